@@ -1,0 +1,56 @@
+"""Building blocks shared by every solver's request and result models.
+
+Conventions (they hold for every solver):
+- lengths are in the request's ``units`` (default ``"mm"``);
+- angles are in **degrees** in every public schema (solvers work in radians inside);
+- quaternions are ``[w, x, y, z]`` (scalar first), unit norm, active rotation;
+- every float in a request must be finite: NaN and infinity are rejected with a 422
+  that names the field.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+"""A float that must be finite (NaN and +-inf are rejected)."""
+
+Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
+"""A point or a direction ``[x, y, z]``."""
+
+Quaternion = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]
+"""A rotation quaternion ``[w, x, y, z]`` (scalar first)."""
+
+Units = Literal["mm", "cm", "m", "in", "ft"]
+"""Length unit of a request; results are given in the same unit."""
+
+
+class StrictModel(BaseModel):
+    """Base of request models: unknown fields are an error, not silently dropped."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class Diagnostic(BaseModel):
+    """One warning or finding, for people (``message``) and machines (``code``, ``details``)."""
+
+    code: str = Field(description="Stable machine-readable identifier, e.g. 'not_converged'.")
+    message: str = Field(description="One human sentence.")
+    details: dict[str, Any] = Field(default_factory=dict)
+
+
+class Report(BaseModel):
+    """What a solver says about its run.
+
+    On success: ``status`` is ``"ok"`` or ``"warning"`` with the warnings and diagnostics.
+    On failure: ``status`` is ``"failed"``, ``stage`` names the stage that failed,
+    ``message`` is a human sentence and ``details`` carries the machine-readable facts.
+    """
+
+    status: Literal["ok", "warning", "failed"] = "ok"
+    stage: str | None = Field(default=None, description="Solver stage that failed (failures only).")
+    message: str = ""
+    warnings: list[Diagnostic] = Field(default_factory=list)
+    details: dict[str, Any] = Field(default_factory=dict)
