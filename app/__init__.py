@@ -1,0 +1,1 @@
+"""HTTP: the FastAPI application, auth, submissions, job reads, artifacts, dashboard, CLI."""

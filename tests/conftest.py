@@ -1,0 +1,97 @@
+"""Shared fixtures: an isolated embedded service per test, and the real PostgreSQL/Redis
+used by the integration tests (skipped with a printed reason outside CI when down; with
+CI=true they must run)."""
+
+from __future__ import annotations
+
+import os
+import time
+import uuid
+from pathlib import Path
+
+import pytest
+
+from workers.settings import Settings
+
+REPO = Path(__file__).resolve().parents[1]
+PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
+REDIS_URL = os.environ.get("TEST_REDIS_URL", "redis://127.0.0.1:6379/9")
+
+
+def service_settings(tmp_path: Path, **overrides) -> Settings:
+    values = dict(
+        data_dir=tmp_path,
+        plugins=["tests.support.kinds"],
+        heartbeat_seconds=0.2,
+        lease_seconds=3.0,
+        sweep_seconds=0.3,
+        progress_write_seconds=0.0,
+    )
+    values.update(overrides)
+    return Settings(_env_file=None, **values)
+
+
+@pytest.fixture
+def settings(tmp_path) -> Settings:
+    return service_settings(tmp_path)
+
+
+@pytest.fixture
+def client(settings):
+    from fastapi.testclient import TestClient
+
+    from app.main import create_app
+
+    with TestClient(create_app(settings)) as test_client:
+        yield test_client
+
+
+def wait_for(client, job_id: str, statuses=("succeeded", "failed", "cancelled"), timeout: float = 30.0, headers=None) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        view = client.get(f"/v1/jobs/{job_id}", headers=headers or {}).json()
+        if view["status"] in statuses:
+            return view
+        if time.monotonic() > deadline:
+            raise AssertionError(f"job {job_id} still {view['status']} after {timeout} s: {view}")
+        time.sleep(0.05)
+
+
+def _unavailable(reason: str):
+    if os.environ.get("CI", "").lower() == "true":
+        pytest.fail(f"{reason} (CI=true: the integration tests must run)")
+    print(f"\nSKIP integration: {reason}")
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def pg_url():
+    """A fresh PostgreSQL database for this test session, dropped afterwards."""
+    try:
+        import psycopg
+
+        admin = psycopg.connect(PG_ADMIN_URL, autocommit=True, connect_timeout=3)
+    except Exception as error:
+        _unavailable(f"PostgreSQL unreachable at {PG_ADMIN_URL}: {error}")
+    name = f"plantsolve_test_{uuid.uuid4().hex[:10]}"
+    admin.execute(f'CREATE DATABASE "{name}"')
+    base = PG_ADMIN_URL.rsplit("/", 1)[0].replace("postgresql://", "postgresql+psycopg://")
+    try:
+        yield f"{base}/{name}"
+    finally:
+        admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+        admin.close()
+
+
+@pytest.fixture(scope="session")
+def redis_url():
+    try:
+        import redis
+
+        connection = redis.Redis.from_url(REDIS_URL, socket_connect_timeout=3)
+        connection.ping()
+    except Exception as error:
+        _unavailable(f"Redis unreachable at {REDIS_URL}: {error}")
+    connection.flushdb()
+    yield REDIS_URL
+    connection.flushdb()

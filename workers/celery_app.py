@@ -1,0 +1,96 @@
+"""Celery application for the scaled mode: ``plantsolve worker`` runs it.
+
+Delivery is at-least-once (``acks_late`` + ``reject_on_worker_lost``): a message whose worker
+died is delivered again, and the database lease and attempt fencing make that safe. The
+attempt cap lives in the database, not in Celery's retry counter.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import uuid
+
+from celery import Celery, signals
+from celery.exceptions import SoftTimeLimitExceeded
+
+from workers import registry
+from workers.settings import Settings, get_settings
+
+log = logging.getLogger("plantsolve.celery")
+
+
+def create_celery(settings: Settings) -> Celery:
+    registry.load(settings.plugins)
+    longest = max((spec.time_limit for spec in map(registry.get, registry.kinds()) if spec), default=660.0)
+    app = Celery("plantsolve", broker=settings.broker_url)
+    app.conf.update(
+        task_acks_late=True,
+        task_reject_on_worker_lost=True,
+        worker_prefetch_multiplier=1,
+        task_serializer="json",
+        accept_content=["json"],
+        result_serializer="json",
+        task_ignore_result=True,
+        # A message is re-delivered only after the visibility timeout: keep it above the
+        # longest hard limit so a slow-but-alive job is never delivered twice by Redis.
+        broker_transport_options={"visibility_timeout": int(longest * 2 + 60)},
+        broker_connection_retry_on_startup=True,
+        worker_hijack_root_logger=False,
+    )
+    app.task(name="plantsolve.run_job", bind=True)(_run_job_task)
+    return app
+
+
+_ctx_lock = threading.Lock()
+_ctx = None
+_dispatcher = None
+
+
+def _worker_context():
+    """One database context and dispatcher per worker process, made on first use."""
+    global _ctx, _dispatcher
+    with _ctx_lock:
+        if _ctx is None:
+            from workers.context import ServiceContext
+            from workers.dispatch import CeleryDispatcher
+
+            _ctx = ServiceContext.create(get_settings())
+            _dispatcher = CeleryDispatcher(_ctx)
+        return _ctx, _dispatcher
+
+
+def _run_job_task(task, job_id: str) -> str:
+    from workers.context import worker_name
+    from workers.runner import run_job
+
+    ctx, dispatcher = _worker_context()
+    job_uuid = uuid.UUID(job_id)
+    outcome = run_job(
+        ctx,
+        job_uuid,
+        worker=worker_name("celery"),
+        requeue=dispatcher.enqueue,
+        hard_limit_in_thread=False,  # Celery's own hard time limit kills the process
+        time_limit_errors=(SoftTimeLimitExceeded,),
+    )
+    log.info("job %s: %s", job_id, outcome)
+    return outcome
+
+
+@signals.worker_process_init.connect
+def _forget_parent_context(**_kwargs) -> None:
+    # A forked pool process must not share the parent's database connections.
+    global _ctx, _dispatcher
+    if _ctx is not None:
+        _ctx.db.engine.dispose(close=False)
+    _ctx = _dispatcher = None
+
+
+@signals.worker_ready.connect
+def _start_sweeper(sender=None, **_kwargs) -> None:
+    ctx, dispatcher = _worker_context()
+    dispatcher.start()
+
+
+app = create_celery(get_settings()) if get_settings().broker_url else None
