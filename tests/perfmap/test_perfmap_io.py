@@ -1,0 +1,206 @@
+"""check_input, parse_upload, render_artifacts and the schema's own checks."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
+from solvers.base import InputRejected
+from solvers.perfmap import (
+    TIME_LIMITS,
+    UPLOAD_EXTENSIONS,
+    __version__,
+    check_input,
+    parse_upload,
+    render_artifacts,
+    solve,
+)
+from solvers.perfmap.synthetic import request_body
+
+
+def _body(**opts):
+    return request_body(n_theta=2, n_phi=3, options=opts)
+
+
+def _rejected_locs(body) -> list[tuple]:
+    with pytest.raises(InputRejected) as exc:
+        check_input(PerfmapRequest.model_validate(body))
+    return [e.loc for e in exc.value.errors]
+
+
+def test_contract_constants():
+    assert UPLOAD_EXTENSIONS == (".csv", ".json")
+    assert TIME_LIMITS[0] < TIME_LIMITS[1]
+    assert isinstance(__version__, str)
+
+
+def test_valid_input_passes():
+    check_input(PerfmapRequest.model_validate(_body()))
+
+
+def test_fewer_than_three_points_rejected_by_schema():
+    body = _body()
+    for k in ("flow", "pressure", "efficiency"):
+        body["positions"][1][k] = body["positions"][1][k][:2]
+    with pytest.raises(ValidationError) as exc:
+        PerfmapRequest.model_validate(body)
+    assert exc.value.errors()[0]["loc"][:2] == ("positions", 1)
+
+
+def test_fewer_than_three_distinct_points_rejected():
+    body = _body()
+    p = body["positions"][2]
+    p["flow"] = [p["flow"][0]] * 2 + [p["flow"][1]]
+    p["pressure"] = [p["pressure"][0]] * 2 + [p["pressure"][1]]
+    p["efficiency"] = [p["efficiency"][0]] * 2 + [p["efficiency"][1]]
+    assert _rejected_locs(body) == [("positions", 2, "flow")]
+
+
+def test_repeated_flow_with_different_values_rejected():
+    body = _body()
+    p = body["positions"][4]
+    p["flow"][3] = p["flow"][2]
+    assert _rejected_locs(body) == [("positions", 4, "flow")]
+
+
+def test_unsorted_and_duplicated_points_are_sorted_and_merged():
+    body = _body(map=False)
+    p = body["positions"][0]
+    order = [3, 0, 5, 1, 4, 2]
+    for k in ("flow", "pressure", "efficiency"):
+        p[k] = [p[k][i] for i in order] + [p[k][0]]
+    res = solve(PerfmapRequest.model_validate(body))
+    ref = solve(PerfmapRequest.model_validate(_body(map=False)))
+    assert np.allclose(res.settings[0].pressure_coefficients, ref.settings[0].pressure_coefficients)
+    assert any(w.code == "duplicate_points_merged" for w in res.report.warnings)
+
+
+def test_length_mismatch_rejected():
+    body = _body()
+    body["positions"][0]["efficiency"].append(0.5)
+    assert _rejected_locs(body) == [("positions", 0, "efficiency")]
+
+
+def test_too_few_settings_for_a_map_but_envelope_possible():
+    body = _body()
+    body["positions"] = body["positions"][:2]
+    assert _rejected_locs(body) == [("positions",)]
+    body["options"]["map"] = False
+    res = solve(PerfmapRequest.model_validate(body))
+    assert res.map is None and res.envelopes
+
+
+def test_collinear_settings_rejected():
+    body = request_body(n_theta=1, n_phi=5)
+    assert _rejected_locs(body) == [("positions",)]
+
+
+def test_duplicate_setting_rejected():
+    body = _body()
+    body["positions"].append(copy.deepcopy(body["positions"][0]))
+    assert _rejected_locs(body) == [("positions", 6)]
+
+
+def test_nan_and_bad_options_rejected_by_schema():
+    body = _body()
+    body["positions"][0]["pressure"][0] = float("nan")
+    with pytest.raises(ValidationError):
+        PerfmapRequest.model_validate(body)
+    for bad in ({"grid": [1, 64]}, {"model": "quartic"}, {"fit": "l1"}, {"unknown": 1}):
+        with pytest.raises(ValidationError):
+            PerfmapRequest.model_validate(_body(**bad))
+
+
+def test_non_positive_pressure_rejected():
+    body = _body()
+    body["positions"][3]["pressure"][0] = -1.0
+    assert _rejected_locs(body) == [("positions", 3, "pressure")]
+
+
+def test_query_request_one_or_many():
+    one = PerfmapQueryRequest.model_validate({"flow": 1.0, "pressure": 2.0})
+    many = PerfmapQueryRequest.model_validate({"points": [{"flow": 1.0, "pressure": 2.0}] * 3})
+    assert len(one.points) == 1 and len(many.points) == 3
+    with pytest.raises(ValidationError):
+        PerfmapQueryRequest.model_validate({"points": []})
+
+
+def test_parse_csv_round_trip_and_options(n3_csv):
+    req = parse_upload("MAP.CSV", n3_csv, {"model": "cubic", "grid": [20, 10]})
+    assert len(req.positions) == 18
+    assert req.options.model == "cubic" and req.options.grid == [20, 10]
+    first = req.positions[0]
+    assert (first.theta, first.phi) == (0.0, 0.5) and len(first.flow) == 7
+    assert first.flow[0] == pytest.approx(1104.338)
+
+
+def test_parse_csv_semicolon_and_column_order():
+    text = "phi;Theta;efficiency;pressure;flow\n" + "\n".join(
+        f"{ph};{th};0.8;{2 - 0.1 * i};{i + 1}" for th in (0, 1) for ph in (0, 1) for i in range(4))
+    req = parse_upload("m.csv", text.encode(), None)
+    assert len(req.positions) == 4
+    assert req.positions[1].phi == 1 and req.positions[1].flow == [1, 2, 3, 4]
+
+
+def test_parse_json_file_with_form_options_override():
+    body = _body(grid=[30, 30])
+    req = parse_upload("x.json", json.dumps(body).encode(), {"grid": [12, 11]})
+    assert req.options.grid == [12, 11] and req.options.model == "cubic"
+
+
+@pytest.mark.parametrize("name,content,needle", [
+    ("m.txt", b"theta", "unsupported"),
+    ("m.csv", b"", "empty"),
+    ("m.csv", b"theta,phi,flow\n1,2,3\n", "missing"),
+    ("m.csv", b"theta,phi,flow,pressure,efficiency\n1,2,x,4,5\n", "line 2"),
+    ("m.csv", b"theta,phi,flow,pressure,efficiency\n1,2,nan,4,5\n", "NaN"),
+    ("m.json", b"{not json", "invalid JSON"),
+    ("m.json", b'{"positions": 3}', "positions"),
+    ("m.csv", b"\xff\xfe\x00", "UTF-8"),
+])
+def test_bad_uploads_name_the_file(name, content, needle):
+    with pytest.raises(InputRejected) as exc:
+        parse_upload(name, content, None)
+    assert all(e.loc == ("file",) for e in exc.value.errors)
+    assert needle in str(exc.value)
+
+
+def test_render_artifacts(synthetic_request, synthetic_result):
+    before = synthetic_result.model_dump_json()
+    req_before = synthetic_request.model_dump_json()
+    arts = render_artifacts(synthetic_request, synthetic_result)
+    names = [a.name for a in arts]
+    assert sorted(names) == sorted(f"{s}.{e}" for s in ("characteristics", "envelopes", "map")
+                                   for e in ("png", "svg"))
+    for a in arts:
+        if a.name.endswith(".png"):
+            assert a.media_type == "image/png" and a.data[:8] == b"\x89PNG\r\n\x1a\n"
+        else:
+            assert a.media_type == "image/svg+xml" and b"<svg" in a.data[:2000]
+    assert synthetic_result.model_dump_json() == before  # inputs not mutated
+    assert synthetic_request.model_dump_json() == req_before
+
+
+def test_progress_and_cancellation(synthetic_request):
+    from solvers.base import Cancelled
+
+    seen = []
+
+    def progress(f, msg=""):
+        seen.append(f)
+        if f > 0.7:
+            raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        solve(synthetic_request, progress)
+    assert seen == sorted(seen) and seen[0] < 0.1
+
+
+def test_deterministic(synthetic_request, synthetic_result):
+    again = solve(synthetic_request)
+    assert again.model_dump_json() == synthetic_result.model_dump_json()
