@@ -109,6 +109,28 @@ def log_params_from_public(coef: list[float], x_min: float, x_max: float) -> np.
     return np.array([a, (b - x_min) / span, c + a * np.log(span)])
 
 
+def _eval_rows(family: str, c: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Row-wise evaluation: curve with coefficients c[j] at t[j] (no basis matrices)."""
+    if family == "log":
+        return c[:, 0] * np.log(c[:, 1] - t) + c[:, 2]
+    if family in ("parabola", "cubic"):
+        # de Casteljau on contiguous rows: stable and allocation-light
+        n = 3 if family == "parabola" else 4
+        b = [c[:, k].copy() for k in range(n)]
+        s = 1.0 - t
+        for r in range(1, n):
+            for k in range(n - r):
+                b[k] = s * b[k] + t * b[k + 1]
+        return b[0]
+    K = 2 if family == "spline2" else 3
+    tau = np.clip(t * K, 0.0, float(K))
+    j = np.minimum(np.floor(tau), K - 1).astype(int)
+    u = tau - j
+    rows = np.arange(len(t))
+    return (0.5 * (1.0 - u) ** 2 * c[rows, j] + (0.5 + u - u * u) * c[rows, j + 1]
+            + 0.5 * u * u * c[rows, j + 2])
+
+
 class CurveSet:
     """The fitted curves of all settings, evaluable at any t (vectorised).
 
@@ -141,13 +163,7 @@ class CurveSet:
         uniform = len(fam_ids) and (fam_ids == fam_ids[0]).all()
         for fid in (fam_ids[:1] if uniform else np.unique(fam_ids)):
             m = slice(None) if uniform else fam_ids == fid
-            fam = FAMILIES[fid]
-            tm, cm = t[m], coefs[m]
-            if fam == "log":
-                out[m] = cm[:, 0] * np.log(cm[:, 1] - tm) + cm[:, 2]
-            else:
-                B = basis(fam, tm)
-                out[m] = np.einsum("ij,ij->i", B, cm[:, : B.shape[1]])
+            out[m] = _eval_rows(FAMILIES[fid], coefs[m], t[m])
         return out
 
     def evaluate(self, idx: np.ndarray, t: np.ndarray):
@@ -159,6 +175,16 @@ class CurveSet:
         y = self._eval(self.fam_id[idx], self.p[idx], t)
         eta = self._eval(self.eff_id[idx], self.e[idx], t)
         return x.reshape(shape), y.reshape(shape), eta.reshape(shape)
+
+    def evaluate_xy(self, idx: np.ndarray, t: np.ndarray):
+        """(x, y) only: for root finding, where the efficiency is not needed."""
+        idx = np.asarray(idx)
+        t = np.broadcast_to(np.asarray(t, dtype=float), idx.shape)
+        shape = idx.shape
+        idx, t = idx.ravel(), t.ravel()
+        x = self.x_min[idx] + (self.x_max[idx] - self.x_min[idx]) * t
+        y = self._eval(self.fam_id[idx], self.p[idx], t)
+        return x.reshape(shape), y.reshape(shape)
 
     def sample(self, t: np.ndarray):
         """(x, y, eta), each (n_settings, len(t)): every curve at the same parameters."""

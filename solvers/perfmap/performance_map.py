@@ -131,7 +131,7 @@ def _edge_candidates(curves, i, j, t, Xs, Ys, Es, Xn, Yn, norm, iterations=14):
     idx = np.stack([np.full(len(nodes), i), np.full(len(nodes), j)])
 
     def cross(tt):
-        x, y, _ = curves.evaluate(idx, np.broadcast_to(tt, idx.shape))
+        x, y = curves.evaluate_xy(idx, np.broadcast_to(tt, idx.shape))
         x, y = norm(x, y)
         return (x[1] - x[0]) * (Y - y[0]) - (y[1] - y[0]) * (X - x[0])
 
