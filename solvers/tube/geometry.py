@@ -1,0 +1,311 @@
+"""Arc-line splines and their LRA description (paper §5.3).
+
+A tube is held as :class:`TubeModel` — start point, start frame and the LRA rows in radians.
+Everything else (segments, control polygon, XYZ+CLR, distances, meshes) is derived from it,
+so that LRA ↔ geometry conversions have exactly one implementation each.
+
+Convention (documented publicly in ``schemas/tube.py``): frame columns are x = tangent,
+y = in-plane normal toward the next bend centre, z = x × y. Row i: straight ``lengths[i]``,
+rotate the normal about the tangent by ``rotations[i]``, bend by ``angles[i]`` with
+``radii[i]`` toward the normal. The last row has no bend.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass
+class TubeModel:
+    start: np.ndarray  # (3,)
+    frame: np.ndarray  # (3, 3), columns x, y, z of the local frame in world coordinates
+    lengths: np.ndarray  # (n + 1,)
+    rotations: np.ndarray  # (n + 1,) radians; [0] == 0 and [-1] unused (no bend)
+    angles: np.ndarray  # (n,) radians, in (0, 2π)
+    radii: np.ndarray  # (n,)
+    pipe_radius: float = 0.0
+
+    @property
+    def n_bends(self) -> int:
+        return len(self.angles)
+
+    def copy(self) -> "TubeModel":
+        return TubeModel(
+            self.start.copy(), self.frame.copy(), self.lengths.copy(), self.rotations.copy(),
+            self.angles.copy(), self.radii.copy(), float(self.pipe_radius),
+        )
+
+
+@dataclass
+class Spine:
+    """Segments of a centreline in order. Arrays are indexed by segment."""
+
+    kind: np.ndarray  # (S,) 0 = line, 1 = arc
+    start: np.ndarray  # (S, 3)
+    end: np.ndarray  # (S, 3)
+    tangent: np.ndarray  # (S, 3) tangent at the segment start
+    normal: np.ndarray  # (S, 3) in-plane normal toward the centre (arcs); frame normal (lines)
+    length: np.ndarray  # (S,) straight length (lines) or arc length (arcs)
+    centre: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (S, 3), arcs only meaningful
+    radius: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,)
+    angle: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (S,) radians
+
+    @property
+    def axis(self) -> np.ndarray:
+        """Arc plane normals (t × n): the arc runs counter-clockwise about them."""
+        return np.cross(self.tangent, self.normal)
+
+
+def _rotate_about(v: np.ndarray, axis: np.ndarray, ang: float) -> np.ndarray:
+    """Rodrigues rotation of v about unit axis."""
+    c, s = np.cos(ang), np.sin(ang)
+    return v * c + np.cross(axis, v) * s + axis * np.dot(axis, v) * (1.0 - c)
+
+
+def build_spine(model: TubeModel) -> Spine:
+    """LRA → segments (line, arc, line, …, line); zero-length lines are kept."""
+    n = model.n_bends
+    p = np.asarray(model.start, float).copy()
+    t = model.frame[:, 0].copy()
+    nv = model.frame[:, 1].copy()
+    S = 2 * n + 1
+    kind = np.zeros(S, int)
+    st = np.zeros((S, 3)); en = np.zeros((S, 3)); tg = np.zeros((S, 3)); nm = np.zeros((S, 3))
+    ln = np.zeros(S); ce = np.zeros((S, 3)); ra = np.zeros(S); an = np.zeros(S)
+    for i in range(n + 1):
+        k = 2 * i
+        st[k] = p; tg[k] = t; nm[k] = nv
+        p = p + model.lengths[i] * t
+        en[k] = p; ln[k] = model.lengths[i]
+        if i == n:
+            break
+        nv = _rotate_about(nv, t, model.rotations[i])
+        a, R = model.angles[i], model.radii[i]
+        k += 1
+        kind[k] = 1; st[k] = p; tg[k] = t; nm[k] = nv
+        c = p + R * nv
+        ca, sa = np.cos(a), np.sin(a)
+        p = c - R * (nv * ca) + R * (t * sa)
+        t, nv = t * ca + nv * sa, nv * ca - t * sa
+        en[k] = p; ce[k] = c; ra[k] = R; an[k] = a; ln[k] = R * a
+    return Spine(kind, st, en, tg, nm, ln, ce, ra, an)
+
+
+def end_frame(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
+    """End point and end tangent of the centreline."""
+    sp = build_spine(model)
+    return sp.end[-1], sp.tangent[-1]
+
+
+def signed_angle(a: np.ndarray, b: np.ndarray, axis: np.ndarray) -> float:
+    """Angle from a to b about axis (right-hand rule), in (-π, π]."""
+    return float(np.arctan2(np.dot(np.cross(a, b), axis), np.dot(a, b)))
+
+
+def model_from_spine(sp: Spine, pipe_radius: float) -> TubeModel:
+    """Segments → LRA (inverse of :func:`build_spine`). Lines and arcs must alternate,
+    starting and ending with a line (lines may have zero length)."""
+    lines = np.flatnonzero(sp.kind == 0)
+    arcs = np.flatnonzero(sp.kind == 1)
+    n = len(arcs)
+    t0 = sp.tangent[0] / np.linalg.norm(sp.tangent[0])
+    if n:
+        y0 = sp.normal[arcs[0]] - np.dot(sp.normal[arcs[0]], t0) * t0
+        y0 /= np.linalg.norm(y0)
+    else:
+        y0 = sp.normal[0] - np.dot(sp.normal[0], t0) * t0
+        y0 /= np.linalg.norm(y0)
+    frame = np.column_stack([t0, y0, np.cross(t0, y0)])
+    lengths = np.array([sp.length[k] for k in lines], float)
+    rotations = np.zeros(n + 1)
+    nprev = y0
+    for i, k in enumerate(arcs):
+        ni = sp.normal[k]
+        rotations[i] = 0.0 if i == 0 else signed_angle(nprev, ni, sp.tangent[k])
+        a = sp.angle[k]
+        nprev = ni * np.cos(a) - sp.tangent[k] * np.sin(a)
+    return TubeModel(sp.start[0].copy(), frame, lengths, rotations,
+                     sp.angle[arcs].copy(), sp.radius[arcs].copy(), float(pipe_radius))
+
+
+def reverse_spine(sp: Spine) -> Spine:
+    """The same centreline walked from the other end."""
+    o = slice(None, None, -1)
+    kind = sp.kind[o].copy()
+    start = sp.end[o].copy(); end = sp.start[o].copy()
+    S = len(kind)
+    tangent = np.zeros((S, 3)); normal = np.zeros((S, 3))
+    for k in range(S):
+        j = S - 1 - k
+        if sp.kind[j] == 1:
+            a = sp.angle[j]
+            t_end = sp.tangent[j] * np.cos(a) + sp.normal[j] * np.sin(a)
+            n_end = sp.normal[j] * np.cos(a) - sp.tangent[j] * np.sin(a)
+            tangent[k] = -t_end; normal[k] = n_end
+        else:
+            tangent[k] = -sp.tangent[j]; normal[k] = sp.normal[j]
+    return Spine(kind, start, end, tangent, normal, sp.length[o].copy(), sp.centre[o].copy(),
+                 sp.radius[o].copy(), sp.angle[o].copy())
+
+
+def reverse_model(model: TubeModel) -> TubeModel:
+    return model_from_spine(reverse_spine(build_spine(model)), model.pipe_radius)
+
+
+# --- control polygon / XYZ + CLR -------------------------------------------------------------
+
+def control_polygon(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
+    """Start, straight-line intersection points of the bends, end; and the bend radii.
+
+    Bends of 180° or more have no intersection point and are skipped (paper §5.2)."""
+    sp = build_spine(model)
+    pts = [sp.start[0]]
+    clr = []
+    for k in np.flatnonzero(sp.kind == 1):
+        a = sp.angle[k]
+        if a >= np.pi - 1e-9:
+            continue
+        pts.append(sp.start[k] + sp.radius[k] * np.tan(a / 2) * sp.tangent[k])
+        clr.append(sp.radius[k])
+    pts.append(sp.end[-1])
+    return np.array(pts), np.array(clr)
+
+
+def model_from_control_polygon(pts: np.ndarray, clr: np.ndarray, pipe_radius: float = 0.0) -> TubeModel:
+    """XYZ + CLR → LRA (bends below 180°). Inverse of :func:`control_polygon`."""
+    pts = np.asarray(pts, float)
+    legs = np.diff(pts, axis=0)
+    leg_len = np.linalg.norm(legs, axis=1)
+    d = legs / leg_len[:, None]
+    n = len(pts) - 2
+    ang = np.array([np.arccos(np.clip(np.dot(d[i], d[i + 1]), -1, 1)) for i in range(n)])
+    tanlen = np.asarray(clr, float) * np.tan(ang / 2)
+    lengths = leg_len.copy()
+    lengths[:-1] -= tanlen
+    lengths[1:] -= tanlen
+    normals = []
+    for i in range(n):
+        v = d[i + 1] - np.dot(d[i + 1], d[i]) * d[i]
+        normals.append(v / np.linalg.norm(v))
+    t0 = d[0]
+    if n:
+        y0 = normals[0]
+    else:
+        y0 = _any_perpendicular(t0)
+    rotations = np.zeros(n + 1)
+    nprev = y0
+    for i in range(n):
+        if i:
+            rotations[i] = signed_angle(nprev, normals[i], d[i])
+        nprev = normals[i] * np.cos(ang[i]) - d[i] * np.sin(ang[i])
+    frame = np.column_stack([t0, y0, np.cross(t0, y0)])
+    return TubeModel(pts[0].copy(), frame, lengths, rotations, ang, np.asarray(clr, float).copy(),
+                     float(pipe_radius))
+
+
+def _any_perpendicular(t: np.ndarray) -> np.ndarray:
+    """A deterministic unit vector ⟂ t (used only when no bend fixes the frame)."""
+    e = np.eye(3)[int(np.argmin(np.abs(t)))]
+    v = e - np.dot(e, t) * t
+    return v / np.linalg.norm(v)
+
+
+def frame_quaternion(frame: np.ndarray) -> list[float]:
+    x, y, z, w = Rotation.from_matrix(frame).as_quat()
+    q = np.array([w, x, y, z])
+    if q[0] < 0:
+        q = -q
+    return [float(v) for v in q]
+
+
+def quaternion_frame(q) -> np.ndarray:
+    w, x, y, z = q
+    return Rotation.from_quat([x, y, z, w]).as_matrix()
+
+
+# --- distances ------------------------------------------------------------------------------
+
+def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
+    """Distance of each point to each (bounded) segment: (N, S)."""
+    N, S = len(pts), len(sp.kind)
+    out = np.empty((N, S))
+    axes = sp.axis
+    for k in range(S):
+        if sp.kind[k] == 0:
+            rel = pts - sp.start[k]
+            s = np.clip(rel @ sp.tangent[k], 0.0, sp.length[k])
+            out[:, k] = np.linalg.norm(rel - s[:, None] * sp.tangent[k], axis=1)
+        else:
+            rel = pts - sp.centre[k]
+            h = rel @ axes[k]
+            u = -sp.normal[k]  # from centre to arc start
+            v = sp.tangent[k]
+            phi = np.mod(np.arctan2(rel @ v, rel @ u), TWO_PI)
+            rho = np.hypot(rel @ u, rel @ v)
+            d_in = np.hypot(rho - sp.radius[k], h)
+            d_s = np.linalg.norm(pts - sp.start[k], axis=1)
+            d_e = np.linalg.norm(pts - sp.end[k], axis=1)
+            out[:, k] = np.where(phi <= sp.angle[k], d_in, np.minimum(d_s, d_e))
+    return out
+
+
+def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000) -> tuple[np.ndarray, np.ndarray]:
+    """Distance of each point to the centreline and the index of the closest segment."""
+    d = np.empty(len(pts)); idx = np.empty(len(pts), int)
+    for a in range(0, len(pts), chunk):
+        m = _segment_distances(pts[a:a + chunk], sp)
+        idx[a:a + chunk] = np.argmin(m, axis=1)
+        d[a:a + chunk] = m[np.arange(len(m)), idx[a:a + chunk]]
+    return d, idx
+
+
+def sample_centreline(model: TubeModel, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points along the centreline about ``step`` apart (all segment ends included) and tangents."""
+    sp = build_spine(model)
+    pts, tans = [], []
+    for k in range(len(sp.kind)):
+        m = max(1, int(np.ceil(sp.length[k] / step)))
+        s = np.linspace(0.0, 1.0, m + 1)
+        if k:
+            s = s[1:]
+        if sp.kind[k] == 0:
+            pts.append(sp.start[k] + np.outer(s * sp.length[k], sp.tangent[k]))
+            tans.append(np.repeat(sp.tangent[k][None], len(s), 0))
+        else:
+            a = s * sp.angle[k]
+            R = sp.radius[k]
+            t, nv = sp.tangent[k], sp.normal[k]
+            pts.append(sp.centre[k] - R * np.outer(np.cos(a), nv) + R * np.outer(np.sin(a), t))
+            tans.append(np.outer(np.cos(a), t) + np.outer(np.sin(a), nv))
+    return np.vstack(pts), np.vstack(tans)
+
+
+def tube_mesh_arrays(model: TubeModel, ring: int = 32, step: float | None = None):
+    """Vertices and faces of the tube surface (open ends), parallel-transported rings."""
+    r = model.pipe_radius
+    step = step or max(r / 2, 1e-9)
+    c, t = sample_centreline(model, step)
+    u = model.frame[:, 1].copy()
+    frames = []
+    for i in range(len(c)):
+        u = u - np.dot(u, t[i]) * t[i]
+        nu = np.linalg.norm(u)
+        u = u / nu if nu > 1e-12 else _any_perpendicular(t[i])
+        frames.append((u, np.cross(t[i], u)))
+    th = np.linspace(0, TWO_PI, ring, endpoint=False)
+    U = np.array([f[0] for f in frames]); V = np.array([f[1] for f in frames])
+    verts = (c[:, None, :] + r * (np.cos(th)[None, :, None] * U[:, None, :]
+                                   + np.sin(th)[None, :, None] * V[:, None, :])).reshape(-1, 3)
+    i = np.arange(len(c) - 1)[:, None]
+    j = np.arange(ring)[None, :]
+    a = i * ring + j
+    b = i * ring + (j + 1) % ring
+    a2 = a + ring
+    b2 = b + ring
+    faces = np.concatenate([np.stack([a, b, b2], -1).reshape(-1, 3), np.stack([a, b2, a2], -1).reshape(-1, 3)])
+    return verts, faces

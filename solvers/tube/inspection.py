@@ -1,0 +1,108 @@
+"""Inspection against a nominal LRA (beyond the paper; what tube shops use every day).
+
+The nominal tube is built in its own frame (start at the origin, identity frame). The
+measured centreline is matched to it in both walking directions: a rigid motion is
+initialised by Kabsch on arc-length correspondences and refined by least squares on the
+distance of measured centreline samples to the nominal centreline. The direction with the
+smaller rms wins. Reported: per-bend deviations (measured − nominal), the sheath deviation
+(max distance of the measured centreline from the aligned nominal one) and the corrected
+LRA for the bender: corrected = nominal + damping · (nominal − measured) for bend angle,
+rotation and length (springback compensation); radii are tooling and stay nominal.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+from schemas.tube import BendDeviation, Inspection, LraRow
+
+from .geometry import TubeModel, build_spine, reverse_model, sample_centreline, spine_distance
+
+
+def model_from_rows(rows: list[LraRow], pipe_radius: float) -> TubeModel:
+    n = len(rows) - 1
+    return TubeModel(np.zeros(3), np.eye(3), np.array([r.length for r in rows], float),
+                     np.radians([r.rotation for r in rows]), np.radians([r.angle for r in rows[:n]]),
+                     np.array([r.bend_radius for r in rows[:n]], float), float(pipe_radius))
+
+
+def _wrap_deg(a: float) -> float:
+    return float((a + 180.0) % 360.0 - 180.0)
+
+
+def _resample(pts: np.ndarray, m: int) -> np.ndarray:
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    u = np.linspace(0, s[-1], m)
+    return np.column_stack([np.interp(u, s, pts[:, k]) for k in range(3)])
+
+
+def align(measured: TubeModel, nominal: TubeModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rigid motion (R, t) with R·nominal + t ≈ measured; distances of measured samples."""
+    step = max(measured.pipe_radius, 1e-9) * 0.5
+    total = build_spine(measured).length.sum()
+    step = max(step, total / 400)
+    qm, _ = sample_centreline(measured, step)
+    qn, _ = sample_centreline(nominal, step)
+    a, b = _resample(qn, 200), _resample(qm, 200)
+    ca, cb = a.mean(0), b.mean(0)
+    U, _, Vt = np.linalg.svd((a - ca).T @ (b - cb))
+    D = np.diag([1, 1, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R0 = Vt.T @ D @ U.T
+    t0 = cb - R0 @ ca
+    sp_n = build_spine(nominal)
+
+    def res(x):
+        R = Rotation.from_rotvec(x[:3]).as_matrix() @ R0
+        t = t0 + x[3:]
+        local = (qm - t) @ R  # R^T (q − t)
+        return spine_distance(local, sp_n)[0]
+
+    sol = least_squares(res, np.zeros(6), method="lm", x_scale=np.r_[np.full(3, 1.0), np.full(3, step)])
+    R = Rotation.from_rotvec(sol.x[:3]).as_matrix() @ R0
+    return R, t0 + sol.x[3:], res(sol.x)
+
+
+def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> Inspection:
+    from .pipeline import model_rows
+
+    nominal = model_from_rows(nominal_rows, measured.pipe_radius)
+    best = None
+    for reversed_ in (False, True):
+        m = reverse_model(measured) if reversed_ else measured
+        R, t, d = align(m, nominal)
+        rms = float(np.sqrt(np.mean(d ** 2)))
+        same = m.n_bends == nominal.n_bends
+        key = (not same, rms)
+        if best is None or key < best[0]:
+            best = (key, reversed_, m, R, t, d)
+    _, reversed_, m, R, t, d = best
+    meas_rows = model_rows(m)
+    matched = m.n_bends == nominal.n_bends
+    bends: list[BendDeviation] = []
+    corrected = [row.model_copy() for row in nominal_rows]
+    last_length = None
+    if matched:
+        n = nominal.n_bends
+        for i in range(n):
+            mr, nr = meas_rows[i], nominal_rows[i]
+            bends.append(BendDeviation(bend=i + 1, angle=mr.angle - nr.angle,
+                                       rotation=_wrap_deg(mr.rotation - nr.rotation) if i else 0.0,
+                                       length=mr.length - nr.length, bend_radius=mr.bend_radius - nr.bend_radius))
+            ang = nr.angle - damping * (mr.angle - nr.angle)
+            rot = _wrap_deg(nr.rotation - damping * _wrap_deg(mr.rotation - nr.rotation)) if i else 0.0
+            corrected[i] = LraRow(length=max(nr.length - damping * (mr.length - nr.length), 0.0), rotation=rot,
+                                  angle=float(np.clip(ang, 0.0, 359.999)), bend_radius=nr.bend_radius)
+        last_length = meas_rows[n].length - nominal_rows[n].length
+        corrected[n] = LraRow(length=max(nominal_rows[n].length - damping * last_length, 0.0), rotation=0.0,
+                              angle=0.0, bend_radius=0.0)
+    q = Rotation.from_matrix(R).as_quat()
+    quat = [float(q[3]), float(q[0]), float(q[1]), float(q[2])]
+    if quat[0] < 0:
+        quat = [-v for v in quat]
+    return Inspection(matched=matched, reversed=reversed_, measured_lra=meas_rows, bends=bends,
+                      last_length=last_length, sheath_deviation=float(d.max()),
+                      sheath_rms=float(np.sqrt(np.mean(d ** 2))),
+                      alignment={"translation": [float(v) for v in t], "quaternion": quat},
+                      corrected_lra=corrected)
