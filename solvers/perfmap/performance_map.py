@@ -23,7 +23,7 @@ from solvers.perfmap.families import CurveSet
 
 _INSIDE_TOL = 1e-10
 _DET_TOL = 1e-14
-_CHUNK = 8192
+_T_BLOCK = 8
 
 
 def curve_ranges(curves: CurveSet) -> tuple[float, float, float, float]:
@@ -113,21 +113,33 @@ def _edge_candidates(curves, i, j, t, Xs, Ys, Es, Xn, Yn, norm, iterations=14):
     Returns (nodes, eta, s, t) of feasible crossings.
     """
     P, Q = Xs[[i, j]], Ys[[i, j]]
-    sel = np.flatnonzero((Xn >= P.min() - 1e-12) & (Xn <= P.max() + 1e-12)
-                         & (Yn >= Q.min() - 1e-12) & (Yn <= Q.max() + 1e-12))
     empty = (np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros(0))
-    if not len(sel):
-        return empty
+    M = len(t)
     dxe, dye = P[1] - P[0], Q[1] - Q[0]
-    f = dxe[:, None] * (Yn[sel][None, :] - Q[0][:, None]) - dye[:, None] * (Xn[sel][None, :] - P[0][:, None])
-    sc = (f[:-1] * f[1:] <= 0) & ~((f[:-1] == 0) & (f[1:] == 0))
-    mm, gg = np.nonzero(sc)
-    if not len(mm):
+    found_nodes, found_lo, found_hi, found_flo, found_fhi = [], [], [], [], []
+    for m0 in range(0, M - 1, _T_BLOCK):
+        blk = np.arange(m0, min(m0 + _T_BLOCK, M - 1) + 1)  # overlapping by one sample
+        Pb, Qb = P[:, blk], Q[:, blk]
+        sel = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
+                             & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
+        if not len(sel):
+            continue
+        f = (dxe[blk][:, None] * (Yn[sel][None, :] - Qb[0][:, None])
+             - dye[blk][:, None] * (Xn[sel][None, :] - Pb[0][:, None]))
+        sc = (f[:-1] * f[1:] <= 0) & ~((f[:-1] == 0) & (f[1:] == 0))
+        mm, gg = np.nonzero(sc)
+        if len(mm):
+            found_nodes.append(sel[gg])
+            found_lo.append(t[blk[mm]])
+            found_hi.append(t[blk[mm + 1]])
+            found_flo.append(f[mm, gg])
+            found_fhi.append(f[mm + 1, gg])
+    if not found_nodes:
         return empty
-    nodes = sel[gg]
+    nodes = np.concatenate(found_nodes)
     X, Y = Xn[nodes], Yn[nodes]
-    lo, hi = t[mm], t[mm + 1]
-    flo, fhi = f[mm, gg], f[mm + 1, gg]
+    lo, hi = np.concatenate(found_lo), np.concatenate(found_hi)
+    flo, fhi = np.concatenate(found_flo), np.concatenate(found_fhi)
     idx = np.stack([np.full(len(nodes), i), np.full(len(nodes), j)])
 
     def cross(tt):
@@ -174,34 +186,40 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
     b_tri = np.zeros(G, dtype=int)
     b_m = np.zeros(G, dtype=int)
     n_tri = len(triangles)
+    M = len(t)
     for k, tri in enumerate(triangles):
         P, Q, H = Xs[tri], Ys[tri], Es[tri]  # (3, M)
-        sel = np.flatnonzero((Xn >= P.min() - 1e-12) & (Xn <= P.max() + 1e-12)
-                             & (Yn >= Q.min() - 1e-12) & (Yn <= Q.max() + 1e-12))
         a, b = P[0] - P[2], P[1] - P[2]
         c, d = Q[0] - Q[2], Q[1] - Q[2]
         det = a * d - b * c
-        good = np.flatnonzero(np.abs(det) > _DET_TOL)
-        if not len(good):
-            continue
-        a, b, c, d, det = a[good], b[good], c[good], d[good], det[good]
-        P2, Q2, Hg = P[2][good], Q[2][good], H[:, good]
-        for start in range(0, len(sel), _CHUNK):
-            nodes = sel[start : start + _CHUNK]
-            dx = Xn[nodes][None, :] - P2[:, None]  # (M, g)
-            dy = Yn[nodes][None, :] - Q2[:, None]
-            u = (d[:, None] * dx - b[:, None] * dy) / det[:, None]
-            v = (a[:, None] * dy - c[:, None] * dx) / det[:, None]
+        # Blocks of consecutive t: the triangles of a block sweep a thin band, so only the
+        # nodes in the block's bounding box are solved for (not the whole sweep's box).
+        for m0 in range(0, M, _T_BLOCK):
+            blk = np.arange(m0, min(m0 + _T_BLOCK, M))
+            blk = blk[np.abs(det[blk]) > _DET_TOL]
+            if not len(blk):
+                continue
+            Pb, Qb = P[:, blk], Q[:, blk]
+            nodes = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
+                                   & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
+            if not len(nodes):
+                continue
+            ab, bb, cb, db, detb = a[blk], b[blk], c[blk], d[blk], det[blk]
+            dx = Xn[nodes][None, :] - Pb[2][:, None]  # (m, g)
+            dy = Yn[nodes][None, :] - Qb[2][:, None]
+            u = (db[:, None] * dx - bb[:, None] * dy) / detb[:, None]
+            v = (ab[:, None] * dy - cb[:, None] * dx) / detb[:, None]
             w = 1.0 - u - v
             inside = (u >= -_INSIDE_TOL) & (v >= -_INSIDE_TOL) & (w >= -_INSIDE_TOL)
-            eta = np.where(inside, u * Hg[0][:, None] + v * Hg[1][:, None] + w * Hg[2][:, None],
+            Hb = H[:, blk]
+            eta = np.where(inside, u * Hb[0][:, None] + v * Hb[1][:, None] + w * Hb[2][:, None],
                            -np.inf)
             m = np.argmax(eta, axis=0)
             e = eta[m, np.arange(len(nodes))]
             upd = e > best[nodes]
             best[nodes[upd]] = e[upd]
             b_tri[nodes[upd]] = k
-            b_m[nodes[upd]] = good[m[upd]]
+            b_m[nodes[upd]] = blk[m[upd]]
         progress(p0 + (p1 - p0) * 0.6 * (k + 1) / n_tri, "performance map: triangles")
 
     b_theta = np.full(G, np.nan)

@@ -1,0 +1,138 @@
+"""Benchmark of the perfmap solver (issue 5).
+
+    python bench/perfmap.py            # full run
+    python bench/perfmap.py --quick    # smaller ground truth, one repetition
+
+Prints: solve time for 28 settings x 6 points with a 64 x 64 map (target < 1 s), the map's
+efficiency error against a dense ground truth of a synthetic family for the exact method and
+for the paper's binning (N = 64, M = 128), the 200 x 200 map time, and the paper's Table 1
+for the real N3 fan map.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from schemas.perfmap import PerfmapRequest  # noqa: E402
+from solvers.perfmap import parse_upload, solve  # noqa: E402
+from solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
+from solvers.perfmap.solve import curveset_from_fits  # noqa: E402
+from solvers.perfmap.synthetic import request_body, true_map  # noqa: E402
+
+N3 = Path(__file__).resolve().parents[1] / "examples" / "perfmap" / "n3_fan_map.csv"
+
+
+def timed(fn, reps):
+    times, out = [], None
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def stage_times(req):
+    marks = []
+    t0 = time.perf_counter()
+    solve(req, lambda f, m="": marks.append((time.perf_counter() - t0, m)))
+    first = {}
+    for t, m in marks:
+        first.setdefault(m.split(":")[0].split(" ")[0], t)
+    return first, marks[-1][0]
+
+
+def errors(est, truth):
+    both = np.isfinite(est) & np.isfinite(truth)
+    d = (est - truth)[both]
+    return {
+        "max_abs": float(np.max(np.abs(d))),
+        "mean_abs": float(np.mean(np.abs(d))),
+        "bias": float(np.mean(d)),
+        "missed": int(np.sum(np.isfinite(truth) & ~np.isfinite(est))),
+        "false": int(np.sum(~np.isfinite(truth) & np.isfinite(est))),
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args()
+    reps = 1 if args.quick else 3
+    n_truth = 20001 if args.quick else 200001
+
+    rows = []
+    req = PerfmapRequest.model_validate(request_body(n_theta=4, n_phi=7, n_points=6,
+                                                     options={"grid": [64, 64]}))
+    solve(req)  # warm-up (imports, caches)
+    t64, res = timed(lambda: solve(req), reps)
+    stages, _ = stage_times(req)
+    fit_t = stages.get("envelopes", 0.0)
+    rows.append(("solve 28 settings x 6 pts, 64x64 map (all 5 families + LOO + map)",
+                 f"{t64:.3f} s", "< 1 s", "met" if t64 < 1 else "MISSED"))
+    rows.append(("  of which characteristics, Table 1, LOO, envelopes", f"{fit_t:.3f} s", "", ""))
+    rows.append(("  of which exact map", f"{t64 - fit_t:.3f} s", "", ""))
+
+    gx, gy = np.array(res.map.flow), np.array(res.map.pressure)
+    t0 = time.perf_counter()
+    te, tth, tph = true_map(gx, gy, n_t=n_truth)
+    t_truth = time.perf_counter() - t0
+    eta = np.array(res.map.efficiency, dtype=float)
+    ex = errors(eta, te)
+    curves = curveset_from_fits(res.settings)
+    th = np.array([s.theta for s in res.settings])
+    ph = np.array([s.phi for s in res.settings])
+    tb, (be, bth, bph) = timed(lambda: binned_map(curves, np.array(res.triangles), th, ph, gx, gy,
+                                                  curve_ranges(curves), 64, 128), reps)
+    eb = errors(be, te)
+    ok = np.isfinite(te)
+    th_ex = float(np.nanmean(np.abs(np.array(res.map.theta, dtype=float) - tth)[ok]))
+    th_b = float(np.nanmean(np.abs(bth - tth)[ok & np.isfinite(bth)]))
+
+    t200req = PerfmapRequest.model_validate(request_body(n_theta=4, n_phi=7, n_points=6,
+                                                         options={"grid": [200, 200]}))
+    t200, _ = timed(lambda: solve(t200req), reps)
+
+    n3 = parse_upload("n3_fan_map.csv", N3.read_bytes(), None)
+    tn3, n3res = timed(lambda: solve(n3), reps)
+
+    print(f"\nperfmap benchmark ({'quick' if args.quick else 'full'}; median of {reps}; "
+          f"ground truth: dense t search, {n_truth} samples, {t_truth:.1f} s)\n")
+    print(f"{'measurement':70s} {'value':>12s}  {'target':>8s}  status")
+    for r in rows:
+        print(f"{r[0]:70s} {r[1]:>12s}  {r[2]:>8s}  {r[3]}")
+    print(f"{'solve 28 settings, 200x200 map':70s} {t200:>10.3f} s  {'':>8s}")
+    print(f"{'solve real N3 fan map (18 settings x 7-8 pts, 64x64, auto)':70s} {tn3:>10.3f} s")
+    print(f"{'binning baseline map alone (N=64, M=128)':70s} {tb:>10.3f} s")
+
+    print("\nmap efficiency error vs dense ground truth (synthetic family, 64x64, "
+          f"{int(ok.sum())} reachable nodes)")
+    print(f"{'method':28s} {'max |err|':>10s} {'mean |err|':>11s} {'bias':>10s} "
+          f"{'missed':>7s} {'false':>6s} {'mean |dtheta|':>13s}")
+    for name, e, dth in (("exact (M=129 + refinement)", ex, th_ex),
+                         ("paper binning N=64, M=128", eb, th_b)):
+        print(f"{name:28s} {e['max_abs']:10.2e} {e['mean_abs']:11.2e} {e['bias']:+10.2e} "
+              f"{e['missed']:7d} {e['false']:6d} {dth:13.4f}")
+
+    print(f"\nTable 1 for the N3 fan map (max over 18 settings; auto chose '{n3res.family}')")
+    print(f"{'family':10s} {'#coef':>5s} {'y':>7s} {'eta':>7s} {'LOO y':>7s} {'LOO eta':>8s} "
+          f"{'floor':>7s}")
+    pct = lambda v: "   —  " if v is None else f"{100 * v:6.2f}%"  # noqa: E731
+    for r in n3res.error_table:
+        print(f"{r.family:10s} {r.n_coefficients:5d} {pct(r.pressure_max_rel_error)} "
+              f"{pct(r.efficiency_max_rel_error)} {pct(r.pressure_loo)} "
+              f" {pct(r.efficiency_loo)} {pct(r.floor)}")
+    n_floor = sum(1 for w in n3res.report.warnings if w.code == "data_not_decreasing_concave")
+    print(f"settings whose pressures are not decreasing-concave (floor > 0): {n_floor} of "
+          f"{len(n3res.settings)}")
+
+
+if __name__ == "__main__":
+    main()
