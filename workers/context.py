@@ -24,7 +24,7 @@ class ServiceContext:
         db = Database(settings.resolved_database_url)
         if migrate:
             db.migrate()
-        return cls(settings=settings, db=db, repo=JobRepository(db.sessions), files=FileStore(settings.resolved_artifact_dir))
+        return cls(settings=settings, db=db, repo=JobRepository(db.sessions, db.writing), files=FileStore(settings.resolved_artifact_dir))
 
     def close(self) -> None:
         self.db.dispose()

@@ -26,6 +26,11 @@ IdempotencyKey = Annotated[
 ]
 
 
+def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) -> Response:
+    """Serialise an already-validated model once (the route's response_model documents it)."""
+    return Response(model.model_dump_json(), status_code=status_code, headers=headers, media_type="application/json")
+
+
 def get_service(request: Request) -> JobService:
     return request.app.state.jobs
 
@@ -36,11 +41,11 @@ Service = Annotated[JobService, Depends(get_service)]
 def submit_route(kind: str):
     """The POST /v1/<kind>/jobs handler: JSON body or multipart upload (``file`` + ``options``)."""
 
-    async def submit(request: Request, response: Response, service: Service, idempotency_key: IdempotencyKey = None) -> JobView:
+    async def submit(request: Request, service: Service, idempotency_key: IdempotencyKey = None) -> Response:
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if content_type == "application/json" or content_type.endswith("+json"):
             body = await request.body()
-            submitted = await run_in_threadpool(service.submit_json, kind, body, idempotency_key)
+            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key)
         elif content_type == "multipart/form-data":
             limit = request.app.state.settings.max_body_bytes
             form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
@@ -55,16 +60,14 @@ def submit_route(kind: str):
             if options is not None and not isinstance(options, str):
                 options = (await options.read()).decode("utf-8", "replace")
             submitted = await run_in_threadpool(
-                service.submit_upload, kind, upload.filename or "upload", content, options, idempotency_key
+                service.submit_upload_view, kind, upload.filename or "upload", content, options, idempotency_key
             )
         else:
             raise UnsupportedMediaType(
                 f"Content-Type {content_type or '(none)'!r} is not accepted: send application/json or multipart/form-data."
             )
-        job = submitted.job
-        response.status_code = 202 if submitted.created else 200
-        response.headers["Location"] = f"/v1/jobs/{job.id}"
-        return await run_in_threadpool(service.view, job)
+        job, view = submitted.job, submitted.view
+        return _json(view, status_code=202 if submitted.created else 200, headers={"Location": f"/v1/jobs/{job.id}"})
 
     submit.__name__ = f"submit_{kind}_job"
     return submit
@@ -118,8 +121,8 @@ def build_router(kinds: list[str]) -> APIRouter:
         return service.list(kind, status, cursor, limit)
 
     @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), summary="Job status")
-    def get_job(job_id: uuid.UUID, service: Service) -> JobView:
-        return service.view(service.get(job_id))
+    def get_job(job_id: uuid.UUID, service: Service) -> Response:
+        return _json(service.view(service.get(job_id)))
 
     @router.get(
         "/jobs/{job_id}/result",

@@ -37,6 +37,7 @@ from workers.persistence.repository import as_utc, is_finished
 class Submitted:
     job: Job
     created: bool
+    view: JobView | None = None
 
 
 def _canonical(value: Any) -> bytes:
@@ -60,6 +61,17 @@ class JobService:
         if spec is None:
             raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(registry.kinds())}.")
         return spec
+
+    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
+        """submit_json plus the job's view, in one thread hop for the async route."""
+        submitted = self.submit_json(kind, body, idempotency_key)
+        submitted.view = self.view(submitted.job)
+        return submitted
+
+    def submit_upload_view(self, *args) -> Submitted:
+        submitted = self.submit_upload(*args)
+        submitted.view = self.view(submitted.job)
+        return submitted
 
     def submit_json(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
         spec = self.spec(kind)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
 from sqlalchemy import Engine, create_engine, event, text
@@ -42,6 +44,15 @@ class Database:
         self.url = url
         self.engine = make_engine(url)
         self.sessions: sessionmaker[Session] = sessionmaker(self.engine, expire_on_commit=False)
+        # SQLite has one writer at a time and its busy handler backs off by sleeping
+        # (1, 2, 5, 10 ... ms), which wrecks latency when the API and the job pool write at
+        # once. Threads of this process therefore queue for writes on a lock instead; other
+        # processes (a CLI run) still fall back on the busy timeout.
+        self._write_lock = threading.Lock() if self.is_sqlite else None
+
+    def writing(self) -> AbstractContextManager:
+        """Context for one write transaction: serialised in-process on SQLite, free on PostgreSQL."""
+        return self._write_lock if self._write_lock is not None else nullcontext()
 
     @property
     def is_sqlite(self) -> bool:

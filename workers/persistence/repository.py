@@ -11,7 +11,8 @@ from __future__ import annotations
 import uuid
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
-from typing import Any, Iterable
+from contextlib import AbstractContextManager, nullcontext
+from typing import Any, Callable, Iterable
 
 from sqlalchemy import and_, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
@@ -43,8 +44,9 @@ class SweepOutcome:
 
 
 class JobRepository:
-    def __init__(self, sessions: sessionmaker[Session]):
+    def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext):
         self.sessions = sessions
+        self.writing = writing  # see Database.writing
 
     # ---- submission and reads -------------------------------------------------------------
 
@@ -57,7 +59,7 @@ class JobRepository:
             existing = self.get_by_idempotency_key(job.idempotency_key)
             if existing is not None:
                 return existing, False
-        with self.sessions() as session:
+        with self.writing(), self.sessions() as session:
             session.add(job)
             try:
                 session.commit()
@@ -142,7 +144,7 @@ class JobRepository:
             )
             .returning(Job.attempt)
         )
-        with self.sessions() as session:
+        with self.writing(), self.sessions() as session:
             attempt = session.execute(statement).scalar_one_or_none()
             session.commit()
         return attempt
@@ -167,7 +169,7 @@ class JobRepository:
     ) -> bool:
         """Store result and artifacts in one transaction, fenced on the attempt."""
         now = utcnow()
-        with self.sessions() as session:
+        with self.writing(), self.sessions() as session:
             updated = session.execute(
                 self._fence(job_id, attempt).values(
                     status="succeeded",
@@ -219,7 +221,7 @@ class JobRepository:
     def cancel(self, job_id: uuid.UUID, *, report: Any) -> str | None:
         """Cancel a queued or running job. Returns the status the job has afterwards, or None
         when it does not exist. A running attempt notices at its next fenced write."""
-        with self.sessions() as session:
+        with self.writing(), self.sessions() as session:
             updated = session.execute(
                 update(Job)
                 .where(Job.id == job_id, Job.status.in_(("queued", "running")))
@@ -277,7 +279,7 @@ class JobRepository:
         return self._execute(self._fence(job_id, attempt).where(Job.lease_until < now).values(**values)) == 1
 
     def _execute(self, statement) -> int:
-        with self.sessions() as session:
+        with self.writing(), self.sessions() as session:
             count = session.execute(statement).rowcount
             session.commit()
             return count

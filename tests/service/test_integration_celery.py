@@ -1,0 +1,175 @@
+"""Scaled mode for real: PostgreSQL + Redis + Celery worker subprocesses started with the
+``plantsolve worker`` command. Skipped with a printed reason when the services are down,
+except under CI=true where they must run."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from tests.conftest import REPO, service_settings, wait_for
+
+pytestmark = pytest.mark.integration
+
+BIN = Path(sys.executable).parent
+
+
+def _env(pg_url: str, redis_url: str, data_dir: Path) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(
+        DATABASE_URL=pg_url,
+        BROKER_URL=redis_url,
+        DATA_DIR=str(data_dir),
+        PLUGINS="tests.support.kinds",
+        HEARTBEAT_SECONDS="0.3",
+        LEASE_SECONDS="2",
+        SWEEP_SECONDS="0.5",
+        PROGRESS_WRITE_SECONDS="0",
+        PYTHONPATH=str(REPO),
+    )
+    return env
+
+
+class Worker:
+    def __init__(self, env: dict[str, str], name: str, log: Path):
+        self.log = log
+        self.process = subprocess.Popen(
+            [str(BIN / "plantsolve"), "worker", "--concurrency", "1", "--hostname", f"{name}@%h", "--log-level", "info"],
+            cwd=REPO,
+            env=env,
+            stdout=log.open("ab"),
+            stderr=subprocess.STDOUT,
+            start_new_session=True,  # its own process group: kill takes the pool children too
+        )
+        deadline = time.monotonic() + 60
+        while b"ready" not in log.read_bytes():
+            if self.process.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"worker did not start:\n{log.read_text()[-3000:]}")
+            time.sleep(0.2)
+
+    def kill(self) -> None:
+        os.killpg(self.process.pid, signal.SIGKILL)
+        self.process.wait(timeout=10)
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            os.killpg(self.process.pid, signal.SIGTERM)
+            try:
+                self.process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                self.kill()
+
+
+_main_workers: list = []
+
+
+@pytest.fixture
+def scaled_workers_stopped():
+    """Stop the module's shared worker so only the test's own workers consume jobs."""
+    for worker in _main_workers:
+        worker.stop()
+
+
+@pytest.fixture(scope="module")
+def scaled(pg_url, redis_url, tmp_path_factory):
+    data_dir = tmp_path_factory.mktemp("scaled")
+    env = _env(pg_url, redis_url, data_dir)
+    settings = service_settings(
+        data_dir, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5
+    )
+    with TestClient(create_app(settings)) as client:  # migrates the fresh database
+        worker = Worker(env, "main", data_dir / "worker-main.log")
+        _main_workers.append(worker)
+        try:
+            yield client, env, data_dir
+        finally:
+            worker.stop()
+
+
+def test_job_runs_end_to_end_on_postgres_and_celery(scaled):
+    client, _, _ = scaled
+    response = client.post("/v1/test-compute/jobs", json={"values": [3.0, 4.0]})
+    assert response.status_code == 202
+    done = wait_for(client, response.json()["id"], timeout=60)
+    assert done["status"] == "succeeded", done
+    assert done["attempt"] == 1
+    assert client.get(f"/v1/jobs/{done['id']}/result").json()["norm"] == 5.0
+    artifact = client.get(f"/v1/jobs/{done['id']}/artifacts/values.txt")
+    assert artifact.status_code == 200 and artifact.content == b"3.0\n4.0"
+    assert client.get("/readyz").json()["checks"] == {"database": "ok", "queue": "ok"}
+
+
+def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
+    client, _, _ = scaled
+    body = {"values": [0.1, 0.2, -0.3, 1e-9, 12345.678]}
+    scaled_job = wait_for(client, client.post("/v1/test-compute/jobs", json=body).json()["id"], timeout=60)
+    with TestClient(create_app(service_settings(tmp_path))) as embedded:
+        embedded_job = wait_for(embedded, embedded.post("/v1/test-compute/jobs", json=body).json()["id"])
+        embedded_result = embedded.get(f"/v1/jobs/{embedded_job['id']}/result").json()
+    scaled_result = client.get(f"/v1/jobs/{scaled_job['id']}/result").json()
+    assert scaled_result == embedded_result
+    assert scaled_result["report"]["warnings"][0]["code"] == "negative"
+
+
+def test_crash_is_retried_then_failed_with_report(scaled):
+    client, _, _ = scaled
+    done = wait_for(client, client.post("/v1/test-crash/jobs", json={"message": "kaputt"}).json()["id"], timeout=60)
+    assert done["status"] == "failed" and done["attempt"] == 2
+    assert [a["attempt"] for a in done["report"]["details"]["attempts"]] == [1, 2]
+
+
+def test_hanging_solver_hits_celery_time_limit(scaled):
+    client, _, _ = scaled
+    done = wait_for(client, client.post("/v1/test-hang/jobs", json={}).json()["id"], timeout=60)
+    assert done["status"] == "failed" and done["report"]["stage"] == "time_limit"
+
+
+def test_cancel_running_job_on_celery(scaled):
+    client, _, _ = scaled
+    job = client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 30}).json()
+    wait_for(client, job["id"], statuses=("running",), timeout=60)
+    assert client.post(f"/v1/jobs/{job['id']}/cancel").json()["status"] == "cancelled"
+    follow = wait_for(client, client.post("/v1/test-compute/jobs", json={"values": [2.0]}).json()["id"], timeout=60)
+    assert follow["status"] == "succeeded"  # the worker gave up the cancelled job promptly
+    assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"
+
+
+@pytest.fixture
+def unstaffed(pg_url, redis_url, tmp_path):
+    """The scaled API with no worker running yet (the test starts and kills its own)."""
+    env = _env(pg_url, redis_url, tmp_path)
+    settings = service_settings(
+        tmp_path, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5
+    )
+    with TestClient(create_app(settings)) as client:
+        yield client, env, tmp_path
+
+
+def test_killed_worker_job_reruns_on_another_attempt(unstaffed, scaled_workers_stopped):
+    client, env, data_dir = unstaffed
+    markers = data_dir / "markers"
+    victim = Worker(env, "victim", data_dir / "worker-victim.log")
+    rescuer = None
+    try:
+        job = client.post("/v1/test-compute/jobs", json={"values": [5.0], "seconds": 4, "marker_dir": str(markers)}).json()
+        wait_for(client, job["id"], statuses=("running",), timeout=60)
+        victim.kill()  # SIGKILL to the whole worker: no clean shutdown, no ack, no result
+        assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "running"
+        rescuer = Worker(env, "rescuer", data_dir / "worker-rescuer.log")
+        done = wait_for(client, job["id"], timeout=90)
+        assert done["status"] == "succeeded", done
+        assert done["attempt"] == 2
+        assert client.get(f"/v1/jobs/{job['id']}/result").json()["total"] == 5.0
+        assert len(list(markers.iterdir())) == 1  # the killed attempt never completed
+    finally:
+        victim.stop()
+        if rescuer is not None:
+            rescuer.stop()
