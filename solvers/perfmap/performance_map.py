@@ -314,21 +314,20 @@ def distance_to_region(curves, triangles, t, X, Y, ranges) -> np.ndarray:
     A = np.stack([Xs[triangles], Ys[triangles]], axis=-1)  # (L, 3, M, 2)
     A = A.transpose(0, 2, 1, 3).reshape(-1, 3, 2)  # (L*M, 3, 2)
     out = np.empty(len(Xn))
-    for k in range(len(Xn)):
-        p = np.array([Xn[k], Yn[k]])
-        d = np.full(len(A), np.inf)
+    a, b, c = A[:, 0], A[:, 1], A[:, 2]
+    nonzero_area = np.abs(_cross2(b - a, c - a)) > 0
+    chunk = max(1, 400_000 // max(len(A), 1))
+    for k0 in range(0, len(Xn), chunk):
+        p = np.stack([Xn[k0 : k0 + chunk], Yn[k0 : k0 + chunk]], axis=-1)[:, None, :]  # (q,1,2)
+        d = np.full((p.shape[0], len(A)), np.inf)
         for e0, e1 in ((0, 1), (1, 2), (2, 0)):
-            a, b = A[:, e0], A[:, e1]
-            ab = b - a
+            s0, ab = A[:, e0], A[:, e1] - A[:, e0]
             L2 = np.einsum("ij,ij->i", ab, ab)
-            h = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
-            proj = a + h[:, None] * ab
-            d = np.minimum(d, np.linalg.norm(p - proj, axis=1))
-        # inside some triangle -> 0
-        a, b, c = A[:, 0], A[:, 1], A[:, 2]
-        s1 = _cross2(b - a, p - a)
-        s2 = _cross2(c - b, p - b)
-        s3 = _cross2(a - c, p - c)
-        inside = ((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0))
-        out[k] = 0.0 if np.any(inside & (np.abs(s1) + np.abs(s2) + np.abs(s3) > 0)) else d.min()
+            h = np.clip(np.einsum("qij,ij->qi", p - s0, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+            proj = s0 + h[..., None] * ab
+            d = np.minimum(d, np.linalg.norm(p - proj, axis=-1))
+        s1, s2, s3 = _cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)
+        inside = (((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0)))
+        inside &= nonzero_area
+        out[k0 : k0 + chunk] = np.where(inside.any(axis=1), 0.0, d.min(axis=1))
     return out
