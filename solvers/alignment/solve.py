@@ -1,0 +1,61 @@
+"""Entry point: validate, find conflicts, run the chosen method, build the result."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from schemas.alignment import AlignmentRequest, AlignmentResult
+from solvers.alignment.cuts import choose_cut
+from solvers.alignment.direct import solve_direct
+from solvers.alignment.finalize import Outcome, build_result
+from solvers.alignment.iterative import solve_dual_quaternion
+from solvers.alignment.model import Model, build_model, connection_errors
+from solvers.alignment.validation import check_input
+from solvers.base import Progress, SolverError, no_progress
+
+
+def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progress) -> Outcome:
+    """Direct method; connections it cannot close are cut one at a time, highest impact first."""
+    opts = request.options
+    active = np.ones(model.n_conn, dtype=bool)
+    reasons: dict[int, str] = {}
+    errors: dict[int, tuple[float, float]] = {}
+    iterations = 0
+    while True:
+        progress(0.1 + 0.6 * min(len(reasons), 10) / 10, f"direct solve ({len(reasons)} cuts so far)")
+        pose = solve_direct(model, active, opts.pipe_stiffness)
+        iterations += pose.iterations
+        gap, ang = connection_errors(model, pose.P, pose.D)
+        k = choose_cut(model, active, gap, ang)
+        if k is None:
+            reason = "all connections closed" if not reasons else f"closed after {len(reasons)} cut(s)"
+            break
+        if len(reasons) >= opts.max_cuts:
+            reason = f"cut limit ({opts.max_cuts}) reached with connections still open"
+            break
+        active[k] = False
+        reasons[k] = "conflict"
+        errors[k] = (float(gap[k]), float(ang[k]))
+    return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
+                   cut_reason=reasons, cut_errors=errors)
+
+
+def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
+    """Align the pipe system so that every connection closes; see the package docstring."""
+    check_input(request)
+    progress(0.0, "building model")
+    model = build_model(request)
+    if model.n_comp == 0:
+        raise SolverError("model", "no components")
+    try:
+        conflict = _direct_with_cuts(model, request, progress)
+    except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
+        raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
+    if request.options.method == "direct":
+        out = conflict
+    else:
+        out = solve_dual_quaternion(model, request.options, conflict.active, progress)
+        out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
+        out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
+    progress(0.95, "building result")
+    return build_result(request, model, out, request.options.method)

@@ -1,0 +1,41 @@
+"""Uploaded files: ``.pcf`` (ISOGEN) or ``.json`` (an AlignmentRequest body)."""
+
+from __future__ import annotations
+
+import json
+
+from pydantic import ValidationError
+
+from schemas.alignment import AlignmentRequest
+from solvers.alignment.pcf import parse_pcf
+from solvers.base import FieldError, InputRejected
+
+UPLOAD_EXTENSIONS = (".pcf", ".json")
+
+
+def parse_upload(filename: str, content: bytes, options: dict | None) -> AlignmentRequest:
+    name = (filename or "").lower()
+    ext = next((e for e in UPLOAD_EXTENSIONS if name.endswith(e)), None)
+    if ext is None:
+        raise InputRejected([FieldError(("file",), f"unsupported file type {filename!r}; expected one of {UPLOAD_EXTENSIONS}")])
+    try:
+        text = content.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        try:
+            text = content.decode("latin-1")
+        except UnicodeDecodeError as exc:  # pragma: no cover - latin-1 decodes everything
+            raise InputRejected([FieldError(("file",), "file is not text")]) from exc
+    try:
+        if ext == ".json":
+            body = json.loads(text)
+            if not isinstance(body, dict):
+                raise InputRejected([FieldError(("file",), "JSON upload must be an object (an alignment request)")])
+            if options:
+                body["options"] = {**body.get("options", {}), **options}
+            return AlignmentRequest.model_validate(body)
+        return parse_pcf(text, options)
+    except json.JSONDecodeError as exc:
+        raise InputRejected([FieldError(("file",), f"invalid JSON: {exc}")]) from exc
+    except ValidationError as exc:
+        errs = [FieldError(("file",) + tuple(e["loc"]), e["msg"]) for e in exc.errors()]
+        raise InputRejected(errs) from exc
