@@ -14,7 +14,7 @@ from solvers.base import Progress, SolverError, no_progress
 from . import arcline, curve, fit, local_fit, spine
 from .geometry import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model)
 from .pointio import request_points
-from .validate import check_points
+from .validate import check_input
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
@@ -29,8 +29,8 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     timings: dict[str, float] = {}
     warnings: list[Diagnostic] = []
     opts = request.options
+    check_input(request)
     pts_in = request_points(request)
-    check_points(pts_in, ("points",))
     rng = np.random.default_rng(opts.seed)
     # canonical order: the result must not depend on the order of the input samples
     order = np.lexsort(pts_in.T[::-1])
@@ -195,8 +195,6 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
 
     # ---- stage 6: report ----------------------------------------------------------------
     progress(0.97, "report")
-    inv = np.empty(N, int)
-    inv[order] = np.arange(N)  # sorted position -> original index via order
     reasons_sorted = np.full(N, "residual", dtype=object)
     flagged_curv = probe_idx[labels == 2]
     flagged_proj = seed_idx[~sc.ok]

@@ -65,3 +65,11 @@ def same_tube(result, rows, tol_len=0.15, tol_ang=0.1, tol_rad=0.01):
 @pytest.fixture
 def s_bend_scan():
     return scan(SHAPES["s_bend"], n=5000, seed=3, view=[0.3, 0.2, -1.0], noise=0.05, outliers=0.005)
+
+
+@pytest.fixture
+def tk():
+    """Helpers for the tests (conftest cannot be imported under --import-mode=importlib)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(SHAPES=SHAPES, scan=scan, request=request, same_tube=same_tube, lra_array=lra_array)
