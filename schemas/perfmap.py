@@ -207,7 +207,8 @@ class QueryAnswer(BaseModel):
     feasible: bool = Field(description="True when some setting in the map reaches the point.")
     theta: float | None = Field(description="Optimal inlet setting (None when infeasible).")
     phi: float | None = Field(description="Optimal diffuser setting (None when infeasible).")
-    efficiency: float | None = Field(description="Max efficiency at the point (None when infeasible).")
+    efficiency: float | None = Field(
+        description="Max efficiency at the point (None when infeasible).")
     distance_to_map: float = Field(
         description="Distance to the reachable region in range-normalised units "
         "(flow/flow span, pressure/pressure span); 0 when feasible.")

@@ -25,7 +25,10 @@ def envelope(curves: CurveSet, members: list[int], phis: np.ndarray, n_curves: i
     best_phi = np.full(n_points, np.nan)
     best_eta = np.full(n_points, np.nan)
 
-    pairs = [(members[0], members[0])] if len(members) == 1 else list(zip(members[:-1], members[1:]))
+    if len(members) == 1:
+        pairs = [(members[0], members[0])]
+    else:
+        pairs = list(zip(members[:-1], members[1:]))
     s = np.linspace(0.0, 1.0, n_curves + 1) if len(members) > 1 else np.zeros(1)
     for i0, i1 in pairs:
         xmin = (1 - s) * curves.x_min[i0] + s * curves.x_min[i1]  # (S,)

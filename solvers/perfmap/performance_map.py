@@ -24,6 +24,7 @@ from solvers.perfmap.families import CurveSet
 _INSIDE_TOL = 1e-10
 _DET_TOL = 1e-14
 _T_BLOCK = 8
+_NODE_CHUNK = 65536
 
 
 def curve_ranges(curves: CurveSet) -> tuple[float, float, float, float]:
@@ -120,20 +121,20 @@ def _edge_candidates(curves, i, j, t, Xs, Ys, Es, Xn, Yn, norm, iterations=14):
     for m0 in range(0, M - 1, _T_BLOCK):
         blk = np.arange(m0, min(m0 + _T_BLOCK, M - 1) + 1)  # overlapping by one sample
         Pb, Qb = P[:, blk], Q[:, blk]
-        sel = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
-                             & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
-        if not len(sel):
-            continue
-        f = (dxe[blk][:, None] * (Yn[sel][None, :] - Qb[0][:, None])
-             - dye[blk][:, None] * (Xn[sel][None, :] - Pb[0][:, None]))
-        sc = (f[:-1] * f[1:] <= 0) & ~((f[:-1] == 0) & (f[1:] == 0))
-        mm, gg = np.nonzero(sc)
-        if len(mm):
-            found_nodes.append(sel[gg])
-            found_lo.append(t[blk[mm]])
-            found_hi.append(t[blk[mm + 1]])
-            found_flo.append(f[mm, gg])
-            found_fhi.append(f[mm + 1, gg])
+        in_box = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
+                                & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
+        for n0 in range(0, len(in_box), _NODE_CHUNK):
+            sel = in_box[n0 : n0 + _NODE_CHUNK]
+            f = (dxe[blk][:, None] * (Yn[sel][None, :] - Qb[0][:, None])
+                 - dye[blk][:, None] * (Xn[sel][None, :] - Pb[0][:, None]))
+            sc = (f[:-1] * f[1:] <= 0) & ~((f[:-1] == 0) & (f[1:] == 0))
+            mm, gg = np.nonzero(sc)
+            if len(mm):
+                found_nodes.append(sel[gg])
+                found_lo.append(t[blk[mm]])
+                found_hi.append(t[blk[mm + 1]])
+                found_flo.append(f[mm, gg])
+                found_fhi.append(f[mm + 1, gg])
     if not found_nodes:
         return empty
     nodes = np.concatenate(found_nodes)
@@ -200,26 +201,26 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
             if not len(blk):
                 continue
             Pb, Qb = P[:, blk], Q[:, blk]
-            nodes = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
-                                   & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
-            if not len(nodes):
-                continue
+            in_box = np.flatnonzero((Xn >= Pb.min() - 1e-12) & (Xn <= Pb.max() + 1e-12)
+                                    & (Yn >= Qb.min() - 1e-12) & (Yn <= Qb.max() + 1e-12))
             ab, bb, cb, db, detb = a[blk], b[blk], c[blk], d[blk], det[blk]
-            dx = Xn[nodes][None, :] - Pb[2][:, None]  # (m, g)
-            dy = Yn[nodes][None, :] - Qb[2][:, None]
-            u = (db[:, None] * dx - bb[:, None] * dy) / detb[:, None]
-            v = (ab[:, None] * dy - cb[:, None] * dx) / detb[:, None]
-            w = 1.0 - u - v
-            inside = (u >= -_INSIDE_TOL) & (v >= -_INSIDE_TOL) & (w >= -_INSIDE_TOL)
             Hb = H[:, blk]
-            eta = np.where(inside, u * Hb[0][:, None] + v * Hb[1][:, None] + w * Hb[2][:, None],
-                           -np.inf)
-            m = np.argmax(eta, axis=0)
-            e = eta[m, np.arange(len(nodes))]
-            upd = e > best[nodes]
-            best[nodes[upd]] = e[upd]
-            b_tri[nodes[upd]] = k
-            b_m[nodes[upd]] = blk[m[upd]]
+            for n0 in range(0, len(in_box), _NODE_CHUNK):  # bounded memory on huge grids
+                nodes = in_box[n0 : n0 + _NODE_CHUNK]
+                dx = Xn[nodes][None, :] - Pb[2][:, None]  # (m, g)
+                dy = Yn[nodes][None, :] - Qb[2][:, None]
+                u = (db[:, None] * dx - bb[:, None] * dy) / detb[:, None]
+                v = (ab[:, None] * dy - cb[:, None] * dx) / detb[:, None]
+                w = 1.0 - u - v
+                inside = (u >= -_INSIDE_TOL) & (v >= -_INSIDE_TOL) & (w >= -_INSIDE_TOL)
+                eta = np.where(inside, u * Hb[0][:, None] + v * Hb[1][:, None] + w * Hb[2][:, None],
+                               -np.inf)
+                m = np.argmax(eta, axis=0)
+                e = eta[m, np.arange(len(nodes))]
+                upd = e > best[nodes]
+                best[nodes[upd]] = e[upd]
+                b_tri[nodes[upd]] = k
+                b_m[nodes[upd]] = blk[m[upd]]
         progress(p0 + (p1 - p0) * 0.6 * (k + 1) / n_tri, "performance map: triangles")
 
     b_theta = np.full(G, np.nan)

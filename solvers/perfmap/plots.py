@@ -139,7 +139,8 @@ def _map(result: PerfmapResult) -> Figure:
     ax.plot([], [], "r-", label="reachable boundary")
     ax.legend(fontsize=8, loc="upper right", facecolor="lightgrey")
     ax.set(xlabel="flow", ylabel="pressure",
-           title=f"Performance map ({m.method}, {result.family}): max efficiency and optimal (θ, φ)")
+           title=f"Performance map ({m.method}, {result.family}): "
+           "max efficiency and optimal (θ, φ)")
     return fig
 
 

@@ -83,7 +83,8 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
         table.append(ErrorTableRow(
             family=fam, n_coefficients=N_COEFFICIENTS[fam],
             pressure_max_rel_error=float(max(perr)),
-            efficiency_max_rel_error=None if fam == "log" else float(max(r.efficiency_err for r in rs)),
+            efficiency_max_rel_error=(None if fam == "log"
+                                      else float(max(r.efficiency_err for r in rs))),
             pressure_loo=None if any(v is None for v in ploo) else float(max(ploo)),
             efficiency_loo=None if any(v is None for v in eloo) else float(max(eloo)),
             floor=float(max(floors)), worst_setting=int(np.argmax(perr))))

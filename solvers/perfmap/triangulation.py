@@ -1,4 +1,4 @@
-"""Deterministic, unit-free triangulation of the (theta, phi) settings (paper section 4, Fig. 15)."""
+"""Deterministic, unit-free triangulation of the (theta, phi) settings (paper §4, Fig. 15)."""
 
 from __future__ import annotations
 
