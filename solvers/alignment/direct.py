@@ -218,7 +218,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
                 break
         else:
             stalls = 0
-        if use_cost and err > 0.1 * prev:
+        if use_cost and err > 0.5 * prev:
             use_cost = False
         prev = err
         locked |= short

@@ -130,6 +130,12 @@ def build_model(request: AlignmentRequest) -> Model:
         arm_sum = np.bincount(port_comp, arms, minlength=n)
         rad = np.where(np.isnan(radius), 0.0, radius)
         size[fit_idx] = np.maximum(arm_sum[fit_idx], rad[fit_idx])
+    # an up vector is a direction normal to the port axis of an inline fitting: drop any axial part
+    has_up = np.flatnonzero(~np.isnan(up[:, 0]) & (counts >= 1))
+    if len(has_up):
+        ax = D_in[port_start[has_up]]
+        v = up[has_up] - np.einsum("ij,ij->i", up[has_up], ax)[:, None] * ax
+        up[has_up] = v / np.linalg.norm(v, axis=1, keepdims=True)
     lref = float(np.median(size[size > 0])) if np.any(size > 0) else 1.0
     size = np.maximum(size, 1e-3 * lref)
 

@@ -162,7 +162,8 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
             if dirs[i] is not None and dirs[j] is not None and float(np.dot(dirs[i], dirs[j])) > -0.5:
                 continue
             used[i] = used[j] = True
-            conns.append((i, j))
+            conns.append((min(i, j), max(i, j)))
+        conns.sort()  # file order, independent of the gaps
     for i, j in conns:  # single-ended items take the reversed direction of their partner
         if dirs[i] is None and dirs[j] is not None:
             dirs[i] = -dirs[j]

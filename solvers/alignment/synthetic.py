@@ -26,18 +26,18 @@ def grid_network(
     conns: list[dict] = []
     node_port: dict[tuple[int, int, int, int], tuple[str, int]] = {}
 
-    def perturb(ports, centre, noise, fixed):
+    def perturb(ports, centre, noise, fixed, up=None):
         if fixed or noise == (0.0, 0.0):
-            return ports
+            return ports, up
         rot = Rotation.from_rotvec(rng.normal(size=3) * np.radians(noise[1]) / np.sqrt(3))
         shift = rng.normal(size=3) * noise[0] / np.sqrt(3)
         out = []
         for p, d in ports:
             out.append((rot.apply(np.asarray(p) - centre) + centre + shift, rot.apply(d)))
-        return out
+        return out, (None if up is None else rot.apply(up).tolist())
 
     def add(cid, kind, ftype, ports, centre, noise, fixed=False, up=None):
-        ports = perturb(ports, centre, noise, fixed)
+        ports, up = perturb(ports, centre, noise, fixed, up)
         comp = {"id": cid, "kind": kind, "radius": radius, "fixed": fixed,
                 "ports": [{"position": (np.asarray(p) + org).tolist(), "direction": np.asarray(d).tolist()} for p, d in ports]}
         if kind == "fitting":
