@@ -62,6 +62,10 @@ def create_app(settings: Settings | None = None, *, run_jobs: bool = True) -> Fa
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     problems.install(app)
     app.include_router(build_router(registry.kinds()))
+    if registry.get("perfmap") is not None:
+        from app.perfmap.endpoints import build_router as build_perfmap_router
+
+        app.include_router(build_perfmap_router())
     app.include_router(build_dashboard())
     _install_health(app)
     app.openapi = lambda: _openapi(app)

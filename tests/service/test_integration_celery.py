@@ -119,6 +119,23 @@ def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
     assert scaled_result["report"]["warnings"][0]["code"] == "negative"
 
 
+def test_real_solver_gives_identical_results_embedded_and_celery(scaled, tmp_path):
+    pytest.importorskip("solvers.perfmap")
+    import json
+
+    client, _, _ = scaled
+    body = json.loads((REPO / "examples" / "perfmap" / "n3_fan_map.json").read_text())
+    body.setdefault("options", {})["grid"] = [20, 20]
+    scaled_job = wait_for(client, client.post("/v1/perfmap/jobs", json=body).json()["id"], timeout=180)
+    assert scaled_job["status"] == "succeeded", scaled_job
+    with TestClient(create_app(service_settings(tmp_path))) as embedded:
+        embedded_job = wait_for(embedded, embedded.post("/v1/perfmap/jobs", json=body).json()["id"], timeout=180)
+        embedded_result = embedded.get(f"/v1/jobs/{embedded_job['id']}/result").json()
+        embedded_artifacts = {a["name"]: a["sha256"] for a in embedded_job["artifacts"]}
+    assert client.get(f"/v1/jobs/{scaled_job['id']}/result").json() == embedded_result
+    assert {a["name"] for a in scaled_job["artifacts"]} == set(embedded_artifacts)
+
+
 def test_crash_is_retried_then_failed_with_report(scaled):
     client, _, _ = scaled
     done = wait_for(client, client.post("/v1/test-crash/jobs", json={"message": "kaputt"}).json()["id"], timeout=60)
