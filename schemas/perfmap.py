@@ -114,7 +114,8 @@ class SettingFit(BaseModel):
     efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.")
     pressure_loo: float | None = Field(
         default=None, description="Leave-one-out: max relative error of each point predicted "
-        "by a least-squares fit to the other points (None when too few points).")
+        "by a least-squares fit to the other points (None when too few points; on settings "
+        "with more than 20 points, 20 evenly spread points are left out).")
     efficiency_loo: float | None = None
     floor: float = Field(
         description="Best max relative error of the pressure that ANY decreasing concave "
