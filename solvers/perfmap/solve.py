@@ -33,14 +33,25 @@ def _nan_to_none(a: np.ndarray) -> list:
 
 
 def _choose_family(fits: dict[str, list[SettingResult]]) -> tuple[str, dict]:
-    """Family with the smallest mean (over settings) of pressure + efficiency LOO error."""
-    scores = {}
+    """Family with the smallest leave-one-out error, pressure and efficiency weighted alike.
+
+    Score = mean LOO pressure error / best family's + mean LOO efficiency error / best
+    family's (scale-free: efficiency errors, often much larger near choke, do not swamp the
+    pressure). Near-ties go to the family with fewer coefficients.
+    """
+    means = {}
     for fam, rs in fits.items():
         if all(r.pressure_loo is not None and r.efficiency_loo is not None for r in rs):
-            scores[fam] = float(np.mean([r.pressure_loo + r.efficiency_loo for r in rs]))
-    if not scores:
-        return "parabola", scores
-    return min(scores, key=lambda f: (scores[f], FAMILIES.index(f))), scores
+            means[fam] = (float(np.mean([r.pressure_loo for r in rs])),
+                          float(np.mean([r.efficiency_loo for r in rs])))
+    if not means:
+        return "parabola", {}
+    eps = 1e-9
+    bp = min(v[0] for v in means.values())
+    be = min(v[1] for v in means.values())
+    scores = {f: (p + eps) / (bp + eps) + (e + eps) / (be + eps) for f, (p, e) in means.items()}
+    best = min(scores, key=lambda f: (round(scores[f], 6), N_COEFFICIENTS[f], FAMILIES.index(f)))
+    return best, {"scores": scores, "mean_loo": means}
 
 
 def _public_coefficients(r: SettingResult, s: Setting) -> list[float]:
@@ -90,10 +101,10 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
             floor=float(max(floors)), worst_setting=int(np.argmax(perr))))
 
     if opts.model == "auto":
-        family, scores = _choose_family(fits)
-        details = {"scores": scores, "criterion": "mean over settings of pressure LOO + "
-                   "efficiency LOO (max relative errors)"}
-        if not scores:
+        family, details = _choose_family(fits)
+        details["criterion"] = ("mean LOO pressure error / best family's + mean LOO "
+                                "efficiency error / best family's")
+        if "scores" not in details:
             warnings.append(Diagnostic(code="auto_without_loo", message="Too few points per "
                             "setting for leave-one-out errors; 'auto' fell back to 'parabola'."))
     else:

@@ -204,3 +204,14 @@ def test_progress_and_cancellation(synthetic_request):
 def test_deterministic(synthetic_request, synthetic_result):
     again = solve(synthetic_request)
     assert again.model_dump_json() == synthetic_result.model_dump_json()
+
+
+def test_auto_picks_the_generating_family_and_falls_back_without_loo():
+    res = solve(PerfmapRequest.model_validate(
+        request_body(n_theta=3, n_phi=3, options={"model": "auto", "grid": [12, 12]})))
+    assert res.family == "cubic"  # data are cubic Beziers: LOO exact only for 'cubic'
+    assert res.report.details["family_choice"]["scores"]["cubic"] == pytest.approx(2.0)
+    res = solve(PerfmapRequest.model_validate(
+        request_body(n_theta=3, n_phi=3, n_points=3, options={"model": "auto", "grid": [12, 12]})))
+    assert res.family == "parabola"
+    assert any(w.code == "auto_without_loo" for w in res.report.warnings)
