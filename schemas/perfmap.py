@@ -144,9 +144,11 @@ class Envelope(BaseModel):
 
     theta: float
     flow: list[float]
-    pressure: list[float] = Field(description="max over phi of the interpolated characteristics.")
-    phi: list[float] = Field(description="phi(x) attaining the max (paper eq. 48).")
-    efficiency: list[float] = Field(description="eta along the max-curve (paper eq. 50).")
+    pressure: list[float | None] = Field(
+        description="max over phi of the interpolated characteristics (null: no curve).")
+    phi: list[float | None] = Field(description="phi(x) attaining the max (paper eq. 48).")
+    efficiency: list[float | None] = Field(
+        description="eta along the max-curve (paper eq. 50).")
 
 
 class PerformanceMap(BaseModel):

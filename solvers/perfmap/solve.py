@@ -152,8 +152,10 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
     for th in sorted(set(theta.tolist())):
         members = [i for i in range(len(settings)) if theta[i] == th]
         e = envelope(curves, members, phi, opts.envelope_curves, opts.envelope_points)
-        envs.append(Envelope(theta=th, flow=e["flow"].tolist(), pressure=e["pressure"].tolist(),
-                             phi=e["phi"].tolist(), efficiency=e["efficiency"].tolist()))
+        envs.append(Envelope(theta=th, flow=e["flow"].tolist(),
+                             pressure=_nan_to_none(e["pressure"])[0],
+                             phi=_nan_to_none(e["phi"])[0],
+                             efficiency=_nan_to_none(e["efficiency"])[0]))
     progress(0.62, "envelopes")
 
     ranges = curve_ranges(curves)

@@ -159,3 +159,13 @@ def test_map_nodes_are_nan_outside_not_zero(n3_result):
     eta = _arr(n3_result.map.efficiency)
     assert np.isnan(eta).any() and not (eta == 0).any()
     assert 0.1 < n3_result.map.reachable_fraction < 0.9
+
+
+def test_query_on_stored_json_result(synthetic_result):
+    from schemas.perfmap import PerfmapResult
+
+    stored = PerfmapResult.model_validate_json(synthetic_result.model_dump_json())
+    q = PerfmapQueryRequest(points=[{"flow": f, "pressure": p}
+                                    for f, p in zip(synthetic_result.map.flow[5:30:5],
+                                                    synthetic_result.map.pressure[10:35:5])])
+    assert query(stored, q) == query(synthetic_result, q)
