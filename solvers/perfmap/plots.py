@@ -6,7 +6,8 @@ import io
 import math
 
 import numpy as np
-from matplotlib.figure import Figure  # no pyplot: no global figure state; PNG/SVG via Agg/SVG
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator  # no pyplot: no global figure state; PNG/SVG via Agg/SVG
 
 from schemas.perfmap import PerfmapRequest, PerfmapResult
 from solvers.base import Artifact
@@ -104,8 +105,9 @@ def _envelopes(result: PerfmapResult) -> Figure:
 
 
 def _map(result: PerfmapResult) -> Figure:
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
-    ax = fig.subplots()
+    fig = Figure(figsize=(12, 7.5), layout="constrained")
+    ax, ax_tri = fig.subplots(1, 2, width_ratios=[4.2, 1])
+    _triangulation(ax_tri, result)
     m = result.map
     curves = curveset_from_fits(result.settings)
     X, Y, _ = curves.sample(np.linspace(0.0, 1.0, 101))
@@ -121,27 +123,38 @@ def _map(result: PerfmapResult) -> Figure:
     finite = np.isfinite(eta)
     if finite.sum() >= 4:
         lo, hi = np.nanmin(eta), np.nanmax(eta)
-        levels = np.linspace(lo, hi, 14) if hi > lo else [lo, lo + 1e-9]
+        levels = MaxNLocator(14).tick_values(lo, hi) if hi > lo else [lo, lo + 1e-9]
         cf = ax.contourf(gx, gy, np.ma.masked_invalid(eta), levels=levels, cmap="viridis")
         fig.colorbar(cf, ax=ax, label="max efficiency η")
-        cs = ax.contour(gx, gy, np.ma.masked_invalid(th), levels=8, colors="white",
+        cs = ax.contour(gx, gy, np.ma.masked_invalid(th), levels=6, colors="white",
                         linewidths=0.9, linestyles="--")
         ax.clabel(cs, fontsize=7, fmt="θ=%.3g")
         cs = ax.contour(gx, gy, np.ma.masked_invalid(ph), levels=8, colors="orange",
-                        linewidths=0.9, linestyles=":")
+                        linewidths=1.0, linestyles="-")
         ax.clabel(cs, fontsize=7, fmt="φ=%.3g")
         ax.contour(gx, gy, finite.astype(float), levels=[0.5], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
     ax.plot([], [], "k-", lw=0.6, label="setting characteristics")
     ax.plot([], [], "w--", label="optimal θ")
-    ax.plot([], [], ":", color="orange", label="optimal φ")
+    ax.plot([], [], "-", color="orange", label="optimal φ")
     ax.plot([], [], "r-", label="reachable boundary")
     ax.legend(fontsize=8, loc="upper right", facecolor="lightgrey")
     ax.set(xlabel="flow", ylabel="pressure",
            title=f"Performance map ({m.method}, {result.family}): "
            "max efficiency and optimal (θ, φ)")
     return fig
+
+
+def _triangulation(ax, result: PerfmapResult) -> None:
+    """The settings and their triangulation (paper Fig. 15)."""
+    th = np.array([s.theta for s in result.settings])
+    ph = np.array([s.phi for s in result.settings])
+    if result.triangles:
+        ax.triplot(th, ph, np.array(result.triangles), color="0.4", lw=0.7)
+    ax.plot(th, ph, "ko", ms=3)
+    ax.set(xlabel="θ", ylabel="φ", title="settings")
+    ax.set_box_aspect(1.6)
 
 
 def render_artifacts(request: PerfmapRequest, result: PerfmapResult) -> list[Artifact]:
