@@ -38,6 +38,7 @@ def sweep_once(ctx: ServiceContext, dispatcher: Dispatcher) -> None:
         job = ctx.repo.get(job_id)
         if job is not None and job.status == "queued":
             dispatcher.enqueue(job_id, job.kind)
+            ctx.repo.mark_enqueued(job_id)
     if outcome.requeued or outcome.failed:
         log.info("sweeper: re-queued %d, failed %d", len(outcome.requeued), len(outcome.failed))
 
@@ -137,7 +138,6 @@ class CeleryDispatcher:
         if spec is not None:
             limits = {"soft_time_limit": spec.soft_time_limit, "time_limit": spec.time_limit}
         self.celery.send_task("plantsolve.run_job", args=[str(job_id)], **limits)
-        self.ctx.repo.mark_enqueued(job_id)
 
     def ping(self) -> None:
         with self.celery.connection_for_write() as connection:

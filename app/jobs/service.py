@@ -29,7 +29,7 @@ from solvers.base import InputRejected
 from workers import registry
 from workers.context import ServiceContext
 from workers.dispatch import Dispatcher
-from workers.persistence.models import Job
+from workers.persistence.models import Job, utcnow
 from workers.persistence.repository import as_utc, is_finished
 
 
@@ -161,6 +161,7 @@ class JobService:
             idempotency_key=key,
             body_hash=body_hash,
             solver_version=spec.version,
+            enqueued_at=utcnow(),  # enqueued right after the commit; the sweeper retries if that fails
             **fields,
         )
         stored, created = self.ctx.repo.create(job)

@@ -34,7 +34,9 @@ def make_engine(url: str) -> Engine:
         )
         event.listen(engine, "connect", _sqlite_pragmas)
         return engine
-    return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+    # Connections above pool_size are closed on return; under a burst of submissions that
+    # means a new PostgreSQL connection (several ms) per request, so keep the pool wide.
+    return create_engine(url, pool_pre_ping=True, pool_size=24, max_overflow=16, pool_recycle=1800)
 
 
 class Database:
