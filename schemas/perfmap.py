@@ -194,7 +194,7 @@ class PerfmapQueryRequest(StrictModel):
     """Duty points to look up in a finished map: ``{"points": [{flow, pressure}, ...]}`` or a
     single ``{"flow": ..., "pressure": ...}``."""
 
-    points: list[QueryPoint] = Field(min_length=1, max_length=100_000)
+    points: list[QueryPoint] = Field(min_length=1, max_length=10_000)
 
     @model_validator(mode="before")
     @classmethod
