@@ -9,10 +9,12 @@ the paper, the line l_j is projected into the plane of the edge that reaches j f
 best path, and that modified line is used for j's outgoing edges (G1 continuity).
 
 Implementation choices (sound equivalents of the paper's constructions):
-* The plane of an edge is the least-squares plane of the chain that contains l_i (the paper
-  uses the plane through p_i, p_{i+1}, p_{j+1}; fitting all chain vertices is less sensitive
-  to one noisy vertex). Vertices farther than ε from it reject the edge; the in-plane
-  tolerance is ε'_k = sqrt(ε² − h_k²) exactly as in Alg. 1.
+* The plane of an edge is the least-squares plane through l_i of the chain vertices (less
+  sensitive to one vertex than the paper's plane through p_i, p_{i+1}, p_{j+1}); when the
+  chain hardly leaves l_i (rms offset < 2ε, small bends) that plane would be arbitrary and
+  tilt the projected tangent l'_j by up to the bend angle, so the plane spanned by the two
+  tangent directions (normal u_i × u_j) is used instead. Vertices farther than ε from the plane reject the
+  edge; the in-plane tolerance is ε'_k = sqrt(ε² − h_k²) exactly as in Alg. 1.
 * The family of arcs tangent to both lines is parametrised by the arc's start t₁ on l_i
   instead of the centre on the bisector: radius and end point are linear in t₁ and the
   parametrisation stays regular for apex angles of 180° and more (where the bisector
@@ -29,6 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import Spine, TubeModel, model_from_spine
+
+
+_TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
 
 
 @dataclass
@@ -69,21 +74,29 @@ def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
 
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
-             eps: float, r_min: float, grid: int = 96, t_hi: float | None = None) -> Edge | None:
+             eps: float, r_min: float, grid: int = 96, t_hi: float | None = None):
     """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None.
 
     ``chain`` holds the vertices that must lie within ε; ``t_hi`` bounds the arc end on l_j
-    (default: the projection of p_{j+1})."""
+    (default: the projection of p_{j+1}). Returns ``_TOO_FAR`` when a vertex is more than
+    2ε off the best plane through l_i (then no longer chain can succeed either)."""
     rel = chain - a1
     along = rel @ u1
+    dj = (pj1 - pj) / max(np.linalg.norm(pj1 - pj), 1e-300)
+    cr = np.cross(u1, dj)
     perp = rel - along[:, None] * u1
     cov = perp.T @ perp
-    # plane normal: the direction ⟂ u1 of least spread of the chain
     w, V = np.linalg.eigh(cov + np.outer(u1, u1) * (np.trace(cov) + 1.0) * 10)
-    m = V[:, 0]
+    if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or np.linalg.norm(cr) < 1e-9:
+        # the chain bends well beyond the noise: its least-squares plane through l_i
+        m = V[:, 0]
+    else:
+        # nearly straight chain (small bend): its own plane would be arbitrary; the plane
+        # spanned by both tangent directions is well defined
+        m = cr / np.linalg.norm(cr)
     h = rel @ m
     if np.any(np.abs(h) > eps):
-        return None
+        return _TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     Y = np.cross(m, u1)
     q = np.stack([along, rel @ Y], -1)
@@ -158,47 +171,73 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
                 out_point, out_dir / np.linalg.norm(out_dir), float(cost))
 
 
-def fit_arcline(poly: np.ndarray, eps: float, r_min: float) -> TubeModel | None:
-    """Algorithm 1 with least-squares tie-breaking; None if no chain of arcs fits within ε."""
+@dataclass
+class _State:
+    """A way to reach vertex j: arc count, squared error, predecessor, modified line l'_j."""
+
+    d: int
+    sse: float
+    prev: int
+    prev_state: int
+    point: np.ndarray
+    direction: np.ndarray
+    t_lo: float
+    edge: Edge | None
+
+
+def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> TubeModel | None:
+    """Algorithm 1 with least-squares tie-breaking; None if no chain of arcs fits within ε.
+
+    The paper keeps one state per vertex (the modified tangent line of its best prefix). A
+    prefix that is optimal so far can be a dead end later (e.g. two small bends merged into
+    one arc within ε leave a tangent a few degrees off), so up to ``beam`` states per vertex
+    are kept, ordered by (arc count, squared error); with beam = 1 this is exactly Alg. 1."""
     n = len(poly)
     if n < 2:
         return None
     last = n - 2
-    INF = np.iinfo(np.int64).max
-    d = np.full(n - 1, INF)
-    sse = np.full(n - 1, np.inf)
-    prev = np.full(n - 1, -1)
-    lp = [None] * (n - 1)  # modified line point
-    ld = [None] * (n - 1)  # modified line direction
-    tlo = np.zeros(n - 1)
-    edge_in: list[Edge | None] = [None] * (n - 1)
-    d[0], sse[0] = 0, 0.0
-    lp[0] = poly[0].copy()
-    ld[0] = (poly[1] - poly[0]) / np.linalg.norm(poly[1] - poly[0])
+    d0 = (poly[1] - poly[0]) / np.linalg.norm(poly[1] - poly[0])
+    states: list[list[_State]] = [[] for _ in range(n - 1)]
+    states[0].append(_State(0, 0.0, -1, -1, poly[0].copy(), d0, 0.0, None))
     for i in range(n - 1):
-        if d[i] == INF or i == last:
-            continue
-        for j in range(i + 1, n - 1):
-            if d[i] + 1 > d[j]:
-                continue
-            # p_{j+1} only fixes the direction of l_j; it is checked by j's outgoing edge (it
-            # lies in the next bend's plane when two bends follow each other directly)
-            chain = poly[i:j + 2] if j == last else poly[i:j + 1]
-            e = edge_fit(chain, lp[i], ld[i], tlo[i], poly[j], poly[j + 1], eps, r_min)
-            if e is None:
-                continue
-            nd, ns = d[i] + 1, sse[i] + e.cost
-            if nd < d[j] or ns < sse[j]:
-                d[j], sse[j], prev[j] = nd, ns, i
-                lp[j], ld[j], tlo[j] = e.out_point, e.out_dir, e.t2
-                edge_in[j] = e
-    if d[last] == INF:
+        if i == last:
+            break
+        for si, st in enumerate(states[i]):
+            for j in range(i + 1, n - 1):
+                worst = states[j][-1] if len(states[j]) >= beam else None
+                if worst is not None and st.d + 1 > worst.d:
+                    continue
+                # p_{j+1} only fixes the direction of l_j; it is checked by j's outgoing edge (it
+                # lies in the next bend's plane when two bends follow each other directly)
+                chain = poly[i:j + 2] if j == last else poly[i:j + 1]
+                # an arc may start up to ε before the previous one ended (the straight between
+                # them is then 0): chord tangent estimates at a junction of two bends are off by
+                # about that
+                e = edge_fit(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
+                             eps, r_min)
+                if e is _TOO_FAR:
+                    break
+                if e is None:
+                    continue
+                cand = _State(st.d + 1, st.sse + e.cost, i, si, e.out_point, e.out_dir, e.t2, e)
+                lst = states[j]
+                lst.append(cand)
+                lst.sort(key=lambda x: (x.d, x.sse))
+                del lst[beam:]
+    if not states[last]:
         return None
-    path = [last]
-    while path[-1] != 0:
-        path.append(int(prev[path[-1]]))
-    path = path[::-1]
-    edges = [edge_in[j] for j in path[1:]]
+    path, edges = [last], []
+    st = states[last][0]
+    lines = {last: (st.point, st.direction)}
+    while st.prev >= 0:
+        edges.append(st.edge)
+        j = st.prev
+        st = states[j][st.prev_state]
+        path.append(j)
+        lines[j] = (st.point, st.direction)
+    path, edges = path[::-1], edges[::-1]
+    lp = {j: lines[j][0] for j in path}
+    ld = {j: lines[j][1] for j in path}
     return _model_from_edges(poly, path, edges, lp, ld)
 
 

@@ -11,13 +11,15 @@ from schemas.common import Diagnostic, Report
 from schemas.tube import LraRow, Outliers, Residuals, Segment, SegmentQuality, TubeRequest, TubeResult
 from solvers.base import Progress, SolverError, no_progress
 
-from . import arcline, curve, fit, local_fit, spine
+from . import arcline, curve, fit, local_fit, prune, spine
 from .geometry import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model)
 from .pointio import request_points
 from .validate import check_input
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
-LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
+LM_SUBSAMPLE = 20_000
+SIMPLIFY_FRACTION = 0.25
+PRUNE_SUBSAMPLE = 6_000  # early least-squares rounds; the last round uses every inlier
 
 
 def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
@@ -118,7 +120,9 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     d_sp = _dist_to_polyline(spine_pts, poly)
     sigma_spine = float(np.median(d_sp))
     eps = float(opts.tolerance) if opts.tolerance else max(0.08 * rp, 4.0 * sigma_spine)
-    simp = curve.simplify(poly, eps)
+    # a finer simplification than ε keeps the chord tangent estimates close to the curve
+    # where two bends in different planes meet (§4.5 leaves the simplification tolerance open)
+    simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps)
     timings["curve"] = time.perf_counter() - t0
     progress(0.5, "arc-line spline")
 
@@ -131,7 +135,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
         if model is not None:
             break
         eps_used *= 1.5
-        simp = curve.simplify(poly, eps_used)
+        simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps_used)
     if model is None:
         raise SolverError("arcline", "no arc-line spline approximates the spine within the tolerance",
                           {"tolerance": eps, "last_tried": eps_used})
@@ -144,40 +148,60 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     progress(0.55, f"least-squares fit ({model.n_bends} bends)")
 
     # ---- stage 5: least squares on all inliers -------------------------------------------
+    # early rounds and bend pruning use a subsample, the final round every sample
     t0 = time.perf_counter()
     if opts.bend_radius:
         model.radii = np.full(model.n_bends, float(opts.bend_radius))
         mode = "fixed"
     else:
         mode = "common" if opts.common_bend_radius else "free"
-    lay = fit.Layout(model.n_bends, mode, opts.bend_radius, opts.pipe_radius is None)
     f_scale = max(2.0 * sigma_surface, 1e-3 * rp)
     margin = 2.0 * rp
-    # the initial model's end straights come from the polygon ends; renew them from the samples
     sub = _subsample(N, LM_SUBSAMPLE, rng)
+    pts_sub = pts[sub]
+    fit_rp = opts.pipe_radius is None
+
+    def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int):
+        """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
+        lay = fit.Layout(m.n_bends, mode, opts.bend_radius, fit_rp)
+        info = {}
+        res, seg = fit.assign(m, P, margin)
+        for _ in range(n_rounds):
+            inl = np.abs(res) <= thr
+            if inl.sum() < 10 + lay.size:
+                raise SolverError("least_squares", "too few samples near the initial tube surface",
+                                  {"inliers": int(inl.sum())})
+            m = fit.set_end_lengths(m, P[inl], seg[inl])
+            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev)
+            res, seg = fit.assign(m, P, margin)
+            m = fit.set_end_lengths(m, P[inl], seg[inl])
+            res, seg = fit.assign(m, P, margin)
+            r_in = res[inl]
+            sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
+            thr = max(6.0 * sig, 0.05 * rp)
+        return m, info, thr, sig
+
+    thr0 = max(0.35 * rp, 3 * eps_used)
+    model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
+    progress(0.7, "removing superfluous bends")
+
+    prune_idx = _subsample(len(pts_sub), PRUNE_SUBSAMPLE, np.random.default_rng(opts.seed + 1))
+    pts_prune = pts_sub[prune_idx]
+
+    def refit(m: TubeModel):
+        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 25)
+        progress(0.75, "removing superfluous bends")
+        return m2, fit.assign(m2, pts_prune, margin)[0]
+
+    changes = []
+    if model.n_bends and not opts.bend_radius:
+        model, _, changes = prune.prune(model, refit, eps_used, rp)
+        if changes:
+            model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 2, 60)
+    progress(0.85, "final least-squares fit")
+    if N > len(sub):
+        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 25)
     res_all, seg_all = fit.assign(model, pts, margin)
-    thr = max(0.35 * rp, 3 * eps_used)
-    lm_info = {}
-    rounds = 4
-    for rnd in range(rounds + 1):
-        final = rnd == rounds
-        idx = np.arange(N) if final else sub
-        inl = idx[np.abs(res_all[idx]) <= thr]
-        if len(inl) < 10 + lay.size:
-            raise SolverError("least_squares", "too few samples near the initial tube surface",
-                              {"inliers": int(len(inl))})
-        model = fit.set_end_lengths(model, pts[inl], seg_all[inl])
-        model, lm_info = fit.solve_lm(model, pts[inl], seg_all[inl], lay, f_scale,
-                                      max_nfev=(25 if final and N > LM_SUBSAMPLE else 60))
-        res_all, seg_all = fit.assign(model, pts, margin)
-        model = fit.set_end_lengths(model, pts[inl], seg_all[inl])
-        res_all, seg_all = fit.assign(model, pts, margin)
-        r_in = res_all[inl]
-        sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
-        thr = max(6.0 * sig, 0.05 * rp)
-        progress(0.55 + 0.4 * (rnd + 1) / (rounds + 1), f"least-squares round {rnd + 1}")
-        if final or N <= LM_SUBSAMPLE and rnd >= 2:
-            break
     # final extents without the margin
     inlier = np.abs(res_all) <= thr
     res_all, seg_all = fit.assign(model, pts, 0.0)
@@ -236,7 +260,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                          "fit_residual": int((labels == 3).sum())},
         "stage2_flags": {"projection_distance": int((~sc.ok).sum())},
         "polyline": {"method": poly_method, "vertices": int(len(poly)), "simplified": int(len(simp))},
-        "bends_initial": n_bends_initial, "least_squares": lm_info, "timings_s": timings,
+        "bends_initial": n_bends_initial, "pruned": changes, "least_squares": lm_info, "timings_s": timings,
         "outlier_threshold": float(thr),
     }
     report = Report(status="warning" if warnings else "ok", message=f"{model.n_bends} bends reconstructed.",

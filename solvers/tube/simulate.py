@@ -65,6 +65,26 @@ def random_tube(rng: np.random.Generator, pipe_radius: float | None = None, n_be
     return m
 
 
+def clearance(model: TubeModel) -> float:
+    """Smallest distance between centreline points more than π·r_B + 4 r apart along the
+    tube, in pipe radii (< 2 means the tube runs through itself)."""
+    from scipy.spatial import cKDTree
+
+    from .geometry import sample_centreline
+
+    r = model.pipe_radius
+    c, _ = sample_centreline(model, r / 2)
+    s = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))])
+    gap = np.pi * (model.radii.max() if model.n_bends else 0) + 4 * r
+    pairs = cKDTree(c).query_pairs(4 * r, output_type="ndarray")
+    if len(pairs) == 0:
+        return np.inf
+    far = np.abs(s[pairs[:, 0]] - s[pairs[:, 1]]) > gap
+    if not far.any():
+        return np.inf
+    return float(np.linalg.norm(c[pairs[far, 0]] - c[pairs[far, 1]], axis=1).min() / r)
+
+
 def surface_samples(model: TubeModel, n: int, rng: np.random.Generator, view: np.ndarray | None = None,
                     noise: float = 0.0, outlier_fraction: float = 0.0) -> np.ndarray:
     """Scan-like samples of the tube surface (see module doc)."""

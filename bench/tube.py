@@ -1,0 +1,175 @@
+"""Benchmark of the tube solver on simulated single-view laser scans (issue 4).
+
+    python bench/tube.py           # 40 random tubes + 100k and 1M point runs
+    python bench/tube.py --quick   # 12 random tubes + 100k point run
+
+Scan simulator (solvers/tube/simulate.py): one viewpoint, area-correct sampling, Gaussian
+noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
+with pipe radius 1–50 mm, 1–8 bends, bend radius 2–4 r, back-to-back bends, bends under 8°
+and over 180°. Timings and peak memory for large scans run in a fresh subprocess each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+
+import numpy as np  # noqa: E402
+
+from schemas.tube import TubeRequest  # noqa: E402
+from solvers.base import SolverError  # noqa: E402
+from solvers.tube import solve  # noqa: E402
+from solvers.tube.artifacts import model_from_result  # noqa: E402
+from solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
+from solvers.tube.pointio import points_field  # noqa: E402
+from solvers.tube.simulate import clearance, random_tube, surface_samples  # noqa: E402
+
+
+def make_case(seed: int, n_points: int, n_bends: int | None = None, pipe_radius: float | None = None):
+    rng = np.random.default_rng(seed)
+    while True:
+        m = random_tube(rng, pipe_radius=pipe_radius, n_bends=n_bends)
+        if clearance(m) > 2.5:
+            break
+    sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
+    view = rng.normal(size=3)
+    pts = surface_samples(m, n_points, rng, view=view, noise=sigma, outlier_fraction=0.005)
+    return m, pts, sigma
+
+
+def compare(truth, result):
+    """Errors of a result against the true model (best of both walking directions)."""
+    got = model_from_result(result)
+    best = None
+    for t in (truth, reverse_model(truth)):
+        if t.n_bends != got.n_bends:
+            continue
+        da = np.degrees(np.abs(got.angles - t.angles))
+        dr = np.abs(got.radii - t.radii) / t.radii
+        key = da.sum()
+        if best is None or key < best[0]:
+            best = (key, da, dr, t)
+    c, _ = sample_centreline(got, truth.pipe_radius / 4)
+    dc, _ = spine_distance(c, build_spine(truth))
+    if best is None:
+        return None, None, None, dc
+    return best[1], best[2], best[3], dc
+
+
+def random_tubes(n_tubes: int, n_points: int):
+    rows = []
+    for i in range(n_tubes):
+        m, pts, sigma = make_case(1000 + i, n_points)
+        t0 = time.perf_counter()
+        try:
+            r = solve(TubeRequest(points=pts.tolist()))
+        except SolverError as exc:
+            print(f"  tube {i:2d}: r={m.pipe_radius:6.2f} bends {m.n_bends} -> failed: {exc}", flush=True)
+            rows.append(dict(ok=False, failed=True, time=time.perf_counter() - t0))
+            continue
+        el = time.perf_counter() - t0
+        da, dr, t, dc = compare(m, r)
+        # residual spread of the inliers relative to the simulated noise
+        got = model_from_result(r)
+        d, _ = spine_distance(pts, build_spine(got))
+        res = d - got.pipe_radius
+        inl = np.ones(len(pts), bool)
+        inl[r.outliers.indices] = False
+        rs = 1.4826 * np.median(np.abs(res[inl] - np.median(res[inl])))
+        rows.append(dict(
+            r=m.pipe_radius, bends=m.n_bends, got=len(r.lra) - 1, ok=da is not None, time=el,
+            angle_err=(da.tolist() if da is not None else []), radius_err=(dr.tolist() if dr is not None else []),
+            small=(np.degrees(m.angles) < 10).tolist(), centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
+            centre_max=float(dc.max() / m.pipe_radius), resid_sigma=float(rs / sigma),
+            resid_median=float(np.median(np.abs(res[inl])) / sigma), pr_err=abs(r.pipe_radius - m.pipe_radius) / m.pipe_radius))
+        print(f"  tube {i:2d}: r={m.pipe_radius:6.2f} bends {m.n_bends} -> {len(r.lra) - 1}"
+              f"  max angle err {max(rows[-1]['angle_err'], default=float('nan')):.3f}°"
+              f"  centreline rms {100 * rows[-1]['centre_rms']:.2f}% r  {el:.2f}s", flush=True)
+    return rows
+
+
+def single(n_points: int) -> dict:
+    """One large scan in this process (called in a subprocess for a clean peak-memory figure)."""
+    m, pts, sigma = make_case(77, n_points, n_bends=4, pipe_radius=10.0)
+    req = TubeRequest(points=points_field(pts))
+    t0 = time.perf_counter()
+    r = solve(req)
+    el = time.perf_counter() - t0
+    da, dr, _, dc = compare(m, r)
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return dict(n=n_points, time=el, rss_mb=rss, ok=da is not None,
+                angle_err=float(np.max(da)) if da is not None else None,
+                centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
+                timings=r.report.details["timings_s"])
+
+
+def run_single(n: int) -> dict:
+    out = subprocess.run([sys.executable, __file__, "--single", str(n)], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--single", type=int)
+    ap.add_argument("--tubes", type=int)
+    a = ap.parse_args()
+    if a.single:
+        print(json.dumps(single(a.single)))
+        return
+    n_tubes = a.tubes or (12 if a.quick else 40)
+    print(f"random tubes: {n_tubes} single-view scans of 6000 points")
+    rows = random_tubes(n_tubes, 6000)
+    ok = [r for r in rows if r["ok"]]
+    ang = np.concatenate([r["angle_err"] for r in ok]) if ok else np.zeros(0)
+    small = np.concatenate([r["small"] for r in ok]).astype(bool) if ok else np.zeros(0, bool)
+    rad = np.concatenate([r["radius_err"] for r in ok]) if ok else np.zeros(0)
+    times = np.array([r["time"] for r in rows])
+    large = [run_single(100_000)] + ([] if a.quick else [run_single(1_000_000)])
+
+    def line(name, value, target, met):
+        print(f"| {name:<46} | {value:>22} | {target:>14} | {'yes' if met else 'NO':>4} |")
+
+    print()
+    print(f"| {'metric':<46} | {'measured':>22} | {'target':>14} | {'met':>4} |")
+    print(f"|{'-' * 48}|{'-' * 24}|{'-' * 16}|{'-' * 6}|")
+    share = len(ok) / len(rows)
+    line("correct bend count", f"{len(ok)}/{len(rows)} = {100 * share:.0f} %", ">= 95 %", share >= 0.95)
+    line("bend-angle error, median (all bends)", f"{np.median(ang):.3f}°", "<= 0.2°", np.median(ang) <= 0.2)
+    line("bend-angle error, p95 / max", f"{np.percentile(ang, 95):.3f}° / {ang.max():.3f}°", "-", True)
+    big = ~small
+    line("bend-radius error, median (bends >= 10°)", f"{100 * np.median(rad[big]):.2f} %", "<= 2 %",
+         np.median(rad[big]) <= 0.02)
+    line("bend-radius error, median (bends < 10°)", f"{100 * np.median(rad[small]):.1f} %" if small.any() else "n/a",
+         "(unobservable)", True)
+    rows = [r for r in rows if not r.get("failed")]  # below: tubes that produced a result
+    crms = np.median([r["centre_rms"] for r in rows])
+    line("centreline deviation rms, median over tubes", f"{100 * crms:.2f} % r", "<= 2 % r", crms <= 0.02)
+    line("centreline deviation max, median over tubes", f"{100 * np.median([r['centre_max'] for r in rows]):.2f} % r",
+         "-", True)
+    rsig = np.median([r["resid_sigma"] for r in rows])
+    line("surface residual robust std / noise σ (median)", f"{rsig:.3f} σ", "<= 1.2 σ", rsig <= 1.2)
+    line("median |residual| / σ (Gaussian: 0.674)", f"{np.median([r['resid_median'] for r in rows]):.3f} σ", "-", True)
+    line("pipe radius error, median", f"{100 * np.median([r['pr_err'] for r in rows]):.3f} %", "-", True)
+    line("time, 6000-point scan (median / max)", f"{np.median(times):.2f} s / {times.max():.2f} s", "< 3 s",
+         np.median(times) < 3)
+    for L in large:
+        tgt = "< 30 s, < 2 GB" if L["n"] == 100_000 else "-"
+        met = (L["time"] < 30 and L["rss_mb"] < 2048) if L["n"] == 100_000 else True
+        line(f"{L['n']:,} points: time / peak RSS", f"{L['time']:.1f} s / {L['rss_mb']:.0f} MB", tgt, met)
+        line(f"{L['n']:,} points: bends ok, max angle err",
+             f"{L['ok']}, {L['angle_err']:.3f}°" if L["ok"] else "False", "-", L["ok"])
+    print()
+    for L in large:
+        print(f"{L['n']:,} points stage timings (s): " + ", ".join(f"{k} {v:.2f}" for k, v in L["timings"].items()))
+
+
+if __name__ == "__main__":
+    main()
