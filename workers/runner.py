@@ -7,7 +7,9 @@ number. Cancellation and lost leases reach the solver through its progress callb
 
 from __future__ import annotations
 
+import json
 import logging
+import math
 import threading
 import time
 import traceback
@@ -204,6 +206,16 @@ def run_job(
     return "failed" if written else "stale"
 
 
+def _non_finite_paths(value: Any, path: str = "") -> list[str]:
+    if isinstance(value, float):
+        return [] if math.isfinite(value) else [path or "/"]
+    if isinstance(value, dict):
+        return [p for key, item in value.items() for p in _non_finite_paths(item, f"{path}/{key}")]
+    if isinstance(value, list):
+        return [p for index, item in enumerate(value) for p in _non_finite_paths(item, f"{path}/{index}")]
+    return []
+
+
 def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor) -> str:
     report = failure_report(
         "time_limit",
@@ -220,6 +232,15 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, 
     if not isinstance(result, spec.result_model):
         result = spec.result_model.model_validate(result)
     result_json = result.model_dump(mode="json", by_alias=True)
+    try:
+        json.dumps(result_json, allow_nan=False)
+    except ValueError:
+        # JSON has no NaN or infinity: a result carrying them is a solver bug, and retrying
+        # the same input would give the same numbers.
+        raise SolverError(
+            "result", "The solver produced non-finite numbers (NaN or infinity) in its result.",
+            {"paths": _non_finite_paths(result_json)[:20]},
+        ) from None
     report = dict(result_json.get("report") or Report().model_dump(mode="json"))
     stored: list[StoredArtifact] = []
     if spec.render_artifacts is not None:

@@ -20,7 +20,9 @@ IdempotencyKey = Annotated[
     str | None,
     Header(
         alias="Idempotency-Key",
+        min_length=1,
         max_length=255,
+        pattern=r"^[\x21-\x7e][\x20-\x7e]*$",
         description="Same key and same body return the same job (200); same key with another body is a 422.",
     ),
 ]

@@ -217,3 +217,17 @@ def test_dashboard_lists_jobs(client):
     wait_for(client, job["id"])
     page = client.get("/dashboard")
     assert page.status_code == 200 and job["id"] in page.text and "succeeded" in page.text
+
+
+def test_empty_or_control_char_idempotency_key_is_422(client):
+    for key in ("", " leading-space", "tab\there"):
+        response = client.post("/v1/test-compute/jobs", json={"values": [1.0]}, headers={"Idempotency-Key": key})
+        assert response.status_code == 422, (key, response.text)
+        assert response.json()["errors"][0]["loc"] == ["header", "Idempotency-Key"]
+
+
+def test_result_with_non_finite_numbers_fails_with_a_report(client):
+    job = client.post("/v1/test-compute/jobs", json={"values": [1e308, 1e308]}).json()  # the sum overflows
+    done = wait_for(client, job["id"])
+    assert done["status"] == "failed" and done["attempt"] == 1
+    assert done["report"]["stage"] == "result" and "/total" in done["report"]["details"]["paths"]

@@ -55,7 +55,7 @@ class JobRepository:
 
         Returns ``(job, created)``. The caller compares body hashes of an existing job.
         """
-        if job.idempotency_key:
+        if job.idempotency_key is not None:
             existing = self.get_by_idempotency_key(job.idempotency_key)
             if existing is not None:
                 return existing, False
@@ -65,7 +65,7 @@ class JobRepository:
                 session.commit()
             except IntegrityError:
                 session.rollback()
-                existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key else None
+                existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key is not None else None
                 if existing is None:
                     raise
                 return existing, False
