@@ -29,6 +29,15 @@ FAMILY_DESCRIPTION = (
     "'log': y = a*log(b - x) + c with coefficients [a, b, c], b > x_max, in flow units."
 )
 
+EfficiencyFamily = Literal["parabola", "cubic", "spline2", "spline3", "parabola_log"]
+EFFICIENCY_FAMILY_DESCRIPTION = (
+    "Efficiency curve family, on the same t: 'parabola', 'cubic', 'spline2', 'spline3' as for "
+    "the pressure (coefficients = control values); 'parabola_log' (beyond the paper): "
+    "eta = c0 (1-t)^2 + 2 c1 t (1-t) + c2 t^2 + a*log(beta - t) with coefficients "
+    "[c0, c1, c2, a, beta], a >= 0, beta > 1 (in t units): the log term follows the steep "
+    "efficiency drop at choke, where polynomials overshoot at the peak. Every efficiency "
+    "curve satisfies 0 <= eta <= 1 exactly on its whole flow range.")
+
 
 class Position(StrictModel):
     """Measurements at one (theta, phi) setting: one characteristic."""
@@ -49,8 +58,18 @@ class Position(StrictModel):
 class PerfmapOptions(StrictModel):
     model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3"] = Field(
         default="auto",
-        description="Curve family for the characteristics; 'auto' picks the family with the "
-        "smallest leave-one-out error. " + FAMILY_DESCRIPTION)
+        description="Pressure curve family for the characteristics; 'auto' picks the family "
+        "with the smallest mean (over settings) leave-one-out pressure error. The efficiency "
+        "family is chosen separately (`efficiency_model`). " + FAMILY_DESCRIPTION)
+    efficiency_model: Literal["auto", "same", "parabola", "cubic", "spline2", "spline3",
+                              "parabola_log"] = Field(
+        default="auto",
+        description="Efficiency curve family, chosen independently of the pressure family. "
+        "'auto': per setting, the family with the smallest leave-one-out max ABSOLUTE "
+        "efficiency error (relative errors would be dominated by the small efficiencies at "
+        "choke; ties go to fewer coefficients); 'same': the paper's pairing with `model` "
+        "(log pressure -> cubic efficiency); or a family name for every setting. "
+        + EFFICIENCY_FAMILY_DESCRIPTION)
     fit: Literal["least_squares", "minimax"] = Field(
         default="least_squares",
         description="'least_squares' minimises the sum of squared residuals (paper eq. 3); "
@@ -102,9 +121,8 @@ class SettingFit(BaseModel):
     theta: float
     phi: float
     family: Family = Field(description="Family of the pressure curve. " + FAMILY_DESCRIPTION)
-    efficiency_family: Family = Field(
-        description="Family of the efficiency curve (the paper has no log efficiency: 'log' "
-        "settings use a cubic Bezier efficiency).")
+    efficiency_family: EfficiencyFamily = Field(
+        description="Family of the efficiency curve. " + EFFICIENCY_FAMILY_DESCRIPTION)
     x_min: float = Field(description="Smallest measured flow (t = 0).")
     x_max: float = Field(description="Largest measured flow (t = 1).")
     pressure_coefficients: list[float]
@@ -117,6 +135,17 @@ class SettingFit(BaseModel):
         "by a least-squares fit to the other points (None when too few points; on settings "
         "with more than 20 points, 20 evenly spread points are left out).")
     efficiency_loo: float | None = None
+    efficiency_max_abs_error: float = Field(
+        default=0.0, description="max_i |eta(x_i) - eta_i| (efficiency points).")
+    efficiency_loo_abs: float | None = Field(
+        default=None, description="Leave-one-out max absolute efficiency error ('auto' "
+        "criterion for the efficiency family).")
+    efficiency_peak: float = Field(
+        default=0.0, description="Maximum of the fitted efficiency curve over [x_min, x_max] "
+        "(exact); compare with the measured maximum of the setting.")
+    efficiency_bounds_active: int = Field(
+        default=0, description="Number of points where the physical bound 0 <= eta <= 1 had "
+        "to be imposed on the fitted curve (0: the unconstrained fit was already physical).")
     floor: float = Field(
         description="Best max relative error of the pressure that ANY decreasing concave "
         "function can reach on these points (0 when the data are decreasing and concave).")
@@ -135,8 +164,25 @@ class ErrorTableRow(BaseModel):
         description="None for 'log' (the paper has no log efficiency curve).")
     pressure_loo: float | None
     efficiency_loo: float | None
+    efficiency_max_abs_error: float | None = Field(
+        default=None, description="Max over settings of max_i |eta(x_i) - eta_i|.")
     floor: float = Field(description="Max over settings of the per-setting floor.")
     worst_setting: int = Field(description="Index in `settings` of the worst pressure fit.")
+
+
+class EfficiencyErrorRow(BaseModel):
+    """Errors of one efficiency family over all settings (bounded fits, 0 <= eta <= 1)."""
+
+    family: EfficiencyFamily
+    n_coefficients: int
+    max_rel_error: float
+    max_abs_error: float
+    loo_rel: float | None = Field(description="Max over settings of the leave-one-out max "
+                                  "relative error (None when some setting has too few points).")
+    loo_abs: float | None
+    max_overshoot: float = Field(
+        description="Max over settings of (fitted peak - measured max efficiency).")
+    chosen: int = Field(description="Number of settings that use this family.")
 
 
 class Envelope(BaseModel):
@@ -170,11 +216,15 @@ class PerformanceMap(BaseModel):
 
 class PerfmapResult(BaseModel):
     report: Report
-    family: Family = Field(description="Family used for the characteristics.")
+    family: Family = Field(description="Family used for the pressure characteristics.")
     fit: Literal["least_squares", "minimax"]
     settings: list[SettingFit] = Field(description="Sorted by (theta, phi).")
     error_table: list[ErrorTableRow] = Field(
         description="The paper's Table 1 for the submitted data, one row per family.")
+    efficiency_error_table: list[EfficiencyErrorRow] = Field(
+        default_factory=list,
+        description="Per efficiency family: errors over all settings (the efficiency family "
+        "is chosen separately from the pressure family).")
     envelopes: list[Envelope]
     triangles: list[list[int]] = Field(
         default_factory=list,

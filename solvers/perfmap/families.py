@@ -24,8 +24,12 @@ import numpy as np
 LINEAR_FAMILIES = ("parabola", "cubic", "spline2", "spline3")
 FAMILIES = ("parabola", "log", "cubic", "spline2", "spline3")
 N_COEFFICIENTS = {"parabola": 3, "log": 3, "cubic": 4, "spline2": 4, "spline3": 5}
+# the paper's pairing of pressure and efficiency families (it has no log efficiency)
 EFFICIENCY_FAMILY = {"parabola": "parabola", "log": "cubic", "cubic": "cubic",
                      "spline2": "spline2", "spline3": "spline3"}
+# every family a curve can have (pressure: FAMILIES; efficiency: also parabola_log, see
+# solvers.perfmap.efficiency)
+ALL_FAMILIES = FAMILIES + ("parabola_log",)
 
 
 def bernstein(degree: int, t: np.ndarray) -> np.ndarray:
@@ -113,6 +117,10 @@ def _eval_rows(family: str, c: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Row-wise evaluation: curve with coefficients c[j] at t[j] (no basis matrices)."""
     if family == "log":
         return c[:, 0] * np.log(c[:, 1] - t) + c[:, 2]
+    if family == "parabola_log":  # quadratic Bezier + a log(beta - t)
+        s = 1.0 - t
+        return (s * (s * c[:, 0] + t * c[:, 1]) + t * (s * c[:, 1] + t * c[:, 2])
+                + c[:, 3] * np.log(c[:, 4] - t))
     if family in ("parabola", "cubic"):
         # de Casteljau on contiguous rows: stable and allocation-light
         n = 3 if family == "parabola" else 4
@@ -154,8 +162,8 @@ class CurveSet:
                 pc = list(log_params_from_public(pc, self.x_min[i], self.x_max[i]))
             self.p[i, : len(pc)] = pc
             self.e[i, : len(e_coef[i])] = e_coef[i]
-        self.fam_id = np.array([FAMILIES.index(f) for f in families])
-        self.eff_id = np.array([FAMILIES.index(f) for f in eff_families])
+        self.fam_id = np.array([ALL_FAMILIES.index(f) for f in families])
+        self.eff_id = np.array([ALL_FAMILIES.index(f) for f in eff_families])
 
     @staticmethod
     def _eval(fam_ids: np.ndarray, coefs: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -163,7 +171,7 @@ class CurveSet:
         uniform = len(fam_ids) and (fam_ids == fam_ids[0]).all()
         for fid in (fam_ids[:1] if uniform else np.unique(fam_ids)):
             m = slice(None) if uniform else fam_ids == fid
-            out[m] = _eval_rows(FAMILIES[fid], coefs[m], t[m])
+            out[m] = _eval_rows(ALL_FAMILIES[fid], coefs[m], t[m])
         return out
 
     def evaluate(self, idx: np.ndarray, t: np.ndarray):

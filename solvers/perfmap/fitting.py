@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, linprog, minimize_scalar, nnls
 
+from solvers.perfmap.efficiency import EfficiencyFit, curve_extrema, eta_leave_one_out, fit_eta
 from solvers.perfmap.families import (
     EFFICIENCY_FAMILY,
     N_COEFFICIENTS,
@@ -41,17 +42,6 @@ class CurveFit:
         if self.family == "log":
             return log_eval(self.params, t)
         return basis(self.family, t) @ self.params
-
-
-@dataclass
-class SettingResult:
-    family: str
-    pressure: CurveFit
-    efficiency: CurveFit
-    pressure_err: float
-    efficiency_err: float
-    pressure_loo: float | None
-    efficiency_loo: float | None
 
 
 def max_rel_error(fit: np.ndarray, data: np.ndarray) -> float:
@@ -196,60 +186,81 @@ def fit_pressure(family: str, t, y, minimax: bool, polish: bool = True, B=None) 
     return fit_linear(family, t, y, "decreasing_concave", minimax, B)
 
 
-def fit_efficiency(family: str, t, eta, minimax: bool, concave: bool, B=None) -> CurveFit:
-    return fit_linear(EFFICIENCY_FAMILY[family], t, eta, "concave" if concave else "free",
-                      minimax, B)
+def fit_efficiency(family: str, t, eta, minimax: bool, concave: bool, B=None) -> EfficiencyFit:
+    """Efficiency curve with 0 <= eta <= 1 exactly. ``family`` is an efficiency family, or a
+    pressure family mapped by the paper's pairing (log -> cubic)."""
+    return fit_eta(EFFICIENCY_FAMILY.get(family, family), t, eta, minimax, concave, B)
 
 
-def leave_one_out(family: str, t, y, eta, concave_eta: bool) -> tuple[float | None, float | None]:
+def left_out_points(n: int) -> np.ndarray:
+    """Long characteristics: leave out at most _LOO_MAX evenly spread points (O(n) refits each)."""
+    return np.unique(np.linspace(0, n - 1, min(n, _LOO_MAX)).round().astype(int))
+
+
+def pressure_loo(family: str, t, y) -> float | None:
     """Max relative error of each point predicted by a least-squares fit to the others.
 
     The parametrisation t of the full data set is kept, so no prediction is an
     extrapolation outside the fitted curve's domain of definition. Settings with more than
-    20 points leave out 20 evenly spread points (cost). The unconstrained
-    efficiency uses the exact hat-matrix identity e_(i) = r_i / (1 - h_ii).
+    20 points leave out 20 evenly spread points (cost).
     """
     n = len(t)
-    ncoef = N_COEFFICIENTS[family]
-    efam = EFFICIENCY_FAMILY[family]
-    ne = N_COEFFICIENTS[efam]
+    if n - 1 < N_COEFFICIENTS[family]:
+        return None
     By = None if family == "log" else basis(family, t)
-    Be = basis(efam, t)
-    # Long characteristics: leave out at most _LOO_MAX evenly spread points (O(n) refits each).
-    left_out = np.unique(np.linspace(0, n - 1, min(n, _LOO_MAX)).round().astype(int))
     ey = 0.0
-    if n - 1 >= ncoef:
-        for i in left_out:
-            keep = np.arange(n) != i
-            fy = fit_pressure(family, t[keep], y[keep], False, polish=False,
-                              B=None if By is None else By[keep])
-            pred = fy(t[i : i + 1])[0] if By is None else By[i] @ fy.params
-            ey = max(ey, abs(float(pred) - y[i]) / abs(y[i]))
-    ee = 0.0
-    if n - 1 >= ne:
-        if not concave_eta:
-            pinv = np.linalg.pinv(Be)
-            h = np.einsum("ij,ji->i", Be, pinv)
-            r = eta - Be @ (pinv @ eta)
-            if np.all(h < 1 - 1e-10):
-                ee = float(np.max(np.abs(r / (1 - h)) / np.abs(eta)))
-            else:  # a point the others cannot determine: refit explicitly
-                concave_eta = None
-        if concave_eta is None or concave_eta:
-            for i in left_out:
-                keep = np.arange(n) != i
-                fe = fit_efficiency(family, t[keep], eta[keep], False, bool(concave_eta), Be[keep])
-                ee = max(ee, abs(float(Be[i] @ fe.params) - eta[i]) / abs(eta[i]))
-    return (ey if n - 1 >= ncoef else None), (ee if n - 1 >= ne else None)
+    for i in left_out_points(n):
+        keep = np.arange(n) != i
+        fy = fit_pressure(family, t[keep], y[keep], False, polish=False,
+                          B=None if By is None else By[keep])
+        pred = fy(t[i : i + 1])[0] if By is None else By[i] @ fy.params
+        ey = max(ey, abs(float(pred) - y[i]) / abs(y[i]))
+    return ey
 
 
-def fit_setting(family: str, t, y, eta, minimax: bool, concave_eta: bool,
-                with_loo: bool = True) -> SettingResult:
+def leave_one_out(family: str, t, y, eta, concave_eta: bool) -> tuple[float | None, float | None]:
+    """(pressure, efficiency) leave-one-out max relative errors; the efficiency with the
+    paper's paired family and the physical bounds (see :mod:`efficiency`)."""
+    efam = EFFICIENCY_FAMILY.get(family, family)
+    return (pressure_loo(family, t, y),
+            eta_leave_one_out(efam, t, eta, concave_eta, left_out_points(len(t)))[0])
+
+
+@dataclass
+class PressureResult:
+    family: str
+    fit: CurveFit
+    err: float
+    loo: float | None
+
+
+def fit_pressure_setting(family: str, t, y, minimax: bool, with_loo: bool = True) -> PressureResult:
     fy = fit_pressure(family, t, y, minimax)
-    fe = fit_efficiency(family, t, eta, minimax, concave_eta)
-    loo = leave_one_out(family, t, y, eta, concave_eta) if with_loo else (None, None)
-    return SettingResult(family, fy, fe, max_rel_error(fy(t), y), max_rel_error(fe(t), eta),
-                         loo[0], loo[1])
+    return PressureResult(family, fy, max_rel_error(fy(t), y),
+                          pressure_loo(family, t, y) if with_loo else None)
+
+
+@dataclass
+class EtaResult:
+    family: str
+    fit: EfficiencyFit
+    rel_err: float
+    abs_err: float
+    loo_rel: float | None
+    loo_abs: float | None
+    peak: float  # exact max of the fitted curve over the setting's flow range
+    worst: int  # index (sorted points) of the largest relative error
+
+
+def fit_eta_setting(family: str, t, eta, minimax: bool, concave: bool,
+                    with_loo: bool = True) -> EtaResult:
+    fe = fit_eta(family, t, eta, minimax, concave)
+    err = np.abs(fe(t) - eta)
+    loo = (eta_leave_one_out(family, t, eta, concave, left_out_points(len(t))) if with_loo
+           else (None, None))
+    return EtaResult(family, fe, float(np.max(err / np.abs(eta))), float(np.max(err)), loo[0],
+                     loo[1], curve_extrema(family, fe.params)[3],
+                     int(np.argmax(err / np.abs(eta))))
 
 
 def concave_floor(x: np.ndarray, y: np.ndarray, decreasing: bool = True) -> float:

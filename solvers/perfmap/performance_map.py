@@ -49,6 +49,13 @@ def grid_axes(ranges, nx: int, ny: int) -> tuple[np.ndarray, np.ndarray]:
     return gx, gy
 
 
+def _dot3(W: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Column-wise sum_i W[i] * v[i] over the 3 vertices, as explicit element-wise products:
+    einsum/matmul may pick a different summation kernel for different batch sizes, and a
+    per-point answer must not depend on the other points queried with it."""
+    return W[0] * v[0] + W[1] * v[1] + W[2] * v[2]
+
+
 class _Normaliser:
     def __init__(self, ranges):
         x0, x1, y0, y1 = ranges
@@ -73,7 +80,7 @@ def _solve_in_triangles(curves: CurveSet, tri: np.ndarray, t: np.ndarray, Xn, Yn
     v = (a * dy - c * dx) / det
     W = np.stack([u, v, 1.0 - u - v])
     ok &= np.all(W >= -_INSIDE_TOL, axis=0)
-    return np.where(ok, np.einsum("ij,ij->j", W, e), -np.inf), W
+    return np.where(ok, _dot3(W, e), -np.inf), W
 
 
 def _refine_interior(curves, triangles, t, Xn, Yn, norm, best, b_tri, b_m, iterations=32):
@@ -234,8 +241,8 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
         W /= W.sum(axis=0)
         tri = triangles[b_tri[hit]].T
         best[hit] = e
-        b_theta[hit] = np.einsum("ij,ij->j", theta[tri], W)
-        b_phi[hit] = np.einsum("ij,ij->j", phi[tri], W)
+        b_theta[hit] = _dot3(W, theta[tri])
+        b_phi[hit] = _dot3(W, phi[tri])
         b_t[hit] = tb
     progress(p0 + (p1 - p0) * 0.7, "performance map: refinement")
 
@@ -323,10 +330,12 @@ def distance_to_region(curves, triangles, t, X, Y, ranges) -> np.ndarray:
         d = np.full((p.shape[0], len(A)), np.inf)
         for e0, e1 in ((0, 1), (1, 2), (2, 0)):
             s0, ab = A[:, e0], A[:, e1] - A[:, e0]
-            L2 = np.einsum("ij,ij->i", ab, ab)
-            h = np.clip(np.einsum("qij,ij->qi", p - s0, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+            L2 = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
+            ps = p - s0
+            h = np.clip((ps[..., 0] * ab[:, 0] + ps[..., 1] * ab[:, 1])
+                        / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
             proj = s0 + h[..., None] * ab
-            d = np.minimum(d, np.linalg.norm(p - proj, axis=-1))
+            d = np.minimum(d, np.hypot(*np.moveaxis(p - proj, -1, 0)))
         s1, s2, s3 = _cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)
         inside = (((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0)))
         inside &= nonzero_area
