@@ -2,11 +2,14 @@
 
 1. Thinning: greedy Poisson-disk selection at spacing δ, each kept point replaced by the
    mean of the spine points within δ (removes the residual thickness of the MLS cloud, so
-   the cloud is a "dense sample of a curve" as curve reconstruction requires).
+   the cloud is a "dense sample of a curve" as curve reconstruction requires); points with
+   almost no spine points around them are dropped (failed projections).
 2. NN-Crust (Dey & Kumar): every point joins its nearest neighbour and its nearest "half
    neighbour" (nearest point on the other side, angle > 90°). On a proper sample this is one
-   simple path. If it is not (noise, branches), an equally sound fallback is used: the
-   longest path (diameter) of the Euclidean minimum spanning tree.
+   simple path; where a single-view scan leaves gaps it gives several paths, which are
+   joined end to end (nearest free ends first). If a component branches (noise), an
+   equally sound fallback is used: the longest path (diameter) of the Euclidean minimum
+   spanning tree.
 3. Optional simplification (§4.5): minimum-vertex polygon with vertices from the input
    whose segments stay within ε of the skipped vertices (shortcut graph + shortest path,
    Imai–Iri / Eu–Toussaint); among minimum solutions the least squared error.
@@ -37,7 +40,10 @@ def thin(points: np.ndarray, spacing: float) -> np.ndarray:
         taken[tree.query_ball_point(points[i], spacing)] = True
     centres = points[keep]
     nbrs = tree.query_ball_point(centres, spacing)
-    return np.array([points[n].mean(0) for n in nbrs])
+    counts = np.array([len(n) for n in nbrs])
+    # a lone spine point is a failed projection, not a piece of the curve
+    dense = counts >= max(3, 0.1 * np.median(counts))
+    return np.array([points[n].mean(0) for n, d in zip(nbrs, dense) if d]).reshape(-1, 3)
 
 
 def nn_crust(points: np.ndarray) -> list[tuple[int, int]]:
@@ -56,18 +62,52 @@ def nn_crust(points: np.ndarray) -> list[tuple[int, int]]:
     return sorted(edges)
 
 
-def _path_if_simple(n: int, edges: list[tuple[int, int]]) -> list[int] | None:
+def _bridged_path(n: int, edges: list[tuple[int, int]], points: np.ndarray) -> tuple[list[int] | None, int]:
+    """Order the NN-Crust graph into one path. Components that are simple paths (gaps in a
+    single-view scan split the curve) are joined end to end, nearest free ends first
+    (Kruskal on the path ends). None when a component branches or closes a cycle."""
     g = nx.Graph()
     g.add_nodes_from(range(n))
     g.add_edges_from(edges)
-    comp = max(nx.connected_components(g), key=len)
-    h = g.subgraph(comp)
-    if len(comp) < 0.9 * n or max(dict(h.degree()).values()) > 2:
-        return None
-    ends = [v for v, dg in h.degree() if dg == 1]
-    if len(ends) != 2:
-        return None
-    return nx.shortest_path(h, min(ends), max(ends))
+    comps = list(nx.connected_components(g))
+    for c in comps:
+        h = g.subgraph(c)
+        if h.number_of_edges() != len(c) - 1 or (len(c) > 1 and max(dict(h.degree()).values()) > 2):
+            return None, 0
+    comp_of = np.empty(n, int)
+    for ci, c in enumerate(comps):
+        comp_of[list(c)] = ci
+    ends = np.array([v for v in range(n) if g.degree(v) < 2])
+    bridges = 0
+    if len(comps) > 1:
+        tree = cKDTree(points[ends])
+        k = min(len(ends), 16)
+        d, idx = tree.query(points[ends], k=k)
+        pairs = sorted((d[a, b], int(ends[a]), int(ends[idx[a, b]])) for a in range(len(ends)) for b in range(1, k)
+                       if comp_of[ends[a]] != comp_of[ends[idx[a, b]]])
+        parent = list(range(len(comps)))
+
+        def find(x):
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        for _, u, v in pairs:
+            cu, cv = find(comp_of[u]), find(comp_of[v])
+            if cu == cv or g.degree(u) >= 2 or g.degree(v) >= 2:
+                continue
+            g.add_edge(u, v)
+            parent[cu] = cv
+            bridges += 1
+            if bridges == len(comps) - 1:
+                break
+        if bridges != len(comps) - 1:
+            return None, bridges
+    path_ends = [v for v in range(n) if g.degree(v) == 1]
+    if len(path_ends) != 2:
+        return None, bridges
+    return nx.shortest_path(g, min(path_ends), max(path_ends)), bridges
 
 
 def mst_diameter_path(points: np.ndarray) -> list[int]:
@@ -96,8 +136,8 @@ def reconstruct_polyline(points: np.ndarray) -> tuple[np.ndarray, str]:
     """Ordered polyline through the spine points and the method that produced it."""
     if len(points) < 3:
         return points.copy(), "trivial"
-    path = _path_if_simple(len(points), nn_crust(points))
-    method = "nn_crust"
+    path, bridges = _bridged_path(len(points), nn_crust(points), points)
+    method = "nn_crust" if bridges == 0 else f"nn_crust+{bridges}_gaps_bridged"
     if path is None:
         path = mst_diameter_path(points)
         method = "mst_diameter"

@@ -66,7 +66,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     d_k, _ = tree.query(work[:300], k=min(12, len(work)))
     area_pt = np.pi * np.median(d_k[:, -1]) ** 2 / (d_k.shape[1] - 1)
     length_est = len(work) * area_pt / (1.5 * np.pi * rp)
-    n_probes = int(np.clip(10 * length_est / (0.5 * rp), 800, 5000))
+    n_probes = int(np.clip(10 * length_est / (0.5 * rp), 1500, 5000))
     n_probes = min(n_probes, len(work))
     probes = work[:n_probes]
     probe_idx = work_idx[:n_probes]
@@ -114,7 +114,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     if len(thinned) < 2:
         raise SolverError("curve", "the spine point cloud collapsed to a point", {})
     poly, poly_method = curve.reconstruct_polyline(thinned)
-    if poly_method != "nn_crust":
+    if poly_method == "mst_diameter":
         warnings.append(Diagnostic(code="curve_fallback", message="NN-Crust did not give a simple path; the longest "
                                    "path of the minimum spanning tree was used instead.", details={}))
     d_sp = _dist_to_polyline(spine_pts, poly)
@@ -127,31 +127,40 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     progress(0.5, "arc-line spline")
 
     # ---- stage 4: arc-line spline -------------------------------------------------------
+    # Without a user tolerance, ε is not known well (the spine noise is only estimated), so
+    # Algorithm 1 runs for ε, 1.5ε and 2ε and stage 5 keeps the model with the fewest bends
+    # that fits the samples as well as the best one.
     t0 = time.perf_counter()
-    model = None
-    eps_used = eps
-    for attempt in range(5):
-        model = arcline.fit_arcline(simp, eps_used, 0.5 * rp)
-        if model is not None:
-            break
+    inits: list[tuple[float, TubeModel]] = []
+    factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
+    for f in factors:
+        e = eps * f
+        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * e), e, 0.5 * rp)
+        if mdl is not None and all(mdl.n_bends != m0.n_bends for _, m0 in inits):
+            inits.append((e, mdl))
+    eps_used = eps * factors[-1]
+    while not inits and eps_used < 40 * eps:
         eps_used *= 1.5
-        simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps_used)
-    if model is None:
+        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * eps_used), eps_used, 0.5 * rp)
+        if mdl is not None:
+            inits.append((eps_used, mdl))
+            warnings.append(Diagnostic(code="tolerance_increased", message=f"No arc-line spline met ε = {eps:.4g}; "
+                                       f"ε = {eps_used:.4g} was used.", details={"requested": eps, "used": eps_used}))
+    if not inits:
         raise SolverError("arcline", "no arc-line spline approximates the spine within the tolerance",
                           {"tolerance": eps, "last_tried": eps_used})
-    if eps_used > eps:
-        warnings.append(Diagnostic(code="tolerance_increased", message=f"No arc-line spline met ε = {eps:.4g}; "
-                                   f"ε = {eps_used:.4g} was used.", details={"requested": eps, "used": eps_used}))
-    model.pipe_radius = rp
-    n_bends_initial = model.n_bends
+    for _, mdl in inits:
+        mdl.pipe_radius = rp
+    n_bends_initial = [mdl.n_bends for _, mdl in inits]
     timings["arcline"] = time.perf_counter() - t0
-    progress(0.55, f"least-squares fit ({model.n_bends} bends)")
+    progress(0.55, "least-squares fit")
 
     # ---- stage 5: least squares on all inliers -------------------------------------------
     # early rounds and bend pruning use a subsample, the final round every sample
     t0 = time.perf_counter()
     if opts.bend_radius:
-        model.radii = np.full(model.n_bends, float(opts.bend_radius))
+        for _, mdl in inits:
+            mdl.radii = np.full(mdl.n_bends, float(opts.bend_radius))
         mode = "fixed"
     else:
         mode = "common" if opts.common_bend_radius else "free"
@@ -181,23 +190,22 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
             thr = max(6.0 * sig, 0.05 * rp)
         return m, info, thr, sig
 
-    thr0 = max(0.35 * rp, 3 * eps_used)
-    model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
-    progress(0.7, "removing superfluous bends")
-
     prune_idx = _subsample(len(pts_sub), PRUNE_SUBSAMPLE, np.random.default_rng(opts.seed + 1))
     pts_prune = pts_sub[prune_idx]
+    thr0 = max(0.35 * rp, 3 * max(e for e, _ in inits))
 
     def refit(m: TubeModel):
         m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 25)
-        progress(0.75, "removing superfluous bends")
+        progress(0.7, "selecting the number of bends")
         return m2, fit.assign(m2, pts_prune, margin)[0]
 
+    fitted = [(e,) + refit(mdl) for e, mdl in inits]
+    best_i = prune.select(fitted, rp)
+    eps_used, model, _ = fitted[best_i]
     changes = []
     if model.n_bends and not opts.bend_radius:
         model, _, changes = prune.prune(model, refit, eps_used, rp)
-        if changes:
-            model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 2, 60)
+    model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     progress(0.85, "final least-squares fit")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 25)

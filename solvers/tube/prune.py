@@ -58,15 +58,42 @@ def merged(model: TubeModel, k: int) -> TubeModel:
 
 
 def candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]:
+    """Coplanar touching arcs first, then small bends, then any bend touching another."""
     out = []
     n = model.n_bends
-    for k in range(n - 1):
-        if model.lengths[k + 1] < eps and abs(_wrap(model.rotations[k + 1])) < np.radians(25):
+    touching = [k for k in range(n - 1) if model.lengths[k + 1] < eps]
+    for k in touching:
+        if abs(_wrap(model.rotations[k + 1])) < np.radians(25):
             out.append(("merge", k, merged(model, k)))
-    for k in np.argsort(model.angles):
-        if model.angles[k] < np.radians(20):
-            out.append(("remove", int(k), without_bend(model, int(k))))
+    small = [int(k) for k in np.argsort(model.angles) if model.angles[k] < np.radians(20)]
+    for k in small:
+        out.append(("remove", k, without_bend(model, k)))
+    for k in touching:
+        if abs(_wrap(model.rotations[k + 1])) >= np.radians(25):
+            out.append(("merge", k, merged(model, k)))
+    near = sorted({k for t in touching for k in (t, t + 1)} - set(small), key=lambda k: model.angles[k])
+    for k in near:
+        out.append(("remove", k, without_bend(model, k)))
     return out
+
+
+def _cap(res: np.ndarray, scale: float) -> float:
+    r0 = res - np.median(res)
+    return max(6.0 * 1.4826 * float(np.median(np.abs(r0))), 0.05 * scale)
+
+
+def _score(res: np.ndarray, cap: float) -> float:
+    return float(np.sqrt(np.mean(np.minimum(res * res, cap * cap))))
+
+
+def select(fitted: list[tuple[float, TubeModel, np.ndarray]], scale: float, rel_tol: float = 0.03) -> int:
+    """Index of the fitted model with the fewest bends among those whose truncated rms is
+    within ``rel_tol`` of the best (residuals of the same samples for all)."""
+    cap = min(_cap(r, scale) for _, _, r in fitted)
+    scores = [_score(r, cap) for _, _, r in fitted]
+    best = min(scores)
+    ok = [i for i, s in enumerate(scores) if s <= best * (1 + rel_tol) + 1e-4 * scale]
+    return min(ok, key=lambda i: (fitted[i][1].n_bends, scores[i]))
 
 
 def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.03, max_tries: int = 24):
@@ -75,11 +102,10 @@ def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.
     capped at 6 σ of the starting model, at least 0.05·``scale``), so a candidate cannot look good by losing part
     of the tube to the outliers. Returns the final model, its score and the changes."""
     model, res = refit(model)
-    r0 = res - np.median(res)
-    cap = max(6.0 * 1.4826 * float(np.median(np.abs(r0))), 0.05 * scale)
+    cap = _cap(res, scale)
 
     def score(r):
-        return float(np.sqrt(np.mean(np.minimum(r * r, cap * cap))))
+        return _score(r, cap)
 
     sigma = score(res)
     changes = []

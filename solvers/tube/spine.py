@@ -110,8 +110,13 @@ def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.nda
         x_new, t, r, rms = fit_cylinders(nb, w, x, t, r, free, robust_scale=0.1 * rp)
         # MLS: project the current point onto the axis of its best cylinder
         x = x_new + np.einsum("mi,mi->m", x - x_new, t)[:, None] * t
-    proj_error = np.abs(np.linalg.norm(seeds - x, axis=1) - rp)
+    off = seeds - x
+    dist = np.linalg.norm(off, axis=1)
+    proj_error = np.abs(dist - rp)
     cnt = valid.sum(1)
+    # the sample must also lie on the side its normal points to (a fit that jumped to another
+    # part of the tube can still be r away)
+    facing = np.einsum("ij,ij->i", off, normals) > 0.7 * np.maximum(dist, 1e-300)
     ok = (np.isfinite(x).all(1) & (cnt >= 10) & (proj_error <= 0.1 * rp)
-          & (np.abs(r - rp) <= 0.25 * rp))
+          & (np.abs(r - rp) <= 0.25 * rp) & facing)
     return SpineCloud(x, t, r, rms, proj_error, ok)
