@@ -133,6 +133,26 @@ def main() -> None:
     print(f"settings whose pressures are not decreasing-concave (floor > 0): {n_floor} of "
           f"{len(n3res.settings)}")
 
+    print("\nEfficiency families on the N3 fan map (bounded fits 0 <= eta <= 1; max over "
+          "settings; overshoot = fitted peak - measured max of the setting)")
+    print(f"{'family':13s} {'#coef':>5s} {'rel':>7s} {'abs':>7s} {'LOO rel':>8s} {'LOO abs':>8s} "
+          f"{'overshoot':>9s} {'chosen':>6s}")
+    for r in n3res.efficiency_error_table:
+        print(f"{r.family:13s} {r.n_coefficients:5d} {pct(r.max_rel_error)} {pct(r.max_abs_error)} "
+              f"{pct(r.loo_rel)}  {pct(r.loo_abs)} {r.max_overshoot:+9.4f} {r.chosen:6d}")
+    measured = max(max(p.efficiency) for p in n3.positions)
+    for label, opts in (("auto (default)", {}),
+                        ("paper pairing, spline2", {"model": "spline2", "efficiency_model": "same"})):
+        r = n3res if not opts else solve(n3.model_copy(update={
+            "options": n3.options.model_copy(update=opts)}))
+        m = np.nanmax(np.array(r.map.efficiency, dtype=float))
+        worst = max(r.settings, key=lambda s: s.efficiency_max_rel_error)
+        n_poor = sum(w.code == "efficiency_fit_poor" for w in r.report.warnings)
+        print(f"N3 map, efficiency {label:24s}: max map eta {m:.4f} (measured max {measured:.4f});"
+              f" worst setting ({worst.theta:g}, {worst.phi:g}) {worst.efficiency_family} "
+              f"rel {100 * worst.efficiency_max_rel_error:.2f}% abs "
+              f"{worst.efficiency_max_abs_error:.4f}; efficiency_fit_poor warnings: {n_poor}")
+
 
 if __name__ == "__main__":
     main()

@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linprog, minimize_scalar, nnls
+from scipy.optimize import least_squares, linprog, minimize_scalar, nnls
 
 from solvers.perfmap.families import basis, bernstein
 
@@ -217,7 +217,13 @@ def _fit_fixed(family: str, t, eta, minimax: bool, concave: bool, beta=None, D=N
     def full(lin):
         return lin if beta is None else np.concatenate([lin, [beta]])
 
-    c = solve(G0, np.zeros(len(G0)))
+    c = None
+    if not minimax:  # usually the shape constraints are inactive: plain least squares
+        c = np.linalg.lstsq(D, eta, rcond=None)[0]
+        if len(G0) and (G0 @ c).min() < 0:
+            c = None
+    if c is None:
+        c = solve(G0, np.zeros(len(G0)))
     if c is None:
         c = np.linalg.lstsq(D, eta, rcond=None)[0]
     cuts_lo: list[float] = []
@@ -267,14 +273,56 @@ def fit_parabola_log(t, eta, minimax: bool, concave: bool, polish: bool = True):
     k = int(np.argmin(sse))
     if not polish:
         return _fit_fixed("parabola_log", t, eta, minimax, concave, _BETA_GRID[k])
+    best = _fit_fixed("parabola_log", t, eta, minimax, concave, _BETA_GRID[k])
+    if not minimax and best[1] == 0:
+        polished = _gauss_newton_polish(t, eta, concave, best)
+        if polished is not best:  # converged to an admissible optimum: done
+            return polished
     lo = np.log(_BETA_GRID[max(k - 1, 0)] - 1.0)
     hi = np.log(_BETA_GRID[min(k + 1, len(_BETA_GRID) - 1)] - 1.0)
-    best = _fit_fixed("parabola_log", t, eta, minimax, concave, _BETA_GRID[k])
     res = minimize_scalar(
         lambda s: _fit_fixed("parabola_log", t, eta, minimax, concave, 1.0 + np.exp(s))[2],
         bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
     cand = _fit_fixed("parabola_log", t, eta, minimax, concave, 1.0 + np.exp(res.x))
-    return cand if cand[2] < best[2] else best
+    best = cand if cand[2] < best[2] else best
+    if not minimax and best[1] == 0:
+        best = _gauss_newton_polish(t, eta, concave, best)
+    return best
+
+
+def _gauss_newton_polish(t, eta, concave: bool, fit):
+    """Levenberg-Marquardt on (c0, c1, c2, a, log(beta - 1)) from the profiled fit: the
+    bounded scalar search in beta stops at ~sqrt(eps), this converges quadratically, so data
+    from the family are recovered to round-off. Kept only if it stays admissible."""
+    params, cuts, sse = fit
+    B = bernstein(2, t)
+
+    def resid(q):
+        return B @ q[:3] + q[3] * np.log(1.0 + np.exp(q[4]) - t) - eta
+
+    def jac(q):
+        bb = 1.0 + np.exp(q[4])
+        return np.column_stack([B, np.log(bb - t), q[3] * np.exp(q[4]) / (bb - t)])
+
+    q0 = np.concatenate([params[:4], [np.log(params[4] - 1.0)]])
+    try:
+        with np.errstate(all="ignore"):  # trial steps may leave beta > 1: rejected below
+            sol = least_squares(resid, q0, jac=jac, method="lm", xtol=1e-15, ftol=1e-15,
+                                gtol=1e-15, max_nfev=100)
+    except (ValueError, FloatingPointError):
+        return fit
+    q = sol.x
+    cand = np.concatenate([q[:4], [1.0 + np.exp(q[4])]])
+    if not (np.all(np.isfinite(cand)) and cand[3] >= 0 and cand[4] > 1.0):
+        return fit
+    if concave and cand[0] - 2 * cand[1] + cand[2] > 0:
+        return fit
+    _, vmin, _, vmax = curve_extrema("parabola_log", cand)
+    cand_sse = float(np.sum(resid(q) ** 2))
+    if not (np.isfinite(cand_sse) and vmin >= ETA_LO + _BOUND_MARGIN
+            and vmax <= ETA_HI - _BOUND_MARGIN and cand_sse <= sse):
+        return fit
+    return cand, cuts, cand_sse
 
 
 def fit_eta(family: str, t, eta, minimax: bool, concave: bool, B=None,

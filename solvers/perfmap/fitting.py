@@ -10,6 +10,9 @@ The log family (paper section 2.2, eqs. 9-13) is linear in (a, c) for fixed b, s
 profiling as in the paper — but on a log-spaced grid of ``b - x_max`` refined by a bounded
 scalar search and polished by Gauss-Newton (``scipy.optimize.least_squares``) instead of the
 paper's 1000 uniform samples in ]x_n, x_n + 1].
+
+Efficiency curves (bounded 0 <= eta <= 1, their own family, the parabola_log family) live in
+:mod:`solvers.perfmap.efficiency`; this module wraps them per setting with their errors.
 """
 
 from __future__ import annotations

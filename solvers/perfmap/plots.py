@@ -33,7 +33,8 @@ def _measured(request: PerfmapRequest):
 
 def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
     curves = curveset_from_fits(result.settings)
-    t = np.linspace(0.0, 1.0, 101)
+    # denser towards choke (t = 1), where a parabola_log efficiency falls steeply
+    t = 1.0 - (1.0 - np.linspace(0.0, 1.0, 161)) ** 2
     X, Y, E = curves.sample(t)
     meas = _measured(request)
     n = len(result.settings)
@@ -54,13 +55,15 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
             if p is not None:
                 ax.plot(p.flow, p.pressure, "C0o", ms=3.5)
                 ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5)
-            ax.set_title(f"θ={s.theta:g}, φ={s.phi:g}  ({100 * s.pressure_max_rel_error:.1f}%)",
-                         fontsize=8)
+            ax.set_title(f"θ={s.theta:g}, φ={s.phi:g}  (y {100 * s.pressure_max_rel_error:.1f}%,"
+                         f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
             ax.tick_params(labelsize=7)
             ax2.tick_params(labelsize=7, colors="C1")
         for ax in axes[n:]:
             ax.set_visible(False)
-        fig.suptitle(f"Characteristics ({result.family}, {result.fit}): pressure (blue, left) "
+        eff = ", ".join(sorted({s.efficiency_family for s in result.settings}))
+        fig.suptitle(f"Characteristics (pressure {result.family}, efficiency {eff}, "
+                     f"{result.fit}): pressure (blue, left) "
                      "and efficiency (orange, right) vs flow; markers = measured")
         return fig
     fig = Figure(figsize=(12, 5), layout="constrained")
