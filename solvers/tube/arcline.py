@@ -74,7 +74,7 @@ def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
 
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
-             eps: float, r_min: float, grid: int = 96, t_hi: float | None = None):
+             eps: float, r_min: float, grid: int = 64, t_hi: float | None = None):
     """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None.
 
     ``chain`` holds the vertices that must lie within ε; ``t_hi`` bounds the arc end on l_j
@@ -141,7 +141,7 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
         return None
     best = None
     t_grid = np.linspace(lo, hi, grid) if hi > lo else np.array([lo])
-    for _ in range(5):
+    for _ in range(4):
         R = alpha + beta * t_grid
         d, t2 = _dist_to_arcline(q, t_grid, R, phi, a2, u2, n2)
         viol = np.max(d - epsk[None], axis=1)
@@ -185,7 +185,7 @@ class _State:
     edge: Edge | None
 
 
-def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> TubeModel | None:
+def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 2) -> TubeModel | None:
     """Algorithm 1 with least-squares tie-breaking; None if no chain of arcs fits within ε.
 
     The paper keeps one state per vertex (the modified tangent line of its best prefix). A

@@ -106,6 +106,55 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], -1)
+
+
+def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
+    """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
+
+    The same forward kinematics as geometry.build_spine, vectorised over the batch (the
+    finite-difference Jacobian evaluates 2P models at once)."""
+    B = len(X)
+    n = lay.n
+    i = 6
+    lm = X[:, i:i + n - 1] if n > 1 else np.zeros((B, 0)); i += max(n - 1, 0)
+    rm = X[:, i:i + n - 1] if n > 1 else np.zeros((B, 0)); i += max(n - 1, 0)
+    ang = X[:, i:i + n]; i += n
+    if lay.radius_mode == "free":
+        rad = X[:, i:i + n]; i += n
+    elif lay.radius_mode == "common":
+        rad = np.repeat(X[:, i:i + 1], n, axis=1) if n else np.zeros((B, 0)); i += 1 if n else 0
+    else:
+        rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
+    frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0
+    lengths = np.concatenate([np.zeros((B, 1)), lm, np.zeros((B, 1))], 1) if n else np.zeros((B, 1))
+    rots = np.concatenate([np.zeros((B, 1)), rm], 1) if n else np.zeros((B, 1))
+    g = np.zeros((B, 2 * n + 1, 7))
+    p = X[:, :3].copy()
+    t = frames[:, :, 0].copy()
+    nv = frames[:, :, 1].copy()
+    for k in range(n + 1):
+        g[:, 2 * k, :3] = p
+        g[:, 2 * k, 3:6] = t
+        p = p + lengths[:, k:k + 1] * t
+        if k == n:
+            break
+        c_r, s_r = np.cos(rots[:, k:k + 1]), np.sin(rots[:, k:k + 1])
+        nv = nv * c_r + _cross(t, nv) * s_r
+        R = rad[:, k:k + 1]
+        a = ang[:, k:k + 1]
+        centre = p + R * nv
+        g[:, 2 * k + 1, :3] = centre
+        g[:, 2 * k + 1, 3:6] = _cross(t, nv)
+        g[:, 2 * k + 1, 6] = R[:, 0]
+        ca, sa = np.cos(a), np.sin(a)
+        p = centre - R * nv * ca + R * t * sa
+        t, nv = t * ca + nv * sa, nv * ca - t * sa
+    return g
+
+
 def _geometry_jacobian(x, lay, frame0, rp, scale):
     """d(geometry)/d(params) by central differences: (S, 7, P)."""
     P = len(x)
@@ -114,15 +163,9 @@ def _geometry_jacobian(x, lay, frame0, rp, scale):
     i = 6 + max(lay.n - 1, 0)
     steps[6:i] = 1e-6 * scale
     steps[i + max(lay.n - 1, 0) + lay.n:] = 1e-6 * scale
-    out = None
-    for j in range(P):
-        xp = x.copy(); xm = x.copy()
-        xp[j] += steps[j]; xm[j] -= steps[j]
-        d = (_geometry(unpack(xp, lay, frame0, rp)) - _geometry(unpack(xm, lay, frame0, rp))) / (2 * steps[j])
-        if out is None:
-            out = np.zeros(d.shape + (P,))
-        out[..., j] = d
-    return out
+    X = np.concatenate([x + np.diag(steps), x - np.diag(steps)])
+    G = geometry_batch(X, lay, frame0, rp)
+    return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
 
 
 def _dist_and_grad(pts: np.ndarray, seg: np.ndarray, g: np.ndarray, kind: np.ndarray, want_grad: bool):
@@ -234,13 +277,11 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
     scale = max(rp, 1e-9)
 
     def fun(x):
-        m = unpack(x, lay, frame0, rp)
-        d, _ = _dist_and_grad(pts, seg, _geometry(m), kind, False)
-        return d - m.pipe_radius
+        d, _ = _dist_and_grad(pts, seg, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
+        return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def jac(x):
-        m = unpack(x, lay, frame0, rp)
-        g = _geometry(m)
+        g = geometry_batch(x[None], lay, frame0, rp)[0]
         _, gr = _dist_and_grad(pts, seg, g, kind, True)
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
         J = np.empty((len(pts), len(x)))

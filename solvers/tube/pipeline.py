@@ -19,7 +19,7 @@ from .validate import check_input
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000
 SIMPLIFY_FRACTION = 0.25
-PRUNE_SUBSAMPLE = 6_000  # early least-squares rounds; the last round uses every inlier
+PRUNE_SUBSAMPLE = 3_000  # early least-squares rounds; the last round uses every inlier
 
 
 def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
@@ -195,7 +195,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     thr0 = max(0.35 * rp, 3 * max(e for e, _ in inits))
 
     def refit(m: TubeModel):
-        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 25)
+        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
         progress(0.7, "selecting the number of bends")
         return m2, fit.assign(m2, pts_prune, margin)[0]
 

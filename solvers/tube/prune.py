@@ -61,7 +61,8 @@ def candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]
     """Coplanar touching arcs first, then small bends, then any bend touching another."""
     out = []
     n = model.n_bends
-    touching = [k for k in range(n - 1) if model.lengths[k + 1] < eps]
+    # "touching": joined by a straight shorter than half a pipe radius (or ε)
+    touching = [k for k in range(n - 1) if model.lengths[k + 1] < max(eps, 0.5 * model.pipe_radius)]
     for k in touching:
         if abs(_wrap(model.rotations[k + 1])) < np.radians(25):
             out.append(("merge", k, merged(model, k)))
@@ -96,7 +97,7 @@ def select(fitted: list[tuple[float, TubeModel, np.ndarray]], scale: float, rel_
     return min(ok, key=lambda i: (fitted[i][1].n_bends, scores[i]))
 
 
-def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.03, max_tries: int = 24):
+def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.03, max_tries: int = 16):
     """Greedy pruning. ``refit(model) -> (model, residuals)`` refits a candidate and returns
     the residuals of the same fixed sample set. The score is a truncated rms (residuals
     capped at 6 σ of the starting model, at least 0.05·``scale``), so a candidate cannot look good by losing part
