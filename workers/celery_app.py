@@ -12,7 +12,7 @@ import threading
 import uuid
 
 from celery import Celery, signals
-from celery.exceptions import SoftTimeLimitExceeded
+from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 
 from workers import registry
 from workers.settings import Settings, get_settings
@@ -76,6 +76,34 @@ def _run_job_task(task, job_id: str) -> str:
     )
     log.info("job %s: %s", job_id, outcome)
     return outcome
+
+
+@signals.task_failure.connect
+def _hard_time_limit(sender=None, exception=None, args=None, **_kwargs) -> None:
+    """The pool killed a task's process at its hard time limit (a solver deaf even to the soft
+    limit): fail the job now with a report, instead of letting the lease lapse and retrying a
+    job that would hang again. Runs in the worker's main process."""
+    if not isinstance(exception, TimeLimitExceeded) or not args:
+        return
+    from workers.runner import failure_report
+
+    ctx, _ = _worker_context()
+    job_id = uuid.UUID(str(args[0]))
+    job = ctx.repo.get(job_id)
+    if job is None or job.status != "running":
+        return
+    spec = registry.get(job.kind)
+    limit = spec.time_limit if spec else None
+    report = failure_report(
+        "time_limit",
+        f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
+        if limit
+        else "The solver was killed at its hard time limit.",
+        time_limit=limit,
+        killed=True,
+    )
+    ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None)
+    log.warning("job %s killed at its hard time limit", job_id)
 
 
 @signals.worker_process_init.connect

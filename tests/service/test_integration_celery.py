@@ -149,6 +149,16 @@ def test_hanging_solver_hits_celery_time_limit(scaled):
     assert done["status"] == "failed" and done["report"]["stage"] == "time_limit"
 
 
+def test_solver_deaf_to_the_soft_limit_is_killed_at_the_hard_limit(scaled):
+    client, _, _ = scaled
+    done = wait_for(client, client.post("/v1/test-stubborn/jobs", json={}).json()["id"], timeout=60)
+    assert done["status"] == "failed" and done["attempt"] == 1
+    assert done["report"]["stage"] == "time_limit" and done["report"]["details"]["killed"] is True
+    # The pool replaced the killed process: the next job runs.
+    follow = wait_for(client, client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()["id"], timeout=60)
+    assert follow["status"] == "succeeded"
+
+
 def test_cancel_running_job_on_celery(scaled):
     client, _, _ = scaled
     job = client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 30}).json()

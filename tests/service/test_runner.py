@@ -148,3 +148,11 @@ def test_lost_worker_report_keeps_history():
     second = lost_worker_report(2, 3, first)
     assert [a["attempt"] for a in second["details"]["attempts"]] == [1, 2]
     assert "re-queued" in second["message"]
+
+
+def test_solver_deaf_to_cancellation_is_abandoned_at_the_hard_limit(ctx):
+    job_id = submit(ctx, "test-stubborn", b"{}")
+    started = time.monotonic()
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "failed"
+    assert 1.5 < time.monotonic() - started < 10
+    assert ctx.repo.get(job_id).report["stage"] == "time_limit"

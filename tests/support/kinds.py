@@ -98,6 +98,14 @@ def solve_hang(request: CrashRequest, progress) -> CrashResult:
         time.sleep(0.05)
 
 
+def solve_stubborn(request: CrashRequest, progress) -> CrashResult:
+    while True:  # swallows even Celery's SoftTimeLimitExceeded: only a kill stops it
+        try:
+            time.sleep(0.05)
+        except BaseException:
+            pass
+
+
 register(
     SolverSpec(
         kind="test-compute",
@@ -116,3 +124,4 @@ register(
 register(SolverSpec("test-crash", CrashRequest, CrashResult, solve_crash, "test-1", max_attempts=2))
 register(SolverSpec("test-fail", CrashRequest, CrashResult, solve_fail, "test-1"))
 register(SolverSpec("test-hang", CrashRequest, CrashResult, solve_hang, "test-1", soft_time_limit=1.0, time_limit=2.0))
+register(SolverSpec("test-stubborn", CrashRequest, CrashResult, solve_stubborn, "test-1", soft_time_limit=1.0, time_limit=2.0))
