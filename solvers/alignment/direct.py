@@ -202,6 +202,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     use_cost = True
     prev = np.inf
     stalls = 0
+    cache: dict = {}
     pos_scale = model.lref
     for _ in range(max_gn):
         P, D = st.geometry()
@@ -210,7 +211,8 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         err = max(float(np.max(np.abs(rp))) / pos_scale if m_conn else 0.0,
                   float(np.max(np.abs(rd))) if m_conn else 0.0)
         short = model.is_pipe & free & (st.L < model.min_length * (1 - 1e-12)) & ~locked
-        if nv == 0 or (not np.any(short) and (err <= 1e-3 * min(model.pos_tol / pos_scale, model.ang_tol) or err <= 1e-18)):
+        # 1e-14 relative is where float64 Gauss-Newton ends; what is left is snapped (see Model.snap_pos)
+        if nv == 0 or (not np.any(short) and (err <= 1e-3 * min(model.pos_tol / pos_scale, model.ang_tol) or err <= 1e-14)):
             break
         if not use_cost and err >= 0.9 * prev and not np.any(short):
             stalls += 1
@@ -300,7 +302,8 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
             if use_cost:
                 np.add.at(g, (var[pipes][:, None] + np.arange(7)).ravel(), gp.ravel())
         H = sp.csc_matrix((np.concatenate(hv), (np.concatenate(hr), np.concatenate(hc))), shape=(nv, nv))
-        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-20, max_iter=8 if use_cost else 30)
+        cache["reuse"] = not use_cost and not np.any(short)
+        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-20, max_iter=8 if use_cost else 30, cache=cache)
         steps += k
         om = x[(var[fr][:, None] + np.arange(3))]
         dq = Rotation.from_rotvec(om).as_quat()[:, [3, 0, 1, 2]]
