@@ -179,13 +179,15 @@ def _shape_constraints(family: str, concave: bool) -> np.ndarray:
     return np.array(rows).reshape(-1, n_lin)
 
 
-def _squeeze_inside(family: str, params: np.ndarray) -> np.ndarray:
+def _squeeze_inside(family: str, params: np.ndarray, extrema=None) -> np.ndarray:
     """Shift (or, if both bounds are violated, shrink about the middle) the polynomial part
     by the solvers' tolerance so the exact extrema lie in [lo + margin, hi - margin].
     Partition of unity makes a shift of the control values a shift of the curve (shape,
     concavity, the log term unchanged)."""
     lo_m, hi_m = ETA_LO + _BOUND_MARGIN, ETA_HI - _BOUND_MARGIN
-    _, vmin, _, vmax = curve_extrema(family, params)
+    _, vmin, _, vmax = curve_extrema(family, params) if extrema is None else extrema
+    if lo_m <= vmin and vmax <= hi_m:
+        return params
     p = params.copy()
     k = 3 if family == "parabola_log" else len(p)
     if vmax > hi_m and vmin - (vmax - hi_m) >= lo_m:
@@ -228,8 +230,9 @@ def _fit_fixed(family: str, t, eta, minimax: bool, concave: bool, beta=None, D=N
         c = np.linalg.lstsq(D, eta, rcond=None)[0]
     cuts_lo: list[float] = []
     cuts_hi: list[float] = []
+    ext = None
     for _ in range(_MAX_CUTS):
-        tmin, vmin, tmax, vmax = curve_extrema(family, full(c))
+        ext = tmin, vmin, tmax, vmax = curve_extrema(family, full(c))
         new = False
         if vmax > ETA_HI + 1e-12:
             cuts_hi.append(tmax)
@@ -248,7 +251,8 @@ def _fit_fixed(family: str, t, eta, minimax: bool, concave: bool, beta=None, D=N
         if nxt is None:  # cannot happen for [0, 1] (a constant is feasible); be safe
             break
         c = nxt
-    params = _squeeze_inside(family, full(c))
+        ext = None
+    params = _squeeze_inside(family, full(c), ext)
     r = D @ (params[:4] if beta is not None else params) - eta
     obj = float(np.max(np.abs(r) * w)) if minimax else float(r @ r)
     return params, len(cuts_lo) + len(cuts_hi), obj
@@ -335,6 +339,36 @@ def fit_eta(family: str, t, eta, minimax: bool, concave: bool, B=None,
     return EfficiencyFit(family, params, cuts)
 
 
+def _closed_form_loo(family: str, B: np.ndarray, eta: np.ndarray, concave: bool,
+                     left_out: np.ndarray) -> dict[int, float]:
+    """Predictions at the left-out points whose unconstrained leave-one-out fit (hat-matrix
+    identity c_(i) = c - (B^T B)^-1 b_i r_i / (1 - h_ii)) already satisfies the bounds and
+    the shape constraints: then it IS the constrained fit. Others are left to refits."""
+    BtB = B.T @ B
+    try:
+        M = np.linalg.inv(BtB)
+    except np.linalg.LinAlgError:
+        return {}
+    c = M @ (B.T @ eta)
+    r = eta - B @ c
+    MB = B @ M  # rows: (M b_i)^T
+    h = np.einsum("ij,ij->i", MB, B)
+    out = {}
+    G0 = _shape_constraints(family, concave)
+    for i in left_out:
+        if h[i] >= 1.0 - 1e-10:
+            continue
+        ci = c - MB[i] * (r[i] / (1.0 - h[i]))
+        if len(G0) and (G0 @ ci).min() < 0:
+            continue
+        if ci.min() < ETA_LO or ci.max() > ETA_HI:  # convex hull inconclusive: exact check
+            _, vmin, _, vmax = curve_extrema(family, ci)
+            if vmin < ETA_LO + _BOUND_MARGIN or vmax > ETA_HI - _BOUND_MARGIN:
+                continue
+        out[int(i)] = float(B[i] @ ci)
+    return out
+
+
 def eta_leave_one_out(family: str, t, eta, concave: bool, left_out: np.ndarray):
     """(max relative, max absolute) error of each left-out point predicted by a bounded
     least-squares fit to the others (same parametrisation t); None when too few points."""
@@ -342,11 +376,16 @@ def eta_leave_one_out(family: str, t, eta, concave: bool, left_out: np.ndarray):
     if n - 1 < N_EFF_COEFFICIENTS[family]:
         return None, None
     B = None if family == "parabola_log" else basis(family, t)
+    known = {} if B is None else _closed_form_loo(family, B, eta, concave, left_out)
     rel = ab = 0.0
     for i in left_out:
-        keep = np.arange(n) != i
-        f = fit_eta(family, t[keep], eta[keep], False, concave,
-                    None if B is None else B[keep], polish=False)
-        err = abs(float(f(t[i : i + 1])[0]) - eta[i])
+        if i in known:
+            pred = known[i]
+        else:
+            keep = np.arange(n) != i
+            f = fit_eta(family, t[keep], eta[keep], False, concave,
+                        None if B is None else B[keep], polish=False)
+            pred = float(f(t[i : i + 1])[0])
+        err = abs(pred - eta[i])
         rel, ab = max(rel, err / abs(eta[i])), max(ab, err)
     return rel, ab

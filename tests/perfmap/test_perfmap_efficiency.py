@@ -15,6 +15,7 @@ from solvers.perfmap.efficiency import (
     EFFICIENCY_FAMILIES,
     N_EFF_COEFFICIENTS,
     curve_extrema,
+    eta_leave_one_out,
     design,
     fit_eta,
     lsi,
@@ -191,3 +192,20 @@ def test_query_answer_does_not_depend_on_the_batch(n3_result):
     for k, p in enumerate(pts):
         alone = query(n3_result, PerfmapQueryRequest(points=[p])).points[0]
         assert alone.model_dump() == batch[k].model_dump() == rev[k].model_dump()
+
+
+@pytest.mark.parametrize("family", ["parabola", "cubic", "spline2", "spline3"])
+@pytest.mark.parametrize("concave", [False, True])
+def test_closed_form_loo_equals_explicit_bounded_refits(family, concave):
+    rng = np.random.default_rng(21)
+    t = np.linspace(0.0, 1.0, 9)
+    for eta in (np.array([0.80, 0.90, 0.97, 0.99, 0.985, 0.95, 0.80, 0.45, 0.05]),  # bounds bite
+                0.6 + 0.3 * np.sin(2.5 * t) + 0.01 * rng.standard_normal(9)):
+        rel, ab = eta_leave_one_out(family, t, eta, concave, np.arange(9))
+        errs = []
+        for i in range(9):
+            keep = np.arange(9) != i
+            f = fit_eta(family, t[keep], eta[keep], False, concave)
+            errs.append(abs(float(f(t[i : i + 1])[0]) - eta[i]))
+        assert ab == pytest.approx(max(errs), abs=1e-10)
+        assert rel == pytest.approx(max(np.array(errs) / eta), abs=1e-10)
