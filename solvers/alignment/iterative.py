@@ -332,6 +332,8 @@ def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.nd
             reasons[exploded] = "explosion"
             errors[exploded] = (float(gap[exploded]), float(ang[exploded]))
             continue
+        if exploded is not None:
+            stop = f"explosion indicator fired with the cut limit ({options.max_cuts}) reached"
         break
     if stop != "all connections within tolerance":
         _, P, D = best

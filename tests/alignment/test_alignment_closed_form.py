@@ -177,3 +177,16 @@ def test_iteration_cap_returns_best_result_with_errors():
     warn = next(w for w in res.report.warnings if w.code == "not_converged")
     assert warn.details["connections"][0]["position_error"] == pytest.approx(res.max_position_error)
     assert "cap" in res.report.details["stop_reason"]
+
+
+def test_explosion_cuts_the_worst_connection_and_restarts():
+    # an absurd step limit makes the alternating scheme overshoot; the indicator must fire
+    req = grid_network(3, 3, seed=2, options={"method": "dual_quaternion", "explosion_factor": 1.05,
+                                              "step_limit": 500.0, "max_iterations": 300, "max_cuts": 2})
+    res = solve(req)
+    cuts = next(w for w in res.report.warnings if w.code == "connections_cut").details["cuts"]
+    assert [c["reason"] for c in cuts] == ["explosion", "explosion"]
+    assert res.cut_connections == [c["index"] for c in cuts]
+    assert all(res.connections[k].cut for k in res.cut_connections)
+    assert "explosion" in res.report.details["stop_reason"]
+    assert not res.converged
