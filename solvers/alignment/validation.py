@@ -18,56 +18,63 @@ def check_input(request: AlignmentRequest) -> None:
     """Raise :class:`InputRejected` listing every bad field; return None when the request is usable."""
     errors: list[FieldError] = []
     opts = request.options
+    comps = request.components
     index: dict[str, int] = {}
     cos_tol = np.cos(np.radians(opts.shape_tolerance))
-    for i, comp in enumerate(request.components):
-        loc = ("components", i)
+    for i, comp in enumerate(comps):
         if comp.id in index:
-            errors.append(FieldError(loc + ("id",), f"duplicate component id {comp.id!r}"))
+            errors.append(FieldError(("components", i, "id"), f"duplicate component id {comp.id!r}"))
         else:
             index[comp.id] = i
-        dirs = np.array([p.direction for p in comp.ports], dtype=float)
-        pos = np.array([p.position for p in comp.ports], dtype=float)
-        norms = np.linalg.norm(dirs, axis=1)
-        for k in np.flatnonzero(~(norms > 1e-12)):
-            errors.append(FieldError(loc + ("ports", int(k), "direction"), "direction must be a non-zero vector"))
-        if np.any(~(norms > 1e-12)):
+    # all ports at once: the per-component rules below only look at flagged components
+    counts = np.array([len(c.ports) for c in comps])
+    start = np.concatenate([[0], np.cumsum(counts)])
+    pos = np.array([p.position for c in comps for p in c.ports], dtype=float)
+    dirs = np.array([p.direction for c in comps for p in c.ports], dtype=float)
+    norms = np.linalg.norm(dirs, axis=1)
+    zero = ~(norms > 1e-12)
+    unit = dirs / np.where(zero, 1.0, norms)[:, None]
+    bad_comp = np.zeros(len(comps), dtype=bool)
+    owner = np.repeat(np.arange(len(comps)), counts)
+    bad_comp[owner[zero]] = True
+    for k in np.flatnonzero(zero):
+        errors.append(FieldError(("components", int(owner[k]), "ports", int(k - start[owner[k]]), "direction"),
+                                 "direction must be a non-zero vector"))
+    is_pipe = np.array([c.kind == "pipe" for c in comps])
+    two = is_pipe & (counts == 2) & ~bad_comp
+    pi = np.flatnonzero(two)
+    axis = pos[start[pi] + 1] - pos[start[pi]]
+    length = np.linalg.norm(axis, axis=1)
+    axis = axis / np.where(length > 0, length, 1.0)[:, None]
+    d0, d1 = unit[start[pi]], unit[start[pi] + 1]
+    not_straight = (np.einsum("ij,ij->i", d1, axis) < cos_tol) | (-np.einsum("ij,ij->i", d0, axis) < cos_tol)
+    for i in np.flatnonzero(is_pipe & (counts != 2)):
+        errors.append(FieldError(("components", int(i), "ports"), f"a pipe has exactly 2 ports, got {counts[i]}"))
+    for i, ln, ns in zip(pi, length, not_straight):
+        if not ln > 0:
+            errors.append(FieldError(("components", int(i), "ports"), "a pipe's two ports are at the same point"))
+        elif ns:
+            errors.append(FieldError(
+                ("components", int(i), "ports"),
+                f"pipe ports are not collinear and opposite within {opts.shape_tolerance} deg "
+                "(port directions must point out of the pipe along its axis)"))
+    for i in np.flatnonzero(~is_pipe):
+        comp = comps[i]
+        need = MIN_PORTS.get(comp.type, 1)
+        if counts[i] < need:
+            errors.append(FieldError(("components", int(i), "ports"), f"a {comp.type} needs at least {need} ports, got {counts[i]}"))
+        most = MAX_PORTS.get(comp.type)
+        if most is not None and counts[i] > most:
+            errors.append(FieldError(("components", int(i), "ports"), f"a {comp.type} has at most {most} ports, got {counts[i]}"))
+    for i, comp in enumerate(comps):
+        if comp.up is None or bad_comp[i]:
             continue
-        dirs = dirs / norms[:, None]
-        if comp.kind == "pipe":
-            if len(comp.ports) != 2:
-                errors.append(FieldError(loc + ("ports",), f"a pipe has exactly 2 ports, got {len(comp.ports)}"))
-                continue
-            axis = pos[1] - pos[0]
-            length = float(np.linalg.norm(axis))
-            if not length > 0:
-                errors.append(FieldError(loc + ("ports",), "a pipe's two ports are at the same point"))
-                continue
-            axis /= length
-            if dirs[1] @ axis < cos_tol or -(dirs[0] @ axis) < cos_tol:
-                errors.append(
-                    FieldError(
-                        loc + ("ports",),
-                        f"pipe ports are not collinear and opposite within {opts.shape_tolerance} deg "
-                        "(port directions must point out of the pipe along its axis)",
-                    )
-                )
-        else:
-            need = MIN_PORTS.get(comp.type, 1)
-            if len(comp.ports) < need:
-                errors.append(
-                    FieldError(loc + ("ports",), f"a {comp.type} needs at least {need} ports, got {len(comp.ports)}")
-                )
-            most = MAX_PORTS.get(comp.type)
-            if most is not None and len(comp.ports) > most:
-                errors.append(FieldError(loc + ("ports",), f"a {comp.type} has at most {most} ports, got {len(comp.ports)}"))
-        if comp.up is not None:
-            up = np.array(comp.up, dtype=float)
-            un = np.linalg.norm(up)
-            if not un > 1e-12:
-                errors.append(FieldError(loc + ("up",), "up must be a non-zero vector"))
-            elif comp.kind == "fitting" and abs(dirs[0] @ up) / un > np.cos(np.radians(1.0)):
-                errors.append(FieldError(loc + ("up",), "up must not be parallel to the port axis"))
+        up = np.array(comp.up, dtype=float)
+        un = np.linalg.norm(up)
+        if not un > 1e-12:
+            errors.append(FieldError(("components", i, "up"), "up must be a non-zero vector"))
+        elif comp.kind == "fitting" and abs(unit[start[i]] @ up) / un > np.cos(np.radians(1.0)):
+            errors.append(FieldError(("components", i, "up"), "up must not be parallel to the port axis"))
 
     used: dict[tuple[str, int], tuple[int, str]] = {}
     for j, conn in enumerate(request.connections):
