@@ -46,6 +46,11 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
         errors.append(FieldError(("positions", i, "efficiency"),
                                  "efficiencies must be positive (errors are relative)"))
         bad = True
+    elif np.any(eta > 1):  # fitted curves are held to 0 <= eta <= 1
+        errors.append(FieldError(("positions", i, "efficiency"),
+                                 f"efficiency is a fraction, 0 < eta <= 1; got {eta.max():g} "
+                                 "(percent? divide by 100)"))
+        bad = True
     if bad:
         return None
     order = np.lexsort((eta, y, x))

@@ -209,3 +209,16 @@ def test_closed_form_loo_equals_explicit_bounded_refits(family, concave):
             errs.append(abs(float(f(t[i : i + 1])[0]) - eta[i]))
         assert ab == pytest.approx(max(errs), abs=1e-10)
         assert rel == pytest.approx(max(np.array(errs) / eta), abs=1e-10)
+
+
+def test_efficiency_in_percent_is_rejected_with_its_field():
+    from solvers.base import InputRejected
+    from solvers.perfmap import check_input
+
+    body = request_body(n_theta=3, n_phi=3)
+    body["positions"][4]["efficiency"] = [100 * e for e in body["positions"][4]["efficiency"]]
+    with pytest.raises(InputRejected) as exc:
+        check_input(PerfmapRequest.model_validate(body))
+    errs = exc.value.errors
+    assert [tuple(e.loc) for e in errs] == [("positions", 4, "efficiency")]
+    assert "percent" in errs[0].msg
