@@ -51,16 +51,17 @@ def constrained_lstsq(
     return _refine(H, g, A, residual, lu, stop, max_iter, stale=False)
 
 
-def _factor(H, A):
+def _factor(H: sp.spmatrix, A: sp.spmatrix):
+    """Sparse LU of the regularised (quasi-definite) KKT matrix."""
     n, m = H.shape[0], A.shape[0]
-    if True:  # noqa: SIM108 - keeps the regularisation recipe in one block
-        hd = H.diagonal()
-        col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
-        scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
-        acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
-        delta = 1e-14 * acol / scale
-        K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
-        return splu(K)
+    hd = H.diagonal()
+    col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
+    scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
+    acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
+    delta = 1e-14 * acol / scale
+    K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
+    return splu(K)
+
 
 
 def _refine(H, g, A, residual, lu, stop, max_iter, stale):

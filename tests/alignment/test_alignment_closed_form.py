@@ -190,3 +190,30 @@ def test_explosion_cuts_the_worst_connection_and_restarts():
     assert all(res.connections[k].cut for k in res.cut_connections)
     assert "explosion" in res.report.details["stop_reason"]
     assert not res.converged
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_fitting_bolted_to_fitting_forms_a_cluster_that_closes(method):
+    # run pipes A, B fixed; a tee on them; an elbow bolted straight onto the tee branch (a FixCluster
+    # of two fittings with a 1 mm gap between them), then a free pipe C up from the elbow
+    arms = np.array([[-150, 0, 0], [150, 0, 0], [0, 150, 0.0]])
+    R = Rotation.from_rotvec([0.0, 0.0, 0.004])
+    tee = {"id": "T", "kind": "fitting", "type": "tee",
+           "ports": [port(R.apply(a) + [0.3, 0.4, 0.0], R.apply(a / 150)) for a in arms]}
+    el = elbow("E", [0, 300, 0], [0, -1, 0], [0, 0, 1], shift=(0.8, -0.5, 0.6), rot=[0.01, 0, 0])
+    comps = [pipe("A", [-1150, 0, 0], [-150, 0, 0], fixed=True), pipe("B", [150, 0, 0], [1150, 0, 0], fixed=True),
+             tee, el, pipe("C", [0, 300, 150], [0, 300, 1150])]
+    conns = [conn("T", 0, "A", 1), conn("T", 1, "B", 0), conn("T", 2, "E", 0), conn("E", 1, "C", 0)]
+    req = request(comps, conns, method=method)
+    res = solve(req)
+    assert res.converged and not res.cut_connections
+    assert_watertight(req, res)
+    P, D = ports(res, "T")
+    np.testing.assert_allclose(P[:2], arms[:2], atol=1e-9)  # the run sits on the fixed pipes
+    # the tee may only roll about the run axis: branch stays normal to it, 150 from the centre
+    assert abs(D[2, 0]) < 1e-12 and np.linalg.norm(P[2]) == pytest.approx(150.0, abs=1e-9)
+    assert abs(np.arctan2(D[2, 2], D[2, 1])) < 0.01
+    # the elbow, a rigid 90-degree fitting, keeps its shape on the branch
+    PE, DE = ports(res, "E")
+    np.testing.assert_allclose(PE[0], P[2], atol=0)
+    assert abs(DE[0] @ DE[1]) < 1e-12
