@@ -164,8 +164,10 @@ class Outliers(BaseModel):
     count: int
     indices: list[int] = Field(description="Indices (into the input points) of discarded samples.")
     reasons: list[str] = Field(
-        description="Reason per index: 'curvature' (local fit, §7), 'spine_projection' (MLS "
-        "projection distance, §7) or 'residual' (far from the fitted surface)."
+        description="Reason per index: every listed sample is far from the fitted surface; the "
+        "reason names the first stage that already flagged it: 'local_fit' (curvature off 1/r, "
+        "abnormal quadric residual or too few neighbours, §7), 'spine_projection' (MLS projection "
+        "distance off the pipe radius, §7) or 'residual' (only the final fit)."
     )
     by_reason: dict[str, int]
 

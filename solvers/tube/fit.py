@@ -319,12 +319,22 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
         A = np.einsum("np,nq->pq", Jw, J)
         g = np.einsum("np,n->p", Jw, r)
         dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
+        # active set: a parameter on its bound whose descent direction points outward stays
+        # there (a zero-length straight, say); clipping its step instead stalls the iteration
+        span = np.where(np.isfinite(hi - lo), hi - lo, np.abs(x) + 1.0)
+        at_lo = (x <= lo + 1e-9 * span) & (g > 0)
+        at_hi = (x >= hi - 1e-9 * span) & (g < 0)
+        free = ~(at_lo | at_hi)
+        Af = A[np.ix_(free, free)]
         improved = False
         while nfev < max_nfev:
+            step = np.zeros_like(x)
             try:
-                step = np.linalg.solve(A + lam * np.diag(dg), -g)
+                step[free] = np.linalg.solve(Af + lam * np.diag(dg[free]), -g[free])
             except np.linalg.LinAlgError:
                 lam *= 10
+                if lam > 1e12:
+                    break
                 continue
             xn = np.clip(x + step, lo, hi)
             rn = fun(xn)

@@ -228,9 +228,9 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     # ---- stage 6: report ----------------------------------------------------------------
     progress(0.97, "report")
     reasons_sorted = np.full(N, "residual", dtype=object)
-    flagged_curv = probe_idx[labels == 2]
+    flagged_local = probe_idx[labels != 0]
     flagged_proj = seed_idx[~sc.ok]
-    reasons_sorted[flagged_curv] = "curvature"
+    reasons_sorted[flagged_local] = "local_fit"
     reasons_sorted[flagged_proj] = "spine_projection"
     out_sorted = np.flatnonzero(~inlier)
     out_orig = order[out_sorted]

@@ -118,6 +118,10 @@ def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.
             tries += 1
             fitted, r = refit(cand)
             s = score(r)
+            if sigma * (1 + rel_tol) < s <= sigma * 1.5:
+                # promising but maybe not converged from its rough start: refit once more
+                fitted, r = refit(fitted)
+                s = score(r)
             if s <= sigma * (1 + rel_tol) + 1e-4 * scale:
                 changes.append({"change": kind, "bend": k + 1, "score_before": sigma, "score_after": s})
                 model, sigma = fitted, s

@@ -27,7 +27,8 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
         raise InputRejected([FieldError(loc=loc, msg="all points lie on a line: not a tube surface")])
     if s[2] < 1e-6 * s[0]:
         raise InputRejected([FieldError(loc=loc, msg="all points are coplanar: not a tube surface")])
-    if len(np.unique(np.round(sample / (s[0] * 1e-9)), axis=0)) < min(MIN_POINTS, len(sample)):
+    head = sample[:5000]
+    if len(np.unique(np.round(head / (s[0] * 1e-9)), axis=0)) < min(MIN_POINTS, len(head)):
         raise InputRejected([FieldError(loc=loc, msg=f"fewer than {MIN_POINTS} distinct points")])
 
 
