@@ -199,3 +199,34 @@ def test_progress_is_reported_and_cancellation_propagates():
 
     with pytest.raises(Cancelled):
         solve(req, cancel)
+
+
+PCF_INCH = """UNITS-BORE INCH
+UNITS-CO-ORDS MM
+PIPE
+    END-POINT -1000.0 0.0 0.0 4
+    END-POINT -150.0 0.0 0.0 4
+CROSS
+    END-POINT -150.0 0.0 0.0 4
+    END-POINT 150.0 0.0 0.0 4
+    CENTRE-POINT 0.0 0.0 0.0
+    BRANCH1-POINT 0.0 150.0 0.0 4
+    BRANCH2-POINT 0.0 -150.0 0.0 4
+REDUCER-CONCENTRIC
+    END-POINT 150.0 0.0 0.0 4
+    END-POINT 400.0 0.0 0.0 3
+OLET
+    CENTRE-POINT 0.0 0.0 500.0
+    BRANCH1-POINT 0.0 0.0 600.0 2
+"""
+
+
+def test_pcf_cross_reducer_olet_and_bore_units():
+    req = parse_upload("x.pcf", PCF_INCH.encode(), None)
+    kinds = [(c.id, c.kind, c.type, len(c.ports)) for c in req.components]
+    assert kinds == [("PIPE-1", "pipe", None, 2), ("CROSS-2", "fitting", "cross", 4),
+                     ("REDUCER-CONCENTRIC-3", "fitting", "reducer", 2), ("OLET-4", "fitting", "olet", 1)]
+    assert req.components[0].radius == pytest.approx(2 * 25.4)  # 4 inch bore, mm co-ordinates
+    np.testing.assert_allclose([p.direction for p in req.components[1].ports], [[-1, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0]])
+    np.testing.assert_allclose(req.components[3].ports[0].direction, [0, 0, 1])
+    assert [(c.from_, c.to) for c in req.connections] == [(("PIPE-1", 1), ("CROSS-2", 0)), (("CROSS-2", 1), ("REDUCER-CONCENTRIC-3", 0))]

@@ -47,8 +47,12 @@ def test_rigid_motion_tree_is_exact():
         np.testing.assert_allclose(R.apply([p.position for p in ca.ports]) + t, [p.position for p in cb.ports], rtol=0, atol=1e-8)
 
 
-def test_shuffled_components_and_connections_give_the_same_result():
-    req = grid_network(3, 3, valve_every=4, tie_ins=((0, 0),), seed=4)
+@pytest.mark.parametrize("method, atol", [("direct", 1e-3), ("dual_quaternion", 1e-9)])
+def test_shuffled_components_and_connections_give_the_same_result(method, atol):
+    # the paper's method averages all separate transforms at once (order independence, §3 item 1);
+    # the direct method agrees up to the flat twist modes of its singular loops
+    req = grid_network(3, 3, valve_every=4, tie_ins=((0, 0),), seed=4,
+                       options={"method": method, "max_iterations": 300})
     body = req.model_dump(mode="json", by_alias=True)
     rng = np.random.default_rng(0)
     body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
@@ -59,7 +63,7 @@ def test_shuffled_components_and_connections_give_the_same_result():
     b = {c.id: c for c in solve(shuffled).components}
     assert a.keys() == b.keys()
     for cid in a:
-        np.testing.assert_allclose([p.position for p in a[cid].ports], [p.position for p in b[cid].ports], rtol=0, atol=1e-3)
+        np.testing.assert_allclose([p.position for p in a[cid].ports], [p.position for p in b[cid].ports], rtol=0, atol=atol)
 
 
 @pytest.mark.parametrize("method", ["direct", "dual_quaternion"])
