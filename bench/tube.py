@@ -142,6 +142,8 @@ def main():
     print(f"|{'-' * 48}|{'-' * 24}|{'-' * 16}|{'-' * 6}|")
     share = len(ok) / len(rows)
     line("correct bend count", f"{len(ok)}/{len(rows)} = {100 * share:.0f} %", ">= 95 %", share >= 0.95)
+    seg_ok = [r for r in ok if max(r["angle_err"], default=0.0) < 2.0]
+    line("correct count and every bend within 2° (segmentation)", f"{len(seg_ok)}/{len(rows)}", "-", True)
     line("bend-angle error, median (all bends)", f"{np.median(ang):.3f}°", "<= 0.2°", np.median(ang) <= 0.2)
     line("bend-angle error, p95 / max", f"{np.percentile(ang, 95):.3f}° / {ang.max():.3f}°", "-", True)
     big = ~small

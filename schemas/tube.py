@@ -205,11 +205,27 @@ class Inspection(BaseModel):
     corrected_lra: list[LraRow] = Field(description="LRA to send to the bender (springback correction).")
 
 
+LRA_CONVENTION = (
+    "LRA convention: local frame x = initial tangent, y = in-plane normal toward the first bend's "
+    "centre, z = x × y; `orientation` maps it to world and `start` is the first end. Each row: go "
+    "straight `length`; rotate the in-plane normal about the current tangent by `rotation` (degrees, "
+    "right-hand rule); bend by `angle` (degrees) with `bend_radius` toward the normal. n + 1 rows for "
+    "n bends, first rotation 0, last row angle 0; bends joined directly have a length-0 row between "
+    "them. LRA → XYZ → LRA round trips exactly. A straight tube has no bend plane: then y is an "
+    "arbitrary perpendicular. The walking direction starts at the end with the longer end straight "
+    "(ties: the larger end bend)."
+)
+
+
 class TubeResult(BaseModel):
+    """Reconstructed bent tube: pipe radius, start pose, LRA table, control polygon, spine
+    segments, fit quality, outliers, optional inspection, report. See ``lra`` for the LRA
+    convention."""
+
     pipe_radius: float
     start: Vec3 = Field(description="World position of the tube start (first end of the centreline).")
     orientation: Quaternion = Field(description="Maps the local start frame (see LRA convention) to world, [w,x,y,z].")
-    lra: list[LraRow]
+    lra: list[LraRow] = Field(description=LRA_CONVENTION)
     control_polygon: list[Vec3] = Field(
         description="Start, intersection points of consecutive straights (bends < 180° only), end."
     )

@@ -312,12 +312,15 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
     lam = 1e-3
     nfev, status = 1, 0
     it = 0
+    last_rel = np.inf
     while nfev < max_nfev:
         it += 1
         J = jac(x)
-        Jw = J * w[:, None]
-        A = np.einsum("np,nq->pq", Jw, J)
-        g = np.einsum("np,n->p", Jw, r)
+        sw = np.sqrt(w)
+        J *= sw[:, None]  # in place: with a million samples J is the biggest array here
+        A = np.einsum("np,nq->pq", J, J)
+        g = np.einsum("np,n->p", J, sw * r)
+        del J
         dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
         # active set: a parameter on its bound whose descent direction points outward stays
         # there (a zero-length straight, say); clipping its step instead stalls the iteration
@@ -342,6 +345,7 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
             cn, wn = _soft_l1(rn, f_scale)
             if np.isfinite(cn) and cn <= cost:
                 dcost = cost - cn
+                last_rel = dcost / max(cost, 1e-300)
                 small_step = np.all(np.abs(xn - x) <= tol * (np.abs(x) + 1e-3) * 1e3)
                 x, r, w = xn, rn, wn
                 lam = max(lam / 5, 1e-12)
@@ -357,4 +361,5 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
         if status or not improved:
             status = status or 3
             break
-    return x, {"iterations": it, "nfev": nfev, "status": status, "success": status > 0, "cost": cost}
+    return x, {"iterations": it, "nfev": nfev, "status": status, "success": status > 0, "cost": cost,
+               "last_relative_decrease": float(last_rel) if np.isfinite(last_rel) else None}

@@ -71,7 +71,11 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     probes = work[:n_probes]
     probe_idx = work_idx[:n_probes]
     for _ in range(2 if not opts.pipe_radius else 1):
-        fits = local_fit.fit_at(tree, work, probes, 2.0 / 3.0 * rp)
+        # §7: a 2/3 r ball with at least 10 samples; sparse scans get a larger ball (≤ 1.1 r)
+        h_fit = 2.0 / 3.0 * rp
+        while h_fit < 1.1 * rp and np.median(tree.query_ball_point(probes[:200], h_fit, return_length=True)) < 14:
+            h_fit *= 1.2
+        fits = local_fit.fit_at(tree, work, probes, h_fit)
         good = fits.ok & (fits.count >= 10)
         if not good.any():
             raise SolverError("local_fit", "too few neighbours for local surface fits (scan too sparse?)",
@@ -208,13 +212,13 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     progress(0.85, "final least-squares fit")
     if N > len(sub):
-        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 25)
+        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10)
     res_all, seg_all = fit.assign(model, pts, margin)
     # final extents without the margin
     inlier = np.abs(res_all) <= thr
     res_all, seg_all = fit.assign(model, pts, 0.0)
-    lay_ok = lm_info.get("status", 0) > 0
-    if not lay_ok:
+    last_rel = lm_info.get("last_relative_decrease")
+    if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
                                    "limit; the result is the best found.", details=lm_info))
     timings["least_squares"] = time.perf_counter() - t0
