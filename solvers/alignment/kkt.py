@@ -45,6 +45,8 @@ def constrained_lstsq(
         out = _refine(H, g, A, residual, cache["lu"], stop, max_iter, stale=True)
         if out is not None:
             return out
+    if cache is not None:
+        cache.pop("lu", None)  # never hold two factorisations at once (peak memory)
     lu = _factor(H, A)
     if cache is not None:
         cache.update(lu=lu, shape=(n, m))
