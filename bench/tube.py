@@ -25,10 +25,9 @@ import numpy as np  # noqa: E402
 
 from schemas.tube import TubeRequest  # noqa: E402
 from solvers.base import SolverError  # noqa: E402
-from solvers.tube import solve  # noqa: E402
+from solvers.tube import parse_upload, solve  # noqa: E402
 from solvers.tube.artifacts import model_from_result  # noqa: E402
 from solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
-from solvers.tube.pointio import points_field  # noqa: E402
 from solvers.tube.simulate import clearance, random_tube, surface_samples  # noqa: E402
 
 
@@ -95,10 +94,13 @@ def random_tubes(n_tubes: int, n_points: int):
     return rows
 
 
-def single(n_points: int) -> dict:
-    """One large scan in this process (called in a subprocess for a clean peak-memory figure)."""
-    m, pts, sigma = make_case(77, n_points, n_bends=4, pipe_radius=10.0)
-    req = TubeRequest(points=points_field(pts))
+def single(path: str) -> dict:
+    """One large scan, read from an .npy file the way an upload is (``parse_upload``), solved
+    in this fresh process so that the peak RSS is the solver's, not the simulator's."""
+    n_points = int(path.rsplit("_", 1)[1].split(".")[0])
+    m, _, _ = make_case(77, 1000, n_bends=4, pipe_radius=10.0)  # same tube, few points: the truth
+    with open(path, "rb") as fh:
+        req = parse_upload("scan.npy", fh.read(), None)
     t0 = time.perf_counter()
     r = solve(req)
     el = time.perf_counter() - t0
@@ -111,16 +113,27 @@ def single(n_points: int) -> dict:
 
 
 def run_single(n: int) -> dict:
-    out = subprocess.run([sys.executable, __file__, "--single", str(n)], capture_output=True, text=True, check=True)
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, f"scan_{n}.npy")
+        subprocess.run([sys.executable, __file__, "--make", str(n), path], check=True)
+        out = subprocess.run([sys.executable, __file__, "--single", path], capture_output=True, text=True,
+                             check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--single", type=int)
+    ap.add_argument("--single")
+    ap.add_argument("--make", nargs=2)
     ap.add_argument("--tubes", type=int)
     a = ap.parse_args()
+    if a.make:
+        _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
+        np.save(a.make[1], pts)
+        return
     if a.single:
         print(json.dumps(single(a.single)))
         return
@@ -165,7 +178,7 @@ def main():
     for L in large:
         tgt = "< 30 s, < 2 GB" if L["n"] == 100_000 else "-"
         met = (L["time"] < 30 and L["rss_mb"] < 2048) if L["n"] == 100_000 else True
-        line(f"{L['n']:,} points: time / peak RSS", f"{L['time']:.1f} s / {L['rss_mb']:.0f} MB", tgt, met)
+        line(f"{L['n']:,} points (npy upload): time / peak RSS", f"{L['time']:.1f} s / {L['rss_mb']:.0f} MB", tgt, met)
         line(f"{L['n']:,} points: bends ok, max angle err",
              f"{L['ok']}, {L['angle_err']:.3f}°" if L["ok"] else "False", "-", L["ok"])
     print()
