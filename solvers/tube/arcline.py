@@ -185,7 +185,7 @@ class _State:
     edge: Edge | None
 
 
-def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 2) -> TubeModel | None:
+def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> TubeModel | None:
     """Algorithm 1 with least-squares tie-breaking; None if no chain of arcs fits within ε.
 
     The paper keeps one state per vertex (the modified tangent line of its best prefix). A

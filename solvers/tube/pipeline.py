@@ -140,7 +140,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     for f in factors:
         e = eps * f
         mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * e), e, 0.5 * rp)
-        if mdl is not None and all(mdl.n_bends != m0.n_bends for _, m0 in inits):
+        if mdl is not None and all(not _same_shape(mdl, m0) for _, m0 in inits):
             inits.append((e, mdl))
     eps_used = eps * factors[-1]
     while not inits and eps_used < 40 * eps:
@@ -286,6 +286,10 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
         result.inspection = inspect(model, opts.nominal, opts.damping)
     progress(1.0, "done")
     return result
+
+
+def _same_shape(a: TubeModel, b: TubeModel) -> bool:
+    return a.n_bends == b.n_bends and bool(np.all(np.abs(a.angles - b.angles) < np.radians(1.0)))
 
 
 def _prefer(a: TubeModel, b: TubeModel, tol: float) -> bool:
