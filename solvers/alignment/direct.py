@@ -79,11 +79,20 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
     steps = 0
     prev = np.inf
     use_cost = True
+    best, first = (np.inf, q.copy()), np.inf
     for _ in range(max_gn):
         D = qrotate(q[model.port_comp], model.D0)
         ua, ub = D[a], D[b]
         r = ua + ub
         err = float(np.max(np.linalg.norm(r, axis=1))) if m else 0.0
+        if not err <= max(4.0 * best[0], first) + 1e-12:
+            # conflicting directions: Gauss-Newton walks off along the conflict; keep the best pose,
+            # whose residual the cut logic reads
+            q = best[1]
+            break
+        if err < best[0]:
+            first = err if best[0] == np.inf else first
+            best = (err, q.copy())
         if err <= 2e-16 or nv == 0 or (not use_cost and err >= 0.9 * prev):
             break
         if use_cost and err > 0.1 * prev:
@@ -204,12 +213,21 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     stalls = 0
     cache: dict = {}
     pos_scale = model.lref
+    best, first = (np.inf, None), np.inf
     for _ in range(max_gn):
         P, D = st.geometry()
         rp = (P[a] - P[b]).astype(float)
         rd = D[a] + D[b]
         err = max(float(np.max(np.abs(rp))) / pos_scale if m_conn else 0.0,
                   float(np.max(np.abs(rd))) if m_conn else 0.0)
+        if not err <= max(4.0 * best[0], first) + 1e-12:
+            # inconsistent constraints (conflicting tie-ins): after the least-squares step, Gauss-Newton
+            # runs away along the conflict. Return the best pose; its open connections are the conflict.
+            st.q, st.t, st.L = best[1]
+            break
+        if err < best[0]:
+            first = err if best[0] == np.inf else first
+            best = (err, (st.q.copy(), st.t.copy(), st.L.copy()))
         short = model.is_pipe & free & (st.L < model.min_length * (1 - 1e-12)) & ~locked
         # 1e-14 relative is where float64 Gauss-Newton ends; what is left is snapped (see Model.snap_pos)
         if nv == 0 or (not np.any(short) and (err <= 1e-3 * min(model.pos_tol / pos_scale, model.ang_tol) or err <= 1e-14)):

@@ -26,46 +26,85 @@ from schemas.alignment import AlignmentRequest, AlignmentResult
 from solvers.base import FieldError, InputRejected
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
+EXTRA_KEYS = ("CO-ORDS",)  # support / instrument locations: they follow the item they sit on
 TYPE_OF = {
     "ELBOW": "elbow", "BEND": "bend", "TEE": "tee", "TEE-SET-ON": "tee", "TEE-STUB": "tee", "CROSS": "cross",
     "REDUCER-CONCENTRIC": "reducer", "REDUCER-ECCENTRIC": "reducer", "VALVE": "valve", "VALVE-ANGLE": "valve",
-    "VALVE-3WAY": "valve", "FLANGE": "flange", "FLANGE-BLIND": "flange", "CAP": "cap", "OLET": "olet",
+    "VALVE-3WAY": "valve", "VALVE-MULTIWAY": "valve", "FLANGE": "flange", "FLANGE-BLIND": "flange",
+    "FLANGE-REDUCING-CONCENTRIC": "flange", "FLANGE-REDUCING-ECCENTRIC": "flange", "CAP": "cap", "OLET": "olet",
 }
-UNITS = {"MM": "mm", "INCH": "in", "INCHES": "in", "M": "m", "CM": "cm", "FT": "ft", "FEET": "ft"}
+# Keywords an ISOGEN export may contain: header records, component records, materials. Anything else is
+# kept verbatim with a warning (aligned as a generic fitting when it carries end points).
+KNOWN = {
+    "ISOGEN-FILES", "PIPELINE-REFERENCE", "PROJECT-IDENTIFIER", "AREA", "DATE-DMY", "REVISION", "SPOOL-IDENTIFIER",
+    "MATERIALS", "ITEM-CODE", "PIPE", "PIPE-FIXED", "PIPE-BLOCK-FIXED", "PIPE-BLOCK-VARIABLE", "ELBOW", "BEND",
+    "ELBOW-TEE", "TEE", "TEE-SET-ON", "TEE-STUB", "CROSS", "CROSS-SET-ON", "REDUCER-CONCENTRIC", "REDUCER-ECCENTRIC",
+    "VALVE", "VALVE-ANGLE", "VALVE-3WAY", "VALVE-4WAY", "VALVE-MULTIWAY", "FLANGE", "FLANGE-BLIND",
+    "FLANGE-REDUCING-CONCENTRIC", "FLANGE-REDUCING-ECCENTRIC", "GASKET", "WELD", "BOLT", "CAP", "OLET", "COUPLING",
+    "UNION", "INSTRUMENT", "INSTRUMENT-ANGLE", "INSTRUMENT-3WAY", "INSTRUMENT-DIAL", "SUPPORT", "FILTER", "TRAP",
+    "MISC-COMPONENT", "LAP-JOINT-STUBEND", "LAP-JOINT-RING", "ADAPTER", "BLIND", "SPECTACLE-BLIND", "SPACER",
+    "PLUG", "NIPPLE", "SWAGE", "HOSE", "CLAMP", "END-CONNECTION-PIPELINE", "END-CONNECTION-EQUIPMENT",
+    "END-CONNECTION-NULL", "END-POSITION-OPEN", "END-POSITION-CLOSED", "END-POSITION-NULL", "MESSAGE-SQUARE",
+    "MESSAGE-CIRCLE", "MESSAGE-ROUND", "FLOW-ARROW", "DIMENSION", "TEXT", "LOCATION-POINT", "ISO-SPLIT-POINT",
+    "FIELD-FIT-WELD", "TAPPING", "TAP-CONNECTION",
+}
+HEADER = ("ISOGEN-FILES", "PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE")
+UNITS = {"MM": "mm", "INCH": "in", "INCHES": "in", "IN": "in", "M": "m", "CM": "cm", "FT": "ft", "FEET": "ft"}
+TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$")
+_EOL = re.compile(r"(\r\n|\r|\n)")
 
 
 def _reject(msg: str) -> InputRejected:
     return InputRejected([FieldError(("file",), msg)])
 
 
-def _blocks(text: str) -> tuple[list[str], list[tuple[str, int, list[int]]], dict[str, str]]:
-    """Lines, component blocks (keyword, ordinal, line numbers of point lines), header values."""
-    lines = text.splitlines()
-    blocks: list[tuple[str, int, list[int]]] = []
+def split_lines(text: str) -> tuple[list[str], list[str]]:
+    """Line contents and their own line endings (CRLF, LF or CR kept as found, '' for the last)."""
+    parts = _EOL.split(text)
+    contents, endings = parts[0::2], parts[1::2] + [""]
+    if contents and contents[-1] == "" and len(contents) > 1:
+        contents.pop()
+        endings.pop()
+    return contents, endings
+
+
+def _is_known(word: str) -> bool:
+    return (word in KNOWN or word.startswith(("UNITS-", "ATTRIBUTE", "REDUCER-", "VALVE-", "INSTRUMENT-", "FLANGE-"))
+            or word.endswith("OLET"))
+
+
+def _blocks(text: str):
+    """Lines, component blocks (keyword, ordinal, point line numbers, CO-ORDS line numbers), header values,
+    and the top-level keywords seen. A block is a line starting in column 0 plus its indented lines."""
+    lines, _ = split_lines(text)
+    blocks: list[tuple[str, int, list[int], list[int]]] = []
     header: dict[str, str] = {}
-    current: tuple[str, int, list[int]] | None = None
+    words: list[str] = []
+    current = None
     ordinal = 0
     for i, line in enumerate(lines):
-        if not line.strip():
+        parts = line.split()
+        if not parts:
             continue
+        word = parts[0].upper()
         if not line[0].isspace():
-            word = line.split()[0].upper()
-            parts = line.split()
+            words.append(word)
             if word.startswith("UNITS-") and len(parts) > 1:
                 header[word] = parts[1].upper()
             current = None
-            if word in ("ISOGEN-FILES", "PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE") or word.startswith("UNITS-"):
+            if word in HEADER or word.startswith("UNITS-"):
                 continue
             ordinal += 1
-            current = (word, ordinal, [])
+            current = (word, ordinal, [], [])
             blocks.append(current)
         elif current is not None:
-            word = line.split()[0].upper()
             if word in POINT_KEYS:
                 current[2].append(i)
-    return lines, [b for b in blocks if b[2]], header
+            elif word in EXTRA_KEYS:
+                current[3].append(i)
+    return lines, blocks, header, words
 
 
 def _point(line: str) -> tuple[np.ndarray, float | None]:
@@ -80,19 +119,33 @@ def _point(line: str) -> tuple[np.ndarray, float | None]:
             bore = float(parts[4])
         except ValueError:
             bore = None
+        if bore is not None and not (np.isfinite(bore) and bore > 0):
+            bore = None
     if not np.all(np.isfinite(xyz)):
         raise _reject(f"non-finite coordinate in line {line.strip()!r}")
     return xyz, bore
 
 
-def _unit(x: np.ndarray) -> np.ndarray:
+def _unit(x: np.ndarray) -> np.ndarray | None:
     n = np.linalg.norm(x)
-    return x / n if n > 0 else np.zeros(3)
+    return x / n if n > 0 else None
+
+
+def _coincident(points: list[np.ndarray]) -> bool:
+    """All points at one place (up to print rounding): a zero-length item such as a weld."""
+    P = np.array(points)
+    eps = 1e-6 + 1e-12 * float(np.max(np.abs(P)))
+    return bool(np.max(np.linalg.norm(P - P[0], axis=1)) <= eps)
 
 
 def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_factor: float):
-    """Ports (position, direction or None), kind, type, radius, and for each port its line."""
-    pts = {}
+    """Ports (position, direction or None), kind, type, radius, and for each port its line.
+
+    kind 'joint' marks a zero-length item (a weld, a zero-thickness gasket, a zero-length pipe): all its
+    points coincide, so it has no axis of its own. It is not a solver component but a connection point:
+    the items on both sides connect to each other through it, and its points are written at the
+    aligned position of that connection."""
+    pts: dict[str, list] = {}
     for i in idx:
         key = lines[i].split()[0].upper()
         pts.setdefault(key, []).append((i,) + _point(lines[i]))
@@ -101,55 +154,95 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
     branches = [b for k in ("BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT") for b in pts.get(k, [])]
     bores = [b for (_, _, b) in ends + branches if b]
     radius = 0.5 * max(bores) * bore_factor if bores else None
-    ports, port_lines = [], []
+    every = [p for _, p, _ in ends + branches + centre]
+    if (len(every) >= 2 and _coincident(every) and not (centre and branches)) or (
+            word in ("WELD", "GASKET") and len(every) == 1):
+        return [], [i for i, _, _ in ends + branches], "joint", None, radius
     c = centre[0][1] if centre else None
-    if word == "PIPE":
+    if word == "PIPE" or word.startswith("PIPE-"):
         if len(ends) != 2:
-            raise _reject(f"{word}-{ordinal}: a PIPE needs two END-POINT lines")
+            raise _reject(f"{word}-{ordinal}: a {word} needs two END-POINT lines, found {len(ends)}")
         axis = _unit(ends[1][1] - ends[0][1])
         ports = [(ends[0][1], -axis), (ends[1][1], axis)]
-        port_lines = [ends[0][0], ends[1][0]]
-        return ports, port_lines, "pipe", None, radius
-    for i, p, _ in ends + branches:
-        if c is not None and np.linalg.norm(p - c) > 0:
-            d = _unit(p - c)
-        elif len(ends) == 2 and not branches:
-            other = ends[1][1] if p is ends[0][1] else ends[0][1]
-            d = _unit(p - other)
-        else:
-            d = None
+        return ports, [ends[0][0], ends[1][0]], "pipe", None, radius
+    ports, port_lines = [], []
+    for k, (i, p, _) in enumerate(ends + branches):
+        d = _unit(p - c) if c is not None else None
+        if d is None and len(ends) == 2 and k < 2:  # inline item: along its end-point axis
+            d = _unit(p - ends[1 - k][1])
         ports.append((p, d))
         port_lines.append(i)
-    if not ports and word == "OLET":
-        raise _reject(f"{word}-{ordinal}: an OLET needs a BRANCH1-POINT")
-    ftype = TYPE_OF.get(word, TYPE_OF.get(word.split("-")[0], "other"))
-    if ftype in ("elbow", "bend", "tee", "cross") and c is None:
+    if not ports:
+        raise _reject(f"{word}-{ordinal}: no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
+    ftype = TYPE_OF.get(word)
+    if ftype is None:
+        ftype = "olet" if word.endswith("OLET") else TYPE_OF.get(word.split("-")[0], "other")
+    need = {"tee": 3, "cross": 4, "elbow": 2, "bend": 2, "reducer": 2, "valve": 2}.get(ftype, 1)
+    if len(ports) < need:  # set-on tees and the like: only the branch is a port
+        ftype = "olet" if len(ports) == 1 else "other"
+    if ftype in ("elbow", "bend") and c is None:
         raise _reject(f"{word}-{ordinal}: a {word} needs a CENTRE-POINT to know its port directions")
     return ports, port_lines, "fitting", ftype, radius
 
 
+def _bore_factor(header: dict[str, str], units: str) -> float:
+    bore_units = UNITS.get(header.get("UNITS-BORE", header.get("UNITS-CO-ORDS", "MM")), units)
+    return TO_MM[bore_units] / TO_MM[units]
+
+
+def pcf_notes(text: str) -> list[tuple[str, str, dict]]:
+    """Warnings about a PCF's content: (code, message, details)."""
+    lines, blocks, header, words = _blocks(text)
+    units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), "mm")
+    factor = _bore_factor(header, units)
+    unknown = sorted({w for w in words if not _is_known(w)})
+    notes = []
+    if unknown:
+        notes.append(("pcf_unknown_keyword",
+                      f"PCF keyword(s) {', '.join(unknown)} are not known ISOGEN records: kept verbatim; those with "
+                      "end points were aligned as generic fittings.", {"keywords": unknown}))
+    joints = []
+    for word, ordinal, idx, _ in blocks:
+        if idx:
+            try:
+                if _component(word, ordinal, lines, idx, factor)[2] == "joint":
+                    joints.append(f"{word}-{ordinal}")
+            except InputRejected:
+                pass
+    if joints:
+        notes.append(("pcf_zero_length_items",
+                      f"{len(joints)} zero-length item(s) (welds, gaskets without thickness) were treated as connection "
+                      "points: their neighbours were connected directly and the item written at the closed connection.",
+                      {"items": joints[:200]}))
+    return notes
+
+
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
-    lines, blocks, header = _blocks(text)
-    if not blocks:
-        raise _reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
+    lines, blocks, header, _ = _blocks(text)
     units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), None)
     if units is None:
         raise _reject(f"unsupported UNITS-CO-ORDS {header.get('UNITS-CO-ORDS')!r}")
-    bore_units = UNITS.get(header.get("UNITS-BORE", header.get("UNITS-CO-ORDS", "MM")), units)
-    to_mm = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
-    bore_factor = to_mm[bore_units] / to_mm[units]
+    bore_factor = _bore_factor(header, units)
     comps = []
-    for word, ordinal, idx in blocks:
+    for word, ordinal, idx, _ in blocks:
+        if not idx:
+            continue
         ports, _, kind, ftype, radius = _component(word, ordinal, lines, idx, bore_factor)
-        comps.append({"id": f"{word}-{ordinal}", "kind": kind, "type": ftype, "radius": radius, "ports": ports})
+        if kind != "joint":
+            comps.append({"id": f"{word}-{ordinal}", "word": word, "kind": kind, "type": ftype, "radius": radius, "ports": ports})
+    if not comps:
+        raise _reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
     # infer connections: nearest facing end points within tolerance, each port used once
+    counts = np.array([len(c["ports"]) for c in comps])
+    start = np.concatenate([[0], np.cumsum(counts)])
     pos = np.array([p for c in comps for p, _ in c["ports"]])
-    owner = np.array([k for k, c in enumerate(comps) for _ in c["ports"]])
-    local = np.array([j for c in comps for j in range(len(c["ports"]))])
+    owner = np.repeat(np.arange(len(comps)), counts)
+    local = np.arange(len(pos)) - start[owner]
     dirs = [d for c in comps for _, d in c["ports"]]
     rad = np.array([c["radius"] or 0.0 for c in comps])[owner]
     tol_opt = (options or {}).get("connection_tolerance")
-    pairs = cKDTree(pos).query_pairs(r=float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6), output_type="ndarray")
+    reach = float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6)
+    pairs = cKDTree(pos).query_pairs(r=reach, output_type="ndarray")
     conns = []
     if len(pairs):
         dist = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
@@ -169,13 +262,27 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
             dirs[i] = -dirs[j]
         elif dirs[j] is None and dirs[i] is not None:
             dirs[j] = -dirs[i]
+    # An eccentric item's end points are offset sideways (flat side), so the line through them is not its
+    # axis: its ports take the axis of the pipes they join (their mean when both sides are connected).
+    partner = {}
+    for i, j in conns:
+        partner[i], partner[j] = j, i
+    for k, c in enumerate(comps):
+        if "ECCENTRIC" in c["word"] and len(c["ports"]) == 2:
+            i0, i1 = start[k], start[k] + 1
+            n0 = -dirs[partner[i0]] if i0 in partner and dirs[partner[i0]] is not None else None
+            n1 = -dirs[partner[i1]] if i1 in partner and dirs[partner[i1]] is not None else None
+            axis = _unit(n1 - n0) if n0 is not None and n1 is not None else n1 if n1 is not None else (
+                -n0 if n0 is not None else None)
+            if axis is not None:
+                dirs[i0], dirs[i1] = -axis, axis
     for k, d in enumerate(dirs):
         if d is None:
             raise _reject(f"{comps[owner[k]]['id']}: cannot determine the direction of end point {local[k]} "
                           "(single-ended item without a connected neighbour)")
     comps_json = []
     for k, c in enumerate(comps):
-        ports = [{"position": p.tolist(), "direction": dirs[np.flatnonzero(owner == k)[j]].tolist()} for j, (p, _) in enumerate(c["ports"])]
+        ports = [{"position": p.tolist(), "direction": dirs[start[k] + j].tolist()} for j, (p, _) in enumerate(c["ports"])]
         entry = {"id": c["id"], "kind": c["kind"], "radius": c["radius"], "ports": ports}
         if c["kind"] == "fitting":
             entry["type"] = c["type"]
@@ -198,14 +305,15 @@ def fmt(x: float) -> str:
     return np.format_float_positional(float(x), unique=True, trim="k", min_digits=4)
 
 
-def _replace_xyz(line: str, xyz) -> str:
+def _replace_xyz(line: str, xyz, spelling: dict[float, str]) -> str:
     m = _POINT_RE.match(line)
     if not m:
         return line
     g = list(m.groups())
     for k, v in zip((3, 5, 7), xyz):
         if float(g[k]) != float(v):  # unchanged numbers keep their original spelling
-            g[k] = fmt(v)
+            # a value that appears in the file (e.g. the fixed partner of a closed connection) prints the same way
+            g[k] = spelling.get(float(v)) or fmt(v)
     return "".join(g)
 
 
@@ -216,30 +324,82 @@ def write_aligned_pcf(request: AlignmentRequest, result: AlignmentResult) -> str
 
 
 def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
+    """The source text with the coordinates of moved points replaced, every other byte as it was."""
     from scipy.spatial.transform import Rotation
 
     text = request.source_pcf
-    lines, blocks, header = _blocks(text)
-    bore_units = UNITS.get(header.get("UNITS-BORE", header.get("UNITS-CO-ORDS", "MM")), request.units)
-    to_mm = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+    lines, blocks, header, _ = _blocks(text)
+    _, endings = split_lines(text)
+    factor = _bore_factor(header, request.units)
+    spelling: dict[float, str] = {}
+    for word, _, idx, extra in blocks:
+        for i in idx:
+            m = _POINT_RE.match(lines[i])
+            if m:
+                for k in (3, 5, 7):
+                    spelling.setdefault(float(m.group(k + 1)), m.group(k + 1))
     by_id = {c.id: c for c in result.components}
+    req_by_id = {c.id: c for c in request.components}
     out = list(lines)
-    for word, ordinal, idx in blocks:
+
+    # every aligned port, located by its input position: zero-length items and supports find theirs
+    old = np.array([p.position for c in request.components for p in c.ports], dtype=float)
+    new = [p.position for c in result.components for p in c.ports]
+    tree = cKDTree(old) if len(old) else None
+    pipes = [(c, r) for c, r in zip(request.components, result.components) if c.kind == "pipe"]
+
+    def motion(comp):
+        tr = comp.transform
+        R = Rotation.from_quat([tr.rotation[1], tr.rotation[2], tr.rotation[3], tr.rotation[0]])
+        t = np.array(tr.translation)
+        return lambda x: R.apply(x) + t
+
+    for word, ordinal, idx, extra in blocks:
         cid = f"{word}-{ordinal}"
         comp = by_id.get(cid)
         if comp is None:
+            if idx and tree is not None:
+                _, port_lines, kind, _, _ = _component(word, ordinal, lines, idx, factor)
+                if kind == "joint":  # all its points go to the aligned connection it sits on
+                    xyz, _ = _point(lines[idx[0]])
+                    _, k = tree.query(xyz)
+                    for i in idx:
+                        out[i] = _replace_xyz(lines[i], new[k], spelling)
+                    continue
+            for i in extra:  # a support: follows the nearest pipe it sits on
+                xyz, _ = _point(lines[i])
+                host = _host_pipe(xyz, pipes)
+                if host is not None:  # sideways with the pipe; along it the support stays where it stands
+                    moved = motion(host)(xyz)
+                    u = np.array(host.ports[1].position) - np.array(host.ports[0].position)
+                    u /= np.linalg.norm(u)
+                    out[i] = _replace_xyz(lines[i], moved - np.dot(moved - xyz, u) * u, spelling)
             continue
-        _, port_lines, _, _, _ = _component(word, ordinal, lines, idx, to_mm[bore_units] / to_mm[request.units])
+        _, port_lines, _, _, _ = _component(word, ordinal, lines, idx, factor)
         for line_no, port in zip(port_lines, comp.ports):
-            out[line_no] = _replace_xyz(lines[line_no], port.position)
-        tr = comp.transform
-        R = Rotation.from_quat([tr.rotation[1], tr.rotation[2], tr.rotation[3], tr.rotation[0]])
-        for i in idx:  # other points (CENTRE-POINT) follow the component's rigid motion
+            out[line_no] = _replace_xyz(lines[line_no], port.position, spelling)
+        if req_by_id[cid].fixed:
+            continue
+        move = motion(comp)
+        for i in list(idx) + list(extra):  # other points (CENTRE-POINT, CO-ORDS) follow the rigid motion
             if i in port_lines:
                 continue
             xyz, _ = _point(lines[i])
-            out[i] = _replace_xyz(lines[i], R.apply(xyz) + np.array(tr.translation))
-    return "\n".join(out) + ("\n" if text.endswith("\n") else "")
+            out[i] = _replace_xyz(lines[i], move(xyz), spelling)
+    return "".join(a + b for a, b in zip(out, endings))
+
+
+def _host_pipe(xyz: np.ndarray, pipes):
+    """The pipe whose axis segment is nearest to a point, if the point is within two radii of it."""
+    if not pipes:
+        return None
+    A = np.array([c.ports[0].position for c, _ in pipes], dtype=float)
+    AB = np.array([c.ports[1].position for c, _ in pipes], dtype=float) - A
+    rad = np.array([c.radius or 0.0 for c, _ in pipes])
+    t = np.clip(np.einsum("ij,ij->i", xyz - A, AB) / np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-300), 0.0, 1.0)
+    d = np.linalg.norm(xyz - (A + t[:, None] * AB), axis=1)
+    k = int(np.argmin(d))
+    return pipes[k][1] if d[k] <= 2.0 * rad[k] + 1e-9 else None
 
 
 def _generate(request: AlignmentRequest, result: AlignmentResult) -> str:

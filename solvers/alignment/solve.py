@@ -5,10 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from schemas.alignment import AlignmentRequest, AlignmentResult
+from schemas.common import Diagnostic
 from solvers.alignment.cuts import choose_cut
 from solvers.alignment.direct import solve_direct
 from solvers.alignment.finalize import Outcome, build_result
 from solvers.alignment.iterative import solve_dual_quaternion
+from solvers.alignment.pcf import pcf_notes
 from solvers.alignment.model import Model, build_model, connection_errors
 from solvers.alignment.validation import check_input
 from solvers.base import Progress, SolverError, no_progress
@@ -47,6 +49,12 @@ def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Alignm
     model = build_model(request)
     if model.n_comp == 0:
         raise SolverError("model", "no components")
+    gap0, ang0 = connection_errors(model, model.P0, model.D0)
+    if model.n_conn == 0 or (np.all(gap0 <= model.pos_tol) and np.all(ang0 <= model.ang_tol)):
+        # already water-tight (e.g. a model aligned before): nothing may move, not even along flat modes
+        out = Outcome(P=model.P0.copy(), D=model.D0.copy(), iterations=0,
+                      stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool))
+        return _finish(request, model, out, progress)
     try:
         conflict = _direct_with_cuts(model, request, progress)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
@@ -57,5 +65,17 @@ def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Alignm
         out = solve_dual_quaternion(model, request.options, conflict.active, progress)
         out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
         out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
+    return _finish(request, model, out, progress)
+
+
+def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress) -> AlignmentResult:
     progress(0.95, "building result")
-    return build_result(request, model, out, request.options.method)
+    result = build_result(request, model, out, request.options.method)
+    if request.source_pcf is not None:
+        for code, message, details in pcf_notes(request.source_pcf):
+            if code == "pcf_zero_length_items":
+                result.report.details[code] = details["items"]
+            else:
+                result.report.warnings.append(Diagnostic(code=code, message=message, details=details))
+                result.report.status = "warning"
+    return result
