@@ -113,3 +113,23 @@ def test_inspection_springback_and_correction(tk):
     exact = solve(tk.request(pts, nominal=own))
     assert exact.inspection.matched and exact.inspection.sheath_deviation < 0.05
     assert all(abs(b.angle) < 0.15 for b in exact.inspection.bends)
+
+
+def test_random_bench_tube_with_b2b_and_large_bend(tk):
+    """A bench-like tube: 7 bends with a 196° bend right after another bend, single view."""
+    from solvers.tube.geometry import reverse_model
+    from solvers.tube.simulate import clearance, random_tube, surface_samples
+
+    rng = np.random.default_rng(1000)
+    while True:
+        m = random_tube(rng)
+        if clearance(m) > 2.5:
+            break
+    sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
+    pts = surface_samples(m, 6000, rng, view=rng.normal(size=3), noise=sigma, outlier_fraction=0.005)
+    assert m.n_bends == 7 and np.degrees(m.angles).max() > 190 and m.lengths[4] == 0
+    r = solve(tk.request(pts))
+    got = np.array([row.angle for row in r.lra[:-1]])
+    assert len(got) == 7
+    err = min(np.abs(got - np.degrees(t.angles)).max() for t in (m, reverse_model(m)))
+    assert err < 0.5
