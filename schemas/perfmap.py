@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
-from schemas.common import FiniteFloat, Report, StrictModel
+from schemas.common import Diagnostic, FiniteFloat, Report, StrictModel
 
 Family = Literal["parabola", "log", "cubic", "spline2", "spline3"]
 FAMILY_DESCRIPTION = (
@@ -77,10 +77,12 @@ class PerfmapOptions(StrictModel):
     grid: list[int] = Field(
         default_factory=lambda: [64, 64], min_length=2, max_length=2,
         description="Map grid [nx, ny]: nodes along flow and along pressure (2..1000 each).")
-    map: bool = Field(
-        default=True,
-        description="Compute the performance map (needs >= 3 settings not all on one line in "
-        "(theta, phi)). With false, only characteristics and envelopes are computed.")
+    map: bool | None = Field(
+        default=None,
+        description="Compute the performance map; it needs >= 3 settings not all on one line "
+        "in (theta, phi). null (default): compute it when the settings allow one, otherwise "
+        "return characteristics and envelopes with a 'map_not_possible' warning; true: "
+        "reject such input (422); false: characteristics and envelopes only.")
     map_method: Literal["exact", "binning"] = Field(
         default="exact",
         description="'exact': per grid node, solve for the barycentric weights of every "
@@ -113,6 +115,10 @@ class PerfmapRequest(StrictModel):
         min_length=1, max_length=2000,
         description="One entry per (theta, phi) setting; settings must be distinct.")
     options: PerfmapOptions = Field(default_factory=PerfmapOptions)
+    upload_warnings: list[Diagnostic] = Field(
+        default_factory=list, max_length=100,
+        description="Notes of the file parser (e.g. ignored CSV columns), repeated in the "
+        "result's report; set by the upload parser, not needed in JSON bodies.")
 
 
 class SettingFit(BaseModel):

@@ -277,6 +277,11 @@ def concave_floor(x: np.ndarray, y: np.ndarray, decreasing: bool = True) -> floa
     n = len(x)
     if n < 3 and not decreasing:
         return 0.0
+    # Concavity and monotonicity are invariant under x -> affine and y -> positive multiple,
+    # and the relative error too: solve on t in [0, 1] and y / max|y| so that rigs in Pa and
+    # m3/h (1e5, 1e4) give the LP the same numbers as dimensionless data.
+    x = (x - x[0]) / (x[-1] - x[0])
+    y = y / np.max(np.abs(y))
     h = np.diff(x)
     D = np.zeros((n - 1, n))  # slopes
     D[np.arange(n - 1), np.arange(n - 1)] = -1.0 / h

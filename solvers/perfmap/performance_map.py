@@ -312,32 +312,59 @@ def _cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
+def _segment_distance(p: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """Distance from points p (..., 2) to the closed triangles A (..., 3, 2) (0 inside)."""
+    d = np.full(p.shape[:-1], np.inf)
+    for e0, e1 in ((0, 1), (1, 2), (2, 0)):
+        s0, ab = A[..., e0, :], A[..., e1, :] - A[..., e0, :]
+        L2 = ab[..., 0] * ab[..., 0] + ab[..., 1] * ab[..., 1]
+        ps = p - s0
+        h = np.clip((ps[..., 0] * ab[..., 0] + ps[..., 1] * ab[..., 1])
+                    / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+        r = ps - h[..., None] * ab
+        d = np.minimum(d, np.hypot(r[..., 0], r[..., 1]))
+    a, b, c = A[..., 0, :], A[..., 1, :], A[..., 2, :]
+    s1, s2, s3 = _cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)
+    inside = (((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0)))
+    inside &= np.abs(_cross2(b - a, c - a)) > 0
+    return np.where(inside, 0.0, d)
+
+
 def distance_to_region(curves, triangles, t, X, Y, ranges) -> np.ndarray:
     """Distance (range-normalised units) from points to the reachable region, i.e. to the
-    union over (triangle, t) of the triangles spanned by the vertex curve points."""
+    union over (triangle, t) of the triangles spanned by the vertex curve points.
+
+    Branch and bound over blocks of consecutive t per triangle of settings: the distance to
+    a block's bounding box is a lower bound, the exact distance to the few nearest blocks an
+    upper bound, and only blocks whose lower bound beats a point's upper bound are
+    evaluated exactly (10,000 points in well under a second instead of a dense sweep).
+    """
     norm = _Normaliser(ranges)
     Xn, Yn = norm(np.asarray(X, float), np.asarray(Y, float))
+    P = np.stack([Xn, Yn], axis=-1)
     Xs, Ys, _ = curves.sample(t)
     Xs, Ys = norm(Xs, Ys)
-    A = np.stack([Xs[triangles], Ys[triangles]], axis=-1)  # (L, 3, M, 2)
-    A = A.transpose(0, 2, 1, 3).reshape(-1, 3, 2)  # (L*M, 3, 2)
-    out = np.empty(len(Xn))
-    a, b, c = A[:, 0], A[:, 1], A[:, 2]
-    nonzero_area = np.abs(_cross2(b - a, c - a)) > 0
-    chunk = max(1, 400_000 // max(len(A), 1))
-    for k0 in range(0, len(Xn), chunk):
-        p = np.stack([Xn[k0 : k0 + chunk], Yn[k0 : k0 + chunk]], axis=-1)[:, None, :]  # (q,1,2)
-        d = np.full((p.shape[0], len(A)), np.inf)
-        for e0, e1 in ((0, 1), (1, 2), (2, 0)):
-            s0, ab = A[:, e0], A[:, e1] - A[:, e0]
-            L2 = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
-            ps = p - s0
-            h = np.clip((ps[..., 0] * ab[:, 0] + ps[..., 1] * ab[:, 1])
-                        / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
-            proj = s0 + h[..., None] * ab
-            d = np.minimum(d, np.hypot(*np.moveaxis(p - proj, -1, 0)))
-        s1, s2, s3 = _cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)
-        inside = (((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0)))
-        inside &= nonzero_area
-        out[k0 : k0 + chunk] = np.where(inside.any(axis=1), 0.0, d.min(axis=1))
+    M = len(t)
+    nb = -(-M // _T_BLOCK)
+    pad = nb * _T_BLOCK - M
+    m_idx = np.concatenate([np.arange(M), np.full(pad, M - 1)])  # repeat the last sample
+    A = np.stack([Xs[triangles][:, :, m_idx], Ys[triangles][:, :, m_idx]], axis=-1)
+    A = A.transpose(0, 2, 1, 3).reshape(len(triangles) * nb, _T_BLOCK, 3, 2)  # blocks
+    lo, hi = A.min(axis=(1, 2)), A.max(axis=(1, 2))  # (B, 2)
+    out = np.empty(len(P))
+    chunk = max(1, 2_000_000 // max(len(A), 1))
+    for q0 in range(0, len(P), chunk):
+        p = P[q0 : q0 + chunk]
+        gap = np.maximum(lo[None] - p[:, None], 0.0) + np.maximum(p[:, None] - hi[None], 0.0)
+        lb = np.hypot(gap[..., 0], gap[..., 1])  # (q, B) lower bounds
+        k = min(3, lb.shape[1])
+        near = np.argpartition(lb, k - 1, axis=1)[:, :k]
+        ub = _segment_distance(p[:, None, None, :], A[near]).min(axis=(1, 2))
+        qi, bi = np.nonzero(lb <= ub[:, None])
+        best = ub.copy()
+        for c0 in range(0, len(qi), 100_000):
+            qq, bb = qi[c0 : c0 + 100_000], bi[c0 : c0 + 100_000]
+            d = _segment_distance(p[qq][:, None, :], A[bb]).min(axis=1)
+            np.minimum.at(best, qq, d)
+        out[q0 : q0 + chunk] = best
     return out

@@ -14,8 +14,9 @@ from solvers.perfmap.triangulation import locate
 
 def _context(result: PerfmapResult):
     if result.map is None or not result.triangles:
-        raise InputRejected(FieldError(("points",), "this job was run with options.map=false: "
-                                       "there is no map to query"))
+        raise InputRejected(FieldError(("points",), "this job has no performance map (options.map "
+                                       "was false, or the settings allow none: see the "
+                                       "report): there is nothing to query"))
     curves = curveset_from_fits(result.settings)
     theta = np.array([s.theta for s in result.settings])
     phi = np.array([s.phi for s in result.settings])

@@ -33,7 +33,7 @@ from solvers.perfmap.fitting import (
 )
 from solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from solvers.perfmap.triangulation import triangulate
-from solvers.perfmap.validation import Setting, prepare
+from solvers.perfmap.validation import Setting, map_impossible, prepare
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -106,7 +106,7 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
     opts = request.options
     settings = prepare(request)
     progress(0.02, "input checked")
-    warnings: list[Diagnostic] = []
+    warnings: list[Diagnostic] = list(request.upload_warnings)
     minimax = opts.fit == "minimax"
 
     # --- characteristics of every family (the paper's Table 1 for these data)
@@ -232,7 +232,8 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
     ranges = curve_ranges(curves)
     triangles = np.zeros((0, 3), dtype=int)
     pmap = None
-    if opts.map:
+    no_map = map_impossible(settings) if opts.map is None else None
+    if opts.map is not False and not no_map:
         triangles = triangulate(theta, phi)
         if len(triangles) == 0:
             raise SolverError("triangulation", "no non-degenerate triangle of settings",
@@ -249,6 +250,10 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                               efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
                               phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
                               reachable_fraction=float(np.mean(np.isfinite(eta))))
+    elif no_map:
+        warnings.append(Diagnostic(code="map_not_possible", message=f"No performance map: "
+                                   f"{no_map}; characteristics and envelopes only, no inverse "
+                                   "query for this job.", details={"reason": no_map}))
     else:
         warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
                                    "performance map and no inverse query for this job."))

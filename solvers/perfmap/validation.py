@@ -38,18 +38,27 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
     if bad:
         return None
     x, y, eta = (np.asarray(v, dtype=float) for v in (pos.flow, pos.pressure, pos.efficiency))
+    # Point-specific errors name the point (loc ..., field, k; k = index in the submitted
+    # list) so that a CSV upload can point at the file row.
     if np.any(y <= 0):
-        errors.append(FieldError(("positions", i, "pressure"),
-                                 "pressures must be positive (errors are relative)"))
+        k = int(np.argmax(y <= 0))
+        errors.append(FieldError(("positions", i, "pressure", k),
+                                 f"pressures must be positive (errors are relative); got "
+                                 f"{y[k]:g}"))
         bad = True
     if np.any(eta <= 0):
-        errors.append(FieldError(("positions", i, "efficiency"),
-                                 "efficiencies must be positive (errors are relative)"))
+        k = int(np.argmax(eta <= 0))
+        errors.append(FieldError(("positions", i, "efficiency", k),
+                                 f"efficiencies must be positive (errors are relative); got "
+                                 f"{eta[k]:g}"))
         bad = True
     elif np.any(eta > 1):  # fitted curves are held to 0 <= eta <= 1
-        errors.append(FieldError(("positions", i, "efficiency"),
-                                 f"efficiency is a fraction, 0 < eta <= 1; got {eta.max():g} "
-                                 "(percent? divide by 100)"))
+        k = int(np.argmax(eta > 1))  # the first offending point
+        hint = ("percent? divide by 100, or in a CSV label the column 'efficiency [%]'"
+                if eta.max() <= 100 else "efficiency must be a fraction")
+        errors.append(FieldError(("positions", i, "efficiency", k),
+                                 f"efficiency is a fraction, 0 < eta <= 1; got {eta[k]:g} "
+                                 f"({hint})"))
         bad = True
     if bad:
         return None
@@ -57,16 +66,24 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
     x, y, eta = x[order], y[order], eta[order]
     same = (np.diff(x) == 0) & (np.diff(y) == 0) & (np.diff(eta) == 0)
     keep = np.concatenate([[True], ~same])
-    x, y, eta = x[keep], y[keep], eta[keep]
+    x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
     if np.any(np.diff(x) <= 0):
         k = int(np.argmax(np.diff(x) <= 0))
-        errors.append(FieldError(("positions", i, "flow"),
+        a, b = sorted((int(order[k]), int(order[k + 1])))
+        errors.append(FieldError(("positions", i, "flow", b),
                                  f"flow is not strictly increasing after sorting: flow {x[k]:g} "
-                                 "appears twice with different pressure/efficiency"))
+                                 f"appears twice (points {a} and {b}) with different "
+                                 "pressure/efficiency; average or drop the repeat"))
         return None
     if len(x) < 3:
         errors.append(FieldError(("positions", i, "flow"),
                                  f"needs at least 3 distinct points, got {len(x)}"))
+        return None
+    span = x[-1] - x[0]
+    if not span > 1e-9 * max(abs(x[0]), abs(x[-1])):
+        errors.append(FieldError(("positions", i, "flow"),
+                                 f"the flow range {x[0]:g}..{x[-1]:g} is too narrow to fit a "
+                                 "curve (relative span below 1e-9)"))
         return None
     return Setting(pos.theta, pos.phi, x, y, eta, i, int(np.sum(same)))
 
@@ -87,6 +104,16 @@ def collinear(theta: np.ndarray, phi: np.ndarray) -> bool:
     return bool(s[1] <= 1e-9 * max(s[0], 1e-300))
 
 
+def map_impossible(settings: list[Setting]) -> str | None:
+    """Why no performance map can be built over these settings (None when it can)."""
+    if len(settings) < 3:
+        return f"a performance map needs at least 3 settings, got {len(settings)}"
+    if collinear(np.array([s.theta for s in settings]), np.array([s.phi for s in settings])):
+        return ("all settings lie on one line in (theta, phi): no triangle to interpolate "
+                "over for a performance map")
+    return None
+
+
 def prepare(request: PerfmapRequest) -> list[Setting]:
     """Validate and return the settings sorted by (theta, phi); raises InputRejected."""
     errors: list[FieldError] = []
@@ -103,19 +130,11 @@ def prepare(request: PerfmapRequest) -> list[Setting]:
         s = _prepare_position(i, pos, errors)
         if s is not None:
             settings.append(s)
-    if not errors and request.options.map:
-        th = np.array([s.theta for s in settings])
-        ph = np.array([s.phi for s in settings])
-        if len(settings) < 3:
-            errors.append(FieldError(("positions",),
-                                     f"a performance map needs at least 3 settings, got "
-                                     f"{len(settings)} (set options.map=false for "
-                                     "characteristics and envelopes only)"))
-        elif collinear(th, ph):
-            errors.append(FieldError(("positions",),
-                                     "all settings lie on one line in (theta, phi): no "
-                                     "triangle to interpolate over (set options.map=false "
-                                     "for characteristics and envelopes only)"))
+    if not errors and request.options.map:  # an explicitly requested map must be possible
+        reason = map_impossible(settings)
+        if reason:
+            errors.append(FieldError(("positions",), reason + " (set options.map=false, or "
+                                     "leave it unset, for characteristics and envelopes only)"))
     if errors:
         raise InputRejected(errors)
     settings.sort(key=lambda s: (s.theta, s.phi))

@@ -220,5 +220,5 @@ def test_efficiency_in_percent_is_rejected_with_its_field():
     with pytest.raises(InputRejected) as exc:
         check_input(PerfmapRequest.model_validate(body))
     errs = exc.value.errors
-    assert [tuple(e.loc) for e in errs] == [("positions", 4, "efficiency")]
+    assert [tuple(e.loc) for e in errs] == [("positions", 4, "efficiency", 0)]
     assert "percent" in errs[0].msg

@@ -65,7 +65,7 @@ def test_repeated_flow_with_different_values_rejected():
     body = _body()
     p = body["positions"][4]
     p["flow"][3] = p["flow"][2]
-    assert _rejected_locs(body) == [("positions", 4, "flow")]
+    assert _rejected_locs(body) == [("positions", 4, "flow", 3)]
 
 
 def test_unsorted_and_duplicated_points_are_sorted_and_merged():
@@ -87,17 +87,28 @@ def test_length_mismatch_rejected():
 
 
 def test_too_few_settings_for_a_map_but_envelope_possible():
-    body = _body()
+    body = _body(map=True)  # an explicitly requested map must be possible: 422
     body["positions"] = body["positions"][:2]
     assert _rejected_locs(body) == [("positions",)]
-    body["options"]["map"] = False
-    res = solve(PerfmapRequest.model_validate(body))
-    assert res.map is None and res.envelopes
+    for flag, code in ((False, "map_skipped"), (None, "map_not_possible")):
+        body["options"]["map"] = flag
+        res = solve(PerfmapRequest.model_validate(body))
+        assert res.map is None and len(res.envelopes) == 1 and res.triangles == []  # one theta
+        assert [w.code for w in res.report.warnings] == [code]
 
 
-def test_collinear_settings_rejected():
-    body = request_body(n_theta=1, n_phi=5)
+def test_collinear_settings_rejected_only_when_the_map_is_requested():
+    body = request_body(n_theta=1, n_phi=5, options={"map": True})
     assert _rejected_locs(body) == [("positions",)]
+    # a single theta with several phi (a common rig layout): envelope yes, map no, no 422
+    body["options"].pop("map")
+    req = PerfmapRequest.model_validate(body)
+    check_input(req)
+    res = solve(req)
+    assert res.map is None and len(res.envelopes) == 1
+    env = res.envelopes[0]
+    assert all(p is not None for p in env.pressure) and min(env.phi) >= 0
+    assert "map_not_possible" in [w.code for w in res.report.warnings]
 
 
 def test_duplicate_setting_rejected():
@@ -119,7 +130,7 @@ def test_nan_and_bad_options_rejected_by_schema():
 def test_non_positive_pressure_rejected():
     body = _body()
     body["positions"][3]["pressure"][0] = -1.0
-    assert _rejected_locs(body) == [("positions", 3, "pressure")]
+    assert _rejected_locs(body) == [("positions", 3, "pressure", 0)]
 
 
 def test_query_request_one_or_many():
@@ -161,12 +172,12 @@ def test_parse_json_file_with_form_options_override():
     ("m.csv", b"theta,phi,flow,pressure,efficiency\n1,2,nan,4,5\n", "NaN"),
     ("m.json", b"{not json", "invalid JSON"),
     ("m.json", b'{"positions": 3}', "positions"),
-    ("m.csv", b"\xff\xfe\x00", "UTF-8"),
+    ("m.csv", b"\xff\xfe\x00", "UTF-16"),
 ])
 def test_bad_uploads_name_the_file(name, content, needle):
     with pytest.raises(InputRejected) as exc:
         parse_upload(name, content, None)
-    assert all(e.loc == ("file",) for e in exc.value.errors)
+    assert all(e.loc[0] == "file" for e in exc.value.errors)
     assert needle in str(exc.value)
 
 
