@@ -139,7 +139,10 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
     for f in factors:
         e = eps * f
-        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * e), e, 0.5 * rp)
+        simp_e = curve.simplify(poly, SIMPLIFY_FRACTION * e)
+        mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp)
+        if mdl is None:  # every kept prefix ran into a dead end: search wider before giving up ε
+            mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp, beam=8)
         if mdl is not None and all(not _same_shape(mdl, m0) for _, m0 in inits):
             inits.append((e, mdl))
     eps_used = eps * factors[-1]
