@@ -49,7 +49,9 @@ KNOWN = {
     "FIELD-FIT-WELD", "TAPPING", "TAP-CONNECTION",
 }
 HEADER = ("ISOGEN-FILES", "PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE")
-UNITS = {"MM": "mm", "INCH": "in", "INCHES": "in", "IN": "in", "M": "m", "CM": "cm", "FT": "ft", "FEET": "ft"}
+UNITS = {"MM": "mm", "MILLIMETRE": "mm", "MILLIMETRES": "mm", "MILLIMETER": "mm", "MILLIMETERS": "mm",
+         "INCH": "in", "INCHES": "in", "IN": "in", "INCH-FRACTION": "in", "M": "m", "METRE": "m", "METRES": "m",
+         "CM": "cm", "FT": "ft", "FEET": "ft"}
 TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$")
@@ -239,7 +241,10 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
     owner = np.repeat(np.arange(len(comps)), counts)
     local = np.arange(len(pos)) - start[owner]
     dirs = [d for c in comps for _, d in c["ports"]]
-    rad = np.array([c["radius"] or 0.0 for c in comps])[owner]
+    known = [c["radius"] for c in comps if c["radius"]]
+    # a component without a readable bore connects like a typical one of the file (10 mm if none has one)
+    typical = float(np.median(known)) if known else 10.0 / TO_MM[units]
+    rad = np.array([c["radius"] or typical for c in comps])[owner]
     tol_opt = (options or {}).get("connection_tolerance")
     reach = float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6)
     pairs = cKDTree(pos).query_pairs(r=reach, output_type="ndarray")

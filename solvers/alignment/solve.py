@@ -6,7 +6,7 @@ import numpy as np
 
 from schemas.alignment import AlignmentRequest, AlignmentResult
 from schemas.common import Diagnostic
-from solvers.alignment.cuts import choose_cut
+from solvers.alignment.cuts import choose_cut, error_impact
 from solvers.alignment.direct import solve_direct
 from solvers.alignment.finalize import Outcome, build_result
 from solvers.alignment.iterative import solve_dual_quaternion
@@ -29,6 +29,12 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         iterations += pose.iterations
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
+        why = "conflict"
+        if k is None:
+            # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
+            # length): that is a conflict too; cut the worst-measured connection of the worst such pipe
+            k = _flip_cut(model, active, pose)
+            why = "pipe_flip"
         if k is None:
             reason = "all connections closed" if not reasons else f"closed after {len(reasons)} cut(s)"
             break
@@ -36,10 +42,31 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
             reason = f"cut limit ({opts.max_cuts}) reached with connections still open"
             break
         active[k] = False
-        reasons[k] = "conflict"
+        reasons[k] = why
         errors[k] = (float(gap[k]), float(ang[k]))
     return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
                    cut_reason=reasons, cut_errors=errors)
+
+
+def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
+    s0, s1 = model.pipe_ports()
+    pipes = np.flatnonzero(model.is_pipe & ~model.fixed)
+    if len(pipes) == 0:
+        return None
+    length = np.einsum("ij,ij->i", (pose.P[s1[pipes]] - pose.P[s0[pipes]]).astype(float), pose.D[s1[pipes]])
+    short = model.min_length[pipes] * (1 - 1e-9) - length
+    bad = short > max(model.pos_tol, 1e-12 * model.lref)
+    if not np.any(bad):
+        return None
+    worst = pipes[bad][np.argmax(short[bad])]
+    ports = (s0[worst], s1[worst])
+    cand = np.flatnonzero(active & (np.isin(model.conn_a, ports) | np.isin(model.conn_b, ports)))
+    if len(cand) == 0:
+        return None
+    gap0, ang0 = connection_errors(model, model.P0, model.D0)
+    impact = error_impact(model, gap0[cand], ang0[cand])
+    keys = [min(model.key[model.conn_a[k]], model.key[model.conn_b[k]]) for k in cand]
+    return int(cand[min(range(len(cand)), key=lambda i: (-impact[i], keys[i]))])
 
 
 def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:

@@ -11,6 +11,7 @@ MIN_PORTS = {
     "elbow": 2, "bend": 2, "tee": 3, "cross": 4, "reducer": 2, "valve": 2,
     "flange": 1, "cap": 1, "olet": 1, "tie_in": 1, "other": 1, None: 1,
 }
+OUTWARD = ("elbow", "bend", "tee", "cross", "reducer", "valve", "flange")
 MAX_PORTS = {"elbow": 2, "bend": 2, "tee": 3, "cross": 4, "reducer": 2, "cap": 1}
 
 
@@ -58,6 +59,20 @@ def check_input(request: AlignmentRequest) -> None:
                 ("components", int(i), "ports"),
                 f"pipe ports are not collinear and opposite within {opts.shape_tolerance} deg "
                 "(port directions must point out of the pipe along its axis)"))
+    # catalogue fittings: every port points away from the fitting (a reversed port would make the solver
+    # turn the fitting inside out to close it)
+    cent = np.zeros((len(comps), 3))
+    np.add.at(cent, owner, pos)
+    cent /= np.maximum(counts, 1)[:, None]
+    arm = pos - cent[owner]
+    arm_len = np.linalg.norm(arm, axis=1)
+    outward = np.einsum("ij,ij->i", arm, unit)
+    typed = np.array([c.kind == "fitting" and c.type in OUTWARD for c in comps])
+    inward = typed[owner] & (counts[owner] >= 2) & ~zero & (outward < -1e-9 * np.maximum(arm_len, 1e-300)) & (
+        arm_len > 0)
+    for k in np.flatnonzero(inward):
+        errors.append(FieldError(("components", int(owner[k]), "ports", int(k - start[owner[k]]), "direction"),
+                                 "a port direction must point out of the fitting (this one points into it)"))
     for i in np.flatnonzero(~is_pipe):
         comp = comps[i]
         need = MIN_PORTS.get(comp.type, 1)

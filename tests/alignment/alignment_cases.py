@@ -34,3 +34,59 @@ def elbow(cid, corner, d0, d1, arm=150.0, fixed=False, rot=None, shift=(0, 0, 0)
 
 def conn(a, i, b, j):
     return {"from": [a, i], "to": [b, j]}
+
+
+def route(points, radius=50.0, bend_radius=None, perturb=(0.0, 0.0, 0.0, 0.0), seed=0, fixed_ends=(True, False),
+          end_flanges=True, scale=1.0):
+    """A single run through ``points``: straight pipes joined by elbows of whatever angle the corners make
+    (arm = bend radius x tan(angle / 2)), optionally a fixed flange at either end. ``perturb`` =
+    (pipe mm, pipe deg, fitting mm, fitting deg) of scan-like noise, applied as rigid motions (pipes
+    also get independent end noise along the axis). Returns (components, connections)."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed)
+    pts = np.asarray(points, float) * scale
+    R = (1.5 * 2 * radius if bend_radius is None else bend_radius) * scale
+    comps, conns = [], []
+    prev = None  # (component id, port index) that the next component joins
+
+    def rigid(ports, mm, deg):
+        if mm == 0 and deg == 0:
+            return ports
+        rot = Rotation.from_rotvec(rng.normal(size=3) * np.radians(deg) / np.sqrt(3))
+        c = np.mean([p[0] for p in ports], axis=0)
+        t = rng.normal(size=3) * mm / np.sqrt(3)
+        return [(rot.apply(p - c) + c + t, rot.apply(d)) for p, d in ports]
+
+    def add(cid, kind, ports, ftype=None, fixed=False):
+        nonlocal prev
+        if not fixed:
+            ports = rigid(ports, *(perturb[:2] if kind == "pipe" else perturb[2:]))
+        c = {"id": cid, "kind": kind, "radius": radius * scale, "fixed": fixed,
+             "ports": [port(p, d) for p, d in ports]}
+        if kind == "fitting":
+            c["type"] = ftype
+        comps.append(c)
+        if prev is not None:
+            conns.append(conn(prev[0], prev[1], cid, 0))
+        prev = (cid, len(ports) - 1)
+
+    u = [(pts[i + 1] - pts[i]) / np.linalg.norm(pts[i + 1] - pts[i]) for i in range(len(pts) - 1)]
+    start = pts[0]
+    flange_len = 100.0 * scale
+    if end_flanges:
+        add("F-start", "fitting", [(start - flange_len * u[0], -u[0]), (start, u[0])], "flange", fixed=fixed_ends[0])
+    for i in range(len(u)):
+        if i + 1 < len(u):
+            ang = np.arccos(np.clip(u[i] @ u[i + 1], -1, 1))
+            arm = R * np.tan(ang / 2)
+            end = pts[i + 1] - arm * u[i]
+        else:
+            end = pts[-1]
+        add(f"P-{i}", "pipe", [(start, -u[i]), (end, u[i])])
+        if i + 1 < len(u):
+            add(f"E-{i}", "fitting", [(end, -u[i]), (pts[i + 1] + arm * u[i + 1], u[i + 1])], "elbow")
+            start = pts[i + 1] + arm * u[i + 1]
+    if end_flanges:
+        add("F-end", "fitting", [(pts[-1], -u[-1]), (pts[-1] + flange_len * u[-1], u[-1])], "flange", fixed=fixed_ends[1])
+    return comps, conns
