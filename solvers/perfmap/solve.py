@@ -250,6 +250,12 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                               efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
                               phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
                               reachable_fraction=float(np.mean(np.isfinite(eta))))
+        if not np.isfinite(eta).any():
+            warnings.append(Diagnostic(
+                code="map_empty", message="No grid node of the map is reachable: the "
+                "characteristics sweep no area in (flow, pressure) (e.g. all pressures equal); "
+                "every inverse query will be infeasible.",
+                details={"pressure_range": [ranges[2], ranges[3]]}))
     elif no_map:
         warnings.append(Diagnostic(code="map_not_possible", message=f"No performance map: "
                                    f"{no_map}; characteristics and envelopes only, no inverse "

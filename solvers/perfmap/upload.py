@@ -92,6 +92,14 @@ def _header_field(name: str) -> tuple[str | None, str]:
     return _ALIAS.get(key), unit
 
 
+def _is_number(cell: str) -> bool:
+    try:
+        _number(cell, True)
+        return True
+    except ValueError:
+        return False
+
+
 def _number(cell: str, decimal_comma: bool) -> float:
     s = cell.strip().strip('"').strip().replace("\u00a0", "").replace("\u2212", "-")
     if decimal_comma and "," in s and _DECIMAL_COMMA.match(s):
@@ -135,7 +143,9 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
             f"(any order and case, units in brackets allowed, e.g. 'Flow (m3/s)'); missing: "
             f"{', '.join(missing)}; found: {', '.join(repr(h.strip()) for h in rows[0])}"
             + ("" if delim != "," or ";" not in text[:2000] else
-               " — if the file uses ';' separators, put them in the header too"),
+               " — if the file uses ';' separators, put them in the header too")
+            + (" — the first line that is not blank or '#' must be the header"
+               if all(_is_number(h) for h in rows[0] if h.strip()) else ""),
             ("file", "header"))
 
     errors: list[FieldError] = []
@@ -149,8 +159,11 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
             j = col[c]
             cell = r[j].strip() if j < len(r) else ""
             if not cell:
+                hint = (" (write the setting on every row, not only on the first row of "
+                        "a speed line)" if c in ("theta", "phi") else "")
                 errors.append(FieldError(("file", "row", n, c), f"line {n}: no {c} value "
-                                         f"(column {j + 1}); every row needs all five values"))
+                                         f"(column {j + 1}); every row needs all five "
+                                         f"values{hint}"))
                 continue
             try:
                 v = _number(cell, decimal_comma) * scale[c]
