@@ -263,7 +263,7 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
 
 
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60) -> tuple[TubeModel, dict]:
+             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
@@ -292,7 +292,7 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
             J[:, -1] -= 1.0
         return J
 
-    x, info = levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev)
+    x, info = levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
@@ -304,8 +304,10 @@ def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
     return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
 
 
-def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
-    """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc)."""
+def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
+    """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc).
+
+    ``tick()`` is called once per iteration (progress / cancellation)."""
     x = x0.copy()
     r = fun(x)
     cost, w = _soft_l1(r, f_scale)
@@ -315,6 +317,8 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10):
     last_rel = np.inf
     while nfev < max_nfev:
         it += 1
+        if tick is not None:
+            tick()
         J = jac(x)
         sw = np.sqrt(w)
         J *= sw[:, None]  # in place: with a million samples J is the biggest array here

@@ -17,9 +17,9 @@ from .pointio import request_points
 from .validate import check_input
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
-LM_SUBSAMPLE = 20_000
-SIMPLIFY_FRACTION = 0.25
-PRUNE_SUBSAMPLE = 3_000  # early least-squares rounds; the last round uses every inlier
+LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
+SIMPLIFY_FRACTION = 0.25  # polygon simplification tolerance as a fraction of ε (§4.5)
+PRUNE_SUBSAMPLE = 3_000  # candidate refits when choosing the number of bends
 
 
 def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
@@ -177,6 +177,11 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     pts_sub = pts[sub]
     fit_rp = opts.pipe_radius is None
 
+    stage_progress = [0.55, "least-squares fit"]
+
+    def tick():
+        progress(*stage_progress)  # lets a cancellation through between LM iterations
+
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int):
         """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
         lay = fit.Layout(m.n_bends, mode, opts.bend_radius, fit_rp)
@@ -188,7 +193,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
-            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev)
+            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
             res, seg = fit.assign(m, P, margin)
             m = fit.set_end_lengths(m, P[inl], seg[inl])
             res, seg = fit.assign(m, P, margin)
@@ -203,8 +208,9 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
 
     def refit(m: TubeModel):
         m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
-        progress(0.7, "selecting the number of bends")
         return m2, fit.assign(m2, pts_prune, margin)[0]
+
+    stage_progress[:] = [0.6, "choosing the number of bends"]
 
     fitted = [(e,) + refit(mdl) for e, mdl in inits]
     best_i = prune.select(fitted, rp)
@@ -212,8 +218,10 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     changes = []
     if model.n_bends and not opts.bend_radius:
         model, _, changes = prune.prune(model, refit, eps_used, rp)
+    stage_progress[:] = [0.75, "least-squares fit"]
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
-    progress(0.85, "final least-squares fit")
+    stage_progress[:] = [0.85, "final least-squares fit on all samples"]
+    progress(*stage_progress)
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10)
     res_all, seg_all = fit.assign(model, pts, margin)
