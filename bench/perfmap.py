@@ -21,8 +21,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from schemas.perfmap import PerfmapRequest  # noqa: E402
-from solvers.perfmap import parse_upload, solve  # noqa: E402
+from schemas.perfmap import PerfmapQueryRequest, PerfmapRequest  # noqa: E402
+from solvers.perfmap import parse_upload, query, solve  # noqa: E402
 from solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
 from solvers.perfmap.solve import curveset_from_fits  # noqa: E402
 from solvers.perfmap.synthetic import request_body, true_map  # noqa: E402
@@ -103,6 +103,17 @@ def main() -> None:
     n3 = parse_upload("n3_fan_map.csv", N3.read_bytes(), None)
     tn3, n3res = timed(lambda: solve(n3), reps)
 
+    # inverse query in bulk (the HTTP handler answers it synchronously): 10,000 duty points
+    # over the N3 map's box and 20 % around it (about 3/4 infeasible: distance computed)
+    rng = np.random.default_rng(0)
+    (x0, x1), (y0, y1) = n3res.flow_range, n3res.pressure_range
+    qpts = PerfmapQueryRequest(points=[
+        {"flow": a, "pressure": b}
+        for a, b in zip(rng.uniform(x0 - 0.2 * (x1 - x0), x1 + 0.2 * (x1 - x0), 10_000),
+                        rng.uniform(y0 - 0.2 * (y1 - y0), y1 + 0.2 * (y1 - y0), 10_000))])
+    tq, qres = timed(lambda: query(n3res, qpts), reps)
+    n_feasible = sum(a.feasible for a in qres.points)
+
     print(f"\nperfmap benchmark ({'quick' if args.quick else 'full'}; median of {reps}; "
           f"ground truth: dense t search, {n_truth} samples, {t_truth:.1f} s)\n")
     print(f"{'measurement':70s} {'value':>12s}  {'target':>8s}  status")
@@ -111,6 +122,7 @@ def main() -> None:
     print(f"{'solve 28 settings, 200x200 map':70s} {t200:>10.3f} s  {'':>8s}")
     print(f"{'solve real N3 fan map (18 settings x 7-8 pts, 64x64, auto)':70s} {tn3:>10.3f} s")
     print(f"{'binning baseline map alone (N=64, M=128)':70s} {tb:>10.3f} s")
+    print(f"{f'inverse query, 10,000 points on N3 ({n_feasible} feasible)':70s} {tq:>10.3f} s")
 
     print("\nmap efficiency error vs dense ground truth (synthetic family, 64x64, "
           f"{int(ok.sum())} reachable nodes)")

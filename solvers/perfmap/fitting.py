@@ -171,10 +171,17 @@ def fit_log(t: np.ndarray, y: np.ndarray, minimax: bool, polish: bool = True) ->
             dbeta = p[0] * np.exp(p[1]) / (bb - t)
             return np.column_stack([np.log(bb - t), dbeta, np.ones_like(t)])
 
-        sol = least_squares(resid, [params[0], np.log(beta - 1.0), params[2]], jac=jac,
-                            method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
-        cand = np.array([sol.x[0], 1.0 + np.exp(sol.x[1]), sol.x[2]])
-        cand_sse = float(np.sum(resid(sol.x) ** 2))
+        # LM may try log(beta - 1) so negative that beta == 1 in floating point (log 0 at
+        # t = 1): such trial points are non-finite and rejected below, silently.
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            try:
+                sol = least_squares(resid, [params[0], np.log(beta - 1.0), params[2]],
+                                    jac=jac, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                                    max_nfev=200)
+                cand = np.array([sol.x[0], 1.0 + np.exp(sol.x[1]), sol.x[2]])
+                cand_sse = float(np.sum(resid(sol.x) ** 2))
+            except ValueError:  # non-finite residuals at the start: keep the profile fit
+                cand, cand_sse = np.full(3, np.nan), np.inf
         if np.all(np.isfinite(cand)) and cand[0] >= 0 and cand[1] > 1 and cand_sse <= best_sse:
             params = cand
     return CurveFit("log", params, int(params[0] <= 0.0))
