@@ -196,6 +196,9 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     var = np.where(free, offs[:-1], -1)
     nv = int(offs[-1])
     w, w_rot = _weights(model, stiffness)
+    # a rotation by phi moves a component's ports by about size * phi: weigh it in the same length units as
+    # the translations, so the answer does not depend on whether the request is in mm, m or inches
+    w_rot = w_rot * model.lref**2
     w_along = 1e-3
     pc = model.port_comp
     a, b = model.conn_a[active], model.conn_b[active]
@@ -213,6 +216,11 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     stalls = 0
     cache: dict = {}
     pos_scale = model.lref
+    sv = np.ones(nv)  # variable scales: radians for rotations, lref for translations and lengths
+    fr_all = np.flatnonzero(free)
+    sv[(var[fr_all][:, None] + 3 + np.arange(3)).ravel()] = model.lref
+    pf = np.flatnonzero(free & model.is_pipe)
+    sv[var[pf] + 6] = model.lref
     best, first = (np.inf, None), np.inf
     for _ in range(max_gn):
         P, D = st.geometry()
@@ -321,7 +329,13 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
                 np.add.at(g, (var[pipes][:, None] + np.arange(7)).ravel(), gp.ravel())
         H = sp.csc_matrix((np.concatenate(hv), (np.concatenate(hr), np.concatenate(hc))), shape=(nv, nv))
         cache["reuse"] = not use_cost and not np.any(short)
-        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-20, max_iter=8 if use_cost else 30, cache=cache)
+        # solve in lengths of lref (x = sv * y) and cost / lref^2: every entry O(1) whatever the units
+        Ssv = sp.diags(sv)
+        Hs = (Ssv @ H @ Ssv / model.lref**2).tocsc()
+        As = (A @ Ssv).tocsr()
+        y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
+                                    max_iter=8 if use_cost else 30, cache=cache)
+        x = sv * y
         steps += k
         om = x[(var[fr][:, None] + np.arange(3))]
         dq = Rotation.from_rotvec(om).as_quat()[:, [3, 0, 1, 2]]

@@ -1,0 +1,254 @@
+"""Realistic PCF exports (Plant 3D, SmartPlant, AVEVA E3D style): parse -> align -> write -> parse.
+
+Fixtures in ``data/`` are hand-written like the tools export them: header records, attribute
+lines, MATERIALS section, welds and gaskets, olets, supports, CRLF / tabs / lower case, inch
+coordinates, plant coordinates near 1e6 mm, gaps of a few mm.
+"""
+
+import random
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from solvers.alignment import parse_upload, render_artifacts, solve
+from solvers.base import InputRejected, SolverError
+
+DATA = Path(__file__).parent / "data"
+POINT_WORDS = {"END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT", "CO-ORDS"}
+
+# fixture, tie-ins, expected number of cuts
+CASES = [
+    ("plant3d_cw_line.pcf", ["FLANGE-3", "FLANGE-35"], 0),
+    ("sp3d_inch_tabs.pcf", ["FLANGE-1", "FLANGE-18", "FLANGE-19"], 0),
+    ("e3d_plant_conflict.pcf", ["FLANGE-1", "FLANGE-15"], 1),
+]
+
+
+def _lines(text):
+    return re.split(r"(?<=\n)", text)
+
+
+def _align(name, fixed):
+    raw = (DATA / name).read_bytes()
+    req = parse_upload(name.upper(), raw, {"fixed_components": fixed})
+    res = solve(req)
+    art = {a.name: a for a in render_artifacts(req, res)}
+    return raw.decode(), req, res, art["aligned.pcf"].data.decode()
+
+
+@pytest.fixture(scope="module", params=CASES, ids=[c[0] for c in CASES])
+def aligned(request):
+    name, fixed, cuts = request.param
+    return (name, fixed, cuts) + _align(name, fixed)
+
+
+def test_closes_with_the_expected_cuts(aligned):
+    name, fixed, cuts, src, req, res, out = aligned
+    assert len(res.cut_connections) == cuts
+    assert res.converged
+    assert res.max_position_error == 0.0 and res.max_angle_error == 0.0
+    for c in res.connections:
+        if not c.cut:
+            assert c.position_error == 0.0
+    if cuts:
+        assert any(w.code == "connections_cut" for w in res.report.warnings)
+
+
+def test_every_unchanged_line_is_kept_byte_for_byte(aligned):
+    name, fixed, cuts, src, req, res, out = aligned
+    a, b = _lines(src), _lines(out)
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        # line endings (CRLF stays CRLF), indentation, keyword and everything after the coordinates
+        assert x[len(x.rstrip("\r\n")):] == y[len(y.rstrip("\r\n")):]
+        if x == y:
+            continue
+        xs, ys = x.split(), y.split()
+        assert xs[0].upper() in POINT_WORDS, (x, y)
+        assert xs[0] == ys[0] and xs[4:] == ys[4:]
+        assert x[: len(x) - len(x.lstrip())] == y[: len(y) - len(y.lstrip())]
+    # the MATERIALS section and every non-geometric attribute survive untouched
+    assert src[src.index("MATERIALS"):] == out[out.index("MATERIALS"):]
+    assert sum(1 for x, y in zip(a, b) if x != y) > 5  # something was actually aligned
+
+
+def test_tie_in_lines_untouched_and_written_connections_print_identically(aligned):
+    name, fixed, cuts, src, req, res, out = aligned
+    req2 = parse_upload("again.pcf", out.encode(), {"fixed_components": fixed})
+    assert [c.id for c in req2.components] == [c.id for c in req.components]
+    assert [(c.from_, c.to) for c in req2.connections] == [(c.from_, c.to) for c in req.connections]
+    ports = {c.id: c.ports for c in req2.components}
+    for c in req.components:
+        if c.id in fixed:
+            assert [p.position for p in ports[c.id]] == [p.position for p in c.ports]
+    for k, c in enumerate(req2.connections):
+        pa, pb = ports[c.from_[0]][c.from_[1]].position, ports[c.to[0]][c.to[1]].position
+        if k in res.cut_connections:
+            assert np.linalg.norm(np.subtract(pa, pb)) > 1.0
+        else:
+            assert pa == pb  # bit-identical after printing and reading back
+    # aligning the aligned file moves nothing at all
+    res2 = solve(req2)
+    assert len(res2.cut_connections) == cuts
+    if not cuts:
+        assert res2.iterations == 0 and all(c.displacement == 0.0 for c in res2.components)
+
+
+def test_zero_length_welds_are_connection_points():
+    src, req, res, out = _align("plant3d_cw_line.pcf", ["FLANGE-3", "FLANGE-35"])
+    ids = [c.id for c in req.components]
+    assert not any(i.startswith("WELD") for i in ids)
+    # the flange connects straight to the pipe the weld joined it to
+    assert any(c.from_ == ("FLANGE-3", 1) and c.to == ("PIPE-5", 0) for c in req.connections)
+    assert res.report.details["pcf_zero_length_items"] == ["WELD-4"]
+    # 3 mm gaskets are real (rigid) parts with two ports
+    gaskets = [c for c in req.components if c.id.startswith("GASKET")]
+    assert gaskets and all(len(c.ports) == 2 and c.kind == "fitting" for c in gaskets)
+    src2, req2, res2, out2 = _align("sp3d_inch_tabs.pcf", ["FLANGE-1", "FLANGE-18", "FLANGE-19"])
+    # the single-ended weld is written exactly where the pipe and the tie-in flange now meet
+    w = _lines(src2).index("weld\n") + 1
+    flange = next(c for c in res2.components if c.id == "FLANGE-18").ports[0].position
+    pipe = next(c for c in res2.components if c.id == "PIPE-16").ports[1].position
+    assert pipe == flange
+    assert [float(v) for v in _lines(out2)[w].split()[1:4]] == flange
+    assert _lines(out2)[w].split()[1:4] == _lines(out2)[w - 2].split()[1:4]  # same printed strings as the pipe end
+
+
+def test_unknown_keyword_kept_and_warned():
+    src, req, res, out = _align("plant3d_cw_line.pcf", ["FLANGE-3", "FLANGE-35"])
+    warn = [w for w in res.report.warnings if w.code == "pcf_unknown_keyword"]
+    assert warn and warn[0].details["keywords"] == ["STRAINER-CUSTOM"]
+    assert res.report.status == "warning"
+    strainer = next(c for c in req.components if c.id.startswith("STRAINER-CUSTOM"))
+    assert strainer.type == "other" and len(strainer.ports) == 2
+    assert "MESSAGE-SQUARE\r\n    TEXT SCANNED 2026-11-02\r\n" in out
+
+
+def test_component_kinds_from_a_plant3d_export():
+    src, req, res, out = _align("plant3d_cw_line.pcf", ["FLANGE-3", "FLANGE-35"])
+    kind = {c.id: (c.kind, c.type, len(c.ports)) for c in req.components}
+    assert kind["OLET-20"] == ("fitting", "olet", 1)
+    assert kind["CAP-18"] == ("fitting", "cap", 1)
+    assert kind["FLANGE-BLIND-26"] == ("fitting", "flange", 1)
+    assert kind["VALVE-ANGLE-31"] == ("fitting", "valve", 2)
+    assert kind["TEE-9"] == ("fitting", "tee", 3)
+    assert kind["BEND-29"] == ("fitting", "bend", 2)
+    assert req.units == "mm"
+    tee = next(c for c in req.components if c.id == "TEE-9")
+    assert tee.radius == pytest.approx(3 * 25.4)  # 6.0000 inch bore, mm coordinates
+    # the angle valve keeps its 90 degrees, the 45 degree elbow its 45
+    out_ports = {c.id: c.ports for c in res.components}
+    for cid, deg in (("VALVE-ANGLE-31", 90.0), ("ELBOW-27", 45.0), ("BEND-29", 45.0)):
+        d0, d1 = (np.array(p.direction) for p in out_ports[cid])
+        assert np.degrees(np.arccos(np.clip(-d0 @ d1, -1, 1))) == pytest.approx(deg, abs=0.01)
+    # single-ended items face their partner
+    cap = out_ports["CAP-18"][0].direction
+    pipe = out_ports["PIPE-17"][1].direction
+    assert np.allclose(cap, -np.array(pipe), atol=1e-12)
+
+
+def test_support_follows_its_pipe_sideways_only():
+    src, req, res, out = _align("plant3d_cw_line.pcf", ["FLANGE-3", "FLANGE-35"])
+    line = next(ln for ln in _lines(out) if ln.strip().startswith("CO-ORDS"))
+    s_new = np.array([float(v) for v in line.split()[1:4]])
+    s_old = np.array([13000.0, -3500.0, 2915.0])
+    before = next(c for c in req.components if c.id == "PIPE-7")
+    after = next(c for c in res.components if c.id == "PIPE-7")
+
+    def offset(comp, s):
+        a, b = (np.array(p.position) for p in comp.ports)
+        u = (b - a) / np.linalg.norm(b - a)
+        return (s - a) - np.dot(s - a, u) * u, u
+
+    off_old, _ = offset(before, s_old)
+    off_new, u_new = offset(after, s_new)
+    assert np.linalg.norm(off_new) == pytest.approx(np.linalg.norm(off_old), abs=1e-6)  # still under the pipe
+    assert np.dot(s_new - s_old, u_new) == pytest.approx(0.0, abs=1e-6)  # not slid along it
+    assert np.linalg.norm(s_new - s_old) > 0.05  # but it did follow the pipe
+
+
+def test_eccentric_reducer_takes_the_pipe_axis_not_the_offset_end_points():
+    src, req, res, out = _align("sp3d_inch_tabs.pcf", ["FLANGE-1", "FLANGE-18", "FLANGE-19"])
+    red = next(c for c in req.components if c.id == "REDUCER-ECCENTRIC-7")
+    d0, d1 = (np.array(p.direction) for p in red.ports)
+    assert d0 @ d1 == pytest.approx(-1.0, abs=1e-12)
+    # the end points are 0.5 in apart sideways (flat side down) but the axis is the pipes' (-y)
+    assert np.degrees(np.arccos(d1 @ [0.0, -1.0, 0.0])) < 0.2
+    # so the 3 inch leg stays level instead of being tilted by 5.7 degrees
+    leg = next(c for c in res.components if c.id == "PIPE-10")
+    assert leg.ports[1].position[2] == pytest.approx(11.5, abs=0.02)
+    assert req.units == "in" and red.radius == pytest.approx(2.0)
+
+
+def test_inconsistent_tie_ins_cut_inside_the_straight_run():
+    src, req, res, out = _align("e3d_plant_conflict.pcf", ["FLANGE-1", "FLANGE-15"])
+    (k,) = res.cut_connections
+    cut = res.report.warnings[0].details["cuts"][0]
+    assert cut["reason"] == "conflict"
+    # the two nozzles are 10 mm apart sideways: that is what is left open
+    assert res.connections[k].position_error == pytest.approx(10.0, abs=0.5)
+    straight = {"FLANGE-1", "PIPE-2", "TEE-3", "PIPE-8", "FLANGE-9", "GASKET-10", "VALVE-11", "GASKET-12",
+                "FLANGE-13", "PIPE-14", "FLANGE-15"}  # not the branch up to the cap
+    c = req.connections[k]
+    assert c.from_[0] in straight and c.to[0] in straight
+
+
+def test_crlf_only_and_lone_cr_files_keep_their_endings():
+    text = (DATA / "sp3d_inch_tabs.pcf").read_text()
+    for eol in ("\r\n", "\r"):
+        body = text.replace("\n", eol)
+        req = parse_upload("x.pcf", body.encode(), {"fixed_components": ["FLANGE-1"]})
+        res = solve(req)
+        out = render_artifacts(req, res)[0].data.decode()
+        assert out.count(eol) == body.count(eol)
+        assert "\n" not in out.replace("\r\n", "") if eol == "\r\n" else "\n" not in out
+
+
+@pytest.mark.parametrize("text, why", [
+    ("", "no PCF components"),
+    ("ISOGEN-FILES ISOGEN.FLS\nUNITS-CO-ORDS MM\nMATERIALS\nITEM-CODE X\n    DESCRIPTION Y\n", "no PCF components"),
+    ("UNITS-CO-ORDS FURLONG\nPIPE\n    END-POINT 0 0 0 100\n    END-POINT 1 0 0 100\n", "UNITS-CO-ORDS"),
+    ("PIPE\n    END-POINT 0 0 0 100\n", "two END-POINT"),
+    ("ELBOW\n    END-POINT 0 0 0 100\n    END-POINT 1 1 0 100\n", "CENTRE-POINT"),
+    ("CAP\n    END-POINT 0 0 0 100\n", "direction"),
+    ("PIPE\n    END-POINT 0 0 zero 100\n    END-POINT 1 0 0 100\n", "coordinates"),
+    ("PIPE\n    END-POINT 0 0 nan 100\n    END-POINT 1 0 0 100\n", "non-finite"),
+    ("WELD\n    END-POINT 0 0 0 100\n    END-POINT 0 0 0 100\n", "no PCF components"),
+])
+def test_unreadable_pcf_is_rejected_on_the_file(text, why):
+    with pytest.raises(InputRejected) as e:
+        parse_upload("bad.pcf", text.encode(), None)
+    assert e.value.errors[0].loc == ("file",)
+    assert why in e.value.errors[0].msg
+
+
+def test_mangled_exports_never_crash():
+    """Lines dropped, duplicated, garbled, lower-cased or re-indented: only InputRejected/SolverError."""
+    rnd = random.Random(7)
+    files = sorted(DATA.glob("*.pcf"))
+    for _ in range(40):
+        lines = _lines(rnd.choice(files).read_text())
+        for _ in range(rnd.randint(1, 4)):
+            i = rnd.randrange(len(lines))
+            op = rnd.random()
+            if op < 0.3:
+                del lines[i]
+            elif op < 0.5:
+                lines.insert(i, lines[rnd.randrange(len(lines))])
+            elif op < 0.7:
+                parts = lines[i].split(" ")
+                j = rnd.randrange(len(parts))
+                parts[j] = rnd.choice(["", "nan", "1e400", "-0", "abc", "0", "1e6", "PIPE"])
+                lines[i] = " ".join(parts)
+            elif op < 0.85:
+                lines[i] = lines[i].lower()
+            else:
+                lines[i] = lines[i].replace("    ", "\t")
+        try:
+            req = parse_upload("f.pcf", "".join(lines).encode(), None)
+            res = solve(req)
+            render_artifacts(req, res)
+        except (InputRejected, SolverError):
+            pass
