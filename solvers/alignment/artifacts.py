@@ -45,8 +45,14 @@ def _gap_plot(request: AlignmentRequest, result: AlignmentResult) -> bytes:
 
 
 def render_artifacts(request: AlignmentRequest, result: AlignmentResult) -> list[Artifact]:
+    text = write_aligned_pcf(request, result)
+    enc = request.source_encoding or "utf-8"
+    try:
+        data = text.encode(enc)  # the bytes of every untouched line stay what the tool wrote
+    except UnicodeEncodeError:
+        enc, data = "utf-8", text.encode("utf-8")
+    charset = "utf-8" if enc == "utf-8-sig" else enc
     return [
-        Artifact(name="aligned.pcf", media_type="text/plain; charset=utf-8",
-                 data=write_aligned_pcf(request, result).encode("utf-8")),
+        Artifact(name="aligned.pcf", media_type=f"text/plain; charset={charset}", data=data),
         Artifact(name="gaps.png", media_type="image/png", data=_gap_plot(request, result)),
     ]

@@ -18,13 +18,14 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Alignme
     ext = next((e for e in UPLOAD_EXTENSIONS if name.endswith(e)), None)
     if ext is None:
         raise InputRejected([FieldError(("file",), f"unsupported file type {filename!r}; expected one of {UPLOAD_EXTENSIONS}")])
-    try:
-        text = content.decode("utf-8-sig")
-    except UnicodeDecodeError:
+    encoding = "utf-8-sig" if content.startswith(b"\xef\xbb\xbf") else "utf-8"
+    for enc in (encoding, "cp1252", "latin-1"):  # latin-1 decodes every byte
         try:
-            text = content.decode("latin-1")
-        except UnicodeDecodeError as exc:  # pragma: no cover - latin-1 decodes everything
-            raise InputRejected([FieldError(("file",), "file is not text")]) from exc
+            text = content.decode(enc)
+            break
+        except UnicodeDecodeError:
+            continue
+    encoding = enc
     try:
         if ext == ".json":
             body = json.loads(text)
@@ -33,7 +34,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Alignme
             if options:
                 body["options"] = {**body.get("options", {}), **options}
             return AlignmentRequest.model_validate(body)
-        return parse_pcf(text, options)
+        return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
     except json.JSONDecodeError as exc:
         raise InputRejected([FieldError(("file",), f"invalid JSON: {exc}")]) from exc
     except ValidationError as exc:

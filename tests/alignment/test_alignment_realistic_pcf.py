@@ -252,3 +252,22 @@ def test_mangled_exports_never_crash():
             render_artifacts(req, res)
         except (InputRejected, SolverError):
             pass
+
+
+@pytest.mark.parametrize("encoding, bom", [("cp1252", b""), ("utf-8", b"\xef\xbb\xbf"), ("utf-8", b"")])
+def test_aligned_pcf_keeps_the_file_encoding_byte_for_byte(encoding, bom):
+    text = (DATA / "e3d_plant_conflict.pcf").read_text().replace(
+        "GATE VALVE 150 CL300 RF", "GATE VALVE Ø150 CL300 RF 20°C")
+    raw = bom + text.encode(encoding)
+    req = parse_upload("x.pcf", raw, {"fixed_components": ["FLANGE-1", "FLANGE-15"]})
+    from schemas.alignment import AlignmentRequest
+
+    req = AlignmentRequest.model_validate_json(req.model_dump_json(by_alias=True))  # as the job queue stores it
+    art = render_artifacts(req, solve(req))[0]
+    assert art.data.startswith(bom) and (bom or not art.data.startswith(b"\xef\xbb\xbf"))
+    out_lines, in_lines = art.data.split(b"\n"), raw.split(b"\n")
+    assert len(out_lines) == len(in_lines)
+    changed = [(a, b) for a, b in zip(in_lines, out_lines) if a != b]
+    assert changed and all(a.split()[0] in (b"END-POINT", b"CENTRE-POINT", b"BRANCH1-POINT") for a, _ in changed)
+    assert "GATE VALVE Ø150 CL300 RF 20°C".encode(encoding) in art.data
+    assert ("cp1252" if encoding == "cp1252" else "utf-8") in art.media_type
