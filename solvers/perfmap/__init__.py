@@ -11,7 +11,7 @@ from solvers.perfmap.solve import solve
 from solvers.perfmap.upload import UPLOAD_EXTENSIONS, parse_upload
 from solvers.perfmap.validation import check_input
 
-__version__ = "1.1.0"
+__version__ = "1.2.0"
 
 # Typical runs take about a second (28 settings, 64x64 map); minimax with the log family and
 # 1000x1000 maps take tens of seconds.

@@ -6,7 +6,8 @@ CSV rules (as rig software and Excel write them):
   Windows-1252; binary files (NUL bytes, a zip/xlsx workbook) are rejected;
 - line ends LF, CRLF or CR; blank lines, lines of separators only (",,,,") and lines whose
   first non-blank character is ``#`` are skipped (also before the header);
-- separator: tab if the header line holds one, else ``;`` if it holds one, else ``,``;
+- separator: the one of an Excel ``sep=;`` first line, else tab if the header line holds
+  one, else ``;`` if it holds one, else ``,``;
   with ``;`` or tab a comma inside a number is a decimal comma (European Excel:
   ``0,85``; ``1.234,5`` with thousands dots too);
 - header: the first remaining line. A column's name is matched case-insensitively after
@@ -46,9 +47,9 @@ HEADER_ALIASES = {
     "theta": ("theta", "θ", "igv", "igv angle", "igv setting", "inlet guide vane"),
     "phi": ("phi", "φ", "ϕ", "diffuser", "diffuser angle", "diffuser setting"),
     "flow": ("flow", "flow rate", "flowrate", "mass flow", "massflow", "mass flow rate",
-             "volume flow", "volume flow rate", "corrected flow", "x"),
+             "volume flow", "volume flow rate", "corrected flow"),
     "pressure": ("pressure", "pressure ratio", "pressure rise", "total pressure ratio",
-                 "pr", "pi", "y"),
+                 "pr", "pi"),
     "efficiency": ("efficiency", "eta", "η", "eff", "isentropic efficiency",
                    "polytropic efficiency", "adiabatic efficiency"),
 }
@@ -115,8 +116,14 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
              and ln.strip(" \t,;\"")]
     if not lines:
         raise _reject("the CSV file is empty (no header; only blank or '#' lines)")
+    forced = re.fullmatch(r'\s*"?sep=(.)"?\s*', lines[0][1])  # Excel's "sep=;" first line
+    if forced:
+        lines = lines[1:]
+        if not lines:
+            raise _reject("the CSV file has no header (only a 'sep=' line)")
     header_line = lines[0][1]
-    delim = "\t" if "\t" in header_line else ";" if ";" in header_line else ","
+    delim = (forced.group(1) if forced else
+             "\t" if "\t" in header_line else ";" if ";" in header_line else ",")
     decimal_comma = delim != ","
     rows = list(csv.reader([ln for _, ln in lines], delimiter=delim))
     numbers = [n for n, _ in lines]

@@ -49,6 +49,8 @@ def _variants(n3_csv: bytes) -> dict[str, bytes]:
         "comments_blank_trailing": ("# rig 3, 2024-05-02\n# operator: x\n\n" + HEADER + "\n"
                                     + "\n".join(plain[:20]) + "\n# speed line break\n"
                                     + "\n".join(plain[20:]) + "\n\n,,,,\n\n").encode(),
+        "excel_sep_line": ("sep=;\r\n" + "theta;phi;flow;pressure;efficiency\r\n"
+                           + "\r\n".join(euro)).encode("cp1252"),
         "unsorted": ("\n".join([HEADER] + plain[::-1])).encode(),
         "cp1252_degree_sign": ("theta [\xb0],phi,flow,pressure,efficiency\n"
                                + "\n".join(plain)).encode("cp1252"),
@@ -61,7 +63,7 @@ def _variants(n3_csv: bytes) -> dict[str, bytes]:
 
 @pytest.mark.parametrize("variant", ["bom_crlf", "semicolon_decimal_comma",
                                      "tab_decimal_comma_utf16", "units_other_order_case",
-                                     "comments_blank_trailing", "unsorted",
+                                     "comments_blank_trailing", "unsorted", "excel_sep_line",
                                      "cp1252_degree_sign", "quoted_excel", "percent_column"])
 def test_csv_dialects_parse_to_the_same_request(n3_csv, n3_request, variant):
     req = parse_upload("rig.csv", _variants(n3_csv)[variant], None)
