@@ -125,7 +125,9 @@ class Network:
                           for pq in order for x in pq])
             centre = (w[:, None] * pts).sum(0) / w.sum()
             axis = P0[order[-1][1]] - P0[order[0][0]]
-            axis /= np.linalg.norm(axis)
+            span = np.linalg.norm(axis)
+            # a row that closes on itself has no end-to-end span: orient it by its first port instead
+            axis = axis / span if span > 0 else -m.D0[order[0][0]]
             X = (pts - centre) * np.sqrt(w)[:, None]
             v = np.linalg.svd(X, full_matrices=False)[2][0]
             axis = v if v @ axis > 0 else -v
