@@ -51,7 +51,10 @@ def merged(model: TubeModel, k: int) -> TubeModel:
     a = m.angles[k] + m.angles[k + 1]
     R = (m.radii[k] * m.angles[k] + m.radii[k + 1] * m.angles[k + 1]) / a
     m.lengths = np.delete(m.lengths, k + 1)
-    m.rotations = np.delete(m.rotations, k + 1)
+    rots = m.rotations.copy()
+    if k + 2 < m.n_bends:
+        rots[k + 2] = _wrap(rots[k + 2] + rots[k + 1])  # keep the later bend planes in place
+    m.rotations = np.delete(rots, k + 1)
     m.angles = np.concatenate([m.angles[:k], [min(a, 2 * np.pi - 1e-3)], m.angles[k + 2:]])
     m.radii = np.concatenate([m.radii[:k], [R], m.radii[k + 2:]])
     return m

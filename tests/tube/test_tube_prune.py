@@ -54,3 +54,10 @@ def test_geometry_batch_matches_forward_kinematics():
         g1 = fit._geometry(fit.unpack(x, lay, m.frame, 2.0))
         g2 = fit.geometry_batch(x[None], lay, m.frame, 2.0)[0]
         np.testing.assert_allclose(g1, g2, atol=1e-12)
+
+
+def test_merge_folds_the_dropped_rotation_into_the_next_bend():
+    m = make_model([[30, 0, 40, 10], [0, 10, 50, 10], [20, 25, 30, 8], [20, 0, 0, 0]], 2.0)
+    mm = prune.merged(m, 0)
+    assert mm.n_bends == 2
+    np.testing.assert_allclose(np.degrees(mm.rotations), [0, 35, 0], atol=1e-12)
