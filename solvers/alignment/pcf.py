@@ -48,6 +48,9 @@ KNOWN = {
     "MESSAGE-CIRCLE", "MESSAGE-ROUND", "FLOW-ARROW", "DIMENSION", "TEXT", "LOCATION-POINT", "ISO-SPLIT-POINT",
     "FIELD-FIT-WELD", "TAPPING", "TAP-CONNECTION",
 }
+# ISOGEN spindle directions (plant axes: east = +x, north = +y, up = +z)
+SPINDLE = {"UP": (0.0, 0.0, 1.0), "DOWN": (0.0, 0.0, -1.0), "NORTH": (0.0, 1.0, 0.0), "SOUTH": (0.0, -1.0, 0.0),
+           "EAST": (1.0, 0.0, 0.0), "WEST": (-1.0, 0.0, 0.0)}
 HEADER = ("ISOGEN-FILES", "PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE")
 UNITS = {"MM": "mm", "MILLIMETRE": "mm", "MILLIMETRES": "mm", "MILLIMETER": "mm", "MILLIMETERS": "mm",
          "INCH": "in", "INCHES": "in", "IN": "in", "INCH-FRACTION": "in", "M": "m", "METRE": "m", "METRES": "m",
@@ -84,6 +87,7 @@ def _blocks(text: str):
     blocks: list[tuple[str, int, list[int], list[int]]] = []
     header: dict[str, str] = {}
     words: list[str] = []
+    spindle: dict[int, str] = {}  # block ordinal -> SPINDLE-DIRECTION word (valve stems)
     current = None
     ordinal = 0
     for i, line in enumerate(lines):
@@ -106,7 +110,9 @@ def _blocks(text: str):
                 current[2].append(i)
             elif word in EXTRA_KEYS:
                 current[3].append(i)
-    return lines, blocks, header, words
+            elif word == "SPINDLE-DIRECTION" and len(parts) > 1:
+                spindle[current[1]] = parts[1].upper()
+    return lines, blocks, header, words, spindle
 
 
 def _point(line: str) -> tuple[np.ndarray, float | None]:
@@ -194,7 +200,7 @@ def _bore_factor(header: dict[str, str], units: str) -> float:
 
 def pcf_notes(text: str) -> list[tuple[str, str, dict]]:
     """Warnings about a PCF's content: (code, message, details)."""
-    lines, blocks, header, words = _blocks(text)
+    lines, blocks, header, words, _ = _blocks(text)
     units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), "mm")
     factor = _bore_factor(header, units)
     unknown = sorted({w for w in words if not _is_known(w)})
@@ -220,7 +226,7 @@ def pcf_notes(text: str) -> list[tuple[str, str, dict]]:
 
 
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
-    lines, blocks, header, _ = _blocks(text)
+    lines, blocks, header, _, spindle = _blocks(text)
     units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), None)
     if units is None:
         raise _reject(f"unsupported UNITS-CO-ORDS {header.get('UNITS-CO-ORDS')!r}")
@@ -231,7 +237,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
             continue
         ports, _, kind, ftype, radius = _component(word, ordinal, lines, idx, bore_factor)
         if kind != "joint":
-            comps.append({"id": f"{word}-{ordinal}", "word": word, "kind": kind, "type": ftype, "radius": radius, "ports": ports})
+            comps.append({"id": f"{word}-{ordinal}", "word": word, "up": SPINDLE.get(spindle.get(ordinal, "")), "kind": kind, "type": ftype, "radius": radius, "ports": ports})
     if not comps:
         raise _reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
     # infer connections: nearest facing end points within tolerance, each port used once
@@ -291,6 +297,12 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
         entry = {"id": c["id"], "kind": c["kind"], "radius": c["radius"], "ports": ports}
         if c["kind"] == "fitting":
             entry["type"] = c["type"]
+            if c["up"] is not None and len(ports) == 2:
+                # a stem along the valve axis is no up vector (and would be rejected)
+                axis = np.array(ports[1]["position"]) - np.array(ports[0]["position"])
+                n = np.linalg.norm(axis)
+                if n > 0 and abs(np.dot(axis / n, c["up"])) < np.cos(np.radians(10.0)):
+                    entry["up"] = list(c["up"])
         comps_json.append(entry)
     fixed = set((options or {}).get("fixed_components", []))
     for entry in comps_json:
@@ -333,7 +345,7 @@ def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
     from scipy.spatial.transform import Rotation
 
     text = request.source_pcf
-    lines, blocks, header, _ = _blocks(text)
+    lines, blocks, header, _, _ = _blocks(text)
     _, endings = split_lines(text)
     factor = _bore_factor(header, request.units)
     spelling: dict[float, str] = {}

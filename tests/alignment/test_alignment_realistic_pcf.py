@@ -143,6 +143,11 @@ def test_component_kinds_from_a_plant3d_export():
     for cid, deg in (("VALVE-ANGLE-31", 90.0), ("ELBOW-27", 45.0), ("BEND-29", 45.0)):
         d0, d1 = (np.array(p.direction) for p in out_ports[cid])
         assert np.degrees(np.arccos(np.clip(-d0 @ d1, -1, 1))) == pytest.approx(deg, abs=0.01)
+    # SPINDLE-DIRECTION UP becomes the valve's up vector, and the stem stays up
+    valve = next(c for c in req.components if c.id == "VALVE-13")
+    assert valve.up == [0.0, 0.0, 1.0]
+    assert next(c for c in res.components if c.id == "VALVE-13").up[2] > 0.9999
+    assert next(c for c in req.components if c.id == "VALVE-ANGLE-31").up is None  # no spindle line
     # single-ended items face their partner
     cap = out_ports["CAP-18"][0].direction
     pipe = out_ports["PIPE-17"][1].direction
