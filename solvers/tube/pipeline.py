@@ -194,9 +194,15 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
             m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
-            res, seg = fit.assign(m, P, margin)
-            m = fit.set_end_lengths(m, P[inl], seg[inl])
-            res, seg = fit.assign(m, P, margin)
+            # the end straights grow by at most the margin per assignment: repeat until they
+            # stop (after a bend was merged or removed the far end can be many radii off)
+            for _ in range(12):
+                res, seg = fit.assign(m, P, margin)
+                near = np.abs(res) <= thr
+                m_new = fit.set_end_lengths(m, P[near], seg[near])
+                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-6 * rp:
+                    break
+                m = m_new
             r_in = res[inl]
             sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
             thr = max(6.0 * sig, 0.05 * rp)

@@ -121,7 +121,7 @@ def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.
             tries += 1
             fitted, r = refit(cand)
             s = score(r)
-            if sigma * (1 + rel_tol) < s <= sigma * 1.5:
+            if sigma * (1 + rel_tol) < s <= sigma * 2.0:
                 # promising but maybe not converged from its rough start: refit once more
                 fitted, r = refit(fitted)
                 s = score(r)
