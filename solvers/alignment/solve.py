@@ -99,6 +99,15 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
     progress(0.95, "building result")
     result = build_result(request, model, out, request.options.method)
     if request.source_pcf is not None:
+        joined = {c.from_[0] for c in request.connections} | {c.to[0] for c in request.connections}
+        alone = [c.id for c in request.components if c.id not in joined]
+        if alone and len(alone) < len(request.components):
+            result.report.warnings.append(Diagnostic(
+                code="pcf_unconnected_items",
+                message=f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
+                        "and were not aligned; raise options.connection_tolerance if they belong to the line.",
+                details={"items": alone[:200]}))
+            result.report.status = "warning"
         for code, message, details in pcf_notes(request.source_pcf):
             if code == "pcf_zero_length_items":
                 result.report.details[code] = details["items"]

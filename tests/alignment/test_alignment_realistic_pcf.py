@@ -276,3 +276,29 @@ def test_aligned_pcf_keeps_the_file_encoding_byte_for_byte(encoding, bom):
     assert changed and all(a.split()[0] in (b"END-POINT", b"CENTRE-POINT", b"BRANCH1-POINT") for a, _ in changed)
     assert "GATE VALVE Ø150 CL300 RF 20°C".encode(encoding) in art.data
     assert ("cp1252" if encoding == "cp1252" else "utf-8") in art.media_type
+
+
+def test_item_beyond_the_connection_tolerance_is_reported_and_option_widens_it():
+    text = (DATA / "plant3d_cw_line.pcf").read_text()
+    # the cap sits 40 mm off the 4 inch pipe end: beyond half its radius (25.4 mm)
+    moved = text.replace("END-POINT 15001.0000 -2000.0000 3000.0000 4.0000 BW", "END-POINT 15040.0000 -2000.0000 3000.0000 4.0000 BW")
+    with pytest.raises(InputRejected) as e:  # a lone cap has no direction to take
+        parse_upload("x.pcf", moved.encode(), None)
+    assert "CAP-18" in e.value.errors[0].msg
+    # a lone two-ended item is aligned without it and reported
+    moved = text.replace("END-POINT 14441.0000 -2000.5000 3000.0000 4.0000 BW", "END-POINT 14480.0000 -2000.5000 3000.0000 4.0000 BW")
+    req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["FLANGE-3"]})
+    res = solve(req)
+    assert not [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]  # pipe still holds the cap
+    assert not any(c.from_[0] == "FLANGE-16" and c.to[0] == "PIPE-17" for c in req.connections)
+    req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["FLANGE-3"], "connection_tolerance": 45.0})
+    assert any(c.from_ == ("FLANGE-16", 1) and c.to == ("PIPE-17", 0) for c in req.connections)
+    res = solve(req)
+    assert res.converged and not res.cut_connections
+
+    stray = text.replace("MATERIALS\r\n", "INSTRUMENT\r\n    END-POINT 20000.0 0.0 0.0 2.0000\r\n"
+                         "    END-POINT 20100.0 0.0 0.0 2.0000\r\nMATERIALS\r\n") if "\r\n" in text else text.replace(
+        "MATERIALS\n", "INSTRUMENT\n    END-POINT 20000.0 0.0 0.0 2.0000\n    END-POINT 20100.0 0.0 0.0 2.0000\nMATERIALS\n")
+    res = solve(parse_upload("x.pcf", stray.encode(), {"fixed_components": ["FLANGE-3"]}))
+    warn = [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]
+    assert warn and warn[0].details["items"] == ["INSTRUMENT-36"]
