@@ -22,7 +22,9 @@ import re
 import numpy as np
 from scipy.spatial import cKDTree
 
-from schemas.alignment import AlignmentRequest, AlignmentResult
+from pydantic import ValidationError
+
+from schemas.alignment import AlignmentOptions, AlignmentRequest, AlignmentResult
 from solvers.base import FieldError, InputRejected
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
@@ -225,7 +227,18 @@ def pcf_notes(text: str) -> list[tuple[str, str, dict]]:
     return notes
 
 
+def _options(options) -> AlignmentOptions:
+    """The upload's options, validated first: they decide how the file is read."""
+    if options is not None and not isinstance(options, dict):
+        raise InputRejected([FieldError(("options",), "options must be an object")])
+    try:
+        return AlignmentOptions.model_validate(options or {})
+    except ValidationError as exc:
+        raise InputRejected([FieldError(("options",) + tuple(e["loc"]), e["msg"]) for e in exc.errors()]) from exc
+
+
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
+    opts = _options(options)
     lines, blocks, header, _, spindle = _blocks(text)
     units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), None)
     if units is None:
@@ -251,7 +264,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
     # a component without a readable bore connects like a typical one of the file (10 mm if none has one)
     typical = float(np.median(known)) if known else 10.0 / TO_MM[units]
     rad = np.array([c["radius"] or typical for c in comps])[owner]
-    tol_opt = (options or {}).get("connection_tolerance")
+    tol_opt = opts.connection_tolerance
     reach = float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6)
     pairs = cKDTree(pos).query_pairs(r=reach, output_type="ndarray")
     conns = []
@@ -304,7 +317,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
                 if n > 0 and abs(np.dot(axis / n, c["up"])) < np.cos(np.radians(10.0)):
                     entry["up"] = list(c["up"])
         comps_json.append(entry)
-    fixed = set((options or {}).get("fixed_components", []))
+    fixed = set(opts.fixed_components)
     for entry in comps_json:
         entry["fixed"] = entry["id"] in fixed
     body = {

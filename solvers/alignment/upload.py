@@ -32,7 +32,12 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Alignme
             if not isinstance(body, dict):
                 raise InputRejected([FieldError(("file",), "JSON upload must be an object (an alignment request)")])
             if options:
-                body["options"] = {**body.get("options", {}), **options}
+                if not isinstance(options, dict):
+                    raise InputRejected([FieldError(("options",), "options must be an object")])
+                inner = body.get("options") or {}
+                if not isinstance(inner, dict):
+                    raise InputRejected([FieldError(("file", "options"), "options must be an object")])
+                body["options"] = {**inner, **options}
             return AlignmentRequest.model_validate(body)
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
     except json.JSONDecodeError as exc:

@@ -302,3 +302,19 @@ def test_item_beyond_the_connection_tolerance_is_reported_and_option_widens_it()
     res = solve(parse_upload("x.pcf", stray.encode(), {"fixed_components": ["FLANGE-3"]}))
     warn = [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]
     assert warn and warn[0].details["items"] == ["INSTRUMENT-36"]
+
+
+@pytest.mark.parametrize("options, loc", [
+    ({"connection_tolerance": "abc"}, ("options", "connection_tolerance")),
+    ({"connection_tolerance": -1.0}, ("options", "connection_tolerance")),
+    ({"fixed_components": "FLANGE-1"}, ("options", "fixed_components")),
+    ({"bogus": 1}, ("options", "bogus")),
+    ("fast", ("options",)),
+])
+def test_bad_upload_options_are_rejected_with_their_field(options, loc):
+    for name, body in (("x.pcf", (DATA / "e3d_plant_conflict.pcf").read_bytes()),
+                       ("x.json", b'{"components": [{"id": "a", "kind": "pipe", "ports": [{"position": [0, 0, 0], '
+                                  b'"direction": [-1, 0, 0]}, {"position": [1, 0, 0], "direction": [1, 0, 0]}]}]}')):
+        with pytest.raises(InputRejected) as e:
+            parse_upload(name, body, options)
+        assert e.value.errors[0].loc[-len(loc):] == loc
