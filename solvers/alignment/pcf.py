@@ -3,16 +3,22 @@
 Reading: every top-level keyword block that carries END-POINT / CENTRE-POINT /
 BRANCHn-POINT lines is a component (PIPE, ELBOW, BEND, TEE, CROSS, REDUCER-*, VALVE,
 FLANGE, GASKET, CAP, OLET, INSTRUMENT, ...). Port directions come from the geometry
-(centre to end point for elbows, tees and crosses; along the end-point axis for pipes and
-inline items); single-ended items (CAP, FLANGE-BLIND) take the reversed direction of the
-port they touch. Connections are inferred between end points closer than a tolerance that
-face each other. Component ids are ``<KEYWORD>-<n>`` with n the block's ordinal in the file,
-so the same text always gives the same ids.
+(centre to end point for elbows, tees, crosses, angle valves and olets; along the end-point
+axis for pipes and inline items; eccentric items take the axis of the pipes they join, since
+their end points are offset by the flat side); single-ended items (CAP, FLANGE-BLIND) take the
+reversed direction of the port they touch. Zero-length items (a WELD, a GASKET without
+thickness, a zero-length PIPE) are connection points, not components: their neighbours are
+connected directly and they are written where that connection ends up. Connections are
+inferred between end points closer than a tolerance that face each other. Component ids are
+``<KEYWORD>-<n>`` with n the block's ordinal in the file, so the same text always gives the
+same ids. SPINDLE-DIRECTION becomes a valve's up vector.
 
-Writing: the original text is rewritten line by line; only the three coordinates of the
-geometric lines of moved components change (bore, end type and every other attribute stay
-as they were). Numbers are printed as the shortest string that reads back to the same
-double, so the two ports of a closed connection print identically.
+Writing: the original text is rewritten line by line, keeping its line endings; only the
+three coordinates of the geometric lines of moved components change (bore, end type and every
+other attribute stay as they were); CENTRE-POINTs follow their item, SUPPORT CO-ORDS follow
+their pipe sideways. Numbers are printed as the shortest string that reads back to the same
+double (or with the spelling the file already uses for that value), so the two ports of a
+closed connection print identically.
 """
 
 from __future__ import annotations
