@@ -181,6 +181,14 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
         axis = _unit(ends[1][1] - ends[0][1])
         ports = [(ends[0][1], -axis), (ends[1][1], axis)]
         return ports, [ends[0][0], ends[1][0]], "pipe", None, radius
+    if c is not None and len(ends) == 2 and not branches:
+        # an inline item that also carries a CENTRE-POINT (instrument, some valves): if the centre is on the
+        # end-point line, the ports are exactly opposite along it (a rounded centre must not put a kink in)
+        e0, e1 = ends[0][1], ends[1][1]
+        span = float(np.linalg.norm(e1 - e0))
+        u = (e1 - e0) / span if span > 0 else None
+        if u is not None and np.linalg.norm((c - e0) - np.dot(c - e0, u) * u) <= 1e-3 * span:
+            c = None
     ports, port_lines = [], []
     for k, (i, p, _) in enumerate(ends + branches):
         d = _unit(p - c) if c is not None else None

@@ -318,3 +318,15 @@ def test_bad_upload_options_are_rejected_with_their_field(options, loc):
         with pytest.raises(InputRejected) as e:
             parse_upload(name, body, options)
         assert e.value.errors[0].loc[-len(loc):] == loc
+
+
+def test_inline_item_with_a_rounded_centre_point_has_exactly_opposite_ports():
+    text = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\nPIPE\n    END-POINT 0 0 0 50\n    END-POINT 1000 0 0 50\n"
+            "INSTRUMENT\n    END-POINT 1001.2 0 0 50\n    END-POINT 1201.2 0 0 50\n    CENTRE-POINT 1101.2 0.1 0\n"
+            "VALVE-ANGLE\n    END-POINT 1201.2 0 0 50\n    END-POINT 1301.2 100 0 50\n    CENTRE-POINT 1301.2 0 0\n")
+    req = parse_upload("x.pcf", text.encode(), None)
+    inst = next(c for c in req.components if c.id == "INSTRUMENT-2")
+    assert inst.ports[0].direction == [-1.0, 0.0, 0.0] and inst.ports[1].direction == [1.0, 0.0, 0.0]
+    angle = next(c for c in req.components if c.id == "VALVE-ANGLE-3")
+    assert angle.ports[1].direction == [0.0, 1.0, 0.0]  # a real angle item keeps its centre
+    assert len(req.connections) == 2
