@@ -363,7 +363,10 @@ def _replace_xyz(line: str, xyz, spelling: dict[float, str]) -> str:
 
 def write_aligned_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
     if request.source_pcf is not None:
-        return _rewrite(request, result)
+        try:
+            return _rewrite(request, result)
+        except InputRejected:  # a source_pcf that does not belong to this request (edited JSON): start afresh
+            pass
     return _generate(request, result)
 
 
