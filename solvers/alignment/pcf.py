@@ -393,6 +393,7 @@ def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
     old = np.array([p.position for c in request.components for p in c.ports], dtype=float)
     new = [p.position for c in result.components for p in c.ports]
     tree = cKDTree(old) if len(old) else None
+    port_rad = np.array([c.radius or 0.0 for c in request.components for _ in c.ports])
     pipes = [(c, r) for c, r in zip(request.components, result.components) if c.kind == "pipe"]
 
     def motion(comp):
@@ -415,6 +416,12 @@ def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
                     continue
             for i in extra:  # a support: follows the nearest pipe it sits on
                 xyz, _ = _point(lines[i])
+                if word.startswith("END-CONNECTION") and tree is not None:
+                    # a line's end marker sits on a port: it goes where that port went
+                    dist, k = tree.query(xyz)
+                    if dist <= 0.5 * port_rad[k] + 1e-9:
+                        out[i] = _replace_xyz(lines[i], new[k], spelling)
+                        continue
                 host = _host_pipe(xyz, pipes)
                 if host is not None:  # sideways with the pipe; along it the support stays where it stands
                     moved = motion(host)(xyz)

@@ -330,3 +330,16 @@ def test_inline_item_with_a_rounded_centre_point_has_exactly_opposite_ports():
     angle = next(c for c in req.components if c.id == "VALVE-ANGLE-3")
     assert angle.ports[1].direction == [0.0, 1.0, 0.0]  # a real angle item keeps its centre
     assert len(req.connections) == 2
+
+
+def test_end_connection_marker_follows_its_port():
+    text = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\nPIPE\n    END-POINT 0 0 0 100\n    END-POINT 1000 0 0 100\n"
+            "ELBOW\n    END-POINT 1002 1 0 100\n    END-POINT 1152 151 0 100\n    CENTRE-POINT 1152 1 0\n"
+            "PIPE\n    END-POINT 1152 152 0 100\n    END-POINT 1152 2000 0 100\n"
+            "END-CONNECTION-PIPELINE\n    CO-ORDS 1152 2000 0 100\n    PIPELINE-REFERENCE 100-CW-1002\n")
+    req = parse_upload("x.pcf", text.encode(), {"fixed_components": ["PIPE-1"]})
+    res = solve(req)
+    out = render_artifacts(req, res)[0].data.decode().splitlines()
+    end = next(c for c in res.components if c.id == "PIPE-3").ports[1].position
+    assert [float(v) for v in out[-2].split()[1:4]] == end
+    assert end != [1152.0, 2000.0, 0.0]
