@@ -221,6 +221,8 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
         return 0.0
     zone = proj >= proj.max() - 3.0 * rp
     cand = np.flatnonzero(zone)
+    if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
+        cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
     if len(cand) > 4:
         from scipy.spatial import cKDTree
 

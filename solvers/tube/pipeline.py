@@ -200,7 +200,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                 res, seg = fit.assign(m, P, margin)
                 near = np.abs(res) <= thr
                 m_new = fit.set_end_lengths(m, P[near], seg[near])
-                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-6 * rp:
+                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-3 * rp:
                     break
                 m = m_new
             r_in = res[inl]
