@@ -8,20 +8,24 @@ fewest arcs the one with the least sum of squared vertex distances is kept (§4.
 the paper, the line l_j is projected into the plane of the edge that reaches j first on the
 best path, and that modified line is used for j's outgoing edges (G1 continuity).
 
-Implementation choices (sound equivalents of the paper's constructions):
+Implementation choices (sound equivalents of the paper's constructions, or extensions):
 * The plane of an edge is the least-squares plane through l_i of the chain vertices (less
   sensitive to one vertex than the paper's plane through p_i, p_{i+1}, p_{j+1}); when the
   chain hardly leaves l_i (rms offset < 2ε, small bends) that plane would be arbitrary and
   tilt the projected tangent l'_j by up to the bend angle, so the plane spanned by the two
-  tangent directions (normal u_i × u_j) is used instead. Vertices farther than ε from the plane reject the
-  edge; the in-plane tolerance is ε'_k = sqrt(ε² − h_k²) exactly as in Alg. 1.
+  tangent directions (normal u_i × u_j) is used instead. Vertices farther than ε from the
+  plane reject the edge; the in-plane tolerance is ε'_k = sqrt(ε² − h_k²) as in Alg. 1.
 * The family of arcs tangent to both lines is parametrised by the arc's start t₁ on l_i
   instead of the centre on the bisector: radius and end point are linear in t₁ and the
   parametrisation stays regular for apex angles of 180° and more (where the bisector
   construction degenerates). The set of valid arcs — the paper's intersection of LLC
-  (Apollonius) intervals — is found on a fine t₁ grid refined around the best sample, with
-  the exact point-to-arc-line distance.
-* Line pieces must have non-negative length: an arc starts after the previous one ends.
+  (Apollonius) intervals — is searched on a t₁ grid zoomed in around the best (or least
+  violating) sample, with the exact point-to-arc-line distance.
+* p_{j+1} only fixes the direction of l_j and is checked by j's outgoing edge (at a junction
+  of two bends it lies in the next bend's plane); an arc may start up to ε before the
+  previous one ended (the straight between them is then 0).
+* Up to ``beam`` states (modified tangent lines of different prefixes) are kept per vertex
+  instead of one, because the best prefix so far can be a dead end later.
 """
 
 from __future__ import annotations
