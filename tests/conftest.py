@@ -5,6 +5,10 @@ CI=true they must run)."""
 from __future__ import annotations
 
 import os
+
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):  # as `plantsolve` does
+    os.environ.setdefault(_name, "1")
+
 import time
 import uuid
 from pathlib import Path
