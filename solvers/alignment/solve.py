@@ -69,6 +69,28 @@ def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
     return int(cand[min(range(len(cand)), key=lambda i: (-impact[i], keys[i]))])
 
 
+def _near_misses(request: AlignmentRequest) -> list[dict]:
+    """Open ports that face an open port of another item within one bore radius (twice the default tolerance)."""
+    from scipy.spatial import cKDTree
+
+    used = {tuple(c.from_) for c in request.connections} | {tuple(c.to) for c in request.connections}
+    open_ports = [(c.id, k, p, c.radius or 0.0) for c in request.components for k, p in enumerate(c.ports)
+                  if (c.id, k) not in used]
+    if len(open_ports) < 2:
+        return []
+    P = np.array([p.position for _, _, p, _ in open_ports])
+    D = np.array([p.direction for _, _, p, _ in open_ports], dtype=float)
+    D /= np.linalg.norm(D, axis=1, keepdims=True)
+    R = np.array([r for *_, r in open_ports])
+    out = []
+    for i, j in cKDTree(P).query_pairs(r=max(float(R.max()), 1e-9), output_type="ndarray"):
+        dist = float(np.linalg.norm(P[i] - P[j]))
+        if open_ports[i][0] != open_ports[j][0] and dist <= min(R[i], R[j]) and D[i] @ D[j] < -0.5:
+            out.append({"from": [open_ports[i][0], open_ports[i][1]], "to": [open_ports[j][0], open_ports[j][1]],
+                        "distance": dist})
+    return sorted(out, key=lambda d: d["distance"])
+
+
 def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
     """Align the pipe system so that every connection closes; see the package docstring."""
     check_input(request)
@@ -107,6 +129,14 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
                 message=f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
                         "and were not aligned; raise options.connection_tolerance if they belong to the line.",
                 details={"items": alone[:200]}))
+            result.report.status = "warning"
+        near = _near_misses(request)
+        if near:
+            result.report.warnings.append(Diagnostic(
+                code="pcf_near_miss",
+                message=f"{len(near)} pair(s) of open PCF end points face each other a little beyond the connection "
+                        "tolerance and were left unconnected; raise options.connection_tolerance to join them.",
+                details={"pairs": near[:200]}))
             result.report.status = "warning"
         for code, message, details in pcf_notes(request.source_pcf):
             if code == "pcf_zero_length_items":

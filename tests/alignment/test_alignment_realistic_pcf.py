@@ -290,6 +290,10 @@ def test_item_beyond_the_connection_tolerance_is_reported_and_option_widens_it()
     req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["FLANGE-3"]})
     res = solve(req)
     assert not [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]  # pipe still holds the cap
+    near = [w for w in res.report.warnings if w.code == "pcf_near_miss"]
+    assert near and near[0].details["pairs"][0]["from"] == ["FLANGE-16", 1]
+    assert near[0].details["pairs"][0]["to"] == ["PIPE-17", 0]
+    assert near[0].details["pairs"][0]["distance"] == pytest.approx(40.3, abs=0.01)
     assert not any(c.from_[0] == "FLANGE-16" and c.to[0] == "PIPE-17" for c in req.connections)
     req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["FLANGE-3"], "connection_tolerance": 45.0})
     assert any(c.from_ == ("FLANGE-16", 1) and c.to == ("PIPE-17", 0) for c in req.connections)
@@ -343,3 +347,38 @@ def test_end_connection_marker_follows_its_port():
     end = next(c for c in res.components if c.id == "PIPE-3").ports[1].position
     assert [float(v) for v in out[-2].split()[1:4]] == end
     assert end != [1152.0, 2000.0, 0.0]
+
+
+@pytest.mark.parametrize("digits", [0, 2, 4])
+def test_loops_from_a_rounded_export_close_without_cuts(digits):
+    """A PCF prints coordinates rounded, which bends catalogue angles by ~quantum / arm: in loops of
+    elbows and tees that makes closure impossible unless the angles are restored (here: 9 loops, CRLF)."""
+    from solvers.alignment.pcf import _generate
+    from solvers.alignment.synthetic import grid_network
+
+    req = grid_network(4, 4, valve_every=5, tie_ins=((0, 0),), origin=(1e6, 2e5, 1e4), seed=5)
+    text = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)):.{digits}f}", _generate(req, req)).replace("\n", "\r\n")
+    up = parse_upload("loops.pcf", text.encode(), {"fixed_components": ["ELBOW-1"]})
+    assert len(up.connections) == len(req.connections)
+    for c in up.components:
+        if c.type in ("elbow", "tee", "cross"):
+            D = np.array([p.direction for p in c.ports])
+            G = np.abs(D @ D.T)
+            assert np.all((G < 1e-15) | (np.abs(G - 1) < 1e-15))  # exact right angles and straight runs again
+    res = solve(up)
+    assert res.converged and not res.cut_connections and res.max_position_error == 0.0
+    fixed_in = next(c for c in up.components if c.id == "ELBOW-1")
+    assert [p.position for p in next(c for c in res.components if c.id == "ELBOW-1").ports] == [p.position for p in fixed_in.ports]
+
+
+def test_a_bend_of_an_odd_angle_is_not_snapped():
+    # an 88.6 degree pipe bend printed with 4 decimals stays 88.6 degrees
+    th = np.radians(88.6)
+    c = np.array([1000.0, 0, 0])
+    e0, e1 = c - [300.0, 0, 0], c + 300.0 * np.array([np.cos(th), np.sin(th), 0])
+    f = lambda v: " ".join(f"{x:.4f}" for x in v)
+    text = f"BEND\n    END-POINT {f(e0)} 100\n    END-POINT {f(e1)} 100\n    CENTRE-POINT {f(c)}\n"
+    text += f"PIPE\n    END-POINT {f(e1 + 1.0 * np.array([np.cos(th), np.sin(th), 0]))} 100\n    END-POINT {f(e1 + 900 * np.array([np.cos(th), np.sin(th), 0]))} 100\n"
+    bend = parse_upload("b.pcf", text.encode(), None).components[0]
+    d0, d1 = (np.array(p.direction) for p in bend.ports)
+    assert np.degrees(np.arccos(-d0 @ d1)) == pytest.approx(88.6, abs=1e-4)
