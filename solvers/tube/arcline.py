@@ -30,6 +30,7 @@ Implementation choices (sound equivalents of the paper's constructions, or exten
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,24 +56,34 @@ class Edge:
     cost: float
 
 
+def _norm3(v: np.ndarray) -> float:
+    """Norm of a 3-vector without np.linalg.norm's per-call overhead (hot loop)."""
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
                      a2: np.ndarray, u2: np.ndarray, n2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """2D distances of chain points q (K, 2) to the left-turning curves given by t1 (G,):
     ray along +x ending at (t1, 0), arc about C = (t1, R) by phi, ray along u2 from T2."""
-    C = np.stack([t1, R], -1)  # (G, 2)
-    T1 = np.stack([t1, np.zeros_like(t1)], -1)
-    T2 = C - R[:, None] * n2
-    t2 = (T2 - a2) @ u2
+    # centre C = (t1, R), arc end T2 = C − R·n2; all (G, K) arrays built from coordinates
+    T2x, T2y = t1 - R * n2[0], R - R * n2[1]
+    t2 = (T2x - a2[0]) * u2[0] + (T2y - a2[1]) * u2[1]
     qx, qy = q[None, :, 0], q[None, :, 1]
-    d1 = np.where(qx <= t1[:, None], np.abs(qy), np.hypot(qx - t1[:, None], qy))
-    s2 = (q[None] - a2) @ u2  # (1, K)
-    dT2 = np.linalg.norm(q[None] - T2[:, None], axis=-1)
-    d3 = np.where(s2 >= t2[:, None], np.abs((q[None] - a2) @ n2), dT2)
-    v = q[None] - C[:, None]  # (G, K, 2)
+    dx1 = qx - t1[:, None]
+    dT1 = np.hypot(dx1, qy)
+    d1 = np.where(qx <= t1[:, None], np.abs(qy), dT1)
+    qa = q - a2
+    s2 = (qa @ u2)[None]  # (1, K)
+    dT2 = np.hypot(qx - T2x[:, None], qy - T2y[:, None])
+    d3 = np.where(s2 >= t2[:, None], np.abs(qa @ n2)[None], dT2)
+    vy = qy - R[:, None]  # v = q − C = (dx1, vy)
     # angle from the start direction (0, -1) counter-clockwise
-    th = np.mod(np.arctan2(v[..., 0], -v[..., 1]), 2 * np.pi)
-    rho = np.linalg.norm(v, axis=-1)
-    dT1 = np.hypot(qx - t1[:, None], qy)
+    th = np.mod(np.arctan2(dx1, -vy), 2 * np.pi)
+    rho = np.hypot(dx1, vy)
     d2 = np.where(th <= phi, np.abs(rho - R[:, None]), np.minimum(dT1, dT2))
     return np.minimum(np.minimum(d1, d2), d3), t2
 
@@ -86,28 +97,28 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
     2ε off the best plane through l_i (then no longer chain can succeed either)."""
     rel = chain - a1
     along = rel @ u1
-    dj = (pj1 - pj) / max(np.linalg.norm(pj1 - pj), 1e-300)
-    cr = np.cross(u1, dj)
+    dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
+    cr = _cross3(u1, dj)
     perp = rel - along[:, None] * u1
     cov = perp.T @ perp
     w, V = np.linalg.eigh(cov + np.outer(u1, u1) * (np.trace(cov) + 1.0) * 10)
-    if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or np.linalg.norm(cr) < 1e-9:
+    if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
         # the chain bends well beyond the noise: its least-squares plane through l_i
         m = V[:, 0]
     else:
         # nearly straight chain (small bend): its own plane would be arbitrary; the plane
         # spanned by both tangent directions is well defined
-        m = cr / np.linalg.norm(cr)
+        m = cr / _norm3(cr)
     h = rel @ m
     if np.any(np.abs(h) > eps):
         return _TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
-    Y = np.cross(m, u1)
+    Y = _cross3(m, u1)
     q = np.stack([along, rel @ Y], -1)
     a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
     d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
-    nd = np.linalg.norm(d2)
-    if nd < 1e-12 * (np.linalg.norm(pj1 - pj) + 1e-300):
+    nd = math.hypot(d2[0], d2[1])
+    if nd < 1e-12 * (_norm3(pj1 - pj) + 1e-300):
         return None
     u2 = d2 / nd
     seg = np.diff(q, axis=0)

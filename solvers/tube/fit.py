@@ -18,7 +18,7 @@ kinematics, which is cheap: it involves no samples). Each round is solved by
 Levenberg–Marquardt (Marquardt diagonal scaling, soft-L1 robust loss by iteratively
 reweighted normal equations, bounds by projection). Written out rather than calling
 scipy.optimize.least_squares because that solver takes an SVD of the full N×P Jacobian
-every iteration; the P×P normal equations here are assembled with single-threaded einsum,
+every iteration; here only the P×P normal equations Jᵀ J are formed and solved,
 which stays fast with many samples and on a loaded machine.
 """
 
@@ -168,19 +168,28 @@ def _geometry_jacobian(x, lay, frame0, rp, scale):
     return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
 
 
-def _dist_and_grad(pts: np.ndarray, seg: np.ndarray, g: np.ndarray, kind: np.ndarray, want_grad: bool):
-    """Distance of each point to its (unbounded) assigned line / circle and d dist / d geometry."""
+def _groups(seg: np.ndarray) -> list[tuple[int, slice]]:
+    """(segment, slice) runs of a segment array sorted by segment."""
+    ks, starts = np.unique(seg, return_index=True)
+    ends = np.r_[starts[1:], len(seg)]
+    return [(int(k), slice(int(a), int(b))) for k, a, b in zip(ks, starts, ends)]
+
+
+def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
+                   want_grad: bool):
+    """Distance of each point to its (unbounded) assigned line / circle and d dist / d geometry.
+
+    ``pts`` are sorted by assigned segment; ``groups`` are the runs (see :func:`_groups`)."""
     N = len(pts)
     d = np.empty(N)
     grad = np.zeros((N, 7)) if want_grad else None
-    for k in np.unique(seg):
-        m = seg == k
+    for k, m in groups:
         q = pts[m]
         c, a = g[k, :3], g[k, 3:6]
         w = q - c
         s = w @ a
         perp = w - s[:, None] * a
-        rho = np.linalg.norm(perp, axis=1)
+        rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
         e = perp / np.maximum(rho, 1e-300)[:, None]
         if kind[k] == 0:
             d[m] = rho
@@ -277,19 +286,23 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
     # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
     kind = build_spine(unpack(x0, lay, frame0, rp)).kind
     scale = max(rp, 1e-9)
+    # samples grouped by their (fixed) segment: slices instead of masks in every evaluation;
+    # the residual order is irrelevant to the solver
+    order = np.argsort(seg, kind="stable")
+    pts = pts[order]
+    groups = _groups(seg[order])
 
     def fun(x):
-        d, _ = _dist_and_grad(pts, seg, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
+        d, _ = _dist_and_grad(pts, groups, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def jac(x):
         g = geometry_batch(x[None], lay, frame0, rp)[0]
-        _, gr = _dist_and_grad(pts, seg, g, kind, True)
+        _, gr = _dist_and_grad(pts, groups, g, kind, True)
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
         J = np.empty((len(pts), len(x)))
-        for k in np.unique(seg):
-            m_k = seg == k
-            J[m_k] = np.einsum("nk,kp->np", gr[m_k], dG[k])
+        for k, m_k in groups:
+            np.matmul(gr[m_k], dG[k], out=J[m_k])
         if lay.fit_pipe_radius:
             J[:, -1] -= 1.0
         return J
@@ -324,8 +337,8 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, t
         J = jac(x)
         sw = np.sqrt(w)
         J *= sw[:, None]  # in place: with a million samples J is the biggest array here
-        A = np.einsum("np,nq->pq", J, J)
-        g = np.einsum("np,n->p", J, sw * r)
+        A = J.T @ J
+        g = J.T @ (sw * r)
         del J
         dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
         # active set: a parameter on its bound whose descent direction points outward stays

@@ -230,38 +230,91 @@ def quaternion_frame(q) -> np.ndarray:
 
 # --- distances ------------------------------------------------------------------------------
 
+def _segment_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal frame of every segment, (3, 3S) with columns (e1, e2, e3) per segment,
+    and the frame origins' coordinates (3S,). Lines: (tangent, ⟂, ⟂) at the start;
+    arcs: (centre → arc start, start tangent, plane normal) at the centre."""
+    S = len(sp.kind)
+    t = sp.tangent / np.linalg.norm(sp.tangent, axis=1)[:, None]
+    e = np.eye(3)[np.argmin(np.abs(t), axis=1)]
+    p = e - np.einsum("sk,sk->s", e, t)[:, None] * t
+    p /= np.linalg.norm(p, axis=1)[:, None]
+    b1 = np.where((sp.kind == 0)[:, None], t, -sp.normal)
+    b2 = np.where((sp.kind == 0)[:, None], p, sp.tangent)
+    b3 = np.cross(b1, b2)
+    basis = np.stack([b1, b2, b3], 1)  # (S, 3, 3): rows are the axes
+    origin = np.where((sp.kind == 0)[:, None], sp.start, sp.centre[:S] if len(sp.centre) else sp.start)
+    return basis.reshape(3 * S, 3).T, np.einsum("sjk,sk->sj", basis, origin).reshape(-1)
+
+
 def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
-    """Distance of each point to each (bounded) segment: (N, S)."""
-    N, S = len(pts), len(sp.kind)
-    out = np.empty((N, S))
-    axes = sp.axis
-    for k in range(S):
-        if sp.kind[k] == 0:
-            rel = pts - sp.start[k]
-            s = np.clip(rel @ sp.tangent[k], 0.0, sp.length[k])
-            out[:, k] = np.linalg.norm(rel - s[:, None] * sp.tangent[k], axis=1)
-        else:
-            rel = pts - sp.centre[k]
-            h = rel @ axes[k]
-            u = -sp.normal[k]  # from centre to arc start
-            v = sp.tangent[k]
-            phi = np.mod(np.arctan2(rel @ v, rel @ u), TWO_PI)
-            rho = np.hypot(rel @ u, rel @ v)
-            d_in = np.hypot(rho - sp.radius[k], h)
-            d_s = np.linalg.norm(pts - sp.start[k], axis=1)
-            d_e = np.linalg.norm(pts - sp.end[k], axis=1)
-            out[:, k] = np.where(phi <= sp.angle[k], d_in, np.minimum(d_s, d_e))
+    """Distance of each point to each (bounded) segment: (N, S).
+
+    All segments at once: one product gives every point's coordinates in every segment's
+    frame; the distances then follow elementwise from those coordinates."""
+    S = len(sp.kind)
+    W, off = _segment_frames(sp)
+    c = (pts @ W - off).reshape(len(pts), S, 3)
+    a, b, h = c[..., 0], c[..., 1], c[..., 2]
+    out = np.empty((len(pts), S))
+    line = sp.kind == 0
+    if line.any():
+        al = a[:, line]
+        da = al - np.clip(al, 0.0, sp.length[line])
+        out[:, line] = np.sqrt(da * da + b[:, line] ** 2 + h[:, line] ** 2)
+    if (~line).any():
+        arc = ~line
+        x, y, z = a[:, arc], b[:, arc], h[:, arc]
+        R, ang = sp.radius[arc], sp.angle[arc]
+        phi = np.mod(np.arctan2(y, x), TWO_PI)
+        d_in = np.hypot(np.hypot(x, y) - R, z)
+        # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
+        z2 = z * z
+        d_s = (x - R) ** 2 + y * y + z2
+        d_e = (x - R * np.cos(ang)) ** 2 + (y - R * np.sin(ang)) ** 2 + z2
+        out[:, arc] = np.where(phi <= ang, d_in, np.sqrt(np.minimum(d_s, d_e)))
     return out
 
 
-def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000) -> tuple[np.ndarray, np.ndarray]:
-    """Distance of each point to the centreline and the index of the closest segment."""
+def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 4_000_000) -> tuple[np.ndarray, np.ndarray]:
+    """Distance of each point to the centreline and the index of the closest segment.
+
+    ``chunk`` bounds points × segments per block (memory of the (N, S, 3) temporaries)."""
     d = np.empty(len(pts)); idx = np.empty(len(pts), int)
-    for a in range(0, len(pts), chunk):
-        m = _segment_distances(pts[a:a + chunk], sp)
-        idx[a:a + chunk] = np.argmin(m, axis=1)
-        d[a:a + chunk] = m[np.arange(len(m)), idx[a:a + chunk]]
+    step = max(1, chunk // max(len(sp.kind), 1))
+    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + float(np.abs(pts).max(initial=0.0)) + 1e-300)
+    for a in range(0, len(pts), step):
+        m = _segment_distances(pts[a:a + step], sp)
+        # first segment within round-off of the minimum: a point at a junction (or at a
+        # zero-length straight) goes to the earlier segment, independent of round-off
+        lo = m.min(axis=1)
+        i = np.argmax(m <= (lo + tol)[:, None], axis=1)
+        idx[a:a + step] = i
+        d[a:a + step] = np.take_along_axis(m, i[:, None], 1)[:, 0]
     return d, idx
+
+
+def closest_points(pts: np.ndarray, sp: Spine, idx: np.ndarray) -> np.ndarray:
+    """Closest point of segment ``idx[i]`` (bounded) to each ``pts[i]``: (N, 3)."""
+    st, en, tg = sp.start[idx], sp.end[idx], sp.tangent[idx]
+    rel = pts - st
+    s = np.clip(np.einsum("nk,nk->n", rel, tg), 0.0, sp.length[idx])
+    c = st + s[:, None] * tg
+    arc = sp.kind[idx] != 0
+    if arc.any():
+        ia = idx[arc]
+        p = pts[arc]
+        u, v = -sp.normal[ia], sp.tangent[ia]
+        rel = p - sp.centre[ia]
+        x, y = np.einsum("nk,nk->n", rel, u), np.einsum("nk,nk->n", rel, v)
+        phi = np.mod(np.arctan2(y, x), TWO_PI)
+        rho = np.maximum(np.hypot(x, y), 1e-300)
+        on = sp.centre[ia] + (sp.radius[ia] / rho)[:, None] * (x[:, None] * u + y[:, None] * v)
+        ds = np.einsum("nk,nk->n", p - st[arc], p - st[arc])
+        de = np.einsum("nk,nk->n", p - en[arc], p - en[arc])
+        ends = np.where((ds <= de)[:, None], st[arc], en[arc])
+        c[arc] = np.where((phi <= sp.angle[ia])[:, None], on, ends)
+    return c
 
 
 def sample_centreline(model: TubeModel, step: float) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,11 @@ from scipy.spatial.transform import Rotation
 
 from schemas.tube import BendDeviation, Inspection, LraRow
 
-from .geometry import TubeModel, build_spine, reverse_model, sample_centreline, spine_distance
+from .geometry import (TubeModel, build_spine, closest_points, reverse_model, sample_centreline,
+                       spine_distance)
+
+
+QUICK_NFEV = 15  # alignment steps that decide the walking direction
 
 
 def model_from_rows(rows: list[LraRow], pipe_radius: float) -> TubeModel:
@@ -38,7 +42,8 @@ def _resample(pts: np.ndarray, m: int) -> np.ndarray:
     return np.column_stack([np.interp(u, s, pts[:, k]) for k in range(3)])
 
 
-def align(measured: TubeModel, nominal: TubeModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def align(measured: TubeModel, nominal: TubeModel,
+          max_nfev: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rigid motion (R, t) with R·nominal + t ≈ measured; distances of measured samples."""
     step = max(measured.pipe_radius, 1e-9) * 0.5
     total = build_spine(measured).length.sum()
@@ -52,14 +57,41 @@ def align(measured: TubeModel, nominal: TubeModel) -> tuple[np.ndarray, np.ndarr
     R0 = Vt.T @ D @ U.T
     t0 = cb - R0 @ ca
     sp_n = build_spine(nominal)
+    scale = np.r_[np.full(3, 1.0), np.full(3, step)]
+    cache: dict = {}
+
+    def evaluate(x):
+        """Distances and their Jacobian. d(distance)/d(point) is the unit vector from the
+        closest nominal point (envelope theorem, valid on arcs, lines and segment ends);
+        the point's dependence on the rotation vector is differentiated numerically on the
+        3×3 matrix only, which costs nothing."""
+        key = x.tobytes()
+        if key not in cache:
+            cache.clear()
+            M = (Rotation.from_rotvec(x[:3]).as_matrix() @ R0).T
+            u = qm - (t0 + x[3:])
+            local = u @ M.T  # R^T (q − t)
+            d, idx = spine_distance(local, sp_n)
+            e = local - closest_points(local, sp_n, idx)
+            e /= np.maximum(d, 1e-300)[:, None]
+            h = 1e-7
+            J = np.empty((len(qm), 6))
+            for j in range(3):
+                dx = np.zeros(3); dx[j] = h
+                dM = ((Rotation.from_rotvec(x[:3] + dx).as_matrix() @ R0).T
+                      - (Rotation.from_rotvec(x[:3] - dx).as_matrix() @ R0).T) / (2 * h)
+                J[:, j] = np.einsum("nk,nk->n", e, u @ dM.T)
+            J[:, 3:] = -e @ M
+            cache[key] = (d, J)
+        return cache[key]
 
     def res(x):
-        R = Rotation.from_rotvec(x[:3]).as_matrix() @ R0
-        t = t0 + x[3:]
-        local = (qm - t) @ R  # R^T (q − t)
-        return spine_distance(local, sp_n)[0]
+        return evaluate(x)[0]
 
-    sol = least_squares(res, np.zeros(6), method="lm", x_scale=np.r_[np.full(3, 1.0), np.full(3, step)])
+    def jac(x):
+        return evaluate(x)[1]
+
+    sol = least_squares(res, np.zeros(6), jac=jac, method="lm", x_scale=scale, max_nfev=max_nfev)
     R = Rotation.from_rotvec(sol.x[:3]).as_matrix() @ R0
     return R, t0 + sol.x[3:], res(sol.x)
 
@@ -69,8 +101,13 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> 
 
     nominal = model_from_rows(nominal_rows, measured.pipe_radius)
     best = None
-    for reversed_ in (False, True):
-        m = reverse_model(measured) if reversed_ else measured
+    cands = [(False, measured), (True, reverse_model(measured))]
+    # a short alignment tells the walking direction apart when one is clearly worse; only
+    # close calls get the full alignment in both directions
+    quick = [float(np.sqrt(np.mean(align(m, nominal, max_nfev=QUICK_NFEV)[2] ** 2))) for _, m in cands]
+    if max(quick) > 2.0 * min(quick):
+        cands = [cands[int(np.argmin(quick))]]
+    for reversed_, m in cands:
         R, t, d = align(m, nominal)
         rms = float(np.sqrt(np.mean(d ** 2)))
         same = m.n_bends == nominal.n_bends
