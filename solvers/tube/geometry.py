@@ -231,48 +231,60 @@ def quaternion_frame(q) -> np.ndarray:
 # --- distances ------------------------------------------------------------------------------
 
 def _segment_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray]:
-    """Orthonormal frame of every segment, (3, 3S) with columns (e1, e2, e3) per segment,
-    and the frame origins' coordinates (3S,). Lines: (tangent, ⟂, ⟂) at the start;
-    arcs: (centre → arc start, start tangent, plane normal) at the centre."""
+    """Orthonormal frames of the segments, rows (e1, e2, e3): (S, 3, 3), and the frame
+    origins' coordinates in them: (S, 3). Lines: (tangent, ⟂, ⟂) at the start; arcs:
+    (centre → arc start, start tangent, plane normal) at the centre."""
     S = len(sp.kind)
     t = sp.tangent / np.linalg.norm(sp.tangent, axis=1)[:, None]
     e = np.eye(3)[np.argmin(np.abs(t), axis=1)]
     p = e - np.einsum("sk,sk->s", e, t)[:, None] * t
     p /= np.linalg.norm(p, axis=1)[:, None]
-    b1 = np.where((sp.kind == 0)[:, None], t, -sp.normal)
-    b2 = np.where((sp.kind == 0)[:, None], p, sp.tangent)
-    b3 = np.cross(b1, b2)
-    basis = np.stack([b1, b2, b3], 1)  # (S, 3, 3): rows are the axes
-    origin = np.where((sp.kind == 0)[:, None], sp.start, sp.centre[:S] if len(sp.centre) else sp.start)
-    return basis.reshape(3 * S, 3).T, np.einsum("sjk,sk->sj", basis, origin).reshape(-1)
+    line = (sp.kind == 0)[:, None]
+    b1 = np.where(line, t, -sp.normal)
+    b2 = np.where(line, p, sp.tangent)
+    basis = np.stack([b1, b2, np.cross(b1, b2)], 1)
+    origin = np.where(line, sp.start, sp.centre[:S] if len(sp.centre) else sp.start)
+    return basis, np.einsum("sjk,sk->sj", basis, origin)
 
 
 def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
     """Distance of each point to each (bounded) segment: (N, S).
 
     All segments at once: one product gives every point's coordinates in every segment's
-    frame; the distances then follow elementwise from those coordinates."""
+    frame (columns grouped as line e1, e2, e3 | arc e1, e2, e3); the distances then follow
+    elementwise from those coordinates."""
     S = len(sp.kind)
-    W, off = _segment_frames(sp)
-    c = (pts @ W - off).reshape(len(pts), S, 3)
-    a, b, h = c[..., 0], c[..., 1], c[..., 2]
+    basis, origin = _segment_frames(sp)
+    lines = np.flatnonzero(sp.kind == 0)
+    arcs = np.flatnonzero(sp.kind != 0)
+    W = np.concatenate([basis[g].transpose(1, 0, 2).reshape(-1, 3) for g in (lines, arcs)]).T  # (3, 3S)
+    off = np.concatenate([origin[g].T.reshape(-1) for g in (lines, arcs)])
+    c = pts @ W
+    c -= off
+    L, A = len(lines), len(arcs)
     out = np.empty((len(pts), S))
-    line = sp.kind == 0
-    if line.any():
-        al = a[:, line]
-        da = al - np.clip(al, 0.0, sp.length[line])
-        out[:, line] = np.sqrt(da * da + b[:, line] ** 2 + h[:, line] ** 2)
-    if (~line).any():
-        arc = ~line
-        x, y, z = a[:, arc], b[:, arc], h[:, arc]
-        R, ang = sp.radius[arc], sp.angle[arc]
-        phi = np.mod(np.arctan2(y, x), TWO_PI)
-        d_in = np.hypot(np.hypot(x, y) - R, z)
-        # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
+    if L:
+        a, b, h = c[:, :L], c[:, L:2 * L], c[:, 2 * L:3 * L]
+        # a − clip(a, 0, length): the offset beyond either end of the straight
+        da = np.maximum(a - sp.length[lines], 0.0) + np.minimum(a, 0.0)
+        out[:, lines] = np.sqrt(da * da + b * b + h * h)
+    if A:
+        o = 3 * L
+        x, y, z = c[:, o:o + A], c[:, o + A:o + 2 * A], c[:, o + 2 * A:]
+        R, ang = sp.radius[arcs], sp.angle[arcs]
+        ca, sa = np.cos(ang), np.sin(ang)
         z2 = z * z
+        rho = np.sqrt(x * x + y * y)
+        d_in = np.sqrt((rho - R) ** 2 + z2)
+        # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
         d_s = (x - R) ** 2 + y * y + z2
-        d_e = (x - R * np.cos(ang)) ** 2 + (y - R * np.sin(ang)) ** 2 + z2
-        out[:, arc] = np.where(phi <= ang, d_in, np.sqrt(np.minimum(d_s, d_e)))
+        d_e = (x - R * ca) ** 2 + (y - R * sa) ** 2 + z2
+        # polar angle of (x, y) in [0, angle]: upper half plane and not beyond the end
+        # direction (angles ≤ π), or either (angles > π); on the boundary both branches agree
+        before_end = ca * y - sa * x <= 0.0
+        upper = y >= 0.0
+        inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
+        out[:, arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
     return out
 
 
