@@ -65,6 +65,24 @@ def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
+_RAMPS: dict[int, np.ndarray] = {}
+
+
+def _linspace(lo: float, hi: float, num: int) -> np.ndarray:
+    """np.linspace(lo, hi, num) for scalars, bit for bit, without its per-call overhead."""
+    delta = float(hi) - float(lo)
+    step = delta / (num - 1)
+    if step == 0.0 or num < 2:
+        return np.linspace(lo, hi, num)
+    ramp = _RAMPS.get(num)
+    if ramp is None:
+        ramp = _RAMPS.setdefault(num, np.arange(num, dtype=float))
+    y = ramp * step
+    y += lo
+    y[-1] = hi
+    return y
+
+
 def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
                      a2: np.ndarray, u2: np.ndarray, n2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """2D distances of chain points q (K, 2) to the left-turning curves given by t1 (G,):
@@ -155,7 +173,7 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
     if hi < lo:
         return None
     best = None
-    t_grid = np.linspace(lo, hi, grid) if hi > lo else np.array([lo])
+    t_grid = _linspace(lo, hi, grid) if hi > lo else np.array([lo])
     for _ in range(4):
         R = alpha + beta * t_grid
         d, t2 = _dist_to_arcline(q, t_grid, R, phi, a2, u2, n2)
@@ -171,7 +189,7 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
         if len(t_grid) == 1:
             break
         step = t_grid[1] - t_grid[0]
-        t_grid = np.linspace(max(lo, t_grid[g] - step), min(hi, t_grid[g] + step), 17)
+        t_grid = _linspace(max(lo, t_grid[g] - step), min(hi, t_grid[g] + step), 17)
     if best is None:
         return None
     cost, t1, R, t2 = best

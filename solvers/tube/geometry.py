@@ -288,7 +288,7 @@ def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
     return out
 
 
-def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 4_000_000) -> tuple[np.ndarray, np.ndarray]:
+def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 2_000_000) -> tuple[np.ndarray, np.ndarray]:
     """Distance of each point to the centreline and the index of the closest segment.
 
     ``chunk`` bounds points × segments per block (memory of the (N, S, 3) temporaries)."""
