@@ -247,18 +247,25 @@ def _segment_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray]:
     return basis, np.einsum("sjk,sk->sj", basis, origin)
 
 
-def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
-    """Distance of each point to each (bounded) segment: (N, S).
-
-    All segments at once: one product gives every point's coordinates in every segment's
-    frame (columns grouped as line e1, e2, e3 | arc e1, e2, e3); the distances then follow
-    elementwise from those coordinates."""
-    S = len(sp.kind)
+def distance_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`spine_distance` needs of a spine besides the points: the (3, 3S) matrix of
+    segment frame axes (columns grouped as line e1, e2, e3 | arc e1, e2, e3), the origin
+    offsets, and the line and arc indices. Precompute it when one spine is queried often."""
     basis, origin = _segment_frames(sp)
     lines = np.flatnonzero(sp.kind == 0)
     arcs = np.flatnonzero(sp.kind != 0)
     W = np.concatenate([basis[g].transpose(1, 0, 2).reshape(-1, 3) for g in (lines, arcs)]).T  # (3, 3S)
     off = np.concatenate([origin[g].T.reshape(-1) for g in (lines, arcs)])
+    return W, off, lines, arcs
+
+
+def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
+    """Distance of each point to each (bounded) segment: (N, S).
+
+    All segments at once: one product gives every point's coordinates in every segment's
+    frame; the distances then follow elementwise from those coordinates."""
+    S = len(sp.kind)
+    W, off, lines, arcs = frames if frames is not None else distance_frames(sp)
     c = pts @ W
     c -= off
     L, A = len(lines), len(arcs)
@@ -288,7 +295,8 @@ def _segment_distances(pts: np.ndarray, sp: Spine) -> np.ndarray:
     return out
 
 
-def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 2_000_000) -> tuple[np.ndarray, np.ndarray]:
+def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 2_000_000,
+                   frames=None) -> tuple[np.ndarray, np.ndarray]:
     """Distance of each point to the centreline and the index of the closest segment.
 
     ``chunk`` bounds points × segments per block (memory of the (N, S, 3) temporaries)."""
@@ -296,7 +304,7 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 2_000_000) -> tuple[
     step = max(1, chunk // max(len(sp.kind), 1))
     tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + float(np.abs(pts).max(initial=0.0)) + 1e-300)
     for a in range(0, len(pts), step):
-        m = _segment_distances(pts[a:a + step], sp)
+        m = _segment_distances(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a
         # zero-length straight) goes to the earlier segment, independent of round-off
         lo = m.min(axis=1)
