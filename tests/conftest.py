@@ -61,6 +61,18 @@ def wait_for(client, job_id: str, statuses=("succeeded", "failed", "cancelled"),
         time.sleep(0.05)
 
 
+def run_plantsolve(args: list[str], cwd: Path, *, plugins: bool = False, timeout: float = 400):
+    """Run the installed ``plantsolve`` command in a clean environment with DATA_DIR under cwd."""
+    import subprocess
+    import sys
+
+    env = {"DATA_DIR": str(cwd / "var"), "PATH": "/usr/bin:/bin"}
+    if plugins:
+        env.update(PLUGINS="tests.support.kinds", PYTHONPATH=str(REPO))
+    binary = Path(sys.executable).parent / "plantsolve"
+    return subprocess.run([str(binary), *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
 def _unavailable(reason: str):
     if os.environ.get("CI", "").lower() == "true":
         pytest.fail(f"{reason} (CI=true: the integration tests must run)")

@@ -4,13 +4,10 @@ artifact, bad input as 422 naming the field, and the CLI."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, wait_for
+from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "alignment"
 pytest.importorskip("solvers.alignment")
@@ -92,11 +89,7 @@ def test_bad_connections_are_422_naming_the_field(client):
 
 
 def test_cli_aligns_the_pcf_example(tmp_path):
-    binary = Path(sys.executable).parent / "plantsolve"
-    done = subprocess.run(
-        [str(binary), "solve", "alignment", str(EXAMPLES / "ladder.pcf"), "-o", str(tmp_path / "aligned.json")],
-        cwd=tmp_path, env={"DATA_DIR": str(tmp_path / "var"), "PATH": "/usr/bin:/bin"}, capture_output=True, text=True, timeout=300,
-    )
+    done = run_plantsolve(["solve", "alignment", str(EXAMPLES / "ladder.pcf"), "-o", str(tmp_path / "aligned.json")], tmp_path)
     assert done.returncode == 0, done.stderr
     assert json.loads((tmp_path / "aligned.json").read_text())["converged"] is True
     assert (tmp_path / "aligned_artifacts" / "aligned.pcf").exists()

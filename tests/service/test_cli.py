@@ -3,18 +3,13 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
-from tests.conftest import REPO
-
-BIN = Path(sys.executable).parent / "plantsolve"
+from tests.conftest import run_plantsolve
 
 
-def run(args: list[str], tmp_path: Path) -> subprocess.CompletedProcess:
-    env = {"DATA_DIR": str(tmp_path / "var"), "PLUGINS": "tests.support.kinds", "PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"}
-    return subprocess.run([str(BIN), *args], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+def run(args: list[str], tmp_path: Path):
+    return run_plantsolve(args, tmp_path, plugins=True, timeout=120)
 
 
 def test_solve_success_writes_result_and_artifacts(tmp_path):

@@ -5,13 +5,10 @@ see examples/perfmap/README.md)."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, wait_for
+from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "perfmap"
 pytest.importorskip("solvers.perfmap")
@@ -88,11 +85,7 @@ def test_csv_upload_and_bad_tables(finished):
 
 
 def test_cli_solves_the_example(tmp_path):
-    binary = Path(sys.executable).parent / "plantsolve"
-    done = subprocess.run(
-        [str(binary), "solve", "perfmap", str(EXAMPLES / "n3_fan_map.csv"), "-o", str(tmp_path / "map.json"), "--options", '{"grid": [24, 24]}'],
-        cwd=tmp_path, env={"DATA_DIR": str(tmp_path / "var"), "PATH": "/usr/bin:/bin"}, capture_output=True, text=True, timeout=300,
-    )
+    done = run_plantsolve(["solve", "perfmap", str(EXAMPLES / "n3_fan_map.csv"), "-o", str(tmp_path / "map.json"), "--options", '{"grid": [24, 24]}'], tmp_path)
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "map.json").read_text())
     assert len(result["map"]["flow"]) == 24 and (tmp_path / "map_artifacts" / "map.png").exists()

@@ -7,14 +7,11 @@ import base64
 import csv
 import io
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests.conftest import REPO, wait_for
+from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "tube"
 pytest.importorskip("solvers.tube")
@@ -92,11 +89,7 @@ def test_bad_scans_are_422(client):
 
 
 def test_cli_reads_the_xyz_scan(tmp_path):
-    binary = Path(sys.executable).parent / "plantsolve"
-    done = subprocess.run(
-        [str(binary), "solve", "tube", str(EXAMPLES / "scan.xyz"), "-o", str(tmp_path / "tube.json")],
-        cwd=tmp_path, env={"DATA_DIR": str(tmp_path / "var"), "PATH": "/usr/bin:/bin"}, capture_output=True, text=True, timeout=400,
-    )
+    done = run_plantsolve(["solve", "tube", str(EXAMPLES / "scan.xyz"), "-o", str(tmp_path / "tube.json")], tmp_path)
     assert done.returncode == 0, done.stderr
     assert len(json.loads((tmp_path / "tube.json").read_text())["lra"]) == 4
     assert (tmp_path / "tube_artifacts" / "xyz_clr.csv").exists()
