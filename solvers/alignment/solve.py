@@ -124,24 +124,24 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
         joined = {c.from_[0] for c in request.connections} | {c.to[0] for c in request.connections}
         alone = [c.id for c in request.components if c.id not in joined]
         if alone and len(alone) < len(request.components):
-            result.report.warnings.append(Diagnostic(
-                code="pcf_unconnected_items",
-                message=f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
-                        "and were not aligned; raise options.connection_tolerance if they belong to the line.",
-                details={"items": alone[:200]}))
-            result.report.status = "warning"
+            _warn(result, "pcf_unconnected_items",
+                  f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
+                  "and were not aligned; raise options.connection_tolerance if they belong to the line.",
+                  {"items": alone[:200]})
         near = _near_misses(request)
         if near:
-            result.report.warnings.append(Diagnostic(
-                code="pcf_near_miss",
-                message=f"{len(near)} pair(s) of open PCF end points face each other a little beyond the connection "
-                        "tolerance and were left unconnected; raise options.connection_tolerance to join them.",
-                details={"pairs": near[:200]}))
-            result.report.status = "warning"
+            _warn(result, "pcf_near_miss",
+                  f"{len(near)} pair(s) of open PCF end points face each other a little beyond the connection "
+                  "tolerance and were left unconnected; raise options.connection_tolerance to join them.",
+                  {"pairs": near[:200]})
         for code, message, details in pcf_notes(request.source_pcf):
             if code == "pcf_zero_length_items":
                 result.report.details[code] = details["items"]
             else:
-                result.report.warnings.append(Diagnostic(code=code, message=message, details=details))
-                result.report.status = "warning"
+                _warn(result, code, message, details)
     return result
+
+
+def _warn(result: AlignmentResult, code: str, message: str, details: dict) -> None:
+    result.report.warnings.append(Diagnostic(code=code, message=message, details=details))
+    result.report.status = "warning"

@@ -175,14 +175,12 @@ class CurveSet:
         return out
 
     def evaluate(self, idx: np.ndarray, t: np.ndarray):
+        """(x, y, eta) of characteristics ``idx`` at parameters ``t`` (broadcast together)."""
+        x, y = self.evaluate_xy(idx, t)
         idx = np.asarray(idx)
         t = np.broadcast_to(np.asarray(t, dtype=float), idx.shape)
-        shape = idx.shape
-        idx, t = idx.ravel(), t.ravel()
-        x = self.x_min[idx] + (self.x_max[idx] - self.x_min[idx]) * t
-        y = self._eval(self.fam_id[idx], self.p[idx], t)
-        eta = self._eval(self.eff_id[idx], self.e[idx], t)
-        return x.reshape(shape), y.reshape(shape), eta.reshape(shape)
+        eta = self._eval(self.eff_id[idx.ravel()], self.e[idx.ravel()], t.ravel())
+        return x, y, eta.reshape(idx.shape)
 
     def evaluate_xy(self, idx: np.ndarray, t: np.ndarray):
         """(x, y) only: for root finding, where the efficiency is not needed."""
