@@ -51,7 +51,7 @@ class Network:
     """Bodies (rows, clusters) and the per-port state of the alternating iteration."""
 
     def __init__(self, model: Model, active: np.ndarray):
-        m = self.m = model
+        self.m = model
         n = model.n_comp
         pc = model.port_comp
         self.row_member = model.is_pipe | collinear_fittings(model)

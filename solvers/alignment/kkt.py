@@ -55,7 +55,7 @@ def constrained_lstsq(
 
 def _factor(H: sp.spmatrix, A: sp.spmatrix):
     """Sparse LU of the regularised (quasi-definite) KKT matrix."""
-    n, m = H.shape[0], A.shape[0]
+    m = A.shape[0]
     hd = H.diagonal()
     col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0

@@ -17,7 +17,6 @@ first-difference rows are implied by concavity), with the inequalities closed (<
 
 from __future__ import annotations
 
-from math import comb
 
 import numpy as np
 

@@ -93,7 +93,6 @@ def surface_samples(model: TubeModel, n: int, rng: np.random.Generator, view: np
     seg_len = np.maximum(sp.length, 0.0)
     total = seg_len.sum()
     out = []
-    need = n
     n_out = int(round(outlier_fraction * n))
     need_surface = n - n_out
     got = 0
