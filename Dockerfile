@@ -4,10 +4,7 @@ FROM python:3.11-slim AS build
 WORKDIR /src
 RUN pip install --no-cache-dir --upgrade pip wheel
 COPY pyproject.toml README.md ./
-COPY app ./app
-COPY workers ./workers
-COPY solvers ./solvers
-COPY schemas ./schemas
+COPY plantsolve ./plantsolve
 RUN pip wheel --no-cache-dir --wheel-dir /wheels .
 
 FROM python:3.11-slim AS runtime

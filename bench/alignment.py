@@ -31,8 +31,8 @@ def _rss_kib(field: str) -> int:
 
 
 def _run(side: int, method: str, max_iterations: int, queue) -> None:
-    from solvers.alignment import solve
-    from solvers.alignment.synthetic import grid_network
+    from plantsolve.solvers.alignment import solve
+    from plantsolve.solvers.alignment.synthetic import grid_network
 
     req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
                        origin=(1.0e6, 2.0e5, 1.0e4), seed=2024,

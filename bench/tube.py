@@ -23,12 +23,12 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import numpy as np  # noqa: E402
 
-from schemas.tube import TubeRequest  # noqa: E402
-from solvers.base import SolverError  # noqa: E402
-from solvers.tube import parse_upload, solve  # noqa: E402
-from solvers.tube.artifacts import model_from_result  # noqa: E402
-from solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
-from solvers.tube.simulate import clearance, random_tube, surface_samples  # noqa: E402
+from plantsolve.schemas.tube import TubeRequest  # noqa: E402
+from plantsolve.solvers.base import SolverError  # noqa: E402
+from plantsolve.solvers.tube import parse_upload, solve  # noqa: E402
+from plantsolve.solvers.tube.artifacts import model_from_result  # noqa: E402
+from plantsolve.solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
+from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples  # noqa: E402
 
 
 def make_case(seed: int, n_points: int, n_bends: int | None = None, pipe_radius: float | None = None):

@@ -15,14 +15,14 @@ from pathlib import Path
 
 import pytest
 
-from workers.settings import Settings
+from plantsolve.app.settings import AppSettings
 
 REPO = Path(__file__).resolve().parents[1]
 PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
 REDIS_URL = os.environ.get("TEST_REDIS_URL", "redis://127.0.0.1:6379/9")
 
 
-def service_settings(tmp_path: Path, **overrides) -> Settings:
+def service_settings(tmp_path: Path, **overrides) -> AppSettings:
     values = dict(
         data_dir=tmp_path,
         plugins=["tests.support.kinds"],
@@ -32,11 +32,11 @@ def service_settings(tmp_path: Path, **overrides) -> Settings:
         progress_write_seconds=0.0,
     )
     values.update(overrides)
-    return Settings(_env_file=None, **values)
+    return AppSettings(_env_file=None, **values)
 
 
 @pytest.fixture
-def settings(tmp_path) -> Settings:
+def settings(tmp_path) -> AppSettings:
     return service_settings(tmp_path)
 
 
@@ -44,7 +44,7 @@ def settings(tmp_path) -> Settings:
 def client(settings):
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
+    from plantsolve.app.main import create_app
 
     with TestClient(create_app(settings)) as test_client:
         yield test_client

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from schemas.alignment import AlignmentRequest
+from plantsolve.schemas.alignment import AlignmentRequest
 
 
 def port(p, d):

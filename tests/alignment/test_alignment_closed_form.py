@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from solvers.alignment import solve
-from solvers.alignment.synthetic import grid_network
+from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.synthetic import grid_network
 
 from alignment_cases import conn, elbow, pipe, port, request
 

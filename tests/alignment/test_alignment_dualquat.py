@@ -3,7 +3,7 @@
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from solvers.alignment import dualquat as dq
+from plantsolve.solvers.alignment import dualquat as dq
 
 RNG = np.random.default_rng(42)
 

@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from schemas.alignment import AlignmentRequest
-from solvers.alignment import UPLOAD_EXTENSIONS, check_input, parse_upload, render_artifacts, solve
-from solvers.base import InputRejected
+from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.alignment import SPEC, check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.base import InputRejected
 
 from alignment_cases import conn, elbow, pipe, port, request
 
@@ -50,7 +50,7 @@ ITEM-CODE PIPE-100
 
 
 def test_extensions():
-    assert UPLOAD_EXTENSIONS == (".pcf", ".json")
+    assert SPEC.upload_extensions == (".pcf", ".json")
 
 
 def test_pcf_parse_align_write_parse_round_trip():
@@ -173,7 +173,7 @@ def test_non_finite_values_are_rejected_by_the_schema():
 
 
 def test_tolerance_profiles():
-    from solvers.alignment.model import resolve_tolerances
+    from plantsolve.solvers.alignment.model import resolve_tolerances
 
     r = request(_base(), [], tolerance_profile="aveva_e3d")
     assert resolve_tolerances(r) == (1.0, 0.01)
@@ -187,7 +187,7 @@ def test_tolerance_profiles():
 
 
 def test_progress_is_reported_and_cancellation_propagates():
-    from solvers.base import Cancelled
+    from plantsolve.solvers.base import Cancelled
 
     seen = []
     req = request(_base(), [conn("P", 1, "E", 0)])

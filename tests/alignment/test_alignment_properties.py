@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from schemas.alignment import AlignmentRequest
-from solvers.alignment import solve
-from solvers.alignment.synthetic import grid_network
+from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.synthetic import grid_network
 
 
 def _moved(req: AlignmentRequest, R: Rotation, t: np.ndarray) -> AlignmentRequest:

@@ -4,9 +4,9 @@ reducers / flange pairs / valves, tiny pipes, non-unit directions, plant coordin
 import numpy as np
 import pytest
 
-from schemas.alignment import AlignmentRequest
-from solvers.alignment import check_input, solve
-from solvers.base import InputRejected
+from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.alignment import check_input, solve
+from plantsolve.solvers.base import InputRejected
 
 from alignment_cases import conn, elbow, pipe, port, request, route
 

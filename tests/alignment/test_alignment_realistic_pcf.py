@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from solvers.alignment import parse_upload, render_artifacts, solve
-from solvers.base import InputRejected, SolverError
+from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve
+from plantsolve.solvers.base import InputRejected, SolverError
 
 DATA = Path(__file__).parent / "data"
 POINT_WORDS = {"END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT", "CO-ORDS"}
@@ -265,7 +265,7 @@ def test_aligned_pcf_keeps_the_file_encoding_byte_for_byte(encoding, bom):
         "GATE VALVE 150 CL300 RF", "GATE VALVE Ø150 CL300 RF 20°C")
     raw = bom + text.encode(encoding)
     req = parse_upload("x.pcf", raw, {"fixed_components": ["FLANGE-1", "FLANGE-15"]})
-    from schemas.alignment import AlignmentRequest
+    from plantsolve.schemas.alignment import AlignmentRequest
 
     req = AlignmentRequest.model_validate_json(req.model_dump_json(by_alias=True))  # as the job queue stores it
     art = render_artifacts(req, solve(req))[0]
@@ -353,8 +353,8 @@ def test_end_connection_marker_follows_its_port():
 def test_loops_from_a_rounded_export_close_without_cuts(digits):
     """A PCF prints coordinates rounded, which bends catalogue angles by ~quantum / arm: in loops of
     elbows and tees that makes closure impossible unless the angles are restored (here: 9 loops, CRLF)."""
-    from solvers.alignment.pcf import _generate
-    from solvers.alignment.synthetic import grid_network
+    from plantsolve.solvers.alignment.pcf import _generate
+    from plantsolve.solvers.alignment.synthetic import grid_network
 
     req = grid_network(4, 4, valve_every=5, tie_ins=((0, 0),), origin=(1e6, 2e5, 1e4), seed=5)
     text = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)):.{digits}f}", _generate(req, req)).replace("\n", "\r\n")

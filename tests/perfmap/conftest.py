@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from schemas.perfmap import PerfmapRequest
-from solvers.perfmap import parse_upload, solve
-from solvers.perfmap.synthetic import request_body
+from plantsolve.schemas.perfmap import PerfmapRequest
+from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.synthetic import request_body
 
 DATA = Path(__file__).parent / "data"
 

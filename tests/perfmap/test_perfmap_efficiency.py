@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.optimize import lsq_linear
 
-from schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from solvers.perfmap import query, solve
-from solvers.perfmap.efficiency import (
+from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
+from plantsolve.solvers.perfmap import query, solve
+from plantsolve.solvers.perfmap.efficiency import (
     EFFICIENCY_FAMILIES,
     N_EFF_COEFFICIENTS,
     curve_extrema,
@@ -20,9 +20,9 @@ from solvers.perfmap.efficiency import (
     fit_eta,
     lsi,
 )
-from solvers.perfmap.families import basis, bernstein
-from solvers.perfmap.solve import curveset_from_fits
-from solvers.perfmap.synthetic import request_body
+from plantsolve.solvers.perfmap.families import basis, bernstein
+from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.synthetic import request_body
 
 T = np.array([0.0, 0.13, 0.31, 0.5, 0.64, 0.82, 0.93, 1.0])
 DENSE = np.linspace(0.0, 1.0, 200_001)
@@ -212,8 +212,8 @@ def test_closed_form_loo_equals_explicit_bounded_refits(family, concave):
 
 
 def test_efficiency_in_percent_is_rejected_with_its_field():
-    from solvers.base import InputRejected
-    from solvers.perfmap import check_input
+    from plantsolve.solvers.base import InputRejected
+    from plantsolve.solvers.perfmap import check_input
 
     body = request_body(n_theta=3, n_phi=3)
     body["positions"][4]["efficiency"] = [100 * e for e in body["positions"][4]["efficiency"]]

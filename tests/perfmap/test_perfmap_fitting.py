@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import BSpline
 
-from solvers.perfmap.families import (
+from plantsolve.solvers.perfmap.families import (
     N_COEFFICIENTS,
     basis,
     bernstein,
@@ -16,7 +16,7 @@ from solvers.perfmap.families import (
     log_params_to_public,
     uniform_quadratic_bspline,
 )
-from solvers.perfmap.fitting import (
+from plantsolve.solvers.perfmap.fitting import (
     concave_floor,
     fit_efficiency,
     fit_log,

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from solvers.base import InputRejected
-from solvers.perfmap import query, solve
-from solvers.perfmap.performance_map import binned_map, curve_ranges
-from solvers.perfmap.query import characteristic_at
-from solvers.perfmap.solve import curveset_from_fits
-from solvers.perfmap.synthetic import request_body, true_map
-from solvers.perfmap.triangulation import triangulate
+from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.perfmap import query, solve
+from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges
+from plantsolve.solvers.perfmap.query import characteristic_at
+from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.synthetic import request_body, true_map
+from plantsolve.solvers.perfmap.triangulation import triangulate
 
 
 def _arr(v):
@@ -162,7 +162,7 @@ def test_map_nodes_are_nan_outside_not_zero(n3_result):
 
 
 def test_query_on_stored_json_result(synthetic_result):
-    from schemas.perfmap import PerfmapResult
+    from plantsolve.schemas.perfmap import PerfmapResult
 
     stored = PerfmapResult.model_validate_json(synthetic_result.model_dump_json())
     q = PerfmapQueryRequest(points=[{"flow": f, "pressure": p}

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from schemas.perfmap import PerfmapQueryRequest, PerfmapResult
-from solvers.perfmap import query, render_artifacts
-from solvers.perfmap.families import basis, log_eval, log_params_from_public
+from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapResult
+from plantsolve.solvers.perfmap import query, render_artifacts
+from plantsolve.solvers.perfmap.families import basis, log_eval, log_params_from_public
 
 
 def test_n3_end_to_end(n3_request, n3_result: PerfmapResult):
@@ -54,7 +54,7 @@ def test_n3_query_and_plots(n3_request, n3_result):
 
 
 def test_n3_all_models_and_minimax(n3_request):
-    from solvers.perfmap import solve
+    from plantsolve.solvers.perfmap import solve
 
     for model in ("parabola", "log", "spline3"):
         for fit in ("least_squares", "minimax"):

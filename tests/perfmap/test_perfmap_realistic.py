@@ -11,14 +11,14 @@ import math
 import numpy as np
 import pytest
 
-from schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from solvers.base import InputRejected
-from solvers.perfmap import parse_upload, query, solve
-from solvers.perfmap.families import bernstein
-from solvers.perfmap.fitting import concave_floor
-from solvers.perfmap.performance_map import _cross2, distance_to_region, max_efficiency
-from solvers.perfmap.solve import curveset_from_fits
-from solvers.perfmap.synthetic import PHI_MAX, THETA_MAX, _data, true_map
+from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.perfmap import parse_upload, query, solve
+from plantsolve.solvers.perfmap.families import bernstein
+from plantsolve.solvers.perfmap.fitting import concave_floor
+from plantsolve.solvers.perfmap.performance_map import _cross2, distance_to_region, max_efficiency
+from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.synthetic import PHI_MAX, THETA_MAX, _data, true_map
 
 HEADER = "theta,phi,flow,pressure,efficiency"
 

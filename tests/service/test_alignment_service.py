@@ -10,14 +10,14 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "alignment"
-pytest.importorskip("solvers.alignment")
+pytest.importorskip("plantsolve.solvers.alignment")
 
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
+    from plantsolve.app.main import create_app
     from tests.conftest import service_settings
 
     with TestClient(create_app(service_settings(tmp_path_factory.mktemp("alignment")))) as test_client:

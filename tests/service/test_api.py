@@ -9,7 +9,7 @@ import json
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
+from plantsolve.app.main import create_app
 from tests.conftest import service_settings, wait_for
 
 PROBLEM = "application/problem+json"
@@ -99,7 +99,7 @@ def test_cancel_queued_job_never_runs(tmp_path):
     with TestClient(app) as client:
         job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
         assert client.post(f"/v1/jobs/{job['id']}/cancel").json()["status"] == "cancelled"
-        from workers.runner import run_job
+        from plantsolve.workers.runner import run_job
 
         assert run_job(app.state.ctx, __import__("uuid").UUID(job["id"]), worker="t", requeue=lambda *a: None) == "skipped"
         assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"

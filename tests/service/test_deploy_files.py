@@ -30,5 +30,5 @@ def test_dockerfile_is_multi_stage_and_runs_the_console_script():
     text = (REPO / "Dockerfile").read_text()
     assert text.count("\nFROM ") + text.startswith("FROM ") >= 2 and "COPY --from=build" in text
     scripts = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts["plantsolve"] == "app.cli:main"
+    assert scripts["plantsolve"] == "plantsolve.cli:main"
     assert 'CMD ["plantsolve", "serve"' in text

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
+from plantsolve.app.main import create_app
 from tests.conftest import REPO, service_settings, wait_for
 
 pytestmark = pytest.mark.integration
@@ -120,7 +120,7 @@ def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
 
 
 def test_real_solver_gives_identical_results_embedded_and_celery(scaled, tmp_path):
-    pytest.importorskip("solvers.perfmap")
+    pytest.importorskip("plantsolve.solvers.perfmap")
     import json
 
     client, _, _ = scaled

@@ -7,8 +7,8 @@ from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
 from sqlalchemy import inspect
 
-from workers.persistence import Database
-from workers.persistence.models import Base
+from plantsolve.store import Database
+from plantsolve.store.models import Base
 
 
 def _assert_upgraded_and_matching(db: Database) -> None:

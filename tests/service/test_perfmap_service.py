@@ -11,14 +11,14 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "perfmap"
-pytest.importorskip("solvers.perfmap")
+pytest.importorskip("plantsolve.solvers.perfmap")
 
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
+    from plantsolve.app.main import create_app
     from tests.conftest import service_settings
 
     with TestClient(create_app(service_settings(tmp_path_factory.mktemp("perfmap")))) as client:

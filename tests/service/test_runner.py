@@ -11,12 +11,12 @@ from datetime import timedelta
 import pytest
 from sqlalchemy import update
 
-from app.jobs.service import JobService
-from workers.context import ServiceContext
-from workers.dispatch import sweep_once
-from workers.persistence.models import Job, utcnow
-from workers.persistence.repository import StoredArtifact
-from workers.runner import lost_worker_report, run_job
+from plantsolve.app.jobs.service import JobService
+from plantsolve.workers.context import ServiceContext
+from plantsolve.workers.sweeper import sweep_once
+from plantsolve.store.models import Job, utcnow
+from plantsolve.store.repository import StoredArtifact
+from plantsolve.workers.runner import lost_worker_report, run_job
 from tests.conftest import service_settings
 
 
@@ -136,7 +136,7 @@ def test_sweeper_requeues_lapsed_leases_and_fails_after_the_cap(ctx):
     for attempt in range(1, 4):
         assert ctx.repo.claim(job_id, lease_seconds=0.01, worker="dies") == attempt
         time.sleep(0.03)  # the worker was killed: no heartbeat, the lease lapses
-        sweep_once(ctx, queue)
+        sweep_once(ctx, queue.enqueue)
     job = ctx.repo.get(job_id)
     assert job.status == "failed" and job.attempt == 3 == job.max_attempts
     assert job.report["stage"] == "worker" and len(job.report["details"]["attempts"]) == 3

@@ -14,7 +14,7 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "tube"
-pytest.importorskip("solvers.tube")
+pytest.importorskip("plantsolve.solvers.tube")
 
 NOMINAL_ANGLES = [90.0, 45.0, 30.0]  # the example's nominal bends (see examples/tube/README.md)
 
@@ -23,7 +23,7 @@ NOMINAL_ANGLES = [90.0, 45.0, 30.0]  # the example's nominal bends (see examples
 def client(tmp_path_factory):
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
+    from plantsolve.app.main import create_app
     from tests.conftest import service_settings
 
     with TestClient(create_app(service_settings(tmp_path_factory.mktemp("tube")))) as test_client:

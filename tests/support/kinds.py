@@ -1,4 +1,4 @@
-"""Test-only solver kinds that exercise the job machinery (registered via PLUGINS).
+"""Test-only solver kinds that exercise the job machinery (added through the PLUGINS setting).
 
 None of them ships with the service: they exist to make the runner sleep, crash, hang,
 reject input, and compute something deterministic, so the lifecycle can be tested without
@@ -14,9 +14,8 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, Field
 
-from schemas.common import FiniteFloat, Report, StrictModel
-from solvers.base import Artifact, FieldError, InputRejected, SolverError
-from workers.registry import SolverSpec, register
+from plantsolve.schemas.common import FiniteFloat, Report, StrictModel
+from plantsolve.solvers.base import Artifact, FieldError, InputRejected, SolverError, SolverSpec
 
 
 class ComputeRequest(StrictModel):
@@ -106,7 +105,7 @@ def solve_stubborn(request: CrashRequest, progress) -> CrashResult:
             pass
 
 
-register(
+SPECS = (
     SolverSpec(
         kind="test-compute",
         request_model=ComputeRequest,
@@ -119,9 +118,9 @@ register(
         upload_extensions=(".txt",),
         soft_time_limit=60,
         time_limit=90,
-    )
+    ),
+    SolverSpec("test-crash", CrashRequest, CrashResult, solve_crash, "test-1", max_attempts=2),
+    SolverSpec("test-fail", CrashRequest, CrashResult, solve_fail, "test-1"),
+    SolverSpec("test-hang", CrashRequest, CrashResult, solve_hang, "test-1", soft_time_limit=1.0, time_limit=2.0),
+    SolverSpec("test-stubborn", CrashRequest, CrashResult, solve_stubborn, "test-1", soft_time_limit=1.0, time_limit=2.0),
 )
-register(SolverSpec("test-crash", CrashRequest, CrashResult, solve_crash, "test-1", max_attempts=2))
-register(SolverSpec("test-fail", CrashRequest, CrashResult, solve_fail, "test-1"))
-register(SolverSpec("test-hang", CrashRequest, CrashResult, solve_hang, "test-1", soft_time_limit=1.0, time_limit=2.0))
-register(SolverSpec("test-stubborn", CrashRequest, CrashResult, solve_stubborn, "test-1", soft_time_limit=1.0, time_limit=2.0))

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from schemas.tube import TubeRequest
-from solvers.tube.simulate import make_model, surface_samples
+from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 SHAPES = {
     "straight": [[80, 0, 0, 0]],
@@ -32,8 +32,8 @@ def lra_array(result):
 
 def same_tube(result, rows, tol_len=0.15, tol_ang=0.1, tol_rad=0.01):
     """Compare a result with LRA rows, allowing the reversed walking direction."""
-    from solvers.tube.geometry import reverse_model
-    from solvers.tube.pipeline import model_rows
+    from plantsolve.solvers.tube.geometry import reverse_model
+    from plantsolve.solvers.tube.solve import model_rows
 
     truth = make_model(rows, 4.0)
     got = lra_array(result)

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from solvers.tube.geometry import (TubeModel, build_spine, closest_points, sample_centreline, spine_distance)
-from solvers.tube.inspection import align
-from solvers.tube.simulate import random_tube
+from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, closest_points, sample_centreline, spine_distance)
+from plantsolve.solvers.tube.inspection import align
+from plantsolve.solvers.tube.synthetic import random_tube
 
 
 def _brute(pts, model, step):

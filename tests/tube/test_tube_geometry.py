@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from solvers.tube.geometry import (build_spine, control_polygon, model_from_control_polygon, model_from_spine,
+from plantsolve.solvers.tube.geometry import (build_spine, control_polygon, model_from_control_polygon, model_from_spine,
                                    reverse_model, spine_distance, frame_quaternion, quaternion_frame)
-from solvers.tube.simulate import random_tube, surface_samples
+from plantsolve.solvers.tube.synthetic import random_tube, surface_samples
 
 
 def _close(a, b, tol=1e-9):
@@ -52,7 +52,7 @@ def test_arc_normal_orientation_counter_clockwise():
 
 
 def test_lra_convention_first_bend_toward_local_y():
-    from solvers.tube.simulate import make_model
+    from plantsolve.solvers.tube.synthetic import make_model
 
     m = make_model([[10, 0, 90, 5], [20, 90, 90, 5], [7, 0, 0, 0]], 1.0)
     sp = build_spine(m)

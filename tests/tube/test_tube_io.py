@@ -10,16 +10,16 @@ import pytest
 import trimesh
 from pydantic import ValidationError
 
-from schemas.tube import TubeRequest
-from solvers.base import InputRejected
-from solvers.tube import TIME_LIMITS, UPLOAD_EXTENSIONS, __version__, check_input, parse_upload, render_artifacts, solve
-from solvers.tube.geometry import build_spine, model_from_control_polygon, spine_distance
-from solvers.tube.pointio import request_points
+from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.tube import SPEC, __version__, check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.tube.geometry import build_spine, model_from_control_polygon, spine_distance
+from plantsolve.solvers.tube.upload import request_points
 
 
 @pytest.fixture(scope="module")
 def cloud():
-    from solvers.tube.simulate import make_model, surface_samples
+    from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
     m = make_model([[30, 0, 90, 12], [20, 45, 60, 10], [25, 0, 0, 0]], 4.0)
     return m, surface_samples(m, 3000, np.random.default_rng(0), noise=0.02)
@@ -32,8 +32,8 @@ def _npy_bytes(a):
 
 
 def test_public_contract():
-    assert UPLOAD_EXTENSIONS == (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
-    assert TIME_LIMITS[0] < TIME_LIMITS[1] and isinstance(__version__, str)
+    assert SPEC.upload_extensions == (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
+    assert SPEC.soft_time_limit < SPEC.time_limit and isinstance(__version__, str)
 
 
 @pytest.mark.parametrize("fmt", ["ply_ascii", "ply_binary", "xyz", "csv", "txt", "npy", "json_request", "json_list"])
@@ -158,7 +158,7 @@ def test_artifacts(cloud):
 
 
 def test_progress_is_reported_and_cancellation_propagates(cloud):
-    from solvers.base import Cancelled
+    from plantsolve.solvers.base import Cancelled
 
     _, pts = cloud
     seen = []

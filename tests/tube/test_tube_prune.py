@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from solvers.tube import fit, prune
-from solvers.tube.geometry import build_spine, sample_centreline, spine_distance
-from solvers.tube.simulate import make_model
+from plantsolve.solvers.tube import fit, prune
+from plantsolve.solvers.tube.geometry import build_spine, sample_centreline, spine_distance
+from plantsolve.solvers.tube.synthetic import make_model
 
 
 def test_merge_of_coplanar_touching_arcs_is_the_same_curve():

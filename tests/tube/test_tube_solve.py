@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from solvers.tube import solve
-from solvers.tube.simulate import random_rotation
+from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube.synthetic import random_rotation
 
 
 @pytest.mark.parametrize("name", ["straight", "bend90", "s_bend", "u_bend", "bend200", "back_to_back", "bend3"])
@@ -34,7 +34,7 @@ def test_noisy_single_view_scan_with_outliers(s_bend_scan, tk):
     # residuals follow the simulated noise σ = 0.05 (median |N(0,σ)| = 0.674σ)
     assert 0.8 * 0.0337 < r.residuals.median < 1.2 * 0.0337
     # injected outliers (the last 0.5 %) far from the surface are all reported
-    from solvers.tube.geometry import build_spine, spine_distance
+    from plantsolve.solvers.tube.geometry import build_spine, spine_distance
 
     d, _ = spine_distance(pts, build_spine(m))
     far = np.flatnonzero(np.abs(d - 4.0) > 0.5)
@@ -117,8 +117,8 @@ def test_inspection_springback_and_correction(tk):
 
 def test_random_bench_tube_with_b2b_and_large_bend(tk):
     """A bench-like tube: 7 bends with a 196° bend right after another bend, single view."""
-    from solvers.tube.geometry import reverse_model
-    from solvers.tube.simulate import clearance, random_tube, surface_samples
+    from plantsolve.solvers.tube.geometry import reverse_model
+    from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples
 
     rng = np.random.default_rng(1000)
     while True:

@@ -3,9 +3,9 @@
 import numpy as np
 from scipy.spatial import cKDTree
 
-from solvers.tube import arcline, curve, local_fit, spine
-from solvers.tube.geometry import build_spine, sample_centreline, spine_distance
-from solvers.tube.simulate import make_model, surface_samples
+from plantsolve.solvers.tube import arcline, curve, local_fit, spine
+from plantsolve.solvers.tube.geometry import build_spine, sample_centreline, spine_distance
+from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 
 def _cylinder(n=4000, r=5.0, length=60.0, seed=0, noise=0.0):

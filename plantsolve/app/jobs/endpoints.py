@@ -1,0 +1,171 @@
+"""/v1 routes: submit per solver kind, read, list, cancel, result, artifacts, input."""
+
+from __future__ import annotations
+
+import uuid
+from typing import Annotated, Any, Mapping
+
+from fastapi import APIRouter, Depends, Header, Query, Request, Response
+from fastapi.responses import FileResponse, JSONResponse
+from starlette.concurrency import run_in_threadpool
+from starlette.datastructures import UploadFile
+
+from plantsolve.app.auth import require_api_key
+from plantsolve.app.jobs.service import JobService
+from plantsolve.app.problems import NotFound, UnsupportedMediaType, Unprocessable, field_problem, responses
+from plantsolve.schemas.jobs import JobList, JobStatus, JobView
+from plantsolve.solvers.base import SolverSpec
+
+IdempotencyKey = Annotated[
+    str | None,
+    Header(
+        alias="Idempotency-Key",
+        min_length=1,
+        max_length=255,
+        pattern=r"^[\x21-\x7e][\x20-\x7e]*$",
+        description="Same key and same body return the same job (200); same key with another body is a 422.",
+    ),
+]
+
+
+def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) -> Response:
+    """Serialise an already-validated model once (the route's response_model documents it)."""
+    return Response(model.model_dump_json(), status_code=status_code, headers=headers, media_type="application/json")
+
+
+def get_service(request: Request) -> JobService:
+    return request.app.state.jobs
+
+
+Service = Annotated[JobService, Depends(get_service)]
+
+
+def submit_route(kind: str):
+    """The POST /v1/<kind>/jobs handler: JSON body or multipart upload (``file`` + ``options``)."""
+
+    async def submit(request: Request, service: Service, idempotency_key: IdempotencyKey = None) -> Response:
+        content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        if content_type == "application/json" or content_type.endswith("+json"):
+            body = await request.body()
+            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key)
+        elif content_type == "multipart/form-data":
+            limit = request.app.state.settings.max_body_bytes
+            form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
+            upload = form.get("file")
+            if not isinstance(upload, UploadFile):
+                raise Unprocessable(
+                    "A multipart submission needs a 'file' part.",
+                    errors=[field_problem(["file"], "missing file part", "missing")],
+                )
+            content = await upload.read()
+            options = form.get("options")
+            if options is not None and not isinstance(options, str):
+                options = (await options.read()).decode("utf-8", "replace")
+            submitted = await run_in_threadpool(
+                service.submit_upload_view, kind, upload.filename or "upload", content, options, idempotency_key
+            )
+        else:
+            raise UnsupportedMediaType(
+                f"Content-Type {content_type or '(none)'!r} is not accepted: send application/json or multipart/form-data."
+            )
+        job, view = submitted.job, submitted.view
+        return _json(view, status_code=202 if submitted.created else 200, headers={"Location": f"/v1/jobs/{job.id}"})
+
+    submit.__name__ = f"submit_{kind}_job"
+    return submit
+
+
+def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
+    name = spec.request_model.__name__
+    extensions = ", ".join(spec.upload_extensions) or "none"
+    content: dict[str, Any] = {"application/json": {"schema": {"$ref": f"#/components/schemas/{name}"}}}
+    if spec.upload_extensions:
+        content["multipart/form-data"] = {
+            "schema": {
+                "type": "object",
+                "required": ["file"],
+                "properties": {
+                    "file": {"type": "string", "format": "binary", "description": f"Accepted file types: {extensions}."},
+                    "options": {"type": "string", "description": "JSON object: the request's 'options'."},
+                },
+            }
+        }
+    return {"requestBody": {"required": True, "content": content}}
+
+
+def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401))
+
+    for kind in sorted(kinds):
+        spec = kinds[kind]
+        router.add_api_route(
+            f"/{kind}/jobs",
+            submit_route(kind),
+            methods=["POST"],
+            status_code=202,
+            response_model=JobView,
+            tags=[kind],
+            summary=f"Submit a {kind} job",
+            description=(spec.description or f"Run the {kind} solver.")
+            + "\n\nAnswers 202 with the job and a Location header; 200 with the existing job for a repeated Idempotency-Key.",
+            responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(413, 415, 422)},
+            openapi_extra=submit_openapi(spec),
+        )
+
+    @router.get("/jobs", response_model=JobList, tags=["jobs"], responses=responses(422), summary="List jobs, newest first")
+    def list_jobs(
+        service: Service,
+        kind: str | None = None,
+        status: JobStatus | None = None,
+        cursor: str | None = Query(default=None, description="next_cursor of the previous page"),
+        limit: int = Query(default=50, ge=1, le=200),
+    ) -> JobList:
+        return service.list(kind, status, cursor, limit)
+
+    @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), summary="Job status")
+    def get_job(job_id: uuid.UUID, service: Service) -> Response:
+        return _json(service.view(service.get(job_id)))
+
+    @router.get(
+        "/jobs/{job_id}/result",
+        tags=["jobs"],
+        responses={200: {"description": "The solver's result (schema per kind: see components <Kind>Result)"}, **responses(404, 409, 422)},
+        summary="Result of a succeeded job",
+    )
+    def get_result(job_id: uuid.UUID, service: Service) -> JSONResponse:
+        return JSONResponse(service.result(job_id))
+
+    @router.post("/jobs/{job_id}/cancel", response_model=JobView, tags=["jobs"], responses=responses(404, 409, 422), summary="Cancel a queued or running job")
+    def cancel_job(job_id: uuid.UUID, service: Service) -> JobView:
+        return service.view(service.cancel(job_id))
+
+    @router.get(
+        "/jobs/{job_id}/artifacts/{name}",
+        tags=["jobs"],
+        response_class=FileResponse,
+        responses={200: {"description": "The file, with its media type"}, **responses(404, 422)},
+        summary="Download an artifact",
+    )
+    def get_artifact(job_id: uuid.UUID, name: str, service: Service) -> FileResponse:
+        service.get(job_id)
+        artifact = service.ctx.repo.artifact(job_id, name)
+        if artifact is None:
+            raise NotFound(f"Job {job_id} has no artifact {name!r}.")
+        return FileResponse(service.ctx.files.path(artifact.path), media_type=artifact.media_type, filename=artifact.name)
+
+    @router.get(
+        "/jobs/{job_id}/input",
+        tags=["jobs"],
+        responses={200: {"description": "The request exactly as stored: JSON, or the uploaded file"}, **responses(404, 422)},
+        summary="What was submitted",
+    )
+    def get_input(job_id: uuid.UUID, service: Service) -> Response:
+        job = service.get(job_id)
+        if job.input_kind == "json":
+            return JSONResponse(job.input)
+        path = service.ctx.files.path(job.input_file)
+        if job.input_kind == "json_file":
+            return FileResponse(path, media_type="application/json")
+        return FileResponse(path, media_type="application/octet-stream", filename=job.input_filename)
+
+    return router

@@ -1,0 +1,293 @@
+"""Submitting and reading jobs: validation, idempotency, storage of the input, enqueue after
+commit, and the views returned by the API."""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import hashlib
+import json
+import re
+import uuid
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from pydantic import ValidationError
+
+from plantsolve.app.problems import (
+    Conflict,
+    NotFound,
+    UnsupportedMediaType,
+    Unprocessable,
+    field_problem,
+    from_input_rejected,
+    from_validation_error,
+)
+from plantsolve.schemas.jobs import ArtifactInfo, JobList, JobProgress, JobTimings, JobView
+from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec
+from plantsolve.workers.context import ServiceContext
+from plantsolve.workers.dispatch import Dispatcher
+from plantsolve.workers.runner import failure_report
+from plantsolve.store.models import Job, utcnow
+from plantsolve.store.repository import as_utc, is_finished
+
+
+@dataclass
+class Submitted:
+    job: Job
+    created: bool
+    view: JobView | None = None
+
+
+def _canonical(value: Any) -> bytes:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode()
+
+
+def _safe_filename(name: str) -> str:
+    base = re.sub(r"[^A-Za-z0-9._-]+", "_", name.rsplit("/", 1)[-1].rsplit("\\", 1)[-1]).strip("._")
+    return base[:120] or "upload"
+
+
+class JobService:
+    def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
+        self.ctx = ctx
+        self.dispatcher = dispatcher
+
+    # ---- submission ---------------------------------------------------------------------
+
+    def spec(self, kind: str) -> SolverSpec:
+        spec = self.ctx.spec(kind)
+        if spec is None:
+            raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(sorted(self.ctx.kinds))}.")
+        return spec
+
+    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
+        """submit_json plus the job's view, in one thread hop for the async route."""
+        submitted = self.submit_json(kind, body, idempotency_key)
+        submitted.view = self.view(submitted.job)
+        return submitted
+
+    def submit_upload_view(self, *args) -> Submitted:
+        submitted = self.submit_upload(*args)
+        submitted.view = self.view(submitted.job)
+        return submitted
+
+    def submit_json(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
+        spec = self.spec(kind)
+        try:
+            raw = json.loads(body)
+        except (UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise Unprocessable(
+                f"The body is not valid JSON: {error}", errors=[field_problem([], f"invalid JSON: {error}", "json_invalid")]
+            ) from None
+        try:
+            request = spec.request_model.model_validate(raw)
+        except ValidationError as error:
+            raise from_validation_error(error) from None
+        self._check(spec, request)
+        body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
+        job_id = uuid.uuid4()
+        if len(body) > self.ctx.settings.inline_input_bytes:
+            path, _, _ = self.ctx.files.put(f"{job_id}/input/request.json", _canonical(raw))
+            fields = {"input_kind": "json_file", "input_file": path}
+        else:
+            fields = {"input_kind": "json", "input": raw}
+        return self._create(spec, job_id, body_hash, idempotency_key, fields)
+
+    def submit_upload(
+        self, kind: str, filename: str, content: bytes, options_text: str | None, idempotency_key: str | None
+    ) -> Submitted:
+        spec = self.spec(kind)
+        if spec.parse_upload is None or not spec.upload_extensions:
+            raise UnsupportedMediaType(f"Solver kind {kind!r} takes JSON bodies only.")
+        extension = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
+        if extension not in spec.upload_extensions:
+            raise UnsupportedMediaType(
+                f"File type {extension or '(none)'!r} is not accepted by {kind!r}; "
+                f"accepted: {', '.join(spec.upload_extensions)}."
+            )
+        options: dict | None = None
+        if options_text:
+            try:
+                options = json.loads(options_text)
+            except json.JSONDecodeError as error:
+                raise Unprocessable(
+                    "The 'options' form field is not valid JSON.",
+                    errors=[field_problem(["options"], f"invalid JSON: {error}", "json_invalid")],
+                ) from None
+            if not isinstance(options, dict):
+                raise Unprocessable(
+                    "The 'options' form field must be a JSON object.",
+                    errors=[field_problem(["options"], "must be a JSON object", "dict_type")],
+                )
+        if not content:
+            raise Unprocessable("The uploaded file is empty.", errors=[field_problem(["file"], "empty file", "value_error")])
+        try:
+            request = spec.parse_upload(filename, content, options)
+        except InputRejected as error:
+            raise from_input_rejected(error) from None
+        except ValidationError as error:
+            raise from_validation_error(error) from None
+        self._check(spec, request)
+        digest = hashlib.sha256()
+        for part in (kind.encode(), extension.encode(), _canonical(options), content):
+            digest.update(hashlib.sha256(part).digest())
+        job_id = uuid.uuid4()
+        path, _, _ = self.ctx.files.put(f"{job_id}/input/{_safe_filename(filename)}", content)
+        fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options}
+        return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields)
+
+    @staticmethod
+    def _check(spec: SolverSpec, request: Any) -> None:
+        if spec.check_input is None:
+            return
+        try:
+            spec.check_input(request)
+        except InputRejected as error:
+            raise from_input_rejected(error) from None
+
+    def _create(
+        self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict
+    ) -> Submitted:
+        job = Job(
+            id=job_id,
+            kind=spec.kind,
+            status="queued",
+            attempt=0,
+            max_attempts=spec.max_attempts or self.ctx.settings.max_attempts,
+            progress=0.0,
+            progress_message="queued",
+            idempotency_key=key,
+            body_hash=body_hash,
+            solver_version=spec.version,
+            enqueued_at=utcnow(),  # enqueued right after the commit; the sweeper retries if that fails
+            **fields,
+        )
+        stored, created = self.ctx.repo.create(job)
+        if not created:
+            if stored.body_hash != body_hash or stored.kind != spec.kind:
+                raise Unprocessable(
+                    "This Idempotency-Key was already used with a different request.",
+                    errors=[field_problem(["header", "Idempotency-Key"], "already used with a different body", "idempotency_conflict")],
+                )
+            return Submitted(stored, False)
+        # Enqueue only after the row is committed: a worker must always find the job.
+        try:
+            self.dispatcher.enqueue(stored.id, stored.kind)
+        except Exception:  # the broker is down: the row is safe, the sweeper enqueues it later
+            pass
+        return Submitted(stored, True)
+
+    # ---- reads and cancel -------------------------------------------------------------------
+
+    def get(self, job_id: uuid.UUID) -> Job:
+        job = self.ctx.repo.get(job_id)
+        if job is None:
+            raise NotFound(f"No job {job_id}.")
+        return job
+
+    def cancel(self, job_id: uuid.UUID) -> Job:
+        outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."))
+        if outcome is None:
+            raise NotFound(f"No job {job_id}.")
+        if outcome != "cancelled":
+            raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
+        return self.get(job_id)
+
+    def result(self, job_id: uuid.UUID) -> Any:
+        job = self.get(job_id)
+        if job.status != "succeeded":
+            if is_finished(job.status):
+                raise Conflict(
+                    f"Job {job_id} {job.status}; it has no result. See its report.",
+                    extra={"status": job.status, "report": job.report},
+                )
+            raise Conflict(f"Job {job_id} is {job.status}; the result is not ready yet.", extra={"status": job.status})
+        return job.result
+
+    def answer(self, spec: SolverSpec, operation: ResultOperation, job_id: uuid.UUID, body: Any) -> Any:
+        """A kind's synchronous result operation (e.g. perfmap's inverse query) on a finished job."""
+        job = self.get(job_id)
+        if job.kind != spec.kind:
+            raise NotFound(f"Job {job_id} is a {job.kind!r} job, not a {spec.kind!r} job.")
+        if job.status != "succeeded":
+            raise Conflict(
+                f"Job {job_id} is {job.status}; only a succeeded {spec.kind} job can answer '{operation.name}'.",
+                extra={"status": job.status},
+            )
+        result = spec.result_model.model_validate(job.result)
+        try:
+            return operation.answer(result, body)
+        except ResultNotUsable as error:
+            raise Conflict(f"Job {job_id} {error}") from None
+        except InputRejected as error:
+            raise from_input_rejected(error) from None
+
+    def list(self, kind: str | None, status: str | None, cursor: str | None, limit: int) -> JobList:
+        after = decode_cursor(cursor) if cursor else None
+        jobs = self.ctx.repo.list(kind=kind, status=status, after=after, limit=limit + 1)
+        more = len(jobs) > limit
+        jobs = jobs[:limit]
+        next_cursor = encode_cursor(jobs[-1]) if more and jobs else None
+        return JobList(items=[self.view(job, with_artifacts=False) for job in jobs], next_cursor=next_cursor)
+
+    def view(self, job: Job, *, with_artifacts: bool = True) -> JobView:
+        created, started, finished = as_utc(job.created_at), as_utc(job.started_at), as_utc(job.finished_at)
+        base = f"/v1/jobs/{job.id}"
+        artifacts = []
+        if with_artifacts and job.status == "succeeded":
+            artifacts = [
+                ArtifactInfo(name=a.name, media_type=a.media_type, size=a.size, sha256=a.sha256, url=f"{base}/artifacts/{a.name}")
+                for a in self.ctx.repo.artifacts(job.id)
+            ]
+        links = {"self": base, "result": f"{base}/result", "cancel": f"{base}/cancel", "input": f"{base}/input"}
+        return JobView(
+            id=job.id,
+            kind=job.kind,
+            status=job.status,
+            attempt=job.attempt,
+            max_attempts=job.max_attempts,
+            progress=JobProgress(fraction=job.progress, message=job.progress_message or ""),
+            timings=JobTimings(
+                created_at=created,
+                started_at=started,
+                finished_at=finished,
+                queued_seconds=(started - created).total_seconds() if started else None,
+                run_seconds=job.run_seconds,
+            ),
+            solver_version=job.solver_version,
+            idempotency_key=job.idempotency_key,
+            summary=_summary(job),
+            report=job.report,
+            artifacts=artifacts,
+            links=links,
+        )
+
+
+def _summary(job: Job) -> str:
+    report = job.report or {}
+    if job.status == "queued":
+        return "Waiting for a worker." if job.attempt == 0 else f"Re-queued after attempt {job.attempt}: {report.get('message', '')}"
+    if job.status == "running":
+        return f"Running (attempt {job.attempt}): {job.progress_message} ({job.progress:.0%})."
+    if job.status == "succeeded":
+        warnings = len(report.get("warnings") or [])
+        return report.get("message") or ("Succeeded" + (f" with {warnings} warning(s)." if warnings else "."))
+    return report.get("message") or job.status.capitalize() + "."
+
+
+def encode_cursor(job: Job) -> str:
+    payload = json.dumps([as_utc(job.created_at).isoformat(), str(job.id)]).encode()
+    return base64.urlsafe_b64encode(payload).decode().rstrip("=")
+
+
+def decode_cursor(cursor: str) -> tuple[datetime, uuid.UUID]:
+    try:
+        padded = cursor + "=" * (-len(cursor) % 4)
+        created, job_id = json.loads(base64.urlsafe_b64decode(padded))
+        return as_utc(datetime.fromisoformat(created)), uuid.UUID(job_id)
+    except (ValueError, TypeError, binascii.Error, json.JSONDecodeError):
+        raise Unprocessable(
+            "The cursor is not one this API returned.", errors=[field_problem(["query", "cursor"], "invalid cursor", "value_error")]
+        ) from None

@@ -1,0 +1,118 @@
+"""The FastAPI application: ``create_app()`` wires settings, database, dispatcher and routes."""
+
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.openapi.utils import get_openapi
+from fastapi.responses import JSONResponse, RedirectResponse
+
+from plantsolve.app import problems
+from plantsolve.app.dashboard import build_dashboard
+from plantsolve.app.jobs.endpoints import build_router
+from plantsolve.app.jobs.operations import build_operations_router
+from plantsolve.app.jobs.service import JobService
+from plantsolve.app.middleware import BodyLimitMiddleware
+from plantsolve.app.settings import AppSettings, get_settings
+from plantsolve.schemas.jobs import HealthStatus, Problem
+from plantsolve.workers.context import ServiceContext
+from plantsolve.workers.dispatch import make_dispatcher
+
+log = logging.getLogger("plantsolve.api")
+
+
+def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) -> FastAPI:
+    """Build the app. ``run_jobs=False`` keeps the embedded pool stopped (tests that drive
+    the runner by hand)."""
+    settings = settings or get_settings()
+    ctx = ServiceContext.create(settings)
+    dispatcher = make_dispatcher(ctx)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        if settings.auto_migrate:
+            ctx.db.migrate()
+        if run_jobs:
+            dispatcher.start()
+        try:
+            yield
+        finally:
+            if run_jobs:
+                dispatcher.stop()
+            ctx.close()
+
+    app = FastAPI(
+        title="plantsolve",
+        version="0.1.0",
+        summary="Engineering solvers for measured plant geometry and test-rig data, run as jobs.",
+        description=(
+            "Submit a job with `POST /v1/<kind>/jobs` (JSON or a file upload), poll `GET /v1/jobs/{id}`, "
+            "then fetch `/result` and `/artifacts/{name}`. Errors are RFC 9457 problem documents. "
+            "Lengths are in the request's `units` (default mm), angles in degrees, quaternions `[w, x, y, z]`."
+        ),
+        lifespan=lifespan,
+    )
+    app.state.settings = settings
+    app.state.ctx = ctx
+    app.state.dispatcher = dispatcher
+    app.state.jobs = JobService(ctx, dispatcher)
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    problems.install(app)
+    app.include_router(build_router(ctx.kinds))
+    app.include_router(build_operations_router(ctx.kinds))
+    app.include_router(build_dashboard())
+    _install_health(app)
+    app.openapi = lambda: _openapi(app)
+    return app
+
+
+def _install_health(app: FastAPI) -> None:
+    @app.get("/", include_in_schema=False)
+    def root() -> RedirectResponse:
+        return RedirectResponse("/dashboard")
+
+    @app.get("/healthz", response_model=HealthStatus, tags=["health"], summary="The process is up")
+    def healthz() -> HealthStatus:
+        return HealthStatus(status="ok")
+
+    @app.get(
+        "/readyz",
+        response_model=HealthStatus,
+        tags=["health"],
+        summary="Database (and broker, when configured) reachable",
+        responses={503: {"model": HealthStatus, "description": "A dependency is unreachable"}},
+    )
+    def readyz(request: Request) -> Any:
+        checks: dict[str, str] = {}
+        ok = True
+        for name, probe in (("database", request.app.state.ctx.db.ping), ("queue", request.app.state.dispatcher.ping)):
+            try:
+                probe()
+                checks[name] = "ok"
+            except Exception as error:
+                ok = False
+                checks[name] = f"unreachable: {type(error).__name__}: {error}"[:300]
+        status = HealthStatus(status="ok" if ok else "unavailable", checks=checks)
+        return JSONResponse(status.model_dump(), status_code=200 if ok else 503)
+
+
+def _openapi(app: FastAPI) -> dict[str, Any]:
+    """OpenAPI with every solver's request and result schema among the components (the
+    submit routes read their body by hand to accept JSON or multipart)."""
+    if app.openapi_schema:
+        return app.openapi_schema
+    schema = get_openapi(title=app.title, version=app.version, summary=app.summary, description=app.description, routes=app.routes)
+    components = schema.setdefault("components", {}).setdefault("schemas", {})
+    models = [Problem]
+    for spec in app.state.ctx.kinds.values():
+        models += [spec.request_model, spec.result_model]
+    for model in models:
+        definition = model.model_json_schema(ref_template="#/components/schemas/{model}", by_alias=True)
+        for name, sub in definition.pop("$defs", {}).items():
+            components.setdefault(name, sub)
+        components[model.__name__] = definition
+    app.openapi_schema = schema
+    return schema

@@ -1,0 +1,168 @@
+"""Errors as classes with status codes, rendered as RFC 9457 ``application/problem+json``.
+
+Every error the API returns goes through here, including FastAPI's own validation errors
+and anything unexpected (a 500 still gets a problem document, never a stack trace).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, Iterable, Sequence
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import ValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from plantsolve.schemas.jobs import Problem
+from plantsolve.solvers.base import InputRejected
+
+log = logging.getLogger("plantsolve.api")
+
+PROBLEM_JSON = "application/problem+json"
+TYPE_BASE = "https://plantsolve.dev/problems/"
+
+
+def pointer(loc: Sequence[str | int]) -> str:
+    return "".join("/" + str(part).replace("~", "~0").replace("/", "~1") for part in loc)
+
+
+def field_problem(loc: Sequence[str | int], msg: str, type_: str = "value_error") -> dict[str, Any]:
+    return {"loc": list(loc), "pointer": pointer(loc), "msg": msg, "type": type_}
+
+
+class ProblemError(Exception):
+    status: int = 500
+    title: str = "Internal error"
+    slug: str = "internal"
+
+    def __init__(
+        self,
+        detail: str | None = None,
+        *,
+        errors: list[dict[str, Any]] | None = None,
+        extra: dict[str, Any] | None = None,
+        headers: dict[str, str] | None = None,
+    ):
+        self.detail = detail
+        self.errors = errors
+        self.extra = extra
+        self.headers = headers or {}
+        super().__init__(detail or self.title)
+
+    def to_problem(self, instance: str | None = None) -> Problem:
+        return Problem(
+            type=TYPE_BASE + self.slug,
+            title=self.title,
+            status=self.status,
+            detail=self.detail,
+            instance=instance,
+            errors=self.errors,
+            extra=self.extra,
+        )
+
+
+class Unauthorized(ProblemError):
+    status, title, slug = 401, "Missing or invalid API key", "unauthorized"
+
+    def __init__(self, detail: str):
+        super().__init__(detail, headers={"WWW-Authenticate": 'Bearer realm="plantsolve"'})
+
+
+class NotFound(ProblemError):
+    status, title, slug = 404, "Not found", "not-found"
+
+
+class Conflict(ProblemError):
+    status, title, slug = 409, "Conflict with the job's state", "conflict"
+
+
+class PayloadTooLarge(ProblemError):
+    status, title, slug = 413, "Request body too large", "payload-too-large"
+
+
+class UnsupportedMediaType(ProblemError):
+    status, title, slug = 415, "Unsupported media type", "unsupported-media-type"
+
+
+class Unprocessable(ProblemError):
+    status, title, slug = 422, "Invalid input", "invalid-input"
+
+
+class ServiceUnavailable(ProblemError):
+    status, title, slug = 503, "Service unavailable", "unavailable"
+
+
+def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = ()) -> Unprocessable:
+    errors = [field_problem([*prefix, *e["loc"]], e["msg"], e["type"]) for e in error.errors(include_url=False)]
+    return Unprocessable(_summary(errors), errors=errors)
+
+
+def from_input_rejected(error: InputRejected, prefix: Sequence[str | int] = ()) -> Unprocessable:
+    errors = [field_problem([*prefix, *e.loc], e.msg, e.type) for e in error.errors]
+    return Unprocessable(_summary(errors), errors=errors)
+
+
+def _summary(errors: Iterable[dict[str, Any]]) -> str:
+    parts = [f"{e['pointer'] or '(body)'}: {e['msg']}" for e in errors]
+    text = "; ".join(parts[:5])
+    return text + (f" (and {len(parts) - 5} more)" if len(parts) > 5 else "")
+
+
+def problem_response(error: ProblemError, request: Request | None = None) -> JSONResponse:
+    problem = error.to_problem(instance=str(request.url.path) if request is not None else None)
+    return JSONResponse(
+        problem.model_dump(mode="json", exclude_none=True),
+        status_code=error.status,
+        media_type=PROBLEM_JSON,
+        headers=error.headers,
+    )
+
+
+_STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, PayloadTooLarge, UnsupportedMediaType, Unprocessable)}
+
+
+def install(app: FastAPI) -> None:
+    @app.exception_handler(ProblemError)
+    async def _problem(request: Request, error: ProblemError):
+        return problem_response(error, request)
+
+    @app.exception_handler(RequestValidationError)
+    async def _validation(request: Request, error: RequestValidationError):
+        errors = [field_problem(e["loc"], e["msg"], e["type"]) for e in error.errors()]
+        return problem_response(Unprocessable(_summary(errors), errors=errors), request)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, error: StarletteHTTPException):
+        cls = _STATUS_CLASSES.get(error.status_code)
+        if cls is Unauthorized:
+            problem = Unauthorized(str(error.detail))
+        elif cls is not None:
+            problem = cls(str(error.detail))
+        else:
+            problem = ProblemError(str(error.detail))
+            problem.status, problem.title, problem.slug = error.status_code, str(error.detail), "http"
+        return problem_response(problem, request)
+
+    @app.exception_handler(Exception)
+    async def _unexpected(request: Request, error: Exception):
+        log.exception("unhandled error on %s", request.url.path)
+        return problem_response(ProblemError("An unexpected error occurred; it has been logged."), request)
+
+
+PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
+    status: {"model": Problem, "content": {PROBLEM_JSON: {"schema": {"$ref": "#/components/schemas/Problem"}}}, "description": title}
+    for status, title in (
+        (401, "Missing or invalid API key (only when API_KEYS is set)"),
+        (404, "No such job or artifact"),
+        (409, "The job is not in a state that allows this"),
+        (413, "Request body above MAX_BODY_BYTES"),
+        (415, "Unsupported content type or file type"),
+        (422, "Invalid input: 'errors' names each bad field by its JSON path"),
+    )
+}
+
+
+def responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
+    return {status: PROBLEM_RESPONSES[status] for status in statuses}

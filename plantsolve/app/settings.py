@@ -1,0 +1,38 @@
+"""HTTP settings: API keys, body limits, schema migration at start-up.
+
+:class:`AppSettings` extends the worker settings (the API process also runs the embedded pool
+and the sweeper); see :mod:`plantsolve.store.settings` for the layering.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Annotated
+
+from pydantic import Field, field_validator
+from pydantic_settings import NoDecode
+
+from plantsolve.workers.settings import WorkerSettings, split_commas
+
+
+class AppSettings(WorkerSettings):
+    api_keys: Annotated[list[str], NoDecode] = Field(
+        default_factory=list,
+        description="Comma-separated API keys. When set, every /v1 call needs 'Authorization: Bearer <key>'.",
+    )
+    max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
+    inline_input_bytes: int = Field(
+        default=1024 * 1024,
+        description="JSON inputs larger than this are stored as a file and referenced from the job row.",
+    )
+    auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
+
+    @field_validator("api_keys", mode="before")
+    @classmethod
+    def _split_keys(cls, value: object) -> object:
+        return split_commas(value)
+
+
+@lru_cache
+def get_settings() -> AppSettings:
+    return AppSettings()

@@ -1,0 +1,194 @@
+"""Request and result models of the ``alignment`` solver (issue 3).
+
+A pipe system is a set of components (straight pipes and catalogue fittings), each with
+ports (the paper's *ConnectionPoints*: a point and a unit direction pointing out of the
+component), and a list of connections between ports. The solver moves the components as
+little as possible so that every connected pair of ports ends at the same point with
+opposite directions.
+
+Conventions: lengths in the request's ``units``; angles in degrees; quaternions
+``[w, x, y, z]``; dual quaternions ``[w, x, y, z, w', x', y', z']`` (real part then dual
+part, ``x -> R x + t`` with dual part ``0.5 * (0, t) * real``).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from plantsolve.schemas.common import FiniteFloat, Quaternion, Report, StrictModel, Units, Vec3
+
+FittingType = Literal[
+    "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
+]
+
+
+class Port(StrictModel):
+    """A ConnectionPoint: where a component joins its neighbour."""
+
+    position: Vec3 = Field(description="Port centre point, in the request's units.")
+    direction: Vec3 = Field(
+        description="Direction pointing out of the component (any non-zero length; normalised by the solver)."
+    )
+
+
+class Component(StrictModel):
+    """A straight pipe (two collinear, opposite ports; its length may change) or a rigid fitting."""
+
+    id: str = Field(min_length=1, max_length=200, description="Unique component id.")
+    kind: Literal["pipe", "fitting"] = Field(description="'pipe' (stretchable) or 'fitting' (rigid).")
+    type: FittingType | None = Field(
+        default=None,
+        description="Catalogue type of a fitting (elbow, tee, cross, reducer, valve, flange, cap, olet, "
+        "tie_in, other); decides the minimum number of ports. Ignored for pipes.",
+    )
+    radius: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="Outside radius in the request's units. For pipes it sets the minimum pipe length "
+        "(options.min_pipe_length_factor x radius); without it a hundredth of the measured length is used.",
+    )
+    fixed: bool = Field(
+        default=False,
+        description="A tie-in: the component never moves (its output coordinates are its input, bit for bit).",
+    )
+    up: Vec3 | None = Field(
+        default=None,
+        description="Up vector of a fitting whose ports are collinear (e.g. a valve stem). After alignment it is "
+        "re-established as the original up projected onto the plane normal to the new port axis.",
+    )
+    ports: list[Port] = Field(min_length=1, max_length=16, description="Ports in a stable order.")
+
+
+class Connection(StrictModel):
+    """Two ports that must end at the same point with opposite directions."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, serialize_by_alias=True)
+
+    from_: tuple[str, int] = Field(alias="from", description="[component id, port index] of one side.")
+    to: tuple[str, int] = Field(description="[component id, port index] of the other side.")
+
+
+class AlignmentOptions(StrictModel):
+    """Tolerances and method. Unset tolerances come from ``tolerance_profile``."""
+
+    tolerance_profile: Literal["autocad_plant3d", "aveva_e3d", "revit", "custom"] = Field(
+        default="autocad_plant3d",
+        description="Preset tolerances: autocad_plant3d (1e-10 drawing units, 1e-10 rad), aveva_e3d (1 mm, "
+        "0.01 rad), revit (1e-9 ft), custom (1e-10 units, 1e-10 rad unless set). Explicit "
+        "position_tolerance / angle_tolerance override the profile.",
+    )
+    position_tolerance: FiniteFloat | None = Field(
+        default=None, gt=0, description="Largest accepted port gap, in the request's units."
+    )
+    angle_tolerance: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="Largest accepted angle between a port direction and the reversed direction of its "
+        "partner, in degrees (1e-10 rad = 5.73e-9 deg).",
+    )
+    max_iterations: int = Field(
+        default=4000, ge=1, le=1_000_000, description="Iteration cap of the dual-quaternion method."
+    )
+    method: Literal["direct", "dual_quaternion"] = Field(
+        default="direct",
+        description="'direct': rotation averaging + sparse constrained least squares (closes loops exactly); "
+        "'dual_quaternion': the paper's alternating mean-displacement iteration.",
+    )
+    pipe_stiffness: FiniteFloat = Field(
+        default=10.0,
+        gt=0,
+        description="How much more a pipe axis resists moving than a fitting of the same length.",
+    )
+    min_pipe_length_factor: FiniteFloat = Field(
+        default=0.1, gt=0, description="Minimum pipe length as a multiple of the pipe radius (no flips)."
+    )
+    step_limit: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="Dual-quaternion method: largest port movement of a fitting per step, in units "
+        "(pipes get half, long pipes less). Default: half the largest initial gap.",
+    )
+    explosion_factor: FiniteFloat = Field(
+        default=50.0,
+        gt=1,
+        description="Dual-quaternion method: if the largest gap exceeds this multiple of the initial largest gap, "
+        "the connection with the highest error is cut and the run restarts.",
+    )
+    max_cuts: int = Field(default=50, ge=0, description="Most connections the solver may cut.")
+    fixed_components: list[str] = Field(
+        default_factory=list, description="Ids of additional tie-ins (same as fixed=true on the component)."
+    )
+    shape_tolerance: FiniteFloat = Field(
+        default=1.0,
+        gt=0,
+        description="Degrees: how far a pipe's ports may be from collinear-and-opposite before the input is rejected.",
+    )
+    connection_tolerance: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="PCF upload only: end points closer than this (units) are connected. "
+        "Default: half the smaller bore radius.",
+    )
+
+
+class AlignmentRequest(StrictModel):
+    """Root of ``POST /v1/alignment/jobs``."""
+
+    units: Units = "mm"
+    components: list[Component] = Field(min_length=1, max_length=500_000)
+    connections: list[Connection] = Field(default_factory=list, max_length=1_000_000)
+    options: AlignmentOptions = Field(default_factory=AlignmentOptions)
+    source_pcf: str | None = Field(
+        default=None,
+        description="Original PCF text when the request came from a .pcf upload; used to write aligned.pcf "
+        "with every untouched attribute preserved. Component ids map to its component blocks.",
+    )
+    source_encoding: Literal["utf-8", "utf-8-sig", "cp1252", "latin-1"] | None = Field(
+        default=None,
+        description="Text encoding of the uploaded PCF (Windows plant-design tools write cp1252); aligned.pcf "
+        "is written back in the same encoding.",
+    )
+
+
+class Transform(BaseModel):
+    """Rigid motion ``x -> R x + t`` taking the input pose to the output pose."""
+
+    dual_quaternion: list[float] = Field(description="[w, x, y, z, w', x', y', z'] (unit dual quaternion).")
+    rotation: Quaternion = Field(description="Rotation quaternion [w, x, y, z].")
+    translation: Vec3 = Field(description="Translation in units (applied after the rotation).")
+
+
+class ComponentResult(BaseModel):
+    id: str
+    ports: list[Port] = Field(description="Aligned ports, same order as the request.")
+    transform: Transform = Field(
+        description="Rigid part of the motion (for pipes: the axis motion; port 0 maps exactly, port 1 also moves "
+        "by length_change along the axis)."
+    )
+    displacement: float = Field(description="Largest movement of any of its ports, in units.")
+    rotation_angle: float = Field(description="Rotation angle of the transform, degrees.")
+    length_change: float | None = Field(default=None, description="Pipes: new length minus old length, units.")
+    up: list[float] | None = Field(default=None, description="Re-established up vector (fittings with an up).")
+
+
+class ConnectionResult(BaseModel):
+    model_config = ConfigDict(populate_by_name=True, serialize_by_alias=True)
+
+    from_: tuple[str, int] = Field(alias="from")
+    to: tuple[str, int]
+    position_error: float = Field(description="Distance between the two ports after alignment, units.")
+    angle_error: float = Field(description="Angle between one direction and the reversed other, degrees.")
+    cut: bool = Field(description="True if the solver cut this connection to resolve a conflict or explosion.")
+
+
+class AlignmentResult(BaseModel):
+    converged: bool
+    iterations: int = Field(description="Iterations of the chosen method (direct: Gauss-Newton + refinement steps).")
+    max_position_error: float = Field(description="Largest gap over connections that were not cut, units.")
+    max_angle_error: float = Field(description="Largest angle error over connections that were not cut, degrees.")
+    components: list[ComponentResult]
+    connections: list[ConnectionResult]
+    cut_connections: list[int] = Field(description="Indices (request order) of the connections that were cut.")
+    report: Report

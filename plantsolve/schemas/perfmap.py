@@ -1,0 +1,277 @@
+"""Request and result models of the ``perfmap`` solver (compressor performance maps).
+
+Conventions
+-----------
+- ``theta`` (inlet guide vane setting) and ``phi`` (diffuser setting) are setting values in
+  whatever unit the rig uses (degrees, %, speed fraction…); the solver never mixes them with
+  each other: the triangulation of the settings is done on range-normalised values.
+- ``flow`` (x), ``pressure`` (y) and ``efficiency`` (eta) are the measured, usually
+  dimensionless, values; results are given in the same units.
+- A characteristic is parametrised by ``t = (x - x_min) / (x_max - x_min)`` in [0, 1], where
+  ``x_min``/``x_max`` are the smallest/largest measured flow of the setting.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, Field, model_validator
+
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Report, StrictModel
+
+Family = Literal["parabola", "log", "cubic", "spline2", "spline3"]
+FAMILY_DESCRIPTION = (
+    "Curve family. With t = (x - x_min)/(x_max - x_min): "
+    "'parabola': y = sum_k c_k B_k^2(t) (Bernstein degree 2, 3 coefficients); "
+    "'cubic': y = sum_k c_k B_k^3(t) (cubic Bezier, 4 coefficients); "
+    "'spline2'/'spline3': uniform quadratic B-spline with K = 2/3 segments on knots "
+    "-2, -1, ..., K+2 in the parameter K*t (K+2 coefficients); "
+    "'log': y = a*log(b - x) + c with coefficients [a, b, c], b > x_max, in flow units."
+)
+
+EfficiencyFamily = Literal["parabola", "cubic", "spline2", "spline3", "parabola_log"]
+EFFICIENCY_FAMILY_DESCRIPTION = (
+    "Efficiency curve family, on the same t: 'parabola', 'cubic', 'spline2', 'spline3' as for "
+    "the pressure (coefficients = control values); 'parabola_log' (beyond the paper): "
+    "eta = c0 (1-t)^2 + 2 c1 t (1-t) + c2 t^2 + a*log(beta - t) with coefficients "
+    "[c0, c1, c2, a, beta], a >= 0, beta > 1 (in t units): the log term follows the steep "
+    "efficiency drop at choke, where polynomials overshoot at the peak. Every efficiency "
+    "curve satisfies 0 <= eta <= 1 exactly on its whole flow range.")
+
+
+class Position(StrictModel):
+    """Measurements at one (theta, phi) setting: one characteristic."""
+
+    theta: FiniteFloat = Field(description="Inlet guide vane setting (rig unit, e.g. degrees).")
+    phi: FiniteFloat = Field(description="Diffuser setting (rig unit, e.g. degrees).")
+    flow: list[FiniteFloat] = Field(
+        min_length=3, max_length=10_000,
+        description="Measured flow x per point (any order; sorted by the solver).")
+    pressure: list[FiniteFloat] = Field(
+        min_length=3, max_length=10_000,
+        description="Measured pressure y per point (same length as flow).")
+    efficiency: list[FiniteFloat] = Field(
+        min_length=3, max_length=10_000,
+        description="Measured efficiency eta per point (same length as flow), e.g. 0.85.")
+
+
+class PerfmapOptions(StrictModel):
+    model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3"] = Field(
+        default="auto",
+        description="Pressure curve family for the characteristics; 'auto' picks the family "
+        "with the smallest mean (over settings) leave-one-out pressure error. The efficiency "
+        "family is chosen separately (`efficiency_model`). " + FAMILY_DESCRIPTION)
+    efficiency_model: Literal["auto", "same", "parabola", "cubic", "spline2", "spline3",
+                              "parabola_log"] = Field(
+        default="auto",
+        description="Efficiency curve family, chosen independently of the pressure family. "
+        "'auto': per setting, the family with the smallest leave-one-out max ABSOLUTE "
+        "efficiency error (relative errors would be dominated by the small efficiencies at "
+        "choke; ties go to fewer coefficients); 'same': the paper's pairing with `model` "
+        "(log pressure -> cubic efficiency); or a family name for every setting. "
+        + EFFICIENCY_FAMILY_DESCRIPTION)
+    fit: Literal["least_squares", "minimax"] = Field(
+        default="least_squares",
+        description="'least_squares' minimises the sum of squared residuals (paper eq. 3); "
+        "'minimax' minimises the maximal relative error directly (linear programme).")
+    grid: list[int] = Field(
+        default_factory=lambda: [64, 64], min_length=2, max_length=2,
+        description="Map grid [nx, ny]: nodes along flow and along pressure (2..1000 each).")
+    map: bool | None = Field(
+        default=None,
+        description="Compute the performance map; it needs >= 3 settings not all on one line "
+        "in (theta, phi). null (default): compute it when the settings allow one, otherwise "
+        "return characteristics and envelopes with a 'map_not_possible' warning; true: "
+        "reject such input (422); false: characteristics and envelopes only.")
+    map_method: Literal["exact", "binning"] = Field(
+        default="exact",
+        description="'exact': per grid node, solve for the barycentric weights of every "
+        "(triangle, t) exactly; 'binning': the paper's scatter-and-bin (eqs. 62-71), for "
+        "comparison only.")
+    t_samples: int = Field(
+        default=129, ge=3, le=4097,
+        description="Number of samples of the curve parameter t in [0, 1] for the map and "
+        "the inverse query.")
+    envelope_curves: int = Field(
+        default=50, ge=1, le=2000,
+        description="Interpolated curves per pair of neighbouring phi settings used to take "
+        "the max-curve (paper section 3, N = 50).")
+    envelope_points: int = Field(
+        default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
+    concave_efficiency: bool = Field(
+        default=False, description="Also constrain the efficiency curve to be concave.")
+
+    @model_validator(mode="after")
+    def _grid_range(self) -> "PerfmapOptions":
+        if any(not 2 <= g <= 1000 for g in self.grid):
+            raise ValueError("grid entries must be between 2 and 1000")
+        return self
+
+
+class PerfmapRequest(StrictModel):
+    """Rig measurements at several (theta, phi) settings and what to compute from them."""
+
+    positions: list[Position] = Field(
+        min_length=1, max_length=2000,
+        description="One entry per (theta, phi) setting; settings must be distinct.")
+    options: PerfmapOptions = Field(default_factory=PerfmapOptions)
+    upload_warnings: list[Diagnostic] = Field(
+        default_factory=list, max_length=100,
+        description="Notes of the file parser (e.g. ignored CSV columns), repeated in the "
+        "result's report; set by the upload parser, not needed in JSON bodies.")
+
+
+class SettingFit(BaseModel):
+    """The fitted characteristic y(x) and efficiency eta(x) of one setting."""
+
+    theta: float
+    phi: float
+    family: Family = Field(description="Family of the pressure curve. " + FAMILY_DESCRIPTION)
+    efficiency_family: EfficiencyFamily = Field(
+        description="Family of the efficiency curve. " + EFFICIENCY_FAMILY_DESCRIPTION)
+    x_min: float = Field(description="Smallest measured flow (t = 0).")
+    x_max: float = Field(description="Largest measured flow (t = 1).")
+    pressure_coefficients: list[float]
+    efficiency_coefficients: list[float]
+    n_points: int
+    pressure_max_rel_error: float = Field(description="max_i |y(x_i) - y_i| / |y_i|.")
+    efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.")
+    pressure_loo: float | None = Field(
+        default=None, description="Leave-one-out: max relative error of each point predicted "
+        "by a least-squares fit to the other points (None when too few points; on settings "
+        "with more than 20 points, 20 evenly spread points are left out).")
+    efficiency_loo: float | None = None
+    efficiency_max_abs_error: float = Field(
+        default=0.0, description="max_i |eta(x_i) - eta_i| (efficiency points).")
+    efficiency_loo_abs: float | None = Field(
+        default=None, description="Leave-one-out max absolute efficiency error ('auto' "
+        "criterion for the efficiency family).")
+    efficiency_peak: float = Field(
+        default=0.0, description="Maximum of the fitted efficiency curve over [x_min, x_max] "
+        "(exact); compare with the measured maximum of the setting.")
+    efficiency_bounds_active: int = Field(
+        default=0, description="Number of points where the physical bound 0 <= eta <= 1 had "
+        "to be imposed on the fitted curve (0: the unconstrained fit was already physical).")
+    floor: float = Field(
+        description="Best max relative error of the pressure that ANY decreasing concave "
+        "function can reach on these points (0 when the data are decreasing and concave).")
+    active_side_conditions: int = Field(
+        default=0, description="Number of side conditions (y' <= 0 at the surge end, y'' <= 0 "
+        "per piece) active in the fit: the data push against the physics there.")
+
+
+class ErrorTableRow(BaseModel):
+    """One column of the paper's Table 1, for the submitted data (max over settings)."""
+
+    family: Family
+    n_coefficients: int
+    pressure_max_rel_error: float
+    efficiency_max_rel_error: float | None = Field(
+        description="None for 'log' (the paper has no log efficiency curve).")
+    pressure_loo: float | None
+    efficiency_loo: float | None
+    efficiency_max_abs_error: float | None = Field(
+        default=None, description="Max over settings of max_i |eta(x_i) - eta_i|.")
+    floor: float = Field(description="Max over settings of the per-setting floor.")
+    worst_setting: int = Field(description="Index in `settings` of the worst pressure fit.")
+
+
+class EfficiencyErrorRow(BaseModel):
+    """Errors of one efficiency family over all settings (bounded fits, 0 <= eta <= 1)."""
+
+    family: EfficiencyFamily
+    n_coefficients: int
+    max_rel_error: float
+    max_abs_error: float
+    loo_rel: float | None = Field(description="Max over settings of the leave-one-out max "
+                                  "relative error (None when some setting has too few points).")
+    loo_abs: float | None
+    max_overshoot: float = Field(
+        description="Max over settings of (fitted peak - measured max efficiency).")
+    chosen: int = Field(description="Number of settings that use this family.")
+
+
+class Envelope(BaseModel):
+    """Max-curve of one theta over the interpolated phi settings (paper section 3)."""
+
+    theta: float
+    flow: list[float]
+    pressure: list[float | None] = Field(
+        description="max over phi of the interpolated characteristics (null: no curve).")
+    phi: list[float | None] = Field(description="phi(x) attaining the max (paper eq. 48).")
+    efficiency: list[float | None] = Field(
+        description="eta along the max-curve (paper eq. 50).")
+
+
+class PerformanceMap(BaseModel):
+    """Max efficiency over all settings whose characteristic passes through (flow, pressure).
+
+    Grid nodes are cell centres of the bounding box of all characteristics (paper eqs. 66-67).
+    Rows = pressure, columns = flow; ``null`` where no setting reaches the node.
+    """
+
+    method: Literal["exact", "binning"]
+    flow: list[float]
+    pressure: list[float]
+    efficiency: list[list[float | None]]
+    theta: list[list[float | None]]
+    phi: list[list[float | None]]
+    t_samples: int
+    reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.")
+
+
+class PerfmapResult(BaseModel):
+    report: Report
+    family: Family = Field(description="Family used for the pressure characteristics.")
+    fit: Literal["least_squares", "minimax"]
+    settings: list[SettingFit] = Field(description="Sorted by (theta, phi).")
+    error_table: list[ErrorTableRow] = Field(
+        description="The paper's Table 1 for the submitted data, one row per family.")
+    efficiency_error_table: list[EfficiencyErrorRow] = Field(
+        default_factory=list,
+        description="Per efficiency family: errors over all settings (the efficiency family "
+        "is chosen separately from the pressure family).")
+    envelopes: list[Envelope]
+    triangles: list[list[int]] = Field(
+        default_factory=list,
+        description="Triangulation of the settings (indices into `settings`), Delaunay on "
+        "range-normalised (theta, phi).")
+    map: PerformanceMap | None = None
+    flow_range: list[float] = Field(description="[min, max] flow over all characteristics.")
+    pressure_range: list[float] = Field(description="[min, max] pressure over all characteristics.")
+
+
+class QueryPoint(StrictModel):
+    flow: FiniteFloat
+    pressure: FiniteFloat
+
+
+class PerfmapQueryRequest(StrictModel):
+    """Duty points to look up in a finished map: ``{"points": [{flow, pressure}, ...]}`` or a
+    single ``{"flow": ..., "pressure": ...}``."""
+
+    points: list[QueryPoint] = Field(min_length=1, max_length=10_000)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _single_point(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "points" not in data and {"flow", "pressure"} <= set(data):
+            return {"points": [data]}
+        return data
+
+
+class QueryAnswer(BaseModel):
+    flow: float
+    pressure: float
+    feasible: bool = Field(description="True when some setting in the map reaches the point.")
+    theta: float | None = Field(description="Optimal inlet setting (None when infeasible).")
+    phi: float | None = Field(description="Optimal diffuser setting (None when infeasible).")
+    efficiency: float | None = Field(
+        description="Max efficiency at the point (None when infeasible).")
+    distance_to_map: float = Field(
+        description="Distance to the reachable region in range-normalised units "
+        "(flow/flow span, pressure/pressure span); 0 when feasible.")
+
+
+class PerfmapQueryResult(BaseModel):
+    points: list[QueryAnswer]

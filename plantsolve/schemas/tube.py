@@ -1,0 +1,239 @@
+"""Request and result models of the ``tube`` solver: bent-tube reconstruction from scans.
+
+LRA convention (the public contract of ``lra`` tables, measured and nominal):
+
+* The local frame of the tube start: **x** = initial tangent (direction of travel along the
+  first straight), **y** = in-plane normal toward the centre of the first bend, **z** = x × y.
+  ``orientation`` is the unit quaternion ``[w, x, y, z]`` that maps this local frame to the
+  world frame; ``start`` is the world position of the tube's first end.
+* Each row is applied in turn: go straight ``length``; rotate the in-plane normal about the
+  current tangent by ``rotation`` (right-hand rule, degrees); bend by ``angle`` (degrees) with
+  ``bend_radius`` toward the normal (the centre of the bend lies at ``bend_radius`` along the
+  normal).
+* A tube with n bends has n + 1 rows; the first row's rotation is 0 (the frame fixes the first
+  bend plane) and the last row's angle is 0 (it is only the final straight). Two bends that
+  follow each other directly are joined by a row with length 0.
+* LRA → XYZ → LRA round trips exactly (for bends under 180°, where the control polygon
+  exists); LRA → segments → LRA round trips for every bend angle.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import io
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, Field, field_validator
+
+from plantsolve.schemas.common import FiniteFloat, Quaternion, Report, StrictModel, Units, Vec3
+
+MAX_POINTS = 5_000_000
+
+
+class NpyPoints(StrictModel):
+    """Points as a base64-encoded NPY array of shape (N, 3) (float32 or float64)."""
+
+    npy_base64: str = Field(
+        description="base64 of the bytes of a .npy file holding an (N, 3) float array, "
+        "one row [x, y, z] per sample, in the request's units. Every value must be finite."
+    )
+
+    @field_validator("npy_base64")
+    @classmethod
+    def _valid_npy(cls, value: str) -> str:
+        decode_npy_points(value)
+        return value
+
+
+def decode_npy_points(value: str) -> np.ndarray:
+    """Decode a base64 NPY string into an (N, 3) float64 array; ValueError with a reason."""
+    try:
+        raw = base64.b64decode(value, validate=False)
+    except (binascii.Error, ValueError) as exc:
+        raise ValueError(f"not valid base64: {exc}") from None
+    try:
+        arr = np.load(io.BytesIO(raw), allow_pickle=False)
+    except Exception as exc:  # numpy raises several types for corrupt headers
+        raise ValueError(f"not a readable NPY array: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"NPY array must have shape (N, 3), got {arr.shape}")
+    if not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(f"NPY array must be numeric, got dtype {arr.dtype}")
+    if arr.shape[0] > MAX_POINTS:
+        raise ValueError(f"at most {MAX_POINTS} points are accepted, got {arr.shape[0]}")
+    arr = np.asarray(arr, dtype=np.float64)
+    if not np.isfinite(arr).all():
+        bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+        raise ValueError(f"NPY array holds non-finite values (first at row {bad})")
+    return arr
+
+
+class LraRow(StrictModel):
+    """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
+
+    length: FiniteFloat = Field(ge=0, description="Straight length before the bend, in the request's units.")
+    rotation: FiniteFloat = Field(
+        default=0.0,
+        description="Rotation of the in-plane normal about the current tangent before the bend, "
+        "degrees, right-hand rule. 0 in the first row.",
+    )
+    angle: FiniteFloat = Field(
+        default=0.0, ge=0, lt=360, description="Bend angle in degrees (0 in the last row)."
+    )
+    bend_radius: FiniteFloat = Field(
+        default=0.0, ge=0, description="Centreline bend radius (CLR) of this bend; 0 in the last row."
+    )
+
+
+class TubeOptions(StrictModel):
+    tolerance: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="ε: maximum distance of the reconstructed spine polygon from the arc-line "
+        "spline when choosing the number of segments (request units). Default: derived from the "
+        "pipe radius and the estimated noise (max(0.08·pipe radius, 4·spine noise)).",
+    )
+    pipe_radius: FiniteFloat | None = Field(
+        default=None, gt=0, description="Known outer pipe radius (request units); fixed in every fit when given."
+    )
+    bend_radius: FiniteFloat | None = Field(
+        default=None,
+        gt=0,
+        description="Known centreline bend radius (request units); when given all bends are "
+        "fitted with this fixed radius.",
+    )
+    common_bend_radius: bool = Field(
+        default=False, description="Fit one bend radius shared by all bends (typical of rotary-draw benders)."
+    )
+    nominal: list[LraRow] | None = Field(
+        default=None,
+        min_length=1,
+        description="Nominal LRA table (same convention and units) for inspection: the "
+        "reconstruction is aligned to it and per-bend deviations and corrected LRA are reported.",
+    )
+    damping: FiniteFloat = Field(
+        default=1.0,
+        gt=0,
+        le=1.5,
+        description="Springback-correction damping factor: corrected = nominal + damping · "
+        "(nominal − measured), for angle, rotation and length.",
+    )
+    seed: int = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
+
+
+class TubeRequest(StrictModel):
+    """A scan of one bent tube: unorganised surface samples (full or single-view)."""
+
+    points: list[Vec3] | NpyPoints = Field(
+        description="Surface samples: a JSON list of [x, y, z], or {\"npy_base64\": ...} holding "
+        "an (N, 3) NPY array. At least 100 points."
+    )
+    units: Units = "mm"
+    options: TubeOptions = Field(default_factory=TubeOptions)
+
+
+class Segment(BaseModel):
+    """One piece of the spine (centreline), in order from the start."""
+
+    type: Literal["line", "arc"]
+    start: Vec3
+    end: Vec3
+    centre: Vec3 | None = Field(default=None, description="Arc centre (arcs only).")
+    radius: float | None = Field(default=None, description="Arc radius = bend radius (arcs only).")
+    angle: float | None = Field(default=None, description="Arc apex angle in degrees (arcs only).")
+    normal: Vec3 | None = Field(
+        default=None,
+        description="Unit normal of the arc's plane, oriented so that the arc runs from start to "
+        "end counter-clockwise about it (arcs only).",
+    )
+
+
+class Residuals(BaseModel):
+    """Unsigned point-to-surface distances of the inlier samples (request units)."""
+
+    count: int
+    median: float
+    p95: float
+    max: float
+    rms: float
+
+
+class Outliers(BaseModel):
+    count: int
+    indices: list[int] = Field(description="Indices (into the input points) of discarded samples.")
+    reasons: list[str] = Field(
+        description="Reason per index: every listed sample is far from the fitted surface; the "
+        "reason names the first stage that already flagged it: 'local_fit' (curvature off 1/r, "
+        "abnormal quadric residual or too few neighbours, §7), 'spine_projection' (MLS projection "
+        "distance off the pipe radius, §7) or 'residual' (only the final fit)."
+    )
+    by_reason: dict[str, int]
+
+
+class SegmentQuality(BaseModel):
+    index: int = Field(description="Index into `segments`.")
+    type: Literal["line", "arc"]
+    count: int = Field(description="Inlier samples closest to this segment.")
+    median: float
+    rms: float
+    max: float
+
+
+class BendDeviation(BaseModel):
+    bend: int = Field(description="1-based bend number.")
+    angle: float = Field(description="measured − nominal bend angle, degrees")
+    rotation: float = Field(description="measured − nominal rotation, degrees (wrapped to ±180)")
+    length: float = Field(description="measured − nominal straight length before this bend")
+    bend_radius: float = Field(description="measured − nominal bend radius")
+
+
+class Inspection(BaseModel):
+    matched: bool = Field(description="False when the bend counts differ (then only sheath data is given).")
+    reversed: bool = Field(description="True when the scan was matched to the nominal in reverse direction.")
+    measured_lra: list[LraRow] = Field(description="Measured LRA in the nominal's direction.")
+    bends: list[BendDeviation]
+    last_length: float | None = Field(default=None, description="measured − nominal length of the last straight")
+    sheath_deviation: float = Field(
+        description="Max distance of the measured centreline from the nominal centreline after best-fit alignment."
+    )
+    sheath_rms: float
+    alignment: dict[str, list[float]] = Field(
+        description="Rigid motion mapping the nominal frame to the scan: 'translation' and 'quaternion' [w,x,y,z]."
+    )
+    corrected_lra: list[LraRow] = Field(description="LRA to send to the bender (springback correction).")
+
+
+LRA_CONVENTION = (
+    "LRA convention: local frame x = initial tangent, y = in-plane normal toward the first bend's "
+    "centre, z = x × y; `orientation` maps it to world and `start` is the first end. Each row: go "
+    "straight `length`; rotate the in-plane normal about the current tangent by `rotation` (degrees, "
+    "right-hand rule); bend by `angle` (degrees) with `bend_radius` toward the normal. n + 1 rows for "
+    "n bends, first rotation 0, last row angle 0; bends joined directly have a length-0 row between "
+    "them. LRA → XYZ → LRA round trips exactly. A straight tube has no bend plane: then y is an "
+    "arbitrary perpendicular. The walking direction starts at the end with the longer end straight "
+    "(ties: the larger end bend)."
+)
+
+
+class TubeResult(BaseModel):
+    """Reconstructed bent tube: pipe radius, start pose, LRA table, control polygon, spine
+    segments, fit quality, outliers, optional inspection, report. See ``lra`` for the LRA
+    convention."""
+
+    pipe_radius: float
+    start: Vec3 = Field(description="World position of the tube start (first end of the centreline).")
+    orientation: Quaternion = Field(description="Maps the local start frame (see LRA convention) to world, [w,x,y,z].")
+    lra: list[LraRow] = Field(description=LRA_CONVENTION)
+    control_polygon: list[Vec3] = Field(
+        description="Start, intersection points of consecutive straights (bends < 180° only), end."
+    )
+    segments: list[Segment]
+    residuals: Residuals
+    outliers: Outliers
+    segment_quality: list[SegmentQuality] = Field(default_factory=list)
+    tolerance: float = Field(description="ε used for the segment count (request units).")
+    units: Units = "mm"
+    inspection: Inspection | None = None
+    report: Report

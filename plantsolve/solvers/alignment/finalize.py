@@ -1,0 +1,239 @@
+"""From a solver state to the public result: exact closure, transforms, report.
+
+Connections the solver closed within tolerance are made bit-identical: both ports get the
+very same float64 coordinates (a tie-in's own, else those of the port with the smaller
+(id, port) key) and exactly opposite directions, so exported files print the same string.
+Tie-ins keep their input coordinates bit for bit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from plantsolve.schemas.alignment import (
+    AlignmentRequest, AlignmentResult, ComponentResult, ConnectionResult, Port, Transform,
+)
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.solvers.alignment.dualquat import dq_from_rt, minimal_rotation, rotation_angle
+from plantsolve.solvers.alignment.model import Model, collinear_fittings, connection_errors
+
+
+@dataclass
+class Outcome:
+    """What a method hands to :func:`build_result`."""
+
+    P: np.ndarray  # [np, 3] longdouble, centred frame
+    D: np.ndarray  # [np, 3]
+    iterations: int
+    stop_reason: str
+    active: np.ndarray  # [nk] bool, False = cut
+    cut_reason: dict[int, str] = field(default_factory=dict)
+    cut_errors: dict[int, tuple[float, float]] = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+
+def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Final float64 world positions and directions, and which connections were snapped."""
+    P = (out.P + model.center.astype(np.longdouble)).astype(float)
+    D = out.D / np.linalg.norm(out.D, axis=1, keepdims=True)
+    fixed_ports = model.fixed[model.port_comp]
+    P[fixed_ports] = model.P_in[fixed_ports]
+    D[fixed_ports] = model.D_in[fixed_ports]
+    gap, ang = connection_errors(model, out.P, out.D)
+    closed = out.active & (gap <= model.snap_pos) & (ang <= model.snap_ang)
+    a, b = model.conn_a[closed], model.conn_b[closed]
+    fa, fb = fixed_ports[a], fixed_ports[b]
+    a_first = np.array([model.key[i] <= model.key[j] for i, j in zip(a, b)], dtype=bool)
+    rep_is_a = fa | (~fb & a_first)
+    rep = np.where(rep_is_a, a, b)
+    other = np.where(rep_is_a, b, a)
+    movable = ~fixed_ports[other]
+    P[other[movable]] = P[rep[movable]]
+    D[other[movable]] = -D[rep[movable]]
+    return P, D, closed
+
+
+def _kabsch(model: Model, P_new: np.ndarray, D_new: np.ndarray, up_new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation quaternion and (centred-frame) translation of each component's rigid motion."""
+    n = model.n_comp
+    pc = model.port_comp
+    old = model.P_in - model.center
+    new = P_new - model.center
+    counts = np.diff(model.port_start)
+    c_old = np.zeros((n, 3)); np.add.at(c_old, pc, old); c_old /= counts[:, None]
+    c_new = np.zeros((n, 3)); np.add.at(c_new, pc, new); c_new /= counts[:, None]
+    scale = model.size[pc][:, None]
+    H = np.zeros((n, 3, 3))
+    np.add.at(H, pc, model.D_in[:, :, None] * D_new[:, None, :])
+    np.add.at(H, pc, ((old - c_old[pc]) / scale)[:, :, None] * ((new - c_new[pc]) / scale)[:, None, :])
+    has_up = ~np.isnan(model.up[:, 0])
+    H[has_up] += model.up[has_up][:, :, None] * up_new[has_up][:, None, :]
+    U, S, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.einsum("nji,nkj->nik", Vt, U)))
+    Dm = np.zeros((n, 3, 3)); Dm[:, 0, 0] = 1; Dm[:, 1, 1] = 1; Dm[:, 2, 2] = np.where(d == 0, 1, d)
+    R = np.einsum("nji,njk,nlk->nil", Vt, Dm, U)
+    q = Rotation.from_matrix(R).as_quat()[:, [3, 0, 1, 2]]
+    degenerate = S[:, 1] < 1e-9 * np.maximum(S[:, 0], 1e-300)
+    first = model.port_start[:-1]
+    if np.any(degenerate):
+        q[degenerate] = minimal_rotation(model.D_in[first[degenerate]], D_new[first[degenerate]])
+    q = np.where(q[:, :1] < 0, -q, q)
+    Rm = Rotation.from_quat(q[:, [1, 2, 3, 0]])
+    anchor_old = np.where(model.is_pipe[:, None], old[first], c_old)
+    anchor_new = np.where(model.is_pipe[:, None], new[first], c_new)
+    t = anchor_new - Rm.apply(anchor_old)
+    t[model.fixed] = 0.0
+    q[model.fixed] = [1.0, 0, 0, 0]
+    return q, t
+
+
+def _final_up(model: Model, D_new: np.ndarray, q_rot: np.ndarray | None = None) -> np.ndarray:
+    up = np.full_like(model.up, np.nan)
+    has_up = ~np.isnan(model.up[:, 0])
+    inline = collinear_fittings(model)
+    idx = np.flatnonzero(has_up & inline)
+    if len(idx):
+        axis = D_new[model.port_start[idx]]
+        u0 = model.up[idx]
+        v = u0 - np.einsum("ij,ij->i", u0, axis)[:, None] * axis
+        up[idx] = v / np.linalg.norm(v, axis=1, keepdims=True)
+    other = np.flatnonzero(has_up & ~inline)
+    if len(other) and q_rot is not None:
+        up[other] = Rotation.from_quat(q_rot[other][:, [1, 2, 3, 0]]).apply(model.up[other])
+    fx = np.flatnonzero(has_up & model.fixed)
+    up[fx] = model.up[fx]
+    return up
+
+
+def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: str) -> AlignmentResult:
+    P, D, closed = world_ports(model, out)
+    gap_solver, ang_solver = connection_errors(model, out.P, out.D)
+    up = _final_up(model, D)
+    q, t_local = _kabsch(model, P, D, np.nan_to_num(up))
+    other = ~np.isnan(model.up[:, 0]) & ~collinear_fittings(model) & ~model.fixed
+    if np.any(other):
+        up[other] = Rotation.from_quat(q[other][:, [1, 2, 3, 0]]).apply(model.up[other])
+    R = Rotation.from_quat(q[:, [1, 2, 3, 0]])
+    t_world = t_local + model.center - R.apply(np.tile(model.center, (model.n_comp, 1)))
+    t_world[model.fixed] = 0.0
+    dq = dq_from_rt(q, t_world)
+    angles = np.degrees(rotation_angle(q))
+
+    gap, ang = connection_errors(model, P, D)
+    act = out.active
+    max_gap = float(np.max(gap[act])) if np.any(act) else 0.0
+    max_ang = float(np.max(ang[act])) if np.any(act) else 0.0
+    converged = bool(max_gap <= model.pos_tol and max_ang <= model.ang_tol)
+
+    move = np.linalg.norm(P - model.P_in, axis=1)
+    disp = np.zeros(model.n_comp)
+    np.maximum.at(disp, model.port_comp, move)
+    s0 = model.port_start[:-1]
+    pipes = np.flatnonzero(model.is_pipe)
+    length_old = np.linalg.norm(model.P_in[s0[pipes] + 1] - model.P_in[s0[pipes]], axis=1)
+    length_new = np.linalg.norm(P[s0[pipes] + 1] - P[s0[pipes]], axis=1)
+    # pipe-axis movement: mean distance of the measured end points from the new axis line
+    axis = (P[s0[pipes] + 1] - P[s0[pipes]]) / length_new[:, None]
+    axis_move = np.zeros(len(pipes))
+    for end in (0, 1):
+        v = model.P_in[s0[pipes] + end] - P[s0[pipes]]
+        axis_move += 0.5 * np.linalg.norm(v - np.einsum("ij,ij->i", v, axis)[:, None] * axis, axis=1)
+    fittings = np.flatnonzero(~model.is_pipe)
+    length_change = np.full(model.n_comp, np.nan)
+    length_change[pipes] = length_new - length_old
+
+    comps = []
+    for c, cid in enumerate(model.ids):
+        sl = slice(model.port_start[c], model.port_start[c + 1])
+        comps.append(
+            ComponentResult(
+                id=cid,
+                ports=[Port(position=p.tolist(), direction=d.tolist()) for p, d in zip(P[sl], D[sl])],
+                transform=Transform(dual_quaternion=dq[c].tolist(), rotation=q[c].tolist(), translation=t_world[c].tolist()),
+                displacement=float(disp[c]),
+                rotation_angle=float(angles[c]),
+                length_change=None if np.isnan(length_change[c]) else float(length_change[c]),
+                up=None if np.isnan(up[c, 0]) else up[c].tolist(),
+            )
+        )
+    conns = [
+        ConnectionResult(
+            from_=request.connections[k].from_, to=request.connections[k].to,
+            position_error=float(gap[k]), angle_error=float(np.degrees(ang[k])), cut=not bool(act[k]),
+        )
+        for k in range(model.n_conn)
+    ]
+    cut_idx = [int(k) for k in np.flatnonzero(~act)]
+
+    warnings: list[Diagnostic] = []
+    if cut_idx:
+        warnings.append(
+            Diagnostic(
+                code="connections_cut",
+                message=f"{len(cut_idx)} connection(s) were cut to make the model consistent; they are left open.",
+                details={
+                    "cuts": [
+                        {
+                            "index": k,
+                            "from": list(request.connections[k].from_),
+                            "to": list(request.connections[k].to),
+                            "reason": out.cut_reason.get(k, "conflict"),
+                            "position_error_before_cut": out.cut_errors.get(k, (float("nan"),) * 2)[0],
+                            "angle_error_before_cut_deg": float(np.degrees(out.cut_errors.get(k, (float("nan"),) * 2)[1])),
+                        }
+                        for k in cut_idx
+                    ]
+                },
+            )
+        )
+    above = np.flatnonzero(act & ((gap > model.pos_tol) | (ang > model.ang_tol)))
+    if len(above):
+        order = above[np.argsort(-(gap[above] + ang[above] * model.lref))][:100]
+        warnings.append(
+            Diagnostic(
+                code="not_converged",
+                message=f"{len(above)} connection(s) remain above tolerance: {out.stop_reason}.",
+                details={
+                    "connections": [
+                        {"index": int(k), "from": list(request.connections[k].from_), "to": list(request.connections[k].to),
+                         "position_error": float(gap[k]), "angle_error_deg": float(np.degrees(ang[k]))}
+                        for k in order
+                    ]
+                },
+            )
+        )
+
+    def stats(x: np.ndarray) -> dict[str, float]:
+        return {"count": int(len(x)), "mean": float(np.mean(x)) if len(x) else 0.0, "max": float(np.max(x)) if len(x) else 0.0}
+
+    details = {
+        "method": method,
+        "stop_reason": out.stop_reason,
+        "position_tolerance": model.pos_tol,
+        "angle_tolerance_deg": float(np.degrees(model.ang_tol)),
+        "center": model.center.tolist(),
+        "pipe_axis_movement": stats(axis_move),
+        "pipe_displacement": stats(disp[pipes]),
+        "fitting_displacement": stats(disp[fittings]),
+        "pipe_length_change": stats(np.abs(length_change[pipes])),
+        "closed_bit_identical": int(np.sum(closed)),
+        "snap_distortion": {
+            "position": float(np.max(gap_solver[closed])) if np.any(closed) else 0.0,
+            "angle_deg": float(np.degrees(np.max(ang_solver[closed]))) if np.any(closed) else 0.0,
+        },
+        **out.extra,
+    }
+    status = "ok" if converged and not cut_idx else "warning"
+    message = (
+        f"Converged ({out.stop_reason}); largest gap {max_gap:.3g}, largest angle {np.degrees(max_ang):.3g} deg."
+        if converged
+        else f"Not converged ({out.stop_reason}); largest gap {max_gap:.3g}, largest angle {np.degrees(max_ang):.3g} deg."
+    )
+    return AlignmentResult(
+        converged=converged, iterations=int(out.iterations), max_position_error=max_gap,
+        max_angle_error=float(np.degrees(max_ang)), components=comps, connections=conns,
+        cut_connections=cut_idx, report=Report(status=status, message=message, warnings=warnings, details=details),
+    )

@@ -1,0 +1,184 @@
+"""Array form of a request: ports, connections and weights in a centred frame.
+
+Coordinates reach 1e6 mm in plant models, where a double's spacing is above the 1e-10
+tolerance, so the solvers work relative to a centre and keep base positions in
+``np.longdouble`` (80-bit on x86-64: 64-bit mantissa) where the last digits are decided.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from plantsolve.schemas.alignment import AlignmentRequest
+
+TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+PROFILES = {  # (position tolerance in mm or None = drawing units, value, angle tolerance rad)
+    "autocad_plant3d": (None, 1e-10, 1e-10),
+    "aveva_e3d": ("mm", 1.0, 0.01),
+    "revit": ("ft", 1e-9, 1e-10),
+    "custom": (None, 1e-10, 1e-10),
+}
+
+
+def resolve_tolerances(request: AlignmentRequest) -> tuple[float, float]:
+    """(position tolerance in request units, angle tolerance in radians)."""
+    opts = request.options
+    unit, value, ang = PROFILES[opts.tolerance_profile]
+    pos = value if unit is None else value * TO_MM[unit] / TO_MM[request.units]
+    if opts.position_tolerance is not None:
+        pos = opts.position_tolerance
+    if opts.angle_tolerance is not None:
+        ang = np.radians(opts.angle_tolerance)
+    return float(pos), float(ang)
+
+
+@dataclass
+class Model:
+    ids: list[str]
+    is_pipe: np.ndarray  # [n] bool
+    fixed: np.ndarray  # [n] bool
+    radius: np.ndarray  # [n] float, nan if unknown
+    up: np.ndarray  # [n, 3] unit up vectors, nan if none
+    ftype: list[str | None]
+    port_comp: np.ndarray  # [np] component of each port
+    port_start: np.ndarray  # [n + 1] ports of c are port_start[c]:port_start[c + 1]
+    port_local: np.ndarray  # [np] index of the port within its component
+    P_in: np.ndarray  # [np, 3] float64 input positions (world)
+    D_in: np.ndarray  # [np, 3] float64 input directions, normalised
+    center: np.ndarray  # [3] float64
+    P0: np.ndarray  # [np, 3] longdouble positions relative to center
+    D0: np.ndarray  # [np, 3] float64 directions used by the solver (pipes: +-axis)
+    conn_a: np.ndarray  # [nk] port index of "from"
+    conn_b: np.ndarray  # [nk] port index of "to"
+    pos_tol: float
+    ang_tol: float
+    size: np.ndarray  # [n] "length" of a component (pipe length, fitting arm sum)
+    lref: float  # typical length, makes weights dimensionless
+    min_length: np.ndarray  # [n] minimum pipe length (0 for fittings)
+    key: list[tuple[str, int]]  # [np] canonical (id, port) of each port, order-independent tie-breaks
+
+    @property
+    def snap_pos(self) -> float:
+        """Largest solver residual still closed by snapping: singular (orthogonal) loops stall the
+        last digits of Gauss-Newton near 1e-12..1e-10 relative; such a residue is distributed by making
+        the two ports bit-identical (the distortion is reported)."""
+        return max(self.pos_tol, 1e-9 * self.lref)
+
+    @property
+    def snap_ang(self) -> float:
+        return max(self.ang_tol, 1e-9)
+
+    @property
+    def n_comp(self) -> int:
+        return len(self.ids)
+
+    @property
+    def n_conn(self) -> int:
+        return len(self.conn_a)
+
+    def pipe_ports(self) -> tuple[np.ndarray, np.ndarray]:
+        """Port indices (port 0, port 1) of every component (meaningful for pipes)."""
+        return self.port_start[:-1], self.port_start[:-1] + 1
+
+
+def build_model(request: AlignmentRequest) -> Model:
+    comps = request.components
+    n = len(comps)
+    fixed_extra = set(request.options.fixed_components)
+    counts = np.array([len(c.ports) for c in comps])
+    port_start = np.concatenate([[0], np.cumsum(counts)])
+    port_comp = np.repeat(np.arange(n), counts)
+    port_local = np.arange(port_start[-1]) - port_start[port_comp]
+    P_in = np.array([p.position for c in comps for p in c.ports], dtype=float)
+    D_raw = np.array([p.direction for c in comps for p in c.ports], dtype=float)
+    D_in = D_raw / np.linalg.norm(D_raw, axis=1, keepdims=True)
+    is_pipe = np.array([c.kind == "pipe" for c in comps])
+    fixed = np.array([c.fixed or c.id in fixed_extra for c in comps])
+    radius = np.array([np.nan if c.radius is None else c.radius for c in comps])
+    up = np.full((n, 3), np.nan)
+    for i, c in enumerate(comps):
+        if c.up is not None and c.kind == "fitting":
+            u = np.array(c.up, dtype=float)
+            up[i] = u / np.linalg.norm(u)
+
+    # A centre that is a round number keeps P_in - center exact for typical coordinates.
+    center = np.round(P_in.mean(axis=0), 0) if len(P_in) else np.zeros(3)
+    P0 = P_in.astype(np.longdouble) - center.astype(np.longdouble)
+
+    D0 = D_in.copy()
+    s = port_start[:-1]
+    pipe_idx = np.flatnonzero(is_pipe)
+    axis = (P0[s[pipe_idx] + 1] - P0[s[pipe_idx]]).astype(float)
+    plen = np.linalg.norm(axis, axis=1)
+    axis /= plen[:, None]
+    D0[s[pipe_idx]] = -axis
+    D0[s[pipe_idx] + 1] = axis
+    # a tie-in keeps exactly what was measured, even a pipe whose ends are not quite on its axis
+    D0[fixed[port_comp]] = D_in[fixed[port_comp]]
+
+    size = np.zeros(n)
+    size[pipe_idx] = plen
+    fit_idx = np.flatnonzero(~is_pipe)
+    if len(fit_idx):
+        pc = P0.astype(float)
+        cent = np.zeros((n, 3))
+        np.add.at(cent, port_comp, pc)
+        cent /= counts[:, None]
+        arms = np.linalg.norm(pc - cent[port_comp], axis=1)
+        arm_sum = np.bincount(port_comp, arms, minlength=n)
+        rad = np.where(np.isnan(radius), 0.0, radius)
+        size[fit_idx] = np.maximum(arm_sum[fit_idx], rad[fit_idx])
+    # an up vector is a direction normal to the port axis of an inline fitting: drop any axial part
+    has_up = np.flatnonzero(~np.isnan(up[:, 0]) & (counts >= 1))
+    if len(has_up):
+        ax = D_in[port_start[has_up]]
+        v = up[has_up] - np.einsum("ij,ij->i", up[has_up], ax)[:, None] * ax
+        up[has_up] = v / np.linalg.norm(v, axis=1, keepdims=True)
+    lref = float(np.median(size[size > 0])) if np.any(size > 0) else 1.0
+    size = np.maximum(size, 1e-3 * lref)
+
+    factor = request.options.min_pipe_length_factor
+    min_length = np.zeros(n)
+    min_length[pipe_idx] = np.where(np.isnan(radius[pipe_idx]), 0.01 * plen, factor * radius[pipe_idx])
+
+    index = {c.id: i for i, c in enumerate(comps)}
+    conn_a = np.array([port_start[index[c.from_[0]]] + c.from_[1] for c in request.connections], dtype=np.intp)
+    conn_b = np.array([port_start[index[c.to[0]]] + c.to[1] for c in request.connections], dtype=np.intp)
+    pos_tol, ang_tol = resolve_tolerances(request)
+    key = [(comps[c].id, int(k)) for c, k in zip(port_comp, port_local)]
+    return Model(
+        ids=[c.id for c in comps], is_pipe=is_pipe, fixed=fixed, radius=radius, up=up,
+        ftype=[c.type for c in comps], port_comp=port_comp, port_start=port_start, port_local=port_local,
+        P_in=P_in, D_in=D_in, center=center, P0=P0, D0=D0, conn_a=conn_a, conn_b=conn_b,
+        pos_tol=pos_tol, ang_tol=ang_tol, size=size, lref=lref, min_length=min_length, key=key,
+    )
+
+
+def connection_errors(model: Model, P: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gap (units) and angle error (radians) of every connection for port positions P and directions D."""
+    a, b = model.conn_a, model.conn_b
+    gap = np.linalg.norm((P[a] - P[b]).astype(np.longdouble), axis=1).astype(float)
+    s = np.linalg.norm(D[a] + D[b], axis=1)
+    ang = 2.0 * np.arcsin(np.clip(s / 2.0, 0.0, 1.0))
+    return gap, ang
+
+
+def collinear_fittings(model: Model, tol_cos: float = np.cos(np.radians(1.0))) -> np.ndarray:
+    """Fittings with two opposite, collinear ports (valves, flanges, concentric reducers)."""
+    n = model.n_comp
+    counts = np.diff(model.port_start)
+    out = np.zeros(n, dtype=bool)
+    cand = np.flatnonzero((~model.is_pipe) & (counts == 2))
+    if len(cand) == 0:
+        return out
+    s = model.port_start[cand]
+    d0, d1 = model.D0[s], model.D0[s + 1]
+    opposite = np.einsum("ij,ij->i", d0, d1) < -tol_cos
+    sep = (model.P0[s + 1] - model.P0[s]).astype(float)
+    sl = np.linalg.norm(sep, axis=1)
+    perp = np.linalg.norm(sep - np.einsum("ij,ij->i", sep, d1)[:, None] * d1, axis=1)
+    inline = perp <= 1e-6 * np.maximum(sl, model.lref) + 1e-9
+    out[cand] = opposite & inline
+    return out

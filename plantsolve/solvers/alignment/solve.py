@@ -1,0 +1,147 @@
+"""Entry point: validate, find conflicts, run the chosen method, build the result."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
+from plantsolve.solvers.alignment.direct import solve_direct
+from plantsolve.solvers.alignment.finalize import Outcome, build_result
+from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
+from plantsolve.solvers.alignment.pcf import pcf_notes
+from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
+from plantsolve.solvers.alignment.validation import check_input
+from plantsolve.solvers.base import Progress, SolverError, no_progress
+
+
+def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progress) -> Outcome:
+    """Direct method; connections it cannot close are cut one at a time, highest impact first."""
+    opts = request.options
+    active = np.ones(model.n_conn, dtype=bool)
+    reasons: dict[int, str] = {}
+    errors: dict[int, tuple[float, float]] = {}
+    iterations = 0
+    while True:
+        progress(0.1 + 0.6 * min(len(reasons), 10) / 10, f"direct solve ({len(reasons)} cuts so far)")
+        pose = solve_direct(model, active, opts.pipe_stiffness)
+        iterations += pose.iterations
+        gap, ang = connection_errors(model, pose.P, pose.D)
+        k = choose_cut(model, active, gap, ang)
+        why = "conflict"
+        if k is None:
+            # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
+            # length): that is a conflict too; cut the worst-measured connection of the worst such pipe
+            k = _flip_cut(model, active, pose)
+            why = "pipe_flip"
+        if k is None:
+            reason = "all connections closed" if not reasons else f"closed after {len(reasons)} cut(s)"
+            break
+        if len(reasons) >= opts.max_cuts:
+            reason = f"cut limit ({opts.max_cuts}) reached with connections still open"
+            break
+        active[k] = False
+        reasons[k] = why
+        errors[k] = (float(gap[k]), float(ang[k]))
+    return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
+                   cut_reason=reasons, cut_errors=errors)
+
+
+def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
+    s0, s1 = model.pipe_ports()
+    pipes = np.flatnonzero(model.is_pipe & ~model.fixed)
+    if len(pipes) == 0:
+        return None
+    length = np.einsum("ij,ij->i", (pose.P[s1[pipes]] - pose.P[s0[pipes]]).astype(float), pose.D[s1[pipes]])
+    short = model.min_length[pipes] * (1 - 1e-9) - length
+    bad = short > max(model.pos_tol, 1e-12 * model.lref)
+    if not np.any(bad):
+        return None
+    worst = pipes[bad][np.argmax(short[bad])]
+    ports = (s0[worst], s1[worst])
+    cand = np.flatnonzero(active & (np.isin(model.conn_a, ports) | np.isin(model.conn_b, ports)))
+    if len(cand) == 0:
+        return None
+    gap0, ang0 = connection_errors(model, model.P0, model.D0)
+    impact = error_impact(model, gap0[cand], ang0[cand])
+    keys = [min(model.key[model.conn_a[k]], model.key[model.conn_b[k]]) for k in cand]
+    return int(cand[min(range(len(cand)), key=lambda i: (-impact[i], keys[i]))])
+
+
+def _near_misses(request: AlignmentRequest) -> list[dict]:
+    """Open ports that face an open port of another item within one bore radius (twice the default tolerance)."""
+    from scipy.spatial import cKDTree
+
+    used = {tuple(c.from_) for c in request.connections} | {tuple(c.to) for c in request.connections}
+    open_ports = [(c.id, k, p, c.radius or 0.0) for c in request.components for k, p in enumerate(c.ports)
+                  if (c.id, k) not in used]
+    if len(open_ports) < 2:
+        return []
+    P = np.array([p.position for _, _, p, _ in open_ports])
+    D = np.array([p.direction for _, _, p, _ in open_ports], dtype=float)
+    D /= np.linalg.norm(D, axis=1, keepdims=True)
+    R = np.array([r for *_, r in open_ports])
+    out = []
+    for i, j in cKDTree(P).query_pairs(r=max(float(R.max()), 1e-9), output_type="ndarray"):
+        dist = float(np.linalg.norm(P[i] - P[j]))
+        if open_ports[i][0] != open_ports[j][0] and dist <= min(R[i], R[j]) and D[i] @ D[j] < -0.5:
+            out.append({"from": [open_ports[i][0], open_ports[i][1]], "to": [open_ports[j][0], open_ports[j][1]],
+                        "distance": dist})
+    return sorted(out, key=lambda d: d["distance"])
+
+
+def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
+    """Align the pipe system so that every connection closes; see the package docstring."""
+    check_input(request)
+    progress(0.0, "building model")
+    model = build_model(request)
+    if model.n_comp == 0:
+        raise SolverError("model", "no components")
+    gap0, ang0 = connection_errors(model, model.P0, model.D0)
+    if model.n_conn == 0 or (np.all(gap0 <= model.pos_tol) and np.all(ang0 <= model.ang_tol)):
+        # already water-tight (e.g. a model aligned before): nothing may move, not even along flat modes
+        out = Outcome(P=model.P0.copy(), D=model.D0.copy(), iterations=0,
+                      stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool))
+        return _finish(request, model, out, progress)
+    try:
+        conflict = _direct_with_cuts(model, request, progress)
+    except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
+        raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
+    if request.options.method == "direct":
+        out = conflict
+    else:
+        out = solve_dual_quaternion(model, request.options, conflict.active, progress)
+        out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
+        out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
+    return _finish(request, model, out, progress)
+
+
+def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress) -> AlignmentResult:
+    progress(0.95, "building result")
+    result = build_result(request, model, out, request.options.method)
+    if request.source_pcf is not None:
+        joined = {c.from_[0] for c in request.connections} | {c.to[0] for c in request.connections}
+        alone = [c.id for c in request.components if c.id not in joined]
+        if alone and len(alone) < len(request.components):
+            _warn(result, "pcf_unconnected_items",
+                  f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
+                  "and were not aligned; raise options.connection_tolerance if they belong to the line.",
+                  {"items": alone[:200]})
+        near = _near_misses(request)
+        if near:
+            _warn(result, "pcf_near_miss",
+                  f"{len(near)} pair(s) of open PCF end points face each other a little beyond the connection "
+                  "tolerance and were left unconnected; raise options.connection_tolerance to join them.",
+                  {"pairs": near[:200]})
+        for code, message, details in pcf_notes(request.source_pcf):
+            if code == "pcf_zero_length_items":
+                result.report.details[code] = details["items"]
+            else:
+                _warn(result, code, message, details)
+    return result
+
+
+def _warn(result: AlignmentResult, code: str, message: str, details: dict) -> None:
+    result.report.warnings.append(Diagnostic(code=code, message=message, details=details))
+    result.report.status = "warning"

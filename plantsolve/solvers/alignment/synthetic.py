@@ -1,0 +1,87 @@
+"""Scan-like test networks: a grid of fittings joined by pipes (every cell is a loop).
+
+Used by the tests, the benchmark and the examples. Nodes of degree 2/3/4 get an elbow, a
+tee or a cross; every ``valve_every``-th edge gets an inline valve (pipe-valve-pipe); the
+listed corners are tie-ins placed exactly; everything else is perturbed like a scan fit
+(pipes ~2 mm / 0.3 deg, fittings ~6 mm / 1.5 deg by default). Seeded, so deterministic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from plantsolve.schemas.alignment import AlignmentRequest
+
+
+def grid_network(
+    nx: int, ny: int, *, spacing: float = 3000.0, arm: float = 150.0, radius: float = 50.0,
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0), valve_every: int = 0,
+    tie_ins: tuple[tuple[int, int], ...] = (), pipe_noise: tuple[float, float] = (2.0, 0.3),
+    fitting_noise: tuple[float, float] = (6.0, 1.5), seed: int = 0, options: dict | None = None,
+) -> AlignmentRequest:
+    rng = np.random.default_rng(seed)
+    org = np.array(origin, dtype=float)
+    comps: list[dict] = []
+    conns: list[dict] = []
+    node_port: dict[tuple[int, int, int, int], tuple[str, int]] = {}
+
+    def perturb(ports, centre, noise, fixed, up=None):
+        if fixed or noise == (0.0, 0.0):
+            return ports, up
+        rot = Rotation.from_rotvec(rng.normal(size=3) * np.radians(noise[1]) / np.sqrt(3))
+        shift = rng.normal(size=3) * noise[0] / np.sqrt(3)
+        out = []
+        for p, d in ports:
+            out.append((rot.apply(np.asarray(p) - centre) + centre + shift, rot.apply(d)))
+        return out, (None if up is None else rot.apply(up).tolist())
+
+    def add(cid, kind, ftype, ports, centre, noise, fixed=False, up=None):
+        ports, up = perturb(ports, centre, noise, fixed, up)
+        comp = {"id": cid, "kind": kind, "radius": radius, "fixed": fixed,
+                "ports": [{"position": (np.asarray(p) + org).tolist(), "direction": np.asarray(d).tolist()} for p, d in ports]}
+        if kind == "fitting":
+            comp["type"] = ftype
+        if up is not None:
+            comp["up"] = up
+        comps.append(comp)
+
+    dirs = {(1, 0): 0, (-1, 0): 1, (0, 1): 2, (0, -1): 3}
+    for i in range(nx):
+        for j in range(ny):
+            c = np.array([i * spacing, j * spacing, 0.0])
+            nbrs = [(di, dj) for (di, dj) in dirs if 0 <= i + di < nx and 0 <= j + dj < ny]
+            ftype = {1: "cap", 2: "elbow", 3: "tee", 4: "cross"}[len(nbrs)]
+            if len(nbrs) == 2 and nbrs[0][0] == -nbrs[1][0] and nbrs[0][1] == -nbrs[1][1]:
+                ftype = "other"
+            ports = [(c + arm * np.array([di, dj, 0.0]), np.array([di, dj, 0.0])) for di, dj in nbrs]
+            cid = f"N{i}-{j}"
+            add(cid, "fitting", ftype, ports, c, fitting_noise, fixed=(i, j) in tie_ins)
+            for k, (di, dj) in enumerate(nbrs):
+                node_port[(i, j, di, dj)] = (cid, k)
+    edge = 0
+    for i in range(nx):
+        for j in range(ny):
+            for di, dj in ((1, 0), (0, 1)):
+                if not (i + di < nx and j + dj < ny):
+                    continue
+                a = np.array([i * spacing, j * spacing, 0.0])
+                e = np.array([di, dj, 0.0])
+                start, end = a + arm * e, a + (spacing - arm) * e
+                edge += 1
+                if valve_every and edge % valve_every == 0:
+                    mid = 0.5 * (start + end)
+                    v0, v1 = mid - 150 * e, mid + 150 * e
+                    add(f"P{edge}a", "pipe", None, [(start, -e), (v0, e)], 0.5 * (start + v0), pipe_noise)
+                    add(f"V{edge}", "fitting", "valve", [(v0, -e), (v1, e)], mid, fitting_noise, up=[0.0, 0.0, 1.0])
+                    add(f"P{edge}b", "pipe", None, [(v1, -e), (end, e)], 0.5 * (v1 + end), pipe_noise)
+                    chain = [(f"P{edge}a", 0), (f"P{edge}a", 1), (f"V{edge}", 0), (f"V{edge}", 1), (f"P{edge}b", 0), (f"P{edge}b", 1)]
+                else:
+                    add(f"P{edge}", "pipe", None, [(start, -e), (end, e)], 0.5 * (start + end), pipe_noise)
+                    chain = [(f"P{edge}", 0), (f"P{edge}", 1)]
+                ends = [node_port[(i, j, di, dj)]] + chain + [node_port[(i + di, j + dj, -di, -dj)]]
+                for k in range(0, len(ends), 2):
+                    conns.append({"from": list(ends[k]), "to": list(ends[k + 1])})
+    return AlignmentRequest.model_validate(
+        {"units": "mm", "components": comps, "connections": conns, "options": options or {}}
+    )

@@ -1,0 +1,156 @@
+"""The contract between a solver package and whoever runs it.
+
+Every solver package exports ``SPEC``, a :class:`SolverSpec` that declares its kind, its
+request and result schemas, its solve function, upload parser, input checker, artifact
+writer, synchronous result operations and limits. The kind map
+(:mod:`plantsolve.solvers.kinds`) lists the packages' specs; nothing is found by naming
+convention.
+
+A solver receives a :class:`Progress` callback. It calls ``progress(fraction, message)``
+between iterations; the callback raises :class:`Cancelled` when the job has been
+cancelled (or its time is up), so a solver needs no extra code to honour cancellation
+beyond calling it regularly.
+
+Errors a solver may raise:
+- :class:`InputRejected` — the input is invalid in a way only the solver can see
+  (e.g. a pipe whose ports are not collinear). The service answers 422 naming the field.
+- :class:`SolverError` — the solver could not produce any result. A solver that merely
+  did not converge must *not* raise: it returns its best result with a report instead.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any, Callable, Protocol, Sequence
+
+from pydantic import BaseModel
+
+
+class Progress(Protocol):
+    def __call__(self, fraction: float, message: str = "") -> None:
+        """Report progress in [0, 1]; raises :class:`Cancelled` if the run must stop."""
+
+
+def no_progress(fraction: float, message: str = "") -> None:
+    """A :class:`Progress` that ignores reports and never cancels (library and test use)."""
+
+
+class Cancelled(Exception):
+    """Raised by the progress callback when the job was cancelled or timed out."""
+
+
+@dataclass
+class FieldError:
+    """One bad field: ``loc`` is the JSON path (e.g. ``("connections", 3, "to")``)."""
+
+    loc: tuple[str | int, ...]
+    msg: str
+    type: str = "value_error"
+
+
+class InputRejected(ValueError):
+    """The input is invalid; carries one :class:`FieldError` per bad field."""
+
+    def __init__(self, errors: Sequence[FieldError] | FieldError, title: str | None = None):
+        """``InputRejected(FieldError(("file",), "no END-POINT"))`` or a list of them."""
+        self.errors = [errors] if isinstance(errors, FieldError) else list(errors)
+        self.title = title or "; ".join(
+            f"{'/'.join(str(p) for p in e.loc) or '(body)'}: {e.msg}" for e in self.errors
+        )
+        super().__init__(self.title)
+
+
+class SolverError(Exception):
+    """The solver produced no usable result.
+
+    ``stage`` names the stage that failed, ``message`` is a human sentence, ``details`` is
+    JSON-serialisable and machine readable.
+    """
+
+    def __init__(self, stage: str, message: str, details: dict[str, Any] | None = None):
+        self.stage = stage
+        self.message = message
+        self.details = details or {}
+        super().__init__(f"{stage}: {message}")
+
+
+@dataclass
+class Artifact:
+    """A file produced from a result: a plot, a mesh, an exported model."""
+
+    name: str  # file name, e.g. "tube.stl"; unique per job
+    media_type: str  # e.g. "model/stl", "image/png"
+    data: bytes = field(repr=False)
+
+
+def reject(msg: str, loc: tuple[str | int, ...] = ("file",), type: str = "value_error") -> InputRejected:
+    """One bad field as an exception to raise: ``raise reject("no END-POINT", ("file", "line", 7))``."""
+    return InputRejected(FieldError(loc, msg, type))
+
+
+class ResultNotUsable(Exception):
+    """A finished result cannot answer a :class:`ResultOperation` (the service answers 409)."""
+
+
+@dataclass(frozen=True)
+class ResultOperation:
+    """A synchronous question answered from a finished job's result, served as
+    ``POST /v1/<kind>/jobs/{id}/<name>`` (perfmap's inverse query is one).
+
+    ``answer(result, request)`` takes the stored result (as ``result_model`` of the spec) and
+    the validated ``request_model``; it raises :class:`InputRejected` (422) for a bad request
+    and :class:`ResultNotUsable` (409) when this result cannot answer at all.
+    """
+
+    name: str
+    request_model: type[BaseModel]
+    response_model: type[BaseModel]
+    answer: Callable[[Any, Any], BaseModel]
+    summary: str = ""
+    description: str = ""
+
+
+_KIND = re.compile(r"^[a-z][a-z0-9_-]{0,39}$")
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """Everything the service needs to know about one solver kind.
+
+    - ``solve(request, progress) -> result``: the pure computation.
+    - ``check_input(request)``: fast checks run at submission (raises :class:`InputRejected`).
+    - ``parse_upload(filename, content, options) -> request``: files the kind accepts, with
+      ``upload_extensions`` (lower case, with the dot).
+    - ``render_artifacts(request, result) -> [Artifact]``: plots, meshes, exported files.
+    - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
+      stopped), ``max_attempts`` (``None``: the service's ``MAX_ATTEMPTS``).
+    """
+
+    kind: str
+    request_model: type[BaseModel]
+    result_model: type[BaseModel]
+    solve: Callable[[Any, Progress], BaseModel]
+    version: str
+    check_input: Callable[[Any], None] | None = None
+    parse_upload: Callable[[str, bytes, dict | None], BaseModel] | None = None
+    render_artifacts: Callable[[Any, Any], list[Artifact]] | None = None
+    upload_extensions: tuple[str, ...] = ()
+    soft_time_limit: float = 600.0
+    time_limit: float = 660.0
+    max_attempts: int | None = None
+    description: str = ""
+    operations: tuple[ResultOperation, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not _KIND.match(self.kind):
+            raise ValueError(f"solver kind {self.kind!r} is not a lower-case name usable in a URL")
+        if not 0 < self.soft_time_limit <= self.time_limit:
+            raise ValueError(f"{self.kind}: need 0 < soft_time_limit <= time_limit")
+        if self.parse_upload is not None and not self.upload_extensions:
+            raise ValueError(f"{self.kind}: parse_upload needs upload_extensions")
+        if any(not e.startswith(".") or e != e.lower() for e in self.upload_extensions):
+            raise ValueError(f"{self.kind}: upload extensions are lower case and start with a dot")
+        names = [op.name for op in self.operations]
+        if len(set(names)) != len(names):
+            raise ValueError(f"{self.kind}: operation names repeat: {names}")

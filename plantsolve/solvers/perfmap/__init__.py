@@ -1,0 +1,45 @@
+"""Compressor performance maps from rig measurements (ESGI 51, HV-Turbo chapter).
+
+The job computes characteristics, envelopes and the maximum-efficiency map; the inverse
+query (``POST /v1/perfmap/jobs/{id}/query``) answers duty points from a finished map.
+"""
+
+from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapQueryResult, PerfmapRequest, PerfmapResult
+from plantsolve.solvers.base import ResultOperation, SolverSpec
+from plantsolve.solvers.perfmap.artifacts import render_artifacts
+from plantsolve.solvers.perfmap.query import answer_query, query
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import UPLOAD_EXTENSIONS, parse_upload
+from plantsolve.solvers.perfmap.validation import check_input
+
+__version__ = "1.2.0"
+
+SPEC = SolverSpec(
+    kind="perfmap",
+    request_model=PerfmapRequest,
+    result_model=PerfmapResult,
+    solve=solve,
+    version=__version__,
+    check_input=check_input,
+    parse_upload=parse_upload,
+    render_artifacts=render_artifacts,
+    upload_extensions=UPLOAD_EXTENSIONS,
+    # Typical runs take about a second (28 settings, 64x64 map); minimax with the log family
+    # and 1000x1000 maps take tens of seconds.
+    soft_time_limit=120,
+    time_limit=300,
+    description=__doc__.split("\n\n")[0],
+    operations=(
+        ResultOperation(
+            name="query",
+            request_model=PerfmapQueryRequest,
+            response_model=PerfmapQueryResult,
+            answer=answer_query,
+            summary="Inverse query: optimal settings and efficiency for duty points",
+            description="One `{flow, pressure}` or `{points: [...]}`. Points outside the reachable region "
+            "come back with `feasible: false` and their distance to the map instead of an extrapolation.",
+        ),
+    ),
+)
+
+__all__ = ["SPEC", "solve", "check_input", "parse_upload", "render_artifacts", "query", "__version__"]

@@ -1,0 +1,277 @@
+"""The ``perfmap`` pipeline: characteristics -> error table -> envelopes -> map."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.schemas.perfmap import (
+    EfficiencyErrorRow,
+    Envelope,
+    ErrorTableRow,
+    PerfmapRequest,
+    PerfmapResult,
+    PerformanceMap,
+    SettingFit,
+)
+from plantsolve.solvers.base import Progress, SolverError, no_progress
+from plantsolve.solvers.perfmap.envelopes import envelope
+from plantsolve.solvers.perfmap.families import (
+    EFFICIENCY_FAMILY,
+    FAMILIES,
+    N_COEFFICIENTS,
+    CurveSet,
+    log_params_to_public,
+)
+from plantsolve.solvers.perfmap.efficiency import EFFICIENCY_FAMILIES, N_EFF_COEFFICIENTS
+from plantsolve.solvers.perfmap.fitting import (
+    EtaResult,
+    PressureResult,
+    concave_floor,
+    fit_eta_setting,
+    fit_pressure_setting,
+)
+from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
+from plantsolve.solvers.perfmap.triangulation import triangulate
+from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
+
+
+EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
+EFFICIENCY_OVERSHOOT = 0.02  # efficiency_above_measured: fitted peak above the measured max
+
+
+def _nan_to_none(a: np.ndarray) -> list:
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in np.atleast_2d(a)]
+
+
+def _choose_family(fits: dict[str, list[PressureResult]]) -> tuple[str, dict]:
+    """Pressure family with the smallest mean (over settings) leave-one-out pressure error;
+    near-ties go to the family with fewer coefficients. (The efficiency family is chosen
+    separately, per setting: :func:`_choose_efficiency`.)"""
+    means = {fam: float(np.mean([r.loo for r in rs])) for fam, rs in fits.items()
+             if all(r.loo is not None for r in rs)}
+    if not means:
+        return "parabola", {}
+    best = min(means, key=lambda f: (round(means[f], 9), N_COEFFICIENTS[f], FAMILIES.index(f)))
+    return best, {"mean_pressure_loo": means}
+
+
+def _choose_efficiency(results: dict[str, EtaResult]) -> str:
+    """Efficiency family of one setting with the smallest leave-one-out max absolute error
+    (efficiency is a fraction: absolute errors compare across the curve, relative ones are
+    inflated at choke where eta is small); near-ties go to fewer coefficients."""
+    scored = {f: r.loo_abs for f, r in results.items() if r.loo_abs is not None}
+    if not scored:
+        return "parabola"
+    return min(scored, key=lambda f: (round(scored[f], 9), N_EFF_COEFFICIENTS[f],
+                                      EFFICIENCY_FAMILIES.index(f)))
+
+
+def _public_coefficients(r: PressureResult, s: Setting) -> list[float]:
+    if r.family == "log":
+        return log_params_to_public(r.fit.params, float(s.x[0]), float(s.x[-1]))
+    return [float(v) for v in r.fit.params]
+
+
+def _efficiency_diagnostics(s: Setting, e: EtaResult, where: dict) -> list[Diagnostic]:
+    out = []
+    if e.rel_err > EFFICIENCY_POOR_REL:
+        i = e.worst
+        out.append(Diagnostic(
+            code="efficiency_fit_poor",
+            message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the {e.family} efficiency fit "
+            f"misses a measured point by {100 * e.rel_err:.1f}% (relative; max absolute error "
+            f"{e.abs_err:.3f}), worst at flow {s.x[i]:g} where eta = {s.eta[i]:.3f}.",
+            details={**where, "family": e.family, "max_rel_error": e.rel_err,
+                     "max_abs_error": e.abs_err, "worst_flow": float(s.x[i]),
+                     "worst_efficiency": float(s.eta[i])}))
+    overshoot = e.peak - float(s.eta.max())
+    if overshoot > EFFICIENCY_OVERSHOOT:
+        out.append(Diagnostic(
+            code="efficiency_above_measured",
+            message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the fitted efficiency peaks at "
+            f"{e.peak:.4f}, {overshoot:.4f} above the best measured point ({s.eta.max():.4f}).",
+            details={**where, "peak": e.peak, "measured_max": float(s.eta.max())}))
+    return out
+
+
+def curveset_from_fits(settings: list[SettingFit]) -> CurveSet:
+    return CurveSet([s.family for s in settings], [s.efficiency_family for s in settings],
+                    [s.x_min for s in settings], [s.x_max for s in settings],
+                    [s.pressure_coefficients for s in settings],
+                    [s.efficiency_coefficients for s in settings])
+
+
+def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
+    opts = request.options
+    settings = prepare(request)
+    progress(0.02, "input checked")
+    warnings: list[Diagnostic] = list(request.upload_warnings)
+    minimax = opts.fit == "minimax"
+
+    # --- characteristics of every family (the paper's Table 1 for these data)
+    fits: dict[str, list[PressureResult]] = {f: [] for f in FAMILIES}
+    eta_fits: dict[str, list[EtaResult]] = {f: [] for f in EFFICIENCY_FAMILIES}
+    n_steps = (len(FAMILIES) + len(EFFICIENCY_FAMILIES)) * len(settings)
+    step = 0
+    for fam in FAMILIES:
+        for s in settings:
+            fits[fam].append(fit_pressure_setting(fam, s.t, s.y, minimax))
+            step += 1
+            progress(0.02 + 0.58 * step / n_steps, f"fitting {fam}")
+    for efam in EFFICIENCY_FAMILIES:
+        for s in settings:
+            eta_fits[efam].append(fit_eta_setting(efam, s.t, s.eta, minimax,
+                                                  opts.concave_efficiency))
+            step += 1
+            progress(0.02 + 0.58 * step / n_steps, f"fitting efficiency {efam}")
+    floors = [concave_floor(s.x, s.y) for s in settings]
+
+    table = []
+    for fam in FAMILIES:
+        rs = fits[fam]
+        es = eta_fits[EFFICIENCY_FAMILY[fam]]  # the paper's pairing
+        perr = [r.err for r in rs]
+        ploo = [r.loo for r in rs]
+        eloo = [r.loo_rel for r in es]
+        table.append(ErrorTableRow(
+            family=fam, n_coefficients=N_COEFFICIENTS[fam],
+            pressure_max_rel_error=float(max(perr)),
+            efficiency_max_rel_error=(None if fam == "log"
+                                      else float(max(r.rel_err for r in es))),
+            efficiency_max_abs_error=(None if fam == "log"
+                                      else float(max(r.abs_err for r in es))),
+            pressure_loo=None if any(v is None for v in ploo) else float(max(ploo)),
+            efficiency_loo=None if any(v is None for v in eloo) else float(max(eloo)),
+            floor=float(max(floors)), worst_setting=int(np.argmax(perr))))
+
+    if opts.model == "auto":
+        family, details = _choose_family(fits)
+        details["criterion"] = "mean over settings of the LOO max relative pressure error"
+        if "mean_pressure_loo" not in details:
+            warnings.append(Diagnostic(code="auto_without_loo", message="Too few points per "
+                            "setting for leave-one-out errors; 'auto' fell back to 'parabola'."))
+    else:
+        family, details = opts.model, {}
+
+    if opts.efficiency_model == "auto":
+        eta_choice = [_choose_efficiency({f: eta_fits[f][k] for f in EFFICIENCY_FAMILIES})
+                      for k in range(len(settings))]
+    elif opts.efficiency_model == "same":
+        eta_choice = [EFFICIENCY_FAMILY[family]] * len(settings)
+    else:
+        eta_choice = [opts.efficiency_model] * len(settings)
+    details["efficiency_criterion"] = (
+        "per setting: LOO max absolute efficiency error" if opts.efficiency_model == "auto"
+        else f"efficiency_model = {opts.efficiency_model!r}")
+
+    eta_table = []
+    for efam in EFFICIENCY_FAMILIES:
+        es = eta_fits[efam]
+        lr, la = [r.loo_rel for r in es], [r.loo_abs for r in es]
+        eta_table.append(EfficiencyErrorRow(
+            family=efam, n_coefficients=N_EFF_COEFFICIENTS[efam],
+            max_rel_error=float(max(r.rel_err for r in es)),
+            max_abs_error=float(max(r.abs_err for r in es)),
+            loo_rel=None if any(v is None for v in lr) else float(max(lr)),
+            loo_abs=None if any(v is None for v in la) else float(max(la)),
+            max_overshoot=float(max(r.peak - float(s.eta.max()) for r, s in zip(es, settings))),
+            chosen=sum(c == efam for c in eta_choice)))
+
+    chosen = fits[family]
+    out_settings = []
+    for k, (s, r) in enumerate(zip(settings, chosen)):
+        e = eta_fits[eta_choice[k]][k]
+        out_settings.append(SettingFit(
+            theta=s.theta, phi=s.phi, family=family, efficiency_family=e.family,
+            x_min=float(s.x[0]), x_max=float(s.x[-1]),
+            pressure_coefficients=_public_coefficients(r, s),
+            efficiency_coefficients=[float(v) for v in e.fit.params],
+            n_points=len(s.x), pressure_max_rel_error=r.err,
+            efficiency_max_rel_error=e.rel_err, efficiency_max_abs_error=e.abs_err,
+            pressure_loo=r.loo, efficiency_loo=e.loo_rel, efficiency_loo_abs=e.loo_abs,
+            efficiency_peak=e.peak, efficiency_bounds_active=e.fit.active_bounds,
+            floor=floors[k], active_side_conditions=r.fit.active))
+        where = {"setting": k, "position": s.source_index, "theta": s.theta, "phi": s.phi}
+        if floors[k] > 0:
+            warnings.append(Diagnostic(
+                code="data_not_decreasing_concave",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the measured pressures are "
+                f"not decreasing and concave; no admissible curve can beat a max relative "
+                f"error of {100 * floors[k]:.2f}% (the floor), the {family} fit reaches "
+                f"{100 * r.err:.2f}%.",
+                details={**where, "floor": floors[k], "fit_error": r.err}))
+        warnings.extend(_efficiency_diagnostics(s, e, where))
+        if len(s.x) < N_COEFFICIENTS[family]:
+            warnings.append(Diagnostic(
+                code="underdetermined_fit",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g} has {len(s.x)} points for "
+                f"{N_COEFFICIENTS[family]} coefficients: the fit is not unique.",
+                details=where))
+        if s.merged_duplicates:
+            warnings.append(Diagnostic(
+                code="duplicate_points_merged",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {s.merged_duplicates} "
+                "repeated measurement(s) merged.", details=where))
+
+    curves = curveset_from_fits(out_settings)
+    theta = np.array([s.theta for s in settings])
+    phi = np.array([s.phi for s in settings])
+
+    # --- envelopes per theta
+    envs = []
+    for th in sorted(set(theta.tolist())):
+        members = [i for i in range(len(settings)) if theta[i] == th]
+        e = envelope(curves, members, phi, opts.envelope_curves, opts.envelope_points)
+        envs.append(Envelope(theta=th, flow=e["flow"].tolist(),
+                             pressure=_nan_to_none(e["pressure"])[0],
+                             phi=_nan_to_none(e["phi"])[0],
+                             efficiency=_nan_to_none(e["efficiency"])[0]))
+    progress(0.62, "envelopes")
+
+    ranges = curve_ranges(curves)
+    triangles = np.zeros((0, 3), dtype=int)
+    pmap = None
+    no_map = map_impossible(settings) if opts.map is None else None
+    if opts.map is not False and not no_map:
+        triangles = triangulate(theta, phi)
+        if len(triangles) == 0:
+            raise SolverError("triangulation", "no non-degenerate triangle of settings",
+                              {"n_settings": len(settings)})
+        gx, gy = grid_axes(ranges, *opts.grid)
+        if opts.map_method == "exact":
+            t = np.linspace(0.0, 1.0, opts.t_samples)
+            eta, th_map, ph_map = exact_map(curves, triangles, theta, phi, t, gx, gy, ranges,
+                                            progress, 0.62, 0.98)
+        else:
+            eta, th_map, ph_map = binned_map(curves, triangles, theta, phi, gx, gy, ranges,
+                                             m_t=opts.t_samples - 1)
+        pmap = PerformanceMap(method=opts.map_method, flow=gx.tolist(), pressure=gy.tolist(),
+                              efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
+                              phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
+                              reachable_fraction=float(np.mean(np.isfinite(eta))))
+        if not np.isfinite(eta).any():
+            warnings.append(Diagnostic(
+                code="map_empty", message="No grid node of the map is reachable: the "
+                "characteristics sweep no area in (flow, pressure) (e.g. all pressures equal); "
+                "every inverse query will be infeasible.",
+                details={"pressure_range": [ranges[2], ranges[3]]}))
+    elif no_map:
+        warnings.append(Diagnostic(code="map_not_possible", message=f"No performance map: "
+                                   f"{no_map}; characteristics and envelopes only, no inverse "
+                                   "query for this job.", details={"reason": no_map}))
+    else:
+        warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
+                                   "performance map and no inverse query for this job."))
+    progress(1.0, "done")
+
+    report = Report(status="warning" if warnings else "ok",
+                    message=f"{len(settings)} settings fitted with family '{family}' "
+                    f"({opts.fit}); {len(envs)} envelope(s)"
+                    + (f"; map {opts.grid[0]}x{opts.grid[1]} over {len(triangles)} triangles"
+                       if pmap else ""),
+                    warnings=warnings, details={"family_choice": details})
+    return PerfmapResult(report=report, family=family, fit=opts.fit, settings=out_settings,
+                         error_table=table, efficiency_error_table=eta_table, envelopes=envs, triangles=triangles.tolist(),
+                         map=pmap, flow_range=[ranges[0], ranges[1]],
+                         pressure_range=[ranges[2], ranges[3]])

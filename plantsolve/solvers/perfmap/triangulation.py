@@ -1,0 +1,41 @@
+"""Deterministic, unit-free triangulation of the (theta, phi) settings (paper §4, Fig. 15)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import Delaunay
+
+from plantsolve.solvers.perfmap.validation import normalised_settings
+
+
+def triangulate(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Delaunay triangles (indices, counter-clockwise) of range-normalised (theta, phi).
+
+    Normalising each axis to [0, 1] makes the result independent of the units of theta and
+    phi (degrees vs speed fraction). The input order is the caller's canonical (theta, phi)
+    sort, and Qhull is deterministic for a given input, so the triangulation is too.
+    Zero-area simplices (possible for co-circular grids) are dropped: they cover nothing.
+    """
+    pts = normalised_settings(theta, phi)
+    tri = Delaunay(pts).simplices.astype(int)
+    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    area2 = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    keep = np.abs(area2) > 1e-12
+    tri, area2 = tri[keep], area2[keep]
+    tri[area2 < 0] = tri[area2 < 0][:, [0, 2, 1]]
+    order = np.lexsort((tri.max(axis=1), tri.min(axis=1)))  # stable listing order
+    return tri[order]
+
+
+def locate(theta: np.ndarray, phi: np.ndarray, triangles: np.ndarray,
+           q_theta: float, q_phi: float, tol: float = 1e-9):
+    """(triangle index, barycentric weights) of a setting, or (None, None) outside the hull."""
+    pts = normalised_settings(np.append(theta, q_theta), np.append(phi, q_phi))
+    q, pts = pts[-1], pts[:-1]
+    for k, (i, j, l) in enumerate(triangles):
+        A = np.column_stack([pts[i] - pts[l], pts[j] - pts[l]])
+        u, v = np.linalg.solve(A, q - pts[l])
+        w = np.array([u, v, 1.0 - u - v])
+        if np.all(w >= -tol):
+            return k, w
+    return None, None

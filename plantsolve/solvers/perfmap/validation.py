@@ -1,0 +1,146 @@
+"""Semantic input checks (cross-field; types, finiteness and lengths are in the schema)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from plantsolve.schemas.perfmap import PerfmapRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+
+
+@dataclass
+class Setting:
+    """One (theta, phi) setting, points sorted by flow, exact duplicates merged."""
+
+    theta: float
+    phi: float
+    x: np.ndarray
+    y: np.ndarray
+    eta: np.ndarray
+    source_index: int  # index in request.positions
+    merged_duplicates: int = 0
+
+    @property
+    def t(self) -> np.ndarray:
+        return (self.x - self.x[0]) / (self.x[-1] - self.x[0])
+
+
+def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
+    n = len(pos.flow)
+    bad = False
+    for name in ("pressure", "efficiency"):
+        if len(getattr(pos, name)) != n:
+            errors.append(FieldError(("positions", i, name),
+                                     f"has {len(getattr(pos, name))} values but flow has {n}"))
+            bad = True
+    if bad:
+        return None
+    x, y, eta = (np.asarray(v, dtype=float) for v in (pos.flow, pos.pressure, pos.efficiency))
+    # Point-specific errors name the point (loc ..., field, k; k = index in the submitted
+    # list) so that a CSV upload can point at the file row.
+    if np.any(y <= 0):
+        k = int(np.argmax(y <= 0))
+        errors.append(FieldError(("positions", i, "pressure", k),
+                                 f"pressures must be positive (errors are relative); got "
+                                 f"{y[k]:g}"))
+        bad = True
+    if np.any(eta <= 0):
+        k = int(np.argmax(eta <= 0))
+        errors.append(FieldError(("positions", i, "efficiency", k),
+                                 f"efficiencies must be positive (errors are relative); got "
+                                 f"{eta[k]:g}"))
+        bad = True
+    elif np.any(eta > 1):  # fitted curves are held to 0 <= eta <= 1
+        k = int(np.argmax(eta > 1))  # the first offending point
+        hint = ("percent? divide by 100, or in a CSV label the column 'efficiency [%]'"
+                if eta.max() <= 100 else "efficiency must be a fraction")
+        errors.append(FieldError(("positions", i, "efficiency", k),
+                                 f"efficiency is a fraction, 0 < eta <= 1; got {eta[k]:g} "
+                                 f"({hint})"))
+        bad = True
+    if bad:
+        return None
+    order = np.lexsort((eta, y, x))
+    x, y, eta = x[order], y[order], eta[order]
+    same = (np.diff(x) == 0) & (np.diff(y) == 0) & (np.diff(eta) == 0)
+    keep = np.concatenate([[True], ~same])
+    x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
+    if np.any(np.diff(x) <= 0):
+        k = int(np.argmax(np.diff(x) <= 0))
+        a, b = sorted((int(order[k]), int(order[k + 1])))
+        errors.append(FieldError(("positions", i, "flow", b),
+                                 f"flow is not strictly increasing after sorting: flow {x[k]:g} "
+                                 f"appears twice (points {a} and {b}) with different "
+                                 "pressure/efficiency; average or drop the repeat"))
+        return None
+    if len(x) < 3:
+        errors.append(FieldError(("positions", i, "flow"),
+                                 f"needs at least 3 distinct points, got {len(x)}"))
+        return None
+    span = x[-1] - x[0]
+    if not span > 1e-9 * max(abs(x[0]), abs(x[-1])):
+        errors.append(FieldError(("positions", i, "flow"),
+                                 f"the flow range {x[0]:g}..{x[-1]:g} is too narrow to fit a "
+                                 "curve (relative span below 1e-9)"))
+        return None
+    return Setting(pos.theta, pos.phi, x, y, eta, i, int(np.sum(same)))
+
+
+def normalised_settings(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(theta, phi) scaled to [0, 1] each, so that geometry does not depend on units."""
+    pts = np.column_stack([theta, phi]).astype(float)
+    lo, span = pts.min(axis=0), np.ptp(pts, axis=0)
+    return (pts - lo) / np.where(span > 0, span, 1.0)
+
+
+def collinear(theta: np.ndarray, phi: np.ndarray) -> bool:
+    pts = normalised_settings(theta, phi)
+    if len(pts) < 3:
+        return True
+    centred = pts - pts.mean(axis=0)
+    s = np.linalg.svd(centred, compute_uv=False)
+    return bool(s[1] <= 1e-9 * max(s[0], 1e-300))
+
+
+def map_impossible(settings: list[Setting]) -> str | None:
+    """Why no performance map can be built over these settings (None when it can)."""
+    if len(settings) < 3:
+        return f"a performance map needs at least 3 settings, got {len(settings)}"
+    if collinear(np.array([s.theta for s in settings]), np.array([s.phi for s in settings])):
+        return ("all settings lie on one line in (theta, phi): no triangle to interpolate "
+                "over for a performance map")
+    return None
+
+
+def prepare(request: PerfmapRequest) -> list[Setting]:
+    """Validate and return the settings sorted by (theta, phi); raises InputRejected."""
+    errors: list[FieldError] = []
+    settings: list[Setting] = []
+    seen: dict[tuple[float, float], int] = {}
+    for i, pos in enumerate(request.positions):
+        key = (float(pos.theta), float(pos.phi))
+        if key in seen:
+            errors.append(FieldError(("positions", i),
+                                     f"setting (theta={key[0]:g}, phi={key[1]:g}) repeats "
+                                     f"positions[{seen[key]}]; merge their points"))
+            continue
+        seen[key] = i
+        s = _prepare_position(i, pos, errors)
+        if s is not None:
+            settings.append(s)
+    if not errors and request.options.map:  # an explicitly requested map must be possible
+        reason = map_impossible(settings)
+        if reason:
+            errors.append(FieldError(("positions",), reason + " (set options.map=false, or "
+                                     "leave it unset, for characteristics and envelopes only)"))
+    if errors:
+        raise InputRejected(errors)
+    settings.sort(key=lambda s: (s.theta, s.phi))
+    return settings
+
+
+def check_input(request: PerfmapRequest) -> None:
+    """Fast semantic validation; raises :class:`InputRejected` naming each bad field."""
+    prepare(request)

@@ -1,0 +1,387 @@
+"""Stage 5 — least-squares fit of the tube surface to the samples in LRA parameters (§5–6).
+
+Unknowns: the first arc's start point, the start frame (rotation vector applied to the
+initial frame), the inner straight lengths, the inner rotations, the bend angles, the bend
+radii (per bend, one common radius, or fixed) and the pipe radius (unless given); the
+segment count from stage 4 is fixed. The LRA parametrisation is the one the paper argues
+for in §5.1/§6 (no representation has local control, and LRA covers the whole
+configuration space).
+
+Residual of a sample: distance to its assigned spine segment minus the pipe radius, with the
+assignment (nearest segment of the bounded spine) held fixed during a solve and renewed
+between solves; the first and last straights are infinite lines during a solve, their
+lengths follow from the extent of their samples afterwards (a bounded end would cost
+nothing when too long). The Jacobian is analytic per sample (derivative of the distance
+with respect to the segment's line or circle) chained with the derivative of the segment
+geometry with respect to the LRA parameters (central differences of the forward
+kinematics, which is cheap: it involves no samples). Each round is solved by
+Levenberg–Marquardt (Marquardt diagonal scaling, soft-L1 robust loss by iteratively
+reweighted normal equations, bounds by projection). Written out rather than calling
+scipy.optimize.least_squares because that solver takes an SVD of the full N×P Jacobian
+every iteration; here only the P×P normal equations Jᵀ J are formed and solved,
+which stays fast with many samples and on a loaded machine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from plantsolve.solvers.tube.geometry import TubeModel, build_spine, spine_distance
+
+
+@dataclass
+class Layout:
+    n: int
+    radius_mode: str  # "free" | "common" | "fixed"
+    fixed_bend_radius: float | None
+    fit_pipe_radius: bool
+
+    @property
+    def n_radii(self) -> int:
+        return {"free": self.n, "common": 1 if self.n else 0, "fixed": 0}[self.radius_mode]
+
+    @property
+    def size(self) -> int:
+        return 6 + 2 * max(self.n - 1, 0) + self.n + self.n_radii + int(self.fit_pipe_radius)
+
+
+def pack(model: TubeModel, lay: Layout) -> np.ndarray:
+    n = lay.n
+    p0 = model.start + model.lengths[0] * model.frame[:, 0]
+    parts = [p0, np.zeros(3), model.lengths[1:n], model.rotations[1:n], model.angles]
+    if lay.radius_mode == "free":
+        parts.append(model.radii)
+    elif lay.radius_mode == "common" and n:
+        parts.append([np.mean(model.radii)])
+    if lay.fit_pipe_radius:
+        parts.append([model.pipe_radius])
+    return np.concatenate([np.atleast_1d(np.asarray(p, float)) for p in parts])
+
+
+def unpack(x: np.ndarray, lay: Layout, frame0: np.ndarray, pipe_radius: float) -> TubeModel:
+    n = lay.n
+    i = 6
+    lm = x[i:i + n - 1] if n > 1 else np.zeros(0); i += max(n - 1, 0)
+    rm = x[i:i + n - 1] if n > 1 else np.zeros(0); i += max(n - 1, 0)
+    ang = x[i:i + n]; i += n
+    if lay.radius_mode == "free":
+        rad = x[i:i + n]; i += n
+    elif lay.radius_mode == "common":
+        rad = np.full(n, x[i] if n else 0.0); i += 1 if n else 0
+    else:
+        rad = np.full(n, lay.fixed_bend_radius or 0.0)
+    rp = x[i] if lay.fit_pipe_radius else pipe_radius
+    frame = Rotation.from_rotvec(x[3:6]).as_matrix() @ frame0
+    lengths = np.concatenate([[0.0], lm, [0.0]]) if n else np.zeros(1)
+    rots = np.concatenate([[0.0], rm, [0.0]]) if n else np.zeros(1)
+    return TubeModel(x[:3].copy(), frame, lengths, rots, ang.copy(), rad.copy(), float(rp))
+
+
+def bounds(lay: Layout, rp: float) -> tuple[np.ndarray, np.ndarray]:
+    n = lay.n
+    lo = np.full(lay.size, -np.inf); hi = np.full(lay.size, np.inf)
+    i = 6
+    lo[i:i + n - 1] = 0.0 if n > 1 else lo[i:i]; i += max(n - 1, 0)
+    i += max(n - 1, 0)
+    lo[i:i + n] = 1e-6; hi[i:i + n] = 2 * np.pi - 1e-6; i += n
+    lo[i:i + lay.n_radii] = 0.5 * rp  # no bender makes a CLR below the pipe radius; 0.5 r leaves room
+    hi[i:i + lay.n_radii] = 200.0 * rp  # a 1° bend needs no more; beyond, the model degenerates
+    i += lay.n_radii
+    if lay.fit_pipe_radius:
+        lo[i] = 1e-3 * rp
+    return lo, hi
+
+
+def _geometry(model: TubeModel) -> np.ndarray:
+    """(S, 7): lines [start, tangent, 0]; arcs [centre, axis, radius]."""
+    sp = build_spine(model)
+    g = np.zeros((len(sp.kind), 7))
+    line = sp.kind == 0
+    g[line, :3] = sp.start[line]; g[line, 3:6] = sp.tangent[line]
+    arc = ~line
+    g[arc, :3] = sp.centre[arc]; g[arc, 3:6] = sp.axis[arc]; g[arc, 6] = sp.radius[arc]
+    return g
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    out = np.empty(a.shape)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
+    """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
+
+    The same forward kinematics as geometry.build_spine, vectorised over the batch (the
+    finite-difference Jacobian evaluates 2P models at once)."""
+    B = len(X)
+    n = lay.n
+    i = 6
+    lm = X[:, i:i + n - 1] if n > 1 else np.zeros((B, 0)); i += max(n - 1, 0)
+    rm = X[:, i:i + n - 1] if n > 1 else np.zeros((B, 0)); i += max(n - 1, 0)
+    ang = X[:, i:i + n]; i += n
+    if lay.radius_mode == "free":
+        rad = X[:, i:i + n]; i += n
+    elif lay.radius_mode == "common":
+        rad = np.repeat(X[:, i:i + 1], n, axis=1) if n else np.zeros((B, 0)); i += 1 if n else 0
+    else:
+        rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
+    frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0
+    lengths = np.concatenate([np.zeros((B, 1)), lm, np.zeros((B, 1))], 1) if n else np.zeros((B, 1))
+    rots = np.concatenate([np.zeros((B, 1)), rm], 1) if n else np.zeros((B, 1))
+    g = np.zeros((B, 2 * n + 1, 7))
+    p = X[:, :3].copy()
+    t = frames[:, :, 0].copy()
+    nv = frames[:, :, 1].copy()
+    for k in range(n + 1):
+        g[:, 2 * k, :3] = p
+        g[:, 2 * k, 3:6] = t
+        p = p + lengths[:, k:k + 1] * t
+        if k == n:
+            break
+        c_r, s_r = np.cos(rots[:, k:k + 1]), np.sin(rots[:, k:k + 1])
+        nv = nv * c_r + _cross(t, nv) * s_r
+        R = rad[:, k:k + 1]
+        a = ang[:, k:k + 1]
+        centre = p + R * nv
+        g[:, 2 * k + 1, :3] = centre
+        g[:, 2 * k + 1, 3:6] = _cross(t, nv)
+        g[:, 2 * k + 1, 6] = R[:, 0]
+        ca, sa = np.cos(a), np.sin(a)
+        p = centre - R * nv * ca + R * t * sa
+        t, nv = t * ca + nv * sa, nv * ca - t * sa
+    return g
+
+
+def _geometry_jacobian(x, lay, frame0, rp, scale):
+    """d(geometry)/d(params) by central differences: (S, 7, P)."""
+    P = len(x)
+    steps = np.full(P, 1e-6)
+    steps[:3] = 1e-6 * scale
+    i = 6 + max(lay.n - 1, 0)
+    steps[6:i] = 1e-6 * scale
+    steps[i + max(lay.n - 1, 0) + lay.n:] = 1e-6 * scale
+    X = np.concatenate([x + np.diag(steps), x - np.diag(steps)])
+    G = geometry_batch(X, lay, frame0, rp)
+    return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
+
+
+def _groups(seg: np.ndarray) -> list[tuple[int, slice]]:
+    """(segment, slice) runs of a segment array sorted by segment."""
+    ks, starts = np.unique(seg, return_index=True)
+    ends = np.r_[starts[1:], len(seg)]
+    return [(int(k), slice(int(a), int(b))) for k, a, b in zip(ks, starts, ends)]
+
+
+def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
+                   want_grad: bool):
+    """Distance of each point to its (unbounded) assigned line / circle and d dist / d geometry.
+
+    ``pts`` are sorted by assigned segment; ``groups`` are the runs (see :func:`_groups`)."""
+    N = len(pts)
+    d = np.empty(N)
+    grad = np.zeros((N, 7)) if want_grad else None
+    for k, m in groups:
+        q = pts[m]
+        c, a = g[k, :3], g[k, 3:6]
+        w = q - c
+        s = w @ a
+        perp = w - s[:, None] * a
+        rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
+        e = perp / np.maximum(rho, 1e-300)[:, None]
+        if kind[k] == 0:
+            d[m] = rho
+            if want_grad:
+                grad[m, :3] = -e
+                grad[m, 3:6] = -s[:, None] * e
+        else:
+            R = g[k, 6]
+            dd = np.hypot(rho - R, s)
+            d[m] = dd
+            if want_grad:
+                inv = 1.0 / np.maximum(dd, 1e-300)
+                grad[m, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
+                grad[m, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
+                grad[m, 6] = -(rho - R) * inv
+    return d, grad
+
+
+def extended(model: TubeModel, margin: float) -> TubeModel:
+    m = model.copy()
+    m.start = m.start - margin * m.frame[:, 0]
+    m.lengths = m.lengths.copy()
+    m.lengths[0] += margin
+    m.lengths[-1] += margin
+    return m
+
+
+def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """Residual (bounded distance − pipe radius) and nearest segment of every sample."""
+    d, seg = spine_distance(pts, build_spine(extended(model, margin)))
+    return d - model.pipe_radius, seg
+
+
+def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
+    """Largest projection among samples that have company: an isolated stray sample just
+    beyond a tube end must not lengthen the tube (≥ 3 neighbours within 0.5 r)."""
+    if len(proj) == 0:
+        return 0.0
+    zone = proj >= proj.max() - 3.0 * rp
+    cand = np.flatnonzero(zone)
+    if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
+        cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
+    if len(cand) > 4:
+        from scipy.spatial import cKDTree
+
+        cnt = cKDTree(pts[cand]).query_ball_point(pts[cand], 0.5 * rp, return_length=True)
+        dense = cand[cnt >= 4]
+        if len(dense):
+            return float(proj[dense].max())
+    return float(np.percentile(proj, 99.5))
+
+
+def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeModel:
+    """First/last straight lengths from the extent of their samples."""
+    m = model.copy()
+    rp = max(m.pipe_radius, 1e-12)
+    sp = build_spine(m)
+    last = len(sp.kind) - 1
+    t0 = m.frame[:, 0]
+    if last == 0:  # straight tube: one line holds both ends
+        sel = seg == 0
+        if sel.any():
+            proj = (pts[sel] - m.start) @ t0
+            hi = _robust_max(proj, pts[sel], rp)
+            lo = -_robust_max(-proj, pts[sel], rp)
+            m.start = m.start + lo * t0
+            m.lengths = np.array([max(hi - lo, 0.0)])
+        return m
+    first_arc_start = sp.end[0]
+    sel = seg == 0
+    L0 = max(0.0, _robust_max(-((pts[sel] - first_arc_start) @ t0), pts[sel], rp)) if sel.any() else 0.0
+    m.start = first_arc_start - L0 * t0
+    lengths = m.lengths.copy()
+    lengths[0] = L0
+    sel = seg == last
+    if sel.any():
+        lengths[-1] = max(0.0, _robust_max((pts[sel] - sp.start[last]) @ sp.tangent[last], pts[sel], rp))
+    else:
+        lengths[-1] = 0.0
+    m.lengths = lengths
+    return m
+
+
+def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
+             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment."""
+    frame0 = model.frame.copy()
+    rp = model.pipe_radius
+    x0 = pack(model, lay)
+    lo, hi = bounds(lay, rp)
+    pad_lo = np.where(np.isfinite(lo), 1e-9 * (np.abs(lo) + 1), 0.0)
+    pad_hi = np.where(np.isfinite(hi), 1e-9 * (np.abs(hi) + 1), 0.0)
+    x0 = np.clip(x0, lo + pad_lo, hi - pad_hi)
+    # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
+    kind = build_spine(unpack(x0, lay, frame0, rp)).kind
+    scale = max(rp, 1e-9)
+    # samples grouped by their (fixed) segment: slices instead of masks in every evaluation;
+    # the residual order is irrelevant to the solver
+    order = np.argsort(seg, kind="stable")
+    pts = pts[order]
+    groups = _groups(seg[order])
+
+    def fun(x):
+        d, _ = _dist_and_grad(pts, groups, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
+        return d - (x[-1] if lay.fit_pipe_radius else rp)
+
+    def jac(x):
+        g = geometry_batch(x[None], lay, frame0, rp)[0]
+        _, gr = _dist_and_grad(pts, groups, g, kind, True)
+        dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
+        J = np.empty((len(pts), len(x)))
+        for k, m_k in groups:
+            np.matmul(gr[m_k], dG[k], out=J[m_k])
+        if lay.fit_pipe_radius:
+            J[:, -1] -= 1.0
+        return J
+
+    x, info = levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev, tick=tick)
+    m = unpack(x, lay, frame0, rp)
+    return m, info
+
+
+def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
+    """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z)."""
+    z = (r / f) ** 2
+    sq = np.sqrt(1.0 + z)
+    return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
+
+
+def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
+    """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc).
+
+    ``tick()`` is called once per iteration (progress / cancellation)."""
+    x = x0.copy()
+    r = fun(x)
+    cost, w = _soft_l1(r, f_scale)
+    lam = 1e-3
+    nfev, status = 1, 0
+    it = 0
+    last_rel = np.inf
+    while nfev < max_nfev:
+        it += 1
+        if tick is not None:
+            tick()
+        J = jac(x)
+        sw = np.sqrt(w)
+        J *= sw[:, None]  # in place: with a million samples J is the biggest array here
+        A = J.T @ J
+        g = J.T @ (sw * r)
+        del J
+        dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
+        # active set: a parameter on its bound whose descent direction points outward stays
+        # there (a zero-length straight, say); clipping its step instead stalls the iteration
+        span = np.where(np.isfinite(hi - lo), hi - lo, np.abs(x) + 1.0)
+        at_lo = (x <= lo + 1e-9 * span) & (g > 0)
+        at_hi = (x >= hi - 1e-9 * span) & (g < 0)
+        free = ~(at_lo | at_hi)
+        Af = A[np.ix_(free, free)]
+        improved = False
+        while nfev < max_nfev:
+            step = np.zeros_like(x)
+            try:
+                step[free] = np.linalg.solve(Af + lam * np.diag(dg[free]), -g[free])
+            except np.linalg.LinAlgError:
+                lam *= 10
+                if lam > 1e12:
+                    break
+                continue
+            xn = np.clip(x + step, lo, hi)
+            rn = fun(xn)
+            nfev += 1
+            cn, wn = _soft_l1(rn, f_scale)
+            if np.isfinite(cn) and cn <= cost:
+                dcost = cost - cn
+                last_rel = dcost / max(cost, 1e-300)
+                small_step = np.all(np.abs(xn - x) <= tol * (np.abs(x) + 1e-3) * 1e3)
+                x, r, w = xn, rn, wn
+                lam = max(lam / 5, 1e-12)
+                improved = True
+                if dcost <= tol * max(cost, 1e-300) * 1e3 or small_step:
+                    status = 2
+                cost = cn
+                break
+            lam *= 4
+            if lam > 1e12:
+                status = 3  # no descent direction left: at a (local) minimum
+                break
+        if status or not improved:
+            status = status or 3
+            break
+    return x, {"iterations": it, "nfev": nfev, "status": status, "success": status > 0, "cost": cost,
+               "last_relative_decrease": float(last_rel) if np.isfinite(last_rel) else None}

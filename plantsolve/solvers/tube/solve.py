@@ -1,0 +1,366 @@
+"""The whole reconstruction: stages 1–6 of issue 4, in order, with progress reports."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.schemas.tube import LraRow, Outliers, Residuals, Segment, SegmentQuality, TubeRequest, TubeResult
+from plantsolve.solvers.base import Progress, SolverError, no_progress
+
+from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
+from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model)
+from plantsolve.solvers.tube.upload import request_points
+from plantsolve.solvers.tube.validation import check_input
+
+WORK_MAX = 30_000  # samples used for the local stages (1–3)
+LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
+SIMPLIFY_FRACTION = 0.25  # polygon simplification tolerance as a fraction of ε (§4.5)
+PRUNE_SUBSAMPLE = 3_000  # candidate refits when choosing the number of bends
+
+
+def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
+    return np.arange(n) if n <= m else np.sort(rng.choice(n, m, replace=False))
+
+
+def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    warnings: list[Diagnostic] = []
+    opts = request.options
+    check_input(request)
+    pts_in = request_points(request)
+    rng = np.random.default_rng(opts.seed)
+    # canonical order: the result must not depend on the order of the input samples
+    order = np.lexsort(pts_in.T[::-1])
+    pts = pts_in[order]
+    N = len(pts)
+    scale0 = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+
+    # ---- stage 1: local polynomial fits -------------------------------------------------
+    progress(0.02, "local polynomial fits")
+    t0 = time.perf_counter()
+    perm = rng.permutation(N)
+    work_idx = perm[:WORK_MAX]
+    work = pts[work_idx]
+    tree = cKDTree(work)
+    n_probe0 = min(len(work), 1500)
+    probes0 = work[:n_probe0]
+    f0 = local_fit.knn_fit(tree, work, probes0, 40)
+    if not f0.ok.any():
+        raise SolverError("local_fit", "no local surface fit succeeded", {"points": N})
+    rp = float(opts.pipe_radius) if opts.pipe_radius else float(np.median(1.0 / np.maximum(f0.kmax[f0.ok], 1e-300)))
+    if not np.isfinite(rp) or rp <= 0 or rp > scale0:
+        raise SolverError("local_fit", "could not estimate a pipe radius: the samples do not look like a tube surface",
+                          {"estimate": rp if np.isfinite(rp) else None})
+    # thin the working set so that a 2/3 r ball holds ~60 samples (dense scans)
+    cnt = np.median(tree.query_ball_point(probes0[:300], 2.0 / 3.0 * rp, return_length=True))
+    if cnt > 90:
+        keep = max(int(len(work) * 90 / cnt), 2000)
+        work, work_idx = work[:keep], work_idx[:keep]
+        tree = cKDTree(work)
+    # how many probes: enough to cover the spine every r/2 many times over
+    d_k, _ = tree.query(work[:300], k=min(12, len(work)))
+    area_pt = np.pi * np.median(d_k[:, -1]) ** 2 / (d_k.shape[1] - 1)
+    length_est = len(work) * area_pt / (1.5 * np.pi * rp)
+    n_probes = int(np.clip(10 * length_est / (0.5 * rp), 1500, 5000))
+    n_probes = min(n_probes, len(work))
+    probes = work[:n_probes]
+    probe_idx = work_idx[:n_probes]
+    for _ in range(2 if not opts.pipe_radius else 1):
+        # §7: a 2/3 r ball with at least 10 samples; sparse scans get a larger ball (≤ 1.1 r)
+        h_fit = 2.0 / 3.0 * rp
+        while h_fit < 1.1 * rp and np.median(tree.query_ball_point(probes[:200], h_fit, return_length=True)) < 14:
+            h_fit *= 1.2
+        fits = local_fit.fit_at(tree, work, probes, h_fit)
+        good = fits.ok & (fits.count >= 10)
+        if not good.any():
+            raise SolverError("local_fit", "too few neighbours for local surface fits (scan too sparse?)",
+                              {"pipe_radius_estimate": rp})
+        if not opts.pipe_radius:
+            rp = float(np.median(1.0 / np.maximum(fits.kmax[good], 1e-300)))
+    labels = local_fit.classify(fits, rp)
+    sigma_surface = float(np.median(fits.sigma[labels == 0])) if (labels == 0).any() else 0.0
+    timings["local_fit"] = time.perf_counter() - t0
+    progress(0.15, "MLS spine projection")
+
+    # ---- stage 2: MLS spine -------------------------------------------------------------
+    t0 = time.perf_counter()
+    seeds_mask = labels == 0
+    if seeds_mask.sum() < 20:
+        raise SolverError("spine", "too few reliable surface samples to project onto the spine",
+                          {"reliable": int(seeds_mask.sum())})
+    work2, tree2 = work, tree
+    cnt2 = np.median(tree.query_ball_point((probes - rp * fits.normal)[:300], 1.2 * rp, return_length=True))
+    if cnt2 > 150:
+        keep = max(int(len(work) * 150 / cnt2), 2000)
+        work2 = work[:keep]
+        tree2 = cKDTree(work2)
+    sc = spine.mls_spine(tree2, work2, probes[seeds_mask], fits.normal[seeds_mask], fits.dir_min[seeds_mask],
+                         rp, free_radius=opts.pipe_radius is None, k=160)
+    if sc.ok.sum() < 10:
+        raise SolverError("spine", "the MLS spine projection failed for almost all samples", {})
+    if opts.pipe_radius is None:
+        rp = float(np.median(sc.radius[sc.ok]))
+    seed_idx = probe_idx[seeds_mask]
+    timings["spine"] = time.perf_counter() - t0
+    progress(0.4, "curve reconstruction")
+
+    # ---- stage 3: polygonal curve -------------------------------------------------------
+    t0 = time.perf_counter()
+    spine_pts = sc.points[sc.ok]
+    extent = float(np.linalg.norm(spine_pts.max(0) - spine_pts.min(0)))
+    spacing = max(0.5 * rp, extent / 400.0)
+    thinned = curve.thin(spine_pts, spacing)
+    if len(thinned) < 2:
+        raise SolverError("curve", "the spine point cloud collapsed to a point", {})
+    poly, poly_method = curve.reconstruct_polyline(thinned)
+    if poly_method == "mst_diameter":
+        warnings.append(Diagnostic(code="curve_fallback", message="NN-Crust did not give a simple path; the longest "
+                                   "path of the minimum spanning tree was used instead.", details={}))
+    d_sp = _dist_to_polyline(spine_pts, poly)
+    sigma_spine = float(np.median(d_sp))
+    eps = float(opts.tolerance) if opts.tolerance else max(0.08 * rp, 4.0 * sigma_spine)
+    # a finer simplification than ε keeps the chord tangent estimates close to the curve
+    # where two bends in different planes meet (§4.5 leaves the simplification tolerance open)
+    simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps)
+    timings["curve"] = time.perf_counter() - t0
+    progress(0.5, "arc-line spline")
+
+    # ---- stage 4: arc-line spline -------------------------------------------------------
+    # Without a user tolerance, ε is not known well (the spine noise is only estimated), so
+    # Algorithm 1 runs for ε, 1.5ε and 2ε and stage 5 keeps the model with the fewest bends
+    # that fits the samples as well as the best one.
+    t0 = time.perf_counter()
+    inits: list[tuple[float, TubeModel]] = []
+    factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
+    for f in factors:
+        e = eps * f
+        simp_e = curve.simplify(poly, SIMPLIFY_FRACTION * e)
+        mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp)
+        if mdl is None:  # every kept prefix ran into a dead end: search wider before giving up ε
+            mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp, beam=8)
+        if mdl is not None and all(not _same_shape(mdl, m0) for _, m0 in inits):
+            inits.append((e, mdl))
+    eps_used = eps * factors[-1]
+    while not inits and eps_used < 40 * eps:
+        eps_used *= 1.5
+        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * eps_used), eps_used, 0.5 * rp)
+        if mdl is not None:
+            inits.append((eps_used, mdl))
+            warnings.append(Diagnostic(code="tolerance_increased", message=f"No arc-line spline met ε = {eps:.4g}; "
+                                       f"ε = {eps_used:.4g} was used.", details={"requested": eps, "used": eps_used}))
+    if not inits:
+        raise SolverError("arcline", "no arc-line spline approximates the spine within the tolerance",
+                          {"tolerance": eps, "last_tried": eps_used})
+    for _, mdl in inits:
+        mdl.pipe_radius = rp
+    n_bends_initial = [mdl.n_bends for _, mdl in inits]
+    timings["arcline"] = time.perf_counter() - t0
+    progress(0.55, "least-squares fit")
+
+    # ---- stage 5: least squares on all inliers -------------------------------------------
+    # early rounds and bend pruning use a subsample, the final round every sample
+    t0 = time.perf_counter()
+    if opts.bend_radius:
+        for _, mdl in inits:
+            mdl.radii = np.full(mdl.n_bends, float(opts.bend_radius))
+        mode = "fixed"
+    else:
+        mode = "common" if opts.common_bend_radius else "free"
+    f_scale = max(2.0 * sigma_surface, 1e-3 * rp)
+    margin = 2.0 * rp
+    sub = _subsample(N, LM_SUBSAMPLE, rng)
+    pts_sub = pts[sub]
+    fit_rp = opts.pipe_radius is None
+
+    stage_progress = [0.55, "least-squares fit"]
+
+    def tick():
+        progress(*stage_progress)  # lets a cancellation through between LM iterations
+
+    def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int):
+        """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
+        lay = fit.Layout(m.n_bends, mode, opts.bend_radius, fit_rp)
+        info = {}
+        res, seg = fit.assign(m, P, margin)
+        for _ in range(n_rounds):
+            inl = np.abs(res) <= thr
+            if inl.sum() < 10 + lay.size:
+                raise SolverError("least_squares", "too few samples near the initial tube surface",
+                                  {"inliers": int(inl.sum())})
+            m = fit.set_end_lengths(m, P[inl], seg[inl])
+            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            # the end straights grow by at most the margin per assignment: repeat until they
+            # stop (after a bend was merged or removed the far end can be many radii off)
+            for _ in range(12):
+                res, seg = fit.assign(m, P, margin)
+                near = np.abs(res) <= thr
+                m_new = fit.set_end_lengths(m, P[near], seg[near])
+                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-3 * rp:
+                    break
+                m = m_new
+            r_in = res[inl]
+            sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
+            thr = max(6.0 * sig, 0.05 * rp)
+        return m, info, thr, sig
+
+    prune_idx = _subsample(len(pts_sub), PRUNE_SUBSAMPLE, np.random.default_rng(opts.seed + 1))
+    pts_prune = pts_sub[prune_idx]
+    thr0 = max(0.35 * rp, 3 * max(e for e, _ in inits))
+
+    def refit(m: TubeModel):
+        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
+        return m2, fit.assign(m2, pts_prune, margin)[0]
+
+    stage_progress[:] = [0.6, "choosing the number of bends"]
+
+    fitted = [(e,) + refit(mdl) for e, mdl in inits]
+    best_i = prune.select(fitted, rp)
+    eps_used, model, _ = fitted[best_i]
+    changes = []
+    if model.n_bends and not opts.bend_radius:
+        model, _, changes = prune.prune(model, refit, eps_used, rp)
+    stage_progress[:] = [0.75, "least-squares fit"]
+    model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
+    stage_progress[:] = [0.85, "final least-squares fit on all samples"]
+    progress(*stage_progress)
+    if N > len(sub):
+        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10)
+    res_all, seg_all = fit.assign(model, pts, margin)
+    # final extents without the margin
+    inlier = np.abs(res_all) <= thr
+    res_all, seg_all = fit.assign(model, pts, 0.0)
+    last_rel = lm_info.get("last_relative_decrease")
+    if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
+        warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
+                                   "limit; the result is the best found.", details=lm_info))
+    timings["least_squares"] = time.perf_counter() - t0
+
+    # canonical direction: start at the end with the longer straight (ties: larger first bend)
+    rev = reverse_model(model)
+    if _prefer(rev, model, eps_used):
+        model = rev
+        res_all, seg_all = fit.assign(model, pts, 0.0)
+
+    # ---- stage 6: report ----------------------------------------------------------------
+    progress(0.97, "report")
+    reasons_sorted = np.full(N, "residual", dtype=object)
+    flagged_local = probe_idx[labels != 0]
+    flagged_proj = seed_idx[~sc.ok]
+    reasons_sorted[flagged_local] = "local_fit"
+    reasons_sorted[flagged_proj] = "spine_projection"
+    out_sorted = np.flatnonzero(~inlier)
+    out_orig = order[out_sorted]
+    srt = np.argsort(out_orig)
+    out_idx = out_orig[srt]
+    out_reason = reasons_sorted[out_sorted][srt]
+    by_reason: dict[str, int] = {}
+    for r in out_reason:
+        by_reason[r] = by_reason.get(r, 0) + 1
+    absr = np.abs(res_all[inlier])
+    residuals = Residuals(count=int(inlier.sum()), median=float(np.median(absr)), p95=float(np.percentile(absr, 95)),
+                          max=float(absr.max()), rms=float(np.sqrt(np.mean(absr ** 2))))
+    sp = build_spine(model)
+    quality = []
+    for k in range(len(sp.kind)):
+        m = inlier & (seg_all == k)
+        a = np.abs(res_all[m])
+        quality.append(SegmentQuality(index=k, type="arc" if sp.kind[k] else "line", count=int(m.sum()),
+                                      median=float(np.median(a)) if len(a) else 0.0,
+                                      rms=float(np.sqrt(np.mean(a ** 2))) if len(a) else 0.0,
+                                      max=float(a.max()) if len(a) else 0.0))
+    if len(out_idx) > 0.1 * N:
+        warnings.append(Diagnostic(code="many_outliers", message=f"{len(out_idx)} of {N} samples were discarded as "
+                                   "outliers.", details={"count": int(len(out_idx))}))
+    if sigma_surface > 0 and residuals.median > 3 * sigma_surface + 0.01 * rp:
+        warnings.append(Diagnostic(code="poor_fit", message="The median residual is well above the estimated scan "
+                                   "noise: the tube may not be a pure arc-line pipe surface.",
+                                   details={"median": residuals.median, "noise": sigma_surface}))
+    timings["total"] = time.perf_counter() - t_start
+    details = {
+        "points": N, "working_samples": int(len(work)), "probes": int(n_probes),
+        "pipe_radius_stage1": float(np.median(1.0 / np.maximum(fits.kmax[labels == 0], 1e-300))) if (labels == 0).any() else None,
+        "noise_sigma_estimate": sigma_surface, "spine_noise": sigma_spine,
+        "stage1_flags": {"few_neighbours": int((labels == 1).sum()), "curvature": int((labels == 2).sum()),
+                         "fit_residual": int((labels == 3).sum())},
+        "stage2_flags": {"projection_distance": int((~sc.ok).sum())},
+        "polyline": {"method": poly_method, "vertices": int(len(poly)), "simplified": int(len(simp))},
+        "bends_initial": n_bends_initial, "pruned": changes, "least_squares": lm_info, "timings_s": timings,
+        "outlier_threshold": float(thr),
+    }
+    report = Report(status="warning" if warnings else "ok", message=f"{model.n_bends} bends reconstructed.",
+                    warnings=warnings, details=details)
+    result = result_from_model(model, eps_used, request.units, residuals,
+                               Outliers(count=int(len(out_idx)), indices=[int(i) for i in out_idx],
+                                        reasons=[str(r) for r in out_reason], by_reason=by_reason),
+                               quality, report)
+    if opts.nominal:
+        from plantsolve.solvers.tube.inspection import inspect
+        result.inspection = inspect(model, opts.nominal, opts.damping)
+    progress(1.0, "done")
+    return result
+
+
+def _same_shape(a: TubeModel, b: TubeModel) -> bool:
+    return a.n_bends == b.n_bends and bool(np.all(np.abs(a.angles - b.angles) < np.radians(1.0)))
+
+
+def _prefer(a: TubeModel, b: TubeModel, tol: float) -> bool:
+    """True when model a (one walking direction) is the canonical one rather than b."""
+    if abs(a.lengths[0] - b.lengths[0]) > tol:
+        return a.lengths[0] > b.lengths[0]
+    if a.n_bends and abs(a.angles[0] - b.angles[0]) > np.radians(0.5):
+        return a.angles[0] > b.angles[0]
+    return False
+
+
+def _dist_to_polyline(p: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    if len(poly) < 2:
+        return np.linalg.norm(p - poly[0], axis=1)
+    tree = cKDTree(poly)
+    _, i = tree.query(p)
+    best = np.full(len(p), np.inf)
+    for off in (-1, 0):
+        a = np.clip(i + off, 0, len(poly) - 2)
+        A, B = poly[a], poly[a + 1]
+        ab = B - A
+        t = np.clip(((p - A) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0, 1)
+        best = np.minimum(best, np.linalg.norm(p - A - t[:, None] * ab, axis=1))
+    return best
+
+
+def model_rows(model: TubeModel) -> list[LraRow]:
+    n = model.n_bends
+    rows = []
+    for i in range(n + 1):
+        rot = 0.0 if i in (0, n) else float(np.degrees(np.arctan2(np.sin(model.rotations[i]), np.cos(model.rotations[i]))))
+        rows.append(LraRow(length=max(float(model.lengths[i]), 0.0), rotation=rot,
+                           angle=float(np.degrees(model.angles[i])) if i < n else 0.0,
+                           bend_radius=float(model.radii[i]) if i < n else 0.0))
+    return rows
+
+
+def segments_of(model: TubeModel) -> list[Segment]:
+    sp = build_spine(model)
+    out = []
+    ax = sp.axis
+    for k in range(len(sp.kind)):
+        if sp.kind[k] == 0:
+            out.append(Segment(type="line", start=sp.start[k].tolist(), end=sp.end[k].tolist()))
+        else:
+            out.append(Segment(type="arc", start=sp.start[k].tolist(), end=sp.end[k].tolist(),
+                               centre=sp.centre[k].tolist(), radius=float(sp.radius[k]),
+                               angle=float(np.degrees(sp.angle[k])), normal=ax[k].tolist()))
+    return out
+
+
+def result_from_model(model: TubeModel, eps: float, units, residuals, outliers, quality, report) -> TubeResult:
+    cp, _ = control_polygon(model)
+    return TubeResult(pipe_radius=float(model.pipe_radius), start=model.start.tolist(),
+                      orientation=frame_quaternion(model.frame), lra=model_rows(model),
+                      control_polygon=cp.tolist(), segments=segments_of(model), residuals=residuals,
+                      outliers=outliers, segment_quality=quality, tolerance=float(eps), units=units, report=report)

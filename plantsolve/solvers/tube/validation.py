@@ -1,0 +1,65 @@
+"""Semantic input checks (fast; run at submission and again by ``solve``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+
+MIN_POINTS = 100
+
+
+def check_points(pts: np.ndarray, loc: tuple) -> None:
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise InputRejected([FieldError(loc=loc, msg="points must be an (N, 3) array")])
+    if len(pts) < MIN_POINTS:
+        raise InputRejected([FieldError(loc=loc, msg=f"at least {MIN_POINTS} points are needed, got {len(pts)}")])
+    if not np.isfinite(pts).all():
+        bad = int(np.flatnonzero(~np.isfinite(pts).all(1))[0])
+        raise InputRejected([FieldError(loc=loc + (bad,), msg="coordinates must be finite")])
+    sample = pts if len(pts) <= 200_000 else pts[:: len(pts) // 200_000 + 1]
+    c = sample - sample.mean(0)
+    s = np.linalg.svd(c.T @ c / len(c), compute_uv=False) ** 0.5
+    if s[0] <= 0:
+        raise InputRejected([FieldError(loc=loc, msg="all points coincide")])
+    if s[1] < 1e-6 * s[0]:
+        raise InputRejected([FieldError(loc=loc, msg="all points lie on a line: not a tube surface")])
+    if s[2] < 1e-6 * s[0]:
+        raise InputRejected([FieldError(loc=loc, msg="all points are coplanar: not a tube surface")])
+    head = sample[:5000]
+    if len(np.unique(np.round(head / (s[0] * 1e-9)), axis=0)) < min(MIN_POINTS, len(head)):
+        raise InputRejected([FieldError(loc=loc, msg=f"fewer than {MIN_POINTS} distinct points")])
+
+
+def check_input(request: TubeRequest) -> None:
+    """Cross-field checks of a :class:`TubeRequest`; raises InputRejected naming the field."""
+    from plantsolve.solvers.tube.upload import request_points
+
+    errors: list[FieldError] = []
+    try:
+        check_points(request_points(request), ("points",))
+    except InputRejected as exc:
+        errors.extend(exc.errors)
+    except ValueError as exc:
+        errors.append(FieldError(loc=("points",), msg=str(exc)))
+    o = request.options
+    if o.pipe_radius and o.bend_radius and o.bend_radius < o.pipe_radius:
+        errors.append(FieldError(loc=("options", "bend_radius"),
+                                 msg="bend radius must be at least the pipe radius"))
+    if o.nominal:
+        rows = o.nominal
+        if len(rows) > 1 and rows[0].rotation != 0:
+            errors.append(FieldError(loc=("options", "nominal", 0, "rotation"), msg="first rotation must be 0"))
+        for i, row in enumerate(rows[:-1]):
+            if row.angle <= 0:
+                errors.append(FieldError(loc=("options", "nominal", i, "angle"),
+                                         msg="every row but the last needs a bend angle > 0"))
+            if row.bend_radius <= 0:
+                errors.append(FieldError(loc=("options", "nominal", i, "bend_radius"),
+                                         msg="every row but the last needs a bend radius > 0"))
+        if rows[-1].angle != 0:
+            errors.append(FieldError(loc=("options", "nominal", len(rows) - 1, "angle"),
+                                     msg="the last row is the final straight: angle must be 0"))
+    if errors:
+        raise InputRejected(errors)

@@ -1,0 +1,289 @@
+"""Every read and write of the ``jobs`` and ``artifacts`` tables.
+
+Writes made on behalf of a running attempt are *fenced*: they carry the attempt number and
+only apply while the row is still ``running`` with that attempt. A worker whose lease lapsed
+(and whose job was re-queued and claimed again), or whose job was cancelled, therefore can
+never overwrite what a newer attempt or the user did: its update matches no row.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from datetime import datetime, timedelta, timezone
+from contextlib import AbstractContextManager, nullcontext
+from typing import Any, Callable, Iterable
+
+from sqlalchemy import and_, delete, func, or_, select, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session, sessionmaker
+
+from plantsolve.store.models import FINISHED, Artifact, Job, utcnow
+
+
+def as_utc(value: datetime | None) -> datetime | None:
+    """SQLite hands back naive datetimes; every stored time is UTC."""
+    if value is None or value.tzinfo is not None:
+        return value
+    return value.replace(tzinfo=timezone.utc)
+
+
+@dataclass(frozen=True)
+class StoredArtifact:
+    name: str
+    media_type: str
+    size: int
+    sha256: str
+    path: str
+
+
+@dataclass(frozen=True)
+class SweepOutcome:
+    requeued: list[uuid.UUID]
+    failed: list[uuid.UUID]
+
+
+class JobRepository:
+    def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext):
+        self.sessions = sessions
+        self.writing = writing  # see Database.writing
+
+    # ---- submission and reads -------------------------------------------------------------
+
+    def create(self, job: Job) -> tuple[Job, bool]:
+        """Insert ``job``; with an idempotency key already taken, return the existing job.
+
+        Returns ``(job, created)``. The caller compares body hashes of an existing job.
+        """
+        if job.idempotency_key is not None:
+            existing = self.get_by_idempotency_key(job.idempotency_key)
+            if existing is not None:
+                return existing, False
+        with self.writing(), self.sessions() as session:
+            session.add(job)
+            try:
+                session.commit()
+            except IntegrityError:
+                session.rollback()
+                existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key is not None else None
+                if existing is None:
+                    raise
+                return existing, False
+            return job, True
+
+    def get(self, job_id: uuid.UUID) -> Job | None:
+        with self.sessions() as session:
+            return session.get(Job, job_id)
+
+    def get_by_idempotency_key(self, key: str) -> Job | None:
+        with self.sessions() as session:
+            return session.scalars(select(Job).where(Job.idempotency_key == key)).first()
+
+    def list(
+        self,
+        *,
+        kind: str | None = None,
+        status: str | None = None,
+        after: tuple[datetime, uuid.UUID] | None = None,
+        limit: int = 50,
+    ) -> list[Job]:
+        """Newest first; ``after`` is the (created_at, id) of the last job of the previous page."""
+        query = select(Job).order_by(Job.created_at.desc(), Job.id.desc()).limit(limit)
+        if kind:
+            query = query.where(Job.kind == kind)
+        if status:
+            query = query.where(Job.status == status)
+        if after is not None:
+            created, last_id = after
+            query = query.where(
+                or_(Job.created_at < created, and_(Job.created_at == created, Job.id < last_id))
+            )
+        with self.sessions() as session:
+            return list(session.scalars(query))
+
+    def count_by_status(self) -> dict[str, int]:
+        with self.sessions() as session:
+            rows = session.execute(select(Job.status, func.count()).group_by(Job.status))
+            return {status: count for status, count in rows}
+
+    def artifacts(self, job_id: uuid.UUID) -> list[Artifact]:
+        with self.sessions() as session:
+            return list(session.scalars(select(Artifact).where(Artifact.job_id == job_id).order_by(Artifact.name)))
+
+    def artifact(self, job_id: uuid.UUID, name: str) -> Artifact | None:
+        with self.sessions() as session:
+            return session.scalars(
+                select(Artifact).where(Artifact.job_id == job_id, Artifact.name == name)
+            ).first()
+
+    def mark_enqueued(self, job_id: uuid.UUID) -> None:
+        self._execute(update(Job).where(Job.id == job_id).values(enqueued_at=utcnow()))
+
+    # ---- the attempt's life: claim, heartbeat, progress, finish ----------------------------
+
+    def claim(self, job_id: uuid.UUID, *, lease_seconds: float, worker: str) -> int | None:
+        """queued (or running with a lapsed lease) -> running, attempt+1. Returns the attempt
+        number now owned by the caller, or None if the job is not claimable."""
+        now = utcnow()
+        statement = (
+            update(Job)
+            .where(
+                Job.id == job_id,
+                Job.attempt < Job.max_attempts,
+                or_(Job.status == "queued", and_(Job.status == "running", Job.lease_until < now)),
+            )
+            .values(
+                status="running",
+                attempt=Job.attempt + 1,
+                lease_until=now + timedelta(seconds=lease_seconds),
+                heartbeat_at=now,
+                started_at=func.coalesce(Job.started_at, now),
+                worker=worker,
+                progress=0.0,
+                progress_message="started",
+            )
+            .returning(Job.attempt)
+        )
+        with self.writing(), self.sessions() as session:
+            attempt = session.execute(statement).scalar_one_or_none()
+            session.commit()
+        return attempt
+
+    def heartbeat(self, job_id: uuid.UUID, attempt: int, *, lease_seconds: float) -> bool:
+        """Extend the lease; False when the attempt no longer owns the job (stale or cancelled)."""
+        now = utcnow()
+        return self._fenced(job_id, attempt, lease_until=now + timedelta(seconds=lease_seconds), heartbeat_at=now)
+
+    def set_progress(self, job_id: uuid.UUID, attempt: int, fraction: float, message: str) -> bool:
+        return self._fenced(job_id, attempt, progress=fraction, progress_message=message[:2000])
+
+    def finish_success(
+        self,
+        job_id: uuid.UUID,
+        attempt: int,
+        *,
+        result: Any,
+        report: Any,
+        artifacts: Iterable[StoredArtifact],
+        run_seconds: float,
+    ) -> bool:
+        """Store result and artifacts in one transaction, fenced on the attempt."""
+        now = utcnow()
+        with self.writing(), self.sessions() as session:
+            updated = session.execute(
+                self._fence(job_id, attempt).values(
+                    status="succeeded",
+                    result=result,
+                    report=report,
+                    progress=1.0,
+                    progress_message="done",
+                    finished_at=now,
+                    lease_until=None,
+                    run_seconds=run_seconds,
+                )
+            ).rowcount
+            if updated != 1:
+                session.rollback()
+                return False
+            session.execute(delete(Artifact).where(Artifact.job_id == job_id))
+            session.add_all(
+                Artifact(
+                    job_id=job_id,
+                    attempt=attempt,
+                    name=a.name,
+                    media_type=a.media_type,
+                    size=a.size,
+                    sha256=a.sha256,
+                    path=a.path,
+                )
+                for a in artifacts
+            )
+            session.commit()
+            return True
+
+    def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None) -> bool:
+        return self._fenced(
+            job_id,
+            attempt,
+            status="failed",
+            report=report,
+            finished_at=utcnow(),
+            lease_until=None,
+            run_seconds=run_seconds,
+        )
+
+    def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any) -> bool:
+        """Give a crashed attempt's job back to the queue (the caller enqueues it again)."""
+        return self._fenced(job_id, attempt, status="queued", report=report, lease_until=None, worker=None)
+
+    # ---- user actions and housekeeping -----------------------------------------------------
+
+    def cancel(self, job_id: uuid.UUID, *, report: Any) -> str | None:
+        """Cancel a queued or running job. Returns the status the job has afterwards, or None
+        when it does not exist. A running attempt notices at its next fenced write."""
+        with self.writing(), self.sessions() as session:
+            updated = session.execute(
+                update(Job)
+                .where(Job.id == job_id, Job.status.in_(("queued", "running")))
+                .values(status="cancelled", finished_at=utcnow(), lease_until=None, report=report)
+            ).rowcount
+            session.commit()
+            if updated == 1:
+                return "cancelled"
+            job = session.get(Job, job_id)
+            return job.status if job is not None else None
+
+    def sweep(self, *, requeue_queued_after: float, report_for_lost) -> SweepOutcome:
+        """Re-queue running jobs whose lease lapsed (their worker is gone), fail those that have
+        used up their attempts, and re-enqueue queued jobs whose message may have been lost."""
+        now = utcnow()
+        requeued: list[uuid.UUID] = []
+        failed: list[uuid.UUID] = []
+        with self.sessions() as session:
+            lapsed = session.execute(
+                select(Job.id, Job.attempt, Job.max_attempts, Job.report).where(
+                    Job.status == "running", Job.lease_until < now
+                )
+            ).all()
+        for job_id, attempt, max_attempts, report in lapsed:
+            lost = report_for_lost(attempt, max_attempts, report)
+            if attempt >= max_attempts:
+                if self._fenced_lapsed(job_id, attempt, now, status="failed", report=lost, finished_at=now, lease_until=None):
+                    failed.append(job_id)
+            elif self._fenced_lapsed(job_id, attempt, now, status="queued", report=lost, lease_until=None, worker=None):
+                requeued.append(job_id)
+        stale = now - timedelta(seconds=requeue_queued_after)
+        with self.sessions() as session:
+            waiting = session.scalars(
+                select(Job.id).where(
+                    Job.status == "queued", or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
+                )
+            ).all()
+        requeued.extend(job_id for job_id in waiting if job_id not in requeued)
+        return SweepOutcome(requeued=requeued, failed=failed)
+
+    def queued_ids(self) -> list[uuid.UUID]:
+        with self.sessions() as session:
+            return list(session.scalars(select(Job.id).where(Job.status == "queued").order_by(Job.created_at)))
+
+    # ---- helpers ----------------------------------------------------------------------------
+
+    @staticmethod
+    def _fence(job_id: uuid.UUID, attempt: int):
+        return update(Job).where(Job.id == job_id, Job.attempt == attempt, Job.status == "running")
+
+    def _fenced(self, job_id: uuid.UUID, attempt: int, **values: Any) -> bool:
+        return self._execute(self._fence(job_id, attempt).values(**values)) == 1
+
+    def _fenced_lapsed(self, job_id: uuid.UUID, attempt: int, now: datetime, **values: Any) -> bool:
+        return self._execute(self._fence(job_id, attempt).where(Job.lease_until < now).values(**values)) == 1
+
+    def _execute(self, statement) -> int:
+        with self.writing(), self.sessions() as session:
+            count = session.execute(statement).rowcount
+            session.commit()
+            return count
+
+
+def is_finished(status: str) -> bool:
+    return status in FINISHED

@@ -1,0 +1,142 @@
+"""Celery application for the scaled mode: ``plantsolve worker`` runs it.
+
+Delivery is at-least-once (``acks_late`` + ``reject_on_worker_lost``): a message whose worker
+died is delivered again, and the database lease and attempt fencing make that safe. The
+attempt cap lives in the database, not in Celery's retry counter.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import uuid
+
+from celery import Celery, signals
+from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
+
+from plantsolve.solvers.kinds import load_kinds
+from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.workers.runner import failure_report, run_job
+from plantsolve.workers.settings import WorkerSettings, get_worker_settings
+from plantsolve.workers.sweeper import Sweeper
+
+log = logging.getLogger("plantsolve.celery")
+
+
+def create_celery(settings: WorkerSettings) -> Celery:
+    longest = max((spec.time_limit for spec in load_kinds(settings.plugins).values()), default=660.0)
+    app = Celery("plantsolve", broker=settings.broker_url)
+    app.conf.update(
+        task_acks_late=True,
+        task_reject_on_worker_lost=True,
+        worker_prefetch_multiplier=1,
+        task_serializer="json",
+        accept_content=["json"],
+        result_serializer="json",
+        task_ignore_result=True,
+        # A message is re-delivered only after the visibility timeout: keep it above the
+        # longest hard limit so a slow-but-alive job is never delivered twice by Redis.
+        broker_transport_options={"visibility_timeout": int(longest * 2 + 60)},
+        broker_connection_retry_on_startup=True,
+        worker_hijack_root_logger=False,
+    )
+    app.task(name="plantsolve.run_job", bind=True)(_run_job_task)
+    return app
+
+
+class CeleryDispatcher:
+    """Sends ``plantsolve.run_job(job_id)`` with the kind's time limits (scaled mode)."""
+
+    def __init__(self, ctx: ServiceContext):
+        self.ctx = ctx
+        self.celery = create_celery(ctx.settings)
+        self._sweeper = Sweeper(ctx, self.enqueue)
+
+    def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
+        spec = self.ctx.spec(kind)
+        limits = {}
+        if spec is not None:
+            limits = {"soft_time_limit": spec.soft_time_limit, "time_limit": spec.time_limit}
+        self.celery.send_task("plantsolve.run_job", args=[str(job_id)], **limits)
+
+    def ping(self) -> None:
+        with self.celery.connection_for_write() as connection:
+            connection.ensure_connection(max_retries=1, timeout=2)
+
+    def start(self) -> None:
+        self._sweeper.start()
+
+    def stop(self) -> None:
+        self._sweeper.stop()
+
+
+_ctx_lock = threading.Lock()
+_ctx = None
+_dispatcher = None
+
+
+def _worker_context():
+    """One database context and dispatcher per worker process, made on first use."""
+    global _ctx, _dispatcher
+    with _ctx_lock:
+        if _ctx is None:
+            _ctx = ServiceContext.create(get_worker_settings())
+            _dispatcher = CeleryDispatcher(_ctx)
+        return _ctx, _dispatcher
+
+
+def _run_job_task(task, job_id: str) -> str:
+    ctx, dispatcher = _worker_context()
+    job_uuid = uuid.UUID(job_id)
+    outcome = run_job(
+        ctx,
+        job_uuid,
+        worker=worker_name("celery"),
+        requeue=dispatcher.enqueue,
+        hard_limit_in_thread=False,  # Celery's own hard time limit kills the process
+        time_limit_errors=(SoftTimeLimitExceeded,),
+    )
+    log.info("job %s: %s", job_id, outcome)
+    return outcome
+
+
+@signals.task_failure.connect
+def _hard_time_limit(sender=None, exception=None, args=None, **_kwargs) -> None:
+    """The pool killed a task's process at its hard time limit (a solver deaf even to the soft
+    limit): fail the job now with a report, instead of letting the lease lapse and retrying a
+    job that would hang again. Runs in the worker's main process."""
+    if not isinstance(exception, TimeLimitExceeded) or not args:
+        return
+    ctx, _ = _worker_context()
+    job_id = uuid.UUID(str(args[0]))
+    job = ctx.repo.get(job_id)
+    if job is None or job.status != "running":
+        return
+    spec = ctx.spec(job.kind)
+    limit = spec.time_limit if spec else None
+    report = failure_report(
+        "time_limit",
+        f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
+        if limit
+        else "The solver was killed at its hard time limit.",
+        time_limit=limit,
+        killed=True,
+    )
+    ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None)
+    log.warning("job %s killed at its hard time limit", job_id)
+
+
+@signals.worker_process_init.connect
+def _forget_parent_context(**_kwargs) -> None:
+    # A forked pool process must not share the parent's database connections.
+    global _ctx, _dispatcher
+    if _ctx is not None:
+        _ctx.db.engine.dispose(close=False)
+    _ctx = _dispatcher = None
+
+
+@signals.worker_ready.connect
+def _start_sweeper(sender=None, **_kwargs) -> None:
+    ctx, dispatcher = _worker_context()
+    dispatcher.start()
+

@@ -1,0 +1,47 @@
+"""What a process needs to run or serve jobs: settings, the store and the map of solver kinds."""
+
+from __future__ import annotations
+
+import os
+import socket
+from dataclasses import dataclass
+from typing import Mapping
+
+from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.kinds import load_kinds
+from plantsolve.store import Database, FileStore, JobRepository, Store
+from plantsolve.workers.settings import WorkerSettings
+
+
+@dataclass
+class ServiceContext:
+    settings: WorkerSettings
+    store: Store
+    kinds: Mapping[str, SolverSpec]
+
+    @classmethod
+    def create(cls, settings: WorkerSettings, *, migrate: bool = False) -> "ServiceContext":
+        """The built-in kinds plus those of the ``PLUGINS`` modules; an import error is raised."""
+        return cls(settings=settings, store=Store.open(settings, migrate=migrate), kinds=load_kinds(settings.plugins))
+
+    @property
+    def db(self) -> Database:
+        return self.store.db
+
+    @property
+    def repo(self) -> JobRepository:
+        return self.store.repo
+
+    @property
+    def files(self) -> FileStore:
+        return self.store.files
+
+    def spec(self, kind: str) -> SolverSpec | None:
+        return self.kinds.get(kind)
+
+    def close(self) -> None:
+        self.store.close()
+
+
+def worker_name(mode: str) -> str:
+    return f"{mode}@{socket.gethostname()}:{os.getpid()}"

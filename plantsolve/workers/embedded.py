@@ -1,0 +1,70 @@
+"""The embedded default: a small pool of job threads inside the API process."""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import uuid
+
+from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.workers.runner import run_job
+from plantsolve.workers.sweeper import Sweeper, sweep_once
+
+log = logging.getLogger("plantsolve.embedded")
+
+
+class EmbeddedDispatcher:
+    """Job ids go on an in-memory queue; each pool thread runs :func:`run_job` on them."""
+
+    def __init__(self, ctx: ServiceContext, workers: int | None = None):
+        self.ctx = ctx
+        self.size = workers or ctx.settings.embedded_workers
+        self._queue: queue.Queue[uuid.UUID | None] = queue.Queue()
+        self._pending: set[uuid.UUID] = set()
+        self._lock = threading.Lock()
+        self._threads: list[threading.Thread] = []
+        self._sweeper = Sweeper(ctx, self.enqueue)
+        self.name = worker_name("embedded")
+
+    def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
+        with self._lock:
+            if job_id in self._pending:
+                return
+            self._pending.add(job_id)
+        self._queue.put(job_id)
+
+    def ping(self) -> None:
+        if self._threads and not any(t.is_alive() for t in self._threads):
+            raise RuntimeError("the embedded job pool has stopped")
+
+    def start(self) -> None:
+        for index in range(self.size):
+            thread = threading.Thread(target=self._work, name=f"job-pool-{index}", daemon=True)
+            thread.start()
+            self._threads.append(thread)
+        # Jobs left queued (or running with a dead lease) by a previous process are resumed.
+        sweep_once(self.ctx, self.enqueue)
+        for job_id in self.ctx.repo.queued_ids():
+            self.enqueue(job_id)
+        self._sweeper.start()
+
+    def stop(self) -> None:
+        self._sweeper.stop()
+        for _ in self._threads:
+            self._queue.put(None)
+        for thread in self._threads:
+            thread.join(timeout=5)
+        self._threads.clear()
+
+    def _work(self) -> None:
+        while True:
+            job_id = self._queue.get()
+            if job_id is None:
+                return
+            with self._lock:
+                self._pending.discard(job_id)
+            try:
+                run_job(self.ctx, job_id, worker=self.name, requeue=self.enqueue)
+            except Exception:  # the pool must survive anything a job does
+                log.exception("job %s: runner error", job_id)

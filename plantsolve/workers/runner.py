@@ -1,0 +1,261 @@
+"""The one function that runs a job, shared by the embedded pool and the Celery task.
+
+claim (conditional update: queued -> running, attempt+1, lease) -> heartbeat while the
+solver runs -> store the result and artifacts, or the failure report, fenced on the attempt
+number. Cancellation and lost leases reach the solver through its progress callback.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import threading
+import time
+import traceback
+import uuid
+from typing import Any, Callable
+
+from pydantic import ValidationError
+
+from plantsolve.schemas.common import Report
+from plantsolve.solvers.base import Cancelled, InputRejected, SolverError, SolverSpec
+from plantsolve.workers.context import ServiceContext
+from plantsolve.store.repository import StoredArtifact
+
+log = logging.getLogger("plantsolve.runner")
+
+
+class _Stop(Cancelled):
+    """Raised inside the solver (through the progress callback) to end the attempt."""
+
+    def __init__(self, reason: str):
+        self.reason = reason  # "cancelled" (or lost lease) | "time_limit"
+        super().__init__(reason)
+
+
+class AttemptMonitor:
+    """Heartbeats the lease and turns cancellation, a lost lease or the soft time limit into
+    an exception raised at the solver's next progress report."""
+
+    def __init__(self, ctx: ServiceContext, job_id: uuid.UUID, attempt: int, soft_limit: float):
+        self.ctx, self.job_id, self.attempt = ctx, job_id, attempt
+        self.soft_limit = soft_limit
+        self.started = time.monotonic()
+        self.stop_reason: str | None = None
+        self._last_write = 0.0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._beat, name=f"heartbeat-{job_id}", daemon=True)
+
+    def __enter__(self) -> "AttemptMonitor":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._done.set()
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+    def _beat(self) -> None:
+        settings = self.ctx.settings
+        while not self._done.wait(settings.heartbeat_seconds):
+            try:
+                if not self.ctx.repo.heartbeat(self.job_id, self.attempt, lease_seconds=settings.lease_seconds):
+                    self.stop_reason = self.stop_reason or "cancelled"
+                    return
+            except Exception:  # a database hiccup must not kill the attempt; the next beat retries
+                log.exception("heartbeat failed for job %s", self.job_id)
+
+    def progress(self, fraction: float, message: str = "") -> None:
+        if self.stop_reason:
+            raise _Stop(self.stop_reason)
+        if self.elapsed > self.soft_limit:
+            self.stop_reason = "time_limit"
+            raise _Stop("time_limit")
+        now = time.monotonic()
+        if now - self._last_write < self.ctx.settings.progress_write_seconds:
+            return
+        self._last_write = now
+        fraction = min(max(float(fraction), 0.0), 1.0) if fraction == fraction else 0.0
+        if not self.ctx.repo.set_progress(self.job_id, self.attempt, fraction, str(message)):
+            self.stop_reason = "cancelled"
+            raise _Stop("cancelled")
+
+
+def failure_report(stage: str, message: str, **details: Any) -> dict:
+    return Report(status="failed", stage=stage, message=message, details=details).model_dump(mode="json")
+
+
+def lost_worker_report(attempt: int, max_attempts: int, previous: Any) -> dict:
+    """Report for a job whose worker stopped heartbeating (killed, crashed host, OOM)."""
+    history = list((previous or {}).get("details", {}).get("attempts", []))
+    history.append({"attempt": attempt, "error": "worker lost: lease lapsed without a heartbeat"})
+    if attempt >= max_attempts:
+        return failure_report(
+            "worker",
+            f"The job's worker stopped responding on each of {attempt} attempts; giving up.",
+            attempts=history,
+        )
+    return failure_report("worker", "The worker stopped responding; the job was re-queued.", attempts=history)
+
+
+def load_request(ctx: ServiceContext, spec: SolverSpec, job) -> Any:
+    if job.input_kind == "json":
+        return spec.request_model.model_validate(job.input)
+    if job.input_kind == "json_file":
+        return spec.request_model.model_validate_json(ctx.files.read(job.input_file))
+    if job.input_kind == "upload":
+        if spec.parse_upload is None:
+            raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
+        return spec.parse_upload(job.input_filename, ctx.files.read(job.input_file), job.input_options)
+    raise SolverError("input", f"unknown input kind {job.input_kind!r}")
+
+
+def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> Any:
+    """Run ``function``; with a deadline, in a daemon thread abandoned if it overruns.
+
+    The embedded pool cannot kill a thread; an abandoned solver can no longer write anything
+    (every write is fenced) and stops at its next progress report.
+    """
+    if deadline is None:
+        return function()
+    outcome: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            outcome["value"] = function()
+        except BaseException as error:  # re-raised in the caller's thread
+            outcome["error"] = error
+
+    thread = threading.Thread(target=target, name="solver", daemon=True)
+    thread.start()
+    thread.join(deadline)
+    if thread.is_alive():
+        raise _Stop("time_limit")
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
+
+
+def run_job(
+    ctx: ServiceContext,
+    job_id: uuid.UUID,
+    *,
+    worker: str,
+    requeue: Callable[[uuid.UUID, str], None],
+    hard_limit_in_thread: bool = True,
+    time_limit_errors: tuple[type[BaseException], ...] = (),
+) -> str:
+    """Run one delivery of ``job_id``. Returns what happened: the final status, ``"requeued"``,
+    ``"skipped"`` (not claimable: already running elsewhere, finished or cancelled) or
+    ``"stale"`` (this attempt lost the job before it could store anything)."""
+    job = ctx.repo.get(job_id)
+    if job is None:
+        return "skipped"
+    attempt = ctx.repo.claim(job_id, lease_seconds=ctx.settings.lease_seconds, worker=worker)
+    if attempt is None:
+        return "skipped"
+    spec = ctx.spec(job.kind)
+    if spec is None:
+        ctx.repo.finish_failure(
+            job_id, attempt, report=failure_report("dispatch", f"No solver kind {job.kind!r} in this worker."), run_seconds=0
+        )
+        return "failed"
+
+    history = list(((job.report or {}).get("details") or {}).get("attempts", []))
+    with AttemptMonitor(ctx, job_id, attempt, spec.soft_time_limit) as monitor:
+        try:
+            request = load_request(ctx, spec, job)
+            result = _call_with_deadline(
+                lambda: spec.solve(request, monitor.progress),
+                spec.time_limit if hard_limit_in_thread else None,
+            )
+            return _store_success(ctx, spec, job_id, attempt, request, result, monitor)
+        except _Stop as stop:
+            if stop.reason != "time_limit":
+                return "cancelled"  # by the user, or the lease went to a newer attempt
+            return _time_limit(ctx, spec, job_id, attempt, monitor)
+        except time_limit_errors:
+            return _time_limit(ctx, spec, job_id, attempt, monitor)
+        except InputRejected as error:
+            report = failure_report(
+                "input",
+                error.title,
+                errors=[{"loc": list(e.loc), "msg": e.msg, "type": e.type} for e in error.errors],
+            )
+        except ValidationError as error:
+            report = failure_report("input", "The stored input no longer validates.", errors=error.errors(include_url=False, include_context=False))
+        except SolverError as error:
+            report = failure_report(error.stage, error.message, **error.details)
+        except Exception as error:  # a crash: retried up to the attempt cap
+            history.append({"attempt": attempt, "error": f"{type(error).__name__}: {error}", "traceback": traceback.format_exc(limit=8)[-4000:]})
+            log.exception("job %s attempt %d crashed", job_id, attempt)
+            if attempt < job.max_attempts:
+                report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
+                if ctx.repo.requeue(job_id, attempt, report=report):
+                    requeue(job_id, job.kind)
+                    return "requeued"
+                return "stale"
+            report = failure_report(
+                "solver", f"The solver crashed on each of {attempt} attempts: {type(error).__name__}: {error}", attempts=history
+            )
+    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+    return "failed" if written else "stale"
+
+
+def _non_finite_paths(value: Any, path: str = "") -> list[str]:
+    if isinstance(value, float):
+        return [] if math.isfinite(value) else [path or "/"]
+    if isinstance(value, dict):
+        return [p for key, item in value.items() for p in _non_finite_paths(item, f"{path}/{key}")]
+    if isinstance(value, list):
+        return [p for index, item in enumerate(value) for p in _non_finite_paths(item, f"{path}/{index}")]
+    return []
+
+
+def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor) -> str:
+    report = failure_report(
+        "time_limit",
+        f"The solver ran past its time limit ({spec.soft_time_limit:g} s soft, {spec.time_limit:g} s hard) and was stopped.",
+        soft_time_limit=spec.soft_time_limit,
+        time_limit=spec.time_limit,
+        elapsed_seconds=round(monitor.elapsed, 3),
+    )
+    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+    return "failed" if written else "stale"
+
+
+def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, monitor: AttemptMonitor) -> str:
+    if not isinstance(result, spec.result_model):
+        result = spec.result_model.model_validate(result)
+    result_json = result.model_dump(mode="json", by_alias=True)
+    try:
+        json.dumps(result_json, allow_nan=False)
+    except ValueError:
+        # JSON has no NaN or infinity: a result carrying them is a solver bug, and retrying
+        # the same input would give the same numbers.
+        raise SolverError(
+            "result", "The solver produced non-finite numbers (NaN or infinity) in its result.",
+            {"paths": _non_finite_paths(result_json)[:20]},
+        ) from None
+    report = dict(result_json.get("report") or Report().model_dump(mode="json"))
+    stored: list[StoredArtifact] = []
+    if spec.render_artifacts is not None:
+        try:
+            for artifact in spec.render_artifacts(request, result):
+                path, size, digest = ctx.files.put(f"{job_id}/a{attempt}/{artifact.name}", artifact.data)
+                stored.append(StoredArtifact(artifact.name, artifact.media_type, size, digest, path))
+        except Cancelled:
+            raise
+        except Exception as error:  # the result stands; the missing files are reported
+            log.exception("artifacts of job %s failed", job_id)
+            warnings = list(report.get("warnings") or [])
+            warnings.append({"code": "artifacts_failed", "message": f"Artifacts could not be rendered: {error}", "details": {}})
+            report["warnings"] = warnings
+            report["status"] = "warning" if report.get("status") == "ok" else report.get("status", "warning")
+    written = ctx.repo.finish_success(
+        job_id, attempt, result=result_json, report=report, artifacts=stored, run_seconds=monitor.elapsed
+    )
+    return "succeeded" if written else "stale"

@@ -1,0 +1,57 @@
+"""Settings of the queue and the runner: broker, pool size, leases, attempts, plugins.
+
+See :mod:`plantsolve.store.settings` for how the settings are layered. FastAPI's settings
+guide is followed: one object per process, cached by :func:`get_worker_settings`, so tests
+can clear the cache after changing the environment.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Annotated
+
+from pydantic import Field, field_validator
+from pydantic_settings import NoDecode
+
+from plantsolve.store.settings import StoreSettings
+
+
+def split_commas(value: object) -> object:
+    if isinstance(value, str):
+        return [part.strip() for part in value.split(",") if part.strip()]
+    return value
+
+
+class WorkerSettings(StoreSettings):
+    broker_url: str | None = Field(
+        default=None,
+        description="Celery broker (redis://host:6379/0). Unset: jobs run in-process (embedded pool).",
+    )
+    embedded_workers: int = Field(default=2, ge=1, description="Threads of the in-process job pool.")
+    lease_seconds: float = Field(default=60.0, gt=0, description="A running job's lease; renewed by heartbeats.")
+    heartbeat_seconds: float = Field(default=10.0, gt=0, description="Heartbeat period of a running job.")
+    sweep_seconds: float = Field(default=15.0, gt=0, description="Period of the lapsed-lease sweeper.")
+    max_attempts: int = Field(default=3, ge=1, description="Attempts before a crashing or lost job is failed.")
+    progress_write_seconds: float = Field(
+        default=0.5, ge=0, description="Minimum interval between progress writes (and cancellation checks)."
+    )
+    plugins: Annotated[list[str], NoDecode] = Field(
+        default_factory=list,
+        description="Comma-separated modules, each exporting SPECS (a sequence of SolverSpec): extra "
+        "solver kinds for tests and benchmarks, added to the built-in kind map.",
+    )
+
+    @field_validator("plugins", mode="before")
+    @classmethod
+    def _split_plugins(cls, value: object) -> object:
+        return split_commas(value)
+
+    @property
+    def embedded(self) -> bool:
+        """True when jobs run in-process (no broker configured)."""
+        return not self.broker_url
+
+
+@lru_cache
+def get_worker_settings() -> WorkerSettings:
+    return WorkerSettings()
