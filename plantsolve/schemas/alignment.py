@@ -1,4 +1,4 @@
-"""Request and result models of the ``alignment`` solver (issue 3).
+"""Request and result models of the ``alignment`` solver.
 
 A pipe system is a set of components (straight pipes and catalogue fittings), each with
 ports (the paper's *ConnectionPoints*: a point and a unit direction pointing out of the

@@ -123,6 +123,8 @@ class SolverSpec:
     - ``parse_upload(filename, content, options) -> request``: files the kind accepts, with
       ``upload_extensions`` (lower case, with the dot).
     - ``render_artifacts(request, result) -> [Artifact]``: plots, meshes, exported files.
+    - ``example() -> dict``: a small valid request body (JSON) that solves in seconds; the
+      OpenAPI document shows it and the contract test runs every kind through it.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
       stopped), ``max_attempts`` (``None``: the service's ``MAX_ATTEMPTS``).
     """
@@ -141,6 +143,7 @@ class SolverSpec:
     max_attempts: int | None = None
     description: str = ""
     operations: tuple[ResultOperation, ...] = ()
+    example: Callable[[], dict[str, Any]] | None = None
 
     def __post_init__(self) -> None:
         if not _KIND.match(self.kind):

@@ -1,0 +1,124 @@
+"""The rooms of the design picture and the direction of their imports, read from the source.
+
+app → store ← workers → solvers; schemas are imported by everyone and import nothing of ours.
+"""
+
+from __future__ import annotations
+
+import ast
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+
+PACKAGE = REPO / "plantsolve"
+
+# room -> rooms it may import (besides itself)
+ALLOWED = {
+    "schemas": set(),
+    "solvers": {"schemas"},
+    "store": set(),
+    "workers": {"store", "solvers", "schemas"},
+    "app": {"store", "workers", "solvers", "schemas"},
+    "cli": {"app", "store", "workers", "solvers", "schemas"},
+}
+
+
+def _imports(path: Path) -> set[str]:
+    """Every plantsolve module a file imports, at any depth (function-level imports too)."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                raise AssertionError(f"{path}: relative import (use absolute plantsolve.… imports)")
+            names.add(node.module or "")
+    return {name for name in names if name == "plantsolve" or name.startswith("plantsolve.")}
+
+
+def _room(path: Path) -> str:
+    parts = path.relative_to(PACKAGE).parts
+    return parts[0].removesuffix(".py") if len(parts) > 1 or parts[0] == "cli.py" else "root"
+
+
+SOURCES = sorted(p for p in PACKAGE.rglob("*.py") if "migrations" not in p.parts or p.name == "env.py")
+
+
+@pytest.mark.parametrize("path", SOURCES, ids=lambda p: str(p.relative_to(REPO)))
+def test_imports_run_one_way(path):
+    room = _room(path)
+    if room == "root":
+        return
+    for name in _imports(path):
+        target = name.split(".")[1] if "." in name else "plantsolve"
+        assert target == room or target in ALLOWED[room], f"{path.relative_to(REPO)}: {room} imports {name}"
+
+
+def test_only_plantsolve_is_installed():
+    config = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert config["tool"]["setuptools"]["packages"]["find"]["include"] == ["plantsolve*"]
+    for old in ("app", "workers", "solvers", "schemas"):
+        assert not (REPO / old).exists(), f"top-level package {old!r} is back"
+    assert {p.name for p in PACKAGE.iterdir() if p.is_dir() and not p.name.startswith("__")} == {
+        "app", "store", "workers", "solvers", "schemas"}
+
+
+def test_every_kind_uses_the_same_file_names_for_the_same_roles():
+    from plantsolve.solvers.kinds import KINDS
+
+    roles = {"__init__.py", "solve.py", "validation.py", "upload.py", "artifacts.py", "synthetic.py"}
+    for kind in KINDS:
+        files = {p.name for p in (PACKAGE / "solvers" / kind).glob("*.py")}
+        assert roles <= files, f"{kind} lacks {roles - files}"
+        assert not files & {"pipeline.py", "validate.py", "pointio.py", "plots.py", "simulate.py"}
+
+
+def test_no_comment_points_outside_the_repository():
+    import re
+
+    pattern = re.compile(r"\bissue\s*#?\d+|design\.md", re.IGNORECASE)
+    offenders = [f"{p.relative_to(REPO)}:{i}" for p in SOURCES for i, line in enumerate(p.read_text().splitlines(), 1)
+                 if pattern.search(line)]
+    assert not offenders, offenders
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(REPO).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _is_module(name: str) -> bool:
+    base = REPO.joinpath(*name.split("."))
+    return base.with_suffix(".py").exists() or (base / "__init__.py").exists()
+
+
+def test_no_import_cycles_and_no_imports_hidden_in_functions():
+    """Module-level imports form no cycle, so none has to be hidden in a function to break one.
+    Only the CLI imports lazily (so ``plantsolve --help`` does not load numpy or FastAPI)."""
+    import networkx as nx
+
+    graph = nx.DiGraph()
+    hidden = []
+    for path in SOURCES:
+        module = _module_name(path)
+        tree = ast.parse(path.read_text())
+        top_level = set()
+        for node in tree.body:
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("plantsolve"):
+                for alias in node.names:
+                    target = f"{node.module}.{alias.name}"
+                    graph.add_edge(module, target if _is_module(target) else node.module)
+                top_level.add(id(node))
+            elif isinstance(node, ast.Import):
+                top_level.add(id(node))
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in top_level:
+                names = [node.module or ""] if isinstance(node, ast.ImportFrom) else [a.name for a in node.names]
+                if any(n.startswith("plantsolve") for n in names) and path.name != "cli.py" and "migrations" not in path.parts:
+                    hidden.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    cycles = list(nx.simple_cycles(graph))
+    assert not cycles, cycles
+    assert not hidden, f"plantsolve imports inside functions: {hidden}"
