@@ -79,6 +79,8 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     name = spec.request_model.__name__
     extensions = ", ".join(spec.upload_extensions) or "none"
     content: dict[str, Any] = {"application/json": {"schema": {"$ref": f"#/components/schemas/{name}"}}}
+    if spec.example is not None:
+        content["application/json"]["example"] = spec.example()
     if spec.upload_extensions:
         content["multipart/form-data"] = {
             "schema": {

@@ -1,0 +1,50 @@
+"""The shared schemas: round trips through JSON, finite floats, strict request models."""
+
+from __future__ import annotations
+
+import uuid
+from datetime import datetime, timezone
+
+import pytest
+from pydantic import ValidationError
+
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Report, StrictModel, Vec3
+from plantsolve.schemas.jobs import ArtifactInfo, JobList, JobProgress, JobTimings, JobView, Problem
+
+
+def test_job_view_round_trips_through_json():
+    now = datetime(2026, 11, 24, 12, 0, tzinfo=timezone.utc)
+    view = JobView(
+        id=uuid.uuid4(), kind="tube", status="succeeded", attempt=2, max_attempts=3,
+        progress=JobProgress(fraction=1.0, message="done"),
+        timings=JobTimings(created_at=now, started_at=now, finished_at=now, queued_seconds=0.5, run_seconds=1.25),
+        solver_version="1.0.0", summary="Succeeded.",
+        report=Report(status="warning", warnings=[Diagnostic(code="c", message="m", details={"x": [1, 2.5]})]),
+        artifacts=[ArtifactInfo(name="a.png", media_type="image/png", size=3, sha256="0" * 64, url="/v1/jobs/x/artifacts/a.png")],
+        links={"self": "/v1/jobs/x"},
+    )
+    assert JobView.model_validate_json(view.model_dump_json()) == view
+    listing = JobList(items=[view], next_cursor="abc")
+    assert JobList.model_validate_json(listing.model_dump_json()) == listing
+
+
+def test_problem_document_round_trips():
+    problem = Problem(title="Invalid input", status=422, errors=[{"loc": ["a", 0], "pointer": "/a/0", "msg": "m", "type": "t"}])
+    assert Problem.model_validate_json(problem.model_dump_json()) == problem
+
+
+def test_requests_refuse_non_finite_numbers_and_unknown_fields():
+    class Probe(StrictModel):
+        value: FiniteFloat
+        point: Vec3
+
+    assert Probe(value=1.5, point=[0, 1, 2]).point == [0.0, 1.0, 2.0]
+    for bad in (float("nan"), float("inf"), -float("inf")):
+        with pytest.raises(ValidationError) as error:
+            Probe(value=bad, point=[0, 0, 0])
+        assert error.value.errors()[0]["loc"] == ("value",)
+    with pytest.raises(ValidationError):
+        Probe(value=1, point=[0, 0])
+    with pytest.raises(ValidationError) as error:
+        Probe(value=1, point=[0, 0, 0], extra=1)
+    assert error.value.errors()[0]["type"] == "extra_forbidden"
