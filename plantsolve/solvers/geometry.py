@@ -90,6 +90,8 @@ def wrap_angle(angle: float | np.ndarray, period: float = 2.0 * np.pi) -> float 
 def angle_between(a: np.ndarray, b: np.ndarray) -> float | np.ndarray:
     """Unsigned angle between vectors, accurate near 0 and π too (arccos of the dot is not)."""
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.ndim == b.ndim == 1:
+        return float(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))
     return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from plantsolve.solvers.geometry import rotation
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.synthetic import grid_network
 
@@ -57,7 +58,7 @@ def test_elbow_gap_closes_onto_fixed_pipes(method):
     np.testing.assert_array_equal(D, [[-1, 0, 0], [0, 1, 0]])
     comp = next(c for c in res.components if c.id == "E")
     # the reported transform undoes the perturbation
-    R = Rotation.from_quat(np.roll(comp.transform.rotation, -1))
+    R = rotation(comp.transform.rotation)
     np.testing.assert_allclose(R.as_rotvec(), -np.array([0.01, -0.02, 0.015]), atol=1e-9)
     assert_watertight(req, res)
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from plantsolve.solvers.geometry import rotation
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.synthetic import grid_network
@@ -99,6 +100,6 @@ def test_plant_scale_coordinates_close_bit_identically():
     for c_in, c_out in zip(req.components, res.components):
         if c_in.kind != "fitting":
             continue
-        R = Rotation.from_quat(np.roll(c_out.transform.rotation, -1))
+        R = rotation(c_out.transform.rotation)
         new = R.apply([p.position for p in c_in.ports]) + c_out.transform.translation
         np.testing.assert_allclose(new, [p.position for p in c_out.ports], rtol=0, atol=1e-6)

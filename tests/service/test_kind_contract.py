@@ -5,6 +5,7 @@ solves; request and result schemas round-trip."""
 from __future__ import annotations
 
 import copy
+import functools
 import json
 import math
 
@@ -53,16 +54,20 @@ def _problem(response, status=422):
     return problem
 
 
+@functools.cache
+def _example_json(kind: str) -> str:
+    spec = KINDS[kind]
+    assert spec.example is not None, f"kind {kind!r} declares no example request"
+    return json.dumps(spec.example(), allow_nan=False)  # a JSON body
+
+
 @pytest.fixture(scope="module")
 def examples():
-    bodies = {}
-    for kind in KIND_NAMES:
-        spec = KINDS[kind]
-        assert spec.example is not None, f"kind {kind!r} declares no example request"
-        body = spec.example()
-        json.dumps(body, allow_nan=False)  # a JSON body
-        bodies[kind] = body
-    return bodies
+    class Examples:
+        def __getitem__(self, kind):
+            return json.loads(_example_json(kind))
+
+    return Examples()
 
 
 @pytest.mark.parametrize("kind", KIND_NAMES)

@@ -9,6 +9,7 @@ constrained pipe systems*. Two methods share model, validation, cuts and report:
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.solvers.alignment.artifacts import render_artifacts
 from plantsolve.solvers.alignment.solve import solve
+from plantsolve.solvers.alignment.synthetic import example
 from plantsolve.solvers.alignment.upload import UPLOAD_EXTENSIONS, parse_upload
 from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.base import SolverSpec
@@ -25,6 +26,7 @@ SPEC = SolverSpec(
     parse_upload=parse_upload,
     render_artifacts=render_artifacts,
     upload_extensions=UPLOAD_EXTENSIONS,
+    example=example,
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],

@@ -1,4 +1,4 @@
-"""The direct method (issue 3): rotation averaging, then a joint constrained Gauss-Newton.
+"""The direct method (not in the paper): rotation averaging, then a joint constrained Gauss-Newton.
 
 Stage 1 — rotation averaging (:func:`solve_rotations`): every free component gets a
 rotation; each connection asks for opposite port directions (two equations in the tangent
@@ -7,8 +7,8 @@ equality-constrained weighted least squares that keeps the rotations as close as
 the measured ones (pipes stiffer than fittings, long pipes stiffer than short, tie-ins are
 constants). Fitting port angles stay catalogue-exact because fittings only rotate rigidly.
 
-Stage 2 — joint solve (:func:`solve_joint`): the issue suggests fixing these rotations and
-solving the then-linear positions once, but on loops the averaged rotations leave a small
+Stage 2 — joint solve (:func:`solve_joint`): one could fix these rotations and solve the
+then-linear positions once, but on loops the averaged rotations leave a small
 twist and that linear problem is infeasible (measured: 0.11 mm gaps on a 4-elbow ring). So
 stage 1 is only the start: Gauss-Newton over all poses and pipe lengths together, every
 connection an exact constraint, each step one sparse KKT solve (:mod:`kkt`). The cost keeps
@@ -27,11 +27,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.alignment.dualquat import minimal_rotation, qmul, qrotate
 from plantsolve.solvers.alignment.kkt import constrained_lstsq
 from plantsolve.solvers.alignment.model import Model, collinear_fittings
+from plantsolve.solvers.geometry import quaternion_to_rotvec, rotvec_to_quaternion
 
 
 @dataclass
@@ -118,11 +118,11 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2 * m, nv)
         )
         rhs = -np.stack([np.einsum("ij,ij->i", e1, r), np.einsum("ij,ij->i", e2, r)], axis=1).ravel()
-        phi = Rotation.from_quat(q[free][:, [1, 2, 3, 0]]).as_rotvec().ravel()
+        phi = quaternion_to_rotvec(q[free]).ravel()
         g = hdiag * phi if use_cost else np.zeros(nv)
         x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=6)
         steps += k
-        dq = Rotation.from_rotvec(x.reshape(-1, 3)).as_quat()[:, [3, 0, 1, 2]]
+        dq = rotvec_to_quaternion(x.reshape(-1, 3))
         q[free] = qmul(dq, q[free])
         q[free] /= np.linalg.norm(q[free], axis=1, keepdims=True)
     _reestablish_up(model, q)
@@ -308,7 +308,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         hr, hc, hv = [], [], []
         g = np.zeros(nv)
         fr = np.flatnonzero(free)
-        phi = Rotation.from_quat(st.q[fr][:, [1, 2, 3, 0]]).as_rotvec()
+        phi = quaternion_to_rotvec(st.q[fr])
         for j in range(3):
             hr.append(var[fr] + j); hc.append(var[fr] + j); hv.append(2 * w_rot[fr])
             hr.append(var[fits] + 3 + j); hc.append(var[fits] + 3 + j); hv.append(2 * w[fits])
@@ -341,7 +341,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         x = sv * y
         steps += k
         om = x[(var[fr][:, None] + np.arange(3))]
-        dq = Rotation.from_rotvec(om).as_quat()[:, [3, 0, 1, 2]]
+        dq = rotvec_to_quaternion(om)
         # fittings rotate about their current port centroid: keep that centroid where the step puts it
         st.q[fr] = qmul(dq, st.q[fr])
         st.q[fr] /= np.linalg.norm(st.q[fr], axis=1, keepdims=True)

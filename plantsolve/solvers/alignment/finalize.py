@@ -19,6 +19,7 @@ from plantsolve.schemas.alignment import (
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.solvers.alignment.dualquat import dq_from_rt, minimal_rotation, rotation_angle
 from plantsolve.solvers.alignment.model import Model, collinear_fittings, connection_errors
+from plantsolve.solvers.geometry import quaternion, rotation
 
 
 @dataclass
@@ -57,7 +58,11 @@ def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.
 
 
 def _kabsch(model: Model, P_new: np.ndarray, D_new: np.ndarray, up_new: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation quaternion and (centred-frame) translation of each component's rigid motion."""
+    """Rotation quaternion and (centred-frame) translation of each component's rigid motion.
+
+    Kabsch batched over all components at once (one stacked SVD), with port directions and up
+    vectors as extra point pairs and pipes anchored at their first port: that is why it is not
+    :func:`plantsolve.solvers.geometry.kabsch`, which fits one point set."""
     n = model.n_comp
     pc = model.port_comp
     old = model.P_in - model.center
@@ -75,13 +80,13 @@ def _kabsch(model: Model, P_new: np.ndarray, D_new: np.ndarray, up_new: np.ndarr
     d = np.sign(np.linalg.det(np.einsum("nji,nkj->nik", Vt, U)))
     Dm = np.zeros((n, 3, 3)); Dm[:, 0, 0] = 1; Dm[:, 1, 1] = 1; Dm[:, 2, 2] = np.where(d == 0, 1, d)
     R = np.einsum("nji,njk,nlk->nil", Vt, Dm, U)
-    q = Rotation.from_matrix(R).as_quat()[:, [3, 0, 1, 2]]
+    q = quaternion(Rotation.from_matrix(R))
     degenerate = S[:, 1] < 1e-9 * np.maximum(S[:, 0], 1e-300)
     first = model.port_start[:-1]
     if np.any(degenerate):
         q[degenerate] = minimal_rotation(model.D_in[first[degenerate]], D_new[first[degenerate]])
     q = np.where(q[:, :1] < 0, -q, q)
-    Rm = Rotation.from_quat(q[:, [1, 2, 3, 0]])
+    Rm = rotation(q)
     anchor_old = np.where(model.is_pipe[:, None], old[first], c_old)
     anchor_new = np.where(model.is_pipe[:, None], new[first], c_new)
     t = anchor_new - Rm.apply(anchor_old)
@@ -102,7 +107,7 @@ def _final_up(model: Model, D_new: np.ndarray, q_rot: np.ndarray | None = None) 
         up[idx] = v / np.linalg.norm(v, axis=1, keepdims=True)
     other = np.flatnonzero(has_up & ~inline)
     if len(other) and q_rot is not None:
-        up[other] = Rotation.from_quat(q_rot[other][:, [1, 2, 3, 0]]).apply(model.up[other])
+        up[other] = rotation(q_rot[other]).apply(model.up[other])
     fx = np.flatnonzero(has_up & model.fixed)
     up[fx] = model.up[fx]
     return up
@@ -115,8 +120,8 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
     q, t_local = _kabsch(model, P, D, np.nan_to_num(up))
     other = ~np.isnan(model.up[:, 0]) & ~collinear_fittings(model) & ~model.fixed
     if np.any(other):
-        up[other] = Rotation.from_quat(q[other][:, [1, 2, 3, 0]]).apply(model.up[other])
-    R = Rotation.from_quat(q[:, [1, 2, 3, 0]])
+        up[other] = rotation(q[other]).apply(model.up[other])
+    R = rotation(q)
     t_world = t_local + model.center - R.apply(np.tile(model.center, (model.n_comp, 1)))
     t_world[model.fixed] = 0.0
     dq = dq_from_rt(q, t_world)

@@ -31,7 +31,8 @@ from scipy.spatial import cKDTree
 from pydantic import ValidationError
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest, AlignmentResult
-from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.geometry import angle_between, rotation
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
 EXTRA_KEYS = ("CO-ORDS",)  # support / instrument locations: they follow the item they sit on
@@ -67,10 +68,6 @@ TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$")
 _EOL = re.compile(r"(\r\n|\r|\n)")
-
-
-def _reject(msg: str) -> InputRejected:
-    return InputRejected([FieldError(("file",), msg)])
 
 
 def split_lines(text: str) -> tuple[list[str], list[str]]:
@@ -128,7 +125,7 @@ def _point(line: str) -> tuple[np.ndarray, float | None]:
     try:
         xyz = np.array([float(v) for v in parts[1:4]])
     except (ValueError, IndexError) as exc:
-        raise _reject(f"cannot read coordinates in line {line.strip()!r}") from exc
+        raise reject(f"cannot read coordinates in line {line.strip()!r}") from exc
     bore = None
     if len(parts) > 4:
         try:
@@ -138,7 +135,7 @@ def _point(line: str) -> tuple[np.ndarray, float | None]:
         if bore is not None and not (np.isfinite(bore) and bore > 0):
             bore = None
     if not np.all(np.isfinite(xyz)):
-        raise _reject(f"non-finite coordinate in line {line.strip()!r}")
+        raise reject(f"non-finite coordinate in line {line.strip()!r}")
     return xyz, bore
 
 
@@ -177,7 +174,7 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
     c = centre[0][1] if centre else None
     if word == "PIPE" or word.startswith("PIPE-"):
         if len(ends) != 2:
-            raise _reject(f"{word}-{ordinal}: a {word} needs two END-POINT lines, found {len(ends)}")
+            raise reject(f"{word}-{ordinal}: a {word} needs two END-POINT lines, found {len(ends)}")
         axis = _unit(ends[1][1] - ends[0][1])
         ports = [(ends[0][1], -axis), (ends[1][1], axis)]
         return ports, [ends[0][0], ends[1][0]], "pipe", None, radius
@@ -197,7 +194,7 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
         ports.append((p, d))
         port_lines.append(i)
     if not ports:
-        raise _reject(f"{word}-{ordinal}: no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
+        raise reject(f"{word}-{ordinal}: no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
     ftype = TYPE_OF.get(word)
     if ftype is None:
         ftype = "olet" if word.endswith("OLET") else TYPE_OF.get(word.split("-")[0], "other")
@@ -205,7 +202,7 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
     if len(ports) < need:  # set-on tees and the like: only the branch is a port
         ftype = "olet" if len(ports) == 1 else "other"
     if ftype in ("elbow", "bend") and c is None:
-        raise _reject(f"{word}-{ordinal}: a {word} needs a CENTRE-POINT to know its port directions")
+        raise reject(f"{word}-{ordinal}: a {word} needs a CENTRE-POINT to know its port directions")
     if snap and c is not None and ftype in ("elbow", "bend", "tee", "cross") and all(d is not None for _, d in ports):
         ports = _snap_catalogue(ports, c, _quantum([lines[i] for i in idx]))
     return ports, port_lines, "fitting", ftype, radius
@@ -213,11 +210,6 @@ def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_f
 
 # angles between port directions of catalogue fittings: 180 - (90, 45, 60, 30, 22.5, 11.25 elbows), 90, 180
 STANDARD_ANGLES = np.radians([0.0, 90.0, 135.0, 120.0, 150.0, 157.5, 168.75, 180.0, 45.0, 60.0])
-
-
-def _angle(a: np.ndarray, b: np.ndarray) -> float:
-    """Angle between unit vectors, accurate near 0 and 180 degrees too (arccos of the dot is not)."""
-    return float(np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))
 
 
 def _cos_sin(angle: float) -> tuple[float, float]:
@@ -268,7 +260,7 @@ def _snap_catalogue(ports, c: np.ndarray, quantum: float):
 
     def towards(axis: np.ndarray, d: np.ndarray) -> np.ndarray:
         """d with its angle to the axis snapped (in the plane of axis and d)."""
-        ang = _angle(axis, d)
+        ang = angle_between(axis, d)
         tgt = nice(ang)
         e = d - (axis @ d) * axis
         n = np.linalg.norm(e)
@@ -279,7 +271,7 @@ def _snap_catalogue(ports, c: np.ndarray, quantum: float):
         return c_ * axis + s_ * e
 
     if len(D) == 2:  # elbow / bend: symmetric about the bisector
-        beta = _angle(D[0], D[1])
+        beta = angle_between(D[0], D[1])
         tgt = nice(beta)
         b, e = D[0] + D[1], D[1] - D[0]
         if tgt is not None and abs(tgt - beta) > exact and np.linalg.norm(b) > 0 and np.linalg.norm(e) > 0:
@@ -287,12 +279,12 @@ def _snap_catalogue(ports, c: np.ndarray, quantum: float):
             c_, s_ = _cos_sin(tgt / 2)
             D = [c_ * b - s_ * e, c_ * b + s_ * e]
     else:  # tee / cross: run END-POINTs opposite, branches at exact angles to the run
-        run = _angle(D[0], D[1])
+        run = angle_between(D[0], D[1])
         straight = _straight(nice(run))
         a = (D[1] - D[0]) / np.linalg.norm(D[1] - D[0]) if straight else D[1]
         D[2] = towards(a, D[2])
         if len(D) > 3:
-            opp = _angle(D[2], D[3])
+            opp = angle_between(D[2], D[3])
             if not (np.pi - opp <= exact and D[2] is ports[2][1]):
                 D[3] = -D[2] if _straight(nice(opp)) else towards(a, D[3])
         if straight and (np.pi - run > exact or any(d is not d_in for d, (_, d_in) in zip(D[2:], ports[2:]))):
@@ -351,7 +343,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
     lines, blocks, header, _, spindle = _blocks(text)
     units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), None)
     if units is None:
-        raise _reject(f"unsupported UNITS-CO-ORDS {header.get('UNITS-CO-ORDS')!r}")
+        raise reject(f"unsupported UNITS-CO-ORDS {header.get('UNITS-CO-ORDS')!r}")
     bore_factor = _bore_factor(header, units)
     comps = []
     for word, ordinal, idx, _ in blocks:
@@ -362,7 +354,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
         if kind != "joint":
             comps.append({"id": f"{word}-{ordinal}", "word": word, "up": SPINDLE.get(spindle.get(ordinal, "")), "kind": kind, "type": ftype, "radius": radius, "ports": ports})
     if not comps:
-        raise _reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
+        raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
     # infer connections: nearest facing end points within tolerance, each port used once
     counts = np.array([len(c["ports"]) for c in comps])
     start = np.concatenate([[0], np.cumsum(counts)])
@@ -412,7 +404,7 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
                 dirs[i0], dirs[i1] = -axis, axis
     for k, d in enumerate(dirs):
         if d is None:
-            raise _reject(f"{comps[owner[k]]['id']}: cannot determine the direction of end point {local[k]} "
+            raise reject(f"{comps[owner[k]]['id']}: cannot determine the direction of end point {local[k]} "
                           "(single-ended item without a connected neighbour)")
     comps_json = []
     for k, c in enumerate(comps):
@@ -468,8 +460,6 @@ def write_aligned_pcf(request: AlignmentRequest, result: AlignmentResult) -> str
 
 def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
     """The source text with the coordinates of moved points replaced, every other byte as it was."""
-    from scipy.spatial.transform import Rotation
-
     text = request.source_pcf
     lines, blocks, header, _, _ = _blocks(text)
     _, endings = split_lines(text)
@@ -494,7 +484,7 @@ def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
 
     def motion(comp):
         tr = comp.transform
-        R = Rotation.from_quat([tr.rotation[1], tr.rotation[2], tr.rotation[3], tr.rotation[0]])
+        R = rotation(tr.rotation)
         t = np.array(tr.translation)
         return lambda x: R.apply(x) + t
 

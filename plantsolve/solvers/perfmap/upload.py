@@ -19,7 +19,7 @@ CSV rules (as rig software and Excel write them):
   warning in the result's report;
 - rows: any order; rows with equal (theta, phi) form one setting (in order of first
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
-  different values is rejected (the issue's "non-increasing flow after sorting").
+  different values is rejected (flow must increase along a characteristic after sorting).
 
 Every rejection is an :class:`InputRejected` whose loc starts with ``"file"``: ``("file",)``
 for the file as a whole, ``("file", "header")`` for the header, ``("file", "row", n,

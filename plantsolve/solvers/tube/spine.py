@@ -8,7 +8,7 @@ neighbourhood is gathered again around it. All seeds are solved at once (batched
 normal equations). A seed whose final distance to its projection differs from the pipe
 radius by more than 0.1·r is an outlier (§7).
 
-Neighbourhood: a ball of radius 1.2·r_P about the axis point. The paper (and the issue) say
+Neighbourhood: a ball of radius 1.2·r_P about the axis point. The paper says
 "1.2 r_B", but the paper's own check in §3.2 — "for a cylindrical point set this
 neighbourhood is a cylinder with a height of about 1.3 r_P" and the 0.038 r_P worst-case
 shrinkage on a torus — only holds for a ball of 1.2 r_P: 2·sqrt(1.2² − 1) r_P = 1.33 r_P.
