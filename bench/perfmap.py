@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest  # noqa: E402
 from plantsolve.solvers.perfmap import parse_upload, query, solve  # noqa: E402
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
-from plantsolve.solvers.perfmap.solve import curveset_from_fits  # noqa: E402
+from plantsolve.solvers.perfmap.families import curveset_from_fits  # noqa: E402
 from plantsolve.solvers.perfmap.synthetic import request_body, true_map  # noqa: E402
 
 N3 = Path(__file__).resolve().parents[1] / "examples" / "perfmap" / "n3_fan_map.csv"

@@ -21,7 +21,7 @@ from plantsolve.solvers.perfmap.efficiency import (
     lsi,
 )
 from plantsolve.solvers.perfmap.families import basis, bernstein
-from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.synthetic import request_body
 
 T = np.array([0.0, 0.13, 0.31, 0.5, 0.64, 0.82, 0.93, 1.0])

@@ -10,7 +10,7 @@ from plantsolve.solvers.base import InputRejected
 from plantsolve.solvers.perfmap import query, solve
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges
 from plantsolve.solvers.perfmap.query import characteristic_at
-from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.synthetic import request_body, true_map
 from plantsolve.solvers.perfmap.triangulation import triangulate
 

@@ -16,8 +16,8 @@ from plantsolve.solvers.base import InputRejected
 from plantsolve.solvers.perfmap import parse_upload, query, solve
 from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor
-from plantsolve.solvers.perfmap.performance_map import _cross2, distance_to_region, max_efficiency
-from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.performance_map import cross2, distance_to_region, max_efficiency
+from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.synthetic import PHI_MAX, THETA_MAX, _data, true_map
 
 HEADER = "theta,phi,flow,pressure,efficiency"
@@ -324,7 +324,7 @@ def test_distance_to_region_equals_dense_evaluation(n3_result):
         h = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0, 1)
         d = np.minimum(d, np.linalg.norm(p - a - h[..., None] * ab, axis=-1))
     a, b, c = A[:, 0], A[:, 1], A[:, 2]
-    s = np.stack([_cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)])
+    s = np.stack([cross2(b - a, p - a), cross2(c - b, p - b), cross2(a - c, p - c)])
     inside = (np.all(s >= 0, axis=0) | np.all(s <= 0, axis=0)).any(axis=1)
     want = np.where(inside, 0.0, d.min(axis=1))
     assert np.sum(want == 0) > 20 and np.sum(want > 0) > 100

@@ -9,6 +9,7 @@ from plantsolve.solvers.base import ResultOperation, SolverSpec
 from plantsolve.solvers.perfmap.artifacts import render_artifacts
 from plantsolve.solvers.perfmap.query import answer_query, query
 from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.synthetic import example
 from plantsolve.solvers.perfmap.upload import UPLOAD_EXTENSIONS, parse_upload
 from plantsolve.solvers.perfmap.validation import check_input
 
@@ -24,6 +25,7 @@ SPEC = SolverSpec(
     parse_upload=parse_upload,
     render_artifacts=render_artifacts,
     upload_extensions=UPLOAD_EXTENSIONS,
+    example=example,
     # Typical runs take about a second (28 settings, 64x64 map); minimax with the log family
     # and 1000x1000 maps take tens of seconds.
     soft_time_limit=120,

@@ -11,7 +11,7 @@ from matplotlib.ticker import MaxNLocator  # no pyplot: no global figure state; 
 
 from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
 from plantsolve.solvers.base import Artifact
-from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.families import curveset_from_fits
 
 _SMALL_MULTIPLES_MAX = 36
 _MEDIA = {"png": "image/png", "svg": "image/svg+xml"}

@@ -196,3 +196,12 @@ class CurveSet:
         t = np.asarray(t, dtype=float)
         idx = np.repeat(np.arange(self.n)[:, None], len(t), axis=1)
         return self.evaluate(idx, np.broadcast_to(t, idx.shape))
+
+
+def curveset_from_fits(settings) -> CurveSet:
+    """The :class:`CurveSet` of a result's settings (``SettingFit`` objects: public
+    coefficients), as the solver, the inverse query and the plots all evaluate it."""
+    return CurveSet([s.family for s in settings], [s.efficiency_family for s in settings],
+                    [s.x_min for s in settings], [s.x_max for s in settings],
+                    [s.pressure_coefficients for s in settings],
+                    [s.efficiency_coefficients for s in settings])

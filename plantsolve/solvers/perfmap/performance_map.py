@@ -308,7 +308,7 @@ def binned_map(curves, triangles, theta, phi, gx, gy, ranges, n_bary: int = 64, 
     return best.reshape(shape), b_theta.reshape(shape), b_phi.reshape(shape)
 
 
-def _cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+def cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
@@ -324,9 +324,9 @@ def _segment_distance(p: np.ndarray, A: np.ndarray) -> np.ndarray:
         r = ps - h[..., None] * ab
         d = np.minimum(d, np.hypot(r[..., 0], r[..., 1]))
     a, b, c = A[..., 0, :], A[..., 1, :], A[..., 2, :]
-    s1, s2, s3 = _cross2(b - a, p - a), _cross2(c - b, p - b), _cross2(a - c, p - c)
+    s1, s2, s3 = cross2(b - a, p - a), cross2(c - b, p - b), cross2(a - c, p - c)
     inside = (((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0)))
-    inside &= np.abs(_cross2(b - a, c - a)) > 0
+    inside &= np.abs(cross2(b - a, c - a)) > 0
     return np.where(inside, 0.0, d)
 
 

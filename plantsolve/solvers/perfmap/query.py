@@ -6,9 +6,8 @@ import numpy as np
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapQueryResult, PerfmapResult, QueryAnswer
 from plantsolve.solvers.base import FieldError, InputRejected, ResultNotUsable
-from plantsolve.solvers.perfmap.families import CurveSet
 from plantsolve.solvers.perfmap.performance_map import distance_to_region, max_efficiency
-from plantsolve.solvers.perfmap.solve import curveset_from_fits
+from plantsolve.solvers.perfmap.families import CurveSet, curveset_from_fits
 from plantsolve.solvers.perfmap.triangulation import locate
 
 

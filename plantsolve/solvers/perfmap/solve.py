@@ -1,6 +1,13 @@
-"""The ``perfmap`` pipeline: characteristics -> error table -> envelopes -> map."""
+"""The ``perfmap`` solve, stage by stage as the paper's HV-Turbo chapter runs:
+
+characteristics of every family (§2, with the paper's Table 1 for the submitted data) →
+choice of family → per-setting results and their diagnostics → envelopes per θ (§3) →
+the maximum-efficiency map over triangles of settings (§4).
+"""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,6 +28,7 @@ from plantsolve.solvers.perfmap.families import (
     FAMILIES,
     N_COEFFICIENTS,
     CurveSet,
+    curveset_from_fits,
     log_params_to_public,
 )
 from plantsolve.solvers.perfmap.efficiency import EFFICIENCY_FAMILIES, N_EFF_COEFFICIENTS
@@ -95,21 +103,20 @@ def _efficiency_diagnostics(s: Setting, e: EtaResult, where: dict) -> list[Diagn
     return out
 
 
-def curveset_from_fits(settings: list[SettingFit]) -> CurveSet:
-    return CurveSet([s.family for s in settings], [s.efficiency_family for s in settings],
-                    [s.x_min for s in settings], [s.x_max for s in settings],
-                    [s.pressure_coefficients for s in settings],
-                    [s.efficiency_coefficients for s in settings])
+@dataclass
+class Characteristics:
+    """Every family fitted to every setting (§2): pressure fits, efficiency fits, floors."""
+
+    pressure: dict[str, list[PressureResult]]
+    efficiency: dict[str, list[EtaResult]]
+    floors: list[float]
 
 
-def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
-    opts = request.options
-    settings = prepare(request)
-    progress(0.02, "input checked")
-    warnings: list[Diagnostic] = list(request.upload_warnings)
-    minimax = opts.fit == "minimax"
-
-    # --- characteristics of every family (the paper's Table 1 for these data)
+def fit_characteristics(settings: list[Setting], minimax: bool, concave_efficiency: bool,
+                        progress: Progress) -> Characteristics:
+    """§2 (2.1 parabolas, 2.2 logarithms, 2.3 cubic Bézier, 2.4 quadratic B-splines): each
+    pressure family and each efficiency family on each setting, with the side conditions
+    y' ≤ 0, y'' ≤ 0 held exactly; plus the concave floor of each setting."""
     fits: dict[str, list[PressureResult]] = {f: [] for f in FAMILIES}
     eta_fits: dict[str, list[EtaResult]] = {f: [] for f in EFFICIENCY_FAMILIES}
     n_steps = (len(FAMILIES) + len(EFFICIENCY_FAMILIES)) * len(settings)
@@ -121,16 +128,21 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
             progress(0.02 + 0.58 * step / n_steps, f"fitting {fam}")
     for efam in EFFICIENCY_FAMILIES:
         for s in settings:
-            eta_fits[efam].append(fit_eta_setting(efam, s.t, s.eta, minimax,
-                                                  opts.concave_efficiency))
+            eta_fits[efam].append(fit_eta_setting(efam, s.t, s.eta, minimax, concave_efficiency))
             step += 1
             progress(0.02 + 0.58 * step / n_steps, f"fitting efficiency {efam}")
     floors = [concave_floor(s.x, s.y) for s in settings]
+    return Characteristics(fits, eta_fits, floors)
 
+
+def error_table(ch: Characteristics) -> list[ErrorTableRow]:
+    """The paper's Table 1 (§2) for the submitted data: per pressure family its worst relative
+    errors, with the efficiency family the paper pairs it with, leave-one-out errors and the
+    floor."""
     table = []
     for fam in FAMILIES:
-        rs = fits[fam]
-        es = eta_fits[EFFICIENCY_FAMILY[fam]]  # the paper's pairing
+        rs = ch.pressure[fam]
+        es = ch.efficiency[EFFICIENCY_FAMILY[fam]]  # the paper's pairing
         perr = [r.err for r in rs]
         ploo = [r.loo for r in rs]
         eloo = [r.loo_rel for r in es]
@@ -143,10 +155,16 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                                       else float(max(r.abs_err for r in es))),
             pressure_loo=None if any(v is None for v in ploo) else float(max(ploo)),
             efficiency_loo=None if any(v is None for v in eloo) else float(max(eloo)),
-            floor=float(max(floors)), worst_setting=int(np.argmax(perr))))
+            floor=float(max(ch.floors)), worst_setting=int(np.argmax(perr))))
+    return table
 
+
+def choose_families(ch: Characteristics, opts, n_settings: int,
+                    warnings: list[Diagnostic]) -> tuple[str, list[str], dict]:
+    """The pressure family (one for all settings: ``model``, or the best leave-one-out error)
+    and the efficiency family of each setting (``efficiency_model``)."""
     if opts.model == "auto":
-        family, details = _choose_family(fits)
+        family, details = _choose_family(ch.pressure)
         details["criterion"] = "mean over settings of the LOO max relative pressure error"
         if "mean_pressure_loo" not in details:
             warnings.append(Diagnostic(code="auto_without_loo", message="Too few points per "
@@ -155,19 +173,24 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
         family, details = opts.model, {}
 
     if opts.efficiency_model == "auto":
-        eta_choice = [_choose_efficiency({f: eta_fits[f][k] for f in EFFICIENCY_FAMILIES})
-                      for k in range(len(settings))]
+        eta_choice = [_choose_efficiency({f: ch.efficiency[f][k] for f in EFFICIENCY_FAMILIES})
+                      for k in range(n_settings)]
     elif opts.efficiency_model == "same":
-        eta_choice = [EFFICIENCY_FAMILY[family]] * len(settings)
+        eta_choice = [EFFICIENCY_FAMILY[family]] * n_settings
     else:
-        eta_choice = [opts.efficiency_model] * len(settings)
+        eta_choice = [opts.efficiency_model] * n_settings
     details["efficiency_criterion"] = (
         "per setting: LOO max absolute efficiency error" if opts.efficiency_model == "auto"
         else f"efficiency_model = {opts.efficiency_model!r}")
+    return family, eta_choice, details
 
+
+def efficiency_error_table(ch: Characteristics, settings: list[Setting],
+                           eta_choice: list[str]) -> list[EfficiencyErrorRow]:
+    """Table 1's efficiency side for every efficiency family, and how often each was chosen."""
     eta_table = []
     for efam in EFFICIENCY_FAMILIES:
-        es = eta_fits[efam]
+        es = ch.efficiency[efam]
         lr, la = [r.loo_rel for r in es], [r.loo_abs for r in es]
         eta_table.append(EfficiencyErrorRow(
             family=efam, n_coefficients=N_EFF_COEFFICIENTS[efam],
@@ -177,11 +200,17 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
             loo_abs=None if any(v is None for v in la) else float(max(la)),
             max_overshoot=float(max(r.peak - float(s.eta.max()) for r, s in zip(es, settings))),
             chosen=sum(c == efam for c in eta_choice)))
+    return eta_table
 
-    chosen = fits[family]
+
+def setting_results(ch: Characteristics, settings: list[Setting], family: str,
+                    eta_choice: list[str], warnings: list[Diagnostic]) -> list[SettingFit]:
+    """The chosen characteristic and efficiency curve of each setting in public coefficients,
+    with a diagnostic wherever the data or the fit deserve one."""
     out_settings = []
-    for k, (s, r) in enumerate(zip(settings, chosen)):
-        e = eta_fits[eta_choice[k]][k]
+    for k, (s, r) in enumerate(zip(settings, ch.pressure[family])):
+        e = ch.efficiency[eta_choice[k]][k]
+        floor = ch.floors[k]
         out_settings.append(SettingFit(
             theta=s.theta, phi=s.phi, family=family, efficiency_family=e.family,
             x_min=float(s.x[0]), x_max=float(s.x[-1]),
@@ -191,16 +220,16 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
             efficiency_max_rel_error=e.rel_err, efficiency_max_abs_error=e.abs_err,
             pressure_loo=r.loo, efficiency_loo=e.loo_rel, efficiency_loo_abs=e.loo_abs,
             efficiency_peak=e.peak, efficiency_bounds_active=e.fit.active_bounds,
-            floor=floors[k], active_side_conditions=r.fit.active))
+            floor=floor, active_side_conditions=r.fit.active))
         where = {"setting": k, "position": s.source_index, "theta": s.theta, "phi": s.phi}
-        if floors[k] > 0:
+        if floor > 0:
             warnings.append(Diagnostic(
                 code="data_not_decreasing_concave",
                 message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the measured pressures are "
                 f"not decreasing and concave; no admissible curve can beat a max relative "
-                f"error of {100 * floors[k]:.2f}% (the floor), the {family} fit reaches "
+                f"error of {100 * floor:.2f}% (the floor), the {family} fit reaches "
                 f"{100 * r.err:.2f}%.",
-                details={**where, "floor": floors[k], "fit_error": r.err}))
+                details={**where, "floor": floor, "fit_error": r.err}))
         warnings.extend(_efficiency_diagnostics(s, e, where))
         if len(s.x) < N_COEFFICIENTS[family]:
             warnings.append(Diagnostic(
@@ -213,56 +242,86 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                 code="duplicate_points_merged",
                 message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {s.merged_duplicates} "
                 "repeated measurement(s) merged.", details=where))
+    return out_settings
 
-    curves = curveset_from_fits(out_settings)
-    theta = np.array([s.theta for s in settings])
-    phi = np.array([s.phi for s in settings])
 
-    # --- envelopes per theta
+def envelopes(curves: CurveSet, theta: np.ndarray, phi: np.ndarray, opts) -> list[Envelope]:
+    """§3, "The Envelope": for each inlet angle θ, the upper envelope of its characteristics
+    interpolated over the diffuser positions φ, with φ(x) and η along it."""
     envs = []
     for th in sorted(set(theta.tolist())):
-        members = [i for i in range(len(settings)) if theta[i] == th]
+        members = [i for i in range(len(theta)) if theta[i] == th]
         e = envelope(curves, members, phi, opts.envelope_curves, opts.envelope_points)
         envs.append(Envelope(theta=th, flow=e["flow"].tolist(),
                              pressure=_nan_to_none(e["pressure"])[0],
                              phi=_nan_to_none(e["phi"])[0],
                              efficiency=_nan_to_none(e["efficiency"])[0]))
+    return envs
+
+
+def performance_map(curves: CurveSet, settings: list[Setting], theta: np.ndarray,
+                    phi: np.ndarray, ranges, opts, progress: Progress,
+                    warnings: list[Diagnostic]) -> tuple[PerformanceMap | None, np.ndarray]:
+    """§4, "The Performance Map": triangulate the settings, then the maximum efficiency (and
+    the θ, φ that reach it) at every grid node, exactly per triangle (or by the paper's
+    binning, ``map_method: "binning"``). Returns the map (None when there is none) and the
+    triangles."""
+    triangles = np.zeros((0, 3), dtype=int)
+    no_map = map_impossible(settings) if opts.map is None else None
+    if opts.map is False or no_map:
+        if no_map:
+            warnings.append(Diagnostic(code="map_not_possible", message=f"No performance map: "
+                                       f"{no_map}; characteristics and envelopes only, no inverse "
+                                       "query for this job.", details={"reason": no_map}))
+        else:
+            warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
+                                       "performance map and no inverse query for this job."))
+        return None, triangles
+    triangles = triangulate(theta, phi)
+    if len(triangles) == 0:
+        raise SolverError("triangulation", "no non-degenerate triangle of settings",
+                          {"n_settings": len(settings)})
+    gx, gy = grid_axes(ranges, *opts.grid)
+    if opts.map_method == "exact":
+        t = np.linspace(0.0, 1.0, opts.t_samples)
+        eta, th_map, ph_map = exact_map(curves, triangles, theta, phi, t, gx, gy, ranges,
+                                        progress, 0.62, 0.98)
+    else:
+        eta, th_map, ph_map = binned_map(curves, triangles, theta, phi, gx, gy, ranges,
+                                         m_t=opts.t_samples - 1)
+    pmap = PerformanceMap(method=opts.map_method, flow=gx.tolist(), pressure=gy.tolist(),
+                          efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
+                          phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
+                          reachable_fraction=float(np.mean(np.isfinite(eta))))
+    if not np.isfinite(eta).any():
+        warnings.append(Diagnostic(
+            code="map_empty", message="No grid node of the map is reachable: the "
+            "characteristics sweep no area in (flow, pressure) (e.g. all pressures equal); "
+            "every inverse query will be infeasible.",
+            details={"pressure_range": [ranges[2], ranges[3]]}))
+    return pmap, triangles
+
+
+def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
+    opts = request.options
+    settings = prepare(request)
+    progress(0.02, "input checked")
+    warnings: list[Diagnostic] = list(request.upload_warnings)
+
+    ch = fit_characteristics(settings, opts.fit == "minimax", opts.concave_efficiency, progress)
+    table = error_table(ch)
+    family, eta_choice, details = choose_families(ch, opts, len(settings), warnings)
+    eta_table = efficiency_error_table(ch, settings, eta_choice)
+    out_settings = setting_results(ch, settings, family, eta_choice, warnings)
+
+    curves = curveset_from_fits(out_settings)
+    theta = np.array([s.theta for s in settings])
+    phi = np.array([s.phi for s in settings])
+    envs = envelopes(curves, theta, phi, opts)
     progress(0.62, "envelopes")
 
     ranges = curve_ranges(curves)
-    triangles = np.zeros((0, 3), dtype=int)
-    pmap = None
-    no_map = map_impossible(settings) if opts.map is None else None
-    if opts.map is not False and not no_map:
-        triangles = triangulate(theta, phi)
-        if len(triangles) == 0:
-            raise SolverError("triangulation", "no non-degenerate triangle of settings",
-                              {"n_settings": len(settings)})
-        gx, gy = grid_axes(ranges, *opts.grid)
-        if opts.map_method == "exact":
-            t = np.linspace(0.0, 1.0, opts.t_samples)
-            eta, th_map, ph_map = exact_map(curves, triangles, theta, phi, t, gx, gy, ranges,
-                                            progress, 0.62, 0.98)
-        else:
-            eta, th_map, ph_map = binned_map(curves, triangles, theta, phi, gx, gy, ranges,
-                                             m_t=opts.t_samples - 1)
-        pmap = PerformanceMap(method=opts.map_method, flow=gx.tolist(), pressure=gy.tolist(),
-                              efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
-                              phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
-                              reachable_fraction=float(np.mean(np.isfinite(eta))))
-        if not np.isfinite(eta).any():
-            warnings.append(Diagnostic(
-                code="map_empty", message="No grid node of the map is reachable: the "
-                "characteristics sweep no area in (flow, pressure) (e.g. all pressures equal); "
-                "every inverse query will be infeasible.",
-                details={"pressure_range": [ranges[2], ranges[3]]}))
-    elif no_map:
-        warnings.append(Diagnostic(code="map_not_possible", message=f"No performance map: "
-                                   f"{no_map}; characteristics and envelopes only, no inverse "
-                                   "query for this job.", details={"reason": no_map}))
-    else:
-        warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
-                                   "performance map and no inverse query for this job."))
+    pmap, triangles = performance_map(curves, settings, theta, phi, ranges, opts, progress, warnings)
     progress(1.0, "done")
 
     report = Report(status="warning" if warnings else "ok",
@@ -272,6 +331,6 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                        if pmap else ""),
                     warnings=warnings, details={"family_choice": details})
     return PerfmapResult(report=report, family=family, fit=opts.fit, settings=out_settings,
-                         error_table=table, efficiency_error_table=eta_table, envelopes=envs, triangles=triangles.tolist(),
-                         map=pmap, flow_range=[ranges[0], ranges[1]],
+                         error_table=table, efficiency_error_table=eta_table, envelopes=envs,
+                         triangles=triangles.tolist(), map=pmap, flow_range=[ranges[0], ranges[1]],
                          pressure_range=[ranges[2], ranges[3]])

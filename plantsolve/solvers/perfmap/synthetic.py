@@ -91,3 +91,9 @@ def true_map(gx: np.ndarray, gy: np.ndarray, n_t: int = 20001, chunk: int = 256)
     best[~np.isfinite(best)] = np.nan
     shape = XX.shape
     return best.reshape(shape), bt.reshape(shape), bp.reshape(shape)
+
+
+def example() -> dict:
+    """A small request for the API docs and the contract test: 2 × 3 settings of the synthetic
+    family, 6 points each, a 24 × 24 map (about a second)."""
+    return request_body(n_theta=2, n_phi=3, n_points=6, options={"grid": [24, 24]})

@@ -38,7 +38,7 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.base import FieldError, InputRejected, reject
 from plantsolve.solvers.perfmap.validation import prepare
 
 UPLOAD_EXTENSIONS = (".csv", ".json")
@@ -59,21 +59,17 @@ _DECIMAL_COMMA = re.compile(r"^[+-]?(\d+|\d{1,3}(\.\d{3})+),\d*([eE][+-]?\d+)?$"
 _MAX_ROW_ERRORS = 20
 
 
-def _reject(msg: str, loc: tuple = ("file",)) -> InputRejected:
-    return InputRejected(FieldError(loc, msg))
-
-
 def _decode(content: bytes) -> str:
     if content[:4] == b"PK\x03\x04":
-        raise _reject("this is a zip archive (an Excel .xlsx workbook?), not a CSV text "
+        raise reject("this is a zip archive (an Excel .xlsx workbook?), not a CSV text "
                       "file: save the sheet as 'CSV (comma delimited)' or 'CSV UTF-8'")
     if content[:2] in (b"\xff\xfe", b"\xfe\xff"):
         try:
             return content.decode("utf-16")
         except UnicodeDecodeError:
-            raise _reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
+            raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
     if b"\x00" in content:
-        raise _reject("this is a binary file (it contains NUL bytes), not a CSV text file")
+        raise reject("this is a binary file (it contains NUL bytes), not a CSV text file")
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -115,12 +111,12 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
              if ln.strip() and not ln.lstrip().lstrip('"').startswith("#")
              and ln.strip(" \t,;\"")]
     if not lines:
-        raise _reject("the CSV file is empty (no header; only blank or '#' lines)")
+        raise reject("the CSV file is empty (no header; only blank or '#' lines)")
     forced = re.fullmatch(r'\s*"?sep=(.)"?\s*', lines[0][1])  # Excel's "sep=;" first line
     if forced:
         lines = lines[1:]
         if not lines:
-            raise _reject("the CSV file has no header (only a 'sep=' line)")
+            raise reject("the CSV file has no header (only a 'sep=' line)")
     header_line = lines[0][1]
     delim = (forced.group(1) if forced else
              "\t" if "\t" in header_line else ";" if ";" in header_line else ",")
@@ -138,14 +134,14 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
                 ignored.append(name.strip())
             continue
         if field in col:
-            raise _reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
+            raise reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
                           f"name the {field}", ("file", "header"))
         col[field] = j
         if field == "efficiency" and unit == "%":
             scale[field] = 0.01
     missing = [c for c in CSV_COLUMNS if c not in col]
     if missing:
-        raise _reject(
+        raise reject(
             f"the header (line {numbers[0]}) must name the columns {', '.join(CSV_COLUMNS)} "
             f"(any order and case, units in brackets allowed, e.g. 'Flow (m3/s)'); missing: "
             f"{', '.join(missing)}; found: {', '.join(repr(h.strip()) for h in rows[0])}"
@@ -196,7 +192,7 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
     if errors:
         raise InputRejected(errors)
     if not groups:
-        raise _reject(f"the CSV file has a header (line {numbers[0]}) but no data rows")
+        raise reject(f"the CSV file has a header (line {numbers[0]}) but no data rows")
     notes = []
     if ignored:
         notes.append(Diagnostic(
@@ -230,7 +226,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     inside a JSON file."""
     ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in UPLOAD_EXTENSIONS:
-        raise _reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
+        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
                       f"{', '.join(UPLOAD_EXTENSIONS)}")
     text = _decode(content)
     lines: list[list[int]] = []
@@ -243,11 +239,11 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
         try:
             body = json.loads(text)
         except json.JSONDecodeError as e:
-            raise _reject(f"invalid JSON: {e}") from None
+            raise reject(f"invalid JSON: {e}") from None
         if isinstance(body, list):
             body = {"positions": body}
         if not isinstance(body, dict):
-            raise _reject("the JSON file must hold a request object or a list of positions")
+            raise reject("the JSON file must hold a request object or a list of positions")
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:
