@@ -19,13 +19,9 @@ LRA convention (the public contract of ``lra`` tables, measured and nominal):
 
 from __future__ import annotations
 
-import base64
-import binascii
-import io
-from typing import Literal
+from typing import Any, Literal
 
-import numpy as np
-from pydantic import BaseModel, Field, field_validator
+from pydantic import BaseModel, Field, PrivateAttr
 
 from plantsolve.schemas.common import FiniteFloat, Quaternion, Report, StrictModel, Units, Vec3
 
@@ -36,38 +32,11 @@ class NpyPoints(StrictModel):
     """Points as a base64-encoded NPY array of shape (N, 3) (float32 or float64)."""
 
     npy_base64: str = Field(
+        min_length=1,
         description="base64 of the bytes of a .npy file holding an (N, 3) float array, "
-        "one row [x, y, z] per sample, in the request's units. Every value must be finite."
+        "one row [x, y, z] per sample, in the request's units. Every value must be finite; "
+        f"at most {MAX_POINTS} rows. Decoded and checked by the solver (422 on points).",
     )
-
-    @field_validator("npy_base64")
-    @classmethod
-    def _valid_npy(cls, value: str) -> str:
-        decode_npy_points(value)
-        return value
-
-
-def decode_npy_points(value: str) -> np.ndarray:
-    """Decode a base64 NPY string into an (N, 3) float64 array; ValueError with a reason."""
-    try:
-        raw = base64.b64decode(value, validate=False)
-    except (binascii.Error, ValueError) as exc:
-        raise ValueError(f"not valid base64: {exc}") from None
-    try:
-        arr = np.load(io.BytesIO(raw), allow_pickle=False)
-    except Exception as exc:  # numpy raises several types for corrupt headers
-        raise ValueError(f"not a readable NPY array: {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"NPY array must have shape (N, 3), got {arr.shape}")
-    if not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"NPY array must be numeric, got dtype {arr.dtype}")
-    if arr.shape[0] > MAX_POINTS:
-        raise ValueError(f"at most {MAX_POINTS} points are accepted, got {arr.shape[0]}")
-    arr = np.asarray(arr, dtype=np.float64)
-    if not np.isfinite(arr).all():
-        bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise ValueError(f"NPY array holds non-finite values (first at row {bad})")
-    return arr
 
 
 class LraRow(StrictModel):
@@ -132,6 +101,10 @@ class TubeRequest(StrictModel):
     )
     units: Units = "mm"
     options: TubeOptions = Field(default_factory=TubeOptions)
+
+    # The solver decodes ``points`` once per process and keeps the array here, so the checks,
+    # the solve and the artifacts share one decode. Not part of the contract.
+    _points_array: Any = PrivateAttr(default=None)
 
 
 class Segment(BaseModel):

@@ -68,16 +68,24 @@ def kabsch(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = 
     """
     P = np.asarray(source, dtype=float)
     Q = np.asarray(target, dtype=float)
-    w = np.ones(len(P)) if weights is None else np.asarray(weights, dtype=float)
-    w = w / w.sum()
-    cp, cq = w @ P, w @ Q
-    Pc, Qc = P - cp, Q - cq
-    U, S, Vt = np.linalg.svd((Pc * w[:, None]).T @ Qc)
+    if weights is None:
+        cp, cq = P.mean(0), Q.mean(0)
+        Pc, Qc = P - cp, Q - cq
+        H = Pc.T @ Qc
+        spread = float(np.sum(Pc * Pc))
+    else:
+        w = np.asarray(weights, dtype=float)
+        w = w / w.sum()
+        cp, cq = w @ P, w @ Q
+        Pc, Qc = P - cp, Q - cq
+        H = (Pc * w[:, None]).T @ Qc
+        spread = float(w @ np.sum(Pc * Pc, axis=1))
+    U, S, Vt = np.linalg.svd(H)
     d = np.sign(np.linalg.det(Vt.T @ U.T))
     D = np.diag([1.0, 1.0, d if d != 0 else 1.0])
     R = Vt.T @ D @ U.T
-    s = float((S * np.diag(D)).sum() / (w @ np.sum(Pc * Pc, axis=1))) if scale else 1.0
-    t = cq - s * R @ cp
+    s = float((S * np.diag(D)).sum() / spread) if scale else 1.0
+    t = cq - R @ cp if not scale else cq - s * R @ cp
     return R, t, s
 
 

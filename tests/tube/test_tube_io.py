@@ -102,11 +102,13 @@ def test_bad_points_rejected():
         TubeRequest(points=[[0, 0, float("nan")]] * 200)
     with pytest.raises(ValidationError):
         TubeRequest(points=[[0, 0, float("inf")]] * 200)
+    # NPY payloads are decoded by the solver (schemas hold types, not codecs): the check that
+    # runs at submission rejects them, naming the field
     bad = np.ones((200, 3)); bad[5, 1] = np.nan
-    with pytest.raises(ValidationError, match="non-finite"):
-        TubeRequest(points={"npy_base64": base64.b64encode(_npy_bytes(bad)).decode()})
-    with pytest.raises(ValidationError, match="NPY"):
-        TubeRequest(points={"npy_base64": base64.b64encode(b"garbage").decode()})
+    for payload, needle in [(_npy_bytes(bad), "non-finite"), (b"garbage", "NPY")]:
+        with pytest.raises(InputRejected) as exc:
+            check_input(TubeRequest(points={"npy_base64": base64.b64encode(payload).decode()}))
+        assert exc.value.errors[0].loc == ("points",) and needle in exc.value.errors[0].msg
     with pytest.raises(ValidationError):
         TubeRequest(points=[[0, 0, 0]] * 200, options={"unknown": 1})
 

@@ -12,6 +12,7 @@ from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.tube.artifacts import render_artifacts
 from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.synthetic import example
 from plantsolve.solvers.tube.upload import UPLOAD_EXTENSIONS, parse_upload
 from plantsolve.solvers.tube.validation import check_input
 
@@ -27,6 +28,7 @@ SPEC = SolverSpec(
     parse_upload=parse_upload,
     render_artifacts=render_artifacts,
     upload_extensions=UPLOAD_EXTENSIONS,
+    example=example,
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],

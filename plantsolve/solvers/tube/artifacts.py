@@ -7,6 +7,9 @@ import csv
 import io
 
 import numpy as np
+import trimesh
+from matplotlib import colormaps
+from matplotlib.figure import Figure
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact
@@ -50,8 +53,6 @@ def xyz_clr_csv(result: TubeResult, model: TubeModel) -> bytes:
 
 
 def _deviation_colours(dev: np.ndarray, lim: float, outlier: np.ndarray) -> np.ndarray:
-    from matplotlib import colormaps
-
     cmap = colormaps["coolwarm"]
     col = (cmap(np.clip(0.5 + 0.5 * dev / max(lim, 1e-300), 0, 1)) * 255).astype(np.uint8)
     col[outlier] = [128, 128, 128, 255]
@@ -59,12 +60,6 @@ def _deviation_colours(dev: np.ndarray, lim: float, outlier: np.ndarray) -> np.n
 
 
 def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import trimesh
-
     model = model_from_result(result)
     out: list[Artifact] = []
     verts, faces = tube_mesh_arrays(model)
@@ -83,16 +78,18 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     out.append(Artifact("lra.csv", "text/csv", lra_csv(result)))
     out.append(Artifact("xyz_clr.csv", "text/csv", xyz_clr_csv(result, model)))
 
-    fig = plt.figure(figsize=(11, 5))
+    fig = Figure(figsize=(11, 5))  # no pyplot: jobs render in parallel threads
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     rng = np.random.default_rng(0)
     inl_idx = np.flatnonzero(~outlier)
     show = rng.choice(inl_idx, min(len(inl_idx), 20_000), replace=False)
     sc = ax.scatter(*pts[show].T, c=np.clip(dev[show], -lim, lim), cmap="coolwarm", s=1, vmin=-lim, vmax=lim)
     c, _ = sample_centreline(model, max(model.pipe_radius / 2, 1e-9))
-    ax.plot(*c.T, "k-", lw=1.5)
+    ax.plot(*c.T, "k-", lw=1.5, label="fitted centreline")
     cp, _ = control_polygon(model)
-    ax.plot(*cp.T, "g--", lw=0.8)
+    ax.plot(*cp.T, "g--", lw=0.8, label="control polygon (XYZ)")
+    ax.set_xlabel(f"x [{result.units}]"); ax.set_ylabel(f"y [{result.units}]"); ax.set_zlabel(f"z [{result.units}]")
+    ax.legend(loc="upper left", fontsize=7)
     span = np.ptp(pts[show], axis=0).max() / 2
     mid = (pts[show].max(0) + pts[show].min(0)) / 2
     ax.set_xlim(mid[0] - span, mid[0] + span); ax.set_ylim(mid[1] - span, mid[1] + span)
@@ -101,8 +98,10 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     fig.colorbar(sc, ax=ax, shrink=0.6, label=f"deviation [{result.units}]")
     ax2 = fig.add_subplot(1, 2, 2)
     inl = ~outlier
-    ax2.hist(dev[inl], bins=80, color="steelblue")
+    ax2.hist(dev[inl], bins=80, color="steelblue", label="inlier samples")
     ax2.set_xlabel(f"signed distance to surface [{result.units}]")
+    ax2.set_ylabel("samples per bin")
+    ax2.legend(loc="upper right", fontsize=7)
     ax2.set_title(f"median |r| {result.residuals.median:.3g}, p95 {result.residuals.p95:.3g}")
     txt = "\n".join(f"{i + 1}: L {r.length:.2f}  R {r.rotation:.1f}°  A {r.angle:.2f}°  CLR {r.bend_radius:.2f}"
                     for i, r in enumerate(result.lra[:12]))
@@ -110,6 +109,5 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
     out.append(Artifact("overview.png", "image/png", buf.getvalue()))
     return out

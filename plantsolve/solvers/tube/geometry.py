@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotate_about, rotation, signed_angle
+
 TWO_PI = 2.0 * np.pi
 
 
@@ -29,10 +31,22 @@ class TubeModel:
     angles: np.ndarray  # (n,) radians, in (0, 2π)
     radii: np.ndarray  # (n,)
     pipe_radius: float = 0.0
+    _spine_cache: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def n_bends(self) -> int:
         return len(self.angles)
+
+    @property
+    def spine(self) -> "Spine":
+        """The segments of this model, built once and reused until a parameter changes (the
+        solver edits models in place, so the cache is keyed on the parameters' bytes, which
+        costs far less than rebuilding). The cached arrays are read-only."""
+        key = (self.start.tobytes(), self.frame.tobytes(), self.lengths.tobytes(),
+               self.rotations.tobytes(), self.angles.tobytes(), self.radii.tobytes())
+        if self._spine_cache is None or self._spine_cache[0] != key:
+            self._spine_cache = (key, _build_spine(self))
+        return self._spine_cache[1]
 
     def copy(self) -> "TubeModel":
         return TubeModel(
@@ -61,14 +75,13 @@ class Spine:
         return np.cross(self.tangent, self.normal)
 
 
-def _rotate_about(v: np.ndarray, axis: np.ndarray, ang: float) -> np.ndarray:
-    """Rodrigues rotation of v about unit axis."""
-    c, s = np.cos(ang), np.sin(ang)
-    return v * c + np.cross(axis, v) * s + axis * np.dot(axis, v) * (1.0 - c)
-
-
 def build_spine(model: TubeModel) -> Spine:
-    """LRA → segments (line, arc, line, …, line); zero-length lines are kept."""
+    """LRA → segments (line, arc, line, …, line); zero-length lines are kept. Cached on the
+    model (:attr:`TubeModel.spine`)."""
+    return model.spine
+
+
+def _build_spine(model: TubeModel) -> Spine:
     n = model.n_bends
     p = np.asarray(model.start, float).copy()
     t = model.frame[:, 0].copy()
@@ -84,7 +97,7 @@ def build_spine(model: TubeModel) -> Spine:
         en[k] = p; ln[k] = model.lengths[i]
         if i == n:
             break
-        nv = _rotate_about(nv, t, model.rotations[i])
+        nv = rotate_about(nv, t, model.rotations[i])
         a, R = model.angles[i], model.radii[i]
         k += 1
         kind[k] = 1; st[k] = p; tg[k] = t; nm[k] = nv
@@ -93,6 +106,8 @@ def build_spine(model: TubeModel) -> Spine:
         p = c - R * (nv * ca) + R * (t * sa)
         t, nv = t * ca + nv * sa, nv * ca - t * sa
         en[k] = p; ce[k] = c; ra[k] = R; an[k] = a; ln[k] = R * a
+    for array in (kind, st, en, tg, nm, ln, ce, ra, an):
+        array.setflags(write=False)
     return Spine(kind, st, en, tg, nm, ln, ce, ra, an)
 
 
@@ -100,11 +115,6 @@ def end_frame(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
     """End point and end tangent of the centreline."""
     sp = build_spine(model)
     return sp.end[-1], sp.tangent[-1]
-
-
-def signed_angle(a: np.ndarray, b: np.ndarray, axis: np.ndarray) -> float:
-    """Angle from a to b about axis (right-hand rule), in (-π, π]."""
-    return float(np.arctan2(np.dot(np.cross(a, b), axis), np.dot(a, b)))
 
 
 def model_from_spine(sp: Spine, pipe_radius: float) -> TubeModel:
@@ -196,7 +206,7 @@ def model_from_control_polygon(pts: np.ndarray, clr: np.ndarray, pipe_radius: fl
     if n:
         y0 = normals[0]
     else:
-        y0 = _any_perpendicular(t0)
+        y0 = any_perpendicular(t0)
     rotations = np.zeros(n + 1)
     nprev = y0
     for i in range(n):
@@ -208,24 +218,14 @@ def model_from_control_polygon(pts: np.ndarray, clr: np.ndarray, pipe_radius: fl
                      float(pipe_radius))
 
 
-def _any_perpendicular(t: np.ndarray) -> np.ndarray:
-    """A deterministic unit vector ⟂ t (used only when no bend fixes the frame)."""
-    e = np.eye(3)[int(np.argmin(np.abs(t)))]
-    v = e - np.dot(e, t) * t
-    return v / np.linalg.norm(v)
-
-
 def frame_quaternion(frame: np.ndarray) -> list[float]:
-    x, y, z, w = Rotation.from_matrix(frame).as_quat()
-    q = np.array([w, x, y, z])
-    if q[0] < 0:
-        q = -q
-    return [float(v) for v in q]
+    """``[w, x, y, z]`` (w ≥ 0) of the rotation that maps the world axes onto ``frame``'s columns."""
+    return [float(v) for v in quaternion(Rotation.from_matrix(frame), positive_w=True)]
 
 
 def quaternion_frame(q) -> np.ndarray:
-    w, x, y, z = q
-    return Rotation.from_quat([x, y, z, w]).as_matrix()
+    """The frame (columns x, y, z) of a ``[w, x, y, z]`` quaternion."""
+    return rotation(q).as_matrix()
 
 
 # --- distances ------------------------------------------------------------------------------
@@ -368,7 +368,7 @@ def tube_mesh_arrays(model: TubeModel, ring: int = 32, step: float | None = None
     for i in range(len(c)):
         u = u - np.dot(u, t[i]) * t[i]
         nu = np.linalg.norm(u)
-        u = u / nu if nu > 1e-12 else _any_perpendicular(t[i])
+        u = u / nu if nu > 1e-12 else any_perpendicular(t[i])
         frames.append((u, np.cross(t[i], u)))
     th = np.linspace(0, TWO_PI, ring, endpoint=False)
     U = np.array([f[0] for f in frames]); V = np.array([f[1] for f in frames])

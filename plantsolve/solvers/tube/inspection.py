@@ -16,8 +16,11 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_angle
+
 from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow
 
+from plantsolve.solvers.tube.lra import model_from_rows, model_rows
 from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, closest_points, distance_frames, reverse_model,
                        sample_centreline, spine_distance)
 
@@ -25,27 +28,8 @@ from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, closest_po
 QUICK_NFEV = 15  # alignment steps that decide the walking direction
 
 
-def model_from_rows(rows: list[LraRow], pipe_radius: float) -> TubeModel:
-    n = len(rows) - 1
-    return TubeModel(np.zeros(3), np.eye(3), np.array([r.length for r in rows], float),
-                     np.radians([r.rotation for r in rows]), np.radians([r.angle for r in rows[:n]]),
-                     np.array([r.bend_radius for r in rows[:n]], float), float(pipe_radius))
-
-
-def _rotvec_matrix(w: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a rotation vector (Rodrigues; scipy's Rotation costs ~25 µs a call)."""
-    th2 = float(w @ w)
-    if th2 < 1e-12:  # series to second order in θ
-        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
-    else:
-        th = np.sqrt(th2)
-        a, b = np.sin(th) / th, (1.0 - np.cos(th)) / th2
-    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    return np.eye(3) + a * K + b * (K @ K)
-
-
-def _wrap_deg(a: float) -> float:
-    return float((a + 180.0) % 360.0 - 180.0)
+def wrap_degrees(a: float) -> float:
+    return float(wrap_angle(a, 360.0))
 
 
 def _resample(pts: np.ndarray, m: int) -> np.ndarray:
@@ -63,11 +47,7 @@ def align(measured: TubeModel, nominal: TubeModel,
     qm, _ = sample_centreline(measured, step)
     qn, _ = sample_centreline(nominal, step)
     a, b = _resample(qn, 200), _resample(qm, 200)
-    ca, cb = a.mean(0), b.mean(0)
-    U, _, Vt = np.linalg.svd((a - ca).T @ (b - cb))
-    D = np.diag([1, 1, np.sign(np.linalg.det(Vt.T @ U.T))])
-    R0 = Vt.T @ D @ U.T
-    t0 = cb - R0 @ ca
+    R0, t0, _ = kabsch(a, b)
     sp_n = build_spine(nominal)
     scale = np.r_[np.full(3, 1.0), np.full(3, step)]
     frames = distance_frames(sp_n)
@@ -83,7 +63,7 @@ def align(measured: TubeModel, nominal: TubeModel,
         key = x.tobytes()
         if key not in cache:
             cache.clear()
-            M = (_rotvec_matrix(x[:3]) @ R0).T
+            M = (rotvec_matrix(x[:3]) @ R0).T
             u = qm - (t0 + x[3:])
             local = u @ M.T  # R^T (q − t)
             d, idx = spine_distance(local, sp_n, frames=frames)
@@ -91,7 +71,7 @@ def align(measured: TubeModel, nominal: TubeModel,
             e /= np.maximum(d, 1e-300)[:, None]
             J = np.empty((len(qm), 6))
             for j in range(3):
-                dM = ((_rotvec_matrix(x[:3] + steps[j]) - _rotvec_matrix(x[:3] - steps[j])) @ R0).T / (2 * h)
+                dM = ((rotvec_matrix(x[:3] + steps[j]) - rotvec_matrix(x[:3] - steps[j])) @ R0).T / (2 * h)
                 J[:, j] = np.einsum("nk,nk->n", e, u @ dM.T)
             J[:, 3:] = -e @ M
             cache[key] = (d, J)
@@ -104,13 +84,11 @@ def align(measured: TubeModel, nominal: TubeModel,
         return evaluate(x)[1]
 
     sol = least_squares(res, np.zeros(6), jac=jac, method="lm", x_scale=scale, max_nfev=max_nfev)
-    R = _rotvec_matrix(sol.x[:3]) @ R0
+    R = rotvec_matrix(sol.x[:3]) @ R0
     return R, t0 + sol.x[3:], res(sol.x)
 
 
 def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> Inspection:
-    from plantsolve.solvers.tube.solve import model_rows
-
     nominal = model_from_rows(nominal_rows, measured.pipe_radius)
     best = None
     cands = [(False, measured), (True, reverse_model(measured))]
@@ -137,19 +115,16 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> 
         for i in range(n):
             mr, nr = meas_rows[i], nominal_rows[i]
             bends.append(BendDeviation(bend=i + 1, angle=mr.angle - nr.angle,
-                                       rotation=_wrap_deg(mr.rotation - nr.rotation) if i else 0.0,
+                                       rotation=wrap_degrees(mr.rotation - nr.rotation) if i else 0.0,
                                        length=mr.length - nr.length, bend_radius=mr.bend_radius - nr.bend_radius))
             ang = nr.angle - damping * (mr.angle - nr.angle)
-            rot = _wrap_deg(nr.rotation - damping * _wrap_deg(mr.rotation - nr.rotation)) if i else 0.0
+            rot = wrap_degrees(nr.rotation - damping * wrap_degrees(mr.rotation - nr.rotation)) if i else 0.0
             corrected[i] = LraRow(length=max(nr.length - damping * (mr.length - nr.length), 0.0), rotation=rot,
                                   angle=float(np.clip(ang, 0.0, 359.999)), bend_radius=nr.bend_radius)
         last_length = meas_rows[n].length - nominal_rows[n].length
         corrected[n] = LraRow(length=max(nominal_rows[n].length - damping * last_length, 0.0), rotation=0.0,
                               angle=0.0, bend_radius=0.0)
-    q = Rotation.from_matrix(R).as_quat()
-    quat = [float(q[3]), float(q[0]), float(q[1]), float(q[2])]
-    if quat[0] < 0:
-        quat = [-v for v in quat]
+    quat = [float(v) for v in quaternion(Rotation.from_matrix(R), positive_w=True)]
     return Inspection(matched=matched, reversed=reversed_, measured_lra=meas_rows, bends=bends,
                       last_length=last_length, sheath_deviation=float(d.max()),
                       sheath_rms=float(np.sqrt(np.mean(d ** 2))),

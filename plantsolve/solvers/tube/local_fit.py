@@ -28,7 +28,7 @@ class LocalFits:
     ok: np.ndarray  # (M,) solvable fit
 
 
-def _weights(d: np.ndarray, h: np.ndarray | float) -> np.ndarray:
+def mls_weights(d: np.ndarray, h: np.ndarray | float) -> np.ndarray:
     """Wendland-like monotone weight with support [0, h]."""
     u = np.clip(d / h, 0.0, 1.0)
     return (1.0 - u * u) ** 2
@@ -110,7 +110,7 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
 
 def fit_at(tree: cKDTree, pts: np.ndarray, probes: np.ndarray, h: float, k: int = 96) -> LocalFits:
     nb, d, valid = neighbourhoods(tree, pts, probes, h, k)
-    w = np.where(valid, _weights(np.where(valid, d, h), h), 0.0)
+    w = np.where(valid, mls_weights(np.where(valid, d, h), h), 0.0)
     return fit_quadrics(nb, w, probes)
 
 
@@ -118,7 +118,7 @@ def knn_fit(tree: cKDTree, pts: np.ndarray, probes: np.ndarray, k: int = 40) -> 
     """Scale-free first pass: support = distance to the k-th neighbour."""
     d, idx = tree.query(probes, k=min(k, len(pts)))
     h = d[:, -1:] * 1.0001 + 1e-300
-    w = _weights(d, h)
+    w = mls_weights(d, h)
     return fit_quadrics(pts[idx], w, probes)
 
 

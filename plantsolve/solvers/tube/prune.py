@@ -13,11 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from plantsolve.solvers.tube.geometry import TubeModel, _rotate_about
-
-
-def _wrap(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
+from plantsolve.solvers.geometry import rotate_about, wrap_angle
+from plantsolve.solvers.tube.geometry import TubeModel
 
 
 def without_bend(model: TubeModel, k: int) -> TubeModel:
@@ -29,12 +26,12 @@ def without_bend(model: TubeModel, k: int) -> TubeModel:
     m.lengths = np.concatenate([L[:k], [joined], L[k + 2:]])
     rots = m.rotations.copy()
     if k + 1 < n:
-        rots[k + 1] = _wrap(rots[k + 1] + rots[k])
+        rots[k + 1] = wrap_angle(rots[k + 1] + rots[k])
     rots = np.delete(rots, k)
     if k == 0 and n > 1:
         # the start frame carries the first bend plane: turn it to the new first bend
         x = m.frame[:, 0]
-        y = _rotate_about(m.frame[:, 1], x, rots[0])
+        y = rotate_about(m.frame[:, 1], x, rots[0])
         m.frame = np.column_stack([x, y, np.cross(x, y)])
         rots[0] = 0.0
     if n == 1:
@@ -53,7 +50,7 @@ def merged(model: TubeModel, k: int) -> TubeModel:
     m.lengths = np.delete(m.lengths, k + 1)
     rots = m.rotations.copy()
     if k + 2 < m.n_bends:
-        rots[k + 2] = _wrap(rots[k + 2] + rots[k + 1])  # keep the later bend planes in place
+        rots[k + 2] = wrap_angle(rots[k + 2] + rots[k + 1])  # keep the later bend planes in place
     m.rotations = np.delete(rots, k + 1)
     m.angles = np.concatenate([m.angles[:k], [min(a, 2 * np.pi - 1e-3)], m.angles[k + 2:]])
     m.radii = np.concatenate([m.radii[:k], [R], m.radii[k + 2:]])
@@ -67,13 +64,13 @@ def candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]
     # "touching": joined by a straight shorter than half a pipe radius (or ε)
     touching = [k for k in range(n - 1) if model.lengths[k + 1] < max(eps, 0.5 * model.pipe_radius)]
     for k in touching:
-        if abs(_wrap(model.rotations[k + 1])) < np.radians(25):
+        if abs(wrap_angle(model.rotations[k + 1])) < np.radians(25):
             out.append(("merge", k, merged(model, k)))
     small = [int(k) for k in np.argsort(model.angles) if model.angles[k] < np.radians(20)]
     for k in small:
         out.append(("remove", k, without_bend(model, k)))
     for k in touching:
-        if abs(_wrap(model.rotations[k + 1])) >= np.radians(25):
+        if abs(wrap_angle(model.rotations[k + 1])) >= np.radians(25):
             out.append(("merge", k, merged(model, k)))
     near = sorted({k for t in touching for k in (t, t + 1)} - set(small), key=lambda k: model.angles[k])
     for k in near:

@@ -1,18 +1,27 @@
-"""The whole reconstruction: stages 1–6 of issue 4, in order, with progress reports."""
+"""The whole reconstruction, stage by stage as the paper runs it, with progress reports:
+
+local surface fits (§2, pipe radius §3.1) → MLS spine (§3) → polygonal curve (§3, §4.5) →
+arc-line splines (§4, Algorithm 1) → least squares on all samples in LRA parameters (§6), with
+the number of bends chosen by the data → canonical direction → outliers and residuals (§7) →
+the result in LRA form (§5.3), and the inspection against a nominal LRA when one is given.
+"""
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.tube import LraRow, Outliers, Residuals, Segment, SegmentQuality, TubeRequest, TubeResult
+from plantsolve.schemas.tube import (Outliers, Residuals, Segment, SegmentQuality, TubeOptions, TubeRequest,
+                                     TubeResult)
 from plantsolve.solvers.base import Progress, SolverError, no_progress
-
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
-from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model)
+from plantsolve.solvers.tube.geometry import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
+from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.upload import request_points
 from plantsolve.solvers.tube.validation import check_input
 
@@ -26,23 +35,59 @@ def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
     return np.arange(n) if n <= m else np.sort(rng.choice(n, m, replace=False))
 
 
-def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
-    t_start = time.perf_counter()
-    timings: dict[str, float] = {}
-    warnings: list[Diagnostic] = []
-    opts = request.options
-    check_input(request)
-    pts_in = request_points(request)
-    rng = np.random.default_rng(opts.seed)
-    # canonical order: the result must not depend on the order of the input samples
-    order = np.lexsort(pts_in.T[::-1])
-    pts = pts_in[order]
+@dataclass
+class LocalFits:
+    """Stage 1: the working samples, the probes and their local surface fits."""
+
+    work: np.ndarray
+    tree: cKDTree
+    probes: np.ndarray
+    probe_idx: np.ndarray
+    fits: local_fit.LocalFits
+    labels: np.ndarray  # 0 reliable, 1 few neighbours, 2 curvature, 3 fit residual (§7)
+    pipe_radius: float
+    sigma_surface: float
+
+
+@dataclass
+class SpineSamples:
+    """Stage 2: seeds projected onto the spine."""
+
+    result: spine.SpineCloud
+    seed_idx: np.ndarray
+    pipe_radius: float
+
+
+@dataclass
+class PolygonalCurve:
+    """Stage 3: the spine as a polyline, its noise, the tolerance ε and the simplified polygon."""
+
+    poly: np.ndarray
+    method: str
+    sigma_spine: float
+    eps: float
+    simplified: np.ndarray
+
+
+@dataclass
+class LeastSquaresFit:
+    """Stage 5: the fitted model with its residuals on every sample."""
+
+    model: TubeModel
+    eps_used: float
+    info: dict
+    threshold: float
+    inlier: np.ndarray
+    residuals: np.ndarray
+    segment: np.ndarray
+    changes: list = field(default_factory=list)
+
+
+def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Generator) -> LocalFits:
+    """§2 (2.1 local polynomial surface approximation, 2.2 shape operator) on a working subset,
+    the pipe radius from the curvatures (§3.1), and the §7 flags of unreliable fits."""
     N = len(pts)
     scale0 = float(np.linalg.norm(pts.max(0) - pts.min(0)))
-
-    # ---- stage 1: local polynomial fits -------------------------------------------------
-    progress(0.02, "local polynomial fits")
-    t0 = time.perf_counter()
     perm = rng.permutation(N)
     work_idx = perm[:WORK_MAX]
     work = pts[work_idx]
@@ -84,34 +129,37 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
             rp = float(np.median(1.0 / np.maximum(fits.kmax[good], 1e-300)))
     labels = local_fit.classify(fits, rp)
     sigma_surface = float(np.median(fits.sigma[labels == 0])) if (labels == 0).any() else 0.0
-    timings["local_fit"] = time.perf_counter() - t0
-    progress(0.15, "MLS spine projection")
+    return LocalFits(work, tree, probes, probe_idx, fits, labels, rp, sigma_surface)
 
-    # ---- stage 2: MLS spine -------------------------------------------------------------
-    t0 = time.perf_counter()
-    seeds_mask = labels == 0
+
+def mls_spine(lf: LocalFits, opts: TubeOptions) -> SpineSamples:
+    """§3: every reliable seed projected onto the spine by a moving-least-squares cylinder fit
+    (neighbourhood §3.2, tangent §3.3); the pipe radius re-estimated from the fits."""
+    rp = lf.pipe_radius
+    seeds_mask = lf.labels == 0
     if seeds_mask.sum() < 20:
         raise SolverError("spine", "too few reliable surface samples to project onto the spine",
                           {"reliable": int(seeds_mask.sum())})
-    work2, tree2 = work, tree
-    cnt2 = np.median(tree.query_ball_point((probes - rp * fits.normal)[:300], 1.2 * rp, return_length=True))
+    work2, tree2 = lf.work, lf.tree
+    cnt2 = np.median(lf.tree.query_ball_point((lf.probes - rp * lf.fits.normal)[:300], 1.2 * rp, return_length=True))
     if cnt2 > 150:
-        keep = max(int(len(work) * 150 / cnt2), 2000)
-        work2 = work[:keep]
+        keep = max(int(len(lf.work) * 150 / cnt2), 2000)
+        work2 = lf.work[:keep]
         tree2 = cKDTree(work2)
-    sc = spine.mls_spine(tree2, work2, probes[seeds_mask], fits.normal[seeds_mask], fits.dir_min[seeds_mask],
-                         rp, free_radius=opts.pipe_radius is None, k=160)
+    sc = spine.mls_spine(tree2, work2, lf.probes[seeds_mask], lf.fits.normal[seeds_mask],
+                         lf.fits.dir_min[seeds_mask], rp, free_radius=opts.pipe_radius is None, k=160)
     if sc.ok.sum() < 10:
         raise SolverError("spine", "the MLS spine projection failed for almost all samples", {})
     if opts.pipe_radius is None:
         rp = float(np.median(sc.radius[sc.ok]))
-    seed_idx = probe_idx[seeds_mask]
-    timings["spine"] = time.perf_counter() - t0
-    progress(0.4, "curve reconstruction")
+    return SpineSamples(sc, lf.probe_idx[seeds_mask], rp)
 
-    # ---- stage 3: polygonal curve -------------------------------------------------------
-    t0 = time.perf_counter()
-    spine_pts = sc.points[sc.ok]
+
+def polygonal_curve(ss: SpineSamples, opts: TubeOptions, warnings: list[Diagnostic]) -> PolygonalCurve:
+    """§3 (curve reconstruction from the spine samples: thinning, NN-Crust) and §4.5
+    (preprocessing: the polygon simplified within a fraction of ε before Algorithm 1)."""
+    rp = ss.pipe_radius
+    spine_pts = ss.result.points[ss.result.ok]
     extent = float(np.linalg.norm(spine_pts.max(0) - spine_pts.min(0)))
     spacing = max(0.5 * rp, extent / 400.0)
     thinned = curve.thin(spine_pts, spacing)
@@ -127,14 +175,15 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     # a finer simplification than ε keeps the chord tangent estimates close to the curve
     # where two bends in different planes meet (§4.5 leaves the simplification tolerance open)
     simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps)
-    timings["curve"] = time.perf_counter() - t0
-    progress(0.5, "arc-line spline")
+    return PolygonalCurve(poly, poly_method, sigma_spine, eps, simp)
 
-    # ---- stage 4: arc-line spline -------------------------------------------------------
-    # Without a user tolerance, ε is not known well (the spine noise is only estimated), so
-    # Algorithm 1 runs for ε, 1.5ε and 2ε and stage 5 keeps the model with the fewest bends
-    # that fits the samples as well as the best one.
-    t0 = time.perf_counter()
+
+def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
+                       warnings: list[Diagnostic]) -> list[tuple[float, TubeModel]]:
+    """§4, Algorithm 1: the G1 arc-line spline with the fewest segments within ε. Without a
+    user tolerance ε is only estimated, so it runs for ε, 1.5ε and 2ε and the least-squares
+    stage keeps the model with the fewest bends that fits the samples as well as the best."""
+    eps, poly = pc.eps, pc.poly
     inits: list[tuple[float, TubeModel]] = []
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
     for f in factors:
@@ -158,13 +207,16 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                           {"tolerance": eps, "last_tried": eps_used})
     for _, mdl in inits:
         mdl.pipe_radius = rp
-    n_bends_initial = [mdl.n_bends for _, mdl in inits]
-    timings["arcline"] = time.perf_counter() - t0
-    progress(0.55, "least-squares fit")
+    return inits
 
-    # ---- stage 5: least squares on all inliers -------------------------------------------
-    # early rounds and bend pruning use a subsample, the final round every sample
-    t0 = time.perf_counter()
+
+def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp: float, sigma_surface: float,
+                      opts: TubeOptions, rng: np.random.Generator, progress: Progress,
+                      warnings: list[Diagnostic]) -> LeastSquaresFit:
+    """§6, least-squares distance fitting of the tube surface to the samples in LRA parameters.
+    Early rounds and the choice of the number of bends (``prune``) use subsamples, the final
+    round every sample; each round re-assigns samples to segments and re-fits the end straights."""
+    N = len(pts)
     if opts.bend_radius:
         for _, mdl in inits:
             mdl.radii = np.full(mdl.n_bends, float(opts.bend_radius))
@@ -238,22 +290,26 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
                                    "limit; the result is the best found.", details=lm_info))
-    timings["least_squares"] = time.perf_counter() - t0
+    return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes)
 
-    # canonical direction: start at the end with the longer straight (ties: larger first bend)
-    rev = reverse_model(model)
-    if _prefer(rev, model, eps_used):
-        model = rev
-        res_all, seg_all = fit.assign(model, pts, 0.0)
 
-    # ---- stage 6: report ----------------------------------------------------------------
-    progress(0.97, "report")
+def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
+    """Start at the end with the longer straight (ties: the larger first bend), so that the
+    same tube gives the same LRA whichever way the scan was walked."""
+    rev = reverse_model(ls.model)
+    if _prefer(rev, ls.model, ls.eps_used):
+        ls.model = rev
+        ls.residuals, ls.segment = fit.assign(rev, pts, 0.0)
+
+
+def outlier_report(ls: LeastSquaresFit, lf: LocalFits, ss: SpineSamples, order: np.ndarray) -> Outliers:
+    """§7: every sample left out of the final fit, in input order, with the stage that flagged
+    it (local fit, spine projection) or ``residual``."""
+    N = len(order)
     reasons_sorted = np.full(N, "residual", dtype=object)
-    flagged_local = probe_idx[labels != 0]
-    flagged_proj = seed_idx[~sc.ok]
-    reasons_sorted[flagged_local] = "local_fit"
-    reasons_sorted[flagged_proj] = "spine_projection"
-    out_sorted = np.flatnonzero(~inlier)
+    reasons_sorted[lf.probe_idx[lf.labels != 0]] = "local_fit"
+    reasons_sorted[ss.seed_idx[~ss.result.ok]] = "spine_projection"
+    out_sorted = np.flatnonzero(~ls.inlier)
     out_orig = order[out_sorted]
     srt = np.argsort(out_orig)
     out_idx = out_orig[srt]
@@ -261,46 +317,96 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     by_reason: dict[str, int] = {}
     for r in out_reason:
         by_reason[r] = by_reason.get(r, 0) + 1
-    absr = np.abs(res_all[inlier])
-    residuals = Residuals(count=int(inlier.sum()), median=float(np.median(absr)), p95=float(np.percentile(absr, 95)),
+    return Outliers(count=int(len(out_idx)), indices=[int(i) for i in out_idx],
+                    reasons=[str(r) for r in out_reason], by_reason=by_reason)
+
+
+def residual_summary(ls: LeastSquaresFit) -> tuple[Residuals, list[SegmentQuality]]:
+    """Distances of the inliers to the fitted surface, overall and per segment."""
+    absr = np.abs(ls.residuals[ls.inlier])
+    residuals = Residuals(count=int(ls.inlier.sum()), median=float(np.median(absr)), p95=float(np.percentile(absr, 95)),
                           max=float(absr.max()), rms=float(np.sqrt(np.mean(absr ** 2))))
-    sp = build_spine(model)
+    sp = build_spine(ls.model)
     quality = []
     for k in range(len(sp.kind)):
-        m = inlier & (seg_all == k)
-        a = np.abs(res_all[m])
+        m = ls.inlier & (ls.segment == k)
+        a = np.abs(ls.residuals[m])
         quality.append(SegmentQuality(index=k, type="arc" if sp.kind[k] else "line", count=int(m.sum()),
                                       median=float(np.median(a)) if len(a) else 0.0,
                                       rms=float(np.sqrt(np.mean(a ** 2))) if len(a) else 0.0,
                                       max=float(a.max()) if len(a) else 0.0))
-    if len(out_idx) > 0.1 * N:
-        warnings.append(Diagnostic(code="many_outliers", message=f"{len(out_idx)} of {N} samples were discarded as "
-                                   "outliers.", details={"count": int(len(out_idx))}))
-    if sigma_surface > 0 and residuals.median > 3 * sigma_surface + 0.01 * rp:
+    return residuals, quality
+
+
+def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    warnings: list[Diagnostic] = []
+    opts = request.options
+    check_input(request)
+    pts_in = request_points(request)
+    rng = np.random.default_rng(opts.seed)
+    # canonical order: the result must not depend on the order of the input samples
+    order = np.lexsort(pts_in.T[::-1])
+    pts = pts_in[order]
+    N = len(pts)
+
+    progress(0.02, "local polynomial fits")
+    t0 = time.perf_counter()
+    lf = local_surface_fits(pts, opts, rng)
+    timings["local_fit"] = time.perf_counter() - t0
+
+    progress(0.15, "MLS spine projection")
+    t0 = time.perf_counter()
+    ss = mls_spine(lf, opts)
+    rp = ss.pipe_radius
+    timings["spine"] = time.perf_counter() - t0
+
+    progress(0.4, "curve reconstruction")
+    t0 = time.perf_counter()
+    pc = polygonal_curve(ss, opts, warnings)
+    timings["curve"] = time.perf_counter() - t0
+
+    progress(0.5, "arc-line spline")
+    t0 = time.perf_counter()
+    inits = arcline_candidates(pc, rp, opts, warnings)
+    n_bends_initial = [mdl.n_bends for _, mdl in inits]
+    timings["arcline"] = time.perf_counter() - t0
+
+    progress(0.55, "least-squares fit")
+    t0 = time.perf_counter()
+    ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings)
+    timings["least_squares"] = time.perf_counter() - t0
+    canonical_direction(ls, pts)
+
+    progress(0.97, "report")
+    outliers = outlier_report(ls, lf, ss, order)
+    residuals, quality = residual_summary(ls)
+    if outliers.count > 0.1 * N:
+        warnings.append(Diagnostic(code="many_outliers", message=f"{outliers.count} of {N} samples were discarded as "
+                                   "outliers.", details={"count": int(outliers.count)}))
+    if lf.sigma_surface > 0 and residuals.median > 3 * lf.sigma_surface + 0.01 * rp:
         warnings.append(Diagnostic(code="poor_fit", message="The median residual is well above the estimated scan "
                                    "noise: the tube may not be a pure arc-line pipe surface.",
-                                   details={"median": residuals.median, "noise": sigma_surface}))
+                                   details={"median": residuals.median, "noise": lf.sigma_surface}))
     timings["total"] = time.perf_counter() - t_start
+    labels, fits = lf.labels, lf.fits
     details = {
-        "points": N, "working_samples": int(len(work)), "probes": int(n_probes),
+        "points": N, "working_samples": int(len(lf.work)), "probes": int(len(lf.probes)),
         "pipe_radius_stage1": float(np.median(1.0 / np.maximum(fits.kmax[labels == 0], 1e-300))) if (labels == 0).any() else None,
-        "noise_sigma_estimate": sigma_surface, "spine_noise": sigma_spine,
+        "noise_sigma_estimate": lf.sigma_surface, "spine_noise": pc.sigma_spine,
         "stage1_flags": {"few_neighbours": int((labels == 1).sum()), "curvature": int((labels == 2).sum()),
                          "fit_residual": int((labels == 3).sum())},
-        "stage2_flags": {"projection_distance": int((~sc.ok).sum())},
-        "polyline": {"method": poly_method, "vertices": int(len(poly)), "simplified": int(len(simp))},
-        "bends_initial": n_bends_initial, "pruned": changes, "least_squares": lm_info, "timings_s": timings,
-        "outlier_threshold": float(thr),
+        "stage2_flags": {"projection_distance": int((~ss.result.ok).sum())},
+        "polyline": {"method": pc.method, "vertices": int(len(pc.poly)), "simplified": int(len(pc.simplified))},
+        "bends_initial": n_bends_initial, "pruned": ls.changes, "least_squares": ls.info, "timings_s": timings,
+        "outlier_threshold": float(ls.threshold),
     }
-    report = Report(status="warning" if warnings else "ok", message=f"{model.n_bends} bends reconstructed.",
+    report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",
                     warnings=warnings, details=details)
-    result = result_from_model(model, eps_used, request.units, residuals,
-                               Outliers(count=int(len(out_idx)), indices=[int(i) for i in out_idx],
-                                        reasons=[str(r) for r in out_reason], by_reason=by_reason),
-                               quality, report)
+    result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report)
     if opts.nominal:
-        from plantsolve.solvers.tube.inspection import inspect
-        result.inspection = inspect(model, opts.nominal, opts.damping)
+        result.inspection = inspect(ls.model, opts.nominal, opts.damping)
     progress(1.0, "done")
     return result
 
@@ -331,17 +437,6 @@ def _dist_to_polyline(p: np.ndarray, poly: np.ndarray) -> np.ndarray:
         t = np.clip(((p - A) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0, 1)
         best = np.minimum(best, np.linalg.norm(p - A - t[:, None] * ab, axis=1))
     return best
-
-
-def model_rows(model: TubeModel) -> list[LraRow]:
-    n = model.n_bends
-    rows = []
-    for i in range(n + 1):
-        rot = 0.0 if i in (0, n) else float(np.degrees(np.arctan2(np.sin(model.rotations[i]), np.cos(model.rotations[i]))))
-        rows.append(LraRow(length=max(float(model.lengths[i]), 0.0), rotation=rot,
-                           angle=float(np.degrees(model.angles[i])) if i < n else 0.0,
-                           bend_radius=float(model.radii[i]) if i < n else 0.0))
-    return rows
 
 
 def segments_of(model: TubeModel) -> list[Segment]:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from plantsolve.solvers.tube.local_fit import _weights, neighbourhoods
+from plantsolve.solvers.tube.local_fit import mls_weights, neighbourhoods
 
 
 @dataclass
@@ -106,7 +106,7 @@ def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.nda
             r = np.full(len(seeds), rp)
         h = support * rp
         nb, d, valid = neighbourhoods(tree, pts, x, h, k)
-        w = np.where(valid, _weights(np.where(valid, d, h), h), 0.0)
+        w = np.where(valid, mls_weights(np.where(valid, d, h), h), 0.0)
         x_new, t, r, rms = fit_cylinders(nb, w, x, t, r, free, robust_scale=0.1 * rp)
         # MLS: project the current point onto the axis of its best cylinder
         x = x_new + np.einsum("mi,mi->m", x - x_new, t)[:, None] * t

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import binascii
 import io
 import json
 import re
@@ -10,17 +11,49 @@ import re
 import numpy as np
 from pydantic import ValidationError
 
-from plantsolve.schemas.tube import NpyPoints, TubeRequest, decode_npy_points
-from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.schemas.tube import MAX_POINTS, NpyPoints, TubeRequest
+from plantsolve.solvers.base import FieldError, InputRejected, reject
 
 UPLOAD_EXTENSIONS = (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
 INLINE_LIST_MAX = 20_000  # larger uploads travel inside the request as base64 NPY
 
 
 def request_points(request: TubeRequest) -> np.ndarray:
-    if isinstance(request.points, NpyPoints):
-        return decode_npy_points(request.points.npy_base64)
-    return np.asarray(request.points, dtype=np.float64).reshape(-1, 3)
+    """The samples of a request as an (N, 3) float64 array, decoded once per request object
+    (checks, solve and artifacts share it; read-only so that no stage edits another's input).
+    A bad NPY payload raises ValueError with the reason."""
+    cached = request._points_array
+    if cached is None:
+        if isinstance(request.points, NpyPoints):
+            cached = decode_npy_points(request.points.npy_base64)
+        else:
+            cached = np.asarray(request.points, dtype=np.float64).reshape(-1, 3)
+        cached.setflags(write=False)
+        request._points_array = cached
+    return cached
+
+
+def decode_npy_points(value: str) -> np.ndarray:
+    """Decode a base64 NPY string into an (N, 3) float64 array; ValueError with a reason."""
+    try:
+        raw = base64.b64decode(value, validate=False)
+    except (binascii.Error, ValueError) as exc:
+        raise ValueError(f"not valid base64: {exc}") from None
+    try:
+        arr = np.load(io.BytesIO(raw), allow_pickle=False)
+    except Exception as exc:  # numpy raises several types for corrupt headers
+        raise ValueError(f"not a readable NPY array: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"NPY array must have shape (N, 3), got {arr.shape}")
+    if not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(f"NPY array must be numeric, got dtype {arr.dtype}")
+    if arr.shape[0] > MAX_POINTS:
+        raise ValueError(f"at most {MAX_POINTS} points are accepted, got {arr.shape[0]}")
+    arr = np.asarray(arr, dtype=np.float64)
+    if not np.isfinite(arr).all():
+        bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+        raise ValueError(f"NPY array holds non-finite values (first at row {bad})")
+    return arr
 
 
 def points_field(pts: np.ndarray):
@@ -32,24 +65,20 @@ def points_field(pts: np.ndarray):
     return {"npy_base64": base64.b64encode(buf.getvalue()).decode("ascii")}
 
 
-def _reject(msg: str) -> InputRejected:
-    return InputRejected([FieldError(loc=("file",), msg=msg)])
-
-
 def _read_ply(content: bytes) -> np.ndarray:
     import trimesh
 
     try:
         geom = trimesh.load(io.BytesIO(content), file_type="ply", process=False)
     except Exception as exc:  # trimesh raises many types on corrupt files
-        raise _reject(f"unreadable PLY file: {exc}") from None
+        raise reject(f"unreadable PLY file: {exc}") from None
     if isinstance(geom, trimesh.Scene):
         parts = [g.vertices for g in geom.geometry.values() if hasattr(g, "vertices")]
         verts = np.vstack(parts) if parts else np.zeros((0, 3))
     else:
         verts = getattr(geom, "vertices", None)
         if verts is None:
-            raise _reject("PLY file holds no vertices")
+            raise reject("PLY file holds no vertices")
     return np.asarray(verts, dtype=np.float64)
 
 
@@ -60,7 +89,7 @@ def _read_text(content: bytes) -> np.ndarray:
     try:
         text = content.decode("utf-8-sig")
     except UnicodeDecodeError:
-        raise _reject("text file is not UTF-8") from None
+        raise reject("text file is not UTF-8") from None
     rows = []
     for lineno, line in enumerate(text.splitlines(), 1):
         s = line.strip()
@@ -72,12 +101,12 @@ def _read_text(content: bytes) -> np.ndarray:
         except ValueError:
             if not rows:  # a header line
                 continue
-            raise _reject(f"line {lineno}: expected numbers 'x y z', got {s[:60]!r}") from None
+            raise reject(f"line {lineno}: expected numbers 'x y z', got {s[:60]!r}") from None
         if len(vals) < 3:
-            raise _reject(f"line {lineno}: expected 3 coordinates, got {len(vals)}")
+            raise reject(f"line {lineno}: expected 3 coordinates, got {len(vals)}")
         rows.append(vals)
     if not rows:
-        raise _reject("no 'x y z' rows found")
+        raise reject("no 'x y z' rows found")
     return np.array(rows, dtype=np.float64)
 
 
@@ -85,9 +114,9 @@ def _read_npy(content: bytes) -> np.ndarray:
     try:
         arr = np.load(io.BytesIO(content), allow_pickle=False)
     except Exception as exc:
-        raise _reject(f"unreadable NPY file: {exc}") from None
+        raise reject(f"unreadable NPY file: {exc}") from None
     if arr.ndim != 2 or arr.shape[1] < 3 or not np.issubdtype(arr.dtype, np.number):
-        raise _reject(f"NPY array must be numeric with shape (N, 3), got {arr.shape} {arr.dtype}")
+        raise reject(f"NPY array must be numeric with shape (N, 3), got {arr.shape} {arr.dtype}")
     return np.asarray(arr[:, :3], dtype=np.float64)
 
 
@@ -96,7 +125,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
     name = (filename or "").lower()
     ext = next((e for e in UPLOAD_EXTENSIONS if name.endswith(e)), None)
     if ext is None:
-        raise _reject(f"unsupported file type {filename!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+        raise reject(f"unsupported file type {filename!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
     units = None
     opts = dict(options or {})
     if "units" in opts:  # tolerate units passed among the options
@@ -105,11 +134,11 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
         try:
             doc = json.loads(content.decode("utf-8-sig"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise _reject(f"invalid JSON: {exc}") from None
+            raise reject(f"invalid JSON: {exc}") from None
         if isinstance(doc, list):
             doc = {"points": doc}
         if not isinstance(doc, dict):
-            raise _reject("JSON must be a request object or a list of [x, y, z]")
+            raise reject("JSON must be a request object or a list of [x, y, z]")
         body = dict(doc)
         body["options"] = {**(body.get("options") or {}), **opts}
         if units:
@@ -118,10 +147,10 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
         reader = {".ply": _read_ply, ".npy": _read_npy}.get(ext, _read_text)
         pts = reader(content)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
-            raise _reject("file holds no 3D points")
+            raise reject("file holds no 3D points")
         if not np.isfinite(pts).all():
             bad = int(np.flatnonzero(~np.isfinite(pts).all(1))[0])
-            raise _reject(f"non-finite coordinate in point {bad}")
+            raise reject(f"non-finite coordinate in point {bad}")
         body = {"points": points_field(pts), "options": opts}
         if units:
             body["units"] = units

@@ -6,6 +6,7 @@ import numpy as np
 
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.tube.upload import request_points
 
 MIN_POINTS = 100
 
@@ -34,8 +35,6 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
 
 def check_input(request: TubeRequest) -> None:
     """Cross-field checks of a :class:`TubeRequest`; raises InputRejected naming the field."""
-    from plantsolve.solvers.tube.upload import request_points
-
     errors: list[FieldError] = []
     try:
         check_points(request_points(request), ("points",))
