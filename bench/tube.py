@@ -3,7 +3,7 @@
     python bench/tube.py           # 40 random tubes + 100k and 1M point runs
     python bench/tube.py --quick   # 12 random tubes + 100k point run
 
-Scan simulator (solvers/tube/simulate.py): one viewpoint, area-correct sampling, Gaussian
+Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
 with pipe radius 1–50 mm, 1–8 bends, bend radius 2–4 r, back-to-back bends, bends under 8°
 and over 180°. Timings and peak memory for large scans run in a fresh subprocess each.
