@@ -353,11 +353,11 @@ def test_end_connection_marker_follows_its_port():
 def test_loops_from_a_rounded_export_close_without_cuts(digits):
     """A PCF prints coordinates rounded, which bends catalogue angles by ~quantum / arm: in loops of
     elbows and tees that makes closure impossible unless the angles are restored (here: 9 loops, CRLF)."""
-    from plantsolve.solvers.alignment.pcf import _generate
+    from plantsolve.solvers.alignment.pcf import generate_pcf
     from plantsolve.solvers.alignment.synthetic import grid_network
 
     req = grid_network(4, 4, valve_every=5, tie_ins=((0, 0),), origin=(1e6, 2e5, 1e4), seed=5)
-    text = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)):.{digits}f}", _generate(req, req)).replace("\n", "\r\n")
+    text = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)):.{digits}f}", generate_pcf(req, req)).replace("\n", "\r\n")
     up = parse_upload("loops.pcf", text.encode(), {"fixed_components": ["ELBOW-1"]})
     assert len(up.connections) == len(req.connections)
     for c in up.components:

@@ -122,3 +122,13 @@ def test_no_import_cycles_and_no_imports_hidden_in_functions():
     cycles = list(nx.simple_cycles(graph))
     assert not cycles, cycles
     assert not hidden, f"plantsolve imports inside functions: {hidden}"
+
+
+def test_no_private_name_is_imported_from_another_module():
+    offenders = []
+    for path in sorted([*PACKAGE.rglob("*.py"), *(REPO / "tests").rglob("*.py"), *(REPO / "bench").rglob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("plantsolve"):
+                offenders += [f"{path.relative_to(REPO)}:{node.lineno} {alias.name}" for alias in node.names
+                              if alias.name.startswith("_") and not alias.name.startswith("__")]
+    assert not offenders, offenders

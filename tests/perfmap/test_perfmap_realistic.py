@@ -18,7 +18,7 @@ from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor
 from plantsolve.solvers.perfmap.performance_map import cross2, distance_to_region, max_efficiency
 from plantsolve.solvers.perfmap.families import curveset_from_fits
-from plantsolve.solvers.perfmap.synthetic import PHI_MAX, THETA_MAX, _data, true_map
+from plantsolve.solvers.perfmap.synthetic import PHI_MAX, THETA_MAX, family_curves, true_map
 
 HEADER = "theta,phi,flow,pressure,efficiency"
 
@@ -157,7 +157,7 @@ def _body(layout, npts=6, xscale=1.0, yscale=1.0, surge=0.0, options=None):
     t = np.linspace(0.0, 1.0, npts)
     B = bernstein(3, t)
     for th, ph, a, b in layout:
-        x_min, x_max, c, d = _data(a, b)
+        x_min, x_max, c, d = family_curves(a, b)
         y = B @ c - surge * np.exp(-8.0 * t)  # surge > 0: a rising surge-side branch
         pos.append({"theta": th, "phi": ph, "flow": ((x_min + t * (x_max - x_min)) * xscale).tolist(),
                     "pressure": (y * yscale).tolist(), "efficiency": (B @ d).tolist()})

@@ -455,7 +455,7 @@ def write_aligned_pcf(request: AlignmentRequest, result: AlignmentResult) -> str
             return _rewrite(request, result)
         except InputRejected:  # a source_pcf that does not belong to this request (edited JSON): start afresh
             pass
-    return _generate(request, result)
+    return generate_pcf(request, result)
 
 
 def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
@@ -542,7 +542,8 @@ def _host_pipe(xyz: np.ndarray, pipes):
     return pipes[k][1] if d[k] <= 2.0 * rad[k] + 1e-9 else None
 
 
-def _generate(request: AlignmentRequest, result: AlignmentResult) -> str:
+def generate_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
+    """A PCF written from the result alone (JSON requests, or a source PCF that does not match)."""
     scale = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 1.0, "ft": 12.0}[request.units]
     unit = "INCH" if request.units in ("in", "ft") else "MM"
     out = ["ISOGEN-FILES ISOGEN.FLS", f"UNITS-BORE {unit}", f"UNITS-CO-ORDS {unit}", "PIPELINE-REFERENCE plantsolve-aligned"]

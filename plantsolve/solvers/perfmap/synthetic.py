@@ -17,7 +17,7 @@ THETA_MAX = 30.0
 PHI_MAX = 60.0
 
 
-def _data(a, b):
+def family_curves(a, b):
     """Curve data at normalised settings (arrays): x_min, x_max, pressure c (.., 4), eta d."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     x_min = 0.30 + 0.20 * a + 0.30 * b
@@ -42,7 +42,7 @@ def request_body(n_theta: int = 4, n_phi: int = 7, n_points: int = 6, noise: flo
     t = np.linspace(0.0, 1.0, n_points)
     for th in np.linspace(0.0, THETA_MAX, n_theta):
         for ph in np.linspace(0.0, PHI_MAX, n_phi):
-            x_min, x_max, c, d = _data(th / THETA_MAX, ph / PHI_MAX)
+            x_min, x_max, c, d = family_curves(th / THETA_MAX, ph / PHI_MAX)
             B = bernstein(3, t)
             y, eta = B @ c, B @ d
             if noise:
@@ -60,9 +60,9 @@ def true_map(gx: np.ndarray, gy: np.ndarray, n_t: int = 20001, chunk: int = 256)
     XX, YY = np.meshgrid(gx, gy)
     X, Y = XX.ravel(), YY.ravel()
     # Affine decomposition f(a, b) = f0 + a fa + b fb of every datum.
-    x0, x1, c0, d0 = _data(0.0, 0.0)
-    xa, xa1, ca, da = (v - w for v, w in zip(_data(1.0, 0.0), (x0, x1, c0, d0)))
-    xb, xb1, cb, db = (v - w for v, w in zip(_data(0.0, 1.0), (x0, x1, c0, d0)))
+    x0, x1, c0, d0 = family_curves(0.0, 0.0)
+    xa, xa1, ca, da = (v - w for v, w in zip(family_curves(1.0, 0.0), (x0, x1, c0, d0)))
+    xb, xb1, cb, db = (v - w for v, w in zip(family_curves(0.0, 1.0), (x0, x1, c0, d0)))
     best = np.full(X.shape, -np.inf)
     bt = np.full(X.shape, np.nan)
     bp = np.full(X.shape, np.nan)
