@@ -1,4 +1,4 @@
-"""Benchmark of the alignment solver (issue 3): both methods side by side.
+"""Benchmark of the alignment solver: both methods side by side.
 
 Scan-like grid networks (every cell a loop, inline valves, two tie-ins at opposite corners,
 plant-scale coordinates around 1e6 mm): pipes perturbed ~2 mm / 0.3 deg, fittings
@@ -7,7 +7,7 @@ plant-scale coordinates around 1e6 mm): pipes perturbed ~2 mm / 0.3 deg, fitting
     python bench/alignment.py            # 100, 1,000 and 10,000 components
     python bench/alignment.py --quick    # 100 and 1,000 components
 
-Targets (issue 3): 1,000 components < 2 s, 10,000 < 30 s, memory linear.
+Targets: 1,000 components < 2 s, 10,000 < 30 s, memory linear.
 """
 
 from __future__ import annotations

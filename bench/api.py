@@ -10,7 +10,7 @@ takes about half the CPU itself and so understates the server. The table says wh
 Submissions run for a fixed time from C connections (each makes a new job; in embedded mode the
 pool runs them meanwhile), then GET /v1/jobs/{id} is read from 1 connection (latency of a
 polling client) and from 8 (throughput), while the backlog of submitted jobs is still running.
-Targets (issue 2): >= 300 submissions/s, p99 status read < 20 ms.
+Targets: >= 300 submissions/s, p99 status read < 20 ms.
 
     python bench/api.py [--quick] [--seconds S] [--concurrency C] [--modes embedded,scaled] [--client wrk|python]
 """

@@ -1,4 +1,4 @@
-"""Benchmark of the perfmap solver (issue 5).
+"""Benchmark of the perfmap solver.
 
     python bench/perfmap.py            # full run
     python bench/perfmap.py --quick    # smaller ground truth, one repetition

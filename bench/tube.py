@@ -1,4 +1,4 @@
-"""Benchmark of the tube solver on simulated single-view laser scans (issue 4).
+"""Benchmark of the tube solver on simulated single-view laser scans.
 
     python bench/tube.py           # 40 random tubes + 100k and 1M point runs
     python bench/tube.py --quick   # 12 random tubes + 100k point run

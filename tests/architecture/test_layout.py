@@ -80,8 +80,9 @@ def test_no_comment_points_outside_the_repository():
     import re
 
     pattern = re.compile(r"\bissue\s*#?\d+|design\.md", re.IGNORECASE)
-    offenders = [f"{p.relative_to(REPO)}:{i}" for p in SOURCES for i, line in enumerate(p.read_text().splitlines(), 1)
-                 if pattern.search(line)]
+    files = [*SOURCES, *(REPO / "tests").rglob("*.py"), *(REPO / "bench").rglob("*.py"), *(REPO / "examples").rglob("*.md")]
+    offenders = [f"{p.relative_to(REPO)}:{i}" for p in files for i, line in enumerate(p.read_text().splitlines(), 1)
+                 if pattern.search(line) and p.name != "test_layout.py"]
     assert not offenders, offenders
 
 

@@ -115,7 +115,7 @@ def test_semantic_rejections_point_at_file_rows(n3_csv):
     errs = _reject("\n".join(pct).encode())
     assert errs[0].loc == ("file", "row", 2, "efficiency") and "divide by 100" in errs[0].msg
     assert len(errs) == 18  # one per setting
-    # the same flow twice with different readings (issue: non-increasing flow) -> the repeat
+    # the same flow twice with different readings (flow must increase) -> the repeat
     dup = list(rows[3])
     dup[3] = "1.2"
     errs = _reject("\n".join(lines + [",".join(dup)]).encode())
