@@ -1,1 +1,1 @@
-"""HTTP: the FastAPI application, auth, submissions, job reads, artifacts, dashboard, CLI."""
+"""HTTP: the FastAPI application, its settings, auth, submissions, kind operations, job reads, artifacts, dashboard."""

@@ -1,8 +1,8 @@
-"""Pure numerics. Each ``solvers/<name>/`` package exposes one public entry
+"""Pure numerics, one package per solver kind, each exporting ``SPEC`` (a
+:class:`plantsolve.solvers.base.SolverSpec`); :mod:`plantsolve.solvers.kinds` lists them.
 
-    solve(request: schemas.<name>.<Name>Request, progress: Progress) -> schemas.<name>.<Name>Result
-
-and optionally ``parse_upload`` (file bytes -> request) and ``render_artifacts``
-(request + result -> files). Nothing here imports FastAPI, Celery or SQLAlchemy, and
+Every package uses the same file names for the same roles (``solve``, ``validation``,
+``upload``, ``artifacts``, ``synthetic``); maths shared by kinds lives once in
+:mod:`plantsolve.solvers.geometry`. Nothing here imports FastAPI, Celery or SQLAlchemy, and
 nothing keeps global state.
 """
