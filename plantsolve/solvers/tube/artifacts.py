@@ -95,14 +95,15 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     ax.set_xlim(mid[0] - span, mid[0] + span); ax.set_ylim(mid[1] - span, mid[1] + span)
     ax.set_zlim(mid[2] - span, mid[2] + span)
     ax.set_title(f"{len(result.lra) - 1} bends, pipe radius {result.pipe_radius:.4g} {result.units}")
-    fig.colorbar(sc, ax=ax, shrink=0.6, label=f"deviation [{result.units}]")
+    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.15, label=f"deviation [{result.units}]")
     ax2 = fig.add_subplot(1, 2, 2)
     inl = ~outlier
     ax2.hist(dev[inl], bins=80, color="steelblue", label="inlier samples")
     ax2.set_xlabel(f"signed distance to surface [{result.units}]")
     ax2.set_ylabel("samples per bin")
+    ax2.set_ylim(top=ax2.get_ylim()[1] * 1.45)  # headroom: the LRA table must not hide bars
     ax2.legend(loc="upper right", fontsize=7)
-    ax2.set_title(f"median |r| {result.residuals.median:.3g}, p95 {result.residuals.p95:.3g}")
+    ax2.set_title(f"median |r| {result.residuals.median:.3g} {result.units}, p95 {result.residuals.p95:.3g} {result.units}")
     txt = "\n".join(f"{i + 1}: L {r.length:.2f}  R {r.rotation:.1f}°  A {r.angle:.2f}°  CLR {r.bend_radius:.2f}"
                     for i, r in enumerate(result.lra[:12]))
     ax2.text(0.02, 0.98, txt, transform=ax2.transAxes, va="top", family="monospace", fontsize=7)
