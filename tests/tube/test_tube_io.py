@@ -173,3 +173,16 @@ def test_progress_is_reported_and_cancellation_propagates(cloud):
     with pytest.raises(Cancelled):
         solve(TubeRequest(points=pts.tolist()), prog)
     assert seen == sorted(seen) and len(seen) >= 4
+
+
+def test_points_are_decoded_once_and_never_stale(cloud):
+    _, pts = cloud
+    npy = {"npy_base64": base64.b64encode(_npy_bytes(pts)).decode()}
+    req = TubeRequest(points=npy)
+    first = request_points(req)
+    assert request_points(req) is first and not first.flags.writeable  # one decode per request
+    assert req == TubeRequest(points=npy)  # the cache does not take part in equality
+    moved = req.model_copy(update={"points": (pts + 1.0).tolist()})
+    np.testing.assert_array_equal(request_points(moved), pts + 1.0)  # a copy with new points decodes again
+    req.points = [[0.0, 0.0, 0.0]] * 3
+    assert request_points(req).shape == (3, 3)

@@ -18,19 +18,36 @@ UPLOAD_EXTENSIONS = (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
 INLINE_LIST_MAX = 20_000  # larger uploads travel inside the request as base64 NPY
 
 
+class _DecodedPoints:
+    """The decoded array of one ``points`` value, kept on the request. It remembers the value it
+    came from (a request copied with other points, or given new ones, decodes again) and is
+    invisible to equality: two requests with the same points compare equal, decoded or not."""
+
+    __slots__ = ("source", "array")
+
+    def __init__(self, source: object, array: np.ndarray):
+        self.source, self.array = source, array
+
+    def __eq__(self, other: object) -> bool:
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+
 def request_points(request: TubeRequest) -> np.ndarray:
     """The samples of a request as an (N, 3) float64 array, decoded once per request object
     (checks, solve and artifacts share it; read-only so that no stage edits another's input).
     A bad NPY payload raises ValueError with the reason."""
     cached = request._points_array
-    if cached is None:
-        if isinstance(request.points, NpyPoints):
-            cached = decode_npy_points(request.points.npy_base64)
-        else:
-            cached = np.asarray(request.points, dtype=np.float64).reshape(-1, 3)
-        cached.setflags(write=False)
-        request._points_array = cached
-    return cached
+    if isinstance(cached, _DecodedPoints) and cached.source is request.points:
+        return cached.array
+    if isinstance(request.points, NpyPoints):
+        array = decode_npy_points(request.points.npy_base64)
+    else:
+        array = np.asarray(request.points, dtype=np.float64).reshape(-1, 3)
+    array.setflags(write=False)
+    request._points_array = _DecodedPoints(request.points, array)
+    return array
 
 
 def decode_npy_points(value: str) -> np.ndarray:
