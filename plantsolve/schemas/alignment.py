@@ -73,11 +73,13 @@ class Connection(StrictModel):
 class AlignmentOptions(StrictModel):
     """Tolerances and method. Unset tolerances come from ``tolerance_profile``."""
 
-    tolerance_profile: Literal["autocad_plant3d", "aveva_e3d", "revit", "custom"] = Field(
-        default="autocad_plant3d",
-        description="Preset tolerances: autocad_plant3d (1e-10 drawing units, 1e-10 rad), aveva_e3d (1 mm, "
-        "0.01 rad), revit (1e-9 ft), custom (1e-10 units, 1e-10 rad unless set). Explicit "
-        "position_tolerance / angle_tolerance override the profile.",
+    tolerance_profile: Literal["auto", "autocad_plant3d", "aveva_e3d", "revit", "custom"] = Field(
+        default="auto",
+        description="Preset tolerances. 'auto' (default): for a PCF, the exporting tool named in the file sets the "
+        "profile and the coordinates' printed precision the rounding floor (differences a rounding of the printed "
+        "digits can cause are not moved); for JSON, 1e-10 units and 1e-10 rad. autocad_plant3d (1e-10 drawing "
+        "units, 1e-10 rad), aveva_e3d (1 mm, 0.01 rad), revit (1e-9 ft, 1e-10 rad), custom (1e-10 units, 1e-10 rad). "
+        "Explicit position_tolerance / angle_tolerance override the profile. The report names what was used.",
     )
     position_tolerance: FiniteFloat | None = Field(
         default=None, gt=0, description="Largest accepted port gap, in the request's units."
@@ -89,7 +91,14 @@ class AlignmentOptions(StrictModel):
         "partner, in degrees (1e-10 rad = 5.73e-9 deg).",
     )
     max_iterations: int = Field(
-        default=4000, ge=1, le=1_000_000, description="Iteration cap of the dual-quaternion method."
+        default=4000, ge=1, le=1_000_000,
+        description="Iteration cap of either method (direct: Gauss-Newton and refinement steps over all cut rounds; "
+        "dual_quaternion: alternating steps). A run stopped by the cap says so in its stop reason.",
+    )
+    anchor: bool = Field(
+        default=True,
+        description="When a connected network has no fixed component, hold one still (a tie_in, else an end flange, "
+        "else its largest component) so the result is reproducible; the report names it.",
     )
     method: Literal["direct", "dual_quaternion"] = Field(
         default="direct",

@@ -7,7 +7,7 @@ import io
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
-from plantsolve.solvers.alignment.pcf import write_aligned_pcf
+from plantsolve.solvers.alignment.pcf_write import write_aligned_pcf
 from plantsolve.solvers.base import Artifact
 
 

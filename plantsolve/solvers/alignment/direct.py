@@ -64,7 +64,8 @@ def _variables(mask: np.ndarray, width: int) -> np.ndarray:
     return var
 
 
-def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: int = 30) -> tuple[np.ndarray, int]:
+def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: int = 30,
+                    budget: int = 10**9) -> tuple[np.ndarray, int]:
     """Rotation of every component such that connected port directions are opposite."""
     n = model.n_comp
     free = ~model.fixed
@@ -84,6 +85,8 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
     use_cost = True
     best, first = (np.inf, q.copy()), np.inf
     for _ in range(max_gn):
+        if steps >= budget:
+            break
         D = qrotate(q[model.port_comp], model.D0)
         ua, ub = D[a], D[b]
         r = ua + ub
@@ -120,7 +123,7 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
         rhs = -np.stack([np.einsum("ij,ij->i", e1, r), np.einsum("ij,ij->i", e2, r)], axis=1).ravel()
         phi = quaternion_to_rotvec(q[free]).ravel()
         g = hdiag * phi if use_cost else np.zeros(nv)
-        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=6)
+        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=min(6, budget - steps))
         steps += k
         dq = rotvec_to_quaternion(x.reshape(-1, 3))
         q[free] = qmul(dq, q[free])
@@ -189,7 +192,8 @@ class JointState:
         return P, D
 
 
-def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: float, max_gn: int = 25) -> tuple[JointState, int]:
+def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: float, max_gn: int = 25,
+                budget: int = 10**9) -> tuple[JointState, int]:
     """Gauss-Newton over all poses and pipe lengths with exact port constraints (see module doc)."""
     n = model.n_comp
     st = JointState(model, q)
@@ -239,6 +243,8 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         if err < best[0]:
             first = err if best[0] == np.inf else first
             best = (err, (st.q.copy(), st.t.copy(), st.L.copy()))
+        if steps >= budget:
+            break
         short = model.is_pipe & free & (st.L < model.min_length * (1 - 1e-12)) & ~locked
         # 1e-14 relative is where float64 Gauss-Newton ends; what is left is snapped (see Model.snap_pos)
         if nv == 0 or (not np.any(short) and (err <= 1e-3 * min(model.pos_tol / pos_scale, model.ang_tol) or err <= 1e-14)):
@@ -337,7 +343,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         Hs = (Ssv @ H @ Ssv / model.lref**2).tocsc()
         As = (A @ Ssv).tocsr()
         y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
-                                    max_iter=8 if use_cost else 30, cache=cache)
+                                    max_iter=min(8 if use_cost else 30, budget - steps), cache=cache)
         x = sv * y
         steps += k
         om = x[(var[fr][:, None] + np.arange(3))]
@@ -352,8 +358,9 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     return st, steps
 
 
-def solve_direct(model: Model, active: np.ndarray, stiffness: float) -> Pose:
-    q, k1 = solve_rotations(model, active, stiffness)
-    st, k2 = solve_joint(model, active, q, stiffness)
+def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9) -> Pose:
+    """Both stages; ``budget`` caps the Gauss-Newton and refinement steps (the pose reached is returned)."""
+    q, k1 = solve_rotations(model, active, stiffness, budget=budget)
+    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0))
     P, D = st.geometry()
     return Pose(q=st.q, P=P, D=D, iterations=k1 + k2)

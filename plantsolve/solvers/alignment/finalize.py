@@ -34,6 +34,7 @@ class Outcome:
     cut_reason: dict[int, str] = field(default_factory=dict)
     cut_errors: dict[int, tuple[float, float]] = field(default_factory=dict)
     extra: dict = field(default_factory=dict)
+    snap: bool = True  # False: the input is returned as it is (already within tolerance)
 
 
 def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -45,6 +46,8 @@ def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.
     D[fixed_ports] = model.D_in[fixed_ports]
     gap, ang = connection_errors(model, out.P, out.D)
     closed = out.active & (gap <= model.snap_pos) & (ang <= model.snap_ang)
+    if not out.snap:
+        return P, D, np.zeros_like(closed)
     a, b = model.conn_a[closed], model.conn_b[closed]
     fa, fb = fixed_ports[a], fixed_ports[b]
     a_first = np.array([model.key[i] <= model.key[j] for i, j in zip(a, b)], dtype=bool)

@@ -292,32 +292,46 @@ def _optimise_clusters(net: Network, model: Model, max_iter: int) -> int:
     return it
 
 
-def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.ndarray, progress: Progress) -> Outcome:
+def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.ndarray, progress: Progress,
+                          may_cut: bool = True) -> Outcome:
+    """The alternating iteration with the paper's explosion cuts, where cuts are justified.
+
+    ``may_cut`` is False when the direct method closed every connection without a cut: the
+    constraints then do not conflict (a tree, or loops that close), so an explosion means the steps
+    were too long, not that a connection is wrong; the run restarts with half the step limit instead
+    of cutting. ``options.max_iterations`` caps all steps of all restarts together; the best state
+    seen is returned when the cap stops the run."""
     active = active.copy()
     reasons: dict[int, str] = {}
     errors: dict[int, tuple[float, float]] = {}
     total = 0
     budget = options.max_iterations
+    shrink = 1.0
+    restarts = 0
+    overall_best = None
     while True:
         net = Network(model, active)
-        total += _optimise_clusters(net, model, min(500, budget))
+        total += _optimise_clusters(net, model, max(min(500, budget - total), 0))
         P, D = net.ports()
         gap, ang = connection_errors(model, P, D)
         g0 = float(np.max(gap[active], initial=0.0))
-        lim_fit = options.step_limit or max(0.5 * g0, 10 * model.pos_tol)
+        lim_fit = shrink * (options.step_limit or max(0.5 * g0, 10 * model.pos_tol))
         lim_pipe = 0.5 * lim_fit
         best = (np.inf, P, D)
         exploded = None
-        stop = "iteration cap reached"
-        for it in range(budget - total):
+        stop = f"iteration cap ({budget}) reached"
+        it = 0
+        for it in range(max(budget - total, 0) + 1):
             impact = float(np.max(gap[active] + ang[active] * model.lref, initial=0.0))
             if impact < best[0]:
                 best = (impact, P, D)
-            if np.all(gap[active] <= model.pos_tol) and np.all(ang[active] <= model.ang_tol):
-                stop = "all connections within tolerance"
+            if np.all(gap[active] <= model.snap_pos) and np.all(ang[active] <= model.snap_ang):
+                stop = f"all connections within tolerance after {total + it} iterations"
                 break
             if np.max(gap[active], initial=0.0) > options.explosion_factor * max(g0, model.pos_tol):
                 exploded = choose_cut(model, active, gap, ang, only_bad=False)
+                break
+            if total + it >= budget:
                 break
             if it % 25 == 0:
                 progress(0.7 + 0.25 * (total + it) / budget, f"dual-quaternion iteration {total + it}")
@@ -326,18 +340,25 @@ def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.nd
             net.step_clusters(P, D, lim_fit)
             P, D = net.ports()
             gap, ang = connection_errors(model, P, D)
-        else:
-            it = budget - total
         total += it
-        if exploded is not None and len(reasons) < options.max_cuts:
+        if overall_best is None or best[0] < overall_best[0]:
+            overall_best = best
+        if exploded is not None and not may_cut and total < budget and restarts < 20:
+            shrink *= 0.5
+            restarts += 1
+            continue
+        if exploded is not None and may_cut and len(reasons) < options.max_cuts:
             active[exploded] = False
             reasons[exploded] = "explosion"
             errors[exploded] = (float(gap[exploded]), float(ang[exploded]))
+            overall_best = None
             continue
         if exploded is not None:
-            stop = f"explosion indicator fired with the cut limit ({options.max_cuts}) reached"
+            stop = (f"explosion indicator fired with the cut limit ({options.max_cuts}) reached" if may_cut else
+                    f"explosion indicator fired after {restarts} restarts with shorter steps")
         break
-    if stop != "all connections within tolerance":
-        _, P, D = best
+    extra = {"step_limit_restarts": restarts} if restarts else {}
+    if not stop.startswith("all connections"):
+        _, P, D = overall_best
     return Outcome(P=P.astype(np.longdouble), D=D, iterations=total, stop_reason=stop, active=active,
-                   cut_reason=reasons, cut_errors=errors)
+                   cut_reason=reasons, cut_errors=errors, extra=extra)

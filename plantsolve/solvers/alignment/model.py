@@ -12,21 +12,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest
-
-TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
-PROFILES = {  # (position tolerance in mm or None = drawing units, value, angle tolerance rad)
-    "autocad_plant3d": (None, 1e-10, 1e-10),
-    "aveva_e3d": ("mm", 1.0, 0.01),
-    "revit": ("ft", 1e-9, 1e-10),
-    "custom": (None, 1e-10, 1e-10),
-}
-
+from plantsolve.solvers.alignment.pcf import profile_tolerances, resolve_pcf_tolerance
+from plantsolve.solvers.base import InputRejected
 
 def resolve_tolerances(request: AlignmentRequest) -> tuple[float, float]:
     """(position tolerance in request units, angle tolerance in radians)."""
     opts = request.options
-    unit, value, ang = PROFILES[opts.tolerance_profile]
-    pos = value if unit is None else value * TO_MM[unit] / TO_MM[request.units]
+    if request.source_pcf is not None:
+        try:
+            return resolve_pcf_tolerance(request.source_pcf, request.units, opts)
+        except InputRejected:  # a source_pcf that does not belong to this request: JSON rules
+            pass
+    profile = "custom" if opts.tolerance_profile == "auto" else opts.tolerance_profile
+    pos, ang = profile_tolerances(profile, request.units)
     if opts.position_tolerance is not None:
         pos = opts.position_tolerance
     if opts.angle_tolerance is not None:

@@ -1,38 +1,46 @@
-"""PCF (ISOGEN Piping Component File) in and out.
+"""PCF (ISOGEN Piping Component File) in: a text read item by item, never refused for one item.
 
-Reading: every top-level keyword block that carries END-POINT / CENTRE-POINT /
-BRANCHn-POINT lines is a component (PIPE, ELBOW, BEND, TEE, CROSS, REDUCER-*, VALVE,
-FLANGE, GASKET, CAP, OLET, INSTRUMENT, ...). Port directions come from the geometry
-(centre to end point for elbows, tees, crosses, angle valves and olets; along the end-point
-axis for pipes and inline items; eccentric items take the axis of the pipes they join, since
-their end points are offset by the flat side); single-ended items (CAP, FLANGE-BLIND) take the
-reversed direction of the port they touch. Zero-length items (a WELD, a GASKET without
-thickness, a zero-length PIPE) are connection points, not components: their neighbours are
-connected directly and they are written where that connection ends up. Connections are
-inferred between end points closer than a tolerance that face each other. Component ids are
-``<KEYWORD>-<n>`` with n the block's ordinal in the file, so the same text always gives the
-same ids. SPINDLE-DIRECTION becomes a valve's up vector.
+Reading (:func:`read_document`): header records (``ISOGEN-FILES``, ``UNITS-*``,
+``PIPELINE-REFERENCE`` and its records, dates, revision, specs) and the MATERIALS section
+(``ITEM-CODE``, ``DESCRIPTION``, ``MATERIAL-IDENTIFIER`` ...) are known records; every other
+top-level block is an item. Item ids are what the exporting tool wrote: the item's
+``COMPONENT-IDENTIFIER``, else its ``UCI``, else its ``ITEM-CODE`` (each only where its value
+is unique in the file), else ``<KEYWORD>-<n>`` with n the item's ordinal among the items; that
+positional id is always accepted as an alias (``fixed_components``) and listed in the report.
 
-Writing: the original text is rewritten line by line, keeping its line endings; only the
-three coordinates of the geometric lines of moved components change (bore, end type and every
-other attribute stay as they were); CENTRE-POINTs follow their item, SUPPORT CO-ORDS follow
-their pipe sideways. Numbers are printed as the shortest string that reads back to the same
-double (or with the spelling the file already uses for that value), so the two ports of a
-closed connection print identically.
+Interpreting (:func:`interpret_pcf`): port directions come from the geometry (centre to end
+point for elbows, tees, crosses, angle valves and olets; along the end-point axis for pipes
+and inline items; eccentric items take the axis of the pipes they join, since their end
+points are offset by the flat side). What the geometry does not give is taken from the
+neighbours: single-ended items (CAP, FLANGE-BLIND) and 180 degree return bends whose
+CENTRE-POINT lies on their chord take the reversed direction of the ports they touch (a
+return bend's two ports are parallel, normal to its chord); an OLET without a usable
+CENTRE-POINT points away from the axis of the pipe it sits on. Zero-length items (a WELD,
+a GASKET without thickness, a zero-length PIPE) are connection points: their neighbours are
+connected directly and they are written where that connection ends up. Facing flange faces a
+gasket's thickness apart are joined by a rigid spacer, so the gap is kept, not closed. An
+item that still cannot be interpreted is kept verbatim and held fixed (or, without readable
+points, left out of the solve), and listed in the report with the reason; the file is
+refused only when no item is left.
+
+Tolerances (:func:`pcf_tolerances`): the exporting tool named in the file (AVEVA E3D/PDMS,
+Revit, AutoCAD Plant 3D) sets the profile; the coordinates' printed precision sets the
+rounding floor: differences a rounding of the printed digits can cause are not errors.
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
+from pydantic import ValidationError
 from scipy.spatial import cKDTree
 
-from pydantic import ValidationError
-
-from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest, AlignmentResult
+from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
+from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
 from plantsolve.solvers.base import FieldError, InputRejected, reject
-from plantsolve.solvers.geometry import angle_between, rotation
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
 EXTRA_KEYS = ("CO-ORDS",)  # support / instrument locations: they follow the item they sit on
@@ -42,32 +50,55 @@ TYPE_OF = {
     "VALVE-3WAY": "valve", "VALVE-MULTIWAY": "valve", "FLANGE": "flange", "FLANGE-BLIND": "flange",
     "FLANGE-REDUCING-CONCENTRIC": "flange", "FLANGE-REDUCING-ECCENTRIC": "flange", "CAP": "cap", "OLET": "olet",
 }
-# Keywords an ISOGEN export may contain: header records, component records, materials. Anything else is
-# kept verbatim with a warning (aligned as a generic fitting when it carries end points).
-KNOWN = {
-    "ISOGEN-FILES", "PIPELINE-REFERENCE", "PROJECT-IDENTIFIER", "AREA", "DATE-DMY", "REVISION", "SPOOL-IDENTIFIER",
-    "MATERIALS", "ITEM-CODE", "PIPE", "PIPE-FIXED", "PIPE-BLOCK-FIXED", "PIPE-BLOCK-VARIABLE", "ELBOW", "BEND",
-    "ELBOW-TEE", "TEE", "TEE-SET-ON", "TEE-STUB", "CROSS", "CROSS-SET-ON", "REDUCER-CONCENTRIC", "REDUCER-ECCENTRIC",
-    "VALVE", "VALVE-ANGLE", "VALVE-3WAY", "VALVE-4WAY", "VALVE-MULTIWAY", "FLANGE", "FLANGE-BLIND",
-    "FLANGE-REDUCING-CONCENTRIC", "FLANGE-REDUCING-ECCENTRIC", "GASKET", "WELD", "BOLT", "CAP", "OLET", "COUPLING",
-    "UNION", "INSTRUMENT", "INSTRUMENT-ANGLE", "INSTRUMENT-3WAY", "INSTRUMENT-DIAL", "SUPPORT", "FILTER", "TRAP",
-    "MISC-COMPONENT", "LAP-JOINT-STUBEND", "LAP-JOINT-RING", "ADAPTER", "BLIND", "SPECTACLE-BLIND", "SPACER",
-    "PLUG", "NIPPLE", "SWAGE", "HOSE", "CLAMP", "END-CONNECTION-PIPELINE", "END-CONNECTION-EQUIPMENT",
-    "END-CONNECTION-NULL", "END-POSITION-OPEN", "END-POSITION-CLOSED", "END-POSITION-NULL", "MESSAGE-SQUARE",
-    "MESSAGE-CIRCLE", "MESSAGE-ROUND", "FLOW-ARROW", "DIMENSION", "TEXT", "LOCATION-POINT", "ISO-SPLIT-POINT",
-    "FIELD-FIT-WELD", "TAPPING", "TAP-CONNECTION",
+# Top-level records of the header and of the MATERIALS section: never items.
+HEADER_RECORDS = {
+    "ISOGEN-FILES", "PIPELINE-REFERENCE", "PROJECT-IDENTIFIER", "AREA", "DATE-DMY", "DATE-MDY", "DATE-YMD",
+    "REVISION", "SPOOL-IDENTIFIER", "SPOOL-PREFIX", "SHEET-REFERENCE", "PIPING-SPEC", "INSULATION-SPEC",
+    "PAINTING-SPEC", "TRACING-SPEC", "JACKET-SPEC", "NOMINAL-CLASS", "PIPELINE-TEMP", "PIPELINE-TYPE",
+    "START-CO-ORDS", "END-CO-ORDS", "MISC-SPEC1", "MISC-SPEC2", "MISC-SPEC3", "MISC-SPEC4", "MISC-SPEC5",
+    "PROJECT-NAME", "DRAWING-NUMBER", "DRAWING-REFERENCE", "BATCH-REFERENCE", "MATERIALS",
 }
+MATERIAL_RECORDS = {"ITEM-CODE", "DESCRIPTION", "MATERIAL-IDENTIFIER", "ITEM-DESCRIPTION", "MATERIAL-DESCRIPTION"}
+# Item keywords of the PCF specification (component records, markers, messages).
+ITEM_KEYWORDS = {
+    "PIPE", "PIPE-FIXED", "PIPE-BLOCK-FIXED", "PIPE-BLOCK-VARIABLE", "ELBOW", "BEND", "ELBOW-TEE", "TEE",
+    "TEE-SET-ON", "TEE-STUB", "CROSS", "CROSS-SET-ON", "REDUCER-CONCENTRIC", "REDUCER-ECCENTRIC", "VALVE",
+    "VALVE-ANGLE", "VALVE-3WAY", "VALVE-4WAY", "VALVE-MULTIWAY", "FLANGE", "FLANGE-BLIND",
+    "FLANGE-REDUCING-CONCENTRIC", "FLANGE-REDUCING-ECCENTRIC", "GASKET", "WELD", "BOLT", "CAP", "OLET",
+    "COUPLING", "UNION", "INSTRUMENT", "INSTRUMENT-ANGLE", "INSTRUMENT-3WAY", "INSTRUMENT-DIAL", "SUPPORT",
+    "FILTER", "TRAP", "MISC-COMPONENT", "LAP-JOINT-STUBEND", "LAP-JOINT-RING", "ADAPTER", "BLIND",
+    "SPECTACLE-BLIND", "SPACER", "PLUG", "NIPPLE", "SWAGE", "HOSE", "CLAMP", "END-CONNECTION-PIPELINE",
+    "END-CONNECTION-EQUIPMENT", "END-CONNECTION-NULL", "END-POSITION-OPEN", "END-POSITION-CLOSED",
+    "END-POSITION-NULL", "MESSAGE-SQUARE", "MESSAGE-CIRCLE", "MESSAGE-ROUND", "MESSAGE-TRIANGLE", "FLOW-ARROW",
+    "DIMENSION", "TEXT", "LOCATION-POINT", "ISO-SPLIT-POINT", "FIELD-FIT-WELD", "TAPPING", "TAP-CONNECTION",
+    "CONTINUATION",
+}
+ID_RECORDS = ("COMPONENT-IDENTIFIER", "UCI", "ITEM-CODE")
+SINGLE_ENDED = ("CAP", "FLANGE-BLIND", "PLUG", "BLIND")
+FLANGE_LIKE = ("FLANGE", "GASKET", "BLIND", "SPECTACLE-BLIND", "SPACER", "LAP-JOINT")
 # ISOGEN spindle directions (plant axes: east = +x, north = +y, up = +z)
 SPINDLE = {"UP": (0.0, 0.0, 1.0), "DOWN": (0.0, 0.0, -1.0), "NORTH": (0.0, 1.0, 0.0), "SOUTH": (0.0, -1.0, 0.0),
            "EAST": (1.0, 0.0, 0.0), "WEST": (-1.0, 0.0, 0.0)}
-HEADER = ("ISOGEN-FILES", "PIPELINE-REFERENCE", "MATERIALS", "ITEM-CODE")
 UNITS = {"MM": "mm", "MILLIMETRE": "mm", "MILLIMETRES": "mm", "MILLIMETER": "mm", "MILLIMETERS": "mm",
          "INCH": "in", "INCHES": "in", "IN": "in", "INCH-FRACTION": "in", "M": "m", "METRE": "m", "METRES": "m",
          "CM": "cm", "FT": "ft", "FEET": "ft"}
 TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+# Exporting tools recognised by name anywhere in the file, and E3D's database references (=1234/567).
+TOOLS = (
+    ("aveva_e3d", re.compile(r"\bAVEVA\b|\bE3D\b|\bPDMS\b|\bEverything3D\b", re.I)),
+    ("revit", re.compile(r"\bREVIT\b", re.I)),
+    ("autocad_plant3d", re.compile(r"\bPLANT\s?3D\b|\bAUTOCAD\b|\bP3D\b", re.I)),
+)
+E3D_REFERENCE = re.compile(r"^\s+UCI\s+=\d+/\d+\s*$", re.M)
+# Largest flange face gap taken for a gasket (a spiral-wound gasket is 4.5 mm, ring joints need more).
+GASKET_GAP_MM = 10.0
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$")
+POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$")
 _EOL = re.compile(r"(\r\n|\r|\n)")
+
+
+class ItemProblem(Exception):
+    """One item cannot be (fully) interpreted; the message says why."""
 
 
 def split_lines(text: str) -> tuple[list[str], list[str]]:
@@ -80,52 +111,139 @@ def split_lines(text: str) -> tuple[list[str], list[str]]:
     return contents, endings
 
 
-def _is_known(word: str) -> bool:
-    return (word in KNOWN or word.startswith(("UNITS-", "ATTRIBUTE", "REDUCER-", "VALVE-", "INSTRUMENT-", "FLANGE-"))
+def is_known_keyword(word: str) -> bool:
+    return (word in ITEM_KEYWORDS or word in HEADER_RECORDS or word in MATERIAL_RECORDS
+            or word.startswith(("UNITS-", "ATTRIBUTE", "REDUCER-", "VALVE-", "INSTRUMENT-", "FLANGE-", "MISC-"))
             or word.endswith("OLET"))
 
 
-def _blocks(text: str):
-    """Lines, component blocks (keyword, ordinal, point line numbers, CO-ORDS line numbers), header values,
-    and the top-level keywords seen. A block is a line starting in column 0 plus its indented lines."""
-    lines, _ = split_lines(text)
-    blocks: list[tuple[str, int, list[int], list[int]]] = []
+@dataclass
+class Item:
+    """One top-level block that is not a header or material record."""
+
+    keyword: str
+    ordinal: int  # 1-based among the items
+    line: int  # 0-based line of the keyword
+    point_lines: list[int] = field(default_factory=list)
+    extra_lines: list[int] = field(default_factory=list)
+    records: dict[str, str] = field(default_factory=dict)  # first value of each indented record
+    id: str = ""
+
+    @property
+    def position_id(self) -> str:
+        return f"{self.keyword}-{self.ordinal}"
+
+
+@dataclass
+class Document:
+    lines: list[str]
+    endings: list[str]
+    header: dict[str, str]
+    items: list[Item]
+    unknown: list[str]
+    id_source: dict[str, int]
+    tool: str | None
+    decimals: int
+
+    @property
+    def units(self) -> str | None:
+        return UNITS.get(self.header.get("UNITS-CO-ORDS", "MM"))
+
+    @property
+    def bore_factor(self) -> float:
+        """Bores (in UNITS-BORE) to coordinate units."""
+        units = self.units or "mm"
+        bore_units = UNITS.get(self.header.get("UNITS-BORE", self.header.get("UNITS-CO-ORDS", "MM")), units)
+        return TO_MM[bore_units] / TO_MM[units]
+
+    @property
+    def quantum(self) -> float:
+        """Half the last printed digit of the coordinates: how far rounding may have moved a point."""
+        return 0.5 * 10.0 ** -self.decimals
+
+
+@lru_cache(maxsize=8)
+def read_document(text: str) -> Document:
+    """Records, items and ids of a PCF text (the same text always gives the same items and ids)."""
+    lines, endings = split_lines(text)
     header: dict[str, str] = {}
-    words: list[str] = []
-    spindle: dict[int, str] = {}  # block ordinal -> SPINDLE-DIRECTION word (valve stems)
-    current = None
-    ordinal = 0
+    items: list[Item] = []
+    words: set[str] = set()
+    current: Item | None = None
+    in_materials = False
+    decimals = 0
     for i, line in enumerate(lines):
         parts = line.split()
         if not parts:
             continue
         word = parts[0].upper()
         if not line[0].isspace():
-            words.append(word)
-            if word.startswith("UNITS-") and len(parts) > 1:
-                header[word] = parts[1].upper()
+            words.add(word)
             current = None
-            if word in HEADER or word.startswith("UNITS-"):
+            if word.startswith(("UNITS-", "ATTRIBUTE", "PIPELINE-ATTRIBUTE")) or word in HEADER_RECORDS:
+                header.setdefault(word, parts[1].upper() if len(parts) > 1 else "")
+                in_materials = in_materials or word == "MATERIALS"
                 continue
-            ordinal += 1
-            current = (word, ordinal, [], [])
-            blocks.append(current)
+            if word in MATERIAL_RECORDS and (in_materials or word != "ITEM-CODE" or not items):
+                continue
+            current = Item(keyword=word, ordinal=len(items) + 1, line=i)
+            items.append(current)
         elif current is not None:
             if word in POINT_KEYS:
-                current[2].append(i)
+                current.point_lines.append(i)
+                for tok in parts[1:4]:
+                    mant = tok.lower().split("e")[0]
+                    if "." in mant:
+                        decimals = max(decimals, len(mant.split(".")[1]))
             elif word in EXTRA_KEYS:
-                current[3].append(i)
-            elif word == "SPINDLE-DIRECTION" and len(parts) > 1:
-                spindle[current[1]] = parts[1].upper()
-    return lines, blocks, header, words, spindle
+                current.extra_lines.append(i)
+            elif len(parts) > 1:
+                current.records.setdefault(word, " ".join(parts[1:]))
+    id_source = _assign_ids(items)
+    unknown = sorted(w for w in words if not is_known_keyword(w))
+    tool = next((name for name, pattern in TOOLS if pattern.search(text)), None)
+    if tool is None and E3D_REFERENCE.search(text):
+        tool = "aveva_e3d"
+    return Document(lines=lines, endings=endings, header=header, items=items, unknown=unknown,
+                    id_source=id_source, tool=tool, decimals=min(decimals, 12))
 
 
-def _point(line: str) -> tuple[np.ndarray, float | None]:
+def _assign_ids(items: list[Item]) -> dict[str, int]:
+    """The exporting tool's own ids where they identify one item; positional ids otherwise."""
+    counts: dict[tuple[str, str], int] = {}
+    for it in items:
+        for rec in ID_RECORDS:
+            if rec in it.records:
+                counts[(rec, it.records[rec])] = counts.get((rec, it.records[rec]), 0) + 1
+    taken: set[str] = set()
+    source: dict[str, int] = {}
+    positional = {it.position_id for it in items}
+    for it in items:
+        chosen, how = it.position_id, "position"
+        for rec in ID_RECORDS:
+            value = it.records.get(rec)
+            if value and counts[(rec, value)] == 1 and value not in taken and (
+                    value not in positional or value == it.position_id) and len(value) <= 200:
+                chosen, how = value, rec
+                break
+        if chosen in taken:
+            chosen, how = it.position_id, "position"
+        it.id = chosen
+        taken.add(chosen)
+        source[how] = source.get(how, 0) + 1
+    return source
+
+
+def read_point(line: str) -> tuple[np.ndarray, float | None]:
     parts = line.split()
     try:
         xyz = np.array([float(v) for v in parts[1:4]])
     except (ValueError, IndexError) as exc:
-        raise reject(f"cannot read coordinates in line {line.strip()!r}") from exc
+        raise ItemProblem(f"cannot read the coordinates of {line.strip()!r}") from exc
+    if len(xyz) < 3:
+        raise ItemProblem(f"cannot read the coordinates of {line.strip()!r}")
+    if not np.all(np.isfinite(xyz)):
+        raise ItemProblem(f"non-finite coordinate in {line.strip()!r}")
     bore = None
     if len(parts) > 4:
         try:
@@ -134,8 +252,6 @@ def _point(line: str) -> tuple[np.ndarray, float | None]:
             bore = None
         if bore is not None and not (np.isfinite(bore) and bore > 0):
             bore = None
-    if not np.all(np.isfinite(xyz)):
-        raise reject(f"non-finite coordinate in line {line.strip()!r}")
     return xyz, bore
 
 
@@ -144,192 +260,121 @@ def _unit(x: np.ndarray) -> np.ndarray | None:
     return x / n if n > 0 else None
 
 
-def _coincident(points: list[np.ndarray]) -> bool:
+def _coincident(points: list[np.ndarray], quantum: float) -> bool:
     """All points at one place (up to print rounding): a zero-length item such as a weld."""
     P = np.array(points)
-    eps = 1e-6 + 1e-12 * float(np.max(np.abs(P)))
+    eps = max(1e-6, 2.0 * quantum) + 1e-12 * float(np.max(np.abs(P)))
     return bool(np.max(np.linalg.norm(P - P[0], axis=1)) <= eps)
 
 
-def _component(word: str, ordinal: int, lines: list[str], idx: list[int], bore_factor: float, snap: bool = False):
-    """Ports (position, direction or None), kind, type, radius, and for each port its line.
+def _angle_record(value: str | None) -> float | None:
+    """ANGLE in degrees; E3D writes hundredths of a degree (ANGLE 18000)."""
+    try:
+        a = abs(float((value or "").split()[0]))
+    except (ValueError, IndexError):
+        return None
+    return a / 100.0 if a > 360.0 else a
 
-    kind 'joint' marks a zero-length item (a weld, a zero-thickness gasket, a zero-length pipe): all its
-    points coincide, so it has no axis of its own. It is not a solver component but a connection point:
-    the items on both sides connect to each other through it, and its points are written at the
-    aligned position of that connection."""
+
+@dataclass
+class Geometry:
+    """An item as the solver sees it: ports (direction None = to be taken from the neighbours)."""
+
+    ports: list[tuple[np.ndarray, np.ndarray | None]]
+    port_lines: list[int]
+    kind: str  # pipe | fitting | joint
+    ftype: str | None
+    radius: float | None
+    chord: np.ndarray | None = None  # return bend whose plane comes from its neighbours
+    note: str | None = None  # what had to be taken from elsewhere
+
+
+def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
+    """Ports of one item from its own lines; raises :class:`ItemProblem` with the reason."""
+    word, lines = item.keyword, doc.lines
     pts: dict[str, list] = {}
-    for i in idx:
+    for i in item.point_lines:
         key = lines[i].split()[0].upper()
-        pts.setdefault(key, []).append((i,) + _point(lines[i]))
+        pts.setdefault(key, []).append((i,) + read_point(lines[i]))
     ends = pts.get("END-POINT", [])
     centre = pts.get("CENTRE-POINT", [])
     branches = [b for k in ("BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT") for b in pts.get(k, [])]
     bores = [b for (_, _, b) in ends + branches if b]
-    radius = 0.5 * max(bores) * bore_factor if bores else None
+    radius = 0.5 * max(bores) * doc.bore_factor if bores else None
     every = [p for _, p, _ in ends + branches + centre]
-    if (len(every) >= 2 and _coincident(every) and not (centre and branches)) or (
+    q = doc.quantum
+    if word.startswith(SINGLE_ENDED) and len(ends) == 2 and not branches and _coincident([p for _, p, _ in ends], q):
+        return Geometry([(ends[0][1], None)], [ends[0][0]], "fitting", "cap" if word == "CAP" else "flange", radius,
+                        note="two coincident END-POINTs: one port")
+    if (len(every) >= 2 and _coincident(every, q) and not (centre and branches)) or (
             word in ("WELD", "GASKET") and len(every) == 1):
-        return [], [i for i, _, _ in ends + branches], "joint", None, radius
+        return Geometry([], [i for i, _, _ in ends + branches], "joint", None, radius)
     c = centre[0][1] if centre else None
     if word == "PIPE" or word.startswith("PIPE-"):
         if len(ends) != 2:
-            raise reject(f"{word}-{ordinal}: a {word} needs two END-POINT lines, found {len(ends)}")
+            raise ItemProblem(f"a {word} needs two END-POINT lines, found {len(ends)}")
         axis = _unit(ends[1][1] - ends[0][1])
-        ports = [(ends[0][1], -axis), (ends[1][1], axis)]
-        return ports, [ends[0][0], ends[1][0]], "pipe", None, radius
+        return Geometry([(ends[0][1], -axis), (ends[1][1], axis)], [ends[0][0], ends[1][0]], "pipe", None, radius)
+    ftype = TYPE_OF.get(word)
+    if ftype is None:
+        ftype = "olet" if word.endswith("OLET") else TYPE_OF.get(word.split("-")[0], "other")
+    chord = note = None
     if c is not None and len(ends) == 2 and not branches:
-        # an inline item that also carries a CENTRE-POINT (instrument, some valves): if the centre is on the
-        # end-point line, the ports are exactly opposite along it (a rounded centre must not put a kink in)
         e0, e1 = ends[0][1], ends[1][1]
         span = float(np.linalg.norm(e1 - e0))
         u = (e1 - e0) / span if span > 0 else None
-        if u is not None and np.linalg.norm((c - e0) - np.dot(c - e0, u) * u) <= 1e-3 * span:
+        off = (c - e0) - np.dot(c - e0, u) * u if u is not None else None
+        on_line = off is not None and np.linalg.norm(off) <= max(1e-3 * span, 4.0 * q)
+        angle = _angle_record(item.records.get("ANGLE"))
+        turning = ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))
+        if turning and u is not None and (on_line or (angle is not None and abs(angle - 180.0) < 0.5)):
+            # a 180 degree return bend: both ports parallel, normal to the chord, away from the CENTRE-POINT
+            # side; a centre on the chord (the arc's centre) does not tell which side: the neighbours do
+            ftype = "bend" if ftype not in ("elbow", "bend") else ftype
+            if not on_line:
+                d = _unit(-off)
+                return Geometry([(e0, d), (e1, d.copy())], [ends[0][0], ends[1][0]], "fitting", ftype, radius,
+                                note="180 degree return bend: plane from the CENTRE-POINT offset")
+            return Geometry([(e0, None), (e1, None)], [ends[0][0], ends[1][0]], "fitting", ftype, radius, chord=u,
+                            note="180 degree return bend with its CENTRE-POINT on the chord: plane from its neighbours")
+        if on_line:
+            # an inline item with a CENTRE-POINT (instrument, some valves): ports exactly opposite along the line
             c = None
     ports, port_lines = [], []
     for k, (i, p, _) in enumerate(ends + branches):
         d = _unit(p - c) if c is not None else None
-        if d is None and len(ends) == 2 and k < 2:  # inline item: along its end-point axis
-            d = _unit(p - ends[1 - k][1])
+        if d is None and len(ends) == 2 and k < 2 and not (ftype in ("elbow", "bend")):
+            d = _unit(p - ends[1 - k][1])  # inline item: along its end-point axis
         ports.append((p, d))
         port_lines.append(i)
     if not ports:
-        raise reject(f"{word}-{ordinal}: no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
-    ftype = TYPE_OF.get(word)
-    if ftype is None:
-        ftype = "olet" if word.endswith("OLET") else TYPE_OF.get(word.split("-")[0], "other")
+        raise ItemProblem(f"no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
     need = {"tee": 3, "cross": 4, "elbow": 2, "bend": 2, "reducer": 2, "valve": 2}.get(ftype, 1)
     if len(ports) < need:  # set-on tees and the like: only the branch is a port
         ftype = "olet" if len(ports) == 1 else "other"
     if ftype in ("elbow", "bend") and c is None:
-        raise reject(f"{word}-{ordinal}: a {word} needs a CENTRE-POINT to know its port directions")
+        note = f"no CENTRE-POINT: the {word}'s port directions come from its neighbours"
+    if ftype == "olet" and any(d is None for _, d in ports):
+        note = "no usable CENTRE-POINT: direction from the pipe it sits on or its branch"
     if snap and c is not None and ftype in ("elbow", "bend", "tee", "cross") and all(d is not None for _, d in ports):
-        ports = _snap_catalogue(ports, c, _quantum([lines[i] for i in idx]))
-    return ports, port_lines, "fitting", ftype, radius
+        ports = snap_catalogue(ports, c, print_quantum([lines[i] for i in item.point_lines]))
+    return Geometry(ports, port_lines, "fitting", ftype, radius, chord=chord, note=note)
 
 
-# angles between port directions of catalogue fittings: 180 - (90, 45, 60, 30, 22.5, 11.25 elbows), 90, 180
-STANDARD_ANGLES = np.radians([0.0, 90.0, 135.0, 120.0, 150.0, 157.5, 168.75, 180.0, 45.0, 60.0])
+@dataclass
+class Interpretation:
+    """A PCF as a request body, and what the reading had to decide (report notes)."""
+
+    body: dict
+    notes: list[tuple[str, str, dict, str]]  # (code, message, details, 'warning' | 'detail')
+    geometry: dict[str, Geometry]  # by item id, items that are solver components or joints
+    spacers: dict[str, tuple[str, str]]  # spacer component id -> the two items it joins
 
 
-def _cos_sin(angle: float) -> tuple[float, float]:
-    """cos and sin, exact at multiples of 45 degrees (so snapped right angles have exact zeros)."""
-    k = angle / (np.pi / 4)
-    if abs(k - round(k)) < 1e-12:
-        h = np.sqrt(0.5)
-        return [(1.0, 0.0), (h, h), (0.0, 1.0), (-h, h), (-1.0, 0.0)][int(round(k)) % 8] if 0 <= round(k) <= 4 else (
-            float(np.cos(angle)), float(np.sin(angle)))
-    return float(np.cos(angle)), float(np.sin(angle))
-
-
-def _straight(angle: float | None) -> bool:
-    return angle is not None and abs(angle - np.pi) < 1e-9
-
-
-def _quantum(point_lines: list[str]) -> float:
-    """Half the last printed digit of the coordinates: how far rounding may have moved a point."""
-    decimals = 0
-    for line in point_lines:
-        for tok in line.split()[1:4]:
-            mant = tok.lower().split("e")[0]
-            decimals = max(decimals, len(mant.split(".")[1]) if "." in mant else 0)
-    return 0.5 * 10.0 ** -decimals
-
-
-def _snap_catalogue(ports, c: np.ndarray, quantum: float):
-    """Catalogue fittings have exact angles (90, 45, 22.5 ... degrees; run ports exactly opposite), but a PCF
-    prints coordinates rounded, which bends them by up to ~quantum / arm. Angles within that rounding of a
-    multiple of 0.25 degree are restored exactly; otherwise loops of such fittings could never close."""
-    P = [p for p, _ in ports]
-    D = [d for _, d in ports]
-    arm = [float(np.linalg.norm(p - c)) for p in P]
-    if min(arm) <= 0:
-        return ports
-    slack = 3.0 * 2.0 * np.sqrt(3.0) * quantum / min(arm) + 1e-12  # radians
-    # already exact up to the float spacing of the coordinates (e.g. a file this solver wrote): leave the bits
-    exact = 64 * np.finfo(float).eps * max(1.0, float(np.max(np.abs(np.concatenate([c, *P]))))) / min(arm)
-
-    def nice(angle: float) -> float | None:
-        std = STANDARD_ANGLES[np.argmin(np.abs(STANDARD_ANGLES - angle))]
-        if abs(std - angle) <= slack:
-            return float(std)
-        if slack < np.radians(0.05):  # fine print: any quarter degree (bends) is as good a catalogue angle
-            target = np.radians(0.25) * round(np.degrees(angle) / 0.25)
-            return float(target) if abs(target - angle) <= slack else None
-        return None
-
-    def towards(axis: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """d with its angle to the axis snapped (in the plane of axis and d)."""
-        ang = angle_between(axis, d)
-        tgt = nice(ang)
-        e = d - (axis @ d) * axis
-        n = np.linalg.norm(e)
-        if tgt is None or n == 0 or abs(tgt - ang) <= exact:
-            return d
-        e /= n
-        c_, s_ = _cos_sin(tgt)
-        return c_ * axis + s_ * e
-
-    if len(D) == 2:  # elbow / bend: symmetric about the bisector
-        beta = angle_between(D[0], D[1])
-        tgt = nice(beta)
-        b, e = D[0] + D[1], D[1] - D[0]
-        if tgt is not None and abs(tgt - beta) > exact and np.linalg.norm(b) > 0 and np.linalg.norm(e) > 0:
-            b, e = b / np.linalg.norm(b), e / np.linalg.norm(e)
-            c_, s_ = _cos_sin(tgt / 2)
-            D = [c_ * b - s_ * e, c_ * b + s_ * e]
-    else:  # tee / cross: run END-POINTs opposite, branches at exact angles to the run
-        run = angle_between(D[0], D[1])
-        straight = _straight(nice(run))
-        a = (D[1] - D[0]) / np.linalg.norm(D[1] - D[0]) if straight else D[1]
-        D[2] = towards(a, D[2])
-        if len(D) > 3:
-            opp = angle_between(D[2], D[3])
-            if not (np.pi - opp <= exact and D[2] is ports[2][1]):
-                D[3] = -D[2] if _straight(nice(opp)) else towards(a, D[3])
-        if straight and (np.pi - run > exact or any(d is not d_in for d, (_, d_in) in zip(D[2:], ports[2:]))):
-            D[0], D[1] = -a, a
-    # the ports of a restored fitting move onto their exact catalogue axes through the centre (rounding also
-    # put them a little off those axes, which would leave loops of such fittings out of plane)
-    if all(d is d_in for d, (_, d_in) in zip(D, ports)):
-        return ports
-    return [(c + r * d, d) for r, d in zip(arm, D)]
-
-
-def _bore_factor(header: dict[str, str], units: str) -> float:
-    bore_units = UNITS.get(header.get("UNITS-BORE", header.get("UNITS-CO-ORDS", "MM")), units)
-    return TO_MM[bore_units] / TO_MM[units]
-
-
-def pcf_notes(text: str) -> list[tuple[str, str, dict]]:
-    """Warnings about a PCF's content: (code, message, details)."""
-    lines, blocks, header, words, _ = _blocks(text)
-    units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), "mm")
-    factor = _bore_factor(header, units)
-    unknown = sorted({w for w in words if not _is_known(w)})
-    notes = []
-    if unknown:
-        notes.append(("pcf_unknown_keyword",
-                      f"PCF keyword(s) {', '.join(unknown)} are not known ISOGEN records: kept verbatim; those with "
-                      "end points were aligned as generic fittings.", {"keywords": unknown}))
-    joints = []
-    for word, ordinal, idx, _ in blocks:
-        if idx:
-            try:
-                if _component(word, ordinal, lines, idx, factor)[2] == "joint":
-                    joints.append(f"{word}-{ordinal}")
-            except InputRejected:
-                pass
-    if joints:
-        notes.append(("pcf_zero_length_items",
-                      f"{len(joints)} zero-length item(s) (welds, gaskets without thickness) were treated as connection "
-                      "points: their neighbours were connected directly and the item written at the closed connection.",
-                      {"items": joints[:200]}))
-    return notes
-
-
-def _options(options) -> AlignmentOptions:
+def options_from(options) -> AlignmentOptions:
     """The upload's options, validated first: they decide how the file is read."""
+    if isinstance(options, AlignmentOptions):
+        return options
     if options is not None and not isinstance(options, dict):
         raise InputRejected([FieldError(("options",), "options must be an object")])
     try:
@@ -338,63 +383,119 @@ def _options(options) -> AlignmentOptions:
         raise InputRejected([FieldError(("options",) + tuple(e["loc"]), e["msg"]) for e in exc.errors()]) from exc
 
 
-def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
-    opts = _options(options)
-    lines, blocks, header, _, spindle = _blocks(text)
-    units = UNITS.get(header.get("UNITS-CO-ORDS", "MM"), None)
+PROFILES = {  # (position tolerance unit or None = drawing units, value, angle tolerance rad)
+    "autocad_plant3d": (None, 1e-10, 1e-10),
+    "aveva_e3d": ("mm", 1.0, 0.01),
+    "revit": ("ft", 1e-9, 1e-10),
+    "custom": (None, 1e-10, 1e-10),
+}
+
+
+def profile_tolerances(profile: str, units: str) -> tuple[float, float]:
+    unit, value, ang = PROFILES[profile]
+    return (value if unit is None else value * TO_MM[unit] / TO_MM[units]), ang
+
+
+def pcf_tolerances(text: str, units: str) -> dict:
+    """The tolerances a PCF's own exporter and printed precision imply (profile 'auto').
+
+    Rounding to d decimals moves a point by up to q = 0.5e-d per coordinate, so two ends of one
+    connection printed independently differ by up to 2 q sqrt(3); a direction over an arm L
+    turns by up to that over L (L: the shortest tenth of the items' spans, where rounding turns most)."""
+    doc = read_document(text)
+    q = doc.quantum
+    pos_round = 2.0 * np.sqrt(3.0) * q
+    spans = []
+    for it in doc.items:
+        pts = []
+        for i in it.point_lines:
+            try:
+                pts.append(read_point(doc.lines[i])[0])
+            except ItemProblem:
+                continue
+        if len(pts) >= 2:
+            s = float(np.max(np.linalg.norm(np.array(pts) - pts[0], axis=1)))
+            if s > 10 * pos_round:
+                spans.append(s)
+    short = float(np.percentile(spans, 10)) if spans else 1.0 / max(TO_MM[units], 1e-300) * 100.0
+    ang_round = pos_round / short
+    if doc.tool is not None:
+        pos_tool, ang_tool = profile_tolerances(doc.tool, units)
+        reason = f"exporter named in the file ({doc.tool}); coordinates printed with {doc.decimals} decimals"
+    else:
+        pos_tool, ang_tool = 0.0, 0.0
+        reason = f"no exporter named in the file; coordinates printed with {doc.decimals} decimals"
+    return {"profile": doc.tool or "printed_precision", "position": max(pos_tool, pos_round),
+            "angle": max(ang_tool, ang_round), "reason": reason, "decimals": doc.decimals,
+            "rounding_position": pos_round, "rounding_angle_deg": float(np.degrees(ang_round))}
+
+
+@lru_cache(maxsize=8)
+def _interpret_cached(text: str, options_json: str) -> Interpretation:
+    return _interpret(text, AlignmentOptions.model_validate_json(options_json))
+
+
+def interpret_pcf(text: str, options) -> Interpretation:
+    opts = options_from(options)
+    return _interpret_cached(text, opts.model_dump_json())
+
+
+def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
+    doc = read_document(text)
+    units = doc.units
     if units is None:
-        raise reject(f"unsupported UNITS-CO-ORDS {header.get('UNITS-CO-ORDS')!r}")
-    bore_factor = _bore_factor(header, units)
-    comps = []
-    for word, ordinal, idx, _ in blocks:
-        if not idx:
+        raise reject(f"unsupported UNITS-CO-ORDS {doc.header.get('UNITS-CO-ORDS')!r}")
+    alias = {it.position_id: it.id for it in doc.items}
+    fixed_ids = {alias.get(f, f) for f in opts.fixed_components}
+    notes: list[tuple[str, str, dict, str]] = []
+    held: list[dict] = []
+    dropped: list[dict] = []
+    resolved: list[dict] = []
+    comps: list[dict] = []
+    geometry: dict[str, Geometry] = {}
+    for it in doc.items:
+        if not it.point_lines:
             continue
-        ports, _, kind, ftype, radius = _component(word, ordinal, lines, idx, bore_factor,
-                                                   snap=f"{word}-{ordinal}" not in opts.fixed_components)
-        if kind != "joint":
-            comps.append({"id": f"{word}-{ordinal}", "word": word, "up": SPINDLE.get(spindle.get(ordinal, "")), "kind": kind, "type": ftype, "radius": radius, "ports": ports})
+        try:
+            g = interpret_item(it, doc, snap=it.id not in fixed_ids)
+        except ItemProblem as exc:
+            g = _held_geometry(it, doc)
+            if g is None:
+                dropped.append({"id": it.id, "line": it.line + 1, "reason": str(exc)})
+                continue
+            held.append({"id": it.id, "line": it.line + 1, "reason": str(exc)})
+            g.kind, g.ftype, g.note = "held", "other", str(exc)
+        geometry[it.id] = g
+        if g.kind != "joint":
+            spindle = SPINDLE.get(it.records.get("SPINDLE-DIRECTION", "").split(" ")[0].upper())
+            comps.append({"id": it.id, "word": it.keyword, "up": spindle, "geometry": g, "line": it.line + 1})
     if not comps:
-        raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found")
-    # infer connections: nearest facing end points within tolerance, each port used once
-    counts = np.array([len(c["ports"]) for c in comps])
+        why = "; ".join(f"line {d['line']}: {d['reason']}" for d in dropped[:5])
+        raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found"
+                     + (f" that could be read ({why})" if why else ""))
+
+    tol = resolve_pcf_tolerance(text, units, opts)
+    counts = np.array([len(c["geometry"].ports) for c in comps])
     start = np.concatenate([[0], np.cumsum(counts)])
-    pos = np.array([p for c in comps for p, _ in c["ports"]])
+    pos = np.array([p for c in comps for p, _ in c["geometry"].ports]).reshape(-1, 3)
     owner = np.repeat(np.arange(len(comps)), counts)
     local = np.arange(len(pos)) - start[owner]
-    dirs = [d for c in comps for _, d in c["ports"]]
-    known = [c["radius"] for c in comps if c["radius"]]
+    dirs = [d for c in comps for _, d in c["geometry"].ports]
+    known = [c["geometry"].radius for c in comps if c["geometry"].radius]
     # a component without a readable bore connects like a typical one of the file (10 mm if none has one)
     typical = float(np.median(known)) if known else 10.0 / TO_MM[units]
-    rad = np.array([c["radius"] or typical for c in comps])[owner]
-    tol_opt = opts.connection_tolerance
-    reach = float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6)
-    pairs = cKDTree(pos).query_pairs(r=reach, output_type="ndarray")
-    conns = []
-    if len(pairs):
-        dist = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
-        limit = float(tol_opt) if tol_opt else 0.5 * np.maximum(np.minimum(rad[pairs[:, 0]], rad[pairs[:, 1]]), 1e-6)
-        used = np.zeros(len(pos), dtype=bool)
-        for k in np.lexsort((pairs[:, 1], pairs[:, 0], dist)):
-            i, j = pairs[k]
-            if used[i] or used[j] or owner[i] == owner[j] or dist[k] > (limit if np.isscalar(limit) else limit[k]):
-                continue
-            if dirs[i] is not None and dirs[j] is not None and float(np.dot(dirs[i], dirs[j])) > -0.5:
-                continue
-            used[i] = used[j] = True
-            conns.append((min(i, j), max(i, j)))
-        conns.sort()  # file order, independent of the gaps
-    for i, j in conns:  # single-ended items take the reversed direction of their partner
-        if dirs[i] is None and dirs[j] is not None:
-            dirs[i] = -dirs[j]
-        elif dirs[j] is None and dirs[i] is not None:
-            dirs[j] = -dirs[i]
-    # An eccentric item's end points are offset sideways (flat side), so the line through them is not its
-    # axis: its ports take the axis of the pipes they join (their mean when both sides are connected).
+    rad = np.array([c["geometry"].radius or typical for c in comps])[owner]
+    flange_like = np.array([c["word"].startswith(FLANGE_LIKE) for c in comps])[owner]
+    conns, gaps = _infer_connections(pos, dirs, owner, rad, flange_like, opts.connection_tolerance, tol[0],
+                                     GASKET_GAP_MM / TO_MM[units])
     partner = {}
     for i, j in conns:
         partner[i], partner[j] = j, i
+    _directions_from_neighbours(comps, start, dirs, partner, resolved)
+    # An eccentric item's end points are offset sideways (flat side), so the line through them is not its
+    # axis: its ports take the axis of the pipes they join (their mean when both sides are connected).
     for k, c in enumerate(comps):
-        if "ECCENTRIC" in c["word"] and len(c["ports"]) == 2:
+        if "ECCENTRIC" in c["word"] and len(c["geometry"].ports) == 2:
             i0, i1 = start[k], start[k] + 1
             n0 = -dirs[partner[i0]] if i0 in partner and dirs[partner[i0]] is not None else None
             n1 = -dirs[partner[i1]] if i1 in partner and dirs[partner[i1]] is not None else None
@@ -402,16 +503,34 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
                 -n0 if n0 is not None else None)
             if axis is not None:
                 dirs[i0], dirs[i1] = -axis, axis
-    for k, d in enumerate(dirs):
-        if d is None:
-            raise reject(f"{comps[owner[k]]['id']}: cannot determine the direction of end point {local[k]} "
-                          "(single-ended item without a connected neighbour)")
-    comps_json = []
+    _olet_directions(comps, start, dirs, pos, resolved)
     for k, c in enumerate(comps):
-        ports = [{"position": p.tolist(), "direction": dirs[start[k] + j].tolist()} for j, (p, _) in enumerate(c["ports"])]
-        entry = {"id": c["id"], "kind": c["kind"], "radius": c["radius"], "ports": ports}
-        if c["kind"] == "fitting":
-            entry["type"] = c["type"]
+        ks = range(start[k], start[k + 1])
+        if c["geometry"].kind != "held" and any(dirs[i] is None for i in ks):
+            held.append({"id": c["id"], "line": c["line"],
+                         "reason": "cannot determine the direction of "
+                                   + ", ".join(f"end point {local[i]}" for i in ks if dirs[i] is None)
+                                   + " (no connected neighbour to take it from)"})
+            c["geometry"].kind = "held"
+        if c["geometry"].kind == "held":
+            centroid = pos[start[k]:start[k + 1]].mean(axis=0)
+            for i in ks:
+                if dirs[i] is None:
+                    dirs[i] = _unit(pos[i] - centroid)
+                    if dirs[i] is None:
+                        dirs[i] = np.array([0.0, 0.0, 1.0])
+
+    comps_json = []
+    held_ids = {h["id"] for h in held}
+    for k, c in enumerate(comps):
+        g = c["geometry"]
+        ports = [{"position": pos[start[k] + j].tolist(), "direction": dirs[start[k] + j].tolist()}
+                 for j in range(len(g.ports))]
+        kind = "pipe" if g.kind == "pipe" else "fitting"
+        entry = {"id": c["id"], "kind": kind, "radius": g.radius, "ports": ports,
+                 "fixed": c["id"] in fixed_ids or c["id"] in held_ids}
+        if kind == "fitting":
+            entry["type"] = "other" if c["id"] in held_ids else g.ftype
             if c["up"] is not None and len(ports) == 2:
                 # a stem along the valve axis is no up vector (and would be rejected)
                 axis = np.array(ports[1]["position"]) - np.array(ports[0]["position"])
@@ -419,163 +538,204 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
                 if n > 0 and abs(np.dot(axis / n, c["up"])) < np.cos(np.radians(10.0)):
                     entry["up"] = list(c["up"])
         comps_json.append(entry)
-    fixed = set(opts.fixed_components)
-    for entry in comps_json:
-        entry["fixed"] = entry["id"] in fixed
-    body = {
-        "units": units,
-        "components": comps_json,
-        "connections": [{"from": [comps[owner[i]]["id"], int(local[i])], "to": [comps[owner[j]]["id"], int(local[j])]} for i, j in conns],
-        "options": options or {},
-        "source_pcf": text,
-    }
-    return AlignmentRequest.model_validate(body)
+    connections = [{"from": [comps[owner[i]]["id"], int(local[i])], "to": [comps[owner[j]]["id"], int(local[j])]}
+                   for i, j in conns]
+    spacers = {}
+    taken = {c["id"] for c in comps_json}
+    for n, (i, j, gap) in enumerate(gaps, start=1):
+        sid = f"gasket-gap-{n}"
+        while sid in taken:
+            sid += "'"
+        taken.add(sid)
+        a, b = comps[owner[i]]["id"], comps[owner[j]]["id"]
+        spacers[sid] = (a, b)
+        comps_json.append({"id": sid, "kind": "fitting", "type": "other", "radius": float(min(rad[i], rad[j])),
+                           "fixed": False, "ports": [{"position": pos[i].tolist(), "direction": (-dirs[i]).tolist()},
+                                                     {"position": pos[j].tolist(), "direction": (-dirs[j]).tolist()}]})
+        connections += [{"from": [a, int(local[i])], "to": [sid, 0]}, {"from": [b, int(local[j])], "to": [sid, 1]}]
+    options_out = opts.model_dump(exclude_unset=True)
+    if opts.fixed_components:
+        options_out["fixed_components"] = [alias.get(f, f) for f in opts.fixed_components]
+    body = {"units": units, "components": comps_json, "connections": connections, "options": options_out,
+            "source_pcf": text}
+    notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, tol))
+    return Interpretation(body=body, notes=notes, geometry=geometry, spacers=spacers)
 
 
-def fmt(x: float) -> str:
-    """Shortest decimal that reads back to the same double, at least 4 decimals, no exponent."""
-    return np.format_float_positional(float(x), unique=True, trim="k", min_digits=4)
-
-
-def _replace_xyz(line: str, xyz, spelling: dict[float, str]) -> str:
-    m = _POINT_RE.match(line)
-    if not m:
-        return line
-    g = list(m.groups())
-    for k, v in zip((3, 5, 7), xyz):
-        if float(g[k]) != float(v):  # unchanged numbers keep their original spelling
-            # a value that appears in the file (e.g. the fixed partner of a closed connection) prints the same way
-            g[k] = spelling.get(float(v)) or fmt(v)
-    return "".join(g)
-
-
-def write_aligned_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
-    if request.source_pcf is not None:
+def _held_geometry(item: Item, doc: Document) -> Geometry | None:
+    """The readable END/BRANCH points of an item that cannot be interpreted: ports of a fixed item."""
+    ports, port_lines = [], []
+    bores = []
+    for i in item.point_lines:
+        key = doc.lines[i].split()[0].upper()
+        if key == "CENTRE-POINT":
+            continue
         try:
-            return _rewrite(request, result)
-        except InputRejected:  # a source_pcf that does not belong to this request (edited JSON): start afresh
-            pass
-    return generate_pcf(request, result)
-
-
-def _rewrite(request: AlignmentRequest, result: AlignmentResult) -> str:
-    """The source text with the coordinates of moved points replaced, every other byte as it was."""
-    text = request.source_pcf
-    lines, blocks, header, _, _ = _blocks(text)
-    _, endings = split_lines(text)
-    factor = _bore_factor(header, request.units)
-    spelling: dict[float, str] = {}
-    for word, _, idx, extra in blocks:
-        for i in idx:
-            m = _POINT_RE.match(lines[i])
-            if m:
-                for k in (3, 5, 7):
-                    spelling.setdefault(float(m.group(k + 1)), m.group(k + 1))
-    by_id = {c.id: c for c in result.components}
-    req_by_id = {c.id: c for c in request.components}
-    out = list(lines)
-
-    # every aligned port, located by its input position: zero-length items and supports find theirs
-    old = np.array([p.position for c in request.components for p in c.ports], dtype=float)
-    new = [p.position for c in result.components for p in c.ports]
-    tree = cKDTree(old) if len(old) else None
-    port_rad = np.array([c.radius or 0.0 for c in request.components for _ in c.ports])
-    pipes = [(c, r) for c, r in zip(request.components, result.components) if c.kind == "pipe"]
-
-    def motion(comp):
-        tr = comp.transform
-        R = rotation(tr.rotation)
-        t = np.array(tr.translation)
-        return lambda x: R.apply(x) + t
-
-    for word, ordinal, idx, extra in blocks:
-        cid = f"{word}-{ordinal}"
-        comp = by_id.get(cid)
-        if comp is None:
-            if idx and tree is not None:
-                _, port_lines, kind, _, _ = _component(word, ordinal, lines, idx, factor)
-                if kind == "joint":  # all its points go to the aligned connection it sits on
-                    xyz, _ = _point(lines[idx[0]])
-                    _, k = tree.query(xyz)
-                    for i in idx:
-                        out[i] = _replace_xyz(lines[i], new[k], spelling)
-                    continue
-            for i in extra:  # a support: follows the nearest pipe it sits on
-                xyz, _ = _point(lines[i])
-                if word.startswith("END-CONNECTION") and tree is not None:
-                    # a line's end marker sits on a port: it goes where that port went
-                    dist, k = tree.query(xyz)
-                    if dist <= 0.5 * port_rad[k] + 1e-9:
-                        out[i] = _replace_xyz(lines[i], new[k], spelling)
-                        continue
-                host = _host_pipe(xyz, pipes)
-                if host is not None:  # sideways with the pipe; along it the support stays where it stands
-                    moved = motion(host)(xyz)
-                    u = np.array(host.ports[1].position) - np.array(host.ports[0].position)
-                    u /= np.linalg.norm(u)
-                    out[i] = _replace_xyz(lines[i], moved - np.dot(moved - xyz, u) * u, spelling)
+            p, b = read_point(doc.lines[i])
+        except ItemProblem:
             continue
-        _, port_lines, _, _, _ = _component(word, ordinal, lines, idx, factor)
-        for line_no, port in zip(port_lines, comp.ports):
-            out[line_no] = _replace_xyz(lines[line_no], port.position, spelling)
-        if req_by_id[cid].fixed:
-            continue
-        move = motion(comp)
-        for i in list(idx) + list(extra):  # other points (CENTRE-POINT, CO-ORDS) follow the rigid motion
-            if i in port_lines:
-                continue
-            xyz, _ = _point(lines[i])
-            out[i] = _replace_xyz(lines[i], move(xyz), spelling)
-    return "".join(a + b for a, b in zip(out, endings))
-
-
-def _host_pipe(xyz: np.ndarray, pipes):
-    """The pipe whose axis segment is nearest to a point, if the point is within two radii of it."""
-    if not pipes:
+        ports.append((p, None))
+        port_lines.append(i)
+        if b:
+            bores.append(b)
+    if not ports:
         return None
-    A = np.array([c.ports[0].position for c, _ in pipes], dtype=float)
-    AB = np.array([c.ports[1].position for c, _ in pipes], dtype=float) - A
-    rad = np.array([c.radius or 0.0 for c, _ in pipes])
-    t = np.clip(np.einsum("ij,ij->i", xyz - A, AB) / np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-300), 0.0, 1.0)
-    d = np.linalg.norm(xyz - (A + t[:, None] * AB), axis=1)
-    k = int(np.argmin(d))
-    return pipes[k][1] if d[k] <= 2.0 * rad[k] + 1e-9 else None
+    radius = 0.5 * max(bores) * doc.bore_factor if bores else None
+    return Geometry(ports, port_lines, "held", "other", radius)
 
 
-def generate_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
-    """A PCF written from the result alone (JSON requests, or a source PCF that does not match)."""
-    scale = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 1.0, "ft": 12.0}[request.units]
-    unit = "INCH" if request.units in ("in", "ft") else "MM"
-    out = ["ISOGEN-FILES ISOGEN.FLS", f"UNITS-BORE {unit}", f"UNITS-CO-ORDS {unit}", "PIPELINE-REFERENCE plantsolve-aligned"]
-    keyword = {"elbow": "ELBOW", "bend": "BEND", "tee": "TEE", "cross": "CROSS", "reducer": "REDUCER-CONCENTRIC",
-               "valve": "VALVE", "flange": "FLANGE", "cap": "CAP", "olet": "OLET"}
-    for comp, res in zip(request.components, result.components):
-        bore = 2 * comp.radius * scale if comp.radius else 0.0
-        P = [np.array(p.position) * scale for p in res.ports]
-        D = [np.array(p.direction) for p in res.ports]
-        word = "PIPE" if comp.kind == "pipe" else keyword.get(comp.type or "", "MISC-COMPONENT")
-        out.append(word)
-        out.append(f"    COMPONENT-IDENTIFIER {comp.id}")
-        if word == "OLET":
-            ends, branches = [], list(range(len(P)))
-        elif len(P) >= 3:
-            # the most opposite pair is the run, the rest are branches
-            best = min(((i, j) for i in range(len(P)) for j in range(i + 1, len(P))), key=lambda ij: float(D[ij[0]] @ D[ij[1]]))
-            ends = list(best)
-            branches = [k for k in range(len(P)) if k not in best]
-        else:
-            ends, branches = list(range(len(P))), []
-        for k in ends:
-            out.append(f"    END-POINT {fmt(P[k][0])} {fmt(P[k][1])} {fmt(P[k][2])} {fmt(bore)}")
-        if comp.kind == "fitting" and len(P) >= 2 and not all(abs(float(D[0] @ d)) > 1 - 1e-9 for d in D):
-            # centre = point closest to all port axes
-            A = sum(np.eye(3) - np.outer(d, d) for d in D)
-            b = sum((np.eye(3) - np.outer(d, d)) @ p for p, d in zip(P, D))
-            c = np.linalg.lstsq(A, b, rcond=None)[0]
-            out.append(f"    CENTRE-POINT {fmt(c[0])} {fmt(c[1])} {fmt(c[2])}")
-        elif word == "OLET":
-            c = P[0] - D[0] * (comp.radius or 0.0)
-            out.append(f"    CENTRE-POINT {fmt(c[0])} {fmt(c[1])} {fmt(c[2])}")
-        for n, k in enumerate(branches, start=1):
-            out.append(f"    BRANCH{n}-POINT {fmt(P[k][0])} {fmt(P[k][1])} {fmt(P[k][2])} {fmt(bore)}")
-    return "\n".join(out) + "\n"
+def resolve_pcf_tolerance(text: str, units: str, opts: AlignmentOptions) -> tuple[float, float]:
+    """(position, angle in radians) the options ask for on this PCF."""
+    if opts.tolerance_profile == "auto":
+        t = pcf_tolerances(text, units)
+        pos, ang = t["position"], t["angle"]
+    else:
+        pos, ang = profile_tolerances(opts.tolerance_profile, units)
+    if opts.position_tolerance is not None:
+        pos = opts.position_tolerance
+    if opts.angle_tolerance is not None:
+        ang = float(np.radians(opts.angle_tolerance))
+    return float(pos), float(ang)
+
+
+def _infer_connections(pos, dirs, owner, rad, flange_like, tol_opt, pos_tol, gasket_gap):
+    """Nearest facing end points within reach, each port used once, in file order. Facing flange faces
+    further apart than the tolerance but within a gasket's thickness (on their common axis) are returned
+    as gaps to be bridged by a spacer, not closed."""
+    reach = float(tol_opt) if tol_opt else max(float(np.max(rad)) * 0.5, 1e-6)
+    pairs = cKDTree(pos).query_pairs(r=reach, output_type="ndarray")
+    conns, gaps = [], []
+    if len(pairs) == 0:
+        return conns, gaps
+    dist = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
+    limit = float(tol_opt) if tol_opt else 0.5 * np.maximum(np.minimum(rad[pairs[:, 0]], rad[pairs[:, 1]]), 1e-6)
+    used = np.zeros(len(pos), dtype=bool)
+    for k in np.lexsort((pairs[:, 1], pairs[:, 0], dist)):
+        i, j = pairs[k]
+        if used[i] or used[j] or owner[i] == owner[j] or dist[k] > (limit if np.isscalar(limit) else limit[k]):
+            continue
+        if dirs[i] is not None and dirs[j] is not None and float(np.dot(dirs[i], dirs[j])) > -0.5:
+            continue
+        used[i] = used[j] = True
+        a, b = (i, j) if i < j else (j, i)
+        if (pos_tol < dist[k] <= gasket_gap and flange_like[i] and flange_like[j] and dirs[i] is not None
+                and dirs[j] is not None and float(np.dot(dirs[i], dirs[j])) < -np.cos(np.radians(1.0))):
+            v = pos[j] - pos[i]
+            lateral = np.linalg.norm(v - np.dot(v, dirs[i]) * dirs[i])
+            if lateral <= pos_tol and np.dot(v, dirs[i]) > 0:
+                gaps.append((a, b, float(dist[k])))
+                continue
+        conns.append((a, b))
+    conns.sort()  # file order, independent of the gaps
+    gaps.sort()
+    return conns, gaps
+
+
+def _directions_from_neighbours(comps, start, dirs, partner, resolved) -> None:
+    """Single-ended items and bends without a usable centre take the reversed direction of their partner;
+    a return bend's two ports are made parallel and normal to its chord."""
+    for k, c in enumerate(comps):
+        g = c["geometry"]
+        ks = list(range(start[k], start[k + 1]))
+        if g.chord is not None:
+            u = g.chord
+            votes = []
+            for side, i in enumerate(ks):
+                j = partner.get(i)
+                if j is not None and dirs[j] is not None:
+                    n = -dirs[j] - np.dot(-dirs[j], u) * u
+                    if np.linalg.norm(n) > 0.5:
+                        votes.append(n / np.linalg.norm(n))
+            if votes:
+                d = _unit(np.sum(votes, axis=0))
+                if d is not None:
+                    for i in ks:
+                        dirs[i] = d.copy()
+                    resolved.append({"id": c["id"], "how": g.note})
+            continue
+        changed = False
+        for i in ks:
+            j = partner.get(i)
+            if dirs[i] is None and j is not None and dirs[j] is not None:
+                dirs[i] = -dirs[j]
+                changed = True
+        if changed and g.note:
+            resolved.append({"id": c["id"], "how": g.note})
+    for i, j in partner.items():  # partners that were themselves resolved above
+        if dirs[i] is None and dirs[j] is not None:
+            dirs[i] = -dirs[j]
+
+
+def _olet_directions(comps, start, dirs, pos, resolved) -> None:
+    """An OLET without a usable CENTRE-POINT points away from the axis of the pipe it sits on."""
+    pipes = [k for k, c in enumerate(comps) if c["geometry"].kind == "pipe"]
+    if not pipes:
+        return
+    A = np.array([pos[start[k]] for k in pipes])
+    B = np.array([pos[start[k] + 1] for k in pipes])
+    rad = np.array([comps[k]["geometry"].radius or 0.0 for k in pipes])
+    for k, c in enumerate(comps):
+        if c["geometry"].ftype != "olet":
+            continue
+        for i in range(start[k], start[k + 1]):
+            if dirs[i] is not None:
+                continue
+            AB = B - A
+            t = np.clip(np.einsum("ij,ij->i", pos[i] - A, AB) / np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-300), 0, 1)
+            foot = A + t[:, None] * AB
+            d = np.linalg.norm(pos[i] - foot, axis=1)
+            m = int(np.argmin(d))
+            if d[m] <= 3.0 * max(rad[m], 1e-9) and d[m] > 0:
+                dirs[i] = (pos[i] - foot[m]) / d[m]
+                resolved.append({"id": c["id"], "how": "OLET direction from the axis of the pipe it sits on"})
+
+
+def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, tol):
+    notes = []
+    if doc.unknown:
+        notes.append(("pcf_unknown_keyword",
+                      f"PCF keyword(s) {', '.join(doc.unknown)} are not records of the PCF specification: kept "
+                      "verbatim; those with end points were aligned as generic fittings.",
+                      {"keywords": doc.unknown}, "warning"))
+    joints = [cid for cid, g in geometry.items() if g.kind == "joint"]
+    if joints:
+        notes.append(("pcf_zero_length_items",
+                      f"{len(joints)} zero-length item(s) (welds, gaskets without thickness) were treated as connection "
+                      "points: their neighbours were connected directly and the item written at the closed connection.",
+                      {"items": joints[:200]}, "detail"))
+    if held:
+        notes.append(("pcf_items_held",
+                      f"{len(held)} PCF item(s) could not be fully interpreted: kept verbatim and held fixed.",
+                      {"items": held[:200]}, "warning"))
+    if dropped:
+        notes.append(("pcf_items_unread",
+                      f"{len(dropped)} PCF item(s) have no readable point: kept verbatim, not aligned.",
+                      {"items": dropped[:200]}, "warning"))
+    if resolved:
+        notes.append(("pcf_directions_from_neighbours",
+                      f"{len(resolved)} item(s) took port directions from their neighbours or parent pipe.",
+                      {"items": resolved[:200]}, "detail"))
+    if gaps:
+        ids = [c["id"] for c in comps]
+        notes.append(("pcf_gasket_gaps",
+                      f"{len(gaps)} gap(s) between facing flange faces within a gasket's thickness were kept (a rigid "
+                      "spacer joins them) instead of being closed.",
+                      {"gaps": [{"from": ids[owner[i]], "to": ids[owner[j]], "gap": g} for i, j, g in gaps[:200]]},
+                      "warning"))
+    notes.append(("pcf_items", "", {
+        "id_source": doc.id_source,
+        "items": [{"id": it.id, "keyword": it.keyword, "line": it.line + 1, "position_id": it.position_id}
+                  for it in doc.items[:5000]]}, "detail"))
+    return notes
+
+
+def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
+    return AlignmentRequest.model_validate(interpret_pcf(text, options).body)
+
+
+def pcf_notes(request: AlignmentRequest) -> list[tuple[str, str, dict, str]]:
+    """Report notes about the request's source PCF: (code, message, details, 'warning' | 'detail')."""
+    try:
+        return interpret_pcf(request.source_pcf, request.options).notes
+    except InputRejected:  # a source_pcf that does not belong to this request (edited JSON)
+        return []

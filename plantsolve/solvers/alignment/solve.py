@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
@@ -10,10 +13,10 @@ from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
-from plantsolve.solvers.alignment.pcf import pcf_notes
+from plantsolve.solvers.alignment.pcf import pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
 from plantsolve.solvers.alignment.validation import check_input
-from plantsolve.solvers.base import Progress, SolverError, no_progress
+from plantsolve.solvers.base import InputRejected, Progress, SolverError, no_progress
 
 
 def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progress) -> Outcome:
@@ -25,8 +28,11 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     iterations = 0
     while True:
         progress(0.1 + 0.6 * min(len(reasons), 10) / 10, f"direct solve ({len(reasons)} cuts so far)")
-        pose = solve_direct(model, active, opts.pipe_stiffness)
+        pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations)
         iterations += pose.iterations
+        if iterations >= opts.max_iterations:
+            reason = f"iteration cap ({opts.max_iterations}) reached"
+            break
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
         why = "conflict"
@@ -71,8 +77,6 @@ def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
 
 def _near_misses(request: AlignmentRequest) -> list[dict]:
     """Open ports that face an open port of another item within one bore radius (twice the default tolerance)."""
-    from scipy.spatial import cKDTree
-
     used = {tuple(c.from_) for c in request.connections} | {tuple(c.to) for c in request.connections}
     open_ports = [(c.id, k, p, c.radius or 0.0) for c in request.components for k, p in enumerate(c.ports)
                   if (c.id, k) not in used]
@@ -91,38 +95,104 @@ def _near_misses(request: AlignmentRequest) -> list[dict]:
     return sorted(out, key=lambda d: d["distance"])
 
 
+def anchor_components(request: AlignmentRequest) -> list[dict]:
+    """One component to hold still in every connected network that has no fixed component: its tie_in,
+    else an end flange (a flange with an open port: a nozzle), else its largest component; ties by id."""
+    comps = request.components
+    index = {c.id: i for i, c in enumerate(comps)}
+    fixed = np.array([c.fixed or c.id in set(request.options.fixed_components) for c in comps])
+    n = len(comps)
+    if n == 0 or not request.connections:
+        return []
+    a = np.array([index[c.from_[0]] for c in request.connections])
+    b = np.array([index[c.to[0]] for c in request.connections])
+    _, label = connected_components(sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    used = {tuple(c.from_) for c in request.connections} | {tuple(c.to) for c in request.connections}
+    has_conn = np.zeros(n, dtype=bool)
+    has_conn[a] = has_conn[b] = True
+    out = []
+    for net in np.unique(label[has_conn]):
+        members = np.flatnonzero(label == net)
+        if np.any(fixed[members]):
+            continue
+
+        def rank(i: int):
+            c = comps[i]
+            P = np.array([p.position for p in c.ports], dtype=float)
+            span = float(np.max(np.linalg.norm(P - P[0], axis=1))) if len(P) > 1 else 0.0
+            open_port = any((c.id, k) not in used for k in range(len(c.ports)))
+            tier = 0 if c.type == "tie_in" else 1 if (c.type == "flange" and open_port) else 2
+            return (tier, -span, c.id)
+
+        best = min(members, key=rank)
+        tier = rank(best)[0]
+        out.append({"id": comps[best].id, "network_size": int(len(members)),
+                    "why": ["tie_in", "end flange (open port)", "largest component"][tier]})
+    return out
+
+
 def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
     """Align the pipe system so that every connection closes; see the package docstring."""
     check_input(request)
     progress(0.0, "building model")
-    model = build_model(request)
+    anchors = anchor_components(request) if request.options.anchor else []
+    work = request
+    if anchors:
+        opts = request.options.model_copy(
+            update={"fixed_components": list(request.options.fixed_components) + [x["id"] for x in anchors]})
+        work = request.model_copy(update={"options": opts})
+    model = build_model(work)
     if model.n_comp == 0:
         raise SolverError("model", "no components")
     gap0, ang0 = connection_errors(model, model.P0, model.D0)
     if model.n_conn == 0 or (np.all(gap0 <= model.pos_tol) and np.all(ang0 <= model.ang_tol)):
         # already water-tight (e.g. a model aligned before): nothing may move, not even along flat modes
         out = Outcome(P=model.P0.copy(), D=model.D0.copy(), iterations=0,
-                      stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool))
-        return _finish(request, model, out, progress)
+                      stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool),
+                      snap=False)
+        return _finish(request, model, out, progress, anchors, gap0, ang0)
     try:
-        conflict = _direct_with_cuts(model, request, progress)
+        conflict = _direct_with_cuts(model, work, progress)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
         raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
     if request.options.method == "direct":
         out = conflict
     else:
-        out = solve_dual_quaternion(model, request.options, conflict.active, progress)
+        out = solve_dual_quaternion(model, work.options, conflict.active, progress,
+                                    may_cut=bool(conflict.cut_reason))
         out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
         out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
-    return _finish(request, model, out, progress)
+    return _finish(request, model, out, progress, anchors, gap0, ang0)
 
 
-def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress) -> AlignmentResult:
+def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress, anchors: list[dict],
+            gap0: np.ndarray, ang0: np.ndarray) -> AlignmentResult:
     progress(0.95, "building result")
     result = build_result(request, model, out, request.options.method)
+    details = result.report.details
+    details["tolerance_profile"], details["tolerance_reason"] = tolerance_source(request)
+    closed0 = (gap0 <= model.pos_tol) & (ang0 <= model.ang_tol)
+    details["initial_max_gap"] = float(np.max(gap0, initial=0.0))
+    details["initial_max_angle_deg"] = float(np.degrees(np.max(ang0, initial=0.0)))
+    details["within_rounding_at_start"] = int(np.sum(closed0))
+    if anchors:
+        _warn(result, "anchored",
+              f"{len(anchors)} connected network(s) had no fixed component: one component of each was held still so "
+              "the result is reproducible; fix your tie-ins (fixed=true or options.fixed_components) to choose.",
+              {"anchors": anchors})
+    opened = [k for k, c in enumerate(result.connections)
+              if closed0[k] and not c.cut and (c.position_error > model.pos_tol
+                                                or np.radians(c.angle_error) > model.ang_tol)]
+    if opened:
+        _warn(result, "connections_opened",
+              f"{len(opened)} connection(s) within tolerance at the start are open at the end: "
+              f"{details.get('stop_reason')}.",
+              {"connections": [{"index": k, "from": list(request.connections[k].from_),
+                                "to": list(request.connections[k].to)} for k in opened[:200]]})
     if request.source_pcf is not None:
+        spacers = {c.id for c in request.components if c.id.startswith("gasket-gap-")}
         joined = {c.from_[0] for c in request.connections} | {c.to[0] for c in request.connections}
-        alone = [c.id for c in request.components if c.id not in joined]
+        alone = [c.id for c in request.components if c.id not in joined and c.id not in spacers]
         if alone and len(alone) < len(request.components):
             _warn(result, "pcf_unconnected_items",
                   f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
@@ -134,13 +204,28 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
                   f"{len(near)} pair(s) of open PCF end points face each other a little beyond the connection "
                   "tolerance and were left unconnected; raise options.connection_tolerance to join them.",
                   {"pairs": near[:200]})
-        for code, message, details in pcf_notes(request.source_pcf):
-            if code == "pcf_zero_length_items":
-                result.report.details[code] = details["items"]
+        for code, message, extra, level in pcf_notes(request):
+            if level == "detail":
+                details[code] = extra.get("items", extra) if code == "pcf_zero_length_items" else extra
             else:
-                _warn(result, code, message, details)
+                _warn(result, code, message, extra)
     return result
 
+
+def tolerance_source(request: AlignmentRequest) -> tuple[str, str]:
+    """Which profile set the tolerances, and why."""
+    opts = request.options
+    explicit = opts.position_tolerance is not None or opts.angle_tolerance is not None
+    note = "; explicit position_tolerance/angle_tolerance override it" if explicit else ""
+    if opts.tolerance_profile != "auto":
+        return opts.tolerance_profile, "chosen in the options" + note
+    if request.source_pcf is not None:
+        try:
+            t = pcf_tolerances(request.source_pcf, request.units)
+            return t["profile"], t["reason"] + note
+        except InputRejected:
+            pass
+    return "custom", "JSON request: coordinates as exact as given (1e-10)" + note
 
 def _warn(result: AlignmentResult, code: str, message: str, details: dict) -> None:
     result.report.warnings.append(Diagnostic(code=code, message=message, details=details))
