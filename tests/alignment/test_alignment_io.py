@@ -179,14 +179,14 @@ def test_tolerance_profiles():
     from plantsolve.solvers.alignment.model import resolve_tolerances
 
     r = request(_base(), [], tolerance_profile="aveva_e3d")
-    assert resolve_tolerances(r) == (1.0, 0.01)
+    assert resolve_tolerances(r) == (1.0, 0.01, 0.0)  # (position, angle, rounding of printed coordinates)
     r = AlignmentRequest.model_validate({**r.model_dump(by_alias=True), "units": "m"})
-    assert resolve_tolerances(r) == pytest.approx((1e-3, 0.01))
+    assert resolve_tolerances(r) == pytest.approx((1e-3, 0.01, 0.0))
     r = request(_base(), [], tolerance_profile="revit")
     assert resolve_tolerances(r)[0] == pytest.approx(304.8e-9)
     r = request(_base(), [], tolerance_profile="revit", position_tolerance=0.5, angle_tolerance=1.0)
-    assert resolve_tolerances(r) == pytest.approx((0.5, np.radians(1.0)))
-    assert resolve_tolerances(request(_base(), [])) == (1e-10, 1e-10)
+    assert resolve_tolerances(r) == pytest.approx((0.5, np.radians(1.0), 0.0))
+    assert resolve_tolerances(request(_base(), [])) == (1e-10, 1e-10, 0.0)  # 'auto' on JSON: exact coordinates
 
 
 def test_progress_is_reported_and_cancellation_propagates():

@@ -19,7 +19,7 @@ def error_impact(model: Model, gap: np.ndarray, ang: np.ndarray) -> np.ndarray:
 
 def choose_cut(model: Model, active: np.ndarray, gap: np.ndarray, ang: np.ndarray, only_bad: bool = True) -> int | None:
     """Index of the connection to cut, or None if every active connection is within tolerance."""
-    bad = active & ((gap > model.snap_pos) | (ang > model.snap_ang)) if only_bad else active.copy()
+    bad = active & ((gap > model.close_pos) | (ang > model.close_ang)) if only_bad else active.copy()
     if not np.any(bad):
         return None
     impact = error_impact(model, gap, ang)

@@ -247,7 +247,8 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
             break
         short = model.is_pipe & free & (st.L < model.min_length * (1 - 1e-12)) & ~locked
         # 1e-14 relative is where float64 Gauss-Newton ends; what is left is snapped (see Model.snap_pos)
-        if nv == 0 or (not np.any(short) and (err <= 1e-3 * min(model.pos_tol / pos_scale, model.ang_tol) or err <= 1e-14)):
+        tight = min(1e-3 * min(model.pos_tol / pos_scale, float(np.min(model.ang_tol, initial=1.0))), 1e-12)
+        if nv == 0 or (not np.any(short) and err <= tight):
             break
         if not use_cost and err >= 0.9 * prev and not np.any(short):
             stalls += 1

@@ -134,7 +134,7 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
     act = out.active
     max_gap = float(np.max(gap[act])) if np.any(act) else 0.0
     max_ang = float(np.max(ang[act])) if np.any(act) else 0.0
-    converged = bool(max_gap <= model.pos_tol and max_ang <= model.ang_tol)
+    converged = bool(max_gap <= model.pos_tol and np.all(ang[act] <= model.ang_tol[act]))
 
     move = np.linalg.norm(P - model.P_in, axis=1)
     disp = np.zeros(model.n_comp)
@@ -221,7 +221,8 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
         "method": method,
         "stop_reason": out.stop_reason,
         "position_tolerance": model.pos_tol,
-        "angle_tolerance_deg": float(np.degrees(model.ang_tol)),
+        "angle_tolerance_deg": float(np.degrees(np.max(model.ang_tol, initial=0.0))),
+        "angle_tolerance_deg_min": float(np.degrees(np.min(model.ang_tol, initial=0.0))),
         "center": model.center.tolist(),
         "pipe_axis_movement": stats(axis_move),
         "pipe_displacement": stats(disp[pipes]),

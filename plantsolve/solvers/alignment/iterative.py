@@ -273,7 +273,7 @@ def _optimise_clusters(net: Network, model: Model, max_iter: int) -> int:
         Dg = qrotate(Tg[group[pc]][:, :4], net.Dc0)
         g_a = np.linalg.norm(Pg[open_a] - Pg[open_b], axis=1)
         ang = np.linalg.norm(Dg[open_a] + Dg[open_b], axis=1)
-        if len(open_a) == 0 or (g_a.max() <= model.pos_tol and ang.max() <= model.ang_tol):
+        if len(open_a) == 0 or (g_a.max() <= model.pos_tol and ang.max() <= np.min(model.ang_tol, initial=1.0)):
             break
         src = np.concatenate([open_a, open_b])
         dst = np.concatenate([open_b, open_a])
@@ -325,7 +325,7 @@ def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.nd
             impact = float(np.max(gap[active] + ang[active] * model.lref, initial=0.0))
             if impact < best[0]:
                 best = (impact, P, D)
-            if np.all(gap[active] <= model.snap_pos) and np.all(ang[active] <= model.snap_ang):
+            if np.all(gap[active] <= model.close_pos) and np.all(ang[active] <= model.close_ang[active]):
                 stop = f"all connections within tolerance after {total + it} iterations"
                 break
             if np.max(gap[active], initial=0.0) > options.explosion_factor * max(g0, model.pos_tol):

@@ -15,8 +15,9 @@ from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.pcf import profile_tolerances, resolve_pcf_tolerance
 from plantsolve.solvers.base import InputRejected
 
-def resolve_tolerances(request: AlignmentRequest) -> tuple[float, float]:
-    """(position tolerance in request units, angle tolerance in radians)."""
+def resolve_tolerances(request: AlignmentRequest) -> tuple[float, float, float]:
+    """(position tolerance in request units, base angle tolerance in radians, rounding of printed
+    coordinates in units: 0 unless a PCF's precision sets a floor)."""
     opts = request.options
     if request.source_pcf is not None:
         try:
@@ -29,7 +30,7 @@ def resolve_tolerances(request: AlignmentRequest) -> tuple[float, float]:
         pos = opts.position_tolerance
     if opts.angle_tolerance is not None:
         ang = np.radians(opts.angle_tolerance)
-    return float(pos), float(ang)
+    return float(pos), float(ang), 0.0
 
 
 @dataclass
@@ -51,7 +52,7 @@ class Model:
     conn_a: np.ndarray  # [nk] port index of "from"
     conn_b: np.ndarray  # [nk] port index of "to"
     pos_tol: float
-    ang_tol: float
+    ang_tol: np.ndarray  # [nk] radians, per connection (printed rounding over the shorter lever raises it)
     size: np.ndarray  # [n] "length" of a component (pipe length, fitting arm sum)
     lref: float  # typical length, makes weights dimensionless
     min_length: np.ndarray  # [n] minimum pipe length (0 for fittings)
@@ -59,14 +60,23 @@ class Model:
 
     @property
     def snap_pos(self) -> float:
-        """Largest solver residual still closed by snapping: singular (orthogonal) loops stall the
-        last digits of Gauss-Newton near 1e-12..1e-10 relative; such a residue is distributed by making
-        the two ports bit-identical (the distortion is reported)."""
-        return max(self.pos_tol, 1e-9 * self.lref)
+        """Largest solver residual closed by snapping (the two ports made bit-identical): singular
+        (orthogonal) loops stall the last digits of Gauss-Newton near 1e-12..1e-10 relative. Never more
+        than 1e-6 of the typical length, so a loose tolerance (a millimetre) cannot distort short items."""
+        return min(max(self.pos_tol, 1e-9 * self.lref), 1e-6 * self.lref)
 
     @property
-    def snap_ang(self) -> float:
-        return max(self.ang_tol, 1e-9)
+    def snap_ang(self) -> np.ndarray:
+        return np.minimum(np.maximum(self.ang_tol, 1e-9), 1e-6)
+
+    @property
+    def close_pos(self) -> float:
+        """A gap that counts as closed: within tolerance or a snapped residue."""
+        return max(self.pos_tol, self.snap_pos)
+
+    @property
+    def close_ang(self) -> np.ndarray:
+        return np.maximum(self.ang_tol, self.snap_ang)
 
     @property
     def n_comp(self) -> int:
@@ -144,7 +154,19 @@ def build_model(request: AlignmentRequest) -> Model:
     index = {c.id: i for i, c in enumerate(comps)}
     conn_a = np.array([port_start[index[c.from_[0]]] + c.from_[1] for c in request.connections], dtype=np.intp)
     conn_b = np.array([port_start[index[c.to[0]]] + c.to[1] for c in request.connections], dtype=np.intp)
-    pos_tol, ang_tol = resolve_tolerances(request)
+    pos_tol, ang_base, rounding = resolve_tolerances(request)
+    ang_tol = np.full(len(conn_a), ang_base)
+    if rounding > 0 and len(conn_a):
+        # a direction read from printed points a lever L apart is only known to rounding / L
+        far = np.zeros(len(P_in))
+        for c in range(n):
+            sl = slice(port_start[c], port_start[c + 1])
+            Q = P_in[sl]
+            far[sl] = np.max(np.linalg.norm(Q[:, None] - Q[None], axis=2), axis=1) if len(Q) > 1 else 0.0
+        alone = far <= 0
+        far[alone] = np.where(np.isnan(radius[port_comp[alone]]), lref, radius[port_comp[alone]])
+        lever = np.minimum(far[conn_a], far[conn_b])
+        ang_tol = np.maximum(ang_tol, rounding / np.maximum(lever, 1e-300))
     key = [(comps[c].id, int(k)) for c, k in zip(port_comp, port_local)]
     return Model(
         ids=[c.id for c in comps], is_pipe=is_pipe, fixed=fixed, radius=radius, up=up,

@@ -400,34 +400,20 @@ def pcf_tolerances(text: str, units: str) -> dict:
     """The tolerances a PCF's own exporter and printed precision imply (profile 'auto').
 
     Rounding to d decimals moves a point by up to q = 0.5e-d per coordinate, so two ends of one
-    connection printed independently differ by up to 2 q sqrt(3); a direction over an arm L
-    turns by up to that over L (L: the shortest tenth of the items' spans, where rounding turns most)."""
+    connection printed independently differ by up to 2 q sqrt(3) (``rounding``): the position
+    tolerance is at least that. A direction taken from two printed points a lever L apart turns by
+    up to rounding / L, so each connection's angle tolerance is at least rounding over the shorter
+    lever of its two items (see :func:`plantsolve.solvers.alignment.model.build_model`)."""
     doc = read_document(text)
-    q = doc.quantum
-    pos_round = 2.0 * np.sqrt(3.0) * q
-    spans = []
-    for it in doc.items:
-        pts = []
-        for i in it.point_lines:
-            try:
-                pts.append(read_point(doc.lines[i])[0])
-            except ItemProblem:
-                continue
-        if len(pts) >= 2:
-            s = float(np.max(np.linalg.norm(np.array(pts) - pts[0], axis=1)))
-            if s > 10 * pos_round:
-                spans.append(s)
-    short = float(np.percentile(spans, 10)) if spans else 1.0 / max(TO_MM[units], 1e-300) * 100.0
-    ang_round = pos_round / short
+    rounding = 2.0 * np.sqrt(3.0) * doc.quantum
     if doc.tool is not None:
         pos_tool, ang_tool = profile_tolerances(doc.tool, units)
         reason = f"exporter named in the file ({doc.tool}); coordinates printed with {doc.decimals} decimals"
     else:
-        pos_tool, ang_tool = 0.0, 0.0
+        pos_tool, ang_tool = profile_tolerances("custom", units)
         reason = f"no exporter named in the file; coordinates printed with {doc.decimals} decimals"
-    return {"profile": doc.tool or "printed_precision", "position": max(pos_tool, pos_round),
-            "angle": max(ang_tool, ang_round), "reason": reason, "decimals": doc.decimals,
-            "rounding_position": pos_round, "rounding_angle_deg": float(np.degrees(ang_round))}
+    return {"profile": doc.tool or "printed_precision", "position": max(pos_tool, rounding), "angle": ang_tool,
+            "rounding": rounding, "reason": reason, "decimals": doc.decimals}
 
 
 @lru_cache(maxsize=8)
@@ -485,7 +471,9 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     # a component without a readable bore connects like a typical one of the file (10 mm if none has one)
     typical = float(np.median(known)) if known else 10.0 / TO_MM[units]
     rad = np.array([c["geometry"].radius or typical for c in comps])[owner]
-    flange_like = np.array([c["word"].startswith(FLANGE_LIKE) for c in comps])[owner]
+    # a flange face: a flange-like item, or an end written with a flanged end type (FL, FLG) as valves have
+    flange_like = np.array([c["word"].startswith(FLANGE_LIKE) or _flanged_end(doc.lines[i])
+                            for c in comps for i in c["geometry"].port_lines], dtype=bool)
     conns, gaps = _infer_connections(pos, dirs, owner, rad, flange_like, opts.connection_tolerance, tol[0],
                                      GASKET_GAP_MM / TO_MM[units])
     partner = {}
@@ -562,6 +550,11 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     return Interpretation(body=body, notes=notes, geometry=geometry, spacers=spacers)
 
 
+def _flanged_end(line: str) -> bool:
+    parts = line.split()
+    return len(parts) > 5 and parts[5].upper().startswith("FL")
+
+
 def _held_geometry(item: Item, doc: Document) -> Geometry | None:
     """The readable END/BRANCH points of an item that cannot be interpreted: ports of a fixed item."""
     ports, port_lines = [], []
@@ -584,18 +577,20 @@ def _held_geometry(item: Item, doc: Document) -> Geometry | None:
     return Geometry(ports, port_lines, "held", "other", radius)
 
 
-def resolve_pcf_tolerance(text: str, units: str, opts: AlignmentOptions) -> tuple[float, float]:
-    """(position, angle in radians) the options ask for on this PCF."""
+def resolve_pcf_tolerance(text: str, units: str, opts: AlignmentOptions) -> tuple[float, float, float]:
+    """(position, base angle in radians, rounding of the printed coordinates) the options ask for on this PCF;
+    the rounding is 0 unless the profile is 'auto'."""
+    rounding = 0.0
     if opts.tolerance_profile == "auto":
         t = pcf_tolerances(text, units)
-        pos, ang = t["position"], t["angle"]
+        pos, ang, rounding = t["position"], t["angle"], t["rounding"]
     else:
         pos, ang = profile_tolerances(opts.tolerance_profile, units)
     if opts.position_tolerance is not None:
         pos = opts.position_tolerance
     if opts.angle_tolerance is not None:
-        ang = float(np.radians(opts.angle_tolerance))
-    return float(pos), float(ang)
+        ang, rounding = float(np.radians(opts.angle_tolerance)), 0.0
+    return float(pos), float(ang), float(rounding)
 
 
 def _infer_connections(pos, dirs, owner, rad, flange_like, tol_opt, pos_tol, gasket_gap):

@@ -18,9 +18,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
+from plantsolve.solvers.alignment.model import build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import POINT_RE, ItemProblem, interpret_pcf, read_document, read_point
 from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.geometry import angle_between, rotation
+from plantsolve.solvers.geometry import rotation
 
 MORE_DECIMALS = (0, 1, 2, 3, 6, None)  # None: shortest spelling that reads back to the same double
 
@@ -83,29 +84,24 @@ def rewrite_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
 
 
 def reread_matches(request: AlignmentRequest, result: AlignmentResult, text: str) -> bool:
-    """The written file read back has the same connections (cut ones may go either way) and its closed
-    connections are within the position tolerance."""
+    """The written file read back has the same connections (cut ones may go either way), and every
+    connection the result closed is closed on re-reading: gap within the position tolerance, angle within
+    its tolerance or what the result itself left (the re-read model's own tolerances, as a new upload)."""
     try:
-        body = interpret_pcf(text, request.options).body
-    except InputRejected:
+        again = AlignmentRequest.model_validate(interpret_pcf(text, request.options).body)
+        model = build_model(again)
+    except (InputRejected, ValueError):
         return False
     cut = {_key(request.connections[k]) for k in result.cut_connections}
-    before = {_key(c) for c in request.connections} - cut
-    after_list = [(tuple(c["from"]), tuple(c["to"])) for c in body["connections"]]
-    after = {tuple(sorted(p)) for p in after_list} - cut
-    if before != after:
+    keys = [_key(c) for c in again.connections]
+    if {_key(c) for c in request.connections} - cut != set(keys) - cut:
         return False
-    ports = {c["id"]: c["ports"] for c in body["components"]}
     tol = float(result.report.details.get("position_tolerance", 0.0))
-    ang_tol = float(np.radians(result.report.details.get("angle_tolerance_deg", 0.0)))
-    for a, b in after_list:
-        if tuple(sorted((a, b))) in cut:
-            continue
-        pa, pb = ports[a[0]][a[1]], ports[b[0]][b[1]]
-        if np.linalg.norm(np.subtract(pa["position"], pb["position"])) > tol:
-            return False
-        da, db = np.array(pa["direction"]), np.array(pb["direction"])
-        if angle_between(da, -db) > ang_tol:
+    left = {_key(c): np.radians(r.angle_error) for c, r in zip(request.connections, result.connections)
+            if not r.cut and r.position_error <= tol}
+    gap, ang = connection_errors(model, model.P0, model.D0)
+    for k, key in enumerate(keys):
+        if key in left and (gap[k] > model.pos_tol or ang[k] > max(model.ang_tol[k], 1.001 * left[key])):
             return False
     return True
 

@@ -182,7 +182,7 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
               {"anchors": anchors})
     opened = [k for k, c in enumerate(result.connections)
               if closed0[k] and not c.cut and (c.position_error > model.pos_tol
-                                                or np.radians(c.angle_error) > model.ang_tol)]
+                                                or np.radians(c.angle_error) > model.ang_tol[k])]
     if opened:
         _warn(result, "connections_opened",
               f"{len(opened)} connection(s) within tolerance at the start are open at the end: "

@@ -12,7 +12,7 @@ MIN_PORTS = {
     "flange": 1, "cap": 1, "olet": 1, "tie_in": 1, "other": 1, None: 1,
 }
 OUTWARD = ("elbow", "bend", "tee", "cross", "reducer", "valve", "flange")
-MAX_PORTS = {"elbow": 2, "bend": 2, "tee": 3, "cross": 4, "reducer": 2, "cap": 1}
+MAX_PORTS = {"elbow": 2, "bend": 2, "tee": 3, "cross": 4, "reducer": 2, "cap": 2}  # a cap: 1 port, or 2 (Revit)
 
 
 def check_input(request: AlignmentRequest) -> None:
