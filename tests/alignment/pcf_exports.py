@@ -161,6 +161,9 @@ def e3d_return_bends() -> str:
     header = ["ISOGEN-FILES ISOGEN.FLS", "UNITS-BORE MM", "UNITS-CO-ORDS MM", "UNITS-BOLT-LENGTH MM",
               "UNITS-BOLT-DIA MM", "UNITS-WEIGHT KGS", "PIPELINE-REFERENCE /150-HW-3101",
               "    PIPING-SPEC /A3B", "    DATE-DMY 24/11/2026"]
+    nozzle = items[0].ends[0]
+    header += ["END-CONNECTION-EQUIPMENT", f"    CO-ORDS {' '.join(fmt(x, 2) for x in nozzle)} 150.00",
+               "    CONNECTION-REFERENCE /P-1101/N1"]
     ids = lambda k, it: [f"COMPONENT-IDENTIFIER {k + 1}", f"UCI =16384/{30001 + k}", "MATERIAL-IDENTIFIER 1"]
     materials = ["MATERIALS", "MATERIAL-IDENTIFIER 1", "    DESCRIPTION PIPE SMLS ASTM A106-B",
                  "ITEM-CODE AAFWNB150", "    DESCRIPTION FLANGE WN 150 CL300 RF"]

@@ -125,8 +125,8 @@ def test_e3d_return_bends_misc_component_and_olet():
     comps = {c.id: c for c in req.components}
     assert list(comps)[:3] == ["1", "2", "3"]  # COMPONENT-IDENTIFIER, not file positions
     items = res.report.details["pcf_items"]
-    assert items["id_source"] == {"COMPONENT-IDENTIFIER": 16}
-    assert {i["position_id"]: i["id"] for i in items["items"]}["BEND-3"] == "3"
+    assert items["id_source"] == {"COMPONENT-IDENTIFIER": 16, "position": 1}  # + the end-connection marker
+    assert {i["position_id"]: i["id"] for i in items["items"]}["BEND-4"] == "3"
     assert res.report.details["tolerance_profile"] == "aveva_e3d"  # from its =16384/... references
     bends = [c for c in req.components if c.type == "bend"]
     assert len(bends) == 3
@@ -142,6 +142,14 @@ def test_e3d_return_bends_misc_component_and_olet():
     assert {d["id"] for d in details} >= {"3", "5", olet.id}
     moved = max(c.displacement for c in res.components if c.id != "1")
     assert 1.0 < moved < 10.0  # the drifted items were put back, by millimetres
+
+
+def test_without_tie_ins_the_nozzle_at_the_end_connection_is_held_and_named():
+    raw, req, res, out = _run("e3d_return_bends.pcf", [], "direct")
+    anchors = next(w for w in res.report.warnings if w.code == "anchored").details["anchors"]
+    assert {"id": "1", "network_size": 13, "why": "at an end connection"} in anchors
+    assert next(c for c in res.components if c.id == "1").displacement == 0.0
+    assert out.split(b"\n")[9:13] == raw.split(b"\n")[9:13]  # the marker stays where the nozzle is
 
 
 def test_revit_two_point_caps_materials_and_dates():

@@ -369,6 +369,7 @@ class Interpretation:
     notes: list[tuple[str, str, dict, str]]  # (code, message, details, 'warning' | 'detail')
     geometry: dict[str, Geometry]  # by item id, items that are solver components or joints
     spacers: dict[str, tuple[str, str]]  # spacer component id -> the two items it joins
+    nozzles: list[str] = field(default_factory=list)  # items at an END-CONNECTION-EQUIPMENT/-PIPELINE marker
 
 
 def options_from(options) -> AlignmentOptions:
@@ -547,7 +548,24 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     body = {"units": units, "components": comps_json, "connections": connections, "options": options_out,
             "source_pcf": text}
     notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, tol))
-    return Interpretation(body=body, notes=notes, geometry=geometry, spacers=spacers)
+    return Interpretation(body=body, notes=notes, geometry=geometry, spacers=spacers,
+                          nozzles=_at_end_connections(doc, pos, owner, rad, comps))
+
+
+def _at_end_connections(doc: Document, pos, owner, rad, comps) -> list[str]:
+    """Items with a port at a line's end-connection marker (a nozzle or another line): tie-in-like."""
+    marks = []
+    for it in doc.items:
+        if it.keyword in ("END-CONNECTION-EQUIPMENT", "END-CONNECTION-PIPELINE"):
+            for i in it.extra_lines + it.point_lines:
+                try:
+                    marks.append(read_point(doc.lines[i])[0])
+                except ItemProblem:
+                    continue
+    if not marks or len(pos) == 0:
+        return []
+    dist, k = cKDTree(pos).query(np.array(marks))
+    return sorted({comps[owner[j]]["id"] for d, j in zip(dist, k) if d <= 0.5 * rad[j] + 1e-9})
 
 
 def _flanged_end(line: str) -> bool:

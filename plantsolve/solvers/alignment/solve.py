@@ -13,7 +13,7 @@ from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
-from plantsolve.solvers.alignment.pcf import pcf_notes, pcf_tolerances
+from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
 from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.base import InputRejected, Progress, SolverError, no_progress
@@ -95,9 +95,10 @@ def _near_misses(request: AlignmentRequest) -> list[dict]:
     return sorted(out, key=lambda d: d["distance"])
 
 
-def anchor_components(request: AlignmentRequest) -> list[dict]:
+def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = frozenset()) -> list[dict]:
     """One component to hold still in every connected network that has no fixed component: its tie_in,
-    else an end flange (a flange with an open port: a nozzle), else its largest component; ties by id."""
+    else an item at a line's end connection (``nozzles``, from a PCF's END-CONNECTION records), else an
+    end flange (a flange with an open port), else its largest component; ties by id."""
     comps = request.components
     index = {c.id: i for i, c in enumerate(comps)}
     fixed = np.array([c.fixed or c.id in set(request.options.fixed_components) for c in comps])
@@ -121,13 +122,13 @@ def anchor_components(request: AlignmentRequest) -> list[dict]:
             P = np.array([p.position for p in c.ports], dtype=float)
             span = float(np.max(np.linalg.norm(P - P[0], axis=1))) if len(P) > 1 else 0.0
             open_port = any((c.id, k) not in used for k in range(len(c.ports)))
-            tier = 0 if c.type == "tie_in" else 1 if (c.type == "flange" and open_port) else 2
+            tier = 0 if c.type == "tie_in" else 1 if c.id in nozzles else 2 if (c.type == "flange" and open_port) else 3
             return (tier, -span, c.id)
 
         best = min(members, key=rank)
         tier = rank(best)[0]
         out.append({"id": comps[best].id, "network_size": int(len(members)),
-                    "why": ["tie_in", "end flange (open port)", "largest component"][tier]})
+                    "why": ["tie_in", "at an end connection", "end flange (open port)", "largest component"][tier]})
     return out
 
 
@@ -135,7 +136,7 @@ def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Alignm
     """Align the pipe system so that every connection closes; see the package docstring."""
     check_input(request)
     progress(0.0, "building model")
-    anchors = anchor_components(request) if request.options.anchor else []
+    anchors = anchor_components(request, _nozzles(request)) if request.options.anchor else []
     work = request
     if anchors:
         opts = request.options.model_copy(
@@ -210,6 +211,15 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
             else:
                 _warn(result, code, message, extra)
     return result
+
+
+def _nozzles(request: AlignmentRequest) -> frozenset[str]:
+    if request.source_pcf is None:
+        return frozenset()
+    try:
+        return frozenset(interpret_pcf(request.source_pcf, request.options).nozzles)
+    except InputRejected:
+        return frozenset()
 
 
 def tolerance_source(request: AlignmentRequest) -> tuple[str, str]:
