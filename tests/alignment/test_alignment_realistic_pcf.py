@@ -242,6 +242,8 @@ GOOD = "PIPE\n    END-POINT 0 0 0 100\n    END-POINT 1000 0 0 100\n"
     ("PIPE\n    END-POINT 1000 0 0 100\n    END-POINT 1000 0 zero 100\n", "pcf_items_held", "cannot read"),
     ("PIPE\n    END-POINT 1000 0 0 100\n    END-POINT 1000 nan 0 100\n", "pcf_items_held", "non-finite"),
     ("CAP\n    END-POINT 5000 0 0 100\n", "pcf_items_held", "direction"),
+    ("OLET\n    BRANCH1-POINT 9000 0 50 50\n", "pcf_items_held", "direction"),
+    ("OLET\n    CENTRE-POINT 9000 0 50\n    BRANCH1-POINT 9000 0 50 50\n", "pcf_items_held", "direction"),
     ("VALVE\n    END-POINT 0 0 abc 100\n", "pcf_items_unread", "cannot read"),
 ])
 def test_an_item_that_cannot_be_read_is_kept_held_and_reported(item, code, reason):
