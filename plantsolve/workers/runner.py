@@ -10,9 +10,9 @@ from __future__ import annotations
 import json
 import logging
 import math
+import re
 import threading
 import time
-import traceback
 import uuid
 from typing import Any, Callable
 
@@ -189,9 +189,19 @@ def run_job(
             report = failure_report("input", "The stored input no longer validates.", errors=error.errors(include_url=False, include_context=False))
         except SolverError as error:
             report = failure_report(error.stage, error.message, **error.details)
-        except Exception as error:  # a crash: retried up to the attempt cap
-            history.append({"attempt": attempt, "error": f"{type(error).__name__}: {error}", "traceback": traceback.format_exc(limit=8)[-4000:]})
-            log.exception("job %s attempt %d crashed", job_id, attempt)
+        except Exception as error:
+            log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
+            history.append({"attempt": attempt, "worker": worker, "error": f"{type(error).__name__}: {_clean(error)}"})
+            if not is_infrastructure_failure(error):
+                # the same input gives the same failure: retrying would only repeat it
+                report = failure_report(
+                    "solver",
+                    f"The solver failed on this input ({type(error).__name__}: {_clean(error)}); it was not retried "
+                    "because the same input fails the same way. Check the input's values (scale, degenerate geometry).",
+                    attempts=history,
+                )
+                written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+                return "failed" if written else "stale"
             if attempt < job.max_attempts:
                 report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
                 if ctx.repo.requeue(job_id, attempt, report=report):
@@ -199,10 +209,32 @@ def run_job(
                     return "requeued"
                 return "stale"
             report = failure_report(
-                "solver", f"The solver crashed on each of {attempt} attempts: {type(error).__name__}: {error}", attempts=history
+                "solver", f"The solver crashed on each of {attempt} attempts: {type(error).__name__}: {_clean(error)}",
+                attempts=history,
             )
     written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
     return "failed" if written else "stale"
+
+
+INFRASTRUCTURE = (OSError, ConnectionError, TimeoutError, EOFError)
+
+
+def is_infrastructure_failure(error: BaseException) -> bool:
+    """A failure of the machine or its services (network, disk, database, broker) that another attempt
+    may not meet; anything else a solver raises (numerical breakdown, a bug) repeats on the same input."""
+    if isinstance(error, INFRASTRUCTURE):
+        return True
+    module = type(error).__module__ or ""
+    return module.startswith(("sqlalchemy", "psycopg", "redis", "kombu", "celery", "billiard", "amqp"))
+
+
+_PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")
+
+
+def _clean(error: BaseException) -> str:
+    """The error's message for a client: one line, server paths removed, at most 300 characters."""
+    text = " ".join(str(error).split())
+    return _PATHS.sub("<path>", text)[:300]
 
 
 def _non_finite_paths(value: Any, path: str = "") -> list[str]:

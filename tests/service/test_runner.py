@@ -99,8 +99,23 @@ def test_crashing_solver_retries_then_fails_with_a_report(ctx):
     assert report["status"] == "failed" and report["stage"] == "solver"
     assert "division by zero" in report["message"]
     assert [a["attempt"] for a in report["details"]["attempts"]] == [1, 2]
-    assert "RuntimeError" in report["details"]["attempts"][0]["error"]
+    assert "ConnectionError" in report["details"]["attempts"][0]["error"]
     assert run_job(ctx, job_id, worker="w", requeue=queue.enqueue) == "skipped"
+
+
+@pytest.mark.parametrize("error", ["LinAlgError", "ValueError", "MemoryError"])
+def test_a_failure_that_the_input_decides_fails_once_without_server_details(ctx, error):
+    message = "SVD did not converge in /srv/plantsolve/.venv/lib/python3.11/site-packages/numpy/linalg/_linalg.py"
+    job_id = submit(ctx, "test-crash", f'{{"message": "{message}", "error": "{error}"}}'.encode())
+    queue = Recorder()
+    assert run_job(ctx, job_id, worker="w", requeue=queue.enqueue) == "failed"
+    assert queue.enqueued == []
+    job = ctx.repo.get(job_id)
+    assert job.status == "failed" and job.attempt == 1  # one attempt, not max_attempts
+    report = job.report
+    assert report["stage"] == "solver" and error in report["message"] and "not retried" in report["message"]
+    text = str(report)
+    assert "site-packages" not in text and "/srv/" not in text and "Traceback" not in text and "<path>" in text
 
 
 def test_hanging_solver_hits_the_time_limit(ctx):

@@ -77,15 +77,21 @@ def render_compute(request: ComputeRequest, result: ComputeResult) -> list[Artif
 
 class CrashRequest(StrictModel):
     message: str = "boom"
+    error: str = Field(default="ConnectionError", description="ConnectionError (infrastructure: retried), "
+                       "LinAlgError or ValueError (input-dependent: failed at once), MemoryError.")
 
 
 class CrashResult(BaseModel):
     report: Report
 
 
+ERRORS = {"ConnectionError": ConnectionError, "LinAlgError": np.linalg.LinAlgError, "ValueError": ValueError,
+          "MemoryError": MemoryError, "OSError": OSError}
+
+
 def solve_crash(request: CrashRequest, progress) -> CrashResult:
     progress(0.1, "about to crash")
-    raise RuntimeError(request.message)
+    raise ERRORS[request.error](request.message)
 
 
 def solve_fail(request: CrashRequest, progress) -> CrashResult:
