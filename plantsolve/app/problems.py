@@ -6,6 +6,7 @@ and anything unexpected (a 500 still gets a problem document, never a stack trac
 
 from __future__ import annotations
 
+import json
 import logging
 from typing import Any, Iterable, Sequence
 
@@ -123,6 +124,41 @@ def problem_response(error: ProblemError, request: Request | None = None) -> JSO
 _STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, PayloadTooLarge, UnsupportedMediaType, Unprocessable)}
 
 
+MAX_JSON_DEPTH = 200
+
+
+def loads_bounded(data: bytes | str, loc: Sequence[str | int], what: str) -> Any:
+    """json.loads with a nesting limit: deeper documents (or unreadable ones) are a 422 naming ``loc``."""
+    try:
+        value = json.loads(data)
+    except RecursionError:
+        raise Unprocessable(f"{what} is nested too deeply to be read.",
+                            errors=[field_problem(loc, f"JSON nested deeper than {MAX_JSON_DEPTH} levels",
+                                                  "json_too_deep")]) from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise Unprocessable(f"{what} is not valid JSON: {error}",
+                            errors=[field_problem(loc, f"invalid JSON: {error}", "json_invalid")]) from None
+    if _depth(value) > MAX_JSON_DEPTH:
+        raise Unprocessable(f"{what} is nested too deeply to be read.",
+                            errors=[field_problem(loc, f"JSON nested deeper than {MAX_JSON_DEPTH} levels",
+                                                  "json_too_deep")])
+    return value
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of a parsed JSON value, without recursion."""
+    deepest, stack = 0, [(value, 1)]
+    while stack:
+        item, level = stack.pop()
+        if isinstance(item, dict):
+            deepest = max(deepest, level)
+            stack.extend((v, level + 1) for v in item.values() if isinstance(v, (dict, list)))
+        elif isinstance(item, list):
+            deepest = max(deepest, level)
+            stack.extend((v, level + 1) for v in item if isinstance(v, (dict, list)))
+    return deepest
+
+
 def install(app: FastAPI) -> None:
     @app.exception_handler(ProblemError)
     async def _problem(request: Request, error: ProblemError):
@@ -143,7 +179,16 @@ def install(app: FastAPI) -> None:
         else:
             problem = ProblemError(str(error.detail))
             problem.status, problem.title, problem.slug = error.status_code, str(error.detail), "http"
-        return problem_response(problem, request)
+        response = problem_response(problem, request)
+        for name, value in (getattr(error, "headers", None) or {}).items():  # Allow on 405, WWW-Authenticate ...
+            response.headers.setdefault(name, value)
+        return response
+
+    @app.exception_handler(RecursionError)
+    async def _too_deep(request: Request, error: RecursionError):
+        return problem_response(Unprocessable(
+            "The body is nested too deeply to be read.",
+            errors=[field_problem([], f"JSON nested deeper than {MAX_JSON_DEPTH} levels", "json_too_deep")]), request)
 
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, error: Exception):
@@ -154,6 +199,7 @@ def install(app: FastAPI) -> None:
 PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
     status: {"model": Problem, "content": {PROBLEM_JSON: {"schema": {"$ref": "#/components/schemas/Problem"}}}, "description": title}
     for status, title in (
+        (400, "Malformed multipart body (too many fields or files)"),
         (401, "Missing or invalid API key (only when API_KEYS is set)"),
         (404, "No such job or artifact"),
         (409, "The job is not in a state that allows this"),

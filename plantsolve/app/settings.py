@@ -21,6 +21,7 @@ class AppSettings(WorkerSettings):
         description="Comma-separated API keys. When set, every /v1 call needs 'Authorization: Bearer <key>'.",
     )
     max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
+    max_upload_bytes: int = Field(default=64 * 1024 * 1024, description="Largest accepted uploaded file (413 above).")
     inline_input_bytes: int = Field(
         default=1024 * 1024,
         description="JSON inputs larger than this are stored as a file and referenced from the job row.",

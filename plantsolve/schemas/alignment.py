@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from plantsolve.schemas.common import FiniteFloat, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import Direction3, FiniteFloat, Point3, Quaternion, Report, StrictModel, Units, Vec3
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -27,9 +27,10 @@ FittingType = Literal[
 class Port(StrictModel):
     """A ConnectionPoint: where a component joins its neighbour."""
 
-    position: Vec3 = Field(description="Port centre point, in the request's units.")
-    direction: Vec3 = Field(
-        description="Direction pointing out of the component (any non-zero length; normalised by the solver)."
+    position: Point3 = Field(description="Port centre point, in the request's units (|x| <= 1e12).")
+    direction: Direction3 = Field(
+        description="Direction pointing out of the component (any non-zero length, components within 1e9; "
+        "normalised by the solver)."
     )
 
 
@@ -46,6 +47,7 @@ class Component(StrictModel):
     radius: FiniteFloat | None = Field(
         default=None,
         gt=0,
+        le=1e12,
         description="Outside radius in the request's units. For pipes it sets the minimum pipe length "
         "(options.min_pipe_length_factor x radius); without it a hundredth of the measured length is used.",
     )
@@ -53,7 +55,7 @@ class Component(StrictModel):
         default=False,
         description="A tie-in: the component never moves (its output coordinates are its input, bit for bit).",
     )
-    up: Vec3 | None = Field(
+    up: Direction3 | None = Field(
         default=None,
         description="Up vector of a fitting whose ports are collinear (e.g. a valve stem). After alignment it is "
         "re-established as the original up projected onto the plane normal to the new port axis.",

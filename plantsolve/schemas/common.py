@@ -18,6 +18,12 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 """A float that must be finite (NaN and +-inf are rejected)."""
 
 Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
+# Input magnitudes a plant model can have: coordinates within 1e12 of the unit (a light-hour in mm),
+# direction components within 1e9 (they are normalised; 1e200 only overflows the solvers' products).
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
+Point3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+DirectionComponent = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
+Direction3 = Annotated[list[DirectionComponent], Field(min_length=3, max_length=3)]
 """A point or a direction ``[x, y, z]``."""
 
 Quaternion = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]

@@ -11,8 +11,10 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.jobs.service import JobService
-from plantsolve.app.problems import NotFound, UnsupportedMediaType, Unprocessable, field_problem, responses
+from plantsolve.app.jobs.service import JobService, safe_filename
+from plantsolve.app.problems import (
+    NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
+)
 from plantsolve.schemas.jobs import JobList, JobStatus, JobView
 from plantsolve.solvers.base import SolverSpec
 
@@ -57,6 +59,9 @@ def submit_route(kind: str):
                     "A multipart submission needs a 'file' part.",
                     errors=[field_problem(["file"], "missing file part", "missing")],
                 )
+            upload_limit = request.app.state.settings.max_upload_bytes
+            if upload.size is not None and upload.size > upload_limit:
+                raise PayloadTooLarge(f"The uploaded file has {upload.size} bytes; the limit is {upload_limit} bytes.")
             content = await upload.read()
             options = form.get("options")
             if options is not None and not isinstance(options, str):
@@ -110,7 +115,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             summary=f"Submit a {kind} job",
             description=(spec.description or f"Run the {kind} solver.")
             + "\n\nAnswers 202 with the job and a Location header; 200 with the existing job for a repeated Idempotency-Key.",
-            responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(413, 415, 422)},
+            responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(400, 413, 415, 422)},
             openapi_extra=submit_openapi(spec),
         )
 
@@ -168,6 +173,6 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         path = service.ctx.files.path(job.input_file)
         if job.input_kind == "json_file":
             return FileResponse(path, media_type="application/json")
-        return FileResponse(path, media_type="application/octet-stream", filename=job.input_filename)
+        return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
 
     return router

@@ -23,6 +23,7 @@ from plantsolve.app.problems import (
     field_problem,
     from_input_rejected,
     from_validation_error,
+    loads_bounded,
 )
 from plantsolve.schemas.jobs import ArtifactInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec
@@ -44,7 +45,7 @@ def _canonical(value: Any) -> bytes:
     return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode()
 
 
-def _safe_filename(name: str) -> str:
+def safe_filename(name: str) -> str:
     base = re.sub(r"[^A-Za-z0-9._-]+", "_", name.rsplit("/", 1)[-1].rsplit("\\", 1)[-1]).strip("._")
     return base[:120] or "upload"
 
@@ -75,12 +76,7 @@ class JobService:
 
     def submit_json(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
         spec = self.spec(kind)
-        try:
-            raw = json.loads(body)
-        except (UnicodeDecodeError, json.JSONDecodeError) as error:
-            raise Unprocessable(
-                f"The body is not valid JSON: {error}", errors=[field_problem([], f"invalid JSON: {error}", "json_invalid")]
-            ) from None
+        raw = loads_bounded(body, [], "The body")
         try:
             request = spec.request_model.model_validate(raw)
         except ValidationError as error:
@@ -109,13 +105,7 @@ class JobService:
             )
         options: dict | None = None
         if options_text:
-            try:
-                options = json.loads(options_text)
-            except json.JSONDecodeError as error:
-                raise Unprocessable(
-                    "The 'options' form field is not valid JSON.",
-                    errors=[field_problem(["options"], f"invalid JSON: {error}", "json_invalid")],
-                ) from None
+            options = loads_bounded(options_text, ["options"], "The 'options' form field")
             if not isinstance(options, dict):
                 raise Unprocessable(
                     "The 'options' form field must be a JSON object.",
@@ -129,12 +119,15 @@ class JobService:
             raise from_input_rejected(error) from None
         except ValidationError as error:
             raise from_validation_error(error) from None
+        except RecursionError:
+            raise Unprocessable("The uploaded file is nested too deeply to be read.",
+                                errors=[field_problem(["file"], "nested too deeply", "json_too_deep")]) from None
         self._check(spec, request)
         digest = hashlib.sha256()
         for part in (kind.encode(), extension.encode(), _canonical(options), content):
             digest.update(hashlib.sha256(part).digest())
         job_id = uuid.uuid4()
-        path, _, _ = self.ctx.files.put(f"{job_id}/input/{_safe_filename(filename)}", content)
+        path, _, _ = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
         fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options}
         return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields)
 
