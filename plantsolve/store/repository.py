@@ -9,7 +9,7 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 from __future__ import annotations
 
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime, timedelta, timezone
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
@@ -41,6 +41,7 @@ class StoredArtifact:
 class SweepOutcome:
     requeued: list[uuid.UUID]
     failed: list[uuid.UUID]
+    waiting: list[tuple[uuid.UUID, bool]] = field(default_factory=list)  # queued: (id, reached the broker), oldest first
 
 
 class JobRepository:
@@ -254,13 +255,21 @@ class JobRepository:
                 requeued.append(job_id)
         stale = now - timedelta(seconds=requeue_queued_after)
         with self.sessions() as session:
-            waiting = session.scalars(
-                select(Job.id).where(
+            waiting = session.execute(
+                select(Job.id, Job.enqueued_at).where(
                     Job.status == "queued", or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
-                )
+                ).order_by(Job.created_at)
             ).all()
-        requeued.extend(job_id for job_id in waiting if job_id not in requeued)
-        return SweepOutcome(requeued=requeued, failed=failed)
+        return SweepOutcome(requeued=requeued, failed=failed,
+                            waiting=[(job_id, sent is not None) for job_id, sent in waiting if job_id not in requeued])
+
+    def count_queued(self) -> int:
+        with self.sessions() as session:
+            return int(session.scalar(select(func.count()).select_from(Job).where(Job.status == "queued")))
+
+    def clear_enqueued(self, job_id: uuid.UUID) -> None:
+        """The message never reached the broker: the next sweep sends it."""
+        self._execute(update(Job).where(Job.id == job_id).values(enqueued_at=None))
 
     def queued_ids(self) -> list[uuid.UUID]:
         with self.sessions() as session:

@@ -24,7 +24,8 @@ log = logging.getLogger("plantsolve.celery")
 
 
 def create_celery(settings: WorkerSettings) -> Celery:
-    longest = max((spec.time_limit for spec in load_kinds(settings.plugins).values()), default=660.0)
+    longest = max((float(settings.time_limits.get(spec.kind, spec.time_limit))
+                   for spec in load_kinds(settings.plugins).values()), default=660.0)
     app = Celery("plantsolve", broker=settings.broker_url)
     app.conf.update(
         task_acks_late=True,
@@ -50,14 +51,27 @@ class CeleryDispatcher:
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
         self.celery = create_celery(ctx.settings)
-        self._sweeper = Sweeper(ctx, self.enqueue)
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
         spec = self.ctx.spec(kind)
         limits = {}
         if spec is not None:
-            limits = {"soft_time_limit": spec.soft_time_limit, "time_limit": spec.time_limit}
+            soft, hard = self.ctx.limits(spec)
+            limits = {"soft_time_limit": soft, "time_limit": hard}
         self.celery.send_task("plantsolve.run_job", args=[str(job_id)], **limits)
+
+    def pending(self) -> int | None:
+        """Messages waiting in the broker's queue (Redis), or None when it cannot tell."""
+        try:
+            with self.celery.connection_for_read() as connection:
+                client = getattr(connection.default_channel, "client", None)
+                if client is None:
+                    return None
+                return int(client.llen(self.celery.conf.task_default_queue or "celery"))
+        except Exception:  # an unreachable broker: the time rule alone decides
+            log.warning("could not read the broker's queue length", exc_info=True)
+            return None
 
     def ping(self) -> None:
         with self.celery.connection_for_write() as connection:

@@ -39,6 +39,12 @@ class ServiceContext:
     def spec(self, kind: str) -> SolverSpec | None:
         return self.kinds.get(kind)
 
+    def limits(self, spec: SolverSpec) -> tuple[float, float]:
+        """(soft, hard) time limit of a kind: the settings' override, else the kind's own."""
+        hard = float(self.settings.time_limits.get(spec.kind, spec.time_limit))
+        soft = float(self.settings.soft_time_limits.get(spec.kind, min(spec.soft_time_limit, hard)))
+        return min(soft, hard), hard
+
     def close(self) -> None:
         self.store.close()
 

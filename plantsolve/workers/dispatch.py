@@ -20,6 +20,9 @@ class Dispatcher(Protocol):
     def ping(self) -> None:
         """Raise if the queue cannot accept jobs."""
 
+    def pending(self) -> int | None:
+        """Messages waiting for a worker, or None when the queue cannot tell."""
+
     def start(self) -> None: ...
 
     def stop(self) -> None: ...

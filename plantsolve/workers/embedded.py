@@ -24,7 +24,7 @@ class EmbeddedDispatcher:
         self._pending: set[uuid.UUID] = set()
         self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
-        self._sweeper = Sweeper(ctx, self.enqueue)
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
         self.name = worker_name("embedded")
 
     def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
@@ -33,6 +33,10 @@ class EmbeddedDispatcher:
                 return
             self._pending.add(job_id)
         self._queue.put(job_id)
+
+    def pending(self) -> int:
+        with self._lock:
+            return len(self._pending)
 
     def ping(self) -> None:
         if self._threads and not any(t.is_alive() for t in self._threads):
@@ -44,7 +48,7 @@ class EmbeddedDispatcher:
             thread.start()
             self._threads.append(thread)
         # Jobs left queued (or running with a dead lease) by a previous process are resumed.
-        sweep_once(self.ctx, self.enqueue)
+        sweep_once(self.ctx, self.enqueue, self.pending)
         for job_id in self.ctx.repo.queued_ids():
             self.enqueue(job_id)
         self._sweeper.start()

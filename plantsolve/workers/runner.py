@@ -165,12 +165,13 @@ def run_job(
         return "failed"
 
     history = list(((job.report or {}).get("details") or {}).get("attempts", []))
-    with AttemptMonitor(ctx, job_id, attempt, spec.soft_time_limit) as monitor:
+    soft_limit, hard_limit = ctx.limits(spec)
+    with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
             request = load_request(ctx, spec, job)
             result = _call_with_deadline(
                 lambda: spec.solve(request, monitor.progress),
-                spec.time_limit if hard_limit_in_thread else None,
+                hard_limit if hard_limit_in_thread else None,
             )
             return _store_success(ctx, spec, job_id, attempt, request, result, monitor)
         except _Stop as stop:
@@ -248,11 +249,12 @@ def _non_finite_paths(value: Any, path: str = "") -> list[str]:
 
 
 def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor) -> str:
+    soft, hard = ctx.limits(spec)
     report = failure_report(
         "time_limit",
-        f"The solver ran past its time limit ({spec.soft_time_limit:g} s soft, {spec.time_limit:g} s hard) and was stopped.",
-        soft_time_limit=spec.soft_time_limit,
-        time_limit=spec.time_limit,
+        f"The solver ran past its time limit ({soft:g} s soft, {hard:g} s hard) and was stopped.",
+        soft_time_limit=soft,
+        time_limit=hard,
         elapsed_seconds=round(monitor.elapsed, 3),
     )
     written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)

@@ -30,7 +30,19 @@ class WorkerSettings(StoreSettings):
     embedded_workers: int = Field(default=2, ge=1, description="Threads of the in-process job pool.")
     lease_seconds: float = Field(default=60.0, gt=0, description="A running job's lease; renewed by heartbeats.")
     heartbeat_seconds: float = Field(default=10.0, gt=0, description="Heartbeat period of a running job.")
-    sweep_seconds: float = Field(default=15.0, gt=0, description="Period of the lapsed-lease sweeper.")
+    sweep_seconds: float = Field(default=10.0, gt=0, description="Period of the sweeper (lapsed leases, lost messages).")
+    requeue_queued_after: float = Field(
+        default=20.0, gt=0,
+        description="A queued job whose message is older than this and that the broker no longer holds (its queue "
+        "is shorter than the queued jobs) is enqueued again; jobs whose enqueue failed are enqueued at the next sweep.",
+    )
+    time_limits: dict[str, float] = Field(
+        default_factory=dict,
+        description='Hard time limit per kind in seconds, overriding the kind\'s own (JSON: {"tube": 1200}).',
+    )
+    soft_time_limits: dict[str, float] = Field(
+        default_factory=dict, description="Soft time limit per kind in seconds (the solver is asked to stop)."
+    )
     max_attempts: int = Field(default=3, ge=1, description="Attempts before a crashing or lost job is failed.")
     progress_write_seconds: float = Field(
         default=0.5, ge=0, description="Minimum interval between progress writes (and cancellation checks)."

@@ -14,27 +14,44 @@ from plantsolve.workers.runner import lost_worker_report
 
 log = logging.getLogger("plantsolve.sweeper")
 
-REQUEUE_QUEUED_AFTER = 600.0  # s: a queued job not picked up by then may have lost its message
-
 Enqueue = Callable[[uuid.UUID, str], None]
+Pending = Callable[[], "int | None"]
 
 
-def sweep_once(ctx: ServiceContext, enqueue: Enqueue) -> None:
-    outcome = ctx.repo.sweep(requeue_queued_after=REQUEUE_QUEUED_AFTER, report_for_lost=lost_worker_report)
-    for job_id in outcome.requeued:
+def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None) -> None:
+    """One pass. Queued jobs are enqueued again when their message never reached the broker
+    (``enqueued_at`` unset), or when it is older than ``requeue_queued_after`` and the broker holds
+    fewer messages than there are such jobs (the oldest first: a restarted Redis without persistence
+    lost them). A duplicate message is harmless: the claim lets one delivery run."""
+    outcome = ctx.repo.sweep(requeue_queued_after=ctx.settings.requeue_queued_after,
+                             report_for_lost=lost_worker_report)
+    again = list(outcome.requeued) + [job_id for job_id, sent in outcome.waiting if not sent]
+    stale = [job_id for job_id, sent in outcome.waiting if sent]
+    if stale:
+        held = pending() if pending is not None else None
+        missing = len(stale) if held is None else max(0, ctx.repo.count_queued() - held)
+        again += stale[:missing]
+    sent = 0
+    for job_id in dict.fromkeys(again):
         job = ctx.repo.get(job_id)
-        if job is not None and job.status == "queued":
+        if job is None or job.status != "queued":
+            continue
+        try:
             enqueue(job_id, job.kind)
-            ctx.repo.mark_enqueued(job_id)
-    if outcome.requeued or outcome.failed:
-        log.info("sweeper: re-queued %d, failed %d", len(outcome.requeued), len(outcome.failed))
+        except Exception:  # still no broker: the next sweep tries again
+            log.warning("sweeper: enqueue of job %s failed", job_id, exc_info=True)
+            continue
+        ctx.repo.mark_enqueued(job_id)
+        sent += 1
+    if sent or outcome.failed:
+        log.info("sweeper: enqueued %d again, failed %d", sent, len(outcome.failed))
 
 
 class Sweeper:
-    """Runs :func:`sweep_once` every ``SWEEP_SECONDS`` in a daemon thread."""
+    """Runs :func:`sweep_once` every ``sweep_seconds`` in a daemon thread."""
 
-    def __init__(self, ctx: ServiceContext, enqueue: Enqueue):
-        self.ctx, self.enqueue = ctx, enqueue
+    def __init__(self, ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None):
+        self.ctx, self.enqueue, self.pending = ctx, enqueue, pending
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="sweeper", daemon=True)
 
@@ -47,6 +64,6 @@ class Sweeper:
     def _loop(self) -> None:
         while not self._stop.wait(self.ctx.settings.sweep_seconds):
             try:
-                sweep_once(self.ctx, self.enqueue)
+                sweep_once(self.ctx, self.enqueue, self.pending)
             except Exception:
                 log.exception("sweep failed")

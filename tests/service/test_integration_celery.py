@@ -200,3 +200,36 @@ def test_killed_worker_job_reruns_on_another_attempt(unstaffed, scaled_workers_s
         victim.stop()
         if rescuer is not None:
             rescuer.stop()
+
+
+def test_queued_jobs_whose_messages_the_broker_lost_are_sent_again(pg_url, redis_url, tmp_path, scaled_workers_stopped):
+    """A Redis restarted without persistence forgets its queue: the sweeper notices the broker holds fewer
+    messages than there are queued jobs and sends them again, within a sweep period after REQUEUE_QUEUED_AFTER."""
+    import redis
+
+    env = {**_env(pg_url, redis_url, tmp_path), "REQUEUE_QUEUED_AFTER": "1.5"}
+    settings = service_settings(tmp_path, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3,
+                                lease_seconds=2.0, sweep_seconds=0.5, requeue_queued_after=1.5)
+    with TestClient(create_app(settings)) as client:
+        ids = [client.post("/v1/test-compute/jobs", json={"values": [float(i)]}).json()["id"] for i in range(5)]
+        redis.Redis.from_url(redis_url).flushdb()  # the restart: every queued message is gone
+        lost_at = time.monotonic()
+        worker = Worker(env, "after-restart", tmp_path / "worker-after-restart.log")
+        try:
+            for job_id in ids:
+                assert wait_for(client, job_id, timeout=60)["status"] == "succeeded"
+            assert time.monotonic() - lost_at < 30
+        finally:
+            worker.stop()
+
+
+def test_a_job_whose_enqueue_failed_is_sent_by_the_next_sweep(pg_url, tmp_path):
+    """The broker is down while a job is submitted: the job is stored, not marked as sent, and the sweeper
+    sends it once the broker is back."""
+    settings = service_settings(tmp_path, database_url=pg_url, broker_url="redis://127.0.0.1:9/0",
+                                sweep_seconds=0.3, requeue_queued_after=60.0)
+    with TestClient(create_app(settings)) as client:
+        job = client.post("/v1/test-compute/jobs", json={"values": [1.0]})
+        assert job.status_code == 202
+        stored = client.app.state.ctx.repo.get(__import__("uuid").UUID(job.json()["id"]))
+        assert stored.status == "queued" and stored.enqueued_at is None

@@ -171,3 +171,61 @@ def test_solver_deaf_to_cancellation_is_abandoned_at_the_hard_limit(ctx):
     assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "failed"
     assert 1.5 < time.monotonic() - started < 10
     assert ctx.repo.get(job_id).report["stage"] == "time_limit"
+
+
+class Broker(Recorder):
+    """A queue that can lose its messages and say how many it holds."""
+
+    def __init__(self, fail: bool = False):
+        super().__init__()
+        self.fail = fail
+        self.held = 0
+
+    def enqueue(self, job_id, kind=""):
+        if self.fail:
+            raise ConnectionError("broker down")
+        super().enqueue(job_id, kind)
+        self.held += 1
+
+    def pending(self):
+        return self.held
+
+
+def test_a_failed_enqueue_is_sent_at_the_next_sweep(ctx):
+    broker = Broker(fail=True)
+    job_id = JobService(ctx, broker).submit_json("test-compute", b'{"values": [1]}', None).job.id
+    assert ctx.repo.get(job_id).enqueued_at is None  # stored, not marked as sent
+    broker.fail = False
+    sweep_once(ctx, broker.enqueue, broker.pending)  # no waiting period for a message that never left
+    assert broker.enqueued == [job_id] and ctx.repo.get(job_id).enqueued_at is not None
+
+
+def test_messages_lost_by_the_broker_are_sent_again_and_held_ones_are_not(ctx):
+    broker = Broker()
+    service = JobService(ctx, broker)
+    ids = [service.submit_json("test-compute", f'{{"values": [{i}]}}'.encode(), None).job.id for i in range(3)]
+    with ctx.db.sessions() as session:  # older than requeue_queued_after
+        session.execute(update(Job).values(enqueued_at=utcnow() - timedelta(seconds=ctx.settings.requeue_queued_after + 1)))
+        session.commit()
+    broker.enqueued.clear()
+    sweep_once(ctx, broker.enqueue, broker.pending)  # the broker still holds all three: nothing to do
+    assert broker.enqueued == []
+    broker.held = 1  # a restart lost two of them
+    sweep_once(ctx, broker.enqueue, broker.pending)
+    assert broker.enqueued == ids[:2]  # the two oldest are sent again
+
+
+def test_time_limits_come_from_the_settings(tmp_path):
+    context = ServiceContext.create(service_settings(tmp_path, time_limits={"test-hang": 0.5},
+                                                     soft_time_limits={"test-hang": 0.2}), migrate=True)
+    try:
+        spec = context.spec("test-hang")
+        assert context.limits(spec) == (0.2, 0.5)
+        assert context.limits(context.spec("test-compute")) == (60.0, 90.0)
+        job_id = JobService(context, Recorder()).submit_json("test-hang", b"{}", None).job.id
+        started = time.monotonic()
+        assert run_job(context, job_id, worker="w", requeue=Recorder().enqueue) == "failed"
+        assert time.monotonic() - started < 1.5
+        assert context.repo.get(job_id).report["details"]["time_limit"] == 0.5
+    finally:
+        context.close()

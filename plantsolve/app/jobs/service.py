@@ -7,6 +7,7 @@ import base64
 import binascii
 import hashlib
 import json
+import logging
 import re
 import uuid
 from dataclasses import dataclass
@@ -32,6 +33,8 @@ from plantsolve.workers.dispatch import Dispatcher
 from plantsolve.workers.runner import failure_report
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import as_utc, is_finished
+
+log = logging.getLogger("plantsolve.api")
 
 
 @dataclass
@@ -154,7 +157,7 @@ class JobService:
             idempotency_key=key,
             body_hash=body_hash,
             solver_version=spec.version,
-            enqueued_at=utcnow(),  # enqueued right after the commit; the sweeper retries if that fails
+            enqueued_at=utcnow(),  # enqueued right after the commit; cleared if that fails
             **fields,
         )
         stored, created = self.ctx.repo.create(job)
@@ -168,8 +171,9 @@ class JobService:
         # Enqueue only after the row is committed: a worker must always find the job.
         try:
             self.dispatcher.enqueue(stored.id, stored.kind)
-        except Exception:  # the broker is down: the row is safe, the sweeper enqueues it later
-            pass
+        except Exception:  # the broker is down: the row is safe; unmarked, the next sweep sends it
+            log.warning("enqueue of job %s failed; the sweeper will send it", stored.id, exc_info=True)
+            self.ctx.repo.clear_enqueued(stored.id)
         return Submitted(stored, True)
 
     # ---- reads and cancel -------------------------------------------------------------------
