@@ -1,21 +1,123 @@
-"""Optional API keys: with ``API_KEYS`` set, every /v1 call needs ``Authorization: Bearer <key>``."""
+"""API keys and tenants, checked before any body is read.
+
+With ``API_KEYS`` set, every ``/v1`` call, the dashboard and (with ``PROTECT_DOCS``) the docs need
+``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``, which sets
+an HTTP-only, same-site cookie honoured for reads (GET/HEAD) only, so a cookie cannot submit or
+cancel on a user's behalf. Each key is a tenant: an entry ``name:key`` names it, a bare ``key`` is
+named by the first 16 hex digits of its SHA-256. Jobs belong to the tenant that created them; keys
+in ``ADMIN_KEYS`` see every tenant's jobs. Without keys there is one anonymous tenant (``""``).
+"""
 
 from __future__ import annotations
 
+import hashlib
 import hmac
+from dataclasses import dataclass
 
 from fastapi import Request
+from fastapi.responses import RedirectResponse
+from starlette.types import ASGIApp, Receive, Scope, Send
 
-from plantsolve.app.problems import Unauthorized
+from plantsolve.app.problems import Unauthorized, problem_response
+
+COOKIE = "plantsolve_key"
+DOCS = ("/docs", "/redoc", "/openapi.json")
 
 
-def require_api_key(request: Request) -> None:
-    keys: list[str] = request.app.state.settings.api_keys
-    if not keys:
-        return
-    header = request.headers.get("authorization", "")
+@dataclass(frozen=True)
+class Principal:
+    owner: str  # the tenant: "" when the service runs without keys
+    admin: bool  # sees every tenant's jobs
+    authenticated: bool  # a valid key was presented (or no keys are configured)
+
+    @property
+    def sees(self) -> str | None:
+        """The owner filter for reads: None sees all."""
+        return None if self.admin else self.owner
+
+
+ANONYMOUS = Principal(owner="", admin=True, authenticated=True)
+NOBODY = Principal(owner="", admin=False, authenticated=False)
+
+
+def _entry(entry: str) -> tuple[str, str]:
+    name, sep, key = entry.partition(":")
+    if sep and name and key:
+        return name[:64], key
+    return hashlib.sha256(entry.encode()).hexdigest()[:16], entry
+
+
+class KeyRing:
+    def __init__(self, api_keys: list[str], admin_keys: list[str]):
+        self.entries = [(*_entry(e), False) for e in api_keys] + [(*_entry(e), True) for e in admin_keys]
+
+    def __bool__(self) -> bool:
+        return bool(self.entries)
+
+    def find(self, token: str) -> Principal | None:
+        found = None
+        for owner, key, admin in self.entries:  # compare with every key: no early exit to time
+            if hmac.compare_digest(token.encode(), key.encode()):
+                found = Principal(owner=owner, admin=admin, authenticated=True)
+        return found
+
+
+def _token(scope: Scope) -> str | None:
+    headers = dict(scope.get("headers") or [])
+    header = headers.get(b"authorization", b"").decode("latin-1")
     scheme, _, token = header.partition(" ")
-    if scheme.lower() != "bearer" or not token:
+    if scheme.lower() == "bearer" and token.strip():
+        return token.strip()
+    if scope.get("method") in ("GET", "HEAD"):
+        for part in headers.get(b"cookie", b"").decode("latin-1").split(";"):
+            name, _, value = part.strip().partition("=")
+            if name == COOKIE and value:
+                return value
+    return None
+
+
+class AuthMiddleware:
+    """Resolves the caller before the route (and before any body is read) and refuses protected paths."""
+
+    def __init__(self, app: ASGIApp, keys: KeyRing, protect_docs: bool):
+        self.app, self.keys, self.protect_docs = app, keys, protect_docs
+
+    def protected(self, path: str) -> bool:
+        if path.startswith("/v1/") or path == "/v1":
+            return True
+        if path == "/dashboard" or (path.startswith("/dashboard/") and not path.startswith("/dashboard/log")):
+            return True
+        return self.protect_docs and path.startswith(DOCS)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        if not self.keys:
+            principal = ANONYMOUS
+        else:
+            token = _token(scope)
+            principal = self.keys.find(token) if token else None
+            path = scope.get("path", "")
+            if principal is None and path == "/dashboard" and token is None:
+                await RedirectResponse("/dashboard/login", status_code=303)(scope, receive, send)  # a browser
+                return
+            if principal is None and self.protected(path):
+                detail = "Send 'Authorization: Bearer <key>'." if token is None else "The API key is not valid."
+                await problem_response(Unauthorized(detail))(scope, receive, send)
+                return
+            principal = principal or NOBODY
+        scope.setdefault("state", {})["principal"] = principal
+        await self.app(scope, receive, send)
+
+
+def principal(request: Request) -> Principal:
+    return getattr(request.state, "principal", ANONYMOUS)
+
+
+def require_api_key(request: Request) -> Principal:
+    """Route dependency: the caller (the middleware has already refused unknown keys)."""
+    who = principal(request)
+    if not who.authenticated:
         raise Unauthorized("Send 'Authorization: Bearer <key>'.")
-    if not any(hmac.compare_digest(token.strip().encode(), key.encode()) for key in keys):
-        raise Unauthorized("The API key is not valid.")
+    return who

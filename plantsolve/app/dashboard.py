@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from html import escape
 
-from fastapi import APIRouter, Depends, Request
-from fastapi.responses import HTMLResponse
+from fastapi import APIRouter, Depends, Form, Request
+from fastapi.responses import HTMLResponse, RedirectResponse
 
-from plantsolve.app.auth import require_api_key
+from plantsolve.app.auth import COOKIE, Principal, principal, require_api_key
 from plantsolve.store.repository import as_utc
 
 _STYLE = """
@@ -18,14 +18,42 @@ table{border-collapse:collapse;width:100%}td,th{padding:.3rem .6rem;border-botto
 """
 
 
-def build_dashboard() -> APIRouter:
-    router = APIRouter(include_in_schema=False, dependencies=[Depends(require_api_key)])
+_LOGIN = """<!doctype html><html><head><meta charset='utf-8'><title>plantsolve: log in</title><style>{style}</style>
+</head><body><h1>plantsolve</h1><form method='post' action='/dashboard/login'><p>{message}</p>
+<label>API key <input type='password' name='key' autocomplete='current-password' autofocus></label>
+<button type='submit'>Log in</button></form></body></html>"""
 
-    @router.get("/dashboard", response_class=HTMLResponse)
+
+def build_dashboard() -> APIRouter:
+    router = APIRouter(include_in_schema=False)
+
+    @router.get("/dashboard/login", response_class=HTMLResponse)
+    def login_form() -> HTMLResponse:
+        return HTMLResponse(_LOGIN.format(style=_STYLE, message="This service needs an API key."))
+
+    @router.post("/dashboard/login")
+    def login(request: Request, key: str = Form(default="", max_length=512)) -> HTMLResponse:
+        keys = request.app.state.keys
+        if keys and keys.find(key) is None:
+            return HTMLResponse(_LOGIN.format(style=_STYLE, message="That key is not valid."), status_code=401)
+        response = RedirectResponse("/dashboard", status_code=303)
+        # HTTP-only and same-site: scripts cannot read it, other sites cannot send it; reads only (see auth)
+        response.set_cookie(COOKIE, key, httponly=True, samesite="strict", secure=request.url.scheme == "https",
+                            path="/")
+        return response
+
+    @router.post("/dashboard/logout")
+    def logout() -> RedirectResponse:
+        response = RedirectResponse("/dashboard/login", status_code=303)
+        response.delete_cookie(COOKIE, path="/")
+        return response
+
+    @router.get("/dashboard", response_class=HTMLResponse, dependencies=[Depends(require_api_key)])
     def dashboard(request: Request, kind: str | None = None, status: str | None = None) -> HTMLResponse:
         ctx = request.app.state.ctx
-        counts = ctx.repo.count_by_status()
-        jobs = ctx.repo.list(kind=kind or None, status=status or None, limit=50)
+        who: Principal = principal(request)
+        counts = ctx.repo.count_by_status(owner=who.sees)
+        jobs = ctx.repo.list(kind=kind or None, status=status or None, limit=50, owner=who.sees)
         rows = []
         for job in jobs:
             created = as_utc(job.created_at).strftime("%Y-%m-%d %H:%M:%S")

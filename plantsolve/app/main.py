@@ -8,9 +8,11 @@ from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.openapi.utils import get_openapi
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
+from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
 from plantsolve.app.dashboard import build_dashboard
 from plantsolve.app.jobs.endpoints import build_router
 from plantsolve.app.jobs.operations import build_operations_router
@@ -60,6 +62,13 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.state.dispatcher = dispatcher
     app.state.jobs = JobService(ctx, dispatcher)
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
+    # added last = runs first: the caller is known (or refused) before any body is read
+    app.state.keys = KeyRing(settings.api_keys, settings.admin_keys)
+    app.add_middleware(AuthMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs)
+    if settings.cors_origins:
+        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["GET", "POST"],
+                           allow_headers=["Authorization", "Content-Type", "Idempotency-Key"],
+                           expose_headers=["Location"])
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
@@ -95,6 +104,8 @@ def _install_health(app: FastAPI) -> None:
             except Exception as error:
                 ok = False
                 checks[name] = f"unreachable: {type(error).__name__}: {error}"[:300]
+        if not principal(request).authenticated:  # dependency addresses are for operators only
+            checks = {name: ("ok" if value == "ok" else "unreachable") for name, value in checks.items()}
         status = HealthStatus(status="ok" if ok else "unavailable", checks=checks)
         return JSONResponse(status.model_dump(), status_code=200 if ok else 503)
 

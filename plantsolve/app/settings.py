@@ -18,7 +18,15 @@ from plantsolve.workers.settings import WorkerSettings, split_commas
 class AppSettings(WorkerSettings):
     api_keys: Annotated[list[str], NoDecode] = Field(
         default_factory=list,
-        description="Comma-separated API keys. When set, every /v1 call needs 'Authorization: Bearer <key>'.",
+        description="Comma-separated API keys, each 'name:key' or a bare key; each key is a tenant that sees only "
+        "its own jobs. When set, every /v1 call needs 'Authorization: Bearer <key>'.",
+    )
+    admin_keys: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="Comma-separated keys that see every tenant's jobs."
+    )
+    protect_docs: bool = Field(default=True, description="With keys set, /docs, /redoc and /openapi.json need a key too.")
+    cors_origins: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="Comma-separated origins allowed to call the API from a browser (CORS off when empty)."
     )
     max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, description="Largest accepted uploaded file (413 above).")
@@ -28,7 +36,7 @@ class AppSettings(WorkerSettings):
     )
     auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
 
-    @field_validator("api_keys", mode="before")
+    @field_validator("api_keys", "admin_keys", "cors_origins", mode="before")
     @classmethod
     def _split_keys(cls, value: object) -> object:
         return split_commas(value)

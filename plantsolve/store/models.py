@@ -48,7 +48,10 @@ class Job(Base):
     input_options: Mapped[Any | None] = mapped_column(JSON)
     result: Mapped[Any | None] = mapped_column(JSON)
     report: Mapped[Any | None] = mapped_column(JSON)
-    idempotency_key: Mapped[str | None] = mapped_column(String(255), unique=True)
+    # "<owner>:<key>" when the job has an owner: the same key of two tenants names two jobs
+    idempotency_key: Mapped[str | None] = mapped_column(String(320), unique=True)
+    owner: Mapped[str] = mapped_column(String(64), default="", server_default="")  # "" without API keys
+    attempts: Mapped[Any | None] = mapped_column(JSON)  # [{attempt, worker, started_at, finished_at, outcome, error}]
     body_hash: Mapped[str] = mapped_column(String(64))
     solver_version: Mapped[str] = mapped_column(String(64))
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
@@ -61,6 +64,7 @@ class Job(Base):
         Index("ix_jobs_status_lease", "status", "lease_until"),
         Index("ix_jobs_created", "created_at", "id"),
         Index("ix_jobs_kind_status_created", "kind", "status", "created_at"),
+        Index("ix_jobs_owner_created", "owner", "created_at", "id"),
     )
 
 

@@ -87,9 +87,13 @@ class JobRepository:
         status: str | None = None,
         after: tuple[datetime, uuid.UUID] | None = None,
         limit: int = 50,
+        owner: str | None = None,
     ) -> list[Job]:
-        """Newest first; ``after`` is the (created_at, id) of the last job of the previous page."""
+        """Newest first; ``after`` is the (created_at, id) of the last job of the previous page; ``owner``
+        None lists every tenant's jobs."""
         query = select(Job).order_by(Job.created_at.desc(), Job.id.desc()).limit(limit)
+        if owner is not None:
+            query = query.where(Job.owner == owner)
         if kind:
             query = query.where(Job.kind == kind)
         if status:
@@ -102,9 +106,12 @@ class JobRepository:
         with self.sessions() as session:
             return list(session.scalars(query))
 
-    def count_by_status(self) -> dict[str, int]:
+    def count_by_status(self, owner: str | None = None) -> dict[str, int]:
+        query = select(Job.status, func.count()).group_by(Job.status)
+        if owner is not None:
+            query = query.where(Job.owner == owner)
         with self.sessions() as session:
-            rows = session.execute(select(Job.status, func.count()).group_by(Job.status))
+            rows = session.execute(query)
             return {status: count for status, count in rows}
 
     def artifacts(self, job_id: uuid.UUID) -> list[Artifact]:

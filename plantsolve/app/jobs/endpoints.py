@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
-from plantsolve.app.auth import require_api_key
+from plantsolve.app.auth import Principal, require_api_key
 from plantsolve.app.jobs.service import JobService, safe_filename
 from plantsolve.app.problems import (
     NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
@@ -40,16 +40,17 @@ def get_service(request: Request) -> JobService:
 
 
 Service = Annotated[JobService, Depends(get_service)]
+Caller = Annotated[Principal, Depends(require_api_key)]
 
 
 def submit_route(kind: str):
     """The POST /v1/<kind>/jobs handler: JSON body or multipart upload (``file`` + ``options``)."""
 
-    async def submit(request: Request, service: Service, idempotency_key: IdempotencyKey = None) -> Response:
+    async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None) -> Response:
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if content_type == "application/json" or content_type.endswith("+json"):
             body = await request.body()
-            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key)
+            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner)
         elif content_type == "multipart/form-data":
             limit = request.app.state.settings.max_body_bytes
             form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
@@ -67,7 +68,8 @@ def submit_route(kind: str):
             if options is not None and not isinstance(options, str):
                 options = (await options.read()).decode("utf-8", "replace")
             submitted = await run_in_threadpool(
-                service.submit_upload_view, kind, upload.filename or "upload", content, options, idempotency_key
+                lambda: service.submit_upload_view(kind, upload.filename or "upload", content, options, idempotency_key,
+                                                   owner=caller.owner)
             )
         else:
             raise UnsupportedMediaType(
@@ -122,16 +124,17 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     @router.get("/jobs", response_model=JobList, tags=["jobs"], responses=responses(422), summary="List jobs, newest first")
     def list_jobs(
         service: Service,
+        caller: Caller,
         kind: str | None = None,
         status: JobStatus | None = None,
         cursor: str | None = Query(default=None, description="next_cursor of the previous page"),
         limit: int = Query(default=50, ge=1, le=200),
     ) -> JobList:
-        return service.list(kind, status, cursor, limit)
+        return service.list(kind, status, cursor, limit, caller.sees)
 
     @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), summary="Job status")
-    def get_job(job_id: uuid.UUID, service: Service) -> Response:
-        return _json(service.view(service.get(job_id)))
+    def get_job(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
+        return _json(service.view(service.get(job_id, caller.sees)))
 
     @router.get(
         "/jobs/{job_id}/result",
@@ -139,12 +142,12 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         responses={200: {"description": "The solver's result (schema per kind: see components <Kind>Result)"}, **responses(404, 409, 422)},
         summary="Result of a succeeded job",
     )
-    def get_result(job_id: uuid.UUID, service: Service) -> JSONResponse:
-        return JSONResponse(service.result(job_id))
+    def get_result(job_id: uuid.UUID, service: Service, caller: Caller) -> JSONResponse:
+        return JSONResponse(service.result(job_id, caller.sees))
 
     @router.post("/jobs/{job_id}/cancel", response_model=JobView, tags=["jobs"], responses=responses(404, 409, 422), summary="Cancel a queued or running job")
-    def cancel_job(job_id: uuid.UUID, service: Service) -> JobView:
-        return service.view(service.cancel(job_id))
+    def cancel_job(job_id: uuid.UUID, service: Service, caller: Caller) -> JobView:
+        return service.view(service.cancel(job_id, caller.sees))
 
     @router.get(
         "/jobs/{job_id}/artifacts/{name}",
@@ -153,8 +156,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         responses={200: {"description": "The file, with its media type"}, **responses(404, 422)},
         summary="Download an artifact",
     )
-    def get_artifact(job_id: uuid.UUID, name: str, service: Service) -> FileResponse:
-        service.get(job_id)
+    def get_artifact(job_id: uuid.UUID, name: str, service: Service, caller: Caller) -> FileResponse:
+        service.get(job_id, caller.sees)
         artifact = service.ctx.repo.artifact(job_id, name)
         if artifact is None:
             raise NotFound(f"Job {job_id} has no artifact {name!r}.")
@@ -166,8 +169,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         responses={200: {"description": "The request exactly as stored: JSON, or the uploaded file"}, **responses(404, 422)},
         summary="What was submitted",
     )
-    def get_input(job_id: uuid.UUID, service: Service) -> Response:
-        job = service.get(job_id)
+    def get_input(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
+        job = service.get(job_id, caller.sees)
         if job.input_kind == "json":
             return JSONResponse(job.input)
         path = service.ctx.files.path(job.input_file)

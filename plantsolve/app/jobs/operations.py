@@ -11,7 +11,7 @@ from typing import Mapping
 from fastapi import APIRouter, Depends
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.jobs.endpoints import Service
+from plantsolve.app.jobs.endpoints import Caller, Service
 from plantsolve.app.problems import responses
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 
@@ -19,8 +19,8 @@ from plantsolve.solvers.base import ResultOperation, SolverSpec
 def operation_route(spec: SolverSpec, operation: ResultOperation):
     request_model = operation.request_model
 
-    def answer(job_id: uuid.UUID, body: request_model, service: Service):  # type: ignore[valid-type]
-        return service.answer(spec, operation, job_id, body)
+    def answer(job_id: uuid.UUID, body: request_model, service: Service, caller: Caller):  # type: ignore[valid-type]
+        return service.answer(spec, operation, job_id, body, caller.sees)
 
     answer.__name__ = f"{spec.kind}_{operation.name}".replace("-", "_")
     return answer

@@ -66,18 +66,18 @@ class JobService:
             raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(sorted(self.ctx.kinds))}.")
         return spec
 
-    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
+    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None, owner: str = "") -> Submitted:
         """submit_json plus the job's view, in one thread hop for the async route."""
-        submitted = self.submit_json(kind, body, idempotency_key)
+        submitted = self.submit_json(kind, body, idempotency_key, owner=owner)
         submitted.view = self.view(submitted.job)
         return submitted
 
-    def submit_upload_view(self, *args) -> Submitted:
-        submitted = self.submit_upload(*args)
+    def submit_upload_view(self, *args, owner: str = "") -> Submitted:
+        submitted = self.submit_upload(*args, owner=owner)
         submitted.view = self.view(submitted.job)
         return submitted
 
-    def submit_json(self, kind: str, body: bytes, idempotency_key: str | None) -> Submitted:
+    def submit_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "") -> Submitted:
         spec = self.spec(kind)
         raw = loads_bounded(body, [], "The body")
         try:
@@ -92,10 +92,11 @@ class JobService:
             fields = {"input_kind": "json_file", "input_file": path}
         else:
             fields = {"input_kind": "json", "input": raw}
-        return self._create(spec, job_id, body_hash, idempotency_key, fields)
+        return self._create(spec, job_id, body_hash, idempotency_key, fields, owner)
 
     def submit_upload(
-        self, kind: str, filename: str, content: bytes, options_text: str | None, idempotency_key: str | None
+        self, kind: str, filename: str, content: bytes, options_text: str | None, idempotency_key: str | None,
+        *, owner: str = "",
     ) -> Submitted:
         spec = self.spec(kind)
         if spec.parse_upload is None or not spec.upload_extensions:
@@ -132,7 +133,7 @@ class JobService:
         job_id = uuid.uuid4()
         path, _, _ = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
         fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options}
-        return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields)
+        return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)
 
     @staticmethod
     def _check(spec: SolverSpec, request: Any) -> None:
@@ -144,7 +145,7 @@ class JobService:
             raise from_input_rejected(error) from None
 
     def _create(
-        self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict
+        self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
     ) -> Submitted:
         job = Job(
             id=job_id,
@@ -154,7 +155,8 @@ class JobService:
             max_attempts=spec.max_attempts or self.ctx.settings.max_attempts,
             progress=0.0,
             progress_message="queued",
-            idempotency_key=key,
+            idempotency_key=f"{owner}:{key}" if key is not None and owner else key,
+            owner=owner,
             body_hash=body_hash,
             solver_version=spec.version,
             enqueued_at=utcnow(),  # enqueued right after the commit; cleared if that fails
@@ -178,13 +180,15 @@ class JobService:
 
     # ---- reads and cancel -------------------------------------------------------------------
 
-    def get(self, job_id: uuid.UUID) -> Job:
+    def get(self, job_id: uuid.UUID, sees: str | None = None) -> Job:
+        """The job, if the caller may see it (``sees``: the caller's tenant, None for all)."""
         job = self.ctx.repo.get(job_id)
-        if job is None:
+        if job is None or (sees is not None and job.owner != sees):
             raise NotFound(f"No job {job_id}.")
         return job
 
-    def cancel(self, job_id: uuid.UUID) -> Job:
+    def cancel(self, job_id: uuid.UUID, sees: str | None = None) -> Job:
+        self.get(job_id, sees)
         outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."))
         if outcome is None:
             raise NotFound(f"No job {job_id}.")
@@ -192,8 +196,8 @@ class JobService:
             raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
         return self.get(job_id)
 
-    def result(self, job_id: uuid.UUID) -> Any:
-        job = self.get(job_id)
+    def result(self, job_id: uuid.UUID, sees: str | None = None) -> Any:
+        job = self.get(job_id, sees)
         if job.status != "succeeded":
             if is_finished(job.status):
                 raise Conflict(
@@ -203,9 +207,10 @@ class JobService:
             raise Conflict(f"Job {job_id} is {job.status}; the result is not ready yet.", extra={"status": job.status})
         return job.result
 
-    def answer(self, spec: SolverSpec, operation: ResultOperation, job_id: uuid.UUID, body: Any) -> Any:
+    def answer(self, spec: SolverSpec, operation: ResultOperation, job_id: uuid.UUID, body: Any,
+               sees: str | None = None) -> Any:
         """A kind's synchronous result operation (e.g. perfmap's inverse query) on a finished job."""
-        job = self.get(job_id)
+        job = self.get(job_id, sees)
         if job.kind != spec.kind:
             raise NotFound(f"Job {job_id} is a {job.kind!r} job, not a {spec.kind!r} job.")
         if job.status != "succeeded":
@@ -221,9 +226,10 @@ class JobService:
         except InputRejected as error:
             raise from_input_rejected(error) from None
 
-    def list(self, kind: str | None, status: str | None, cursor: str | None, limit: int) -> JobList:
+    def list(self, kind: str | None, status: str | None, cursor: str | None, limit: int,
+             sees: str | None = None) -> JobList:
         after = decode_cursor(cursor) if cursor else None
-        jobs = self.ctx.repo.list(kind=kind, status=status, after=after, limit=limit + 1)
+        jobs = self.ctx.repo.list(kind=kind, status=status, after=after, limit=limit + 1, owner=sees)
         more = len(jobs) > limit
         jobs = jobs[:limit]
         next_cursor = encode_cursor(jobs[-1]) if more and jobs else None
@@ -254,7 +260,8 @@ class JobService:
                 run_seconds=job.run_seconds,
             ),
             solver_version=job.solver_version,
-            idempotency_key=job.idempotency_key,
+            idempotency_key=(job.idempotency_key[len(job.owner) + 1:]
+                             if job.owner and job.idempotency_key else job.idempotency_key),
             summary=_summary(job),
             report=job.report,
             artifacts=artifacts,
