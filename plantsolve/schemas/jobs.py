@@ -34,6 +34,20 @@ class ArtifactInfo(BaseModel):
     url: str
 
 
+class AttemptInfo(BaseModel):
+    """One attempt at running the job, as the runner or the sweeper recorded it."""
+
+    attempt: int
+    worker: str | None = None
+    started_at: datetime | None = None
+    finished_at: datetime | None = None
+    outcome: Literal["succeeded", "failed", "requeued", "time_limit", "cancelled", "lost", "result_pending"] = Field(
+        description="lost: the worker stopped heartbeating; result_pending: computed, but the database did not take "
+        "the result (it is stored by the next attempt without solving again)."
+    )
+    error: str | None = None
+
+
 class JobView(BaseModel):
     """A job's status. ``report`` is present once the job has finished (and after a failed
     attempt that was re-queued)."""
@@ -50,6 +64,7 @@ class JobView(BaseModel):
     summary: str = Field(description="One line for people: what happened or is happening.")
     report: Report | None = None
     artifacts: list[ArtifactInfo] = Field(default_factory=list)
+    attempts: list[AttemptInfo] = Field(default_factory=list, description="Every attempt so far, oldest first.")
     links: dict[str, str] = Field(description="self, result, cancel (URLs relative to the host).")
 
 

@@ -174,9 +174,11 @@ class JobRepository:
         report: Any,
         artifacts: Iterable[StoredArtifact],
         run_seconds: float,
+        attempts: list | None = None,
     ) -> bool:
         """Store result and artifacts in one transaction, fenced on the attempt."""
         now = utcnow()
+        extra = {} if attempts is None else {"attempts": attempts}
         with self.writing(), self.sessions() as session:
             updated = session.execute(
                 self._fence(job_id, attempt).values(
@@ -188,6 +190,7 @@ class JobRepository:
                     finished_at=now,
                     lease_until=None,
                     run_seconds=run_seconds,
+                    **extra,
                 )
             ).rowcount
             if updated != 1:
@@ -209,7 +212,9 @@ class JobRepository:
             session.commit()
             return True
 
-    def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None) -> bool:
+    def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None,
+                       attempts: list | None = None) -> bool:
+        extra = {} if attempts is None else {"attempts": attempts}
         return self._fenced(
             job_id,
             attempt,
@@ -218,11 +223,17 @@ class JobRepository:
             finished_at=utcnow(),
             lease_until=None,
             run_seconds=run_seconds,
+            **extra,
         )
 
-    def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any) -> bool:
+    def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any, attempts: list | None = None) -> bool:
         """Give a crashed attempt's job back to the queue (the caller enqueues it again)."""
-        return self._fenced(job_id, attempt, status="queued", report=report, lease_until=None, worker=None)
+        extra = {} if attempts is None else {"attempts": attempts}
+        return self._fenced(job_id, attempt, status="queued", report=report, lease_until=None, worker=None, **extra)
+
+    def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
+        """The attempts history of a running attempt (e.g. a result waiting to be stored)."""
+        return self._fenced(job_id, attempt, attempts=attempts)
 
     # ---- user actions and housekeeping -----------------------------------------------------
 
@@ -249,16 +260,23 @@ class JobRepository:
         failed: list[uuid.UUID] = []
         with self.sessions() as session:
             lapsed = session.execute(
-                select(Job.id, Job.attempt, Job.max_attempts, Job.report).where(
-                    Job.status == "running", Job.lease_until < now
-                )
+                select(Job.id, Job.attempt, Job.max_attempts, Job.report, Job.attempts, Job.worker,
+                       Job.heartbeat_at).where(Job.status == "running", Job.lease_until < now)
             ).all()
-        for job_id, attempt, max_attempts, report in lapsed:
+        for job_id, attempt, max_attempts, report, history, worker, beat in lapsed:
             lost = report_for_lost(attempt, max_attempts, report)
+            earlier = [h for h in (history or []) if h.get("attempt") != attempt]
+            same = next((h for h in (history or []) if h.get("attempt") == attempt), {})
+            history = earlier + [{
+                **same, "attempt": attempt, "worker": worker, "finished_at": now.isoformat(),
+                "outcome": "lost" if same.get("outcome") != "result_pending" else "result_pending",
+                "error": f"no heartbeat since {as_utc(beat).isoformat() if beat else 'the start'}"}]
             if attempt >= max_attempts:
-                if self._fenced_lapsed(job_id, attempt, now, status="failed", report=lost, finished_at=now, lease_until=None):
+                if self._fenced_lapsed(job_id, attempt, now, status="failed", report=lost, finished_at=now,
+                                       lease_until=None, attempts=history):
                     failed.append(job_id)
-            elif self._fenced_lapsed(job_id, attempt, now, status="queued", report=lost, lease_until=None, worker=None):
+            elif self._fenced_lapsed(job_id, attempt, now, status="queued", report=lost, lease_until=None, worker=None,
+                                     attempts=history):
                 requeued.append(job_id)
         stale = now - timedelta(seconds=requeue_queued_after)
         with self.sessions() as session:

@@ -7,6 +7,7 @@ number. Cancellation and lost leases reach the solver through its progress callb
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -17,13 +18,23 @@ import uuid
 from typing import Any, Callable
 
 from pydantic import ValidationError
+from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Cancelled, InputRejected, SolverError, SolverSpec
 from plantsolve.workers.context import ServiceContext
+from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
 
 log = logging.getLogger("plantsolve.runner")
+
+
+class ResultPending(ConnectionError):
+    """A computed result the database did not take in time: it waits on disk for the next attempt."""
+
+
+def pending_path(job_id: uuid.UUID) -> str:
+    return f"{job_id}/pending-result.json"
 
 
 class _Stop(Cancelled):
@@ -165,21 +176,32 @@ def run_job(
         return "failed"
 
     history = list(((job.report or {}).get("details") or {}).get("attempts", []))
+    log_book = AttemptLog(job.attempts, attempt, worker)
     soft_limit, hard_limit = ctx.limits(spec)
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
+            if ctx.files.path(pending_path(job_id)).exists():
+                return _store_pending(ctx, job_id, attempt, monitor, log_book)
             request = load_request(ctx, spec, job)
             result = _call_with_deadline(
                 lambda: spec.solve(request, monitor.progress),
                 hard_limit if hard_limit_in_thread else None,
             )
-            return _store_success(ctx, spec, job_id, attempt, request, result, monitor)
+            return _store_success(ctx, spec, job_id, attempt, request, result, monitor, log_book)
         except _Stop as stop:
             if stop.reason != "time_limit":
                 return "cancelled"  # by the user, or the lease went to a newer attempt
-            return _time_limit(ctx, spec, job_id, attempt, monitor)
+            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
         except time_limit_errors:
-            return _time_limit(ctx, spec, job_id, attempt, monitor)
+            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
+        except ResultPending:
+            log.error("job %s attempt %d: result kept on disk; the next attempt stores it", job_id, attempt)
+            report = failure_report("result", "The result was computed but the database did not take it; the next "
+                                    "attempt stores it without solving again.", attempts=history)
+            if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending")):
+                requeue(job_id, job.kind)
+                return "requeued"
+            return "stale"
         except InputRejected as error:
             report = failure_report(
                 "input",
@@ -201,11 +223,13 @@ def run_job(
                     "because the same input fails the same way. Check the input's values (scale, degenerate geometry).",
                     attempts=history,
                 )
-                written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+                written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
+                                                  attempts=log_book.add("failed", _clean(error)))
                 return "failed" if written else "stale"
             if attempt < job.max_attempts:
                 report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
-                if ctx.repo.requeue(job_id, attempt, report=report):
+                if ctx.repo.requeue(job_id, attempt, report=report,
+                                    attempts=log_book.add("requeued", f"{type(error).__name__}: {_clean(error)}")):
                     requeue(job_id, job.kind)
                     return "requeued"
                 return "stale"
@@ -213,8 +237,24 @@ def run_job(
                 "solver", f"The solver crashed on each of {attempt} attempts: {type(error).__name__}: {_clean(error)}",
                 attempts=history,
             )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
+                                      attempts=log_book.add("failed", report.get("message")))
     return "failed" if written else "stale"
+
+
+class AttemptLog:
+    """The job's attempts history, and this attempt's entry to add when it ends."""
+
+    def __init__(self, previous: Any, attempt: int, worker: str):
+        self.previous = [h for h in (previous or []) if h.get("attempt") != attempt]
+        self.attempt, self.worker, self.started = attempt, worker, utcnow()
+
+    def add(self, outcome: str, error: str | None = None) -> list[dict]:
+        entry = {"attempt": self.attempt, "worker": self.worker, "started_at": self.started.isoformat(),
+                 "finished_at": utcnow().isoformat(), "outcome": outcome}
+        if error:
+            entry["error"] = str(error)[:300]
+        return self.previous + [entry]
 
 
 INFRASTRUCTURE = (OSError, ConnectionError, TimeoutError, EOFError)
@@ -248,7 +288,8 @@ def _non_finite_paths(value: Any, path: str = "") -> list[str]:
     return []
 
 
-def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor) -> str:
+def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor,
+                log_book: AttemptLog) -> str:
     soft, hard = ctx.limits(spec)
     report = failure_report(
         "time_limit",
@@ -257,11 +298,13 @@ def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, moni
         time_limit=hard,
         elapsed_seconds=round(monitor.elapsed, 3),
     )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed)
+    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
+                                      attempts=log_book.add("time_limit"))
     return "failed" if written else "stale"
 
 
-def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, monitor: AttemptMonitor) -> str:
+def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, monitor: AttemptMonitor,
+                   log_book: AttemptLog) -> str:
     if not isinstance(result, spec.result_model):
         result = spec.result_model.model_validate(result)
     result_json = result.model_dump(mode="json", by_alias=True)
@@ -289,7 +332,34 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, 
             warnings.append({"code": "artifacts_failed", "message": f"Artifacts could not be rendered: {error}", "details": {}})
             report["warnings"] = warnings
             report["status"] = "warning" if report.get("status") == "ok" else report.get("status", "warning")
-    written = ctx.repo.finish_success(
-        job_id, attempt, result=result_json, report=report, artifacts=stored, run_seconds=monitor.elapsed
-    )
+    return _write_result(ctx, job_id, attempt, result_json, report, stored, monitor.elapsed, log_book)
+
+
+def _write_result(ctx: ServiceContext, job_id, attempt, result_json, report, stored: list[StoredArtifact],
+                  run_seconds: float, log_book: AttemptLog, note: str | None = None) -> str:
+    """The final write, retried with backoff while the database is unreachable (the heartbeat keeps the
+    lease meanwhile); if it never succeeds, the result waits on disk for the next attempt."""
+    retrying = Retrying(retry=retry_if_exception(is_infrastructure_failure),
+                        stop=stop_after_delay(ctx.settings.result_write_seconds),
+                        wait=wait_exponential(multiplier=0.05, max=5.0), reraise=True)
+    try:
+        written = retrying(ctx.repo.finish_success, job_id, attempt, result=result_json, report=report,
+                           artifacts=stored, run_seconds=run_seconds, attempts=log_book.add("succeeded", note))
+    except Exception as error:
+        if not is_infrastructure_failure(error):
+            raise
+        payload = {"attempt": attempt, "result": result_json, "report": report, "run_seconds": run_seconds,
+                   "artifacts": [dataclasses.asdict(a) for a in stored]}
+        ctx.files.put(pending_path(job_id), json.dumps(payload).encode())
+        raise ResultPending(str(error)) from error
+    if written:
+        ctx.files.path(pending_path(job_id)).unlink(missing_ok=True)
     return "succeeded" if written else "stale"
+
+
+def _store_pending(ctx: ServiceContext, job_id, attempt, monitor: AttemptMonitor, log_book: AttemptLog) -> str:
+    """An earlier attempt computed the result but could not store it: store it now, without solving."""
+    payload = json.loads(ctx.files.read(pending_path(job_id)))
+    stored = [StoredArtifact(**a) for a in payload["artifacts"]]
+    return _write_result(ctx, job_id, attempt, payload["result"], payload["report"], stored,
+                         payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}")

@@ -36,6 +36,11 @@ class WorkerSettings(StoreSettings):
         description="A queued job whose message is older than this and that the broker no longer holds (its queue "
         "is shorter than the queued jobs) is enqueued again; jobs whose enqueue failed are enqueued at the next sweep.",
     )
+    result_write_seconds: float = Field(
+        default=60.0, ge=0,
+        description="How long the final write of a computed result is retried (with backoff) while the database is "
+        "unreachable; after that the result waits on disk and the next attempt stores it without solving again.",
+    )
     time_limits: dict[str, float] = Field(
         default_factory=dict,
         description='Hard time limit per kind in seconds, overriding the kind\'s own (JSON: {"tube": 1200}).',

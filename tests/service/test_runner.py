@@ -229,3 +229,62 @@ def test_time_limits_come_from_the_settings(tmp_path):
         assert context.repo.get(job_id).report["details"]["time_limit"] == 0.5
     finally:
         context.close()
+
+
+def _db_down(calls: list, failures: int, real):
+    from sqlalchemy.exc import OperationalError
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) <= failures:
+            raise OperationalError("UPDATE jobs ...", {}, ConnectionError("server closed the connection"))
+        return real(*args, **kwargs)
+
+    return flaky
+
+
+def test_a_result_write_that_hits_a_database_hiccup_is_retried(ctx, tmp_path, monkeypatch):
+    markers = tmp_path / "runs"
+    job_id = submit(ctx, "test-compute", f'{{"values": [2], "marker_dir": "{markers}"}}'.encode())
+    calls: list = []
+    monkeypatch.setattr(ctx.repo, "finish_success", _db_down(calls, 2, ctx.repo.finish_success))
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert job.attempt == 1 and job.result["total"] == 2.0 and len(calls) == 3
+    assert [(h["attempt"], h["outcome"]) for h in job.attempts] == [(1, "succeeded")]
+    assert len(list(markers.iterdir())) == 1
+
+
+def test_a_result_the_database_never_took_is_stored_by_the_next_attempt_without_solving(tmp_path, monkeypatch):
+    context = ServiceContext.create(service_settings(tmp_path, result_write_seconds=0.3), migrate=True)
+    try:
+        markers = tmp_path / "runs"
+        job_id = submit(context, "test-compute", f'{{"values": [3], "marker_dir": "{markers}"}}'.encode())
+        real = context.repo.finish_success
+        monkeypatch.setattr(context.repo, "finish_success", _db_down([], 10**6, real))
+        queue = Recorder()
+        assert run_job(context, job_id, worker="w1", requeue=queue.enqueue) == "requeued"
+        assert queue.enqueued == [job_id] and context.repo.get(job_id).status == "queued"
+        monkeypatch.setattr(context.repo, "finish_success", real)  # the database is back
+        assert run_job(context, job_id, worker="w2", requeue=queue.enqueue) == "succeeded"
+        job = context.repo.get(job_id)
+        assert job.result["total"] == 3.0 and len(list(markers.iterdir())) == 1  # solved once
+        outcomes = [(h["attempt"], h["worker"], h["outcome"]) for h in job.attempts]
+        assert outcomes == [(1, "w1", "result_pending"), (2, "w2", "succeeded")]
+        assert "attempt 1" in job.attempts[1]["error"]
+        view = JobService(context, Recorder()).view(job)
+        assert [a.outcome for a in view.attempts] == ["result_pending", "succeeded"]
+    finally:
+        context.close()
+
+
+def test_the_job_view_keeps_a_lost_attempt_after_a_later_success(ctx):
+    job_id = submit(ctx, "test-compute", b'{"values": [4]}')
+    assert ctx.repo.claim(job_id, lease_seconds=60, worker="gone") == 1
+    with ctx.db.sessions() as session:
+        session.execute(update(Job).where(Job.id == job_id).values(lease_until=utcnow() - timedelta(seconds=1)))
+        session.commit()
+    sweep_once(ctx, Recorder().enqueue)
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert [(h["attempt"], h["worker"], h["outcome"]) for h in job.attempts] == [(1, "gone", "lost"), (2, "w", "succeeded")]

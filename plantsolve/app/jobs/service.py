@@ -26,7 +26,7 @@ from plantsolve.app.problems import (
     from_validation_error,
     loads_bounded,
 )
-from plantsolve.schemas.jobs import ArtifactInfo, JobList, JobProgress, JobTimings, JobView
+from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.dispatch import Dispatcher
@@ -265,6 +265,7 @@ class JobService:
             summary=_summary(job),
             report=job.report,
             artifacts=artifacts,
+            attempts=[AttemptInfo.model_validate(h) for h in (job.attempts or [])],
             links=links,
         )
 
