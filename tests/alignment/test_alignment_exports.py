@@ -50,8 +50,8 @@ def aligned(request):
     return (name, cuts) + _run(name, fixed, method)
 
 
-# the paper's alternating iteration does not reach these tolerances within its default cap here (see the
-# bench table); it must say so truthfully and keep what it did not close listed
+# the paper's alternating iteration stalls short of these tolerances here (see the bench table); it must say
+# so truthfully and keep what it did not close listed
 SLOW_FOR_THE_PAPER_METHOD = {"plant3d_cw_line.pcf", "sp3d_inch_tabs.pcf", "e3d_plant_conflict.pcf"}
 
 
@@ -66,7 +66,7 @@ def test_accepted_and_aligned_within_the_tool_tolerance(aligned):
         assert "cap" not in res.report.details["stop_reason"]
         assert not [w for w in res.report.warnings if w.code in ("not_converged", "connections_opened")]
     else:
-        assert res.converged or "iteration cap (4000) reached" in res.report.message
+        assert res.converged or "stalled" in res.report.message or "iteration cap (4000)" in res.report.message
         if not res.converged:
             assert any(w.code == "not_converged" for w in res.report.warnings)
 
