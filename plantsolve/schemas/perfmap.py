@@ -19,14 +19,17 @@ from pydantic import BaseModel, Field, model_validator
 
 from plantsolve.schemas.common import Diagnostic, FiniteFloat, Report, StrictModel
 
-Family = Literal["parabola", "log", "cubic", "spline2", "spline3"]
+Family = Literal["parabola", "log", "cubic", "spline2", "spline3", "concave"]
 FAMILY_DESCRIPTION = (
     "Curve family. With t = (x - x_min)/(x_max - x_min): "
     "'parabola': y = sum_k c_k B_k^2(t) (Bernstein degree 2, 3 coefficients); "
     "'cubic': y = sum_k c_k B_k^3(t) (cubic Bezier, 4 coefficients); "
     "'spline2'/'spline3': uniform quadratic B-spline with K = 2/3 segments on knots "
     "-2, -1, ..., K+2 in the parameter K*t (K+2 coefficients); "
-    "'log': y = a*log(b - x) + c with coefficients [a, b, c], b > x_max, in flow units."
+    "'log': y = a*log(b - x) + c with coefficients [a, b, c], b > x_max, in flow units; "
+    "'concave' (beyond the paper): the decreasing concave broken line with a knot at every measured flow, "
+    "coefficients [x_1, ..., x_n, y_1, ..., y_n] (knot flows, then pressures); it reaches any data a "
+    "decreasing concave curve can."
 )
 
 EfficiencyFamily = Literal["parabola", "cubic", "spline2", "spline3", "parabola_log"]
@@ -56,10 +59,12 @@ class Position(StrictModel):
 
 
 class PerfmapOptions(StrictModel):
-    model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3"] = Field(
+    model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3", "concave"] = Field(
         default="auto",
-        description="Pressure curve family for the characteristics; 'auto' picks the family "
-        "with the smallest mean (over settings) leave-one-out pressure error. The efficiency "
+        description="Pressure curve family for the characteristics; 'auto' picks the paper family "
+        "with the smallest mean (over settings) leave-one-out pressure error, and gives a setting it "
+        "misses by more than 1 % above the setting's floor the family that reaches it (smallest "
+        "leave-one-out error among those within 1 %, else the smallest error). The efficiency "
         "family is chosen separately (`efficiency_model`). " + FAMILY_DESCRIPTION)
     efficiency_model: Literal["auto", "same", "parabola", "cubic", "spline2", "spline3",
                               "parabola_log"] = Field(
@@ -155,6 +160,9 @@ class SettingFit(BaseModel):
     floor: float = Field(
         description="Best max relative error of the pressure that ANY decreasing concave "
         "function can reach on these points (0 when the data are decreasing and concave).")
+    pressure_excess: float = Field(
+        default=0.0, description="pressure_max_rel_error - floor: what the fitted family loses against the "
+        "best decreasing concave curve (a 'pressure_fit_poor' warning above 0.01).")
     active_side_conditions: int = Field(
         default=0, description="Number of side conditions (y' <= 0 at the surge end, y'' <= 0 "
         "per piece) active in the fit: the data push against the physics there.")
@@ -222,7 +230,8 @@ class PerformanceMap(BaseModel):
 
 class PerfmapResult(BaseModel):
     report: Report
-    family: Family = Field(description="Family used for the pressure characteristics.")
+    family: Family = Field(description="Pressure family shared by the settings (a setting it cannot fit "
+                           "within 1 % of its floor has its own: see settings[].family).")
     fit: Literal["least_squares", "minimax"]
     settings: list[SettingFit] = Field(description="Sorted by (theta, phi).")
     error_table: list[ErrorTableRow] = Field(

@@ -60,11 +60,13 @@ def test_fewer_than_three_distinct_points_rejected():
     assert _rejected_locs(body) == [("positions", 2, "flow")]
 
 
-def test_repeated_flow_with_different_values_rejected():
-    body = _body()
+def test_repeated_flow_with_different_values_is_averaged_and_reported():
+    body = _body(map=False)
     p = body["positions"][4]
     p["flow"][3] = p["flow"][2]
-    assert _rejected_locs(body) == [("positions", 4, "flow", 3)]
+    res = solve(PerfmapRequest.model_validate(body))
+    warn = next(w for w in res.report.warnings if w.code == "repeated_flows_averaged")
+    assert warn.details["position"] == 4
 
 
 def test_unsorted_and_duplicated_points_are_sorted_and_merged():

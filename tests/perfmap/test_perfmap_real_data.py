@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.solvers.perfmap.families import curveset_from_fits
+
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapResult
 from plantsolve.solvers.perfmap import query, render_artifacts
 from plantsolve.solvers.perfmap.families import basis, log_eval, log_params_from_public
@@ -31,12 +33,17 @@ def test_n3_end_to_end(n3_request, n3_result: PerfmapResult):
     assert res.error_table[1].efficiency_max_rel_error is None
     # every fitted characteristic is decreasing and concave, on dense samples
     t = np.linspace(0, 1, 2001)
-    for s in res.settings:
+    curves = curveset_from_fits(res.settings)
+    for k, s in enumerate(res.settings):
         if s.family == "log":
             y = log_eval(log_params_from_public(s.pressure_coefficients, s.x_min, s.x_max), t)
-        else:
-            y = basis(s.family, t) @ np.array(s.pressure_coefficients)
-        assert np.diff(y).max() <= 1e-12 and np.diff(y, 2).max() <= 1e-12
+            assert np.allclose(y, curves.evaluate_xy(np.full(len(t), k), t)[1])
+        y = curves.evaluate_xy(np.full(len(t), k), t)[1]
+        scale = np.abs(y).max()
+        assert np.diff(y).max() <= 1e-12 * scale and np.diff(y, 2).max() <= 1e-12 * scale
+        # every line within 1 % of the best decreasing concave curve, or warned about
+        assert s.pressure_excess <= 0.01 + 1e-12
+    assert not [w for w in res.report.warnings if w.code == "pressure_fit_poor"]
     assert len(res.envelopes) == 2 and {e.theta for e in res.envelopes} == {0.0, 5.0}
     assert res.map is not None and res.map.reachable_fraction > 0.3
     eta = np.array(res.map.efficiency, dtype=float)

@@ -21,11 +21,14 @@ from __future__ import annotations
 import numpy as np
 
 LINEAR_FAMILIES = ("parabola", "cubic", "spline2", "spline3")
-FAMILIES = ("parabola", "log", "cubic", "spline2", "spline3")
-N_COEFFICIENTS = {"parabola": 3, "log": 3, "cubic": 4, "spline2": 4, "spline3": 5}
+# 'concave' (beyond the paper): the piecewise-linear decreasing concave curve with a knot at every
+# measured flow of its setting; it reaches any data a decreasing concave curve can (see fitting)
+FAMILIES = ("parabola", "log", "cubic", "spline2", "spline3", "concave")
+PAPER_FAMILIES = FAMILIES[:5]
+N_COEFFICIENTS = {"parabola": 3, "log": 3, "cubic": 4, "spline2": 4, "spline3": 5, "concave": 3}
 # the paper's pairing of pressure and efficiency families (it has no log efficiency)
 EFFICIENCY_FAMILY = {"parabola": "parabola", "log": "cubic", "cubic": "cubic",
-                     "spline2": "spline2", "spline3": "spline3"}
+                     "spline2": "spline2", "spline3": "spline3", "concave": "spline3"}
 # every family a curve can have (pressure: FAMILIES; efficiency: also parabola_log, see
 # solvers.perfmap.efficiency)
 ALL_FAMILIES = FAMILIES + ("parabola_log",)
@@ -112,8 +115,17 @@ def log_params_from_public(coef: list[float], x_min: float, x_max: float) -> np.
     return np.array([a, (b - x_min) / span, c + a * np.log(span)])
 
 
+def concave_knots(coefficients: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """'concave' public coefficients [x_1..x_n, y_1..y_n] -> (knot flows, values)."""
+    c = np.asarray(coefficients, dtype=float)
+    n = len(c) // 2
+    return c[:n], c[n:]
+
+
 def _eval_rows(family: str, c: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Row-wise evaluation: curve with coefficients c[j] at t[j] (no basis matrices)."""
+    if family == "concave":  # evaluated per setting from its knots (CurveSet.evaluate_xy)
+        return np.zeros(len(t))
     if family == "log":
         return c[:, 0] * np.log(c[:, 1] - t) + c[:, 2]
     if family == "parabola_log":  # quadratic Bezier + a log(beta - t)
@@ -155,11 +167,16 @@ class CurveSet:
         self.x_max = np.asarray(x_max, dtype=float)
         self.p = np.zeros((self.n, 5))
         self.e = np.zeros((self.n, 5))
+        self.knots: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # 'concave': (t of the knots, values)
         for i in range(self.n):
             pc = list(p_coef[i])
             if families[i] == "log":
                 pc = list(log_params_from_public(pc, self.x_min[i], self.x_max[i]))
-            self.p[i, : len(pc)] = pc
+            if families[i] == "concave":
+                xk, vk = concave_knots(pc)
+                self.knots[i] = ((xk - self.x_min[i]) / (self.x_max[i] - self.x_min[i]), vk)
+            else:
+                self.p[i, : len(pc)] = pc
             self.e[i, : len(e_coef[i])] = e_coef[i]
         self.fam_id = np.array([ALL_FAMILIES.index(f) for f in families])
         self.eff_id = np.array([ALL_FAMILIES.index(f) for f in eff_families])
@@ -189,6 +206,10 @@ class CurveSet:
         idx, t = idx.ravel(), t.ravel()
         x = self.x_min[idx] + (self.x_max[idx] - self.x_min[idx]) * t
         y = self._eval(self.fam_id[idx], self.p[idx], t)
+        for i, (tk, vk) in self.knots.items():
+            rows = idx == i
+            if rows.any():
+                y[rows] = np.interp(t[rows], tk, vk)
         return x.reshape(shape), y.reshape(shape)
 
     def sample(self, t: np.ndarray):

@@ -38,12 +38,15 @@ _LOG_GRID = np.logspace(-6.0, 3.0, 181)  # beta - 1, in units of the flow span
 @dataclass
 class CurveFit:
     family: str
-    params: np.ndarray  # linear: control values c; log: (a, beta, c) in t
+    params: np.ndarray  # linear: control values c; log: (a, beta, c) in t; concave: values at the knots
     active: int = 0  # side conditions active at the solution
+    knots: np.ndarray | None = None  # concave: the knots' t
 
     def __call__(self, t: np.ndarray) -> np.ndarray:
         if self.family == "log":
             return log_eval(self.params, t)
+        if self.family == "concave":
+            return np.interp(t, self.knots, self.params)
         return basis(self.family, t) @ self.params
 
 
@@ -103,6 +106,30 @@ def fit_linear(family: str, t: np.ndarray, y: np.ndarray, shape: str, minimax: b
     scale = max(float(np.max(np.abs(y))), 1e-300)
     active = int(np.sum(z[n_free:] > -1e-12 * scale))
     return CurveFit(family, T @ z, active)
+
+
+# ---------------------------------------------------------------- concave (piecewise linear)
+
+
+def concave_transform(t: np.ndarray) -> np.ndarray:
+    """F with f = F z, z = (f_0, s_1, s_2 - s_1, ..., s_{n-1} - s_{n-2}): values at the knots t from the
+    first value, the first slope and the slope changes. f is decreasing and concave iff z[1:] <= 0."""
+    h = np.diff(t)
+    n = len(t)
+    L = np.tril(np.ones((n - 1, n - 1)))  # slopes from the first slope and the changes
+    C = np.tril(np.ones((n, n - 1)), -1) * h[None, :]  # values from the slopes
+    return np.hstack([np.ones((n, 1)), C @ L])
+
+
+def fit_concave(t: np.ndarray, y: np.ndarray, minimax: bool) -> CurveFit:
+    """The decreasing concave piecewise-linear curve with a knot at every measured point: least squares
+    (or minimax) over the convex set of such curves, exactly (NNLS or LP after :func:`concave_transform`).
+    Its minimax error is the setting's floor: no decreasing concave curve does better."""
+    F = concave_transform(t)
+    z = _minimax_lp(F, y, 1, 1.0 / np.abs(y)) if minimax else _bounded_lsq(F, y, 1)
+    z[1:] = np.minimum(z[1:], 0.0)
+    scale = max(float(np.max(np.abs(y))), 1e-300)
+    return CurveFit("concave", F @ z, int(np.sum(z[1:] > -1e-12 * scale)), knots=np.array(t, dtype=float))
 
 
 # ---------------------------------------------------------------- log family
@@ -193,6 +220,8 @@ def fit_log(t: np.ndarray, y: np.ndarray, minimax: bool, polish: bool = True) ->
 def fit_pressure(family: str, t, y, minimax: bool, polish: bool = True, B=None) -> CurveFit:
     if family == "log":
         return fit_log(t, y, minimax, polish)
+    if family == "concave":
+        return fit_concave(t, y, minimax)
     return fit_linear(family, t, y, "decreasing_concave", minimax, B)
 
 
@@ -217,7 +246,7 @@ def pressure_loo(family: str, t, y) -> float | None:
     n = len(t)
     if n - 1 < N_COEFFICIENTS[family]:
         return None
-    By = None if family == "log" else basis(family, t)
+    By = None if family in ("log", "concave") else basis(family, t)
     ey = 0.0
     for i in left_out_points(n):
         keep = np.arange(n) != i

@@ -26,6 +26,7 @@ from plantsolve.solvers.perfmap.envelopes import envelope
 from plantsolve.solvers.perfmap.families import (
     EFFICIENCY_FAMILY,
     FAMILIES,
+    PAPER_FAMILIES,
     N_COEFFICIENTS,
     CurveSet,
     curveset_from_fits,
@@ -45,6 +46,7 @@ from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepa
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
+PRESSURE_EXCESS = 0.01  # pressure_fit_poor: max relative error more than 1 % above the setting's floor
 EFFICIENCY_OVERSHOOT = 0.02  # efficiency_above_measured: fitted peak above the measured max
 
 
@@ -57,11 +59,23 @@ def _choose_family(fits: dict[str, list[PressureResult]]) -> tuple[str, dict]:
     near-ties go to the family with fewer coefficients. (The efficiency family is chosen
     separately, per setting: :func:`_choose_efficiency`.)"""
     means = {fam: float(np.mean([r.loo for r in rs])) for fam, rs in fits.items()
-             if all(r.loo is not None for r in rs)}
+             if fam in PAPER_FAMILIES and all(r.loo is not None for r in rs)}
     if not means:
         return "parabola", {}
     best = min(means, key=lambda f: (round(means[f], 9), N_COEFFICIENTS[f], FAMILIES.index(f)))
     return best, {"mean_pressure_loo": means}
+
+
+def _reach_floor(results: dict[str, PressureResult], floor: float) -> str:
+    """A setting the shared family misses by more than PRESSURE_EXCESS above its floor gets the family
+    that reaches it: among those within it, the smallest leave-one-out error (ties: the paper's
+    families before 'concave', fewer coefficients first); if none, the smallest error."""
+    rank = {f: (N_COEFFICIENTS[f] if f != "concave" else 99, FAMILIES.index(f)) for f in results}
+    within = {f: r for f, r in results.items() if r.err <= floor + PRESSURE_EXCESS}
+    if within:
+        score = {f: r.loo if r.loo is not None else r.err for f, r in within.items()}
+        return min(score, key=lambda f: (round(score[f], 9),) + rank[f])
+    return min(results, key=lambda f: (results[f].err,) + rank[f])
 
 
 def _choose_efficiency(results: dict[str, EtaResult]) -> str:
@@ -76,6 +90,8 @@ def _choose_efficiency(results: dict[str, EtaResult]) -> str:
 
 
 def _public_coefficients(r: PressureResult, s: Setting) -> list[float]:
+    if r.family == "concave":  # [flows of the knots..., pressures at them...]
+        return [float(v) for v in s.x] + [float(v) for v in r.fit.params]
     if r.family == "log":
         return log_params_to_public(r.fit.params, float(s.x[0]), float(s.x[-1]))
     return [float(v) for v in r.fit.params]
@@ -132,6 +148,9 @@ def fit_characteristics(settings: list[Setting], minimax: bool, concave_efficien
             step += 1
             progress(0.02 + 0.58 * step / n_steps, f"fitting efficiency {efam}")
     floors = [concave_floor(s.x, s.y) for s in settings]
+    for fam in FAMILIES:  # no fit beats the floor; a minimax fit hits it up to the LP's tolerance
+        for r, floor in zip(fits[fam], floors):
+            r.err = max(r.err, floor) if r.err > floor - 1e-7 else r.err
     return Characteristics(fits, eta_fits, floors)
 
 
@@ -140,7 +159,7 @@ def error_table(ch: Characteristics) -> list[ErrorTableRow]:
     errors, with the efficiency family the paper pairs it with, leave-one-out errors and the
     floor."""
     table = []
-    for fam in FAMILIES:
+    for fam in PAPER_FAMILIES:
         rs = ch.pressure[fam]
         es = ch.efficiency[EFFICIENCY_FAMILY[fam]]  # the paper's pairing
         perr = [r.err for r in rs]
@@ -160,17 +179,26 @@ def error_table(ch: Characteristics) -> list[ErrorTableRow]:
 
 
 def choose_families(ch: Characteristics, opts, n_settings: int,
-                    warnings: list[Diagnostic]) -> tuple[str, list[str], dict]:
-    """The pressure family (one for all settings: ``model``, or the best leave-one-out error)
-    and the efficiency family of each setting (``efficiency_model``)."""
+                    warnings: list[Diagnostic]) -> tuple[str, list[str], list[str], dict]:
+    """The shared pressure family (``model``, or the paper family with the best mean leave-one-out
+    error), the pressure family of each setting ('auto': the shared one unless it misses the setting's
+    floor by more than PRESSURE_EXCESS, see :func:`_reach_floor`) and the efficiency family of each
+    setting (``efficiency_model``)."""
     if opts.model == "auto":
         family, details = _choose_family(ch.pressure)
-        details["criterion"] = "mean over settings of the LOO max relative pressure error"
+        details["criterion"] = ("mean over settings of the LOO max relative pressure error; a setting the "
+                                f"family misses by more than {PRESSURE_EXCESS:.0%} above its floor gets one "
+                                "that reaches it")
         if "mean_pressure_loo" not in details:
             warnings.append(Diagnostic(code="auto_without_loo", message="Too few points per "
                             "setting for leave-one-out errors; 'auto' fell back to 'parabola'."))
+        pressure_choice = [family if ch.pressure[family][k].err <= ch.floors[k] + PRESSURE_EXCESS
+                           else _reach_floor({f: ch.pressure[f][k] for f in FAMILIES}, ch.floors[k])
+                           for k in range(n_settings)]
+        details["settings_with_another_family"] = sum(f != family for f in pressure_choice)
     else:
         family, details = opts.model, {}
+        pressure_choice = [family] * n_settings
 
     if opts.efficiency_model == "auto":
         eta_choice = [_choose_efficiency({f: ch.efficiency[f][k] for f in EFFICIENCY_FAMILIES})
@@ -182,7 +210,7 @@ def choose_families(ch: Characteristics, opts, n_settings: int,
     details["efficiency_criterion"] = (
         "per setting: LOO max absolute efficiency error" if opts.efficiency_model == "auto"
         else f"efficiency_model = {opts.efficiency_model!r}")
-    return family, eta_choice, details
+    return family, pressure_choice, eta_choice, details
 
 
 def efficiency_error_table(ch: Characteristics, settings: list[Setting],
@@ -203,12 +231,14 @@ def efficiency_error_table(ch: Characteristics, settings: list[Setting],
     return eta_table
 
 
-def setting_results(ch: Characteristics, settings: list[Setting], family: str,
+def setting_results(ch: Characteristics, settings: list[Setting], pressure_choice: list[str],
                     eta_choice: list[str], warnings: list[Diagnostic]) -> list[SettingFit]:
     """The chosen characteristic and efficiency curve of each setting in public coefficients,
     with a diagnostic wherever the data or the fit deserve one."""
     out_settings = []
-    for k, (s, r) in enumerate(zip(settings, ch.pressure[family])):
+    for k, s in enumerate(settings):
+        family = pressure_choice[k]
+        r = ch.pressure[family][k]
         e = ch.efficiency[eta_choice[k]][k]
         floor = ch.floors[k]
         out_settings.append(SettingFit(
@@ -220,8 +250,16 @@ def setting_results(ch: Characteristics, settings: list[Setting], family: str,
             efficiency_max_rel_error=e.rel_err, efficiency_max_abs_error=e.abs_err,
             pressure_loo=r.loo, efficiency_loo=e.loo_rel, efficiency_loo_abs=e.loo_abs,
             efficiency_peak=e.peak, efficiency_bounds_active=e.fit.active_bounds,
-            floor=floor, active_side_conditions=r.fit.active))
+            floor=floor, pressure_excess=max(r.err - floor, 0.0), active_side_conditions=r.fit.active))
         where = {"setting": k, "position": s.source_index, "theta": s.theta, "phi": s.phi}
+        if r.err > floor + PRESSURE_EXCESS:
+            warnings.append(Diagnostic(
+                code="pressure_fit_poor",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the {family} pressure fit misses the data by "
+                f"{100 * r.err:.2f}% at its worst point, {100 * (r.err - floor):.2f}% more than the best any "
+                f"decreasing concave curve reaches ({100 * floor:.2f}%).",
+                details={**where, "family": family, "max_rel_error": r.err, "floor": floor,
+                         "excess": r.err - floor}))
         if floor > 0:
             warnings.append(Diagnostic(
                 code="data_not_decreasing_concave",
@@ -231,12 +269,24 @@ def setting_results(ch: Characteristics, settings: list[Setting], family: str,
                 f"{100 * r.err:.2f}%.",
                 details={**where, "floor": floor, "fit_error": r.err}))
         warnings.extend(_efficiency_diagnostics(s, e, where))
-        if len(s.x) < N_COEFFICIENTS[family]:
+        if family != "concave" and len(s.x) < N_COEFFICIENTS[family]:
             warnings.append(Diagnostic(
                 code="underdetermined_fit",
                 message=f"Setting theta={s.theta:g}, phi={s.phi:g} has {len(s.x)} points for "
                 f"{N_COEFFICIENTS[family]} coefficients: the fit is not unique.",
                 details=where))
+        if s.repeated_flows:
+            warnings.append(Diagnostic(
+                code="repeated_flows_averaged",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {s.repeated_flows} reading(s) at an already "
+                "measured flow (other pressure or efficiency) averaged with it.", details=where))
+        if s.choke_pressures:
+            warnings.append(Diagnostic(
+                code="vertical_choke_segment",
+                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {len(s.choke_pressures)} points share the "
+                f"largest flow {s.x[-1]:g} (a vertical choke line): the characteristic ends at the highest "
+                f"({max(s.choke_pressures):g}), the rest is its choke segment.",
+                details={**where, "flow": float(s.x[-1]), "pressures": s.choke_pressures}))
         if s.merged_duplicates:
             warnings.append(Diagnostic(
                 code="duplicate_points_merged",
@@ -310,9 +360,9 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
 
     ch = fit_characteristics(settings, opts.fit == "minimax", opts.concave_efficiency, progress)
     table = error_table(ch)
-    family, eta_choice, details = choose_families(ch, opts, len(settings), warnings)
+    family, pressure_choice, eta_choice, details = choose_families(ch, opts, len(settings), warnings)
     eta_table = efficiency_error_table(ch, settings, eta_choice)
-    out_settings = setting_results(ch, settings, family, eta_choice, warnings)
+    out_settings = setting_results(ch, settings, pressure_choice, eta_choice, warnings)
 
     curves = curveset_from_fits(out_settings)
     theta = np.array([s.theta for s in settings])

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -21,6 +21,8 @@ class Setting:
     eta: np.ndarray
     source_index: int  # index in request.positions
     merged_duplicates: int = 0
+    repeated_flows: int = 0  # readings at an already measured flow, averaged
+    choke_pressures: list[float] = field(default_factory=list)  # a vertical choke segment at x[-1], low to high
 
     @property
     def t(self) -> np.ndarray:
@@ -67,14 +69,24 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
     same = (np.diff(x) == 0) & (np.diff(y) == 0) & (np.diff(eta) == 0)
     keep = np.concatenate([[True], ~same])
     x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
+    repeated = vertical = 0
+    choke_pressures: list[float] = []
     if np.any(np.diff(x) <= 0):
-        k = int(np.argmax(np.diff(x) <= 0))
-        a, b = sorted((int(order[k]), int(order[k + 1])))
-        errors.append(FieldError(("positions", i, "flow", b),
-                                 f"flow is not strictly increasing after sorting: flow {x[k]:g} "
-                                 f"appears twice (points {a} and {b}) with different "
-                                 "pressure/efficiency; average or drop the repeat"))
-        return None
+        # The same flow with other values: at the largest flow a vertical choke segment (the
+        # characteristic ends at its top, the rest is the choke line); elsewhere repeated readings,
+        # averaged.
+        xs, ys, es = [], [], []
+        groups = np.split(np.arange(len(x)), np.flatnonzero(np.diff(x) > 0) + 1)
+        for g, members in enumerate(groups):
+            if len(members) > 1 and g == len(groups) - 1:
+                top = members[int(np.argmax(y[members]))]
+                xs.append(x[top]); ys.append(y[top]); es.append(eta[top])
+                choke_pressures = sorted(float(v) for v in y[members])
+                vertical = len(members) - 1
+            else:
+                xs.append(x[members[0]]); ys.append(float(np.mean(y[members]))); es.append(float(np.mean(eta[members])))
+                repeated += len(members) - 1
+        x, y, eta = np.array(xs), np.array(ys), np.array(es)
     if len(x) < 3:
         errors.append(FieldError(("positions", i, "flow"),
                                  f"needs at least 3 distinct points, got {len(x)}"))
@@ -85,7 +97,7 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
                                  f"the flow range {x[0]:g}..{x[-1]:g} is too narrow to fit a "
                                  "curve (relative span below 1e-9)"))
         return None
-    return Setting(pos.theta, pos.phi, x, y, eta, i, int(np.sum(same)))
+    return Setting(pos.theta, pos.phi, x, y, eta, i, int(np.sum(same)), repeated, choke_pressures)
 
 
 def normalised_settings(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:

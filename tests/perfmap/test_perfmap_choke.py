@@ -1,0 +1,88 @@
+"""Speed lines as real compressor maps have them: steep or vertical choke, repeated flows, lines the
+paper's smooth families cannot follow. Every line ends within 1 % of the best decreasing concave
+curve (its floor), or says why."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plantsolve.schemas.perfmap import PerfmapRequest
+from plantsolve.solvers.perfmap import solve
+from plantsolve.solvers.perfmap.families import curveset_from_fits
+from plantsolve.solvers.perfmap.fitting import concave_floor, fit_concave
+
+
+def speed_line(n: int, steep: float, pr0: float = 2.0, eta0: float = 0.86, flow0: float = 10.0):
+    """A decreasing concave line whose pressure falls off a cliff at choke (power `steep`)."""
+    t = np.linspace(0.0, 1.0, n)
+    flow = flow0 * (1 + 0.6 * t)
+    pressure = pr0 * (1.0 - 0.04 * t - 0.55 * t ** steep)
+    efficiency = eta0 - 0.25 * (t - 0.45) ** 2 - 0.2 * t ** 8
+    return flow, pressure, efficiency
+
+
+def request(lines, **options) -> PerfmapRequest:
+    positions = [{"theta": th, "phi": ph, "flow": f.tolist(), "pressure": p.tolist(), "efficiency": e.tolist()}
+                 for (th, ph), (f, p, e) in lines]
+    return PerfmapRequest.model_validate({"positions": positions, "options": {"map": False, **options}})
+
+
+def cliff_map():
+    return [((0.0, 0.6 + 0.1 * k), speed_line(24, 8 + 4 * k, pr0=1.6 + 0.2 * k, flow0=8 + 2 * k))
+            for k in range(4)]
+
+
+def test_lines_with_a_choke_cliff_reach_their_floor():
+    res = solve(request(cliff_map()))
+    curves = curveset_from_fits(res.settings)
+    t = np.linspace(0, 1, 1001)
+    for k, s in enumerate(res.settings):
+        assert s.floor == 0.0  # the data are exactly decreasing and concave
+        assert s.pressure_max_rel_error <= 0.01 and s.pressure_excess <= 0.01
+        y = curves.evaluate_xy(np.full(len(t), k), t)[1]
+        assert np.diff(y).max() <= 1e-12 and np.diff(y, 2).max() <= 1e-12 * np.abs(y).max()
+    # the paper's smooth families alone miss these lines by more than 1 %
+    assert min(r.pressure_max_rel_error for r in res.error_table) > 0.01
+    assert res.report.details["family_choice"]["settings_with_another_family"] >= 1
+    assert not [w for w in res.report.warnings if w.code == "pressure_fit_poor"]
+
+
+def test_a_forced_stiff_family_is_warned_about_with_the_numbers():
+    res = solve(request(cliff_map(), model="parabola"))
+    poor = [w for w in res.report.warnings if w.code == "pressure_fit_poor"]
+    assert len(poor) == 4
+    for w in poor:
+        d = w.details
+        assert d["family"] == "parabola" and d["excess"] == pytest.approx(d["max_rel_error"] - d["floor"])
+        assert d["excess"] > 0.01
+
+
+def test_the_broken_line_reaches_the_floor_exactly_on_noisy_data():
+    rng = np.random.default_rng(4)
+    f, p, _ = speed_line(30, 6)
+    noisy = p * (1 + 0.004 * rng.standard_normal(len(p)))
+    t = (f - f[0]) / (f[-1] - f[0])
+    floor = concave_floor(f, noisy)
+    assert floor > 0
+    fit = fit_concave(t, noisy, minimax=True)
+    err = np.max(np.abs(fit(t) - noisy) / noisy)
+    assert err == pytest.approx(floor, abs=2e-7)
+    assert np.diff(fit.params).max() <= 1e-12 and np.diff(np.diff(fit.params) / np.diff(t)).max() <= 1e-9
+
+
+def test_repeated_flows_and_a_vertical_choke_segment_are_accepted():
+    f, p, e = speed_line(20, 6)
+    # a vertical choke: three more readings at the last flow, lower pressure; a repeated mid reading
+    f2 = np.concatenate([f, [f[-1]] * 3, [f[5]]])
+    p2 = np.concatenate([p, p[-1] * np.array([0.95, 0.9, 0.85]), [p[5] * 1.002]])
+    e2 = np.concatenate([e, e[-1] * np.array([0.97, 0.94, 0.9]), [e[5]]])
+    lines = [((0.0, 1.0), (f2, p2, e2)), ((0.0, 2.0), speed_line(20, 7, pr0=2.3, flow0=12))]
+    res = solve(request(lines))
+    codes = {w.code: w for w in res.report.warnings}
+    vertical = codes["vertical_choke_segment"].details
+    assert vertical["flow"] == pytest.approx(f[-1]) and len(vertical["pressures"]) == 4
+    assert vertical["pressures"][-1] == pytest.approx(p[-1])  # the characteristic ends at the top
+    assert "repeated_flows_averaged" in codes
+    s = res.settings[0]
+    assert s.n_points == 20 and s.x_max == pytest.approx(f[-1])
