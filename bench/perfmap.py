@@ -6,7 +6,8 @@
 Prints: solve time for 28 settings x 6 points with a 64 x 64 map (target < 1 s), the map's
 efficiency error against a dense ground truth of a synthetic family for the exact method and
 for the paper's binning (N = 64, M = 128), the 200 x 200 map time, and the paper's Table 1
-for the real N3 fan map.
+for the real N3 fan map; then, per map, the pressure error against the floor (the best any
+decreasing concave curve reaches) with the families chosen and the time.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest  # no
 from plantsolve.solvers.perfmap import parse_upload, query, solve  # noqa: E402
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
 from plantsolve.solvers.perfmap.families import curveset_from_fits  # noqa: E402
-from plantsolve.solvers.perfmap.synthetic import request_body, true_map  # noqa: E402
+from plantsolve.solvers.perfmap.synthetic import request_body, speed_lines, true_map  # noqa: E402
 
 N3 = Path(__file__).resolve().parents[1] / "examples" / "perfmap" / "n3_fan_map.csv"
 
@@ -166,5 +167,38 @@ def main() -> None:
               f"{worst.efficiency_max_abs_error:.4f}; efficiency_fit_poor warnings: {n_poor}")
 
 
+def pressure_reach() -> None:
+    """Per map: how close the pressure characteristics come to the best decreasing concave curve."""
+    maps = [
+        ("N3 fan (real, 18 settings)", parse_upload("n3_fan_map.csv", N3.read_bytes(), None)),
+        ("synthetic family 4x7, cubic data", PerfmapRequest.model_validate(request_body(options={"model": "auto"}))),
+        ("speed lines 24x12, choke cliff", PerfmapRequest.model_validate(speed_lines(24, 12, options={"map": False}))),
+        ("speed lines 28x20, steep cliff", PerfmapRequest.model_validate(speed_lines(28, 20, steep=16.0,
+                                                                                    options={"map": False}))),
+        ("speed lines 20x25, cliff + 0.3 % noise", PerfmapRequest.model_validate(
+            speed_lines(20, 25, noise=0.003, seed=2, options={"map": False}))),
+        ("synthetic 4x7 (theta, phi) with a 96x96 map", PerfmapRequest.model_validate(
+            request_body(n_points=12, noise=0.002, seed=1, options={"model": "auto", "grid": [96, 96]}))),
+    ]
+    print("\nPressure characteristics against the floor (max over lines; excess = error - floor; target <= 1 %)")
+    print("| map | lines | pressure max err | floor max | excess max | lines > 1 % | families | eta max abs | "
+          "eta max rel | time s |")
+    print("|---|---:|---:|---:|---:|---:|---|---:|---:|---:|")
+    for name, req in maps:
+        t0 = time.perf_counter()
+        res = solve(req)
+        dt = time.perf_counter() - t0
+        s = res.settings
+        fams = {}
+        for x in s:
+            fams[x.family] = fams.get(x.family, 0) + 1
+        print(f"| {name} | {len(s)} | {max(x.pressure_max_rel_error for x in s):.2%} | {max(x.floor for x in s):.2%} "
+              f"| {max(x.pressure_excess for x in s):.2%} | {sum(x.pressure_excess > 0.01 for x in s)} "
+              f"| {', '.join(f'{k} {v}' for k, v in sorted(fams.items()))} "
+              f"| {max(x.efficiency_max_abs_error for x in s):.4f} | {max(x.efficiency_max_rel_error for x in s):.2%} "
+              f"| {dt:.2f} |")
+
+
 if __name__ == "__main__":
     main()
+    pressure_reach()

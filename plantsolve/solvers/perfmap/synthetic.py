@@ -97,3 +97,25 @@ def example() -> dict:
     """A small request for the API docs and the contract test: 2 × 3 settings of the synthetic
     family, 6 points each, a 24 × 24 map (about a second)."""
     return request_body(n_theta=2, n_phi=3, n_points=6, options={"grid": [24, 24]})
+
+
+def speed_lines(n_lines: int = 24, n_points: int = 12, steep: float = 10.0, noise: float = 0.0,
+                seed: int = 0, options: dict | None = None) -> dict:
+    """A cycle-code style map: speed lines (one setting parameter, given as phi = corrected speed,
+    theta = 0) whose pressure ratio falls off a cliff at choke (a decreasing concave line
+    1 - 0.04 t - 0.55 t^p with p rising with speed), points evenly spread along the flow."""
+    rng = np.random.default_rng(seed)
+    positions = []
+    t = np.linspace(0.0, 1.0, n_points)
+    for k, speed in enumerate(np.linspace(0.5, 1.1, n_lines)):
+        p = steep * (0.6 + 0.8 * k / max(n_lines - 1, 1))
+        pr0 = 1.0 + 2.5 * speed ** 2
+        flow = 20.0 * speed * (0.75 + 0.35 * t)
+        pressure = pr0 * (1.0 - 0.04 * t - 0.35 * t ** p)
+        efficiency = 0.86 - 0.05 * (speed - 0.9) ** 2 - 0.25 * (t - 0.45) ** 2 - 0.2 * t ** 8
+        if noise:
+            pressure = pressure * (1 + noise * rng.standard_normal(n_points))
+            efficiency = efficiency * (1 + noise * rng.standard_normal(n_points))
+        positions.append({"theta": 0.0, "phi": float(speed), "flow": flow.tolist(),
+                          "pressure": pressure.tolist(), "efficiency": efficiency.tolist()})
+    return {"positions": positions, "options": dict(options or {})}
