@@ -105,6 +105,11 @@ class PerfmapOptions(StrictModel):
         default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
     concave_efficiency: bool = Field(
         default=False, description="Also constrain the efficiency curve to be concave.")
+    columns: dict[str, str] | None = Field(
+        default=None,
+        description="CSV uploads: header name -> role, for headers the parser does not know (roles: theta, phi, "
+        "igv, vgv, alpha, speed, diffuser, flow, pressure, efficiency, rline, ignore). Example: "
+        '{"N1 [%]": "speed", "Q [m3/h]": "flow"}.')
 
     @model_validator(mode="after")
     def _grid_range(self) -> "PerfmapOptions":

@@ -1,4 +1,4 @@
-"""Parsing uploaded measurement files (CSV table or JSON request) into a PerfmapRequest.
+"""Parsing uploaded measurement files (CSV table, pyCycle/NPSS map, or JSON request) into a PerfmapRequest.
 
 CSV rules (as rig software and Excel write them):
 
@@ -12,14 +12,21 @@ CSV rules (as rig software and Excel write them):
   ``0,85``; ``1.234,5`` with thousands dots too);
 - header: the first remaining line. A column's name is matched case-insensitively after
   stripping unit suffixes in brackets or parentheses (``Flow (m3/s)``, ``Theta [deg]``) and
-  folding ``_``/``-``/blanks; accepted names per field are in :data:`HEADER_ALIASES`
-  (e.g. ``pressure ratio`` for pressure, ``eta``/``η`` for efficiency). An efficiency
-  column whose unit is ``%`` (``Efficiency [%]``) is divided by 100; efficiencies above 1
-  without that unit are rejected (percent is not guessed). Other columns are ignored with a
-  warning in the result's report;
+  folding ``_``/``-``/blanks; accepted names per role are in :data:`HEADER_ALIASES` (rig and
+  cycle-code names: ``Nc``, ``N/sqrt(theta)``, corrected speed; ``Wc``, corrected mass flow;
+  ``PR``, pressure ratio; ``eff``, isentropic/polytropic efficiency; IGV, VGV, alpha,
+  diffuser; ``R-line``/beta, recognised and not needed). The ``columns`` option maps any
+  header to a role. A table needs flow, pressure, efficiency and one or two setting
+  parameters: one is given as phi (theta = 0), two as (theta, phi) in the order of
+  :data:`SETTING_ROLES`. An efficiency column whose unit is ``%`` (``Efficiency [%]``) is
+  divided by 100; efficiencies above 1 without that unit are rejected (percent is not
+  guessed). Other columns are reported in the result, not fatal;
 - rows: any order; rows with equal (theta, phi) form one setting (in order of first
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
   different values is rejected (flow must increase along a characteristic after sorting).
+
+A ``.py`` upload is a pyCycle/NPSS ``MapData`` map (see :func:`_parse_map_data`); its text is
+read, never run.
 
 Every rejection is an :class:`InputRejected` whose loc starts with ``"file"``: ``("file",)``
 for the file as a whole, ``("file", "header")`` for the header, ``("file", "row", n,
@@ -29,11 +36,13 @@ Excel shows).
 
 from __future__ import annotations
 
+import ast
 import csv
 import json
 import math
 import re
 
+import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.common import Diagnostic
@@ -41,18 +50,38 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, reject
 from plantsolve.solvers.perfmap.validation import prepare
 
-UPLOAD_EXTENSIONS = (".csv", ".json")
+UPLOAD_EXTENSIONS = (".csv", ".json", ".py")
 CSV_COLUMNS = ("theta", "phi", "flow", "pressure", "efficiency")
+MEASURED = ("flow", "pressure", "efficiency")
+# Names rig software and cycle codes give their columns (matched after units and separators are
+# stripped, case-insensitively). Setting parameters have roles of their own; the solver takes the
+# paper's two (theta, phi): a table with one setting parameter gives it as phi (theta = 0), two
+# give (first, second) in the order of SETTING_ROLES.
 HEADER_ALIASES = {
-    "theta": ("theta", "θ", "igv", "igv angle", "igv setting", "inlet guide vane"),
-    "phi": ("phi", "φ", "ϕ", "diffuser", "diffuser angle", "diffuser setting"),
+    "theta": ("theta", "θ"),
+    "phi": ("phi", "φ", "ϕ"),
+    "igv": ("igv", "igv angle", "igv setting", "inlet guide vane", "inlet guide vanes", "igv position"),
+    "vgv": ("vgv", "vgv angle", "variable guide vane", "stator angle", "vsv"),
+    "alpha": ("alpha", "α", "alphamap", "alpha map"),
+    "speed": ("speed", "corrected speed", "nc", "n c", "nc map", "ncmap", "n/√θ", "n/sqrt(theta)", "n/sqrt theta",
+              "n/sqrttheta", "n/√t", "n/sqrt(t)", "n/sqrt", "n/√", "relative speed", "rel speed", "speed line", "rpm", "n",
+              "shaft speed", "rotational speed", "corrected rotational speed", "nmech", "pcn", "% speed",
+              "percent speed"),
+    "diffuser": ("diffuser", "diffuser angle", "diffuser setting", "diffuser vane", "diffuser position"),
     "flow": ("flow", "flow rate", "flowrate", "mass flow", "massflow", "mass flow rate",
-             "volume flow", "volume flow rate", "corrected flow"),
-    "pressure": ("pressure", "pressure ratio", "pressure rise", "total pressure ratio",
-                 "pr", "pi"),
-    "efficiency": ("efficiency", "eta", "η", "eff", "isentropic efficiency",
-                   "polytropic efficiency", "adiabatic efficiency"),
+             "volume flow", "volume flow rate", "corrected flow", "corrected mass flow",
+             "corrected mass flow rate", "wc", "w c", "wcmap", "wc map", "w corr", "wcorr", "w", "m dot",
+             "mdot", "corrected airflow", "airflow"),
+    "pressure": ("pressure", "pressure ratio", "pressure rise", "total pressure ratio", "total pressure rise",
+                 "total to total pressure ratio", "pr", "prmap", "pr map", "pi", "π", "p2/p1", "pt2/pt1",
+                 "head", "delta p", "dp"),
+    "efficiency": ("efficiency", "eta", "η", "eff", "effmap", "eff map", "isentropic efficiency",
+                   "polytropic efficiency", "adiabatic efficiency", "eta is", "eta isentropic",
+                   "eta polytropic", "efficiency isentropic", "total to total efficiency"),
+    "rline": ("r line", "rline", "rlinemap", "r line map", "beta", "β", "beta line"),
 }
+SETTING_ROLES = ("theta", "igv", "vgv", "alpha", "phi", "speed", "diffuser")
+ROLES = tuple(HEADER_ALIASES) + ("ignore",)
 _ALIAS = {a: field for field, names in HEADER_ALIASES.items() for a in names}
 _UNIT_SUFFIX = re.compile(r"\s*[\[(]([^\[\]()]*)[\])]\s*$")
 _DECIMAL_COMMA = re.compile(r"^[+-]?(\d+|\d{1,3}(\.\d{3})+),\d*([eE][+-]?\d+)?$")
@@ -80,6 +109,9 @@ def _decode(content: bytes) -> str:
 def _header_field(name: str) -> tuple[str | None, str]:
     """(field or None, unit) of a header cell by the rules in the module docstring."""
     label, unit = name.strip().strip('"').strip(), ""
+    whole = re.sub(r"[\s_\-]+", " ", label.lower()).strip()
+    if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
+        return _ALIAS[whole], ""
     while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0:
         unit = unit or m.group(1).strip()
         label = label[: m.start()]
@@ -104,7 +136,7 @@ def _number(cell: str, decimal_comma: bool) -> float:
     return float(s)
 
 
-def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]]:
+def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict], list[list[int]], list[Diagnostic]]:
     """Positions (one per (theta, phi), in order of first appearance), the file line of
     each of their points, and notes for the report."""
     lines = [(n, ln) for n, ln in enumerate(text.splitlines(), start=1)
@@ -125,31 +157,59 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
     numbers = [n for n, _ in lines]
 
     col: dict[str, int] = {}
-    scale = {c: 1.0 for c in CSV_COLUMNS}
-    ignored = []
+    scale: dict[str, float] = {}
+    ignored, recognised = [], []
+    columns = {re.sub(r"[\s_\-]+", " ", k.strip().lower()): v for k, v in (column_roles or {}).items()}
     for j, name in enumerate(rows[0]):
         field, unit = _header_field(name)
+        key = re.sub(r"[\s_\-]+", " ", name.strip().strip('"').strip().lower())
+        if key in columns:
+            field = None if columns[key] == "ignore" else columns[key]
         if field is None:
             if name.strip():
                 ignored.append(name.strip())
             continue
+        if field == "rline":
+            recognised.append(name.strip())
+            continue
         if field in col:
             raise reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
-                          f"name the {field}", ("file", "header"))
+                          f"name the {field}; say which is which with the 'columns' option", ("file", "header"))
         col[field] = j
-        if field == "efficiency" and unit == "%":
-            scale[field] = 0.01
-    missing = [c for c in CSV_COLUMNS if c not in col]
-    if missing:
+        scale[field] = 0.01 if field == "efficiency" and unit == "%" else 1.0
+    unknown_roles = sorted(set(columns.values()) - set(ROLES))
+    if unknown_roles:
+        raise reject(f"options.columns names unknown roles {unknown_roles}; roles: {', '.join(ROLES)}",
+                     ("options", "columns"))
+    settings_found = [r for r in SETTING_ROLES if r in col]
+    missing = [c for c in MEASURED if c not in col]
+    if missing or not settings_found:
+        need = missing + ([] if settings_found else ["a setting (speed, IGV, VGV, alpha, diffuser, theta or phi)"])
         raise reject(
-            f"the header (line {numbers[0]}) must name the columns {', '.join(CSV_COLUMNS)} "
-            f"(any order and case, units in brackets allowed, e.g. 'Flow (m3/s)'); missing: "
-            f"{', '.join(missing)}; found: {', '.join(repr(h.strip()) for h in rows[0])}"
+            f"the header (line {numbers[0]}) must name the columns flow, pressure, efficiency and at least one "
+            f"setting parameter (any order and case, units in brackets allowed, e.g. 'Wc [kg/s]'; or map any "
+            f"header to a role with the 'columns' option); missing: {', '.join(need)}; found: "
+            f"{', '.join(repr(h.strip()) for h in rows[0])}"
             + ("" if delim != "," or ";" not in text[:2000] else
                " — if the file uses ';' separators, put them in the header too")
             + (" — the first line that is not blank or '#' must be the header"
                if all(_is_number(h) for h in rows[0] if h.strip()) else ""),
             ("file", "header"))
+    if "theta" in col and "phi" in col:  # the paper's two settings named: other setting columns are extra
+        setting_cols = ["theta", "phi"]
+        ignored += [rows[0][col[r]].strip() for r in settings_found if r not in setting_cols]
+    elif "theta" in col or "phi" in col:
+        setting_cols = [r for r in ("theta", "phi") if r in col]
+        setting_cols += [r for r in settings_found if r not in ("theta", "phi")]
+    else:
+        setting_cols = settings_found
+    if len(setting_cols) > 2:
+        raise reject(f"{len(setting_cols)} setting parameters ({', '.join(rows[0][col[r]].strip() for r in setting_cols)}):"
+                     " at most two are supported (the paper's theta and phi); map the others to 'ignore' with the "
+                     "'columns' option", ("file", "header"))
+    for r in setting_cols:
+        scale.setdefault(r, 1.0)
+    roles = tuple(setting_cols) + MEASURED
 
     errors: list[FieldError] = []
     groups: dict[tuple[float, float], dict] = {}
@@ -158,15 +218,15 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
         if len(errors) >= _MAX_ROW_ERRORS:
             break
         vals = {}
-        for c in CSV_COLUMNS:
+        for c in roles:
             j = col[c]
             cell = r[j].strip() if j < len(r) else ""
             if not cell:
                 hint = (" (write the setting on every row, not only on the first row of "
-                        "a speed line)" if c in ("theta", "phi") else "")
+                        "a speed line)" if c not in MEASURED else "")
                 errors.append(FieldError(("file", "row", n, c), f"line {n}: no {c} value "
-                                         f"(column {j + 1}); every row needs all five "
-                                         f"values{hint}"))
+                                         f"(column {j + 1}); every row needs all "
+                                         f"{len(roles)} values{hint}"))
                 continue
             try:
                 v = _number(cell, decimal_comma) * scale[c]
@@ -181,9 +241,10 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
                                          f"line {n}: {c} is {cell!r} (NaN or infinite)"))
                 continue
             vals[c] = v
-        if len(vals) < len(CSV_COLUMNS):
+        if len(vals) < len(roles):
             continue
-        key = (vals["theta"], vals["phi"])
+        key = ((0.0, vals[setting_cols[0]]) if len(setting_cols) == 1
+               else (vals[setting_cols[0]], vals[setting_cols[1]]))
         g = groups.setdefault(key, {"theta": key[0], "phi": key[1], "flow": [],
                                     "pressure": [], "efficiency": []})
         for c in ("flow", "pressure", "efficiency"):
@@ -194,15 +255,102 @@ def _parse_csv(text: str) -> tuple[list[dict], list[list[int]], list[Diagnostic]
     if not groups:
         raise reject(f"the CSV file has a header (line {numbers[0]}) but no data rows")
     notes = []
+    order = [c.strip() for c in rows[0]]
+    ignored.sort(key=order.index)
+    names = {r: rows[0][col[r]].strip() for r in col}
+    if setting_cols != ["theta", "phi"]:
+        theta_name = names[setting_cols[0]] if len(setting_cols) == 2 else None
+        phi_name = names[setting_cols[-1]]
+        notes.append(Diagnostic(
+            code="upload_settings",
+            message=(f"One setting parameter ({phi_name!r}): given as phi, theta = 0." if theta_name is None else
+                     f"Setting parameters: {theta_name!r} as theta, {phi_name!r} as phi."),
+            details={"theta": theta_name, "phi": phi_name, "columns": names}))
     if ignored:
         notes.append(Diagnostic(
             code="upload_columns_ignored",
-            message=f"CSV columns ignored (not theta, phi, flow, pressure, efficiency): "
+            message=f"CSV columns not used (no known role; map them with the 'columns' option): "
             f"{', '.join(ignored)}.", details={"columns": ignored}))
+    if recognised:
+        notes.append(Diagnostic(
+            code="upload_rline_not_needed",
+            message=f"Column(s) {', '.join(recognised)} (R-line / beta) recognised and not needed: each line is "
+            "parametrised by its flow.", details={"columns": recognised}))
     if scale["efficiency"] != 1.0:
         notes.append(Diagnostic(code="upload_efficiency_percent",
                                 message="Efficiency column given in % : divided by 100."))
     return list(groups.values()), list(lines_of.values()), notes
+
+
+_MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
+                        re.M)
+
+
+def _bracketed(text: str, start: int) -> str:
+    """The balanced [...] literal that starts at or after ``start``."""
+    i = text.index("[", start)
+    depth = 0
+    for j in range(i, len(text)):
+        if text[j] == "[":
+            depth += 1
+        elif text[j] == "]":
+            depth -= 1
+            if depth == 0:
+                return text[i:j + 1]
+    raise ValueError("unbalanced brackets")
+
+
+def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic]]:
+    """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
+    ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
+    read, never run: only the array literals are evaluated (``ast.literal_eval``). Each (alpha, Nc) is a
+    speed line (theta = alpha, phi = Nc); points whose values are not positive and finite are dropped and
+    reported; a line with fewer than 3 points left is dropped and reported."""
+    arrays: dict[str, np.ndarray] = {}
+    for m in _MAP_ARRAY.finditer(text):
+        name = m.group(1)
+        try:
+            arrays[name] = np.array(ast.literal_eval(_bracketed(text, m.end() - 1)), dtype=float)
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError) as error:
+            raise reject(f"{name}: not a numeric array literal ({type(error).__name__})", ("file", name)) from None
+    missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]
+    if missing:
+        raise reject(f"no compressor MAP_DATA here: missing {', '.join(missing)} (a pyCycle/NPSS map defines "
+                     "alphaMap, NcMap, RlineMap, WcMap, PRmap and effMap)")
+    nc = arrays["NcMap"].ravel()
+    alpha = arrays.get("alphaMap", np.zeros(1)).ravel()
+    tables = {}
+    for name in ("WcMap", "PRmap", "effMap"):
+        a = arrays[name]
+        if a.ndim == 2:
+            a = a[None]
+        if a.ndim != 3 or a.shape[:2] != (len(alpha), len(nc)):
+            raise reject(f"{name} has shape {arrays[name].shape}; expected (alpha {len(alpha)}, Nc {len(nc)}, "
+                         "R-lines)", ("file", name))
+        tables[name] = a
+    if not tables["WcMap"].shape == tables["PRmap"].shape == tables["effMap"].shape:
+        raise reject("WcMap, PRmap and effMap differ in shape", ("file",))
+    positions, dropped, short = [], 0, []
+    for i, al in enumerate(alpha):
+        for k, n in enumerate(nc):
+            w, pr, eff = tables["WcMap"][i, k], tables["PRmap"][i, k], tables["effMap"][i, k]
+            ok = np.isfinite(w) & np.isfinite(pr) & np.isfinite(eff) & (w > 0) & (pr > 0) & (eff > 0) & (eff <= 1)
+            dropped += int(np.sum(~ok))
+            if ok.sum() < 3:
+                short.append({"alpha": float(al), "Nc": float(n), "points": int(ok.sum())})
+                continue
+            positions.append({"theta": float(al), "phi": float(n), "flow": w[ok].tolist(),
+                              "pressure": pr[ok].tolist(), "efficiency": eff[ok].tolist()})
+    if not positions:
+        raise reject("no speed line of the map has 3 usable points (positive, finite, efficiency <= 1)")
+    notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines; alpha "
+                        "as theta, Nc (corrected speed) as phi.", details={"theta": "alphaMap", "phi": "NcMap"})]
+    if dropped or short:
+        notes.append(Diagnostic(code="upload_points_dropped",
+                                message=f"{dropped} map point(s) without positive finite values (or efficiency above "
+                                f"1) dropped; {len(short)} speed line(s) with fewer than 3 points left out.",
+                                details={"points": dropped, "lines": short[:100]}))
+    return positions, notes
 
 
 def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tuple[tuple, str]:
@@ -230,8 +378,14 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
                       f"{', '.join(UPLOAD_EXTENSIONS)}")
     text = _decode(content)
     lines: list[list[int]] = []
-    if ext == ".csv":
-        positions, lines, notes = _parse_csv(text)
+    if ext == ".py":
+        positions, notes = _parse_map_data(text)
+        body = {"positions": positions, "upload_warnings": [d.model_dump() for d in notes]}
+    elif ext == ".csv":
+        roles = (options or {}).get("columns") if isinstance(options, dict) else None
+        if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
+            raise reject("options.columns must map header names to roles", ("options", "columns"))
+        positions, lines, notes = _parse_csv(text, roles)
         body: dict = {"positions": positions}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]

@@ -1,0 +1,104 @@
+"""Tables as rig software and cycle codes write them: their header names and units, one or two
+setting parameters, an explicit ``columns`` mapping, unknown columns reported (not fatal), and
+pyCycle/NPSS MAP_DATA map files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.synthetic import speed_lines
+
+DATA = Path(__file__).parent / "data"
+LINES = speed_lines(4, 8, steep=6.0)["positions"]
+
+
+def table(header: list[str], row, sep: str = ",", decimal: str = ".") -> bytes:
+    out = [sep.join(header)]
+    for p in LINES:
+        for f, pr, e in zip(p["flow"], p["pressure"], p["efficiency"]):
+            out.append(sep.join(str(v).replace(".", decimal) for v in row(p["phi"], f, pr, e)))
+    return "\n".join(out).encode()
+
+
+@pytest.mark.parametrize("header, row, sep, decimal", [
+    (["Nc", "Wc [lbm/s]", "PR", "eff"], lambda n, f, p, e: (n, f, p, e), ",", "."),
+    (["speed [rpm]", "corrected mass flow [kg/s]", "pressure ratio", "isentropic efficiency [%]"],
+     lambda n, f, p, e: (n * 10000, f, p, 100 * e), ";", ","),
+    (["N/sqrt(theta)", "R-line", "Wc", "PR", "eta"], lambda n, f, p, e: (n, 2.0, f, p, e), "\t", "."),
+    (["Corrected Speed", "Corrected Mass Flow", "Total Pressure Ratio", "Polytropic Efficiency", "T_in [K]"],
+     lambda n, f, p, e: (n, f, p, e, 288.15), ",", "."),
+])
+def test_header_families_of_real_tables(header, row, sep, decimal):
+    req = parse_upload("map.csv", table(header, row, sep, decimal), {"map": False})
+    assert len(req.positions) == 4
+    assert {p.theta for p in req.positions} == {0.0}  # one setting parameter: given as phi
+    first = req.positions[0]
+    assert first.flow == pytest.approx(LINES[0]["flow"]) and first.efficiency == pytest.approx(LINES[0]["efficiency"])
+    codes = {w.code: w for w in req.upload_warnings}
+    assert "one setting parameter" in codes["upload_settings"].message.lower()
+    if "R-line" in header:
+        assert codes["upload_rline_not_needed"].details["columns"] == ["R-line"]
+    if "T_in [K]" in header:
+        assert codes["upload_columns_ignored"].details["columns"] == ["T_in [K]"]
+    res = solve(req)
+    assert len(res.settings) == 4 and all(s.pressure_excess <= 0.01 for s in res.settings)
+
+
+def test_two_setting_parameters_are_theta_and_phi_in_role_order():
+    body = table(["Speed [%]", "IGV [deg]", "Flow", "PR", "Eff"], lambda n, f, p, e: (100 * n, 10 * n, f, p, e))
+    req = parse_upload("rig.csv", body, None)
+    assert [(p.theta, p.phi) for p in req.positions][:2] == [(5.0, 50.0), (pytest.approx(7.0), 70.0)]
+    note = next(w for w in req.upload_warnings if w.code == "upload_settings")
+    assert note.details["theta"] == "IGV [deg]" and note.details["phi"] == "Speed [%]"
+
+
+def test_the_columns_option_maps_any_header_to_a_role():
+    body = table(["N1 [%]", "Q [m3/h]", "Pi_tt", "Wirkungsgrad"], lambda n, f, p, e: (n, f, p, e))
+    with pytest.raises(InputRejected) as e:
+        parse_upload("rig.csv", body, None)
+    assert e.value.errors[0].loc == ("file", "header") and "columns" in e.value.errors[0].msg
+    options = {"columns": {"N1 [%]": "speed", "Q [m3/h]": "flow", "pi_tt": "pressure", "Wirkungsgrad": "efficiency"},
+               "map": False}
+    req = parse_upload("rig.csv", body, options)
+    assert len(req.positions) == 4 and req.positions[1].phi == pytest.approx(LINES[1]["phi"])
+    with pytest.raises(InputRejected) as e:
+        parse_upload("rig.csv", body, {"columns": {"N1 [%]": "rpm"}})
+    assert e.value.errors[0].loc == ("options", "columns")
+
+
+def test_three_setting_parameters_name_the_columns_to_drop():
+    body = table(["Speed", "IGV", "VGV", "Flow", "PR", "Eff"], lambda n, f, p, e: (n, 1, 2, f, p, e))
+    with pytest.raises(InputRejected) as e:
+        parse_upload("rig.csv", body, None)
+    assert "IGV" in e.value.errors[0].msg and "'columns'" in e.value.errors[0].msg
+    req = parse_upload("rig.csv", body, {"columns": {"VGV": "ignore"}, "map": False})
+    assert {p.theta for p in req.positions} == {1.0}
+
+
+def test_pycycle_map_data_file():
+    text = (DATA / "pycycle_fan_map.py").read_bytes()
+    req = parse_upload("fan_map.py", text, None)
+    assert len(req.positions) == 18  # 2 alpha x 9 Nc speed lines
+    assert sorted({p.theta for p in req.positions}) == [0.0, 5.0]
+    assert req.positions[0].phi == 0.5 and len(req.positions[0].flow) == 12
+    res = solve(req)
+    assert res.map is not None and res.map.reachable_fraction > 0.2
+    assert all(s.pressure_excess <= 0.01 for s in res.settings)
+    assert any(w.code == "vertical_choke_segment" for w in res.report.warnings)  # Wc repeated at choke
+
+
+@pytest.mark.parametrize("text, needle", [
+    (b"import numpy as np\nX = np.array([1, 2])\n", "missing NcMap"),
+    (b"M.NcMap = np.array([0.5, 1.0])\nM.WcMap = np.array([[1, 2, 3]])\nM.PRmap = np.array([[1, 2, 3]])\n"
+     b"M.effMap = np.array([[0.5, 0.5, 0.5]])\n", "shape"),
+    (b"M.NcMap = np.array([0.5])\nM.WcMap = np.array([[1, 2, __import__('os')]])\n", "not a numeric array"),
+])
+def test_map_data_that_cannot_be_read_says_why(text, needle):
+    with pytest.raises(InputRejected) as e:
+        parse_upload("bad.py", text, None)
+    assert needle in e.value.errors[0].msg
