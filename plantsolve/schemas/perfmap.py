@@ -105,6 +105,10 @@ class PerfmapOptions(StrictModel):
         default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
     concave_efficiency: bool = Field(
         default=False, description="Also constrain the efficiency curve to be concave.")
+    surge_margin: float = Field(
+        default=0.0, ge=0.0, le=1.0,
+        description="Surge margin for the 'surge_margin_line' (0: none): on each characteristic the point whose "
+        "pressure is the surge pressure / (1 + margin), i.e. SM = p_surge / p - 1 at constant setting.")
     columns: dict[str, str] | None = Field(
         default=None,
         description="CSV uploads: header name -> role, for headers the parser does not know (roles: theta, phi, "
@@ -216,6 +220,19 @@ class Envelope(BaseModel):
         description="eta along the max-curve (paper eq. 50).")
 
 
+class LimitPoint(BaseModel):
+    """One end of a characteristic (surge or choke), or its surge-margin point."""
+
+    theta: float
+    phi: float
+    flow: float
+    pressure: float
+    efficiency: float
+    vertical_to: float | None = Field(
+        default=None, description="Choke: the lowest pressure measured at this same flow (a vertical choke "
+        "segment from `pressure` down to it), null when there is none.")
+
+
 class PerformanceMap(BaseModel):
     """Max efficiency over all settings whose characteristic passes through (flow, pressure).
 
@@ -246,10 +263,19 @@ class PerfmapResult(BaseModel):
         description="Per efficiency family: errors over all settings (the efficiency family "
         "is chosen separately from the pressure family).")
     envelopes: list[Envelope]
+    surge_line: list[LimitPoint] = Field(
+        default_factory=list, description="Surge (stall) end of every characteristic: its smallest measured flow, "
+        "in the order of `settings`.")
+    choke_line: list[LimitPoint] = Field(
+        default_factory=list, description="Choke end of every characteristic: its largest measured flow.")
+    surge_margin_line: list[LimitPoint] | None = Field(
+        default=None, description="With options.surge_margin > 0: the point of each characteristic at that margin "
+        "(null where the characteristic does not drop that far).")
     triangles: list[list[int]] = Field(
         default_factory=list,
         description="Triangulation of the settings (indices into `settings`), Delaunay on "
-        "range-normalised (theta, phi).")
+        "range-normalised (theta, phi); settings on one line (one setting parameter) are chained as "
+        "segments written (i, j, j).")
     map: PerformanceMap | None = None
     flow_range: list[float] = Field(description="[min, max] flow over all characteristics.")
     pressure_range: list[float] = Field(description="[min, max] pressure over all characteristics.")

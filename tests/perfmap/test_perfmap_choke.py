@@ -86,3 +86,53 @@ def test_repeated_flows_and_a_vertical_choke_segment_are_accepted():
     assert "repeated_flows_averaged" in codes
     s = res.settings[0]
     assert s.n_points == 20 and s.x_max == pytest.approx(f[-1])
+
+
+def test_speed_lines_give_a_speed_map_and_the_query_finds_the_speed():
+    from plantsolve.schemas.perfmap import PerfmapQueryRequest
+    from plantsolve.solvers.perfmap import query
+    from plantsolve.solvers.perfmap.synthetic import speed_lines
+
+    res = solve(PerfmapRequest.model_validate(speed_lines(6, 12, options={"grid": [48, 48]})))
+    assert res.map is not None and res.map.reachable_fraction > 0.3
+    assert {w.code for w in res.report.warnings} >= {"one_parameter_map"}
+    curves = curveset_from_fits(res.settings)
+    k = 3
+    x, y, e = curves.evaluate(np.array([k]), np.array([0.4]))
+    ans = query(res, PerfmapQueryRequest.model_validate({"flow": float(x[0]), "pressure": float(y[0])})).points[0]
+    assert ans.feasible and ans.phi == pytest.approx(res.settings[k].phi, abs=1e-6)
+    assert ans.efficiency == pytest.approx(float(e[0]), abs=1e-6)
+    # between two lines the speed is between theirs
+    x2, y2, _ = curves.evaluate(np.array([k + 1]), np.array([0.4]))
+    mid = query(res, PerfmapQueryRequest.model_validate({"flow": float((x[0] + x2[0]) / 2),
+                                                         "pressure": float((y[0] + y2[0]) / 2)})).points[0]
+    assert mid.feasible and res.settings[k].phi < mid.phi < res.settings[k + 1].phi
+
+
+def test_surge_choke_and_margin_lines_are_returned_and_drawn():
+    from plantsolve.solvers.perfmap import render_artifacts
+    from plantsolve.solvers.perfmap.synthetic import speed_lines
+
+    req = PerfmapRequest.model_validate(speed_lines(5, 10, options={"grid": [32, 32], "surge_margin": 0.1}))
+    res = solve(req)
+    assert len(res.surge_line) == len(res.choke_line) == 5
+    for s, surge, choke in zip(res.settings, res.surge_line, res.choke_line):
+        assert surge.flow == pytest.approx(s.x_min) and choke.flow == pytest.approx(s.x_max)
+        assert surge.pressure > choke.pressure and surge.phi == s.phi
+    margin = res.surge_margin_line
+    assert len(margin) == 5
+    for m, surge in zip(margin, res.surge_line):
+        assert surge.pressure / m.pressure - 1 == pytest.approx(0.1, abs=1e-9) and m.flow > surge.flow
+    svg = next(a for a in render_artifacts(req, res) if a.name == "map.svg").data.decode()
+    for label in ("surge line", "choke line", "surge margin line"):
+        assert label in svg
+
+
+def test_a_vertical_choke_segment_is_part_of_the_choke_line():
+    f, p, e = speed_line(20, 6)
+    f2 = np.concatenate([f, [f[-1]] * 2])
+    p2 = np.concatenate([p, p[-1] * np.array([0.9, 0.8])])
+    e2 = np.concatenate([e, e[-1] * np.array([0.95, 0.9])])
+    res = solve(request([((0.0, 1.0), (f2, p2, e2)), ((0.0, 2.0), speed_line(20, 7, pr0=2.3, flow0=12))]))
+    assert res.choke_line[0].vertical_to == pytest.approx(0.8 * p[-1])
+    assert res.choke_line[1].vertical_to is None

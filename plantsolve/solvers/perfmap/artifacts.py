@@ -138,6 +138,7 @@ def _map(result: PerfmapResult) -> Figure:
         ax.contour(gx, gy, finite.astype(float), levels=[0.5], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
+    _limit_lines(ax, result)
     ax.plot([], [], "k-", lw=0.6, label="setting characteristics")
     ax.plot([], [], "w--", label="optimal θ")
     ax.plot([], [], "-", color="orange", label="optimal φ")
@@ -147,6 +148,21 @@ def _map(result: PerfmapResult) -> Figure:
            title=f"Performance map ({m.method}, {result.family}): "
            "max efficiency and optimal (θ, φ)")
     return fig
+
+
+def _limit_lines(ax, result: PerfmapResult) -> None:
+    """Surge, choke and surge-margin lines, joined within each θ (one line per θ)."""
+    styles = (("surge_line", "m-", 2.0, "surge line"), ("surge_margin_line", "m:", 1.5, "surge margin line"),
+              ("choke_line", "c-", 2.0, "choke line"))
+    for name, style, width, label in styles:
+        points = getattr(result, name) or []
+        for j, theta in enumerate(sorted({p.theta for p in points})):
+            line = sorted((p for p in points if p.theta == theta), key=lambda p: p.phi)
+            ax.plot([p.flow for p in line], [p.pressure for p in line], style, lw=width,
+                    label=label if j == 0 else None)
+    for p in result.choke_line:
+        if p.vertical_to is not None:
+            ax.plot([p.flow, p.flow], [p.pressure, p.vertical_to], "c-", lw=2.0)
 
 
 def _triangulation(ax, result: PerfmapResult) -> None:

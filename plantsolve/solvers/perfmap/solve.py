@@ -16,6 +16,7 @@ from plantsolve.schemas.perfmap import (
     EfficiencyErrorRow,
     Envelope,
     ErrorTableRow,
+    LimitPoint,
     PerfmapRequest,
     PerfmapResult,
     PerformanceMap,
@@ -41,8 +42,8 @@ from plantsolve.solvers.perfmap.fitting import (
     fit_pressure_setting,
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
-from plantsolve.solvers.perfmap.triangulation import triangulate
-from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
+from plantsolve.solvers.perfmap.triangulation import chain, triangulate
+from plantsolve.solvers.perfmap.validation import Setting, collinear, map_impossible, prepare
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -295,6 +296,33 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
     return out_settings
 
 
+def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
+    """Surge and choke lines (the two ends of every characteristic) and, with a margin, the point of each
+    characteristic whose pressure is p_surge / (1 + margin) (bisection in t: pressure decreases along it)."""
+    n = curves.n
+    idx = np.arange(n)
+    x0, y0, e0 = curves.evaluate(idx, np.zeros(n))
+    x1, y1, e1 = curves.evaluate(idx, np.ones(n))
+    surge = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(x0[k]), pressure=float(y0[k]), efficiency=float(e0[k]))
+             for k, s in enumerate(settings)]
+    choke = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(x1[k]), pressure=float(y1[k]), efficiency=float(e1[k]),
+                        vertical_to=min(s.choke_pressures) if s.choke_pressures else None)
+             for k, s in enumerate(settings)]
+    if margin <= 0:
+        return surge, choke, None
+    target = y0 / (1.0 + margin)
+    lo, hi = np.zeros(n), np.ones(n)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        above = curves.evaluate_xy(idx, mid)[1] > target
+        lo, hi = np.where(above, mid, lo), np.where(above, hi, mid)
+    xm, ym, em = curves.evaluate(idx, hi)
+    reach = y1 <= target
+    line = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(xm[k]), pressure=float(ym[k]), efficiency=float(em[k]))
+            for k, s in enumerate(settings) if reach[k]]
+    return surge, choke, line
+
+
 def envelopes(curves: CurveSet, theta: np.ndarray, phi: np.ndarray, opts) -> list[Envelope]:
     """§3, "The Envelope": for each inlet angle θ, the upper envelope of its characteristics
     interpolated over the diffuser positions φ, with φ(x) and η along it."""
@@ -327,7 +355,13 @@ def performance_map(curves: CurveSet, settings: list[Setting], theta: np.ndarray
             warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
                                        "performance map and no inverse query for this job."))
         return None, triangles
-    triangles = triangulate(theta, phi)
+    one_line = collinear(theta, phi)
+    triangles = chain(theta, phi) if one_line else triangulate(theta, phi)
+    if one_line:
+        warnings.append(Diagnostic(
+            code="one_parameter_map", message=f"The {len(settings)} settings lie on one line (one setting "
+            "parameter, e.g. speed): the map interpolates between neighbouring lines only; "
+            "'triangles' lists them as (i, j, j).", details={"segments": len(triangles)}))
     if len(triangles) == 0:
         raise SolverError("triangulation", "no non-degenerate triangle of settings",
                           {"n_settings": len(settings)})
@@ -368,6 +402,7 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
     theta = np.array([s.theta for s in settings])
     phi = np.array([s.phi for s in settings])
     envs = envelopes(curves, theta, phi, opts)
+    surge, choke, margin_line = limit_lines(curves, settings, opts.surge_margin)
     progress(0.62, "envelopes")
 
     ranges = curve_ranges(curves)
@@ -382,5 +417,6 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                     warnings=warnings, details={"family_choice": details})
     return PerfmapResult(report=report, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,
+                         surge_line=surge, choke_line=choke, surge_margin_line=margin_line,
                          triangles=triangles.tolist(), map=pmap, flow_range=[ranges[0], ranges[1]],
                          pressure_range=[ranges[2], ranges[3]])

@@ -27,12 +27,32 @@ def triangulate(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return tri[order]
 
 
+def chain(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Settings on one line (one setting parameter, e.g. speed lines): neighbours along the line as
+    degenerate triangles (i, j, j). The map machinery then interpolates between neighbouring lines only
+    (its edge pass), which is the one-parameter map: every point between two speed lines belongs to the
+    speed between them."""
+    pts = normalised_settings(theta, phi)
+    centred = pts - pts.mean(axis=0)
+    direction = np.linalg.svd(centred, full_matrices=False)[2][0] if len(pts) > 1 else np.array([1.0, 0.0])
+    order = np.argsort(centred @ direction, kind="stable")
+    if order[0] > order[-1]:  # a direction-independent listing: from the smaller index end
+        order = order[::-1]
+    return np.array([[order[k], order[k + 1], order[k + 1]] for k in range(len(order) - 1)], dtype=int).reshape(-1, 3)
+
+
 def locate(theta: np.ndarray, phi: np.ndarray, triangles: np.ndarray,
            q_theta: float, q_phi: float, tol: float = 1e-9):
     """(triangle index, barycentric weights) of a setting, or (None, None) outside the hull."""
     pts = normalised_settings(np.append(theta, q_theta), np.append(phi, q_phi))
     q, pts = pts[-1], pts[:-1]
     for k, (i, j, l) in enumerate(triangles):
+        if j == l:  # a segment of a one-parameter chain
+            d = pts[j] - pts[i]
+            s = float((q - pts[i]) @ d / (d @ d))
+            if -tol <= s <= 1 + tol and np.linalg.norm(pts[i] + s * d - q) <= 1e-9:
+                return k, np.array([1.0 - s, s, 0.0])
+            continue
         A = np.column_stack([pts[i] - pts[l], pts[j] - pts[l]])
         u, v = np.linalg.solve(A, q - pts[l])
         w = np.array([u, v, 1.0 - u - v])

@@ -117,12 +117,10 @@ def collinear(theta: np.ndarray, phi: np.ndarray) -> bool:
 
 
 def map_impossible(settings: list[Setting]) -> str | None:
-    """Why no performance map can be built over these settings (None when it can)."""
-    if len(settings) < 3:
-        return f"a performance map needs at least 3 settings, got {len(settings)}"
-    if collinear(np.array([s.theta for s in settings]), np.array([s.phi for s in settings])):
-        return ("all settings lie on one line in (theta, phi): no triangle to interpolate "
-                "over for a performance map")
+    """Why no performance map can be built over these settings (None when it can). Settings on one
+    line (a single setting parameter, e.g. speed lines) give the one-parameter map."""
+    if len(settings) < 2:
+        return f"a performance map needs at least 2 settings, got {len(settings)}"
     return None
 
 
