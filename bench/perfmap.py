@@ -90,8 +90,8 @@ def main() -> None:
     curves = curveset_from_fits(res.settings)
     th = np.array([s.theta for s in res.settings])
     ph = np.array([s.phi for s in res.settings])
-    tb, (be, bth, bph) = timed(lambda: binned_map(curves, np.array(res.triangles), th, ph, gx, gy,
-                                                  curve_ranges(curves), 64, 128), reps)
+    tb, (be, (bth, bph)) = timed(lambda: binned_map(curves, np.array(res.triangles), np.column_stack([th, ph]),
+                                                    gx, gy, curve_ranges(curves), 64, 128), reps)
     eb = errors(be, te)
     ok = np.isfinite(te)
     th_ex = float(np.nanmean(np.abs(np.array(res.map.theta, dtype=float) - tth)[ok]))

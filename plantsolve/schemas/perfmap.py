@@ -43,10 +43,14 @@ EFFICIENCY_FAMILY_DESCRIPTION = (
 
 
 class Position(StrictModel):
-    """Measurements at one (theta, phi) setting: one characteristic."""
+    """Measurements at one setting: one characteristic. The setting is ``setting`` (values in the order of
+    the request's ``setting_names``) or, for the paper's two settings, ``theta`` and ``phi``."""
 
-    theta: FiniteFloat = Field(description="Inlet guide vane setting (rig unit, e.g. degrees).")
-    phi: FiniteFloat = Field(description="Diffuser setting (rig unit, e.g. degrees).")
+    setting: list[FiniteFloat] | None = Field(
+        default=None, min_length=1, max_length=3,
+        description="Setting values in the order of the request's setting_names (e.g. [speed] or [IGV, speed]).")
+    theta: FiniteFloat | None = Field(default=None, description="Inlet guide vane setting (rig unit, e.g. degrees).")
+    phi: FiniteFloat | None = Field(default=None, description="Diffuser setting (rig unit, e.g. degrees).")
     flow: list[FiniteFloat] = Field(
         min_length=3, max_length=10_000,
         description="Measured flow x per point (any order; sorted by the solver).")
@@ -123,23 +127,51 @@ class PerfmapOptions(StrictModel):
 
 
 class PerfmapRequest(StrictModel):
-    """Rig measurements at several (theta, phi) settings and what to compute from them."""
+    """Rig measurements at several settings and what to compute from them."""
 
+    setting_names: list[str] = Field(
+        default_factory=lambda: ["theta", "phi"], min_length=1, max_length=3,
+        description="Names of the setting parameters (1 to 3: speed, IGV/VGV angle, diffuser angle, ...); the "
+        "paper's case is ['theta', 'phi']. One parameter gives a one-parameter (e.g. speed) map; two or three "
+        "the paper's maximum-efficiency map over the settings.")
+    setting_units: list[str] | None = Field(
+        default=None, description="Unit of each setting parameter (labels only), in the order of setting_names.")
     positions: list[Position] = Field(
         min_length=1, max_length=2000,
-        description="One entry per (theta, phi) setting; settings must be distinct.")
+        description="One entry per setting; settings must be distinct.")
     options: PerfmapOptions = Field(default_factory=PerfmapOptions)
     upload_warnings: list[Diagnostic] = Field(
         default_factory=list, max_length=100,
         description="Notes of the file parser (e.g. ignored CSV columns), repeated in the "
         "result's report; set by the upload parser, not needed in JSON bodies.")
 
+    @model_validator(mode="after")
+    def _settings_given(self) -> "PerfmapRequest":
+        d = len(self.setting_names)
+        if len(set(self.setting_names)) != d:
+            raise ValueError("setting_names must be distinct")
+        if self.setting_units is not None and len(self.setting_units) != d:
+            raise ValueError(f"setting_units needs {d} entries, one per setting name")
+        for i, p in enumerate(self.positions):
+            if p.setting is not None:
+                if len(p.setting) != d:
+                    raise ValueError(f"positions[{i}].setting has {len(p.setting)} values; setting_names has {d}")
+            elif not (self.setting_names == ["theta", "phi"] and p.theta is not None and p.phi is not None):
+                raise ValueError(f"positions[{i}] needs 'setting' ({d} values: {', '.join(self.setting_names)})"
+                                 + (" or 'theta' and 'phi'" if self.setting_names == ["theta", "phi"] else ""))
+        return self
+
+    def setting_values(self, i: int) -> tuple[float, ...]:
+        p = self.positions[i]
+        return tuple(p.setting) if p.setting is not None else (float(p.theta), float(p.phi))
+
 
 class SettingFit(BaseModel):
     """The fitted characteristic y(x) and efficiency eta(x) of one setting."""
 
-    theta: float
-    phi: float
+    setting: list[float] = Field(default_factory=list, description="Setting values, in the order of setting_names.")
+    theta: float | None = Field(default=None, description="With two setting parameters: the first.")
+    phi: float | None = Field(default=None, description="With two setting parameters: the second.")
     family: Family = Field(description="Family of the pressure curve. " + FAMILY_DESCRIPTION)
     efficiency_family: EfficiencyFamily = Field(
         description="Family of the efficiency curve. " + EFFICIENCY_FAMILY_DESCRIPTION)
@@ -209,13 +241,16 @@ class EfficiencyErrorRow(BaseModel):
 
 
 class Envelope(BaseModel):
-    """Max-curve of one theta over the interpolated phi settings (paper section 3)."""
+    """Max-curve of one theta over the interpolated phi settings (paper section 3); in general, of one value
+    of the other setting parameters over the last one."""
 
-    theta: float
+    fixed: list[float] = Field(default_factory=list, description="Values of the settings held fixed (all but the "
+                               "last setting name; empty with one setting parameter).")
+    theta: float | None = None
     flow: list[float]
     pressure: list[float | None] = Field(
         description="max over phi of the interpolated characteristics (null: no curve).")
-    phi: list[float | None] = Field(description="phi(x) attaining the max (paper eq. 48).")
+    phi: list[float | None] = Field(description="The last setting parameter (phi) attaining the max (paper eq. 48).")
     efficiency: list[float | None] = Field(
         description="eta along the max-curve (paper eq. 50).")
 
@@ -223,8 +258,9 @@ class Envelope(BaseModel):
 class LimitPoint(BaseModel):
     """One end of a characteristic (surge or choke), or its surge-margin point."""
 
-    theta: float
-    phi: float
+    setting: list[float] = Field(default_factory=list)
+    theta: float | None = None
+    phi: float | None = None
     flow: float
     pressure: float
     efficiency: float
@@ -244,18 +280,23 @@ class PerformanceMap(BaseModel):
     flow: list[float]
     pressure: list[float]
     efficiency: list[list[float | None]]
-    theta: list[list[float | None]]
-    phi: list[list[float | None]]
+    settings: list[list[list[float | None]]] = Field(
+        default_factory=list, description="Optimal value of each setting parameter (in the order of setting_names) "
+        "per node.")
+    theta: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the first.")
+    phi: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the second.")
     t_samples: int
     reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.")
 
 
 class PerfmapResult(BaseModel):
     report: Report
+    setting_names: list[str] = Field(default_factory=lambda: ["theta", "phi"])
+    setting_units: list[str] | None = None
     family: Family = Field(description="Pressure family shared by the settings (a setting it cannot fit "
                            "within 1 % of its floor has its own: see settings[].family).")
     fit: Literal["least_squares", "minimax"]
-    settings: list[SettingFit] = Field(description="Sorted by (theta, phi).")
+    settings: list[SettingFit] = Field(description="Sorted by setting values.")
     error_table: list[ErrorTableRow] = Field(
         description="The paper's Table 1 for the submitted data, one row per family.")
     efficiency_error_table: list[EfficiencyErrorRow] = Field(
@@ -304,8 +345,9 @@ class QueryAnswer(BaseModel):
     flow: float
     pressure: float
     feasible: bool = Field(description="True when some setting in the map reaches the point.")
-    theta: float | None = Field(description="Optimal inlet setting (None when infeasible).")
-    phi: float | None = Field(description="Optimal diffuser setting (None when infeasible).")
+    setting: list[float] | None = Field(default=None, description="Optimal setting values (None when infeasible).")
+    theta: float | None = Field(default=None, description="Two setting parameters: the first (None when infeasible).")
+    phi: float | None = Field(default=None, description="Two setting parameters: the second (None when infeasible).")
     efficiency: float | None = Field(
         description="Max efficiency at the point (None when infeasible).")
     distance_to_map: float = Field(

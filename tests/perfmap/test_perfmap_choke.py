@@ -100,13 +100,13 @@ def test_speed_lines_give_a_speed_map_and_the_query_finds_the_speed():
     k = 3
     x, y, e = curves.evaluate(np.array([k]), np.array([0.4]))
     ans = query(res, PerfmapQueryRequest.model_validate({"flow": float(x[0]), "pressure": float(y[0])})).points[0]
-    assert ans.feasible and ans.phi == pytest.approx(res.settings[k].phi, abs=1e-6)
+    assert ans.feasible and ans.setting == pytest.approx(res.settings[k].setting, abs=1e-6)
     assert ans.efficiency == pytest.approx(float(e[0]), abs=1e-6)
     # between two lines the speed is between theirs
     x2, y2, _ = curves.evaluate(np.array([k + 1]), np.array([0.4]))
     mid = query(res, PerfmapQueryRequest.model_validate({"flow": float((x[0] + x2[0]) / 2),
                                                          "pressure": float((y[0] + y2[0]) / 2)})).points[0]
-    assert mid.feasible and res.settings[k].phi < mid.phi < res.settings[k + 1].phi
+    assert mid.feasible and res.settings[k].setting[0] < mid.setting[0] < res.settings[k + 1].setting[0]
 
 
 def test_surge_choke_and_margin_lines_are_returned_and_drawn():
@@ -118,7 +118,7 @@ def test_surge_choke_and_margin_lines_are_returned_and_drawn():
     assert len(res.surge_line) == len(res.choke_line) == 5
     for s, surge, choke in zip(res.settings, res.surge_line, res.choke_line):
         assert surge.flow == pytest.approx(s.x_min) and choke.flow == pytest.approx(s.x_max)
-        assert surge.pressure > choke.pressure and surge.phi == s.phi
+        assert surge.pressure > choke.pressure and surge.setting == s.setting
     margin = res.surge_margin_line
     assert len(margin) == 5
     for m, surge in zip(margin, res.surge_line):

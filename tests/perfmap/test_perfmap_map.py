@@ -48,8 +48,8 @@ def test_binning_baseline_is_biased_high(synthetic_result):
     curves = curveset_from_fits(synthetic_result.settings)
     th = _arr([s.theta for s in synthetic_result.settings])
     ph = _arr([s.phi for s in synthetic_result.settings])
-    be, _, _ = binned_map(curves, np.array(synthetic_result.triangles), th, ph, gx, gy,
-                          curve_ranges(curves))
+    be, _ = binned_map(curves, np.array(synthetic_result.triangles), np.column_stack([th, ph]), gx, gy,
+                       curve_ranges(curves))
     te, _, _ = true_map(gx, gy, n_t=8001)
     ok = np.isfinite(be) & np.isfinite(te)
     # the paper's method, for the record: the max over a cell is biased high, and cells

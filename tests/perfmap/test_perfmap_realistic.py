@@ -266,7 +266,7 @@ def test_exact_map_is_never_beaten_by_a_random_setting_on_real_data(n3_result):
     W[0, :2000], W[1, :2000] = (s := rng.uniform(0, 1, 2000)), 1 - s
     x, y, e = curves.evaluate(idx, np.broadcast_to(t, idx.shape))
     X, Y, E = (W * x).sum(axis=0), (W * y).sum(axis=0), (W * e).sum(axis=0)
-    eta = max_efficiency(curves, tri, th, ph, np.linspace(0, 1, res.map.t_samples), X, Y,
+    eta = max_efficiency(curves, tri, np.column_stack([th, ph]), np.linspace(0, 1, res.map.t_samples), X, Y,
                          (*res.flow_range, *res.pressure_range))[0]
     assert np.all(np.isfinite(eta))
     assert np.max(E - eta) < 1e-9

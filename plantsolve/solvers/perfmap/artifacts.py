@@ -28,7 +28,24 @@ def _save(fig: Figure, stem: str) -> list[Artifact]:
 
 
 def _measured(request: PerfmapRequest):
-    return {(p.theta, p.phi): p for p in request.positions}
+    return {tuple(float(v) for v in request.setting_values(i)): p for i, p in enumerate(request.positions)}
+
+
+def _values(s) -> tuple[float, ...]:
+    return tuple(s.setting) if s.setting else (s.theta, s.phi)
+
+
+SYMBOLS = {"theta": "θ", "phi": "φ"}
+
+
+def _names(result: PerfmapResult) -> list[str]:
+    """Axis labels of the setting parameters: name (θ/φ for the paper's) and unit."""
+    units = result.setting_units or [""] * len(result.setting_names)
+    return [SYMBOLS.get(n, n) + (f" [{u}]" if u else "") for n, u in zip(result.setting_names, units)]
+
+
+def _label(result: PerfmapResult, values) -> str:
+    return ", ".join(f"{SYMBOLS.get(n, n)}={v:g}" for n, v in zip(result.setting_names, values))
 
 
 def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
@@ -48,14 +65,14 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
                             hspace=0.45, wspace=0.45)
         for k, s in enumerate(result.settings):
             ax = axes[k]
-            p = meas.get((s.theta, s.phi))
+            p = meas.get(_values(s))
             ax.plot(X[k], Y[k], "C0-", lw=1.5)
             ax2 = ax.twinx()
             ax2.plot(X[k], E[k], "C1--", lw=1.2)
             if p is not None:
                 ax.plot(p.flow, p.pressure, "C0o", ms=3.5)
                 ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5)
-            ax.set_title(f"θ={s.theta:g}, φ={s.phi:g}  (y {100 * s.pressure_max_rel_error:.1f}%,"
+            ax.set_title(f"{_label(result, _values(s))}  (y {100 * s.pressure_max_rel_error:.1f}%,"
                          f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
             ax.tick_params(labelsize=7)
             ax2.tick_params(labelsize=7, colors="C1")
@@ -72,7 +89,7 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
         col = f"C{k % 10}"
         ax1.plot(X[k], Y[k], "-", color=col, lw=1)
         ax2.plot(X[k], E[k], "-", color=col, lw=1)
-        p = meas.get((s.theta, s.phi))
+        p = meas.get(_values(s))
         if p is not None:
             ax1.plot(p.flow, p.pressure, "o", color=col, ms=2.5)
             ax2.plot(p.flow, p.efficiency, "o", color=col, ms=2.5)
@@ -86,25 +103,34 @@ def _envelopes(result: PerfmapResult) -> Figure:
     X, Y, _ = curves.sample(np.linspace(0.0, 1.0, 101))
     fig = Figure(figsize=(12, 5), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
-    thetas = [e.theta for e in result.envelopes]
+    names = _names(result)
+    fixed_names = result.setting_names[:-1]
     for j, env in enumerate(result.envelopes):
         col = f"C{j % 10}"
+        fixed = tuple(env.fixed) if env.fixed or not fixed_names else (env.theta,)
         for k, s in enumerate(result.settings):
-            if s.theta == env.theta:
+            if _values(s)[:-1] == fixed:
                 ax1.plot(X[k], Y[k], "-", color=col, lw=0.7, alpha=0.6)
-        ax1.plot(env.flow, env.pressure, "-", color=col, lw=2.2, label=f"θ={env.theta:g}")
-        ax2.plot(env.flow, env.efficiency, "-", color=col, lw=1.8, label=f"η, θ={env.theta:g}")
-    ax1.set(xlabel="flow", ylabel="pressure", title="Max-curves (envelopes) per θ")
+        tag = ", ".join(f"{SYMBOLS.get(n, n)}={v:g}" for n, v in zip(fixed_names, fixed)) or "max-curve"
+        ax1.plot(env.flow, env.pressure, "-", color=col, lw=2.2, label=tag)
+        ax2.plot(env.flow, env.efficiency, "-", color=col, lw=1.8, label=f"η, {tag}")
+    per = f" per {', '.join(names[:-1])}" if fixed_names else ""
+    ax1.set(xlabel="flow", ylabel="pressure", title=f"Max-curves (envelopes){per} over {names[-1]}")
     ax1.legend(fontsize=8)
     ax2.set(xlabel="flow", ylabel="efficiency along the max-curve")
     ax3 = ax2.twinx()
     for j, env in enumerate(result.envelopes):
         ax3.plot(env.flow, env.phi, ":", color=f"C{j % 10}", lw=1.5)
-    ax3.set_ylabel("φ(x) on the max-curve (dotted)")
+    ax3.set_ylabel(f"{names[-1]} on the max-curve (dotted)")
     ax2.legend(fontsize=8, loc="lower center")
-    if not thetas:
+    if not result.envelopes:
         ax1.text(0.5, 0.5, "no envelopes", transform=ax1.transAxes, ha="center")
     return fig
+
+
+# contour colour and style of the optimal setting parameters (1, 2 or 3 of them)
+CONTOUR_STYLES = ([("orange", "-")], [("white", "--"), ("orange", "-")],
+                  [("white", "--"), ("pink", ":"), ("orange", "-")])
 
 
 def _map(result: PerfmapResult) -> Figure:
@@ -121,32 +147,32 @@ def _map(result: PerfmapResult) -> Figure:
         return fig
     gx, gy = np.array(m.flow), np.array(m.pressure)
     eta = np.array(m.efficiency, dtype=float)
-    th = np.array(m.theta, dtype=float)
-    ph = np.array(m.phi, dtype=float)
+    grids = [np.array(g, dtype=float) for g in m.settings] if m.settings else [
+        np.array(m.theta, dtype=float), np.array(m.phi, dtype=float)]
+    names = _names(result)
     finite = np.isfinite(eta)
     if finite.sum() >= 4:
         lo, hi = np.nanmin(eta), np.nanmax(eta)
         levels = MaxNLocator(14).tick_values(lo, hi) if hi > lo else [lo, lo + 1e-9]
         cf = ax.contourf(gx, gy, np.ma.masked_invalid(eta), levels=levels, cmap="viridis")
         fig.colorbar(cf, ax=ax, label="max efficiency η")
-        cs = ax.contour(gx, gy, np.ma.masked_invalid(th), levels=6, colors="white",
-                        linewidths=0.9, linestyles="--")
-        ax.clabel(cs, fontsize=7, fmt="θ=%.3g")
-        cs = ax.contour(gx, gy, np.ma.masked_invalid(ph), levels=8, colors="orange",
-                        linewidths=1.0, linestyles="-")
-        ax.clabel(cs, fontsize=7, fmt="φ=%.3g")
+        for grid, name, (colour, style) in zip(grids, names, CONTOUR_STYLES[len(grids) - 1]):
+            if np.nanmax(grid) > np.nanmin(grid):
+                cs = ax.contour(gx, gy, np.ma.masked_invalid(grid), levels=8, colors=colour, linewidths=1.0,
+                                linestyles=style)
+                ax.clabel(cs, fontsize=7, fmt=f"{name.split(' [')[0]}=%.3g")
         ax.contour(gx, gy, finite.astype(float), levels=[0.5], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
     _limit_lines(ax, result)
     ax.plot([], [], "k-", lw=0.6, label="setting characteristics")
-    ax.plot([], [], "w--", label="optimal θ")
-    ax.plot([], [], "-", color="orange", label="optimal φ")
+    for name, (colour, style) in zip(names, CONTOUR_STYLES[len(names) - 1]):
+        ax.plot([], [], color=colour, linestyle=style, label=f"optimal {name}")
     ax.plot([], [], "r-", label="reachable boundary")
     ax.legend(fontsize=8, loc="upper right", facecolor="lightgrey")
     ax.set(xlabel="flow", ylabel="pressure",
            title=f"Performance map ({m.method}, {result.family}): "
-           "max efficiency and optimal (θ, φ)")
+           f"max efficiency and optimal ({', '.join(n.split(' [')[0] for n in names)})")
     return fig
 
 
@@ -156,8 +182,9 @@ def _limit_lines(ax, result: PerfmapResult) -> None:
               ("choke_line", "c-", 2.0, "choke line"))
     for name, style, width, label in styles:
         points = getattr(result, name) or []
-        for j, theta in enumerate(sorted({p.theta for p in points})):
-            line = sorted((p for p in points if p.theta == theta), key=lambda p: p.phi)
+        key = (lambda p: tuple(p.setting)) if points and points[0].setting else (lambda p: (p.theta, p.phi))
+        for j, group in enumerate(sorted({key(p)[:-1] for p in points})):
+            line = sorted((p for p in points if key(p)[:-1] == group), key=lambda p: key(p)[-1])
             ax.plot([p.flow for p in line], [p.pressure for p in line], style, lw=width,
                     label=label if j == 0 else None)
     for p in result.choke_line:
@@ -167,12 +194,21 @@ def _limit_lines(ax, result: PerfmapResult) -> None:
 
 def _triangulation(ax, result: PerfmapResult) -> None:
     """The settings and their triangulation (paper Fig. 15)."""
-    th = np.array([s.theta for s in result.settings])
-    ph = np.array([s.phi for s in result.settings])
-    if result.triangles:
-        ax.triplot(th, ph, np.array(result.triangles), color="0.4", lw=0.7)
-    ax.plot(th, ph, "ko", ms=3)
-    ax.set(xlabel="θ", ylabel="φ", title="settings")
+    values = np.array([_values(s) for s in result.settings], dtype=float).reshape(len(result.settings), -1)
+    names = _names(result)
+    if values.shape[1] == 1:  # one parameter: the settings along it
+        ax.plot(np.zeros(len(values)), values[:, 0], "k-o", ms=3, lw=0.7)
+        ax.set(xticks=[], ylabel=names[0], title="settings")
+    else:
+        th, ph = values[:, 0], values[:, 1]
+        if result.triangles and values.shape[1] == 2 and all(j != k for _, j, k in result.triangles):
+            ax.triplot(th, ph, np.array(result.triangles), color="0.4", lw=0.7)
+        elif result.triangles:
+            for i, j, _ in result.triangles:
+                ax.plot(th[[i, j]], ph[[i, j]], "-", color="0.4", lw=0.7)
+        ax.plot(th, ph, "ko", ms=3)
+        ax.set(xlabel=names[0], ylabel=names[1],
+               title="settings" + (f" (projected; {names[2]} not shown)" if values.shape[1] == 3 else ""))
     ax.set_box_aspect(1.6)
 
 

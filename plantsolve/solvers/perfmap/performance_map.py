@@ -175,11 +175,12 @@ def _edge_candidates(curves, i, j, t, Xs, Ys, Es, Xn, Yn, norm, iterations=14):
     return nodes[ok], eta[ok], s[ok], hi[ok]
 
 
-def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, phi: np.ndarray,
+def max_efficiency(curves: CurveSet, triangles: np.ndarray, values: np.ndarray,
                    t: np.ndarray, X: np.ndarray, Y: np.ndarray, ranges,
                    progress: Progress = no_progress, p0: float = 0.0, p1: float = 1.0):
-    """Exact max efficiency at points (X, Y) (1-D arrays); returns eta, theta, phi, t (NaN
-    where no setting reaches the point).
+    """Exact max efficiency at points (X, Y) (1-D arrays); returns eta, the optimal setting values
+    (len(X), d) interpolated from ``values`` (n_settings, d), and t (NaN where no setting reaches
+    the point).
 
     Three passes: (1) every (triangle, t sample): 2x2 solve per node; (2) golden-section
     refinement in t of each node's best sample; (3) crossings of every edge of the
@@ -230,8 +231,8 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
                 b_m[nodes[upd]] = blk[m[upd]]
         progress(p0 + (p1 - p0) * 0.6 * (k + 1) / n_tri, "performance map: triangles")
 
-    b_theta = np.full(G, np.nan)
-    b_phi = np.full(G, np.nan)
+    values = np.asarray(values, dtype=float).reshape(curves.n, -1)
+    b_val = np.full((G, values.shape[1]), np.nan)
     b_t = np.full(G, np.nan)
     hit = np.flatnonzero(np.isfinite(best))
     if len(hit):
@@ -241,8 +242,8 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
         W /= W.sum(axis=0)
         tri = triangles[b_tri[hit]].T
         best[hit] = e
-        b_theta[hit] = _dot3(W, theta[tri])
-        b_phi[hit] = _dot3(W, phi[tri])
+        for col in range(values.shape[1]):
+            b_val[hit, col] = _dot3(W, values[tri, col])
         b_t[hit] = tb
     progress(p0 + (p1 - p0) * 0.7, "performance map: refinement")
 
@@ -258,24 +259,23 @@ def max_efficiency(curves: CurveSet, triangles: np.ndarray, theta: np.ndarray, p
             upd = eta > best[nodes]
             n = nodes[upd]
             best[n] = eta[upd]
-            b_theta[n] = (1 - s[upd]) * theta[i] + s[upd] * theta[j]
-            b_phi[n] = (1 - s[upd]) * phi[i] + s[upd] * phi[j]
+            b_val[n] = (1 - s[upd])[:, None] * values[i] + s[upd][:, None] * values[j]
             b_t[n] = te[upd]
         progress(p0 + (p1 - p0) * (0.7 + 0.3 * (k + 1) / len(edges)), "performance map: edges")
     best[~np.isfinite(best)] = np.nan
-    return best, b_theta, b_phi, b_t
+    return best, b_val, b_t
 
 
-def exact_map(curves, triangles, theta, phi, t, gx, gy, ranges, progress=no_progress,
-              p0=0.0, p1=1.0):
+def exact_map(curves, triangles, values, t, gx, gy, ranges, progress=no_progress, p0=0.0, p1=1.0):
+    """Max efficiency (ny, nx) and the optimal setting values (d, ny, nx) on the grid."""
     XX, YY = np.meshgrid(gx, gy)  # rows = pressure, columns = flow
-    eta, th, ph, _ = max_efficiency(curves, triangles, theta, phi, t, XX.ravel(), YY.ravel(),
-                                    ranges, progress, p0, p1)
+    eta, val, _ = max_efficiency(curves, triangles, values, t, XX.ravel(), YY.ravel(),
+                                 ranges, progress, p0, p1)
     shape = XX.shape
-    return eta.reshape(shape), th.reshape(shape), ph.reshape(shape)
+    return eta.reshape(shape), val.T.reshape((-1,) + shape)
 
 
-def binned_map(curves, triangles, theta, phi, gx, gy, ranges, n_bary: int = 64, m_t: int = 128):
+def binned_map(curves, triangles, values, gx, gy, ranges, n_bary: int = 64, m_t: int = 128):
     """The paper's scatter-and-bin map (eqs. 62-71), NaN-initialised: baseline only."""
     t = np.linspace(0.0, 1.0, m_t + 1)
     Xs, Ys, Es = curves.sample(t)
@@ -285,8 +285,8 @@ def binned_map(curves, triangles, theta, phi, gx, gy, ranges, n_bary: int = 64, 
     nx, ny = len(gx), len(gy)
     x0, x1, y0, y1 = ranges
     best = np.full(nx * ny, -np.inf)
-    b_theta = np.full(nx * ny, np.nan)
-    b_phi = np.full(nx * ny, np.nan)
+    values = np.asarray(values, dtype=float).reshape(curves.n, -1)
+    b_val = np.full((nx * ny, values.shape[1]), np.nan)
     for tri in triangles:
         x = U.T @ Xs[tri]  # (K, M)
         y = U.T @ Ys[tri]
@@ -301,11 +301,10 @@ def binned_map(curves, triangles, theta, phi, gx, gy, ranges, n_bary: int = 64, 
         best[upd] = local[upd]
         winner = np.flatnonzero(upd[node] & (e == local[node]))
         kk = winner // x.shape[1]
-        b_theta[node[winner]] = U[:, kk].T @ theta[tri]
-        b_phi[node[winner]] = U[:, kk].T @ phi[tri]
+        b_val[node[winner]] = U[:, kk].T @ values[tri]
     best[~np.isfinite(best)] = np.nan
     shape = (ny, nx)
-    return best.reshape(shape), b_theta.reshape(shape), b_phi.reshape(shape)
+    return best.reshape(shape), b_val.T.reshape((-1,) + shape)
 
 
 def cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Inverse query on a finished result: best (theta, phi) for duty points (flow, pressure)."""
+"""Inverse query on a finished result: the best setting for duty points (flow, pressure)."""
 
 from __future__ import annotations
 
@@ -17,11 +17,14 @@ def _context(result: PerfmapResult):
                                        "was false, or the settings allow none: see the "
                                        "report): there is nothing to query"))
     curves = curveset_from_fits(result.settings)
-    theta = np.array([s.theta for s in result.settings])
-    phi = np.array([s.phi for s in result.settings])
+    values = np.array([_values(s) for s in result.settings], dtype=float).reshape(len(result.settings), -1)
     ranges = (*result.flow_range, *result.pressure_range)
     t = np.linspace(0.0, 1.0, result.map.t_samples)
-    return curves, np.asarray(result.triangles, dtype=int), theta, phi, ranges, t
+    return curves, np.asarray(result.triangles, dtype=int), values, ranges, t
+
+
+def _values(s) -> list[float]:
+    return list(s.setting) if s.setting else [s.theta, s.phi]
 
 
 def answer_query(result: PerfmapResult, q: PerfmapQueryRequest) -> PerfmapQueryResult:
@@ -37,10 +40,11 @@ def query(result: PerfmapResult, q: PerfmapQueryRequest) -> PerfmapQueryResult:
     Points no setting reaches are reported infeasible with their distance to the reachable
     region instead of an extrapolated setting.
     """
-    curves, triangles, theta, phi, ranges, t = _context(result)
+    curves, triangles, values, ranges, t = _context(result)
     X = np.array([p.flow for p in q.points], dtype=float)
     Y = np.array([p.pressure for p in q.points], dtype=float)
-    eta, th, ph, _ = max_efficiency(curves, triangles, theta, phi, t, X, Y, ranges)
+    eta, best, _ = max_efficiency(curves, triangles, values, t, X, Y, ranges)
+    two = values.shape[1] == 2
     feasible = np.isfinite(eta)
     dist = np.zeros(len(X))
     if (~feasible).any():
@@ -48,8 +52,9 @@ def query(result: PerfmapResult, q: PerfmapQueryRequest) -> PerfmapQueryResult:
                                              ranges)
     answers = [
         QueryAnswer(flow=float(X[k]), pressure=float(Y[k]), feasible=bool(feasible[k]),
-                    theta=float(th[k]) if feasible[k] else None,
-                    phi=float(ph[k]) if feasible[k] else None,
+                    setting=[float(v) for v in best[k]] if feasible[k] else None,
+                    theta=float(best[k, 0]) if feasible[k] and two else None,
+                    phi=float(best[k, 1]) if feasible[k] and two else None,
                     efficiency=float(eta[k]) if feasible[k] else None,
                     distance_to_map=float(dist[k]))
         for k in range(len(X))

@@ -42,8 +42,8 @@ from plantsolve.solvers.perfmap.fitting import (
     fit_pressure_setting,
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
-from plantsolve.solvers.perfmap.triangulation import chain, triangulate
-from plantsolve.solvers.perfmap.validation import Setting, collinear, map_impossible, prepare
+from plantsolve.solvers.perfmap.triangulation import map_simplices
+from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -104,7 +104,7 @@ def _efficiency_diagnostics(s: Setting, e: EtaResult, where: dict) -> list[Diagn
         i = e.worst
         out.append(Diagnostic(
             code="efficiency_fit_poor",
-            message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the {e.family} efficiency fit "
+            message=f"Setting {s.label}: the {e.family} efficiency fit "
             f"misses a measured point by {100 * e.rel_err:.1f}% (relative; max absolute error "
             f"{e.abs_err:.3f}), worst at flow {s.x[i]:g} where eta = {s.eta[i]:.3f}.",
             details={**where, "family": e.family, "max_rel_error": e.rel_err,
@@ -114,7 +114,7 @@ def _efficiency_diagnostics(s: Setting, e: EtaResult, where: dict) -> list[Diagn
     if overshoot > EFFICIENCY_OVERSHOOT:
         out.append(Diagnostic(
             code="efficiency_above_measured",
-            message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the fitted efficiency peaks at "
+            message=f"Setting {s.label}: the fitted efficiency peaks at "
             f"{e.peak:.4f}, {overshoot:.4f} above the best measured point ({s.eta.max():.4f}).",
             details={**where, "peak": e.peak, "measured_max": float(s.eta.max())}))
     return out
@@ -243,7 +243,7 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
         e = ch.efficiency[eta_choice[k]][k]
         floor = ch.floors[k]
         out_settings.append(SettingFit(
-            theta=s.theta, phi=s.phi, family=family, efficiency_family=e.family,
+            setting=list(s.values), theta=s.theta, phi=s.phi, family=family, efficiency_family=e.family,
             x_min=float(s.x[0]), x_max=float(s.x[-1]),
             pressure_coefficients=_public_coefficients(r, s),
             efficiency_coefficients=[float(v) for v in e.fit.params],
@@ -252,11 +252,12 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
             pressure_loo=r.loo, efficiency_loo=e.loo_rel, efficiency_loo_abs=e.loo_abs,
             efficiency_peak=e.peak, efficiency_bounds_active=e.fit.active_bounds,
             floor=floor, pressure_excess=max(r.err - floor, 0.0), active_side_conditions=r.fit.active))
-        where = {"setting": k, "position": s.source_index, "theta": s.theta, "phi": s.phi}
+        where = {"setting": k, "position": s.source_index, "values": list(s.values), "theta": s.theta,
+                 "phi": s.phi}
         if r.err > floor + PRESSURE_EXCESS:
             warnings.append(Diagnostic(
                 code="pressure_fit_poor",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the {family} pressure fit misses the data by "
+                message=f"Setting {s.label}: the {family} pressure fit misses the data by "
                 f"{100 * r.err:.2f}% at its worst point, {100 * (r.err - floor):.2f}% more than the best any "
                 f"decreasing concave curve reaches ({100 * floor:.2f}%).",
                 details={**where, "family": family, "max_rel_error": r.err, "floor": floor,
@@ -264,7 +265,7 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
         if floor > 0:
             warnings.append(Diagnostic(
                 code="data_not_decreasing_concave",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: the measured pressures are "
+                message=f"Setting {s.label}: the measured pressures are "
                 f"not decreasing and concave; no admissible curve can beat a max relative "
                 f"error of {100 * floor:.2f}% (the floor), the {family} fit reaches "
                 f"{100 * r.err:.2f}%.",
@@ -273,25 +274,25 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
         if family != "concave" and len(s.x) < N_COEFFICIENTS[family]:
             warnings.append(Diagnostic(
                 code="underdetermined_fit",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g} has {len(s.x)} points for "
+                message=f"Setting {s.label} has {len(s.x)} points for "
                 f"{N_COEFFICIENTS[family]} coefficients: the fit is not unique.",
                 details=where))
         if s.repeated_flows:
             warnings.append(Diagnostic(
                 code="repeated_flows_averaged",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {s.repeated_flows} reading(s) at an already "
+                message=f"Setting {s.label}: {s.repeated_flows} reading(s) at an already "
                 "measured flow (other pressure or efficiency) averaged with it.", details=where))
         if s.choke_pressures:
             warnings.append(Diagnostic(
                 code="vertical_choke_segment",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {len(s.choke_pressures)} points share the "
+                message=f"Setting {s.label}: {len(s.choke_pressures)} points share the "
                 f"largest flow {s.x[-1]:g} (a vertical choke line): the characteristic ends at the highest "
                 f"({max(s.choke_pressures):g}), the rest is its choke segment.",
                 details={**where, "flow": float(s.x[-1]), "pressures": s.choke_pressures}))
         if s.merged_duplicates:
             warnings.append(Diagnostic(
                 code="duplicate_points_merged",
-                message=f"Setting theta={s.theta:g}, phi={s.phi:g}: {s.merged_duplicates} "
+                message=f"Setting {s.label}: {s.merged_duplicates} "
                 "repeated measurement(s) merged.", details=where))
     return out_settings
 
@@ -303,9 +304,9 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
     idx = np.arange(n)
     x0, y0, e0 = curves.evaluate(idx, np.zeros(n))
     x1, y1, e1 = curves.evaluate(idx, np.ones(n))
-    surge = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(x0[k]), pressure=float(y0[k]), efficiency=float(e0[k]))
+    surge = [LimitPoint(setting=list(s.values), theta=s.theta, phi=s.phi, flow=float(x0[k]), pressure=float(y0[k]), efficiency=float(e0[k]))
              for k, s in enumerate(settings)]
-    choke = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(x1[k]), pressure=float(y1[k]), efficiency=float(e1[k]),
+    choke = [LimitPoint(setting=list(s.values), theta=s.theta, phi=s.phi, flow=float(x1[k]), pressure=float(y1[k]), efficiency=float(e1[k]),
                         vertical_to=min(s.choke_pressures) if s.choke_pressures else None)
              for k, s in enumerate(settings)]
     if margin <= 0:
@@ -318,27 +319,30 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
         lo, hi = np.where(above, mid, lo), np.where(above, hi, mid)
     xm, ym, em = curves.evaluate(idx, hi)
     reach = y1 <= target
-    line = [LimitPoint(theta=s.theta, phi=s.phi, flow=float(xm[k]), pressure=float(ym[k]), efficiency=float(em[k]))
+    line = [LimitPoint(setting=list(s.values), theta=s.theta, phi=s.phi, flow=float(xm[k]), pressure=float(ym[k]), efficiency=float(em[k]))
             for k, s in enumerate(settings) if reach[k]]
     return surge, choke, line
 
 
-def envelopes(curves: CurveSet, theta: np.ndarray, phi: np.ndarray, opts) -> list[Envelope]:
+def envelopes(curves: CurveSet, values: np.ndarray, opts) -> list[Envelope]:
     """§3, "The Envelope": for each inlet angle θ, the upper envelope of its characteristics
-    interpolated over the diffuser positions φ, with φ(x) and η along it."""
+    interpolated over the diffuser positions φ, with φ(x) and η along it. In general: for each value of
+    the other setting parameters, over the last one (one parameter: one envelope over it)."""
     envs = []
-    for th in sorted(set(theta.tolist())):
-        members = [i for i in range(len(theta)) if theta[i] == th]
-        e = envelope(curves, members, phi, opts.envelope_curves, opts.envelope_points)
-        envs.append(Envelope(theta=th, flow=e["flow"].tolist(),
+    last = values[:, -1]
+    groups = sorted({tuple(v) for v in values[:, :-1].tolist()})
+    for fixed in groups:
+        members = [i for i in range(len(values)) if tuple(values[i, :-1].tolist()) == fixed]
+        e = envelope(curves, members, last, opts.envelope_curves, opts.envelope_points)
+        envs.append(Envelope(fixed=list(fixed), theta=fixed[0] if len(fixed) == 1 else None,
+                             flow=e["flow"].tolist(),
                              pressure=_nan_to_none(e["pressure"])[0],
                              phi=_nan_to_none(e["phi"])[0],
                              efficiency=_nan_to_none(e["efficiency"])[0]))
     return envs
 
 
-def performance_map(curves: CurveSet, settings: list[Setting], theta: np.ndarray,
-                    phi: np.ndarray, ranges, opts, progress: Progress,
+def performance_map(curves: CurveSet, settings: list[Setting], values: np.ndarray, ranges, opts, progress: Progress,
                     warnings: list[Diagnostic]) -> tuple[PerformanceMap | None, np.ndarray]:
     """§4, "The Performance Map": triangulate the settings, then the maximum efficiency (and
     the θ, φ that reach it) at every grid node, exactly per triangle (or by the paper's
@@ -355,9 +359,13 @@ def performance_map(curves: CurveSet, settings: list[Setting], theta: np.ndarray
             warnings.append(Diagnostic(code="map_skipped", message="options.map is false: no "
                                        "performance map and no inverse query for this job."))
         return None, triangles
-    one_line = collinear(theta, phi)
-    triangles = chain(theta, phi) if one_line else triangulate(theta, phi)
-    if one_line:
+    triangles, kind = map_simplices(values)
+    if kind == "faces":
+        warnings.append(Diagnostic(
+            code="three_parameter_map", message=f"Three setting parameters: the map is the maximum over the "
+            f"{len(triangles)} faces of the Delaunay tetrahedra of the settings (where a maximum over a "
+            "tetrahedron lies); 'triangles' lists the faces.", details={"faces": len(triangles)}))
+    if kind == "chain":
         warnings.append(Diagnostic(
             code="one_parameter_map", message=f"The {len(settings)} settings lie on one line (one setting "
             "parameter, e.g. speed): the map interpolates between neighbouring lines only; "
@@ -368,14 +376,15 @@ def performance_map(curves: CurveSet, settings: list[Setting], theta: np.ndarray
     gx, gy = grid_axes(ranges, *opts.grid)
     if opts.map_method == "exact":
         t = np.linspace(0.0, 1.0, opts.t_samples)
-        eta, th_map, ph_map = exact_map(curves, triangles, theta, phi, t, gx, gy, ranges,
+        eta, val_map = exact_map(curves, triangles, values, t, gx, gy, ranges,
                                         progress, 0.62, 0.98)
     else:
-        eta, th_map, ph_map = binned_map(curves, triangles, theta, phi, gx, gy, ranges,
+        eta, val_map = binned_map(curves, triangles, values, gx, gy, ranges,
                                          m_t=opts.t_samples - 1)
     pmap = PerformanceMap(method=opts.map_method, flow=gx.tolist(), pressure=gy.tolist(),
-                          efficiency=_nan_to_none(eta), theta=_nan_to_none(th_map),
-                          phi=_nan_to_none(ph_map), t_samples=opts.t_samples,
+                          efficiency=_nan_to_none(eta), settings=[_nan_to_none(v) for v in val_map],
+                          theta=_nan_to_none(val_map[0]) if len(val_map) == 2 else None,
+                          phi=_nan_to_none(val_map[1]) if len(val_map) == 2 else None, t_samples=opts.t_samples,
                           reachable_fraction=float(np.mean(np.isfinite(eta))))
     if not np.isfinite(eta).any():
         warnings.append(Diagnostic(
@@ -399,14 +408,13 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
     out_settings = setting_results(ch, settings, pressure_choice, eta_choice, warnings)
 
     curves = curveset_from_fits(out_settings)
-    theta = np.array([s.theta for s in settings])
-    phi = np.array([s.phi for s in settings])
-    envs = envelopes(curves, theta, phi, opts)
+    values = np.array([s.values for s in settings], dtype=float).reshape(len(settings), -1)
+    envs = envelopes(curves, values, opts)
     surge, choke, margin_line = limit_lines(curves, settings, opts.surge_margin)
     progress(0.62, "envelopes")
 
     ranges = curve_ranges(curves)
-    pmap, triangles = performance_map(curves, settings, theta, phi, ranges, opts, progress, warnings)
+    pmap, triangles = performance_map(curves, settings, values, ranges, opts, progress, warnings)
     progress(1.0, "done")
 
     report = Report(status="warning" if warnings else "ok",
@@ -415,7 +423,8 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                     + (f"; map {opts.grid[0]}x{opts.grid[1]} over {len(triangles)} triangles"
                        if pmap else ""),
                     warnings=warnings, details={"family_choice": details})
-    return PerfmapResult(report=report, family=family, fit=opts.fit, settings=out_settings,
+    return PerfmapResult(report=report, setting_names=list(request.setting_names),
+                         setting_units=request.setting_units, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,
                          surge_line=surge, choke_line=choke, surge_margin_line=margin_line,
                          triangles=triangles.tolist(), map=pmap, flow_range=[ranges[0], ranges[1]],

@@ -101,8 +101,8 @@ def example() -> dict:
 
 def speed_lines(n_lines: int = 24, n_points: int = 12, steep: float = 10.0, noise: float = 0.0,
                 seed: int = 0, options: dict | None = None) -> dict:
-    """A cycle-code style map: speed lines (one setting parameter, given as phi = corrected speed,
-    theta = 0) whose pressure ratio falls off a cliff at choke (a decreasing concave line
+    """A cycle-code style map: speed lines (one setting parameter, the corrected speed) whose
+    pressure ratio falls off a cliff at choke (a decreasing concave line
     1 - 0.04 t - 0.55 t^p with p rising with speed), points evenly spread along the flow."""
     rng = np.random.default_rng(seed)
     positions = []
@@ -116,6 +116,6 @@ def speed_lines(n_lines: int = 24, n_points: int = 12, steep: float = 10.0, nois
         if noise:
             pressure = pressure * (1 + noise * rng.standard_normal(n_points))
             efficiency = efficiency * (1 + noise * rng.standard_normal(n_points))
-        positions.append({"theta": 0.0, "phi": float(speed), "flow": flow.tolist(),
+        positions.append({"setting": [float(speed)], "flow": flow.tolist(),
                           "pressure": pressure.tolist(), "efficiency": efficiency.tolist()})
-    return {"positions": positions, "options": dict(options or {})}
+    return {"setting_names": ["Nc"], "setting_units": ["-"], "positions": positions, "options": dict(options or {})}

@@ -27,18 +27,50 @@ def triangulate(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return tri[order]
 
 
-def chain(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+def chain(*columns: np.ndarray) -> np.ndarray:
     """Settings on one line (one setting parameter, e.g. speed lines): neighbours along the line as
     degenerate triangles (i, j, j). The map machinery then interpolates between neighbouring lines only
     (its edge pass), which is the one-parameter map: every point between two speed lines belongs to the
     speed between them."""
-    pts = normalised_settings(theta, phi)
+    pts = normalised_settings(*columns)
     centred = pts - pts.mean(axis=0)
-    direction = np.linalg.svd(centred, full_matrices=False)[2][0] if len(pts) > 1 else np.array([1.0, 0.0])
+    direction = (np.linalg.svd(centred, full_matrices=False)[2][0] if len(pts) > 1
+                 else np.eye(pts.shape[1])[0])
     order = np.argsort(centred @ direction, kind="stable")
     if order[0] > order[-1]:  # a direction-independent listing: from the smaller index end
         order = order[::-1]
     return np.array([[order[k], order[k + 1], order[k + 1]] for k in range(len(order) - 1)], dtype=int).reshape(-1, 3)
+
+
+def faces(values: np.ndarray) -> np.ndarray:
+    """Three setting parameters: the triangular faces of the Delaunay tetrahedra of the range-normalised
+    settings. For a fixed curve parameter the settings through a point (flow, pressure) inside a
+    tetrahedron form a segment on which the efficiency is linear, so its maximum lies on a face: the
+    map over faces is the map over the tetrahedra."""
+    pts = normalised_settings(values)
+    tet = Delaunay(pts).simplices.astype(int)
+    tri = np.unique(np.sort(np.concatenate([tet[:, [0, 1, 2]], tet[:, [0, 1, 3]], tet[:, [0, 2, 3]],
+                                            tet[:, [1, 2, 3]]]), axis=1), axis=0)
+    a, b, c = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    return tri[np.linalg.norm(np.cross(b - a, c - a), axis=1) > 1e-12]
+
+
+def map_simplices(values: np.ndarray) -> tuple[np.ndarray, str]:
+    """Triangles of the settings for the map, and what they are: 'chain' (settings on one line: one
+    parameter), 'triangles' (a plane: two parameters, or three in one plane) or 'faces' (three)."""
+    values = np.asarray(values, dtype=float)
+    pts = normalised_settings(values)
+    centred = pts - pts.mean(axis=0)
+    sv, basis = np.linalg.svd(centred, full_matrices=False)[1:]
+    rank = int(np.sum(sv > 1e-9 * max(sv[0], 1e-300))) if len(sv) else 0
+    if rank <= 1:
+        return chain(values), "chain"
+    if values.shape[1] == 2:
+        return triangulate(values[:, 0], values[:, 1]), "triangles"
+    if rank == 2:
+        plane = centred @ basis[:2].T
+        return triangulate(plane[:, 0], plane[:, 1]), "triangles"
+    return faces(values), "faces"
 
 
 def locate(theta: np.ndarray, phi: np.ndarray, triangles: np.ndarray,

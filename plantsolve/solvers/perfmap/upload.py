@@ -121,6 +121,15 @@ def _header_field(name: str) -> tuple[str | None, str]:
     return _ALIAS.get(key), unit
 
 
+def _split_unit(name: str) -> tuple[str, str]:
+    """A header's label and the unit in its trailing brackets ('Speed [rpm]' -> ('Speed', 'rpm'))."""
+    label = name.strip().strip('"').strip()
+    m = _UNIT_SUFFIX.search(label)
+    if m and m.start() > 0 and re.sub(r"[\s_\-]+", " ", label.lower()) not in _ALIAS:
+        return label[: m.start()].strip(), m.group(1).strip()
+    return label, ""
+
+
 def _is_number(cell: str) -> bool:
     try:
         _number(cell, True)
@@ -136,7 +145,8 @@ def _number(cell: str, decimal_comma: bool) -> float:
     return float(s)
 
 
-def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict], list[list[int]], list[Diagnostic]]:
+def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict], list[list[int]], list[Diagnostic],
+                                                                   dict]:
     """Positions (one per (theta, phi), in order of first appearance), the file line of
     each of their points, and notes for the report."""
     lines = [(n, ln) for n, ln in enumerate(text.splitlines(), start=1)
@@ -203,10 +213,10 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         setting_cols += [r for r in settings_found if r not in ("theta", "phi")]
     else:
         setting_cols = settings_found
-    if len(setting_cols) > 2:
+    if len(setting_cols) > 3:
         raise reject(f"{len(setting_cols)} setting parameters ({', '.join(rows[0][col[r]].strip() for r in setting_cols)}):"
-                     " at most two are supported (the paper's theta and phi); map the others to 'ignore' with the "
-                     "'columns' option", ("file", "header"))
+                     " at most three are supported; map the others to 'ignore' with the 'columns' option",
+                     ("file", "header"))
     for r in setting_cols:
         scale.setdefault(r, 1.0)
     roles = tuple(setting_cols) + MEASURED
@@ -243,10 +253,10 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
             vals[c] = v
         if len(vals) < len(roles):
             continue
-        key = ((0.0, vals[setting_cols[0]]) if len(setting_cols) == 1
-               else (vals[setting_cols[0]], vals[setting_cols[1]]))
-        g = groups.setdefault(key, {"theta": key[0], "phi": key[1], "flow": [],
-                                    "pressure": [], "efficiency": []})
+        key = tuple(vals[c] for c in setting_cols)
+        paper = setting_cols == ["theta", "phi"]
+        g = groups.setdefault(key, {**({"theta": key[0], "phi": key[1]} if paper else {"setting": list(key)}),
+                                    "flow": [], "pressure": [], "efficiency": []})
         for c in ("flow", "pressure", "efficiency"):
             g[c].append(vals[c])
         lines_of.setdefault(key, []).append(n)
@@ -258,14 +268,18 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
     order = [c.strip() for c in rows[0]]
     ignored.sort(key=order.index)
     names = {r: rows[0][col[r]].strip() for r in col}
-    if setting_cols != ["theta", "phi"]:
-        theta_name = names[setting_cols[0]] if len(setting_cols) == 2 else None
-        phi_name = names[setting_cols[-1]]
+    labels, units = [], []
+    for r in setting_cols:
+        label, unit = _split_unit(names[r])
+        labels.append(label or r)
+        units.append(unit)
+    meta = {} if setting_cols == ["theta", "phi"] else {"setting_names": labels, "setting_units": units}
+    if meta:
         notes.append(Diagnostic(
             code="upload_settings",
-            message=(f"One setting parameter ({phi_name!r}): given as phi, theta = 0." if theta_name is None else
-                     f"Setting parameters: {theta_name!r} as theta, {phi_name!r} as phi."),
-            details={"theta": theta_name, "phi": phi_name, "columns": names}))
+            message=(f"One setting parameter ({labels[0]!r})." if len(labels) == 1 else
+                     f"{len(labels)} setting parameters: {', '.join(map(repr, labels))}."),
+            details={"names": labels, "units": units, "columns": [names[r] for r in setting_cols]}))
     if ignored:
         notes.append(Diagnostic(
             code="upload_columns_ignored",
@@ -279,7 +293,7 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
     if scale["efficiency"] != 1.0:
         notes.append(Diagnostic(code="upload_efficiency_percent",
                                 message="Efficiency column given in % : divided by 100."))
-    return list(groups.values()), list(lines_of.values()), notes
+    return list(groups.values()), list(lines_of.values()), notes, meta
 
 
 _MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
@@ -300,7 +314,7 @@ def _bracketed(text: str, start: int) -> str:
     raise ValueError("unbalanced brackets")
 
 
-def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic]]:
+def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]:
     """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
     ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
     read, never run: only the array literals are evaluated (``ast.literal_eval``). Each (alpha, Nc) is a
@@ -339,18 +353,19 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic]]:
             if ok.sum() < 3:
                 short.append({"alpha": float(al), "Nc": float(n), "points": int(ok.sum())})
                 continue
-            positions.append({"theta": float(al), "phi": float(n), "flow": w[ok].tolist(),
-                              "pressure": pr[ok].tolist(), "efficiency": eff[ok].tolist()})
+            positions.append({"setting": [float(al), float(n)] if len(alpha) > 1 else [float(n)],
+                              "flow": w[ok].tolist(), "pressure": pr[ok].tolist(), "efficiency": eff[ok].tolist()})
     if not positions:
         raise reject("no speed line of the map has 3 usable points (positive, finite, efficiency <= 1)")
-    notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines; alpha "
-                        "as theta, Nc (corrected speed) as phi.", details={"theta": "alphaMap", "phi": "NcMap"})]
+    names = ["alpha", "Nc"] if len(alpha) > 1 else ["Nc"]
+    notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines over "
+                        f"{' and '.join(names)}.", details={"names": names})]
     if dropped or short:
         notes.append(Diagnostic(code="upload_points_dropped",
                                 message=f"{dropped} map point(s) without positive finite values (or efficiency above "
                                 f"1) dropped; {len(short)} speed line(s) with fewer than 3 points left out.",
                                 details={"points": dropped, "lines": short[:100]}))
-    return positions, notes
+    return positions, notes, names
 
 
 def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tuple[tuple, str]:
@@ -361,7 +376,8 @@ def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tupl
         return ("file",), ""
     i = loc[1]
     rows = lines[i]
-    where = (f"setting theta={positions[i]['theta']:g}, phi={positions[i]['phi']:g} "
+    values = positions[i].get("setting") or [positions[i]["theta"], positions[i]["phi"]]
+    where = (f"setting {', '.join(f'{v:g}' for v in values)} "
              f"(lines {', '.join(map(str, rows[:12]))}{', ...' if len(rows) > 12 else ''}): ")
     field = loc[2] if len(loc) > 2 and isinstance(loc[2], str) else None
     k = loc[3] if len(loc) > 3 and isinstance(loc[3], int) and loc[3] < len(rows) else 0
@@ -379,14 +395,14 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     text = _decode(content)
     lines: list[list[int]] = []
     if ext == ".py":
-        positions, notes = _parse_map_data(text)
-        body = {"positions": positions, "upload_warnings": [d.model_dump() for d in notes]}
+        positions, notes, names = _parse_map_data(text)
+        body = {"positions": positions, "setting_names": names, "upload_warnings": [d.model_dump() for d in notes]}
     elif ext == ".csv":
         roles = (options or {}).get("columns") if isinstance(options, dict) else None
         if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
             raise reject("options.columns must map header names to roles", ("options", "columns"))
-        positions, lines, notes = _parse_csv(text, roles)
-        body: dict = {"positions": positions}
+        positions, lines, notes, meta = _parse_csv(text, roles)
+        body: dict = {"positions": positions, **meta}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     else:

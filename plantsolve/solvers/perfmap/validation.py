@@ -12,10 +12,10 @@ from plantsolve.solvers.base import FieldError, InputRejected
 
 @dataclass
 class Setting:
-    """One (theta, phi) setting, points sorted by flow, exact duplicates merged."""
+    """One setting (its values in the order of the request's setting names), points sorted by flow,
+    exact duplicates merged."""
 
-    theta: float
-    phi: float
+    values: tuple[float, ...]
     x: np.ndarray
     y: np.ndarray
     eta: np.ndarray
@@ -24,12 +24,27 @@ class Setting:
     repeated_flows: int = 0  # readings at an already measured flow, averaged
     choke_pressures: list[float] = field(default_factory=list)  # a vertical choke segment at x[-1], low to high
 
+    names: tuple[str, ...] = ("theta", "phi")
+
+    @property
+    def theta(self) -> float | None:
+        return self.values[0] if len(self.values) == 2 else None
+
+    @property
+    def phi(self) -> float | None:
+        return self.values[1] if len(self.values) == 2 else None
+
+    @property
+    def label(self) -> str:
+        return ", ".join(f"{n}={v:g}" for n, v in zip(self.names, self.values))
+
     @property
     def t(self) -> np.ndarray:
         return (self.x - self.x[0]) / (self.x[-1] - self.x[0])
 
 
-def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
+def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float, ...] = (),
+                      names: tuple[str, ...] = ("theta", "phi")) -> Setting | None:
     n = len(pos.flow)
     bad = False
     for name in ("pressure", "efficiency"):
@@ -97,23 +112,36 @@ def _prepare_position(i: int, pos, errors: list[FieldError]) -> Setting | None:
                                  f"the flow range {x[0]:g}..{x[-1]:g} is too narrow to fit a "
                                  "curve (relative span below 1e-9)"))
         return None
-    return Setting(pos.theta, pos.phi, x, y, eta, i, int(np.sum(same)), repeated, choke_pressures)
+    return Setting(values, x, y, eta, i, int(np.sum(same)), repeated, choke_pressures, names)
 
 
-def normalised_settings(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """(theta, phi) scaled to [0, 1] each, so that geometry does not depend on units."""
-    pts = np.column_stack([theta, phi]).astype(float)
+def normalised_settings(*columns: np.ndarray) -> np.ndarray:
+    """Setting values (one array per parameter, or one (n, d) matrix) scaled to [0, 1] each, so that
+    geometry does not depend on units."""
+    pts = (np.asarray(columns[0], dtype=float) if len(columns) == 1 and np.ndim(columns[0]) == 2
+           else np.column_stack(columns).astype(float))
     lo, span = pts.min(axis=0), np.ptp(pts, axis=0)
     return (pts - lo) / np.where(span > 0, span, 1.0)
 
 
-def collinear(theta: np.ndarray, phi: np.ndarray) -> bool:
-    pts = normalised_settings(theta, phi)
+def collinear(*columns: np.ndarray) -> bool:
+    pts = normalised_settings(*columns)
+    if pts.shape[1] == 1:
+        return True
     if len(pts) < 3:
         return True
     centred = pts - pts.mean(axis=0)
     s = np.linalg.svd(centred, compute_uv=False)
     return bool(s[1] <= 1e-9 * max(s[0], 1e-300))
+
+
+def settings_rank(values: np.ndarray) -> int:
+    """Dimension of the affine hull of the (range-normalised) settings: 0..3."""
+    pts = normalised_settings(values)
+    if len(pts) < 2:
+        return 0
+    s = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
+    return int(np.sum(s > 1e-9 * max(s[0], 1e-300)))
 
 
 def map_impossible(settings: list[Setting]) -> str | None:
@@ -125,19 +153,21 @@ def map_impossible(settings: list[Setting]) -> str | None:
 
 
 def prepare(request: PerfmapRequest) -> list[Setting]:
-    """Validate and return the settings sorted by (theta, phi); raises InputRejected."""
+    """Validate and return the settings sorted by their values; raises InputRejected."""
     errors: list[FieldError] = []
     settings: list[Setting] = []
-    seen: dict[tuple[float, float], int] = {}
+    seen: dict[tuple[float, ...], int] = {}
+    names = tuple(request.setting_names)
     for i, pos in enumerate(request.positions):
-        key = (float(pos.theta), float(pos.phi))
+        key = tuple(float(v) for v in request.setting_values(i))
         if key in seen:
+            label = ", ".join(f"{n}={v:g}" for n, v in zip(names, key))
             errors.append(FieldError(("positions", i),
-                                     f"setting (theta={key[0]:g}, phi={key[1]:g}) repeats "
+                                     f"setting ({label}) repeats "
                                      f"positions[{seen[key]}]; merge their points"))
             continue
         seen[key] = i
-        s = _prepare_position(i, pos, errors)
+        s = _prepare_position(i, pos, errors, key, names)
         if s is not None:
             settings.append(s)
     if not errors and request.options.map:  # an explicitly requested map must be possible
@@ -147,7 +177,7 @@ def prepare(request: PerfmapRequest) -> list[Setting]:
                                      "leave it unset, for characteristics and envelopes only)"))
     if errors:
         raise InputRejected(errors)
-    settings.sort(key=lambda s: (s.theta, s.phi))
+    settings.sort(key=lambda s: s.values)
     return settings
 
 
