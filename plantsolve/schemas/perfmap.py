@@ -85,7 +85,8 @@ class PerfmapOptions(StrictModel):
         "'minimax' minimises the maximal relative error directly (linear programme).")
     grid: list[int] = Field(
         default_factory=lambda: [64, 64], min_length=2, max_length=2,
-        description="Map grid [nx, ny]: nodes along flow and along pressure (2..1000 each).")
+        description="Map grid [nx, ny]: nodes along flow and along pressure (2..400 each; the map is stored "
+        "with the job).")
     map: bool | None = Field(
         default=None,
         description="Compute the performance map; it needs >= 3 settings not all on one line "
@@ -121,8 +122,8 @@ class PerfmapOptions(StrictModel):
 
     @model_validator(mode="after")
     def _grid_range(self) -> "PerfmapOptions":
-        if any(not 2 <= g <= 1000 for g in self.grid):
-            raise ValueError("grid entries must be between 2 and 1000")
+        if any(not 2 <= g <= 400 for g in self.grid):
+            raise ValueError("grid entries must be between 2 and 400")
         return self
 
 
@@ -323,8 +324,8 @@ class PerfmapResult(BaseModel):
 
 
 class QueryPoint(StrictModel):
-    flow: FiniteFloat
-    pressure: FiniteFloat
+    flow: FiniteFloat = Field(ge=-1e12, le=1e12, description="Flow of the duty point (the map's unit).")
+    pressure: FiniteFloat = Field(ge=-1e12, le=1e12, description="Pressure of the duty point (the map's unit).")
 
 
 class PerfmapQueryRequest(StrictModel):

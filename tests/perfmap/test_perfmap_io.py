@@ -241,3 +241,10 @@ def test_auto_picks_the_generating_family_and_falls_back_without_loo():
         request_body(n_theta=3, n_phi=3, n_points=3, options={"model": "auto", "grid": [12, 12]})))
     assert res.family == "parabola"
     assert any(w.code == "auto_without_loo" for w in res.report.warnings)
+
+
+def test_extreme_duty_points_and_grids_are_refused_by_the_schema():
+    with pytest.raises(ValidationError):
+        PerfmapQueryRequest.model_validate({"flow": 1e308, "pressure": 1.0})
+    with pytest.raises(ValidationError):
+        PerfmapRequest.model_validate({**_body(), "options": {"grid": [1000, 1000]}})

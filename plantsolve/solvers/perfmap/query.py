@@ -50,6 +50,7 @@ def query(result: PerfmapResult, q: PerfmapQueryRequest) -> PerfmapQueryResult:
     if (~feasible).any():
         dist[~feasible] = distance_to_region(curves, triangles, t, X[~feasible], Y[~feasible],
                                              ranges)
+    dist = np.where(np.isfinite(dist), dist, np.finfo(float).max)  # a number, as the schema says
     answers = [
         QueryAnswer(flow=float(X[k]), pressure=float(Y[k]), feasible=bool(feasible[k]),
                     setting=[float(v) for v in best[k]] if feasible[k] else None,
