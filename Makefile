@@ -1,5 +1,5 @@
 # Two commands on a fresh machine (only python3 >= 3.11 and make needed):
-#   make run    set up .venv and start the service on the embedded default (SQLite, in-process jobs)
+#   make run    set up .venv and start the service on the embedded default (SQLite, job processes it supervises)
 #   make test   set up .venv and run the whole test suite
 PYTHON ?= python3
 VENV   ?= .venv

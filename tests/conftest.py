@@ -30,6 +30,7 @@ def service_settings(tmp_path: Path, **overrides) -> AppSettings:
         lease_seconds=3.0,
         sweep_seconds=0.3,
         progress_write_seconds=0.0,
+        embedded_mode="thread",  # fast app start-up; the process pool has its own tests
     )
     values.update(overrides)
     return AppSettings(_env_file=None, **values)

@@ -16,7 +16,7 @@ from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.workers.context import ServiceContext, worker_name
-from plantsolve.workers.runner import failure_report, run_job
+from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.workers.settings import WorkerSettings, get_worker_settings
 from plantsolve.workers.sweeper import Sweeper
 
@@ -122,35 +122,5 @@ def _hard_time_limit(sender=None, exception=None, args=None, **_kwargs) -> None:
     if not isinstance(exception, TimeLimitExceeded) or not args:
         return
     ctx, _ = _worker_context()
-    job_id = uuid.UUID(str(args[0]))
-    job = ctx.repo.get(job_id)
-    if job is None or job.status != "running":
-        return
-    spec = ctx.spec(job.kind)
-    limit = spec.time_limit if spec else None
-    report = failure_report(
-        "time_limit",
-        f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
-        if limit
-        else "The solver was killed at its hard time limit.",
-        time_limit=limit,
-        killed=True,
-    )
-    ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None)
-    log.warning("job %s killed at its hard time limit", job_id)
-
-
-@signals.worker_process_init.connect
-def _forget_parent_context(**_kwargs) -> None:
-    # A forked pool process must not share the parent's database connections.
-    global _ctx, _dispatcher
-    if _ctx is not None:
-        _ctx.db.engine.dispose(close=False)
-    _ctx = _dispatcher = None
-
-
-@signals.worker_ready.connect
-def _start_sweeper(sender=None, **_kwargs) -> None:
-    ctx, dispatcher = _worker_context()
-    dispatcher.start()
-
+    if fail_killed_at_hard_limit(ctx, uuid.UUID(str(args[0]))):
+        log.warning("job %s killed at its hard time limit", args[0])

@@ -12,6 +12,7 @@ from typing import Protocol
 from plantsolve.workers.celery_app import CeleryDispatcher
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.embedded import EmbeddedDispatcher
+from plantsolve.workers.processes import ProcessDispatcher
 
 
 class Dispatcher(Protocol):
@@ -29,4 +30,6 @@ class Dispatcher(Protocol):
 
 
 def make_dispatcher(ctx: ServiceContext) -> Dispatcher:
-    return EmbeddedDispatcher(ctx) if ctx.settings.embedded else CeleryDispatcher(ctx)
+    if not ctx.settings.embedded:
+        return CeleryDispatcher(ctx)
+    return ProcessDispatcher(ctx) if ctx.settings.embedded_mode == "process" else EmbeddedDispatcher(ctx)

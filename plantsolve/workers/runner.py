@@ -363,3 +363,23 @@ def _store_pending(ctx: ServiceContext, job_id, attempt, monitor: AttemptMonitor
     stored = [StoredArtifact(**a) for a in payload["artifacts"]]
     return _write_result(ctx, job_id, attempt, payload["result"], payload["report"], stored,
                          payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}")
+
+
+def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
+    """A pool killed a job's process at its hard time limit (a solver deaf even to the soft limit): fail
+    the running attempt now with a report, instead of letting the lease lapse and retrying a job that
+    would hang again. Fenced on the attempt that was running."""
+    job = ctx.repo.get(job_id)
+    if job is None or job.status != "running":
+        return False
+    spec = ctx.spec(job.kind)
+    limit = ctx.limits(spec)[1] if spec is not None else None
+    report = failure_report(
+        "time_limit",
+        f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
+        if limit else "The solver was killed at its hard time limit.",
+        time_limit=limit, killed=True)
+    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
+        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "time_limit",
+        "error": "killed at the hard time limit"}]
+    return ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None, attempts=history)

@@ -8,7 +8,7 @@ can clear the cache after changing the environment.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, field_validator
 from pydantic_settings import NoDecode
@@ -27,7 +27,12 @@ class WorkerSettings(StoreSettings):
         default=None,
         description="Celery broker (redis://host:6379/0). Unset: jobs run in-process (embedded pool).",
     )
-    embedded_workers: int = Field(default=2, ge=1, description="Threads of the in-process job pool.")
+    embedded_workers: int = Field(default=2, ge=1, description="Job processes (or threads) of the embedded pool.")
+    embedded_mode: Literal["process", "thread"] = Field(
+        default="process",
+        description="Embedded default (no broker): 'process' runs jobs in worker processes the service starts and "
+        "supervises (the API process never computes; a hard time limit kills the process); 'thread' runs them in "
+        "threads of the API process (tests, debugging).")
     lease_seconds: float = Field(default=60.0, gt=0, description="A running job's lease; renewed by heartbeats.")
     heartbeat_seconds: float = Field(default=10.0, gt=0, description="Heartbeat period of a running job.")
     sweep_seconds: float = Field(default=10.0, gt=0, description="Period of the sweeper (lapsed leases, lost messages).")

@@ -1,0 +1,124 @@
+"""The embedded default: job processes that the API process starts and supervises.
+
+The API process never computes: each job runs in a worker process of a ``pebble`` pool (spawned,
+each with its own database connection), through the same :func:`run_job` as Celery workers, with
+the same claim and fencing. The pool kills a worker at the kind's hard time limit (the job is then
+failed with a report) and replaces dead workers; a worker that dies otherwise (out of memory, a
+crash in native code) loses its lease and the sweeper re-queues the job. Readers never wait on a
+solver: solvers write only through short fenced updates from their own processes.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import threading
+import uuid
+from concurrent.futures import CancelledError, TimeoutError as FutureTimeout
+from functools import partial
+
+from pebble import ProcessExpired, ProcessPool
+
+from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
+from plantsolve.workers.settings import WorkerSettings
+from plantsolve.workers.sweeper import Sweeper, sweep_once
+
+log = logging.getLogger("plantsolve.processes")
+
+# time for a solver to notice its soft limit, clean up and store a report before it is killed
+HARD_LIMIT_GRACE = 5.0
+
+_worker_ctx: ServiceContext | None = None
+
+
+def _start_worker(settings_json: str) -> None:
+    """Initializer of each worker process: its own settings object and database connections."""
+    global _worker_ctx
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
+    _worker_ctx = ServiceContext.create(WorkerSettings.model_validate_json(settings_json))
+
+
+def _run(job_id: str) -> str:
+    """One delivery in a worker process; a re-queued job is handed back to the pool by the parent."""
+    requeued: list[str] = []
+    outcome = run_job(_worker_ctx, uuid.UUID(job_id), worker=worker_name("process"),
+                      requeue=lambda jid, kind="": requeued.append(str(jid)), hard_limit_in_thread=False)
+    return "requeued" if requeued else outcome
+
+
+class ProcessDispatcher:
+    """Job ids go to a supervised pool of worker processes (``EMBEDDED_WORKERS`` of them)."""
+
+    def __init__(self, ctx: ServiceContext, workers: int | None = None):
+        self.ctx = ctx
+        self.size = workers or ctx.settings.embedded_workers
+        self._pool: ProcessPool | None = None
+        self._pending: set[uuid.UUID] = set()
+        self._lock = threading.Lock()
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
+
+    def start(self) -> None:
+        settings = WorkerSettings.model_validate(self.ctx.settings.model_dump(include=set(WorkerSettings.model_fields)))
+        self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
+                                 initargs=(settings.model_dump_json(),), context=multiprocessing.get_context("spawn"))
+        # Jobs left queued (or running with a dead lease) by a previous process are resumed.
+        sweep_once(self.ctx, self.enqueue, self.pending)
+        for job_id in self.ctx.repo.queued_ids():
+            self.enqueue(job_id)
+        self._sweeper.start()
+
+    def stop(self) -> None:
+        self._sweeper.stop()
+        if self._pool is not None:
+            self._pool.stop()
+            self._pool.join(timeout=10)
+            self._pool = None
+
+    def ping(self) -> None:
+        if self._pool is None or not self._pool.active:
+            raise RuntimeError("the job process pool is not running")
+
+    def pending(self) -> int:
+        with self._lock:
+            return len(self._pending)
+
+    def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
+        if self._pool is None:
+            raise RuntimeError("the job process pool is not running")
+        with self._lock:
+            if job_id in self._pending:
+                return
+            self._pending.add(job_id)
+        spec = self.ctx.spec(kind) if kind else None
+        if spec is None:
+            job = self.ctx.repo.get(job_id)
+            spec = self.ctx.spec(job.kind) if job is not None else None
+        timeout = self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
+        future = self._pool.schedule(_run, args=(str(job_id),), timeout=timeout)
+        future.add_done_callback(partial(self._done, job_id))
+
+    def _done(self, job_id: uuid.UUID, future) -> None:
+        with self._lock:
+            self._pending.discard(job_id)
+        try:
+            outcome = future.result()
+        except FutureTimeout:  # the pool killed the worker at the hard limit
+            if fail_killed_at_hard_limit(self.ctx, job_id):
+                log.warning("job %s killed at its hard time limit", job_id)
+            return
+        except ProcessExpired as error:  # the worker died: its lease lapses, the sweeper re-queues
+            log.error("job %s: worker process died (%s)", job_id, error)
+            return
+        except CancelledError:
+            return
+        except Exception:  # the pool must survive anything a job does
+            log.exception("job %s: runner error", job_id)
+            return
+        if outcome == "requeued":
+            try:
+                self.enqueue(job_id)
+            except RuntimeError:  # stopping: the next start (or the sweeper) picks it up
+                pass

@@ -1,0 +1,52 @@
+"""The embedded default: jobs run in supervised worker processes, never in the API process."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import pytest
+from fastapi.testclient import TestClient
+
+from plantsolve.app.main import create_app
+from tests.conftest import service_settings, wait_for
+
+
+@pytest.fixture(scope="module")
+def pooled(tmp_path_factory):
+    settings = service_settings(tmp_path_factory.mktemp("pool"), embedded_mode="process", embedded_workers=2)
+    with TestClient(create_app(settings)) as client:
+        yield client
+
+
+def test_jobs_run_in_worker_processes(pooled):
+    job = pooled.post("/v1/test-compute/jobs", json={"values": [3.0, 4.0]}).json()
+    done = wait_for(pooled, job["id"], timeout=60)
+    assert done["status"] == "succeeded"
+    assert pooled.get(f"/v1/jobs/{job['id']}/result").json()["norm"] == 5.0
+    (attempt,) = done["attempts"]
+    worker = attempt["worker"]
+    assert worker.startswith("process@") and not worker.endswith(f":{os.getpid()}")
+
+
+def test_a_solver_deaf_to_its_soft_limit_is_killed_at_the_hard_limit(pooled):
+    threads = threading.active_count()
+    started = time.monotonic()
+    job = pooled.post("/v1/test-stubborn/jobs", json={}).json()
+    done = wait_for(pooled, job["id"], timeout=60)
+    assert done["status"] == "failed" and done["report"]["stage"] == "time_limit"
+    assert done["report"]["details"]["killed"] is True
+    assert time.monotonic() - started < 30
+    assert [a["outcome"] for a in done["attempts"]] == ["time_limit"]
+    # the API process kept no thread of the killed solver, and the pool still runs jobs
+    assert threading.active_count() <= threads + 1
+    again = pooled.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
+    assert wait_for(pooled, again["id"], timeout=60)["status"] == "succeeded"
+
+
+def test_an_infrastructure_crash_is_retried_through_the_pool(pooled):
+    job = pooled.post("/v1/test-crash/jobs", json={"message": "connection reset"}).json()
+    done = wait_for(pooled, job["id"], timeout=60)
+    assert done["status"] == "failed" and done["attempt"] == 2
+    assert [a["outcome"] for a in done["attempts"]] == ["requeued", "failed"]
