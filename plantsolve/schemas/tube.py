@@ -19,7 +19,7 @@ LRA convention (the public contract of ``lra`` tables, measured and nominal):
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field, PrivateAttr
 
@@ -74,7 +74,19 @@ class TubeOptions(StrictModel):
         "fitted with this fixed radius.",
     )
     common_bend_radius: bool = Field(
-        default=False, description="Fit one bend radius shared by all bends (typical of rotary-draw benders)."
+        default=False, description="Fit one bend radius shared by all bends (typical of rotary-draw benders); "
+        "the same as bend_radius_model 'common'."
+    )
+    bend_radius_model: Literal["auto", "common", "dies", "per_bend"] = Field(
+        default="auto",
+        description="How the bend radii are fitted: 'common' (one die: one radius for all bends), 'dies' (two "
+        "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
+        "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
+    )
+    dies: list[Annotated[float, Field(gt=0, allow_inf_nan=False)]] | None = Field(
+        default=None, min_length=1, max_length=20,
+        description="Centreline radii of the dies available (request units): each bend gets the nearest die "
+        "(by its freely fitted radius), and its radius is held at that die's.",
     )
     nominal: list[LraRow] | None = Field(
         default=None,
@@ -190,6 +202,19 @@ LRA_CONVENTION = (
 )
 
 
+class BendRadiusModel(BaseModel):
+    """Which radius model the fit used, and the evidence."""
+
+    chosen: Literal["common", "dies", "per_bend", "fixed", "given_dies"]
+    criterion: str = Field(description="How it was chosen: 'BIC' (n ln(RSS/n) + p ln n on the inlier surface "
+                           "residuals, smaller is better), or 'options' when forced.")
+    values: dict[str, float] = Field(default_factory=dict, description="Criterion value per candidate model.")
+    rss: dict[str, float] = Field(default_factory=dict, description="Sum of squared inlier residuals per candidate.")
+    n_parameters: dict[str, int] = Field(default_factory=dict)
+    die_radii: list[float] | None = Field(default=None, description="'dies'/'given_dies': the radius of each die.")
+    assignment: list[int] | None = Field(default=None, description="'dies'/'given_dies': the die of each bend.")
+
+
 class TubeResult(BaseModel):
     """Reconstructed bent tube: pipe radius, start pose, LRA table, control polygon, spine
     segments, fit quality, outliers, optional inspection, report. See ``lra`` for the LRA
@@ -209,4 +234,6 @@ class TubeResult(BaseModel):
     tolerance: float = Field(description="ε used for the segment count (request units).")
     units: Units = "mm"
     inspection: Inspection | None = None
+    bend_radius_model: BendRadiusModel | None = Field(default=None, description="The radius model of the bends "
+                                                      "and why (null without bends).")
     report: Report

@@ -35,12 +35,16 @@ from plantsolve.solvers.tube.geometry import TubeModel, build_spine, spine_dista
 @dataclass
 class Layout:
     n: int
-    radius_mode: str  # "free" | "common" | "fixed"
+    radius_mode: str  # "free" | "common" | "dies" | "fixed"
     fixed_bend_radius: float | None
     fit_pipe_radius: bool
+    dies: tuple[int, ...] = ()  # "dies": the die (radius parameter) of each bend
+    fixed_radii: tuple[float, ...] = ()  # "fixed" without fixed_bend_radius: each bend's held radius
 
     @property
     def n_radii(self) -> int:
+        if self.radius_mode == "dies":
+            return max(self.dies) + 1 if self.n else 0
         return {"free": self.n, "common": 1 if self.n else 0, "fixed": 0}[self.radius_mode]
 
     @property
@@ -56,6 +60,9 @@ def pack(model: TubeModel, lay: Layout) -> np.ndarray:
         parts.append(model.radii)
     elif lay.radius_mode == "common" and n:
         parts.append([np.mean(model.radii)])
+    elif lay.radius_mode == "dies" and n:
+        die = np.asarray(lay.dies)
+        parts.append([float(np.mean(model.radii[die == k])) for k in range(lay.n_radii)])
     if lay.fit_pipe_radius:
         parts.append([model.pipe_radius])
     return np.concatenate([np.atleast_1d(np.asarray(p, float)) for p in parts])
@@ -71,6 +78,10 @@ def unpack(x: np.ndarray, lay: Layout, frame0: np.ndarray, pipe_radius: float) -
         rad = x[i:i + n]; i += n
     elif lay.radius_mode == "common":
         rad = np.full(n, x[i] if n else 0.0); i += 1 if n else 0
+    elif lay.radius_mode == "dies":
+        rad = x[i:i + lay.n_radii][np.asarray(lay.dies, dtype=int)]; i += lay.n_radii
+    elif lay.fixed_radii:
+        rad = np.asarray(lay.fixed_radii, dtype=float)
     else:
         rad = np.full(n, lay.fixed_bend_radius or 0.0)
     rp = x[i] if lay.fit_pipe_radius else pipe_radius
@@ -129,6 +140,10 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = X[:, i:i + n]; i += n
     elif lay.radius_mode == "common":
         rad = np.repeat(X[:, i:i + 1], n, axis=1) if n else np.zeros((B, 0)); i += 1 if n else 0
+    elif lay.radius_mode == "dies":
+        rad = X[:, i:i + lay.n_radii][:, np.asarray(lay.dies, dtype=int)]; i += lay.n_radii
+    elif lay.fixed_radii:
+        rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
     frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0

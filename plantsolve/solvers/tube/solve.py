@@ -15,8 +15,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.tube import (Outliers, Residuals, Segment, SegmentQuality, TubeOptions, TubeRequest,
-                                     TubeResult)
+from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segment, SegmentQuality, TubeOptions,
+                                     TubeRequest, TubeResult)
 from plantsolve.solvers.base import Progress, SolverError, no_progress
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
 from plantsolve.solvers.tube.geometry import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
@@ -81,6 +81,7 @@ class LeastSquaresFit:
     residuals: np.ndarray
     segment: np.ndarray
     changes: list = field(default_factory=list)
+    radius_model: BendRadiusModel | None = None
 
 
 def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Generator) -> LocalFits:
@@ -234,9 +235,10 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     def tick():
         progress(*stage_progress)  # lets a cancellation through between LM iterations
 
-    def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int):
+    def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
+               dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
         """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
-        lay = fit.Layout(m.n_bends, mode, opts.bend_radius, fit_rp)
+        lay = fit.Layout(m.n_bends, radius_mode or mode, opts.bend_radius, fit_rp, dies, fixed_radii)
         info = {}
         res, seg = fit.assign(m, P, margin)
         for _ in range(n_rounds):
@@ -278,10 +280,16 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         model, _, changes = prune.prune(model, refit, eps_used, rp)
     stage_progress[:] = [0.75, "least-squares fit"]
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
+    radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
+    final_mode: dict = {}
+    if model.n_bends and not opts.bend_radius:
+        stage_progress[:] = [0.8, "choosing the bend radius model"]
+        model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
+                                                                      lm_info)
     stage_progress[:] = [0.85, "final least-squares fit on all samples"]
     progress(*stage_progress)
     if N > len(sub):
-        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10)
+        model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
     res_all, seg_all = fit.assign(model, pts, margin)
     # final extents without the margin
     inlier = np.abs(res_all) <= thr
@@ -290,7 +298,74 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
                                    "limit; the result is the best found.", details=lm_info))
-    return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes)
+    return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes, radius)
+
+
+def _two_dies(radii: np.ndarray) -> tuple[int, ...]:
+    """The split of the bends' radii into two groups (in log radius) with the least within-group spread."""
+    order = np.argsort(radii)
+    logr = np.log(radii[order])
+    best, cut = np.inf, 1
+    for k in range(1, len(logr)):
+        cost = np.var(logr[:k]) * k + np.var(logr[k:]) * (len(logr) - k)
+        if cost < best:
+            best, cut = cost, k
+    dies = np.zeros(len(radii), dtype=int)
+    dies[order[cut:]] = 1
+    return tuple(int(d) for d in dies)
+
+
+def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
+                        lm_info: dict):
+    """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
+    bends assigned by their free radii ('dies', three bends or more), a radius per bend ('per_bend', the
+    model fitted so far). Each is refitted in LRA parameters; the one with the smallest BIC
+    (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless the
+    options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
+    bender did and what the data support. Returns the model, its fit info, the threshold, the report
+    and the mode for the final fit on all samples."""
+    n = model.n_bends
+    forced = "common" if opts.common_bend_radius else opts.bend_radius_model
+    if opts.dies:
+        die_r = np.asarray(opts.dies, dtype=float)
+        assign = tuple(int(np.argmin(np.abs(die_r - r))) for r in model.radii)
+        fixed = tuple(float(die_r[a]) for a in assign)
+        m = model.copy()
+        m.radii = np.array(fixed)
+        m, info, thr2, _ = rounds(m, P, thr, 2, 30, "fixed", (), fixed)
+        return m, info, thr2, BendRadiusModel(chosen="given_dies", criterion="options", die_radii=die_r.tolist(),
+                                              assignment=list(assign)), {"radius_mode": "fixed", "fixed_radii": fixed}
+    candidates = {"per_bend": (model, lm_info, thr, {"radius_mode": "free"})}
+    if forced in ("auto", "common"):
+        m = model.copy()
+        m.radii = np.full(n, float(np.median(model.radii)))
+        m, info, t2, _ = rounds(m, P, thr, 2, 30, "common")
+        candidates["common"] = (m, info, t2, {"radius_mode": "common"})
+    dies = _two_dies(model.radii) if n >= 3 else ()
+    if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
+        m = model.copy()
+        m, info, t2, _ = rounds(m, P, thr, 2, 30, "dies", dies)
+        candidates["dies"] = (m, info, t2, {"radius_mode": "dies", "dies": dies})
+    res_free = fit.assign(model, P, margin)[0]
+    keep = np.abs(res_free) <= thr
+    N = int(keep.sum())
+    size = {"per_bend": n, "common": 1, "dies": 2}
+    rss, bic, n_par = {}, {}, {}
+    for name, (m, _, _, _) in candidates.items():
+        r = fit.assign(m, P, margin)[0][keep]
+        rss[name] = float(np.sum(r * r))
+        n_par[name] = 6 + 2 * max(n - 1, 0) + n + size[name] + int(opts.pipe_radius is None)
+        bic[name] = float(N * np.log(max(rss[name], 1e-300) / N) + n_par[name] * np.log(N))
+    if forced != "auto" and forced in candidates:
+        chosen, how = forced, "options"
+    else:
+        chosen = min(bic, key=lambda k: (bic[k], size[k]))
+        how = "BIC"
+    m, info, t2, mode = candidates[chosen]
+    report = BendRadiusModel(chosen=chosen, criterion=how, values=bic, rss=rss, n_parameters=n_par,
+                             die_radii=([float(m.radii[list(dies).index(k)]) for k in (0, 1)] if chosen == "dies" else None),
+                             assignment=list(dies) if chosen == "dies" else None)
+    return m, info, t2, report, mode
 
 
 def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
@@ -404,7 +479,8 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     }
     report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",
                     warnings=warnings, details=details)
-    result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report)
+    result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report,
+                               ls.radius_model)
     if opts.nominal:
         result.inspection = inspect(ls.model, opts.nominal, opts.damping)
     progress(1.0, "done")
@@ -453,9 +529,17 @@ def segments_of(model: TubeModel) -> list[Segment]:
     return out
 
 
-def result_from_model(model: TubeModel, eps: float, units, residuals, outliers, quality, report) -> TubeResult:
+def result_from_model(model: TubeModel, eps: float, units, residuals, outliers, quality, report,
+                      radius_model: BendRadiusModel | None = None) -> TubeResult:
     cp, _ = control_polygon(model)
-    return TubeResult(pipe_radius=float(model.pipe_radius), start=model.start.tolist(),
+    if radius_model is not None and radius_model.chosen == "dies":  # after the final fit, in the result's bend order
+        die_r = sorted({float(r) for r in model.radii})
+        radius_model.die_radii = die_r
+        radius_model.assignment = [int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii]
+    elif radius_model is not None and radius_model.chosen == "given_dies":
+        die_r = radius_model.die_radii
+        radius_model.assignment = [int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii]
+    return TubeResult(pipe_radius=float(model.pipe_radius), start=model.start.tolist(), bend_radius_model=radius_model,
                       orientation=frame_quaternion(model.frame), lra=model_rows(model),
                       control_polygon=cp.tolist(), segments=segments_of(model), residuals=residuals,
                       outliers=outliers, segment_quality=quality, tolerance=float(eps), units=units, report=report)

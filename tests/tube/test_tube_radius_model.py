@@ -1,0 +1,67 @@
+"""Bend radius models: one die ('common'), two dies ('dies'), a radius per bend ('per_bend'), chosen by
+BIC on the surface residuals or forced; available dies given by the user."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube.synthetic import make_model, surface_samples
+
+RP = 4.0
+
+
+def fit(rows, seed=1, n=6000, **options):
+    pts = surface_samples(make_model(rows, RP), n, np.random.default_rng(seed), noise=0.012 * RP,
+                          outlier_fraction=0.005)
+    return solve(TubeRequest.model_validate({"points": pts.tolist(), "options": {"pipe_radius": RP, **options}}))
+
+
+def radii(res):
+    return np.array([r.bend_radius for r in res.lra[:-1]])
+
+
+def test_one_die_is_found_and_pins_every_radius():
+    res = fit([(40, 0, 60, 12.0), (25, 45, 90, 12.0), (30, -60, 45, 12.0), (40, 0, 0, 0)])
+    model = res.bend_radius_model
+    assert model.chosen == "common" and model.criterion == "BIC"
+    assert model.values["common"] < min(model.values["per_bend"], model.values["dies"])
+    assert np.all(np.abs(radii(res) / 12.0 - 1) < 0.005)
+
+
+def test_short_arcs_on_one_die_share_its_radius_instead_of_wild_ones():
+    r = 2.4 * RP  # arcs of 16-30 degrees: shorter than the pipe radius
+    res = fit([(40, 0, 30, r), (25, 45, 18, r), (30, -60, 16, r), (25, 90, 20, r), (40, 0, 0, 0)])
+    assert res.bend_radius_model.chosen == "common"
+    assert np.ptp(radii(res)) == 0.0 and abs(radii(res)[0] / r - 1) < 0.02
+    assert np.allclose([x.angle for x in res.lra[:-1]], [30, 18, 16, 20], atol=0.1) or np.allclose(
+        [x.angle for x in res.lra[:-1]], [20, 16, 18, 30], atol=0.1)
+
+
+def test_varied_radii_keep_one_radius_per_bend():
+    res = fit([(40, 0, 60, 8.0), (30, 45, 70, 20.0), (35, -60, 50, 36.0), (40, 0, 0, 0)])
+    assert res.bend_radius_model.chosen == "per_bend"
+    got = np.sort(radii(res))
+    assert np.all(np.abs(got / np.array([8.0, 20.0, 36.0]) - 1) < 0.01)
+
+
+def test_two_dies_are_told_apart_and_each_bend_assigned():
+    res = fit([(40, 0, 60, 10.0), (30, 45, 70, 24.0), (35, -60, 50, 10.0), (30, 80, 65, 24.0), (40, 0, 0, 0)])
+    model = res.bend_radius_model
+    assert model.chosen == "dies"
+    a = model.assignment
+    assert a[0] == a[2] != a[1] == a[3]
+    assert np.allclose(sorted(model.die_radii), [10.0, 24.0], rtol=0.01)
+    assert np.allclose(radii(res), [model.die_radii[k] for k in a])
+
+
+def test_forced_models_and_available_dies():
+    rows = [(40, 0, 60, 12.0), (25, 45, 90, 12.0), (30, -60, 45, 12.0), (40, 0, 0, 0)]
+    res = fit(rows, bend_radius_model="per_bend")
+    assert res.bend_radius_model.chosen == "per_bend" and res.bend_radius_model.criterion == "options"
+    res = fit(rows, dies=[8.0, 12.5, 20.0])
+    model = res.bend_radius_model
+    assert model.chosen == "given_dies" and model.assignment == [1, 1, 1]
+    assert np.all(radii(res) == 12.5)
