@@ -54,6 +54,15 @@ class LraRow(StrictModel):
     bend_radius: FiniteFloat = Field(
         default=0.0, ge=0, description="Centreline bend radius (CLR) of this bend; 0 in the last row."
     )
+    sigma_length: FiniteFloat | None = Field(
+        default=None, ge=0, description="Results: standard deviation of the length (null for the end straights, "
+        "whose extent is where the samples end)."
+    )
+    sigma_rotation: FiniteFloat | None = Field(default=None, ge=0, description="Results: standard deviation, degrees.")
+    sigma_angle: FiniteFloat | None = Field(default=None, ge=0, description="Results: standard deviation, degrees.")
+    sigma_bend_radius: FiniteFloat | None = Field(
+        default=None, ge=0, description="Results: standard deviation of the bend radius (0 when held by the options)."
+    )
 
 
 class TubeOptions(StrictModel):

@@ -291,9 +291,8 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
-def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
-    """One least-squares round with a fixed sample-to-segment assignment."""
+def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
+    """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -325,9 +324,49 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
             J[:, -1] -= 1.0
         return J
 
+    return x0, lo, hi, fun, jac, frame0, rp
+
+
+def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
+             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment."""
+    x0, lo, hi, fun, jac, frame0, rp = _problem(model, pts, seg, lay)
     x, info = levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
+
+
+def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout) -> dict[str, np.ndarray]:
+    """Standard deviations of the LRA parameters at the solution (§6's least squares, linearised): the
+    covariance s^2 (J^T J)^+ with s^2 = RSS / (N - P) from the residuals of the given (inlier) samples.
+    Returns arrays 'lengths' (inner straights, n - 1), 'rotations' (n - 1), 'angles' (n, radians) and
+    'radii' (n; a shared radius gives every bend its sigma, a held one 0)."""
+    x0, _, _, fun, jac, _, _ = _problem(model, pts, seg, lay)
+    r = fun(x0)
+    J = jac(x0)
+    N, P = J.shape
+    s2 = float(r @ r) / max(N - P, 1)
+    cov = s2 * np.linalg.pinv(J.T @ J)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    n = lay.n
+    i = 6
+    out = {"lengths": sd[i:i + n - 1] if n > 1 else np.zeros(0)}
+    i += max(n - 1, 0)
+    out["rotations"] = sd[i:i + n - 1] if n > 1 else np.zeros(0)
+    i += max(n - 1, 0)
+    out["angles"] = sd[i:i + n]
+    i += n
+    k = lay.n_radii
+    rad = sd[i:i + k]
+    if lay.radius_mode == "free":
+        out["radii"] = rad
+    elif lay.radius_mode == "common":
+        out["radii"] = np.full(n, rad[0] if k else 0.0)
+    elif lay.radius_mode == "dies":
+        out["radii"] = rad[np.asarray(lay.dies, dtype=int)]
+    else:
+        out["radii"] = np.zeros(n)
+    return out
 
 
 def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:

@@ -481,10 +481,46 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
                     warnings=warnings, details=details)
     result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report,
                                ls.radius_model)
+    add_sigmas(result, ls, pts, opts)
     if opts.nominal:
         result.inspection = inspect(ls.model, opts.nominal, opts.damping)
     progress(1.0, "done")
     return result
+
+
+def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:
+    """Standard deviations of every LRA row from the Jacobian at the solution (inlier samples), and a
+    warning for bends whose radius the data do not determine (sigma above 10 % of the radius)."""
+    model = ls.model
+    n = model.n_bends
+    if n == 0:
+        return
+    chosen = ls.radius_model.chosen if ls.radius_model is not None else ("common" if opts.common_bend_radius else "per_bend")
+    mode = {"common": "common", "dies": "dies", "per_bend": "free"}.get(chosen, "fixed")
+    die_r = sorted({float(r) for r in model.radii})
+    dies = tuple(int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii) if mode == "dies" else ()
+    fixed = tuple(float(r) for r in model.radii) if mode == "fixed" else ()
+    lay = fit.Layout(n, mode, opts.bend_radius, opts.pipe_radius is None, dies, fixed)
+    sd = fit.parameter_sigmas(model, pts[ls.inlier], ls.segment[ls.inlier], lay)
+    rows = result.lra
+    for k, row in enumerate(rows):
+        if 1 <= k <= n - 1:
+            row.sigma_length = float(sd["lengths"][k - 1])
+            row.sigma_rotation = float(np.degrees(sd["rotations"][k - 1]))
+        elif k == 0:
+            row.sigma_rotation = 0.0
+        if k < n:
+            row.sigma_angle = float(np.degrees(sd["angles"][k]))
+            row.sigma_bend_radius = float(sd["radii"][k])
+    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius]
+    if loose:
+        result.report.warnings.append(Diagnostic(
+            code="bend_radius_undetermined",
+            message=f"The radius of bend(s) {', '.join(str(k + 1) for k in loose)} is not determined by the data "
+            "(standard deviation above 10 % of the radius): give the die radius (options.bend_radius or dies).",
+            details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
+                                "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
+        result.report.status = "warning"
 
 
 def _same_shape(a: TubeModel, b: TubeModel) -> bool:
