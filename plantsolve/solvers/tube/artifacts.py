@@ -52,6 +52,41 @@ def xyz_clr_csv(result: TubeResult, model: TubeModel) -> bytes:
     return _csv(rows)
 
 
+DXF_UNITS = {"mm": 4, "cm": 5, "m": 6, "in": 1, "ft": 2}  # $INSUNITS codes
+
+
+def centreline_dxf(model: TubeModel, units: str) -> bytes:
+    """The centreline for benders and CAD: each straight a LINE and each bend an ARC in its own plane
+    (extrusion = the bend's axis, so the arc runs counter-clockwise from its start to its end), plus the
+    whole centreline as a 3-D POLYLINE (arcs densified) for tools that read polylines only."""
+    import ezdxf
+    from ezdxf.math import OCS
+
+    doc = ezdxf.new("R2013")
+    doc.units = DXF_UNITS.get(units, 0)
+    doc.layers.add("CENTRELINE")
+    doc.layers.add("CENTRELINE_POLYLINE")
+    msp = doc.modelspace()
+    sp = build_spine(model)
+    axes = sp.axis
+    for k in range(len(sp.kind)):
+        if not sp.kind[k]:
+            if np.linalg.norm(sp.end[k] - sp.start[k]) > 0:
+                msp.add_line(sp.start[k], sp.end[k], dxfattribs={"layer": "CENTRELINE"})
+            continue
+        ocs = OCS(axes[k])
+        c, a, b = (ocs.from_wcs(v) for v in (sp.centre[k], sp.start[k], sp.end[k]))
+        start = float(np.degrees(np.arctan2(a.y - c.y, a.x - c.x)))
+        end = float(np.degrees(np.arctan2(b.y - c.y, b.x - c.x)))
+        msp.add_arc(center=c, radius=float(sp.radius[k]), start_angle=start, end_angle=end,
+                    dxfattribs={"layer": "CENTRELINE", "extrusion": tuple(axes[k])})
+    pts, _ = sample_centreline(model, max(model.pipe_radius / 4, 1e-9))
+    msp.add_polyline3d([tuple(p) for p in pts], dxfattribs={"layer": "CENTRELINE_POLYLINE"})
+    stream = io.StringIO()
+    doc.write(stream)
+    return stream.getvalue().encode()
+
+
 def _deviation_colours(dev: np.ndarray, lim: float, outlier: np.ndarray) -> np.ndarray:
     cmap = colormaps["coolwarm"]
     col = (cmap(np.clip(0.5 + 0.5 * dev / max(lim, 1e-300), 0, 1)) * 255).astype(np.uint8)
@@ -77,6 +112,7 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     out.append(Artifact("deviation.ply", "application/x-ply", cloud.export(file_type="ply")))
     out.append(Artifact("lra.csv", "text/csv", lra_csv(result)))
     out.append(Artifact("xyz_clr.csv", "text/csv", xyz_clr_csv(result, model)))
+    out.append(Artifact("centreline.dxf", "image/vnd.dxf", centreline_dxf(model, result.units)))
 
     fig = Figure(figsize=(11, 5))  # no pyplot: jobs render in parallel threads
     ax = fig.add_subplot(1, 2, 1, projection="3d")

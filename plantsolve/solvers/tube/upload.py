@@ -14,7 +14,11 @@ from pydantic import ValidationError
 from plantsolve.schemas.tube import MAX_POINTS, NpyPoints, TubeRequest
 from plantsolve.solvers.base import FieldError, InputRejected, reject
 
-UPLOAD_EXTENSIONS = (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
+UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
+TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+# a mesh with fewer vertices than this is a CAD-style tessellation: its faces are sampled instead
+MESH_MIN_VERTICES = 2000
+MESH_SAMPLES = 20_000
 INLINE_LIST_MAX = 20_000  # larger uploads travel inside the request as base64 NPY
 
 
@@ -82,21 +86,63 @@ def points_field(pts: np.ndarray):
     return {"npy_base64": base64.b64encode(buf.getvalue()).decode("ascii")}
 
 
-def _read_ply(content: bytes) -> np.ndarray:
+def _read_mesh(content: bytes, file_type: str) -> np.ndarray:
+    """Scanner exports as meshes (STL, OBJ, PLY) or point clouds (PLY): the vertices, or, for a sparse
+    CAD-style tessellation, samples on its faces (seeded, so the same file gives the same points)."""
     import trimesh
 
     try:
-        geom = trimesh.load(io.BytesIO(content), file_type="ply", process=False)
+        geom = trimesh.load(io.BytesIO(content), file_type=file_type, process=False)
     except Exception as exc:  # trimesh raises many types on corrupt files
-        raise reject(f"unreadable PLY file: {exc}") from None
-    if isinstance(geom, trimesh.Scene):
-        parts = [g.vertices for g in geom.geometry.values() if hasattr(g, "vertices")]
-        verts = np.vstack(parts) if parts else np.zeros((0, 3))
-    else:
-        verts = getattr(geom, "vertices", None)
-        if verts is None:
-            raise reject("PLY file holds no vertices")
-    return np.asarray(verts, dtype=np.float64)
+        raise reject(f"unreadable {file_type.upper()} file: {exc}") from None
+    parts = list(geom.geometry.values()) if isinstance(geom, trimesh.Scene) else [geom]
+    meshes = [g for g in parts if isinstance(g, trimesh.Trimesh) and len(g.faces)]
+    verts = [np.asarray(g.vertices) for g in parts if getattr(g, "vertices", None) is not None]
+    n_verts = sum(len(v) for v in verts)
+    if meshes and n_verts < MESH_MIN_VERTICES:
+        mesh = trimesh.util.concatenate(meshes)
+        if mesh.area > 0:
+            pts, _ = trimesh.sample.sample_surface(mesh, MESH_SAMPLES, seed=0)
+            return np.asarray(pts, dtype=np.float64)
+    if not verts:
+        raise reject(f"{file_type.upper()} file holds no vertices")
+    return np.vstack(verts).astype(np.float64)
+
+
+def _read_ply(content: bytes) -> np.ndarray:
+    return _read_mesh(content, "ply")
+
+
+def _read_las(content: bytes) -> np.ndarray:
+    """LAS/LAZ point clouds (laspy; LAZ needs a LAZ backend such as lazrs): scaled x, y, z."""
+    import laspy
+
+    try:
+        las = laspy.read(io.BytesIO(content))
+    except Exception as exc:  # laspy raises its own and OS errors on corrupt files
+        raise reject(f"unreadable LAS/LAZ file: {exc}") from None
+    return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
+
+
+def _read_e57(content: bytes) -> np.ndarray:
+    """E57 scans (pye57): every scan's cartesian points, each in world coordinates (its pose applied)."""
+    import tempfile
+
+    import pye57
+
+    with tempfile.NamedTemporaryFile(suffix=".e57") as handle:
+        handle.write(content)
+        handle.flush()
+        try:
+            e57 = pye57.E57(handle.name)
+            scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
+        except Exception as exc:  # libE57 raises its own errors on corrupt files
+            raise reject(f"unreadable E57 file: {exc}") from None
+    parts = [np.column_stack([d["cartesianX"], d["cartesianY"], d["cartesianZ"]]) for d in scans
+             if "cartesianX" in d]
+    if not parts:
+        raise reject("E57 file holds no cartesian points")
+    return np.vstack(parts).astype(np.float64)
 
 
 _SPLIT = re.compile(r"[,;\s]+")
@@ -147,6 +193,10 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
     opts = dict(options or {})
     if "units" in opts:  # tolerate units passed among the options
         units = opts.pop("units")
+    file_units = opts.pop("file_units", None)
+    if file_units is not None and file_units not in TO_MM:
+        raise InputRejected([FieldError(("options", "file_units"), f"unknown unit {file_units!r}; one of "
+                                        f"{', '.join(TO_MM)}")])
     if ext == ".json":
         try:
             doc = json.loads(content.decode("utf-8-sig"))
@@ -161,8 +211,17 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
         if units:
             body["units"] = units
     else:
-        reader = {".ply": _read_ply, ".npy": _read_npy}.get(ext, _read_text)
+        reader = {".ply": _read_ply, ".npy": _read_npy, ".stl": lambda c: _read_mesh(c, "stl"),
+                  ".obj": lambda c: _read_mesh(c, "obj"), ".las": _read_las, ".laz": _read_las,
+                  ".e57": _read_e57}.get(ext, _read_text)
         pts = reader(content)
+        # the file's length unit: declared (options.file_units), E57's metres by its standard, else the request's
+        declared = file_units or ("m" if ext == ".e57" else None)
+        if declared is not None:
+            target = units or "mm"
+            if target not in TO_MM:
+                raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}")])
+            pts = pts * (TO_MM[declared] / TO_MM[target])
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
             raise reject("file holds no 3D points")
         if not np.isfinite(pts).all():
