@@ -32,7 +32,8 @@ def _npy_bytes(a):
 
 
 def test_public_contract():
-    assert SPEC.upload_extensions == (".ply", ".xyz", ".csv", ".txt", ".npy", ".json")
+    assert SPEC.upload_extensions == (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy",
+                                      ".json")
     assert SPEC.soft_time_limit < SPEC.time_limit and isinstance(__version__, str)
 
 
@@ -81,7 +82,8 @@ def test_large_upload_travels_as_npy_base64():
     ("scan.csv", b"1,2,nan\n" * 200, "non-finite"),
     ("scan.npy", b"not an npy", "NPY"),
     ("scan.json", b"{not json", "JSON"),
-    ("scan.stl", b"solid x", "unsupported"),
+    ("scan.stl", b"solid x", "no vertices"),
+    ("scan.dwg", b"AC1032", "unsupported"),
     ("scan.txt", b"\xff\xfe\x00", "UTF-8"),
 ])
 def test_unreadable_files_are_rejected_with_reason(name, data, needle):
@@ -138,7 +140,8 @@ def test_artifacts(cloud):
     arts = render_artifacts(req, res)
     assert req.model_dump() == before and res.model_dump() == res_before
     by = {a.name: a for a in arts}
-    assert set(by) == {"tube.stl", "tube.glb", "deviation.ply", "lra.csv", "xyz_clr.csv", "overview.png"}
+    assert set(by) == {"tube.stl", "tube.glb", "deviation.ply", "lra.csv", "xyz_clr.csv", "centreline.dxf",
+                       "overview.png"}
     assert by["overview.png"].data[:8] == b"\x89PNG\r\n\x1a\n" and by["overview.png"].media_type == "image/png"
     assert by["tube.stl"].media_type == "model/stl" and by["tube.glb"].media_type == "model/gltf-binary"
     mesh = trimesh.load(io.BytesIO(by["tube.stl"].data), file_type="stl")
