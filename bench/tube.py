@@ -2,6 +2,8 @@
 
     python bench/tube.py           # 40 random tubes + 100k and 1M point runs
     python bench/tube.py --quick   # 12 random tubes + 100k point run
+    python bench/tube.py --families 50   # only the hard scenario families (short arcs, small bends far
+                                         # apart, nearly coplanar back-to-back bends), per radius model
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -123,6 +125,70 @@ def run_single(n: int) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def family_tube(family: str, seed: int):
+    """A tube of one of the hard scenario families (each bent on one die, so radii are shared):
+    short_arc: 3-5 bends of 12-22 degrees on a 2.4 r die (arcs shorter than the pipe radius);
+    small_far: two bends of 3-5 degrees 6-8 r apart with 30-60 degrees of rotation between them;
+    b2b_coplanar: two bends of 90-115 degrees with 0.15-0.3 r of straight and under 1.5 degrees of
+    rotation between them. 6000 single-view samples, noise 1.2 % of r, 0.5 % outliers."""
+    from plantsolve.solvers.tube.synthetic import make_model, random_rotation
+
+    rng = np.random.default_rng(seed)
+    rp = float(rng.uniform(3.0, 20.0))
+    if family == "short_arc":
+        die = 2.4 * rp
+        n = int(rng.integers(3, 6))
+        rows = [(rng.uniform(4, 8) * rp, rng.uniform(-180, 180) if k else 0.0, rng.uniform(12, 22), die)
+                for k in range(n)] + [(rng.uniform(4, 8) * rp, rng.uniform(-180, 180), 0.0, 0.0)]
+    elif family == "small_far":
+        die = rng.uniform(12, 20) * rp
+        rows = [(6 * rp, 0.0, rng.uniform(3, 5), die), (rng.uniform(6, 8) * rp, rng.uniform(30, 60), rng.uniform(3, 5), die),
+                (6 * rp, 0.0, 0.0, 0.0)]
+    else:
+        die = rng.uniform(2.5, 3.5) * rp
+        rows = [(5 * rp, 0.0, rng.uniform(90, 115), die), (rng.uniform(0.15, 0.3) * rp, rng.uniform(-1.5, 1.5),
+                                                            rng.uniform(90, 115), die), (5 * rp, 0.0, 0.0, 0.0)]
+    m = make_model(rows, rp, start=rng.normal(size=3) * 10 * rp, frame=random_rotation(rng))
+    pts = surface_samples(m, 6000, rng, view=rng.normal(size=3), noise=0.012 * rp, outlier_fraction=0.005)
+    return m, pts
+
+
+def families(n_tubes: int) -> None:
+    """Per hard family and radius model ('auto' now; 'per_bend' = one free radius per bend, as before)."""
+    print(f"hard scenario families: {n_tubes} tubes each, 6000 points")
+    print("| family | radius model | bend count ok | angle err median / p95 | radius err median / p95 / max | "
+          "centreline rms (median, % r) | chosen | time median s |")
+    print("|---|---|---:|---:|---:|---:|---|---:|")
+    for family in ("short_arc", "small_far", "b2b_coplanar"):
+        for model in ("per_bend", "auto"):
+            ok, ang, rad, crms, chosen, times = 0, [], [], [], {}, []
+            for i in range(n_tubes):
+                truth, pts = family_tube(family, 5000 + i)
+                req = TubeRequest.model_validate({"points": pts.tolist(),
+                                                  "options": {"bend_radius_model": model}})
+                t0 = time.perf_counter()
+                try:
+                    res = solve(req)
+                except SolverError:
+                    times.append(time.perf_counter() - t0)
+                    continue
+                times.append(time.perf_counter() - t0)
+                da, dr, _, dc = compare(truth, res)
+                crms.append(float(np.sqrt(np.mean(dc ** 2)) / truth.pipe_radius))
+                if res.bend_radius_model is not None:
+                    chosen[res.bend_radius_model.chosen] = chosen.get(res.bend_radius_model.chosen, 0) + 1
+                if da is not None:
+                    ok += 1
+                    ang += list(da)
+                    rad += list(dr)
+            ang, rad = np.array(ang), np.array(rad)
+            q = lambda a, f: f"{f(a):.3f}" if len(a) else "n/a"
+            print(f"| {family} | {model} | {ok}/{n_tubes} | {q(ang, np.median)}° / {q(ang, lambda a: np.percentile(a, 95))}° "
+                  f"| {q(100 * rad, np.median)} / {q(100 * rad, lambda a: np.percentile(a, 95))} / {q(100 * rad, np.max)} % "
+                  f"| {100 * np.median(crms):.2f} | {', '.join(f'{k} {v}' for k, v in sorted(chosen.items()))} "
+                  f"| {np.median(times):.2f} |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
@@ -131,7 +197,11 @@ def main():
     ap.add_argument("--tubes", type=int)
     ap.add_argument("--seed0", type=int, default=1000, help="seed of the first random tube")
     ap.add_argument("--no-large", action="store_true", help="skip the 100k / 1M point runs")
+    ap.add_argument("--families", type=int, help="only the hard scenario families, this many tubes each")
     a = ap.parse_args()
+    if a.families:
+        families(a.families)
+        return
     if a.make:
         _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
         np.save(a.make[1], pts)
@@ -186,6 +256,8 @@ def main():
     print()
     for L in large:
         print(f"{L['n']:,} points stage timings (s): " + ", ".join(f"{k} {v:.2f}" for k, v in L["timings"].items()))
+    print()
+    families(10 if a.quick else 50)
 
 
 if __name__ == "__main__":
