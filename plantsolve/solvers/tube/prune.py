@@ -130,3 +130,71 @@ def prune(model: TubeModel, refit, eps: float, scale: float, rel_tol: float = 0.
             if tries >= max_tries:
                 break
     return model, sigma, changes
+
+
+def evidence_tolerance(n_samples: int, extra_parameters: int = 4) -> float:
+    """The relative drop of the rms residual that the Bayesian information criterion asks of a model with
+    ``extra_parameters`` more parameters (a bend's length, rotation, angle and radius):
+    n ln(RSS/RSS') > dp ln n, i.e. rms/rms' > exp(dp ln n / 2n)."""
+    n = max(n_samples, 2)
+    return float(np.expm1(extra_parameters * np.log(n) / (2.0 * n)))
+
+
+def split(model: TubeModel, k: int, fraction: float, radius: float, gap: float) -> TubeModel:
+    """Initial guess for bend k as two bends in its plane: angles fraction and 1 - fraction of it, both of
+    ``radius``, with a straight of ``gap`` between them (the rest of its arc length when the radius is
+    smaller, so the tube keeps its extent)."""
+    m = model.copy()
+    A, R = m.angles[k], m.radii[k]
+    L = list(m.lengths)
+    mid = max(gap, R * A - radius * A) if radius < R else gap
+    m.lengths = np.array(L[:k + 1] + [mid] + L[k + 1:])
+    rots = list(m.rotations)
+    m.rotations = np.array(rots[:k + 1] + [0.0] + rots[k + 1:])
+    m.angles = np.concatenate([m.angles[:k], [A * fraction, A * (1 - fraction)], m.angles[k + 1:]])
+    m.radii = np.concatenate([m.radii[:k], [radius, radius], m.radii[k + 1:]])
+    return m
+
+
+def split_candidates(model: TubeModel) -> list[tuple[str, int, TubeModel]]:
+    """Bends the spline stage may have merged: a large one (two nearly coplanar back-to-back bends) and one
+    whose radius is far beyond the others' or the pipe's (two small bends far apart on one long arc)."""
+    n = model.n_bends
+    rp = model.pipe_radius
+    out = []
+    for k in range(n):
+        others = np.delete(model.radii, k)
+        typical = float(np.median(others)) if len(others) else 4.0 * rp
+        if model.angles[k] > np.radians(150):
+            for f in (0.5, 0.4, 0.6):
+                out.append(("split", k, split(model, k, f, model.radii[k], 0.25 * rp)))
+        if model.radii[k] > 3.0 * typical or (len(others) == 0 and model.radii[k] > 25.0 * rp):
+            out.append(("split", k, split(model, k, 0.5, min(model.radii[k], max(typical, 4.0 * rp)), rp)))
+    return out
+
+
+def split_by_evidence(model: TubeModel, refit, scale: float, max_tries: int = 8):
+    """Splits of suspect bends (:func:`split_candidates`), each refitted in LRA parameters and kept when the
+    Bayesian information criterion prefers the model with the extra bend (same samples for both)."""
+    changes = []
+    model, res = refit(model)
+    model, res = refit(model)  # as converged as the candidates below (each refitted twice)
+    cap = _cap(res, scale)
+    sigma = _score(res, cap)
+    tries = 0
+    improved = True
+    while improved and tries < max_tries:
+        improved = False
+        for kind, k, cand in split_candidates(model):
+            tries += 1
+            fitted, r = refit(cand)
+            fitted, r = refit(fitted)
+            s = _score(r, cap)
+            if s * (1 + evidence_tolerance(len(r))) + 1e-4 * scale < sigma:
+                changes.append({"change": kind, "bend": k + 1, "score_before": sigma, "score_after": s})
+                model, sigma = fitted, s
+                improved = True
+                break
+            if tries >= max_tries:
+                break
+    return model, changes

@@ -278,6 +278,9 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     changes = []
     if model.n_bends and not opts.bend_radius:
         model, _, changes = prune.prune(model, refit, eps_used, rp)
+    if model.n_bends:
+        model, splits = prune.split_by_evidence(model, refit, rp)
+        changes = changes + splits
     stage_progress[:] = [0.75, "least-squares fit"]
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
