@@ -9,7 +9,7 @@ import uuid
 
 from plantsolve.workers.context import ServiceContext, worker_name
 from plantsolve.workers.runner import run_job
-from plantsolve.workers.sweeper import Sweeper, sweep_once
+from plantsolve.workers.sweeper import Sweeper, resume
 
 log = logging.getLogger("plantsolve.embedded")
 
@@ -47,10 +47,7 @@ class EmbeddedDispatcher:
             thread = threading.Thread(target=self._work, name=f"job-pool-{index}", daemon=True)
             thread.start()
             self._threads.append(thread)
-        # Jobs left queued (or running with a dead lease) by a previous process are resumed.
-        sweep_once(self.ctx, self.enqueue, self.pending)
-        for job_id in self.ctx.repo.queued_ids():
-            self.enqueue(job_id)
+        resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
     def stop(self) -> None:

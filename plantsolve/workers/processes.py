@@ -23,7 +23,7 @@ from pebble import ProcessExpired, ProcessPool
 from plantsolve.workers.context import ServiceContext, worker_name
 from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.workers.settings import WorkerSettings
-from plantsolve.workers.sweeper import Sweeper, sweep_once
+from plantsolve.workers.sweeper import Sweeper, resume
 
 log = logging.getLogger("plantsolve.processes")
 
@@ -64,10 +64,7 @@ class ProcessDispatcher:
         settings = WorkerSettings.model_validate(self.ctx.settings.model_dump(include=set(WorkerSettings.model_fields)))
         self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
                                  initargs=(settings.model_dump_json(),), context=multiprocessing.get_context("spawn"))
-        # Jobs left queued (or running with a dead lease) by a previous process are resumed.
-        sweep_once(self.ctx, self.enqueue, self.pending)
-        for job_id in self.ctx.repo.queued_ids():
-            self.enqueue(job_id)
+        resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
     def stop(self) -> None:

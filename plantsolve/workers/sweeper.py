@@ -47,6 +47,14 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
         log.info("sweeper: enqueued %d again, failed %d", sent, len(outcome.failed))
 
 
+def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None) -> None:
+    """At a dispatcher's start: jobs left queued (or running with a dead lease) by a previous process are
+    enqueued again."""
+    sweep_once(ctx, enqueue, pending)
+    for job_id in ctx.repo.queued_ids():
+        enqueue(job_id)
+
+
 class Sweeper:
     """Runs :func:`sweep_once` every ``sweep_seconds`` in a daemon thread."""
 
