@@ -15,7 +15,7 @@ from plantsolve.solvers.perfmap.families import curveset_from_fits
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapResult
 from plantsolve.solvers.perfmap import query, render_artifacts
-from plantsolve.solvers.perfmap.families import basis, log_eval, log_params_from_public
+from plantsolve.solvers.perfmap.families import log_eval, log_params_from_public
 
 
 def test_n3_end_to_end(n3_request, n3_result: PerfmapResult):

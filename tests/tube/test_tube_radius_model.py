@@ -4,7 +4,6 @@ BIC on the surface residuals or forced; available dies given by the user."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.tube import solve

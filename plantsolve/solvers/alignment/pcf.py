@@ -368,7 +368,6 @@ class Interpretation:
     body: dict
     notes: list[tuple[str, str, dict, str]]  # (code, message, details, 'warning' | 'detail')
     geometry: dict[str, Geometry]  # by item id, items that are solver components or joints
-    spacers: dict[str, tuple[str, str]]  # spacer component id -> the two items it joins
     nozzles: list[str] = field(default_factory=list)  # items at an END-CONNECTION-EQUIPMENT/-PIPELINE marker
 
 
@@ -529,7 +528,6 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         comps_json.append(entry)
     connections = [{"from": [comps[owner[i]]["id"], int(local[i])], "to": [comps[owner[j]]["id"], int(local[j])]}
                    for i, j in conns]
-    spacers = {}
     taken = {c["id"] for c in comps_json}
     for n, (i, j, gap) in enumerate(gaps, start=1):
         sid = f"gasket-gap-{n}"
@@ -537,7 +535,6 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
             sid += "'"
         taken.add(sid)
         a, b = comps[owner[i]]["id"], comps[owner[j]]["id"]
-        spacers[sid] = (a, b)
         comps_json.append({"id": sid, "kind": "fitting", "type": "other", "radius": float(min(rad[i], rad[j])),
                            "fixed": False, "ports": [{"position": pos[i].tolist(), "direction": (-dirs[i]).tolist()},
                                                      {"position": pos[j].tolist(), "direction": (-dirs[j]).tolist()}]})
@@ -547,8 +544,8 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         options_out["fixed_components"] = [alias.get(f, f) for f in opts.fixed_components]
     body = {"units": units, "components": comps_json, "connections": connections, "options": options_out,
             "source_pcf": text}
-    notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, tol))
-    return Interpretation(body=body, notes=notes, geometry=geometry, spacers=spacers,
+    notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner))
+    return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, pos, owner, rad, comps))
 
 
@@ -703,7 +700,7 @@ def _olet_directions(comps, start, dirs, pos, resolved) -> None:
                 resolved.append({"id": c["id"], "how": "OLET direction from the axis of the pipe it sits on"})
 
 
-def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, tol):
+def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner):
     notes = []
     if doc.unknown:
         notes.append(("pcf_unknown_keyword",

@@ -51,7 +51,6 @@ from plantsolve.solvers.base import FieldError, InputRejected, reject
 from plantsolve.solvers.perfmap.validation import prepare
 
 UPLOAD_EXTENSIONS = (".csv", ".json", ".py")
-CSV_COLUMNS = ("theta", "phi", "flow", "pressure", "efficiency")
 MEASURED = ("flow", "pressure", "efficiency")
 # Names rig software and cycle codes give their columns (matched after units and separators are
 # stripped, case-insensitively). Setting parameters have roles of their own; the solver takes the

@@ -84,7 +84,7 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
     same = (np.diff(x) == 0) & (np.diff(y) == 0) & (np.diff(eta) == 0)
     keep = np.concatenate([[True], ~same])
     x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
-    repeated = vertical = 0
+    repeated = 0
     choke_pressures: list[float] = []
     if np.any(np.diff(x) <= 0):
         # The same flow with other values: at the largest flow a vertical choke segment (the
@@ -97,7 +97,6 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
                 top = members[int(np.argmax(y[members]))]
                 xs.append(x[top]); ys.append(y[top]); es.append(eta[top])
                 choke_pressures = sorted(float(v) for v in y[members])
-                vertical = len(members) - 1
             else:
                 xs.append(x[members[0]]); ys.append(float(np.mean(y[members]))); es.append(float(np.mean(eta[members])))
                 repeated += len(members) - 1

@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from plantsolve.solvers.geometry import any_perpendicular
 from plantsolve.solvers.tube.geometry import TubeModel, build_spine, sample_centreline
 
 
