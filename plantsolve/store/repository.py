@@ -16,7 +16,7 @@ from typing import Any, Callable, Iterable
 
 from sqlalchemy import and_, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
-from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy.orm import Session, defer, sessionmaker
 
 from plantsolve.store.models import FINISHED, Artifact, Job, utcnow
 
@@ -60,9 +60,13 @@ class JobRepository:
             existing = self.get_by_idempotency_key(job.idempotency_key)
             if existing is not None:
                 return existing, False
+        _apply_defaults(job)
+        # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
+        values = {column.key: value for column in Job.__table__.columns if (value := getattr(job, column.key)) is not None}
+        # one Core INSERT: the ORM's unit of work costs more than the write itself on the submit path
         with self.writing(), self.sessions() as session:
-            session.add(job)
             try:
+                session.connection().execute(JOBS.insert(), values)
                 session.commit()
             except IntegrityError:
                 session.rollback()
@@ -72,9 +76,14 @@ class JobRepository:
                 return existing, False
             return job, True
 
-    def get(self, job_id: uuid.UUID) -> Job | None:
+    def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Job | None:
+        """The job; ``brief`` leaves out the input and the result (a status read must not load
+        and decode a result of many megabytes that it does not show)."""
         with self.sessions() as session:
-            return session.get(Job, job_id)
+            if not brief:
+                return session.get(Job, job_id)
+            query = select(Job).where(Job.id == job_id).options(*BRIEF)
+            return session.scalars(query).first()
 
     def get_by_idempotency_key(self, key: str) -> Job | None:
         with self.sessions() as session:
@@ -317,6 +326,19 @@ class JobRepository:
             count = session.execute(statement).rowcount
             session.commit()
             return count
+
+
+JOBS = Job.__table__
+BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
+
+
+def _apply_defaults(job: Job) -> None:
+    """Fill the columns' Python-side defaults that the ORM would have applied on flush."""
+    for column in Job.__table__.columns:
+        if getattr(job, column.key) is None and column.default is not None:
+            default = column.default
+            value = default.arg(None) if default.is_callable else default.arg
+            setattr(job, column.key, value)
 
 
 def is_finished(status: str) -> bool:

@@ -38,7 +38,10 @@ def _start_worker(settings_json: str) -> None:
     global _worker_ctx
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
-    _worker_ctx = ServiceContext.create(WorkerSettings.model_validate_json(settings_json))
+    settings = WorkerSettings.model_validate_json(settings_json)
+    # a solver must never slow down the API process that shares this machine with it
+    os.nice(settings.job_niceness)
+    _worker_ctx = ServiceContext.create(settings)
 
 
 def _run(job_id: str) -> str:
@@ -58,9 +61,11 @@ class ProcessDispatcher:
         self._pool: ProcessPool | None = None
         self._pending: set[uuid.UUID] = set()
         self._lock = threading.Lock()
+        self._stopping = False
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
 
     def start(self) -> None:
+        self._stopping = False
         settings = WorkerSettings.model_validate(self.ctx.settings.model_dump(include=set(WorkerSettings.model_fields)))
         self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
                                  initargs=(settings.model_dump_json(),), context=multiprocessing.get_context("spawn"))
@@ -68,6 +73,8 @@ class ProcessDispatcher:
         self._sweeper.start()
 
     def stop(self) -> None:
+        # jobs still waiting for a process stay queued in the database: the next start resumes them
+        self._stopping = True
         self._sweeper.stop()
         if self._pool is not None:
             self._pool.stop()
@@ -100,6 +107,8 @@ class ProcessDispatcher:
     def _done(self, job_id: uuid.UUID, future) -> None:
         with self._lock:
             self._pending.discard(job_id)
+        if self._stopping:
+            return
         try:
             outcome = future.result()
         except FutureTimeout:  # the pool killed the worker at the hard limit

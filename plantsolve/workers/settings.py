@@ -33,6 +33,11 @@ class WorkerSettings(StoreSettings):
         description="Embedded default (no broker): 'process' runs jobs in worker processes the service starts and "
         "supervises (the API process never computes; a hard time limit kills the process); 'thread' runs them in "
         "threads of the API process (tests, debugging).")
+    job_niceness: int = Field(
+        default=10, ge=0, le=19,
+        description="Scheduling niceness of the embedded pool's job processes: they share the machine with the API "
+        "process, which answers first (0 = same priority as the API).",
+    )
     lease_seconds: float = Field(default=60.0, gt=0, description="A running job's lease; renewed by heartbeats.")
     heartbeat_seconds: float = Field(default=10.0, gt=0, description="Heartbeat period of a running job.")
     sweep_seconds: float = Field(default=10.0, gt=0, description="Period of the sweeper (lapsed leases, lost messages).")

@@ -28,6 +28,19 @@ def test_jobs_run_in_worker_processes(pooled):
     (attempt,) = done["attempts"]
     worker = attempt["worker"]
     assert worker.startswith("process@") and not worker.endswith(f":{os.getpid()}")
+    # the job process yields the CPU to the API process it shares the machine with
+    worker_pid = int(worker.rsplit(":", 1)[1])
+    assert os.getpriority(os.PRIO_PROCESS, worker_pid) == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 10)
+
+
+def test_stopping_with_a_backlog_leaves_it_queued_and_quiet(tmp_path, caplog):
+    settings = service_settings(tmp_path, embedded_mode="process", embedded_workers=1)
+    with TestClient(create_app(settings)) as client:
+        ids = [client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 0.2}).json()["id"]
+               for _ in range(30)]
+    assert not [r for r in caplog.records if r.levelname == "ERROR"]
+    with TestClient(create_app(settings)) as client:  # the next start resumes the backlog
+        assert all(wait_for(client, job_id, timeout=90)["status"] == "succeeded" for job_id in ids)
 
 
 def test_a_solver_deaf_to_its_soft_limit_is_killed_at_the_hard_limit(pooled):

@@ -35,7 +35,7 @@ def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) 
     return Response(model.model_dump_json(), status_code=status_code, headers=headers, media_type="application/json")
 
 
-def get_service(request: Request) -> JobService:
+async def get_service(request: Request) -> JobService:  # async: see require_api_key
     return request.app.state.jobs
 
 
@@ -134,7 +134,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
 
     @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), summary="Job status")
     def get_job(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
-        return _json(service.view(service.get(job_id, caller.sees)))
+        return _json(service.view(service.get(job_id, caller.sees, brief=True)))
 
     @router.get(
         "/jobs/{job_id}/result",

@@ -180,9 +180,10 @@ class JobService:
 
     # ---- reads and cancel -------------------------------------------------------------------
 
-    def get(self, job_id: uuid.UUID, sees: str | None = None) -> Job:
-        """The job, if the caller may see it (``sees``: the caller's tenant, None for all)."""
-        job = self.ctx.repo.get(job_id)
+    def get(self, job_id: uuid.UUID, sees: str | None = None, *, brief: bool = False) -> Job:
+        """The job, if the caller may see it (``sees``: the caller's tenant, None for all); ``brief``
+        without its input and result (enough for its view)."""
+        job = self.ctx.repo.get(job_id, brief=brief)
         if job is None or (sees is not None and job.owner != sees):
             raise NotFound(f"No job {job_id}.")
         return job
@@ -194,7 +195,7 @@ class JobService:
             raise NotFound(f"No job {job_id}.")
         if outcome != "cancelled":
             raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
-        return self.get(job_id)
+        return self.get(job_id, brief=True)
 
     def result(self, job_id: uuid.UUID, sees: str | None = None) -> Any:
         job = self.get(job_id, sees)
