@@ -171,6 +171,10 @@ def install(app: FastAPI) -> None:
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, error: StarletteHTTPException):
+        if error.status_code == 400 and str(error.detail) == "There was an error parsing the body":
+            # FastAPI's answer to a JSON body that is not text: unreadable input like any other
+            return problem_response(Unprocessable("The body is not valid JSON text.", errors=[
+                field_problem(["body"], "invalid JSON: not UTF-8 text", "json_invalid")]), request)
         cls = _STATUS_CLASSES.get(error.status_code)
         if cls is Unauthorized:
             problem = Unauthorized(str(error.detail))

@@ -17,7 +17,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from plantsolve.schemas.common import Direction3, FiniteFloat, Point3, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import Direction3, FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel, Units, Vec3
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -68,8 +68,8 @@ class Connection(StrictModel):
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, serialize_by_alias=True)
 
-    from_: tuple[str, int] = Field(alias="from", description="[component id, port index] of one side.")
-    to: tuple[str, int] = Field(description="[component id, port index] of the other side.")
+    from_: tuple[str, Integer] = Field(alias="from", description="[component id, port index] of one side.")
+    to: tuple[str, Integer] = Field(description="[component id, port index] of the other side.")
 
 
 class AlignmentOptions(StrictModel):
@@ -92,7 +92,7 @@ class AlignmentOptions(StrictModel):
         description="Largest accepted angle between a port direction and the reversed direction of its "
         "partner, in degrees (1e-10 rad = 5.73e-9 deg).",
     )
-    max_iterations: int = Field(
+    max_iterations: Integer = Field(
         default=4000, ge=1, le=1_000_000,
         description="Iteration cap of either method (direct: Gauss-Newton and refinement steps over all cut rounds; "
         "dual_quaternion: alternating steps). A run stopped by the cap says so in its stop reason.",
@@ -127,7 +127,7 @@ class AlignmentOptions(StrictModel):
         description="Dual-quaternion method: if the largest gap exceeds this multiple of the initial largest gap, "
         "the connection with the highest error is cut and the run restarts.",
     )
-    max_cuts: int = Field(default=50, ge=0, description="Most connections the solver may cut.")
+    max_cuts: Integer = Field(default=50, ge=0, description="Most connections the solver may cut.")
     fixed_components: list[str] = Field(
         default_factory=list, description="Ids of additional tie-ins (same as fixed=true on the component)."
     )

@@ -10,9 +10,26 @@ Conventions (they hold for every solver):
 
 from __future__ import annotations
 
+from numbers import Integral, Real
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic_core import PydanticCustomError
+
+def _json_integer(value: Any) -> Any:
+    """JSON Schema's integer: a number without a fraction (``5`` and ``5.0``), never a bool or a string."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise PydanticCustomError("int_type", "Input should be a valid integer")
+    if isinstance(value, Integral):
+        return int(value)
+    if not float(value).is_integer():
+        raise PydanticCustomError("int_from_float", "Input should be a valid integer, got a number with a fractional part")
+    return int(value)
+
+
+Integer = Annotated[int, BeforeValidator(_json_integer)]
+"""An integer field of a request: 5 or 5.0, as JSON Schema's ``integer``; requests are validated strictly
+otherwise (no ``true`` for 1, no ``"5"`` for 5)."""
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 """A float that must be finite (NaN and +-inf are rejected)."""

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
-from plantsolve.schemas.common import Diagnostic, FiniteFloat, Report, StrictModel
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Report, StrictModel
 
 Family = Literal["parabola", "log", "cubic", "spline2", "spline3", "concave"]
 FAMILY_DESCRIPTION = (
@@ -54,12 +54,15 @@ class Position(StrictModel):
     flow: list[FiniteFloat] = Field(
         min_length=3, max_length=10_000,
         description="Measured flow x per point (any order; sorted by the solver).")
+    # The bounds of each value are stated in the schema and checked by the solver's input check,
+    # whose messages name the file row and suggest the fix (a '%' column divided by 100).
     pressure: list[FiniteFloat] = Field(
-        min_length=3, max_length=10_000,
-        description="Measured pressure y per point (same length as flow).")
+        min_length=3, max_length=10_000, json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0}},
+        description="Measured pressure y per point (same length as flow), positive.")
     efficiency: list[FiniteFloat] = Field(
         min_length=3, max_length=10_000,
-        description="Measured efficiency eta per point (same length as flow), e.g. 0.85.")
+        json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0, "maximum": 1}},
+        description="Measured efficiency eta per point (same length as flow), a fraction in (0, 1], e.g. 0.85.")
 
 
 class PerfmapOptions(StrictModel):
@@ -83,7 +86,7 @@ class PerfmapOptions(StrictModel):
         default="least_squares",
         description="'least_squares' minimises the sum of squared residuals (paper eq. 3); "
         "'minimax' minimises the maximal relative error directly (linear programme).")
-    grid: list[int] = Field(
+    grid: list[Integer] = Field(
         default_factory=lambda: [64, 64], min_length=2, max_length=2,
         description="Map grid [nx, ny]: nodes along flow and along pressure (2..400 each; the map is stored "
         "with the job).")
@@ -98,15 +101,15 @@ class PerfmapOptions(StrictModel):
         description="'exact': per grid node, solve for the barycentric weights of every "
         "(triangle, t) exactly; 'binning': the paper's scatter-and-bin (eqs. 62-71), for "
         "comparison only.")
-    t_samples: int = Field(
+    t_samples: Integer = Field(
         default=129, ge=3, le=4097,
         description="Number of samples of the curve parameter t in [0, 1] for the map and "
         "the inverse query.")
-    envelope_curves: int = Field(
+    envelope_curves: Integer = Field(
         default=50, ge=1, le=2000,
         description="Interpolated curves per pair of neighbouring phi settings used to take "
         "the max-curve (paper section 3, N = 50).")
-    envelope_points: int = Field(
+    envelope_points: Integer = Field(
         default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
     concave_efficiency: bool = Field(
         default=False, description="Also constrain the efficiency curve to be concave.")

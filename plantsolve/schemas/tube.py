@@ -23,7 +23,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field, PrivateAttr
 
-from plantsolve.schemas.common import FiniteFloat, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import FiniteFloat, Integer, Quaternion, Report, StrictModel, Units, Vec3
 
 MAX_POINTS = 5_000_000
 
@@ -110,13 +110,13 @@ class TubeOptions(StrictModel):
         description="Springback-correction damping factor: corrected = nominal + damping · "
         "(nominal − measured), for angle, rotation and length.",
     )
-    seed: int = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
+    seed: Integer = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
 
 
 class TubeRequest(StrictModel):
     """A scan of one bent tube: unorganised surface samples (full or single-view)."""
 
-    points: list[Vec3] | NpyPoints = Field(
+    points: Annotated[list[Vec3], Field(json_schema_extra={"minItems": 100})] | NpyPoints = Field(
         description="Surface samples: a JSON list of [x, y, z], or {\"npy_base64\": ...} holding "
         "an (N, 3) NPY array. At least 100 points."
     )

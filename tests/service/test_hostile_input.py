@@ -8,6 +8,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
+from plantsolve.solvers.perfmap.synthetic import example as perfmap_example
 from tests.conftest import service_settings, wait_for
 
 PROBLEM = "application/problem+json"
@@ -92,3 +93,24 @@ def test_multipart_with_too_many_fields_is_a_documented_400(client):
     spec = client.get("/openapi.json").json()
     assert "400" in spec["paths"]["/v1/test-compute/jobs"]["post"]["responses"]
     assert json.dumps(response.json())
+
+
+def test_an_operation_body_that_is_not_text_is_a_422_naming_the_body(client):
+    job = client.post("/v1/perfmap/jobs", json=perfmap_example()).json()
+    response = client.post(f"/v1/perfmap/jobs/{job['id']}/query", content=b"\x8b\xff\xfe{",
+                           headers={"Content-Type": "application/json"})
+    assert response.status_code == 422 and response.headers["content-type"].startswith("application/problem+json")
+    assert response.json()["errors"][0]["type"] == "json_invalid"
+
+
+def test_numbers_are_numbers_in_a_json_submission(client):
+    body = perfmap_example()
+    body["options"] = {"envelope_points": True}
+    response = client.post("/v1/perfmap/jobs", json=body)
+    assert response.status_code == 422 and response.json()["errors"][0]["loc"] == ["options", "envelope_points"]
+    body["options"] = {"envelope_points": "50"}
+    assert client.post("/v1/perfmap/jobs", json=body).status_code == 422
+    body["options"] = {"envelope_points": 50.0}  # JSON Schema's integer: no fraction
+    assert client.post("/v1/perfmap/jobs", json=body).status_code == 202
+    body["options"] = {"envelope_points": 50.5}
+    assert client.post("/v1/perfmap/jobs", json=body).json()["errors"][0]["type"] == "int_from_float"

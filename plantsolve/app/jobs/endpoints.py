@@ -93,8 +93,10 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
             "schema": {
                 "type": "object",
                 "required": ["file"],
+                "additionalProperties": False,
                 "properties": {
-                    "file": {"type": "string", "format": "binary", "description": f"Accepted file types: {extensions}."},
+                    "file": {"type": "string", "format": "binary",
+                             "description": f"Accepted file types (by the file name's extension): {extensions}."},
                     "options": {"type": "string", "description": "JSON object: the request's 'options'."},
                 },
             }
@@ -127,7 +129,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         caller: Caller,
         kind: str | None = None,
         status: JobStatus | None = None,
-        cursor: str | None = Query(default=None, description="next_cursor of the previous page"),
+        cursor: str | None = Query(default=None, max_length=512, pattern=r"^[A-Za-z0-9_-]+$",
+                                   description="next_cursor of the previous page (opaque)"),
         limit: int = Query(default=50, ge=1, le=200),
     ) -> JobList:
         return service.list(kind, status, cursor, limit, caller.sees)

@@ -81,7 +81,8 @@ class JobService:
         spec = self.spec(kind)
         raw = loads_bounded(body, [], "The body")
         try:
-            request = spec.request_model.model_validate(raw)
+            # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
+            request = spec.request_model.model_validate_json(body, strict=True)
         except ValidationError as error:
             raise from_validation_error(error) from None
         self._check(spec, request)
