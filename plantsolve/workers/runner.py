@@ -90,7 +90,12 @@ class AttemptMonitor:
             return
         self._last_write = now
         fraction = min(max(float(fraction), 0.0), 1.0) if fraction == fraction else 0.0
-        if not self.ctx.repo.set_progress(self.job_id, self.attempt, fraction, str(message)):
+        try:
+            still_ours = self.ctx.repo.set_progress(self.job_id, self.attempt, fraction, str(message))
+        except Exception as error:  # a database hiccup must not cost the computation: skip this report
+            log.warning("progress write failed for job %s: %s", self.job_id, type(error).__name__)
+            return
+        if not still_ours:
             self.stop_reason = "cancelled"
             raise _Stop("cancelled")
 

@@ -233,3 +233,59 @@ def test_a_job_whose_enqueue_failed_is_sent_by_the_next_sweep(pg_url, tmp_path):
         assert job.status_code == 202
         stored = client.app.state.ctx.repo.get(__import__("uuid").UUID(job.json()["id"]))
         assert stored.status == "queued" and stored.enqueued_at is None
+
+
+def test_a_message_delivered_twice_runs_the_solver_once(unstaffed, scaled_workers_stopped):
+    """At-least-once delivery: the broker hands the same job id to two workers; the claim lets one run it."""
+    client, env, data_dir = unstaffed
+    markers = data_dir / "markers-twice"
+    workers = [Worker(env, f"twin{i}", data_dir / f"worker-twin{i}.log") for i in range(2)]
+    try:
+        job = client.post("/v1/test-compute/jobs", json={"values": [2.0], "seconds": 2, "marker_dir": str(markers)}).json()
+        client.app.state.dispatcher.enqueue(__import__("uuid").UUID(job["id"]), "test-compute")  # the duplicate
+        done = wait_for(client, job["id"], timeout=60)
+        assert done["status"] == "succeeded" and done["attempt"] == 1
+        time.sleep(1.0)  # the duplicate has been consumed by now
+        assert len(list(markers.iterdir())) == 1
+        assert [a["outcome"] for a in client.get(f"/v1/jobs/{job['id']}").json()["attempts"]] == ["succeeded"]
+    finally:
+        for worker in workers:
+            worker.stop()
+
+
+def test_a_database_outage_during_the_final_write_loses_no_result(pg_url, redis_url, tmp_path, scaled_workers_stopped):
+    """PostgreSQL refuses every connection (and drops the open ones) while the solver finishes: the worker keeps
+    the computed result and retries the write; once the database is back the job succeeds on its first attempt
+    and the solver ran once."""
+    import psycopg
+
+    from tests.conftest import PG_ADMIN_URL
+
+    name = pg_url.rsplit("/", 1)[1]
+    env = {**_env(pg_url, redis_url, tmp_path), "LEASE_SECONDS": "30", "RESULT_WRITE_SECONDS": "60"}
+    settings = service_settings(tmp_path, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3,
+                                lease_seconds=30.0, sweep_seconds=0.5)
+    markers = tmp_path / "markers"
+    admin = psycopg.connect(PG_ADMIN_URL, autocommit=True)
+    with TestClient(create_app(settings)) as client:
+        worker = Worker(env, "outage", tmp_path / "worker-outage.log")
+        try:
+            job = client.post("/v1/test-compute/jobs",
+                              json={"values": [7.0], "seconds": 1.5, "marker_dir": str(markers)}).json()
+            wait_for(client, job["id"], statuses=("running",), timeout=60)
+            admin.execute(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS false')
+            admin.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = %s", (name,))
+            deadline = time.monotonic() + 30
+            while not markers.exists() or not any(markers.iterdir()):  # the solver finished during the outage
+                assert time.monotonic() < deadline
+                time.sleep(0.1)
+            time.sleep(2.0)  # the result write is failing and being retried meanwhile
+            admin.execute(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true')
+            done = wait_for(client, job["id"], timeout=90)
+            assert done["status"] == "succeeded" and done["attempt"] == 1, done
+            assert client.get(f"/v1/jobs/{job['id']}/result").json()["total"] == 7.0
+            assert len(list(markers.iterdir())) == 1
+        finally:
+            admin.execute(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true')
+            admin.close()
+            worker.stop()

@@ -255,6 +255,18 @@ def test_a_result_write_that_hits_a_database_hiccup_is_retried(ctx, tmp_path, mo
     assert len(list(markers.iterdir())) == 1
 
 
+def test_progress_writes_that_hit_a_database_hiccup_do_not_cost_the_computation(ctx, tmp_path, monkeypatch):
+    markers = tmp_path / "runs"
+    job_id = submit(ctx, "test-compute", f'{{"values": [3], "seconds": 0.2, "marker_dir": "{markers}"}}'.encode())
+    calls: list = []
+    monkeypatch.setattr(ctx.settings, "progress_write_seconds", 0.0)
+    monkeypatch.setattr(ctx.repo, "set_progress", _db_down(calls, 5, ctx.repo.set_progress))
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert job.attempt == 1 and job.result["total"] == 3.0 and len(calls) > 5
+    assert len(list(markers.iterdir())) == 1
+
+
 def test_a_result_the_database_never_took_is_stored_by_the_next_attempt_without_solving(tmp_path, monkeypatch):
     context = ServiceContext.create(service_settings(tmp_path, result_write_seconds=0.3), migrate=True)
     try:
