@@ -235,9 +235,14 @@ class JobRepository:
             **extra,
         )
 
-    def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any, attempts: list | None = None) -> bool:
-        """Give a crashed attempt's job back to the queue (the caller enqueues it again)."""
-        extra = {} if attempts is None else {"attempts": attempts}
+    def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any, attempts: list | None = None,
+                grant_attempt: bool = False) -> bool:
+        """Give a crashed attempt's job back to the queue (the caller enqueues it again). ``grant_attempt``
+        adds one attempt to the cap: for a result that waits on disk, whose storing must not be refused
+        because the attempt that computed it was the last."""
+        extra: dict[str, Any] = {} if attempts is None else {"attempts": attempts}
+        if grant_attempt:
+            extra["max_attempts"] = Job.max_attempts + 1
         return self._fenced(job_id, attempt, status="queued", report=report, lease_until=None, worker=None, **extra)
 
     def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
@@ -261,9 +266,11 @@ class JobRepository:
             job = session.get(Job, job_id)
             return job.status if job is not None else None
 
-    def sweep(self, *, requeue_queued_after: float, report_for_lost) -> SweepOutcome:
+    def sweep(self, *, requeue_queued_after: float, report_for_lost,
+              result_waiting: Callable[[uuid.UUID], bool] = lambda job_id: False) -> SweepOutcome:
         """Re-queue running jobs whose lease lapsed (their worker is gone), fail those that have
-        used up their attempts, and re-enqueue queued jobs whose message may have been lost."""
+        used up their attempts (unless ``result_waiting``: a computed result waits to be stored, which
+        gets one more attempt), and re-enqueue queued jobs whose message may have been lost."""
         now = utcnow()
         requeued: list[uuid.UUID] = []
         failed: list[uuid.UUID] = []
@@ -273,6 +280,8 @@ class JobRepository:
                        Job.heartbeat_at).where(Job.status == "running", Job.lease_until < now)
             ).all()
         for job_id, attempt, max_attempts, report, history, worker, beat in lapsed:
+            if attempt >= max_attempts and result_waiting(job_id):
+                max_attempts = attempt + 1
             lost = report_for_lost(attempt, max_attempts, report)
             earlier = [h for h in (history or []) if h.get("attempt") != attempt]
             same = next((h for h in (history or []) if h.get("attempt") == attempt), {})
@@ -285,7 +294,7 @@ class JobRepository:
                                        lease_until=None, attempts=history):
                     failed.append(job_id)
             elif self._fenced_lapsed(job_id, attempt, now, status="queued", report=lost, lease_until=None, worker=None,
-                                     attempts=history):
+                                     attempts=history, max_attempts=max_attempts):
                 requeued.append(job_id)
         stale = now - timedelta(seconds=requeue_queued_after)
         with self.sessions() as session:

@@ -203,7 +203,8 @@ def run_job(
             log.error("job %s attempt %d: result kept on disk; the next attempt stores it", job_id, attempt)
             report = failure_report("result", "The result was computed but the database did not take it; the next "
                                     "attempt stores it without solving again.", attempts=history)
-            if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending")):
+            if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending"),
+                                grant_attempt=attempt >= job.max_attempts):
                 requeue(job_id, job.kind)
                 return "requeued"
             return "stale"

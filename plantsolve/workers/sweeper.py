@@ -10,7 +10,7 @@ import uuid
 from typing import Callable
 
 from plantsolve.workers.context import ServiceContext
-from plantsolve.workers.runner import lost_worker_report
+from plantsolve.workers.runner import lost_worker_report, pending_path
 
 log = logging.getLogger("plantsolve.sweeper")
 
@@ -24,7 +24,8 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
     fewer messages than there are such jobs (the oldest first: a restarted Redis without persistence
     lost them). A duplicate message is harmless: the claim lets one delivery run."""
     outcome = ctx.repo.sweep(requeue_queued_after=ctx.settings.requeue_queued_after,
-                             report_for_lost=lost_worker_report)
+                             report_for_lost=lost_worker_report,
+                             result_waiting=lambda job_id: ctx.files.path(pending_path(job_id)).exists())
     again = list(outcome.requeued) + [job_id for job_id, sent in outcome.waiting if not sent]
     stale = [job_id for job_id, sent in outcome.waiting if sent]
     if stale:

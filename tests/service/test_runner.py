@@ -290,6 +290,51 @@ def test_a_result_the_database_never_took_is_stored_by_the_next_attempt_without_
         context.close()
 
 
+def test_a_result_waiting_after_the_last_attempt_is_still_stored(tmp_path, monkeypatch):
+    """The last attempt computed the result and the database took neither it nor the re-queue: the lease
+    lapses, and the sweeper grants one attempt to store the result instead of failing the job as lost."""
+    context = ServiceContext.create(service_settings(tmp_path, result_write_seconds=0.2, max_attempts=1), migrate=True)
+    try:
+        markers = tmp_path / "runs"
+        job_id = submit(context, "test-compute", f'{{"values": [6], "marker_dir": "{markers}"}}'.encode())
+        real_finish, real_requeue = context.repo.finish_success, context.repo.requeue
+        monkeypatch.setattr(context.repo, "finish_success", _db_down([], 10**6, real_finish))
+        monkeypatch.setattr(context.repo, "requeue", _db_down([], 10**6, real_requeue))
+        with pytest.raises(Exception):
+            run_job(context, job_id, worker="w1", requeue=Recorder().enqueue)
+        monkeypatch.setattr(context.repo, "finish_success", real_finish)
+        monkeypatch.setattr(context.repo, "requeue", real_requeue)
+        assert context.repo.get(job_id).status == "running"
+        with context.db.sessions() as session:  # the lease lapses
+            session.execute(update(Job).where(Job.id == job_id).values(lease_until=utcnow() - timedelta(seconds=1)))
+            session.commit()
+        queue = Recorder()
+        sweep_once(context, queue.enqueue)
+        job = context.repo.get(job_id)
+        assert job.status == "queued" and job.max_attempts == 2 and queue.enqueued == [job_id]
+        assert run_job(context, job_id, worker="w2", requeue=queue.enqueue) == "succeeded"
+        job = context.repo.get(job_id)
+        assert job.result["total"] == 6.0 and len(list(markers.iterdir())) == 1
+    finally:
+        context.close()
+
+
+def test_a_result_pending_on_the_last_attempt_gets_an_attempt_to_be_stored(tmp_path, monkeypatch):
+    context = ServiceContext.create(service_settings(tmp_path, result_write_seconds=0.2, max_attempts=1), migrate=True)
+    try:
+        job_id = submit(context, "test-compute", b'{"values": [8]}')
+        real = context.repo.finish_success
+        monkeypatch.setattr(context.repo, "finish_success", _db_down([], 10**6, real))
+        queue = Recorder()
+        assert run_job(context, job_id, worker="w1", requeue=queue.enqueue) == "requeued"
+        assert context.repo.get(job_id).max_attempts == 2
+        monkeypatch.setattr(context.repo, "finish_success", real)
+        assert run_job(context, job_id, worker="w2", requeue=queue.enqueue) == "succeeded"
+        assert context.repo.get(job_id).result["total"] == 8.0
+    finally:
+        context.close()
+
+
 def test_the_job_view_keeps_a_lost_attempt_after_a_later_success(ctx):
     job_id = submit(ctx, "test-compute", b'{"values": [4]}')
     assert ctx.repo.claim(job_id, lease_seconds=60, worker="gone") == 1
