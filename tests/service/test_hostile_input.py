@@ -114,3 +114,11 @@ def test_numbers_are_numbers_in_a_json_submission(client):
     assert client.post("/v1/perfmap/jobs", json=body).status_code == 202
     body["options"] = {"envelope_points": 50.5}
     assert client.post("/v1/perfmap/jobs", json=body).json()["errors"][0]["type"] == "int_from_float"
+
+
+def test_a_table_far_beyond_any_rig_is_refused_before_it_is_parsed(client):
+    rows = b"theta,phi,flow,pressure,efficiency\n" + b"0,0,1.0,2.0,0.8\n" * 250_000
+    response = client.post("/v1/perfmap/jobs", files={"file": ("rig.csv", rows, "text/csv")})
+    assert response.status_code == 422
+    (error,) = response.json()["errors"]
+    assert error["loc"] == ["file"] and "250,000 lines" in error["msg"] and "200,000" in error["msg"]

@@ -383,6 +383,9 @@ def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tupl
     return (("file", "row", rows[k], field) if field else ("file", "row", rows[k])), where
 
 
+MAX_CSV_ROWS = 200_000
+
+
 def parse_upload(filename: str, content: bytes, options: dict | None) -> PerfmapRequest:
     """CSV (columns theta, phi, flow, pressure, efficiency; rules in the module docstring)
     or a JSON request; ``options`` (the upload form's options) override options given
@@ -391,6 +394,11 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     if ext not in UPLOAD_EXTENSIONS:
         raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
                       f"{', '.join(UPLOAD_EXTENSIONS)}")
+    n_lines = content.count(b"\n") if ext == ".csv" else 0
+    if n_lines > MAX_CSV_ROWS:
+        # counted before any parsing: a table far beyond any rig's is refused in milliseconds
+        raise reject(f"the table has {n_lines:,} lines; at most {MAX_CSV_ROWS:,} rows are read "
+                     "(2,000 settings of 100 points)")
     text = _decode(content)
     lines: list[list[int]] = []
     if ext == ".py":
