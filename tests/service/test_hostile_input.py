@@ -121,4 +121,4 @@ def test_a_table_far_beyond_any_rig_is_refused_before_it_is_parsed(client):
     response = client.post("/v1/perfmap/jobs", files={"file": ("rig.csv", rows, "text/csv")})
     assert response.status_code == 422
     (error,) = response.json()["errors"]
-    assert error["loc"] == ["file"] and "250,000 lines" in error["msg"] and "200,000" in error["msg"]
+    assert error["loc"] == ["file"] and "250,001 lines" in error["msg"] and "200,000" in error["msg"]
