@@ -95,9 +95,34 @@ class ServiceUnavailable(ProblemError):
     status, title, slug = 503, "Service unavailable", "unavailable"
 
 
-def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = ()) -> Unprocessable:
-    errors = [field_problem([*prefix, *e["loc"]], e["msg"], e["type"]) for e in error.errors(include_url=False)]
+def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (), document: Any = None) -> Unprocessable:
+    """422 naming each bad field; with the submitted ``document`` the locations are its JSON paths (the tags
+    pydantic puts in them for a member of a union are left out)."""
+    errors = [field_problem([*prefix, *json_path(document, e["loc"])], e["msg"], e["type"])
+              for e in error.errors(include_url=False)]
     return Unprocessable(_summary(errors), errors=errors)
+
+
+def json_path(document: Any, loc: Sequence[str | int]) -> list[str | int]:
+    """``loc`` as a path into ``document``: a string step where the document has no such key and the path
+    goes on (a union member's tag such as ``list[...]``) is dropped; a missing field, the last step, stays."""
+    if document is None:
+        return list(loc)
+    path: list[str | int] = []
+    node: Any = document
+    for i, step in enumerate(loc):
+        tag = isinstance(step, str) and (isinstance(node, list) or
+                                         (isinstance(node, dict) and step not in node and i < len(loc) - 1))
+        if tag:
+            continue
+        path.append(step)
+        if isinstance(node, dict) and isinstance(step, str):
+            node = node.get(step)
+        elif isinstance(node, list) and isinstance(step, int) and -len(node) <= step < len(node):
+            node = node[step]
+        else:
+            node = None
+    return path
 
 
 def from_input_rejected(error: InputRejected, prefix: Sequence[str | int] = ()) -> Unprocessable:

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
-from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Report, StrictModel
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel
 
 Family = Literal["parabola", "log", "cubic", "spline2", "spline3", "concave"]
 FAMILY_DESCRIPTION = (
@@ -46,20 +46,21 @@ class Position(StrictModel):
     """Measurements at one setting: one characteristic. The setting is ``setting`` (values in the order of
     the request's ``setting_names``) or, for the paper's two settings, ``theta`` and ``phi``."""
 
-    setting: list[FiniteFloat] | None = Field(
+    setting: list[Measured] | None = Field(
         default=None, min_length=1, max_length=3,
         description="Setting values in the order of the request's setting_names (e.g. [speed] or [IGV, speed]).")
-    theta: FiniteFloat | None = Field(default=None, description="Inlet guide vane setting (rig unit, e.g. degrees).")
-    phi: FiniteFloat | None = Field(default=None, description="Diffuser setting (rig unit, e.g. degrees).")
-    flow: list[FiniteFloat] = Field(
+    theta: Measured | None = Field(default=None, description="Inlet guide vane setting (rig unit, e.g. degrees).")
+    phi: Measured | None = Field(default=None, description="Diffuser setting (rig unit, e.g. degrees).")
+    flow: list[Measured] = Field(
         min_length=3, max_length=10_000,
         description="Measured flow x per point (any order; sorted by the solver).")
     # The bounds of each value are stated in the schema and checked by the solver's input check,
     # whose messages name the file row and suggest the fix (a '%' column divided by 100).
-    pressure: list[FiniteFloat] = Field(
-        min_length=3, max_length=10_000, json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0}},
+    pressure: list[Measured] = Field(
+        min_length=3, max_length=10_000,
+        json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0, "maximum": 1e12}},
         description="Measured pressure y per point (same length as flow), positive.")
-    efficiency: list[FiniteFloat] = Field(
+    efficiency: list[Measured] = Field(
         min_length=3, max_length=10_000,
         json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0, "maximum": 1}},
         description="Measured efficiency eta per point (same length as flow), a fraction in (0, 1], e.g. 0.85.")

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, PrivateAttr
+from pydantic import BaseModel, Discriminator, Field, PrivateAttr, Tag
 
-from plantsolve.schemas.common import FiniteFloat, Integer, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel, Units, Vec3
 
 MAX_POINTS = 5_000_000
 
@@ -113,12 +113,21 @@ class TubeOptions(StrictModel):
     seed: Integer = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
 
 
+def _points_form(value: Any) -> str:
+    """Which of the two forms ``points`` is (so that errors name only that form's fields)."""
+    return "npy" if isinstance(value, (dict, NpyPoints)) else "list"
+
+
 class TubeRequest(StrictModel):
     """A scan of one bent tube: unorganised surface samples (full or single-view)."""
 
-    points: Annotated[list[Vec3], Field(json_schema_extra={"minItems": 100})] | NpyPoints = Field(
+    points: Annotated[
+        Annotated[list[Point3], Field(json_schema_extra={"minItems": 100}), Tag("list")]
+        | Annotated[NpyPoints, Tag("npy")],
+        Discriminator(_points_form),
+    ] = Field(
         description="Surface samples: a JSON list of [x, y, z], or {\"npy_base64\": ...} holding "
-        "an (N, 3) NPY array. At least 100 points."
+        "an (N, 3) NPY array. At least 100 points; coordinates within 1e12 of the unit."
     )
     units: Units = "mm"
     options: TubeOptions = Field(default_factory=TubeOptions)

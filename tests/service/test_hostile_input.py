@@ -122,3 +122,16 @@ def test_a_table_far_beyond_any_rig_is_refused_before_it_is_parsed(client):
     assert response.status_code == 422
     (error,) = response.json()["errors"]
     assert error["loc"] == ["file"] and "250,001 lines" in error["msg"] and "200,000" in error["msg"]
+
+
+def test_tube_and_perfmap_values_beyond_1e12_are_refused_naming_the_value(client):
+    from plantsolve.solvers.tube.synthetic import example as tube_example
+
+    body = tube_example()
+    body["points"][5] = [1e13, 0.0, 0.0]
+    response = client.post("/v1/tube/jobs", json=body)
+    assert response.status_code == 422 and response.json()["errors"][0]["loc"] == ["points", 5, 0]
+    body = perfmap_example()
+    body["positions"][1]["flow"][2] = 1e200
+    response = client.post("/v1/perfmap/jobs", json=body)
+    assert response.status_code == 422 and response.json()["errors"][0]["loc"] == ["positions", 1, "flow", 2]

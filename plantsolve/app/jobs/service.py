@@ -84,7 +84,7 @@ class JobService:
             # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
             request = spec.request_model.model_validate_json(body, strict=True)
         except ValidationError as error:
-            raise from_validation_error(error) from None
+            raise from_validation_error(error, document=raw) from None
         self._check(spec, request)
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()

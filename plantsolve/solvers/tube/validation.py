@@ -9,6 +9,7 @@ from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.tube.upload import request_points
 
 MIN_POINTS = 100
+MAX_COORDINATE = 1e12
 
 
 def check_points(pts: np.ndarray, loc: tuple) -> None:
@@ -19,6 +20,10 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
     if not np.isfinite(pts).all():
         bad = int(np.flatnonzero(~np.isfinite(pts).all(1))[0])
         raise InputRejected([FieldError(loc=loc + (bad,), msg="coordinates must be finite")])
+    if np.abs(pts).max() > MAX_COORDINATE:
+        bad = int(np.flatnonzero(np.abs(pts).max(1) > MAX_COORDINATE)[0])
+        raise InputRejected([FieldError(loc=loc + (bad,), msg=f"coordinates must be within {MAX_COORDINATE:g} of the unit "
+                                        "(the schema's bound for points)")])
     sample = pts if len(pts) <= 200_000 else pts[:: len(pts) // 200_000 + 1]
     c = sample - sample.mean(0)
     s = np.linalg.svd(c.T @ c / len(c), compute_uv=False) ** 0.5
