@@ -37,6 +37,12 @@ class Port(StrictModel):
 class Component(StrictModel):
     """A straight pipe (two collinear, opposite ports; its length may change) or a rigid fitting."""
 
+    # stated for clients and generated tests; the solver's input check says why a pipe is refused
+    model_config = ConfigDict(json_schema_extra={
+        "if": {"properties": {"kind": {"const": "pipe"}}},
+        "then": {"properties": {"ports": {"minItems": 2, "maxItems": 2}}},
+    })
+
     id: str = Field(min_length=1, max_length=200, description="Unique component id.")
     kind: Literal["pipe", "fitting"] = Field(description="'pipe' (stretchable) or 'fitting' (rigid).")
     type: FittingType | None = Field(
