@@ -1,7 +1,7 @@
 """API benchmark: submissions per second and status-read latency, embedded vs scaled.
 
 Starts ``plantsolve serve`` as a real server on a loopback port, for each mode:
-- embedded: SQLite (WAL) + in-process pool (the jobs run while submissions arrive);
+- embedded: SQLite (WAL) + the supervised pool of job processes (the jobs run while submissions arrive);
 - scaled:   PostgreSQL + Redis (the API only enqueues; no worker is started, so the
             numbers are the API's own).
 Load comes from ``wrk`` when it is installed (Debian package ``wrk``: a C client that leaves
