@@ -3,7 +3,8 @@
     python bench/tube.py           # 40 random tubes + 100k and 1M point runs
     python bench/tube.py --quick   # 12 random tubes + 100k point run
     python bench/tube.py --families 50   # only the hard scenario families (short arcs, small bends far
-                                         # apart, nearly coplanar back-to-back bends), per radius model
+                                         # apart, nearly coplanar back-to-back bends)
+    python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -153,15 +154,20 @@ def family_tube(family: str, seed: int):
     return m, pts
 
 
-def families(n_tubes: int) -> None:
-    """Per hard family and radius model ('auto' now; 'per_bend' = one free radius per bend, as before)."""
+def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
+    """Per hard family and radius model ('auto': chosen by the data; 'per_bend': one free radius per bend).
+
+    Radius errors are given over all bends and over the bends whose radius the solver reports as
+    determined (no ``bend_radius_undetermined`` warning); 'undetermined' counts the flagged bends.
+    'within 2σ' is the share of reported sigmas (angle and radius) that cover the truth."""
     print(f"hard scenario families: {n_tubes} tubes each, 6000 points")
-    print("| family | radius model | bend count ok | angle err median / p95 | radius err median / p95 / max | "
-          "centreline rms (median, % r) | chosen | time median s |")
-    print("|---|---|---:|---:|---:|---:|---|---:|")
+    print("| family | radius model | bend count ok | angle err median / p95 | radius err median / p95 / max "
+          "(all bends) | radius err median / p95 / max (determined) | undetermined bends | within 2σ "
+          "(angle, radius) | centreline rms (median, % r) | chosen | time median s |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|")
     for family in ("short_arc", "small_far", "b2b_coplanar"):
-        for model in ("per_bend", "auto"):
-            ok, ang, rad, crms, chosen, times = 0, [], [], [], {}, []
+        for model in radius_models:
+            ok, ang, rad, rad_det, n_undet, n_bends, za, zr, crms, chosen, times = 0, [], [], [], 0, 0, [], [], [], {}, []
             for i in range(n_tubes):
                 truth, pts = family_tube(family, 5000 + i)
                 req = TubeRequest.model_validate({"points": pts.tolist(),
@@ -173,20 +179,37 @@ def families(n_tubes: int) -> None:
                     times.append(time.perf_counter() - t0)
                     continue
                 times.append(time.perf_counter() - t0)
-                da, dr, _, dc = compare(truth, res)
+                da, dr, t, dc = compare(truth, res)
                 crms.append(float(np.sqrt(np.mean(dc ** 2)) / truth.pipe_radius))
                 if res.bend_radius_model is not None:
                     chosen[res.bend_radius_model.chosen] = chosen.get(res.bend_radius_model.chosen, 0) + 1
-                if da is not None:
-                    ok += 1
-                    ang += list(da)
-                    rad += list(dr)
-            ang, rad = np.array(ang), np.array(rad)
+                if da is None:
+                    continue
+                ok += 1
+                ang += list(da)
+                rad += list(dr)
+                undet = set()
+                for w in res.report.warnings:
+                    if w.code == "bend_radius_undetermined":
+                        undet |= {b["bend"] - 1 for b in w.details["bends"]}
+                n_undet += len(undet)
+                n_bends += len(dr)
+                rad_det += [e for k, e in enumerate(dr) if k not in undet]
+                rows = res.lra[:-1]
+                got = model_from_result(res)
+                za += [np.degrees(abs(got.angles[k] - t.angles[k])) / max(rows[k].sigma_angle, 1e-300)
+                       for k in range(len(rows))]
+                zr += [abs(got.radii[k] - t.radii[k]) / max(rows[k].sigma_bend_radius, 1e-300) for k in range(len(rows))]
+            ang, rad, rad_det, za, zr = map(np.array, (ang, rad, rad_det, za, zr))
             q = lambda a, f: f"{f(a):.3f}" if len(a) else "n/a"
-            print(f"| {family} | {model} | {ok}/{n_tubes} | {q(ang, np.median)}° / {q(ang, lambda a: np.percentile(a, 95))}° "
-                  f"| {q(100 * rad, np.median)} / {q(100 * rad, lambda a: np.percentile(a, 95))} / {q(100 * rad, np.max)} % "
+            p95 = lambda a: np.percentile(a, 95)
+            cov = lambda z: f"{100 * np.mean(z <= 2):.0f} %" if len(z) else "n/a"
+            print(f"| {family} | {model} | {ok}/{n_tubes} | {q(ang, np.median)}° / {q(ang, p95)}° "
+                  f"| {q(100 * rad, np.median)} / {q(100 * rad, p95)} / {q(100 * rad, np.max)} % "
+                  f"| {q(100 * rad_det, np.median)} / {q(100 * rad_det, p95)} / {q(100 * rad_det, np.max)} % "
+                  f"| {n_undet}/{n_bends} | {cov(za)}, {cov(zr)} "
                   f"| {100 * np.median(crms):.2f} | {', '.join(f'{k} {v}' for k, v in sorted(chosen.items()))} "
-                  f"| {np.median(times):.2f} |")
+                  f"| {np.median(times):.2f} |", flush=True)
 
 
 def main():
@@ -198,9 +221,11 @@ def main():
     ap.add_argument("--seed0", type=int, default=1000, help="seed of the first random tube")
     ap.add_argument("--no-large", action="store_true", help="skip the 100k / 1M point runs")
     ap.add_argument("--families", type=int, help="only the hard scenario families, this many tubes each")
+    ap.add_argument("--radius-models", default="auto",
+                    help="comma-separated bend radius models for the families (auto, per_bend, common)")
     a = ap.parse_args()
     if a.families:
-        families(a.families)
+        families(a.families, tuple(a.radius_models.split(",")))
         return
     if a.make:
         _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
