@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.tube import fit as lsq
 from plantsolve.solvers.tube import solve
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
@@ -91,8 +92,6 @@ def test_linearised_sigmas_cover_the_least_squares_estimate_in_repeats():
     single-view scans of one tube: the share of |error| <= 2 sigma is 95 % for a calibrated sigma
     (on these repeats 91.6 % if sigma were 15 % too small, 98.0 % if 15 % too large; median |z| 0.77 and
     0.58). Measured: 95.3 %, median |z| 0.67."""
-    from plantsolve.solvers.tube import fit as lsq
-
     truth = make_model([(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, -60, 45, 10.0), (40, 0, 0, 0)], RP)
     lay = lsq.Layout(3, "free", None, False)
     z = []
