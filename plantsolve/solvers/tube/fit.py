@@ -98,10 +98,7 @@ def bounds(lay: Layout, rp: float) -> tuple[np.ndarray, np.ndarray]:
     lo[i:i + n - 1] = 0.0 if n > 1 else lo[i:i]; i += max(n - 1, 0)
     i += max(n - 1, 0)
     lo[i:i + n] = 1e-6; hi[i:i + n] = 2 * np.pi - 1e-6; i += n
-    # no bender makes a CLR below the pipe radius: there the tube's inner wall would pass the bend axis
-    # (a spindle torus), whose folded surface gives a bend of a few degrees a sharp but spurious
-    # minimum and a confident, wrong radius
-    lo[i:i + lay.n_radii] = rp
+    lo[i:i + lay.n_radii] = 0.5 * rp  # no bender makes a CLR below the pipe radius; 0.5 r leaves room
     hi[i:i + lay.n_radii] = 200.0 * rp  # a 1° bend needs no more; beyond, the model degenerates
     i += lay.n_radii
     if lay.fit_pipe_radius:

@@ -508,7 +508,8 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
 
 def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:
     """Standard deviations of every LRA row from the Jacobian at the solution (inlier samples), and a
-    warning for bends whose radius the data do not determine (sigma above 10 % of the radius)."""
+    warning for bends whose radius the data do not determine (sigma above 10 % of the radius, or a
+    radius below the pipe radius)."""
     model = ls.model
     n = model.n_bends
     if n == 0:
@@ -530,12 +531,17 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
         if k < n:
             row.sigma_angle = float(np.degrees(sd["angles"][k]))
             row.sigma_bend_radius = float(sd["radii"][k])
-    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius]
+    # a radius below the pipe radius is no bend a bender makes: the tube surface there is a spindle torus,
+    # whose folded inner wall gives a bend of a few degrees a sharp but spurious minimum, so its sigma
+    # (often a few percent) describes that fold, not the die
+    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
+             or rows[k].bend_radius < model.pipe_radius]
     if loose:
         result.report.warnings.append(Diagnostic(
             code="bend_radius_undetermined",
             message=f"The radius of bend(s) {', '.join(str(k + 1) for k in loose)} is not determined by the data "
-            "(standard deviation above 10 % of the radius): give the die radius (options.bend_radius or dies).",
+            "(standard deviation above 10 % of the radius, or a radius below the pipe radius): give the die radius "
+            "(options.bend_radius or dies).",
             details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
                                 "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
         result.report.status = "warning"
