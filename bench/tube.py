@@ -103,7 +103,7 @@ def random_tubes(n_tubes: int, n_points: int, seed0: int = 1000):
         rows.append(dict(
             r=m.pipe_radius, bends=m.n_bends, got=len(r.lra) - 1, ok=da is not None, time=el,
             angle_err=(da.tolist() if da is not None else []), radius_err=(dr.tolist() if dr is not None else []),
-            small=(np.degrees(m.angles) < 10).tolist(), centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
+            small=((np.degrees(t.angles) < 10).tolist() if da is not None else []), centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
             centre_max=float(dc.max() / m.pipe_radius), resid_sigma=float(rs / sigma),
             resid_median=float(np.median(np.abs(res[inl])) / sigma), pr_err=abs(r.pipe_radius - m.pipe_radius) / m.pipe_radius,
             z=(np.concatenate(sigma_check(r, t)[:2]).tolist() if da is not None else [])))

@@ -332,7 +332,8 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                         lm_info: dict):
     """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
     bends assigned by their free radii ('dies', three bends or more), a radius per bend ('per_bend', the
-    model fitted so far). Each is refitted in LRA parameters; the one with the smallest BIC
+    model fitted so far). Each is refitted in LRA parameters, the shared radii starting from the free ones
+    weighted by the information the samples hold on each (``_shared_radius``); the one with the smallest BIC
     (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless the
     options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
     bender did and what the data support. Returns the model, its fit info, the threshold, the report
