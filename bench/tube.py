@@ -3,7 +3,8 @@
     python bench/tube.py           # 40 random tubes + 100k and 1M point runs
     python bench/tube.py --quick   # 12 random tubes + 100k point run
     python bench/tube.py --families 50   # only the hard scenario families (short arcs, small bends far
-                                         # apart, nearly coplanar back-to-back bends), per radius model
+                                         # apart, nearly coplanar back-to-back bends)
+    python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -64,6 +65,21 @@ def compare(truth, result):
     return best[1], best[2], best[3], dc
 
 
+def sigma_check(result, t):
+    """|error| / reported sigma of every bend angle and radius (t: the truth in the result's walking
+    direction), the median relative radius sigma and the bends flagged ``bend_radius_undetermined``."""
+    got = model_from_result(result)
+    rows = result.lra[:-1]
+    za = [np.degrees(abs(got.angles[k] - t.angles[k])) / max(rows[k].sigma_angle, 1e-300) for k in range(len(rows))]
+    zr = [abs(got.radii[k] - t.radii[k]) / max(rows[k].sigma_bend_radius, 1e-300) for k in range(len(rows))]
+    rel_sigma = [rows[k].sigma_bend_radius / rows[k].bend_radius for k in range(len(rows))]
+    undet = set()
+    for w in result.report.warnings:
+        if w.code == "bend_radius_undetermined":
+            undet |= {b["bend"] - 1 for b in w.details["bends"]}
+    return za, zr, rel_sigma, undet
+
+
 def random_tubes(n_tubes: int, n_points: int, seed0: int = 1000):
     rows = []
     for i in range(n_tubes):
@@ -87,9 +103,10 @@ def random_tubes(n_tubes: int, n_points: int, seed0: int = 1000):
         rows.append(dict(
             r=m.pipe_radius, bends=m.n_bends, got=len(r.lra) - 1, ok=da is not None, time=el,
             angle_err=(da.tolist() if da is not None else []), radius_err=(dr.tolist() if dr is not None else []),
-            small=(np.degrees(m.angles) < 10).tolist(), centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
+            small=((np.degrees(t.angles) < 10).tolist() if da is not None else []), centre_rms=float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
             centre_max=float(dc.max() / m.pipe_radius), resid_sigma=float(rs / sigma),
-            resid_median=float(np.median(np.abs(res[inl])) / sigma), pr_err=abs(r.pipe_radius - m.pipe_radius) / m.pipe_radius))
+            resid_median=float(np.median(np.abs(res[inl])) / sigma), pr_err=abs(r.pipe_radius - m.pipe_radius) / m.pipe_radius,
+            z=(np.concatenate(sigma_check(r, t)[:2]).tolist() if da is not None else [])))
         print(f"  tube {i:2d}: r={m.pipe_radius:6.2f} bends {m.n_bends} -> {len(r.lra) - 1}"
               f"  max angle err {max(rows[-1]['angle_err'], default=float('nan')):.3f}°"
               f"  centreline rms {100 * rows[-1]['centre_rms']:.2f}% r  {el:.2f}s", flush=True)
@@ -153,15 +170,21 @@ def family_tube(family: str, seed: int):
     return m, pts
 
 
-def families(n_tubes: int) -> None:
-    """Per hard family and radius model ('auto' now; 'per_bend' = one free radius per bend, as before)."""
+def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
+    """Per hard family and radius model ('auto': chosen by the data; 'per_bend': one free radius per bend).
+
+    Radius errors are given over all bends and over the bends whose radius the solver reports as
+    determined (no ``bend_radius_undetermined`` warning); 'undetermined' counts the flagged bends.
+    'radius σ' is the reported standard deviation relative to the radius (what the data can resolve);
+    'within 2σ' is the share of reported sigmas (angle and radius) that cover the truth."""
     print(f"hard scenario families: {n_tubes} tubes each, 6000 points")
-    print("| family | radius model | bend count ok | angle err median / p95 | radius err median / p95 / max | "
-          "centreline rms (median, % r) | chosen | time median s |")
-    print("|---|---|---:|---:|---:|---:|---|---:|")
+    print("| family | radius model | bend count ok | angle err median / p95 | radius err median / p95 / max "
+          "(all bends) | radius err median / p95 / max (determined) | radius σ median | undetermined bends | within 2σ "
+          "(angle, radius) | centreline rms (median, % r) | chosen | time median s |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|")
     for family in ("short_arc", "small_far", "b2b_coplanar"):
-        for model in ("per_bend", "auto"):
-            ok, ang, rad, crms, chosen, times = 0, [], [], [], {}, []
+        for model in radius_models:
+            ok, ang, rad, rad_det, n_undet, n_bends, za, zr, rsig, crms, chosen, times = 0, [], [], [], 0, 0, [], [], [], [], {}, []
             for i in range(n_tubes):
                 truth, pts = family_tube(family, 5000 + i)
                 req = TubeRequest.model_validate({"points": pts.tolist(),
@@ -173,20 +196,32 @@ def families(n_tubes: int) -> None:
                     times.append(time.perf_counter() - t0)
                     continue
                 times.append(time.perf_counter() - t0)
-                da, dr, _, dc = compare(truth, res)
+                da, dr, t, dc = compare(truth, res)
                 crms.append(float(np.sqrt(np.mean(dc ** 2)) / truth.pipe_radius))
                 if res.bend_radius_model is not None:
                     chosen[res.bend_radius_model.chosen] = chosen.get(res.bend_radius_model.chosen, 0) + 1
-                if da is not None:
-                    ok += 1
-                    ang += list(da)
-                    rad += list(dr)
-            ang, rad = np.array(ang), np.array(rad)
+                if da is None:
+                    continue
+                ok += 1
+                ang += list(da)
+                rad += list(dr)
+                za_k, zr_k, sr_k, undet = sigma_check(res, t)
+                n_undet += len(undet)
+                n_bends += len(dr)
+                rad_det += [e for k, e in enumerate(dr) if k not in undet]
+                za += za_k
+                zr += zr_k
+                rsig += sr_k
+            ang, rad, rad_det, za, zr, rsig = map(np.array, (ang, rad, rad_det, za, zr, rsig))
             q = lambda a, f: f"{f(a):.3f}" if len(a) else "n/a"
-            print(f"| {family} | {model} | {ok}/{n_tubes} | {q(ang, np.median)}° / {q(ang, lambda a: np.percentile(a, 95))}° "
-                  f"| {q(100 * rad, np.median)} / {q(100 * rad, lambda a: np.percentile(a, 95))} / {q(100 * rad, np.max)} % "
+            p95 = lambda a: np.percentile(a, 95)
+            cov = lambda z: f"{100 * np.mean(z <= 2):.0f} %" if len(z) else "n/a"
+            print(f"| {family} | {model} | {ok}/{n_tubes} | {q(ang, np.median)}° / {q(ang, p95)}° "
+                  f"| {q(100 * rad, np.median)} / {q(100 * rad, p95)} / {q(100 * rad, np.max)} % "
+                  f"| {q(100 * rad_det, np.median)} / {q(100 * rad_det, p95)} / {q(100 * rad_det, np.max)} % "
+                  f"| {q(100 * rsig, np.median)} % | {n_undet}/{n_bends} | {cov(za)}, {cov(zr)} "
                   f"| {100 * np.median(crms):.2f} | {', '.join(f'{k} {v}' for k, v in sorted(chosen.items()))} "
-                  f"| {np.median(times):.2f} |")
+                  f"| {np.median(times):.2f} |", flush=True)
 
 
 def main():
@@ -198,9 +233,11 @@ def main():
     ap.add_argument("--seed0", type=int, default=1000, help="seed of the first random tube")
     ap.add_argument("--no-large", action="store_true", help="skip the 100k / 1M point runs")
     ap.add_argument("--families", type=int, help="only the hard scenario families, this many tubes each")
+    ap.add_argument("--radius-models", default="auto",
+                    help="comma-separated bend radius models for the families (auto, per_bend, common)")
     a = ap.parse_args()
     if a.families:
-        families(a.families)
+        families(a.families, tuple(a.radius_models.split(",")))
         return
     if a.make:
         _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
@@ -238,6 +275,9 @@ def main():
          "(unobservable)", True)
     rows = [r for r in rows if not r.get("failed")]  # below: tubes that produced a result
     crms = np.median([r["centre_rms"] for r in rows])
+    z = np.concatenate([r["z"] for r in ok]) if ok else np.zeros(0)
+    line("reported sigmas covering the truth (angles, radii)", f"{100 * np.mean(z <= 2):.0f} % in 2σ, "
+         f"{100 * np.mean(z <= 3):.0f} % in 3σ" if len(z) else "n/a", ">= 90 % in 2σ", len(z) and np.mean(z <= 2) >= 0.9)
     line("centreline deviation rms, median over tubes", f"{100 * crms:.2f} % r", "<= 2 % r", crms <= 0.02)
     line("centreline deviation max, median over tubes", f"{100 * np.median([r['centre_max'] for r in rows]):.2f} % r",
          "-", True)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.tube import fit as lsq
 from plantsolve.solvers.tube import solve
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
@@ -67,9 +68,9 @@ def test_forced_models_and_available_dies():
 
 
 def test_row_sigmas_are_reported_and_of_the_right_size():
-    """Calibration over random repeats: the errors of angles, radii, inner lengths and rotations divided by
-    their reported standard deviations. (Measured: 87 % within 2 sigma, 91 % within 3; median |z| 0.89
-    where a Gaussian gives 0.67 — the sigmas are about 1.3 times optimistic; see the note of the issue.)"""
+    """Calibration over random repeats, end to end: the errors of angles, radii, inner lengths and rotations
+    divided by their reported standard deviations. (Measured: 98 % within 2 sigma, all within 3, median
+    |z| 0.52; a Gaussian gives 95 %, 99.7 % and 0.67.)"""
     rows = [(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, -60, 45, 10.0), (40, 0, 0, 0)]
     z = []
     for seed in range(10):
@@ -82,8 +83,30 @@ def test_row_sigmas_are_reported_and_of_the_right_size():
             z += [(got[k].length - rows[k][0]) / got[k].sigma_length,
                   ((got[k].rotation - rows[k][1] + 180) % 360 - 180) / got[k].sigma_rotation]
     z = np.abs(np.array(z))
-    assert 0.4 < np.median(z) < 1.2
-    assert np.mean(z < 3) >= 0.85
+    assert 0.4 < np.median(z) < 0.9
+    assert np.mean(z < 2) >= 0.9 and np.mean(z < 3) >= 0.97
+
+
+def test_linearised_sigmas_cover_the_least_squares_estimate_in_repeats():
+    """The covariance s^2 (J^T J)^-1 against the spread of the least-squares estimate itself, over 150
+    single-view scans of one tube: the share of |error| <= 2 sigma is 95 % for a calibrated sigma
+    (on these repeats 91.6 % if sigma were 15 % too small, 98.0 % if 15 % too large; median |z| 0.77 and
+    0.58). Measured: 95.3 %, median |z| 0.67."""
+    truth = make_model([(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, -60, 45, 10.0), (40, 0, 0, 0)], RP)
+    lay = lsq.Layout(3, "free", None, False)
+    z = []
+    for seed in range(150):
+        rng = np.random.default_rng(seed)
+        pts = surface_samples(truth, 2000, rng, view=rng.normal(size=3), noise=0.012 * RP)
+        res, seg = lsq.assign(truth, pts, 2 * RP)
+        est, _ = lsq.solve_lm(truth, pts, seg, lay, 0.024 * RP, max_nfev=50)
+        sd = lsq.parameter_sigmas(est, pts, seg, lay)
+        z += list((est.angles - truth.angles) / sd["angles"]) + list((est.radii - truth.radii) / sd["radii"])
+        z += list((est.lengths[1:3] - truth.lengths[1:3]) / sd["lengths"])
+        z += list((est.rotations[1:3] - truth.rotations[1:3]) / sd["rotations"])
+    z = np.abs(np.array(z))
+    assert 0.93 <= np.mean(z <= 2) <= 0.975
+    assert 0.6 < np.median(z) < 0.75
 
 
 def test_a_radius_the_data_cannot_tell_is_flagged():

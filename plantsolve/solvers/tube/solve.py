@@ -304,13 +304,16 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes, radius)
 
 
-def _two_dies(radii: np.ndarray) -> tuple[int, ...]:
-    """The split of the bends' radii into two groups (in log radius) with the least within-group spread."""
+def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:
+    """The split of the bends' radii into two groups (in log radius) with the least within-group spread,
+    each bend weighted by the information the samples hold on its radius (1 / sigma^2), so that a bend
+    whose radius they do not determine neither forms a die of its own nor moves one."""
     order = np.argsort(radii)
-    logr = np.log(radii[order])
+    logr, w = np.log(radii[order]), weight[order]
     best, cut = np.inf, 1
     for k in range(1, len(logr)):
-        cost = np.var(logr[:k]) * k + np.var(logr[k:]) * (len(logr) - k)
+        cost = sum(float(np.sum(wg * (lg - np.average(lg, weights=wg)) ** 2))
+                   for lg, wg in ((logr[:k], w[:k]), (logr[k:], w[k:])))
         if cost < best:
             best, cut = cost, k
     dies = np.zeros(len(radii), dtype=int)
@@ -318,11 +321,19 @@ def _two_dies(radii: np.ndarray) -> tuple[int, ...]:
     return tuple(int(d) for d in dies)
 
 
+def _shared_radius(radii: np.ndarray, weight: np.ndarray) -> float:
+    """Start value of a radius shared by bends: their free radii averaged with weights 1 / sigma^2. A bend
+    of a few degrees wanders to any radius in a free fit (often a bound); an unweighted median or mean
+    of such radii starts the shared fit far off, and it can stop in a local minimum there."""
+    return float(np.exp(np.average(np.log(radii), weights=weight)))
+
+
 def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
                         lm_info: dict):
     """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
     bends assigned by their free radii ('dies', three bends or more), a radius per bend ('per_bend', the
-    model fitted so far). Each is refitted in LRA parameters; the one with the smallest BIC
+    model fitted so far). Each is refitted in LRA parameters, the shared radii starting from the free ones
+    weighted by the information the samples hold on each (``_shared_radius``); the one with the smallest BIC
     (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless the
     options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
     bender did and what the data support. Returns the model, its fit info, the threshold, the report
@@ -339,18 +350,23 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
         return m, info, thr2, BendRadiusModel(chosen="given_dies", criterion="options", die_radii=die_r.tolist(),
                                               assignment=list(assign)), {"radius_mode": "fixed", "fixed_radii": fixed}
     candidates = {"per_bend": (model, lm_info, thr, {"radius_mode": "free"})}
+    res_free, seg_free = fit.assign(model, P, margin)
+    keep = np.abs(res_free) <= thr
+    free_layout = fit.Layout(n, "free", None, opts.pipe_radius is None)
+    sd_free = fit.parameter_sigmas(model, P[keep], seg_free[keep], free_layout)["radii"]
+    weight = 1.0 / np.maximum(sd_free / model.radii, 1e-9) ** 2
     if forced in ("auto", "common"):
         m = model.copy()
-        m.radii = np.full(n, float(np.median(model.radii)))
+        m.radii = np.full(n, _shared_radius(model.radii, weight))
         m, info, t2, _ = rounds(m, P, thr, 2, 30, "common")
         candidates["common"] = (m, info, t2, {"radius_mode": "common"})
-    dies = _two_dies(model.radii) if n >= 3 else ()
+    dies = _two_dies(model.radii, weight) if n >= 3 else ()
     if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
         m = model.copy()
+        die_arr = np.asarray(dies)
+        m.radii = np.array([_shared_radius(model.radii[die_arr == d], weight[die_arr == d]) for d in dies])
         m, info, t2, _ = rounds(m, P, thr, 2, 30, "dies", dies)
         candidates["dies"] = (m, info, t2, {"radius_mode": "dies", "dies": dies})
-    res_free = fit.assign(model, P, margin)[0]
-    keep = np.abs(res_free) <= thr
     N = int(keep.sum())
     size = {"per_bend": n, "common": 1, "dies": 2}
     rss, bic, n_par = {}, {}, {}
@@ -493,7 +509,8 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
 
 def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:
     """Standard deviations of every LRA row from the Jacobian at the solution (inlier samples), and a
-    warning for bends whose radius the data do not determine (sigma above 10 % of the radius)."""
+    warning for bends whose radius the data do not determine (sigma above 10 % of the radius, or a
+    radius below the pipe radius)."""
     model = ls.model
     n = model.n_bends
     if n == 0:
@@ -515,12 +532,17 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
         if k < n:
             row.sigma_angle = float(np.degrees(sd["angles"][k]))
             row.sigma_bend_radius = float(sd["radii"][k])
-    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius]
+    # a radius below the pipe radius is no bend a bender makes: the tube surface there is a spindle torus,
+    # whose folded inner wall gives a bend of a few degrees a sharp but spurious minimum, so its sigma
+    # (often a few percent) describes that fold, not the die
+    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
+             or rows[k].bend_radius < model.pipe_radius]
     if loose:
         result.report.warnings.append(Diagnostic(
             code="bend_radius_undetermined",
             message=f"The radius of bend(s) {', '.join(str(k + 1) for k in loose)} is not determined by the data "
-            "(standard deviation above 10 % of the radius): give the die radius (options.bend_radius or dies).",
+            "(standard deviation above 10 % of the radius, or a radius below the pipe radius): give the die radius "
+            "(options.bend_radius or dies).",
             details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
                                 "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
         result.report.status = "warning"
