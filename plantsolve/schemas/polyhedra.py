@@ -111,8 +111,10 @@ class ZoneResult(BaseModel):
         description="Volumes (units³) from the flux of x, y and z alone through the surface: equal to each other "
         "only when the surface is closed.")
     vector_area_sum: list[float] = Field(description="Sum of the faces' area vectors (units²): zero for a closed surface.")
-    open_edges: list[EdgeReport]
-    non_manifold_edges: list[EdgeReport]
+    open_edges: list[EdgeReport] = Field(description="Edges used by an odd number of the zone's faces (the first 1000).")
+    open_edge_count: int
+    non_manifold_edges: list[EdgeReport] = Field(description="Edges used by more than two of the zone's faces (the first 1000).")
+    non_manifold_edge_count: int
     non_manifold_vertices: list[Point3] = Field(description="Vertices where separate sheets of the zone's surface touch.")
     t_junctions_repaired: int = Field(description="Vertices inserted into face loops because they lay on an edge.")
     components: int = Field(description="Connected pieces of the zone's surface (across manifold edges).")

@@ -1,0 +1,46 @@
+"""Multi-zone complexes: which zones share which faces, and how much area.
+
+A face listed with two zones is one wall between them (α3 sews its two uses). Exporters that
+write each side as a surface of its own (EnergyPlus interzone surfaces) give two coincident faces
+in different zones: after merging, they have the same vertices, and they are paired here."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+
+import numpy as np
+
+from plantsolve.solvers.polyhedra.polygons import Polygons
+
+
+def adjacency(poly: Polygons, area: np.ndarray) -> list[dict]:
+    """Shared faces per pair of zones: ``{"zones": [a, b], "faces": [...], "area": ...}``."""
+    shared: dict[tuple[int, int], dict] = {}
+
+    def add(pair: tuple[int, int], faces: list[int], face_area: float) -> None:
+        entry = shared.setdefault(pair, {"faces": [], "area": 0.0})
+        entry["faces"].extend(faces)
+        entry["area"] += face_area
+
+    for f, zones in enumerate(poly.face_zones):
+        if len(zones) == 2:
+            add(tuple(sorted(zones)), [f], float(area[f]))
+    if len(poly.zone_ids) > 1:
+        single = [f for f, zones in enumerate(poly.face_zones) if len(zones) == 1]
+        by_shape: dict[tuple, list[int]] = defaultdict(list)
+        fps = poly.face_position_start
+        for f in single:
+            by_shape[tuple(np.sort(poly.loop_vertices[fps[f]:fps[f + 1]]).tolist())].append(f)
+        for faces in by_shape.values():
+            if len(faces) < 2:
+                continue
+            for i, a in enumerate(faces):
+                for b in faces[i + 1:]:
+                    za, zb = poly.face_zones[a][0], poly.face_zones[b][0]
+                    if za != zb:
+                        add((min(za, zb), max(za, zb)), [a, b], float(area[a]))
+    out = []
+    for (za, zb), entry in sorted(shared.items(), key=lambda item: (poly.zone_ids[item[0][0]], poly.zone_ids[item[0][1]])):
+        names = sorted([poly.zone_ids[za], poly.zone_ids[zb]])
+        out.append({"zones": names, "faces": [poly.face_ids[f] for f in entry["faces"]], "area": entry["area"]})
+    return out
