@@ -351,7 +351,8 @@ def parse_stl(content: bytes) -> dict:
     triangles = triangles[good]
     if len(triangles) == 0:
         raise reject("no usable triangle in the STL file (non-finite or repeated vertices)")
-    name = str(getattr(mesh, "metadata", {}).get("name") or "default").strip() or "default"
+    # an ASCII file names its solid; a binary header is free text, often an exporter's banner
+    name = (str(getattr(mesh, "metadata", {}).get("name") or "").strip() if ascii_like else "") or "default"
     faces = [{"id": f"t{k + 1}", "loops": [t], "zones": [name]} for k, t in enumerate(triangles.tolist())]
     return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
             "source": {"format": "stl", "faces": len(faces), "zones": 1, "skipped": skipped,
