@@ -22,11 +22,11 @@ def adjacency(poly: Polygons, area: np.ndarray) -> list[dict]:
         entry["faces"].extend(faces)
         entry["area"] += face_area
 
-    for f, zones in enumerate(poly.face_zones):
-        if len(zones) == 2:
-            add(tuple(sorted(zones)), [f], float(area[f]))
+    fz = poly.face_zone
+    for f in np.flatnonzero(fz[:, 1] >= 0):
+        add((int(min(fz[f])), int(max(fz[f]))), [int(f)], float(area[f]))
     if len(poly.zone_ids) > 1:
-        single = [f for f, zones in enumerate(poly.face_zones) if len(zones) == 1]
+        single = np.flatnonzero((fz[:, 0] >= 0) & (fz[:, 1] < 0)).tolist()
         by_shape: dict[tuple, list[int]] = defaultdict(list)
         fps = poly.face_position_start
         for f in single:
@@ -36,7 +36,7 @@ def adjacency(poly: Polygons, area: np.ndarray) -> list[dict]:
                 continue
             for i, a in enumerate(faces):
                 for b in faces[i + 1:]:
-                    za, zb = poly.face_zones[a][0], poly.face_zones[b][0]
+                    za, zb = int(fz[a, 0]), int(fz[b, 0])
                     if za != zb:
                         add((min(za, zb), max(za, zb)), [a, b], float(area[a]))
     out = []

@@ -80,15 +80,15 @@ def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones:
     edges = np.bincount(group_zone, minlength=n_zones)
     faces = np.bincount(gmap.use_zone, minlength=n_zones)
     inner = np.bincount(gmap.use_zone, weights=loops_per_face[gmap.use_face] - 1, minlength=n_zones).astype(np.int64)
-    dart_zone = np.repeat(gmap.use_zone[gmap.use], 2)
-    n_points = int(gmap.dart_vertex.max()) + 1 if gmap.n_darts else 1
-    zv = dart_zone * n_points + gmap.dart_vertex
+    corner_vertex = gmap.dart_vertex[0::2]  # every vertex of a loop is the first vertex of one edge-use
+    n_points = int(corner_vertex.max()) + 1 if len(corner_vertex) else 1
+    zv = gmap.use_zone[gmap.use] * n_points + corner_vertex
     zv_unique = np.unique(zv)
     vertices = np.bincount(zv_unique // n_points, minlength=n_zones)
     # vertex fans: ⟨α1, α2⟩ orbits; more than one at a vertex of a zone means sheets touching there
-    _, fan = gmap.orbits(1, 2)
-    fan_first = np.full(int(fan.max()) + 1 if gmap.n_darts else 0, -1, dtype=np.int64)
-    fan_first[fan[::-1]] = np.arange(gmap.n_darts)[::-1]
+    fan = gmap.vertex_fans()
+    fan_first = np.full(int(fan.max()) + 1 if len(fan) else 0, -1, dtype=np.int64)
+    fan_first[fan[::-1]] = np.arange(len(fan))[::-1]
     fan_keys, fans_per_vertex = np.unique(zv[fan_first], return_counts=True)
     pinched = fan_keys[fans_per_vertex > 1]
     nm_vertices = [pinched[pinched // n_points == z] % n_points for z in range(n_zones)]

@@ -52,7 +52,7 @@ def group_edges(poly: Polygons, use_zone: np.ndarray, position: np.ndarray, use:
     n_zones = max(len(poly.zone_ids), 1)
     if n_zones * n_points * n_points < 2 ** 62:
         key = (zone * n_points + lo) * n_points + hi
-        order = np.argsort(key, kind="stable")
+        order = np.argsort(key)
         ks = key[order]
         new = np.ones(len(ks), dtype=bool)
         new[1:] = ks[1:] != ks[:-1]
@@ -96,12 +96,25 @@ class GMap:
         graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n)).tocsr()
         return connected_components(graph, directed=False)
 
+    def vertex_fans(self) -> np.ndarray:
+        """The ⟨α1, α2⟩ orbit of every edge-use's first corner. α1 pairs the two darts of a corner
+        (edge-use ``e`` at its first vertex and the edge-use before it at its second), so these orbits
+        are the corners joined by α2: the same orbits from half the nodes and a sixth of the links."""
+        n_eu = len(self.position)
+        darts = np.arange(2 * n_eu)
+        # corner of a dart: 2e is edge-use e's first corner; 2e + 1 is the first corner of the next edge-use
+        corner = np.where(darts % 2 == 0, darts // 2, self.alpha[1][darts] // 2)
+        sewn = np.flatnonzero(self.alpha[2] != darts)
+        graph = coo_matrix((np.ones(len(sewn), dtype=np.int8), (corner[sewn], corner[self.alpha[2][sewn]])),
+                           shape=(n_eu, n_eu))
+        return connected_components(graph, directed=False)[1]
+
     def is_involution(self) -> bool:
         """Every αi is its own inverse (a well-formed G-map)."""
         return all(np.array_equal(a[a], np.arange(self.n_darts)) for a in self.alpha)
 
 
-def build_gmap(poly: Polygons) -> GMap:
+def build_gmap(poly: Polygons, groups: EdgeGroups | None = None) -> GMap:
     """Sew the darts of every enclosure face use (the paper's model of the complex): α0 and α1 from
     the loops, α2 between the two faces of a manifold edge of a zone, α3 between the two uses of a
     face shared by two zones."""
@@ -122,7 +135,8 @@ def build_gmap(poly: Polygons) -> GMap:
     alpha1[2 * e + 1] = 2 * e_next
     alpha1[2 * e_next] = 2 * e + 1
 
-    groups = group_edges(poly, use_zone, position, use)
+    if groups is None:
+        groups = group_edges(poly, use_zone, position, use)
     sewn = groups.starts[groups.counts == 2]
     first, second = groups.order[sewn], groups.order[sewn + 1]
     same_start = dart_vertex[2 * first] == dart_vertex[2 * second]

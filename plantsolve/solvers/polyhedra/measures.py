@@ -92,7 +92,10 @@ def face_measures(poly: Polygons) -> FaceMeasures:
     normal = np.divide(area_vector, norm[:, None], out=np.zeros_like(area_vector), where=norm[:, None] > 0)
     distance = np.abs(np.einsum("ij,ij->i", rel - centroid[position_face], normal[position_face]))
     planarity = np.zeros(n_faces)
-    np.maximum.at(planarity, position_face, distance)
+    starts = poly.face_position_start
+    nonempty = starts[1:] > starts[:-1]
+    if len(distance):
+        planarity[nonempty] = np.maximum.reduceat(distance, starts[:-1][nonempty])
     return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
                         planarity_error=planarity)
 

@@ -24,7 +24,7 @@ class Polygons:
     loop_start: np.ndarray  # (L + 1,) offsets into loop_vertices
     loop_face: np.ndarray  # (L,) face of each loop, non-decreasing
     face_ids: list[str]
-    face_zones: list[tuple[int, ...]]  # zone indices; () for a subsurface
+    face_zone: np.ndarray  # (F, 2) zone indices, -1 where none (a subsurface has none, most faces one)
     face_parent: np.ndarray  # (F,) host face index, -1 for an enclosure face
     zone_ids: list[str]
     face_loop_start: np.ndarray = field(init=False)  # (F + 1,) first loop of each face
@@ -32,6 +32,10 @@ class Polygons:
     def __post_init__(self) -> None:
         n_faces = len(self.face_ids)
         object.__setattr__(self, "face_loop_start", np.searchsorted(self.loop_face, np.arange(n_faces + 1)))
+
+    @property
+    def face_zones(self) -> list[tuple[int, ...]]:
+        return [tuple(int(z) for z in row if z >= 0) for row in self.face_zone]
 
     @property
     def n_faces(self) -> int:
@@ -68,12 +72,10 @@ class Polygons:
 
     def uses(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, zone, sign) of every use, faces in order, a face's first zone first."""
-        counts = np.fromiter((len(z) for z in self.face_zones), dtype=np.int64, count=self.n_faces)
-        face = np.repeat(np.arange(self.n_faces), counts)
-        zone = np.fromiter((z for zs in self.face_zones for z in zs), dtype=np.int64, count=int(counts.sum()))
-        first = np.ones(len(face), dtype=bool)
-        first[1:] = face[1:] != face[:-1]
-        return face, zone, np.where(first, 1, -1)
+        has = self.face_zone >= 0  # row-major: a face's first zone comes before its second
+        face = np.nonzero(has)[0]
+        column = np.nonzero(has)[1]
+        return face, self.face_zone[has], np.where(column == 0, 1, -1)
 
 
 def expand_uses(poly: Polygons, use_face: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -95,7 +97,7 @@ def from_request(request: PolyhedraRequest) -> Polygons:
     lengths: list[int] = []
     loop_face: list[int] = []
     zone_index: dict[str, int] = {}
-    face_zones: list[tuple[int, ...]] = []
+    face_zones: list[tuple[int, int]] = []
     index = {face.id: i for i, face in enumerate(request.faces)}
     parents = np.full(len(request.faces), -1, dtype=np.int64)
     for i, face in enumerate(request.faces):
@@ -111,15 +113,17 @@ def from_request(request: PolyhedraRequest) -> Polygons:
             loop_face.append(i)
         if face.parent is not None:
             parents[i] = index[face.parent]
-            face_zones.append(())
+            face_zones.append((-1, -1))
         else:
-            face_zones.append(tuple(zone_index.setdefault(z, len(zone_index)) for z in (face.zones or [DEFAULT_ZONE])))
+            zs = [zone_index.setdefault(z, len(zone_index)) for z in (face.zones or [DEFAULT_ZONE])]
+            face_zones.append((zs[0], zs[1] if len(zs) > 1 else -1))
     loop_start = np.zeros(len(lengths) + 1, dtype=np.int64)
     np.cumsum(lengths, out=loop_start[1:])
     vertices = np.fromiter((v for loop in flat for v in loop), dtype=np.int64, count=int(loop_start[-1]))
     return Polygons(points=np.concatenate(points) if len(points) > 1 else points[0], loop_vertices=vertices,
                     loop_start=loop_start, loop_face=np.asarray(loop_face, dtype=np.int64),
-                    face_ids=[f.id for f in request.faces], face_zones=face_zones, face_parent=parents,
+                    face_ids=[f.id for f in request.faces], face_zone=np.asarray(face_zones, dtype=np.int64).reshape(-1, 2),
+                    face_parent=parents,
                     zone_ids=list(zone_index))
 
 
@@ -129,5 +133,5 @@ def from_mesh(vertices: np.ndarray, triangles: np.ndarray, zone: str = DEFAULT_Z
     n = len(triangles)
     return Polygons(points=np.asarray(vertices, dtype=float), loop_vertices=triangles.reshape(-1),
                     loop_start=np.arange(0, 3 * n + 1, 3, dtype=np.int64), loop_face=np.arange(n, dtype=np.int64),
-                    face_ids=[f"{prefix}{i + 1}" for i in range(n)], face_zones=[(0,)] * n,
+                    face_ids=[f"{prefix}{i + 1}" for i in range(n)], face_zone=np.column_stack([np.zeros(n, dtype=np.int64), np.full(n, -1)]),
                     face_parent=np.full(n, -1, dtype=np.int64), zone_ids=[zone])

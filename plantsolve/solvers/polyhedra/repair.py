@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import FieldError, InputRejected
-from plantsolve.solvers.polyhedra.gmap import group_edges
+from plantsolve.solvers.polyhedra.gmap import EdgeGroups, group_edges
 from plantsolve.solvers.polyhedra.polygons import Polygons, expand_uses
 
 
@@ -27,12 +27,15 @@ class Repairs:
     dropped_repeats: int
     holes_reversed: list[str]
     t_junctions_per_zone: np.ndarray  # vertices inserted into faces of each zone
+    edge_groups: EdgeGroups | None  # the grouping of the repaired faces' edges, when the last pass made one
 
 
 def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
     """Vertices within ``tolerance`` of each other become the one with the smallest index (chains
     of close vertices collapse together, as in a union-find)."""
-    used = np.unique(poly.loop_vertices)
+    mask = np.zeros(len(poly.points), dtype=bool)
+    mask[poly.loop_vertices] = True
+    used = np.flatnonzero(mask)
     pts = poly.points[used]
     if tolerance > 0:
         pairs = cKDTree(pts).query_pairs(tolerance, output_type="ndarray")
@@ -109,19 +112,19 @@ def orient_holes(poly: Polygons) -> tuple[Polygons, list[str]]:
     return poly.with_loops(lv, poly.loop_start), sorted(set(reversed_faces))
 
 
-def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) -> tuple[Polygons, np.ndarray]:
+def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) -> tuple[Polygons, np.ndarray, EdgeGroups]:
     """Insert into a face's loop every vertex of the same zone that lies on one of its open edges
     strictly between the ends (within ``tolerance``): a wall split in two against an unsplit roof,
     or collinear extra vertices on a roof edge, then share edges as the map needs. Only open edges
     are searched, so a closed surface costs one grouping pass."""
     per_zone = np.zeros(len(poly.zone_ids), dtype=np.int64)
     tol = max(tolerance, 1e-12)
-    for _ in range(max_passes):
+    for pass_no in range(max_passes + 1):
         use_face, use_zone, _ = poly.uses()
         position, use = expand_uses(poly, use_face)
         groups = group_edges(poly, use_zone, position, use)
         odd = groups.counts % 2 == 1
-        if not odd.any():
+        if not odd.any() or pass_no == max_passes:
             break
         open_eu = np.flatnonzero(odd[groups.group])
         nxt = poly.next_position()
@@ -161,6 +164,7 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
                 per_zone[zone] += len(entries) - before
         if not inserts:
             break
+        groups = None
         counts = np.zeros(len(lv), dtype=np.int64)
         for pos, entries in inserts.items():
             counts[pos] = len(entries)
@@ -174,7 +178,7 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
         added = np.bincount(loop_of, weights=counts, minlength=len(poly.loop_start) - 1).astype(np.int64)
         start = poly.loop_start + np.concatenate([[0], np.cumsum(added)])
         poly = poly.with_loops(new_lv, start)
-    return poly, per_zone
+    return poly, per_zone, groups
 
 
 def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
@@ -182,6 +186,6 @@ def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
     poly, merged = merge_vertices(poly, merge_tolerance)
     poly, dropped = drop_repeats(poly)
     poly, holes = orient_holes(poly)
-    poly, per_zone = insert_t_junctions(poly, merge_tolerance)
+    poly, per_zone, groups = insert_t_junctions(poly, merge_tolerance)
     return poly, Repairs(merged_vertices=merged, dropped_repeats=dropped, holes_reversed=holes,
-                         t_junctions_per_zone=per_zone)
+                         t_junctions_per_zone=per_zone, edge_groups=groups)

@@ -41,7 +41,7 @@ def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = 
     """Repair, sew the generalized map, measure and diagnose (the paper's method on flat arrays)."""
     poly, repairs = repair(poly, merge_tolerance)
     progress(0.3, "generalized map")
-    gmap = build_gmap(poly)
+    gmap = build_gmap(poly, repairs.edge_groups)
     progress(0.5, "measures")
     measures = face_measures(poly)
     n_zones = len(poly.zone_ids)
@@ -180,9 +180,10 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     _, first = np.unique(np.minimum(a, b) * n_points + np.maximum(a, b), return_index=True)
     edge_length_total = float(np.linalg.norm(poly.points[b[first]] - poly.points[a[first]], axis=1).sum())
 
+    face_zones = poly.face_zones
     face_results = [{
-        "id": poly.face_ids[f], "zones": [poly.zone_ids[z] for z in poly.face_zones[f]] if poly.face_parent[f] < 0
-        else [poly.zone_ids[z] for z in poly.face_zones[poly.face_parent[f]]],
+        "id": poly.face_ids[f], "zones": [poly.zone_ids[z] for z in face_zones[f]] if poly.face_parent[f] < 0
+        else [poly.zone_ids[z] for z in face_zones[poly.face_parent[f]]],
         "parent": poly.face_ids[poly.face_parent[f]] if poly.face_parent[f] >= 0 else None,
         "area": float(area[f]), "net_area": float(net_area[f]), "perimeter": float(an.measures.perimeter[f]),
         "normal": normal[f].tolist(), "planarity_error": float(planarity[f]),
