@@ -223,3 +223,12 @@ def test_gmap_alpha3_sews_the_shared_wall():
     sewn = np.flatnonzero(gmap.alpha[3] != np.arange(gmap.n_darts))
     assert len(sewn) == 16  # the wall's 4 edges, 2 darts each, seen from both zones
     assert gmap.orbits(0, 1, 2)[0] == 2 and gmap.orbits(0, 1, 2, 3)[0] == 1
+
+
+def test_paneled_building_stays_conforming():
+    result = run(shapes.building(floors=2, rooms_x=2, rooms_y=1, panels=3))
+    assert all(z.closed and z.volume == pytest.approx(60.0) and z.t_junctions_repaired == 0 for z in result.zones)
+    assert all(z.net_surface_area < z.surface_area for z in result.zones)  # each has exterior walls with windows
+    assert sorted((tuple(a.zones), round(a.area, 9)) for a in result.adjacency) == [
+        (("F1-R1-1", "F1-R2-1"), 12.0), (("F1-R1-1", "F2-R1-1"), 20.0), (("F1-R2-1", "F2-R2-1"), 20.0),
+        (("F2-R1-1", "F2-R2-1"), 12.0)]

@@ -26,10 +26,18 @@ def adjacency(poly: Polygons, area: np.ndarray) -> list[dict]:
     for f in np.flatnonzero(fz[:, 1] >= 0):
         add((int(min(fz[f])), int(max(fz[f]))), [int(f)], float(area[f]))
     if len(poly.zone_ids) > 1:
-        single = np.flatnonzero((fz[:, 0] >= 0) & (fz[:, 1] < 0)).tolist()
-        by_shape: dict[tuple, list[int]] = defaultdict(list)
+        # a cheap signature (vertex count, sum, sum of squares of the vertex indices) finds the
+        # candidates; the sorted vertex lists decide
         fps = poly.face_position_start
-        for f in single:
+        single = (fz[:, 0] >= 0) & (fz[:, 1] < 0)
+        position_face = poly.position_face
+        lv = poly.loop_vertices.astype(np.float64)
+        signature = np.stack([np.diff(fps), np.bincount(position_face, weights=lv, minlength=poly.n_faces),
+                              np.bincount(position_face, weights=lv * lv, minlength=poly.n_faces)], axis=1)
+        candidates = np.flatnonzero(single)
+        _, inverse, counts = np.unique(signature[candidates], axis=0, return_inverse=True, return_counts=True)
+        by_shape: dict[tuple, list[int]] = defaultdict(list)
+        for f in candidates[counts[inverse.reshape(-1)] > 1].tolist():
             by_shape[tuple(np.sort(poly.loop_vertices[fps[f]:fps[f + 1]]).tolist())].append(f)
         for faces in by_shape.values():
             if len(faces) < 2:

@@ -91,9 +91,10 @@ def expand_uses(poly: Polygons, use_face: np.ndarray) -> tuple[np.ndarray, np.nd
 
 def from_request(request: PolyhedraRequest) -> Polygons:
     """Flat arrays from a validated request: point loops become vertices appended after the given ones."""
-    points = [np.asarray(request.vertices, dtype=float).reshape(-1, 3)]
-    n_points = len(points[0])
-    flat: list[list[int]] = []
+    given = np.asarray(request.vertices, dtype=float).reshape(-1, 3)
+    extra: list[list[float]] = []  # points of point loops, appended after the given vertices
+    n_points = len(given)
+    flat: list = []
     lengths: list[int] = []
     loop_face: list[int] = []
     zone_index: dict[str, int] = {}
@@ -103,10 +104,9 @@ def from_request(request: PolyhedraRequest) -> Polygons:
     for i, face in enumerate(request.faces):
         for loop in face.loops:
             if loop and isinstance(loop[0], list):
-                block = np.asarray(loop, dtype=float)
-                points.append(block)
-                flat.append(list(range(n_points, n_points + len(block))))
-                n_points += len(block)
+                extra.extend(loop)
+                flat.append(range(n_points, n_points + len(loop)))
+                n_points += len(loop)
             else:
                 flat.append(loop)
             lengths.append(len(loop))
@@ -120,7 +120,8 @@ def from_request(request: PolyhedraRequest) -> Polygons:
     loop_start = np.zeros(len(lengths) + 1, dtype=np.int64)
     np.cumsum(lengths, out=loop_start[1:])
     vertices = np.fromiter((v for loop in flat for v in loop), dtype=np.int64, count=int(loop_start[-1]))
-    return Polygons(points=np.concatenate(points) if len(points) > 1 else points[0], loop_vertices=vertices,
+    points = np.concatenate([given, np.asarray(extra, dtype=float).reshape(-1, 3)]) if extra else given
+    return Polygons(points=points, loop_vertices=vertices,
                     loop_start=loop_start, loop_face=np.asarray(loop_face, dtype=np.int64),
                     face_ids=[f.id for f in request.faces], face_zone=np.asarray(face_zones, dtype=np.int64).reshape(-1, 2),
                     face_parent=parents,

@@ -181,13 +181,14 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     edge_length_total = float(np.linalg.norm(poly.points[b[first]] - poly.points[a[first]], axis=1).sum())
 
     face_zones = poly.face_zones
+    parent = poly.face_parent.tolist()
+    area_l, net_l, perim_l = area.tolist(), net_area.tolist(), an.measures.perimeter.tolist()
+    normal_l, planarity_l = normal.tolist(), planarity.tolist()
+    zone_names = [[poly.zone_ids[z] for z in zs] for zs in face_zones]
     face_results = [{
-        "id": poly.face_ids[f], "zones": [poly.zone_ids[z] for z in face_zones[f]] if poly.face_parent[f] < 0
-        else [poly.zone_ids[z] for z in face_zones[poly.face_parent[f]]],
-        "parent": poly.face_ids[poly.face_parent[f]] if poly.face_parent[f] >= 0 else None,
-        "area": float(area[f]), "net_area": float(net_area[f]), "perimeter": float(an.measures.perimeter[f]),
-        "normal": normal[f].tolist(), "planarity_error": float(planarity[f]),
-    } for f in range(n_faces)]
+        "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
+        "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
+        "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
 
     details = {
         "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,

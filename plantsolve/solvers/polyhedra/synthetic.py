@@ -123,10 +123,12 @@ def gable_house(width: float = 8.0, depth: float = 10.0, eave: float = 3.0, ridg
 
 
 def building(floors: int, rooms_x: int, rooms_y: int, room: tuple[float, float, float] = (5.0, 4.0, 3.0),
-             windows: bool = True, origin=(0.0, 0.0, 0.0)) -> dict:
+             windows: bool = True, origin=(0.0, 0.0, 0.0), panels: int = 1) -> dict:
     """A block of ``floors × rooms_x × rooms_y`` box rooms on a shared vertex grid: interior walls and
     slabs are one face with two zones, exterior walls carry a window subsurface each. Every room has
-    the volume ``room[0] · room[1] · room[2]``."""
+    the volume ``room[0] · room[1] · room[2]``. With ``panels`` > 1 every wall and slab is split into
+    ``panels × panels`` faces (as cladding and ceiling grids are modelled; neighbours split alike, so
+    the surfaces stay conforming) and the window sits in the middle half of the panel at (1, 1)."""
     nx, ny, nz = rooms_x + 1, rooms_y + 1, floors + 1
     gx, gy, gz = np.meshgrid(np.arange(nx) * room[0], np.arange(ny) * room[1], np.arange(nz) * room[2], indexing="ij")
     vertices = (np.stack([gx, gy, gz], axis=-1).reshape(-1, 3) + np.asarray(origin, dtype=float)).tolist()
@@ -174,7 +176,31 @@ def building(floors: int, rooms_x: int, rooms_y: int, room: tuple[float, float, 
                     x0, z0 = i * room[0] + origin[0], k * room[2] + origin[2]
                     pts = [[x0 + 1, y, z0 + 1], [x0 + 1, y, z0 + 2], [x0 + 2, y, z0 + 2], [x0 + 2, y, z0 + 1]]
                     faces.append({"id": f"win-{fid}", "parent": fid, "loops": [pts if south else pts[::-1]]})
+    if panels > 1:
+        faces = _split_into_panels(faces, np.asarray(vertices), panels)
     return {"units": "m", "vertices": vertices, "faces": faces}
+
+
+def _split_into_panels(faces: list[dict], vertices: np.ndarray, k: int) -> list[dict]:
+    out = []
+    t = np.linspace(0.0, 1.0, k + 1)
+    for face in faces:
+        if face.get("parent"):
+            continue
+        a, b, c, d = (vertices[i] for i in face["loops"][0])
+
+        def at(u, v):
+            return (1 - u) * (1 - v) * a + u * (1 - v) * b + u * v * c + (1 - u) * v * d
+
+        for i in range(k):
+            for j in range(k):
+                loop = [at(t[i], t[j]), at(t[i + 1], t[j]), at(t[i + 1], t[j + 1]), at(t[i], t[j + 1])]
+                out.append({**face, "id": f"{face['id']}.{i}.{j}", "loops": [[p.tolist() for p in loop]]})
+        if any(f.get("parent") == face["id"] for f in faces):
+            u0, u1, v0, v1 = t[1] + (t[2] - t[1]) / 4, t[2] - (t[2] - t[1]) / 4, t[1] + (t[2] - t[1]) / 4, t[2] - (t[2] - t[1]) / 4
+            loop = [at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)]
+            out.append({"id": f"win-{face['id']}", "parent": f"{face['id']}.1.1", "loops": [[p.tolist() for p in loop]]})
+    return out
 
 
 def torus_mesh(n_major: int, n_minor: int, major: float = 3.0, minor: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
