@@ -232,3 +232,34 @@ def test_paneled_building_stays_conforming():
     assert sorted((tuple(a.zones), round(a.area, 9)) for a in result.adjacency) == [
         (("F1-R1-1", "F1-R2-1"), 12.0), (("F1-R1-1", "F2-R1-1"), 20.0), (("F1-R2-1", "F2-R2-1"), 20.0),
         (("F2-R1-1", "F2-R2-1"), 12.0)]
+
+
+def test_a_wall_facing_two_walls_of_the_next_zone_and_a_partial_overlap():
+    big = [f for f in shapes.box_faces((0, 0, 0), (1, 2, 1), "A", "A-") if f["id"] != "A-east"]
+    big.append({"id": "A-east", "zones": ["A"], "loops": [[[1, 0, 0], [1, 2, 0], [1, 2, 1], [1, 0, 1]]]})
+    right = shapes.box_faces((1, 0, 0), (2, 1, 1), "B", "B-") + shapes.box_faces((1, 1, 0), (2, 2, 1), "C", "C-")
+    # D touches A's east wall only over 0.5 m² (a staggered room)
+    right += shapes.box_faces((1, 1.5, 1), (2, 2.5, 2), "D", "D-")
+    result = run({"faces": big + right})
+    found = {tuple(a.zones): (sorted(a.faces), round(a.area, 9)) for a in result.adjacency}
+    assert found[("A", "B")] == (["A-east", "B-west"], 1.0) and found[("A", "C")] == (["A-east", "C-west"], 1.0)
+    assert found[("C", "D")] == (["C-roof", "D-floor"], 0.5)
+    assert ("A", "D") not in found  # D sits above A's roof height: it only touches along an edge
+    # T-junctions are repaired within a zone: A is closed by itself, B's and C's corners do not split it
+    assert zone(result, "A").closed and zone(result, "A").t_junctions_repaired == 0
+
+
+def test_sketchup_style_walls_triangulated_along_different_diagonals_are_adjacent():
+    def tris(faces, flip):
+        out = []
+        for f in faces:
+            p = f["loops"][0]
+            a, b = ([p[0], p[1], p[2]], [p[0], p[2], p[3]]) if not flip else ([p[0], p[1], p[3]], [p[1], p[2], p[3]])
+            out += [{**f, "id": f["id"] + ".1", "loops": [a]}, {**f, "id": f["id"] + ".2", "loops": [b]}]
+        return out
+    faces = tris(shapes.box_faces((0, 0, 0), (1, 1, 1), "R1", "R1-"), False)
+    faces += tris(shapes.box_faces((1, 0, 0), (2, 1, 1), "R2", "R2-"), True)
+    result = run({"faces": faces})
+    (adj,) = result.adjacency
+    assert adj.zones == ["R1", "R2"] and adj.area == pytest.approx(1.0)
+    assert all(z.closed and z.volume == pytest.approx(1.0) for z in result.zones)

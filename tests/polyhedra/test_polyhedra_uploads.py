@@ -83,6 +83,8 @@ def test_sketchup_obj_groups_are_zones():
     assert r1.volume == pytest.approx(4 * 3 * 2.7) and r2.volume == pytest.approx(3.5 * 3 * 2.7)
     assert r1.closed and r2.closed and r1.orientation == r2.orientation == "outward"
     assert result.report.details["merged_vertices"] > 0  # SketchUp writes every triangle's corners afresh
+    (adj,) = result.adjacency  # the shared wall, triangulated along different diagonals on each side
+    assert adj.zones == ["Room_1", "Room_2"] and adj.area == pytest.approx(3 * 2.7) and len(adj.faces) == 4
 
 
 def test_revit_obj_objects_negative_indices_and_continuations():

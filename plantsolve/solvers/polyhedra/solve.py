@@ -207,7 +207,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, edge_length_total=edge_length_total,
-        adjacency=adjacency(poly, area), total_volume=total if all_closed else None,
+        adjacency=adjacency(poly, area, normal), total_volume=total if all_closed else None,
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     )
