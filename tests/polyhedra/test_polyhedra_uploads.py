@@ -127,3 +127,19 @@ def test_json_upload_and_form_options():
     with pytest.raises(InputRejected) as error:
         parse_upload("r.json", json.dumps(body).encode(), {"merge_tolerance": -1})
     assert error.value.errors[0].loc == ("options", "merge_tolerance")
+
+
+def test_relative_coordinates_follow_the_zone_relative_north():
+    # office B turned by 90 degrees (EnergyPlus turns zone coordinates clockwise by the relative north)
+    # and placed at (5, 5): its local south wall (y = 0) lands on x = 5, against office A's east wall
+    lines = (DATA / "openstudio_two_offices.idf").read_text().splitlines()
+    assert lines[32].strip().startswith("Office B Thermal Zone,") and lines[33].strip().startswith("0,")
+    lines[33] = "  90,                                     !- Direction of Relative North {deg}"
+    lines[35] = "  5,                                      !- Y Origin {m}"
+    result = solve(parse_upload("turned.idf", "\n".join(lines).encode(), None))
+    b = zone(result, "Office B Thermal Zone")
+    assert b.volume == pytest.approx(60.0) and b.closed
+    (adj,) = result.adjacency
+    assert sorted(adj.faces) == ["Office A East", "Office B South"] and adj.area == pytest.approx(12.0)
+    south = next(f for f in result.faces if f.id == "Office B South")
+    assert south.normal == pytest.approx([-1.0, 0.0, 0.0], abs=1e-12)
