@@ -195,6 +195,7 @@ def test_openstudio_tilted_roof():
 def test_openstudio_box_with_a_keyhole_hole():
     z = zone(run(request(BOX_WITH_HOLE)))
     assert z.closed and z.volume == pytest.approx(BOX_WITH_HOLE_VOLUME, rel=1e-12) and z.genus == 1
+    assert z.non_manifold_vertices == [] and z.non_manifold_edges == []  # the bridge edge is sewn to itself
 
 
 def test_generated_building():

@@ -72,7 +72,8 @@ class Topology:
 
 
 def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones: int) -> Topology:
-    """Cell counts per zone from the map's orbits and the edge defects."""
+    """Cell counts per zone from the map's orbits and the edge defects (the paper's topology read from
+    the G-map: edges as ⟨α0, α2⟩ groups, vertex fans as ⟨α1, α2⟩ orbits)."""
     groups = gmap.groups
     group_zone = groups.zone[groups.order[groups.starts]]
     open_groups = np.flatnonzero(groups.counts % 2 == 1)
