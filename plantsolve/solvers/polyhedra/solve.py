@@ -94,8 +94,10 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     zones = []
     all_closed = True
     total = 0.0
+    by_zone = np.argsort(gmap.use_zone, kind="stable")
+    zone_bounds = np.searchsorted(gmap.use_zone[by_zone], np.arange(n_zones + 1))
     for z in range(n_zones):
-        uses = np.flatnonzero(gmap.use_zone == z)
+        uses = by_zone[zone_bounds[z]:zone_bounds[z + 1]]
         faces = gmap.use_face[uses]
         factor = an.orientation.factor[uses]
         conflict = bool(an.orientation.conflict[uses].any())
