@@ -1,0 +1,150 @@
+"""Request and result models of the ``polyhedra`` solver (zone volumes, areas and closure diagnostics).
+
+Conventions
+-----------
+- Lengths are in the request's ``units`` (default ``"m"``); areas in units², volumes in units³.
+- A face is one planar polygon with an outer loop and optional inner loops (holes). The outer loop
+  runs counter-clockwise seen from outside the face's first zone; inner loops run the other way
+  (the solver turns an inner loop that runs the same way as its outer loop and says so).
+- A loop is a list of vertex indices into ``vertices`` or a list of ``[x, y, z]`` points.
+- A face listed with two zones is the wall between them: it bounds both (with opposite
+  orientation for the second zone). A face with a ``parent`` is a subsurface (window, door) of
+  that face: it reduces the parent's net area and is not part of any enclosure.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, Discriminator, Field, Tag
+
+from plantsolve.schemas.common import Coordinate, FiniteFloat, Integer, Point3, Report, StrictModel, Units
+
+MAX_VERTICES = 5_000_000
+MAX_FACES = 2_000_000
+MAX_LOOP = 100_000
+
+Name = Annotated[str, Field(min_length=1, max_length=200)]
+VertexIndex = Annotated[Integer, Field(ge=0, lt=MAX_VERTICES)]
+
+
+def _loop_form(value: Any) -> str:
+    """A loop of points starts with a list, a loop of indices with a number."""
+    if isinstance(value, (list, tuple)) and value and isinstance(value[0], (list, tuple)):
+        return "points"
+    return "indices"
+
+
+Loop = Annotated[
+    Annotated[list[VertexIndex], Field(min_length=3, max_length=MAX_LOOP), Tag("indices")]
+    | Annotated[list[Point3], Field(min_length=3, max_length=MAX_LOOP), Tag("points")],
+    Discriminator(_loop_form),
+]
+
+
+class Face(StrictModel):
+    """One polygon: an outer loop and its holes."""
+
+    id: Name = Field(description="Face name, unique in the request (e.g. the IDF surface name).")
+    loops: list[Loop] = Field(
+        min_length=1, max_length=10_000,
+        description="The outer loop first (counter-clockwise seen from outside the first zone), then inner "
+        "loops (holes: shafts, courtyards). Each loop is vertex indices or [x, y, z] points (at least 3 distinct).")
+    zones: list[Name] | None = Field(
+        default=None, min_length=1, max_length=2,
+        description="The zone(s) this face bounds: one, or two for a wall between zones (the loop is "
+        "counter-clockwise seen from outside the first). Omitted: the zone 'default'.")
+    parent: Name | None = Field(
+        default=None,
+        description="Id of the host face when this face is a subsurface (window, door): it reduces the host's "
+        "net area and is not part of any enclosure.")
+
+
+class PolyhedraOptions(StrictModel):
+    merge_tolerance: FiniteFloat = Field(
+        default=1e-6, ge=0.0, le=1.0,
+        description="Vertices closer than this (request units) are one vertex; also the distance within which a "
+        "vertex lies on an edge (T-junction).")
+    planarity_tolerance: FiniteFloat = Field(
+        default=1e-4, ge=0.0, le=1e3,
+        description="Largest distance (request units) of a face's vertex from the face's plane before the face "
+        "is reported non-planar (EnergyPlus uses 1e-4 m).")
+
+
+class PolyhedraRequest(StrictModel):
+    units: Units = Field(default="m", description="Length unit of vertices and of every result.")
+    vertices: list[Point3] = Field(
+        default_factory=list, max_length=MAX_VERTICES,
+        description="Vertex coordinates [x, y, z] referenced by index from the loops.")
+    faces: list[Face] = Field(min_length=1, max_length=MAX_FACES)
+    options: PolyhedraOptions = Field(default_factory=PolyhedraOptions)
+    source: dict[str, Any] | None = Field(
+        default=None,
+        description="What the upload parser read (file format, objects skipped with line and reason); set by the "
+        "upload parser, not needed in JSON bodies.")
+
+
+class EdgeReport(BaseModel):
+    """An edge of a zone's surface that is not shared by exactly two faces."""
+
+    start: Point3 = Field(description="One end [x, y, z] (request units).")
+    end: Point3 = Field(description="The other end [x, y, z] (request units).")
+    faces: list[str] = Field(description="Ids of the faces using this edge in this zone.")
+    uses: int = Field(description="How many face boundaries run along the edge in this zone (2 when manifold).")
+
+
+class ZoneResult(BaseModel):
+    id: str
+    volume: float | None = Field(
+        description="Enclosed volume (units³), null unless the zone's surface is closed; faces turned the wrong "
+        "way are counted the right way (they are listed in misoriented_faces).")
+    signed_volume: float = Field(
+        description="Divergence-theorem volume (units³) with the faces as given: negative when inside out.")
+    surface_area: float = Field(description="Sum of the enclosure faces' areas (units², net of holes, gross of subsurfaces).")
+    net_surface_area: float = Field(description="surface_area minus the subsurfaces' areas (units²): the opaque area.")
+    closed: bool = Field(description="Every edge is used by an even number of the zone's faces (no open edge).")
+    orientation: Literal["outward", "inward", "mixed"] = Field(
+        description="outward: every face's normal points out of the zone; inward: every face points in; mixed: "
+        "some faces disagree with their neighbours (misoriented_faces), or the surface cannot be oriented.")
+    misoriented_faces: list[str] = Field(description="Faces whose normal points into the zone (or disagrees with their neighbours).")
+    flux_volumes: list[float] = Field(
+        description="Volumes (units³) from the flux of x, y and z alone through the surface: equal to each other "
+        "only when the surface is closed.")
+    vector_area_sum: list[float] = Field(description="Sum of the faces' area vectors (units²): zero for a closed surface.")
+    open_edges: list[EdgeReport] = Field(description="Edges used by an odd number of the zone's faces (the first 1000).")
+    open_edge_count: int
+    non_manifold_edges: list[EdgeReport] = Field(description="Edges used by more than two of the zone's faces (the first 1000).")
+    non_manifold_edge_count: int
+    non_manifold_vertices: list[Point3] = Field(description="Vertices where separate sheets of the zone's surface touch.")
+    t_junctions_repaired: int = Field(description="Vertices inserted into face loops because they lay on an edge.")
+    components: int = Field(description="Connected pieces of the zone's surface (across manifold edges).")
+    euler_characteristic: int = Field(description="V - E + F - (inner loops), over the zone's surface.")
+    genus: int | None = Field(description="Handles (through holes) of the surface; null when non-manifold or not orientable.")
+    faces: list[str] = Field(description="Ids of the faces bounding the zone.")
+
+
+class FaceResult(BaseModel):
+    id: str
+    zones: list[str]
+    parent: str | None = None
+    area: float = Field(description="Area (units²) of the face net of its holes, gross of its subsurfaces.")
+    net_area: float = Field(description="area minus the subsurfaces' areas (units²).")
+    perimeter: float = Field(description="Length of all the face's loops (units).")
+    normal: list[float] = Field(description="Unit normal (Newell), pointing out of the first zone as given.")
+    planarity_error: float = Field(description="Largest distance of a vertex from the face's plane (units).")
+
+
+class Adjacency(BaseModel):
+    zones: list[str] = Field(description="The two zones [a, b].")
+    faces: list[str] = Field(description="The faces they share (one face listed with both zones, or two coincident faces).")
+    area: float = Field(description="Shared area (units²).")
+
+
+class PolyhedraResult(BaseModel):
+    units: Units
+    zones: list[ZoneResult]
+    faces: list[FaceResult]
+    edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.")
+    adjacency: list[Adjacency]
+    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not closed.")
+    report: Report

@@ -1,0 +1,191 @@
+"""Repair before counting: coincident vertices, degenerate loop steps, hole orientation, T-junctions.
+
+Exporters write the same corner several times with rounding differences, split a wall in two
+against an unsplit roof, and put extra collinear vertices on roof edges; none of this changes the
+solid, but every one of them would show up as an open edge. The repairs here are the ones
+OpenStudio applies before it calls a zone enclosed (merge within a tolerance, insert the missing
+collinear points), plus turning a hole that runs the same way as its outer loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.polyhedra.gmap import EdgeGroups, group_edges
+from plantsolve.solvers.polyhedra.polygons import Polygons, expand_uses
+
+
+@dataclass(frozen=True)
+class Repairs:
+    merged_vertices: int
+    dropped_repeats: int
+    holes_reversed: list[str]
+    t_junctions_per_zone: np.ndarray  # vertices inserted into faces of each zone
+    edge_groups: EdgeGroups | None  # the grouping of the repaired faces' edges, when the last pass made one
+
+
+def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
+    """Vertices within ``tolerance`` of each other become the one with the smallest index (chains
+    of close vertices collapse together, as in a union-find)."""
+    mask = np.zeros(len(poly.points), dtype=bool)
+    mask[poly.loop_vertices] = True
+    used = np.flatnonzero(mask)
+    pts = poly.points[used]
+    if tolerance > 0:
+        pairs = cKDTree(pts).query_pairs(tolerance, output_type="ndarray")
+        if len(pairs) == 0:
+            return poly, 0
+        n = len(used)
+        graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        _, label = connected_components(graph, directed=False)
+    else:
+        _, label = np.unique(pts, axis=0, return_inverse=True)
+        label = label.reshape(-1)
+    representative = np.full(label.max() + 1, len(used), dtype=np.int64)
+    np.minimum.at(representative, label, np.arange(len(used)))
+    mapping = np.arange(len(poly.points))
+    mapping[used] = used[representative[label]]
+    merged = int(len(used) - len(np.unique(label)))
+    if merged == 0:
+        return poly, 0
+    return poly.with_loops(mapping[poly.loop_vertices], poly.loop_start), merged
+
+
+def drop_repeats(poly: Polygons) -> tuple[Polygons, int]:
+    """Remove a vertex equal to the one after it along its loop (after merging, a closing vertex that
+    repeats the first one, or two exporter points that became one). A loop left with fewer than three
+    vertices is refused, naming the face and loop."""
+    lv = poly.loop_vertices
+    keep = lv != lv[poly.next_position()]
+    dropped = int((~keep).sum())
+    if dropped == 0:
+        return poly, 0
+    loop_of = poly.position_loop
+    lengths = np.bincount(loop_of[keep], minlength=len(poly.loop_start) - 1)
+    short = np.flatnonzero(lengths < 3)
+    if len(short):
+        errors = []
+        for loop in short[:50]:
+            face = int(poly.loop_face[loop])
+            k = int(loop - poly.face_loop_start[face])
+            errors.append(FieldError(("faces", face, "loops", k), f"face {poly.face_ids[face]!r}: the loop has fewer "
+                                     "than 3 distinct vertices after merging vertices closer than merge_tolerance"))
+        raise InputRejected(errors)
+    start = np.zeros(len(lengths) + 1, dtype=np.int64)
+    np.cumsum(lengths, out=start[1:])
+    return poly.with_loops(lv[keep], start), dropped
+
+
+def loop_area_vectors(poly: Polygons, loops: np.ndarray) -> np.ndarray:
+    """Newell area vectors of the given loops (each loop's points taken relative to its first)."""
+    out = np.zeros((len(loops), 3))
+    for i, loop in enumerate(loops):
+        p = poly.points[poly.loop_vertices[poly.loop_start[loop]:poly.loop_start[loop + 1]]]
+        p = p - p[0]
+        out[i] = 0.5 * np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)
+    return out
+
+
+def orient_holes(poly: Polygons) -> tuple[Polygons, list[str]]:
+    """An inner loop must run against its outer loop (its area is subtracted); one that runs with it
+    is reversed and named in the report."""
+    n_loops = np.diff(poly.face_loop_start)
+    faces = np.flatnonzero(n_loops > 1)
+    if len(faces) == 0:
+        return poly, []
+    lv = poly.loop_vertices.copy()
+    reversed_faces = []
+    for f in faces:
+        loops = np.arange(poly.face_loop_start[f], poly.face_loop_start[f + 1])
+        areas = loop_area_vectors(poly, loops)
+        for loop, area in zip(loops[1:], areas[1:]):
+            if float(area @ areas[0]) > 0:
+                s, t = poly.loop_start[loop], poly.loop_start[loop + 1]
+                lv[s:t] = lv[s:t][::-1]
+                reversed_faces.append(poly.face_ids[f])
+    return poly.with_loops(lv, poly.loop_start), sorted(set(reversed_faces))
+
+
+def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) -> tuple[Polygons, np.ndarray, EdgeGroups]:
+    """Insert into a face's loop every vertex of the same zone that lies on one of its open edges
+    strictly between the ends (within ``tolerance``): a wall split in two against an unsplit roof,
+    or collinear extra vertices on a roof edge, then share edges as the map needs. Only open edges
+    are searched, so a closed surface costs one grouping pass."""
+    per_zone = np.zeros(len(poly.zone_ids), dtype=np.int64)
+    tol = max(tolerance, 1e-12)
+    for pass_no in range(max_passes + 1):
+        use_face, use_zone, _ = poly.uses()
+        position, use = expand_uses(poly, use_face)
+        groups = group_edges(poly, use_zone, position, use)
+        odd = groups.counts % 2 == 1
+        if not odd.any() or pass_no == max_passes:
+            break
+        open_eu = np.flatnonzero(odd[groups.group])
+        nxt = poly.next_position()
+        lv = poly.loop_vertices
+        inserts: dict[int, list[tuple[float, int]]] = {}
+        zone_of_open = groups.zone[open_eu]
+        for zone in np.unique(zone_of_open):
+            eus = open_eu[zone_of_open == zone]
+            ends = np.unique(np.concatenate([lv[position[eus]], lv[nxt[position[eus]]]]))
+            tree = cKDTree(poly.points[ends])
+            a_idx, b_idx = lv[position[eus]], lv[nxt[position[eus]]]
+            a, b = poly.points[a_idx], poly.points[b_idx]
+            mid, half = 0.5 * (a + b), 0.5 * np.linalg.norm(b - a, axis=1)
+            near = tree.query_ball_point(mid, half + tol)
+            for k, candidates in enumerate(near):
+                if len(candidates) <= 2:
+                    continue
+                w = ends[np.asarray(candidates)]
+                w = w[(w != a_idx[k]) & (w != b_idx[k])]
+                if len(w) == 0:
+                    continue
+                d = b[k] - a[k]
+                length2 = float(d @ d)
+                if length2 == 0:
+                    continue
+                rel = poly.points[w] - a[k]
+                t = rel @ d / length2
+                off = np.linalg.norm(rel - np.outer(t, d), axis=1)
+                on = (off <= tol) & (t * np.sqrt(length2) > tol) & ((1 - t) * np.sqrt(length2) > tol)
+                if not on.any():
+                    continue
+                pos = int(position[eus[k]])
+                entries = inserts.setdefault(pos, [])
+                # the loop runs a -> b at this position in stored order
+                before = len(entries)
+                entries.extend((float(tt), int(ww)) for tt, ww in zip(t[on], w[on]) if ww not in {e[1] for e in entries})
+                per_zone[zone] += len(entries) - before
+        if not inserts:
+            break
+        groups = None
+        counts = np.zeros(len(lv), dtype=np.int64)
+        for pos, entries in inserts.items():
+            counts[pos] = len(entries)
+        new_lv = np.empty(len(lv) + int(counts.sum()), dtype=np.int64)
+        target = np.arange(len(lv)) + np.concatenate([[0], np.cumsum(counts)[:-1]])
+        new_lv[target] = lv
+        for pos, entries in inserts.items():
+            entries.sort()
+            new_lv[target[pos] + 1: target[pos] + 1 + len(entries)] = [w for _, w in entries]
+        loop_of = poly.position_loop
+        added = np.bincount(loop_of, weights=counts, minlength=len(poly.loop_start) - 1).astype(np.int64)
+        start = poly.loop_start + np.concatenate([[0], np.cumsum(added)])
+        poly = poly.with_loops(new_lv, start)
+    return poly, per_zone, groups
+
+
+def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
+    """The repairs in the order they depend on each other: merge, drop repeats, holes, T-junctions."""
+    poly, merged = merge_vertices(poly, merge_tolerance)
+    poly, dropped = drop_repeats(poly)
+    poly, holes = orient_holes(poly)
+    poly, per_zone, groups = insert_t_junctions(poly, merge_tolerance)
+    return poly, Repairs(merged_vertices=merged, dropped_repeats=dropped, holes_reversed=holes,
+                         t_junctions_per_zone=per_zone, edge_groups=groups)

@@ -1,0 +1,215 @@
+"""The polyhedra solver: the paper's stages in order.
+
+1. topology as a generalized map — after the repairs it depends on (merge, T-junctions);
+2. measures per orbit — Newell area vectors, divergence-theorem volumes in each zone's frame;
+3. diagnostics — open/non-manifold edges, orientation, Euler characteristic, genus;
+4. multi-zone complexes — adjacency of zones through shared faces.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
+from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.polyhedra.adjacency import adjacency
+from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
+from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
+from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
+from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
+from plantsolve.solvers.polyhedra.repair import Repairs, repair
+from plantsolve.solvers.polyhedra.validation import check_input
+
+MAX_LISTED_EDGES = 1000
+
+
+@dataclass(frozen=True)
+class Analysis:
+    poly: Polygons
+    repairs: Repairs
+    gmap: GMap
+    measures: FaceMeasures
+    terms: UseTerms
+    orientation: Orientation
+    topology: Topology
+
+
+def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = no_progress) -> Analysis:
+    """Repair, sew the generalized map, measure and diagnose (the paper's method on flat arrays)."""
+    poly, repairs = repair(poly, merge_tolerance)
+    progress(0.3, "generalized map")
+    gmap = build_gmap(poly, repairs.edge_groups)
+    progress(0.5, "measures")
+    measures = face_measures(poly)
+    n_zones = len(poly.zone_ids)
+    terms = use_terms(measures, gmap.use_face, gmap.use_zone, gmap.use_sign, n_zones)
+    progress(0.7, "diagnostics")
+    volume = terms.flux.sum(axis=1) / 3.0
+    orientation = orient(gmap, measures.area[gmap.use_face], volume, n_zones)
+    loops_per_face = np.diff(poly.face_loop_start)
+    topo = topology(gmap, loops_per_face, orientation.sheet, n_zones)
+    return Analysis(poly, repairs, gmap, measures, terms, orientation, topo)
+
+
+def _edge_reports(an: Analysis, groups_idx: np.ndarray) -> list[dict]:
+    g = an.gmap.groups
+    pts = an.poly.points
+    out = []
+    for gi in groups_idx[:MAX_LISTED_EDGES]:
+        members = g.order[g.starts[gi]:g.starts[gi] + g.counts[gi]]
+        e0 = members[0]
+        faces = sorted({an.poly.face_ids[an.gmap.use_face[an.gmap.use[e]]] for e in members})
+        out.append({"start": pts[g.lo[e0]].tolist(), "end": pts[g.hi[e0]].tolist(), "faces": faces,
+                    "uses": int(g.counts[gi])})
+    return out
+
+
+def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> PolyhedraResult:
+    """Zone volumes, areas and closure diagnostics of polygonal zones (the paper's method: a
+    generalized map of the faces, measures per orbit, diagnostics from the orbits)."""
+    check_input(request)
+    progress(0.0, "reading faces")
+    poly = from_request(request)
+    opts = request.options
+    an = analyse(poly, opts.merge_tolerance, progress)
+    poly, gmap, topo = an.poly, an.gmap, an.topology
+    progress(0.85, "results")
+    area = an.measures.area
+    n_faces = poly.n_faces
+    sub_area = np.zeros(n_faces)
+    subs = np.flatnonzero(poly.face_parent >= 0)
+    np.add.at(sub_area, poly.face_parent[subs], area[subs])
+    net_area = area - sub_area
+    normal = an.measures.normal
+
+    warnings: list[Diagnostic] = []
+    n_zones = len(poly.zone_ids)
+    use_volume = an.terms.flux.sum(axis=1) / 3.0
+    group_zone = gmap.groups.zone[gmap.groups.order[gmap.groups.starts]]
+    open_zone = group_zone[topo.open_groups]
+    nm_zone = group_zone[topo.non_manifold_groups]
+    zones = []
+    all_closed = True
+    total = 0.0
+    by_zone = np.argsort(gmap.use_zone, kind="stable")
+    zone_bounds = np.searchsorted(gmap.use_zone[by_zone], np.arange(n_zones + 1))
+    for z in range(n_zones):
+        uses = by_zone[zone_bounds[z]:zone_bounds[z + 1]]
+        faces = gmap.use_face[uses]
+        factor = an.orientation.factor[uses]
+        conflict = bool(an.orientation.conflict[uses].any())
+        n_open = int((open_zone == z).sum())
+        closed = n_open == 0
+        oriented_volume = float((factor * use_volume[uses]).sum())
+        signed = float(use_volume[uses].sum())
+        volume = abs(oriented_volume) if closed and not conflict else None
+        all_closed &= volume is not None
+        total += volume or 0.0
+        if conflict:
+            label = "mixed"
+        elif (factor > 0).all():
+            label = "outward"
+        elif (factor < 0).all():
+            label = "inward"
+        else:
+            label = "mixed"
+        nm = topo.non_manifold_groups[nm_zone == z]
+        nm_vertices = topo.non_manifold_vertices[z]
+        euler = int(topo.euler[z])
+        zone_id = poly.zone_ids[z]
+        zones.append({
+            "id": zone_id, "volume": volume, "signed_volume": signed,
+            "surface_area": float(area[faces].sum()), "net_surface_area": float(net_area[faces].sum()),
+            "closed": closed, "orientation": label,
+            "misoriented_faces": [poly.face_ids[f] for f in faces[factor < 0]] if label != "outward" else [],
+            "flux_volumes": an.terms.flux[uses].sum(axis=0).tolist(),
+            "vector_area_sum": an.terms.area_vector[uses].sum(axis=0).tolist(),
+            "open_edges": _edge_reports(an, topo.open_groups[open_zone == z]),
+            "open_edge_count": n_open,
+            "non_manifold_edges": _edge_reports(an, nm),
+            "non_manifold_edge_count": int(len(nm)),
+            "non_manifold_vertices": poly.points[nm_vertices[:MAX_LISTED_EDGES]].tolist(),
+            "t_junctions_repaired": int(an.repairs.t_junctions_per_zone[z]),
+            "components": int(topo.sheets[z]),
+            "euler_characteristic": euler,
+            "genus": genus(euler, int(topo.sheets[z]), int(topo.boundary_loops[z]),
+                           manifold=len(nm) == 0 and len(nm_vertices) == 0, orientable=not conflict),
+            "faces": [poly.face_ids[f] for f in faces],
+        })
+        if not closed:
+            warnings.append(Diagnostic(code="zone_not_closed", message=(
+                f"zone {zone_id!r} is not closed: {n_open} open edge(s); its volume is not given."),
+                details={"zone": zone_id, "open_edges": n_open}))
+        if len(nm):
+            warnings.append(Diagnostic(code="non_manifold_edges", message=(
+                f"zone {zone_id!r}: {len(nm)} edge(s) shared by more than two faces."),
+                details={"zone": zone_id, "count": int(len(nm))}))
+        if label != "outward":
+            bad = zones[-1]["misoriented_faces"]
+            warnings.append(Diagnostic(code=f"orientation_{label}", message=(
+                f"zone {zone_id!r}: " + ("the faces cannot be oriented consistently." if conflict else
+                                          f"{len(bad)} face(s) point into the zone.")),
+                details={"zone": zone_id, "faces": bad[:MAX_LISTED_EDGES]}))
+
+    planarity = an.measures.planarity_error
+    nonplanar = np.flatnonzero(planarity > opts.planarity_tolerance)
+    if len(nonplanar):
+        warnings.append(Diagnostic(code="non_planar_faces", message=(
+            f"{len(nonplanar)} face(s) deviate from their plane by more than {opts.planarity_tolerance:g} "
+            f"{request.units}; areas are Newell's projected areas."),
+            details={"faces": {poly.face_ids[f]: float(planarity[f]) for f in nonplanar[:MAX_LISTED_EDGES]}}))
+    degenerate = np.flatnonzero(area <= 0)
+    if len(degenerate):
+        warnings.append(Diagnostic(code="zero_area_faces", message=f"{len(degenerate)} face(s) have no area.",
+                                   details={"faces": [poly.face_ids[f] for f in degenerate[:MAX_LISTED_EDGES]]}))
+    oversized = subs[net_area[poly.face_parent[subs]] < -1e-9 * np.maximum(area[poly.face_parent[subs]], 1)]
+    if len(oversized):
+        warnings.append(Diagnostic(code="subsurfaces_exceed_host", message=(
+            "the subsurfaces of some faces have more area than their host."),
+            details={"faces": sorted({poly.face_ids[poly.face_parent[f]] for f in oversized})}))
+    if an.repairs.holes_reversed:
+        warnings.append(Diagnostic(code="holes_reversed", message=(
+            f"{len(an.repairs.holes_reversed)} face(s) had inner loops running the same way as the outer loop; "
+            "they were reversed."), details={"faces": an.repairs.holes_reversed[:MAX_LISTED_EDGES]}))
+
+    lv = poly.loop_vertices
+    nxt = poly.next_position()
+    a, b = lv, lv[nxt]
+    n_points = len(poly.points)
+    _, first = np.unique(np.minimum(a, b) * n_points + np.maximum(a, b), return_index=True)
+    edge_length_total = float(np.linalg.norm(poly.points[b[first]] - poly.points[a[first]], axis=1).sum())
+
+    face_zones = poly.face_zones
+    parent = poly.face_parent.tolist()
+    area_l, net_l, perim_l = area.tolist(), net_area.tolist(), an.measures.perimeter.tolist()
+    normal_l, planarity_l = normal.tolist(), planarity.tolist()
+    zone_names = [[poly.zone_ids[z] for z in zs] for zs in face_zones]
+    face_results = [{
+        "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
+        "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
+        "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
+
+    details = {
+        "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,
+        "merged_vertices": an.repairs.merged_vertices, "repeated_vertices_dropped": an.repairs.dropped_repeats,
+        "t_junctions_repaired": int(an.repairs.t_junctions_per_zone.sum()),
+        "method": "Newell area vectors and divergence-theorem volumes over the generalized map's orbits",
+    }
+    if request.source:
+        details["source"] = request.source
+        skipped = request.source.get("skipped") or []
+        if skipped:
+            warnings.append(Diagnostic(code="objects_skipped", message=(
+                f"{len(skipped)} object(s) of the file were skipped (line and reason in details)."),
+                details={"skipped": skipped[:MAX_LISTED_EDGES]}))
+    progress(1.0, "done")
+    closed_count = sum(1 for z in zones if z["volume"] is not None)
+    return PolyhedraResult(
+        units=request.units, zones=zones, faces=face_results, edge_length_total=edge_length_total,
+        adjacency=adjacency(poly, area, normal), total_volume=total if all_closed else None,
+        report=Report(status="warning" if warnings else "ok",
+                      message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
+    )

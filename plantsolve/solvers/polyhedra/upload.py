@@ -1,0 +1,409 @@
+"""Files the zones come in: EnergyPlus IDF, Wavefront OBJ, STL, or a JSON request.
+
+Item by item: an object that cannot be read (a vertex that is not a number, a window whose host
+surface does not exist, a face with fewer than three vertices) is skipped and listed in the
+result's report with its line and reason; the file is refused (422 naming the line) only when
+nothing usable remains.
+
+IDF (as EnergyPlus and OpenStudio write it): objects end with ``;``, fields are separated by
+``,`` and may be spread over any number of lines; ``!`` starts a comment (``!-`` field notes such
+as ``!- X,Y,Z Vertex 1 {m}`` included); object names are case-insensitive. Read: ``Zone`` (origin
+and relative north for relative coordinates), ``GlobalGeometryRules`` (vertex entry direction,
+coordinate system), ``BuildingSurface:Detailed``, ``Wall:Detailed``, ``RoofCeiling:Detailed``,
+``Floor:Detailed`` (with or without the Space Name field of EnergyPlus 9.6+) and
+``FenestrationSurface:Detailed`` (windows and doors, as subsurfaces of their host; with or
+without the Shading Control Name field of EnergyPlus before 9.0). Interzone surfaces are written
+once per zone; the solver pairs coincident faces of different zones as adjacency.
+
+OBJ: ``v`` vertices, ``f`` faces (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``; negative indices count
+back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` continues a line;
+everything else (``vn``, ``vt``, ``usemtl``, ``mtllib``, ``s``, ``l``) is ignored. SketchUp and
+Revit write unwelded, triangulated faces: coincident vertices are merged by the solver.
+
+STL (ASCII or binary, read with trimesh): one zone, triangles as faces.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import re
+import struct
+
+import numpy as np
+from pydantic import ValidationError
+
+from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.solvers.base import FieldError, InputRejected, reject
+
+UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
+MAX_SKIPPED_LISTED = 200
+
+SURFACE_CLASSES = {
+    # class -> (index of the zone name, index of the surface type or None) before any Space Name field
+    "buildingsurface:detailed": (3, 1),
+    "wall:detailed": (2, None),
+    "roofceiling:detailed": (2, None),
+    "floor:detailed": (2, None),
+}
+BOUNDARY_CONDITIONS = {
+    "outdoors", "surface", "zone", "ground", "adiabatic", "foundation", "othersidecoefficients",
+    "othersideconditionsmodel", "groundfcfactormethod", "groundslabpreprocessoraverage",
+    "groundslabpreprocessorcore", "groundslabpreprocessorperimeter", "groundbasementpreprocessoraveragewall",
+    "groundbasementpreprocessoraveragefloor", "groundbasementpreprocessorupperwall",
+    "groundbasementpreprocessorlowerwall", "kivafoundation",
+}
+
+
+def _decode(content: bytes) -> str:
+    if content.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return content.decode("utf-16")
+        except UnicodeDecodeError:
+            raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
+    if b"\x00" in content:
+        raise reject("this is a binary file (it contains NUL bytes), not a text file")
+    try:
+        return content.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return content.decode("cp1252", errors="replace")
+
+
+def idf_objects(text: str) -> list[tuple[str, list[str], list[int], int]]:
+    """(class, fields, line of each field, line of the object) of every object, comments removed."""
+    objects = []
+    fields: list[str] = []
+    lines: list[int] = []
+    current: list[str] = []
+    current_line = 0
+    for number, raw in enumerate(text.splitlines(), 1):
+        line = raw.split("!", 1)[0]
+        for char in line:
+            if char in ",;":
+                if not current and not fields and char == ";" and not "".join(current).strip():
+                    continue
+                fields.append("".join(current).strip())
+                lines.append(current_line or number)
+                current, current_line = [], 0
+                if char == ";":
+                    if fields and fields[0]:
+                        objects.append((fields[0].lower(), fields[1:], lines[1:], lines[0]))
+                    fields, lines = [], []
+            else:
+                if not current_line and not char.isspace():
+                    current_line = number
+                current.append(char)
+    return objects
+
+
+def _number(value: str) -> float:
+    x = float(value)
+    if not math.isfinite(x):
+        raise ValueError(f"{value!r} is not finite")
+    return x
+
+
+def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[float]]:
+    """The vertex list after the Number of Vertices field at ``n_index``."""
+    coords = [f for f in fields[n_index + 1:]]
+    while coords and coords[-1] == "":
+        coords.pop()
+    if len(coords) % 3:
+        raise ValueError(f"{len(coords)} coordinates after 'Number of Vertices' (line {lines[n_index]}): not a "
+                         "multiple of 3")
+    count = fields[n_index].strip().lower()
+    if count not in ("", "autocalculate"):
+        try:
+            n = int(float(count))
+        except ValueError:
+            raise ValueError(f"'Number of Vertices' is {fields[n_index]!r}") from None
+        if n != len(coords) // 3:
+            raise ValueError(f"'Number of Vertices' says {n} but {len(coords) // 3} vertices follow")
+    points = []
+    for k in range(0, len(coords), 3):
+        try:
+            points.append([_number(c) for c in coords[k:k + 3]])
+        except ValueError as e:
+            raise ValueError(f"vertex {k // 3 + 1} (line {lines[n_index + 1 + k]}): {e}") from None
+    if len({tuple(p) for p in points}) < 3:
+        raise ValueError(f"{len({tuple(p) for p in points})} distinct vertices; a surface needs at least 3")
+    return points
+
+
+def _surface_layout(cls: str, fields: list[str]) -> tuple[int, int]:
+    """(index of the boundary condition, index of Number of Vertices), with or without Space Name."""
+    zone_index, _ = SURFACE_CLASSES[cls]
+    for extra in (0, 1):
+        bc = zone_index + 1 + extra
+        if bc < len(fields) and fields[bc].strip().lower() in BOUNDARY_CONDITIONS:
+            return bc, bc + 5
+    for extra in (0, 1):  # an unknown boundary condition: the layout whose vertex fields come in threes
+        n_index = zone_index + 6 + extra
+        if n_index < len(fields) and (len(fields) - n_index - 1) % 3 == 0:
+            return zone_index + 1 + extra, n_index
+    return zone_index + 1, zone_index + 6
+
+
+def _fenestration_layout(fields: list[str]) -> int:
+    for n_index in (8, 9):  # 9: the Shading Control Name field of EnergyPlus before 9.0
+        if n_index >= len(fields):
+            continue
+        rest = [f for f in fields[n_index + 1:]]
+        while rest and rest[-1] == "":
+            rest.pop()
+        count = fields[n_index].strip().lower()
+        if len(rest) % 3:
+            continue
+        if count in ("", "autocalculate"):
+            return n_index
+        try:
+            if int(float(count)) == len(rest) // 3:
+                return n_index
+        except ValueError:
+            continue
+    return 8
+
+
+def parse_idf(text: str) -> dict:
+    objects = idf_objects(text)
+    if not objects:
+        raise reject("no IDF object here (objects are 'Class, field, ...;')")
+    skipped: list[dict] = []
+    clockwise, relative = False, False
+    zones: dict[str, tuple[float, float, float, float]] = {}
+    zone_names: dict[str, str] = {}
+    for cls, fields, lines, line in objects:
+        if cls == "globalgeometryrules":
+            if len(fields) > 1 and fields[1].strip().lower() in ("clockwise",):
+                clockwise = True
+            if len(fields) > 2 and fields[2].strip().lower() == "relative":
+                relative = True
+        elif cls == "zone" and fields and fields[0]:
+            try:
+                values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
+            except ValueError as e:
+                skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
+                values = [0.0] * 4
+            zones[fields[0].lower()] = tuple(values)
+            zone_names[fields[0].lower()] = fields[0]
+    faces: list[dict] = []
+    face_line: dict[str, int] = {}
+    surface_zone: dict[str, str] = {}
+    windows = []
+    for cls, fields, lines, line in objects:
+        if cls in SURFACE_CLASSES:
+            name = fields[0] if fields else ""
+            label = f"{cls} {name!r}"
+            try:
+                zone_index, _ = SURFACE_CLASSES[cls]
+                if not name:
+                    raise ValueError("no name")
+                if len(fields) <= zone_index or not fields[zone_index]:
+                    raise ValueError("no zone name")
+                _, n_index = _surface_layout(cls, fields)
+                points = _vertices(fields, lines, n_index)
+                zone = fields[zone_index]
+                zone_key = zone.lower()
+                if relative and zone_key in zones:
+                    points = _to_world(points, zones[zone_key])
+                if name.lower() in face_line:
+                    raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+            except ValueError as e:
+                skipped.append({"line": line, "object": label, "reason": str(e)})
+                continue
+            zone = zone_names.get(zone_key, zone)
+            faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "zones": [zone]})
+            face_line[name.lower()] = line
+            surface_zone[name.lower()] = zone_key
+        elif cls == "fenestrationsurface:detailed":
+            windows.append((fields, lines, line))
+    by_name = {f["id"].lower(): f["id"] for f in faces}
+    for fields, lines, line in windows:
+        name = fields[0] if fields else ""
+        label = f"fenestrationsurface:detailed {name!r}"
+        try:
+            if not name:
+                raise ValueError("no name")
+            if len(fields) < 4 or fields[3].lower() not in by_name:
+                raise ValueError(f"its building surface {fields[3] if len(fields) > 3 else ''!r} is not a surface "
+                                 "read from this file")
+            n_index = _fenestration_layout(fields)
+            points = _vertices(fields, lines, n_index)
+            zone_key = surface_zone[fields[3].lower()]
+            if relative and zone_key in zones:
+                points = _to_world(points, zones[zone_key])
+            if name.lower() in face_line:
+                raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+        except ValueError as e:
+            skipped.append({"line": line, "object": label, "reason": str(e)})
+            continue
+        faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "parent": by_name[fields[3].lower()]})
+        face_line[name.lower()] = line
+    if not any("parent" not in f for f in faces):
+        first = skipped[0] if skipped else None
+        where = ("file", "line", first["line"]) if first else ("file",)
+        reason = (f"no usable surface: {first['object']} (line {first['line']}): {first['reason']}" if first else
+                  "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed or Floor:Detailed object")
+        raise reject(reason, where)
+    return {"units": "m", "faces": faces,
+            "source": {"format": "idf", "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
+                       "vertex_entry": "clockwise" if clockwise else "counterclockwise",
+                       "coordinates": "relative" if relative else "world", "skipped": skipped[:MAX_SKIPPED_LISTED],
+                       "skipped_count": len(skipped)}}
+
+
+def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
+    """Relative coordinates: rotate by the zone's relative north (clockwise, as a compass bearing) and
+    move to its origin, as EnergyPlus does."""
+    north, x0, y0, z0 = zone
+    angle = -math.radians(north)
+    c, s = math.cos(angle), math.sin(angle)
+    return [[x * c - y * s + x0, x * s + y * c + y0, z + z0] for x, y, z in points]
+
+
+def parse_obj(text: str) -> dict:
+    vertices: list[list[float]] = []
+    faces: list[dict] = []
+    skipped: list[dict] = []
+    group = None
+    obj_name = None
+    pending = ""
+    pending_line = 0
+    for number, raw in enumerate(text.splitlines(), 1):
+        line = raw.split("#", 1)[0].rstrip()
+        if line.endswith("\\"):
+            pending, pending_line = pending + line[:-1] + " ", pending_line or number
+            continue
+        line, at = pending + line, pending_line or number
+        pending, pending_line = "", 0
+        parts = line.split()
+        if not parts:
+            continue
+        key = parts[0]
+        if key == "v":
+            try:
+                if len(parts) < 4:
+                    raise ValueError(f"{len(parts) - 1} coordinates")
+                vertices.append([_number(p) for p in parts[1:4]])
+            except ValueError as e:
+                # keep the numbering of later vertices: a placeholder that no usable face may use
+                vertices.append([math.nan] * 3)
+                skipped.append({"line": at, "object": "v", "reason": f"not a vertex: {e}"})
+        elif key == "g":
+            group = " ".join(parts[1:]) or None
+        elif key == "o":
+            obj_name = " ".join(parts[1:]) or None
+        elif key == "f":
+            try:
+                loop = []
+                for token in parts[1:]:
+                    ref = int(token.split("/")[0])
+                    index = ref - 1 if ref > 0 else len(vertices) + ref
+                    if ref == 0 or not 0 <= index < len(vertices):
+                        raise ValueError(f"vertex {ref} does not exist ({len(vertices)} vertices so far)")
+                    if not math.isfinite(vertices[index][0]):
+                        raise ValueError(f"vertex {ref} could not be read")
+                    loop.append(index)
+                if len(set(loop)) < 3:
+                    raise ValueError(f"{len(set(loop))} distinct vertices; a face needs at least 3")
+            except ValueError as e:
+                skipped.append({"line": at, "object": "f", "reason": str(e)})
+                continue
+            faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [group or obj_name or "default"]})
+    if not faces:
+        first = skipped[0] if skipped else None
+        if first:
+            raise reject(f"no usable face: line {first['line']}: {first['reason']}", ("file", "line", first["line"]))
+        raise reject("no face ('f' line) in this OBJ file")
+    used = sorted({v for f in faces for v in f["loops"][0]})
+    remap = {old: new for new, old in enumerate(used)}
+    for f in faces:
+        f["loops"] = [[remap[v] for v in f["loops"][0]]]
+    return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
+            "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
+                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped)}}
+
+
+def parse_stl(content: bytes) -> dict:
+    """One zone of triangles (trimesh reads the file; vertices stay unwelded, the solver merges them)."""
+    import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
+
+    head = content[:1024].lstrip().lower()
+    ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
+    binary_like = len(content) >= 84 and 84 + 50 * struct.unpack("<I", content[80:84])[0] == len(content)
+    if not (ascii_like or binary_like):
+        raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
+                     "triangle count)")
+    try:
+        mesh = trimesh.load(io.BytesIO(content), file_type="stl", process=False, force="mesh")
+    except Exception as e:  # trimesh raises many kinds for a broken file
+        raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
+    vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
+    triangles = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if len(triangles) == 0:
+        raise reject("the STL file holds no triangle")
+    finite = np.isfinite(vertices).all(axis=1)
+    good = finite[triangles].all(axis=1) & (triangles[:, 0] != triangles[:, 1]) & \
+        (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
+    skipped = [{"object": f"facet {int(k) + 1}", "reason": "non-finite or repeated vertex"}
+               for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
+    triangles = triangles[good]
+    if len(triangles) == 0:
+        raise reject("no usable triangle in the STL file (non-finite or repeated vertices)")
+    # an ASCII file names its solid; a binary header is free text, often an exporter's banner
+    name = (str(getattr(mesh, "metadata", {}).get("name") or "").strip() if ascii_like else "") or "default"
+    faces = [{"id": f"t{k + 1}", "loops": [t], "zones": [name]} for k, t in enumerate(triangles.tolist())]
+    return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
+            "source": {"format": "stl", "faces": len(faces), "zones": 1, "skipped": skipped,
+                       "skipped_count": int((~good).sum())}}
+
+
+def _apply_options(body: dict, options: dict | None) -> dict:
+    if not options:
+        return body
+    if not isinstance(options, dict):
+        raise reject("options must be a JSON object", ("options",))
+    options = dict(options)
+    if "units" in options:
+        body = {**body, "units": options.pop("units")}
+    nested = options.pop("options", None)
+    merged = {**(body.get("options") or {}), **(nested if isinstance(nested, dict) else {}), **options}
+    return {**body, "options": merged} if merged else body
+
+
+def parse_upload(filename: str, content: bytes, options: dict | None) -> PolyhedraRequest:
+    """An IDF, OBJ, STL or JSON file as a request; ``options`` (the form's options: ``units``,
+    ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
+    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
+    if ext not in UPLOAD_EXTENSIONS:
+        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    if not content.strip():
+        raise reject("the file is empty")
+    if ext == ".stl":
+        body = parse_stl(content)
+    else:
+        text = _decode(content)
+        if ext == ".idf":
+            body = parse_idf(text)
+        elif ext == ".obj":
+            body = parse_obj(text)
+        else:
+            try:
+                body = json.loads(text)
+            except json.JSONDecodeError as e:
+                raise reject(f"invalid JSON: {e}") from None
+            if not isinstance(body, dict):
+                raise reject("the JSON file must hold a request object")
+    body = _apply_options(body, options)
+    try:
+        return PolyhedraRequest.model_validate(body)
+    except ValidationError as e:
+        errors = []
+        for err in e.errors()[:50]:
+            loc = tuple(p for p in err["loc"] if p not in ("indices", "points"))
+            if loc[:1] in (("options",), ("units",)) and options:
+                errors.append(FieldError(loc, err["msg"], err.get("type", "value_error")))
+            else:
+                errors.append(FieldError(("file",), f"{'/'.join(map(str, loc))}: {err['msg']}", err.get("type", "value_error")))
+        raise InputRejected(errors) from None

@@ -1,0 +1,56 @@
+"""Semantic input checks (types, finiteness and lengths are in the schema): every one names the field."""
+
+from __future__ import annotations
+
+from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+
+MAX_ERRORS = 50
+
+
+def check_input(request: PolyhedraRequest) -> None:
+    """Unique face ids, vertex indices in range, at least three distinct points per loop, parents that
+    exist and are enclosure faces, no zone listed twice on a face, at least one enclosure face."""
+    errors: list[FieldError] = []
+    n_vertices = len(request.vertices)
+    seen: dict[str, int] = {}
+    for i, face in enumerate(request.faces):
+        if face.id in seen:
+            errors.append(FieldError(("faces", i, "id"), f"face id {face.id!r} repeats face {seen[face.id]}"))
+        seen.setdefault(face.id, i)
+        for j, loop in enumerate(face.loops):
+            if loop and isinstance(loop[0], list):
+                distinct = len({tuple(p) for p in loop})
+            else:
+                bad = [k for k, v in enumerate(loop) if v >= n_vertices]
+                if bad:
+                    errors.append(FieldError(("faces", i, "loops", j, bad[0]),
+                                             f"vertex index {loop[bad[0]]} is out of range ({n_vertices} vertices)"))
+                    continue
+                distinct = len(set(loop))
+            if distinct < 3:
+                errors.append(FieldError(("faces", i, "loops", j), f"face {face.id!r}: a loop needs at least 3 "
+                                         f"distinct points, this one has {distinct}"))
+        if face.zones is not None and len(set(face.zones)) != len(face.zones):
+            errors.append(FieldError(("faces", i, "zones"), f"face {face.id!r} names the same zone twice"))
+        if len(errors) >= MAX_ERRORS:
+            break
+    by_id = {face.id: face for face in request.faces}
+    for i, face in enumerate(request.faces):
+        if face.parent is None:
+            continue
+        host = by_id.get(face.parent)
+        if host is None:
+            errors.append(FieldError(("faces", i, "parent"), f"subsurface {face.id!r}: no face {face.parent!r}"))
+        elif host.parent is not None or host is face:
+            errors.append(FieldError(("faces", i, "parent"), f"subsurface {face.id!r}: its parent {face.parent!r} "
+                                     "is itself a subsurface" if host is not face else "a face cannot be its own parent"))
+        elif face.zones is not None and not set(face.zones) <= set(host.zones or ["default"]):
+            errors.append(FieldError(("faces", i, "zones"), f"subsurface {face.id!r}: zones {face.zones} are not "
+                                     f"zones of its parent {face.parent!r}"))
+        if len(errors) >= MAX_ERRORS:
+            break
+    if not errors and all(face.parent is not None for face in request.faces):
+        errors.append(FieldError(("faces",), "every face is a subsurface: no face bounds a zone"))
+    if errors:
+        raise InputRejected(errors[:MAX_ERRORS])

@@ -1,0 +1,145 @@
+"""Uploads as exporters write them: EnergyPlus/OpenStudio IDF, SketchUp and Revit OBJ, ASCII and binary STL."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import pytest
+import trimesh
+
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.polyhedra import parse_upload, solve
+
+DATA = Path(__file__).parent / "data"
+
+
+def solved(name: str, options: dict | None = None):
+    request = parse_upload(name, (DATA / name).read_bytes(), options)
+    return request, solve(request)
+
+
+def zone(result, name):
+    return next(z for z in result.zones if z.id == name)
+
+
+def test_energyplus_1zone_uncontrolled():
+    request, result = solved("1ZoneUncontrolled.idf")
+    (z,) = result.zones
+    assert z.id == "ZONE ONE" and z.closed and z.orientation == "outward"
+    assert z.volume == pytest.approx(1061.88, abs=0.005)
+    floor = next(f for f in result.faces if f.id == "Zn001:Flr001")
+    assert floor.area == pytest.approx(232.26, abs=0.005) and floor.normal == pytest.approx([0, 0, -1])
+    assert z.surface_area == pytest.approx(2 * 15.24 ** 2 + 4 * 15.24 * 4.572)
+    assert request.source["format"] == "idf" and request.source["skipped"] == []
+
+
+def test_openstudio_export_with_space_names_relative_coordinates_and_interzone_walls():
+    request, result = solved("openstudio_two_offices.idf")
+    a, b = zone(result, "Office A Thermal Zone"), zone(result, "Office B Thermal Zone")
+    assert a.volume == pytest.approx(60.0) and b.volume == pytest.approx(60.0) and a.closed and b.closed
+    assert a.surface_area == pytest.approx(94.0) and a.net_surface_area == pytest.approx(94.0 - 3.0)
+    window = next(f for f in result.faces if f.id == "Office A Window")
+    assert window.parent == "Office A South" and window.area == pytest.approx(3.0)
+    (adj,) = result.adjacency  # the wall written once per zone, at x = 5 m once moved to the zone origins
+    assert adj.zones == ["Office A Thermal Zone", "Office B Thermal Zone"] and adj.area == pytest.approx(12.0)
+    assert sorted(adj.faces) == ["Office A East", "Office B West"]
+    text = (DATA / "openstudio_two_offices.idf").read_text().splitlines()
+    skipped = {s["object"]: s for s in request.source["skipped"]}
+    shade = skipped["buildingsurface:detailed 'Office B Broken Shade'"]
+    assert "oops" in shade["reason"] and "line 264" in shade["reason"] and "oops" in text[263]
+    assert text[shade["line"] - 1] == "buildingsurface:detailed," and "Broken Shade" in text[shade["line"]]
+    orphan = skipped["fenestrationsurface:detailed 'Office B Orphan Window'"]
+    assert "Office B Nowhere" in orphan["reason"] and "Orphan Window" in text[orphan["line"]]
+    assert [w.code for w in result.report.warnings] == ["objects_skipped"]
+
+
+def test_legacy_idf_clockwise_and_free_formatting():
+    request, result = solved("legacy_clockwise.idf")
+    (z,) = result.zones
+    assert z.id == "Shop" and z.closed and z.orientation == "outward" and z.volume == pytest.approx(40.0)
+    window = next(f for f in result.faces if f.id == "Shop Window")
+    assert window.parent == "Shop South" and window.area == pytest.approx(1.0)
+    assert window.normal == pytest.approx([0, -1, 0])  # clockwise entry turned counter-clockwise
+    assert z.net_surface_area == pytest.approx(z.surface_area - 1.0) and request.source["skipped"] == []
+
+
+def test_idf_with_nothing_usable_is_refused_naming_the_line():
+    text = b"Version,9.3;\n\nBuildingSurface:Detailed,\n  W1, Wall, C, Z, Outdoors, , SunExposed, WindExposed, 0.5, 4,\n" \
+           b"  0, 0, 1,\n  0, 0, zero,\n  1, 0, 0,\n  1, 0, 1;\n"
+    with pytest.raises(InputRejected) as error:
+        parse_upload("bad.idf", text, None)
+    (fe,) = error.value.errors
+    assert fe.loc == ("file", "line", 3) and "zero" in fe.msg
+    with pytest.raises(InputRejected, match="no BuildingSurface"):
+        parse_upload("empty.idf", b"Version,9.3;\nTimestep,4;\n", None)
+
+
+def test_sketchup_obj_groups_are_zones():
+    request, result = solved("sketchup_two_rooms.obj")
+    assert request.source["format"] == "obj" and len(request.faces) == 24
+    r1, r2 = zone(result, "Room_1"), zone(result, "Room_2")
+    assert r1.volume == pytest.approx(4 * 3 * 2.7) and r2.volume == pytest.approx(3.5 * 3 * 2.7)
+    assert r1.closed and r2.closed and r1.orientation == r2.orientation == "outward"
+    assert result.report.details["merged_vertices"] > 0  # SketchUp writes every triangle's corners afresh
+    (adj,) = result.adjacency  # the shared wall, triangulated along different diagonals on each side
+    assert adj.zones == ["Room_1", "Room_2"] and adj.area == pytest.approx(3 * 2.7) and len(adj.faces) == 4
+
+
+def test_revit_obj_objects_negative_indices_and_continuations():
+    request, result = solved("revit_room.obj")
+    (z,) = result.zones
+    assert z.id == "Level_1_Room_101" and z.closed and z.volume == pytest.approx(6 * 4 * 3.2)
+    (skip,) = request.source["skipped"]
+    lines = (DATA / "revit_room.obj").read_text().splitlines()
+    assert lines[skip["line"] - 1] == "f 1 2 99" and "99" in skip["reason"]
+
+
+def test_obj_with_no_usable_face_is_refused():
+    with pytest.raises(InputRejected) as error:
+        parse_upload("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", None)
+    assert error.value.errors[0].loc == ("file", "line", 3)
+
+
+def test_ascii_stl():
+    request, result = solved("ascii_box.stl")
+    (z,) = result.zones
+    assert z.id == "pump_housing" and z.closed and z.volume == pytest.approx(2.0 * 1.0 * 0.5)
+    assert z.surface_area == pytest.approx(2 * (2 + 1 + 0.5) * 1) and z.orientation == "outward"
+
+
+def test_binary_stl_of_a_torus_agrees_with_trimesh():
+    mesh = trimesh.creation.torus(major_radius=2.0, minor_radius=0.5, major_sections=48, minor_sections=24)
+    content = trimesh.exchange.stl.export_stl(mesh)
+    stored = trimesh.load(io.BytesIO(content), file_type="stl")  # binary STL holds float32 coordinates
+    result = solve(parse_upload("torus.stl", content, {"units": "m"}))
+    (z,) = result.zones
+    assert z.id == "default" and z.closed and z.genus == 1 and z.orientation == "outward"
+    assert z.volume == pytest.approx(stored.volume, rel=1e-12) and z.surface_area == pytest.approx(stored.area, rel=1e-12)
+    assert z.volume == pytest.approx(mesh.volume, rel=1e-6)
+
+
+def test_json_upload_and_form_options():
+    body = {"faces": [{"id": "a", "loops": [[[0, 0, 0], [1, 0, 0], [0, 1, 0]]]}]}
+    request = parse_upload("r.json", json.dumps(body).encode(), {"units": "ft", "merge_tolerance": 0.01})
+    assert request.units == "ft" and request.options.merge_tolerance == 0.01
+    with pytest.raises(InputRejected) as error:
+        parse_upload("r.json", json.dumps(body).encode(), {"merge_tolerance": -1})
+    assert error.value.errors[0].loc == ("options", "merge_tolerance")
+
+
+def test_relative_coordinates_follow_the_zone_relative_north():
+    # office B turned by 90 degrees (EnergyPlus turns zone coordinates clockwise by the relative north)
+    # and placed at (5, 5): its local south wall (y = 0) lands on x = 5, against office A's east wall
+    lines = (DATA / "openstudio_two_offices.idf").read_text().splitlines()
+    assert lines[32].strip().startswith("Office B Thermal Zone,") and lines[33].strip().startswith("0,")
+    lines[33] = "  90,                                     !- Direction of Relative North {deg}"
+    lines[35] = "  5,                                      !- Y Origin {m}"
+    result = solve(parse_upload("turned.idf", "\n".join(lines).encode(), None))
+    b = zone(result, "Office B Thermal Zone")
+    assert b.volume == pytest.approx(60.0) and b.closed
+    (adj,) = result.adjacency
+    assert sorted(adj.faces) == ["Office A East", "Office B South"] and adj.area == pytest.approx(12.0)
+    south = next(f for f in result.faces if f.id == "Office B South")
+    assert south.normal == pytest.approx([-1.0, 0.0, 0.0], abs=1e-12)
