@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import math
 import multiprocessing as mp
+import resource
 import sys
 import time
 from pathlib import Path
@@ -40,6 +41,11 @@ def _rss_kib(field: str) -> int:
     return 0
 
 
+def _cpu_s() -> float:
+    use = resource.getrusage(resource.RUSAGE_SELF)
+    return use.ru_utime + use.ru_stime
+
+
 def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None) -> None:
     if code is not None:
         # the child has imported nothing of plantsolve yet, so this checkout is the one it loads
@@ -52,13 +58,13 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
                        options={"method": method} if max_iterations is None
                        else {"method": method, "max_iterations": max_iterations})
     base = _rss_kib("VmRSS")
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu_s()
     res = solve(req)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
     d = res.report.details
     queue.put({
         "components": len(req.components), "connections": len(req.connections), "method": method, "converged": res.converged,
-        "iterations": res.iterations, "wall_s": wall, "peak_mib": (_rss_kib("VmHWM") - base) / 1024.0,
+        "iterations": res.iterations, "wall_s": wall, "cpu_s": cpu, "peak_mib": (_rss_kib("VmHWM") - base) / 1024.0,
         "max_gap": res.max_position_error, "solver_residual": d["snap_distortion"]["position"] if res.converged else res.max_position_error,
         "pipe_axis_mean": d["pipe_axis_movement"]["mean"], "fitting_mean": d["fitting_displacement"]["mean"],
         "cuts": len(res.cut_connections), "stop": d["stop_reason"],
@@ -85,9 +91,9 @@ def scaling(quick: bool, before: str | None) -> None:
     """Direct method on growing grids; with ``before``, the code in that directory on the same grids."""
     sides = SCALING_SIDES[:-1] if quick else SCALING_SIDES
     runs = [("this", None)] + ([("before", before)] if before else [])
-    head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'peak MiB':>9} {'max gap':>9} "
-            f"{'k time':>6} {'k mem':>6} {'iter':>5}  stop")
-    print("\nDirect method, scaling (k: exponent of time or memory ~ components^k since the size before)")
+    head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'max gap':>9} "
+            f"{'k cpu':>6} {'k mem':>6} {'iter':>5}  stop")
+    print("\nDirect method, scaling (k: exponent of CPU time or memory ~ components^k since the size before)")
     print(head)
     print("-" * len(head))
     rows: dict[str, list[dict]] = {}
@@ -96,15 +102,16 @@ def scaling(quick: bool, before: str | None) -> None:
             r = run_case(side, "direct", None, code)
             prev = rows.get(label, [None])[-1]
             rows.setdefault(label, []).append(r)
-            print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['peak_mib']:>9.1f} "
-                  f"{r['max_gap']:>9.2e} {_exponent(prev, r, 'wall_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
+            print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
+                  f"{r['peak_mib']:>9.1f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
                   f"{r['iterations']:>5}  {r['stop']}", flush=True)
     if before:
         print("\nthis / before:")
         for now, old in zip(rows["this"], rows["before"]):
-            print(f"  {now['components']:>6} components: time {now['wall_s'] / old['wall_s']:.2f}, "
+            print(f"  {now['components']:>6} components: CPU time {now['cpu_s'] / old['cpu_s']:.2f}, "
                   f"peak memory {now['peak_mib'] / max(old['peak_mib'], 1e-9):.2f}")
-    print("peak MiB: growth of the resident set during the solve (the request is built before).")
+    print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
+          "growth of the resident set during the solve (the request is built before).")
 
 
 def main() -> None:
