@@ -82,3 +82,17 @@ def test_badly_scaled_weights_with_redundant_constraints_go_to_the_lu():
     assert not isinstance(kkt._factor(H, A), kkt._SchurFactor)
     x, r, _ = kkt.constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-14, max_iter=12)
     assert np.max(np.abs(r)) <= 1e-10 * np.max(np.abs(b))
+
+
+def test_a_second_matrix_of_the_same_pattern_reuses_the_ordering_and_agrees_with_the_lu():
+    H, g, A, b = _problem(7)
+    cache: dict = {}
+    kkt.constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-14, max_iter=12, cache=cache)
+    assert cache["lu"].order is None
+    H2 = H.copy()
+    H2.data *= 1.5  # new values, same pattern
+    x, _, _ = kkt.constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-14, max_iter=12, cache=cache)
+    assert cache["lu"].order is not None
+    x_lu, _, _ = kkt._refine(H2, g, A, lambda x: b - A @ x, kkt._factor(H2, A, try_schur=False), 1e-14, 12,
+                             stale=False)
+    np.testing.assert_allclose(x, x_lu, rtol=0, atol=1e-10 * np.max(np.abs(x_lu)))
