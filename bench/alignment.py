@@ -10,8 +10,9 @@ plant-scale coordinates around 1e6 mm): pipes perturbed ~2 mm / 0.3 deg, fitting
 Targets: 1,000 components < 2 s, 10,000 < 30 s, memory linear.
 
 Then the scaling table of the direct method: about 1,000, 3,500, 10,000 and 35,000 components
-(35,000 not with --quick), time, peak memory, the largest gap left, and the exponent k of
-time ~ components^k (and of memory) fitted between each size and the one before. With
+(35,000 not with --quick), wall and CPU time, peak memory, the largest gap left, and the
+exponent k of CPU time ~ components^k (and of memory) fitted between each size and the one
+before. With
 ``--before DIR`` the same sizes also run on the code in DIR (a checkout of another revision,
 only read), side by side:
 
