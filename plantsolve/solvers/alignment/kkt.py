@@ -28,8 +28,8 @@ and small networks with nearly redundant ones, fail that and use the LU).
 What remains superlinear is elimination itself: on a network where every cell is a loop (a
 planar grid) any elimination order fills ~n log n entries and costs ~n^1.5 operations
 (separator bound); measured on the bench grids, the factor of ``S`` grows with exponent 1.2 in
-entries and 1.3-1.5 in time from 3,000 to 35,000 components. Trees and networks with few loops
-fill in linearly.
+entries and 1.3-1.5 in time from 3,000 to 35,000 components. On a tree network ``S`` has an
+elimination order without fill (from the leaves in).
 """
 
 from __future__ import annotations
