@@ -301,7 +301,7 @@ class JobRepository:
             waiting = session.execute(
                 select(Job.id, Job.enqueued_at).where(
                     Job.status == "queued", or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
-                ).order_by(Job.created_at)
+                ).order_by(Job.enqueued_at.is_not(None), Job.created_at).limit(SWEEP_BATCH)
             ).all()
         return SweepOutcome(requeued=requeued, failed=failed,
                             waiting=[(job_id, sent is not None) for job_id, sent in waiting if job_id not in requeued])
@@ -314,9 +314,12 @@ class JobRepository:
         """The message never reached the broker: the next sweep sends it."""
         self._execute(update(Job).where(Job.id == job_id).values(enqueued_at=None))
 
-    def queued_ids(self) -> list[uuid.UUID]:
+    def queued_ids(self, limit: int | None = None) -> list[uuid.UUID]:
+        """Queued jobs that a worker can claim, oldest first."""
+        query = (select(Job.id).where(Job.status == "queued", Job.attempt < Job.max_attempts)
+                 .order_by(Job.created_at, Job.id).limit(limit))
         with self.sessions() as session:
-            return list(session.scalars(select(Job.id).where(Job.status == "queued").order_by(Job.created_at)))
+            return list(session.scalars(query))
 
     # ---- helpers ----------------------------------------------------------------------------
 
@@ -338,6 +341,9 @@ class JobRepository:
 
 
 JOBS = Job.__table__
+# queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
+# sweeps instead of loaded whole every time
+SWEEP_BATCH = 1000
 BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
 
 

@@ -58,11 +58,15 @@ class ProcessDispatcher:
     def __init__(self, ctx: ServiceContext, workers: int | None = None):
         self.ctx = ctx
         self.size = workers or ctx.settings.embedded_workers
+        # Jobs handed to the pool at once. The database is this dispatcher's queue: beyond the window a
+        # job stays queued in its row and is pulled when a process frees up, so a backlog of thousands
+        # costs the API process no memory (and no garbage-collector pauses) for pool tasks.
+        self.window = max(4, 2 * self.size)
         self._pool: ProcessPool | None = None
         self._pending: set[uuid.UUID] = set()
         self._lock = threading.Lock()
         self._stopping = False
-        self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=self._refill)
 
     def start(self) -> None:
         self._stopping = False
@@ -85,16 +89,21 @@ class ProcessDispatcher:
         if self._pool is None or not self._pool.active:
             raise RuntimeError("the job process pool is not running")
 
-    def pending(self) -> int:
+    def in_flight(self) -> int:
+        """Jobs handed to the pool and not finished (at most ``window``)."""
         with self._lock:
             return len(self._pending)
+
+    def pending(self) -> int:
+        """Queued jobs this dispatcher holds: all of them, since it pulls them from the database."""
+        return self.ctx.repo.count_queued()
 
     def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
         if self._pool is None:
             raise RuntimeError("the job process pool is not running")
         with self._lock:
-            if job_id in self._pending:
-                return
+            if job_id in self._pending or len(self._pending) >= self.window:
+                return  # running, or waiting in its row until a process frees up (_refill)
             self._pending.add(job_id)
         spec = self.ctx.spec(kind) if kind else None
         if spec is None:
@@ -109,6 +118,12 @@ class ProcessDispatcher:
             self._pending.discard(job_id)
         if self._stopping:
             return
+        try:
+            self._outcome(job_id, future)
+        finally:
+            self._refill()
+
+    def _outcome(self, job_id: uuid.UUID, future) -> None:
         try:
             outcome = future.result()
         except FutureTimeout:  # the pool killed the worker at the hard limit
@@ -128,3 +143,17 @@ class ProcessDispatcher:
                 self.enqueue(job_id)
             except RuntimeError:  # stopping: the next start (or the sweeper) picks it up
                 pass
+
+    def _refill(self) -> None:
+        """Hand the oldest queued jobs to the pool until the window is full again."""
+        with self._lock:
+            free = self.window - len(self._pending)
+            held = set(self._pending)
+        if free <= 0 or self._stopping:
+            return
+        try:
+            waiting = [j for j in self.ctx.repo.queued_ids(limit=free + len(held)) if j not in held][:free]
+            for job_id in waiting:
+                self.enqueue(job_id)
+        except Exception:  # the database is away: the sweeper's next pass refills
+            log.warning("refilling the job pool failed", exc_info=True)

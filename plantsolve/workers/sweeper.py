@@ -52,15 +52,16 @@ def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None
     """At a dispatcher's start: jobs left queued (or running with a dead lease) by a previous process are
     enqueued again."""
     sweep_once(ctx, enqueue, pending)
-    for job_id in ctx.repo.queued_ids():
+    for job_id in ctx.repo.queued_ids(limit=10_000):  # a dispatcher that pulls from the database takes what it can
         enqueue(job_id)
 
 
 class Sweeper:
     """Runs :func:`sweep_once` every ``sweep_seconds`` in a daemon thread."""
 
-    def __init__(self, ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None):
-        self.ctx, self.enqueue, self.pending = ctx, enqueue, pending
+    def __init__(self, ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None,
+                 after_pass: Callable[[], None] | None = None):
+        self.ctx, self.enqueue, self.pending, self.after_pass = ctx, enqueue, pending, after_pass
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="sweeper", daemon=True)
 
@@ -74,5 +75,7 @@ class Sweeper:
         while not self._stop.wait(self.ctx.settings.sweep_seconds):
             try:
                 sweep_once(self.ctx, self.enqueue, self.pending)
+                if self.after_pass is not None:
+                    self.after_pass()
             except Exception:
                 log.exception("sweep failed")

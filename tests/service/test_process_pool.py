@@ -33,11 +33,13 @@ def test_jobs_run_in_worker_processes(pooled):
     assert os.getpriority(os.PRIO_PROCESS, worker_pid) == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 10)
 
 
-def test_stopping_with_a_backlog_leaves_it_queued_and_quiet(tmp_path, caplog):
+def test_a_backlog_waits_in_the_database_and_is_resumed_after_a_stop(tmp_path, caplog):
     settings = service_settings(tmp_path, embedded_mode="process", embedded_workers=1)
     with TestClient(create_app(settings)) as client:
         ids = [client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 0.2}).json()["id"]
                for _ in range(30)]
+        # a backlog waits in its rows, not in the API process: the pool holds at most its window
+        assert client.app.state.dispatcher.in_flight() <= client.app.state.dispatcher.window == 4
     assert not [r for r in caplog.records if r.levelname == "ERROR"]
     with TestClient(create_app(settings)) as client:  # the next start resumes the backlog
         assert all(wait_for(client, job_id, timeout=90)["status"] == "succeeded" for job_id in ids)
