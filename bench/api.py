@@ -46,17 +46,7 @@ def start_server(env: dict[str, str], port: int) -> subprocess.Popen:
         [str(BIN / "plantsolve"), "serve", "--port", str(port), "--log-level", "warning"],
         cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
     )
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        try:
-            if httpx.get(f"http://127.0.0.1:{port}/readyz", timeout=1).status_code == 200:
-                return process
-        except httpx.HTTPError:
-            pass
-        if process.poll() is not None:
-            raise SystemExit(f"server exited: {process.stderr.read().decode()[-2000:]}")
-        time.sleep(0.2)
-    raise SystemExit("server did not become ready")
+    return wait_ready(process, f"http://127.0.0.1:{port}/readyz")
 
 
 async def submit_all(base: str, submit_path: str, jobs: int, concurrency: int) -> tuple[float, list[float], list[str]]:

@@ -89,6 +89,25 @@ def reject(msg: str, loc: tuple[str | int, ...] = ("file",), type: str = "value_
     return InputRejected(FieldError(loc, msg, type))
 
 
+def decode_text(content: bytes, what: str = "text file") -> str:
+    """The text of an uploaded file as exporters write it: UTF-8 (with or without a byte-order mark),
+    UTF-16 with its mark, or Windows-1252 (what Excel and older Windows tools write). Binary content
+    is refused naming the file."""
+    if content[:4] == b"PK\x03\x04":
+        raise reject(f"this is a zip archive (an Excel .xlsx workbook?), not a {what}")
+    if content[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        try:
+            return content.decode("utf-16")
+        except UnicodeDecodeError:
+            raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
+    if b"\x00" in content:
+        raise reject(f"this is a binary file (it contains NUL bytes), not a {what}")
+    try:
+        return content.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return content.decode("cp1252", errors="replace")
+
+
 class ResultNotUsable(Exception):
     """A finished result cannot answer a :class:`ResultOperation` (the service answers 409)."""
 

@@ -47,7 +47,7 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.validation import prepare
 
 UPLOAD_EXTENSIONS = (".csv", ".json", ".py")
@@ -91,18 +91,7 @@ def _decode(content: bytes) -> str:
     if content[:4] == b"PK\x03\x04":
         raise reject("this is a zip archive (an Excel .xlsx workbook?), not a CSV text "
                       "file: save the sheet as 'CSV (comma delimited)' or 'CSV UTF-8'")
-    if content[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        try:
-            return content.decode("utf-16")
-        except UnicodeDecodeError:
-            raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
-    if b"\x00" in content:
-        raise reject("this is a binary file (it contains NUL bytes), not a CSV text file")
-    try:
-        return content.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = content.decode("cp1252", errors="replace")  # Excel's "CSV" on Windows
-    return text
+    return decode_text(content, "CSV text file")
 
 
 def _header_field(name: str) -> tuple[str | None, str]:

@@ -35,7 +35,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 
 UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
 MAX_SKIPPED_LISTED = 200
@@ -54,20 +54,6 @@ BOUNDARY_CONDITIONS = {
     "groundbasementpreprocessoraveragefloor", "groundbasementpreprocessorupperwall",
     "groundbasementpreprocessorlowerwall", "kivafoundation",
 }
-
-
-def _decode(content: bytes) -> str:
-    if content.startswith((b"\xff\xfe", b"\xfe\xff")):
-        try:
-            return content.decode("utf-16")
-        except UnicodeDecodeError:
-            raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
-    if b"\x00" in content:
-        raise reject("this is a binary file (it contains NUL bytes), not a text file")
-    try:
-        return content.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        return content.decode("cp1252", errors="replace")
 
 
 def idf_objects(text: str) -> list[tuple[str, list[str], list[int], int]]:
@@ -383,7 +369,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Polyhed
     if ext == ".stl":
         body = parse_stl(content)
     else:
-        text = _decode(content)
+        text = decode_text(content)
         if ext == ".idf":
             body = parse_idf(text)
         elif ext == ".obj":
