@@ -11,13 +11,14 @@ import importlib
 from types import MappingProxyType
 from typing import Iterable, Mapping
 
-from plantsolve.solvers import alignment, perfmap, tube
+from plantsolve.solvers import alignment, flowmeter, perfmap, tube
 from plantsolve.solvers.base import SolverSpec
 
 KINDS: Mapping[str, SolverSpec] = MappingProxyType({
     "alignment": alignment.SPEC,
     "tube": tube.SPEC,
     "perfmap": perfmap.SPEC,
+    "flowmeter": flowmeter.SPEC,
 })
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.special import roots_jacobi
 
 
-def electrode_current_integral(beta: float, nodes: int = 40) -> float:
+def electrode_current_integral(beta: float, nodes: int = 400) -> float:
     """integral_{-beta}^{beta} dtheta / (2 sqrt(sin^2 beta - sin^2 theta)), by Gauss-Jacobi on the
     edge singularity (sin^2 beta - sin^2 theta = sin(beta - theta) sin(beta + theta))."""
     t, w = roots_jacobi(nodes, -0.5, -0.5)  # weight (1 - t)^(-1/2) (1 + t)^(-1/2) on [-1, 1]

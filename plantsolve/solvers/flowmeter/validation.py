@@ -1,0 +1,95 @@
+"""Semantic input checks (types, finiteness and bounds are in the schema)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from plantsolve.schemas.flowmeter import FlowmeterRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The meter in units of the pipe radius (the only lengths S depends on)."""
+
+    beta: float | None  # electrode half-angle in radians; None for point electrodes
+    half_length: float  # a / R (the liner's half-length for full-length electrodes)
+    half_liner: float  # L / (2 R)
+    full_length: bool
+
+
+def geometry(request: FlowmeterRequest) -> Geometry:
+    radius = request.pipe.radius
+    liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
+    half_liner = liner / (2 * radius)
+    e = request.electrodes
+    if e.shape == "point":
+        return Geometry(None, 0.0, half_liner, False)
+    full = e.half_length is None or e.half_length >= liner / 2 * (1 - 1e-12)
+    a = half_liner if full else e.half_length / radius
+    return Geometry(float(np.radians(e.half_angle)), a, half_liner, full)
+
+
+def check_input(request: FlowmeterRequest) -> None:
+    """Fast semantic validation; raises :class:`InputRejected` naming each bad field."""
+    errors: list[FieldError] = []
+    radius = request.pipe.radius
+    liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
+    e = request.electrodes
+    if e.shape == "patch" and e.half_length is not None and e.half_length > liner / 2 * (1 + 1e-12):
+        errors.append(FieldError(("electrodes", "half_length"),
+                                 f"the electrode half-length {e.half_length:g} exceeds half the liner length "
+                                 f"({liner / 2:g}); use null for electrodes along the whole liner"))
+    if e.shape == "point" and e.half_length is not None:
+        errors.append(FieldError(("electrodes", "half_length"), "point electrodes have no half-length; leave it null"))
+    if request.options.method == "fem" and e.shape != "patch":
+        errors.append(FieldError(("options", "method"), "'fem' models patch electrodes; point electrodes are solved exactly"))
+    if e.shape == "patch" and not liner / radius <= 200:
+        errors.append(FieldError(("pipe", "liner_length"),
+                                 f"L/R = {liner / radius:g}; at most 200 (the virtual current has decayed long before)"))
+    for k, p in enumerate(request.options.probe_points):
+        if len(p) not in (2, 3):
+            errors.append(FieldError(("options", "probe_points", k), f"a probe is [x, y] or [x, y, z]; got {len(p)} numbers"))
+        elif not np.hypot(p[0], p[1]) < radius:
+            errors.append(FieldError(("options", "probe_points", k),
+                                     f"({p[0]:g}, {p[1]:g}) is not inside the pipe (radius {radius:g})"))
+    for k, re in enumerate(request.reynolds):
+        if not 0 < re <= 1e9:
+            errors.append(FieldError(("reynolds", k), f"a Reynolds number is positive and at most 1e9; got {re:g}"))
+    v = request.velocity
+    if v.type == "samples":
+        errors += sample_errors(request)
+    elif v.points is not None or v.values is not None:
+        errors.append(FieldError(("velocity", "points"), f"points and values belong to type 'samples', not {v.type!r}"))
+    if errors:
+        raise InputRejected(errors)
+
+
+def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
+    v = request.velocity
+    radius = request.pipe.radius
+    if v.points is None or v.values is None:
+        return [FieldError(("velocity", "points" if v.points is None else "values"),
+                           "type 'samples' needs points and values")]
+    if len(v.points) != len(v.values):
+        return [FieldError(("velocity", "values"), f"{len(v.values)} values for {len(v.points)} points")]
+    bad = [k for k, p in enumerate(v.points) if len(p) != 2]
+    if bad:
+        return [FieldError(("velocity", "points", bad[0]), "a sample point is [x, y]")]
+    points = np.asarray(v.points, dtype=float) / radius
+    outside = np.flatnonzero(np.hypot(points[:, 0], points[:, 1]) > 1 + 1e-9)
+    if len(outside):
+        return [FieldError(("velocity", "points", int(outside[0])), "the sample point lies outside the pipe")]
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):
+        return [FieldError(("velocity", "points"), "the sample points do not span the cross-section (fewer than 3, or on a line)")]
+    if hull.volume < 0.5 * np.pi:
+        return [FieldError(("velocity", "points"),
+                           f"the samples cover {100 * hull.volume / np.pi:.0f} % of the cross-section; at least half is needed")]
+    if not abs(float(np.mean(v.values))) > 0:
+        return [FieldError(("velocity", "values"), "the sampled flow has no mean velocity (all values zero)")]
+    return []
