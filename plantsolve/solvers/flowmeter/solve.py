@@ -66,8 +66,14 @@ def closed_form(beta: float | None, method: str) -> WeightField:
     theta = edge_nodes(beta)
     if method == "first_order":
         current = np.column_stack([theta, np.full_like(theta, 1 / (2 * beta))])
-        return quadrature_field("first_order", lambda x, y: weight2d.weight_first_order(x, y, beta), current,
-                                {"model": "uniform current density on the electrodes (the seed's first-order iterate)"})
+        field = quadrature_field("first_order", lambda x, y: weight2d.weight_first_order(x, y, beta), current,
+                                 {"model": "uniform current density on the electrodes (the seed's first-order iterate)"})
+        # The iterate's error is that of its model, not of the quadrature: its distance from the
+        # exact equipotential value for full-length electrodes (the 3-D gap is smaller).
+        model_gap = weight2d.sensitivity_first_order(beta) - np.pi / 2 / weight2d.electrode_current_integral(beta)
+        field.error_estimate += abs(model_gap)
+        field.details["model_error_estimate"] = abs(model_gap)
+        return field
     integral = weight2d.electrode_current_integral(beta)
     density = 1 / (2 * np.sqrt(np.sin(beta) ** 2 - np.sin(theta) ** 2)) / integral
     return quadrature_field("closed_form_2d", lambda x, y: weight2d.weight_full_length(x, y, beta),
