@@ -32,6 +32,10 @@ def test_half_angles_outside_0_90_are_refused(beta):
     (meter(velocity={"type": "samples", "points": [[0, 0], [10, 0], [0, 10]], "values": [1, 1, 1]}), ("velocity", "points")),
     (meter(velocity={"type": "samples", "points": [[0, 0], [80, 0], [0, 10]], "values": [1, 1, 1]}), ("velocity", "points", 1)),
     (meter(velocity={"type": "laminar", "values": [1.0]}), ("velocity", "points")),
+    (meter(velocity={"type": "samples", "points": [[0, 50], [0, -50], [50, 0], [-50, 0]], "values": [0, 0, 50, -50]}),
+     ("velocity", "values")),
+    (meter(radius=50, half_length=0.5), ("electrodes", "half_length")),
+    (meter(radius=50, half_length=5.0, liner_length=20.0), ("pipe", "liner_length")),
 ])
 def test_semantic_errors_name_the_field(body, loc):
     request = FlowmeterRequest.model_validate(body)

@@ -9,6 +9,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,13 @@ def check_input(request: FlowmeterRequest) -> None:
         errors.append(FieldError(("electrodes", "half_length"), "point electrodes have no half-length; leave it null"))
     if request.options.method == "fem" and e.shape != "patch":
         errors.append(FieldError(("options", "method"), "'fem' models patch electrodes; point electrodes are solved exactly"))
+    finite_patch = e.shape == "patch" and e.half_length is not None and e.half_length < liner / 2
+    if finite_patch and e.half_length / radius < 0.02:
+        errors.append(FieldError(("electrodes", "half_length"),
+                                 f"a/R = {e.half_length / radius:.3g} is below 0.02, finer than the finite-element mesh "
+                                 "resolves; use point electrodes"))
+    if finite_patch and liner / radius < 0.5:
+        errors.append(FieldError(("pipe", "liner_length"), f"L/R = {liner / radius:.3g}; at least 0.5 for patch electrodes"))
     if e.shape == "patch" and not liner / radius <= 200:
         errors.append(FieldError(("pipe", "liner_length"),
                                  f"L/R = {liner / radius:g}; at most 200 (the virtual current has decayed long before)"))
@@ -90,6 +98,10 @@ def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
     if hull.volume < 0.5 * np.pi:
         return [FieldError(("velocity", "points"),
                            f"the samples cover {100 * hull.volume / np.pi:.0f} % of the cross-section; at least half is needed")]
-    if not abs(float(np.mean(v.values))) > 0:
-        return [FieldError(("velocity", "values"), "the sampled flow has no mean velocity (all values zero)")]
+    velocity, _ = sampled(points, np.asarray(v.values, dtype=float))
+    quadrature = disc_quadrature(radial=24, scale=4.0, max_angular=512)
+    flow = velocity(quadrature.x, quadrature.y)
+    mean = float(np.sum(flow * quadrature.w) / np.pi)
+    if not abs(mean) > 1e-9 * max(float(np.max(np.abs(flow))), 1e-300):
+        return [FieldError(("velocity", "values"), "the sampled flow has no mean velocity; S = U / (2 R B v_mean) is undefined")]
     return []
