@@ -16,7 +16,7 @@ Conventions
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
@@ -49,6 +49,24 @@ class UniformField(StrictModel):
     type: Literal["uniform"] = "uniform"
     magnitude: float = Field(default=0.01, gt=0, le=1e3, allow_inf_nan=False,
                              description="|B| in tesla, along +y.")
+
+
+class GridField(StrictModel):
+    """B on a rectilinear grid (from the magnet's finite-element model), trilinearly interpolated.
+
+    ``bx``, ``by``, ``bz`` hold one value per grid point in C order: the value at (x[i], y[j], z[k])
+    is at index (i * len(y) + j) * len(z) + k. The grid must cover the liner section
+    (|x|, |y| <= R, |z| <= L/2). S is normalised by B_y at the pipe centre.
+    """
+
+    type: Literal["grid"]
+    x: list[Measured] = Field(min_length=2, max_length=400, description="Grid x coordinates, increasing (units).")
+    y: list[Measured] = Field(min_length=2, max_length=400, description="Grid y coordinates, increasing (units).")
+    z: list[Measured] = Field(min_length=2, max_length=400, description="Grid z coordinates, increasing (units).")
+    bx: list[Measured] = Field(max_length=2_000_000, description="B_x in tesla per grid point (C order).")
+    by: list[Measured] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
+    bz: list[Measured] | None = Field(default=None, max_length=2_000_000,
+                                      description="B_z per grid point; it does not enter U (the flow is axial).")
 
 
 class Velocity(StrictModel):
@@ -84,7 +102,7 @@ class FlowmeterRequest(StrictModel):
     units: Units = "mm"
     pipe: Pipe
     electrodes: Electrodes = Field(default_factory=Electrodes)
-    magnetic_field: UniformField = Field(default_factory=UniformField)
+    magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(default_factory=UniformField)
     velocity: Velocity = Field(default_factory=Velocity)
     reynolds: list[FiniteFloat] = Field(
         default_factory=list, max_length=1000,

@@ -21,6 +21,7 @@ the split faces of neighbouring prisms conforming. Lengths are in units of R.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import pyamg
@@ -29,12 +30,15 @@ from skfem import Basis, ElementTetP1, MeshTet, asm
 from skfem.models.poisson import laplace
 
 
+QUADRANTS = ((1, 1), (-1, 1), (1, -1), (-1, -1))  # signs of (x, y)
+
+
 @dataclass
 class FemSolution:
     sensitivity: float
     triangles: np.ndarray  # (m, 3) node indices of the quarter-disc triangulation
     nodes: np.ndarray  # (n, 2) quarter-disc nodes (x, y) in units of R
-    weight: np.ndarray  # (m,) W on each triangle (its mean over the triangle)
+    weight: np.ndarray  # (4, m) W on each triangle (its mean) in the quadrants QUADRANTS
     wall_current: np.ndarray  # (k, 2): theta (rad), electrode current density at z = 0 times R / I
     unknowns: int
     tetrahedra: int
@@ -117,9 +121,14 @@ def extrude(points: np.ndarray, triangles: np.ndarray, z: np.ndarray) -> tuple[n
 
 
 def solve_patch(beta: float, half_length: float, half_liner: float, h: float = 0.12,
-                edge_ratio: float = 0.08, grade: float = 0.35) -> FemSolution:
+                edge_ratio: float = 0.08, grade: float = 0.35,
+                field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None) -> FemSolution:
     """S, W per triangle and the electrode current for a patch (half-angle ``beta`` radians,
-    half-length ``half_length``) in an insulated liner section of half-length ``half_liner`` (R = 1)."""
+    half-length ``half_length``) in an insulated liner section of half-length ``half_liner`` (R = 1).
+
+    ``field(points) -> (B_x, B_y)`` (relative to the reference B) at points (n, 3); None is the
+    uniform field along +y. The potential on the other seven eighths follows from the symmetries
+    (odd in x, even in y and z): there d(phi)/dx is the same and d(phi)/dy carries the signs of x and y."""
     h_edge = h * edge_ratio
     points, triangles = quarter_disc(beta, h, h_edge, grade)
     a = min(half_length, half_liner)
@@ -156,15 +165,24 @@ def solve_patch(beta: float, half_length: float, half_liner: float, h: float = 0
     # gradient of the P1 function: solve edges @ g = phi differences
     dphi = phi[tets[:, 1:]] - phi[tets[:, :1]]
     gradient = np.linalg.solve(edges, dphi[..., None])[..., 0]
-    moment = volume * gradient[:, 0]
-    sensitivity = float(np.sum(moment) / current)
-
     m2 = len(triangles)
-    per_triangle = moment.reshape(len(z) - 1, 3, m2).sum(axis=(0, 1))
+    layers = len(z) - 1
     tri_pts = points[triangles]
     area = 0.5 * np.abs((tri_pts[:, 1, 0] - tri_pts[:, 0, 0]) * (tri_pts[:, 2, 1] - tri_pts[:, 0, 1])
                         - (tri_pts[:, 2, 0] - tri_pts[:, 0, 0]) * (tri_pts[:, 1, 1] - tri_pts[:, 0, 1]))
-    weight = (np.pi / 4) * per_triangle / area / current
+    centroid = corners.mean(axis=1)
+    weight = np.empty((4, m2))
+    for q, (sx, sy) in enumerate(QUADRANTS):
+        total = np.zeros(len(tets))
+        for sz in (1, -1):
+            if field is None:
+                bx, by = 0.0, 1.0
+            else:
+                bx, by = field(centroid * np.array([sx, sy, sz]))
+            total += volume * (by * gradient[:, 0] - bx * sx * sy * gradient[:, 1])
+        # W = (pi R / 2) integral dz / I with I = 4 I_eighth, the two z-halves summed above
+        weight[q] = (np.pi / 8) * total.reshape(layers, 3, m2).sum(axis=(0, 1)) / area / current
+    sensitivity = float(np.sum(weight * area) / np.pi)
 
     # electrode current density at z = 0: each wall node's reaction over its share of the wall
     # (half cells at the ends of the arc and on the symmetry plane z = 0), times R / I with I the

@@ -20,6 +20,7 @@ from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress
 from plantsolve.solvers.flowmeter import fem, profiles, weight2d
+from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
 from plantsolve.solvers.flowmeter.validation import check_input, geometry
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
@@ -58,7 +59,21 @@ def edge_nodes(beta: float, count: int = 64) -> np.ndarray:
     return beta * np.cos(np.pi * (np.arange(count) + 0.5) / count)[::-1]
 
 
-def closed_form(beta: float | None, method: str) -> WeightField:
+def combine(complex_weight, average):
+    """W for a field: Re of the complex weight for B along +y; with a grid, weighted by the liner's
+    mean B_y and B_x (module field)."""
+    if average is None:
+        return lambda x, y: np.real(complex_weight(x, y))
+
+    def values(x, y):
+        c = complex_weight(x, y)
+        bx, by = average(x, y)
+        return by * np.real(c) + bx * np.imag(c)
+
+    return values
+
+
+def closed_form(beta: float | None, method: str, average=None) -> WeightField:
     """Full-length equipotential, point, or first-order electrodes in closed form (module weight2d)."""
     if beta is None:
         return quadrature_field("closed_form_point", weight2d.weight_point, np.zeros((0, 2)),
@@ -66,8 +81,8 @@ def closed_form(beta: float | None, method: str) -> WeightField:
     theta = edge_nodes(beta)
     if method == "first_order":
         current = np.column_stack([theta, np.full_like(theta, 1 / (2 * beta))])
-        field = quadrature_field("first_order", lambda x, y: weight2d.weight_first_order(x, y, beta), current,
-                                 {"model": "uniform current density on the electrodes (the seed's first-order iterate)"})
+        field = quadrature_field("first_order", combine(lambda x, y: weight2d.complex_weight_first_order(x, y, beta), average),
+                                 current, {"model": "uniform current density on the electrodes (the seed's first-order iterate)"})
         # The iterate's error is that of its model, not of the quadrature: its distance from the
         # exact equipotential value for full-length electrodes (the 3-D gap is smaller).
         model_gap = weight2d.sensitivity_first_order(beta) - np.pi / 2 / weight2d.electrode_current_integral(beta)
@@ -76,7 +91,7 @@ def closed_form(beta: float | None, method: str) -> WeightField:
         return field
     integral = weight2d.electrode_current_integral(beta)
     density = 1 / (2 * np.sqrt(np.sin(beta) ** 2 - np.sin(theta) ** 2)) / integral
-    return quadrature_field("closed_form_2d", lambda x, y: weight2d.weight_full_length(x, y, beta),
+    return quadrature_field("closed_form_2d", combine(lambda x, y: weight2d.complex_weight_full_length(x, y, beta), average),
                             np.column_stack([theta, density]),
                             {"model": "equipotential electrodes along the whole liner (2-D, exact)"})
 
@@ -87,17 +102,19 @@ def mesh_size(tolerance: float) -> float:
     return float(np.clip(0.12 * np.sqrt(tolerance / 1e-3), 0.08, 0.25))
 
 
-def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, progress: Progress) -> WeightField:
+def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, progress: Progress,
+                    grid: FieldGrid | None = None) -> WeightField:
     """FEM reference (module fem), calibrated by the exact 2-D value: the ratio of the exact
-    full-length S to the FEM's on the same cross-section mesh multiplies S and W, removing most of the
-    error of the theta-edge singularity and of the polygonal wall; the change of the calibrated S
-    between the mesh and one 1.5 times coarser is the error estimate."""
+    full-length S to the FEM's (uniform field) on the same cross-section mesh multiplies S and W,
+    removing most of the error of the theta-edge singularity and of the polygonal wall; the change
+    of the calibrated S between the mesh and one 1.5 times coarser is the error estimate."""
     exact_2d = np.pi / 2 / weight2d.electrode_current_integral(beta)
     h = mesh_size(tolerance)
+    at = None if grid is None else grid.at
     runs = []
     for step, size in enumerate((1.5 * h, h)):
         progress(0.1 + 0.35 * step, f"finite elements, mesh size {size:.3g} R")
-        patch = fem.solve_patch(beta, a, half_liner, h=size)
+        patch = fem.solve_patch(beta, a, half_liner, h=size, field=at)
         full = fem.solve_patch(beta, half_liner, half_liner, h=size)
         runs.append((patch, full, exact_2d / full.sensitivity))
     patch, full, ratio = runs[-1]
@@ -111,40 +128,46 @@ def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, 
     u, v = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
     midpoints = [(corners[:, i] + corners[:, (i + 1) % 3]) / 2 for i in range(3)]
-
     # W at the nodes (area-weighted mean of the triangles around each), linear in between: the
     # piecewise-constant W integrates consistently but draws jagged contours
-    nodal = np.zeros(len(patch.nodes))
     share = np.zeros(len(patch.nodes))
     for k in range(3):
-        np.add.at(nodal, patch.triangles[:, k], weight * area)
         np.add.at(share, patch.triangles[:, k], area)
-    interpolator = LinearTriInterpolator(tri, nodal / share, trifinder=finder)
+    nodal = np.zeros((4, len(patch.nodes)))
+    for q in range(4):
+        for k in range(3):
+            np.add.at(nodal[q], patch.triangles[:, k], weight[q] * area)
+    nodal /= share
+    interpolators = [LinearTriInterpolator(tri, nodal[q], trifinder=finder) for q in range(4)]
 
     def values(x, y):
-        ax, ay = np.abs(np.asarray(x, float)), np.abs(np.asarray(y, float))
-        out = np.ma.filled(interpolator(ax, ay), np.nan)
-        outside = ~np.isfinite(out)
-        if np.any(outside):  # between the polygonal wall and the circle: the nearest node
-            near = np.argmin((patch.nodes[:, 0][None] - ax[outside][:, None]) ** 2
-                             + (patch.nodes[:, 1][None] - ay[outside][:, None]) ** 2, axis=1)
-            out[outside] = nodal[near] / share[near]
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        ax, ay = np.abs(x), np.abs(y)
+        out = np.full(x.shape, np.nan)
+        for q, (sx, sy) in enumerate(fem.QUADRANTS):
+            mine = ((x >= 0) if sx > 0 else (x < 0)) & ((y >= 0) if sy > 0 else (y < 0))
+            if np.any(mine):
+                out[mine] = np.ma.filled(interpolators[q](ax[mine], ay[mine]), np.nan)
+                missing = mine & ~np.isfinite(out)
+                if np.any(missing):  # between the polygonal wall and the circle: the nearest node
+                    near = np.argmin((patch.nodes[:, 0][None] - ax[missing][:, None]) ** 2
+                                     + (patch.nodes[:, 1][None] - ay[missing][:, None]) ** 2, axis=1)
+                    out[missing] = nodal[q][near]
         return out
 
     def integrate(velocity) -> float:
         total = 0.0
-        for sx in (1, -1):
-            for sy in (1, -1):
-                v = sum(velocity(sx * m[:, 0], sy * m[:, 1]) for m in midpoints) / 3
-                total += float(np.sum(weight * v * area))
+        for q, (sx, sy) in enumerate(fem.QUADRANTS):
+            v = sum(velocity(sx * m[:, 0], sy * m[:, 1]) for m in midpoints) / 3
+            total += float(np.sum(weight[q] * v * area))
         return total / np.pi
 
-    # In this model W is harmonic (the z-integrated potential has no z-flux through the insulated
-    # ends), so every axisymmetric profile has the same S: the laminar-uniform difference measures
-    # the discretisation error of W itself, which the profile-weighted integrals see.
-    laminar = integrate(lambda x, y: profiles.axisymmetric("laminar", np.hypot(x, y)))
-    uniform = integrate(lambda x, y: np.ones_like(x))
-    error = max(error, abs(laminar - uniform))
+    # For a uniform field W is harmonic in this model (the z-integrated potential has no z-flux
+    # through the insulated ends), so every axisymmetric profile has the same S: the
+    # laminar-uniform difference measures the discretisation error of W itself.
+    if grid is None:
+        laminar = integrate(lambda x, y: profiles.axisymmetric("laminar", np.hypot(x, y)))
+        error = max(error, abs(laminar - integrate(lambda x, y: np.ones_like(x))))
     return WeightField("fem", values, integrate, error, patch.wall_current,
                        {"mesh_size": h, "unknowns": patch.unknowns, "tetrahedra": patch.tetrahedra,
                         "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio,
@@ -154,14 +177,16 @@ def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, 
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
     """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function."""
     g = geometry(request)
+    grid = field_grid(request)
+    average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
     if g.beta is None:
         return closed_form(None, method)
     if method == "first_order":
-        return closed_form(g.beta, "first_order")
+        return closed_form(g.beta, "first_order", average)
     if method == "auto" and g.full_length:
-        return closed_form(g.beta, "exact")
-    return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress)
+        return closed_form(g.beta, "exact", average)
+    return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress, grid)
 
 
 def velocity_function(request: FlowmeterRequest) -> tuple[Callable, str, list[Diagnostic]]:
@@ -208,7 +233,8 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     velocity, profile, notes = velocity_function(request)
     s, mean = sensitivity(field, velocity)
     mean_velocity = request.velocity.mean if profile != "samples" else mean
-    b = request.magnetic_field.magnitude
+    grid = field_grid(request)
+    b = request.magnetic_field.magnitude if grid is None else grid.reference
     signal = 2 * radius * METRES[request.units] * b * mean_velocity * s
     probes = []
     if request.options.probe_points:

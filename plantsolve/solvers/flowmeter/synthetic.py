@@ -51,3 +51,14 @@ def example() -> dict[str, Any]:
     return meter(radius=50.0, half_angle=22.5, half_length=None,
                  probes=[[0.0, 0.0], [25.0, 0.0], [0.0, 25.0]],
                  reynolds=[1000.0, 5000.0, 20000.0, 100000.0, 1000000.0])
+
+
+def grid_field(radius: float, liner_length: float, bx, by, nx: int = 21, nz: int = 13) -> dict[str, Any]:
+    """A ``magnetic_field`` of type grid sampling ``bx(x, y, z)``, ``by(x, y, z)`` (tesla; lengths in
+    radius units) on a grid that just covers the liner section (a node at z = 0)."""
+    x = np.linspace(-radius, radius, nx)
+    z = np.linspace(-liner_length / 2, liner_length / 2, nz)
+    gx, gy, gz = np.meshgrid(x / radius, x / radius, z / radius, indexing="ij")
+    return {"type": "grid", "x": x.tolist(), "y": x.tolist(), "z": z.tolist(),
+            "bx": np.broadcast_to(bx(gx, gy, gz), gx.shape).ravel().tolist(),
+            "by": np.broadcast_to(by(gx, gy, gz), gx.shape).ravel().tolist()}

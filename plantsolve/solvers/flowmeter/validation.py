@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import RegularGridInterpolator
 from scipy.spatial import ConvexHull, QhullError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
@@ -67,6 +68,8 @@ def check_input(request: FlowmeterRequest) -> None:
     for k, re in enumerate(request.reynolds):
         if not 0 < re <= 1e9:
             errors.append(FieldError(("reynolds", k), f"a Reynolds number is positive and at most 1e9; got {re:g}"))
+    if request.magnetic_field.type == "grid":
+        errors += grid_errors(request, liner)
     v = request.velocity
     if v.type == "samples":
         errors += sample_errors(request)
@@ -74,6 +77,39 @@ def check_input(request: FlowmeterRequest) -> None:
         errors.append(FieldError(("velocity", "points"), f"points and values belong to type 'samples', not {v.type!r}"))
     if errors:
         raise InputRejected(errors)
+
+
+def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
+    f = request.magnetic_field
+    radius = request.pipe.radius
+    if request.electrodes.shape == "point":
+        return [FieldError(("magnetic_field", "type"),
+                           "a grid field needs the 3-D virtual current, computed for patch electrodes only; "
+                           "point electrodes take a uniform field")]
+    errors = []
+    for name, reach in (("x", radius), ("y", radius), ("z", liner / 2)):
+        axis = np.asarray(getattr(f, name), dtype=float)
+        if np.any(np.diff(axis) <= 0):
+            errors.append(FieldError(("magnetic_field", name), "grid coordinates must increase strictly"))
+        elif axis[0] > -reach * (1 - 1e-9) or axis[-1] < reach * (1 - 1e-9):
+            errors.append(FieldError(("magnetic_field", name),
+                                     f"the grid spans {axis[0]:g}..{axis[-1]:g} and does not cover the pipe "
+                                     f"(-{reach:g}..{reach:g} {'along the liner' if name == 'z' else ''})".rstrip()))
+    count = len(f.x) * len(f.y) * len(f.z)
+    for name in ("bx", "by", "bz"):
+        values = getattr(f, name)
+        if values is not None and len(values) != count:
+            errors.append(FieldError(("magnetic_field", name),
+                                     f"{len(values)} values for a {len(f.x)} x {len(f.y)} x {len(f.z)} grid ({count} points)"))
+    if errors:
+        return errors
+    x, y, z = (np.asarray(getattr(f, n), dtype=float) for n in ("x", "y", "z"))
+    by = np.asarray(f.by, dtype=float).reshape(len(x), len(y), len(z))
+    centre = RegularGridInterpolator((x, y, z), by)([[0.0, 0.0, 0.0]])[0]
+    if not abs(centre) > 1e-12 * max(float(np.max(np.abs(by))), 1e-300):
+        errors.append(FieldError(("magnetic_field", "by"),
+                                 "B_y at the pipe centre is zero; S is normalised by it (B along +y)"))
+    return errors
 
 
 def sample_errors(request: FlowmeterRequest) -> list[FieldError]:

@@ -1,6 +1,6 @@
 """Cross-section weight functions in closed form (unit pipe radius, B along +y, electrodes at (+-1, 0)).
 
-All three are W = (pi/2) Re F'(z) / I with F the complex virtual-current potential of the disc
+All three are W = (pi/2) Re F'(z) / I for B along +y (and (pi/2) Im F'(z) / I weighs B_x), with F the complex virtual-current potential of the disc
 |z| < 1 driving the current I (per unit length, conductivity 1) from the electrode at +1 to the
 one at -1: U = sigma B integral v dphi/dx dA / I (seed eq. 1-2 with v x B = -v B e_x), and the
 pi/2 makes S = (1/pi) integral W dA.
@@ -36,12 +36,17 @@ def electrode_current_integral(beta: float, nodes: int = 400) -> float:
 
 def weight_full_length(x: np.ndarray, y: np.ndarray, beta: float) -> np.ndarray:
     """W of equipotential full-length electrodes of half-angle ``beta`` (radians) at points inside the unit disc."""
+    return np.real(complex_weight_full_length(x, y, beta))
+
+
+def complex_weight_full_length(x: np.ndarray, y: np.ndarray, beta: float) -> np.ndarray:
+    """(pi/2) F'(z) / I: its real part is the weight of B_y, its imaginary part that of B_x."""
     z2 = (np.asarray(x, dtype=float) + 1j * np.asarray(y, dtype=float)) ** 2
     # Each factor has a positive real part in the disc, so the product of principal roots is the
     # branch of sqrt(z^4 - 2 cos 2beta z^2 + 1) that is analytic there and 1 at the centre.
     root = np.sqrt(1 - z2 * np.exp(-2j * beta)) * np.sqrt(1 - z2 * np.exp(2j * beta))
     current = electrode_current_integral(beta)
-    return (np.pi / 2) * np.real(1.0 / root) / current
+    return (np.pi / 2) * (1.0 / root) / current
 
 
 def weight_point(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -52,6 +57,11 @@ def weight_point(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def weight_first_order(x: np.ndarray, y: np.ndarray, beta: float) -> np.ndarray:
     """W of the seed's first-order potential (uniform current density on full-length electrode arcs)."""
+    return np.real(complex_weight_first_order(x, y, beta))
+
+
+def complex_weight_first_order(x: np.ndarray, y: np.ndarray, beta: float) -> np.ndarray:
+    """(pi/2) F'(z) / I of the first-order potential."""
     z = np.asarray(x, dtype=float) + 1j * np.asarray(y, dtype=float)
 
     def schwarz_arc(centre: float) -> np.ndarray:
@@ -69,7 +79,7 @@ def weight_first_order(x: np.ndarray, y: np.ndarray, beta: float) -> np.ndarray:
     # h has odd powers only (the data changes sign under theta -> theta + pi), so near 0 the
     # cancellation-free h'(0) is off by O(|z|^2) < 1e-12.
     derivative = np.where(small, 4 * np.sin(beta) / np.pi + 0j, h / safe)
-    return (np.pi / 2) * np.real(derivative) / (2 * beta)
+    return (np.pi / 2) * derivative / (2 * beta)
 
 
 def sensitivity_first_order(beta: float) -> float:
