@@ -124,9 +124,9 @@ class FlowmeterResult(BaseModel):
     signal: float = Field(description="U in volts for the field and mean velocity.")
     probes: list[float] = Field(default_factory=list, description="W at each probe point.")
     linearity: list[LinearityPoint] = Field(default_factory=list)
-    ideal_meter_residual: float | None = Field(
-        default=None, description="Bevir's residual |curl W| relative to |W| (not computed for a uniform field, where "
-        "it is not the question asked).")
+    ideal_meter_residual: float = Field(
+        description="Bevir's ideal-meter residual for rectilinear flow: curl W = 0 means W constant over the "
+        "cross-section; given as (1/(pi R^2)) integral |W - S_uniform| dA / S_uniform, 0 for an ideal meter.")
     method: str
     error_estimate: float = Field(description="Estimated absolute error of S.")
     grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")

@@ -106,3 +106,15 @@ def test_scaling_R_1_and_R_500_give_the_same_S_and_W():
     # U = 2 R B v S: 2 m diameter versus 1 m
     assert small.signal == pytest.approx(2 * large.signal, rel=1e-12)
     assert small.signal == pytest.approx(2 * 1.0 * 0.01 * 2.0 * small.sensitivity, rel=1e-12)
+
+
+def test_the_ideal_meter_residual_is_the_mean_deviation_of_W():
+    n = 1500
+    r, t = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(2 * n) + 0.5) * np.pi / n)
+    w = weight_full_length(r * np.cos(t), r * np.sin(t), np.radians(30.0))
+    s = exact_full_length(30.0)
+    want = np.sum(np.abs(w - s) * r) / np.sum(r) / s
+    result = run(half_angle=30.0, half_length=None)
+    assert result.ideal_meter_residual == pytest.approx(want, abs=2e-3)
+    # point electrodes weigh the flow near them far more than wide electrodes do
+    assert run(shape="point").ideal_meter_residual > result.ideal_meter_residual + 0.05

@@ -213,6 +213,16 @@ def sensitivity(field: WeightField, velocity) -> tuple[float, float]:
     return field.integrate(velocity) / mean, mean
 
 
+def ideal_meter_residual(field: WeightField, s_uniform: float) -> float:
+    """Bevir's ideal-meter condition for rectilinear flow: with the weight vector W_z(x, y) e_z, curl W = 0
+    means W constant over the cross-section (every profile then gives the same signal). Returned as
+    (1/(pi R^2)) integral |W - S| dA / |S|, the mean deviation (finite also where W is unbounded at
+    point electrodes, unlike an L2 norm); 0 for an ideal meter."""
+    quadrature = profiles.disc_quadrature(radial=48, scale=10.0, max_angular=4096)
+    w = field.values(quadrature.x, quadrature.y)
+    return float(np.sum(np.abs(w - s_uniform) * quadrature.w) / np.pi / abs(s_uniform))
+
+
 def linearity(field: WeightField, reynolds: list[float]) -> list[LinearityPoint]:
     """S over Reynolds numbers, the profile going from laminar to the turbulent power law."""
     out = []
@@ -250,7 +260,8 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     progress(1.0, "done")
     return FlowmeterResult(
         sensitivity=s, sensitivity_first_order=first_order, signal=signal, probes=probes,
-        linearity=linearity(field, list(request.reynolds)), ideal_meter_residual=None,
+        linearity=linearity(field, list(request.reynolds)),
+        ideal_meter_residual=ideal_meter_residual(field, field.integrate(lambda x, y: np.ones_like(x))),
         method=field.method, error_estimate=field.error_estimate, grid=grid, electrode_current=current,
         report=Report(status="warning" if notes else "ok",
                       message=f"S = {s:.6f} ({field.method}, estimated error {field.error_estimate:.1e}); "
