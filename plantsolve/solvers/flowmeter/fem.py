@@ -60,6 +60,14 @@ def graded_with_break(start: float, stop: float, at: float, spacing) -> np.ndarr
     return np.concatenate([graded_points(start, at, spacing)[:-1], graded_points(at, stop, spacing)])
 
 
+def axial_spacing(distance: np.ndarray, h: float, h_edge: float, grade: float) -> np.ndarray:
+    """Layer spacing at a distance from the electrode's end: graded to it, h within a radius of it,
+    then growing in proportion to the distance (up to 2 R): the potential there varies like
+    exp(-1.84 |z| / R), the slowest decaying mode, so long liners cost few layers."""
+    near = np.minimum(h, h_edge + grade * distance)
+    return np.clip(np.maximum(near, 0.25 * (distance - 1.0)), None, 2.0)
+
+
 def quarter_disc(beta: float, h: float, h_edge: float, grade: float) -> tuple[np.ndarray, np.ndarray]:
     """Nodes and triangles of the quarter disc x, y >= 0, graded towards the wall point at angle beta."""
     edge = np.array([np.cos(beta), np.sin(beta)])
@@ -132,7 +140,7 @@ def solve_patch(beta: float, half_length: float, half_liner: float, h: float = 0
     h_edge = h * edge_ratio
     points, triangles = quarter_disc(beta, h, h_edge, grade)
     a = min(half_length, half_liner)
-    z = graded_with_break(0.0, half_liner, a, lambda s: np.minimum(h, h_edge + grade * np.abs(s - a)))
+    z = graded_with_break(0.0, half_liner, a, lambda s: axial_spacing(np.abs(s - a), h, h_edge, grade))
     xyz, tets = extrude(points, triangles, z)
     mesh = MeshTet(xyz.T.copy(), tets.T.copy())
     basis = Basis(mesh, ElementTetP1())
