@@ -86,11 +86,12 @@ class Velocity(StrictModel):
 
 
 class FlowmeterOptions(StrictModel):
-    method: Literal["auto", "fem", "first_order"] = Field(
+    method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
         default="auto",
-        description="'auto': closed form for full-length (2-D) and point electrodes, finite elements for "
-        "finite patches; 'fem': finite elements (scikit-fem) for patches; 'first_order': the uniform "
-        "current-density iterate (S = sin(beta)/beta).")
+        description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
+        "finite patches in a uniform field, finite elements for finite patches in a grid field; "
+        "'integral_equation': the Galerkin integral equation on the electrode (uniform field); 'fem': finite "
+        "elements (scikit-fem) for patches; 'first_order': the uniform current-density iterate (S = sin(beta)/beta).")
     tolerance: float = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
                              description="Target accuracy of S; for 'fem' it sets the mesh size.")
     probe_points: list[list[Measured]] = Field(

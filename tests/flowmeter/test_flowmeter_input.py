@@ -28,6 +28,7 @@ def test_half_angles_outside_0_90_are_refused(beta):
 @pytest.mark.parametrize("body, loc", [
     (meter(radius=50, half_length=200.0, liner_length=300.0), ("electrodes", "half_length")),
     (meter(shape="point", method="fem"), ("options", "method")),
+    (meter(half_length=None, method="integral_equation"), ("options", "method")),
     (meter(probes=[[60.0, 0.0]]), ("options", "probe_points", 0)),
     (meter(probes=[[1.0]]), ("options", "probe_points", 0)),
     (meter(reynolds=[1e4, -3.0]), ("reynolds", 1)),
@@ -62,7 +63,7 @@ def test_the_api_solves_the_shipped_example_and_refuses_nan(client):
     view = wait_for(client, response.json()["id"], timeout=120)
     assert view["status"] == "succeeded", view["report"]
     result = client.get(f"/v1/jobs/{view['id']}/result").json()
-    assert result["method"] == "fem" and abs(result["sensitivity"] - 0.965) < 2e-3
+    assert result["method"] == "integral_equation" and abs(result["sensitivity"] - 0.965) < 2e-3
     assert {a["name"] for a in view["artifacts"]} >= {"weight_function.png", "linearity.png", "weight_grid.csv"}
     bad = client.post("/v1/flowmeter/jobs", content=json.dumps(body).replace('"magnitude": 0.01', '"magnitude": NaN'),
                       headers={"Content-Type": "application/json"})

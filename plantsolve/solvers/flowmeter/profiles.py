@@ -48,6 +48,7 @@ class DiscQuadrature:
     x: np.ndarray
     y: np.ndarray
     w: np.ndarray
+    rings: list[tuple[float, int]]  # (radius, number of nodes) of each ring, in node order
 
 
 def disc_quadrature(radial: int = 48, scale: float = 40.0, max_angular: int = 20000) -> DiscQuadrature:
@@ -60,14 +61,15 @@ def disc_quadrature(radial: int = 48, scale: float = 40.0, max_angular: int = 20
     wu = 0.5 * wu
     r = 1.0 - u**3
     dr = 3 * u**2 * wu
-    xs, ys, ws = [], [], []
+    xs, ys, ws, rings = [], [], [], []
     for ri, dri in zip(r, dr):
         m = int(np.clip(np.ceil(scale / max(1.0 - ri, 1e-12) / 4) * 4, 64, max_angular))
         t = (np.arange(m) + 0.5) * (2 * np.pi / m)
         xs.append(ri * np.cos(t))
         ys.append(ri * np.sin(t))
         ws.append(np.full(m, ri * dri * 2 * np.pi / m))
-    return DiscQuadrature(np.concatenate(xs), np.concatenate(ys), np.concatenate(ws))
+        rings.append((float(ri), m))
+    return DiscQuadrature(np.concatenate(xs), np.concatenate(ys), np.concatenate(ws), rings)
 
 
 def sampled(points: np.ndarray, values: np.ndarray):

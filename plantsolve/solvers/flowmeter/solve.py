@@ -19,7 +19,7 @@ from matplotlib.tri import LinearTriInterpolator, Triangulation
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress
-from plantsolve.solvers.flowmeter import fem, profiles, weight2d
+from plantsolve.solvers.flowmeter import fem, integral_equation, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
 from plantsolve.solvers.flowmeter.validation import check_input, geometry
 
@@ -174,6 +174,25 @@ def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, 
                         "model": "equipotential patches on an insulated liner section (ends insulated), FEM"})
 
 
+def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float) -> WeightField:
+    """The integral equation on the electrode (module integral_equation): S extrapolated in the modes,
+    W from its series, integrated ring by ring on the polar rule (exact values of the series there)."""
+    solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
+    quadrature = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
+    rings = np.concatenate([integral_equation.weight_on_ring(solution.series, r, count) for r, count in quadrature.rings])
+
+    def integrate(velocity) -> float:
+        return float(np.sum(rings * velocity(quadrature.x, quadrature.y) * quadrature.w) / np.pi)
+
+    # the rule's own error: its uniform-flow integral against W(0), equal for a harmonic W
+    error = solution.error_estimate + abs(integrate(lambda x, y: np.ones_like(x)) - solution.sensitivity)
+    return WeightField("integral_equation", lambda x, y: integral_equation.weight_at(solution.series, x, y),
+                       integrate, error, np.zeros((0, 2)),
+                       {"modes": solution.levels, "basis": solution.basis,
+                        "model": "equipotential patches on an insulated liner section (ends insulated), "
+                                 "Galerkin integral equation on the electrode"})
+
+
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
     """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function."""
     g = geometry(request)
@@ -186,6 +205,9 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
         return closed_form(g.beta, "first_order", average)
     if method == "auto" and g.full_length:
         return closed_form(g.beta, "exact", average)
+    if method == "integral_equation" or (method == "auto" and grid is None):
+        progress(0.1, "integral equation on the electrode")
+        return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance)
     return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress, grid)
 
 

@@ -47,6 +47,15 @@ def check_input(request: FlowmeterRequest) -> None:
                                  f"({liner / 2:g}); use null for electrodes along the whole liner"))
     if e.shape == "point" and e.half_length is not None:
         errors.append(FieldError(("electrodes", "half_length"), "point electrodes have no half-length; leave it null"))
+    if request.options.method == "integral_equation":
+        if e.shape != "patch" or e.half_length is None or e.half_length >= liner / 2:
+            errors.append(FieldError(("options", "method"),
+                                     "'integral_equation' models patches shorter than the liner; full-length and point "
+                                     "electrodes are solved exactly ('auto')"))
+        elif request.magnetic_field.type != "uniform":
+            errors.append(FieldError(("options", "method"),
+                                     "'integral_equation' gives the z-integrated current only, which a uniform field "
+                                     "needs; a grid field takes 'fem' (or 'auto')"))
     if request.options.method == "fem" and e.shape != "patch":
         errors.append(FieldError(("options", "method"), "'fem' models patch electrodes; point electrodes are solved exactly"))
     finite_patch = e.shape == "patch" and e.half_length is not None and e.half_length < liner / 2
