@@ -4,12 +4,12 @@
     python bench/flowmeter.py --quick    # reference meshes h = 0.08 R
 
 For beta in {5, 22.5, 45} deg and a/R in {0.1, pi/10, 1, inf} (L/R = 6, uniform B and flow):
-S and |error| against the reference, and seconds, for the methods that exist: the closed form
-(a = inf, exact pi/(2K(sin beta))), the calibrated FEM at the default tolerance (1e-3) and the seed's
-first-order iterate sin(beta)/beta. The reference for finite a is the calibrated FEM on a finer mesh
-(so the FEM rows there measure mesh convergence, not model error); the uncalibrated FEM is shown too.
-Then the time of a 20-point linearity curve. No integral-equation column: that method is not
-implemented.
+S, |error| against the reference, the method's own error estimate and seconds for the closed form
+(a = inf, exact pi/(2K(sin beta))), the integral equation (default tolerance 1e-3), the calibrated
+FEM (default tolerance 1e-3; the uncalibrated value too) and the seed's first-order iterate
+sin(beta)/beta. The reference for finite a is the integral equation extrapolated to 3200 modes
+(tolerance 1e-6) and, side by side, the calibrated FEM on a finer mesh. Then the time of a
+20-point linearity curve, uniform and grid field.
 """
 
 from __future__ import annotations
@@ -56,8 +56,11 @@ def main() -> None:
                 r, t = run(beta, None, "fem")
                 rows.append(("fem", r, t))
             else:
-                ref, _ = run(beta, a, "fem", reference_tolerance)
+                ref, _ = run(beta, a, "integral_equation", 1e-6)
                 reference = ref.sensitivity
+                fine, _ = run(beta, a, "fem", reference_tolerance)
+                r, t = run(beta, a, "integral_equation")
+                rows.append(("integral eq.", r, t))
                 r, t = run(beta, a, "fem")
                 rows.append(("fem", r, t))
             r, t = run(beta, a, "first_order")
@@ -68,12 +71,14 @@ def main() -> None:
                 if name == "fem":
                     raw = r.report.details["uncalibrated_sensitivity"]
                     print(f"{beta:5.1f} {label:>6} | {'fem uncalibr.':<15} {raw:9.6f} {abs(raw - reference):9.2e}")
-            print(f"{'':5} {'':>6} | {'reference':<15} {reference:9.6f}")
+            print(f"{'':5} {'':>6} | {'reference':<15} {reference:9.6f}"
+                  + ("" if a is None else f"   (fine FEM {fine.sensitivity:.6f}, differs by {abs(fine.sensitivity - reference):.1e})"))
     reynolds = list(np.logspace(2.5, 6.5, 20))
     # a magnet whose field is strongest at the centre and falls off towards the wall and the liner ends
     grid = grid_field(1.0, 6.0, lambda x, y, z: 0.0 * x,
                       lambda x, y, z: 0.01 * (1 - 0.15 * (x * x + y * y)) * np.exp(-(z / 1.5) ** 2), nx=21, nz=25)
-    for a, method, field in ((None, "auto", None), (np.pi / 10, "fem", None), (None, "auto", grid), (np.pi / 10, "fem", grid)):
+    for a, method, field in ((None, "auto", None), (np.pi / 10, "integral_equation", None), (np.pi / 10, "fem", None),
+                             (None, "auto", grid), (np.pi / 10, "fem", grid)):
         r, t = run(22.5, a, method, reynolds=reynolds, field=field)
         spread = max(p.sensitivity for p in r.linearity) - min(p.sensitivity for p in r.linearity)
         print(f"linearity, 20 Reynolds numbers, beta 22.5, a/R {'inf' if a is None else 'pi/10'}, "

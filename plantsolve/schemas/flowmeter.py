@@ -46,7 +46,7 @@ class Electrodes(StrictModel):
 
 
 class UniformField(StrictModel):
-    type: Literal["uniform"] = "uniform"
+    type: Literal["uniform"] = Field(description="The field's form; it selects the model (uniform or grid).")
     magnitude: float = Field(default=0.01, gt=0, le=1e3, allow_inf_nan=False,
                              description="|B| in tesla, along +y.")
 
@@ -103,7 +103,8 @@ class FlowmeterRequest(StrictModel):
     units: Units = "mm"
     pipe: Pipe
     electrodes: Electrodes = Field(default_factory=Electrodes)
-    magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(default_factory=UniformField)
+    magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(
+        default_factory=lambda: UniformField(type="uniform"))
     velocity: Velocity = Field(default_factory=Velocity)
     reynolds: list[FiniteFloat] = Field(
         default_factory=list, max_length=1000,
