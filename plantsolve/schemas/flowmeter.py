@@ -133,5 +133,6 @@ class FlowmeterResult(BaseModel):
     error_estimate: float = Field(description="Estimated absolute error of S.")
     grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")
     electrode_current: list[list[float]] = Field(
-        default_factory=list, description="Normalised electrode current density along the electrode: rows [theta deg, j R / I].")
+        default_factory=list, description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
+        "[theta deg, j R^2 / I] for patches, [theta deg, j R / I'] (I' per unit length) along the whole liner.")
     report: Report

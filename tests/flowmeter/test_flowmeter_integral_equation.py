@@ -68,3 +68,22 @@ def test_scaling_R_1_and_R_500():
                                                         liner_length=3000.0)), no_progress)
     assert small.method == large.method == "integral_equation"
     assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-12)
+
+
+def test_the_electrode_current_peaks_at_the_edges_and_the_2d_one_integrates_to_one():
+    from scipy.special import roots_chebyt
+
+    patch = run(half_angle=30.0, half_length=20.0)
+    full = run(half_angle=30.0, half_length=None)
+    for result in (patch, full):
+        theta, j = np.array(result.electrode_current).T
+        assert np.all(j > 0)
+        centre, edge = j[np.argmin(np.abs(theta))], j[np.argmax(np.abs(theta))]
+        assert edge > 3 * centre
+    # the 2-D density is given at Gauss-Chebyshev nodes, whose rule integrates it over the electrode
+    beta = np.radians(30.0)
+    theta, j = np.array(full.electrode_current).T
+    t, w = roots_chebyt(len(theta))
+    assert np.allclose(np.sort(np.radians(theta)), np.sort(beta * t))
+    order = np.argsort(theta)
+    assert np.sum(w * np.sqrt(1 - t * t) * j[order]) * beta == pytest.approx(1.0, abs=1e-6)

@@ -57,8 +57,9 @@ def current_plot(result: FlowmeterResult) -> Figure:
     data = np.asarray(result.electrode_current, dtype=float)
     if len(data):
         ax.plot(data[:, 0], data[:, 1], "o-", ms=3, label="electrode at +R (z = 0 for finite patches)")
-    ax.set(xlabel="angle from the electrode centre theta [deg]", ylabel="current density j R / I (dimensionless)",
-           title="virtual current density on the electrode")
+    ax.set(xlabel="angle from the electrode centre theta [deg]",
+           ylabel="j R^2 / I (patches), j R / I' (full length)",
+           title="virtual current density on the electrode (integral over it = 1)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return fig

@@ -39,7 +39,6 @@ class FemSolution:
     triangles: np.ndarray  # (m, 3) node indices of the quarter-disc triangulation
     nodes: np.ndarray  # (n, 2) quarter-disc nodes (x, y) in units of R
     weight: np.ndarray  # (4, m) W on each triangle (its mean) in the quadrants QUADRANTS
-    wall_current: np.ndarray  # (k, 2): theta (rad), electrode current density at z = 0 times R / I
     unknowns: int
     tetrahedra: int
 
@@ -192,14 +191,4 @@ def solve_patch(beta: float, half_length: float, half_liner: float, h: float = 0
         weight[q] = (np.pi / 8) * total.reshape(layers, 3, m2).sum(axis=(0, 1)) / area / current
     sensitivity = float(np.sum(weight * area) / np.pi)
 
-    # electrode current density at z = 0: each wall node's reaction over its share of the wall
-    # (half cells at the ends of the arc and on the symmetry plane z = 0), times R / I with I the
-    # whole electrode's current
-    wall = np.flatnonzero(on_electrode_2d)
-    wall = wall[np.argsort(angle[wall])]
-    theta = angle[wall]
-    gaps = np.diff(theta)
-    share = 0.5 * (np.concatenate([gaps, [0.0]]) + np.concatenate([[0.0], gaps]))
-    density = reaction[wall] / (share * 0.5 * (z[1] - z[0]))
-    wall_current = np.column_stack([theta, density / (4 * current)])
-    return FemSolution(sensitivity, triangles, points, weight, wall_current, int(np.sum(free)), len(tets))
+    return FemSolution(sensitivity, triangles, points, weight, int(np.sum(free)), len(tets))

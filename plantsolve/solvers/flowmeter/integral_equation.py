@@ -35,6 +35,7 @@ class IntegralEquationSolution:
     sensitivity: float
     error_estimate: float
     series: np.ndarray  # e_l for l = 0, 2, 4, ...: W(z) = sum_l e_l Re(z^l)
+    coefficients: np.ndarray  # c_pq of the finest level, for the current I = 1
     levels: list[tuple[int, float]]  # (M, S) of each truncation
     basis: tuple[int, int]
 
@@ -72,18 +73,18 @@ def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q
     current = c[0, 0] * np.pi**2 * beta * a
     d = big_a @ c[:, 0]
     sensitivity = float(a * np.pi * d[0] / current)
-    return sensitivity, a * np.pi * d / current
+    return sensitivity, a * np.pi * d / current, c / current
 
 
 def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-4) -> IntegralEquationSolution:
     """S (Richardson-extrapolated) and W's series for a patch of half-angle ``beta`` (radians) and
     half-length ``a`` on an insulated liner of half-length ``half_liner`` (R = 1)."""
     modes = 200
-    levels = [(modes, *galerkin(beta, a, half_liner, modes))]
+    levels = [(modes, *galerkin(beta, a, half_liner, modes)[:2])]
     extrapolated: list[float] = []
     while True:
         modes *= 2
-        s, series = galerkin(beta, a, half_liner, modes)
+        s, series, coefficients = galerkin(beta, a, half_liner, modes)
         levels.append((modes, s, series))
         extrapolated.append(2 * levels[-1][1] - levels[-2][1])
         if len(extrapolated) >= 2:
@@ -91,11 +92,19 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
             if error < tolerance / 10 or modes >= 3200:
                 break
     # truncation in the modes (Richardson's change) plus in the basis (two more functions each way)
-    richer, _ = galerkin(beta, a, half_liner, modes, 8, 8)
+    richer = galerkin(beta, a, half_liner, modes, 8, 8)[0]
     error = abs(extrapolated[-1] - extrapolated[-2]) + abs(richer - levels[-1][1])
     # the series of the finest level, rescaled so that W(0) is the extrapolated S
     series = levels[-1][2] * (extrapolated[-1] / levels[-1][1])
-    return IntegralEquationSolution(extrapolated[-1], error, series, [(lv[0], lv[1]) for lv in levels], (6, 6))
+    return IntegralEquationSolution(extrapolated[-1], error, series, coefficients, [(lv[0], lv[1]) for lv in levels], (6, 6))
+
+
+def current_density(solution: IntegralEquationSolution, beta: float, theta: np.ndarray) -> np.ndarray:
+    """The electrode current density at z = 0 for the current 1 (R = 1), at angles inside (-beta, beta)."""
+    t = theta / beta
+    p, q = solution.coefficients.shape
+    along = sum(solution.coefficients[:, j] * (-1.0) ** j for j in range(q))  # T_2q(0) = (-1)^q
+    return sum(along[i] * np.cos(2 * i * np.arccos(t)) for i in range(p)) / np.sqrt(1 - t * t)
 
 
 def weight_at(series: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
