@@ -1,7 +1,7 @@
 """Cross-section weight functions in closed form (unit pipe radius, B along +y, electrodes at (+-1, 0)).
 
-All three are W = (pi/2) Re F'(z) / I for B along +y (and (pi/2) Im F'(z) / I weighs B_x), with F the complex virtual-current potential of the disc
-|z| < 1 driving the current I (per unit length, conductivity 1) from the electrode at +1 to the
+All three are W = (pi/2) Re F'(z) / I for B along +y ((pi/2) Im F'(z) / I weighs B_x), with F the
+complex virtual-current potential of the disc |z| < 1 driving the current I (per unit length, conductivity 1) from the electrode at +1 to the
 one at -1: U = sigma B integral v dphi/dx dA / I (seed eq. 1-2 with v x B = -v B e_x), and the
 pi/2 makes S = (1/pi) integral W dA.
 
