@@ -29,6 +29,7 @@ def test_half_angles_outside_0_90_are_refused(beta):
     (meter(radius=50, half_length=200.0, liner_length=300.0), ("electrodes", "half_length")),
     (meter(shape="point", method="fem"), ("options", "method")),
     (meter(half_length=None, method="integral_equation"), ("options", "method")),
+    (meter(half_angle=89.0, half_length=1.0, method="integral_equation"), ("options", "method")),
     (meter(probes=[[60.0, 0.0]]), ("options", "probe_points", 0)),
     (meter(probes=[[1.0]]), ("options", "probe_points", 0)),
     (meter(reynolds=[1e4, -3.0]), ("reynolds", 1)),

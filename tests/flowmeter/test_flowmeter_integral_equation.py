@@ -87,3 +87,15 @@ def test_the_electrode_current_peaks_at_the_edges_and_the_2d_one_integrates_to_o
     assert np.allclose(np.sort(np.radians(theta)), np.sort(beta * t))
     order = np.argsort(theta)
     assert np.sum(w * np.sqrt(1 - t * t) * j[order]) * beta == pytest.approx(1.0, abs=1e-6)
+
+
+def test_long_liners_are_cut_where_the_current_has_decayed_and_huge_mode_counts_go_to_fem():
+    short = run(half_angle=22.5, half_length=50 * np.pi / 10)
+    body = meter(radius=50.0, liner_length=10_000.0, half_angle=22.5, half_length=50 * np.pi / 10,
+                 velocity={"type": "uniform", "mean": 1.0})
+    long = solve(FlowmeterRequest.model_validate(body), no_progress)
+    assert long.method == "integral_equation"
+    assert long.sensitivity == pytest.approx(short.sensitivity, abs=1e-5)
+    narrow = meter(radius=50.0, liner_length=300.0, half_angle=89.0, half_length=1.0,
+                   velocity={"type": "uniform", "mean": 1.0}, tolerance=0.01)
+    assert solve(FlowmeterRequest.model_validate(narrow), no_progress).method == "fem"

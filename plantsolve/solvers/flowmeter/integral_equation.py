@@ -53,11 +53,26 @@ def bessel_ratio_table(orders: np.ndarray, k: np.ndarray) -> np.ndarray:
     return out
 
 
+BUDGET = 10_000_000  # (theta modes) x (z modes) of the largest level: about 80 MB per table
+DECAY_LENGTH = 8.0  # the potential decays like exp(-1.84 |z| / R) beyond the electrode: e^-14.7 at 8 R
+
+
+def z_modes(beta: float, a: float, half_liner: float, modes: int) -> int:
+    """Number of cosine modes in z for ``modes`` theta modes (k a up to the largest m beta)."""
+    return int(np.ceil((2 * modes - 1) * beta / a * min(half_liner, a + DECAY_LENGTH) / np.pi)) + 1
+
+
+def feasible(beta: float, a: float, half_liner: float) -> bool:
+    """Whether the three levels the extrapolation needs (200, 400, 800 theta modes) fit the budget."""
+    return 800 * z_modes(beta, a, half_liner, 800) <= BUDGET
+
+
 def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q: int = 6):
-    """S and the coefficients d_m (m = 1, 3, ...) for ``modes`` odd orders."""
+    """S and the coefficients d_m (m = 1, 3, ...) for ``modes`` odd orders. Beyond a + 8 R the liner is
+    cut (its end insulated there): the virtual current has decayed to below 1e-6 of its value."""
+    half_liner = min(half_liner, a + DECAY_LENGTH)
     m = np.arange(1, 2 * modes, 2).astype(float)
-    k_max = m[-1] * beta / a
-    count = int(np.ceil(k_max * half_liner / np.pi)) + 1
+    count = z_modes(beta, a, half_liner, modes)
     n = np.arange(count)
     k = n * np.pi / half_liner
     green = 1.0 / (m[:, None] + k[None, :] * bessel_ratio_table(m, k))
@@ -89,7 +104,7 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
         extrapolated.append(2 * levels[-1][1] - levels[-2][1])
         if len(extrapolated) >= 2:
             error = abs(extrapolated[-1] - extrapolated[-2])
-            if error < tolerance / 10 or modes >= 3200:
+            if error < tolerance / 10 or modes >= 3200 or 2 * modes * z_modes(beta, a, half_liner, 2 * modes) > BUDGET:
                 break
     # truncation in the modes (Richardson's change) plus in the basis (two more functions each way)
     richer = galerkin(beta, a, half_liner, modes, 8, 8)[0]

@@ -209,7 +209,8 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
         return closed_form(g.beta, "first_order", average)
     if method == "auto" and g.full_length:
         return closed_form(g.beta, "exact", average)
-    if method == "integral_equation" or (method == "auto" and grid is None):
+    if method == "integral_equation" or (method == "auto" and grid is None
+                                          and integral_equation.feasible(g.beta, g.half_length, g.half_liner)):
         progress(0.1, "integral equation on the electrode")
         return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance)
     return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress, grid)

@@ -10,6 +10,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.flowmeter.integral_equation import feasible
 from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
@@ -52,6 +53,11 @@ def check_input(request: FlowmeterRequest) -> None:
             errors.append(FieldError(("options", "method"),
                                      "'integral_equation' models patches shorter than the liner; full-length and point "
                                      "electrodes are solved exactly ('auto')"))
+        elif not feasible(float(np.radians(e.half_angle)), e.half_length / radius, liner / (2 * radius)):
+            errors.append(FieldError(("options", "method"),
+                                     f"electrodes this short for their width (a/R = {e.half_length / radius:.3g}, "
+                                     f"beta = {e.half_angle:g} deg) need more modes than the integral equation's "
+                                     "memory budget; use 'fem' or 'auto'"))
         elif request.magnetic_field.type != "uniform":
             errors.append(FieldError(("options", "method"),
                                      "'integral_equation' gives the z-integrated current only, which a uniform field "
