@@ -67,7 +67,16 @@ def feasible(beta: float, a: float, half_liner: float) -> bool:
     return 800 * z_modes(beta, a, half_liner, 800) <= BUDGET
 
 
-def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q: int = 6):
+def ratio_table(beta: float, a: float, half_liner: float, modes: int) -> np.ndarray:
+    """The Bessel ratios of a level; the levels below use its leading rows and columns."""
+    half_liner = min(half_liner, a + DECAY_LENGTH)
+    m = np.arange(1, 2 * modes, 2).astype(float)
+    k = np.arange(z_modes(beta, a, half_liner, modes)) * np.pi / half_liner
+    return bessel_ratio_table(m, k)
+
+
+def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q: int = 6,
+             ratios: np.ndarray | None = None):
     """S and the coefficients d_m (m = 1, 3, ...) for ``modes`` odd orders. Beyond a + 8 R the liner is
     cut (its end insulated there): the virtual current has decayed to below 1e-6 of its value."""
     half_liner = min(half_liner, a + DECAY_LENGTH)
@@ -75,12 +84,14 @@ def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q
     count = z_modes(beta, a, half_liner, modes)
     n = np.arange(count)
     k = n * np.pi / half_liner
-    green = 1.0 / (m[:, None] + k[None, :] * bessel_ratio_table(m, k))
+    table = bessel_ratio_table(m, k) if ratios is None else ratios[:modes, :count]
+    green = 1.0 / (m[:, None] + k[None, :] * table)
     weight_n = np.where(n == 0, 1.0, 2.0) / (2 * half_liner) * (2 / np.pi)
     pi_, qi = np.arange(p), np.arange(q)
     big_a = beta * np.pi * (-1.0) ** pi_[None] * jv(2 * pi_[None], m[:, None] * beta)
     big_b = a * np.pi * (-1.0) ** qi[None] * jv(2 * qi[None], k[:, None] * a)
-    h = np.einsum("mn,nq,nr->mqr", green * weight_n[None], big_b, big_b)
+    pairs = (big_b[:, :, None] * big_b[:, None, :]).reshape(len(k), q * q)
+    h = ((green * weight_n[None]) @ pairs).reshape(len(m), q, q)  # one BLAS product over the z modes
     matrix = np.einsum("mp,ms,mqr->pqsr", big_a, big_a, h).reshape(p * q, p * q)
     rhs = np.zeros(p * q)
     rhs[0] = np.pi * beta * np.pi * a  # V = 1 tested with each basis function
@@ -95,11 +106,13 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
     """S (Richardson-extrapolated) and W's series for a patch of half-angle ``beta`` (radians) and
     half-length ``a`` on an insulated liner of half-length ``half_liner`` (R = 1)."""
     modes = 200
-    levels = [(modes, *galerkin(beta, a, half_liner, modes)[:2])]
+    shared = ratio_table(beta, a, half_liner, 800)  # the first three levels read one table
+    levels = [(modes, *galerkin(beta, a, half_liner, modes, ratios=shared)[:2])]
     extrapolated: list[float] = []
     while True:
         modes *= 2
-        s, series, coefficients = galerkin(beta, a, half_liner, modes)
+        table = shared if modes <= 800 else None
+        s, series, coefficients = galerkin(beta, a, half_liner, modes, ratios=table)
         levels.append((modes, s, series))
         extrapolated.append(2 * levels[-1][1] - levels[-2][1])
         if len(extrapolated) >= 2:
@@ -107,7 +120,7 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
             if error < tolerance / 10 or modes >= 3200 or 2 * modes * z_modes(beta, a, half_liner, 2 * modes) > BUDGET:
                 break
     # truncation in the modes (Richardson's change) plus in the basis (two more functions each way)
-    richer = galerkin(beta, a, half_liner, modes, 8, 8)[0]
+    richer = galerkin(beta, a, half_liner, modes, 8, 8, ratios=shared if modes <= 800 else None)[0]
     error = abs(extrapolated[-1] - extrapolated[-2]) + abs(richer - levels[-1][1])
     # the series of the finest level, rescaled so that W(0) is the extrapolated S
     series = levels[-1][2] * (extrapolated[-1] / levels[-1][1])
