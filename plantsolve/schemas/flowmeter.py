@@ -1,0 +1,138 @@
+"""Request and result models of the ``flowmeter`` solver (electromagnetic flow meters).
+
+Conventions
+-----------
+- The pipe axis is z and the liquid flows along +z; the magnetic field B points along +y; the two
+  electrodes are centred at (+R, 0) and (-R, 0) in the cross-section (R the pipe radius).
+- Lengths are in the request's ``units``, angles in degrees, the field in tesla, velocities in m/s
+  and the signal in volts (the signal needs the diameter in metres, so ``units`` matters there).
+- The cross-section weight function W(x, y) is the weight vector's z-component integrated along z
+  and normalised so that, for uniform B, ``S = (1/(pi R^2)) * integral W dA`` and
+  ``U = 2 R B (1/(pi R^2)) * integral W v dA``; S = U / (2 R B v_mean) is the sensitivity.
+- Scaling: S and W(x/R, y/R) depend only on the electrode half-angle, a/R and L/R (and the shapes
+  of the field and the profile); a result for one pipe size holds for every size with the
+  geometry scaled.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, Field
+
+from plantsolve.schemas.common import FiniteFloat, Measured, Report, StrictModel, Units
+
+
+class Pipe(StrictModel):
+    radius: float = Field(gt=0, le=1e9, allow_inf_nan=False, description="Inner radius R of the liner.")
+    liner_length: float | None = Field(
+        default=None, gt=0, le=1e10, allow_inf_nan=False,
+        description="Length L of the insulating liner (default 3 diameters, 6 R). The liner section is "
+        "modelled as an insulated pipe of this length, its end cross-sections insulated too.")
+
+
+class Electrodes(StrictModel):
+    shape: Literal["patch", "point"] = Field(
+        default="patch",
+        description="'patch': theta-z patches of half-angle beta and half-length a, equipotential; "
+        "'point': point electrodes (Shercliff's weight function).")
+    half_angle: float = Field(
+        default=22.5, gt=0, lt=90, allow_inf_nan=False,
+        description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90.")
+    half_length: float | None = Field(
+        default=None, gt=0, le=1e10, allow_inf_nan=False,
+        description="Half-length a of a patch electrode along z; null means electrodes along the whole "
+        "liner (the 2-D case, solved exactly).")
+
+
+class UniformField(StrictModel):
+    type: Literal["uniform"] = Field(description="The field's form; it selects the model (uniform or grid).")
+    magnitude: float = Field(default=0.01, gt=0, le=1e3, allow_inf_nan=False,
+                             description="|B| in tesla, along +y.")
+
+
+class GridField(StrictModel):
+    """B on a rectilinear grid (from the magnet's finite-element model), trilinearly interpolated.
+
+    ``bx``, ``by``, ``bz`` hold one value per grid point in C order: the value at (x[i], y[j], z[k])
+    is at index (i * len(y) + j) * len(z) + k. The grid must cover the liner section
+    (|x|, |y| <= R, |z| <= L/2). S is normalised by B_y at the pipe centre.
+    """
+
+    type: Literal["grid"]
+    x: list[Measured] = Field(min_length=2, max_length=400, description="Grid x coordinates, increasing (units).")
+    y: list[Measured] = Field(min_length=2, max_length=400, description="Grid y coordinates, increasing (units).")
+    z: list[Measured] = Field(min_length=2, max_length=400, description="Grid z coordinates, increasing (units).")
+    bx: list[Measured] = Field(max_length=2_000_000, description="B_x in tesla per grid point (C order).")
+    by: list[Measured] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
+    bz: list[Measured] | None = Field(default=None, max_length=2_000_000,
+                                      description="B_z per grid point; it does not enter U (the flow is axial).")
+
+
+class Velocity(StrictModel):
+    type: Literal["uniform", "laminar", "power_law", "samples"] = Field(
+        default="uniform",
+        description="'uniform': v = mean; 'laminar': 2 mean (1 - r^2/R^2); 'power_law': "
+        "mean (n+1)(2n+1)/(2n^2) (1 - r/R)^(1/n); 'samples': values at points of the cross-section, "
+        "linearly interpolated on their Delaunay triangulation.")
+    mean: float = Field(default=1.0, gt=-1e6, lt=1e6, allow_inf_nan=False,
+                        description="Mean axial velocity (m/s), for the analytic profiles.")
+    n: float = Field(default=7.0, ge=1, le=100, allow_inf_nan=False, description="Power-law exponent.")
+    points: list[list[Measured]] | None = Field(
+        default=None, max_length=100_000,
+        description="Sample points [x, y] in the request's units (for 'samples'); they must cover the cross-section.")
+    values: list[Measured] | None = Field(default=None, max_length=100_000,
+                                          description="Axial velocity (m/s) at each sample point.")
+
+
+class FlowmeterOptions(StrictModel):
+    method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
+        default="auto",
+        description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
+        "finite patches in a uniform field, finite elements for finite patches in a grid field; "
+        "'integral_equation': the Galerkin integral equation on the electrode (uniform field); 'fem': finite "
+        "elements (scikit-fem) for patches; 'first_order': the uniform current-density iterate (S = sin(beta)/beta).")
+    tolerance: float = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
+                             description="Target accuracy of S; for 'fem' it sets the mesh size.")
+    probe_points: list[list[Measured]] = Field(
+        default_factory=list, max_length=10_000,
+        description="Points [x, y] (or [x, y, z]; z is ignored, W is z-integrated) where W is reported.")
+
+
+class FlowmeterRequest(StrictModel):
+    units: Units = "mm"
+    pipe: Pipe
+    electrodes: Electrodes = Field(default_factory=Electrodes)
+    magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(
+        default_factory=lambda: UniformField(type="uniform"))
+    velocity: Velocity = Field(default_factory=Velocity)
+    reynolds: list[FiniteFloat] = Field(
+        default_factory=list, max_length=1000,
+        description="Reynolds numbers for the linearity curve: laminar profile below 2300, else the power "
+        "law with n = -1.7 + 1.8 log10(Re) (at least that of Re = 4000).")
+    options: FlowmeterOptions = Field(default_factory=FlowmeterOptions)
+
+
+class LinearityPoint(BaseModel):
+    reynolds: float
+    profile: str
+    n: float | None = None
+    sensitivity: float
+
+
+class FlowmeterResult(BaseModel):
+    sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.")
+    sensitivity_first_order: float = Field(description="The uniform current-density iterate sin(beta)/beta (1 for points).")
+    signal: float = Field(description="U in volts for the field and mean velocity.")
+    probes: list[float] = Field(default_factory=list, description="W at each probe point.")
+    linearity: list[LinearityPoint] = Field(default_factory=list)
+    ideal_meter_residual: float = Field(
+        description="Bevir's ideal-meter residual for rectilinear flow: curl W = 0 means W constant over the "
+        "cross-section; given as (1/(pi R^2)) integral |W - S_uniform| dA / S_uniform, 0 for an ideal meter.")
+    method: str
+    error_estimate: float = Field(description="Estimated absolute error of S.")
+    grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")
+    electrode_current: list[list[float]] = Field(
+        default_factory=list, description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
+        "[theta deg, j R^2 / I] for patches, [theta deg, j R / I'] (I' per unit length) along the whole liner.")
+    report: Report

@@ -1,0 +1,90 @@
+"""Plots and tables of a flowmeter result: W over the cross-section, the electrode current density,
+the linearity curve (PNG), and W on a grid (CSV)."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+from matplotlib.figure import Figure  # no pyplot: no global figure state
+from matplotlib.lines import Line2D
+from matplotlib.tri import Triangulation
+
+from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult
+from plantsolve.solvers.base import Artifact
+
+
+def png(fig: Figure, name: str) -> Artifact:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return Artifact(name=name, media_type="image/png", data=buf.getvalue())
+
+
+def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
+    grid = np.asarray(result.grid, dtype=float)
+    radius, units = request.pipe.radius, request.units
+    fig = Figure(figsize=(6.4, 5.6))
+    ax = fig.add_subplot()
+    tri = Triangulation(grid[:, 0], grid[:, 1])
+    # the point electrodes' W is unbounded at the wall: colour the central range
+    lo, hi = np.percentile(grid[:, 2], [1, 99])
+    filled = ax.tricontourf(tri, np.clip(grid[:, 2], lo, hi), levels=20, cmap="viridis")
+    lines = ax.tricontour(tri, np.clip(grid[:, 2], lo, hi), levels=10, colors="k", linewidths=0.5)
+    ax.clabel(lines, fontsize=7, fmt="%.2f")
+    fig.colorbar(filled, ax=ax, label="weight function W (dimensionless)")
+    t = np.linspace(0, 2 * np.pi, 400)
+    ax.plot(radius * np.cos(t), radius * np.sin(t), color="0.3", lw=1)
+    if request.electrodes.shape == "patch":
+        beta = np.radians(request.electrodes.half_angle)
+        arc = np.linspace(-beta, beta, 50)
+        for sign in (1, -1):
+            ax.plot(sign * radius * np.cos(arc), radius * np.sin(arc), color="red", lw=4)
+    else:
+        ax.plot([radius, -radius], [0, 0], "o", color="red", ms=8)
+    ax.annotate("", xy=(0, 0.6 * radius), xytext=(0, 0.2 * radius), arrowprops={"arrowstyle": "->", "color": "white"})
+    ax.set(xlabel=f"x [{units}]", ylabel=f"y [{units}]", aspect="equal",
+           title=f"W over the cross-section, S = {result.sensitivity:.5f} ({result.method})")
+    ax.legend(handles=[Line2D([], [], color="red", lw=4, label="electrodes"),
+                       Line2D([], [], color="white", marker=r"$\uparrow$", lw=0, label="B along +y"),
+                       Line2D([], [], color="k", lw=0.5, label="contours of W")],
+              loc="lower right", fontsize=8, facecolor="0.85")
+    return fig
+
+
+def current_plot(result: FlowmeterResult) -> Figure:
+    fig = Figure(figsize=(6.4, 4.0))
+    ax = fig.add_subplot()
+    data = np.asarray(result.electrode_current, dtype=float)
+    if len(data):
+        ax.plot(data[:, 0], data[:, 1], "o-", ms=3, label="electrode at +R (z = 0 for finite patches)")
+    ax.set(xlabel="angle from the electrode centre theta [deg]",
+           ylabel="j R^2 / I (patches), j R / I' (full length)",
+           title="virtual current density on the electrode (integral over it = 1)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def linearity_plot(result: FlowmeterResult) -> Figure:
+    fig = Figure(figsize=(6.4, 4.0))
+    ax = fig.add_subplot()
+    re = [p.reynolds for p in result.linearity]
+    s = [p.sensitivity for p in result.linearity]
+    ax.semilogx(re, s, "o-", label="S(Re)")
+    ax.axhline(result.sensitivity_first_order, color="0.5", ls="--", label="first order sin(beta)/beta")
+    ax.set(xlabel="Reynolds number (dimensionless)", ylabel="sensitivity S (dimensionless)", title="linearity")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    return fig
+
+
+def render_artifacts(request: FlowmeterRequest, result: FlowmeterResult) -> list[Artifact]:
+    """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
+    out = [png(weight_map(request, result), "weight_function.png")]
+    if result.electrode_current:
+        out.append(png(current_plot(result), "electrode_current.png"))
+    if result.linearity:
+        out.append(png(linearity_plot(result), "linearity.png"))
+    rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
+    out.append(Artifact(name="weight_grid.csv", media_type="text/csv", data=("\n".join(rows) + "\n").encode()))
+    return out

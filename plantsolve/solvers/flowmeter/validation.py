@@ -1,0 +1,158 @@
+"""Semantic input checks (types, finiteness and bounds are in the schema)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+from scipy.spatial import ConvexHull, QhullError
+
+from plantsolve.schemas.flowmeter import FlowmeterRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.flowmeter.integral_equation import feasible
+from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The meter in units of the pipe radius (the only lengths S depends on)."""
+
+    beta: float | None  # electrode half-angle in radians; None for point electrodes
+    half_length: float  # a / R (the liner's half-length for full-length electrodes)
+    half_liner: float  # L / (2 R)
+    full_length: bool
+
+
+def geometry(request: FlowmeterRequest) -> Geometry:
+    radius = request.pipe.radius
+    liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
+    half_liner = liner / (2 * radius)
+    e = request.electrodes
+    if e.shape == "point":
+        return Geometry(None, 0.0, half_liner, False)
+    full = e.half_length is None or e.half_length >= liner / 2 * (1 - 1e-12)
+    a = half_liner if full else e.half_length / radius
+    return Geometry(float(np.radians(e.half_angle)), a, half_liner, full)
+
+
+def check_input(request: FlowmeterRequest) -> None:
+    """Fast semantic validation; raises :class:`InputRejected` naming each bad field."""
+    errors: list[FieldError] = []
+    radius = request.pipe.radius
+    liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
+    e = request.electrodes
+    if e.shape == "patch" and e.half_length is not None and e.half_length > liner / 2 * (1 + 1e-12):
+        errors.append(FieldError(("electrodes", "half_length"),
+                                 f"the electrode half-length {e.half_length:g} exceeds half the liner length "
+                                 f"({liner / 2:g}); use null for electrodes along the whole liner"))
+    if e.shape == "point" and e.half_length is not None:
+        errors.append(FieldError(("electrodes", "half_length"), "point electrodes have no half-length; leave it null"))
+    if request.options.method == "integral_equation":
+        if e.shape != "patch" or e.half_length is None or e.half_length >= liner / 2:
+            errors.append(FieldError(("options", "method"),
+                                     "'integral_equation' models patches shorter than the liner; full-length and point "
+                                     "electrodes are solved exactly ('auto')"))
+        elif not feasible(float(np.radians(e.half_angle)), e.half_length / radius, liner / (2 * radius)):
+            errors.append(FieldError(("options", "method"),
+                                     f"electrodes this short for their width (a/R = {e.half_length / radius:.3g}, "
+                                     f"beta = {e.half_angle:g} deg) need more modes than the integral equation's "
+                                     "memory budget; use 'fem' or 'auto'"))
+        elif request.magnetic_field.type != "uniform":
+            errors.append(FieldError(("options", "method"),
+                                     "'integral_equation' gives the z-integrated current only, which a uniform field "
+                                     "needs; a grid field takes 'fem' (or 'auto')"))
+    if request.options.method == "fem" and e.shape != "patch":
+        errors.append(FieldError(("options", "method"), "'fem' models patch electrodes; point electrodes are solved exactly"))
+    finite_patch = e.shape == "patch" and e.half_length is not None and e.half_length < liner / 2
+    if finite_patch and e.half_length / radius < 0.02:
+        errors.append(FieldError(("electrodes", "half_length"),
+                                 f"a/R = {e.half_length / radius:.3g} is below 0.02, finer than the finite-element mesh "
+                                 "resolves; use point electrodes"))
+    if finite_patch and liner / radius < 0.5:
+        errors.append(FieldError(("pipe", "liner_length"), f"L/R = {liner / radius:.3g}; at least 0.5 for patch electrodes"))
+    if e.shape == "patch" and not liner / radius <= 200:
+        errors.append(FieldError(("pipe", "liner_length"),
+                                 f"L/R = {liner / radius:g}; at most 200 (the virtual current has decayed long before)"))
+    for k, p in enumerate(request.options.probe_points):
+        if len(p) not in (2, 3):
+            errors.append(FieldError(("options", "probe_points", k), f"a probe is [x, y] or [x, y, z]; got {len(p)} numbers"))
+        elif not np.hypot(p[0], p[1]) < radius:
+            errors.append(FieldError(("options", "probe_points", k),
+                                     f"({p[0]:g}, {p[1]:g}) is not inside the pipe (radius {radius:g})"))
+    for k, re in enumerate(request.reynolds):
+        if not 0 < re <= 1e9:
+            errors.append(FieldError(("reynolds", k), f"a Reynolds number is positive and at most 1e9; got {re:g}"))
+    if request.magnetic_field.type == "grid":
+        errors += grid_errors(request, liner)
+    v = request.velocity
+    if v.type == "samples":
+        errors += sample_errors(request)
+    elif v.points is not None or v.values is not None:
+        errors.append(FieldError(("velocity", "points"), f"points and values belong to type 'samples', not {v.type!r}"))
+    if errors:
+        raise InputRejected(errors)
+
+
+def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
+    f = request.magnetic_field
+    radius = request.pipe.radius
+    if request.electrodes.shape == "point":
+        return [FieldError(("magnetic_field", "type"),
+                           "a grid field needs the 3-D virtual current, computed for patch electrodes only; "
+                           "point electrodes take a uniform field")]
+    errors = []
+    for name, reach in (("x", radius), ("y", radius), ("z", liner / 2)):
+        axis = np.asarray(getattr(f, name), dtype=float)
+        if np.any(np.diff(axis) <= 0):
+            errors.append(FieldError(("magnetic_field", name), "grid coordinates must increase strictly"))
+        elif axis[0] > -reach * (1 - 1e-9) or axis[-1] < reach * (1 - 1e-9):
+            errors.append(FieldError(("magnetic_field", name),
+                                     f"the grid spans {axis[0]:g}..{axis[-1]:g} and does not cover the pipe "
+                                     f"(-{reach:g}..{reach:g} {'along the liner' if name == 'z' else ''})".rstrip()))
+    count = len(f.x) * len(f.y) * len(f.z)
+    for name in ("bx", "by", "bz"):
+        values = getattr(f, name)
+        if values is not None and len(values) != count:
+            errors.append(FieldError(("magnetic_field", name),
+                                     f"{len(values)} values for a {len(f.x)} x {len(f.y)} x {len(f.z)} grid ({count} points)"))
+    if errors:
+        return errors
+    x, y, z = (np.asarray(getattr(f, n), dtype=float) for n in ("x", "y", "z"))
+    by = np.asarray(f.by, dtype=float).reshape(len(x), len(y), len(z))
+    centre = RegularGridInterpolator((x, y, z), by)([[0.0, 0.0, 0.0]])[0]
+    if not abs(centre) > 1e-12 * max(float(np.max(np.abs(by))), 1e-300):
+        errors.append(FieldError(("magnetic_field", "by"),
+                                 "B_y at the pipe centre is zero; S is normalised by it (B along +y)"))
+    return errors
+
+
+def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
+    v = request.velocity
+    radius = request.pipe.radius
+    if v.points is None or v.values is None:
+        return [FieldError(("velocity", "points" if v.points is None else "values"),
+                           "type 'samples' needs points and values")]
+    if len(v.points) != len(v.values):
+        return [FieldError(("velocity", "values"), f"{len(v.values)} values for {len(v.points)} points")]
+    bad = [k for k, p in enumerate(v.points) if len(p) != 2]
+    if bad:
+        return [FieldError(("velocity", "points", bad[0]), "a sample point is [x, y]")]
+    points = np.asarray(v.points, dtype=float) / radius
+    outside = np.flatnonzero(np.hypot(points[:, 0], points[:, 1]) > 1 + 1e-9)
+    if len(outside):
+        return [FieldError(("velocity", "points", int(outside[0])), "the sample point lies outside the pipe")]
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):
+        return [FieldError(("velocity", "points"), "the sample points do not span the cross-section (fewer than 3, or on a line)")]
+    if hull.volume < 0.5 * np.pi:
+        return [FieldError(("velocity", "points"),
+                           f"the samples cover {100 * hull.volume / np.pi:.0f} % of the cross-section; at least half is needed")]
+    velocity, _ = sampled(points, np.asarray(v.values, dtype=float))
+    quadrature = disc_quadrature(radial=24, scale=4.0, max_angular=512)
+    flow = velocity(quadrature.x, quadrature.y)
+    mean = float(np.sum(flow * quadrature.w) / np.pi)
+    if not abs(mean) > 1e-9 * max(float(np.max(np.abs(flow))), 1e-300):
+        return [FieldError(("velocity", "values"), "the sampled flow has no mean velocity; S = U / (2 R B v_mean) is undefined")]
+    return []

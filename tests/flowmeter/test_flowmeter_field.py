@@ -1,0 +1,82 @@
+"""A magnetic field on a grid: a uniform grid is the uniform field, the liner's mean field weighs the
+2-D current exactly, and the FEM with the field on every eighth agrees with the closed form."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plantsolve.schemas.flowmeter import FlowmeterRequest
+from plantsolve.solvers.base import InputRejected, no_progress
+from plantsolve.solvers.flowmeter import check_input, solve
+from plantsolve.solvers.flowmeter.synthetic import exact_full_length, grid_field, meter
+from plantsolve.solvers.flowmeter.weight2d import complex_weight_full_length
+
+RADIUS, LINER = 50.0, 300.0
+B0 = 0.01
+
+
+def run(field, **kwargs):
+    body = meter(radius=RADIUS, liner_length=LINER, velocity={"type": "uniform", "mean": 1.0}, **kwargs)
+    body["magnetic_field"] = field
+    return solve(FlowmeterRequest.model_validate(body), no_progress)
+
+
+def tilted_x(x, y, z):
+    return 0.3 * B0 * x * y
+
+
+def tilted_y(x, y, z):
+    # B_y falls linearly to half at the liner ends (L/2 = 3 R): its liner mean is 3/4 of the centre's
+    return B0 * (1 + 0.2 * x + 0.1 * y) * (1 - 0.5 * np.abs(z) / 3.0)
+
+
+def test_a_uniform_grid_is_the_uniform_field():
+    grid = grid_field(RADIUS, LINER, lambda x, y, z: 0.0 * x, lambda x, y, z: B0 + 0.0 * x, nx=3, nz=3)
+    for kwargs in ({"half_length": None}, {"half_length": 15.0, "method": "fem", "tolerance": 0.01}):
+        uniform = run({"type": "uniform", "magnitude": B0}, **kwargs)
+        gridded = run(grid, **kwargs)
+        assert gridded.sensitivity == pytest.approx(uniform.sensitivity, abs=1e-10)
+        assert gridded.signal == pytest.approx(uniform.signal, rel=1e-10)
+
+
+def test_full_length_electrodes_see_the_liner_mean_of_the_field():
+    result = run(grid_field(RADIUS, LINER, tilted_x, tilted_y), half_angle=30.0, half_length=None)
+    n = 1500
+    r, t = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(2 * n) + 0.5) * np.pi / n)
+    x, y = r * np.cos(t), r * np.sin(t)
+    c = complex_weight_full_length(x, y, np.radians(30.0))
+    by_mean = 0.75 * (1 + 0.2 * x + 0.1 * y)
+    bx_mean = 0.3 * x * y
+    want = np.sum((by_mean * c.real + bx_mean * c.imag) * r) / np.sum(r)
+    assert result.sensitivity == pytest.approx(want, abs=1e-3)
+    assert abs(result.sensitivity - 0.75 * exact_full_length(30.0)) > 5e-3  # B_x matters here
+
+
+def test_fem_with_a_grid_agrees_with_the_closed_form():
+    field = grid_field(RADIUS, LINER, tilted_x, tilted_y)
+    exact = run(field, half_angle=30.0, half_length=None)
+    by_fem = run(field, half_angle=30.0, half_length=LINER / 2, method="fem", tolerance=0.004)
+    assert by_fem.method == "fem" and exact.method == "closed_form_2d"
+    assert by_fem.sensitivity == pytest.approx(exact.sensitivity, abs=2e-3)
+    probes = [[10.0, 20.0], [-20.0, -10.0], [30.0, -15.0]]
+    a = run(field, half_angle=30.0, half_length=None, probes=probes)
+    b = run(field, half_angle=30.0, half_length=LINER / 2, method="fem", tolerance=0.004, probes=probes)
+    assert np.allclose(a.probes, b.probes, atol=2e-2)
+
+
+@pytest.mark.parametrize("change, loc", [
+    (lambda f: f.update(x=[v * 0.5 for v in f["x"]]), ("magnetic_field", "x")),
+    (lambda f: f.update(z=[v * 0.5 for v in f["z"]]), ("magnetic_field", "z")),
+    (lambda f: f.update(by=f["by"][:-1]), ("magnetic_field", "by")),
+    (lambda f: f.update(y=f["y"][::-1]), ("magnetic_field", "y")),
+    (lambda f: f.update(by=[0.0] * len(f["by"])), ("magnetic_field", "by")),
+])
+def test_a_grid_that_does_not_cover_the_pipe_or_mismatches_is_refused(change, loc):
+    field = grid_field(RADIUS, LINER, tilted_x, tilted_y, nx=5, nz=5)
+    change(field)
+    body = meter(radius=RADIUS, liner_length=LINER)
+    body["magnetic_field"] = field
+    with pytest.raises(InputRejected) as error:
+        check_input(FlowmeterRequest.model_validate(body))
+    assert error.value.errors[0].loc == loc
