@@ -16,7 +16,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from pydantic_core import PydanticCustomError
 
-def _json_integer(value: Any) -> Any:
+def json_integer(value: Any) -> Any:
     """JSON Schema's integer: a number without a fraction (``5`` and ``5.0``), never a bool or a string."""
     if isinstance(value, bool) or not isinstance(value, Real):
         raise PydanticCustomError("int_type", "Input should be a valid integer")
@@ -27,9 +27,10 @@ def _json_integer(value: Any) -> Any:
     return int(value)
 
 
-Integer = Annotated[int, BeforeValidator(_json_integer)]
+Integer = Annotated[int, BeforeValidator(json_integer)]
 """An integer field of a request: 5 or 5.0, as JSON Schema's ``integer``; requests are validated strictly
-otherwise (no ``true`` for 1, no ``"5"`` for 5)."""
+otherwise (no ``true`` for 1, no ``"5"`` for 5). Bounds go before the validator, or the schema loses them:
+``Annotated[int, Field(ge=0), BeforeValidator(json_integer)]``."""
 
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 """A float that must be finite (NaN and +-inf are rejected)."""

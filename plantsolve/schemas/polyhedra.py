@@ -16,16 +16,16 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, Tag
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag
 
-from plantsolve.schemas.common import Coordinate, FiniteFloat, Integer, Point3, Report, StrictModel, Units
+from plantsolve.schemas.common import Coordinate, FiniteFloat, Integer, Point3, Report, StrictModel, Units, json_integer
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000
 MAX_LOOP = 100_000
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
-VertexIndex = Annotated[Integer, Field(ge=0, lt=MAX_VERTICES)]
+VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
 
 
 def _loop_form(value: Any) -> str:

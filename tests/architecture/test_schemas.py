@@ -48,3 +48,25 @@ def test_requests_refuse_non_finite_numbers_and_unknown_fields():
     with pytest.raises(ValidationError) as error:
         Probe(value=1, point=[0, 0, 0], extra=1)
     assert error.value.errors()[0]["type"] == "extra_forbidden"
+
+
+def test_every_bound_of_every_kind_reaches_its_json_schema():
+    """A bound pydantic cannot place in the JSON schema is emitted under its Python name (``ge``, ``lt``):
+    clients and generated tests would then not see it."""
+    from plantsolve.solvers.kinds import KINDS
+
+    stray: list[str] = []
+
+    def walk(node, path):
+        if isinstance(node, dict):
+            stray.extend(f"{path}: {key}" for key in ("ge", "gt", "le", "lt", "multiple_of") if key in node)
+            for key, value in node.items():
+                walk(value, f"{path}/{key}")
+        elif isinstance(node, list):
+            for i, value in enumerate(node):
+                walk(value, f"{path}/{i}")
+
+    for kind, spec in KINDS.items():
+        for model in (spec.request_model, spec.result_model):
+            walk(model.model_json_schema(), f"{kind}:{model.__name__}")
+    assert not stray
