@@ -155,5 +155,6 @@ class ProcessDispatcher:
             waiting = [j for j in self.ctx.repo.queued_ids(limit=free + len(held)) if j not in held][:free]
             for job_id in waiting:
                 self.enqueue(job_id)
-        except Exception:  # the database is away: the sweeper's next pass refills
-            log.warning("refilling the job pool failed", exc_info=True)
+        except Exception:  # the database is away (or the pool is stopping): the next pass refills
+            if not self._stopping:
+                log.warning("refilling the job pool failed", exc_info=True)
