@@ -1,0 +1,256 @@
+"""The exact pass: degrees of freedom, redundant constraints and maximal rigid clusters at the
+actual positions of a body–joint mechanism.
+
+Method (the exact counterpart of the seed's §6.2 constraint Jacobian, in screw form):
+1. Superbricks: union-find over ``rigid`` joints (seed §3, 7.1).
+2. The body–joint graph of the superbricks is split into biconnected blocks (networkx). Motions
+   of different blocks are independent, so the relative-motion space is the direct sum of the
+   blocks' spaces: a bridge joint adds its freedoms, a cyclic block adds the nullity of its
+   constraint matrix, and each further connected component adds 6.
+3. A cyclic block's matrix has one row per constraint wrench of each joint (``screws``) on the
+   relative twist ``t_j − t_i``; unknowns are 6 twist components per body, one body of the block
+   held fixed. Its nullity is the block's mobility, ``rows − rank`` its redundant constraints.
+4. Rank and null space are exact when every joint point and axis is an integer vector (LDraw
+   units, integer JSON input): Gaussian elimination modulo two primes near 2³¹ (``modrank``).
+   Otherwise points are centred and divided by the model's size, axes normalised, and a float SVD
+   is used: singular values below ``rank_tolerance · max(m, n) · σ_max`` count as zero. The
+   tests check the two against each other.
+5. Clusters come from a basis of the motion space: two bodies are one cluster when their
+   relative twist is zero in every basis motion (equal residues mod p; in floats, equal within
+   ``cluster_tolerance`` on the normalised, orthonormal basis). A joint moves when its relative
+   twist is non-zero in some basis motion.
+
+``dof`` counts motions of the bodies relative to each other: the whole model's 6 rigid motions are
+excluded once, and every further unconnected piece adds 6.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import networkx as nx
+import numpy as np
+
+from plantsolve.solvers.rigidity import modrank
+from plantsolve.solvers.rigidity.screws import FREEDOM, constraint_rows
+
+RANK_TOLERANCE = 1e-9
+CLUSTER_TOLERANCE = 1e-6
+EXACT_LIMIT = 2 ** 30  # integer inputs above this are treated as floats (they are not LDraw units)
+
+
+@dataclass(frozen=True)
+class Joint:
+    kind: str
+    a: int  # body indices
+    b: int
+    point: tuple[float, float, float]
+    axis: tuple[float, float, float]
+
+
+@dataclass
+class Mobility:
+    dof: int
+    clusters: list[list[int]]  # body indices, each body in exactly one
+    superbricks: list[list[int]]
+    moves: list[bool]  # per joint
+    redundant_constraints: int
+    rank_method: str  # "modular" or "svd"
+    rows: int = 0
+    blocks: int = 0
+    largest_block: int = 0
+    details: dict = field(default_factory=dict)
+
+
+class _UnionFind:
+    def __init__(self, n: int) -> None:
+        self.parent = list(range(n))
+
+    def find(self, x: int) -> int:
+        while self.parent[x] != x:
+            self.parent[x] = self.parent[self.parent[x]]
+            x = self.parent[x]
+        return x
+
+    def union(self, x: int, y: int) -> bool:
+        rx, ry = self.find(x), self.find(y)
+        if rx == ry:
+            return False
+        self.parent[max(rx, ry)] = min(rx, ry)
+        return True
+
+    def groups(self, n: int) -> list[list[int]]:
+        out: dict[int, list[int]] = {}
+        for x in range(n):
+            out.setdefault(self.find(x), []).append(x)
+        return sorted(out.values(), key=lambda g: g[0])
+
+
+def is_exact(joints: Sequence[Joint]) -> bool:
+    """Every point and axis component an integer of modest size: the modular rank applies."""
+    for j in joints:
+        for x in (*j.point, *j.axis):
+            if not float(x).is_integer() or abs(x) >= EXACT_LIMIT:
+                return False
+    return True
+
+
+def _float_frame(joints: Sequence[Joint]) -> tuple[np.ndarray, float]:
+    pts = np.array([j.point for j in joints], dtype=float) if joints else np.zeros((1, 3))
+    centre = pts.mean(axis=0)
+    size = float(np.abs(pts - centre).max()) or 1.0
+    return centre, size
+
+
+def _rows(joint: Joint, exact: bool, centre, size) -> np.ndarray:
+    if exact:
+        p = np.array([int(x) for x in joint.point], dtype=np.int64)
+        a = np.array([int(x) for x in joint.axis], dtype=np.int64)
+        return constraint_rows(joint.kind, p, a)
+    p = (np.asarray(joint.point, dtype=float) - centre) / size
+    a = np.asarray(joint.axis, dtype=float)
+    return constraint_rows(joint.kind, p, a / np.linalg.norm(a))
+
+
+def block_matrix(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int],
+                 exact: bool, centre, size):
+    """The constraint matrix of one block: rows of every joint, 6 columns per body but the first."""
+    col = {b: 6 * k for k, b in enumerate(bodies[1:])}
+    n_cols = 6 * (len(bodies) - 1)
+    blocks = []
+    for ji in joints:
+        j = all_joints[ji]
+        r = _rows(j, exact, centre, size)
+        m = np.zeros((r.shape[0], n_cols), dtype=np.int64 if exact else float)
+        a, b = sb[j.a], sb[j.b]
+        if b in col:
+            m[:, col[b]:col[b] + 6] += r
+        if a in col:
+            m[:, col[a]:col[a] + 6] -= r
+        blocks.append(m)
+    matrix = np.vstack(blocks) if blocks else np.zeros((0, n_cols))
+    return matrix, col
+
+
+def _svd_nullspace(matrix: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
+    n_cols = matrix.shape[1]
+    if matrix.shape[0] == 0 or n_cols == 0:
+        return 0, np.eye(n_cols)
+    _, s, vt = np.linalg.svd(matrix, full_matrices=True)
+    cut = tolerance * max(matrix.shape) * (s[0] if s.size else 0.0)
+    rank = int((s > cut).sum()) if s.size and s[0] > 0 else 0
+    return rank, vt[rank:].T
+
+
+def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None,
+            rank_tolerance: float = RANK_TOLERANCE, cluster_tolerance: float = CLUSTER_TOLERANCE) -> Mobility:
+    """Degrees of freedom, clusters, moving joints and redundant constraints (module docstring)."""
+    if exact is None:
+        exact = is_exact(joints)
+    centre, size = _float_frame(joints)
+    uf = _UnionFind(n_bodies)
+    redundant = 0
+    moves = [False] * len(joints)
+    for k, j in enumerate(joints):
+        if j.kind == "rigid" and not uf.union(j.a, j.b):
+            redundant += 6
+    superbricks = uf.groups(n_bodies)
+    sb_of = [0] * n_bodies
+    for s, group in enumerate(superbricks):
+        for b in group:
+            sb_of[b] = s
+    n_sb = len(superbricks)
+    graph = nx.Graph()
+    graph.add_nodes_from(range(n_sb))
+    pair_joints: dict[tuple[int, int], list[int]] = {}
+    for k, j in enumerate(joints):
+        if j.kind == "rigid":
+            continue
+        a, b = sb_of[j.a], sb_of[j.b]
+        if a == b:  # a joint inside a superbrick: all its constraints are redundant
+            redundant += 6 - FREEDOM[j.kind]
+            continue
+        graph.add_edge(a, b)
+        pair_joints.setdefault((min(a, b), max(a, b)), []).append(k)
+    components = nx.number_connected_components(graph)
+    dof = 6 * (components - 1) if n_sb else 0
+    cluster_uf = _UnionFind(n_sb)
+    total_rows = 0
+    n_blocks = 0
+    largest = 0
+    for edges in nx.biconnected_component_edges(graph):
+        block_joints = sorted(k for u, v in edges for k in pair_joints[(min(u, v), max(u, v))])
+        bodies = sorted({x for e in edges for x in e})
+        n_blocks += 1
+        largest = max(largest, len(bodies))
+        if len(block_joints) == 1:  # a bridge joint: its freedoms add, nothing is redundant
+            k = block_joints[0]
+            dof += FREEDOM[joints[k].kind]
+            moves[k] = True
+            total_rows += 6 - FREEDOM[joints[k].kind]
+            continue
+        matrix, col = block_matrix(bodies, block_joints, joints, sb_of, exact, centre, size)
+        total_rows += matrix.shape[0]
+        if exact:
+            rank, basis, p = modrank.exact_nullspace(matrix)
+        else:
+            rank, basis = _svd_nullspace(matrix, rank_tolerance)
+            p = None
+        nullity = basis.shape[1]
+        dof += nullity
+        redundant += matrix.shape[0] - rank
+
+        def twist(b):
+            if b not in col:
+                return np.zeros((6, nullity), dtype=basis.dtype)
+            return basis[col[b]:col[b] + 6]
+
+        def same(x, y) -> bool:
+            d = x - y
+            if exact:
+                return not (d % p).any()
+            return bool(np.abs(d).max(initial=0.0) <= cluster_tolerance)
+
+        twists = {b: twist(b) for b in bodies}
+        for k in block_joints:
+            j = joints[k]
+            moves[k] = not same(twists[sb_of[j.b]], twists[sb_of[j.a]])
+        if exact:
+            keyed: dict[bytes, int] = {}
+            for b in bodies:
+                key = (twists[b] % p).tobytes()
+                if key in keyed:
+                    cluster_uf.union(keyed[key], b)
+                else:
+                    keyed[key] = b
+        else:
+            for i, b in enumerate(bodies):
+                for c in bodies[i + 1:]:
+                    if cluster_uf.find(b) != cluster_uf.find(c) and same(twists[b], twists[c]):
+                        cluster_uf.union(b, c)
+    clusters = [[b for s in group for b in superbricks[s]] for group in cluster_uf.groups(n_sb)]
+    clusters = sorted((sorted(c) for c in clusters), key=lambda c: c[0])
+    return Mobility(dof=dof, clusters=clusters, superbricks=superbricks, moves=moves,
+                    redundant_constraints=redundant, rank_method="modular" if exact else "svd",
+                    rows=total_rows, blocks=n_blocks, largest_block=largest,
+                    details={"components": components, "model_size": size})
+
+
+def dense_svd_dof(n_bodies: int, joints: Sequence[Joint], rank_tolerance: float = RANK_TOLERANCE) -> int:
+    """Baseline for the benchmark and tests: one dense float SVD of the whole constraint matrix
+    (6 columns per body, every joint including rigid ones); dof = nullity − 6."""
+    centre, size = _float_frame(joints)
+    rows = []
+    for j in joints:
+        r = _rows(j, False, centre, size)
+        m = np.zeros((r.shape[0], 6 * n_bodies))
+        m[:, 6 * j.b:6 * j.b + 6] += r
+        m[:, 6 * j.a:6 * j.a + 6] -= r
+        rows.append(m)
+    matrix = np.vstack(rows) if rows else np.zeros((0, 6 * n_bodies))
+    if matrix.shape[0] == 0:
+        return 6 * n_bodies - 6
+    s = np.linalg.svd(matrix, compute_uv=False)
+    rank = int((s > rank_tolerance * max(matrix.shape) * s[0]).sum())
+    return 6 * n_bodies - rank - 6
