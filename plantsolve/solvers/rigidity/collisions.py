@@ -6,7 +6,9 @@ that overlap by more than the contact tolerance; the narrow phase runs python-fc
 shapes (boxes as solid primitives, meshes as BVH triangle models) and reads the penetration depth.
 A pair is a collision only when that depth exceeds ``contact_tolerance``: a brick resting on
 another touches it along a face (depth 0) and is contact, not collision. Meshes are surfaces to
-FCL: a mesh wholly inside another without crossing its surface is not reported.
+FCL: a mesh wholly inside another without crossing its surface is not reported, and the depth
+FCL gives for two meshes is the largest of its triangle contacts' estimates (exact for boxes, not
+for meshes: touching meshes give 0, crossing meshes a positive but approximate depth).
 """
 
 from __future__ import annotations
