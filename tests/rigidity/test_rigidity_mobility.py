@@ -150,6 +150,21 @@ def test_float_svd_rank_agrees_with_modular_rank(body):
     assert sets(floating.clusters) == sets(exact.clusters) and floating.moves == exact.moves
 
 
+@pytest.mark.parametrize("exact", [True, False])
+def test_loop_closure_and_body_twist_formulations_agree(exact):
+    bodies = [synthetic.four_bar(), synthetic.sarrus(), synthetic.idler_chains(), synthetic.collinear_hinges(),
+              synthetic.bennett()] + [synthetic.random_loop(n, s) for n in (6, 7, 9) for s in range(2)]
+    for body in bodies:
+        n, joints = _joints(body)
+        if exact and body is bodies[4]:
+            continue  # the Bennett linkage has irrational coordinates
+        loops = analyse(n, joints, exact=exact)
+        twists = analyse(n, joints, exact=exact, method="twists")
+        assert (loops.dof, loops.redundant_constraints, loops.moves) == (twists.dof, twists.redundant_constraints,
+                                                                        twists.moves)
+        assert sets(loops.clusters) == sets(twists.clusters)
+
+
 def test_a_nearly_special_position_is_generic_for_the_exact_rank():
     # the four-bar with one hinge tilted by one part in a thousand is rigid, exactly
     body = synthetic.four_bar()

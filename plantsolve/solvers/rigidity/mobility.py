@@ -7,16 +7,22 @@ Method (the exact counterpart of the seed's §6.2 constraint Jacobian, in screw 
    of different blocks are independent, so the relative-motion space is the direct sum of the
    blocks' spaces: a bridge joint adds its freedoms, a cyclic block adds the nullity of its
    constraint matrix, and each further connected component adds 6.
-3. A cyclic block's matrix has one row per constraint wrench of each joint (``screws``) on the
-   relative twist ``t_j − t_i``; unknowns are 6 twist components per body, one body of the block
-   held fixed. Its nullity is the block's mobility, ``rows − rank`` its redundant constraints.
+3. A cyclic block's loop-closure matrix: a spanning tree of the block (breadth first from its
+   first body) and, for each joint off the tree (a chord), the closure of its cycle
+   ``Σ ±S_j q_j = 0`` (6 rows), where ``S_j`` holds the screws the joint allows (``screws``) and
+   ``q_j`` its joint rates. Its nullity is the block's mobility; the redundant constraints follow
+   from it, ``Σ(6 − f_j) − 6(n − 1) + nullity``, as for the equivalent constraint matrix on body
+   twists (one row per constraint wrench on ``t_j − t_i``, 6 unknowns per body, one body fixed),
+   which ``method="twists"`` builds instead (tests compare the two). The loop form has one column
+   per joint freedom and 6 rows per independent cycle: several times smaller for hinged models.
 4. Rank and null space are exact when every joint point and axis is an integer vector (LDraw
    units, integer JSON input): Gaussian elimination modulo two primes near 2³¹ (``modrank``).
    Otherwise points are centred and divided by the model's size, axes normalised, and a float SVD
    is used: singular values below ``rank_tolerance · max(m, n) · σ_max`` count as zero. The
    tests check the two against each other.
-5. Clusters come from a basis of the motion space: two bodies are one cluster when their
-   relative twist is zero in every basis motion (equal residues mod p; in floats, equal within
+5. Clusters come from a basis of the motion space (body twists follow from the joint rates
+   along the tree): two bodies are one cluster when their relative twist is zero in every basis
+   motion (equal residues mod p; in floats, equal within
    ``cluster_tolerance`` on the normalised, orthonormal basis). A joint moves when its relative
    twist is non-zero in some basis motion.
 
@@ -33,7 +39,7 @@ import networkx as nx
 import numpy as np
 
 from plantsolve.solvers.rigidity import modrank
-from plantsolve.solvers.rigidity.screws import FREEDOM, constraint_rows
+from plantsolve.solvers.rigidity.screws import FREEDOM, constraint_rows, freedom_screws
 
 RANK_TOLERANCE = 1e-9
 CLUSTER_TOLERANCE = 1e-6
@@ -133,6 +139,77 @@ def block_matrix(bodies: list[int], joints: list[int], all_joints: Sequence[Join
     return matrix, col
 
 
+def _screws(joint: Joint, exact: bool, centre, size) -> np.ndarray:
+    if exact:
+        p = np.array([int(x) for x in joint.point], dtype=np.int64)
+        a = np.array([int(x) for x in joint.axis], dtype=np.int64)
+        return freedom_screws(joint.kind, p, a)
+    p = (np.asarray(joint.point, dtype=float) - centre) / size
+    a = np.asarray(joint.axis, dtype=float)
+    return freedom_screws(joint.kind, p, a / np.linalg.norm(a))
+
+
+def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int], exact: bool,
+               centre, size, rank_tolerance: float):
+    """(rank, basis of joint rates, body twists in the basis, joint columns, prime or None) of one block."""
+    screws = {k: _screws(all_joints[k], exact, centre, size) for k in joints}
+    col, n_cols = {}, 0
+    for k in joints:
+        col[k] = n_cols
+        n_cols += screws[k].shape[1]
+    adjacency: dict[int, list[tuple[int, int, int]]] = {b: [] for b in bodies}
+    for k in joints:
+        a, b = sb[all_joints[k].a], sb[all_joints[k].b]
+        adjacency[a].append((k, b, 1))
+        adjacency[b].append((k, a, -1))
+    root = bodies[0]
+    parent: dict[int, tuple[int, int, int] | None] = {root: None}  # body -> (parent body, joint, sign)
+    order = [root]
+    tree = set()
+    for x in order:
+        for k, y, sign in adjacency[x]:
+            if y not in parent:
+                parent[y] = (x, k, sign)
+                tree.add(k)
+                order.append(y)
+    dtype = np.int64 if exact else float
+    rows = []
+    for k in joints:
+        if k in tree:
+            continue
+        block = np.zeros((6, n_cols), dtype=dtype)
+        a, b = sb[all_joints[k].a], sb[all_joints[k].b]
+        for end, outer in ((b, 1), (a, -1)):
+            x = end
+            while parent[x] is not None:
+                px, kj, sign = parent[x]
+                block[:, col[kj]:col[kj] + screws[kj].shape[1]] += outer * sign * screws[kj]
+                x = px
+        block[:, col[k]:col[k] + screws[k].shape[1]] -= screws[k]
+        rows.append(block)
+    matrix = np.vstack(rows)
+    if exact:
+        rank, basis, p = modrank.exact_nullspace(matrix)
+    else:
+        rank, basis = _svd_nullspace(matrix, rank_tolerance)
+        p = None
+    nullity = basis.shape[1]
+    twists = {root: np.zeros((6, nullity), dtype=basis.dtype)}
+    for x in order[1:]:
+        px, k, sign = parent[x]
+        s_mat = screws[k]
+        rates = basis[col[k]:col[k] + s_mat.shape[1]]
+        if exact:
+            acc = twists[px].copy()
+            for c in range(s_mat.shape[1]):
+                term = (np.mod(sign * s_mat[:, c], p)[:, None] * rates[c][None, :]) % p
+                acc = (acc + term) % p
+            twists[x] = acc
+        else:
+            twists[x] = twists[px] + sign * (s_mat @ rates)
+    return rank, basis, twists, col, screws, p
+
+
 def _svd_nullspace(matrix: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
     n_cols = matrix.shape[1]
     if matrix.shape[0] == 0 or n_cols == 0:
@@ -143,7 +220,7 @@ def _svd_nullspace(matrix: np.ndarray, tolerance: float) -> tuple[int, np.ndarra
     return rank, vt[rank:].T
 
 
-def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None,
+def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None, method: str = "loops",
             rank_tolerance: float = RANK_TOLERANCE, cluster_tolerance: float = CLUSTER_TOLERANCE) -> Mobility:
     """Degrees of freedom, clusters, moving joints and redundant constraints (module docstring)."""
     if exact is None:
@@ -190,21 +267,29 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
             moves[k] = True
             total_rows += 6 - FREEDOM[joints[k].kind]
             continue
-        matrix, col = block_matrix(bodies, block_joints, joints, sb_of, exact, centre, size)
-        total_rows += matrix.shape[0]
-        if exact:
-            rank, basis, p = modrank.exact_nullspace(matrix)
+        if method == "loops":
+            rank, basis, twists, jcol, screws, p = loop_block(bodies, block_joints, joints, sb_of, exact, centre,
+                                                              size, rank_tolerance)
+            nullity = basis.shape[1]
+            n_rows = sum(6 - FREEDOM[joints[k].kind] for k in block_joints)
+            total_rows += n_rows
+            redundant += n_rows - 6 * (len(bodies) - 1) + nullity
+            for k in block_joints:
+                rates = basis[jcol[k]:jcol[k] + screws[k].shape[1]]
+                moves[k] = bool((rates % p).any()) if exact else bool(np.abs(rates).max(initial=0.0) > cluster_tolerance)
         else:
-            rank, basis = _svd_nullspace(matrix, rank_tolerance)
-            p = None
-        nullity = basis.shape[1]
+            matrix, col = block_matrix(bodies, block_joints, joints, sb_of, exact, centre, size)
+            total_rows += matrix.shape[0]
+            if exact:
+                rank, basis, p = modrank.exact_nullspace(matrix)
+            else:
+                rank, basis = _svd_nullspace(matrix, rank_tolerance)
+                p = None
+            nullity = basis.shape[1]
+            redundant += matrix.shape[0] - rank
+            twists = {b: basis[col[b]:col[b] + 6] if b in col else np.zeros((6, nullity), dtype=basis.dtype)
+                      for b in bodies}
         dof += nullity
-        redundant += matrix.shape[0] - rank
-
-        def twist(b):
-            if b not in col:
-                return np.zeros((6, nullity), dtype=basis.dtype)
-            return basis[col[b]:col[b] + 6]
 
         def same(x, y) -> bool:
             d = x - y
@@ -212,10 +297,10 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
                 return not (d % p).any()
             return bool(np.abs(d).max(initial=0.0) <= cluster_tolerance)
 
-        twists = {b: twist(b) for b in bodies}
-        for k in block_joints:
-            j = joints[k]
-            moves[k] = not same(twists[sb_of[j.b]], twists[sb_of[j.a]])
+        if method != "loops":
+            for k in block_joints:
+                j = joints[k]
+                moves[k] = not same(twists[sb_of[j.b]], twists[sb_of[j.a]])
         if exact:
             keyed: dict[bytes, int] = {}
             for b in bodies:

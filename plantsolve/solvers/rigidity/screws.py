@@ -76,6 +76,21 @@ def constraint_rows(kind: str, point, axis) -> np.ndarray:
     return np.array(rows)
 
 
+def freedom_screws(kind: str, point, axis) -> np.ndarray:
+    """The ``6 × freedom`` screws (columns ``(ω, v)``) a joint allows, in the inputs' arithmetic
+    (integer points and axes give integer screws): the columns of the loop-closure matrix."""
+    p = np.asarray(point)
+    a = np.asarray(axis)
+    if p.dtype != a.dtype:
+        p, a = np.promote_types(p.dtype, a.dtype).type(0) + p, np.promote_types(p.dtype, a.dtype).type(0) + a
+    zero = np.zeros(3, dtype=p.dtype)
+    e = np.eye(3, dtype=p.dtype)
+    cols = {"rigid": [], "hinge": [np.concatenate([a, np.cross(p, a)])], "slider": [np.concatenate([zero, a])],
+            "cylindrical": [np.concatenate([a, np.cross(p, a)]), np.concatenate([zero, a])],
+            "ball": [np.concatenate([e[k], np.cross(p, e[k])]) for k in range(3)]}[kind]
+    return np.array(cols, dtype=p.dtype).reshape(-1, 6).T
+
+
 def allowed_twists(kind: str, point, axis) -> np.ndarray:
     """A basis (rows) of the relative twists a joint allows: used by tests to check reciprocity."""
     p = np.asarray(point, dtype=float)

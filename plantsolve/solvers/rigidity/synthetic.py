@@ -163,71 +163,66 @@ def stacked(studs: int = 8) -> dict:
 
 
 def _footprint(number: str, rotation: list) -> tuple[int, int, int]:
+    """Cells (20 × 8 × 20 LDU) a part covers along x, y, z."""
     size = CATALOGUE[number].box_size
     nx, ny, nz = round(size[0] / 20), round(size[1] / 8), round(size[2] / 20)
     return (nz, ny, nx) if rotation == ROT_Y90 else (nx, ny, nz)
 
 
 def random_lego(n_parts: int, seed: int = 0) -> list[dict]:
-    """A random model of about ``n_parts`` parts on the LDraw grid: bricks and plates stacked with
-    random offsets (several studs: rigid; one stud: a hinge), hinge bricks (3937 + 3938), and pairs of
-    technic bricks side by side joined by a pin (2780). Occupied cells (20 × 8 × 20 LDU) are tracked
-    so no two parts overlap."""
+    """A random model of ``n_parts`` parts on the LDraw grid, built upwards: bricks and plates put on
+    a random earlier part with a random overlap (several studs: rigid; one stud: a hinge), hinge
+    bricks (3937 with its 3938 top), and pairs of technic bricks side by side joined by a pin (2780).
+    Parts are placed by grid cells (20 × 8 × 20 LDU, stud centres at odd multiples of 10) and no two
+    parts share a cell, so the model has no collisions."""
     rng = np.random.default_rng(seed)
     occupied: set[tuple[int, int, int]] = set()
     parts: list[dict] = []
-    tops: list[tuple[int, int, int]] = []  # (x cell, top plate level, z cell) of free stud cells
+    cells_of: list[tuple[int, int, int, int, int]] = []  # (cx, level, cz, nx, nz) per part; pins: None
 
-    def cells(number, rotation, x, y, z):
+    def place(number, cx, level, cz, rotation=IDENTITY, commit=True) -> bool:
         nx, ny, nz = _footprint(number, rotation)
-        cx, cy, cz = round(x / 20 - nx / 2), round(y / 8), round(z / 20 - nz / 2)
-        return [(cx + i, cy + j, cz + k) for i in range(nx) for j in range(ny) for k in range(nz)]
-
-    def place(number, x, y, z, rotation=IDENTITY) -> bool:
-        c = cells(number, rotation, x, y, z)
-        if any(cell in occupied for cell in c):
+        cover = [(cx + i, level + j, cz + k) for i in range(nx) for j in range(ny) for k in range(nz)]
+        if any(c in occupied for c in cover):
             return False
-        occupied.update(c)
-        parts.append({"id": f"p{len(parts)}", "part": number, "position": [x, y, z], "rotation": rotation})
+        if commit:
+            occupied.update(cover)
+            parts.append({"id": f"p{len(parts)}", "part": number,
+                          "position": [20 * cx + 10 * nx, 8 * level, 20 * cz + 10 * nz], "rotation": rotation})
+            cells_of.append((cx, level, cz, nx, nz))
         return True
 
     place("3001", 0, 0, 0)
-    tops.append((0, 0, 0))
-    stud_parts = ["3001", "3001", "3003", "3010", "3020", "3022", "3004", "3710", "3034"]
+    studded = ["3001", "3001", "3003", "3010", "3020", "3022", "3004", "3710", "3034", "3023", "3002"]
     attempts = 0
-    while len(parts) < n_parts and attempts < 50 * n_parts:
+    while len(parts) < n_parts and attempts < 100 * n_parts:
         attempts += 1
         i = int(rng.integers(len(parts)))
-        base = parts[i]
-        if base["part"] in ("2780", "3937"):
+        if cells_of[i] is None or parts[i]["part"] == "3937":
             continue
-        bx, by, bz = base["position"]
+        bcx, blevel, bcz, bnx, bnz = cells_of[i]
         roll = rng.random()
-        if roll < 0.08 and n_parts - len(parts) >= 2:  # hinge brick pair on top
-            x, z = bx + 20 * int(rng.integers(-1, 2)) + 10, bz + 20 * int(rng.integers(-1, 2)) + 10
-            if place("3937", x, by - 24, z):
-                if not place("3938", x, by - 32, z):
-                    occupied.difference_update(cells("3937", IDENTITY, x, by - 24, z))
-                    parts.pop()
+        if roll < 0.06 and n_parts - len(parts) >= 2:  # a hinge brick with its top plate
+            cx, cz = bcx + int(rng.integers(-1, bnx)), bcz + int(rng.integers(0, bnz))
+            if place("3937", cx, blevel - 3, cz, commit=False) and place("3938", cx, blevel - 4, cz, commit=False):
+                place("3937", cx, blevel - 3, cz)
+                place("3938", cx, blevel - 4, cz)
             continue
-        if roll < 0.16 and n_parts - len(parts) >= 3:  # two technic bricks side by side with a pin
-            x, z = bx + 20 * int(rng.integers(-1, 2)), bz + 20 * int(rng.integers(-1, 2)) + 10
-            y = by - 24
-            n0 = len(parts)
-            if place("3701", x, y, z) and place("3701", x, y, z + 20):
-                pin_x = x + 20 * int(rng.integers(-1, 2))
-                parts.append({"id": f"p{len(parts)}", "part": "2780", "position": [pin_x, y + 10, z + 10],
-                              "rotation": IDENTITY})
-            else:
-                for p in parts[n0:]:
-                    occupied.difference_update(cells(p["part"], p["rotation"], *p["position"]))
-                del parts[n0:]
+        if roll < 0.12 and n_parts - len(parts) >= 3:  # two technic bricks side by side, pinned
+            cx, cz = bcx + int(rng.integers(-3, bnx)), bcz + int(rng.integers(-1, bnz))
+            level = blevel - 3
+            if place("3701", cx, level, cz, commit=False) and place("3701", cx, level, cz + 1, commit=False):
+                place("3701", cx, level, cz)
+                place("3701", cx, level, cz + 1)
+                hole = 20 * int(rng.integers(-1, 2))
+                parts.append({"id": f"p{len(parts)}", "part": "2780",
+                              "position": [20 * cx + 40 + hole, 8 * level + 10, 20 * cz + 20], "rotation": IDENTITY})
+                cells_of.append(None)
             continue
-        number = "3005" if roll < 0.24 else stud_parts[int(rng.integers(len(stud_parts)))]
+        number = "3005" if roll < 0.18 else studded[int(rng.integers(len(studded)))]
         rotation = ROT_Y90 if rng.random() < 0.3 else IDENTITY
-        height = CATALOGUE[number].box_size[1]
-        nx, _, nz = _footprint(number, rotation)
-        x = bx + 20 * int(rng.integers(-2, 3)) + (10 if nx % 2 else 0) - (10 if _footprint(base["part"], base["rotation"])[0] % 2 else 0)
-        z = bz + 20 * int(rng.integers(-1, 2)) + (10 if nz % 2 else 0) - (10 if _footprint(base["part"], base["rotation"])[2] % 2 else 0)
-        place(number, x, by - height, z, rotation)
+        nx, ny, nz = _footprint(number, rotation)
+        cx = bcx + int(rng.integers(-(nx - 1), bnx))
+        cz = bcz + int(rng.integers(-(nz - 1), bnz))
+        place(number, cx, blevel - ny, cz, rotation)
     return parts
