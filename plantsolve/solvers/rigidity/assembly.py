@@ -100,6 +100,7 @@ class Assembly:
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
         self._pebble_stale = False
+        self._free_table = self._boxes = None  # docking's arrays of free connection points, rebuilt after a change
 
     # ---------------------------------------------------------------- building
     def add_part(self, id: str, number: str, position, rotation=None) -> list[Connection]:
@@ -114,8 +115,9 @@ class Assembly:
         local = shape.points()
         points = local @ rot.T + pos
         dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
-        keys = [key_of(p) for p in points]
+        keys = [tuple(k) for k in np.round(points / SNAP).astype(np.int64).tolist()]
         placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
+        self._free_table = self._boxes = None
         self.parts[id] = placed
         self._neighbours[id] = set()
         self._pebble.add_body(id)
@@ -145,6 +147,7 @@ class Assembly:
 
     def remove_part(self, id: str) -> None:
         placed = self.parts.pop(id)
+        self._free_table = self._boxes = None
         for key in placed.keys:
             slot = [s for s in self._slots.get(key, []) if s[0] != id]
             if slot:
@@ -161,6 +164,7 @@ class Assembly:
         if id in self.parts or id in self.bodies:
             raise ValueError(f"id {id!r} is already in the assembly")
         self.bodies[id] = solid
+        self._free_table = self._boxes = None
         self._pebble.add_body(id)
 
     def add_joint(self, spec: JointSpec) -> None:
@@ -216,6 +220,15 @@ class Assembly:
         ids = self.ids()
         return ids, [self.parts[i].solid() if i in self.parts else self.bodies[i] for i in ids]
 
+    def solid_boxes(self):
+        """(ids, solids, lower corners, upper corners) of the bodies' world boxes, kept until the next change."""
+        if self._boxes is None:
+            ids, solids = self.solids()
+            boxes = [s.aabb() if s is not None else (np.full(3, np.inf), np.full(3, -np.inf)) for s in solids]
+            self._boxes = (ids, solids, np.array([b[0] for b in boxes]).reshape(-1, 3),
+                           np.array([b[1] for b in boxes]).reshape(-1, 3))
+        return self._boxes
+
     def inserted_pairs(self) -> set[tuple[str, str]]:
         """Part pairs joined pin- or axle-in-hole: they overlap by design."""
         return {pair for pair, conns in self._links.items() if any(c.kind in INSERTED for c in conns)}
@@ -237,3 +250,19 @@ class Assembly:
                 used.add((c.a, c.ca))
                 used.add((c.b, c.cb))
         return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys)) if (pid, ci) not in used]
+
+    def free_table(self):
+        """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free
+        connection points, as arrays for docking; kept until the next add or remove."""
+        if self._free_table is None:
+            free = self.free_connectors()
+            if not free:
+                return None
+            parts = self.parts
+            self._free_table = (
+                np.array([p for p, _ in free], dtype=object),
+                np.array([parts[p].shape.connectors[c].type for p, c in free], dtype=object),
+                np.array([parts[p].shape.connectors[c].direction for p, c in free], dtype=float),
+                np.array([parts[p].points[c] for p, c in free]),
+                np.array([parts[p].rotation for p, _ in free]))
+        return self._free_table

@@ -5,7 +5,7 @@ point of the model and each compatible point of the new part, the new part is or
 frame of the part it docks to, turned by each of the 24 axis-aligned rotations that bring its
 connection direction onto the mate's (opposite for studs, parallel for pins, axles and hinges), and
 moved so the two points meet. Every pair of points that yields the same pose is one connection of
-that pose, so counting the pairs per distinct pose (numpy ``unique``) ranks the poses at once.
+that pose, so counting the pairs per distinct pose (a lexicographic sort of the poses) ranks the poses at once.
 Poses are then checked for collisions in that order (broad phase on boxes, FCL for the exact test)
 until ``limit`` collision-free poses are found. A pose joined by pins or axles is not a collision
 with the parts it is pinned to.
@@ -43,63 +43,77 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     shape = lookup(number)
     if shape is None:
         raise KeyError(number)
-    free = assembly.free_connectors()
-    if not free:
+    table = assembly.free_table()
+    if table is None:
         return []
-    parts = assembly.parts
-    owner = np.array([parts[p].id for p, _ in free], dtype=object)
-    types = np.array([parts[p].shape.connectors[c].type for p, c in free], dtype=object)
-    local_dir = np.array([parts[p].shape.connectors[c].direction for p, c in free], dtype=float)
-    world_pt = np.array([parts[p].points[c] for p, c in free])
-    frame = np.array([parts[p].rotation for p, _ in free])
+    owner, types, local_dir, world_pt, frame = table
     new_pts = shape.points()
-    poses, counts_from, kinds = [], [], []
+    # rotations as small ids: the product (owner frame) x (cube rotation) for each distinct frame
+    frame_keys, frame_id = np.unique(np.round(frame.reshape(-1, 9) * 1e6).astype(np.int64), axis=0, return_inverse=True)
+    frame_id = frame_id.reshape(-1)
+    rot_ids: dict[tuple, int] = {}
+    rot_of = np.zeros((len(frame_keys), len(CUBE)), dtype=np.int64)
+    rotations = []
+    for f, key in enumerate(frame_keys):
+        base = key.reshape(3, 3) / 1e6
+        for gi, g in enumerate(CUBE):
+            product = base @ g
+            k = tuple(np.round(product * 1e6).astype(np.int64).ravel())
+            if k not in rot_ids:
+                rot_ids[k] = len(rotations)
+                rotations.append(product)
+            rot_of[f, gi] = rot_ids[k]
+    pose_rot, pose_pos, sources, kinds = [], [], [], []
+    groups: dict[tuple, list[int]] = {}  # connectors of one type and direction share their matches
     for ci, conn in enumerate(shape.connectors):
-        d_new = np.asarray(conn.direction, dtype=float)
-        for mate_type in {t for (a, t), kind in MATES.items() if a == conn.type}:
-            kind = MATES[(conn.type, mate_type)]
+        groups.setdefault((conn.type, conn.direction), []).append(ci)
+    for (ctype, direction), members_of_group in groups.items():
+        turned_all = CUBE @ np.asarray(direction, dtype=float)  # (24, 3): the direction under each rotation
+        for mate_type in {t for (a, t) in MATES if a == ctype}:
+            kind = MATES[(ctype, mate_type)]
             sel = np.flatnonzero(types == mate_type)
             if sel.size == 0:
                 continue
-            for g in CUBE:
-                gd = g @ d_new
-                dots = local_dir[sel] @ gd
-                ok = sel[dots < -0.999] if kind in OPPOSED else sel[np.abs(dots) > 0.999]
-                if ok.size == 0:
-                    continue
-                rot = frame[ok] @ g  # (k, 3, 3)
-                pos = world_pt[ok] - rot @ new_pts[ci]
-                poses.append(np.concatenate([rot.reshape(-1, 9), pos], axis=1))
-                counts_from.append(ok)
-                kinds.extend([kind] * ok.size)
-    if not poses:
+            dots = local_dir[sel] @ turned_all.T  # (k, 24)
+            match = dots < -0.999 if kind in OPPOSED else np.abs(dots) > 0.999
+            for gi in np.flatnonzero(match.any(axis=0)):
+                ok = sel[match[:, gi]]
+                g = CUBE[gi]
+                frames = frame[ok]
+                rots = rot_of[frame_id[ok], gi]
+                for ci in members_of_group:
+                    pose_pos.append(world_pt[ok] - np.einsum("kij,j->ki", frames, g @ new_pts[ci]))
+                    pose_rot.append(rots)
+                    sources.append(ok)
+                    kinds.append(np.full(ok.size, kind in INSERTED))
+    if not pose_rot:
         return []
-    table = np.concatenate(poses)
-    sources = np.concatenate(counts_from)
-    kinds = np.array(kinds, dtype=object)
-    keys = np.round(table * 1000).astype(np.int64)
-    unique, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
-    order = np.lexsort((np.arange(len(unique)), -counts))
-    ids, solids = assembly.solids()
-    boxes = [s.aabb() if s is not None else (np.full(3, np.inf), np.full(3, -np.inf)) for s in solids]
-    lo = np.array([b[0] for b in boxes])
-    hi = np.array([b[1] for b in boxes])
+    rot_id = np.concatenate(pose_rot)
+    position = np.concatenate(pose_pos)
+    sources = np.concatenate(sources)
+    inserted = np.concatenate(kinds)
+    grid = np.round(position * 1000).astype(np.int64)
+    order_rows = np.lexsort((grid[:, 2], grid[:, 1], grid[:, 0], rot_id))
+    keys = np.column_stack([rot_id, grid])[order_rows]
+    starts = np.concatenate([[0], np.flatnonzero((np.diff(keys, axis=0) != 0).any(axis=1)) + 1])
+    counts = np.diff(np.concatenate([starts, [len(keys)]]))
+    order = np.lexsort((np.arange(len(starts)), -counts))
+    ids, solids, lo, hi = assembly.solid_boxes()
     cache: dict[int, object] = {}
     out = []
     seen: set[frozenset] = set()
     new_types = [c.type for c in shape.connectors]
     for u in order:
-        members = np.flatnonzero(inverse == u)
+        members = order_rows[starts[u]:starts[u] + counts[u]]
         first = members[0]
-        rot = table[first, :9].reshape(3, 3)
-        pos = table[first, 9:]
+        rot = rotations[rot_id[first]]
+        pos = position[first]
         # a symmetric part reaches the same placement under several rotations: keep one
         footprint = frozenset(zip(new_types, map(tuple, np.round((new_pts @ rot.T + pos) * 1000).astype(np.int64))))
         if footprint in seen:
             continue
         seen.add(footprint)
-        pinned = {owner[sources[m]] for m in members if kinds[m] in INSERTED}
+        pinned = {owner[sources[m]] for m in members if inserted[m]}
         candidate = Solid(center=rot @ np.asarray(shape.box_center) + pos, size=np.asarray(shape.box_size, float),
                           rotation=rot)
         c_lo, c_hi = candidate.aabb()

@@ -24,7 +24,7 @@ class PebbleGame:
 
     def __init__(self) -> None:
         self.pebbles: dict = {}
-        self.out: dict = defaultdict(lambda: defaultdict(int))  # out[u][v] = bars directed u -> v
+        self.out: dict = defaultdict(lambda: defaultdict(int))  # out[u][v] = bars directed u -> v (> 0)
         self.independent = 0
         self.redundant = 0
 
@@ -38,15 +38,18 @@ class PebbleGame:
         stack = [start]
         while stack:
             x = stack.pop()
-            for y, count in self.out[x].items():
-                if count == 0 or y in parent or y in held:
+            for y in self.out[x]:
+                if y in parent or y in held:
                     continue
                 parent[y] = x
                 if self.pebbles[y] > 0:
                     self.pebbles[y] -= 1
                     while parent[y] is not None:  # reverse each bar of the path: y now points back
                         x2 = parent[y]
-                        self.out[x2][y] -= 1
+                        edges = self.out[x2]
+                        edges[y] -= 1
+                        if not edges[y]:
+                            del edges[y]  # keep only live bars: the search walks dict keys
                         self.out[y][x2] += 1
                         y = x2
                     self.pebbles[start] += 1
@@ -79,8 +82,13 @@ class PebbleGame:
         return True
 
     def add_joint(self, u, v, bars: int) -> int:
-        """Insert a joint as ``bars`` parallel bars; returns how many were independent."""
-        return sum(self.add_bar(u, v) for _ in range(bars))
+        """Insert a joint as ``bars`` parallel bars; returns how many were independent. Once one bar
+        between u and v is redundant the rest are too (nothing more can reach u or v): no search."""
+        for k in range(bars):
+            if not self.add_bar(u, v):
+                self.redundant += bars - k - 1
+                return k
+        return bars
 
     @property
     def generic_dof(self) -> int:

@@ -20,12 +20,18 @@ FREEDOM = {"rigid": 0, "hinge": 1, "slider": 1, "cylindrical": 2, "ball": 3}
 E = np.eye(3)
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b of two 3-vectors, keeping integer dtypes exact (numpy's cross is slow on tiny arrays)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]],
+                    dtype=np.result_type(a, b))
+
+
 def _perpendiculars(axis: np.ndarray) -> list[np.ndarray]:
     """Two independent vectors perpendicular to ``axis``: axis × e_k for the two coordinate axes other
     than the axis's largest component (so neither product vanishes). Integer when the axis is."""
     big = int(np.argmax(np.abs(axis)))
     e = np.eye(3, dtype=axis.dtype)
-    return [np.cross(axis, e[k]) for k in range(3) if k != big]
+    return [cross(axis, e[k]) for k in range(3) if k != big]
 
 
 def constraint_rows(kind: str, point, axis) -> np.ndarray:
@@ -43,7 +49,7 @@ def constraint_rows(kind: str, point, axis) -> np.ndarray:
     rows = []
 
     def force(f):  # a force f acting along a line through p: moment p × f
-        rows.append(np.concatenate([np.cross(p, f), f]))
+        rows.append(np.concatenate([cross(p, f), f]))
 
     def couple(m):
         rows.append(np.concatenate([m, zero]))
@@ -85,9 +91,9 @@ def freedom_screws(kind: str, point, axis) -> np.ndarray:
         p, a = np.promote_types(p.dtype, a.dtype).type(0) + p, np.promote_types(p.dtype, a.dtype).type(0) + a
     zero = np.zeros(3, dtype=p.dtype)
     e = np.eye(3, dtype=p.dtype)
-    cols = {"rigid": [], "hinge": [np.concatenate([a, np.cross(p, a)])], "slider": [np.concatenate([zero, a])],
-            "cylindrical": [np.concatenate([a, np.cross(p, a)]), np.concatenate([zero, a])],
-            "ball": [np.concatenate([e[k], np.cross(p, e[k])]) for k in range(3)]}[kind]
+    cols = {"rigid": [], "hinge": [np.concatenate([a, cross(p, a)])], "slider": [np.concatenate([zero, a])],
+            "cylindrical": [np.concatenate([a, cross(p, a)]), np.concatenate([zero, a])],
+            "ball": [np.concatenate([e[k], cross(p, e[k])]) for k in range(3)]}[kind]
     return np.array(cols, dtype=p.dtype).reshape(-1, 6).T
 
 
@@ -98,11 +104,11 @@ def allowed_twists(kind: str, point, axis) -> np.ndarray:
     if kind == "rigid":
         return np.zeros((0, 6))
     if kind == "hinge":
-        return np.array([np.concatenate([a, np.cross(p, a)])])
+        return np.array([np.concatenate([a, cross(p, a)])])
     if kind == "slider":
         return np.array([np.concatenate([np.zeros(3), a])])
     if kind == "cylindrical":
-        return np.array([np.concatenate([a, np.cross(p, a)]), np.concatenate([np.zeros(3), a])])
+        return np.array([np.concatenate([a, cross(p, a)]), np.concatenate([np.zeros(3), a])])
     if kind == "ball":
-        return np.array([np.concatenate([E[k], np.cross(p, E[k])]) for k in range(3)])
+        return np.array([np.concatenate([E[k], cross(p, E[k])]) for k in range(3)])
     raise ValueError(f"unknown joint type {kind!r}")
