@@ -75,10 +75,11 @@ def test_two_pins_hold_two_technic_bricks_rigid_while_each_pin_spins():
              part("p1", "2780", -20, 10, 10), part("p2", "2780", 20, 10, 10)]
     result = run(parts)
     assert frozenset({"a", "b"}) in {frozenset(c) for c in result.clusters}
+    assert ["a", "b"] in result.superbricks  # two pins in parallel holes are a rigid connection
     assert result.dof == 2 and {j.origin for j in result.joints} == {"pin"}
     assert result.collisions == []  # pins inside holes are not collisions
     one_pin = run(parts[:3])
-    assert one_pin.dof == 2 and len(one_pin.clusters) == 3
+    assert one_pin.dof == 2 and len(one_pin.clusters) == 3 and len(one_pin.superbricks) == 3
 
 
 def test_axle_in_axle_hole_is_rigid_and_in_a_round_hole_turns_and_slides():
@@ -160,3 +161,20 @@ def test_docking_skips_poses_that_collide():
 def test_docking_through_the_job():
     result = run(synthetic.stacked(8)["parts"], dock={"part": "3005", "limit": 3})
     assert len(result.docking) == 3 and all(d.connections == 1 for d in result.docking)
+
+
+def test_a_lego_model_under_a_general_rigid_motion_keeps_its_mobility():
+    from scipy.spatial.transform import Rotation
+
+    parts = synthetic.random_lego(40, seed=7)
+    before = run(parts)
+    rot = Rotation.from_rotvec([0.4, 0.9, -0.3]).as_matrix()
+    shift = np.array([123.4, -56.7, 8.9])
+    moved = [{**p, "position": (rot @ np.asarray(p["position"], float) + shift).tolist(),
+              "rotation": (rot @ np.asarray(p["rotation"], float).reshape(3, 3)).ravel().tolist()} for p in parts]
+    after = run(moved)
+    assert before.rank_method == "modular" and after.rank_method == "svd"
+    assert (after.dof, after.generic_dof, after.redundant_constraints) == (before.dof, before.generic_dof,
+                                                                          before.redundant_constraints)
+    assert {frozenset(c) for c in after.clusters} == {frozenset(c) for c in before.clusters}
+    assert after.collisions == before.collisions == []

@@ -11,6 +11,9 @@ deletion, is rebuilt at the next query.
 Between two parts: two or more stud connections, or any axle in an axle hole, make them rigid
 (one superbrick); otherwise each connection is a joint — a single stud a hinge about its axis, a
 pin in a pin hole a hinge, an axle in a round hole a cylindrical joint, two hinge halves a hinge.
+Two parts held by two pins (or axles) in distinct parallel holes are reported in one superbrick
+(:meth:`Assembly.rod_pairs`); the exact pass finds them rigid to each other on its own, with each
+pin free to spin.
 """
 
 from __future__ import annotations
@@ -192,6 +195,30 @@ class Assembly:
         for (a, b), conns in self._links.items():
             out.extend(self._pair_joints(a, b, conns))
         return out
+
+    def rod_pairs(self) -> list[tuple[str, str]]:
+        """Part pairs held by two or more pins (or axles in round holes) on distinct parallel lines: rigid
+        to each other (seed §3's rigid connections), while each rod still turns in its holes."""
+        lines: dict[tuple[str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
+        for rod in self.parts:
+            ends = {}
+            for other in self._neighbours.get(rod, ()):
+                conns = self._links.get((other, rod)) or self._links.get((rod, other)) or []
+                for c in conns:
+                    if c.kind in ("pin", "axle_round") and other not in ends:
+                        ends[other] = (np.asarray(c.point, float), np.asarray(c.axis, float))
+            hosts = sorted(ends)
+            for i, a in enumerate(hosts):
+                for b in hosts[i + 1:]:
+                    lines.setdefault((a, b), []).append(ends[a])
+        pairs = []
+        for pair, found in lines.items():
+            for i, (p1, a1) in enumerate(found):
+                if any(abs(abs(a1 @ a2) - np.linalg.norm(a1) * np.linalg.norm(a2)) < 1e-9
+                       and np.linalg.norm(np.cross(p2 - p1, a1)) > 1e-6 for p2, a2 in found[i + 1:]):
+                    pairs.append(pair)
+                    break
+        return pairs
 
     def ids(self) -> list[str]:
         return [*self.parts, *self.bodies]

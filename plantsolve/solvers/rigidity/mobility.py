@@ -109,14 +109,19 @@ def _float_frame(joints: Sequence[Joint]) -> tuple[np.ndarray, float]:
     return centre, size
 
 
+def _unit(axis) -> np.ndarray:
+    a = np.asarray(axis, dtype=float)
+    a = a / np.abs(a).max()  # first to order one: no overflow or underflow in the norm
+    return a / np.linalg.norm(a)
+
+
 def _rows(joint: Joint, exact: bool, centre, size) -> np.ndarray:
     if exact:
         p = np.array([int(x) for x in joint.point], dtype=np.int64)
         a = np.array([int(x) for x in joint.axis], dtype=np.int64)
         return constraint_rows(joint.kind, p, a)
     p = (np.asarray(joint.point, dtype=float) - centre) / size
-    a = np.asarray(joint.axis, dtype=float)
-    return constraint_rows(joint.kind, p, a / np.linalg.norm(a))
+    return constraint_rows(joint.kind, p, _unit(joint.axis))
 
 
 def block_matrix(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int],
@@ -145,8 +150,7 @@ def _screws(joint: Joint, exact: bool, centre, size) -> np.ndarray:
         a = np.array([int(x) for x in joint.axis], dtype=np.int64)
         return freedom_screws(joint.kind, p, a)
     p = (np.asarray(joint.point, dtype=float) - centre) / size
-    a = np.asarray(joint.axis, dtype=float)
-    return freedom_screws(joint.kind, p, a / np.linalg.norm(a))
+    return freedom_screws(joint.kind, p, _unit(joint.axis))
 
 
 def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int], exact: bool,

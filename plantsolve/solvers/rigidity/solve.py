@@ -3,6 +3,8 @@ count, collisions and docking."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
@@ -24,9 +26,30 @@ def _solid(body) -> Solid | None:
         return None
     if shape.box is not None:
         q = np.asarray(shape.box.rotation, dtype=float)
-        rot = quaternion_rotation(q / np.linalg.norm(q)).as_matrix()
+        rot = quaternion_rotation(q / math.hypot(*q)).as_matrix()
         return Solid(center=np.asarray(shape.box.center, float), size=np.asarray(shape.box.size, float), rotation=rot)
     return Solid(vertices=np.asarray(shape.mesh.vertices, float), faces=np.asarray(shape.mesh.faces, dtype=np.int32))
+
+
+def _superbricks(ids: list[str], groups: list[list[int]], rod_pairs: list[tuple[str, str]]) -> list[list[str]]:
+    """The exact pass's superbricks (rigid joints) joined further by pairs of parallel pins or axles."""
+    root = {ids[b]: ids[g[0]] for g in groups for b in g}
+
+    def find(x):
+        while root[x] != x:
+            root[x] = root[root[x]]
+            x = root[x]
+        return x
+
+    for a, b in rod_pairs:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            root[rb] = ra
+    out: dict[str, list[str]] = {}
+    for g in groups:
+        for b in g:
+            out.setdefault(find(ids[b]), []).append(ids[b])
+    return list(out.values())
 
 
 def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
@@ -74,6 +97,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Rigidit
                           connections=s.connections, moves=m)
               for s, m in zip(analysis.joints, mob.moves)]
     n_pieces = mob.details["components"]
+    superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
     special = mob.dof > analysis.generic_dof
     if special:
         warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
@@ -86,7 +110,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Rigidit
     return RigidityResult(
         length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
         special_position=special, rigid=bool(ids) and n_pieces == 1 and mob.dof == 0,
-        clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=[[ids[b] for b in s] for s in mob.superbricks],
+        clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],
         docking=docking, unknown_parts=unknown, rank_method=mob.rank_method, report=report)
