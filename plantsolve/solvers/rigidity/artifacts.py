@@ -14,10 +14,11 @@ from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
 from plantsolve.solvers.base import Artifact
 
 MAX_NODES_DRAWN = 3000
-MAX_COLOURED = 20  # the largest clusters get their own colour; the rest share grey (counted in the legend)
+MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share light grey (counted in the legend)
+PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
 
 
-def _graph_png(result: RigidityResult) -> bytes:
+def _graph_png(request: RigidityRequest, result: RigidityResult) -> bytes:
     graph = nx.MultiGraph()
     cluster_of = {}
     order = sorted(range(len(result.clusters)), key=lambda k: (-len(result.clusters[k]), k))
@@ -37,7 +38,7 @@ def _graph_png(result: RigidityResult) -> bytes:
     cmap = colormaps["tab20"]
 
     def colour(r):
-        return cmap(r % 20) if r < MAX_COLOURED else (0.6, 0.6, 0.6, 1.0)
+        return cmap(PALETTE[r]) if r < MAX_COLOURED else (0.82, 0.82, 0.82, 1.0)
 
     small = graph.number_of_nodes() <= 60
     for moves, style, label in ((True, "solid", "joint that moves"), (False, "dashed", "joint that does not move")):
@@ -47,14 +48,16 @@ def _graph_png(result: RigidityResult) -> bytes:
     nx.draw_networkx_nodes(graph, pos, ax=ax, node_size=220 if small else 30,
                            node_color=[colour(cluster_of[n]) for n in graph.nodes])
     if small:
-        nx.draw_networkx_labels(graph, pos, ax=ax, font_size=7)
+        number = {p.id: p.part for p in request.parts}
+        labels = {n: f"{n}\n{number[n]}" if n in number else n for n in graph.nodes}
+        nx.draw_networkx_labels(graph, pos, labels=labels, ax=ax, font_size=6)
     handles = [Line2D([], [], color=colour(r), marker="o", linestyle="", markersize=8,
-                      label=f"cluster {r + 1} ({len(result.clusters[k])} bodies)")
+                      label=f"cluster {r + 1} ({_count(len(result.clusters[k]))})")
                for r, k in enumerate(order[:MAX_COLOURED])]
     if len(order) > MAX_COLOURED:
         rest = sum(len(result.clusters[k]) for k in order[MAX_COLOURED:])
         handles.append(Line2D([], [], color=colour(MAX_COLOURED), marker="o", linestyle="", markersize=8,
-                              label=f"{len(order) - MAX_COLOURED} more clusters ({rest} bodies)"))
+                              label=f"{len(order) - MAX_COLOURED} more clusters ({_count(rest)})"))
     handles.append(Line2D([], [], color="#444444", linestyle="solid", label="joint that moves"))
     handles.append(Line2D([], [], color="#444444", linestyle="dashed", label="joint that does not move"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
@@ -69,6 +72,10 @@ def _graph_png(result: RigidityResult) -> bytes:
     return buf.getvalue()
 
 
+def _count(n: int) -> str:
+    return f"{n} body" if n == 1 else f"{n} bodies"
+
+
 def _table(result: RigidityResult) -> bytes:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
@@ -81,5 +88,5 @@ def _table(result: RigidityResult) -> bytes:
 
 
 def render_artifacts(request: RigidityRequest, result: RigidityResult) -> list[Artifact]:
-    return [Artifact("graph.png", "image/png", _graph_png(result)),
+    return [Artifact("graph.png", "image/png", _graph_png(request, result)),
             Artifact("clusters.csv", "text/csv", _table(result))]
