@@ -178,3 +178,14 @@ def test_a_lego_model_under_a_general_rigid_motion_keeps_its_mobility():
                                                                           before.redundant_constraints)
     assert {frozenset(c) for c in after.clusters} == {frozenset(c) for c in before.clusters}
     assert after.collisions == before.collisions == []
+
+
+def test_a_lego_model_in_another_order_gives_the_same_answer():
+    parts = synthetic.random_lego(60, seed=11)
+    before = run(parts)
+    shuffled = [parts[k] for k in np.random.default_rng(2).permutation(len(parts))]
+    after = run(shuffled)
+    assert (after.dof, after.generic_dof, after.redundant_constraints) == (before.dof, before.generic_dof,
+                                                                          before.redundant_constraints)
+    assert {frozenset(c) for c in after.clusters} == {frozenset(c) for c in before.clusters}
+    assert {frozenset(c) for c in after.superbricks} == {frozenset(c) for c in before.superbricks}
