@@ -189,3 +189,12 @@ def test_a_lego_model_in_another_order_gives_the_same_answer():
                                                                           before.redundant_constraints)
     assert {frozenset(c) for c in after.clusters} == {frozenset(c) for c in before.clusters}
     assert {frozenset(c) for c in after.superbricks} == {frozenset(c) for c in before.superbricks}
+
+
+def test_a_symmetric_part_is_turned_only_through_distinct_placements():
+    from plantsolve.solvers.rigidity.docking import coset_representatives
+
+    assert len(coset_representatives(CATALOGUE["3001"])) == 12  # a half turn about y maps it onto itself
+    assert len(coset_representatives(CATALOGUE["3003"])) == 6  # so do quarter turns
+    assert len(coset_representatives(CATALOGUE["3937"])) == 12  # a hinge axis has no sign
+    assert len(coset_representatives(CATALOGUE["3010"])) == 12 and len(coset_representatives(CATALOGUE["3701"])) == 12

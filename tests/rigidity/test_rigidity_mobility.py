@@ -60,8 +60,8 @@ def test_idler_chains_keep_the_ends_rigid_while_every_hinge_turns():
 def test_a_third_hinge_off_both_lines_locks_the_idlers_ends_but_not_the_idlers():
     body = synthetic.idler_chains()
     body["bodies"].append({"id": "E"})
-    body["joints"] += [synthetic._hinge("AE", "A", "E", (0, 0, 100), (0, 0, 1)),
-                       synthetic._hinge("EB", "E", "B", (5, 5, 100), (1, 1, 0))]
+    body["joints"] += [synthetic.hinge_joint("AE", "A", "E", (0, 0, 100), (0, 0, 1)),
+                       synthetic.hinge_joint("EB", "E", "B", (5, 5, 100), (1, 1, 0))]
     result = run(body)
     # E's two hinges do not share a line: E cannot move relative to A and B, which are rigid anyway
     assert result.dof == 2 and frozenset("ABE") in sets(result.clusters)

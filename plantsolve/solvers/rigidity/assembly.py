@@ -34,10 +34,6 @@ JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge
 INSERTED = {"pin", "axle", "axle_round"}  # one part inside the other's hole: not a collision
 
 
-def key_of(point: np.ndarray) -> tuple[int, int, int]:
-    return tuple(int(v) for v in np.round(np.asarray(point) / SNAP))
-
-
 @dataclass
 class Placed:
     id: str

@@ -13,6 +13,7 @@ with the parts it is pinned to.
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -36,6 +37,33 @@ def _cube_group() -> np.ndarray:
 
 
 CUBE = _cube_group()
+
+
+def _signature(shape, h: np.ndarray) -> frozenset:
+    pts = np.round(shape.points() @ h.T, 6)
+    dirs = np.array([c.direction for c in shape.connectors], dtype=float) @ h.T
+    box = tuple(np.round(h @ np.asarray(shape.box_center), 6)) + tuple(np.round(np.abs(h) @ shape.box_size, 6))
+    items = set()
+    for c, p, d in zip(shape.connectors, pts, dirs):
+        if c.type not in ("stud", "antistud") and d[np.flatnonzero(np.abs(d) > 1e-9)[0]] < 0:
+            d = -d  # an axis (pin, hole, axle, hinge) has no sign
+        items.add((c.type, tuple(p), tuple(np.round(d, 6))))
+    return frozenset(items) | {box}
+
+
+@functools.lru_cache(maxsize=256)
+def coset_representatives(shape) -> list[int]:
+    """Indices into :data:`CUBE` of one rotation per class of rotations that place the part alike:
+    a 2 × 4 brick looks the same turned half a turn about its vertical axis, so only half of the 24
+    rotations give distinct placements (a 2 × 2 brick: a quarter)."""
+    base = _signature(shape, np.eye(3))
+    symmetry = [h for h in CUBE if _signature(shape, h) == base]
+    index = {tuple(np.round(g).astype(int).ravel()): k for k, g in enumerate(CUBE)}
+    keep = []
+    for k, g in enumerate(CUBE):
+        if k == min(index[tuple(np.round(g @ h).astype(int).ravel())] for h in symmetry):
+            keep.append(k)
+    return keep
 
 
 def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.01) -> list[dict]:
@@ -67,8 +95,9 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     groups: dict[tuple, list[int]] = {}  # connectors of one type and direction share their matches
     for ci, conn in enumerate(shape.connectors):
         groups.setdefault((conn.type, conn.direction), []).append(ci)
+    reps = np.array(coset_representatives(shape))  # the part's own symmetries give no new placements
     for (ctype, direction), members_of_group in groups.items():
-        turned_all = CUBE @ np.asarray(direction, dtype=float)  # (24, 3): the direction under each rotation
+        turned_all = CUBE[reps] @ np.asarray(direction, dtype=float)  # the direction under each rotation
         for mate_type in {t for (a, t) in MATES if a == ctype}:
             kind = MATES[(ctype, mate_type)]
             sel = np.flatnonzero(types == mate_type)
@@ -76,8 +105,9 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
                 continue
             dots = local_dir[sel] @ turned_all.T  # (k, 24)
             match = dots < -0.999 if kind in OPPOSED else np.abs(dots) > 0.999
-            for gi in np.flatnonzero(match.any(axis=0)):
-                ok = sel[match[:, gi]]
+            for ri in np.flatnonzero(match.any(axis=0)):
+                ok = sel[match[:, ri]]
+                gi = reps[ri]
                 g = CUBE[gi]
                 frames = frame[ok]
                 rots = rot_of[frame_id[ok], gi]
@@ -93,11 +123,19 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     sources = np.concatenate(sources)
     inserted = np.concatenate(kinds)
     grid = np.round(position * 1000).astype(np.int64)
-    order_rows = np.lexsort((grid[:, 2], grid[:, 1], grid[:, 0], rot_id))
-    keys = np.column_stack([rot_id, grid])[order_rows]
-    starts = np.concatenate([[0], np.flatnonzero((np.diff(keys, axis=0) != 0).any(axis=1)) + 1])
-    counts = np.diff(np.concatenate([starts, [len(keys)]]))
-    order = np.lexsort((np.arange(len(starts)), -counts))
+    grid -= grid.min(axis=0)
+    span = [int(v) + 1 for v in grid.max(axis=0)]
+    if len(rotations) * span[0] * span[1] * span[2] >= 2 ** 62:  # too wide for one key: rank each axis
+        for axis in range(3):
+            values, grid[:, axis] = np.unique(grid[:, axis], return_inverse=True)
+            span[axis] = len(values)
+    # one integer key per pose (rotation, position on a 0.001 LDU grid): a single sort groups the poses
+    key = ((rot_id * span[0] + grid[:, 0]) * span[1] + grid[:, 1]) * span[2] + grid[:, 2]
+    order_rows = np.argsort(key, kind="stable")
+    change = np.diff(key[order_rows]) != 0
+    starts = np.concatenate([[0], np.flatnonzero(change) + 1])
+    counts = np.diff(np.concatenate([starts, [len(order_rows)]]))
+    order = np.argsort(-counts, kind="stable")  # most connections first, ties in pose order
     ids, solids, lo, hi = assembly.solid_boxes()
     cache: dict[int, object] = {}
     out = []

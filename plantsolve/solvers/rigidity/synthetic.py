@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 from plantsolve.solvers.rigidity.catalogue import CATALOGUE
 
 
-def _hinge(jid, a, b, point, axis, kind="hinge") -> dict:
+def hinge_joint(jid, a, b, point, axis, kind="hinge") -> dict:
     return {"id": jid, "type": kind, "bodies": [a, b], "point": list(point), "axis": list(axis)}
 
 
@@ -23,24 +23,24 @@ def four_bar() -> dict:
     pts = [(0, 0, 0), (40, 0, 0), (50, 30, 0), (0, 20, 0)]
     names = ["ground", "crank", "coupler", "rocker"]
     return {"units": "mm", "bodies": _bodies(names),
-            "joints": [_hinge(f"J{k + 1}", names[k], names[(k + 1) % 4], pts[k], (0, 0, 1)) for k in range(4)]}
+            "joints": [hinge_joint(f"J{k + 1}", names[k], names[(k + 1) % 4], pts[k], (0, 0, 1)) for k in range(4)]}
 
 
 def collinear_hinges() -> dict:
     """Two bodies joined by two hinges on one line (a door on two pins): dof 1."""
     return {"units": "mm", "bodies": _bodies(["frame", "door"]),
-            "joints": [_hinge("top", "frame", "door", (0, 0, 0), (0, 0, 1)),
-                       _hinge("bottom", "frame", "door", (0, 0, 200), (0, 0, 2))]}
+            "joints": [hinge_joint("top", "frame", "door", (0, 0, 0), (0, 0, 1)),
+                       hinge_joint("bottom", "frame", "door", (0, 0, 200), (0, 0, 2))]}
 
 
 def sarrus() -> dict:
     """Sarrus linkage: two legs of three parallel hinges, the legs' axes not parallel: dof 1."""
     names = ["base", "top", "l1a", "l1b", "l2a", "l2b"]
     return {"units": "mm", "bodies": _bodies(names), "joints": [
-        _hinge("a1", "base", "l1a", (0, 0, 0), (1, 0, 0)), _hinge("a2", "l1a", "l1b", (0, 5, 5), (1, 0, 0)),
-        _hinge("a3", "l1b", "top", (0, 0, 10), (1, 0, 0)),
-        _hinge("b1", "base", "l2a", (10, 0, 0), (0, 1, 0)), _hinge("b2", "l2a", "l2b", (15, 0, 5), (0, 1, 0)),
-        _hinge("b3", "l2b", "top", (10, 0, 10), (0, 1, 0))]}
+        hinge_joint("a1", "base", "l1a", (0, 0, 0), (1, 0, 0)), hinge_joint("a2", "l1a", "l1b", (0, 5, 5), (1, 0, 0)),
+        hinge_joint("a3", "l1b", "top", (0, 0, 10), (1, 0, 0)),
+        hinge_joint("b1", "base", "l2a", (10, 0, 0), (0, 1, 0)), hinge_joint("b2", "l2a", "l2b", (15, 0, 5), (0, 1, 0)),
+        hinge_joint("b3", "l2b", "top", (10, 0, 10), (0, 1, 0))]}
 
 
 def random_loop(n: int, seed: int = 0) -> dict:
@@ -52,7 +52,7 @@ def random_loop(n: int, seed: int = 0) -> dict:
         axis = rng.integers(-5, 6, 3)
         while not axis.any():
             axis = rng.integers(-5, 6, 3)
-        joints.append(_hinge(f"J{k}", names[k], names[(k + 1) % n], rng.integers(-100, 101, 3).tolist(), axis.tolist()))
+        joints.append(hinge_joint(f"J{k}", names[k], names[(k + 1) % n], rng.integers(-100, 101, 3).tolist(), axis.tolist()))
     return {"units": "mm", "bodies": _bodies(names), "joints": joints}
 
 
@@ -86,7 +86,7 @@ def bennett(theta1: float = 0.7, a: float = 100.0, alpha_deg: float = 30.0, beta
     if np.abs(residual(best.x)).max() > 1e-9:
         raise RuntimeError("Bennett loop did not close")
     names = ["L0", "L1", "L2", "L3"]
-    joints = [_hinge(f"J{k}", names[(k - 1) % 4], names[k], frames[k][:3, 3].tolist(), frames[k][:3, 2].tolist())
+    joints = [hinge_joint(f"J{k}", names[(k - 1) % 4], names[k], frames[k][:3, 3].tolist(), frames[k][:3, 2].tolist())
               for k in range(4)]
     return {"units": "mm", "bodies": _bodies(names), "joints": joints}
 
@@ -94,15 +94,15 @@ def bennett(theta1: float = 0.7, a: float = 100.0, alpha_deg: float = 30.0, beta
 def idler_chains() -> dict:
     """A–C–B with both hinges on line L, A–D–B with both on L′ ≠ L: dof 2, clusters {A, B}, {C}, {D}."""
     return {"units": "mm", "bodies": _bodies("ABCD"), "joints": [
-        _hinge("AC", "A", "C", (0, 0, 0), (1, 0, 0)), _hinge("CB", "C", "B", (50, 0, 0), (1, 0, 0)),
-        _hinge("AD", "A", "D", (0, 30, 0), (0, 1, 1)), _hinge("DB", "D", "B", (0, 40, 10), (0, 1, 1))]}
+        hinge_joint("AC", "A", "C", (0, 0, 0), (1, 0, 0)), hinge_joint("CB", "C", "B", (50, 0, 0), (1, 0, 0)),
+        hinge_joint("AD", "A", "D", (0, 30, 0), (0, 1, 1)), hinge_joint("DB", "D", "B", (0, 40, 10), (0, 1, 1))]}
 
 
 def open_chain(n: int = 3) -> dict:
     names = [f"B{k}" for k in range(n + 1)]
     axes = [(0, 0, 1), (1, 0, 0), (0, 1, 1), (1, 2, 3)]
     return {"units": "mm", "bodies": _bodies(names),
-            "joints": [_hinge(f"J{k}", names[k], names[k + 1], (10 * k, 3 * k, 0), axes[k % 4]) for k in range(n)]}
+            "joints": [hinge_joint(f"J{k}", names[k], names[k + 1], (10 * k, 3 * k, 0), axes[k % 4]) for k in range(n)]}
 
 
 def ball_joint() -> dict:
@@ -141,8 +141,8 @@ def example() -> dict:
         center, size = sizes[b["id"]]
         b["shape"] = {"box": {"center": center, "size": size, "rotation": [1, 0, 0, 0]}}
     body["bodies"].append({"id": "door", "shape": None})
-    body["joints"].append(_hinge("door-top", "ground", "door", [0, 0, 0], [0, 1, 0]))
-    body["joints"].append(_hinge("door-bottom", "ground", "door", [0, 50, 0], [0, 1, 0]))
+    body["joints"].append(hinge_joint("door-top", "ground", "door", [0, 0, 0], [0, 1, 0]))
+    body["joints"].append(hinge_joint("door-bottom", "ground", "door", [0, 50, 0], [0, 1, 0]))
     body["options"] = {"contact_tolerance": 0.01}
     return body
 
