@@ -135,7 +135,8 @@ class RigidityResult(BaseModel):
     length_unit: str = Field(description="Unit of every length in the result: the request's units, or 'ldu' for parts.")
     dof: int = Field(description="Degrees of freedom relative to each other (6 rigid motions of the whole excluded; "
                      "each further unconnected piece adds 6).")
-    generic_dof: int = Field(description="The (6,6) pebble game's count for generic positions.")
+    generic_dof: int = Field(description="The (6,6) pebble game's count for generic positions (exact for hinges and "
+                             "rigid joints; for ball, slider and cylindrical joints a lower bound).")
     special_position: bool = Field(description="dof > generic_dof: the geometry moves more than its joint count says.")
     rigid: bool = Field(description="One connected piece with dof 0.")
     clusters: list[list[str]] = Field(description="Maximal rigid clusters; every body or part in exactly one.")

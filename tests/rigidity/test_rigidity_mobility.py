@@ -196,3 +196,11 @@ def test_pebble_game_counts_match_the_rank_of_a_random_realisation():
         for k in range(n):
             game.add_body(k)
         assert game.generic_dof == analyse(n, joints).dof == dense_svd_dof(n, joints)
+
+
+def test_two_balls_turn_about_their_line_which_the_count_misses():
+    body = {"bodies": [{"id": "A"}, {"id": "B"}], "joints": [
+        {"id": "b1", "type": "ball", "bodies": ["A", "B"], "point": [0, 0, 0]},
+        {"id": "b2", "type": "ball", "bodies": ["A", "B"], "point": [3, 4, 12]}]}
+    result = run(body)
+    assert result.dof == 1 and result.generic_dof == 0 and result.special_position  # a documented limit

@@ -7,6 +7,12 @@ Lee–Streinu, finds it. Each body holds six pebbles; a bar is independent when 
 gathered on its two ends, and it then takes one. A joint leaving f freedoms counts as 6 − f bars
 (hinge 5, cylindrical 4, ball 3, slider 5 — a slider is a hinge at infinity, rigid 6).
 
+The count is exact for bars and hinges (the theorems above). Ball, slider and cylindrical joints
+enter as their number of constraint rows; their rows are not generic bars (a ball's three forces
+meet in a point), so for them the count bounds the generic rank from above: two bodies on two ball
+joints count as rigid but turn about the line through the balls in every position, and the exact
+pass then reports ``special_position``.
+
 The game is incremental on insertion: :meth:`PebbleGame.add_joint` costs a few searches of the
 directed graph near the new bar. Deletion is not supported (rebuild: the game is linear in practice).
 """
