@@ -7,7 +7,7 @@ Models come from ``synthetic.random_lego``: bricks and plates stacked on random 
 random overlaps (two or more studs rigid, one stud a hinge), hinge bricks 3937 + 3938, and pairs
 of technic bricks joined by a pin 2780; no two parts overlap. Per size:
 
-- parts, superbricks, joints after superbricks, largest biconnected block (superbricks);
+- parts, superbricks, flexible joints (between superbricks), largest biconnected block (superbricks);
 - ``full``: the whole job (request checked, assembly built, exact pass, pebble game, collisions)
   — target 500 parts < 0.5 s;
 - ``add`` / ``remove``: median time of one ``Assembly.add_part`` (connections found in the spatial
@@ -89,7 +89,7 @@ def main() -> None:
     sizes = (50, 200) if args.quick else (50, 200, 500, 1000)
     dense_limit = 1500 if args.quick else 3000
     rng = np.random.default_rng(0)
-    head = (f"{'parts':>6} {'superbr.':>8} {'joints':>6} {'block':>5} {'dof':>5} {'generic':>7} {'full s':>7} "
+    head = (f"{'parts':>6} {'superbr.':>8} {'flexible':>8} {'block':>5} {'dof':>5} {'generic':>7} {'full s':>7} "
             f"{'add ms':>7} {'rm ms':>6} {'pebble s':>8} {'dock cold':>9} {'dock ms':>7} {'exact s':>7} {'float s':>7} "
             f"{'dense SVD s':>11} {'dense dof':>9}")
     print(head)
@@ -113,7 +113,7 @@ def main() -> None:
         assert floating.mobility.dof == exact.mobility.dof == result.dof
         if dense_cols[1].strip() != "-":
             assert int(dense_cols[1]) == result.dof, (dense_cols, result.dof)
-        print(f"{n:>6} {len(result.superbricks):>8} {exact.mobility.rows and len([j for j in result.joints if j.type != 'rigid']):>6} "
+        print(f"{n:>6} {len(result.superbricks):>8} {len([j for j in result.joints if j.type != 'rigid']):>8} "
               f"{result.report.details['largest_block']:>5} {result.dof:>5} {result.generic_dof:>7} {full:>7.3f} "
               f"{1e3 * statistics.median(adds):>7.3f} {1e3 * statistics.median(rm):>6.3f} {rebuild:>8.3f} "
               f"{1e3 * cold:>9.1f} {1e3 * statistics.median(dock_times):>7.1f} {exact_time:>7.3f} {float_time:>7.3f} {dense_cols[0]} {dense_cols[1]}")
