@@ -5,7 +5,8 @@ point of the model and each compatible point of the new part, the new part is or
 frame of the part it docks to, turned by each of the 24 axis-aligned rotations that bring its
 connection direction onto the mate's (opposite for studs, parallel for pins, axles and hinges), and
 moved so the two points meet. Every pair of points that yields the same pose is one connection of
-that pose, so counting the pairs per distinct pose (a lexicographic sort of the poses) ranks the poses at once.
+that pose, so counting the pairs per distinct pose (one sort of integer pose keys) ranks the poses at
+once; rotations that map the part onto itself (a 2 × 4 brick turned half a turn) are tried once.
 Poses are then checked for collisions in that order (broad phase on boxes, FCL for the exact test)
 until ``limit`` collision-free poses are found. A pose joined by pins or axles is not a collision
 with the parts it is pinned to.
