@@ -1,0 +1,124 @@
+"""Benchmark of the rigidity solver on random LEGO-like models.
+
+    python bench/rigidity.py            # 50, 200, 500 and 1,000 parts
+    python bench/rigidity.py --quick    # 50 and 200 parts
+
+Models come from ``synthetic.random_lego``: bricks and plates stacked on random earlier parts with
+random overlaps (two or more studs rigid, one stud a hinge), hinge bricks 3937 + 3938, and pairs
+of technic bricks joined by a pin 2780; no two parts overlap. Per size:
+
+- parts, superbricks, flexible joints (between superbricks), largest biconnected block (superbricks);
+- ``full``: the whole job (request checked, assembly built, exact pass, pebble game, collisions)
+  — target 500 parts < 0.5 s;
+- ``add`` / ``remove``: median time of one ``Assembly.add_part`` (connections found in the spatial
+  hash, pebble game updated) while the model is built, and of one ``remove_part`` (20 % of the parts,
+  re-added between removals) — target add < 5 ms; ``pebble rebuild``: the lazy rebuild of the generic
+  pass that the next query after a removal pays;
+- ``dock``: median time of a docking query for a 2 × 4 brick (10 poses) — target < 50 ms; ``dock
+  cold``: the first query after a change, which also rebuilds the arrays of free connection points
+  and of the parts' boxes;
+- ``exact``: the exact pass alone (modular rank of each block's loop-closure matrix);
+  ``float``: the same blocks with float SVD; ``dense SVD``: one float SVD of the whole body-twist
+  constraint matrix (6 columns per part, every joint) — the baseline, with its dof, which must equal
+  the exact dof (skipped above 1,500 columns with --quick, above 3,000 otherwise: it takes minutes beyond).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from plantsolve.schemas.rigidity import RigidityRequest  # noqa: E402
+from plantsolve.solvers.rigidity.assembly import Assembly  # noqa: E402
+from plantsolve.solvers.rigidity.docking import dock  # noqa: E402
+from plantsolve.solvers.rigidity.mobility import Joint, analyse, dense_svd_dof  # noqa: E402
+from plantsolve.solvers.rigidity.solve import solve  # noqa: E402
+from plantsolve.solvers.rigidity.synthetic import random_lego  # noqa: E402
+
+
+def timed(fn, reps=3):
+    best, out = float("inf"), None
+    for _ in range(reps):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def build(parts):
+    assembly = Assembly()
+    times = []
+    for p in parts:
+        t0 = time.perf_counter()
+        assembly.add_part(p["id"], p["part"], p["position"], p["rotation"])
+        times.append(time.perf_counter() - t0)
+    return assembly, times
+
+
+def removals(assembly, parts, rng):
+    times = []
+    for k in rng.choice(len(parts), max(1, len(parts) // 5), replace=False):
+        p = parts[k]
+        t0 = time.perf_counter()
+        assembly.remove_part(p["id"])
+        times.append(time.perf_counter() - t0)
+        assembly.add_part(p["id"], p["part"], p["position"], p["rotation"])
+    t0 = time.perf_counter()
+    assembly.generic_dof  # noqa: B018  (the lazy rebuild of the pebble game)
+    return times, time.perf_counter() - t0
+
+
+def part_joints(assembly):
+    ids = assembly.ids()
+    index = {b: k for k, b in enumerate(ids)}
+    return len(ids), [Joint(s.type, index[s.bodies[0]], index[s.bodies[1]], tuple(s.point), tuple(s.axis))
+                      for s in assembly.all_joints()]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="50 and 200 parts only")
+    args = parser.parse_args()
+    sizes = (50, 200) if args.quick else (50, 200, 500, 1000)
+    dense_limit = 1500 if args.quick else 3000
+    rng = np.random.default_rng(0)
+    head = (f"{'parts':>6} {'superbr.':>8} {'flexible':>8} {'block':>5} {'dof':>5} {'generic':>7} {'full s':>7} "
+            f"{'add ms':>7} {'rm ms':>6} {'pebble s':>8} {'dock cold':>9} {'dock ms':>7} {'exact s':>7} {'float s':>7} "
+            f"{'dense SVD s':>11} {'dense dof':>9}")
+    print(head)
+    print("-" * len(head))
+    for n in sizes:
+        parts = random_lego(n, seed=n)
+        request = RigidityRequest.model_validate({"parts": parts})
+        full, result = timed(lambda: solve(request), reps=3)
+        assembly, adds = build(parts)
+        rm, rebuild = removals(assembly, parts, rng)
+        cold = timed(lambda: dock(assembly, "3001", 10), reps=1)[0]  # first query after a change
+        dock_times = [timed(lambda: dock(assembly, "3001", 10), reps=1)[0] for _ in range(5)]
+        exact_time, exact = timed(lambda: assembly.analyse(), reps=3)
+        float_time, floating = timed(lambda: assembly.analyse(exact=False), reps=3)
+        n_bodies, joints = part_joints(assembly)
+        if 6 * n_bodies <= dense_limit:
+            dense_time, dense = timed(lambda: dense_svd_dof(n_bodies, joints), reps=1)
+            dense_cols = (f"{dense_time:>11.3f}", f"{dense:>9d}")
+        else:
+            dense_cols = (f"{'skipped':>11}", f"{'-':>9}")
+        assert floating.mobility.dof == exact.mobility.dof == result.dof
+        if dense_cols[1].strip() != "-":
+            assert int(dense_cols[1]) == result.dof, (dense_cols, result.dof)
+        print(f"{n:>6} {len(result.superbricks):>8} {len([j for j in result.joints if j.type != 'rigid']):>8} "
+              f"{result.report.details['largest_block']:>5} {result.dof:>5} {result.generic_dof:>7} {full:>7.3f} "
+              f"{1e3 * statistics.median(adds):>7.3f} {1e3 * statistics.median(rm):>6.3f} {rebuild:>8.3f} "
+              f"{1e3 * cold:>9.1f} {1e3 * statistics.median(dock_times):>7.1f} {exact_time:>7.3f} {float_time:>7.3f} {dense_cols[0]} {dense_cols[1]}")
+    print("\ntargets: 500 parts full < 0.5 s, add < 5 ms (median), dock < 50 ms; exact = float = dense dof checked")
+
+
+if __name__ == "__main__":
+    main()

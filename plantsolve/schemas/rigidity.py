@@ -1,0 +1,150 @@
+"""Request and result models of the ``rigidity`` solver (jointed assemblies: mobility, rigid clusters,
+collisions, docking).
+
+Conventions
+-----------
+- ``bodies`` and ``joints`` are in the request's ``units``; LEGO ``parts`` are in LDraw units (LDU:
+  1 stud pitch = 20, a brick 24 high, a plate 8, −y up) whatever ``units`` says. A request holds
+  bodies and joints, or parts, not both. Results use the same length unit (``length_unit``).
+- Rotations of bodies are quaternions ``[w, x, y, z]``; rotations of parts are 3×3 matrices given
+  row-major as 9 numbers, as in an LDraw type-1 line (``a b c d e f g h i``).
+- ``dof`` counts motions of the bodies relative to each other: the whole model's 6 rigid motions
+  are excluded once, and every further unconnected piece adds 6.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, BeforeValidator, Field
+
+from plantsolve.schemas.common import (Direction3, FiniteFloat, Point3, Quaternion, Report, StrictModel, Units,
+                                       json_integer)
+
+MAX_BODIES = 20_000
+MAX_JOINTS = 100_000
+MAX_MESH_VERTICES = 200_000
+
+Name = Annotated[str, Field(min_length=1, max_length=200)]
+PositiveLength = Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1e12)]
+VertexIndex = Annotated[int, Field(ge=0, lt=MAX_MESH_VERTICES), BeforeValidator(json_integer)]
+JointType = Literal["rigid", "hinge", "ball", "slider", "cylindrical"]
+Matrix9 = Annotated[list[Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]],
+                    Field(min_length=9, max_length=9)]
+
+
+class BoxShape(StrictModel):
+    center: Point3 = Field(description="Centre [x, y, z] (units).")
+    size: Annotated[list[PositiveLength], Field(min_length=3, max_length=3)] = Field(
+        description="Edge lengths along the box's own x, y, z (units).")
+    rotation: Quaternion = Field(default=[1.0, 0.0, 0.0, 0.0], description="Orientation [w, x, y, z].")
+
+
+class MeshShape(StrictModel):
+    vertices: list[Point3] = Field(min_length=4, max_length=MAX_MESH_VERTICES, description="[x, y, z] (units).")
+    faces: list[Annotated[list[VertexIndex], Field(min_length=3, max_length=3)]] = Field(
+        min_length=4, max_length=2 * MAX_MESH_VERTICES, description="Triangles as vertex indices.")
+
+
+class Shape(StrictModel):
+    box: BoxShape | None = None
+    mesh: MeshShape | None = None
+
+
+class Body(StrictModel):
+    id: Name
+    shape: Shape | None = Field(default=None, description="A box or a mesh for collision checks; null: no shape.")
+
+
+class JointIn(StrictModel):
+    id: Name
+    type: JointType = Field(description="rigid, hinge (revolute), ball (spherical), slider (prismatic), cylindrical.")
+    bodies: Annotated[list[Name], Field(min_length=2, max_length=2)] = Field(description="The two body ids [A, B].")
+    point: Point3 = Field(description="A point of the joint [x, y, z] (units): on the hinge line, the ball's centre.")
+    axis: Direction3 | None = Field(
+        default=None, description="Axis [dx, dy, dz] of a hinge, slider or cylindrical joint (any length but 0).")
+
+
+class PartIn(StrictModel):
+    id: Name
+    part: Annotated[str, Field(min_length=1, max_length=64)] = Field(
+        description="LDraw part number, e.g. '3001' (a 2 x 4 brick); '.dat' is optional.")
+    position: Point3 = Field(description="Origin of the part [x, y, z] in LDraw units.")
+    rotation: Matrix9 = Field(default=[1, 0, 0, 0, 1, 0, 0, 0, 1],
+                              description="3 x 3 rotation, row-major (LDraw's a b c d e f g h i).")
+
+
+class DockOptions(StrictModel):
+    part: Annotated[str, Field(min_length=1, max_length=64)] = Field(description="Catalogue part number to dock.")
+    limit: Annotated[int, Field(ge=1, le=500), BeforeValidator(json_integer)] = Field(
+        default=10, description="How many candidate poses to return (most connections first).")
+
+
+class RigidityOptions(StrictModel):
+    dock: DockOptions | None = Field(default=None, description="A part to find docking poses for (parts models).")
+    contact_tolerance: FiniteFloat = Field(
+        default=0.01, ge=0.0, le=1e6,
+        description="Penetration depth (model length unit) up to which touching shapes are contact, not collision.")
+    rank_tolerance: FiniteFloat = Field(
+        default=1e-9, ge=1e-15, le=1e-3,
+        description="Float rank cut-off (non-integer geometry only): singular values below rank_tolerance · "
+        "max(rows, columns) · σ_max are zero, on coordinates centred and divided by the model's size.")
+
+
+class RigidityRequest(StrictModel):
+    units: Units = Field(default="mm", description="Length unit of bodies and joints (parts are in LDraw units).")
+    bodies: list[Body] = Field(default_factory=list, max_length=MAX_BODIES)
+    joints: list[JointIn] = Field(default_factory=list, max_length=MAX_JOINTS)
+    parts: list[PartIn] = Field(default_factory=list, max_length=MAX_BODIES,
+                                description="LEGO parts (LDraw units); their connections are inferred.")
+    options: RigidityOptions = Field(default_factory=RigidityOptions)
+    source: dict[str, Any] | None = Field(
+        default=None, description="What the upload parser read (lines skipped with reasons); set by the parser.")
+
+
+class JointResult(BaseModel):
+    id: str
+    type: JointType
+    bodies: list[str]
+    point: list[float]
+    axis: list[float] | None
+    origin: str = Field(description="input (a request joint) or the inferred LEGO connection: stud, pin, axle, hinge.")
+    connections: int = Field(description="Connection points behind the joint (several studs make one rigid joint).")
+    moves: bool = Field(description="The joint's relative twist is non-zero in some motion of the model.")
+
+
+class Collision(BaseModel):
+    bodies: list[str] = Field(description="The two ids.")
+    depth: float = Field(description="Penetration depth (length unit).")
+
+
+class DockingCandidate(BaseModel):
+    part: str
+    position: list[float] = Field(description="Origin of the docked part [x, y, z] (LDU).")
+    rotation: list[float] = Field(description="3 x 3 rotation, row-major.")
+    connections: int = Field(description="Connection points the pose joins.")
+    connects_to: list[str] = Field(description="Parts it connects to.")
+
+
+class UnknownPart(BaseModel):
+    id: str
+    part: str
+
+
+class RigidityResult(BaseModel):
+    length_unit: str = Field(description="Unit of every length in the result: the request's units, or 'ldu' for parts.")
+    dof: int = Field(description="Degrees of freedom relative to each other (6 rigid motions of the whole excluded; "
+                     "each further unconnected piece adds 6).")
+    generic_dof: int = Field(description="The (6,6) pebble game's count for generic positions (exact for hinges and "
+                             "rigid joints; for ball, slider and cylindrical joints a lower bound).")
+    special_position: bool = Field(description="dof > generic_dof: the geometry moves more than its joint count says.")
+    rigid: bool = Field(description="One connected piece with dof 0.")
+    clusters: list[list[str]] = Field(description="Maximal rigid clusters; every body or part in exactly one.")
+    superbricks: list[list[str]] = Field(description="Groups joined by rigid connections alone.")
+    joints: list[JointResult]
+    redundant_constraints: int = Field(description="Constraint rows minus the rank of the constraint matrix.")
+    collisions: list[Collision]
+    docking: list[DockingCandidate]
+    unknown_parts: list[UnknownPart] = Field(description="Parts not in the catalogue: not analysed.")
+    rank_method: Literal["modular", "svd"] = Field(description="modular: exact integer rank; svd: float rank.")
+    report: Report

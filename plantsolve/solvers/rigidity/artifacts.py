@@ -1,0 +1,92 @@
+"""The body–joint graph coloured by rigid cluster (PNG) and a CSV of bodies with their cluster."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import networkx as nx
+from matplotlib import colormaps
+from matplotlib.figure import Figure  # no pyplot: no global figure state
+from matplotlib.lines import Line2D
+
+from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
+from plantsolve.solvers.base import Artifact
+
+MAX_NODES_DRAWN = 3000
+MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share light grey (counted in the legend)
+PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
+
+
+def _graph_png(request: RigidityRequest, result: RigidityResult) -> bytes:
+    graph = nx.MultiGraph()
+    cluster_of = {}
+    order = sorted(range(len(result.clusters)), key=lambda k: (-len(result.clusters[k]), k))
+    rank = {k: r for r, k in enumerate(order)}
+    for k, members in enumerate(result.clusters):
+        for b in members:
+            cluster_of[b] = rank[k]
+    nodes = list(cluster_of)[:MAX_NODES_DRAWN]
+    graph.add_nodes_from(nodes)
+    for j in result.joints:
+        a, b = j.bodies
+        if a in graph and b in graph:
+            graph.add_edge(a, b, moves=j.moves, type=j.type)
+    fig = Figure(figsize=(8.5, 6.5))
+    ax = fig.add_subplot(1, 1, 1)
+    pos = nx.spring_layout(graph, seed=1) if graph.number_of_nodes() else {}
+    cmap = colormaps["tab20"]
+
+    def colour(r):
+        return cmap(PALETTE[r]) if r < MAX_COLOURED else (0.82, 0.82, 0.82, 1.0)
+
+    small = graph.number_of_nodes() <= 60
+    for moves, style, label in ((True, "solid", "joint that moves"), (False, "dashed", "joint that does not move")):
+        edges = [(a, b) for a, b, d in graph.edges(data=True) if d["moves"] == moves]
+        if edges:
+            nx.draw_networkx_edges(graph, pos, edgelist=edges, ax=ax, style=style, width=1.2, edge_color="#444444")
+    nx.draw_networkx_nodes(graph, pos, ax=ax, node_size=220 if small else 30,
+                           node_color=[colour(cluster_of[n]) for n in graph.nodes])
+    if small:
+        number = {p.id: p.part for p in request.parts}
+        labels = {n: f"{n}\n{number[n]}" if n in number else n for n in graph.nodes}
+        nx.draw_networkx_labels(graph, pos, labels=labels, ax=ax, font_size=6)
+    handles = [Line2D([], [], color=colour(r), marker="o", linestyle="", markersize=8,
+                      label=f"cluster {r + 1} ({_count(len(result.clusters[k]))})")
+               for r, k in enumerate(order[:MAX_COLOURED])]
+    if len(order) > MAX_COLOURED:
+        rest = sum(len(result.clusters[k]) for k in order[MAX_COLOURED:])
+        handles.append(Line2D([], [], color=colour(MAX_COLOURED), marker="o", linestyle="", markersize=8,
+                              label=f"{len(order) - MAX_COLOURED} more clusters ({_count(rest)})"))
+    handles.append(Line2D([], [], color="#444444", linestyle="solid", label="joint that moves"))
+    handles.append(Line2D([], [], color="#444444", linestyle="dashed", label="joint that does not move"))
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
+    ax.set_xlabel("graph layout x (no unit: spring layout)")
+    ax.set_ylabel("graph layout y (no unit)")
+    shown = "" if len(cluster_of) <= MAX_NODES_DRAWN else f", first {MAX_NODES_DRAWN} of {len(cluster_of)} bodies drawn"
+    ax.set_title(f"body–joint graph: dof {result.dof} (generic {result.generic_dof}), "
+                 f"{len(result.clusters)} rigid clusters{shown}", fontsize=9)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    return buf.getvalue()
+
+
+def _count(n: int) -> str:
+    return f"{n} body" if n == 1 else f"{n} bodies"
+
+
+def _table(result: RigidityResult) -> bytes:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["body", "cluster", "superbrick"])
+    superbrick = {b: k + 1 for k, s in enumerate(result.superbricks) for b in s}
+    for k, members in enumerate(result.clusters):
+        for b in members:
+            writer.writerow([b, k + 1, superbrick.get(b, "")])
+    return out.getvalue().encode()
+
+
+def render_artifacts(request: RigidityRequest, result: RigidityResult) -> list[Artifact]:
+    return [Artifact("graph.png", "image/png", _graph_png(request, result)),
+            Artifact("clusters.csv", "text/csv", _table(result))]

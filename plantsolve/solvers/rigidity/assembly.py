@@ -1,0 +1,291 @@
+"""An assembly of parts and bodies that updates its connections as parts come and go.
+
+This is the seed's online use (§3): adding a part looks up its connection points in a spatial hash
+of the model's points (a dict keyed by the point rounded to ``SNAP`` LDU), records the connections
+it makes, and inserts them into the incremental (6,6) pebble game, so the generic degrees of freedom
+follow every insertion at once. The exact pass (:mod:`mobility`) is run on demand by
+:meth:`Assembly.analyse`: the seed gives model updates "plenty of time" while the user picks the
+next brick. Removing a part drops its points and connections; the pebble game, which has no
+deletion, is rebuilt at the next query.
+
+Between two parts: two or more stud connections, or any axle in an axle hole, make them rigid
+(one superbrick); otherwise each connection is a joint — a single stud a hinge about its axis, a
+pin in a pin hole a hinge, an axle in a round hole a cylindrical joint, two hinge halves a hinge.
+Two parts held by two pins (or axles) in distinct parallel holes are reported in one superbrick
+(:meth:`Assembly.rod_pairs`); the exact pass finds them rigid to each other on its own, with each
+pin free to spin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, PartShape, lookup
+from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
+from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
+from plantsolve.solvers.rigidity.pebble import PebbleGame
+from plantsolve.solvers.rigidity.screws import FREEDOM
+
+SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) are one point
+ALIGN = 0.999  # |cos| between directions that count as parallel
+JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid"}
+INSERTED = {"pin", "axle", "axle_round"}  # one part inside the other's hole: not a collision
+
+
+@dataclass
+class Placed:
+    id: str
+    number: str
+    shape: PartShape
+    position: np.ndarray
+    rotation: np.ndarray
+    points: np.ndarray
+    directions: np.ndarray
+    keys: list
+
+    def solid(self) -> Solid:
+        center = self.rotation @ np.asarray(self.shape.box_center) + self.position
+        return Solid(center=center, size=np.asarray(self.shape.box_size, dtype=float), rotation=self.rotation)
+
+
+@dataclass(frozen=True)
+class Connection:
+    a: str
+    ca: int
+    b: str
+    cb: int
+    kind: str  # stud, pin, axle, axle_round, hinge
+    point: tuple
+    axis: tuple
+
+
+@dataclass
+class JointSpec:
+    id: str
+    type: str
+    bodies: tuple[str, str]
+    point: tuple
+    axis: tuple
+    origin: str = "input"
+    connections: int = 1
+
+
+@dataclass
+class Analysis:
+    ids: list[str]
+    joints: list[JointSpec]
+    mobility: Mobility
+    generic_dof: int
+    details: dict = field(default_factory=dict)
+
+
+def _clean(x: float) -> float | int:
+    """Integer-valued coordinates as ints (LDraw units), so the exact pass can use them."""
+    r = round(float(x))
+    return r if abs(float(x) - r) < 1e-9 else float(x)
+
+
+class Assembly:
+    """Parts (catalogue LEGO parts), bodies (free shapes) and explicit joints, kept connected."""
+
+    def __init__(self) -> None:
+        self.parts: dict[str, Placed] = {}
+        self.bodies: dict[str, Solid | None] = {}
+        self.joints: dict[str, JointSpec] = {}
+        self._slots: dict[tuple, list[tuple[str, int]]] = {}
+        self._links: dict[tuple[str, str], list[Connection]] = {}
+        self._neighbours: dict[str, set[str]] = {}
+        self._pebble = PebbleGame()
+        self._pebble_stale = False
+        self._free_table = self._boxes = None  # docking's arrays of free connection points, rebuilt after a change
+
+    # ---------------------------------------------------------------- building
+    def add_part(self, id: str, number: str, position, rotation=None) -> list[Connection]:
+        """Place a catalogue part; returns the connections it makes. Unknown parts raise KeyError."""
+        if id in self.parts or id in self.bodies:
+            raise ValueError(f"id {id!r} is already in the assembly")
+        shape = lookup(number)
+        if shape is None:
+            raise KeyError(number)
+        rot = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float).reshape(3, 3)
+        pos = np.asarray(position, dtype=float)
+        local = shape.points()
+        points = local @ rot.T + pos
+        dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
+        keys = [tuple(k) for k in np.round(points / SNAP).astype(np.int64).tolist()]
+        placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
+        self._free_table = self._boxes = None
+        self.parts[id] = placed
+        self._neighbours[id] = set()
+        self._pebble.add_body(id)
+        found: dict[str, list[Connection]] = {}
+        for ci, key in enumerate(keys):
+            mine = shape.connectors[ci].type
+            for other, oi in self._slots.get(key, ()):
+                theirs = self.parts[other].shape.connectors[oi].type
+                kind = MATES.get((mine, theirs))
+                if kind is None:
+                    continue
+                cos = float(dirs[ci] @ self.parts[other].directions[oi])
+                if (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
+                    continue
+                point = tuple(_clean(v) for v in points[ci])
+                axis = tuple(_clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
+                found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
+            self._slots.setdefault(key, []).append((id, ci))
+        for other, conns in found.items():
+            self._links[(other, id)] = conns
+            self._neighbours[other].add(id)
+            self._neighbours[id].add(other)
+            if not self._pebble_stale:
+                for j in self._pair_joints(other, id, conns):
+                    self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
+        return [c for conns in found.values() for c in conns]
+
+    def remove_part(self, id: str) -> None:
+        placed = self.parts.pop(id)
+        self._free_table = self._boxes = None
+        for key in placed.keys:
+            slot = [s for s in self._slots.get(key, []) if s[0] != id]
+            if slot:
+                self._slots[key] = slot
+            else:
+                self._slots.pop(key, None)
+        for other in self._neighbours.pop(id):
+            self._links.pop((other, id), None)
+            self._links.pop((id, other), None)
+            self._neighbours[other].discard(id)
+        self._pebble_stale = True
+
+    def add_body(self, id: str, solid: Solid | None = None) -> None:
+        if id in self.parts or id in self.bodies:
+            raise ValueError(f"id {id!r} is already in the assembly")
+        self.bodies[id] = solid
+        self._free_table = self._boxes = None
+        self._pebble.add_body(id)
+
+    def add_joint(self, spec: JointSpec) -> None:
+        self.joints[spec.id] = spec
+        if not self._pebble_stale:
+            self._pebble.add_joint(spec.bodies[0], spec.bodies[1], 6 - FREEDOM[spec.type])
+
+    def remove_joint(self, id: str) -> None:
+        self.joints.pop(id)
+        self._pebble_stale = True
+
+    # ---------------------------------------------------------------- queries
+    @staticmethod
+    def _pair_joints(a: str, b: str, conns: list[Connection]) -> list[JointSpec]:
+        studs = [c for c in conns if c.kind == "stud"]
+        if len(studs) >= 2 or any(c.kind == "axle" for c in conns):
+            c = conns[0]
+            return [JointSpec(f"{a}~{b}", "rigid", (a, b), c.point, c.axis,
+                              "axle" if any(x.kind == "axle" for x in conns) else "stud", len(conns))]
+        return [JointSpec(f"{a}~{b}" + (f"#{k + 1}" if len(conns) > 1 else ""), JOINT_OF[c.kind], (a, b), c.point,
+                          c.axis, c.kind if c.kind != "axle_round" else "axle", 1) for k, c in enumerate(conns)]
+
+    def all_joints(self) -> list[JointSpec]:
+        out = list(self.joints.values())
+        for (a, b), conns in self._links.items():
+            out.extend(self._pair_joints(a, b, conns))
+        return out
+
+    def rod_pairs(self) -> list[tuple[str, str]]:
+        """Part pairs held by two or more pins (or axles in round holes) on distinct parallel lines: rigid
+        to each other (seed §3's rigid connections), while each rod still turns in its holes."""
+        lines: dict[tuple[str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
+        for rod in self.parts:
+            ends = {}
+            for other in self._neighbours.get(rod, ()):
+                conns = self._links.get((other, rod)) or self._links.get((rod, other)) or []
+                for c in conns:
+                    if c.kind in ("pin", "axle_round") and other not in ends:
+                        ends[other] = (np.asarray(c.point, float), np.asarray(c.axis, float))
+            hosts = sorted(ends)
+            for i, a in enumerate(hosts):
+                for b in hosts[i + 1:]:
+                    lines.setdefault((a, b), []).append(ends[a])
+        pairs = []
+        for pair, found in lines.items():
+            for i, (p1, a1) in enumerate(found):
+                if any(abs(abs(a1 @ a2) - np.linalg.norm(a1) * np.linalg.norm(a2)) < 1e-9
+                       and np.linalg.norm(np.cross(p2 - p1, a1)) > 1e-6 for p2, a2 in found[i + 1:]):
+                    pairs.append(pair)
+                    break
+        return pairs
+
+    def ids(self) -> list[str]:
+        return [*self.parts, *self.bodies]
+
+    @property
+    def generic_dof(self) -> int:
+        if self._pebble_stale:
+            game = PebbleGame()
+            for body in self.ids():
+                game.add_body(body)
+            for j in self.all_joints():
+                game.add_joint(j.bodies[0], j.bodies[1], 6 - FREEDOM[j.type])
+            self._pebble, self._pebble_stale = game, False
+        return self._pebble.generic_dof
+
+    def analyse(self, **tolerances) -> Analysis:
+        ids = self.ids()
+        index = {b: k for k, b in enumerate(ids)}
+        specs = self.all_joints()
+        joints = [Joint(s.type, index[s.bodies[0]], index[s.bodies[1]], tuple(s.point),
+                        tuple(s.axis) if s.axis is not None else (0, 0, 1)) for s in specs]
+        mobility = analyse(len(ids), joints, **tolerances)
+        return Analysis(ids, specs, mobility, self.generic_dof)
+
+    def solids(self) -> tuple[list[str], list[Solid | None]]:
+        ids = self.ids()
+        return ids, [self.parts[i].solid() if i in self.parts else self.bodies[i] for i in ids]
+
+    def solid_boxes(self):
+        """(ids, solids, lower corners, upper corners) of the bodies' world boxes, kept until the next change."""
+        if self._boxes is None:
+            ids, solids = self.solids()
+            boxes = [s.aabb() if s is not None else (np.full(3, np.inf), np.full(3, -np.inf)) for s in solids]
+            self._boxes = (ids, solids, np.array([b[0] for b in boxes]).reshape(-1, 3),
+                           np.array([b[1] for b in boxes]).reshape(-1, 3))
+        return self._boxes
+
+    def inserted_pairs(self) -> set[tuple[str, str]]:
+        """Part pairs joined pin- or axle-in-hole: they overlap by design."""
+        return {pair for pair, conns in self._links.items() if any(c.kind in INSERTED for c in conns)}
+
+    def collisions(self, tolerance: float) -> list[tuple[str, str, float]]:
+        ids, solids = self.solids()
+        index = {b: k for k, b in enumerate(ids)}
+        exclude = set()
+        for a, b in self.inserted_pairs():
+            i, j = sorted((index[a], index[b]))
+            exclude.add((i, j))
+        return [(ids[i], ids[j], d) for i, j, d in find_collisions(solids, tolerance, exclude)]
+
+    def free_connectors(self) -> list[tuple[str, int]]:
+        """Connection points not used by any connection."""
+        used = set()
+        for conns in self._links.values():
+            for c in conns:
+                used.add((c.a, c.ca))
+                used.add((c.b, c.cb))
+        return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys)) if (pid, ci) not in used]
+
+    def free_table(self):
+        """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free
+        connection points, as arrays for docking; kept until the next add or remove."""
+        if self._free_table is None:
+            free = self.free_connectors()
+            if not free:
+                return None
+            parts = self.parts
+            self._free_table = (
+                np.array([p for p, _ in free], dtype=object),
+                np.array([parts[p].shape.connectors[c].type for p, c in free], dtype=object),
+                np.array([parts[p].shape.connectors[c].direction for p, c in free], dtype=float),
+                np.array([parts[p].points[c] for p, c in free]),
+                np.array([parts[p].rotation for p, _ in free]))
+        return self._free_table

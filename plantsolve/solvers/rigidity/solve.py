@@ -1,0 +1,116 @@
+"""The rigidity job: build an :class:`Assembly` from the request, then the exact pass, the generic
+count, collisions and docking."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, RigidityRequest, RigidityResult,
+                                         UnknownPart)
+from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.geometry import rotation as quaternion_rotation
+from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
+from plantsolve.solvers.rigidity.catalogue import lookup
+from plantsolve.solvers.rigidity.collisions import Solid
+from plantsolve.solvers.rigidity.docking import dock
+
+MAX_LISTED = 1000
+
+
+def _solid(body) -> Solid | None:
+    shape = body.shape
+    if shape is None:
+        return None
+    if shape.box is not None:
+        q = np.asarray(shape.box.rotation, dtype=float)
+        rot = quaternion_rotation(q / math.hypot(*q)).as_matrix()
+        return Solid(center=np.asarray(shape.box.center, float), size=np.asarray(shape.box.size, float), rotation=rot)
+    return Solid(vertices=np.asarray(shape.mesh.vertices, float), faces=np.asarray(shape.mesh.faces, dtype=np.int32))
+
+
+def _superbricks(ids: list[str], groups: list[list[int]], rod_pairs: list[tuple[str, str]]) -> list[list[str]]:
+    """The exact pass's superbricks (rigid joints) joined further by pairs of parallel pins or axles."""
+    root = {ids[b]: ids[g[0]] for g in groups for b in g}
+
+    def find(x):
+        while root[x] != x:
+            root[x] = root[root[x]]
+            x = root[x]
+        return x
+
+    for a, b in rod_pairs:
+        ra, rb = find(a), find(b)
+        if ra != rb:
+            root[rb] = ra
+    out: dict[str, list[str]] = {}
+    for g in groups:
+        for b in g:
+            out.setdefault(find(ids[b]), []).append(ids[b])
+    return list(out.values())
+
+
+def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
+    """The assembly of a request: bodies and joints, or catalogue parts (unknown parts set aside)."""
+    assembly = Assembly()
+    unknown = []
+    for body in request.bodies:
+        assembly.add_body(body.id, _solid(body))
+    for joint in request.joints:
+        axis = tuple(joint.axis) if joint.axis is not None else None
+        assembly.add_joint(JointSpec(joint.id, joint.type, (joint.bodies[0], joint.bodies[1]), tuple(joint.point), axis))
+    for part in request.parts:
+        if lookup(part.part) is None:
+            unknown.append(UnknownPart(id=part.id, part=part.part))
+            continue
+        assembly.add_part(part.id, part.part, part.position, part.rotation)
+    return assembly, unknown
+
+
+def solve(request: RigidityRequest, progress: Progress = no_progress) -> RigidityResult:
+    progress(0.0, "building the assembly")
+    assembly, unknown = build(request)
+    warnings: list[Diagnostic] = []
+    if unknown:
+        warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
+                                   "were left out of the analysis (not guessed)",
+                                   details={"parts": sorted({u.part for u in unknown})[:100]}))
+    progress(0.2, "exact mobility")
+    analysis = assembly.analyse(rank_tolerance=request.options.rank_tolerance)
+    mob = analysis.mobility
+    ids = analysis.ids
+    progress(0.6, "collisions")
+    tol = request.options.contact_tolerance
+    collisions = assembly.collisions(tol)
+    if collisions:
+        warnings.append(Diagnostic(code="collisions", message=f"{len(collisions)} pair(s) of shapes interpenetrate "
+                                   f"deeper than contact_tolerance = {tol}"))
+    docking = []
+    if request.options.dock is not None:
+        progress(0.8, "docking")
+        docking = [DockingCandidate(**c) for c in dock(assembly, request.options.dock.part,
+                                                       request.options.dock.limit, tol)]
+    joints = [JointResult(id=s.id, type=s.type, bodies=list(s.bodies), point=[float(v) for v in s.point],
+                          axis=None if s.axis is None else [float(v) for v in s.axis], origin=s.origin,
+                          connections=s.connections, moves=m)
+              for s, m in zip(analysis.joints, mob.moves)]
+    n_pieces = mob.details["components"]
+    superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
+    special = mob.dof > analysis.generic_dof
+    if special:
+        warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
+                                   f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes)"))
+    report = Report(status="warning" if warnings else "ok", warnings=warnings, details={
+        "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
+        "largest_block": mob.largest_block, "connected_pieces": n_pieces, "rank_method": mob.rank_method,
+        "source": request.source or {}})
+    progress(1.0, "done")
+    return RigidityResult(
+        length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
+        special_position=special, rigid=bool(ids) and n_pieces == 1 and mob.dof == 0,
+        clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
+        joints=joints, redundant_constraints=mob.redundant_constraints,
+        collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],
+        docking=docking, unknown_parts=unknown, rank_method=mob.rank_method, report=report)

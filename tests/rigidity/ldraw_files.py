@@ -1,0 +1,59 @@
+"""LDraw files written the way common editors write them (headers, meta commands, number formats and
+line endings as they come out of LDCad, LeoCAD, MLCad and BrickLink Studio)."""
+
+LDCAD = """0 Stacked pair
+0 Name: stacked.ldr
+0 Author: someone
+0 !LDRAW_ORG Unofficial_Model
+0 !LICENSE Redistributable under CCAL version 2.0 : see CAreadme.txt
+0 BFC CERTIFY CCW
+0 !LDCAD GROUP_DEF [topLevel=true] [LID=1] [GID=abc] [name=Group 1] [center=0 0 0]
+0 !LDCAD GROUP_NXT [ids=1] [nrs=-1]
+1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat
+0 !LDCAD GROUP_NXT [ids=1] [nrs=-1]
+1 14 30 -24 10 1 0 0 0 1 0 0 0 1 3005.dat
+0 STEP
+"""
+
+LEOCAD = """0 Model exported from LeoCAD
+0 Original name: hinge.lcd
+0 !LEOCAD MODEL NAME hinge
+0 !LEOCAD MODEL AUTHOR someone
+1 4 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3001.dat
+0 !LEOCAD PIECE STEP_HIDE 3
+1 15 -20.000000 -24.000000 10.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3937.dat
+1 15 -20.000000 -32.000000 10.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3938.dat
+0 STEP
+0 !LEOCAD CAMERA FOV 30 ZNEAR 25 ZFAR 50000 POSITION 0 0 0 TARGET_POSITION 0 0 1 UP_VECTOR 0 1 0 NAME Camera 1
+"""
+
+MLCAD = ("0 Tower\r\n0 Name: tower.ldr\r\n0 Author: MLCad user\r\n0 Unofficial Model\r\n"
+         "0 ROTSTEP 0 0 0 ABS\r\n0 MLCAD BTG base\r\n"
+         "1 1 0 0 0 1 0 0 0 1 0 0 0 1 3001.DAT\r\n0 MLCAD BTG base\r\n"
+         "1 1 0 -24 0 1 0 0 0 1 0 0 0 1 3001.DAT\r\n"
+         "0 GHOST 1 7 0 -48 0 1 0 0 0 1 0 0 0 1 3001.DAT\r\n"
+         "2 24 0 0 0 10 0 0\r\n3 16 0 0 0 10 0 0 0 10 0\r\n4 16 0 0 0 1 0 0 1 1 0 0 1 0\r\n5 24 0 0 0 1 0 0 0 1 0 1 1 1\r\n"
+         "0 STEP\r\n")
+
+STUDIO = ("\ufeff0 FILE main.ldr\n0 Main\n0 Name: main.ldr\n0 Author: \n0 CustomBrick\n0 NumOfBricks: 5\n"
+          "1 71 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+          "1 16 -20 -24 0 1 0 0 0 1 0 0 0 1 wing.ldr\n"
+          "1 16 20 -24 0 -1 0 0 0 1 0 0 0 -1 wing.ldr\n"
+          "1 0 0 -50 0 0.999999 0 0 0 1 0 0 0 1 99999.dat\n"
+          "0 NOFILE\n"
+          "0 FILE wing.ldr\n0 wing\n0 Name: wing.ldr\n0 Author: \n"
+          "1 72 0 0 10 1 0 0 0 1 0 0 0 1 3004.dat\n"
+          "0 NOFILE\n")
+
+BROKEN = """0 items that must be skipped one by one
+1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat
+1 4 0 -24 0 1 0 0 0 1 0 0 0 3001.dat
+1 4 0 -24 zero 1 0 0 0 1 0 0 0 1 3001.dat
+1 4 0 -24 0 0 0 0 0 0 0 0 0 0 3001.dat
+7 this is not ldraw
+1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat
+"""
+
+SELF_INCLUDING = "0 FILE a.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 a.ldr\n0 NOFILE\n"
+
+ONLY_COMMENTS = "0 nothing here\n0 STEP\n2 24 0 0 0 1 1 1\n"

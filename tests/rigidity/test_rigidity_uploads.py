@@ -1,0 +1,93 @@
+"""LDraw uploads item by item: what editors write is read, what cannot be read is skipped with its
+line and reason, and a file with no part is refused."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.rigidity.solve import solve
+from plantsolve.solvers.rigidity.upload import parse_upload
+
+import ldraw_files as files  # noqa: E402  (the folder is on sys.path through conftest)
+
+
+def parse(name, text, options=None):
+    content = text.encode("utf-8") if isinstance(text, str) else text
+    return parse_upload(name, content, options)
+
+
+def test_ldcad_file_one_stud_hinge():
+    request = parse("stacked.ldr", files.LDCAD)
+    assert [(p.id, p.part, p.position) for p in request.parts] == [("L9", "3001", [0, 0, 0]), ("L11", "3005", [30, -24, 10])]
+    result = solve(request)
+    assert result.dof == 1 and result.joints[0].type == "hinge"
+    assert request.source["meta_lines"] == 10 and request.source["skipped_count"] == 0
+
+
+def test_leocad_file_with_six_decimals_hinge_bricks():
+    result = solve(parse("hinge.ldr", files.LEOCAD))
+    assert result.dof == 1 and result.rank_method == "modular"
+    assert {frozenset(c) for c in result.clusters} == {frozenset({"L5", "L7"}), frozenset({"L8"})}
+
+
+def test_mlcad_file_with_crlf_upper_case_names_and_drawn_geometry():
+    request = parse("tower.ldr", files.MLCAD)
+    assert [p.part for p in request.parts] == ["3001", "3001"]  # the GHOST line is a meta line
+    assert request.source["geometry_lines"] == 4
+    result = solve(request)
+    assert result.rigid and result.superbricks == [["L7", "L9"]]
+
+
+def test_studio_mpd_expands_submodels_with_their_placement_and_reports_unknown_parts():
+    request = parse("main.mpd", files.STUDIO)
+    parts = {p.id: p for p in request.parts}
+    assert set(parts) == {"L7", "L8/L16", "L9/L16", "L10"}
+    assert parts["L8/L16"].position == [-20, -24, 10]
+    assert parts["L9/L16"].position == [20, -24, -10] and parts["L9/L16"].rotation[0] == -1
+    assert parts["L10"].rotation[0] == 1  # 0.999999 as written by the exporter
+    assert request.source["submodels"] == 1 and request.source["submodels_expanded"] == 2
+    result = solve(request)
+    assert [(u.id, u.part) for u in result.unknown_parts] == [("L10", "99999")]
+    # each 1x2 brick sits on two studs of the 2x4: all rigid
+    assert result.rigid and len(result.superbricks) == 1
+
+
+def test_broken_lines_are_skipped_one_by_one_with_reasons():
+    request = parse("broken.ldr", files.BROKEN)
+    assert [p.id for p in request.parts] == ["L2", "L7"]
+    reasons = {s["line"]: s["reason"] for s in request.source["skipped"]}
+    assert set(reasons) == {3, 4, 5, 6}
+    assert "15 fields" in reasons[3] and "not a number" in reasons[4] and "singular" in reasons[5]
+    assert "line type" in reasons[6]
+    assert solve(request).rigid
+
+
+def test_a_submodel_that_includes_itself_is_refused_at_its_line():
+    request = parse("loop.mpd", files.SELF_INCLUDING)
+    assert [p.part for p in request.parts] == ["3001"]
+    assert request.source["skipped"][0]["line"] == 3 and "includes itself" in request.source["skipped"][0]["reason"]
+
+
+@pytest.mark.parametrize("name, content, message", [
+    ("empty.ldr", b"  \n", "empty"),
+    ("nothing.ldr", files.ONLY_COMMENTS.encode(), "places no part"),
+    ("model.lxf", b"PK\x03\x04", "unsupported file type"),
+    ("model.json", b"[1, 2]", "request object"),
+    ("model.ldr", b"\x00\x01binary", "binary"),
+])
+def test_files_that_give_nothing_are_refused_naming_the_file(name, content, message):
+    with pytest.raises(InputRejected) as info:
+        parse_upload(name, content, None)
+    assert info.value.errors[0].loc[0] == "file" and message in info.value.errors[0].msg
+
+
+def test_json_upload_and_form_options():
+    body = {"parts": [{"id": "a", "part": "3001", "position": [0, 0, 0]}]}
+    request = parse("model.json", json.dumps(body), {"contact_tolerance": 0.5, "dock": {"part": "3003"}})
+    assert request.options.contact_tolerance == 0.5 and request.options.dock.part == "3003"
+    with pytest.raises(InputRejected) as info:
+        parse("model.ldr", files.LDCAD, {"contact_tolerance": -1})
+    assert info.value.errors[0].loc == ("contact_tolerance",) or info.value.errors[0].loc[0] == "options"
