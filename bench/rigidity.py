@@ -4,8 +4,9 @@
     python bench/rigidity.py --quick    # 50 and 200 parts
 
 Models come from ``synthetic.random_lego``: bricks and plates stacked on random earlier parts with
-random overlaps (two or more studs rigid, one stud a hinge), hinge bricks 3937 + 3938, and pairs
-of technic bricks joined by a pin 2780; no two parts overlap. Per size:
+random overlaps (two or more studs rigid, one stud a hinge), hinge bricks 3937 + 3938 (both at one
+position, as in the LDraw library's frames), and pairs of technic bricks joined by a pin 2780 turned
+into their holes; no two parts overlap. Per size:
 
 - parts, superbricks, flexible joints (between superbricks), largest biconnected block (superbricks);
 - ``full``: the whole job (request checked, assembly built, exact pass, pebble game, collisions)

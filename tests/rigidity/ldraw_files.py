@@ -22,9 +22,36 @@ LEOCAD = """0 Model exported from LeoCAD
 1 4 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3001.dat
 0 !LEOCAD PIECE STEP_HIDE 3
 1 15 -20.000000 -24.000000 10.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3937.dat
-1 15 -20.000000 -32.000000 10.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3938.dat
+1 15 -20.000000 -24.000000 10.000000 1.000000 0.000000 0.000000 0.000000 1.000000 0.000000 0.000000 0.000000 1.000000 3938.dat
 0 STEP
 0 !LEOCAD CAMERA FOV 30 ZNEAR 25 ZFAR 50000 POSITION 0 0 0 TARGET_POSITION 0 0 1 UP_VECTOR 0 1 0 NAME Camera 1
+"""
+
+# A technic stack as LDCad saves it, every part where the LDraw library's own frames put it: two 1x4
+# technic bricks side by side (their holes along z) pinned through two holes by a 2780 and a 3673,
+# each turned a quarter turn about y (the two ways round) because a pin's own axis is x; a 32064 on
+# the first brick with an axle 4 centred in its axle hole, turned the same way; on it a hinge brick,
+# base 3937 and top 3938 at one position and rotation as editors snap them, and a 1x2 brick on top.
+LDCAD_TECHNIC = """0 Technic stack
+0 Name: technic.ldr
+0 Author: someone
+0 !LDRAW_ORG Unofficial_Model
+0 BFC CERTIFY CCW
+0 !LDCAD GROUP_DEF [topLevel=true] [LID=2] [GID=def] [name=Pinned pair] [center=0 0 10]
+0 !LDCAD GROUP_NXT [ids=2] [nrs=-1]
+1 71 0 0 0 1 0 0 0 1 0 0 0 1 3701.dat
+0 !LDCAD GROUP_NXT [ids=2] [nrs=-1]
+1 71 0 0 20 1 0 0 0 1 0 0 0 1 3701.dat
+1 0 -20 10 10 0 0 -1 0 1 0 1 0 0 2780.dat
+1 1 20 10 10 0 0 1 0 1 0 -1 0 0 3673.dat
+0 STEP
+1 4 0 -24 0 1 0 0 0 1 0 0 0 1 32064.dat
+1 0 0 -14 0 0 0 -1 0 1 0 1 0 0 3705.dat
+0 STEP
+1 15 0 -48 0 1 0 0 0 1 0 0 0 1 3937.dat
+1 15 0 -48 0 1 0 0 0 1 0 0 0 1 3938.dat
+1 14 0 -72 0 1 0 0 0 1 0 0 0 1 3004.dat
+0 STEP
 """
 
 MLCAD = ("0 Tower\r\n0 Name: tower.ldr\r\n0 Author: MLCad user\r\n0 Unofficial Model\r\n"

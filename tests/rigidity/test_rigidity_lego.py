@@ -52,27 +52,32 @@ def test_a_turned_brick_connects_through_its_rotated_studs():
 
 
 def test_hinge_bricks_turn_about_their_hinge_line():
-    parts = [part("base", "3001", 0, 0, 0), part("hb", "3937", -20, -24, 10), part("ht", "3938", -20, -32, 10),
-             part("top", "3004", -20, -56, 10)]
+    # as in LDraw files: base and top at one position and rotation, a brick's height together
+    parts = [part("base", "3001", 0, 0, 0), part("hb", "3937", -20, -24, 10), part("ht", "3938", -20, -24, 10),
+             part("top", "3004", -20, -48, 10)]
     result = run(parts)
     assert result.dof == 1
     assert {frozenset(c) for c in result.clusters} == {frozenset({"base", "hb"}), frozenset({"ht", "top"})}
     hinge = next(j for j in result.joints if j.origin == "hinge")
-    assert hinge.type == "hinge" and hinge.axis == [1.0, 0.0, 0.0] and hinge.point == [-20.0, -24.0, 10.0]
+    assert hinge.type == "hinge" and hinge.axis == [1.0, 0.0, 0.0] and hinge.point == [-20.0, -14.0, 10.0]
+    assert {tuple(j.bodies) for j in result.joints if j.origin == "stud"} == {("base", "hb"), ("ht", "top")}
+    assert all(j.type == "rigid" and j.connections == 2 for j in result.joints if j.origin == "stud")
+    assert result.collisions == []  # the base's and the top's boxes touch at the hinge line's height
 
 
 def test_two_hinges_on_parallel_axes_make_a_four_bar_that_moves():
     # two hinge-brick pairs side by side along x share one hinge line: the plate on top still turns
-    parts = [part("base", "3001", 0, 0, 0), part("h1", "3937", -20, -24, 10), part("t1", "3938", -20, -32, 10),
-             part("h2", "3937", 20, -24, 10), part("t2", "3938", 20, -32, 10), part("roof", "3020", 0, -40, 0)]
+    parts = [part("base", "3001", 0, 0, 0), part("h1", "3937", -20, -24, 10), part("t1", "3938", -20, -24, 10),
+             part("h2", "3937", 20, -24, 10), part("t2", "3938", 20, -24, 10), part("roof", "3020", 0, -32, 0)]
     result = run(parts)
     assert result.dof == 1 and result.generic_dof == 0 and result.special_position
     assert frozenset({"t1", "t2", "roof"}) in {frozenset(c) for c in result.clusters}
 
 
 def test_two_pins_hold_two_technic_bricks_rigid_while_each_pin_spins():
+    # the pins' own axis is x: turned a quarter turn about y into the bricks' z holes
     parts = [part("a", "3701", 0, 0, 0), part("b", "3701", 0, 0, 20),
-             part("p1", "2780", -20, 10, 10), part("p2", "2780", 20, 10, 10)]
+             part("p1", "2780", -20, 10, 10, ROT_Y90), part("p2", "2780", 20, 10, 10, ROT_Y90)]
     result = run(parts)
     assert frozenset({"a", "b"}) in {frozenset(c) for c in result.clusters}
     assert ["a", "b"] in result.superbricks  # two pins in parallel holes are a rigid connection
@@ -83,10 +88,52 @@ def test_two_pins_hold_two_technic_bricks_rigid_while_each_pin_spins():
 
 
 def test_axle_in_axle_hole_is_rigid_and_in_a_round_hole_turns_and_slides():
-    rigid = run([part("brick", "32064", 0, 0, 0), part("axle", "3705", 0, 10, 10)])
+    rigid = run([part("brick", "32064", 0, 0, 0), part("axle", "3705", 0, 10, 10, ROT_Y90)])
     assert rigid.rigid and rigid.joints[0].type == "rigid" and rigid.joints[0].origin == "axle"
-    loose = run([part("brick", "3700", 0, 0, 0), part("axle", "3705", 0, 10, 10)])
+    loose = run([part("brick", "3700", 0, 0, 0), part("axle", "3705", 0, 10, 10, ROT_Y90)])
     assert loose.dof == 2 and loose.joints[0].type == "cylindrical"
+
+
+def test_catalogue_frames_are_the_ldraw_library_frames():
+    def conns(number, kind):
+        return sorted((c.point, c.direction) for c in CATALOGUE[number].connectors if c.type == kind)
+
+    x, z = (1, 0, 0), (0, 0, 1)
+    for pin in ("3673", "2780"):  # along x, centred, 40 LDU: two halves at x = -10 and +10
+        assert conns(pin, "pin") == [((-10, 0, 0), x), ((10, 0, 0), x)] and CATALOGUE[pin].box_size[0] == 40
+    for axle, n in {"3704": 2, "3705": 4, "3706": 6, "3707": 8}.items():  # along x, centred, 20 N LDU
+        points = [p for p, d in conns(axle, "axle")]
+        assert {d for p, d in conns(axle, "axle")} == {x} and CATALOGUE[axle].box_size[0] == 20 * n
+        assert points[0] == (-10 * (n - 1), 0, 0) and points[-1] == (10 * (n - 1), 0, 0)
+    assert conns("3700", "pinhole") == [((0, 10, 0), z)] and conns("32064", "axlehole") == [((0, 10, 0), z)]
+    assert [p for p, _ in conns("3701", "pinhole")] == [(-20, 10, 0), (0, 10, 0), (20, 10, 0)]
+    # hinge brick: both halves' axis along x through (0, 10, 0) of their own frame
+    assert conns("3937", "hinge_a") == conns("3938", "hinge_b") == [((0, 10, 0), x)]
+    assert conns("3937", "antistud") == [((-10, 24, 0), (0, 1, 0)), ((10, 24, 0), (0, 1, 0))]
+    assert conns("3938", "stud") == [((-10, 0, 0), (0, -1, 0)), ((10, 0, 0), (0, -1, 0))]
+    assert conns("3937", "stud") == [] and conns("3938", "antistud") == []
+    base, top = CATALOGUE["3937"], CATALOGUE["3938"]  # boxes y in [10, 24] and [0, 10]: they touch
+    assert base.box_center[1] - base.box_size[1] / 2 == top.box_center[1] + top.box_size[1] / 2 == 10
+
+
+def test_a_pin_or_axle_left_along_x_does_not_enter_holes_along_z():
+    # the same positions as above without the quarter turn: the rods lie across the holes
+    pins = run([part("a", "3701", 0, 0, 0), part("b", "3701", 0, 0, 20), part("p1", "2780", -20, 10, 10)])
+    assert pins.joints == [] and len(pins.clusters) == 3
+    axle = run([part("brick", "32064", 0, 0, 0), part("axle", "3705", 0, 10, 10)])
+    assert axle.joints == [] and axle.dof == 6
+    # either quarter turn about y does: an axis has no sign
+    other_turn = [0, 0, -1, 0, 1, 0, 1, 0, 0]
+    turned = run([part("a", "3701", 0, 0, 0), part("b", "3701", 0, 0, 20), part("p1", "2780", -20, 10, 10, other_turn),
+                  part("p2", "2780", 20, 10, 10, ROT_Y90)])
+    assert turned.dof == 2 and ["a", "b"] in turned.superbricks
+
+
+def test_an_axle_centred_in_a_one_wide_brick_is_held():
+    centred = run([part("brick", "32064", 0, 0, 0), part("axle", "3706", 0, 10, 0, ROT_Y90)])
+    assert centred.rigid and centred.joints[0].point == [0.0, 10.0, 0.0]
+    half_out = run([part("brick", "3700", 0, 0, 0), part("axle", "3704", 0, 10, 10, ROT_Y90)])
+    assert half_out.joints[0].type == "cylindrical" and half_out.dof == 2
 
 
 def test_unknown_parts_are_reported_not_guessed():
@@ -101,7 +148,7 @@ def test_every_catalogue_part_has_a_box_and_typed_connectors():
         assert all(s > 0 for s in shape.box_size) and shape.connectors, number
         assert {c.type for c in shape.connectors} <= kinds
     for number in ("3001", "3003", "3004", "3005", "3010", "3009", "3008", "3002", "3007", "3024", "3023", "3623",
-                   "3710", "3022", "3021", "3020", "3034", "3700", "3701", "3894", "2780", "3704", "3705", "3706",
+                   "3710", "3022", "3021", "3020", "3034", "3700", "3701", "3894", "3673", "2780", "3704", "3705", "3706",
                    "3937", "3938"):
         assert number in CATALOGUE
     assert len([c for c in CATALOGUE["3001"].connectors if c.type == "stud"]) == 8

@@ -33,6 +33,34 @@ def test_leocad_file_with_six_decimals_hinge_bricks():
     assert {frozenset(c) for c in result.clusters} == {frozenset({"L5", "L7"}), frozenset({"L8"})}
 
 
+def test_ldcad_technic_file_pins_axle_and_hinge_in_the_ldraw_frames():
+    request = parse("technic.ldr", files.LDCAD_TECHNIC)
+    assert [p.part for p in request.parts] == ["3701", "3701", "2780", "3673", "32064", "3705", "3937", "3938", "3004"]
+    result = solve(request)
+    by_pair = {frozenset(j.bodies): j for j in result.joints}
+    # each pin sits in one hole of each technic brick (a hinge about the hole's z axis)
+    for pin in ("L11", "L12"):
+        for brick in ("L8", "L10"):
+            joint = by_pair[frozenset({pin, brick})]
+            assert (joint.type, joint.origin) == ("hinge", "pin") and [abs(v) for v in joint.axis] == [0, 0, 1]
+    assert by_pair[frozenset({"L11", "L8"})].point == [-20.0, 10.0, 0.0]
+    # the centred axle is held in the axle hole; the hinge halves meet on the line y = -38 along x
+    axle = by_pair[frozenset({"L14", "L15"})]
+    assert (axle.type, axle.origin, axle.point) == ("rigid", "axle", [0.0, -14.0, 0.0])
+    hinge = by_pair[frozenset({"L17", "L18"})]
+    assert (hinge.type, hinge.origin, hinge.point, hinge.axis) == ("hinge", "hinge", [0.0, -38.0, 0.0], [1.0, 0.0, 0.0])
+    for below, above in (("L8", "L14"), ("L14", "L17"), ("L18", "L19")):
+        studs = by_pair[frozenset({below, above})]
+        assert (studs.type, studs.origin, studs.connections) == ("rigid", "stud", 2)
+    assert len(result.joints) == 9
+    # two pins hold the bricks rigid while each spins, and the hinge turns: 3 degrees of freedom
+    assert result.dof == 3 and result.rank_method == "modular"
+    assert {frozenset(c) for c in result.clusters} == {frozenset({"L8", "L10", "L14", "L15", "L17"}),
+                                                       frozenset({"L11"}), frozenset({"L12"}), frozenset({"L18", "L19"})}
+    assert {frozenset(c) for c in result.superbricks} == {frozenset(c) for c in result.clusters}
+    assert result.collisions == [] and result.unknown_parts == []
+
+
 def test_mlcad_file_with_crlf_upper_case_names_and_drawn_geometry():
     request = parse("tower.ldr", files.MLCAD)
     assert [p.part for p in request.parts] == ["3001", "3001"]  # the GHOST line is a meta line

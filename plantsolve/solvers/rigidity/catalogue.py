@@ -1,10 +1,24 @@
 """A catalogue of common LEGO parts: box shape and connection points (the seed's §3.2 structure).
 
-Every coordinate is in LDraw units (LDU) in the part's own LDraw frame: 1 stud pitch = 20 LDU, a
-brick is 24 LDU high, a plate 8; −y is up. Bricks and plates have their origin at the centre of
-the top face, the long side along x (a 2×4 brick spans x ∈ [−40, 40], z ∈ [−20, 20], y ∈ [0, 24]).
-Technic holes of the 1×N technic bricks run along z through y = 10, between the studs. Pins and
-axles in this catalogue lie along their local z axis, centred on the origin.
+Every coordinate is in LDraw units (LDU) in the part's own frame as the official LDraw library
+draws it (so ``.ldr`` files from any editor place the parts as they are here): 1 stud pitch = 20
+LDU, a brick is 24 LDU high, a plate 8; −y is up. Bricks and plates have their origin at the centre
+of the top face, the long side along x (a 2×4 brick spans x ∈ [−40, 40], z ∈ [−20, 20],
+y ∈ [0, 24]). The connection points follow the LDraw parts' connection data (the LDCad shadow
+library's snap meta lines):
+
+- 1×N technic bricks (3700, 3701, 3894, 3702): N − 1 pin holes between the studs at y = 10, their
+  axis along z; 32064 has one axle hole there. Anti-studs at y = 24 under the studs.
+- Pins (3673, 2780) and axles (3704–3707) lie along x, centred on the origin: a pin is 40 LDU long,
+  its two 20-LDU halves centred at x = ±10 with the collar at x = 0; axle N is 20·N LDU long with a
+  point every 10 LDU from x = −10·(N − 1) to 10·(N − 1) (it slides: a hole may sit at any whole or
+  half stud along it). A pin joining two side-by-side technic bricks is
+  therefore placed turned a quarter turn about y (its x axis onto z), e.g. the LDraw matrix ``0 0 1 0 1 0
+  −1 0 0``.
+- Hinge brick 1 × 2 (3937 base, 3938 top plate): both have their hinge axis along x through
+  (0, 10, 0) in their own frame, so a straight hinge has the top placed at the base's very position
+  and rotation. The base has two anti-studs at y = 24 and no studs, the top two studs at y = 0; the
+  base's box is y ∈ [10, 24], the top's y ∈ [0, 10], so the pair touches without overlapping.
 
 A connection point is ``(type, point, direction)``: for studs and anti-studs the direction points
 away from the part (studs up, −y; anti-studs down, +y); for pins, holes, axles and hinge halves it
@@ -28,8 +42,8 @@ PITCH = 20
 
 UP = (0, -1, 0)
 DOWN = (0, 1, 0)
-Z = (0, 0, 1)
-X = (1, 0, 0)
+Z = (0, 0, 1)  # technic holes
+X = (1, 0, 0)  # pins, axles, hinge lines
 
 
 @dataclass(frozen=True)
@@ -88,13 +102,33 @@ def _technic_brick(number, length, holes="pinhole") -> PartShape:
 
 
 def _rod(number, name, kind, length_studs, half_width=4.0) -> PartShape:
-    """A pin or an axle along z: connection points at the centre of each stud-pitch segment."""
-    zs = [PITCH * i - PITCH * (length_studs - 1) // 2 for i in range(length_studs)] if length_studs > 1 else [0]
+    """A pin or an axle along x, centred on the origin. A pin's points are its two halves' centres
+    (x = ±10); an axle slides in its holes, so it has a point every half pitch from the centre of its
+    first 20-LDU segment to that of its last: a hole meets it whether the axle is centred in the hole
+    (an even axle through a 1-wide brick, as editors snap it) or offset by whole studs."""
+    half = PITCH // 2
     if kind == "pin":
-        zs = [-10, 10]
-    connectors = tuple(Connector(kind, (0, 0, z), Z) for z in zs)
-    length = PITCH * length_studs
-    return PartShape(number, name, (0.0, 0.0, 0.0), (2 * half_width, 2 * half_width, float(length)), connectors)
+        xs = [-half, half]
+    else:
+        xs = list(range(-half * (length_studs - 1), half * (length_studs - 1) + 1, half))
+    connectors = tuple(Connector(kind, (x, 0, 0), X) for x in xs)
+    return PartShape(number, name, (0.0, 0.0, 0.0), (float(PITCH * length_studs), 2 * half_width, 2 * half_width),
+                     connectors)
+
+
+def _hinge_brick() -> tuple[PartShape, PartShape]:
+    """3937 and 3938: the hinge axis along x through (0, 10, 0) in both frames; the base below it
+    (anti-studs at y = 24), the top above it (studs at y = 0)."""
+    hinge_y = 10
+    base = PartShape("3937", "Hinge Brick 1 x 2 Base", (0.0, (hinge_y + BRICK) / 2, 0.0),
+                     (2.0 * PITCH, float(BRICK - hinge_y), float(PITCH)),
+                     tuple([Connector("antistud", (x, BRICK, 0), DOWN) for x in (-10, 10)]
+                           + [Connector("hinge_a", (0, hinge_y, 0), X)]))
+    top = PartShape("3938", "Hinge Brick 1 x 2 Top Plate", (0.0, hinge_y / 2, 0.0),
+                    (2.0 * PITCH, float(hinge_y), float(PITCH)),
+                    tuple([Connector("stud", (x, 0, 0), UP) for x in (-10, 10)]
+                          + [Connector("hinge_b", (0, hinge_y, 0), X)]))
+    return base, top
 
 
 def _build() -> dict[str, PartShape]:
@@ -111,15 +145,11 @@ def _build() -> dict[str, PartShape]:
         parts[number] = _technic_brick(number, length)
     parts["32064"] = _block("32064", "Technic Brick 1 x 2 with Axle Hole", 1, 2, BRICK,
                             extra=[Connector("axlehole", (0, 10, 0), Z)])
+    parts["3673"] = _rod("3673", "Technic Pin", "pin", 2)
     parts["2780"] = _rod("2780", "Technic Pin with Friction Ridges", "pin", 2)
     for number, n in {"3704": 2, "3705": 4, "3706": 6, "3707": 8}.items():
         parts[number] = _rod(number, f"Technic Axle {n}", "axle", n, half_width=3.0)
-    # Hinge brick 1 x 2: the base's hinge axis runs along x at the centre of its top; the top plate
-    # sits on it with its own hinge line at the centre of its underside.
-    parts["3937"] = _block("3937", "Hinge Brick 1 x 2 Base", 1, 2, BRICK, studs=False,
-                           extra=[Connector("hinge_a", (0, 0, 0), X)])
-    parts["3938"] = _block("3938", "Hinge Brick 1 x 2 Top Plate", 1, 2, PLATE, antistuds=False,
-                           extra=[Connector("hinge_b", (0, PLATE, 0), X)])
+    parts["3937"], parts["3938"] = _hinge_brick()
     return parts
 
 

@@ -149,8 +149,9 @@ def example() -> dict:
 
 # ------------------------------------------------------------------ LEGO models
 
-ROT_Y90 = [0, 0, 1, 0, 1, 0, -1, 0, 0]
+ROT_Y90 = [0, 0, 1, 0, 1, 0, -1, 0, 0]  # a quarter turn about y: x onto −z (pins and axles into z holes)
 IDENTITY = [1, 0, 0, 0, 1, 0, 0, 0, 1]
+HINGE_PAIR = ("3937", "3938")  # one 1 x 2 brick's cells, both parts at the same position and rotation
 
 
 def stacked(studs: int = 8) -> dict:
@@ -164,7 +165,7 @@ def stacked(studs: int = 8) -> dict:
 
 def _footprint(number: str, rotation: list) -> tuple[int, int, int]:
     """Cells (20 × 8 × 20 LDU) a part covers along x, y, z."""
-    size = CATALOGUE[number].box_size
+    size = CATALOGUE["3004" if number in HINGE_PAIR else number].box_size
     nx, ny, nz = round(size[0] / 20), round(size[1] / 8), round(size[2] / 20)
     return (nz, ny, nx) if rotation == ROT_Y90 else (nx, ny, nz)
 
@@ -172,24 +173,26 @@ def _footprint(number: str, rotation: list) -> tuple[int, int, int]:
 def random_lego(n_parts: int, seed: int = 0) -> list[dict]:
     """A random model of ``n_parts`` parts on the LDraw grid, built upwards: bricks and plates put on
     a random earlier part with a random overlap (several studs: rigid; one stud: a hinge), hinge
-    bricks (3937 with its 3938 top), and pairs of technic bricks side by side joined by a pin (2780).
-    Parts are placed by grid cells (20 × 8 × 20 LDU, stud centres at odd multiples of 10) and no two
-    parts share a cell, so the model has no collisions."""
+    bricks (3937 with its 3938 top at the same position: together the cells of a 1 × 2 brick), and
+    pairs of technic bricks side by side joined by a pin (2780, turned so its x axis runs along the
+    holes' z). Parts are placed by grid cells (20 × 8 × 20 LDU, stud centres at odd multiples of 10)
+    and no two parts share a cell (the pin lies inside its bricks), so the model has no collisions."""
     rng = np.random.default_rng(seed)
     occupied: set[tuple[int, int, int]] = set()
     parts: list[dict] = []
-    cells_of: list[tuple[int, int, int, int, int]] = []  # (cx, level, cz, nx, nz) per part; pins: None
+    cells_of: list[tuple[int, int, int, int, int] | None] = []  # (cx, level, cz, nx, nz); None: nothing on top
 
-    def place(number, cx, level, cz, rotation=IDENTITY, commit=True) -> bool:
+    def place(number, cx, level, cz, rotation=IDENTITY, commit=True, cells=True) -> bool:
         nx, ny, nz = _footprint(number, rotation)
         cover = [(cx + i, level + j, cz + k) for i in range(nx) for j in range(ny) for k in range(nz)]
-        if any(c in occupied for c in cover):
+        if cells and any(c in occupied for c in cover):
             return False
         if commit:
-            occupied.update(cover)
+            if cells:
+                occupied.update(cover)
             parts.append({"id": f"p{len(parts)}", "part": number,
                           "position": [20 * cx + 10 * nx, 8 * level, 20 * cz + 10 * nz], "rotation": rotation})
-            cells_of.append((cx, level, cz, nx, nz))
+            cells_of.append(None if number == "3937" else (cx, level, cz, nx, nz))  # the base has no studs
         return True
 
     place("3001", 0, 0, 0)
@@ -198,15 +201,14 @@ def random_lego(n_parts: int, seed: int = 0) -> list[dict]:
     while len(parts) < n_parts and attempts < 100 * n_parts:
         attempts += 1
         i = int(rng.integers(len(parts)))
-        if cells_of[i] is None or parts[i]["part"] == "3937":
+        if cells_of[i] is None:
             continue
         bcx, blevel, bcz, bnx, bnz = cells_of[i]
         roll = rng.random()
-        if roll < 0.06 and n_parts - len(parts) >= 2:  # a hinge brick with its top plate
+        if roll < 0.06 and n_parts - len(parts) >= 2:  # a hinge brick: base and top at one position
             cx, cz = bcx + int(rng.integers(-1, bnx)), bcz + int(rng.integers(0, bnz))
-            if place("3937", cx, blevel - 3, cz, commit=False) and place("3938", cx, blevel - 4, cz, commit=False):
-                place("3937", cx, blevel - 3, cz)
-                place("3938", cx, blevel - 4, cz)
+            if place("3937", cx, blevel - 3, cz):
+                place("3938", cx, blevel - 3, cz, cells=False)
             continue
         if roll < 0.12 and n_parts - len(parts) >= 3:  # two technic bricks side by side, pinned
             cx, cz = bcx + int(rng.integers(-3, bnx)), bcz + int(rng.integers(-1, bnz))
@@ -216,7 +218,7 @@ def random_lego(n_parts: int, seed: int = 0) -> list[dict]:
                 place("3701", cx, level, cz + 1)
                 hole = 20 * int(rng.integers(-1, 2))
                 parts.append({"id": f"p{len(parts)}", "part": "2780",
-                              "position": [20 * cx + 40 + hole, 8 * level + 10, 20 * cz + 20], "rotation": IDENTITY})
+                              "position": [20 * cx + 40 + hole, 8 * level + 10, 20 * cz + 20], "rotation": ROT_Y90})
                 cells_of.append(None)
             continue
         number = "3005" if roll < 0.18 else studded[int(rng.integers(len(studded)))]
