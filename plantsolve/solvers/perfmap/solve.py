@@ -43,6 +43,7 @@ from plantsolve.solvers.perfmap.fitting import (
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
+from plantsolve.solvers.perfmap.units import to_internal
 from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
 
 
@@ -397,6 +398,7 @@ def performance_map(curves: CurveSet, settings: list[Setting], values: np.ndarra
 
 def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
     opts = request.options
+    request, units = to_internal(request)
     settings = prepare(request)
     progress(0.02, "input checked")
     warnings: list[Diagnostic] = list(request.upload_warnings)
@@ -423,7 +425,7 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                     + (f"; map {opts.grid[0]}x{opts.grid[1]} over {len(triangles)} triangles"
                        if pmap else ""),
                     warnings=warnings, details={"family_choice": details})
-    return PerfmapResult(report=report, setting_names=list(request.setting_names),
+    return PerfmapResult(report=report, units=units, setting_names=list(request.setting_names),
                          setting_units=request.setting_units, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,
                          surge_line=surge, choke_line=choke, surge_margin_line=margin_line,
