@@ -25,6 +25,16 @@ CSV rules (as rig software and Excel write them):
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
   different values is rejected (flow must increase along a characteristic after sorting).
 
+An ``.xlsx`` upload (Excel) is read sheet by sheet into rows of cell texts and then follows the same rules
+(see :mod:`plantsolve.solvers.perfmap.workbook`): ``options.sheet`` names the sheet, else the first sheet
+with a recognisable header is read. Rows of titles above the header are skipped (in CSV too), and a row
+of units under the header (``[kg/s]``, ``bar``, ``%``) gives the columns their units.
+
+Units (read with pint, :mod:`plantsolve.solvers.perfmap.units`) may also follow a comma (``Flow, kg/s``);
+flow, pressure and efficiency units are checked against the quantity (``Flow [kg]`` is refused naming the
+column) and stated in the request's ``units``; values are not converted (an efficiency in % or ‰ is made
+a fraction).
+
 A ``.py`` upload is a pyCycle/NPSS ``MapData`` map (see :func:`_parse_map_data`); its text is
 read, never run.
 
@@ -50,8 +60,9 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
+from plantsolve.solvers.perfmap.workbook import read_workbook
 
-UPLOAD_EXTENSIONS = (".csv", ".json", ".py")
+UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 MEASURED = ("flow", "pressure", "efficiency")
 # Names rig software and cycle codes give their columns (matched after units and separators are
 # stripped, case-insensitively). Setting parameters have roles of their own; the solver takes the
@@ -221,6 +232,37 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
                         what="line")
 
 
+def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
+                ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
+    """An Excel workbook's rig table (:mod:`plantsolve.solvers.perfmap.workbook`): the named sheet, else the
+    first sheet with a recognisable header, else the first sheet; then the CSV rules, rows named by their
+    sheet row."""
+    sheets = read_workbook(content, MAX_CSV_ROWS)
+    if sheet is not None:
+        chosen = [s for s in sheets if s.name == sheet]
+        if not chosen:
+            raise reject(f"no sheet {sheet!r} in the workbook; its sheets: {', '.join(repr(s.name) for s in sheets)}",
+                         ("options", "sheet"))
+        ws = chosen[0]
+    else:
+        usable = [s for s in sheets if s.rows]
+        if not usable:
+            raise reject("the workbook's sheets are empty")
+        found = [s for s in usable
+                 if len({_header_field(c)[0] for c in s.rows[_find_header(s.rows, column_roles)]} & set(MEASURED)) >= 2]
+        ws = (found or usable)[0]
+    if not ws.rows:
+        raise reject(f"sheet {ws.name!r} is empty", ("options", "sheet"))
+    positions, lines, notes, meta = _parse_table(ws.rows, ws.numbers, True, column_roles,
+                                                 header=_find_header(ws.rows, column_roles),
+                                                 what=f"sheet {ws.name!r} row")
+    if len(sheets) > 1:
+        notes.insert(0, Diagnostic(code="upload_sheet", message=f"Sheet {ws.name!r} read (of "
+                                   f"{', '.join(repr(s.name) for s in sheets)}; choose with options.sheet).",
+                                   details={"sheet": ws.name, "sheets": [s.name for s in sheets]}))
+    return positions, lines, notes, meta
+
+
 def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool, column_roles: dict | None,
                  hint: str = "", comma_separated: bool = False, header: int = 0, what: str = "line",
                  ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
@@ -333,7 +375,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
                 v = _number(cell, decimal_comma) * scale[c]
             except ValueError:
                 hint = (" (decimal comma with ',' separators? use ';' as separator)"
-                        if comma_separated and re.fullmatch(r"-?\d+,\d+", cell) else "")
+                        if comma_separated and re.fullmatch(r"-?\d+,\d+", cell) else
+                        " (a formula never calculated: open and save the workbook in Excel, or paste values)"
+                        if cell.startswith("=") else "")
                 errors.append(FieldError(("file", "row", n, c),
                                          f"{what} {n}: {c} {cell!r} is not a number{hint}"))
                 continue
@@ -489,7 +533,19 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in UPLOAD_EXTENSIONS:
         raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
-                      f"{', '.join(UPLOAD_EXTENSIONS)}")
+                      f"{', '.join(UPLOAD_EXTENSIONS)}"
+                     + (" (an Excel 97-2003 .xls workbook: save it as .xlsx)" if ext in (".xls", ".xlsb") else ""))
+    if ext == ".xlsx":
+        options = dict(options or {})
+        roles = options.get("columns")
+        if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
+            raise reject("options.columns must map header names to roles", ("options", "columns"))
+        sheet = options.get("sheet")
+        if sheet is not None and not isinstance(sheet, str):
+            raise reject("options.sheet must be a sheet name", ("options", "sheet"))
+        positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
+        body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
+        return _validated(body, options, lines)
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
         # counted before any parsing: a table far beyond any rig's is refused in milliseconds
@@ -518,6 +574,11 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
             body = {"positions": body}
         if not isinstance(body, dict):
             raise reject("the JSON file must hold a request object or a list of positions")
+    return _validated(body, options, lines)
+
+
+def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:
+    """The request of a parsed file, its errors named by file row where the file has rows."""
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:
