@@ -49,6 +49,9 @@ def axis_problems(fig: Figure) -> list[str]:
         for axis in wanted:
             if axis == "x" and not ax.get_xticks().size and not ax.get_xlabel():
                 continue
+            if axis == "x" and not ax.get_xlabel() and any(
+                    UNIT.search(o.get_xlabel()) for o in ax.get_shared_x_axes().get_siblings(ax) if o is not ax):
+                continue  # stacked panels sharing x: the bottom one names it
             label = getattr(ax, f"get_{axis}label")()
             if not UNIT.search(label or ""):
                 problems.append(f"axes {name!r}: {axis} label {label!r} has no unit in brackets")
