@@ -410,3 +410,5 @@ class QueryAnswer(BaseModel):
 
 class PerfmapQueryResult(BaseModel):
     points: list[QueryAnswer]
+    units: ResultUnits | None = Field(default=None, description="Units of flow, pressure and settings (the map's; "
+                                      "duty points are read in them too).")

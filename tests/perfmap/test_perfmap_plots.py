@@ -120,3 +120,11 @@ def test_map_csv_holds_every_node(rig):
     assert (row[2] == "") == (m.efficiency[j][i] is None)
     names = [a.name for a in render_artifacts(*rig)]
     assert "map.csv" in names and "curves.csv" in names
+
+
+def test_a_setting_with_few_values_is_contoured_where_the_optimum_changes_side():
+    from plantsolve.solvers.perfmap.artifacts import setting_levels
+
+    assert setting_levels(np.array([0.0, 5.0, 0.0, 5.0])) == [2.5]
+    assert setting_levels(np.array([0.0, 2.0, 6.0])) == [1.0, 4.0]
+    assert setting_levels(np.linspace(0.5, 1.1, 9)) == 8

@@ -105,6 +105,17 @@ def test_result_units_convert_without_changing_the_answer():
         [s.pressure_max_rel_error for s in plain.settings], rel=1e-6, abs=1e-12)
     a, b = np.array(plain.map.efficiency, dtype=float), np.array(conv.map.efficiency, dtype=float)
     assert np.array_equal(np.isfinite(a), np.isfinite(b)) and np.nanmax(abs(a - b)) < 1e-9
+    # a duty point in the map's units: the same answer in lbm/s and in kg/s, and the answer says its units
+    from plantsolve.schemas.perfmap import PerfmapQueryRequest
+    from plantsolve.solvers.perfmap import query
+    x = 0.5 * sum(plain.flow_range)
+    y = 0.5 * sum(plain.pressure_range)
+    pa = query(plain, PerfmapQueryRequest.model_validate({"flow": x, "pressure": y}))
+    pb = query(conv, PerfmapQueryRequest.model_validate({"flow": x * 0.45359237, "pressure": y}))
+    assert pa.units.flow == "lbm/s" and pb.units.flow == "kg/s"
+    assert pa.points[0].feasible == pb.points[0].feasible
+    if pa.points[0].feasible:
+        assert pb.points[0].efficiency == pytest.approx(pa.points[0].efficiency, rel=1e-9)
 
 
 def test_json_requests_state_units_and_are_refused_field_by_field():

@@ -182,6 +182,16 @@ _REFINE = 4  # contour grids are refined this many times per map cell
 _BOUNDARY_NODES = 160  # nodes per axis of the distance field the reachable boundary is drawn from
 
 
+def setting_levels(values: np.ndarray):
+    """Contour levels of an optimal setting: with few distinct measured values (an IGV at 0 and 5 deg) the
+    midpoints between them — where the optimum passes from one measured setting's side to the next —
+    since levels in between would trace the interpolation's detail; otherwise 8 levels."""
+    distinct = np.unique(values)
+    if 2 <= len(distinct) <= 4:
+        return ((distinct[:-1] + distinct[1:]) / 2).tolist()
+    return 8
+
+
 def smooth_on_finer_grid(gx: np.ndarray, gy: np.ndarray, z: np.ndarray, sigma: float = 0.8):
     """A map field (NaN where unreachable) smoothed by a normalised Gaussian convolution (NaNs neither
     spread nor pull values to zero) and resampled on a grid ``_REFINE`` times finer: contours of an
@@ -270,11 +280,12 @@ def _map(result: PerfmapResult) -> Figure:
         fine_eta = np.ma.masked_where(d > 0.25 * h, resample(gx, gy, eta, bx, by))
         cf = ax.contourf(bx, by, fine_eta, levels=levels, cmap="viridis")
         fig.colorbar(cf, ax=ax, label=axis_label(result, "efficiency", "max efficiency η"))
-        for grid, name, (colour, style) in zip(grids, names, CONTOUR_STYLES[len(grids) - 1]):
+        measured = np.array([_values(s) for s in result.settings], dtype=float).reshape(len(result.settings), -1)
+        for k, (grid, name, (colour, style)) in enumerate(zip(grids, names, CONTOUR_STYLES[len(grids) - 1])):
             if np.nanmax(grid) > np.nanmin(grid) and len(gx) > 2 and len(gy) > 2:
-                fx, fy, fine = smooth_on_finer_grid(gx, gy, grid)
-                cs = ax.contour(fx, fy, np.ma.masked_invalid(fine), levels=8, colors=colour, linewidths=1.0,
-                                linestyles=style)
+                fx, fy, fine = smooth_on_finer_grid(gx, gy, grid, sigma=1.2)
+                cs = ax.contour(fx, fy, np.ma.masked_invalid(fine), levels=setting_levels(measured[:, k]),
+                                colors=colour, linewidths=1.0, linestyles=style)
                 ax.clabel(cs, fontsize=7, fmt=f"{name.split(' [')[0]}=%.3g")
         ax.contour(bx, by, d, levels=[0.25 * h], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
