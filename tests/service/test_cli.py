@@ -108,3 +108,19 @@ def test_cli_runs_stay_out_of_the_servers_database_unless_named(tmp_path):
     done = run(["solve", "test-compute", "in.json", "-o", "c.json", "--store", f"sqlite:///{db}"], tmp_path)
     assert done.returncode == 0, done.stderr
     assert jobs() == 2
+
+
+def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
+    """The issue's case: the N+3 map succeeds with warnings, and standard error lists every one."""
+    examples = Path(__file__).resolve().parents[2] / "examples" / "perfmap"
+    done = run_plantsolve(["solve", "perfmap", str(examples / "n3_fan_map.csv"), "-o", "map.json",
+                           "--options", '{"grid": [16, 16]}'], tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr
+    warnings = json.loads((tmp_path / "map.json").read_text())["report"]["warnings"]
+    printed = [ln for ln in done.stderr.splitlines() if ln.startswith("warning [")]
+    assert warnings and len(printed) == len(warnings)
+    assert [ln.split("]")[0][len("warning ["):] for ln in printed] == [w["code"] for w in warnings]
+    assert f"with {len(warnings)} warning(s)" in done.stderr
+    assert sorted(p.name for p in (tmp_path / "map_artifacts").iterdir()) == sorted(
+        ["characteristics.png", "characteristics.svg", "envelopes.png", "envelopes.svg", "map.png", "map.svg",
+         "curves.csv", "map.csv"])
