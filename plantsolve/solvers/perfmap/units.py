@@ -13,6 +13,7 @@ efficiency is a fraction (``%`` and ``‰`` are divided out); settings keep thei
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass
 
@@ -21,11 +22,18 @@ import pint
 from plantsolve.schemas.perfmap import PerfmapRequest, QuantityUnits, ResultUnits, ResultUnitsOption
 from plantsolve.solvers.base import FieldError, InputRejected
 
-_REGISTRY = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
 # Spellings of rig software and cycle codes that pint does not know.
-for _definition in ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O",
-                    "barg = bar", "bara = bar", "mbarg = millibar", "permille = 0.001 = ‰"):
-    _REGISTRY.define(_definition)
+_DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
+                "bara = bar", "mbarg = millibar", "permille = 0.001 = ‰")
+
+
+@functools.cache
+def registry() -> pint.UnitRegistry:
+    """The one unit registry (built on first use: it takes a few hundred milliseconds; read-only after)."""
+    reg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    for definition in _DEFINITIONS:
+        reg.define(definition)
+    return reg
 
 MEASURED = ("flow", "pressure", "efficiency")
 # Dimensions each measured quantity may have, in words for the messages.
@@ -57,20 +65,20 @@ class Unit:
         return self.unit.dimensionless
 
     def factor_to(self, other: "Unit") -> float:
-        return float(_REGISTRY.Quantity(1.0, self.unit).to(other.unit).magnitude)
+        return float(registry().Quantity(1.0, self.unit).to(other.unit).magnitude)
 
 
 def parse_unit(text: str) -> Unit:
     """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it."""
     s = text.strip().strip("[]()").strip()
     if s.lower() in _DIMENSIONLESS_WORDS:
-        return Unit("1", _REGISTRY.dimensionless)
+        return Unit("1", registry().dimensionless)
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
          .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
     s = _DIGIT_EXPONENT.sub(r"\1**\2", s)
     s = s.replace("^", "**")
     try:
-        unit = _REGISTRY.parse_units(s)
+        unit = registry().parse_units(s)
     except Exception:  # pint's parser raises many types on garbage (tokenize, syntax, key, attribute errors)
         raise UnitError(f"unit {text.strip()!r} is not understood (write e.g. kg/s, m3/h, bar, kPa, psi, %, rpm)") \
             from None
@@ -99,7 +107,7 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
 def fraction_factor(text: str | None) -> float:
     """Factor from an efficiency unit to a fraction (0.01 for '%'); 1 without a unit."""
     u = check_quantity("efficiency", text)
-    return 1.0 if u is None else float(_REGISTRY.Quantity(1.0, u.unit).to("dimensionless").magnitude)
+    return 1.0 if u is None else float(registry().Quantity(1.0, u.unit).to("dimensionless").magnitude)
 
 
 def conversion(quantity: str, given: str | None, wanted: str | None) -> tuple[float, str | None]:
