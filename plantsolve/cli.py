@@ -1,8 +1,10 @@
 """``plantsolve`` command line: serve, worker, solve, migrate.
 
 ``plantsolve solve KIND INPUT [-o OUT]`` runs one job through the same submission checks and
-the same runner as the service. Exit codes: 0 success, 2 invalid input (the problem is
-printed), 1 solver failure (the report is written).
+the same runner as the service, in a store of its own (not the server's database, unless ``--store`` or
+``--data-dir`` names it); the result goes to OUT or standard output, artifacts to ``--artifacts DIR``
+(default next to OUT, or a temporary folder), warnings with their codes to standard error. Exit
+codes: 0 success, 2 invalid input (the problem is printed), 1 solver failure (the report is written).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import json
 import logging
 import os
 import sys
+import tempfile
 import uuid
 from pathlib import Path
 
@@ -78,53 +81,98 @@ class _InlineDispatcher:
     def stop(self) -> None: ...
 
 
+def _solve_settings(args: argparse.Namespace, scratch: Path):
+    """The settings of a CLI run: its own store in ``scratch`` (a temporary folder removed afterwards), so
+    that CLI runs neither land in the server's database nor on its dashboard, unless ``--store`` or
+    ``--data-dir`` names a database to use (the server's, to see the job there)."""
+    settings = _settings()
+    if args.store or args.data_dir:
+        updates: dict = {}
+        if args.data_dir:
+            updates["data_dir"] = Path(args.data_dir)
+        if args.store:
+            updates["database_url"] = args.store
+        return settings.model_copy(update=updates)
+    return settings.model_copy(update={"data_dir": scratch, "database_url": None, "artifact_dir": None})
+
+
+def _artifact_folder(args: argparse.Namespace) -> Path:
+    """``--artifacts``, else ``<OUT stem>_artifacts`` next to ``-o OUT``, else a new temporary folder (the
+    result went to standard output: nothing is written into the current directory unasked)."""
+    if args.artifacts:
+        return Path(args.artifacts)
+    if args.output:
+        out = Path(args.output)
+        return out.with_name(out.stem + "_artifacts")
+    return Path(tempfile.mkdtemp(prefix=f"plantsolve-{args.kind}-artifacts-"))
+
+
+def _print_warnings(report: dict | None) -> int:
+    warnings = (report or {}).get("warnings") or []
+    for w in warnings:
+        print(f"warning [{w.get('code', '?')}]: {w.get('message', '')}", file=sys.stderr)
+    return len(warnings)
+
+
 def cmd_solve(args: argparse.Namespace) -> int:
+    path = Path(args.input)
+    if not path.is_file():
+        print(f"plantsolve: no such file: {path}", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory(prefix="plantsolve-cli-") as scratch:
+        return _solve(args, path, _solve_settings(args, Path(scratch)))
+
+
+def _solve(args: argparse.Namespace, path: Path, settings) -> int:
     from plantsolve.app.jobs.service import JobService
     from plantsolve.app.problems import ProblemError
     from plantsolve.workers.context import ServiceContext, worker_name
     from plantsolve.workers.runner import run_job
 
-    path = Path(args.input)
-    if not path.is_file():
-        print(f"plantsolve: no such file: {path}", file=sys.stderr)
-        return 2
-    ctx = ServiceContext.create(_settings(), migrate=True)
-    dispatcher = _InlineDispatcher()
-    service = JobService(ctx, dispatcher)
-    content = path.read_bytes()
+    ctx = ServiceContext.create(settings, migrate=True)
     try:
-        if path.suffix.lower() == ".json" and args.options is None:
-            submitted = service.submit_json(args.kind, content, None)
-        else:
-            submitted = service.submit_upload(args.kind, path.name, content, args.options, None)
-    except ProblemError as error:
-        print(json.dumps(error.to_problem().model_dump(mode="json", exclude_none=True), indent=2), file=sys.stderr)
-        return 2
-    job_id = submitted.job.id
-    name = worker_name("cli")
-    while dispatcher.pending:
-        run_job(ctx, dispatcher.pending.pop(0), worker=name, requeue=dispatcher.enqueue)
-    job = ctx.repo.get(job_id)
-    if job.status == "succeeded":
-        _write(args.output, job.result)
-        if args.output:
-            folder = Path(args.artifacts) if args.artifacts else Path(args.output).with_suffix("").with_name(Path(args.output).stem + "_artifacts")
+        dispatcher = _InlineDispatcher()
+        service = JobService(ctx, dispatcher)
+        content = path.read_bytes()
+        try:
+            if path.suffix.lower() == ".json" and args.options is None:
+                submitted = service.submit_json(args.kind, content, None)
+            else:
+                submitted = service.submit_upload(args.kind, path.name, content, args.options, None)
+        except ProblemError as error:
+            print(json.dumps(error.to_problem().model_dump(mode="json", exclude_none=True), indent=2),
+                  file=sys.stderr)
+            return 2
+        job_id = submitted.job.id
+        name = worker_name("cli")
+        while dispatcher.pending:
+            run_job(ctx, dispatcher.pending.pop(0), worker=name, requeue=dispatcher.enqueue)
+        job = ctx.repo.get(job_id)
+        if job.status == "succeeded":
+            _write(args.output, job.result)
             artifacts = ctx.repo.artifacts(job_id)
             if artifacts:
+                folder = _artifact_folder(args)
                 folder.mkdir(parents=True, exist_ok=True)
                 for artifact in artifacts:
                     (folder / artifact.name).write_bytes(ctx.files.read(artifact.path))
                 print(f"artifacts: {', '.join(a.name for a in artifacts)} in {folder}", file=sys.stderr)
-        print(f"job {job_id} succeeded", file=sys.stderr)
-        return 0
-    _write(args.output, {"job": str(job_id), "status": job.status, "report": job.report}, stream=sys.stderr)
-    print(f"job {job_id} {job.status}: {(job.report or {}).get('message', '')}", file=sys.stderr)
-    return 1
+            report = job.report or (job.result or {}).get("report")
+            n = _print_warnings(report)
+            print(f"job {job_id} succeeded" + (f" with {n} warning(s) (above)" if n else ""), file=sys.stderr)
+            return 0
+        _write(args.output, {"job": str(job_id), "status": job.status, "report": job.report}, stream=sys.stderr)
+        _print_warnings(job.report)
+        print(f"job {job_id} {job.status}: {(job.report or {}).get('message', '')}", file=sys.stderr)
+        return 1
+    finally:
+        ctx.close()
 
 
 def _write(output: str | None, payload, stream=sys.stdout) -> None:
     text = json.dumps(payload, indent=2)
     if output:
+        Path(output).parent.mkdir(parents=True, exist_ok=True)
         Path(output).write_text(text + "\n")
     else:
         print(text, file=stream)
@@ -151,7 +199,15 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("input", help="request JSON, or a file the solver reads (PCF, PLY, CSV, ...)")
     solve.add_argument("-o", "--output", help="result JSON (default: standard output)")
     solve.add_argument("--options", help="JSON object of options for a file input")
-    solve.add_argument("--artifacts", help="folder for artifacts (default: <OUT stem>_artifacts next to OUT)")
+    solve.add_argument("--artifacts", metavar="DIR",
+                       help="folder for artifacts (default: <OUT stem>_artifacts next to OUT; without -o a new "
+                       "temporary folder, named on standard error)")
+    where = solve.add_mutually_exclusive_group()
+    where.add_argument("--store", metavar="URL",
+                       help="database to record the job in (e.g. the server's DATABASE_URL, to see it on the "
+                       "dashboard); default: a temporary store of this run only")
+    where.add_argument("--data-dir", metavar="DIR",
+                       help="DATA_DIR whose SQLite database and artifact folder record the job (the server's: 'var')")
     solve.set_defaults(func=cmd_solve)
 
     migrate = commands.add_parser("migrate", help="upgrade the database schema")

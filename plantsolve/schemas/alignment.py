@@ -201,6 +201,9 @@ class ConnectionResult(BaseModel):
 
 
 class AlignmentResult(BaseModel):
+    units: Units = Field(default="mm", description="Length unit of every length and position in this result (the "
+                         "request's units); angles are in degrees.")
+    angle_unit: Literal["deg"] = Field(default="deg", description="Unit of every angle in this result.")
     converged: bool
     iterations: int = Field(description="Iterations of the chosen method (direct: Gauss-Newton + refinement steps).")
     max_position_error: float = Field(description="Largest gap over connections that were not cut, units.")

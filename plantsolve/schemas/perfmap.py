@@ -5,15 +5,18 @@ Conventions
 - ``theta`` (inlet guide vane setting) and ``phi`` (diffuser setting) are setting values in
   whatever unit the rig uses (degrees, %, speed fraction…); the solver never mixes them with
   each other: the triangulation of the settings is done on range-normalised values.
-- ``flow`` (x), ``pressure`` (y) and ``efficiency`` (eta) are the measured, usually
-  dimensionless, values; results are given in the same units.
+- ``flow`` (x), ``pressure`` (y) and ``efficiency`` (eta) are the measured values in the request's
+  ``units`` (pint spellings: ``kg/s``, ``lbm/s``, ``m3/h``, ``bar``, ``kPa``, ``psi``, ``%``, ``-`` …; a CSV
+  or Excel header's unit, e.g. ``Wc [lbm/s]``, sets them). Results are in the same units, or in
+  ``options.result_units`` when given; efficiency is always a fraction. The result's ``units`` states
+  which unit each quantity is in.
 - A characteristic is parametrised by ``t = (x - x_min) / (x_max - x_min)`` in [0, 1], where
   ``x_min``/``x_max`` are the smallest/largest measured flow of the setting.
 """
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field, model_validator
 
@@ -64,6 +67,30 @@ class Position(StrictModel):
         min_length=3, max_length=10_000,
         json_schema_extra={"items": {"type": "number", "exclusiveMinimum": 0, "maximum": 1}},
         description="Measured efficiency eta per point (same length as flow), a fraction in (0, 1], e.g. 0.85.")
+
+
+UnitText = Annotated[str, Field(min_length=1, max_length=40)]
+
+
+class QuantityUnits(StrictModel):
+    """Units of the measured quantities (pint spellings as exporters write them). Unset: not stated."""
+
+    flow: UnitText | None = Field(
+        default=None, description="Flow unit: a mass flow (kg/s, lbm/s), a volume flow (m3/h, m^3/s, m³/s) or "
+        "dimensionless ('-', '1', '%').", examples=["kg/s"])
+    pressure: UnitText | None = Field(
+        default=None, description="Pressure unit: a pressure (Pa, kPa, bar, psi), a ratio ('-', '1'), a head (m) or "
+        "a specific work (J/kg).", examples=["bar"])
+    efficiency: UnitText | None = Field(
+        default=None, description="Efficiency unit: '-' or '1' (a fraction) or '%' (divided by 100 on input).",
+        examples=["%"])
+
+
+class ResultUnitsOption(StrictModel):
+    """Units to give flow and pressure in (converted from the request's units, which must then be stated)."""
+
+    flow: UnitText | None = Field(default=None, examples=["kg/s"])
+    pressure: UnitText | None = Field(default=None, examples=["kPa"])
 
 
 class PerfmapOptions(StrictModel):
@@ -118,6 +145,12 @@ class PerfmapOptions(StrictModel):
         default=0.0, ge=0.0, le=1.0,
         description="Surge margin for the 'surge_margin_line' (0: none): on each characteristic the point whose "
         "pressure is the surge pressure / (1 + margin), i.e. SM = p_surge / p - 1 at constant setting.")
+    result_units: ResultUnitsOption | None = Field(
+        default=None, description="Convert flow and/or pressure to these units (same dimensions as the request's "
+        "units) before solving: the result, its plots and its exports are in them.")
+    sheet: Annotated[str, Field(min_length=1, max_length=100)] | None = Field(
+        default=None, description="Excel uploads: the worksheet to read (default: the first sheet with a "
+        "recognisable header).")
     columns: dict[str, str] | None = Field(
         default=None,
         description="CSV uploads: header name -> role, for headers the parser does not know (roles: theta, phi, "
@@ -141,6 +174,9 @@ class PerfmapRequest(StrictModel):
         "the paper's maximum-efficiency map over the settings.")
     setting_units: list[str] | None = Field(
         default=None, description="Unit of each setting parameter (labels only), in the order of setting_names.")
+    units: QuantityUnits | None = Field(
+        default=None, description="Units of flow, pressure and efficiency as submitted (unset: not stated; "
+        "efficiency a fraction).")
     positions: list[Position] = Field(
         min_length=1, max_length=2000,
         description="One entry per setting; settings must be distinct.")
@@ -294,8 +330,20 @@ class PerformanceMap(BaseModel):
     reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.")
 
 
+class ResultUnits(BaseModel):
+    """Which unit each quantity of the result is in."""
+
+    flow: str | None = Field(description="Unit of every flow value (null: not stated in the request).")
+    pressure: str | None = Field(description="Unit of every pressure value ('1' for a ratio; null: not stated).")
+    efficiency: Literal["1"] = Field(default="1", description="Efficiencies are fractions (0.85, not 85 %).")
+    settings: list[str | None] = Field(default_factory=list, description="Unit of each setting parameter, in the "
+                                       "order of setting_names (null: not stated).")
+
+
 class PerfmapResult(BaseModel):
     report: Report
+    units: ResultUnits | None = Field(default=None, description="Units of flow, pressure, efficiency and settings "
+                                      "in this result (and its query answers).")
     setting_names: list[str] = Field(default_factory=lambda: ["theta", "phi"])
     setting_units: list[str] | None = None
     family: Family = Field(description="Pressure family shared by the settings (a setting it cannot fit "
@@ -362,3 +410,5 @@ class QueryAnswer(BaseModel):
 
 class PerfmapQueryResult(BaseModel):
     points: list[QueryAnswer]
+    units: ResultUnits | None = Field(default=None, description="Units of flow, pressure and settings (the map's; "
+                                      "duty points are read in them too).")

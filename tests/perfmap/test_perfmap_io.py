@@ -33,7 +33,7 @@ def _rejected_locs(body) -> list[tuple]:
 
 
 def test_contract_constants():
-    assert SPEC.upload_extensions == (".csv", ".json", ".py")
+    assert SPEC.upload_extensions == (".csv", ".xlsx", ".json", ".py")
     assert SPEC.soft_time_limit < SPEC.time_limit
     assert isinstance(__version__, str) and SPEC.version == __version__
 
@@ -187,10 +187,12 @@ def test_render_artifacts(synthetic_request, synthetic_result):
     req_before = synthetic_request.model_dump_json()
     arts = render_artifacts(synthetic_request, synthetic_result)
     names = [a.name for a in arts]
-    assert sorted(names) == sorted(f"{s}.{e}" for s in ("characteristics", "envelopes", "map")
-                                   for e in ("png", "svg"))
+    assert sorted(names) == sorted([f"{s}.{e}" for s in ("characteristics", "envelopes", "map")
+                                    for e in ("png", "svg")] + ["curves.csv", "map.csv"])
     for a in arts:
-        if a.name.endswith(".png"):
+        if a.name.endswith(".csv"):
+            assert a.media_type == "text/csv" and a.data.startswith(b"theta,phi,") or a.data.startswith(b"flow")
+        elif a.name.endswith(".png"):
             assert a.media_type == "image/png" and a.data[:8] == b"\x89PNG\r\n\x1a\n"
         else:
             assert a.media_type == "image/svg+xml" and b"<svg" in a.data[:2000]

@@ -57,7 +57,7 @@ def test_n3_query_and_plots(n3_request, n3_result):
     assert a.feasible and 0.0 <= a.theta <= 5.0 and 0.5 <= a.phi <= 1.1 and a.efficiency > 0.8
     assert not b.feasible and b.distance_to_map > 0.1
     arts = render_artifacts(n3_request, n3_result)
-    assert len(arts) == 6 and all(len(x.data) > 1000 for x in arts)
+    assert len(arts) == 8 and all(len(x.data) > 1000 for x in arts)  # 3 plots as PNG and SVG, curves.csv, map.csv
 
 
 def test_n3_all_models_and_minimax(n3_request):

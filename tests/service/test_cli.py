@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 from tests.conftest import run_plantsolve
@@ -49,3 +50,77 @@ def test_migrate_command(tmp_path):
     done = run(["migrate"], tmp_path)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "var" / "plantsolve.db").exists()
+
+
+def _files(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+
+
+def test_solve_writes_nothing_unasked_into_the_current_directory(tmp_path):
+    (tmp_path / "in.json").write_text(json.dumps({"values": [6.0, 8.0]}))
+    done = run(["solve", "test-compute", "in.json"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["norm"] == 10.0
+    assert _files(tmp_path) == {"in.json"}  # no var/, no database, no artifacts here
+    line = next(ln for ln in done.stderr.splitlines() if ln.startswith("artifacts: "))
+    folder = Path(line.rsplit(" in ", 1)[1])
+    try:
+        assert (folder / "values.txt").read_text() == "6.0\n8.0" and not folder.is_relative_to(tmp_path)
+    finally:
+        shutil.rmtree(folder)
+
+
+def test_solve_artifacts_go_where_asked(tmp_path):
+    (tmp_path / "in.json").write_text(json.dumps({"values": [3.0, 4.0]}))
+    done = run(["solve", "test-compute", "in.json", "-o", "res/out.json", "--artifacts", "plots"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "plots" / "values.txt").read_text() == "3.0\n4.0"
+    assert f"in {Path('plots')}" in done.stderr and not (tmp_path / "res" / "out_artifacts").exists()
+
+
+def test_warnings_are_printed_with_their_codes(tmp_path):
+    (tmp_path / "in.json").write_text(json.dumps({"values": [-3.0, 4.0]}))
+    done = run(["solve", "test-compute", "in.json", "-o", "out.json"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "warning [negative]: Some values are negative." in done.stderr
+    assert "succeeded with 1 warning(s)" in done.stderr
+    assert json.loads((tmp_path / "out.json").read_text())["norm"] == 5.0
+
+
+def test_cli_runs_stay_out_of_the_servers_database_unless_named(tmp_path):
+    """By default a CLI run has a store of its own; --data-dir (or --store) records it where the server
+    keeps its jobs, so that it shows there."""
+    import sqlite3
+
+    (tmp_path / "in.json").write_text(json.dumps({"values": [1.0, 2.0]}))
+    assert run(["migrate"], tmp_path).returncode == 0  # the server's database, at DATA_DIR=var
+    db = tmp_path / "var" / "plantsolve.db"
+
+    def jobs() -> int:
+        with sqlite3.connect(db) as con:
+            return con.execute("select count(*) from jobs").fetchone()[0]
+
+    assert run(["solve", "test-compute", "in.json", "-o", "a.json"], tmp_path).returncode == 0
+    assert jobs() == 0
+    done = run(["solve", "test-compute", "in.json", "-o", "b.json", "--data-dir", "var"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert jobs() == 1
+    done = run(["solve", "test-compute", "in.json", "-o", "c.json", "--store", f"sqlite:///{db}"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert jobs() == 2
+
+
+def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
+    """The issue's case: the N+3 map succeeds with warnings, and standard error lists every one."""
+    examples = Path(__file__).resolve().parents[2] / "examples" / "perfmap"
+    done = run_plantsolve(["solve", "perfmap", str(examples / "n3_fan_map.csv"), "-o", "map.json",
+                           "--options", '{"grid": [16, 16]}'], tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr
+    warnings = json.loads((tmp_path / "map.json").read_text())["report"]["warnings"]
+    printed = [ln for ln in done.stderr.splitlines() if ln.startswith("warning [")]
+    assert warnings and len(printed) == len(warnings)
+    assert [ln.split("]")[0][len("warning ["):] for ln in printed] == [w["code"] for w in warnings]
+    assert f"with {len(warnings)} warning(s)" in done.stderr
+    assert sorted(p.name for p in (tmp_path / "map_artifacts").iterdir()) == sorted(
+        ["characteristics.png", "characteristics.svg", "envelopes.png", "envelopes.svg", "map.png", "map.svg",
+         "curves.csv", "map.csv"])

@@ -89,3 +89,48 @@ def test_cli_solves_the_example(tmp_path):
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "map.json").read_text())
     assert len(result["map"]["flow"]) == 24 and (tmp_path / "map_artifacts" / "map.png").exists()
+
+
+def test_units_xlsx_upload_and_csv_exports_through_the_service(finished):
+    """The JSON example states its units and the result repeats them; an Excel rig table uploads like a
+    CSV, a wrong unit is a 422 naming the header, and map.csv / curves.csv download with units."""
+    import io
+
+    import openpyxl
+
+    client, job = finished
+    result = client.get(f"/v1/jobs/{job['id']}/result").json()
+    assert result["units"] == {"flow": "lbm/s", "pressure": "1", "efficiency": "1", "settings": ["deg", "-"]}
+    exported = client.get(f"/v1/jobs/{job['id']}/artifacts/curves.csv")
+    assert exported.status_code == 200 and exported.text.splitlines()[0] == (
+        "theta [deg],phi [-],t [-],flow [lbm/s],pressure [-],efficiency [-]")
+    grid = client.get(f"/v1/jobs/{job['id']}/artifacts/map.csv")
+    assert grid.text.splitlines()[0].startswith("flow [lbm/s],pressure [-],max efficiency [-]")
+
+    rows = [ln.split(",") for ln in (EXAMPLES / "n3_fan_map.csv").read_text().splitlines()[1:]]
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws.title = "Rig"
+    ws.append(["IGV [deg]", "Nc [-]", "Wc [lbm/s]", "PR", "eff"])
+    for r in rows:
+        ws.append([float(v) for v in r])
+    buf = io.BytesIO()
+    wb.save(buf)
+    xlsx = buf.getvalue()
+    kind = "application/vnd.openxmlformats-officedocument.spreadsheetml.sheet"
+    response = client.post("/v1/perfmap/jobs", files={"file": ("rig.xlsx", xlsx, kind)},
+                           data={"options": json.dumps({"map": False, "result_units": {"flow": "kg/s"}})})
+    assert response.status_code == 202, response.text
+    done = wait_for(client, response.json()["id"], timeout=180)
+    assert done["status"] == "succeeded", done
+    res = client.get(f"/v1/jobs/{done['id']}/result").json()
+    assert res["units"]["flow"] == "kg/s" and res["setting_names"] == ["IGV", "Nc"]
+    assert res["flow_range"][1] == pytest.approx(result["flow_range"][1] * 0.45359237, rel=1e-9)
+
+    ws["C1"] = "Wc [kg]"
+    buf = io.BytesIO()
+    wb.save(buf)
+    bad = client.post("/v1/perfmap/jobs", files={"file": ("rig.xlsx", buf.getvalue(), kind)})
+    assert bad.status_code == 422, bad.text
+    error = bad.json()["errors"][0]
+    assert error["loc"] == ["file", "header"] and "'Wc [kg]'" in error["msg"]

@@ -73,3 +73,11 @@ def tk():
     from types import SimpleNamespace
 
     return SimpleNamespace(SHAPES=SHAPES, scan=scan, request=request, same_tube=same_tube, lra_array=lra_array)
+
+
+@pytest.fixture(scope="module")
+def tk_module():
+    """The same helpers for module-scoped fixtures (a solve shared by several tests)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(SHAPES=SHAPES, scan=scan, request=request, same_tube=same_tube, lra_array=lra_array)

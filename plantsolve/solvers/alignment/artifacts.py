@@ -1,46 +1,81 @@
-"""Files made from a result: the aligned PCF and a plot of the gaps before and after."""
+"""Files made from a result: the aligned PCF and a plot of the gaps and angle errors before and after."""
 
 from __future__ import annotations
 
 import io
 
 import numpy as np
+from matplotlib.figure import Figure  # no pyplot: no global figure state
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.solvers.alignment.pcf_write import write_aligned_pcf
 from plantsolve.solvers.base import Artifact
 
 
-def _gap_plot(request: AlignmentRequest, result: AlignmentResult) -> bytes:
-    import matplotlib
+_FLOOR = 1e-16  # a closed connection (gap exactly 0) is drawn here on the log axis
 
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
 
+def _before(request: AlignmentRequest) -> tuple[np.ndarray, np.ndarray]:
+    """Gap (units) and angle error (degrees: between one port direction and the reversed other) of every
+    connection as submitted."""
     index = {c.id: c for c in request.components}
-    before = np.array([
-        np.linalg.norm(np.subtract(index[c.from_[0]].ports[c.from_[1]].position, index[c.to[0]].ports[c.to[1]].position))
-        for c in request.connections
-    ]) if request.connections else np.zeros(0)
+    gaps, angles = [], []
+    for c in request.connections:
+        a, b = index[c.from_[0]].ports[c.from_[1]], index[c.to[0]].ports[c.to[1]]
+        gaps.append(float(np.linalg.norm(np.subtract(a.position, b.position))))
+        u = np.asarray(a.direction, float) / np.linalg.norm(a.direction)
+        v = np.asarray(b.direction, float) / np.linalg.norm(b.direction)
+        angles.append(float(np.degrees(2.0 * np.arcsin(np.clip(np.linalg.norm(u + v) / 2.0, 0.0, 1.0)))))
+    return np.array(gaps), np.array(angles)
+
+
+def gaps_figure(request: AlignmentRequest, result: AlignmentResult) -> Figure:
+    """Gaps (top, length unit) and angle errors (bottom, degrees) of every connection before and after,
+    connections numbered in request order; cut connections marked; tolerances dashed."""
+    before, angle_before = _before(request)
     after = np.array([c.position_error for c in result.connections])
+    angle_after = np.array([c.angle_error for c in result.connections])
     cut = np.array([c.cut for c in result.connections], dtype=bool)
-    floor = 1e-16
-    fig = Figure(figsize=(8, 4.5), dpi=100)
-    ax = fig.add_subplot(1, 1, 1)
     x = np.arange(len(before))
-    ax.semilogy(x, np.maximum(before, floor), "o", ms=3, label="gap before")
-    ax.semilogy(x[~cut], np.maximum(after[~cut], floor), "s", ms=3, label="gap after (0 plotted at 1e-16)")
+    fig = Figure(figsize=(8.5, 6.6), layout="constrained")
+    ax, ax_ang = fig.subplots(2, 1, sharex=True)
+    details = result.report.details
+    rows = ((ax, before, after, f"gap [{request.units}]", details.get("position_tolerance"), "gap"),
+            (ax_ang, angle_before, angle_after, "angle error [deg]", details.get("angle_tolerance_deg"), "angle"))
+    for axis, b, a, label, tol, what in rows:
+        axis.semilogy(x, np.maximum(b, _FLOOR), "o", ms=3, color="C0")
+        axis.semilogy(x[~cut], np.maximum(a[~cut], _FLOOR), "s", ms=3, color="C1")
+        if np.any(cut):
+            axis.semilogy(x[cut], np.maximum(a[cut], _FLOOR), "x", color="red", ms=6)
+        if tol:
+            axis.axhline(tol, color="gray", ls="--", lw=1)
+        axis.set_ylabel(label)
+        axis.grid(True, which="major", axis="y", lw=0.3)
+    ax_ang.set_xlabel("connection [index in request order]")
+    ax_ang.xaxis.set_major_locator(MaxNLocator(integer=True, nbins=12))
+    if len(x):
+        ax_ang.set_xlim(-0.5, len(x) - 0.5)
+    ax.set_title(f"Alignment: {'converged' if result.converged else 'not converged'}, "
+                 f"{len(result.cut_connections)} cut; largest gap {result.max_position_error:.3g} {request.units}, "
+                 f"largest angle {result.max_angle_error:.3g} deg", fontsize=10)
+    handles = [Line2D([], [], marker="o", ls="", ms=3, color="C0", label="before"),
+               Line2D([], [], marker="s", ls="", ms=3, color="C1", label=f"after (closed: drawn at {_FLOOR:g})"),
+               Line2D([], [], ls="--", color="gray", label="tolerance")]
     if np.any(cut):
-        ax.semilogy(x[cut], np.maximum(after[cut], floor), "x", color="red", ms=6, label="cut")
-    tol = result.report.details.get("position_tolerance")
-    if tol:
-        ax.axhline(tol, color="gray", ls="--", lw=1, label="tolerance")
-    ax.set_xlabel("connection (request order)")
-    ax.set_ylabel(f"gap [{request.units}]")
-    ax.set_title(f"Alignment: {'converged' if result.converged else 'not converged'}, {len(result.cut_connections)} cut")
-    ax.legend(loc="best", fontsize=8)
+        handles.append(Line2D([], [], marker="x", ls="", ms=6, color="red", label="cut"))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8)
+    return fig
+
+
+def figures(request: AlignmentRequest, result: AlignmentResult) -> dict[str, Figure]:
+    return {"gaps": gaps_figure(request, result)}
+
+
+def _png(fig: Figure) -> bytes:
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format="png", dpi=100)
     return buf.getvalue()
 
 
@@ -54,5 +89,5 @@ def render_artifacts(request: AlignmentRequest, result: AlignmentResult) -> list
     charset = "utf-8" if enc == "utf-8-sig" else enc
     return [
         Artifact(name="aligned.pcf", media_type=f"text/plain; charset={charset}", data=data),
-        Artifact(name="gaps.png", media_type="image/png", data=_gap_plot(request, result)),
+        Artifact(name="gaps.png", media_type="image/png", data=_png(gaps_figure(request, result))),
     ]

@@ -65,8 +65,9 @@ def _variables(mask: np.ndarray, width: int) -> np.ndarray:
 
 
 def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: int = 30,
-                    budget: int = 10**9) -> tuple[np.ndarray, int]:
-    """Rotation of every component such that connected port directions are opposite."""
+                    budget: int = 10**9, step=None) -> tuple[np.ndarray, int]:
+    """Rotation of every component such that connected port directions are opposite; ``step(message)`` is
+    called at every Gauss-Newton step (progress and cancellation)."""
     n = model.n_comp
     free = ~model.fixed
     var = _variables(free, 3)
@@ -84,9 +85,11 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
     prev = np.inf
     use_cost = True
     best, first = (np.inf, q.copy()), np.inf
-    for _ in range(max_gn):
+    for it in range(max_gn):
         if steps >= budget:
             break
+        if step is not None:
+            step(f"rotation averaging, Gauss-Newton step {it + 1}")
         D = qrotate(q[model.port_comp], model.D0)
         ua, ub = D[a], D[b]
         r = ua + ub
@@ -193,7 +196,7 @@ class JointState:
 
 
 def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: float, max_gn: int = 25,
-                budget: int = 10**9) -> tuple[JointState, int]:
+                budget: int = 10**9, step=None) -> tuple[JointState, int]:
     """Gauss-Newton over all poses and pipe lengths with exact port constraints (see module doc)."""
     n = model.n_comp
     st = JointState(model, q)
@@ -229,7 +232,9 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     pf = np.flatnonzero(free & model.is_pipe)
     sv[var[pf] + 6] = model.lref
     best, first = (np.inf, None), np.inf
-    for _ in range(max_gn):
+    for it in range(max_gn):
+        if step is not None:
+            step(f"joint constrained Gauss-Newton, step {it + 1}")
         P, D = st.geometry()
         rp = (P[a] - P[b]).astype(float)
         rd = D[a] + D[b]
@@ -359,9 +364,10 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     return st, steps
 
 
-def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9) -> Pose:
-    """Both stages; ``budget`` caps the Gauss-Newton and refinement steps (the pose reached is returned)."""
-    q, k1 = solve_rotations(model, active, stiffness, budget=budget)
-    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0))
+def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None) -> Pose:
+    """Both stages; ``budget`` caps the Gauss-Newton and refinement steps (the pose reached is returned);
+    ``step(message)`` at every step of either."""
+    q, k1 = solve_rotations(model, active, stiffness, budget=budget, step=step)
+    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step)
     P, D = st.geometry()
     return Pose(q=st.q, P=P, D=D, iterations=k1 + k2)

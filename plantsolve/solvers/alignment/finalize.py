@@ -203,7 +203,8 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
         warnings.append(
             Diagnostic(
                 code="not_converged",
-                message=f"{len(above)} connection(s) remain above tolerance: {out.stop_reason}.",
+                message=f"{len(above)} connection(s) remain above tolerance ({model.pos_tol:.3g} {request.units}, "
+                f"{np.degrees(np.min(model.ang_tol, initial=0.0)):.3g} deg): {out.stop_reason}.",
                 details={
                     "connections": [
                         {"index": int(k), "from": list(request.connections[k].from_), "to": list(request.connections[k].to),
@@ -236,13 +237,15 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
         **out.extra,
     }
     status = "ok" if converged and not cut_idx else "warning"
+    unit = request.units
     message = (
-        f"Converged ({out.stop_reason}); largest gap {max_gap:.3g}, largest angle {np.degrees(max_ang):.3g} deg."
+        f"Converged ({out.stop_reason}); largest gap {max_gap:.3g} {unit}, largest angle {np.degrees(max_ang):.3g} deg."
         if converged
-        else f"Not converged ({out.stop_reason}); largest gap {max_gap:.3g}, largest angle {np.degrees(max_ang):.3g} deg."
+        else f"Not converged ({out.stop_reason}); largest gap {max_gap:.3g} {unit}, "
+        f"largest angle {np.degrees(max_ang):.3g} deg."
     )
     return AlignmentResult(
-        converged=converged, iterations=int(out.iterations), max_position_error=max_gap,
+        units=unit, converged=converged, iterations=int(out.iterations), max_position_error=max_gap,
         max_angle_error=float(np.degrees(max_ang)), components=comps, connections=conns,
         cut_connections=cut_idx, report=Report(status=status, message=message, warnings=warnings, details=details),
     )

@@ -38,6 +38,7 @@ from plantsolve.solvers.alignment.dualquat import (
 from plantsolve.solvers.alignment.finalize import Outcome
 from plantsolve.solvers.alignment.model import Model, collinear_fittings, connection_errors
 from plantsolve.solvers.base import Progress
+from plantsolve.solvers.stages import Stages
 
 FIXED_WEIGHT = 1e9
 # The alternating means converge linearly at best; when the worst error has not dropped by 1 % in
@@ -310,6 +311,8 @@ def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.nd
     errors: dict[int, tuple[float, float]] = {}
     total = 0
     budget = options.max_iterations
+    stages = Stages(progress)
+    stages.stage(0.7, 0.95, "dual-quaternion iteration")
     shrink = 1.0
     restarts = 0
     overall_best = None
@@ -344,8 +347,8 @@ def solve_dual_quaternion(model: Model, options: AlignmentOptions, active: np.nd
                 break
             if total + it >= budget:
                 break
-            if it % 25 == 0:
-                progress(0.7 + 0.25 * (total + it) / budget, f"dual-quaternion iteration {total + it}")
+            if it % 25 == 0:  # creeps toward the stage's end: the iteration count is not known in advance
+                stages.tick(f"dual-quaternion iteration {total + it}")
             net.step_rows(P, D, lim_pipe)
             P, D = net.ports()
             net.step_clusters(P, D, lim_fit)

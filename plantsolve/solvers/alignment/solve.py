@@ -17,6 +17,7 @@ from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_toler
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
 from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.base import InputRejected, Progress, SolverError, no_progress
+from plantsolve.solvers.stages import Stages
 
 
 def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progress) -> Outcome:
@@ -26,9 +27,12 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     reasons: dict[int, str] = {}
     errors: dict[int, tuple[float, float]] = {}
     iterations = 0
+    st = Stages(progress)
+    st.stage(0.1, 0.7, "direct solve")
     while True:
-        progress(0.1 + 0.6 * min(len(reasons), 10) / 10, f"direct solve ({len(reasons)} cuts so far)")
-        pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations)
+        cuts = f" ({len(reasons)} cut(s) so far)" if reasons else ""
+        pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations,
+                            step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
         iterations += pose.iterations
         if iterations >= opts.max_iterations:
             reason = f"iteration cap ({opts.max_iterations}) reached"
@@ -135,7 +139,7 @@ def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = froze
 def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
     """Align the pipe system so that every connection closes; see the package docstring."""
     check_input(request)
-    progress(0.0, "building model")
+    progress(0.0, f"building the model of {len(request.components)} components")
     anchors = anchor_components(request, _nozzles(request)) if request.options.anchor else []
     work = request
     if anchors:
@@ -143,6 +147,7 @@ def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Alignm
             update={"fixed_components": list(request.options.fixed_components) + [x["id"] for x in anchors]})
         work = request.model_copy(update={"options": opts})
     model = build_model(work)
+    progress(0.05, f"model built: {model.n_conn} connections")
     if model.n_comp == 0:
         raise SolverError("model", "no components")
     gap0, ang0 = connection_errors(model, model.P0, model.D0)
@@ -156,6 +161,7 @@ def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Alignm
         conflict = _direct_with_cuts(model, work, progress)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
         raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
+    progress(0.7, "direct solve done" + ("" if request.options.method == "direct" else "; dual-quaternion iteration"))
     if request.options.method == "direct":
         out = conflict
     else:
@@ -170,6 +176,7 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
             gap0: np.ndarray, ang0: np.ndarray) -> AlignmentResult:
     progress(0.95, "building result")
     result = build_result(request, model, out, request.options.method)
+    progress(0.97, "report")
     details = result.report.details
     details["tolerance_profile"], details["tolerance_reason"] = tolerance_source(request)
     closed0 = (gap0 <= model.pos_tol) & (ang0 <= model.ang_tol)
@@ -210,6 +217,7 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
                 details[code] = extra.get("items", extra) if code == "pcf_zero_length_items" else extra
             else:
                 _warn(result, code, message, extra)
+    progress(1.0, "done")
     return result
 
 

@@ -1,17 +1,23 @@
-"""Plots of a perfmap result (PNG and SVG): characteristics, envelopes, performance map."""
+"""Plots of a perfmap result (PNG and SVG): characteristics, envelopes, performance map; and its exports:
+``map.csv`` (the max-efficiency grid) and ``curves.csv`` (the fitted characteristics), units in every
+axis label and column header (the result's ``units``)."""
 
 from __future__ import annotations
 
+import csv
 import io
 import math
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator  # no pyplot: no global figure state; PNG/SVG via Agg/SVG
+from scipy import ndimage
 
 from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
 from plantsolve.solvers.base import Artifact
 from plantsolve.solvers.perfmap.families import curveset_from_fits
+from plantsolve.solvers.perfmap.performance_map import distance_to_region
 
 _SMALL_MULTIPLES_MAX = 36
 _MEDIA = {"png": "image/png", "svg": "image/svg+xml"}
@@ -38,10 +44,30 @@ def _values(s) -> tuple[float, ...]:
 SYMBOLS = {"theta": "θ", "phi": "φ"}
 
 
+NOT_STATED = "unit not stated"
+
+
+def _unit_text(unit: str | None) -> str:
+    return NOT_STATED if not unit else "-" if unit in ("1", "-") else unit
+
+
+def _units(result: PerfmapResult) -> dict:
+    u = result.units
+    return {"flow": u.flow if u else None, "pressure": u.pressure if u else None}
+
+
+def axis_label(result: PerfmapResult, quantity: str, text: str | None = None) -> str:
+    """'flow [kg/s]', 'pressure [-]' (a ratio), 'efficiency η [-]'; '[unit not stated]' where the request
+    gave none."""
+    if quantity == "efficiency":
+        return f"{text or 'efficiency η'} [-]"
+    return f"{text or quantity} [{_unit_text(_units(result)[quantity])}]"
+
+
 def _names(result: PerfmapResult) -> list[str]:
     """Axis labels of the setting parameters: name (θ/φ for the paper's) and unit."""
     units = result.setting_units or [""] * len(result.setting_names)
-    return [SYMBOLS.get(n, n) + (f" [{u}]" if u else "") for n, u in zip(result.setting_names, units)]
+    return [SYMBOLS.get(n, n) + f" [{_unit_text(u)}]" for n, u in zip(result.setting_names, units)]
 
 
 def _label(result: PerfmapResult, values) -> str:
@@ -55,35 +81,40 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
     X, Y, E = curves.sample(t)
     meas = _measured(request)
     n = len(result.settings)
+    xlabel, ylabel, elabel = axis_label(result, "flow"), axis_label(result, "pressure"), axis_label(result, "efficiency")
     if n <= _SMALL_MULTIPLES_MAX:
         cols = math.ceil(math.sqrt(n))
         rows = math.ceil(n / cols)
         # A fixed grid layout: constrained layout with ~2n axes (twin y axes) is very slow.
-        fig = Figure(figsize=(3.4 * cols, 2.7 * rows + 0.6))
+        height = 2.9 * rows + 1.1
+        fig = Figure(figsize=(3.9 * cols + 0.4, height))
         axes = fig.subplots(rows, cols, squeeze=False).ravel()
-        fig.subplots_adjust(left=0.05, right=0.95, bottom=0.05, top=1 - 0.7 / (2.7 * rows + 0.6),
-                            hspace=0.45, wspace=0.45)
+        fig.subplots_adjust(left=0.09 / cols ** 0.5, right=1 - 0.09 / cols ** 0.5, bottom=0.7 / height,
+                            top=1 - 0.8 / height, hspace=0.62, wspace=0.62)
         for k, s in enumerate(result.settings):
             ax = axes[k]
             p = meas.get(_values(s))
-            ax.plot(X[k], Y[k], "C0-", lw=1.5)
+            ax.plot(X[k], Y[k], "C0-", lw=1.5, label="pressure (fit)")
             ax2 = ax.twinx()
-            ax2.plot(X[k], E[k], "C1--", lw=1.2)
+            ax2.plot(X[k], E[k], "C1--", lw=1.2, label="efficiency (fit)")
             if p is not None:
-                ax.plot(p.flow, p.pressure, "C0o", ms=3.5)
-                ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5)
-            ax.set_title(f"{_label(result, _values(s))}  (y {100 * s.pressure_max_rel_error:.1f}%,"
+                ax.plot(p.flow, p.pressure, "C0o", ms=3.5, label="pressure (measured)")
+                ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5, label="efficiency (measured)")
+            ax.set_title(f"{_label(result, _values(s))}  (p {100 * s.pressure_max_rel_error:.1f}%,"
                          f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
+            ax.set_xlabel(xlabel, fontsize=7)
+            ax.set_ylabel(ylabel, fontsize=7, color="C0")
+            ax2.set_ylabel(elabel, fontsize=7, color="C1")
             ax.tick_params(labelsize=7)
             ax2.tick_params(labelsize=7, colors="C1")
         for ax in axes[n:]:
             ax.set_visible(False)
+        fig.legend(handles=_legend_handles(), loc="lower center", ncol=4, fontsize=8, frameon=False)
         eff = ", ".join(sorted({s.efficiency_family for s in result.settings}))
-        fig.suptitle(f"Characteristics (pressure {result.family}, efficiency {eff}, "
-                     f"{result.fit}): pressure (blue, left) "
-                     "and efficiency (orange, right) vs flow; markers = measured")
+        fig.suptitle(f"Characteristics (pressure {result.family}, efficiency {eff}, {result.fit}); "
+                     "titles: setting and max relative error")
         return fig
-    fig = Figure(figsize=(12, 5), layout="constrained")
+    fig = Figure(figsize=(12, 5.4), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     for k, s in enumerate(result.settings):
         col = f"C{k % 10}"
@@ -93,15 +124,29 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
         if p is not None:
             ax1.plot(p.flow, p.pressure, "o", color=col, ms=2.5)
             ax2.plot(p.flow, p.efficiency, "o", color=col, ms=2.5)
-    ax1.set(xlabel="flow", ylabel="pressure", title="Characteristics")
-    ax2.set(xlabel="flow", ylabel="efficiency", title="Efficiency")
+    ax1.set(xlabel=xlabel, ylabel=ylabel, title=f"Characteristics ({n} settings)")
+    ax2.set(xlabel=xlabel, ylabel=elabel, title="Efficiency")
+    fig.legend(handles=[_line("k-", "fitted curve"), _line("ko", "measured", ms=3)], loc="outside lower center",
+               ncol=2, fontsize=8)
     return fig
+
+
+def _line(style: str, label: str, **kw):
+    """A legend entry without data (matplotlib.lines.Line2D through a throwaway figure's axes)."""
+    if not style:
+        return Line2D([], [], label=label, **kw)
+    return Figure().subplots().plot([], [], style, label=label, **kw)[0]
+
+
+def _legend_handles():
+    return [_line("C0-", "pressure (fit, left axis)"), _line("C0o", "pressure (measured)", ms=3.5),
+            _line("C1--", "efficiency (fit, right axis)"), _line("C1^", "efficiency (measured)", ms=3.5)]
 
 
 def _envelopes(result: PerfmapResult) -> Figure:
     curves = curveset_from_fits(result.settings)
     X, Y, _ = curves.sample(np.linspace(0.0, 1.0, 101))
-    fig = Figure(figsize=(12, 5), layout="constrained")
+    fig = Figure(figsize=(12, 5.8), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     names = _names(result)
     fixed_names = result.setting_names[:-1]
@@ -113,16 +158,18 @@ def _envelopes(result: PerfmapResult) -> Figure:
                 ax1.plot(X[k], Y[k], "-", color=col, lw=0.7, alpha=0.6)
         tag = ", ".join(f"{SYMBOLS.get(n, n)}={v:g}" for n, v in zip(fixed_names, fixed)) or "max-curve"
         ax1.plot(env.flow, env.pressure, "-", color=col, lw=2.2, label=tag)
-        ax2.plot(env.flow, env.efficiency, "-", color=col, lw=1.8, label=f"η, {tag}")
+        ax2.plot(env.flow, env.efficiency, "-", color=col, lw=1.8)
     per = f" per {', '.join(names[:-1])}" if fixed_names else ""
-    ax1.set(xlabel="flow", ylabel="pressure", title=f"Max-curves (envelopes){per} over {names[-1]}")
-    ax1.legend(fontsize=8)
-    ax2.set(xlabel="flow", ylabel="efficiency along the max-curve")
+    ax1.set(xlabel=axis_label(result, "flow"), ylabel=axis_label(result, "pressure"),
+            title=f"Max-curves (envelopes){per} over {names[-1]}")
+    ax2.set(xlabel=axis_label(result, "flow"), ylabel=axis_label(result, "efficiency", "efficiency along the max-curve"))
     ax3 = ax2.twinx()
     for j, env in enumerate(result.envelopes):
         ax3.plot(env.flow, env.phi, ":", color=f"C{j % 10}", lw=1.5)
     ax3.set_ylabel(f"{names[-1]} on the max-curve (dotted)")
-    ax2.legend(fontsize=8, loc="lower center")
+    handles = [h for h in ax1.get_lines() if not h.get_label().startswith("_")]
+    handles += [_line("k-", "thin: characteristics", lw=0.7), _line("k:", f"dotted: {names[-1]} (right axis)")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 6), fontsize=8)
     if not result.envelopes:
         ax1.text(0.5, 0.5, "no envelopes", transform=ax1.transAxes, ha="center")
     return fig
@@ -131,19 +178,92 @@ def _envelopes(result: PerfmapResult) -> Figure:
 # contour colour and style of the optimal setting parameters (1, 2 or 3 of them)
 CONTOUR_STYLES = ([("orange", "-")], [("white", "--"), ("orange", "-")],
                   [("white", "--"), ("pink", ":"), ("orange", "-")])
+_REFINE = 4  # contour grids are refined this many times per map cell
+_BOUNDARY_NODES = 160  # nodes per axis of the distance field the reachable boundary is drawn from
+
+
+def setting_levels(values: np.ndarray):
+    """Contour levels of an optimal setting: with few distinct measured values (an IGV at 0 and 5 deg) the
+    midpoints between them — where the optimum passes from one measured setting's side to the next —
+    since levels in between would trace the interpolation's detail; otherwise 8 levels."""
+    distinct = np.unique(values)
+    if 2 <= len(distinct) <= 4:
+        return ((distinct[:-1] + distinct[1:]) / 2).tolist()
+    return 8
+
+
+def smooth_on_finer_grid(gx: np.ndarray, gy: np.ndarray, z: np.ndarray, sigma: float = 0.8):
+    """A map field (NaN where unreachable) smoothed by a normalised Gaussian convolution (NaNs neither
+    spread nor pull values to zero) and resampled on a grid ``_REFINE`` times finer: contours of an
+    optimum that switches between neighbouring triangles from node to node then follow its trend instead
+    of the grid's cells. Nodes of the finer grid whose nearest map node is unreachable stay NaN."""
+    ok = np.isfinite(z)
+    if sigma > 0:
+        w = ndimage.gaussian_filter(ok.astype(float), sigma, mode="nearest")
+        v = ndimage.gaussian_filter(np.where(ok, z, 0.0), sigma, mode="nearest")
+        z = np.where(ok, v / np.maximum(w, 1e-12), np.nan)
+    fx = np.linspace(gx[0], gx[-1], (len(gx) - 1) * _REFINE + 1)
+    fy = np.linspace(gy[0], gy[-1], (len(gy) - 1) * _REFINE + 1)
+    fine = resample(gx, gy, z, fx, fy)
+    i = np.rint(np.interp(fx, gx, np.arange(len(gx)))).astype(int)
+    j = np.rint(np.interp(fy, gy, np.arange(len(gy)))).astype(int)
+    return fx, fy, np.where(ok[np.ix_(j, i)], fine, np.nan)
+
+
+def resample(gx: np.ndarray, gy: np.ndarray, z: np.ndarray, fx: np.ndarray, fy: np.ndarray) -> np.ndarray:
+    """z (NaN where unreachable) linearly interpolated at the nodes (fx x fy); NaNs first take their nearest
+    reachable node's value, so that the edge of the region keeps its colour up to the smooth boundary."""
+    ok = np.isfinite(z)
+    if not ok.any():
+        return np.full((len(fy), len(fx)), np.nan)
+    idx = ndimage.distance_transform_edt(~ok, return_distances=False, return_indices=True)
+    filled = z[tuple(idx)]
+    ci = np.interp(fx, gx, np.arange(len(gx)))
+    cj = np.interp(fy, gy, np.arange(len(gy)))
+    J, I = np.meshgrid(cj, ci, indexing="ij")
+    return ndimage.map_coordinates(filled, [J, I], order=1, mode="nearest")
+
+
+def reachable_boundary(result: PerfmapResult):
+    """(fx, fy, d): the distance (range-normalised) from a fine grid of nodes to the reachable region
+    (0 inside), whose contour at a small level is the region's boundary drawn smoothly — the map's own
+    grid only says reachable or not per node, and its 0/1 contour is a staircase. The distance is computed
+    in the band of fine nodes within two map cells of the map's boundary; elsewhere the map's node decides."""
+    curves = curveset_from_fits(result.settings)
+    lo_x, hi_x = result.flow_range
+    lo_y, hi_y = result.pressure_range
+    fx = np.linspace(lo_x, hi_x, _BOUNDARY_NODES)
+    fy = np.linspace(lo_y, hi_y, _BOUNDARY_NODES)
+    FX, FY = np.meshgrid(fx, fy)
+    m = result.map
+    gx, gy = np.array(m.flow), np.array(m.pressure)
+    ok = np.isfinite(np.array(m.efficiency, dtype=float))
+    edge = ok ^ ndimage.binary_erosion(ok, border_value=0) | ~ok ^ ndimage.binary_erosion(~ok, border_value=0)
+    band = ndimage.binary_dilation(edge, iterations=2)
+    i = np.clip(np.rint(np.interp(fx, gx, np.arange(len(gx)))).astype(int), 0, len(gx) - 1)
+    j = np.clip(np.rint(np.interp(fy, gy, np.arange(len(gy)))).astype(int), 0, len(gy) - 1)
+    J, I = np.meshgrid(j, i, indexing="ij")
+    d = np.where(ok[J, I], 0.0, 1.0)
+    near = band[J, I]
+    t = np.linspace(0.0, 1.0, m.t_samples)
+    tri = np.array(result.triangles, dtype=int).reshape(-1, 3)
+    d[near] = distance_to_region(curves, tri, t, FX[near], FY[near], (lo_x, hi_x, lo_y, hi_y))
+    return fx, fy, d
 
 
 def _map(result: PerfmapResult) -> Figure:
-    fig = Figure(figsize=(12, 7.5), layout="constrained")
+    fig = Figure(figsize=(12, 8.2), layout="constrained")
     ax, ax_tri = fig.subplots(1, 2, width_ratios=[4.2, 1])
     _triangulation(ax_tri, result)
     m = result.map
     curves = curveset_from_fits(result.settings)
     X, Y, _ = curves.sample(np.linspace(0.0, 1.0, 101))
+    xlabel, ylabel = axis_label(result, "flow"), axis_label(result, "pressure")
     if m is None:
         for k in range(len(result.settings)):
             ax.plot(X[k], Y[k], "k-", lw=0.8)
-        ax.set(xlabel="flow", ylabel="pressure", title="Characteristics (no map requested)")
+        ax.set(xlabel=xlabel, ylabel=ylabel, title="Characteristics (no map requested)")
+        fig.legend(handles=[_line("k-", "setting characteristics")], loc="outside lower center", fontsize=8)
         return fig
     gx, gy = np.array(m.flow), np.array(m.pressure)
     eta = np.array(m.efficiency, dtype=float)
@@ -154,23 +274,31 @@ def _map(result: PerfmapResult) -> Figure:
     if finite.sum() >= 4:
         lo, hi = np.nanmin(eta), np.nanmax(eta)
         levels = MaxNLocator(14).tick_values(lo, hi) if hi > lo else [lo, lo + 1e-9]
-        cf = ax.contourf(gx, gy, np.ma.masked_invalid(eta), levels=levels, cmap="viridis")
-        fig.colorbar(cf, ax=ax, label="max efficiency η")
-        for grid, name, (colour, style) in zip(grids, names, CONTOUR_STYLES[len(grids) - 1]):
-            if np.nanmax(grid) > np.nanmin(grid):
-                cs = ax.contour(gx, gy, np.ma.masked_invalid(grid), levels=8, colors=colour, linewidths=1.0,
-                                linestyles=style)
+        bx, by, d = reachable_boundary(result)
+        h = max((bx[1] - bx[0]) / (bx[-1] - bx[0]), (by[1] - by[0]) / (by[-1] - by[0]))
+        # filled on the boundary's fine grid, so that the colours end at the smooth boundary too
+        fine_eta = np.ma.masked_where(d > 0.25 * h, resample(gx, gy, eta, bx, by))
+        cf = ax.contourf(bx, by, fine_eta, levels=levels, cmap="viridis")
+        fig.colorbar(cf, ax=ax, label=axis_label(result, "efficiency", "max efficiency η"))
+        measured = np.array([_values(s) for s in result.settings], dtype=float).reshape(len(result.settings), -1)
+        for k, (grid, name, (colour, style)) in enumerate(zip(grids, names, CONTOUR_STYLES[len(grids) - 1])):
+            if np.nanmax(grid) > np.nanmin(grid) and len(gx) > 2 and len(gy) > 2:
+                fx, fy, fine = smooth_on_finer_grid(gx, gy, grid, sigma=1.2)
+                cs = ax.contour(fx, fy, np.ma.masked_invalid(fine), levels=setting_levels(measured[:, k]),
+                                colors=colour, linewidths=1.0, linestyles=style)
                 ax.clabel(cs, fontsize=7, fmt=f"{name.split(' [')[0]}=%.3g")
-        ax.contour(gx, gy, finite.astype(float), levels=[0.5], colors="red", linewidths=1.5)
+        ax.contour(bx, by, d, levels=[0.25 * h], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
     _limit_lines(ax, result)
-    ax.plot([], [], "k-", lw=0.6, label="setting characteristics")
-    for name, (colour, style) in zip(names, CONTOUR_STYLES[len(names) - 1]):
-        ax.plot([], [], color=colour, linestyle=style, label=f"optimal {name}")
-    ax.plot([], [], "r-", label="reachable boundary")
-    ax.legend(fontsize=8, loc="upper right", facecolor="lightgrey")
-    ax.set(xlabel="flow", ylabel="pressure",
+    handles = [_line("k-", "setting characteristics", lw=0.6)]
+    handles += [_line("", f"optimal {name}", color=colour, linestyle=style)
+                for name, (colour, style) in zip(names, CONTOUR_STYLES[len(names) - 1])]
+    handles += [_line("r-", "reachable boundary")]
+    handles += [h for h in ax.get_lines() if h.get_label() in ("surge line", "surge margin line", "choke line")]
+    # below the axes: a legend inside would cover the reachable region it explains
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, facecolor="lightgrey")
+    ax.set(xlabel=xlabel, ylabel=ylabel,
            title=f"Performance map ({m.method}, {result.family}): "
            f"max efficiency and optimal ({', '.join(n.split(' [')[0] for n in names)})")
     return fig
@@ -181,7 +309,7 @@ def _limit_lines(ax, result: PerfmapResult) -> None:
     styles = (("surge_line", "m-", 2.0, "surge line"), ("surge_margin_line", "m:", 1.5, "surge margin line"),
               ("choke_line", "c-", 2.0, "choke line"))
     for name, style, width, label in styles:
-        points = getattr(result, name) or []
+        points = [p for p in (getattr(result, name) or []) if p is not None]
         key = (lambda p: tuple(p.setting)) if points and points[0].setting else (lambda p: (p.theta, p.phi))
         for j, group in enumerate(sorted({key(p)[:-1] for p in points})):
             line = sorted((p for p in points if key(p)[:-1] == group), key=lambda p: key(p)[-1])
@@ -198,7 +326,7 @@ def _triangulation(ax, result: PerfmapResult) -> None:
     names = _names(result)
     if values.shape[1] == 1:  # one parameter: the settings along it
         ax.plot(np.zeros(len(values)), values[:, 0], "k-o", ms=3, lw=0.7)
-        ax.set(xticks=[], ylabel=names[0], title="settings")
+        ax.set(xticks=[], xlabel="(one setting parameter) [-]", ylabel=names[0], title="settings")
     else:
         th, ph = values[:, 0], values[:, 1]
         if result.triangles and values.shape[1] == 2 and all(j != k for _, j, k in result.triangles):
@@ -212,10 +340,65 @@ def _triangulation(ax, result: PerfmapResult) -> None:
     ax.set_box_aspect(1.6)
 
 
+def _csv_header(result: PerfmapResult, quantity: str) -> str:
+    """A column header the upload parser reads back: 'flow [kg/s]', 'efficiency [-]'; no brackets for a unit
+    the request did not state."""
+    if quantity == "efficiency":
+        return "efficiency [-]"
+    unit = _units(result)[quantity]
+    return quantity if not unit else f"{quantity} [{'-' if unit == '1' else unit}]"
+
+
+def _setting_headers(result: PerfmapResult) -> list[str]:
+    units = result.setting_units or [""] * len(result.setting_names)
+    return [n + (f" [{u}]" if u else "") for n, u in zip(result.setting_names, units)]
+
+
+def _to_csv(header: list[str], rows) -> bytes:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for row in rows:
+        w.writerow(["" if v is None else repr(float(v)) if isinstance(v, (float, np.floating)) else v for v in row])
+    return buf.getvalue().encode()
+
+
+def curves_csv(result: PerfmapResult, samples: int = 51) -> bytes:
+    """The fitted characteristics (speed lines) sampled evenly in flow: one row per point, the setting
+    values first — the layout of a rig table, so the file reads back as an upload."""
+    curves = curveset_from_fits(result.settings)
+    t = np.linspace(0.0, 1.0, samples)
+    X, Y, E = curves.sample(t)
+    header = _setting_headers(result) + ["t [-]", _csv_header(result, "flow"), _csv_header(result, "pressure"),
+                                         _csv_header(result, "efficiency")]
+    rows = ([*map(float, _values(s)), float(t[j]), float(X[k, j]), float(Y[k, j]), float(E[k, j])]
+            for k, s in enumerate(result.settings) for j in range(samples))
+    return _to_csv(header, rows)
+
+
+def map_csv(result: PerfmapResult) -> bytes:
+    """The max-efficiency map, one row per grid node (flow fastest), empty cells where no setting reaches."""
+    m = result.map
+    header = [_csv_header(result, "flow"), _csv_header(result, "pressure"), "max efficiency [-]"]
+    header += [f"optimal {h}" for h in _setting_headers(result)]
+    grids = m.settings or [m.theta, m.phi]
+    rows = ([m.flow[i], m.pressure[j], m.efficiency[j][i], *(g[j][i] for g in grids)]
+            for j in range(len(m.pressure)) for i in range(len(m.flow)))
+    return _to_csv(header, rows)
+
+
+def figures(request: PerfmapRequest, result: PerfmapResult) -> dict[str, Figure]:
+    """Every plot of the result by artifact stem (tests read their axes)."""
+    return {"characteristics": _characteristics(request, result), "envelopes": _envelopes(result),
+            "map": _map(result)}
+
+
 def render_artifacts(request: PerfmapRequest, result: PerfmapResult) -> list[Artifact]:
-    """characteristics, envelopes and map, each as .png and .svg."""
+    """characteristics, envelopes and map, each as .png and .svg; curves.csv and (with a map) map.csv."""
     out = []
-    for stem, fig in (("characteristics", _characteristics(request, result)),
-                      ("envelopes", _envelopes(result)), ("map", _map(result))):
+    for stem, fig in figures(request, result).items():
         out += _save(fig, stem)
+    out.append(Artifact(name="curves.csv", media_type="text/csv", data=curves_csv(result)))
+    if result.map is not None:
+        out.append(Artifact(name="map.csv", media_type="text/csv", data=map_csv(result)))
     return out

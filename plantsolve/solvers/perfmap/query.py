@@ -60,7 +60,7 @@ def query(result: PerfmapResult, q: PerfmapQueryRequest) -> PerfmapQueryResult:
                     distance_to_map=float(dist[k]))
         for k in range(len(X))
     ]
-    return PerfmapQueryResult(points=answers)
+    return PerfmapQueryResult(points=answers, units=result.units)
 
 
 def characteristic_at(result: PerfmapResult, theta: float, phi: float):

@@ -43,6 +43,7 @@ from plantsolve.solvers.perfmap.fitting import (
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
+from plantsolve.solvers.perfmap.units import to_internal
 from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
 
 
@@ -324,14 +325,15 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
     return surge, choke, line
 
 
-def envelopes(curves: CurveSet, values: np.ndarray, opts) -> list[Envelope]:
+def envelopes(curves: CurveSet, values: np.ndarray, opts, progress: Progress = no_progress) -> list[Envelope]:
     """§3, "The Envelope": for each inlet angle θ, the upper envelope of its characteristics
     interpolated over the diffuser positions φ, with φ(x) and η along it. In general: for each value of
     the other setting parameters, over the last one (one parameter: one envelope over it)."""
     envs = []
     last = values[:, -1]
     groups = sorted({tuple(v) for v in values[:, :-1].tolist()})
-    for fixed in groups:
+    for j, fixed in enumerate(groups):
+        progress(0.61 + 0.01 * j / len(groups), f"envelope {j + 1} of {len(groups)}")
         members = [i for i in range(len(values)) if tuple(values[i, :-1].tolist()) == fixed]
         e = envelope(curves, members, last, opts.envelope_curves, opts.envelope_points)
         envs.append(Envelope(fixed=list(fixed), theta=fixed[0] if len(fixed) == 1 else None,
@@ -397,21 +399,24 @@ def performance_map(curves: CurveSet, settings: list[Setting], values: np.ndarra
 
 def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
     opts = request.options
+    request, units = to_internal(request)
     settings = prepare(request)
     progress(0.02, "input checked")
     warnings: list[Diagnostic] = list(request.upload_warnings)
 
     ch = fit_characteristics(settings, opts.fit == "minimax", opts.concave_efficiency, progress)
+    progress(0.6, "choosing the curve families")
     table = error_table(ch)
     family, pressure_choice, eta_choice, details = choose_families(ch, opts, len(settings), warnings)
     eta_table = efficiency_error_table(ch, settings, eta_choice)
     out_settings = setting_results(ch, settings, pressure_choice, eta_choice, warnings)
 
+    progress(0.605, "per-setting results")
     curves = curveset_from_fits(out_settings)
     values = np.array([s.values for s in settings], dtype=float).reshape(len(settings), -1)
-    envs = envelopes(curves, values, opts)
+    envs = envelopes(curves, values, opts, progress)
     surge, choke, margin_line = limit_lines(curves, settings, opts.surge_margin)
-    progress(0.62, "envelopes")
+    progress(0.62, "surge and choke lines done")
 
     ranges = curve_ranges(curves)
     pmap, triangles = performance_map(curves, settings, values, ranges, opts, progress, warnings)
@@ -423,7 +428,7 @@ def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapR
                     + (f"; map {opts.grid[0]}x{opts.grid[1]} over {len(triangles)} triangles"
                        if pmap else ""),
                     warnings=warnings, details={"family_choice": details})
-    return PerfmapResult(report=report, setting_names=list(request.setting_names),
+    return PerfmapResult(report=report, units=units, setting_names=list(request.setting_names),
                          setting_units=request.setting_units, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,
                          surge_line=surge, choke_line=choke, surge_margin_line=margin_line,

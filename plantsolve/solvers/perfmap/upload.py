@@ -25,6 +25,16 @@ CSV rules (as rig software and Excel write them):
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
   different values is rejected (flow must increase along a characteristic after sorting).
 
+An ``.xlsx`` upload (Excel) is read sheet by sheet into rows of cell texts and then follows the same rules
+(see :mod:`plantsolve.solvers.perfmap.workbook`): ``options.sheet`` names the sheet, else the first sheet
+with a recognisable header is read. Rows of titles above the header are skipped (in CSV too), and a row
+of units under the header (``[kg/s]``, ``bar``, ``%``) gives the columns their units.
+
+Units (read with pint, :mod:`plantsolve.solvers.perfmap.units`) may also follow a comma (``Flow, kg/s``);
+flow, pressure and efficiency units are checked against the quantity (``Flow [kg]`` is refused naming the
+column) and stated in the request's ``units``; values are not converted (an efficiency in % or ‰ is made
+a fraction).
+
 A ``.py`` upload is a pyCycle/NPSS ``MapData`` map (see :func:`_parse_map_data`); its text is
 read, never run.
 
@@ -48,9 +58,11 @@ from pydantic import ValidationError
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
+from plantsolve.solvers.perfmap.workbook import read_workbook
 
-UPLOAD_EXTENSIONS = (".csv", ".json", ".py")
+UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 MEASURED = ("flow", "pressure", "efficiency")
 # Names rig software and cycle codes give their columns (matched after units and separators are
 # stripped, case-insensitively). Setting parameters have roles of their own; the solver takes the
@@ -85,6 +97,10 @@ _ALIAS = {a: field for field, names in HEADER_ALIASES.items() for a in names}
 _UNIT_SUFFIX = re.compile(r"\s*[\[(]([^\[\]()]*)[\])]\s*$")
 _DECIMAL_COMMA = re.compile(r"^[+-]?(\d+|\d{1,3}(\.\d{3})+),\d*([eE][+-]?\d+)?$")
 _MAX_ROW_ERRORS = 20
+_HEADER_SEARCH_ROWS = 30
+# Pressure names that are ratios: such a column without a unit is dimensionless.
+_RATIO_NAMES = {"pressure ratio", "total pressure ratio", "total to total pressure ratio", "pr", "prmap", "pr map", "pi",
+                "π", "p2/p1", "pt2/pt1"}
 
 
 def _decode(content: bytes) -> str:
@@ -92,6 +108,21 @@ def _decode(content: bytes) -> str:
         raise reject("this is a zip archive (an Excel .xlsx workbook?), not a CSV text "
                       "file: save the sheet as 'CSV (comma delimited)' or 'CSV UTF-8'")
     return decode_text(content, "CSV text file")
+
+
+def _trailing_unit(label: str) -> tuple[str, str] | None:
+    """(label, unit) of a header that writes its unit after a comma or a spaced slash ('Flow, kg/s',
+    'Flow / (kg/s)'), when what follows reads as a unit; None otherwise."""
+    for sep in (",", " / "):
+        if sep in label:
+            head, tail = label.rsplit(sep, 1)
+            if head.strip() and tail.strip():
+                try:
+                    parse_unit(tail)
+                except UnitError:
+                    continue
+                return head.strip(), tail.strip().strip("()[]").strip()
+    return None
 
 
 def _header_field(name: str) -> tuple[str | None, str]:
@@ -104,8 +135,11 @@ def _header_field(name: str) -> tuple[str | None, str]:
         unit = unit or m.group(1).strip()
         label = label[: m.start()]
     if label.endswith("%") and len(label) > 1:  # "efficiency %"
-        label, unit = label[:-1], unit or "%"
+        label, unit = label[:-1].rstrip(" ,/"), unit or "%"
     key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
+    if key not in _ALIAS and not unit and (split := _trailing_unit(label)):
+        label, unit = split
+        key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
     return _ALIAS.get(key), unit
 
 
@@ -115,6 +149,9 @@ def _split_unit(name: str) -> tuple[str, str]:
     m = _UNIT_SUFFIX.search(label)
     if m and m.start() > 0 and re.sub(r"[\s_\-]+", " ", label.lower()) not in _ALIAS:
         return label[: m.start()].strip(), m.group(1).strip()
+    split = _trailing_unit(label)
+    if split and re.sub(r"[\s_\-]+", " ", label.lower()) not in _ALIAS:
+        return split
     return label, ""
 
 
@@ -133,6 +170,36 @@ def _number(cell: str, decimal_comma: bool) -> float:
     return float(s)
 
 
+def _role_key(name: str) -> str:
+    return re.sub(r"[\s_\-]+", " ", name.strip().strip('"').strip().lower())
+
+
+def _find_header(rows: list[list[str]], column_roles: dict | None) -> int:
+    """Index of the header row: the first of the leading rows (titles, test conditions, merged banners
+    above the table) whose cells name at least two of flow, pressure and efficiency; 0 when none does
+    (the first row is then the header, and its message says what is missing)."""
+    columns = {_role_key(k): v for k, v in (column_roles or {}).items()}
+    for i, row in enumerate(rows[:_HEADER_SEARCH_ROWS]):
+        fields = {columns.get(_role_key(c)) or _header_field(c)[0] for c in row if c.strip()}
+        if len(fields & set(MEASURED)) >= 2:
+            return i
+    return 0
+
+
+def _units_row(row: list[str]) -> bool:
+    """A row of units under the header ('[kg/s]', 'bar', '%', '-'): no number in it, and every cell either
+    empty or a unit."""
+    cells = [c.strip() for c in row if c.strip()]
+    if not cells or any(_is_number(c) for c in cells):
+        return False
+    for c in cells:
+        try:
+            parse_unit(c)
+        except UnitError:
+            return False
+    return True
+
+
 def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict], list[list[int]], list[Diagnostic],
                                                                    dict]:
     """Positions (one per (theta, phi), in order of first appearance), the file line of
@@ -147,15 +214,79 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         lines = lines[1:]
         if not lines:
             raise reject("the CSV file has no header (only a 'sep=' line)")
-    header_line = lines[0][1]
-    delim = (forced.group(1) if forced else
-             "\t" if "\t" in header_line else ";" if ";" in header_line else ",")
-    decimal_comma = delim != ","
-    rows = list(csv.reader([ln for _, ln in lines], delimiter=delim))
     numbers = [n for n, _ in lines]
+    candidates = [forced.group(1)] if forced else []
+    candidates += [d for d in ("\t", ";", ",") if d in lines[0][1]] + ["\t", ";", ","]
+    for delim in candidates:  # the separator whose split finds a header (title lines may precede it)
+        rows = list(csv.reader([ln for _, ln in lines], delimiter=delim))
+        h = _find_header(rows, column_roles)
+        if h or len(rows[0]) > 1 and len({_header_field(c)[0] for c in rows[0]} & set(MEASURED)) >= 2:
+            break
+    else:
+        h_line = lines[0][1]
+        delim = (forced.group(1) if forced else "\t" if "\t" in h_line else ";" if ";" in h_line else ",")
+        rows, h = list(csv.reader([ln for _, ln in lines], delimiter=delim)), 0
+    hint = ("" if delim != "," or ";" not in text[:2000] else
+            " — if the file uses ';' separators, put them in the header too")
+    return _parse_table(rows, numbers, delim != ",", column_roles, hint, comma_separated=delim == ",", header=h,
+                        what="line")
+
+
+def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
+                ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
+    """An Excel workbook's rig table (:mod:`plantsolve.solvers.perfmap.workbook`): the named sheet, else the
+    first sheet with a recognisable header, else the first sheet; then the CSV rules, rows named by their
+    sheet row."""
+    sheets = read_workbook(content, MAX_CSV_ROWS)
+    if sheet is not None:
+        chosen = [s for s in sheets if s.name == sheet]
+        if not chosen:
+            raise reject(f"no sheet {sheet!r} in the workbook; its sheets: {', '.join(repr(s.name) for s in sheets)}",
+                         ("options", "sheet"))
+        ws = chosen[0]
+    else:
+        usable = [s for s in sheets if s.rows]
+        if not usable:
+            raise reject("the workbook's sheets are empty")
+        found = [s for s in usable
+                 if len({_header_field(c)[0] for c in s.rows[_find_header(s.rows, column_roles)]} & set(MEASURED)) >= 2]
+        ws = (found or usable)[0]
+    if not ws.rows:
+        raise reject(f"sheet {ws.name!r} is empty", ("options", "sheet"))
+    positions, lines, notes, meta = _parse_table(ws.rows, ws.numbers, True, column_roles,
+                                                 header=_find_header(ws.rows, column_roles),
+                                                 what=f"sheet {ws.name!r} row")
+    if len(sheets) > 1:
+        notes.insert(0, Diagnostic(code="upload_sheet", message=f"Sheet {ws.name!r} read (of "
+                                   f"{', '.join(repr(s.name) for s in sheets)}; choose with options.sheet).",
+                                   details={"sheet": ws.name, "sheets": [s.name for s in sheets]}))
+    return positions, lines, notes, meta
+
+
+def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool, column_roles: dict | None,
+                 hint: str = "", comma_separated: bool = False, header: int = 0, what: str = "line",
+                 ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
+    """The table's rows (cells as text) from its header on; ``numbers`` are the file's line (or sheet row)
+    numbers of the rows, used in every message."""
+    notes_before = []
+    if header:
+        notes_before.append(Diagnostic(
+            code="upload_rows_above_header",
+            message=f"{header} row(s) above the header ({what} {numbers[header]}) skipped (titles, test "
+            "conditions).", details={"rows": numbers[:header]}))
+        rows, numbers = rows[header:], numbers[header:]
+    header_units: list[str] = []
+    if len(rows) > 1 and _units_row(rows[1]):
+        header_units = [c.strip().strip("[]()").strip() for c in rows[1]]
+        notes_before.append(Diagnostic(code="upload_units_row",
+                                       message=f"Units read from the row under the header ({what} {numbers[1]}).",
+                                       details={"row": numbers[1], "units": header_units}))
+        rows, numbers = [rows[0]] + rows[2:], [numbers[0]] + numbers[2:]
 
     col: dict[str, int] = {}
     scale: dict[str, float] = {}
+    unit_of: dict[str, str] = {}
+    measured_units: dict[str, str] = {}
     ignored, recognised = [], []
     columns = {re.sub(r"[\s_\-]+", " ", k.strip().lower()): v for k, v in (column_roles or {}).items()}
     for j, name in enumerate(rows[0]):
@@ -174,7 +305,22 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
             raise reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
                           f"name the {field}; say which is which with the 'columns' option", ("file", "header"))
         col[field] = j
-        scale[field] = 0.01 if field == "efficiency" and unit == "%" else 1.0
+        if not unit and j < len(header_units):
+            unit = header_units[j]
+        unit_of[field] = unit
+        scale[field] = 1.0
+        if field in MEASURED:
+            try:
+                parsed = check_quantity(field, unit or None)
+            except UnitError as e:
+                raise reject(f"column {name.strip()!r} ({what} {numbers[0]}, column {j + 1}): {e}",
+                             ("file", "header")) from None
+            if field == "efficiency":
+                scale[field] = fraction_factor(unit or None)
+            elif parsed is not None:
+                measured_units[field] = parsed.text
+            elif field == "pressure" and _role_key(_split_unit(name)[0]) in _RATIO_NAMES:
+                measured_units[field] = "1"
     unknown_roles = sorted(set(columns.values()) - set(ROLES))
     if unknown_roles:
         raise reject(f"options.columns names unknown roles {unknown_roles}; roles: {', '.join(ROLES)}",
@@ -184,13 +330,12 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
     if missing or not settings_found:
         need = missing + ([] if settings_found else ["a setting (speed, IGV, VGV, alpha, diffuser, theta or phi)"])
         raise reject(
-            f"the header (line {numbers[0]}) must name the columns flow, pressure, efficiency and at least one "
+            f"the header ({what} {numbers[0]}) must name the columns flow, pressure, efficiency and at least one "
             f"setting parameter (any order and case, units in brackets allowed, e.g. 'Wc [kg/s]'; or map any "
             f"header to a role with the 'columns' option); missing: {', '.join(need)}; found: "
             f"{', '.join(repr(h.strip()) for h in rows[0])}"
-            + ("" if delim != "," or ";" not in text[:2000] else
-               " — if the file uses ';' separators, put them in the header too")
-            + (" — the first line that is not blank or '#' must be the header"
+            + hint
+            + (f" — the first {what} that is not blank or '#' must be the header"
                if all(_is_number(h) for h in rows[0] if h.strip()) else ""),
             ("file", "header"))
     if "theta" in col and "phi" in col:  # the paper's two settings named: other setting columns are extra
@@ -222,7 +367,7 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
             if not cell:
                 hint = (" (write the setting on every row, not only on the first row of "
                         "a speed line)" if c not in MEASURED else "")
-                errors.append(FieldError(("file", "row", n, c), f"line {n}: no {c} value "
+                errors.append(FieldError(("file", "row", n, c), f"{what} {n}: no {c} value "
                                          f"(column {j + 1}); every row needs all "
                                          f"{len(roles)} values{hint}"))
                 continue
@@ -230,13 +375,15 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
                 v = _number(cell, decimal_comma) * scale[c]
             except ValueError:
                 hint = (" (decimal comma with ',' separators? use ';' as separator)"
-                        if delim == "," and re.fullmatch(r"-?\d+,\d+", cell) else "")
+                        if comma_separated and re.fullmatch(r"-?\d+,\d+", cell) else
+                        " (a formula never calculated: open and save the workbook in Excel, or paste values)"
+                        if cell.startswith("=") else "")
                 errors.append(FieldError(("file", "row", n, c),
-                                         f"line {n}: {c} {cell!r} is not a number{hint}"))
+                                         f"{what} {n}: {c} {cell!r} is not a number{hint}"))
                 continue
             if not math.isfinite(v):
                 errors.append(FieldError(("file", "row", n, c),
-                                         f"line {n}: {c} is {cell!r} (NaN or infinite)"))
+                                         f"{what} {n}: {c} is {cell!r} (NaN or infinite)"))
                 continue
             vals[c] = v
         if len(vals) < len(roles):
@@ -251,8 +398,8 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
     if errors:
         raise InputRejected(errors)
     if not groups:
-        raise reject(f"the CSV file has a header (line {numbers[0]}) but no data rows")
-    notes = []
+        raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows")
+    notes = notes_before
     order = [c.strip() for c in rows[0]]
     ignored.sort(key=order.index)
     names = {r: rows[0][col[r]].strip() for r in col}
@@ -260,9 +407,12 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
     for r in setting_cols:
         label, unit = _split_unit(names[r])
         labels.append(label or r)
-        units.append(unit)
-    meta = {} if setting_cols == ["theta", "phi"] else {"setting_names": labels, "setting_units": units}
-    if meta:
+        units.append(unit or unit_of.get(r, ""))
+    meta: dict = {} if setting_cols == ["theta", "phi"] else {"setting_names": labels, "setting_units": units}
+    if setting_cols == ["theta", "phi"] and any(units):
+        meta["setting_units"] = units
+    meta["units"] = {**measured_units, "efficiency": "1"}
+    if "setting_names" in meta:
         notes.append(Diagnostic(
             code="upload_settings",
             message=(f"One setting parameter ({labels[0]!r})." if len(labels) == 1 else
@@ -280,7 +430,8 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
             "parametrised by its flow.", details={"columns": recognised}))
     if scale["efficiency"] != 1.0:
         notes.append(Diagnostic(code="upload_efficiency_percent",
-                                message="Efficiency column given in % : divided by 100."))
+                                message=f"Efficiency column given in {unit_of['efficiency']} : converted to a "
+                                "fraction.", details={"factor": scale["efficiency"]}))
     return list(groups.values()), list(lines_of.values()), notes, meta
 
 
@@ -382,7 +533,19 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
     if ext not in UPLOAD_EXTENSIONS:
         raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
-                      f"{', '.join(UPLOAD_EXTENSIONS)}")
+                      f"{', '.join(UPLOAD_EXTENSIONS)}"
+                     + (" (an Excel 97-2003 .xls workbook: save it as .xlsx)" if ext in (".xls", ".xlsb") else ""))
+    if ext == ".xlsx":
+        options = dict(options or {})
+        roles = options.get("columns")
+        if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
+            raise reject("options.columns must map header names to roles", ("options", "columns"))
+        sheet = options.get("sheet")
+        if sheet is not None and not isinstance(sheet, str):
+            raise reject("options.sheet must be a sheet name", ("options", "sheet"))
+        positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
+        body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
+        return _validated(body, options, lines)
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
         # counted before any parsing: a table far beyond any rig's is refused in milliseconds
@@ -392,7 +555,8 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
     lines: list[list[int]] = []
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
-        body = {"positions": positions, "setting_names": names, "upload_warnings": [d.model_dump() for d in notes]}
+        body = {"positions": positions, "setting_names": names, "units": {"pressure": "1", "efficiency": "1"},
+                "upload_warnings": [d.model_dump() for d in notes]}
     elif ext == ".csv":
         roles = (options or {}).get("columns") if isinstance(options, dict) else None
         if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
@@ -410,6 +574,11 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Perfmap
             body = {"positions": body}
         if not isinstance(body, dict):
             raise reject("the JSON file must hold a request object or a list of positions")
+    return _validated(body, options, lines)
+
+
+def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:
+    """The request of a parsed file, its errors named by file row where the file has rows."""
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:

@@ -8,6 +8,7 @@ import numpy as np
 
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.perfmap.units import to_internal
 
 
 @dataclass
@@ -181,5 +182,5 @@ def prepare(request: PerfmapRequest) -> list[Setting]:
 
 
 def check_input(request: PerfmapRequest) -> None:
-    """Fast semantic validation; raises :class:`InputRejected` naming each bad field."""
-    prepare(request)
+    """Fast semantic validation (units included); raises :class:`InputRejected` naming each bad field."""
+    prepare(to_internal(request)[0])

@@ -18,12 +18,14 @@ MAX_PANELS = 12
 MAX_FACES_DRAWN = 20_000
 
 
-def _view(request: PolyhedraRequest, result: PolyhedraResult) -> bytes:
+def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
+    """A 3-D panel per zone (axes in the request's units); one legend below the panels, off the drawings."""
     poly = from_request(request)
     zones = result.zones[:MAX_PANELS]
     cols = min(len(zones), 4) or 1
     rows = math.ceil(len(zones) / cols) or 1
-    fig = Figure(figsize=(4.2 * cols, 4.0 * rows))
+    fig = Figure(figsize=(4.2 * cols, 4.0 * rows + 0.6), layout="constrained")
+    labels: dict[str, object] = {}
     face_index = {fid: i for i, fid in enumerate(poly.face_ids)}
     units = request.units
     for k, zone in enumerate(zones):
@@ -59,9 +61,21 @@ def _view(request: PolyhedraRequest, result: PolyhedraResult) -> bytes:
         ax.set_zlabel(f"z [{units}]")
         volume = f"V = {zone.volume:.6g} {units}³" if zone.volume is not None else "not closed: no volume"
         ax.set_title(f"{zone.id}: {volume}", fontsize=9)
-        ax.legend(loc="upper left", fontsize=7)
+        handles, names = ax.get_legend_handles_labels()
+        for h, n in zip(handles, names):
+            labels.setdefault(n, h)
     if len(result.zones) > MAX_PANELS:
         fig.suptitle(f"first {MAX_PANELS} of {len(result.zones)} zones", fontsize=10)
+    if labels:
+        fig.legend(list(labels.values()), list(labels), loc="outside lower center", ncol=len(labels), fontsize=8)
+    return fig
+
+
+def figures(request: PolyhedraRequest, result: PolyhedraResult) -> dict[str, Figure]:
+    return {"zones": zones_figure(request, result)}
+
+
+def _png(fig: Figure) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     return buf.getvalue()
@@ -85,5 +99,5 @@ def _table(result: PolyhedraResult) -> bytes:
 
 
 def render_artifacts(request: PolyhedraRequest, result: PolyhedraResult) -> list[Artifact]:
-    return [Artifact("zones.png", "image/png", _view(request, result)),
+    return [Artifact("zones.png", "image/png", _png(zones_figure(request, result))),
             Artifact("zones.csv", "text/csv", _table(result))]

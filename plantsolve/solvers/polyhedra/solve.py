@@ -15,6 +15,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
@@ -39,16 +40,20 @@ class Analysis:
 
 def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = no_progress) -> Analysis:
     """Repair, sew the generalized map, measure and diagnose (the paper's method on flat arrays)."""
+    st = Stages(progress)
+    st.stage(0.05, 0.3, f"repair: {poly.n_faces} faces, merging vertices within {merge_tolerance:g}")
     poly, repairs = repair(poly, merge_tolerance)
-    progress(0.3, "generalized map")
+    st.stage(0.3, 0.45, "generalized map: darts and their involutions")
     gmap = build_gmap(poly, repairs.edge_groups)
-    progress(0.5, "measures")
+    st.stage(0.45, 0.55, "measures: Newell areas per face")
     measures = face_measures(poly)
     n_zones = len(poly.zone_ids)
+    st.stage(0.55, 0.65, "measures: volume terms per face use")
     terms = use_terms(measures, gmap.use_face, gmap.use_zone, gmap.use_sign, n_zones)
-    progress(0.7, "diagnostics")
+    st.stage(0.65, 0.75, "diagnostics: orientation of the sheets")
     volume = terms.flux.sum(axis=1) / 3.0
     orientation = orient(gmap, measures.area[gmap.use_face], volume, n_zones)
+    st.stage(0.75, 0.85, "diagnostics: topology (Euler characteristic, genus)")
     loops_per_face = np.diff(poly.face_loop_start)
     topo = topology(gmap, loops_per_face, orientation.sheet, n_zones)
     return Analysis(poly, repairs, gmap, measures, terms, orientation, topo)
@@ -71,7 +76,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     """Zone volumes, areas and closure diagnostics of polygonal zones (the paper's method: a
     generalized map of the faces, measures per orbit, diagnostics from the orbits)."""
     check_input(request)
-    progress(0.0, "reading faces")
+    progress(0.0, f"reading {len(request.faces)} faces")
     poly = from_request(request)
     opts = request.options
     an = analyse(poly, opts.merge_tolerance, progress)
@@ -97,6 +102,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     by_zone = np.argsort(gmap.use_zone, kind="stable")
     zone_bounds = np.searchsorted(gmap.use_zone[by_zone], np.arange(n_zones + 1))
     for z in range(n_zones):
+        if z % max(1, n_zones // 20) == 0:
+            progress(0.85 + 0.08 * z / max(n_zones, 1), f"results: zone {z + 1} of {n_zones}")
         uses = by_zone[zone_bounds[z]:zone_bounds[z + 1]]
         faces = gmap.use_face[uses]
         factor = an.orientation.factor[uses]
@@ -205,11 +212,13 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
             warnings.append(Diagnostic(code="objects_skipped", message=(
                 f"{len(skipped)} object(s) of the file were skipped (line and reason in details)."),
                 details={"skipped": skipped[:MAX_LISTED_EDGES]}))
+    progress(0.95, "adjacency: shared and facing walls")
+    adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, edge_length_total=edge_length_total,
-        adjacency=adjacency(poly, area, normal), total_volume=total if all_closed else None,
+        adjacency=adjacent, total_volume=total if all_closed else None,
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     )

@@ -1,5 +1,5 @@
 """Files from a result: tube mesh (STL, GLB), deviation-coloured cloud (PLY), LRA and
-XYZ+CLR tables (CSV), overview plot (PNG)."""
+XYZ+CLR tables (CSV), overview plot (PNG) and, with a nominal LRA, the inspection plot (PNG)."""
 
 from __future__ import annotations
 
@@ -10,12 +10,15 @@ import numpy as np
 import trimesh
 from matplotlib import colormaps
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact
 
-from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, quaternion_frame, sample_centreline,
-                       spine_distance, tube_mesh_arrays)
+from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
+                                              sample_centreline, spine_distance, tube_mesh_arrays)
+from plantsolve.solvers.tube.lra import model_from_rows
 from plantsolve.solvers.tube.upload import request_points
 
 
@@ -114,8 +117,21 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     out.append(Artifact("xyz_clr.csv", "text/csv", xyz_clr_csv(result, model)))
     out.append(Artifact("centreline.dxf", "image/vnd.dxf", centreline_dxf(model, result.units)))
 
-    fig = Figure(figsize=(11, 5))  # no pyplot: jobs render in parallel threads
-    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    for name, fig in figures(request, result, pts=pts, dev=dev, outlier=outlier, lim=lim).items():
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=110)
+        out.append(Artifact(f"{name}.png", "image/png", buf.getvalue()))
+    return out
+
+
+def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: np.ndarray, outlier: np.ndarray,
+                    lim: float) -> Figure:
+    """The scan coloured by deviation with the fitted centreline (3-D, axes in the request's units), the
+    histogram of signed distances, and the LRA table in a panel of its own (it used to sit over the bars)."""
+    u = result.units
+    fig = Figure(figsize=(14, 5.6), layout="constrained")  # no pyplot: jobs render in parallel threads
+    grid = fig.add_gridspec(1, 3, width_ratios=[1.35, 1.0, 0.85])
+    ax = fig.add_subplot(grid[0], projection="3d")
     rng = np.random.default_rng(0)
     inl_idx = np.flatnonzero(~outlier)
     show = rng.choice(inl_idx, min(len(inl_idx), 20_000), replace=False)
@@ -124,27 +140,107 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     ax.plot(*c.T, "k-", lw=1.5, label="fitted centreline")
     cp, _ = control_polygon(model)
     ax.plot(*cp.T, "g--", lw=0.8, label="control polygon (XYZ)")
-    ax.set_xlabel(f"x [{result.units}]"); ax.set_ylabel(f"y [{result.units}]"); ax.set_zlabel(f"z [{result.units}]")
-    ax.legend(loc="upper left", fontsize=7)
+    ax.set_xlabel(f"x [{u}]"); ax.set_ylabel(f"y [{u}]"); ax.set_zlabel(f"z [{u}]")
     span = np.ptp(pts[show], axis=0).max() / 2
     mid = (pts[show].max(0) + pts[show].min(0)) / 2
     ax.set_xlim(mid[0] - span, mid[0] + span); ax.set_ylim(mid[1] - span, mid[1] + span)
     ax.set_zlim(mid[2] - span, mid[2] + span)
-    ax.set_title(f"{len(result.lra) - 1} bends, pipe radius {result.pipe_radius:.4g} {result.units}")
-    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.15, label=f"deviation [{result.units}]")
-    ax2 = fig.add_subplot(1, 2, 2)
-    inl = ~outlier
-    ax2.hist(dev[inl], bins=80, color="steelblue", label="inlier samples")
-    ax2.set_xlabel(f"signed distance to surface [{result.units}]")
-    ax2.set_ylabel("samples per bin")
-    ax2.set_ylim(top=ax2.get_ylim()[1] * 1.45)  # headroom: the LRA table must not hide bars
-    ax2.legend(loc="upper right", fontsize=7)
-    ax2.set_title(f"median |r| {result.residuals.median:.3g} {result.units}, p95 {result.residuals.p95:.3g} {result.units}")
-    txt = "\n".join(f"{i + 1}: L {r.length:.2f}  R {r.rotation:.1f}°  A {r.angle:.2f}°  CLR {r.bend_radius:.2f}"
-                    for i, r in enumerate(result.lra[:12]))
-    ax2.text(0.02, 0.98, txt, transform=ax2.transAxes, va="top", family="monospace", fontsize=7)
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    out.append(Artifact("overview.png", "image/png", buf.getvalue()))
+    ax.set_title(f"{len(result.lra) - 1} bends, pipe radius {result.pipe_radius:.4g} {u}")
+    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.12, label=f"deviation [{u}]")
+    ax2 = fig.add_subplot(grid[1])
+    ax2.hist(dev[~outlier], bins=80, color="steelblue", label="inlier samples")
+    ax2.set_xlabel(f"signed distance to surface [{u}]")
+    ax2.set_ylabel("samples per bin [count]")
+    ax2.set_title(f"median |r| {result.residuals.median:.3g} {u}, p95 {result.residuals.p95:.3g} {u}")
+    ax3 = fig.add_subplot(grid[2])
+    ax3.axis("off")
+    rows = result.lra[:24]
+    table = ax3.table(cellText=[[i + 1, f"{r.length:.2f}", f"{r.rotation:.1f}", f"{r.angle:.2f}", f"{r.bend_radius:.2f}"]
+                                for i, r in enumerate(rows)],
+                      colLabels=["row", f"L [{u}]", "R [deg]", "A [deg]", f"CLR [{u}]"], cellLoc="right",
+                      bbox=[0.0, 1.0 - min(1.0, 0.055 * (len(rows) + 1)), 1.0, min(1.0, 0.055 * (len(rows) + 1))])
+    table.auto_set_font_size(False)
+    table.set_fontsize(7)
+    ax3.set_title("LRA" + (f" (first {len(rows)} of {len(result.lra)} rows)" if len(result.lra) > len(rows) else ""))
+    handles = [Line2D([], [], color="k", lw=1.5, label="fitted centreline"),
+               Line2D([], [], color="g", ls="--", lw=0.8, label="control polygon (XYZ)"),
+               Patch(color="steelblue", label="inlier samples (histogram)")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8)
+    return fig
+
+
+def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
+    """Deviation along the tube (top): distance of the measured centreline from the nominal one after the
+    inspection's best-fit motion, against arc length, bends shaded; per-bend deviations (bottom) of angle
+    and rotation (degrees) and of length and radius (request units, right axis)."""
+    ins, nominal_rows = result.inspection, request.options.nominal
+    if ins is None or not nominal_rows:
+        return None
+    u = result.units
+    measured = model_from_result(result)
+    if ins.reversed:
+        measured = reverse_model(measured)
+    nominal = model_from_rows(nominal_rows, measured.pipe_radius)
+    R = quaternion_frame(ins.alignment["quaternion"])
+    t = np.asarray(ins.alignment["translation"], float)
+    q, _ = sample_centreline(measured, max(build_spine(measured).length.sum() / 800, 1e-9))
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+    d, _ = spine_distance((q - t) @ R, build_spine(nominal))
+    fig = Figure(figsize=(10, 6.8), layout="constrained")
+    ax, ax_b = fig.subplots(2, 1, height_ratios=[3, 2])
+    sp = build_spine(measured)
+    ends = np.cumsum(sp.length)
+    for k in np.flatnonzero(sp.kind == 1):
+        ax.axvspan(ends[k] - sp.length[k], ends[k], color="0.88", lw=0)
+    ax.plot(arc, d, "C3-", lw=1.4)
+    ax.axhline(ins.sheath_deviation, color="C3", ls=":", lw=1)
+    ax.set_xlabel(f"arc length along the measured centreline [{u}]")
+    ax.set_ylabel(f"distance from nominal centreline [{u}]")
+    ax.set_title(f"Inspection: sheath deviation {ins.sheath_deviation:.3g} {u} (rms {ins.sheath_rms:.3g} {u})"
+                 + ("" if ins.matched else "; bend counts differ"))
+    handles = [Line2D([], [], color="C3", lw=1.4, label="deviation along the tube"),
+               Line2D([], [], color="C3", ls=":", lw=1, label="sheath deviation (max)"),
+               Patch(color="0.88", label="bends")]
+    if ins.bends:
+        b = np.array([x.bend for x in ins.bends])
+        w = 0.2
+        ax_b.bar(b - 1.5 * w, [x.angle for x in ins.bends], w, color="C0")
+        ax_b.bar(b - 0.5 * w, [x.rotation for x in ins.bends], w, color="C1")
+        ax_b.set_ylabel("angle, rotation deviation [deg]")
+        ax_l = ax_b.twinx()
+        ax_l.bar(b + 0.5 * w, [x.length for x in ins.bends], w, color="C2")
+        ax_l.bar(b + 1.5 * w, [x.bend_radius for x in ins.bends], w, color="C4")
+        ax_l.set_ylabel(f"length, radius deviation [{u}]")
+        for a in (ax_b, ax_l):
+            lim_b = max(float(np.max(np.abs(a.get_ylim()))), 1e-12)
+            a.set_ylim(-lim_b, lim_b)
+        ax_b.axhline(0.0, color="0.5", lw=0.6)
+        ax_b.set_xticks(b)
+        handles += [Patch(color="C0", label="angle (measured − nominal)"), Patch(color="C1", label="rotation"),
+                    Patch(color="C2", label="length before the bend"), Patch(color="C4", label="bend radius")]
+    else:
+        ax_b.text(0.5, 0.5, "bend counts differ: no per-bend deviations", ha="center", va="center",
+                  transform=ax_b.transAxes)
+        ax_b.set_yticks([])
+        ax_b.set_ylabel("deviation [-]")
+    ax_b.set_xlabel("bend [number, in the nominal's order]")
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
+    return fig
+
+
+def figures(request: TubeRequest, result: TubeResult, pts: np.ndarray | None = None, dev: np.ndarray | None = None,
+            outlier: np.ndarray | None = None, lim: float | None = None) -> dict[str, Figure]:
+    """Every plot by artifact stem: ``overview`` and, with a nominal LRA, ``inspection``."""
+    model = model_from_result(result)
+    if pts is None:
+        pts = request_points(request)
+        d, _ = spine_distance(pts, build_spine(model))
+        dev = d - model.pipe_radius
+        outlier = np.zeros(len(pts), bool)
+        outlier[np.asarray(result.outliers.indices, int)] = True
+        lim = max(3 * result.residuals.p95, 1e-12)
+    out = {"overview": overview_figure(result, model, pts, dev, outlier, lim)}
+    fig = inspection_figure(request, result)
+    if fig is not None:
+        out["inspection"] = fig
     return out

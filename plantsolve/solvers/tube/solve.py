@@ -18,6 +18,7 @@ from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segment, SegmentQuality, TubeOptions,
                                      TubeRequest, TubeResult)
 from plantsolve.solvers.base import Progress, SolverError, no_progress
+from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
 from plantsolve.solvers.tube.geometry import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
 from plantsolve.solvers.tube.inspection import inspect
@@ -84,7 +85,11 @@ class LeastSquaresFit:
     radius_model: BendRadiusModel | None = None
 
 
-def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Generator) -> LocalFits:
+def no_progress_tick(message: str | None = None) -> None:
+    """A tick that reports nothing (stage functions called on their own)."""
+
+
+def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Generator, tick=no_progress_tick) -> LocalFits:
     """§2 (2.1 local polynomial surface approximation, 2.2 shape operator) on a working subset,
     the pipe radius from the curvatures (§3.1), and the §7 flags of unreliable fits."""
     N = len(pts)
@@ -96,6 +101,7 @@ def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Genera
     n_probe0 = min(len(work), 1500)
     probes0 = work[:n_probe0]
     f0 = local_fit.knn_fit(tree, work, probes0, 40)
+    tick("local fits: pipe radius estimate")
     if not f0.ok.any():
         raise SolverError("local_fit", "no local surface fit succeeded", {"points": N})
     rp = float(opts.pipe_radius) if opts.pipe_radius else float(np.median(1.0 / np.maximum(f0.kmax[f0.ok], 1e-300)))
@@ -122,6 +128,7 @@ def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Genera
         while h_fit < 1.1 * rp and np.median(tree.query_ball_point(probes[:200], h_fit, return_length=True)) < 14:
             h_fit *= 1.2
         fits = local_fit.fit_at(tree, work, probes, h_fit)
+        tick(f"local fits at {len(probes)} probes")
         good = fits.ok & (fits.count >= 10)
         if not good.any():
             raise SolverError("local_fit", "too few neighbours for local surface fits (scan too sparse?)",
@@ -133,7 +140,7 @@ def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Genera
     return LocalFits(work, tree, probes, probe_idx, fits, labels, rp, sigma_surface)
 
 
-def mls_spine(lf: LocalFits, opts: TubeOptions) -> SpineSamples:
+def mls_spine(lf: LocalFits, opts: TubeOptions, tick=no_progress_tick) -> SpineSamples:
     """§3: every reliable seed projected onto the spine by a moving-least-squares cylinder fit
     (neighbourhood §3.2, tangent §3.3); the pipe radius re-estimated from the fits."""
     rp = lf.pipe_radius
@@ -148,7 +155,7 @@ def mls_spine(lf: LocalFits, opts: TubeOptions) -> SpineSamples:
         work2 = lf.work[:keep]
         tree2 = cKDTree(work2)
     sc = spine.mls_spine(tree2, work2, lf.probes[seeds_mask], lf.fits.normal[seeds_mask],
-                         lf.fits.dir_min[seeds_mask], rp, free_radius=opts.pipe_radius is None, k=160)
+                         lf.fits.dir_min[seeds_mask], rp, free_radius=opts.pipe_radius is None, k=160, tick=tick)
     if sc.ok.sum() < 10:
         raise SolverError("spine", "the MLS spine projection failed for almost all samples", {})
     if opts.pipe_radius is None:
@@ -230,10 +237,11 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     pts_sub = pts[sub]
     fit_rp = opts.pipe_radius is None
 
-    stage_progress = [0.55, "least-squares fit"]
+    st = Stages(progress)
+    st.stage(0.55, 0.6, "least-squares fit")
 
     def tick():
-        progress(*stage_progress)  # lets a cancellation through between LM iterations
+        st.tick()  # lets a cancellation through between LM iterations
 
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
                dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
@@ -270,7 +278,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
         return m2, fit.assign(m2, pts_prune, margin)[0]
 
-    stage_progress[:] = [0.6, "choosing the number of bends"]
+    st.stage(0.6, 0.75, "choosing the number of bends")
 
     fitted = [(e,) + refit(mdl) for e, mdl in inits]
     best_i = prune.select(fitted, rp)
@@ -281,16 +289,15 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     if model.n_bends:
         model, splits = prune.split_by_evidence(model, refit, rp)
         changes = changes + splits
-    stage_progress[:] = [0.75, "least-squares fit"]
+    st.stage(0.75, 0.8, "least-squares fit")
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
     final_mode: dict = {}
     if model.n_bends and not opts.bend_radius:
-        stage_progress[:] = [0.8, "choosing the bend radius model"]
+        st.stage(0.8, 0.85, "choosing the bend radius model")
         model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
                                                                       lm_info)
-    stage_progress[:] = [0.85, "final least-squares fit on all samples"]
-    progress(*stage_progress)
+    st.stage(0.85, 0.97, "final least-squares fit on all samples")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
     res_all, seg_all = fit.assign(model, pts, margin)
@@ -445,35 +452,35 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     pts = pts_in[order]
     N = len(pts)
 
-    progress(0.02, "local polynomial fits")
+    st = Stages(progress)
+    st.stage(0.02, 0.12, "local polynomial fits")
     t0 = time.perf_counter()
-    lf = local_surface_fits(pts, opts, rng)
+    lf = local_surface_fits(pts, opts, rng, st.tick)
     timings["local_fit"] = time.perf_counter() - t0
 
-    progress(0.15, "MLS spine projection")
+    st.stage(0.12, 0.3, "MLS spine projection")
     t0 = time.perf_counter()
-    ss = mls_spine(lf, opts)
+    ss = mls_spine(lf, opts, st.tick)
     rp = ss.pipe_radius
     timings["spine"] = time.perf_counter() - t0
 
-    progress(0.4, "curve reconstruction")
+    st.stage(0.3, 0.42, "curve reconstruction")
     t0 = time.perf_counter()
     pc = polygonal_curve(ss, opts, warnings)
     timings["curve"] = time.perf_counter() - t0
 
-    progress(0.5, "arc-line spline")
+    st.stage(0.42, 0.55, "arc-line spline")
     t0 = time.perf_counter()
     inits = arcline_candidates(pc, rp, opts, warnings)
     n_bends_initial = [mdl.n_bends for _, mdl in inits]
     timings["arcline"] = time.perf_counter() - t0
 
-    progress(0.55, "least-squares fit")
     t0 = time.perf_counter()
     ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings)
     timings["least_squares"] = time.perf_counter() - t0
     canonical_direction(ls, pts)
 
-    progress(0.97, "report")
+    st.stage(0.97, 1.0, "report")
     outliers = outlier_report(ls, lf, ss, order)
     residuals, quality = residual_summary(ls)
     if outliers.count > 0.1 * N:

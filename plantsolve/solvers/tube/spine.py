@@ -91,8 +91,8 @@ def fit_cylinders(nb: np.ndarray, w0: np.ndarray, x: np.ndarray, t: np.ndarray, 
 
 def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.ndarray, tangents: np.ndarray,
               pipe_radius: float, free_radius: bool = True, support: float = 1.2, k: int = 96,
-              outer: int = 2) -> SpineCloud:
-    """Project seed samples onto the MLS spine (§3 steps i–iii)."""
+              outer: int = 2, tick=None) -> SpineCloud:
+    """Project seed samples onto the MLS spine (§3 steps i–iii); ``tick(message)`` after each pass."""
     rp = float(pipe_radius)
     x = seeds - rp * normals
     t = tangents / np.linalg.norm(tangents, axis=1, keepdims=True)
@@ -110,6 +110,8 @@ def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.nda
         x_new, t, r, rms = fit_cylinders(nb, w, x, t, r, free, robust_scale=0.1 * rp)
         # MLS: project the current point onto the axis of its best cylinder
         x = x_new + np.einsum("mi,mi->m", x - x_new, t)[:, None] * t
+        if tick is not None:
+            tick(f"MLS spine projection, pass {it + 1} of {len(schedule)}")
     off = seeds - x
     dist = np.linalg.norm(off, axis=1)
     proj_error = np.abs(dist - rp)

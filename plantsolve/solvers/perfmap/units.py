@@ -1,0 +1,179 @@
+"""Units of a rig table's quantities, read with pint (one registry for the whole package).
+
+What exporters write is accepted: ``m3/h``, ``m^3/s``, ``m³/s``, ``%``, ``kg/s``, ``lbm/s``, ``°C``/``degC``,
+``rpm``, ``1/min``, ``psi``/``psia``/``psig``, ``-`` for dimensionless, in brackets or parentheses or after a
+comma (the caller strips those). Each measured quantity has the dimensions it may take
+(:data:`ALLOWED`); a unit of other dimensions (``kg`` for a flow) is refused naming the column.
+
+The solver's internal units: flow and pressure stay in the unit they were submitted in (every error the
+solver reports is relative and every geometric step range-normalised, so a unit is a label to them), unless
+``options.result_units`` asks for another unit of the same dimensions, to which the values are converted;
+efficiency is a fraction (``%`` and ``‰`` are divided out); settings keep their submitted units (labels).
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+
+import pint
+
+from plantsolve.schemas.perfmap import PerfmapRequest, QuantityUnits, ResultUnits, ResultUnitsOption
+from plantsolve.solvers.base import FieldError, InputRejected
+
+# Spellings of rig software and cycle codes that pint does not know.
+_DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
+                "bara = bar", "mbarg = millibar", "permille = 0.001 = ‰")
+
+
+@functools.cache
+def registry() -> pint.UnitRegistry:
+    """The one unit registry (built on first use: it takes a few hundred milliseconds; read-only after)."""
+    reg = pint.UnitRegistry(autoconvert_offset_to_baseunit=True)
+    for definition in _DEFINITIONS:
+        reg.define(definition)
+    return reg
+
+MEASURED = ("flow", "pressure", "efficiency")
+# Dimensions each measured quantity may have, in words for the messages.
+ALLOWED = {
+    "flow": {"[mass] / [time]": "mass flow (kg/s, lbm/s)", "[length] ** 3 / [time]": "volume flow (m3/h, m³/s)",
+             "": "dimensionless (corrected or relative flow, %)"},
+    "pressure": {"[mass] / [length] / [time] ** 2": "pressure (Pa, kPa, bar, psi)", "": "ratio (PR, -)",
+                 "[length]": "head (m)", "[length] ** 2 / [time] ** 2": "specific work (J/kg)"},
+    "efficiency": {"": "fraction or percent (-, %)"},
+}
+_DIMENSIONLESS_WORDS = {"", "-", "–", "1", "—", "/", "ratio", "dimensionless", "frac", "fraction", "n/a", "na"}
+# Exponents written as plain digits after a length ('m3/h', 'cm3/s', 'ft3/min').
+_DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])")
+
+
+class UnitError(ValueError):
+    """A unit that is not understood or has the wrong dimensions for its quantity."""
+
+
+@dataclass(frozen=True)
+class Unit:
+    """A parsed unit: its canonical spelling (what results state) and its pint unit."""
+
+    text: str
+    unit: pint.Unit
+
+    @property
+    def dimensionless(self) -> bool:
+        return self.unit.dimensionless
+
+    def factor_to(self, other: "Unit") -> float:
+        return float(registry().Quantity(1.0, self.unit).to(other.unit).magnitude)
+
+
+def parse_unit(text: str) -> Unit:
+    """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it."""
+    s = text.strip().strip("[]()").strip()
+    if s.lower() in _DIMENSIONLESS_WORDS:
+        return Unit("1", registry().dimensionless)
+    s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
+         .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
+    s = _DIGIT_EXPONENT.sub(r"\1**\2", s)
+    s = s.replace("^", "**")
+    try:
+        unit = registry().parse_units(s)
+    except Exception:  # pint's parser raises many types on garbage (tokenize, syntax, key, attribute errors)
+        raise UnitError(f"unit {text.strip()!r} is not understood (write e.g. kg/s, m3/h, bar, kPa, psi, %, rpm)") \
+            from None
+    if unit.dimensionless and str(unit) == "dimensionless":
+        return Unit("1", unit)
+    return Unit(format(unit, "~P") or "1", unit)
+
+
+def _dimensions(unit: pint.Unit) -> str:
+    return "" if unit.dimensionless else str(unit.dimensionality)
+
+
+def check_quantity(quantity: str, text: str | None) -> Unit | None:
+    """The parsed unit of ``quantity`` (flow, pressure, efficiency), None when none is given; raises
+    :class:`UnitError` when it is not understood or its dimensions do not fit the quantity."""
+    if text is None:
+        return None
+    u = parse_unit(text)
+    allowed = ALLOWED[quantity]
+    if _dimensions(u.unit) not in allowed:
+        raise UnitError(f"unit {text.strip()!r} ({u.unit.dimensionality if not u.dimensionless else 'dimensionless'})"
+                        f" is not a unit of {quantity}: expected {' or '.join(allowed.values())}")
+    return u
+
+
+def fraction_factor(text: str | None) -> float:
+    """Factor from an efficiency unit to a fraction (0.01 for '%'); 1 without a unit."""
+    u = check_quantity("efficiency", text)
+    return 1.0 if u is None else float(registry().Quantity(1.0, u.unit).to("dimensionless").magnitude)
+
+
+def conversion(quantity: str, given: str | None, wanted: str | None) -> tuple[float, str | None]:
+    """(factor, unit): multiply values in ``given`` by factor to get them in ``wanted`` (the unit then stated);
+    without ``wanted`` the values stay in ``given``. Raises :class:`UnitError` (the message says which side)."""
+    src = check_quantity(quantity, given)
+    if wanted is None:
+        return 1.0, None if src is None else src.text
+    dst = check_quantity(quantity, wanted)
+    if src is None:
+        raise UnitError(f"result unit {wanted!r} asked for but the {quantity} has no unit: state it in "
+                        f"units.{quantity} (or in the column header, e.g. '{quantity} [{wanted}]')")
+    try:
+        return src.factor_to(dst), dst.text
+    except pint.errors.DimensionalityError:
+        raise UnitError(f"{quantity} in {given!r} cannot be converted to {wanted!r} (other dimensions)") from None
+
+
+def to_internal(request: PerfmapRequest) -> tuple[PerfmapRequest, ResultUnits]:
+    """The request in the solver's internal units (module docstring) and the units it is then in; raises
+    :class:`InputRejected` naming ``units.<quantity>`` or ``options.result_units.<quantity>``."""
+    given = request.units or QuantityUnits()
+    wanted = request.options.result_units or ResultUnitsOption()
+    errors: list[FieldError] = []
+    factors: dict[str, float] = {}
+    stated: dict[str, str | None] = {}
+    for quantity in ("flow", "pressure"):
+        src_text, dst_text = getattr(given, quantity), getattr(wanted, quantity)
+        try:
+            src = check_quantity(quantity, src_text)
+        except UnitError as e:
+            errors.append(FieldError(("units", quantity), str(e)))
+            continue
+        try:
+            dst = check_quantity(quantity, dst_text)
+        except UnitError as e:
+            errors.append(FieldError(("options", "result_units", quantity), str(e)))
+            continue
+        if dst is None or (src is not None and src.unit == dst.unit):
+            factors[quantity], stated[quantity] = 1.0, None if src is None else src.text
+        elif src is None:
+            errors.append(FieldError(("options", "result_units", quantity),
+                                     f"{quantity} in {dst_text!r} asked for, but the request does not state the unit "
+                                     f"its {quantity} is in: give units.{quantity} (or a unit in the column header, "
+                                     f"e.g. '{quantity} [{dst_text}]')"))
+        else:
+            try:
+                factors[quantity], stated[quantity] = src.factor_to(dst), dst.text
+            except pint.errors.DimensionalityError:
+                errors.append(FieldError(("options", "result_units", quantity),
+                                         f"{quantity} in {src.text!r} cannot be converted to {dst_text!r} "
+                                         "(other dimensions)"))
+    try:
+        factors["efficiency"] = fraction_factor(given.efficiency)
+    except UnitError as e:
+        errors.append(FieldError(("units", "efficiency"), str(e)))
+    if errors:
+        raise InputRejected(errors)
+    d = len(request.setting_names)
+    settings = [u or None for u in (request.setting_units or [None] * d)]
+    units = ResultUnits(flow=stated["flow"], pressure=stated["pressure"], settings=settings)
+    if all(f == 1.0 for f in factors.values()):
+        return request, units
+    positions = [p.model_copy(update={q: [v * factors[q] for v in getattr(p, q)] for q in MEASURED})
+                 for p in request.positions]
+    converted = request.model_copy(update={
+        "positions": positions,
+        "units": QuantityUnits(flow=units.flow, pressure=units.pressure, efficiency="1")})
+    return converted, units

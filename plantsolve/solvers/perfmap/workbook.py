@@ -1,0 +1,82 @@
+"""Rig tables in Excel workbooks (.xlsx, read with openpyxl): each sheet as rows of cell texts, so that the
+CSV rules (header detection, units, decimal commas, row messages) apply unchanged.
+
+What exporters and people do to a sheet, and what it becomes here:
+- merged cells (a title across the table, a speed value merged down its speed line): every cell of the
+  range holds the range's value, as the sheet shows it;
+- blank rows and rows whose first cell starts with ``#``: skipped (their numbers are kept for messages);
+- numbers stored as text (``'0.85``, ``0,85``): parsed like CSV cells (decimal comma allowed);
+- formulas: their value as last saved by Excel; a formula never calculated (a workbook written by a
+  script) has none and becomes ``=<formula>``, which the table parser refuses naming the cell's row;
+- error values (``#DIV/0!``) and dates stay text and are refused as not numbers.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from dataclasses import dataclass
+from datetime import date, datetime, time
+
+import openpyxl
+from openpyxl.utils.exceptions import InvalidFileException
+
+from plantsolve.solvers.base import reject
+
+
+@dataclass
+class Sheet:
+    name: str
+    rows: list[list[str]]  # cell texts of the non-blank rows
+    numbers: list[int]  # 1-based sheet row of each
+
+
+def _text(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return str(value).upper()
+    if isinstance(value, (int, float)):
+        return repr(float(value)) if isinstance(value, float) else str(value)
+    if isinstance(value, (datetime, date, time)):
+        return value.isoformat()
+    return str(value).strip()
+
+
+def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
+    """The workbook's sheets in order (hidden ones last); raises :class:`InputRejected` when it is not a
+    readable .xlsx or a sheet is longer than ``max_rows``."""
+    try:
+        values = openpyxl.load_workbook(io.BytesIO(content), data_only=True)
+        formulas = openpyxl.load_workbook(io.BytesIO(content), data_only=False)
+    except (zipfile.BadZipFile, InvalidFileException, KeyError, ValueError, TypeError, OSError, EOFError,
+            IndexError, AttributeError) as e:
+        raise reject(f"not a readable Excel .xlsx workbook ({type(e).__name__}); save it from Excel as "
+                     "'Excel Workbook (*.xlsx)' or as CSV") from None
+    sheets = []
+    order = sorted(values.worksheets, key=lambda ws: ws.sheet_state != "visible")
+    for ws in order:
+        if ws.max_row > max_rows:
+            raise reject(f"sheet {ws.title!r} has {ws.max_row:,} rows; at most {max_rows:,} are read")
+        grid = [[_text(v) for v in row] for row in ws.iter_rows(values_only=True)]
+        fws = formulas[ws.title]
+        for r, row in enumerate(grid):
+            for c, cell in enumerate(row):
+                if not cell:
+                    f = fws.cell(row=r + 1, column=c + 1).value
+                    if isinstance(f, str) and f.startswith("="):
+                        row[c] = f
+        for rng in ws.merged_cells.ranges:
+            top = grid[rng.min_row - 1][rng.min_col - 1] if rng.min_row - 1 < len(grid) else ""
+            for r in range(rng.min_row - 1, min(rng.max_row, len(grid))):
+                for c in range(rng.min_col - 1, min(rng.max_col, len(grid[r]))):
+                    grid[r][c] = top
+        rows, numbers = [], []
+        for n, row in enumerate(grid, start=1):
+            while row and not row[-1]:
+                row = row[:-1]
+            if any(row) and not row[0].lstrip().startswith("#"):
+                rows.append(row)
+                numbers.append(n)
+        sheets.append(Sheet(ws.title, rows, numbers))
+    return sheets

@@ -1,0 +1,130 @@
+"""Every perfmap plot states its units on every axis and keeps its legends off the data; the map's exports
+read back."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.artifacts import (curves_csv, figures, map_csv, reachable_boundary,
+                                                  render_artifacts, smooth_on_finer_grid)
+from plantsolve.solvers.perfmap.performance_map import distance_to_region
+from plantsolve.solvers.perfmap.families import curveset_from_fits
+from plantsolve.solvers.perfmap.synthetic import speed_lines
+from tests.support.plots import check_figure
+
+LINES = speed_lines(4, 8, steep=6.0)["positions"]
+
+
+def rig_table(header) -> bytes:
+    out = [";".join(header)]
+    for p in LINES:
+        for f, pr, e in zip(p["flow"], p["pressure"], p["efficiency"]):
+            out.append(";".join(str(v) for v in (p["setting"][0] * 10000, f, pr, 100 * e)))
+    return "\n".join(out).encode()
+
+
+@pytest.fixture(scope="module")
+def rig():
+    req = parse_upload("rig.csv", rig_table(["Speed [rpm]", "Flow [kg/s]", "Pressure rise [kPa]", "Efficiency [%]"]),
+                       {"grid": [24, 24]})
+    return req, solve(req)
+
+
+def test_every_plot_has_units_on_its_axes_and_legends_off_the_data(rig):
+    req, res = rig
+    figs = figures(req, res)
+    assert set(figs) == {"characteristics", "envelopes", "map"}
+    for name, fig in figs.items():
+        check_figure(fig)
+        labels = [a.get_xlabel() for a in fig.axes] + [a.get_ylabel() for a in fig.axes]
+        assert "flow [kg/s]" in labels and (name == "envelopes" or "pressure [kPa]" in labels or name == "map"), name
+    assert "Speed [rpm]" in [a.get_ylabel() for a in figs["map"].axes]
+    assert figs["map"].axes[0].get_legend() is None and figs["map"].legends  # the legend sits outside the map
+
+
+def test_the_unit_not_stated_is_said_so(rig):
+    req = parse_upload("rig.csv", rig_table(["Speed", "Flow", "Pressure", "Efficiency [%]"]), {"grid": [16, 16]})
+    figs = figures(req, solve(req))
+    assert "flow [unit not stated]" in [a.get_xlabel() for a in figs["map"].axes]
+    for fig in figs.values():
+        check_figure(fig)
+
+
+def test_the_label_checker_catches_a_bare_axis():
+    from matplotlib.figure import Figure
+    from tests.support.plots import axis_problems, legend_problems
+    fig = Figure()
+    ax = fig.subplots()
+    ax.plot([0, 1], [0, 1], label="data")
+    ax.set(xlabel="flow", ylabel="y")
+    ax.legend(loc="center")  # right over the line
+    assert len(axis_problems(fig)) == 2 and legend_problems(fig)
+
+
+def test_the_smooth_boundary_lies_on_the_exact_region(rig):
+    """The boundary contour is drawn from the exact distance to the reachable region: at every node of the
+    fine grid outside the map's reachable nodes' band the value is the map's verdict, and inside the band the
+    distance is exact (0 at a point of a characteristic, which is reachable)."""
+    _, res = rig
+    fx, fy, d = reachable_boundary(res)
+    assert d.shape == (len(fy), len(fx)) and np.all(d >= 0)
+    curves = curveset_from_fits(res.settings)
+    x, y, _ = curves.evaluate(np.array([0, 3]), np.array([0.5, 0.5]))
+    tri = np.array(res.triangles).reshape(-1, 3)
+    ranges = (*res.flow_range, *res.pressure_range)
+    assert np.allclose(distance_to_region(curves, tri, np.linspace(0, 1, 129), x, y, ranges), 0.0, atol=1e-12)
+    # the map's verdict away from its boundary: reachable nodes 0, unreachable ones positive
+    m = res.map
+    eta = np.array(m.efficiency, dtype=float)
+    i = int(np.argmin(abs(np.array(m.flow) - fx[80]))), int(np.argmin(abs(np.array(m.pressure) - fy[80])))
+    assert (d[80, 80] == 0) == np.isfinite(eta[i[1], i[0]]) or d[80, 80] < 0.05
+
+
+def test_smoothing_keeps_a_linear_field_and_the_unreachable_nodes():
+    gx, gy = np.linspace(0, 1, 11), np.linspace(0, 2, 21)
+    z = 3 * gx[None, :] + gy[:, None]
+    z[:4, :3] = np.nan
+    fx, fy, fine = smooth_on_finer_grid(gx, gy, z, sigma=0.0)
+    exact = 3 * fx[None, :] + fy[:, None]
+    ok = np.isfinite(fine)
+    assert np.nanmax(abs(fine - exact)[ok & (fy[:, None] > 0.5) & (fx[None, :] > 0.35)]) < 1e-9
+    assert not ok[0, 0] and ok[-1, -1]
+
+
+def test_curves_csv_reads_back_as_the_same_rig(rig):
+    req, res = rig
+    text = curves_csv(res).decode()
+    header = next(csv.reader(io.StringIO(text)))
+    assert header == ["Speed [rpm]", "t [-]", "flow [kg/s]", "pressure [kPa]", "efficiency [-]"]
+    back = parse_upload("curves.csv", text.encode(), {"map": False, "columns": {"t [-]": "ignore"}})
+    assert back.units.flow == "kg/s" and back.units.pressure == "kPa" and back.setting_units == ["rpm"]
+    again = solve(back)
+    for a, b in zip(res.settings, again.settings):
+        assert a.setting == b.setting and b.x_min == pytest.approx(a.x_min) and b.x_max == pytest.approx(a.x_max)
+
+
+def test_map_csv_holds_every_node(rig):
+    _, res = rig
+    rows = list(csv.reader(io.StringIO(map_csv(res).decode())))
+    assert rows[0] == ["flow [kg/s]", "pressure [kPa]", "max efficiency [-]", "optimal Speed [rpm]"]
+    m = res.map
+    assert len(rows) - 1 == len(m.flow) * len(m.pressure)
+    j, i = 5, 7
+    row = rows[1 + j * len(m.flow) + i]
+    assert float(row[0]) == m.flow[i] and float(row[1]) == m.pressure[j]
+    assert (row[2] == "") == (m.efficiency[j][i] is None)
+    names = [a.name for a in render_artifacts(*rig)]
+    assert "map.csv" in names and "curves.csv" in names
+
+
+def test_a_setting_with_few_values_is_contoured_where_the_optimum_changes_side():
+    from plantsolve.solvers.perfmap.artifacts import setting_levels
+
+    assert setting_levels(np.array([0.0, 5.0, 0.0, 5.0])) == [2.5]
+    assert setting_levels(np.array([0.0, 2.0, 6.0])) == [1.0, 4.0]
+    assert setting_levels(np.linspace(0.5, 1.1, 9)) == 8
