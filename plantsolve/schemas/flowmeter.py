@@ -32,17 +32,26 @@ class Pipe(StrictModel):
 
 
 class Electrodes(StrictModel):
-    shape: Literal["patch", "point"] = Field(
+    shape: Literal["patch", "point", "button"] = Field(
         default="patch",
         description="'patch': theta-z patches of half-angle beta and half-length a, equipotential; "
-        "'point': point electrodes (Shercliff's weight function).")
+        "'point': point electrodes (Shercliff's weight function); 'button': cylindrical electrodes of "
+        "radius r_e through the wall along x, protruding l_e into the flow (0: flush discs), equipotential.")
     half_angle: float = Field(
         default=22.5, gt=0, lt=90, allow_inf_nan=False,
-        description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90.")
+        description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90 (not used by points and buttons).")
     half_length: float | None = Field(
         default=None, gt=0, le=1e10, allow_inf_nan=False,
         description="Half-length a of a patch electrode along z; null means electrodes along the whole "
-        "liner (the 2-D case, solved exactly).")
+        "liner (the 2-D case, solved exactly). Null for points and buttons.")
+    radius: float | None = Field(
+        default=None, gt=0, le=1e9, allow_inf_nan=False,
+        description="Radius r_e of a button electrode (units): its face on the wall is y^2 + z^2 <= r_e^2; "
+        "0.02 R <= r_e <= 0.8 R and r_e <= L/2. Required for buttons only.")
+    protrusion: float = Field(
+        default=0.0, ge=0, le=1e9, allow_inf_nan=False,
+        description="Length l_e by which a button enters the flow (units), 0 <= l_e <= 0.9 R (the two tips stay apart); 0 is a flush disc. "
+        "Buttons only.")
 
 
 class UniformField(StrictModel):
@@ -90,8 +99,9 @@ class FlowmeterOptions(StrictModel):
         default="auto",
         description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
         "finite patches in a uniform field, finite elements for finite patches in a grid field; "
-        "'integral_equation': the Galerkin integral equation on the electrode (uniform field); 'fem': finite "
-        "elements (scikit-fem) for patches; 'first_order': the uniform current-density iterate (S = sin(beta)/beta).")
+        "'integral_equation': the Galerkin integral equation on the electrode (patches and flush buttons); 'fem': "
+        "finite elements (scikit-fem) for patches and buttons; 'first_order': the uniform current-density iterate "
+        "(S = sin(beta)/beta for patches).")
     tolerance: float = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
                              description="Target accuracy of S; for 'fem' it sets the mesh size.")
     probe_points: list[list[Measured]] = Field(

@@ -39,6 +39,14 @@ def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
         arc = np.linspace(-beta, beta, 50)
         for sign in (1, -1):
             ax.plot(sign * radius * np.cos(arc), radius * np.sin(arc), color="red", lw=4)
+    elif request.electrodes.shape == "button":
+        r_e, l_e = request.electrodes.radius, request.electrodes.protrusion
+        arc = np.linspace(-np.arcsin(min(r_e / radius, 1.0)), np.arcsin(min(r_e / radius, 1.0)), 50)
+        for sign in (1, -1):
+            ax.plot(sign * radius * np.cos(arc), radius * np.sin(arc), color="red", lw=4)
+            if l_e > 0:  # the protruding cylinder's section at z = 0
+                ax.fill([sign * radius * np.cos(arc[0]), sign * (radius - l_e), sign * (radius - l_e),
+                         sign * radius * np.cos(arc[-1])], [-r_e, -r_e, r_e, r_e], color="red")
     else:
         ax.plot([radius, -radius], [0, 0], "o", color="red", ms=8)
     ax.annotate("", xy=(0, 0.6 * radius), xytext=(0, 0.2 * radius), arrowprops={"arrowstyle": "->", "color": "white"})

@@ -102,25 +102,34 @@ def mesh_size(tolerance: float) -> float:
     return float(np.clip(0.12 * np.sqrt(tolerance / 1e-3), 0.08, 0.25))
 
 
-def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, progress: Progress,
-                    grid: FieldGrid | None = None) -> WeightField:
-    """FEM reference (module fem), calibrated by the exact 2-D value: the ratio of the exact
+def finite_elements(beta: float | None, a: float, half_liner: float, tolerance: float, progress: Progress,
+                    grid: FieldGrid | None = None, button: tuple[float, float] | None = None) -> WeightField:
+    """FEM reference (module fem). Patches are calibrated by the exact 2-D value: the ratio of the exact
     full-length S to the FEM's (uniform field) on the same cross-section mesh multiplies S and W,
-    removing most of the error of the theta-edge singularity and of the polygonal wall; the change
-    of the calibrated S between the mesh and one 1.5 times coarser is the error estimate."""
-    exact_2d = np.pi / 2 / weight2d.electrode_current_integral(beta)
+    removing most of the error of the theta-edge singularity and of the polygonal wall. Buttons
+    have no such companion and are reported uncalibrated. The change of S between the mesh and one
+    1.5 times coarser is the error estimate."""
     h = mesh_size(tolerance)
     at = None if grid is None else grid.at
     runs = []
     for step, size in enumerate((1.5 * h, h)):
         progress(0.1 + 0.35 * step, f"finite elements, mesh size {size:.3g} R")
+        if button is not None:
+            patch = fem.solve_button(*button, half_liner, h=size, field=at)
+            runs.append((patch, None, 1.0))
+            continue
         patch = fem.solve_patch(beta, a, half_liner, h=size, field=at)
+        progress(0.25 + 0.35 * step, f"finite elements, full-length companion for the calibration, mesh size {size:.3g} R")
         full = fem.solve_patch(beta, half_liner, half_liner, h=size)
+        exact_2d = np.pi / 2 / weight2d.electrode_current_integral(beta)
         runs.append((patch, full, exact_2d / full.sensitivity))
+    progress(0.8, "finite elements: weight function")
     patch, full, ratio = runs[-1]
     coarse_patch, _, coarse_ratio = runs[0]
     calibrated = patch.sensitivity * ratio
     error = abs(calibrated - coarse_patch.sensitivity * coarse_ratio)
+    if button is not None:  # uncalibrated, first order in h: the error is about twice the change from 1.5 h
+        error *= 2
     weight = patch.weight * ratio
     tri = Triangulation(patch.nodes[:, 0], patch.nodes[:, 1], patch.triangles)
     finder = tri.get_trifinder()
@@ -165,15 +174,19 @@ def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, 
     # For a uniform field W is harmonic in this model (the z-integrated potential has no z-flux
     # through the insulated ends), so every axisymmetric profile has the same S: the
     # laminar-uniform difference measures the discretisation error of W itself.
-    if grid is None:
+    # A protruding button takes fluid out of the disc: W is harmonic only in what is left, and the
+    # profile matters for real (the electrode weighs the flow where it reaches into it).
+    if grid is None and (button is None or button[1] == 0):
         laminar = integrate(lambda x, y: profiles.axisymmetric("laminar", np.hypot(x, y)))
         error = max(error, abs(laminar - integrate(lambda x, y: np.ones_like(x))))
     # No current density: the lumped nodal reaction misstates it on the symmetry planes (by about
     # 4/3 at the electrode centre against the exact 2-D density), so none is reported.
+    model = ("equipotential button electrodes (radius, protrusion) on an insulated liner section (ends insulated), "
+             "FEM, staircase electrode boundary" if button is not None else
+             "equipotential patches on an insulated liner section (ends insulated), FEM")
     return WeightField("fem", values, integrate, error, np.zeros((0, 2)),
                        {"mesh_size": h, "unknowns": patch.unknowns, "tetrahedra": patch.tetrahedra,
-                        "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio,
-                        "model": "equipotential patches on an insulated liner section (ends insulated), FEM"})
+                        "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio, "model": model})
 
 
 def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float) -> WeightField:
@@ -203,6 +216,8 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
     grid = field_grid(request)
     average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
+    if g.button is not None:
+        return finite_elements(None, 0.0, g.half_liner, request.options.tolerance, progress, grid, g.button)
     if g.beta is None:
         return closed_form(None, method)
     if method == "first_order":
@@ -282,7 +297,10 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     inside = np.hypot(gx, gy) < 1 - 1e-9
     gw = field.values(gx[inside], gy[inside])
     grid = np.column_stack([gx[inside] * radius, gy[inside] * radius, gw]).tolist()
-    first_order = 1.0 if g.beta is None else weight2d.sensitivity_first_order(g.beta)
+    if g.button is not None:
+        first_order = weight2d.sensitivity_first_order_button(g.button[0])
+    else:
+        first_order = 1.0 if g.beta is None else weight2d.sensitivity_first_order(g.beta)
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
     progress(1.0, "done")
     return FlowmeterResult(
