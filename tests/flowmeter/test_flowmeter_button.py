@@ -117,3 +117,38 @@ def test_a_button_wider_than_the_liner_is_refused():
     with pytest.raises(InputRejected) as error:
         check_input(FlowmeterRequest.model_validate(body))
     assert error.value.errors[0].loc == ("electrodes", "radius")
+
+
+def test_the_integral_equation_for_flush_buttons_reaches_the_small_button_limit():
+    # (1 - S) / r^2 tends to 1/6 with a correction of order r^2
+    from plantsolve.solvers.flowmeter.integral_equation_button import solve_button as ie_button
+
+    ratios = []
+    for r_e in (0.3, 0.2, 0.1):
+        solution = ie_button(r_e, 3.0)
+        assert solution.error_estimate < 1e-4
+        ratios.append((1 - solution.sensitivity) / r_e**2)
+        assert abs(ratios[-1] - 1 / 6) < 0.06 * r_e**2
+    assert ratios[0] > ratios[1] > ratios[2] > 1 / 6
+
+
+@pytest.mark.parametrize("r_e", [5.0, 10.0])
+def test_integral_equation_and_finite_elements_agree_for_flush_buttons(r_e):
+    probes = [[-20.0, 15.0], [10.0, -25.0]]
+    ie = run(r_e, probes=probes)
+    by_fem = run(r_e, method="fem", tolerance=1e-3, probes=probes)
+    assert ie.method == "integral_equation" and by_fem.method == "fem"
+    assert abs(ie.sensitivity - by_fem.sensitivity) < 3e-4
+    assert np.allclose(ie.probes, by_fem.probes, atol=3e-3)
+    # the current per wall area at z = 0 peaks at the rim
+    theta, j = np.array(ie.electrode_current).T
+    assert np.all(j > 0) and j[np.argmax(np.abs(theta))] > 3 * j[np.argmin(np.abs(theta))]
+
+
+def test_flush_button_scaling_by_the_integral_equation():
+    small = solve(FlowmeterRequest.model_validate(meter(radius=1.0, units="m", shape="button", button_radius=0.15,
+                                                        liner_length=6.0)), no_progress)
+    large = solve(FlowmeterRequest.model_validate(meter(radius=500.0, units="mm", shape="button", button_radius=75.0,
+                                                        liner_length=3000.0)), no_progress)
+    assert small.method == large.method == "integral_equation"
+    assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-12)

@@ -25,7 +25,7 @@ from scipy.special import binom, jv, roots_legendre
 
 from plantsolve.solvers.flowmeter.integral_equation import DECAY_LENGTH, IntegralEquationSolution, bessel_ratio_table
 
-LEVEL_SPAN = 20.0  # M asin(r) of the coarsest level (200 modes for a 22.5 degree patch is 78)
+LEVEL_SPAN = 10.0  # M asin(r) of the coarsest level (200 modes for a 22.5 degree patch is 78); doubled below 1e-4
 BUDGET = 6_000_000  # (theta modes) x (z modes) of the finest level, per basis function
 
 
@@ -36,9 +36,10 @@ def chebyshev_of_power(q: int) -> np.ndarray:
     return alpha
 
 
-def levels(radius: float) -> list[int]:
+def levels(radius: float, tolerance: float = 1e-3) -> list[int]:
     """Theta-mode counts of the three levels."""
-    base = int(np.ceil(LEVEL_SPAN / np.arcsin(radius) / 10) * 10)
+    span = LEVEL_SPAN if tolerance >= 1e-4 else 2 * LEVEL_SPAN
+    base = int(np.ceil(span / np.arcsin(radius) / 10) * 10)
     return [base, 2 * base, 4 * base]
 
 
@@ -48,8 +49,8 @@ def z_modes(radius: float, half_liner: float, modes: int) -> int:
     return int(np.ceil((2 * modes - 1) * np.arcsin(radius) / radius * cut / np.pi)) + 1
 
 
-def feasible(radius: float, half_liner: float) -> bool:
-    finest = levels(radius)[-1]
+def feasible(radius: float, half_liner: float, tolerance: float = 1e-3) -> bool:
+    finest = levels(radius, tolerance)[-1]
     return finest * z_modes(radius, half_liner, finest) <= BUDGET
 
 
@@ -102,7 +103,7 @@ def solve_button(radius: float, half_liner: float, tolerance: float = 1e-4, p: i
     """S (Richardson-extrapolated over three mode levels) and W's series for a flush button of radius
     ``radius`` (R = 1) on an insulated liner of half-length ``half_liner``. The error estimate is the
     extrapolation's change plus the change from one more basis function each way."""
-    counts = levels(radius)
+    counts = levels(radius, tolerance)
     finest, rows = counts[-1], z_modes(radius, half_liner, counts[-1])
     table, current, k, cut = transforms(radius, half_liner, finest, p + 1, q + 1)
     m = np.arange(1, 2 * finest, 2).astype(float)

@@ -19,7 +19,7 @@ from matplotlib.tri import LinearTriInterpolator, Triangulation
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress
-from plantsolve.solvers.flowmeter import fem, integral_equation, profiles, weight2d
+from plantsolve.solvers.flowmeter import fem, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
 from plantsolve.solvers.flowmeter.validation import check_input, geometry
 
@@ -189,10 +189,23 @@ def finite_elements(beta: float | None, a: float, half_liner: float, tolerance: 
                         "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio, "model": model})
 
 
-def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float) -> WeightField:
-    """The integral equation on the electrode (module integral_equation): S extrapolated in the modes,
-    W from its series, integrated ring by ring on the polar rule (exact values of the series there)."""
-    solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
+def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float,
+                            button: float | None = None, progress: Progress | None = None) -> WeightField:
+    """The integral equation on the electrode (modules integral_equation, integral_equation_button): S
+    extrapolated in the modes, W from its series, integrated ring by ring on the polar rule (exact
+    values of the series there)."""
+    if button is None:
+        solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
+        theta = edge_nodes(beta)
+        current = np.column_stack([theta, integral_equation.current_density(solution, beta, theta)])
+        model = "equipotential patches on an insulated liner section (ends insulated), Galerkin integral equation on the electrode"
+    else:
+        solution = integral_equation_button.solve_button(button, half_liner, tolerance, progress=progress)
+        theta = edge_nodes(float(np.arcsin(button)))
+        current = np.column_stack([theta, integral_equation_button.current_density(solution, button, theta)])
+        model = "equipotential flush buttons on an insulated liner section (ends insulated), Galerkin integral equation on the electrode"
+    if progress is not None:
+        progress(0.8, "integral equation: weight function on the cross-section")
     quadrature = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
     rings = np.concatenate([integral_equation.weight_on_ring(solution.series, r, count) for r, count in quadrature.rings])
 
@@ -201,13 +214,9 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
 
     # the rule's own error: its uniform-flow integral against W(0), equal for a harmonic W
     error = solution.error_estimate + abs(integrate(lambda x, y: np.ones_like(x)) - solution.sensitivity)
-    theta = edge_nodes(beta)
-    current = np.column_stack([theta, integral_equation.current_density(solution, beta, theta)])
     return WeightField("integral_equation", lambda x, y: integral_equation.weight_at(solution.series, x, y),
                        integrate, error, current,
-                       {"modes": solution.levels, "basis": solution.basis,
-                        "model": "equipotential patches on an insulated liner section (ends insulated), "
-                                 "Galerkin integral equation on the electrode"})
+                       {"modes": solution.levels, "basis": solution.basis, "model": model})
 
 
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
@@ -217,6 +226,11 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
     average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
     if g.button is not None:
+        r_e, l_e = g.button
+        flush_ie = l_e == 0 and grid is None and integral_equation_button.feasible(r_e, g.half_liner, request.options.tolerance)
+        if method == "integral_equation" or (method == "auto" and flush_ie):
+            progress(0.1, "integral equation on the button")
+            return integral_equation_field(0.0, 0.0, g.half_liner, request.options.tolerance, r_e, progress)
         return finite_elements(None, 0.0, g.half_liner, request.options.tolerance, progress, grid, g.button)
     if g.beta is None:
         return closed_form(None, method)

@@ -11,6 +11,7 @@ from scipy.spatial import ConvexHull, QhullError
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.flowmeter.integral_equation import feasible
+from plantsolve.solvers.flowmeter.integral_equation_button import feasible as feasible_button
 from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
@@ -58,6 +59,11 @@ def check_input(request: FlowmeterRequest) -> None:
             errors.append(FieldError(("options", "method"),
                                      "the integral equation lives on the wall: it models flush buttons (protrusion 0); "
                                      "a protruding button takes 'fem' (or 'auto')"))
+        elif e.radius is not None and 0.02 * radius <= e.radius <= 0.8 * radius and not feasible_button(
+                e.radius / radius, liner / (2 * radius), request.options.tolerance):
+            errors.append(FieldError(("options", "method"),
+                                     f"a button this small (r_e/R = {e.radius / radius:.3g}) needs more modes than the "
+                                     "integral equation's memory budget; use 'fem' or 'auto'"))
     elif request.options.method == "integral_equation":
         if e.shape != "patch" or e.half_length is None or e.half_length >= liner / 2:
             errors.append(FieldError(("options", "method"),
