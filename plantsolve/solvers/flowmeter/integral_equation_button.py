@@ -23,7 +23,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import binom, jv, roots_legendre
 
-from plantsolve.solvers.flowmeter.integral_equation import DECAY_LENGTH, IntegralEquationSolution, bessel_ratio_table
+from plantsolve.solvers.flowmeter.integral_equation import (DECAY_LENGTH, WALL_MODES, IntegralEquationSolution,
+                                                            bessel_ratio_table)
 
 LEVEL_SPAN = 10.0  # M asin(r) of the coarsest level (200 modes for a 22.5 degree patch is 78); doubled below 1e-4
 BUDGET = 6_000_000  # (theta modes) x (z modes) of the finest level, per basis function
@@ -119,9 +120,11 @@ def solve_button(radius: float, half_liner: float, tolerance: float = 1e-4, p: i
     extrapolated = [2 * s[1] - s[0], 2 * s[2] - s[1]]
     richer = galerkin(table, current, ratios, k, cut, finest, rows)[0]
     error = abs(extrapolated[1] - extrapolated[0]) + abs(richer - s[2])
-    series = results[-1][1] * (extrapolated[1] / s[2])
+    scale = extrapolated[1] / s[2]
+    series = results[-1][1] * scale
+    wall = np.tensordot(results[-1][2], table[keep][:, :, :WALL_MODES], axes=1) * scale
     return IntegralEquationSolution(extrapolated[1], error, series, results[-1][2],
-                                    [(mm, sv) for mm, sv in zip(counts, s)], (p, q))
+                                    [(mm, sv) for mm, sv in zip(counts, s)], (p, q), wall, cut)
 
 
 def current_density(solution: IntegralEquationSolution, radius: float, theta: np.ndarray) -> np.ndarray:

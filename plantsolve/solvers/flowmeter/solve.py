@@ -19,7 +19,7 @@ from matplotlib.tri import LinearTriInterpolator, Triangulation
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress
-from plantsolve.solvers.flowmeter import fem, integral_equation, integral_equation_button, profiles, weight2d
+from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
 from plantsolve.solvers.flowmeter.validation import check_input, geometry
 
@@ -190,7 +190,8 @@ def finite_elements(beta: float | None, a: float, half_liner: float, tolerance: 
 
 
 def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float,
-                            button: float | None = None, progress: Progress | None = None) -> WeightField:
+                            button: float | None = None, progress: Progress | None = None,
+                            grid: FieldGrid | None = None) -> WeightField:
     """The integral equation on the electrode (modules integral_equation, integral_equation_button): S
     extrapolated in the modes, W from its series, integrated ring by ring on the polar rule (exact
     values of the series there)."""
@@ -204,6 +205,8 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
         theta = edge_nodes(float(np.arcsin(button)))
         current = np.column_stack([theta, integral_equation_button.current_density(solution, button, theta)])
         model = "equipotential flush buttons on an insulated liner section (ends insulated), Galerkin integral equation on the electrode"
+    if grid is not None:
+        return integral_equation_in_grid(solution, grid, current, model, progress)
     if progress is not None:
         progress(0.8, "integral equation: weight function on the cross-section")
     quadrature = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
@@ -219,6 +222,39 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
                        {"modes": solution.levels, "basis": solution.basis, "model": model})
 
 
+def integral_equation_in_grid(solution, grid: FieldGrid, current: np.ndarray, model: str,
+                              progress: Progress | None) -> WeightField:
+    """W in a grid field from the integral equation's current (module grid_weight): the z-mean field
+    on the z-integrated series (fine rule) plus the modes of the field's variation along z (light rule)."""
+    extra = grid_weight.grid_weight(solution, grid, progress)
+    if progress is not None:
+        progress(0.8, "integral equation: z-mean field on the cross-section")
+    fine = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
+    c = np.concatenate([integral_equation.complex_on_ring(solution.series, r, count) for r, count in fine.rings])
+    pts = np.column_stack([fine.x, fine.y])
+    w0 = extra.mean_by(pts) * c.real + extra.mean_bx(pts) * c.imag
+    light = extra.quadrature
+
+    def integrate(velocity) -> float:
+        return float((np.sum(w0 * velocity(fine.x, fine.y) * fine.w)
+                      + np.sum(extra.values * velocity(light.x, light.y) * light.w)) / np.pi)
+
+    def values(x, y):
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        at = np.column_stack([np.ravel(x), np.ravel(y)])
+        cz = integral_equation.complex_weight_at(solution.series, x, y)
+        base = extra.mean_by(at).reshape(x.shape) * cz.real + extra.mean_bx(at).reshape(x.shape) * cz.imag
+        return base + grid_weight.interpolate_rings(light, extra.values, np.ravel(x), np.ravel(y)).reshape(x.shape)
+
+    s = integrate(lambda x, y: np.ones_like(x))
+    truncation = abs(float(np.sum((extra.values - extra.half_values) * light.w) / np.pi))
+    # the uniform-field estimate, scaled to this field, plus the truncation of the field's z modes
+    error = solution.error_estimate * abs(s) / max(solution.sensitivity, 1e-300) + truncation
+    return WeightField("integral_equation", values, integrate, error, current,
+                       {"modes": solution.levels, "basis": solution.basis, "field_z_modes": int(solution.wall.shape[1]),
+                        "field_z_truncation": truncation, "model": model + ", in the grid field (z modes of B)"})
+
+
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
     """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function."""
     g = geometry(request)
@@ -227,10 +263,10 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
     method = request.options.method
     if g.button is not None:
         r_e, l_e = g.button
-        flush_ie = l_e == 0 and grid is None and integral_equation_button.feasible(r_e, g.half_liner, request.options.tolerance)
+        flush_ie = l_e == 0 and integral_equation_button.feasible(r_e, g.half_liner, request.options.tolerance)
         if method == "integral_equation" or (method == "auto" and flush_ie):
             progress(0.1, "integral equation on the button")
-            return integral_equation_field(0.0, 0.0, g.half_liner, request.options.tolerance, r_e, progress)
+            return integral_equation_field(0.0, 0.0, g.half_liner, request.options.tolerance, r_e, progress, grid)
         return finite_elements(None, 0.0, g.half_liner, request.options.tolerance, progress, grid, g.button)
     if g.beta is None:
         return closed_form(None, method)
@@ -238,10 +274,10 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
         return closed_form(g.beta, "first_order", average)
     if method == "auto" and g.full_length:
         return closed_form(g.beta, "exact", average)
-    if method == "integral_equation" or (method == "auto" and grid is None
-                                          and integral_equation.feasible(g.beta, g.half_length, g.half_liner)):
+    if method == "integral_equation" or (method == "auto" and integral_equation.feasible(g.beta, g.half_length, g.half_liner)):
         progress(0.1, "integral equation on the electrode")
-        return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance)
+        return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance,
+                                       progress=progress, grid=grid)
     return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress, grid)
 
 

@@ -74,10 +74,6 @@ def check_input(request: FlowmeterRequest) -> None:
                                      f"electrodes this short for their width (a/R = {e.half_length / radius:.3g}, "
                                      f"beta = {e.half_angle:g} deg) need more modes than the integral equation's "
                                      "memory budget; use 'fem' or 'auto'"))
-        elif request.magnetic_field.type != "uniform":
-            errors.append(FieldError(("options", "method"),
-                                     "'integral_equation' gives the z-integrated current only, which a uniform field "
-                                     "needs; a grid field takes 'fem' (or 'auto')"))
     if request.options.method == "fem" and e.shape == "point":
         errors.append(FieldError(("options", "method"), "'fem' models patches and buttons; point electrodes are solved exactly"))
     if request.options.method == "first_order" and e.shape == "button":
