@@ -144,5 +144,9 @@ class FlowmeterResult(BaseModel):
     grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")
     electrode_current: list[list[float]] = Field(
         default_factory=list, description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
-        "[theta deg, j R^2 / I] for patches, [theta deg, j R / I'] (I' per unit length) along the whole liner.")
+        "[theta deg, j R^2 / I] for patches and buttons, [theta deg, j R / I'] (I' per unit length) along the whole liner. "
+        "From the integral equation or the closed form; the finite elements report none.")
+    electrode_current_map: list[list[float]] = Field(
+        default_factory=list, description="The electrode current density over the electrode at +R (integral equation "
+        "only): rows [theta deg, z (units), j R^2 / I] on Chebyshev points, the edges singular (inverse square root).")
     report: Report

@@ -65,7 +65,8 @@ def test_the_api_solves_the_shipped_example_and_refuses_nan(client):
     assert view["status"] == "succeeded", view["report"]
     result = client.get(f"/v1/jobs/{view['id']}/result").json()
     assert result["method"] == "integral_equation" and abs(result["sensitivity"] - 0.965) < 2e-3
-    assert {a["name"] for a in view["artifacts"]} >= {"weight_function.png", "linearity.png", "weight_grid.csv"}
+    assert {a["name"] for a in view["artifacts"]} >= {"weight_function.png", "electrode_current.png", "linearity.png",
+                                                     "weight_grid.csv"}
     bad = client.post("/v1/flowmeter/jobs", content=json.dumps(body).replace('"magnitude": 0.01', '"magnitude": NaN'),
                       headers={"Content-Type": "application/json"})
     assert bad.status_code == 422

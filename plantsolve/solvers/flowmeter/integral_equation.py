@@ -42,6 +42,7 @@ class IntegralEquationSolution:
     # rescaled like ``series``), odd m, k_n = n pi / cut for n < WALL_MODES: what a grid field needs
     wall: np.ndarray | None = None
     cut: float = 0.0
+    previous_coefficients: np.ndarray | None = None  # the level below's (the density's error estimate)
 
 
 WALL_MODES = 97  # z modes kept for a field that varies along z (module grid_weight)
@@ -114,13 +115,13 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
     half-length ``a`` on an insulated liner of half-length ``half_liner`` (R = 1)."""
     modes = 200
     shared = ratio_table(beta, a, half_liner, 800)  # the first three levels read one table
-    levels = [(modes, *galerkin(beta, a, half_liner, modes, ratios=shared)[:2])]
+    levels = [(modes, *galerkin(beta, a, half_liner, modes, ratios=shared))]
     extrapolated: list[float] = []
     while True:
         modes *= 2
         table = shared if modes <= 800 else None
         s, series, coefficients = galerkin(beta, a, half_liner, modes, ratios=table)
-        levels.append((modes, s, series))
+        levels.append((modes, s, series, coefficients))
         extrapolated.append(2 * levels[-1][1] - levels[-2][1])
         if len(extrapolated) >= 2:
             error = abs(extrapolated[-1] - extrapolated[-2])
@@ -140,15 +141,22 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
     big_b = a * np.pi * (-1.0) ** np.arange(q)[None] * jv(2 * np.arange(q)[None], k[:, None] * a)
     wall = big_a @ coefficients @ big_b.T * scale
     return IntegralEquationSolution(extrapolated[-1], error, series, coefficients, [(lv[0], lv[1]) for lv in levels], (6, 6),
-                                    wall, cut)
+                                    wall, cut, levels[-2][3])
 
 
-def current_density(solution: IntegralEquationSolution, beta: float, theta: np.ndarray) -> np.ndarray:
-    """The electrode current density at z = 0 for the current 1 (R = 1), at angles inside (-beta, beta)."""
-    t = theta / beta
-    p, q = solution.coefficients.shape
-    along = sum(solution.coefficients[:, j] * (-1.0) ** j for j in range(q))  # T_2q(0) = (-1)^q
-    return sum(along[i] * np.cos(2 * i * np.arccos(t)) for i in range(p)) / np.sqrt(1 - t * t)
+def current_density(solution: IntegralEquationSolution, beta: float, theta: np.ndarray, z: np.ndarray | None = None,
+                    a: float = 1.0, coefficients: np.ndarray | None = None) -> np.ndarray:
+    """The electrode current density sigma (per unit wall area, R = 1, current 1) at angles inside
+    (-beta, beta) and, with ``z`` (same shape as theta) and the half-length ``a``, at heights inside
+    (-a, a); at z = 0 without. ``coefficients`` replaces the solution's (another level's)."""
+    c = solution.coefficients if coefficients is None else coefficients
+    t = np.asarray(theta, float) / beta
+    s = np.zeros_like(t) if z is None else np.asarray(z, float) / a
+    p, q = c.shape
+    across = [np.cos(2 * i * np.arccos(t)) for i in range(p)]
+    along = [np.cos(2 * j * np.arccos(s)) for j in range(q)]
+    total = sum(c[i, j] * across[i] * along[j] for i in range(p) for j in range(q))
+    return total / np.sqrt((1 - t * t) * (1 - s * s))
 
 
 def weight_at(series: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -124,14 +124,18 @@ def solve_button(radius: float, half_liner: float, tolerance: float = 1e-4, p: i
     series = results[-1][1] * scale
     wall = np.tensordot(results[-1][2], table[keep][:, :, :WALL_MODES], axes=1) * scale
     return IntegralEquationSolution(extrapolated[1], error, series, results[-1][2],
-                                    [(mm, sv) for mm, sv in zip(counts, s)], (p, q), wall, cut)
+                                    [(mm, sv) for mm, sv in zip(counts, s)], (p, q), wall, cut, results[-2][2])
 
 
-def current_density(solution: IntegralEquationSolution, radius: float, theta: np.ndarray) -> np.ndarray:
-    """The current per unit wall area sigma = sigma' cos(theta) at z = 0, at angles |theta| < asin(r), for I = 1."""
-    y = np.sin(theta)
+def current_density(solution: IntegralEquationSolution, radius: float, theta: np.ndarray, z: np.ndarray | None = None,
+                    coefficients: np.ndarray | None = None) -> np.ndarray:
+    """The current per unit wall area sigma = sigma' cos(theta) (R = 1, current 1) at points
+    (theta, z) of the disc sin^2 theta + z^2 < r^2 (z = 0 without ``z``); ``coefficients`` replaces
+    the solution's (another level's)."""
+    y = np.sin(np.asarray(theta, float))
+    zz = np.zeros_like(y) if z is None else np.asarray(z, float)
     p, q = solution.basis
-    c = solution.coefficients
-    base = 1 / np.sqrt(1 - (y / radius) ** 2)
-    # at z = 0 only q = 0 survives
-    return np.cos(theta) * base * sum(c[i * q] * (y / radius) ** (2 * i) for i in range(p))
+    c = solution.coefficients if coefficients is None else coefficients
+    base = 1 / np.sqrt(1 - (y * y + zz * zz) / radius**2)
+    total = sum(c[i * q + j] * (y / radius) ** (2 * i) * (zz / radius) ** (2 * j) for i in range(p) for j in range(q))
+    return np.cos(np.asarray(theta, float)) * base * total

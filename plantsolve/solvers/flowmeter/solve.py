@@ -37,6 +37,7 @@ class WeightField:
     error_estimate: float
     electrode_current: np.ndarray  # rows (theta rad, j R / I)
     details: dict
+    current_map: np.ndarray | None = None  # rows (theta rad, z / R, j R^2 / I) over the electrode
 
 
 def quadrature_field(method: str, values, current: np.ndarray, details: dict) -> WeightField:
@@ -197,16 +198,32 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
     values of the series there)."""
     if button is None:
         solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
-        theta = edge_nodes(beta)
-        current = np.column_stack([theta, integral_equation.current_density(solution, beta, theta)])
-        model = "equipotential patches on an insulated liner section (ends insulated), Galerkin integral equation on the electrode"
+
+        def density(theta, z=None, coefficients=None):
+            return integral_equation.current_density(solution, beta, theta, z, a, coefficients)
+
+        width, model = beta, ("equipotential patches on an insulated liner section (ends insulated), "
+                              "Galerkin integral equation on the electrode")
     else:
         solution = integral_equation_button.solve_button(button, half_liner, tolerance, progress=progress)
-        theta = edge_nodes(float(np.arcsin(button)))
-        current = np.column_stack([theta, integral_equation_button.current_density(solution, button, theta)])
-        model = "equipotential flush buttons on an insulated liner section (ends insulated), Galerkin integral equation on the electrode"
+
+        def density(theta, z=None, coefficients=None):
+            return integral_equation_button.current_density(solution, button, theta, z, coefficients)
+
+        width, model = float(np.arcsin(button)), ("equipotential flush buttons on an insulated liner section (ends "
+                                                  "insulated), Galerkin integral equation on the electrode")
+    theta = edge_nodes(width)
+    current = np.column_stack([theta, density(theta)])
+    # the density converges more slowly than S (about 1/M at the edges): its change from the level
+    # below, on the part without the edge singularity (density times the distance factor)
+    smooth = np.sqrt(1 - (theta / width) ** 2)
+    change = float(np.max(np.abs(density(theta, coefficients=solution.previous_coefficients) - current[:, 1]) * smooth)
+                   / np.max(np.abs(current[:, 1]) * smooth))
+    current_map = electrode_map(density, width, a if button is None else button, button is not None)
     if grid is not None:
-        return integral_equation_in_grid(solution, grid, current, model, progress)
+        field = integral_equation_in_grid(solution, grid, current, model, progress)
+        field.current_map, field.details["electrode_current_change"] = current_map, change
+        return field
     if progress is not None:
         progress(0.8, "integral equation: weight function on the cross-section")
     quadrature = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
@@ -219,7 +236,21 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
     error = solution.error_estimate + abs(integrate(lambda x, y: np.ones_like(x)) - solution.sensitivity)
     return WeightField("integral_equation", lambda x, y: integral_equation.weight_at(solution.series, x, y),
                        integrate, error, current,
-                       {"modes": solution.levels, "basis": solution.basis, "model": model})
+                       {"modes": solution.levels, "basis": solution.basis, "model": model,
+                        "electrode_current_change": change}, current_map)
+
+
+def electrode_map(density, width: float, half_length: float, disc: bool, count: int = 25) -> np.ndarray:
+    """The density on Chebyshev points over the electrode: rows (theta rad, z / R, j R^2 / I); for a
+    button the z points of each theta span its chord of the disc."""
+    nodes = np.cos(np.pi * (np.arange(count) + 0.5) / count)
+    theta = width * nodes
+    rows = []
+    for t in theta:
+        reach = np.sqrt(max(half_length**2 - np.sin(t) ** 2, 0.0)) if disc else half_length
+        z = reach * nodes
+        rows.append(np.column_stack([np.full(count, t), z, density(np.full(count, t), z)]))
+    return np.vstack(rows)
 
 
 def integral_equation_in_grid(solution, grid: FieldGrid, current: np.ndarray, model: str,
@@ -352,12 +383,15 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     else:
         first_order = 1.0 if g.beta is None else weight2d.sensitivity_first_order(g.beta)
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
+    current_map = [] if field.current_map is None else [
+        [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
     progress(1.0, "done")
     return FlowmeterResult(
         sensitivity=s, sensitivity_first_order=first_order, signal=signal, probes=probes,
         linearity=linearity(field, list(request.reynolds)),
         ideal_meter_residual=ideal_meter_residual(field, field.integrate(lambda x, y: np.ones_like(x))),
         method=field.method, error_estimate=field.error_estimate, grid=grid, electrode_current=current,
+        electrode_current_map=current_map,
         report=Report(status="warning" if notes else "ok",
                       message=f"S = {s:.6f} ({field.method}, estimated error {field.error_estimate:.1e}); "
                               f"first-order sin(beta)/beta = {first_order:.6f}.",
