@@ -98,7 +98,8 @@ class FlowmeterOptions(StrictModel):
     method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
         default="auto",
         description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
-        "finite patches in a uniform field, finite elements for finite patches in a grid field; "
+        "finite patches and flush buttons (uniform or grid field), finite elements for protruding buttons and "
+        "for patches too short for the integral equation's mode budget; "
         "'integral_equation': the Galerkin integral equation on the electrode (patches and flush buttons); 'fem': "
         "finite elements (scikit-fem) for patches and buttons; 'first_order': the uniform current-density iterate "
         "(S = sin(beta)/beta for patches).")
@@ -132,7 +133,9 @@ class LinearityPoint(BaseModel):
 
 class FlowmeterResult(BaseModel):
     sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.")
-    sensitivity_first_order: float = Field(description="The uniform current-density iterate sin(beta)/beta (1 for points).")
+    sensitivity_first_order: float = Field(
+        description="The uniform current-density iterate: sin(beta)/beta for patches, 1 for points, for buttons "
+        "that of the flush disc, pi r^2 / integral 2 sqrt(r^2 - y^2) / sqrt(1 - y^2) dy (R = 1).")
     signal: float = Field(description="U in volts for the field and mean velocity.")
     probes: list[float] = Field(default_factory=list, description="W at each probe point.")
     linearity: list[LinearityPoint] = Field(default_factory=list)

@@ -151,3 +151,15 @@ def test_the_button_density_carries_the_unit_current():
     per_projected_area = current_density(solution, r, theta, rho * np.sin(pp)) / np.cos(theta)
     total = np.sum(per_projected_area * rho * r * np.cos(uu) * wu[None, :]) * 2 * np.pi / 64
     assert total == pytest.approx(1.0, abs=1e-10)
+
+
+@pytest.mark.parametrize("half_angle", [22.5, 45.0])
+def test_long_electrodes_extrapolate_to_the_exact_2d_value_at_1e_4(half_angle):
+    # an independent check of the integral equation at its own accuracy: S(a) = S_2D + c/a + d/a^2
+    # for electrodes far from the liner ends (L/2 = a + 8R), fitted on a/R = 4, 8, 16
+    beta = np.radians(half_angle)
+    lengths = np.array([4.0, 8.0, 16.0])
+    values = [solve_patch(beta, a, a + 8.0, 1e-5).sensitivity for a in lengths]
+    fit = np.linalg.solve(np.column_stack([np.ones(3), 1 / lengths, 1 / lengths**2]), values)
+    assert abs(fit[0] - exact_full_length(half_angle)) < 1e-4
+    assert values[0] - exact_full_length(half_angle) > 1e-3 * np.sin(beta)  # the finite ends do matter

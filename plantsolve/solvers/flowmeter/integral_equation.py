@@ -110,7 +110,7 @@ def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q
     return sensitivity, a * np.pi * d / current, c / current
 
 
-def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-4) -> IntegralEquationSolution:
+def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-4, progress=None) -> IntegralEquationSolution:
     """S (Richardson-extrapolated) and W's series for a patch of half-angle ``beta`` (radians) and
     half-length ``a`` on an insulated liner of half-length ``half_liner`` (R = 1)."""
     modes = 200
@@ -119,6 +119,8 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
     extrapolated: list[float] = []
     while True:
         modes *= 2
+        if progress is not None:
+            progress(min(0.15 + 0.1 * len(levels), 0.55), f"integral equation, {modes} theta modes")
         table = shared if modes <= 800 else None
         s, series, coefficients = galerkin(beta, a, half_liner, modes, ratios=table)
         levels.append((modes, s, series, coefficients))

@@ -197,7 +197,7 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
     extrapolated in the modes, W from its series, integrated ring by ring on the polar rule (exact
     values of the series there)."""
     if button is None:
-        solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
+        solution = integral_equation.solve_patch(beta, a, half_liner, tolerance, progress)
 
         def density(theta, z=None, coefficients=None):
             return integral_equation.current_density(solution, beta, theta, z, a, coefficients)
@@ -362,9 +362,10 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     radius = request.pipe.radius
     progress(0.05, "virtual current")
     field = virtual_current(request, progress)
-    progress(0.85, "weight function integrals")
+    progress(0.85, "weight function integrals: the request's profile")
     velocity, profile, notes = velocity_function(request)
     s, mean = sensitivity(field, velocity)
+    progress(0.9, "probes, the weight-function grid and the linearity curve")
     mean_velocity = request.velocity.mean if profile != "samples" else mean
     grid = field_grid(request)
     b = request.magnetic_field.magnitude if grid is None else grid.reference
