@@ -91,7 +91,9 @@ def quarter_disc(beta: float, h: float, h_edge: float, grade: float,
         near = 1.0 - r if footprint is None else np.maximum(1.0 - footprint[1] - r, 0.0)
         return np.minimum(h, h_edge + grade * near)
 
-    radii = graded_points(0.0, 1.0, radial_spacing)
+    # a ring through the tip of a protruding button (x = 1 - protrusion at theta = 0)
+    tip = 1.0 - footprint[1] if footprint is not None and footprint[1] > 0 else 1.0
+    radii = graded_with_break(0.0, 1.0, tip, radial_spacing)
     nodes = [np.zeros((1, 2))]
     rings = [np.array([0])]
     count = 1

@@ -67,26 +67,31 @@ def all_ratios(x: np.ndarray, top: int) -> np.ndarray:
     return out
 
 
-def bessel_quotients(k: np.ndarray, r: float, orders: int) -> tuple[np.ndarray, np.ndarray]:
-    """For odd m = 1, 3, ..., 2 orders - 1 (rows) and k > 0 (columns): I_m(kr)/I_m(k) (a product of
-    ratio quotients, so neither Bessel function over- or underflows) and rho_m(kr) = I_{m+1}(kr)/I_m(kr)."""
+def bessel_quotients(k: np.ndarray, radii: np.ndarray, orders: int,
+                     at_1: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """For odd m = 1, 3, ..., 2 orders - 1, k > 0 and each radius: I_m(kr)/I_m(k) (a product of ratio
+    quotients, so neither Bessel function over- or underflows) and rho_m(kr) = I_{m+1}(kr)/I_m(kr);
+    both shaped (radii, orders, k). ``at_1`` is all_ratios(k, 2 orders), shared by every call."""
     top = 2 * orders
-    at_r, at_1 = all_ratios(k * r, top), all_ratios(k, top)
+    x = (radii[:, None] * k[None, :]).ravel()
+    at_r = all_ratios(x, top).reshape(top, len(radii), len(k)).transpose(1, 0, 2)
+    if at_1 is None:
+        at_1 = all_ratios(k, top)
     with np.errstate(divide="ignore"):
-        logs = np.log(at_r) - np.log(at_1)
+        logs = np.log(at_r) - np.log(at_1)[None]
     # log(I_m(kr)/I_m(k)) = log(I_0(kr)/I_0(k)) + sum_{v<m} log(rho_v(kr)/rho_v(k))
-    base = np.log(ive(0, k * r) / ive(0, k)) + k * (r - 1)
-    cumulative = base[None] + np.concatenate([np.zeros((1, len(k))), np.cumsum(logs, axis=0)])
+    base = np.log(ive(0, radii[:, None] * k[None]) / ive(0, k)[None]) + k[None] * (radii[:, None] - 1)
+    cumulative = base[:, None, :] + np.concatenate([np.zeros((len(radii), 1, len(k))), np.cumsum(logs, axis=1)], axis=1)
     odd = np.arange(1, top, 2)
-    return np.exp(cumulative[odd]), at_r[odd]
+    return np.exp(cumulative[:, odd]), at_r[:, odd]
 
 
-def ring_gradient(wall: np.ndarray, green: np.ndarray, weight_n: np.ndarray, k: np.ndarray, r: float, count: int) -> np.ndarray:
+def ring_gradient(wall: np.ndarray, green: np.ndarray, weight_n: np.ndarray, k: np.ndarray, r: float, count: int,
+                  quotient: np.ndarray, rho: np.ndarray) -> np.ndarray:
     """phi_x - i phi_y of each z mode n >= 1 at the ``count`` points theta_j = (j + 1/2) 2 pi / count of
-    the ring of radius r: shape (modes n >= 1, count)."""
+    the ring of radius r: shape (modes n >= 1, count). ``quotient`` and ``rho`` from bessel_quotients."""
     orders = wall.shape[0]
     m = np.arange(1, 2 * orders, 2).astype(float)
-    quotient, rho = bessel_quotients(k[1:], r, orders)
     f = wall[:, 1:] * weight_n[None, 1:] * green[:, 1:] * quotient  # (M, n)
     kr = k[None, 1:] * rho
     up = f * (2 * m[:, None] / r + kr) / 2  # frequency m - 1
@@ -129,10 +134,15 @@ def grid_weight(solution: IntegralEquationSolution, grid: FieldGrid, progress=No
     values, half_values = [], []
     start = 0
     half = (modes - 1) // 2
+    at_1 = all_ratios(k[1:], 2 * orders)
+    chunk = 8  # rings whose Bessel quotients share one backward recurrence
     for index, (r, count) in enumerate(quadrature.rings):
-        if progress is not None and index % 8 == 0:
-            progress(0.6 + 0.2 * index / len(quadrature.rings), f"grid field: ring {index + 1} of {len(quadrature.rings)}")
-        gradient = ring_gradient(wall, green, weight_n, k, r, count)  # (modes - 1, count)
+        if index % chunk == 0:
+            if progress is not None:
+                progress(0.6 + 0.2 * index / len(quadrature.rings), f"grid field: ring {index + 1} of {len(quadrature.rings)}")
+            radii = np.array([rr for rr, _ in quadrature.rings[index:index + chunk]])
+            quotients, rhos = bessel_quotients(k[1:], radii, orders, at_1)
+        gradient = ring_gradient(wall, green, weight_n, k, r, count, quotients[index % chunk], rhos[index % chunk])
         pts = np.column_stack([quadrature.x[start:start + count], quadrature.y[start:start + count]])
         start += count
         fx, fy = modes_bx(pts).T, modes_by(pts).T  # (modes - 1, count)
