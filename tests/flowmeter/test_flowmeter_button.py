@@ -152,3 +152,13 @@ def test_flush_button_scaling_by_the_integral_equation():
                                                         liner_length=3000.0)), no_progress)
     assert small.method == large.method == "integral_equation"
     assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-12)
+
+
+def test_a_large_flush_button_by_both_methods():
+    # r_e = R/2 covers the wall up to 30 degrees: the mesh must follow the wall arc, not only the centre
+    from plantsolve.solvers.flowmeter.integral_equation_button import solve_button as ie_button
+
+    ie = ie_button(0.5, 3.0)
+    by_fem = solve_button(0.5, 0.0, 3.0, h=0.18).sensitivity
+    assert abs(ie.sensitivity - by_fem) < 5e-4
+    assert ie.sensitivity < small_button(0.5) - 1e-3  # beyond the small-button limit

@@ -82,10 +82,14 @@ def quarter_disc(beta: float, h: float, h_edge: float, grade: float,
         if footprint is None:
             return np.hypot(px - edge[0], py - edge[1])
         width, protrusion = footprint
-        # distance to the box 0 <= y <= width, x >= 1 - protrusion (inside the disc near the wall)
-        dy = np.maximum(py - width, 0.0)
-        dx = np.maximum(1.0 - protrusion - px, 0.0)
-        return np.hypot(dx, dy)
+        # distance to the wall arc the face covers (0 <= theta <= asin(width)) ...
+        rho, phi = np.hypot(px, py), np.arctan2(py, px)
+        arc = np.where(phi <= beta, 1.0 - rho, np.hypot(px - edge[0], py - edge[1]))
+        if protrusion == 0:
+            return arc
+        # ... and to the protruding part, the box 0 <= y <= width, x >= 1 - protrusion
+        box = np.hypot(np.maximum(1.0 - protrusion - px, 0.0), np.maximum(py - width, 0.0))
+        return np.minimum(arc, box)
 
     def radial_spacing(r):
         near = 1.0 - r if footprint is None else np.maximum(1.0 - footprint[1] - r, 0.0)

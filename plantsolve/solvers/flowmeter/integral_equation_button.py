@@ -27,7 +27,7 @@ from plantsolve.solvers.flowmeter.integral_equation import (DECAY_LENGTH, WALL_M
                                                             bessel_ratio_table)
 
 LEVEL_SPAN = 10.0  # M asin(r) of the coarsest level (200 modes for a 22.5 degree patch is 78); doubled below 1e-4
-BUDGET = 6_000_000  # (theta modes) x (z modes) of the finest level, per basis function
+BUDGET = 2_500_000  # (theta modes) x (z modes) of the finest level, per basis function (16 of them: 320 MB)
 
 
 def chebyshev_of_power(q: int) -> np.ndarray:
