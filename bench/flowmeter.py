@@ -19,7 +19,8 @@ Further tables:
   (liner ends 8 R beyond), fitted by S_inf + c/a + d/a^2, against the exact pi/(2K(sin beta));
   (b) Richardson extrapolation of the uncalibrated FEM over three meshes (order fitted) against
   the integral equation; (c) the integral equation's error estimate against its 1e-6 reference;
-- a grid field: the integral equation against the FEM, and their times.
+- a grid field varying across and along the pipe: the integral equation against the FEM on refined
+  meshes, and their times.
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ def main() -> None:
                   + ("" if a is None else f"   (fine FEM {fine.sensitivity:.6f}, differs by {abs(fine.sensitivity - reference):.1e})"))
     buttons(args.quick)
     independent_checks(args.quick)
+    grid_fields(args.quick)
     reynolds = list(np.logspace(2.5, 6.5, 20))
     # a magnet whose field is strongest at the centre and falls off towards the wall and the liner ends
     grid = grid_field(1.0, 6.0, lambda x, y, z: 0.0 * x,
@@ -176,6 +178,30 @@ def independent_checks(quick: bool) -> None:
         gap = abs(default.sensitivity - reference)
         print(f"{beta:5.1f} {a:6.3f} | {default.sensitivity:9.6f} {default.error_estimate:8.1e} {gap:9.1e} | "
               f"{'yes' if default.error_estimate >= gap else 'NO':>6}")
+
+
+def grid_fields(quick: bool) -> None:
+    from plantsolve.solvers.flowmeter.synthetic import grid_field
+
+    print()
+    print("grid field B_y = B0 (1 + 0.2 x + 0.1 y) exp(-(z/1.5R)^2), B_x = 0.3 B0 x y exp(-(z/1.5R)^2) (21 x 21 x 25 grid, L/R = 6):")
+    print("the integral equation against the FEM on refined meshes; S (error estimate, seconds)")
+    field = grid_field(1.0, 6.0, lambda x, y, z: 0.3 * 0.01 * x * y * np.exp(-(z / 1.5) ** 2),
+                       lambda x, y, z: 0.01 * (1 + 0.2 * x + 0.1 * y) * np.exp(-(z / 1.5) ** 2), nx=21, nz=25)
+    tolerances = (4e-3, 1e-3) if quick else (4e-3, 1e-3, 2.5e-4)
+    print(f"{'electrodes':<26} | {'integral eq.':>28} | " + " | ".join(f"{'fem tol ' + format(t, '.1e'):>28}" for t in tolerances))
+    for label, extra in (("patch 22.5 deg, a/R pi/10", {"half_angle": 22.5, "half_length": np.pi / 10}),
+                         ("patch 45 deg, a/R 1", {"half_angle": 45.0, "half_length": 1.0}),
+                         ("flush button r_e/R 0.2", {"shape": "button", "button_radius": 0.2})):
+        cells = []
+        for method, tolerance in (("auto", 1e-3), *(("fem", t) for t in tolerances)):
+            body = meter(radius=1.0, units="m", liner_length=6.0, method=method, tolerance=tolerance,
+                         velocity={"type": "uniform", "mean": 1.0}, **extra)
+            body["magnetic_field"] = field
+            t0 = time.perf_counter()
+            r = solve(FlowmeterRequest.model_validate(body), no_progress)
+            cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {time.perf_counter() - t0:5.2f})")
+        print(f"{label:<26} | " + " | ".join(f"{c:>28}" for c in cells))
 
 
 if __name__ == "__main__":
