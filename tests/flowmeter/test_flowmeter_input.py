@@ -73,9 +73,12 @@ def test_the_api_solves_the_shipped_example_and_refuses_nan(client):
     assert any(e["loc"][:2] == ["magnetic_field", "magnitude"] for e in bad.json()["errors"])
 
 
-def test_the_cli_solves_the_example(tmp_path):
+@pytest.mark.parametrize("name, method, sensitivity", [("meter.json", "integral_equation", 0.965),
+                                                       ("button.json", "integral_equation", 1 - 0.16**2 / 6)])
+def test_the_cli_solves_the_examples(tmp_path, name, method, sensitivity):
     out = tmp_path / "result.json"
-    done = run_plantsolve(["solve", "flowmeter", str(REPO / "examples" / "flowmeter" / "meter.json"), "-o", str(out)], tmp_path)
+    done = run_plantsolve(["solve", "flowmeter", str(REPO / "examples" / "flowmeter" / name), "-o", str(out)], tmp_path)
     assert done.returncode == 0, done.stderr[-2000:]
     result = json.loads(out.read_text())
-    assert abs(result["sensitivity"] - 0.965) < 2e-3
+    assert result["method"] == method
+    assert abs(result["sensitivity"] - sensitivity) < 2e-3
