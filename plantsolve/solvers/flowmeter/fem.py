@@ -206,7 +206,6 @@ def solve_mesh(points: np.ndarray, triangles: np.ndarray, z: np.ndarray, electro
     basis = Basis(mesh, ElementTetP1())
     stiffness = asm(laplace, basis).tocsr()
 
-    n2 = len(points)
     grounded = np.tile(points[:, 0] == 0.0, len(z))
     fixed = electrode | grounded
     phi = np.where(electrode, 1.0, 0.0)
