@@ -10,6 +10,17 @@ FEM (default tolerance 1e-3; the uncalibrated value too) and the seed's first-or
 sin(beta)/beta. The reference for finite a is the integral equation extrapolated to 3200 modes
 (tolerance 1e-6) and, side by side, the calibrated FEM on a finer mesh. Then the time of a
 20-point linearity curve, uniform and grid field.
+
+Further tables:
+- buttons (flush r_e/R = 0.05, 0.1, 0.2 and protruding l_e/R = 0.05, 0.1 at r_e/R = 0.1): the
+  integral equation (flush only), the FEM at the default and a finer mesh, the uniform-density first
+  order, and the small-button limit 1 - (r_e/R)^2/6;
+- independent checks of the integral equation at 1e-4: (a) a/R -> inf: S(a) on a/R = 4, 8, 16
+  (liner ends 8 R beyond), fitted by S_inf + c/a + d/a^2, against the exact pi/(2K(sin beta));
+  (b) Richardson extrapolation of the uncalibrated FEM over three meshes (order fitted) against
+  the integral equation; (c) the integral equation's error estimate against its 1e-6 reference;
+- a grid field varying across and along the pipe: the integral equation against the FEM on refined
+  meshes, and their times.
 """
 
 from __future__ import annotations
@@ -73,18 +84,124 @@ def main() -> None:
                     print(f"{beta:5.1f} {label:>6} | {'fem uncalibr.':<15} {raw:9.6f} {abs(raw - reference):9.2e}")
             print(f"{'':5} {'':>6} | {'reference':<15} {reference:9.6f}"
                   + ("" if a is None else f"   (fine FEM {fine.sensitivity:.6f}, differs by {abs(fine.sensitivity - reference):.1e})"))
+    buttons(args.quick)
+    independent_checks(args.quick)
+    grid_fields(args.quick)
     reynolds = list(np.logspace(2.5, 6.5, 20))
     # a magnet whose field is strongest at the centre and falls off towards the wall and the liner ends
     grid = grid_field(1.0, 6.0, lambda x, y, z: 0.0 * x,
                       lambda x, y, z: 0.01 * (1 - 0.15 * (x * x + y * y)) * np.exp(-(z / 1.5) ** 2), nx=21, nz=25)
     for a, method, field in ((None, "auto", None), (np.pi / 10, "integral_equation", None), (np.pi / 10, "fem", None),
-                             (None, "auto", grid), (np.pi / 10, "fem", grid)):
+                             (None, "auto", grid), (np.pi / 10, "integral_equation", grid), (np.pi / 10, "fem", grid)):
         r, t = run(22.5, a, method, reynolds=reynolds, field=field)
         spread = max(p.sensitivity for p in r.linearity) - min(p.sensitivity for p in r.linearity)
         print(f"linearity, 20 Reynolds numbers, beta 22.5, a/R {'inf' if a is None else 'pi/10'}, "
               f"{'grid' if field else 'uniform'} field ({r.method}): {t:.2f} s, S {r.linearity[0].sensitivity:.5f} "
               f"(Re {reynolds[0]:.0f}) .. {r.linearity[-1].sensitivity:.5f} (Re {reynolds[-1]:.0f}), spread {spread:.1e}, "
               f"ideal-meter residual {r.ideal_meter_residual:.3f}")
+
+
+def run_button(r_e: float, l_e: float, method: str, tolerance: float = 1e-3):
+    body = meter(radius=1.0, units="m", shape="button", button_radius=r_e, protrusion=l_e, liner_length=6.0,
+                 method=method, tolerance=tolerance, velocity={"type": "uniform", "mean": 1.0})
+    t0 = time.perf_counter()
+    result = solve(FlowmeterRequest.model_validate(body), no_progress)
+    return result, time.perf_counter() - t0
+
+
+def buttons(quick: bool) -> None:
+    fine_tolerance = 4.4e-4 if quick else 2.5e-4
+    print()
+    print("buttons (L/R = 6, uniform B and flow); S (error estimate, seconds)")
+    print(f"{'r_e/R':>6} {'l_e/R':>6} | {'integral eq.':>30} | {'fem':>30} | {'finer fem':>30} | {'1st order':>9} | {'1 - r^2/6':>9}")
+    for r_e, l_e in ((0.05, 0.0), (0.1, 0.0), (0.2, 0.0), (0.1, 0.05), (0.1, 0.1)):
+        cells = []
+        if l_e == 0:
+            r, t = run_button(r_e, 0.0, "integral_equation")
+            cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {t:5.2f})")
+        else:
+            cells.append("— (protruding: FEM only)")
+        for tolerance in (1e-3, fine_tolerance):
+            r, t = run_button(r_e, l_e, "fem", tolerance)
+            cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {t:5.2f})")
+        first = r.sensitivity_first_order
+        print(f"{r_e:6.3f} {l_e:6.3f} | {cells[0]:>30} | {cells[1]:>30} | {cells[2]:>30} | {first:9.6f} | {1 - r_e**2 / 6:9.6f}")
+
+
+def independent_checks(quick: bool) -> None:
+    from plantsolve.solvers.flowmeter import fem, integral_equation
+
+    print()
+    print("independent check (a): a/R -> inf by the integral equation (L/2 = a + 8R), fit S_inf + c/a + d/a^2")
+    print(f"{'beta':>5} | {'S(4)':>9} {'S(8)':>9} {'S(16)':>9} | {'S_inf':>9} {'exact':>9} {'|diff|':>8} | {'s':>5}")
+    lengths = np.array([4.0, 8.0, 16.0])
+    for beta in (5.0, 22.5, 45.0):
+        t0 = time.perf_counter()
+        values = [integral_equation.solve_patch(np.radians(beta), a, a + 8.0, 1e-6).sensitivity for a in lengths]
+        fit = np.linalg.solve(np.column_stack([np.ones(3), 1 / lengths, 1 / lengths**2]), values)
+        exact = exact_full_length(beta)
+        print(f"{beta:5.1f} | {values[0]:9.6f} {values[1]:9.6f} {values[2]:9.6f} | {fit[0]:9.6f} {exact:9.6f} "
+              f"{abs(fit[0] - exact):8.1e} | {time.perf_counter() - t0:5.2f}")
+    print()
+    print("independent check (b): the uncalibrated FEM (L/R = 6) on three meshes, Richardson-extrapolated from the two")
+    print("finest with the order 1 of the square-root edge singularity (energy error O(h^(2 * 1/2))); the order fitted on")
+    print("all three is shown too (far from 1 where the coarsest mesh is not yet asymptotic)")
+    sizes = (0.18, 0.12, 0.08) if quick else (0.12, 0.08, 0.06)
+    print(f"{'beta':>5} {'a/R':>6} | " + " ".join(f"{'h=' + str(h):>9}" for h in sizes)
+          + f" | {'extrap.':>9} {'fit p':>5} | {'IE 1e-6':>9} {'|diff|':>8} | {'s':>5}")
+    for beta, a in ((5.0, 0.1), (22.5, np.pi / 10), (45.0, np.pi / 10)):
+        t0 = time.perf_counter()
+        values = [fem.solve_patch(np.radians(beta), a, 3.0, h=h).sensitivity for h in sizes]
+        h1, h2, h3 = sizes
+        extrapolated = values[2] + (values[2] - values[1]) * h3 / (h2 - h3)
+        ratio = (values[1] - values[0]) / (values[2] - values[1])
+        fitted = float("nan")
+        if ratio > 0:  # S_h = S + c h^p: (h1^p - h2^p) / (h2^p - h3^p) = ratio, by bisection
+            lo, hi = 0.05, 6.0
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                if (h1**mid - h2**mid) / (h2**mid - h3**mid) < ratio:
+                    lo = mid
+                else:
+                    hi = mid
+            fitted = 0.5 * (lo + hi)
+        reference = integral_equation.solve_patch(np.radians(beta), a, 3.0, 1e-6).sensitivity
+        print(f"{beta:5.1f} {a:6.3f} | " + " ".join(f"{v:9.6f}" for v in values)
+              + f" | {extrapolated:9.6f} {fitted:5.2f} | {reference:9.6f} {abs(extrapolated - reference):8.1e} | "
+              f"{time.perf_counter() - t0:5.2f}")
+    print()
+    print("check (c): the integral equation's error estimate (default tolerance 1e-3) against its 1e-6 reference")
+    print(f"{'beta':>5} {'a/R':>6} | {'S':>9} {'est.':>8} {'|S - ref|':>9} | {'honest':>6}")
+    for beta, a in ((5.0, 0.1), (22.5, np.pi / 10), (22.5, 1.0), (45.0, 0.1), (45.0, np.pi / 10)):
+        default = integral_equation.solve_patch(np.radians(beta), a, 3.0, 1e-3)
+        reference = integral_equation.solve_patch(np.radians(beta), a, 3.0, 1e-6).sensitivity
+        gap = abs(default.sensitivity - reference)
+        print(f"{beta:5.1f} {a:6.3f} | {default.sensitivity:9.6f} {default.error_estimate:8.1e} {gap:9.1e} | "
+              f"{'yes' if default.error_estimate >= gap else 'NO':>6}")
+
+
+def grid_fields(quick: bool) -> None:
+    from plantsolve.solvers.flowmeter.synthetic import grid_field
+
+    print()
+    print("grid field B_y = B0 (1 + 0.2 x + 0.1 y) exp(-(z/1.5R)^2), B_x = 0.3 B0 x y exp(-(z/1.5R)^2) (21 x 21 x 25 grid, L/R = 6):")
+    print("the integral equation against the FEM on refined meshes; S (error estimate, seconds)")
+    field = grid_field(1.0, 6.0, lambda x, y, z: 0.3 * 0.01 * x * y * np.exp(-(z / 1.5) ** 2),
+                       lambda x, y, z: 0.01 * (1 + 0.2 * x + 0.1 * y) * np.exp(-(z / 1.5) ** 2), nx=21, nz=25)
+    tolerances = (4e-3, 1e-3) if quick else (4e-3, 1e-3, 2.5e-4)
+    print(f"{'electrodes':<26} | {'integral eq.':>28} | " + " | ".join(f"{'fem tol ' + format(t, '.1e'):>28}" for t in tolerances))
+    for label, extra in (("patch 22.5 deg, a/R pi/10", {"half_angle": 22.5, "half_length": np.pi / 10}),
+                         ("patch 45 deg, a/R 1", {"half_angle": 45.0, "half_length": 1.0}),
+                         ("flush button r_e/R 0.2", {"shape": "button", "button_radius": 0.2})):
+        cells = []
+        for method, tolerance in (("auto", 1e-3), *(("fem", t) for t in tolerances)):
+            body = meter(radius=1.0, units="m", liner_length=6.0, method=method, tolerance=tolerance,
+                         velocity={"type": "uniform", "mean": 1.0}, **extra)
+            body["magnetic_field"] = field
+            t0 = time.perf_counter()
+            r = solve(FlowmeterRequest.model_validate(body), no_progress)
+            cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {time.perf_counter() - t0:5.2f})")
+        print(f"{label:<26} | " + " | ".join(f"{c:>28}" for c in cells))
 
 
 if __name__ == "__main__":

@@ -32,17 +32,26 @@ class Pipe(StrictModel):
 
 
 class Electrodes(StrictModel):
-    shape: Literal["patch", "point"] = Field(
+    shape: Literal["patch", "point", "button"] = Field(
         default="patch",
         description="'patch': theta-z patches of half-angle beta and half-length a, equipotential; "
-        "'point': point electrodes (Shercliff's weight function).")
+        "'point': point electrodes (Shercliff's weight function); 'button': cylindrical electrodes of "
+        "radius r_e through the wall along x, protruding l_e into the flow (0: flush discs), equipotential.")
     half_angle: float = Field(
         default=22.5, gt=0, lt=90, allow_inf_nan=False,
-        description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90.")
+        description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90 (not used by points and buttons).")
     half_length: float | None = Field(
         default=None, gt=0, le=1e10, allow_inf_nan=False,
         description="Half-length a of a patch electrode along z; null means electrodes along the whole "
-        "liner (the 2-D case, solved exactly).")
+        "liner (the 2-D case, solved exactly). Null for points and buttons.")
+    radius: float | None = Field(
+        default=None, gt=0, le=1e9, allow_inf_nan=False,
+        description="Radius r_e of a button electrode (units): its face on the wall is y^2 + z^2 <= r_e^2; "
+        "0.02 R <= r_e <= 0.8 R and r_e <= L/2. Required for buttons only.")
+    protrusion: float = Field(
+        default=0.0, ge=0, le=1e9, allow_inf_nan=False,
+        description="Length l_e by which a button enters the flow (units), 0 <= l_e <= 0.9 R (the two tips stay apart); 0 is a flush disc. "
+        "Buttons only.")
 
 
 class UniformField(StrictModel):
@@ -89,9 +98,11 @@ class FlowmeterOptions(StrictModel):
     method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
         default="auto",
         description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
-        "finite patches in a uniform field, finite elements for finite patches in a grid field; "
-        "'integral_equation': the Galerkin integral equation on the electrode (uniform field); 'fem': finite "
-        "elements (scikit-fem) for patches; 'first_order': the uniform current-density iterate (S = sin(beta)/beta).")
+        "finite patches and flush buttons (uniform or grid field), finite elements for protruding buttons and "
+        "for patches too short for the integral equation's mode budget; "
+        "'integral_equation': the Galerkin integral equation on the electrode (patches and flush buttons); 'fem': "
+        "finite elements (scikit-fem) for patches and buttons; 'first_order': the uniform current-density iterate "
+        "(S = sin(beta)/beta for patches).")
     tolerance: float = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
                              description="Target accuracy of S; for 'fem' it sets the mesh size.")
     probe_points: list[list[Measured]] = Field(
@@ -122,7 +133,9 @@ class LinearityPoint(BaseModel):
 
 class FlowmeterResult(BaseModel):
     sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.")
-    sensitivity_first_order: float = Field(description="The uniform current-density iterate sin(beta)/beta (1 for points).")
+    sensitivity_first_order: float = Field(
+        description="The uniform current-density iterate: sin(beta)/beta for patches, 1 for points, for buttons "
+        "that of the flush disc, pi r^2 / integral 2 sqrt(r^2 - y^2) / sqrt(1 - y^2) dy (R = 1).")
     signal: float = Field(description="U in volts for the field and mean velocity.")
     probes: list[float] = Field(default_factory=list, description="W at each probe point.")
     linearity: list[LinearityPoint] = Field(default_factory=list)
@@ -134,5 +147,9 @@ class FlowmeterResult(BaseModel):
     grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")
     electrode_current: list[list[float]] = Field(
         default_factory=list, description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
-        "[theta deg, j R^2 / I] for patches, [theta deg, j R / I'] (I' per unit length) along the whole liner.")
+        "[theta deg, j R^2 / I] for patches and buttons, [theta deg, j R / I'] (I' per unit length) along the whole liner. "
+        "From the integral equation or the closed form; the finite elements report none.")
+    electrode_current_map: list[list[float]] = Field(
+        default_factory=list, description="The electrode current density over the electrode at +R (integral equation "
+        "only): rows [theta deg, z (units), j R^2 / I] on Chebyshev points, the edges singular (inverse square root).")
     report: Report

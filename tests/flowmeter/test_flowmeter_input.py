@@ -65,16 +65,20 @@ def test_the_api_solves_the_shipped_example_and_refuses_nan(client):
     assert view["status"] == "succeeded", view["report"]
     result = client.get(f"/v1/jobs/{view['id']}/result").json()
     assert result["method"] == "integral_equation" and abs(result["sensitivity"] - 0.965) < 2e-3
-    assert {a["name"] for a in view["artifacts"]} >= {"weight_function.png", "linearity.png", "weight_grid.csv"}
+    assert {a["name"] for a in view["artifacts"]} >= {"weight_function.png", "electrode_current.png", "linearity.png",
+                                                     "weight_grid.csv"}
     bad = client.post("/v1/flowmeter/jobs", content=json.dumps(body).replace('"magnitude": 0.01', '"magnitude": NaN'),
                       headers={"Content-Type": "application/json"})
     assert bad.status_code == 422
     assert any(e["loc"][:2] == ["magnetic_field", "magnitude"] for e in bad.json()["errors"])
 
 
-def test_the_cli_solves_the_example(tmp_path):
+@pytest.mark.parametrize("name, method, sensitivity", [("meter.json", "integral_equation", 0.965),
+                                                       ("button.json", "integral_equation", 1 - 0.16**2 / 6)])
+def test_the_cli_solves_the_examples(tmp_path, name, method, sensitivity):
     out = tmp_path / "result.json"
-    done = run_plantsolve(["solve", "flowmeter", str(REPO / "examples" / "flowmeter" / "meter.json"), "-o", str(out)], tmp_path)
+    done = run_plantsolve(["solve", "flowmeter", str(REPO / "examples" / "flowmeter" / name), "-o", str(out)], tmp_path)
     assert done.returncode == 0, done.stderr[-2000:]
     result = json.loads(out.read_text())
-    assert abs(result["sensitivity"] - 0.965) < 2e-3
+    assert result["method"] == method
+    assert abs(result["sensitivity"] - sensitivity) < 2e-3

@@ -99,3 +99,67 @@ def test_long_liners_are_cut_where_the_current_has_decayed_and_huge_mode_counts_
     narrow = meter(radius=50.0, liner_length=300.0, half_angle=89.0, half_length=1.0,
                    velocity={"type": "uniform", "mean": 1.0}, tolerance=0.01)
     assert solve(FlowmeterRequest.model_validate(narrow), no_progress).method == "fem"
+
+
+def test_the_electrode_current_map_carries_the_unit_current():
+    # Gauss-Chebyshev in theta and z: the rule's weight is the basis's edge factor, so the product
+    # rule integrates the density exactly
+    result = run(half_angle=22.5, half_length=15.7)
+    rows = np.array(result.electrode_current_map)
+    assert len(rows) == 625
+    beta, a = np.radians(22.5), 15.7 / 50.0
+    t, s = np.radians(rows[:, 0]) / beta, rows[:, 1] / 15.7
+    total = np.sum(rows[:, 2] * np.sqrt((1 - t * t) * (1 - s * s))) * (np.pi / 25) ** 2 * beta * a
+    assert total == pytest.approx(1.0, abs=1e-10)
+
+
+def test_the_density_of_long_electrodes_at_z_0_is_the_2d_equipotential_density():
+    # the 2-D density j = 1 / (2 K(sin beta) sqrt(sin^2 beta - sin^2 theta)) per unit length (from
+    # F' = C / sqrt(z^4 - 2 cos(2 beta) z^2 + 1): on the wall d(phi)/dr = C / (2 sqrt(sin^2 beta - sin^2 theta))),
+    # compared in shape (normalised across) on the part without the edge factor
+    from plantsolve.solvers.flowmeter.weight2d import electrode_current_integral
+
+    beta = np.radians(30.0)
+    result = run(half_angle=30.0, half_length=125.0)
+    theta, j = np.array(result.electrode_current).T
+    theta = np.radians(theta)
+    exact = 1 / (2 * np.sqrt(np.sin(beta) ** 2 - np.sin(theta) ** 2)) / electrode_current_integral(beta)
+    smooth = np.sqrt(1 - (theta / beta) ** 2)
+    shape = j * smooth / np.sum(j * smooth)
+    want = exact * smooth / np.sum(exact * smooth)
+    deviation = np.abs(shape - want) / np.max(want)
+    centre = np.abs(theta) < beta / 2
+    assert np.max(deviation[centre]) < 5e-3
+    assert np.max(deviation) < 2.5e-2  # the density converges like 1/M at the edges, slower than S
+    # the reported change by the extrapolation bounds that error
+    assert result.report.details["electrode_current_change"] > np.max(deviation)
+
+
+def test_the_button_density_carries_the_unit_current():
+    from scipy.special import roots_legendre
+
+    from plantsolve.solvers.flowmeter.integral_equation_button import current_density, solve_button
+
+    r = 0.2
+    solution = solve_button(r, 3.0)
+    u, wu = roots_legendre(40)
+    u, wu = (u + 1) * np.pi / 4, wu * np.pi / 4  # rho = r sin(u) removes the rim's inverse square root
+    psi = (np.arange(64) + 0.5) * 2 * np.pi / 64
+    uu, pp = np.meshgrid(u, psi)
+    rho = r * np.sin(uu)
+    theta = np.arcsin(rho * np.cos(pp))
+    per_projected_area = current_density(solution, r, theta, rho * np.sin(pp)) / np.cos(theta)
+    total = np.sum(per_projected_area * rho * r * np.cos(uu) * wu[None, :]) * 2 * np.pi / 64
+    assert total == pytest.approx(1.0, abs=1e-10)
+
+
+@pytest.mark.parametrize("half_angle", [22.5, 45.0])
+def test_long_electrodes_extrapolate_to_the_exact_2d_value_at_1e_4(half_angle):
+    # an independent check of the integral equation at its own accuracy: S(a) = S_2D + c/a + d/a^2
+    # for electrodes far from the liner ends (L/2 = a + 8R), fitted on a/R = 4, 8, 16
+    beta = np.radians(half_angle)
+    lengths = np.array([4.0, 8.0, 16.0])
+    values = [solve_patch(beta, a, a + 8.0, 1e-5).sensitivity for a in lengths]
+    fit = np.linalg.solve(np.column_stack([np.ones(3), 1 / lengths, 1 / lengths**2]), values)
+    assert abs(fit[0] - exact_full_length(half_angle)) < 1e-4
+    assert values[0] - exact_full_length(half_angle) > 1e-3 * np.sin(beta)  # the finite ends do matter

@@ -1,9 +1,11 @@
 """Electromagnetic flow meters: virtual current, weight function, sensitivity and linearity (ESGI 51, Siemens chapter).
 
 The job computes the cross-section weight function of the electrodes (exactly for electrodes
-along the whole liner and for point electrodes, by finite elements for patches of finite
-length), the sensitivity S = U / (2 R B v_mean) for the request's flow profile, W at probe points
-and S over Reynolds numbers.
+along the whole liner and for point electrodes, by a Galerkin integral equation on the electrode
+for patches of finite length and flush buttons, in a uniform or a gridded field, by finite
+elements for protruding buttons and as the reference), the sensitivity S = U / (2 R B v_mean) for
+the request's flow profile, W at probe points, S over Reynolds numbers and the electrode current
+density.
 """
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult

@@ -39,6 +39,14 @@ def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
         arc = np.linspace(-beta, beta, 50)
         for sign in (1, -1):
             ax.plot(sign * radius * np.cos(arc), radius * np.sin(arc), color="red", lw=4)
+    elif request.electrodes.shape == "button":
+        r_e, l_e = request.electrodes.radius, request.electrodes.protrusion
+        arc = np.linspace(-np.arcsin(min(r_e / radius, 1.0)), np.arcsin(min(r_e / radius, 1.0)), 50)
+        for sign in (1, -1):
+            ax.plot(sign * radius * np.cos(arc), radius * np.sin(arc), color="red", lw=4)
+            if l_e > 0:  # the protruding cylinder's section at z = 0
+                ax.fill([sign * radius * np.cos(arc[0]), sign * (radius - l_e), sign * (radius - l_e),
+                         sign * radius * np.cos(arc[-1])], [-r_e, -r_e, r_e, r_e], color="red")
     else:
         ax.plot([radius, -radius], [0, 0], "o", color="red", ms=8)
     ax.annotate("", xy=(0, 0.6 * radius), xytext=(0, 0.2 * radius), arrowprops={"arrowstyle": "->", "color": "white"})
@@ -51,17 +59,42 @@ def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
     return fig
 
 
-def current_plot(result: FlowmeterResult) -> Figure:
-    fig = Figure(figsize=(6.4, 4.0))
-    ax = fig.add_subplot()
+def current_plot(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
+    """The density across the electrode at z = 0 (with the 2-D equipotential density of the same
+    half-angle for patches, scaled to the same integral across) and, from the integral equation, its
+    map over the electrode."""
     data = np.asarray(result.electrode_current, dtype=float)
-    if len(data):
-        ax.plot(data[:, 0], data[:, 1], "o-", ms=3, label="electrode at +R (z = 0 for finite patches)")
+    grid = np.asarray(result.electrode_current_map, dtype=float)
+    fig = Figure(figsize=(11.0 if len(grid) else 6.4, 4.2))
+    ax = fig.add_subplot(1, 2 if len(grid) else 1, 1)
+    order = np.argsort(data[:, 0])
+    theta, j = data[order, 0], data[order, 1]
+    ax.plot(theta, j, "o-", ms=3, label=f"electrode at +R ({'z = 0' if len(grid) else 'per unit length'}, {result.method})")
+    e = request.electrodes
+    if e.shape == "patch" and len(grid):
+        beta = np.radians(e.half_angle)
+        t = np.radians(theta)
+        two_d = 1 / np.sqrt(np.sin(beta) ** 2 - np.sin(t) ** 2)
+        # scale by the integral across (Chebyshev nodes: weights pi/n after the factor sqrt(beta^2 - t^2))
+        smooth = np.sqrt(np.maximum(beta**2 - t**2, 0))
+        two_d *= np.sum(j * smooth) / np.sum(two_d * smooth)
+        ax.plot(theta, two_d, "--", color="0.4", label="2-D (full-length) density, same beta, same integral across")
     ax.set(xlabel="angle from the electrode centre theta [deg]",
-           ylabel="j R^2 / I (patches), j R / I' (full length)",
-           title="virtual current density on the electrode (integral over it = 1)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
+           ylabel="j R^2 / I (finite electrodes), j R / I' (full length)",
+           title="virtual current density across the electrode (total = 1)")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3, which="both")
+    if len(grid):
+        mx = fig.add_subplot(1, 2, 2)
+        tri = Triangulation(grid[:, 0], grid[:, 1])
+        level = np.log10(np.clip(grid[:, 2], np.min(grid[:, 2][grid[:, 2] > 0]), None))
+        filled = mx.tricontourf(tri, level, levels=20, cmap="magma")
+        fig.colorbar(filled, ax=mx, label="log10 (j R^2 / I)")
+        mx.plot(grid[:, 0], grid[:, 1], ".", color="0.8", ms=1, label="Chebyshev points (edges singular)")
+        mx.set(xlabel="theta [deg]", ylabel=f"z [{request.units}]", title="density over the electrode at +R")
+        mx.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
     return fig
 
 
@@ -82,7 +115,7 @@ def render_artifacts(request: FlowmeterRequest, result: FlowmeterResult) -> list
     """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
     out = [png(weight_map(request, result), "weight_function.png")]
     if result.electrode_current:
-        out.append(png(current_plot(result), "electrode_current.png"))
+        out.append(png(current_plot(request, result), "electrode_current.png"))
     if result.linearity:
         out.append(png(linearity_plot(result), "linearity.png"))
     rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]

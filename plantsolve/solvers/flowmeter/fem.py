@@ -67,21 +67,43 @@ def axial_spacing(distance: np.ndarray, h: float, h_edge: float, grade: float) -
     return np.clip(np.maximum(near, 0.25 * (distance - 1.0)), None, 2.0)
 
 
-def quarter_disc(beta: float, h: float, h_edge: float, grade: float) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes and triangles of the quarter disc x, y >= 0, graded towards the wall point at angle beta."""
+def quarter_disc(beta: float, h: float, h_edge: float, grade: float,
+                 footprint: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and triangles of the quarter disc x, y >= 0, graded towards the wall point at angle beta.
+
+    ``footprint = (half_width, protrusion)`` grades towards a button instead: the part of the
+    cross-section a button electrode of radius ``half_width`` protruding ``protrusion`` into the
+    flow covers at some z (0 <= y <= half_width, x >= 1 - protrusion, the wall arc up to
+    asin(half_width)); the spacing there is ``h_edge`` throughout, because the electrode's edge
+    (a circle in y-z) crosses every cross-section over that range."""
     edge = np.array([np.cos(beta), np.sin(beta)])
 
-    def radial_spacing(r):
-        return np.minimum(h, h_edge + grade * (1.0 - r))
+    def distance(px, py):
+        if footprint is None:
+            return np.hypot(px - edge[0], py - edge[1])
+        width, protrusion = footprint
+        # distance to the wall arc the face covers (0 <= theta <= asin(width)) ...
+        rho, phi = np.hypot(px, py), np.arctan2(py, px)
+        arc = np.where(phi <= beta, 1.0 - rho, np.hypot(px - edge[0], py - edge[1]))
+        if protrusion == 0:
+            return arc
+        # ... and to the protruding part, the box 0 <= y <= width, x >= 1 - protrusion
+        box = np.hypot(np.maximum(1.0 - protrusion - px, 0.0), np.maximum(py - width, 0.0))
+        return np.minimum(arc, box)
 
-    radii = graded_points(0.0, 1.0, radial_spacing)
+    def radial_spacing(r):
+        near = 1.0 - r if footprint is None else np.maximum(1.0 - footprint[1] - r, 0.0)
+        return np.minimum(h, h_edge + grade * near)
+
+    # a ring through the tip of a protruding button (x = 1 - protrusion at theta = 0)
+    tip = 1.0 - footprint[1] if footprint is not None and footprint[1] > 0 else 1.0
+    radii = graded_with_break(0.0, 1.0, tip, radial_spacing)
     nodes = [np.zeros((1, 2))]
     rings = [np.array([0])]
     count = 1
     for r in radii[1:]:
         def arc_spacing(t, r=r):
-            d = np.hypot(r * np.cos(t) - edge[0], r * np.sin(t) - edge[1])
-            return np.minimum(h, h_edge + grade * d) / r
+            return np.minimum(h, h_edge + grade * distance(r * np.cos(t), r * np.sin(t))) / r
 
         theta = graded_with_break(0.0, np.pi / 2, beta, arc_spacing)
         if len(theta) < 3:
@@ -140,17 +162,50 @@ def solve_patch(beta: float, half_length: float, half_liner: float, h: float = 0
     points, triangles = quarter_disc(beta, h, h_edge, grade)
     a = min(half_length, half_liner)
     z = graded_with_break(0.0, half_liner, a, lambda s: axial_spacing(np.abs(s - a), h, h_edge, grade))
+    radius = np.hypot(points[:, 0], points[:, 1])
+    angle = np.arctan2(points[:, 1], points[:, 0])
+    on_electrode_2d = (radius > 1 - 1e-9) & (angle <= beta + 1e-9)
+    electrode = np.tile(on_electrode_2d, len(z)) & (np.repeat(z, len(points)) <= a + 1e-9)
+    return solve_mesh(points, triangles, z, electrode, field)
+
+
+def button_edge_size(radius: float, h: float, edge_ratio: float = 0.08) -> float:
+    """The mesh spacing over a button: the patch's edge spacing, and at most h / 1.5 of the radius (12
+    cells across it at h = 0.12 R), so that the staircase boundary refines with the mesh."""
+    return min(h * edge_ratio, radius * h / 1.5)
+
+
+def solve_button(radius: float, protrusion: float, half_liner: float, h: float = 0.12,
+                 edge_ratio: float = 0.08, grade: float = 0.35,
+                 field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None) -> FemSolution:
+    """A button electrode (the seed's sketch): a cylinder of radius ``radius`` along x through the wall
+    at (1, 0, 0), entering the flow by ``protrusion`` (0: a flush disc), equipotential. Its surface is
+    the wall inside y^2 + z^2 <= radius^2 and, protruding, the solid y^2 + z^2 <= radius^2,
+    x >= 1 - protrusion; the nodes inside it are held at the electrode potential (a staircase
+    boundary on the structured mesh, first order in the spacing ``button_edge_size``)."""
+    h_edge = button_edge_size(radius, h, edge_ratio)
+    points, triangles = quarter_disc(float(np.arcsin(min(radius, 1.0))), h, h_edge, grade,
+                                     footprint=(radius, protrusion))
+    z = graded_with_break(0.0, half_liner, radius,
+                          lambda s: axial_spacing(np.maximum(s - radius, 0.0), h, h_edge, grade))
+    n2 = len(points)
+    x, y = np.tile(points[:, 0], len(z)), np.tile(points[:, 1], len(z))
+    zz = np.repeat(z, n2)
+    inside = y * y + zz * zz <= radius * radius * (1 + 1e-9)
+    wall = np.tile(np.hypot(points[:, 0], points[:, 1]) > 1 - 1e-9, len(z))
+    electrode = inside & (wall | (x >= 1 - protrusion - 1e-12))
+    return solve_mesh(points, triangles, z, electrode, field)
+
+
+def solve_mesh(points: np.ndarray, triangles: np.ndarray, z: np.ndarray, electrode: np.ndarray,
+               field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None) -> FemSolution:
+    """The potential on the extruded mesh with ``electrode`` nodes at 1 and the plane x = 0 at 0;
+    S and W per cross-section triangle."""
     xyz, tets = extrude(points, triangles, z)
     mesh = MeshTet(xyz.T.copy(), tets.T.copy())
     basis = Basis(mesh, ElementTetP1())
     stiffness = asm(laplace, basis).tocsr()
 
-    n2 = len(points)
-    radius = np.hypot(points[:, 0], points[:, 1])
-    angle = np.arctan2(points[:, 1], points[:, 0])
-    on_electrode_2d = (radius > 1 - 1e-9) & (angle <= beta + 1e-9)
-    layer_z = np.repeat(z, n2)
-    electrode = np.tile(on_electrode_2d, len(z)) & (layer_z <= a + 1e-9)
     grounded = np.tile(points[:, 0] == 0.0, len(z))
     fixed = electrode | grounded
     phi = np.where(electrode, 1.0, 0.0)

@@ -38,6 +38,14 @@ class IntegralEquationSolution:
     coefficients: np.ndarray  # c_pq of the finest level, for the current I = 1
     levels: list[tuple[int, float]]  # (M, S) of each truncation
     basis: tuple[int, int]
+    # the wall transform T[m, n] = integral sigma cos(m theta) cos(k_n z) dS of the finest level (I = 1,
+    # rescaled like ``series``), odd m, k_n = n pi / cut for n < WALL_MODES: what a grid field needs
+    wall: np.ndarray | None = None
+    cut: float = 0.0
+    previous_coefficients: np.ndarray | None = None  # the level below's (the density's error estimate)
+
+
+WALL_MODES = 97  # z modes kept for a field that varies along z (module grid_weight)
 
 
 def bessel_ratio_table(orders: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -102,18 +110,20 @@ def galerkin(beta: float, a: float, half_liner: float, modes: int, p: int = 6, q
     return sensitivity, a * np.pi * d / current, c / current
 
 
-def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-4) -> IntegralEquationSolution:
+def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-4, progress=None) -> IntegralEquationSolution:
     """S (Richardson-extrapolated) and W's series for a patch of half-angle ``beta`` (radians) and
     half-length ``a`` on an insulated liner of half-length ``half_liner`` (R = 1)."""
     modes = 200
     shared = ratio_table(beta, a, half_liner, 800)  # the first three levels read one table
-    levels = [(modes, *galerkin(beta, a, half_liner, modes, ratios=shared)[:2])]
+    levels = [(modes, *galerkin(beta, a, half_liner, modes, ratios=shared))]
     extrapolated: list[float] = []
     while True:
         modes *= 2
+        if progress is not None:
+            progress(min(0.15 + 0.1 * len(levels), 0.55), f"integral equation, {modes} theta modes")
         table = shared if modes <= 800 else None
         s, series, coefficients = galerkin(beta, a, half_liner, modes, ratios=table)
-        levels.append((modes, s, series))
+        levels.append((modes, s, series, coefficients))
         extrapolated.append(2 * levels[-1][1] - levels[-2][1])
         if len(extrapolated) >= 2:
             error = abs(extrapolated[-1] - extrapolated[-2])
@@ -123,33 +133,60 @@ def solve_patch(beta: float, a: float, half_liner: float, tolerance: float = 1e-
     richer = galerkin(beta, a, half_liner, modes, 8, 8, ratios=shared if modes <= 800 else None)[0]
     error = abs(extrapolated[-1] - extrapolated[-2]) + abs(richer - levels[-1][1])
     # the series of the finest level, rescaled so that W(0) is the extrapolated S
-    series = levels[-1][2] * (extrapolated[-1] / levels[-1][1])
-    return IntegralEquationSolution(extrapolated[-1], error, series, coefficients, [(lv[0], lv[1]) for lv in levels], (6, 6))
+    scale = extrapolated[-1] / levels[-1][1]
+    series = levels[-1][2] * scale
+    cut = min(half_liner, a + DECAY_LENGTH)
+    m = np.arange(1, 2 * modes, 2).astype(float)
+    k = np.arange(min(WALL_MODES, z_modes(beta, a, half_liner, modes))) * np.pi / cut
+    p, q = coefficients.shape
+    big_a = beta * np.pi * (-1.0) ** np.arange(p)[None] * jv(2 * np.arange(p)[None], m[:, None] * beta)
+    big_b = a * np.pi * (-1.0) ** np.arange(q)[None] * jv(2 * np.arange(q)[None], k[:, None] * a)
+    wall = big_a @ coefficients @ big_b.T * scale
+    return IntegralEquationSolution(extrapolated[-1], error, series, coefficients, [(lv[0], lv[1]) for lv in levels], (6, 6),
+                                    wall, cut, levels[-2][3])
 
 
-def current_density(solution: IntegralEquationSolution, beta: float, theta: np.ndarray) -> np.ndarray:
-    """The electrode current density at z = 0 for the current 1 (R = 1), at angles inside (-beta, beta)."""
-    t = theta / beta
-    p, q = solution.coefficients.shape
-    along = sum(solution.coefficients[:, j] * (-1.0) ** j for j in range(q))  # T_2q(0) = (-1)^q
-    return sum(along[i] * np.cos(2 * i * np.arccos(t)) for i in range(p)) / np.sqrt(1 - t * t)
+def current_density(solution: IntegralEquationSolution, beta: float, theta: np.ndarray, z: np.ndarray | None = None,
+                    a: float = 1.0, coefficients: np.ndarray | None = None) -> np.ndarray:
+    """The electrode current density sigma (per unit wall area, R = 1, current 1) at angles inside
+    (-beta, beta) and, with ``z`` (same shape as theta) and the half-length ``a``, at heights inside
+    (-a, a); at z = 0 without. ``coefficients`` replaces the solution's (another level's)."""
+    c = solution.coefficients if coefficients is None else coefficients
+    t = np.asarray(theta, float) / beta
+    s = np.zeros_like(t) if z is None else np.asarray(z, float) / a
+    p, q = c.shape
+    across = [np.cos(2 * i * np.arccos(t)) for i in range(p)]
+    along = [np.cos(2 * j * np.arccos(s)) for j in range(q)]
+    total = sum(c[i, j] * across[i] * along[j] for i in range(p) for j in range(q))
+    return total / np.sqrt((1 - t * t) * (1 - s * s))
 
 
 def weight_at(series: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """W(z) = sum_l e_l Re(z^l), l = 0, 2, 4, ... (Horner in z^2)."""
+    return np.real(complex_weight_at(series, x, y))
+
+
+def complex_weight_at(series: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """sum_l e_l z^l: its real part weighs B_y, its imaginary part B_x (phi_x - i phi_y of the
+    z-integrated potential, times pi/2)."""
     z2 = (np.asarray(x, float) + 1j * np.asarray(y, float)) ** 2
     total = np.zeros_like(z2)
     for coefficient in series[::-1]:
         total = total * z2 + coefficient
-    return np.real(total)
+    return total
 
 
 def weight_on_ring(series: np.ndarray, r: float, count: int) -> np.ndarray:
     """W at theta_j = (j + 1/2) 2 pi / count on the ring of radius r, exactly for the truncated series:
     orders beyond the ring's resolution fold onto it (what evaluating them there gives)."""
+    return np.real(complex_on_ring(series, r, count))
+
+
+def complex_on_ring(series: np.ndarray, r: float, count: int) -> np.ndarray:
+    """sum_l e_l z^l at the ring's points (see weight_on_ring)."""
     orders = 2 * np.arange(len(series))
     with np.errstate(under="ignore"):
         terms = series * r ** orders.astype(float) * np.exp(1j * orders * np.pi / count)
     folded = np.zeros(count, dtype=complex)
     np.add.at(folded, orders % count, terms)
-    return np.real(np.fft.ifft(folded) * count)
+    return np.fft.ifft(folded) * count

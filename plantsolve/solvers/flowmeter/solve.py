@@ -19,7 +19,7 @@ from matplotlib.tri import LinearTriInterpolator, Triangulation
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress
-from plantsolve.solvers.flowmeter import fem, integral_equation, profiles, weight2d
+from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
 from plantsolve.solvers.flowmeter.validation import check_input, geometry
 
@@ -37,6 +37,7 @@ class WeightField:
     error_estimate: float
     electrode_current: np.ndarray  # rows (theta rad, j R / I)
     details: dict
+    current_map: np.ndarray | None = None  # rows (theta rad, z / R, j R^2 / I) over the electrode
 
 
 def quadrature_field(method: str, values, current: np.ndarray, details: dict) -> WeightField:
@@ -102,25 +103,38 @@ def mesh_size(tolerance: float) -> float:
     return float(np.clip(0.12 * np.sqrt(tolerance / 1e-3), 0.08, 0.25))
 
 
-def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, progress: Progress,
-                    grid: FieldGrid | None = None) -> WeightField:
-    """FEM reference (module fem), calibrated by the exact 2-D value: the ratio of the exact
+def finite_elements(beta: float | None, a: float, half_liner: float, tolerance: float, progress: Progress,
+                    grid: FieldGrid | None = None, button: tuple[float, float] | None = None) -> WeightField:
+    """FEM reference (module fem). Patches are calibrated by the exact 2-D value: the ratio of the exact
     full-length S to the FEM's (uniform field) on the same cross-section mesh multiplies S and W,
-    removing most of the error of the theta-edge singularity and of the polygonal wall; the change
-    of the calibrated S between the mesh and one 1.5 times coarser is the error estimate."""
-    exact_2d = np.pi / 2 / weight2d.electrode_current_integral(beta)
+    removing most of the error of the theta-edge singularity and of the polygonal wall. Buttons
+    have no such companion and are reported uncalibrated. The change of S between the mesh and one
+    1.5 times coarser is the error estimate."""
     h = mesh_size(tolerance)
     at = None if grid is None else grid.at
     runs = []
     for step, size in enumerate((1.5 * h, h)):
         progress(0.1 + 0.35 * step, f"finite elements, mesh size {size:.3g} R")
+        if button is not None:
+            patch = fem.solve_button(*button, half_liner, h=size, field=at)
+            runs.append((patch, None, 1.0))
+            continue
         patch = fem.solve_patch(beta, a, half_liner, h=size, field=at)
+        progress(0.25 + 0.35 * step, f"finite elements, full-length companion for the calibration, mesh size {size:.3g} R")
         full = fem.solve_patch(beta, half_liner, half_liner, h=size)
+        exact_2d = np.pi / 2 / weight2d.electrode_current_integral(beta)
         runs.append((patch, full, exact_2d / full.sensitivity))
+    progress(0.8, "finite elements: weight function")
     patch, full, ratio = runs[-1]
     coarse_patch, _, coarse_ratio = runs[0]
     calibrated = patch.sensitivity * ratio
     error = abs(calibrated - coarse_patch.sensitivity * coarse_ratio)
+    if button is not None:  # uncalibrated, first order in h: the error is about twice the change from 1.5 h
+        error *= 2
+    elif grid is not None:
+        # the calibration is exact for a uniform field only: in a grid field the FEM converges at about
+        # first order (measured against the integral equation), and the calibration's own size counts
+        error = 2 * error + abs(ratio - 1) * abs(calibrated)
     weight = patch.weight * ratio
     tri = Triangulation(patch.nodes[:, 0], patch.nodes[:, 1], patch.triangles)
     finder = tri.get_trifinder()
@@ -165,21 +179,59 @@ def finite_elements(beta: float, a: float, half_liner: float, tolerance: float, 
     # For a uniform field W is harmonic in this model (the z-integrated potential has no z-flux
     # through the insulated ends), so every axisymmetric profile has the same S: the
     # laminar-uniform difference measures the discretisation error of W itself.
-    if grid is None:
+    # A protruding button takes fluid out of the disc: W is harmonic only in what is left, and the
+    # profile matters for real (the electrode weighs the flow where it reaches into it).
+    if grid is None and (button is None or button[1] == 0):
         laminar = integrate(lambda x, y: profiles.axisymmetric("laminar", np.hypot(x, y)))
         error = max(error, abs(laminar - integrate(lambda x, y: np.ones_like(x))))
     # No current density: the lumped nodal reaction misstates it on the symmetry planes (by about
     # 4/3 at the electrode centre against the exact 2-D density), so none is reported.
+    model = ("equipotential button electrodes (radius, protrusion) on an insulated liner section (ends insulated), "
+             "FEM, staircase electrode boundary" if button is not None else
+             "equipotential patches on an insulated liner section (ends insulated), FEM")
     return WeightField("fem", values, integrate, error, np.zeros((0, 2)),
                        {"mesh_size": h, "unknowns": patch.unknowns, "tetrahedra": patch.tetrahedra,
-                        "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio,
-                        "model": "equipotential patches on an insulated liner section (ends insulated), FEM"})
+                        "uncalibrated_sensitivity": patch.sensitivity, "calibration_ratio": ratio, "model": model})
 
 
-def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float) -> WeightField:
-    """The integral equation on the electrode (module integral_equation): S extrapolated in the modes,
-    W from its series, integrated ring by ring on the polar rule (exact values of the series there)."""
-    solution = integral_equation.solve_patch(beta, a, half_liner, tolerance)
+def integral_equation_field(beta: float, a: float, half_liner: float, tolerance: float,
+                            button: float | None = None, progress: Progress | None = None,
+                            grid: FieldGrid | None = None) -> WeightField:
+    """The integral equation on the electrode (modules integral_equation, integral_equation_button): S
+    extrapolated in the modes, W from its series, integrated ring by ring on the polar rule (exact
+    values of the series there)."""
+    if button is None:
+        solution = integral_equation.solve_patch(beta, a, half_liner, tolerance, progress)
+
+        def density(theta, z=None, coefficients=None):
+            return integral_equation.current_density(solution, beta, theta, z, a, coefficients)
+
+        width, model = beta, ("equipotential patches on an insulated liner section (ends insulated), "
+                              "Galerkin integral equation on the electrode")
+    else:
+        solution = integral_equation_button.solve_button(button, half_liner, tolerance, progress=progress)
+
+        def density(theta, z=None, coefficients=None):
+            return integral_equation_button.current_density(solution, button, theta, z, coefficients)
+
+        width, model = float(np.arcsin(button)), ("equipotential flush buttons on an insulated liner section (ends "
+                                                  "insulated), Galerkin integral equation on the electrode")
+    # The density converges like 1/M (slower than S, whose error is second order): Richardson over the
+    # two finest levels on the coefficients, as on S (the total current stays 1); its change from the
+    # finest level, on the part without the edge singularity, is the density's error estimate.
+    extrapolated = 2 * solution.coefficients - solution.previous_coefficients
+    theta = edge_nodes(width)
+    current = np.column_stack([theta, density(theta, coefficients=extrapolated)])
+    smooth = np.sqrt(1 - (theta / width) ** 2)
+    change = float(np.max(np.abs(density(theta) - current[:, 1]) * smooth) / np.max(np.abs(current[:, 1]) * smooth))
+    current_map = electrode_map(lambda t, z: density(t, z, extrapolated), width, a if button is None else button,
+                                button is not None)
+    if grid is not None:
+        field = integral_equation_in_grid(solution, grid, current, model, progress)
+        field.current_map, field.details["electrode_current_change"] = current_map, change
+        return field
+    if progress is not None:
+        progress(0.8, "integral equation: weight function on the cross-section")
     quadrature = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
     rings = np.concatenate([integral_equation.weight_on_ring(solution.series, r, count) for r, count in quadrature.rings])
 
@@ -188,13 +240,56 @@ def integral_equation_field(beta: float, a: float, half_liner: float, tolerance:
 
     # the rule's own error: its uniform-flow integral against W(0), equal for a harmonic W
     error = solution.error_estimate + abs(integrate(lambda x, y: np.ones_like(x)) - solution.sensitivity)
-    theta = edge_nodes(beta)
-    current = np.column_stack([theta, integral_equation.current_density(solution, beta, theta)])
     return WeightField("integral_equation", lambda x, y: integral_equation.weight_at(solution.series, x, y),
                        integrate, error, current,
-                       {"modes": solution.levels, "basis": solution.basis,
-                        "model": "equipotential patches on an insulated liner section (ends insulated), "
-                                 "Galerkin integral equation on the electrode"})
+                       {"modes": solution.levels, "basis": solution.basis, "model": model,
+                        "electrode_current_change": change}, current_map)
+
+
+def electrode_map(density, width: float, half_length: float, disc: bool, count: int = 25) -> np.ndarray:
+    """The density on Chebyshev points over the electrode: rows (theta rad, z / R, j R^2 / I); for a
+    button the z points of each theta span its chord of the disc."""
+    nodes = np.cos(np.pi * (np.arange(count) + 0.5) / count)
+    theta = width * nodes
+    rows = []
+    for t in theta:
+        reach = np.sqrt(max(half_length**2 - np.sin(t) ** 2, 0.0)) if disc else half_length
+        z = reach * nodes
+        rows.append(np.column_stack([np.full(count, t), z, density(np.full(count, t), z)]))
+    return np.vstack(rows)
+
+
+def integral_equation_in_grid(solution, grid: FieldGrid, current: np.ndarray, model: str,
+                              progress: Progress | None) -> WeightField:
+    """W in a grid field from the integral equation's current (module grid_weight): the z-mean field
+    on the z-integrated series (fine rule) plus the modes of the field's variation along z (light rule)."""
+    extra = grid_weight.grid_weight(solution, grid, progress)
+    if progress is not None:
+        progress(0.8, "integral equation: z-mean field on the cross-section")
+    fine = profiles.disc_quadrature(radial=64, scale=40.0, max_angular=40000)
+    c = np.concatenate([integral_equation.complex_on_ring(solution.series, r, count) for r, count in fine.rings])
+    pts = np.column_stack([fine.x, fine.y])
+    w0 = extra.mean_by(pts) * c.real + extra.mean_bx(pts) * c.imag
+    light = extra.quadrature
+
+    def integrate(velocity) -> float:
+        return float((np.sum(w0 * velocity(fine.x, fine.y) * fine.w)
+                      + np.sum(extra.values * velocity(light.x, light.y) * light.w)) / np.pi)
+
+    def values(x, y):
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        at = np.column_stack([np.ravel(x), np.ravel(y)])
+        cz = integral_equation.complex_weight_at(solution.series, x, y)
+        base = extra.mean_by(at).reshape(x.shape) * cz.real + extra.mean_bx(at).reshape(x.shape) * cz.imag
+        return base + grid_weight.interpolate_rings(light, extra.values, np.ravel(x), np.ravel(y)).reshape(x.shape)
+
+    s = integrate(lambda x, y: np.ones_like(x))
+    truncation = abs(float(np.sum((extra.values - extra.half_values) * light.w) / np.pi))
+    # the uniform-field estimate, scaled to this field, plus the truncation of the field's z modes
+    error = solution.error_estimate * abs(s) / max(solution.sensitivity, 1e-300) + truncation
+    return WeightField("integral_equation", values, integrate, error, current,
+                       {"modes": solution.levels, "basis": solution.basis, "field_z_modes": int(solution.wall.shape[1]),
+                        "field_z_truncation": truncation, "model": model + ", in the grid field (z modes of B)"})
 
 
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
@@ -203,16 +298,23 @@ def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightFiel
     grid = field_grid(request)
     average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
+    if g.button is not None:
+        r_e, l_e = g.button
+        flush_ie = l_e == 0 and integral_equation_button.feasible(r_e, g.half_liner, request.options.tolerance)
+        if method == "integral_equation" or (method == "auto" and flush_ie):
+            progress(0.1, "integral equation on the button")
+            return integral_equation_field(0.0, 0.0, g.half_liner, request.options.tolerance, r_e, progress, grid)
+        return finite_elements(None, 0.0, g.half_liner, request.options.tolerance, progress, grid, g.button)
     if g.beta is None:
         return closed_form(None, method)
     if method == "first_order":
         return closed_form(g.beta, "first_order", average)
     if method == "auto" and g.full_length:
         return closed_form(g.beta, "exact", average)
-    if method == "integral_equation" or (method == "auto" and grid is None
-                                          and integral_equation.feasible(g.beta, g.half_length, g.half_liner)):
+    if method == "integral_equation" or (method == "auto" and integral_equation.feasible(g.beta, g.half_length, g.half_liner)):
         progress(0.1, "integral equation on the electrode")
-        return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance)
+        return integral_equation_field(g.beta, g.half_length, g.half_liner, request.options.tolerance,
+                                       progress=progress, grid=grid)
     return finite_elements(g.beta, g.half_length, g.half_liner, request.options.tolerance, progress, grid)
 
 
@@ -266,9 +368,10 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     radius = request.pipe.radius
     progress(0.05, "virtual current")
     field = virtual_current(request, progress)
-    progress(0.85, "weight function integrals")
+    progress(0.85, "weight function integrals: the request's profile")
     velocity, profile, notes = velocity_function(request)
     s, mean = sensitivity(field, velocity)
+    progress(0.9, "probes, the weight-function grid and the linearity curve")
     mean_velocity = request.velocity.mean if profile != "samples" else mean
     grid = field_grid(request)
     b = request.magnetic_field.magnitude if grid is None else grid.reference
@@ -282,14 +385,20 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     inside = np.hypot(gx, gy) < 1 - 1e-9
     gw = field.values(gx[inside], gy[inside])
     grid = np.column_stack([gx[inside] * radius, gy[inside] * radius, gw]).tolist()
-    first_order = 1.0 if g.beta is None else weight2d.sensitivity_first_order(g.beta)
+    if g.button is not None:
+        first_order = weight2d.sensitivity_first_order_button(g.button[0])
+    else:
+        first_order = 1.0 if g.beta is None else weight2d.sensitivity_first_order(g.beta)
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
+    current_map = [] if field.current_map is None else [
+        [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
     progress(1.0, "done")
     return FlowmeterResult(
         sensitivity=s, sensitivity_first_order=first_order, signal=signal, probes=probes,
         linearity=linearity(field, list(request.reynolds)),
         ideal_meter_residual=ideal_meter_residual(field, field.integrate(lambda x, y: np.ones_like(x))),
         method=field.method, error_estimate=field.error_estimate, grid=grid, electrode_current=current,
+        electrode_current_map=current_map,
         report=Report(status="warning" if notes else "ok",
                       message=f"S = {s:.6f} ({field.method}, estimated error {field.error_estimate:.1e}); "
                               f"first-order sin(beta)/beta = {first_order:.6f}.",

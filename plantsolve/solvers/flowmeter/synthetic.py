@@ -6,7 +6,10 @@ Known answers (uniform field, R the pipe radius):
 - point electrodes: Shercliff's W = R^2 (R^2 - x^2 + y^2) / (R^4 - 2 R^2 (x^2 - y^2) + (x^2 + y^2)^2), S = 1;
 - any axisymmetric profile gives the same S (W is harmonic, so its mean over every circle about
   the axis is W(0));
-- the seed's first-order iterate: S = sin(beta) / beta.
+- the seed's first-order iterate: S = sin(beta) / beta;
+- a small flush button of radius r_e: S = 1 - (r_e/R)^2 / 6 + O((r_e/R)^3) (S is the current-weighted
+  mean of cos(theta) over the electrode, and a small disc carries the flat disc's density
+  1/sqrt(r_e^2 - rho^2), whose mean of y^2 is r_e^2/3).
 """
 
 from __future__ import annotations
@@ -32,11 +35,14 @@ def shercliff(x: np.ndarray, y: np.ndarray, radius: float = 1.0) -> np.ndarray:
 def meter(radius: float = 50.0, half_angle: float = 22.5, half_length: float | None = None,
           shape: str = "patch", liner_length: float | None = None, velocity: dict | None = None,
           method: str = "auto", probes: list | None = None, reynolds: list | None = None,
-          units: str = "mm", tolerance: float = 1e-3) -> dict[str, Any]:
+          units: str = "mm", tolerance: float = 1e-3, button_radius: float | None = None,
+          protrusion: float = 0.0) -> dict[str, Any]:
     """A request body."""
     electrodes: dict[str, Any] = {"shape": shape}
     if shape == "patch":
         electrodes.update(half_angle=half_angle, half_length=half_length)
+    if shape == "button":
+        electrodes.update(radius=button_radius, protrusion=protrusion)
     return {"units": units,
             "pipe": {"radius": radius, "liner_length": liner_length if liner_length is not None else 6 * radius},
             "electrodes": electrodes,
@@ -62,3 +68,8 @@ def grid_field(radius: float, liner_length: float, bx, by, nx: int = 21, nz: int
     return {"type": "grid", "x": x.tolist(), "y": x.tolist(), "z": z.tolist(),
             "bx": np.broadcast_to(bx(gx, gy, gz), gx.shape).ravel().tolist(),
             "by": np.broadcast_to(by(gx, gy, gz), gx.shape).ravel().tolist()}
+
+
+def small_button(radius_ratio: float) -> float:
+    """The leading terms of S for a flush button of radius r_e = ``radius_ratio`` R."""
+    return 1 - radius_ratio**2 / 6

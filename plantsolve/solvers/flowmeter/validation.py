@@ -11,6 +11,7 @@ from scipy.spatial import ConvexHull, QhullError
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.flowmeter.integral_equation import feasible
+from plantsolve.solvers.flowmeter.integral_equation_button import feasible as feasible_button
 from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
@@ -18,10 +19,11 @@ from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 class Geometry:
     """The meter in units of the pipe radius (the only lengths S depends on)."""
 
-    beta: float | None  # electrode half-angle in radians; None for point electrodes
+    beta: float | None  # electrode half-angle in radians; None for point and button electrodes
     half_length: float  # a / R (the liner's half-length for full-length electrodes)
     half_liner: float  # L / (2 R)
     full_length: bool
+    button: tuple[float, float] | None = None  # (r_e / R, l_e / R) of button electrodes
 
 
 def geometry(request: FlowmeterRequest) -> Geometry:
@@ -31,6 +33,9 @@ def geometry(request: FlowmeterRequest) -> Geometry:
     e = request.electrodes
     if e.shape == "point":
         return Geometry(None, 0.0, half_liner, False)
+    if e.shape == "button":
+        r_e = (e.radius or 0.0) / radius
+        return Geometry(None, r_e, half_liner, False, (r_e, e.protrusion / radius))
     full = e.half_length is None or e.half_length >= liner / 2 * (1 - 1e-12)
     a = half_liner if full else e.half_length / radius
     return Geometry(float(np.radians(e.half_angle)), a, half_liner, full)
@@ -48,7 +53,18 @@ def check_input(request: FlowmeterRequest) -> None:
                                  f"({liner / 2:g}); use null for electrodes along the whole liner"))
     if e.shape == "point" and e.half_length is not None:
         errors.append(FieldError(("electrodes", "half_length"), "point electrodes have no half-length; leave it null"))
-    if request.options.method == "integral_equation":
+    errors += button_errors(request, liner)
+    if request.options.method == "integral_equation" and e.shape == "button":
+        if e.protrusion > 0:
+            errors.append(FieldError(("options", "method"),
+                                     "the integral equation lives on the wall: it models flush buttons (protrusion 0); "
+                                     "a protruding button takes 'fem' (or 'auto')"))
+        elif e.radius is not None and 0.02 * radius <= e.radius <= 0.8 * radius and not feasible_button(
+                e.radius / radius, liner / (2 * radius), request.options.tolerance):
+            errors.append(FieldError(("options", "method"),
+                                     f"a button this small (r_e/R = {e.radius / radius:.3g}) needs more modes than the "
+                                     "integral equation's memory budget; use 'fem' or 'auto'"))
+    elif request.options.method == "integral_equation":
         if e.shape != "patch" or e.half_length is None or e.half_length >= liner / 2:
             errors.append(FieldError(("options", "method"),
                                      "'integral_equation' models patches shorter than the liner; full-length and point "
@@ -58,12 +74,12 @@ def check_input(request: FlowmeterRequest) -> None:
                                      f"electrodes this short for their width (a/R = {e.half_length / radius:.3g}, "
                                      f"beta = {e.half_angle:g} deg) need more modes than the integral equation's "
                                      "memory budget; use 'fem' or 'auto'"))
-        elif request.magnetic_field.type != "uniform":
-            errors.append(FieldError(("options", "method"),
-                                     "'integral_equation' gives the z-integrated current only, which a uniform field "
-                                     "needs; a grid field takes 'fem' (or 'auto')"))
-    if request.options.method == "fem" and e.shape != "patch":
-        errors.append(FieldError(("options", "method"), "'fem' models patch electrodes; point electrodes are solved exactly"))
+    if request.options.method == "fem" and e.shape == "point":
+        errors.append(FieldError(("options", "method"), "'fem' models patches and buttons; point electrodes are solved exactly"))
+    if request.options.method == "first_order" and e.shape == "button":
+        errors.append(FieldError(("options", "method"),
+                                 "'first_order' is the seed's iterate for patches; buttons take 'auto', "
+                                 "'integral_equation' (flush) or 'fem'"))
     finite_patch = e.shape == "patch" and e.half_length is not None and e.half_length < liner / 2
     if finite_patch and e.half_length / radius < 0.02:
         errors.append(FieldError(("electrodes", "half_length"),
@@ -94,12 +110,48 @@ def check_input(request: FlowmeterRequest) -> None:
         raise InputRejected(errors)
 
 
+def button_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
+    """A button needs a radius that the wall holds without the two electrodes meeting, and a
+    protrusion that keeps the tips apart; patches and points take neither field."""
+    e = request.electrodes
+    radius = request.pipe.radius
+    if e.shape != "button":
+        out = []
+        if e.radius is not None:
+            out.append(FieldError(("electrodes", "radius"), f"'radius' belongs to button electrodes, not {e.shape!r}"))
+        if e.protrusion != 0:
+            out.append(FieldError(("electrodes", "protrusion"), f"'protrusion' belongs to button electrodes, not {e.shape!r}"))
+        return out
+    errors = []
+    if e.radius is None:
+        return [FieldError(("electrodes", "radius"), "a button electrode needs its radius r_e")]
+    if e.half_length is not None:
+        errors.append(FieldError(("electrodes", "half_length"), "button electrodes have no half-length; leave it null"))
+    if not 0.02 * radius <= e.radius <= 0.8 * radius:
+        errors.append(FieldError(("electrodes", "radius"),
+                                 f"r_e/R = {e.radius / radius:.3g}; a button needs 0.02 <= r_e/R <= 0.8 (smaller is a point "
+                                 "electrode; larger wraps round the pipe towards the other electrode)"))
+    elif e.radius > liner / 2:
+        errors.append(FieldError(("electrodes", "radius"),
+                                 f"r_e = {e.radius:g} exceeds half the liner length ({liner / 2:g}): the button does not fit"))
+    if not e.protrusion <= 0.9 * radius:
+        errors.append(FieldError(("electrodes", "protrusion"),
+                                 f"l_e/R = {e.protrusion / radius:.3g}; at most 0.9 (the two tips would meet at the "
+                                 "pipe's mid-plane)"))
+    if liner / radius < 0.5:
+        errors.append(FieldError(("pipe", "liner_length"), f"L/R = {liner / radius:.3g}; at least 0.5 for button electrodes"))
+    if not liner / radius <= 200:
+        errors.append(FieldError(("pipe", "liner_length"),
+                                 f"L/R = {liner / radius:g}; at most 200 (the virtual current has decayed long before)"))
+    return errors
+
+
 def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
     f = request.magnetic_field
     radius = request.pipe.radius
     if request.electrodes.shape == "point":
         return [FieldError(("magnetic_field", "type"),
-                           "a grid field needs the 3-D virtual current, computed for patch electrodes only; "
+                           "a grid field needs the 3-D virtual current, computed for patches and buttons only; "
                            "point electrodes take a uniform field")]
     errors = []
     for name, reach in (("x", radius), ("y", radius), ("z", liner / 2)):

@@ -85,3 +85,17 @@ def complex_weight_first_order(x: np.ndarray, y: np.ndarray, beta: float) -> np.
 def sensitivity_first_order(beta: float) -> float:
     """sin(beta)/beta: the seed's eq. 39-40 (the factor 2 of its eq. 42 is a slip)."""
     return float(np.sin(beta) / beta)
+
+
+def sensitivity_first_order_button(radius: float, nodes: int = 256) -> float:
+    """The uniform-current-density iterate for a flush button of radius ``radius`` (R = 1).
+
+    For uniform B only the z-integrated potential enters, and its weight at the centre is
+    S = integral sigma cos(theta) dS / integral sigma dS (the current-weighted mean of cos theta over
+    the electrode, which is sin(beta)/beta for a uniform patch and pi/(2K) for the 2-D density).
+    For uniform sigma on the disc y^2 + z^2 <= r^2 of the wall (dS = dy dz / cos theta):
+    S = pi r^2 / integral 2 sqrt(r^2 - y^2) / sqrt(1 - y^2) dy, with y = r cos u a smooth
+    periodic integrand, integrated by the trapezoid rule."""
+    u = (np.arange(nodes) + 0.5) * np.pi / nodes
+    area = np.sum(2 * radius**2 * np.sin(u) ** 2 / np.sqrt(1 - (radius * np.cos(u)) ** 2)) * np.pi / nodes
+    return float(np.pi * radius**2 / area)
