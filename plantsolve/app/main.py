@@ -20,6 +20,7 @@ from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.jobs.service import JobService
 from plantsolve.app.middleware import BodyLimitMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
+from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
 from plantsolve.schemas.jobs import HealthStatus, Problem
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.dispatch import make_dispatcher
@@ -40,10 +41,12 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
             ctx.db.migrate()
         if run_jobs:
             dispatcher.start()
+            app.state.webhooks.start()
         try:
             yield
         finally:
             if run_jobs:
+                app.state.webhooks.stop()
                 dispatcher.stop()
             ctx.close()
 
@@ -67,6 +70,8 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     # added last = runs first: the caller is known (or refused) before any body is read
     app.state.keys = KeyRing(settings.api_keys, settings.admin_keys)
+    app.state.webhook_secrets = WebhookSecrets(settings.webhook_secrets, app.state.keys)
+    app.state.webhooks = WebhookNotifier(app.state.jobs, app.state.webhook_secrets, settings)
     app.add_middleware(AuthMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs)
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["GET", "POST"],

@@ -48,6 +48,16 @@ class AttemptInfo(BaseModel):
     error: str | None = None
 
 
+class CallbackInfo(BaseModel):
+    """The completion webhook asked for at submission (``?callback_url=``)."""
+
+    url: str
+    state: Literal["pending", "delivered", "failed"] = Field(
+        description="pending: not yet delivered (the job is running, or a retry is due); failed: every attempt failed.")
+    attempts: int = Field(description="Deliveries tried so far.")
+    error: str | None = Field(default=None, description="Why the last delivery failed.")
+
+
 class JobView(BaseModel):
     """A job's status. ``report`` is present once the job has finished (and after a failed
     attempt that was re-queued)."""
@@ -66,6 +76,7 @@ class JobView(BaseModel):
     artifacts: list[ArtifactInfo] = Field(default_factory=list)
     attempts: list[AttemptInfo] = Field(default_factory=list, description="Every attempt so far, oldest first.")
     links: dict[str, str] = Field(description="self, result, cancel (URLs relative to the host).")
+    callback: CallbackInfo | None = Field(default=None, description="The completion webhook, when one was asked for.")
 
 
 class JobList(BaseModel):

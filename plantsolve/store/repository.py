@@ -363,6 +363,38 @@ class JobRepository:
         with self.sessions() as session:
             return list(session.scalars(query))
 
+    # ---- the completion webhook ---------------------------------------------------------------
+
+    def due_callbacks(self, limit: int = 20) -> list[uuid.UUID]:
+        """Finished jobs whose callback is pending and due, the longest waiting first."""
+        now = utcnow()
+        query = (select(Job.id).where(Job.callback_state == "pending", Job.callback_next_at <= now,
+                                      Job.status.in_(FINISHED))
+                 .order_by(Job.callback_next_at).limit(limit))
+        with self.sessions() as session:
+            return list(session.scalars(query))
+
+    def claim_callback(self, job_id: uuid.UUID, *, lease_seconds: float) -> int | None:
+        """Take one delivery attempt (a conditional update only one process wins); until it is recorded,
+        the lease keeps others off. Returns the attempt number, or None when another process has it."""
+        now = utcnow()
+        statement = (update(Job)
+                     .where(Job.id == job_id, Job.callback_state == "pending", Job.callback_next_at <= now)
+                     .values(callback_attempts=Job.callback_attempts + 1,
+                             callback_next_at=now + timedelta(seconds=lease_seconds))
+                     .returning(Job.callback_attempts))
+        with self.writing(), self.sessions() as session:
+            attempt = session.execute(statement).scalar_one_or_none()
+            session.commit()
+        return attempt
+
+    def record_callback(self, job_id: uuid.UUID, attempt: int, *, state: str, error: str | None = None,
+                        next_at: datetime | None = None) -> bool:
+        """The outcome of delivery ``attempt``: "delivered", "failed" (gave up) or "pending" again at ``next_at``."""
+        return self._execute(
+            update(Job).where(Job.id == job_id, Job.callback_attempts == attempt, Job.callback_state == "pending")
+            .values(callback_state=state, callback_error=error[:2000] if error else None, callback_next_at=next_at)) == 1
+
     # ---- helpers ----------------------------------------------------------------------------
 
     @staticmethod

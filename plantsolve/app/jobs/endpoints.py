@@ -14,6 +14,7 @@ from starlette.datastructures import UploadFile
 from plantsolve.app.auth import Principal, require_api_key
 from plantsolve.app.jobs.events import add_event_routes
 from plantsolve.app.jobs.service import JobService, safe_filename
+from plantsolve.app.webhooks import check_callback_url
 from plantsolve.app.problems import (
     NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
 )
@@ -45,14 +46,29 @@ Service = Annotated[JobService, Depends(get_service)]
 Caller = Annotated[Principal, Depends(require_api_key)]
 
 
+CallbackUrl = Annotated[
+    str | None,
+    Query(
+        max_length=2048,
+        description="Completion webhook: when the job has finished, the job view is POSTed to this http(s) URL, signed "
+        "with 'X-Plantsolve-Signature: sha256=<HMAC-SHA256 of the body>' (the key's webhook secret) and retried with "
+        "backoff until the receiver answers 2xx.",
+    ),
+]
+
+
 def submit_route(kind: str):
     """The POST /v1/<kind>/jobs handler: JSON body or multipart upload (``file`` + ``options``)."""
 
-    async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None) -> Response:
+    async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None,
+                     callback_url: CallbackUrl = None) -> Response:
+        if callback_url is not None:
+            callback_url = check_callback_url(callback_url, caller.owner, request.app.state.webhook_secrets)
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if content_type == "application/json" or content_type.endswith("+json"):
             body = await request.body()
-            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner)
+            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner,
+                                                callback_url)
         elif content_type == "multipart/form-data":
             limit = request.app.state.settings.max_body_bytes
             form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
@@ -71,7 +87,7 @@ def submit_route(kind: str):
                 options = (await options.read()).decode("utf-8", "replace")
             submitted = await run_in_threadpool(
                 lambda: service.submit_upload_view(kind, upload.filename or "upload", content, options, idempotency_key,
-                                                   owner=caller.owner)
+                                                   owner=caller.owner, callback_url=callback_url)
             )
         else:
             raise UnsupportedMediaType(
