@@ -1,6 +1,6 @@
 """API keys and tenants, checked before any body is read.
 
-With ``API_KEYS`` set, every ``/v1`` call, the dashboard and (with ``PROTECT_DOCS``) the docs need
+With ``API_KEYS`` set, every ``/v1`` call, ``/metrics``, the dashboard and (with ``PROTECT_DOCS``) the docs need
 ``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``, which sets
 an HTTP-only, same-site cookie honoured for reads (GET/HEAD) only, so a cookie cannot submit or
 cancel on a user's behalf. Each key is a tenant: an entry ``name:key`` names it, a bare ``key`` is
@@ -83,7 +83,7 @@ class AuthMiddleware:
         self.app, self.keys, self.protect_docs = app, keys, protect_docs
 
     def protected(self, path: str) -> bool:
-        if path.startswith("/v1/") or path == "/v1":
+        if path.startswith("/v1/") or path == "/v1" or path == "/metrics":
             return True
         if path == "/dashboard" or (path.startswith("/dashboard/") and not path.startswith("/dashboard/log")):
             return True

@@ -79,6 +79,15 @@ class JobView(BaseModel):
     callback: CallbackInfo | None = Field(default=None, description="The completion webhook, when one was asked for.")
 
 
+class UploadedInput(BaseModel):
+    """What a file upload submitted: the file's name and size, the multipart ``options``, and where the bytes are."""
+
+    filename: str = Field(description="The uploaded file's name, as sent.")
+    options: dict[str, Any] | None = Field(description="The multipart 'options' JSON object (null when none was sent).")
+    size: int = Field(description="Bytes of the file.")
+    file: str = Field(description="URL of the file itself (GET /v1/jobs/{id}/input/file).")
+
+
 class JobList(BaseModel):
     items: list[JobView]
     next_cursor: str | None = Field(description="Pass as ?cursor= to get the next page; null on the last page.")

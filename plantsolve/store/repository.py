@@ -14,7 +14,7 @@ from datetime import datetime, timedelta, timezone
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import and_, delete, func, or_, select, update
+from sqlalchemy import and_, case, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -164,6 +164,29 @@ class JobRepository:
         with self.sessions() as session:
             rows = session.execute(query)
             return {status: count for status, count in rows}
+
+    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
+        with self.sessions() as session:
+            return [(kind, status, int(n)) for kind, status, n in
+                    session.execute(select(Job.kind, Job.status, func.count()).group_by(Job.kind, Job.status))]
+
+    def oldest_queued(self) -> list[tuple[str, datetime]]:
+        """Per kind, when its longest-waiting queued job was submitted."""
+        with self.sessions() as session:
+            return [(kind, as_utc(created)) for kind, created in session.execute(
+                select(Job.kind, func.min(Job.created_at)).where(Job.status == "queued").group_by(Job.kind))]
+
+    def run_time_histogram(self, buckets: Iterable[float]) -> list[tuple[str, str, int, float, list[int]]]:
+        """Per kind and final status of the finished jobs: count, sum of run seconds, and the cumulative count
+        at or below each bucket bound, computed by the database in one pass."""
+        buckets = list(buckets)
+        seconds = Job.run_seconds
+        columns = [func.sum(case((seconds <= bound, 1), else_=0)) for bound in buckets]
+        query = (select(Job.kind, Job.status, func.count(), func.sum(seconds), *columns)
+                 .where(Job.status.in_(FINISHED), seconds.is_not(None)).group_by(Job.kind, Job.status))
+        with self.sessions() as session:
+            return [(row[0], row[1], int(row[2]), float(row[3] or 0.0), [int(v or 0) for v in row[4:]])
+                    for row in session.execute(query)]
 
     def artifacts(self, job_id: uuid.UUID) -> list[Artifact]:
         with self.sessions() as session:

@@ -174,6 +174,8 @@ class JobService:
                     errors=[field_problem(["header", "Idempotency-Key"], "already used with a different body", "idempotency_conflict")],
                 )
             return Submitted(stored, False)
+        log.info("job %s (%s) submitted", stored.id, stored.kind,
+                 extra={"job_id": str(stored.id), "kind": stored.kind, "status": "queued"})
         # Enqueue only after the row is committed: a worker must always find the job.
         try:
             self.dispatcher.enqueue(stored.id, stored.kind)
