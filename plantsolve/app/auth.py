@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import ipaddress
+import logging
 from dataclasses import dataclass
 
 from fastapi import Request
@@ -19,6 +21,8 @@ from fastapi.responses import RedirectResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plantsolve.app.problems import Unauthorized, problem_response
+
+log = logging.getLogger("plantsolve.api")
 
 COOKIE = "plantsolve_key"
 DOCS = ("/docs", "/redoc", "/openapi.json")
@@ -76,11 +80,31 @@ def _token(scope: Scope) -> str | None:
     return None
 
 
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False  # a host name other than localhost: reachable from elsewhere
+
+
+def warn_if_exposed(host: str, keys: KeyRing) -> bool:
+    """Log a warning when the service answers on a non-loopback address without API keys. ``plantsolve serve``
+    may call it with its --host at start; the auth middleware calls it with the address of the first request."""
+    if keys or is_loopback(host):
+        return False
+    log.warning("API_KEYS is empty and the service answers on %s: anyone who can reach it can submit, read and "
+                "cancel every job. Set API_KEYS (and ADMIN_KEYS), or bind to 127.0.0.1.", host)
+    return True
+
+
 class AuthMiddleware:
     """Resolves the caller before the route (and before any body is read) and refuses protected paths."""
 
     def __init__(self, app: ASGIApp, keys: KeyRing, protect_docs: bool):
         self.app, self.keys, self.protect_docs = app, keys, protect_docs
+        self._bind_checked = False
 
     def protected(self, path: str) -> bool:
         if path.startswith("/v1/") or path == "/v1" or path == "/metrics":
@@ -94,6 +118,11 @@ class AuthMiddleware:
             await self.app(scope, receive, send)
             return
         if not self.keys:
+            if not self._bind_checked:  # the server's own address, as the first request reached it
+                self._bind_checked = True
+                server = scope.get("server")
+                if server:
+                    warn_if_exposed(str(server[0]), self.keys)
             principal = ANONYMOUS
         else:
             token = _token(scope)
