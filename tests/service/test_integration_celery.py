@@ -178,7 +178,7 @@ def test_events_stream_progress_written_by_a_celery_worker(scaled):
 
     client, _, _ = scaled
     assert client.app.state.settings.embedded_mode and client.app.state.settings.broker_url  # Celery mode
-    job = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0], "seconds": 2.0}).json()
+    job = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0], "seconds": 3.0}).json()
     received = []
     with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
         for name, data in events(response.iter_lines(), deadline=time.monotonic() + 60):
