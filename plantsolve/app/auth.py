@@ -91,7 +91,8 @@ def is_loopback(host: str) -> bool:
 
 def warn_if_exposed(host: str, keys: KeyRing) -> bool:
     """Log a warning when the service answers on a non-loopback address without API keys. ``plantsolve serve``
-    may call it with its --host at start; the auth middleware calls it with the address of the first request."""
+    may call it with its --host at start; the auth middleware calls it with the server address of each request
+    until one arrives on a non-loopback address (a published port), then warns once."""
     if keys or is_loopback(host):
         return False
     log.warning("API_KEYS is empty and the service answers on %s: anyone who can reach it can submit, read and "
@@ -104,7 +105,8 @@ class AuthMiddleware:
 
     def __init__(self, app: ASGIApp, keys: KeyRing, protect_docs: bool):
         self.app, self.keys, self.protect_docs = app, keys, protect_docs
-        self._bind_checked = False
+        self._warned = False  # once per process
+        self._loopback: set[str] = set()  # server addresses seen to be loopback (a health check's, say)
 
     def protected(self, path: str) -> bool:
         if path.startswith("/v1/") or path == "/v1" or path == "/metrics":
@@ -118,11 +120,13 @@ class AuthMiddleware:
             await self.app(scope, receive, send)
             return
         if not self.keys:
-            if not self._bind_checked:  # the server's own address, as the first request reached it
-                self._bind_checked = True
+            if not self._warned:  # the server's own address as this request reached it: loopback, or exposed?
                 server = scope.get("server")
-                if server:
-                    warn_if_exposed(str(server[0]), self.keys)
+                if server and server[0] not in self._loopback:
+                    if warn_if_exposed(str(server[0]), self.keys):
+                        self._warned = True
+                    else:
+                        self._loopback.add(server[0])
             principal = ANONYMOUS
         else:
             token = _token(scope)

@@ -3,7 +3,8 @@
 Fields: ``time`` (UTC, ISO 8601), ``level``, ``logger``, ``message``, and whatever a call passes in
 ``extra`` among :data:`FIELDS` (a finished job attempt logs ``job_id``, ``kind``, ``attempt``,
 ``duration_seconds``, ``outcome``, ``worker``; an HTTP request's log lines carry ``request_id``, the
-``X-Request-ID`` the API answered with). ``LOG_FORMAT=text`` gives plain lines instead.
+``X-Request-ID`` the API answered with). ``LOG_FORMAT=text`` gives plain lines instead. The
+``plantsolve`` logger then writes its lines itself and does not pass them on to the root logger.
 """
 
 from __future__ import annotations
@@ -47,6 +48,8 @@ def configure_logging(log_format: str = "json", level: int | str = logging.INFO,
     for log_filter in filters:
         handler.addFilter(log_filter)
     logger.addHandler(handler)
+    # written once, here: a root handler set up by the command line or a host application would repeat each line
+    logger.propagate = False
     if logger.level == logging.NOTSET:
         logger.setLevel(level)
     return handler

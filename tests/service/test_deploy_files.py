@@ -97,12 +97,26 @@ def test_api_keys_unset_on_a_public_address_is_logged_loudly(tmp_path, caplog):
     assert not warn_if_exposed("127.0.0.1", KeyRing([], [])) and not warn_if_exposed("::1", KeyRing([], []))
     assert not warn_if_exposed("0.0.0.0", KeyRing(["k"], []))
     assert not caplog.records
-    # as served: the first request names the address the server answers on (TestClient: 'testserver')
-    with TestClient(create_app(service_settings(tmp_path), run_jobs=False)) as client:
-        client.get("/healthz")
-        client.get("/healthz")
-    assert len([r for r in caplog.records if "API_KEYS is empty" in r.getMessage()]) == 1
+    # as served: each request names the server address it arrived on; loopback ones (a container's own health
+    # check) are quiet, the first on another address (a published port) warns, once
+    app = create_app(service_settings(tmp_path), run_jobs=False)
+    reached = {"server": ("127.0.0.1", 8000)}
+
+    async def served_on(scope, receive, send):  # the server address uvicorn puts in each request's scope
+        if scope["type"] == "http":
+            scope = {**scope, "server": reached["server"]}
+        await app(scope, receive, send)
+
+    with TestClient(served_on) as client:
+        for address in ("127.0.0.1", "127.0.0.1", "172.18.0.5", "172.18.0.5"):
+            reached["server"] = (address, 8000)
+            client.get("/healthz")
+            if address == "127.0.0.1":
+                assert not [r for r in caplog.records if "API_KEYS is empty" in r.getMessage()]
+    warnings = [r for r in caplog.records if "API_KEYS is empty" in r.getMessage()]
+    assert len(warnings) == 1 and "172.18.0.5" in warnings[0].getMessage()
     caplog.clear()
     with TestClient(create_app(service_settings(tmp_path / "keyed", api_keys=["k"]), run_jobs=False)) as client:
         client.get("/healthz")
     assert not [r for r in caplog.records if "API_KEYS is empty" in r.getMessage()]
+
