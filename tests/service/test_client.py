@@ -34,12 +34,12 @@ def server(tmp_path_factory):
 def test_submit_wait_with_progress_result_and_artifacts(server, tmp_path):
     seen: list[Job] = []
     with Client(server) as client:
-        job = client.submit("test-compute", {"values": [3.0, 4.0], "seconds": 1.0}, idempotency_key="client-1")
+        job = client.submit("test-compute", {"values": [3.0, 4.0], "seconds": 2.0}, idempotency_key="client-1")
         assert job.status in ("queued", "running") and job.kind == "test-compute"
         done = client.wait(job, progress=seen.append, timeout=60)
         assert done.status == "succeeded" and done.finished and done.fraction == 1.0
         fractions = [j.fraction for j in seen]
-        assert fractions == sorted(fractions) and len(set(fractions)) >= 5  # live progress, not two polls
+        assert fractions == sorted(fractions) and len(set(fractions)) >= 5  # live: 20 steps over 2 s, not two polls
         assert seen[-1].status == "succeeded"
         assert client.result(done)["norm"] == 5.0
         files = client.download_artifacts(done, tmp_path / "out")
@@ -48,7 +48,7 @@ def test_submit_wait_with_progress_result_and_artifacts(server, tmp_path):
         assert json.loads((tmp_path / "out" / "summary.json").read_text())["total"] == 7.0
         assert client.artifact(done, "values.txt") == b"3.0\n4.0"
         # the same key and body: the same job
-        assert client.submit("test-compute", {"values": [3.0, 4.0], "seconds": 1.0}, idempotency_key="client-1").id == job.id
+        assert client.submit("test-compute", {"values": [3.0, 4.0], "seconds": 2.0}, idempotency_key="client-1").id == job.id
 
 
 def test_file_upload_with_options(server):

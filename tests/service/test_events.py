@@ -3,6 +3,7 @@ change, then ``end``) and the stream of every job, both read from the database."
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 import uuid
@@ -21,7 +22,7 @@ def fast_events(tmp_path, **overrides):
 
 def test_a_running_job_streams_rising_progress_then_end(tmp_path):
     with TestClient(create_app(fast_events(tmp_path))) as client:
-        job = client.post("/v1/test-compute/jobs", json={"values": [3.0, 4.0], "seconds": 1.0}).json()
+        job = client.post("/v1/test-compute/jobs", json={"values": [3.0, 4.0], "seconds": 2.0}).json()
         received = []
         with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
             assert response.status_code == 200
@@ -34,7 +35,7 @@ def test_a_running_job_streams_rising_progress_then_end(tmp_path):
         views = [data for _, data in received[:-1]]
         fractions = [view["progress"]["fraction"] for view in views]
         assert fractions == sorted(fractions)  # progress never goes back
-        assert len(set(fractions)) >= 5  # the solver reports 20 steps over a second; polled every 0.05 s
+        assert len(set(fractions)) >= 5  # the solver reports 20 steps over 2 s; polled every 0.05 s
         # every event is a change of status or progress: no repeats
         changes = [(v["status"], v["progress"]["fraction"], v["progress"]["message"]) for v in views]
         assert len(changes) == len(set(changes))
@@ -51,17 +52,24 @@ def test_the_stream_of_a_finished_job_is_its_view_then_end(tmp_path):
         assert received == [("job", client.get(f"/v1/jobs/{job['id']}").json()), ("end", {"status": "failed"})]
 
 
-def _drive(app, job_id: uuid.UUID, pause: float) -> threading.Thread:
-    """Play a worker by writing straight into the database, as a Celery worker on another host would."""
+def _drive(app, job_id: uuid.UUID, pause: float, seen: "queue.Queue | None" = None) -> threading.Thread:
+    """Play a worker by writing straight into the database, as a Celery worker on another host would. With
+    ``seen``, each write waits until the reader has taken the previous state off the stream (no poll can miss
+    a state on a slow machine)."""
     repo = app.state.ctx.repo
 
-    def steps() -> None:
+    def step() -> None:
+        if seen is not None:
+            seen.get(timeout=20)
         time.sleep(pause)
+
+    def steps() -> None:
+        step()
         attempt = repo.claim(job_id, lease_seconds=30, worker="elsewhere")
         for fraction, message in ((0.25, "fitting"), (0.5, "fitting"), (0.5, "rendering")):
-            time.sleep(pause)
+            step()
             repo.set_progress(job_id, attempt, fraction, message)
-        time.sleep(pause)
+        step()
         repo.finish_success(job_id, attempt, result={"total": 1.0}, report={"status": "ok", "message": "done"},
                             artifacts=[], run_seconds=0.1)
 
@@ -75,12 +83,16 @@ def test_events_come_from_the_database_not_from_the_process(tmp_path):
     app = create_app(fast_events(tmp_path), run_jobs=False)
     with TestClient(app) as client:
         job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
-        writer = _drive(app, uuid.UUID(job["id"]), pause=0.3)
+        seen: queue.Queue = queue.Queue()
+        writer = _drive(app, uuid.UUID(job["id"]), pause=0.1, seen=seen)
+        received = []
         with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
-            received = list(events(response.iter_lines(), deadline=time.monotonic() + 20))
+            for name, data in events(response.iter_lines(), deadline=time.monotonic() + 30):
+                received.append((name, data))
+                seen.put(name)
         writer.join()
-    seen = [(d["status"], d["progress"]["fraction"], d["progress"]["message"]) for n, d in received if n == "job"]
-    assert seen == [
+    states = [(d["status"], d["progress"]["fraction"], d["progress"]["message"]) for n, d in received if n == "job"]
+    assert states == [
         ("queued", 0.0, "queued"),
         ("running", 0.0, "started"),
         ("running", 0.25, "fitting"),
@@ -103,15 +115,18 @@ def test_the_stream_of_every_job_sends_changes_after_connect_filtered_by_kind(tm
             lines = response.iter_lines()
             assert next(lines).startswith(":")  # the stream is open before anything happens
 
+            seen: queue.Queue = queue.Queue()
+
             def submit_and_run() -> None:
                 client.post("/v1/test-fail/jobs", json={})  # another kind: filtered out
                 job = client.post("/v1/test-compute/jobs", json={"values": [2.0]}).json()
-                _drive(app, uuid.UUID(job["id"]), pause=0.2).join()
+                _drive(app, uuid.UUID(job["id"]), pause=0.1, seen=seen).join()
 
             threading.Thread(target=submit_and_run, daemon=True).start()
-            for name, data in events(lines, deadline=time.monotonic() + 20, comments=comments):
+            for name, data in events(lines, deadline=time.monotonic() + 30, comments=comments):
                 received.append((data["kind"], data["status"], data["progress"]["fraction"]))
                 ids.add(data["id"])
+                seen.put(name)
                 if data["status"] == "succeeded":
                     break
         assert all(kind == "test-compute" for kind, _, _ in received)
@@ -132,6 +147,14 @@ def test_the_stream_of_every_job_filters_by_status(tmp_path):
             _drive(app, uuid.UUID(job["id"]), pause=0.1)
             name, data = next(events(lines, deadline=time.monotonic() + 20))
         assert (name, data["id"], data["status"]) == ("job", job["id"], "succeeded")
+
+
+def test_bad_stream_parameters_are_422_problems(client):
+    for path, params, loc in (("/v1/jobs/events", {"status": "done"}, ["query", "status"]),
+                              ("/v1/jobs/not-a-uuid/events", {}, ["path", "job_id"])):
+        response = client.get(path, params=params)
+        assert response.status_code == 422 and response.headers["content-type"] == "application/problem+json"
+        assert response.json()["errors"][0]["loc"] == loc
 
 
 @pytest.fixture
