@@ -36,6 +36,18 @@ def service_settings(tmp_path: Path, **overrides) -> AppSettings:
     return AppSettings(_env_file=None, **values)
 
 
+@pytest.fixture(autouse=True)
+def _plantsolve_logs_reach_caplog(caplog):
+    """The plantsolve logger writes its own lines and does not propagate (see plantsolve.workers.logs):
+    hand its records to caplog as well."""
+    import logging
+
+    logger = logging.getLogger("plantsolve")
+    logger.addHandler(caplog.handler)
+    yield
+    logger.removeHandler(caplog.handler)
+
+
 @pytest.fixture
 def settings(tmp_path) -> AppSettings:
     return service_settings(tmp_path)

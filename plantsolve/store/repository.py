@@ -14,7 +14,7 @@ from datetime import datetime, timedelta, timezone
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import and_, delete, func, or_, select, update
+from sqlalchemy import and_, case, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -35,6 +35,22 @@ class StoredArtifact:
     size: int
     sha256: str
     path: str
+
+
+@dataclass(frozen=True)
+class JobState:
+    """A job's status and progress: what changes while it runs."""
+
+    id: uuid.UUID
+    kind: str
+    status: str
+    attempt: int
+    progress: float
+    progress_message: str
+
+    @property
+    def signature(self) -> tuple:
+        return self.status, self.attempt, self.progress, self.progress_message
 
 
 @dataclass(frozen=True)
@@ -85,6 +101,32 @@ class JobRepository:
             query = select(Job).where(Job.id == job_id).options(*BRIEF)
             return session.scalars(query).first()
 
+    def state(self, job_id: uuid.UUID) -> JobState | None:
+        """The columns an event stream watches, read by primary key (no input, result or report)."""
+        with self.sessions() as session:
+            row = session.execute(select(*STATE).where(Job.id == job_id)).first()
+        return JobState(*row) if row is not None else None
+
+    def states(self, *, since: datetime, ids: Iterable[uuid.UUID] = (), owner: str | None = None,
+               kind: str | None = None) -> list[JobState]:
+        """What a stream of every job watches: the queued and running jobs, those created at or after
+        ``since``, and the jobs ``ids`` (those seen active before: to learn how they ended). Each part is
+        an indexed read, so a poll costs in proportion to the jobs in flight, not to the table."""
+        ids = list(ids)
+        queries = [select(*STATE).where(Job.status.in_(("queued", "running"))),
+                   select(*STATE).where(Job.created_at >= since)]
+        queries += [select(*STATE).where(Job.id.in_(ids[i:i + 500])) for i in range(0, len(ids), 500)]
+        found: dict[uuid.UUID, JobState] = {}
+        with self.sessions() as session:
+            for query in queries:
+                if owner is not None:
+                    query = query.where(Job.owner == owner)
+                if kind:
+                    query = query.where(Job.kind == kind)
+                for row in session.execute(query):
+                    found[row[0]] = JobState(*row)
+        return list(found.values())
+
     def get_by_idempotency_key(self, key: str) -> Job | None:
         with self.sessions() as session:
             return session.scalars(select(Job).where(Job.idempotency_key == key)).first()
@@ -122,6 +164,29 @@ class JobRepository:
         with self.sessions() as session:
             rows = session.execute(query)
             return {status: count for status, count in rows}
+
+    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
+        with self.sessions() as session:
+            return [(kind, status, int(n)) for kind, status, n in
+                    session.execute(select(Job.kind, Job.status, func.count()).group_by(Job.kind, Job.status))]
+
+    def oldest_queued(self) -> list[tuple[str, datetime]]:
+        """Per kind, when its longest-waiting queued job was submitted."""
+        with self.sessions() as session:
+            return [(kind, as_utc(created)) for kind, created in session.execute(
+                select(Job.kind, func.min(Job.created_at)).where(Job.status == "queued").group_by(Job.kind))]
+
+    def run_time_histogram(self, buckets: Iterable[float]) -> list[tuple[str, str, int, float, list[int]]]:
+        """Per kind and final status of the finished jobs: count, sum of run seconds, and the cumulative count
+        at or below each bucket bound, computed by the database in one pass."""
+        buckets = list(buckets)
+        seconds = Job.run_seconds
+        columns = [func.sum(case((seconds <= bound, 1), else_=0)) for bound in buckets]
+        query = (select(Job.kind, Job.status, func.count(), func.sum(seconds), *columns)
+                 .where(Job.status.in_(FINISHED), seconds.is_not(None)).group_by(Job.kind, Job.status))
+        with self.sessions() as session:
+            return [(row[0], row[1], int(row[2]), float(row[3] or 0.0), [int(v or 0) for v in row[4:]])
+                    for row in session.execute(query)]
 
     def artifacts(self, job_id: uuid.UUID) -> list[Artifact]:
         with self.sessions() as session:
@@ -321,6 +386,38 @@ class JobRepository:
         with self.sessions() as session:
             return list(session.scalars(query))
 
+    # ---- the completion webhook ---------------------------------------------------------------
+
+    def due_callbacks(self, limit: int = 20) -> list[uuid.UUID]:
+        """Finished jobs whose callback is pending and due, the longest waiting first."""
+        now = utcnow()
+        query = (select(Job.id).where(Job.callback_state == "pending", Job.callback_next_at <= now,
+                                      Job.status.in_(FINISHED))
+                 .order_by(Job.callback_next_at).limit(limit))
+        with self.sessions() as session:
+            return list(session.scalars(query))
+
+    def claim_callback(self, job_id: uuid.UUID, *, lease_seconds: float) -> int | None:
+        """Take one delivery attempt (a conditional update only one process wins); until it is recorded,
+        the lease keeps others off. Returns the attempt number, or None when another process has it."""
+        now = utcnow()
+        statement = (update(Job)
+                     .where(Job.id == job_id, Job.callback_state == "pending", Job.callback_next_at <= now)
+                     .values(callback_attempts=Job.callback_attempts + 1,
+                             callback_next_at=now + timedelta(seconds=lease_seconds))
+                     .returning(Job.callback_attempts))
+        with self.writing(), self.sessions() as session:
+            attempt = session.execute(statement).scalar_one_or_none()
+            session.commit()
+        return attempt
+
+    def record_callback(self, job_id: uuid.UUID, attempt: int, *, state: str, error: str | None = None,
+                        next_at: datetime | None = None) -> bool:
+        """The outcome of delivery ``attempt``: "delivered", "failed" (gave up) or "pending" again at ``next_at``."""
+        return self._execute(
+            update(Job).where(Job.id == job_id, Job.callback_attempts == attempt, Job.callback_state == "pending")
+            .values(callback_state=state, callback_error=error[:2000] if error else None, callback_next_at=next_at)) == 1
+
     # ---- helpers ----------------------------------------------------------------------------
 
     @staticmethod
@@ -344,6 +441,7 @@ JOBS = Job.__table__
 # queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
 # sweeps instead of loaded whole every time
 SWEEP_BATCH = 1000
+STATE = (Job.id, Job.kind, Job.status, Job.attempt, Job.progress, Job.progress_message)
 BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
 
 

@@ -169,6 +169,51 @@ def test_cancel_running_job_on_celery(scaled):
     assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"
 
 
+def test_events_stream_progress_written_by_a_celery_worker(scaled):
+    """The API process runs no job here: the progress it streams can only come from the database rows a
+    worker process writes."""
+    import json
+
+    from tests.support.sse import events
+
+    client, _, _ = scaled
+    assert client.app.state.settings.embedded_mode and client.app.state.settings.broker_url  # Celery mode
+    job = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0], "seconds": 3.0}).json()
+    received = []
+    with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
+        for name, data in events(response.iter_lines(), deadline=time.monotonic() + 60):
+            received.append((name, data))
+    views = [data for name, data in received if name == "job"]
+    fractions = [view["progress"]["fraction"] for view in views]
+    assert fractions == sorted(fractions) and len({f for f in fractions if 0 < f < 1}) >= 3
+    assert {view["status"] for view in views} >= {"running", "succeeded"}
+    worker = views[-1]["attempts"][0]["worker"]  # "celery@<host>:<pid>": run by the worker subprocess
+    assert worker.startswith("celery@") and not worker.endswith(f":{os.getpid()}")
+    assert received[-1] == ("end", {"status": "succeeded"})
+    assert json.loads(json.dumps(views[-1])) == client.get(f"/v1/jobs/{job['id']}").json()
+
+
+def test_the_compose_worker_healthcheck_pings_a_live_worker(scaled, redis_url):
+    """docker-compose.yml's worker check, run here against the module's worker (node main@<host>)."""
+    import socket
+
+    import yaml
+
+    client, env, _ = scaled
+    compose = yaml.safe_load((REPO / "docker-compose.yml").read_text())
+    command = compose["services"]["worker"]["healthcheck"]["test"][1].replace("$$", "$")
+    node = f"main@{socket.gethostname()}"
+    shell_env = {**env, "PATH": f"{BIN}:{os.environ.get('PATH', '')}", "BROKER_URL": redis_url,
+                 "HOSTNAME": "ignored"}
+    alive = subprocess.run(["sh", "-c", command.replace("celery@$HOSTNAME", node)], env=shell_env,
+                           capture_output=True, text=True, timeout=60)
+    assert alive.returncode == 0 and "pong" in alive.stdout, alive.stdout + alive.stderr
+    nobody = subprocess.run(["sh", "-c", command], env={**shell_env, "HOSTNAME": "no-such-node"},
+                            capture_output=True, text=True, timeout=60)
+    assert nobody.returncode != 0  # a worker that does not answer is reported unhealthy
+
+
+# The tests below stop the module's shared worker: tests that need it go above this line.
 @pytest.fixture
 def unstaffed(pg_url, redis_url, tmp_path):
     """The scaled API with no worker running yet (the test starts and kills its own)."""
@@ -289,3 +334,4 @@ def test_a_database_outage_during_the_final_write_loses_no_result(pg_url, redis_
             admin.execute(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true')
             admin.close()
             worker.stop()
+
