@@ -13,7 +13,7 @@ from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
-from plantsolve.app.dashboard import build_dashboard
+from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.jobs.endpoints import build_router
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.jobs.service import JobService
@@ -72,7 +72,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
-    app.include_router(build_dashboard())
+    install_dashboard(app)
     _install_health(app)
     app.openapi = lambda: _openapi(app)
     return app
