@@ -98,7 +98,7 @@ def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
         "progress": views.progress_text(view.status, view.progress.fraction),
         "finished": views.finished(view.status),
         "warnings": view.report.warnings if view.report is not None else [],
-        "plots": [a for a in artifacts if views.is_plot(a.media_type)],
+        "plots": views.plots(artifacts),
         "artifacts": artifacts,
         "input": views.input_view(job),
         "summary": views.result_summary(job.result) if job.status == "succeeded" else [],

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from plantsolve.schemas.jobs import JobView
+from plantsolve.schemas.jobs import ArtifactInfo, JobView
 from plantsolve.store.models import FINISHED, Job
 
 # larger inputs are offered as a download instead of being printed into the page
@@ -85,9 +85,13 @@ def result_summary(result: Any) -> list[tuple[str, str]]:
     rows: list[tuple[str, str]] = []
 
     def describe(value: Any) -> str:
+        if value is None:
+            return "—"
         if isinstance(value, float):
             return f"{value:.6g}"
         if isinstance(value, list):
+            if 0 < len(value) <= 4 and all(isinstance(v, (int, float, str)) for v in value):
+                return "[" + ", ".join(describe(v) for v in value) + "]"
             return f"list of {len(value)}"
         if isinstance(value, dict):
             return f"object with {len(value)} field(s)"
@@ -127,8 +131,13 @@ def input_view(job: Job) -> InputView:
     return InputView("json_file", None, "request.json", None, url)
 
 
-def is_plot(media_type: str) -> bool:
-    return media_type in ("image/png", "image/svg+xml", "image/jpeg")
+def plots(artifacts: list[ArtifactInfo]) -> list[ArtifactInfo]:
+    """The images to show inline: every raster image, and a vector one only when no raster image
+    has its name (kinds write each plot as PNG and SVG; the SVG is for downloading)."""
+    raster = [a for a in artifacts if a.media_type in ("image/png", "image/jpeg")]
+    stems = {a.name.rsplit(".", 1)[0] for a in raster}
+    vector = [a for a in artifacts if a.media_type == "image/svg+xml" and a.name.rsplit(".", 1)[0] not in stems]
+    return raster + vector
 
 
 def finished(status: str) -> bool:

@@ -44,7 +44,10 @@
   function stream(url, onJob, onEnd, onFail) {
     if (!window.EventSource) { onFail(); return; }
     var source = new EventSource(url);
-    source.addEventListener("open", function () { liveState("streaming", "live"); });
+    source.addEventListener("open", function () {
+      document.body.dataset.transport = "events";
+      liveState("streaming", "live");
+    });
     source.addEventListener("job", function (event) { onJob(JSON.parse(event.data)); });
     source.addEventListener("end", function (event) {
       source.close();
@@ -54,6 +57,7 @@
   }
 
   function every(ms, task) {
+    document.body.dataset.transport = "polling";
     var timer = setInterval(function () { if (!document.hidden) task(); }, ms);
     return function () { clearInterval(timer); };
   }
