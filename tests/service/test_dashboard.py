@@ -224,3 +224,18 @@ def test_a_running_job_can_be_cancelled_from_its_page(keyed):
     assert keyed.post(f"/dashboard/jobs/{job['id']}/cancel", data={}).status_code == 403
     done = keyed.post(f"/dashboard/jobs/{job['id']}/cancel", data={"token": token})
     assert done.status_code == 200 and 'data-status="cancelled"' in done.text
+
+
+def test_templates_and_static_files_are_package_data():
+    """A non-editable install carries every file the pages need (pyproject's package-data globs)."""
+    import fnmatch
+    import tomllib
+
+    from tests.conftest import REPO
+
+    globs = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["plantsolve.app"]
+    app = REPO / "plantsolve" / "app"
+    files = [p.relative_to(app).as_posix() for folder in ("templates", "static") for p in (app / folder).rglob("*")
+             if p.is_file()]
+    assert "templates/job.html" in files and "static/dashboard.js" in files
+    assert [f for f in files if not any(fnmatch.fnmatch(f, g) for g in globs)] == []
