@@ -14,6 +14,7 @@ from fastapi.responses import JSONResponse, RedirectResponse
 from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
 from plantsolve.app.dashboard import install_dashboard
+from plantsolve.app.docs import install_docs
 from plantsolve.app.jobs.endpoints import build_router
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.jobs.service import JobService
@@ -56,6 +57,8 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
             "Lengths are in the request's `units` (default mm), angles in degrees, quaternions `[w, x, y, z]`."
         ),
         lifespan=lifespan,
+        docs_url=None,  # served from the package's own assets: see install_docs
+        redoc_url=None,
     )
     app.state.settings = settings
     app.state.ctx = ctx
@@ -73,6 +76,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
     install_dashboard(app)
+    install_docs(app)
     _install_health(app)
     app.openapi = lambda: _openapi(app)
     return app

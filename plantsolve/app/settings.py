@@ -35,6 +35,13 @@ class AppSettings(WorkerSettings):
         description="JSON inputs larger than this are stored as a file and referenced from the job row.",
     )
     auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
+    events_poll_seconds: float = Field(
+        default=0.5, gt=0, le=60,
+        description="How often an open event stream (/events) reads the jobs' status and progress from the database.",
+    )
+    events_ping_seconds: float = Field(
+        default=15.0, gt=0, le=3600, description="Period of the keep-alive comment on an open event stream."
+    )
 
     @field_validator("api_keys", "admin_keys", "cors_origins", mode="before")
     @classmethod

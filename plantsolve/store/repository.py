@@ -38,6 +38,22 @@ class StoredArtifact:
 
 
 @dataclass(frozen=True)
+class JobState:
+    """A job's status and progress: what changes while it runs."""
+
+    id: uuid.UUID
+    kind: str
+    status: str
+    attempt: int
+    progress: float
+    progress_message: str
+
+    @property
+    def signature(self) -> tuple:
+        return self.status, self.attempt, self.progress, self.progress_message
+
+
+@dataclass(frozen=True)
 class SweepOutcome:
     requeued: list[uuid.UUID]
     failed: list[uuid.UUID]
@@ -84,6 +100,32 @@ class JobRepository:
                 return session.get(Job, job_id)
             query = select(Job).where(Job.id == job_id).options(*BRIEF)
             return session.scalars(query).first()
+
+    def state(self, job_id: uuid.UUID) -> JobState | None:
+        """The columns an event stream watches, read by primary key (no input, result or report)."""
+        with self.sessions() as session:
+            row = session.execute(select(*STATE).where(Job.id == job_id)).first()
+        return JobState(*row) if row is not None else None
+
+    def states(self, *, since: datetime, ids: Iterable[uuid.UUID] = (), owner: str | None = None,
+               kind: str | None = None) -> list[JobState]:
+        """What a stream of every job watches: the queued and running jobs, those created at or after
+        ``since``, and the jobs ``ids`` (those seen active before: to learn how they ended). Each part is
+        an indexed read, so a poll costs in proportion to the jobs in flight, not to the table."""
+        ids = list(ids)
+        queries = [select(*STATE).where(Job.status.in_(("queued", "running"))),
+                   select(*STATE).where(Job.created_at >= since)]
+        queries += [select(*STATE).where(Job.id.in_(ids[i:i + 500])) for i in range(0, len(ids), 500)]
+        found: dict[uuid.UUID, JobState] = {}
+        with self.sessions() as session:
+            for query in queries:
+                if owner is not None:
+                    query = query.where(Job.owner == owner)
+                if kind:
+                    query = query.where(Job.kind == kind)
+                for row in session.execute(query):
+                    found[row[0]] = JobState(*row)
+        return list(found.values())
 
     def get_by_idempotency_key(self, key: str) -> Job | None:
         with self.sessions() as session:
@@ -351,6 +393,7 @@ JOBS = Job.__table__
 # queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
 # sweeps instead of loaded whole every time
 SWEEP_BATCH = 1000
+STATE = (Job.id, Job.kind, Job.status, Job.attempt, Job.progress, Job.progress_message)
 BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
 
 

@@ -289,3 +289,27 @@ def test_a_database_outage_during_the_final_write_loses_no_result(pg_url, redis_
             admin.execute(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true')
             admin.close()
             worker.stop()
+
+
+def test_events_stream_progress_written_by_a_celery_worker(scaled):
+    """The API process runs no job here: the progress it streams can only come from the database rows a
+    worker process writes."""
+    import json
+
+    from tests.support.sse import events
+
+    client, _, _ = scaled
+    assert client.app.state.settings.embedded_mode and client.app.state.settings.broker_url  # Celery mode
+    job = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0], "seconds": 2.0}).json()
+    received = []
+    with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
+        for name, data in events(response.iter_lines(), deadline=time.monotonic() + 60):
+            received.append((name, data))
+    views = [data for name, data in received if name == "job"]
+    fractions = [view["progress"]["fraction"] for view in views]
+    assert fractions == sorted(fractions) and len({f for f in fractions if 0 < f < 1}) >= 3
+    assert {view["status"] for view in views} >= {"running", "succeeded"}
+    worker = views[-1]["attempts"][0]["worker"]  # "celery@<host>:<pid>": run by the worker subprocess
+    assert worker.startswith("celery@") and not worker.endswith(f":{os.getpid()}")
+    assert received[-1] == ("end", {"status": "succeeded"})
+    assert json.loads(json.dumps(views[-1])) == client.get(f"/v1/jobs/{job['id']}").json()

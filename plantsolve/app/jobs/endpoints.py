@@ -11,6 +11,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from plantsolve.app.auth import Principal, require_api_key
+from plantsolve.app.jobs.events import add_event_routes
 from plantsolve.app.jobs.service import JobService, safe_filename
 from plantsolve.app.problems import (
     NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
@@ -122,6 +123,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(400, 413, 415, 422)},
             openapi_extra=submit_openapi(spec),
         )
+
+    add_event_routes(router)  # before /jobs/{job_id}: "events" is no job id
 
     @router.get("/jobs", response_model=JobList, tags=["jobs"], responses=responses(422), summary="List jobs, newest first")
     def list_jobs(

@@ -1,0 +1,165 @@
+"""Live progress as Server-Sent Events, read from the database.
+
+``GET /v1/jobs/{id}/events``: an ``event: job`` with the job's view (the body of ``GET /v1/jobs/{id}``)
+at once, another whenever its status or progress (fraction or message) changes, and after a
+terminal status ``event: end`` with ``{"status": ...}``; then the stream closes.
+
+``GET /v1/jobs/events``: an ``event: job`` for every job the caller may see whose status or
+progress changes after the stream opened (filtered by ``kind`` and ``status``); it never ends.
+
+Both poll the jobs' status columns every ``EVENTS_POLL_SECONDS`` instead of listening to the
+process that runs the job: a job may run in a Celery worker on another machine, and the database
+is the one place every mode writes progress to. A comment line every ``EVENTS_PING_SECONDS`` keeps
+proxies from closing an idle stream; the stream stops when the client goes away.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import uuid
+from datetime import timedelta
+from typing import Annotated, Any, AsyncIterator
+
+from fastapi import APIRouter, Depends, Request
+from sse_starlette import EventSourceResponse, ServerSentEvent
+from starlette.concurrency import run_in_threadpool
+
+from plantsolve.app.auth import Principal, require_api_key
+from plantsolve.app.jobs.service import JobService
+from plantsolve.app.problems import responses
+from plantsolve.schemas.jobs import JobStatus
+from plantsolve.store.models import utcnow
+from plantsolve.store.repository import JobState, is_finished
+
+EVENT_STREAM = "text/event-stream"
+
+# sent ahead of a new stream so that a client reconnects after this long (milliseconds)
+RETRY_MS = 3000
+
+
+def _stream_doc(text: str) -> dict[int | str, dict[str, Any]]:
+    return {200: {"description": text, "content": {EVENT_STREAM: {"schema": {"type": "string"}}}}}
+
+
+SEP = "\n"
+
+
+def _job_event(view_json: str) -> ServerSentEvent:
+    return ServerSentEvent(data=view_json, event="job", sep=SEP)
+
+
+def _response(events: AsyncIterator[ServerSentEvent], request: Request) -> EventSourceResponse:
+    return EventSourceResponse(events, ping=request.app.state.settings.events_ping_seconds, sep=SEP,
+                               headers={"Cache-Control": "no-store"})
+
+
+async def job_event_stream(request: Request, service: JobService, job_id: uuid.UUID, sees: str | None) -> AsyncIterator[ServerSentEvent]:
+    settings = request.app.state.settings
+    repo = service.ctx.repo
+    job = await run_in_threadpool(service.get, job_id, sees, brief=True)
+    view = await run_in_threadpool(service.view, job)
+    first = _job_event(view.model_dump_json())
+    first.retry = RETRY_MS
+    yield first
+    seen = (job.status, job.attempt, job.progress, job.progress_message or "")
+    status = job.status
+    while not is_finished(status):
+        await asyncio.sleep(settings.events_poll_seconds)
+        state = await run_in_threadpool(repo.state, job_id)
+        if state is None:  # deleted under us: nothing more will happen
+            break
+        if state.signature == seen:
+            continue
+        job = await run_in_threadpool(service.get, job_id, sees, brief=True)
+        view = await run_in_threadpool(service.view, job)
+        seen = (job.status, job.attempt, job.progress, job.progress_message or "")
+        status = job.status
+        yield _job_event(view.model_dump_json())
+    yield ServerSentEvent(data=json.dumps({"status": status}), event="end", sep=SEP)
+
+
+async def jobs_event_stream(request: Request, service: JobService, sees: str | None, kind: str | None,
+                            status: str | None) -> AsyncIterator[ServerSentEvent]:
+    settings = request.app.state.settings
+    repo = service.ctx.repo
+    # a job created between two polls is caught by its creation time; a second of slack covers the
+    # clocks of the processes that write created_at
+    since = utcnow() - timedelta(seconds=1)
+    known: dict[uuid.UUID, tuple] = {}
+    for state in await run_in_threadpool(lambda: repo.states(since=since, owner=sees, kind=kind)):
+        known[state.id] = state.signature
+    opened = ServerSentEvent(comment="watching jobs", sep=SEP)
+    opened.retry = RETRY_MS
+    yield opened
+    while True:
+        await asyncio.sleep(settings.events_poll_seconds)
+        now = utcnow()
+        active = [job_id for job_id, signature in known.items() if not is_finished(signature[0])]
+        states: list[JobState] = await run_in_threadpool(
+            lambda: repo.states(since=since, ids=active, owner=sees, kind=kind))
+        since = now - timedelta(seconds=1)
+        for state in states:
+            if known.get(state.id) == state.signature:
+                continue
+            known[state.id] = state.signature
+            if status and state.status != status:
+                continue
+            job = await run_in_threadpool(repo.get, state.id, brief=True)
+            if job is None:
+                continue
+            view = await run_in_threadpool(service.view, job)
+            yield _job_event(view.model_dump_json())
+        # forget jobs that ended and left the creation window: nothing more happens to them
+        current = {state.id for state in states}
+        for job_id in [j for j, signature in known.items() if is_finished(signature[0]) and j not in current]:
+            del known[job_id]
+
+
+async def _service(request: Request) -> JobService:
+    return request.app.state.jobs
+
+
+Service = Annotated[JobService, Depends(_service)]
+Caller = Annotated[Principal, Depends(require_api_key)]
+
+
+def add_event_routes(router: APIRouter) -> None:
+    """Register the two streams on the /v1 router. Call before the ``/jobs/{job_id}`` routes:
+    ``/jobs/events`` would otherwise be read as a job id."""
+
+    @router.get(
+        "/jobs/events",
+        tags=["jobs"],
+        operation_id="streamJobListEvents",
+        summary="Live status and progress of every job (Server-Sent Events)",
+        description=(
+            "A `text/event-stream` of `event: job` (data: the job view, as `GET /v1/jobs/{id}`) for every job you "
+            "may see whose status or progress changes after you connect; `kind` and `status` filter them (a job "
+            "is sent when its new status matches). It never ends; a comment line every ~15 s keeps it open."
+        ),
+        response_class=EventSourceResponse,
+        responses={**_stream_doc("The event stream"), **responses(422)},
+    )
+    async def stream_job_list_events(request: Request, service: Service, caller: Caller, kind: str | None = None,
+                                     status: JobStatus | None = None) -> EventSourceResponse:
+        return _response(jobs_event_stream(request, service, caller.sees, kind, status), request)
+
+    @router.get(
+        "/jobs/{job_id}/events",
+        tags=["jobs"],
+        operation_id="streamJobEvents",
+        summary="Live status and progress of a job (Server-Sent Events)",
+        description=(
+            "A `text/event-stream`: first `event: job` whose data is the job view (exactly `GET /v1/jobs/{id}`), "
+            "then one whenever the status or progress (fraction or message) changes; after a terminal status "
+            "(succeeded, failed, cancelled) `event: end` with data `{\"status\": \"<final>\"}`, and the stream "
+            "closes. A comment line every ~15 s keeps it open."
+        ),
+        response_class=EventSourceResponse,
+        responses={**_stream_doc("The event stream"), **responses(404, 422)},
+    )
+    async def stream_job_events(job_id: uuid.UUID, request: Request, service: Service, caller: Caller) -> EventSourceResponse:
+        # an unknown or foreign job is a 404 problem before the stream starts
+        await run_in_threadpool(service.get, job_id, caller.sees, brief=True)
+        return _response(job_event_stream(request, service, job_id, caller.sees), request)
