@@ -13,6 +13,7 @@ import hmac
 import uuid
 from pathlib import Path
 from typing import Annotated, Any
+from urllib.parse import urlencode
 
 from fastapi import APIRouter, Depends, FastAPI, Form, Query, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
@@ -77,6 +78,8 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
     more = len(jobs) > limit
     jobs = jobs[:limit]
     filters = {"kind": kind or "", "status": status or "", "q": q or ""}
+    # the stream filters by kind and status only (the text is applied when the rows reload); no empty values
+    stream = {name: value for name, value in (("kind", kind), ("status", status)) if value}
     return {
         "rows": [views.row(service.view(job, with_artifacts=False)) for job in jobs],
         "counts": service.ctx.repo.count_by_status(owner=who.sees),
@@ -85,6 +88,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
         "next_cursor": encode_cursor(jobs[-1]) if more and jobs else None,
         "limit": limit,
         "embedded": service.ctx.settings.embedded,
+        "events": "/v1/jobs/events" + (f"?{urlencode(stream)}" if stream else ""),
     }
 
 

@@ -43,8 +43,10 @@ def test_list_filters_by_kind_status_and_text(client):
     assert _row_ids(client.get("/dashboard?q=negative").text) == [warned["id"]]  # a warning's code
     page = client.get("/dashboard?q=nothing-like-this").text
     assert "No jobs match these filters." in page
-    # the filter form shows what is applied
+    # the filter form shows what is applied; the page follows the events of the same kind and status
     assert '<option value="failed" selected>' in client.get("/dashboard?status=failed").text
+    assert 'data-events="/v1/jobs/events?status=failed"' in client.get("/dashboard?status=failed&q=x").text
+    assert 'data-events="/v1/jobs/events"' in everything
 
 
 def test_list_pages_with_the_repository_cursor(client):

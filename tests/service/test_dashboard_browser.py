@@ -35,7 +35,7 @@ def site(tmp_path):
 
 
 def _has_route(app, path: str) -> bool:
-    return any(getattr(route, "path", None) == path for route in app.routes)
+    return path in app.openapi()["paths"]
 
 
 def test_submit_watch_and_list_in_a_browser(site):
@@ -50,8 +50,7 @@ def test_submit_watch_and_list_in_a_browser(site):
     # the cookie login, then the form: the upload with the example's options (prefilled)
     driver.get(f"{base}/dashboard")
     assert driver.current_url.endswith("/dashboard/login")
-    driver.find_element(By.NAME, "key").send_keys(KEY)
-    driver.find_element(By.CSS_SELECTOR, "form.login button").click()
+    _login(driver, base)
     wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
     driver.get(f"{base}/dashboard/submit/perfmap")
     form = driver.find_element(By.ID, "upload-form")
@@ -99,3 +98,37 @@ def test_submit_watch_and_list_in_a_browser(site):
     new = api.post("/v1/test-compute/jobs", json={"values": [3.0]}).json()
     wait.until(lambda d: d.find_elements(By.CSS_SELECTOR, f'tr[data-job="{new["id"]}"][data-status="succeeded"]'))
     assert driver.execute_script("return window.sameDocument === true;")
+    expected = "events" if _has_route(app, "/v1/jobs/events") else "polling"
+    assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == expected
+
+
+def _login(driver, base: str) -> None:
+    from selenium.webdriver.common.by import By
+
+    driver.get(f"{base}/dashboard/login")
+    driver.find_element(By.NAME, "key").send_keys(KEY)
+    driver.find_element(By.CSS_SELECTOR, "form.login button").click()
+
+
+def test_pages_poll_when_the_browser_has_no_event_stream(site):
+    """Without EventSource (or when the stream fails) the pages poll: a job's page every 2 s."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = site
+    wait = WebDriverWait(driver, 20, poll_frequency=0.1)
+    driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": "delete window.EventSource;"})
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/submit/test-compute")
+    form = driver.find_element(By.ID, "json-form")
+    body = form.find_element(By.NAME, "body")
+    body.clear()
+    body.send_keys('{"values": [-1.0, 2.0], "seconds": 1.5}')
+    form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
+    wait.until(lambda d: "/dashboard/jobs/" in d.current_url)
+    driver.execute_script("window.sameDocument = true;")
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, "#job-detail [data-field=status]").text == "succeeded")
+    assert driver.execute_script("return window.sameDocument === true;")
+    assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == "polling"
+    assert "1 warning" in driver.find_element(By.CSS_SELECTOR, ".headline .warn").text
