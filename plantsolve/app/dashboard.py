@@ -224,6 +224,7 @@ def build_dashboard() -> APIRouter:
         except ProblemError as error:
             problem = error.to_problem(instance=str(request.url.path))
             sent = {"options": options} if source == "upload" else {"body": body}  # the other form keeps its example
+            sent["source"] = source
             return _page(request, "submit.html", error.status, **_form_context(request, spec, problem=problem, **sent))
         return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
