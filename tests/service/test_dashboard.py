@@ -4,6 +4,7 @@ its warnings, plots, downloads and input, the submit forms and their errors, and
 from __future__ import annotations
 
 import re
+import uuid
 
 import pytest
 from fastapi.testclient import TestClient
@@ -241,3 +242,20 @@ def test_templates_and_static_files_are_package_data():
              if p.is_file()]
     assert "templates/job.html" in files and "static/dashboard.js" in files
     assert [f for f in files if not any(fnmatch.fnmatch(f, g) for g in globs)] == []
+
+
+def test_a_running_job_whose_solver_is_through_is_not_shown_as_100_percent(tmp_path):
+    """The runner sets 1.0 when the solver returns and only then stores the result: the list and the
+    page say 'running' and 'storing result' for that moment, never 'running | 100 %'."""
+    with TestClient(create_app(service_settings(tmp_path), run_jobs=False)) as client:
+        job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
+        repo = client.app.state.ctx.repo
+        attempt = repo.claim(uuid.UUID(job["id"]), lease_seconds=30, worker="test")
+        assert repo.set_progress(uuid.UUID(job["id"]), attempt, 0.87, "step 18 of 20")
+        row = re.search(r'<tr data-job="%s".*?</tr>' % job["id"], client.get("/dashboard").text, re.S).group(0)
+        assert ">running<" in row and ">87%<" in row and "step 18 of 20" in row
+        assert repo.set_progress(uuid.UUID(job["id"]), attempt, 1.0, "done")
+        row = re.search(r'<tr data-job="%s".*?</tr>' % job["id"], client.get("/dashboard").text, re.S).group(0)
+        assert ">running<" in row and ">storing result<" in row and "100%" not in row
+        page = client.get(f"/dashboard/jobs/{job['id']}").text
+        assert 'data-status="running"' in page and ">storing result<" in page and "Cancel job" in page
