@@ -65,21 +65,26 @@
   function followJob(id) {
     var detail = document.getElementById("job-detail");
     var shown = function () { return detail.querySelector("section").dataset.status; };
-    var pending = null;
+    var pending = false;
+    var again = false;  // a change arrived while a render was on its way: render once more after it
     var stopPolling = null;
 
     function rerender() {  // the status changed: the server renders report, plots, downloads
-      if (pending) return;
-      pending = fetchText("/dashboard/jobs/" + id + "/detail")
-        .then(function (html) { detail.innerHTML = html; })
-        .catch(function () { setTimeout(rerender, POLL_MS); })
-        .then(function () {
-          pending = null;
-          if (FINISHED.indexOf(shown()) >= 0) {
-            liveState("finished", "");
-            if (stopPolling) stopPolling();
-          }
-        });
+      if (pending) { again = true; return; }
+      pending = true;
+      fetchText("/dashboard/jobs/" + id + "/detail").then(function (html) {
+        detail.innerHTML = html;
+        return 0;
+      }, function () { return POLL_MS; }).then(function (retry) {
+        pending = false;
+        if (again || retry) {
+          again = false;
+          setTimeout(rerender, retry);
+        } else if (FINISHED.indexOf(shown()) >= 0) {
+          liveState("finished", "");
+          if (stopPolling) stopPolling();
+        }
+      });
     }
     function onJob(job) {
       if (job.status !== shown()) rerender();
@@ -104,9 +109,13 @@
     var rows = document.body.dataset.rows;
     var firstPage = document.body.dataset.firstPage === "true";
     var timer = null;
+    var sent = 0;  // reloads started; an answer older than the newest shown is dropped
 
     function reload() {
-      return fetchText(rows).then(function (html) { live.innerHTML = html; }).catch(function () {});
+      var mine = ++sent;
+      return fetchText(rows).then(function (html) {
+        if (mine === sent) live.innerHTML = html;
+      }).catch(function () {});
     }
     function soon() {  // many events in a burst: one reload
       if (timer) return;
