@@ -87,7 +87,8 @@ def _install_health(app: FastAPI) -> None:
     def root() -> RedirectResponse:
         return RedirectResponse("/dashboard")
 
-    @app.get("/healthz", response_model=HealthStatus, tags=["health"], summary="The process is up")
+    @app.get("/healthz", response_model=HealthStatus, tags=["health"], operation_id="getHealth",
+             responses=problems.responses(500), summary="The process is up")
     def healthz() -> HealthStatus:
         return HealthStatus(status="ok")
 
@@ -96,7 +97,8 @@ def _install_health(app: FastAPI) -> None:
         response_model=HealthStatus,
         tags=["health"],
         summary="Database (and broker, when configured) reachable",
-        responses={503: {"model": HealthStatus, "description": "A dependency is unreachable"}},
+        operation_id="getReadiness",
+        responses={503: {"model": HealthStatus, "description": "A dependency is unreachable"}, **problems.responses(500)},
     )
     def readyz(request: Request) -> Any:
         checks: dict[str, str] = {}
@@ -121,13 +123,15 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
         return app.openapi_schema
     schema = get_openapi(title=app.title, version=app.version, summary=app.summary, description=app.description, routes=app.routes)
     components = schema.setdefault("components", {}).setdefault("schemas", {})
-    models = [Problem]
+    models: list[tuple[type, dict | None]] = [(Problem, None)]
     for spec in app.state.ctx.kinds.values():
-        models += [spec.request_model, spec.result_model]
-    for model in models:
+        models += [(spec.request_model, spec.example() if spec.example else None), (spec.result_model, None)]
+    for model, example in models:
         definition = model.model_json_schema(ref_template="#/components/schemas/{model}", by_alias=True)
         for name, sub in definition.pop("$defs", {}).items():
             components.setdefault(name, sub)
+        if example is not None:
+            definition["examples"] = [example]
         components[model.__name__] = definition
     app.openapi_schema = schema
     return schema

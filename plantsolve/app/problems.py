@@ -230,11 +230,12 @@ PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
     for status, title in (
         (400, "Malformed multipart body (too many fields or files)"),
         (401, "Missing or invalid API key (only when API_KEYS is set)"),
-        (404, "No such job or artifact"),
+        (404, "No such job, kind or artifact"),
         (409, "The job is not in a state that allows this"),
         (413, "Request body above MAX_BODY_BYTES"),
         (415, "Unsupported content type or file type"),
         (422, "Invalid input: 'errors' names each bad field by its JSON path"),
+        (500, "Unexpected error (logged; the document says no more)"),
     )
 }
 

@@ -128,6 +128,7 @@ class ResultOperation:
     answer: Callable[[Any, Any], BaseModel]
     summary: str = ""
     description: str = ""
+    example: Callable[[], dict[str, Any]] | None = None  # a valid request body, shown in the API documentation
 
 
 _KIND = re.compile(r"^[a-z][a-z0-9_-]{0,39}$")

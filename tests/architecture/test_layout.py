@@ -23,6 +23,7 @@ ALLOWED = {
     "workers": {"store", "solvers", "schemas"},
     "app": {"store", "workers", "solvers", "schemas"},
     "cli": {"app", "store", "workers", "solvers", "schemas"},
+    "client": set(),  # the HTTP client stands alone: a script with only httpx can copy it
 }
 
 
@@ -41,7 +42,7 @@ def _imports(path: Path) -> set[str]:
 
 def _room(path: Path) -> str:
     parts = path.relative_to(PACKAGE).parts
-    return parts[0].removesuffix(".py") if len(parts) > 1 or parts[0] == "cli.py" else "root"
+    return parts[0].removesuffix(".py") if len(parts) > 1 or parts[0] in ("cli.py", "client.py") else "root"
 
 
 SOURCES = sorted(p for p in PACKAGE.rglob("*.py") if "migrations" not in p.parts or p.name == "env.py")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import uuid
 from typing import Annotated, Any, Mapping
 
@@ -83,6 +84,15 @@ def submit_route(kind: str):
     return submit
 
 
+def camel(kind: str) -> str:
+    """A kind as it appears in operationIds: ``test-compute`` -> ``TestCompute``."""
+    return "".join(part[:1].upper() + part[1:] for part in re.split(r"[-_]", kind) if part)
+
+
+def result_schema_name(spec: SolverSpec) -> str:
+    return spec.result_model.__name__
+
+
 def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     name = spec.request_model.__name__
     extensions = ", ".join(spec.upload_extensions) or "none"
@@ -106,7 +116,7 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
 
 
 def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
-    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401))
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401, 500))
 
     for kind in sorted(kinds):
         spec = kinds[kind]
@@ -117,6 +127,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             status_code=202,
             response_model=JobView,
             tags=[kind],
+            operation_id=f"submit{camel(kind)}Job",
             summary=f"Submit a {kind} job",
             description=(spec.description or f"Run the {kind} solver.")
             + "\n\nAnswers 202 with the job and a Location header; 200 with the existing job for a repeated Idempotency-Key.",
@@ -126,7 +137,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
 
     add_event_routes(router)  # before /jobs/{job_id}: "events" is no job id
 
-    @router.get("/jobs", response_model=JobList, tags=["jobs"], responses=responses(422), summary="List jobs, newest first")
+    @router.get("/jobs", response_model=JobList, tags=["jobs"], responses=responses(422), operation_id="listJobs",
+                summary="List jobs, newest first")
     def list_jobs(
         service: Service,
         caller: Caller,
@@ -138,20 +150,28 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     ) -> JobList:
         return service.list(kind, status, cursor, limit, caller.sees)
 
-    @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), summary="Job status")
+    @router.get("/jobs/{job_id}", response_model=JobView, tags=["jobs"], responses=responses(404, 422), operation_id="getJob",
+                summary="Job status")
     def get_job(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
         return _json(service.view(service.get(job_id, caller.sees, brief=True)))
+
+    any_result = {"anyOf": [{"$ref": f"#/components/schemas/{result_schema_name(kinds[k])}"} for k in sorted(kinds)]}
 
     @router.get(
         "/jobs/{job_id}/result",
         tags=["jobs"],
-        responses={200: {"description": "The solver's result (schema per kind: see components <Kind>Result)"}, **responses(404, 409, 422)},
-        summary="Result of a succeeded job",
+        operation_id="getJobResult",
+        responses={200: {"description": "The solver's result: the result schema of the job's kind (typed per kind at "
+                                        "GET /v1/<kind>/jobs/{id}/result)",
+                         "content": {"application/json": {"schema": any_result}}},
+                   **responses(404, 409, 422)},
+        summary="Result of a succeeded job (any kind)",
     )
     def get_result(job_id: uuid.UUID, service: Service, caller: Caller) -> JSONResponse:
         return JSONResponse(service.result(job_id, caller.sees))
 
-    @router.post("/jobs/{job_id}/cancel", response_model=JobView, tags=["jobs"], responses=responses(404, 409, 422), summary="Cancel a queued or running job")
+    @router.post("/jobs/{job_id}/cancel", response_model=JobView, tags=["jobs"], responses=responses(404, 409, 413, 422),
+                 operation_id="cancelJob", summary="Cancel a queued or running job")
     def cancel_job(job_id: uuid.UUID, service: Service, caller: Caller) -> JobView:
         return service.view(service.cancel(job_id, caller.sees))
 
@@ -159,7 +179,10 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         "/jobs/{job_id}/artifacts/{name}",
         tags=["jobs"],
         response_class=FileResponse,
-        responses={200: {"description": "The file, with its media type"}, **responses(404, 422)},
+        operation_id="getJobArtifact",
+        responses={200: {"description": "The file, with its media type",
+                         "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}},
+                   **responses(404, 422)},
         summary="Download an artifact",
     )
     def get_artifact(job_id: uuid.UUID, name: str, service: Service, caller: Caller) -> FileResponse:
@@ -172,6 +195,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     @router.get(
         "/jobs/{job_id}/input",
         tags=["jobs"],
+        operation_id="getJobInput",
         responses={200: {"description": "The request exactly as stored: JSON, or the uploaded file"}, **responses(404, 422)},
         summary="What was submitted",
     )
@@ -184,4 +208,25 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             return FileResponse(path, media_type="application/json")
         return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
 
+    for kind in sorted(kinds):
+        router.add_api_route(
+            f"/{kind}/jobs/{{job_id}}/result",
+            kind_result_route(kind),
+            methods=["GET"],
+            response_model=kinds[kind].result_model,
+            tags=[kind],
+            operation_id=f"get{camel(kind)}JobResult",
+            responses={**responses(404, 409, 422)},
+            summary=f"Result of a succeeded {kind} job",
+            description=f"The same document as GET /v1/jobs/{{id}}/result, typed as the {kind} result; 404 for a job "
+                        f"of another kind.",
+        )
     return router
+
+
+def kind_result_route(kind: str):
+    def get_kind_result(job_id: uuid.UUID, service: Service, caller: Caller) -> JSONResponse:
+        return JSONResponse(service.result(job_id, caller.sees, kind=kind))
+
+    get_kind_result.__name__ = f"get_{kind.replace('-', '_')}_result"
+    return get_kind_result

@@ -11,7 +11,7 @@ from typing import Mapping
 from fastapi import APIRouter, Depends
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.jobs.endpoints import Caller, Service
+from plantsolve.app.jobs.endpoints import Caller, Service, camel
 from plantsolve.app.problems import responses
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 
@@ -26,8 +26,14 @@ def operation_route(spec: SolverSpec, operation: ResultOperation):
     return answer
 
 
+def _example(operation: ResultOperation) -> dict | None:
+    if operation.example is None:
+        return None
+    return {"requestBody": {"content": {"application/json": {"example": operation.example()}}}}
+
+
 def build_operations_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
-    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401))
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401, 500))
     for kind in sorted(kinds):
         spec = kinds[kind]
         for operation in spec.operations:
@@ -36,8 +42,10 @@ def build_operations_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
                 operation_route(spec, operation),
                 methods=["POST"],
                 response_model=operation.response_model,
-                responses=responses(404, 409, 422),
+                responses=responses(404, 409, 413, 422),
                 tags=[kind],
+                operation_id=f"{camel(operation.name)[:1].lower()}{camel(operation.name)[1:]}{camel(kind)}Job",
+                openapi_extra=_example(operation),
                 summary=operation.summary or f"{operation.name} on a finished {kind} job",
                 description=operation.description,
             )

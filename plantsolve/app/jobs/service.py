@@ -198,8 +198,11 @@ class JobService:
             raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
         return self.get(job_id, brief=True)
 
-    def result(self, job_id: uuid.UUID, sees: str | None = None) -> Any:
+    def result(self, job_id: uuid.UUID, sees: str | None = None, *, kind: str | None = None) -> Any:
+        """The result of a succeeded job; ``kind``: only a job of that kind (404 for another)."""
         job = self.get(job_id, sees)
+        if kind is not None and job.kind != kind:
+            raise NotFound(f"Job {job_id} is a {job.kind!r} job, not a {kind!r} job.")
         if job.status != "succeeded":
             if is_finished(job.status):
                 raise Conflict(

@@ -40,6 +40,7 @@ SPEC = SolverSpec(
             summary="Inverse query: optimal settings and efficiency for duty points",
             description="One `{flow, pressure}` or `{points: [...]}`. Points outside the reachable region "
             "come back with `feasible: false` and their distance to the map instead of an extrapolation.",
+            example=lambda: {"points": [{"flow": 2000.0, "pressure": 1.15}, {"flow": 1000.0, "pressure": 1.6}]},
         ),
     ),
 )
