@@ -41,12 +41,13 @@
   }
 
   // Opens the stream; on any error it is closed and onFail starts polling instead.
-  function stream(url, onJob, onEnd, onFail) {
+  function stream(url, onJob, onEnd, onFail, onOpen) {
     if (!window.EventSource) { onFail(); return; }
     var source = new EventSource(url);
     source.addEventListener("open", function () {
       document.body.dataset.transport = "events";
       liveState("streaming", "live");
+      if (onOpen) onOpen();
     });
     source.addEventListener("job", function (event) { onJob(JSON.parse(event.data)); });
     source.addEventListener("end", function (event) {
@@ -126,10 +127,12 @@
       if (row && row.dataset.status === job.status) paint(row, job);
       else if (row || firstPage) soon();
     }
+    // the list stream tells of changes after it connects: what changed between the page's
+    // rendering and the connection is fetched once when it opens
     stream(document.body.dataset.events, onJob, null, function () {
       liveState("polling every " + POLL_MS / 1000 + " s", "polling");
       every(POLL_MS, reload);
-    });
+    }, reload);
   }
 
   document.addEventListener("DOMContentLoaded", function () {
