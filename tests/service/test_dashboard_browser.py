@@ -39,11 +39,12 @@ def _has_route(app, path: str) -> bool:
 
 
 def test_submit_watch_and_list_in_a_browser(site):
+    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select, WebDriverWait
 
     app, base, driver = site
-    wait = WebDriverWait(driver, 30, poll_frequency=0.1)
+    wait = WebDriverWait(driver, 30, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
     api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
     other = api.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]}).json()  # a second kind for the filter
 
@@ -76,21 +77,20 @@ def test_submit_watch_and_list_in_a_browser(site):
         "return imgs.length > 0 && imgs.every(i => i.complete && i.naturalWidth > 0);"))
     shown = driver.execute_script("return [...document.querySelectorAll('.plots img')].map(i => i.alt).sort();")
     assert shown == pngs
-    assert f"{warnings} warnings" in driver.find_element(By.CSS_SELECTOR, ".headline .warn").text
-    assert len(driver.find_elements(By.CSS_SELECTOR, "#warnings li")) == warnings
+    badge, items = driver.execute_script(
+        "return [document.querySelector('.headline .warn').textContent, document.querySelectorAll('#warnings li').length];")
+    assert f"{warnings} warnings" in badge and items == warnings
 
     # the list: the job with its warning count, links to its page; a filter narrows it
     driver.get(f"{base}/dashboard")
-    row = driver.find_element(By.CSS_SELECTOR, f'tr[data-job="{job_id}"]')
-    assert row.find_element(By.CSS_SELECTOR, "[data-field=status]").text == "succeeded"
-    assert row.find_element(By.CSS_SELECTOR, "[data-field=warnings]").text.endswith(f"{warnings} warnings")
-    assert row.find_element(By.CSS_SELECTOR, "a").get_attribute("href").endswith(f"/dashboard/jobs/{job_id}")
-    assert driver.find_elements(By.CSS_SELECTOR, f'tr[data-job="{other["id"]}"]')
+    rows = _rows(driver)  # read at once: the script may swap the rows in again at any time
+    assert rows[job_id]["status"] == "succeeded" and rows[job_id]["warnings"].endswith(f"{warnings} warnings")
+    assert rows[job_id]["href"].endswith(f"/dashboard/jobs/{job_id}")
+    assert other["id"] in rows and rows[other["id"]]["warnings"] == ""
     Select(driver.find_element(By.NAME, "kind")).select_by_value("perfmap")
     driver.find_element(By.CSS_SELECTOR, "form.filters button").click()
     wait.until(lambda d: "kind=perfmap" in d.current_url)
-    listed = [r.get_attribute("data-job") for r in driver.find_elements(By.CSS_SELECTOR, "tr[data-job]")]
-    assert listed == [job_id]
+    assert list(_rows(driver)) == [job_id]
 
     # live: a job submitted elsewhere appears in the open, unfiltered list without a reload
     driver.get(f"{base}/dashboard")
@@ -100,6 +100,18 @@ def test_submit_watch_and_list_in_a_browser(site):
     assert driver.execute_script("return window.sameDocument === true;")
     expected = "events" if _has_route(app, "/v1/jobs/events") else "polling"
     assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == expected
+
+
+def _rows(driver) -> dict[str, dict[str, str]]:
+    """The list's rows by job id: status, warning badge and link."""
+    return driver.execute_script("""
+        const rows = {};
+        for (const row of document.querySelectorAll('tr[data-job]')) {
+            const warn = row.querySelector('[data-field=warnings]');
+            rows[row.dataset.job] = {status: row.querySelector('[data-field=status]').textContent,
+                                     warnings: warn ? warn.textContent.trim() : '', href: row.querySelector('a').href};
+        }
+        return rows;""")
 
 
 def _login(driver, base: str) -> None:
@@ -112,11 +124,12 @@ def _login(driver, base: str) -> None:
 
 def test_pages_poll_when_the_browser_has_no_event_stream(site):
     """Without EventSource (or when the stream fails) the pages poll: a job's page every 2 s."""
+    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
     app, base, driver = site
-    wait = WebDriverWait(driver, 20, poll_frequency=0.1)
+    wait = WebDriverWait(driver, 20, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
     driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": "delete window.EventSource;"})
     _login(driver, base)
     wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
