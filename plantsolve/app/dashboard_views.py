@@ -75,8 +75,16 @@ def row(view: JobView) -> Row:
     )
 
 
-def pretty(value: Any) -> str:
-    return json.dumps(value, indent=2, ensure_ascii=False, allow_nan=True)
+def pretty(value: Any, indent: str = "") -> str:
+    """JSON for people: objects one member a line, a list of numbers or strings on one line (a point
+    [x, y, z] stays readable, and a scan's 10,000 points do not become 30,000 lines)."""
+    inner = indent + "  "
+    if isinstance(value, dict) and value:
+        members = (f"{inner}{json.dumps(str(k), ensure_ascii=False)}: {pretty(v, inner)}" for k, v in value.items())
+        return "{\n" + ",\n".join(members) + "\n" + indent + "}"
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        return "[\n" + ",\n".join(inner + pretty(v, inner) for v in value) + "\n" + indent + "]"
+    return json.dumps(value, ensure_ascii=False, allow_nan=True, separators=(", ", ": "))
 
 
 def result_summary(result: Any) -> list[tuple[str, str]]:

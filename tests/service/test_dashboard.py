@@ -3,6 +3,7 @@ its warnings, plots, downloads and input, the submit forms and their errors, and
 
 from __future__ import annotations
 
+import json
 import re
 import uuid
 
@@ -259,3 +260,14 @@ def test_a_running_job_whose_solver_is_through_is_not_shown_as_100_percent(tmp_p
         assert ">running<" in row and ">storing result<" in row and "100%" not in row
         page = client.get(f"/dashboard/jobs/{job['id']}").text
         assert 'data-status="running"' in page and ">storing result<" in page and "Cancel job" in page
+
+
+def test_pretty_json_reads_back_and_keeps_number_lists_on_one_line():
+    from plantsolve.app.dashboard_views import pretty
+
+    for kind, spec in KINDS.items():
+        example = spec.example()
+        assert json.loads(pretty(example)) == example, kind
+    text = pretty({"points": [[0.0, 1.5, -2.0], [1, 2, 3]], "name": "a\"b", "empty": {}, "none": []})
+    assert '[0.0, 1.5, -2.0]' in text and '"name": "a\\"b"' in text and '"empty": {}' in text
+    assert json.loads(text)["points"][1] == [1, 2, 3]
