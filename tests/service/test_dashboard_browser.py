@@ -7,6 +7,7 @@ reason when they are missing, except with CI=true, where that is a failure."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 
@@ -14,6 +15,7 @@ import httpx
 import pytest
 
 from plantsolve.app.main import create_app
+from plantsolve.solvers.kinds import KINDS
 from tests.conftest import REPO, service_settings
 from tests.support import browser
 
@@ -55,7 +57,7 @@ def test_submit_watch_and_list_in_a_browser(site):
     wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
     driver.get(f"{base}/dashboard/submit/perfmap")
     form = driver.find_element(By.ID, "upload-form")
-    assert '"model"' in form.find_element(By.NAME, "options").get_attribute("value")
+    assert json.loads(form.find_element(By.NAME, "options").get_attribute("value")) == KINDS["perfmap"].example()["options"]
     form.find_element(By.NAME, "file").send_keys(str(FAN_MAP))
     form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
 
