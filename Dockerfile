@@ -1,22 +1,25 @@
 # syntax=docker/dockerfile:1
-# Multi-stage: build wheels once, ship a slim runtime image with no compilers.
+# Multi-stage: the build stage installs plantsolve and its dependencies into a virtual environment;
+# the runtime stage copies that environment alone (no wheels, no pip cache, no build tools).
 FROM python:3.11-slim AS build
+ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
+RUN python -m venv /opt/venv
+ENV PATH=/opt/venv/bin:$PATH
 WORKDIR /src
-RUN pip install --no-cache-dir --upgrade pip wheel
 COPY pyproject.toml README.md ./
 COPY plantsolve ./plantsolve
-RUN pip wheel --no-cache-dir --wheel-dir /wheels .
+RUN pip install --upgrade pip && pip install . && find /opt/venv -name '__pycache__' -prune -exec rm -rf {} +
 
 FROM python:3.11-slim AS runtime
-ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 DATA_DIR=/data MPLBACKEND=Agg \
+ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 DATA_DIR=/data MPLBACKEND=Agg PATH=/opt/venv/bin:$PATH \
     OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 RUN useradd --create-home --uid 10001 plantsolve && mkdir -p /data && chown plantsolve /data
-COPY --from=build /wheels /wheels
-RUN pip install --no-cache-dir /wheels/*.whl && rm -rf /wheels
+COPY --from=build /opt/venv /opt/venv
 USER plantsolve
 WORKDIR /home/plantsolve
 VOLUME ["/data"]
 EXPOSE 8000
+# the API's check; the worker service in docker-compose.yml replaces it with a Celery ping
 HEALTHCHECK --interval=10s --timeout=3s --retries=5 \
   CMD python -c "import urllib.request,sys; sys.exit(0 if urllib.request.urlopen('http://127.0.0.1:8000/healthz').status == 200 else 1)"
 CMD ["plantsolve", "serve", "--host", "0.0.0.0", "--port", "8000"]

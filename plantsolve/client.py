@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
+import hmac
 import inspect
 import json
 import time
@@ -166,14 +167,15 @@ def _headers(api_key: str | None) -> dict[str, str]:
 
 
 def _submit_arguments(request: Mapping[str, Any] | None, file: FileArgument | None, options: Mapping[str, Any] | None,
-                      idempotency_key: str | None) -> dict[str, Any]:
+                      idempotency_key: str | None, callback_url: str | None) -> dict[str, Any]:
     if (request is None) == (file is None):
         raise ValueError("give either a JSON request or a file")
     headers = {"Idempotency-Key": idempotency_key} if idempotency_key else {}
+    params = {"callback_url": callback_url} if callback_url else {}
     if request is not None:
         if options:
             raise ValueError("options go inside a JSON request ('options' field); the argument is for uploads")
-        return {"json": dict(request), "headers": headers}
+        return {"json": dict(request), "headers": headers, "params": params}
     if isinstance(file, (str, Path)):
         path = Path(file)
         name, content = path.name, path.read_bytes()
@@ -182,7 +184,8 @@ def _submit_arguments(request: Mapping[str, Any] | None, file: FileArgument | No
     else:
         name, content = file
     data = {"options": json.dumps(dict(options))} if options else {}
-    return {"files": {"file": (name, content, "application/octet-stream")}, "data": data, "headers": headers}
+    return {"files": {"file": (name, content, "application/octet-stream")}, "data": data, "headers": headers,
+            "params": params}
 
 
 def _list_params(kind: str | None, status: str | None, limit: int, cursor: str | None) -> dict[str, Any]:
@@ -194,6 +197,18 @@ def _list_params(kind: str | None, status: str | None, limit: int, cursor: str |
     if cursor:
         params["cursor"] = cursor
     return params
+
+
+def verify_signature(body: bytes, header: str, secret: bytes | str) -> bool:
+    """For a webhook receiver: does ``X-Plantsolve-Signature`` (``header``) sign ``body`` with ``secret``?"""
+    key = secret.encode() if isinstance(secret, str) else secret
+    expected = "sha256=" + hmac.new(key, body, hashlib.sha256).hexdigest()
+    return hmac.compare_digest(expected, header or "")
+
+
+def webhook_secret(api_key: str) -> str:
+    """The webhook secret the service derives from an API key when WEBHOOK_SECRETS names none for its tenant."""
+    return hmac.new(api_key.encode(), b"plantsolve-webhook", hashlib.sha256).hexdigest()
 
 
 def _check_sha256(content: bytes, artifact: Mapping[str, Any]) -> None:
@@ -266,9 +281,11 @@ class Client:
         return response
 
     def submit(self, kind: str, request: Mapping[str, Any] | None = None, *, file: FileArgument | None = None,
-               options: Mapping[str, Any] | None = None, idempotency_key: str | None = None) -> Job:
-        """``POST /v1/<kind>/jobs``: a JSON request, or a file (a path, bytes or ``(name, bytes)``) with ``options``."""
-        arguments = _submit_arguments(request, file, options, idempotency_key)
+               options: Mapping[str, Any] | None = None, idempotency_key: str | None = None,
+               callback_url: str | None = None) -> Job:
+        """``POST /v1/<kind>/jobs``: a JSON request, or a file (a path, bytes or ``(name, bytes)``) with ``options``;
+        ``callback_url``: the completion webhook."""
+        arguments = _submit_arguments(request, file, options, idempotency_key, callback_url)
         return Job.from_view(self._request("POST", f"/v1/{kind}/jobs", **arguments).json())
 
     def job(self, job: JobRef) -> Job:
@@ -407,8 +424,9 @@ class AsyncClient:
         return response
 
     async def submit(self, kind: str, request: Mapping[str, Any] | None = None, *, file: FileArgument | None = None,
-                     options: Mapping[str, Any] | None = None, idempotency_key: str | None = None) -> Job:
-        arguments = _submit_arguments(request, file, options, idempotency_key)
+                     options: Mapping[str, Any] | None = None, idempotency_key: str | None = None,
+                     callback_url: str | None = None) -> Job:
+        arguments = _submit_arguments(request, file, options, idempotency_key, callback_url)
         return Job.from_view((await self._request("POST", f"/v1/{kind}/jobs", **arguments)).json())
 
     async def job(self, job: JobRef) -> Job:
@@ -519,4 +537,5 @@ class AsyncClient:
 __all__ = [
     "Client", "AsyncClient", "Job", "EventParser", "ApiError", "Unauthorized", "NotFound", "Conflict",
     "PayloadTooLarge", "UnsupportedMediaType", "InvalidInput", "ServerError", "JobFailed", "IntegrityError",
+    "verify_signature", "webhook_secret",
 ]

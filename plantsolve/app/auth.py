@@ -1,6 +1,6 @@
 """API keys and tenants, checked before any body is read.
 
-With ``API_KEYS`` set, every ``/v1`` call, the dashboard and (with ``PROTECT_DOCS``) the docs need
+With ``API_KEYS`` set, every ``/v1`` call, ``/metrics``, the dashboard and (with ``PROTECT_DOCS``) the docs need
 ``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``, which sets
 an HTTP-only, same-site cookie honoured for reads (GET/HEAD) and for the dashboard's own forms
 (POST under ``/dashboard/``), never for a ``/v1`` write. A dashboard form must also carry the token
@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import ipaddress
+import logging
 from dataclasses import dataclass
 
 from fastapi import Request
@@ -21,6 +23,8 @@ from fastapi.responses import RedirectResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plantsolve.app.problems import Unauthorized, problem_response
+
+log = logging.getLogger("plantsolve.api")
 
 COOKIE = "plantsolve_key"
 DOCS = ("/docs", "/redoc", "/openapi.json")
@@ -97,14 +101,34 @@ def cookie_key(request: Request) -> str | None:
     return request.cookies.get(COOKIE) or None
 
 
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False  # a host name other than localhost: reachable from elsewhere
+
+
+def warn_if_exposed(host: str, keys: KeyRing) -> bool:
+    """Log a warning when the service answers on a non-loopback address without API keys. ``plantsolve serve``
+    may call it with its --host at start; the auth middleware calls it with the address of the first request."""
+    if keys or is_loopback(host):
+        return False
+    log.warning("API_KEYS is empty and the service answers on %s: anyone who can reach it can submit, read and "
+                "cancel every job. Set API_KEYS (and ADMIN_KEYS), or bind to 127.0.0.1.", host)
+    return True
+
+
 class AuthMiddleware:
     """Resolves the caller before the route (and before any body is read) and refuses protected paths."""
 
     def __init__(self, app: ASGIApp, keys: KeyRing, protect_docs: bool):
         self.app, self.keys, self.protect_docs = app, keys, protect_docs
+        self._bind_checked = False
 
     def protected(self, path: str) -> bool:
-        if path.startswith("/v1/") or path == "/v1":
+        if path.startswith("/v1/") or path == "/v1" or path == "/metrics":
             return True
         if path == "/dashboard" or (path.startswith("/dashboard/") and not path.startswith("/dashboard/log")):
             return True
@@ -115,6 +139,11 @@ class AuthMiddleware:
             await self.app(scope, receive, send)
             return
         if not self.keys:
+            if not self._bind_checked:  # the server's own address, as the first request reached it
+                self._bind_checked = True
+                server = scope.get("server")
+                if server:
+                    warn_if_exposed(str(server[0]), self.keys)
             principal = ANONYMOUS
         else:
             token = _token(scope)

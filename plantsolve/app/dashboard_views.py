@@ -133,9 +133,9 @@ def input_view(job: Job) -> InputView:
     if job.input_kind == "json":
         text = pretty(job.input)
         return InputView("json", text if len(text) <= INLINE_INPUT_CHARS else None, None, None, url)
-    if job.input_kind == "upload":
+    if job.input_kind == "upload":  # /input describes an upload; its bytes are at /input/file
         options = pretty(job.input_options) if job.input_options else None
-        return InputView("upload", None, job.input_filename, options, url)
+        return InputView("upload", None, job.input_filename, options, f"{url}/file")
     return InputView("json_file", None, "request.json", None, url)
 
 

@@ -6,6 +6,7 @@ import logging
 from contextlib import asynccontextmanager
 from typing import Any
 
+from asgi_correlation_id import CorrelationIdMiddleware, correlation_id
 from fastapi import FastAPI, Request
 from fastapi.openapi.utils import get_openapi
 from fastapi.middleware.cors import CORSMiddleware
@@ -15,22 +16,35 @@ from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
-from plantsolve.app.jobs.endpoints import build_router
+from plantsolve.app.metrics import build_metrics
+from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.jobs.service import JobService
 from plantsolve.app.middleware import BodyLimitMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
-from plantsolve.schemas.jobs import HealthStatus, Problem
+from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
+from plantsolve.schemas.jobs import HealthStatus, Problem, UploadedInput
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.dispatch import make_dispatcher
+from plantsolve.workers.logs import configure_logging
 
 log = logging.getLogger("plantsolve.api")
+
+
+class RequestIdFilter(logging.Filter):
+    """Puts the request id of the HTTP request being served (if any) on each log record."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if getattr(record, "request_id", None) is None:
+            record.request_id = correlation_id.get()
+        return True
 
 
 def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) -> FastAPI:
     """Build the app. ``run_jobs=False`` keeps the embedded pool stopped (tests that drive
     the runner by hand)."""
     settings = settings or get_settings()
+    configure_logging(settings.log_format, filters=(RequestIdFilter(),))
     ctx = ServiceContext.create(settings)
     dispatcher = make_dispatcher(ctx)
 
@@ -40,10 +54,12 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
             ctx.db.migrate()
         if run_jobs:
             dispatcher.start()
+            app.state.webhooks.start()
         try:
             yield
         finally:
             if run_jobs:
+                app.state.webhooks.stop()
                 dispatcher.stop()
             ctx.close()
 
@@ -67,15 +83,22 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
     # added last = runs first: the caller is known (or refused) before any body is read
     app.state.keys = KeyRing(settings.api_keys, settings.admin_keys)
+    app.state.webhook_secrets = WebhookSecrets(settings.webhook_secrets, app.state.keys)
+    app.state.webhooks = WebhookNotifier(app.state.jobs, app.state.webhook_secrets, settings)
     app.add_middleware(AuthMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs)
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["GET", "POST"],
-                           allow_headers=["Authorization", "Content-Type", "Idempotency-Key"],
-                           expose_headers=["Location"])
+                           allow_headers=["Authorization", "Content-Type", "Idempotency-Key", "X-Request-ID"],
+                           expose_headers=["Location", "X-Request-ID"])
+    # outermost: every answer, a refusal by the auth middleware too, carries X-Request-ID (the caller's, if it
+    # sent a valid one), and every log line written while serving it names it
+    app.add_middleware(CorrelationIdMiddleware, header_name="X-Request-ID")
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
     install_dashboard(app)
+    app.include_router(build_metrics(ctx.repo, ctx.kinds))
+    app.include_router(build_unknown_kind_router(ctx.kinds))
     install_docs(app)
     _install_health(app)
     app.openapi = lambda: _openapi(app)
@@ -123,7 +146,7 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
         return app.openapi_schema
     schema = get_openapi(title=app.title, version=app.version, summary=app.summary, description=app.description, routes=app.routes)
     components = schema.setdefault("components", {}).setdefault("schemas", {})
-    models: list[tuple[type, dict | None]] = [(Problem, None)]
+    models: list[tuple[type, dict | None]] = [(Problem, None), (UploadedInput, None)]
     for spec in app.state.ctx.kinds.values():
         models += [(spec.request_model, spec.example() if spec.example else None), (spec.result_model, None)]
     for model, example in models:

@@ -43,7 +43,21 @@ class AppSettings(WorkerSettings):
         default=15.0, gt=0, le=3600, description="Period of the keep-alive comment on an open event stream."
     )
 
-    @field_validator("api_keys", "admin_keys", "cors_origins", mode="before")
+    webhook_secrets: Annotated[list[str], NoDecode] = Field(
+        default_factory=list,
+        description="Comma-separated 'tenant:secret' (or one bare secret for every tenant) signing the completion "
+        "webhooks; a tenant without one gets hex(HMAC-SHA256(key=<its API key>, msg='plantsolve-webhook')).",
+    )
+    webhook_max_attempts: int = Field(default=6, ge=1, le=50, description="Deliveries tried before a webhook is given up.")
+    webhook_retry_seconds: float = Field(
+        default=2.0, gt=0, le=3600, description="First retry delay of a webhook; doubled after each failed delivery."
+    )
+    webhook_timeout_seconds: float = Field(default=10.0, gt=0, le=300, description="Timeout of one webhook delivery.")
+    webhook_poll_seconds: float = Field(
+        default=1.0, gt=0, le=60, description="How often the API process looks for finished jobs with a webhook to send."
+    )
+
+    @field_validator("api_keys", "admin_keys", "cors_origins", "webhook_secrets", mode="before")
     @classmethod
     def _split_keys(cls, value: object) -> object:
         return split_commas(value)

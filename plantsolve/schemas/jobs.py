@@ -48,6 +48,16 @@ class AttemptInfo(BaseModel):
     error: str | None = None
 
 
+class CallbackInfo(BaseModel):
+    """The completion webhook asked for at submission (``?callback_url=``)."""
+
+    url: str
+    state: Literal["pending", "delivered", "failed"] = Field(
+        description="pending: not yet delivered (the job is running, or a retry is due); failed: every attempt failed.")
+    attempts: int = Field(description="Deliveries tried so far.")
+    error: str | None = Field(default=None, description="Why the last delivery failed.")
+
+
 class JobView(BaseModel):
     """A job's status. ``report`` is present once the job has finished (and after a failed
     attempt that was re-queued)."""
@@ -66,6 +76,16 @@ class JobView(BaseModel):
     artifacts: list[ArtifactInfo] = Field(default_factory=list)
     attempts: list[AttemptInfo] = Field(default_factory=list, description="Every attempt so far, oldest first.")
     links: dict[str, str] = Field(description="self, result, cancel (URLs relative to the host).")
+    callback: CallbackInfo | None = Field(default=None, description="The completion webhook, when one was asked for.")
+
+
+class UploadedInput(BaseModel):
+    """What a file upload submitted: the file's name and size, the multipart ``options``, and where the bytes are."""
+
+    filename: str = Field(description="The uploaded file's name, as sent.")
+    options: dict[str, Any] | None = Field(description="The multipart 'options' JSON object (null when none was sent).")
+    size: int = Field(description="Bytes of the file.")
+    file: str = Field(description="URL of the file itself (GET /v1/jobs/{id}/input/file).")
 
 
 class JobList(BaseModel):

@@ -59,6 +59,13 @@ class Job(Base):
     started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     run_seconds: Mapped[float | None] = mapped_column(Float)
+    # the completion webhook: state None (no callback) | "pending" | "delivered" | "failed"; while pending,
+    # callback_next_at is when the next delivery attempt is due (also the lease of a delivery under way)
+    callback_url: Mapped[str | None] = mapped_column(Text)
+    callback_state: Mapped[str | None] = mapped_column(String(16))
+    callback_attempts: Mapped[int] = mapped_column(Integer, default=0, server_default="0")
+    callback_next_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    callback_error: Mapped[str | None] = mapped_column(Text)
 
     __table_args__ = (
         Index("ix_jobs_status_lease", "status", "lease_until"),
@@ -66,6 +73,7 @@ class Job(Base):
         Index("ix_jobs_status_created", "status", "created_at", "id"),
         Index("ix_jobs_kind_status_created", "kind", "status", "created_at"),
         Index("ix_jobs_owner_created", "owner", "created_at", "id"),
+        Index("ix_jobs_callback_due", "callback_state", "callback_next_at"),
     )
 
 

@@ -14,7 +14,7 @@ from datetime import datetime, timedelta, timezone
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import String, Text, and_, cast, delete, func, or_, select, update
+from sqlalchemy import String, Text, and_, case, cast, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -171,6 +171,29 @@ class JobRepository:
         with self.sessions() as session:
             rows = session.execute(query)
             return {status: count for status, count in rows}
+
+    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
+        with self.sessions() as session:
+            return [(kind, status, int(n)) for kind, status, n in
+                    session.execute(select(Job.kind, Job.status, func.count()).group_by(Job.kind, Job.status))]
+
+    def oldest_queued(self) -> list[tuple[str, datetime]]:
+        """Per kind, when its longest-waiting queued job was submitted."""
+        with self.sessions() as session:
+            return [(kind, as_utc(created)) for kind, created in session.execute(
+                select(Job.kind, func.min(Job.created_at)).where(Job.status == "queued").group_by(Job.kind))]
+
+    def run_time_histogram(self, buckets: Iterable[float]) -> list[tuple[str, str, int, float, list[int]]]:
+        """Per kind and final status of the finished jobs: count, sum of run seconds, and the cumulative count
+        at or below each bucket bound, computed by the database in one pass."""
+        buckets = list(buckets)
+        seconds = Job.run_seconds
+        columns = [func.sum(case((seconds <= bound, 1), else_=0)) for bound in buckets]
+        query = (select(Job.kind, Job.status, func.count(), func.sum(seconds), *columns)
+                 .where(Job.status.in_(FINISHED), seconds.is_not(None)).group_by(Job.kind, Job.status))
+        with self.sessions() as session:
+            return [(row[0], row[1], int(row[2]), float(row[3] or 0.0), [int(v or 0) for v in row[4:]])
+                    for row in session.execute(query)]
 
     def artifacts(self, job_id: uuid.UUID) -> list[Artifact]:
         with self.sessions() as session:
@@ -369,6 +392,38 @@ class JobRepository:
                  .order_by(Job.created_at, Job.id).limit(limit))
         with self.sessions() as session:
             return list(session.scalars(query))
+
+    # ---- the completion webhook ---------------------------------------------------------------
+
+    def due_callbacks(self, limit: int = 20) -> list[uuid.UUID]:
+        """Finished jobs whose callback is pending and due, the longest waiting first."""
+        now = utcnow()
+        query = (select(Job.id).where(Job.callback_state == "pending", Job.callback_next_at <= now,
+                                      Job.status.in_(FINISHED))
+                 .order_by(Job.callback_next_at).limit(limit))
+        with self.sessions() as session:
+            return list(session.scalars(query))
+
+    def claim_callback(self, job_id: uuid.UUID, *, lease_seconds: float) -> int | None:
+        """Take one delivery attempt (a conditional update only one process wins); until it is recorded,
+        the lease keeps others off. Returns the attempt number, or None when another process has it."""
+        now = utcnow()
+        statement = (update(Job)
+                     .where(Job.id == job_id, Job.callback_state == "pending", Job.callback_next_at <= now)
+                     .values(callback_attempts=Job.callback_attempts + 1,
+                             callback_next_at=now + timedelta(seconds=lease_seconds))
+                     .returning(Job.callback_attempts))
+        with self.writing(), self.sessions() as session:
+            attempt = session.execute(statement).scalar_one_or_none()
+            session.commit()
+        return attempt
+
+    def record_callback(self, job_id: uuid.UUID, attempt: int, *, state: str, error: str | None = None,
+                        next_at: datetime | None = None) -> bool:
+        """The outcome of delivery ``attempt``: "delivered", "failed" (gave up) or "pending" again at ``next_at``."""
+        return self._execute(
+            update(Job).where(Job.id == job_id, Job.callback_attempts == attempt, Job.callback_state == "pending")
+            .values(callback_state=state, callback_error=error[:2000] if error else None, callback_next_at=next_at)) == 1
 
     # ---- helpers ----------------------------------------------------------------------------
 

@@ -16,6 +16,7 @@ from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.workers.settings import WorkerSettings, get_worker_settings
 from plantsolve.workers.sweeper import Sweeper
@@ -94,7 +95,9 @@ def _worker_context():
     global _ctx, _dispatcher
     with _ctx_lock:
         if _ctx is None:
-            _ctx = ServiceContext.create(get_worker_settings())
+            settings = get_worker_settings()
+            configure_logging(settings.log_format)
+            _ctx = ServiceContext.create(settings)
             _dispatcher = CeleryDispatcher(_ctx)
         return _ctx, _dispatcher
 

@@ -21,6 +21,7 @@ from functools import partial
 from pebble import ProcessExpired, ProcessPool
 
 from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.workers.settings import WorkerSettings
 from plantsolve.workers.sweeper import Sweeper, resume
@@ -41,6 +42,7 @@ def _start_worker(settings_json: str) -> None:
     settings = WorkerSettings.model_validate_json(settings_json)
     # a solver must never slow down the API process that shares this machine with it
     os.nice(settings.job_niceness)
+    configure_logging(settings.log_format)
     _worker_ctx = ServiceContext.create(settings)
 
 

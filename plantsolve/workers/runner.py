@@ -166,13 +166,43 @@ def run_job(
 ) -> str:
     """Run one delivery of ``job_id``. Returns what happened: the final status, ``"requeued"``,
     ``"skipped"`` (not claimable: already running elsewhere, finished or cancelled) or
-    ``"stale"`` (this attempt lost the job before it could store anything)."""
+    ``"stale"`` (this attempt lost the job before it could store anything). Each claimed attempt
+    logs one line when it starts and one when it ends (job id, kind, attempt, duration, outcome)."""
+    claimed: dict[str, Any] = {}
+    started = time.monotonic()
+    outcome = "crashed"
+    try:
+        outcome = _run_claimed(ctx, job_id, worker=worker, requeue=requeue, hard_limit_in_thread=hard_limit_in_thread,
+                               time_limit_errors=time_limit_errors, claimed=claimed)
+        return outcome
+    finally:
+        if claimed:
+            duration = round(time.monotonic() - started, 3)
+            log.log(logging.WARNING if outcome in ("failed", "crashed") else logging.INFO,
+                    "job %s (%s) attempt %d: %s after %.3f s", job_id, claimed["kind"], claimed["attempt"], outcome,
+                    duration, extra={"job_id": str(job_id), "kind": claimed["kind"], "attempt": claimed["attempt"],
+                                     "duration_seconds": duration, "outcome": outcome, "worker": worker})
+
+
+def _run_claimed(
+    ctx: ServiceContext,
+    job_id: uuid.UUID,
+    *,
+    worker: str,
+    requeue: Callable[[uuid.UUID, str], None],
+    hard_limit_in_thread: bool,
+    time_limit_errors: tuple[type[BaseException], ...],
+    claimed: dict[str, Any],
+) -> str:
     job = ctx.repo.get(job_id)
     if job is None:
         return "skipped"
     attempt = ctx.repo.claim(job_id, lease_seconds=ctx.settings.lease_seconds, worker=worker)
     if attempt is None:
         return "skipped"
+    claimed.update(kind=job.kind, attempt=attempt)
+    log.info("job %s (%s) attempt %d started", job_id, job.kind, attempt,
+             extra={"job_id": str(job_id), "kind": job.kind, "attempt": attempt, "outcome": "started", "worker": worker})
     spec = ctx.spec(job.kind)
     if spec is None:
         ctx.repo.finish_failure(

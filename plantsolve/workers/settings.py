@@ -27,6 +27,8 @@ class WorkerSettings(StoreSettings):
         default=None,
         description="Celery broker (redis://host:6379/0). Unset: jobs run in-process (embedded pool).",
     )
+    log_format: Literal["json", "text"] = Field(
+        default="json", description="The plantsolve log lines on stderr: one JSON object per line, or plain text.")
     embedded_workers: int = Field(default=2, ge=1, description="Job processes (or threads) of the embedded pool.")
     embedded_mode: Literal["process", "thread"] = Field(
         default="process",

@@ -42,7 +42,11 @@ def test_multipart_upload_with_options(client):
     assert response.status_code == 202, response.text
     done = wait_for(client, response.json()["id"])
     assert client.get(f"/v1/jobs/{done['id']}/result").json()["total"] == 5.5
-    assert client.get(f"/v1/jobs/{done['id']}/input").content == b"1\n2\n2.5\n"
+    # the input: the file's name, the multipart options and a link to the file, which is the bytes as sent
+    submitted = client.get(f"/v1/jobs/{done['id']}/input").json()
+    assert submitted == {"filename": "numbers.txt", "options": {"seconds": 0}, "size": 8,
+                         "file": f"/v1/jobs/{done['id']}/input/file"}
+    assert client.get(submitted["file"]).content == b"1\n2\n2.5\n"
 
 
 def test_list_filters_and_cursor_pagination(client):

@@ -136,7 +136,8 @@ def test_the_submit_form_is_prefilled_and_posts_through_the_service(client):
     assert wait_for(client, job_id)["status"] == "succeeded"
     assert client.get(f"/v1/jobs/{job_id}/result").json()["total"] == 6.0
     page = client.get(f"/dashboard/jobs/{job_id}").text
-    assert f'href="/v1/jobs/{job_id}/input" download><code>values.txt</code>' in page and "&#34;seconds&#34;" in page
+    assert f'href="/v1/jobs/{job_id}/input/file" download><code>values.txt</code>' in page and "&#34;seconds&#34;" in page
+    assert client.get(f"/v1/jobs/{job_id}/input/file").content == b"1\n2\n3\n"
 
 
 @pytest.mark.parametrize("data, files, status, shown", [

@@ -67,7 +67,7 @@ def test_pcf_with_a_two_coordinate_end_point_is_accepted_and_the_item_reported(c
 def test_input_download_never_echoes_a_path_in_its_file_name(client):
     files = {"file": ("../../../../tmp/evil name;.txt", b"1\n2\n", "text/plain")}
     job = client.post("/v1/test-compute/jobs", files=files).json()
-    disposition = client.get(f"/v1/jobs/{job['id']}/input").headers["content-disposition"]
+    disposition = client.get(f"/v1/jobs/{job['id']}/input/file").headers["content-disposition"]
     assert "/" not in disposition and ".." not in disposition and "evil_name" in disposition
 
 

@@ -313,3 +313,23 @@ def test_events_stream_progress_written_by_a_celery_worker(scaled):
     assert worker.startswith("celery@") and not worker.endswith(f":{os.getpid()}")
     assert received[-1] == ("end", {"status": "succeeded"})
     assert json.loads(json.dumps(views[-1])) == client.get(f"/v1/jobs/{job['id']}").json()
+
+
+def test_the_compose_worker_healthcheck_pings_a_live_worker(scaled, redis_url):
+    """docker-compose.yml's worker check, run here against the module's worker (node main@<host>)."""
+    import socket
+
+    import yaml
+
+    client, env, _ = scaled
+    compose = yaml.safe_load((REPO / "docker-compose.yml").read_text())
+    command = compose["services"]["worker"]["healthcheck"]["test"][1].replace("$$", "$")
+    node = f"main@{socket.gethostname()}"
+    shell_env = {**env, "PATH": f"{BIN}:{os.environ.get('PATH', '')}", "BROKER_URL": redis_url,
+                 "HOSTNAME": "ignored"}
+    alive = subprocess.run(["sh", "-c", command.replace("celery@$HOSTNAME", node)], env=shell_env,
+                           capture_output=True, text=True, timeout=60)
+    assert alive.returncode == 0 and "pong" in alive.stdout, alive.stdout + alive.stderr
+    nobody = subprocess.run(["sh", "-c", command], env={**shell_env, "HOSTNAME": "no-such-node"},
+                            capture_output=True, text=True, timeout=60)
+    assert nobody.returncode != 0  # a worker that does not answer is reported unhealthy

@@ -29,7 +29,8 @@ def test_a_key_sees_only_its_own_jobs(tenants):
     theirs = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers=B).json()
     wait_for(client, theirs["id"], headers=B)
     base = f"/v1/jobs/{mine['id']}"
-    for path in (base, f"{base}/result", f"{base}/input", f"{base}/artifacts/values.txt"):
+    for path in (base, f"{base}/result", f"{base}/input", f"{base}/input/file", f"{base}/artifacts/values.txt",
+                 f"{base}/events", f"/v1/test-compute/jobs/{mine['id']}/result"):
         assert client.get(path, headers=B).status_code == 404, path
         assert client.get(path, headers=A).status_code == 200, path
     assert client.post(f"{base}/cancel", headers=B).status_code == 404

@@ -14,10 +14,11 @@ from starlette.datastructures import UploadFile
 from plantsolve.app.auth import Principal, require_api_key
 from plantsolve.app.jobs.events import add_event_routes
 from plantsolve.app.jobs.service import JobService, safe_filename
+from plantsolve.app.webhooks import check_callback_url
 from plantsolve.app.problems import (
     NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
 )
-from plantsolve.schemas.jobs import JobList, JobStatus, JobView
+from plantsolve.schemas.jobs import JobList, JobStatus, JobView, UploadedInput
 from plantsolve.solvers.base import SolverSpec
 
 IdempotencyKey = Annotated[
@@ -45,14 +46,29 @@ Service = Annotated[JobService, Depends(get_service)]
 Caller = Annotated[Principal, Depends(require_api_key)]
 
 
+CallbackUrl = Annotated[
+    str | None,
+    Query(
+        max_length=2048,
+        description="Completion webhook: when the job has finished, the job view is POSTed to this http(s) URL, signed "
+        "with 'X-Plantsolve-Signature: sha256=<HMAC-SHA256 of the body>' (the key's webhook secret) and retried with "
+        "backoff until the receiver answers 2xx.",
+    ),
+]
+
+
 def submit_route(kind: str):
     """The POST /v1/<kind>/jobs handler: JSON body or multipart upload (``file`` + ``options``)."""
 
-    async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None) -> Response:
+    async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None,
+                     callback_url: CallbackUrl = None) -> Response:
+        if callback_url is not None:
+            callback_url = check_callback_url(callback_url, caller.owner, request.app.state.webhook_secrets)
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if content_type == "application/json" or content_type.endswith("+json"):
             body = await request.body()
-            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner)
+            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner,
+                                                callback_url)
         elif content_type == "multipart/form-data":
             limit = request.app.state.settings.max_body_bytes
             form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
@@ -71,7 +87,7 @@ def submit_route(kind: str):
                 options = (await options.read()).decode("utf-8", "replace")
             submitted = await run_in_threadpool(
                 lambda: service.submit_upload_view(kind, upload.filename or "upload", content, options, idempotency_key,
-                                                   owner=caller.owner)
+                                                   owner=caller.owner, callback_url=callback_url)
             )
         else:
             raise UnsupportedMediaType(
@@ -175,31 +191,58 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     def cancel_job(job_id: uuid.UUID, service: Service, caller: Caller) -> JobView:
         return service.view(service.cancel(job_id, caller.sees))
 
-    @router.get(
-        "/jobs/{job_id}/artifacts/{name}",
-        tags=["jobs"],
-        response_class=FileResponse,
-        operation_id="getJobArtifact",
-        responses={200: {"description": "The file, with its media type",
-                         "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}},
-                   **responses(404, 422)},
-        summary="Download an artifact",
-    )
     def get_artifact(job_id: uuid.UUID, name: str, service: Service, caller: Caller) -> FileResponse:
-        service.get(job_id, caller.sees)
+        service.get(job_id, caller.sees, brief=True)
         artifact = service.ctx.repo.artifact(job_id, name)
         if artifact is None:
             raise NotFound(f"Job {job_id} has no artifact {name!r}.")
-        return FileResponse(service.ctx.files.path(artifact.path), media_type=artifact.media_type, filename=artifact.name)
+        return FileResponse(service.ctx.files.path(artifact.path), media_type=artifact.media_type, filename=artifact.name,
+                            headers={"X-Content-SHA256": artifact.sha256})
+
+    artifact_file = {"description": "The file, with its media type (Content-Length, X-Content-SHA256)",
+                     "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}}
+    router.add_api_route("/jobs/{job_id}/artifacts/{name}", get_artifact, methods=["GET"], tags=["jobs"],
+                         response_class=FileResponse, operation_id="getJobArtifact", summary="Download an artifact",
+                         responses={200: artifact_file, **responses(404, 422)})
+    router.add_api_route("/jobs/{job_id}/artifacts/{name}", get_artifact, methods=["HEAD"], tags=["jobs"],
+                         response_class=FileResponse, operation_id="headJobArtifact",
+                         summary="An artifact's headers (size, media type, SHA-256) without its body",
+                         responses={200: {"description": "The headers GET would send, no body"}, **responses(404, 422)})
+
+    any_request = [{"$ref": f"#/components/schemas/{kinds[k].request_model.__name__}"} for k in sorted(kinds)]
 
     @router.get(
         "/jobs/{job_id}/input",
         tags=["jobs"],
         operation_id="getJobInput",
-        responses={200: {"description": "The request exactly as stored: JSON, or the uploaded file"}, **responses(404, 422)},
+        responses={200: {"description": "A JSON request as it was stored; for a file upload, an UploadedInput document "
+                                        "(file name, the multipart 'options', a link to the file)",
+                         "content": {"application/json": {"schema": {
+                             "anyOf": [{"$ref": "#/components/schemas/UploadedInput"}, *any_request]}}}},
+                   **responses(404, 422)},
         summary="What was submitted",
     )
     def get_input(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
+        job = service.get(job_id, caller.sees)
+        if job.input_kind == "json":
+            return JSONResponse(job.input)
+        path = service.ctx.files.path(job.input_file)
+        if job.input_kind == "json_file":
+            return FileResponse(path, media_type="application/json")
+        uploaded = UploadedInput(filename=job.input_filename or "", options=job.input_options,
+                                 size=path.stat().st_size, file=f"/v1/jobs/{job_id}/input/file")
+        return _json(uploaded)
+
+    @router.get(
+        "/jobs/{job_id}/input/file",
+        tags=["jobs"],
+        operation_id="getJobInputFile",
+        responses={200: {"description": "The submitted bytes: the uploaded file, or the JSON request",
+                         "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}},
+                   **responses(404, 422)},
+        summary="The submitted file, byte for byte",
+    )
+    def get_input_file(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
         job = service.get(job_id, caller.sees)
         if job.input_kind == "json":
             return JSONResponse(job.input)
@@ -221,6 +264,22 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             description=f"The same document as GET /v1/jobs/{{id}}/result, typed as the {kind} result; 404 for a job "
                         f"of another kind.",
         )
+    return router
+
+
+def build_unknown_kind_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
+    """``/v1/<kind>/jobs…`` for a kind that does not exist: a 404 that lists the kinds. Include it after every
+    other router, so that only paths no kind serves get here."""
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], include_in_schema=False)
+
+    async def unknown_kind(kind: str) -> Response:
+        if kind in kinds:
+            raise NotFound("Not Found")
+        raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(sorted(kinds))}.",
+                       extra={"kinds": sorted(kinds)})
+
+    router.add_api_route("/{kind}/jobs", unknown_kind, methods=["POST"])
+    router.add_api_route("/{kind}/jobs/{rest:path}", unknown_kind, methods=["GET", "POST"])
     return router
 
 

@@ -26,7 +26,7 @@ from plantsolve.app.problems import (
     from_validation_error,
     loads_bounded,
 )
-from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, JobList, JobProgress, JobTimings, JobView
+from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.dispatch import Dispatcher
@@ -66,18 +66,20 @@ class JobService:
             raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(sorted(self.ctx.kinds))}.")
         return spec
 
-    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None, owner: str = "") -> Submitted:
+    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None, owner: str = "",
+                         callback_url: str | None = None) -> Submitted:
         """submit_json plus the job's view, in one thread hop for the async route."""
-        submitted = self.submit_json(kind, body, idempotency_key, owner=owner)
+        submitted = self.submit_json(kind, body, idempotency_key, owner=owner, callback_url=callback_url)
         submitted.view = self.view(submitted.job)
         return submitted
 
-    def submit_upload_view(self, *args, owner: str = "") -> Submitted:
-        submitted = self.submit_upload(*args, owner=owner)
+    def submit_upload_view(self, *args, owner: str = "", callback_url: str | None = None) -> Submitted:
+        submitted = self.submit_upload(*args, owner=owner, callback_url=callback_url)
         submitted.view = self.view(submitted.job)
         return submitted
 
-    def submit_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "") -> Submitted:
+    def submit_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "",
+                    callback_url: str | None = None) -> Submitted:
         spec = self.spec(kind)
         raw = loads_bounded(body, [], "The body")
         try:
@@ -93,11 +95,11 @@ class JobService:
             fields = {"input_kind": "json_file", "input_file": path}
         else:
             fields = {"input_kind": "json", "input": raw}
-        return self._create(spec, job_id, body_hash, idempotency_key, fields, owner)
+        return self._create(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
 
     def submit_upload(
         self, kind: str, filename: str, content: bytes, options_text: str | None, idempotency_key: str | None,
-        *, owner: str = "",
+        *, owner: str = "", callback_url: str | None = None,
     ) -> Submitted:
         spec = self.spec(kind)
         if spec.parse_upload is None or not spec.upload_extensions:
@@ -133,7 +135,8 @@ class JobService:
             digest.update(hashlib.sha256(part).digest())
         job_id = uuid.uuid4()
         path, _, _ = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
-        fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options}
+        fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options,
+                  **_callback(callback_url)}
         return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)
 
     @staticmethod
@@ -171,6 +174,8 @@ class JobService:
                     errors=[field_problem(["header", "Idempotency-Key"], "already used with a different body", "idempotency_conflict")],
                 )
             return Submitted(stored, False)
+        log.info("job %s (%s) submitted", stored.id, stored.kind,
+                 extra={"job_id": str(stored.id), "kind": stored.kind, "status": "queued"})
         # Enqueue only after the row is committed: a worker must always find the job.
         try:
             self.dispatcher.enqueue(stored.id, stored.kind)
@@ -272,7 +277,16 @@ class JobService:
             artifacts=artifacts,
             attempts=[AttemptInfo.model_validate(h) for h in (job.attempts or [])],
             links=links,
+            callback=(CallbackInfo(url=job.callback_url, state=job.callback_state, attempts=job.callback_attempts or 0,
+                                   error=job.callback_error) if job.callback_url and job.callback_state else None),
         )
+
+
+def _callback(url: str | None) -> dict[str, Any]:
+    """The job columns of a completion webhook: due as soon as the job has finished."""
+    if url is None:
+        return {}
+    return {"callback_url": url, "callback_state": "pending", "callback_attempts": 0, "callback_next_at": utcnow()}
 
 
 def _summary(job: Job) -> str:

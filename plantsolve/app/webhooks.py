@@ -1,0 +1,150 @@
+"""The completion webhook: ``POST <callback_url>`` with the job view once the job has finished.
+
+A submission may name ``?callback_url=``; the job row keeps it with a delivery state. A notifier
+thread in every API process looks for finished jobs whose delivery is due, takes one delivery with a
+conditional update (so two API processes never both send it; a lease lets another take over if this
+one dies mid-delivery), and sends it from a small thread pool: the job runners never wait for a
+receiver. A delivery that fails (no 2xx, a timeout, a refused connection) is retried after
+``WEBHOOK_RETRY_SECONDS``, doubled each time, up to ``WEBHOOK_MAX_ATTEMPTS``; the job view shows
+how it went (``callback``).
+
+Each body is signed: ``X-Plantsolve-Signature: sha256=<hex HMAC-SHA256 of the raw body>`` with the
+tenant's secret, from ``WEBHOOK_SECRETS`` or else derived from its API key as
+``hex(HMAC-SHA256(key=<API key>, msg="plantsolve-webhook"))``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import logging
+import threading
+import uuid
+from concurrent.futures import ThreadPoolExecutor
+from datetime import timedelta
+from urllib.parse import urlsplit
+
+import httpx
+
+from plantsolve.app.auth import KeyRing
+from plantsolve.app.problems import Unprocessable, field_problem
+from plantsolve.store.models import utcnow
+
+log = logging.getLogger("plantsolve.webhooks")
+
+SIGNATURE_HEADER = "X-Plantsolve-Signature"
+DERIVATION_MESSAGE = b"plantsolve-webhook"
+LEASE_SECONDS = 120.0  # one delivery's claim: longer than its timeout
+
+
+def derived_secret(api_key: str) -> bytes:
+    return hmac.new(api_key.encode(), DERIVATION_MESSAGE, hashlib.sha256).hexdigest().encode()
+
+
+def signature(secret: bytes, body: bytes) -> str:
+    return "sha256=" + hmac.new(secret, body, hashlib.sha256).hexdigest()
+
+
+class WebhookSecrets:
+    def __init__(self, entries: list[str], keys: KeyRing):
+        self.named: dict[str, bytes] = {}
+        self.default: bytes | None = None
+        for entry in entries:
+            name, sep, secret = entry.partition(":")
+            if sep and secret:
+                self.named[name] = secret.encode()
+            elif entry:
+                self.default = entry.encode()
+        self.keys = keys
+
+    def secret_for(self, owner: str) -> bytes | None:
+        if owner in self.named:
+            return self.named[owner]
+        if self.default is not None:
+            return self.default
+        for entry_owner, key, _ in self.keys.entries:
+            if entry_owner == owner:
+                return derived_secret(key)
+        return None
+
+
+def check_callback_url(url: str, owner: str, secrets: WebhookSecrets) -> str:
+    """The URL as stored; a 422 naming ``callback_url`` when it is unusable or cannot be signed."""
+    parts = urlsplit(url)
+    if parts.scheme not in ("http", "https") or not parts.hostname:
+        raise Unprocessable("callback_url must be an absolute http or https URL.",
+                            errors=[field_problem(["query", "callback_url"], "not an absolute http(s) URL")])
+    if secrets.secret_for(owner) is None:
+        raise Unprocessable("callback_url needs a signing secret: set WEBHOOK_SECRETS (or API_KEYS) on the service.",
+                            errors=[field_problem(["query", "callback_url"], "no webhook secret configured")])
+    return url
+
+
+class WebhookNotifier:
+    """Sends due webhooks from a daemon thread and a small pool (see the module docstring)."""
+
+    def __init__(self, service, secrets: WebhookSecrets, settings, transport: httpx.BaseTransport | None = None):
+        self.service, self.repo, self.secrets, self.settings = service, service.ctx.repo, secrets, settings
+        self._http = httpx.Client(timeout=settings.webhook_timeout_seconds, transport=transport,
+                                  headers={"User-Agent": "plantsolve-webhook"})
+        self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix="webhook")
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="webhook-notifier", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5)
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._http.close()
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.settings.webhook_poll_seconds):
+            try:
+                self.send_due()
+            except Exception:  # a database hiccup: the next round tries again
+                log.exception("webhook round failed")
+
+    def send_due(self) -> int:
+        """Claim every due delivery and hand it to the pool; returns how many were claimed."""
+        claimed = 0
+        for job_id in self.repo.due_callbacks():
+            attempt = self.repo.claim_callback(job_id, lease_seconds=LEASE_SECONDS)
+            if attempt is not None:
+                claimed += 1
+                self._pool.submit(self.deliver, job_id, attempt)
+        return claimed
+
+    def deliver(self, job_id: uuid.UUID, attempt: int) -> bool:
+        job = self.repo.get(job_id, brief=True)
+        if job is None or not job.callback_url:
+            return False
+        body = self.service.view(job).model_dump_json().encode()
+        secret = self.secrets.secret_for(job.owner)
+        headers = {"Content-Type": "application/json", "X-Plantsolve-Event": "job.finished",
+                   "X-Plantsolve-Delivery": f"{job_id}/{attempt}"}
+        if secret is not None:
+            headers[SIGNATURE_HEADER] = signature(secret, body)
+        error = None
+        try:
+            response = self._http.post(job.callback_url, content=body, headers=headers)
+            if not 200 <= response.status_code < 300:
+                error = f"HTTP {response.status_code}"
+        except httpx.HTTPError as failure:
+            error = f"{type(failure).__name__}: {failure}"[:500]
+        if error is None:
+            self.repo.record_callback(job_id, attempt, state="delivered")
+            log.info("webhook delivered", extra={"job_id": str(job_id), "attempt": attempt})
+            return True
+        if attempt >= self.settings.webhook_max_attempts:
+            self.repo.record_callback(job_id, attempt, state="failed", error=error)
+            log.warning("webhook of job %s given up after %d attempts: %s", job_id, attempt, error)
+        else:
+            delay = self.settings.webhook_retry_seconds * 2 ** (attempt - 1)
+            self.repo.record_callback(job_id, attempt, state="pending", error=error,
+                                      next_at=utcnow() + timedelta(seconds=delay))
+            log.info("webhook of job %s failed (%s); retry in %.1f s", job_id, error, delay)
+        return False

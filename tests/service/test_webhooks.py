@@ -1,0 +1,163 @@
+"""The completion webhook: POSTed once the job has finished, with the job view, signed with the
+tenant's secret, retried with backoff, given up after WEBHOOK_MAX_ATTEMPTS; never in the runner's way."""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import json
+import threading
+import time
+from contextlib import contextmanager
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import pytest
+from fastapi.testclient import TestClient
+
+from plantsolve.app.main import create_app
+from plantsolve.client import Client, verify_signature, webhook_secret
+from tests.conftest import service_settings, wait_for
+
+ALICE = {"Authorization": "Bearer key-a"}
+
+
+class Receiver:
+    """A loopback HTTP server that records each POST and answers from a script of status codes."""
+
+    def __init__(self, statuses=(200,), delay: float = 0.0):
+        self.statuses, self.delay = list(statuses), delay
+        self.requests: list[dict] = []
+        receiver = self
+
+        class Handler(BaseHTTPRequestHandler):
+            def do_POST(self) -> None:
+                body = self.rfile.read(int(self.headers["Content-Length"]))
+                receiver.requests.append({"at": time.monotonic(), "body": body, "headers": dict(self.headers)})
+                time.sleep(receiver.delay)
+                status = receiver.statuses.pop(0) if len(receiver.statuses) > 1 else receiver.statuses[0]
+                self.send_response(status)
+                self.send_header("Content-Length", "0")
+                self.end_headers()
+
+            def log_message(self, *args) -> None:
+                pass
+
+        self.server = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.url = f"http://127.0.0.1:{self.server.server_address[1]}/hook?token=t1"
+        threading.Thread(target=self.server.serve_forever, daemon=True).start()
+
+    def close(self) -> None:
+        self.server.shutdown()
+        self.server.server_close()
+
+
+@contextmanager
+def receiver(**kwargs):
+    r = Receiver(**kwargs)
+    try:
+        yield r
+    finally:
+        r.close()
+
+
+def _app(tmp_path, **overrides):
+    values = dict(api_keys=["alice:key-a"], webhook_poll_seconds=0.05, webhook_retry_seconds=0.2)
+    values.update(overrides)
+    return create_app(service_settings(tmp_path, **values))
+
+
+def _callback_state(client, job_id, states=("delivered", "failed"), timeout=20.0, headers=ALICE) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        callback = client.get(f"/v1/jobs/{job_id}", headers=headers).json()["callback"]
+        if callback["state"] in states:
+            return callback
+        assert time.monotonic() < deadline, callback
+        time.sleep(0.05)
+
+
+def test_a_finished_job_is_posted_signed_with_the_key_derived_secret(tmp_path):
+    with receiver() as hook, TestClient(_app(tmp_path)) as client:
+        job = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [3.0, 4.0]},
+                          headers=ALICE).json()
+        assert job["callback"] == {"url": hook.url, "state": "pending", "attempts": 0, "error": None}
+        assert _callback_state(client, job["id"]) == {"url": hook.url, "state": "delivered", "attempts": 1, "error": None}
+        (request,) = hook.requests
+        view = json.loads(request["body"])
+        assert view["id"] == job["id"] and view["status"] == "succeeded" and view["artifacts"]
+        assert request["headers"]["Content-Type"] == "application/json"
+        assert request["headers"]["X-Plantsolve-Event"] == "job.finished"
+        # the receiver checks the signature with the secret it derives from its own API key
+        secret = hmac.new(b"key-a", b"plantsolve-webhook", hashlib.sha256).hexdigest().encode()
+        expected = "sha256=" + hmac.new(secret, request["body"], hashlib.sha256).hexdigest()
+        assert hmac.compare_digest(request["headers"]["X-Plantsolve-Signature"], expected)
+        wrong = "sha256=" + hmac.new(b"other", request["body"], hashlib.sha256).hexdigest()
+        assert request["headers"]["X-Plantsolve-Signature"] != wrong
+        # the client's helpers do the same for a receiver written in Python
+        assert verify_signature(request["body"], request["headers"]["X-Plantsolve-Signature"], webhook_secret("key-a"))
+        assert not verify_signature(request["body"] + b" ", request["headers"]["X-Plantsolve-Signature"],
+                                    webhook_secret("key-a"))
+
+
+def test_failed_deliveries_are_retried_with_growing_delays(tmp_path):
+    with receiver(statuses=(503, 500, 200)) as hook, TestClient(_app(tmp_path)) as client:
+        job = client.post("/v1/test-fail/jobs", params={"callback_url": hook.url}, json={}, headers=ALICE).json()
+        callback = _callback_state(client, job["id"])
+        assert callback["state"] == "delivered" and callback["attempts"] == 3
+        times = [r["at"] for r in hook.requests]
+        assert len(times) == 3
+        first_gap, second_gap = times[1] - times[0], times[2] - times[1]
+        assert first_gap >= 0.2 and second_gap >= 0.4  # 0.2 s, then doubled
+        assert json.loads(hook.requests[-1]["body"])["status"] == "failed"  # failed jobs are reported too
+
+
+def test_the_client_asks_for_a_webhook(tmp_path):
+    with receiver() as hook, TestClient(_app(tmp_path)) as http:
+        client = Client(api_key="key-a", http=http)
+        job = client.submit("test-compute", {"values": [1.0]}, callback_url=hook.url)
+        assert job.view["callback"]["state"] == "pending"
+        assert _callback_state(http, job.id)["state"] == "delivered"
+
+
+def test_a_receiver_that_keeps_failing_is_given_up(tmp_path):
+    with receiver(statuses=(500,)) as hook, TestClient(_app(tmp_path, webhook_max_attempts=2)) as client:
+        job = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [1.0]},
+                          headers=ALICE).json()
+        callback = _callback_state(client, job["id"])
+        assert callback == {"url": hook.url, "state": "failed", "attempts": 2, "error": "HTTP 500"}
+        time.sleep(0.5)
+        assert len(hook.requests) == 2
+
+
+def test_webhook_secrets_setting_and_bad_urls(tmp_path):
+    with receiver() as hook, TestClient(_app(tmp_path, api_keys=[], webhook_secrets=["s3cret"])) as client:
+        job = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [1.0]}).json()
+        assert _callback_state(client, job["id"], headers={})["state"] == "delivered"
+        body = hook.requests[0]["body"]
+        assert hook.requests[0]["headers"]["X-Plantsolve-Signature"] == \
+            "sha256=" + hmac.new(b"s3cret", body, hashlib.sha256).hexdigest()
+        for bad in ("ftp://host/x", "not a url", "/relative"):
+            refused = client.post("/v1/test-compute/jobs", params={"callback_url": bad}, json={"values": [1.0]})
+            assert refused.status_code == 422 and refused.json()["errors"][0]["loc"] == ["query", "callback_url"]
+    with TestClient(create_app(service_settings(tmp_path / "plain"))) as client:  # no keys, no secrets: unsignable
+        refused = client.post("/v1/test-compute/jobs", params={"callback_url": "http://127.0.0.1:9/x"},
+                              json={"values": [1.0]})
+        assert refused.status_code == 422 and "WEBHOOK_SECRETS" in refused.json()["detail"]
+        assert client.get("/v1/jobs").json()["items"] == []
+
+
+def test_a_slow_receiver_does_not_hold_up_the_jobs(tmp_path):
+    with receiver(delay=3.0) as hook, TestClient(_app(tmp_path, embedded_workers=1)) as client:
+        first = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [1.0]},
+                            headers=ALICE).json()
+        wait_for(client, first["id"], headers=ALICE)
+        deadline = time.monotonic() + 10
+        while not hook.requests:  # the delivery has started and hangs in the receiver
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        started = time.monotonic()
+        second = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers=ALICE).json()
+        assert wait_for(client, second["id"], headers=ALICE)["status"] == "succeeded"
+        assert time.monotonic() - started < 2.5  # the only job slot was free while the webhook waited
+        assert client.get(f"/v1/jobs/{first['id']}", headers=ALICE).json()["callback"]["state"] == "pending"
+        assert _callback_state(client, first["id"])["state"] == "delivered"
