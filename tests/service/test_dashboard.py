@@ -272,3 +272,13 @@ def test_pretty_json_reads_back_and_keeps_number_lists_on_one_line():
     text = pretty({"points": [[0.0, 1.5, -2.0], [1, 2, 3]], "name": "a\"b", "empty": {}, "none": []})
     assert '[0.0, 1.5, -2.0]' in text and '"name": "a\\"b"' in text and '"empty": {}' in text
     assert json.loads(text)["points"][1] == [1, 2, 3]
+
+
+def test_a_job_page_shows_its_completion_webhook(keyed):
+    alice = {"Authorization": "Bearer key-a"}
+    job = keyed.post("/v1/test-compute/jobs", params={"callback_url": "http://127.0.0.1:9/hook"}, json={"values": [1.0]},
+                     headers=alice).json()
+    wait_for(keyed, job["id"], headers=alice)
+    page = keyed.get(f"/dashboard/jobs/{job['id']}", headers=alice).text
+    assert "completion webhook" in page and 'title="http://127.0.0.1:9/hook"' in page
+    assert "completion webhook" not in keyed.get(f"/dashboard/jobs/{_submit(keyed, [1.0], alice)['id']}", headers=alice).text
