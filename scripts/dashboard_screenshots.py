@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 import tempfile
 import time
@@ -80,6 +81,7 @@ def main() -> None:
     if reason:
         sys.exit(f"cannot take screenshots: {reason}")
     args.out.mkdir(parents=True, exist_ok=True)
+    logging.getLogger("plantsolve").setLevel(logging.WARNING)  # the jobs' log lines are not what this prints
     with tempfile.TemporaryDirectory() as data:
         app = create_app(AppSettings(_env_file=None, data_dir=Path(data), embedded_mode="thread"))
         with browser.serve(app) as base, browser.chromium() as driver, httpx.Client(base_url=base, timeout=30) as api:
