@@ -173,3 +173,27 @@ def test_the_stream_of_every_job_shows_only_the_callers_jobs(tenants):
             if data["status"] == "succeeded":
                 break
     assert set(received) == {mine["id"]}
+
+
+def test_a_stream_stops_reading_the_database_when_its_client_goes_away(tmp_path):
+    import httpx
+
+    from tests.support.live import live_server
+
+    app = create_app(fast_events(tmp_path), run_jobs=False)  # the job stays queued: the stream would never end
+    polls: list[float] = []
+    read_state = app.state.ctx.repo.state
+    app.state.ctx.repo.state = lambda job_id: (polls.append(time.monotonic()), read_state(job_id))[1]
+    with live_server(app) as url:
+        job = httpx.post(f"{url}/v1/test-compute/jobs", json={"values": [1.0]}).json()
+        with httpx.stream("GET", f"{url}/v1/jobs/{job['id']}/events") as response:
+            lines = response.iter_lines()  # kept open: leaving a for loop early would close the connection
+            while not next(lines).startswith("data:"):
+                pass
+            time.sleep(0.3)
+            assert polls  # it polls while the client is connected
+        # the with block closed the connection
+        time.sleep(0.3)  # the server notices the closed connection
+        settled = len(polls)
+        time.sleep(0.5)
+        assert len(polls) == settled  # and stopped after the client left
