@@ -2,8 +2,10 @@
 
 With ``API_KEYS`` set, every ``/v1`` call, ``/metrics``, the dashboard and (with ``PROTECT_DOCS``) the docs need
 ``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``, which sets
-an HTTP-only, same-site cookie honoured for reads (GET/HEAD) only, so a cookie cannot submit or
-cancel on a user's behalf. Each key is a tenant: an entry ``name:key`` names it, a bare ``key`` is
+an HTTP-only, same-site cookie honoured for reads (GET/HEAD) and for the dashboard's own forms
+(POST under ``/dashboard/``), never for a ``/v1`` write. A dashboard form must also carry the token
+:func:`form_token` derives from the key (a page of another site cannot know it) and must not come
+from another site (``Sec-Fetch-Site``); the cookie is ``SameSite=Strict`` besides. Each key is a tenant: an entry ``name:key`` names it, a bare ``key`` is
 named by the first 16 hex digits of its SHA-256. Jobs belong to the tenant that created them; keys
 in ``ADMIN_KEYS`` see every tenant's jobs. Without keys there is one anonymous tenant (``""``).
 """
@@ -72,12 +74,31 @@ def _token(scope: Scope) -> str | None:
     scheme, _, token = header.partition(" ")
     if scheme.lower() == "bearer" and token.strip():
         return token.strip()
-    if scope.get("method") in ("GET", "HEAD"):
+    if scope.get("method") in ("GET", "HEAD") or dashboard_form(scope):
         for part in headers.get(b"cookie", b"").decode("latin-1").split(";"):
             name, _, value = part.strip().partition("=")
             if name == COOKIE and value:
                 return value
     return None
+
+
+def dashboard_form(scope: Scope) -> bool:
+    """A POST of one of the dashboard's forms (the login form needs no key)."""
+    path = scope.get("path", "")
+    return scope.get("method") == "POST" and path.startswith("/dashboard/") and not path.startswith("/dashboard/log")
+
+
+def form_token(key: str) -> str:
+    """The anti-forgery token of the dashboard's forms for a browser logged in with ``key``:
+    stateless (any API process can check it) and unknowable without the key."""
+    return hmac.new(key.encode(), b"plantsolve dashboard form", hashlib.sha256).hexdigest()
+
+
+def cookie_key(request: Request) -> str | None:
+    """The key of the login cookie, when the caller is authenticated by it (not by a header)."""
+    if request.headers.get("authorization"):
+        return None
+    return request.cookies.get(COOKIE) or None
 
 
 def is_loopback(host: str) -> bool:

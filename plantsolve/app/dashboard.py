@@ -1,43 +1,145 @@
-"""A small server-rendered dashboard: job counts and the latest jobs, refreshed every 5 s."""
+"""The server-rendered dashboard: job list (filters, paging, live), a page per job, a submit form
+per kind, and the login that sets the browser's cookie.
+
+Pages are Jinja2 templates (``templates/``) with one small script (``static/dashboard.js``) that
+follows the job events (``/v1/jobs/events``, ``/v1/jobs/{id}/events``) and falls back to polling.
+The form posts go through the same :class:`JobService` calls as ``POST /v1/<kind>/jobs``; a
+browser authorised by its cookie must send the form's anti-forgery token (see ``auth``).
+"""
 
 from __future__ import annotations
 
-from html import escape
+import hmac
+import uuid
+from pathlib import Path
+from typing import Annotated, Any
+from urllib.parse import urlencode
 
-from fastapi import APIRouter, Depends, Form, Request
-from fastapi.responses import HTMLResponse, RedirectResponse
+from fastapi import APIRouter, Depends, FastAPI, Form, Query, Request
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from fastapi.staticfiles import StaticFiles
+from fastapi.templating import Jinja2Templates
+from starlette.concurrency import run_in_threadpool
+from starlette.datastructures import UploadFile
 
-from plantsolve.app.auth import COOKIE, Principal, principal, require_api_key
-from plantsolve.store.repository import as_utc
+from plantsolve.app import dashboard_views as views
+from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
+from plantsolve.app.jobs.service import JobService, decode_cursor, encode_cursor
+from plantsolve.app.problems import NotFound, PayloadTooLarge, ProblemError, Unprocessable, field_problem
+from plantsolve.solvers.base import SolverSpec
+from plantsolve.store.models import JOB_STATUSES
 
-_STYLE = """
-body{font-family:system-ui,sans-serif;margin:2rem;color:#222}
-table{border-collapse:collapse;width:100%}td,th{padding:.3rem .6rem;border-bottom:1px solid #ddd;text-align:left}
-.succeeded{color:#17692c}.failed{color:#b00020}.running{color:#0b5cad}.cancelled{color:#777}
-.counts span{margin-right:1.5rem}code{font-size:.85em}
-"""
+HERE = Path(__file__).parent
+STATIC = "/dashboard-static"  # outside /dashboard/: the login page needs its style before any key
+PAGE_SIZE = 25
+
+Kind = Annotated[str | None, Query(max_length=64)]
+Status = Annotated[str | None, Query(max_length=16)]
+Text = Annotated[str | None, Query(max_length=200, description="text in the id, kind, message or report")]
+Cursor = Annotated[str | None, Query(max_length=512, pattern=r"^[A-Za-z0-9_-]*$")]
+Limit = Annotated[int, Query(ge=1, le=200)]
+
+templates = Jinja2Templates(directory=HERE / "templates")
+templates.env.globals.update(static=STATIC, statuses=JOB_STATUSES)
+templates.env.filters.update(when=views.when, seconds=views.seconds, pretty=views.pretty)
 
 
-_LOGIN = """<!doctype html><html><head><meta charset='utf-8'><title>plantsolve: log in</title><style>{style}</style>
-</head><body><h1>plantsolve</h1><form method='post' action='/dashboard/login'><p>{message}</p>
-<label>API key <input type='password' name='key' autocomplete='current-password' autofocus></label>
-<button type='submit'>Log in</button></form></body></html>"""
+class Forbidden(ProblemError):
+    status, title, slug = 403, "Forbidden", "forbidden"
+
+
+def install_dashboard(app: FastAPI) -> None:
+    app.include_router(build_dashboard())
+    app.mount(STATIC, StaticFiles(directory=HERE / "static"), name="dashboard-static")
+
+
+def _service(request: Request) -> JobService:
+    return request.app.state.jobs
+
+
+def _page(request: Request, name: str, status_code: int = 200, **context: Any) -> HTMLResponse:
+    context.setdefault("kinds", sorted(request.app.state.ctx.kinds))
+    context.setdefault("keys", bool(request.app.state.keys))
+    return templates.TemplateResponse(request, name, context, status_code=status_code)
+
+
+def _not_found(request: Request, error: NotFound) -> HTMLResponse:
+    return _page(request, "error.html", 404, title="Not found", message=error.detail)
+
+
+def _listing(request: Request, kind: str | None, status: str | None, q: str | None, cursor: str | None,
+             limit: int) -> dict[str, Any]:
+    """One page of the list (the repository's cursor paging) with the counts by status."""
+    service, who = _service(request), principal(request)
+    kind, status, q = kind or None, status or None, (q or "").strip() or None
+    after = decode_cursor(cursor) if cursor else None
+    jobs = service.ctx.repo.list(kind=kind, status=status, text=q, after=after, limit=limit + 1, owner=who.sees,
+                                 brief=True)
+    more = len(jobs) > limit
+    jobs = jobs[:limit]
+    filters = {"kind": kind or "", "status": status or "", "q": q or ""}
+    # the stream filters by kind and status only (the text is applied when the rows reload); no empty values
+    stream = {name: value for name, value in (("kind", kind), ("status", status)) if value}
+    return {
+        "rows": [views.row(service.view(job, with_artifacts=False)) for job in jobs],
+        "counts": service.ctx.repo.count_by_status(owner=who.sees),
+        "filters": filters,
+        "cursor": cursor or "",
+        "next_cursor": encode_cursor(jobs[-1]) if more and jobs else None,
+        "limit": limit,
+        "embedded": service.ctx.settings.embedded,
+        "events": "/v1/jobs/events" + (f"?{urlencode(stream)}" if stream else ""),
+    }
+
+
+def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
+    service = _service(request)
+    job = service.get(job_id, principal(request).sees)
+    view = service.view(job)
+    artifacts = view.artifacts
+    return {
+        "job": view,
+        "progress": views.progress_text(view.status, view.progress.fraction),
+        "finished": views.finished(view.status),
+        "warnings": view.report.warnings if view.report is not None else [],
+        "plots": views.plots(artifacts),
+        "artifacts": artifacts,
+        "input": views.input_view(job),
+        "summary": views.result_summary(job.result) if job.status == "succeeded" else [],
+        "token": _token_for(request),
+    }
+
+
+def _token_for(request: Request) -> str:
+    key = cookie_key(request)
+    return form_token(key) if key else ""
+
+
+def _check_form(request: Request, token: str) -> None:
+    """A dashboard form post must come from the dashboard: not from another site, and, when the
+    cookie authorises it, with the token only a page of this service knows."""
+    if request.headers.get("sec-fetch-site", "same-origin") in ("cross-site", "same-site"):
+        raise Forbidden("Dashboard forms are accepted from the dashboard only.")
+    key = cookie_key(request)
+    if key and request.app.state.keys and not hmac.compare_digest(token.encode(), form_token(key).encode()):
+        raise Forbidden("The form's token is missing or stale: reload the page and send it again.")
 
 
 def build_dashboard() -> APIRouter:
     router = APIRouter(include_in_schema=False)
+    authorised = [Depends(require_api_key)]
 
     @router.get("/dashboard/login", response_class=HTMLResponse)
-    def login_form() -> HTMLResponse:
-        return HTMLResponse(_LOGIN.format(style=_STYLE, message="This service needs an API key."))
+    def login_form(request: Request) -> HTMLResponse:
+        return _page(request, "login.html", message="This service needs an API key.")
 
     @router.post("/dashboard/login")
-    def login(request: Request, key: str = Form(default="", max_length=512)) -> HTMLResponse:
+    def login(request: Request, key: str = Form(default="", max_length=512)) -> Response:
         keys = request.app.state.keys
         if keys and keys.find(key) is None:
-            return HTMLResponse(_LOGIN.format(style=_STYLE, message="That key is not valid."), status_code=401)
+            return _page(request, "login.html", 401, message="That key is not valid.")
         response = RedirectResponse("/dashboard", status_code=303)
-        # HTTP-only and same-site: scripts cannot read it, other sites cannot send it; reads only (see auth)
+        # HTTP-only and same-site: scripts cannot read it, other sites cannot send it (see auth)
         response.set_cookie(COOKIE, key, httponly=True, samesite="strict", secure=request.url.scheme == "https",
                             path="/")
         return response
@@ -48,31 +150,96 @@ def build_dashboard() -> APIRouter:
         response.delete_cookie(COOKIE, path="/")
         return response
 
-    @router.get("/dashboard", response_class=HTMLResponse, dependencies=[Depends(require_api_key)])
-    def dashboard(request: Request, kind: str | None = None, status: str | None = None) -> HTMLResponse:
-        ctx = request.app.state.ctx
-        who: Principal = principal(request)
-        counts = ctx.repo.count_by_status(owner=who.sees)
-        jobs = ctx.repo.list(kind=kind or None, status=status or None, limit=50, owner=who.sees)
-        rows = []
-        for job in jobs:
-            created = as_utc(job.created_at).strftime("%Y-%m-%d %H:%M:%S")
-            run = f"{job.run_seconds:.2f} s" if job.run_seconds is not None else ""
-            message = (job.report or {}).get("message") or job.progress_message or ""
-            link = f"/v1/jobs/{job.id}"
-            rows.append(
-                f"<tr><td><a href='{link}'><code>{job.id}</code></a></td><td>{escape(job.kind)}</td>"
-                f"<td class='{job.status}'>{job.status}</td><td>{job.progress:.0%}</td><td>{job.attempt}/{job.max_attempts}</td>"
-                f"<td>{created}</td><td>{run}</td><td>{escape(message[:160])}</td>"
-                f"<td>{'<a href=' + chr(39) + link + '/result' + chr(39) + '>result</a>' if job.status == 'succeeded' else ''}</td></tr>"
-            )
-        count_html = "".join(f"<span class='{s}'>{s}: <b>{counts.get(s, 0)}</b></span>" for s in ("queued", "running", "succeeded", "failed", "cancelled"))
-        page = f"""<!doctype html><html><head><meta charset='utf-8'><meta http-equiv='refresh' content='5'>
-<title>plantsolve jobs</title><style>{_STYLE}</style></head><body>
-<h1>plantsolve</h1><p class='counts'>{count_html}</p>
-<p>Mode: {'embedded (in-process pool)' if ctx.settings.embedded else 'scaled (Celery)'} · <a href='/docs'>API docs</a></p>
-<table><tr><th>job</th><th>kind</th><th>status</th><th>progress</th><th>attempt</th><th>created (UTC)</th><th>run</th><th>message</th><th></th></tr>
-{''.join(rows) or "<tr><td colspan='9'>No jobs yet.</td></tr>"}</table></body></html>"""
-        return HTMLResponse(page)
+    @router.get("/dashboard", response_class=HTMLResponse, dependencies=authorised)
+    def dashboard(request: Request, kind: Kind = None, status: Status = None, q: Text = None, cursor: Cursor = None,
+                  limit: Limit = PAGE_SIZE) -> HTMLResponse:
+        return _page(request, "jobs.html", **_listing(request, kind, status, q, cursor, limit))
+
+    @router.get("/dashboard/rows", response_class=HTMLResponse, dependencies=authorised)
+    def rows(request: Request, kind: Kind = None, status: Status = None, q: Text = None, cursor: Cursor = None,
+             limit: Limit = PAGE_SIZE) -> HTMLResponse:
+        """The list's live part alone: the script swaps it in when jobs change."""
+        return _page(request, "_jobs_live.html", **_listing(request, kind, status, q, cursor, limit))
+
+    @router.get("/dashboard/jobs/{job_id}", response_class=HTMLResponse, dependencies=authorised)
+    def job_page(request: Request, job_id: uuid.UUID) -> HTMLResponse:
+        try:
+            return _page(request, "job.html", **_job_context(request, job_id))
+        except NotFound as error:
+            return _not_found(request, error)
+
+    @router.get("/dashboard/jobs/{job_id}/detail", response_class=HTMLResponse, dependencies=authorised)
+    def job_detail(request: Request, job_id: uuid.UUID) -> HTMLResponse:
+        """The job page's body alone: the script swaps it in when the job's status changes."""
+        try:
+            return _page(request, "_job_detail.html", **_job_context(request, job_id))
+        except NotFound as error:
+            return _not_found(request, error)
+
+    @router.post("/dashboard/jobs/{job_id}/cancel", dependencies=authorised)
+    async def cancel(request: Request, job_id: uuid.UUID, token: str = Form(default="", max_length=128)) -> Response:
+        _check_form(request, token)
+        service = _service(request)
+        try:
+            await run_in_threadpool(service.cancel, job_id, principal(request).sees)
+        except NotFound as error:
+            return _not_found(request, error)
+        except ProblemError:  # already finished: the page shows how
+            pass
+        return RedirectResponse(f"/dashboard/jobs/{job_id}", status_code=303)
+
+    @router.get("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
+    def submit_form(request: Request, kind: str) -> HTMLResponse:
+        try:
+            spec = _service(request).spec(kind)
+        except NotFound as error:
+            return _not_found(request, error)
+        return _page(request, "submit.html", **_form_context(request, spec))
+
+    @router.post("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
+    async def submit(request: Request, kind: str) -> Response:
+        service, who = _service(request), principal(request)
+        try:
+            spec = service.spec(kind)
+        except NotFound as error:
+            return _not_found(request, error)
+        settings = request.app.state.settings
+        form = await request.form(max_files=1, max_fields=6, max_part_size=min(settings.max_body_bytes, 16 * 1024 * 1024))
+        source = str(form.get("source") or "json")
+        options, body = str(form.get("options") or ""), str(form.get("body") or "")
+        try:
+            _check_form(request, str(form.get("token") or ""))
+            if source == "upload":
+                upload = form.get("file")
+                if not isinstance(upload, UploadFile) or not upload.filename:
+                    raise Unprocessable("Choose a file to upload.", errors=[field_problem(["file"], "no file chosen", "missing")])
+                if upload.size is not None and upload.size > settings.max_upload_bytes:
+                    raise PayloadTooLarge(f"The file has {upload.size} bytes; the limit is {settings.max_upload_bytes} bytes.")
+                content = await upload.read()
+                submitted = await run_in_threadpool(
+                    lambda: service.submit_upload(kind, upload.filename, content, options.strip() or None, None, owner=who.owner))
+            else:
+                submitted = await run_in_threadpool(
+                    lambda: service.submit_json(kind, body.encode(), None, owner=who.owner))
+        except ProblemError as error:
+            problem = error.to_problem(instance=str(request.url.path))
+            sent = {"options": options} if source == "upload" else {"body": body}  # the other form keeps its example
+            sent["source"] = source
+            return _page(request, "submit.html", error.status, **_form_context(request, spec, problem=problem, **sent))
+        return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
     return router
+
+
+def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:
+    """The submit page: both forms prefilled from the kind's example (its options for an upload)."""
+    example = spec.example() if spec.example is not None else None
+    options = example.get("options") if isinstance(example, dict) else None
+    context = {
+        "spec": spec,
+        "token": _token_for(request),
+        "problem": None,
+        "options": views.pretty(options) if options else "{}",
+        "body": views.pretty(example) if example is not None else "",
+    }
+    return {**context, **values}

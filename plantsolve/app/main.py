@@ -14,7 +14,7 @@ from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
-from plantsolve.app.dashboard import build_dashboard
+from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
 from plantsolve.app.metrics import build_metrics
 from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router
@@ -96,7 +96,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
-    app.include_router(build_dashboard())
+    install_dashboard(app)
     app.include_router(build_metrics(ctx.repo, ctx.kinds))
     app.include_router(build_unknown_kind_router(ctx.kinds))
     install_docs(app)

@@ -14,7 +14,7 @@ from datetime import datetime, timedelta, timezone
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import and_, case, delete, func, or_, select, update
+from sqlalchemy import String, Text, and_, case, cast, delete, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -139,10 +139,17 @@ class JobRepository:
         after: tuple[datetime, uuid.UUID] | None = None,
         limit: int = 50,
         owner: str | None = None,
+        text: str | None = None,
+        brief: bool = False,
     ) -> list[Job]:
         """Newest first; ``after`` is the (created_at, id) of the last job of the previous page; ``owner``
-        None lists every tenant's jobs."""
+        None lists every tenant's jobs; ``text`` keeps jobs whose id, kind, progress message or report
+        contains it (case-insensitive); ``brief`` leaves out inputs and results."""
         query = select(Job).order_by(Job.created_at.desc(), Job.id.desc()).limit(limit)
+        if brief:
+            query = query.options(*BRIEF)
+        if text:
+            query = query.where(_contains_text(text))
         if owner is not None:
             query = query.where(Job.owner == owner)
         if kind:
@@ -443,6 +450,22 @@ JOBS = Job.__table__
 SWEEP_BATCH = 1000
 STATE = (Job.id, Job.kind, Job.status, Job.attempt, Job.progress, Job.progress_message)
 BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
+
+
+def _contains_text(text: str):
+    """Substring match, case-insensitive, with LIKE's wildcards taken literally. The id is compared
+    without dashes: SQLite stores a UUID as 32 hex digits, PostgreSQL prints it with dashes."""
+    def pattern(value: str) -> str:
+        escaped = value.lower().replace("\\", "\\\\").replace("%", "\\%").replace("_", "\\_")
+        return f"%{escaped}%"
+
+    like, bare = pattern(text), pattern(text.replace("-", ""))
+    return or_(
+        func.lower(func.replace(cast(Job.id, String), "-", "")).like(bare, escape="\\"),
+        func.lower(Job.kind).like(like, escape="\\"),
+        func.lower(Job.progress_message).like(like, escape="\\"),
+        func.lower(cast(Job.report, Text)).like(like, escape="\\"),
+    )
 
 
 def _apply_defaults(job: Job) -> None:

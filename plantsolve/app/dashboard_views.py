@@ -1,0 +1,152 @@
+"""What the dashboard's templates show of a job: plain values computed from the API's job view,
+so a page and the JSON a browser receives live (``GET /v1/jobs/{id}``, its events) agree."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from plantsolve.schemas.jobs import ArtifactInfo, JobView
+from plantsolve.store.models import FINISHED, Job
+
+# larger inputs are offered as a download instead of being printed into the page
+INLINE_INPUT_CHARS = 60_000
+SUMMARY_ROWS = 40
+
+
+def when(value: datetime | None) -> str:
+    return value.strftime("%Y-%m-%d %H:%M:%S") if value else ""
+
+
+def seconds(value: float | None) -> str:
+    if value is None:
+        return ""
+    return f"{value:.2f} s" if value < 120 else f"{value / 60:.1f} min"
+
+
+def progress_text(status: str, fraction: float) -> str:
+    """The progress column: a share only while running. A running job whose solver is through
+    (1.0) is still storing its result: it says so instead of '100 %'."""
+    if status == "queued":
+        return "waiting"
+    if status == "running":
+        return "storing result" if fraction >= 1.0 else f"{fraction:.0%}"
+    return {"succeeded": "done", "failed": "failed", "cancelled": "cancelled"}[status]
+
+
+def warning_count(view: JobView) -> int:
+    return len(view.report.warnings) if view.report is not None else 0
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of the job list."""
+
+    id: str
+    kind: str
+    status: str
+    fraction: float
+    progress: str
+    warnings: int
+    message: str
+    attempt: str
+    created: str
+    run: str
+
+
+def row(view: JobView) -> Row:
+    report = view.report
+    message = (report.message if report is not None and report.message else "") or view.progress.message
+    if view.status in ("queued", "running"):
+        message = view.progress.message
+    return Row(
+        id=str(view.id),
+        kind=view.kind,
+        status=view.status,
+        fraction=view.progress.fraction,
+        progress=progress_text(view.status, view.progress.fraction),
+        warnings=warning_count(view),
+        message=message[:200],
+        attempt=f"{view.attempt}/{view.max_attempts}",
+        created=when(view.timings.created_at),
+        run=seconds(view.timings.run_seconds),
+    )
+
+
+def pretty(value: Any, indent: str = "") -> str:
+    """JSON for people: objects one member a line, a list of numbers or strings on one line (a point
+    [x, y, z] stays readable, and a scan's 10,000 points do not become 30,000 lines)."""
+    inner = indent + "  "
+    if isinstance(value, dict) and value:
+        members = (f"{inner}{json.dumps(str(k), ensure_ascii=False)}: {pretty(v, inner)}" for k, v in value.items())
+        return "{\n" + ",\n".join(members) + "\n" + indent + "}"
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        return "[\n" + ",\n".join(inner + pretty(v, inner) for v in value) + "\n" + indent + "]"
+    return json.dumps(value, ensure_ascii=False, allow_nan=True, separators=(", ", ": "))
+
+
+def result_summary(result: Any) -> list[tuple[str, str]]:
+    """The result's scalar fields (two levels deep) for people; lists and objects by their size.
+    The full result is one link away."""
+    rows: list[tuple[str, str]] = []
+
+    def describe(value: Any) -> str:
+        if value is None:
+            return "—"
+        if isinstance(value, float):
+            return f"{value:.6g}"
+        if isinstance(value, list):
+            if 0 < len(value) <= 4 and all(isinstance(v, (int, float, str)) for v in value):
+                return "[" + ", ".join(describe(v) for v in value) + "]"
+            return f"list of {len(value)}"
+        if isinstance(value, dict):
+            return f"object with {len(value)} field(s)"
+        return str(value)
+
+    if not isinstance(result, dict):
+        return [("result", describe(result))]
+    for key, value in result.items():
+        if key == "report":  # shown in full on its own
+            continue
+        if isinstance(value, dict) and 0 < len(value) <= 12:
+            rows += [(f"{key}.{sub}", describe(v)) for sub, v in value.items()]
+        else:
+            rows.append((key, describe(value)))
+    return rows[:SUMMARY_ROWS]
+
+
+@dataclass(frozen=True)
+class InputView:
+    """How the job's input is shown: JSON printed, or the uploaded file's name with its options."""
+
+    kind: str  # json | json_file | upload
+    text: str | None  # pretty JSON when small enough to print
+    filename: str | None
+    options: str | None
+    url: str
+
+
+def input_view(job: Job) -> InputView:
+    url = f"/v1/jobs/{job.id}/input"
+    if job.input_kind == "json":
+        text = pretty(job.input)
+        return InputView("json", text if len(text) <= INLINE_INPUT_CHARS else None, None, None, url)
+    if job.input_kind == "upload":  # /input describes an upload; its bytes are at /input/file
+        options = pretty(job.input_options) if job.input_options else None
+        return InputView("upload", None, job.input_filename, options, f"{url}/file")
+    return InputView("json_file", None, "request.json", None, url)
+
+
+def plots(artifacts: list[ArtifactInfo]) -> list[ArtifactInfo]:
+    """The images to show inline: every raster image, and a vector one only when no raster image
+    has its name (kinds write each plot as PNG and SVG; the SVG is for downloading)."""
+    raster = [a for a in artifacts if a.media_type in ("image/png", "image/jpeg")]
+    stems = {a.name.rsplit(".", 1)[0] for a in raster}
+    vector = [a for a in artifacts if a.media_type == "image/svg+xml" and a.name.rsplit(".", 1)[0] not in stems]
+    return raster + vector
+
+
+def finished(status: str) -> bool:
+    return status in FINISHED

@@ -1,0 +1,149 @@
+"""The dashboard in a real headless browser against the real service (uvicorn, SQLite in tmp_path):
+log in, submit a perfmap job through the form, watch its page reach 'succeeded' without a reload,
+find the plots loaded, then the list with the job's warning count, a filter and a live new row.
+
+Needs Debian's ``chromium`` and ``chromium-driver`` (``.ci/run`` installs them); skipped with the
+reason when they are missing, except with CI=true, where that is a failure."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+
+import httpx
+import pytest
+
+from plantsolve.app.main import create_app
+from plantsolve.solvers.kinds import KINDS
+from tests.conftest import REPO, service_settings
+from tests.support import browser
+
+KEY = "key-a"
+FAN_MAP = REPO / "examples" / "perfmap" / "n3_fan_map.csv"
+
+
+@pytest.fixture
+def site(tmp_path):
+    reason = browser.missing()
+    if reason and os.environ.get("CI", "").lower() == "true":
+        pytest.fail(f"CI=true: the dashboard browser test must run, but {reason}")
+    if reason:
+        pytest.skip(f"no headless browser: {reason}")
+    app = create_app(service_settings(tmp_path, api_keys=[f"alice:{KEY}"]))
+    with browser.serve(app) as base, browser.chromium() as driver:
+        driver.set_page_load_timeout(20)
+        yield app, base, driver
+
+
+def _has_route(app, path: str) -> bool:
+    return path in app.openapi()["paths"]
+
+
+def test_submit_watch_and_list_in_a_browser(site):
+    from selenium.common.exceptions import StaleElementReferenceException
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    app, base, driver = site
+    wait = WebDriverWait(driver, 30, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
+    api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
+    other = api.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]}).json()  # a second kind for the filter
+
+    # the cookie login, then the form: the upload with the example's options (prefilled)
+    driver.get(f"{base}/dashboard")
+    assert driver.current_url.endswith("/dashboard/login")
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/submit/perfmap")
+    form = driver.find_element(By.ID, "upload-form")
+    assert json.loads(form.find_element(By.NAME, "options").get_attribute("value")) == KINDS["perfmap"].example()["options"]
+    form.find_element(By.NAME, "file").send_keys(str(FAN_MAP))
+    form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
+
+    wait.until(lambda d: "/dashboard/jobs/" in d.current_url)
+    job_id = re.search(r"/dashboard/jobs/([0-9a-f-]{36})", driver.current_url).group(1)
+    driver.execute_script("window.sameDocument = true;")  # gone if the page were reloaded
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, "#job-detail [data-field=status]").text == "succeeded")
+    assert driver.execute_script("return window.sameDocument === true;"), "the page reloaded instead of updating"
+    transport = driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport")
+    expected = "events" if _has_route(app, "/v1/jobs/{job_id}/events") else "polling"
+    assert transport == expected, f"followed by {transport!r}, expected {expected!r}"
+
+    view = api.get(f"/v1/jobs/{job_id}").json()
+    warnings = len(view["report"]["warnings"])
+    pngs = sorted(a["name"] for a in view["artifacts"] if a["media_type"] == "image/png")
+    assert warnings > 0 and pngs  # the fan map's non-monotone speed lines: the solver warns about them
+    wait.until(lambda d: d.execute_script(
+        "const imgs = [...document.querySelectorAll('.plots img')];"
+        "return imgs.length > 0 && imgs.every(i => i.complete && i.naturalWidth > 0);"))
+    shown = driver.execute_script("return [...document.querySelectorAll('.plots img')].map(i => i.alt).sort();")
+    assert shown == pngs
+    badge, items = driver.execute_script(
+        "return [document.querySelector('.headline .warn').textContent, document.querySelectorAll('#warnings li').length];")
+    assert f"{warnings} warnings" in badge and items == warnings
+
+    # the list: the job with its warning count, links to its page; a filter narrows it
+    driver.get(f"{base}/dashboard")
+    rows = _rows(driver)  # read at once: the script may swap the rows in again at any time
+    assert rows[job_id]["status"] == "succeeded" and rows[job_id]["warnings"].endswith(f"{warnings} warnings")
+    assert rows[job_id]["href"].endswith(f"/dashboard/jobs/{job_id}")
+    assert other["id"] in rows and rows[other["id"]]["warnings"] == ""
+    Select(driver.find_element(By.NAME, "kind")).select_by_value("perfmap")
+    driver.find_element(By.CSS_SELECTOR, "form.filters button").click()
+    wait.until(lambda d: "kind=perfmap" in d.current_url)
+    assert list(_rows(driver)) == [job_id]
+
+    # live: a job submitted elsewhere appears in the open, unfiltered list without a reload
+    driver.get(f"{base}/dashboard")
+    driver.execute_script("window.sameDocument = true;")
+    new = api.post("/v1/test-compute/jobs", json={"values": [3.0]}).json()
+    wait.until(lambda d: d.find_elements(By.CSS_SELECTOR, f'tr[data-job="{new["id"]}"][data-status="succeeded"]'))
+    assert driver.execute_script("return window.sameDocument === true;")
+    expected = "events" if _has_route(app, "/v1/jobs/events") else "polling"
+    assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == expected
+
+
+def _rows(driver) -> dict[str, dict[str, str]]:
+    """The list's rows by job id: status, warning badge and link."""
+    return driver.execute_script("""
+        const rows = {};
+        for (const row of document.querySelectorAll('tr[data-job]')) {
+            const warn = row.querySelector('[data-field=warnings]');
+            rows[row.dataset.job] = {status: row.querySelector('[data-field=status]').textContent,
+                                     warnings: warn ? warn.textContent.trim() : '', href: row.querySelector('a').href};
+        }
+        return rows;""")
+
+
+def _login(driver, base: str) -> None:
+    from selenium.webdriver.common.by import By
+
+    driver.get(f"{base}/dashboard/login")
+    driver.find_element(By.NAME, "key").send_keys(KEY)
+    driver.find_element(By.CSS_SELECTOR, "form.login button").click()
+
+
+def test_pages_poll_when_the_browser_has_no_event_stream(site):
+    """Without EventSource (or when the stream fails) the pages poll: a job's page every 2 s."""
+    from selenium.common.exceptions import StaleElementReferenceException
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = site
+    wait = WebDriverWait(driver, 20, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
+    driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": "delete window.EventSource;"})
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/submit/test-compute")
+    form = driver.find_element(By.ID, "json-form")
+    body = form.find_element(By.NAME, "body")
+    body.clear()
+    body.send_keys('{"values": [-1.0, 2.0], "seconds": 1.5}')
+    form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
+    wait.until(lambda d: "/dashboard/jobs/" in d.current_url)
+    driver.execute_script("window.sameDocument = true;")
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, "#job-detail [data-field=status]").text == "succeeded")
+    assert driver.execute_script("return window.sameDocument === true;")
+    assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == "polling"
+    assert "1 warning" in driver.find_element(By.CSS_SELECTOR, ".headline .warn").text
