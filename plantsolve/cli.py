@@ -29,9 +29,11 @@ def _settings():
 def cmd_serve(args: argparse.Namespace) -> int:
     import uvicorn
 
+    from plantsolve.app.auth import warn_if_exposed
     from plantsolve.app.main import create_app
 
     app = create_app()
+    warn_if_exposed(args.host, app.state.keys)
     # Everything imported so far (numpy, scipy, every solver kind) lives as long as the process: out of
     # the collector's sight, a full collection no longer walks it and stalls requests for tens of ms.
     gc.collect()

@@ -124,3 +124,25 @@ def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
     assert sorted(p.name for p in (tmp_path / "map_artifacts").iterdir()) == sorted(
         ["characteristics.png", "characteristics.svg", "envelopes.png", "envelopes.svg", "map.png", "map.svg",
          "curves.csv", "map.csv"])
+
+
+def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, caplog):
+    """`plantsolve serve --host 0.0.0.0` without API_KEYS says so before the first request arrives."""
+    import argparse
+
+    import uvicorn
+
+    from plantsolve import cli
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("API_KEYS", raising=False)
+    monkeypatch.setenv("DATA_DIR", str(tmp_path / "var"))
+    monkeypatch.setenv("EMBEDDED_MODE", "thread")
+    monkeypatch.setattr(cli.gc, "freeze", lambda: None)  # the test process's heap stays collectable
+    started = []
+    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: started.append(kw["host"]))
+    for host, warned in (("0.0.0.0", True), ("127.0.0.1", False)):
+        caplog.clear()
+        assert cli.cmd_serve(argparse.Namespace(host=host, port=0, log_level="warning")) == 0
+        assert ("API_KEYS is empty" in caplog.text) is warned
+    assert started == ["0.0.0.0", "127.0.0.1"]
