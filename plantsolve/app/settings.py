@@ -48,6 +48,11 @@ class AppSettings(WorkerSettings):
         description="Comma-separated 'tenant:secret' (or one bare secret for every tenant) signing the completion "
         "webhooks; a tenant without one gets hex(HMAC-SHA256(key=<its API key>, msg='plantsolve-webhook')).",
     )
+    webhook_private_targets: bool = Field(
+        default=False, description="Allow webhooks to loopback, private, link-local and other non-public addresses "
+        "(a receiver on the same host or network). Off: such a callback_url is refused at submission (an address "
+        "literal) or at delivery (a name that resolves to one), so a tenant cannot make the service call its "
+        "internal network.")
     webhook_max_attempts: int = Field(default=6, ge=1, le=50, description="Deliveries tried before a webhook is given up.")
     webhook_retry_seconds: float = Field(
         default=2.0, gt=0, le=3600, description="First retry delay of a webhook; doubled after each failed delivery."

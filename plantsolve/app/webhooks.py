@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import ipaddress
 import logging
+import socket
 import threading
 import uuid
 from concurrent.futures import ThreadPoolExecutor
@@ -68,8 +70,34 @@ class WebhookSecrets:
         return None
 
 
-def check_callback_url(url: str, owner: str, secrets: WebhookSecrets) -> str:
-    """The URL as stored; a 422 naming ``callback_url`` when it is unusable or cannot be signed."""
+def _public(address: str) -> bool:
+    ip = ipaddress.ip_address(address.split("%", 1)[0])
+    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
+        ip = ip.ipv4_mapped
+    return ip.is_global and not ip.is_multicast
+
+
+def non_public_address(host: str, port: int | None) -> str | None:
+    """The first address ``host`` stands for that is not a public unicast one (loopback, private,
+    link-local, reserved), or None. A name is resolved, so a public-looking name that points
+    inside is caught too."""
+    try:
+        return None if _public(host) else host
+    except ValueError:
+        pass  # a name, not an address literal
+    try:
+        infos = socket.getaddrinfo(host, port or 443, type=socket.SOCK_STREAM)
+    except OSError:
+        return None  # unresolvable: the delivery itself fails and is retried
+    for *_, sockaddr in infos:
+        if not _public(str(sockaddr[0])):
+            return str(sockaddr[0])
+    return None
+
+
+def check_callback_url(url: str, owner: str, secrets: WebhookSecrets, allow_private: bool = False) -> str:
+    """The URL as stored; a 422 naming ``callback_url`` when it is unusable or cannot be signed, or
+    (unless ``allow_private``) names a non-public address literal."""
     parts = urlsplit(url)
     if parts.scheme not in ("http", "https") or not parts.hostname:
         raise Unprocessable("callback_url must be an absolute http or https URL.",
@@ -77,6 +105,16 @@ def check_callback_url(url: str, owner: str, secrets: WebhookSecrets) -> str:
     if secrets.secret_for(owner) is None:
         raise Unprocessable("callback_url needs a signing secret: set WEBHOOK_SECRETS (or API_KEYS) on the service.",
                             errors=[field_problem(["query", "callback_url"], "no webhook secret configured")])
+    if not allow_private:
+        try:
+            literal = not _public(parts.hostname)
+        except ValueError:
+            literal = False  # a name: checked when it is resolved for the delivery
+        if literal:
+            raise Unprocessable(
+                "callback_url points at a non-public address; the service does not call its own network "
+                "(WEBHOOK_PRIVATE_TARGETS=true allows it).",
+                errors=[field_problem(["query", "callback_url"], f"{parts.hostname} is not a public address")])
     return url
 
 
@@ -129,6 +167,14 @@ class WebhookNotifier:
         if secret is not None:
             headers[SIGNATURE_HEADER] = signature(secret, body)
         error = None
+        target = urlsplit(job.callback_url)
+        inside = None if self.settings.webhook_private_targets else non_public_address(target.hostname or "",
+                                                                                         target.port)
+        if inside is not None:
+            self.repo.record_callback(job_id, attempt, state="failed",
+                                      error=f"refused: {target.hostname} resolves to the non-public address {inside}")
+            log.warning("webhook of job %s refused: %s resolves to %s", job_id, target.hostname, inside)
+            return False
         try:
             response = self._http.post(job.callback_url, content=body, headers=headers)
             if not 200 <= response.status_code < 300:

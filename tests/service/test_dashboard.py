@@ -174,7 +174,8 @@ def test_result_summary_lists_scalars_and_sizes():
 
 @pytest.fixture
 def keyed(tmp_path):
-    with TestClient(create_app(service_settings(tmp_path, api_keys=["alice:key-a", "bob:key-b"]))) as client:
+    with TestClient(create_app(service_settings(tmp_path, api_keys=["alice:key-a", "bob:key-b"],
+                                                      webhook_private_targets=True))) as client:
         yield client
 
 

@@ -61,7 +61,8 @@ def receiver(**kwargs):
 
 
 def _app(tmp_path, **overrides):
-    values = dict(api_keys=["alice:key-a"], webhook_poll_seconds=0.05, webhook_retry_seconds=0.2)
+    values = dict(api_keys=["alice:key-a"], webhook_poll_seconds=0.05, webhook_retry_seconds=0.2,
+                  webhook_private_targets=True)  # the receiver listens on 127.0.0.1
     values.update(overrides)
     return create_app(service_settings(tmp_path, **values))
 
@@ -161,3 +162,22 @@ def test_a_slow_receiver_does_not_hold_up_the_jobs(tmp_path):
         assert time.monotonic() - started < 2.5  # the only job slot was free while the webhook waited
         assert client.get(f"/v1/jobs/{first['id']}", headers=ALICE).json()["callback"]["state"] == "pending"
         assert _callback_state(client, first["id"])["state"] == "delivered"
+
+
+def test_callbacks_into_the_services_own_network_are_refused_by_default(tmp_path):
+    """A tenant must not make the service call addresses only it can reach (cloud metadata, admin ports):
+    an address literal is refused at submission, a name that resolves inside at delivery."""
+    with receiver() as hook, TestClient(_app(tmp_path, webhook_private_targets=False)) as client:
+        for inside in ("http://127.0.0.1:9/x", "http://10.1.2.3/x", "http://169.254.169.254/latest",
+                       "http://[::1]:8000/x", "http://[::ffff:192.168.0.1]/x", "http://0.0.0.0/x"):
+            refused = client.post("/v1/test-compute/jobs", params={"callback_url": inside}, json={"values": [1.0]},
+                                  headers=ALICE)
+            assert refused.status_code == 422, inside
+            assert refused.json()["errors"][0]["loc"] == ["query", "callback_url"]
+            assert "not a public address" in refused.json()["errors"][0]["msg"]
+        by_name = hook.url.replace("127.0.0.1", "localhost")
+        job = client.post("/v1/test-compute/jobs", params={"callback_url": by_name}, json={"values": [1.0]},
+                          headers=ALICE).json()
+        state = _callback_state(client, job["id"])
+        assert state["state"] == "failed" and "non-public address" in state["error"]
+        assert hook.requests == []
