@@ -102,7 +102,10 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Rigidit
     if special:
         warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
                                    f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes)"))
-    report = Report(status="warning" if warnings else "ok", warnings=warnings, details={
+    movable = sum(m for m in mob.moves)
+    message = (f"dof {mob.dof} (generic count {analysis.generic_dof}); {len(mob.clusters)} rigid cluster(s) of "
+               f"{len(ids)} bodies; {movable} of {len(joints)} joints move; {len(collisions)} collision(s)")
+    report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces, "rank_method": mob.rank_method,
         "source": request.source or {}})
