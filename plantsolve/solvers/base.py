@@ -89,6 +89,21 @@ def reject(msg: str, loc: tuple[str | int, ...] = ("file",), type: str = "value_
     return InputRejected(FieldError(loc, msg, type))
 
 
+def merge_upload_options(body: dict, options: dict | None) -> dict:
+    """A request read from an uploaded file, with the form's ``options`` laid over it: ``units`` goes to
+    the top level, everything else (flat, or nested under ``options``) into the request's ``options``."""
+    if not options:
+        return body
+    if not isinstance(options, dict):
+        raise reject("options must be a JSON object", ("options",))
+    options = dict(options)
+    if "units" in options:
+        body = {**body, "units": options.pop("units")}
+    nested = options.pop("options", None)
+    merged = {**(body.get("options") or {}), **(nested if isinstance(nested, dict) else {}), **options}
+    return {**body, "options": merged} if merged else body
+
+
 def decode_text(content: bytes, what: str = "text file") -> str:
     """The text of an uploaded file as exporters write it: UTF-8 (with or without a byte-order mark),
     UTF-16 with its mark, or Windows-1252 (what Excel and older Windows tools write). Binary content

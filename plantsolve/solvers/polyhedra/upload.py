@@ -35,7 +35,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, merge_upload_options, reject
 
 UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
 MAX_SKIPPED_LISTED = 200
@@ -345,19 +345,6 @@ def parse_stl(content: bytes) -> dict:
                        "skipped_count": int((~good).sum())}}
 
 
-def _apply_options(body: dict, options: dict | None) -> dict:
-    if not options:
-        return body
-    if not isinstance(options, dict):
-        raise reject("options must be a JSON object", ("options",))
-    options = dict(options)
-    if "units" in options:
-        body = {**body, "units": options.pop("units")}
-    nested = options.pop("options", None)
-    merged = {**(body.get("options") or {}), **(nested if isinstance(nested, dict) else {}), **options}
-    return {**body, "options": merged} if merged else body
-
-
 def parse_upload(filename: str, content: bytes, options: dict | None) -> PolyhedraRequest:
     """An IDF, OBJ, STL or JSON file as a request; ``options`` (the form's options: ``units``,
     ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
@@ -381,7 +368,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Polyhed
                 raise reject(f"invalid JSON: {e}") from None
             if not isinstance(body, dict):
                 raise reject("the JSON file must hold a request object")
-    body = _apply_options(body, options)
+    body = merge_upload_options(body, options)
     try:
         return PolyhedraRequest.model_validate(body)
     except ValidationError as e:

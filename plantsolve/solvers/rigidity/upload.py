@@ -22,7 +22,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.rigidity import RigidityRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, merge_upload_options, reject
 from plantsolve.solvers.rigidity.catalogue import normalise_number
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
@@ -125,19 +125,6 @@ def _tidy(v: float) -> float:
     return float(r) if abs(v - r) < 1e-5 else float(v)
 
 
-def _apply_options(body: dict, options: dict | None) -> dict:
-    if not options:
-        return body
-    if not isinstance(options, dict):
-        raise reject("options must be a JSON object", ("options",))
-    options = dict(options)
-    if "units" in options:
-        body = {**body, "units": options.pop("units")}
-    nested = options.pop("options", None)
-    merged = {**(body.get("options") or {}), **(nested if isinstance(nested, dict) else {}), **options}
-    return {**body, "options": merged} if merged else body
-
-
 def parse_upload(filename: str, content: bytes, options: dict | None) -> RigidityRequest:
     """An LDraw or JSON file as a request; ``options`` (the form's: ``contact_tolerance``, ``dock``,
     ``rank_tolerance``) override what the file says."""
@@ -156,7 +143,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Rigidit
             raise reject("the JSON file must hold a request object")
     else:
         body = parse_ldraw(text)
-    body = _apply_options(body, options)
+    body = merge_upload_options(body, options)
     try:
         return RigidityRequest.model_validate(body)
     except ValidationError as e:

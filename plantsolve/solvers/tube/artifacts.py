@@ -97,6 +97,16 @@ def _deviation_colours(dev: np.ndarray, lim: float, outlier: np.ndarray) -> np.n
     return col
 
 
+def _deviations(request: TubeRequest, result: TubeResult, model: TubeModel):
+    """Scan points, their signed distance from the fitted surface, the outlier mask and the colour limit
+    (3 × the 95th percentile residual)."""
+    pts = request_points(request)
+    d, _ = spine_distance(pts, build_spine(model))
+    outlier = np.zeros(len(pts), bool)
+    outlier[np.asarray(result.outliers.indices, int)] = True
+    return pts, d - model.pipe_radius, outlier, max(3 * result.residuals.p95, 1e-12)
+
+
 def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]:
     model = model_from_result(result)
     out: list[Artifact] = []
@@ -105,12 +115,7 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     out.append(Artifact("tube.stl", "model/stl", mesh.export(file_type="stl")))
     out.append(Artifact("tube.glb", "model/gltf-binary", mesh.export(file_type="glb")))
 
-    pts = request_points(request)
-    d, _ = spine_distance(pts, build_spine(model))
-    dev = d - model.pipe_radius
-    outlier = np.zeros(len(pts), bool)
-    outlier[np.asarray(result.outliers.indices, int)] = True
-    lim = max(3 * result.residuals.p95, 1e-12)
+    pts, dev, outlier, lim = _deviations(request, result, model)
     cloud = trimesh.PointCloud(pts, colors=_deviation_colours(dev, lim, outlier))
     out.append(Artifact("deviation.ply", "application/x-ply", cloud.export(file_type="ply")))
     out.append(Artifact("lra.csv", "text/csv", lra_csv(result)))
@@ -233,12 +238,7 @@ def figures(request: TubeRequest, result: TubeResult, pts: np.ndarray | None = N
     """Every plot by artifact stem: ``overview`` and, with a nominal LRA, ``inspection``."""
     model = model_from_result(result)
     if pts is None:
-        pts = request_points(request)
-        d, _ = spine_distance(pts, build_spine(model))
-        dev = d - model.pipe_radius
-        outlier = np.zeros(len(pts), bool)
-        outlier[np.asarray(result.outliers.indices, int)] = True
-        lim = max(3 * result.residuals.p95, 1e-12)
+        pts, dev, outlier, lim = _deviations(request, result, model)
     out = {"overview": overview_figure(result, model, pts, dev, outlier, lim)}
     fig = inspection_figure(request, result)
     if fig is not None:
