@@ -1,0 +1,254 @@
+"""Generated IFC models for tests, the example and the benchmark: the paper's case study (a tunnel
+lining of rings × 8 prefabricated segment types along a curved alignment, every segment's mesh baked
+into world coordinates far from the origin, Section "Results and discussion"), plus the awkward
+variants a real exporter produces (shuffled vertex order, rotated face loops, mirrored and scaled
+copies, nested placements, mapped items, extrusions).
+
+Lengths in metres. The model is written with IfcOpenShell: ``ifcopenshell.api`` for the project
+skeleton (units, contexts, spatial structure), plain entity creation for the thousands of meshes
+(the API's per-call bookkeeping would dominate the benchmark's set-up time).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import ifcopenshell
+import ifcopenshell.api
+import ifcopenshell.guid
+
+WORLD_ORIGIN = np.array([1.0e6, 1.0e6, 30.0])  # map coordinates, as a georeferenced exporter writes them
+SEGMENT_TYPES = ("A", "B", "C", "D", "E", "Counter Segment Left", "Counter Segment Right", "Keystone")
+# angular span of each segment type in degrees (sums to 360 with the keystone)
+SEGMENT_SPANS = (50.0, 50.0, 50.0, 50.0, 50.0, 47.5, 47.5, 15.0)
+
+
+def segment_mesh(span_deg: float, *, inner: float = 2.9, outer: float = 3.2, width: float = 1.5,
+                 taper_deg: float = 0.0, arcs: int = 6) -> tuple[np.ndarray, list[list[int]]]:
+    """Vertices and quad/polygon faces of one ring segment (an annular sector of ``span_deg``),
+    in a local frame: tunnel axis along +y, ring centre at the origin, the segment starting at angle 0.
+    ``taper_deg`` narrows the far side (a keystone), which makes the shape chiral."""
+    verts = []
+    for side, y in ((0, 0.0), (1, width)):
+        shrink = math.radians(taper_deg) * side
+        angles = np.linspace(shrink, math.radians(span_deg) - shrink * 0.5, arcs + 1)
+        for r in (inner, outer):
+            for a in angles:
+                verts.append((r * math.cos(a), y, r * math.sin(a)))
+    n = arcs + 1
+    idx = lambda side, ring, k: side * 2 * n + ring * n + k  # noqa: E731
+    faces = []
+    for k in range(arcs):
+        faces.append([idx(0, 0, k), idx(0, 0, k + 1), idx(1, 0, k + 1), idx(1, 0, k)])  # inner surface
+        faces.append([idx(0, 1, k), idx(1, 1, k), idx(1, 1, k + 1), idx(0, 1, k + 1)])  # outer surface
+        faces.append([idx(0, 0, k), idx(0, 1, k), idx(0, 1, k + 1), idx(0, 0, k + 1)])  # front joint
+        faces.append([idx(1, 0, k), idx(1, 0, k + 1), idx(1, 1, k + 1), idx(1, 1, k)])  # back joint
+    faces.append([idx(0, 0, 0), idx(1, 0, 0), idx(1, 1, 0), idx(0, 1, 0)])  # radial joints
+    faces.append([idx(0, 0, arcs), idx(0, 1, arcs), idx(1, 1, arcs), idx(1, 0, arcs)])
+    return np.array(verts, dtype=float), faces
+
+
+def rotation_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_y(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def ring_pose(ring: int, *, radius: float = 500.0, width: float = 1.5) -> tuple[np.ndarray, np.ndarray]:
+    """(R, t) of ring ``ring`` on a plan curve of ``radius`` (rings staggered by a roll of 22.5°)."""
+    theta = ring * width / radius
+    heading = rotation_z(theta)
+    centre = WORLD_ORIGIN + np.array([radius * math.sin(theta), radius * (1.0 - math.cos(theta)), 0.0])
+    roll = rotation_y(math.radians(22.5) * (ring % 2))
+    return heading @ roll, centre
+
+
+@dataclass
+class Product:
+    """One element to write: world-baked mesh or local geometry with a placement."""
+
+    object_type: str
+    entity: str = "IfcBuildingElementProxy"
+    verts: np.ndarray | None = None  # world (or placement-local) coordinates
+    faces: list[list[int]] | None = None
+    placement: np.ndarray | None = None  # 4x4, relative to the parent placement
+    parent: int | None = None  # index of the product whose placement this one's is relative to
+    extrusion: tuple[float, float, float] | None = None  # (x dim, y dim, depth) of a rectangle extrusion
+    mapped: bool = False  # write the mesh through an IfcRepresentationMap + IfcMappedItem
+    container: int = 0  # index of the spatial element (ring) holding it
+    name: str = ""
+    style_rgb: tuple[float, float, float] | None = None
+
+
+@dataclass
+class ModelSpec:
+    schema: str = "IFC4"
+    products: list[Product] = field(default_factory=list)
+    containers: int = 1
+    face_set: str = "auto"  # IFC4: IfcPolygonalFaceSet; IFC2X3 (or "brep"): IfcFacetedBrep
+    precision: float = 1e-5
+
+
+def shuffled(verts: np.ndarray, faces: list[list[int]], rng: np.random.Generator, *, rotate_loops: bool = True):
+    """The same mesh with its vertex list permuted and every face loop starting at another vertex."""
+    perm = rng.permutation(len(verts))
+    inverse = np.empty_like(perm)
+    inverse[perm] = np.arange(len(perm))
+    new_verts = verts[perm]
+    new_faces = []
+    for f in faces:
+        g = [int(inverse[i]) for i in f]
+        if rotate_loops:
+            k = int(rng.integers(len(g)))
+            g = g[k:] + g[:k]
+        new_faces.append(g)
+    order = rng.permutation(len(new_faces))
+    return new_verts, [new_faces[i] for i in order]
+
+
+def tunnel_products(rings: int, *, shuffle: bool = False, seed: int = 0) -> list[Product]:
+    """``rings`` × 8 segments, meshes baked into world coordinates (the paper's world-coordinate model)."""
+    rng = np.random.default_rng(seed)
+    templates = [segment_mesh(span, taper_deg=4.0 if name == "Keystone" else 0.0)
+                 for name, span in zip(SEGMENT_TYPES, SEGMENT_SPANS)]
+    starts = np.cumsum((0.0,) + SEGMENT_SPANS[:-1])
+    products = []
+    for r in range(rings):
+        R, t = ring_pose(r)
+        for k, name in enumerate(SEGMENT_TYPES):
+            verts, faces = templates[k]
+            local = verts @ rotation_y(-math.radians(starts[k])).T
+            world = local @ R.T + t
+            if shuffle:
+                world, faces = shuffled(world, faces, rng)
+            products.append(Product(object_type=name, verts=world, faces=faces, container=r,
+                                    name=f"Ring {r + 1} segment {name}"))
+    return products
+
+
+def tunnel_spec(rings: int, schema: str = "IFC4", **kw) -> ModelSpec:
+    return ModelSpec(schema=schema, products=tunnel_products(rings, **kw), containers=rings)
+
+
+def _placement(f, matrix: np.ndarray | None, rel):
+    m = np.eye(4) if matrix is None else matrix
+    axis = f.create_entity("IfcAxis2Placement3D",
+                           f.create_entity("IfcCartesianPoint", [float(v) for v in m[:3, 3]]),
+                           f.create_entity("IfcDirection", [float(v) for v in m[:3, 2]]),
+                           f.create_entity("IfcDirection", [float(v) for v in m[:3, 0]]))
+    return f.create_entity("IfcLocalPlacement", rel, axis)
+
+
+def _mesh_item(f, schema: str, verts: np.ndarray, faces: list[list[int]], face_set: str):
+    if schema != "IFC2X3" and face_set in ("auto", "polygonal"):
+        points = f.create_entity("IfcCartesianPointList3D", [[float(c) for c in v] for v in verts])
+        polys = [f.create_entity("IfcIndexedPolygonalFace", [i + 1 for i in face]) for face in faces]
+        return f.create_entity("IfcPolygonalFaceSet", points, True, polys, None)
+    pts = [f.create_entity("IfcCartesianPoint", [float(c) for c in v]) for v in verts]
+    ifc_faces = [f.create_entity("IfcFace", [f.create_entity("IfcFaceOuterBound",
+                                                            f.create_entity("IfcPolyLoop", [pts[i] for i in face]),
+                                                            True)]) for face in faces]
+    return f.create_entity("IfcFacetedBrep", f.create_entity("IfcClosedShell", ifc_faces))
+
+
+def build_model(spec: ModelSpec) -> ifcopenshell.file:
+    """The IFC file of ``spec``: project, site, a tunnel building with one partial building per ring
+    (with a property set ``ringNumber``, as in the paper), and the products."""
+    f = ifcopenshell.api.run("project.create_file", version=spec.schema)
+    project = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcProject", name="Tunnel")
+    length = ifcopenshell.api.run("unit.add_si_unit", f, unit_type="LENGTHUNIT")
+    ifcopenshell.api.run("unit.assign_unit", f, units=[length])
+    model = ifcopenshell.api.run("context.add_context", f, context_type="Model")
+    model.Precision = spec.precision
+    body = ifcopenshell.api.run("context.add_context", f, context_type="Model", context_identifier="Body",
+                                target_view="MODEL_VIEW", parent=model)
+    site = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcSite", name="Site")
+    tunnel = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcBuilding", name="Tunnel")
+    tunnel.CompositionType = "ELEMENT"
+    ifcopenshell.api.run("aggregate.assign_object", f, products=[site], relating_object=project)
+    ifcopenshell.api.run("aggregate.assign_object", f, products=[tunnel], relating_object=site)
+    site.ObjectPlacement = _placement(f, None, None)
+    tunnel.ObjectPlacement = _placement(f, None, site.ObjectPlacement)
+    owner = site.OwnerHistory
+    rings = []
+    for r in range(spec.containers):
+        ring = f.create_entity("IfcBuilding", ifcopenshell.guid.new(), owner, f"Ring {r + 1}", None, None,
+                               tunnel.ObjectPlacement, None, None, "PARTIAL")
+        rings.append(ring)
+    if rings:
+        f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, tunnel, rings)
+        for r, ring in enumerate(rings):
+            value = f.create_entity("IfcInteger", r + 1)
+            prop = f.create_entity("IfcPropertySingleValue", "ringNumber", None, value, None)
+            pset = f.create_entity("IfcPropertySet", ifcopenshell.guid.new(), owner, "Pset_Ring", None, [prop])
+            f.create_entity("IfcRelDefinesByProperties", ifcopenshell.guid.new(), owner, None, None, [ring], pset)
+    elements = []
+    maps: dict[int, object] = {}
+    for k, p in enumerate(spec.products):
+        parent = elements[p.parent].ObjectPlacement if p.parent is not None else (
+            rings[p.container].ObjectPlacement if rings else tunnel.ObjectPlacement)
+        placement = _placement(f, p.placement, parent)
+        if p.extrusion is not None:
+            xdim, ydim, depth = p.extrusion
+            profile = f.create_entity("IfcRectangleProfileDef", "AREA", None,
+                                      f.create_entity("IfcAxis2Placement2D",
+                                                      f.create_entity("IfcCartesianPoint", [0.0, 0.0]), None),
+                                      xdim, ydim)
+            item = f.create_entity("IfcExtrudedAreaSolid", profile,
+                                   f.create_entity("IfcAxis2Placement3D",
+                                                   f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None),
+                                   f.create_entity("IfcDirection", [0.0, 0.0, 1.0]), depth)
+            rep_type = "SweptSolid"
+        else:
+            item = None
+            rep_type = "Tessellation" if spec.schema != "IFC2X3" and spec.face_set in ("auto", "polygonal") else "Brep"
+        if p.mapped:
+            key = id(p.verts)
+            if key not in maps:
+                inner = _mesh_item(f, spec.schema, p.verts, p.faces, spec.face_set) if item is None else item
+                shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [inner])
+                maps[key] = f.create_entity("IfcRepresentationMap", _placement(f, None, None).RelativePlacement, shape)
+            op = f.create_entity("IfcCartesianTransformationOperator3D", None, None,
+                                 f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None)
+            item = f.create_entity("IfcMappedItem", maps[key], op)
+            rep_type = "MappedRepresentation"
+        elif item is None:
+            item = _mesh_item(f, spec.schema, p.verts, p.faces, spec.face_set)
+        if p.style_rgb is not None:
+            colour = f.create_entity("IfcColourRgb", None, *p.style_rgb)
+            rendering = f.create_entity("IfcSurfaceStyleRendering", colour, 0.0, None, None, None, None, None, None,
+                                        "NOTDEFINED")
+            style = f.create_entity("IfcSurfaceStyle", None, "BOTH", [rendering])
+            styles = [style] if spec.schema != "IFC2X3" else [f.create_entity("IfcPresentationStyleAssignment", [style])]
+            f.create_entity("IfcStyledItem", item, styles, None)
+        shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [item])
+        product_shape = f.create_entity("IfcProductDefinitionShape", None, None, [shape])
+        element = f.create_entity(p.entity, ifcopenshell.guid.new(), owner, p.name or f"{p.object_type} {k}", None,
+                                  p.object_type, placement, product_shape, None)
+        elements.append(element)
+    by_container: dict[int, list] = {}
+    for p, e in zip(spec.products, elements):
+        by_container.setdefault(p.container, []).append(e)
+    for c, members in by_container.items():
+        holder = rings[c] if rings else tunnel
+        f.create_entity("IfcRelContainedInSpatialStructure", ifcopenshell.guid.new(), owner, None, None, members, holder)
+    return f
+
+
+def tunnel_file(rings: int, schema: str = "IFC4", **kw) -> ifcopenshell.file:
+    return build_model(tunnel_spec(rings, schema, **kw))
+
+
+def example() -> dict:
+    """A small valid request: a 2-ring world-coordinate tunnel (16 segments in 8 classes), base64 IFC."""
+    text = tunnel_file(2, "IFC4").to_string()
+    return {"filename": "tunnel.ifc", "file": base64.b64encode(text.encode()).decode(),
+            "options": {"tolerance": 0.0001, "sharing": "mapped_item", "postpass": True}}
