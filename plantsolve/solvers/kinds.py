@@ -11,7 +11,7 @@ import importlib
 from types import MappingProxyType
 from typing import Iterable, Mapping
 
-from plantsolve.solvers import alignment, flowmeter, perfmap, polyhedra, tube
+from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, tube
 from plantsolve.solvers.base import SolverSpec
 
 KINDS: Mapping[str, SolverSpec] = MappingProxyType({
@@ -20,6 +20,7 @@ KINDS: Mapping[str, SolverSpec] = MappingProxyType({
     "perfmap": perfmap.SPEC,
     "polyhedra": polyhedra.SPEC,
     "flowmeter": flowmeter.SPEC,
+    "dedup": dedup.SPEC,
 })
 
 

@@ -159,29 +159,36 @@ def _mesh_item(f, schema: str, verts: np.ndarray, faces: list[list[int]], face_s
     return f.create_entity("IfcFacetedBrep", f.create_entity("IfcClosedShell", ifc_faces))
 
 
+def _owner_history(f):
+    person = f.create_entity("IfcPerson", None, "Generator", None)
+    org = f.create_entity("IfcOrganization", None, "plantsolve", None)
+    user = f.create_entity("IfcPersonAndOrganization", person, org)
+    app = f.create_entity("IfcApplication", org, "1.0", "plantsolve dedup synthetic", "plantsolve")
+    return f.create_entity("IfcOwnerHistory", user, app, None, "NOCHANGE", 1767225600, None, None, 1767225600)
+
+
 def build_model(spec: ModelSpec) -> ifcopenshell.file:
     """The IFC file of ``spec``: project, site, a tunnel building with one partial building per ring
     (with a property set ``ringNumber``, as in the paper), and the products."""
     f = ifcopenshell.api.run("project.create_file", version=spec.schema)
-    project = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcProject", name="Tunnel")
+    owner = _owner_history(f)
+    project = f.create_entity("IfcProject", ifcopenshell.guid.new(), owner, "Tunnel")
     length = ifcopenshell.api.run("unit.add_si_unit", f, unit_type="LENGTHUNIT")
     ifcopenshell.api.run("unit.assign_unit", f, units=[length])
     model = ifcopenshell.api.run("context.add_context", f, context_type="Model")
     model.Precision = spec.precision
     body = ifcopenshell.api.run("context.add_context", f, context_type="Model", context_identifier="Body",
                                 target_view="MODEL_VIEW", parent=model)
-    site = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcSite", name="Site")
-    tunnel = ifcopenshell.api.run("root.create_entity", f, ifc_class="IfcBuilding", name="Tunnel")
-    tunnel.CompositionType = "ELEMENT"
-    ifcopenshell.api.run("aggregate.assign_object", f, products=[site], relating_object=project)
-    ifcopenshell.api.run("aggregate.assign_object", f, products=[tunnel], relating_object=site)
+    site = f.create_entity("IfcSite", ifcopenshell.guid.new(), owner, "Site", CompositionType="ELEMENT")
+    tunnel = f.create_entity("IfcBuilding", ifcopenshell.guid.new(), owner, "Tunnel", CompositionType="ELEMENT")
+    f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, project, [site])
+    f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, site, [tunnel])
     site.ObjectPlacement = _placement(f, None, None)
     tunnel.ObjectPlacement = _placement(f, None, site.ObjectPlacement)
-    owner = site.OwnerHistory
     rings = []
     for r in range(spec.containers):
         ring = f.create_entity("IfcBuilding", ifcopenshell.guid.new(), owner, f"Ring {r + 1}", None, None,
-                               tunnel.ObjectPlacement, None, None, "PARTIAL")
+                               _placement(f, None, tunnel.ObjectPlacement), None, None, "PARTIAL")
         rings.append(ring)
     if rings:
         f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, tunnel, rings)
