@@ -174,6 +174,8 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
     scale = 1.0
     if allow_scale and rep.radius > 0:
         scale = member.radius / rep.radius
+        if abs(scale - 1.0) * rep.radius <= 0.01 * tol:  # equal size within the tolerance: rigid, exactly
+            scale = 1.0
     elif abs(member.radius - rep.radius) > 2 * tol:
         return None
     rep_local = rep.local * scale

@@ -5,8 +5,9 @@ once), as IFCCompressor and the Solibri optimizer do generically (paper Section 
 
 It respects the file schema's inverse cardinalities: an instance that is referenced through an
 inverse attribute bounded to one (IFC2X3: a placement's ``PlacesObject``, a product shape's
-``ShapeOfProduct``; every schema: a representation item's ``StyledByItem``) is never merged away; it
-may only receive duplicates that bring no such reference. Representations are never merged
+``ShapeOfProduct``; every schema: a representation item's ``StyledByItem``) is never merged, and
+neither is one a style or a presentation layer points at (merging it with an undecorated twin would
+restyle or re-layer the twin's users). Representations are never merged
 (``IfcShapeModel.WR11``), rooted instances and contexts never.
 """
 
@@ -21,7 +22,7 @@ NEVER_MERGED = ("IfcRoot", "IfcRepresentation", "IfcRepresentationContext", "Ifc
 
 
 def _pinned(model: ifcopenshell.file) -> set[int]:
-    """Ids of instances referenced through an inverse attribute whose upper bound is one."""
+    """Ids of instances referenced through an inverse attribute whose upper bound is one, or styled or layered."""
     schema = wrapper.schema_by_name(model.schema_identifier if hasattr(model, "schema_identifier") else model.schema)
     pinned: set[int] = set()
     seen_types: set[str] = set()
@@ -34,6 +35,8 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
         for inv in schema.declaration_by_name(name).all_inverse_attributes():
             if inv.bound2() == 1:
                 bounded.add((inv.entity_reference().name(), inv.attribute_reference().name()))
+    # decorations: a styled or layered instance must not absorb an undecorated one (nor the reverse)
+    bounded |= {("IfcStyledItem", "Item"), ("IfcPresentationLayerAssignment", "AssignedItems")}
     for entity, attribute in bounded:
         try:
             referencers = model.by_type(entity)
@@ -122,10 +125,12 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
         if not mergeable:
             continue
         key = (name, tuple(_key_of(v) for v in values))
+        if inst.id() in pinned:
+            continue
         first = canonical.get(key)
         if first is None:
             canonical[key] = inst
-        elif inst.id() not in pinned:
+        else:
             remap[inst.id()] = first
             duplicates.append(inst)
     removed: dict[str, int] = {}

@@ -259,3 +259,88 @@ def example() -> dict:
     text = tunnel_file(2, "IFC4").to_string()
     return {"filename": "tunnel.ifc", "file": base64.b64encode(text.encode()).decode(),
             "options": {"tolerance": 0.0001, "sharing": "mapped_item", "postpass": True}}
+
+
+def box_mesh(size: float = 1.0) -> tuple[np.ndarray, list[list[int]]]:
+    """A cube (48 symmetries: every rotation of the octahedral group maps it onto itself)."""
+    v = np.array([[x, y, z] for x in (0.0, size) for y in (0.0, size) for z in (0.0, size)])
+    faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    return v, faces
+
+
+def pose(rx: float, ry: float, rz: float, t) -> np.ndarray:
+    """4×4 rigid transform: rotations about x, y, z (degrees, applied in that order), then ``t``."""
+    from scipy.spatial.transform import Rotation  # noqa: PLC0415  (scipy only for the zoo)
+
+    m = np.eye(4)
+    m[:3, :3] = Rotation.from_euler("xyz", [rx, ry, rz], degrees=True).as_matrix()
+    m[:3, 3] = t
+    return m
+
+
+def apply(m: np.ndarray, verts: np.ndarray) -> np.ndarray:
+    return verts @ m[:3, :3].T + m[:3, 3]
+
+
+ZOO_NAMES = ("chiral_a", "chiral_b_shuffled", "chiral_mirrored", "chiral_scaled_1pct", "cube_a", "cube_b",
+             "chiral_nested_1", "chiral_nested_2", "mapped_a", "mapped_b", "column_a", "column_b", "column_red",
+             "column_longer")
+
+
+def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
+    """One model with every awkward case (products named as in ``ZOO_NAMES``), world coordinates ~1e6 m:
+
+    - a chiral mesh (the keystone) baked at two poses, the second with shuffled vertices and rotated loops;
+    - its mirror image and a copy scaled by 1 % (neither may join the rigid class);
+    - a cube (a symmetric shape) at two poses;
+    - two more copies of the chiral mesh in placement-local coordinates under nested placements (the
+      first placed relative to ``cube_b``, the second relative to the first);
+    - two products already using one IfcRepresentationMap through IfcMappedItem;
+    - three rectangular IfcExtrudedAreaSolid columns (one styled red, so not congruent in appearance)
+      and a longer one.
+    """
+    rng = np.random.default_rng(seed)
+    chiral, chiral_faces = segment_mesh(15.0, taper_deg=4.0)
+    cube, cube_faces = box_mesh(0.8)
+    o = WORLD_ORIGIN
+    p = []
+    m_a = pose(10, 20, 30, o + [10.0, 5.0, 0.0])
+    m_b = pose(-40, 5, 170, o + [-20.0, 40.0, 3.0])
+    p.append(Product("chiral", verts=apply(m_a, chiral), faces=chiral_faces, name="chiral_a"))
+    v, f = shuffled(apply(m_b, chiral), chiral_faces, rng)
+    p.append(Product("chiral", verts=v, faces=f, name="chiral_b_shuffled"))
+    mirror = np.diag([1.0, -1.0, 1.0, 1.0])
+    p.append(Product("chiral", verts=apply(pose(0, 0, 60, o + [30.0, 0.0, 0.0]) @ mirror, chiral),
+                     faces=[f[::-1] for f in chiral_faces], name="chiral_mirrored"))
+    scale = np.diag([1.01, 1.01, 1.01, 1.0])
+    p.append(Product("chiral", verts=apply(pose(0, 0, -60, o + [40.0, 0.0, 0.0]) @ scale, chiral),
+                     faces=chiral_faces, name="chiral_scaled_1pct"))
+    p.append(Product("cube", verts=apply(pose(0, 0, 0, o + [0.0, -10.0, 0.0]), cube), faces=cube_faces, name="cube_a"))
+    p.append(Product("cube", verts=cube, faces=cube_faces, placement=pose(0, 0, 0, o + [5.0, -10.0, 0.0]),
+                     name="cube_b"))
+    # nested: local geometry under placements relative to cube_b's, then to the first nested one
+    p.append(Product("chiral", verts=chiral, faces=chiral_faces, placement=pose(0, 90, 45, [2.0, 1.0, 0.5]),
+                     parent=5, name="chiral_nested_1"))
+    p.append(Product("chiral", verts=chiral, faces=chiral_faces, placement=pose(30, 0, -15, [0.0, 3.0, 0.0]),
+                     parent=6, name="chiral_nested_2"))
+    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True,
+                     placement=pose(0, 0, 15, o + [60.0, 0.0, 0.0]), name="mapped_a"))
+    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True,
+                     placement=pose(0, 0, 195, o + [70.0, 0.0, 0.0]), name="mapped_b"))
+    for k, (name, dims, rgb) in enumerate((("column_a", (0.4, 0.6, 3.0), None), ("column_b", (0.4, 0.6, 3.0), None),
+                                           ("column_red", (0.4, 0.6, 3.0), (1.0, 0.0, 0.0)),
+                                           ("column_longer", (0.4, 0.6, 3.5), None))):
+        p.append(Product("column", entity="IfcColumn", extrusion=dims, style_rgb=rgb, name=name,
+                         placement=pose(0, 0, 25 * k, o + [k * 3.0, 20.0, 0.0])))
+    return ModelSpec(schema=schema, products=p, containers=1)
+
+
+def zoo_expected(allow_mirror: bool = False, allow_scale: bool = False) -> set[frozenset[str]]:
+    """The congruence classes (two or more members) of ``zoo_spec``, by product name."""
+    chiral = {"chiral_a", "chiral_b_shuffled", "chiral_nested_1", "chiral_nested_2"}
+    if allow_mirror:
+        chiral.add("chiral_mirrored")
+    if allow_scale:
+        chiral.add("chiral_scaled_1pct")
+    return {frozenset(chiral), frozenset({"cube_a", "cube_b"}), frozenset({"mapped_a", "mapped_b"}),
+            frozenset({"column_a", "column_b"})}
