@@ -222,7 +222,8 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
             if key not in maps:
                 inner = _mesh_item(f, spec.schema, p.verts, p.faces, spec.face_set) if item is None else item
                 shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [inner])
-                maps[key] = f.create_entity("IfcRepresentationMap", _placement(f, None, None).RelativePlacement, shape)
+                origin = f.create_entity("IfcAxis2Placement3D", f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None)
+                maps[key] = f.create_entity("IfcRepresentationMap", origin, shape)
             op = f.create_entity("IfcCartesianTransformationOperator3D", None, None,
                                  f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None)
             item = f.create_entity("IfcMappedItem", maps[key], op)
