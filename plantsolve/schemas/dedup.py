@@ -37,6 +37,8 @@ class DedupOptions(StrictModel):
     allow_scale: bool = Field(default=False, description="Let uniformly scaled copies join a class (IfcMappedItem).")
     postpass: bool = Field(default=True, description="Merge identical non-rooted instances afterwards (points, "
                            "directions, placements, styles), respecting the schema's inverse cardinalities.")
+    express_rules: bool = Field(default=True, description="Validate the output against the schema's EXPRESS "
+                                "rules too (a few seconds more); false checks types, cardinalities and inverses only.")
     entity_types: list[EntityName] | None = Field(
         default=None, max_length=200,
         description="Only products of these IFC entities (and their subtypes) are deduplicated, e.g. ['IfcWall'].")
@@ -78,6 +80,9 @@ class Verification(BaseModel):
     schema_valid: bool
     validation_errors: list[str] = Field(default_factory=list)
     express_rules: bool = Field(default=True, description="Whether EXPRESS where-rules were checked too.")
+    errors_inherited: bool = Field(
+        default=False, description="The output's validation errors are all errors the input file already had (then "
+        "the optimized file is still offered; schema_valid stays false).")
 
 
 class DedupResult(BaseModel):

@@ -3,6 +3,7 @@ written file read back and tessellated again), semantic counts, and ``ifcopenshe
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 
 import numpy as np
@@ -37,6 +38,18 @@ def deviation(before: np.ndarray, after: np.ndarray) -> float:
     c = before.mean(axis=0)
     a, b = before - c, after - c
     return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
+
+
+def normalised(message: str) -> str:
+    """An error message without instance ids, to compare errors of the input and the output."""
+    return re.sub(r"#\d+", "#", message)
+
+
+def inherited(output_errors: list[str], input_errors: list[str]) -> bool:
+    """Whether every error of the output is one the input already had (as many times or more)."""
+    have = Counter(normalised(e) for e in input_errors)
+    need = Counter(normalised(e) for e in output_errors)
+    return all(have[k] >= n for k, n in need.items())
 
 
 def validate(model: ifcopenshell.file, express_rules: bool) -> list[str]:

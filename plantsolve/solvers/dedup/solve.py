@@ -139,17 +139,25 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
                 continue
             deviations.append(proof.deviation(pts, after_points[prod.id()]))
         semantic_equal = proof.semantic_fingerprint(check.model) == semantic_before and not missing
-        progress(0.9, "validating the written file (schema and EXPRESS rules)")
-        errors = proof.validate(check.model, express_rules=True)
+        progress(0.9, "validating the written file")
+        errors = proof.validate(check.model, express_rules=opts.express_rules)
         counts_after = proof.entity_counts(check.model)
     finally:
         check.close()
+    inherited_errors = False
+    if errors:  # are they ours? (real exports are often invalid already)
+        with ifcio.opened(request) as (original, _):
+            inherited_errors = proof.inherited(errors, proof.validate(original, express_rules=opts.express_rules))
     lap("verification")
     max_dev = float(max(deviations)) if deviations else None
     verification = Verification(max_deviation=max_dev, products_checked=len(deviations),
                                 semantic_counts_equal=semantic_equal, schema_valid=not errors,
-                                validation_errors=errors[:proof.MAX_ERRORS_LISTED], express_rules=True)
-    ok = semantic_equal and not errors and (max_dev is None or max_dev <= tol)
+                                validation_errors=errors[:proof.MAX_ERRORS_LISTED], express_rules=opts.express_rules,
+                                errors_inherited=inherited_errors)
+    if inherited_errors:
+        warnings.append(Diagnostic(code="input_invalid", message=f"The output has {len(errors)} validation error(s), "
+                                   "all of them already in the input file", details={}))
+    ok = semantic_equal and (not errors or inherited_errors) and (max_dev is None or max_dev <= tol)
     out_classes = []
     shared = 0
     for cls in classes:
