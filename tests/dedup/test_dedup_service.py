@@ -23,7 +23,8 @@ EXAMPLES = REPO / "examples" / "dedup"
 def test_upload_with_options_through_the_api(client):
     content = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
     response = client.post("/v1/dedup/jobs", files={"file": ("tunnel.ifc", content)},
-                           data={"options": json.dumps({"sharing": "mapped_item", "tolerance": 1e-4})})
+                           data={"options": json.dumps({"sharing": "mapped_item", "tolerance": 1e-4,
+                                                            "express_rules": False})})
     assert response.status_code == 202, response.text
     job = wait_for(client, response.json()["id"], timeout=120)
     assert job["status"] == "succeeded", job
