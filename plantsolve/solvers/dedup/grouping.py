@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.matching import Match, Shape, make_shape, match
+from plantsolve.solvers.dedup.matching import Match, Shape, make_shape, match, verify
 
 QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
 CANONICAL_DEPTH = 8
@@ -108,3 +108,31 @@ def build_classes(candidates: list[Candidate], tol: float, *, allow_mirror: bool
 
 def make_candidate(product, representation, model, points: np.ndarray, n_triangles: int) -> Candidate:
     return Candidate(product, product_key(product, representation, model, len(points), n_triangles), make_shape(points))
+
+
+def pool_transforms(classes: list[CongruenceClass], tol: float) -> int:
+    """The flyweight pool of transforms: a member whose transform agrees (to fit noise) with one
+    already used by another member takes that one instead, if it still verifies within ``tol`` for
+    this member (two-way Hausdorff). The rings of a tunnel then write one transform per ring for all
+    eight segment types, and the post-pass merges their placements and operators. Returns how many
+    transforms were replaced."""
+    pool: dict[tuple, list[Match]] = {}
+    replaced = 0
+    for cls in classes:
+        rep = cls.representative.shape
+        for k, (cand, m) in enumerate(cls.members):
+            if k == 0:
+                continue
+            key = (tuple(np.round(m.rotation.reshape(-1) * m.scale, 7)),
+                   tuple(np.round(m.translation / max(100 * tol, 1e-9))))
+            for other in pool.get(key, ()):
+                if other is m or other.mirror != m.mirror:
+                    continue
+                dev = verify(rep, cand.shape, other, tol)
+                if dev <= tol:
+                    cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
+                    replaced += 1
+                    break
+            else:
+                pool.setdefault(key, []).append(m)
+    return replaced

@@ -143,25 +143,27 @@ def _anchor_guesses(rep: Shape, member: Shape, tol: float, allow_mirror: bool) -
     return guesses
 
 
-def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest-neighbour (ICP) refinement of ``member.local ≈ R @ rep_local + t``."""
+def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: bool, stop: float):
+    """Nearest-neighbour (ICP) refinement of ``member.local ≈ R @ rep_local + t``; returns R, t and the
+    final nearest-neighbour distances and indices."""
     t = np.zeros(3)
     last = np.inf
+    flip = np.diag([1.0, 1.0, -1.0])
     for _ in range(MAX_ICP_STEPS):
         moved = rep_local @ rotation.T + t
         dist, idx = member.tree.query(moved, k=1)
         err = float(np.max(dist))
-        if err >= last * 0.999999:
+        if err <= stop or err >= last * 0.999999:
             break
         last = err
         if proper:
-            rotation, t, _ = kabsch(rep_local, member.local[idx])
+            new_r, new_t, _ = kabsch(rep_local, member.local[idx])
         else:
             # an improper fit: mirror the rep through its own frame, fit properly, mirror back
-            flip = np.diag([1.0, 1.0, -1.0])
-            r, t, _ = kabsch(rep_local @ flip, member.local[idx])
-            rotation = r @ flip
-    return rotation, t
+            r, new_t, _ = kabsch(rep_local @ flip, member.local[idx])
+            new_r = r @ flip
+        rotation, t = new_r, new_t
+    return rotation, t, dist, idx
 
 
 def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, allow_scale: bool = False) -> Match | None:
@@ -185,22 +187,32 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
     candidates = _axis_guesses(rep, member, tol, allow_mirror)
     # quick ranking on a subsample keeps the refinement to the promising guesses
     sample = rep_local[:: max(1, len(rep_local) // 64)]
-    scored = []
-    for r in candidates:
-        d = member.tree.query(sample @ r.T, k=1)[0]
-        scored.append((float(np.max(d)), r))
-    scored.sort(key=lambda s: s[0])
-    tries = [r for _, r in scored[:8]]
+    if not candidates:
+        return None
+    stacked = np.stack(candidates)  # (g, 3, 3): every guess's sample in one tree query
+    d = member.tree.query(np.einsum("gij,nj->gni", stacked, sample).reshape(-1, 3), k=1)[0]
+    worst = d.reshape(len(candidates), -1).max(axis=1)
+    scored = sorted(zip(worst.tolist(), candidates), key=lambda s: s[0])
+    # a right guess already lands the sample within the tolerance (plus fit noise); refine only those,
+    # and all of the best eight only when none does (a rough guess that ICP still has to pull in)
+    close = [r for d, r in scored if d <= 4 * tol]
+    tries = close or [r for _, r in scored[:8]]
     best: Match | None = None
 
     def consider(r0: np.ndarray) -> None:
         nonlocal best
         proper = np.linalg.det(r0) > 0
-        r, t = _refine(rep_local, member, r0, proper)
-        moved = rep_local @ r.T + t
-        dev = hausdorff(moved, member.local, member.tree, bound=tol)
+        r, t, dist, idx = _refine(rep_local, member, r0, proper, 1e-3 * tol)
+        dev = float(np.max(dist))
         if dev > tol:
             return
+        if len(np.unique(idx)) != len(idx):
+            # not one-to-one: the way back needs its own search
+            dev = hausdorff(rep_local @ r.T + t, member.local, member.tree, bound=tol)
+            if dev > tol:
+                return
+        # one-to-one within tol: every member point is within dev of its preimage, so the two-way
+        # Hausdorff distance is dev itself
         cand = Match(r, scale, member.centre + t - r @ (rep.centre * scale), dev, bool(np.linalg.det(r) < 0))
         key = (round(float(np.trace(r)), 9) * -1, dev)
         if best is None or key < (round(float(np.trace(best.rotation)), 9) * -1, best.deviation):

@@ -14,7 +14,7 @@ from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.dedup import DedupClass, DedupRequest, DedupResult, Verification
 from plantsolve.solvers.base import Progress, reject
 from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
-from plantsolve.solvers.dedup.grouping import build_classes, make_candidate
+from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5
@@ -111,6 +111,7 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
         lap("grouping")
         classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
                                 progress=progress, span=(0.35, 0.55))
+        pooled = pool_transforms(classes, tol)
         lap("matching")
         written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65))
         lap("sharing")
@@ -187,7 +188,7 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
                     message=(f"{len(out_classes)} classes, {shared} of {len(products)} products share geometry; "
                              f"{len(optimized)} of {original_bytes} bytes ({mode})"),
                     warnings=warnings,
-                    details={"written": written, "postpass_removed": removed, "unprocessed": len(skipped)})
+                    details={"written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
     ratio = len(optimized) / original_bytes if original_bytes else 1.0
     result = DedupResult(
         schema=schema, length_unit=unit_name, tolerance=tol, sharing=mode,

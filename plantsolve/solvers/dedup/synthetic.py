@@ -93,7 +93,8 @@ class ModelSpec:
     schema: str = "IFC4"
     products: list[Product] = field(default_factory=list)
     containers: int = 1
-    face_set: str = "auto"  # IFC4: IfcPolygonalFaceSet; IFC2X3 (or "brep"): IfcFacetedBrep
+    face_set: str = "auto"  # IFC4: IfcPolygonalFaceSet; IFC2X3 or "brep": IfcFacetedBrep; "surface_model":
+    # IfcFaceBasedSurfaceModel (the paper's tunnel)
     precision: float = 1e-5
 
 
@@ -114,10 +115,12 @@ def shuffled(verts: np.ndarray, faces: list[list[int]], rng: np.random.Generator
     return new_verts, [new_faces[i] for i in order]
 
 
-def tunnel_products(rings: int, *, shuffle: bool = False, seed: int = 0) -> list[Product]:
-    """``rings`` × 8 segments, meshes baked into world coordinates (the paper's world-coordinate model)."""
+def tunnel_products(rings: int, *, shuffle: bool = False, seed: int = 0, arcs: int = 6) -> list[Product]:
+    """``rings`` × 8 segments, meshes baked into world coordinates (the paper's world-coordinate model);
+    ``arcs`` facets per segment arc set the mesh density (the paper's segments average ~29 kB of STEP
+    text each: about ``arcs=40`` as a face-based surface model)."""
     rng = np.random.default_rng(seed)
-    templates = [segment_mesh(span, taper_deg=4.0 if name == "Keystone" else 0.0)
+    templates = [segment_mesh(span, taper_deg=4.0 if name == "Keystone" else 0.0, arcs=arcs)
                  for name, span in zip(SEGMENT_TYPES, SEGMENT_SPANS)]
     starts = np.cumsum((0.0,) + SEGMENT_SPANS[:-1])
     products = []
@@ -134,8 +137,8 @@ def tunnel_products(rings: int, *, shuffle: bool = False, seed: int = 0) -> list
     return products
 
 
-def tunnel_spec(rings: int, schema: str = "IFC4", **kw) -> ModelSpec:
-    return ModelSpec(schema=schema, products=tunnel_products(rings, **kw), containers=rings)
+def tunnel_spec(rings: int, schema: str = "IFC4", face_set: str = "auto", **kw) -> ModelSpec:
+    return ModelSpec(schema=schema, products=tunnel_products(rings, **kw), containers=rings, face_set=face_set)
 
 
 def _placement(f, matrix: np.ndarray | None, rel):
@@ -156,6 +159,8 @@ def _mesh_item(f, schema: str, verts: np.ndarray, faces: list[list[int]], face_s
     ifc_faces = [f.create_entity("IfcFace", [f.create_entity("IfcFaceOuterBound",
                                                             f.create_entity("IfcPolyLoop", [pts[i] for i in face]),
                                                             True)]) for face in faces]
+    if face_set == "surface_model":
+        return f.create_entity("IfcFaceBasedSurfaceModel", [f.create_entity("IfcConnectedFaceSet", ifc_faces)])
     return f.create_entity("IfcFacetedBrep", f.create_entity("IfcClosedShell", ifc_faces))
 
 
@@ -216,7 +221,8 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
             rep_type = "SweptSolid"
         else:
             item = None
-            rep_type = "Tessellation" if spec.schema != "IFC2X3" and spec.face_set in ("auto", "polygonal") else "Brep"
+            rep_type = ("Tessellation" if spec.schema != "IFC2X3" and spec.face_set in ("auto", "polygonal") else
+                        "SurfaceModel" if spec.face_set == "surface_model" else "Brep")
         if p.mapped:
             key = id(p.verts)
             if key not in maps:
