@@ -86,11 +86,12 @@ def _row(name: str, r: dict) -> str:
     t = r["timings"]
     cell = lambda k: f"{t[k]:.2f}" if k in t else "–"  # noqa: E731
     gm = f"{t['grouping'] + t['matching']:.2f}" if "matching" in t else "–"
+    dev = "–" if r["deviation"] is None else f"{r['deviation']:.1e}"
     return (f"| {name} | {r['original'] / 1e6:.2f} | {r['optimized'] / 1e6:.3f} | {100 * r['rate']:.2f} | "
             f"{r['classes'] if r['classes'] is not None else '–'} | {r['shared'] if r['shared'] is not None else '–'} | "
             + " | ".join(cell(k) for k in PHASES) + f" | {gm} | {r['total']:.1f} | {r['peak_mb']:.0f} | "
             f"{'–' if r['valid'] is None else ('yes' if r['valid'] else 'NO')}{' +rules' if r['rules'] else ''} | "
-            f"{'–' if r['deviation'] is None else f'{r[chr(100) + 'eviation']:.1e}'} |")
+            f"{dev} |")
 
 
 HEADER = ("| configuration | original MB | optimized MB | rate % | classes | shared | " + " | ".join(PHASES)

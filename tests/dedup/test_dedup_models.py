@@ -111,11 +111,22 @@ def test_zoo_rigid_classes(schema):
     out = assert_round_trip(model, result, inherited=broken)
     if broken:
         assert any(w.code == "input_invalid" for w in result.report.warnings)
+    if schema == "IFC4":  # entity filter: only the columns are looked at
+        columns = run(model, entity_types=["IfcColumn"], express_rules=False)
+        assert classes_by_name(columns, model) == {frozenset({"column_a", "column_b"})}
+        assert_round_trip(model, columns)
     # the red column keeps its style, the plain ones stay plain
     styled = {s.Item.id() for s in out.by_type("IfcStyledItem") if s.Item is not None}
     red = out.by_guid(next(p.GlobalId for p in model.by_type("IfcColumn") if p.Name == "column_red"))
     assert red.Representation.Representations[0].Items[0].id() in styled
     assert len(styled) == 1
+    # the text-only product: no geometry to process, left as it was and listed
+    (left,) = [w for w in result.report.warnings if w.code == "left_unchanged"]
+    label = next(p for p in model.by_type("IfcProduct") if p.Name == "label_only")
+    assert left.details["products"] == [{"global_id": label.GlobalId, "entity": label.is_a(),
+                                         "reason": "geometry could not be processed"}]
+    assert out.by_guid(label.GlobalId).Representation.Representations[0].Items[0].is_a("IfcTextLiteral")
+    assert result.products_total == 15
     # the nested placements still hang where they did
     nested = next(p for p in out.by_type("IfcProduct") if p.Name == "chiral_nested_2")
     assert nested.ObjectPlacement.PlacementRelTo.PlacementRelTo is not None

@@ -42,7 +42,7 @@ def deviation(before: np.ndarray, after: np.ndarray) -> float:
 
 def normalised(message: str) -> str:
     """An error message without instance ids, to compare errors of the input and the output."""
-    return re.sub(r"#\d+", "#", message)
+    return re.sub(r"0x[0-9a-fA-F]+", "0x", re.sub(r"#\d+", "#", message))
 
 
 def inherited(output_errors: list[str], input_errors: list[str]) -> bool:

@@ -86,6 +86,7 @@ class Product:
     container: int = 0  # index of the spatial element (ring) holding it
     name: str = ""
     style_rgb: tuple[float, float, float] | None = None
+    text_only: bool = False  # a body the geometry kernel cannot process (an IfcTextLiteral)
 
 
 @dataclass
@@ -208,7 +209,11 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
         parent = elements[p.parent].ObjectPlacement if p.parent is not None else (
             rings[p.container].ObjectPlacement if rings else tunnel.ObjectPlacement)
         placement = _placement(f, p.placement, parent)
-        if p.extrusion is not None:
+        if p.text_only:
+            item = f.create_entity("IfcTextLiteral", p.name, f.create_entity(
+                "IfcAxis2Placement3D", f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None), "LEFT")
+            rep_type = "Annotation2D"
+        elif p.extrusion is not None:
             xdim, ydim, depth = p.extrusion
             profile = f.create_entity("IfcRectangleProfileDef", "AREA", None,
                                       f.create_entity("IfcAxis2Placement2D",
@@ -291,7 +296,7 @@ def apply(m: np.ndarray, verts: np.ndarray) -> np.ndarray:
 
 ZOO_NAMES = ("chiral_a", "chiral_b_shuffled", "chiral_mirrored", "chiral_scaled_1pct", "cube_a", "cube_b",
              "chiral_nested_1", "chiral_nested_2", "mapped_a", "mapped_b", "column_a", "column_b", "column_red",
-             "column_longer")
+             "column_longer", "label_only")
 
 
 def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
@@ -304,7 +309,8 @@ def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
       first placed relative to ``cube_b``, the second relative to the first);
     - two products already using one IfcRepresentationMap through IfcMappedItem;
     - three rectangular IfcExtrudedAreaSolid columns (one styled red, so not congruent in appearance)
-      and a longer one.
+      and a longer one;
+    - a product whose body is only an IfcTextLiteral (the kernel makes no geometry of it: left as it was).
     """
     rng = np.random.default_rng(seed)
     chiral, chiral_faces = segment_mesh(15.0, taper_deg=4.0)
@@ -339,6 +345,7 @@ def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
                                            ("column_longer", (0.4, 0.6, 3.5), None))):
         p.append(Product("column", entity="IfcColumn", extrusion=dims, style_rgb=rgb, name=name,
                          placement=pose(0, 0, 25 * k, o + [k * 3.0, 20.0, 0.0])))
+    p.append(Product("label", text_only=True, placement=pose(0, 0, 0, o), name="label_only"))
     return ModelSpec(schema=schema, products=p, containers=1)
 
 
