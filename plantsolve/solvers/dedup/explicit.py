@@ -19,15 +19,17 @@ FACE_MODELS = ("IfcFacetedBrep", "IfcFaceBasedSurfaceModel", "IfcShellBasedSurfa
 
 
 def _loop_points(model: ifcopenshell.file, item) -> tuple[list, int] | None:
-    """(points, face count) of a faceted item: every IfcPolyLoop's IfcCartesianPoints."""
+    """(points, face count) of a faceted item: every IfcCartesianPoint under it (each once)."""
     points, faces = [], 0
     for inst in model.traverse(item):
-        if inst.is_a("IfcFace"):
+        name = inst.is_a()
+        if name == "IfcCartesianPoint":
+            points.append(inst.Coordinates)
+        elif name == "IfcFace":
             faces += 1
-        elif inst.is_a("IfcPolyLoop"):
-            points.extend(p.Coordinates for p in inst.Polygon)
-        elif inst.is_a("IfcEdgeLoop") or inst.is_a("IfcVertexLoop") or inst.is_a("IfcCurve"):
-            return None  # edge loops and curved boundaries: the kernel's job
+        elif name in ("IfcEdgeLoop", "IfcVertexLoop", "IfcAdvancedFace", "IfcFaceSurface") or "Curve" in name or (
+                "Surface" in name and name not in ("IfcFaceBasedSurfaceModel", "IfcShellBasedSurfaceModel")):
+            return None  # edge loops and curved geometry: the kernel's job
     return points, faces
 
 
