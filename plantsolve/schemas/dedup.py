@@ -75,8 +75,9 @@ class Verification(BaseModel):
         description="Largest distance (file units) between a product's world geometry before and after, read "
         "back from the written file (two-way Hausdorff per product).")
     products_checked: int
-    semantic_counts_equal: bool = Field(description="Products per entity, property sets, spatial elements, "
-                                        "relationships and GlobalIds unchanged.")
+    semantic_counts_equal: bool = Field(description="Rooted instances per entity (products, property sets, "
+                                        "spatial elements, relationships), GlobalIds, property values and each "
+                                        "product's styles unchanged.")
     schema_valid: bool
     validation_errors: list[str] = Field(default_factory=list)
     express_rules: bool = Field(default=True, description="Whether EXPRESS where-rules were checked too.")

@@ -12,6 +12,8 @@ from scipy.spatial import cKDTree
 import ifcopenshell
 import ifcopenshell.validate
 
+from plantsolve.solvers.dedup.grouping import canonical
+
 MAX_ERRORS_LISTED = 50
 SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
 
@@ -20,17 +22,50 @@ def entity_counts(model: ifcopenshell.file) -> dict[str, int]:
     return dict(sorted(Counter(inst.is_a() for inst in model).items()))
 
 
+def _item_styles(item, styled_by: dict[int, list], depth: int = 0) -> list[str]:
+    keys = [repr(canonical(st.Styles)) for st in styled_by.get(item.id(), ())]
+    if item.is_a("IfcMappedItem") and depth < 8:
+        for inner in item.MappingSource.MappedRepresentation.Items or ():
+            keys += _item_styles(inner, styled_by, depth + 1)
+    return keys
+
+
+def product_styles(model: ifcopenshell.file) -> dict[str, tuple]:
+    """GlobalId → the styles (by content) on its representation items, through mapped items: a
+    product must look the same afterwards."""
+    styled_by: dict[int, list] = {}
+    for styled in model.by_type("IfcStyledItem"):
+        if styled.Item is not None:
+            styled_by.setdefault(styled.Item.id(), []).append(styled)
+    cache: dict[int, tuple] = {}
+    out = {}
+    for product in model.by_type("IfcProduct"):
+        shape = product.Representation
+        if shape is None:
+            continue
+        if shape.id() not in cache:
+            keys = [k for rep in shape.Representations or () for item in rep.Items or ()
+                    for k in _item_styles(item, styled_by)]
+            cache[shape.id()] = tuple(sorted(keys))
+        out[product.GlobalId] = cache[shape.id()]
+    return out
+
+
 def semantic_fingerprint(model: ifcopenshell.file) -> dict:
-    """Rooted instances per entity, their GlobalIds, and property values: what must not change."""
+    """Rooted instances per entity, their GlobalIds, property values and each product's styles:
+    what must not change."""
     counts = Counter()
     guids = set()
     for root in model.by_type("IfcRoot"):
         counts[root.is_a()] += 1
         guids.add(root.GlobalId)
     props = Counter()
+    for prop in model.by_type("IfcPropertySingleValue"):
+        props[(prop.Name, repr(prop.NominalValue))] += 1
     for prop in model.by_type("IfcProperty"):
-        props[(prop.is_a(), prop.Name)] += 1
-    return {"rooted": dict(counts), "guids": guids, "properties": dict(props)}
+        if not prop.is_a("IfcPropertySingleValue"):
+            props[(prop.is_a(), prop.Name)] += 1
+    return {"rooted": dict(counts), "guids": guids, "properties": dict(props), "styles": product_styles(model)}
 
 
 def deviation(before: np.ndarray, after: np.ndarray) -> float:
