@@ -95,8 +95,8 @@ class DedupResult(BaseModel):
     products_shared: int = Field(description="Products now using another product's geometry (class members "
                                  "other than the representative).")
     classes: list[DedupClass] = Field(description="Congruence classes with at least two members.")
-    original_bytes: int
-    optimized_bytes: int
+    original_bytes: int = Field(description="Size of the input's STEP text (of the .ifc inside an .ifczip).")
+    optimized_bytes: int = Field(description="Size of the optimized STEP text (optimized.ifc).")
     optimization_ratio: FiniteFloat
     optimization_rate: FiniteFloat
     entity_counts_before: dict[str, int]

@@ -7,11 +7,12 @@ import base64
 import csv
 import io
 import json
+import zipfile
 
 import ifcopenshell
 import pytest
 
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import Cancelled, InputRejected
 from plantsolve.solvers.dedup.synthetic import build_model, ModelSpec
 from plantsolve.solvers.dedup.upload import parse_upload
 from plantsolve.solvers.dedup.validation import check_input
@@ -20,9 +21,12 @@ from tests.conftest import REPO, run_plantsolve, wait_for
 EXAMPLES = REPO / "examples" / "dedup"
 
 
-def test_upload_with_options_through_the_api(client):
+def test_zipped_upload_with_options_through_the_api(client):
     content = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
-    response = client.post("/v1/dedup/jobs", files={"file": ("tunnel.ifc", content)},
+    archive = io.BytesIO()
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("tunnel.ifc", content)
+    response = client.post("/v1/dedup/jobs", files={"file": ("tunnel.ifczip", archive.getvalue())},
                            data={"options": json.dumps({"sharing": "mapped_item", "tolerance": 1e-4,
                                                             "express_rules": False})})
     assert response.status_code == 202, response.text
@@ -60,6 +64,21 @@ def test_bad_files_are_422_with_the_reason(client):
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["options", "sharing"]
     problem = client.post("/v1/dedup/jobs", json={"file": "not base64!"}).json()
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["file"]
+
+
+def test_cancellation_between_groups():
+    request = parse_upload("t.ifc", (EXAMPLES / "tunnel_3rings.ifc").read_bytes(), None)
+    seen = []
+
+    def progress(fraction, message=""):
+        seen.append(message)
+        if message.startswith("matching"):
+            raise Cancelled()
+
+    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
+    with pytest.raises(Cancelled):
+        solve(request, progress)
+    assert seen[-1].startswith("matching") and not any(m.startswith("sharing") for m in seen)
 
 
 def test_a_file_without_geometry_is_refused():
