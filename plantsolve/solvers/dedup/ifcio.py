@@ -19,8 +19,6 @@ import ifcopenshell
 from plantsolve.schemas.dedup import DedupRequest
 from plantsolve.solvers.base import reject
 
-KNOWN_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3", "IFC4X3_ADD2", "IFC4X3_ADD1", "IFC4X3_TC1", "IFC4X1", "IFC4X2")
-
 
 def request_bytes(request: DedupRequest) -> bytes:
     """The file's bytes (an upload's as received, or the JSON's ``file`` decoded)."""

@@ -24,7 +24,6 @@ import numpy as np
 
 import ifcopenshell
 import ifcopenshell.api
-import ifcopenshell.util.element
 import ifcopenshell.util.placement
 
 from plantsolve.solvers.base import Progress, no_progress

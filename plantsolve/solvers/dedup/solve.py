@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 import ifcopenshell
 import ifcopenshell.util.unit
 
