@@ -78,11 +78,12 @@ def _replace_in_list(owner, attribute: str, old, new) -> None:
     setattr(owner, attribute, [new if v == old else v for v in values if v != old or new is not None])
 
 
-def _exclusive(model: ifcopenshell.file, roots: list) -> list:
+def _exclusive(model: ifcopenshell.file, roots: list, sub: dict[int, object] | None = None) -> list:
     """The ``roots`` and everything under them that nothing outside that set references (what
     ``ifcopenshell.util.element.remove_deep2`` deletes, in a few calls into the C++ core instead of
-    one traversal per instance)."""
-    sub = {e.id(): e for root in roots for e in model.traverse(root) if e.id()}
+    one traversal per instance); ``sub`` is the traversal of ``roots`` when the caller has it."""
+    if sub is None:
+        sub = {e.id(): e for root in roots for e in model.traverse(root) if e.id()}
     allowed = set(sub)
     while True:
         inside = set(model._ids_referenced_only_within(list(allowed)))
@@ -98,8 +99,11 @@ def _remove_representation(model: ifcopenshell.file, old, new, styled_by: dict[i
     representative)."""
     for layer in [i for i in model.get_inverse(old) if i.is_a("IfcPresentationLayerAssignment")]:
         _replace_in_list(layer, "AssignedItems", old, new)
-    styled = [st for e in model.traverse(old) for st in styled_by.get(e.id(), ())]
-    pending.update(_exclusive(model, [old, *styled]))
+    sub = {e.id(): e for e in model.traverse(old) if e.id()}
+    styled = [st for i in sub for st in styled_by.get(i, ())]
+    for st in styled:
+        sub.update((e.id(), e) for e in model.traverse(st) if e.id())
+    pending.update(_exclusive(model, [old, *styled], sub))
 
 
 def _is_shared(model: ifcopenshell.file, instance, allowed: int = 1) -> bool:
