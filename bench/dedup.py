@@ -98,9 +98,9 @@ HEADER = ("| configuration | original MB | optimized MB | rate % | classes | sha
           + " | grouping+matching s | total s | peak MB | valid | max dev m |")
 
 
-def run_size(rings: int, arcs: int, folder: Path, *, full: bool) -> list[tuple[str, dict]]:
+def run_size(rings: int, arcs: int, folder: Path, *, full: bool, headline: bool = False) -> list[tuple[str, dict]]:
     rows = []
-    for schema in ("IFC4", "IFC2X3") if full else ("IFC4",):
+    for schema in ("IFC4", "IFC2X3") if full and not headline else ("IFC4",):
         path = folder / f"tunnel_{rings}_{schema}.ifc"
         start = time.perf_counter()
         size = _in_fresh_process(_generate, rings, arcs, schema, path)
@@ -108,6 +108,8 @@ def run_size(rings: int, arcs: int, folder: Path, *, full: bool) -> list[tuple[s
         modes = ([("product_shape", True, True), ("product_shape", False, False), ("mapped_item", True, False),
                   ("mapped_item", False, False)] if schema == "IFC4" else
                  [("mapped_item", True, True), ("mapped_item", False, False)])
+        if headline:  # the post-pass configurations of IFC4 only
+            modes = [m for m in modes if m[1]] if schema == "IFC4" else []
         if not full:
             modes = modes[:1] if schema == "IFC4" else []
         for sharing, postpass, rules in modes:
@@ -130,11 +132,13 @@ def main() -> None:
     parser.add_argument("--growth", action="store_true", help="also 1,060 and 2,120 rings (IFC4 product_shape "
                         "+ post-pass, --growth-arcs facets)")
     parser.add_argument("--growth-arcs", type=int, default=6)
+    parser.add_argument("--headline", action="store_true", help="only IFC4 with the post-pass (both sharing "
+                        "modes) and the baseline")
     args = parser.parse_args()
     rings, arcs = (20, 12) if args.quick else (args.rings, args.arcs)
     with tempfile.TemporaryDirectory(prefix="bench-dedup-") as tmp:
         folder = Path(tmp)
-        rows = run_size(rings, arcs, folder, full=True)
+        rows = run_size(rings, arcs, folder, full=True, headline=args.headline)
         growth = []
         if args.growth:
             for n in (530, 1060, 2120):

@@ -110,29 +110,34 @@ def make_candidate(product, representation, model, points: np.ndarray, n_triangl
     return Candidate(product, product_key(product, representation, model, len(points), n_triangles), make_shape(points))
 
 
-def pool_transforms(classes: list[CongruenceClass], tol: float) -> int:
-    """The flyweight pool of transforms: a member whose transform agrees (to fit noise) with one
-    already used by another member takes that one instead, if it still verifies within ``tol`` for
-    this member (two-way Hausdorff). The rings of a tunnel then write one transform per ring for all
-    eight segment types, and the post-pass merges their placements and operators. Returns how many
-    transforms were replaced."""
-    pool: dict[tuple, list[Match]] = {}
+def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int = 48) -> int:
+    """The flyweight pool of transforms: a member takes the transform already used by a nearby member
+    of an earlier class when that transform also verifies for it (two-way Hausdorff ≤ ``tol``). The
+    eight segments of a tunnel ring then share one transform (whichever of a symmetric segment's
+    valid rotations its own fit picked), and the post-pass merges their placements and operators.
+    Candidates are the ``neighbours`` nearest members by centroid. Returns how many were replaced."""
+    entries = [(ci, k) for ci, cls in enumerate(classes) for k in range(1, len(cls.members))]
+    if len(entries) < 2:
+        return 0
+    centres = np.array([classes[ci].members[k][0].shape.centre for ci, k in entries])
+    tree = cKDTree(centres - centres.mean(axis=0))
+    _, near = tree.query(centres - centres.mean(axis=0), k=min(neighbours, len(entries)))
     replaced = 0
-    for cls in classes:
-        rep = cls.representative.shape
-        for k, (cand, m) in enumerate(cls.members):
-            if k == 0:
+    for index, (ci, k) in enumerate(entries):
+        cls = classes[ci]
+        cand, m = cls.members[k]
+        tried: set[int] = set()
+        for n in np.atleast_1d(near[index]):
+            cj, kj = entries[n]
+            if cj >= ci:  # only members of earlier classes, whose transforms are final
                 continue
-            key = (tuple(np.round(m.rotation.reshape(-1) * m.scale, 7)),
-                   tuple(np.round(m.translation / max(100 * tol, 1e-9))))
-            for other in pool.get(key, ()):
-                if other is m or other.mirror != m.mirror:
-                    continue
-                dev = verify(rep, cand.shape, other, tol)
-                if dev <= tol:
-                    cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
-                    replaced += 1
-                    break
-            else:
-                pool.setdefault(key, []).append(m)
+            other = classes[cj].members[kj][1]
+            if id(other) in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
+                continue
+            tried.add(id(other))
+            dev = verify(cls.representative.shape, cand.shape, other, tol)
+            if dev <= tol:
+                cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
+                replaced += 1
+                break
     return replaced
