@@ -35,7 +35,7 @@ migrate: install
 
 bench: install
 	$(BIN)/python bench/api.py --quick
-	@for b in alignment tube perfmap polyhedra flowmeter rigidity; do [ -f bench/$$b.py ] && $(BIN)/python bench/$$b.py --quick || true; done
+	@for b in alignment tube perfmap polyhedra flowmeter rigidity dedup; do [ -f bench/$$b.py ] && $(BIN)/python bench/$$b.py --quick || true; done
 
 clean:
 	rm -rf $(VENV) var *.egg-info

@@ -11,7 +11,7 @@ import importlib
 from types import MappingProxyType
 from typing import Iterable, Mapping
 
-from plantsolve.solvers import alignment, flowmeter, perfmap, polyhedra, rigidity, tube
+from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, rigidity, tube
 from plantsolve.solvers.base import SolverSpec
 
 KINDS: Mapping[str, SolverSpec] = MappingProxyType({
@@ -21,6 +21,7 @@ KINDS: Mapping[str, SolverSpec] = MappingProxyType({
     "polyhedra": polyhedra.SPEC,
     "flowmeter": flowmeter.SPEC,
     "rigidity": rigidity.SPEC,
+    "dedup": dedup.SPEC,
 })
 
 

@@ -9,7 +9,7 @@ import pytest
 from pydantic import BaseModel
 
 from plantsolve.schemas.common import Report
-from plantsolve.solvers import alignment, flowmeter, perfmap, polyhedra, rigidity, tube
+from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, rigidity, tube
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 from plantsolve.solvers.kinds import KINDS, load_kinds
 from plantsolve.solvers.perfmap.query import answer_query
@@ -34,7 +34,7 @@ def _spec(kind="extra", **extra) -> SolverSpec:
 def test_the_map_lists_each_package_spec_under_its_own_kind():
     assert dict(KINDS) == {"alignment": alignment.SPEC, "tube": tube.SPEC, "perfmap": perfmap.SPEC,
                            "polyhedra": polyhedra.SPEC, "flowmeter": flowmeter.SPEC,
-                           "rigidity": rigidity.SPEC}
+                           "rigidity": rigidity.SPEC, "dedup": dedup.SPEC}
     for kind, spec in KINDS.items():
         assert spec.kind == kind and spec.version and spec.description
         assert spec.check_input and spec.parse_upload and spec.render_artifacts and spec.upload_extensions
@@ -47,7 +47,7 @@ def test_perfmap_declares_its_query_as_an_operation():
     (operation,) = perfmap.SPEC.operations
     assert operation.name == "query" and operation.answer is answer_query
     assert alignment.SPEC.operations == tube.SPEC.operations == polyhedra.SPEC.operations == flowmeter.SPEC.operations == ()
-    assert rigidity.SPEC.operations == ()
+    assert rigidity.SPEC.operations == dedup.SPEC.operations == ()
 
 
 def _plugin(name: str, **attributes) -> str:
@@ -60,7 +60,8 @@ def _plugin(name: str, **attributes) -> str:
 def test_plugins_add_kinds_without_touching_the_map():
     name = _plugin("plantsolve_test_plugin_ok", SPECS=(_spec("extra"),))
     kinds = load_kinds([name])
-    assert set(kinds) == set(KINDS) | {"extra"} and set(KINDS) == {"alignment", "tube", "perfmap", "polyhedra", "flowmeter", "rigidity"}
+    assert set(kinds) == set(KINDS) | {"extra"} and set(KINDS) == {"alignment", "tube", "perfmap", "polyhedra", "flowmeter",
+                                                                   "rigidity", "dedup"}
     assert load_kinds([]) == KINDS
 
 

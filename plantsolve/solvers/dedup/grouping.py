@@ -1,0 +1,143 @@
+"""Phase 1 (paper Section "Basic algorithm", grouping) and phase 2's driver: products are grouped by
+entity, ``ObjectType``, predefined type, the structure and styling of their body representation and
+an invariant signature of their world geometry (point and triangle counts exactly; principal spreads
+and centred-distance quantiles within the tolerance, through a k-d tree so that only plausible pairs
+are ever compared). Within a group, the first unassigned product becomes a representative and every
+candidate near it in signature space is matched (``matching.match``); a candidate that fails stays
+for a later representative."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.matching import Match, Shape, make_shape, match, verify
+
+QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
+CANONICAL_DEPTH = 8
+
+
+@dataclass
+class Candidate:
+    product: object  # the ifcopenshell entity_instance
+    key: tuple
+    shape: Shape
+
+
+@dataclass
+class CongruenceClass:
+    representative: Candidate
+    members: list[tuple[Candidate, Match]] = field(default_factory=list)  # the representative first (identity)
+
+
+def canonical(value, depth: int = CANONICAL_DEPTH):
+    """Content of an instance graph without instance ids (two equal styles give equal keys)."""
+    if hasattr(value, "is_a") and hasattr(value, "id"):
+        if depth <= 0:
+            return (value.is_a(),)
+        return (value.is_a(),) + tuple(canonical(v, depth - 1) for v in value)
+    if isinstance(value, (tuple, list)):
+        return tuple(canonical(v, depth) for v in value)
+    if isinstance(value, float):
+        return round(value, 12)
+    return value
+
+
+def style_key(model, representation) -> tuple:
+    """The styles of the representation's items, by content."""
+    keys = []
+    for item in representation.Items or ():
+        for styled in model.get_inverse(item):
+            if styled.is_a("IfcStyledItem"):
+                keys.append(canonical(styled.Styles))
+    return tuple(sorted(map(repr, keys)))
+
+
+def signature(shape: Shape) -> np.ndarray:
+    d = np.sqrt(np.sum(shape.local * shape.local, axis=1))
+    return np.concatenate([np.sqrt(np.maximum(shape.eigenvalues, 0.0)), [shape.radius],
+                           np.quantile(d, QUANTILES)])
+
+
+def product_key(product, representation, model, n_points: int, n_triangles: int) -> tuple:
+    return (product.is_a(), getattr(product, "ObjectType", None), getattr(product, "PredefinedType", None),
+            tuple(sorted(item.is_a() for item in representation.Items or ())), style_key(model, representation),
+            n_points, n_triangles)
+
+
+def build_classes(candidates: list[Candidate], tol: float, *, allow_mirror: bool, allow_scale: bool,
+                  progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0)) -> list[CongruenceClass]:
+    """Every candidate in exactly one class (singletons included), in file order."""
+    groups: dict[tuple, list[Candidate]] = {}
+    for c in candidates:
+        groups.setdefault(c.key, []).append(c)
+    classes: list[CongruenceClass] = []
+    done = 0
+    lo, hi = span
+    for group in groups.values():
+        progress(lo + (hi - lo) * done / max(len(candidates), 1), f"matching {len(group)} products of "
+                 f"{group[0].key[0]} {group[0].key[1] or ''}".rstrip())
+        sig = np.array([signature(c.shape) for c in group])
+        if allow_scale:  # scale-free: divide by the RMS radius
+            sig = sig / np.maximum(sig[:, 3:4], 1e-300)
+        tree = cKDTree(sig)
+        assigned = np.zeros(len(group), dtype=bool)
+        for i, rep in enumerate(group):
+            if assigned[i]:
+                continue
+            assigned[i] = True
+            identity = Match(np.eye(3), 1.0, np.zeros(3), 0.0, False)
+            cls = CongruenceClass(rep, [(rep, identity)])
+            r = (4 * tol / max(rep.shape.radius, 1e-300) + 1e-9) if allow_scale else 4 * tol + 1e-12
+            for j in sorted(tree.query_ball_point(sig[i], r=r, p=np.inf)):
+                if assigned[j]:
+                    continue
+                m = match(rep.shape, group[j].shape, tol, allow_mirror=allow_mirror, allow_scale=allow_scale)
+                if m is not None:
+                    assigned[j] = True
+                    cls.members.append((group[j], m))
+            classes.append(cls)
+            done += len(cls.members)
+            if len(classes) % 16 == 0:
+                progress(lo + (hi - lo) * done / max(len(candidates), 1), "matching")
+    return classes
+
+
+def make_candidate(product, representation, model, points: np.ndarray, n_triangles: int) -> Candidate:
+    return Candidate(product, product_key(product, representation, model, len(points), n_triangles), make_shape(points))
+
+
+def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int = 48) -> int:
+    """The flyweight pool of transforms: a member takes the transform already used by a nearby member
+    of an earlier class when that transform also verifies for it (two-way Hausdorff ≤ ``tol``). The
+    eight segments of a tunnel ring then share one transform (whichever of a symmetric segment's
+    valid rotations its own fit picked), and the post-pass merges their placements and operators.
+    Candidates are the ``neighbours`` nearest members by centroid. Returns how many were replaced."""
+    entries = [(ci, k) for ci, cls in enumerate(classes) for k in range(1, len(cls.members))]
+    if len(entries) < 2:
+        return 0
+    centres = np.array([classes[ci].members[k][0].shape.centre for ci, k in entries])
+    tree = cKDTree(centres - centres.mean(axis=0))
+    _, near = tree.query(centres - centres.mean(axis=0), k=min(neighbours, len(entries)))
+    replaced = 0
+    for index, (ci, k) in enumerate(entries):
+        cls = classes[ci]
+        cand, m = cls.members[k]
+        tried: set[int] = set()
+        for n in np.atleast_1d(near[index]):
+            cj, kj = entries[n]
+            if cj >= ci:  # only members of earlier classes, whose transforms are final
+                continue
+            other = classes[cj].members[kj][1]
+            if id(other) in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
+                continue
+            tried.add(id(other))
+            dev = verify(cls.representative.shape, cand.shape, other, tol)
+            if dev <= tol:
+                cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
+                replaced += 1
+                break
+    return replaced

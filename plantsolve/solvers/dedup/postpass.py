@@ -1,0 +1,143 @@
+"""The schema-aware syntactic post-pass: identical non-rooted instances (points, directions,
+placements, styles, owner histories, ...) are merged in one sweep in topological order (an instance
+after everything it references, so each is keyed by its already-merged references and compared
+once), as IFCCompressor and the Solibri optimizer do generically (paper Section "Related work").
+
+It respects the file schema's inverse cardinalities: an instance that is referenced through an
+inverse attribute bounded to one (IFC2X3: a placement's ``PlacesObject``, a product shape's
+``ShapeOfProduct``; every schema: a representation item's ``StyledByItem``) is never merged, and
+neither is one a style or a presentation layer points at (merging it with an undecorated twin would
+restyle or re-layer the twin's users). Representations are never merged
+(``IfcShapeModel.WR11``), rooted instances and contexts never.
+"""
+
+from __future__ import annotations
+
+import ifcopenshell
+import ifcopenshell.ifcopenshell_wrapper as wrapper
+
+from plantsolve.solvers.base import Progress, no_progress
+
+NEVER_MERGED = ("IfcRoot", "IfcRepresentation", "IfcRepresentationContext", "IfcProductRepresentation")
+
+
+def _pinned(model: ifcopenshell.file) -> set[int]:
+    """Ids of instances referenced through an inverse attribute whose upper bound is one, or styled or layered."""
+    schema = wrapper.schema_by_name(model.schema_identifier if hasattr(model, "schema_identifier") else model.schema)
+    pinned: set[int] = set()
+    seen_types: set[str] = set()
+    bounded: set[tuple[str, str]] = set()
+    for inst in model:
+        name = inst.is_a()
+        if name in seen_types:
+            continue
+        seen_types.add(name)
+        for inv in schema.declaration_by_name(name).all_inverse_attributes():
+            if inv.bound2() == 1:
+                bounded.add((inv.entity_reference().name(), inv.attribute_reference().name()))
+    # decorations: a styled or layered instance must not absorb an undecorated one (nor the reverse)
+    bounded |= {("IfcStyledItem", "Item"), ("IfcPresentationLayerAssignment", "AssignedItems")}
+    for entity, attribute in bounded:
+        try:
+            referencers = model.by_type(entity)
+        except RuntimeError:
+            continue
+        for ref in referencers:
+            value = getattr(ref, attribute, None)
+            for v in (value if isinstance(value, tuple) else (value,)):
+                if isinstance(v, ifcopenshell.entity_instance) and v.id():
+                    pinned.add(v.id())
+    return pinned
+
+
+def _topological(model: ifcopenshell.file) -> list:
+    order, state = [], {}
+    for root in model:
+        if root.id() in state:
+            continue
+        stack = [(root, False)]
+        while stack:
+            inst, expanded = stack.pop()
+            key = inst.id()
+            if expanded:
+                if state.get(key) != 2:
+                    state[key] = 2
+                    order.append(inst)
+                continue
+            if key in state:
+                continue
+            state[key] = 1
+            stack.append((inst, True))
+            for child in model.traverse(inst, max_levels=1)[1:]:
+                if child.id() and child.id() not in state:
+                    stack.append((child, False))
+    return order
+
+
+def _substituted(value, remap: dict[int, object]):
+    """``value`` with merged references replaced; ``None`` if nothing changed."""
+    if isinstance(value, ifcopenshell.entity_instance):
+        return remap.get(value.id()) if value.id() else None
+    if isinstance(value, tuple):
+        changed = False
+        out = []
+        for v in value:
+            s = _substituted(v, remap)
+            changed |= s is not None
+            out.append(v if s is None else s)
+        return tuple(out) if changed else None
+    return None
+
+
+def _key_of(value):
+    if isinstance(value, ifcopenshell.entity_instance):
+        return ("#", value.id()) if value.id() else (value.is_a(), _key_of(value.wrappedValue))
+    if isinstance(value, tuple):
+        return tuple(_key_of(v) for v in value)
+    if isinstance(value, float):
+        return ("f", value)
+    return value
+
+
+def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
+                    span: tuple[float, float] = (0.0, 1.0)) -> dict[str, int]:
+    """Merge identical non-rooted instances; returns how many of each entity were removed."""
+    pinned = _pinned(model)
+    order = _topological(model)
+    remap: dict[int, object] = {}
+    canonical: dict[tuple, object] = {}
+    mergeable_cache: dict[str, bool] = {}
+    duplicates = []
+    lo, hi = span
+    for k, inst in enumerate(order):
+        if k % 20000 == 0:
+            progress(lo + (hi - lo) * k / max(len(order), 1), "post-pass")
+        values = list(inst)
+        for i, v in enumerate(values):
+            s = _substituted(v, remap)
+            if s is not None:
+                inst[i] = s
+                values[i] = s
+        name = inst.is_a()
+        mergeable = mergeable_cache.get(name)
+        if mergeable is None:
+            mergeable = mergeable_cache[name] = not any(inst.is_a(t) for t in NEVER_MERGED)
+        if not mergeable:
+            continue
+        key = (name, tuple(_key_of(v) for v in values))
+        if inst.id() in pinned:
+            continue
+        first = canonical.get(key)
+        if first is None:
+            canonical[key] = inst
+        else:
+            remap[inst.id()] = first
+            duplicates.append(inst)
+    removed: dict[str, int] = {}
+    model.batch()
+    for dup in duplicates:
+        if model.get_total_inverses(dup) == 0:
+            removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
+            model.remove(dup)
+    model.unbatch()
+    return removed

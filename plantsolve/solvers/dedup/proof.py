@@ -1,0 +1,100 @@
+"""Proof instead of the paper's "visual perception": per-product world geometry before vs after (the
+written file read back and tessellated again), semantic counts, and ``ifcopenshell.validate``."""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+import ifcopenshell
+import ifcopenshell.validate
+
+from plantsolve.solvers.dedup.grouping import canonical
+
+MAX_ERRORS_LISTED = 50
+SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
+
+
+def entity_counts(model: ifcopenshell.file) -> dict[str, int]:
+    return dict(sorted(Counter(inst.is_a() for inst in model).items()))
+
+
+def _item_styles(item, styled_by: dict[int, list], depth: int = 0) -> list[str]:
+    keys = [repr(canonical(st.Styles)) for st in styled_by.get(item.id(), ())]
+    if item.is_a("IfcMappedItem") and depth < 8:
+        for inner in item.MappingSource.MappedRepresentation.Items or ():
+            keys += _item_styles(inner, styled_by, depth + 1)
+    return keys
+
+
+def product_styles(model: ifcopenshell.file) -> dict[str, tuple]:
+    """GlobalId → the styles (by content) on its representation items, through mapped items: a
+    product must look the same afterwards."""
+    styled_by: dict[int, list] = {}
+    for styled in model.by_type("IfcStyledItem"):
+        if styled.Item is not None:
+            styled_by.setdefault(styled.Item.id(), []).append(styled)
+    cache: dict[int, tuple] = {}
+    out = {}
+    for product in model.by_type("IfcProduct"):
+        shape = product.Representation
+        if shape is None:
+            continue
+        if shape.id() not in cache:
+            keys = [k for rep in shape.Representations or () for item in rep.Items or ()
+                    for k in _item_styles(item, styled_by)]
+            cache[shape.id()] = tuple(sorted(keys))
+        out[product.GlobalId] = cache[shape.id()]
+    return out
+
+
+def semantic_fingerprint(model: ifcopenshell.file) -> dict:
+    """Rooted instances per entity, their GlobalIds, property values and each product's styles:
+    what must not change."""
+    counts = Counter()
+    guids = set()
+    for root in model.by_type("IfcRoot"):
+        counts[root.is_a()] += 1
+        guids.add(root.GlobalId)
+    props = Counter()
+    for prop in model.by_type("IfcPropertySingleValue"):
+        props[(prop.Name, repr(prop.NominalValue))] += 1
+    for prop in model.by_type("IfcProperty"):
+        if not prop.is_a("IfcPropertySingleValue"):
+            props[(prop.is_a(), prop.Name)] += 1
+    return {"rooted": dict(counts), "guids": guids, "properties": dict(props), "styles": product_styles(model)}
+
+
+def deviation(before: np.ndarray, after: np.ndarray) -> float:
+    """Two-way Hausdorff distance of two point sets, centred on the first for accuracy."""
+    c = before.mean(axis=0)
+    a, b = before - c, after - c
+    return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
+
+
+def normalised(message: str) -> str:
+    """An error message without instance ids, to compare errors of the input and the output."""
+    return re.sub(r"0x[0-9a-fA-F]+", "0x", re.sub(r"#\d+", "#", message))
+
+
+def inherited(output_errors: list[str], input_errors: list[str]) -> bool:
+    """Whether every error of the output is one the input already had (as many times or more)."""
+    have = Counter(normalised(e) for e in input_errors)
+    need = Counter(normalised(e) for e in output_errors)
+    return all(have[k] >= n for k, n in need.items())
+
+
+def validate(model: ifcopenshell.file, express_rules: bool) -> list[str]:
+    logger = ifcopenshell.validate.json_logger()
+    ifcopenshell.validate.validate(model, logger, express_rules=express_rules)
+    errors = []
+    for statement in logger.statements:
+        if str(statement.get("level", "error")).lower() not in ("error", "critical"):
+            continue
+        inst = statement.get("instance")
+        where = f"{inst}: " if inst is not None else ""
+        errors.append(f"{where}{statement.get('message', statement)}"[:500])
+    return errors

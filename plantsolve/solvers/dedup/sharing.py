@@ -1,0 +1,192 @@
+"""Phase 3 (paper Sections "Sharing data using implicit flyweights" and the explicit IfcMappedItem
+concept): each class's geometry is written once and reused, with IfcOpenShell.
+
+- ``mapped_item`` (IFC2X3 and later): the representative's body representation becomes the
+  ``MappedRepresentation`` of one ``IfcRepresentationMap`` (made by ``ifcopenshell.api``'s
+  ``geometry.map_representation``); every member, the representative included, gets a new body
+  ``IfcShapeRepresentation`` holding one ``IfcMappedItem`` whose ``IfcCartesianTransformationOperator3D``
+  carries the member's transform expressed in its own object frame
+  (``P_member⁻¹ · T · P_representative``); mirror and scale only ever go here.
+- ``product_shape`` (IFC4 and later; ``ShapeOfProduct`` is [1:1] in IFC2X3): rigid members share the
+  representative's ``IfcProductDefinitionShape`` and get a new ``IfcLocalPlacement`` (same parent)
+  carrying the transform. A member whose product shape holds more than its body representation, or
+  whose transform mirrors or scales, falls back to a mapped item.
+- An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
+
+A member's old representation is deleted with the instances only it used (as ``remove_deep2`` does,
+all in one batch); styled items of its items go with it (grouping guarantees the representative carries equal styles); a
+presentation layer that held the old representation holds the new one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import ifcopenshell
+import ifcopenshell.api
+import ifcopenshell.util.placement
+
+from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.grouping import CongruenceClass
+
+
+def placement_matrix(product) -> np.ndarray:
+    if product.ObjectPlacement is None:
+        return np.eye(4)
+    return np.asarray(ifcopenshell.util.placement.get_local_placement(product.ObjectPlacement), dtype=float)
+
+
+def body_representation(product):
+    """The product's body ``IfcShapeRepresentation`` (identifier 'Body', or the only one), or None."""
+    shape = product.Representation
+    if shape is None or not shape.is_a("IfcProductDefinitionShape"):
+        return None
+    reps = [r for r in shape.Representations or () if r.is_a("IfcShapeRepresentation")]
+    body = [r for r in reps if (r.RepresentationIdentifier or "").lower() == "body"]
+    if len(body) == 1:
+        return body[0]
+    if len(reps) == 1 and not body:
+        return reps[0]
+    return None
+
+
+def _floats(v) -> list[float]:
+    return [float(x) for x in v]
+
+
+def operator(model: ifcopenshell.file, t: np.ndarray):
+    """``IfcCartesianTransformationOperator3D`` of 4×4 ``t`` = s·R (R orthogonal, maybe improper) + translation."""
+    a = t[:3, :3]
+    s = float(abs(np.linalg.det(a)) ** (1.0 / 3.0))
+    r = a / s
+    return model.create_entity(
+        "IfcCartesianTransformationOperator3D",
+        model.create_entity("IfcDirection", _floats(r[:, 0])),
+        model.create_entity("IfcDirection", _floats(r[:, 1])),
+        model.create_entity("IfcCartesianPoint", _floats(t[:3, 3])),
+        s, model.create_entity("IfcDirection", _floats(r[:, 2])))
+
+
+def axis_placement(model: ifcopenshell.file, t: np.ndarray):
+    return model.create_entity("IfcAxis2Placement3D", model.create_entity("IfcCartesianPoint", _floats(t[:3, 3])),
+                               model.create_entity("IfcDirection", _floats(t[:3, 2])),
+                               model.create_entity("IfcDirection", _floats(t[:3, 0])))
+
+
+def _replace_in_list(owner, attribute: str, old, new) -> None:
+    values = list(getattr(owner, attribute))
+    setattr(owner, attribute, [new if v == old else v for v in values if v != old or new is not None])
+
+
+def _exclusive(model: ifcopenshell.file, roots: list, sub: dict[int, object] | None = None) -> list:
+    """The ``roots`` and everything under them that nothing outside that set references (what
+    ``ifcopenshell.util.element.remove_deep2`` deletes, in a few calls into the C++ core instead of
+    one traversal per instance); ``sub`` is the traversal of ``roots`` when the caller has it."""
+    if sub is None:
+        sub = {e.id(): e for root in roots for e in model.traverse(root) if e.id()}
+    allowed = set(sub)
+    while True:
+        inside = set(model._ids_referenced_only_within(list(allowed)))
+        dropped = allowed - inside
+        if not dropped:
+            return [sub[i] for i in allowed]
+        allowed -= dropped
+
+
+def _remove_representation(model: ifcopenshell.file, old, new, styled_by: dict[int, list], pending: set) -> None:
+    """Schedule ``old`` (no longer referenced by its product shape) for deletion with what only it
+    used, the styled items of its items included (grouping guarantees equal styles on the class's
+    representative)."""
+    for layer in [i for i in model.get_inverse(old) if i.is_a("IfcPresentationLayerAssignment")]:
+        _replace_in_list(layer, "AssignedItems", old, new)
+    sub = {e.id(): e for e in model.traverse(old) if e.id()}
+    styled = [st for i in sub for st in styled_by.get(i, ())]
+    for st in styled:
+        sub.update((e.id(), e) for e in model.traverse(st) if e.id())
+    pending.update(_exclusive(model, [old, *styled], sub))
+
+
+def _is_shared(model: ifcopenshell.file, instance, allowed: int = 1) -> bool:
+    return model.get_total_inverses(instance) > allowed
+
+
+def can_share_product_shape(model: ifcopenshell.file, cls: CongruenceClass) -> bool:
+    rep = cls.representative.product
+    return len(rep.Representation.Representations) == 1 and not _is_shared(model, rep.Representation)
+
+
+def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *,
+          progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0)) -> dict[str, int]:
+    """Rewrite every class with at least two members; returns counts of what was written."""
+    counts = {"mapped_items": 0, "shared_product_shapes": 0, "fallback_to_mapped_item": 0}
+    multi = [c for c in classes if len(c.members) > 1]
+    styled_by: dict[int, list] = {}
+    for styled in model.by_type("IfcStyledItem"):
+        if styled.Item is not None:
+            styled_by.setdefault(styled.Item.id(), []).append(styled)
+    pending: set = set()
+    try:
+        _apply(model, multi, mode, counts, progress, span, styled_by, pending)
+    finally:
+        # one batch: removing instance by instance rewrites the inverse maps thousands of times
+        model.batch()
+        for instance in pending:
+            model.remove(instance)
+        model.unbatch()
+    return counts
+
+
+def _apply(model, multi, mode, counts, progress, span, styled_by, pending) -> None:
+    lo, hi = span
+    for k, cls in enumerate(multi):
+        if k % 8 == 0:
+            progress(lo + (hi - lo) * k / max(len(multi), 1), "sharing")
+        rep = cls.representative.product
+        p_rep = placement_matrix(rep)
+        shape_mode = mode == "product_shape" and can_share_product_shape(model, cls)
+        mapped = []  # members written as mapped items
+        for cand, m in cls.members[1:]:
+            member = cand.product
+            t_world = m.matrix
+            rigid = not m.mirror and abs(m.scale - 1.0) < 1e-12
+            member_ok = (shape_mode and rigid and len(member.Representation.Representations) == 1
+                         and not _is_shared(model, member.Representation)
+                         and (member.ObjectPlacement is None or member.ObjectPlacement.is_a("IfcLocalPlacement")))
+            if not member_ok:
+                if shape_mode:
+                    counts["fallback_to_mapped_item"] += 1
+                mapped.append((member, t_world))
+                continue
+            old_shape = member.Representation
+            parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
+            p_parent = (np.asarray(ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
+                        if parent is not None else np.eye(4))
+            relative = np.linalg.inv(p_parent) @ t_world @ p_rep
+            old_placement = member.ObjectPlacement
+            member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
+            member.Representation = rep.Representation
+            if old_placement is not None and model.get_total_inverses(old_placement) == 0:
+                pending.update(_exclusive(model, [old_placement]))
+            old_body = old_shape.Representations[0]
+            old_shape.Representations = []
+            model.remove(old_shape)
+            _remove_representation(model, old_body, None, styled_by, pending)
+            counts["shared_product_shapes"] += 1
+        if not mapped:
+            continue
+        body_rep = body_representation(rep)
+        new_rep_repr = ifcopenshell.api.run("geometry.map_representation", model, representation=body_rep)
+        _replace_in_list(rep.Representation, "Representations", body_rep, new_rep_repr)
+        for layer in [i for i in model.get_inverse(body_rep) if i.is_a("IfcPresentationLayerAssignment")]:
+            _replace_in_list(layer, "AssignedItems", body_rep, new_rep_repr)
+        source = new_rep_repr.Items[0].MappingSource
+        counts["mapped_items"] += 1
+        for member, t_world in mapped:
+            old = body_representation(member)
+            local = np.linalg.inv(placement_matrix(member)) @ t_world @ p_rep
+            item = model.create_entity("IfcMappedItem", source, operator(model, local))
+            new = model.create_entity("IfcShapeRepresentation", old.ContextOfItems, old.RepresentationIdentifier,
+                                      "MappedRepresentation", [item])
+            _replace_in_list(member.Representation, "Representations", old, new)
+            _remove_representation(model, old, new, styled_by, pending)
+            counts["mapped_items"] += 1

@@ -1,0 +1,199 @@
+"""The dedup pipeline: read → world geometry → grouping → matching → sharing → post-pass → write →
+proof (the written file read back). Phases as in the paper's Fig. 4, timed like its Table 2."""
+
+from __future__ import annotations
+
+import time
+
+import ifcopenshell
+import ifcopenshell.util.unit
+
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.schemas.dedup import DedupClass, DedupRequest, DedupResult, Verification
+from plantsolve.solvers.base import Progress, reject
+from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
+from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.worldgeom import world_points
+
+DEFAULT_PRECISION_M = 1e-5
+MAX_LISTED = 200
+
+
+def resolve_mode(requested: str, schema: str) -> str:
+    if requested == "auto":
+        return "mapped_item" if schema == "IFC2X3" else "product_shape"
+    return requested
+
+
+def model_tolerance(model: ifcopenshell.file, unit: float) -> float:
+    """The Model context's Precision (file units), else 1e-5 m."""
+    values = [c.Precision for c in model.by_type("IfcGeometricRepresentationContext")
+              if not c.is_a("IfcGeometricRepresentationSubContext") and c.Precision]
+    return float(max(values)) if values else DEFAULT_PRECISION_M / unit
+
+
+def length_unit_name(model: ifcopenshell.file) -> str:
+    unit = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT")
+    if unit is None:
+        return "METRE"
+    if unit.is_a("IfcSIUnit"):
+        return f"{unit.Prefix or ''}{unit.Name}"
+    return str(getattr(unit, "Name", unit.is_a()))
+
+
+def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
+    """Why ``product`` cannot be deduplicated, or None."""
+    if wanted and not any(product.is_a(t) for t in wanted):
+        return "entity not selected"
+    body = sharing.body_representation(product)
+    if body is None:
+        return "no single body representation"
+    if model.get_total_inverses(body) > 1 + sum(1 for i in model.get_inverse(body)
+                                                 if i.is_a("IfcPresentationLayerAssignment")):
+        return "body representation already shared"
+    if sum(1 for i in model.get_inverse(product.Representation) if i.is_a("IfcProduct")) > 1:
+        return "product shape already shared"
+    if product.ObjectPlacement is not None and not product.ObjectPlacement.is_a("IfcLocalPlacement"):
+        return f"placement {product.ObjectPlacement.is_a()} is not an IfcLocalPlacement"
+    return None
+
+
+def solve(request: DedupRequest, progress: Progress) -> DedupResult:
+    opts = request.options
+    timings: dict[str, float] = {}
+    warnings: list[Diagnostic] = []
+    clock = time.perf_counter()
+
+    def lap(name: str) -> None:
+        nonlocal clock
+        now = time.perf_counter()
+        timings[name] = round(now - clock, 4)
+        clock = now
+
+    progress(0.0, "reading the IFC file")
+    with ifcio.opened(request) as (model, original_bytes):
+        lap("parse")
+        schema = model.schema
+        mode = resolve_mode(opts.sharing, schema)
+        if mode == "product_shape" and schema == "IFC2X3":
+            raise reject("'product_shape' needs IFC4 or later: in IFC2X3 an IfcProductDefinitionShape belongs to "
+                         "exactly one product (ShapeOfProduct [1:1]); use 'mapped_item'", ("options", "sharing"))
+        unit = ifcopenshell.util.unit.calculate_unit_scale(model)
+        unit_name = length_unit_name(model)
+        tol = float(opts.tolerance) if opts.tolerance is not None else model_tolerance(model, unit)
+        counts_before = proof.entity_counts(model)
+        semantic_before = proof.semantic_fingerprint(model)
+        products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
+        if not products:
+            raise reject("the file has no product with geometry (no IfcProduct has a Representation)")
+        progress(0.05, "tessellating products in world coordinates")
+        points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35))
+        if not points:
+            raise reject("no product geometry could be processed by the geometry kernel")
+        before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
+        skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": "geometry could not be processed"}
+                   for p in products if p.id() not in points]
+        lap("geometry")
+        wanted = tuple(opts.entity_types) if opts.entity_types else None
+        candidates = []
+        for p in products:
+            if p.id() not in points:
+                continue
+            why = _eligible(model, p, wanted)
+            if why is not None:
+                if why != "entity not selected":
+                    skipped.append({"global_id": p.GlobalId, "entity": p.is_a(), "reason": why})
+                continue
+            candidates.append(make_candidate(p, sharing.body_representation(p), model, points[p.id()],
+                                             triangles[p.id()]))
+        lap("grouping")
+        classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
+                                progress=progress, span=(0.35, 0.55))
+        pooled = pool_transforms(classes, tol)
+        lap("matching")
+        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65))
+        lap("sharing")
+        removed = {}
+        if opts.postpass:
+            removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72))
+        lap("postpass")
+        progress(0.72, "writing the optimized file")
+        optimized = ifcio.write_bytes(model)
+        del model
+        lap("write")
+
+    progress(0.75, "verifying: reading the written file back")
+    check = ifcio.open_path_from_bytes(optimized)
+    try:
+        again = {p.GlobalId: p for p in check.model.by_type("IfcProduct")}
+        back_products = [again[g] for g in before if g in again]
+        after_points, _ = world_points(check.model, back_products, progress=progress, span=(0.75, 0.9),
+                                       message="verifying geometry")
+        deviations = []
+        missing = []
+        for g, pts in before.items():
+            prod = again.get(g)
+            if prod is None or prod.id() not in after_points:
+                missing.append(g)
+                continue
+            deviations.append(proof.deviation(pts, after_points[prod.id()]))
+        semantic_equal = proof.semantic_fingerprint(check.model) == semantic_before and not missing
+        progress(0.9, "validating the written file")
+        errors = proof.validate(check.model, express_rules=opts.express_rules)
+        counts_after = proof.entity_counts(check.model)
+    finally:
+        check.close()
+    inherited_errors = False
+    if errors:  # are they ours? (real exports are often invalid already)
+        with ifcio.opened(request) as (original, _):
+            inherited_errors = proof.inherited(errors, proof.validate(original, express_rules=opts.express_rules))
+    lap("verification")
+    max_dev = float(max(deviations)) if deviations else None
+    verification = Verification(max_deviation=max_dev, products_checked=len(deviations),
+                                semantic_counts_equal=semantic_equal, schema_valid=not errors,
+                                validation_errors=errors[:proof.MAX_ERRORS_LISTED], express_rules=opts.express_rules,
+                                errors_inherited=inherited_errors)
+    if inherited_errors:
+        warnings.append(Diagnostic(code="input_invalid", message=f"The output has {len(errors)} validation error(s), "
+                                   "all of them already in the input file", details={}))
+    ok = semantic_equal and (not errors or inherited_errors) and (max_dev is None or max_dev <= tol)
+    out_classes = []
+    shared = 0
+    for cls in classes:
+        if len(cls.members) < 2:
+            continue
+        shared += len(cls.members) - 1
+        rep = cls.representative.product
+        out_classes.append(DedupClass(
+            representative=rep.GlobalId, members=[c.product.GlobalId for c, _ in cls.members],
+            entity=rep.is_a(), object_type=getattr(rep, "ObjectType", None),
+            transforms=[[float(v) for v in m.matrix.reshape(-1)] for _, m in cls.members],
+            max_deviation=float(max(m.deviation for _, m in cls.members)),
+            mirror=any(m.mirror for _, m in cls.members),
+            scale=any(abs(m.scale - 1.0) > 1e-12 for _, m in cls.members)))
+    if skipped:
+        warnings.append(Diagnostic(code="left_unchanged", message=f"{len(skipped)} product(s) were left as they "
+                                   "were (their geometry could not be processed or is not deduplicable)",
+                                   details={"products": skipped[:MAX_LISTED], "count": len(skipped)}))
+    if written.get("fallback_to_mapped_item"):
+        warnings.append(Diagnostic(code="mapped_item_fallback", message=f"{written['fallback_to_mapped_item']} "
+                                   "member(s) could not share a product shape and were written as mapped items",
+                                   details={}))
+    if not ok:
+        warnings.append(Diagnostic(code="verification_failed", message="The optimized file failed verification; "
+                                   "it is not offered as an artifact", details={"max_deviation": max_dev}))
+    report = Report(status="ok" if not warnings else "warning",
+                    message=(f"{len(out_classes)} classes, {shared} of {len(products)} products share geometry; "
+                             f"{len(optimized)} of {original_bytes} bytes ({mode})"),
+                    warnings=warnings,
+                    details={"written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
+    ratio = len(optimized) / original_bytes if original_bytes else 1.0
+    result = DedupResult(
+        schema=schema, length_unit=unit_name, tolerance=tol, sharing=mode,
+        products_total=len(products), products_shared=shared, classes=out_classes,
+        original_bytes=original_bytes, optimized_bytes=len(optimized), optimization_ratio=ratio,
+        optimization_rate=1.0 - ratio, entity_counts_before=counts_before, entity_counts_after=counts_after,
+        verification=verification, timings=timings, report=report)
+    result._optimized = optimized if ok else None
+    progress(1.0, "done")
+    return result

@@ -1,0 +1,29 @@
+"""Checks at submission: a file is there, it is base64 (JSON), it looks like an IFC file, and the
+sharing mode suits its schema (read from the header without parsing the model)."""
+
+from __future__ import annotations
+
+import re
+
+from plantsolve.schemas.dedup import DedupRequest
+from plantsolve.solvers.base import reject
+from plantsolve.solvers.dedup.ifcio import request_bytes, step_text
+
+_SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)'", re.IGNORECASE)
+
+
+def header_schema(text: bytes) -> str | None:
+    found = _SCHEMA.search(text[:65536])
+    return found.group(1).decode().upper() if found else None
+
+
+def check_input(request: DedupRequest) -> None:
+    text = step_text(request_bytes(request), request.filename)
+    schema = header_schema(text)
+    if schema is None:
+        raise reject("no FILE_SCHEMA in the STEP header")
+    if not (schema in ("IFC2X3", "IFC4") or schema.startswith("IFC4X3")):
+        raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
+    if request.options.sharing == "product_shape" and schema == "IFC2X3":
+        raise reject("'product_shape' needs IFC4 or later: in IFC2X3 an IfcProductDefinitionShape belongs to "
+                     "exactly one product (ShapeOfProduct [1:1]); use 'mapped_item' or 'auto'", ("options", "sharing"))

@@ -1,0 +1,60 @@
+"""Each product's world-space geometry, tessellated by ``ifcopenshell.geom`` with world coordinates:
+the points the matching compares and the proof re-checks after the round trip through the written
+file. IfcOpenShell returns metres; the points are converted back to the file's length unit."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import ifcopenshell
+import ifcopenshell.geom
+import ifcopenshell.util.unit
+
+from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.explicit import product_points
+
+
+def geometry_settings() -> ifcopenshell.geom.settings:
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    return settings
+
+
+def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
+                 progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
+                 message: str = "geometry") -> tuple[dict[int, np.ndarray], dict[int, int]]:
+    """``{product id: unique world points (n, 3) in file units}`` and ``{product id: face count}``
+    (explicit meshes: their points and polygons as written; anything else: the kernel's tessellation,
+    its vertices and triangles); a product the kernel cannot tessellate is missing from both."""
+    points: dict[int, np.ndarray] = {}
+    triangles: dict[int, int] = {}
+    rest = []
+    for k, product in enumerate(products):
+        got = product_points(model, product)
+        if got is None:
+            rest.append(product)
+        else:
+            points[product.id()], triangles[product.id()] = got
+        if k % 500 == 0:
+            progress(span[0] + (span[1] - span[0]) * 0.5 * k / len(products), message)
+    products = rest
+    if not products:
+        return points, triangles
+    unit = ifcopenshell.util.unit.calculate_unit_scale(model)
+    iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
+    total = len(products)
+    done = len(points)
+    if not iterator.initialize():
+        return points, triangles
+    lo, hi = span
+    while True:
+        shape = iterator.get()
+        verts = np.asarray(shape.geometry.verts, dtype=float).reshape(-1, 3) / unit
+        if len(verts):
+            points[shape.id] = np.unique(verts, axis=0)
+            triangles[shape.id] = len(shape.geometry.faces) // 3
+        if (len(points) - done) % 200 == 0:
+            progress(lo + (hi - lo) * min(0.5 + 0.5 * (len(points) - done) / total, 1.0), message)
+        if not iterator.next():
+            break
+    return points, triangles

@@ -1,0 +1,63 @@
+"""Correspondence-free matching on point sets alone: known rotations recovered, mirror and 1 % scale
+refused unless allowed, a symmetric shape matched with a valid proper rotation, far from the origin."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from plantsolve.solvers.dedup.matching import make_shape, match
+from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh
+
+FAR = np.array([1.0e6, 1.0e6, 30.0])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_random_rigid_copy_with_shuffled_points_gives_the_known_transform(seed):
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)  # the chiral keystone
+    rng = np.random.default_rng(seed)
+    rotation = Rotation.random(random_state=seed).as_matrix()
+    shift = FAR + rng.normal(size=3) * 300.0
+    rep = make_shape(verts + FAR)
+    member = make_shape((verts @ rotation.T + shift)[rng.permutation(len(verts))])
+    m = match(rep, member, 1e-6)
+    assert m is not None and not m.mirror and m.scale == 1.0
+    # member = R (x + FAR) + t  ⇒  t = shift − R·FAR
+    assert np.allclose(m.rotation, rotation, atol=1e-9)
+    assert np.allclose(m.translation, shift - rotation @ FAR, atol=1e-6)
+    assert m.deviation < 1e-8
+
+
+def test_mirror_and_one_percent_scale_join_only_when_allowed():
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)
+    rotation = Rotation.from_euler("xyz", [10, 70, -30], degrees=True).as_matrix()
+    rep = make_shape(verts + FAR)
+    mirrored = make_shape((verts * [1.0, -1.0, 1.0]) @ rotation.T + FAR)
+    scaled = make_shape((verts * 1.01) @ rotation.T + FAR)
+    assert match(rep, mirrored, 1e-5) is None
+    assert match(rep, scaled, 1e-5) is None
+    m = match(rep, mirrored, 1e-5, allow_mirror=True)
+    assert m is not None and m.mirror and np.linalg.det(m.rotation) == pytest.approx(-1.0)
+    s = match(rep, scaled, 1e-5, allow_scale=True)
+    assert s is not None and s.scale == pytest.approx(1.01, abs=1e-9) and not s.mirror
+
+
+def test_a_symmetric_cube_matches_with_a_proper_rotation_and_the_identity_for_itself():
+    verts, _ = box_mesh(0.8)
+    rotation = Rotation.from_euler("xyz", [33, -12, 71], degrees=True).as_matrix()
+    rep = make_shape(verts + FAR)
+    member = make_shape(verts @ rotation.T + FAR + 5.0)
+    m = match(rep, member, 1e-6)
+    assert m is not None and np.linalg.det(m.rotation) == pytest.approx(1.0)
+    moved = (verts + FAR) @ m.rotation.T + m.translation
+    assert np.abs(np.sort(moved, axis=0) - np.sort(member.points, axis=0)).max() < 1e-6
+    same = match(rep, make_shape(verts + FAR), 1e-6)
+    assert np.allclose(same.rotation, np.eye(3)) and np.allclose(same.translation, 0.0, atol=1e-6)
+
+
+def test_different_shapes_with_equal_point_counts_do_not_match():
+    a, _ = segment_mesh(50.0)
+    b, _ = segment_mesh(47.5)
+    assert len(a) == len(b)
+    assert match(make_shape(a + FAR), make_shape(b + FAR), 1e-5) is None

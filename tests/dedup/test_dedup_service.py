@@ -1,0 +1,102 @@
+"""The dedup kind through the service and the CLI: multipart upload with options, artifacts (the
+optimized file, the classes table, the chart), 422s naming the file or the option."""
+
+from __future__ import annotations
+
+import base64
+import csv
+import io
+import json
+import zipfile
+
+import ifcopenshell
+import pytest
+
+from plantsolve.solvers.base import Cancelled, InputRejected
+from plantsolve.solvers.dedup.synthetic import build_model, ModelSpec
+from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.dedup.validation import check_input
+from tests.conftest import REPO, run_plantsolve, wait_for
+
+EXAMPLES = REPO / "examples" / "dedup"
+
+
+def test_zipped_upload_with_options_through_the_api(client):
+    content = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
+    archive = io.BytesIO()
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("tunnel.ifc", content)
+    response = client.post("/v1/dedup/jobs", files={"file": ("tunnel.ifczip", archive.getvalue())},
+                           data={"options": json.dumps({"sharing": "mapped_item", "tolerance": 1e-4,
+                                                            "express_rules": False})})
+    assert response.status_code == 202, response.text
+    job = wait_for(client, response.json()["id"], timeout=120)
+    assert job["status"] == "succeeded", job
+    result = client.get(f"/v1/jobs/{job['id']}/result").json()
+    assert result["schema"] == "IFC4" and result["tolerance"] == 1e-4 and result["sharing"] == "mapped_item"
+    assert result["products_total"] == 24 and result["products_shared"] == 16 and len(result["classes"]) == 8
+    assert result["verification"]["schema_valid"] and result["verification"]["semantic_counts_equal"]
+    assert result["original_bytes"] == len(content)
+    names = {a["name"]: a for a in job["artifacts"]}
+    assert set(names) == {"optimized.ifc", "classes.csv", "entity_counts.png"}
+    optimized = client.get(names["optimized.ifc"]["url"]).content
+    assert len(optimized) == result["optimized_bytes"]
+    model = ifcopenshell.file.from_string(optimized.decode())
+    assert len(model.by_type("IfcRepresentationMap")) == 8
+    rows = list(csv.DictReader(io.StringIO(client.get(names["classes.csv"]["url"]).text)))
+    assert len(rows) == 24 and {r["class"] for r in rows} == {str(k) for k in range(1, 9)}
+    assert client.get(names["entity_counts.png"]["url"]).content.startswith(b"\x89PNG")
+
+
+def test_bad_files_are_422_with_the_reason(client):
+    good = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
+    cases = {
+        "not IFC": b"solid cube\nfacet normal 0 0 1\nendsolid\n",
+        "truncated": good[: len(good) // 2],
+        "unknown schema": good.replace(b"FILE_SCHEMA(('IFC4'))", b"FILE_SCHEMA(('IFC9'))"),
+    }
+    for what, content in cases.items():
+        problem = client.post("/v1/dedup/jobs", files={"file": ("m.ifc", content)}).json()
+        assert problem["status"] == 422 and problem["errors"][0]["loc"][0] == "file", (what, problem)
+    zoo2x3 = (EXAMPLES / "zoo_ifc2x3.ifc").read_bytes()
+    problem = client.post("/v1/dedup/jobs", files={"file": ("zoo.ifc", zoo2x3)},
+                          data={"options": '{"sharing": "product_shape"}'}).json()
+    assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["options", "sharing"]
+    problem = client.post("/v1/dedup/jobs", json={"file": "not base64!"}).json()
+    assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["file"]
+
+
+def test_cancellation_between_groups():
+    request = parse_upload("t.ifc", (EXAMPLES / "tunnel_3rings.ifc").read_bytes(), None)
+    seen = []
+
+    def progress(fraction, message=""):
+        seen.append(message)
+        if message.startswith("matching"):
+            raise Cancelled()
+
+    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
+    with pytest.raises(Cancelled):
+        solve(request, progress)
+    assert seen[-1].startswith("matching") and not any(m.startswith("sharing") for m in seen)
+
+
+def test_a_file_without_geometry_is_refused():
+    content = build_model(ModelSpec(products=[], containers=1)).to_string().encode()
+    request = parse_upload("empty.ifc", content, None)
+    check_input(request)
+    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
+    with pytest.raises(InputRejected, match="no product with geometry"):
+        solve(request, lambda *a: None)
+
+
+def test_json_with_base64_and_the_cli(tmp_path):
+    (tmp_path / "zoo.ifc").write_bytes((EXAMPLES / "zoo_ifc2x3.ifc").read_bytes())
+    done = run_plantsolve(["solve", "dedup", "zoo.ifc", "-o", "out.json", "--options", '{"express_rules": false}'], tmp_path)
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "out.json").read_text())
+    assert result["schema"] == "IFC2X3" and len(result["classes"]) == 4 and result["sharing"] == "mapped_item"
+    assert (tmp_path / "out_artifacts" / "optimized.ifc").stat().st_size == result["optimized_bytes"]
+    body = {"filename": "zoo.ifc", "file": base64.b64encode((EXAMPLES / "zoo_ifc2x3.ifc").read_bytes()).decode()}
+    request = parse_upload("request.json", json.dumps(body).encode(), {"postpass": False})
+    assert request.options.postpass is False and request.file == body["file"]
