@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import base64
 import math
+import random
+import uuid
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -178,31 +180,36 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
     (with a property set ``ringNumber``, as in the paper), and the products."""
     f = ifcopenshell.api.run("project.create_file", version=spec.schema)
     owner = _owner_history(f)
-    project = f.create_entity("IfcProject", ifcopenshell.guid.new(), owner, "Tunnel")
+    ids = random.Random(0)  # seeded GlobalIds: the same spec gives the same file
+
+    def new_guid() -> str:
+        return ifcopenshell.guid.compress(uuid.UUID(int=ids.getrandbits(128), version=4).hex)
+
+    project = f.create_entity("IfcProject", new_guid(), owner, "Tunnel")
     length = ifcopenshell.api.run("unit.add_si_unit", f, unit_type="LENGTHUNIT")
     ifcopenshell.api.run("unit.assign_unit", f, units=[length])
     model = ifcopenshell.api.run("context.add_context", f, context_type="Model")
     model.Precision = spec.precision
     body = ifcopenshell.api.run("context.add_context", f, context_type="Model", context_identifier="Body",
                                 target_view="MODEL_VIEW", parent=model)
-    site = f.create_entity("IfcSite", ifcopenshell.guid.new(), owner, "Site", CompositionType="ELEMENT")
-    tunnel = f.create_entity("IfcBuilding", ifcopenshell.guid.new(), owner, "Tunnel", CompositionType="ELEMENT")
-    f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, project, [site])
-    f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, site, [tunnel])
+    site = f.create_entity("IfcSite", new_guid(), owner, "Site", CompositionType="ELEMENT")
+    tunnel = f.create_entity("IfcBuilding", new_guid(), owner, "Tunnel", CompositionType="ELEMENT")
+    f.create_entity("IfcRelAggregates", new_guid(), owner, None, None, project, [site])
+    f.create_entity("IfcRelAggregates", new_guid(), owner, None, None, site, [tunnel])
     site.ObjectPlacement = _placement(f, None, None)
     tunnel.ObjectPlacement = _placement(f, None, site.ObjectPlacement)
     rings = []
     for r in range(spec.containers):
-        ring = f.create_entity("IfcBuilding", ifcopenshell.guid.new(), owner, f"Ring {r + 1}", None, None,
+        ring = f.create_entity("IfcBuilding", new_guid(), owner, f"Ring {r + 1}", None, None,
                                _placement(f, None, tunnel.ObjectPlacement), None, None, "PARTIAL")
         rings.append(ring)
     if rings:
-        f.create_entity("IfcRelAggregates", ifcopenshell.guid.new(), owner, None, None, tunnel, rings)
+        f.create_entity("IfcRelAggregates", new_guid(), owner, None, None, tunnel, rings)
         for r, ring in enumerate(rings):
             value = f.create_entity("IfcInteger", r + 1)
             prop = f.create_entity("IfcPropertySingleValue", "ringNumber", None, value, None)
-            pset = f.create_entity("IfcPropertySet", ifcopenshell.guid.new(), owner, "Pset_Ring", None, [prop])
-            f.create_entity("IfcRelDefinesByProperties", ifcopenshell.guid.new(), owner, None, None, [ring], pset)
+            pset = f.create_entity("IfcPropertySet", new_guid(), owner, "Pset_Ring", None, [prop])
+            f.create_entity("IfcRelDefinesByProperties", new_guid(), owner, None, None, [ring], pset)
     elements = []
     maps: dict[int, object] = {}
     for k, p in enumerate(spec.products):
@@ -250,7 +257,7 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
             f.create_entity("IfcStyledItem", item, styles, None)
         shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [item])
         product_shape = f.create_entity("IfcProductDefinitionShape", None, None, [shape])
-        element = f.create_entity(p.entity, ifcopenshell.guid.new(), owner, p.name or f"{p.object_type} {k}", None,
+        element = f.create_entity(p.entity, new_guid(), owner, p.name or f"{p.object_type} {k}", None,
                                   p.object_type, placement, product_shape, None)
         elements.append(element)
     by_container: dict[int, list] = {}
@@ -258,7 +265,7 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
         by_container.setdefault(p.container, []).append(e)
     for c, members in by_container.items():
         holder = rings[c] if rings else tunnel
-        f.create_entity("IfcRelContainedInSpatialStructure", ifcopenshell.guid.new(), owner, None, None, members, holder)
+        f.create_entity("IfcRelContainedInSpatialStructure", new_guid(), owner, None, None, members, holder)
     return f
 
 
@@ -268,7 +275,9 @@ def tunnel_file(rings: int, schema: str = "IFC4", **kw) -> ifcopenshell.file:
 
 def example() -> dict:
     """A small valid request: a 2-ring world-coordinate tunnel (16 segments in 8 classes), base64 IFC."""
-    text = tunnel_file(2, "IFC4").to_string()
+    model = tunnel_file(2, "IFC4")
+    model.header.file_name.time_stamp = "2026-01-01T00:00:00"  # the same example whenever it is asked for
+    text = model.to_string()
     return {"filename": "tunnel.ifc", "file": base64.b64encode(text.encode()).decode(),
             "options": {"tolerance": 0.0001, "sharing": "mapped_item", "postpass": True}}
 
