@@ -47,3 +47,16 @@ def test_the_post_pass_respects_inverse_cardinalities_of_ifc2x3_and_ifc4():
         else:  # IFC4 allows shared placements: the segments' identical ones merge
             assert max(placements.values()) > 1 and removed["IfcLocalPlacement"] > 0
         assert not proof.validate(model, express_rules=False)
+
+
+def test_fingerprint_differences_name_what_changed():
+    from plantsolve.solvers.dedup.proof import fingerprint_differences
+
+    before = {"rooted": {"IfcBeam": 2, "IfcWall": 1}, "guids": {"a", "b", "c"},
+              "properties": {("Width", "0.2"): 2}, "styles": {"a": ("red",), "b": ("red",)}}
+    assert fingerprint_differences(before, before) == []
+    after = {"rooted": {"IfcBeam": 2}, "guids": {"a", "b"}, "properties": {("Width", "0.2"): 1},
+             "styles": {"a": ("red",), "b": ()}}
+    said = fingerprint_differences(before, after)
+    assert said == ["IfcWall: 1 rooted instance(s) before, 0 after", "1 GlobalId(s) lost, e.g. c",
+                    "property Width 0.2: 2 before, 1 after", "1 product(s) with other styles, e.g. b"]

@@ -68,6 +68,29 @@ def semantic_fingerprint(model: ifcopenshell.file) -> dict:
     return {"rooted": dict(counts), "guids": guids, "properties": dict(props), "styles": product_styles(model)}
 
 
+def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[str]:
+    """What changed between two :func:`semantic_fingerprint`\ s, one sentence per difference (at most
+    ``limit``): the reason an output is refused, for the report."""
+    out: list[str] = []
+    for entity in sorted(set(before["rooted"]) | set(after["rooted"])):
+        a, b = before["rooted"].get(entity, 0), after["rooted"].get(entity, 0)
+        if a != b:
+            out.append(f"{entity}: {a} rooted instance(s) before, {b} after")
+    lost, new = before["guids"] - after["guids"], after["guids"] - before["guids"]
+    if lost:
+        out.append(f"{len(lost)} GlobalId(s) lost, e.g. {sorted(lost)[0]}")
+    if new:
+        out.append(f"{len(new)} GlobalId(s) new, e.g. {sorted(new)[0]}")
+    for key in sorted(set(before["properties"]) | set(after["properties"]), key=repr):
+        a, b = before["properties"].get(key, 0), after["properties"].get(key, 0)
+        if a != b:
+            out.append(f"property {key[0]!s} {key[1]!s}: {a} before, {b} after")
+    restyled = [g for g in before["styles"] if after["styles"].get(g) != before["styles"][g]]
+    if restyled:
+        out.append(f"{len(restyled)} product(s) with other styles, e.g. {restyled[0]}")
+    return out[:limit]
+
+
 def deviation(before: np.ndarray, after: np.ndarray) -> float:
     """Two-way Hausdorff distance of two point sets, centred on the first for accuracy."""
     c = before.mean(axis=0)

@@ -137,7 +137,11 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
                 missing.append(g)
                 continue
             deviations.append(proof.deviation(pts, after_points[prod.id()]))
-        semantic_equal = proof.semantic_fingerprint(check.model) == semantic_before and not missing
+        semantic_after = proof.semantic_fingerprint(check.model)
+        semantic_equal = semantic_after == semantic_before and not missing
+        changed = proof.fingerprint_differences(semantic_before, semantic_after)
+        if missing:
+            changed.append(f"{len(missing)} product(s) without geometry after, e.g. {missing[0]}")
         progress(0.9, "validating the written file")
         errors = proof.validate(check.model, express_rules=opts.express_rules)
         counts_after = proof.entity_counts(check.model)
@@ -181,7 +185,8 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
                                    details={}))
     if not ok:
         warnings.append(Diagnostic(code="verification_failed", message="The optimized file failed verification; "
-                                   "it is not offered as an artifact", details={"max_deviation": max_dev}))
+                                   "it is not offered as an artifact", details={"max_deviation": max_dev,
+                                                                                  "semantic_differences": changed}))
     report = Report(status="ok" if not warnings else "warning",
                     message=(f"{len(out_classes)} classes, {shared} of {len(products)} products share geometry; "
                              f"{len(optimized)} of {original_bytes} bytes ({mode})"),
