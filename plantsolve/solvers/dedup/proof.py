@@ -69,7 +69,7 @@ def semantic_fingerprint(model: ifcopenshell.file) -> dict:
 
 
 def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[str]:
-    """What changed between two :func:`semantic_fingerprint`\ s, one sentence per difference (at most
+    """What changed between two semantic fingerprints, one sentence per difference (at most
     ``limit``): the reason an output is refused, for the report."""
     out: list[str] = []
     for entity in sorted(set(before["rooted"]) | set(after["rooted"])):
