@@ -119,7 +119,11 @@ def test_zoo_rigid_classes(schema):
     styled = {s.Item.id() for s in out.by_type("IfcStyledItem") if s.Item is not None}
     red = out.by_guid(next(p.GlobalId for p in model.by_type("IfcColumn") if p.Name == "column_red"))
     assert red.Representation.Representations[0].Items[0].id() in styled
-    assert len(styled) == 1
+    mapped = [p for p in out.by_type("IfcProduct") if (p.Name or "").startswith("mapped_")]
+    inside = {it.id() for p in mapped for rep in p.Representation.Representations for outer in rep.Items
+              if outer.is_a("IfcMappedItem") for it in outer.MappingSource.MappedRepresentation.Items
+              for it in ([it] if not it.is_a("IfcMappedItem") else it.MappingSource.MappedRepresentation.Items)}
+    assert len(styled) == 2 and len(styled & inside) == 1  # and the wood inside the shared map, kept
     # the text-only product: no geometry to process, left as it was and listed
     (left,) = [w for w in result.report.warnings if w.code == "left_unchanged"]
     label = next(p for p in model.by_type("IfcProduct") if p.Name == "label_only")

@@ -15,7 +15,8 @@ def test_the_fingerprint_sees_a_restyled_product_and_a_changed_property():
     before = proof.semantic_fingerprint(model)
     assert proof.semantic_fingerprint(model) == before
     column = next(p for p in model.by_type("IfcColumn") if p.Name == "column_a")
-    red = next(s for s in model.by_type("IfcStyledItem"))
+    red_column = next(p for p in model.by_type("IfcColumn") if p.Name == "column_red")
+    red = next(s for s in model.by_type("IfcStyledItem") if s.Item == red_column.Representation.Representations[0].Items[0])
     model.create_entity("IfcStyledItem", column.Representation.Representations[0].Items[0], red.Styles, None)
     after = proof.semantic_fingerprint(model)
     assert after != before and after["styles"][column.GlobalId] == before["styles"][

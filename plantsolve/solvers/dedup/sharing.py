@@ -100,10 +100,13 @@ def _remove_representation(model: ifcopenshell.file, old, new, styled_by: dict[i
     for layer in [i for i in model.get_inverse(old) if i.is_a("IfcPresentationLayerAssignment")]:
         _replace_in_list(layer, "AssignedItems", old, new)
     sub = {e.id(): e for e in model.traverse(old) if e.id()}
-    styled = [st for i in sub for st in styled_by.get(i, ())]
+    only_old = {e.id(): e for e in _exclusive(model, [old], sub)}
+    # the styled items of the items that go: an item still used elsewhere (inside a representation
+    # map the representative shares, as ArchiCAD writes its beams) keeps its style
+    styled = [st for i in only_old for st in styled_by.get(i, ())]
     for st in styled:
-        sub.update((e.id(), e) for e in model.traverse(st) if e.id())
-    pending.update(_exclusive(model, [old, *styled], sub))
+        only_old.update((e.id(), e) for e in model.traverse(st) if e.id())
+    pending.update(_exclusive(model, [old, *styled], only_old))
 
 
 def _is_shared(model: ifcopenshell.file, instance, allowed: int = 1) -> bool:

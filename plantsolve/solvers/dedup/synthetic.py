@@ -175,6 +175,15 @@ def _owner_history(f):
     return f.create_entity("IfcOwnerHistory", user, app, None, "NOCHANGE", 1767225600, None, None, 1767225600)
 
 
+def _style(f, schema: str, item, rgb: tuple[float, float, float]) -> None:
+    colour = f.create_entity("IfcColourRgb", None, *rgb)
+    rendering = f.create_entity("IfcSurfaceStyleRendering", colour, 0.0, None, None, None, None, None, None,
+                                "NOTDEFINED")
+    style = f.create_entity("IfcSurfaceStyle", None, "BOTH", [rendering])
+    styles = [style] if schema != "IFC2X3" else [f.create_entity("IfcPresentationStyleAssignment", [style])]
+    f.create_entity("IfcStyledItem", item, styles, None)
+
+
 def build_model(spec: ModelSpec) -> ifcopenshell.file:
     """The IFC file of ``spec``: project, site, a tunnel building with one partial building per ring
     (with a property set ``ringNumber``, as in the paper), and the products."""
@@ -239,6 +248,8 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
             key = id(p.verts)
             if key not in maps:
                 inner = _mesh_item(f, spec.schema, p.verts, p.faces, spec.face_set) if item is None else item
+                if p.style_rgb is not None:  # as ArchiCAD and Revit write it: the style inside the map
+                    _style(f, spec.schema, inner, p.style_rgb)
                 shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [inner])
                 origin = f.create_entity("IfcAxis2Placement3D", f.create_entity("IfcCartesianPoint", [0.0, 0.0, 0.0]), None, None)
                 maps[key] = f.create_entity("IfcRepresentationMap", origin, shape)
@@ -248,13 +259,8 @@ def build_model(spec: ModelSpec) -> ifcopenshell.file:
             rep_type = "MappedRepresentation"
         elif item is None:
             item = _mesh_item(f, spec.schema, p.verts, p.faces, spec.face_set)
-        if p.style_rgb is not None:
-            colour = f.create_entity("IfcColourRgb", None, *p.style_rgb)
-            rendering = f.create_entity("IfcSurfaceStyleRendering", colour, 0.0, None, None, None, None, None, None,
-                                        "NOTDEFINED")
-            style = f.create_entity("IfcSurfaceStyle", None, "BOTH", [rendering])
-            styles = [style] if spec.schema != "IFC2X3" else [f.create_entity("IfcPresentationStyleAssignment", [style])]
-            f.create_entity("IfcStyledItem", item, styles, None)
+        if p.style_rgb is not None and not p.mapped:
+            _style(f, spec.schema, item, p.style_rgb)
         shape = f.create_entity("IfcShapeRepresentation", body, "Body", rep_type, [item])
         product_shape = f.create_entity("IfcProductDefinitionShape", None, None, [shape])
         element = f.create_entity(p.entity, new_guid(), owner, p.name or f"{p.object_type} {k}", None,
@@ -316,7 +322,7 @@ def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
     - a cube (a symmetric shape) at two poses;
     - two more copies of the chiral mesh in placement-local coordinates under nested placements (the
       first placed relative to ``cube_b``, the second relative to the first);
-    - two products already using one IfcRepresentationMap through IfcMappedItem;
+    - two products already using one IfcRepresentationMap through IfcMappedItem, its item styled inside the map;
     - three rectangular IfcExtrudedAreaSolid columns (one styled red, so not congruent in appearance)
       and a longer one;
     - a product whose body is only an IfcTextLiteral (the kernel makes no geometry of it: left as it was).
@@ -345,9 +351,10 @@ def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
                      parent=5, name="chiral_nested_1"))
     p.append(Product("chiral", verts=chiral, faces=chiral_faces, placement=pose(30, 0, -15, [0.0, 3.0, 0.0]),
                      parent=6, name="chiral_nested_2"))
-    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True,
+    wood = (0.96, 0.75, 0.45)  # styled inside the shared map, as ArchiCAD exports its beams
+    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True, style_rgb=wood,
                      placement=pose(0, 0, 15, o + [60.0, 0.0, 0.0]), name="mapped_a"))
-    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True,
+    p.append(Product("mapped", verts=chiral, faces=chiral_faces, mapped=True, style_rgb=wood,
                      placement=pose(0, 0, 195, o + [70.0, 0.0, 0.0]), name="mapped_b"))
     for k, (name, dims, rgb) in enumerate((("column_a", (0.4, 0.6, 3.0), None), ("column_b", (0.4, 0.6, 3.0), None),
                                            ("column_red", (0.4, 0.6, 3.0), (1.0, 0.0, 0.0)),
