@@ -81,14 +81,15 @@ def _replace_in_list(owner, attribute: str, old, new) -> None:
 def _exclusive(model: ifcopenshell.file, sub: dict[int, object]) -> dict[int, object]:
     """The part of ``sub`` (id → instance, closed under references) that nothing outside it
     references: what ``ifcopenshell.util.element.remove_deep2`` deletes, found for the whole set at
-    once in a few calls into the C++ core instead of one traversal per instance."""
-    allowed = set(sub)
-    while True:
-        inside = set(model._ids_referenced_only_within(list(allowed)))
-        dropped = allowed - inside
-        if not dropped:
-            return {i: sub[i] for i in allowed}
-        allowed -= dropped
+    once. One call into the C++ core finds the instances of ``sub`` referenced from outside; they
+    stay, and so does everything they reference (their traversal), the rest goes: every referrer of
+    an instance not reached that way is itself in ``sub`` and goes too."""
+    inside = set(model._ids_referenced_only_within(list(sub)))
+    kept: set[int] = set()
+    for i in sub:
+        if i not in inside and i not in kept:
+            kept.update(e.id() for e in model.traverse(sub[i]))
+    return {i: e for i, e in sub.items() if i not in kept}
 
 
 def remove_batch(model: ifcopenshell.file, instances) -> None:
