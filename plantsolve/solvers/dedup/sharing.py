@@ -175,6 +175,17 @@ def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *
 
 def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> None:
     lo, hi = span
+    parents: dict[int, np.ndarray] = {}  # members of a ring share its placement: evaluate it once
+
+    def parent_matrix(parent) -> np.ndarray:
+        if parent is None:
+            return np.eye(4)
+        matrix = parents.get(parent.id())
+        if matrix is None:
+            matrix = parents[parent.id()] = np.asarray(
+                ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
+        return matrix
+
     for k, cls in enumerate(multi):
         if k % 8 == 0:
             progress(lo + (hi - lo) * k / max(len(multi), 1), "sharing")
@@ -196,8 +207,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> Non
                 continue
             old_shape = member.Representation
             parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = (np.asarray(ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
-                        if parent is not None else np.eye(4))
+            p_parent = parent_matrix(parent)
             relative = np.linalg.inv(p_parent) @ t_world @ p_rep
             old_placement = member.ObjectPlacement
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
