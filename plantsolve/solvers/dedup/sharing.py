@@ -13,9 +13,11 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
   whose transform mirrors or scales, falls back to a mapped item.
 - An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
 
-Old representations, product shapes and placements are deleted with the instances only they used (as ``remove_deep2`` does,
-all in one batch); styled items of its items go with it (grouping guarantees the representative carries equal styles); a
-presentation layer that held the old representation holds the new one.
+Old representations, product shapes and placements are deleted with the instances only they used
+(what ``remove_deep2`` deletes, found for all of them at once after the rewrite and deleted in one
+batch, so the phase grows linearly with the model); styled items of their items go with them
+(grouping guarantees the representative carries equal styles); a presentation layer that held an
+old representation holds the new one.
 """
 
 from __future__ import annotations
@@ -79,7 +81,7 @@ def _replace_in_list(owner, attribute: str, old, new) -> None:
 
 
 def _exclusive(model: ifcopenshell.file, sub: dict[int, object]) -> dict[int, object]:
-    """The part of ``sub`` (id → instance, closed under references) that nothing outside it
+    """The part of ``sub`` (id → instance, closed under references; pruned in place) that nothing outside it
     references: what ``ifcopenshell.util.element.remove_deep2`` deletes, found for the whole set at
     once. One call into the C++ core finds the instances of ``sub`` referenced from outside; they
     stay, and so does everything they reference (their traversal), the rest goes: every referrer of
@@ -89,7 +91,10 @@ def _exclusive(model: ifcopenshell.file, sub: dict[int, object]) -> dict[int, ob
     for i in sub:
         if i not in inside and i not in kept:
             kept.update(e.id() for e in model.traverse(sub[i]))
-    return {i: e for i, e in sub.items() if i not in kept}
+    del inside
+    for i in kept:  # in place: ``sub`` holds every detached instance (millions in a large model)
+        sub.pop(i, None)
+    return sub
 
 
 def remove_batch(model: ifcopenshell.file, instances) -> None:
@@ -144,7 +149,7 @@ class _Garbage:
         for root in self.roots:
             if root.id() not in sub:
                 sub.update((e.id(), e) for e in model.traverse(root) if e.id())
-        styled = [st for i in list(sub) for st in self.styled_by.get(i, ())]
+        styled = [st for i in sub for st in self.styled_by.get(i, ())]
         for st in styled:
             if st.id() not in sub:
                 sub.update((e.id(), e) for e in model.traverse(st) if e.id())
