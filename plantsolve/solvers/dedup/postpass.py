@@ -17,6 +17,7 @@ import ifcopenshell
 import ifcopenshell.ifcopenshell_wrapper as wrapper
 
 from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.sharing import remove_batch
 
 NEVER_MERGED = ("IfcRoot", "IfcRepresentation", "IfcRepresentationContext", "IfcProductRepresentation")
 
@@ -134,10 +135,8 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
             remap[inst.id()] = first
             duplicates.append(inst)
     removed: dict[str, int] = {}
-    model.batch()
-    for dup in duplicates:
-        if model.get_total_inverses(dup) == 0:
-            removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
-            model.remove(dup)
-    model.unbatch()
+    unused = [dup for dup in duplicates if model.get_total_inverses(dup) == 0]
+    for dup in unused:
+        removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
+    remove_batch(model, unused)
     return removed

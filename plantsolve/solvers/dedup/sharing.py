@@ -13,9 +13,11 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
   whose transform mirrors or scales, falls back to a mapped item.
 - An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
 
-A member's old representation is deleted with the instances only it used (as ``remove_deep2`` does,
-all in one batch); styled items of its items go with it (grouping guarantees the representative carries equal styles); a
-presentation layer that held the old representation holds the new one.
+Old representations, product shapes and placements are deleted with the instances only they used
+(what ``remove_deep2`` deletes, found for all of them at once after the rewrite and deleted in one
+batch, so the phase grows linearly with the model); styled items of their items go with them
+(grouping guarantees the representative carries equal styles); a presentation layer that held an
+old representation holds the new one.
 """
 
 from __future__ import annotations
@@ -78,35 +80,87 @@ def _replace_in_list(owner, attribute: str, old, new) -> None:
     setattr(owner, attribute, [new if v == old else v for v in values if v != old or new is not None])
 
 
-def _exclusive(model: ifcopenshell.file, roots: list, sub: dict[int, object] | None = None) -> list:
-    """The ``roots`` and everything under them that nothing outside that set references (what
-    ``ifcopenshell.util.element.remove_deep2`` deletes, in a few calls into the C++ core instead of
-    one traversal per instance); ``sub`` is the traversal of ``roots`` when the caller has it."""
-    if sub is None:
-        sub = {e.id(): e for root in roots for e in model.traverse(root) if e.id()}
-    allowed = set(sub)
-    while True:
-        inside = set(model._ids_referenced_only_within(list(allowed)))
-        dropped = allowed - inside
-        if not dropped:
-            return [sub[i] for i in allowed]
-        allowed -= dropped
+def _exclusive(model: ifcopenshell.file, sub: dict[int, object]) -> dict[int, object]:
+    """The part of ``sub`` (id → instance, closed under references; pruned in place) that nothing outside it
+    references: what ``ifcopenshell.util.element.remove_deep2`` deletes, found for the whole set at
+    once. One call into the C++ core finds the instances of ``sub`` referenced from outside; they
+    stay, and so does everything they reference (their traversal), the rest goes: every referrer of
+    an instance not reached that way is itself in ``sub`` and goes too."""
+    inside = set(model._ids_referenced_only_within(list(sub)))
+    kept: set[int] = set()
+    for i in sub:
+        if i not in inside and i not in kept:
+            kept.update(e.id() for e in model.traverse(sub[i]))
+    del inside
+    for i in kept:  # in place: ``sub`` holds every detached instance (millions in a large model)
+        sub.pop(i, None)
+    return sub
 
 
-def _remove_representation(model: ifcopenshell.file, old, new, styled_by: dict[int, list], pending: set) -> None:
-    """Schedule ``old`` (no longer referenced by its product shape) for deletion with what only it
-    used, the styled items of its items included (grouping guarantees equal styles on the class's
-    representative)."""
-    for layer in [i for i in model.get_inverse(old) if i.is_a("IfcPresentationLayerAssignment")]:
-        _replace_in_list(layer, "AssignedItems", old, new)
-    sub = {e.id(): e for e in model.traverse(old) if e.id()}
-    only_old = {e.id(): e for e in _exclusive(model, [old], sub)}
-    # the styled items of the items that go: an item still used elsewhere (inside a representation
-    # map the representative shares, as ArchiCAD writes its beams) keeps its style
-    styled = [st for i in only_old for st in styled_by.get(i, ())]
-    for st in styled:
-        only_old.update((e.id(), e) for e in model.traverse(st) if e.id())
-    pending.update(_exclusive(model, [old, *styled], only_old))
+def remove_batch(model: ifcopenshell.file, instances) -> None:
+    """Delete ``instances`` (an iterable, or a dict id → instance) in one batch, highest id first.
+
+    One batch, because removing instance by instance rewrites the inverse maps once per instance.
+    Highest id first, because the core keeps its instances in id-sorted arrays and erases each one
+    in place: erasing from the end moves only the few kept instances behind it, while the hash
+    order of a set made the batch quadratic (530 rings: most of the sharing phase)."""
+    by_id = instances if isinstance(instances, dict) else {e.id(): e for e in instances}
+    remove = model.remove
+    model.batch()
+    try:
+        for i in sorted(by_id, reverse=True):
+            remove(by_id[i])
+    finally:
+        model.unbatch()
+
+
+class _Garbage:
+    """What the rewrite detached: old representations, product shapes and placements. Layers that
+    held an old representation are pointed at its replacement at once; the deletion (each root with
+    what only the detached roots use, the styled items of their items included: grouping
+    guarantees the representative carries equal styles) happens for all of them together."""
+
+    def __init__(self, model: ifcopenshell.file):
+        self.model = model
+        self.roots: list = []
+        self.styled_by: dict[int, list] = {}
+        for styled in model.by_type("IfcStyledItem"):
+            if styled.Item is not None:
+                self.styled_by.setdefault(styled.Item.id(), []).append(styled)
+        self.layers_of: dict[int, list] = {}
+        for layer in model.by_type("IfcPresentationLayerAssignment"):
+            for item in layer.AssignedItems or ():
+                self.layers_of.setdefault(item.id(), []).append(layer)
+
+    def replace_representation(self, old, new) -> None:
+        """``old`` is no longer referenced by its product shape; ``new`` (or None) takes its layers."""
+        for layer in self.layers_of.pop(old.id(), ()):
+            _replace_in_list(layer, "AssignedItems", old, new)
+            if new is not None:
+                self.layers_of.setdefault(new.id(), []).append(layer)
+        self.roots.append(old)
+
+    def detached(self, instance) -> None:
+        self.roots.append(instance)
+
+    def collect(self) -> dict[int, object]:
+        model = self.model
+        sub: dict[int, object] = {}
+        for root in self.roots:
+            if root.id() not in sub:
+                sub.update((e.id(), e) for e in model.traverse(root) if e.id())
+        if not sub:
+            return {}
+        going = _exclusive(model, sub)
+        # the styled items of the items that go: an item still used elsewhere (inside a representation
+        # map the representative shares, as ArchiCAD writes its beams) keeps its style
+        styled = [st for i in list(going) for st in self.styled_by.get(i, ())]
+        if not styled:
+            return going
+        for st in styled:
+            if st.id() not in going:
+                going.update((e.id(), e) for e in model.traverse(st) if e.id())
+        return _exclusive(model, going)
 
 
 def _is_shared(model: ifcopenshell.file, instance, allowed: int = 1) -> bool:
@@ -123,24 +177,27 @@ def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *
     """Rewrite every class with at least two members; returns counts of what was written."""
     counts = {"mapped_items": 0, "shared_product_shapes": 0, "fallback_to_mapped_item": 0}
     multi = [c for c in classes if len(c.members) > 1]
-    styled_by: dict[int, list] = {}
-    for styled in model.by_type("IfcStyledItem"):
-        if styled.Item is not None:
-            styled_by.setdefault(styled.Item.id(), []).append(styled)
-    pending: set = set()
+    garbage = _Garbage(model)
     try:
-        _apply(model, multi, mode, counts, progress, span, styled_by, pending)
+        _apply(model, multi, mode, counts, progress, span, garbage)
     finally:
-        # one batch: removing instance by instance rewrites the inverse maps thousands of times
-        model.batch()
-        for instance in pending:
-            model.remove(instance)
-        model.unbatch()
+        remove_batch(model, garbage.collect())
     return counts
 
 
-def _apply(model, multi, mode, counts, progress, span, styled_by, pending) -> None:
+def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> None:
     lo, hi = span
+    parents: dict[int, np.ndarray] = {}  # members of a ring share its placement: evaluate it once
+
+    def parent_matrix(parent) -> np.ndarray:
+        if parent is None:
+            return np.eye(4)
+        matrix = parents.get(parent.id())
+        if matrix is None:
+            matrix = parents[parent.id()] = np.asarray(
+                ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
+        return matrix
+
     for k, cls in enumerate(multi):
         if k % 8 == 0:
             progress(lo + (hi - lo) * k / max(len(multi), 1), "sharing")
@@ -162,18 +219,15 @@ def _apply(model, multi, mode, counts, progress, span, styled_by, pending) -> No
                 continue
             old_shape = member.Representation
             parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = (np.asarray(ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
-                        if parent is not None else np.eye(4))
+            p_parent = parent_matrix(parent)
             relative = np.linalg.inv(p_parent) @ t_world @ p_rep
             old_placement = member.ObjectPlacement
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
             member.Representation = rep.Representation
             if old_placement is not None and model.get_total_inverses(old_placement) == 0:
-                pending.update(_exclusive(model, [old_placement]))
-            old_body = old_shape.Representations[0]
-            old_shape.Representations = []
-            model.remove(old_shape)
-            _remove_representation(model, old_body, None, styled_by, pending)
+                garbage.detached(old_placement)
+            garbage.detached(old_shape)  # first: its traversal holds the old body's
+            garbage.replace_representation(old_shape.Representations[0], None)
             counts["shared_product_shapes"] += 1
         if not mapped:
             continue
@@ -191,5 +245,5 @@ def _apply(model, multi, mode, counts, progress, span, styled_by, pending) -> No
             new = model.create_entity("IfcShapeRepresentation", old.ContextOfItems, old.RepresentationIdentifier,
                                       "MappedRepresentation", [item])
             _replace_in_list(member.Representation, "Representations", old, new)
-            _remove_representation(model, old, new, styled_by, pending)
+            garbage.replace_representation(old, new)
             counts["mapped_items"] += 1
