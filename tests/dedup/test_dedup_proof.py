@@ -61,3 +61,21 @@ def test_fingerprint_differences_name_what_changed():
     said = fingerprint_differences(before, after)
     assert said == ["IfcWall: 1 rooted instance(s) before, 0 after", "1 GlobalId(s) lost, e.g. c",
                     "property Width 0.2: 2 before, 1 after", "1 product(s) with other styles, e.g. b"]
+
+
+def test_the_fingerprint_compares_what_each_property_set_holds_not_instance_counts():
+    """Two property sets may share one identical property instance (IFC4): the post-pass does that
+    to real exports (an ArchiCAD file repeats 'AirConditioning' .F. in seven sets)."""
+    model = tunnel_file(2, "IFC4")
+    psets = model.by_type("IfcPropertySet")
+    for pset in psets[:2]:
+        pset.HasProperties = [*pset.HasProperties, model.create_entity(
+            "IfcPropertySingleValue", "AirConditioning", None, model.create_entity("IfcBoolean", False), None)]
+    before = proof.semantic_fingerprint(model)
+    first, second = psets[0].HasProperties[-1], psets[1].HasProperties[-1]
+    psets[1].HasProperties = [*psets[1].HasProperties[:-1], first]
+    model.remove(second)
+    assert proof.semantic_fingerprint(model) == before
+    psets[1].HasProperties = psets[1].HasProperties[:-1]  # a set that lost a property is a change
+    assert proof.fingerprint_differences(before, proof.semantic_fingerprint(model)) == [
+        "property AirConditioning IfcBoolean(.F.): 2 before, 1 after"]

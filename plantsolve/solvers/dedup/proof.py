@@ -59,12 +59,16 @@ def semantic_fingerprint(model: ifcopenshell.file) -> dict:
     for root in model.by_type("IfcRoot"):
         counts[root.is_a()] += 1
         guids.add(root.GlobalId)
+    # what each property or quantity set holds, by content: the post-pass may let two sets share one
+    # identical property instance (IFC4 allows it), which changes instance counts but no set's content
     props = Counter()
-    for prop in model.by_type("IfcPropertySingleValue"):
-        props[(prop.Name, repr(prop.NominalValue))] += 1
-    for prop in model.by_type("IfcProperty"):
-        if not prop.is_a("IfcPropertySingleValue"):
-            props[(prop.is_a(), prop.Name)] += 1
+    for pset in model.by_type("IfcPropertySet"):
+        for prop in pset.HasProperties or ():
+            value = repr(prop.NominalValue) if prop.is_a("IfcPropertySingleValue") else prop.is_a()
+            props[(prop.Name, value)] += 1
+    for qset in model.by_type("IfcElementQuantity"):
+        for quantity in qset.Quantities or ():
+            props[(quantity.Name, repr(quantity[3]))] += 1
     return {"rooted": dict(counts), "guids": guids, "properties": dict(props), "styles": product_styles(model)}
 
 
