@@ -18,7 +18,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag
 
-from plantsolve.schemas.common import Coordinate, FiniteFloat, Point3, Report, StrictModel, Units, json_integer
+from plantsolve.schemas.common import FiniteFloat, Point3, Report, StrictModel, Units, json_integer
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000

@@ -20,6 +20,7 @@ Errors a solver may raise:
 
 from __future__ import annotations
 
+import json
 import re
 from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol, Sequence
@@ -87,6 +88,25 @@ class Artifact:
 def reject(msg: str, loc: tuple[str | int, ...] = ("file",), type: str = "value_error") -> InputRejected:
     """One bad field as an exception to raise: ``raise reject("no END-POINT", ("file", "line", 7))``."""
     return InputRejected(FieldError(loc, msg, type))
+
+
+def upload_extension(filename: str, accepted: Sequence[str]) -> str:
+    """The uploaded file's extension (lower case, with its dot) when the kind reads it; else a 422 on ``file``."""
+    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
+    if ext not in accepted:
+        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(accepted)}")
+    return ext
+
+
+def json_object(text: str | bytes) -> dict:
+    """An uploaded JSON file that must hold a request object; a 422 on ``file`` saying why it does not."""
+    try:
+        body = json.loads(text)
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise reject(f"invalid JSON: {e}") from None
+    if not isinstance(body, dict):
+        raise reject("the JSON file must hold a request object")
+    return body
 
 
 def merge_upload_options(body: dict, options: dict | None) -> dict:

@@ -5,12 +5,11 @@ received (no base64 copy); the solver writes them to a temporary file for IfcOpe
 
 from __future__ import annotations
 
-import json
 
 from pydantic import ValidationError
 
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.base import FieldError, InputRejected, json_object, reject, upload_extension
 from plantsolve.solvers.dedup.ifcio import check_header
 
 UPLOAD_EXTENSIONS = (".ifc", ".ifczip", ".json")
@@ -30,18 +29,11 @@ def _options(options: dict | None) -> DedupOptions:
 
 
 def parse_upload(filename: str, content: bytes, options: dict | None) -> DedupRequest:
-    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-    if ext not in UPLOAD_EXTENSIONS:
-        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
     if not content.strip():
         raise reject("the file is empty")
     if ext == ".json":
-        try:
-            body = json.loads(content)
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise reject(f"invalid JSON: {e}") from None
-        if not isinstance(body, dict):
-            raise reject("the JSON file must hold a request object")
+        body = json_object(content)
         if options:
             body = {**body, "options": {**(body.get("options") or {}), **_options(options).model_dump(exclude_unset=True)}}
         try:

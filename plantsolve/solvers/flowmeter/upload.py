@@ -2,29 +2,25 @@
 
 from __future__ import annotations
 
-import json
 
 from pydantic import ValidationError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.base import FieldError, InputRejected, json_object, reject, upload_extension
 
 UPLOAD_EXTENSIONS = (".json",)
 
 
 def parse_upload(filename: str, content: bytes, options: dict | None) -> FlowmeterRequest:
     """A JSON request file; ``options`` (the upload form's options) override the file's options."""
-    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-    if ext not in UPLOAD_EXTENSIONS:
-        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    upload_extension(filename, UPLOAD_EXTENSIONS)
     if not content.strip():
         raise reject("the file is empty")
     try:
-        body = json.loads(content.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        text = content.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
         raise reject(f"invalid JSON: {e}") from None
-    if not isinstance(body, dict):
-        raise reject("the JSON file must hold a request object")
+    body = json_object(text)
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:

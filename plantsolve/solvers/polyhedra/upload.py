@@ -26,16 +26,14 @@ STL (ASCII or binary, read with trimesh): one zone, triangles as faces.
 from __future__ import annotations
 
 import io
-import json
 import math
-import re
 import struct
 
 import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, merge_upload_options, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, json_object, merge_upload_options, reject, upload_extension
 
 UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
 MAX_SKIPPED_LISTED = 200
@@ -348,9 +346,7 @@ def parse_stl(content: bytes) -> dict:
 def parse_upload(filename: str, content: bytes, options: dict | None) -> PolyhedraRequest:
     """An IDF, OBJ, STL or JSON file as a request; ``options`` (the form's options: ``units``,
     ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
-    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-    if ext not in UPLOAD_EXTENSIONS:
-        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
     if not content.strip():
         raise reject("the file is empty")
     if ext == ".stl":
@@ -362,12 +358,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Polyhed
         elif ext == ".obj":
             body = parse_obj(text)
         else:
-            try:
-                body = json.loads(text)
-            except json.JSONDecodeError as e:
-                raise reject(f"invalid JSON: {e}") from None
-            if not isinstance(body, dict):
-                raise reject("the JSON file must hold a request object")
+            body = json_object(text)
     body = merge_upload_options(body, options)
     try:
         return PolyhedraRequest.model_validate(body)

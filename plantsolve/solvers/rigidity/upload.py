@@ -16,13 +16,12 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 from pydantic import ValidationError
 
 from plantsolve.schemas.rigidity import RigidityRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, merge_upload_options, reject
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, json_object, merge_upload_options, reject, upload_extension
 from plantsolve.solvers.rigidity.catalogue import normalise_number
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
@@ -128,19 +127,12 @@ def _tidy(v: float) -> float:
 def parse_upload(filename: str, content: bytes, options: dict | None) -> RigidityRequest:
     """An LDraw or JSON file as a request; ``options`` (the form's: ``contact_tolerance``, ``dock``,
     ``rank_tolerance``) override what the file says."""
-    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-    if ext not in UPLOAD_EXTENSIONS:
-        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
     if not content.strip():
         raise reject("the file is empty")
     text = decode_text(content, "LDraw or JSON file")
     if ext == ".json":
-        try:
-            body = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise reject(f"invalid JSON: {e}") from None
-        if not isinstance(body, dict):
-            raise reject("the JSON file must hold a request object")
+        body = json_object(text)
     else:
         body = parse_ldraw(text)
     body = merge_upload_options(body, options)
