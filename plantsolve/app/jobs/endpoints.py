@@ -38,6 +38,13 @@ def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) 
     return Response(model.model_dump_json(), status_code=status_code, headers=headers, media_type="application/json")
 
 
+def _json_input(job, service: JobService) -> Response:
+    """A JSON request as it was stored: inline in the row, or in a file when it was large."""
+    if job.input_kind == "json":
+        return JSONResponse(job.input)
+    return FileResponse(service.ctx.files.path(job.input_file), media_type="application/json")
+
+
 async def get_service(request: Request) -> JobService:  # async: see require_api_key
     return request.app.state.jobs
 
@@ -225,11 +232,9 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     )
     def get_input(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
         job = service.get(job_id, caller.sees)
-        if job.input_kind == "json":
-            return JSONResponse(job.input)
+        if job.input_kind != "upload":
+            return _json_input(job, service)
         path = service.ctx.files.path(job.input_file)
-        if job.input_kind == "json_file":
-            return FileResponse(path, media_type="application/json")
         uploaded = UploadedInput(filename=job.input_filename or "", options=job.input_options,
                                  size=path.stat().st_size, file=f"/v1/jobs/{job_id}/input/file")
         return _json(uploaded)
@@ -245,11 +250,9 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     )
     def get_input_file(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
         job = service.get(job_id, caller.sees)
-        if job.input_kind == "json":
-            return JSONResponse(job.input)
+        if job.input_kind != "upload":
+            return _json_input(job, service)
         path = service.ctx.files.path(job.input_file)
-        if job.input_kind == "json_file":
-            return FileResponse(path, media_type="application/json")
         return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
 
     for kind in sorted(kinds):

@@ -115,13 +115,17 @@ def _unit(axis) -> np.ndarray:
     return a / np.linalg.norm(a)
 
 
-def _rows(joint: Joint, exact: bool, centre, size) -> np.ndarray:
+def _frame(joint: Joint, exact: bool, centre, size) -> tuple[np.ndarray, np.ndarray]:
+    """The joint's point and axis as the rank needs them: integers as they are for the modular rank;
+    floats centred, scaled to order one and with a unit axis for the SVD."""
     if exact:
-        p = np.array([int(x) for x in joint.point], dtype=np.int64)
-        a = np.array([int(x) for x in joint.axis], dtype=np.int64)
-        return constraint_rows(joint.kind, p, a)
-    p = (np.asarray(joint.point, dtype=float) - centre) / size
-    return constraint_rows(joint.kind, p, _unit(joint.axis))
+        return (np.array([int(x) for x in joint.point], dtype=np.int64),
+                np.array([int(x) for x in joint.axis], dtype=np.int64))
+    return (np.asarray(joint.point, dtype=float) - centre) / size, _unit(joint.axis)
+
+
+def _rows(joint: Joint, exact: bool, centre, size) -> np.ndarray:
+    return constraint_rows(joint.kind, *_frame(joint, exact, centre, size))
 
 
 def block_matrix(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int],
@@ -145,12 +149,7 @@ def block_matrix(bodies: list[int], joints: list[int], all_joints: Sequence[Join
 
 
 def _screws(joint: Joint, exact: bool, centre, size) -> np.ndarray:
-    if exact:
-        p = np.array([int(x) for x in joint.point], dtype=np.int64)
-        a = np.array([int(x) for x in joint.axis], dtype=np.int64)
-        return freedom_screws(joint.kind, p, a)
-    p = (np.asarray(joint.point, dtype=float) - centre) / size
-    return freedom_screws(joint.kind, p, _unit(joint.axis))
+    return freedom_screws(joint.kind, *_frame(joint, exact, centre, size))
 
 
 def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int], exact: bool,
