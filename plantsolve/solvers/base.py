@@ -22,10 +22,13 @@ from __future__ import annotations
 
 import json
 import re
+import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable, Protocol, Sequence
+from pathlib import Path
+from typing import Any, Callable, Iterator, Mapping, Protocol, Sequence
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 
 class Progress(Protocol):
@@ -83,6 +86,78 @@ class Artifact:
     name: str  # file name, e.g. "tube.stl"; unique per job
     media_type: str  # e.g. "model/stl", "image/png"
     data: bytes = field(repr=False)
+
+
+@dataclass(frozen=True)
+class StoredInput:
+    """A submitted file as the service keeps it: the ``name`` it was sent under, where it lies
+    (``path``, None when it only lives in memory) and its bytes on demand (:meth:`read`).
+
+    The job domain hands the stored upload by path, so a reader that wants a file on disk (dedup's
+    IfcOpenShell) opens it directly; library use and tests make one from bytes."""
+
+    name: str
+    path: Path | None = None
+    content: bytes | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if (self.path is None) == (self.content is None):
+            raise ValueError("a StoredInput has a path or bytes, exactly one of them")
+
+    @classmethod
+    def from_bytes(cls, name: str, content: bytes) -> "StoredInput":
+        return cls(name=name, content=bytes(content))
+
+    @classmethod
+    def from_path(cls, path: str | Path, name: str | None = None) -> "StoredInput":
+        path = Path(path)
+        return cls(name=name or path.name, path=path)
+
+    @property
+    def extension(self) -> str:
+        """Lower case, with its dot; ``""`` for a name without one."""
+        return "." + self.name.rsplit(".", 1)[-1].lower() if "." in self.name else ""
+
+    @property
+    def size(self) -> int:
+        return len(self.content) if self.content is not None else self.path.stat().st_size
+
+    def read(self) -> bytes:
+        return self.content if self.content is not None else self.path.read_bytes()
+
+    @contextmanager
+    def as_file(self) -> Iterator[Path]:
+        """A path on disk holding the bytes: the stored file itself, or a temporary copy of in-memory bytes."""
+        if self.path is not None:
+            yield self.path
+            return
+        with tempfile.TemporaryDirectory(prefix="plantsolve-input-") as folder:
+            path = Path(folder) / (re.sub(r"[^A-Za-z0-9._-]+", "_", self.name)[-120:] or "input")
+            path.write_bytes(self.content)
+            yield path
+
+
+@dataclass(frozen=True)
+class Solved:
+    """What a kind's solve returns: the ``result`` (the kind's result model) and the payloads that
+    only the solve could make and its artifacts need (dedup's optimized model), keyed by name.
+    The artifact writer takes both, so no artifact is ever made by solving again."""
+
+    result: BaseModel
+    files: Mapping[str, bytes] = field(default_factory=dict, repr=False)
+
+
+def validated(model: type[BaseModel], data: Any, loc_prefix: tuple[str | int, ...] = ("file",), *,
+              max_errors: int = 50, strict: bool | None = None) -> Any:
+    """``model`` validated from ``data`` (a dict read from a file or a form field); a pydantic
+    ``ValidationError`` becomes :class:`InputRejected` with each field's path behind ``loc_prefix``."""
+    try:
+        return model.model_validate(data, strict=strict)
+    except ValidationError as error:
+        raise InputRejected([
+            FieldError((*loc_prefix, *e["loc"]), e["msg"], e.get("type", "value_error"))
+            for e in error.errors(include_url=False)[:max_errors]
+        ]) from None
 
 
 def reject(msg: str, loc: tuple[str | int, ...] = ("file",), type: str = "value_error") -> InputRejected:
@@ -173,11 +248,17 @@ _KIND = re.compile(r"^[a-z][a-z0-9_-]{0,39}$")
 class SolverSpec:
     """Everything the service needs to know about one solver kind.
 
-    - ``solve(request, progress) -> result``: the pure computation.
-    - ``check_input(request)``: fast checks run at submission (raises :class:`InputRejected`).
-    - ``parse_upload(filename, content, options) -> request``: files the kind accepts, with
-      ``upload_extensions`` (lower case, with the dot).
-    - ``render_artifacts(request, result) -> [Artifact]``: plots, meshes, exported files.
+    - ``parse_upload(source, options) -> request``: a :class:`StoredInput` of a file the kind
+      accepts (``upload_extensions``, lower case, with the dot) and the form's options, read
+      into the kind's request model.
+    - ``load(request, source) -> input``: the kind's input value (decoded arrays, a model
+      handle) made once from the request and, for an upload, its stored file; ``None``: the
+      request itself is the input. Everything below takes this input.
+    - ``check_input(input)``: the checks across fields that the schema cannot state (raises
+      :class:`InputRejected`). The job domain runs them once, at submission; a solver does
+      not run them again.
+    - ``solve(input, progress) -> Solved``: the pure computation.
+    - ``render_artifacts(input, solved) -> [Artifact]``: plots, meshes, exported files.
     - ``example() -> dict``: a small valid request body (JSON) that solves in seconds; the
       OpenAPI document shows it and the contract test runs every kind through it.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
@@ -187,11 +268,12 @@ class SolverSpec:
     kind: str
     request_model: type[BaseModel]
     result_model: type[BaseModel]
-    solve: Callable[[Any, Progress], BaseModel]
+    solve: Callable[[Any, Progress], Solved]
     version: str
+    load: Callable[[Any, StoredInput | None], Any] | None = None
     check_input: Callable[[Any], None] | None = None
-    parse_upload: Callable[[str, bytes, dict | None], BaseModel] | None = None
-    render_artifacts: Callable[[Any, Any], list[Artifact]] | None = None
+    parse_upload: Callable[[StoredInput, dict | None], BaseModel] | None = None
+    render_artifacts: Callable[[Any, Solved], list[Artifact]] | None = None
     upload_extensions: tuple[str, ...] = ()
     soft_time_limit: float = 600.0
     time_limit: float = 660.0
@@ -212,3 +294,7 @@ class SolverSpec:
         names = [op.name for op in self.operations]
         if len(set(names)) != len(names):
             raise ValueError(f"{self.kind}: operation names repeat: {names}")
+
+    def input_of(self, request: BaseModel, source: StoredInput | None = None) -> Any:
+        """The kind's input value for a request (and its stored file, for an upload)."""
+        return request if self.load is None else self.load(request, source)
