@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
 from plantsolve.schemas.common import Report
-from plantsolve.solvers.base import Cancelled, InputRejected, SolverError, SolverSpec
+from plantsolve.solvers.base import Cancelled, InputRejected, Solved, SolverError, SolverSpec, StoredInput
 from plantsolve.workers.context import ServiceContext
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
@@ -118,14 +118,16 @@ def lost_worker_report(attempt: int, max_attempts: int, previous: Any) -> dict:
 
 
 def load_request(ctx: ServiceContext, spec: SolverSpec, job) -> Any:
+    """The kind's input value, re-read from the job's stored input (checked once, at submission)."""
     if job.input_kind == "json":
-        return spec.request_model.model_validate(job.input)
+        return spec.input_of(spec.request_model.model_validate(job.input))
     if job.input_kind == "json_file":
-        return spec.request_model.model_validate_json(ctx.files.read(job.input_file))
+        return spec.input_of(spec.request_model.model_validate_json(ctx.files.read(job.input_file)))
     if job.input_kind == "upload":
         if spec.parse_upload is None:
             raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
-        return spec.parse_upload(job.input_filename, ctx.files.read(job.input_file), job.input_options)
+        source = StoredInput.from_path(ctx.files.path(job.input_file), job.input_filename)
+        return spec.input_of(spec.parse_upload(source, job.input_options), source)
     raise SolverError("input", f"unknown input kind {job.input_kind!r}")
 
 
@@ -217,12 +219,12 @@ def _run_claimed(
         try:
             if ctx.files.path(pending_path(job_id)).exists():
                 return _store_pending(ctx, job_id, attempt, monitor, log_book)
-            request = load_request(ctx, spec, job)
-            result = _call_with_deadline(
-                lambda: spec.solve(request, monitor.progress),
+            job_input = load_request(ctx, spec, job)
+            solved = _call_with_deadline(
+                lambda: spec.solve(job_input, monitor.progress),
                 hard_limit if hard_limit_in_thread else None,
             )
-            return _store_success(ctx, spec, job_id, attempt, request, result, monitor, log_book)
+            return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
         except _Stop as stop:
             if stop.reason != "time_limit":
                 return "cancelled"  # by the user, or the lease went to a newer attempt
@@ -339,8 +341,9 @@ def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, moni
     return "failed" if written else "stale"
 
 
-def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, monitor: AttemptMonitor,
+def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved: Solved, monitor: AttemptMonitor,
                    log_book: AttemptLog) -> str:
+    result = solved.result
     if not isinstance(result, spec.result_model):
         result = spec.result_model.model_validate(result)
     result_json = result.model_dump(mode="json", by_alias=True)
@@ -357,7 +360,7 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, request, result, 
     stored: list[StoredArtifact] = []
     if spec.render_artifacts is not None:
         try:
-            for artifact in spec.render_artifacts(request, result):
+            for artifact in spec.render_artifacts(job_input, solved):
                 path, size, digest = ctx.files.put(f"{job_id}/a{attempt}/{artifact.name}", artifact.data)
                 stored.append(StoredArtifact(artifact.name, artifact.media_type, size, digest, path))
         except Cancelled:

@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import BaseModel, Field
 
 from plantsolve.schemas.common import FiniteFloat, Report, StrictModel
-from plantsolve.solvers.base import Artifact, FieldError, InputRejected, SolverError, SolverSpec
+from plantsolve.solvers.base import Artifact, FieldError, InputRejected, Solved, SolverError, SolverSpec, StoredInput
 
 
 class ComputeRequest(StrictModel):
@@ -31,7 +31,7 @@ class ComputeResult(BaseModel):
     report: Report
 
 
-def solve_compute(request: ComputeRequest, progress) -> ComputeResult:
+def solve_compute(request: ComputeRequest, progress) -> Solved:
     steps = 20
     for step in range(steps):
         progress(step / steps, f"step {step + 1} of {steps}")
@@ -48,12 +48,12 @@ def solve_compute(request: ComputeRequest, progress) -> ComputeResult:
     warnings = [] if values.min() >= 0 else [{"code": "negative", "message": "Some values are negative."}]
     with np.errstate(over="ignore"):  # overflow to inf is what one test wants
         total, norm = float(values.sum()), float(np.linalg.norm(values))
-    return ComputeResult(
+    return Solved(ComputeResult(
         total=total,
         norm=norm,
         spectrum=spectrum,
         report=Report(status="warning" if warnings else "ok", message="computed", warnings=warnings),
-    )
+    ))
 
 
 def check_compute(request: ComputeRequest) -> None:
@@ -62,17 +62,18 @@ def check_compute(request: ComputeRequest) -> None:
         raise InputRejected(bad)
 
 
-def parse_compute(filename: str, content: bytes, options: dict | None) -> ComputeRequest:
+def parse_compute(source: StoredInput, options: dict | None) -> ComputeRequest:
     try:
-        values = [float(line) for line in content.decode().split() if line.strip()]
+        values = [float(line) for line in source.read().decode().split() if line.strip()]
     except (UnicodeDecodeError, ValueError) as error:
         raise InputRejected(FieldError(("file",), f"not a list of numbers: {error}")) from None
     return ComputeRequest.model_validate({"values": values, **(options or {})})
 
 
-def render_compute(request: ComputeRequest, result: ComputeResult) -> list[Artifact]:
+def render_compute(request: ComputeRequest, solved: Solved) -> list[Artifact]:
     text = "\n".join(f"{v!r}" for v in request.values).encode()
-    return [Artifact("values.txt", "text/plain", text), Artifact("summary.json", "application/json", result.model_dump_json().encode())]
+    return [Artifact("values.txt", "text/plain", text),
+            Artifact("summary.json", "application/json", solved.result.model_dump_json().encode())]
 
 
 class CrashRequest(StrictModel):

@@ -27,7 +27,7 @@ from plantsolve.app.problems import (
     loads_bounded,
 )
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
-from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec
+from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
 from plantsolve.workers.context import ServiceContext
 from plantsolve.workers.dispatch import Dispatcher
 from plantsolve.workers.runner import failure_report
@@ -87,7 +87,7 @@ class JobService:
             request = spec.request_model.model_validate_json(body, strict=True)
         except ValidationError as error:
             raise from_validation_error(error, document=raw) from None
-        self._check(spec, request)
+        self._check(spec, spec.input_of(request))
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
         if len(body) > self.ctx.settings.inline_input_bytes:
@@ -121,7 +121,8 @@ class JobService:
         if not content:
             raise Unprocessable("The uploaded file is empty.", errors=[field_problem(["file"], "empty file", "value_error")])
         try:
-            request = spec.parse_upload(filename, content, options)
+            source = StoredInput.from_bytes(filename, content)
+            request = spec.input_of(spec.parse_upload(source, options), source)
         except InputRejected as error:
             raise from_input_rejected(error) from None
         except ValidationError as error:
