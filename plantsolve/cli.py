@@ -126,10 +126,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
-    from plantsolve.app.jobs.service import JobService
-    from plantsolve.app.problems import ProblemError
-    from plantsolve.workers.context import ServiceContext, worker_name
-    from plantsolve.workers.runner import run_job
+    from plantsolve.jobs.context import ServiceContext, worker_name
+    from plantsolve.jobs.errors import ProblemError
+    from plantsolve.jobs.lifecycle import SUCCEEDED
+    from plantsolve.jobs.runner import run_job
+    from plantsolve.jobs.service import JobService
 
     ctx = ServiceContext.create(settings, migrate=True)
     try:
@@ -149,15 +150,15 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
         name = worker_name("cli")
         while dispatcher.pending:
             run_job(ctx, dispatcher.pending.pop(0), worker=name, requeue=dispatcher.enqueue)
-        job = ctx.repo.get(job_id)
-        if job.status == "succeeded":
+        job = service.get(job_id)
+        if job.status == SUCCEEDED:
             _write(args.output, job.result)
-            artifacts = ctx.repo.artifacts(job_id)
+            artifacts = service.view(job).artifacts
             if artifacts:
                 folder = _artifact_folder(args)
                 folder.mkdir(parents=True, exist_ok=True)
                 for artifact in artifacts:
-                    (folder / artifact.name).write_bytes(ctx.files.read(artifact.path))
+                    (folder / artifact.name).write_bytes(service.artifact(job_id, artifact.name)[1].read_bytes())
                 print(f"artifacts: {', '.join(a.name for a in artifacts)} in {folder}", file=sys.stderr)
             report = job.report or (job.result or {}).get("report")
             n = _print_warnings(report)

@@ -24,10 +24,10 @@ from starlette.datastructures import UploadFile
 
 from plantsolve.app import dashboard_views as views
 from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
-from plantsolve.app.jobs.service import JobService, decode_cursor, encode_cursor
+from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
 from plantsolve.app.problems import NotFound, PayloadTooLarge, ProblemError, Unprocessable, field_problem
 from plantsolve.solvers.base import SolverSpec
-from plantsolve.store.models import JOB_STATUSES
+from plantsolve.jobs.lifecycle import STATUSES, is_finished
 
 HERE = Path(__file__).parent
 STATIC = "/dashboard-static"  # outside /dashboard/: the login page needs its style before any key
@@ -40,7 +40,7 @@ Cursor = Annotated[str | None, Query(max_length=512, pattern=r"^[A-Za-z0-9_-]*$"
 Limit = Annotated[int, Query(ge=1, le=200)]
 
 templates = Jinja2Templates(directory=HERE / "templates")
-templates.env.globals.update(static=STATIC, statuses=JOB_STATUSES)
+templates.env.globals.update(static=STATIC, statuses=STATUSES)
 templates.env.filters.update(when=views.when, seconds=views.seconds, pretty=views.pretty)
 
 
@@ -73,8 +73,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
     service, who = _service(request), principal(request)
     kind, status, q = kind or None, status or None, (q or "").strip() or None
     after = decode_cursor(cursor) if cursor else None
-    jobs = service.ctx.repo.list(kind=kind, status=status, text=q, after=after, limit=limit + 1, owner=who.sees,
-                                 brief=True)
+    jobs = service.search(kind=kind, status=status, text=q, after=after, limit=limit + 1, sees=who.sees)
     more = len(jobs) > limit
     jobs = jobs[:limit]
     filters = {"kind": kind or "", "status": status or "", "q": q or ""}
@@ -82,7 +81,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
     stream = {name: value for name, value in (("kind", kind), ("status", status)) if value}
     return {
         "rows": [views.row(service.view(job, with_artifacts=False)) for job in jobs],
-        "counts": service.ctx.repo.count_by_status(owner=who.sees),
+        "counts": service.count_by_status(who.sees),
         "filters": filters,
         "cursor": cursor or "",
         "next_cursor": encode_cursor(jobs[-1]) if more and jobs else None,
@@ -100,7 +99,7 @@ def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
     return {
         "job": view,
         "progress": views.progress_text(view.status, view.progress.fraction),
-        "finished": views.finished(view.status),
+        "finished": is_finished(view.status),
         "warnings": view.report.warnings if view.report is not None else [],
         "plots": views.plots(artifacts),
         "artifacts": artifacts,

@@ -9,7 +9,6 @@ from datetime import datetime
 from typing import Any
 
 from plantsolve.schemas.jobs import ArtifactInfo, JobView
-from plantsolve.store.models import FINISHED, Job
 
 # larger inputs are offered as a download instead of being printed into the page
 INLINE_INPUT_CHARS = 60_000
@@ -128,7 +127,7 @@ class InputView:
     url: str
 
 
-def input_view(job: Job) -> InputView:
+def input_view(job: Any) -> InputView:
     url = f"/v1/jobs/{job.id}/input"
     if job.input_kind == "json":
         text = pretty(job.input)
@@ -146,7 +145,3 @@ def plots(artifacts: list[ArtifactInfo]) -> list[ArtifactInfo]:
     stems = {a.name.rsplit(".", 1)[0] for a in raster}
     vector = [a for a in artifacts if a.media_type == "image/svg+xml" and a.name.rsplit(".", 1)[0] not in stems]
     return raster + vector
-
-
-def finished(status: str) -> bool:
-    return status in FINISHED

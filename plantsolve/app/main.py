@@ -19,12 +19,12 @@ from plantsolve.app.docs import install_docs
 from plantsolve.app.metrics import build_metrics
 from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router
 from plantsolve.app.jobs.operations import build_operations_router
-from plantsolve.app.jobs.service import JobService
+from plantsolve.jobs.service import JobService
 from plantsolve.app.middleware import BodyLimitMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
 from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
 from plantsolve.schemas.jobs import HealthStatus, Problem, UploadedInput
-from plantsolve.workers.context import ServiceContext
+from plantsolve.jobs.context import ServiceContext
 from plantsolve.workers.dispatch import make_dispatcher
 from plantsolve.workers.logs import configure_logging
 
@@ -97,7 +97,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
     install_dashboard(app)
-    app.include_router(build_metrics(ctx.repo, ctx.kinds))
+    app.include_router(build_metrics(app.state.jobs, ctx.kinds))
     app.include_router(build_unknown_kind_router(ctx.kinds))
     install_docs(app)
     _install_health(app)

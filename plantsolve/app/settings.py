@@ -1,7 +1,7 @@
 """HTTP settings: API keys, body limits, schema migration at start-up.
 
-:class:`AppSettings` extends the worker settings (the API process also runs the embedded pool
-and the sweeper); see :mod:`plantsolve.store.settings` for the layering.
+:class:`AppSettings` extends the job settings (the API process also takes jobs in, runs the
+sweeper and, on the embedded default, the pool); see :mod:`plantsolve.store.settings` for the layering.
 """
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ from typing import Annotated
 from pydantic import Field, field_validator
 from pydantic_settings import NoDecode
 
-from plantsolve.workers.settings import WorkerSettings, split_commas
+from plantsolve.jobs.settings import JobSettings, split_commas
 
 
-class AppSettings(WorkerSettings):
+class AppSettings(JobSettings):
     api_keys: Annotated[list[str], NoDecode] = Field(
         default_factory=list,
         description="Comma-separated API keys, each 'name:key' or a bare key; each key is a tenant that sees only "
@@ -30,10 +30,6 @@ class AppSettings(WorkerSettings):
     )
     max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, description="Largest accepted uploaded file (413 above).")
-    inline_input_bytes: int = Field(
-        default=1024 * 1024,
-        description="JSON inputs larger than this are stored as a file and referenced from the job row.",
-    )
     auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
     events_poll_seconds: float = Field(
         default=0.5, gt=0, le=60,

@@ -23,14 +23,14 @@ import socket
 import threading
 import uuid
 from concurrent.futures import ThreadPoolExecutor
-from datetime import timedelta
+from datetime import datetime, timedelta, timezone
 from urllib.parse import urlsplit
 
 import httpx
 
 from plantsolve.app.auth import KeyRing
 from plantsolve.app.problems import Unprocessable, field_problem
-from plantsolve.store.models import utcnow
+from plantsolve.jobs.errors import NotFound
 
 log = logging.getLogger("plantsolve.webhooks")
 
@@ -122,7 +122,7 @@ class WebhookNotifier:
     """Sends due webhooks from a daemon thread and a small pool (see the module docstring)."""
 
     def __init__(self, service, secrets: WebhookSecrets, settings, transport: httpx.BaseTransport | None = None):
-        self.service, self.repo, self.secrets, self.settings = service, service.ctx.repo, secrets, settings
+        self.service, self.secrets, self.settings = service, secrets, settings
         self._http = httpx.Client(timeout=settings.webhook_timeout_seconds, transport=transport,
                                   headers={"User-Agent": "plantsolve-webhook"})
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix="webhook")
@@ -149,16 +149,19 @@ class WebhookNotifier:
     def send_due(self) -> int:
         """Claim every due delivery and hand it to the pool; returns how many were claimed."""
         claimed = 0
-        for job_id in self.repo.due_callbacks():
-            attempt = self.repo.claim_callback(job_id, lease_seconds=LEASE_SECONDS)
+        for job_id in self.service.due_callbacks():
+            attempt = self.service.claim_callback(job_id, lease_seconds=LEASE_SECONDS)
             if attempt is not None:
                 claimed += 1
                 self._pool.submit(self.deliver, job_id, attempt)
         return claimed
 
     def deliver(self, job_id: uuid.UUID, attempt: int) -> bool:
-        job = self.repo.get(job_id, brief=True)
-        if job is None or not job.callback_url:
+        try:
+            job = self.service.get(job_id, brief=True)
+        except NotFound:
+            return False
+        if not job.callback_url:
             return False
         body = self.service.view(job).model_dump_json().encode()
         secret = self.secrets.secret_for(job.owner)
@@ -171,7 +174,7 @@ class WebhookNotifier:
         inside = None if self.settings.webhook_private_targets else non_public_address(target.hostname or "",
                                                                                          target.port)
         if inside is not None:
-            self.repo.record_callback(job_id, attempt, state="failed",
+            self.service.record_callback(job_id, attempt, state="failed",
                                       error=f"refused: {target.hostname} resolves to the non-public address {inside}")
             log.warning("webhook of job %s refused: %s resolves to %s", job_id, target.hostname, inside)
             return False
@@ -182,15 +185,15 @@ class WebhookNotifier:
         except httpx.HTTPError as failure:
             error = f"{type(failure).__name__}: {failure}"[:500]
         if error is None:
-            self.repo.record_callback(job_id, attempt, state="delivered")
+            self.service.record_callback(job_id, attempt, state="delivered")
             log.info("webhook delivered", extra={"job_id": str(job_id), "attempt": attempt})
             return True
         if attempt >= self.settings.webhook_max_attempts:
-            self.repo.record_callback(job_id, attempt, state="failed", error=error)
+            self.service.record_callback(job_id, attempt, state="failed", error=error)
             log.warning("webhook of job %s given up after %d attempts: %s", job_id, attempt, error)
         else:
             delay = self.settings.webhook_retry_seconds * 2 ** (attempt - 1)
-            self.repo.record_callback(job_id, attempt, state="pending", error=error,
-                                      next_at=utcnow() + timedelta(seconds=delay))
+            self.service.record_callback(job_id, attempt, state="pending", error=error,
+                                      next_at=datetime.now(timezone.utc) + timedelta(seconds=delay))
             log.info("webhook of job %s failed (%s); retry in %.1f s", job_id, error, delay)
         return False

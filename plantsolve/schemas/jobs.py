@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from datetime import datetime
+from enum import StrEnum
 from typing import Any, Literal
 from uuid import UUID
 
@@ -10,7 +11,14 @@ from pydantic import BaseModel, Field
 
 from plantsolve.schemas.common import Report
 
-JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
+class JobStatus(StrEnum):
+    """Where a job is in its life; the transitions between them are in :mod:`plantsolve.jobs.lifecycle`."""
+
+    QUEUED = "queued"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
 
 
 class JobProgress(BaseModel):

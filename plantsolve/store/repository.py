@@ -18,7 +18,8 @@ from sqlalchemy import String, Text, and_, case, cast, delete, func, or_, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
-from plantsolve.store.models import FINISHED, Artifact, Job, utcnow
+from plantsolve.jobs.lifecycle import ACTIVE, CANCEL, CLAIM, FAIL, FINISHED, QUEUED, REQUEUE, RUNNING, SUCCEED
+from plantsolve.store.models import Artifact, Job, utcnow
 
 
 def as_utc(value: datetime | None) -> datetime | None:
@@ -47,6 +48,10 @@ class JobState:
     attempt: int
     progress: float
     progress_message: str
+
+    @classmethod
+    def of(cls, job: Job) -> "JobState":
+        return cls(job.id, job.kind, job.status, job.attempt, job.progress, job.progress_message or "")
 
     @property
     def signature(self) -> tuple:
@@ -113,7 +118,7 @@ class JobRepository:
         ``since``, and the jobs ``ids`` (those seen active before: to learn how they ended). Each part is
         an indexed read, so a poll costs in proportion to the jobs in flight, not to the table."""
         ids = list(ids)
-        queries = [select(*STATE).where(Job.status.in_(("queued", "running"))),
+        queries = [select(*STATE).where(Job.status.in_(ACTIVE)),
                    select(*STATE).where(Job.created_at >= since)]
         queries += [select(*STATE).where(Job.id.in_(ids[i:i + 500])) for i in range(0, len(ids), 500)]
         found: dict[uuid.UUID, JobState] = {}
@@ -181,7 +186,7 @@ class JobRepository:
         """Per kind, when its longest-waiting queued job was submitted."""
         with self.sessions() as session:
             return [(kind, as_utc(created)) for kind, created in session.execute(
-                select(Job.kind, func.min(Job.created_at)).where(Job.status == "queued").group_by(Job.kind))]
+                select(Job.kind, func.min(Job.created_at)).where(Job.status == QUEUED).group_by(Job.kind))]
 
     def run_time_histogram(self, buckets: Iterable[float]) -> list[tuple[str, str, int, float, list[int]]]:
         """Per kind and final status of the finished jobs: count, sum of run seconds, and the cumulative count
@@ -219,10 +224,10 @@ class JobRepository:
             .where(
                 Job.id == job_id,
                 Job.attempt < Job.max_attempts,
-                or_(Job.status == "queued", and_(Job.status == "running", Job.lease_until < now)),
+                or_(Job.status == QUEUED, and_(Job.status == RUNNING, Job.lease_until < now)),
             )
             .values(
-                status="running",
+                status=CLAIM.target,
                 attempt=Job.attempt + 1,
                 lease_until=now + timedelta(seconds=lease_seconds),
                 heartbeat_at=now,
@@ -263,7 +268,7 @@ class JobRepository:
         with self.writing(), self.sessions() as session:
             updated = session.execute(
                 self._fence(job_id, attempt).values(
-                    status="succeeded",
+                    status=SUCCEED.target,
                     result=result,
                     report=report,
                     progress=1.0,
@@ -299,7 +304,7 @@ class JobRepository:
         return self._fenced(
             job_id,
             attempt,
-            status="failed",
+            status=FAIL.target,
             report=report,
             finished_at=utcnow(),
             lease_until=None,
@@ -315,7 +320,8 @@ class JobRepository:
         extra: dict[str, Any] = {} if attempts is None else {"attempts": attempts}
         if grant_attempt:
             extra["max_attempts"] = Job.max_attempts + 1
-        return self._fenced(job_id, attempt, status="queued", report=report, lease_until=None, worker=None, **extra)
+        return self._fenced(job_id, attempt, status=REQUEUE.target, report=report, lease_until=None, worker=None,
+                            **extra)
 
     def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
         """The attempts history of a running attempt (e.g. a result waiting to be stored)."""
@@ -329,12 +335,12 @@ class JobRepository:
         with self.writing(), self.sessions() as session:
             updated = session.execute(
                 update(Job)
-                .where(Job.id == job_id, Job.status.in_(("queued", "running")))
-                .values(status="cancelled", finished_at=utcnow(), lease_until=None, report=report)
+                .where(Job.id == job_id, Job.status.in_(CANCEL.sources))
+                .values(status=CANCEL.target, finished_at=utcnow(), lease_until=None, report=report)
             ).rowcount
             session.commit()
             if updated == 1:
-                return "cancelled"
+                return CANCEL.target
             job = session.get(Job, job_id)
             return job.status if job is not None else None
 
@@ -349,7 +355,7 @@ class JobRepository:
         with self.sessions() as session:
             lapsed = session.execute(
                 select(Job.id, Job.attempt, Job.max_attempts, Job.report, Job.attempts, Job.worker,
-                       Job.heartbeat_at).where(Job.status == "running", Job.lease_until < now)
+                       Job.heartbeat_at).where(Job.status == RUNNING, Job.lease_until < now)
             ).all()
         for job_id, attempt, max_attempts, report, history, worker, beat in lapsed:
             if attempt >= max_attempts and result_waiting(job_id):
@@ -362,17 +368,17 @@ class JobRepository:
                 "outcome": "lost" if same.get("outcome") != "result_pending" else "result_pending",
                 "error": f"no heartbeat since {as_utc(beat).isoformat() if beat else 'the start'}"}]
             if attempt >= max_attempts:
-                if self._fenced_lapsed(job_id, attempt, now, status="failed", report=lost, finished_at=now,
+                if self._fenced_lapsed(job_id, attempt, now, status=FAIL.target, report=lost, finished_at=now,
                                        lease_until=None, attempts=history):
                     failed.append(job_id)
-            elif self._fenced_lapsed(job_id, attempt, now, status="queued", report=lost, lease_until=None, worker=None,
+            elif self._fenced_lapsed(job_id, attempt, now, status=REQUEUE.target, report=lost, lease_until=None, worker=None,
                                      attempts=history, max_attempts=max_attempts):
                 requeued.append(job_id)
         stale = now - timedelta(seconds=requeue_queued_after)
         with self.sessions() as session:
             waiting = session.execute(
                 select(Job.id, Job.enqueued_at).where(
-                    Job.status == "queued", or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
+                    Job.status == QUEUED, or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
                 ).order_by(Job.enqueued_at.is_not(None), Job.created_at).limit(SWEEP_BATCH)
             ).all()
         return SweepOutcome(requeued=requeued, failed=failed,
@@ -380,7 +386,7 @@ class JobRepository:
 
     def count_queued(self) -> int:
         with self.sessions() as session:
-            return int(session.scalar(select(func.count()).select_from(Job).where(Job.status == "queued")))
+            return int(session.scalar(select(func.count()).select_from(Job).where(Job.status == QUEUED)))
 
     def clear_enqueued(self, job_id: uuid.UUID) -> None:
         """The message never reached the broker: the next sweep sends it."""
@@ -388,7 +394,7 @@ class JobRepository:
 
     def queued_ids(self, limit: int | None = None) -> list[uuid.UUID]:
         """Queued jobs that a worker can claim, oldest first."""
-        query = (select(Job.id).where(Job.status == "queued", Job.attempt < Job.max_attempts)
+        query = (select(Job.id).where(Job.status == QUEUED, Job.attempt < Job.max_attempts)
                  .order_by(Job.created_at, Job.id).limit(limit))
         with self.sessions() as session:
             return list(session.scalars(query))
@@ -429,7 +435,8 @@ class JobRepository:
 
     @staticmethod
     def _fence(job_id: uuid.UUID, attempt: int):
-        return update(Job).where(Job.id == job_id, Job.attempt == attempt, Job.status == "running")
+        # every transition out of running starts here: the attempt that holds the job
+        return update(Job).where(Job.id == job_id, Job.attempt == attempt, Job.status == RUNNING)
 
     def _fenced(self, job_id: uuid.UUID, attempt: int, **values: Any) -> bool:
         return self._execute(self._fence(job_id, attempt).values(**values)) == 1
@@ -476,6 +483,3 @@ def _apply_defaults(job: Job) -> None:
             value = default.arg(None) if default.is_callable else default.arg
             setattr(job, column.key, value)
 
-
-def is_finished(status: str) -> bool:
-    return status in FINISHED

@@ -1,7 +1,7 @@
 """Where the store keeps its data, read from the environment (or a ``.env`` file).
 
 Settings are layered by room, each layer adding what its room needs: :class:`StoreSettings`
-(here) → :class:`plantsolve.workers.settings.WorkerSettings` (queue and runner) →
+(here) → :class:`plantsolve.jobs.settings.JobSettings` (queue and runner) →
 :class:`plantsolve.app.settings.AppSettings` (HTTP). All read the same environment, so one
 ``.env`` configures every process. With nothing set the service runs on the embedded default:
 a SQLite file under ``./var``.

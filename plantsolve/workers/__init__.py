@@ -1,6 +1,7 @@
-"""The queue side: the one runner function shared by the embedded pool and the Celery
-workers, the dispatchers that carry job ids to it, and the sweeper.
+"""Transport only: how job ids reach :func:`plantsolve.jobs.runner.run_job` — the supervised process
+pool (embedded default), its thread variant, the Celery app and task — plus the sweeper loop and the
+log format. Decisions about jobs live in :mod:`plantsolve.jobs`.
 
-Imports the store, the solvers (through the kind map) and the schemas; imported by ``app`` and
-the CLI, never the other way.
+Imports the job domain (and the store, solvers and schemas it needs to start a process); imported
+only where a process is assembled (``app/main.py``, the CLI).
 """

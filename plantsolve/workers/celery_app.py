@@ -15,16 +15,16 @@ from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 
 from plantsolve.solvers.kinds import load_kinds
-from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.workers.logs import configure_logging
-from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
-from plantsolve.workers.settings import WorkerSettings, get_worker_settings
+from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
+from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.celery")
 
 
-def create_celery(settings: WorkerSettings) -> Celery:
+def create_celery(settings: JobSettings) -> Celery:
     longest = max((float(settings.time_limits.get(spec.kind, spec.time_limit))
                    for spec in load_kinds(settings.plugins).values()), default=660.0)
     app = Celery("plantsolve", broker=settings.broker_url)
@@ -95,7 +95,7 @@ def _worker_context():
     global _ctx, _dispatcher
     with _ctx_lock:
         if _ctx is None:
-            settings = get_worker_settings()
+            settings = get_job_settings()
             configure_logging(settings.log_format)
             _ctx = ServiceContext.create(settings)
             _dispatcher = CeleryDispatcher(_ctx)

@@ -7,9 +7,10 @@ import queue
 import threading
 import uuid
 
-from plantsolve.workers.context import ServiceContext, worker_name
-from plantsolve.workers.runner import run_job
-from plantsolve.workers.sweeper import Sweeper, resume
+from plantsolve.jobs.context import ServiceContext, worker_name
+from plantsolve.jobs.runner import run_job
+from plantsolve.jobs.leases import resume
+from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.embedded")
 

@@ -20,11 +20,12 @@ from functools import partial
 
 from pebble import ProcessExpired, ProcessPool
 
-from plantsolve.workers.context import ServiceContext, worker_name
+from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.workers.logs import configure_logging
-from plantsolve.workers.runner import fail_killed_at_hard_limit, run_job
-from plantsolve.workers.settings import WorkerSettings
-from plantsolve.workers.sweeper import Sweeper, resume
+from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
+from plantsolve.jobs.settings import JobSettings
+from plantsolve.jobs.leases import resume
+from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.processes")
 
@@ -39,7 +40,7 @@ def _start_worker(settings_json: str) -> None:
     global _worker_ctx
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
-    settings = WorkerSettings.model_validate_json(settings_json)
+    settings = JobSettings.model_validate_json(settings_json)
     # a solver must never slow down the API process that shares this machine with it
     os.nice(settings.job_niceness)
     configure_logging(settings.log_format)
@@ -72,7 +73,7 @@ class ProcessDispatcher:
 
     def start(self) -> None:
         self._stopping = False
-        settings = WorkerSettings.model_validate(self.ctx.settings.model_dump(include=set(WorkerSettings.model_fields)))
+        settings = JobSettings.model_validate(self.ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
                                  initargs=(settings.model_dump_json(),), context=multiprocessing.get_context("spawn"))
         resume(self.ctx, self.enqueue, self.pending)

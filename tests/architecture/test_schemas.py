@@ -70,3 +70,23 @@ def test_every_bound_of_every_kind_reaches_its_json_schema():
         for model in (spec.request_model, spec.result_model):
             walk(model.model_json_schema(), f"{kind}:{model.__name__}")
     assert not stray
+
+
+def test_schema_models_carry_no_private_attributes():
+    """A request or result is its fields: no side channel travels on a model (a kind's decoded arrays or
+    file handles live in its own input value; a solve's extra payloads travel in ``Solved``)."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    import plantsolve.schemas
+    from pydantic import BaseModel
+
+    offenders = []
+    for info in pkgutil.iter_modules(plantsolve.schemas.__path__):
+        module = importlib.import_module(f"plantsolve.schemas.{info.name}")
+        for name, value in vars(module).items():
+            if inspect.isclass(value) and issubclass(value, BaseModel) and value.__module__ == module.__name__:
+                if value.__private_attributes__:
+                    offenders.append(f"{module.__name__}.{name}: {sorted(value.__private_attributes__)}")
+    assert not offenders, offenders

@@ -103,7 +103,7 @@ def test_cancel_queued_job_never_runs(tmp_path):
     with TestClient(app) as client:
         job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
         assert client.post(f"/v1/jobs/{job['id']}/cancel").json()["status"] == "cancelled"
-        from plantsolve.workers.runner import run_job
+        from plantsolve.jobs.runner import run_job
 
         assert run_job(app.state.ctx, __import__("uuid").UUID(job["id"]), worker="t", requeue=lambda *a: None) == "skipped"
         assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"

@@ -9,7 +9,7 @@ from sqlalchemy import text
 from sqlalchemy.orm.exc import DetachedInstanceError
 
 from plantsolve.store.models import Job
-from plantsolve.workers.context import ServiceContext
+from plantsolve.jobs.context import ServiceContext
 from tests.conftest import service_settings
 
 

@@ -11,13 +11,14 @@ from fastapi.responses import FileResponse, JSONResponse
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
-from plantsolve.app.auth import Principal, require_api_key
+from plantsolve.app.auth import require_api_key
+from plantsolve.app.deps import Caller, Service
 from plantsolve.app.jobs.events import add_event_routes
-from plantsolve.app.jobs.service import JobService, safe_filename
-from plantsolve.app.webhooks import check_callback_url
 from plantsolve.app.problems import (
     NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
 )
+from plantsolve.app.webhooks import check_callback_url
+from plantsolve.jobs.service import JobService, safe_filename
 from plantsolve.schemas.jobs import JobList, JobStatus, JobView, UploadedInput
 from plantsolve.solvers.base import SolverSpec
 
@@ -42,15 +43,7 @@ def _json_input(job, service: JobService) -> Response:
     """A JSON request as it was stored: inline in the row, or in a file when it was large."""
     if job.input_kind == "json":
         return JSONResponse(job.input)
-    return FileResponse(service.ctx.files.path(job.input_file), media_type="application/json")
-
-
-async def get_service(request: Request) -> JobService:  # async: see require_api_key
-    return request.app.state.jobs
-
-
-Service = Annotated[JobService, Depends(get_service)]
-Caller = Annotated[Principal, Depends(require_api_key)]
+    return FileResponse(service.input_path(job), media_type="application/json")
 
 
 CallbackUrl = Annotated[
@@ -200,11 +193,8 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         return service.view(service.cancel(job_id, caller.sees))
 
     def get_artifact(job_id: uuid.UUID, name: str, service: Service, caller: Caller) -> FileResponse:
-        service.get(job_id, caller.sees, brief=True)
-        artifact = service.ctx.repo.artifact(job_id, name)
-        if artifact is None:
-            raise NotFound(f"Job {job_id} has no artifact {name!r}.")
-        return FileResponse(service.ctx.files.path(artifact.path), media_type=artifact.media_type, filename=artifact.name,
+        artifact, path = service.artifact(job_id, name, caller.sees)
+        return FileResponse(path, media_type=artifact.media_type, filename=artifact.name,
                             headers={"X-Content-SHA256": artifact.sha256})
 
     artifact_file = {"description": "The file, with its media type (Content-Length, X-Content-SHA256)",
@@ -234,7 +224,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         job = service.get(job_id, caller.sees)
         if job.input_kind != "upload":
             return _json_input(job, service)
-        path = service.ctx.files.path(job.input_file)
+        path = service.input_path(job)
         uploaded = UploadedInput(filename=job.input_filename or "", options=job.input_options,
                                  size=path.stat().st_size, file=f"/v1/jobs/{job_id}/input/file")
         return _json(uploaded)
@@ -252,7 +242,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         job = service.get(job_id, caller.sees)
         if job.input_kind != "upload":
             return _json_input(job, service)
-        path = service.ctx.files.path(job.input_file)
+        path = service.input_path(job)
         return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
 
     for kind in sorted(kinds):

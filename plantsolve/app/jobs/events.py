@@ -18,19 +18,19 @@ from __future__ import annotations
 import asyncio
 import json
 import uuid
-from datetime import timedelta
-from typing import Annotated, Any, AsyncIterator
+from datetime import datetime, timedelta, timezone
+from typing import Any, AsyncIterator
 
-from fastapi import APIRouter, Depends, Request
+from fastapi import APIRouter, Request
 from sse_starlette import EventSourceResponse, ServerSentEvent
 from starlette.concurrency import run_in_threadpool
 
-from plantsolve.app.auth import Principal, require_api_key
-from plantsolve.app.jobs.service import JobService
+from plantsolve.app.deps import Caller, Service
 from plantsolve.app.problems import responses
+from plantsolve.jobs.errors import NotFound
+from plantsolve.jobs.lifecycle import is_finished
+from plantsolve.jobs.service import JobService, JobState
 from plantsolve.schemas.jobs import JobStatus
-from plantsolve.store.models import utcnow
-from plantsolve.store.repository import JobState, is_finished
 
 EVENT_STREAM = "text/event-stream"
 
@@ -56,24 +56,23 @@ def _response(events: AsyncIterator[ServerSentEvent], request: Request) -> Event
 
 async def job_event_stream(request: Request, service: JobService, job_id: uuid.UUID, sees: str | None) -> AsyncIterator[ServerSentEvent]:
     settings = request.app.state.settings
-    repo = service.ctx.repo
     job = await run_in_threadpool(service.get, job_id, sees, brief=True)
     view = await run_in_threadpool(service.view, job)
     first = _job_event(view.model_dump_json())
     first.retry = RETRY_MS
     yield first
-    seen = (job.status, job.attempt, job.progress, job.progress_message or "")
+    seen = JobState.of(job).signature
     status = job.status
     while not is_finished(status):
         await asyncio.sleep(settings.events_poll_seconds)
-        state = await run_in_threadpool(repo.state, job_id)
+        state = await run_in_threadpool(service.state, job_id)
         if state is None:  # deleted under us: nothing more will happen
             break
         if state.signature == seen:
             continue
         job = await run_in_threadpool(service.get, job_id, sees, brief=True)
         view = await run_in_threadpool(service.view, job)
-        seen = (job.status, job.attempt, job.progress, job.progress_message or "")
+        seen = JobState.of(job).signature
         status = job.status
         yield _job_event(view.model_dump_json())
     yield ServerSentEvent(data=json.dumps({"status": status}), event="end", sep=SEP)
@@ -82,22 +81,21 @@ async def job_event_stream(request: Request, service: JobService, job_id: uuid.U
 async def jobs_event_stream(request: Request, service: JobService, sees: str | None, kind: str | None,
                             status: str | None) -> AsyncIterator[ServerSentEvent]:
     settings = request.app.state.settings
-    repo = service.ctx.repo
     # a job created between two polls is caught by its creation time; a second of slack covers the
     # clocks of the processes that write created_at
-    since = utcnow() - timedelta(seconds=1)
+    since = datetime.now(timezone.utc) - timedelta(seconds=1)
     known: dict[uuid.UUID, tuple] = {}
-    for state in await run_in_threadpool(lambda: repo.states(since=since, owner=sees, kind=kind)):
+    for state in await run_in_threadpool(lambda: service.states(since=since, owner=sees, kind=kind)):
         known[state.id] = state.signature
     opened = ServerSentEvent(comment="watching jobs", sep=SEP)
     opened.retry = RETRY_MS
     yield opened
     while True:
         await asyncio.sleep(settings.events_poll_seconds)
-        now = utcnow()
+        now = datetime.now(timezone.utc)
         active = [job_id for job_id, signature in known.items() if not is_finished(signature[0])]
         states: list[JobState] = await run_in_threadpool(
-            lambda: repo.states(since=since, ids=active, owner=sees, kind=kind))
+            lambda: service.states(since=since, ids=active, owner=sees, kind=kind))
         since = now - timedelta(seconds=1)
         for state in states:
             if known.get(state.id) == state.signature:
@@ -105,8 +103,9 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
             known[state.id] = state.signature
             if status and state.status != status:
                 continue
-            job = await run_in_threadpool(repo.get, state.id, brief=True)
-            if job is None:
+            try:
+                job = await run_in_threadpool(service.get, state.id, sees, brief=True)
+            except NotFound:  # deleted under us
                 continue
             view = await run_in_threadpool(service.view, job)
             yield _job_event(view.model_dump_json())
@@ -114,14 +113,6 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
         current = {state.id for state in states}
         for job_id in [j for j, signature in known.items() if is_finished(signature[0]) and j not in current]:
             del known[job_id]
-
-
-async def _service(request: Request) -> JobService:
-    return request.app.state.jobs
-
-
-Service = Annotated[JobService, Depends(_service)]
-Caller = Annotated[Principal, Depends(require_api_key)]
 
 
 def add_event_routes(router: APIRouter) -> None:

@@ -11,7 +11,8 @@ from typing import Mapping
 from fastapi import APIRouter, Depends
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.jobs.endpoints import Caller, Service, camel
+from plantsolve.app.deps import Caller, Service
+from plantsolve.app.jobs.endpoints import camel
 from plantsolve.app.problems import responses
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 

@@ -20,9 +20,11 @@ from typing import Any, Callable
 from pydantic import ValidationError
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
+from plantsolve.jobs import intake
+from plantsolve.jobs.context import ServiceContext
+from plantsolve.jobs.lifecycle import RUNNING
 from plantsolve.schemas.common import Report
-from plantsolve.solvers.base import Cancelled, InputRejected, Solved, SolverError, SolverSpec, StoredInput
-from plantsolve.workers.context import ServiceContext
+from plantsolve.solvers.base import Cancelled, InputRejected, Solved, SolverError
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
 
@@ -117,20 +119,6 @@ def lost_worker_report(attempt: int, max_attempts: int, previous: Any) -> dict:
     return failure_report("worker", "The worker stopped responding; the job was re-queued.", attempts=history)
 
 
-def load_request(ctx: ServiceContext, spec: SolverSpec, job) -> Any:
-    """The kind's input value, re-read from the job's stored input (checked once, at submission)."""
-    if job.input_kind == "json":
-        return spec.input_of(spec.request_model.model_validate(job.input))
-    if job.input_kind == "json_file":
-        return spec.input_of(spec.request_model.model_validate_json(ctx.files.read(job.input_file)))
-    if job.input_kind == "upload":
-        if spec.parse_upload is None:
-            raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
-        source = StoredInput.from_path(ctx.files.path(job.input_file), job.input_filename)
-        return spec.input_of(spec.parse_upload(source, job.input_options), source)
-    raise SolverError("input", f"unknown input kind {job.input_kind!r}")
-
-
 def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> Any:
     """Run ``function``; with a deadline, in a daemon thread abandoned if it overruns.
 
@@ -219,7 +207,7 @@ def _run_claimed(
         try:
             if ctx.files.path(pending_path(job_id)).exists():
                 return _store_pending(ctx, job_id, attempt, monitor, log_book)
-            job_input = load_request(ctx, spec, job)
+            job_input = intake.read_stored(spec, job, ctx.files)
             solved = _call_with_deadline(
                 lambda: spec.solve(job_input, monitor.progress),
                 hard_limit if hard_limit_in_thread else None,
@@ -409,7 +397,7 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     the running attempt now with a report, instead of letting the lease lapse and retrying a job that
     would hang again. Fenced on the attempt that was running."""
     job = ctx.repo.get(job_id)
-    if job is None or job.status != "running":
+    if job is None or job.status != RUNNING:
         return False
     spec = ctx.spec(job.kind)
     limit = ctx.limits(spec)[1] if spec is not None else None

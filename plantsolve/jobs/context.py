@@ -10,17 +10,17 @@ from typing import Mapping
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.store import Database, FileStore, JobRepository, Store
-from plantsolve.workers.settings import WorkerSettings
+from plantsolve.jobs.settings import JobSettings
 
 
 @dataclass
 class ServiceContext:
-    settings: WorkerSettings
+    settings: JobSettings
     store: Store
     kinds: Mapping[str, SolverSpec]
 
     @classmethod
-    def create(cls, settings: WorkerSettings, *, migrate: bool = False) -> "ServiceContext":
+    def create(cls, settings: JobSettings, *, migrate: bool = False) -> "ServiceContext":
         """The built-in kinds plus those of the ``PLUGINS`` modules; an import error is raised."""
         return cls(settings=settings, store=Store.open(settings, migrate=migrate), kinds=load_kinds(settings.plugins))
 

@@ -1,5 +1,6 @@
-"""Submitting and reading jobs: validation, idempotency, storage of the input, enqueue after
-commit, and the views returned by the API."""
+"""The job service: submission (intake, idempotency, the input stored, enqueue after commit), reads,
+cancellation, result operations and the views the API returns. No HTTP here: it raises the job
+domain's errors (:mod:`plantsolve.jobs.errors`), which the app renders as problem documents."""
 
 from __future__ import annotations
 
@@ -12,27 +13,19 @@ import re
 import uuid
 from dataclasses import dataclass
 from datetime import datetime
+from pathlib import Path
 from typing import Any
 
-from pydantic import ValidationError
-
-from plantsolve.app.problems import (
-    Conflict,
-    NotFound,
-    UnsupportedMediaType,
-    Unprocessable,
-    field_problem,
-    from_input_rejected,
-    from_validation_error,
-    loads_bounded,
-)
+from plantsolve.jobs import intake
+from plantsolve.jobs.context import ServiceContext
+from plantsolve.jobs.dispatch import Dispatcher
+from plantsolve.jobs.errors import Conflict, NotFound, Unprocessable, field_problem, from_input_rejected
+from plantsolve.jobs.lifecycle import CANCELLED, QUEUED, RUNNING, SUCCEEDED, is_finished
+from plantsolve.jobs.runner import failure_report
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
-from plantsolve.workers.context import ServiceContext
-from plantsolve.workers.dispatch import Dispatcher
-from plantsolve.workers.runner import failure_report
 from plantsolve.store.models import Job, utcnow
-from plantsolve.store.repository import as_utc, is_finished
+from plantsolve.store.repository import JobState, as_utc
 
 log = logging.getLogger("plantsolve.api")
 
@@ -81,13 +74,8 @@ class JobService:
     def submit_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "",
                     callback_url: str | None = None) -> Submitted:
         spec = self.spec(kind)
-        raw = loads_bounded(body, [], "The body")
-        try:
-            # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
-            request = spec.request_model.model_validate_json(body, strict=True)
-        except ValidationError as error:
-            raise from_validation_error(error, document=raw) from None
-        self._check(spec, spec.input_of(request))
+        raw, job_input = intake.read_json(spec, body)
+        intake.check(spec, job_input)
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
         if len(body) > self.ctx.settings.inline_input_bytes:
@@ -102,35 +90,10 @@ class JobService:
         *, owner: str = "", callback_url: str | None = None,
     ) -> Submitted:
         spec = self.spec(kind)
-        if spec.parse_upload is None or not spec.upload_extensions:
-            raise UnsupportedMediaType(f"Solver kind {kind!r} takes JSON bodies only.")
-        extension = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-        if extension not in spec.upload_extensions:
-            raise UnsupportedMediaType(
-                f"File type {extension or '(none)'!r} is not accepted by {kind!r}; "
-                f"accepted: {', '.join(spec.upload_extensions)}."
-            )
-        options: dict | None = None
-        if options_text:
-            options = loads_bounded(options_text, ["options"], "The 'options' form field")
-            if not isinstance(options, dict):
-                raise Unprocessable(
-                    "The 'options' form field must be a JSON object.",
-                    errors=[field_problem(["options"], "must be a JSON object", "dict_type")],
-                )
-        if not content:
-            raise Unprocessable("The uploaded file is empty.", errors=[field_problem(["file"], "empty file", "value_error")])
-        try:
-            source = StoredInput.from_bytes(filename, content)
-            request = spec.input_of(spec.parse_upload(source, options), source)
-        except InputRejected as error:
-            raise from_input_rejected(error) from None
-        except ValidationError as error:
-            raise from_validation_error(error) from None
-        except RecursionError:
-            raise Unprocessable("The uploaded file is nested too deeply to be read.",
-                                errors=[field_problem(["file"], "nested too deeply", "json_too_deep")]) from None
-        self._check(spec, request)
+        extension = intake.upload_extension(spec, filename)
+        options = intake.upload_options(options_text)
+        job_input = intake.read_upload(spec, StoredInput.from_bytes(filename, content), options)
+        intake.check(spec, job_input)
         digest = hashlib.sha256()
         for part in (kind.encode(), extension.encode(), _canonical(options), content):
             digest.update(hashlib.sha256(part).digest())
@@ -140,22 +103,13 @@ class JobService:
                   **_callback(callback_url)}
         return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)
 
-    @staticmethod
-    def _check(spec: SolverSpec, request: Any) -> None:
-        if spec.check_input is None:
-            return
-        try:
-            spec.check_input(request)
-        except InputRejected as error:
-            raise from_input_rejected(error) from None
-
     def _create(
         self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
     ) -> Submitted:
         job = Job(
             id=job_id,
             kind=spec.kind,
-            status="queued",
+            status=QUEUED,
             attempt=0,
             max_attempts=spec.max_attempts or self.ctx.settings.max_attempts,
             progress=0.0,
@@ -176,7 +130,7 @@ class JobService:
                 )
             return Submitted(stored, False)
         log.info("job %s (%s) submitted", stored.id, stored.kind,
-                 extra={"job_id": str(stored.id), "kind": stored.kind, "status": "queued"})
+                 extra={"job_id": str(stored.id), "kind": stored.kind, "status": QUEUED.value})
         # Enqueue only after the row is committed: a worker must always find the job.
         try:
             self.dispatcher.enqueue(stored.id, stored.kind)
@@ -195,12 +149,61 @@ class JobService:
             raise NotFound(f"No job {job_id}.")
         return job
 
+    def state(self, job_id: uuid.UUID) -> JobState | None:
+        """The job's status and progress alone (what an event stream polls)."""
+        return self.ctx.repo.state(job_id)
+
+    def states(self, **filters: Any) -> list[JobState]:
+        """Status and progress of the jobs created since ``since`` or named in ``ids`` (see the repository)."""
+        return self.ctx.repo.states(**filters)
+
+    def search(self, *, kind: str | None, status: str | None, text: str | None, after: tuple | None, limit: int,
+               sees: str | None) -> list[Job]:
+        """A page of jobs the caller may see, newest first, filtered by kind, status and a text (without their
+        inputs and results: enough for their views)."""
+        return self.ctx.repo.list(kind=kind, status=status, text=text, after=after, limit=limit, owner=sees, brief=True)
+
+    def count_by_status(self, sees: str | None) -> dict[str, int]:
+        return self.ctx.repo.count_by_status(owner=sees)
+
+    def input_path(self, job: Job) -> Path:
+        """Where a job's stored input file lies (an upload, or a large JSON request)."""
+        return self.ctx.files.path(job.input_file)
+
+    def artifact(self, job_id: uuid.UUID, name: str, sees: str | None = None) -> tuple[Any, Path]:
+        """An artifact of a job the caller may see, and the path of its file."""
+        self.get(job_id, sees, brief=True)
+        artifact = self.ctx.repo.artifact(job_id, name)
+        if artifact is None:
+            raise NotFound(f"Job {job_id} has no artifact {name!r}.")
+        return artifact, self.ctx.files.path(artifact.path)
+
+    # ---- what the metrics and the completion webhooks read and record ------------------------
+
+    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
+        return self.ctx.repo.count_by_kind_status()
+
+    def oldest_queued(self) -> list[tuple[str, Any]]:
+        return self.ctx.repo.oldest_queued()
+
+    def run_time_histogram(self, buckets: tuple[float, ...]) -> list[tuple]:
+        return self.ctx.repo.run_time_histogram(buckets)
+
+    def due_callbacks(self) -> list[uuid.UUID]:
+        return self.ctx.repo.due_callbacks()
+
+    def claim_callback(self, job_id: uuid.UUID, *, lease_seconds: float) -> int | None:
+        return self.ctx.repo.claim_callback(job_id, lease_seconds=lease_seconds)
+
+    def record_callback(self, job_id: uuid.UUID, attempt: int, **outcome: Any) -> bool:
+        return self.ctx.repo.record_callback(job_id, attempt, **outcome)
+
     def cancel(self, job_id: uuid.UUID, sees: str | None = None) -> Job:
         self.get(job_id, sees)
         outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."))
         if outcome is None:
             raise NotFound(f"No job {job_id}.")
-        if outcome != "cancelled":
+        if outcome != CANCELLED:
             raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
         return self.get(job_id, brief=True)
 
@@ -209,7 +212,7 @@ class JobService:
         job = self.get(job_id, sees)
         if kind is not None and job.kind != kind:
             raise NotFound(f"Job {job_id} is a {job.kind!r} job, not a {kind!r} job.")
-        if job.status != "succeeded":
+        if job.status != SUCCEEDED:
             if is_finished(job.status):
                 raise Conflict(
                     f"Job {job_id} {job.status}; it has no result. See its report.",
@@ -224,7 +227,7 @@ class JobService:
         job = self.get(job_id, sees)
         if job.kind != spec.kind:
             raise NotFound(f"Job {job_id} is a {job.kind!r} job, not a {spec.kind!r} job.")
-        if job.status != "succeeded":
+        if job.status != SUCCEEDED:
             raise Conflict(
                 f"Job {job_id} is {job.status}; only a succeeded {spec.kind} job can answer '{operation.name}'.",
                 extra={"status": job.status},
@@ -250,7 +253,7 @@ class JobService:
         created, started, finished = as_utc(job.created_at), as_utc(job.started_at), as_utc(job.finished_at)
         base = f"/v1/jobs/{job.id}"
         artifacts = []
-        if with_artifacts and job.status == "succeeded":
+        if with_artifacts and job.status == SUCCEEDED:
             artifacts = [
                 ArtifactInfo(name=a.name, media_type=a.media_type, size=a.size, sha256=a.sha256, url=f"{base}/artifacts/{a.name}")
                 for a in self.ctx.repo.artifacts(job.id)
@@ -292,11 +295,11 @@ def _callback(url: str | None) -> dict[str, Any]:
 
 def _summary(job: Job) -> str:
     report = job.report or {}
-    if job.status == "queued":
+    if job.status == QUEUED:
         return "Waiting for a worker." if job.attempt == 0 else f"Re-queued after attempt {job.attempt}: {report.get('message', '')}"
-    if job.status == "running":
+    if job.status == RUNNING:
         return f"Running (attempt {job.attempt}): {job.progress_message} ({job.progress:.0%})."
-    if job.status == "succeeded":
+    if job.status == SUCCEEDED:
         warnings = len(report.get("warnings") or [])
         return report.get("message") or ("Succeeded" + (f" with {warnings} warning(s)." if warnings else "."))
     return report.get("message") or job.status.capitalize() + "."

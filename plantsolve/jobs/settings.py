@@ -1,7 +1,7 @@
-"""Settings of the queue and the runner: broker, pool size, leases, attempts, plugins.
+"""Settings of the job domain and its transport: intake, broker, pool size, leases, attempts, plugins.
 
 See :mod:`plantsolve.store.settings` for how the settings are layered. FastAPI's settings
-guide is followed: one object per process, cached by :func:`get_worker_settings`, so tests
+guide is followed: one object per process, cached by :func:`get_job_settings`, so tests
 can clear the cache after changing the environment.
 """
 
@@ -22,10 +22,14 @@ def split_commas(value: object) -> object:
     return value
 
 
-class WorkerSettings(StoreSettings):
+class JobSettings(StoreSettings):
     broker_url: str | None = Field(
         default=None,
         description="Celery broker (redis://host:6379/0). Unset: jobs run in-process (embedded pool).",
+    )
+    inline_input_bytes: int = Field(
+        default=1024 * 1024,
+        description="JSON inputs larger than this are stored as a file and referenced from the job row.",
     )
     log_format: Literal["json", "text"] = Field(
         default="json", description="The plantsolve log lines on stderr: one JSON object per line, or plain text.")
@@ -82,5 +86,5 @@ class WorkerSettings(StoreSettings):
 
 
 @lru_cache
-def get_worker_settings() -> WorkerSettings:
-    return WorkerSettings()
+def get_job_settings() -> JobSettings:
+    return JobSettings()

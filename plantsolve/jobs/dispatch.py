@@ -1,0 +1,22 @@
+"""Getting a job id to a worker: the protocol every transport implements (the embedded pool, its
+thread variant, Celery). A message carries only the job id; the database row holds everything else.
+The job service calls :meth:`Dispatcher.enqueue` only after the job row is committed."""
+
+from __future__ import annotations
+
+import uuid
+from typing import Protocol
+
+
+class Dispatcher(Protocol):
+    def enqueue(self, job_id: uuid.UUID, kind: str) -> None: ...
+
+    def ping(self) -> None:
+        """Raise if the queue cannot accept jobs."""
+
+    def pending(self) -> int | None:
+        """Messages waiting for a worker, or None when the queue cannot tell."""
+
+    def start(self) -> None: ...
+
+    def stop(self) -> None: ...
