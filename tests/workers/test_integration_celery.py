@@ -120,7 +120,6 @@ def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
 
 
 def test_real_solver_gives_identical_results_embedded_and_celery(scaled, tmp_path):
-    pytest.importorskip("plantsolve.solvers.perfmap")
     import json
 
     client, _, _ = scaled

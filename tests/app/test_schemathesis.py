@@ -8,7 +8,7 @@ cannot state, the check that needs it is left out for those cases only, each for
 - an uploaded file's content: random bytes are never a valid PCF, CSV or scan, whatever the name;
 - an opaque pagination cursor: only cursors this API returned are valid;
 - the stream of every job's changes (``GET /v1/jobs/events``) never ends by design, so no call to it can
-  complete: it is left out here and tested in ``tests/service/test_events.py`` (its answers and its 422s);
+  complete: it is left out here and tested in ``tests/app/test_events.py`` (its answers and its 422s);
 - a JSON request that breaks a rule across fields or a reference (a position needs as many
   setting values as there are setting names, a fixed component must exist, a nominal LRA ends
   on a straight): such a request may be refused, but only with a 422 whose every error is of
