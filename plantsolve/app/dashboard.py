@@ -24,10 +24,12 @@ from starlette.datastructures import UploadFile
 
 from plantsolve.app import dashboard_views as views
 from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
-from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
-from plantsolve.app.problems import NotFound, PayloadTooLarge, ProblemError, Unprocessable, field_problem
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.app.deps import service_of
+from plantsolve.app.problems import PayloadTooLarge
+from plantsolve.jobs.errors import NotFound, ProblemError, Unprocessable, field_problem
 from plantsolve.jobs.lifecycle import STATUSES, is_finished
+from plantsolve.jobs.service import decode_cursor, encode_cursor
+from plantsolve.solvers.base import SolverSpec
 
 HERE = Path(__file__).parent
 STATIC = "/dashboard-static"  # outside /dashboard/: the login page needs its style before any key
@@ -53,12 +55,8 @@ def install_dashboard(app: FastAPI) -> None:
     app.mount(STATIC, StaticFiles(directory=HERE / "static"), name="dashboard-static")
 
 
-def _service(request: Request) -> JobService:
-    return request.app.state.jobs
-
-
 def _page(request: Request, name: str, status_code: int = 200, **context: Any) -> HTMLResponse:
-    context.setdefault("kinds", sorted(request.app.state.ctx.kinds))
+    context.setdefault("kinds", sorted(service_of(request).kinds))
     context.setdefault("keys", bool(request.app.state.keys))
     return templates.TemplateResponse(request, name, context, status_code=status_code)
 
@@ -70,7 +68,7 @@ def _not_found(request: Request, error: NotFound) -> HTMLResponse:
 def _listing(request: Request, kind: str | None, status: str | None, q: str | None, cursor: str | None,
              limit: int) -> dict[str, Any]:
     """One page of the list (the repository's cursor paging) with the counts by status."""
-    service, who = _service(request), principal(request)
+    service, who = service_of(request), principal(request)
     kind, status, q = kind or None, status or None, (q or "").strip() or None
     after = decode_cursor(cursor) if cursor else None
     jobs = service.search(kind=kind, status=status, text=q, after=after, limit=limit + 1, sees=who.sees)
@@ -92,7 +90,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
 
 
 def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
-    service = _service(request)
+    service = service_of(request)
     job = service.get(job_id, principal(request).sees)
     view = service.view(job)
     artifacts = view.artifacts
@@ -178,7 +176,7 @@ def build_dashboard() -> APIRouter:
     @router.post("/dashboard/jobs/{job_id}/cancel", dependencies=authorised)
     async def cancel(request: Request, job_id: uuid.UUID, token: str = Form(default="", max_length=128)) -> Response:
         _check_form(request, token)
-        service = _service(request)
+        service = service_of(request)
         try:
             await run_in_threadpool(service.cancel, job_id, principal(request).sees)
         except NotFound as error:
@@ -190,14 +188,14 @@ def build_dashboard() -> APIRouter:
     @router.get("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
     def submit_form(request: Request, kind: str) -> HTMLResponse:
         try:
-            spec = _service(request).spec(kind)
+            spec = service_of(request).spec(kind)
         except NotFound as error:
             return _not_found(request, error)
         return _page(request, "submit.html", **_form_context(request, spec))
 
     @router.post("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
     async def submit(request: Request, kind: str) -> Response:
-        service, who = _service(request), principal(request)
+        service, who = service_of(request), principal(request)
         try:
             spec = service.spec(kind)
         except NotFound as error:

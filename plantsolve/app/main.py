@@ -8,23 +8,23 @@ from typing import Any
 
 from asgi_correlation_id import CorrelationIdMiddleware, correlation_id
 from fastapi import FastAPI, Request
-from fastapi.openapi.utils import get_openapi
 from fastapi.middleware.cors import CORSMiddleware
+from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
-from plantsolve.app.metrics import build_metrics
 from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router
 from plantsolve.app.jobs.operations import build_operations_router
-from plantsolve.jobs.service import JobService
+from plantsolve.app.metrics import build_metrics
 from plantsolve.app.middleware import BodyLimitMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
 from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
-from plantsolve.schemas.jobs import HealthStatus, Problem, UploadedInput
 from plantsolve.jobs.context import ServiceContext
+from plantsolve.jobs.service import JobService
+from plantsolve.schemas.jobs import HealthStatus, Problem, UploadedInput
 from plantsolve.workers.dispatch import make_dispatcher
 from plantsolve.workers.logs import configure_logging
 

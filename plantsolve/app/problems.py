@@ -15,7 +15,14 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from plantsolve.jobs.errors import (
-    MAX_JSON_DEPTH, Conflict, NotFound, ProblemError, UnsupportedMediaType, Unprocessable, field_problem, summary,
+    MAX_JSON_DEPTH,
+    Conflict,
+    NotFound,
+    ProblemError,
+    Unprocessable,
+    UnsupportedMediaType,
+    field_problem,
+    summary,
 )
 from plantsolve.schemas.jobs import Problem
 

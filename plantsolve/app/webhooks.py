@@ -29,8 +29,7 @@ from urllib.parse import urlsplit
 import httpx
 
 from plantsolve.app.auth import KeyRing
-from plantsolve.app.problems import Unprocessable, field_problem
-from plantsolve.jobs.errors import NotFound
+from plantsolve.jobs.errors import NotFound, Unprocessable, field_problem
 
 log = logging.getLogger("plantsolve.webhooks")
 

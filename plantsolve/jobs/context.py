@@ -7,10 +7,10 @@ import socket
 from dataclasses import dataclass
 from typing import Mapping
 
+from plantsolve.jobs.settings import JobSettings
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.store import Database, FileStore, JobRepository, Store
-from plantsolve.jobs.settings import JobSettings
 
 
 @dataclass

@@ -17,7 +17,12 @@ from typing import Any
 from pydantic import ValidationError
 
 from plantsolve.jobs.errors import (
-    UnsupportedMediaType, Unprocessable, field_problem, from_input_rejected, from_validation_error, loads_bounded,
+    Unprocessable,
+    UnsupportedMediaType,
+    field_problem,
+    from_input_rejected,
+    from_validation_error,
+    loads_bounded,
 )
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
 from plantsolve.store.files import FileStore

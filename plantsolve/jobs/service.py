@@ -14,7 +14,7 @@ import uuid
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
@@ -50,6 +50,10 @@ class JobService:
     def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
         self.ctx = ctx
         self.dispatcher = dispatcher
+
+    @property
+    def kinds(self) -> Mapping[str, SolverSpec]:
+        return self.ctx.kinds
 
     # ---- submission ---------------------------------------------------------------------
 

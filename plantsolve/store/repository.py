@@ -9,9 +9,9 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 from __future__ import annotations
 
 import uuid
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta, timezone
-from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Callable, Iterable
 
 from sqlalchemy import String, Text, and_, case, cast, delete, func, or_, select, update

@@ -14,11 +14,11 @@ import uuid
 from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 
-from plantsolve.solvers.kinds import load_kinds
 from plantsolve.jobs.context import ServiceContext, worker_name
-from plantsolve.workers.logs import configure_logging
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.jobs.settings import JobSettings, get_job_settings
+from plantsolve.solvers.kinds import load_kinds
+from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.celery")

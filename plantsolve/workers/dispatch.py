@@ -3,9 +3,9 @@ default), its thread variant (``EMBEDDED_MODE=thread``) or Celery (``BROKER_URL`
 
 from __future__ import annotations
 
-from plantsolve.workers.celery_app import CeleryDispatcher
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.dispatch import Dispatcher
+from plantsolve.workers.celery_app import CeleryDispatcher
 from plantsolve.workers.embedded import EmbeddedDispatcher
 from plantsolve.workers.processes import ProcessDispatcher
 

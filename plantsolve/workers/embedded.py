@@ -8,8 +8,8 @@ import threading
 import uuid
 
 from plantsolve.jobs.context import ServiceContext, worker_name
-from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.leases import resume
+from plantsolve.jobs.runner import run_job
 from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.embedded")

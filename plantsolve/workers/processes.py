@@ -15,16 +15,17 @@ import multiprocessing
 import os
 import threading
 import uuid
-from concurrent.futures import CancelledError, TimeoutError as FutureTimeout
+from concurrent.futures import CancelledError
+from concurrent.futures import TimeoutError as FutureTimeout
 from functools import partial
 
 from pebble import ProcessExpired, ProcessPool
 
 from plantsolve.jobs.context import ServiceContext, worker_name
-from plantsolve.workers.logs import configure_logging
+from plantsolve.jobs.leases import resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.jobs.settings import JobSettings
-from plantsolve.jobs.leases import resume
+from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.processes")

@@ -15,7 +15,15 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from plantsolve.client import (
-    AsyncClient, Client, Conflict, InvalidInput, Job, JobFailed, NotFound, Unauthorized, UnsupportedMediaType,
+    AsyncClient,
+    Client,
+    Conflict,
+    InvalidInput,
+    Job,
+    JobFailed,
+    NotFound,
+    Unauthorized,
+    UnsupportedMediaType,
 )
 from tests.conftest import REPO, service_settings
 from tests.support.live import live_server

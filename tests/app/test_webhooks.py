@@ -11,7 +11,6 @@ import time
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
-import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.errors import UnsupportedMediaType, Unprocessable
+from plantsolve.jobs.errors import Unprocessable, UnsupportedMediaType
 from plantsolve.jobs.lifecycle import SUCCEEDED
 from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService

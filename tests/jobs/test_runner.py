@@ -11,12 +11,12 @@ from datetime import timedelta
 import pytest
 from sqlalchemy import update
 
-from plantsolve.jobs.service import JobService
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import sweep_once
+from plantsolve.jobs.runner import lost_worker_report, run_job
+from plantsolve.jobs.service import JobService
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import StoredArtifact
-from plantsolve.jobs.runner import lost_worker_report, run_job
 from tests.conftest import service_settings
 
 

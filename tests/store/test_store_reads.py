@@ -8,8 +8,8 @@ import pytest
 from sqlalchemy import text
 from sqlalchemy.orm.exc import DetachedInstanceError
 
-from plantsolve.store.models import Job
 from plantsolve.jobs.context import ServiceContext
+from plantsolve.store.models import Job
 from tests.conftest import service_settings
 
 

@@ -14,10 +14,9 @@ from starlette.datastructures import UploadFile
 from plantsolve.app.auth import require_api_key
 from plantsolve.app.deps import Caller, Service
 from plantsolve.app.jobs.events import add_event_routes
-from plantsolve.app.problems import (
-    NotFound, PayloadTooLarge, UnsupportedMediaType, Unprocessable, field_problem, responses,
-)
+from plantsolve.app.problems import PayloadTooLarge, responses
 from plantsolve.app.webhooks import check_callback_url
+from plantsolve.jobs.errors import NotFound, Unprocessable, UnsupportedMediaType, field_problem
 from plantsolve.jobs.service import JobService, safe_filename
 from plantsolve.schemas.jobs import JobList, JobStatus, JobView, UploadedInput
 from plantsolve.solvers.base import SolverSpec
