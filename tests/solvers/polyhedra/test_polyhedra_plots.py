@@ -8,7 +8,7 @@ from plantsolve.solvers.polyhedra import parse_upload, solve
 from plantsolve.solvers.polyhedra.artifacts import figures
 from tests.support.plots import check_figure
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "polyhedra"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples" / "polyhedra"
 
 
 def test_zone_panels_have_units_and_the_legend_sits_outside():

@@ -12,7 +12,7 @@ from plantsolve.solvers.dedup.synthetic import SEGMENT_TYPES, build_model, ring_
 from plantsolve.solvers.dedup.solve import resolve_mode
 from plantsolve.solvers.dedup.upload import parse_upload
 from plantsolve.solvers.dedup.validation import check_input
-from tests.dedup.support import assert_round_trip, check_transforms, classes_by_name, run, world
+from tests.solvers.dedup.support import assert_round_trip, check_transforms, classes_by_name, run, world
 
 RINGS = 3
 

@@ -7,7 +7,7 @@ import pytest
 from pydantic import ValidationError
 from scipy.spatial.transform import Rotation
 
-from openstudio_cases import TILTED_ROOF, TILTED_ROOF_VOLUME, request
+from tests.solvers.polyhedra.openstudio_cases import TILTED_ROOF, TILTED_ROOF_VOLUME, request
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected
 from plantsolve.solvers.polyhedra import check_input, solve

@@ -10,8 +10,7 @@ import pytest
 from plantsolve.solvers.base import InputRejected
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
-
-import ldraw_files as files  # noqa: E402  (the folder is on sys.path through conftest)
+from tests.solvers.rigidity import ldraw_files as files
 
 
 def parse(name, text, options=None):
