@@ -12,10 +12,11 @@ import zipfile
 import ifcopenshell
 import pytest
 
-from plantsolve.solvers.base import Cancelled, InputRejected
+from plantsolve.solvers.base import Cancelled, InputRejected, StoredInput
 from plantsolve.solvers.dedup.synthetic import build_model, ModelSpec
+from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
-from plantsolve.solvers.dedup.validation import check_input
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "dedup"
@@ -67,7 +68,8 @@ def test_bad_files_are_422_with_the_reason(client):
 
 
 def test_cancellation_between_groups():
-    request = parse_upload("t.ifc", (EXAMPLES / "tunnel_3rings.ifc").read_bytes(), None)
+    source = StoredInput.from_path(EXAMPLES / "tunnel_3rings.ifc", "t.ifc")
+    value = SPEC.input_of(parse_upload(source, None), source)
     seen = []
 
     def progress(fraction, message=""):
@@ -75,19 +77,18 @@ def test_cancellation_between_groups():
         if message.startswith("matching"):
             raise Cancelled()
 
-    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
     with pytest.raises(Cancelled):
-        solve(request, progress)
+        solve(value, progress)
     assert seen[-1].startswith("matching") and not any(m.startswith("sharing") for m in seen)
 
 
 def test_a_file_without_geometry_is_refused():
     content = build_model(ModelSpec(products=[], containers=1)).to_string().encode()
-    request = parse_upload("empty.ifc", content, None)
-    check_input(request)
-    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
+    source = StoredInput.from_bytes("empty.ifc", content)
+    value = SPEC.input_of(parse_upload(source, None), source)
+    SPEC.check_input(value)
     with pytest.raises(InputRejected, match="no product with geometry"):
-        solve(request, lambda *a: None)
+        solve(value, lambda *a: None)
 
 
 def test_json_with_base64_and_the_cli(tmp_path):
@@ -98,5 +99,5 @@ def test_json_with_base64_and_the_cli(tmp_path):
     assert result["schema"] == "IFC2X3" and len(result["classes"]) == 4 and result["sharing"] == "mapped_item"
     assert (tmp_path / "out_artifacts" / "optimized.ifc").stat().st_size == result["optimized_bytes"]
     body = {"filename": "zoo.ifc", "file": base64.b64encode((EXAMPLES / "zoo_ifc2x3.ifc").read_bytes()).decode()}
-    request = parse_upload("request.json", json.dumps(body).encode(), {"postpass": False})
+    request = parse_upload(StoredInput.from_bytes("request.json", json.dumps(body).encode()), {"postpass": False})
     assert request.options.postpass is False and request.file == body["file"]
