@@ -19,7 +19,7 @@ from plantsolve.solvers.polyhedra.repair import repair
 
 
 def run(body: dict):
-    return solve(PolyhedraRequest.model_validate(body))
+    return solve(PolyhedraRequest.model_validate(body)).result
 
 
 def zone(result, name="default"):
