@@ -12,8 +12,8 @@ from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
 from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
-from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5

@@ -13,11 +13,12 @@ import io
 import shutil
 import tempfile
 import zipfile
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import IO, Iterator
+from typing import IO
 
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
 from plantsolve.solvers.base import StoredInput, reject
