@@ -7,12 +7,13 @@ import base64
 import csv
 import io
 import json
+import tempfile
 import zipfile
 
 import ifcopenshell
 import pytest
 
-from plantsolve.solvers.base import Cancelled, InputRejected, StoredInput
+from plantsolve.solvers.base import Cancelled, InputRejected, Solved, StoredInput
 from plantsolve.solvers.dedup.synthetic import build_model, ModelSpec
 from plantsolve.solvers.dedup import SPEC
 from plantsolve.solvers.dedup.solve import solve
@@ -65,6 +66,42 @@ def test_bad_files_are_422_with_the_reason(client):
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["options", "sharing"]
     problem = client.post("/v1/dedup/jobs", json={"file": "not base64!"}).json()
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["file"]
+
+
+def _count_temporaries(monkeypatch) -> list[str]:
+    made: list[str] = []
+    for name in ("mkdtemp", "mkstemp"):  # TemporaryDirectory and NamedTemporaryFile go through these
+        original = getattr(tempfile, name)
+        monkeypatch.setattr(tempfile, name, lambda *a, _o=original, _n=name, **k: made.append(_n) or _o(*a, **k))
+    return made
+
+
+def test_a_stored_ifc_is_solved_where_it_lies_and_its_artifacts_come_from_the_solve(monkeypatch):
+    made = _count_temporaries(monkeypatch)
+    source = StoredInput.from_path(EXAMPLES / "zoo_ifc2x3.ifc")  # as the runner hands a stored upload
+    value = SPEC.input_of(SPEC.parse_upload(source, {"express_rules": False}), source)
+    SPEC.check_input(value)
+    solved = SPEC.solve(value, lambda *a: None)
+    assert made == [] and solved.result.verification.schema_valid
+    artifacts = {a.name: a.data for a in SPEC.render_artifacts(value, solved)}
+    assert list(artifacts) == ["optimized.ifc", "classes.csv", "entity_counts.png"]
+    assert artifacts["optimized.ifc"] == solved.files["optimized.ifc"]
+    # a result without the file (its proof failed) gets no optimized.ifc: nothing solves again to make one
+    assert [a.name for a in SPEC.render_artifacts(value, Solved(solved.result))] == ["classes.csv", "entity_counts.png"]
+    assert made == []
+
+
+def test_a_stored_ifczip_is_extracted_once(monkeypatch, tmp_path):
+    archive = tmp_path / "zoo.ifczip"
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(EXAMPLES / "zoo_ifc2x3.ifc", "zoo.ifc")
+    made = _count_temporaries(monkeypatch)
+    source = StoredInput.from_path(archive)
+    value = SPEC.input_of(SPEC.parse_upload(source, {"express_rules": False}), source)
+    SPEC.check_input(value)  # reads the header from the archive's stream, writes nothing
+    assert made == []
+    solved = SPEC.solve(value, lambda *a: None)
+    assert made == ["mkdtemp"] and solved.result.original_bytes == (EXAMPLES / "zoo_ifc2x3.ifc").stat().st_size
 
 
 def test_cancellation_between_groups():
