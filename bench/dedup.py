@@ -38,19 +38,20 @@ def _generate(rings: int, arcs: int, schema: str, path: Path) -> int:
 
 
 def _dedup(path: str, options: dict) -> dict:
-    from plantsolve.solvers.base import no_progress
-    from plantsolve.solvers.dedup.solve import solve
-    from plantsolve.solvers.dedup.upload import parse_upload
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.dedup import SPEC
 
-    request = parse_upload(Path(path).name, Path(path).read_bytes(), options)
+    source = StoredInput.from_path(path)  # opened where it lies, as the runner hands a stored upload
+    value = SPEC.input_of(SPEC.parse_upload(source, options), source)
     start = time.perf_counter()
-    result = solve(request, no_progress)
+    solved = SPEC.solve(value)
+    result = solved.result
     v = result.verification
     return {"original": result.original_bytes, "optimized": result.optimized_bytes, "rate": result.optimization_rate,
             "classes": len(result.classes), "shared": result.products_shared, "products": result.products_total,
             "timings": result.timings, "total": time.perf_counter() - start,
             "valid": v.schema_valid, "rules": v.express_rules, "deviation": v.max_deviation,
-            "offered": result._optimized is not None,
+            "offered": "optimized.ifc" in solved.files,
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 

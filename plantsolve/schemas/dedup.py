@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, Field, PrivateAttr
+from pydantic import BaseModel, Field
 
 from plantsolve.schemas.common import FiniteFloat, Report, StrictModel
 
@@ -53,8 +53,6 @@ class DedupRequest(StrictModel):
     file: Annotated[str, Field(min_length=1, max_length=MAX_FILE_CHARS)] | None = Field(
         default=None, description="The IFC file, base64-encoded (JSON requests).")
     options: DedupOptions = Field(default_factory=DedupOptions)
-    # the uploaded file's bytes, as received (never serialised: uploads are stored as files)
-    _content: bytes | None = PrivateAttr(default=None)
 
 
 class DedupClass(BaseModel):
@@ -104,7 +102,5 @@ class DedupResult(BaseModel):
     verification: Verification
     timings: dict[str, FiniteFloat] = Field(description="Seconds per phase.")
     report: Report = Field(default_factory=Report)
-    # the optimized file itself, handed to the artifact writer in the same process
-    _optimized: bytes | None = PrivateAttr(default=None)
 
     model_config = {"populate_by_name": True}

@@ -10,6 +10,7 @@ from plantsolve.schemas.dedup import DedupRequest, DedupResult
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.dedup.artifacts import render_artifacts
 from plantsolve.solvers.dedup.solve import solve
+from plantsolve.solvers.dedup.source import IfcSource, load
 from plantsolve.solvers.dedup.synthetic import example
 from plantsolve.solvers.dedup.upload import UPLOAD_EXTENSIONS, parse_upload
 from plantsolve.solvers.dedup.validation import check_input
@@ -22,6 +23,7 @@ SPEC = SolverSpec(
     result_model=DedupResult,
     solve=solve,
     version=__version__,
+    load=load,
     check_input=check_input,
     parse_upload=parse_upload,
     render_artifacts=render_artifacts,
@@ -33,4 +35,4 @@ SPEC = SolverSpec(
     description=__doc__.split("\n\n")[0],
 )
 
-__all__ = ["SPEC", "solve", "check_input", "parse_upload", "render_artifacts", "__version__"]
+__all__ = ["SPEC", "IfcSource", "load", "solve", "check_input", "parse_upload", "render_artifacts", "__version__"]

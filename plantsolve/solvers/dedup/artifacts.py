@@ -9,9 +9,10 @@ import io
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
 
-from plantsolve.schemas.dedup import DedupRequest, DedupResult
-from plantsolve.solvers.base import Artifact, no_progress
-from plantsolve.solvers.dedup.solve import solve
+from plantsolve.schemas.dedup import DedupResult
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.dedup.source import IfcSource
+from plantsolve.solvers.plots import figure_bytes
 
 MAX_BARS = 24
 
@@ -49,18 +50,15 @@ def counts_chart(result: DedupResult) -> bytes:
                  f"geometry, rate {100 * result.optimization_rate:.1f} %", fontsize=9)
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()
+    return figure_bytes(fig, "png", dpi=110)
 
 
-def render_artifacts(request: DedupRequest, result: DedupResult) -> list[Artifact]:
+def render_artifacts(source: IfcSource, solved: Solved) -> list[Artifact]:
+    """The optimized file comes from the solve (``solved.files``), present only when it passed its proof."""
+    result = solved.result
     artifacts = [Artifact("classes.csv", "text/csv", classes_csv(result)),
                  Artifact("entity_counts.png", "image/png", counts_chart(result))]
-    optimized = result._optimized
-    if optimized is None and result.verification.schema_valid and result.verification.semantic_counts_equal:
-        # a result read back from the store: run again (deterministic) to get the file
-        optimized = solve(request, no_progress)._optimized
+    optimized = solved.files.get("optimized.ifc")
     if optimized is not None:
         artifacts.insert(0, Artifact("optimized.ifc", "application/x-step", optimized))
     return artifacts

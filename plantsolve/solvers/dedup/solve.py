@@ -9,10 +9,11 @@ import ifcopenshell
 import ifcopenshell.util.unit
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.dedup import DedupClass, DedupRequest, DedupResult, Verification
-from plantsolve.solvers.base import Progress, reject
+from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
+from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5
@@ -58,8 +59,9 @@ def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
     return None
 
 
-def solve(request: DedupRequest, progress: Progress) -> DedupResult:
-    opts = request.options
+def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
+    """The deduplicated model's result and, when it passed its proof, the optimized file itself."""
+    opts = source.options
     timings: dict[str, float] = {}
     warnings: list[Diagnostic] = []
     clock = time.perf_counter()
@@ -71,7 +73,8 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
         clock = now
 
     progress(0.0, "reading the IFC file")
-    with ifcio.opened(request) as (model, original_bytes):
+    with source.step_file() as (path, original_bytes):
+        model = ifcio.open_path(str(path))
         lap("parse")
         schema = model.schema
         mode = resolve_mode(opts.sharing, schema)
@@ -118,16 +121,14 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
             removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72))
         lap("postpass")
         progress(0.72, "writing the optimized file")
-        optimized = ifcio.write_bytes(model)
+        optimized = ifcio.model_text(model)
         del model
         lap("write")
-
-    progress(0.75, "verifying: reading the written file back")
-    check = ifcio.open_path_from_bytes(optimized)
-    try:
-        again = {p.GlobalId: p for p in check.model.by_type("IfcProduct")}
+        progress(0.75, "verifying: reading the written file back")
+        check = ifcio.read_back(optimized)
+        again = {p.GlobalId: p for p in check.by_type("IfcProduct")}
         back_products = [again[g] for g in before if g in again]
-        after_points, _ = world_points(check.model, back_products, progress=progress, span=(0.75, 0.9),
+        after_points, _ = world_points(check, back_products, progress=progress, span=(0.75, 0.9),
                                        message="verifying geometry")
         deviations = []
         missing = []
@@ -137,19 +138,18 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
                 missing.append(g)
                 continue
             deviations.append(proof.deviation(pts, after_points[prod.id()]))
-        semantic_after = proof.semantic_fingerprint(check.model)
+        semantic_after = proof.semantic_fingerprint(check)
         semantic_equal = semantic_after == semantic_before and not missing
         changed = proof.fingerprint_differences(semantic_before, semantic_after)
         if missing:
             changed.append(f"{len(missing)} product(s) without geometry after, e.g. {missing[0]}")
         progress(0.9, "validating the written file")
-        errors = proof.validate(check.model, express_rules=opts.express_rules)
-        counts_after = proof.entity_counts(check.model)
-    finally:
-        check.close()
-    inherited_errors = False
-    if errors:  # are they ours? (real exports are often invalid already)
-        with ifcio.opened(request) as (original, _):
+        errors = proof.validate(check, express_rules=opts.express_rules)
+        counts_after = proof.entity_counts(check)
+        del check, again, back_products
+        inherited_errors = False
+        if errors:  # are they ours? (real exports are often invalid already)
+            original = ifcio.open_path(str(path))
             inherited_errors = proof.inherited(errors, proof.validate(original, express_rules=opts.express_rules))
     lap("verification")
     max_dev = float(max(deviations)) if deviations else None
@@ -199,6 +199,5 @@ def solve(request: DedupRequest, progress: Progress) -> DedupResult:
         original_bytes=original_bytes, optimized_bytes=len(optimized), optimization_ratio=ratio,
         optimization_rate=1.0 - ratio, entity_counts_before=counts_before, entity_counts_after=counts_after,
         verification=verification, timings=timings, report=report)
-    result._optimized = optimized if ok else None
     progress(1.0, "done")
-    return result
+    return Solved(result, files={"optimized.ifc": optimized} if ok else {})

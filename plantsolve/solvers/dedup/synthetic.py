@@ -364,13 +364,3 @@ def zoo_spec(schema: str = "IFC4", seed: int = 3) -> ModelSpec:
     p.append(Product("label", text_only=True, placement=pose(0, 0, 0, o), name="label_only"))
     return ModelSpec(schema=schema, products=p, containers=1)
 
-
-def zoo_expected(allow_mirror: bool = False, allow_scale: bool = False) -> set[frozenset[str]]:
-    """The congruence classes (two or more members) of ``zoo_spec``, by product name."""
-    chiral = {"chiral_a", "chiral_b_shuffled", "chiral_nested_1", "chiral_nested_2"}
-    if allow_mirror:
-        chiral.add("chiral_mirrored")
-    if allow_scale:
-        chiral.add("chiral_scaled_1pct")
-    return {frozenset(chiral), frozenset({"cube_a", "cube_b"}), frozenset({"mapped_a", "mapped_b"}),
-            frozenset({"column_a", "column_b"})}

@@ -1,16 +1,14 @@
 """Uploads: an ``.ifc`` (STEP physical file) or ``.ifczip`` as the multipart ``file``, options as the
 form's ``options`` JSON (``sharing``, ``tolerance``, ``allow_mirror``, ``allow_scale``, ``postpass``,
-``entity_types``); or a ``.json`` request with the file base64-encoded. The uploaded bytes are kept as
-received (no base64 copy); the solver writes them to a temporary file for IfcOpenShell."""
+``entity_types``); or a ``.json`` request with the file base64-encoded. An uploaded model is not copied:
+the request names it, and the solve opens the stored file (:mod:`.source`)."""
 
 from __future__ import annotations
 
-
-from pydantic import ValidationError
-
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
-from plantsolve.solvers.base import FieldError, InputRejected, json_object, reject, upload_extension
-from plantsolve.solvers.dedup.ifcio import check_header
+from plantsolve.solvers.base import StoredInput, json_object, reject, validated
+from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, TRAILER_BYTES, check_header
+from plantsolve.solvers.dedup.source import ZIP_MAGIC, ends, is_blank
 
 UPLOAD_EXTENSIONS = (".ifc", ".ifczip", ".json")
 
@@ -21,30 +19,21 @@ def _options(options: dict | None) -> DedupOptions:
     options = dict(options.get("options", options)) if isinstance(options, dict) else options
     if not isinstance(options, dict):
         raise reject("options must be a JSON object", ("options",))
-    try:
-        return DedupOptions.model_validate(options)
-    except ValidationError as e:
-        raise InputRejected([FieldError(("options", *err["loc"]), err["msg"], err.get("type", "value_error"))
-                             for err in e.errors()[:50]]) from None
+    return validated(DedupOptions, options, ("options",))
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> DedupRequest:
-    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
-    if not content.strip():
+def parse_upload(source: StoredInput, options: dict | None) -> DedupRequest:
+    """The request of an upload (intake checked its extension); an IFC file is only looked at, not read."""
+    if is_blank(source):
         raise reject("the file is empty")
-    if ext == ".json":
-        body = json_object(content)
+    if source.extension == ".json":
+        body = json_object(source.read())
         if options:
             body = {**body, "options": {**(body.get("options") or {}), **_options(options).model_dump(exclude_unset=True)}}
-        try:
-            return DedupRequest.model_validate(body)
-        except ValidationError as e:
-            raise InputRejected([FieldError(("file", *err["loc"]), err["msg"], err.get("type", "value_error"))
-                                 for err in e.errors()[:50]]) from None
-    if ext == ".ifc":
-        check_header(content)
-    elif content[:4] != b"PK\x03\x04":
+        return validated(DedupRequest, body, ("file",))
+    head, tail = ends(source, HEADER_BYTES, TRAILER_BYTES)
+    if source.extension == ".ifc":
+        check_header(head, tail)
+    elif head[:4] != ZIP_MAGIC:
         raise reject("not an .ifczip: a zip archive starts with 'PK'")
-    request = DedupRequest(filename=filename[-255:], options=_options(options))
-    request._content = content
-    return request
+    return DedupRequest(filename=source.name[-255:], options=_options(options))

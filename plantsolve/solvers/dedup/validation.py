@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import re
 
-from plantsolve.schemas.dedup import DedupRequest
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.dedup.ifcio import request_bytes, step_text
+from plantsolve.solvers.dedup.source import IfcSource
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)'", re.IGNORECASE)
 
@@ -17,13 +16,12 @@ def header_schema(text: bytes) -> str | None:
     return found.group(1).decode().upper() if found else None
 
 
-def check_input(request: DedupRequest) -> None:
-    text = step_text(request_bytes(request), request.filename)
-    schema = header_schema(text)
+def check_input(source: IfcSource) -> None:
+    schema = header_schema(source.header())
     if schema is None:
         raise reject("no FILE_SCHEMA in the STEP header")
     if not (schema in ("IFC2X3", "IFC4") or schema.startswith("IFC4X3")):
         raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
-    if request.options.sharing == "product_shape" and schema == "IFC2X3":
+    if source.options.sharing == "product_shape" and schema == "IFC2X3":
         raise reject("'product_shape' needs IFC4 or later: in IFC2X3 an IfcProductDefinitionShape belongs to "
                      "exactly one product (ShapeOfProduct [1:1]); use 'mapped_item' or 'auto'", ("options", "sharing"))

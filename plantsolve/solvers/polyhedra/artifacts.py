@@ -11,7 +11,8 @@ from matplotlib.figure import Figure  # no pyplot: no global figure state
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
-from plantsolve.solvers.base import Artifact
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.plots import figure_artifact
 from plantsolve.solvers.polyhedra.polygons import from_request
 
 MAX_PANELS = 12
@@ -75,12 +76,6 @@ def figures(request: PolyhedraRequest, result: PolyhedraResult) -> dict[str, Fig
     return {"zones": zones_figure(request, result)}
 
 
-def _png(fig: Figure) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return buf.getvalue()
-
-
 def _table(result: PolyhedraResult) -> bytes:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
@@ -98,6 +93,6 @@ def _table(result: PolyhedraResult) -> bytes:
     return out.getvalue().encode()
 
 
-def render_artifacts(request: PolyhedraRequest, result: PolyhedraResult) -> list[Artifact]:
-    return [Artifact("zones.png", "image/png", _png(zones_figure(request, result))),
-            Artifact("zones.csv", "text/csv", _table(result))]
+def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact]:
+    return [figure_artifact("zones.png", zones_figure(request, solved.result), dpi=100),
+            Artifact("zones.csv", "text/csv", _table(solved.result))]

@@ -14,7 +14,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
-from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
@@ -22,7 +22,6 @@ from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
-from plantsolve.solvers.polyhedra.validation import check_input
 
 MAX_LISTED_EDGES = 1000
 
@@ -72,10 +71,10 @@ def _edge_reports(an: Analysis, groups_idx: np.ndarray) -> list[dict]:
     return out
 
 
-def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> PolyhedraResult:
+def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved:
     """Zone volumes, areas and closure diagnostics of polygonal zones (the paper's method: a
-    generalized map of the faces, measures per orbit, diagnostics from the orbits)."""
-    check_input(request)
+    generalized map of the faces, measures per orbit, diagnostics from the orbits). The request has
+    passed ``check_input`` (the job domain runs it once, at submission)."""
     progress(0.0, f"reading {len(request.faces)} faces")
     poly = from_request(request)
     opts = request.options
@@ -216,9 +215,9 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Polyhe
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
-    return PolyhedraResult(
+    return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
-    )
+    ))

@@ -28,14 +28,16 @@ from __future__ import annotations
 import io
 import math
 import struct
+from dataclasses import replace
 
 import numpy as np
-from pydantic import ValidationError
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, json_object, merge_upload_options, reject, upload_extension
+from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
+LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
 
 SURFACE_CLASSES = {
@@ -343,31 +345,18 @@ def parse_stl(content: bytes) -> dict:
                        "skipped_count": int((~good).sum())}}
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> PolyhedraRequest:
-    """An IDF, OBJ, STL or JSON file as a request; ``options`` (the form's options: ``units``,
-    ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
-    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
+def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
+    """An IDF, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
+    form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
+    content = source.read()
     if not content.strip():
         raise reject("the file is empty")
-    if ext == ".stl":
+    if source.extension == ".stl":
         body = parse_stl(content)
     else:
         text = decode_text(content)
-        if ext == ".idf":
-            body = parse_idf(text)
-        elif ext == ".obj":
-            body = parse_obj(text)
-        else:
-            body = json_object(text)
-    body = merge_upload_options(body, options)
+        body = {".idf": parse_idf, ".obj": parse_obj}.get(source.extension, json_object)(text)
     try:
-        return PolyhedraRequest.model_validate(body)
-    except ValidationError as e:
-        errors = []
-        for err in e.errors()[:50]:
-            loc = tuple(p for p in err["loc"] if p not in ("indices", "points"))
-            if loc[:1] in (("options",), ("units",)) and options:
-                errors.append(FieldError(loc, err["msg"], err.get("type", "value_error")))
-            else:
-                errors.append(FieldError(("file",), f"{'/'.join(map(str, loc))}: {err['msg']}", err.get("type", "value_error")))
-        raise InputRejected(errors) from None
+        return validated_upload(PolyhedraRequest, body, options)
+    except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file
+        raise InputRejected([replace(e, loc=tuple(p for p in e.loc if p not in LOOP_KINDS)) for e in rejected.errors]) from None

@@ -11,14 +11,15 @@ from matplotlib.figure import Figure  # no pyplot: no global figure state
 from matplotlib.lines import Line2D
 
 from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
-from plantsolve.solvers.base import Artifact
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.plots import figure_artifact
 
 MAX_NODES_DRAWN = 3000
 MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share light grey (counted in the legend)
 PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
 
 
-def _graph_png(request: RigidityRequest, result: RigidityResult) -> bytes:
+def _graph(request: RigidityRequest, result: RigidityResult) -> Figure:
     graph = nx.MultiGraph()
     cluster_of = {}
     order = sorted(range(len(result.clusters)), key=lambda k: (-len(result.clusters[k]), k))
@@ -67,9 +68,7 @@ def _graph_png(request: RigidityRequest, result: RigidityResult) -> bytes:
     ax.set_title(f"body–joint graph: dof {result.dof} (generic {result.generic_dof}), "
                  f"{len(result.clusters)} rigid clusters{shown}", fontsize=9)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return buf.getvalue()
+    return fig
 
 
 def _count(n: int) -> str:
@@ -87,6 +86,6 @@ def _table(result: RigidityResult) -> bytes:
     return out.getvalue().encode()
 
 
-def render_artifacts(request: RigidityRequest, result: RigidityResult) -> list[Artifact]:
-    return [Artifact("graph.png", "image/png", _graph_png(request, result)),
-            Artifact("clusters.csv", "text/csv", _table(result))]
+def render_artifacts(request: RigidityRequest, solved: Solved) -> list[Artifact]:
+    return [figure_artifact("graph.png", _graph(request, solved.result), dpi=100),
+            Artifact("clusters.csv", "text/csv", _table(solved.result))]

@@ -10,7 +10,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, RigidityRequest, RigidityResult,
                                          UnknownPart)
-from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
 from plantsolve.solvers.rigidity.catalogue import lookup
@@ -69,7 +69,7 @@ def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
     return assembly, unknown
 
 
-def solve(request: RigidityRequest, progress: Progress = no_progress) -> RigidityResult:
+def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(0.0, "building the assembly")
     assembly, unknown = build(request)
     warnings: list[Diagnostic] = []
@@ -110,10 +110,10 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Rigidit
         "largest_block": mob.largest_block, "connected_pieces": n_pieces, "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
-    return RigidityResult(
+    return Solved(RigidityResult(
         length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
         special_position=special, rigid=bool(ids) and n_pieces == 1 and mob.dof == 0,
         clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],
-        docking=docking, unknown_parts=unknown, rank_method=mob.rank_method, report=report)
+        docking=docking, unknown_parts=unknown, rank_method=mob.rank_method, report=report))

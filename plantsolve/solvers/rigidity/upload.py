@@ -18,11 +18,11 @@ from __future__ import annotations
 
 
 import numpy as np
-from pydantic import ValidationError
 
 from plantsolve.schemas.rigidity import RigidityRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, json_object, merge_upload_options, reject, upload_extension
+from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import normalise_number
+from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
@@ -124,26 +124,12 @@ def _tidy(v: float) -> float:
     return float(r) if abs(v - r) < 1e-5 else float(v)
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> RigidityRequest:
-    """An LDraw or JSON file as a request; ``options`` (the form's: ``contact_tolerance``, ``dock``,
-    ``rank_tolerance``) override what the file says."""
-    ext = upload_extension(filename, UPLOAD_EXTENSIONS)
+def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
+    """An LDraw or JSON file (intake checked the extension) as a request; ``options`` (the form's:
+    ``contact_tolerance``, ``dock``, ``rank_tolerance``) override what the file says."""
+    content = source.read()
     if not content.strip():
         raise reject("the file is empty")
     text = decode_text(content, "LDraw or JSON file")
-    if ext == ".json":
-        body = json_object(text)
-    else:
-        body = parse_ldraw(text)
-    body = merge_upload_options(body, options)
-    try:
-        return RigidityRequest.model_validate(body)
-    except ValidationError as e:
-        errors = []
-        for err in e.errors()[:50]:
-            loc = tuple(err["loc"])
-            if loc[:1] in (("options",), ("units",)) and options:
-                errors.append(FieldError(loc, err["msg"], err.get("type", "value_error")))
-            else:
-                errors.append(FieldError(("file",), f"{'/'.join(map(str, loc))}: {err['msg']}", err.get("type", "value_error")))
-        raise InputRejected(errors) from None
+    body = json_object(text) if source.extension == ".json" else parse_ldraw(text)
+    return validated_upload(RigidityRequest, body, options)

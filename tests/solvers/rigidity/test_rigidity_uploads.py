@@ -7,28 +7,27 @@ import json
 
 import pytest
 
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
-
-import ldraw_files as files  # noqa: E402  (the folder is on sys.path through conftest)
+from tests.solvers.rigidity import ldraw_files as files
 
 
 def parse(name, text, options=None):
     content = text.encode("utf-8") if isinstance(text, str) else text
-    return parse_upload(name, content, options)
+    return parse_upload(StoredInput.from_bytes(name, content), options)
 
 
 def test_ldcad_file_one_stud_hinge():
     request = parse("stacked.ldr", files.LDCAD)
     assert [(p.id, p.part, p.position) for p in request.parts] == [("L9", "3001", [0, 0, 0]), ("L11", "3005", [30, -24, 10])]
-    result = solve(request)
+    result = solve(request).result
     assert result.dof == 1 and result.joints[0].type == "hinge"
     assert request.source["meta_lines"] == 10 and request.source["skipped_count"] == 0
 
 
 def test_leocad_file_with_six_decimals_hinge_bricks():
-    result = solve(parse("hinge.ldr", files.LEOCAD))
+    result = solve(parse("hinge.ldr", files.LEOCAD)).result
     assert result.dof == 1 and result.rank_method == "modular"
     assert {frozenset(c) for c in result.clusters} == {frozenset({"L5", "L7"}), frozenset({"L8"})}
 
@@ -36,7 +35,7 @@ def test_leocad_file_with_six_decimals_hinge_bricks():
 def test_ldcad_technic_file_pins_axle_and_hinge_in_the_ldraw_frames():
     request = parse("technic.ldr", files.LDCAD_TECHNIC)
     assert [p.part for p in request.parts] == ["3701", "3701", "2780", "3673", "32064", "3705", "3937", "3938", "3004"]
-    result = solve(request)
+    result = solve(request).result
     by_pair = {frozenset(j.bodies): j for j in result.joints}
     # each pin sits in one hole of each technic brick (a hinge about the hole's z axis)
     for pin in ("L11", "L12"):
@@ -65,7 +64,7 @@ def test_mlcad_file_with_crlf_upper_case_names_and_drawn_geometry():
     request = parse("tower.ldr", files.MLCAD)
     assert [p.part for p in request.parts] == ["3001", "3001"]  # the GHOST line is a meta line
     assert request.source["geometry_lines"] == 4
-    result = solve(request)
+    result = solve(request).result
     assert result.rigid and result.superbricks == [["L7", "L9"]]
 
 
@@ -77,7 +76,7 @@ def test_studio_mpd_expands_submodels_with_their_placement_and_reports_unknown_p
     assert parts["L9/L16"].position == [20, -24, -10] and parts["L9/L16"].rotation[0] == -1
     assert parts["L10"].rotation[0] == 1  # 0.999999 as written by the exporter
     assert request.source["submodels"] == 1 and request.source["submodels_expanded"] == 2
-    result = solve(request)
+    result = solve(request).result
     assert [(u.id, u.part) for u in result.unknown_parts] == [("L10", "99999")]
     # each 1x2 brick sits on two studs of the 2x4: all rigid
     assert result.rigid and len(result.superbricks) == 1
@@ -90,7 +89,7 @@ def test_broken_lines_are_skipped_one_by_one_with_reasons():
     assert set(reasons) == {3, 4, 5, 6}
     assert "15 fields" in reasons[3] and "not a number" in reasons[4] and "singular" in reasons[5]
     assert "line type" in reasons[6]
-    assert solve(request).rigid
+    assert solve(request).result.rigid
 
 
 def test_a_submodel_that_includes_itself_is_refused_at_its_line():
@@ -102,13 +101,12 @@ def test_a_submodel_that_includes_itself_is_refused_at_its_line():
 @pytest.mark.parametrize("name, content, message", [
     ("empty.ldr", b"  \n", "empty"),
     ("nothing.ldr", files.ONLY_COMMENTS.encode(), "places no part"),
-    ("model.lxf", b"PK\x03\x04", "unsupported file type"),
     ("model.json", b"[1, 2]", "request object"),
     ("model.ldr", b"\x00\x01binary", "binary"),
 ])
 def test_files_that_give_nothing_are_refused_naming_the_file(name, content, message):
     with pytest.raises(InputRejected) as info:
-        parse_upload(name, content, None)
+        parse(name, content)
     assert info.value.errors[0].loc[0] == "file" and message in info.value.errors[0].msg
 
 

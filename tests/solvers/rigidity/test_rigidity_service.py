@@ -57,6 +57,12 @@ def test_bad_requests_are_422_naming_the_field(client, change, loc):
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == loc, problem
 
 
+def test_a_file_type_rigidity_does_not_read_is_415(client):
+    # the intake checks the extension against SPEC.upload_extensions; parse_upload never sees the file
+    problem = client.post("/v1/rigidity/jobs", files={"file": ("model.lxf", b"PK\x03\x04")}).json()
+    assert problem["status"] == 415 and "'.lxf'" in problem["detail"] and ".ldr, .mpd, .json" in problem["detail"]
+
+
 def test_nan_is_422_naming_the_field(client):
     text = json.dumps(synthetic.four_bar()).replace('"point": [0, 0, 0]', '"point": [NaN, 0, 0]', 1)
     problem = client.post("/v1/rigidity/jobs", content=text, headers={"Content-Type": "application/json"}).json()

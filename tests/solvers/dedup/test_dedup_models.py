@@ -8,11 +8,9 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.dedup.synthetic import SEGMENT_TYPES, build_model, ring_pose, tunnel_file, zoo_expected, zoo_spec
+from plantsolve.solvers.dedup.synthetic import SEGMENT_TYPES, build_model, ring_pose, tunnel_file, zoo_spec
 from plantsolve.solvers.dedup.solve import resolve_mode
-from plantsolve.solvers.dedup.upload import parse_upload
-from plantsolve.solvers.dedup.validation import check_input
-from tests.dedup.support import assert_round_trip, check_transforms, classes_by_name, run, world
+from tests.solvers.dedup.support import assert_round_trip, check_transforms, classes_by_name, run, upload, world, zoo_expected
 
 RINGS = 3
 
@@ -56,9 +54,10 @@ def _assert_tunnel_classes(result, model):
 
 
 def test_tunnel_ifc4_mapped_item(tunnel4):
-    result = run(tunnel4, sharing="mapped_item")
+    solved = run(tunnel4, sharing="mapped_item")
+    result = solved.result
     _assert_tunnel_classes(result, tunnel4)
-    out = assert_round_trip(tunnel4, result)
+    out = assert_round_trip(tunnel4, solved)
     assert len(out.by_type("IfcRepresentationMap")) == 8 and len(out.by_type("IfcMappedItem")) == RINGS * 8
     assert len(out.by_type("IfcPolygonalFaceSet")) == 8
     assert result.sharing == "mapped_item" and result.report.status == "ok"
@@ -68,33 +67,35 @@ def test_tunnel_ifc4_mapped_item(tunnel4):
 
 def test_tunnel_ifc4_product_shape_shares_the_product_shape_and_is_smaller(tunnel4):
     # EXPRESS rules on product_shape output: test_zoo_mirror_and_scale_only_as_mapped_items
-    result = run(tunnel4, sharing="auto", express_rules=False)
+    solved = run(tunnel4, sharing="auto", express_rules=False)
+    result = solved.result
     assert result.sharing == "product_shape"
     _assert_tunnel_classes(result, tunnel4)
-    out = assert_round_trip(tunnel4, result)
+    out = assert_round_trip(tunnel4, solved)
     assert len(out.by_type("IfcProductDefinitionShape")) == 8 and len(out.by_type("IfcShapeRepresentation")) == 8
     assert not out.by_type("IfcMappedItem")
     for cls in result.classes:
         shapes = {out.by_guid(g).Representation.id() for g in cls.members}
         assert len(shapes) == 1
-    without = run(tunnel4, sharing="product_shape", postpass=False, express_rules=False)
+    solved_without = run(tunnel4, sharing="product_shape", postpass=False, express_rules=False)
+    without = solved_without.result
     assert not without.verification.express_rules
-    assert_round_trip(tunnel4, without)
+    assert_round_trip(tunnel4, solved_without)
     assert result.optimized_bytes < without.optimized_bytes
 
 
 def test_tunnel_ifc2x3_mapped_item_and_product_shape_refused():
     model = tunnel_file(RINGS, "IFC2X3", shuffle=True, seed=5)
-    result = run(model)
+    solved = run(model)
+    result = solved.result
     _assert_tunnel_classes(result, model)
-    out = assert_round_trip(model, result)
+    out = assert_round_trip(model, solved)
     assert len(out.by_type("IfcFacetedBrep")) == 8 and len(out.by_type("IfcRepresentationMap")) == 8
     # IFC2X3: one placement per product survives the post-pass
     assert all(len(out.get_inverse(p)) >= 1 for p in out.by_type("IfcLocalPlacement"))
     assert len({p.ObjectPlacement.id() for p in out.by_type("IfcProduct")}) == len(out.by_type("IfcProduct"))
-    request = parse_upload("t.ifc", model.to_string().encode(), {"sharing": "product_shape"})
     with pytest.raises(InputRejected) as error:
-        check_input(request)
+        upload(model, "t.ifc", sharing="product_shape")
     assert error.value.errors[0].loc == ("options", "sharing") and "IFC2X3" in error.value.errors[0].msg
     assert resolve_mode("auto", "IFC2X3") == "mapped_item" and resolve_mode("auto", "IFC4") == "product_shape"
 
@@ -105,16 +106,18 @@ def test_zoo_rigid_classes(schema):
     broken = schema == "IFC2X3"
     if broken:  # an orphan placement (PlacesObject [1:1] in IFC2X3), as real exports have: not our error
         model.create_entity("IfcLocalPlacement", None, model.by_type("IfcAxis2Placement3D")[0])
-    result = run(model)
+    solved = run(model)
+    result = solved.result
     assert classes_by_name(result, model) == zoo_expected()
     check_transforms(result, model)
-    out = assert_round_trip(model, result, inherited=broken)
+    out = assert_round_trip(model, solved, inherited=broken)
     if broken:
         assert any(w.code == "input_invalid" for w in result.report.warnings)
     if schema == "IFC4":  # entity filter: only the columns are looked at
-        columns = run(model, entity_types=["IfcColumn"], express_rules=False)
+        solved_columns = run(model, entity_types=["IfcColumn"], express_rules=False)
+        columns = solved_columns.result
         assert classes_by_name(columns, model) == {frozenset({"column_a", "column_b"})}
-        assert_round_trip(model, columns)
+        assert_round_trip(model, solved_columns)
     # the red column keeps its style, the plain ones stay plain
     styled = {s.Item.id() for s in out.by_type("IfcStyledItem") if s.Item is not None}
     red = out.by_guid(next(p.GlobalId for p in model.by_type("IfcColumn") if p.Name == "column_red"))
@@ -138,10 +141,11 @@ def test_zoo_rigid_classes(schema):
 
 def test_zoo_mirror_and_scale_only_as_mapped_items():
     model = build_model(zoo_spec("IFC4"))
-    result = run(model, sharing="product_shape", allow_mirror=True, allow_scale=True)
+    solved = run(model, sharing="product_shape", allow_mirror=True, allow_scale=True)
+    result = solved.result
     assert classes_by_name(result, model) == zoo_expected(allow_mirror=True, allow_scale=True)
     check_transforms(result, model)
-    out = assert_round_trip(model, result)
+    out = assert_round_trip(model, solved)
     chiral = next(c for c in result.classes if c.object_type == "chiral")
     assert chiral.mirror and chiral.scale
     names = {p.GlobalId: p.Name for p in model.by_type("IfcProduct")}

@@ -16,7 +16,7 @@ from plantsolve.solvers.rigidity.solve import solve
 
 
 def run(body):
-    return solve(RigidityRequest.model_validate(body))
+    return solve(RigidityRequest.model_validate(body)).result
 
 
 def sets(clusters):

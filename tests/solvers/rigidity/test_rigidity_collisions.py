@@ -18,7 +18,7 @@ def box(bid, center, size, rotation=(1, 0, 0, 0)):
 
 
 def run(body):
-    return solve(RigidityRequest.model_validate(body))
+    return solve(RigidityRequest.model_validate(body)).result
 
 
 def test_stacked_bricks_touch_but_do_not_collide():

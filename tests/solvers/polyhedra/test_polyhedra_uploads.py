@@ -9,15 +9,19 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.polyhedra import parse_upload, solve
 
 DATA = Path(__file__).parent / "data"
 
 
+def upload(name: str, content: bytes, options: dict | None = None):
+    return parse_upload(StoredInput.from_bytes(name, content), options)
+
+
 def solved(name: str, options: dict | None = None):
-    request = parse_upload(name, (DATA / name).read_bytes(), options)
-    return request, solve(request)
+    request = parse_upload(StoredInput.from_path(DATA / name), options)
+    return request, solve(request).result
 
 
 def zone(result, name):
@@ -69,11 +73,11 @@ def test_idf_with_nothing_usable_is_refused_naming_the_line():
     text = b"Version,9.3;\n\nBuildingSurface:Detailed,\n  W1, Wall, C, Z, Outdoors, , SunExposed, WindExposed, 0.5, 4,\n" \
            b"  0, 0, 1,\n  0, 0, zero,\n  1, 0, 0,\n  1, 0, 1;\n"
     with pytest.raises(InputRejected) as error:
-        parse_upload("bad.idf", text, None)
+        upload("bad.idf", text, None)
     (fe,) = error.value.errors
     assert fe.loc == ("file", "line", 3) and "zero" in fe.msg
     with pytest.raises(InputRejected, match="no BuildingSurface"):
-        parse_upload("empty.idf", b"Version,9.3;\nTimestep,4;\n", None)
+        upload("empty.idf", b"Version,9.3;\nTimestep,4;\n", None)
 
 
 def test_sketchup_obj_groups_are_zones():
@@ -98,7 +102,7 @@ def test_revit_obj_objects_negative_indices_and_continuations():
 
 def test_obj_with_no_usable_face_is_refused():
     with pytest.raises(InputRejected) as error:
-        parse_upload("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", None)
+        upload("x.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", None)
     assert error.value.errors[0].loc == ("file", "line", 3)
 
 
@@ -113,7 +117,7 @@ def test_binary_stl_of_a_torus_agrees_with_trimesh():
     mesh = trimesh.creation.torus(major_radius=2.0, minor_radius=0.5, major_sections=48, minor_sections=24)
     content = trimesh.exchange.stl.export_stl(mesh)
     stored = trimesh.load(io.BytesIO(content), file_type="stl")  # binary STL holds float32 coordinates
-    result = solve(parse_upload("torus.stl", content, {"units": "m"}))
+    result = solve(upload("torus.stl", content, {"units": "m"})).result
     (z,) = result.zones
     assert z.id == "default" and z.closed and z.genus == 1 and z.orientation == "outward"
     assert z.volume == pytest.approx(stored.volume, rel=1e-12) and z.surface_area == pytest.approx(stored.area, rel=1e-12)
@@ -122,10 +126,10 @@ def test_binary_stl_of_a_torus_agrees_with_trimesh():
 
 def test_json_upload_and_form_options():
     body = {"faces": [{"id": "a", "loops": [[[0, 0, 0], [1, 0, 0], [0, 1, 0]]]}]}
-    request = parse_upload("r.json", json.dumps(body).encode(), {"units": "ft", "merge_tolerance": 0.01})
+    request = upload("r.json", json.dumps(body).encode(), {"units": "ft", "merge_tolerance": 0.01})
     assert request.units == "ft" and request.options.merge_tolerance == 0.01
     with pytest.raises(InputRejected) as error:
-        parse_upload("r.json", json.dumps(body).encode(), {"merge_tolerance": -1})
+        upload("r.json", json.dumps(body).encode(), {"merge_tolerance": -1})
     assert error.value.errors[0].loc == ("options", "merge_tolerance")
 
 
@@ -136,7 +140,7 @@ def test_relative_coordinates_follow_the_zone_relative_north():
     assert lines[32].strip().startswith("Office B Thermal Zone,") and lines[33].strip().startswith("0,")
     lines[33] = "  90,                                     !- Direction of Relative North {deg}"
     lines[35] = "  5,                                      !- Y Origin {m}"
-    result = solve(parse_upload("turned.idf", "\n".join(lines).encode(), None))
+    result = solve(upload("turned.idf", "\n".join(lines).encode(), None)).result
     b = zone(result, "Office B Thermal Zone")
     assert b.volume == pytest.approx(60.0) and b.closed
     (adj,) = result.adjacency

@@ -7,7 +7,7 @@ import pytest
 from pydantic import ValidationError
 from scipy.spatial.transform import Rotation
 
-from openstudio_cases import TILTED_ROOF, TILTED_ROOF_VOLUME, request
+from tests.solvers.polyhedra.openstudio_cases import TILTED_ROOF, TILTED_ROOF_VOLUME, request
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected
 from plantsolve.solvers.polyhedra import check_input, solve
@@ -15,7 +15,7 @@ from plantsolve.solvers.polyhedra import synthetic as shapes
 
 
 def measures(body):
-    result = solve(PolyhedraRequest.model_validate(body))
+    result = solve(PolyhedraRequest.model_validate(body)).result
     zones = {z.id: (z.volume, z.surface_area, z.net_surface_area, z.closed, z.orientation, z.genus,
                     z.open_edge_count, z.t_junctions_repaired) for z in result.zones}
     faces = {f.id: (f.area, f.net_area, f.perimeter) for f in result.faces}
@@ -92,10 +92,10 @@ def test_tilted_roof_volume_survives_merging_of_noisy_vertices():
     rng = np.random.default_rng(3)
     for f in body["faces"]:
         f["loops"] = [(np.asarray(f["loops"][0]) + rng.uniform(-2e-7, 2e-7, (len(f["loops"][0]), 3))).tolist()]
-    result = solve(PolyhedraRequest.model_validate(body))
+    result = solve(PolyhedraRequest.model_validate(body)).result
     assert result.zones[0].closed and result.zones[0].volume == pytest.approx(TILTED_ROOF_VOLUME, rel=1e-6)
     body["options"] = {"merge_tolerance": 1e-9}  # too tight for that noise: open edges, no volume
-    result = solve(PolyhedraRequest.model_validate(body))
+    result = solve(PolyhedraRequest.model_validate(body)).result
     assert not result.zones[0].closed and result.zones[0].volume is None
 
 

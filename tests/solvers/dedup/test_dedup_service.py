@@ -7,15 +7,17 @@ import base64
 import csv
 import io
 import json
+import tempfile
 import zipfile
 
 import ifcopenshell
 import pytest
 
-from plantsolve.solvers.base import Cancelled, InputRejected
+from plantsolve.solvers.base import Cancelled, InputRejected, Solved, StoredInput
 from plantsolve.solvers.dedup.synthetic import build_model, ModelSpec
+from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
-from plantsolve.solvers.dedup.validation import check_input
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "dedup"
@@ -66,8 +68,45 @@ def test_bad_files_are_422_with_the_reason(client):
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["file"]
 
 
+def _count_temporaries(monkeypatch) -> list[str]:
+    made: list[str] = []
+    for name in ("mkdtemp", "mkstemp"):  # TemporaryDirectory and NamedTemporaryFile go through these
+        original = getattr(tempfile, name)
+        monkeypatch.setattr(tempfile, name, lambda *a, _o=original, _n=name, **k: made.append(_n) or _o(*a, **k))
+    return made
+
+
+def test_a_stored_ifc_is_solved_where_it_lies_and_its_artifacts_come_from_the_solve(monkeypatch):
+    made = _count_temporaries(monkeypatch)
+    source = StoredInput.from_path(EXAMPLES / "zoo_ifc2x3.ifc")  # as the runner hands a stored upload
+    value = SPEC.input_of(SPEC.parse_upload(source, {"express_rules": False}), source)
+    SPEC.check_input(value)
+    solved = SPEC.solve(value, lambda *a: None)
+    assert made == [] and solved.result.verification.schema_valid
+    artifacts = {a.name: a.data for a in SPEC.render_artifacts(value, solved)}
+    assert list(artifacts) == ["optimized.ifc", "classes.csv", "entity_counts.png"]
+    assert artifacts["optimized.ifc"] == solved.files["optimized.ifc"]
+    # a result without the file (its proof failed) gets no optimized.ifc: nothing solves again to make one
+    assert [a.name for a in SPEC.render_artifacts(value, Solved(solved.result))] == ["classes.csv", "entity_counts.png"]
+    assert made == []
+
+
+def test_a_stored_ifczip_is_extracted_once(monkeypatch, tmp_path):
+    archive = tmp_path / "zoo.ifczip"
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(EXAMPLES / "zoo_ifc2x3.ifc", "zoo.ifc")
+    made = _count_temporaries(monkeypatch)
+    source = StoredInput.from_path(archive)
+    value = SPEC.input_of(SPEC.parse_upload(source, {"express_rules": False}), source)
+    SPEC.check_input(value)  # reads the header from the archive's stream, writes nothing
+    assert made == []
+    solved = SPEC.solve(value, lambda *a: None)
+    assert made == ["mkdtemp"] and solved.result.original_bytes == (EXAMPLES / "zoo_ifc2x3.ifc").stat().st_size
+
+
 def test_cancellation_between_groups():
-    request = parse_upload("t.ifc", (EXAMPLES / "tunnel_3rings.ifc").read_bytes(), None)
+    source = StoredInput.from_path(EXAMPLES / "tunnel_3rings.ifc", "t.ifc")
+    value = SPEC.input_of(parse_upload(source, None), source)
     seen = []
 
     def progress(fraction, message=""):
@@ -75,19 +114,18 @@ def test_cancellation_between_groups():
         if message.startswith("matching"):
             raise Cancelled()
 
-    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
     with pytest.raises(Cancelled):
-        solve(request, progress)
+        solve(value, progress)
     assert seen[-1].startswith("matching") and not any(m.startswith("sharing") for m in seen)
 
 
 def test_a_file_without_geometry_is_refused():
     content = build_model(ModelSpec(products=[], containers=1)).to_string().encode()
-    request = parse_upload("empty.ifc", content, None)
-    check_input(request)
-    from plantsolve.solvers.dedup.solve import solve  # noqa: PLC0415
+    source = StoredInput.from_bytes("empty.ifc", content)
+    value = SPEC.input_of(parse_upload(source, None), source)
+    SPEC.check_input(value)
     with pytest.raises(InputRejected, match="no product with geometry"):
-        solve(request, lambda *a: None)
+        solve(value, lambda *a: None)
 
 
 def test_json_with_base64_and_the_cli(tmp_path):
@@ -98,5 +136,5 @@ def test_json_with_base64_and_the_cli(tmp_path):
     assert result["schema"] == "IFC2X3" and len(result["classes"]) == 4 and result["sharing"] == "mapped_item"
     assert (tmp_path / "out_artifacts" / "optimized.ifc").stat().st_size == result["optimized_bytes"]
     body = {"filename": "zoo.ifc", "file": base64.b64encode((EXAMPLES / "zoo_ifc2x3.ifc").read_bytes()).decode()}
-    request = parse_upload("request.json", json.dumps(body).encode(), {"postpass": False})
+    request = parse_upload(StoredInput.from_bytes("request.json", json.dumps(body).encode()), {"postpass": False})
     assert request.options.postpass is False and request.file == body["file"]

@@ -10,14 +10,23 @@ import ifcopenshell
 import ifcopenshell.geom
 import ifcopenshell.util.unit
 
-from plantsolve.solvers.base import no_progress
+from plantsolve.solvers.base import Solved, StoredInput
+from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
 
 
-def run(model: ifcopenshell.file, **options):
-    request = parse_upload("model.ifc", model.to_string().encode(), options)
-    return solve(request, no_progress)
+def upload(model: ifcopenshell.file, name: str = "model.ifc", **options) -> IfcSource:
+    """The model uploaded (in memory) as the intake takes it: parsed, loaded and checked."""
+    source = StoredInput.from_bytes(name, model.to_string().encode())
+    value = SPEC.input_of(parse_upload(source, options), source)
+    SPEC.check_input(value)
+    return value
+
+
+def run(model: ifcopenshell.file, **options) -> Solved:
+    return solve(upload(model, **options))
 
 
 def world(model: ifcopenshell.file) -> dict[str, np.ndarray]:
@@ -41,15 +50,17 @@ def two_way(a: np.ndarray, b: np.ndarray) -> float:
     return max(float(cKDTree(b - c).query(a - c)[0].max()), float(cKDTree(a - c).query(b - c)[0].max()))
 
 
-def reopen(result) -> ifcopenshell.file:
-    assert result._optimized is not None, result.report
-    return ifcopenshell.file.from_string(result._optimized.decode())
+def reopen(solved: Solved) -> ifcopenshell.file:
+    assert "optimized.ifc" in solved.files, solved.result.report
+    return ifcopenshell.file.from_string(solved.files["optimized.ifc"].decode())
 
 
-def assert_round_trip(original: ifcopenshell.file, result, tol: float = 1e-5, *, inherited: bool = False) -> ifcopenshell.file:
+def assert_round_trip(original: ifcopenshell.file, solved: Solved, tol: float = 1e-5, *,
+                      inherited: bool = False) -> ifcopenshell.file:
     """Every product's world geometry unchanged within ``tol``, the same rooted instances and
     GlobalIds, and the solver's own proof saying so."""
-    out = reopen(result)
+    result = solved.result
+    out = reopen(solved)
     before, after = world(original), world(out)
     assert set(before) == set(after)
     worst = max(two_way(before[g], after[g]) for g in before)
@@ -65,7 +76,7 @@ def assert_round_trip(original: ifcopenshell.file, result, tol: float = 1e-5, *,
     else:
         assert v.schema_valid and not v.validation_errors and not v.errors_inherited, v
     assert v.products_checked == len(before) and v.max_deviation <= tol
-    assert result.optimized_bytes == len(result._optimized) < result.original_bytes
+    assert result.optimized_bytes == len(solved.files["optimized.ifc"]) < result.original_bytes
     assert result.optimization_ratio == result.optimized_bytes / result.original_bytes
     assert abs(result.optimization_rate - (1 - result.optimization_ratio)) < 1e-15
     return out
@@ -86,3 +97,14 @@ def check_transforms(result, model: ifcopenshell.file, tol: float = 1e-5) -> Non
             assert np.allclose(m[3], [0, 0, 0, 1])
             moved = rep @ m[:3, :3].T + m[:3, 3]
             assert two_way(moved, points[g]) <= tol
+
+
+def zoo_expected(allow_mirror: bool = False, allow_scale: bool = False) -> set[frozenset[str]]:
+    """The congruence classes (two or more members) of ``synthetic.zoo_spec``, by product name."""
+    chiral = {"chiral_a", "chiral_b_shuffled", "chiral_nested_1", "chiral_nested_2"}
+    if allow_mirror:
+        chiral.add("chiral_mirrored")
+    if allow_scale:
+        chiral.add("chiral_scaled_1pct")
+    return {frozenset(chiral), frozenset({"cube_a", "cube_b"}), frozenset({"mapped_a", "mapped_b"}),
+            frozenset({"column_a", "column_b"})}

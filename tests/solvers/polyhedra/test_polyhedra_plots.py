@@ -4,16 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.polyhedra import parse_upload, solve
 from plantsolve.solvers.polyhedra.artifacts import figures
 from tests.support.plots import check_figure
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "polyhedra"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples" / "polyhedra"
 
 
 def test_zone_panels_have_units_and_the_legend_sits_outside():
-    req = parse_upload("two_offices.idf", (EXAMPLES / "two_offices.idf").read_bytes(), None)
-    res = solve(req)
+    req = parse_upload(StoredInput.from_path(EXAMPLES / "two_offices.idf"), None)
+    res = solve(req).result
     fig = figures(req, res)["zones"]
     check_figure(fig)
     panels = [a for a in fig.axes if a.name == "3d"]

@@ -17,7 +17,7 @@ ROT_Y90 = synthetic.ROT_Y90
 
 
 def run(parts, **options):
-    return solve(RigidityRequest.model_validate({"parts": parts, "options": options}))
+    return solve(RigidityRequest.model_validate({"parts": parts, "options": options})).result
 
 
 def part(pid, number, x, y, z, rotation=None):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from openstudio_cases import (BOX_WITH_HOLE, BOX_WITH_HOLE_VOLUME, PLENUM_SPLIT_WALL, PLENUM_VOLUME, TILTED_ROOF,
+from tests.solvers.polyhedra.openstudio_cases import (BOX_WITH_HOLE, BOX_WITH_HOLE_VOLUME, PLENUM_SPLIT_WALL, PLENUM_VOLUME, TILTED_ROOF,
                               TILTED_ROOF_VOLUME, request)
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.polyhedra import solve
@@ -19,7 +19,7 @@ from plantsolve.solvers.polyhedra.repair import repair
 
 
 def run(body: dict):
-    return solve(PolyhedraRequest.model_validate(body))
+    return solve(PolyhedraRequest.model_validate(body)).result
 
 
 def zone(result, name="default"):

@@ -1,0 +1,120 @@
+"""dedup's input value: the request and the IFC file it names, read where it lies.
+
+An upload is opened straight from the service's stored file (no copy); an ``.ifczip`` is extracted
+once, into a temporary folder that lives as long as the solve; a JSON request's base64 ``file`` is
+decoded when first needed. Making the value never raises: the intake makes it before
+``check_input``, whose 422s name the field."""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import io
+import shutil
+import tempfile
+import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import IO
+
+from plantsolve.schemas.dedup import DedupOptions, DedupRequest
+from plantsolve.solvers.base import StoredInput, reject
+from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, TRAILER_BYTES, check_header
+
+ZIP_MAGIC = b"PK\x03\x04"
+SCHEMA_BYTES = 65536  # FILE_SCHEMA is looked for this far into the STEP text
+
+
+def ends(stored: StoredInput, head: int, tail: int) -> tuple[bytes, bytes]:
+    """The first ``head`` and last ``tail`` bytes of a stored file, without reading the rest of it."""
+    if stored.path is None:
+        content = stored.content
+        return content[:head], content[max(len(content) - tail, 0):]
+    with stored.path.open("rb") as handle:
+        first = handle.read(head)
+        handle.seek(max(stored.size - tail, 0))
+        return first, handle.read()
+
+
+def is_blank(stored: StoredInput) -> bool:
+    """Empty or only white space (the whole file is read only when its start is blank)."""
+    head, _ = ends(stored, HEADER_BYTES, 0)
+    return not head.strip() and (stored.size <= len(head) or not stored.read().strip())
+
+
+@dataclass(frozen=True)
+class IfcSource:
+    request: DedupRequest
+    upload: StoredInput | None = None  # None: the file is the request's base64 ``file``
+
+    @property
+    def options(self) -> DedupOptions:
+        return self.request.options
+
+    @cached_property
+    def stored(self) -> StoredInput:
+        """The upload, or the JSON request's ``file`` decoded (a 422 on ``file`` when absent or not base64)."""
+        if self.upload is not None:
+            return self.upload
+        if self.request.file is None:
+            raise reject("no file: send the IFC file as a multipart upload, or base64 in 'file'", ("file",))
+        try:
+            content = base64.b64decode(self.request.file, validate=True)
+        except (binascii.Error, ValueError):
+            raise reject("'file' is not valid base64", ("file",)) from None
+        return StoredInput.from_bytes(self.request.filename, content)
+
+    @property
+    def zipped(self) -> bool:
+        return self.stored.extension == ".ifczip" or ends(self.stored, len(ZIP_MAGIC), 0)[0] == ZIP_MAGIC
+
+    def header(self) -> bytes:
+        """The start of the STEP text (enough for FILE_SCHEMA), once the file proved to be a whole STEP file."""
+        if not self.zipped:
+            head, tail = ends(self.stored, SCHEMA_BYTES, TRAILER_BYTES)
+            check_header(head[:HEADER_BYTES], tail)
+            return head
+        with self._member() as member:
+            head = member.read(SCHEMA_BYTES)
+            tail = head[-TRAILER_BYTES:]
+            while chunk := member.read(1 << 20):  # the trailer: decompressed in passing, kept nowhere
+                tail = (tail + chunk)[-TRAILER_BYTES:]
+        check_header(head[:HEADER_BYTES], tail)
+        return head
+
+    @contextmanager
+    def step_file(self) -> Iterator[tuple[Path, int]]:
+        """A path to the STEP text on disk and its size in bytes: the stored ``.ifc`` itself, or the
+        ``.ifc`` of an ``.ifczip`` extracted once (removed when the block ends)."""
+        if not self.zipped:
+            with self.stored.as_file() as path:
+                yield path, self.stored.size
+            return
+        with tempfile.TemporaryDirectory(prefix="dedup-") as folder:
+            path = Path(folder) / "input.ifc"
+            with self._member() as member, path.open("wb") as out:
+                shutil.copyfileobj(member, out, 1 << 20)
+            check_header(*ends(StoredInput.from_path(path), HEADER_BYTES, TRAILER_BYTES))
+            yield path, path.stat().st_size
+
+    @contextmanager
+    def _member(self) -> Iterator[IO[bytes]]:
+        """The one ``.ifc`` inside the ``.ifczip``, as a stream."""
+        stored = self.stored
+        try:
+            with zipfile.ZipFile(stored.path if stored.path is not None else io.BytesIO(stored.content)) as archive:
+                names = [n for n in archive.namelist() if n.lower().endswith(".ifc")]
+                if len(names) != 1:
+                    raise reject(f"an .ifczip must hold exactly one .ifc file; this one holds {len(names)}")
+                with archive.open(names[0]) as member:
+                    yield member
+        except zipfile.BadZipFile:
+            raise reject("not a zip archive (an .ifczip is a zip holding one .ifc file)") from None
+
+
+def load(request: DedupRequest, upload: StoredInput | None = None) -> IfcSource:
+    """SPEC's ``load``: the request and, for an upload, its stored file."""
+    return IfcSource(request, upload)
