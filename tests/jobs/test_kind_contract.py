@@ -76,7 +76,7 @@ def test_example_validates_and_the_request_schema_round_trips(kind, examples):
     request = spec.request_model.model_validate(examples[kind])
     again = spec.request_model.model_validate_json(request.model_dump_json(by_alias=True))
     assert again == request
-    spec.check_input(request)
+    spec.check_input(spec.input_of(request))
 
 
 @pytest.mark.parametrize("kind", KIND_NAMES)
