@@ -1,6 +1,6 @@
 """PCF exports through the whole path, per fixture and method: read, align, write, read back.
 
-Fixtures are the exporter-style files in ``tests/alignment/data`` (E3D return bends, Revit caps
+Fixtures are the exporter-style files in ``tests/solvers/alignment/data`` (E3D return bends, Revit caps
 and MATERIALS, a 255 m tree with only rounding noise, flange faces a gasket apart, Plant 3D,
 SmartPlant inch/TAB, an E3D line with inconsistent nozzles). Tie-ins are the ones a user of
 each file would fix (none for the tree and the Revit line: they are anchored).
@@ -28,7 +28,7 @@ from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve  
 from plantsolve.solvers.alignment.model import build_model, connection_errors  # noqa: E402
 from plantsolve.solvers.alignment.pcf import interpret_pcf, read_document  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[1] / "tests" / "alignment" / "data"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "alignment" / "data"
 FILES = [
     ("e3d_return_bends.pcf", ["1"]),
     ("revit_caps_materials.pcf", []),

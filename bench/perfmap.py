@@ -178,7 +178,7 @@ def pressure_reach() -> None:
         ("speed lines 20x25, cliff + 0.3 % noise", PerfmapRequest.model_validate(
             speed_lines(20, 25, noise=0.003, seed=2, options={"map": False}))),
         ("pyCycle-style map file, 2 alpha x 9 Nc, 64x64 map", parse_upload(
-            "fan.py", (Path(__file__).resolve().parents[1] / "tests" / "perfmap" / "data" / "pycycle_fan_map.py")
+            "fan.py", (Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle_fan_map.py")
             .read_bytes(), None)),
         ("speed lines 28x12, speed map 96x96", PerfmapRequest.model_validate(
             speed_lines(28, 12, options={"grid": [96, 96]}))),

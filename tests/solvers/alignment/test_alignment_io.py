@@ -12,7 +12,7 @@ from plantsolve.solvers.base import InputRejected
 
 from alignment_cases import conn, elbow, pipe, port, request
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "alignment"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples" / "alignment"
 
 PCF = """ISOGEN-FILES ISOGEN.FLS
 UNITS-BORE MM

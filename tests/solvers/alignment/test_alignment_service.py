@@ -10,7 +10,6 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "alignment"
-pytest.importorskip("plantsolve.solvers.alignment")
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,6 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "perfmap"
-pytest.importorskip("plantsolve.solvers.perfmap")
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """Realistic inputs: CSV files as rig software and Excel write them, rig layouts and units
 other than the benchmark's, duty-point queries on the boundary, far away and in bulk.
 
-The real map is the N+3 fan map of pyCycle (Apache-2.0, see tests/perfmap/data/README.md).
+The real map is the N+3 fan map of pyCycle (Apache-2.0, see tests/solvers/perfmap/data/README.md).
 """
 
 from __future__ import annotations
