@@ -94,7 +94,6 @@ def test_json_model_writes_a_pcf_that_parses_back():
     req = json.loads((EXAMPLES / "ladder.json").read_text())
     req = AlignmentRequest.model_validate(req)
     solved = solve(req)
-    res = solved.result
     arts = render_artifacts(req, solved)
     names = [a.name for a in arts]
     assert len(names) == len(set(names)) == 2

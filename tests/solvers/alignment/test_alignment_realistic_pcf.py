@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve
+from plantsolve.solvers.alignment import check_input, parse_upload, render_artifacts, solve
 from plantsolve.solvers.base import InputRejected, SolverError, StoredInput
 
 DATA = Path(__file__).parent / "data"
@@ -216,7 +216,6 @@ def test_crlf_only_and_lone_cr_files_keep_their_endings():
         body = text.replace("\n", eol)
         req = parse_upload(StoredInput.from_bytes("x.pcf", body.encode()), {"fixed_components": ["F4WN150"]})
         solved = solve(req)
-        res = solved.result
         out = render_artifacts(req, solved)[0].data.decode()
         assert out.count(eol) == body.count(eol)
         assert "\n" not in out.replace("\r\n", "") if eol == "\r\n" else "\n" not in out
@@ -289,8 +288,8 @@ def test_mangled_exports_never_crash():
                 lines[i] = lines[i].replace("    ", "\t")
         try:
             req = parse_upload(StoredInput.from_bytes("f.pcf", "".join(lines).encode()), None)
+            check_input(req)  # as the job domain does at submission
             solved = solve(req)
-            res = solved.result
             render_artifacts(req, solved)
         except (InputRejected, SolverError):
             pass
