@@ -12,12 +12,12 @@ UPLOAD_EXTENSIONS = (".pcf", ".json")
 def _decoded(content: bytes) -> tuple[str, str]:
     """The text and the encoding it was read with (the aligned PCF is written back in it)."""
     encoding = "utf-8-sig" if content.startswith(b"\xef\xbb\xbf") else "utf-8"
-    for enc in (encoding, "cp1252", "latin-1"):  # latin-1 decodes every byte
+    for enc in (encoding, "cp1252"):
         try:
             return content.decode(enc), enc
         except UnicodeDecodeError:
             continue
-    raise AssertionError("unreachable: latin-1 decodes every byte")
+    return content.decode("latin-1"), "latin-1"  # latin-1 decodes every byte
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
