@@ -60,7 +60,8 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
                        else {"method": method, "max_iterations": max_iterations})
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
-    res = solve(req)
+    solved = solve(req)
+    res = getattr(solved, "result", solved)  # a --before checkout older than the Solved contract returns the result
     wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
     d = res.report.details
     queue.put({

@@ -1,6 +1,6 @@
 """PCF exports through the whole path, per fixture and method: read, align, write, read back.
 
-Fixtures are the exporter-style files in ``tests/alignment/data`` (E3D return bends, Revit caps
+Fixtures are the exporter-style files in ``tests/solvers/alignment/data`` (E3D return bends, Revit caps
 and MATERIALS, a 255 m tree with only rounding noise, flange faces a gasket apart, Plant 3D,
 SmartPlant inch/TAB, an E3D line with inconsistent nozzles). Tie-ins are the ones a user of
 each file would fix (none for the tree and the Revit line: they are anchored).
@@ -24,11 +24,12 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.alignment import AlignmentRequest  # noqa: E402
+from plantsolve.solvers.base import StoredInput  # noqa: E402
 from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve  # noqa: E402
 from plantsolve.solvers.alignment.model import build_model, connection_errors  # noqa: E402
 from plantsolve.solvers.alignment.pcf import interpret_pcf, read_document  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[1] / "tests" / "alignment" / "data"
+DATA = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "alignment" / "data"
 FILES = [
     ("e3d_return_bends.pcf", ["1"]),
     ("revit_caps_materials.pcf", []),
@@ -43,9 +44,10 @@ FILES = [
 def run(name: str, fixed: list[str], method: str) -> dict:
     raw = (DATA / name).read_bytes()
     t0 = time.perf_counter()
-    req = parse_upload(name, raw, {"fixed_components": fixed, "method": method})
-    res = solve(req)
-    out = render_artifacts(req, res)[0].data
+    req = parse_upload(StoredInput.from_bytes(name, raw), {"fixed_components": fixed, "method": method})
+    solved = solve(req)
+    res = solved.result
+    out = render_artifacts(req, solved)[0].data
     again = AlignmentRequest.model_validate(interpret_pcf(out.decode(), req.options).body)
     seconds = time.perf_counter() - t0
     key = lambda c: tuple(sorted((tuple(c.from_), tuple(c.to))))

@@ -23,6 +23,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest  # noqa: E402
+from plantsolve.solvers.base import StoredInput  # noqa: E402
 from plantsolve.solvers.perfmap import parse_upload, query, solve  # noqa: E402
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
 from plantsolve.solvers.perfmap.families import curveset_from_fits  # noqa: E402
@@ -73,7 +74,7 @@ def main() -> None:
     req = PerfmapRequest.model_validate(request_body(n_theta=4, n_phi=7, n_points=6,
                                                      options={"grid": [64, 64]}))
     solve(req)  # warm-up (imports, caches)
-    t64, res = timed(lambda: solve(req), reps)
+    t64, res = timed(lambda: solve(req).result, reps)
     stages, _ = stage_times(req)
     fit_t = stages.get("envelopes", 0.0)
     rows.append(("solve 28 settings x 6 pts, 64x64 map (all 5 families + LOO + map)",
@@ -99,10 +100,10 @@ def main() -> None:
 
     t200req = PerfmapRequest.model_validate(request_body(n_theta=4, n_phi=7, n_points=6,
                                                          options={"grid": [200, 200]}))
-    t200, _ = timed(lambda: solve(t200req), reps)
+    t200, _ = timed(lambda: solve(t200req).result, reps)
 
-    n3 = parse_upload("n3_fan_map.csv", N3.read_bytes(), None)
-    tn3, n3res = timed(lambda: solve(n3), reps)
+    n3 = parse_upload(StoredInput.from_bytes("n3_fan_map.csv", N3.read_bytes()), None)
+    tn3, n3res = timed(lambda: solve(n3).result, reps)
 
     # inverse query in bulk (the HTTP handler answers it synchronously): 10,000 duty points
     # over the N3 map's box and 20 % around it (about 3/4 infeasible: distance computed)
@@ -157,7 +158,7 @@ def main() -> None:
     for label, opts in (("auto (default)", {}),
                         ("paper pairing, spline2", {"model": "spline2", "efficiency_model": "same"})):
         r = n3res if not opts else solve(n3.model_copy(update={
-            "options": n3.options.model_copy(update=opts)}))
+            "options": n3.options.model_copy(update=opts)})).result
         m = np.nanmax(np.array(r.map.efficiency, dtype=float))
         worst = max(r.settings, key=lambda s: s.efficiency_max_rel_error)
         n_poor = sum(w.code == "efficiency_fit_poor" for w in r.report.warnings)
@@ -170,7 +171,7 @@ def main() -> None:
 def pressure_reach() -> None:
     """Per map: how close the pressure characteristics come to the best decreasing concave curve."""
     maps = [
-        ("N3 fan (real, 18 settings)", parse_upload("n3_fan_map.csv", N3.read_bytes(), None)),
+        ("N3 fan (real, 18 settings)", parse_upload(StoredInput.from_bytes("n3_fan_map.csv", N3.read_bytes()), None)),
         ("synthetic family 4x7, cubic data", PerfmapRequest.model_validate(request_body(options={"model": "auto"}))),
         ("speed lines 24x12, choke cliff", PerfmapRequest.model_validate(speed_lines(24, 12, options={"map": False}))),
         ("speed lines 28x20, steep cliff", PerfmapRequest.model_validate(speed_lines(28, 20, steep=16.0,
@@ -178,8 +179,8 @@ def pressure_reach() -> None:
         ("speed lines 20x25, cliff + 0.3 % noise", PerfmapRequest.model_validate(
             speed_lines(20, 25, noise=0.003, seed=2, options={"map": False}))),
         ("pyCycle-style map file, 2 alpha x 9 Nc, 64x64 map", parse_upload(
-            "fan.py", (Path(__file__).resolve().parents[1] / "tests" / "perfmap" / "data" / "pycycle_fan_map.py")
-            .read_bytes(), None)),
+            StoredInput.from_bytes("fan.py", (Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle_fan_map.py")
+            .read_bytes()), None)),
         ("speed lines 28x12, speed map 96x96", PerfmapRequest.model_validate(
             speed_lines(28, 12, options={"grid": [96, 96]}))),
         ("synthetic 4x7 (theta, phi) with a 96x96 map", PerfmapRequest.model_validate(
@@ -191,7 +192,7 @@ def pressure_reach() -> None:
     print("|---|---:|---:|---:|---:|---:|---|---:|---:|---:|")
     for name, req in maps:
         t0 = time.perf_counter()
-        res = solve(req)
+        res = solve(req).result
         dt = time.perf_counter() - t0
         s = res.settings
         fams = {}

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
 from matplotlib.lines import Line2D
@@ -11,7 +9,8 @@ from matplotlib.ticker import MaxNLocator
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.solvers.alignment.pcf_write import write_aligned_pcf
-from plantsolve.solvers.base import Artifact
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.plots import figure_artifact
 
 
 _FLOOR = 1e-16  # a closed connection (gap exactly 0) is drawn here on the log axis
@@ -73,13 +72,9 @@ def figures(request: AlignmentRequest, result: AlignmentResult) -> dict[str, Fig
     return {"gaps": gaps_figure(request, result)}
 
 
-def _png(fig: Figure) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return buf.getvalue()
-
-
-def render_artifacts(request: AlignmentRequest, result: AlignmentResult) -> list[Artifact]:
+def render_artifacts(request: AlignmentRequest, solved: Solved) -> list[Artifact]:
+    """The aligned PCF (in the encoding of the uploaded one) and the gaps plot."""
+    result = solved.result
     text = write_aligned_pcf(request, result)
     enc = request.source_encoding or "utf-8"
     try:
@@ -89,5 +84,5 @@ def render_artifacts(request: AlignmentRequest, result: AlignmentResult) -> list
     charset = "utf-8" if enc == "utf-8-sig" else enc
     return [
         Artifact(name="aligned.pcf", media_type=f"text/plain; charset={charset}", data=data),
-        Artifact(name="gaps.png", media_type="image/png", data=_png(gaps_figure(request, result))),
+        figure_artifact("gaps.png", gaps_figure(request, result), dpi=100),
     ]

@@ -35,12 +35,11 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from pydantic import ValidationError
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
 EXTRA_KEYS = ("CO-ORDS",)  # support / instrument locations: they follow the item they sit on
@@ -377,10 +376,7 @@ def options_from(options) -> AlignmentOptions:
         return options
     if options is not None and not isinstance(options, dict):
         raise InputRejected([FieldError(("options",), "options must be an object")])
-    try:
-        return AlignmentOptions.model_validate(options or {})
-    except ValidationError as exc:
-        raise InputRejected([FieldError(("options",) + tuple(e["loc"]), e["msg"]) for e in exc.errors()]) from exc
+    return validated(AlignmentOptions, options or {}, ("options",))
 
 
 PROFILES = {  # (position tolerance unit or None = drawing units, value, angle tolerance rad)
@@ -740,7 +736,7 @@ def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner):
 
 
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
-    return AlignmentRequest.model_validate(interpret_pcf(text, options).body)
+    return validated(AlignmentRequest, interpret_pcf(text, options).body)
 
 
 def pcf_notes(request: AlignmentRequest) -> list[tuple[str, str, dict, str]]:

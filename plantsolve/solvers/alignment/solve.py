@@ -1,4 +1,4 @@
-"""Entry point: validate, find conflicts, run the chosen method, build the result."""
+"""Entry point: find conflicts, run the chosen method, build the result (the request was checked at submission)."""
 
 from __future__ import annotations
 
@@ -15,8 +15,7 @@ from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
-from plantsolve.solvers.alignment.validation import check_input
-from plantsolve.solvers.base import InputRejected, Progress, SolverError, no_progress
+from plantsolve.solvers.base import InputRejected, Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 
 
@@ -136,9 +135,13 @@ def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = froze
     return out
 
 
-def solve(request: AlignmentRequest, progress: Progress = no_progress) -> AlignmentResult:
-    """Align the pipe system so that every connection closes; see the package docstring."""
-    check_input(request)
+def solve(request: AlignmentRequest, progress: Progress = no_progress) -> Solved:
+    """Align the pipe system so that every connection closes; see the package docstring. The request
+    has passed :func:`~plantsolve.solvers.alignment.validation.check_input` (the job domain runs it)."""
+    return Solved(_align(request, progress))
+
+
+def _align(request: AlignmentRequest, progress: Progress) -> AlignmentResult:
     progress(0.0, f"building the model of {len(request.components)} components")
     anchors = anchor_components(request, _nozzles(request)) if request.options.anchor else []
     work = request

@@ -15,22 +15,17 @@ from matplotlib.ticker import MaxNLocator  # no pyplot: no global figure state; 
 from scipy import ndimage
 
 from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
-from plantsolve.solvers.base import Artifact
+from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.performance_map import distance_to_region
+from plantsolve.solvers.plots import figure_artifact
 
 _SMALL_MULTIPLES_MAX = 36
-_MEDIA = {"png": "image/png", "svg": "image/svg+xml"}
 
 
 def _save(fig: Figure, stem: str) -> list[Artifact]:
-    out = []
-    for fmt in ("png", "svg"):
-        buf = io.BytesIO()
-        fig.savefig(buf, format=fmt, dpi=110,
-                    metadata={"Date": None} if fmt == "svg" else None)
-        out.append(Artifact(name=f"{stem}.{fmt}", media_type=_MEDIA[fmt], data=buf.getvalue()))
-    return out
+    # an SVG without its date: the same result gives the same bytes
+    return [figure_artifact(f"{stem}.png", fig), figure_artifact(f"{stem}.svg", fig, metadata={"Date": None})]
 
 
 def _measured(request: PerfmapRequest):
@@ -393,8 +388,9 @@ def figures(request: PerfmapRequest, result: PerfmapResult) -> dict[str, Figure]
             "map": _map(result)}
 
 
-def render_artifacts(request: PerfmapRequest, result: PerfmapResult) -> list[Artifact]:
+def render_artifacts(request: PerfmapRequest, solved: Solved) -> list[Artifact]:
     """characteristics, envelopes and map, each as .png and .svg; curves.csv and (with a map) map.csv."""
+    result = solved.result
     out = []
     for stem, fig in figures(request, result).items():
         out += _save(fig, stem)

@@ -22,7 +22,7 @@ from plantsolve.schemas.perfmap import (
     PerformanceMap,
     SettingFit,
 )
-from plantsolve.solvers.base import Progress, SolverError, no_progress
+from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.perfmap.envelopes import envelope
 from plantsolve.solvers.perfmap.families import (
     EFFICIENCY_FAMILY,
@@ -397,7 +397,12 @@ def performance_map(curves: CurveSet, settings: list[Setting], values: np.ndarra
     return pmap, triangles
 
 
-def solve(request: PerfmapRequest, progress: Progress = no_progress) -> PerfmapResult:
+def solve(request: PerfmapRequest, progress: Progress = no_progress) -> Solved:
+    """Characteristics, envelopes, surge and choke lines and (options.map) the maximum-efficiency map."""
+    return Solved(_performance(request, progress))
+
+
+def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
     opts = request.options
     request, units = to_internal(request)
     settings = prepare(request)

@@ -53,11 +53,10 @@ import math
 import re
 
 import numpy as np
-from pydantic import ValidationError
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, reject, validated
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
@@ -526,15 +525,12 @@ def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tupl
 MAX_CSV_ROWS = 200_000
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> PerfmapRequest:
-    """CSV (columns theta, phi, flow, pressure, efficiency; rules in the module docstring)
-    or a JSON request; ``options`` (the upload form's options) override options given
-    inside a JSON file."""
-    ext = "." + filename.rsplit(".", 1)[-1].lower() if "." in filename else ""
-    if ext not in UPLOAD_EXTENSIONS:
-        raise reject(f"unsupported file type {ext or '(none)'!r}; accepted: "
-                      f"{', '.join(UPLOAD_EXTENSIONS)}"
-                     + (" (an Excel 97-2003 .xls workbook: save it as .xlsx)" if ext in (".xls", ".xlsb") else ""))
+def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
+    """CSV (columns theta, phi, flow, pressure, efficiency; rules in the module docstring), an Excel
+    workbook, a pyCycle/NPSS map or a JSON request, by the file's extension (the intake has checked it);
+    ``options`` (the upload form's options) override options given inside a JSON file."""
+    ext = source.extension
+    content = source.read()
     if ext == ".xlsx":
         options = dict(options or {})
         roles = options.get("columns")
@@ -582,23 +578,21 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:
-        request = PerfmapRequest.model_validate(body)
-    except ValidationError as e:
+        request = validated(PerfmapRequest, body, ())
+    except InputRejected as e:
         errs = []
-        for err in e.errors():
-            loc = tuple(err["loc"])
+        for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
+            loc, path = fe.loc, "/".join(map(str, fe.loc))
             if options and loc[:1] == ("options",):  # form options point at the options
-                errs.append(FieldError(loc, f"{'/'.join(map(str, loc))}: {err['msg']}",
-                                       err.get("type", "value_error")))
+                errs.append(FieldError(loc, f"{path}: {fe.msg}", fe.type))
             elif lines:
                 where, prefix = _file_loc(loc, lines, body["positions"])
-                msg = err["msg"]
-                if err.get("type") == "too_short" and len(loc) == 3:
+                msg = fe.msg
+                if fe.type == "too_short" and len(loc) == 3:
                     msg, where = "needs at least 3 measured points (rows)", where[:3]
-                errs.append(FieldError(where, prefix + msg, err.get("type", "value_error")))
+                errs.append(FieldError(where, prefix + msg, fe.type))
             else:
-                errs.append(FieldError(("file",), f"{'/'.join(map(str, loc))}: {err['msg']}",
-                                       err.get("type", "value_error")))
+                errs.append(FieldError(("file",), f"{path}: {fe.msg}", fe.type))
         seen, unique = set(), []
         for fe in errs:  # the three lists of one short setting give one message
             if (fe.loc, fe.msg) not in seen:

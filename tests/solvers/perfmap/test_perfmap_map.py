@@ -125,7 +125,7 @@ def test_query_infeasible_point_says_so(synthetic_result):
 
 def test_query_without_map_is_rejected():
     req = PerfmapRequest.model_validate(request_body(n_theta=1, n_phi=3, options={"map": False}))
-    res = solve(req)
+    res = solve(req).result
     assert res.map is None and len(res.envelopes) == 1
     with pytest.raises(InputRejected):
         query(res, PerfmapQueryRequest(points=[{"flow": 0.5, "pressure": 1.0}]))

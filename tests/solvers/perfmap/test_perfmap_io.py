@@ -10,7 +10,7 @@ import pytest
 from pydantic import ValidationError
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, Solved, StoredInput
 from plantsolve.solvers.perfmap import (
     SPEC,
     __version__,
@@ -64,7 +64,7 @@ def test_repeated_flow_with_different_values_is_averaged_and_reported():
     body = _body(map=False)
     p = body["positions"][4]
     p["flow"][3] = p["flow"][2]
-    res = solve(PerfmapRequest.model_validate(body))
+    res = solve(PerfmapRequest.model_validate(body)).result
     warn = next(w for w in res.report.warnings if w.code == "repeated_flows_averaged")
     assert warn.details["position"] == 4
 
@@ -75,8 +75,8 @@ def test_unsorted_and_duplicated_points_are_sorted_and_merged():
     order = [3, 0, 5, 1, 4, 2]
     for k in ("flow", "pressure", "efficiency"):
         p[k] = [p[k][i] for i in order] + [p[k][0]]
-    res = solve(PerfmapRequest.model_validate(body))
-    ref = solve(PerfmapRequest.model_validate(_body(map=False)))
+    res = solve(PerfmapRequest.model_validate(body)).result
+    ref = solve(PerfmapRequest.model_validate(_body(map=False))).result
     assert np.allclose(res.settings[0].pressure_coefficients, ref.settings[0].pressure_coefficients)
     assert any(w.code == "duplicate_points_merged" for w in res.report.warnings)
 
@@ -93,7 +93,7 @@ def test_too_few_settings_for_a_map_but_envelope_possible():
     assert _rejected_locs(body) == [("positions",)]
     for flag, code in ((False, "map_skipped"), (None, "map_not_possible")):
         body["options"]["map"] = flag
-        res = solve(PerfmapRequest.model_validate(body))
+        res = solve(PerfmapRequest.model_validate(body)).result
         assert res.map is None and len(res.envelopes) == 1 and res.triangles == []  # one theta
         assert [w.code for w in res.report.warnings] == [code]
 
@@ -104,7 +104,7 @@ def test_settings_on_one_line_give_the_one_parameter_map():
     body = request_body(n_theta=1, n_phi=5, options={"map": True})
     req = PerfmapRequest.model_validate(body)
     check_input(req)
-    res = solve(req)
+    res = solve(req).result
     assert res.map is not None and res.map.reachable_fraction > 0.2 and len(res.envelopes) == 1
     assert all(j == k for _, j, k in res.triangles) and len(res.triangles) == 4
     env = res.envelopes[0]
@@ -143,7 +143,7 @@ def test_query_request_one_or_many():
 
 
 def test_parse_csv_round_trip_and_options(n3_csv):
-    req = parse_upload("MAP.CSV", n3_csv, {"model": "cubic", "grid": [20, 10]})
+    req = parse_upload(StoredInput.from_bytes("MAP.CSV", n3_csv), {"model": "cubic", "grid": [20, 10]})
     assert len(req.positions) == 18
     assert req.options.model == "cubic" and req.options.grid == [20, 10]
     first = req.positions[0]
@@ -154,19 +154,18 @@ def test_parse_csv_round_trip_and_options(n3_csv):
 def test_parse_csv_semicolon_and_column_order():
     text = "phi;Theta;efficiency;pressure;flow\n" + "\n".join(
         f"{ph};{th};0.8;{2 - 0.1 * i};{i + 1}" for th in (0, 1) for ph in (0, 1) for i in range(4))
-    req = parse_upload("m.csv", text.encode(), None)
+    req = parse_upload(StoredInput.from_bytes("m.csv", text.encode()), None)
     assert len(req.positions) == 4
     assert req.positions[1].phi == 1 and req.positions[1].flow == [1, 2, 3, 4]
 
 
 def test_parse_json_file_with_form_options_override():
     body = _body(grid=[30, 30])
-    req = parse_upload("x.json", json.dumps(body).encode(), {"grid": [12, 11]})
+    req = parse_upload(StoredInput.from_bytes("x.json", json.dumps(body).encode()), {"grid": [12, 11]})
     assert req.options.grid == [12, 11] and req.options.model == "cubic"
 
 
 @pytest.mark.parametrize("name,content,needle", [
-    ("m.txt", b"theta", "unsupported"),
     ("m.csv", b"", "empty"),
     ("m.csv", b"theta,phi,flow\n1,2,3\n", "missing"),
     ("m.csv", b"theta,phi,flow,pressure,efficiency\n1,2,x,4,5\n", "line 2"),
@@ -177,7 +176,7 @@ def test_parse_json_file_with_form_options_override():
 ])
 def test_bad_uploads_name_the_file(name, content, needle):
     with pytest.raises(InputRejected) as exc:
-        parse_upload(name, content, None)
+        parse_upload(StoredInput.from_bytes(name, content), None)
     assert all(e.loc[0] == "file" for e in exc.value.errors)
     assert needle in str(exc.value)
 
@@ -185,7 +184,7 @@ def test_bad_uploads_name_the_file(name, content, needle):
 def test_render_artifacts(synthetic_request, synthetic_result):
     before = synthetic_result.model_dump_json()
     req_before = synthetic_request.model_dump_json()
-    arts = render_artifacts(synthetic_request, synthetic_result)
+    arts = render_artifacts(synthetic_request, Solved(synthetic_result))
     names = [a.name for a in arts]
     assert sorted(names) == sorted([f"{s}.{e}" for s in ("characteristics", "envelopes", "map")
                                     for e in ("png", "svg")] + ["curves.csv", "map.csv"])
@@ -220,7 +219,7 @@ def test_deterministic(synthetic_request, synthetic_result):
     exact cubic data ``parabola_log`` ends its fit in a flat valley at ~2e-6 error, where the
     last bits of BLAS sums (which depend on memory alignment with single-threaded OpenBLAS)
     move where it stops (by ~4e-7). Its numbers agree to 1e-5; everything the map uses is exact."""
-    again = solve(synthetic_request)
+    again = solve(synthetic_request).result
     table_again = again.efficiency_error_table
     table_first = synthetic_result.efficiency_error_table
     assert [r.family for r in table_again] == [r.family for r in table_first]
@@ -234,13 +233,13 @@ def test_deterministic(synthetic_request, synthetic_result):
 
 def test_auto_picks_the_generating_family_and_falls_back_without_loo():
     res = solve(PerfmapRequest.model_validate(
-        request_body(n_theta=3, n_phi=3, options={"model": "auto", "grid": [12, 12]})))
+        request_body(n_theta=3, n_phi=3, options={"model": "auto", "grid": [12, 12]}))).result
     assert res.family == "cubic"  # data are cubic Beziers: LOO exact only for 'cubic'
     assert res.report.details["family_choice"]["mean_pressure_loo"]["cubic"] < 1e-12
     # the efficiency family is chosen on its own, per setting: also exact only for 'cubic'
     assert all(s.efficiency_family == "cubic" for s in res.settings)
     res = solve(PerfmapRequest.model_validate(
-        request_body(n_theta=3, n_phi=3, n_points=3, options={"model": "auto", "grid": [12, 12]})))
+        request_body(n_theta=3, n_phi=3, n_points=3, options={"model": "auto", "grid": [12, 12]}))).result
     assert res.family == "parabola"
     assert any(w.code == "auto_without_loo" for w in res.report.warnings)
 

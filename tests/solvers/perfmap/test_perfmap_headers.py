@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap import parse_upload, solve
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 
@@ -39,7 +39,7 @@ def table(header: list[str], row, sep: str = ",", decimal: str = ".") -> bytes:
      lambda n, f, p, e: (n, f, p, e, 288.15), ",", "."),
 ])
 def test_header_families_of_real_tables(header, row, sep, decimal):
-    req = parse_upload("map.csv", table(header, row, sep, decimal), {"map": False})
+    req = parse_upload(StoredInput.from_bytes("map.csv", table(header, row, sep, decimal)), {"map": False})
     assert len(req.positions) == 4
     assert len(req.setting_names) == 1 and req.setting_names[0] == header[0].split(" [")[0]
     assert req.setting_units == ["rpm" if "[rpm]" in header[0] else ""]
@@ -53,16 +53,16 @@ def test_header_families_of_real_tables(header, row, sep, decimal):
         assert codes["upload_rline_not_needed"].details["columns"] == ["R-line"]
     if "T_in [K]" in header:
         assert codes["upload_columns_ignored"].details["columns"] == ["T_in [K]"]
-    res = solve(req)
+    res = solve(req).result
     assert len(res.settings) == 4 and all(s.pressure_excess <= 0.01 for s in res.settings)
 
 
 def test_two_setting_parameters_keep_their_names_and_units_in_role_order():
     body = table(["Speed [%]", "IGV [deg]", "Flow", "PR", "Eff"], lambda n, f, p, e: (100 * n, 10 * n + k(n), f, p, e))
-    req = parse_upload("rig.csv", body, {"grid": [24, 24]})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), {"grid": [24, 24]})
     assert req.setting_names == ["IGV", "Speed"] and req.setting_units == ["deg", "%"]
     assert req.positions[0].setting == pytest.approx([5.0 + k(0.5), 50.0])
-    res = solve(req)
+    res = solve(req).result
     assert res.setting_names == ["IGV", "Speed"] and res.map is not None
     assert len(res.map.settings) == 2 and res.map.theta is not None  # two parameters: also as theta, phi
 
@@ -70,34 +70,34 @@ def test_two_setting_parameters_keep_their_names_and_units_in_role_order():
 def test_the_columns_option_maps_any_header_to_a_role():
     body = table(["N1 [%]", "Q [m3/h]", "Pi_tt", "Wirkungsgrad"], lambda n, f, p, e: (n, f, p, e))
     with pytest.raises(InputRejected) as e:
-        parse_upload("rig.csv", body, None)
+        parse_upload(StoredInput.from_bytes("rig.csv", body), None)
     assert e.value.errors[0].loc == ("file", "header") and "columns" in e.value.errors[0].msg
     options = {"columns": {"N1 [%]": "speed", "Q [m3/h]": "flow", "pi_tt": "pressure", "Wirkungsgrad": "efficiency"},
                "map": False}
-    req = parse_upload("rig.csv", body, options)
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), options)
     assert len(req.positions) == 4 and req.positions[1].setting == pytest.approx(LINES[1]["setting"])
     with pytest.raises(InputRejected) as e:
-        parse_upload("rig.csv", body, {"columns": {"N1 [%]": "rpm"}})
+        parse_upload(StoredInput.from_bytes("rig.csv", body), {"columns": {"N1 [%]": "rpm"}})
     assert e.value.errors[0].loc == ("options", "columns")
 
 
 def test_four_setting_parameters_name_the_columns_to_drop():
     body = table(["Speed", "IGV", "VGV", "Diffuser", "Flow", "PR", "Eff"], lambda n, f, p, e: (n, 1, 2, 3, f, p, e))
     with pytest.raises(InputRejected) as e:
-        parse_upload("rig.csv", body, None)
+        parse_upload(StoredInput.from_bytes("rig.csv", body), None)
     assert "IGV" in e.value.errors[0].msg and "'columns'" in e.value.errors[0].msg
-    req = parse_upload("rig.csv", body, {"columns": {"VGV": "ignore"}, "map": False})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), {"columns": {"VGV": "ignore"}, "map": False})
     assert req.setting_names == ["IGV", "Speed", "Diffuser"]
 
 
 def test_pycycle_map_data_file():
     text = (DATA / "pycycle_fan_map.py").read_bytes()
-    req = parse_upload("fan_map.py", text, None)
+    req = parse_upload(StoredInput.from_bytes("fan_map.py", text), None)
     assert len(req.positions) == 18  # 2 alpha x 9 Nc speed lines
     assert req.setting_names == ["alpha", "Nc"]
     assert sorted({p.setting[0] for p in req.positions}) == [0.0, 5.0]
     assert req.positions[0].setting[1] == 0.5 and len(req.positions[0].flow) == 12
-    res = solve(req)
+    res = solve(req).result
     assert res.map is not None and res.map.reachable_fraction > 0.2
     assert all(s.pressure_excess <= 0.01 for s in res.settings)
     assert any(w.code == "vertical_choke_segment" for w in res.report.warnings)  # Wc repeated at choke
@@ -111,7 +111,7 @@ def test_pycycle_map_data_file():
 ])
 def test_map_data_that_cannot_be_read_says_why(text, needle):
     with pytest.raises(InputRejected) as e:
-        parse_upload("bad.py", text, None)
+        parse_upload(StoredInput.from_bytes("bad.py", text), None)
     assert needle in e.value.errors[0].msg
 
 
@@ -132,7 +132,7 @@ def test_three_setting_parameters_give_the_maximum_efficiency_map_over_them():
                                   "efficiency": [e * (1 - 0.002 * igv + 0.001 * vgv) for e in p["efficiency"]]})
     req = PerfmapRequest.model_validate({"setting_names": ["speed", "IGV", "VGV"], "setting_units": ["-", "deg", "deg"],
                                          "positions": positions, "options": {"grid": [20, 20]}})
-    res = solve(req)
+    res = solve(req).result
     assert res.map is not None and len(res.map.settings) == 3 and res.map.theta is None
     assert any(w.code == "three_parameter_map" for w in res.report.warnings)
     curves = curveset_from_fits(res.settings)

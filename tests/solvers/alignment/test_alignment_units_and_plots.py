@@ -18,7 +18,7 @@ def _request(units: str) -> AlignmentRequest:
 
 def test_result_and_summary_state_the_length_unit():
     for units in ("mm", "in"):
-        res = solve(_request(units))
+        res = solve(_request(units)).result
         assert res.units == units and res.angle_unit == "deg"
         assert f"largest gap {res.max_position_error:.3g} {units}," in res.report.message
         assert res.model_dump(mode="json")["units"] == units
@@ -26,7 +26,7 @@ def test_result_and_summary_state_the_length_unit():
 
 def test_gaps_plot_has_units_integer_ticks_and_angle_errors():
     req = _request("mm")
-    res = solve(req)
+    res = solve(req).result
     fig = figures(req, res)["gaps"]
     check_figure(fig)
     gap_ax, ang_ax = fig.axes[:2]

@@ -9,6 +9,7 @@ import io
 import numpy as np
 import pytest
 
+from plantsolve.solvers.base import Solved, StoredInput
 from plantsolve.solvers.perfmap import parse_upload, solve
 from plantsolve.solvers.perfmap.artifacts import (curves_csv, figures, map_csv, reachable_boundary,
                                                   render_artifacts, smooth_on_finer_grid)
@@ -30,9 +31,9 @@ def rig_table(header) -> bytes:
 
 @pytest.fixture(scope="module")
 def rig():
-    req = parse_upload("rig.csv", rig_table(["Speed [rpm]", "Flow [kg/s]", "Pressure rise [kPa]", "Efficiency [%]"]),
+    req = parse_upload(StoredInput.from_bytes("rig.csv", rig_table(["Speed [rpm]", "Flow [kg/s]", "Pressure rise [kPa]", "Efficiency [%]"])),
                        {"grid": [24, 24]})
-    return req, solve(req)
+    return req, solve(req).result
 
 
 def test_every_plot_has_units_on_its_axes_and_legends_off_the_data(rig):
@@ -48,8 +49,8 @@ def test_every_plot_has_units_on_its_axes_and_legends_off_the_data(rig):
 
 
 def test_the_unit_not_stated_is_said_so(rig):
-    req = parse_upload("rig.csv", rig_table(["Speed", "Flow", "Pressure", "Efficiency [%]"]), {"grid": [16, 16]})
-    figs = figures(req, solve(req))
+    req = parse_upload(StoredInput.from_bytes("rig.csv", rig_table(["Speed", "Flow", "Pressure", "Efficiency [%]"])), {"grid": [16, 16]})
+    figs = figures(req, solve(req).result)
     assert "flow [unit not stated]" in [a.get_xlabel() for a in figs["map"].axes]
     for fig in figs.values():
         check_figure(fig)
@@ -101,9 +102,9 @@ def test_curves_csv_reads_back_as_the_same_rig(rig):
     text = curves_csv(res).decode()
     header = next(csv.reader(io.StringIO(text)))
     assert header == ["Speed [rpm]", "t [-]", "flow [kg/s]", "pressure [kPa]", "efficiency [-]"]
-    back = parse_upload("curves.csv", text.encode(), {"map": False, "columns": {"t [-]": "ignore"}})
+    back = parse_upload(StoredInput.from_bytes("curves.csv", text.encode()), {"map": False, "columns": {"t [-]": "ignore"}})
     assert back.units.flow == "kg/s" and back.units.pressure == "kPa" and back.setting_units == ["rpm"]
-    again = solve(back)
+    again = solve(back).result
     for a, b in zip(res.settings, again.settings):
         assert a.setting == b.setting and b.x_min == pytest.approx(a.x_min) and b.x_max == pytest.approx(a.x_max)
 
@@ -118,7 +119,7 @@ def test_map_csv_holds_every_node(rig):
     row = rows[1 + j * len(m.flow) + i]
     assert float(row[0]) == m.flow[i] and float(row[1]) == m.pressure[j]
     assert (row[2] == "") == (m.efficiency[j][i] is None)
-    names = [a.name for a in render_artifacts(*rig)]
+    names = [a.name for a in render_artifacts(rig[0], Solved(rig[1]))]
     assert "map.csv" in names and "curves.csv" in names
 
 

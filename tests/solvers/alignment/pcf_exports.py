@@ -3,7 +3,7 @@
 Each builder lays a route out exactly (pipes, elbows, 180 degree return bends, tees, flanges,
 gaskets, valves, caps, olets), optionally disturbs items the way a model drifts (small rigid
 motions of single items), and prints it in one exporter's style: its header records, its ids,
-its quirks, its number of decimals. ``python tests/alignment/pcf_exports.py`` rewrites the
+its quirks, its number of decimals. ``python tests/solvers/alignment/pcf_exports.py`` rewrites the
 fixture files in ``data/`` (deterministic).
 """
 

@@ -36,7 +36,7 @@ def test_pipe_between_two_fixed_elbows_takes_their_ports(method):
     e2 = elbow("E2", [2000, 0, 0], [-1, 0, 0], [0, 1, 0], fixed=True)
     p = pipe("P", [151.0, 0.8, -0.5], [1849.0, -0.6, 0.7])  # measured off by ~1 mm and tilted
     req = request([e1, e2, p], [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0)], method=method)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
     P, D = ports(res, "P")
     assert P.tolist() == [[150.0, 0.0, 0.0], [1850.0, 0.0, 0.0]]
@@ -51,7 +51,7 @@ def test_elbow_gap_closes_onto_fixed_pipes(method):
     p2 = pipe("P2", [1150, 150, 0], [1150, 1150, 0], fixed=True)
     e = elbow("E", [1150, 0, 0], [-1, 0, 0], [0, 1, 0], rot=[0.01, -0.02, 0.015], shift=(2.0, -1.5, 3.0))
     req = request([p1, e, p2], [conn("P1", 1, "E", 0), conn("E", 1, "P2", 0)], method=method)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged
     P, D = ports(res, "E")
     np.testing.assert_array_equal(P, [[1000, 0, 0], [1150, 150, 0]])
@@ -72,7 +72,7 @@ def test_tee_with_three_fixed_pipes(method):
     comps = [tee, pipe("A", [-1150, 0, 0], [-150, 0, 0], fixed=True), pipe("B", [150, 0, 0], [1150, 0, 0], fixed=True),
              pipe("C", [0, 150, 0], [0, 1150, 0], fixed=True)]
     req = request(comps, [conn("T", 0, "A", 1), conn("T", 1, "B", 0), conn("T", 2, "C", 0)], method=method)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged
     P, _ = ports(res, "T")
     np.testing.assert_array_equal(P, arms)
@@ -89,7 +89,7 @@ def test_tee_with_free_pipes_moves_the_tee_not_the_axes(method):
     # nothing fixed and no anchor: the paper's weighting alone decides who moves
     req = request(comps, [conn("T", 0, "A", 1), conn("T", 1, "B", 0), conn("T", 2, "C", 0)], method=method,
                   anchor=False)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged
     assert_watertight(req, res)
     d = res.report.details
@@ -99,7 +99,7 @@ def test_tee_with_free_pipes_moves_the_tee_not_the_axes(method):
 
 def test_rectangular_loop_closes_to_a_rectangle():
     req = grid_network(2, 2, origin=(1e6, 2e5, 1e4), seed=3)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
     assert_watertight(req, res)
     by_id = {c.id: c for c in res.components}
@@ -120,7 +120,7 @@ def test_rectangular_loop_closes_to_a_rectangle():
 
 def test_ladder_of_loops_closes_with_orthogonal_runs():
     req = grid_network(2, 4, valve_every=3, tie_ins=((0, 0),), origin=(5e5, 5e5, 0), seed=5)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
     assert_watertight(req, res)
     dirs = np.array([c.ports[1].direction for c, r in zip(res.components, req.components) if r.kind == "pipe"])
@@ -139,7 +139,7 @@ def test_valve_up_vector_is_re_established(method):
     valve = {"id": "V", "kind": "fitting", "type": "valve", "up": up0.tolist(), "ports": ports}
     comps = [pipe("A", [0, 0, 0], [1000, 0, 0], fixed=True), valve, pipe("B", [1300, 0, 0], [2300, 0, 0], fixed=True)]
     req = request(comps, [conn("A", 1, "V", 0), conn("V", 1, "B", 0)], method=method)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged
     comp = next(c for c in res.components if c.id == "V")
     np.testing.assert_array_equal([p.position for p in comp.ports], [[1000, 0, 0], [1300, 0, 0]])
@@ -160,7 +160,7 @@ def test_conflicting_tie_ins_cut_one_connection_and_close_the_rest(method):
     conns = [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0), conn("E1", 0, "Q", 0), conn("Q", 1, "E3", 0),
              conn("E3", 1, "R", 0)]
     req = request(comps, conns, method=method)
-    res = solve(req)
+    res = solve(req).result
     assert len(res.cut_connections) == 1 and res.cut_connections[0] in (0, 1)
     assert res.converged
     assert res.report.status == "warning"
@@ -172,7 +172,7 @@ def test_conflicting_tie_ins_cut_one_connection_and_close_the_rest(method):
 
 def test_iteration_cap_returns_best_result_with_errors():
     req = grid_network(3, 3, seed=2, options={"method": "dual_quaternion", "max_iterations": 5})
-    res = solve(req)
+    res = solve(req).result
     assert not res.converged
     assert res.iterations <= 5
     assert res.max_position_error > 1e-3
@@ -186,12 +186,12 @@ def test_iteration_cap_returns_best_result_with_errors():
 def test_iteration_cap_is_honoured_by_both_methods(method):
     req = grid_network(3, 3, seed=2, tie_ins=((0, 0),), options={"method": method, "max_iterations": 3,
                                                                 "tolerance_profile": "custom"})
-    res = solve(req)
+    res = solve(req).result
     assert res.iterations <= 3
     assert "iteration cap (3) reached" in res.report.details["stop_reason"]
     assert not res.converged and "Not converged" in res.report.message
     if method == "direct":
-        full = solve(grid_network(3, 3, seed=2, tie_ins=((0, 0),), options={"method": method}))
+        full = solve(grid_network(3, 3, seed=2, tie_ins=((0, 0),), options={"method": method})).result
         assert full.converged and "cap" not in full.report.details["stop_reason"] and full.iterations > 3
 
 
@@ -200,7 +200,7 @@ def test_explosion_in_a_closable_network_shortens_the_steps_instead_of_cutting()
     # closed this grid without a cut, so nothing conflicts: the run restarts with shorter steps
     req = grid_network(3, 3, seed=2, options={"method": "dual_quaternion", "explosion_factor": 1.05,
                                               "step_limit": 500.0, "max_iterations": 3000, "max_cuts": 2})
-    res = solve(req)
+    res = solve(req).result
     assert not res.cut_connections
     assert res.report.details["step_limit_restarts"] >= 1
     stop = res.report.details["stop_reason"]
@@ -218,7 +218,7 @@ def test_explosion_in_a_conflicting_network_cuts_the_worst_connection():
     for p in moved.ports:
         p.direction = turned.apply(p.direction).tolist()
     req = req.model_copy(update={"components": comps})
-    res = solve(req)
+    res = solve(req).result
     cuts = next(w for w in res.report.warnings if w.code == "connections_cut").details["cuts"]
     assert cuts and {c["reason"] for c in cuts} <= {"conflict", "explosion"}
     assert res.cut_connections == sorted(c["index"] for c in cuts)
@@ -238,7 +238,7 @@ def test_fitting_bolted_to_fitting_forms_a_cluster_that_closes(method):
              tee, el, pipe("C", [0, 300, 150], [0, 300, 1150])]
     conns = [conn("T", 0, "A", 1), conn("T", 1, "B", 0), conn("T", 2, "E", 0), conn("E", 1, "C", 0)]
     req = request(comps, conns, method=method)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
     assert_watertight(req, res)
     P, D = ports(res, "T")
@@ -260,7 +260,7 @@ def test_the_paper_method_stops_when_it_stalls_and_says_so():
     turned = Rotation.from_rotvec([0.0, 0.0, np.radians(2.0)])
     for p in [c for c in comps if c.fixed][-1].ports:
         p.direction = turned.apply(p.direction).tolist()
-    res = solve(req.model_copy(update={"components": comps}))
+    res = solve(req.model_copy(update={"components": comps})).result
     stop = res.report.details["stop_reason"]
     assert not res.converged and stop.startswith("stalled") and res.iterations < 2_000
     assert "Not converged (stalled" in res.report.message

@@ -11,7 +11,6 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "perfmap"
-pytest.importorskip("plantsolve.solvers.perfmap")
 
 
 @pytest.fixture(scope="module")
@@ -82,6 +81,9 @@ def test_csv_upload_and_bad_tables(finished):
     nan = {"positions": [{"theta": 0, "phi": 0.5, "flow": [1, 2, 3], "pressure": [1.2, 1.1, float("nan")], "efficiency": [0.5, 0.6, 0.5]}]}
     body = json.dumps(nan).encode()  # json.dumps writes NaN literally
     assert client.post("/v1/perfmap/jobs", content=body, headers={"Content-Type": "application/json"}).status_code == 422
+    for name, content in (("m.txt", b"theta"), ("rig.xls", b"\xd0\xcf\x11\xe0")):  # an old Excel workbook too
+        refused = client.post("/v1/perfmap/jobs", files={"file": (name, content, "application/octet-stream")})
+        assert refused.status_code == 415 and ".xlsx" in refused.json()["detail"], refused.text
 
 
 def test_cli_solves_the_example(tmp_path):

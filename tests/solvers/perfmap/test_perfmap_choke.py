@@ -34,7 +34,7 @@ def cliff_map():
 
 
 def test_lines_with_a_choke_cliff_reach_their_floor():
-    res = solve(request(cliff_map()))
+    res = solve(request(cliff_map())).result
     curves = curveset_from_fits(res.settings)
     t = np.linspace(0, 1, 1001)
     for k, s in enumerate(res.settings):
@@ -49,7 +49,7 @@ def test_lines_with_a_choke_cliff_reach_their_floor():
 
 
 def test_a_forced_stiff_family_is_warned_about_with_the_numbers():
-    res = solve(request(cliff_map(), model="parabola"))
+    res = solve(request(cliff_map(), model="parabola")).result
     poor = [w for w in res.report.warnings if w.code == "pressure_fit_poor"]
     assert len(poor) == 4
     for w in poor:
@@ -78,7 +78,7 @@ def test_repeated_flows_and_a_vertical_choke_segment_are_accepted():
     p2 = np.concatenate([p, p[-1] * np.array([0.95, 0.9, 0.85]), [p[5] * 1.002]])
     e2 = np.concatenate([e, e[-1] * np.array([0.97, 0.94, 0.9]), [e[5]]])
     lines = [((0.0, 1.0), (f2, p2, e2)), ((0.0, 2.0), speed_line(20, 7, pr0=2.3, flow0=12))]
-    res = solve(request(lines))
+    res = solve(request(lines)).result
     codes = {w.code: w for w in res.report.warnings}
     vertical = codes["vertical_choke_segment"].details
     assert vertical["flow"] == pytest.approx(f[-1]) and len(vertical["pressures"]) == 4
@@ -93,7 +93,7 @@ def test_speed_lines_give_a_speed_map_and_the_query_finds_the_speed():
     from plantsolve.solvers.perfmap import query
     from plantsolve.solvers.perfmap.synthetic import speed_lines
 
-    res = solve(PerfmapRequest.model_validate(speed_lines(6, 12, options={"grid": [48, 48]})))
+    res = solve(PerfmapRequest.model_validate(speed_lines(6, 12, options={"grid": [48, 48]}))).result
     assert res.map is not None and res.map.reachable_fraction > 0.3
     assert {w.code for w in res.report.warnings} >= {"one_parameter_map"}
     curves = curveset_from_fits(res.settings)
@@ -114,7 +114,8 @@ def test_surge_choke_and_margin_lines_are_returned_and_drawn():
     from plantsolve.solvers.perfmap.synthetic import speed_lines
 
     req = PerfmapRequest.model_validate(speed_lines(5, 10, options={"grid": [32, 32], "surge_margin": 0.1}))
-    res = solve(req)
+    solved = solve(req)
+    res = solved.result
     assert len(res.surge_line) == len(res.choke_line) == 5
     for s, surge, choke in zip(res.settings, res.surge_line, res.choke_line):
         assert surge.flow == pytest.approx(s.x_min) and choke.flow == pytest.approx(s.x_max)
@@ -123,7 +124,7 @@ def test_surge_choke_and_margin_lines_are_returned_and_drawn():
     assert len(margin) == 5
     for m, surge in zip(margin, res.surge_line):
         assert surge.pressure / m.pressure - 1 == pytest.approx(0.1, abs=1e-9) and m.flow > surge.flow
-    svg = next(a for a in render_artifacts(req, res) if a.name == "map.svg").data.decode()
+    svg = next(a for a in render_artifacts(req, solved) if a.name == "map.svg").data.decode()
     for label in ("surge line", "choke line", "surge margin line"):
         assert label in svg
 
@@ -133,6 +134,6 @@ def test_a_vertical_choke_segment_is_part_of_the_choke_line():
     f2 = np.concatenate([f, [f[-1]] * 2])
     p2 = np.concatenate([p, p[-1] * np.array([0.9, 0.8])])
     e2 = np.concatenate([e, e[-1] * np.array([0.95, 0.9])])
-    res = solve(request([((0.0, 1.0), (f2, p2, e2)), ((0.0, 2.0), speed_line(20, 7, pr0=2.3, flow0=12))]))
+    res = solve(request([((0.0, 1.0), (f2, p2, e2)), ((0.0, 2.0), speed_line(20, 7, pr0=2.3, flow0=12))])).result
     assert res.choke_line[0].vertical_to == pytest.approx(0.8 * p[-1])
     assert res.choke_line[1].vertical_to is None

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap import check_input, parse_upload, solve
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_unit
@@ -50,17 +50,17 @@ def test_factors_are_pints():
 
 def test_header_units_are_stated_in_the_result():
     body = table(["Speed [rpm]", "Flow [m3/h]", "Pressure rise [bar]", "Efficiency [%]"], eff_scale=100)
-    req = parse_upload("rig.csv", body, {"map": False})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), {"map": False})
     assert req.units.flow == "m³/h" and req.units.pressure == "bar" and req.units.efficiency == "1"
     assert req.positions[0].efficiency == pytest.approx(LINES[0]["efficiency"])  # % divided out
-    res = solve(req)
+    res = solve(req).result
     assert res.units.model_dump() == {"flow": "m³/h", "pressure": "bar", "efficiency": "1", "settings": ["rpm"]}
 
 
 def test_a_pressure_ratio_without_unit_is_dimensionless_and_a_bare_flow_is_unstated():
-    req = parse_upload("rig.csv", table(["Nc", "Wc", "PR", "eff"], sep=","), {"map": False})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", table(["Nc", "Wc", "PR", "eff"], sep=",")), {"map": False})
     assert req.units.flow is None and req.units.pressure == "1"
-    assert solve(req).units.flow is None
+    assert solve(req).result.units.flow is None
 
 
 @pytest.mark.parametrize("header, column", [
@@ -71,7 +71,7 @@ def test_a_pressure_ratio_without_unit_is_dimensionless_and_a_bare_flow_is_unsta
 ])
 def test_an_incompatible_unit_is_refused_naming_the_column(header, column):
     with pytest.raises(InputRejected) as e:
-        parse_upload("rig.csv", table(header), None)
+        parse_upload(StoredInput.from_bytes("rig.csv", table(header)), None)
     err = e.value.errors[0]
     assert err.loc == ("file", "header") and repr(column) in err.msg and "line 1" in err.msg
 
@@ -79,7 +79,7 @@ def test_an_incompatible_unit_is_refused_naming_the_column(header, column):
 def test_units_after_a_comma_in_a_units_row_and_below_title_lines():
     body = table(["Speed, rpm", "Flow, kg/s", "Pressure, kPa", "Efficiency, %"], eff_scale=100,
                  extra_rows=("Rig 7 acceptance test", "Inlet 288.15 K; 101.325 kPa"))
-    req = parse_upload("rig.csv", body, {"map": False})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), {"map": False})
     assert req.units.flow == "kg/s" and req.units.pressure == "kPa" and req.setting_units == ["rpm"]
     assert req.setting_names == ["Speed"]
     codes = {w.code: w for w in req.upload_warnings}
@@ -87,7 +87,7 @@ def test_units_after_a_comma_in_a_units_row_and_below_title_lines():
     assert req.positions[0].efficiency == pytest.approx(LINES[0]["efficiency"])
 
     body = table(["Speed", "Flow", "Pressure", "Efficiency"], eff_scale=100, under_header=("[rpm];[m3/h];[psi];[%]",))
-    req = parse_upload("rig.csv", body, {"map": False})
+    req = parse_upload(StoredInput.from_bytes("rig.csv", body), {"map": False})
     assert (req.units.flow, req.units.pressure, req.setting_units) == ("m³/h", "psi", ["rpm"])
     assert req.positions[0].efficiency == pytest.approx(LINES[0]["efficiency"])
     assert {w.code for w in req.upload_warnings} >= {"upload_units_row"}
@@ -95,8 +95,8 @@ def test_units_after_a_comma_in_a_units_row_and_below_title_lines():
 
 def test_result_units_convert_without_changing_the_answer():
     body = table(["Nc", "Wc [lbm/s]", "PR", "eff"], sep=",")
-    plain = solve(parse_upload("rig.csv", body, {"grid": [16, 16]}))
-    conv = solve(parse_upload("rig.csv", body, {"grid": [16, 16], "result_units": {"flow": "kg/s"}}))
+    plain = solve(parse_upload(StoredInput.from_bytes("rig.csv", body), {"grid": [16, 16]})).result
+    conv = solve(parse_upload(StoredInput.from_bytes("rig.csv", body), {"grid": [16, 16], "result_units": {"flow": "kg/s"}})).result
     assert plain.units.flow == "lbm/s" and conv.units.flow == "kg/s"
     assert conv.flow_range == pytest.approx(np.multiply(plain.flow_range, 0.45359237).tolist())
     assert conv.settings[0].x_max == pytest.approx(plain.settings[0].x_max * 0.45359237)
@@ -124,7 +124,7 @@ def test_json_requests_state_units_and_are_refused_field_by_field():
                                          "positions": [{**p, "efficiency": [100 * e for e in p["efficiency"]]}
                                                        for p in LINES], "options": {"map": False}})
     check_input(req)
-    res = solve(req)
+    res = solve(req).result
     assert res.units.flow == "kg/s" and res.settings[0].efficiency_peak <= 1.0
     for units, loc in (({"flow": "kg"}, ("units", "flow")), ({"efficiency": "kg/s"}, ("units", "efficiency")),
                        ({"pressure": "zorkmids"}, ("units", "pressure"))):

@@ -10,7 +10,6 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "alignment"
-pytest.importorskip("plantsolve.solvers.alignment")
 
 
 @pytest.fixture(scope="module")
@@ -85,6 +84,8 @@ def test_bad_connections_are_422_naming_the_field(client):
     response = client.post("/v1/alignment/jobs", json=body)
     assert response.status_code == 422
     assert any(error["loc"][:2] == ["components", 1] for error in response.json()["errors"]), response.json()
+    refused = client.post("/v1/alignment/jobs", files={"file": ("model.stl", b"solid", "model/stl")})
+    assert refused.status_code == 415 and ".pcf" in refused.json()["detail"], refused.text
 
 
 def test_cli_aligns_the_pcf_example(tmp_path):

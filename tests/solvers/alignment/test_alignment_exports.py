@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve
 from plantsolve.solvers.alignment.model import build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import read_document
@@ -37,9 +38,10 @@ def test_fixture_files_are_what_the_builders_write(name):
 
 def _run(name, fixed, method, **options):
     raw = (DATA / name).read_bytes()
-    req = parse_upload(name, raw, {"fixed_components": fixed, "method": method, **options})
-    res = solve(req)
-    out = render_artifacts(req, res)[0].data
+    req = parse_upload(StoredInput.from_bytes(name, raw), {"fixed_components": fixed, "method": method, **options})
+    solved = solve(req)
+    res = solved.result
+    out = render_artifacts(req, solved)[0].data
     return raw, req, res, out
 
 
@@ -76,7 +78,7 @@ def test_written_back_faithfully(aligned):
     every item that did not move byte for byte."""
     name, cuts, raw, req, res, out = aligned
     text_in, text_out = raw.decode(), out.decode()
-    again = parse_upload(name, out, req.options.model_dump())
+    again = parse_upload(StoredInput.from_bytes(name, out), req.options.model_dump())
     key = lambda c: tuple(sorted((tuple(c.from_), tuple(c.to))))
     assert sorted(map(key, again.connections)) == sorted(map(key, req.connections))
     model = build_model(again)
@@ -114,10 +116,11 @@ def test_aligning_the_aligned_file_moves_nothing(aligned):
     name, cuts, raw, req, res, out = aligned
     if not res.converged:
         pytest.skip("not converged: there is more to move")
-    again = parse_upload(name, out, req.options.model_dump())
-    res2 = solve(again)
+    again = parse_upload(StoredInput.from_bytes(name, out), req.options.model_dump())
+    solved = solve(again)
+    res2 = solved.result
     assert res2.iterations == 0 and all(c.displacement == 0.0 for c in res2.components)
-    assert render_artifacts(again, res2)[0].data == out
+    assert render_artifacts(again, solved)[0].data == out
 
 
 def test_e3d_return_bends_misc_component_and_olet():
@@ -174,7 +177,7 @@ def test_a_tree_with_only_rounding_differences_is_left_alone():
     assert all(c.displacement == 0.0 for c in res.components) and out == raw
     assert d["within_rounding_at_start"] == len(req.connections)
     # the old default (exact, 1e-10) would have moved the line to close rounding noise
-    tight = solve(parse_upload("tree.pcf", raw, {"tolerance_profile": "custom"}))
+    tight = solve(parse_upload(StoredInput.from_bytes("tree.pcf", raw), {"tolerance_profile": "custom"})).result
     assert max(c.displacement for c in tight.components) > 1e-3
 
 
@@ -196,7 +199,7 @@ def test_flange_faces_a_gasket_apart_keep_their_gap():
 def test_return_bend_alone_is_held_with_its_reason():
     text = "UNITS-CO-ORDS MM\nBEND\n    END-POINT 0 0 0 100\n    END-POINT 0 400 0 100\n    CENTRE-POINT 0 200 0\n" \
            "    ANGLE 18000\nPIPE\n    END-POINT 5000 0 0 100\n    END-POINT 6000 0 0 100\n"
-    res = solve(parse_upload("x.pcf", text.encode(), None))
+    res = solve(parse_upload(StoredInput.from_bytes("x.pcf", text.encode()), None)).result
     held = next(w for w in res.report.warnings if w.code == "pcf_items_held").details["items"]
     assert held[0]["id"] == "BEND-1" and "direction" in held[0]["reason"]
 
@@ -211,7 +214,7 @@ def test_a_closed_loop_with_one_drifted_pipe_keeps_its_closed_connections(method
     for p in pipe.ports:
         p.position = [p.position[0] + 1.5, p.position[1] - 1.0, p.position[2]]
     req = base.model_copy(update={"components": comps})
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
     assert not [w for w in res.report.warnings if w.code == "connections_opened"]
 
@@ -219,7 +222,7 @@ def test_a_closed_loop_with_one_drifted_pipe_keeps_its_closed_connections(method
 def test_dual_quaternion_never_cuts_a_tree():
     req = grid_network(1, 4, tie_ins=((0, 0),), seed=4, options={
         "method": "dual_quaternion", "explosion_factor": 1.2, "step_limit": 400.0, "tolerance_profile": "custom"})
-    res = solve(req)
+    res = solve(req).result
     assert not res.cut_connections
     stop = res.report.details["stop_reason"]
     assert res.converged == stop.startswith("all connections within tolerance")
@@ -227,6 +230,6 @@ def test_dual_quaternion_never_cuts_a_tree():
 
 def test_json_requests_keep_exact_tolerances_and_say_so():
     req = AlignmentRequest.model_validate(grid_network(2, 2, tie_ins=((0, 0),)).model_dump(by_alias=True))
-    d = solve(req).report.details
+    d = solve(req).result.report.details
     assert d["tolerance_profile"] == "custom" and d["position_tolerance"] == 1e-10
     assert "JSON" in d["tolerance_reason"]

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve
-from plantsolve.solvers.base import InputRejected, SolverError
+from plantsolve.solvers.alignment import check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.base import InputRejected, SolverError, StoredInput
 
 DATA = Path(__file__).parent / "data"
 POINT_WORDS = {"END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT", "CO-ORDS"}
@@ -32,9 +32,10 @@ def _lines(text):
 
 def _align(name, fixed, **options):
     raw = (DATA / name).read_bytes()
-    req = parse_upload(name.upper(), raw, {"fixed_components": fixed, **options})
-    res = solve(req)
-    art = {a.name: a for a in render_artifacts(req, res)}
+    req = parse_upload(StoredInput.from_bytes(name.upper(), raw), {"fixed_components": fixed, **options})
+    solved = solve(req)
+    res = solved.result
+    art = {a.name: a for a in render_artifacts(req, solved)}
     return raw.decode(), req, res, art["aligned.pcf"].data.decode()
 
 
@@ -77,7 +78,7 @@ def test_every_unchanged_line_is_kept_byte_for_byte(aligned):
 
 def test_tie_in_lines_untouched_and_written_connections_print_identically(aligned):
     name, fixed, cuts, src, req, res, out = aligned
-    req2 = parse_upload("again.pcf", out.encode(), {"fixed_components": fixed,
+    req2 = parse_upload(StoredInput.from_bytes("again.pcf", out.encode()), {"fixed_components": fixed,
                                                     **({"tolerance_profile": "custom"} if cuts else {})})
     assert [c.id for c in req2.components] == [c.id for c in req.components]
     assert [(c.from_, c.to) for c in req2.connections] == [(c.from_, c.to) for c in req.connections]
@@ -93,7 +94,7 @@ def test_tie_in_lines_untouched_and_written_connections_print_identically(aligne
         else:  # printed alike; reading back may restore a catalogue angle by a few ulps
             assert np.linalg.norm(np.subtract(pa, pb)) <= tol
     # aligning the aligned file moves nothing at all
-    res2 = solve(req2)
+    res2 = solve(req2).result
     assert len(res2.cut_connections) == cuts
     if not cuts:
         assert res2.iterations == 0 and all(c.displacement == 0.0 for c in res2.components)
@@ -213,9 +214,9 @@ def test_crlf_only_and_lone_cr_files_keep_their_endings():
     text = (DATA / "sp3d_inch_tabs.pcf").read_text()
     for eol in ("\r\n", "\r"):
         body = text.replace("\n", eol)
-        req = parse_upload("x.pcf", body.encode(), {"fixed_components": ["F4WN150"]})
-        res = solve(req)
-        out = render_artifacts(req, res)[0].data.decode()
+        req = parse_upload(StoredInput.from_bytes("x.pcf", body.encode()), {"fixed_components": ["F4WN150"]})
+        solved = solve(req)
+        out = render_artifacts(req, solved)[0].data.decode()
         assert out.count(eol) == body.count(eol)
         assert "\n" not in out.replace("\r\n", "") if eol == "\r\n" else "\n" not in out
 
@@ -229,7 +230,7 @@ def test_crlf_only_and_lone_cr_files_keep_their_endings():
 ])
 def test_a_file_with_nothing_usable_is_rejected_on_the_file(text, why):
     with pytest.raises(InputRejected) as e:
-        parse_upload("bad.pcf", text.encode(), None)
+        parse_upload(StoredInput.from_bytes("bad.pcf", text.encode()), None)
     assert e.value.errors[0].loc == ("file",)
     assert why in e.value.errors[0].msg
 
@@ -250,12 +251,13 @@ def test_an_item_that_cannot_be_read_is_kept_held_and_reported(item, code, reaso
     """One bad item never refuses the file: it is kept verbatim, held fixed (or left out without a readable
     point) and listed with its line and reason; the rest is aligned."""
     text = "UNITS-CO-ORDS MM\n" + GOOD + item
-    req = parse_upload("x.pcf", text.encode(), None)
-    res = solve(req)
+    req = parse_upload(StoredInput.from_bytes("x.pcf", text.encode()), None)
+    solved = solve(req)
+    res = solved.result
     note = next(w for w in res.report.warnings if w.code == code)
     (entry,) = note.details["items"]
     assert reason in entry["reason"] and entry["line"] == 5
-    out = render_artifacts(req, res)[0].data.decode()
+    out = render_artifacts(req, solved)[0].data.decode()
     assert out.endswith(item)  # written back exactly as read
     if code == "pcf_items_held":
         held = next(c for c in req.components if c.id == entry["id"])
@@ -285,9 +287,10 @@ def test_mangled_exports_never_crash():
             else:
                 lines[i] = lines[i].replace("    ", "\t")
         try:
-            req = parse_upload("f.pcf", "".join(lines).encode(), None)
-            res = solve(req)
-            render_artifacts(req, res)
+            req = parse_upload(StoredInput.from_bytes("f.pcf", "".join(lines).encode()), None)
+            check_input(req)  # as the job domain does at submission
+            solved = solve(req)
+            render_artifacts(req, solved)
         except (InputRejected, SolverError):
             pass
 
@@ -297,7 +300,7 @@ def test_aligned_pcf_keeps_the_file_encoding_byte_for_byte(encoding, bom):
     text = (DATA / "e3d_plant_conflict.pcf").read_text().replace(
         "GATE VALVE 150 CL300 RF", "GATE VALVE Ø150 CL300 RF 20°C")
     raw = bom + text.encode(encoding)
-    req = parse_upload("x.pcf", raw, {"fixed_components": ["1", "15"]})
+    req = parse_upload(StoredInput.from_bytes("x.pcf", raw), {"fixed_components": ["1", "15"]})
     from plantsolve.schemas.alignment import AlignmentRequest
 
     req = AlignmentRequest.model_validate_json(req.model_dump_json(by_alias=True))  # as the job queue stores it
@@ -316,28 +319,28 @@ def test_item_beyond_the_connection_tolerance_is_reported_and_option_widens_it()
     # the cap sits 40 mm off the 4 inch pipe end: beyond half its radius (25.4 mm)
     moved = text.replace("END-POINT 15001.0000 -2000.0000 3000.0000 4.0000 BW", "END-POINT 15040.0000 -2000.0000 3000.0000 4.0000 BW")
     # a lone cap has no direction to take: kept, held where it is, and reported
-    res = solve(parse_upload("x.pcf", moved.encode(), None))
+    res = solve(parse_upload(StoredInput.from_bytes("x.pcf", moved.encode()), None)).result
     held = next(w for w in res.report.warnings if w.code == "pcf_items_held").details["items"]
     assert [h["id"] for h in held] == ["CAP4S40"] and "direction" in held[0]["reason"]
     # a lone two-ended item is aligned without it and reported
     moved = text.replace("END-POINT 14441.0000 -2000.5000 3000.0000 4.0000 BW", "END-POINT 14480.0000 -2000.5000 3000.0000 4.0000 BW")
-    req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"]})
-    res = solve(req)
+    req = parse_upload(StoredInput.from_bytes("x.pcf", moved.encode()), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"]})
+    res = solve(req).result
     assert not [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]  # pipe still holds the cap
     near = [w for w in res.report.warnings if w.code == "pcf_near_miss"]
     assert near and near[0].details["pairs"][0]["from"] == ["FLANGE-14", 1]
     assert near[0].details["pairs"][0]["to"] == ["PIPE-15", 0]
     assert near[0].details["pairs"][0]["distance"] == pytest.approx(40.3, abs=0.01)
     assert not any(c.from_[0] == "FLANGE-14" and c.to[0] == "PIPE-15" for c in req.connections)
-    req = parse_upload("x.pcf", moved.encode(), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"], "connection_tolerance": 45.0})
+    req = parse_upload(StoredInput.from_bytes("x.pcf", moved.encode()), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"], "connection_tolerance": 45.0})
     assert any(c.from_ == ("FLANGE-14", 1) and c.to == ("PIPE-15", 0) for c in req.connections)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and not res.cut_connections
 
     stray = text.replace("MATERIALS\r\n", "INSTRUMENT\r\n    END-POINT 20000.0 0.0 0.0 2.0000\r\n"
                          "    END-POINT 20100.0 0.0 0.0 2.0000\r\nMATERIALS\r\n") if "\r\n" in text else text.replace(
         "MATERIALS\n", "INSTRUMENT\n    END-POINT 20000.0 0.0 0.0 2.0000\n    END-POINT 20100.0 0.0 0.0 2.0000\nMATERIALS\n")
-    res = solve(parse_upload("x.pcf", stray.encode(), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"]}))
+    res = solve(parse_upload(StoredInput.from_bytes("x.pcf", stray.encode()), {"fixed_components": ["0F1A3C22-1B7E-4A2E-9D0C-11AA00000001"]})).result
     warn = [w for w in res.report.warnings if w.code == "pcf_unconnected_items"]
     assert warn and warn[0].details["items"] == ["INSTRUMENT-34"]
 
@@ -354,7 +357,7 @@ def test_bad_upload_options_are_rejected_with_their_field(options, loc):
                        ("x.json", b'{"components": [{"id": "a", "kind": "pipe", "ports": [{"position": [0, 0, 0], '
                                   b'"direction": [-1, 0, 0]}, {"position": [1, 0, 0], "direction": [1, 0, 0]}]}]}')):
         with pytest.raises(InputRejected) as e:
-            parse_upload(name, body, options)
+            parse_upload(StoredInput.from_bytes(name, body), options)
         assert e.value.errors[0].loc[-len(loc):] == loc
 
 
@@ -362,7 +365,7 @@ def test_inline_item_with_a_rounded_centre_point_has_exactly_opposite_ports():
     text = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\nPIPE\n    END-POINT 0 0 0 50\n    END-POINT 1000 0 0 50\n"
             "INSTRUMENT\n    END-POINT 1001.2 0 0 50\n    END-POINT 1201.2 0 0 50\n    CENTRE-POINT 1101.2 0.1 0\n"
             "VALVE-ANGLE\n    END-POINT 1201.2 0 0 50\n    END-POINT 1301.2 100 0 50\n    CENTRE-POINT 1301.2 0 0\n")
-    req = parse_upload("x.pcf", text.encode(), None)
+    req = parse_upload(StoredInput.from_bytes("x.pcf", text.encode()), None)
     inst = next(c for c in req.components if c.id == "INSTRUMENT-2")
     assert inst.ports[0].direction == [-1.0, 0.0, 0.0] and inst.ports[1].direction == [1.0, 0.0, 0.0]
     angle = next(c for c in req.components if c.id == "VALVE-ANGLE-3")
@@ -375,9 +378,10 @@ def test_end_connection_marker_follows_its_port():
             "ELBOW\n    END-POINT 1002 1 0 100\n    END-POINT 1152 151 0 100\n    CENTRE-POINT 1152 1 0\n"
             "PIPE\n    END-POINT 1152 152 0 100\n    END-POINT 1152 2000 0 100\n"
             "END-CONNECTION-PIPELINE\n    CO-ORDS 1152 2000 0 100\n    PIPELINE-REFERENCE 100-CW-1002\n")
-    req = parse_upload("x.pcf", text.encode(), {"fixed_components": ["PIPE-1"]})
-    res = solve(req)
-    out = render_artifacts(req, res)[0].data.decode().splitlines()
+    req = parse_upload(StoredInput.from_bytes("x.pcf", text.encode()), {"fixed_components": ["PIPE-1"]})
+    solved = solve(req)
+    res = solved.result
+    out = render_artifacts(req, solved)[0].data.decode().splitlines()
     end = next(c for c in res.components if c.id == "PIPE-3").ports[1].position
     assert [float(v) for v in out[-2].split()[1:4]] == end
     assert end != [1152.0, 2000.0, 0.0]
@@ -392,14 +396,14 @@ def test_loops_from_a_rounded_export_close_without_cuts(digits):
 
     req = grid_network(4, 4, valve_every=5, tie_ins=((0, 0),), origin=(1e6, 2e5, 1e4), seed=5)
     text = re.sub(r"-?\d+\.\d+", lambda m: f"{float(m.group(0)):.{digits}f}", generate_pcf(req, req)).replace("\n", "\r\n")
-    up = parse_upload("loops.pcf", text.encode(), {"fixed_components": ["ELBOW-1"]})
+    up = parse_upload(StoredInput.from_bytes("loops.pcf", text.encode()), {"fixed_components": ["ELBOW-1"]})
     assert len(up.connections) == len(req.connections)
     for c in up.components:
         if c.type in ("elbow", "tee", "cross"):
             D = np.array([p.direction for p in c.ports])
             G = np.abs(D @ D.T)
             assert np.all((G < 1e-15) | (np.abs(G - 1) < 1e-15))  # exact right angles and straight runs again
-    res = solve(up)
+    res = solve(up).result
     assert res.converged and not res.cut_connections and res.max_position_error == 0.0
     (elbow,) = up.options.fixed_components  # ELBOW-1 is the first elbow's positional alias
     fixed_in = next(c for c in up.components if c.id == elbow)
@@ -414,6 +418,6 @@ def test_a_bend_of_an_odd_angle_is_not_snapped():
     f = lambda v: " ".join(f"{x:.4f}" for x in v)
     text = f"BEND\n    END-POINT {f(e0)} 100\n    END-POINT {f(e1)} 100\n    CENTRE-POINT {f(c)}\n"
     text += f"PIPE\n    END-POINT {f(e1 + 1.0 * np.array([np.cos(th), np.sin(th), 0]))} 100\n    END-POINT {f(e1 + 900 * np.array([np.cos(th), np.sin(th), 0]))} 100\n"
-    bend = parse_upload("b.pcf", text.encode(), None).components[0]
+    bend = parse_upload(StoredInput.from_bytes("b.pcf", text.encode()), None).components[0]
     d0, d1 = (np.array(p.direction) for p in bend.ports)
     assert np.degrees(np.arccos(-d0 @ d1)) == pytest.approx(88.6, abs=1e-4)

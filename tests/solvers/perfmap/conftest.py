@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
+from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.perfmap import parse_upload, solve
 from plantsolve.solvers.perfmap.synthetic import request_body
 
@@ -20,12 +21,12 @@ def n3_csv() -> bytes:
 
 @pytest.fixture(scope="session")
 def n3_request(n3_csv) -> PerfmapRequest:
-    return parse_upload("n3_fan_map.csv", n3_csv, None)
+    return parse_upload(StoredInput.from_bytes("n3_fan_map.csv", n3_csv), None)
 
 
 @pytest.fixture(scope="session")
 def n3_result(n3_request):
-    return solve(n3_request)
+    return solve(n3_request).result
 
 
 @pytest.fixture(scope="session")
@@ -36,4 +37,4 @@ def synthetic_request() -> PerfmapRequest:
 
 @pytest.fixture(scope="session")
 def synthetic_result(synthetic_request):
-    return solve(synthetic_request)
+    return solve(synthetic_request).result

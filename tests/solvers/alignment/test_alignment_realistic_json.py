@@ -44,7 +44,7 @@ def test_long_run_of_60_pipes_closes(fixed_ends):
     comps, conns = route(_orthogonal_walk(60), perturb=NOISE, seed=2, fixed_ends=fixed_ends)
     req = request(comps, conns)
     assert sum(c["kind"] == "pipe" for c in comps) == 60
-    res = solve(req)
+    res = solve(req).result
     _closed_exactly(req, res)
     d = res.report.details
     assert d["pipe_axis_movement"]["mean"] < d["fitting_displacement"]["mean"]
@@ -58,7 +58,7 @@ def test_straight_run_between_tie_ins_10mm_apart_is_cut_once(method):
     for p in comps[-1]["ports"]:
         p["position"][1] += 10.0
     req = request(comps, conns, method=method, max_iterations=200)
-    res = solve(req)
+    res = solve(req).result
     assert len(res.cut_connections) == 1
     cut = [w for w in res.report.warnings if w.code == "connections_cut"][0].details["cuts"][0]
     # the conflict shows as a tilt (10 mm over 6 m = 0.1 deg) or a gap before the cut
@@ -76,7 +76,7 @@ def test_shallow_and_45_degree_elbows_keep_their_catalogue_angle(angle):
     pts = [np.zeros(3), a, b, b + [1500.0, 0, 0]]
     comps, conns = route(pts, perturb=NOISE, seed=4, fixed_ends=(True, True))
     req = request(comps, conns)
-    res = solve(req)
+    res = solve(req).result
     _closed_exactly(req, res)
     for c_in, c_out in zip(req.components, res.components):
         if c_in.type == "elbow":
@@ -120,7 +120,7 @@ def _reducer_flanges_valve(scale_dirs=1.0):
 def test_reducer_flange_pairs_and_valve_between_flanges(method):
     comps, conns = _reducer_flanges_valve()
     req = request(comps, conns, method=method, max_iterations=4000)
-    res = solve(req)
+    res = solve(req).result
     _closed_exactly(req, res)
     valve = next(c for c in res.components if c.id == "V1")
     axis = np.array(valve.ports[1].direction)
@@ -130,8 +130,8 @@ def test_reducer_flange_pairs_and_valve_between_flanges(method):
 
 
 def test_non_unit_directions_are_normalised_not_rejected():
-    a = solve(request(*_reducer_flanges_valve()))
-    b = solve(request(*_reducer_flanges_valve(scale_dirs=7.5)))
+    a = solve(request(*_reducer_flanges_valve())).result
+    b = solve(request(*_reducer_flanges_valve(scale_dirs=7.5))).result
     for ca, cb in zip(a.components, b.components):
         np.testing.assert_allclose([p.position for p in ca.ports], [p.position for p in cb.ports], rtol=0, atol=1e-9)
         for p in cb.ports:
@@ -145,7 +145,7 @@ def test_pipe_shorter_than_its_minimum_is_lengthened_not_flipped():
     for p in e0["ports"]:
         p["position"][0] += 2.0
     req = request(comps, conns)
-    res = solve(req)
+    res = solve(req).result
     _closed_exactly(req, res)
     short = next(c for c in res.components if c.id == "P-1")
     a, b = (np.array(p.position) for p in short.ports)
@@ -156,7 +156,7 @@ def test_loop_that_only_closes_with_a_turned_over_pipe_is_cut():
     req = request([pipe("A", [0, 0, 0], [1000, 0, 0]), pipe("B", [1000, 0, 0], [0, 1000, 0]),
                    pipe("C", [0, 1000, 0], [0, 0, 0])],
                   [conn("A", 1, "B", 0), conn("B", 1, "C", 0), conn("C", 1, "A", 0)])
-    res = solve(req)
+    res = solve(req).result
     assert res.cut_connections
     for c in res.components:
         a, b = (np.array(p.position) for p in c.ports)
@@ -177,7 +177,7 @@ def test_plant_coordinates_and_units_scale():
         for p in c["ports"]:
             p["position"] = [v + 1.0e6 for v in p["position"]]
     far = AlignmentRequest.model_validate(far)
-    r_mm, r_m, r_far = solve(mm), solve(m), solve(far)
+    r_mm, r_m, r_far = solve(mm).result, solve(m).result, solve(far).result
     for req, res in ((mm, r_mm), (m, r_m), (far, r_far)):
         _closed_exactly(req, res)
     assert r_m.report.details["position_tolerance"] == 1e-10  # drawing units
@@ -191,7 +191,7 @@ def test_inch_units_use_inch_tolerances_in_profiles():
     comps, conns = route([[0, 0, 0], [100, 0, 0], [100, 80, 0]], radius=2.0, perturb=(0.08, 0.3, 0.2, 1.5), seed=6)
     req = AlignmentRequest.model_validate({"units": "in", "components": comps, "connections": conns,
                                            "options": {"tolerance_profile": "aveva_e3d"}})
-    res = solve(req)
+    res = solve(req).result
     assert res.report.details["position_tolerance"] == pytest.approx(1.0 / 25.4)  # 1 mm in inches
     assert res.max_position_error <= 1.0 / 25.4
 
@@ -199,11 +199,11 @@ def test_inch_units_use_inch_tolerances_in_profiles():
 def test_already_aligned_input_does_not_move():
     comps, conns = route(_orthogonal_walk(12, seed=8), perturb=NOISE, seed=8, fixed_ends=(True, True))
     req = request(comps, conns)
-    res = solve(req)
+    res = solve(req).result
     body = req.model_dump(mode="json", by_alias=True)
     for c, r in zip(body["components"], res.components):
         c["ports"] = [{"position": p.position, "direction": p.direction} for p in r.ports]
-    again = solve(AlignmentRequest.model_validate(body))
+    again = solve(AlignmentRequest.model_validate(body)).result
     assert again.iterations == 0 and again.converged
     assert all(c.displacement == 0.0 for c in again.components)
     assert [[p.position for p in c.ports] for c in again.components] == [[p.position for p in c.ports] for c in res.components]

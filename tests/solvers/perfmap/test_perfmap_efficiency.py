@@ -125,7 +125,7 @@ def _spline3_eta_request():
 
 
 def test_auto_chooses_efficiency_family_independently_by_loo():
-    res = solve(_spline3_eta_request())
+    res = solve(_spline3_eta_request()).result
     assert res.family == "parabola"  # pressure: exact for every family, fewest coefficients
     assert all(s.efficiency_family == "spline3" for s in res.settings)
     for s in res.settings:
@@ -137,7 +137,7 @@ def test_auto_chooses_efficiency_family_independently_by_loo():
     req = _spline3_eta_request()
     for choice, expected in (("same", "parabola"), ("cubic", "cubic")):
         opts = req.options.model_copy(update={"efficiency_model": choice})
-        forced = solve(req.model_copy(update={"options": opts}))
+        forced = solve(req.model_copy(update={"options": opts})).result
         assert {s.efficiency_family for s in forced.settings} == {expected}
         assert min(s.efficiency_max_abs_error for s in forced.settings) > 1e-3
 
@@ -166,7 +166,7 @@ def test_n3_efficiency_physical_and_close_to_measured(n3_request, n3_result):
 def test_n3_forced_paper_efficiency_is_bounded_and_flagged(n3_request):
     opts = n3_request.options.model_copy(update={
         "model": "spline2", "efficiency_model": "same", "grid": [32, 32], "t_samples": 65})
-    res = solve(n3_request.model_copy(update={"options": opts}))
+    res = solve(n3_request.model_copy(update={"options": opts})).result
     E = _all_eta_curves(res)
     assert E.min() >= 0.0 and E.max() <= 1.0
     assert np.nanmax(np.array(res.map.efficiency, dtype=float)) <= 1.0

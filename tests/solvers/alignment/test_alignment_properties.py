@@ -27,8 +27,8 @@ def test_rigid_motion_of_input_moves_result_the_same_way(method):
                        options={"method": method, "max_iterations": 300})
     R = Rotation.from_rotvec([0.3, -0.2, 0.5])
     t = np.array([1.0e6, -2.5e5, 3.0e4])
-    a = solve(req)
-    b = solve(_moved(req, R, t))
+    a = solve(req).result
+    b = solve(_moved(req, R, t)).result
     assert a.converged == b.converged
     for ca, cb in zip(a.components, b.components):
         pa = np.array([p.position for p in ca.ports])
@@ -43,7 +43,7 @@ def test_rigid_motion_tree_is_exact():
     req = grid_network(4, 1, valve_every=2, tie_ins=((0, 0),), seed=11)
     R = Rotation.from_rotvec([0.3, -0.2, 0.5])
     t = np.array([1.0e6, -2.5e5, 3.0e4])
-    a, b = solve(req), solve(_moved(req, R, t))
+    a, b = solve(req).result, solve(_moved(req, R, t)).result
     for ca, cb in zip(a.components, b.components):
         np.testing.assert_allclose(R.apply([p.position for p in ca.ports]) + t, [p.position for p in cb.ports], rtol=0, atol=1e-8)
 
@@ -60,8 +60,8 @@ def test_shuffled_components_and_connections_give_the_same_result(method, atol):
     conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
     body["connections"] = [{"from": c["to"], "to": c["from"]} if k % 2 else c for k, c in enumerate(conns)]
     shuffled = AlignmentRequest.model_validate(body)
-    a = {c.id: c for c in solve(req).components}
-    b = {c.id: c for c in solve(shuffled).components}
+    a = {c.id: c for c in solve(req).result.components}
+    b = {c.id: c for c in solve(shuffled).result.components}
     assert a.keys() == b.keys()
     for cid in a:
         np.testing.assert_allclose([p.position for p in a[cid].ports], [p.position for p in b[cid].ports], rtol=0, atol=atol)
@@ -71,7 +71,7 @@ def test_shuffled_components_and_connections_give_the_same_result(method, atol):
 def test_fixed_components_untouched_bit_for_bit(method):
     req = grid_network(3, 3, tie_ins=((0, 0), (2, 2)), valve_every=3, origin=(1e6, 2e5, 1e4), seed=8,
                        options={"method": method, "max_iterations": 200})
-    res = solve(req)
+    res = solve(req).result
     fixed = [c for c in req.components if c.fixed]
     assert len(fixed) == 2
     by_id = {c.id: c for c in res.components}
@@ -85,7 +85,7 @@ def test_fixed_components_untouched_bit_for_bit(method):
 
 def test_pipe_axes_move_less_than_fittings_on_scan_noise():
     req = grid_network(6, 6, valve_every=3, tie_ins=((0, 0),), seed=1)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged
     d = res.report.details
     assert d["pipe_axis_movement"]["mean"] < 0.75 * d["fitting_displacement"]["mean"]
@@ -93,7 +93,7 @@ def test_pipe_axes_move_less_than_fittings_on_scan_noise():
 
 def test_plant_scale_coordinates_close_bit_identically():
     req = grid_network(4, 3, valve_every=2, tie_ins=((0, 0),), origin=(1.2e6, 9.8e5, 3.0e4), seed=6)
-    res = solve(req)
+    res = solve(req).result
     assert res.converged and res.max_position_error == 0.0 and res.max_angle_error == 0.0
     assert res.report.details["closed_bit_identical"] == len(req.connections)
     # transforms reproduce the new ports from the old ones (rigid part of every fitting)

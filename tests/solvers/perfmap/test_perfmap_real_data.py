@@ -14,6 +14,7 @@ import numpy as np
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapResult
+from plantsolve.solvers.base import Solved
 from plantsolve.solvers.perfmap import query, render_artifacts
 from plantsolve.solvers.perfmap.families import log_eval, log_params_from_public
 
@@ -56,7 +57,7 @@ def test_n3_query_and_plots(n3_request, n3_result):
     a, b = query(n3_result, q).points
     assert a.feasible and 0.0 <= a.theta <= 5.0 and 0.5 <= a.phi <= 1.1 and a.efficiency > 0.8
     assert not b.feasible and b.distance_to_map > 0.1
-    arts = render_artifacts(n3_request, n3_result)
+    arts = render_artifacts(n3_request, Solved(n3_result))
     assert len(arts) == 8 and all(len(x.data) > 1000 for x in arts)  # 3 plots as PNG and SVG, curves.csv, map.csv
 
 
@@ -67,7 +68,7 @@ def test_n3_all_models_and_minimax(n3_request):
         for fit in ("least_squares", "minimax"):
             req = n3_request.model_copy(update={"options": n3_request.options.model_copy(
                 update={"model": model, "fit": fit, "grid": [16, 16], "t_samples": 33})})
-            res = solve(req)
+            res = solve(req).result
             assert res.family == model and res.fit == fit
             if fit == "minimax":
                 for s in res.settings:  # minimax never loses to the floor, and is >= it

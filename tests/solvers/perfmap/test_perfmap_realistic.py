@@ -1,7 +1,7 @@
 """Realistic inputs: CSV files as rig software and Excel write them, rig layouts and units
 other than the benchmark's, duty-point queries on the boundary, far away and in bulk.
 
-The real map is the N+3 fan map of pyCycle (Apache-2.0, see tests/perfmap/data/README.md).
+The real map is the N+3 fan map of pyCycle (Apache-2.0, see tests/solvers/perfmap/data/README.md).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap import parse_upload, query, solve
 from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor
@@ -66,7 +66,7 @@ def _variants(n3_csv: bytes) -> dict[str, bytes]:
                                      "comments_blank_trailing", "unsorted", "excel_sep_line",
                                      "cp1252_degree_sign", "quoted_excel", "percent_column"])
 def test_csv_dialects_parse_to_the_same_request(n3_csv, n3_request, variant):
-    req = parse_upload("rig.csv", _variants(n3_csv)[variant], None)
+    req = parse_upload(StoredInput.from_bytes("rig.csv", _variants(n3_csv)[variant]), None)
     got, ref = _key(req), _key(n3_request)
     assert len(got) == 18 and [g[:2] for g in got] == [r[:2] for r in ref]
     for g, r in zip(got, ref):
@@ -77,15 +77,15 @@ def test_extra_columns_ignored_with_a_warning_in_the_report(n3_csv):
     rows = _rows(n3_csv)[:22]  # theta 0, phi 0.5 .. 0.7: three settings
     text = "Speed [rpm],theta,phi,flow,pressure,efficiency,T_in [K]\n" + "\n".join(
         ",".join(["9000"] + r + ["288.15"]) for r in rows)
-    req = parse_upload("rig.csv", text.encode(), {"map": False})
-    res = solve(req)
+    req = parse_upload(StoredInput.from_bytes("rig.csv", text.encode()), {"map": False})
+    res = solve(req).result
     notes = [w for w in res.report.warnings if w.code == "upload_columns_ignored"]
     assert len(notes) == 1 and notes[0].details["columns"] == ["Speed [rpm]", "T_in [K]"]
 
 
 def _reject(content: bytes, options=None):
     with pytest.raises(InputRejected) as exc:
-        parse_upload("rig.csv", content, options)
+        parse_upload(StoredInput.from_bytes("rig.csv", content), options)
     return exc.value.errors
 
 
@@ -118,9 +118,9 @@ def test_semantic_rejections_point_at_file_rows(n3_csv):
     # the same flow twice with different readings: accepted, averaged and reported (see test_perfmap_choke)
     dup = list(rows[3])
     dup[3] = "1.2"
-    assert parse_upload("rig.csv", "\n".join(lines + [",".join(dup)]).encode(), None)
+    assert parse_upload(StoredInput.from_bytes("rig.csv", "\n".join(lines + [",".join(dup)]).encode()), None)
     # exact repeats are merged (with a warning, see test_perfmap_io)
-    req = parse_upload("rig.csv", "\n".join(lines + lines[1:4]).encode(), None)
+    req = parse_upload(StoredInput.from_bytes("rig.csv", "\n".join(lines + lines[1:4]).encode()), None)
     assert len(req.positions[0].flow) == 10 and _key(req)[0][2][0] == _key(req)[0][2][1]
     # a setting with a single row (a typo in phi) -> that row
     typo = list(rows[5])
@@ -189,7 +189,7 @@ def test_grid_rig_in_m3h_and_pa_matches_dense_truth():
     with null exactly where the truth is unreachable."""
     xs, ys = 1.2e4, 1.1e5
     res = solve(PerfmapRequest.model_validate(_body(_grid_layout(4, 7), xscale=xs, yscale=ys,
-                                                    options={"grid": [36, 30]})))
+                                                    options={"grid": [36, 30]}))).result
     assert _all_finite(res.model_dump())
     m = res.map
     te, tt, tp = true_map(np.array(m.flow) / xs, np.array(m.pressure) / ys, n_t=20001)
@@ -207,9 +207,9 @@ def test_units_do_not_change_the_answer():
     settings, flows and pressures scaled; floors and warnings identical."""
     layout = _grid_layout(3, 3)
     a = solve(PerfmapRequest.model_validate(_body(layout, surge=0.02,
-                                                  options={"grid": [20, 20]})))
+                                                  options={"grid": [20, 20]}))).result
     b = solve(PerfmapRequest.model_validate(_body(layout, surge=0.02, xscale=3.6e3,
-                                                  yscale=1e5, options={"grid": [20, 20]})))
+                                                  yscale=1e5, options={"grid": [20, 20]}))).result
     np.testing.assert_allclose(_arr(a.map.efficiency), _arr(b.map.efficiency),
                                atol=1e-9, equal_nan=True)
     np.testing.assert_allclose(np.array(b.map.flow), 3.6e3 * np.array(a.map.flow), rtol=1e-12)
@@ -231,7 +231,7 @@ def test_floor_is_invariant_to_units_and_large_values():
 def test_surge_rise_three_and_twenty_points_clustered_settings():
     # non-monotone (surge-side rise) characteristics: floor warning, not failure
     res = solve(PerfmapRequest.model_validate(_body(_grid_layout(3, 3), npts=8, surge=0.05,
-                                                    options={"grid": [24, 24]})))
+                                                    options={"grid": [24, 24]}))).result
     floors = [w for w in res.report.warnings if w.code == "data_not_decreasing_concave"]
     assert len(floors) == 9 and all(w.details["floor"] > 0.005 for w in floors)
     assert res.map is not None and 0.2 < res.map.reachable_fraction < 0.9
@@ -239,12 +239,12 @@ def test_surge_rise_three_and_twenty_points_clustered_settings():
     # the minimum: 3 points per setting; and 20 points per setting
     for npts in (3, 20):
         body = _body(_grid_layout(3, 3), npts=npts, options={"grid": [16, 16], "model": "auto"})
-        res = solve(PerfmapRequest.model_validate(body))
+        res = solve(PerfmapRequest.model_validate(body)).result
         assert res.map.reachable_fraction > 0.2 and _all_finite(res.model_dump())
     # clustered settings (a tight 3x3 cluster and one far setting): thin triangles
     layout = [(10 + 0.1 * i, 1 + 0.01 * j, 0.3 + 0.01 * i, 0.3 + 0.01 * j)
               for i in range(3) for j in range(3)] + [(40.0, 2.5, 0.9, 0.9)]
-    res = solve(PerfmapRequest.model_validate(_body(layout, options={"grid": [24, 24]})))
+    res = solve(PerfmapRequest.model_validate(_body(layout, options={"grid": [24, 24]}))).result
     assert res.map.reachable_fraction > 0.2 and _all_finite(res.model_dump())
 
 
