@@ -46,7 +46,7 @@ def run(beta: float, a: float | None, method: str, tolerance: float = 1e-3, reyn
     if field is not None:
         body["magnetic_field"] = field
     t0 = time.perf_counter()
-    result = solve(FlowmeterRequest.model_validate(body), no_progress)
+    result = solve(FlowmeterRequest.model_validate(body), no_progress).result
     return result, time.perf_counter() - t0
 
 
@@ -105,7 +105,7 @@ def run_button(r_e: float, l_e: float, method: str, tolerance: float = 1e-3):
     body = meter(radius=1.0, units="m", shape="button", button_radius=r_e, protrusion=l_e, liner_length=6.0,
                  method=method, tolerance=tolerance, velocity={"type": "uniform", "mean": 1.0})
     t0 = time.perf_counter()
-    result = solve(FlowmeterRequest.model_validate(body), no_progress)
+    result = solve(FlowmeterRequest.model_validate(body), no_progress).result
     return result, time.perf_counter() - t0
 
 
@@ -199,7 +199,7 @@ def grid_fields(quick: bool) -> None:
                          velocity={"type": "uniform", "mean": 1.0}, **extra)
             body["magnetic_field"] = field
             t0 = time.perf_counter()
-            r = solve(FlowmeterRequest.model_validate(body), no_progress)
+            r = solve(FlowmeterRequest.model_validate(body), no_progress).result
             cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {time.perf_counter() - t0:5.2f})")
         print(f"{label:<26} | " + " | ".join(f"{c:>28}" for c in cells))
 

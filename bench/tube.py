@@ -27,7 +27,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 import numpy as np  # noqa: E402
 
 from plantsolve.schemas.tube import TubeRequest  # noqa: E402
-from plantsolve.solvers.base import SolverError  # noqa: E402
+from plantsolve.solvers.base import SolverError, StoredInput  # noqa: E402
 from plantsolve.solvers.tube import parse_upload, solve  # noqa: E402
 from plantsolve.solvers.tube.artifacts import model_from_result  # noqa: E402
 from plantsolve.solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
@@ -86,7 +86,7 @@ def random_tubes(n_tubes: int, n_points: int, seed0: int = 1000):
         m, pts, sigma = make_case(seed0 + i, n_points)
         t0 = time.perf_counter()
         try:
-            r = solve(TubeRequest(points=pts.tolist()))
+            r = solve(TubeRequest(points=pts.tolist())).result
         except SolverError as exc:
             print(f"  tube {i:2d}: r={m.pipe_radius:6.2f} bends {m.n_bends} -> failed: {exc}", flush=True)
             rows.append(dict(ok=False, failed=True, time=time.perf_counter() - t0))
@@ -118,10 +118,9 @@ def single(path: str) -> dict:
     in this fresh process so that the peak RSS is the solver's, not the simulator's."""
     n_points = int(path.rsplit("_", 1)[1].split(".")[0])
     m, _, _ = make_case(77, 1000, n_bends=4, pipe_radius=10.0)  # same tube, few points: the truth
-    with open(path, "rb") as fh:
-        req = parse_upload("scan.npy", fh.read(), None)
+    req = parse_upload(StoredInput.from_path(path, "scan.npy"), None)
     t0 = time.perf_counter()
-    r = solve(req)
+    r = solve(req).result
     el = time.perf_counter() - t0
     da, dr, _, dc = compare(m, r)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -191,7 +190,7 @@ def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
                                                   "options": {"bend_radius_model": model}})
                 t0 = time.perf_counter()
                 try:
-                    res = solve(req)
+                    res = solve(req).result
                 except SolverError:
                     times.append(time.perf_counter() - t0)
                     continue

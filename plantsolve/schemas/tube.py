@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, PrivateAttr, Tag
+from pydantic import BaseModel, Discriminator, Field, Tag
 
 from plantsolve.schemas.common import FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel, Units, Vec3
 
@@ -131,10 +131,6 @@ class TubeRequest(StrictModel):
     )
     units: Units = "mm"
     options: TubeOptions = Field(default_factory=TubeOptions)
-
-    # The solver decodes ``points`` once per process and keeps the array here, so the checks,
-    # the solve and the artifacts share one decode. Not part of the contract.
-    _points_array: Any = PrivateAttr(default=None)
 
 
 class Segment(BaseModel):

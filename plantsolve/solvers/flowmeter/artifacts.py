@@ -3,21 +3,14 @@ the linearity curve (PNG), and W on a grid (CSV)."""
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
 from matplotlib.lines import Line2D
 from matplotlib.tri import Triangulation
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult
-from plantsolve.solvers.base import Artifact
-
-
-def png(fig: Figure, name: str) -> Artifact:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return Artifact(name=name, media_type="image/png", data=buf.getvalue())
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.plots import figure_artifact
 
 
 def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
@@ -111,13 +104,14 @@ def linearity_plot(result: FlowmeterResult) -> Figure:
     return fig
 
 
-def render_artifacts(request: FlowmeterRequest, result: FlowmeterResult) -> list[Artifact]:
+def render_artifacts(request: FlowmeterRequest, solved: Solved) -> list[Artifact]:
     """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
-    out = [png(weight_map(request, result), "weight_function.png")]
+    result = solved.result
+    out = [figure_artifact("weight_function.png", weight_map(request, result))]
     if result.electrode_current:
-        out.append(png(current_plot(request, result), "electrode_current.png"))
+        out.append(figure_artifact("electrode_current.png", current_plot(request, result)))
     if result.linearity:
-        out.append(png(linearity_plot(result), "linearity.png"))
+        out.append(figure_artifact("linearity.png", linearity_plot(result)))
     rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
     out.append(Artifact(name="weight_grid.csv", media_type="text/csv", data=("\n".join(rows) + "\n").encode()))
     return out

@@ -18,10 +18,10 @@ from matplotlib.tri import LinearTriInterpolator, Triangulation
 
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
-from plantsolve.solvers.base import Progress
+from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
-from plantsolve.solvers.flowmeter.validation import check_input, geometry
+from plantsolve.solvers.flowmeter.validation import geometry
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 GRID_SIZE = 41
@@ -362,8 +362,8 @@ def linearity(field: WeightField, reynolds: list[float]) -> list[LinearityPoint]
     return out
 
 
-def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
-    check_input(request)
+def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved:
+    """The job on a checked request (``check_input``)."""
     g = geometry(request)
     radius = request.pipe.radius
     progress(0.05, "virtual current")
@@ -393,7 +393,7 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
     current_map = [] if field.current_map is None else [
         [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
     progress(1.0, "done")
-    return FlowmeterResult(
+    return Solved(FlowmeterResult(
         sensitivity=s, sensitivity_first_order=first_order, signal=signal, probes=probes,
         linearity=linearity(field, list(request.reynolds)),
         ideal_meter_residual=ideal_meter_residual(field, field.integrate(lambda x, y: np.ones_like(x))),
@@ -405,4 +405,4 @@ def solve(request: FlowmeterRequest, progress: Progress) -> FlowmeterResult:
                       warnings=notes,
                       details={**field.details, "profile": profile, "mean_velocity": mean_velocity,
                                "scaling": "S depends only on beta, a/R and L/R: reuse this result for any R "
-                                          "with the geometry scaled"}))
+                                          "with the geometry scaled"})))

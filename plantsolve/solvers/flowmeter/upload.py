@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
-
-from pydantic import ValidationError
+from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import FieldError, InputRejected, json_object, reject, upload_extension
+from plantsolve.solvers.base import InputRejected, StoredInput, json_object, reject, validated
 
 UPLOAD_EXTENSIONS = (".json",)
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> FlowmeterRequest:
+def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
     """A JSON request file; ``options`` (the upload form's options) override the file's options."""
-    upload_extension(filename, UPLOAD_EXTENSIONS)
+    content = source.read()
     if not content.strip():
         raise reject("the file is empty")
     try:
@@ -24,9 +23,10 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> Flowmet
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:
-        return FlowmeterRequest.model_validate(body)
-    except ValidationError as e:
-        raise InputRejected([
-            FieldError(tuple(err["loc"]) if options and tuple(err["loc"])[:1] == ("options",) else ("file", *err["loc"]),
-                       err["msg"], err.get("type", "value_error"))
-            for err in e.errors()]) from None
+        return validated(FlowmeterRequest, body)
+    except InputRejected as exc:
+        if not options:
+            raise
+        # the form's options are merged over the file's: their errors name the form field, not the file
+        raise InputRejected([replace(e, loc=e.loc[1:]) if e.loc[1:2] == ("options",) else e
+                             for e in exc.errors]) from None

@@ -14,12 +14,12 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
-from plantsolve.solvers.base import Artifact
-
+from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.plots import figure_artifact
 from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
                                               sample_centreline, spine_distance, tube_mesh_arrays)
 from plantsolve.solvers.tube.lra import model_from_rows
-from plantsolve.solvers.tube.upload import request_points
+from plantsolve.solvers.tube.scan import TubeScan
 
 
 def model_from_result(result: TubeResult) -> TubeModel:
@@ -97,17 +97,18 @@ def _deviation_colours(dev: np.ndarray, lim: float, outlier: np.ndarray) -> np.n
     return col
 
 
-def _deviations(request: TubeRequest, result: TubeResult, model: TubeModel):
+def _deviations(scan: TubeScan, result: TubeResult, model: TubeModel):
     """Scan points, their signed distance from the fitted surface, the outlier mask and the colour limit
     (3 × the 95th percentile residual)."""
-    pts = request_points(request)
+    pts = scan.points
     d, _ = spine_distance(pts, build_spine(model))
     outlier = np.zeros(len(pts), bool)
     outlier[np.asarray(result.outliers.indices, int)] = True
     return pts, d - model.pipe_radius, outlier, max(3 * result.residuals.p95, 1e-12)
 
 
-def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]:
+def render_artifacts(scan: TubeScan, solved: Solved) -> list[Artifact]:
+    result = solved.result
     model = model_from_result(result)
     out: list[Artifact] = []
     verts, faces = tube_mesh_arrays(model)
@@ -115,17 +116,15 @@ def render_artifacts(request: TubeRequest, result: TubeResult) -> list[Artifact]
     out.append(Artifact("tube.stl", "model/stl", mesh.export(file_type="stl")))
     out.append(Artifact("tube.glb", "model/gltf-binary", mesh.export(file_type="glb")))
 
-    pts, dev, outlier, lim = _deviations(request, result, model)
+    pts, dev, outlier, lim = _deviations(scan, result, model)
     cloud = trimesh.PointCloud(pts, colors=_deviation_colours(dev, lim, outlier))
     out.append(Artifact("deviation.ply", "application/x-ply", cloud.export(file_type="ply")))
     out.append(Artifact("lra.csv", "text/csv", lra_csv(result)))
     out.append(Artifact("xyz_clr.csv", "text/csv", xyz_clr_csv(result, model)))
     out.append(Artifact("centreline.dxf", "image/vnd.dxf", centreline_dxf(model, result.units)))
 
-    for name, fig in figures(request, result, pts=pts, dev=dev, outlier=outlier, lim=lim).items():
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
-        out.append(Artifact(f"{name}.png", "image/png", buf.getvalue()))
+    for name, fig in figures(scan, result, pts=pts, dev=dev, outlier=outlier, lim=lim).items():
+        out.append(figure_artifact(f"{name}.png", fig))
     return out
 
 
@@ -233,14 +232,14 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
     return fig
 
 
-def figures(request: TubeRequest, result: TubeResult, pts: np.ndarray | None = None, dev: np.ndarray | None = None,
+def figures(scan: TubeScan, result: TubeResult, pts: np.ndarray | None = None, dev: np.ndarray | None = None,
             outlier: np.ndarray | None = None, lim: float | None = None) -> dict[str, Figure]:
     """Every plot by artifact stem: ``overview`` and, with a nominal LRA, ``inspection``."""
     model = model_from_result(result)
     if pts is None:
-        pts, dev, outlier, lim = _deviations(request, result, model)
+        pts, dev, outlier, lim = _deviations(scan, result, model)
     out = {"overview": overview_figure(result, model, pts, dev, outlier, lim)}
-    fig = inspection_figure(request, result)
+    fig = inspection_figure(scan.request, result)
     if fig is not None:
         out["inspection"] = fig
     return out

@@ -17,14 +17,13 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segment, SegmentQuality, TubeOptions,
                                      TubeRequest, TubeResult)
-from plantsolve.solvers.base import Progress, SolverError, no_progress
+from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
 from plantsolve.solvers.tube.geometry import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
 from plantsolve.solvers.tube.inspection import inspect
 from plantsolve.solvers.tube.lra import model_rows
-from plantsolve.solvers.tube.upload import request_points
-from plantsolve.solvers.tube.validation import check_input
+from plantsolve.solvers.tube.scan import TubeScan
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
@@ -439,13 +438,16 @@ def residual_summary(ls: LeastSquaresFit) -> tuple[Residuals, list[SegmentQualit
     return residuals, quality
 
 
-def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
+def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Solved:
+    """The reconstruction of a checked scan (``check_input``); a plain request is wrapped, for library use."""
+    if isinstance(scan, TubeRequest):
+        scan = TubeScan(scan)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     warnings: list[Diagnostic] = []
+    request = scan.request
     opts = request.options
-    check_input(request)
-    pts_in = request_points(request)
+    pts_in = scan.points
     rng = np.random.default_rng(opts.seed)
     # canonical order: the result must not depend on the order of the input samples
     order = np.lexsort(pts_in.T[::-1])
@@ -511,7 +513,7 @@ def solve(request: TubeRequest, progress: Progress = no_progress) -> TubeResult:
     if opts.nominal:
         result.inspection = inspect(ls.model, opts.nominal, opts.damping)
     progress(1.0, "done")
-    return result
+    return Solved(result)
 
 
 def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:

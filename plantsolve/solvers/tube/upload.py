@@ -1,18 +1,17 @@
-"""Reading samples: request ``points`` (JSON list or base64 NPY) and uploaded files."""
+"""Uploaded scan files read into a request; large point sets travel in it as base64 NPY (decoded by ``scan``)."""
 
 from __future__ import annotations
 
 import base64
-import binascii
 import io
 import json
 import re
+from dataclasses import replace
 
 import numpy as np
-from pydantic import ValidationError
 
-from plantsolve.schemas.tube import MAX_POINTS, NpyPoints, TubeRequest
-from plantsolve.solvers.base import FieldError, InputRejected, reject
+from plantsolve.schemas.tube import TubeRequest
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, reject, validated
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
 TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
@@ -20,61 +19,6 @@ TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 MESH_MIN_VERTICES = 2000
 MESH_SAMPLES = 20_000
 INLINE_LIST_MAX = 20_000  # larger uploads travel inside the request as base64 NPY
-
-
-class _DecodedPoints:
-    """The decoded array of one ``points`` value, kept on the request. It remembers the value it
-    came from (a request copied with other points, or given new ones, decodes again) and is
-    invisible to equality: two requests with the same points compare equal, decoded or not."""
-
-    __slots__ = ("source", "array")
-
-    def __init__(self, source: object, array: np.ndarray):
-        self.source, self.array = source, array
-
-    def __eq__(self, other: object) -> bool:
-        return True
-
-    __hash__ = None  # type: ignore[assignment]
-
-
-def request_points(request: TubeRequest) -> np.ndarray:
-    """The samples of a request as an (N, 3) float64 array, decoded once per request object
-    (checks, solve and artifacts share it; read-only so that no stage edits another's input).
-    A bad NPY payload raises ValueError with the reason."""
-    cached = request._points_array
-    if isinstance(cached, _DecodedPoints) and cached.source is request.points:
-        return cached.array
-    if isinstance(request.points, NpyPoints):
-        array = decode_npy_points(request.points.npy_base64)
-    else:
-        array = np.asarray(request.points, dtype=np.float64).reshape(-1, 3)
-    array.setflags(write=False)
-    request._points_array = _DecodedPoints(request.points, array)
-    return array
-
-
-def decode_npy_points(value: str) -> np.ndarray:
-    """Decode a base64 NPY string into an (N, 3) float64 array; ValueError with a reason."""
-    try:
-        raw = base64.b64decode(value, validate=False)
-    except (binascii.Error, ValueError) as exc:
-        raise ValueError(f"not valid base64: {exc}") from None
-    try:
-        arr = np.load(io.BytesIO(raw), allow_pickle=False)
-    except Exception as exc:  # numpy raises several types for corrupt headers
-        raise ValueError(f"not a readable NPY array: {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"NPY array must have shape (N, 3), got {arr.shape}")
-    if not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"NPY array must be numeric, got dtype {arr.dtype}")
-    if arr.shape[0] > MAX_POINTS:
-        raise ValueError(f"at most {MAX_POINTS} points are accepted, got {arr.shape[0]}")
-    arr = np.asarray(arr, dtype=np.float64)
-    if not np.isfinite(arr).all():
-        bad = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise ValueError(f"NPY array holds non-finite values (first at row {bad})")
-    return arr
 
 
 def points_field(pts: np.ndarray):
@@ -109,10 +53,6 @@ def _read_mesh(content: bytes, file_type: str) -> np.ndarray:
     return np.vstack(verts).astype(np.float64)
 
 
-def _read_ply(content: bytes) -> np.ndarray:
-    return _read_mesh(content, "ply")
-
-
 def _read_las(content: bytes) -> np.ndarray:
     """LAS/LAZ point clouds (laspy; LAZ needs a LAZ backend such as lazrs): scaled x, y, z."""
     import laspy
@@ -124,17 +64,14 @@ def _read_las(content: bytes) -> np.ndarray:
     return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
 
 
-def _read_e57(content: bytes) -> np.ndarray:
-    """E57 scans (pye57): every scan's cartesian points, each in world coordinates (its pose applied)."""
-    import tempfile
-
+def _read_e57(source: StoredInput) -> np.ndarray:
+    """E57 scans (pye57, which reads files on disk only): every scan's cartesian points, each in world
+    coordinates (its pose applied)."""
     import pye57
 
-    with tempfile.NamedTemporaryFile(suffix=".e57") as handle:
-        handle.write(content)
-        handle.flush()
+    with source.as_file() as path:
         try:
-            e57 = pye57.E57(handle.name)
+            e57 = pye57.E57(str(path))
             scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
         except Exception as exc:  # libE57 raises its own errors on corrupt files
             raise reject(f"unreadable E57 file: {exc}") from None
@@ -183,12 +120,24 @@ def _read_npy(content: bytes) -> np.ndarray:
     return np.asarray(arr[:, :3], dtype=np.float64)
 
 
-def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeRequest:
+def _read_points(source: StoredInput) -> np.ndarray:
+    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``)."""
+    ext = source.extension
+    if ext == ".e57":
+        return _read_e57(source)
+    content = source.read()
+    if ext in (".ply", ".stl", ".obj"):
+        return _read_mesh(content, ext[1:])
+    if ext in (".las", ".laz"):
+        return _read_las(content)
+    if ext == ".npy":
+        return _read_npy(content)
+    return _read_text(content)  # .xyz, .csv, .txt
+
+
+def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
     """Uploaded scan → :class:`TubeRequest` (format from the extension, case-insensitive)."""
-    name = (filename or "").lower()
-    ext = next((e for e in UPLOAD_EXTENSIONS if name.endswith(e)), None)
-    if ext is None:
-        raise reject(f"unsupported file type {filename!r}; accepted: {', '.join(UPLOAD_EXTENSIONS)}")
+    ext = source.extension
     units = None
     opts = dict(options or {})
     if "units" in opts:  # tolerate units passed among the options
@@ -199,7 +148,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
                                         f"{', '.join(TO_MM)}")])
     if ext == ".json":
         try:
-            doc = json.loads(content.decode("utf-8-sig"))
+            doc = json.loads(source.read().decode("utf-8-sig"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise reject(f"invalid JSON: {exc}") from None
         if isinstance(doc, list):
@@ -211,10 +160,7 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
         if units:
             body["units"] = units
     else:
-        reader = {".ply": _read_ply, ".npy": _read_npy, ".stl": lambda c: _read_mesh(c, "stl"),
-                  ".obj": lambda c: _read_mesh(c, "obj"), ".las": _read_las, ".laz": _read_las,
-                  ".e57": _read_e57}.get(ext, _read_text)
-        pts = reader(content)
+        pts = _read_points(source)
         # the file's length unit: declared (options.file_units), E57's metres by its standard, else the request's
         declared = file_units or ("m" if ext == ".e57" else None)
         if declared is not None:
@@ -231,8 +177,10 @@ def parse_upload(filename: str, content: bytes, options: dict | None) -> TubeReq
         if units:
             body["units"] = units
     try:
-        return TubeRequest.model_validate(body)
-    except ValidationError as exc:
-        errs = [FieldError(loc=("file",) + tuple(e["loc"]) if ext == ".json" and e["loc"][:1] == ("points",)
-                           else tuple(e["loc"]), msg=e["msg"]) for e in exc.errors()]
-        raise InputRejected(errs) from None
+        return validated(TubeRequest, body, ())
+    except InputRejected as exc:
+        if ext != ".json":
+            raise
+        # the points of a JSON file are the file's; its options are merged with the form's, so they keep their own path
+        raise InputRejected([replace(e, loc=("file", *e.loc)) if e.loc[:1] == ("points",) else e
+                             for e in exc.errors]) from None

@@ -1,12 +1,11 @@
-"""Semantic input checks (fast; run at submission and again by ``solve``)."""
+"""Semantic input checks (fast; the job domain runs them once, at submission)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import FieldError, InputRejected
-from plantsolve.solvers.tube.upload import request_points
+from plantsolve.solvers.tube.scan import TubeScan
 
 MIN_POINTS = 100
 MAX_COORDINATE = 1e12
@@ -38,16 +37,16 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
         raise InputRejected([FieldError(loc=loc, msg=f"fewer than {MIN_POINTS} distinct points")])
 
 
-def check_input(request: TubeRequest) -> None:
-    """Cross-field checks of a :class:`TubeRequest`; raises InputRejected naming the field."""
+def check_input(scan: TubeScan) -> None:
+    """Cross-field checks of a scan's request; raises InputRejected naming the field."""
     errors: list[FieldError] = []
     try:
-        check_points(request_points(request), ("points",))
+        check_points(scan.points, ("points",))
     except InputRejected as exc:
         errors.extend(exc.errors)
     except ValueError as exc:
         errors.append(FieldError(loc=("points",), msg=str(exc)))
-    o = request.options
+    o = scan.request.options
     if o.pipe_radius and o.bend_radius and o.bend_radius < o.pipe_radius:
         errors.append(FieldError(loc=("options", "bend_radius"),
                                  msg="bend radius must be at least the pipe radius"))

@@ -14,7 +14,6 @@ import pytest
 from tests.conftest import REPO, run_plantsolve, wait_for
 
 EXAMPLES = REPO / "examples" / "tube"
-pytest.importorskip("plantsolve.solvers.tube")
 
 NOMINAL_ANGLES = [90.0, 45.0, 30.0]  # the example's nominal bends (see examples/tube/README.md)
 
@@ -85,6 +84,12 @@ def test_bad_scans_are_422(client):
     assert nan.status_code == 422 and nan.json()["errors"][0]["loc"][0] == "points"
     line = [[float(i), 0.0, 0.0] for i in range(500)]  # all points on a line: no surface to fit
     assert client.post("/v1/tube/jobs", json={"points": line}).status_code == 422
+
+
+def test_unsupported_file_types_are_refused_at_intake(client):
+    """The parser reads only what intake let through: the extension is checked there, once."""
+    dwg = client.post("/v1/tube/jobs", files={"file": ("scan.dwg", b"AC1032", "application/octet-stream")})
+    assert dwg.status_code == 415 and ".ply" in dwg.json()["detail"]
 
 
 def test_cli_reads_the_xyz_scan(tmp_path):

@@ -20,7 +20,7 @@ def run(rows, n=4000, seed=2, noise=0.012, **options):
     truth = make_model(rows, RP)
     pts = surface_samples(truth, n, np.random.default_rng(seed), view=VIEW, noise=noise * RP,
                           outlier_fraction=0.005)
-    res = solve(TubeRequest.model_validate({"points": pts.tolist(), "options": options}))
+    res = solve(TubeRequest.model_validate({"points": pts.tolist(), "options": options})).result
     got = model_from_result(res)
     if got.n_bends == truth.n_bends and np.abs(got.angles - reverse_model(truth).angles).sum() < np.abs(
             got.angles - truth.angles).sum():

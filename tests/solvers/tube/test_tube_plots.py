@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube import TubeScan, solve
 from plantsolve.solvers.tube.artifacts import figures, render_artifacts
 from tests.support.plots import check_figure
 
@@ -17,13 +17,14 @@ NOMINAL = [[40, 0, 61, 12], [20, 180, 61.5, 12], [30, 0, 0, 0]]
 def inspected(tk_module):
     tk = tk_module
     _, pts = tk.scan(tk.SHAPES["s_bend"], n=3000, seed=8, view=[0.2, 0.1, -1.0], noise=0.04)
-    req = tk.request(pts, nominal=[dict(length=a, rotation=b, angle=c, bend_radius=d) for a, b, c, d in NOMINAL])
-    return req, solve(req)
+    scan = TubeScan(tk.request(pts, nominal=[dict(length=a, rotation=b, angle=c, bend_radius=d) for a, b, c, d in NOMINAL]))
+    return scan, solve(scan)
 
 
 def test_overview_axes_have_units_and_the_table_its_own_panel(inspected):
-    req, res = inspected
-    fig = figures(req, res)["overview"]
+    scan, solved = inspected
+    res = solved.result
+    fig = figures(scan, res)["overview"]
     check_figure(fig)
     ax3d = fig.axes[0]
     assert [ax3d.get_xlabel(), ax3d.get_ylabel(), ax3d.get_zlabel()] == ["x [mm]", "y [mm]", "z [mm]"]
@@ -34,8 +35,9 @@ def test_overview_axes_have_units_and_the_table_its_own_panel(inspected):
 
 
 def test_inspection_plot_shows_the_deviation_along_the_tube(inspected):
-    req, res = inspected
-    figs = figures(req, res)
+    scan, solved = inspected
+    res = solved.result
+    figs = figures(scan, res)
     assert set(figs) == {"overview", "inspection"}
     fig = figs["inspection"]
     check_figure(fig)
@@ -47,11 +49,11 @@ def test_inspection_plot_shows_the_deviation_along_the_tube(inspected):
     assert np.max(d) == pytest.approx(res.inspection.sheath_deviation, rel=0.05, abs=0.02)
     assert len(bars.patches) == 2 * len(res.inspection.bends)
     assert [p.get_height() for p in bars.patches[:2]] == pytest.approx([b.angle for b in res.inspection.bends])
-    assert "inspection.png" in [a.name for a in render_artifacts(req, res)]
+    assert "inspection.png" in [a.name for a in render_artifacts(scan, solved)]
 
 
 def test_no_inspection_no_inspection_plot(tk_module):
     tk = tk_module
     _, pts = tk.scan(tk.SHAPES["s_bend"], n=1500, seed=3, noise=0.02)
-    req = tk.request(pts)
-    assert set(figures(req, solve(req))) == {"overview"}
+    scan = TubeScan(tk.request(pts))
+    assert set(figures(scan, solve(scan).result)) == {"overview"}

@@ -9,7 +9,7 @@ import pytest
 from pydantic import ValidationError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.flowmeter import check_input, parse_upload
 from plantsolve.solvers.flowmeter.synthetic import example, meter
 from tests.conftest import REPO, run_plantsolve, wait_for
@@ -50,10 +50,10 @@ def test_semantic_errors_name_the_field(body, loc):
 
 
 def test_a_json_upload_is_the_request_and_garbage_names_the_file():
-    request = parse_upload("meter.json", json.dumps(example()).encode(), None)
+    request = parse_upload(StoredInput.from_bytes("meter.json", json.dumps(example()).encode()), None)
     assert request == FlowmeterRequest.model_validate(example())
     with pytest.raises(InputRejected) as error:
-        parse_upload("meter.json", b'{"pipe": {"radius": "wide"}}', None)
+        parse_upload(StoredInput.from_bytes("meter.json", b'{"pipe": {"radius": "wide"}}'), None)
     assert error.value.errors[0].loc[:3] == ("file", "pipe", "radius")
 
 

@@ -11,10 +11,9 @@ import trimesh
 from pydantic import ValidationError
 
 from plantsolve.schemas.tube import TubeRequest
-from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.tube import SPEC, __version__, check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.tube import SPEC, TubeScan, __version__, check_input, parse_upload, render_artifacts, solve
 from plantsolve.solvers.tube.geometry import build_spine, model_from_control_polygon, spine_distance
-from plantsolve.solvers.tube.upload import request_points
 
 
 @pytest.fixture(scope="module")
@@ -35,6 +34,7 @@ def test_public_contract():
     assert SPEC.upload_extensions == (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy",
                                       ".json")
     assert SPEC.soft_time_limit < SPEC.time_limit and isinstance(__version__, str)
+    assert isinstance(SPEC.input_of(TubeRequest(points=[[0.0, 0.0, 0.0]] * 3)), TubeScan)
 
 
 @pytest.mark.parametrize("fmt", ["ply_ascii", "ply_binary", "xyz", "csv", "txt", "npy", "json_request", "json_list"])
@@ -59,8 +59,8 @@ def test_parse_upload_formats(cloud, fmt):
         data, name = json.dumps({"points": pts.tolist(), "units": "in"}).encode(), "req.json"
     else:
         data, name = json.dumps(pts.tolist()).encode(), "pts.json"
-    req = parse_upload(name, data, opts)
-    got = request_points(req)
+    req = parse_upload(StoredInput.from_bytes(name, data), opts)
+    got = TubeScan(req).points
     tol = 1e-5 if fmt.startswith("ply") else 1e-12  # PLY export stores float32
     np.testing.assert_allclose(got, pts, rtol=tol, atol=tol)
     assert req.options.tolerance == 0.3
@@ -70,9 +70,9 @@ def test_parse_upload_formats(cloud, fmt):
 
 def test_large_upload_travels_as_npy_base64():
     pts = np.random.default_rng(0).normal(size=(30_000, 3))
-    req = parse_upload("big.npy", _npy_bytes(pts), None)
+    req = parse_upload(StoredInput.from_bytes("big.npy", _npy_bytes(pts)), None)
     assert not isinstance(req.points, list)
-    np.testing.assert_array_equal(request_points(req), pts)
+    np.testing.assert_array_equal(TubeScan(req).points, pts)
 
 
 @pytest.mark.parametrize("name,data,needle", [
@@ -83,12 +83,11 @@ def test_large_upload_travels_as_npy_base64():
     ("scan.npy", b"not an npy", "NPY"),
     ("scan.json", b"{not json", "JSON"),
     ("scan.stl", b"solid x", "no vertices"),
-    ("scan.dwg", b"AC1032", "unsupported"),
     ("scan.txt", b"\xff\xfe\x00", "UTF-8"),
 ])
 def test_unreadable_files_are_rejected_with_reason(name, data, needle):
     with pytest.raises(InputRejected) as exc:
-        parse_upload(name, data, None)
+        parse_upload(StoredInput.from_bytes(name, data), None)
     assert exc.value.errors[0].loc[0] == "file"
     assert needle.lower() in exc.value.errors[0].msg.lower()
 
@@ -98,7 +97,7 @@ def test_bad_points_rejected():
     plane = np.random.default_rng(0).uniform(size=(200, 3)) * [1, 1, 0]
     for pts, needle in [(line, "line"), (plane, "coplanar"), (np.ones((50, 3)), "at least")]:
         with pytest.raises(InputRejected) as exc:
-            check_input(TubeRequest(points=pts.tolist()))
+            check_input(TubeScan(TubeRequest(points=pts.tolist())))
         assert exc.value.errors[0].loc[0] == "points" and needle in exc.value.errors[0].msg
     with pytest.raises(ValidationError):
         TubeRequest(points=[[0, 0, float("nan")]] * 200)
@@ -109,7 +108,7 @@ def test_bad_points_rejected():
     bad = np.ones((200, 3)); bad[5, 1] = np.nan
     for payload, needle in [(_npy_bytes(bad), "non-finite"), (b"garbage", "NPY")]:
         with pytest.raises(InputRejected) as exc:
-            check_input(TubeRequest(points={"npy_base64": base64.b64encode(payload).decode()}))
+            check_input(TubeScan(TubeRequest(points={"npy_base64": base64.b64encode(payload).decode()})))
         assert exc.value.errors[0].loc == ("points",) and needle in exc.value.errors[0].msg
     with pytest.raises(ValidationError):
         TubeRequest(points=[[0, 0, 0]] * 200, options={"unknown": 1})
@@ -121,24 +120,23 @@ def test_check_input_nominal_and_radius_fields(cloud):
         "pipe_radius": 4.0, "bend_radius": 2.0,
         "nominal": [{"length": 10, "rotation": 5, "angle": 0, "bend_radius": 0}, {"length": 5, "angle": 30}]})
     with pytest.raises(InputRejected) as exc:
-        check_input(req)
+        check_input(TubeScan(req))
     locs = {e.loc for e in exc.value.errors}
     assert ("options", "bend_radius") in locs
     assert ("options", "nominal", 0, "rotation") in locs
     assert ("options", "nominal", 0, "angle") in locs
     assert ("options", "nominal", 1, "angle") in locs
-    with pytest.raises(InputRejected):
-        solve(req)  # the library checks on its own too
 
 
 def test_artifacts(cloud):
     m, pts = cloud
-    req = TubeRequest(points=pts.tolist())
-    before = req.model_dump()
-    res = solve(req)
+    scan = TubeScan(TubeRequest(points=pts.tolist()))
+    before = scan.request.model_dump()
+    solved = solve(scan)
+    res = solved.result
     res_before = res.model_dump()
-    arts = render_artifacts(req, res)
-    assert req.model_dump() == before and res.model_dump() == res_before
+    arts = render_artifacts(scan, solved)
+    assert scan.request.model_dump() == before and res.model_dump() == res_before
     by = {a.name: a for a in arts}
     assert set(by) == {"tube.stl", "tube.glb", "deviation.ply", "lra.csv", "xyz_clr.csv", "centreline.dxf",
                        "overview.png"}
@@ -178,14 +176,16 @@ def test_progress_is_reported_and_cancellation_propagates(cloud):
     assert seen == sorted(seen) and len(seen) >= 4
 
 
-def test_points_are_decoded_once_and_never_stale(cloud):
+def test_points_are_decoded_once_per_scan(cloud):
     _, pts = cloud
     npy = {"npy_base64": base64.b64encode(_npy_bytes(pts)).decode()}
     req = TubeRequest(points=npy)
-    first = request_points(req)
-    assert request_points(req) is first and not first.flags.writeable  # one decode per request
-    assert req == TubeRequest(points=npy)  # the cache does not take part in equality
+    scan = TubeScan(req)
+    first = scan.points
+    assert scan.points is first and not first.flags.writeable  # one decode per scan, shared read-only
+    np.testing.assert_array_equal(first, pts)
+    assert req == TubeRequest(points=npy)  # the request holds no decoded state
     moved = req.model_copy(update={"points": (pts + 1.0).tolist()})
-    np.testing.assert_array_equal(request_points(moved), pts + 1.0)  # a copy with new points decodes again
+    np.testing.assert_array_equal(TubeScan(moved).points, pts + 1.0)  # a scan of other points decodes them
     req.points = [[0.0, 0.0, 0.0]] * 3
-    assert request_points(req).shape == (3, 3)
+    assert TubeScan(req).points.shape == (3, 3)

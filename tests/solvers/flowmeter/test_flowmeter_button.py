@@ -22,7 +22,7 @@ def run(button_radius, protrusion=0.0, **kwargs):
                  protrusion=protrusion, **kwargs)
     request = FlowmeterRequest.model_validate(body)
     check_input(request)
-    return solve(request, no_progress)
+    return solve(request, no_progress).result
 
 
 def test_small_flush_buttons_tend_to_the_point_electrode_S_1():
@@ -64,7 +64,7 @@ def test_a_button_lies_between_point_electrodes_and_the_patch_around_it():
     button = solve_button(r_e, 0.0, 3.0, h=0.12).sensitivity
     body = meter(radius=1.0, units="m", half_angle=float(np.degrees(np.arcsin(r_e))), half_length=r_e, liner_length=6.0,
                  velocity={"type": "uniform", "mean": 1.0})
-    patch = solve(FlowmeterRequest.model_validate(body), no_progress)
+    patch = solve(FlowmeterRequest.model_validate(body), no_progress).result
     assert patch.method == "integral_equation"
     # the patch |theta| <= asin(r_e), |z| <= r_e contains the disc: more edge, lower S
     assert patch.sensitivity + 1e-3 < button < 1.0
@@ -86,10 +86,10 @@ def test_a_protruding_button_reaches_into_the_flow_and_makes_the_profile_matter(
 def test_button_scaling_R_1_and_R_500():
     small = solve(FlowmeterRequest.model_validate(meter(radius=1.0, units="m", shape="button", button_radius=0.15,
                                                         protrusion=0.03, liner_length=6.0, method="fem", tolerance=0.01)),
-                  no_progress)
+                  no_progress).result
     large = solve(FlowmeterRequest.model_validate(meter(radius=500.0, units="mm", shape="button", button_radius=75.0,
                                                         protrusion=15.0, liner_length=3000.0, method="fem",
-                                                        tolerance=0.01)), no_progress)
+                                                        tolerance=0.01)), no_progress).result
     assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-9)
 
 
@@ -147,9 +147,9 @@ def test_integral_equation_and_finite_elements_agree_for_flush_buttons(r_e):
 
 def test_flush_button_scaling_by_the_integral_equation():
     small = solve(FlowmeterRequest.model_validate(meter(radius=1.0, units="m", shape="button", button_radius=0.15,
-                                                        liner_length=6.0)), no_progress)
+                                                        liner_length=6.0)), no_progress).result
     large = solve(FlowmeterRequest.model_validate(meter(radius=500.0, units="mm", shape="button", button_radius=75.0,
-                                                        liner_length=3000.0)), no_progress)
+                                                        liner_length=3000.0)), no_progress).result
     assert small.method == large.method == "integral_equation"
     assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-12)
 

@@ -11,10 +11,10 @@ import pytest
 import trimesh
 
 from plantsolve.schemas.tube import TubeRequest
-from plantsolve.solvers.tube import parse_upload, render_artifacts, solve
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.tube import TubeScan, parse_upload, render_artifacts, solve
 from plantsolve.solvers.tube.geometry import tube_mesh_arrays
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
-from plantsolve.solvers.tube.upload import request_points
 
 ROWS = [(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, 0, 0, 0)]
 
@@ -28,17 +28,17 @@ def test_meshes_give_their_vertices_or_samples_on_their_faces(file_type):
     verts, faces = tube_mesh_arrays(make_model(ROWS, 4.0))
     data = trimesh.Trimesh(verts, faces, process=False).export(file_type=file_type)
     data = data.encode() if isinstance(data, str) else data
-    req = parse_upload(f"scan.{file_type.upper()}", data, {"pipe_radius": 4.0})
-    pts = request_points(req)
+    req = parse_upload(StoredInput.from_bytes(f"scan.{file_type.upper()}", data), {"pipe_radius": 4.0})
+    pts = TubeScan(req).points
     if len(verts) >= 2000:  # a dense scan mesh: its vertices (STL repeats them per triangle)
         assert len(np.unique(pts.round(4), axis=0)) == len(np.unique(verts.round(4), axis=0))
     # every point lies on the tube surface
-    res = solve(req)
+    res = solve(req).result
     assert len(res.lra) == 3 and res.residuals.max < 0.05
     coarse = trimesh.creation.cylinder(radius=4.0, height=80.0, sections=16)
     data = coarse.export(file_type=file_type)
     data = data.encode() if isinstance(data, str) else data
-    pts = request_points(parse_upload(f"c.{file_type}", data, None))
+    pts = TubeScan(parse_upload(StoredInput.from_bytes(f"c.{file_type}", data), None)).points
     assert len(pts) == 20_000  # a coarse tessellation is sampled on its faces
     r = np.hypot(pts[:, 0], pts[:, 1])
     assert r.max() <= 4.0 + 1e-9
@@ -55,10 +55,10 @@ def test_las_point_cloud_with_declared_units():
     las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
     buf = io.BytesIO()
     las.write(buf)
-    req = parse_upload("scan.las", buf.getvalue(), {"file_units": "m", "pipe_radius": 4.0})
-    assert np.allclose(request_points(req), pts * 1000.0, atol=2e-3)
+    req = parse_upload(StoredInput.from_bytes("scan.las", buf.getvalue()), {"file_units": "m", "pipe_radius": 4.0})
+    assert np.allclose(TubeScan(req).points, pts * 1000.0, atol=2e-3)
     with pytest.raises(Exception) as e:
-        parse_upload("scan.las", buf.getvalue(), {"file_units": "furlong"})
+        parse_upload(StoredInput.from_bytes("scan.las", buf.getvalue()), {"file_units": "furlong"})
     assert "file_units" in str(e.value)
 
 
@@ -71,16 +71,17 @@ def test_e57_scan_in_metres_by_its_standard():
         writer.write_scan_raw({"cartesianX": pts[:, 0], "cartesianY": pts[:, 1], "cartesianZ": pts[:, 2]})
         writer.close()
         data = open(handle.name, "rb").read()
-    req = parse_upload("scan.e57", data, {"pipe_radius": 4.0})  # request units default mm
-    assert np.allclose(request_points(req), pts * 1000.0, atol=1e-6)
+    req = parse_upload(StoredInput.from_bytes("scan.e57", data), {"pipe_radius": 4.0})  # request units default mm
+    assert np.allclose(TubeScan(req).points, pts * 1000.0, atol=1e-6)
 
 
 def test_dxf_centreline_reads_back_as_the_segments():
     import ezdxf
 
-    req = TubeRequest.model_validate({"points": cloud().tolist(), "options": {"pipe_radius": 4.0}})
-    res = solve(req)
-    dxf = next(a for a in render_artifacts(req, res) if a.name == "centreline.dxf")
+    scan = TubeScan(TubeRequest.model_validate({"points": cloud().tolist(), "options": {"pipe_radius": 4.0}}))
+    solved = solve(scan)
+    res = solved.result
+    dxf = next(a for a in render_artifacts(scan, solved) if a.name == "centreline.dxf")
     doc = ezdxf.read(io.StringIO(dxf.data.decode()))
     assert doc.units == 4  # millimetres
     msp = doc.modelspace()

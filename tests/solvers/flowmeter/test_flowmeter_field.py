@@ -19,7 +19,7 @@ B0 = 0.01
 def run(field, **kwargs):
     body = meter(radius=RADIUS, liner_length=LINER, velocity={"type": "uniform", "mean": 1.0}, **kwargs)
     body["magnetic_field"] = field
-    return solve(FlowmeterRequest.model_validate(body), no_progress)
+    return solve(FlowmeterRequest.model_validate(body), no_progress).result
 
 
 def tilted_x(x, y, z):

@@ -16,7 +16,7 @@ RP = 4.0
 def fit(rows, seed=1, n=6000, **options):
     pts = surface_samples(make_model(rows, RP), n, np.random.default_rng(seed), noise=0.012 * RP,
                           outlier_fraction=0.005)
-    return solve(TubeRequest.model_validate({"points": pts.tolist(), "options": {"pipe_radius": RP, **options}}))
+    return solve(TubeRequest.model_validate({"points": pts.tolist(), "options": {"pipe_radius": RP, **options}})).result
 
 
 def radii(res):

@@ -18,7 +18,7 @@ from plantsolve.solvers.flowmeter.synthetic import exact_full_length, meter
 
 
 def run(**kwargs):
-    return solve(FlowmeterRequest.model_validate(meter(**kwargs)), no_progress)
+    return solve(FlowmeterRequest.model_validate(meter(**kwargs)), no_progress).result
 
 
 def test_the_mesh_fills_the_quarter_pipe_without_gaps_or_overlaps():

@@ -14,7 +14,7 @@ from plantsolve.solvers.flowmeter.weight2d import electrode_current_integral, we
 
 
 def run(**kwargs):
-    return solve(FlowmeterRequest.model_validate(meter(**kwargs)), no_progress)
+    return solve(FlowmeterRequest.model_validate(meter(**kwargs)), no_progress).result
 
 
 @pytest.mark.parametrize("beta, known", [(5, 0.9981), (18, 0.9754), (30, 0.9318), (45, None), (60, 0.7284)])

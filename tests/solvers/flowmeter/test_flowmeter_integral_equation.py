@@ -16,7 +16,7 @@ from plantsolve.solvers.flowmeter.synthetic import exact_full_length, meter
 
 def run(**kwargs):
     body = meter(radius=50.0, liner_length=300.0, velocity={"type": "uniform", "mean": 1.0}, **kwargs)
-    return solve(FlowmeterRequest.model_validate(body), no_progress)
+    return solve(FlowmeterRequest.model_validate(body), no_progress).result
 
 
 def test_the_bessel_ratio_recurrence_matches_scipy_where_scipy_is_finite():
@@ -63,9 +63,9 @@ def test_long_electrodes_tend_to_the_2d_value():
 
 def test_scaling_R_1_and_R_500():
     small = solve(FlowmeterRequest.model_validate(meter(radius=1.0, units="m", half_angle=22.5, half_length=0.4,
-                                                        liner_length=6.0)), no_progress)
+                                                        liner_length=6.0)), no_progress).result
     large = solve(FlowmeterRequest.model_validate(meter(radius=500.0, units="mm", half_angle=22.5, half_length=200.0,
-                                                        liner_length=3000.0)), no_progress)
+                                                        liner_length=3000.0)), no_progress).result
     assert small.method == large.method == "integral_equation"
     assert small.sensitivity == pytest.approx(large.sensitivity, abs=1e-12)
 
@@ -93,12 +93,12 @@ def test_long_liners_are_cut_where_the_current_has_decayed_and_huge_mode_counts_
     short = run(half_angle=22.5, half_length=50 * np.pi / 10)
     body = meter(radius=50.0, liner_length=10_000.0, half_angle=22.5, half_length=50 * np.pi / 10,
                  velocity={"type": "uniform", "mean": 1.0})
-    long = solve(FlowmeterRequest.model_validate(body), no_progress)
+    long = solve(FlowmeterRequest.model_validate(body), no_progress).result
     assert long.method == "integral_equation"
     assert long.sensitivity == pytest.approx(short.sensitivity, abs=1e-5)
     narrow = meter(radius=50.0, liner_length=300.0, half_angle=89.0, half_length=1.0,
                    velocity={"type": "uniform", "mean": 1.0}, tolerance=0.01)
-    assert solve(FlowmeterRequest.model_validate(narrow), no_progress).method == "fem"
+    assert solve(FlowmeterRequest.model_validate(narrow), no_progress).result.method == "fem"
 
 
 def test_the_electrode_current_map_carries_the_unit_current():
