@@ -21,7 +21,7 @@ from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, Line
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
-from plantsolve.solvers.flowmeter.validation import geometry
+from plantsolve.solvers.flowmeter.validation import meter_shape
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 GRID_SIZE = 41
@@ -294,7 +294,7 @@ def integral_equation_in_grid(solution, grid: FieldGrid, current: np.ndarray, mo
 
 def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
     """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function."""
-    g = geometry(request)
+    g = meter_shape(request)
     grid = field_grid(request)
     average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
@@ -364,7 +364,7 @@ def linearity(field: WeightField, reynolds: list[float]) -> list[LinearityPoint]
 
 def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved:
     """The job on a checked request (``check_input``)."""
-    g = geometry(request)
+    g = meter_shape(request)
     radius = request.pipe.radius
     progress(0.05, "virtual current")
     field = virtual_current(request, progress)

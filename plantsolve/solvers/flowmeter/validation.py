@@ -16,7 +16,7 @@ from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
 @dataclass(frozen=True)
-class Geometry:
+class MeterShape:
     """The meter in units of the pipe radius (the only lengths S depends on)."""
 
     beta: float | None  # electrode half-angle in radians; None for point and button electrodes
@@ -26,19 +26,19 @@ class Geometry:
     button: tuple[float, float] | None = None  # (r_e / R, l_e / R) of button electrodes
 
 
-def geometry(request: FlowmeterRequest) -> Geometry:
+def meter_shape(request: FlowmeterRequest) -> MeterShape:
     radius = request.pipe.radius
     liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
     half_liner = liner / (2 * radius)
     e = request.electrodes
     if e.shape == "point":
-        return Geometry(None, 0.0, half_liner, False)
+        return MeterShape(None, 0.0, half_liner, False)
     if e.shape == "button":
         r_e = (e.radius or 0.0) / radius
-        return Geometry(None, r_e, half_liner, False, (r_e, e.protrusion / radius))
+        return MeterShape(None, r_e, half_liner, False, (r_e, e.protrusion / radius))
     full = e.half_length is None or e.half_length >= liner / 2 * (1 - 1e-12)
     a = half_liner if full else e.half_length / radius
-    return Geometry(float(np.radians(e.half_angle)), a, half_liner, full)
+    return MeterShape(float(np.radians(e.half_angle)), a, half_liner, full)
 
 
 def check_input(request: FlowmeterRequest) -> None:

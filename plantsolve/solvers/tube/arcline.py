@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plantsolve.solvers.tube.geometry import Spine, TubeModel, model_from_spine
+from plantsolve.solvers.tube.model import Spine, TubeModel, model_from_spine
 
 
 _TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too

@@ -16,7 +16,7 @@ from matplotlib.patches import Patch
 from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
-from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
                                               sample_centreline, spine_distance, tube_mesh_arrays)
 from plantsolve.solvers.tube.lra import model_from_rows
 from plantsolve.solvers.tube.scan import TubeScan

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.tube.geometry import TubeModel, build_spine, spine_distance
+from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
 
 
 @dataclass
@@ -128,7 +128,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
-    The same forward kinematics as geometry.build_spine, vectorised over the batch (the
+    The same forward kinematics as model.build_spine, vectorised over the batch (the
     finite-difference Jacobian evaluates 2P models at once)."""
     B = len(X)
     n = lay.n

@@ -21,7 +21,7 @@ from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_
 from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow
 
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
-from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, closest_points, distance_frames, reverse_model,
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, distance_frames, reverse_model,
                        sample_centreline, spine_distance)
 
 

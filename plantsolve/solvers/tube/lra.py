@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.tube import LraRow
-from plantsolve.solvers.tube.geometry import TubeModel
+from plantsolve.solvers.tube.model import TubeModel
 
 
 def model_rows(model: TubeModel) -> list[LraRow]:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.solvers.geometry import rotate_about, wrap_angle
-from plantsolve.solvers.tube.geometry import TubeModel
+from plantsolve.solvers.tube.model import TubeModel
 
 
 def without_bend(model: TubeModel, k: int) -> TubeModel:

@@ -20,7 +20,7 @@ from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segme
 from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
-from plantsolve.solvers.tube.geometry import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
+from plantsolve.solvers.tube.model import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
 from plantsolve.solvers.tube.inspection import inspect
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.scan import TubeScan

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from plantsolve.solvers.tube.geometry import TubeModel, build_spine, sample_centreline
+from plantsolve.solvers.tube.model import TubeModel, build_spine, sample_centreline
 
 
 def make_model(rows, pipe_radius: float, start=(0.0, 0.0, 0.0), frame=None) -> TubeModel:

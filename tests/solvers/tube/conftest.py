@@ -32,7 +32,7 @@ def lra_array(result):
 
 def same_tube(result, rows, tol_len=0.15, tol_ang=0.1, tol_rad=0.01):
     """Compare a result with LRA rows, allowing the reversed walking direction."""
-    from plantsolve.solvers.tube.geometry import reverse_model
+    from plantsolve.solvers.tube.model import reverse_model
     from plantsolve.solvers.tube.lra import model_rows
 
     truth = make_model(rows, 4.0)

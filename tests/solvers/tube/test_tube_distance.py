@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube.geometry import (TubeModel, build_spine, closest_points, sample_centreline, spine_distance)
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, sample_centreline, spine_distance)
 from plantsolve.solvers.tube.inspection import align
 from plantsolve.solvers.tube.synthetic import random_tube
 

@@ -13,7 +13,7 @@ import trimesh
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.tube import TubeScan, parse_upload, render_artifacts, solve
-from plantsolve.solvers.tube.geometry import tube_mesh_arrays
+from plantsolve.solvers.tube.model import tube_mesh_arrays
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 ROWS = [(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, 0, 0, 0)]

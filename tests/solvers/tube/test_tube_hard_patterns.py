@@ -9,7 +9,7 @@ import numpy as np
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.tube import solve
 from plantsolve.solvers.tube.artifacts import model_from_result
-from plantsolve.solvers.tube.geometry import build_spine, reverse_model, sample_centreline, spine_distance
+from plantsolve.solvers.tube.model import build_spine, reverse_model, sample_centreline, spine_distance
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 RP = 4.0

@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube import SPEC, TubeScan, __version__, check_input, parse_upload, render_artifacts, solve
-from plantsolve.solvers.tube.geometry import build_spine, model_from_control_polygon, spine_distance
+from plantsolve.solvers.tube.model import build_spine, model_from_control_polygon, spine_distance
 
 
 @pytest.fixture(scope="module")

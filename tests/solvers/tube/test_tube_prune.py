@@ -3,7 +3,7 @@
 import numpy as np
 
 from plantsolve.solvers.tube import fit, prune
-from plantsolve.solvers.tube.geometry import build_spine, sample_centreline, spine_distance
+from plantsolve.solvers.tube.model import build_spine, sample_centreline, spine_distance
 from plantsolve.solvers.tube.synthetic import make_model
 
 

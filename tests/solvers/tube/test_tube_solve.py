@@ -34,7 +34,7 @@ def test_noisy_single_view_scan_with_outliers(s_bend_scan, tk):
     # residuals follow the simulated noise σ = 0.05 (median |N(0,σ)| = 0.674σ)
     assert 0.8 * 0.0337 < r.residuals.median < 1.2 * 0.0337
     # injected outliers (the last 0.5 %) far from the surface are all reported
-    from plantsolve.solvers.tube.geometry import build_spine, spine_distance
+    from plantsolve.solvers.tube.model import build_spine, spine_distance
 
     d, _ = spine_distance(pts, build_spine(m))
     far = np.flatnonzero(np.abs(d - 4.0) > 0.5)
@@ -117,7 +117,7 @@ def test_inspection_springback_and_correction(tk):
 
 def test_random_bench_tube_with_b2b_and_large_bend(tk):
     """A bench-like tube: 7 bends with a 196° bend right after another bend, single view."""
-    from plantsolve.solvers.tube.geometry import reverse_model
+    from plantsolve.solvers.tube.model import reverse_model
     from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples
 
     rng = np.random.default_rng(1000)

@@ -4,7 +4,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.tube import arcline, curve, local_fit, spine
-from plantsolve.solvers.tube.geometry import build_spine, sample_centreline, spine_distance
+from plantsolve.solvers.tube.model import build_spine, sample_centreline, spine_distance
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 

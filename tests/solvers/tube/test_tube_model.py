@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube.geometry import (build_spine, control_polygon, model_from_control_polygon, model_from_spine,
+from plantsolve.solvers.tube.model import (build_spine, control_polygon, model_from_control_polygon, model_from_spine,
                                    reverse_model, spine_distance, frame_quaternion, quaternion_frame)
 from plantsolve.solvers.tube.synthetic import random_tube, surface_samples
 
