@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+from asgi_correlation_id import correlation_id
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
@@ -22,6 +23,7 @@ from plantsolve.jobs.errors import (
     Unprocessable,
     UnsupportedMediaType,
     field_problem,
+    is_infrastructure_failure,
     summary,
 )
 from plantsolve.schemas.jobs import Problem
@@ -29,6 +31,8 @@ from plantsolve.schemas.jobs import Problem
 log = logging.getLogger("plantsolve.api")
 
 PROBLEM_JSON = "application/problem+json"
+REQUEST_ID = "X-Request-ID"
+RETRY_AFTER_SECONDS = 5
 
 
 class Unauthorized(ProblemError):
@@ -96,8 +100,20 @@ def install(app: FastAPI) -> None:
 
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, error: Exception):
-        log.exception("unhandled error on %s", request.url.path)
-        return problem_response(ProblemError("An unexpected error occurred; it has been logged."), request)
+        # Starlette answers these outside every middleware: the request id is set here
+        if is_infrastructure_failure(error):
+            log.warning("infrastructure unavailable on %s: %s", request.url.path, type(error).__name__)
+            problem = ServiceUnavailable(
+                "A service this request needs (the database, the queue or the file store) is unreachable; "
+                "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+        else:
+            log.exception("unhandled error on %s", request.url.path)
+            problem = ProblemError("An unexpected error occurred; it has been logged.")
+        response = problem_response(problem, request)
+        request_id = correlation_id.get() or request.headers.get(REQUEST_ID)
+        if request_id:
+            response.headers[REQUEST_ID] = request_id
+        return response
 
 
 PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
@@ -111,6 +127,8 @@ PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
         (415, "Unsupported content type or file type"),
         (422, "Invalid input: 'errors' names each bad field by its JSON path"),
         (500, "Unexpected error (logged; the document says no more)"),
+        (503, "The database, the queue or the file store is unreachable: nothing was lost, try again after "
+              "Retry-After seconds"),
     )
 }
 

@@ -8,6 +8,7 @@ import json
 from typing import Any, Iterable, Sequence
 
 from pydantic import ValidationError
+from sqlalchemy import exc as sqlalchemy_exc
 
 from plantsolve.schemas.jobs import Problem
 from plantsolve.solvers.base import InputRejected
@@ -144,3 +145,21 @@ def _depth(value: Any) -> int:
             deepest = max(deepest, level)
             stack.extend((v, level + 1) for v in item if isinstance(v, (dict, list)))
     return deepest
+
+
+INFRASTRUCTURE = (OSError, ConnectionError, TimeoutError, EOFError)
+DATABASE_AWAY = (sqlalchemy_exc.OperationalError, sqlalchemy_exc.InterfaceError, sqlalchemy_exc.DisconnectionError,
+                 sqlalchemy_exc.TimeoutError)
+
+
+def is_infrastructure_failure(error: BaseException) -> bool:
+    """A failure of the machine or its services (network, disk, database, broker) that another attempt
+    (or request) may not meet; anything else a solver raises (numerical breakdown, a bug) repeats on the
+    same input. The API answers these with 503 and ``Retry-After``, the runner retries them."""
+    if isinstance(error, INFRASTRUCTURE):
+        return True
+    if isinstance(error, sqlalchemy_exc.SQLAlchemyError):  # not a constraint or a statement the code got wrong
+        return isinstance(error, DATABASE_AWAY) or bool(getattr(error, "connection_invalidated", False))
+    module = type(error).__module__ or ""
+    return module.startswith(("psycopg", "redis", "kombu", "celery", "billiard", "amqp"))
+

@@ -20,11 +20,21 @@ Enqueue = Callable[[uuid.UUID, str], None]
 Pending = Callable[[], "int | None"]
 
 
-def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None) -> None:
+def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, *,
+               after_outage: bool = False) -> None:
     """One pass. Queued jobs are enqueued again when their message never reached the broker
     (``enqueued_at`` unset), or when it is older than ``requeue_queued_after`` and the broker holds
     fewer messages than there are such jobs (the oldest first: a restarted Redis without persistence
-    lost them). A duplicate message is harmless: the claim lets one delivery run."""
+    lost them). A duplicate message is harmless: the claim lets one delivery run.
+
+    ``after_outage``: the previous pass could not reach the database. Nobody could heartbeat meanwhile,
+    so a lapsed lease says nothing about its worker: every running attempt first gets a full lease
+    from now. A live worker's next heartbeat keeps its claim (no second solve, no attempt counted); a
+    dead worker's lease lapses one lease later and it is re-queued then."""
+    if after_outage:
+        extended = ctx.repo.extend_leases(ctx.settings.lease_seconds)
+        if extended:
+            log.warning("sweeper: the database was away; %d running lease(s) extended instead of lapsing", extended)
     outcome = ctx.repo.sweep(requeue_queued_after=ctx.settings.requeue_queued_after,
                              report_for_lost=lost_worker_report,
                              result_waiting=lambda job_id: ctx.files.path(pending_path(job_id)).exists())

@@ -22,6 +22,7 @@ from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_expone
 
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
+from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Cancelled, InputRejected, Solved, SolverError
@@ -281,18 +282,6 @@ class AttemptLog:
         if error:
             entry["error"] = str(error)[:300]
         return self.previous + [entry]
-
-
-INFRASTRUCTURE = (OSError, ConnectionError, TimeoutError, EOFError)
-
-
-def is_infrastructure_failure(error: BaseException) -> bool:
-    """A failure of the machine or its services (network, disk, database, broker) that another attempt
-    may not meet; anything else a solver raises (numerical breakdown, a bug) repeats on the same input."""
-    if isinstance(error, INFRASTRUCTURE):
-        return True
-    module = type(error).__module__ or ""
-    return module.startswith(("sqlalchemy", "psycopg", "redis", "kombu", "celery", "billiard", "amqp"))
 
 
 _PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")

@@ -323,6 +323,13 @@ class JobRepository:
         return self._fenced(job_id, attempt, status=REQUEUE.target, report=report, lease_until=None, worker=None,
                             **extra)
 
+    def extend_leases(self, lease_seconds: float) -> int:
+        """Give every running attempt a full lease from now (after the database was away, so that no
+        lease counts as lapsed for the time nobody could heartbeat). Returns how many were extended."""
+        until = utcnow() + timedelta(seconds=lease_seconds)
+        return self._execute(update(Job).where(Job.status == RUNNING, Job.lease_until < until)
+                             .values(lease_until=until))
+
     def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
         """The attempts history of a running attempt (e.g. a result waiting to be stored)."""
         return self._fenced(job_id, attempt, attempts=attempts)
