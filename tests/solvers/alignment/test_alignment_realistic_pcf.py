@@ -423,7 +423,7 @@ def test_a_bend_of_an_odd_angle_is_not_snapped():
     assert np.degrees(np.arccos(-d0 @ d1)) == pytest.approx(88.6, abs=1e-4)
 
 
-# ---------------------------------------------------------------- files cut short (issue 26)
+# ---------------------------------------------------------------- files cut short
 
 
 def _plant3d_lines() -> list[str]:

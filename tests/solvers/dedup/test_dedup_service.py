@@ -140,7 +140,7 @@ def test_json_with_base64_and_the_cli(tmp_path):
     assert request.options.postpass is False and request.file == body["file"]
 
 
-# ---------------------------------------------------------------- files cut short (issue 26)
+# ---------------------------------------------------------------- files cut short
 
 
 def _upload(name: str, content: bytes):

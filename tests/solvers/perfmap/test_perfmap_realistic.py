@@ -329,7 +329,7 @@ def test_distance_to_region_equals_dense_evaluation(n3_result):
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
 
 
-# ---------------------------------------------------------------- files cut short (issue 26)
+# ---------------------------------------------------------------- files cut short
 
 
 def test_rig_csv_cut_inside_its_last_row_is_read_without_it_and_warns(n3_csv):

@@ -149,7 +149,7 @@ def test_relative_coordinates_follow_the_zone_relative_north():
     assert south.normal == pytest.approx([-1.0, 0.0, 0.0], abs=1e-12)
 
 
-# ---------------------------------------------------------------- files cut short (issue 26)
+# ---------------------------------------------------------------- files cut short
 
 
 def test_idf_cut_inside_its_last_surface_warns_naming_the_line():

@@ -119,7 +119,7 @@ def test_json_upload_and_form_options():
     assert info.value.errors[0].loc == ("contact_tolerance",) or info.value.errors[0].loc[0] == "options"
 
 
-# ---------------------------------------------------------------- files cut short or with unreadable lines (issue 26)
+# ---------------------------------------------------------------- files cut short or with unreadable lines
 
 
 def _ldcad_cut_in_its_last_part_line() -> tuple[str, int]:
