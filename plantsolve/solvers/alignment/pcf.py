@@ -96,6 +96,14 @@ POINT_RE = re.compile(rf"^(\s*)(\S+)(\s+)({_NUM})(\s+)({_NUM})(\s+)({_NUM})(.*)$
 _EOL = re.compile(r"(\r\n|\r|\n)")
 
 
+def needs_points(word: str) -> bool:
+    """A component keyword: the item is nothing without END-POINT/CENTRE-POINT/BRANCH-POINT lines (markers,
+    messages, supports and bolts place themselves by CO-ORDS or not at all)."""
+    return (word.startswith(("PIPE", "ELBOW", "BEND", "TEE", "CROSS", "REDUCER-", "VALVE", "FLANGE", "INSTRUMENT"))
+            or word in TYPE_OF or word.endswith("OLET")
+            or word in ("GASKET", "WELD", "COUPLING", "UNION", "FILTER", "TRAP", "MISC-COMPONENT"))
+
+
 class ItemProblem(Exception):
     """One item cannot be (fully) interpreted; the message says why."""
 
@@ -437,6 +445,9 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     geometry: dict[str, Geometry] = {}
     for it in doc.items:
         if not it.point_lines:
+            if needs_points(it.keyword) and not it.extra_lines:
+                dropped.append({"id": it.id, "line": it.line + 1,
+                                "reason": f"no END-POINT, CENTRE-POINT or BRANCH1-POINT line (a {it.keyword} needs them)"})
             continue
         try:
             g = interpret_item(it, doc, snap=it.id not in fixed_ids)
@@ -540,9 +551,37 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         options_out["fixed_components"] = [alias.get(f, f) for f in opts.fixed_components]
     body = {"units": units, "components": comps_json, "connections": connections, "options": options_out,
             "source_pcf": text}
+    cut = _cut_item(doc, {h["id"] for h in held + dropped})
+    if cut is not None:
+        notes.append(cut)
     notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, pos, owner, rad, comps))
+
+
+def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | None:
+    """The ``truncated_file`` note when the file ends inside its last item: a component keyword with no point
+    line after it (the file stops at 'PIPE'), or a last line without a line ending (exporters end every line)
+    that is one of the item's point lines or leaves it unreadable. An item followed by the MATERIALS section
+    (or any record) was written whole."""
+    tops = [i for i, line in enumerate(doc.lines) if line.strip() and not line[0].isspace()]
+    if not doc.items or not tops or doc.items[-1].line != tops[-1]:
+        return None
+    item, last = doc.items[-1], len(doc.lines) - 1
+    unterminated = doc.endings[-1] == "" and len(doc.lines) > 1
+    if needs_points(item.keyword) and not item.point_lines and not item.extra_lines:
+        lost = f"{item.keyword} {item.id!r} has no END-POINT line after it; it was not aligned."
+    elif unterminated and last in item.point_lines + item.extra_lines and item.id not in unread:
+        lost = (f"the last line ({last + 1}) has no line ending, so its last value may be cut; {item.keyword} "
+                f"{item.id!r} was read as written.")
+    elif unterminated and item.id in unread and last >= item.line:
+        lost = (f"the last line ({last + 1}) has no line ending and {item.keyword} {item.id!r} could not be read "
+                "whole (see pcf_items_held / pcf_items_unread).")
+    else:
+        return None
+    line = item.line + 1
+    return ("truncated_file", f"The file ends inside the item at line {line} (the file was cut?): {lost}",
+            {"line": line, "id": item.id, "keyword": item.keyword, "last_line": last + 1}, "warning")
 
 
 def _at_end_connections(doc: Document, pos, owner, rad, comps) -> list[str]:

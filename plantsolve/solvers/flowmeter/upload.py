@@ -6,6 +6,7 @@ from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, json_object, reject, validated
+from plantsolve.solvers.skipped_input import refuse_cut_json
 
 UPLOAD_EXTENSIONS = (".json",)
 
@@ -19,6 +20,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
         text = content.decode("utf-8-sig")
     except UnicodeDecodeError as e:
         raise reject(f"invalid JSON: {e}") from None
+    refuse_cut_json(text)
     body = json_object(text)
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}

@@ -60,6 +60,7 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, deco
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
+from plantsolve.solvers.skipped_input import ends_mid_line, refuse_cut_json, truncated_file
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -227,8 +228,10 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         rows, h = list(csv.reader([ln for _, ln in lines], delimiter=delim)), 0
     hint = ("" if delim != "," or ";" not in text[:2000] else
             " — if the file uses ';' separators, put them in the header too")
+    # exporters end every row: a last row without a line ending is where a copy or an export stopped
+    cut = lines[-1][0] if ends_mid_line(text) and lines[-1][0] == len(text.splitlines()) else None
     return _parse_table(rows, numbers, delim != ",", column_roles, hint, comma_separated=delim == ",", header=h,
-                        what="line")
+                        what="line", cut_line=cut)
 
 
 def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
@@ -264,9 +267,12 @@ def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
 
 def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool, column_roles: dict | None,
                  hint: str = "", comma_separated: bool = False, header: int = 0, what: str = "line",
+                 cut_line: int | None = None,
                  ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
     """The table's rows (cells as text) from its header on; ``numbers`` are the file's line (or sheet row)
-    numbers of the rows, used in every message."""
+    numbers of the rows, used in every message. ``cut_line`` is the file's last line when it has no line
+    ending: a row there with fewer cells than the header or a value that does not read was cut, and is
+    skipped with a ``truncated_file`` warning instead of refusing the file."""
     notes_before = []
     if header:
         notes_before.append(Diagnostic(
@@ -356,9 +362,11 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
     errors: list[FieldError] = []
     groups: dict[tuple[float, float], dict] = {}
     lines_of: dict[tuple[float, float], list[int]] = {}
+    cut_note: Diagnostic | None = None
     for n, r in zip(numbers[1:], rows[1:]):
         if len(errors) >= _MAX_ROW_ERRORS:
             break
+        row_start = len(errors)
         vals = {}
         for c in roles:
             j = col[c]
@@ -385,6 +393,12 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
                                          f"{what} {n}: {c} is {cell!r} (NaN or infinite)"))
                 continue
             vals[c] = v
+        if n == cut_line and (len(errors) > row_start or len(r) < len(rows[0])):
+            why = [e.msg for e in errors[row_start:]] or [f"{len(r)} of the header's {len(rows[0])} cells"]
+            del errors[row_start:]
+            cut_note = truncated_file(n, f"its last row has no line ending and is incomplete ({why[0]}): the file "
+                                      "was cut? That row was not read.", reason=why[0])
+            continue
         if len(vals) < len(roles):
             continue
         key = tuple(vals[c] for c in setting_cols)
@@ -397,8 +411,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
     if errors:
         raise InputRejected(errors)
     if not groups:
-        raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows")
-    notes = notes_before
+        cut = f" (its only data row, {what} {cut_line}, is cut short)" if cut_note else ""
+        raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows{cut}")
+    notes = notes_before + ([cut_note] if cut_note else [])
     order = [c.strip() for c in rows[0]]
     ignored.sort(key=order.index)
     names = {r: rows[0][col[r]].strip() for r in col}
@@ -562,6 +577,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     else:
+        refuse_cut_json(text)
         try:
             body = json.loads(text)
         except json.JSONDecodeError as e:

@@ -51,6 +51,11 @@ def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
         formulas = openpyxl.load_workbook(io.BytesIO(content), data_only=False)
     except (zipfile.BadZipFile, InvalidFileException, KeyError, ValueError, TypeError, OSError, EOFError,
             IndexError, AttributeError) as e:
+        if content[:4] == b"PK\x03\x04" and b"PK\x05\x06" not in content[-(1 << 16) - 22:]:
+            # a zip archive ends with its directory: without it the workbook was cut, and no sheet can be found
+            raise reject(f"not a readable Excel .xlsx workbook: it is cut short, ending after {len(content):,} bytes, "
+                         "before the zip directory every .xlsx ends with (an incomplete upload or copy?); send the "
+                         "whole file") from None
         raise reject(f"not a readable Excel .xlsx workbook ({type(e).__name__}); save it from Excel as "
                      "'Excel Workbook (*.xlsx)' or as CSV") from None
     sheets = []

@@ -15,6 +15,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Progress, Solved, no_progress
+from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
@@ -206,11 +207,12 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     }
     if request.source:
         details["source"] = request.source
-        skipped = request.source.get("skipped") or []
+        skipped = [s for s in request.source.get("skipped") or [] if isinstance(s, dict)]
         if skipped:
-            warnings.append(Diagnostic(code="objects_skipped", message=(
-                f"{len(skipped)} object(s) of the file were skipped (line and reason in details)."),
-                details={"skipped": skipped[:MAX_LISTED_EDGES]}))
+            count = request.source.get("skipped_count")
+            warnings.append(skipped_lines(skipped, "object", count if isinstance(count, int) else None,
+                                          code="objects_skipped"))
+        warnings.extend(source_warnings(request.source))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")

@@ -32,8 +32,10 @@ from dataclasses import replace
 
 import numpy as np
 
+from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
@@ -56,8 +58,12 @@ BOUNDARY_CONDITIONS = {
 }
 
 
-def idf_objects(text: str) -> list[tuple[str, list[str], list[int], int]]:
-    """(class, fields, line of each field, line of the object) of every object, comments removed."""
+IdfObject = tuple[str, list[str], list[int], int]  # (class, fields, line of each field, line of the object)
+
+
+def idf_objects(text: str) -> tuple[list[IdfObject], IdfObject | None]:
+    """(class, fields, line of each field, line of the object) of every object, comments removed; and the
+    object the text ends inside (fields after the last ``;``: the file was cut), or None."""
     objects = []
     fields: list[str] = []
     lines: list[int] = []
@@ -80,7 +86,13 @@ def idf_objects(text: str) -> list[tuple[str, list[str], list[int], int]]:
                 if not current_line and not char.isspace():
                     current_line = number
                 current.append(char)
-    return objects
+    if "".join(current).strip():
+        fields.append("".join(current).strip())
+        lines.append(current_line)
+    unterminated = None
+    if fields and fields[0]:
+        unterminated = (fields[0].lower(), fields[1:], lines[1:], lines[0])
+    return objects, unterminated
 
 
 def _number(value: str) -> float:
@@ -152,10 +164,20 @@ def _fenestration_layout(fields: list[str]) -> int:
 
 
 def parse_idf(text: str) -> dict:
-    objects = idf_objects(text)
-    if not objects:
+    objects, unterminated = idf_objects(text)
+    if not objects and unterminated is None:
         raise reject("no IDF object here (objects are 'Class, field, ...;')")
     skipped: list[dict] = []
+    warnings: list[dict] = []
+    if unterminated is not None:
+        # the file ends inside this object: what it would have held is unknown (a vertex list cut after a
+        # whole vertex still reads), so it is not read at all, and the report says so
+        cls, fields, _, line = unterminated
+        label = f"{cls} {fields[0]!r}" if fields and fields[0] else cls
+        skipped.append({"line": line, "object": label,
+                        "reason": "the file ends inside this object (no closing ';'): not read"})
+        warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
+                                       object=label).model_dump())
     clockwise, relative = False, False
     zones: dict[str, tuple[float, float, float, float]] = {}
     zone_names: dict[str, str] = {}
@@ -236,7 +258,7 @@ def parse_idf(text: str) -> dict:
             "source": {"format": "idf", "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",
                        "coordinates": "relative" if relative else "world", "skipped": skipped[:MAX_SKIPPED_LISTED],
-                       "skipped_count": len(skipped)}}
+                       "skipped_count": len(skipped), "warnings": warnings}}
 
 
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
@@ -297,6 +319,11 @@ def parse_obj(text: str) -> dict:
                 skipped.append({"line": at, "object": "f", "reason": str(e)})
                 continue
             faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [group or obj_name or "default"]})
+    warnings: list[dict] = []
+    last = len(text.splitlines())
+    if ends_mid_line(text) and skipped and skipped[-1]["line"] == last:
+        warnings.append(truncated_file(last, f"its last line has no line ending and could not be read "
+                                       f"({skipped[-1]['reason']}): the file was cut?").model_dump())
     if not faces:
         first = skipped[0] if skipped else None
         if first:
@@ -308,7 +335,7 @@ def parse_obj(text: str) -> dict:
         f["loops"] = [[remap[v] for v in f["loops"][0]]]
     return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
             "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
-                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped)}}
+                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
 
 
 def parse_stl(content: bytes) -> dict:
@@ -317,7 +344,30 @@ def parse_stl(content: bytes) -> dict:
 
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
-    binary_like = len(content) >= 84 and 84 + 50 * struct.unpack("<I", content[80:84])[0] == len(content)
+    declared = struct.unpack("<I", content[80:84])[0] if len(content) >= 84 else 0
+    binary_like = len(content) >= 84 and 84 + 50 * declared == len(content)
+    warnings: list[dict] = []
+    if ascii_like and not content.rstrip().lower().rsplit(b"\n", 1)[-1].lstrip().startswith(b"endsolid"):
+        # cut before 'endsolid': the whole facets up to the last 'endfacet' are read, the cut one is not
+        end = content.lower().rfind(b"endfacet")
+        if end < 0:
+            raise reject("the ASCII STL file ends before its first facet is complete (no 'endfacet'): the file "
+                         "was cut")
+        end += len(b"endfacet")
+        line = content.count(b"\n", 0, end) + 2
+        content = content[:end] + b"\nendsolid\n"
+        warnings.append(truncated_file(line, "the ASCII STL has no 'endsolid' (the file was cut?); the facet cut "
+                                       "there was not read.").model_dump())
+    elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
+        whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
+        if whole == 0:
+            raise reject(f"the binary STL file says {declared} triangles but ends before the first is complete: "
+                         "the file was cut")
+        warnings.append(Diagnostic(code="truncated_file", message=(
+            f"The binary STL says {declared} triangles but holds {whole} whole ones (the file was cut?); those were "
+            "read."), details={"declared": declared, "read": whole, "bytes": len(content)}).model_dump())
+        content = content[:80] + struct.pack("<I", whole) + content[84:84 + 50 * whole]
+        binary_like = True
     if not (ascii_like or binary_like):
         raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
                      "triangle count)")
@@ -342,7 +392,7 @@ def parse_stl(content: bytes) -> dict:
     faces = [{"id": f"t{k + 1}", "loops": [t], "zones": [name]} for k, t in enumerate(triangles.tolist())]
     return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
             "source": {"format": "stl", "faces": len(faces), "zones": 1, "skipped": skipped,
-                       "skipped_count": int((~good).sum())}}
+                       "skipped_count": int((~good).sum()), "warnings": warnings}}
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:

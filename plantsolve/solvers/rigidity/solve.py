@@ -16,6 +16,7 @@ from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
 
@@ -77,6 +78,12 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
                                    "were left out of the analysis (not guessed)",
                                    details={"parts": sorted({u.part for u in unknown})[:100]}))
+    source = request.source or {}
+    skipped = [s for s in source.get("skipped") or [] if isinstance(s, dict)]
+    if skipped:  # lines of the uploaded file that placed nothing: the analysis is of the rest
+        count = source.get("skipped_count")
+        warnings.append(skipped_lines(skipped, "line", count if isinstance(count, int) else None))
+    warnings.extend(source_warnings(source))
     progress(0.2, "exact mobility")
     analysis = assembly.analyse(rank_tolerance=request.options.rank_tolerance)
     mob = analysis.mobility

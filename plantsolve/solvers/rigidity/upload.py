@@ -22,6 +22,7 @@ import numpy as np
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import normalise_number
+from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
@@ -53,10 +54,29 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
     return main or "<main>", files
 
 
+PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
+
+
+def _cut_last_line(text: str) -> int | None:
+    """The number of the last line when it has no line ending and is a type-1 line cut short: editors end
+    every line, and a cut that leaves 15 fields has cut the file name (its extension is gone)."""
+    if not ends_mid_line(text):
+        return None
+    lines = text.splitlines()
+    tokens = lines[-1].split()
+    if not tokens or tokens[0] != "1":
+        return None
+    if len(tokens) >= 15 and lines[-1].split(None, 14)[14].strip().lower().endswith(PART_EXTENSIONS):
+        return None
+    return len(lines)
+
+
 def parse_ldraw(text: str) -> dict:
     main, files = _files(text)
     parts: list[dict] = []
     skipped: list[dict] = []
+    warnings: list[dict] = []
+    cut = _cut_last_line(text)
     counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0}
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
@@ -73,6 +93,10 @@ def parse_ldraw(text: str) -> dict:
                 continue
             if kind != "1":
                 skipped.append({"line": number, "reason": f"line type {kind!r} is not an LDraw line type"})
+                continue
+            if number == cut:
+                skipped.append({"line": number, "reason": "the file ends inside this line (no line ending, "
+                                "fields or the file name's extension missing): not read"})
                 continue
             if len(tokens) < 15:
                 skipped.append({"line": number, "reason": f"a type-1 line needs 15 fields, this one has {len(tokens)}"})
@@ -110,12 +134,16 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    if cut is not None:
+        warnings.append(truncated_file(cut, "the file ends inside this type-1 line (the file was cut?); the part it "
+                                       "placed was not read.").model_dump())
     if not parts:
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
     return {"parts": parts, "source": {"format": "ldraw", "main_model": main, "parts": len(parts),
                                        "submodels": max(len(files) - 1, 0), **counts,
-                                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped)}}
+                                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
+                                       "warnings": warnings}}
 
 
 def _tidy(v: float) -> float:

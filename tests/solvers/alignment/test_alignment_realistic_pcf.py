@@ -421,3 +421,41 @@ def test_a_bend_of_an_odd_angle_is_not_snapped():
     bend = parse_upload(StoredInput.from_bytes("b.pcf", text.encode()), None).components[0]
     d0, d1 = (np.array(p.direction) for p in bend.ports)
     assert np.degrees(np.arccos(-d0 @ d1)) == pytest.approx(88.6, abs=1e-4)
+
+
+# ---------------------------------------------------------------- files cut short
+
+
+def _plant3d_lines() -> list[str]:
+    return _lines((DATA / "plant3d_cw_line.pcf").read_bytes().decode())
+
+
+def test_a_plant3d_export_cut_after_pipe_warns_that_the_last_item_has_no_points():
+    lines = _plant3d_lines()
+    pipe = next(n for n, ln in enumerate(lines, 1) if n > 140 and ln.rstrip() == "PIPE")  # the run after the bend
+    req = parse_upload(StoredInput.from_bytes("cut.pcf", "".join(lines[:pipe]).encode()), None)
+    res = solve(req).result
+    warnings = {w.code: w for w in res.report.warnings}
+    cut = warnings["truncated_file"]
+    assert cut.details["line"] == pipe and f"line {pipe}" in cut.message and "no END-POINT" in cut.message
+    (unread,) = warnings["pcf_items_unread"].details["items"]
+    assert unread["line"] == pipe and res.report.status == "warning"
+
+
+def test_a_plant3d_export_cut_inside_an_end_point_line_warns_naming_its_item():
+    lines = _plant3d_lines()
+    pipe = next(n for n, ln in enumerate(lines, 1) if n > 140 and ln.rstrip() == "PIPE")
+    text = "".join(lines[:pipe + 1]) + lines[pipe + 1][:26]  # '    END-POINT 13000.0000 2' of its second end
+    res = solve(parse_upload(StoredInput.from_bytes("cut.pcf", text.encode()), None)).result
+    cut = next(w for w in res.report.warnings if w.code == "truncated_file")
+    assert cut.details == {"line": pipe, "id": cut.details["id"], "keyword": "PIPE", "last_line": pipe + 2}
+    assert "could not be read whole" in cut.message
+    held = next(w for w in res.report.warnings if w.code == "pcf_items_held").details["items"]
+    assert [h["line"] for h in held] == [pipe]
+
+
+def test_a_pcf_cut_after_its_only_component_keyword_is_refused_on_the_file():
+    with pytest.raises(InputRejected) as e:
+        parse_upload(StoredInput.from_bytes("cut.pcf", b"ISOGEN-FILES ISOGEN.FLS\r\nUNITS-CO-ORDS MM\r\nPIPE\r\n"), None)
+    (fe,) = e.value.errors
+    assert fe.loc == ("file",) and "line 3" in fe.msg and "no END-POINT" in fe.msg

@@ -138,3 +138,36 @@ def test_json_with_base64_and_the_cli(tmp_path):
     body = {"filename": "zoo.ifc", "file": base64.b64encode((EXAMPLES / "zoo_ifc2x3.ifc").read_bytes()).decode()}
     request = parse_upload(StoredInput.from_bytes("request.json", json.dumps(body).encode()), {"postpass": False})
     assert request.options.postpass is False and request.file == body["file"]
+
+
+# ---------------------------------------------------------------- files cut short
+
+
+def _upload(name: str, content: bytes):
+    return parse_upload(StoredInput.from_bytes(name, content), None)
+
+
+def test_a_step_file_cut_inside_an_entity_is_refused_naming_that_entity():
+    good = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
+    lines = good.splitlines(keepends=True)
+    cut = b"".join(lines[:len(lines) // 2]) + lines[len(lines) // 2][:25]  # inside that line's entity
+    number = lines[len(lines) // 2].split(b"=", 1)[0].decode()
+    with pytest.raises(InputRejected) as error:
+        _upload("m.ifc", cut)
+    (fe,) = error.value.errors
+    assert fe.loc == ("file",) and f"stops inside entity {number}" in fe.msg and "truncated" in fe.msg
+    with pytest.raises(InputRejected, match="before 'ENDSEC;'"):  # cut between entities: still incomplete
+        _upload("m.ifc", good[:good.rfind(b"ENDSEC;")])
+
+
+def test_what_the_step_format_allows_after_its_end_is_not_a_cut():
+    good = (EXAMPLES / "tunnel_3rings.ifc").read_bytes()
+    for ending in (b"/* written by the exporter */\r\n", b"\x00" * 64):  # a comment; the padding of a copy
+        assert _upload("m.ifc", good + ending).filename == "m.ifc"
+
+
+def test_a_json_request_cut_short_is_refused_naming_where_it_stops():
+    with pytest.raises(InputRejected) as error:
+        _upload("m.json", b'{"filename": "m.ifc",\n "options": {"sharing": "mapped')
+    (fe,) = error.value.errors
+    assert fe.loc == ("file",) and "ends before" in fe.msg and "line 2" in fe.msg

@@ -82,3 +82,11 @@ def test_the_cli_solves_the_examples(tmp_path, name, method, sensitivity):
     result = json.loads(out.read_text())
     assert result["method"] == method
     assert abs(result["sensitivity"] - sensitivity) < 2e-3
+
+
+def test_a_json_request_cut_short_is_refused_naming_where_it_stops():
+    text = '{\n  "units": "m",\n  "options": {\n    "grid": [64,'
+    with pytest.raises(InputRejected) as exc:
+        parse_upload(StoredInput.from_bytes("meter.json", text.encode()), None)
+    (fe,) = exc.value.errors
+    assert fe.loc == ("file",) and "ends before" in fe.msg and "line 4" in fe.msg

@@ -249,3 +249,12 @@ def test_extreme_duty_points_and_grids_are_refused_by_the_schema():
         PerfmapQueryRequest.model_validate({"flow": 1e308, "pressure": 1.0})
     with pytest.raises(ValidationError):
         PerfmapRequest.model_validate({**_body(), "options": {"grid": [1000, 1000]}})
+
+
+def test_a_json_request_cut_short_is_refused_naming_where_it_stops():
+    text = json.dumps(_body(grid=[30, 30]), indent=2)
+    cut = text[:len(text) // 2]
+    with pytest.raises(InputRejected) as exc:
+        parse_upload(StoredInput.from_bytes("m.json", cut.encode()), None)
+    (fe,) = exc.value.errors
+    assert fe.loc == ("file",) and "ends before" in fe.msg and f"line {cut.count(chr(10)) + 1}" in fe.msg

@@ -327,3 +327,22 @@ def test_distance_to_region_equals_dense_evaluation(n3_result):
     want = np.where(inside, 0.0, d.min(axis=1))
     assert np.sum(want == 0) > 20 and np.sum(want > 0) > 100
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-14)
+
+
+# ---------------------------------------------------------------- files cut short
+
+
+def test_rig_csv_cut_inside_its_last_row_is_read_without_it_and_warns(n3_csv):
+    cut = n3_csv.rstrip()[:-10]  # the rig's CRLF export, stopped inside the last row's pressure
+    last = cut.count(b"\n") + 1
+    req = parse_upload(StoredInput.from_bytes("rig.csv", cut), {"map": False})
+    whole = parse_upload(StoredInput.from_bytes("rig.csv", n3_csv), {"map": False})
+    assert len(req.positions[-1].flow) == len(whole.positions[-1].flow) - 1
+    res = solve(req).result
+    (warning,) = [w for w in res.report.warnings if w.code == "truncated_file"]
+    assert warning.details["line"] == last and f"line {last}" in warning.message and res.report.status == "warning"
+
+
+def test_rig_csv_whose_only_row_is_cut_is_refused_on_the_file():
+    errs = _reject(b"theta,phi,flow,pressure,efficiency\r\n0.0,0.5,1104.3")
+    assert [e.loc for e in errs] == [("file",)] and "line 2, is cut short" in errs[0].msg

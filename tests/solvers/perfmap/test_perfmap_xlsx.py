@@ -167,3 +167,11 @@ def test_an_empty_workbook():
     with pytest.raises(InputRejected) as e:
         parse_upload(StoredInput.from_bytes("rig.xlsx", workbook(lambda wb: None)), None)
     assert "empty" in e.value.errors[0].msg
+
+
+def test_a_workbook_cut_short_is_refused_saying_so():
+    content = workbook(lambda wb: plain(wb.active))
+    with pytest.raises(InputRejected) as e:
+        parse_upload(StoredInput.from_bytes("rig.xlsx", content[:len(content) * 2 // 3]), None)
+    (fe,) = e.value.errors
+    assert fe.loc == ("file",) and "cut short" in fe.msg and f"{len(content) * 2 // 3:,} bytes" in fe.msg

@@ -147,3 +147,63 @@ def test_relative_coordinates_follow_the_zone_relative_north():
     assert sorted(adj.faces) == ["Office A East", "Office B South"] and adj.area == pytest.approx(12.0)
     south = next(f for f in result.faces if f.id == "Office B South")
     assert south.normal == pytest.approx([-1.0, 0.0, 0.0], abs=1e-12)
+
+
+# ---------------------------------------------------------------- files cut short
+
+
+def test_idf_cut_inside_its_last_surface_warns_naming_the_line():
+    # EnergyPlus's own file, cut in transfer after the roof's third vertex: no closing ';'
+    lines = (DATA / "1ZoneUncontrolled.idf").read_bytes().splitlines(keepends=True)
+    roof = next(n for n, ln in enumerate(lines, 1) if b"Zn001:Roof001" in ln) - 1
+    request = upload("cut.idf", b"".join(lines[:roof + 13]))
+    assert request.source["skipped"][-1]["line"] == roof and "no closing ';'" in request.source["skipped"][-1]["reason"]
+    result = solve(request).result
+    assert result.report.status == "warning"
+    cut = {w.code: w for w in result.report.warnings}["truncated_file"]
+    assert cut.details["line"] == roof and f"line {roof}" in cut.message and "Zn001:Roof001" in cut.message
+    (z,) = result.zones
+    assert not z.closed and len(result.faces) == 5  # the walls and floor are read; the cut roof is not
+
+
+def test_idf_whose_only_surface_is_cut_is_refused_naming_its_line():
+    text = b"Version,9.3;\n\nBuildingSurface:Detailed,\n  W1, Wall, C, Z, Outdoors, , SunExposed, WindExposed, 0.5, 4,\n" \
+           b"  0, 0, 1,\n  0, 0, 0,\n  1, 0, 0,\n  1, 0,"
+    with pytest.raises(InputRejected) as error:
+        upload("cut.idf", text, None)
+    (fe,) = error.value.errors
+    assert fe.loc == ("file", "line", 3) and "no closing ';'" in fe.msg
+
+
+def test_obj_cut_inside_its_last_face_line_warns_naming_the_line():
+    content = (DATA / "sketchup_two_rooms.obj").read_bytes().rstrip()
+    cut = content[:content.rfind(b" ")]  # 'f 70/70/24 71/71/24': two vertices of the last triangle
+    last = cut.count(b"\n") + 1
+    result = solve(upload("cut.obj", cut)).result
+    warnings = {w.code: w for w in result.report.warnings}
+    assert warnings["truncated_file"].details["line"] == last and f"line {last}" in warnings["truncated_file"].message
+    assert warnings["objects_skipped"].details["lines"] == [last] and warnings["objects_skipped"].details["count"] == 1
+
+
+def test_ascii_stl_cut_before_endsolid_reads_its_whole_facets_and_warns():
+    content = (DATA / "ascii_box.stl").read_bytes()
+    cut = content[:content.rfind(b"vertex")]  # inside the last facet's loop
+    request = upload("cut.stl", cut)
+    assert len(request.faces) == 11  # the box's 12 triangles but the cut one
+    result = solve(request).result
+    (warning,) = [w for w in result.report.warnings if w.code == "truncated_file"]
+    lines = cut.decode().splitlines()
+    assert lines[warning.details["line"] - 1].strip().startswith("facet normal")  # the cut facet's first line
+    with pytest.raises(InputRejected, match="before its first facet"):
+        upload("cut.stl", content[:content.find(b"endfacet")])
+
+
+def test_binary_stl_cut_short_reads_its_whole_triangles_and_warns():
+    mesh = trimesh.creation.box(extents=[2.0, 1.0, 0.5])
+    content = trimesh.exchange.stl.export_stl(mesh)  # 12 triangles of 50 bytes after an 84-byte header
+    request = upload("cut.stl", content[:84 + 50 * 9 + 17])
+    assert len(request.faces) == 9
+    (warning,) = [w for w in solve(request).result.report.warnings if w.code == "truncated_file"]
+    assert warning.details == {"declared": 12, "read": 9, "bytes": 84 + 50 * 9 + 17}
+    with pytest.raises(InputRejected, match="ends before the first"):
+        upload("cut.stl", content[:84 + 30])

@@ -84,3 +84,16 @@ def test_cli_solves_an_ldraw_file(tmp_path):
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "out.json").read_text())
     assert result["dof"] == 4 and result["generic_dof"] == 2
+
+
+def test_a_cut_ldraw_upload_succeeds_with_the_warning_in_the_jobs_report(client):
+    from tests.solvers.rigidity.ldraw_files import LDCAD_TECHNIC
+
+    text = LDCAD_TECHNIC[:LDCAD_TECHNIC.rindex("3004.dat") + 2]
+    job, result = _result(client, client.post("/v1/rigidity/jobs", files={"file": ("technic.ldr", text.encode())}))
+    last = text.count("\n") + 1
+    assert job["report"]["status"] == "warning"
+    (cut,) = [w for w in job["report"]["warnings"] if w["code"] == "truncated_file"]
+    assert cut["details"]["line"] == last and result["report"]["warnings"] == job["report"]["warnings"]
+    problem = client.post("/v1/rigidity/jobs", files={"file": ("cut.ldr", b"0 x\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 300")}).json()
+    assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["file"]

@@ -117,3 +117,40 @@ def test_json_upload_and_form_options():
     with pytest.raises(InputRejected) as info:
         parse("model.ldr", files.LDCAD, {"contact_tolerance": -1})
     assert info.value.errors[0].loc == ("contact_tolerance",) or info.value.errors[0].loc[0] == "options"
+
+
+# ---------------------------------------------------------------- files cut short or with unreadable lines
+
+
+def _ldcad_cut_in_its_last_part_line() -> tuple[str, int]:
+    # LDCad saved the stack with a trailing 'STEP'; the copy stops inside the 3004's line, after its 't 1 30'
+    text = files.LDCAD_TECHNIC[:files.LDCAD_TECHNIC.rindex("3004.dat") + 2]
+    return text, text.count("\n") + 1
+
+
+def test_ldcad_file_cut_inside_its_last_part_line_warns_naming_the_line():
+    text, last = _ldcad_cut_in_its_last_part_line()
+    request = parse("technic.ldr", text)
+    assert [p.part for p in request.parts][-1] == "3938"  # the cut '30' is no part number: not read
+    result = solve(request).result
+    warnings = {w.code: w for w in result.report.warnings}
+    assert result.report.status == "warning"
+    assert warnings["truncated_file"].details["line"] == last and f"line {last}" in warnings["truncated_file"].message
+    assert warnings["skipped_lines"].details["lines"] == [last]
+
+
+def test_leocad_line_with_nan_is_skipped_with_a_warning_naming_it():
+    lines = files.LEOCAD.splitlines(keepends=True)
+    bad = next(n for n, ln in enumerate(lines, 1) if ln.rstrip().endswith("3938.dat"))
+    lines[bad - 1] = lines[bad - 1].replace("-24.000000", "nan", 1)
+    result = solve(parse("hinge.ldr", "".join(lines))).result
+    (warning,) = [w for w in result.report.warnings if w.code == "skipped_lines"]
+    assert warning.details["lines"] == [bad] and warning.details["count"] == 1
+    assert f"line {bad}" in warning.message and "not finite" in warning.message
+
+
+def test_a_file_whose_only_part_line_is_cut_is_refused_naming_the_file():
+    with pytest.raises(InputRejected) as error:
+        parse("cut.ldr", "0 Name: one.ldr\r\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 300")
+    (fe,) = error.value.errors
+    assert fe.loc == ("file",) and "line 2" in fe.msg and "ends inside" in fe.msg
