@@ -399,3 +399,19 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
         "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "time_limit",
         "error": "killed at the hard time limit"}]
     return ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None, attempts=history)
+
+
+def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
+    """The service stops while the job runs: give it back to the queue without counting the attempt
+    (the job did not fail; the next start runs it again). Fenced on the running attempt: an attempt
+    that stored its result first keeps it, and the solver, if it goes on, can write nothing more."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is None or job.status != RUNNING:
+        return False
+    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
+        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "handed_back",
+        "error": "the service stopped while the job ran"}]
+    report = failure_report("worker", "The service stopped while the job ran; it was re-queued and runs again "
+                            "at the next start (this attempt is not counted).")
+    return ctx.repo.requeue(job_id, job.attempt, report=report, attempts=history, grant_attempt=True)
+

@@ -49,8 +49,10 @@ class AttemptInfo(BaseModel):
     worker: str | None = None
     started_at: datetime | None = None
     finished_at: datetime | None = None
-    outcome: Literal["succeeded", "failed", "requeued", "time_limit", "cancelled", "lost", "result_pending"] = Field(
-        description="lost: the worker stopped heartbeating; result_pending: computed, but the database did not take "
+    outcome: Literal["succeeded", "failed", "requeued", "time_limit", "cancelled", "lost", "result_pending",
+                     "handed_back"] = Field(
+        description="lost: the worker stopped heartbeating; handed_back: the service stopped while it ran (the "
+        "job was re-queued, the attempt not counted); result_pending: computed, but the database did not take "
         "the result (it is stored by the next attempt without solving again)."
     )
     error: str | None = None

@@ -14,6 +14,7 @@ import logging
 import multiprocessing
 import os
 import threading
+import time
 import uuid
 from concurrent.futures import CancelledError
 from concurrent.futures import TimeoutError as FutureTimeout
@@ -23,7 +24,7 @@ from pebble import ProcessExpired, ProcessPool
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.leases import resume
-from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
+from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
 from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
@@ -32,13 +33,33 @@ log = logging.getLogger("plantsolve.processes")
 
 # time for a solver to notice its soft limit, clean up and store a report before it is killed
 HARD_LIMIT_GRACE = 5.0
+# how long a stop waits for the job processes to end after the running jobs were handed back
+STOP_SECONDS = 5.0
 
 _worker_ctx: ServiceContext | None = None
 
 
-def _start_worker(settings_json: str) -> None:
+PARENT_WATCH_SECONDS = 0.5
+
+
+def _die_with_parent(parent: int) -> None:
+    """End this job process as soon as its parent (the service that supervises it) is gone: a job
+    process nobody supervises must not go on and write a result after the service was killed (the
+    job's lease lapses and the next service re-queues it). An orphan is re-parented, so its parent
+    pid changes; a daemon thread watches for that."""
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_WATCH_SECONDS)
+            if os.getppid() != parent:
+                os._exit(70)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def _start_worker(settings_json: str, parent: int) -> None:
     """Initializer of each worker process: its own settings object and database connections."""
     global _worker_ctx
+    _die_with_parent(parent)
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
     settings = JobSettings.model_validate_json(settings_json)
@@ -76,17 +97,26 @@ class ProcessDispatcher:
         self._stopping = False
         settings = JobSettings.model_validate(self.ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
-                                 initargs=(settings.model_dump_json(),), context=multiprocessing.get_context("spawn"))
+                                 initargs=(settings.model_dump_json(), os.getpid()), context=multiprocessing.get_context("spawn"))
         resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
     def stop(self) -> None:
-        # jobs still waiting for a process stay queued in the database: the next start resumes them
+        """Drain: stop taking jobs, hand the running ones back to the queue (their attempt not counted:
+        the service stopped, the job did not fail), then end the job processes (within ``STOP_SECONDS``).
+        Jobs waiting for a process stay queued in the database; the next start resumes them all."""
         self._stopping = True
         self._sweeper.stop()
+        with self._lock:
+            running = list(self._pending)
+        for job_id in running:
+            try:
+                handed_back(self.ctx, job_id)
+            except Exception:  # the database is away: the lease lapses and the next start re-queues it
+                log.warning("job %s: could not be handed back at stop", job_id, exc_info=True)
         if self._pool is not None:
             self._pool.stop()
-            self._pool.join(timeout=10)
+            self._pool.join(timeout=STOP_SECONDS)
             self._pool = None
 
     def ping(self) -> None:

@@ -1,0 +1,103 @@
+"""Supervision of the embedded pool: a stop hands running jobs back to the queue (their attempt not
+counted) and ends the job processes within its stated time; job processes die with the service."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from plantsolve.app.main import create_app
+from plantsolve.workers.processes import PARENT_WATCH_SECONDS, STOP_SECONDS
+from tests.conftest import REPO, service_settings, wait_for
+
+
+def _wait_running(client, job_id: str, timeout: float = 60) -> dict:
+    return wait_for(client, job_id, statuses=("running",), timeout=timeout)
+
+
+def test_a_stop_hands_the_running_job_back_and_the_next_start_runs_it(tmp_path):
+    markers = tmp_path / "runs"
+    settings = service_settings(tmp_path, embedded_mode="process", embedded_workers=1)
+    body = {"values": [1.0, 2.0], "seconds": 30, "marker_dir": str(markers)}
+    with TestClient(create_app(settings)) as client:
+        job_id = client.post("/v1/test-compute/jobs", json=body).json()["id"]
+        _wait_running(client, job_id)
+        started = time.monotonic()
+    stopped_in = time.monotonic() - started
+    assert stopped_in < STOP_SECONDS + 5
+    fast = {**body, "seconds": 0}
+    with TestClient(create_app(settings)) as client:
+        view = client.get(f"/v1/jobs/{job_id}").json()
+        assert view["attempts"][0]["outcome"] == "handed_back"
+        assert view["max_attempts"] == 4  # the stopped attempt is not counted against the job
+        client.post("/v1/test-compute/jobs", json=fast)  # the pool is alive and takes new work too
+        done = wait_for(client, job_id, timeout=120)
+    assert done["status"] == "succeeded" and [a["outcome"] for a in done["attempts"]] == ["handed_back", "succeeded"]
+
+
+def _children(pid: int) -> set[int]:
+    found = set()
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        found |= {int(p) for p in (task / "children").read_text().split()}
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    status = Path(f"/proc/{pid}/status").read_text() if Path(f"/proc/{pid}").exists() else ""
+    return "State:\tZ" not in status
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
+def test_job_processes_die_with_a_killed_service_and_write_nothing(tmp_path):
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    port = sock.getsockname()[1]
+    sock.close()
+    markers = tmp_path / "runs"
+    env = {"DATA_DIR": str(tmp_path / "var"), "PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": str(REPO),
+           "PLUGINS": "tests.support.kinds", "EMBEDDED_WORKERS": "1", "LOG_FORMAT": "text"}
+    binary = Path(sys.executable).parent / "plantsolve"
+    server = subprocess.Popen([str(binary), "serve", "--port", str(port)], cwd=tmp_path, env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        base = f"http://127.0.0.1:{port}"
+        deadline = time.monotonic() + 90
+        while True:
+            try:
+                if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
+                    break
+            except httpx.HTTPError:
+                pass
+            assert time.monotonic() < deadline and server.poll() is None, "the service did not start"
+            time.sleep(0.2)
+        job = httpx.post(f"{base}/v1/test-compute/jobs", timeout=10,
+                         json={"values": [1.0], "seconds": 6, "marker_dir": str(markers)}).json()
+        while httpx.get(f"{base}/v1/jobs/{job['id']}", timeout=5).json()["status"] != "running":
+            assert time.monotonic() < deadline
+            time.sleep(0.1)
+        workers = _children(server.pid)
+        assert workers
+        server.send_signal(signal.SIGKILL)
+        server.wait(timeout=10)
+        gone_by = time.monotonic() + PARENT_WATCH_SECONDS * 4 + 2
+        while any(_alive(pid) for pid in workers) and time.monotonic() < gone_by:
+            time.sleep(0.1)
+        assert not [pid for pid in workers if _alive(pid)], "a job process outlived its service"
+        time.sleep(7)  # past the moment the solve would have finished
+        assert not markers.exists() or not list(markers.iterdir()), "an orphan finished the job"
+    finally:
+        if server.poll() is None:
+            server.kill()
