@@ -1,14 +1,19 @@
 # syntax=docker/dockerfile:1
 # Multi-stage: the build stage installs plantsolve and its dependencies into a virtual environment;
 # the runtime stage copies that environment alone (no wheels, no pip cache, no build tools).
+# The versions are the lock's (requirements/image.txt: every kind plus scaled mode, with hashes), so
+# two builds of one commit install the same packages. The dependencies are installed before the code
+# is copied: a code change rebuilds one small layer.
 FROM python:3.11-slim AS build
-ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1
-RUN python -m venv /opt/venv
+ENV PIP_NO_CACHE_DIR=1 PIP_DISABLE_PIP_VERSION_CHECK=1 UV_PYTHON_DOWNLOADS=never UV_NO_CACHE=1
+RUN pip install uv==0.13.8 && python -m venv /opt/venv
 ENV PATH=/opt/venv/bin:$PATH
 WORKDIR /src
+COPY requirements/image.txt ./requirements/image.txt
+RUN uv pip install --python /opt/venv/bin/python --require-hashes -r requirements/image.txt
 COPY pyproject.toml README.md ./
 COPY plantsolve ./plantsolve
-RUN pip install --upgrade pip && pip install . && find /opt/venv -name '__pycache__' -prune -exec rm -rf {} +
+RUN uv pip install --python /opt/venv/bin/python --no-deps . && find /opt/venv -name '__pycache__' -prune -exec rm -rf {} +
 
 FROM python:3.11-slim AS runtime
 ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 DATA_DIR=/data MPLBACKEND=Agg PATH=/opt/venv/bin:$PATH \
@@ -17,7 +22,8 @@ RUN useradd --create-home --uid 10001 plantsolve && mkdir -p /data && chown plan
 COPY --from=build /opt/venv /opt/venv
 USER plantsolve
 WORKDIR /home/plantsolve
-VOLUME ["/data"]
+# no VOLUME: compose mounts the named volume 'artifacts' at /data where it is needed (a VOLUME here
+# would leave an anonymous volume behind every one-shot container, such as each 'migrate' run)
 EXPOSE 8000
 # the API's check; the worker service in docker-compose.yml replaces it with a Celery ping
 HEALTHCHECK --interval=10s --timeout=3s --retries=5 \

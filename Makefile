@@ -1,23 +1,43 @@
 # Two commands on a fresh machine (only python3 >= 3.11 and make needed):
 #   make run    set up .venv and start the service on the embedded default (SQLite, job processes it supervises)
 #   make test   set up .venv and run the whole test suite
-PYTHON ?= python3
-VENV   ?= .venv
-BIN    := $(VENV)/bin
-HOST   ?= 127.0.0.1
-PORT   ?= 8000
+# Both install the versions pinned in requirements/*.txt (with hashes), written by `make lock` from
+# pyproject.toml: `make run` the service with every kind (requirements/service.txt), `make test` that plus
+# scaled mode and the test tools (requirements/test.txt). The installer is uv, pinned below and set up
+# into .tools/ by pip; packages come from its cache (~/.cache/uv) after the first install.
+PYTHON     ?= python3
+VENV       ?= .venv
+BIN        := $(VENV)/bin
+HOST       ?= 127.0.0.1
+PORT       ?= 8000
+UV_VERSION := 0.13.8
+UV         := .tools/bin/uv
+# never let uv fetch a Python of its own: the venv is made with $(PYTHON)
+export UV_PYTHON_DOWNLOADS := never
+# what `make lock` resolves for: the Python and platform of the machines, CI and the image
+LOCK_FLAGS := --python-version 3.11 --python-platform x86_64-manylinux_2_36 --generate-hashes --quiet
 
-.PHONY: install run test test-fast bench worker migrate clean
+.PHONY: install install-service run test test-fast bench worker migrate lock clean
 
-$(BIN)/plantsolve: pyproject.toml
+$(UV):
+	$(PYTHON) -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --target .tools uv==$(UV_VERSION)
+
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+
+# one stamp per installed set: each install is the lock's exact versions, then plantsolve itself (editable)
+$(VENV)/.installed-%: requirements/%.txt pyproject.toml | $(UV) $(BIN)/python
+	$(UV) pip install --quiet --python $(BIN)/python --require-hashes -r requirements/$*.txt
+	$(UV) pip install --quiet --python $(BIN)/python --no-deps -e .
 	touch $@
 
-install: $(BIN)/plantsolve
+# everything the tests need (a developer's install)
+install: $(VENV)/.installed-test
 
-run: install
+# the service alone: every kind, no test tools
+install-service: $(VENV)/.installed-service
+
+run: install-service
 	$(BIN)/plantsolve serve --host $(HOST) --port $(PORT)
 
 test: install
@@ -30,12 +50,19 @@ test-fast: install
 worker: install
 	$(BIN)/plantsolve worker
 
-migrate: install
+migrate: install-service
 	$(BIN)/plantsolve migrate
 
 bench: install
 	$(BIN)/python bench/api.py --quick
 	@for b in alignment tube perfmap polyhedra flowmeter rigidity dedup; do [ -f bench/$$b.py ] && $(BIN)/python bench/$$b.py --quick || true; done
 
+# Re-pin after changing pyproject.toml's dependencies (needs the package index). The service and
+# image sets take the test set's versions, so every set agrees on every package it shares.
+lock: $(UV)
+	$(UV) pip compile pyproject.toml --extra test $(LOCK_FLAGS) -o requirements/test.txt
+	$(UV) pip compile pyproject.toml --extra kinds --extra scaled -c requirements/test.txt $(LOCK_FLAGS) -o requirements/image.txt
+	$(UV) pip compile pyproject.toml --extra kinds -c requirements/test.txt $(LOCK_FLAGS) -o requirements/service.txt
+
 clean:
-	rm -rf $(VENV) var *.egg-info
+	rm -rf $(VENV) .tools var *.egg-info

@@ -19,6 +19,7 @@ The module imports nothing else of plantsolve: it can be copied next to a script
 from __future__ import annotations
 
 import asyncio
+import base64
 import hashlib
 import hmac
 import inspect
@@ -199,16 +200,85 @@ def _list_params(kind: str | None, status: str | None, limit: int, cursor: str |
     return params
 
 
-def verify_signature(body: bytes, header: str, secret: bytes | str) -> bool:
-    """For a webhook receiver: does ``X-Plantsolve-Signature`` (``header``) sign ``body`` with ``secret``?"""
-    key = secret.encode() if isinstance(secret, str) else secret
-    expected = "sha256=" + hmac.new(key, body, hashlib.sha256).hexdigest()
-    return hmac.compare_digest(expected, header or "")
+class WebhookVerificationError(ValueError):
+    """A webhook delivery that does not verify: headers missing, timestamp out of tolerance, no
+    matching signature."""
+
+
+class WebhookReplayed(WebhookVerificationError):
+    """A delivery whose ``webhook-id`` this verifier has accepted before (a replay, or a retry of a
+    delivery the receiver already took: answer 2xx without acting on it again)."""
 
 
 def webhook_secret(api_key: str) -> str:
-    """The webhook secret the service derives from an API key when WEBHOOK_SECRETS names none for its tenant."""
-    return hmac.new(api_key.encode(), b"plantsolve-webhook", hashlib.sha256).hexdigest()
+    """The webhook secret (``whsec_<base64>``, as Standard Webhooks writes secrets) that the service
+    derives from an API key when WEBHOOK_SECRETS names none for its tenant."""
+    key = hmac.new(api_key.encode(), b"plantsolve-webhook", hashlib.sha256).digest()
+    return "whsec_" + base64.b64encode(key).decode()
+
+
+def _webhook_key(secret: str | bytes) -> bytes:
+    if isinstance(secret, bytes):
+        return secret
+    if secret.startswith("whsec_"):
+        return base64.b64decode(secret[len("whsec_"):], validate=True)
+    return secret.encode()  # a WEBHOOK_SECRETS value without the prefix is used as its UTF-8 bytes
+
+
+class WebhookVerifier:
+    """Checks completion webhooks as the Standard Webhooks specification says, for a receiver:
+
+        verifier = WebhookVerifier(webhook_secret(api_key))      # or the WEBHOOK_SECRETS value
+        view = verifier.verify(request_body, request_headers)    # the job view, or an exception
+
+    ``webhook-signature`` must hold a ``v1,<base64 HMAC-SHA256 of "{id}.{timestamp}.{body}">`` made
+    with the secret; ``webhook-timestamp`` must lie within ``tolerance_seconds`` of now; and a
+    ``webhook-id`` accepted before is refused (:class:`WebhookReplayed`). Ids are remembered for the
+    tolerance window only: an older delivery is refused by its timestamp anyway. The memory is this
+    object's: a receiver with several processes keeps the ids in a shared store instead. A receiver
+    that accepted a delivery and then failed to act on it calls :meth:`forget` so the retry passes."""
+
+    def __init__(self, secret: str | bytes, tolerance_seconds: float = 300.0):
+        self.key = _webhook_key(secret)
+        if not self.key:
+            raise ValueError("the webhook secret is empty")
+        self.tolerance = tolerance_seconds
+        self._seen: dict[str, float] = {}  # webhook-id -> its timestamp
+
+    def verify(self, body: bytes, headers: Mapping[str, str], now: float | None = None) -> Any:
+        """The JSON body when the delivery verifies; else :class:`WebhookVerificationError`."""
+        lower = {k.lower(): v for k, v in headers.items()}
+        msg_id, stamp, signatures = (lower.get(h) for h in ("webhook-id", "webhook-timestamp", "webhook-signature"))
+        if not (msg_id and stamp and signatures):
+            raise WebhookVerificationError("missing webhook-id, webhook-timestamp or webhook-signature")
+        try:
+            sent = int(stamp)
+        except ValueError:
+            raise WebhookVerificationError(f"webhook-timestamp {stamp!r} is not Unix seconds") from None
+        now = time.time() if now is None else now
+        if abs(now - sent) > self.tolerance:
+            raise WebhookVerificationError(
+                f"webhook-timestamp is {now - sent:+.0f} s from now, beyond the {self.tolerance:.0f} s tolerance")
+        expected = hmac.new(self.key, f"{msg_id}.{stamp}.".encode() + body, hashlib.sha256).digest()
+        for candidate in signatures.split():  # space-separated; several while a secret is rotated
+            version, _, value = candidate.partition(",")
+            try:
+                given = base64.b64decode(value, validate=True)
+            except ValueError:
+                continue
+            if version == "v1" and hmac.compare_digest(expected, given):
+                break
+        else:
+            raise WebhookVerificationError("no webhook-signature matches the body with this secret")
+        self._seen = {k: t for k, t in self._seen.items() if abs(now - t) <= self.tolerance}
+        if msg_id in self._seen:
+            raise WebhookReplayed(f"webhook-id {msg_id} was accepted before")
+        self._seen[msg_id] = sent
+        return json.loads(body)
+
+    def forget(self, msg_id: str) -> None:
+        """Accept ``msg_id`` once more (its handling failed, the sender's retry is wanted)."""
+        self._seen.pop(msg_id, None)
 
 
 def _check_sha256(content: bytes, artifact: Mapping[str, Any]) -> None:
@@ -537,5 +607,5 @@ class AsyncClient:
 __all__ = [
     "Client", "AsyncClient", "Job", "EventParser", "ApiError", "Unauthorized", "NotFound", "Conflict",
     "PayloadTooLarge", "UnsupportedMediaType", "InvalidInput", "ServerError", "JobFailed", "IntegrityError",
-    "verify_signature", "webhook_secret",
+    "WebhookVerifier", "WebhookVerificationError", "WebhookReplayed", "webhook_secret",
 ]

@@ -8,13 +8,21 @@ receiver. A delivery that fails (no 2xx, a timeout, a refused connection) is ret
 ``WEBHOOK_RETRY_SECONDS``, doubled each time, up to ``WEBHOOK_MAX_ATTEMPTS``; the job view shows
 how it went (``callback``).
 
-Each body is signed: ``X-Plantsolve-Signature: sha256=<hex HMAC-SHA256 of the raw body>`` with the
-tenant's secret, from ``WEBHOOK_SECRETS`` or else derived from its API key as
-``hex(HMAC-SHA256(key=<API key>, msg="plantsolve-webhook"))``.
+Each delivery is signed per the Standard Webhooks specification (standardwebhooks.com), so that a
+receiver can refuse a captured delivery sent again: ``webhook-id`` (``msg_<job id hex>``, the same on
+every attempt, for the receiver's de-duplication), ``webhook-timestamp`` (Unix seconds of this attempt)
+and ``webhook-signature: v1,<base64 HMAC-SHA256 of "{id}.{timestamp}.{body}">``. The signature is made
+by the ``standardwebhooks`` package. The key is the tenant's secret: its ``WEBHOOK_SECRETS`` entry
+(``whsec_<base64>`` as the spec writes secrets: the key is the decoded bytes; any other text is used as
+its UTF-8 bytes), else derived from its API key as ``HMAC-SHA256(key=<API key>, msg="plantsolve-webhook")``
+(32 bytes; ``plantsolve.client.webhook_secret(key)`` gives it as ``whsec_...``). The former
+``X-Plantsolve-Signature`` (body only, replayable) is no longer sent.
 """
 
 from __future__ import annotations
 
+import base64
+import binascii
 import hashlib
 import hmac
 import ipaddress
@@ -27,23 +35,44 @@ from datetime import datetime, timedelta, timezone
 from urllib.parse import urlsplit
 
 import httpx
+from standardwebhooks import Webhook
 
 from plantsolve.app.auth import KeyRing
 from plantsolve.jobs.errors import NotFound, Unprocessable, field_problem
 
 log = logging.getLogger("plantsolve.webhooks")
 
-SIGNATURE_HEADER = "X-Plantsolve-Signature"
+SECRET_PREFIX = "whsec_"
 DERIVATION_MESSAGE = b"plantsolve-webhook"
 LEASE_SECONDS = 120.0  # one delivery's claim: longer than its timeout
 
 
 def derived_secret(api_key: str) -> bytes:
-    return hmac.new(api_key.encode(), DERIVATION_MESSAGE, hashlib.sha256).hexdigest().encode()
+    """The signing key of a tenant that has no WEBHOOK_SECRETS entry (raw bytes)."""
+    return hmac.new(api_key.encode(), DERIVATION_MESSAGE, hashlib.sha256).digest()
 
 
-def signature(secret: bytes, body: bytes) -> str:
-    return "sha256=" + hmac.new(secret, body, hashlib.sha256).hexdigest()
+def secret_bytes(text: str) -> bytes:
+    """The signing key a WEBHOOK_SECRETS value stands for: ``whsec_<base64>`` decoded (as the spec
+    writes secrets), any other text as its UTF-8 bytes (secrets set before the spec was followed)."""
+    if text.startswith(SECRET_PREFIX):
+        try:
+            return base64.b64decode(text[len(SECRET_PREFIX):], validate=True)
+        except binascii.Error as bad:
+            raise ValueError(f"WEBHOOK_SECRETS: a whsec_ secret must be base64 ({bad})") from None
+    return text.encode()
+
+
+def message_id(job_id: uuid.UUID) -> str:
+    """``webhook-id``: one per event (a job finishes once), the same on every attempt of its delivery."""
+    return f"msg_{job_id.hex}"
+
+
+def signed_headers(secret: bytes, msg_id: str, body: bytes, at: datetime | None = None) -> dict[str, str]:
+    """The three Standard Webhooks headers for ``body`` sent at ``at`` (now by default)."""
+    at = (at or datetime.now(timezone.utc)).replace(microsecond=0)
+    return {"webhook-id": msg_id, "webhook-timestamp": str(int(at.timestamp())),
+            "webhook-signature": Webhook(secret).sign(msg_id, at, body.decode())}
 
 
 class WebhookSecrets:
@@ -53,9 +82,9 @@ class WebhookSecrets:
         for entry in entries:
             name, sep, secret = entry.partition(":")
             if sep and secret:
-                self.named[name] = secret.encode()
+                self.named[name] = secret_bytes(secret)
             elif entry:
-                self.default = entry.encode()
+                self.default = secret_bytes(entry)
         self.keys = keys
 
     def secret_for(self, owner: str) -> bytes | None:
@@ -166,8 +195,8 @@ class WebhookNotifier:
         secret = self.secrets.secret_for(job.owner)
         headers = {"Content-Type": "application/json", "X-Plantsolve-Event": "job.finished",
                    "X-Plantsolve-Delivery": f"{job_id}/{attempt}"}
-        if secret is not None:
-            headers[SIGNATURE_HEADER] = signature(secret, body)
+        if secret is not None:  # signed at each attempt: a retry carries the same id and a fresh timestamp
+            headers.update(signed_headers(secret, message_id(job_id), body))
         error = None
         target = urlsplit(job.callback_url)
         inside = None if self.settings.webhook_private_targets else non_public_address(target.hostname or "",

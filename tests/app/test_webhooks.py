@@ -1,8 +1,10 @@
 """The completion webhook: POSTed once the job has finished, with the job view, signed with the
-tenant's secret, retried with backoff, given up after WEBHOOK_MAX_ATTEMPTS; never in the runner's way."""
+tenant's secret per the Standard Webhooks spec (a captured delivery cannot be replayed), retried with
+backoff, given up after WEBHOOK_MAX_ATTEMPTS; never in the runner's way."""
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import hmac
 import json
@@ -11,10 +13,13 @@ import time
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
+import pytest
 from fastapi.testclient import TestClient
+from standardwebhooks import Webhook
 
 from plantsolve.app.main import create_app
-from plantsolve.client import Client, verify_signature, webhook_secret
+from plantsolve.client import (Client, WebhookReplayed, WebhookVerificationError, WebhookVerifier,
+                               webhook_secret)
 from tests.conftest import service_settings, wait_for
 
 ALICE = {"Authorization": "Bearer key-a"}
@@ -76,27 +81,73 @@ def _callback_state(client, job_id, states=("delivered", "failed"), timeout=20.0
         time.sleep(0.05)
 
 
-def test_a_finished_job_is_posted_signed_with_the_key_derived_secret(tmp_path):
-    with receiver() as hook, TestClient(_app(tmp_path)) as client:
+def spec_signature(key: bytes, msg_id: str, timestamp: str, body: bytes) -> str:
+    """The Standard Webhooks v1 signature, written here from the spec (not taken from the service)."""
+    signed = f"{msg_id}.{timestamp}.".encode() + body
+    return "v1," + base64.b64encode(hmac.new(key, signed, hashlib.sha256).digest()).decode()
+
+
+def _delivered(tmp_path, **overrides) -> dict:
+    """One real delivery of a finished job, as the receiver got it."""
+    with receiver() as hook, TestClient(_app(tmp_path, **overrides)) as client:
         job = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [3.0, 4.0]},
                           headers=ALICE).json()
-        assert job["callback"] == {"url": hook.url, "state": "pending", "attempts": 0, "error": None}
-        assert _callback_state(client, job["id"]) == {"url": hook.url, "state": "delivered", "attempts": 1, "error": None}
+        assert _callback_state(client, job["id"])["state"] == "delivered"
         (request,) = hook.requests
-        view = json.loads(request["body"])
-        assert view["id"] == job["id"] and view["status"] == "succeeded" and view["artifacts"]
-        assert request["headers"]["Content-Type"] == "application/json"
-        assert request["headers"]["X-Plantsolve-Event"] == "job.finished"
-        # the receiver checks the signature with the secret it derives from its own API key
-        secret = hmac.new(b"key-a", b"plantsolve-webhook", hashlib.sha256).hexdigest().encode()
-        expected = "sha256=" + hmac.new(secret, request["body"], hashlib.sha256).hexdigest()
-        assert hmac.compare_digest(request["headers"]["X-Plantsolve-Signature"], expected)
-        wrong = "sha256=" + hmac.new(b"other", request["body"], hashlib.sha256).hexdigest()
-        assert request["headers"]["X-Plantsolve-Signature"] != wrong
-        # the client's helpers do the same for a receiver written in Python
-        assert verify_signature(request["body"], request["headers"]["X-Plantsolve-Signature"], webhook_secret("key-a"))
-        assert not verify_signature(request["body"] + b" ", request["headers"]["X-Plantsolve-Signature"],
-                                    webhook_secret("key-a"))
+        return {"job": job, **request}
+
+
+def test_a_finished_job_is_posted_signed_per_standard_webhooks(tmp_path):
+    before = int(time.time())
+    delivery = _delivered(tmp_path)
+    job, body, headers = delivery["job"], delivery["body"], delivery["headers"]
+    assert job["callback"]["state"] == "pending" and job["callback"]["attempts"] == 0
+    view = json.loads(body)
+    assert view["id"] == job["id"] and view["status"] == "succeeded" and view["artifacts"]
+    assert headers["Content-Type"] == "application/json"
+    assert headers["X-Plantsolve-Event"] == "job.finished"
+    assert "X-Plantsolve-Signature" not in headers  # the body-only, replayable signature is gone
+    msg_id, stamp = headers["webhook-id"], headers["webhook-timestamp"]
+    assert msg_id == "msg_" + job["id"].replace("-", "")
+    assert before <= int(stamp) <= time.time() + 1
+    # the receiver derives the key from its own API key and checks the signature as the spec says
+    key = hmac.new(b"key-a", b"plantsolve-webhook", hashlib.sha256).digest()
+    assert headers["webhook-signature"] == spec_signature(key, msg_id, stamp, body)
+    assert webhook_secret("key-a") == "whsec_" + base64.b64encode(key).decode()
+    # the reference implementation agrees, and so does the client's verifier
+    assert Webhook(webhook_secret("key-a")).verify(body, headers)["id"] == job["id"]
+    assert WebhookVerifier(webhook_secret("key-a")).verify(body, headers)["id"] == job["id"]
+    with pytest.raises(WebhookVerificationError, match="no webhook-signature matches"):
+        WebhookVerifier(webhook_secret("key-b")).verify(body, headers)
+
+
+def test_a_tampered_or_replayed_delivery_is_refused(tmp_path):
+    delivery = _delivered(tmp_path)
+    body, headers, secret = delivery["body"], delivery["headers"], webhook_secret("key-a")
+    sent = int(headers["webhook-timestamp"])
+    verifier = WebhookVerifier(secret, tolerance_seconds=300)
+    # a changed body: the signature no longer matches
+    tampered = body.replace(b'"succeeded"', b'"failed"')
+    assert tampered != body
+    with pytest.raises(WebhookVerificationError, match="no webhook-signature matches"):
+        verifier.verify(tampered, headers)
+    # a moved timestamp: it is part of what is signed
+    with pytest.raises(WebhookVerificationError, match="no webhook-signature matches"):
+        verifier.verify(body, {**headers, "webhook-timestamp": str(sent + 1)})
+    assert verifier.verify(body, headers)["status"] == "succeeded"
+    # the same delivery sent again: its id was taken
+    with pytest.raises(WebhookReplayed):
+        verifier.verify(body, headers)
+    # captured and replayed later, to a receiver that does not remember the id: too old
+    with pytest.raises(WebhookVerificationError, match="beyond the 300 s tolerance"):
+        WebhookVerifier(secret).verify(body, headers, now=sent + 301)
+    assert WebhookVerifier(secret).verify(body, headers, now=sent + 299)["status"] == "succeeded"
+    # a receiver whose handling failed lets the sender's retry through
+    verifier.forget(headers["webhook-id"])
+    assert verifier.verify(body, headers)["status"] == "succeeded"
+    # no signature headers at all
+    with pytest.raises(WebhookVerificationError, match="missing"):
+        verifier.verify(body, {"Content-Type": "application/json"})
 
 
 def test_failed_deliveries_are_retried_with_growing_delays(tmp_path):
@@ -109,6 +160,10 @@ def test_failed_deliveries_are_retried_with_growing_delays(tmp_path):
         first_gap, second_gap = times[1] - times[0], times[2] - times[1]
         assert first_gap >= 0.2 and second_gap >= 0.4  # 0.2 s, then doubled
         assert json.loads(hook.requests[-1]["body"])["status"] == "failed"  # failed jobs are reported too
+        # one message, three attempts: the same webhook-id (for de-duplication), each attempt signed anew
+        assert len({r["headers"]["webhook-id"] for r in hook.requests}) == 1
+        for request in hook.requests:
+            assert WebhookVerifier(webhook_secret("key-a")).verify(request["body"], request["headers"])
 
 
 def test_the_client_asks_for_a_webhook(tmp_path):
@@ -129,13 +184,18 @@ def test_a_receiver_that_keeps_failing_is_given_up(tmp_path):
         assert len(hook.requests) == 2
 
 
+SPEC_SECRET = "whsec_MfKQ9r8GKYqrTwjUPD8ILPZIo2LaLaSw"  # the spec's example secret: base64 of 24 bytes
+
+
 def test_webhook_secrets_setting_and_bad_urls(tmp_path):
-    with receiver() as hook, TestClient(_app(tmp_path, api_keys=[], webhook_secrets=["s3cret"])) as client:
+    with receiver() as hook, TestClient(_app(tmp_path, api_keys=[], webhook_secrets=[SPEC_SECRET])) as client:
         job = client.post("/v1/test-compute/jobs", params={"callback_url": hook.url}, json={"values": [1.0]}).json()
         assert _callback_state(client, job["id"], headers={})["state"] == "delivered"
-        body = hook.requests[0]["body"]
-        assert hook.requests[0]["headers"]["X-Plantsolve-Signature"] == \
-            "sha256=" + hmac.new(b"s3cret", body, hashlib.sha256).hexdigest()
+        body, headers = hook.requests[0]["body"], hook.requests[0]["headers"]
+        key = base64.b64decode(SPEC_SECRET.removeprefix("whsec_"))  # the key is the decoded bytes
+        assert headers["webhook-signature"] == spec_signature(key, headers["webhook-id"],
+                                                              headers["webhook-timestamp"], body)
+        assert Webhook(SPEC_SECRET).verify(body, headers)["id"] == job["id"]
         for bad in ("ftp://host/x", "not a url", "/relative"):
             refused = client.post("/v1/test-compute/jobs", params={"callback_url": bad}, json={"values": [1.0]})
             assert refused.status_code == 422 and refused.json()["errors"][0]["loc"] == ["query", "callback_url"]
@@ -180,3 +240,29 @@ def test_callbacks_into_the_services_own_network_are_refused_by_default(tmp_path
         state = _callback_state(client, job["id"])
         assert state["state"] == "failed" and "non-public address" in state["error"]
         assert hook.requests == []
+
+
+def test_the_example_receiver_takes_a_delivery_once_and_refuses_forgeries(tmp_path):
+    """examples/client/webhook_receiver.py, fed a real delivery, its replay and a forgery."""
+    import importlib.util
+
+    import httpx
+
+    spec = importlib.util.spec_from_file_location("webhook_receiver", "examples/client/webhook_receiver.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    delivery = _delivered(tmp_path)
+    taken: list[dict] = []
+    server = example.make_server("127.0.0.1", 0, webhook_secret("key-a"), taken.append)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/hook"
+        headers = {k: v for k, v in delivery["headers"].items() if k.lower() != "content-length"}
+        assert httpx.post(url, content=delivery["body"], headers=headers).status_code == 204
+        assert httpx.post(url, content=delivery["body"], headers=headers).status_code == 200  # replayed
+        forged = delivery["body"].replace(b'"succeeded"', b'"cancelled"')
+        assert httpx.post(url, content=forged, headers=headers).status_code == 401
+        assert [view["id"] for view in taken] == [delivery["job"]["id"]]
+    finally:
+        server.shutdown()
+        server.server_close()

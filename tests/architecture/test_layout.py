@@ -114,7 +114,9 @@ def _is_module(name: str) -> bool:
 
 def test_no_import_cycles_and_no_imports_hidden_in_functions():
     """Module-level imports form no cycle, so none has to be hidden in a function to break one.
-    Only the CLI imports lazily (so ``plantsolve --help`` does not load numpy or FastAPI)."""
+    Only the CLI imports lazily (so ``plantsolve --help`` does not load numpy or FastAPI), and the
+    dispatcher choice imports the Celery one only in scaled mode (Celery is the [scaled] extra, not
+    installed by ``make run``)."""
     import networkx as nx
 
     graph = nx.DiGraph()
@@ -134,7 +136,8 @@ def test_no_import_cycles_and_no_imports_hidden_in_functions():
         for node in ast.walk(tree):
             if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in top_level:
                 names = [node.module or ""] if isinstance(node, ast.ImportFrom) else [a.name for a in node.names]
-                if any(n.startswith("plantsolve") for n in names) and path.name != "cli.py" and "migrations" not in path.parts:
+                if any(n.startswith("plantsolve") for n in names) and path.name != "cli.py" and "migrations" not in path.parts \
+                        and path.relative_to(REPO).as_posix() != "plantsolve/workers/dispatch.py":
                     hidden.append(f"{path.relative_to(REPO)}:{node.lineno}")
     cycles = list(nx.simple_cycles(graph))
     assert not cycles, cycles
