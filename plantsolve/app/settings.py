@@ -42,7 +42,9 @@ class AppSettings(JobSettings):
     webhook_secrets: Annotated[list[str], NoDecode] = Field(
         default_factory=list,
         description="Comma-separated 'tenant:secret' (or one bare secret for every tenant) signing the completion "
-        "webhooks; a tenant without one gets hex(HMAC-SHA256(key=<its API key>, msg='plantsolve-webhook')).",
+        "webhooks per Standard Webhooks: 'whsec_<base64>' (the decoded bytes are the key; text without the prefix "
+        "is used as its UTF-8 bytes); a tenant without one gets the secret derived from its API key "
+        "(plantsolve.client.webhook_secret(key)).",
     )
     webhook_private_targets: bool = Field(
         default=False, description="Allow webhooks to loopback, private, link-local and other non-public addresses "
