@@ -75,7 +75,8 @@ def test_each_kind_has_its_result_schema(spec):
 
 def test_results_are_told_apart_by_their_kind(shipped):
     """getJobResult is a oneOf with a discriminator on 'kind', which every result carries (required, one value)."""
-    generic = shipped["paths"]["/v1/jobs/{job_id}/result"]["get"]["responses"]["200"]["content"]["application/json"]["schema"]
+    answer = shipped["paths"]["/v1/jobs/{job_id}/result"]["get"]["responses"]["200"]
+    generic = answer["content"]["application/json"]["schema"]
     mapping = {kind: f"#/components/schemas/{kind_spec.result_model.__name__}" for kind, kind_spec in KINDS.items()}
     assert generic["discriminator"] == {"propertyName": "kind", "mapping": mapping}
     assert sorted(entry["$ref"] for entry in generic["oneOf"]) == sorted(mapping.values())
