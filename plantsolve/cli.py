@@ -73,7 +73,15 @@ def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
     """uvicorn on the socket bound by :func:`bind` (what ``uvicorn.run`` does, minus the binding)."""
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level))
+    class Server(uvicorn.Server):
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+            await super().startup(sockets)
+            if self.started:  # uvicorn names the address only for sockets it bound itself
+                host, port = sock.getsockname()[:2]
+                logging.getLogger("uvicorn.error").info(
+                    "Uvicorn running on http://%s:%d (Press CTRL+C to quit)", f"[{host}]" if ":" in host else host, port)
+
+    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level))
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:
