@@ -4,7 +4,9 @@
 the same runner as the service, in a store of its own (not the server's database, unless ``--store`` or
 ``--data-dir`` names it); the result goes to OUT or standard output, artifacts to ``--artifacts DIR``
 (default next to OUT, or a temporary folder), warnings with their codes to standard error. Exit
-codes: 0 success, 2 invalid input (the problem is printed), 1 solver failure (the report is written).
+codes: 0 success, 2 invalid input (one line per bad field; ``--json`` prints the problem document), 1 solver
+failure (the report is written). A progress bar goes to standard error while the job runs (on a terminal, or
+with ``--progress``).
 """
 
 from __future__ import annotations
@@ -14,10 +16,13 @@ import gc
 import json
 import logging
 import os
+import socket
 import sys
 import tempfile
+import threading
 import uuid
 from pathlib import Path
+from typing import Any, Mapping
 
 
 def _settings():
@@ -26,20 +31,61 @@ def _settings():
     return get_settings()
 
 
+def bind(host: str, port: int) -> socket.socket:
+    """The listening address, bound now (as uvicorn would bind it), so that a busy port fails before any start-up
+    work; uvicorn then serves on this very socket, so nothing can take the port in between."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except BaseException:
+        sock.close()
+        raise
+    return sock
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
+    try:
+        sock = bind(args.host, args.port)
+    except OSError as error:  # before migrations run and job processes start: nothing to undo
+        reason = error.strerror or str(error)
+        print(f"plantsolve serve: cannot listen on {args.host}:{args.port}: {reason} (another server on this port? "
+              "choose another with --port)", file=sys.stderr)
+        return 2
+    try:
+        from plantsolve.app.auth import warn_if_exposed
+        from plantsolve.app.main import create_app
+
+        app = create_app()
+        warn_if_exposed(args.host, app.state.keys)
+        # Everything imported so far (numpy, scipy, every solver kind) lives as long as the process: out of
+        # the collector's sight, a full collection no longer walks it and stalls requests for tens of ms.
+        gc.collect()
+        gc.freeze()
+        serve_on(app, sock, args)
+    finally:
+        sock.close()
+    return 0
+
+
+def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
+    """uvicorn on the socket bound by :func:`bind` (what ``uvicorn.run`` does, minus the binding)."""
     import uvicorn
 
-    from plantsolve.app.auth import warn_if_exposed
-    from plantsolve.app.main import create_app
+    class Server(uvicorn.Server):
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+            await super().startup(sockets)
+            if self.started:  # uvicorn names the address only for sockets it bound itself
+                host, port = sock.getsockname()[:2]
+                logging.getLogger("uvicorn.error").info(
+                    "Uvicorn running on http://%s:%d (Press CTRL+C to quit)", f"[{host}]" if ":" in host else host, port)
 
-    app = create_app()
-    warn_if_exposed(args.host, app.state.keys)
-    # Everything imported so far (numpy, scipy, every solver kind) lives as long as the process: out of
-    # the collector's sight, a full collection no longer walks it and stalls requests for tens of ms.
-    gc.collect()
-    gc.freeze()
-    uvicorn.run(app, host=args.host, port=args.port, log_level=args.log_level)
-    return 0
+    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level))
+    try:
+        server.run(sockets=[sock])
+    except KeyboardInterrupt:
+        pass
 
 
 def cmd_worker(args: argparse.Namespace) -> int:
@@ -88,6 +134,8 @@ def _solve_settings(args: argparse.Namespace, scratch: Path):
     that CLI runs neither land in the server's database nor on its dashboard, unless ``--store`` or
     ``--data-dir`` names a database to use (the server's, to see the job there)."""
     settings = _settings()
+    # the bar reads the job row: progress is written at least 10 times a second (not the service's 2)
+    settings = settings.model_copy(update={"progress_write_seconds": min(settings.progress_write_seconds, 0.1)})
     if args.store or args.data_dir:
         updates: dict = {}
         if args.data_dir:
@@ -121,6 +169,16 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if not path.is_file():
         print(f"plantsolve: no such file: {path}", file=sys.stderr)
         return 2
+    if args.options is not None:
+        try:
+            options = json.loads(args.options)
+        except json.JSONDecodeError as error:
+            print(f"plantsolve: --options is not valid JSON: {error.msg} (column {error.colno})", file=sys.stderr)
+            return 2
+        if not isinstance(options, dict):
+            print(f"plantsolve: --options must be a JSON object, e.g. '{{\"units\": \"m\"}}', not "
+                  f"{type(options).__name__}", file=sys.stderr)
+            return 2
     with tempfile.TemporaryDirectory(prefix="plantsolve-cli-") as scratch:
         return _solve(args, path, _solve_settings(args, Path(scratch)))
 
@@ -143,13 +201,17 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
             else:
                 submitted = service.submit_upload(args.kind, path.name, content, args.options, None)
         except ProblemError as error:
-            print(json.dumps(error.to_problem().model_dump(mode="json", exclude_none=True), indent=2),
-                  file=sys.stderr)
+            problem = error.to_problem().model_dump(mode="json", exclude_none=True)
+            if args.json:
+                print(json.dumps(problem, indent=2), file=sys.stderr)
+            else:
+                print(problem_lines(problem, json.loads(args.options) if args.options else None), file=sys.stderr)
             return 2
         job_id = submitted.job.id
         name = worker_name("cli")
-        while dispatcher.pending:
-            run_job(ctx, dispatcher.pending.pop(0), worker=name, requeue=dispatcher.enqueue)
+        with JobProgressBar(service, job_id, args.kind, enabled=_wants_progress(args)):
+            while dispatcher.pending:
+                run_job(ctx, dispatcher.pending.pop(0), worker=name, requeue=dispatcher.enqueue)
         job = service.get(job_id)
         if job.status == SUCCEEDED:
             _write(args.output, job.result)
@@ -164,12 +226,110 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
             n = _print_warnings(report)
             print(f"job {job_id} succeeded" + (f" with {n} warning(s) (above)" if n else ""), file=sys.stderr)
             return 0
-        _write(args.output, {"job": str(job_id), "status": job.status, "report": job.report}, stream=sys.stderr)
+        failure = {"job": str(job_id), "status": job.status, "report": job.report}
+        if args.output or args.json:
+            _write(args.output, failure, stream=sys.stderr)
         _print_warnings(job.report)
-        print(f"job {job_id} {job.status}: {(job.report or {}).get('message', '')}", file=sys.stderr)
+        print(failure_lines(str(job_id), job.status, job.report, args.output), file=sys.stderr)
         return 1
     finally:
         ctx.close()
+
+
+def field_path(loc: list) -> str:
+    """A field's place as one writes it: ``values[1]``, ``options.grid``, ``file.row[12]``."""
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text or "(input)"
+
+
+def problem_lines(problem: dict, options: dict | None) -> str:
+    """A problem document as a headline and one line per bad field. A field the command's ``--options`` set is
+    named as such (its value came from there, not from the input file)."""
+    head, errors = problem.get("title", "error"), problem.get("errors") or []
+    if errors:  # the detail repeats the fields' messages: the lines below say them once each
+        head = f"{head} ({len(errors)} field{'s' if len(errors) > 1 else ''}):"
+    elif problem.get("detail"):
+        head = f"{head}: {problem['detail']}"
+    lines = [f"plantsolve: {head}"]
+    for error in errors:
+        loc = list(error.get("loc") or [])
+        inner = loc[1:] if loc[:1] == ["options"] else loc
+        from_options = options is not None and bool(inner) and inner[0] in options
+        lines.append(f"  {'--options ' if from_options else ''}{field_path(inner if from_options else loc)}: "
+                     f"{error.get('msg', '')}")
+    if errors:
+        lines.append("  (--json prints the whole problem document)")
+    return "\n".join(lines)
+
+
+def failure_lines(job_id: str, status: str, report: dict | None, output: str | None) -> str:
+    """A failed job in a few lines: its stage and message, each input error, where the whole report went."""
+    report = report or {}
+    stage = f" at stage '{report['stage']}'" if report.get("stage") else ""
+    lines = [f"job {job_id} {status}{stage}: {report.get('message', '')}"]
+    for error in (report.get("details") or {}).get("errors") or []:
+        if isinstance(error, dict):
+            lines.append(f"  {field_path(list(error.get('loc') or []))}: {error.get('msg', '')}")
+    lines.append(f"  the report is in {output}" if output else "  (--json prints the whole report)")
+    return "\n".join(lines)
+
+
+def _wants_progress(args: argparse.Namespace) -> bool:
+    """``--progress``/``--no-progress``; by default a bar only where someone watches (standard error is a terminal)."""
+    return args.progress if args.progress is not None else sys.stderr.isatty()
+
+
+class JobProgressBar:
+    """A progress bar on standard error for a job that runs in this process: a thread reads the job's progress
+    from its row (where the runner writes it, as for any job), so the run itself stays the service's."""
+
+    def __init__(self, service, job_id: uuid.UUID, kind: str, *, enabled: bool, period: float = 0.1) -> None:
+        self.service, self.job_id, self.kind, self.enabled, self.period = service, job_id, kind, enabled, period
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> "JobProgressBar":
+        if not self.enabled:
+            return self
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+
+        # a terminal's codes even when standard error is redirected: --progress asked for the bar
+        console = Console(stderr=True, force_terminal=True)
+        self._bar = Progress(TextColumn("{task.description}"), BarColumn(), TaskProgressColumn(), TimeElapsedColumn(),
+                             console=console, auto_refresh=False)
+        self._task = self._bar.add_task(self.kind, total=1.0)
+        self._bar.start()
+        self._thread = threading.Thread(target=self._follow, name="progress-bar", daemon=True)
+        self._thread.start()
+        return self
+
+    def _show(self) -> None:
+        state = self.service.state(self.job_id)
+        if state is None:
+            return
+        message = f"{self.kind}: {state.progress_message}" if state.progress_message else self.kind
+        self._bar.update(self._task, completed=state.progress, description=message[:60])
+        self._bar.refresh()
+
+    def _follow(self) -> None:
+        while not self._done.wait(self.period):
+            try:
+                self._show()
+            except Exception:  # a busy database: the next read will do
+                pass
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._thread is None:
+            return
+        self._done.set()
+        self._thread.join()
+        try:
+            self._show()  # the final state: 100 % for a finished job
+        finally:
+            self._bar.stop()
 
 
 def _write(output: str | None, payload, stream=sys.stdout) -> None:
@@ -181,27 +341,82 @@ def _write(output: str | None, payload, stream=sys.stdout) -> None:
         print(text, file=stream)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="plantsolve", description=__doc__.split("\n\n")[0])
-    commands = parser.add_subparsers(dest="command", required=True)
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Every option's default after its help; none where the help says in words what happens without it."""
 
-    serve = commands.add_parser("serve", help="start the API (and, without BROKER_URL, the in-process job pool)")
-    serve.add_argument("--host", default="127.0.0.1")
-    serve.add_argument("--port", type=int, default=8000)
-    serve.add_argument("--log-level", default="info")
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or action.default is argparse.SUPPRESS:
+            return action.help
+        return super()._get_help_string(action)
+
+
+def version() -> str:
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
+
+    try:
+        return installed("plantsolve")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown"
+
+
+def kinds_epilog(kinds: Mapping[str, Any]) -> str:
+    """The kinds, one line each: what they solve and which files they read."""
+    width = max(map(len, kinds))
+    lines = ["kinds:"]
+    for kind in sorted(kinds):
+        spec = kinds[kind]
+        files = ", ".join(spec.upload_extensions) or "JSON request only"
+        lines.append(f"  {kind:<{width}}  {(spec.description or '').split('. ')[0].rstrip('.')} [{files}]")
+    lines.append("\nJSON requests, options and result fields of every kind: README.md (Solvers), /docs of a server.")
+    return "\n".join(lines)
+
+
+def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
+    """The command line; ``kinds`` (the kind map) makes ``solve``'s KIND a choice among them, with help. Without it
+    (every command but ``solve``) no solver is imported, so that ``--help`` and ``--version`` answer at once."""
+    parser = argparse.ArgumentParser(prog="plantsolve", description=__doc__.split("\n\n")[0].replace("``", ""),
+                                     formatter_class=HelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    log_levels = ["critical", "error", "warning", "info", "debug"]
+
+    serve = commands.add_parser("serve", formatter_class=HelpFormatter,
+                                help="start the API (and, without BROKER_URL, the in-process job pool)",
+                                description="Start the API. Without BROKER_URL it also runs the jobs, in processes it\n"
+                                "supervises. The database is migrated at start (AUTO_MIGRATE). Further settings\n"
+                                "come from the environment (README.md, Settings).")
+    serve.add_argument("--host", default="127.0.0.1",
+                       help="address to listen on; 0.0.0.0 for every interface (then set API_KEYS)")
+    serve.add_argument("--port", type=int, default=8000,
+                       help="TCP port to listen on; a busy port is refused before anything starts")
+    serve.add_argument("--log-level", default="info", choices=log_levels, help="uvicorn's log level")
     serve.set_defaults(func=cmd_serve)
 
-    worker = commands.add_parser("worker", help="start a Celery worker (scaled mode, needs BROKER_URL)")
-    worker.add_argument("--concurrency", type=int, default=2)
-    worker.add_argument("--hostname", default=None)
-    worker.add_argument("--log-level", default="info")
+    worker = commands.add_parser("worker", formatter_class=HelpFormatter,
+                                 help="start a Celery worker (scaled mode, needs BROKER_URL)",
+                                 description="Start a Celery worker that runs jobs from BROKER_URL (scaled mode).")
+    worker.add_argument("--concurrency", type=int, default=2, help="jobs run at once (worker processes)")
+    worker.add_argument("--hostname", default=None,
+                        help="the worker's node name (default: Celery's, celery@<host name>)")
+    worker.add_argument("--log-level", default="info", choices=log_levels, help="Celery's log level")
     worker.set_defaults(func=cmd_worker)
 
-    solve = commands.add_parser("solve", help="run one job in this process and write its result")
-    solve.add_argument("kind")
-    solve.add_argument("input", help="request JSON, or a file the solver reads (PCF, PLY, CSV, ...)")
-    solve.add_argument("-o", "--output", help="result JSON (default: standard output)")
-    solve.add_argument("--options", help="JSON object of options for a file input")
+    solve = commands.add_parser("solve", formatter_class=HelpFormatter,
+                                help="run one job in this process and write its result",
+                                description=__doc__.split("\n\n")[1].replace("``", ""),
+                                epilog=kinds_epilog(kinds) if kinds else "kinds: see 'plantsolve solve --help'")
+    if kinds:
+        solve.add_argument("kind", choices=sorted(kinds), metavar="KIND",
+                           help=f"solver kind: one of {', '.join(sorted(kinds))} (below)")
+    else:
+        solve.add_argument("kind", metavar="KIND", help="solver kind")
+    solve.add_argument("input", metavar="INPUT",
+                       help="request JSON, or a file the solver reads (PCF, PLY, CSV, ...; the kinds' files below)")
+    solve.add_argument("-o", "--output", metavar="OUT", help="result JSON (default: standard output)")
+    solve.add_argument("--options", metavar="JSON",
+                       help="JSON object of options for a file input, as the upload form's 'options', e.g. "
+                       "'{\"units\": \"m\"}' (default: none; the kind's defaults)")
     solve.add_argument("--artifacts", metavar="DIR",
                        help="folder for artifacts (default: <OUT stem>_artifacts next to OUT; without -o a new "
                        "temporary folder, named on standard error)")
@@ -210,12 +425,32 @@ def build_parser() -> argparse.ArgumentParser:
                        help="database to record the job in (e.g. the server's DATABASE_URL, to see it on the "
                        "dashboard); default: a temporary store of this run only")
     where.add_argument("--data-dir", metavar="DIR",
-                       help="DATA_DIR whose SQLite database and artifact folder record the job (the server's: 'var')")
+                       help="DATA_DIR whose SQLite database and artifact folder record the job (the server's: 'var'); "
+                       "default: a temporary store of this run only")
+    solve.add_argument("--json", action="store_true",
+                       help="print an invalid input's problem document and a failure's report as JSON on standard "
+                       "error, instead of one line per field")
+    solve.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                       help="a progress bar on standard error while the job runs (default: when standard error is "
+                       "a terminal)")
     solve.set_defaults(func=cmd_solve)
 
-    migrate = commands.add_parser("migrate", help="upgrade the database schema")
+    migrate = commands.add_parser("migrate", formatter_class=HelpFormatter, help="upgrade the database schema",
+                                  description="Upgrade the database (DATABASE_URL, or DATA_DIR's SQLite file) to the\n"
+                                  "newest schema revision.")
     migrate.set_defaults(func=cmd_migrate)
     return parser
+
+
+def _command(argv: list[str]) -> str | None:
+    """The command named on the command line (the first word that is no option)."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
+def _kinds() -> Mapping[str, Any]:
+    from plantsolve.solvers.kinds import load_kinds
+
+    return load_kinds(_settings().plugins)
 
 
 def _single_threaded_blas() -> None:
@@ -229,7 +464,9 @@ def _single_threaded_blas() -> None:
 def main(argv: list[str] | None = None) -> int:
     _single_threaded_blas()
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    # the kind map (every solver's imports) only when solving, which imports it anyway
+    args = build_parser(_kinds() if _command(argv) == "solve" else None).parse_args(argv)
     return args.func(args)
 
 

@@ -16,7 +16,7 @@ from plantsolve.app import problems
 from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
-from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router
+from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router, declares_kind, upload_options_model
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.metrics import build_metrics
 from plantsolve.app.middleware import BodyLimitMiddleware
@@ -141,7 +141,9 @@ def _install_health(app: FastAPI) -> None:
 
 def _openapi(app: FastAPI) -> dict[str, Any]:
     """OpenAPI with every solver's request and result schema among the components (the
-    submit routes read their body by hand to accept JSON or multipart)."""
+    submit routes read their body by hand to accept JSON or multipart), each kind's multipart
+    ``options`` part, and ``kind`` required on results that carry it: the server always sends it,
+    and the result union's discriminator needs it."""
     if app.openapi_schema:
         return app.openapi_schema
     schema = get_openapi(title=app.title, version=app.version, summary=app.summary, description=app.description, routes=app.routes)
@@ -149,6 +151,9 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
     models: list[tuple[type, dict | None]] = [(Problem, None), (UploadedInput, None)]
     for spec in app.state.ctx.kinds.values():
         models += [(spec.request_model, spec.example() if spec.example else None), (spec.result_model, None)]
+        upload_options = upload_options_model(spec) if spec.upload_extensions else None
+        if upload_options is not None:
+            models.append((upload_options, None))
     for model, example in models:
         definition = model.model_json_schema(ref_template="#/components/schemas/{model}", by_alias=True)
         for name, sub in definition.pop("$defs", {}).items():
@@ -156,5 +161,9 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
         if example is not None:
             definition["examples"] = [example]
         components[model.__name__] = definition
+    for spec in app.state.ctx.kinds.values():
+        if declares_kind(spec):
+            result = components[spec.result_model.__name__]
+            result["required"] = ["kind", *[name for name in result.get("required", []) if name != "kind"]]
     app.openapi_schema = schema
     return schema

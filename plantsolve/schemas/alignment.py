@@ -201,6 +201,8 @@ class ConnectionResult(BaseModel):
 
 
 class AlignmentResult(BaseModel):
+    kind: Literal["alignment"] = Field(default="alignment", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     units: Units = Field(default="mm", description="Length unit of every length and position in this result (the "
                          "request's units); angles are in degrees.")
     angle_unit: Literal["deg"] = Field(default="deg", description="Unit of every angle in this result.")

@@ -85,6 +85,8 @@ class Verification(BaseModel):
 
 
 class DedupResult(BaseModel):
+    kind: Literal["dedup"] = Field(default="dedup", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     schema_: str = Field(alias="schema", description="IFC schema of the file, e.g. 'IFC4'.")
     length_unit: str = Field(description="The file's length unit (tolerances and transforms are in it).")
     tolerance: FiniteFloat

@@ -132,6 +132,8 @@ class LinearityPoint(BaseModel):
 
 
 class FlowmeterResult(BaseModel):
+    kind: Literal["flowmeter"] = Field(default="flowmeter", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.")
     sensitivity_first_order: float = Field(
         description="The uniform current-density iterate: sin(beta)/beta for patches, 1 for points, for buttons "

@@ -341,6 +341,8 @@ class ResultUnits(BaseModel):
 
 
 class PerfmapResult(BaseModel):
+    kind: Literal["perfmap"] = Field(default="perfmap", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     report: Report
     units: ResultUnits | None = Field(default=None, description="Units of flow, pressure, efficiency and settings "
                                       "in this result (and its query answers).")

@@ -141,6 +141,8 @@ class Adjacency(BaseModel):
 
 
 class PolyhedraResult(BaseModel):
+    kind: Literal["polyhedra"] = Field(default="polyhedra", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     units: Units
     zones: list[ZoneResult]
     faces: list[FaceResult]

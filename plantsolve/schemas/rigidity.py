@@ -132,6 +132,8 @@ class UnknownPart(BaseModel):
 
 
 class RigidityResult(BaseModel):
+    kind: Literal["rigidity"] = Field(default="rigidity", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     length_unit: str = Field(description="Unit of every length in the result: the request's units, or 'ldu' for parts.")
     dof: int = Field(description="Degrees of freedom relative to each other (6 rigid motions of the whole excluded; "
                      "each further unconnected piece adds 6).")

@@ -234,6 +234,8 @@ class TubeResult(BaseModel):
     segments, fit quality, outliers, optional inspection, report. See ``lra`` for the LRA
     convention."""
 
+    kind: Literal["tube"] = Field(default="tube", description="The solver kind of this result (what tells the "
+                                   "results of GET /v1/jobs/{id}/result apart).")
     pipe_radius: float
     start: Vec3 = Field(description="World position of the tube start (first end of the centreline).")
     orientation: Quaternion = Field(description="Maps the local start frame (see LRA convention) to world, [w,x,y,z].")

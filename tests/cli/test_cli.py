@@ -30,7 +30,7 @@ def test_solve_upload_with_options(tmp_path):
 
 def test_solve_invalid_input_exits_2_with_the_problem(tmp_path):
     (tmp_path / "bad.json").write_text(json.dumps({"values": [1.0, 666.0]}))
-    done = run(["solve", "test-compute", "bad.json", "-o", "out.json"], tmp_path)
+    done = run(["solve", "test-compute", "bad.json", "-o", "out.json", "--json"], tmp_path)
     assert done.returncode == 2
     problem = json.loads(done.stderr[done.stderr.index("{"):])
     assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["values", 1]
@@ -130,8 +130,6 @@ def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, capl
     """`plantsolve serve --host 0.0.0.0` without API_KEYS says so before the first request arrives."""
     import argparse
 
-    import uvicorn
-
     from plantsolve import cli
 
     monkeypatch.chdir(tmp_path)
@@ -140,7 +138,7 @@ def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, capl
     monkeypatch.setenv("EMBEDDED_MODE", "thread")
     monkeypatch.setattr(cli.gc, "freeze", lambda: None)  # the test process's heap stays collectable
     started = []
-    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: started.append(kw["host"]))
+    monkeypatch.setattr(cli, "serve_on", lambda app, sock, args: started.append(args.host))
     for host, warned in (("0.0.0.0", True), ("127.0.0.1", False)):
         caplog.clear()
         assert cli.cmd_serve(argparse.Namespace(host=host, port=0, log_level="warning")) == 0

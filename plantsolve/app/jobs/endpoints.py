@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import re
 import uuid
-from typing import Annotated, Any, Mapping
+from typing import Annotated, Any, Mapping, get_args
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response
 from fastapi.responses import FileResponse, JSONResponse
+from pydantic import BaseModel, ConfigDict, create_model
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
@@ -109,6 +110,55 @@ def result_schema_name(spec: SolverSpec) -> str:
     return spec.result_model.__name__
 
 
+def declares_kind(spec: SolverSpec) -> bool:
+    """Whether the kind's result model carries ``kind: Literal["<kind>"]`` (every shipped kind's does)."""
+    field = spec.result_model.model_fields.get("kind")
+    return field is not None and get_args(field.annotation) == (spec.kind,)
+
+
+def result_union(kinds: Mapping[str, SolverSpec]) -> dict[str, Any]:
+    """The schema of GET /v1/jobs/{id}/result: one of the kinds' result schemas, told apart by ``kind``. Should a
+    plugin kind's result not carry ``kind``, nothing can tell the results apart: then a plain anyOf."""
+    refs = {kind: f"#/components/schemas/{result_schema_name(kinds[kind])}" for kind in sorted(kinds)}
+    if not all(declares_kind(spec) for spec in kinds.values()):
+        return {"anyOf": [{"$ref": ref} for ref in refs.values()]}
+    return {"oneOf": [{"$ref": ref} for ref in refs.values()],
+            "discriminator": {"propertyName": "kind", "mapping": refs}}
+
+
+def with_kind(result: Any, spec: SolverSpec | None) -> Any:
+    """A stored result as the contract describes it: results stored before results carried ``kind`` get it here."""
+    if spec is not None and isinstance(result, dict) and "kind" not in result and declares_kind(spec):
+        return {"kind": spec.kind, **result}
+    return result
+
+
+def a_or_an(word: str) -> str:
+    """The indefinite article for ``word`` (kinds start with a vowel sound exactly when they start with a vowel)."""
+    return "an" if word[:1].lower() in "aeiou" else "a"
+
+
+def upload_options_name(spec: SolverSpec) -> str:
+    """Component name of the schema of a kind's multipart ``options`` part."""
+    return f"{camel(spec.kind)}UploadOptions"
+
+
+def upload_options_model(spec: SolverSpec) -> type[BaseModel] | None:
+    """What a kind's multipart ``options`` part holds, as a model for the OpenAPI document only: the fields of the
+    request's ``options``, flat. Open to further keys: some kinds' file readers take keys of their own from the form
+    (the request's ``units``, the file's unit); keys nothing reads are refused with a 422 naming them. None for a
+    kind whose request has no ``options`` object (plugin kinds): the part is then documented as a JSON object."""
+    options = spec.request_model.model_fields.get("options")
+    model = options.annotation if options is not None else None
+    if not (isinstance(model, type) and issubclass(model, BaseModel)):
+        return None
+    fields: dict[str, Any] = {name: (field.annotation, field) for name, field in model.model_fields.items()}
+    config = ConfigDict(**{**model.model_config, "extra": "allow", "title": upload_options_name(spec)})
+    return create_model(upload_options_name(spec), __config__=config, __doc__=(
+        f"The multipart 'options' part of {a_or_an(spec.kind)} {spec.kind} upload: the request's options, flat; "
+        "further keys a file reader takes (e.g. 'units') are passed on."), **fields)
+
+
 def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     name = spec.request_model.__name__
     extensions = ", ".join(spec.upload_extensions) or "none"
@@ -116,6 +166,9 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     if spec.example is not None:
         content["application/json"]["example"] = spec.example()
     if spec.upload_extensions:
+        typed = upload_options_model(spec) is not None
+        options = ({"$ref": f"#/components/schemas/{upload_options_name(spec)}"} if typed else
+                   {"type": "object", "additionalProperties": True})
         content["multipart/form-data"] = {
             "schema": {
                 "type": "object",
@@ -124,9 +177,12 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
                 "properties": {
                     "file": {"type": "string", "format": "binary",
                              "description": f"Accepted file types (by the file name's extension): {extensions}."},
-                    "options": {"type": "string", "description": "JSON object: the request's 'options'."},
+                    "options": {**options, "description": "The request's options as a JSON object (sent as a part "
+                                "of type application/json, or as a plain form field holding the JSON text)."},
                 },
-            }
+            },
+            # the part is JSON, not a string: generated clients send it typed and serialised
+            "encoding": {"options": {"contentType": "application/json"}},
         }
     return {"requestBody": {"required": True, "content": content}}
 
@@ -144,7 +200,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             response_model=JobView,
             tags=[kind],
             operation_id=f"submit{camel(kind)}Job",
-            summary=f"Submit a {kind} job",
+            summary=f"Submit {a_or_an(kind)} {kind} job",
             description=(spec.description or f"Run the {kind} solver.")
             + "\n\nAnswers 202 with the job and a Location header; 200 with the existing job for a repeated Idempotency-Key.",
             responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(400, 413, 415, 422)},
@@ -171,7 +227,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     def get_job(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
         return _json(service.view(service.get(job_id, caller.sees, brief=True)))
 
-    any_result = {"anyOf": [{"$ref": f"#/components/schemas/{result_schema_name(kinds[k])}"} for k in sorted(kinds)]}
+    any_result = result_union(kinds)
 
     @router.get(
         "/jobs/{job_id}/result",
@@ -184,7 +240,10 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         summary="Result of a succeeded job (any kind)",
     )
     def get_result(job_id: uuid.UUID, service: Service, caller: Caller) -> JSONResponse:
-        return JSONResponse(service.result(job_id, caller.sees))
+        result = service.result(job_id, caller.sees)
+        if isinstance(result, dict) and "kind" not in result:  # stored before results carried their kind
+            result = with_kind(result, kinds.get(service.get(job_id, caller.sees, brief=True).kind))
+        return JSONResponse(result)
 
     @router.post("/jobs/{job_id}/cancel", response_model=JobView, tags=["jobs"], responses=responses(404, 409, 413, 422),
                  operation_id="cancelJob", summary="Cancel a queued or running job")
@@ -245,9 +304,10 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
         return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
 
     for kind in sorted(kinds):
+        spec = kinds[kind]
         router.add_api_route(
             f"/{kind}/jobs/{{job_id}}/result",
-            kind_result_route(kind),
+            kind_result_route(spec),
             methods=["GET"],
             response_model=kinds[kind].result_model,
             tags=[kind],
@@ -276,9 +336,11 @@ def build_unknown_kind_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     return router
 
 
-def kind_result_route(kind: str):
+def kind_result_route(spec: SolverSpec):
+    kind = spec.kind
+
     def get_kind_result(job_id: uuid.UUID, service: Service, caller: Caller) -> JSONResponse:
-        return JSONResponse(service.result(job_id, caller.sees, kind=kind))
+        return JSONResponse(with_kind(service.result(job_id, caller.sees, kind=kind), spec))
 
     get_kind_result.__name__ = f"get_{kind.replace('-', '_')}_result"
     return get_kind_result
