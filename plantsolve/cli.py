@@ -69,6 +69,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
+SHUTDOWN_SECONDS = 5
+
+
 def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
     """uvicorn on the socket bound by :func:`bind` (what ``uvicorn.run`` does, minus the binding)."""
     import uvicorn
@@ -81,7 +84,10 @@ def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
                 logging.getLogger("uvicorn.error").info(
                     "Uvicorn running on http://%s:%d (Press CTRL+C to quit)", f"[{host}]" if ":" in host else host, port)
 
-    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level))
+    # SIGTERM: open requests get SHUTDOWN_SECONDS to finish, then the lifespan stops the job processes
+    # (running jobs are handed back to the queue; see workers/processes.py)
+    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level,
+                                   timeout_graceful_shutdown=SHUTDOWN_SECONDS))
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:

@@ -51,8 +51,9 @@ CallbackUrl = Annotated[
     Query(
         max_length=2048,
         description="Completion webhook: when the job has finished, the job view is POSTed to this http(s) URL, signed "
-        "with 'X-Plantsolve-Signature: sha256=<HMAC-SHA256 of the body>' (the key's webhook secret) and retried with "
-        "backoff until the receiver answers 2xx.",
+        "per Standard Webhooks ('webhook-id', 'webhook-timestamp', 'webhook-signature: v1,<base64 HMAC-SHA256 of "
+        "\"{id}.{timestamp}.{body}\">' with the key's webhook secret) and retried with backoff until the receiver "
+        "answers 2xx; the id stays the same on every retry.",
     ),
 ]
 
