@@ -60,44 +60,77 @@ def _alive(pid: int) -> bool:
     return "State:\tZ" not in status
 
 
-@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
-def test_job_processes_die_with_a_killed_service_and_write_nothing(tmp_path):
-    sock = socket.socket()
-    sock.bind(("127.0.0.1", 0))
-    port = sock.getsockname()[1]
-    sock.close()
-    markers = tmp_path / "runs"
-    env = {"DATA_DIR": str(tmp_path / "var"), "PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": str(REPO),
-           "PLUGINS": "tests.support.kinds", "EMBEDDED_WORKERS": "1", "LOG_FORMAT": "text"}
-    binary = Path(sys.executable).parent / "plantsolve"
-    server = subprocess.Popen([str(binary), "serve", "--port", str(port)], cwd=tmp_path, env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        base = f"http://127.0.0.1:{port}"
+class Served:
+    """``plantsolve serve`` in a subprocess on a free loopback port (embedded default, one job process)."""
+
+    def __init__(self, tmp_path: Path):
+        sock = socket.socket()
+        sock.bind(("127.0.0.1", 0))
+        self.port = sock.getsockname()[1]
+        sock.close()
+        self.base = f"http://127.0.0.1:{self.port}"
+        env = {"DATA_DIR": str(tmp_path / "var"), "PATH": os.environ.get("PATH", "/usr/bin:/bin"),
+               "PYTHONPATH": str(REPO), "PLUGINS": "tests.support.kinds", "EMBEDDED_WORKERS": "1", "LOG_FORMAT": "text"}
+        binary = Path(sys.executable).parent / "plantsolve"
+        self.process = subprocess.Popen([str(binary), "serve", "--port", str(self.port)], cwd=tmp_path, env=env,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 90
         while True:
             try:
-                if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
-                    break
+                if httpx.get(f"{self.base}/readyz", timeout=2).status_code == 200:
+                    return
             except httpx.HTTPError:
                 pass
-            assert time.monotonic() < deadline and server.poll() is None, "the service did not start"
+            assert time.monotonic() < deadline and self.process.poll() is None, "the service did not start"
             time.sleep(0.2)
-        job = httpx.post(f"{base}/v1/test-compute/jobs", timeout=10,
-                         json={"values": [1.0], "seconds": 6, "marker_dir": str(markers)}).json()
-        while httpx.get(f"{base}/v1/jobs/{job['id']}", timeout=5).json()["status"] != "running":
+
+    def running_job(self, body: dict) -> str:
+        job_id = httpx.post(f"{self.base}/v1/test-compute/jobs", json=body, timeout=10).json()["id"]
+        deadline = time.monotonic() + 60
+        while httpx.get(f"{self.base}/v1/jobs/{job_id}", timeout=5).json()["status"] != "running":
             assert time.monotonic() < deadline
             time.sleep(0.1)
-        workers = _children(server.pid)
-        assert workers
-        server.send_signal(signal.SIGKILL)
-        server.wait(timeout=10)
-        gone_by = time.monotonic() + PARENT_WATCH_SECONDS * 4 + 2
-        while any(_alive(pid) for pid in workers) and time.monotonic() < gone_by:
-            time.sleep(0.1)
-        assert not [pid for pid in workers if _alive(pid)], "a job process outlived its service"
-        time.sleep(7)  # past the moment the solve would have finished
-        assert not markers.exists() or not list(markers.iterdir()), "an orphan finished the job"
+        return job_id
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+
+
+@pytest.fixture
+def served(tmp_path):
+    server = Served(tmp_path)
+    yield server
+    server.close()
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
+def test_job_processes_die_with_a_killed_service_and_write_nothing(served, tmp_path):
+    markers = tmp_path / "runs"
+    served.running_job({"values": [1.0], "seconds": 6, "marker_dir": str(markers)})
+    workers = _children(served.process.pid)
+    assert workers
+    served.process.send_signal(signal.SIGKILL)
+    served.process.wait(timeout=10)
+    gone_by = time.monotonic() + PARENT_WATCH_SECONDS * 4 + 2
+    while any(_alive(pid) for pid in workers) and time.monotonic() < gone_by:
+        time.sleep(0.1)
+    assert not [pid for pid in workers if _alive(pid)], "a job process outlived its service"
+    time.sleep(7)  # past the moment the solve would have finished
+    assert not markers.exists() or not list(markers.iterdir()), "an orphan finished the job"
+
+
+def test_sigterm_drains_within_its_stated_time_and_hands_the_job_back(served, tmp_path):
+    from plantsolve.cli import SHUTDOWN_SECONDS
+
+    job_id = served.running_job({"values": [1.0], "seconds": 60})
+    started = time.monotonic()
+    served.process.send_signal(signal.SIGTERM)
+    served.process.wait(timeout=SHUTDOWN_SECONDS + STOP_SECONDS + 20)
+    assert time.monotonic() - started < SHUTDOWN_SECONDS + STOP_SECONDS + 5
+    again = Served(tmp_path)  # the same data directory: the job is queued again, its attempt not counted
+    try:
+        view = httpx.get(f"{again.base}/v1/jobs/{job_id}", timeout=5).json()
+        assert view["attempts"][0]["outcome"] == "handed_back" and view["max_attempts"] == 4
     finally:
-        if server.poll() is None:
-            server.kill()
+        again.close()
