@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.tube.scan import TubeScan
 
@@ -66,3 +67,30 @@ def check_input(scan: TubeScan) -> None:
                                      msg="the last row is the final straight: angle must be 0"))
     if errors:
         raise InputRejected(errors)
+
+
+# physical bounds of a pipe's outer radius: thinner than a hypodermic tube or wider than a 4 m main is
+# no bent tube, but a unit mix-up (metres read as millimetres gives 1000× too small)
+RADIUS_MM_PLAUSIBLE = (0.5, 2000.0)
+UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+
+
+def implausible_radius(pipe_radius: float, units: str, file_units: str | None = None) -> Diagnostic | None:
+    """A warning when the pipe radius, in physical terms, is outside ``RADIUS_MM_PLAUSIBLE``, naming the units
+    in which the same number would be plausible (the likely mix-up); None when it is plausible."""
+    lo, hi = RADIUS_MM_PLAUSIBLE
+    mm = pipe_radius * UNIT_MM[units]
+    if lo <= mm <= hi:
+        return None
+    # the coordinates' unit that would make the radius plausible: the data were in it but read as `units`
+    read_as = file_units if file_units in UNIT_MM else units  # a CRS's own unit name: judged in the request's
+    likely = sorted((u for u, f in UNIT_MM.items() if u != read_as and lo <= mm * f / UNIT_MM[read_as] <= hi),
+                    key=lambda u: abs(np.log(mm * UNIT_MM[u] / UNIT_MM[read_as] / 20.0)))  # typical: r ≈ 20 mm
+    hint = (f"the coordinates are likely in {' or '.join(likely)} but were read as {read_as}" if likely
+            else "check the units")
+    return Diagnostic(
+        code="implausible_radius",
+        message=f"A pipe radius of {pipe_radius:.4g} {units} ({mm:.4g} mm) is implausible for a tube "
+        f"(expected {lo:g} mm to {hi / 1000:g} m): {hint}; set options.file_units (uploads) or units.",
+        details={"pipe_radius": pipe_radius, "units": units, "pipe_radius_mm": mm, "plausible_mm": [lo, hi],
+                 "read_as": read_as, "likely_units": likely})
