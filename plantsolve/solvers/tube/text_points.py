@@ -39,7 +39,7 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
                 bad.append((lineno, "not numbers"))
             continue
         if len(vals) < 3:
-            bad.append((lineno, "fewer than 3 columns"))
+            bad.append((lineno, "fewer than 3 coordinates"))
         elif not all(math.isfinite(v) for v in vals):
             bad.append((lineno, "non-finite coordinate"))
         else:
@@ -54,6 +54,10 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
     if ends_mid_line and any(ln == last_point_line for ln, _ in bad + short):
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
     if not kept:
-        why = f": {', '.join(f'{n} {r}' for r, n in log.reasons.most_common())}" if log.count else ""
+        why = ""
+        if log.count:
+            more = f" and {log.count - len(log.lines)} more" if log.count > len(log.lines) else ""
+            why = (f": {', '.join(f'{n} {r}' for r, n in log.reasons.most_common())} (line"
+                   f"{'s' if log.count > 1 else ''} {', '.join(map(str, log.lines))}{more})")
         raise reject(f"no readable 'x y z' rows found{why}")
     return np.array(kept, dtype=np.float64)

@@ -84,8 +84,9 @@ def implausible_radius(pipe_radius: float, units: str, file_units: str | None = 
         return None
     # the coordinates' unit that would make the radius plausible: the data were in it but read as `units`
     read_as = file_units if file_units in UNIT_MM else units  # a CRS's own unit name: judged in the request's
+    # the largest factor first: metres and millimetres swapped is the usual mix-up (scanners write metres)
     likely = sorted((u for u, f in UNIT_MM.items() if u != read_as and lo <= mm * f / UNIT_MM[read_as] <= hi),
-                    key=lambda u: abs(np.log(mm * UNIT_MM[u] / UNIT_MM[read_as] / 20.0)))  # typical: r ≈ 20 mm
+                    key=lambda u: -abs(np.log(UNIT_MM[u] / UNIT_MM[read_as])))
     hint = (f"the coordinates are likely in {' or '.join(likely)} but were read as {read_as}" if likely
             else "check the units")
     return Diagnostic(
