@@ -85,7 +85,7 @@ def read_ply(content: bytes, log: ReadLog, faces_below: int) -> PlyData:
     data = read(content, start, header_lines, elements, ">" if fmt == "binary_big_endian" else "<", log, faces_below)
     verts = data.get("vertex")
     if verts is None or not np.isfinite(verts).all(1).any():
-        raise reject(f"PLY file holds no readable vertex{' (' + log.truncation.message + ')' if log.truncation else ''}")
+        raise reject(f"PLY file holds no readable vertex{log.summary()}")
     faces = data.get("face")
     triangles = None
     if faces:

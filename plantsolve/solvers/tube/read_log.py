@@ -34,6 +34,11 @@ class ReadLog:
         self.truncation = Diagnostic(code="file_truncated", message=f"{self.fmt.upper()} file: {message}",
                                      details=details)
 
+    def summary(self) -> str:
+        """What was left out, for the refusal of a file with nothing usable left: '' when nothing was."""
+        parts = [w.message for w in self.warnings()]
+        return f" ({' '.join(parts)})" if parts else ""
+
     def warnings(self) -> list[Diagnostic]:
         out = [self.truncation] if self.truncation else []
         if self.count:

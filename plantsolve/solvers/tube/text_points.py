@@ -54,10 +54,5 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
     if ends_mid_line and any(ln == last_point_line for ln, _ in bad + short):
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
     if not kept:
-        why = ""
-        if log.count:
-            more = f" and {log.count - len(log.lines)} more" if log.count > len(log.lines) else ""
-            why = (f": {', '.join(f'{n} {r}' for r, n in log.reasons.most_common())} (line"
-                   f"{'s' if log.count > 1 else ''} {', '.join(map(str, log.lines))}{more})")
-        raise reject(f"no readable 'x y z' rows found{why}")
+        raise reject(f"no readable 'x y z' rows found{log.summary()}")
     return np.array(kept, dtype=np.float64)

@@ -38,7 +38,7 @@ def points_field(pts: np.ndarray):
     return {"npy_base64": base64.b64encode(buf.getvalue()).decode("ascii")}
 
 
-def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: str) -> np.ndarray:
+def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: str, log: ReadLog) -> np.ndarray:
     """A mesh's samples: its vertices, or, for a sparse CAD-style tessellation, samples on its faces (seeded, so
     the same file gives the same points). Vertices left out by the reader are NaN rows here and are dropped."""
     import trimesh
@@ -50,7 +50,7 @@ def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: 
             pts, _ = trimesh.sample.sample_surface(mesh, MESH_SAMPLES, seed=0)
             return np.asarray(pts, dtype=np.float64)
     if not finite.any():
-        raise reject(f"{file_type.upper()} file holds no vertices")
+        raise reject(f"{file_type.upper()} file holds no vertices{log.summary()}")
     return vertices[finite].astype(np.float64)
 
 
@@ -106,12 +106,12 @@ def _read_mesh(content: bytes, file_type: str, log: ReadLog) -> np.ndarray:
         offset += len(v)
     if not verts:
         raise reject(f"{file_type.upper()} file holds no vertices")
-    return _mesh_points(np.vstack(verts), np.vstack(tris) if tris else None, file_type)
+    return _mesh_points(np.vstack(verts), np.vstack(tris) if tris else None, file_type, log)
 
 
 def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
     data = read_ply(content, log, MESH_MIN_VERTICES)
-    return _mesh_points(data.vertices, data.triangles, "ply")
+    return _mesh_points(data.vertices, data.triangles, "ply", log)
 
 
 def _read_las(content: bytes) -> tuple[np.ndarray, "CrsUnit | str | None"]:

@@ -16,11 +16,11 @@ import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube import TubeScan, parse_upload, solve
-from plantsolve.solvers.tube.las_units import US_SURVEY_FOOT_M, wkt_unit
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 ROWS = [(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, 0, 0, 0)]  # mm; pipe radius 4 mm
 FT, M = 304.8, 1000.0  # mm per unit
+US_SURVEY_FOOT_M = 1200.0 / 3937.0
 
 WKT1_FEET = ('PROJCS["NAD83 / Texas North Central (ftUS-like, foot)",GEOGCS["NAD83",DATUM["North_American_Datum_1983",'
              'SPHEROID["GRS 1980",6378137,298.257222101]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],'
@@ -184,6 +184,8 @@ def test_e57_states_metres_by_its_standard():
 
 
 def test_wkt_reader_finds_the_linear_unit_not_the_angular_or_parameter_ones():
+    from plantsolve.solvers.tube.las_units import wkt_unit
+
     assert wkt_unit(WKT1_FEET).metres == 0.3048
     assert wkt_unit(WKT2_US_FEET).name == "US survey foot"
     assert wkt_unit(WKT1_GEOGRAPHIC).geographic
