@@ -149,3 +149,13 @@ def test_nothing_usable_left_is_refused_naming_file_and_what_was_wrong(name, dat
     with pytest.raises(InputRejected) as e:
         parse_upload(StoredInput.from_bytes(name, data), None)
     assert e.value.errors[0].loc == ("file",) and needle in e.value.errors[0].msg, e.value.errors[0].msg
+
+
+def test_a_file_cut_inside_its_last_number_is_caught_by_the_decimals_of_its_rows():
+    pts = cloud()
+    text = "\n".join(xyz_lines(pts))[:-4]  # '…-12.345678' → '…-12.345', no newline
+    req = parse_upload(StoredInput.from_bytes("scan.xyz", text.encode()), None)
+    assert len(TubeScan(req).points) == 2999
+    assert warning(req, "records_skipped").details["lines"] == [3000] and req.source.truncated
+    whole = parse_upload(StoredInput.from_bytes("scan.xyz", "\n".join(xyz_lines(pts)).encode()), None)
+    assert whole.source.skipped == 0 and not whole.source.truncated  # no newline at the end alone is no cut
