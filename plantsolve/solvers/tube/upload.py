@@ -114,7 +114,7 @@ def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
     return _mesh_points(data.vertices, data.triangles, "ply", log)
 
 
-def _read_las(content: bytes) -> tuple[np.ndarray, "CrsUnit | str | None"]:
+def _read_las(content: bytes) -> tuple[np.ndarray, CrsUnit | str | None]:
     """LAS/LAZ point clouds (laspy; LAZ through its lazrs backend): scaled x, y, z, and the unit the file's CRS
     states (a message instead when it states one that cannot be read)."""
     import laspy
@@ -162,7 +162,7 @@ def _read_npy(content: bytes) -> np.ndarray:
 E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
 
 
-def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, "CrsUnit | str | None"]:
+def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
     """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
     the file or its format states (None: none)."""
     ext = source.extension
@@ -180,7 +180,7 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, "CrsUni
     return read_text_points(content, log), None  # .xyz, .csv, .txt
 
 
-def _conversion(ext: str, stated: "CrsUnit | str | None", file_units: str | None,
+def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
                 target: str) -> tuple[UnitConversion, np.ndarray, list[Diagnostic]]:
     """How the file's coordinates become the request's: the conversion for the report, the factor per axis and
     a warning when the unit was assumed. ``options.file_units`` overrides what the file states."""

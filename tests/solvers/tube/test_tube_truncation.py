@@ -139,10 +139,10 @@ def test_a_clean_file_reports_no_skipped_records():
 
 @pytest.mark.parametrize("name,data,needle", [
     ("scan.xyz", b"x y z\n1 2\n3 nan 4\n", "lines 2, 3"),
-    ("scan.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                 b"end_header\n1 2\n", "ends after 1 of 3 vertex records"),
-    ("scan.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                 b"property float z\nend_header\n\x00\x00", "ends after 0 of 3 vertex records"),
+    ("scan.ply", (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  b"end_header\n1 2\n"), "ends after 1 of 3 vertex records"),
+    ("scan.ply", (b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                  b"property float z\nend_header\n\x00\x00"), "ends after 0 of 3 vertex records"),
     ("scan.obj", b"v 1 2\nv nan 1 2\n", "lines 1, 2"),
 ])
 def test_nothing_usable_left_is_refused_naming_file_and_what_was_wrong(name, data, needle):

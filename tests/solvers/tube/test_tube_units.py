@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import json
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -176,7 +177,7 @@ def test_e57_states_metres_by_its_standard():
         writer = pye57.E57(handle.name, mode="w")
         writer.write_scan_raw({"cartesianX": pts[:, 0], "cartesianY": pts[:, 1], "cartesianZ": pts[:, 2]})
         writer.close()
-        data = open(handle.name, "rb").read()
+        data = Path(handle.name).read_bytes()
     req = parse_upload(StoredInput.from_bytes("scan.e57", data), {"units": "cm"})
     assert np.allclose(TubeScan(req).points, pts * 100.0, atol=1e-6)
     assert req.source.units.basis == "format" and req.source.units.factor == pytest.approx(100.0)
