@@ -224,3 +224,13 @@ def test_file_units_in_a_json_request_is_ignored_with_a_warning_and_refused_for_
     with pytest.raises(InputRejected) as e:
         parse_upload(StoredInput.from_bytes("scan.json", json.dumps(body).encode()), {"file_units": "m"})
     assert e.value.errors[0].loc == ("options", "file_units")
+
+
+def test_a_fit_that_fails_on_a_scan_too_small_for_its_unit_names_the_likely_unit():
+    from plantsolve.schemas.tube import TubeRequest
+    from plantsolve.solvers.base import SolverError
+
+    with pytest.raises(SolverError) as e:  # a 4 mm tube in metres, read as millimetres: 0.1 mm long
+        solve(TubeRequest(points=(cloud_mm() / M).tolist()))
+    assert "likely in m" in e.value.message and "file_units" in e.value.message
+    assert e.value.details["extent"] == pytest.approx(0.1032, rel=0.01)
