@@ -19,6 +19,7 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, reje
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
+from plantsolve.solvers.tube.stl_points import read_stl
 from plantsolve.solvers.tube.text_points import read_text_points
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
@@ -83,7 +84,8 @@ def _obj_checked(content: bytes, log: ReadLog) -> bytes:
 
 
 def _read_mesh(content: bytes, file_type: str, log: ReadLog) -> np.ndarray:
-    """Scanner exports as meshes (STL, OBJ) through trimesh: the vertices or samples on the faces."""
+    """Scanner exports as OBJ meshes through trimesh (vertex lines checked first): the vertices or samples on
+    the faces."""
     import trimesh
 
     if file_type == "obj":
@@ -107,6 +109,13 @@ def _read_mesh(content: bytes, file_type: str, log: ReadLog) -> np.ndarray:
     if not verts:
         raise reject(f"{file_type.upper()} file holds no vertices")
     return _mesh_points(np.vstack(verts), np.vstack(tris) if tris else None, file_type, log)
+
+
+def _read_stl(content: bytes, log: ReadLog) -> np.ndarray:
+    corners = read_stl(content, log)
+    # STL repeats each vertex in every triangle on it: one sample per vertex, as the mesh was scanned
+    vertices, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    return _mesh_points(vertices, index.reshape(-1, 3), "stl", log)
 
 
 def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
@@ -173,8 +182,10 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
         return _read_las(content)
     if ext == ".ply":
         return _read_ply(content, log), None
-    if ext in (".stl", ".obj"):
-        return _read_mesh(content, ext[1:], log), None
+    if ext == ".stl":
+        return _read_stl(content, log), None
+    if ext == ".obj":
+        return _read_mesh(content, "obj", log), None
     if ext == ".npy":
         return _read_npy(content), None
     return read_text_points(content, log), None  # .xyz, .csv, .txt

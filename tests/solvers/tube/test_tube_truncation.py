@@ -159,3 +159,28 @@ def test_a_file_cut_inside_its_last_number_is_caught_by_the_decimals_of_its_rows
     assert warning(req, "records_skipped").details["lines"] == [3000] and req.source.truncated
     whole = parse_upload(StoredInput.from_bytes("scan.xyz", "\n".join(xyz_lines(pts)).encode()), None)
     assert whole.source.skipped == 0 and not whole.source.truncated  # no newline at the end alone is no cut
+
+
+@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+def test_an_stl_cut_short_keeps_its_complete_triangles(encoding):
+    verts, faces = tube_mesh_arrays(make_model(ROWS, 4.0))
+    mesh = trimesh.Trimesh(verts, faces, process=False)
+    if encoding == "binary":
+        data = trimesh.exchange.stl.export_stl(mesh)
+        cut = data[: len(data) - 50 * 100 - 20]  # 100 triangles and 20 bytes of one more gone
+        kept = len(faces) - 101
+    else:
+        lines = trimesh.exchange.stl.export_stl_ascii(mesh).splitlines()
+        ends = [i for i, ln in enumerate(lines) if ln.strip() == "endfacet"]
+        lines[ends[0] - 2] = "vertex 1.0 nan 2.0"  # the first facet's second corner unreadable
+        cut_at = ends[-101] + 4  # inside the facet after the 100th last
+        cut = "\n".join(lines[:cut_at]).encode()
+        kept = len(faces) - 101  # the 100 facets after the cut, and the one with the NaN
+    req = parse_upload(StoredInput.from_bytes("scan.stl", cut), None)
+    pts = TubeScan(req).points
+    assert len(pts) == len(verts) and np.isfinite(pts).all()  # a dense mesh: its vertices (each on kept triangles)
+    w = warning(req, "file_truncated")
+    assert (f"{kept} of {len(faces)} triangles" in w.message) if encoding == "binary" else "inside a facet" in w.message
+    if encoding == "ascii":
+        assert warning(req, "records_skipped").details["lines"][0] == ends[0] - 1
+    assert solve(req).result.pipe_radius == pytest.approx(4.0, rel=0.02)
