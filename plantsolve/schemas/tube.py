@@ -296,7 +296,8 @@ class TubeResult(BaseModel):
     outliers: Outliers
     segment_quality: list[SegmentQuality] = Field(default_factory=list)
     tolerance: float = Field(description="ε used for the segment count (request units).")
-    units: Units = "mm"
+    units: Units = Field(default="mm", description="Unit of every length in the result: the request's. How an "
+                         "uploaded file's coordinates were converted into it is in report.details.source.units.")
     inspection: Inspection | None = None
     bend_radius_model: BendRadiusModel | None = Field(default=None, description="The radius model of the bends "
                                                       "and why (null without bends).")

@@ -184,3 +184,16 @@ def test_an_stl_cut_short_keeps_its_complete_triangles(encoding):
     if encoding == "ascii":
         assert warning(req, "records_skipped").details["lines"][0] == ends[0] - 1
     assert solve(req).result.pipe_radius == pytest.approx(4.0, rel=0.02)
+
+
+def test_npy_rows_with_nan_are_left_out_and_counted():
+    import io
+
+    pts = cloud()
+    pts[[7, 70]] = np.nan
+    buffer = io.BytesIO()
+    np.save(buffer, pts)
+    req = parse_upload(StoredInput.from_bytes("scan.npy", buffer.getvalue()), None)
+    assert len(TubeScan(req).points) == 2998
+    w = warning(req, "records_skipped")
+    assert w.details["count"] == 2 and w.details["reasons"] == {"non-finite coordinate": 2}

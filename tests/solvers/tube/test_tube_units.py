@@ -46,17 +46,20 @@ def cloud_mm(n=3000, seed=0):
 
 
 def las_bytes(pts: np.ndarray, wkt: str | None = None, geokeys: dict[int, int] | None = None,
-              compress: bool = False) -> bytes:
-    """A LAS 1.4 (or LAZ, through lazrs) file of the points, with a WKT CRS record or GeoTIFF keys."""
+              compress: bool = False, evlr: bool = False) -> bytes:
+    """A LAS 1.4 (or LAZ, through lazrs) file of the points, with a WKT CRS record (a VLR, or an EVLR after the
+    points) or GeoTIFF keys."""
     import laspy
     from laspy.vlrs.known import GeoKeyDirectoryVlr, GeoKeyEntryStruct, WktCoordinateSystemVlr
+    from laspy.vlrs.vlrlist import VLRList
 
     header = laspy.LasHeader(point_format=6, version="1.4")
     header.scales = np.array([1e-7, 1e-7, 1e-7])
     header.offsets = pts.min(axis=0)
     if wkt is not None:
         header.global_encoding.wkt = True
-        header.vlrs.append(WktCoordinateSystemVlr(wkt))
+        if not evlr:
+            header.vlrs.append(WktCoordinateSystemVlr(wkt))
     if geokeys is not None:
         vlr = GeoKeyDirectoryVlr()
         vlr.geo_keys_header.key_directory_version = 1
@@ -69,6 +72,8 @@ def las_bytes(pts: np.ndarray, wkt: str | None = None, geokeys: dict[int, int] |
         header.vlrs.append(vlr)
     las = laspy.LasData(header)
     las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+    if wkt is not None and evlr:
+        las.evlrs = VLRList([WktCoordinateSystemVlr(wkt)])
     buf = io.BytesIO()
     if compress:
         las.write(buf, do_compress=True, laz_backend=laspy.LazBackend.Lazrs)
@@ -116,16 +121,17 @@ def test_las_with_a_feet_crs_is_converted_from_feet(ext):
         assert "file_units_assumed" not in codes(res.report)
 
 
-@pytest.mark.parametrize("wkt,geokeys,xy_mm,z_mm,name", [
-    (WKT2_US_FEET, None, US_SURVEY_FOOT_M * 1000, US_SURVEY_FOOT_M * 1000, "us_ft"),
-    (WKT1_COMPOUND, None, M, FT, "m"),
-    (None, {1024: 1, 3076: 9002}, FT, FT, "ft"),
-    (None, {1024: 1, 3076: 9003}, US_SURVEY_FOOT_M * 1000, US_SURVEY_FOOT_M * 1000, "us_ft"),
-    (None, {1024: 1, 3076: 9001, 4099: 9002}, M, FT, "m"),
+@pytest.mark.parametrize("wkt,geokeys,xy_mm,z_mm,name,evlr", [
+    (WKT2_US_FEET, None, US_SURVEY_FOOT_M * 1000, US_SURVEY_FOOT_M * 1000, "us_ft", False),
+    (WKT1_COMPOUND, None, M, FT, "m", False),
+    (WKT1_FEET, None, FT, FT, "ft", True),
+    (None, {1024: 1, 3076: 9002}, FT, FT, "ft", False),
+    (None, {1024: 1, 3076: 9003}, US_SURVEY_FOOT_M * 1000, US_SURVEY_FOOT_M * 1000, "us_ft", False),
+    (None, {1024: 1, 3076: 9001, 4099: 9002}, M, FT, "m", False),
 ])
-def test_crs_units_from_wkt2_compound_wkt_and_geotiff_keys(wkt, geokeys, xy_mm, z_mm, name):
+def test_crs_units_from_wkt2_compound_wkt_evlr_and_geotiff_keys(wkt, geokeys, xy_mm, z_mm, name, evlr):
     pts = cloud_mm()
-    data = las_bytes(pts / [xy_mm, xy_mm, z_mm], wkt=wkt, geokeys=geokeys)
+    data = las_bytes(pts / [xy_mm, xy_mm, z_mm], wkt=wkt, geokeys=geokeys, evlr=evlr)
     req = parse_upload(StoredInput.from_bytes("scan.las", data), None)
     assert np.allclose(TubeScan(req).points, pts, atol=1e-3)
     u = req.source.units
