@@ -21,9 +21,10 @@ from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.stl_points import read_stl
 from plantsolve.solvers.tube.text_points import read_text_points
+from plantsolve.solvers.tube.validation import UNIT_MM
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
-TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+TO_MM = UNIT_MM  # millimetres per unit of each of the request's units
 # a mesh with fewer vertices than this is a CAD-style tessellation: its faces are sampled instead
 MESH_MIN_VERTICES = 2000
 MESH_SAMPLES = 20_000
@@ -216,7 +217,7 @@ def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
         warnings.append(Diagnostic(
             code="file_units_assumed",
             message=f"The {ext[1:].upper()} file states no unit (no CRS with a linear unit): its coordinates were "
-            f"read as metres, as scanners write them, and converted to {target} (x {1000.0 / TO_MM[target]:g}). "
+            f"read as metres, as scanners write them, and converted to {target} (× {1000.0 / TO_MM[target]:g}). "
             "Set options.file_units if they are in another unit.",
             details={"file_unit": "m", "request_unit": target, "factor": 1000.0 / TO_MM[target]}))
     else:
