@@ -23,9 +23,21 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Discriminator, Field, Tag
 
-from plantsolve.schemas.common import FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import (Diagnostic, FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel,
+                                      Units, Vec3)
 
 MAX_POINTS = 5_000_000
+
+FILE_UNITS_HELP = (
+    "Length unit of the coordinates in an uploaded point file (uploads only). It overrides the file format's own "
+    "convention, which is: LAS/LAZ — the linear unit of the file's CRS (OGC WKT VLR/EVLR, else GeoTIFF keys "
+    "ProjLinearUnits 3076 / VerticalUnits 4099), metres when the file states none (as scanners write them; the "
+    "report then warns 'file_units_assumed'); E57 — metres (the standard's); PLY, STL, OBJ, XYZ, CSV, TXT, NPY — "
+    "no unit: read in the request's `units` unless this says otherwise. Points are converted into the request's "
+    "`units`, and the report states the conversion (`report.details.source.units`: file unit, request unit, "
+    "factor, and where the file unit came from). Not accepted with a .json upload (a JSON request states its "
+    "own `units`); ignored, with a warning, in a JSON request body."
+)
 
 
 class NpyPoints(StrictModel):
@@ -111,11 +123,46 @@ class TubeOptions(StrictModel):
         "(nominal − measured), for angle, rotation and length.",
     )
     seed: Integer = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
+    file_units: Units | None = Field(default=None, description=FILE_UNITS_HELP)
 
 
 def _points_form(value: Any) -> str:
     """Which of the two forms ``points`` is (so that errors name only that form's fields)."""
     return "npy" if isinstance(value, (dict, NpyPoints)) else "list"
+
+
+class UnitConversion(StrictModel):
+    """How an uploaded file's coordinates were brought into the request's unit: request value = file value × factor."""
+
+    file_unit: str = Field(description="The file's length unit: mm, cm, m, in, ft, us_ft (US survey foot) or the "
+                           "name a CRS gives.")
+    request_unit: Units
+    factor: float = Field(gt=0, description="Multiplier from the file's x, y (and z unless z_factor is given) to "
+                          "the request's unit; 1 when none was needed.")
+    z_file_unit: str | None = Field(default=None, description="The z unit when the file's CRS states a vertical unit "
+                                    "other than the horizontal one.")
+    z_factor: float | None = Field(default=None, gt=0, description="Multiplier for z when z_file_unit is given.")
+    basis: Literal["options.file_units", "crs", "format", "assumed", "request"] = Field(
+        description="Where the file unit came from: the option, the file's CRS, the format's standard (E57: "
+        "metres), assumed (a LAS/LAZ file stating no unit: metres), or none stated (the request's unit).")
+    evidence: str = Field(default="", description="What in the file stated it, e.g. 'WKT UNIT[\"US survey foot\", "
+                          "0.3048006096012192]' or 'GeoTIFF ProjLinearUnitsGeoKey 9002'.")
+
+
+class PointSource(StrictModel):
+    """What the upload parser read from a point file: set by the upload parser, not needed in JSON bodies."""
+
+    format: str = Field(description="File format read, e.g. 'las', 'ply', 'xyz'.")
+    points: int = Field(ge=0, description="Points kept.")
+    units: UnitConversion
+    skipped: int = Field(default=0, ge=0, description="Records (lines, vertices) that could not be read and were "
+                         "left out; each is listed in the warnings.")
+    skipped_lines: list[int] = Field(default_factory=list, description="1-based line numbers of the first skipped "
+                                     "records (text formats; at most 10).")
+    truncated: bool = Field(default=False, description="The file ends before the records its header declares, or "
+                            "mid-record.")
+    warnings: list[Diagnostic] = Field(default_factory=list, description="The reader's warnings; the solver adds "
+                                       "them to report.warnings.")
 
 
 class TubeRequest(StrictModel):
@@ -131,6 +178,9 @@ class TubeRequest(StrictModel):
     )
     units: Units = "mm"
     options: TubeOptions = Field(default_factory=TubeOptions)
+    source: PointSource | None = Field(
+        default=None, description="What the upload parser read (format, unit conversion, records skipped); set by "
+        "the upload parser, not needed in JSON bodies.")
 
 
 class Segment(BaseModel):
@@ -248,7 +298,8 @@ class TubeResult(BaseModel):
     outliers: Outliers
     segment_quality: list[SegmentQuality] = Field(default_factory=list)
     tolerance: float = Field(description="ε used for the segment count (request units).")
-    units: Units = "mm"
+    units: Units = Field(default="mm", description="Unit of every length in the result: the request's. How an "
+                         "uploaded file's coordinates were converted into it is in report.details.source.units.")
     inspection: Inspection | None = None
     bend_radius_model: BendRadiusModel | None = Field(default=None, description="The radius model of the bends "
                                                       "and why (null without bends).")

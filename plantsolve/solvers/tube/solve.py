@@ -24,6 +24,7 @@ from plantsolve.solvers.tube.model import TubeModel, build_spine, control_polygo
 from plantsolve.solvers.tube.inspection import inspect
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.validation import implausible_extent, implausible_radius
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
@@ -444,8 +445,13 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         scan = TubeScan(scan)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    warnings: list[Diagnostic] = []
     request = scan.request
+    # what the upload's reader left out or assumed comes first: a job fed a damaged file never looks clean
+    warnings: list[Diagnostic] = [Diagnostic(**w.model_dump()) for w in request.source.warnings] if request.source else []
+    if request.options.file_units and request.source is None:
+        warnings.append(Diagnostic(code="file_units_ignored", message="options.file_units applies to uploaded point "
+                                   f"files only: the points of a JSON request are in its units ({request.units}).",
+                                   details={"file_units": request.options.file_units, "units": request.units}))
     opts = request.options
     pts_in = scan.points
     rng = np.random.default_rng(opts.seed)
@@ -457,7 +463,10 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     st = Stages(progress)
     st.stage(0.02, 0.12, "local polynomial fits")
     t0 = time.perf_counter()
-    lf = local_surface_fits(pts, opts, rng, st.tick)
+    try:
+        lf = local_surface_fits(pts, opts, rng, st.tick)
+    except SolverError as exc:
+        raise with_unit_hint(exc, pts, request) from None
     timings["local_fit"] = time.perf_counter() - t0
 
     st.stage(0.12, 0.3, "MLS spine projection")
@@ -505,6 +514,12 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         "bends_initial": n_bends_initial, "pruned": ls.changes, "least_squares": ls.info, "timings_s": timings,
         "outlier_threshold": float(ls.threshold),
     }
+    if request.source:
+        details["source"] = request.source.model_dump()
+    radius_warning = implausible_radius(float(ls.model.pipe_radius), request.units,
+                                        request.source.units.file_unit if request.source else None)
+    if radius_warning:
+        warnings.append(radius_warning)
     report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",
                     warnings=warnings, details=details)
     result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report,
@@ -514,6 +529,16 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         result.inspection = inspect(ls.model, opts.nominal, opts.damping)
     progress(1.0, "done")
     return Solved(result)
+
+
+def with_unit_hint(exc: SolverError, pts: np.ndarray, request: TubeRequest) -> SolverError:
+    """A failed local fit on a scan whose size is implausible in the request's unit (a scan in metres read as
+    millimetres spans a few millimetres) says so and names the likely unit: that is the likely cause."""
+    extent = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    hint = implausible_extent(extent, request.units, request.source.units.file_unit if request.source else None)
+    if hint is None:
+        return exc
+    return SolverError(exc.stage, f"{exc.message}; {hint}", {**exc.details, "extent": extent, "units": request.units})
 
 
 def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:

@@ -1,20 +1,30 @@
-"""Uploaded scan files read into a request; large point sets travel in it as base64 NPY (decoded by ``scan``)."""
+"""Uploaded scan files read into a request; large point sets travel in it as base64 NPY (decoded by ``scan``).
+
+Each format's unit convention is applied (``_conversion``: LAS/LAZ the unit of the file's CRS, metres when it
+states none; E57 metres; the others the request's unit; ``options.file_units`` overrides), and what the readers
+left out of a damaged file is reported (``ReadLog``): both travel in the request's ``source`` into the report."""
 
 from __future__ import annotations
 
 import base64
 import io
 import json
-import re
 from dataclasses import replace
 
 import numpy as np
 
-from plantsolve.schemas.tube import TubeRequest
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.tube import PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, reject, validated
+from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
+from plantsolve.solvers.tube.ply_points import read_ply
+from plantsolve.solvers.tube.read_log import ReadLog
+from plantsolve.solvers.tube.stl_points import read_stl
+from plantsolve.solvers.tube.text_points import read_text_points
+from plantsolve.solvers.tube.validation import UNIT_MM
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
-TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+TO_MM = UNIT_MM  # millimetres per unit of each of the request's units
 # a mesh with fewer vertices than this is a CAD-style tessellation: its faces are sampled instead
 MESH_MIN_VERTICES = 2000
 MESH_SAMPLES = 20_000
@@ -30,38 +40,105 @@ def points_field(pts: np.ndarray):
     return {"npy_base64": base64.b64encode(buf.getvalue()).decode("ascii")}
 
 
-def _read_mesh(content: bytes, file_type: str) -> np.ndarray:
-    """Scanner exports as meshes (STL, OBJ, PLY) or point clouds (PLY): the vertices, or, for a sparse
-    CAD-style tessellation, samples on its faces (seeded, so the same file gives the same points)."""
+def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: str, log: ReadLog) -> np.ndarray:
+    """A mesh's samples: its vertices, or, for a sparse CAD-style tessellation, samples on its faces (seeded, so
+    the same file gives the same points). Vertices left out by the reader are NaN rows here and are dropped."""
     import trimesh
 
+    finite = np.isfinite(vertices).all(1)
+    if triangles is not None and len(triangles) and finite.sum() < MESH_MIN_VERTICES:
+        mesh = trimesh.Trimesh(vertices, triangles, process=False)
+        if mesh.area > 0:
+            pts, _ = trimesh.sample.sample_surface(mesh, MESH_SAMPLES, seed=0)
+            return np.asarray(pts, dtype=np.float64)
+    if not finite.any():
+        raise reject(f"{file_type.upper()} file holds no vertices{log.summary()}")
+    return vertices[finite].astype(np.float64)
+
+
+def _obj_checked(content: bytes, log: ReadLog) -> bytes:
+    """OBJ text with each unreadable vertex line (cut short, not numbers, NaN) made a NaN vertex, so that the face
+    indices after it keep their meaning and the faces on it can be dropped, and each face line with fewer than
+    three corners made a comment; both logged with their line numbers."""
+    text = content.decode("utf-8", errors="replace")
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        words = line.split()
+        if not words or words[0] not in ("v", "f"):
+            continue
+        if words[0] == "f":
+            if len(words) < 4:
+                log.skip(i + 1, "face cut short")
+                lines[i] = "# " + line
+            continue
+        try:
+            xyz = [float(w) for w in words[1:4]]
+            why = "cut short" if len(xyz) < 3 else "" if all(np.isfinite(xyz)) else "non-finite coordinate"
+        except ValueError:
+            why = "not numbers"
+        if why:
+            log.skip(i + 1, f"vertex {why}")
+            lines[i] = "v nan nan nan"
+            if i == len(lines) - 1 and not text.endswith(("\n", "\r")):
+                log.truncate(f"the file ends mid-line (line {i + 1})", line=i + 1)
+    return "\n".join(lines).encode()
+
+
+def _read_mesh(content: bytes, file_type: str, log: ReadLog) -> np.ndarray:
+    """Scanner exports as OBJ meshes through trimesh (vertex lines checked first): the vertices or samples on
+    the faces."""
+    import trimesh
+
+    if file_type == "obj":
+        content = _obj_checked(content, log)
     try:
         geom = trimesh.load(io.BytesIO(content), file_type=file_type, process=False)
     except Exception as exc:  # trimesh raises many types on corrupt files
         raise reject(f"unreadable {file_type.upper()} file: {exc}") from None
     parts = list(geom.geometry.values()) if isinstance(geom, trimesh.Scene) else [geom]
-    meshes = [g for g in parts if isinstance(g, trimesh.Trimesh) and len(g.faces)]
-    verts = [np.asarray(g.vertices) for g in parts if getattr(g, "vertices", None) is not None]
-    n_verts = sum(len(v) for v in verts)
-    if meshes and n_verts < MESH_MIN_VERTICES:
-        mesh = trimesh.util.concatenate(meshes)
-        if mesh.area > 0:
-            pts, _ = trimesh.sample.sample_surface(mesh, MESH_SAMPLES, seed=0)
-            return np.asarray(pts, dtype=np.float64)
+    verts, tris, offset = [], [], 0
+    for g in parts:
+        v = getattr(g, "vertices", None)
+        if v is None:
+            continue
+        v = np.asarray(v, dtype=np.float64)
+        if isinstance(g, trimesh.Trimesh) and len(g.faces):
+            t = np.asarray(g.faces, dtype=np.int64)
+            tris.append(t[np.isfinite(v[t]).all((1, 2))] + offset)  # faces on a vertex left out go too
+        verts.append(v)
+        offset += len(v)
     if not verts:
         raise reject(f"{file_type.upper()} file holds no vertices")
-    return np.vstack(verts).astype(np.float64)
+    return _mesh_points(np.vstack(verts), np.vstack(tris) if tris else None, file_type, log)
 
 
-def _read_las(content: bytes) -> np.ndarray:
-    """LAS/LAZ point clouds (laspy; LAZ needs a LAZ backend such as lazrs): scaled x, y, z."""
+def _read_stl(content: bytes, log: ReadLog) -> np.ndarray:
+    corners = read_stl(content, log)
+    # STL repeats each vertex in every triangle on it: one sample per vertex, as the mesh was scanned
+    vertices, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    return _mesh_points(vertices, index.reshape(-1, 3), "stl", log)
+
+
+def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
+    data = read_ply(content, log, MESH_MIN_VERTICES)
+    return _mesh_points(data.vertices, data.triangles, "ply", log)
+
+
+def _read_las(content: bytes) -> tuple[np.ndarray, CrsUnit | str | None]:
+    """LAS/LAZ point clouds (laspy; LAZ through its lazrs backend): scaled x, y, z, and the unit the file's CRS
+    states (a message instead when it states one that cannot be read)."""
     import laspy
 
     try:
         las = laspy.read(io.BytesIO(content))
     except Exception as exc:  # laspy raises its own and OS errors on corrupt files
         raise reject(f"unreadable LAS/LAZ file: {exc}") from None
-    return np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
+    try:
+        unit = las_crs_unit(las)
+    except (ValueError, IndexError) as exc:
+        unit = f"the file's CRS record cannot be read ({exc})"
+    pts = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
+    return pts, unit
 
 
 def _read_e57(source: StoredInput) -> np.ndarray:
@@ -82,34 +159,6 @@ def _read_e57(source: StoredInput) -> np.ndarray:
     return np.vstack(parts).astype(np.float64)
 
 
-_SPLIT = re.compile(r"[,;\s]+")
-
-
-def _read_text(content: bytes) -> np.ndarray:
-    try:
-        text = content.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise reject("text file is not UTF-8") from None
-    rows = []
-    for lineno, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s or s[0] in "#/%":
-            continue
-        fields = [f for f in _SPLIT.split(s) if f]
-        try:
-            vals = [float(f) for f in fields[:3]]
-        except ValueError:
-            if not rows:  # a header line
-                continue
-            raise reject(f"line {lineno}: expected numbers 'x y z', got {s[:60]!r}") from None
-        if len(vals) < 3:
-            raise reject(f"line {lineno}: expected 3 coordinates, got {len(vals)}")
-        rows.append(vals)
-    if not rows:
-        raise reject("no 'x y z' rows found")
-    return np.array(rows, dtype=np.float64)
-
-
 def _read_npy(content: bytes) -> np.ndarray:
     try:
         arr = np.load(io.BytesIO(content), allow_pickle=False)
@@ -120,19 +169,66 @@ def _read_npy(content: bytes) -> np.ndarray:
     return np.asarray(arr[:, :3], dtype=np.float64)
 
 
-def _read_points(source: StoredInput) -> np.ndarray:
-    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``)."""
+E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
+
+
+def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
+    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
+    the file or its format states (None: none)."""
     ext = source.extension
     if ext == ".e57":
-        return _read_e57(source)
+        return _read_e57(source), E57_METRES
     content = source.read()
-    if ext in (".ply", ".stl", ".obj"):
-        return _read_mesh(content, ext[1:])
     if ext in (".las", ".laz"):
         return _read_las(content)
+    if ext == ".ply":
+        return _read_ply(content, log), None
+    if ext == ".stl":
+        return _read_stl(content, log), None
+    if ext == ".obj":
+        return _read_mesh(content, "obj", log), None
     if ext == ".npy":
-        return _read_npy(content)
-    return _read_text(content)  # .xyz, .csv, .txt
+        return _read_npy(content), None
+    return read_text_points(content, log), None  # .xyz, .csv, .txt
+
+
+def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
+                target: str) -> tuple[UnitConversion, np.ndarray, list[Diagnostic]]:
+    """How the file's coordinates become the request's: the conversion for the report, the factor per axis and
+    a warning when the unit was assumed. ``options.file_units`` overrides what the file states."""
+    warnings: list[Diagnostic] = []
+    to_target = 1000.0 / TO_MM[target]  # metres → the request's unit
+    z_name = z_metres = None
+    if file_units is not None:
+        name, metres, basis = file_units, TO_MM[file_units] / 1000.0, "options.file_units"
+        evidence = f"overrides the file's own: {stated.evidence}" if isinstance(stated, CrsUnit) else ""
+    elif isinstance(stated, str):
+        raise reject(f"{ext[1:].upper()} file: {stated}; set options.file_units to the unit of its coordinates")
+    elif stated is not None and stated.geographic:
+        raise reject(f"{ext[1:].upper()} file's CRS is geographic ({stated.evidence}): x, y are angles, not lengths; "
+                     "a tube scan needs a projected or local CRS (set options.file_units if x, y are lengths)")
+    elif stated is not None:
+        name, metres, evidence = short_name(stated.name, stated.metres), stated.metres, stated.evidence
+        basis = "format" if stated is E57_METRES else "crs"
+        if stated.z_metres is not None:
+            z_name, z_metres = short_name(stated.z_name, stated.z_metres), stated.z_metres
+    elif ext in (".las", ".laz"):
+        name, metres, basis, evidence = "m", 1.0, "assumed", "no CRS unit in the file"
+        warnings.append(Diagnostic(
+            code="file_units_assumed",
+            message=f"The {ext[1:].upper()} file states no unit (no CRS with a linear unit): its coordinates were "
+            f"read as metres, as scanners write them, and converted to {target} (× {1000.0 / TO_MM[target]:g}). "
+            "Set options.file_units if they are in another unit.",
+            details={"file_unit": "m", "request_unit": target, "factor": 1000.0 / TO_MM[target]}))
+    else:
+        conv = UnitConversion(file_unit=target, request_unit=target, factor=1.0, basis="request",
+                              evidence=f"{ext[1:].upper()} files state no unit: read in the request's")
+        return conv, np.ones(3), warnings
+    factor = metres * to_target
+    z_factor = z_metres * to_target if z_metres is not None else None
+    conv = UnitConversion(file_unit=name, request_unit=target, factor=factor, z_file_unit=z_name, z_factor=z_factor,
+                          basis=basis, evidence=evidence)
+    return conv, np.array([factor, factor, z_factor or factor]), warnings
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
@@ -142,11 +238,14 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
     opts = dict(options or {})
     if "units" in opts:  # tolerate units passed among the options
         units = opts.pop("units")
-    file_units = opts.pop("file_units", None)
+    file_units = opts.get("file_units")
     if file_units is not None and file_units not in TO_MM:
         raise InputRejected([FieldError(("options", "file_units"), f"unknown unit {file_units!r}; one of "
                                         f"{', '.join(TO_MM)}")])
     if ext == ".json":
+        if file_units is not None:
+            raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
+                                            "its `units` (set units instead)")])
         try:
             doc = json.loads(source.read().decode("utf-8-sig"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -160,20 +259,29 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         if units:
             body["units"] = units
     else:
-        pts = _read_points(source)
-        # the file's length unit: declared (options.file_units), E57's metres by its standard, else the request's
-        declared = file_units or ("m" if ext == ".e57" else None)
-        if declared is not None:
-            target = units or "mm"
-            if target not in TO_MM:
-                raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}")])
-            pts = pts * (TO_MM[declared] / TO_MM[target])
+        target = units or "mm"
+        if target not in TO_MM:
+            raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}; one of "
+                                            f"{', '.join(TO_MM)}")])
+        log = ReadLog(ext[1:])
+        pts, stated = _read_points(source, log)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
             raise reject("file holds no 3D points")
-        if not np.isfinite(pts).all():
-            bad = int(np.flatnonzero(~np.isfinite(pts).all(1))[0])
-            raise reject(f"non-finite coordinate in point {bad}")
-        body = {"points": points_field(pts), "options": opts}
+        finite = np.isfinite(pts).all(1)
+        if not finite.all():  # binary formats (LAS, NPY, E57) have no lines to name: a count
+            bad = np.flatnonzero(~finite)
+            if len(bad) == len(pts):
+                raise reject("every point of the file has a non-finite coordinate")
+            for _ in bad:
+                log.skip(None, "non-finite coordinate")
+            pts = pts[finite]
+        conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target)
+        if not (factors == 1.0).all():
+            pts = pts * factors
+        source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
+                                    skipped_lines=log.lines, truncated=log.truncation is not None,
+                                    warnings=log.warnings() + unit_warnings)
+        body = {"points": points_field(pts), "options": opts, "source": source_report.model_dump()}
         if units:
             body["units"] = units
     try:

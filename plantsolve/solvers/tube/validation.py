@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.tube.scan import TubeScan
 
@@ -66,3 +67,57 @@ def check_input(scan: TubeScan) -> None:
                                      msg="the last row is the final straight: angle must be 0"))
     if errors:
         raise InputRejected(errors)
+
+
+# physical bounds of a pipe's outer radius: thinner than a hypodermic tube or wider than a 4 m main is
+# no bent tube, but a unit mix-up (metres read as millimetres gives 1000× too small)
+RADIUS_MM_PLAUSIBLE = (0.5, 2000.0)
+# and of a scan of one tube (its bounding-box diagonal)
+EXTENT_MM_PLAUSIBLE = (5.0, 200_000.0)
+UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+
+
+def likely_units(mm: float, bounds: tuple[float, float], read_as: str) -> list[str]:
+    """The units the coordinates were likely in when a length read as ``read_as`` is ``mm`` in physical terms and
+    outside ``bounds``: those that put it inside, the largest factor first (metres and millimetres swapped is
+    the usual mix-up: scanners write metres)."""
+    lo, hi = bounds
+    return sorted((u for u, f in UNIT_MM.items() if u != read_as and lo <= mm * f / UNIT_MM[read_as] <= hi),
+                  key=lambda u: -abs(np.log(UNIT_MM[u] / UNIT_MM[read_as])))
+
+
+def _read_as(units: str, file_units: str | None) -> str:
+    return file_units if file_units in UNIT_MM else units  # a CRS's own unit name: judged in the request's
+
+
+def implausible_radius(pipe_radius: float, units: str, file_units: str | None = None) -> Diagnostic | None:
+    """A warning when the pipe radius, in physical terms, is outside ``RADIUS_MM_PLAUSIBLE``, naming the units
+    in which the same number would be plausible (the likely mix-up); None when it is plausible."""
+    lo, hi = RADIUS_MM_PLAUSIBLE
+    mm = pipe_radius * UNIT_MM[units]
+    if lo <= mm <= hi:
+        return None
+    read_as = _read_as(units, file_units)
+    likely = likely_units(mm, RADIUS_MM_PLAUSIBLE, read_as)
+    hint = (f"the coordinates are likely in {' or '.join(likely)} but were read as {read_as}" if likely
+            else "check the units")
+    return Diagnostic(
+        code="implausible_radius",
+        message=f"A pipe radius of {pipe_radius:.4g} {units} ({mm:.4g} mm) is implausible for a tube "
+        f"(expected {lo:g} mm to {hi / 1000:g} m): {hint}; set options.file_units (uploads) or units.",
+        details={"pipe_radius": pipe_radius, "units": units, "pipe_radius_mm": mm, "plausible_mm": [lo, hi],
+                 "read_as": read_as, "likely_units": likely})
+
+
+def implausible_extent(extent: float, units: str, file_units: str | None = None) -> str | None:
+    """A sentence for a failed fit when the scan's size, in physical terms, is outside ``EXTENT_MM_PLAUSIBLE``
+    (the likely cause of the failure), naming the likely units; None when the size is plausible."""
+    lo, hi = EXTENT_MM_PLAUSIBLE
+    mm = extent * UNIT_MM[units]
+    if lo <= mm <= hi:
+        return None
+    read_as = _read_as(units, file_units)
+    likely = likely_units(mm, EXTENT_MM_PLAUSIBLE, read_as)
+    return (f"the scan spans {extent:.4g} {units} ({mm:.4g} mm), implausible for a tube"
+            f"{': its coordinates are likely in ' + ' or '.join(likely) + ', not ' + read_as if likely else ''}; "
+            "set options.file_units (uploads) or units")

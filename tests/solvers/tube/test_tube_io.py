@@ -77,7 +77,7 @@ def test_large_upload_travels_as_npy_base64():
 
 @pytest.mark.parametrize("name,data,needle", [
     ("scan.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "PLY"),
-    ("scan.xyz", b"1 2 3\n4 5 six\n", "line 2"),
+    ("scan.xyz", b"1 2\n4 5 six\n", "lines 1, 2"),
     ("scan.xyz", b"1 2\n", "3 coordinates"),
     ("scan.csv", b"1,2,nan\n" * 200, "non-finite"),
     ("scan.npy", b"not an npy", "NPY"),

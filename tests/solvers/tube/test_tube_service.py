@@ -97,3 +97,35 @@ def test_cli_reads_the_xyz_scan(tmp_path):
     assert done.returncode == 0, done.stderr
     assert len(json.loads((tmp_path / "tube.json").read_text())["lra"]) == 4
     assert (tmp_path / "tube_artifacts" / "xyz_clr.csv").exists()
+
+
+def test_a_truncated_upload_succeeds_with_its_skipped_lines_and_a_las_in_metres_comes_out_in_mm(client, tmp_path):
+    """Through intake and the job store: the reader's warnings and unit conversion reach the stored result."""
+    import laspy
+
+    lines = (EXAMPLES / "scan.xyz").read_text().splitlines()
+    lines[41] = "12.5 7.25"  # a line cut short
+    cut = "\n".join(lines)[:-3]  # and the file ends mid-line
+    xyz = client.post("/v1/tube/jobs", files={"file": ("scan.xyz", cut.encode(), "text/plain")})
+    assert xyz.status_code == 202, xyz.text
+    points = np.asarray(json.loads((EXAMPLES / "scan_request.json").read_text())["points"], dtype=float) / 1000.0
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales, header.offsets = np.array([1e-7] * 3), points.min(axis=0)
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = points.T
+    buffer = io.BytesIO()
+    las.write(buffer)
+    las_job = client.post("/v1/tube/jobs", files={"file": ("scan.las", buffer.getvalue(), "application/octet-stream")})
+    assert las_job.status_code == 202, las_job.text
+    done = wait_for(client, xyz.json()["id"], timeout=240)
+    assert done["status"] == "succeeded", done
+    report = client.get(f"/v1/jobs/{done['id']}/result").json()["report"]
+    assert report["status"] == "warning"
+    skipped = next(w for w in report["warnings"] if w["code"] == "records_skipped")
+    assert 42 in skipped["details"]["lines"] and report["details"]["source"]["truncated"]
+    done = wait_for(client, las_job.json()["id"], timeout=240)
+    assert done["status"] == "succeeded", done
+    result = client.get(f"/v1/jobs/{done['id']}/result").json()
+    assert result["units"] == "mm" and result["pipe_radius"] == pytest.approx(6.0, rel=0.03)
+    assert result["report"]["details"]["source"]["units"]["factor"] == pytest.approx(1000.0)
+    assert "file_units_assumed" in [w["code"] for w in result["report"]["warnings"]]

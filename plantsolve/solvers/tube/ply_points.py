@@ -1,0 +1,219 @@
+"""PLY point clouds and meshes (ASCII, binary little and big endian), read so that a damaged file says so.
+
+A general PLY reader stops at, or silently drops, what follows a cut: this one keeps every complete record
+before the cut and logs the rest (``ReadLog``): a file ending before the records its header declares, an ASCII
+record cut short or not numbers, a vertex with a NaN coordinate (then the faces using it go too). Faces are read
+only for a sparse mesh, whose faces are sampled instead of its vertices (``faces_below``)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from plantsolve.solvers.base import reject
+from plantsolve.solvers.tube.read_log import ReadLog
+
+TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
+         "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4",
+         "double": "f8", "float64": "f8"}
+
+
+@dataclass
+class Prop:
+    name: str
+    type: str  # numpy type code without byte order
+    count_type: str | None = None  # list properties: the type of the item count
+
+
+@dataclass
+class Element:
+    name: str
+    count: int
+    props: list[Prop]
+
+
+@dataclass
+class PlyData:
+    """Vertices (N, 3) with NaN rows where a vertex could not be read (so that face indices stay valid), and the
+    faces as triangles (M, 3) when they were read."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray | None
+
+
+def _header(content: bytes) -> tuple[str, list[Element], int, int]:
+    """Format, elements, byte offset of the body and the number of header lines."""
+    if not content.startswith(b"ply"):
+        raise reject("not a PLY file (it does not start with 'ply')")
+    end = content.find(b"end_header")
+    if end < 0:
+        raise reject("PLY header has no 'end_header' (the file is cut inside its header)")
+    body = content.find(b"\n", end)
+    body = len(content) if body < 0 else body + 1
+    lines = content[:body].decode("ascii", errors="replace").splitlines()
+    fmt, elements = None, []
+    for lineno, line in enumerate(lines, 1):
+        words = line.split()
+        if not words or words[0] in ("ply", "comment", "obj_info", "end_header"):
+            continue
+        try:
+            if words[0] == "format":
+                fmt = words[1]
+            elif words[0] == "element":
+                elements.append(Element(words[1], int(words[2]), []))
+            elif words[0] == "property" and words[1] == "list":
+                elements[-1].props.append(Prop(words[4], TYPES[words[3]], TYPES[words[2]]))
+            elif words[0] == "property":
+                elements[-1].props.append(Prop(words[2], TYPES[words[1]]))
+            else:
+                raise ValueError
+        except (IndexError, KeyError, ValueError):
+            raise reject(f"PLY header line {lineno} not understood: {line[:60]!r}") from None
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise reject(f"PLY format {fmt!r} not understood")
+    return fmt, elements, body, len(lines)
+
+
+def read_ply(content: bytes, log: ReadLog, faces_below: int) -> PlyData:
+    fmt, elements, start, header_lines = _header(content)
+    vertex = next((e for e in elements if e.name == "vertex"), None)
+    if vertex is None or not {"x", "y", "z"} <= {p.name for p in vertex.props if p.count_type is None}:
+        raise reject("PLY file has no vertex element with x, y, z")
+    read = _read_ascii if fmt == "ascii" else _read_binary
+    data = read(content, start, header_lines, elements, ">" if fmt == "binary_big_endian" else "<", log, faces_below)
+    verts = data.get("vertex")
+    if verts is None or not np.isfinite(verts).all(1).any():
+        raise reject(f"PLY file holds no readable vertex{log.summary()}")
+    faces = data.get("face")
+    triangles = None
+    if faces:
+        tri = [(f[0], f[k], f[k + 1]) for f in faces for k in range(1, len(f) - 1)]  # polygons as fans
+        triangles = np.asarray(tri, dtype=np.int64).reshape(-1, 3)
+        ok = (triangles >= 0).all(1) & (triangles < len(verts)).all(1)
+        ok[ok] = np.isfinite(verts[triangles[ok]]).all((1, 2))
+        for _ in range(int((~ok).sum())):  # faces on a vertex left out (or past the last): they go too
+            log.skip(None, "face on a missing vertex")
+        triangles = triangles[ok]
+    return PlyData(verts, triangles)
+
+
+def _read_ascii(content, start, header_lines, elements, _order, log, faces_below) -> dict:
+    lines = content[start:].decode("utf-8", errors="replace").splitlines()
+    pos, out = 0, {}
+    ends_mid_line = bool(lines) and not content.endswith((b"\n", b"\r"))
+    for el in elements:
+        if el.name == "face" and not ("vertex" in out and len(out["vertex"]) < faces_below):
+            break  # a dense mesh: its vertices are the samples
+        if el.name not in ("vertex", "face"):
+            pos += el.count  # one record a line
+            continue
+        lists = [p.name for p in el.props if p.count_type is not None]
+        records: list = []
+        for i in range(el.count):
+            while pos < len(lines) and not lines[pos].strip():
+                pos += 1
+            if pos >= len(lines):
+                log.truncate(f"the file ends after {i} of {el.count} {el.name} records (line "
+                             f"{header_lines + pos})", element=el.name, read=i, declared=el.count)
+                break
+            lineno, words = header_lines + pos + 1, lines[pos].split()
+            pos += 1
+            rec, why = _ascii_record(el, words)
+            if el.name == "vertex":
+                if rec is not None and not all(math.isfinite(v) for v in (rec[p] for p in "xyz")):
+                    rec, why = None, "non-finite coordinate"
+                records.append([rec[c] for c in "xyz"] if rec else [math.nan] * 3)
+            elif rec is not None:
+                if not lists:
+                    raise reject("PLY face element has no list of vertex indices")
+                records.append(rec[lists[0]])
+            if rec is None:
+                if pos == len(lines) and ends_mid_line:
+                    log.truncate(f"the file ends mid-record (line {lineno})", line=lineno)
+                log.skip(lineno, why)
+        out[el.name] = np.array(records, dtype=np.float64).reshape(-1, 3) if el.name == "vertex" else records
+        if log.truncation:
+            break
+    return out
+
+
+def _ascii_record(el: Element, words: list[str]) -> tuple[dict | None, str]:
+    """One ASCII record as {property: value}, or None and why it is unreadable."""
+    rec, k = {}, 0
+    try:
+        for p in el.props:
+            if p.count_type is None:
+                rec[p.name] = float(words[k])
+                k += 1
+            else:
+                n = int(words[k])
+                rec[p.name] = [int(w) for w in words[k + 1:k + 1 + n]]
+                if len(rec[p.name]) < n:
+                    return None, "cut short"
+                k += 1 + n
+    except IndexError:
+        return None, "cut short"
+    except ValueError:
+        return None, "not numbers"
+    return rec, ""
+
+
+def _read_binary(content, start, _header_lines, elements, order, log, faces_below) -> dict:
+    pos, out = start, {}
+    for el in elements:
+        want_faces = el.name == "face" and "vertex" in out and len(out["vertex"]) < faces_below
+        if el.name == "face" and not want_faces:
+            break
+        if all(p.count_type is None for p in el.props):
+            dt = np.dtype([(p.name, order + p.type) for p in el.props])
+            n = min(el.count, (len(content) - pos) // dt.itemsize)
+            rows = np.frombuffer(content, dt, n, offset=pos)
+            pos += n * dt.itemsize
+            if el.name == "vertex":
+                out["vertex"] = np.column_stack([rows[c] for c in "xyz"]).astype(np.float64)
+        else:
+            rows, pos, n = _binary_lists(content, pos, el, order)
+            if el.name == "face":
+                out["face"] = rows
+        if n < el.count:
+            log.truncate(f"the file ends after {n} of {el.count} {el.name} records", element=el.name, read=n,
+                         declared=el.count)
+            break
+        if el.name == "vertex" and len(out["vertex"]) >= faces_below:
+            break
+    verts = out.get("vertex")
+    if verts is not None:
+        bad = ~np.isfinite(verts).all(1)
+        for _ in range(int(bad.sum())):
+            log.skip(None, "non-finite coordinate")
+        verts[bad] = np.nan
+    return out
+
+
+def _binary_lists(content: bytes, pos: int, el: Element, order: str) -> tuple[list, int, int]:
+    """Records with list properties, one by one (faces of sparse meshes only, so few); the list of the
+    element's first list property per complete record, the offset after them and how many were complete."""
+    size = {p: np.dtype(p).itemsize for p in TYPES.values()}
+    first_list = next(p for p in el.props if p.count_type is not None)
+    out = []
+    for i in range(el.count):
+        p0, item = pos, None
+        try:
+            for p in el.props:
+                if p.count_type is None:
+                    pos += size[p.type]
+                    continue
+                n = int(np.frombuffer(content, order + p.count_type, 1, offset=pos)[0])
+                pos += size[p.count_type]
+                vals = np.frombuffer(content, order + p.type, n, offset=pos)
+                pos += n * size[p.type]
+                if p is first_list:
+                    item = [int(v) for v in vals]
+            if pos > len(content):
+                raise ValueError
+        except ValueError:  # numpy: the buffer ends inside this record
+            return out, p0, i
+        out.append(item)
+    return out, pos, el.count
