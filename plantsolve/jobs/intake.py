@@ -22,7 +22,9 @@ from plantsolve.jobs.errors import (
     field_problem,
     from_input_rejected,
     from_validation_error,
+    array_bounds,
     loads_bounded,
+    prescan_json,
 )
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
 from plantsolve.store.files import FileStore
@@ -31,6 +33,7 @@ from plantsolve.store.models import Job
 
 def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
     """The body as parsed JSON (what is stored) and the kind's input value made from it."""
+    prescan_json(body, array_bounds(spec.request_model), "The body")  # bounds first: nothing built past them
     raw = loads_bounded(body, [], "The body")
     try:
         # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
@@ -57,6 +60,7 @@ def upload_options(options_text: str | None) -> dict | None:
     """The multipart ``options`` field: a JSON object, or nothing."""
     if not options_text:
         return None
+    prescan_json(options_text, {}, "The 'options' form field")
     options = loads_bounded(options_text, ["options"], "The 'options' form field")
     if not isinstance(options, dict):
         raise Unprocessable("The 'options' form field must be a JSON object.",
