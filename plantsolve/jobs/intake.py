@@ -24,7 +24,9 @@ from __future__ import annotations
 import logging
 import math
 import multiprocessing
+from multiprocessing import forkserver
 import pickle
+import threading
 import resource
 import traceback
 from pathlib import Path
@@ -114,6 +116,11 @@ log = logging.getLogger("plantsolve.api")
 _forkserver = multiprocessing.get_context("forkserver")
 # the forkserver imports these once; each reading process forks from it with the kinds already imported
 _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", "plantsolve.solvers.kinds"])
+
+
+def start_readers() -> None:
+    """Start the forkserver (it imports every kind, seconds) in the background, so the first upload does not wait."""
+    threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
 
 
 def check_text_lines(source: StoredInput) -> None:

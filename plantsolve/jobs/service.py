@@ -51,6 +51,7 @@ class JobService:
     def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
         self.ctx = ctx
         self.dispatcher = dispatcher
+        intake.start_readers()  # uploads are read in processes forked from it
 
     @property
     def kinds(self) -> Mapping[str, SolverSpec]:
