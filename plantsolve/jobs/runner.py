@@ -263,8 +263,8 @@ def _run_claimed(
                     return "requeued"
                 return "stale"
             report = failure_report(
-                "solver", f"The solver crashed on each of {attempt} attempts; the server log has the details of job "
-                          f"{job_id}.",
+                "solver", f"The solver crashed on each of {attempt} attempts: {_clean(error)} (the server log has the "
+                          f"details of job {job_id}).",
                 attempts=history,
             )
     written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
