@@ -6,13 +6,31 @@ across fields: the only place they run. The extension of an upload is checked he
 else. A worker re-reads the stored input with :func:`read_stored` and does not check it again:
 what was stored is what passed.
 
+Uploads are read outside the API process (choice (b) of issue 24): :func:`read_upload_bounded` runs
+:func:`read_upload` and :func:`check` on the stored file in a child process forked from a forkserver
+that has the kinds imported, with its address space limited to ``UPLOAD_READ_MEMORY`` bytes beyond what
+it starts with (RLIMIT_AS) and its time to ``UPLOAD_READ_SECONDS`` (a wall-clock wait in the API, CPU
+time as a backstop). The child sends back only the outcome (accepted, or the 422's fields), so a zip
+bomb or a parser that runs away costs the child, never the API process, and is a 422 naming ``file``.
+The answer stays synchronous: a bad upload is a 422 at submission, as before. Before it, cheap checks
+run in the API: the extension, and the line count of text uploads (:data:`MAX_TEXT_LINES`).
+
 Every refusal is an :class:`~plantsolve.jobs.errors.Unprocessable` (422) or
 :class:`~plantsolve.jobs.errors.UnsupportedMediaType` (415) naming the field.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import logging
+import math
+import multiprocessing
+from multiprocessing import forkserver
+import pickle
+import threading
+import resource
+import traceback
+from pathlib import Path
+from typing import Any, Iterable
 
 from pydantic import ValidationError
 
@@ -22,15 +40,19 @@ from plantsolve.jobs.errors import (
     field_problem,
     from_input_rejected,
     from_validation_error,
+    array_bounds,
     loads_bounded,
+    prescan_json,
 )
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
+from plantsolve.solvers.kinds import load_kinds
 from plantsolve.store.files import FileStore
 from plantsolve.store.models import Job
 
 
 def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
     """The body as parsed JSON (what is stored) and the kind's input value made from it."""
+    prescan_json(body, array_bounds(spec.request_model), "The body")  # bounds first: nothing built past them
     raw = loads_bounded(body, [], "The body")
     try:
         # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
@@ -57,6 +79,7 @@ def upload_options(options_text: str | None) -> dict | None:
     """The multipart ``options`` field: a JSON object, or nothing."""
     if not options_text:
         return None
+    prescan_json(options_text, {}, "The 'options' form field")
     options = loads_bounded(options_text, ["options"], "The 'options' form field")
     if not isinstance(options, dict):
         raise Unprocessable("The 'options' form field must be a JSON object.",
@@ -78,6 +101,117 @@ def read_upload(spec: SolverSpec, source: StoredInput, options: dict | None) -> 
         raise Unprocessable("The uploaded file is nested too deeply to be read.",
                             errors=[field_problem(["file"], "nested too deeply", "json_too_deep")]) from None
     return _input(spec, request, source)
+
+
+# Growth of a reading process's address space beyond its start (RLIMIT_AS), and its time: what one upload
+# may cost to read. The API process itself holds only the uploaded bytes.
+UPLOAD_READ_MEMORY = 768 * 1024 * 1024
+UPLOAD_READ_SECONDS = 8.0
+# Text uploads (point clouds, tables) are read line by line in Python at about 1 KB and 9 us a line: beyond
+# this many lines a reader could not finish within the budget above, so they are refused before it runs.
+MAX_TEXT_LINES = 1_000_000
+TEXT_EXTENSIONS = (".xyz", ".csv", ".txt", ".pts", ".asc", ".tsv")
+
+log = logging.getLogger("plantsolve.api")
+_forkserver = multiprocessing.get_context("forkserver")
+# the forkserver imports these once; each reading process forks from it with the kinds already imported
+_forkserver.set_forkserver_preload(["plantsolve.jobs.intake", "plantsolve.solvers.kinds"])
+
+
+def start_readers() -> None:
+    """Start the forkserver (it imports every kind, seconds) in the background, so the first upload does not wait."""
+    threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
+
+
+def check_text_lines(source: StoredInput) -> None:
+    """A text upload of more than :data:`MAX_TEXT_LINES` lines is a 422 before any reader runs (counted at C speed)."""
+    if source.extension not in TEXT_EXTENSIONS:
+        return
+    lines = source.read().count(b"\n")
+    if lines > MAX_TEXT_LINES:
+        raise Unprocessable(
+            f"The uploaded text file has {lines} lines; a text upload may have at most {MAX_TEXT_LINES}. "
+            f"Send large point clouds in a binary format (.npy, .ply, .las, .e57).",
+            errors=[field_problem(["file"], f"{lines} lines, more than the {MAX_TEXT_LINES} a text upload may have",
+                                  "too_long")])
+
+
+def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | None, plugins: Iterable[str] = (), *,
+                        memory_bytes: int = UPLOAD_READ_MEMORY, seconds: float = UPLOAD_READ_SECONDS) -> None:
+    """:func:`read_upload` and :func:`check` of a stored upload, run in a bounded child process: returns when the
+    upload passes, raises the 422 otherwise (also when reading it needs more memory or time than allowed).
+    The spec travels by reference (its kind and the ``plugins`` of the kind map it is in), else pickled; a spec
+    made of local functions (a test's) can do neither, and is read here, in this process."""
+    if source.path is None:
+        raise ValueError("a bounded read needs the upload stored on disk")
+    check_text_lines(source)
+    plugins = tuple(plugins)
+    try:
+        pickled = pickle.dumps((spec.kind, plugins) if load_kinds(plugins).get(spec.kind) is spec else spec)
+    except (pickle.PicklingError, AttributeError, TypeError):
+        check(spec, read_upload(spec, source, options))
+        return
+    receiver, sender = _forkserver.Pipe(duplex=False)
+    process = _forkserver.Process(
+        target=_read_in_child, daemon=True, name=f"read-{spec.kind}",
+        args=(sender, pickled, str(source.path), source.name, options, memory_bytes, seconds))
+    process.start()
+    sender.close()
+    try:
+        outcome = receiver.recv() if receiver.poll(seconds) else ("time",)
+    except EOFError:  # it died without a word: killed by the kernel (out of memory) or a crash in native code
+        outcome = ("memory",)
+    finally:
+        receiver.close()
+        if process.is_alive():
+            process.kill()
+        process.join(timeout=5)
+    if outcome[0] == "ok":
+        return
+    if outcome[0] == "invalid":
+        raise Unprocessable(outcome[1], errors=outcome[2])
+    if outcome[0] == "memory":
+        msg = f"reading this file needs more than the {memory_bytes // 2**20} MiB an upload may take to read"
+        raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_large")])
+    if outcome[0] == "time":
+        msg = f"reading this file takes longer than the {seconds:g} s an upload may take to read"
+        raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_slow")])
+    log.warning("reading an uploaded %s file for %s failed in the reader:\n%s", source.extension, spec.kind, outcome[1])
+    msg = f"the file could not be read as a {source.extension or 'file'} file for {spec.kind} (it is malformed)"
+    raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "value_error")])
+
+
+def _read_in_child(sender, pickled: bytes, path: str, name: str, options: dict | None,
+                   memory_bytes: int, seconds: float) -> None:
+    """In the reading process: limits first, then the reader; only the outcome goes back."""
+    try:
+        resource.setrlimit(resource.RLIMIT_AS, (_address_space() + memory_bytes,) * 2)
+        cpu = math.ceil(seconds) + 2
+        resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
+        spec = pickle.loads(pickled)
+        if isinstance(spec, tuple):
+            kind, plugins = spec
+            spec = load_kinds(plugins)[kind]
+        check(spec, read_upload(spec, StoredInput.from_path(Path(path), name), options))
+        outcome: tuple = ("ok",)
+    except Unprocessable as error:
+        outcome = ("invalid", error.detail, error.errors)
+    except MemoryError:
+        outcome = ("memory",)
+    except BaseException:  # a reader's bug on odd input: the API logs it and answers 422 naming the file
+        outcome = ("failed", traceback.format_exc(limit=20))
+    try:
+        sender.send(outcome)
+    finally:
+        sender.close()
+
+
+def _address_space() -> int:
+    """This process's virtual memory size in bytes (VmSize): the base its limit is counted from."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmSize:"):
+            return int(line.split()[1]) * 1024
+    return 0
 
 
 def check(spec: SolverSpec, job_input: Any) -> None:

@@ -241,13 +241,15 @@ def _run_claimed(
             report = failure_report(error.stage, error.message, **error.details)
         except Exception as error:
             log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
-            history.append({"attempt": attempt, "worker": worker, "error": f"{type(error).__name__}: {_clean(error)}"})
+            # reports say what happened in words; exception class names stay in the server log (above)
+            history.append({"attempt": attempt, "worker": worker, "error": _clean(error) or "internal error"})
             if not is_infrastructure_failure(error):
                 # the same input gives the same failure: retrying would only repeat it
                 report = failure_report(
                     "solver",
-                    f"The solver failed on this input ({type(error).__name__}: {_clean(error)}); it was not retried "
-                    "because the same input fails the same way. Check the input's values (scale, degenerate geometry).",
+                    "The solver failed on this input; it was not retried because the same input fails the same way. "
+                    "Check the input's values (scale, degenerate geometry); the server log has the details of job "
+                    f"{job_id}, attempt {attempt}.",
                     attempts=history,
                 )
                 written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
@@ -256,12 +258,13 @@ def _run_claimed(
             if attempt < job.max_attempts:
                 report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
                 if ctx.repo.requeue(job_id, attempt, report=report,
-                                    attempts=log_book.add("requeued", f"{type(error).__name__}: {_clean(error)}")):
+                                    attempts=log_book.add("requeued", _clean(error) or "internal error")):
                     requeue(job_id, job.kind)
                     return "requeued"
                 return "stale"
             report = failure_report(
-                "solver", f"The solver crashed on each of {attempt} attempts: {type(error).__name__}: {_clean(error)}",
+                "solver", f"The solver crashed on each of {attempt} attempts: {_clean(error)} (the server log has the "
+                          f"details of job {job_id}).",
                 attempts=history,
             )
     written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,

@@ -10,6 +10,7 @@ import hashlib
 import json
 import logging
 import re
+import shutil
 import uuid
 from dataclasses import dataclass
 from datetime import datetime
@@ -50,6 +51,7 @@ class JobService:
     def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
         self.ctx = ctx
         self.dispatcher = dispatcher
+        intake.start_readers()  # uploads are read in processes forked from it
 
     @property
     def kinds(self) -> Mapping[str, SolverSpec]:
@@ -96,13 +98,21 @@ class JobService:
         spec = self.spec(kind)
         extension = intake.upload_extension(spec, filename)
         options = intake.upload_options(options_text)
-        job_input = intake.read_upload(spec, StoredInput.from_bytes(filename, content), options)
-        intake.check(spec, job_input)
+        if not content:
+            intake.read_upload(spec, StoredInput.from_bytes(filename, content), options)  # the 422 of an empty file
+        intake.check_text_lines(StoredInput.from_bytes(filename, content))
         digest = hashlib.sha256()
         for part in (kind.encode(), extension.encode(), _canonical(options), content):
             digest.update(hashlib.sha256(part).digest())
         job_id = uuid.uuid4()
+        # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one
         path, _, _ = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
+        try:
+            intake.read_upload_bounded(spec, StoredInput.from_path(self.ctx.files.path(path), filename), options,
+                                       self.ctx.settings.plugins)
+        except Exception:
+            shutil.rmtree(self.ctx.files.path(path).parent.parent, ignore_errors=True)
+            raise
         fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options,
                   **_callback(callback_url)}
         return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)

@@ -60,7 +60,7 @@ def test_an_upload_is_checked_once_and_re_read_by_path_in_the_worker(counted):
     service = JobService(ctx, dispatcher)
     job = service.submit_upload("test-compute", "values.txt", b"1\n2\n3\n", '{"seconds": 0}', None).job
     assert kind.calls == {"parse": 1, "load": 1, "check": 1}
-    assert kind.sources[0].path is None and kind.sources[0].read() == b"1\n2\n3\n"  # in memory at submission
+    assert kind.sources[0].path is not None and kind.sources[0].read() == b"1\n2\n3\n"  # read from its stored file
 
     assert run_job(ctx, dispatcher.enqueued[0], worker="test", requeue=lambda *a: None) == SUCCEEDED
     assert kind.calls == {"parse": 2, "load": 2, "check": 1}  # re-read, not checked again

@@ -3,6 +3,7 @@ attempt, crashes retry up to the cap, hangs hit the time limit, lapsed leases ar
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 import uuid
@@ -99,7 +100,7 @@ def test_crashing_solver_retries_then_fails_with_a_report(ctx):
     assert report["status"] == "failed" and report["stage"] == "solver"
     assert "division by zero" in report["message"]
     assert [a["attempt"] for a in report["details"]["attempts"]] == [1, 2]
-    assert "ConnectionError" in report["details"]["attempts"][0]["error"]
+    assert "ConnectionError" not in json.dumps(report)  # class names stay in the server log
     assert run_job(ctx, job_id, worker="w", requeue=queue.enqueue) == "skipped"
 
 
@@ -113,7 +114,7 @@ def test_a_failure_that_the_input_decides_fails_once_without_server_details(ctx,
     job = ctx.repo.get(job_id)
     assert job.status == "failed" and job.attempt == 1  # one attempt, not max_attempts
     report = job.report
-    assert report["stage"] == "solver" and error in report["message"] and "not retried" in report["message"]
+    assert report["stage"] == "solver" and error not in report["message"] and "not retried" in report["message"]
     text = str(report)
     assert "site-packages" not in text and "/srv/" not in text and "Traceback" not in text and "<path>" in text
 

@@ -48,9 +48,12 @@ from __future__ import annotations
 
 import ast
 import csv
+import io
 import json
 import math
 import re
+import zipfile
+import zlib
 
 import numpy as np
 
@@ -234,11 +237,52 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
                         what="line", cut_line=cut)
 
 
+# Most bytes an .xlsx may inflate to, counted on the bytes the decompressor actually gives (a zip's declared
+# sizes may lie): a rig table of MAX_CSV_ROWS rows is a few MB of XML; a zip bomb stops here.
+MAX_XLSX_INFLATED = 64 * 1024 * 1024
+_CHUNK = 1 << 20
+
+
+def check_workbook_archive(content: bytes) -> None:
+    """A workbook's archive read member by member, counting inflated bytes (refused past
+    ``MAX_XLSX_INFLATED``) and looking for a DTD: an .xlsx never declares one, and its entities are how an
+    XML bomb expands. Both are a 422 on ``file`` before openpyxl builds anything."""
+    try:
+        archive = zipfile.ZipFile(io.BytesIO(content))
+        members = archive.infolist()
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, ValueError, EOFError, OSError):
+        return  # not a readable zip: the workbook reader says why
+    if sum(m.file_size for m in members) > MAX_XLSX_INFLATED:
+        raise reject(f"the workbook inflates to {sum(m.file_size for m in members):,} bytes; an .xlsx may inflate to "
+                     f"at most {MAX_XLSX_INFLATED:,} (a zip bomb?)")
+    inflated = 0
+    for member in members:
+        try:
+            with archive.open(member) as stream:
+                head = b""
+                while chunk := stream.read(_CHUNK):
+                    inflated += len(chunk)
+                    if inflated > MAX_XLSX_INFLATED:
+                        raise reject(f"the workbook inflates to more than {MAX_XLSX_INFLATED:,} bytes, the most an "
+                                     f".xlsx may (a zip bomb?)")
+                    if len(head) < 4096:
+                        head += chunk[:4096]
+                        if member.filename.endswith((".xml", ".rels", ".vml")) and b"<!DOCTYPE" in head.upper():
+                            raise reject(f"the workbook's {member.filename} declares a DTD (entity definitions); an "
+                                         "Excel .xlsx never does: save it again from Excel or send CSV")
+        except InputRejected:
+            raise
+        except (zipfile.BadZipFile, NotImplementedError, RuntimeError, ValueError, EOFError, OSError, zlib.error):
+            raise reject(f"not a readable Excel .xlsx workbook: its member {member.filename!r} cannot be "
+                         "decompressed (damaged or encrypted); save it again from Excel or send CSV") from None
+
+
 def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
                 ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
     """An Excel workbook's rig table (:mod:`plantsolve.solvers.perfmap.workbook`): the named sheet, else the
     first sheet with a recognisable header, else the first sheet; then the CSV rules, rows named by their
     sheet row."""
+    check_workbook_archive(content)
     sheets = read_workbook(content, MAX_CSV_ROWS)
     if sheet is not None:
         chosen = [s for s in sheets if s.name == sheet]

@@ -123,6 +123,11 @@ def parse_ldraw(text: str) -> dict:
                 if sub in stack or len(stack) >= MAX_DEPTH:
                     skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself"})
                     continue
+                # counted as it expands: a fan-out of sub-models (10 includes x 8 levels = 10^8 placements) is
+                # refused once it passes the bound, before it expands further
+                if len(parts) + counts["submodels_expanded"] >= MAX_PARTS:
+                    raise reject(f"the model expands to more than {MAX_PARTS} parts and sub-model placements "
+                                 f"(line {number} places {file_name!r} once more); at most {MAX_PARTS} are read")
                 counts["submodels_expanded"] += 1
                 expand(sub, world_rot, world_pos, ident + "/", (*stack, sub))
                 continue
