@@ -104,14 +104,21 @@ def linearity_plot(result: FlowmeterResult) -> Figure:
     return fig
 
 
+def figures(request: FlowmeterRequest, result: FlowmeterResult) -> dict[str, Figure]:
+    """Every plot by artifact stem: ``weight_function``, and ``electrode_current``, ``linearity`` when the
+    result has them."""
+    out = {"weight_function": weight_map(request, result)}
+    if result.electrode_current:
+        out["electrode_current"] = current_plot(request, result)
+    if result.linearity:
+        out["linearity"] = linearity_plot(result)
+    return out
+
+
 def render_artifacts(request: FlowmeterRequest, solved: Solved) -> list[Artifact]:
     """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
     result = solved.result
-    out = [figure_artifact("weight_function.png", weight_map(request, result))]
-    if result.electrode_current:
-        out.append(figure_artifact("electrode_current.png", current_plot(request, result)))
-    if result.linearity:
-        out.append(figure_artifact("linearity.png", linearity_plot(result)))
+    out = [figure_artifact(f"{stem}.png", fig) for stem, fig in figures(request, result).items()]
     rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
     out.append(Artifact(name="weight_grid.csv", media_type="text/csv", data=("\n".join(rows) + "\n").encode()))
     return out

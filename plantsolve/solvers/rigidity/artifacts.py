@@ -19,7 +19,7 @@ MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share l
 PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
 
 
-def _graph(request: RigidityRequest, result: RigidityResult) -> Figure:
+def graph_figure(request: RigidityRequest, result: RigidityResult) -> Figure:
     graph = nx.MultiGraph()
     cluster_of = {}
     order = sorted(range(len(result.clusters)), key=lambda k: (-len(result.clusters[k]), k))
@@ -86,6 +86,11 @@ def _table(result: RigidityResult) -> bytes:
     return out.getvalue().encode()
 
 
+def figures(request: RigidityRequest, result: RigidityResult) -> dict[str, Figure]:
+    """Every plot by artifact stem."""
+    return {"graph": graph_figure(request, result)}
+
+
 def render_artifacts(request: RigidityRequest, solved: Solved) -> list[Artifact]:
-    return [figure_artifact("graph.png", _graph(request, solved.result), dpi=100),
+    return [*(figure_artifact(f"{stem}.png", fig, dpi=100) for stem, fig in figures(request, solved.result).items()),
             Artifact("clusters.csv", "text/csv", _table(solved.result))]
