@@ -14,7 +14,8 @@ from matplotlib.text import Text
 from matplotlib.ticker import FixedLocator
 from matplotlib.transforms import Bbox
 
-UNIT = re.compile(r"\[[^\[\]]+\]")
+# a unit in brackets, or the plain statement that the values are in the submitted file's (unstated) unit
+UNIT = re.compile(r"\[[^\[\]]+\]|\(unit as in the file\)")
 
 
 def _is_colorbar(ax) -> bool:
@@ -163,6 +164,34 @@ def _overlap(a: Bbox, b: Bbox) -> bool:
     return (min(a.x1, b.x1) - max(a.x0, b.x0) > OVERLAP_PX) and (min(a.y1, b.y1) - max(a.y0, b.y0) > OVERLAP_PX)
 
 
+def _corners(t: Text, box: Bbox, renderer) -> np.ndarray:
+    """The four corners of a text's own (rotated) rectangle: its window extent is the axis-aligned box around it,
+    which for a slanted 3-D axis label covers far more than the letters. The rectangle has the same centre."""
+    angle = np.radians(t.get_rotation())
+    if abs(np.sin(2 * angle)) < 1e-6:  # 0 or 90 degrees: the box is the rectangle
+        return np.array([[box.x0, box.y0], [box.x1, box.y0], [box.x1, box.y1], [box.x0, box.y1]])
+    lines = t.get_text().split("\n")
+    sizes = [renderer.get_text_width_height_descent(line or " ", t.get_fontproperties(), ismath="TeX" if
+                                                    t.get_usetex() else t._preprocess_math(line)[1]) for line in lines]
+    w = max(s[0] for s in sizes)
+    h = sum(s[1] for s in sizes) * (t.get_linespacing() if len(lines) > 1 else 1.0)
+    c, s = np.cos(angle), np.sin(angle)
+    half = np.array([[-w, -h], [w, -h], [w, h], [-w, h]]) / 2
+    return np.array([(box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2]) + half @ np.array([[c, s], [-s, c]])
+
+
+def _rectangles_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Separating axis test of two convex quadrilaterals, with :data:`OVERLAP_PX` of tolerance."""
+    for poly in (a, b):
+        for k in range(4):
+            edge = poly[(k + 1) % 4] - poly[k]
+            normal = np.array([-edge[1], edge[0]]) / (np.hypot(*edge) or 1.0)
+            pa, pb = a @ normal, b @ normal
+            if min(pa.max(), pb.max()) - max(pa.min(), pb.min()) <= OVERLAP_PX:
+                return False
+    return True
+
+
 def _name(t: Text) -> str:
     text = t.get_text().replace("\n", " ")
     return repr(text if len(text) <= 40 else text[:37] + "...")
@@ -198,9 +227,10 @@ def text_problems(fig: Figure, dpi: float | None = None) -> list[str]:
             if _overlap(box, area):
                 what = "a colour bar" if _is_colorbar(ax) else f"axes {ax.get_title() or ax.get_label()!r}"
                 problems.append(f"text {_name(t)} of {_place(owner)} runs into {what}")
+    corners = [_corners(t, box, renderer) for t, box in zip(texts, boxes)]
     for i in range(len(texts)):
         for j in range(i + 1, len(texts)):
-            if _overlap(boxes[i], boxes[j]):
+            if _overlap(boxes[i], boxes[j]) and _rectangles_overlap(corners[i], corners[j]):
                 problems.append(f"text {_name(texts[i])} overlaps text {_name(texts[j])}")
     return problems
 
