@@ -10,6 +10,7 @@ browser authorised by its cookie must send the form's anti-forgery token (see ``
 from __future__ import annotations
 
 import hmac
+import json
 import uuid
 from pathlib import Path
 from typing import Annotated, Any
@@ -26,9 +27,9 @@ from plantsolve.app import dashboard_views as views
 from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
-from plantsolve.jobs.errors import NotFound, ProblemError, Unprocessable, field_problem
+from plantsolve.jobs.errors import Conflict, NotFound, ProblemError, Unprocessable, field_problem
 from plantsolve.jobs.lifecycle import STATUSES, is_finished
-from plantsolve.jobs.service import decode_cursor, encode_cursor
+from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
 from plantsolve.solvers.base import SolverSpec
 
 HERE = Path(__file__).parent
@@ -78,7 +79,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
     # the stream filters by kind and status only (the text is applied when the rows reload); no empty values
     stream = {name: value for name, value in (("kind", kind), ("status", status)) if value}
     return {
-        "rows": [views.row(service.view(job, with_artifacts=False)) for job in jobs],
+        "rows": [views.row(service.view(job, with_artifacts=False), views.input_label(job)) for job in jobs],
         "counts": service.count_by_status(who.sees),
         "filters": filters,
         "cursor": cursor or "",
@@ -185,6 +186,20 @@ def build_dashboard() -> APIRouter:
             pass
         return RedirectResponse(f"/dashboard/jobs/{job_id}", status_code=303)
 
+    @router.post("/dashboard/jobs/{job_id}/rerun", dependencies=authorised)
+    async def rerun(request: Request, job_id: uuid.UUID, token: str = Form(default="", max_length=128)) -> Response:
+        """The same input submitted again as a new job (a finished job's 'Re-run'): the JSON body, or the
+        stored file under its name with the same options, through the calls of ``POST /v1/<kind>/jobs``."""
+        _check_form(request, token)
+        service, who = service_of(request), principal(request)
+        try:
+            submitted = await run_in_threadpool(_submit_again, service, job_id, who)
+        except NotFound as error:
+            return _not_found(request, error)
+        except ProblemError as error:  # the kind changed since and refuses the input: say so on the job's page
+            return _page(request, "error.html", error.status, title=error.title, message=error.detail)
+        return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
+
     @router.get("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
     def submit_form(request: Request, kind: str) -> HTMLResponse:
         try:
@@ -226,6 +241,18 @@ def build_dashboard() -> APIRouter:
         return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
     return router
+
+
+def _submit_again(service: JobService, job_id: uuid.UUID, who: Any) -> Any:
+    job = service.get(job_id, who.sees)
+    if not is_finished(job.status):
+        raise Conflict(f"Job {job_id} is still {job.status}: re-run it once it has finished.")
+    if job.input_kind == "upload":
+        content = service.input_path(job).read_bytes()
+        options = json.dumps(job.input_options) if job.input_options else None
+        return service.submit_upload(job.kind, job.input_filename, content, options, None, owner=who.owner)
+    body = service.input_path(job).read_bytes() if job.input_kind == "json_file" else json.dumps(job.input).encode()
+    return service.submit_json(job.kind, body, None, owner=who.owner)
 
 
 def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:

@@ -53,9 +53,15 @@ class Row:
     attempt: str
     created: str
     run: str
+    input: str = "JSON"
 
 
-def row(view: JobView) -> Row:
+def input_label(job: Any) -> str:
+    """The list's input column: the uploaded file's name, or 'JSON' for a JSON body."""
+    return (job.input_filename or "upload") if job.input_kind == "upload" else "JSON"
+
+
+def row(view: JobView, input: str = "JSON") -> Row:
     report = view.report
     message = (report.message if report is not None and report.message else "") or view.progress.message
     if view.status in ("queued", "running"):
@@ -71,6 +77,7 @@ def row(view: JobView) -> Row:
         attempt=f"{view.attempt}/{view.max_attempts}",
         created=when(view.timings.created_at),
         run=seconds(view.timings.run_seconds),
+        input=input,
     )
 
 

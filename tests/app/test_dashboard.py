@@ -283,3 +283,63 @@ def test_a_job_page_shows_its_completion_webhook(keyed):
     page = keyed.get(f"/dashboard/jobs/{job['id']}", headers=alice).text
     assert "completion webhook" in page and 'title="http://127.0.0.1:9/hook"' in page
     assert "completion webhook" not in keyed.get(f"/dashboard/jobs/{_submit(keyed, [1.0], alice)['id']}", headers=alice).text
+
+
+def _rows(html: str) -> dict[str, str]:
+    return {m.group(1): m.group(0) for m in re.finditer(r'<tr data-job="([^"]+)".*?</tr>', html, re.S)}
+
+
+def test_the_list_names_each_jobs_input(client):
+    """An input column: the uploaded file's name, or 'JSON' for a JSON body."""
+    body = _submit(client, [1.0])
+    upload = client.post("/v1/test-compute/jobs", files={"file": ("rig run 7.txt", b"1\n2\n", "text/plain")}).json()
+    wait_for(client, upload["id"])
+    page = client.get("/dashboard").text
+    assert "<th>input</th>" in page
+    rows = _rows(page)
+    assert re.search(r'<td class="input-name"[^>]*>rig run 7.txt</td>', rows[upload["id"]])
+    assert re.search(r'<td class="input-name"[^>]*>JSON</td>', rows[body["id"]])
+
+
+def test_a_finished_job_is_re_run_with_the_same_input(keyed):
+    """'Re-run' on a finished job's page submits the same input as a new job of the same tenant (the JSON body;
+    for an upload the stored file under its name with its options) and opens the new job's page."""
+    alice = {"Authorization": "Bearer key-a"}
+    keyed.post("/dashboard/login", data={"key": "key-a"})
+    token = form_token("key-a")
+    first = _submit(keyed, [1.0, 2.5], headers=alice)
+    page = keyed.get(f"/dashboard/jobs/{first['id']}").text
+    assert f'action="/dashboard/jobs/{first["id"]}/rerun"' in page and "Re-run" in page
+    assert keyed.post(f"/dashboard/jobs/{first['id']}/rerun", data={}).status_code == 403  # the form's token
+    again = keyed.post(f"/dashboard/jobs/{first['id']}/rerun", data={"token": token}, follow_redirects=False)
+    assert again.status_code == 303
+    new_id = again.headers["location"].rsplit("/", 1)[-1]
+    assert new_id != first["id"]
+    assert wait_for(keyed, new_id, headers=alice)["status"] == "succeeded"
+    assert keyed.get(f"/v1/jobs/{new_id}/result", headers=alice).json()["total"] == 3.5
+    assert keyed.get(f"/v1/jobs/{new_id}/input", headers=alice).json() == {"values": [1.0, 2.5]}
+
+    upload = keyed.post("/v1/test-compute/jobs", headers=alice, data={"options": '{"seconds": 0.01}'},
+                        files={"file": ("values.txt", b"1\n2\n3\n", "text/plain")}).json()
+    wait_for(keyed, upload["id"], headers=alice)
+    again = keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": token}, follow_redirects=False)
+    new_id = again.headers["location"].rsplit("/", 1)[-1]
+    assert wait_for(keyed, new_id, headers=alice)["status"] == "succeeded"
+    assert keyed.get(f"/v1/jobs/{new_id}/result", headers=alice).json()["total"] == 6.0
+    described = keyed.get(f"/v1/jobs/{new_id}/input", headers=alice).json()
+    assert described["filename"] == "values.txt" and described["options"] == {"seconds": 0.01}
+    assert keyed.get(f"/v1/jobs/{new_id}/input/file", headers=alice).content == b"1\n2\n3\n"
+    # another tenant cannot re-run it
+    keyed.post("/dashboard/login", data={"key": "key-b"})
+    assert keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": form_token("key-b")}).status_code == 404
+
+
+def test_a_running_job_has_no_re_run(keyed):
+    alice = {"Authorization": "Bearer key-a"}
+    job = keyed.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 20}, headers=alice).json()
+    wait_for(keyed, job["id"], statuses=("running",), headers=alice)
+    keyed.post("/dashboard/login", data={"key": "key-a"})
+    assert "/rerun" not in keyed.get(f"/dashboard/jobs/{job['id']}").text
+    refused = keyed.post(f"/dashboard/jobs/{job['id']}/rerun", data={"token": form_token("key-a")})
+    assert refused.status_code == 409 and "once it has finished" in refused.text
+    keyed.post(f"/v1/jobs/{job['id']}/cancel", headers=alice)
