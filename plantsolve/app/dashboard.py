@@ -216,9 +216,10 @@ def build_dashboard() -> APIRouter:
         except NotFound as error:
             return _not_found(request, error)
         settings = request.app.state.settings
-        form = await request.form(max_files=1, max_fields=6, max_part_size=min(settings.max_body_bytes, 16 * 1024 * 1024))
+        form = await request.form(max_files=1, max_fields=7, max_part_size=min(settings.max_body_bytes, 16 * 1024 * 1024))
         source = str(form.get("source") or "json")
         options, body = str(form.get("options") or ""), str(form.get("body") or "")
+        defaults = str(form.get("option_defaults") or "")
         try:
             _check_form(request, str(form.get("token") or ""))
             if source == "upload":
@@ -228,8 +229,9 @@ def build_dashboard() -> APIRouter:
                 if upload.size is not None and upload.size > settings.max_upload_bytes:
                     raise PayloadTooLarge(f"The file has {upload.size} bytes; the limit is {settings.max_upload_bytes} bytes.")
                 content = await upload.read()
+                chosen = _changed_options(options, defaults)
                 submitted = await run_in_threadpool(
-                    lambda: service.submit_upload(kind, upload.filename, content, options.strip() or None, None, owner=who.owner))
+                    lambda: service.submit_upload(kind, upload.filename, content, chosen, None, owner=who.owner))
             else:
                 submitted = await run_in_threadpool(
                     lambda: service.submit_json(kind, body.encode(), None, owner=who.owner))
@@ -255,15 +257,37 @@ def _submit_again(service: JobService, job_id: uuid.UUID, who: Any) -> Any:
     return service.submit_json(job.kind, body, None, owner=who.owner)
 
 
+def _changed_options(options: str, defaults: str) -> str | None:
+    """The options text to submit: only the options that differ from the kind's defaults, so that a
+    default never silently overrides an uploaded JSON file's own option. Text that is not a JSON object goes on
+    as it is, for the intake to refuse naming the field."""
+    if not options.strip():
+        return None
+    try:
+        sent, before = json.loads(options), json.loads(defaults) if defaults.strip() else None
+    except json.JSONDecodeError:
+        return options
+    if not isinstance(sent, dict) or not isinstance(before, dict):
+        return options
+    changed = views.changed_options(sent, before)
+    return json.dumps(changed) if changed else None
+
+
 def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:
-    """The submit page: both forms prefilled from the kind's example (its options for an upload)."""
+    """The submit page: the JSON form prefilled with the kind's example; the upload form's options with their
+    defaults (the example's options over them) and the schema its fields are generated from."""
     example = spec.example() if spec.example is not None else None
-    options = example.get("options") if isinstance(example, dict) else None
+    example_options = example.get("options") if isinstance(example, dict) else None
+    defaults = views.option_defaults(spec)
+    shown = views.option_defaults(spec, example_options if isinstance(example_options, dict) else None)
     context = {
         "spec": spec,
         "token": _token_for(request),
         "problem": None,
-        "options": views.pretty(options) if options else "{}",
+        "options": views.pretty(shown),
+        # what the kind does anyway: an option left at its default is not sent (see _changed_options)
+        "option_defaults": json.dumps(defaults),
+        "options_schema": views.options_schema(spec),
         "body": views.pretty(example) if example is not None else "",
     }
     return {**context, **values}

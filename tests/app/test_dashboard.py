@@ -3,6 +3,7 @@ its warnings, plots, downloads and input, the submit forms and their errors, and
 
 from __future__ import annotations
 
+import html
 import json
 import re
 import uuid
@@ -343,3 +344,47 @@ def test_a_running_job_has_no_re_run(keyed):
     refused = keyed.post(f"/dashboard/jobs/{job['id']}/rerun", data={"token": form_token("key-a")})
     assert refused.status_code == 409 and "once it has finished" in refused.text
     keyed.post(f"/v1/jobs/{job['id']}/cancel", headers=alice)
+
+
+def _options_of(page: str) -> tuple[dict, dict, dict]:
+    """The upload form's options text, its defaults field and the options schema embedded in the page."""
+    text = html.unescape(re.search(r'<textarea name="options"[^>]*>(.*?)</textarea>', page, re.S).group(1))
+    defaults = html.unescape(re.search(r'name="option_defaults" value="([^"]*)"', page).group(1))
+    schema = re.search(r'<script type="application/json" id="options-schema">(.*?)</script>', page, re.S).group(1)
+    return json.loads(text), json.loads(defaults), json.loads(schema)
+
+
+@pytest.mark.parametrize("kind", sorted(k for k, s in KINDS.items() if s.upload_extensions))
+def test_every_upload_form_shows_its_options_with_defaults_and_their_schema(client, kind):
+    spec = KINDS[kind]
+    options, defaults, schema = _options_of(client.get(f"/dashboard/submit/{kind}").text)
+    model = spec.request_model.model_fields["options"].annotation
+    assert set(schema["properties"]) == set(model.model_fields)  # the fields the script generates
+    expected = {name: json.loads(json.dumps(f.get_default(call_default_factory=True, validated_data={}),
+                                            default=lambda m: m.model_dump(mode="json")))
+                for name, f in model.model_fields.items() if not f.is_required()}
+    expected = {k: v for k, v in expected.items() if v is not None}
+    assert defaults == expected
+    assert options == {**expected, **(spec.example().get("options") or {})}
+    model.model_validate(options)  # what the form shows is valid as it stands
+
+
+def test_the_tube_upload_form_is_prefilled_with_its_defaults(client):
+    options, _, schema = _options_of(client.get("/dashboard/submit/tube").text)
+    assert options["bend_radius_model"] == "auto" and options["damping"] == 1.0 and options["seed"] == 0
+    assert "bend_radius" in schema["properties"] and "bend_radius" not in options  # no default: a field left empty
+
+
+def test_an_upload_sends_only_the_options_that_differ_from_the_defaults(client):
+    """Options left at their defaults are not sent (a JSON file's own options stay); changed ones are."""
+    _, defaults, _ = _options_of(client.get("/dashboard/submit/test-compute").text)
+    assert defaults == {"seconds": 0.0}
+    sent = {}
+    for options in ('{"seconds": 0.0}', '{"seconds": 0.01}'):
+        response = client.post("/dashboard/submit/test-compute", follow_redirects=False,
+                               data={"source": "upload", "options": options, "option_defaults": json.dumps(defaults)},
+                               files={"file": ("values.txt", b"1\n2\n", "text/plain")})
+        job_id = response.headers["location"].rsplit("/", 1)[-1]
+        wait_for(client, job_id)
+        sent[options] = client.get(f"/v1/jobs/{job_id}/input").json()["options"]
+    assert sent == {'{"seconds": 0.0}': None, '{"seconds": 0.01}': {"seconds": 0.01}}
