@@ -10,16 +10,24 @@ import numpy as np
 import trimesh
 from matplotlib import colormaps
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
-                                              sample_centreline, spine_distance, tube_mesh_arrays)
 from plantsolve.solvers.tube.lra import model_from_rows
+from plantsolve.solvers.tube.model import (
+    TubeModel,
+    build_spine,
+    control_polygon,
+    quaternion_frame,
+    reverse_model,
+    sample_centreline,
+    spine_distance,
+    tube_mesh_arrays,
+)
 from plantsolve.solvers.tube.scan import TubeScan
 
 
