@@ -87,9 +87,10 @@ def current_plot(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
         level = np.log10(np.clip(grid[:, 2], np.min(grid[:, 2][grid[:, 2] > 0]), None))
         filled = mx.tricontourf(tri, level, levels=20, cmap="magma")
         fig.colorbar(filled, ax=mx, label="log10(j R²/I) [-]")
-        mx.plot(grid[:, 0], grid[:, 1], ".", color="0.8", ms=1, label="Chebyshev points (edges singular)")
-        mx.set(xlabel="theta [deg]", ylabel=f"z [{request.units}]", title="density over the electrode at +R")
-        mx.legend(fontsize=8, loc="upper right")
+        mx.plot(grid[:, 0], grid[:, 1], ".", color="0.8", ms=1)
+        # said in the title: a legend inside covered the points it explains
+        mx.set(xlabel="theta [deg]", ylabel=f"z [{request.units}]",
+               title="density over the electrode at +R\n(dots: Chebyshev points; edges singular)")
     fig.tight_layout()
     return fig
 
