@@ -10,6 +10,7 @@ browser authorised by its cookie must send the form's anti-forgery token (see ``
 from __future__ import annotations
 
 import hmac
+import json
 import uuid
 from pathlib import Path
 from typing import Annotated, Any
@@ -26,9 +27,9 @@ from plantsolve.app import dashboard_views as views
 from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
-from plantsolve.jobs.errors import NotFound, ProblemError, Unprocessable, field_problem
+from plantsolve.jobs.errors import Conflict, NotFound, ProblemError, Unprocessable, field_problem
 from plantsolve.jobs.lifecycle import STATUSES, is_finished
-from plantsolve.jobs.service import decode_cursor, encode_cursor
+from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
 from plantsolve.solvers.base import SolverSpec
 
 HERE = Path(__file__).parent
@@ -78,7 +79,7 @@ def _listing(request: Request, kind: str | None, status: str | None, q: str | No
     # the stream filters by kind and status only (the text is applied when the rows reload); no empty values
     stream = {name: value for name, value in (("kind", kind), ("status", status)) if value}
     return {
-        "rows": [views.row(service.view(job, with_artifacts=False)) for job in jobs],
+        "rows": [views.row(service.view(job, with_artifacts=False), views.input_label(job)) for job in jobs],
         "counts": service.count_by_status(who.sees),
         "filters": filters,
         "cursor": cursor or "",
@@ -185,6 +186,20 @@ def build_dashboard() -> APIRouter:
             pass
         return RedirectResponse(f"/dashboard/jobs/{job_id}", status_code=303)
 
+    @router.post("/dashboard/jobs/{job_id}/rerun", dependencies=authorised)
+    async def rerun(request: Request, job_id: uuid.UUID, token: str = Form(default="", max_length=128)) -> Response:
+        """The same input submitted again as a new job (a finished job's 'Re-run'): the JSON body, or the
+        stored file under its name with the same options, through the calls of ``POST /v1/<kind>/jobs``."""
+        _check_form(request, token)
+        service, who = service_of(request), principal(request)
+        try:
+            submitted = await run_in_threadpool(_submit_again, service, job_id, who)
+        except NotFound as error:
+            return _not_found(request, error)
+        except ProblemError as error:  # the kind changed since and refuses the input: say so on the job's page
+            return _page(request, "error.html", error.status, title=error.title, message=error.detail)
+        return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
+
     @router.get("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
     def submit_form(request: Request, kind: str) -> HTMLResponse:
         try:
@@ -201,9 +216,10 @@ def build_dashboard() -> APIRouter:
         except NotFound as error:
             return _not_found(request, error)
         settings = request.app.state.settings
-        form = await request.form(max_files=1, max_fields=6, max_part_size=min(settings.max_body_bytes, 16 * 1024 * 1024))
+        form = await request.form(max_files=1, max_fields=7, max_part_size=min(settings.max_body_bytes, 16 * 1024 * 1024))
         source = str(form.get("source") or "json")
         options, body = str(form.get("options") or ""), str(form.get("body") or "")
+        defaults = str(form.get("option_defaults") or "")
         try:
             _check_form(request, str(form.get("token") or ""))
             if source == "upload":
@@ -213,8 +229,9 @@ def build_dashboard() -> APIRouter:
                 if upload.size is not None and upload.size > settings.max_upload_bytes:
                     raise PayloadTooLarge(f"The file has {upload.size} bytes; the limit is {settings.max_upload_bytes} bytes.")
                 content = await upload.read()
+                chosen = _changed_options(options, defaults)
                 submitted = await run_in_threadpool(
-                    lambda: service.submit_upload(kind, upload.filename, content, options.strip() or None, None, owner=who.owner))
+                    lambda: service.submit_upload(kind, upload.filename, content, chosen, None, owner=who.owner))
             else:
                 submitted = await run_in_threadpool(
                     lambda: service.submit_json(kind, body.encode(), None, owner=who.owner))
@@ -228,15 +245,49 @@ def build_dashboard() -> APIRouter:
     return router
 
 
+def _submit_again(service: JobService, job_id: uuid.UUID, who: Any) -> Any:
+    job = service.get(job_id, who.sees)
+    if not is_finished(job.status):
+        raise Conflict(f"Job {job_id} is still {job.status}: re-run it once it has finished.")
+    if job.input_kind == "upload":
+        content = service.input_path(job).read_bytes()
+        options = json.dumps(job.input_options) if job.input_options else None
+        return service.submit_upload(job.kind, job.input_filename, content, options, None, owner=who.owner)
+    body = service.input_path(job).read_bytes() if job.input_kind == "json_file" else json.dumps(job.input).encode()
+    return service.submit_json(job.kind, body, None, owner=who.owner)
+
+
+def _changed_options(options: str, defaults: str) -> str | None:
+    """The options text to submit: only the options that differ from the kind's defaults, so that a
+    default never silently overrides an uploaded JSON file's own option. Text that is not a JSON object goes on
+    as it is, for the intake to refuse naming the field."""
+    if not options.strip():
+        return None
+    try:
+        sent, before = json.loads(options), json.loads(defaults) if defaults.strip() else None
+    except json.JSONDecodeError:
+        return options
+    if not isinstance(sent, dict) or not isinstance(before, dict):
+        return options
+    changed = views.changed_options(sent, before)
+    return json.dumps(changed) if changed else None
+
+
 def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:
-    """The submit page: both forms prefilled from the kind's example (its options for an upload)."""
+    """The submit page: the JSON form prefilled with the kind's example; the upload form's options with their
+    defaults (the example's options over them) and the schema its fields are generated from."""
     example = spec.example() if spec.example is not None else None
-    options = example.get("options") if isinstance(example, dict) else None
+    example_options = example.get("options") if isinstance(example, dict) else None
+    defaults = views.option_defaults(spec)
+    shown = views.option_defaults(spec, example_options if isinstance(example_options, dict) else None)
     context = {
         "spec": spec,
         "token": _token_for(request),
         "problem": None,
-        "options": views.pretty(options) if options else "{}",
+        "options": views.pretty(shown),
+        # what the kind does anyway: an option left at its default is not sent (see _changed_options)
+        "option_defaults": json.dumps(defaults),
+        "options_schema": views.options_schema(spec),
         "body": views.pretty(example) if example is not None else "",
     }
     return {**context, **values}

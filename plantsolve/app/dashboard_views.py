@@ -8,7 +8,10 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
+from pydantic import BaseModel, create_model
+
 from plantsolve.schemas.jobs import ArtifactInfo, JobView
+from plantsolve.solvers.base import SolverSpec
 
 # larger inputs are offered as a download instead of being printed into the page
 INLINE_INPUT_CHARS = 60_000
@@ -53,9 +56,15 @@ class Row:
     attempt: str
     created: str
     run: str
+    input: str = "JSON"
 
 
-def row(view: JobView) -> Row:
+def input_label(job: Any) -> str:
+    """The list's input column: the uploaded file's name, or 'JSON' for a JSON body."""
+    return (job.input_filename or "upload") if job.input_kind == "upload" else "JSON"
+
+
+def row(view: JobView, input: str = "JSON") -> Row:
     report = view.report
     message = (report.message if report is not None and report.message else "") or view.progress.message
     if view.status in ("queued", "running"):
@@ -71,6 +80,7 @@ def row(view: JobView) -> Row:
         attempt=f"{view.attempt}/{view.max_attempts}",
         created=when(view.timings.created_at),
         run=seconds(view.timings.run_seconds),
+        input=input,
     )
 
 
@@ -145,3 +155,41 @@ def plots(artifacts: list[ArtifactInfo]) -> list[ArtifactInfo]:
     stems = {a.name.rsplit(".", 1)[0] for a in raster}
     vector = [a for a in artifacts if a.media_type == "image/svg+xml" and a.name.rsplit(".", 1)[0] not in stems]
     return raster + vector
+
+
+def options_model(spec: SolverSpec) -> type[BaseModel]:
+    """What an upload's ``options`` may set: the kind's options model (the request's ``options`` field); a kind
+    without one (a plugin's) takes its options as the request's fields that have defaults."""
+    field = spec.request_model.model_fields.get("options")
+    if field is not None and isinstance(field.annotation, type) and issubclass(field.annotation, BaseModel):
+        return field.annotation
+    fields = {name: (f.annotation, f) for name, f in spec.request_model.model_fields.items() if not f.is_required()}
+    return create_model(f"{spec.request_model.__name__}UploadOptions", **fields)
+
+
+def options_schema(spec: SolverSpec) -> dict[str, Any]:
+    """The JSON schema the submit page's option form is generated from (by static/dashboard.js)."""
+    return options_model(spec).model_json_schema()
+
+
+def option_defaults(spec: SolverSpec, example_options: dict | None = None) -> dict[str, Any]:
+    """The upload form's options as first shown: every option's default (those without one, or null, are left
+    out: the kind decides), with the kind's example options over them."""
+    defaults = {}
+    for name, field in options_model(spec).model_fields.items():
+        if field.is_required():
+            continue
+        value = field.get_default(call_default_factory=True, validated_data={})
+        if value is None:
+            continue
+        defaults[name] = value.model_dump(mode="json") if isinstance(value, BaseModel) else value
+    return json.loads(json.dumps({**defaults, **(example_options or {})}, default=str))
+
+
+def changed_options(sent: dict | None, shown: dict | None) -> dict | None:
+    """The options to send with an upload: those that differ from the kind's defaults (``shown``). An option left
+    at its default is not sent, so a JSON file's own options are not overridden by a default it never saw."""
+    if not sent:
+        return None
+    changed = {k: v for k, v in sent.items() if not (shown and k in shown and shown[k] == v)}
+    return changed or None

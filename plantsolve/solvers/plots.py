@@ -27,3 +27,24 @@ def figure_artifact(name: str, fig: Figure, dpi: int = DPI, **savefig: object) -
     if fmt not in MEDIA_TYPES:
         raise ValueError(f"no figure format for {name!r}; known: {', '.join(MEDIA_TYPES)}")
     return Artifact(name=name, media_type=MEDIA_TYPES[fmt], data=figure_bytes(fig, fmt, dpi, **savefig))
+
+
+def thin_labels(labels: list, renderer=None) -> None:
+    """Hide contour labels (``ax.clabel(..., inline=False)``'s texts) that would overlap one already kept: where
+    contours bunch (near a singular electrode edge, along a steep map border) matplotlib places labels on top of
+    each other. Kept labels get a light backing, since the contour is not broken under them (a broken contour
+    under a hidden label would leave a gap)."""
+    if not labels:
+        return
+    fig = labels[0].get_figure(root=True)
+    if renderer is None:
+        fig.draw_without_rendering()  # labels know their place only once the figure is laid out
+        renderer = fig._get_renderer()
+    kept = []
+    for label in labels:
+        box = label.get_window_extent(renderer).expanded(1.15, 1.3)
+        if any(box.overlaps(k) for k in kept):
+            label.set_visible(False)
+        else:
+            kept.append(box)
+            label.set_bbox({"boxstyle": "round,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.6})

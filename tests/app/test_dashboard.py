@@ -3,6 +3,7 @@ its warnings, plots, downloads and input, the submit forms and their errors, and
 
 from __future__ import annotations
 
+import html
 import json
 import re
 import uuid
@@ -283,3 +284,107 @@ def test_a_job_page_shows_its_completion_webhook(keyed):
     page = keyed.get(f"/dashboard/jobs/{job['id']}", headers=alice).text
     assert "completion webhook" in page and 'title="http://127.0.0.1:9/hook"' in page
     assert "completion webhook" not in keyed.get(f"/dashboard/jobs/{_submit(keyed, [1.0], alice)['id']}", headers=alice).text
+
+
+def _rows(html: str) -> dict[str, str]:
+    return {m.group(1): m.group(0) for m in re.finditer(r'<tr data-job="([^"]+)".*?</tr>', html, re.S)}
+
+
+def test_the_list_names_each_jobs_input(client):
+    """An input column: the uploaded file's name, or 'JSON' for a JSON body."""
+    body = _submit(client, [1.0])
+    upload = client.post("/v1/test-compute/jobs", files={"file": ("rig run 7.txt", b"1\n2\n", "text/plain")}).json()
+    wait_for(client, upload["id"])
+    page = client.get("/dashboard").text
+    assert "<th>input</th>" in page
+    rows = _rows(page)
+    assert re.search(r'<td class="input-name"[^>]*>rig run 7.txt</td>', rows[upload["id"]])
+    assert re.search(r'<td class="input-name"[^>]*>JSON</td>', rows[body["id"]])
+
+
+def test_a_finished_job_is_re_run_with_the_same_input(keyed):
+    """'Re-run' on a finished job's page submits the same input as a new job of the same tenant (the JSON body;
+    for an upload the stored file under its name with its options) and opens the new job's page."""
+    alice = {"Authorization": "Bearer key-a"}
+    keyed.post("/dashboard/login", data={"key": "key-a"})
+    token = form_token("key-a")
+    first = _submit(keyed, [1.0, 2.5], headers=alice)
+    page = keyed.get(f"/dashboard/jobs/{first['id']}").text
+    assert f'action="/dashboard/jobs/{first["id"]}/rerun"' in page and "Re-run" in page
+    assert keyed.post(f"/dashboard/jobs/{first['id']}/rerun", data={}).status_code == 403  # the form's token
+    again = keyed.post(f"/dashboard/jobs/{first['id']}/rerun", data={"token": token}, follow_redirects=False)
+    assert again.status_code == 303
+    new_id = again.headers["location"].rsplit("/", 1)[-1]
+    assert new_id != first["id"]
+    assert wait_for(keyed, new_id, headers=alice)["status"] == "succeeded"
+    assert keyed.get(f"/v1/jobs/{new_id}/result", headers=alice).json()["total"] == 3.5
+    assert keyed.get(f"/v1/jobs/{new_id}/input", headers=alice).json() == {"values": [1.0, 2.5]}
+
+    upload = keyed.post("/v1/test-compute/jobs", headers=alice, data={"options": '{"seconds": 0.01}'},
+                        files={"file": ("values.txt", b"1\n2\n3\n", "text/plain")}).json()
+    wait_for(keyed, upload["id"], headers=alice)
+    again = keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": token}, follow_redirects=False)
+    new_id = again.headers["location"].rsplit("/", 1)[-1]
+    assert wait_for(keyed, new_id, headers=alice)["status"] == "succeeded"
+    assert keyed.get(f"/v1/jobs/{new_id}/result", headers=alice).json()["total"] == 6.0
+    described = keyed.get(f"/v1/jobs/{new_id}/input", headers=alice).json()
+    assert described["filename"] == "values.txt" and described["options"] == {"seconds": 0.01}
+    assert keyed.get(f"/v1/jobs/{new_id}/input/file", headers=alice).content == b"1\n2\n3\n"
+    # another tenant cannot re-run it
+    keyed.post("/dashboard/login", data={"key": "key-b"})
+    assert keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": form_token("key-b")}).status_code == 404
+
+
+def test_a_running_job_has_no_re_run(keyed):
+    alice = {"Authorization": "Bearer key-a"}
+    job = keyed.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 20}, headers=alice).json()
+    wait_for(keyed, job["id"], statuses=("running",), headers=alice)
+    keyed.post("/dashboard/login", data={"key": "key-a"})
+    assert "/rerun" not in keyed.get(f"/dashboard/jobs/{job['id']}").text
+    refused = keyed.post(f"/dashboard/jobs/{job['id']}/rerun", data={"token": form_token("key-a")})
+    assert refused.status_code == 409 and "once it has finished" in refused.text
+    keyed.post(f"/v1/jobs/{job['id']}/cancel", headers=alice)
+
+
+def _options_of(page: str) -> tuple[dict, dict, dict]:
+    """The upload form's options text, its defaults field and the options schema embedded in the page."""
+    text = html.unescape(re.search(r'<textarea name="options"[^>]*>(.*?)</textarea>', page, re.S).group(1))
+    defaults = html.unescape(re.search(r'name="option_defaults" value="([^"]*)"', page).group(1))
+    schema = re.search(r'<script type="application/json" id="options-schema">(.*?)</script>', page, re.S).group(1)
+    return json.loads(text), json.loads(defaults), json.loads(schema)
+
+
+@pytest.mark.parametrize("kind", sorted(k for k, s in KINDS.items() if s.upload_extensions))
+def test_every_upload_form_shows_its_options_with_defaults_and_their_schema(client, kind):
+    spec = KINDS[kind]
+    options, defaults, schema = _options_of(client.get(f"/dashboard/submit/{kind}").text)
+    model = spec.request_model.model_fields["options"].annotation
+    assert set(schema["properties"]) == set(model.model_fields)  # the fields the script generates
+    expected = {name: json.loads(json.dumps(f.get_default(call_default_factory=True, validated_data={}),
+                                            default=lambda m: m.model_dump(mode="json")))
+                for name, f in model.model_fields.items() if not f.is_required()}
+    expected = {k: v for k, v in expected.items() if v is not None}
+    assert defaults == expected
+    assert options == {**expected, **(spec.example().get("options") or {})}
+    model.model_validate(options)  # what the form shows is valid as it stands
+
+
+def test_the_tube_upload_form_is_prefilled_with_its_defaults(client):
+    options, _, schema = _options_of(client.get("/dashboard/submit/tube").text)
+    assert options["bend_radius_model"] == "auto" and options["damping"] == 1.0 and options["seed"] == 0
+    assert "bend_radius" in schema["properties"] and "bend_radius" not in options  # no default: a field left empty
+
+
+def test_an_upload_sends_only_the_options_that_differ_from_the_defaults(client):
+    """Options left at their defaults are not sent (a JSON file's own options stay); changed ones are."""
+    _, defaults, _ = _options_of(client.get("/dashboard/submit/test-compute").text)
+    assert defaults == {"seconds": 0.0}
+    sent = {}
+    for options in ('{"seconds": 0.0}', '{"seconds": 0.01}'):
+        response = client.post("/dashboard/submit/test-compute", follow_redirects=False,
+                               data={"source": "upload", "options": options, "option_defaults": json.dumps(defaults)},
+                               files={"file": ("values.txt", b"1\n2\n", "text/plain")})
+        job_id = response.headers["location"].rsplit("/", 1)[-1]
+        wait_for(client, job_id)
+        sent[options] = client.get(f"/v1/jobs/{job_id}/input").json()["options"]
+    assert sent == {'{"seconds": 0.0}': None, '{"seconds": 0.01}': {"seconds": 0.01}}

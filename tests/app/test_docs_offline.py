@@ -3,11 +3,15 @@ by the app itself."""
 
 from __future__ import annotations
 
+import base64
+import io
+import re
 from html.parser import HTMLParser
 from urllib.parse import urljoin, urlsplit
 
 import pytest
 from fastapi.testclient import TestClient
+from PIL import Image
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings
@@ -54,3 +58,25 @@ def test_docs_assets_need_a_key_when_docs_are_protected(tmp_path):
     with TestClient(create_app(service_settings(tmp_path, api_keys=["k"]))) as client:
         assert client.get("/docs/assets/swagger-ui.css").status_code == 401
         assert client.get("/docs/assets/swagger-ui.css", headers={"Authorization": "Bearer k"}).status_code == 200
+
+
+def test_redoc_bundle_asks_no_cdn_for_its_logo(client):
+    """ReDoc's side bar showed Redocly's logo from their CDN: the bundle the page loads has no off-site image,
+    its logo is the service's icon inline."""
+    page = client.get("/redoc").text
+    js_url = next(u for u in _assets(page) if u.endswith("redoc.standalone.js"))
+    bundle = client.get(js_url).text
+    assert "cdn.redoc.ly" not in bundle
+    assert not re.findall(r'src:"https?://', bundle), "an image the bundle loads from another host"
+    logo = re.search(r'alt:"redocly logo",onError:[^,]+,src:"data:image/png;base64,([A-Za-z0-9+/=]+)"', bundle)
+    assert logo and base64.b64decode(logo.group(1))[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_favicon_is_served_from_the_package_without_a_key(tmp_path):
+    with TestClient(create_app(service_settings(tmp_path, api_keys=["k"]))) as client:
+        response = client.get("/favicon.ico")  # browsers send no key for it
+        assert response.status_code == 200 and response.headers["content-type"] == "image/x-icon"
+        icon = Image.open(io.BytesIO(response.content))
+        assert icon.format == "ICO" and (32, 32) in icon.info["sizes"]
+        pixels = icon.convert("RGB").getcolors(4096)
+        assert len(pixels) > 2  # a drawn icon, not a blank square

@@ -141,3 +141,127 @@
     else if (page === "list") followList();
   });
 })();
+
+// The upload form's options, generated from the kind's options JSON schema (embedded in the page as
+// #options-schema): a number, check box, choice or text field per option, each starting at the value the
+// JSON text shows (the defaults); nested objects and lists stay JSON. Every change writes the JSON text,
+// which is what the form posts; without this script the JSON text alone is the form.
+(function () {
+  "use strict";
+
+  function resolve(schema, root) {
+    while (schema && schema.$ref) schema = root.$defs[schema.$ref.split("/").pop()];
+    return schema || {};
+  }
+
+  // the option's own schema: a nullable one (anyOf [X, null]) is X, allowed to be empty
+  function shape(schema, root) {
+    schema = resolve(schema, root);
+    var choices = schema.anyOf || schema.oneOf;
+    if (choices) {
+      var real = choices.map(function (c) { return resolve(c, root); }).filter(function (c) { return c.type !== "null"; });
+      if (real.length === 1) return Object.assign({}, real[0], { nullable: true, description: schema.description || real[0].description });
+      if (real.every(function (c) { return c.const !== undefined || c.enum; })) {
+        var values = [];
+        real.forEach(function (c) { values = values.concat(c.enum || [c.const]); });
+        return { enum: values, nullable: real.length < choices.length, description: schema.description };
+      }
+      return { description: schema.description };  // a union of shapes: JSON
+    }
+    if (schema.const !== undefined) return Object.assign({}, schema, { enum: [schema.const] });
+    return schema;
+  }
+
+  function field(name, schema, value) {
+    var wrap = document.createElement("label");
+    wrap.className = "option";
+    wrap.title = schema.description || "";
+    var caption = document.createElement("span");
+    caption.textContent = name;
+    var input;
+    if (schema.enum) {
+      input = document.createElement("select");
+      var list = schema.nullable ? [null].concat(schema.enum) : schema.enum;
+      list.forEach(function (v) {
+        var option = document.createElement("option");
+        option.value = JSON.stringify(v);
+        option.textContent = v === null ? "(not set)" : String(v);
+        if (JSON.stringify(v) === JSON.stringify(value === undefined ? null : value)) option.selected = true;
+        input.appendChild(option);
+      });
+      input.read = function () { return JSON.parse(input.value); };
+    } else if (schema.type === "boolean") {
+      input = document.createElement("input");
+      input.type = "checkbox";
+      input.checked = value === true;
+      input.read = function () { return input.checked; };
+    } else if (schema.type === "number" || schema.type === "integer") {
+      input = document.createElement("input");
+      input.type = "number";
+      input.step = schema.type === "integer" ? "1" : "any";
+      if (schema.minimum !== undefined) input.min = schema.minimum;
+      if (schema.maximum !== undefined) input.max = schema.maximum;
+      input.value = value === undefined || value === null ? "" : String(value);
+      input.read = function () { return input.value === "" ? undefined : Number(input.value); };
+    } else if (schema.type === "string") {
+      input = document.createElement("input");
+      input.type = "text";
+      input.value = value === undefined || value === null ? "" : value;
+      input.read = function () { return input.value === "" ? undefined : input.value; };
+    } else {  // objects, lists, unions: JSON, the default prefilled
+      input = document.createElement("textarea");
+      input.rows = 2;
+      input.spellcheck = false;
+      input.value = value === undefined ? "" : JSON.stringify(value);
+      input.read = function () {
+        if (input.value.trim() === "") return undefined;
+        try { input.setCustomValidity(""); return JSON.parse(input.value); }
+        catch (e) { input.setCustomValidity("not JSON: " + e.message); return input.value; }
+      };
+    }
+    input.name = "";  // not posted itself: the JSON text is
+    input.dataset.option = name;
+    wrap.appendChild(caption);
+    wrap.appendChild(input);
+    if (schema.description) {
+      var help = document.createElement("small");
+      help.textContent = schema.description;
+      wrap.appendChild(help);
+    }
+    return { element: wrap, input: input };
+  }
+
+  function build() {
+    var holder = document.getElementById("option-fields");
+    var schemaEl = document.getElementById("options-schema");
+    var text = document.getElementById("options-json");
+    if (!holder || !schemaEl || !text) return;
+    var root = JSON.parse(schemaEl.textContent);
+    var shown;
+    try { shown = JSON.parse(text.value || "{}"); } catch (e) { return; }  // a text with an error: leave it
+    var inputs = [];
+    Object.keys(root.properties || {}).forEach(function (name) {
+      var made = field(name, shape(root.properties[name], root), shown[name]);
+      inputs.push(made.input);
+      holder.appendChild(made.element);
+    });
+    function write() {
+      var current;
+      try { current = JSON.parse(text.value || "{}"); } catch (e) { current = {}; }
+      inputs.forEach(function (input) {
+        var v = input.read();
+        if (v === undefined || v === null) delete current[input.dataset.option];
+        else current[input.dataset.option] = v;
+      });
+      text.value = JSON.stringify(current, null, 2);
+    }
+    inputs.forEach(function (input) {
+      input.addEventListener("change", write);
+      input.addEventListener("input", write);
+    });
+    holder.hidden = false;
+    text.closest("details").open = false;  // the fields are the form now; the JSON stays one click away
+  }
+
+  document.addEventListener("DOMContentLoaded", build);
+})();

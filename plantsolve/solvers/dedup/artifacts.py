@@ -12,7 +12,7 @@ from matplotlib.figure import Figure  # no pyplot: no global figure state
 from plantsolve.schemas.dedup import DedupResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.plots import figure_bytes
+from plantsolve.solvers.plots import figure_artifact
 
 MAX_BARS = 24
 
@@ -29,7 +29,7 @@ def classes_csv(result: DedupResult) -> bytes:
     return out.getvalue().encode()
 
 
-def counts_chart(result: DedupResult) -> bytes:
+def counts_figure(result: DedupResult) -> Figure:
     names = sorted(set(result.entity_counts_before) | set(result.entity_counts_after),
                    key=lambda n: -max(result.entity_counts_before.get(n, 0), result.entity_counts_after.get(n, 0)))
     names = names[:MAX_BARS]
@@ -44,20 +44,25 @@ def counts_chart(result: DedupResult) -> bytes:
     ax.set_yticks(y, names, fontsize=8)
     ax.invert_yaxis()
     ax.set_xscale("symlog", linthresh=1)
-    ax.set_xlabel("instances in the file (count, symmetric log scale)")
+    ax.set_xlabel("instances in the file [count] (symmetric log scale)")
     ax.set_ylabel("IFC entity type")
     ax.set_title(f"Instances per entity type: {result.products_shared} of {result.products_total} products share "
                  f"geometry, rate {100 * result.optimization_rate:.1f} %", fontsize=9)
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
-    return figure_bytes(fig, "png", dpi=110)
+    return fig
+
+
+def figures(source: IfcSource, result: DedupResult) -> dict[str, Figure]:
+    """Every plot by artifact stem."""
+    return {"entity_counts": counts_figure(result)}
 
 
 def render_artifacts(source: IfcSource, solved: Solved) -> list[Artifact]:
     """The optimized file comes from the solve (``solved.files``), present only when it passed its proof."""
     result = solved.result
     artifacts = [Artifact("classes.csv", "text/csv", classes_csv(result)),
-                 Artifact("entity_counts.png", "image/png", counts_chart(result))]
+                 *(figure_artifact(f"{stem}.png", fig) for stem, fig in figures(source, result).items())]
     optimized = solved.files.get("optimized.ifc")
     if optimized is not None:
         artifacts.insert(0, Artifact("optimized.ifc", "application/x-step", optimized))

@@ -10,21 +10,21 @@ from matplotlib.tri import Triangulation
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult
 from plantsolve.solvers.base import Artifact, Solved
-from plantsolve.solvers.plots import figure_artifact
+from plantsolve.solvers.plots import figure_artifact, thin_labels
 
 
 def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
     grid = np.asarray(result.grid, dtype=float)
     radius, units = request.pipe.radius, request.units
-    fig = Figure(figsize=(6.4, 5.6))
+    fig = Figure(figsize=(6.4, 6.2), layout="constrained")
     ax = fig.add_subplot()
     tri = Triangulation(grid[:, 0], grid[:, 1])
     # the point electrodes' W is unbounded at the wall: colour the central range
     lo, hi = np.percentile(grid[:, 2], [1, 99])
     filled = ax.tricontourf(tri, np.clip(grid[:, 2], lo, hi), levels=20, cmap="viridis")
     lines = ax.tricontour(tri, np.clip(grid[:, 2], lo, hi), levels=10, colors="k", linewidths=0.5)
-    ax.clabel(lines, fontsize=7, fmt="%.2f")
-    fig.colorbar(filled, ax=ax, label="weight function W (dimensionless)")
+    labels = ax.clabel(lines, fontsize=8, fmt="%.2f", inline=False)
+    fig.colorbar(filled, ax=ax, label="weight function W [-]")
     t = np.linspace(0, 2 * np.pi, 400)
     ax.plot(radius * np.cos(t), radius * np.sin(t), color="0.3", lw=1)
     if request.electrodes.shape == "patch":
@@ -43,12 +43,15 @@ def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
     else:
         ax.plot([radius, -radius], [0, 0], "o", color="red", ms=8)
     ax.annotate("", xy=(0, 0.6 * radius), xytext=(0, 0.2 * radius), arrowprops={"arrowstyle": "->", "color": "white"})
+    # two lines: one line ran on into the colour bar
     ax.set(xlabel=f"x [{units}]", ylabel=f"y [{units}]", aspect="equal",
-           title=f"W over the cross-section, S = {result.sensitivity:.5f} ({result.method})")
-    ax.legend(handles=[Line2D([], [], color="red", lw=4, label="electrodes"),
-                       Line2D([], [], color="white", marker=r"$\uparrow$", lw=0, label="B along +y"),
-                       Line2D([], [], color="k", lw=0.5, label="contours of W")],
-              loc="lower right", fontsize=8, facecolor="0.85")
+           title=f"W over the cross-section\nS = {result.sensitivity:.5f} ({result.method})")
+    # below the axes: inside, the legend covered the contours near the wall
+    fig.legend(handles=[Line2D([], [], color="red", lw=4, label="electrodes"),
+                        Line2D([], [], color="0.3", marker=r"$\uparrow$", lw=0, label="B along +y (white arrow)"),
+                        Line2D([], [], color="k", lw=0.5, label="contours of W")],
+               loc="outside lower center", ncol=3, fontsize=8)
+    thin_labels(labels)
     return fig
 
 
@@ -73,45 +76,53 @@ def current_plot(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
         two_d *= np.sum(j * smooth) / np.sum(two_d * smooth)
         ax.plot(theta, two_d, "--", color="0.4", label="2-D (full-length) density, same beta, same integral across")
     ax.set(xlabel="angle from the electrode centre theta [deg]",
-           ylabel="j R^2 / I (finite electrodes), j R / I' (full length)",
+           ylabel="j R²/I (finite electrodes), j R/I′ (full length) [-]",
            title="virtual current density across the electrode (total = 1)")
     ax.set_yscale("log")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     if len(grid):
         mx = fig.add_subplot(1, 2, 2)
         tri = Triangulation(grid[:, 0], grid[:, 1])
         level = np.log10(np.clip(grid[:, 2], np.min(grid[:, 2][grid[:, 2] > 0]), None))
         filled = mx.tricontourf(tri, level, levels=20, cmap="magma")
-        fig.colorbar(filled, ax=mx, label="log10 (j R^2 / I)")
-        mx.plot(grid[:, 0], grid[:, 1], ".", color="0.8", ms=1, label="Chebyshev points (edges singular)")
-        mx.set(xlabel="theta [deg]", ylabel=f"z [{request.units}]", title="density over the electrode at +R")
-        mx.legend(fontsize=7, loc="upper right")
+        fig.colorbar(filled, ax=mx, label="log10(j R²/I) [-]")
+        mx.plot(grid[:, 0], grid[:, 1], ".", color="0.8", ms=1)
+        # said in the title: a legend inside covered the points it explains
+        mx.set(xlabel="theta [deg]", ylabel=f"z [{request.units}]",
+               title="density over the electrode at +R\n(dots: Chebyshev points; edges singular)")
     fig.tight_layout()
     return fig
 
 
 def linearity_plot(result: FlowmeterResult) -> Figure:
-    fig = Figure(figsize=(6.4, 4.0))
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
     ax = fig.add_subplot()
     re = [p.reynolds for p in result.linearity]
     s = [p.sensitivity for p in result.linearity]
     ax.semilogx(re, s, "o-", label="S(Re)")
     ax.axhline(result.sensitivity_first_order, color="0.5", ls="--", label="first order sin(beta)/beta")
-    ax.set(xlabel="Reynolds number (dimensionless)", ylabel="sensitivity S (dimensionless)", title="linearity")
+    ax.set(xlabel="Reynolds number Re [-]", ylabel="sensitivity S [-]", title="linearity")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     return fig
 
 
+def figures(request: FlowmeterRequest, result: FlowmeterResult) -> dict[str, Figure]:
+    """Every plot by artifact stem: ``weight_function``, and ``electrode_current``, ``linearity`` when the
+    result has them."""
+    out = {"weight_function": weight_map(request, result)}
+    if result.electrode_current:
+        out["electrode_current"] = current_plot(request, result)
+    if result.linearity:
+        out["linearity"] = linearity_plot(result)
+    return out
+
+
 def render_artifacts(request: FlowmeterRequest, solved: Solved) -> list[Artifact]:
     """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
     result = solved.result
-    out = [figure_artifact("weight_function.png", weight_map(request, result))]
-    if result.electrode_current:
-        out.append(figure_artifact("electrode_current.png", current_plot(request, result)))
-    if result.linearity:
-        out.append(figure_artifact("linearity.png", linearity_plot(result)))
+    out = [figure_artifact(f"{stem}.png", fig) for stem, fig in figures(request, result).items()]
     rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
     out.append(Artifact(name="weight_grid.csv", media_type="text/csv", data=("\n".join(rows) + "\n").encode()))
     return out

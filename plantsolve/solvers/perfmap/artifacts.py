@@ -39,11 +39,16 @@ def _values(s) -> tuple[float, ...]:
 SYMBOLS = {"theta": "θ", "phi": "φ"}
 
 
-NOT_STATED = "unit not stated"
+NOT_STATED = "(unit as in the file)"  # the request stated none: the values are in whatever unit the rig wrote
 
 
-def _unit_text(unit: str | None) -> str:
-    return NOT_STATED if not unit else "-" if unit in ("1", "-") else unit
+def _is_ratio(unit: str | None) -> bool:
+    return unit in ("1", "-")
+
+
+def _with_unit(name: str, unit: str | None) -> str:
+    """'flow [kg/s]'; a dimensionless one '[-]'; one the request did not state 'flow (unit as in the file)'."""
+    return f"{name} {NOT_STATED}" if not unit else f"{name} [{'-' if _is_ratio(unit) else unit}]"
 
 
 def _units(result: PerfmapResult) -> dict:
@@ -51,18 +56,28 @@ def _units(result: PerfmapResult) -> dict:
     return {"flow": u.flow if u else None, "pressure": u.pressure if u else None}
 
 
-def axis_label(result: PerfmapResult, quantity: str, text: str | None = None) -> str:
-    """'flow [kg/s]', 'pressure [-]' (a ratio), 'efficiency η [-]'; '[unit not stated]' where the request
-    gave none."""
-    if quantity == "efficiency":
+def quantity(result: PerfmapResult, quantity: str) -> str:
+    """The quantity's name: a pressure whose unit is a ratio ('1', '-') is a pressure ratio."""
+    return "pressure ratio" if quantity == "pressure" and _is_ratio(_units(result)["pressure"]) else quantity
+
+
+def axis_label(result: PerfmapResult, quantity_name: str, text: str | None = None) -> str:
+    """'flow [kg/s]', 'pressure ratio [-]', 'efficiency η [-]' (always a fraction in a result: a file's % is
+    divided by 100 on reading); 'pressure (unit as in the file)' where the request stated no unit."""
+    if quantity_name == "efficiency":
         return f"{text or 'efficiency η'} [-]"
-    return f"{text or quantity} [{_unit_text(_units(result)[quantity])}]"
+    return _with_unit(text or quantity(result, quantity_name), _units(result)[quantity_name])
 
 
 def _names(result: PerfmapResult) -> list[str]:
     """Axis labels of the setting parameters: name (θ/φ for the paper's) and unit."""
     units = result.setting_units or [""] * len(result.setting_names)
-    return [SYMBOLS.get(n, n) + f" [{_unit_text(u)}]" for n, u in zip(result.setting_names, units)]
+    return [_with_unit(SYMBOLS.get(n, n), u) for n, u in zip(result.setting_names, units)]
+
+
+def _bare(label: str) -> str:
+    """'θ' of 'θ [deg]' or of 'θ (unit as in the file)'."""
+    return label.split(" [")[0].removesuffix(f" {NOT_STATED}")
 
 
 def _label(result: PerfmapResult, values) -> str:
@@ -77,37 +92,39 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
     meas = _measured(request)
     n = len(result.settings)
     xlabel, ylabel, elabel = axis_label(result, "flow"), axis_label(result, "pressure"), axis_label(result, "efficiency")
+    pname = quantity(result, "pressure")
     if n <= _SMALL_MULTIPLES_MAX:
         cols = math.ceil(math.sqrt(n))
         rows = math.ceil(n / cols)
         # A fixed grid layout: constrained layout with ~2n axes (twin y axes) is very slow.
-        height = 2.9 * rows + 1.1
+        height = 2.9 * rows + 1.3
         fig = Figure(figsize=(3.9 * cols + 0.4, height))
         axes = fig.subplots(rows, cols, squeeze=False).ravel()
         fig.subplots_adjust(left=0.09 / cols ** 0.5, right=1 - 0.09 / cols ** 0.5, bottom=0.7 / height,
-                            top=1 - 0.8 / height, hspace=0.62, wspace=0.62)
+                            top=1 - 1.0 / height, hspace=0.62, wspace=0.62)
         for k, s in enumerate(result.settings):
             ax = axes[k]
             p = meas.get(_values(s))
-            ax.plot(X[k], Y[k], "C0-", lw=1.5, label="pressure (fit)")
+            ax.plot(X[k], Y[k], "C0-", lw=1.5, label=f"{pname} (fit)")
             ax2 = ax.twinx()
             ax2.plot(X[k], E[k], "C1--", lw=1.2, label="efficiency (fit)")
             if p is not None:
-                ax.plot(p.flow, p.pressure, "C0o", ms=3.5, label="pressure (measured)")
+                ax.plot(p.flow, p.pressure, "C0o", ms=3.5, label=f"{pname} (measured)")
                 ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5, label="efficiency (measured)")
             ax.set_title(f"{_label(result, _values(s))}  (p {100 * s.pressure_max_rel_error:.1f}%,"
                          f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
-            ax.set_xlabel(xlabel, fontsize=7)
-            ax.set_ylabel(ylabel, fontsize=7, color="C0")
-            ax2.set_ylabel(elabel, fontsize=7, color="C1")
-            ax.tick_params(labelsize=7)
-            ax2.tick_params(labelsize=7, colors="C1")
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_ylabel(ylabel, fontsize=8, color="C0")
+            ax2.set_ylabel(elabel, fontsize=8, color="C1")
+            ax.tick_params(labelsize=8)
+            ax2.tick_params(labelsize=8, colors="C1")
         for ax in axes[n:]:
             ax.set_visible(False)
-        fig.legend(handles=_legend_handles(), loc="lower center", ncol=4, fontsize=8, frameon=False)
+        fig.legend(handles=_legend_handles(pname), loc="lower center", ncol=4, fontsize=8, frameon=False)
         eff = ", ".join(sorted({s.efficiency_family for s in result.settings}))
-        fig.suptitle(f"Characteristics (pressure {result.family}, efficiency {eff}, {result.fit}); "
-                     "titles: setting and max relative error")
+        # two lines: on one, a narrow figure (few settings) cut it off at both edges
+        fig.suptitle(f"Characteristics ({pname} {result.family}, efficiency {eff}, {result.fit})\n"
+                     "panel titles: setting and max relative error", fontsize=11)
         return fig
     fig = Figure(figsize=(12, 5.4), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
@@ -133,8 +150,8 @@ def _line(style: str, label: str, **kw):
     return Figure().subplots().plot([], [], style, label=label, **kw)[0]
 
 
-def _legend_handles():
-    return [_line("C0-", "pressure (fit, left axis)"), _line("C0o", "pressure (measured)", ms=3.5),
+def _legend_handles(pname: str = "pressure"):
+    return [_line("C0-", f"{pname} (fit, left axis)"), _line("C0o", f"{pname} (measured)", ms=3.5),
             _line("C1--", "efficiency (fit, right axis)"), _line("C1^", "efficiency (measured)", ms=3.5)]
 
 
@@ -281,7 +298,7 @@ def _map(result: PerfmapResult) -> Figure:
                 fx, fy, fine = smooth_on_finer_grid(gx, gy, grid, sigma=1.2)
                 cs = ax.contour(fx, fy, np.ma.masked_invalid(fine), levels=setting_levels(measured[:, k]),
                                 colors=colour, linewidths=1.0, linestyles=style)
-                ax.clabel(cs, fontsize=7, fmt=f"{name.split(' [')[0]}=%.3g")
+                ax.clabel(cs, fontsize=8, fmt=f"{_bare(name)}=%.3g")
         ax.contour(bx, by, d, levels=[0.25 * h], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
@@ -295,7 +312,7 @@ def _map(result: PerfmapResult) -> Figure:
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, facecolor="lightgrey")
     ax.set(xlabel=xlabel, ylabel=ylabel,
            title=f"Performance map ({m.method}, {result.family}): "
-           f"max efficiency and optimal ({', '.join(n.split(' [')[0] for n in names)})")
+           f"max efficiency and optimal ({', '.join(_bare(n) for n in names)})")
     return fig
 
 
@@ -321,7 +338,8 @@ def _triangulation(ax, result: PerfmapResult) -> None:
     names = _names(result)
     if values.shape[1] == 1:  # one parameter: the settings along it
         ax.plot(np.zeros(len(values)), values[:, 0], "k-o", ms=3, lw=0.7)
-        ax.set(xticks=[], xlabel="(one setting parameter) [-]", ylabel=names[0], title="settings")
+        # no x axis: the settings lie along one parameter (a label here was cut off at the figure's edge)
+        ax.set(xticks=[], ylabel=names[0], title="settings")
     else:
         th, ph = values[:, 0], values[:, 1]
         if result.triangles and values.shape[1] == 2 and all(j != k for _, j, k in result.triangles):

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
+from matplotlib.ticker import MaxNLocator
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
@@ -25,7 +26,10 @@ def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
     zones = result.zones[:MAX_PANELS]
     cols = min(len(zones), 4) or 1
     rows = math.ceil(len(zones) / cols) or 1
-    fig = Figure(figsize=(4.2 * cols, 4.0 * rows + 0.6), layout="constrained")
+    # a fixed layout: constrained layout does not see a 3-D axes' labels, and put the z label under the next panel
+    fig = Figure(figsize=(4.8 * cols, 4.4 * rows + 0.7))
+    fig.subplots_adjust(left=0.0, right=0.93, bottom=0.7 / (4.4 * rows + 0.7), top=1 - 0.35 / (4.4 * rows + 0.7),
+                        wspace=0.18, hspace=0.15)
     labels: dict[str, object] = {}
     face_index = {fid: i for i, fid in enumerate(poly.face_ids)}
     units = request.units
@@ -57,9 +61,14 @@ def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
             ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
             ax.set_ylim(mid[1] - span / 2, mid[1] + span / 2)
             ax.set_zlim(mid[2] - span / 2, mid[2] + span / 2)
-        ax.set_xlabel(f"x [{units}]")
-        ax.set_ylabel(f"y [{units}]")
-        ax.set_zlabel(f"z [{units}]")
+        for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"), (ax.zaxis, "z")):
+            # fewer tick labels, further from the axis labels; x's last one would meet y's first at the corner
+            axis.set_major_locator(MaxNLocator(4, prune="upper" if name == "x" else None))
+            axis.set_label_text(f"{name} [{units}]")
+            axis.labelpad = 12
+        # the box a little smaller than its panel: at full size the z label fell under the next panel (or off
+        # the figure), since the layout does not see a 3-D axes' labels
+        ax.set_box_aspect(None, zoom=0.8)
         volume = f"V = {zone.volume:.6g} {units}³" if zone.volume is not None else "not closed: no volume"
         ax.set_title(f"{zone.id}: {volume}", fontsize=9)
         handles, names = ax.get_legend_handles_labels()
@@ -68,7 +77,7 @@ def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
     if len(result.zones) > MAX_PANELS:
         fig.suptitle(f"first {MAX_PANELS} of {len(result.zones)} zones", fontsize=10)
     if labels:
-        fig.legend(list(labels.values()), list(labels), loc="outside lower center", ncol=len(labels), fontsize=8)
+        fig.legend(list(labels.values()), list(labels), loc="lower center", ncol=len(labels), fontsize=8)
     return fig
 
 

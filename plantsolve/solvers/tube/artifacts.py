@@ -12,13 +12,22 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, quaternion_frame, reverse_model,
-                                              sample_centreline, spine_distance, tube_mesh_arrays)
 from plantsolve.solvers.tube.lra import model_from_rows
+from plantsolve.solvers.tube.model import (
+    TubeModel,
+    build_spine,
+    control_polygon,
+    quaternion_frame,
+    reverse_model,
+    sample_centreline,
+    spine_distance,
+    tube_mesh_arrays,
+)
 from plantsolve.solvers.tube.scan import TubeScan
 
 
@@ -144,7 +153,11 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
     ax.plot(*c.T, "k-", lw=1.5, label="fitted centreline")
     cp, _ = control_polygon(model)
     ax.plot(*cp.T, "g--", lw=0.8, label="control polygon (XYZ)")
-    ax.set_xlabel(f"x [{u}]"); ax.set_ylabel(f"y [{u}]"); ax.set_zlabel(f"z [{u}]")
+    # labels a little further out than matplotlib puts them: its 3-D tick labels ran into them
+    for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"), (ax.zaxis, "z")):
+        axis.set_major_locator(MaxNLocator(5))
+        axis.set_label_text(f"{name} [{u}]")
+        axis.labelpad = 12
     span = np.ptp(pts[show], axis=0).max() / 2
     mid = (pts[show].max(0) + pts[show].min(0)) / 2
     ax.set_xlim(mid[0] - span, mid[0] + span); ax.set_ylim(mid[1] - span, mid[1] + span)
@@ -164,7 +177,7 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
                       colLabels=["row", f"L [{u}]", "R [deg]", "A [deg]", f"CLR [{u}]"], cellLoc="right",
                       bbox=[0.0, 1.0 - min(1.0, 0.055 * (len(rows) + 1)), 1.0, min(1.0, 0.055 * (len(rows) + 1))])
     table.auto_set_font_size(False)
-    table.set_fontsize(7)
+    table.set_fontsize(8)
     ax3.set_title("LRA" + (f" (first {len(rows)} of {len(result.lra)} rows)" if len(result.lra) > len(rows) else ""))
     handles = [Line2D([], [], color="k", lw=1.5, label="fitted centreline"),
                Line2D([], [], color="g", ls="--", lw=0.8, label="control polygon (XYZ)"),

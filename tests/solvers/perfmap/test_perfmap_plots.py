@@ -51,7 +51,23 @@ def test_every_plot_has_units_on_its_axes_and_legends_off_the_data(rig):
 def test_the_unit_not_stated_is_said_so(rig):
     req = parse_upload(StoredInput.from_bytes("rig.csv", rig_table(["Speed", "Flow", "Pressure", "Efficiency [%]"])), {"grid": [16, 16]})
     figs = figures(req, solve(req).result)
-    assert "flow [unit not stated]" in [a.get_xlabel() for a in figs["map"].axes]
+    labels = {label for fig in figs.values() for a in fig.axes for label in (a.get_xlabel(), a.get_ylabel())}
+    assert {"flow (unit as in the file)", "pressure (unit as in the file)", "Speed (unit as in the file)"} <= labels
+    # efficiency is a fraction in every result (the file's % divided by 100): never 'unit not stated'
+    assert "efficiency η [-]" in labels and not any("not stated" in label for label in labels)
+    for fig in figs.values():
+        check_figure(fig)
+
+
+def test_a_csv_pressure_ratio_is_labelled_a_pressure_ratio_and_the_header_units_are_used():
+    """A rig table in lbm/s with a pressure ratio ('PR [-]') and efficiency in %: every plot says 'pressure
+    ratio [-]' (it used to say 'pressure [-]'), flow in lbm/s, the speed in %."""
+    req = parse_upload(StoredInput.from_bytes("rig.csv", rig_table(["Nc [%]", "Wc [lbm/s]", "PR [-]", "eff [%]"])),
+                       {"grid": [16, 16]})
+    figs = figures(req, solve(req).result)
+    labels = {label for fig in figs.values() for a in fig.axes for label in (a.get_xlabel(), a.get_ylabel())}
+    assert {"flow [lbm/s]", "pressure ratio [-]", "efficiency η [-]", "Nc [%]"} <= labels
+    assert not any(label.startswith("pressure [") for label in labels), labels
     for fig in figs.values():
         check_figure(fig)
 
