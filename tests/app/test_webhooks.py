@@ -22,8 +22,13 @@ from standardwebhooks import Webhook
 
 from plantsolve.app.main import create_app
 from plantsolve.app.webhooks import PinnedTransport, RefusedTarget, host_address
-from plantsolve.client import (Client, WebhookReplayed, WebhookVerificationError, WebhookVerifier,
-                               webhook_secret)
+from plantsolve.client import (
+    Client,
+    WebhookReplayed,
+    WebhookVerificationError,
+    WebhookVerifier,
+    webhook_secret,
+)
 from tests.conftest import service_settings, wait_for
 
 ALICE = {"Authorization": "Bearer key-a"}
