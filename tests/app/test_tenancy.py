@@ -10,6 +10,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings, wait_for
+from tests.support.login import log_in
 
 PROBLEM = "application/problem+json"
 A, B, ADMIN = ({"Authorization": "Bearer key-a"}, {"Authorization": "Bearer key-b"}, {"Authorization": "Bearer root"})
@@ -75,10 +76,10 @@ def test_a_browser_logs_in_to_the_dashboard_with_a_cookie(tenants):
     job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}, headers=A).json()
     first = client.get("/dashboard", follow_redirects=False)
     assert first.status_code == 303 and first.headers["location"] == "/dashboard/login"
-    assert client.post("/dashboard/login", data={"key": "nope"}).status_code == 401
-    login = client.post("/dashboard/login", data={"key": "key-a"}, follow_redirects=False)
+    assert log_in(client, "nope").status_code == 401
+    login = log_in(client, "key-a", follow_redirects=False)
     assert login.status_code == 303
-    cookie = login.headers["set-cookie"]
+    cookie = next(c for c in login.headers.get_list("set-cookie") if c.startswith("plantsolve_session="))
     assert "httponly" in cookie.lower() and "samesite=strict" in cookie.lower()
     page = client.get("/dashboard")
     assert page.status_code == 200 and job["id"] in page.text
