@@ -117,3 +117,23 @@ def test_failed_logins_are_limited_per_address(app):
         time.sleep(int(limited.headers["retry-after"]) + 0.1)
         assert attacker.post("/dashboard/login", data={"key": "key-a", "csrf": csrf},
                              follow_redirects=False).status_code == 303
+
+
+@pytest.mark.integration
+def test_two_api_processes_share_sessions_and_the_login_limit_on_postgresql(tmp_path, pg_url):
+    """Two API processes on one PostgreSQL database: a session opened through one is honoured and revoked
+    through the other, and the failed logins of one address count against it in both."""
+    settings = service_settings(tmp_path, database_url=pg_url, **KEYS)
+    first, second = create_app(settings, run_jobs=False), create_app(settings, run_jobs=False)
+    address = (f"192.0.2.{int(time.time() * 1000) % 250 + 1}", 5000)  # this run's own address on the shared database
+    with TestClient(first, client=address) as a, TestClient(second, client=address) as b:
+        log_in(a, "key-a")
+        b.cookies.set("plantsolve_session", a.cookies["plantsolve_session"])
+        assert b.get("/v1/jobs").status_code == 200
+        assert b.post("/dashboard/logout", follow_redirects=False).status_code == 303
+        assert a.get("/v1/jobs").status_code == 401
+        csrf_a, csrf_b = login_csrf(a), login_csrf(b)
+        for client, csrf in [(a, csrf_a), (b, csrf_b)] * 5:
+            assert client.post("/dashboard/login", data={"key": "guess", "csrf": csrf}).status_code == 401
+        assert a.post("/dashboard/login", data={"key": "key-a", "csrf": csrf_a}).status_code == 429
+        assert b.post("/dashboard/login", data={"key": "key-a", "csrf": csrf_b}).status_code == 429
