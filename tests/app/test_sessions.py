@@ -137,3 +137,21 @@ def test_two_api_processes_share_sessions_and_the_login_limit_on_postgresql(tmp_
             assert client.post("/dashboard/login", data={"key": "guess", "csrf": csrf}).status_code == 401
         assert a.post("/dashboard/login", data={"key": "key-a", "csrf": csrf_a}).status_code == 429
         assert b.post("/dashboard/login", data={"key": "key-a", "csrf": csrf_b}).status_code == 429
+
+
+def test_a_session_lookup_during_a_database_outage_is_a_503(app, monkeypatch):
+    from sqlalchemy.exc import OperationalError
+
+    def away(*args, **kwargs):
+        raise OperationalError("SELECT 1", {}, ConnectionRefusedError("connection refused"))
+
+    with TestClient(app, raise_server_exceptions=False) as client:
+        log_in(client, "key-a")
+        csrf = login_csrf(client)
+        monkeypatch.setattr(app.state.ctx.store.sessions, "key_of", away)
+        monkeypatch.setattr(app.state.ctx.store.sessions, "failures_since", away)
+        for response in (client.get("/v1/jobs", headers={"X-Request-ID": "3f1c0a52-5c1e-4a43-9d3b-0a5c7b2e9d10"}),
+                         client.post("/dashboard/login", data={"key": "key-a", "csrf": csrf})):
+            assert response.status_code == 503 and int(response.headers["retry-after"]) > 0, response.text[:200]
+            assert response.headers["content-type"] == "application/problem+json"
+            assert response.headers["x-request-id"]
