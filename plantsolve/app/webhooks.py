@@ -40,6 +40,7 @@ import ssl
 import threading
 import uuid
 from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
 from datetime import datetime, timedelta, timezone
 from urllib.parse import urlsplit
 
@@ -259,6 +260,22 @@ class PinnedTransport(httpx.HTTPTransport):
                                              network_backend=PinnedBackend(resolver, allow_private, inner))
 
 
+SUBMIT_RESOLVE_SECONDS = 2.0  # the longest a submission waits for the callback host's name to resolve
+_LOOKUPS = ThreadPoolExecutor(max_workers=4, thread_name_prefix="callback-dns")
+
+
+def _bounded(resolver):
+    """``resolver`` with a deadline: a name whose servers never answer cannot hold a submission for the
+    resolver's own timeouts (tens of seconds). A late answer counts as unresolvable here; the delivery
+    resolves and checks it again before it connects."""
+    def lookup(host: str, port: int) -> list[str]:
+        try:
+            return _LOOKUPS.submit(resolver, host, port).result(timeout=SUBMIT_RESOLVE_SECONDS)
+        except FutureTimeout:
+            raise OSError(f"{host} did not resolve within {SUBMIT_RESOLVE_SECONDS} s") from None
+    return lookup
+
+
 def check_callback_url(url: str, owner: str, secrets: WebhookSecrets, allow_private: bool = False,
                        resolver=resolve) -> str:
     """The URL as stored; a 422 naming ``callback_url`` when it is unusable or cannot be signed, or
@@ -278,7 +295,7 @@ def check_callback_url(url: str, owner: str, secrets: WebhookSecrets, allow_priv
         raise Unprocessable("callback_url needs a signing secret: set WEBHOOK_SECRETS (or API_KEYS) on the service.",
                             errors=[field_problem(["query", "callback_url"], "no webhook secret configured")])
     if not allow_private:
-        inside = non_public_address(host, port or (443 if parts.scheme == "https" else 80), resolver)
+        inside = non_public_address(host, port or (443 if parts.scheme == "https" else 80), _bounded(resolver))
         if inside is not None:
             raise Unprocessable(
                 "callback_url points at a non-public address; the service does not call its own network "

@@ -426,3 +426,19 @@ def test_every_loopback_spelling_is_refused_at_submission(tmp_path, monkeypatch)
 def test_host_addresses_are_read_as_a_resolver_reads_them(host, address):
     found = host_address(host)
     assert (str(found) if found is not None else None) == address
+
+
+def test_a_name_that_never_resolves_does_not_hold_a_submission(tmp_path, monkeypatch):
+    real = socket.getaddrinfo
+
+    def stalled(host, port, *args, **kwargs):
+        if host == "slow.example":
+            time.sleep(5)
+        return real(host, port, *args, **kwargs)
+
+    monkeypatch.setattr(socket, "getaddrinfo", stalled)
+    with TestClient(_app(tmp_path, webhook_private_targets=False)) as client:
+        started = time.monotonic()
+        accepted = client.post("/v1/test-compute/jobs", params={"callback_url": "http://slow.example/x"},
+                               json={"values": [1.0]}, headers=ALICE)
+        assert accepted.status_code == 202 and time.monotonic() - started < 4  # checked again at delivery
