@@ -19,7 +19,6 @@ from plantsolve.app.main import create_app
 from plantsolve.app.middleware import SecurityHeadersMiddleware
 from tests.conftest import service_settings
 from tests.support import browser
-from tests.support.login import log_in
 
 ALICE = {"Authorization": "Bearer key-a"}
 
