@@ -1,13 +1,21 @@
-"""API keys and tenants, checked before any body is read.
+"""API keys and tenants, checked before any body is read; the dashboard's login sessions.
 
 With ``API_KEYS`` set, every ``/v1`` call, ``/metrics``, the dashboard and (with ``PROTECT_DOCS``) the docs need
-``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``, which sets
-an HTTP-only, same-site cookie honoured for reads (GET/HEAD) and for the dashboard's own forms
-(POST under ``/dashboard/``), never for a ``/v1`` write. A dashboard form must also carry the token
-:func:`form_token` derives from the key (a page of another site cannot know it) and must not come
-from another site (``Sec-Fetch-Site``); the cookie is ``SameSite=Strict`` besides. Each key is a tenant: an entry ``name:key`` names it, a bare ``key`` is
-named by the first 16 hex digits of its SHA-256. Jobs belong to the tenant that created them; keys
-in ``ADMIN_KEYS`` see every tenant's jobs. Without keys there is one anonymous tenant (``""``).
+``Authorization: Bearer <key>``; a browser may instead log in at ``/dashboard/login``. Each key is a tenant: an
+entry ``name:key`` names it, a bare ``key`` is named by the first 16 hex digits of its SHA-256. Jobs belong to
+the tenant that created them; keys in ``ADMIN_KEYS`` see every tenant's jobs. Without keys there is one
+anonymous tenant (``""``).
+
+A login opens a server-side session (:class:`Sessions`): the cookie holds a random token (never the key), the
+database its SHA-256 with an expiry (``SESSION_SECONDS``); logging out deletes the row, so a copied cookie
+is dead from then on, and removing a key from ``API_KEYS`` ends its sessions. The cookie is HTTP-only,
+``SameSite=Strict`` (``Secure`` over https) and honoured for reads (GET/HEAD) and for the dashboard's own
+forms (POST under ``/dashboard/``), never for a ``/v1`` write. A dashboard form must also carry the token
+:func:`form_token` derives from the session (a page of another site cannot know it) and must not come from
+another site (``Sec-Fetch-Site``). The login form itself carries a CSRF token that must match the login
+cookie set with it (double submit), and an address with ``LOGIN_FAILURES`` failed logins within
+``LOGIN_WINDOW_SECONDS`` is answered 429 with ``Retry-After`` until the oldest of them leaves the window
+(counted in the database: every API process sees the same count).
 """
 
 from __future__ import annotations
@@ -16,18 +24,27 @@ import hashlib
 import hmac
 import ipaddress
 import logging
+import math
+import secrets
 from dataclasses import dataclass
+from datetime import datetime, timedelta, timezone
 
 from fastapi import Request
 from fastapi.responses import RedirectResponse
+from starlette.concurrency import run_in_threadpool
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plantsolve.app.problems import Unauthorized, problem_response
 
 log = logging.getLogger("plantsolve.api")
 
-COOKIE = "plantsolve_key"
+COOKIE = "plantsolve_session"  # the session token (the former plantsolve_key cookie held the key: no longer read)
+LOGIN_COOKIE = "plantsolve_login"  # the login form's CSRF token, sent back with the form
 DOCS = ("/docs", "/redoc", "/openapi.json")
+PUBLIC_ASSETS = "/dashboard-static/"  # the dashboard's style and script: no session is looked up for them
+SESSION_SECONDS = 8 * 3600.0  # a session's lifetime from login (absolute: a working day)
+LOGIN_FAILURES = 10  # failed logins of one client address ...
+LOGIN_WINDOW_SECONDS = 60.0  # ... within this sliding window, before it is answered 429
 
 
 @dataclass(frozen=True)
@@ -67,19 +84,71 @@ class KeyRing:
                 found = Principal(owner=owner, admin=admin, authenticated=True)
         return found
 
+    def find_hash(self, key_hash: str) -> Principal | None:
+        """The tenant of the key whose :func:`digest` is ``key_hash`` (a session's key), if it is still configured."""
+        found = None
+        for owner, key, admin in self.entries:
+            if hmac.compare_digest(digest(key).encode(), key_hash.encode()):
+                found = Principal(owner=owner, admin=admin, authenticated=True)
+        return found
 
-def _token(scope: Scope) -> str | None:
+
+def digest(secret: str) -> str:
+    """SHA-256 hex: what the database keeps of a session token or of the key behind it."""
+    return hashlib.sha256(secret.encode()).hexdigest()
+
+
+class Sessions:
+    """The dashboard's server-side sessions and the login rate limit, over the store's session table
+    (reached as ``store.sessions``: the app does not import the store). Blocking calls: run them off
+    the event loop."""
+
+    def __init__(self, table, keys: KeyRing, lifetime_seconds: float = SESSION_SECONDS,
+                 failures: int = LOGIN_FAILURES, window_seconds: float = LOGIN_WINDOW_SECONDS):
+        self.table, self.keys = table, keys
+        self.lifetime_seconds, self.failures, self.window_seconds = lifetime_seconds, failures, window_seconds
+
+    def open(self, key: str) -> str:
+        """A new session for a valid ``key``: the token for the cookie (256 random bits)."""
+        token = secrets.token_urlsafe(32)
+        now = datetime.now(timezone.utc)
+        self.table.open(digest(token), digest(key), now, now + timedelta(seconds=self.lifetime_seconds))
+        return token
+
+    def principal(self, token: str) -> Principal | None:
+        """Who an open, unexpired session is, while its key is still configured; else None."""
+        key_hash = self.table.key_of(digest(token), datetime.now(timezone.utc))
+        return self.keys.find_hash(key_hash) if key_hash else None
+
+    def close(self, token: str) -> bool:
+        return self.table.close(digest(token))
+
+    def retry_after(self, address: str) -> int | None:
+        """Seconds until ``address`` may try to log in again, or None when it may now."""
+        now = datetime.now(timezone.utc)
+        count, oldest = self.table.failures_since(address, now - timedelta(seconds=self.window_seconds))
+        if count < self.failures or oldest is None:
+            return None
+        return max(1, math.ceil(self.window_seconds - (now - oldest).total_seconds()))
+
+    def failed(self, address: str) -> None:
+        now = datetime.now(timezone.utc)
+        self.table.record_failure(address, now, now - timedelta(seconds=self.window_seconds))
+
+
+def _credentials(scope: Scope) -> tuple[str | None, str | None]:
+    """(the bearer key, the session token of the cookie where it is honoured): at most one of them."""
     headers = dict(scope.get("headers") or [])
     header = headers.get(b"authorization", b"").decode("latin-1")
     scheme, _, token = header.partition(" ")
     if scheme.lower() == "bearer" and token.strip():
-        return token.strip()
+        return token.strip(), None
     if scope.get("method") in ("GET", "HEAD") or dashboard_form(scope):
         for part in headers.get(b"cookie", b"").decode("latin-1").split(";"):
             name, _, value = part.strip().partition("=")
             if name == COOKIE and value:
-                return value
-    return None
+                return None, value
+    return None, None
 
 
 def dashboard_form(scope: Scope) -> bool:
@@ -88,14 +157,15 @@ def dashboard_form(scope: Scope) -> bool:
     return scope.get("method") == "POST" and path.startswith("/dashboard/") and not path.startswith("/dashboard/log")
 
 
-def form_token(key: str) -> str:
-    """The anti-forgery token of the dashboard's forms for a browser logged in with ``key``:
-    stateless (any API process can check it) and unknowable without the key."""
-    return hmac.new(key.encode(), b"plantsolve dashboard form", hashlib.sha256).hexdigest()
+def form_token(session: str) -> str:
+    """The anti-forgery token of the dashboard's forms for a browser with the session token ``session``:
+    stateless (any API process can check it) and unknowable without the cookie."""
+    return hmac.new(session.encode(), b"plantsolve dashboard form", hashlib.sha256).hexdigest()
 
 
 def cookie_key(request: Request) -> str | None:
-    """The key of the login cookie, when the caller is authenticated by it (not by a header)."""
+    """The session token of the login cookie, when the caller is authenticated by it (not by a header).
+    (The name is historical: the cookie no longer holds the key.)"""
     if request.headers.get("authorization"):
         return None
     return request.cookies.get(COOKIE) or None
@@ -150,14 +220,22 @@ class AuthMiddleware:
                         self._loopback.add(server[0])
             principal = ANONYMOUS
         else:
-            token = _token(scope)
-            principal = self.keys.find(token) if token else None
+            key, session = _credentials(scope)
+            token = key or session
+            if key:
+                principal = self.keys.find(key)
+            elif session and not scope.get("path", "").startswith(PUBLIC_ASSETS):
+                # one indexed read of the session table, off the event loop
+                principal = await run_in_threadpool(scope["app"].state.sessions.principal, session)
+            else:
+                principal = None
             path = scope.get("path", "")
-            if principal is None and path == "/dashboard" and token is None:
+            if principal is None and path == "/dashboard" and key is None:  # no session, or one that has ended
                 await RedirectResponse("/dashboard/login", status_code=303)(scope, receive, send)  # a browser
                 return
             if principal is None and self.protected(path):
-                detail = "Send 'Authorization: Bearer <key>'." if token is None else "The API key is not valid."
+                detail = ("Send 'Authorization: Bearer <key>'." if token is None else "The API key is not valid."
+                          if key else "The dashboard session has ended: log in again.")
                 await problem_response(Unauthorized(detail))(scope, receive, send)
                 return
             principal = principal or NOBODY

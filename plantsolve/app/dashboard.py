@@ -1,5 +1,5 @@
 """The server-rendered dashboard: job list (filters, paging, live), a page per job, a submit form
-per kind, and the login that sets the browser's cookie.
+per kind, and the login that opens the browser's session (see ``auth``).
 
 Pages are Jinja2 templates (``templates/``) with one small script (``static/dashboard.js``) that
 follows the job events (``/v1/jobs/events``, ``/v1/jobs/{id}/events``) and falls back to polling.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hmac
 import json
+import secrets
 import uuid
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,7 +25,8 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from plantsolve.app import dashboard_views as views
-from plantsolve.app.auth import COOKIE, cookie_key, form_token, principal, require_api_key
+from plantsolve.app.auth import (COOKIE, LOGIN_COOKIE, Sessions, cookie_key, form_token, principal,
+                                 require_api_key)
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
 from plantsolve.jobs.errors import Conflict, NotFound, ProblemError, Unprocessable, field_problem
@@ -52,6 +54,8 @@ class Forbidden(ProblemError):
 
 
 def install_dashboard(app: FastAPI) -> None:
+    # the login sessions live in the store's session table (see auth.Sessions)
+    app.state.sessions = Sessions(app.state.ctx.store.sessions, app.state.keys)
     app.include_router(build_dashboard())
     app.mount(STATIC, StaticFiles(directory=HERE / "static"), name="dashboard-static")
 
@@ -60,6 +64,16 @@ def _page(request: Request, name: str, status_code: int = 200, **context: Any) -
     context.setdefault("kinds", sorted(service_of(request).kinds))
     context.setdefault("keys", bool(request.app.state.keys))
     return templates.TemplateResponse(request, name, context, status_code=status_code)
+
+
+def _login_page(request: Request, status_code: int, message: str, csrf: str | None = None) -> HTMLResponse:
+    """The login form with its CSRF token, which is also set as a cookie scoped to the login: the post must
+    send both and they must match (double submit; no server state, so any API process checks it)."""
+    csrf = csrf or secrets.token_urlsafe(32)
+    response = _page(request, "login.html", status_code, message=message, csrf=csrf)
+    response.set_cookie(LOGIN_COOKIE, csrf, max_age=3600, httponly=True, samesite="strict",
+                        secure=request.url.scheme == "https", path="/dashboard/login")
+    return response
 
 
 def _not_found(request: Request, error: NotFound) -> HTMLResponse:
@@ -129,21 +143,45 @@ def build_dashboard() -> APIRouter:
 
     @router.get("/dashboard/login", response_class=HTMLResponse)
     def login_form(request: Request) -> HTMLResponse:
-        return _page(request, "login.html", message="This service needs an API key.")
+        return _login_page(request, 200, "This service needs an API key.")
 
     @router.post("/dashboard/login")
-    def login(request: Request, key: str = Form(default="", max_length=512)) -> Response:
-        keys = request.app.state.keys
-        if keys and keys.find(key) is None:
-            return _page(request, "login.html", 401, message="That key is not valid.")
+    def login(request: Request, key: str = Form(default="", max_length=512),
+              csrf: str = Form(default="", max_length=128)) -> Response:
+        """CSRF token first (a page of another site cannot log a browser in under the attacker's key), then
+        the rate limit per client address, then the key; a valid key opens a server-side session."""
+        keys, sessions = request.app.state.keys, request.app.state.sessions
+        sent = request.cookies.get(LOGIN_COOKIE, "")
+        if (request.headers.get("sec-fetch-site", "same-origin") in ("cross-site", "same-site")
+                or not csrf or not hmac.compare_digest(csrf.encode(), sent.encode())):
+            raise Forbidden("The login form's token is missing or stale: reload the login page and send it again.")
+        if not keys:  # no keys: nothing to log in to
+            return RedirectResponse("/dashboard", status_code=303)
+        address = request.client.host if request.client else "unknown"
+        wait = sessions.retry_after(address)
+        if wait is not None:
+            response = _login_page(request, 429, f"Too many failed logins from {address}: try again in {wait} s.",
+                                   csrf=sent)
+            response.headers["Retry-After"] = str(wait)
+            return response
+        if keys.find(key) is None:
+            sessions.failed(address)
+            return _login_page(request, 401, "That key is not valid.", csrf=sent)
         response = RedirectResponse("/dashboard", status_code=303)
         # HTTP-only and same-site: scripts cannot read it, other sites cannot send it (see auth)
-        response.set_cookie(COOKIE, key, httponly=True, samesite="strict", secure=request.url.scheme == "https",
-                            path="/")
+        response.set_cookie(COOKIE, sessions.open(key), max_age=int(sessions.lifetime_seconds), httponly=True,
+                            samesite="strict", secure=request.url.scheme == "https", path="/")
+        response.delete_cookie(LOGIN_COOKIE, path="/dashboard/login")
         return response
 
     @router.post("/dashboard/logout")
-    def logout() -> RedirectResponse:
+    def logout(request: Request) -> RedirectResponse:
+        """Ends the session on the server (the cookie is dead even where a copy of it survives)."""
+        if request.headers.get("sec-fetch-site", "same-origin") in ("cross-site", "same-site"):
+            raise Forbidden("Log out from the dashboard itself.")
+        session = cookie_key(request)
+        if session and request.app.state.keys:
+            request.app.state.sessions.close(session)
         response = RedirectResponse("/dashboard/login", status_code=303)
         response.delete_cookie(COOKIE, path="/")
         return response

@@ -19,7 +19,7 @@ from plantsolve.app.docs import install_docs
 from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router, declares_kind, upload_options_model
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.metrics import build_metrics
-from plantsolve.app.middleware import BodyLimitMiddleware
+from plantsolve.app.middleware import BodyLimitMiddleware, SecurityHeadersMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
 from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
 from plantsolve.jobs.context import ServiceContext
@@ -86,6 +86,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.state.webhook_secrets = WebhookSecrets(settings.webhook_secrets, app.state.keys)
     app.state.webhooks = WebhookNotifier(app.state.jobs, app.state.webhook_secrets, settings)
     app.add_middleware(AuthMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs)
+    app.add_middleware(SecurityHeadersMiddleware)  # outside auth: its refusals and redirects carry them too
     if settings.cors_origins:
         app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["GET", "POST"],
                            allow_headers=["Authorization", "Content-Type", "Idempotency-Key", "X-Request-ID"],

@@ -17,6 +17,14 @@ by the ``standardwebhooks`` package. The key is the tenant's secret: its ``WEBHO
 its UTF-8 bytes), else derived from its API key as ``HMAC-SHA256(key=<API key>, msg="plantsolve-webhook")``
 (32 bytes; ``plantsolve.client.webhook_secret(key)`` gives it as ``whsec_...``). The former
 ``X-Plantsolve-Signature`` (body only, replayable) is no longer sent.
+
+Targets inside the service's network (loopback, private, link-local, cloud metadata ...) are refused
+unless ``WEBHOOK_PRIVATE_TARGETS``: at submission, in every spelling a resolver accepts (``2130706433``,
+``0177.0.0.1``, ``0x7f.1``, ``127.1``, ``[::ffff:127.0.0.1]``, ``localhost.``, a name that resolves inside
+now), and at delivery by :class:`PinnedTransport`, which resolves the host once, checks every address,
+and connects to a checked one (the Host header and TLS name stay the URL's), so a name that changes its
+answer between check and connect (DNS rebinding) reaches no inside address. A refused delivery is not
+retried.
 """
 
 from __future__ import annotations
@@ -28,12 +36,15 @@ import hmac
 import ipaddress
 import logging
 import socket
+import ssl
 import threading
 import uuid
 from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import TimeoutError as FutureTimeout
 from datetime import datetime, timedelta, timezone
 from urllib.parse import urlsplit
 
+import httpcore
 import httpx
 from standardwebhooks import Webhook
 
@@ -98,51 +109,198 @@ class WebhookSecrets:
         return None
 
 
+LOCAL_NAMES = ("localhost", "localhost.localdomain", "ip6-localhost", "ip6-loopback")
+NAT64 = ipaddress.ip_network("64:ff9b::/96")
+
+
+class RefusedTarget(Exception):
+    """A webhook target that resolves to an address inside the service's network."""
+
+
+def _inside(ip: ipaddress.IPv4Address | ipaddress.IPv6Address) -> bool:
+    """Not a public unicast address: loopback, private, link-local, shared, reserved, unspecified,
+    multicast, documentation ... An IPv6 address that carries an IPv4 one (mapped, 6to4, Teredo,
+    NAT64) is judged by the IPv4 address a gateway would reach."""
+    if isinstance(ip, ipaddress.IPv6Address):
+        embedded = [ip.ipv4_mapped, ip.sixtofour, *(ip.teredo or ())]
+        if ip in NAT64:
+            embedded.append(ipaddress.IPv4Address(int(ip) & 0xFFFFFFFF))
+        if any(inner is not None and _inside(inner) for inner in embedded):
+            return True
+    return not ip.is_global or ip.is_multicast or ip.is_reserved or ip.is_unspecified
+
+
 def _public(address: str) -> bool:
-    ip = ipaddress.ip_address(address.split("%", 1)[0])
-    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
-        ip = ip.ipv4_mapped
-    return ip.is_global and not ip.is_multicast
+    return not _inside(ipaddress.ip_address(address.split("%", 1)[0]))
 
 
-def non_public_address(host: str, port: int | None) -> str | None:
-    """The first address ``host`` stands for that is not a public unicast one (loopback, private,
-    link-local, reserved), or None. A name is resolved, so a public-looking name that points
-    inside is caught too."""
+def _ipv4_number(part: str) -> int | None:
+    """One dotted part as the URL standard (and inet_aton, and so every resolver) reads it:
+    ``0x`` hexadecimal, a leading ``0`` octal, else decimal; None when it is no number."""
     try:
-        return None if _public(host) else host
+        if part[:2].lower() == "0x":
+            return int(part[2:] or "0", 16)
+        if len(part) > 1 and part.startswith("0"):
+            return int(part[1:], 8)
+        return int(part, 10) if part.isascii() and part.isdigit() else None
     except ValueError:
-        pass  # a name, not an address literal
+        return None
+
+
+def host_address(host: str) -> ipaddress.IPv4Address | ipaddress.IPv6Address | None:
+    """The address a URL host names when it is an address literal in any spelling, else None (a name).
+
+    IPv4 is read as the WHATWG URL standard reads it: 1 to 4 dot-separated numbers, each decimal,
+    octal (``0177``) or hex (``0x7f``), the last one filling the remaining bytes — so ``2130706433``,
+    ``0177.0.0.1``, ``0x7f.1`` and ``127.1`` are all 127.0.0.1, as a resolver would connect them."""
+    host = host.strip("[]").rstrip(".")
     try:
-        infos = socket.getaddrinfo(host, port or 443, type=socket.SOCK_STREAM)
-    except OSError:
-        return None  # unresolvable: the delivery itself fails and is retried
-    for *_, sockaddr in infos:
-        if not _public(str(sockaddr[0])):
-            return str(sockaddr[0])
+        return ipaddress.ip_address(host.split("%", 1)[0])
+    except ValueError:
+        pass
+    parts = host.split(".")
+    if not host or len(parts) > 4:
+        return None
+    numbers = [_ipv4_number(part) for part in parts]
+    if any(n is None for n in numbers):
+        return None
+    *leading, last = numbers
+    if any(n > 255 for n in leading) or last >= 256 ** (5 - len(numbers)):
+        return None  # out of range: no resolver takes it as an address either
+    value = last
+    for index, n in enumerate(leading):
+        value += n << (8 * (3 - index))
+    return ipaddress.IPv4Address(value)
+
+
+def _local_name(host: str) -> bool:
+    name = host.rstrip(".").lower()
+    return name in LOCAL_NAMES or name.endswith(".localhost")
+
+
+def resolve(host: str, port: int) -> list[str]:
+    """Every address ``host`` resolves to (one lookup), in the resolver's order."""
+    infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    return list(dict.fromkeys(str(sockaddr[0]) for *_, sockaddr in infos))
+
+
+def checked_addresses(host: str, port: int, resolver=resolve, allow_private: bool = False) -> list[str]:
+    """The addresses to connect to for ``host``, resolved once; :class:`RefusedTarget` when any of them
+    (or the name itself: ``localhost.``) is inside, unless ``allow_private``."""
+    literal = host_address(host)
+    if literal is not None:
+        addresses = [str(literal)]
+    elif not allow_private and _local_name(host):
+        raise RefusedTarget(f"{host} names the service's own host")
+    else:
+        addresses = resolver(host, port)
+    if not allow_private:
+        for address in addresses:
+            if not _public(address):
+                raise RefusedTarget(f"{host} resolves to the non-public address {address}")
+    if not addresses:
+        raise OSError(f"{host} resolves to no address")
+    return addresses
+
+
+def non_public_address(host: str, port: int | None, resolver=resolve) -> str | None:
+    """Why ``host`` is inside the service's network (a loopback spelling, a local name, a name that
+    resolves to a non-public address), or None. An unresolvable name is None: its delivery fails
+    and is retried."""
+    try:
+        checked_addresses(host, port or 443, resolver)
+    except RefusedTarget as refused:
+        return str(refused)
+    except (OSError, UnicodeError):
+        return None
     return None
 
 
-def check_callback_url(url: str, owner: str, secrets: WebhookSecrets, allow_private: bool = False) -> str:
+class PinnedBackend(httpcore.NetworkBackend):
+    """Connects to the address that was checked: the host is resolved once here, every address it
+    resolves to is checked, and the TCP connection goes to one of those addresses — no second lookup
+    by the socket layer, so a name that answers public for the check and loopback a moment later (DNS
+    rebinding) cannot slip through. The URL is unchanged, so the request keeps its Host header and TLS
+    keeps the host name for SNI and certificate verification (httpcore takes both from the URL)."""
+
+    def __init__(self, resolver=resolve, allow_private: bool = False, inner: httpcore.NetworkBackend | None = None):
+        self.resolver, self.allow_private = resolver, allow_private
+        self.inner = inner or httpcore.SyncBackend()
+
+    def connect_tcp(self, host, port, timeout=None, local_address=None, socket_options=None):
+        try:
+            addresses = checked_addresses(host, port, self.resolver, self.allow_private)
+        except (OSError, UnicodeError) as failed:
+            raise httpcore.ConnectError(f"cannot resolve {host}: {failed}") from failed
+        last: Exception | None = None
+        for address in addresses:  # each one checked above
+            try:
+                return self.inner.connect_tcp(address, port, timeout, local_address, socket_options)
+            except (httpcore.ConnectError, httpcore.ConnectTimeout) as failed:
+                last = failed
+        raise last  # type: ignore[misc]
+
+    def connect_unix_socket(self, *args, **kwargs):
+        raise httpcore.ConnectError("webhooks are sent over TCP only")
+
+    def sleep(self, seconds: float) -> None:
+        self.inner.sleep(seconds)
+
+
+class PinnedTransport(httpx.HTTPTransport):
+    """httpx's transport with a :class:`PinnedBackend` under its connection pool. No proxy from the
+    environment (``trust_env`` off): through a proxy the check would judge the proxy, not the target."""
+
+    def __init__(self, resolver=resolve, allow_private: bool = False, inner: httpcore.NetworkBackend | None = None,
+                 verify: bool | ssl.SSLContext = True):
+        super().__init__(verify=verify, trust_env=False)
+        context = verify if isinstance(verify, ssl.SSLContext) else httpx.create_ssl_context(verify=verify,
+                                                                                            trust_env=False)
+        self._pool = httpcore.ConnectionPool(ssl_context=context, max_connections=16, max_keepalive_connections=4,
+                                             network_backend=PinnedBackend(resolver, allow_private, inner))
+
+
+SUBMIT_RESOLVE_SECONDS = 2.0  # the longest a submission waits for the callback host's name to resolve
+_LOOKUPS = ThreadPoolExecutor(max_workers=4, thread_name_prefix="callback-dns")
+
+
+def _bounded(resolver):
+    """``resolver`` with a deadline: a name whose servers never answer cannot hold a submission for the
+    resolver's own timeouts (tens of seconds). A late answer counts as unresolvable here; the delivery
+    resolves and checks it again before it connects."""
+    def lookup(host: str, port: int) -> list[str]:
+        try:
+            return _LOOKUPS.submit(resolver, host, port).result(timeout=SUBMIT_RESOLVE_SECONDS)
+        except FutureTimeout:
+            raise OSError(f"{host} did not resolve within {SUBMIT_RESOLVE_SECONDS} s") from None
+    return lookup
+
+
+def check_callback_url(url: str, owner: str, secrets: WebhookSecrets, allow_private: bool = False,
+                       resolver=resolve) -> str:
     """The URL as stored; a 422 naming ``callback_url`` when it is unusable or cannot be signed, or
-    (unless ``allow_private``) names a non-public address literal."""
+    (unless ``allow_private``) points inside the service's network: an address in any spelling
+    (``2130706433``, ``0177.0.0.1``, ``0x7f.1``, ``127.1``, ``[::ffff:127.0.0.1]``, ``0.0.0.0``), a
+    local name (``localhost.``), or a name that resolves to such an address now. The delivery checks
+    again, on the address it connects to (a name may change its answer)."""
     parts = urlsplit(url)
-    if parts.scheme not in ("http", "https") or not parts.hostname:
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("http", "https") or not host:
         raise Unprocessable("callback_url must be an absolute http or https URL.",
                             errors=[field_problem(["query", "callback_url"], "not an absolute http(s) URL")])
     if secrets.secret_for(owner) is None:
         raise Unprocessable("callback_url needs a signing secret: set WEBHOOK_SECRETS (or API_KEYS) on the service.",
                             errors=[field_problem(["query", "callback_url"], "no webhook secret configured")])
     if not allow_private:
-        try:
-            literal = not _public(parts.hostname)
-        except ValueError:
-            literal = False  # a name: checked when it is resolved for the delivery
-        if literal:
+        inside = non_public_address(host, port or (443 if parts.scheme == "https" else 80), _bounded(resolver))
+        if inside is not None:
             raise Unprocessable(
                 "callback_url points at a non-public address; the service does not call its own network "
                 "(WEBHOOK_PRIVATE_TARGETS=true allows it).",
-                errors=[field_problem(["query", "callback_url"], f"{parts.hostname} is not a public address")])
+                errors=[field_problem(["query", "callback_url"], f"{host} is not a public address ({inside})")])
     return url
 
 
@@ -151,7 +309,9 @@ class WebhookNotifier:
 
     def __init__(self, service, secrets: WebhookSecrets, settings, transport: httpx.BaseTransport | None = None):
         self.service, self.secrets, self.settings = service, secrets, settings
-        self._http = httpx.Client(timeout=settings.webhook_timeout_seconds, transport=transport,
+        # the pinned transport resolves each target once and connects to the address it checked
+        transport = transport or PinnedTransport(allow_private=settings.webhook_private_targets)
+        self._http = httpx.Client(timeout=settings.webhook_timeout_seconds, transport=transport, trust_env=False,
                                   headers={"User-Agent": "plantsolve-webhook"})
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix="webhook")
         self._stop = threading.Event()
@@ -198,18 +358,14 @@ class WebhookNotifier:
         if secret is not None:  # signed at each attempt: a retry carries the same id and a fresh timestamp
             headers.update(signed_headers(secret, message_id(job_id), body))
         error = None
-        target = urlsplit(job.callback_url)
-        inside = None if self.settings.webhook_private_targets else non_public_address(target.hostname or "",
-                                                                                         target.port)
-        if inside is not None:
-            self.service.record_callback(job_id, attempt, state="failed",
-                                      error=f"refused: {target.hostname} resolves to the non-public address {inside}")
-            log.warning("webhook of job %s refused: %s resolves to %s", job_id, target.hostname, inside)
-            return False
         try:
             response = self._http.post(job.callback_url, content=body, headers=headers)
             if not 200 <= response.status_code < 300:
                 error = f"HTTP {response.status_code}"
+        except RefusedTarget as refused:  # checked on the address it was about to connect to: not retried
+            self.service.record_callback(job_id, attempt, state="failed", error=f"refused: {refused}")
+            log.warning("webhook of job %s refused: %s", job_id, refused)
+            return False
         except httpx.HTTPError as failure:
             error = f"{type(failure).__name__}: {failure}"[:500]
         if error is None:

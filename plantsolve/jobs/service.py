@@ -194,14 +194,16 @@ class JobService:
 
     # ---- what the metrics and the completion webhooks read and record ------------------------
 
-    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
-        return self.ctx.repo.count_by_kind_status()
+    # the metrics' reads: ``sees`` as elsewhere (None: every tenant)
 
-    def oldest_queued(self) -> list[tuple[str, Any]]:
-        return self.ctx.repo.oldest_queued()
+    def count_by_kind_status(self, sees: str | None = None) -> list[tuple[str, str, int]]:
+        return self.ctx.repo.count_by_kind_status(owner=sees)
 
-    def run_time_histogram(self, buckets: tuple[float, ...]) -> list[tuple]:
-        return self.ctx.repo.run_time_histogram(buckets)
+    def oldest_queued(self, sees: str | None = None) -> list[tuple[str, Any]]:
+        return self.ctx.repo.oldest_queued(owner=sees)
+
+    def run_time_histogram(self, buckets: tuple[float, ...], sees: str | None = None) -> list[tuple]:
+        return self.ctx.repo.run_time_histogram(buckets, owner=sees)
 
     def due_callbacks(self) -> list[uuid.UUID]:
         return self.ctx.repo.due_callbacks()

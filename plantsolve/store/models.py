@@ -1,4 +1,4 @@
-"""SQLAlchemy 2 models of the ``jobs`` and ``artifacts`` tables.
+"""SQLAlchemy 2 models of the ``jobs`` and ``artifacts`` tables, and the dashboard's sessions and failed logins.
 
 The Alembic migrations in ``workers/persistence/migrations`` create exactly these tables;
 ``tests/service/test_migrations.py`` checks that the two agree.
@@ -89,3 +89,30 @@ class Artifact(Base):
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
 
     __table_args__ = (Index("ux_artifacts_job_name", "job_id", "name", unique=True),)
+
+
+class DashboardSession(Base):
+    """A browser's login to the dashboard: the cookie holds a random token, this row its SHA-256 (a copy of the
+    table opens no session) and the SHA-256 of the API key it was opened with (removing the key ends it)."""
+
+    __tablename__ = "dashboard_sessions"
+
+    token_hash: Mapped[str] = mapped_column(String(64), primary_key=True)
+    key_hash: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
+    expires_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+    __table_args__ = (Index("ix_dashboard_sessions_expires", "expires_at"),)
+
+
+class LoginFailure(Base):
+    """A refused dashboard login, by client address: the rate limit counts them in a sliding window, in the
+    database so that every API process counts the same failures."""
+
+    __tablename__ = "login_failures"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    address: Mapped[str] = mapped_column(String(64))
+    at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
+
+    __table_args__ = (Index("ix_login_failures_address_at", "address", "at"),)

@@ -177,18 +177,25 @@ class JobRepository:
             rows = session.execute(query)
             return {status: count for status, count in rows}
 
-    def count_by_kind_status(self) -> list[tuple[str, str, int]]:
-        with self.sessions() as session:
-            return [(kind, status, int(n)) for kind, status, n in
-                    session.execute(select(Job.kind, Job.status, func.count()).group_by(Job.kind, Job.status))]
+    # the metrics' queries: ``owner`` None counts every tenant's jobs, a name only that tenant's
 
-    def oldest_queued(self) -> list[tuple[str, datetime]]:
+    def count_by_kind_status(self, owner: str | None = None) -> list[tuple[str, str, int]]:
+        query = select(Job.kind, Job.status, func.count()).group_by(Job.kind, Job.status)
+        if owner is not None:
+            query = query.where(Job.owner == owner)
+        with self.sessions() as session:
+            return [(kind, status, int(n)) for kind, status, n in session.execute(query)]
+
+    def oldest_queued(self, owner: str | None = None) -> list[tuple[str, datetime]]:
         """Per kind, when its longest-waiting queued job was submitted."""
+        query = select(Job.kind, func.min(Job.created_at)).where(Job.status == QUEUED).group_by(Job.kind)
+        if owner is not None:
+            query = query.where(Job.owner == owner)
         with self.sessions() as session:
-            return [(kind, as_utc(created)) for kind, created in session.execute(
-                select(Job.kind, func.min(Job.created_at)).where(Job.status == QUEUED).group_by(Job.kind))]
+            return [(kind, as_utc(created)) for kind, created in session.execute(query)]
 
-    def run_time_histogram(self, buckets: Iterable[float]) -> list[tuple[str, str, int, float, list[int]]]:
+    def run_time_histogram(self, buckets: Iterable[float],
+                           owner: str | None = None) -> list[tuple[str, str, int, float, list[int]]]:
         """Per kind and final status of the finished jobs: count, sum of run seconds, and the cumulative count
         at or below each bucket bound, computed by the database in one pass."""
         buckets = list(buckets)
@@ -196,6 +203,8 @@ class JobRepository:
         columns = [func.sum(case((seconds <= bound, 1), else_=0)) for bound in buckets]
         query = (select(Job.kind, Job.status, func.count(), func.sum(seconds), *columns)
                  .where(Job.status.in_(FINISHED), seconds.is_not(None)).group_by(Job.kind, Job.status))
+        if owner is not None:
+            query = query.where(Job.owner == owner)
         with self.sessions() as session:
             return [(row[0], row[1], int(row[2]), float(row[3] or 0.0), [int(v or 0) for v in row[4:]])
                     for row in session.execute(query)]

@@ -16,6 +16,7 @@ from plantsolve.app.dashboard_views import progress_text, result_summary
 from plantsolve.app.main import create_app
 from plantsolve.solvers.kinds import KINDS
 from tests.conftest import service_settings, wait_for
+from tests.support.login import log_in
 
 
 def _submit(client, values, headers=None) -> dict:
@@ -196,10 +197,10 @@ def test_pages_need_a_key_and_show_only_the_callers_jobs(keyed):
 
 
 def test_a_cookie_posts_dashboard_forms_only_with_their_token(keyed):
-    keyed.post("/dashboard/login", data={"key": "key-a"})
+    log_in(keyed, "key-a")
     form = keyed.get("/dashboard/submit/test-compute").text
     token = re.search(r'name="token" value="([0-9a-f]*)"', form).group(1)
-    assert token == form_token("key-a")
+    assert token == form_token(keyed.cookies["plantsolve_session"])  # derived from the session, not the key
     body = {"source": "json", "body": '{"values": [2.0]}'}
     no_file = {"unused": ("", b"")}
     assert keyed.post("/dashboard/submit/test-compute", data=body, files=no_file).status_code == 403
@@ -224,7 +225,7 @@ def test_a_running_job_can_be_cancelled_from_its_page(keyed):
     alice = {"Authorization": "Bearer key-a"}
     job = keyed.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 20}, headers=alice).json()
     wait_for(keyed, job["id"], statuses=("running",), headers=alice)
-    keyed.post("/dashboard/login", data={"key": "key-a"})
+    log_in(keyed, "key-a")
     page = keyed.get(f"/dashboard/jobs/{job['id']}").text
     assert "Cancel job" in page and 'data-status="running"' in page
     token = re.search(r'name="token" value="([0-9a-f]+)"', page).group(1)

@@ -13,6 +13,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings, wait_for
+from tests.support.login import log_in
 from tests.support.sse import events
 
 
@@ -174,7 +175,7 @@ def test_event_streams_need_a_key_and_hide_other_tenants_jobs(tenants):
     assert foreign.status_code == 404 and foreign.headers["content-type"] == "application/problem+json"
     assert client.get(f"/v1/jobs/{uuid.uuid4()}/events", headers=alice).status_code == 404
     # the dashboard's log-in cookie is good for reads, so a browser's EventSource can follow a job
-    client.cookies.set("plantsolve_key", "key-a")
+    log_in(client, "key-a")
     with client.stream("GET", f"/v1/jobs/{job['id']}/events") as response:
         received = list(events(response.iter_lines(), deadline=time.monotonic() + 10))
     client.cookies.clear()

@@ -10,6 +10,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings, wait_for
+from tests.support.login import log_in
 
 PROBLEM = "application/problem+json"
 A, B, ADMIN = ({"Authorization": "Bearer key-a"}, {"Authorization": "Bearer key-b"}, {"Authorization": "Bearer root"})
@@ -75,10 +76,10 @@ def test_a_browser_logs_in_to_the_dashboard_with_a_cookie(tenants):
     job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}, headers=A).json()
     first = client.get("/dashboard", follow_redirects=False)
     assert first.status_code == 303 and first.headers["location"] == "/dashboard/login"
-    assert client.post("/dashboard/login", data={"key": "nope"}).status_code == 401
-    login = client.post("/dashboard/login", data={"key": "key-a"}, follow_redirects=False)
+    assert log_in(client, "nope").status_code == 401
+    login = log_in(client, "key-a", follow_redirects=False)
     assert login.status_code == 303
-    cookie = login.headers["set-cookie"]
+    cookie = next(c for c in login.headers.get_list("set-cookie") if c.startswith("plantsolve_session="))
     assert "httponly" in cookie.lower() and "samesite=strict" in cookie.lower()
     page = client.get("/dashboard")
     assert page.status_code == 200 and job["id"] in page.text
@@ -97,3 +98,25 @@ def test_cors_is_off_by_default_and_follows_the_settings(tmp_path, tenants):
         assert response.headers["access-control-allow-origin"] == "https://plant.example"
         assert "access-control-allow-origin" not in client.options(
             "/v1/jobs", headers={**preflight, "Origin": "https://evil.example"}).headers
+
+
+def _samples(text: str) -> dict[str, float]:
+    return {line.rsplit(" ", 1)[0]: float(line.rsplit(" ", 1)[1]) for line in text.splitlines()
+            if line and not line.startswith("#")}
+
+
+def test_metrics_show_a_tenant_its_own_counts_and_an_admin_all(tenants):
+    client = tenants
+    for values, headers in (([1.0], A), ([2.0], A), ([3.0], B)):
+        wait_for(client, client.post("/v1/test-compute/jobs", json={"values": values}, headers=headers).json()["id"],
+                 headers=headers)
+    wait_for(client, client.post("/v1/test-fail/jobs", json={}, headers=B).json()["id"], headers=B)
+    succeeded, failed = 'plantsolve_jobs{kind="test-compute",status="succeeded"}', 'plantsolve_jobs{kind="test-fail",status="failed"}'
+    histogram = 'plantsolve_job_run_seconds_count{kind="test-compute",status="succeeded"}'
+    seen = {name: _samples(client.get("/metrics", headers=headers).text) for name, headers in
+            (("alice", A), ("b", B), ("admin", ADMIN))}
+    assert (seen["alice"][succeeded], seen["alice"][failed], seen["alice"][histogram]) == (2, 0, 2)
+    assert (seen["b"][succeeded], seen["b"][failed], seen["b"][histogram]) == (1, 1, 1)
+    assert (seen["admin"][succeeded], seen["admin"][failed], seen["admin"][histogram]) == (3, 1, 3)
+    assert 'plantsolve_job_run_seconds_count{kind="test-fail",status="failed"}' not in seen["alice"]
+    assert client.get("/metrics").status_code == 401

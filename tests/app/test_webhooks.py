@@ -8,18 +8,27 @@ import base64
 import hashlib
 import hmac
 import json
+import socket
 import threading
 import time
 from contextlib import contextmanager
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
+import httpcore
+import httpx
 import pytest
 from fastapi.testclient import TestClient
 from standardwebhooks import Webhook
 
 from plantsolve.app.main import create_app
-from plantsolve.client import (Client, WebhookReplayed, WebhookVerificationError, WebhookVerifier,
-                               webhook_secret)
+from plantsolve.app.webhooks import PinnedTransport, RefusedTarget, host_address
+from plantsolve.client import (
+    Client,
+    WebhookReplayed,
+    WebhookVerificationError,
+    WebhookVerifier,
+    webhook_secret,
+)
 from tests.conftest import service_settings, wait_for
 
 ALICE = {"Authorization": "Bearer key-a"}
@@ -225,7 +234,7 @@ def test_a_slow_receiver_does_not_hold_up_the_jobs(tmp_path):
 
 def test_callbacks_into_the_services_own_network_are_refused_by_default(tmp_path):
     """A tenant must not make the service call addresses only it can reach (cloud metadata, admin ports):
-    an address literal is refused at submission, a name that resolves inside at delivery."""
+    an address literal or a local name is refused at submission."""
     with receiver() as hook, TestClient(_app(tmp_path, webhook_private_targets=False)) as client:
         for inside in ("http://127.0.0.1:9/x", "http://10.1.2.3/x", "http://169.254.169.254/latest",
                        "http://[::1]:8000/x", "http://[::ffff:192.168.0.1]/x", "http://0.0.0.0/x"):
@@ -235,10 +244,9 @@ def test_callbacks_into_the_services_own_network_are_refused_by_default(tmp_path
             assert refused.json()["errors"][0]["loc"] == ["query", "callback_url"]
             assert "not a public address" in refused.json()["errors"][0]["msg"]
         by_name = hook.url.replace("127.0.0.1", "localhost")
-        job = client.post("/v1/test-compute/jobs", params={"callback_url": by_name}, json={"values": [1.0]},
-                          headers=ALICE).json()
-        state = _callback_state(client, job["id"])
-        assert state["state"] == "failed" and "non-public address" in state["error"]
+        refused = client.post("/v1/test-compute/jobs", params={"callback_url": by_name}, json={"values": [1.0]},
+                              headers=ALICE)
+        assert refused.status_code == 422 and refused.json()["errors"][0]["loc"] == ["query", "callback_url"]
         assert hook.requests == []
 
 
@@ -266,3 +274,171 @@ def test_the_example_receiver_takes_a_delivery_once_and_refuses_forgeries(tmp_pa
     finally:
         server.shutdown()
         server.server_close()
+
+
+# ---- the target is checked where it is connected (DNS rebinding) and in every spelling -------------------
+
+PUBLIC = "93.184.216.34"  # a global unicast address (never connected to here)
+
+
+class Rebinding:
+    """A resolver for one name that answers a public address the first time and loopback after:
+    a DNS rebinding attacker with a zero TTL."""
+
+    def __init__(self, name: str, first: str = PUBLIC, later: str = "127.0.0.1"):
+        self.name, self.first, self.later, self.lookups = name, first, later, 0
+
+    def answer(self) -> str:
+        self.lookups += 1
+        return self.first if self.lookups == 1 else self.later
+
+    def getaddrinfo(self, real):
+        def fake(host, port, *args, **kwargs):
+            if host != self.name:
+                return real(host, port, *args, **kwargs)
+            return [(socket.AF_INET, socket.SOCK_STREAM, 6, "", (self.answer(), int(port or 80)))]
+        return fake
+
+
+class RecordingBackend(httpcore.NetworkBackend):
+    """Stands for the network: records where each connection goes and what is sent on it, answers 204."""
+
+    def __init__(self):
+        self.connected: list[tuple[str, int]] = []
+        self.sent = bytearray()
+        self.tls_names: list[str | None] = []
+        backend = self
+
+        class Stream(httpcore.NetworkStream):
+            def __init__(self):
+                self.answer = b"HTTP/1.1 204 No Content\r\nContent-Length: 0\r\n\r\n"
+
+            def read(self, max_bytes, timeout=None):
+                chunk, self.answer = self.answer[:max_bytes], self.answer[max_bytes:]
+                return chunk
+
+            def write(self, buffer, timeout=None):
+                backend.sent += buffer
+
+            def close(self):
+                pass
+
+            def start_tls(self, ssl_context, server_hostname=None, timeout=None):
+                backend.tls_names.append(server_hostname)
+                return self
+
+            def get_extra_info(self, info):
+                return None
+
+        self.stream = Stream
+
+    def connect_tcp(self, host, port, timeout=None, local_address=None, socket_options=None):
+        self.connected.append((host, port))
+        return self.stream()
+
+    def sleep(self, seconds):
+        pass
+
+
+@pytest.mark.parametrize("scheme", ["http", "https"])
+def test_the_transport_connects_to_the_address_it_checked_with_the_original_host(scheme):
+    """Resolved once: the public answer is checked and connected to; the later loopback answer is never asked
+    for. The request keeps the name in its Host header and TLS gets the name for SNI and verification."""
+    rebinding, network = Rebinding("hooks.example"), RecordingBackend()
+    transport = PinnedTransport(resolver=lambda host, port: [rebinding.answer()], inner=network)
+    with httpx.Client(transport=transport) as client:
+        assert client.post(f"{scheme}://hooks.example/hook", content=b"{}").status_code == 204
+    port = 443 if scheme == "https" else 80
+    assert network.connected == [(PUBLIC, port)] and rebinding.lookups == 1
+    assert b"\r\nHost: hooks.example\r\n" in bytes(network.sent)
+    assert network.tls_names == (["hooks.example"] if scheme == "https" else [])
+
+
+def test_the_transport_refuses_a_name_that_resolves_inside():
+    network = RecordingBackend()
+    for answers in (["127.0.0.1"], [PUBLIC, "10.0.0.7"], ["::ffff:169.254.169.254"]):
+        transport = PinnedTransport(resolver=lambda host, port, answers=answers: answers, inner=network)
+        with httpx.Client(transport=transport) as client, pytest.raises(RefusedTarget):
+            client.post("http://hooks.example/hook", content=b"{}")
+    assert network.connected == []
+    allowed = PinnedTransport(resolver=lambda host, port: ["127.0.0.1"], allow_private=True, inner=network)
+    with httpx.Client(transport=allowed) as client:  # WEBHOOK_PRIVATE_TARGETS=true: connected, still pinned
+        assert client.post("http://hooks.example/hook").status_code == 204
+    assert network.connected == [("127.0.0.1", 80)]
+
+
+def test_a_rebinding_name_never_reaches_the_services_own_network(tmp_path, monkeypatch):
+    """The name answers public when it is checked and loopback afterwards: the delivery goes to the checked
+    address or is refused, never to the loopback receiver."""
+    with receiver() as hook:
+        port = hook.server.server_address[1]
+        rebinding = Rebinding("rebind.example")
+        monkeypatch.setattr(socket, "getaddrinfo", rebinding.getaddrinfo(socket.getaddrinfo))
+        with TestClient(_app(tmp_path, webhook_private_targets=False, webhook_timeout_seconds=1.0,
+                             webhook_max_attempts=1)) as client:
+            job = client.post("/v1/test-compute/jobs", params={"callback_url": f"http://rebind.example:{port}/hook"},
+                              json={"values": [1.0]}, headers=ALICE)
+            assert job.status_code == 202, job.text
+            state = _callback_state(client, job.json()["id"])
+        assert hook.requests == []
+        assert state["state"] == "failed" and "127.0.0.1" in state["error"], state
+
+
+LOOPBACK_SPELLINGS = [
+    "http://2130706433/x", "http://0177.0.0.1/x", "http://0x7f.1/x", "http://127.1/x", "http://0x7f000001/x",
+    "http://017700000001/x", "http://127.0.0.1./x", "http://[::1]/x", "http://[::ffff:127.0.0.1]/x",
+    "http://[::ffff:7f00:1]/x", "http://[64:ff9b::7f00:1]/x", "http://[2002:7f00:1::]/x", "http://localhost./x",
+    "http://LOCALHOST:8000/x", "http://api.localhost/x", "http://0.0.0.0/x", "http://0/x", "http://[::]/x",
+    "https://0xa9.0xfe.0xa9.0xfe/latest", "http://inside.example/x",
+]
+
+
+def test_every_loopback_spelling_is_refused_at_submission(tmp_path, monkeypatch):
+    real = socket.getaddrinfo
+
+    def resolver(host, port, *args, **kwargs):  # a name that resolves inside at submission
+        if host == "inside.example":
+            return [(socket.AF_INET, socket.SOCK_STREAM, 6, "", ("10.20.30.40", port))]
+        if host == "public.example":
+            return [(socket.AF_INET, socket.SOCK_STREAM, 6, "", (PUBLIC, port))]
+        return real(host, port, *args, **kwargs)
+
+    monkeypatch.setattr(socket, "getaddrinfo", resolver)
+    with TestClient(_app(tmp_path, webhook_private_targets=False)) as client:
+        for url in LOOPBACK_SPELLINGS:
+            refused = client.post("/v1/test-compute/jobs", params={"callback_url": url}, json={"values": [1.0]},
+                                  headers=ALICE)
+            assert refused.status_code == 422, url
+            assert refused.json()["errors"][0]["loc"] == ["query", "callback_url"], url
+        for url in ("http://public.example/x", f"http://{PUBLIC}/x", "http://0x5d.0xb8.0xd8.0x22/x"):
+            accepted = client.post("/v1/test-compute/jobs", params={"callback_url": url}, json={"values": [1.0]},
+                                   headers=ALICE)
+            assert accepted.status_code == 202, (url, accepted.text)
+        assert len(client.get("/v1/jobs", headers=ALICE).json()["items"]) == 3
+
+
+@pytest.mark.parametrize("host, address", [
+    ("2130706433", "127.0.0.1"), ("0177.0.0.1", "127.0.0.1"), ("0x7f.1", "127.0.0.1"), ("127.1", "127.0.0.1"),
+    ("10.1", "10.0.0.1"), ("192.168.257", "192.168.1.1"), ("0x5d.0xb8.0xd8.0x22", PUBLIC), ("1.2.3.4.", "1.2.3.4"),
+    ("[::ffff:127.0.0.1]", "::ffff:7f00:1"), ("example.com", None), ("1.2.3.4.5", None), ("256.1.1.1", None),
+    ("0x", "0.0.0.0"), ("08.1.1.1", None), ("1e3", None),
+])
+def test_host_addresses_are_read_as_a_resolver_reads_them(host, address):
+    found = host_address(host)
+    assert (str(found) if found is not None else None) == address
+
+
+def test_a_name_that_never_resolves_does_not_hold_a_submission(tmp_path, monkeypatch):
+    real = socket.getaddrinfo
+
+    def stalled(host, port, *args, **kwargs):
+        if host == "slow.example":
+            time.sleep(5)
+        return real(host, port, *args, **kwargs)
+
+    monkeypatch.setattr(socket, "getaddrinfo", stalled)
+    with TestClient(_app(tmp_path, webhook_private_targets=False)) as client:
+        started = time.monotonic()
+        accepted = client.post("/v1/test-compute/jobs", params={"callback_url": "http://slow.example/x"},
+                               json={"values": [1.0]}, headers=ALICE)
+        assert accepted.status_code == 202 and time.monotonic() - started < 4  # checked again at delivery
