@@ -48,9 +48,9 @@ class AppSettings(JobSettings):
     )
     webhook_private_targets: bool = Field(
         default=False, description="Allow webhooks to loopback, private, link-local and other non-public addresses "
-        "(a receiver on the same host or network). Off: such a callback_url is refused at submission (an address "
-        "literal) or at delivery (a name that resolves to one), so a tenant cannot make the service call its "
-        "internal network.")
+        "(a receiver on the same host or network). Off: such a callback_url is refused at submission (any spelling of "
+        "an inside address, or a name that resolves to one) and a delivery connects only to the address it checked, "
+        "so a tenant cannot make the service call its internal network.")
     webhook_max_attempts: int = Field(default=6, ge=1, le=50, description="Deliveries tried before a webhook is given up.")
     webhook_retry_seconds: float = Field(
         default=2.0, gt=0, le=3600, description="First retry delay of a webhook; doubled after each failed delivery."

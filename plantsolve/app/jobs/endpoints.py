@@ -64,8 +64,10 @@ def submit_route(kind: str):
     async def submit(request: Request, service: Service, caller: Caller, idempotency_key: IdempotencyKey = None,
                      callback_url: CallbackUrl = None) -> Response:
         if callback_url is not None:
-            callback_url = check_callback_url(callback_url, caller.owner, request.app.state.webhook_secrets,
-                                              request.app.state.settings.webhook_private_targets)
+            # the check resolves the host's name: off the event loop
+            callback_url = await run_in_threadpool(check_callback_url, callback_url, caller.owner,
+                                                   request.app.state.webhook_secrets,
+                                                   request.app.state.settings.webhook_private_targets)
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if content_type == "application/json" or content_type.endswith("+json"):
             body = await request.body()
