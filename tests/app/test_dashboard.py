@@ -307,8 +307,8 @@ def test_a_finished_job_is_re_run_with_the_same_input(keyed):
     """'Re-run' on a finished job's page submits the same input as a new job of the same tenant (the JSON body;
     for an upload the stored file under its name with its options) and opens the new job's page."""
     alice = {"Authorization": "Bearer key-a"}
-    keyed.post("/dashboard/login", data={"key": "key-a"})
-    token = form_token("key-a")
+    log_in(keyed, "key-a")
+    token = form_token(keyed.cookies["plantsolve_session"])
     first = _submit(keyed, [1.0, 2.5], headers=alice)
     page = keyed.get(f"/dashboard/jobs/{first['id']}").text
     assert f'action="/dashboard/jobs/{first["id"]}/rerun"' in page and "Re-run" in page
@@ -332,17 +332,18 @@ def test_a_finished_job_is_re_run_with_the_same_input(keyed):
     assert described["filename"] == "values.txt" and described["options"] == {"seconds": 0.01}
     assert keyed.get(f"/v1/jobs/{new_id}/input/file", headers=alice).content == b"1\n2\n3\n"
     # another tenant cannot re-run it
-    keyed.post("/dashboard/login", data={"key": "key-b"})
-    assert keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": form_token("key-b")}).status_code == 404
+    log_in(keyed, "key-b")
+    token_b = form_token(keyed.cookies["plantsolve_session"])
+    assert keyed.post(f"/dashboard/jobs/{upload['id']}/rerun", data={"token": token_b}).status_code == 404
 
 
 def test_a_running_job_has_no_re_run(keyed):
     alice = {"Authorization": "Bearer key-a"}
     job = keyed.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 20}, headers=alice).json()
     wait_for(keyed, job["id"], statuses=("running",), headers=alice)
-    keyed.post("/dashboard/login", data={"key": "key-a"})
+    log_in(keyed, "key-a")
     assert "/rerun" not in keyed.get(f"/dashboard/jobs/{job['id']}").text
-    refused = keyed.post(f"/dashboard/jobs/{job['id']}/rerun", data={"token": form_token("key-a")})
+    refused = keyed.post(f"/dashboard/jobs/{job['id']}/rerun", data={"token": form_token(keyed.cookies["plantsolve_session"])})
     assert refused.status_code == 409 and "once it has finished" in refused.text
     keyed.post(f"/v1/jobs/{job['id']}/cancel", headers=alice)
 
