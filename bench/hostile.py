@@ -1,4 +1,4 @@
-"""Hostile submissions of issue 24 against the real server: status, seconds and server RSS growth per case.
+"""Hostile submissions against the real server: status, seconds and server RSS growth per case.
 
 Starts ``plantsolve serve`` (embedded default, SQLite, a private data dir) on a loopback port with its output
 in a file, sends each case at full size, and prints a table: case, status, seconds to answer, growth of the

@@ -6,7 +6,7 @@ across fields: the only place they run. The extension of an upload is checked he
 else. A worker re-reads the stored input with :func:`read_stored` and does not check it again:
 what was stored is what passed.
 
-Uploads are read outside the API process (choice (b) of issue 24): :func:`read_upload_bounded` runs
+Uploads are read outside the API process: :func:`read_upload_bounded` runs
 :func:`read_upload` and :func:`check` on the stored file in a child process forked from a forkserver
 that has the kinds imported, with its address space limited to ``UPLOAD_READ_MEMORY`` bytes beyond what
 it starts with (RLIMIT_AS) and its time to ``UPLOAD_READ_SECONDS`` (a wall-clock wait in the API, CPU

@@ -1,4 +1,4 @@
-"""Bounded intake (issue 24, item 1): the hostile submissions of the issue, scaled down to the same shape,
+"""Bounded intake: hostile submissions, scaled down to the same shape,
 answer a 422 naming the field quickly, counted before anything is built; uploads are read in a bounded
 process, so a reader that runs away costs that process, never the API. The full sizes run in
 bench/hostile.py."""
