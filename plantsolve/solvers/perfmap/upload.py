@@ -63,7 +63,7 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, deco
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
-from plantsolve.solvers.skipped_input import ends_mid_line, refuse_cut_json, truncated_file
+from plantsolve.solvers.skipped_input import skipped_lines, ends_mid_line, refuse_cut_json, truncated_file
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -407,9 +407,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
     groups: dict[tuple[float, float], dict] = {}
     lines_of: dict[tuple[float, float], list[int]] = {}
     cut_note: Diagnostic | None = None
+    skipped: list[dict] = []  # rows that could not be read: skipped with a warning while others are usable
+    skipped_count = 0
     for n, r in zip(numbers[1:], rows[1:]):
-        if len(errors) >= _MAX_ROW_ERRORS:
-            break
         row_start = len(errors)
         vals = {}
         for c in roles:
@@ -443,6 +443,12 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
             cut_note = truncated_file(n, f"its last row has no line ending and is incomplete ({why[0]}): the file "
                                       "was cut? That row was not read.", reason=why[0])
             continue
+        if len(errors) > row_start:
+            skipped_count += 1
+            if len(skipped) < _MAX_ROW_ERRORS:
+                skipped.append({"line": n, "reason": errors[row_start].msg})
+            del errors[max(row_start, _MAX_ROW_ERRORS):]  # the refusal, if nothing is usable, lists the first rows
+            continue
         if len(vals) < len(roles):
             continue
         key = tuple(vals[c] for c in setting_cols)
@@ -452,12 +458,14 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
         for c in ("flow", "pressure", "efficiency"):
             g[c].append(vals[c])
         lines_of.setdefault(key, []).append(n)
-    if errors:
-        raise InputRejected(errors)
     if not groups:
+        if errors:  # nothing usable is left: the file is refused, naming its first bad rows
+            raise InputRejected(errors)
         cut = f" (its only data row, {what} {cut_line}, is cut short)" if cut_note else ""
         raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows{cut}")
     notes = notes_before + ([cut_note] if cut_note else [])
+    if skipped_count:
+        notes.append(skipped_lines(skipped, what=what, count=skipped_count, code="upload_rows_skipped"))
     order = [c.strip() for c in rows[0]]
     ignored.sort(key=order.index)
     names = {r: rows[0][col[r]].strip() for r in col}

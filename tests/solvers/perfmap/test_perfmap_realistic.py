@@ -89,7 +89,9 @@ def _reject(content: bytes, options=None):
     return exc.value.errors
 
 
-def test_bad_values_are_rejected_with_their_file_row_and_column(n3_csv):
+def test_an_unreadable_row_is_skipped_with_a_warning_naming_its_file_row_and_column(n3_csv):
+    """A row that cannot be read is left out and said in the warnings (its file row and why); the file is
+    refused only when no row is usable, naming the rows."""
     lines = [HEADER] + [",".join(r) for r in _rows(n3_csv)]
     for bad, loc, needle in (("0.0,0.5,,1.0394,0.6642", ("file", "row", 7, "flow"), "no flow"),
                              ("0.0,0.5,1742.0557,1.0394", ("file", "row", 7, "efficiency"),
@@ -98,8 +100,13 @@ def test_bad_values_are_rejected_with_their_file_row_and_column(n3_csv):
                               "NaN"),
                              ("0.0,0.5,1742.0557,1.0394,n/a", ("file", "row", 7, "efficiency"),
                               "not a number")):
-        errs = _reject("\n".join(lines[:6] + [bad] + lines[7:]).encode())
-        assert [e.loc for e in errs] == [loc] and needle in errs[0].msg
+        req = parse_upload(StoredInput.from_bytes("rig.csv", "\n".join(lines[:6] + [bad] + lines[7:]).encode()), None)
+        (warning,) = [w for w in req.upload_warnings if w.code == "upload_rows_skipped"]
+        assert warning.details["lines"] == [7] and warning.details["count"] == 1
+        assert needle in warning.details["skipped"][0]["reason"] and "line 7" in warning.message
+        assert sum(len(p.flow) for p in req.positions) == len(lines) - 2  # every other row was read
+        errs = _reject(("\n".join([HEADER, bad, bad.replace("0.5", "0.6", 1)]) + "\n").encode())  # nothing usable
+        assert [e.loc for e in errs] == [(*loc[:2], 2, loc[3]), (*loc[:2], 3, loc[3])] and needle in errs[0].msg
 
 
 def test_decimal_comma_with_comma_separator_says_how_to_fix():

@@ -120,27 +120,29 @@ def test_a_named_sheet_and_the_first_sheet_with_a_header():
     assert e.value.errors[0].loc == ("options", "sheet") and "'Rig'" in e.value.errors[0].msg
 
 
-# ---------------------------------------------------------------- refused, each with its reason
+# ---------------------------------------------------------------- a row skipped, or the file refused, with its reason
 
 
-def test_a_formula_never_calculated_is_refused_naming_the_row():
+def _skipped(request) -> dict:
+    (warning,) = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
+    return warning.details["skipped"][0]
+
+
+def test_a_formula_never_calculated_skips_its_row_with_the_reason():
     def fill(wb):
         ws = wb.active
         plain(ws)
         ws["B3"] = "=B2*1.01"  # written by a script: no saved value
-    with pytest.raises(InputRejected) as e:
-        parse_upload(StoredInput.from_bytes("rig.xlsx", workbook(fill)), None)
-    err = e.value.errors[0]
-    assert err.loc == ("file", "row", 3, "flow") and "sheet 'Data' row 3" in err.msg and "formula" in err.msg
+    skipped = _skipped(parse_upload(StoredInput.from_bytes("rig.xlsx", workbook(fill)), None))
+    assert skipped["line"] == 3 and "sheet 'Data' row 3" in skipped["reason"] and "formula" in skipped["reason"]
 
 
-def test_an_error_value_is_refused_naming_the_row():
+def test_an_error_value_skips_its_row_with_the_reason():
     def fill(wb):
         plain(wb.active)
         wb.active["D5"] = "#DIV/0!"
-    with pytest.raises(InputRejected) as e:
-        parse_upload(StoredInput.from_bytes("rig.xlsx", workbook(fill)), None)
-    assert e.value.errors[0].loc == ("file", "row", 5, "efficiency") and "#DIV/0!" in e.value.errors[0].msg
+    skipped = _skipped(parse_upload(StoredInput.from_bytes("rig.xlsx", workbook(fill)), None))
+    assert skipped["line"] == 5 and "#DIV/0!" in skipped["reason"]
 
 
 def test_an_incompatible_unit_in_a_sheet_names_the_column():
