@@ -19,8 +19,6 @@ from tests.conftest import REPO, service_settings, wait_for
 from tests.store.s3_server import moto_s3
 from tests.workers.test_integration_celery import Worker
 
-pytestmark = pytest.mark.integration
-
 
 def _worker_env(pg_url: str, redis_url: str, data_dir: Path, blob_env: dict[str, str]) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if k not in ("ARTIFACT_DIR", "BLOB_STORE", "S3_BUCKET", "S3_ENDPOINT_URL")}
@@ -34,6 +32,7 @@ def _files_under(folder: Path) -> list[Path]:
     return [p for p in folder.rglob("*") if p.is_file() and p.suffix not in (".log", ".db", ".db-wal", ".db-shm")]
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("back_end", ["postgres", "s3"])
 def test_api_and_two_workers_share_no_disk(back_end, pg_url, redis_url, tmp_path):
     folders = {name: tmp_path / name for name in ("api", "worker-1", "worker-2")}
@@ -86,3 +85,16 @@ def test_api_and_two_workers_share_no_disk(back_end, pg_url, redis_url, tmp_path
         assert len(runners) == 2, f"both workers should have run jobs: {runners}"
         for name, folder in folders.items():  # nobody's disk holds a blob: nothing needed sharing
             assert _files_under(folder) == [], (name, _files_under(folder))
+
+
+def test_the_compose_workers_mount_nothing_of_the_api():
+    """docker-compose.yml: the workers share no volume with the API (blobs in PostgreSQL by default, or S3), so
+    they run on any host that reaches PostgreSQL and Redis."""
+    import yaml
+
+    services = yaml.safe_load((REPO / "docker-compose.yml").read_text())["services"]
+    assert "volumes" not in services["worker"]
+    for name in ("api", "worker"):
+        environment = services[name]["environment"]
+        assert environment["BLOB_STORE"] == "${BLOB_STORE:-postgres}"
+        assert {"S3_BUCKET", "S3_ENDPOINT_URL", "AWS_ACCESS_KEY_ID", "AWS_SECRET_ACCESS_KEY"} <= set(environment)
