@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import re
 import uuid
-from urllib.parse import quote
 from typing import Annotated, Any, Mapping
+from urllib.parse import quote
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response
 from fastapi.responses import JSONResponse, StreamingResponse
