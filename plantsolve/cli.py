@@ -226,7 +226,7 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
                 folder = _artifact_folder(args)
                 folder.mkdir(parents=True, exist_ok=True)
                 for artifact in artifacts:
-                    (folder / artifact.name).write_bytes(service.artifact(job_id, artifact.name)[1].read_bytes())
+                    (folder / artifact.name).write_bytes(service.artifact(job_id, artifact.name)[1].read())
                 print(f"artifacts: {', '.join(a.name for a in artifacts)} in {folder}", file=sys.stderr)
             report = job.report or (job.result or {}).get("report")
             n = _print_warnings(report)

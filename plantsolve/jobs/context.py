@@ -10,7 +10,7 @@ from typing import Mapping
 from plantsolve.jobs.settings import JobSettings
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.kinds import load_kinds
-from plantsolve.store import Database, FileStore, JobRepository, Store
+from plantsolve.store import BlobStore, Database, JobRepository, LocalBlobStore, Store
 
 
 @dataclass
@@ -33,8 +33,14 @@ class ServiceContext:
         return self.store.repo
 
     @property
-    def files(self) -> FileStore:
+    def files(self) -> BlobStore:
+        """Uploads, large JSON requests, artifacts and spooled results (BLOB_STORE)."""
         return self.store.files
+
+    @property
+    def spool(self) -> LocalBlobStore:
+        """This machine's folder (ARTIFACT_DIR): where a result waits when the blob store cannot take it."""
+        return self.store.spool
 
     def spec(self, kind: str) -> SolverSpec | None:
         return self.kinds.get(kind)

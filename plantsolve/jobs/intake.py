@@ -4,7 +4,9 @@ At submission :func:`read_json` or :func:`read_upload` turns the body (or the up
 the form's ``options``) into the kind's input value and :func:`check` runs the kind's checks
 across fields: the only place they run. The extension of an upload is checked here and nowhere
 else. A worker re-reads the stored input with :func:`read_stored` and does not check it again:
-what was stored is what passed.
+what was stored is what passed. The stored input comes from the blob store, which may be on another
+machine: an upload is handed to the kind as a local file (the local back-end's own, else a temporary
+copy that lives as long as the ``with`` block of :func:`read_stored`).
 
 Uploads are read outside the API process: :func:`read_upload_bounded` runs
 :func:`read_upload` and :func:`check` on the stored file in a child process forked from a forkserver
@@ -24,29 +26,30 @@ from __future__ import annotations
 import logging
 import math
 import multiprocessing
-from multiprocessing import forkserver
 import pickle
-import threading
 import resource
+import threading
 import traceback
+from contextlib import contextmanager
+from multiprocessing import forkserver
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
 
 from pydantic import ValidationError
 
 from plantsolve.jobs.errors import (
     Unprocessable,
     UnsupportedMediaType,
+    array_bounds,
     field_problem,
     from_input_rejected,
     from_validation_error,
-    array_bounds,
     loads_bounded,
     prescan_json,
 )
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
 from plantsolve.solvers.kinds import load_kinds
-from plantsolve.store.files import FileStore
+from plantsolve.store.blobs import BlobMissing, BlobStore
 from plantsolve.store.models import Job
 
 
@@ -224,18 +227,26 @@ def check(spec: SolverSpec, job_input: Any) -> None:
         raise from_input_rejected(error) from None
 
 
-def read_stored(spec: SolverSpec, job: Job, files: FileStore) -> Any:
-    """The kind's input value re-read from a job's stored input (in the worker; not checked again)."""
-    if job.input_kind == "json":
-        return spec.input_of(spec.request_model.model_validate(job.input))
-    if job.input_kind == "json_file":
-        return spec.input_of(spec.request_model.model_validate_json(files.read(job.input_file)))
-    if job.input_kind == "upload":
-        if spec.parse_upload is None:
-            raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
-        source = StoredInput.from_path(files.path(job.input_file), job.input_filename)
-        return spec.input_of(spec.parse_upload(source, job.input_options), source)
-    raise SolverError("input", f"unknown input kind {job.input_kind!r}")
+@contextmanager
+def read_stored(spec: SolverSpec, job: Job, files: BlobStore) -> Iterator[Any]:
+    """The kind's input value re-read from a job's stored input (in the worker; not checked again), for
+    the duration of the ``with`` block (a temporary copy of an upload is removed after it)."""
+    try:
+        if job.input_kind == "json":
+            yield spec.input_of(spec.request_model.model_validate(job.input))
+        elif job.input_kind == "json_file":
+            yield spec.input_of(spec.request_model.model_validate_json(files.get(job.input_file)))
+        elif job.input_kind == "upload":
+            if spec.parse_upload is None:
+                raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
+            with files.local_file(job.input_file, job.input_filename or "") as path:
+                source = StoredInput.from_path(path, job.input_filename)
+                yield spec.input_of(spec.parse_upload(source, job.input_options), source)
+        else:
+            raise SolverError("input", f"unknown input kind {job.input_kind!r}")
+    except BlobMissing:
+        raise SolverError("input", "The submitted input is missing from the blob store (deleted, or a BLOB_STORE "
+                          "other than the one it was submitted to).") from None
 
 
 def _input(spec: SolverSpec, request: Any, source: StoredInput | None = None) -> Any:

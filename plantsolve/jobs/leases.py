@@ -12,7 +12,7 @@ from typing import Callable
 
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED
-from plantsolve.jobs.runner import lost_worker_report, pending_path
+from plantsolve.jobs.runner import lost_worker_report, pending_holder
 
 log = logging.getLogger("plantsolve.sweeper")
 
@@ -37,7 +37,7 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
             log.warning("sweeper: the database was away; %d running lease(s) extended instead of lapsing", extended)
     outcome = ctx.repo.sweep(requeue_queued_after=ctx.settings.requeue_queued_after,
                              report_for_lost=lost_worker_report,
-                             result_waiting=lambda job_id: ctx.files.path(pending_path(job_id)).exists())
+                             result_waiting=lambda job_id: pending_holder(ctx, job_id) is not None)
     again = list(outcome.requeued) + [job_id for job_id, sent in outcome.waiting if not sent]
     stale = [job_id for job_id, sent in outcome.waiting if sent]
     if stale:

@@ -25,7 +25,8 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
 from plantsolve.schemas.common import Report
-from plantsolve.solvers.base import Cancelled, InputRejected, Solved, SolverError
+from plantsolve.solvers.base import Artifact, Cancelled, InputRejected, Solved, SolverError
+from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
 
@@ -33,11 +34,34 @@ log = logging.getLogger("plantsolve.runner")
 
 
 class ResultPending(ConnectionError):
-    """A computed result the database did not take in time: it waits on disk for the next attempt."""
+    """A computed result the database did not take in time: it waits in the blob store (or, when that is
+    away too, in this machine's spool folder) for the next attempt."""
 
 
 def pending_path(job_id: uuid.UUID) -> str:
     return f"{job_id}/pending-result.json"
+
+
+def pending_artifact_key(job_id: uuid.UUID, name: str) -> str:
+    """Where an artifact of a spooled result waits that the blob store did not take."""
+    return f"{job_id}/pending/{name}"
+
+
+def _spools(ctx: ServiceContext) -> list[BlobStore]:
+    """Where a computed result may wait: the blob store first (every worker finds it there), then this
+    machine's folder (the PostgreSQL back-end is away with the database; only this machine finds it)."""
+    return [ctx.files] if ctx.spool is ctx.files else [ctx.files, ctx.spool]
+
+
+def pending_holder(ctx: ServiceContext, job_id: uuid.UUID) -> BlobStore | None:
+    """The store holding a result that an earlier attempt computed but could not write, if any."""
+    for store in _spools(ctx):
+        try:
+            if store.exists(pending_path(job_id)):
+                return store
+        except BlobStoreUnavailable:
+            continue
+    return None
 
 
 class _Stop(Cancelled):
@@ -206,14 +230,15 @@ def _run_claimed(
     soft_limit, hard_limit = ctx.limits(spec)
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
-            if ctx.files.path(pending_path(job_id)).exists():
-                return _store_pending(ctx, job_id, attempt, monitor, log_book)
-            job_input = intake.read_stored(spec, job, ctx.files)
-            solved = _call_with_deadline(
-                lambda: spec.solve(job_input, monitor.progress),
-                hard_limit if hard_limit_in_thread else None,
-            )
-            return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
+            holder = pending_holder(ctx, job_id)
+            if holder is not None:
+                return _store_pending(ctx, job_id, attempt, holder, monitor, log_book)
+            with intake.read_stored(spec, job, ctx.files) as job_input:  # a temporary copy lives until the end
+                solved = _call_with_deadline(
+                    lambda: spec.solve(job_input, monitor.progress),
+                    hard_limit if hard_limit_in_thread else None,
+                )
+                return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
         except _Stop as stop:
             if stop.reason != "time_limit":
                 return "cancelled"  # by the user, or the lease went to a newer attempt
@@ -221,7 +246,7 @@ def _run_claimed(
         except time_limit_errors:
             return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
         except ResultPending:
-            log.error("job %s attempt %d: result kept on disk; the next attempt stores it", job_id, attempt)
+            log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
             report = failure_report("result", "The result was computed but the database did not take it; the next "
                                     "attempt stores it without solving again.", attempts=history)
             if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending"),
@@ -337,51 +362,105 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved
             {"paths": _non_finite_paths(result_json)[:20]},
         ) from None
     report = dict(result_json.get("report") or Report().model_dump(mode="json"))
-    stored: list[StoredArtifact] = []
+    rendered: list[Artifact] = []
     if spec.render_artifacts is not None:
         try:
-            for artifact in spec.render_artifacts(job_input, solved):
-                path, size, digest = ctx.files.put(f"{job_id}/a{attempt}/{artifact.name}", artifact.data)
-                stored.append(StoredArtifact(artifact.name, artifact.media_type, size, digest, path))
+            rendered = list(spec.render_artifacts(job_input, solved))
         except Cancelled:
             raise
         except Exception as error:  # the result stands; the missing files are reported
             log.exception("artifacts of job %s failed", job_id)
-            warnings = list(report.get("warnings") or [])
-            warnings.append({"code": "artifacts_failed", "message": f"Artifacts could not be rendered: {error}", "details": {}})
-            report["warnings"] = warnings
-            report["status"] = "warning" if report.get("status") == "ok" else report.get("status", "warning")
-    return _write_result(ctx, job_id, attempt, result_json, report, stored, monitor.elapsed, log_book)
+            _warn_artifacts(report, f"Artifacts could not be rendered: {error}")
+    return _write_result(ctx, job_id, attempt, attempt, result_json, report, [], rendered, monitor.elapsed, log_book)
 
 
-def _write_result(ctx: ServiceContext, job_id, attempt, result_json, report, stored: list[StoredArtifact],
-                  run_seconds: float, log_book: AttemptLog, note: str | None = None) -> str:
-    """The final write, retried with backoff while the database is unreachable (the heartbeat keeps the
-    lease meanwhile); if it never succeeds, the result waits on disk for the next attempt."""
+def _warn_artifacts(report: dict, message: str) -> None:
+    warnings = list(report.get("warnings") or [])
+    warnings.append({"code": "artifacts_failed", "message": message, "details": {}})
+    report["warnings"] = warnings
+    report["status"] = "warning" if report.get("status") == "ok" else report.get("status", "warning")
+
+
+def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result_json, report,
+                  stored: list[StoredArtifact], rendered: list[Artifact], run_seconds: float, log_book: AttemptLog,
+                  note: str | None = None, spooled_in: BlobStore | None = None) -> str:
+    """The artifacts' blobs, then the final write; retried with backoff while the blob store or the database
+    is unreachable (the heartbeat keeps the lease meanwhile). If that never succeeds, the result (and the
+    artifacts not stored yet) waits in a spool for the next attempt (:func:`_spools`)."""
+    stored, waiting = list(stored), list(rendered)
+
+    def store_all() -> bool:
+        while waiting:
+            artifact = waiting[0]
+            try:
+                blob = ctx.files.put(f"{job_id}/a{computed_by}/{artifact.name}", artifact.data)
+            except Exception as error:
+                if is_infrastructure_failure(error):
+                    raise
+                log.exception("artifact %s of job %s could not be stored", artifact.name, job_id)
+                _warn_artifacts(report, f"Artifact {artifact.name!r} could not be stored: {error}")
+            else:
+                stored.append(StoredArtifact(artifact.name, artifact.media_type, blob.size, blob.sha256, blob.key))
+            waiting.pop(0)
+        return ctx.repo.finish_success(job_id, attempt, result=result_json, report=report, artifacts=stored,
+                                       run_seconds=run_seconds, attempts=log_book.add("succeeded", note))
+
     retrying = Retrying(retry=retry_if_exception(is_infrastructure_failure),
                         stop=stop_after_delay(ctx.settings.result_write_seconds),
                         wait=wait_exponential(multiplier=0.05, max=5.0), reraise=True)
     try:
-        written = retrying(ctx.repo.finish_success, job_id, attempt, result=result_json, report=report,
-                           artifacts=stored, run_seconds=run_seconds, attempts=log_book.add("succeeded", note))
+        written = retrying(store_all)
     except Exception as error:
         if not is_infrastructure_failure(error):
             raise
-        payload = {"attempt": attempt, "result": result_json, "report": report, "run_seconds": run_seconds,
-                   "artifacts": [dataclasses.asdict(a) for a in stored]}
-        ctx.files.put(pending_path(job_id), json.dumps(payload).encode())
+        payload = {"attempt": computed_by, "result": result_json, "report": report, "run_seconds": run_seconds,
+                   "artifacts": [dataclasses.asdict(a) for a in stored],
+                   "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting]}
+        _spool(ctx, job_id, payload, waiting)
         raise ResultPending(str(error)) from error
     if written:
-        ctx.files.path(pending_path(job_id)).unlink(missing_ok=True)
+        _unspool(ctx, job_id, spooled_in)
     return "succeeded" if written else "stale"
 
 
-def _store_pending(ctx: ServiceContext, job_id, attempt, monitor: AttemptMonitor, log_book: AttemptLog) -> str:
+def _spool(ctx: ServiceContext, job_id, payload: dict, waiting: list[Artifact]) -> None:
+    error: BaseException | None = None
+    for store in _spools(ctx):
+        try:
+            for artifact in waiting:
+                store.put(pending_artifact_key(job_id, artifact.name), artifact.data)
+            store.put(pending_path(job_id), json.dumps(payload).encode())  # last: its presence says all is there
+            return
+        except Exception as away:
+            if not is_infrastructure_failure(away):
+                raise
+            error = away
+    raise error
+
+
+def _unspool(ctx: ServiceContext, job_id, holder: BlobStore | None) -> None:
+    """The result is written: its spool, if any, goes (a leftover would only be found and dropped later)."""
+    if holder is None:
+        return
+    try:
+        payload = json.loads(holder.get(pending_path(job_id)))
+        holder.delete(pending_path(job_id))
+        for artifact in payload.get("unstored", []):
+            holder.delete(pending_artifact_key(job_id, artifact["name"]))
+    except Exception:
+        log.warning("the spooled result of job %s could not be removed", job_id, exc_info=True)
+
+
+def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, monitor: AttemptMonitor,
+                   log_book: AttemptLog) -> str:
     """An earlier attempt computed the result but could not store it: store it now, without solving."""
-    payload = json.loads(ctx.files.read(pending_path(job_id)))
+    payload = json.loads(holder.get(pending_path(job_id)))
     stored = [StoredArtifact(**a) for a in payload["artifacts"]]
-    return _write_result(ctx, job_id, attempt, payload["result"], payload["report"], stored,
-                         payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}")
+    waiting = [Artifact(a["name"], a["media_type"], holder.get(pending_artifact_key(job_id, a["name"])))
+               for a in payload.get("unstored", [])]
+    return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"], stored, waiting,
+                         payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}",
+                         spooled_in=holder)
 
 
 def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:

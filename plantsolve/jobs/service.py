@@ -10,11 +10,9 @@ import hashlib
 import json
 import logging
 import re
-import shutil
 import uuid
 from dataclasses import dataclass
 from datetime import datetime
-from pathlib import Path
 from typing import Any, Mapping
 
 from plantsolve.jobs import intake
@@ -25,6 +23,7 @@ from plantsolve.jobs.lifecycle import CANCELLED, QUEUED, RUNNING, SUCCEEDED, is_
 from plantsolve.jobs.runner import failure_report
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
+from plantsolve.store.blobs import BlobMissing, BlobReader
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import JobState, as_utc
 
@@ -85,8 +84,8 @@ class JobService:
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
         if len(body) > self.ctx.settings.inline_input_bytes:
-            path, _, _ = self.ctx.files.put(f"{job_id}/input/request.json", _canonical(raw))
-            fields = {"input_kind": "json_file", "input_file": path}
+            blob = self.ctx.files.put(f"{job_id}/input/request.json", _canonical(raw))
+            fields = {"input_kind": "json_file", "input_file": blob.key}
         else:
             fields = {"input_kind": "json", "input": raw}
         return self._create(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
@@ -106,14 +105,15 @@ class JobService:
             digest.update(hashlib.sha256(part).digest())
         job_id = uuid.uuid4()
         # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one
-        path, _, _ = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
+        blob = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
         try:
-            intake.read_upload_bounded(spec, StoredInput.from_path(self.ctx.files.path(path), filename), options,
-                                       self.ctx.settings.plugins)
+            with self.ctx.files.local_file(blob.key, filename) as path:
+                intake.read_upload_bounded(spec, StoredInput.from_path(path, filename), options,
+                                           self.ctx.settings.plugins)
         except Exception:
-            shutil.rmtree(self.ctx.files.path(path).parent.parent, ignore_errors=True)
+            self.ctx.files.delete(blob.key)
             raise
-        fields = {"input_kind": "upload", "input_file": path, "input_filename": filename, "input_options": options,
+        fields = {"input_kind": "upload", "input_file": blob.key, "input_filename": filename, "input_options": options,
                   **_callback(callback_url)}
         return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)
 
@@ -180,17 +180,28 @@ class JobService:
     def count_by_status(self, sees: str | None) -> dict[str, int]:
         return self.ctx.repo.count_by_status(owner=sees)
 
-    def input_path(self, job: Job) -> Path:
-        """Where a job's stored input file lies (an upload, or a large JSON request)."""
-        return self.ctx.files.path(job.input_file)
+    def input_file(self, job: Job) -> BlobReader:
+        """A job's stored input file (an upload, or a large JSON request), opened from the blob store: its
+        ``size`` and ``chunks()`` (read once), or ``close()``. A blob store that cannot be reached raises a
+        ``ConnectionError`` (503) here, before a response starts."""
+        return self._open(job.input_file, f"The input file of job {job.id} is missing from the blob store.")
 
-    def artifact(self, job_id: uuid.UUID, name: str, sees: str | None = None) -> tuple[Any, Path]:
-        """An artifact of a job the caller may see, and the path of its file."""
+    def artifact(self, job_id: uuid.UUID, name: str, sees: str | None = None) -> tuple[Any, BlobReader]:
+        """An artifact of a job the caller may see (name, media type, size, SHA-256) and its file, opened."""
         self.get(job_id, sees, brief=True)
         artifact = self.ctx.repo.artifact(job_id, name)
         if artifact is None:
             raise NotFound(f"Job {job_id} has no artifact {name!r}.")
-        return artifact, self.ctx.files.path(artifact.path)
+        return artifact, self._open(artifact.path, f"The file of artifact {name!r} of job {job_id} is missing from "
+                                                   "the blob store.")
+
+    def _open(self, key: str | None, missing: str) -> BlobReader:
+        if not key:
+            raise NotFound(missing)
+        try:
+            return self.ctx.files.open(key)
+        except BlobMissing:
+            raise NotFound(missing) from None
 
     # ---- what the metrics and the completion webhooks read and record ------------------------
 

@@ -1,4 +1,5 @@
-"""The store: the database that is the source of truth for jobs, and the artifact file store.
+"""The store: the database that is the source of truth for jobs, and the blob store (uploads, artifacts,
+spooled results) of the configured back-end.
 
 Both the app (submissions, reads) and the workers (claims, results) use it; it imports neither
 of them, nor any solver.
@@ -9,7 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from plantsolve.store.engine import Database
-from plantsolve.store.files import FileStore
+from plantsolve.store.blobs import BlobMissing, BlobStore, BlobStoreUnavailable, LocalBlobStore
+from plantsolve.store.blobs_database import DatabaseBlobStore
+from plantsolve.store.blobs_s3 import S3BlobStore
 from plantsolve.store.repository import JobRepository
 from plantsolve.store.sessions import SessionRepository
 from plantsolve.store.settings import StoreSettings
@@ -17,23 +20,39 @@ from plantsolve.store.settings import StoreSettings
 
 @dataclass
 class Store:
-    """One process's handle on the store: database, job repository, artifact files, dashboard sessions."""
+    """One process's handle on the store: database, job repository, blobs (``files``), dashboard sessions, and
+    ``spool``: this machine's folder, where a computed result waits when the blob store cannot take it either
+    (the PostgreSQL back-end during a database outage)."""
 
     db: Database
     repo: JobRepository
-    files: FileStore
+    files: BlobStore
     sessions: SessionRepository
+    spool: LocalBlobStore
 
     @classmethod
     def open(cls, settings: StoreSettings, *, migrate: bool = False) -> "Store":
         db = Database(settings.resolved_database_url)
         if migrate:
             db.migrate()
-        return cls(db=db, repo=JobRepository(db.sessions, db.writing), files=FileStore(settings.resolved_artifact_dir),
-                   sessions=SessionRepository(db.sessions, db.writing))
+        local = LocalBlobStore(settings.resolved_artifact_dir)
+        return cls(db=db, repo=JobRepository(db.sessions, db.writing), files=open_blob_store(settings, db, local),
+                   sessions=SessionRepository(db.sessions, db.writing), spool=local)
 
     def close(self) -> None:
         self.db.dispose()
 
 
-__all__ = ["Database", "FileStore", "JobRepository", "SessionRepository", "Store", "StoreSettings"]
+def open_blob_store(settings: StoreSettings, db: Database, local: LocalBlobStore) -> BlobStore:
+    kind = settings.resolved_blob_store
+    if kind == "postgres":
+        return DatabaseBlobStore(db)
+    if kind == "s3":
+        if not settings.s3_bucket:
+            raise ValueError("BLOB_STORE=s3 needs S3_BUCKET")
+        return S3BlobStore(settings.s3_bucket, endpoint_url=settings.s3_endpoint_url, region=settings.s3_region)
+    return local
+
+
+__all__ = ["BlobMissing", "BlobStore", "BlobStoreUnavailable", "Database", "JobRepository", "LocalBlobStore",
+           "SessionRepository", "Store", "StoreSettings"]

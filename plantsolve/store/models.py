@@ -1,4 +1,4 @@
-"""SQLAlchemy 2 models of the ``jobs`` and ``artifacts`` tables, and the dashboard's sessions and failed logins.
+"""SQLAlchemy 2 models of the ``jobs``, ``artifacts`` and ``blobs`` tables, and the dashboard's sessions and failed logins.
 
 The Alembic migrations in ``workers/persistence/migrations`` create exactly these tables;
 ``tests/service/test_migrations.py`` checks that the two agree.
@@ -10,7 +10,7 @@ import uuid
 from datetime import datetime, timezone
 from typing import Any
 
-from sqlalchemy import JSON, DateTime, Float, ForeignKey, Index, Integer, String, Text, Uuid
+from sqlalchemy import JSON, BigInteger, DateTime, Float, ForeignKey, Index, Integer, LargeBinary, String, Text, Uuid
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 from plantsolve.schemas.jobs import JobStatus
@@ -116,3 +116,15 @@ class LoginFailure(Base):
     at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
 
     __table_args__ = (Index("ix_login_failures_address_at", "address", "at"),)
+class Blob(Base):
+    """The bytes of a blob when ``BLOB_STORE=postgres`` (:mod:`plantsolve.store.blobs_database`): one row per
+    key. On PostgreSQL the column is stored uncompressed out of line (``STORAGE EXTERNAL``, set by the
+    migration), so a download reads it in slices without the server decompressing the whole value."""
+
+    __tablename__ = "blobs"
+
+    key: Mapped[str] = mapped_column(String(512), primary_key=True)
+    size: Mapped[int] = mapped_column(BigInteger)
+    sha256: Mapped[str] = mapped_column(String(64))
+    data: Mapped[bytes] = mapped_column(LargeBinary)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)

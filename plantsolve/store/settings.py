@@ -10,6 +10,7 @@ a SQLite file under ``./var``.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -28,8 +29,19 @@ class StoreSettings(BaseSettings):
         "Scaled: postgresql+psycopg://user@host/db.",
     )
     artifact_dir: Path | None = Field(
-        default=None, description="Where artifact and upload files live. Unset: <DATA_DIR>/artifacts."
+        default=None, description="The local blob store's folder (uploads, artifacts, spooled results), and where a "
+        "result waits when no other blob store takes it. Unset: <DATA_DIR>/artifacts."
     )
+    blob_store: Literal["local", "postgres", "s3"] | None = Field(
+        default=None,
+        description="Where uploads, artifacts and spooled results live: 'local' (files under ARTIFACT_DIR: one machine "
+        "or a shared volume), 'postgres' (a table in the jobs' database), 's3' (S3_BUCKET). Unset: 'postgres' when "
+        "DATABASE_URL is PostgreSQL, else 'local'.",
+    )
+    s3_bucket: str | None = Field(default=None, description="BLOB_STORE=s3: the bucket (it must exist).")
+    s3_endpoint_url: str | None = Field(
+        default=None, description="BLOB_STORE=s3: the server's URL when it is not AWS (MinIO, Ceph, Garage …).")
+    s3_region: str | None = Field(default=None, description="BLOB_STORE=s3: the region (else boto3's default).")
 
     @property
     def resolved_database_url(self) -> str:
@@ -40,3 +52,9 @@ class StoreSettings(BaseSettings):
     @property
     def resolved_artifact_dir(self) -> Path:
         return self.artifact_dir if self.artifact_dir is not None else self.data_dir / "artifacts"
+
+    @property
+    def resolved_blob_store(self) -> str:
+        if self.blob_store is not None:
+            return self.blob_store
+        return "postgres" if self.resolved_database_url.startswith("postgresql") else "local"

@@ -161,7 +161,7 @@ def test_the_lock_files_pin_every_dependency_and_agree():
     for name in ("service", "image"):  # a package shared by two sets has one version
         assert {p: v for p, v in pins[name].items() if pins["test"][p] != v} == {}, name
     # the embedded default carries no test tools and no scaled-mode libraries
-    assert not {"pytest", "selenium", "schemathesis", "celery", "redis", "psycopg"} & set(pins["service"])
+    assert not {"pytest", "selenium", "schemathesis", "celery", "redis", "psycopg", "boto3"} & set(pins["service"])
     # the LAZ backend, the webhook signer, the CLI's progress bar, the generated client's formatter
     assert {"lazrs", "laspy", "standardwebhooks", "rich"} <= set(pins["service"]) and "ruff" in pins["test"]
 
@@ -174,7 +174,7 @@ def test_the_project_metadata_is_current():
     extras = project["optional-dependencies"]
     assert {"scan", "fem", "lego", "ifc", "kinds", "scaled", "test"} <= set(extras)
     assert _names(extras["ifc"]) == {"ifcopenshell"} and "python-fcl" in _names(extras["lego"])
-    assert {"celery", "redis", "psycopg"} == _names(extras["scaled"])
+    assert {"celery", "redis", "psycopg", "boto3"} == _names(extras["scaled"])
     assert not {"celery", "redis", "psycopg", "ifcopenshell", "python-fcl"} & _names(project["dependencies"])
 
 
@@ -196,7 +196,7 @@ def test_the_embedded_default_starts_without_the_scaled_mode_libraries(tmp_path)
 
     script = (
         "import sys\n"
-        "for name in ('celery', 'redis', 'psycopg', 'kombu'): sys.modules[name] = None  # as if not installed\n"
+        "for name in ('celery', 'redis', 'psycopg', 'kombu', 'boto3', 'botocore'): sys.modules[name] = None  # as if not installed\n"
         "from plantsolve.app.main import create_app\n"
         "from plantsolve.app.settings import AppSettings\n"
         f"app = create_app(AppSettings(_env_file=None, data_dir={str(tmp_path)!r}), run_jobs=False)\n"

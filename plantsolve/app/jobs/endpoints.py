@@ -5,9 +5,10 @@ from __future__ import annotations
 import re
 import uuid
 from typing import Annotated, Any, Mapping, get_args
+from urllib.parse import quote
 
 from fastapi import APIRouter, Depends, Header, Query, Request, Response
-from fastapi.responses import FileResponse, JSONResponse
+from fastapi.responses import JSONResponse, StreamingResponse
 from pydantic import BaseModel, ConfigDict, create_model
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
@@ -39,11 +40,27 @@ def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) 
     return Response(model.model_dump_json(), status_code=status_code, headers=headers, media_type="application/json")
 
 
-def _json_input(job, service: JobService) -> Response:
-    """A JSON request as it was stored: inline in the row, or in a file when it was large."""
+def _json_input(request: Request, job, service: JobService) -> Response:
+    """A JSON request as it was stored: inline in the row, or in a blob when it was large."""
     if job.input_kind == "json":
         return JSONResponse(job.input)
-    return FileResponse(service.input_path(job), media_type="application/json")
+    return _stream(request, service.input_file(job), "application/json")
+
+
+def _stream(request: Request, stored, media_type: str, *, filename: str | None = None,
+            headers: dict[str, str] | None = None) -> Response:
+    """A stored file streamed from the blob store in chunks, with its Content-Length (the service opened it:
+    a missing blob was a 404 and an unreachable store a 503 before this response started); HEAD: the
+    headers alone."""
+    headers = {"content-length": str(stored.size), **(headers or {})}
+    if filename is not None:  # as Starlette's FileResponse writes it
+        quoted = quote(filename)
+        headers["content-disposition"] = (f"attachment; filename*=utf-8''{quoted}" if quoted != filename
+                                          else f'attachment; filename="{filename}"')
+    if request.method == "HEAD":
+        stored.close()
+        return Response(headers=headers, media_type=media_type)
+    return StreamingResponse(stored.chunks(), media_type=media_type, headers=headers)
 
 
 CallbackUrl = Annotated[
@@ -253,18 +270,18 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     def cancel_job(job_id: uuid.UUID, service: Service, caller: Caller) -> JobView:
         return service.view(service.cancel(job_id, caller.sees))
 
-    def get_artifact(job_id: uuid.UUID, name: str, service: Service, caller: Caller) -> FileResponse:
-        artifact, path = service.artifact(job_id, name, caller.sees)
-        return FileResponse(path, media_type=artifact.media_type, filename=artifact.name,
-                            headers={"X-Content-SHA256": artifact.sha256})
+    def get_artifact(job_id: uuid.UUID, name: str, request: Request, service: Service, caller: Caller) -> Response:
+        artifact, stored = service.artifact(job_id, name, caller.sees)
+        return _stream(request, stored, artifact.media_type, filename=artifact.name,
+                       headers={"X-Content-SHA256": artifact.sha256})
 
     artifact_file = {"description": "The file, with its media type (Content-Length, X-Content-SHA256)",
                      "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}}}
     router.add_api_route("/jobs/{job_id}/artifacts/{name}", get_artifact, methods=["GET"], tags=["jobs"],
-                         response_class=FileResponse, operation_id="getJobArtifact", summary="Download an artifact",
+                         response_class=StreamingResponse, operation_id="getJobArtifact", summary="Download an artifact",
                          responses={200: artifact_file, **responses(404, 422)})
     router.add_api_route("/jobs/{job_id}/artifacts/{name}", get_artifact, methods=["HEAD"], tags=["jobs"],
-                         response_class=FileResponse, operation_id="headJobArtifact",
+                         response_class=StreamingResponse, operation_id="headJobArtifact",
                          summary="An artifact's headers (size, media type, SHA-256) without its body",
                          responses={200: {"description": "The headers GET would send, no body"}, **responses(404, 422)})
 
@@ -281,13 +298,14 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
                    **responses(404, 422)},
         summary="What was submitted",
     )
-    def get_input(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
+    def get_input(job_id: uuid.UUID, request: Request, service: Service, caller: Caller) -> Response:
         job = service.get(job_id, caller.sees)
         if job.input_kind != "upload":
-            return _json_input(job, service)
-        path = service.input_path(job)
+            return _json_input(request, job, service)
+        stored = service.input_file(job)
+        stored.close()
         uploaded = UploadedInput(filename=job.input_filename or "", options=job.input_options,
-                                 size=path.stat().st_size, file=f"/v1/jobs/{job_id}/input/file")
+                                 size=stored.size, file=f"/v1/jobs/{job_id}/input/file")
         return _json(uploaded)
 
     @router.get(
@@ -299,12 +317,12 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
                    **responses(404, 422)},
         summary="The submitted file, byte for byte",
     )
-    def get_input_file(job_id: uuid.UUID, service: Service, caller: Caller) -> Response:
+    def get_input_file(job_id: uuid.UUID, request: Request, service: Service, caller: Caller) -> Response:
         job = service.get(job_id, caller.sees)
         if job.input_kind != "upload":
-            return _json_input(job, service)
-        path = service.input_path(job)
-        return FileResponse(path, media_type="application/octet-stream", filename=safe_filename(job.input_filename or ""))
+            return _json_input(request, job, service)
+        return _stream(request, service.input_file(job), "application/octet-stream",
+                       filename=safe_filename(job.input_filename or ""))
 
     for kind in sorted(kinds):
         spec = kinds[kind]
