@@ -4,7 +4,9 @@ is refused with a 422 naming the file. The optimized model is written to and rea
 
 from __future__ import annotations
 
+import itertools
 import re
+from collections import Counter
 
 import ifcopenshell
 
@@ -54,6 +56,11 @@ def open_path(path: str) -> ifcopenshell.file:
         raise reject(f"unreadable IFC file: {message}") from None
     if model.schema not in ("IFC2X3", "IFC4") and not model.schema.startswith("IFC4X3"):
         raise reject(f"unsupported IFC schema {model.schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
+    if not model.by_type("IfcProject"):
+        counts = Counter(entity.is_a() for entity in itertools.islice(model, 100_000))
+        held = ", ".join(f"{n:,} {name}" for name, n in counts.most_common(3)) or "no instances"
+        raise reject(f"not an IFC model: the file has no IfcProject (every model has one, with its units and "
+                     f"representation contexts); it holds {held}")
     return model
 
 

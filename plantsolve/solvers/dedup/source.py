@@ -109,10 +109,37 @@ class IfcSource:
                 names = [n for n in archive.namelist() if n.lower().endswith(".ifc")]
                 if len(names) != 1:
                     raise reject(f"an .ifczip must hold exactly one .ifc file; this one holds {len(names)}")
+                declared = archive.getinfo(names[0]).file_size
+                if declared > MAX_IFC_INFLATED:
+                    raise reject(f"the .ifc inside this .ifczip inflates to {declared:,} bytes; at most "
+                                 f"{MAX_IFC_INFLATED:,} are read")
                 with archive.open(names[0]) as member:
-                    yield member
+                    yield InflationCounter(member)
         except zipfile.BadZipFile:
             raise reject("not a zip archive (an .ifczip is a zip holding one .ifc file)") from None
+
+
+# the most an .ifczip's model may inflate to, counted on the inflated bytes as they come (a zip may lie
+# about its sizes): a zip bomb stops here
+MAX_IFC_INFLATED = 1 << 30
+
+
+class InflationCounter(io.RawIOBase):
+    """A zip member read with its inflated bytes counted: past :data:`MAX_IFC_INFLATED` a 422 on ``file``."""
+
+    def __init__(self, member: IO[bytes]):
+        self.member, self.count = member, 0
+
+    def readable(self) -> bool:
+        return True
+
+    def read(self, size: int = -1) -> bytes:
+        chunk = self.member.read(size if size is not None and size >= 0 else MAX_IFC_INFLATED + 1 - self.count)
+        self.count += len(chunk)
+        if self.count > MAX_IFC_INFLATED:
+            raise reject(f"the .ifc inside this .ifczip inflates to more than {MAX_IFC_INFLATED:,} bytes, the most "
+                         "that is read (a zip bomb?)")
+        return chunk
 
 
 def load(request: DedupRequest, upload: StoredInput | None = None) -> IfcSource:

@@ -1,0 +1,62 @@
+"""Hostile or malformed IFC input is refused with what is wrong with it: an .ifczip that inflates past the
+limit (declared or counted), a file that is STEP but no IFC model (points only, no IfcProject)."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.dedup import SPEC, source
+from tests.conftest import wait_for
+
+HEADER = ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('ViewDefinition [CoordinationView]'),'2;1');\n"
+          "FILE_NAME('p.ifc','2026-01-01T00:00:00',(''),(''),'','','');\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n")
+
+
+def points_only(n: int) -> bytes:
+    body = "".join(f"#{i}=IFCCARTESIANPOINT(({i}.,0.,0.));\n" for i in range(1, n + 1))
+    return (HEADER + body + "ENDSEC;\nEND-ISO-10303-21;\n").encode()
+
+
+def _input(name: str, content: bytes):
+    stored = StoredInput.from_bytes(name, content)
+    return SPEC.input_of(SPEC.parse_upload(stored, None), stored)
+
+
+def test_a_step_file_without_an_ifc_project_says_so():
+    with pytest.raises(InputRejected) as refused:
+        SPEC.solve(_input("points.ifc", points_only(500)), lambda f, m="": None)
+    (error,) = refused.value.errors
+    assert error.loc == ("file",) and "no IfcProject" in error.msg and "500 IfcCartesianPoint" in error.msg
+
+
+def test_the_job_fails_with_a_report_on_the_input_not_an_exception_name(client):
+    job = client.post("/v1/dedup/jobs", files={"file": ("points.ifc", points_only(300), "application/x-step")}).json()
+    done = wait_for(client, job["id"], timeout=120)
+    assert done["status"] == "failed" and done["report"]["stage"] == "input"
+    assert "no IfcProject" in done["report"]["message"] and "Error" not in done["report"]["message"]
+
+
+def _zipped(content: bytes) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("model.ifc", content)
+    return buffer.getvalue()
+
+
+def test_an_ifczip_declaring_more_than_the_limit_is_refused_before_inflating(monkeypatch):
+    monkeypatch.setattr(source, "MAX_IFC_INFLATED", 4096)
+    with pytest.raises(InputRejected) as refused:
+        _input("model.ifczip", _zipped(points_only(1000))).header()
+    assert "inflates to" in refused.value.errors[0].msg and refused.value.errors[0].loc == ("file",)
+
+
+def test_inflated_bytes_are_counted_whatever_the_zip_declares(monkeypatch):
+    monkeypatch.setattr(source, "MAX_IFC_INFLATED", 1000)
+    counted = source.InflationCounter(io.BytesIO(b"x" * 5000))  # a member whose declared size lied
+    assert len(counted.read(600)) == 600
+    with pytest.raises(InputRejected, match="more than 1,000 bytes"):
+        counted.read(600)
