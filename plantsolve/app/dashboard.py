@@ -288,10 +288,10 @@ def _submit_again(service: JobService, job_id: uuid.UUID, who: Any) -> Any:
     if not is_finished(job.status):
         raise Conflict(f"Job {job_id} is still {job.status}: re-run it once it has finished.")
     if job.input_kind == "upload":
-        content = service.input_path(job).read_bytes()
+        content = service.input_file(job).read()
         options = json.dumps(job.input_options) if job.input_options else None
         return service.submit_upload(job.kind, job.input_filename, content, options, None, owner=who.owner)
-    body = service.input_path(job).read_bytes() if job.input_kind == "json_file" else json.dumps(job.input).encode()
+    body = service.input_file(job).read() if job.input_kind == "json_file" else json.dumps(job.input).encode()
     return service.submit_json(job.kind, body, None, owner=who.owner)
 
 
