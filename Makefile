@@ -55,7 +55,8 @@ migrate: install-service
 
 bench: install
 	$(BIN)/python bench/api.py --quick
-	@for b in alignment tube perfmap polyhedra flowmeter rigidity dedup; do [ -f bench/$$b.py ] && $(BIN)/python bench/$$b.py --quick || true; done
+	$(BIN)/python bench/hostile.py
+	@for b in alignment tube perfmap polyhedra flowmeter rigidity dedup blobs; do [ -f bench/$$b.py ] && $(BIN)/python bench/$$b.py --quick || true; done
 
 # Re-pin after changing pyproject.toml's dependencies (needs the package index). The service and
 # image sets take the test set's versions, so every set agrees on every package it shares.
