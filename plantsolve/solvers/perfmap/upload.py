@@ -529,9 +529,15 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     for m in _MAP_ARRAY.finditer(text):
         name = m.group(1)
         try:
-            arrays[name] = np.array(ast.literal_eval(_bracketed(text, m.end() - 1)), dtype=float)
-        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError) as error:
-            raise reject(f"{name}: not a numeric array literal ({type(error).__name__})", ("file", name)) from None
+            literal = _bracketed(text, m.end() - 1)
+        except ValueError:  # the brackets never close: the file ends inside this array
+            line = text.count("\n", 0, m.start(1)) + 1
+            raise reject(f"{name} (line {line}) is not closed before the file ends: the file was cut? The map "
+                         "needs the whole table.", ("file", name), type="truncated_file") from None
+        try:
+            arrays[name] = np.array(ast.literal_eval(literal), dtype=float)
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
     missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]
     if missing:
         raise reject(f"no compressor MAP_DATA here: missing {', '.join(missing)} (a pyCycle/NPSS map defines "

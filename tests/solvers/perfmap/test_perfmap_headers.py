@@ -103,6 +103,17 @@ def test_pycycle_map_data_file():
     assert any(w.code == "vertical_choke_segment" for w in res.report.warnings)  # Wc repeated at choke
 
 
+def test_a_pycycle_map_cut_inside_its_last_table_says_where():
+    text = (DATA / "pycycle_fan_map.py").read_bytes()
+    cut = text[: text.index(b"effMap") + 400]
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("fan_map.py", cut), None)
+    (error,) = refused.value.errors
+    line = cut[: cut.index(b"effMap")].count(b"\n") + 1
+    assert error.loc == ("file", "effMap") and error.type == "truncated_file"
+    assert f"line {line}" in error.msg and "cut" in error.msg
+
+
 @pytest.mark.parametrize("text, needle", [
     (b"import numpy as np\nX = np.array([1, 2])\n", "missing NcMap"),
     (b"M.NcMap = np.array([0.5, 1.0])\nM.WcMap = np.array([[1, 2, 3]])\nM.PRmap = np.array([[1, 2, 3]])\n"
