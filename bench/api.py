@@ -41,11 +41,19 @@ PG_ADMIN = os.environ.get("BENCH_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1
 REDIS = os.environ.get("BENCH_REDIS_URL", "redis://127.0.0.1:6379/8")
 
 
+def launch(command: list[str], env: dict[str, str], data_dir: str | Path) -> subprocess.Popen:
+    """A server whose output goes to ``server.log`` in its data dir: a pipe nobody reads fills up and stalls
+    the server mid-run."""
+    log_path = Path(data_dir) / "server.log"
+    with log_path.open("wb") as log:
+        process = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=log)
+    process.log_path = log_path
+    return process
+
+
 def start_server(env: dict[str, str], port: int) -> subprocess.Popen:
-    process = subprocess.Popen(
-        [str(BIN / "plantsolve"), "serve", "--port", str(port), "--log-level", "warning"],
-        cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-    )
+    process = launch([str(BIN / "plantsolve"), "serve", "--port", str(port), "--log-level", "warning"], env,
+                     env["DATA_DIR"])
     return wait_ready(process, f"http://127.0.0.1:{port}/readyz")
 
 
@@ -149,7 +157,7 @@ def wait_ready(process: subprocess.Popen, url: str) -> subprocess.Popen:
         except httpx.HTTPError:
             pass
         if process.poll() is not None:
-            raise SystemExit(f"server exited: {process.stderr.read().decode()[-2000:]}")
+            raise SystemExit(f"server exited: {process.log_path.read_text(errors='replace')[-2000:]}")
         time.sleep(0.2)
     raise SystemExit("server did not become ready")
 
@@ -161,10 +169,9 @@ def run_mode(mode: str, args, port: int) -> dict:
     submit_path = "/v1/test-compute/jobs"
     if mode == "baseline":
         submit_path = "/v1/jobs"
-        server = wait_ready(subprocess.Popen(
+        server = wait_ready(launch(
             [sys.executable, str(REPO / "bench" / "baseline_app.py"), "--port", str(port), "--db", str(data_dir / "b.db")],
-            cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-        ), f"http://127.0.0.1:{port}/v1/jobs/none")
+            env, data_dir), f"http://127.0.0.1:{port}/v1/jobs/none")
     else:
         if mode == "scaled":
             import psycopg
