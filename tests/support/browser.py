@@ -3,11 +3,14 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
+
+import pytest
 
 from tests.support.live import live_server
 
@@ -25,6 +28,20 @@ def missing() -> str | None:
     except ImportError:
         return "selenium is not installed (pip install -e '.[test]')"
     return None
+
+
+@contextmanager
+def page_on(app, what: str) -> Iterator[tuple[str, object]]:
+    """``app`` served on loopback and a headless Chromium (20 s page loads) to drive it: (base URL, driver).
+    Without a browser the test is skipped with the reason, or fails with CI=true, where it must run."""
+    reason = missing()
+    if reason and os.environ.get("CI", "").lower() == "true":
+        pytest.fail(f"CI=true: the {what} must run, but {reason}")
+    if reason:
+        pytest.skip(f"no headless browser: {reason}")
+    with serve(app) as base, chromium() as driver:
+        driver.set_page_load_timeout(20)
+        yield base, driver
 
 
 def serve(app):
