@@ -98,7 +98,8 @@ def test_solve_shows_a_progress_bar_on_standard_error(tmp_path):
     assert json.loads(done.stdout)["norm"] == 5.0  # the bar stays off standard output
     percents = [int(p) for p in re.findall(r"(\d+)%", done.stderr)]
     assert percents == sorted(percents) and percents[-1] == 100 and len(set(percents)) >= 5, percents
-    assert "step 10 of 20" in done.stderr  # the solver's own progress messages
+    # the solver's own progress messages (the bar samples the job's row: which steps it shows varies with load)
+    assert re.search(r"step \d+ of 20", done.stderr), done.stderr
     quiet = run(["solve", "test-compute", "in.json"], tmp_path)  # standard error is no terminal: no bar
     assert quiet.returncode == 0 and "%" not in quiet.stderr
 
