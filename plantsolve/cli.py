@@ -31,6 +31,16 @@ def _settings():
     return get_settings()
 
 
+def _fresh_settings():
+    """The settings read again from the environment (after this process changed it)."""
+    from plantsolve.app.settings import get_settings
+    from plantsolve.jobs.settings import get_job_settings
+
+    get_settings.cache_clear()
+    get_job_settings.cache_clear()
+    return get_settings()
+
+
 def bind(host: str, port: int) -> socket.socket:
     """The listening address, bound now (as uvicorn would bind it), so that a busy port fails before any start-up
     work; uvicorn then serves on this very socket, so nothing can take the port in between."""
@@ -57,7 +67,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
         from plantsolve.app.auth import warn_if_exposed
         from plantsolve.app.main import create_app
 
-        app = create_app()
+        settings = _settings()
+        if args.log_level:  # the flag wins over LOG_LEVEL, here and in the job processes (they get these settings)
+            settings = settings.model_copy(update={"log_level": args.log_level})
+        args.log_level = settings.log_level
+        app = create_app(settings)
         warn_if_exposed(args.host, app.state.keys)
         # Everything imported so far (numpy, scipy, every solver kind) lives as long as the process: out of
         # the collector's sight, a full collection no longer walks it and stalls requests for tens of ms.
@@ -102,8 +116,11 @@ def cmd_worker(args: argparse.Namespace) -> int:
         return 2
     from plantsolve.workers.celery_app import create_celery
 
+    if args.log_level:  # the flag wins over LOG_LEVEL, in Celery's and in plantsolve's loggers of every process
+        os.environ["LOG_LEVEL"] = args.log_level
+        settings = _fresh_settings()
     celery_app = create_celery(settings)
-    argv = ["worker", f"--loglevel={args.log_level.upper()}", f"--concurrency={args.concurrency}", "--pool=prefork"]
+    argv = ["worker", f"--loglevel={settings.log_level.upper()}", f"--concurrency={args.concurrency}", "--pool=prefork"]
     if args.hostname:
         argv.append(f"--hostname={args.hostname}")
     celery_app.worker_main(argv)
@@ -396,7 +413,9 @@ def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentPar
                        help="address to listen on; 0.0.0.0 for every interface (then set API_KEYS)")
     serve.add_argument("--port", type=int, default=8000,
                        help="TCP port to listen on; a busy port is refused before anything starts")
-    serve.add_argument("--log-level", default="info", choices=log_levels, help="uvicorn's log level")
+    serve.add_argument("--log-level", default=None, choices=log_levels,
+                       help="least severe log line written, by uvicorn and the plantsolve loggers of the API and its job "
+                       "processes (default: LOG_LEVEL, else info)")
     serve.set_defaults(func=cmd_serve)
 
     worker = commands.add_parser("worker", formatter_class=HelpFormatter,
@@ -405,7 +424,9 @@ def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentPar
     worker.add_argument("--concurrency", type=int, default=2, help="jobs run at once (worker processes)")
     worker.add_argument("--hostname", default=None,
                         help="the worker's node name (default: Celery's, celery@<host name>)")
-    worker.add_argument("--log-level", default="info", choices=log_levels, help="Celery's log level")
+    worker.add_argument("--log-level", default=None, choices=log_levels,
+                        help="least severe log line written, by Celery and the plantsolve loggers (default: LOG_LEVEL, "
+                        "else info)")
     worker.set_defaults(func=cmd_worker)
 
     solve = commands.add_parser("solve", formatter_class=HelpFormatter,

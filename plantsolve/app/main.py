@@ -44,7 +44,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     """Build the app. ``run_jobs=False`` keeps the embedded pool stopped (tests that drive
     the runner by hand)."""
     settings = settings or get_settings()
-    configure_logging(settings.log_format, filters=(RequestIdFilter(),))
+    configure_logging(settings.log_format, settings.log_level, filters=(RequestIdFilter(),))
     ctx = ServiceContext.create(settings)
     dispatcher = make_dispatcher(ctx)
 

@@ -81,7 +81,8 @@ class AttemptMonitor:
         self.soft_limit = soft_limit
         self.started = time.monotonic()
         self.stop_reason: str | None = None
-        self._last_write = 0.0
+        # the claim wrote "started": a job shorter than one write interval makes no progress write at all
+        self._last_write = self.started
         self._done = threading.Event()
         self._thread = threading.Thread(target=self._beat, name=f"heartbeat-{job_id}", daemon=True)
 

@@ -33,6 +33,10 @@ class JobSettings(StoreSettings):
     )
     log_format: Literal["json", "text"] = Field(
         default="json", description="The plantsolve log lines on stderr: one JSON object per line, or plain text.")
+    log_level: Literal["critical", "error", "warning", "info", "debug"] = Field(
+        default="info",
+        description="Least severe plantsolve log line written, in the API and in every job process ('warning' drops "
+        "the per-job lines; the command line's --log-level sets it).")
     embedded_workers: int = Field(default=2, ge=1, description="Job processes (or threads) of the embedded pool.")
     embedded_mode: Literal["process", "thread"] = Field(
         default="process",

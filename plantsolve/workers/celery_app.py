@@ -96,7 +96,7 @@ def _worker_context():
     with _ctx_lock:
         if _ctx is None:
             settings = get_job_settings()
-            configure_logging(settings.log_format)
+            configure_logging(settings.log_format, settings.log_level)
             _ctx = ServiceContext.create(settings)
             _dispatcher = CeleryDispatcher(_ctx)
         return _ctx, _dispatcher

@@ -36,8 +36,10 @@ class JsonFormatter(logging.Formatter):
 
 def configure_logging(log_format: str = "json", level: int | str = logging.INFO,
                       filters: tuple[logging.Filter, ...] = ()) -> logging.Handler:
-    """Give the ``plantsolve`` loggers their handler, once per process (later calls return it)."""
+    """Give the ``plantsolve`` loggers their handler, once per process (later calls return it), and ``level``
+    (a name such as ``"warning"`` or a number): the least severe line they write."""
     logger = logging.getLogger("plantsolve")
+    logger.setLevel(level.upper() if isinstance(level, str) else level)
     for handler in logger.handlers:
         if getattr(handler, _MARK, False):
             return handler
@@ -50,6 +52,4 @@ def configure_logging(log_format: str = "json", level: int | str = logging.INFO,
     logger.addHandler(handler)
     # written once, here: a root handler set up by the command line or a host application would repeat each line
     logger.propagate = False
-    if logger.level == logging.NOTSET:
-        logger.setLevel(level)
     return handler

@@ -65,7 +65,7 @@ def _start_worker(settings_json: str, parent: int) -> None:
     settings = JobSettings.model_validate_json(settings_json)
     # a solver must never slow down the API process that shares this machine with it
     os.nice(settings.job_niceness)
-    configure_logging(settings.log_format)
+    configure_logging(settings.log_format, settings.log_level)
     _worker_ctx = ServiceContext.create(settings)
 
 

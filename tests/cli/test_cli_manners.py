@@ -136,3 +136,33 @@ def test_serve_runs_on_the_socket_it_bound(tmp_path, monkeypatch):
                                           ([], "(input)")])
 def test_field_paths(loc, expected):
     assert cli.field_path(loc) == expected
+
+
+@pytest.mark.parametrize("flag,env,expected", [("warning", None, "warning"), (None, "error", "error"),
+                                               ("debug", "error", "debug"), (None, None, "info")])
+def test_serve_log_level_reaches_the_plantsolve_loggers_and_the_job_processes(tmp_path, monkeypatch, flag, env,
+                                                                               expected):
+    import logging
+
+    from plantsolve.app.settings import get_settings
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("DATA_DIR", str(tmp_path / "var"))
+    monkeypatch.setenv("EMBEDDED_MODE", "thread")
+    if env:
+        monkeypatch.setenv("LOG_LEVEL", env)
+    else:
+        monkeypatch.delenv("LOG_LEVEL", raising=False)
+    get_settings.cache_clear()
+    monkeypatch.setattr(cli.gc, "freeze", lambda: None)
+    logger = logging.getLogger("plantsolve")
+    monkeypatch.setattr(logger, "level", logger.level)  # restored afterwards for the other tests
+    seen = []
+    monkeypatch.setattr(cli, "serve_on", lambda app, sock, args: seen.append(
+        (app.state.settings.log_level, args.log_level, logger.getEffectiveLevel())))
+    try:
+        assert cli.cmd_serve(argparse.Namespace(host="127.0.0.1", port=0, log_level=flag)) == 0
+    finally:
+        get_settings.cache_clear()
+    # uvicorn gets the level name; the job processes are started with app.state.settings
+    assert seen == [(expected, expected, getattr(logging, expected.upper()))]

@@ -346,3 +346,20 @@ def test_the_job_view_keeps_a_lost_attempt_after_a_later_success(ctx):
     assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
     job = ctx.repo.get(job_id)
     assert [(h["attempt"], h["worker"], h["outcome"]) for h in job.attempts] == [(1, "gone", "lost"), (2, "w", "succeeded")]
+
+
+def test_a_job_shorter_than_the_write_interval_makes_no_progress_write_and_a_longer_one_coalesces(ctx, monkeypatch):
+    monkeypatch.setattr(ctx.settings, "progress_write_seconds", 0.25)
+    written: list[tuple[float, str]] = []
+    real = ctx.repo.set_progress
+    monkeypatch.setattr(ctx.repo, "set_progress",
+                        lambda job_id, attempt, fraction, message: written.append((fraction, message)) or real(
+                            job_id, attempt, fraction, message))
+    quick = submit(ctx, "test-compute", b'{"values": [1]}')  # 20 progress reports within a few ms
+    assert run_job(ctx, quick, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    assert written == []  # the claim wrote "started", the finish "done": nothing in between is worth a write
+    slow = submit(ctx, "test-compute", b'{"values": [1], "seconds": 1.0}')  # 20 reports, 50 ms apart
+    assert run_job(ctx, slow, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    # one write per 0.25 s interval, the first not before 0.25 s: about 3 of the 20 reports, each the latest
+    assert 2 <= len(written) <= 5, written
+    assert [f for f, _ in written] == sorted(f for f, _ in written) and written[0][0] >= 0.2
