@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import String, Text, and_, case, cast, delete, func, or_, select, update
+from sqlalchemy import String, Text, and_, case, cast, delete, func, insert, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -70,6 +70,11 @@ class JobRepository:
         self.sessions = sessions
         self.writing = writing  # see Database.writing
 
+    def _core(self):
+        """A connection in a transaction, committed on leaving (rolled back on an error), for Core statements on the
+        hot paths (submit, claim, progress, finish): an ORM session's bookkeeping costs more than such a write."""
+        return self.sessions.kw["bind"].begin()
+
     # ---- submission and reads -------------------------------------------------------------
 
     def create(self, job: Job) -> tuple[Job, bool]:
@@ -85,17 +90,15 @@ class JobRepository:
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
         values = {column.key: value for column in Job.__table__.columns if (value := getattr(job, column.key)) is not None}
         # one Core INSERT: the ORM's unit of work costs more than the write itself on the submit path
-        with self.writing(), self.sessions() as session:
-            try:
-                session.connection().execute(JOBS.insert(), values)
-                session.commit()
-            except IntegrityError:
-                session.rollback()
-                existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key is not None else None
-                if existing is None:
-                    raise
-                return existing, False
-            return job, True
+        try:
+            with self.writing(), self._core() as connection:
+                connection.execute(JOBS.insert(), values)
+        except IntegrityError:
+            existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key is not None else None
+            if existing is None:
+                raise
+            return existing, False
+        return job, True
 
     def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Job | None:
         """The job; ``brief`` leaves out the input and the result (a status read must not load
@@ -220,7 +223,7 @@ class JobRepository:
             ).first()
 
     def mark_enqueued(self, job_id: uuid.UUID) -> None:
-        self._execute(update(Job).where(Job.id == job_id).values(enqueued_at=utcnow()))
+        self._execute(update(JOBS).where(JOBS.c.id == job_id).values(enqueued_at=utcnow()))
 
     # ---- the attempt's life: claim, heartbeat, progress, finish ----------------------------
 
@@ -229,28 +232,26 @@ class JobRepository:
         number now owned by the caller, or None if the job is not claimable."""
         now = utcnow()
         statement = (
-            update(Job)
+            update(JOBS)
             .where(
-                Job.id == job_id,
-                Job.attempt < Job.max_attempts,
-                or_(Job.status == QUEUED, and_(Job.status == RUNNING, Job.lease_until < now)),
+                JOBS.c.id == job_id,
+                JOBS.c.attempt < JOBS.c.max_attempts,
+                or_(JOBS.c.status == QUEUED, and_(JOBS.c.status == RUNNING, JOBS.c.lease_until < now)),
             )
             .values(
                 status=CLAIM.target,
-                attempt=Job.attempt + 1,
+                attempt=JOBS.c.attempt + 1,
                 lease_until=now + timedelta(seconds=lease_seconds),
                 heartbeat_at=now,
-                started_at=func.coalesce(Job.started_at, now),
+                started_at=func.coalesce(JOBS.c.started_at, now),
                 worker=worker,
                 progress=0.0,
                 progress_message="started",
             )
-            .returning(Job.attempt)
+            .returning(JOBS.c.attempt)
         )
-        with self.writing(), self.sessions() as session:
-            attempt = session.execute(statement).scalar_one_or_none()
-            session.commit()
-        return attempt
+        with self.writing(), self._core() as connection:
+            return connection.execute(statement).scalar_one_or_none()
 
     def heartbeat(self, job_id: uuid.UUID, attempt: int, *, lease_seconds: float) -> bool:
         """Extend the lease; False when the attempt no longer owns the job (stale or cancelled)."""
@@ -274,8 +275,8 @@ class JobRepository:
         """Store result and artifacts in one transaction, fenced on the attempt."""
         now = utcnow()
         extra = {} if attempts is None else {"attempts": attempts}
-        with self.writing(), self.sessions() as session:
-            updated = session.execute(
+        with self.writing(), self._core() as connection:
+            updated = connection.execute(
                 self._fence(job_id, attempt).values(
                     status=SUCCEED.target,
                     result=result,
@@ -289,22 +290,13 @@ class JobRepository:
                 )
             ).rowcount
             if updated != 1:
-                session.rollback()
+                connection.rollback()
                 return False
-            session.execute(delete(Artifact).where(Artifact.job_id == job_id))
-            session.add_all(
-                Artifact(
-                    job_id=job_id,
-                    attempt=attempt,
-                    name=a.name,
-                    media_type=a.media_type,
-                    size=a.size,
-                    sha256=a.sha256,
-                    path=a.path,
-                )
-                for a in artifacts
-            )
-            session.commit()
+            connection.execute(delete(ARTIFACTS).where(ARTIFACTS.c.job_id == job_id))
+            rows = [{"job_id": job_id, "attempt": attempt, "name": a.name, "media_type": a.media_type, "size": a.size,
+                     "sha256": a.sha256, "path": a.path} for a in artifacts]
+            if rows:
+                connection.execute(insert(ARTIFACTS), rows)
             return True
 
     def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None,
@@ -336,7 +328,7 @@ class JobRepository:
         """Give every running attempt a full lease from now (after the database was away, so that no
         lease counts as lapsed for the time nobody could heartbeat). Returns how many were extended."""
         until = utcnow() + timedelta(seconds=lease_seconds)
-        return self._execute(update(Job).where(Job.status == RUNNING, Job.lease_until < until)
+        return self._execute(update(JOBS).where(JOBS.c.status == RUNNING, JOBS.c.lease_until < until)
                              .values(lease_until=until))
 
     def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
@@ -406,7 +398,7 @@ class JobRepository:
 
     def clear_enqueued(self, job_id: uuid.UUID) -> None:
         """The message never reached the broker: the next sweep sends it."""
-        self._execute(update(Job).where(Job.id == job_id).values(enqueued_at=None))
+        self._execute(update(JOBS).where(JOBS.c.id == job_id).values(enqueued_at=None))
 
     def queued_ids(self, limit: int | None = None) -> list[uuid.UUID]:
         """Queued jobs that a worker can claim, oldest first."""
@@ -430,44 +422,42 @@ class JobRepository:
         """Take one delivery attempt (a conditional update only one process wins); until it is recorded,
         the lease keeps others off. Returns the attempt number, or None when another process has it."""
         now = utcnow()
-        statement = (update(Job)
-                     .where(Job.id == job_id, Job.callback_state == "pending", Job.callback_next_at <= now)
-                     .values(callback_attempts=Job.callback_attempts + 1,
+        statement = (update(JOBS)
+                     .where(JOBS.c.id == job_id, JOBS.c.callback_state == "pending", JOBS.c.callback_next_at <= now)
+                     .values(callback_attempts=JOBS.c.callback_attempts + 1,
                              callback_next_at=now + timedelta(seconds=lease_seconds))
-                     .returning(Job.callback_attempts))
-        with self.writing(), self.sessions() as session:
-            attempt = session.execute(statement).scalar_one_or_none()
-            session.commit()
-        return attempt
+                     .returning(JOBS.c.callback_attempts))
+        with self.writing(), self._core() as connection:
+            return connection.execute(statement).scalar_one_or_none()
 
     def record_callback(self, job_id: uuid.UUID, attempt: int, *, state: str, error: str | None = None,
                         next_at: datetime | None = None) -> bool:
         """The outcome of delivery ``attempt``: "delivered", "failed" (gave up) or "pending" again at ``next_at``."""
         return self._execute(
-            update(Job).where(Job.id == job_id, Job.callback_attempts == attempt, Job.callback_state == "pending")
+            update(JOBS).where(JOBS.c.id == job_id, JOBS.c.callback_attempts == attempt, JOBS.c.callback_state == "pending")
             .values(callback_state=state, callback_error=error[:2000] if error else None, callback_next_at=next_at)) == 1
 
     # ---- helpers ----------------------------------------------------------------------------
 
     @staticmethod
     def _fence(job_id: uuid.UUID, attempt: int):
-        # every transition out of running starts here: the attempt that holds the job
-        return update(Job).where(Job.id == job_id, Job.attempt == attempt, Job.status == RUNNING)
+        # every transition out of running starts here: the attempt that holds the job. Core statements on the
+        # table: an ORM-enabled UPDATE costs several times its own write in statement building and session sync
+        return update(JOBS).where(JOBS.c.id == job_id, JOBS.c.attempt == attempt, JOBS.c.status == RUNNING)
 
     def _fenced(self, job_id: uuid.UUID, attempt: int, **values: Any) -> bool:
         return self._execute(self._fence(job_id, attempt).values(**values)) == 1
 
     def _fenced_lapsed(self, job_id: uuid.UUID, attempt: int, now: datetime, **values: Any) -> bool:
-        return self._execute(self._fence(job_id, attempt).where(Job.lease_until < now).values(**values)) == 1
+        return self._execute(self._fence(job_id, attempt).where(JOBS.c.lease_until < now).values(**values)) == 1
 
     def _execute(self, statement) -> int:
-        with self.writing(), self.sessions() as session:
-            count = session.execute(statement).rowcount
-            session.commit()
-            return count
+        with self.writing(), self._core() as connection:
+            return connection.execute(statement).rowcount
 
 
 JOBS = Job.__table__
+ARTIFACTS = Artifact.__table__
 # queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
 # sweeps instead of loaded whole every time
 SWEEP_BATCH = 1000
