@@ -14,7 +14,13 @@ The trivial app (bench/baseline_app.py: FastAPI + SQLite, same uvicorn settings)
 same run. Targets: submit p99 < 20 ms at 16 connections while jobs run, status p99 < 20 ms at 8
 connections, single-connection submits >= 0.5x the trivial app's.
 
-    python bench/api.py [--quick] [--seconds S] [--concurrency C] [--modes embedded,scaled] [--client wrk|python]
+Beside the rates (which a loaded machine lowers), the table gives the CPU milliseconds the server's own process
+spends per single-connection submit, read from /proc: the measure that holds where other work shares the cores.
+``--smoke`` (CI runs it) makes each phase about a second long, embedded mode only: it proves the bench runs to its
+table, not that the targets hold.
+
+    python bench/api.py [--quick | --smoke] [--seconds S] [--concurrency C] [--modes embedded,scaled]
+                        [--client wrk|python]
 """
 
 from __future__ import annotations
@@ -93,6 +99,16 @@ async def read_all(base: str, ids: list[str], reads: int, concurrency: int) -> l
     return latencies
 
 
+def process_cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of one process so far (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _requests_made(out: str) -> int:
+    return int(re.search(r"(\d+) requests in", out).group(1))
+
+
 def _wrk(args: list[str]) -> tuple[float, float, float, int]:
     """Run wrk; returns (requests/s, p50 ms, p99 ms, non-2xx responses)."""
     out = subprocess.run(["wrk", "--latency", *args], capture_output=True, text=True, check=True).stdout
@@ -104,10 +120,12 @@ def _wrk(args: list[str]) -> tuple[float, float, float, int]:
 
     rate = float(re.search(r"Requests/sec:\s+([\d.]+)", out).group(1))
     bad = re.search(r"Non-2xx or 3xx responses:\s+(\d+)", out)
+    _wrk.last_count = _requests_made(out)
     return rate, percentile("50%"), percentile("99%"), int(bad.group(1)) if bad else 0
 
 
-def run_with_wrk(base: str, submit_path: str, seconds: float, concurrency: int, read_seconds: float) -> dict:
+def run_with_wrk(base: str, submit_path: str, seconds: float, concurrency: int, read_seconds: float,
+                 server_pid: int) -> dict:
     """Single-connection submits, then submits from ``concurrency`` connections, then status reads
     of the newest job from 1 and 8 connections while the submitted backlog is still being run."""
     script = Path(tempfile.mkdtemp()) / "post.lua"
@@ -115,7 +133,9 @@ def run_with_wrk(base: str, submit_path: str, seconds: float, concurrency: int, 
         'wrk.method = "POST"\nwrk.body = \'{"values": [1.5, 2.5]}\'\nwrk.headers["Content-Type"] = "application/json"\n'
     )
     url = f"{base}{submit_path}"
+    cpu_before = process_cpu_seconds(server_pid)
     single_rate, _, _, bad_single = _wrk(["-t", "1", "-c", "1", "-d", f"{seconds}s", "-s", str(script), url])
+    cpu_per_submit = (process_cpu_seconds(server_pid) - cpu_before) / max(_wrk.last_count, 1)
     threads = str(min(2, concurrency))
     rate, p50, p99, bad = _wrk(["-t", threads, "-c", str(concurrency), "-d", f"{seconds}s", "-s", str(script), url])
     if bad or bad_single:
@@ -127,14 +147,15 @@ def run_with_wrk(base: str, submit_path: str, seconds: float, concurrency: int, 
     return {
         "jobs": int(rate * seconds + single_rate * seconds), "single_rate": single_rate, "rate": rate,
         "submit_p50": p50, "submit_p99": p99, "read_p50": read_p50, "read_p99": read_p99,
-        "loaded_p50": loaded_p50, "loaded_p99": loaded_p99, "read_rate": read_rate,
+        "loaded_p50": loaded_p50, "loaded_p99": loaded_p99, "read_rate": read_rate, "cpu_per_submit": cpu_per_submit,
     }
 
 
-def run_with_python(base: str, submit_path: str, jobs: int, concurrency: int, reads: int) -> dict:
-    started = time.perf_counter()
+def run_with_python(base: str, submit_path: str, jobs: int, concurrency: int, reads: int, server_pid: int) -> dict:
+    started, cpu_before = time.perf_counter(), process_cpu_seconds(server_pid)
     asyncio.run(submit_all(base, submit_path, max(jobs // 10, 20), 1))
     single_rate = max(jobs // 10, 20) / (time.perf_counter() - started)
+    cpu_per_submit = (process_cpu_seconds(server_pid) - cpu_before) / max(jobs // 10, 20)
     elapsed, submit_latency, ids = asyncio.run(submit_all(base, submit_path, jobs, concurrency))
     read_latency = asyncio.run(read_all(base, ids, reads, 1))
     started = time.perf_counter()
@@ -145,6 +166,7 @@ def run_with_python(base: str, submit_path: str, jobs: int, concurrency: int, re
         "jobs": jobs, "single_rate": single_rate, "rate": jobs / elapsed, "submit_p50": ms(submit_latency, 50),
         "submit_p99": ms(submit_latency, 99), "read_p50": ms(read_latency, 50), "read_p99": ms(read_latency, 99),
         "loaded_p50": ms(loaded_latency, 50), "loaded_p99": ms(loaded_latency, 99), "read_rate": read_rate,
+        "cpu_per_submit": cpu_per_submit,
     }
 
 
@@ -191,9 +213,9 @@ def run_mode(mode: str, args, port: int) -> dict:
     try:
         base = f"http://127.0.0.1:{port}"
         if args.client == "wrk":
-            row = run_with_wrk(base, submit_path, args.seconds, args.concurrency, args.read_seconds)
+            row = run_with_wrk(base, submit_path, args.seconds, args.concurrency, args.read_seconds, server.pid)
         else:
-            row = run_with_python(base, submit_path, args.jobs, args.concurrency, args.reads)
+            row = run_with_python(base, submit_path, args.jobs, args.concurrency, args.reads, server.pid)
     finally:
         server.terminate()
         server.wait(timeout=30)
@@ -205,6 +227,7 @@ def run_mode(mode: str, args, port: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="shorter runs")
+    parser.add_argument("--smoke", action="store_true", help="about a second per phase, embedded only (CI)")
     parser.add_argument("--client", choices=("wrk", "python"), default="wrk" if shutil.which("wrk") else "python")
     parser.add_argument("--seconds", type=float, help="wrk: submission phase length")
     parser.add_argument("--read-seconds", type=float, help="wrk: each read phase length")
@@ -214,6 +237,8 @@ def main() -> None:
     parser.add_argument("--modes", default="embedded,scaled")
     parser.add_argument("--port", type=int, default=18765)
     args = parser.parse_args()
+    if args.smoke:
+        args.seconds, args.read_seconds, args.jobs, args.reads, args.modes = 1, 1, 60, 60, "embedded"
     args.seconds = args.seconds or (4 if args.quick else 10)
     args.read_seconds = args.read_seconds or (3 if args.quick else 6)
     args.jobs = args.jobs or (500 if args.quick else 2000)
@@ -231,7 +256,8 @@ def main() -> None:
     )
     header = (
         f"{'mode':<9} {'jobs':>6} {'1-conn submits/s':>17} {'vs baseline':>11} {f'{args.concurrency}-conn submits/s':>18} "
-        f"{'submit p50/p99 ms':>18} {'status p50/p99 ms':>18} {'8-conn reads/s':>15} {'8-conn p50/p99 ms':>18}  targets"
+        f"{'submit p50/p99 ms':>18} {'status p50/p99 ms':>18} {'8-conn reads/s':>15} {'8-conn p50/p99 ms':>18} "
+        f"{'CPU ms/submit':>13} {'vs baseline':>11}  targets"
     )
     print(header)
     print("-" * len(header))
@@ -242,10 +268,12 @@ def main() -> None:
         print(
             f"{row['mode']:<9} {row['jobs']:>6} {row['single_rate']:>17.0f} {ratio:>10.2f}x {row['rate']:>18.0f} "
             f"{row['submit_p50']:>8.1f}/{row['submit_p99']:<9.1f} {row['read_p50']:>8.1f}/{row['read_p99']:<9.1f} "
-            f"{row['read_rate']:>15.0f} {row['loaded_p50']:>8.1f}/{row['loaded_p99']:<9.1f}  {verdict}"
+            f"{row['read_rate']:>15.0f} {row['loaded_p50']:>8.1f}/{row['loaded_p99']:<9.1f} "
+            f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
         )
     print(f"targets: submit p99 < 20 ms at {args.concurrency} connections, 8-connection status p99 < 20 ms, "
-          "1-connection submits >= 0.5x the baseline")
+          "1-connection submits >= 0.5x the baseline. CPU ms/submit: the server process alone (its job processes "
+          "not counted), during the 1-connection phase")
 
 
 if __name__ == "__main__":
