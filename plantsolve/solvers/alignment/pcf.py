@@ -483,6 +483,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
                             for c in comps for i in c["geometry"].port_lines], dtype=bool)
     conns, gaps = _infer_connections(pos, dirs, owner, rad, flange_like, opts.connection_tolerance, tol[0],
                                      GASKET_GAP_MM / TO_MM[units])
+    _join_printed_alike(comps, conns, pos, doc)
     partner = {}
     for i, j in conns:
         partner[i], partner[j] = j, i
@@ -674,6 +675,21 @@ def _infer_connections(pos, dirs, owner, rad, flange_like, tol_opt, pos_tol, gas
     conns.sort()  # file order, independent of the gaps
     gaps.sort()
     return conns, gaps
+
+
+def _join_printed_alike(comps, conns, pos, doc: Document) -> None:
+    """Two connected ports printed with the same coordinates are one point, as the file says. Restoring a
+    fitting's catalogue angles moves its ports onto exact axes through its rounded CENTRE-POINT (up to the
+    printed rounding off their END-POINTs), which would open a connection the file closes: a written-back
+    file would re-read with gaps of half its last digit. The joined point is the restored port (their mean
+    when both were restored); pipes and inline items adapt by less than the rounding."""
+    printed = [read_point(doc.lines[i])[0] for c in comps for i in c["geometry"].port_lines]
+    for i, j in conns:
+        if not np.array_equal(printed[i], printed[j]) or np.array_equal(pos[i], pos[j]):
+            continue
+        moved_i, moved_j = not np.array_equal(pos[i], printed[i]), not np.array_equal(pos[j], printed[j])
+        joined = 0.5 * (pos[i] + pos[j]) if moved_i == moved_j else pos[i] if moved_i else pos[j]
+        pos[i] = pos[j] = joined
 
 
 def _directions_from_neighbours(comps, start, dirs, partner, resolved) -> None:
