@@ -20,8 +20,11 @@ a GASKET without thickness, a zero-length PIPE) are connection points: their nei
 connected directly and they are written where that connection ends up. Facing flange faces a
 gasket's thickness apart are joined by a rigid spacer, so the gap is kept, not closed. An
 item that still cannot be interpreted is kept verbatim and held fixed (or, without readable
-points, left out of the solve), and listed in the report with the reason; the file is
-refused only when no item is left.
+points, left out of the solve), and listed in the report with the reason. The interpreted
+model must then pass the rules every request passes (:mod:`.pcf_model_check`): an item failing
+one is held fixed with its directions from its neighbours (left out if it still fails), and a
+closed ring of bends touching nothing else (a handwheel) is left out. Connected ports printed
+with the same coordinates are one point. The file is refused only when no item is left.
 
 Tolerances (:func:`pcf_tolerances`): the exporting tool named in the file (AVEVA E3D/PDMS,
 Revit, AutoCAD Plant 3D) sets the profile; the coordinates' printed precision sets the

@@ -26,8 +26,8 @@ def closed_rings(ports: list[list[np.ndarray]], turning: list[bool], eps: float)
     """Groups of turning fittings (elbows, bends) whose end points all pair up among themselves and touch
     nothing else: a closed ring (two half-circle bends sharing both ends, four quarter bends, one bend
     closing on itself). No pipe can flow through such a ring, so it is drawing geometry, not piping."""
-    counts = np.array([len(p) for p in ports])
-    if not np.any(np.array(turning) & (counts == 2)):
+    counts = np.array([len(p) for p in ports], dtype=int)
+    if not np.any(np.array(turning, dtype=bool) & (counts == 2)):
         return []
     P = np.array([x for p in ports for x in p]).reshape(-1, 3)
     owner = np.repeat(np.arange(len(ports)), counts)

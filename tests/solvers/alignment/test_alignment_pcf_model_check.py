@@ -1,6 +1,7 @@
 """Items that fail a rule of the model once interpreted are held or left out, never the whole file; a
 written-back file re-reads with its closed connections closed (to the precision the format carries)."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment import check_input, parse_upload, render_artifacts, solve
 from plantsolve.solvers.alignment.model import build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import interpret_pcf
-from plantsolve.solvers.alignment.pcf_write import reread_check
+from plantsolve.solvers.alignment.pcf_write import reread_check, write_aligned_pcf
 from plantsolve.solvers.base import InputRejected, StoredInput
 
 from pcf_exports import network_300
@@ -115,18 +116,23 @@ def _closed_reread_gaps(req, res, out: str) -> list[float]:
     return [float(gap[k]) for k, c in enumerate(again.connections) if key(c) in closed]
 
 
-@pytest.mark.parametrize("decimals", [2, 4])
-def test_a_300_item_network_written_back_re_reads_closed(decimals):
+@pytest.fixture(scope="module", params=[2, 4], ids=["2 decimals", "4 decimals"])
+def network(request):
+    """A ~300-item network aligned and written back (the written file only: no plot)."""
+    text = network_300(request.param)
+    req = _upload(text)
+    res = solve(req).result
+    return request.param, req, res, write_aligned_pcf(req, res)
+
+
+def test_a_300_item_network_written_back_re_reads_closed(network):
     """Tees and elbows whose catalogue angles are restored on reading: the written file's closed connections
     print identically and re-read with no gap (the 5e-5 mm re-read gap came from restored ports moving off
     their END-POINTs by half the last digit)."""
-    text = network_300(decimals)
-    req = _upload(text)
+    decimals, req, res, out = network
     assert 280 <= len(req.components) <= 320
-    solved = solve(req)
-    res = solved.result
     assert res.converged and not res.cut_connections
-    out = render_artifacts(req, solved)[0].data.decode()
+    assert max(c.displacement for c in res.components) > 0.1
     gaps = _closed_reread_gaps(req, res, out)
     assert len(gaps) == len(req.connections)
     assert max(gaps) == 0.0 < res.report.details["position_tolerance"]
@@ -136,21 +142,22 @@ def test_a_300_item_network_written_back_re_reads_closed(decimals):
                for t in line.split()[1:4])
 
 
-def test_the_reread_check_catches_a_gap_far_below_the_tolerance_and_prints_it():
-    text = network_300(4)
-    req = _upload(text)
-    solved = solve(req)
-    res = solved.result
-    out = render_artifacts(req, solved)[0].data.decode()
+def test_the_reread_check_catches_a_gap_far_below_the_tolerance_and_prints_it(network):
+    decimals, req, res, out = network
     lines = out.split("\n")
-    # the pipe before the first tee: its last END-POINT, 5e-5 mm off the tee's (printed alike before)
+    # the pipe before the first tee: its last END-POINT, half a last digit off the tee's (printed alike before)
     at = lines.index("    COMPONENT-IDENTIFIER N2") - 1
     assert lines[at].startswith("    END-POINT")
     parts = lines[at].split(" ")
     x = parts.index(lines[at].split()[1])
-    parts[x] = f"{float(parts[x]) + 5e-5:.5f}"
+    half = 0.5 * 10.0 ** -decimals
+    parts[x] = f"{float(parts[x]) + half:.{decimals + 1}f}"
     lines[at] = " ".join(parts)
     check = reread_check(req, res, "\n".join(lines))
-    assert not check.ok and check.max_gap == pytest.approx(5e-5, rel=1e-3)
-    assert check.max_gap < res.report.details["position_tolerance"]
-    assert any("re-reads 5e-05 mm apart" in p for p in check.problems)
+    assert not check.ok
+    assert check.max_gap < res.report.details["position_tolerance"]  # a gap the tolerance alone would pass
+    (said,) = [m for p in check.problems if p.startswith("connection N2:1 - N3:0")
+               and (m := re.search(r"re-reads (\S+) mm apart", p))]
+    assert float(said.group(1)) >= 0.9 * half  # printed to three significant digits, not rounded to nothing
+    if decimals == 4:  # the tee's ports sit on their printed END-POINTs here: the gap is the shift itself
+        assert check.max_gap == pytest.approx(half, rel=1e-3) and said.group(1) == "5e-05"
