@@ -161,3 +161,20 @@ def test_the_reread_check_catches_a_gap_far_below_the_tolerance_and_prints_it(ne
     assert float(said.group(1)) >= 0.9 * half  # printed to three significant digits, not rounded to nothing
     if decimals == 4:  # the tee's ports sit on their printed END-POINTs here: the gap is the shift itself
         assert check.max_gap == pytest.approx(half, rel=1e-3) and said.group(1) == "5e-05"
+
+
+def test_a_ring_of_four_quarter_elbows_is_left_out_like_two_half_bends():
+    c, r = (5000.0, 0.0, 800.0), 250.0
+    pts = [(c[0] + r, c[1], c[2]), (c[0], c[1] + r, c[2]), (c[0] - r, c[1], c[2]), (c[0], c[1] - r, c[2])]
+    f = lambda p: " ".join(f"{v:.1f}" for v in p)
+    ring = ""
+    for k in range(4):
+        a, b = pts[k], pts[(k + 1) % 4]
+        corner = tuple(a[i] + b[i] - c[i] for i in range(3))  # where the two tangents meet
+        ring += f"ELBOW\n    END-POINT {f(a)} 25\n    END-POINT {f(b)} 25\n    CENTRE-POINT {f(corner)}\n    ANGLE 9000\n"
+    req = _upload(LEFT + ring + RIGHT)
+    res = solve(req).result
+    left = _warning(res, "pcf_items_left_out").details["items"]
+    assert [d["line"] for d in left] == [5, 10, 15, 20]
+    assert all("closed ring of 4 ELBOW" in d["reason"] for d in left)
+    assert sorted(c.id for c in req.components) == ["PIPE-1", "PIPE-6"]
