@@ -20,8 +20,11 @@ a GASKET without thickness, a zero-length PIPE) are connection points: their nei
 connected directly and they are written where that connection ends up. Facing flange faces a
 gasket's thickness apart are joined by a rigid spacer, so the gap is kept, not closed. An
 item that still cannot be interpreted is kept verbatim and held fixed (or, without readable
-points, left out of the solve), and listed in the report with the reason; the file is
-refused only when no item is left.
+points, left out of the solve), and listed in the report with the reason. The interpreted
+model must then pass the rules every request passes (:mod:`.pcf_model_check`): an item failing
+one is held fixed with its directions from its neighbours (left out if it still fails), and a
+closed ring of bends touching nothing else (a handwheel) is left out. Connected ports printed
+with the same coordinates are one point. The file is refused only when no item is left.
 
 Tolerances (:func:`pcf_tolerances`): the exporting tool named in the file (AVEVA E3D/PDMS,
 Revit, AutoCAD Plant 3D) sets the profile; the coordinates' printed precision sets the
@@ -39,6 +42,7 @@ from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
+from plantsolve.solvers.alignment.pcf_model_check import TURNING, closed_rings, failing_components
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
@@ -462,12 +466,58 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         if g.kind != "joint":
             spindle = SPINDLE.get(it.records.get("SPINDLE-DIRECTION", "").split(" ")[0].upper())
             comps.append({"id": it.id, "word": it.keyword, "up": spindle, "geometry": g, "line": it.line + 1})
+    left_out: list[dict] = []
+    comps = _without_rings(comps, doc, geometry, left_out)
     if not comps:
-        why = "; ".join(f"line {d['line']}: {d['reason']}" for d in dropped[:5])
-        raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found"
-                     + (f" that could be read ({why})" if why else ""))
+        _refuse(dropped, left_out)
 
     tol = resolve_pcf_tolerance(text, units, opts)
+    # The interpreted model must pass the rules every request passes (the job domain checks them at
+    # submission): an item failing one is held fixed with its directions taken from its neighbours, and left
+    # out if it still fails; only the rest of the file is solved.
+    held_read, forced = held, []
+    for attempt in range(4):
+        held, resolved = list(held_read) + forced, []
+        net = _connect(comps, doc, opts, units, tol[0], held, resolved)
+        comps_json, connections = _entries(comps, net, fixed_ids, {h["id"] for h in held})
+        body = _body(units, comps_json, connections, opts, alias, text)
+        failures = failing_components(body)
+        if not failures or attempt == 3:
+            break
+        forced_ids = {h["id"] for h in forced}
+        gone = set()
+        for n, found in failures.items():
+            if n >= len(comps):  # a gasket spacer: goes with its flanges
+                continue
+            c = comps[n]
+            g = c["geometry"]
+            why = "; ".join((f"end point on line {_port_line(g, port)}: " if port is not None else "") + msg
+                            for port, msg in found)
+            if c["id"] in forced_ids or g.kind == "held":
+                gone.add(c["id"])
+                left_out.append({"id": c["id"], "line": c["line"], "reason": f"fails the model check even when held: {why}"})
+                geometry.pop(c["id"], None)
+                continue
+            forced.append({"id": c["id"], "line": c["line"], "reason": f"fails the model check once interpreted: {why}"})
+            c["geometry"] = geometry[c["id"]] = Geometry([(p, None) for p, _ in g.ports], g.port_lines, "held", "other",
+                                                          g.radius)
+        held_read = [h for h in held_read if h["id"] not in gone]
+        forced = [h for h in forced if h["id"] not in gone]
+        comps = [c for c in comps if c["id"] not in gone]
+        if not comps:
+            _refuse(dropped, left_out)
+    cut = _cut_item(doc, {h["id"] for h in held + dropped + left_out})
+    if cut is not None:
+        notes.append(cut)
+    notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
+    return Interpretation(body=body, notes=notes, geometry=geometry,
+                          nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
+
+
+def _connect(comps: list[dict], doc: Document, opts: AlignmentOptions, units: str, pos_tol: float,
+             held: list[dict], resolved: list[dict]) -> dict:
+    """Connections between the items' end points and the port directions the geometry left open (taken
+    from neighbours; held items without one point away from their centroid). Appends to held and resolved."""
     counts = np.array([len(c["geometry"].ports) for c in comps])
     start = np.concatenate([[0], np.cumsum(counts)])
     pos = np.array([p for c in comps for p, _ in c["geometry"].ports]).reshape(-1, 3)
@@ -481,8 +531,9 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     # a flange face: a flange-like item, or an end written with a flanged end type (FL, FLG) as valves have
     flange_like = np.array([c["word"].startswith(FLANGE_LIKE) or _flanged_end(doc.lines[i])
                             for c in comps for i in c["geometry"].port_lines], dtype=bool)
-    conns, gaps = _infer_connections(pos, dirs, owner, rad, flange_like, opts.connection_tolerance, tol[0],
+    conns, gaps = _infer_connections(pos, dirs, owner, rad, flange_like, opts.connection_tolerance, pos_tol,
                                      GASKET_GAP_MM / TO_MM[units])
+    _join_printed_alike(comps, conns, pos, doc)
     partner = {}
     for i, j in conns:
         partner[i], partner[j] = j, i
@@ -499,24 +550,64 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
             if axis is not None:
                 dirs[i0], dirs[i1] = -axis, axis
     _olet_directions(comps, start, dirs, pos, resolved)
+    held_ids = {h["id"] for h in held}
     for k, c in enumerate(comps):
         ks = range(start[k], start[k + 1])
-        if c["geometry"].kind != "held" and any(dirs[i] is None for i in ks):
+        if c["id"] not in held_ids and any(dirs[i] is None for i in ks):
             held.append({"id": c["id"], "line": c["line"],
                          "reason": "cannot determine the direction of "
                                    + ", ".join(f"end point {local[i]}" for i in ks if dirs[i] is None)
                                    + " (no connected neighbour to take it from)"})
-            c["geometry"].kind = "held"
-        if c["geometry"].kind == "held":
-            centroid = pos[start[k]:start[k + 1]].mean(axis=0)
+            held_ids.add(c["id"])
+        if c["id"] in held_ids:
+            centroid = pos[ks.start:ks.stop].mean(axis=0)
             for i in ks:
                 if dirs[i] is None:
                     dirs[i] = _unit(pos[i] - centroid)
                     if dirs[i] is None:
                         dirs[i] = np.array([0.0, 0.0, 1.0])
+    return {"start": start, "pos": pos, "owner": owner, "local": local, "dirs": dirs, "rad": rad, "conns": conns,
+            "gaps": gaps}
 
+
+def _port_line(g: Geometry, port: int) -> int | str:
+    return g.port_lines[port] + 1 if 0 <= port < len(g.port_lines) else "?"
+
+
+def _refuse(dropped: list[dict], left_out: list[dict]) -> None:
+    """The file has nothing usable left: a 422 naming the lines of what was skipped and why."""
+    skipped = sorted(dropped + left_out, key=lambda d: d["line"])
+    why = "; ".join(f"line {d['line']}: {d['reason']}" for d in skipped[:5])
+    more = f" (and {len(skipped) - 5} more)" if len(skipped) > 5 else ""
+    raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found"
+                 + (f" that could be used ({why}{more})" if why else ""))
+
+
+def _without_rings(comps: list[dict], doc: Document, geometry: dict, left_out: list[dict]) -> list[dict]:
+    """The components without closed rings of bends (a handwheel drawn with BEND items), which are left out."""
+    ports = [[p for p, _ in c["geometry"].ports] for c in comps]
+    turning = [c["geometry"].kind == "fitting" and c["geometry"].ftype in TURNING for c in comps]
+    every = np.array([p for ps in ports for p in ps]).reshape(-1, 3)
+    eps = max(1e-6, 2.0 * doc.quantum) + 1e-12 * float(np.max(np.abs(every), initial=0.0))
+    ring_of = {}
+    for ring in closed_rings(ports, turning, eps):
+        for k in ring:
+            ring_of[k] = ring
+    for k, ring in sorted(ring_of.items()):
+        c = comps[k]
+        lines = ", ".join(str(comps[m]["line"]) for m in ring)
+        left_out.append({"id": c["id"], "line": c["line"], "reason": (
+            f"a closed ring of {len(ring)} {c['word']} item(s) (lines {lines}) whose end points pair up only with "
+            "each other: no pipe can run through it (a handwheel or similar drawn with pipe fittings), not piping")})
+        geometry.pop(c["id"], None)
+    return [c for k, c in enumerate(comps) if k not in ring_of]
+
+
+def _entries(comps: list[dict], net: dict, fixed_ids: set[str], held_ids: set[str]) -> tuple[list, list]:
+    """Components and connections of the request body; spacers bridge the gasket gaps."""
+    start, pos, dirs, owner, local, rad = (net[k] for k in ("start", "pos", "dirs", "owner", "local", "rad"))
+    conns, gaps = net["conns"], net["gaps"]
     comps_json = []
-    held_ids = {h["id"] for h in held}
     for k, c in enumerate(comps):
         g = c["geometry"]
         ports = [{"position": pos[start[k] + j].tolist(), "direction": dirs[start[k] + j].tolist()}
@@ -546,17 +637,15 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
                            "fixed": False, "ports": [{"position": pos[i].tolist(), "direction": (-dirs[i]).tolist()},
                                                      {"position": pos[j].tolist(), "direction": (-dirs[j]).tolist()}]})
         connections += [{"from": [a, int(local[i])], "to": [sid, 0]}, {"from": [b, int(local[j])], "to": [sid, 1]}]
+    return comps_json, connections
+
+
+def _body(units, comps_json, connections, opts, alias, text) -> dict:
     options_out = opts.model_dump(exclude_unset=True)
     if opts.fixed_components:
         options_out["fixed_components"] = [alias.get(f, f) for f in opts.fixed_components]
-    body = {"units": units, "components": comps_json, "connections": connections, "options": options_out,
+    return {"units": units, "components": comps_json, "connections": connections, "options": options_out,
             "source_pcf": text}
-    cut = _cut_item(doc, {h["id"] for h in held + dropped})
-    if cut is not None:
-        notes.append(cut)
-    notes.extend(_notes(doc, geometry, held, dropped, resolved, gaps, comps, owner))
-    return Interpretation(body=body, notes=notes, geometry=geometry,
-                          nozzles=_at_end_connections(doc, pos, owner, rad, comps))
 
 
 def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | None:
@@ -676,6 +765,21 @@ def _infer_connections(pos, dirs, owner, rad, flange_like, tol_opt, pos_tol, gas
     return conns, gaps
 
 
+def _join_printed_alike(comps, conns, pos, doc: Document) -> None:
+    """Two connected ports printed with the same coordinates are one point, as the file says. Restoring a
+    fitting's catalogue angles moves its ports onto exact axes through its rounded CENTRE-POINT (up to the
+    printed rounding off their END-POINTs), which would open a connection the file closes: a written-back
+    file would re-read with gaps of half its last digit. The joined point is the restored port (their mean
+    when both were restored); pipes and inline items adapt by less than the rounding."""
+    printed = [read_point(doc.lines[i])[0] for c in comps for i in c["geometry"].port_lines]
+    for i, j in conns:
+        if not np.array_equal(printed[i], printed[j]) or np.array_equal(pos[i], pos[j]):
+            continue
+        moved_i, moved_j = not np.array_equal(pos[i], printed[i]), not np.array_equal(pos[j], printed[j])
+        joined = 0.5 * (pos[i] + pos[j]) if moved_i == moved_j else pos[i] if moved_i else pos[j]
+        pos[i] = pos[j] = joined
+
+
 def _directions_from_neighbours(comps, start, dirs, partner, resolved) -> None:
     """Single-ended items and bends without a usable centre take the reversed direction of their partner;
     a return bend's two ports are made parallel and normal to its chord."""
@@ -735,7 +839,7 @@ def _olet_directions(comps, start, dirs, pos, resolved) -> None:
                 resolved.append({"id": c["id"], "how": "OLET direction from the axis of the pipe it sits on"})
 
 
-def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner):
+def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, left_out):
     notes = []
     if doc.unknown:
         notes.append(("pcf_unknown_keyword",
@@ -756,6 +860,12 @@ def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner):
         notes.append(("pcf_items_unread",
                       f"{len(dropped)} PCF item(s) have no readable point: kept verbatim, not aligned.",
                       {"items": dropped[:200]}, "warning"))
+    if left_out:
+        notes.append(("pcf_items_left_out",
+                      f"{len(left_out)} PCF item(s) were left out of the alignment (kept verbatim, not moved): "
+                      + "; ".join(f"line {d['line']}: {d['reason']}" for d in left_out[:3])
+                      + ("; ..." if len(left_out) > 3 else ""),
+                      {"items": left_out[:200]}, "warning"))
     if resolved:
         notes.append(("pcf_directions_from_neighbours",
                       f"{len(resolved)} item(s) took port directions from their neighbours or parent pipe.",

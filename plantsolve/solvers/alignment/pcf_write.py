@@ -5,14 +5,17 @@ byte for byte. A moved coordinate is printed with as many decimals as the number
 (the file's own precision); the two ports of a closed connection print the same string, and a
 moved port joined to an unmoved one prints that one's own spelling. CENTRE-POINTs follow their
 item's rigid motion, SUPPORT CO-ORDS follow their pipe sideways, zero-length items (welds) go
-to the connection they sit on. The written text is read back before it is returned: if the
-re-read model does not have the same connections with gaps within tolerance, the moved values
-are printed with more decimals (up to the shortest round-trip spelling).
+to the connection they sit on. The written text is read back before it is returned
+(:func:`reread_check`): if the re-read model does not have the same connections, every one the
+result made bit-identical with no gap and the others within tolerance, the moved values are
+printed with more decimals (up to the shortest round-trip spelling).
 
 Without a source file (JSON requests), :func:`generate_pcf` writes one from the result.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -78,32 +81,60 @@ def rewrite_pcf(request: AlignmentRequest, result: AlignmentResult) -> str:
     text = None
     for extra in MORE_DECIMALS:
         text = _rewrite(request, result, extra)
-        if reread_matches(request, result, text):
+        if reread_check(request, result, text).ok:
             return text
     return text
 
 
-def reread_matches(request: AlignmentRequest, result: AlignmentResult, text: str) -> bool:
+@dataclass
+class Reread:
+    """What reading the written file back shows: ``ok`` when it keeps the aligned model; ``problems`` say
+    which connection differs and by how much (printed to three significant digits, however small)."""
+
+    ok: bool
+    max_gap: float  # largest gap, on re-reading, of a connection the result closed (units)
+    problems: list[str] = field(default_factory=list)
+
+
+def reread_check(request: AlignmentRequest, result: AlignmentResult, text: str) -> Reread:
     """The written file read back has the same connections (cut ones may go either way), and every
-    connection the result closed is closed on re-reading: gap within the position tolerance, angle within
-    its tolerance or what the result itself left (the re-read model's own tolerances, as a new upload)."""
+    connection the result closed is closed on re-reading: one the result made bit-identical re-reads with
+    no gap at all (both ends print the same string, which the format carries exactly), any other within
+    the position tolerance; the angle within what the result itself left plus what printing both ends can
+    turn it by (the re-read model's own tolerances, as a new upload)."""
     try:
         again = AlignmentRequest.model_validate(interpret_pcf(text, request.options).body)
         model = build_model(again)
-    except (InputRejected, ValueError):
-        return False
+    except (InputRejected, ValueError) as exc:
+        return Reread(False, float("inf"), [f"the written file does not read back: {exc}"])
     cut = {_key(request.connections[k]) for k in result.cut_connections}
     keys = [_key(c) for c in again.connections]
-    if {_key(c) for c in request.connections} - cut != set(keys) - cut:
-        return False
+    lost = ({_key(c) for c in request.connections} - cut) ^ (set(keys) - cut)
+    problems = [f"connection {_name(k)} {'lost' if k not in keys else 'new'} on re-reading" for k in sorted(lost)]
     tol = float(result.report.details.get("position_tolerance", 0.0))
-    left = {_key(c): np.radians(r.angle_error) for c, r in zip(request.connections, result.connections)
-            if not r.cut and r.position_error <= tol}
+    closed = {_key(c): (0.0 if r.position_error == 0.0 else model.pos_tol, np.radians(r.angle_error))
+              for c, r in zip(request.connections, result.connections) if not r.cut and r.position_error <= tol}
     gap, ang = connection_errors(model, model.P0, model.D0)
+    max_gap = 0.0
     for k, key in enumerate(keys):
-        if key in left and (gap[k] > model.pos_tol or ang[k] > max(model.ang_tol[k], 1.001 * left[key])):
-            return False
-    return True
+        if key not in closed:
+            continue
+        gap_tol, left = closed[key]
+        max_gap = max(max_gap, float(gap[k]))
+        if gap[k] > gap_tol:
+            problems.append(f"connection {_name(key)} re-reads {gap[k]:.3g} {request.units} apart (closed in the "
+                            f"aligned model; allowed {gap_tol:.3g})")
+        # printing turns each of the two directions by up to the rounding over its lever (the angle tolerance
+        # is that over the shorter one)
+        allowed = left + 2.0 * model.ang_tol[k]
+        if ang[k] > allowed:
+            problems.append(f"connection {_name(key)} re-reads with an angle error of {np.degrees(ang[k]):.3g} deg "
+                            f"(allowed {np.degrees(allowed):.3g})")
+    return Reread(not problems, max_gap, problems)
+
+
+def _name(key: tuple) -> str:
+    return " - ".join(f"{cid}:{port}" for cid, port in key)
 
 
 def _key(conn) -> tuple:

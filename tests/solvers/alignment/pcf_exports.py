@@ -259,7 +259,76 @@ def flange_gasket_gaps() -> str:
     return write(r.items, header, 3, ids, indent="\t", sep="\t")
 
 
+def converter_handwheels() -> str:
+    """A converter's PCF (3 decimals, COMPONENT-IDENTIFIER and SKEY records) that draws every valve's
+    handwheel as two BEND items with ANGLE 18000 sharing both end points, CENTRE-POINT on the chord (a full
+    ring 500 mm across, 600 mm above the valve on its spindle): not piping. Amid real piping: flanged valves,
+    elbows, a real 180 degree return bend (CENTRE-POINT on its chord too), items drifted by about a mm."""
+    rng = np.random.default_rng(21)
+    r = Route([52_000.0, 18_000.0, 6_500.0], [1, 0, 0], bore=100.0)
+    r.straight("FLANGE", 110.0, end_types=("FL", "BW"), records=["SKEY FLWN"])
+    wheels = []
+    for k in range(3):
+        r.straight("PIPE", 1800.0 + 300.0 * k)
+        r.straight("FLANGE", 110.0, end_types=("BW", "FL"), records=["SKEY FLWN"])
+        valve = r.straight("VALVE", 280.0, end_types=("FL", "FL"), records=["SKEY VVFL", "SPINDLE-DIRECTION UP"])
+        wheels.append(valve)
+        r.straight("FLANGE", 110.0, end_types=("FL", "BW"), records=["SKEY FLWN"])
+        if k == 0:
+            r.straight("PIPE", 1200.0)
+            r.elbow(90.0, [0, 1, 0], radius=152.4, records=["ANGLE 9000", "SKEY ELBW"])
+        elif k == 1:
+            r.straight("PIPE", 900.0)
+            r.return_bend([0, 1, 0], radius=152.4, records=["ANGLE 18000", "SKEY BEBW"])
+    r.straight("PIPE", 1500.0)
+    r.straight("FLANGE", 110.0, end_types=("BW", "FL"), records=["SKEY FLWN"])
+    items = r.items
+    drift(items, rng, keep={0}, mm=1.0, deg=0.03)
+    for valve in wheels:
+        c = np.mean(valve.ends, axis=0) + np.array([0.0, 0.0, 600.0])
+        u = (valve.ends[1] - valve.ends[0]) / np.linalg.norm(valve.ends[1] - valve.ends[0])
+        p, q = c - 250.0 * u, c + 250.0 * u
+        ring = [Item("BEND", [p, q], centre=c.copy(), bore=25.0, records=["ANGLE 18000", "SKEY HWHL"], end_types=()),
+                Item("BEND", [q, p], centre=c.copy(), bore=25.0, records=["ANGLE 18000", "SKEY HWHL"], end_types=())]
+        at = items.index(valve) + 1
+        items[at:at] = ring
+    header = ["ISOGEN-FILES ISOGEN.FLS", "UNITS-BORE MM", "UNITS-CO-ORDS MM", "UNITS-WEIGHT KGS",
+              "PIPELINE-REFERENCE 100-CW-2040"]
+    return write(items, header, 3, lambda k, it: [f"COMPONENT-IDENTIFIER {k + 1}"])
+
+
+def network_300(decimals: int = 4, seed: int = 1) -> str:
+    """About 300 items at plant coordinates: a main line of pipes, tees, flanged valves with gaskets and
+    elbows turning every way, its branches ending in flanges, every item but the first drifted by about a
+    mm (generated in the tests, not a fixture file)."""
+    rng = np.random.default_rng(seed)
+    r = Route([1_203_000.0, -845_000.0, 104_500.0], [1, 0, 0], bore=150.0)
+    r.straight("FLANGE", 120.0, end_types=("FL", "BW"))
+    turns = [[0, 1, 0], [0, 0, 1], [0, -1, 0], [0, 0, -1]]
+    branches = []
+    for k in range(30):
+        r.straight("PIPE", 1500.0 + 100.0 * k)
+        if k % 3 == 0:
+            branches.append(r.tee(turns[(k + 1) % 4])[1])
+        r.straight("PIPE", 800.0)
+        r.straight("FLANGE", 120.0)
+        r.straight("GASKET", 3.0)
+        r.straight("VALVE", 300.0, end_types=("FL", "FL"))
+        r.straight("GASKET", 3.0)
+        r.straight("FLANGE", 120.0)
+        r.elbow(90.0 if k % 4 else 45.0, turns[k % 4])
+    for sub in branches:
+        sub.straight("PIPE", 900.0)
+        sub.elbow(90.0, [1, 0, 0])
+        sub.straight("PIPE", 1200.0)
+        sub.straight("FLANGE", 120.0, end_types=("BW", "FL"))
+    drift(r.items, rng, keep={0}, mm=1.0, deg=0.05)
+    header = ["ISOGEN-FILES ISOGEN.FLS", "UNITS-BORE MM", "UNITS-CO-ORDS MM", "PIPELINE-REFERENCE NET-300"]
+    return write(r.items, header, decimals, lambda k, it: [f"COMPONENT-IDENTIFIER N{k + 1}"])
+
+
 FIXTURES = {
+    "converter_handwheels.pcf": converter_handwheels,
     "e3d_return_bends.pcf": e3d_return_bends,
     "revit_caps_materials.pcf": revit_caps_materials,
     "tree_250m.pcf": tree_250m,

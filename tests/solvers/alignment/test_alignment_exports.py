@@ -28,6 +28,7 @@ FILES = [
     ("plant3d_cw_line.pcf", ["FLANGE-1", "FLANGE-33"], 0),
     ("sp3d_inch_tabs.pcf", ["FLANGE-1", "FLANGE-18", "FLANGE-19"], 0),
     ("e3d_plant_conflict.pcf", ["1", "15"], 0),
+    ("converter_handwheels.pcf", ["1"], 0),
 ]
 
 

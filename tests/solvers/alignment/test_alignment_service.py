@@ -88,6 +88,21 @@ def test_bad_connections_are_422_naming_the_field(client):
     assert refused.status_code == 415 and ".pcf" in refused.json()["detail"], refused.text
 
 
+def test_a_pcf_with_items_failing_the_model_check_is_accepted_and_only_a_file_of_rings_refused(client):
+    """The submission check passes on an interpreted PCF with an item that would fail it (that item is held);
+    a file with nothing but a handwheel ring is a 422 naming its lines."""
+    pcf = (b"UNITS-CO-ORDS MM\nPIPE\n    END-POINT 0 0 0 100\n    END-POINT 1000 0 0 100\n"
+           b"BEND\n    END-POINT 1000 0 0 100\n    END-POINT 1300 0 0 100\n    CENTRE-POINT 900 -20 0\n"
+           b"PIPE\n    END-POINT 1300 0 0 100\n    END-POINT 2300 0 0 100\n")
+    response = client.post("/v1/alignment/jobs", files={"file": ("line.pcf", pcf, "text/plain")})
+    assert response.status_code == 202, response.text  # what the solve reports: test_alignment_pcf_model_check
+    ring = (b"UNITS-CO-ORDS MM\nBEND\n    END-POINT 0 0 0 25\n    END-POINT 500 0 0 25\n    CENTRE-POINT 250 0 0\n"
+            b"BEND\n    END-POINT 500 0 0 25\n    END-POINT 0 0 0 25\n    CENTRE-POINT 250 0 0\n")
+    refused = client.post("/v1/alignment/jobs", files={"file": ("wheel.pcf", ring, "text/plain")})
+    assert refused.status_code == 422, refused.text
+    assert "line 2" in refused.text and "line 6" in refused.text
+
+
 def test_cli_aligns_the_pcf_example(tmp_path):
     done = run_plantsolve(["solve", "alignment", str(EXAMPLES / "ladder.pcf"), "-o", str(tmp_path / "aligned.json")], tmp_path)
     assert done.returncode == 0, done.stderr
