@@ -177,3 +177,40 @@ STUDIO_EMBEDDED = ("0 FILE Main.ldr\r\n0 Main\r\n0 Name: Main.ldr\r\n0 Author: \
                    "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\r\n"
                    "4 16 10 0 10 -10 0 10 -10 0 -10 10 0 -10\r\n"
                    "0 NOFILE\r\n")
+
+# A technic gearbox as LDCad saves it, in the LDraw library's frames. Two 7-hole beams (32524, along z,
+# holes along y) are the walls, 40 LDU apart; two 6-long axles pass through both walls' holes at
+# z = -40 and z = 0 (an axle's own x axis turned onto y), carrying a 24-tooth and an 8-tooth gear that
+# mesh (centres 40 apart: pitch radii 30 and 10); a 5-hole beam outside wall A is held by two pins and
+# the output axle passes through its middle hole; a 1 x 4 technic brick outside wall B, turned so its
+# holes run along y, is held by two pins and the output axle passes through it too. A 3-long axle sits
+# in wall A's end hole pushed 15 LDU out, 5 LDU off the half-stud grid of its connection points: it
+# passes through the hole without a connection being recognised. The file places the pin at z = 60 and the 8-tooth gear twice each, at
+# the same pose: those two pairs are the only collisions.
+GEARBOX = """0 Gearbox
+0 Name: gearbox.ldr
+0 Author: someone
+0 !LDRAW_ORG Unofficial_Model
+0 BFC CERTIFY CCW
+1 72 0 0 0 1 0 0 0 1 0 0 0 1 32524.dat
+1 72 0 -60 0 1 0 0 0 1 0 0 0 1 32524.dat
+0 STEP
+1 0 0 -30 -40 0 -1 0 1 0 0 0 0 1 3706.dat
+1 14 0 -30 -40 1 0 0 0 0 1 0 -1 0 3648.dat
+1 0 0 -30 0 0 -1 0 1 0 0 0 0 1 3706.dat
+1 14 0 -30 0 1 0 0 0 0 1 0 -1 0 3647.dat
+0 STEP
+1 4 0 20 20 1 0 0 0 1 0 0 0 1 32316.dat
+1 1 0 10 40 0 -1 0 1 0 0 0 0 1 2780.dat
+1 1 0 10 60 0 -1 0 1 0 0 0 0 1 2780.dat
+0 STEP
+1 71 -10 -80 20 0 1 0 0 0 1 1 0 0 3701.dat
+1 0 0 -70 20 0 -1 0 1 0 0 0 0 1 2780.dat
+1 0 0 -70 40 0 -1 0 1 0 0 0 0 1 2780.dat
+0 STEP
+1 7 0 15 -60 0 -1 0 1 0 0 0 0 1 4519.dat
+0 STEP
+1 1 0 10 60 0 -1 0 1 0 0 0 0 1 2780.dat
+1 14 0 -30 0 1 0 0 0 0 1 0 -1 0 3647.dat
+0 STEP
+"""
