@@ -96,6 +96,8 @@ def _depth(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float:
 def penetration(a: Shapes, b: Shapes) -> float:
     """FCL's largest penetration depth between two solids' pieces (0 when they only touch, -1 when apart);
     only pieces whose world boxes overlap are given to FCL."""
+    if len(a.objects) == 1 and len(b.objects) == 1:  # two plain boxes: the broad phase has matched them
+        return _depth(a.objects[0], b.objects[0])
     near = ((a.lo[:, None, :] <= b.hi[None, :, :]) & (b.lo[None, :, :] <= a.hi[:, None, :])).all(axis=2)
     depth = -1.0
     for i, j in zip(*np.nonzero(near)):

@@ -165,3 +165,12 @@ def test_collision_boxes_are_the_part_less_its_holes(number, holes):
         for c, s in boxes:
             for sign in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
                 assert np.hypot(c[0] + sign[0] * s[0] / 2, c[1] + sign[1] * s[1] / 2) <= 30 + 1e-9
+
+
+def test_synthetic_gearbox_is_the_ldraw_fixture_and_its_copies_only_collide_where_placed_twice():
+    from_file = [(p.part, p.position, p.rotation) for p in gearbox().parts]
+    assert [(p["part"], p["position"], p["rotation"]) for p in synthetic.gearbox(1)] == from_file
+    result = run({"parts": synthetic.gearbox(3)})
+    assert [c.bodies for c in result.collisions] == [[f"g{k}p{a}", f"g{k}p{b}"] for k in range(3)
+                                                     for a, b in ((5, 14), (8, 13))]
+    assert run({"parts": synthetic.gearbox(2, twice=False)}).collisions == []
