@@ -15,6 +15,9 @@ library's snap meta lines):
   half stud along it). A pin joining two side-by-side technic bricks is
   therefore placed turned a quarter turn about y (its x axis onto z), e.g. the LDraw matrix ``0 0 1 0 1 0
   −1 0 0``.
+- Studless beams (32523 … 32278, 3 to 15 holes) as 32524 is drawn: along z, centred on the middle
+  hole, holes along y every 20 LDU, 18 × 20 LDU in section. Gears 3647, 3648, 3649 (8, 24, 40 teeth)
+  as 3647 is drawn: axis z through the origin, an axle hole there.
 - Hinge brick 1 × 2 (3937 base, 3938 top plate): both have their hinge axis along x through
   (0, 10, 0) in their own frame, so a straight hinge has the top placed at the base's very position
   and rotation. The base has two anti-studs at y = 24 and no studs, the top two studs at y = 0; the
@@ -28,6 +31,13 @@ two or more between the same two parts are rigid), pin/pin hole with parallel ax
 axle/axle hole (rigid), axle/pin hole (a cylindrical joint: the axle turns and slides),
 hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs only (the tubes
 between them, which also grip studs, are not modelled).
+
+Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by default its bounding box)
+less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
+pins and axles are 12 LDU across, so a rod in or through a hole touches its part without entering
+it. A gear is its pitch disc (three boxes inscribed in the circle) and hub: gears in mesh do not
+overlap. Everything here is numbers per part (frame, boxes, connection points), so a catalogue
+generated from a parts library can replace the hand-written one.
 """
 
 from __future__ import annotations

@@ -99,11 +99,23 @@ def _section_type(lines: list[tuple[int, str]]) -> str | None:
     return None
 
 
+def _draws_without_parts(lines: list[tuple[int, str]]) -> bool:
+    """Drawn geometry (types 2–5) and no catalogue part placed: how a part's own definition looks."""
+    draws = False
+    for _, raw in lines:
+        tokens = raw.split()
+        if tokens[:1] in (["2"], ["3"], ["4"], ["5"]):
+            draws = True
+        elif tokens[:1] == ["1"] and len(tokens) >= 15 and lookup(raw.split(None, 14)[14]) is not None:
+            return False
+    return draws
+
+
 def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, str]:
     """Each sub-file as 'part' (a part's definition: the part itself is placed), 'geometry' (a subpart
     or primitive: drawn, not a part) or 'model' (a sub-model, expanded). A part header decides; without
-    one, a catalogue part number is that part, and a ``.dat`` file of drawn geometry that places no part
-    of its own is an (unknown) part's definition."""
+    one, a catalogue part number is that part, and a ``.dat`` file of drawn geometry that places no
+    catalogue part is an (unknown) part's definition."""
     out = {}
     for name, lines in files.items():
         if name == main:
@@ -116,8 +128,7 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
             out[name] = "geometry"
         elif kind is None and lookup(name) is not None:
             out[name] = "part"
-        elif kind is None and name.endswith(".dat") and any(raw.split()[:1] in (["2"], ["3"], ["4"], ["5"])
-                                                            for _, raw in lines):
+        elif kind is None and name.endswith(".dat") and _draws_without_parts(lines):
             out[name] = "part"
         else:
             out[name] = "model"

@@ -215,3 +215,13 @@ def test_a_packed_file_whose_main_model_places_only_unknown_parts_is_read_not_re
     request = parse("x.mpd", text)
     assert [(p.id, p.part) for p in request.parts] == [("L2", "u9001")]
     assert [u.part for u in solve(request).result.unknown_parts] == ["u9001"]
+
+
+def test_an_embedded_dat_without_header_is_a_part_when_it_only_draws_and_a_submodel_when_it_places_parts():
+    text = ("0 FILE main.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 sticker.dat\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 layer.dat\n"
+            "0 FILE sticker.dat\n0 Sticker\n3 16 0 0 0 10 0 0 0 0 10\n"
+            "0 FILE layer.dat\n0 a sub-model named .dat with a drawn guide line\n2 24 0 0 0 80 0 0\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    request = parse("x.mpd", text)
+    assert [(p.id, p.part) for p in request.parts] == [("L2", "sticker"), ("L3/L10", "3001")]
+    assert request.source["embedded_parts"] == ["sticker.dat"] and request.source["submodels"] == 1
