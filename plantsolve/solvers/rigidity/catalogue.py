@@ -17,7 +17,8 @@ library's snap meta lines):
   −1 0 0``.
 - Studless beams (32523 … 32278, 3 to 15 holes) as 32524 is drawn: along z, centred on the middle
   hole, holes along y every 20 LDU, 18 × 20 LDU in section. Gears 3647, 3648, 3649 (8, 24, 40 teeth)
-  as 3647 is drawn: axis z through the origin, an axle hole there.
+  as 3647 is drawn: axis z through the origin, an axle hole there; so is the bush 3713 (20 LDU long,
+  flanges of radius 9).
 - Hinge brick 1 × 2 (3937 base, 3938 top plate): both have their hinge axis along x through
   (0, 10, 0) in their own frame, so a straight hinge has the top placed at the base's very position
   and rotation. The base has two anti-studs at y = 24 and no studs, the top two studs at y = 0; the
@@ -245,7 +246,10 @@ def _build() -> dict[str, PartShape]:
                           "32278": 15}.items():
         parts[number] = _beam(number, holes)
     parts["3647"] = _gear("3647", 8, PITCH)
-    parts["3648"] = _gear("3648", 24, 8.0)
+    for number in ("3648", "3648a", "3648b"):  # the library renamed 3648 to 3648b; files carry either name
+        parts[number] = _gear(number, 24, 8.0)
+    parts["3713"] = PartShape("3713", "Technic Bush", (0.0, 0.0, 0.0), (18.0, 18.0, float(PITCH)),
+                              (Connector("axlehole", (0, 0, 0), Z),))
     parts["3649"] = _gear("3649", 40, 8.0)
     parts["3937"], parts["3938"] = _hinge_brick()
     return parts

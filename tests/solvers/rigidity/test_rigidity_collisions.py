@@ -174,3 +174,24 @@ def test_synthetic_gearbox_is_the_ldraw_fixture_and_its_copies_only_collide_wher
     assert [c.bodies for c in result.collisions] == [[f"g{k}p{a}", f"g{k}p{b}"] for k in range(3)
                                                      for a, b in ((5, 14), (8, 13))]
     assert run({"parts": synthetic.gearbox(2, twice=False)}).collisions == []
+
+
+def test_bushes_on_an_axle_against_a_beam_touch_and_hold_the_axle():
+    rod_y, bush_y = synthetic.ROD_ALONG_Y, synthetic.GEAR_ALONG_Y
+    parts = [{"id": "beam", "part": "32524", "position": [0, 0, 0]},
+             {"id": "axle", "part": "3705", "position": [0, 0, 0], "rotation": rod_y},
+             {"id": "above", "part": "3713", "position": [0, -20, 0], "rotation": bush_y},
+             {"id": "below", "part": "3713", "position": [0, 20, 0], "rotation": bush_y},
+             {"id": "gear", "part": "3648b", "position": [0, 30, 40], "rotation": bush_y}]
+    result = run({"parts": parts})
+    # the 24-tooth gear's pitch disc reaches z = 40 - 30 cos 30° ≈ 14 along z: clear of the bush (9)
+    assert result.collisions == [] and result.unknown_parts == []
+    joints = {frozenset(j.bodies): (j.type, j.origin) for j in result.joints}
+    assert joints == {frozenset({"beam", "axle"}): ("cylindrical", "axle"),
+                      frozenset({"axle", "above"}): ("rigid", "axle"), frozenset({"axle", "below"}): ("rigid", "axle")}
+    # moved onto the bush's plane 30 from the axle: its pitch disc (26 LDU across the axle's side) enters the
+    # bush (flange radius 9) and the axle (radius 6)
+    parts[-1]["position"] = [0, 20, 30]
+    hits = {tuple(c.bodies): c.depth for c in run({"parts": parts}).collisions}
+    assert set(hits) == {("axle", "gear"), ("below", "gear")}
+    assert hits[("below", "gear")] == pytest.approx(9 - (30 - 30 * np.cos(np.pi / 6)))
