@@ -35,6 +35,11 @@ UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
 MAX_SKIPPED_LISTED = 200
 MAX_PARTS = 20_000
+PRELUDE = "<main>"  # the text before the first '0 FILE'
+FOLDERS = ("parts/", "p/", "models/")  # where LDraw's search path looks; packers write the folder into the name
+GEOMETRY_FOLDERS = ("p/", "s/", "parts/s/", "48/", "8/")  # primitives and subparts: drawn geometry, not parts
+PART_TYPES = {"part", "shortcut"}  # !LDRAW_ORG types (without 'Unofficial_') of a part's own definition
+GEOMETRY_TYPES = {"subpart", "primitive", "8_primitive", "48_primitive", "helper"}
 
 
 def _key(name: str) -> str:
@@ -64,13 +69,6 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
             files.setdefault(current, []).append((number, raw))
     prelude_places = any(raw.split()[:1] == ["1"] for _, raw in files.get(PRELUDE, ()))
     return (PRELUDE if prelude_places or first is None else first), files
-
-
-PRELUDE = "<main>"
-FOLDERS = ("parts/", "p/", "models/")  # where LDraw's search path looks; packers write the folder into the name
-GEOMETRY_FOLDERS = ("p/", "s/", "parts/s/", "48/", "8/")  # primitives and subparts: drawn geometry, not parts
-PART_TYPES = {"part", "shortcut"}  # !LDRAW_ORG types (without 'Unofficial_') of a part's own definition
-GEOMETRY_TYPES = {"subpart", "primitive", "8_primitive", "48_primitive", "helper"}
 
 
 def _resolve(name: str, files: dict) -> str | None:
