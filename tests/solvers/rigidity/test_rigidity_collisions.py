@@ -111,6 +111,9 @@ def test_gearbox_collisions_are_only_the_two_parts_placed_twice():
         for host in hosts:
             assert joints[frozenset({pin, host})] == ("hinge", "pin")
     assert not any("L22" in pair for pair in joints)  # the axle off the grid: no connection, and no collision
+    # motions: the loose axle 6, five pins spinning 5, each axle with its gears turning and sliding 2 + 2, the
+    # walls sliding apart along the axles 1 (the pinned beam and brick are rigid to their walls)
+    assert result.dof == 16 and {"L6", "L14"} in [set(c) for c in result.clusters]
 
 
 def test_holes_alone_keep_rods_from_colliding_where_one_box_per_part_did_not():
