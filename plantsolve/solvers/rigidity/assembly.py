@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, PartShape, lookup
+from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, PartShape, collision_boxes, lookup
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -46,8 +46,14 @@ class Placed:
     keys: list
 
     def solid(self) -> Solid:
-        center = self.rotation @ np.asarray(self.shape.box_center) + self.position
-        return Solid(center=center, size=np.asarray(self.shape.box_size, dtype=float), rotation=self.rotation)
+        return part_solid(self.shape, self.rotation, self.position)
+
+
+def part_solid(shape: PartShape, rotation: np.ndarray, position: np.ndarray) -> Solid:
+    """A catalogue part's collision shape placed in the world: one box, or its pieces with the holes cut."""
+    boxes = [Solid(center=rotation @ np.asarray(c, dtype=float) + position, size=np.asarray(s, dtype=float),
+                   rotation=rotation) for c, s in collision_boxes(shape)]
+    return boxes[0] if len(boxes) == 1 else Solid(pieces=tuple(boxes))
 
 
 @dataclass(frozen=True)

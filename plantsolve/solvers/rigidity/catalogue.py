@@ -15,6 +15,10 @@ library's snap meta lines):
   half stud along it). A pin joining two side-by-side technic bricks is
   therefore placed turned a quarter turn about y (its x axis onto z), e.g. the LDraw matrix ``0 0 1 0 1 0
   −1 0 0``.
+- Studless beams (32523 … 32278, 3 to 15 holes) as 32524 is drawn: along z, centred on the middle
+  hole, holes along y every 20 LDU, 18 × 20 LDU in section. Gears 3647, 3648, 3649 (8, 24, 40 teeth)
+  as 3647 is drawn: axis z through the origin, an axle hole there; so is the bush 3713 (20 LDU long,
+  flanges of radius 9).
 - Hinge brick 1 × 2 (3937 base, 3938 top plate): both have their hinge axis along x through
   (0, 10, 0) in their own frame, so a straight hinge has the top placed at the base's very position
   and rotation. The base has two anti-studs at y = 24 and no studs, the top two studs at y = 0; the
@@ -28,10 +32,19 @@ two or more between the same two parts are rigid), pin/pin hole with parallel ax
 axle/axle hole (rigid), axle/pin hole (a cylindrical joint: the axle turns and slides),
 hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs only (the tubes
 between them, which also grip studs, are not modelled).
+
+Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by default its bounding box)
+less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
+pins and axles are 12 LDU across, so a rod in or through a hole touches its part without entering
+it. A gear is its pitch disc (three boxes inscribed in the circle) and hub: gears in mesh do not
+overlap. Everything here is numbers per part (frame, boxes, connection points), so a catalogue
+generated from a parts library can replace the hand-written one.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,16 +66,63 @@ class Connector:
     direction: tuple[int, int, int]
 
 
+Box = tuple[tuple[float, float, float], tuple[float, float, float]]  # (centre, size) in the part's frame
+
+
 @dataclass(frozen=True)
 class PartShape:
+    """A part's bounding box, connection points and, when one box is too coarse, the solid boxes whose
+    union is its material before the holes are cut (``solids``; empty: the bounding box). Everything a
+    generated data file would give per part: numbers only, no code."""
+
     number: str
     name: str
     box_center: tuple[float, float, float]
     box_size: tuple[float, float, float]
     connectors: tuple[Connector, ...]
+    solids: tuple[Box, ...] = ()
 
     def points(self) -> np.ndarray:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
+
+
+HOLE_RADIUS = 6  # LDU: a technic hole's and a pin's or axle's radius (LDraw's peghole and axle primitives)
+HOLES = {"pinhole", "axlehole"}
+
+
+def _cut(box: Box, hole: Connector) -> list[Box]:
+    """``box`` less the square prism of half-width HOLE_RADIUS around the hole's axis, which runs through
+    the whole box: up to four boxes (two beside the hole, one on each side between them)."""
+    axis = int(np.flatnonzero(np.asarray(hole.direction))[0])
+    u, v = [k for k in range(3) if k != axis]
+    center, size = np.asarray(box[0], float), np.asarray(box[1], float)
+    lo, hi = center - size / 2, center + size / 2
+    h_lo = np.asarray(hole.point, float) - HOLE_RADIUS
+    h_hi = np.asarray(hole.point, float) + HOLE_RADIUS
+    if h_lo[u] >= hi[u] or h_hi[u] <= lo[u] or h_lo[v] >= hi[v] or h_hi[v] <= lo[v]:
+        return [box]
+    cu0, cu1 = max(lo[u], h_lo[u]), min(hi[u], h_hi[u])
+    pieces = [((lo[u], cu0), (lo[v], hi[v])), ((cu1, hi[u]), (lo[v], hi[v])),
+              ((cu0, cu1), (lo[v], max(lo[v], h_lo[v]))), ((cu0, cu1), (min(hi[v], h_hi[v]), hi[v]))]
+    out = []
+    for (a0, a1), (b0, b1) in pieces:
+        if a1 - a0 <= 1e-9 or b1 - b0 <= 1e-9:
+            continue
+        p_lo, p_hi = lo.copy(), hi.copy()
+        p_lo[u], p_hi[u], p_lo[v], p_hi[v] = a0, a1, b0, b1
+        out.append((tuple(float(x) for x in (p_lo + p_hi) / 2), tuple(float(x) for x in p_hi - p_lo)))
+    return out
+
+
+@functools.lru_cache(maxsize=1024)
+def collision_boxes(shape: PartShape) -> tuple[Box, ...]:
+    """The part's collision shape as boxes in its own frame: its solids (or its bounding box) with every
+    pin and axle hole cut through, so a pin or an axle in a hole, or passing through it, touches the part
+    without entering it (square holes and rods of side 2 · HOLE_RADIUS: a rod fits its hole exactly)."""
+    boxes = list(shape.solids) or [(shape.box_center, shape.box_size)]
+    for hole in (c for c in shape.connectors if c.type in HOLES):
+        boxes = [piece for box in boxes for piece in _cut(box, hole)]
+    return tuple(boxes)
 
 
 MATES = {
@@ -101,7 +161,7 @@ def _technic_brick(number, length, holes="pinhole") -> PartShape:
     return _block(number, f"Technic Brick 1 x {length} with Holes", 1, length, BRICK, extra=extra)
 
 
-def _rod(number, name, kind, length_studs, half_width=4.0) -> PartShape:
+def _rod(number, name, kind, length_studs, half_width=float(HOLE_RADIUS)) -> PartShape:
     """A pin or an axle along x, centred on the origin. A pin's points are its two halves' centres
     (x = ±10); an axle slides in its holes, so it has a point every half pitch from the centre of its
     first 20-LDU segment to that of its last: a hole meets it whether the axle is centred in the hole
@@ -114,6 +174,36 @@ def _rod(number, name, kind, length_studs, half_width=4.0) -> PartShape:
     connectors = tuple(Connector(kind, (x, 0, 0), X) for x in xs)
     return PartShape(number, name, (0.0, 0.0, 0.0), (float(PITCH * length_studs), 2 * half_width, 2 * half_width),
                      connectors)
+
+
+def _beam(number, holes) -> PartShape:
+    """A studless beam (liftarm) of an odd number of holes as the LDraw library draws 32524: along z,
+    centred on its middle hole, holes every 20 LDU along y through its 20-LDU thickness, 18 LDU wide
+    (x ∈ [−9, 9]) with round ends of radius 9 around the end holes (here square)."""
+    reach = PITCH // 2 * (holes - 1)
+    connectors = tuple(Connector("pinhole", (0, 0, z), DOWN) for z in range(-reach, reach + 1, PITCH))
+    return PartShape(number, f"Technic Beam {holes}", (0.0, 0.0, 0.0), (18.0, float(PITCH), 2.0 * (reach + 9)),
+                     connectors)
+
+
+def _inscribed_disc(radius: float, thickness: float) -> list[Box]:
+    """A disc about z as three boxes with their corners on its circle (two crossed rectangles and a square):
+    inside the disc everywhere, so gears that mesh at their pitch circles do not overlap."""
+    c30, s30, c45 = (radius * math.cos(math.pi / 6), radius * math.sin(math.pi / 6), radius * math.cos(math.pi / 4))
+    return [((0.0, 0.0, 0.0), (2 * c30, 2 * s30, thickness)), ((0.0, 0.0, 0.0), (2 * s30, 2 * c30, thickness)),
+            ((0.0, 0.0, 0.0), (2 * c45, 2 * c45, thickness))]
+
+
+def _gear(number, teeth, thickness) -> PartShape:
+    """A spur gear as LDraw draws 3647: axis along z through the origin, an axle hole there. Its shape is
+    the pitch disc (radius 1.25 LDU per tooth: module 1 mm = 2.5 LDU) and a hub 1 stud long and 16 LDU
+    across; the teeth beyond the pitch circle are left out so meshing gears are not collisions."""
+    radius = 1.25 * teeth
+    hub = ((0.0, 0.0, 0.0), (16.0, 16.0, float(PITCH)))
+    solids = tuple([hub, *_inscribed_disc(radius, thickness)]) if thickness < PITCH else tuple(
+        _inscribed_disc(max(radius, 8.0), float(PITCH)))
+    return PartShape(number, f"Technic Gear {teeth} Tooth", (0.0, 0.0, 0.0), (2 * radius, 2 * radius, float(PITCH)),
+                     (Connector("axlehole", (0, 0, 0), Z),), solids)
 
 
 def _hinge_brick() -> tuple[PartShape, PartShape]:
@@ -141,14 +231,26 @@ def _build() -> dict[str, PartShape]:
         parts[number] = _block(number, f"Brick {w} x {l}", w, l, BRICK)
     for number, (w, l) in plates.items():
         parts[number] = _block(number, f"Plate {w} x {l}", w, l, PLATE)
-    for number, length in {"3700": 2, "3701": 4, "3894": 6, "3702": 8}.items():
+    for number, length in {"3700": 2, "3701": 4, "3894": 6, "3702": 8, "2730": 10, "3895": 12, "32018": 14,
+                           "3703": 16}.items():
         parts[number] = _technic_brick(number, length)
     parts["32064"] = _block("32064", "Technic Brick 1 x 2 with Axle Hole", 1, 2, BRICK,
                             extra=[Connector("axlehole", (0, 10, 0), Z)])
     parts["3673"] = _rod("3673", "Technic Pin", "pin", 2)
     parts["2780"] = _rod("2780", "Technic Pin with Friction Ridges", "pin", 2)
     for number, n in {"3704": 2, "3705": 4, "3706": 6, "3707": 8}.items():
-        parts[number] = _rod(number, f"Technic Axle {n}", "axle", n, half_width=3.0)
+        parts[number] = _rod(number, f"Technic Axle {n}", "axle", n)
+    for number, n in {"4519": 3, "32073": 5, "44294": 7, "60485": 9, "3737": 10, "3708": 12}.items():
+        parts[number] = _rod(number, f"Technic Axle {n}", "axle", n)
+    for number, holes in {"32523": 3, "32316": 5, "32524": 7, "40490": 9, "32525": 11, "41239": 13,
+                          "32278": 15}.items():
+        parts[number] = _beam(number, holes)
+    parts["3647"] = _gear("3647", 8, PITCH)
+    for number in ("3648", "3648a", "3648b"):  # the library renamed 3648 to 3648b; files carry either name
+        parts[number] = _gear(number, 24, 8.0)
+    parts["3713"] = PartShape("3713", "Technic Bush", (0.0, 0.0, 0.0), (18.0, 18.0, float(PITCH)),
+                              (Connector("axlehole", (0, 0, 0), Z),))
+    parts["3649"] = _gear("3649", 40, 8.0)
     parts["3937"], parts["3938"] = _hinge_brick()
     return parts
 

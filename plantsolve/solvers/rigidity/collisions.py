@@ -4,8 +4,9 @@ The seed's §4 screens pairs with bounding spheres then boxes before the exact t
 phase compares the world axis-aligned bounding boxes of all bodies at once (numpy), keeping pairs
 that overlap by more than the contact tolerance; the narrow phase runs python-fcl on the true
 shapes (boxes as solid primitives, meshes as BVH triangle models) and reads the penetration depth.
-A pair is a collision only when that depth exceeds ``contact_tolerance``: a brick resting on
-another touches it along a face (depth 0) and is contact, not collision. Meshes are surfaces to
+A part with holes is a union of boxes (its pieces): a pair's depth is the largest over the pairs of
+pieces whose boxes meet. A pair is a collision only when that depth exceeds ``contact_tolerance``: a
+brick resting on another touches it along a face (depth 0) and is contact, not collision. Meshes are surfaces to
 FCL: a mesh wholly inside another without crossing its surface is not reported, and the depth
 FCL gives for two meshes is the largest of its triangle contacts' estimates (exact for boxes, not
 for meshes: touching meshes give 0, crossing meshes a positive but approximate depth).
@@ -21,21 +22,33 @@ import numpy as np
 
 @dataclass
 class Solid:
-    """A body's shape in world coordinates: a box (centre, size, rotation matrix) or a mesh."""
+    """A body's shape in world coordinates: a box (centre, size, rotation matrix), a mesh, or the union of
+    solids (``pieces``: a part with holes as several boxes)."""
 
     center: np.ndarray | None = None
     size: np.ndarray | None = None
     rotation: np.ndarray | None = None
     vertices: np.ndarray | None = None
     faces: np.ndarray | None = None
+    pieces: tuple[Solid, ...] = ()
 
     def aabb(self) -> tuple[np.ndarray, np.ndarray]:
+        if self.pieces:
+            boxes = [p.aabb() for p in self.pieces]
+            return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
         if self.vertices is not None:
             return self.vertices.min(axis=0), self.vertices.max(axis=0)
         half = np.abs(self.rotation) @ (self.size / 2)
         return self.center - half, self.center + half
 
-    def fcl_object(self) -> fcl.CollisionObject:
+    def fcl_object(self) -> Shapes:
+        """The FCL objects of the solid with their world boxes: one per piece (one for a box or a mesh)."""
+        pieces = self.pieces or (self,)
+        boxes = [p.aabb() for p in pieces]
+        return Shapes([p._fcl_single() for p in pieces], np.array([b[0] for b in boxes]),
+                      np.array([b[1] for b in boxes]))
+
+    def _fcl_single(self) -> fcl.CollisionObject:
         if self.vertices is not None:
             model = fcl.BVHModel()
             model.beginModel(len(self.vertices), len(self.faces))
@@ -46,6 +59,15 @@ class Solid:
         if np.linalg.det(rot) < 0:  # a mirrored part: the box is symmetric, flip one axis
             rot = rot @ np.diag([1.0, 1.0, -1.0])
         return fcl.CollisionObject(fcl.Box(*self.size), fcl.Transform(rot, self.center))
+
+
+@dataclass
+class Shapes:
+    """A solid's FCL objects and their world boxes (lower and upper corners), for the narrow phase."""
+
+    objects: list
+    lo: np.ndarray
+    hi: np.ndarray
 
 
 def overlapping_pairs(lo: np.ndarray, hi: np.ndarray, tolerance: float) -> np.ndarray:
@@ -63,13 +85,24 @@ def overlapping_pairs(lo: np.ndarray, hi: np.ndarray, tolerance: float) -> np.nd
     return np.concatenate(pairs) if pairs else np.zeros((0, 2), dtype=int)
 
 
-def penetration(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float:
-    """FCL's largest penetration depth between two objects (0 when they only touch, -1 when apart)."""
+def _depth(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float:
     request = fcl.CollisionRequest(enable_contact=True, num_max_contacts=16)
     result = fcl.CollisionResult()
     if not fcl.collide(a, b, request, result):
         return -1.0
     return max((float(c.penetration_depth) for c in result.contacts), default=0.0)
+
+
+def penetration(a: Shapes, b: Shapes) -> float:
+    """FCL's largest penetration depth between two solids' pieces (0 when they only touch, -1 when apart);
+    only pieces whose world boxes overlap are given to FCL."""
+    if len(a.objects) == 1 and len(b.objects) == 1:  # two plain boxes: the broad phase has matched them
+        return _depth(a.objects[0], b.objects[0])
+    near = ((a.lo[:, None, :] <= b.hi[None, :, :]) & (b.lo[None, :, :] <= a.hi[:, None, :])).all(axis=2)
+    depth = -1.0
+    for i, j in zip(*np.nonzero(near)):
+        depth = max(depth, _depth(a.objects[i], b.objects[j]))
+    return depth
 
 
 def find_collisions(solids: list[Solid | None], tolerance: float, exclude: set[tuple[int, int]] = frozenset(),

@@ -19,9 +19,9 @@ import itertools
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.assembly import INSERTED, Assembly
+from plantsolve.solvers.rigidity.assembly import INSERTED, Assembly, part_solid
 from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, lookup
-from plantsolve.solvers.rigidity.collisions import Solid, penetration
+from plantsolve.solvers.rigidity.collisions import penetration
 
 
 def _cube_group() -> np.ndarray:
@@ -153,8 +153,7 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
             continue
         seen.add(footprint)
         pinned = {owner[sources[m]] for m in members if inserted[m]}
-        candidate = Solid(center=rot @ np.asarray(shape.box_center) + pos, size=np.asarray(shape.box_size, float),
-                          rotation=rot)
+        candidate = part_solid(shape, rot, pos)
         c_lo, c_hi = candidate.aabb()
         near = np.flatnonzero(((c_lo < hi - tolerance) & (lo < c_hi - tolerance)).all(axis=1))
         blocked = False

@@ -53,6 +53,21 @@ def _superbricks(ids: list[str], groups: list[list[int]], rod_pairs: list[tuple[
     return list(out.values())
 
 
+def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
+    """(first, repeat) id pairs of parts with one part number at one pose (to 0.001 LDU and 1e-6 in the
+    rotation): a part placed twice, as an editor's duplicate-and-forget-to-move leaves it."""
+    first: dict[tuple, str] = {}
+    out = []
+    for part in request.parts:
+        key = (lookup(part.part).number if lookup(part.part) else part.part.lower(),
+               tuple(round(float(v) * 1000) for v in part.position), tuple(round(float(v) * 1e6) for v in part.rotation))
+        if key in first:
+            out.append((first[key], part.id))
+        else:
+            first[key] = part.id
+    return out
+
+
 def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
     """The assembly of a request: bodies and joints, or catalogue parts (unknown parts set aside)."""
     assembly = Assembly()
@@ -84,6 +99,12 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         count = source.get("skipped_count")
         warnings.append(skipped_lines(skipped, "line", count if isinstance(count, int) else None))
     warnings.extend(source_warnings(source))
+    twice = repeated_placements(request)
+    if twice:
+        warnings.append(Diagnostic(code="duplicate_parts", message=f"{len(twice)} part(s) repeat another part at "
+                                   "the same pose (part number, position and rotation): "
+                                   + ", ".join(f"{b} repeats {a}" for a, b in twice[:20]),
+                                   details={"pairs": [list(p) for p in twice[:MAX_LISTED]]}))
     progress(0.2, "exact mobility")
     analysis = assembly.analyse(rank_tolerance=request.options.rank_tolerance)
     mob = analysis.mobility

@@ -228,3 +228,30 @@ def random_lego(n_parts: int, seed: int = 0) -> list[dict]:
         cz = bcz + int(rng.integers(-(nz - 1), bnz))
         place(number, cx, blevel - ny, cz, rotation)
     return parts
+
+
+ROD_ALONG_Y = [0, -1, 0, 1, 0, 0, 0, 0, 1]  # a pin's or axle's own x axis onto y (into a beam's holes)
+GEAR_ALONG_Y = [1, 0, 0, 0, 0, 1, 0, -1, 0]  # a gear's own z axis onto y
+BRICK_HOLES_ALONG_Y = [0, 1, 0, 0, 0, 1, 1, 0, 0]  # a 1 x N technic brick on its side, holes along y
+
+
+def gearbox(copies: int = 1, twice: bool = True) -> list[dict]:
+    """Technic gearboxes side by side 80 LDU apart along x: two 7-hole beams as walls, two axles through
+    both with a 24- and an 8-tooth gear in mesh, a 5-hole beam and a 1 x 4 technic brick pinned outside
+    the walls with the output axle through them, a 3-long axle through a wall's end hole off its
+    connection grid. With ``twice`` each box places one pin and the 8-tooth gear a second time at the
+    same pose: the only collisions, two per box."""
+    parts = []
+    for k in range(copies):
+        dx = 80 * k
+        box = [("32524", (0, 0, 0), IDENTITY), ("32524", (0, -60, 0), IDENTITY),
+               ("3706", (0, -30, -40), ROD_ALONG_Y), ("3648", (0, -30, -40), GEAR_ALONG_Y),
+               ("3706", (0, -30, 0), ROD_ALONG_Y), ("3647", (0, -30, 0), GEAR_ALONG_Y),
+               ("32316", (0, 20, 20), IDENTITY), ("2780", (0, 10, 40), ROD_ALONG_Y), ("2780", (0, 10, 60), ROD_ALONG_Y),
+               ("3701", (-10, -80, 20), BRICK_HOLES_ALONG_Y), ("2780", (0, -70, 20), ROD_ALONG_Y),
+               ("2780", (0, -70, 40), ROD_ALONG_Y), ("4519", (0, 15, -60), ROD_ALONG_Y)]
+        if twice:
+            box += [("2780", (0, 10, 60), ROD_ALONG_Y), ("3647", (0, -30, 0), GEAR_ALONG_Y)]
+        parts += [{"id": f"g{k}p{i}", "part": number, "position": [x + dx, y, z], "rotation": list(rotation)}
+                  for i, (number, (x, y, z), rotation) in enumerate(box)]
+    return parts

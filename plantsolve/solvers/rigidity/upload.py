@@ -8,9 +8,15 @@ sub-models too; a sub-model that includes itself is refused at that line). Type 
 comments and meta commands (``0 FILE`` and ``0 NOFILE`` delimit the sub-files of an ``.mpd``;
 ``0 STEP``, ``0 !LDCAD …``, ``0 !LEOCAD …``, ``0 MLCAD …``, ``0 ROTSTEP``, ``0 BFC`` and the rest
 are ignored), types 2–5 are drawn geometry (lines, triangles, quads) and ignored, colours are
-ignored. Item by item: a type-1 line that cannot be read is skipped and listed in the report with
-its line and reason; parts not in the catalogue are kept and reported as unknown by the solver
-(never guessed); the file is refused (422 naming the file) only when it places no part at all.
+ignored. Packed models (three.js' packer, web viewers; Studio and LDCad embedding unofficial parts) hold
+the main model's lines before the first ``0 FILE`` and the parts' own definitions as ``0 FILE`` sections
+(``parts/3001.dat``, ``p/…``, ``parts/s/…``): a type-1 line's name finds its section whatever the case,
+``\\`` or ``/``, and with or without the library folder. A section headed ``!LDRAW_ORG Part`` or
+``Shortcut`` (``Unofficial_`` or not), or without a header but named for a catalogue part, is that part
+and is placed, not expanded; subparts and primitives are drawn geometry. Item by item: a type-1 line
+that cannot be read is skipped and listed in the report with its line and reason; parts not in the
+catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
+the file is refused (422 naming the file) only when it places no part at all.
 Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models.
 """
 
@@ -21,7 +27,7 @@ import numpy as np
 
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
-from plantsolve.solvers.rigidity.catalogue import normalise_number
+from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
@@ -29,29 +35,102 @@ UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
 MAX_SKIPPED_LISTED = 200
 MAX_PARTS = 20_000
+PRELUDE = "<main>"  # the text before the first '0 FILE'
+FOLDERS = ("parts/", "p/", "models/")  # where LDraw's search path looks; packers write the folder into the name
+GEOMETRY_FOLDERS = ("p/", "s/", "parts/s/", "48/", "8/")  # primitives and subparts: drawn geometry, not parts
+PART_TYPES = {"part", "shortcut"}  # !LDRAW_ORG types (without 'Unofficial_') of a part's own definition
+GEOMETRY_TYPES = {"subpart", "primitive", "8_primitive", "48_primitive", "helper"}
+
+
+def _key(name: str) -> str:
+    """A sub-file's name as the lookup key: case and ``\\`` or ``/`` separators do not matter."""
+    return name.strip().replace("\\", "/").lower()
 
 
 def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
-    """The main model's name and every sub-file's numbered lines (one unnamed file for a plain .ldr)."""
+    """The main model's key and every sub-file's numbered lines (one unnamed file for a plain .ldr).
+
+    The main model is the text before the first ``0 FILE`` when that text places anything (a packed
+    model, as three.js' packer writes it, has no ``0 FILE`` line of its own), else the first ``0 FILE``."""
     files: dict[str, list[tuple[int, str]]] = {}
-    main = None
-    current = None
+    first = None
+    current = PRELUDE
     for number, raw in enumerate(text.splitlines(), 1):
         tokens = raw.split()
         if len(tokens) >= 2 and tokens[0] == "0" and tokens[1].upper() == "FILE":
-            current = raw.strip()[1:].strip()[4:].strip().lower()
+            current = _key(raw.strip()[1:].strip()[4:])
             files.setdefault(current, [])
-            main = main or current
+            first = first or current
             continue
         if len(tokens) >= 2 and tokens[0] == "0" and tokens[1].upper() == "NOFILE":
             current = ""  # text between files belongs to no model
             continue
-        if current is None:
-            current = main = "<main>"
-            files.setdefault(current, [])
         if current:
-            files[current].append((number, raw))
-    return main or "<main>", files
+            files.setdefault(current, []).append((number, raw))
+    prelude_places = any(raw.split()[:1] == ["1"] for _, raw in files.get(PRELUDE, ()))
+    return (PRELUDE if prelude_places or first is None else first), files
+
+
+def _resolve(name: str, files: dict) -> str | None:
+    """The embedded sub-file a type-1 line's file name means: as written, or with its library folder
+    added or dropped (``parts/3001.dat`` for ``3001.dat``, ``parts/s/x.dat`` for ``s/x.dat``)."""
+    key = _key(name)
+    if key in files:
+        return key
+    for folder in FOLDERS:
+        if key.startswith(folder) and key[len(folder):] in files:
+            return key[len(folder):]
+    for folder in FOLDERS:
+        if folder + key in files:
+            return folder + key
+    return None
+
+
+def _section_type(lines: list[tuple[int, str]]) -> str | None:
+    """The ``!LDRAW_ORG`` type of a sub-file in lower case without ``unofficial_`` ('part', 'subpart',
+    'model', …), or None without that header."""
+    for _, raw in lines:
+        tokens = raw.split()
+        if len(tokens) >= 3 and tokens[0] == "0" and tokens[1].upper().lstrip("!") == "LDRAW_ORG":
+            kind = tokens[2].lower()
+            return kind[len("unofficial_"):] if kind.startswith("unofficial_") else kind
+    return None
+
+
+def _draws_without_parts(lines: list[tuple[int, str]]) -> bool:
+    """Drawn geometry (types 2–5) and no catalogue part placed: how a part's own definition looks."""
+    draws = False
+    for _, raw in lines:
+        tokens = raw.split()
+        if tokens[:1] in (["2"], ["3"], ["4"], ["5"]):
+            draws = True
+        elif tokens[:1] == ["1"] and len(tokens) >= 15 and lookup(raw.split(None, 14)[14]) is not None:
+            return False
+    return draws
+
+
+def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, str]:
+    """Each sub-file as 'part' (a part's definition: the part itself is placed), 'geometry' (a subpart
+    or primitive: drawn, not a part) or 'model' (a sub-model, expanded). A part header decides; without
+    one, a catalogue part number is that part, and a ``.dat`` file of drawn geometry that places no
+    catalogue part is an (unknown) part's definition."""
+    out = {}
+    for name, lines in files.items():
+        if name == main:
+            out[name] = "model"
+            continue
+        kind = _section_type(lines)
+        if kind in PART_TYPES:
+            out[name] = "part"
+        elif kind in GEOMETRY_TYPES:
+            out[name] = "geometry"
+        elif kind is None and lookup(name) is not None:
+            out[name] = "part"
+        elif kind is None and name.endswith(".dat") and _draws_without_parts(lines):
+            out[name] = "part"
+        else:
+            out[name] = "model"
+    return out
 
 
 PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
@@ -73,6 +152,8 @@ def _cut_last_line(text: str) -> int | None:
 
 def parse_ldraw(text: str) -> dict:
     main, files = _files(text)
+    roles = _classify(files, main)
+    embedded: set[str] = set()
     parts: list[dict] = []
     skipped: list[dict] = []
     warnings: list[dict] = []
@@ -118,8 +199,12 @@ def parse_ldraw(text: str) -> dict:
             world_rot = rot @ local_rot
             world_pos = rot @ local_pos + pos
             ident = f"{prefix}L{number}"
-            sub = file_name.lower()
-            if sub in files:
+            sub = _resolve(file_name, files)
+            role = roles.get(sub, "model") if sub is not None else None
+            if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
+                counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws, it is no part
+                continue
+            if role == "model":
                 if sub in stack or len(stack) >= MAX_DEPTH:
                     skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself"})
                     continue
@@ -134,6 +219,8 @@ def parse_ldraw(text: str) -> dict:
             if len(parts) >= MAX_PARTS:
                 skipped.append({"line": number, "reason": f"more than {MAX_PARTS} parts"})
                 continue
+            if role == "part":
+                embedded.add(sub)
             parts.append({"id": ident, "part": normalise_number(file_name),
                           "position": [_tidy(v) for v in world_pos],
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
@@ -146,7 +233,8 @@ def parse_ldraw(text: str) -> dict:
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
     return {"parts": parts, "source": {"format": "ldraw", "main_model": main, "parts": len(parts),
-                                       "submodels": max(len(files) - 1, 0), **counts,
+                                       "submodels": sum(r == "model" for n, r in roles.items() if n != main),
+                                       "embedded_parts": sorted(embedded), **counts,
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
 

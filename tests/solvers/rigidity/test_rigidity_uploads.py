@@ -154,3 +154,74 @@ def test_a_file_whose_only_part_line_is_cut_is_refused_naming_the_file():
         parse("cut.ldr", "0 Name: one.ldr\r\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 300")
     (fe,) = error.value.errors
     assert fe.loc == ("file",) and "line 2" in fe.msg and "ends inside" in fe.msg
+
+
+# ---------------------------------------------------------------- packed models and embedded part definitions
+
+
+def test_threejs_packed_model_places_its_parts_not_their_drawn_definitions():
+    request = parse("car_Packed.mpd", files.THREEJS_PACKED)
+    assert [(p.id, p.part, p.position, p.rotation) for p in request.parts] == [
+        ("L12", "3001", [0, 0, 0], [1, 0, 0, 0, 1, 0, 0, 0, 1]),
+        ("L13", "3003", [0, -24, 0], [1, 0, 0, 0, 1, 0, 0, 0, 1]),
+        ("L14/L18", "3004", [30, -24, 0], [0, 0, -1, 0, 1, 0, 1, 0, 0])]
+    source = request.source
+    assert source["main_model"] == "<main>" and source["submodels"] == 1 and source["submodels_expanded"] == 1
+    assert source["embedded_parts"] == ["parts/3001.dat", "parts/3003.dat", "parts/3004.dat"]
+    assert source["skipped_count"] == 0
+    result = solve(request).result
+    # the 2 x 2 on four studs, the turned 1 x 2 on two: one superbrick, nothing unknown
+    assert result.rigid and result.superbricks == [["L12", "L13", "L14/L18"]] and result.unknown_parts == []
+    assert sorted(j.connections for j in result.joints) == [2, 4]
+
+
+def test_studio_embedded_unofficial_parts_known_number_is_the_part_custom_part_is_unknown():
+    request = parse("main.mpd", files.STUDIO_EMBEDDED)
+    assert [(p.id, p.part, p.position) for p in request.parts] == [
+        ("L5", "3001", [0, 0, 0]), ("L6", "3701", [0, -24, 10]), ("L7", "custom bracket", [0, -24, -30])]
+    assert request.source["embedded_parts"] == ["3701.dat", "custom bracket.dat"]
+    assert request.source["submodels"] == 0 and request.source["main_model"] == "main.ldr"
+    result = solve(request).result
+    assert [(u.id, u.part) for u in result.unknown_parts] == [("L7", "custom bracket")]
+    assert result.report.status == "warning" and "unknown_parts" in {w.code for w in result.report.warnings}
+    (joint,) = result.joints  # the technic brick sits on the 2 x 4's back row of studs
+    assert (joint.bodies, joint.type, joint.connections) == (["L5", "L6"], "rigid", 4)
+
+
+def test_library_folder_case_and_separator_in_a_reference_find_the_embedded_section():
+    # the same packed model written with '\' and upper case in the references and the sections' names
+    text = (files.THREEJS_PACKED.replace("parts/3001.dat", "Parts\\3001.DAT")
+            .replace("0 FILE Parts\\3001.DAT", "0 FILE PARTS/3001.dat"))
+    assert "1 4 0 0 0 1 0 0 0 1 0 0 0 1 Parts\\3001.DAT" in text
+    request = parse("car_Packed.mpd", text)
+    assert [p.part for p in request.parts] == ["3001", "3003", "3004"]
+    assert request.source["embedded_parts"][0] == "parts/3001.dat"
+    # referenced without the folder (as the part library's search path allows), the section is found too
+    bare = files.THREEJS_PACKED.replace(" parts/3003.dat\n", " 3003.dat\n")
+    assert [p.part for p in parse("car_Packed.mpd", bare).parts] == ["3001", "3003", "3004"]
+
+
+def test_primitives_and_subparts_placed_in_a_model_are_drawn_geometry_not_parts():
+    text = files.THREEJS_PACKED.replace("0 FILE wing.ldr\n", "1 16 0 0 0 1 0 0 0 1 0 0 0 1 p/stud.dat\n"
+                                        "1 16 0 0 0 1 0 0 0 1 0 0 0 1 s\\3001s02.dat\n0 FILE wing.ldr\n")
+    request = parse("car_Packed.mpd", text)
+    assert [p.part for p in request.parts] == ["3001", "3003", "3004"]
+    assert request.source["geometry_lines"] == 2 and request.source["skipped_count"] == 0
+
+
+def test_a_packed_file_whose_main_model_places_only_unknown_parts_is_read_not_refused():
+    text = "0 FILE x.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 parts/u9001.dat\n0 FILE parts/u9001.dat\n" \
+           "0 !LDRAW_ORG Unofficial_Part\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 p/stud.dat\n"
+    request = parse("x.mpd", text)
+    assert [(p.id, p.part) for p in request.parts] == [("L2", "u9001")]
+    assert [u.part for u in solve(request).result.unknown_parts] == ["u9001"]
+
+
+def test_an_embedded_dat_without_header_is_a_part_when_it_only_draws_and_a_submodel_when_it_places_parts():
+    text = ("0 FILE main.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 sticker.dat\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 layer.dat\n"
+            "0 FILE sticker.dat\n0 Sticker\n3 16 0 0 0 10 0 0 0 0 10\n"
+            "0 FILE layer.dat\n0 a sub-model named .dat with a drawn guide line\n2 24 0 0 0 80 0 0\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    request = parse("x.mpd", text)
+    assert [(p.id, p.part) for p in request.parts] == [("L2", "sticker"), ("L3/L10", "3001")]
+    assert request.source["embedded_parts"] == ["sticker.dat"] and request.source["submodels"] == 1
