@@ -64,5 +64,5 @@ def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None
     """At a dispatcher's start: jobs left queued (or running with a dead lease) by a previous process are
     enqueued again."""
     sweep_once(ctx, enqueue, pending)
-    for job_id in ctx.repo.queued_ids(limit=10_000):  # a dispatcher that pulls from the database takes what it can
-        enqueue(job_id)
+    for job_id, kind in ctx.repo.queued_jobs(limit=10_000):  # a dispatcher that pulls from the database takes what it can
+        enqueue(job_id, kind)

@@ -186,9 +186,9 @@ class ProcessDispatcher:
         if free <= 0 or self._stopping:
             return
         try:
-            waiting = [j for j in self.ctx.repo.queued_ids(limit=free + len(held)) if j not in held][:free]
-            for job_id in waiting:
-                self.enqueue(job_id)
+            waiting = [(j, kind) for j, kind in self.ctx.repo.queued_jobs(limit=free + len(held)) if j not in held]
+            for job_id, kind in waiting[:free]:
+                self.enqueue(job_id, kind)
         except Exception:  # the database is away (or the pool is stopping): the next pass refills
             if not self._stopping:
                 log.warning("refilling the job pool failed", exc_info=True)
