@@ -7,7 +7,11 @@ Prints: solve time for 28 settings x 6 points with a 64 x 64 map (target < 1 s),
 efficiency error against a dense ground truth of a synthetic family for the exact method and
 for the paper's binning (N = 64, M = 128), the 200 x 200 map time, and the paper's Table 1
 for the real N3 fan map; then, per map, the pressure error against the floor (the best any
-decreasing concave curve reaches) with the families chosen and the time.
+decreasing concave curve reaches) with the families chosen and the time; then, for every compressor
+map shipped with pyCycle, the worst speed line of 'auto' against its floor, before (least-squares fits
+only, the previous rule) and after (minimax where no least-squares fit reaches the floor).
+
+    python bench/perfmap.py --pycycle  # the pyCycle table only
 """
 
 from __future__ import annotations
@@ -63,10 +67,7 @@ def errors(est, truth):
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args()
+def main(args) -> None:
     reps = 1 if args.quick else 3
     n_truth = 20001 if args.quick else 200001
 
@@ -205,6 +206,59 @@ def pressure_reach() -> None:
               f"| {dt:.2f} |")
 
 
+def pycycle_floor() -> None:
+    """Per pyCycle map: the speed line 'auto' leaves furthest above its floor, before and after.
+
+    Both rules run on the same fitted characteristics in this process: 'before' keeps the shared family
+    unless it misses the floor by more than 1 % and then takes the least-squares fit that reaches it
+    (or the smallest error); 'after' is :func:`choose_families` as the solver runs it. CPU seconds
+    (``time.process_time``) are those of the choice alone; 'solve' is the whole solve without a map."""
+    from plantsolve.solvers.base import no_progress
+    from plantsolve.solvers.perfmap.families import FAMILIES
+    from plantsolve.solvers.perfmap.solve import (
+        PRESSURE_EXCESS, _choose_family, _reach_floor, choose_families, fit_characteristics)
+    from plantsolve.solvers.perfmap.units import to_internal
+    from plantsolve.solvers.perfmap.validation import prepare
+
+    def worst(choice, ch, settings):
+        ex = [r.err - f for r, f in zip(choice, ch.floors)]
+        k = int(np.argmax(ex))
+        f = ch.floors[k]
+        ratio = f"{choice[k].err / f:6.2f}" if f > 0 else "   inf"
+        return (f"{', '.join(f'{v:g}' for v in settings[k].values):>10s} {100 * f:6.2f}% "
+                f"{100 * choice[k].err:6.2f}% {ratio} {100 * ex[k]:+6.2f}%"), sum(e > PRESSURE_EXCESS for e in ex)
+
+    data = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle"
+    print("\npyCycle compressor maps (tests/solvers/perfmap/data/pycycle): worst line of 'auto' against its floor "
+          "(ratio = auto / floor; excess = auto - floor, target <= 1 %); CPU s of the family choice")
+    cols = f"{'worst line':>10s} {'floor':>7s} {'auto':>7s} {'ratio':>6s} {'excess':>7s} {'>1%':>3s} {'cpu s':>6s}"
+    print(f"{'':20s} | {'before (least squares only)':^{len(cols)}s} | {'after (minimax where needed)':^{len(cols) + 8}s} |")
+    print(f"{'map':14s} {'lines':>5s} | {cols} | {cols} {'minimax':>7s} | {'solve s':>7s}")
+    for path in sorted(data.glob("*.py")):
+        req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"map": False})
+        settings = prepare(to_internal(req)[0])
+        opts = req.options
+        ch = fit_characteristics(settings, False, opts.concave_efficiency, no_progress)
+        c0 = time.process_time()
+        family, _ = _choose_family(ch.pressure)
+        before = [ch.pressure[family][k] if ch.pressure[family][k].err <= ch.floors[k] + PRESSURE_EXCESS
+                  else _reach_floor([ch.pressure[f][k] for f in FAMILIES], ch.floors[k]) for k in range(len(settings))]
+        c1 = time.process_time()
+        _, after, _, _ = choose_families(ch, settings, opts, [])
+        c2 = time.process_time()
+        solve(req)
+        c3 = time.process_time()
+        (wb, nb), (wa, na) = worst(before, ch, settings), worst(after, ch, settings)
+        print(f"{path.stem:14s} {len(settings):5d} | {wb} {nb:3d} {c1 - c0:6.3f} | {wa} {na:3d} {c2 - c1:6.3f} "
+              f"{sum(r.minimax for r in after):7d} | {c3 - c2:7.2f}")
+
+
 if __name__ == "__main__":
-    main()
-    pressure_reach()
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--pycycle", action="store_true", help="only the pyCycle maps against their floors")
+    args = ap.parse_args()
+    if not args.pycycle:
+        main(args)
+        pressure_reach()
+    pycycle_floor()
