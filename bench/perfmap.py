@@ -209,14 +209,12 @@ def pressure_reach() -> None:
 def pycycle_floor() -> None:
     """Per pyCycle map: the speed line 'auto' leaves furthest above its floor, before and after.
 
-    Both rules run on the same fitted characteristics in this process: 'before' keeps the shared family
-    unless it misses the floor by more than 1 % and then takes the least-squares fit that reaches it
-    (or the smallest error); 'after' is :func:`choose_families` as the solver runs it. CPU seconds
-    (``time.process_time``) are those of the choice alone; 'solve' is the whole solve without a map."""
+    Both rules run in this process. 'before': a choke segment only at exactly the largest flow
+    (``choke_tolerance=0``), and least-squares fits only (``minimax_fallback=False``); 'after': :func:`prepare` and
+    :func:`choose_families` as the solver runs them. CPU seconds (``time.process_time``) are those of the
+    choice alone; 'solve' is the whole solve without a map."""
     from plantsolve.solvers.base import no_progress
-    from plantsolve.solvers.perfmap.families import FAMILIES
-    from plantsolve.solvers.perfmap.solve import (
-        PRESSURE_EXCESS, _choose_family, _reach_floor, choose_families, fit_characteristics)
+    from plantsolve.solvers.perfmap.solve import PRESSURE_EXCESS, choose_families, fit_characteristics
     from plantsolve.solvers.perfmap.units import to_internal
     from plantsolve.solvers.perfmap.validation import prepare
 
@@ -232,23 +230,24 @@ def pycycle_floor() -> None:
     print("\npyCycle compressor maps (tests/solvers/perfmap/data/pycycle): worst line of 'auto' against its floor "
           "(ratio = auto / floor; excess = auto - floor, target <= 1 %); CPU s of the family choice")
     cols = f"{'worst line':>10s} {'floor':>7s} {'auto':>7s} {'ratio':>6s} {'excess':>7s} {'>1%':>3s} {'cpu s':>6s}"
-    print(f"{'':20s} | {'before (least squares only)':^{len(cols)}s} | {'after (minimax where needed)':^{len(cols) + 8}s} |")
+    before, after = "before (choke at equal flows; least squares)", "after (choke within rounding; minimax where needed)"
+    print(f"{'':20s} | {before:^{len(cols)}s} | {after:^{len(cols) + 8}s} |")
     print(f"{'map':14s} {'lines':>5s} | {cols} | {cols} {'minimax':>7s} | {'solve s':>7s}")
     for path in sorted(data.glob("*.py")):
         req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"map": False})
-        settings = prepare(to_internal(req)[0])
         opts = req.options
+        old_settings = prepare(to_internal(req)[0], choke_tolerance=0.0)
+        old_ch = fit_characteristics(old_settings, False, opts.concave_efficiency, no_progress)
+        settings = prepare(to_internal(req)[0])
         ch = fit_characteristics(settings, False, opts.concave_efficiency, no_progress)
         c0 = time.process_time()
-        family, _ = _choose_family(ch.pressure)
-        before = [ch.pressure[family][k] if ch.pressure[family][k].err <= ch.floors[k] + PRESSURE_EXCESS
-                  else _reach_floor([ch.pressure[f][k] for f in FAMILIES], ch.floors[k]) for k in range(len(settings))]
+        _, before, _, _ = choose_families(old_ch, old_settings, opts, [], minimax_fallback=False)
         c1 = time.process_time()
         _, after, _, _ = choose_families(ch, settings, opts, [])
         c2 = time.process_time()
         solve(req)
         c3 = time.process_time()
-        (wb, nb), (wa, na) = worst(before, ch, settings), worst(after, ch, settings)
+        (wb, nb), (wa, na) = worst(before, old_ch, old_settings), worst(after, ch, settings)
         print(f"{path.stem:14s} {len(settings):5d} | {wb} {nb:3d} {c1 - c0:6.3f} | {wa} {na:3d} {c2 - c1:6.3f} "
               f"{sum(r.minimax for r in after):7d} | {c3 - c2:7.2f}")
 

@@ -44,7 +44,7 @@ from plantsolve.solvers.perfmap.fitting import (
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
 from plantsolve.solvers.perfmap.units import to_internal
-from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
+from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE, Setting, map_impossible, prepare
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -212,13 +212,13 @@ def error_table(ch: Characteristics) -> list[ErrorTableRow]:
     return table
 
 
-def choose_families(ch: Characteristics, settings: list[Setting], opts,
-                    warnings: list[Diagnostic]) -> tuple[str, list[PressureResult], list[str], dict]:
+def choose_families(ch: Characteristics, settings: list[Setting], opts, warnings: list[Diagnostic],
+                    minimax_fallback: bool = True) -> tuple[str, list[PressureResult], list[str], dict]:
     """The shared pressure family (``model``, or the paper family with the best mean leave-one-out
     error), the pressure fit of each setting ('auto': the shared family unless it misses the setting's
     floor by more than PRESSURE_EXCESS, see :func:`_reach_floor`; if no least-squares fit reaches it,
-    the minimax fits compete too, see :func:`_minimax_candidates`) and the efficiency family of each
-    setting (``efficiency_model``)."""
+    the minimax fits compete too, see :func:`_minimax_candidates`; ``minimax_fallback=False``: least
+    squares only, the rule before) and the efficiency family of each setting (``efficiency_model``)."""
     n_settings = len(settings)
     if opts.model == "auto":
         family, details = _choose_family(ch.pressure)
@@ -235,7 +235,8 @@ def choose_families(ch: Characteristics, settings: list[Setting], opts,
                 pressure_choice.append(shared)
                 continue
             candidates = [ch.pressure[f][k] for f in FAMILIES]
-            if opts.fit != "minimax" and min(r.err for r in candidates) > ch.floors[k] + PRESSURE_EXCESS:
+            least_squares_miss = min(r.err for r in candidates) > ch.floors[k] + PRESSURE_EXCESS
+            if minimax_fallback and opts.fit != "minimax" and least_squares_miss:
                 candidates += _minimax_candidates(ch, settings[k], k)
             pressure_choice.append(_reach_floor(candidates, ch.floors[k]))
         details["settings_with_another_family"] = sum(r.family != family for r in pressure_choice)
@@ -339,8 +340,9 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
         if s.choke_pressures:
             warnings.append(Diagnostic(
                 code="vertical_choke_segment",
-                message=f"Setting {s.label}: {len(s.choke_pressures)} points share the "
-                f"largest flow {s.x[-1]:g} (a vertical choke line): the characteristic ends at the highest "
+                message=f"Setting {s.label}: {len(s.choke_pressures)} points at the largest flow {s.x[-1]:g} "
+                f"(within {CHOKE_FLOW_TOLERANCE:.2%} of the line's flow range: a vertical choke line): the "
+                "characteristic ends at the highest "
                 f"({max(s.choke_pressures):g}), the rest is its choke segment.",
                 details={**where, "flow": float(s.x[-1]), "pressures": s.choke_pressures}))
         if s.merged_duplicates:

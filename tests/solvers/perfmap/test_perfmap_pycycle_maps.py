@@ -131,3 +131,31 @@ def test_few_points_rising_to_surge_with_a_vertical_choke_reach_the_floor(n, ris
     assert fit.floor == floor and fit.pressure_excess <= 0.01
     assert "vertical_choke_segment" in {w.code for w in res.report.warnings}
     assert res.choke_line[0].vertical_to == pytest.approx(0.8 * pressure[-1])
+
+
+def test_a_choke_segment_rounded_below_the_last_r_line_is_still_the_choke_segment():
+    """N3_HPC_map (alpha 0, Nc 0.975) prints the choke flow 188.0271 three times after an R-line at 188.0273:
+    read literally, the choke's low pressures come before 17.15 and the line 'rises' by 22 %."""
+    req = pycycle_request("N3_HPC_map.py")
+    literal = {s.values: s for s in prepare(req, choke_tolerance=0.0)}[(0.0, 0.975)]
+    s = {s.values: s for s in prepare(req)}[(0.0, 0.975)]
+    assert concave_floor(literal.x, literal.y) > 0.1  # the artefact the old reading made of it
+    assert s.choke_pressures == [12.381, 14.0424, 15.6466, 17.1524] and s.x[-1] == 188.0273
+    assert len(s.x) == 8 and np.all(np.diff(s.y) < 0) and concave_floor(s.x, s.y) == 0.0
+    res = solve(req).result
+    fit = next(f for f in res.settings if f.setting == [0.0, 0.975])
+    assert fit.floor == 0.0 and fit.pressure_max_rel_error <= 0.01
+    assert res.choke_line[res.settings.index(fit)].vertical_to == 12.381
+
+
+def test_choke_tolerance_is_a_fraction_of_the_flow_range():
+    """Flows within 1e-4 of the line's flow range below the largest join its choke segment; a point
+    1e-3 below stays a point of the characteristic (unit-free: the same on flows x 1000)."""
+    base = {"setting": [1.0], "efficiency": [0.7, 0.8, 0.82, 0.8, 0.7, 0.6]}
+    for scale in (1.0, 1000.0):
+        for gap, merged in ((0.5e-4, True), (1e-3, False)):
+            flow = np.array([0.0, 0.3, 0.6, 0.8, 1.0, 1.0 - gap]) * scale + 7.0 * scale
+            pos = {**base, "flow": flow.tolist(), "pressure": [2.0, 1.95, 1.85, 1.7, 1.5, 1.3]}
+            other = {**pos, "setting": [2.0]}
+            s = prepare(PerfmapRequest.model_validate({"positions": [pos, other], "setting_names": ["Nc"]}))[0]
+            assert (s.choke_pressures == [1.3, 1.5]) is merged and len(s.x) == (5 if merged else 6)
