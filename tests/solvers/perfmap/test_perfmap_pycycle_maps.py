@@ -6,6 +6,7 @@ the report says so per line."""
 
 from __future__ import annotations
 
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -26,10 +27,16 @@ def pycycle_request(name: str, **options) -> PerfmapRequest:
     return parse_upload(StoredInput.from_bytes(name, (PYCYCLE / name).read_bytes()), {"map": False, **options})
 
 
+@lru_cache(maxsize=None)
+def solved(name: str):
+    """Each map solved once for the tests of this module (request, result)."""
+    req = pycycle_request(name)
+    return req, solve(req).result
+
+
 @pytest.fixture(scope="module")
 def axi3_2():
-    req = pycycle_request("axi3_2.py")
-    return req, solve(req).result
+    return solved("axi3_2.py")
 
 
 def test_all_nine_pycycle_compressor_maps_are_here():
@@ -38,8 +45,7 @@ def test_all_nine_pycycle_compressor_maps_are_here():
 
 @pytest.mark.parametrize("name", MAPS)
 def test_auto_ends_every_line_of_a_pycycle_map_within_1_percent_of_its_floor(name):
-    req = pycycle_request(name)
-    res = solve(req).result
+    req, res = solved(name)
     settings = prepare(req)
     curves = curveset_from_fits(res.settings)
     assert len(res.settings) == len(settings) >= 18
@@ -105,17 +111,14 @@ def test_a_line_within_reach_of_least_squares_keeps_it(n3_result):
     assert n3_result.report.details["family_choice"]["settings_fitted_by_minimax"] == 0
 
 
-@pytest.mark.parametrize("n, rise, seed", [(4, 0.03, 0), (6, 0.10, 1), (8, 0.18, 2), (12, 0.25, 3)])
+@pytest.mark.parametrize("n, rise, seed", [(4, 0.03, 0), (6, 0.10, 1), (8, 0.18, 2), (9, 0.12, 5), (12, 0.15, 3)])
 def test_few_points_rising_to_surge_with_a_vertical_choke_reach_the_floor(n, rise, seed):
-    """The axi3_2 pattern, generated: n points of a parabola that peaks inside the line (so the surge
-    end rises by `rise`), a vertical choke segment below the last point and a second, regular line."""
+    """The axi3_2 pattern, generated: n points of a line that peaks at 40 % of its flow range (the surge
+    end `rise` below the peak), falls by 40 % to choke, and ends in a vertical choke segment."""
     rng = np.random.default_rng(seed)
-    t = np.sort(rng.uniform(0.05, 0.95, n - 2))
-    t = np.concatenate([[0.0], t, [1.0]])
+    t = np.concatenate([[0.0], np.sort(rng.uniform(0.05, 0.95, n - 2)), [1.0]])
     flow = 20.0 + 9.0 * t
-    peak = 0.4
-    pressure = 3.0 * (1.0 - rise * ((t - peak) / peak) ** 2 * np.where(t < peak, 1.0, 4.0))
-    pressure = np.maximum(pressure, 0.5)
+    pressure = 3.0 * np.where(t < 0.4, 1.0 - rise * ((t - 0.4) / 0.4) ** 2, 1.0 - 0.4 * ((t - 0.4) / 0.6) ** 2)
     eta = 0.85 - 0.3 * (t - 0.5) ** 2
     line = {"setting": [0.9], "flow": flow.tolist() + [flow[-1]], "pressure": pressure.tolist() + [0.8 * pressure[-1]],
             "efficiency": eta.tolist() + [0.9 * eta[-1]]}
@@ -126,7 +129,9 @@ def test_few_points_rising_to_surge_with_a_vertical_choke_reach_the_floor(n, ris
     res = solve(req).result
     s = prepare(req)[0]
     floor = concave_floor(s.x, s.y)
-    assert floor > 0.2 * rise  # the rise is a real violation of the physics
+    assert 0.3 * rise < floor < rise  # the rise is a real violation of the physics
+    if rise >= 0.1:  # least squares alone misses the floor by more than 1 % here
+        assert min(fit_pressure_setting(f, s.t, s.y, False, with_loo=False).err for f in FAMILIES) > floor + 0.01
     fit = res.settings[0]
     assert fit.floor == floor and fit.pressure_excess <= 0.01
     assert "vertical_choke_segment" in {w.code for w in res.report.warnings}
@@ -136,13 +141,12 @@ def test_few_points_rising_to_surge_with_a_vertical_choke_reach_the_floor(n, ris
 def test_a_choke_segment_rounded_below_the_last_r_line_is_still_the_choke_segment():
     """N3_HPC_map (alpha 0, Nc 0.975) prints the choke flow 188.0271 three times after an R-line at 188.0273:
     read literally, the choke's low pressures come before 17.15 and the line 'rises' by 22 %."""
-    req = pycycle_request("N3_HPC_map.py")
+    req, res = solved("N3_HPC_map.py")
     literal = {s.values: s for s in prepare(req, choke_tolerance=0.0)}[(0.0, 0.975)]
     s = {s.values: s for s in prepare(req)}[(0.0, 0.975)]
     assert concave_floor(literal.x, literal.y) > 0.1  # the artefact the old reading made of it
     assert s.choke_pressures == [12.381, 14.0424, 15.6466, 17.1524] and s.x[-1] == 188.0273
     assert len(s.x) == 8 and np.all(np.diff(s.y) < 0) and concave_floor(s.x, s.y) == 0.0
-    res = solve(req).result
     fit = next(f for f in res.settings if f.setting == [0.0, 0.975])
     assert fit.floor == 0.0 and fit.pressure_max_rel_error <= 0.01
     assert res.choke_line[res.settings.index(fit)].vertical_to == 12.381
