@@ -7,7 +7,11 @@ Prints: solve time for 28 settings x 6 points with a 64 x 64 map (target < 1 s),
 efficiency error against a dense ground truth of a synthetic family for the exact method and
 for the paper's binning (N = 64, M = 128), the 200 x 200 map time, and the paper's Table 1
 for the real N3 fan map; then, per map, the pressure error against the floor (the best any
-decreasing concave curve reaches) with the families chosen and the time.
+decreasing concave curve reaches) with the families chosen and the time; then, for every compressor
+map shipped with pyCycle, the worst speed line of 'auto' against its floor, before (least-squares fits
+only, the previous rule) and after (minimax where no least-squares fit reaches the floor).
+
+    python bench/perfmap.py --pycycle  # the pyCycle table only
 """
 
 from __future__ import annotations
@@ -63,10 +67,7 @@ def errors(est, truth):
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args()
+def main(args) -> None:
     reps = 1 if args.quick else 3
     n_truth = 20001 if args.quick else 200001
 
@@ -205,6 +206,58 @@ def pressure_reach() -> None:
               f"| {dt:.2f} |")
 
 
+def pycycle_floor() -> None:
+    """Per pyCycle map: the speed line 'auto' leaves furthest above its floor, before and after.
+
+    Both rules run in this process. 'before': a choke segment only at exactly the largest flow
+    (``choke_tolerance=0``), and least-squares fits only (``minimax_fallback=False``); 'after': :func:`prepare` and
+    :func:`choose_families` as the solver runs them. CPU seconds (``time.process_time``) are those of the
+    choice alone; 'solve' is the whole solve without a map."""
+    from plantsolve.solvers.base import no_progress
+    from plantsolve.solvers.perfmap.solve import PRESSURE_EXCESS, choose_families, fit_characteristics
+    from plantsolve.solvers.perfmap.units import to_internal
+    from plantsolve.solvers.perfmap.validation import prepare
+
+    def worst(choice, ch, settings):
+        ex = [r.err - f for r, f in zip(choice, ch.floors)]
+        k = int(np.argmax(ex))
+        f = ch.floors[k]
+        ratio = f"{choice[k].err / f:6.2f}" if f > 0 else "   inf"
+        return (f"{', '.join(f'{v:g}' for v in settings[k].values):>10s} {100 * f:6.2f}% "
+                f"{100 * choice[k].err:6.2f}% {ratio} {100 * ex[k]:+6.2f}%"), sum(e > PRESSURE_EXCESS for e in ex)
+
+    data = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle"
+    print("\npyCycle compressor maps (tests/solvers/perfmap/data/pycycle): worst line of 'auto' against its floor "
+          "(ratio = auto / floor; excess = auto - floor, target <= 1 %); CPU s of the family choice")
+    cols = f"{'worst line':>10s} {'floor':>7s} {'auto':>7s} {'ratio':>6s} {'excess':>7s} {'>1%':>3s} {'cpu s':>6s}"
+    before, after = "before (choke at equal flows; least squares)", "after (choke within rounding; minimax where needed)"
+    print(f"{'':20s} | {before:^{len(cols)}s} | {after:^{len(cols) + 8}s} |")
+    print(f"{'map':14s} {'lines':>5s} | {cols} | {cols} {'minimax':>7s} | {'solve s':>7s}")
+    for path in sorted(data.glob("*.py")):
+        req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"map": False})
+        opts = req.options
+        old_settings = prepare(to_internal(req)[0], choke_tolerance=0.0)
+        old_ch = fit_characteristics(old_settings, False, opts.concave_efficiency, no_progress)
+        settings = prepare(to_internal(req)[0])
+        ch = fit_characteristics(settings, False, opts.concave_efficiency, no_progress)
+        c0 = time.process_time()
+        _, before, _, _ = choose_families(old_ch, old_settings, opts, [], minimax_fallback=False)
+        c1 = time.process_time()
+        _, after, _, _ = choose_families(ch, settings, opts, [])
+        c2 = time.process_time()
+        solve(req)
+        c3 = time.process_time()
+        (wb, nb), (wa, na) = worst(before, old_ch, old_settings), worst(after, ch, settings)
+        print(f"{path.stem:14s} {len(settings):5d} | {wb} {nb:3d} {c1 - c0:6.3f} | {wa} {na:3d} {c2 - c1:6.3f} "
+              f"{sum(r.minimax for r in after):7d} | {c3 - c2:7.2f}")
+
+
 if __name__ == "__main__":
-    main()
-    pressure_reach()
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--pycycle", action="store_true", help="only the pyCycle maps against their floors")
+    args = ap.parse_args()
+    if not args.pycycle:
+        main(args)
+        pressure_reach()
+    pycycle_floor()

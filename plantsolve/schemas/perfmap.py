@@ -221,6 +221,10 @@ class SettingFit(BaseModel):
     pressure_coefficients: list[float]
     efficiency_coefficients: list[float]
     n_points: int
+    pressure_fit: Literal["least_squares", "minimax"] = Field(
+        default="least_squares", description="Criterion of this setting's pressure fit: options.fit, except "
+        "where 'auto' found no least-squares fit within 1 % of the floor and took a minimax one (a "
+        "'pressure_fit_minimax' warning says so).")
     pressure_max_rel_error: float = Field(description="max_i |y(x_i) - y_i| / |y_i|.")
     efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.")
     pressure_loo: float | None = Field(

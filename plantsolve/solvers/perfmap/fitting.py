@@ -271,12 +271,13 @@ class PressureResult:
     fit: CurveFit
     err: float
     loo: float | None
+    minimax: bool = False  # the criterion of this fit (False: least squares)
 
 
 def fit_pressure_setting(family: str, t, y, minimax: bool, with_loo: bool = True) -> PressureResult:
     fy = fit_pressure(family, t, y, minimax)
     return PressureResult(family, fy, max_rel_error(fy(t), y),
-                          pressure_loo(family, t, y) if with_loo else None)
+                          pressure_loo(family, t, y) if with_loo else None, minimax)
 
 
 @dataclass

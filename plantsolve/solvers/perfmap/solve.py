@@ -44,7 +44,7 @@ from plantsolve.solvers.perfmap.fitting import (
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
 from plantsolve.solvers.perfmap.units import to_internal
-from plantsolve.solvers.perfmap.validation import Setting, map_impossible, prepare
+from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE, Setting, map_impossible, prepare
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -68,16 +68,48 @@ def _choose_family(fits: dict[str, list[PressureResult]]) -> tuple[str, dict]:
     return best, {"mean_pressure_loo": means}
 
 
-def _reach_floor(results: dict[str, PressureResult], floor: float) -> str:
-    """A setting the shared family misses by more than PRESSURE_EXCESS above its floor gets the family
-    that reaches it: among those within it, the smallest leave-one-out error (ties: the paper's
-    families before 'concave', fewer coefficients first); if none, the smallest error."""
-    rank = {f: (N_COEFFICIENTS[f] if f != "concave" else 99, FAMILIES.index(f)) for f in results}
-    within = {f: r for f, r in results.items() if r.err <= floor + PRESSURE_EXCESS}
+def _reach_floor(results: list[PressureResult], floor: float) -> PressureResult:
+    """A setting the shared family misses by more than PRESSURE_EXCESS above its floor gets the fit
+    that reaches it: among those within it, the smallest leave-one-out error (ties: least squares
+    before minimax, the paper's families before 'concave', fewer coefficients first); if none, the
+    smallest error."""
+    def rank(r: PressureResult) -> tuple:
+        return (r.minimax, N_COEFFICIENTS[r.family] if r.family != "concave" else 99, FAMILIES.index(r.family))
+
+    within = [r for r in results if r.err <= floor + PRESSURE_EXCESS]
     if within:
-        score = {f: r.loo if r.loo is not None else r.err for f, r in within.items()}
-        return min(score, key=lambda f: (round(score[f], 9),) + rank[f])
-    return min(results, key=lambda f: (results[f].err,) + rank[f])
+        return min(within, key=lambda r: (round(r.loo if r.loo is not None else r.err, 9),) + rank(r))
+    return min(results, key=lambda r: (r.err,) + rank(r))
+
+
+def _minimax_candidates(ch: Characteristics, s: Setting, k: int) -> list[PressureResult]:
+    """Every family fitted to setting k by minimax, for a setting no least-squares fit brings within
+    PRESSURE_EXCESS of its floor: a line that rises towards surge (the floor is then a few per cent)
+    pulls a least-squares fit of few points by the square of that misfit, so its worst point ends
+    well above the floor, while the minimax broken line reaches the floor exactly. Leave-one-out
+    errors are the family's (least-squares refits), so the candidates rank as in :func:`_reach_floor`."""
+    out = []
+    for fam in FAMILIES:
+        r = fit_pressure_setting(fam, s.t, s.y, True, with_loo=False)
+        r.loo = ch.pressure[fam][k].loo
+        r.err = _clamp_to_floor(r.err, ch.floors[k])
+        out.append(r)
+    return out
+
+
+def _clamp_to_floor(err: float, floor: float) -> float:
+    """No fit beats the floor; a minimax fit hits it up to the LP's tolerance."""
+    return max(err, floor) if err > floor - 1e-7 else err
+
+
+def _floor_missed_reason(opts) -> tuple[str, str]:
+    """Why a setting's pressure fit ends more than PRESSURE_EXCESS above its floor (machine-readable
+    code, sentence)."""
+    if opts.model != "auto":
+        return "model_forced", (f"options.model is {opts.model!r} for every setting (model 'auto', or "
+                                "'concave' with fit 'minimax', reaches the floor)")
+    # 'auto' tries the minimax broken line, which reaches the floor unless its LP fails numerically
+    return "minimax_not_converged", "even the minimax broken line did not reach it (its linear programme failed)"
 
 
 def _choose_efficiency(results: dict[str, EtaResult]) -> str:
@@ -150,9 +182,9 @@ def fit_characteristics(settings: list[Setting], minimax: bool, concave_efficien
             step += 1
             progress(0.02 + 0.58 * step / n_steps, f"fitting efficiency {efam}")
     floors = [concave_floor(s.x, s.y) for s in settings]
-    for fam in FAMILIES:  # no fit beats the floor; a minimax fit hits it up to the LP's tolerance
+    for fam in FAMILIES:
         for r, floor in zip(fits[fam], floors):
-            r.err = max(r.err, floor) if r.err > floor - 1e-7 else r.err
+            r.err = _clamp_to_floor(r.err, floor)
     return Characteristics(fits, eta_fits, floors)
 
 
@@ -180,27 +212,38 @@ def error_table(ch: Characteristics) -> list[ErrorTableRow]:
     return table
 
 
-def choose_families(ch: Characteristics, opts, n_settings: int,
-                    warnings: list[Diagnostic]) -> tuple[str, list[str], list[str], dict]:
+def choose_families(ch: Characteristics, settings: list[Setting], opts, warnings: list[Diagnostic],
+                    minimax_fallback: bool = True) -> tuple[str, list[PressureResult], list[str], dict]:
     """The shared pressure family (``model``, or the paper family with the best mean leave-one-out
-    error), the pressure family of each setting ('auto': the shared one unless it misses the setting's
-    floor by more than PRESSURE_EXCESS, see :func:`_reach_floor`) and the efficiency family of each
-    setting (``efficiency_model``)."""
+    error), the pressure fit of each setting ('auto': the shared family unless it misses the setting's
+    floor by more than PRESSURE_EXCESS, see :func:`_reach_floor`; if no least-squares fit reaches it,
+    the minimax fits compete too, see :func:`_minimax_candidates`; ``minimax_fallback=False``: least
+    squares only, the rule before) and the efficiency family of each setting (``efficiency_model``)."""
+    n_settings = len(settings)
     if opts.model == "auto":
         family, details = _choose_family(ch.pressure)
         details["criterion"] = ("mean over settings of the LOO max relative pressure error; a setting the "
                                 f"family misses by more than {PRESSURE_EXCESS:.0%} above its floor gets one "
-                                "that reaches it")
+                                "that reaches it (by minimax where no least-squares fit does)")
         if "mean_pressure_loo" not in details:
             warnings.append(Diagnostic(code="auto_without_loo", message="Too few points per "
                             "setting for leave-one-out errors; 'auto' fell back to 'parabola'."))
-        pressure_choice = [family if ch.pressure[family][k].err <= ch.floors[k] + PRESSURE_EXCESS
-                           else _reach_floor({f: ch.pressure[f][k] for f in FAMILIES}, ch.floors[k])
-                           for k in range(n_settings)]
-        details["settings_with_another_family"] = sum(f != family for f in pressure_choice)
+        pressure_choice = []
+        for k in range(n_settings):
+            shared = ch.pressure[family][k]
+            if shared.err <= ch.floors[k] + PRESSURE_EXCESS:
+                pressure_choice.append(shared)
+                continue
+            candidates = [ch.pressure[f][k] for f in FAMILIES]
+            least_squares_miss = min(r.err for r in candidates) > ch.floors[k] + PRESSURE_EXCESS
+            if minimax_fallback and opts.fit != "minimax" and least_squares_miss:
+                candidates += _minimax_candidates(ch, settings[k], k)
+            pressure_choice.append(_reach_floor(candidates, ch.floors[k]))
+        details["settings_with_another_family"] = sum(r.family != family for r in pressure_choice)
+        details["settings_fitted_by_minimax"] = sum(r.minimax and opts.fit != "minimax" for r in pressure_choice)
     else:
         family, details = opts.model, {}
-        pressure_choice = [family] * n_settings
+        pressure_choice = [ch.pressure[family][k] for k in range(n_settings)]
 
     if opts.efficiency_model == "auto":
         eta_choice = [_choose_efficiency({f: ch.efficiency[f][k] for f in EFFICIENCY_FAMILIES})
@@ -233,14 +276,14 @@ def efficiency_error_table(ch: Characteristics, settings: list[Setting],
     return eta_table
 
 
-def setting_results(ch: Characteristics, settings: list[Setting], pressure_choice: list[str],
-                    eta_choice: list[str], warnings: list[Diagnostic]) -> list[SettingFit]:
+def setting_results(ch: Characteristics, settings: list[Setting], pressure_choice: list[PressureResult],
+                    eta_choice: list[str], opts, warnings: list[Diagnostic]) -> list[SettingFit]:
     """The chosen characteristic and efficiency curve of each setting in public coefficients,
     with a diagnostic wherever the data or the fit deserve one."""
     out_settings = []
     for k, s in enumerate(settings):
-        family = pressure_choice[k]
-        r = ch.pressure[family][k]
+        r = pressure_choice[k]
+        family = r.family
         e = ch.efficiency[eta_choice[k]][k]
         floor = ch.floors[k]
         out_settings.append(SettingFit(
@@ -248,21 +291,32 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
             x_min=float(s.x[0]), x_max=float(s.x[-1]),
             pressure_coefficients=_public_coefficients(r, s),
             efficiency_coefficients=[float(v) for v in e.fit.params],
-            n_points=len(s.x), pressure_max_rel_error=r.err,
+            n_points=len(s.x), pressure_fit="minimax" if r.minimax else "least_squares",
+            pressure_max_rel_error=r.err,
             efficiency_max_rel_error=e.rel_err, efficiency_max_abs_error=e.abs_err,
             pressure_loo=r.loo, efficiency_loo=e.loo_rel, efficiency_loo_abs=e.loo_abs,
             efficiency_peak=e.peak, efficiency_bounds_active=e.fit.active_bounds,
             floor=floor, pressure_excess=max(r.err - floor, 0.0), active_side_conditions=r.fit.active))
         where = {"setting": k, "position": s.source_index, "values": list(s.values), "theta": s.theta,
                  "phi": s.phi}
+        if r.minimax and opts.fit != "minimax":
+            ls = min((ch.pressure[f][k] for f in FAMILIES), key=lambda q: q.err)
+            warnings.append(Diagnostic(
+                code="pressure_fit_minimax",
+                message=f"Setting {s.label}: no least-squares fit comes within {PRESSURE_EXCESS:.0%} of the "
+                f"floor ({100 * floor:.2f}%; best: {ls.family} at {100 * ls.err:.2f}%), so this line's "
+                f"{family} curve minimises the worst relative error instead ({100 * r.err:.2f}%).",
+                details={**where, "family": family, "fit": "minimax", "max_rel_error": r.err, "floor": floor,
+                         "least_squares_family": ls.family, "least_squares_max_rel_error": ls.err}))
         if r.err > floor + PRESSURE_EXCESS:
+            reason, why = _floor_missed_reason(opts)
             warnings.append(Diagnostic(
                 code="pressure_fit_poor",
                 message=f"Setting {s.label}: the {family} pressure fit misses the data by "
                 f"{100 * r.err:.2f}% at its worst point, {100 * (r.err - floor):.2f}% more than the best any "
-                f"decreasing concave curve reaches ({100 * floor:.2f}%).",
-                details={**where, "family": family, "max_rel_error": r.err, "floor": floor,
-                         "excess": r.err - floor}))
+                f"decreasing concave curve reaches ({100 * floor:.2f}%): {why}.",
+                details={**where, "family": family, "fit": "minimax" if r.minimax else "least_squares",
+                         "max_rel_error": r.err, "floor": floor, "excess": r.err - floor, "reason": reason}))
         if floor > 0:
             warnings.append(Diagnostic(
                 code="data_not_decreasing_concave",
@@ -286,8 +340,9 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
         if s.choke_pressures:
             warnings.append(Diagnostic(
                 code="vertical_choke_segment",
-                message=f"Setting {s.label}: {len(s.choke_pressures)} points share the "
-                f"largest flow {s.x[-1]:g} (a vertical choke line): the characteristic ends at the highest "
+                message=f"Setting {s.label}: {len(s.choke_pressures)} points at the largest flow {s.x[-1]:g} "
+                f"(within {CHOKE_FLOW_TOLERANCE:.2%} of the line's flow range: a vertical choke line): the "
+                "characteristic ends at the highest "
                 f"({max(s.choke_pressures):g}), the rest is its choke segment.",
                 details={**where, "flow": float(s.x[-1]), "pressures": s.choke_pressures}))
         if s.merged_duplicates:
@@ -412,9 +467,9 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
     ch = fit_characteristics(settings, opts.fit == "minimax", opts.concave_efficiency, progress)
     progress(0.6, "choosing the curve families")
     table = error_table(ch)
-    family, pressure_choice, eta_choice, details = choose_families(ch, opts, len(settings), warnings)
+    family, pressure_choice, eta_choice, details = choose_families(ch, settings, opts, warnings)
     eta_table = efficiency_error_table(ch, settings, eta_choice)
-    out_settings = setting_results(ch, settings, pressure_choice, eta_choice, warnings)
+    out_settings = setting_results(ch, settings, pressure_choice, eta_choice, opts, warnings)
 
     progress(0.605, "per-setting results")
     curves = curveset_from_fits(out_settings)

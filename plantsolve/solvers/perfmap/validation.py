@@ -10,6 +10,8 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.perfmap.units import to_internal
 
+CHOKE_FLOW_TOLERANCE = 1e-4  # flows this close to the largest (fraction of the line's flow range) are the same
+
 
 @dataclass
 class Setting:
@@ -45,7 +47,8 @@ class Setting:
 
 
 def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float, ...] = (),
-                      names: tuple[str, ...] = ("theta", "phi")) -> Setting | None:
+                      names: tuple[str, ...] = ("theta", "phi"),
+                      choke_tolerance: float = CHOKE_FLOW_TOLERANCE) -> Setting | None:
     n = len(pos.flow)
     bad = False
     for name in ("pressure", "efficiency"):
@@ -87,20 +90,24 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
     x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
     repeated = 0
     choke_pressures: list[float] = []
+    # At the largest flow, within table rounding, a vertical choke segment: the characteristic ends at
+    # its top, the rest is the choke line. Cycle-code tables print choke flows rounded, so the R-line
+    # before the segment may read a hair (1e-6 relative) above it; taken literally, that order puts the
+    # segment's low pressures before a higher one, a rise of tens of per cent that no curve could follow.
+    choke = np.flatnonzero(x >= x[-1] - choke_tolerance * (x[-1] - x[0]))
+    if len(choke) > 1:
+        top = choke[int(np.argmax(y[choke]))]
+        choke_pressures = sorted(float(v) for v in y[choke])
+        keep = np.ones(len(x), dtype=bool)
+        keep[choke] = False
+        keep[top] = True
+        x, y, eta = x[keep], y[keep], eta[keep]
     if np.any(np.diff(x) <= 0):
-        # The same flow with other values: at the largest flow a vertical choke segment (the
-        # characteristic ends at its top, the rest is the choke line); elsewhere repeated readings,
-        # averaged.
+        # The same flow with other values elsewhere: repeated readings, averaged.
         xs, ys, es = [], [], []
-        groups = np.split(np.arange(len(x)), np.flatnonzero(np.diff(x) > 0) + 1)
-        for g, members in enumerate(groups):
-            if len(members) > 1 and g == len(groups) - 1:
-                top = members[int(np.argmax(y[members]))]
-                xs.append(x[top]); ys.append(y[top]); es.append(eta[top])
-                choke_pressures = sorted(float(v) for v in y[members])
-            else:
-                xs.append(x[members[0]]); ys.append(float(np.mean(y[members]))); es.append(float(np.mean(eta[members])))
-                repeated += len(members) - 1
+        for members in np.split(np.arange(len(x)), np.flatnonzero(np.diff(x) > 0) + 1):
+            xs.append(x[members[0]]); ys.append(float(np.mean(y[members]))); es.append(float(np.mean(eta[members])))
+            repeated += len(members) - 1
         x, y, eta = np.array(xs), np.array(ys), np.array(es)
     if len(x) < 3:
         errors.append(FieldError(("positions", i, "flow"),
@@ -152,8 +159,9 @@ def map_impossible(settings: list[Setting]) -> str | None:
     return None
 
 
-def prepare(request: PerfmapRequest) -> list[Setting]:
-    """Validate and return the settings sorted by their values; raises InputRejected."""
+def prepare(request: PerfmapRequest, choke_tolerance: float = CHOKE_FLOW_TOLERANCE) -> list[Setting]:
+    """Validate and return the settings sorted by their values; raises InputRejected. ``choke_tolerance``:
+    flows within this fraction of a line's flow range of its largest are its vertical choke segment."""
     errors: list[FieldError] = []
     settings: list[Setting] = []
     seen: dict[tuple[float, ...], int] = {}
@@ -167,7 +175,7 @@ def prepare(request: PerfmapRequest) -> list[Setting]:
                                      f"positions[{seen[key]}]; merge their points"))
             continue
         seen[key] = i
-        s = _prepare_position(i, pos, errors, key, names)
+        s = _prepare_position(i, pos, errors, key, names, choke_tolerance)
         if s is not None:
             settings.append(s)
     if not errors and request.options.map:  # an explicitly requested map must be possible
