@@ -103,19 +103,20 @@ def deviation(before: np.ndarray, after: np.ndarray) -> float:
     return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
 
 
-def affected(model: ifcopenshell.file, changes: Changes, depth: int = 2) -> list:
-    """The instances of ``model`` whose verdict the optimization can have changed: those it wrote,
-    changed or removed and those referenced by other instances than before (the ones of them
-    ``model`` holds), and what references those, ``depth`` levels up (a where-rule reads what its
-    instance refers to, one or two levels deep). Every other instance has the same attribute values,
-    the same inverse references and the same referenced instances as in the input: its verdict is the
-    input's, and it is not checked again."""
+def affected(model: ifcopenshell.file, changes: Changes, *, output: bool = True, depth: int = 2) -> list:
+    """The instances of ``model`` (the output, or else the input) whose verdict the optimization can
+    have changed: those it wrote, changed or removed and those referenced by other instances than
+    before (the ones of them ``model`` holds), and what references those, ``depth`` levels up (a
+    where-rule reads what its instance refers to, one or two levels deep). Every other instance has the
+    same attribute values, the same inverse references and the same referenced instances as in the
+    input: its verdict is the input's, and it is not checked again."""
+    gone = changes.removed if output else changes.new
     seen: dict[int, object] = {}
     frontier = []
-    for i in changes.touched:
+    for i in sorted(changes.touched - gone):
         try:
             inst = model.by_id(i)
-        except RuntimeError:  # removed (output) or new (input)
+        except RuntimeError:  # a '#12' inside a string
             continue
         seen[i] = inst
         frontier.append(inst)
@@ -150,7 +151,7 @@ def input_errors_like(original: ifcopenshell.file, changes: Changes, found: list
     """The input's errors on its counterpart of the changed part, among instances of the entities the
     output's errors were found on (an error of another entity cannot account for them)."""
     entities = {f.entity for f in found}
-    part = [inst for inst in affected(original, changes) if inst.is_a() in entities]
+    part = [inst for inst in affected(original, changes, output=False) if inst.is_a() in entities]
     return findings(original, part, rules)
 
 

@@ -1,16 +1,15 @@
 """``ifcopenshell.validate`` on a part of a model: its schema checks (types, cardinalities, inverses)
 and EXPRESS rules (type and entity where-rules) on chosen instances, the global rules on the whole
 file. The library validates a whole file and compiles the schema's rules anew each time (seconds, with
-pytest's assertion rewriting that only serves to explain a violation); here the rules are compiled
-once per proof, plainly, and run by the library's own procedure (``rule_executor.run``) restricted to
-the instances asked for. Every finding carries what tells it from another (the rule or attribute, the
+pytest's assertion rewriting that only serves to explain a violation); here the rules module is
+imported as it is (bytecode cached by Python), and run by the library's own procedure
+(``rule_executor.run``) restricted to the instances asked for. Every finding carries what tells it from another (the rule or attribute, the
 entity, the message without instance ids) apart from where it was found."""
 
 from __future__ import annotations
 
-import ast
 import collections
-import os
+import importlib
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -82,13 +81,11 @@ class Rules:
     of each defined type."""
 
     def __init__(self, schema_identifier: str):
-        folder = os.path.join(os.path.dirname(rule_executor.__file__), "rules")
-        path = os.path.join(folder, f"{schema_identifier}.py")
-        with open(path) as f:
+        # imported, not compiled here: Python caches the module's bytecode and the module itself
+        module = importlib.import_module(f"{rule_executor.__package__}.rules.{schema_identifier}")
+        with open(module.__file__) as f:
             self.source = f.read()
-        scope: dict = {}
-        # the library's own transpiled rules, run as the library runs them
-        exec(compile(ast.parse(self.source), f"{schema_identifier}.py", "exec"), scope)  # noqa: S102
+        scope = vars(module)
         self.lines = self.source.split("\n")
         self.schema = ifcopenshell.ifcopenshell_wrapper.schema_by_name(schema_identifier)
         rules = [r for r in scope.values() if hasattr(r, "SCOPE")]
