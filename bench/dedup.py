@@ -33,7 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-PHASES = ("parse", "snapshot", "geometry", "grouping", "matching", "sharing", "postpass", "write", "verification")
+PHASES = ("parse", "geometry", "grouping", "matching", "sharing", "postpass", "write", "verification")
 
 
 def _generate(rings: int, arcs: int, schema: str, path: Path) -> int:

@@ -110,10 +110,10 @@ def affected(model: ifcopenshell.file, changes: Changes, *, output: bool = True,
     where-rule reads what its instance refers to, one or two levels deep). Every other instance has the
     same attribute values, the same inverse references and the same referenced instances as in the
     input: its verdict is the input's, and it is not checked again."""
-    gone = changes.removed if output else changes.new
+    seeds = changes.changed | changes.rewired | (changes.new if output else changes.removed)
     seen: dict[int, object] = {}
     frontier = []
-    for i in sorted(changes.touched - gone):
+    for i in sorted(seeds):
         try:
             inst = model.by_id(i)
         except RuntimeError:  # a '#12' inside a string

@@ -78,10 +78,6 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     with source.step_file() as (path, original_bytes):
         model = ifcio.open_path(str(path))
         lap("parse")
-        # the input as IfcOpenShell writes it, before anything changes: what the output is compared
-        # with, instance by instance, to validate only what changed
-        snapshot = model.to_string()
-        lap("snapshot")
         schema = model.schema
         mode = resolve_mode(opts.sharing, schema)
         if mode == "product_shape" and schema == "IFC2X3":
@@ -151,8 +147,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             differences.append(f"{len(missing)} product(s) without geometry after, e.g. {missing[0]}")
         progress(0.9, "validating the written file")
         verified, cpu_verified = time.perf_counter(), time.process_time()
-        delta = changes.diff(snapshot, optimized.decode())
-        del snapshot
+        # the input file as uploaded, instance by instance against the output: only what changed is validated
+        delta = changes.diff(path.read_bytes().decode("latin-1"), optimized.decode("latin-1"))
         rules = proof.Rules(check.schema_identifier) if opts.express_rules else None
         part = proof.affected(check, delta)
         found = proof.findings(check, part, rules)
@@ -163,6 +159,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             original = ifcio.open_path(str(path))
             inherited_errors = proof.inherited(found, proof.input_errors_like(original, delta, found, rules))
             del original
+        delta.release()
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)
