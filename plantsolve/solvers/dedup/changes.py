@@ -14,7 +14,9 @@ import re
 from collections import Counter
 from dataclasses import dataclass, field
 
-_INSTANCE = re.compile(r"^#(\d+)\s*=(.*?);[ \t]*\r?$", re.MULTILINE | re.DOTALL)
+_INSTANCE = re.compile(r"^#(\d+)\s*=(.*);[ \t]*\r?$", re.MULTILINE)  # one instance a line (quick)
+_INSTANCE_LINES = re.compile(r"^#(\d+)\s*=(.*?);[ \t]*\r?$", re.MULTILINE | re.DOTALL)  # or over several
+_CONTINUED = re.compile(r"\n(?!#|DATA;|ENDSEC;|[ \t]*\r?(?:\n|$))")  # a line that does not start an instance
 _REFERENCE = re.compile(r"#(\d+)")
 # a STEP value's tokens: strings, references, enumerations, names, numbers, any other character
 _TOKEN = re.compile(r"'(?:[^']|'')*'|#\d+|\.[A-Za-z0-9_]+\.|[A-Za-z_][A-Za-z0-9_]*|"
@@ -27,7 +29,7 @@ CHUNK_CHARS = 1 << 22
 class Changes:
     changed: set[int] = field(default_factory=set)  # in both files, other attribute values
     new: set[int] = field(default_factory=set)  # only in the output
-    rewired: set[int] = field(default_factory=set)  # same values, but referenced by other instances now
+    rewired: set[int] = field(default_factory=set)  # in both, same values, referenced by other instances now
     unchanged: int = 0
     _before: str | None = field(default=None, repr=False)
     _output_ids: set[str] = field(default_factory=set, repr=False)
@@ -39,7 +41,7 @@ class Changes:
         if self._removed is None:
             self._removed = set()
             for piece in _pieces(self._before or ""):
-                self._removed.update(int(i) for i in dict(_INSTANCE.findall(piece)).keys() - self._output_ids)
+                self._removed.update(int(i) for i in _instances(piece).keys() - self._output_ids)
         return self._removed
 
     def release(self) -> None:
@@ -65,6 +67,11 @@ def _pieces(text: str, size: int | None = None):
         end = stop if end < 0 else end
         yield text[start:end + 1]
         start = end + 1
+
+
+def _instances(piece: str) -> dict[str, str]:
+    """``{id: entity and values}`` of a piece of STEP text."""
+    return dict((_INSTANCE_LINES if _CONTINUED.search(piece) else _INSTANCE).findall(piece))
 
 
 def same_values(a: str, b: str) -> bool:
@@ -97,7 +104,7 @@ def references(line: str) -> set[int]:
 def diff(before: str, after: str) -> Changes:
     """Compare the input's STEP text with the output's (written by IfcOpenShell), instance by instance."""
     data = after[slice(*_bounds(after))]
-    out_lines = dict(_INSTANCE.findall(data))
+    out_lines = _instances(data)
     out_ids = set(out_lines)
     out_refs = Counter(_REFERENCE.findall(data))
     in_refs: Counter = Counter()
@@ -105,7 +112,7 @@ def diff(before: str, after: str) -> Changes:
     was: dict[str, str] = {}  # the input's text of the changed instances
     unchanged = 0
     for piece in _pieces(before):
-        lines = dict(_INSTANCE.findall(piece))
+        lines = _instances(piece)
         for i in lines.keys() & out_ids:
             if same_values(lines[i], out_lines[i]):
                 unchanged += 1
@@ -124,6 +131,7 @@ def diff(before: str, after: str) -> Changes:
     # referred to as often in both files: any referrer lost to a removed or changed line was made up for
     # by a new or changed one, which is counted above (a '#12=' defining an instance counts on both sides)
     rewired.update(int(i) for i in seen if in_refs[i] != out_refs[i])
+    rewired &= {int(i) for i in out_ids}  # a removed instance is looked at as removed
     changed = {int(i) for i in was}
     new_ids = {int(i) for i in new}
     return Changes(changed=changed, new=new_ids, rewired=rewired - changed - new_ids, unchanged=unchanged,
