@@ -5,17 +5,23 @@ the optimization wrote or changed (the rest of the file is the input's, instance
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
 
 import ifcopenshell
 import numpy as np
 from scipy.spatial import cKDTree
 
-from plantsolve.solvers.dedup import schemacheck
+from plantsolve.solvers.dedup import changes as diffing
+from plantsolve.solvers.dedup import ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
+# under this many output bytes per input byte the whole output is validated: cheaper than reading the
+# input to find what changed (about 1 µs per output byte to validate, 35 ns per input byte to compare)
+WHOLE_OUTPUT_BELOW = 1 / 25
 SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
 
 
@@ -161,3 +167,43 @@ def inherited(output_errors: list[Finding], input_errors: list[Finding]) -> bool
     have = Counter(e.key for e in input_errors)
     need = Counter(e.key for e in output_errors)
     return all(have[k] >= n for k, n in need.items())
+
+
+@dataclass
+class Verdict:
+    errors: list[Finding]
+    inherited: bool
+    validated: int
+    changed: int | None  # None: the output was validated whole, the input never read
+
+
+def verdict(check: ifcopenshell.file, written: bytes, input_path: Path, rules: Rules | None) -> Verdict:
+    """The written file's validation errors and whether the input had them all. The part that changed
+    is validated (see ``affected``), or the whole output when it is that much smaller than the input;
+    the input's text is compared with the output only then, and its counterpart validated only
+    when the output has errors."""
+
+    def compared() -> Changes:
+        return diffing.diff(input_path.read_bytes().decode("latin-1"), written.decode("latin-1"))
+
+    delta = None
+    whole = len(written) < input_path.stat().st_size * WHOLE_OUTPUT_BELOW
+    if whole:
+        part = list(check)
+    else:
+        delta = compared()
+        part = affected(check, delta)
+    found = findings(check, part, rules)
+    inherited_errors = False
+    if found:  # are they ours? (real exports are often invalid already): the same part of the input
+        delta = delta or compared()
+        ours = {inst.id() for inst in affected(check, delta)} if whole else None
+        # an error on an instance outside the changed part is on it exactly as the input has it
+        new = [f for f in found if ours is None or not f.instance_id or f.instance_id in ours]
+        original = ifcio.open_path(str(input_path))
+        inherited_errors = inherited(new, input_errors_like(original, delta, new, rules))
+        del original
+    changed = None if delta is None else len(delta.changed | delta.new | delta.rewired)
+    if delta is not None:
+        delta.release()
+    return Verdict(found, inherited_errors, len(part), changed)

@@ -35,6 +35,7 @@ class Finding:
     entity: str  # the entity of the instance it was found on ('' for the header and global rules)
     message: str  # normalised
     instance: str = ""  # the instance as written, for the report
+    instance_id: int = 0  # 0: the header or a global rule
 
     @property
     def key(self) -> tuple[str, str, str]:
@@ -52,7 +53,7 @@ def _finding(statement: dict) -> Finding | None:
     inst = statement.get("instance")
     entity = inst.is_a() if isinstance(inst, ifcopenshell.entity_instance) else ""
     return Finding(str(statement.get("attribute") or ""), entity, normalised(str(statement.get("message", ""))),
-                   str(inst) if inst is not None else "")
+                   str(inst) if inst is not None else "", inst.id() if entity else 0)
 
 
 class _Part(ifcopenshell.file):
@@ -159,7 +160,8 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
     wrapper = ifcopenshell.ifcopenshell_wrapper
 
     def violated(rule, name: str, error: Exception, inst) -> None:
-        out.append(Finding(name, inst.is_a(), normalised(f"Rule {name}:\n    {rules.definition(error)}"), str(inst)))
+        out.append(Finding(name, inst.is_a(), normalised(f"Rule {name}:\n    {rules.definition(error)}"), str(inst),
+                           inst.id()))
 
     def type_name(ty):
         while isinstance(ty, wrapper.named_type):
@@ -196,7 +198,7 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
             except RecursionError:
                 continue
             except Exception as e:  # noqa: BLE001
-                out.append(Finding("", inst.is_a(), normalised(str(e)), str(inst)))
+                out.append(Finding("", inst.is_a(), normalised(str(e)), str(inst), inst.id()))
                 continue
             entity = rules.schema.declaration_by_name(inst.is_a())
             for attr, value, derived in zip(entity.all_attributes(), values, entity.derived()):

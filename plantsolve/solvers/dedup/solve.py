@@ -11,7 +11,7 @@ import ifcopenshell.util.unit
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
 from plantsolve.solvers.base import Progress, Solved, no_progress, reject
-from plantsolve.solvers.dedup import changes, ifcio, postpass, proof, sharing
+from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.worldgeom import world_points
@@ -147,19 +147,11 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             differences.append(f"{len(missing)} product(s) without geometry after, e.g. {missing[0]}")
         progress(0.9, "validating the written file")
         verified, cpu_verified = time.perf_counter(), time.process_time()
-        # the input file as uploaded, instance by instance against the output: only what changed is validated
-        delta = changes.diff(path.read_bytes().decode("latin-1"), optimized.decode("latin-1"))
         rules = proof.Rules(check.schema_identifier) if opts.express_rules else None
-        part = proof.affected(check, delta)
-        found = proof.findings(check, part, rules)
+        judged = proof.verdict(check, optimized, path, rules)
+        found, inherited_errors = judged.errors, judged.inherited
         counts_after = proof.entity_counts(check)
         del check, again, back_products
-        inherited_errors = False
-        if found:  # are they ours? (real exports are often invalid already): the same part of the input
-            original = ifcio.open_path(str(path))
-            inherited_errors = proof.inherited(found, proof.input_errors_like(original, delta, found, rules))
-            del original
-        delta.release()
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)
@@ -168,8 +160,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     verification = Verification(max_deviation=max_dev, products_checked=len(deviations),
                                 semantic_counts_equal=semantic_equal, schema_valid=not errors,
                                 validation_errors=errors[:proof.MAX_ERRORS_LISTED], express_rules=opts.express_rules,
-                                errors_inherited=inherited_errors, instances_validated=len(part),
-                                instances_changed=len(delta.changed | delta.new | delta.rewired))
+                                errors_inherited=inherited_errors, instances_validated=judged.validated,
+                                instances_changed=judged.changed)
     if inherited_errors:
         warnings.append(Diagnostic(code="input_invalid", message=f"The output has {len(errors)} validation error(s), "
                                    "all of them already in the input file", details={}))

@@ -9,6 +9,7 @@ from collections import Counter
 
 import ifcopenshell
 import ifcopenshell.validate
+import pytest
 
 from plantsolve.solvers.dedup import changes, postpass, proof, schemacheck, sharing
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
@@ -166,7 +167,15 @@ def _without_placements(model: ifcopenshell.file) -> ifcopenshell.file:
     return model
 
 
-def test_a_world_baked_model_without_placements_keeps_its_own_errors_and_is_offered():
+@pytest.fixture(params=["changed part", "whole output"])
+def proof_scope(request, monkeypatch):
+    """Both ways the proof validates: the part that changed, or (an output far smaller than its input)
+    the whole output."""
+    monkeypatch.setattr(proof, "WHOLE_OUTPUT_BELOW", 0.0 if request.param == "changed part" else 10.0)
+    return request.param
+
+
+def test_a_world_baked_model_without_placements_keeps_its_own_errors_and_is_offered(proof_scope):
     model = _without_placements(tunnel_file(2, "IFC4"))
     errors = proof.validate(model, express_rules=True)
     assert {(e.rule, e.entity) for e in errors} == {
@@ -183,7 +192,7 @@ def test_a_world_baked_model_without_placements_keeps_its_own_errors_and_is_offe
     assert "optimized.ifc" in solved.files and v.errors_inherited and len(v.validation_errors) == 8
 
 
-def test_a_new_inverse_error_from_sharing_is_caught_and_the_file_withheld(monkeypatch):
+def test_a_new_inverse_error_from_sharing_is_caught_and_the_file_withheld(monkeypatch, proof_scope):
     """IFC2X3 allows one product per IfcProductDefinitionShape (ShapeOfProduct [1:1]): sharing one
     anyway breaks the shape's inverse, on an instance whose own STEP line did not change."""
     apply = sharing.apply
@@ -198,7 +207,7 @@ def test_a_new_inverse_error_from_sharing_is_caught_and_the_file_withheld(monkey
     assert any(w.code == "verification_failed" for w in solved.result.report.warnings)
 
 
-def test_a_new_rule_error_on_a_written_instance_is_caught_even_when_the_input_had_errors(monkeypatch):
+def test_a_new_rule_error_on_a_written_instance_is_caught_even_when_the_input_had_errors(monkeypatch, proof_scope):
     """A mapped representation called 'Brep' breaks IfcShapeRepresentation.CorrectItemsForType; the
     input's own errors (segments without placement) do not cover it."""
     apply = sharing.apply
@@ -220,7 +229,7 @@ def test_a_new_rule_error_on_a_written_instance_is_caught_even_when_the_input_ha
     assert sum("PlacementForShapeRepresentation" in e for e in v.validation_errors) == 16
 
 
-def test_the_proof_validates_what_changed_not_the_whole_file():
+def test_the_proof_validates_what_changed_not_the_whole_file(proof_scope):
     model = tunnel_file(3, "IFC4")
     orphan = model.create_entity("IfcCartesianPoint", [0.0, 0.0])  # unused, untouched: the input's business
     model.create_entity("IfcPolyLoop", [orphan, *model.by_type("IfcCartesianPoint")[:2]])  # AllPointsSameDim
@@ -228,9 +237,18 @@ def test_the_proof_validates_what_changed_not_the_whole_file():
     v = solved.result.verification
     out = reopen(solved)
     total = len(list(out))
-    assert v.schema_valid and not v.validation_errors and "optimized.ifc" in solved.files
-    assert 0 < v.instances_changed <= v.instances_validated < total / 2, (v, total)
-    # the members' new representations are among what was validated: a whole-file check of the output
-    # finds only the input's loop
+    # a whole-file check of the output finds only the input's loop
     assert {(e.rule, e.entity) for e in proof.validate(out, express_rules=True)} == {
         ("IfcPolyLoop.AllPointsSameDim", "IfcPolyLoop")}
+    assert "optimized.ifc" in solved.files
+    if proof_scope == "changed part":  # the loop is not looked at again
+        assert v.schema_valid and not v.validation_errors and not v.errors_inherited
+        assert 0 < v.instances_changed <= v.instances_validated < total / 2, (v, total)
+    else:  # seen, and known for the input's own: it is on an instance the optimization left as it was
+        assert not v.schema_valid and v.errors_inherited and len(v.validation_errors) == 1
+        assert "AllPointsSameDim" in v.validation_errors[0] and v.instances_validated == total
+        assert 0 < v.instances_changed < total  # errors found: what changed was looked up to judge them
+    if proof_scope == "whole output":  # a clean output validated whole never reads the input again
+        solved = run(tunnel_file(3, "IFC4"), sharing="mapped_item", postpass=False)
+        v = solved.result.verification
+        assert v.schema_valid and v.instances_changed is None and v.instances_validated == len(list(reopen(solved)))
