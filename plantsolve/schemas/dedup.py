@@ -76,9 +76,19 @@ class Verification(BaseModel):
     semantic_counts_equal: bool = Field(description="Rooted instances per entity (products, property sets, "
                                         "spatial elements, relationships), GlobalIds, property values and each "
                                         "product's styles unchanged.")
-    schema_valid: bool
-    validation_errors: list[str] = Field(default_factory=list)
+    schema_valid: bool = Field(description="No error of ifcopenshell.validate in what the optimization wrote, "
+                               "changed or re-referenced and the instances referring to those (two levels up), nor in "
+                               "the schema's global rules. The rest of the file is the input's, instance for instance, "
+                               "with whatever errors the input had there (not checked again).")
+    validation_errors: list[str] = Field(default_factory=list, description="The errors found (at most 50), each "
+                                         "'instance: [rule or attribute] message'.")
     express_rules: bool = Field(default=True, description="Whether EXPRESS where-rules were checked too.")
+    instances_changed: int | None = Field(default=None, description="Instances of the output that are new, have "
+                                          "other attribute values than in the input, or are referenced by other "
+                                          "instances; null when the output was validated whole (under 1/25 of the "
+                                          "input's size, checking all of it costs less than finding what changed).")
+    instances_validated: int = Field(default=0, description="Instances of the output validated: the changed ones "
+                                     "and what refers to them, or all of them.")
     errors_inherited: bool = Field(
         default=False, description="The output's validation errors are all errors the input file already had (then "
         "the optimized file is still offered; schema_valid stays false).")

@@ -1,20 +1,27 @@
 """Proof instead of the paper's "visual perception": per-product world geometry before vs after (the
-written file read back and tessellated again), semantic counts, and ``ifcopenshell.validate``."""
+written file read back and tessellated again), semantic counts, and ``ifcopenshell.validate`` on what
+the optimization wrote or changed (the rest of the file is the input's, instance for instance)."""
 
 from __future__ import annotations
 
-import re
 from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
 
+import ifcopenshell
 import numpy as np
 from scipy.spatial import cKDTree
 
-import ifcopenshell
-import ifcopenshell.validate
-
+from plantsolve.solvers.dedup import changes as diffing
+from plantsolve.solvers.dedup import ifcio, schemacheck
+from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
+from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
+# under this many output bytes per input byte the whole output is validated: cheaper than reading the
+# input to find what changed (about 1 µs per output byte to validate, 35 ns per input byte to compare)
+WHOLE_OUTPUT_BELOW = 1 / 25
 SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
 
 
@@ -102,26 +109,101 @@ def deviation(before: np.ndarray, after: np.ndarray) -> float:
     return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
 
 
-def normalised(message: str) -> str:
-    """An error message without instance ids, to compare errors of the input and the output."""
-    return re.sub(r"0x[0-9a-fA-F]+", "0x", re.sub(r"#\d+", "#", message))
+def affected(model: ifcopenshell.file, changes: Changes, *, output: bool = True, depth: int = 2) -> list:
+    """The instances of ``model`` (the output, or else the input) whose verdict the optimization can
+    have changed: those it wrote, changed or removed and those referenced by other instances than
+    before (the ones of them ``model`` holds), and what references those, ``depth`` levels up (a
+    where-rule reads what its instance refers to, one or two levels deep). Every other instance has the
+    same attribute values, the same inverse references and the same referenced instances as in the
+    input: its verdict is the input's, and it is not checked again."""
+    seeds = changes.changed | changes.rewired | (changes.new if output else changes.removed)
+    seen: dict[int, object] = {}
+    frontier = []
+    for i in sorted(seeds):
+        try:
+            inst = model.by_id(i)
+        except RuntimeError:  # a '#12' inside a string
+            continue
+        seen[i] = inst
+        frontier.append(inst)
+    for _ in range(depth):
+        above = []
+        for inst in frontier:
+            for ref in model.get_inverse(inst):
+                if ref.id() not in seen:
+                    seen[ref.id()] = ref
+                    above.append(ref)
+        frontier = above
+    return [seen[i] for i in sorted(seen)]
 
 
-def inherited(output_errors: list[str], input_errors: list[str]) -> bool:
-    """Whether every error of the output is one the input already had (as many times or more)."""
-    have = Counter(normalised(e) for e in input_errors)
-    need = Counter(normalised(e) for e in output_errors)
+def findings(model: ifcopenshell.file, instances: list | None, rules: Rules | None) -> list[Finding]:
+    """Errors of ``ifcopenshell.validate`` on ``instances`` (None: the whole model): schema checks and,
+    with ``rules``, their where-rules and the schema's global rules (always over the whole model)."""
+    out = schemacheck.schema_findings(model, instances)
+    if rules is not None:
+        out += schemacheck.rule_findings(model, model if instances is None else instances, rules)
+        out += schemacheck.global_rule_findings(model, rules)
+    return out
+
+
+def validate(model: ifcopenshell.file, express_rules: bool) -> list[Finding]:
+    """The whole model's errors."""
+    return findings(model, None, Rules(model.schema_identifier) if express_rules else None)
+
+
+def input_errors_like(original: ifcopenshell.file, changes: Changes, found: list[Finding],
+                      rules: Rules | None) -> list[Finding]:
+    """The input's errors on its counterpart of the changed part, among instances of the entities the
+    output's errors were found on (an error of another entity cannot account for them)."""
+    entities = {f.entity for f in found}
+    part = [inst for inst in affected(original, changes, output=False) if inst.is_a() in entities]
+    return findings(original, part, rules)
+
+
+def inherited(output_errors: list[Finding], input_errors: list[Finding]) -> bool:
+    """Whether every error of the output is one the input already had (as many times or more): the same
+    rule or attribute on the same entity with the same message, wherever and on whichever instance id."""
+    have = Counter(e.key for e in input_errors)
+    need = Counter(e.key for e in output_errors)
     return all(have[k] >= n for k, n in need.items())
 
 
-def validate(model: ifcopenshell.file, express_rules: bool) -> list[str]:
-    logger = ifcopenshell.validate.json_logger()
-    ifcopenshell.validate.validate(model, logger, express_rules=express_rules)
-    errors = []
-    for statement in logger.statements:
-        if str(statement.get("level", "error")).lower() not in ("error", "critical"):
-            continue
-        inst = statement.get("instance")
-        where = f"{inst}: " if inst is not None else ""
-        errors.append(f"{where}{statement.get('message', statement)}"[:500])
-    return errors
+@dataclass
+class Verdict:
+    errors: list[Finding]
+    inherited: bool
+    validated: int
+    changed: int | None  # None: the output was validated whole, the input never read
+
+
+def verdict(check: ifcopenshell.file, written: bytes, input_path: Path, rules: Rules | None) -> Verdict:
+    """The written file's validation errors and whether the input had them all. The part that changed
+    is validated (see ``affected``), or the whole output when it is that much smaller than the input;
+    the input's text is compared with the output only then, and its counterpart validated only
+    when the output has errors."""
+
+    def compared() -> Changes:
+        return diffing.diff(input_path.read_bytes().decode("latin-1"), written.decode("latin-1"))
+
+    delta = None
+    whole = len(written) < input_path.stat().st_size * WHOLE_OUTPUT_BELOW
+    if whole:
+        part = list(check)
+    else:
+        delta = compared()
+        part = affected(check, delta)
+    found = findings(check, part, rules)
+    inherited_errors = False
+    if found:  # are they ours? (real exports are often invalid already): the same part of the input
+        delta = delta or compared()
+        ours = {inst.id() for inst in affected(check, delta)} if whole else None
+        # an error on an instance outside the changed part is on it exactly as the input has it
+        new = [f for f in found if ours is None or not f.instance_id or f.instance_id in ours]
+        original = ifcio.open_path(str(input_path))
+        inherited_errors = inherited(new, input_errors_like(original, delta, new, rules))
+        del original
+    changed = None if delta is None else len(delta.changed | delta.new | delta.rewired)
+    if delta is not None:
+        delta.release()
+    return Verdict(found, inherited_errors, len(part), changed)
