@@ -50,12 +50,14 @@ def _face_sums(values: np.ndarray, face_of: np.ndarray, n_faces: int) -> np.ndar
 def face_measures(poly: Polygons) -> FaceMeasures:
     """Newell area vectors and divergence-theorem flux terms of every face, from its fan triangles
     (the paper's per-orbit measures: each loop is an ⟨α0, α1⟩ orbit, each term a sum over its darts)."""
+    lengths = poly.loop_lengths
+    if len(lengths) == poly.n_faces and (lengths == 3).all():
+        return _triangle_measures(poly)
     lv = poly.loop_vertices
     n_faces = poly.n_faces
     origin = poly.points[lv[poly.face_position_start[:-1]]]
     position_face = poly.position_face
     rel = poly.points[lv] - origin[position_face]  # every loop position in its face's frame
-    lengths = poly.loop_lengths
     loop_tri = lengths == 3
     # triangles: loops of three vertices as they are
     tri_loops = np.flatnonzero(loop_tri)
@@ -77,7 +79,7 @@ def face_measures(poly: Polygons) -> FaceMeasures:
         tri_face = np.concatenate([tri_face, fan_face])
         order = np.argsort(tri_face, kind="stable")
         t0, t1, t2, tri_face = t0[order], t1[order], t2[order], tri_face[order]
-    a = 0.5 * np.cross(t1 - t0, t2 - t0)
+    a = 0.5 * _cross(t1 - t0, t2 - t0)
     m = (t0 + t1 + t2) / 3.0
     area_vector = _face_sums(a, tri_face, n_faces)
     flux = _face_sums(m * a, tri_face, n_faces)
@@ -96,6 +98,45 @@ def face_measures(poly: Polygons) -> FaceMeasures:
     nonempty = starts[1:] > starts[:-1]
     if len(distance):
         planarity[nonempty] = np.maximum.reduceat(distance, starts[:-1][nonempty])
+    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
+                        planarity_error=planarity)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise u × v (np.cross's products, without its temporaries)."""
+    out = np.empty_like(u)
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+def _row_norm(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] + x[:, 2] * x[:, 2])
+
+
+def _triangle_measures(poly: Polygons) -> FaceMeasures:
+    """:func:`face_measures` of faces that are each one triangle (a mesh): the same terms, with no fan,
+    no per-face sums and no per-position arrays."""
+    p = poly.points
+    tri = poly.loop_vertices.reshape(-1, 3)
+    origin = p[tri[:, 0]]
+    t1 = p[tri[:, 1]] - origin
+    t2 = p[tri[:, 2]] - origin
+    area_vector = _cross(t1, t2)
+    area_vector *= 0.5
+    flux = (t1 + t2) / 3.0
+    flux *= area_vector
+    e1, e2 = _row_norm(t1), _row_norm(t2 - t1)
+    perimeter = e1 + e2
+    perimeter += _row_norm(t2)
+    # the largest distance of a corner from the plane through the corners' mean (zero up to rounding)
+    norm = _row_norm(area_vector)
+    normal = np.divide(area_vector, norm[:, None], out=np.zeros_like(area_vector), where=norm[:, None] > 0)
+    centroid = (t1 + t2) / 3.0
+    planarity = np.abs(np.einsum("ij,ij->i", centroid, normal))
+    for corner in (t1, t2):
+        np.maximum(planarity, np.abs(np.einsum("ij,ij->i", corner - centroid, normal)), out=planarity)
     return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
                         planarity_error=planarity)
 

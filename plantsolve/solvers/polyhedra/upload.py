@@ -20,7 +20,8 @@ back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` con
 everything else (``vn``, ``vt``, ``usemtl``, ``mtllib``, ``s``, ``l``) is ignored. SketchUp and
 Revit write unwelded, triangulated faces: coincident vertices are merged by the solver.
 
-STL (ASCII or binary, read with trimesh): one zone, triangles as faces.
+STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
+``t1``, ``t2``, … in file order).
 """
 
 from __future__ import annotations
@@ -384,14 +385,20 @@ def parse_stl(content: bytes) -> dict:
         (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
     skipped = [{"object": f"facet {int(k) + 1}", "reason": "non-finite or repeated vertex"}
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
-    triangles = triangles[good]
+    if not good.all():
+        triangles = triangles[good]
     if len(triangles) == 0:
         raise reject("no usable triangle in the STL file (non-finite or repeated vertices)")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str(getattr(mesh, "metadata", {}).get("name") or "").strip() if ascii_like else "") or "default"
-    faces = [{"id": f"t{k + 1}", "loops": [t], "zones": [name]} for k, t in enumerate(triangles.tolist())]
-    return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
-            "source": {"format": "stl", "faces": len(faces), "zones": 1, "skipped": skipped,
+    # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them
+    used = np.zeros(len(vertices), dtype=bool)
+    used[triangles] = True
+    if not used.all():  # the vertices of skipped facets: not part of the zone
+        renumber = np.cumsum(used) - 1
+        vertices, triangles = vertices[used], renumber[triangles]
+    return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
+            "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
 
 
