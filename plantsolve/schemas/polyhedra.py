@@ -73,8 +73,8 @@ def _mesh_vertices(value: Any) -> np.ndarray:
         raise ValueError("a mesh needs at least 3 vertices")
     if len(array) > MAX_VERTICES:
         raise ValueError(f"at most {MAX_VERTICES} vertices, got {len(array)}")
-    bad = ~(np.abs(array) <= MAX_COORDINATE).all(axis=1)
-    if bad.any():
+    if not (array.min() >= -MAX_COORDINATE and array.max() <= MAX_COORDINATE):  # NaN fails both
+        bad = ~(np.abs(array) <= MAX_COORDINATE).all(axis=1)
         raise ValueError(f"vertex {int(np.flatnonzero(bad)[0])} is not finite or beyond {MAX_COORDINATE:g}")
     return array
 

@@ -18,7 +18,9 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
-from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
+from plantsolve.schemas.polyhedra import MAX_LISTED_FACES
+from plantsolve.solvers.polyhedra import bulk_csv
+from plantsolve.solvers.polyhedra.polygons import FaceIds, Polygons, from_request
 from plantsolve.solvers.polyhedra.solve import FACE_TABLE
 
 MAX_PANELS = 12
@@ -126,6 +128,10 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     parents = np.full(poly.n_faces, "", dtype=object)
     subs = np.flatnonzero(poly.face_parent >= 0)
     parents[subs] = [poly.face_ids[p] for p in poly.face_parent[subs]]
+    ids = poly.face_ids
+    named = ids.names if isinstance(ids, FaceIds) else ids
+    if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]):
+        return out.getvalue().encode() + _bulk_face_rows(poly, zones, parents, face_table)
     columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
     net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
     area, perimeter, nx, ny, nz, planarity = columns
@@ -133,6 +139,36 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
                          perimeter, blank, blank, blank, blank, nx, ny, nz, planarity))
     return out.getvalue().encode()
+
+
+def _id_cells(poly: Polygons, s: int, e: int) -> np.ndarray:
+    ids = poly.face_ids
+    if isinstance(ids, FaceIds) and s >= len(ids.names):
+        return bulk_csv.numbered_cells(ids.prefix, s - len(ids.names) + 1, e - s)
+    return bulk_csv.text_cells(ids[s:e])
+
+
+def _label_cells(labels: np.ndarray) -> np.ndarray:
+    """Cells of a column with few distinct strings (zone names, parents): each distinct one made once."""
+    values, index = np.unique(labels.astype(str), return_inverse=True)
+    return bulk_csv.text_cells(values.tolist())[index.reshape(-1)]
+
+
+def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face_table: np.ndarray,
+                    chunk: int = 20_000) -> bytes:
+    """The face rows of a large table (bulk_csv: 17 significant digits, written by array operations)."""
+    parts = []
+    for s in range(0, poly.n_faces, chunk):
+        e = min(s + chunk, poly.n_faces)
+        n = e - s
+        num = [bulk_csv.number_cells(face_table[s:e, k]) for k in range(face_table.shape[1])]
+        comma = bulk_csv.literal(",", n)
+        parts.append(bulk_csv.rows([
+            bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
+            _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
+            bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
+            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal("\n", n)]))
+    return b"".join(parts)
 
 
 def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact]:
