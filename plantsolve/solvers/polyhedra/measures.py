@@ -13,6 +13,7 @@ vector. The numbers are the Newell/divergence ones; no geometric-algebra package
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -27,11 +28,11 @@ class FaceMeasures:
     perimeter: np.ndarray  # (F,)
     planarity_error: np.ndarray  # (F,)
 
-    @property
+    @cached_property
     def area(self) -> np.ndarray:
         return np.linalg.norm(self.area_vector, axis=1)
 
-    @property
+    @cached_property
     def normal(self) -> np.ndarray:
         area = self.area
         return np.divide(self.area_vector, area[:, None], out=np.zeros_like(self.area_vector), where=area[:, None] > 0)

@@ -40,14 +40,13 @@ def exact_labels(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     h = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
     h ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
     h ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
-    order = np.argsort(h, kind="stable")
+    order = np.argsort(h)
     hs = h[order]
     new = np.ones(n, dtype=bool)
     new[1:] = hs[1:] != hs[:-1]
     group_sorted = np.cumsum(new) - 1
-    first_sorted = order[new]  # smallest row of each hash group (stable sort)
-    same = (bits[order] == bits[first_sorted[group_sorted]]).all(axis=1)
-    if not same.all():
+    first_sorted = np.minimum.reduceat(order, np.flatnonzero(new))  # smallest row of each hash group
+    if not (bits[order] == bits[first_sorted[group_sorted]]).all():
         order = np.lexsort((bits[:, 2], bits[:, 1], bits[:, 0]))
         rows = bits[order]
         new = np.ones(n, dtype=bool)
