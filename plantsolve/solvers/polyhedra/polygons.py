@@ -144,7 +144,12 @@ class Polygons:
         position, use = self.edge_uses
         a = self.loop_vertices[position]
         b = self.loop_vertices[self.next_position()[position]]
-        return group_edges(a, b, self.uses()[1][use], len(self.points), len(self.zone_ids))
+        use_zone = self.uses()[1]
+        if len(self.zone_ids) == 1:  # one zone: a view of zeros, not an array of them
+            zone = np.broadcast_to(np.zeros(1, dtype=use_zone.dtype), (len(use),))
+        else:
+            zone = use_zone[use]
+        return group_edges(a, b, zone, len(self.points), len(self.zone_ids))
 
 
 def expand_uses(poly: Polygons, use_face: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
