@@ -28,6 +28,9 @@ class Repairs:
     t_junctions_per_zone: np.ndarray  # vertices inserted into faces of each zone
 
 
+HASH = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
+
+
 def exact_labels(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows of ``pts`` that are equal (-0.0 equal to 0.0): the label of each row (0, 1, … by first
     occurrence order of the sort, not by value) and the first row of each label. One hash of the three
@@ -37,16 +40,24 @@ def exact_labels(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if n == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     bits = np.ascontiguousarray(pts + 0.0).view(np.uint64)  # + 0.0: -0.0 becomes 0.0
-    h = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
-    h ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
-    h ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
+    h = np.zeros(n, dtype=np.uint64)
+    for k in range(3):
+        h ^= bits[:, k]
+        h *= HASH[k]
+        h ^= h >> np.uint64(29)  # the high bits into the low ones: float32 values read into doubles end in zeros
+        h *= HASH[(k + 1) % 3]
     order = np.argsort(h)
     hs = h[order]
     new = np.ones(n, dtype=bool)
     new[1:] = hs[1:] != hs[:-1]
     group_sorted = np.cumsum(new) - 1
     first_sorted = np.minimum.reduceat(order, np.flatnonzero(new))  # smallest row of each hash group
-    if not (bits[order] == bits[first_sorted[group_sorted]]).all():
+    # every row equal to the one before it in the sort, where the two share a hash (one gather per coordinate)
+    equal = np.ones(n - 1, dtype=bool)
+    for k in range(3):
+        column = bits[:, k][order]
+        equal &= column[1:] == column[:-1]
+    if not (new[1:] | equal).all():
         order = np.lexsort((bits[:, 2], bits[:, 1], bits[:, 0]))
         rows = bits[order]
         new = np.ones(n, dtype=bool)
@@ -66,7 +77,7 @@ def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
     mask = np.zeros(len(poly.points), dtype=bool)
     mask[poly.loop_vertices] = True
     used = np.flatnonzero(mask)
-    exact, first = exact_labels(poly.points[used])  # first: smallest position in ``used`` of each distinct point
+    exact, first = exact_labels(poly.points if len(used) == len(poly.points) else poly.points[used])  # first: smallest position in ``used`` of each distinct point
     label = exact
     if tolerance > 0:
         pairs = cKDTree(poly.points[used[first]], balanced_tree=False, compact_nodes=False).query_pairs(
@@ -80,8 +91,13 @@ def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
     merged = int(len(used) - n_labels)
     if merged == 0:
         return poly, 0
-    representative = np.full(n_labels, len(used), dtype=np.int64)
-    np.minimum.at(representative, label[first], first)
+    if label is exact:  # no tolerance pairs: each label is one distinct point, its first row represents it
+        representative = first
+    else:
+        representative = np.full(n_labels, len(used), dtype=np.int64)
+        np.minimum.at(representative, label[first], first)
+    if len(used) == len(poly.points):  # every point used (an STL): positions in ``used`` are point indices
+        return poly.with_loops(representative[label][poly.loop_vertices], poly.loop_start), merged
     mapping = np.arange(len(poly.points))
     mapping[used] = used[representative[label]]
     return poly.with_loops(mapping[poly.loop_vertices], poly.loop_start), merged

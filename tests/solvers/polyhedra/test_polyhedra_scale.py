@@ -19,6 +19,8 @@ from plantsolve.solvers.polyhedra import artifacts, bulk_csv, check_input, parse
 from plantsolve.solvers.polyhedra import synthetic as shapes
 from plantsolve.solvers.polyhedra.polygons import from_mesh, from_request
 from plantsolve.solvers.polyhedra.repair import merge_vertices
+
+repair = importlib.import_module("plantsolve.solvers.polyhedra.repair")
 from plantsolve.solvers.polyhedra.solve import analyse
 from plantsolve.solvers.polyhedra.sorting import counts_of, dense_labels, distinct, stable_order
 
@@ -104,6 +106,17 @@ def test_an_unwelded_mesh_merges_by_hashing_to_the_welded_answer():
         an = analyse(poly, tolerance)
         assert an.terms.flux.sum() == pytest.approx(welded.terms.flux.sum(), rel=1e-12)
         assert an.topology.euler.tolist() == [0] and len(an.topology.open_groups) == 0
+
+
+def test_rows_whose_hashes_collide_are_told_apart(monkeypatch):
+    rng = np.random.default_rng(5)
+    pts = rng.integers(0, 3, size=(200, 3)).astype(float)
+    monkeypatch.setattr(repair, "HASH", (np.uint64(0),) * 3)  # every row the same hash: the rows are sorted instead
+    label, first = repair.exact_labels(pts)
+    _, reference = np.unique(pts, axis=0, return_inverse=True)
+    same = label[:, None] == label[None, :]
+    assert np.array_equal(same, reference.reshape(-1)[:, None] == reference.reshape(-1)[None, :])
+    assert np.array_equal(np.sort(first), np.sort(np.unique(reference.reshape(-1), return_index=True)[1]))
 
 
 def test_a_binary_stl_is_read_into_a_mesh_with_its_bad_facets_skipped():
