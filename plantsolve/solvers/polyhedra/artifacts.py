@@ -130,7 +130,8 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     parents[subs] = [poly.face_ids[p] for p in poly.face_parent[subs]]
     ids = poly.face_ids
     named = ids.names if isinstance(ids, FaceIds) else ids
-    if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]):
+    if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]) and \
+            np.isfinite(face_table).all():
         return out.getvalue().encode() + _bulk_face_rows(poly, zones, parents, face_table)
     columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
     net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
