@@ -2,6 +2,7 @@
 
     python bench/polyhedra.py            # 10, 100, 1,000-zone buildings and a 1,000,000-triangle torus
     python bench/polyhedra.py --quick    # 10 and 100 zones, a 100,000-triangle torus
+    python bench/polyhedra.py --before /work/main   # also the code of another checkout (its .venv), same run
 
 Prints per generated building (floors x rooms, a window subsurface on every exterior wall; the
 "paneled" one has every wall and slab split 4 x 4, 53,200 faces): zones, faces, time of the
@@ -10,14 +11,24 @@ diagnosed, result built; the request is validated once at submission, timed apar
 array analysis alone, peak memory (tracemalloc) and the largest
 volume error. Then the closed triangle mesh, side by side in the same run with trimesh on the same
 arrays: trimesh's volume + area (its mass properties), trimesh's watertight check, our measures
-alone (Newell/divergence, no topology), our full analysis from arrays, and the agreement.
-Targets: 1,000 zones < 2 s; the million-triangle mesh within 2x of trimesh.
+alone (Newell/divergence, no topology), our full analysis from arrays, and the agreement; then the
+full analysis again in a fresh process each (CPU seconds, peak RSS of the process), ours and, with
+``--before``, the other checkout's. Last, end to end: the mesh as a binary STL through
+``plantsolve solve polyhedra`` (a child process: CPU seconds user + system, its peak RSS, the result
+JSON's and the artifacts' sizes) against trimesh loading the same file and taking volume and area
+in a child process of its own. CPU seconds come from the children's ``wait4`` rusage.
+Targets: 1,000 zones < 2 s; the million-triangle mesh within 2x of trimesh in process, under 1 GB;
+end to end within 3x of trimesh reading the file.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
 import sys
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
@@ -39,11 +50,13 @@ BUILDINGS = {"10": (2, 5, 1, 1), "100": (4, 5, 5, 1), "1,000": (10, 10, 10, 1), 
 
 
 def timed(fn, reps=3):
+    """Best CPU seconds of ``reps`` runs (the machine may be shared: CPU time, not wall time)."""
     best, out = float("inf"), None
     for _ in range(reps):
-        t0 = time.perf_counter()
+        out = None
+        t0 = time.process_time()
         out = fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     return best, out
 
 
@@ -62,7 +75,7 @@ def checked_solve(request: PolyhedraRequest):
 
 
 def buildings(sizes):
-    print("| zones | faces | validate request [s] | solve [s] | of which analysis [s] | peak memory of solve [MiB] "
+    print("| zones | faces | validate request CPU [s] | solve CPU [s] | of which analysis CPU [s] | peak memory of solve [MiB] "
           "| max volume error [m³] |")
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for label in sizes:
@@ -77,6 +90,135 @@ def buildings(sizes):
         err = max(abs(z.volume - 60.0) for z in result.zones)
         assert len(result.zones) == n and all(z.closed for z in result.zones)
         print(f"| {label} | {len(body['faces']):,} | {t_validate:.3f} | {t_solve:.3f} | {t_an:.3f} | {mem:.0f} | {err:.1e} |")
+
+
+REPO = Path(__file__).resolve().parents[1]
+
+# run in a fresh interpreter (``sys.argv[1:] = [repo, n_major, n_minor]``): the analysis of the torus mesh,
+# CPU seconds and volume printed as JSON; the code is the given checkout's
+CHILD_ANALYSIS = """
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+from plantsolve.solvers.polyhedra.polygons import from_mesh
+from plantsolve.solvers.polyhedra.solve import analyse
+from plantsolve.solvers.polyhedra.synthetic import torus_mesh
+vertices, triangles = torus_mesh(int(sys.argv[2]), int(sys.argv[3]))
+t0 = time.process_time()
+an = analyse(from_mesh(vertices, triangles))
+cpu = time.process_time() - t0
+print(json.dumps({"cpu": cpu, "volume": float(an.terms.flux.sum() / 3.0), "area": float(an.measures.area.sum())}))
+""" + "print(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])"
+
+CHILD_TRIMESH_FILE = """
+import json, sys, time
+import trimesh
+t0 = time.process_time()
+mesh = trimesh.load(sys.argv[1])
+volume, area = float(mesh.volume), float(mesh.area)
+print(json.dumps({"cpu": time.process_time() - t0, "volume": volume, "area": area}))
+print(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])
+"""
+
+# the command line in this interpreter, then its peak RSS (VmHWM: this process's own, whereas rusage's maxrss
+# starts from the parent's at fork)
+CHILD_CLI = """
+import sys
+from plantsolve.cli import main
+code = main(sys.argv[1:])
+print(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])
+sys.exit(code)
+"""
+
+
+# the job's steps in one process, without the job domain (no upload reader's time limit, no store): read the STL,
+# check, solve, the result as JSON, the artifacts
+CHILD_PIPELINE = """
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.polyhedra import check_input, parse_upload, render_artifacts, solve
+t0 = time.process_time()
+request = parse_upload(StoredInput.from_path(sys.argv[2]), None)
+check_input(request)
+solved = solve(request)
+text = solved.result.model_dump_json()
+files = render_artifacts(request, solved)
+print(json.dumps({"cpu": time.process_time() - t0, "json": len(text), "volume": solved.result.total_volume,
+                  "csv": sum(len(a.data) for a in files if a.name.endswith(".csv"))}))
+print(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])
+"""
+
+
+def child(argv: list[str], cwd: Path | None = None) -> tuple[float, float, str]:
+    """(CPU seconds user + system, peak RSS in MiB, standard output but its last line) of a child process and the
+    children it waited for (its own rusage from wait4); the last line of its output is its VmHWM in kB."""
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    out, err = proc.stdout.read(), proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{argv[:3]} failed ({proc.returncode}): {err.decode()[-2000:]}")
+    *lines, peak = out.decode().strip().splitlines()
+    return usage.ru_utime + usage.ru_stime, int(peak) / 1024, "\n".join(lines)
+
+
+def fresh_analysis(n_major: int, n_minor: int, checkouts: dict[str, Path]) -> None:
+    print("\nfull analysis of the same mesh in a fresh process each (CPU of the analysis; peak RSS of the process, "
+          "the mesh and the imports included)")
+    print("| code | analysis CPU [s] | process peak RSS [MiB] | volume |")
+    print("| --- | ---: | ---: | ---: |")
+    for label, repo in checkouts.items():
+        _, rss, out = child([str(python_of(repo)), "-c", CHILD_ANALYSIS, str(repo), str(n_major), str(n_minor)])
+        got = json.loads(out)
+        print(f"| {label} | {got['cpu']:.3f} | {rss:.0f} | {got['volume']:.9f} |")
+
+
+def python_of(repo: Path) -> Path:
+    venv = repo / ".venv" / "bin" / "python"
+    return venv if venv.exists() else Path(sys.executable)
+
+
+def end_to_end(n_major: int, n_minor: int, checkouts: dict[str, Path]) -> None:
+    vertices, triangles = torus_mesh(n_major, n_minor)
+    with tempfile.TemporaryDirectory(prefix="bench-polyhedra-") as folder:
+        work = Path(folder)
+        stl = work / "torus.stl"
+        trimesh.Trimesh(vertices=vertices, faces=triangles, process=False).export(stl)
+        t_process, t_rss, out = child([sys.executable, "-c", CHILD_TRIMESH_FILE, str(stl)])
+        tm = json.loads(out)
+        t_cpu = tm["cpu"]  # load + volume + area, after its imports
+        print(f"\nend to end: the {len(triangles):,}-triangle torus as a binary STL ({stl.stat().st_size / 2**20:.0f} MiB) "
+              "through `plantsolve solve polyhedra torus.stl -o out.json` (a temporary store, artifacts written)")
+        print("| run | CPU [s] | ratio to trimesh | ratio to trimesh's process | peak RSS [MiB] | result JSON [MiB] "
+              "| CSV [MiB] | volume |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+        print(f"| trimesh load + volume + area of the file (its whole process, imports included: {t_process:.2f} s) | "
+              f"{t_cpu:.2f} | 1.00 | | {t_rss:.0f} | | | {tm['volume']:.9f} |")
+        for label, repo in checkouts.items():
+            try:
+                cpu, rss, out = child([str(python_of(repo)), "-c", CHILD_PIPELINE, str(repo), str(stl)])
+            except RuntimeError as failed:
+                print(f"| read + check + solve + JSON + artifacts in one process ({label}) | failed: "
+                      f"{' '.join(str(failed).split())[-160:]} | | | | | | |")
+            else:
+                got = json.loads(out)
+                print(f"| read + check + solve + JSON + artifacts in one process ({label}) | {got['cpu']:.2f} | "
+                      f"{got['cpu'] / t_cpu:.2f} | | {rss:.0f} | {got['json'] / 2**20:.1f} | {got['csv'] / 2**20:.0f} | "
+                      f"{got['volume']:.9f} |")
+        for label, repo in checkouts.items():
+            out_json = work / f"{label}.json"
+            argv = [str(python_of(repo)), "-c", CHILD_CLI, "solve", "polyhedra", str(stl), "-o", str(out_json),
+                    "--no-progress"]
+            try:
+                cpu, rss, _ = child(argv, cwd=work)
+            except RuntimeError as failed:
+                print(f"| plantsolve solve ({label}) | failed: {' '.join(str(failed).split())[-160:]} | | | | | | |")
+                continue
+            result = json.loads(out_json.read_text())
+            csv_size = (work / f"{label}_artifacts" / "zones.csv").stat().st_size
+            print(f"| plantsolve solve ({label}) | {cpu:.2f} | {cpu / t_cpu:.2f} | {cpu / t_process:.2f} | {rss:.0f} | "
+                  f"{out_json.stat().st_size / 2**20:.1f} | {csv_size / 2**20:.0f} | {result['total_volume']:.9f} |")
 
 
 def mesh(n_major, n_minor):
@@ -105,13 +247,13 @@ def mesh(n_major, n_minor):
     t_tm, (v_tm, a_tm) = timed(trimesh_measures)
     t_tw, (_, _, watertight) = timed(trimesh_watertight)
     t_om, (v_om, a_om) = timed(ours_measures)
-    t_of, (v_of, a_of, an) = timed(ours_full, reps=1)
+    t_of, (v_of, a_of, an) = timed(ours_full)
     mem_tm = peak(trimesh_measures)
     mem_of = peak(ours_full)
     closed = an.topology.open_groups.size == 0 and an.topology.non_manifold_groups.size == 0
     genus = (2 - int(an.topology.euler[0])) // 2
     print(f"\nclosed torus mesh: {n:,} triangles, {len(vertices):,} vertices")
-    print("| method | time [s] | ratio to trimesh volume+area | volume | area | peak memory [MiB] |")
+    print("| method | CPU [s] | ratio to trimesh volume+area | volume | area | peak memory [MiB] |")
     print("| --- | ---: | ---: | ---: | ---: | ---: |")
     print(f"| trimesh volume + area | {t_tm:.3f} | 1.00 | {v_tm:.9f} | {a_tm:.9f} | {mem_tm:.0f} |")
     print(f"| trimesh volume + area + is_watertight | {t_tw:.3f} | {t_tw / t_tm:.2f} | | watertight={watertight} | |")
@@ -125,9 +267,16 @@ def mesh(n_major, n_minor):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--before", type=Path, help="a checkout of other code (with its .venv) measured beside this one")
+    parser.add_argument("--mesh-only", action="store_true", help="skip the buildings")
     args = parser.parse_args()
-    buildings(["10", "100"] if args.quick else list(BUILDINGS))
-    mesh(*((500, 100) if args.quick else (1000, 500)))
+    if not args.mesh_only:
+        buildings(["10", "100"] if args.quick else list(BUILDINGS))
+    size = (500, 100) if args.quick else (1000, 500)
+    mesh(*size)
+    checkouts = {"this": REPO, **({"before": args.before.resolve()} if args.before else {})}
+    fresh_analysis(*size, checkouts)
+    end_to_end(*size, checkouts)
 
 
 if __name__ == "__main__":

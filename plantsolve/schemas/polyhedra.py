@@ -16,13 +16,17 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag
+import numpy as np
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, PlainSerializer, PlainValidator, Tag, \
+    TypeAdapter, WithJsonSchema
 
 from plantsolve.schemas.common import FiniteFloat, Point3, Report, StrictModel, Units, json_integer
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000
 MAX_LOOP = 100_000
+MAX_LISTED_FACES = 10_000  # above this many faces a result lists them only when asked (list_faces)
+MAX_COORDINATE = 1e12  # as schemas.common.Coordinate
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
@@ -60,6 +64,61 @@ class Face(StrictModel):
         "net area and is not part of any enclosure.")
 
 
+def _mesh_vertices(value: Any) -> np.ndarray:
+    """(N, 3) finite float64 coordinates: an array as a reader made it, or JSON's ``[[x, y, z], ...]``."""
+    if not isinstance(value, np.ndarray):
+        value = _POINTS.validate_python(value, strict=True)
+    array = np.asarray(value, dtype=np.float64).reshape(-1, 3) if np.size(value) else np.zeros((0, 3))
+    if not len(array):
+        raise ValueError("a mesh needs at least 3 vertices")
+    if len(array) > MAX_VERTICES:
+        raise ValueError(f"at most {MAX_VERTICES} vertices, got {len(array)}")
+    if not (array.min() >= -MAX_COORDINATE and array.max() <= MAX_COORDINATE):  # NaN fails both
+        bad = ~(np.abs(array) <= MAX_COORDINATE).all(axis=1)
+        raise ValueError(f"vertex {int(np.flatnonzero(bad)[0])} is not finite or beyond {MAX_COORDINATE:g}")
+    return array
+
+
+def _mesh_triangles(value: Any) -> np.ndarray:
+    """(M, 3) int64 vertex indices: an array as a reader made it, or JSON's ``[[i, j, k], ...]``."""
+    if not isinstance(value, np.ndarray):
+        value = _TRIANGLES.validate_python(value, strict=True)
+    array = np.asarray(value, dtype=np.int64).reshape(-1, 3) if np.size(value) else np.zeros((0, 3), np.int64)
+    if not len(array):
+        raise ValueError("a mesh needs at least one triangle")
+    if len(array) > MAX_FACES:
+        raise ValueError(f"at most {MAX_FACES} triangles, got {len(array)}")
+    return array
+
+
+_POINTS = TypeAdapter(list[Point3])
+_TRIANGLES = TypeAdapter(list[Annotated[list[VertexIndex], Field(min_length=3, max_length=3)]])
+
+
+def _array_schema(items: dict, bound: int, description: str) -> WithJsonSchema:
+    return WithJsonSchema({"type": "array", "maxItems": bound, "description": description,
+                           "items": {"type": "array", "minItems": 3, "maxItems": 3, "items": items}})
+
+
+MeshVertices = Annotated[
+    Any, PlainValidator(_mesh_vertices), PlainSerializer(lambda a: a.tolist()),
+    _array_schema({"type": "number"}, MAX_VERTICES, "Vertex coordinates [x, y, z] (request units).")]
+MeshTriangles = Annotated[
+    Any, PlainValidator(_mesh_triangles), PlainSerializer(lambda a: a.tolist()),
+    _array_schema({"type": "integer", "minimum": 0}, MAX_FACES,
+                  "Vertex indices [i, j, k] into the mesh's vertices, counter-clockwise seen from outside.")]
+
+
+class TriangleMesh(StrictModel):
+    """One zone's surface as a triangle mesh: two arrays instead of a face object per triangle."""
+
+    zone: Name = Field(default="default", description="The zone the triangles bound.")
+    vertices: MeshVertices
+    triangles: MeshTriangles
+    id_prefix: Annotated[str, Field(max_length=100)] = Field(
+        default="t", description="Triangle k (from 0) is the face '<id_prefix><k + 1>' in results and reports.")
+
+
 class PolyhedraOptions(StrictModel):
     merge_tolerance: FiniteFloat = Field(
         default=1e-6, ge=0.0, le=1.0,
@@ -69,6 +128,11 @@ class PolyhedraOptions(StrictModel):
         default=1e-4, ge=0.0, le=1e3,
         description="Largest distance (request units) of a face's vertex from the face's plane before the face "
         "is reported non-planar (EnergyPlus uses 1e-4 m).")
+    list_faces: bool | None = Field(
+        default=None,
+        description=f"List every face in the result (faces, each zone's faces and misoriented faces): true always, "
+        f"false never; omitted: when the request has at most {MAX_LISTED_FACES} faces. The zones.csv artifact "
+        "always has every face.")
 
 
 class PolyhedraRequest(StrictModel):
@@ -76,7 +140,11 @@ class PolyhedraRequest(StrictModel):
     vertices: list[Point3] = Field(
         default_factory=list, max_length=MAX_VERTICES,
         description="Vertex coordinates [x, y, z] referenced by index from the loops.")
-    faces: list[Face] = Field(min_length=1, max_length=MAX_FACES)
+    faces: list[Face] = Field(default_factory=list, max_length=MAX_FACES,
+                              description="The faces; may be empty when a mesh is given.")
+    mesh: TriangleMesh | None = Field(
+        default=None, description="A zone given as a triangle mesh (an STL upload is read into one); its triangles "
+        "follow the faces.")
     options: PolyhedraOptions = Field(default_factory=PolyhedraOptions)
     source: dict[str, Any] | None = Field(
         default=None,
@@ -106,7 +174,9 @@ class ZoneResult(BaseModel):
     orientation: Literal["outward", "inward", "mixed"] = Field(
         description="outward: every face's normal points out of the zone; inward: every face points in; mixed: "
         "some faces disagree with their neighbours (misoriented_faces), or the surface cannot be oriented.")
-    misoriented_faces: list[str] = Field(description="Faces whose normal points into the zone (or disagrees with their neighbours).")
+    misoriented_faces: list[str] = Field(description="Faces whose normal points into the zone (or disagrees with their "
+                                         "neighbours); the first 1000 when the result does not list every face.")
+    misoriented_face_count: int | None = Field(default=None, description="How many faces are misoriented.")
     flux_volumes: list[float] = Field(
         description="Volumes (units³) from the flux of x, y and z alone through the surface: equal to each other "
         "only when the surface is closed.")
@@ -120,7 +190,9 @@ class ZoneResult(BaseModel):
     components: int = Field(description="Connected pieces of the zone's surface (across manifold edges).")
     euler_characteristic: int = Field(description="V - E + F - (inner loops), over the zone's surface.")
     genus: int | None = Field(description="Handles (through holes) of the surface; null when non-manifold or not orientable.")
-    faces: list[str] = Field(description="Ids of the faces bounding the zone.")
+    faces: list[str] = Field(description="Ids of the faces bounding the zone (empty when the result does not list "
+                             "every face: see faces_listed).")
+    face_count: int | None = Field(default=None, description="How many faces bound the zone.")
 
 
 class FaceResult(BaseModel):
@@ -145,7 +217,10 @@ class PolyhedraResult(BaseModel):
                                    "results of GET /v1/jobs/{id}/result apart).")
     units: Units
     zones: list[ZoneResult]
-    faces: list[FaceResult]
+    faces: list[FaceResult] = Field(description="Every face, when faces_listed (else empty: the zones.csv artifact "
+                                    "has them).")
+    faces_listed: bool = Field(default=True, description="Whether faces and each zone's faces list every face "
+                               "(the option list_faces).")
     edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.")
     adjacency: list[Adjacency]
     total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not closed.")

@@ -27,8 +27,8 @@ SPEC = SolverSpec(
     render_artifacts=render_artifacts,
     upload_extensions=UPLOAD_EXTENSIONS,
     example=example,
-    # A 1,000-zone building solves in about a second; a million-triangle STL in tens of seconds,
-    # most of it reading and validating the request.
+    # A 1,000-zone building solves in well under a second; a million-triangle STL in a few seconds
+    # (bench/polyhedra.py).
     soft_time_limit=300,
     time_limit=600,
     description=__doc__.split("\n\n")[0],

@@ -1,10 +1,14 @@
-"""A 3-D view of every zone (open and non-manifold edges drawn over it) and a CSV of zones and faces."""
+"""A 3-D view of every zone (open and non-manifold edges drawn over it) and a CSV of zones and faces.
+
+The CSV lists every face whether or not the result does (a million-triangle mesh's result does not):
+its per-face numbers come from the solve (``Solved.files``), its names from the request."""
 
 from __future__ import annotations
 
 import csv
 import io
 import math
+from itertools import repeat
 
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
@@ -14,15 +18,27 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
-from plantsolve.solvers.polyhedra.polygons import from_request
+from plantsolve.schemas.polyhedra import MAX_LISTED_FACES
+from plantsolve.solvers.polyhedra import bulk_csv
+from plantsolve.solvers.polyhedra.polygons import FaceIds, Polygons, from_request
+from plantsolve.solvers.polyhedra.solve import FACE_TABLE
 
 MAX_PANELS = 12
 MAX_FACES_DRAWN = 20_000
 
 
-def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
+def _zone_faces(poly: Polygons, z: int) -> np.ndarray:
+    """The enclosure faces of zone ``z``; a spread of MAX_FACES_DRAWN of them when there are more (the whole
+    shape shows, thinned, rather than its first part)."""
+    faces = np.flatnonzero((poly.face_zone == z).any(axis=1))
+    if len(faces) > MAX_FACES_DRAWN:
+        faces = faces[np.linspace(0, len(faces) - 1, MAX_FACES_DRAWN).astype(np.int64)]
+    return faces
+
+
+def zones_figure(request: PolyhedraRequest, result: PolyhedraResult, poly: Polygons | None = None) -> Figure:
     """A 3-D panel per zone (axes in the request's units); one legend below the panels, off the drawings."""
-    poly = from_request(request)
+    poly = from_request(request) if poly is None else poly
     zones = result.zones[:MAX_PANELS]
     cols = min(len(zones), 4) or 1
     rows = math.ceil(len(zones) / cols) or 1
@@ -31,19 +47,15 @@ def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
     fig.subplots_adjust(left=0.0, right=0.93, bottom=0.7 / (4.4 * rows + 0.7), top=1 - 0.35 / (4.4 * rows + 0.7),
                         wspace=0.18, hspace=0.15)
     labels: dict[str, object] = {}
-    face_index = {fid: i for i, fid in enumerate(poly.face_ids)}
+    zone_index = {zid: i for i, zid in enumerate(poly.zone_ids)}
+    subsurfaces = np.flatnonzero(poly.face_parent >= 0)
     units = request.units
     for k, zone in enumerate(zones):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
-        polygons = []
-        for fid in zone.faces[:MAX_FACES_DRAWN]:
-            f = face_index[fid]
-            loop = poly.face_loop_start[f]
-            polygons.append(poly.points[poly.loop_vertices[poly.loop_start[loop]:poly.loop_start[loop + 1]]])
-        own = set(zone.faces)
-        windows = [poly.points[poly.loop_vertices[poly.loop_start[poly.face_loop_start[f]]:
-                                                  poly.loop_start[poly.face_loop_start[f] + 1]]]
-                   for f in range(poly.n_faces) if poly.face_parent[f] >= 0 and poly.face_ids[poly.face_parent[f]] in own]
+        z = zone_index[zone.id]
+        polygons = [_outer_loop(poly, f) for f in _zone_faces(poly, z)]
+        hosted = subsurfaces[(poly.face_zone[poly.face_parent[subsurfaces]] == z).any(axis=1)]
+        windows = [_outer_loop(poly, f) for f in hosted]
         ax.add_collection3d(Poly3DCollection(polygons, facecolor="#9ecae1", edgecolor="#3b6e8f", linewidth=0.4,
                                              alpha=0.35, label="faces"))
         if windows:
@@ -81,11 +93,17 @@ def zones_figure(request: PolyhedraRequest, result: PolyhedraResult) -> Figure:
     return fig
 
 
+def _outer_loop(poly: Polygons, f: int) -> np.ndarray:
+    loop = poly.face_loop_start[f]
+    return poly.points[poly.loop_vertices[poly.loop_start[loop]:poly.loop_start[loop + 1]]]
+
+
 def figures(request: PolyhedraRequest, result: PolyhedraResult) -> dict[str, Figure]:
     return {"zones": zones_figure(request, result)}
 
 
-def _table(result: PolyhedraResult) -> bytes:
+def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | None) -> bytes:
+    """Zones, then every face (the numbers of the solve's face table, else of the result's face list)."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     u = result.units
@@ -96,12 +114,67 @@ def _table(result: PolyhedraResult) -> bytes:
         writer.writerow(["zone", z.id, "", "", "" if z.volume is None else repr(z.volume), repr(z.signed_volume),
                          repr(z.surface_area), repr(z.net_surface_area), "", z.closed, z.orientation,
                          z.open_edge_count, z.non_manifold_edge_count, "", "", "", ""])
-    for f in result.faces:
-        writer.writerow(["face", f.id, " ".join(f.zones), f.parent or "", "", "", repr(f.area), repr(f.net_area),
-                         repr(f.perimeter), "", "", "", "", *[repr(c) for c in f.normal], repr(f.planarity_error)])
+    if face_table is None:  # a result solved before the face table was handed over
+        for f in result.faces:
+            writer.writerow(["face", f.id, " ".join(f.zones), f.parent or "", "", "", repr(f.area), repr(f.net_area),
+                             repr(f.perimeter), "", "", "", "", *[repr(c) for c in f.normal], repr(f.planarity_error)])
+        return out.getvalue().encode()
+    host = np.where(poly.face_parent >= 0, poly.face_parent, np.arange(poly.n_faces))
+    fz = poly.face_zone[host]  # a subsurface is listed with its host's zones
+    names = np.array([*poly.zone_ids, ""], dtype=object)
+    zones = names[fz[:, 0]]
+    two = np.flatnonzero(fz[:, 1] >= 0)
+    zones[two] = [f"{a} {b}" for a, b in zip(names[fz[two, 0]], names[fz[two, 1]])]
+    parents = np.full(poly.n_faces, "", dtype=object)
+    subs = np.flatnonzero(poly.face_parent >= 0)
+    parents[subs] = [poly.face_ids[p] for p in poly.face_parent[subs]]
+    ids = poly.face_ids
+    named = ids.names if isinstance(ids, FaceIds) else ids
+    if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]) and \
+            np.isfinite(face_table).all():
+        return out.getvalue().encode() + _bulk_face_rows(poly, zones, parents, face_table)
+    columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
+    net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
+    area, perimeter, nx, ny, nz, planarity = columns
+    blank = repeat("")
+    writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
+                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity))
     return out.getvalue().encode()
 
 
+def _id_cells(poly: Polygons, s: int, e: int) -> np.ndarray:
+    ids = poly.face_ids
+    if isinstance(ids, FaceIds) and s >= len(ids.names):
+        return bulk_csv.numbered_cells(ids.prefix, s - len(ids.names) + 1, e - s)
+    return bulk_csv.text_cells(ids[s:e])
+
+
+def _label_cells(labels: np.ndarray) -> np.ndarray:
+    """Cells of a column with few distinct strings (zone names, parents): each distinct one made once."""
+    values, index = np.unique(labels.astype(str), return_inverse=True)
+    return bulk_csv.text_cells(values.tolist())[index.reshape(-1)]
+
+
+def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face_table: np.ndarray,
+                    chunk: int = 20_000) -> bytes:
+    """The face rows of a large table (bulk_csv: 17 significant digits, written by array operations)."""
+    parts = []
+    for s in range(0, poly.n_faces, chunk):
+        e = min(s + chunk, poly.n_faces)
+        n = e - s
+        num = [bulk_csv.number_cells(face_table[s:e, k]) for k in range(face_table.shape[1])]
+        comma = bulk_csv.literal(",", n)
+        parts.append(bulk_csv.rows([
+            bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
+            _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
+            bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
+            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal("\n", n)]))
+    return b"".join(parts)
+
+
 def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact]:
-    return [figure_artifact("zones.png", zones_figure(request, solved.result), dpi=100),
-            Artifact("zones.csv", "text/csv", _table(solved.result))]
+    poly = from_request(request)
+    table = solved.files.get(FACE_TABLE)
+    face_table = np.load(io.BytesIO(table), allow_pickle=False) if table is not None else None
+    return [figure_artifact("zones.png", zones_figure(request, solved.result, poly), dpi=100),
+            Artifact("zones.csv", "text/csv", _table(solved.result, poly, face_table))]

@@ -10,6 +10,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from plantsolve.solvers.polyhedra.gmap import GMap
+from plantsolve.solvers.polyhedra.sorting import counts_of, dense_labels, distinct
 
 
 def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -41,7 +42,7 @@ def orient(gmap: GMap, weight: np.ndarray, volume: np.ndarray, n_zones: int) -> 
     conflict = mine == other
     sheet_label = np.minimum(mine, other)
     parity = (mine != sheet_label).astype(np.int64)
-    _, sheet = np.unique(sheet_label, return_inverse=True)
+    sheet = dense_labels(sheet_label, 2 * n)
     n_sheets = int(sheet.max()) + 1 if n else 0
     weight_flipped = np.bincount(sheet, weights=weight * parity, minlength=n_sheets)
     weight_total = np.bincount(sheet, weights=weight, minlength=n_sheets)
@@ -81,16 +82,17 @@ def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones:
     edges = np.bincount(group_zone, minlength=n_zones)
     faces = np.bincount(gmap.use_zone, minlength=n_zones)
     inner = np.bincount(gmap.use_zone, weights=loops_per_face[gmap.use_face] - 1, minlength=n_zones).astype(np.int64)
-    corner_vertex = gmap.dart_vertex[0::2]  # every vertex of a loop is the first vertex of one edge-use
+    corner_vertex = gmap.loop_vertices[gmap.position]  # every vertex of a loop is the first vertex of one edge-use
     n_points = int(corner_vertex.max()) + 1 if len(corner_vertex) else 1
     zv = gmap.use_zone[gmap.use] * n_points + corner_vertex
-    zv_unique = np.unique(zv)
+    zv_bound = max(n_zones, 1) * n_points
+    zv_unique = distinct(zv, zv_bound)
     vertices = np.bincount(zv_unique // n_points, minlength=n_zones)
     # vertex fans: ⟨α1, α2⟩ orbits; more than one at a vertex of a zone means sheets touching there
     fan = gmap.vertex_fans()
     fan_first = np.full(int(fan.max()) + 1 if len(fan) else 0, -1, dtype=np.int64)
     fan_first[fan[::-1]] = np.arange(len(fan))[::-1]
-    fan_keys, fans_per_vertex = np.unique(zv[fan_first], return_counts=True)
+    fan_keys, fans_per_vertex = counts_of(zv[fan_first], zv_bound)
     pinched = fan_keys[fans_per_vertex > 1]
     nm_vertices = [pinched[pinched // n_points == z] % n_points for z in range(n_zones)]
     # boundary loops: connected runs of open edges, per zone
@@ -99,7 +101,9 @@ def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones:
         z = group_zone[open_groups]
         ends_lo = z * n_points + groups.lo[groups.order[groups.starts[open_groups]]]
         ends_hi = z * n_points + groups.hi[groups.order[groups.starts[open_groups]]]
-        nodes, inverse = np.unique(np.concatenate([ends_lo, ends_hi]), return_inverse=True)
+        ends = np.concatenate([ends_lo, ends_hi])
+        nodes = distinct(ends, zv_bound)
+        inverse = np.searchsorted(nodes, ends)
         k = len(open_groups)
         label = _components(len(nodes), inverse[:k], inverse[k:])
         comp_zone = np.zeros(label.max() + 1, dtype=np.int64)

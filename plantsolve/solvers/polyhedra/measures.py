@@ -13,6 +13,7 @@ vector. The numbers are the Newell/divergence ones; no geometric-algebra package
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -27,11 +28,11 @@ class FaceMeasures:
     perimeter: np.ndarray  # (F,)
     planarity_error: np.ndarray  # (F,)
 
-    @property
+    @cached_property
     def area(self) -> np.ndarray:
         return np.linalg.norm(self.area_vector, axis=1)
 
-    @property
+    @cached_property
     def normal(self) -> np.ndarray:
         area = self.area
         return np.divide(self.area_vector, area[:, None], out=np.zeros_like(self.area_vector), where=area[:, None] > 0)
@@ -50,12 +51,14 @@ def _face_sums(values: np.ndarray, face_of: np.ndarray, n_faces: int) -> np.ndar
 def face_measures(poly: Polygons) -> FaceMeasures:
     """Newell area vectors and divergence-theorem flux terms of every face, from its fan triangles
     (the paper's per-orbit measures: each loop is an ⟨α0, α1⟩ orbit, each term a sum over its darts)."""
+    lengths = poly.loop_lengths
+    if len(lengths) == poly.n_faces and (lengths == 3).all():
+        return _triangle_measures(poly)
     lv = poly.loop_vertices
     n_faces = poly.n_faces
     origin = poly.points[lv[poly.face_position_start[:-1]]]
     position_face = poly.position_face
     rel = poly.points[lv] - origin[position_face]  # every loop position in its face's frame
-    lengths = poly.loop_lengths
     loop_tri = lengths == 3
     # triangles: loops of three vertices as they are
     tri_loops = np.flatnonzero(loop_tri)
@@ -77,7 +80,7 @@ def face_measures(poly: Polygons) -> FaceMeasures:
         tri_face = np.concatenate([tri_face, fan_face])
         order = np.argsort(tri_face, kind="stable")
         t0, t1, t2, tri_face = t0[order], t1[order], t2[order], tri_face[order]
-    a = 0.5 * np.cross(t1 - t0, t2 - t0)
+    a = 0.5 * _cross(t1 - t0, t2 - t0)
     m = (t0 + t1 + t2) / 3.0
     area_vector = _face_sums(a, tri_face, n_faces)
     flux = _face_sums(m * a, tri_face, n_faces)
@@ -100,6 +103,45 @@ def face_measures(poly: Polygons) -> FaceMeasures:
                         planarity_error=planarity)
 
 
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise u × v (np.cross's products, without its temporaries)."""
+    out = np.empty_like(u)
+    out[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+def _row_norm(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] + x[:, 2] * x[:, 2])
+
+
+def _triangle_measures(poly: Polygons) -> FaceMeasures:
+    """:func:`face_measures` of faces that are each one triangle (a mesh): the same terms, with no fan,
+    no per-face sums and no per-position arrays."""
+    p = poly.points
+    tri = poly.loop_vertices.reshape(-1, 3)
+    origin = p[tri[:, 0]]
+    t1 = p[tri[:, 1]] - origin
+    t2 = p[tri[:, 2]] - origin
+    area_vector = _cross(t1, t2)
+    area_vector *= 0.5
+    flux = (t1 + t2) / 3.0
+    flux *= area_vector
+    e1, e2 = _row_norm(t1), _row_norm(t2 - t1)
+    perimeter = e1 + e2
+    perimeter += _row_norm(t2)
+    # the largest distance of a corner from the plane through the corners' mean (zero up to rounding)
+    norm = _row_norm(area_vector)
+    normal = np.divide(area_vector, norm[:, None], out=np.zeros_like(area_vector), where=norm[:, None] > 0)
+    centroid = (t1 + t2) / 3.0
+    planarity = np.abs(np.einsum("ij,ij->i", centroid, normal))
+    for corner in (t1, t2):
+        np.maximum(planarity, np.abs(np.einsum("ij,ij->i", corner - centroid, normal)), out=planarity)
+    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
+                        planarity_error=planarity)
+
+
 def _ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """Concatenated ranges starts[i] .. starts[i] + lengths[i]."""
     offsets = np.cumsum(lengths) - lengths
@@ -117,7 +159,9 @@ def use_terms(measures: FaceMeasures, use_face: np.ndarray, use_zone: np.ndarray
               n_zones: int) -> UseTerms:
     """Each face use's area vector and flux terms in its zone's frame: flux_k = sign * (F_k + (o_k - c_k) A_k),
     the divergence theorem's ∫ (x_k - c_k) n_k dA; the zone volume is (Σ_k flux_k) / 3."""
-    origin = measures.origin[use_face]
+    identity = len(use_face) == len(measures.origin) and bool((use_sign > 0).all()) and \
+        np.array_equal(use_face, np.arange(len(use_face)))  # one use per face, as given (a mesh)
+    origin = measures.origin if identity else measures.origin[use_face]
     counts = np.bincount(use_zone, minlength=n_zones)
     # the zone's frame: the mean of its faces' origins, each taken relative to the zone's first face
     # origin so that the mean of large coordinates loses nothing
@@ -128,6 +172,11 @@ def use_terms(measures: FaceMeasures, use_face: np.ndarray, use_zone: np.ndarray
     mean_shift = np.stack([np.bincount(use_zone, weights=shift[:, k], minlength=n_zones) for k in range(3)], axis=1)
     centre_offset = mean_shift / np.maximum(counts, 1)[:, None]
     offset = shift - centre_offset[use_zone]  # o_f - c_z, small
+    if identity:  # the same numbers without copying the face terms (a sign of +1 changes nothing)
+        flux = offset
+        flux *= measures.area_vector
+        flux += measures.flux
+        return UseTerms(centre=base + centre_offset, area_vector=measures.area_vector, flux=flux)
     area = measures.area_vector[use_face] * use_sign[:, None]
     flux = (measures.flux[use_face] + offset * measures.area_vector[use_face]) * use_sign[:, None]
     return UseTerms(centre=base + centre_offset, area_vector=area, flux=flux)

@@ -17,8 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import FieldError, InputRejected
-from plantsolve.solvers.polyhedra.gmap import EdgeGroups, group_edges
-from plantsolve.solvers.polyhedra.polygons import Polygons, expand_uses
+from plantsolve.solvers.polyhedra.polygons import Polygons
 
 
 @dataclass(frozen=True)
@@ -27,33 +26,80 @@ class Repairs:
     dropped_repeats: int
     holes_reversed: list[str]
     t_junctions_per_zone: np.ndarray  # vertices inserted into faces of each zone
-    edge_groups: EdgeGroups | None  # the grouping of the repaired faces' edges, when the last pass made one
+
+
+HASH = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
+
+
+def exact_labels(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of ``pts`` that are equal (-0.0 equal to 0.0): the label of each row (0, 1, … by first
+    occurrence order of the sort, not by value) and the first row of each label. One hash of the three
+    coordinates' bits is sorted instead of the rows; rows that share a hash are compared, and a
+    collision between different rows (never seen in practice) falls back to sorting the rows."""
+    n = len(pts)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    bits = np.ascontiguousarray(pts + 0.0).view(np.uint64)  # + 0.0: -0.0 becomes 0.0
+    h = np.zeros(n, dtype=np.uint64)
+    for k in range(3):
+        h ^= bits[:, k]
+        h *= HASH[k]
+        h ^= h >> np.uint64(29)  # the high bits into the low ones: float32 values read into doubles end in zeros
+        h *= HASH[(k + 1) % 3]
+    order = np.argsort(h)
+    hs = h[order]
+    new = np.ones(n, dtype=bool)
+    new[1:] = hs[1:] != hs[:-1]
+    group_sorted = np.cumsum(new) - 1
+    first_sorted = np.minimum.reduceat(order, np.flatnonzero(new))  # smallest row of each hash group
+    # every row equal to the one before it in the sort, where the two share a hash (one gather per coordinate)
+    equal = np.ones(n - 1, dtype=bool)
+    for k in range(3):
+        column = bits[:, k][order]
+        equal &= column[1:] == column[:-1]
+    if not (new[1:] | equal).all():
+        order = np.lexsort((bits[:, 2], bits[:, 1], bits[:, 0]))
+        rows = bits[order]
+        new = np.ones(n, dtype=bool)
+        new[1:] = (rows[1:] != rows[:-1]).any(axis=1)
+        group_sorted = np.cumsum(new) - 1
+        first_sorted = np.minimum.reduceat(order, np.flatnonzero(new))
+    label = np.empty(n, dtype=np.int64)
+    label[order] = group_sorted
+    return label, first_sorted
 
 
 def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
     """Vertices within ``tolerance`` of each other become the one with the smallest index (chains
-    of close vertices collapse together, as in a union-find)."""
+    of close vertices collapse together, as in a union-find). Equal vertices are collapsed first by
+    hashing (an unwelded STL repeats every corner about six times); the KD-tree then sees each
+    position once."""
     mask = np.zeros(len(poly.points), dtype=bool)
     mask[poly.loop_vertices] = True
     used = np.flatnonzero(mask)
-    pts = poly.points[used]
+    exact, first = exact_labels(poly.points if len(used) == len(poly.points) else poly.points[used])  # first: smallest position in ``used`` of each distinct point
+    label = exact
     if tolerance > 0:
-        pairs = cKDTree(pts).query_pairs(tolerance, output_type="ndarray")
-        if len(pairs) == 0:
-            return poly, 0
-        n = len(used)
-        graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-        _, label = connected_components(graph, directed=False)
-    else:
-        _, label = np.unique(pts, axis=0, return_inverse=True)
-        label = label.reshape(-1)
-    representative = np.full(label.max() + 1, len(used), dtype=np.int64)
-    np.minimum.at(representative, label, np.arange(len(used)))
-    mapping = np.arange(len(poly.points))
-    mapping[used] = used[representative[label]]
-    merged = int(len(used) - len(np.unique(label)))
+        pairs = cKDTree(poly.points[used[first]], balanced_tree=False, compact_nodes=False).query_pairs(
+            tolerance, output_type="ndarray")
+        if len(pairs):
+            n = len(first)
+            graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+            _, component = connected_components(graph, directed=False)
+            label = component[exact]
+    n_labels = int(label.max()) + 1 if len(label) else 0
+    merged = int(len(used) - n_labels)
     if merged == 0:
         return poly, 0
+    if label is exact:  # no tolerance pairs: each label is one distinct point, its first row represents it
+        representative = first
+    else:
+        representative = np.full(n_labels, len(used), dtype=np.int64)
+        np.minimum.at(representative, label[first], first)
+    if len(used) == len(poly.points):  # every point used (an STL): positions in ``used`` are point indices
+        return poly.with_loops(representative[label][poly.loop_vertices], poly.loop_start), merged
+    mapping = np.arange(len(poly.points))
+    mapping[used] = used[representative[label]]
     return poly.with_loops(mapping[poly.loop_vertices], poly.loop_start), merged
 
 
@@ -112,17 +158,19 @@ def orient_holes(poly: Polygons) -> tuple[Polygons, list[str]]:
     return poly.with_loops(lv, poly.loop_start), sorted(set(reversed_faces))
 
 
-def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) -> tuple[Polygons, np.ndarray, EdgeGroups]:
+def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) -> tuple[Polygons, np.ndarray]:
     """Insert into a face's loop every vertex of the same zone that lies on one of its open edges
     strictly between the ends (within ``tolerance``): a wall split in two against an unsplit roof,
     or collinear extra vertices on a roof edge, then share edges as the map needs. Only open edges
-    are searched, so a closed surface costs one grouping pass."""
+    are searched; an edge-manifold surface has none and costs one grouping, which the map and the
+    diagnostics then use (``poly.edge_groups``)."""
     per_zone = np.zeros(len(poly.zone_ids), dtype=np.int64)
     tol = max(tolerance, 1e-12)
     for pass_no in range(max_passes + 1):
-        use_face, use_zone, _ = poly.uses()
-        position, use = expand_uses(poly, use_face)
-        groups = group_edges(poly, use_zone, position, use)
+        groups = poly.edge_groups
+        if groups.edge_manifold:
+            break
+        position, _ = poly.edge_uses
         odd = groups.counts % 2 == 1
         if not odd.any() or pass_no == max_passes:
             break
@@ -164,7 +212,6 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
                 per_zone[zone] += len(entries) - before
         if not inserts:
             break
-        groups = None
         counts = np.zeros(len(lv), dtype=np.int64)
         for pos, entries in inserts.items():
             counts[pos] = len(entries)
@@ -178,7 +225,7 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
         added = np.bincount(loop_of, weights=counts, minlength=len(poly.loop_start) - 1).astype(np.int64)
         start = poly.loop_start + np.concatenate([[0], np.cumsum(added)])
         poly = poly.with_loops(new_lv, start)
-    return poly, per_zone, groups
+    return poly, per_zone
 
 
 def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
@@ -186,6 +233,6 @@ def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
     poly, merged = merge_vertices(poly, merge_tolerance)
     poly, dropped = drop_repeats(poly)
     poly, holes = orient_holes(poly)
-    poly, per_zone, groups = insert_t_junctions(poly, merge_tolerance)
+    poly, per_zone = insert_t_junctions(poly, merge_tolerance)
     return poly, Repairs(merged_vertices=merged, dropped_repeats=dropped, holes_reversed=holes,
-                         t_junctions_per_zone=per_zone, edge_groups=groups)
+                         t_junctions_per_zone=per_zone)

@@ -8,12 +8,13 @@
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
+from plantsolve.schemas.polyhedra import MAX_LISTED_FACES, PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
@@ -23,8 +24,11 @@ from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
+from plantsolve.solvers.polyhedra.sorting import distinct
 
 MAX_LISTED_EDGES = 1000
+FACE_TABLE = "faces.npy"  # the per-face numbers the zones.csv artifact lists (Solved.files)
+FACE_COLUMNS = ("area", "net_area", "perimeter", "normal_x", "normal_y", "normal_z", "planarity_error")
 
 
 @dataclass(frozen=True)
@@ -44,7 +48,7 @@ def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = 
     st.stage(0.05, 0.3, f"repair: {poly.n_faces} faces, merging vertices within {merge_tolerance:g}")
     poly, repairs = repair(poly, merge_tolerance)
     st.stage(0.3, 0.45, "generalized map: darts and their involutions")
-    gmap = build_gmap(poly, repairs.edge_groups)
+    gmap = build_gmap(poly)
     st.stage(0.45, 0.55, "measures: Newell areas per face")
     measures = face_measures(poly)
     n_zones = len(poly.zone_ids)
@@ -72,13 +76,32 @@ def _edge_reports(an: Analysis, groups_idx: np.ndarray) -> list[dict]:
     return out
 
 
+def lists_faces(request: PolyhedraRequest, n_faces: int) -> bool:
+    """Whether the result lists every face: as the option says, else up to MAX_LISTED_FACES faces."""
+    asked = request.options.list_faces
+    return n_faces <= MAX_LISTED_FACES if asked is None else asked
+
+
+def distinct_edge_length(poly: Polygons) -> float:
+    """Total length of the distinct undirected edges of every loop (subsurfaces included)."""
+    lv = poly.loop_vertices
+    a, b = lv, lv[poly.next_position()]
+    n_points = max(len(poly.points), 1)
+    keys = distinct(np.minimum(a, b) * n_points + np.maximum(a, b), n_points * n_points)
+    lo, hi = keys // n_points, keys % n_points
+    d = poly.points[hi] - poly.points[lo]
+    return float(np.sqrt(np.einsum("ij,ij->i", d, d)).sum())
+
+
 def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved:
     """Zone volumes, areas and closure diagnostics of polygonal zones (the paper's method: a
     generalized map of the faces, measures per orbit, diagnostics from the orbits). The request has
     passed ``check_input`` (the job domain runs it once, at submission)."""
-    progress(0.0, f"reading {len(request.faces)} faces")
+    n_mesh = len(request.mesh.triangles) if request.mesh is not None else 0
+    progress(0.0, f"reading {len(request.faces) + n_mesh} faces")
     poly = from_request(request)
     opts = request.options
+    listed = lists_faces(request, poly.n_faces)
     an = analyse(poly, opts.merge_tolerance, progress)
     poly, gmap, topo = an.poly, an.gmap, an.topology
     progress(0.85, "results")
@@ -127,11 +150,13 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         nm_vertices = topo.non_manifold_vertices[z]
         euler = int(topo.euler[z])
         zone_id = poly.zone_ids[z]
+        misoriented = faces[factor < 0] if label != "outward" else faces[:0]
         zones.append({
             "id": zone_id, "volume": volume, "signed_volume": signed,
             "surface_area": float(area[faces].sum()), "net_surface_area": float(net_area[faces].sum()),
             "closed": closed, "orientation": label,
-            "misoriented_faces": [poly.face_ids[f] for f in faces[factor < 0]] if label != "outward" else [],
+            "misoriented_faces": [poly.face_ids[f] for f in (misoriented if listed else misoriented[:MAX_LISTED_EDGES])],
+            "misoriented_face_count": int(len(misoriented)),
             "flux_volumes": an.terms.flux[uses].sum(axis=0).tolist(),
             "vector_area_sum": an.terms.area_vector[uses].sum(axis=0).tolist(),
             "open_edges": _edge_reports(an, topo.open_groups[open_zone == z]),
@@ -144,7 +169,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             "euler_characteristic": euler,
             "genus": genus(euler, int(topo.sheets[z]), int(topo.boundary_loops[z]),
                            manifold=len(nm) == 0 and len(nm_vertices) == 0, orientable=not conflict),
-            "faces": [poly.face_ids[f] for f in faces],
+            "faces": [poly.face_ids[f] for f in faces] if listed else [],
+            "face_count": int(len(faces)),
         })
         if not closed:
             warnings.append(Diagnostic(code="zone_not_closed", message=(
@@ -158,7 +184,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             bad = zones[-1]["misoriented_faces"]
             warnings.append(Diagnostic(code=f"orientation_{label}", message=(
                 f"zone {zone_id!r}: " + ("the faces cannot be oriented consistently." if conflict else
-                                          f"{len(bad)} face(s) point into the zone.")),
+                                          f"{len(misoriented)} face(s) point into the zone.")),
                 details={"zone": zone_id, "faces": bad[:MAX_LISTED_EDGES]}))
 
     planarity = an.measures.planarity_error
@@ -182,22 +208,20 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             f"{len(an.repairs.holes_reversed)} face(s) had inner loops running the same way as the outer loop; "
             "they were reversed."), details={"faces": an.repairs.holes_reversed[:MAX_LISTED_EDGES]}))
 
-    lv = poly.loop_vertices
-    nxt = poly.next_position()
-    a, b = lv, lv[nxt]
-    n_points = len(poly.points)
-    _, first = np.unique(np.minimum(a, b) * n_points + np.maximum(a, b), return_index=True)
-    edge_length_total = float(np.linalg.norm(poly.points[b[first]] - poly.points[a[first]], axis=1).sum())
+    edge_length_total = distinct_edge_length(poly)
 
-    face_zones = poly.face_zones
-    parent = poly.face_parent.tolist()
-    area_l, net_l, perim_l = area.tolist(), net_area.tolist(), an.measures.perimeter.tolist()
-    normal_l, planarity_l = normal.tolist(), planarity.tolist()
-    zone_names = [[poly.zone_ids[z] for z in zs] for zs in face_zones]
-    face_results = [{
-        "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
-        "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
-        "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
+    face_results = []
+    if listed:
+        face_zones = poly.face_zones
+        parent = poly.face_parent.tolist()
+        area_l, net_l, perim_l = area.tolist(), net_area.tolist(), an.measures.perimeter.tolist()
+        normal_l, planarity_l = normal.tolist(), planarity.tolist()
+        zone_names = [[poly.zone_ids[z] for z in zs] for zs in face_zones]
+        face_results = [{
+            "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
+            "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
+            "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
+    table = np.column_stack([area, net_area, an.measures.perimeter, normal, planarity])
 
     details = {
         "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,
@@ -218,8 +242,14 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return Solved(PolyhedraResult(
-        units=request.units, zones=zones, faces=face_results, edge_length_total=edge_length_total,
+        units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
-    ))
+    ), files={FACE_TABLE: _npy(table)})
+
+
+def _npy(array: np.ndarray) -> bytes:
+    out = io.BytesIO()
+    np.save(out, array, allow_pickle=False)
+    return out.getvalue()

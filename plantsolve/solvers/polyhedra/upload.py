@@ -20,7 +20,8 @@ back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` con
 everything else (``vn``, ``vt``, ``usemtl``, ``mtllib``, ``s``, ``l``) is ignored. SketchUp and
 Revit write unwelded, triangulated faces: coincident vertices are merged by the solver.
 
-STL (ASCII or binary, read with trimesh): one zone, triangles as faces.
+STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
+``t1``, ``t2``, … in file order).
 """
 
 from __future__ import annotations
@@ -341,6 +342,7 @@ def parse_obj(text: str) -> dict:
 def parse_stl(content: bytes) -> dict:
     """One zone of triangles (trimesh reads the file; vertices stay unwelded, the solver merges them)."""
     import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
+    import trimesh.exchange.stl  # noqa: PLC0415
 
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
@@ -372,11 +374,17 @@ def parse_stl(content: bytes) -> dict:
         raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
                      "triangle count)")
     try:
-        mesh = trimesh.load(io.BytesIO(content), file_type="stl", process=False, force="mesh")
+        # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
+        loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
+        if not {"vertices", "faces"} <= set(loaded):  # several solids: trimesh joins them
+            mesh = trimesh.load(io.BytesIO(content), file_type="stl", process=False, force="mesh")
+            loaded = {"vertices": getattr(mesh, "vertices", None), "faces": getattr(mesh, "faces", None),
+                      "metadata": getattr(mesh, "metadata", {})}
     except Exception as e:  # trimesh raises many kinds for a broken file
         raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
-    vertices = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=float)
-    triangles = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+    vertices = np.asarray(loaded["vertices"] if loaded.get("vertices") is not None else np.zeros((0, 3)), dtype=float)
+    triangles = np.asarray(loaded["faces"] if loaded.get("faces") is not None else np.zeros((0, 3)), dtype=np.int64)
+    vertices, triangles = vertices.reshape(-1, 3), triangles.reshape(-1, 3)
     if len(triangles) == 0:
         raise reject("the STL file holds no triangle")
     finite = np.isfinite(vertices).all(axis=1)
@@ -384,14 +392,20 @@ def parse_stl(content: bytes) -> dict:
         (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
     skipped = [{"object": f"facet {int(k) + 1}", "reason": "non-finite or repeated vertex"}
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
-    triangles = triangles[good]
+    if not good.all():
+        triangles = triangles[good]
     if len(triangles) == 0:
         raise reject("no usable triangle in the STL file (non-finite or repeated vertices)")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
-    name = (str(getattr(mesh, "metadata", {}).get("name") or "").strip() if ascii_like else "") or "default"
-    faces = [{"id": f"t{k + 1}", "loops": [t], "zones": [name]} for k, t in enumerate(triangles.tolist())]
-    return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
-            "source": {"format": "stl", "faces": len(faces), "zones": 1, "skipped": skipped,
+    name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
+    # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them
+    used = np.zeros(len(vertices), dtype=bool)
+    used[triangles] = True
+    if not used.all():  # the vertices of skipped facets: not part of the zone
+        renumber = np.cumsum(used) - 1
+        vertices, triangles = vertices[used], renumber[triangles]
+    return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
+            "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 
@@ -50,7 +52,35 @@ def check_input(request: PolyhedraRequest) -> None:
                                      f"zones of its parent {face.parent!r}"))
         if len(errors) >= MAX_ERRORS:
             break
-    if not errors and all(face.parent is not None for face in request.faces):
-        errors.append(FieldError(("faces",), "every face is a subsurface: no face bounds a zone"))
+    if request.mesh is not None and len(errors) < MAX_ERRORS:
+        errors.extend(_mesh_errors(request, seen)[:MAX_ERRORS - len(errors)])
+    if not errors and request.mesh is None and all(face.parent is not None for face in request.faces):
+        errors.append(FieldError(("faces",), "every face is a subsurface: no face bounds a zone" if request.faces else
+                                 "no face: give faces or a mesh"))
     if errors:
         raise InputRejected(errors[:MAX_ERRORS])
+
+
+def _mesh_errors(request: PolyhedraRequest, face_ids: dict[str, int]) -> list[FieldError]:
+    """Triangle indices in range and three distinct per triangle (checked on the arrays); no face id that is
+    also the name of a triangle."""
+    mesh = request.mesh
+    tri = mesh.triangles
+    errors: list[FieldError] = []
+    out = np.flatnonzero((tri >= len(mesh.vertices)).any(axis=1))
+    for k in out[:MAX_ERRORS]:
+        j = int(np.argmax(tri[k] >= len(mesh.vertices)))
+        errors.append(FieldError(("mesh", "triangles", int(k), j), f"vertex index {int(tri[k, j])} is out of range "
+                                 f"({len(mesh.vertices)} vertices)"))
+    repeated = np.flatnonzero((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2]))
+    for k in repeated[:MAX_ERRORS]:
+        errors.append(FieldError(("mesh", "triangles", int(k)), f"triangle {mesh.id_prefix}{int(k) + 1}: a loop "
+                                 "needs at least 3 distinct points"))
+    prefix = mesh.id_prefix
+    for face_id, i in face_ids.items():
+        number = face_id[len(prefix):]
+        if face_id.startswith(prefix) and number.isdigit() and not number.startswith("0") and \
+                1 <= int(number) <= len(tri):
+            errors.append(FieldError(("faces", i, "id"), f"face id {face_id!r} is the name of the mesh's triangle "
+                                     f"{number} (mesh.id_prefix {prefix!r})"))
+    return errors

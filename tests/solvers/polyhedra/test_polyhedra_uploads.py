@@ -189,7 +189,7 @@ def test_ascii_stl_cut_before_endsolid_reads_its_whole_facets_and_warns():
     content = (DATA / "ascii_box.stl").read_bytes()
     cut = content[:content.rfind(b"vertex")]  # inside the last facet's loop
     request = upload("cut.stl", cut)
-    assert len(request.faces) == 11  # the box's 12 triangles but the cut one
+    assert len(request.mesh.triangles) == 11 and request.faces == []  # the box's 12 triangles but the cut one
     result = solve(request).result
     (warning,) = [w for w in result.report.warnings if w.code == "truncated_file"]
     lines = cut.decode().splitlines()
@@ -202,7 +202,7 @@ def test_binary_stl_cut_short_reads_its_whole_triangles_and_warns():
     mesh = trimesh.creation.box(extents=[2.0, 1.0, 0.5])
     content = trimesh.exchange.stl.export_stl(mesh)  # 12 triangles of 50 bytes after an 84-byte header
     request = upload("cut.stl", content[:84 + 50 * 9 + 17])
-    assert len(request.faces) == 9
+    assert len(request.mesh.triangles) == 9
     (warning,) = [w for w in solve(request).result.report.warnings if w.code == "truncated_file"]
     assert warning.details == {"declared": 12, "read": 9, "bytes": 84 + 50 * 9 + 17}
     with pytest.raises(InputRejected, match="ends before the first"):
