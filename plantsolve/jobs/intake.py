@@ -11,8 +11,9 @@ copy that lives as long as the ``with`` block of :func:`read_stored`).
 Uploads are read outside the API process: :func:`read_upload_bounded` runs
 :func:`read_upload` and :func:`check` on the stored file in a child process forked from a forkserver
 that has the kinds imported, with its address space limited to ``UPLOAD_READ_MEMORY`` bytes beyond what
-it starts with (RLIMIT_AS) and its time to ``UPLOAD_READ_SECONDS`` (a wall-clock wait in the API, CPU
-time as a backstop). The child sends back only the outcome (accepted, or the 422's fields), so a zip
+it starts with (RLIMIT_AS) and its CPU time to ``UPLOAD_READ_SECONDS`` (RLIMIT_CPU: a busy machine must not turn
+a file that reads in 5 CPU seconds into a refusal; the API's wall-clock wait, ``UPLOAD_READ_WALL_FACTOR`` times
+that, is the backstop for a reader that waits instead of computing). The child sends back only the outcome (accepted, or the 422's fields), so a zip
 bomb or a parser that runs away costs the child, never the API process, and is a 422 naming ``file``.
 The answer stays synchronous: a bad upload is a 422 at submission, as before. Before it, cheap checks
 run in the API: the extension, and the line count of text uploads (:data:`MAX_TEXT_LINES`).
@@ -28,6 +29,7 @@ import math
 import multiprocessing
 import pickle
 import resource
+import signal
 import threading
 import traceback
 from contextlib import contextmanager
@@ -110,6 +112,7 @@ def read_upload(spec: SolverSpec, source: StoredInput, options: dict | None) -> 
 # may cost to read. The API process itself holds only the uploaded bytes.
 UPLOAD_READ_MEMORY = 768 * 1024 * 1024
 UPLOAD_READ_SECONDS = 8.0
+UPLOAD_READ_WALL_FACTOR = 4.0
 # Text uploads (point clouds, tables) are read line by line in Python at about 1 KB and 9 us a line: beyond
 # this many lines a reader could not finish within the budget above, so they are refused before it runs.
 MAX_TEXT_LINES = 1_000_000
@@ -160,15 +163,18 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
         args=(sender, pickled, str(source.path), source.name, options, memory_bytes, seconds))
     process.start()
     sender.close()
+    died = False
     try:
-        outcome = receiver.recv() if receiver.poll(seconds) else ("time",)
-    except EOFError:  # it died without a word: killed by the kernel (out of memory) or a crash in native code
-        outcome = ("memory",)
+        outcome = receiver.recv() if receiver.poll(seconds * UPLOAD_READ_WALL_FACTOR + 2) else ("time",)
+    except EOFError:  # it died without a word: its CPU limit, the kernel (out of memory) or a crash in native code
+        outcome, died = ("memory",), True
     finally:
         receiver.close()
         if process.is_alive():
             process.kill()
         process.join(timeout=5)
+    if died and process.exitcode == -signal.SIGXCPU:  # the soft CPU limit (the default action ends the process)
+        outcome = ("time",)
     if outcome[0] == "ok":
         return
     if outcome[0] == "invalid":
@@ -177,7 +183,7 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
         msg = f"reading this file needs more than the {memory_bytes // 2**20} MiB an upload may take to read"
         raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_large")])
     if outcome[0] == "time":
-        msg = f"reading this file takes longer than the {seconds:g} s an upload may take to read"
+        msg = f"reading this file takes longer than the {seconds:g} CPU seconds an upload may take to read"
         raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_slow")])
     log.warning("reading an uploaded %s file for %s failed in the reader:\n%s", source.extension, spec.kind, outcome[1])
     msg = f"the file could not be read as a {source.extension or 'file'} file for {spec.kind} (it is malformed)"
@@ -189,7 +195,7 @@ def _read_in_child(sender, pickled: bytes, path: str, name: str, options: dict |
     """In the reading process: limits first, then the reader; only the outcome goes back."""
     try:
         resource.setrlimit(resource.RLIMIT_AS, (_address_space() + memory_bytes,) * 2)
-        cpu = math.ceil(seconds) + 2
+        cpu = math.ceil(seconds)
         resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 1))
         spec = pickle.loads(pickled)
         if isinstance(spec, tuple):

@@ -114,3 +114,21 @@ def test_a_crash_report_names_no_exception_class(client):
     assert done["status"] == "failed"
     text = json.dumps(done["report"])
     assert "ValueError" not in text and "Error:" not in text
+
+
+
+@pytest.mark.parametrize("options,accepted", [({"read_cpu_seconds": 30}, False), ({"read_wait_seconds": 2.5}, True)])
+def test_the_read_budget_is_cpu_time_so_a_slow_wall_clock_is_no_refusal(tmp_path, options, accepted):
+    plugins = ("tests.support.kinds",)
+    spec = load_kinds(plugins)["test-compute"]
+    path = tmp_path / "in.txt"
+    path.write_text("1\n2\n")
+    started = time.monotonic()
+    if accepted:  # 2.5 s of waiting on a 1 s CPU budget: a loaded machine's reader, not a runaway one
+        intake.read_upload_bounded(spec, StoredInput.from_path(path), options, plugins, seconds=1)
+    else:
+        with pytest.raises(Unprocessable) as refused:
+            intake.read_upload_bounded(spec, StoredInput.from_path(path), options, plugins, seconds=1)
+        error = refused.value.errors[0]
+        assert error["type"] == "too_slow" and "1 CPU seconds" in error["msg"], error
+    assert time.monotonic() - started < 1 * intake.UPLOAD_READ_WALL_FACTOR + 2 + 5

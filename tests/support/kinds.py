@@ -63,11 +63,17 @@ def check_compute(request: ComputeRequest) -> None:
 
 
 def parse_compute(source: StoredInput, options: dict | None) -> ComputeRequest:
+    options = dict(options or {})
+    # a reader that computes (or waits) this long first: the bounded read's CPU budget against its wall clock
+    spin_until = time.process_time() + float(options.pop("read_cpu_seconds", 0))
+    while time.process_time() < spin_until:
+        pass
+    time.sleep(float(options.pop("read_wait_seconds", 0)))
     try:
         values = [float(line) for line in source.read().decode().split() if line.strip()]
     except (UnicodeDecodeError, ValueError) as error:
         raise InputRejected(FieldError(("file",), f"not a list of numbers: {error}")) from None
-    return ComputeRequest.model_validate({"values": values, **(options or {})})
+    return ComputeRequest.model_validate({"values": values, **options})
 
 
 def render_compute(request: ComputeRequest, solved: Solved) -> list[Artifact]:
