@@ -119,6 +119,7 @@ def _final_up(model: Model, D_new: np.ndarray, q_rot: np.ndarray | None = None) 
 
 def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: str) -> AlignmentResult:
     P, D, closed = world_ports(model, out)
+    _check_finite(P=P, D=D)
     gap_solver, ang_solver = connection_errors(model, out.P, out.D)
     up = _final_up(model, D)
     q, t_local = _kabsch(model, P, D, np.nan_to_num(up))
@@ -156,7 +157,7 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
 
     # one model per component, port and connection built from whole arrays without re-validating each
     # (model_construct); the checks their schemas would make are made on the arrays, once
-    _check_finite(P=P, D=D, dq=dq, t_world=t_world, disp=disp, angles=angles, gap=gap, ang=ang)
+    _check_finite(dq=dq, t_world=t_world, disp=disp, angles=angles, gap=gap, ang=ang)
     if np.max(np.abs(P), initial=0.0) > 1e12:
         raise SolverError("result", "an aligned port lies beyond 1e12 units of the origin")
     ports = [Port.model_construct(position=p, direction=d) for p, d in zip(P.tolist(), D.tolist())]
