@@ -8,6 +8,7 @@ Tie-ins keep their input coordinates bit for bit.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -162,12 +163,12 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
         raise SolverError("result", "an aligned port lies beyond 1e12 units of the origin")
     ports = [Port.model_construct(position=p, direction=d) for p, d in zip(P.tolist(), D.tolist())]
     starts = model.port_start.tolist()
-    ups = [None if u[0] != u[0] else u for u in up.tolist()]  # NaN first entry: no up vector
+    ups = [None if math.isnan(u[0]) else u for u in up.tolist()]  # NaN first entry: no up vector
     comps = [
         ComponentResult.model_construct(
             id=cid, ports=ports[starts[c]:starts[c + 1]],
             transform=Transform.model_construct(dual_quaternion=dqc, rotation=qc, translation=tc),
-            displacement=dc, rotation_angle=ac, length_change=None if lc != lc else lc, up=uc)
+            displacement=dc, rotation_angle=ac, length_change=None if math.isnan(lc) else lc, up=uc)
         for c, (cid, dqc, qc, tc, dc, ac, lc, uc) in enumerate(zip(
             model.ids, dq.tolist(), q.tolist(), t_world.tolist(), disp.tolist(), angles.tolist(),
             length_change.tolist(), ups))

@@ -28,8 +28,8 @@ settle) its round-off leads elsewhere than the LU's, as the Schur-complement var
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Callable, Iterator
 
 import numpy as np
 import qdldl
