@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import _ldl, constrained_lstsq, use_ldl
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_ldl
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -69,18 +69,28 @@ def test_redundant_constraint_still_gives_the_minimiser():
     assert np.max(np.abs(r)) < 1e-10 * np.max(np.abs(b))
 
 
+def _kkt_point(H, g, A, b):
+    n, m = H.shape[0], A.shape[0]
+    K = np.block([[H.toarray(), A.toarray().T], [A.toarray(), np.zeros((m, m))]])
+    return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
+
+
 def test_wrong_inertia_is_refused_and_remembered():
-    H, _, A, _ = _problem(seed=1)
-    H = H.tolil()
-    H[0, 0] = -1.0  # an indefinite cost: the matrix is no longer quasi-definite
-    m = A.shape[0]
-    upper = sp.bmat([[sp.triu(H.tocsc()), A.T], [None, -1e-3 * sp.identity(m)]], format="csc")
+    good, g, A, b = _problem(seed=1)
+    bad = good.tolil()
+    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite
+    bad = bad.tocsc()
     cache: dict = {}
-    assert _ldl(upper, H.shape[0], cache) is None and cache["ldl_refused"] == 1
-    assert _ldl(upper, H.shape[0], cache) is None and cache["ldl_refused"] == 2
-    good = sp.bmat([[sp.triu(_problem(seed=1)[0]), A.T], [None, -1e-3 * sp.identity(m)]], format="csc")
-    assert _ldl(good, H.shape[0], cache) is None  # twice refused in a sequence: not tried again
-    assert _ldl(good, H.shape[0], {}) is not None
+    with use_ldl():
+        for refusals in (1, 2):
+            x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+            assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
+            assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
+        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+        assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
+        fresh: dict = {}
+        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
+        assert isinstance(fresh["lu"], qdldl.Solver)
 
 
 def test_same_pattern_refactors_numbers_only():
