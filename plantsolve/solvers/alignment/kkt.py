@@ -21,7 +21,7 @@ when its inertia is that of the exact matrix (``n`` positive, ``m`` negative piv
 redundant constraints (planar loops of rotation constraints) make ``A H^-1 A^T`` singular to
 round-off, the ``-delta`` pivots lose their sign, and those systems use the LU. It is not the
 default: on well-posed networks it reaches the LU's answer to round-off (loop grids: 1e-12 mm
-at 1e6 mm coordinates) in 0.6 of the time, but wherever the outer loops decide on the last
+at 1e6 mm coordinates) in 0.55-0.7 of the time, but wherever the outer loops decide on the last
 digits (conflicts and the cuts they lead to, Gauss-Newton sequences stopped before they
 settle) its round-off leads elsewhere than the LU's, as the Schur-complement variant's did.
 """
