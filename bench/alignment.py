@@ -9,10 +9,14 @@ plant-scale coordinates around 1e6 mm): pipes perturbed ~2 mm / 0.3 deg, fitting
 
 Targets: 1,000 components < 2 s, 10,000 < 30 s, memory linear.
 
-Then the scaling table of the direct method: about 1,000, 3,500, 10,000 and 35,000 components
-(35,000 not with --quick), wall and CPU time, peak memory, the largest gap left, and the
-exponent k of CPU time ~ components^k (and of memory) fitted between each size and the one
-before. With
+Then the scaling tables of the direct method, for two families: the square loop grids above
+(about 1,000, 3,500, 10,000 and 35,000 components) and plant-like networks (runs with branches,
+a loop per ~500 nodes, a tie-in at every 500th run end: 10,000, 40,000 and 100,000 components;
+--quick stops at 10,000 and 10,000). Wall and CPU time, peak memory, the largest gap left, the
+exponent k of CPU time ~ components^k (and of memory) fitted between each size and the one before.
+Every size runs twice in the same run: ``this`` (the default: every KKT system factored by the
+pivoted LU) and ``ldl`` (the same code within ``kkt.use_ldl()``: LDL^T where its inertia is exact),
+with the largest difference of any port position from ``this``. With
 ``--before DIR`` the same sizes also run on the code in DIR (a checkout of another revision,
 only read), side by side:
 
@@ -33,6 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 SIZES = {100: 6, 1000: 18, 10000: 55}  # target size -> grid side
 SCALING_SIDES = (18, 31, 55, 99)  # 1,161 / 3,351 / 10,661 / 34,749 components
+PLANT_SIDES = (66, 132, 208)  # plant-like: about 10,000 / 40,000 / 100,000 components
 
 
 def _rss_kib(field: str) -> int:
@@ -47,24 +52,110 @@ def _cpu_s() -> float:
     return use.ru_utime + use.ru_stime
 
 
-def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None) -> None:
+def plant_network(side: int, seed: int = 7, options: dict | None = None):
+    """A plant-like network on a ``side`` x ``side`` lattice of nodes 3 m apart: a random spanning tree
+    (runs that branch at tees and crosses, bends at elbows, caps at the ends), plus one extra edge per
+    ~500 nodes (a few loops), an inline valve on every 7th edge, a tie-in at every 500th cap (run end)
+    and the first; scan-like noise as in the grids (pipes ~2 mm / 0.3 deg, fittings
+    ~6 mm / 1.5 deg), coordinates around 1e6 mm."""
+    import numpy as np
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import minimum_spanning_tree
+    from scipy.spatial.transform import Rotation
+
+    from plantsolve.schemas.alignment import AlignmentRequest
+
+    rng = np.random.default_rng(seed)
+    spacing, arm, org = 3000.0, 150.0, np.array([1.0e6, 2.0e5, 1.0e4])
+    node = np.arange(side * side).reshape(side, side)
+    ea = np.concatenate([node[:-1, :].ravel(), node[:, :-1].ravel()])
+    eb = np.concatenate([node[1:, :].ravel(), node[:, 1:].ravel()])
+    g = sp.coo_matrix((rng.random(len(ea)) + 1.0, (ea, eb)), shape=(side * side,) * 2)
+    tree = minimum_spanning_tree(g).tocoo()
+    in_tree = set(zip(tree.row.tolist(), tree.col.tolist())) | set(zip(tree.col.tolist(), tree.row.tolist()))
+    spare = [k for k in range(len(ea)) if (ea[k], eb[k]) not in in_tree]
+    extra = rng.choice(spare, size=max(1, side * side // 500), replace=False)
+    edges = [(int(a), int(b)) for a, b in zip(tree.row, tree.col)] + [(int(ea[k]), int(eb[k])) for k in extra]
+    xy = np.stack(np.divmod(np.arange(side * side), side), axis=1).astype(float) * spacing
+    nbrs: dict[int, list[int]] = {}
+    for a, b in edges:
+        nbrs.setdefault(a, []).append(b)
+        nbrs.setdefault(b, []).append(a)
+    leaves = sorted(k for k, v in nbrs.items() if len(v) == 1)
+    tie_ins = set(leaves[::500])
+    comps, conns, port_of = [], [], {}
+
+    def add(cid, kind, ftype, ports, noise, fixed=False, up=None):
+        centre = np.mean([p for p, _ in ports], axis=0)
+        if not fixed:
+            rot = Rotation.from_rotvec(rng.normal(size=3) * np.radians(noise[1]) / np.sqrt(3))
+            shift = rng.normal(size=3) * noise[0] / np.sqrt(3)
+            ports = [(rot.apply(p - centre) + centre + shift, rot.apply(d)) for p, d in ports]
+            up = None if up is None else rot.apply(up).tolist()
+        comp = {"id": cid, "kind": kind, "radius": 50.0, "fixed": fixed,
+                "ports": [{"position": (p + org).tolist(), "direction": np.asarray(d).tolist()} for p, d in ports]}
+        if ftype:
+            comp["type"] = ftype
+        if up is not None:
+            comp["up"] = up
+        comps.append(comp)
+
+    for k, nb in sorted(nbrs.items()):
+        c = np.array([*xy[k], 0.0])
+        dirs = [np.array([*(xy[j] - xy[k]) / spacing, 0.0]) for j in nb]
+        straight = len(nb) == 2 and float(dirs[0] @ dirs[1]) < -0.5
+        ftype = "other" if straight else {1: "cap", 2: "elbow", 3: "tee", 4: "cross"}[len(nb)]
+        add(f"N{k}", "fitting", ftype, [(c + arm * d, d) for d in dirs], (6.0, 1.5), fixed=k in tie_ins)
+        for i, j in enumerate(nb):
+            port_of[(k, j)] = (f"N{k}", i)
+    for e, (a, b) in enumerate(edges):
+        u = np.array([*(xy[b] - xy[a]) / spacing, 0.0])
+        start, end = np.array([*xy[a], 0.0]) + arm * u, np.array([*xy[b], 0.0]) - arm * u
+        if (e + 1) % 7 == 0:
+            mid = 0.5 * (start + end)
+            v0, v1 = mid - 150 * u, mid + 150 * u
+            add(f"P{e}a", "pipe", None, [(start, -u), (v0, u)], (2.0, 0.3))
+            add(f"V{e}", "fitting", "valve", [(v0, -u), (v1, u)], (6.0, 1.5), up=[0.0, 0.0, 1.0])
+            add(f"P{e}b", "pipe", None, [(v1, -u), (end, u)], (2.0, 0.3))
+            chain = [(f"P{e}a", 0), (f"P{e}a", 1), (f"V{e}", 0), (f"V{e}", 1), (f"P{e}b", 0), (f"P{e}b", 1)]
+        else:
+            add(f"P{e}", "pipe", None, [(start, -u), (end, u)], (2.0, 0.3))
+            chain = [(f"P{e}", 0), (f"P{e}", 1)]
+        ends = [port_of[(a, b)]] + chain + [port_of[(b, a)]]
+        conns += [{"from": list(ends[i]), "to": list(ends[i + 1])} for i in range(0, len(ends), 2)]
+    return AlignmentRequest.model_validate({"units": "mm", "components": comps, "connections": conns,
+                                            "options": options or {}})
+
+
+def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None,
+         family: str = "grid", ldl: bool = False) -> None:
     if code is not None:
         # the child has imported nothing of plantsolve yet, so this checkout is the one it loads
         sys.path.insert(0, code)
+    import contextlib
+
     from plantsolve.solvers.alignment import solve
     from plantsolve.solvers.alignment.synthetic import grid_network
 
-    req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
-                       origin=(1.0e6, 2.0e5, 1.0e4), seed=2024,
-                       options={"method": method} if max_iterations is None
-                       else {"method": method, "max_iterations": max_iterations})
+    options = {"method": method} if max_iterations is None else {"method": method, "max_iterations": max_iterations}
+    if family == "plant":
+        req = plant_network(side, options=options)
+    else:
+        req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
+                           origin=(1.0e6, 2.0e5, 1.0e4), seed=2024, options=options)
+    mode = contextlib.nullcontext()
+    if ldl:
+        from plantsolve.solvers.alignment.kkt import use_ldl
+        mode = use_ldl()
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
-    solved = solve(req)
+    with mode:
+        solved = solve(req)
     res = getattr(solved, "result", solved)  # a --before checkout older than the Solved contract returns the result
     wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
     d = res.report.details
     queue.put({
+        "positions": [p.position for c in res.components for p in c.ports],
         "components": len(req.components), "connections": len(req.connections), "method": method, "converged": res.converged,
         "iterations": res.iterations, "wall_s": wall, "cpu_s": cpu, "peak_mib": (_rss_kib("VmHWM") - base) / 1024.0,
         "max_gap": res.max_position_error, "solver_residual": d["snap_distortion"]["position"] if res.converged else res.max_position_error,
@@ -73,10 +164,11 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     })
 
 
-def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None) -> dict:
+def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None, family: str = "grid",
+             ldl: bool = False) -> dict:
     ctx = mp.get_context("fork")
     q = ctx.Queue()
-    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code))
+    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, ldl))
     p.start()
     out = q.get()
     p.join()
@@ -89,27 +181,36 @@ def _exponent(small: dict | None, large: dict, key: str) -> str:
     return f"{math.log(large[key] / small[key]) / math.log(large['components'] / small['components']):.2f}"
 
 
-def scaling(quick: bool, before: str | None) -> None:
-    """Direct method on growing grids; with ``before``, the code in that directory on the same grids."""
-    sides = SCALING_SIDES[:-1] if quick else SCALING_SIDES
-    runs = [("this", None)] + ([("before", before)] if before else [])
+def scaling(quick: bool, before: str | None, family: str = "grid") -> None:
+    """Direct method on growing networks of one family: this code, the same code within ``use_ldl()``, and
+    with ``before`` the code in that directory, on the same networks."""
+    import numpy as np
+
+    sides = {"grid": SCALING_SIDES[:-1] if quick else SCALING_SIDES, "plant": PLANT_SIDES[:1] if quick else PLANT_SIDES}[family]
+    runs = [("this", None, False), ("ldl", None, True)] + ([("before", before, False)] if before else [])
     head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'max gap':>9} "
-            f"{'k cpu':>6} {'k mem':>6} {'iter':>5}  stop")
-    print("\nDirect method, scaling (k: exponent of CPU time or memory ~ components^k since the size before)")
+            f"{'k cpu':>6} {'k mem':>6} {'iter':>5} {'max |dP|':>9}  stop")
+    print(f"\nDirect method, scaling on {'square loop grids' if family == 'grid' else 'plant-like networks'} "
+          "(k: exponent of CPU time or memory ~ components^k since the size before; max |dP|: largest difference "
+          "of a port position from 'this', in mm)")
     print(head)
     print("-" * len(head))
     rows: dict[str, list[dict]] = {}
     for side in sides:
-        for label, code in runs:
-            r = run_case(side, "direct", None, code)
+        here = None
+        for label, code, ldl in runs:
+            r = run_case(side, "direct", None, code, family, ldl)
+            pos = np.array(r.pop("positions"))
+            here = here or {**r, "P": pos}
+            dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")
             prev = rows.get(label, [None])[-1]
             rows.setdefault(label, []).append(r)
             print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
                   f"{r['peak_mib']:>9.1f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
-                  f"{r['iterations']:>5}  {r['stop']}", flush=True)
-    if before:
-        print("\nthis / before:")
-        for now, old in zip(rows["this"], rows["before"]):
+                  f"{r['iterations']:>5} {dp:>9.1e}  {r['stop']}", flush=True)
+    for label in [x for x, *_ in runs[1:] if x in rows]:
+        print(f"\nthis / {label}:")
+        for now, old in zip(rows["this"], rows[label]):
             print(f"  {now['components']:>6} components: CPU time {now['cpu_s'] / old['cpu_s']:.2f}, "
                   f"peak memory {now['peak_mib'] / max(old['peak_mib'], 1e-9):.2f}")
     print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
@@ -122,10 +223,12 @@ def main() -> None:
     ap.add_argument("--dq-iterations", type=int, default=4000, help="iteration cap of the dual-quaternion method")
     ap.add_argument("--scaling-only", action="store_true", help="only the scaling table of the direct method")
     ap.add_argument("--before", metavar="DIR", help="also run the scaling table on the plantsolve checkout in DIR")
+    ap.add_argument("--family", action="append", choices=("grid", "plant"), help="only this family's scaling table")
     args = ap.parse_args()
     if not args.scaling_only:
         methods(args.quick, args.dq_iterations)
-    scaling(args.quick, args.before)
+    for family in args.family or ("grid", "plant"):
+        scaling(args.quick, args.before, family)
 
 
 def methods(quick: bool, dq_iterations: int) -> None:

@@ -85,6 +85,7 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
     prev = np.inf
     use_cost = True
     best, first = (np.inf, q.copy()), np.inf
+    cache: dict = {}  # never reused as a stale preconditioner here ("reuse" unset): it remembers refused LDL^Ts
     for it in range(max_gn):
         if steps >= budget:
             break
@@ -126,7 +127,8 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
         rhs = -np.stack([np.einsum("ij,ij->i", e1, r), np.einsum("ij,ij->i", e2, r)], axis=1).ravel()
         phi = quaternion_to_rotvec(q[free]).ravel()
         g = hdiag * phi if use_cost else np.zeros(nv)
-        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=min(6, budget - steps))
+        x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=min(6, budget - steps),
+                                    cache=cache)
         steps += k
         dq = rotvec_to_quaternion(x.reshape(-1, 3))
         q[free] = qmul(dq, q[free])

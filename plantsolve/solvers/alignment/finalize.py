@@ -8,6 +8,7 @@ Tie-ins keep their input coordinates bit for bit.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,6 +20,7 @@ from plantsolve.schemas.alignment import (
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.solvers.alignment.dualquat import dq_from_rt, minimal_rotation, rotation_angle
 from plantsolve.solvers.alignment.model import Model, collinear_fittings, connection_errors
+from plantsolve.solvers.base import SolverError
 from plantsolve.solvers.geometry import quaternion, rotation
 
 
@@ -118,6 +120,7 @@ def _final_up(model: Model, D_new: np.ndarray, q_rot: np.ndarray | None = None) 
 
 def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: str) -> AlignmentResult:
     P, D, closed = world_ports(model, out)
+    _check_finite(P=P, D=D)
     gap_solver, ang_solver = connection_errors(model, out.P, out.D)
     up = _final_up(model, D)
     q, t_local = _kabsch(model, P, D, np.nan_to_num(up))
@@ -153,26 +156,27 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
     length_change = np.full(model.n_comp, np.nan)
     length_change[pipes] = length_new - length_old
 
-    comps = []
-    for c, cid in enumerate(model.ids):
-        sl = slice(model.port_start[c], model.port_start[c + 1])
-        comps.append(
-            ComponentResult(
-                id=cid,
-                ports=[Port(position=p.tolist(), direction=d.tolist()) for p, d in zip(P[sl], D[sl])],
-                transform=Transform(dual_quaternion=dq[c].tolist(), rotation=q[c].tolist(), translation=t_world[c].tolist()),
-                displacement=float(disp[c]),
-                rotation_angle=float(angles[c]),
-                length_change=None if np.isnan(length_change[c]) else float(length_change[c]),
-                up=None if np.isnan(up[c, 0]) else up[c].tolist(),
-            )
-        )
+    # one model per component, port and connection built from whole arrays without re-validating each
+    # (model_construct); the checks their schemas would make are made on the arrays, once
+    _check_finite(dq=dq, t_world=t_world, disp=disp, angles=angles, gap=gap, ang=ang)
+    if np.max(np.abs(P), initial=0.0) > 1e12:
+        raise SolverError("result", "an aligned port lies beyond 1e12 units of the origin")
+    ports = [Port.model_construct(position=p, direction=d) for p, d in zip(P.tolist(), D.tolist())]
+    starts = model.port_start.tolist()
+    ups = [None if math.isnan(u[0]) else u for u in up.tolist()]  # NaN first entry: no up vector
+    comps = [
+        ComponentResult.model_construct(
+            id=cid, ports=ports[starts[c]:starts[c + 1]],
+            transform=Transform.model_construct(dual_quaternion=dqc, rotation=qc, translation=tc),
+            displacement=dc, rotation_angle=ac, length_change=None if math.isnan(lc) else lc, up=uc)
+        for c, (cid, dqc, qc, tc, dc, ac, lc, uc) in enumerate(zip(
+            model.ids, dq.tolist(), q.tolist(), t_world.tolist(), disp.tolist(), angles.tolist(),
+            length_change.tolist(), ups))
+    ]
     conns = [
-        ConnectionResult(
-            from_=request.connections[k].from_, to=request.connections[k].to,
-            position_error=float(gap[k]), angle_error=float(np.degrees(ang[k])), cut=not bool(act[k]),
-        )
-        for k in range(model.n_conn)
+        ConnectionResult.model_construct(from_=request.connections[k].from_, to=request.connections[k].to,
+                                         position_error=ge, angle_error=ae, cut=not ak)
+        for k, (ge, ae, ak) in enumerate(zip(gap.tolist(), np.degrees(ang).tolist(), act.tolist()))
     ]
     cut_idx = [int(k) for k in np.flatnonzero(~act)]
 
@@ -249,3 +253,10 @@ def build_result(request: AlignmentRequest, model: Model, out: Outcome, method: 
         max_angle_error=float(np.degrees(max_ang)), components=comps, connections=conns,
         cut_connections=cut_idx, report=Report(status=status, message=message, warnings=warnings, details=details),
     )
+
+
+def _check_finite(**arrays: np.ndarray) -> None:
+    """What the result schema refuses (NaN, infinity), said of the array it came from."""
+    for name, x in arrays.items():
+        if not np.all(np.isfinite(x)):
+            raise SolverError("result", f"non-finite values in {name} at index {np.argwhere(~np.isfinite(x))[0].tolist()}")

@@ -1,0 +1,136 @@
+"""The KKT solve's two factorisations (pivoted LU, quasi-definite LDL^T) and the result built from arrays."""
+
+import numpy as np
+import pytest
+import qdldl
+import scipy.sparse as sp
+
+from plantsolve.schemas.alignment import AlignmentResult, Port
+from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.finalize import Outcome, build_result
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_ldl
+from plantsolve.solvers.alignment.model import build_model
+from plantsolve.solvers.alignment.synthetic import grid_network
+from plantsolve.solvers.base import SolverError
+
+
+def _problem(n=30, m=12, seed=0, duplicate=False):
+    """Block-diagonal SPD cost (3x3 blocks, as the solver's per-component ones) and a full-rank constraint matrix."""
+    rng = np.random.default_rng(seed)
+    blocks = []
+    for _ in range(n // 3):
+        B = rng.normal(size=(3, 3))
+        blocks.append(B @ B.T + 0.5 * np.eye(3))
+    H = sp.block_diag(blocks, format="csc")
+    A = sp.random(m, n, density=0.3, random_state=seed, format="csr") + sp.eye(m, n, format="csr")
+    if duplicate:  # a redundant constraint: the sum of the first two
+        A = sp.vstack([A, A[0] + A[1]]).tocsr()
+    g = rng.normal(size=n)
+    b = A @ rng.normal(size=n)
+    return H, g, A, b
+
+
+def _dense_minimiser(H, g, A, b):
+    """The exact constrained minimiser from the dense KKT system of the independent constraints."""
+    Ad = A.toarray()
+    keep = np.linalg.matrix_rank(Ad[:12]) == 12
+    assert keep
+    Ad, b = Ad[:12], b[:12]
+    n, m = Ad.shape[1], Ad.shape[0]
+    K = np.block([[H.toarray(), Ad.T], [Ad, np.zeros((m, m))]])
+    return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
+
+
+def test_ldl_solve_is_the_exact_constrained_minimiser():
+    H, g, A, b = _problem()
+    cache: dict = {}
+    with use_ldl():
+        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert isinstance(cache["lu"], qdldl.Solver)  # the LDL^T was used, not the LU
+    assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
+    assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
+
+
+def test_default_is_the_lu_and_gives_the_same_minimiser():
+    H, g, A, b = _problem(seed=3)
+    cache: dict = {}
+    x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert not isinstance(cache["lu"], qdldl.Solver)
+    with use_ldl():
+        y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
+
+
+def test_redundant_constraint_still_gives_the_minimiser():
+    H, g, A, b = _problem(seed=5, duplicate=True)
+    with use_ldl():
+        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-9 * np.max(np.abs(x))
+    assert np.max(np.abs(r)) < 1e-10 * np.max(np.abs(b))
+
+
+def _kkt_point(H, g, A, b):
+    n, m = H.shape[0], A.shape[0]
+    K = np.block([[H.toarray(), A.toarray().T], [A.toarray(), np.zeros((m, m))]])
+    return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
+
+
+def test_wrong_inertia_is_refused_and_remembered():
+    good, g, A, b = _problem(seed=1)
+    bad = good.tolil()
+    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite
+    bad = bad.tocsc()
+    cache: dict = {}
+    with use_ldl():
+        for refusals in (1, 2):
+            x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+            assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
+            assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
+        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+        assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
+        fresh: dict = {}
+        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
+        assert isinstance(fresh["lu"], qdldl.Solver)
+
+
+def test_same_pattern_refactors_numbers_only():
+    H, g, A, b = _problem(seed=2)
+    cache: dict = {}
+    with use_ldl():
+        constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+        first = cache["ldl"][0]
+        H2 = (2.5 * H).tocsc()
+        x, _, _ = constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert cache["ldl"][0] is first
+    assert np.max(np.abs(x - _dense_minimiser(H2, g, A, b))) < 1e-11 * np.max(np.abs(x))
+
+
+def test_ldl_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
+    req = grid_network(6, 6, valve_every=3, tie_ins=((0, 0), (5, 5)), origin=(1.0e6, 2.0e5, 1.0e4), seed=9,
+                       options={"method": "direct"})
+    lu = solve(req).result
+    with use_ldl():
+        ldl = solve(req).result
+    P = [np.array([p.position for c in r.components for p in c.ports]) for r in (lu, ldl)]
+    assert lu.converged and ldl.converged and lu.cut_connections == ldl.cut_connections == []
+    assert np.max(np.abs(P[0] - P[1])) < 1e-9  # mm, at coordinates of 1e6 mm (spacing of doubles there: 1.2e-10)
+
+
+def test_result_built_from_arrays_serialises_like_validated_models():
+    req = grid_network(3, 3, valve_every=2, tie_ins=((0, 0),), seed=4, options={"method": "direct"})
+    res = solve(req).result
+    assert isinstance(res.components[0].ports[0], Port)
+    again = AlignmentResult.model_validate(res.model_dump(mode="json"))
+    assert again.model_dump_json() == res.model_dump_json()
+    assert res.connections[0].from_ == tuple(req.connections[0].from_)
+
+
+def test_non_finite_result_names_the_array():
+    req = grid_network(2, 2, tie_ins=((0, 0),), seed=1)
+    model = build_model(req)
+    P = model.P0.copy()
+    P[3, 1] = np.nan
+    out = Outcome(P=P, D=model.D0.copy(), iterations=1, stop_reason="test", active=np.ones(model.n_conn, dtype=bool),
+                  snap=False)
+    with pytest.raises(SolverError, match="non-finite values in P at index"):
+        build_result(req, model, out, "direct")
