@@ -30,24 +30,25 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 import qdldl
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-_USE_LDL = False
+# per thread and task, as numpy's errstate: one solve's choice never leaks into another running beside it
+_USE_LDL: ContextVar[bool] = ContextVar("use_ldl", default=False)
 
 
 @contextmanager
 def use_ldl() -> Iterator[None]:
     """Within this block KKT systems are factored by LDL^T where its inertia is exact (see the module doc)."""
-    global _USE_LDL
-    before, _USE_LDL = _USE_LDL, True
+    token = _USE_LDL.set(True)
     try:
         yield
     finally:
-        _USE_LDL = before
+        _USE_LDL.reset(token)
 
 
 def constrained_lstsq(
@@ -89,7 +90,7 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
-    if _USE_LDL:
+    if _USE_LDL.get():
         upper = sp.bmat([[sp.triu(H), A.T], [None, -delta * sp.identity(m)]], format="csc")
         ldl = _ldl(upper, n, cache)
         if ldl is not None:
