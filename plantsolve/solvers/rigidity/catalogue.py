@@ -49,6 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from plantsolve.solvers.rigidity import generated
+
 BRICK = 24
 PLATE = 8
 PITCH = 20
@@ -81,6 +83,7 @@ class PartShape:
     box_size: tuple[float, float, float]
     connectors: tuple[Connector, ...]
     solids: tuple[Box, ...] = ()
+    collides: bool = True  # false: no collision shape known (a generated part that is not a plain box)
 
     def points(self) -> np.ndarray:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
@@ -93,7 +96,10 @@ HOLES = {"pinhole", "axlehole"}
 def _cut(box: Box, hole: Connector) -> list[Box]:
     """``box`` less the square prism of half-width HOLE_RADIUS around the hole's axis, which runs through
     the whole box: up to four boxes (two beside the hole, one on each side between them)."""
-    axis = int(np.flatnonzero(np.asarray(hole.direction))[0])
+    direction = np.abs(np.asarray(hole.direction, float))
+    axis = int(np.argmax(direction))
+    if direction[axis] < 0.999:  # a hole at an angle to the box: not cut (its part is then solid there)
+        return [box]
     u, v = [k for k in range(3) if k != axis]
     center, size = np.asarray(box[0], float), np.asarray(box[1], float)
     lo, hi = center - size / 2, center + size / 2
@@ -118,7 +124,10 @@ def _cut(box: Box, hole: Connector) -> list[Box]:
 def collision_boxes(shape: PartShape) -> tuple[Box, ...]:
     """The part's collision shape as boxes in its own frame: its solids (or its bounding box) with every
     pin and axle hole cut through, so a pin or an axle in a hole, or passing through it, touches the part
-    without entering it (square holes and rods of side 2 · HOLE_RADIUS: a rod fits its hole exactly)."""
+    without entering it (square holes and rods of side 2 · HOLE_RADIUS: a rod fits its hole exactly).
+    Empty for a part without a collision shape."""
+    if not shape.collides:
+        return ()
     boxes = list(shape.solids) or [(shape.box_center, shape.box_size)]
     for hole in (c for c in shape.connectors if c.type in HOLES):
         boxes = [piece for box in boxes for piece in _cut(box, hole)]
@@ -131,10 +140,15 @@ MATES = {
     ("axle", "axlehole"): "axle", ("axlehole", "axle"): "axle",
     ("axle", "pinhole"): "axle_round", ("pinhole", "axle"): "axle_round",
     ("hinge_a", "hinge_b"): "hinge", ("hinge_b", "hinge_a"): "hinge",
+    ("finger", "finger"): "hinge", ("finger", "hinge_a"): "hinge", ("hinge_a", "finger"): "hinge",
+    ("finger", "hinge_b"): "hinge", ("hinge_b", "finger"): "hinge",
+    ("ball", "socket"): "ball", ("socket", "ball"): "ball",
+    ("clip", "bar"): "clip", ("bar", "clip"): "clip",
 }
 """Connector types that fit together -> the connection they make."""
 
 OPPOSED = {"stud"}  # connections whose directions must be opposite (the others only parallel)
+ANY_DIRECTION = {"ball"}  # connections at a point whatever the directions
 
 
 def _grid(width: int, length: int) -> list[tuple[int, int]]:
@@ -265,4 +279,19 @@ def normalise_number(name: str) -> str:
 
 
 def lookup(name: str) -> PartShape | None:
-    return CATALOGUE.get(normalise_number(name))
+    """A part by its file name: the hand-coded catalogue first, then the one generated from the LDCad shadow
+    library (:mod:`generated`)."""
+    number = normalise_number(name)
+    found = CATALOGUE.get(number)
+    if found is not None:
+        return found
+    return _generated(number)
+
+
+@functools.lru_cache(maxsize=4096)
+def _generated(number: str) -> PartShape | None:
+    fields = generated.entry(number)
+    if fields is None:
+        return None
+    connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
+    return PartShape(connectors=connectors, **fields)

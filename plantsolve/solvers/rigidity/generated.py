@@ -1,0 +1,155 @@
+"""The generated part of the catalogue: thousands of LDraw parts from the LDCad shadow library's snap data.
+
+``data/ldcad_parts.json.gz`` is written by ``scripts/ldcad_catalogue.py`` (its docstring gives the
+format; the data's licence and attribution are in ``data/README.md``). Each part there is its name,
+the bounding box of its drawn geometry and its snaps (cylinders, clips, hinge fingers, ball joints) in
+the part's LDraw frame. This module turns snaps into the catalogue's connection points, so that two
+snaps that fit make a connection where their points meet (the assembly matches points on a 0.001 LDU
+grid and compatible types, :data:`catalogue.MATES`):
+
+- A stud (male, not sliding, first section round or square of radius 6) is one ``stud`` point at its
+  base, pointing out of the part; the female counterpart an ``antistud`` at its mouth, pointing out.
+  Parts stacked as designed have their studs' bases on the anti-studs' mouths.
+- A sliding cylinder (technic holes, pins, axles) is cut into 20 LDU segments along its axis, one
+  point at each segment's centre, typed by the section there: shape ``A`` an ``axle`` or ``axlehole``,
+  round radius 6 a ``pin`` or ``pinhole``. A male axle slides in its holes, so it has a point every 10
+  LDU (a hole meets it at whole or half studs), as the hand-coded axles do. A pin in a hole has both
+  points at the hole's centre: coaxial, overlapping along the axis.
+- A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
+  anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre. Clip on bar: a hinge about the bar.
+- Hinge fingers (``SNAP_FGR``) are one ``finger`` point at the centre of the finger run, along the
+  hinge axis; two finger runs on one axis with one centre interlock (a hinge), whichever finger comes
+  first (the data's ``genderOfs``), and so do a finger run and a hand-coded hinge half.
+- A ball (``SNAP_GEN`` sphere, male) is a ``ball`` point at its centre, its socket a ``socket``: a
+  ball joint, any direction.
+
+Other snaps (tubes under plates, bar holes, generic boxes) make no point. Collision shapes: the data
+has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
+LDraw name is a plain brick, plate, tile or technic brick (``Brick  2 x  4``, ``Technic Brick  1 x  4
+with Holes``) gets that box less its studs (from y = 0 down) and less its technic holes; a studless
+technic beam its bounding box less its holes. Every other generated part has no collision shape
+(``collides`` false): it connects but is never reported in a collision.
+"""
+
+from __future__ import annotations
+
+import functools
+import gzip
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+Point = tuple  # (type, point, direction): the catalogue's Connector fields, built there
+
+
+DATA = Path(__file__).with_name("data") / "ldcad_parts.json.gz"
+SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
+AXLE_STEP = 10.0
+BAR_STEP = 2.0
+BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
+BEAM = re.compile(r"^technic beam\s+\d+$")
+
+
+@functools.lru_cache(maxsize=1)
+def _parts() -> dict:
+    with gzip.open(DATA, "rt", encoding="utf-8") as handle:
+        return json.load(handle)["parts"]
+
+
+def numbers() -> frozenset[str]:
+    return frozenset(_parts())
+
+
+def _near(value: float, target: float) -> bool:
+    return abs(value - target) < 0.5
+
+
+def _section_at(secs: list, t: float) -> tuple[str, float] | None:
+    run = 0.0
+    for shape, radius, length in secs:
+        if run <= t <= run + length:
+            return shape, radius
+        run += length
+    return None
+
+
+def _cylinder(gender: str, _caps: str, slide: int, start, axis, secs) -> list[Point]:
+    start, axis = np.asarray(start, float), np.asarray(axis, float)
+    length = sum(s[2] for s in secs)
+    male = gender == "M"
+    first_shape, first_radius = secs[0][0], secs[0][1]
+    if not slide and first_shape in ("R", "S") and _near(first_radius, 6):
+        direction = axis if male else -axis  # out of the part: a stud stands up, an anti-stud opens down
+        return [("stud" if male else "antistud", _point(start), _point(direction))]
+    out = []
+    if male and all(s[0] == "R" and _near(s[1], 4) for s in secs):
+        ts = np.arange(0.0, length + 1e-9, BAR_STEP)
+        return [("bar", _point(start + axis * t), _point(axis)) for t in ts]
+    n = max(1, int(round(length / SEGMENT)))
+    centres = [length / 2 + (k - (n - 1) / 2) * SEGMENT for k in range(n)]
+    for t in centres:
+        section = _section_at(secs, t)
+        if section is None:
+            continue
+        shape, radius = section
+        if shape == "A":
+            kind = "axle" if male else "axlehole"
+        elif shape in ("R", "S") and _near(radius, 6):
+            kind = "pin" if male else "pinhole"
+        else:
+            continue
+        if kind == "axle" and length >= SEGMENT:
+            ts = np.arange(AXLE_STEP, length - AXLE_STEP + 1e-9, AXLE_STEP)
+            out.extend(("axle", _point(start + axis * s), _point(axis)) for s in ts
+                       if _section_at(secs, s) is not None and _section_at(secs, s)[0] == "A")
+            continue
+        out.append((kind, _point(start + axis * t), _point(axis)))
+    return out
+
+
+def _point(v) -> tuple[float, float, float]:
+    return tuple(round(float(x), 3) + 0.0 for x in v)
+
+
+def connectors(snaps: list) -> tuple[Point, ...]:
+    """The connection points of a part's snaps (see the module docstring), each once."""
+    out: list[Point] = []
+    for snap in snaps:
+        kind = snap[0]
+        if kind == "cyl":
+            out.extend(_cylinder(*snap[1:]))
+        elif kind == "clp":
+            out.append(("clip", _point(snap[1]), _point(snap[2])))
+        elif kind == "fgr":
+            out.append(("finger", _point(snap[2]), _point(snap[3])))
+        elif kind == "sph":
+            out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
+    unique, seen = [], set()
+    for c in out:
+        kind, point, direction = c
+        key = (kind, point, direction if kind in ("stud", "antistud") else tuple(abs(x) for x in direction))
+        if key not in seen:
+            seen.add(key)
+            unique.append(c)
+    return tuple(unique)
+
+
+def entry(number: str) -> dict | None:
+    """The generated catalogue's part ``number`` (normalised) as the catalogue's PartShape fields, or None."""
+    entry = _parts().get(number)
+    if entry is None:
+        return None
+    lo, hi = np.array(entry["b"][:3], float), np.array(entry["b"][3:], float)
+    name = entry["n"]
+    plain = " ".join(name.lower().split())
+    conns = connectors(entry["s"])
+    collides = True
+    if BOXED.match(plain):
+        lo[1] = max(lo[1], 0.0)  # the studs stand above y = 0 inside the anti-studs of the part on top
+    elif not BEAM.match(plain):
+        collides = False
+    centre, size = (lo + hi) / 2, hi - lo
+    return {"number": number, "name": name, "box_center": tuple(float(v) for v in centre),
+            "box_size": tuple(float(v) for v in size), "connectors": conns, "collides": collides}
