@@ -297,8 +297,8 @@ def main(argv: list[str] | None = None) -> int:
     parts = derive(args.ldraw, args.shadow)
     body = {"source": args.source, "units": "LDU, part frame, -y up", "parts": parts}
     data = json.dumps(body, separators=(",", ":"), sort_keys=True).encode()
-    with open(args.out, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
-        handle.write(data)  # mtime 0: the same libraries give the same bytes
+    with open(args.out, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
+        handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
     print(f"{len(parts)} parts with snap information written to {args.out}", file=sys.stderr)
     return 0
 

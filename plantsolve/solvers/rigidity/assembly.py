@@ -32,7 +32,7 @@ SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) ar
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
             "ball": "ball", "clip": "hinge"}
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip"}  # one part inside the other: not a collision
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge"}  # one part inside (or interlocked with) the other: not a collision
 
 
 @dataclass
