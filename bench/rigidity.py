@@ -53,6 +53,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.rigidity import RigidityRequest  # noqa: E402
+from plantsolve.solvers.base import StoredInput  # noqa: E402
+from plantsolve.solvers.rigidity import generated  # noqa: E402
+from plantsolve.solvers.rigidity.catalogue import CATALOGUE, normalise_number  # noqa: E402
+from plantsolve.solvers.rigidity.upload import parse_upload  # noqa: E402
 from plantsolve.solvers.rigidity.assembly import Assembly  # noqa: E402
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions  # noqa: E402
 from plantsolve.solvers.rigidity.docking import dock  # noqa: E402
@@ -171,11 +175,6 @@ def collisions_table(quick: bool) -> None:
 
 
 def catalogue_table(models: list[Path]) -> None:
-    from plantsolve.solvers.base import StoredInput
-    from plantsolve.solvers.rigidity import generated
-    from plantsolve.solvers.rigidity.catalogue import CATALOGUE, normalise_number
-    from plantsolve.solvers.rigidity.upload import parse_upload
-
     t0 = time.process_time()
     count = len(generated.numbers())
     print(f"\nload: {count} generated parts in {time.process_time() - t0:.3f} s CPU")

@@ -37,8 +37,11 @@ Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by defau
 less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
 pins and axles are 12 LDU across, so a rod in or through a hole touches its part without entering
 it. A gear is its pitch disc (three boxes inscribed in the circle) and hub: gears in mesh do not
-overlap. Everything here is numbers per part (frame, boxes, connection points), so a catalogue
-generated from a parts library can replace the hand-written one.
+overlap. Everything here is numbers per part (frame, boxes, connection points).
+
+:func:`lookup` finds a part here first, then in the catalogue generated from the LDCad shadow library
+(:mod:`generated`: thousands of official parts, their connection points from snap data, a collision
+shape only for plain rectangular parts), which adds ball/socket, clip/bar and hinge-finger connections.
 """
 
 from __future__ import annotations
@@ -285,11 +288,11 @@ def lookup(name: str) -> PartShape | None:
     found = CATALOGUE.get(number)
     if found is not None:
         return found
-    return _generated(number)
+    return generated_part(number)
 
 
 @functools.lru_cache(maxsize=4096)
-def _generated(number: str) -> PartShape | None:
+def generated_part(number: str) -> PartShape | None:
     fields = generated.entry(number)
     if fields is None:
         return None

@@ -7,16 +7,20 @@ the part's LDraw frame. This module turns snaps into the catalogue's connection 
 snaps that fit make a connection where their points meet (the assembly matches points on a 0.001 LDU
 grid and compatible types, :data:`catalogue.MATES`):
 
-- A stud (male, not sliding, first section round or square of radius 6) is one ``stud`` point at its
-  base, pointing out of the part; the female counterpart an ``antistud`` at its mouth, pointing out.
+- A stud is a male round (or square) section of radius 6 at most 6 LDU long, wherever it sits on its
+  cylinder (a round plate's stud above its rim, a half pin's short end): one ``stud`` point at its
+  base, pointing out along the cylinder; so is a closed male cylinder of radius 6 that does not slide
+  (a minifigure's hip pegs), at its start. A female cylinder starting with radius 6 that does not slide
+  through (or is under half a stud long) is an ``antistud`` at its mouth, pointing out of the part.
   Parts stacked as designed have their studs' bases on the anti-studs' mouths.
-- A sliding cylinder (technic holes, pins, axles) is cut into 20 LDU segments along its axis, one
-  point at each segment's centre, typed by the section there: shape ``A`` an ``axle`` or ``axlehole``,
-  round radius 6 a ``pin`` or ``pinhole``. A male axle slides in its holes, so it has a point every 10
-  LDU (a hole meets it at whole or half studs), as the hand-coded axles do. A pin in a hole has both
-  points at the hole's centre: coaxial, overlapping along the axis.
+- Otherwise a cylinder (technic holes, pins, axles) is cut into 20 LDU slots from its start (one slot
+  when shorter), one point at each slot's centre, typed by the section there: shape ``A`` an ``axle``
+  or ``axlehole``, round radius 6 a ``pin`` or ``pinhole``. A male axle slides in its holes, so it has
+  a point every 10 LDU (a hole meets it at whole or half studs), as the hand-coded axles do. A pin in a
+  hole has both points at the hole's centre: coaxial, overlapping along the axis.
 - A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
   anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre. Clip on bar: a hinge about the bar.
+  Female radius-4 holes (hollow studs, a pin's bore) make no point.
 - Hinge fingers (``SNAP_FGR``) are one ``finger`` point at the centre of the finger run, along the
   hinge axis; two finger runs on one axis with one centre interlock (a hinge), whichever finger comes
   first (the data's ``genderOfs``), and so do a finger run and a hand-coded hinge half.
@@ -48,6 +52,7 @@ DATA = Path(__file__).with_name("data") / "ldcad_parts.json.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
 AXLE_STEP = 10.0
 BAR_STEP = 2.0
+STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
 BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
 BEAM = re.compile(r"^technic beam\s+\d+$")
 
@@ -66,44 +71,56 @@ def _near(value: float, target: float) -> bool:
     return abs(value - target) < 0.5
 
 
-def _section_at(secs: list, t: float) -> tuple[str, float] | None:
+def _section_at(secs: list, t: float) -> tuple[str, float, float] | None:
+    """(shape, radius, length) of the section at ``t`` LDU along the cylinder."""
     run = 0.0
     for shape, radius, length in secs:
         if run <= t <= run + length:
-            return shape, radius
+            return shape, radius, length
         run += length
     return None
 
 
-def _cylinder(gender: str, _caps: str, slide: int, start, axis, secs) -> list[Point]:
+def _is_stud(shape: str, radius: float, length: float) -> bool:
+    return shape in ("R", "S") and _near(radius, 6) and length <= STUD_LENGTH
+
+
+def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Point]:
     start, axis = np.asarray(start, float), np.asarray(axis, float)
     length = sum(s[2] for s in secs)
     male = gender == "M"
-    first_shape, first_radius = secs[0][0], secs[0][1]
-    if not slide and first_shape in ("R", "S") and _near(first_radius, 6):
-        direction = axis if male else -axis  # out of the part: a stud stands up, an anti-stud opens down
-        return [("stud" if male else "antistud", _point(start), _point(direction))]
+    shape0, radius0 = secs[0][0], secs[0][1]
+    if not male and shape0 in ("R", "S") and _near(radius0, 6) and (not slide or length < SEGMENT / 2):
+        return [("antistud", _point(start), _point(-axis))]  # its mouth, opening out of the part
+    if male and not slide and caps != "none" and shape0 in ("R", "S") and _near(radius0, 6):
+        return [("stud", _point(start), _point(axis))]  # a closed peg that does not slide: a (long) stud
     out = []
-    if male and all(s[0] == "R" and _near(s[1], 4) for s in secs):
-        ts = np.arange(0.0, length + 1e-9, BAR_STEP)
-        return [("bar", _point(start + axis * t), _point(axis)) for t in ts]
-    n = max(1, int(round(length / SEGMENT)))
-    centres = [length / 2 + (k - (n - 1) / 2) * SEGMENT for k in range(n)]
+    run = 0.0
+    for shape, radius, piece in secs:
+        if male and _is_stud(shape, radius, piece):  # a stud (a half pin's short end too): its base
+            out.append(("stud", _point(start + axis * run), _point(axis)))
+        elif male and shape == "R" and _near(radius, 4):  # a bar: a clip holds it anywhere along it
+            out.extend(("bar", _point(start + axis * t), _point(axis))
+                       for t in np.arange(run, run + piece + 1e-9, BAR_STEP))
+        run += piece
+    # 20 LDU slots from the start (a pin's or a hole's length); a shorter cylinder is one slot
+    centres = [length / 2] if length < SEGMENT else [SEGMENT / 2 + k * SEGMENT
+                                                      for k in range(int(length / SEGMENT + 0.25))]
     for t in centres:
         section = _section_at(secs, t)
         if section is None:
             continue
-        shape, radius = section
+        shape, radius, piece = section
         if shape == "A":
             kind = "axle" if male else "axlehole"
-        elif shape in ("R", "S") and _near(radius, 6):
+        elif shape in ("R", "S") and _near(radius, 6) and not (male and _is_stud(shape, radius, piece)):
             kind = "pin" if male else "pinhole"
         else:
             continue
         if kind == "axle" and length >= SEGMENT:
             ts = np.arange(AXLE_STEP, length - AXLE_STEP + 1e-9, AXLE_STEP)
-            out.extend(("axle", _point(start + axis * s), _point(axis)) for s in ts
-                       if _section_at(secs, s) is not None and _section_at(secs, s)[0] == "A")
+            out.extend(("axle", _point(start + axis * u), _point(axis)) for u in ts
+                       if (_section_at(secs, u) or ("",))[0] == "A")
             continue
         out.append((kind, _point(start + axis * t), _point(axis)))
     return out

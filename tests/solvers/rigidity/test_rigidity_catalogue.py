@@ -16,7 +16,7 @@ import pytest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.rigidity import generated
 from plantsolve.solvers.rigidity.assembly import Assembly
-from plantsolve.solvers.rigidity.catalogue import CATALOGUE, lookup
+from plantsolve.solvers.rigidity.catalogue import CATALOGUE, generated_part, lookup
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -126,8 +126,7 @@ def test_generated_parts_match_the_hand_coded_ones(number):
 
 
 def generated_shape(number):
-    from plantsolve.solvers.rigidity.catalogue import _generated
-    shape = _generated(number)
+    shape = generated_part(number)
     assert shape is not None, number
     return shape
 
@@ -201,4 +200,20 @@ def test_an_official_set_model_is_mostly_known():
     joints = _joints(request, result)
     assert joints[("hinge", "hinge", "3938", "3937")] == 1  # the radar dish's hinge, tilted as the set has it
     assert joints[("rigid", "stud", "3795", "122c01")] == 2  # both wheel holders under the chassis plate
+    assert result.collisions == []
+
+
+def test_an_official_mini_set_is_all_known_every_part_joined_and_nothing_collides():
+    """OMR 30051 X-wing Mini (CC BY 2.0, omr/README.md): round plates on a half pin's short end, an
+    antenna in a round brick, clips on bars, wings on brackets."""
+    request = parse(HERE / "omr" / "30051-1-X-wingFighter-Mini.mpd")
+    result = solve(request).result
+    assert len(request.parts) == 61 and result.unknown_parts == []
+    joined = {b for j in result.joints for b in j.bodies}
+    assert {p.id for p in request.parts} == joined
+    joints = _joints(request, result)
+    assert joints[("hinge", "stud", "4274", "6141")] == 4  # each engine's half pin holds a round plate
+    assert joints[("hinge", "stud", "6141", "6141")] == 4  # and that one the next
+    assert joints[("hinge", "stud", "3957a", "3062b")] == 4
+    assert joints[("hinge", "clip", "6019", "61184")] == 4
     assert result.collisions == []
