@@ -1,6 +1,6 @@
 """Derive the rigidity kind's parts catalogue from the LDCad shadow library and the LDraw parts library.
 
-Usage: ``python scripts/ldcad_catalogue.py --ldraw DIR --shadow DIR --out FILE.json.gz``
+Usage: ``python scripts/ldcad_catalogue.py --ldraw DIR --shadow DIR --out FILE.tsv.gz``
 
 ``--ldraw`` is an LDraw.org parts library (``parts/``, ``p/``; CC BY 4.0), ``--shadow`` a checkout of
 the LDCad shadow library (``parts/``, ``p/``; CC BY-SA 4.0, by Roland Melkert and contributors). The
@@ -19,16 +19,18 @@ What is read of each meta line (LDCad's meta syntax, ``[key=value]`` pairs):
   sum of its section lengths (or is centred on ``pos`` with ``center=true``).
 - ``SNAP_CLP`` (a clip: ``radius``, ``length``, ``center``), ``SNAP_FGR`` (hinge fingers:
   ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``), ``SNAP_GEN`` with
-  ``bounding=sph`` (a ball joint when male, its socket when female); other generic snaps are skipped.
+  ``bounding=sph`` (a ball joint when male, its socket when female), or with a ``group`` (a fit made
+  only within the group: a tyre on its rim); other generic snaps are skipped.
 
-The output is JSON (gzip): ``{"source": …, "parts": {number: {"n": name, "b": [xmin, ymin, zmin, xmax,
-ymax, zmax], "s": [snap, …]}}}`` in LDraw units in the part's frame, with ``b`` the bounding box of the
-part's drawn geometry and each snap one of
+The output is gzip text: a first line of JSON ``{"source": …, "units": …}``, then one line per part,
+``number<TAB>{"n": name, "b": [xmin, ymin, zmin, xmax, ymax, zmax], "s": [snap, …]}`` (JSON after the
+tab, so a reader parses only the parts it looks up), in LDraw units in the part's frame, with ``b``
+the bounding box of the part's drawn geometry and each snap one of
 
 - ``["cyl", gender, caps, slide, start, axis, [[shape, radius, length], …]]``: sections from ``start``
   along the unit vector ``axis``;
 - ``["clp", centre, axis, length]``; ``["fgr", gender, centre, axis, length]``;
-- ``["sph", gender, centre, radius]``.
+- ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``.
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -153,6 +155,9 @@ def _own_snaps(line: str, params: dict, place) -> list[dict]:
             if bounding[:1] == ["sph"] and len(bounding) >= 2:
                 out.append({"id": snap_id, "kind": "sph", "gender": params.get("gender", "M").upper()[:1],
                             "centre": origin, "radius": float(bounding[1])})
+            elif params.get("group"):  # a fit only parts of one group make (a tyre on its rim, a drawer)
+                out.append({"id": snap_id, "kind": "gen", "gender": params.get("gender", "M").upper()[:1],
+                            "group": params["group"].lower(), "centre": origin, "axis": down})
     return [place(s) for s in out]
 
 
@@ -262,6 +267,8 @@ def _record(snap: dict) -> list:
         return ["clp", _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
     if snap["kind"] == "fgr":
         return ["fgr", snap["gender"], _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
+    if snap["kind"] == "gen":
+        return ["gen", snap["gender"], snap["group"], _r(snap["centre"]), _r(snap["axis"])]
     return ["sph", snap["gender"], _r(snap["centre"]), round(snap["radius"], 3)]
 
 
@@ -287,16 +294,21 @@ def derive(ldraw_root: Path, shadow_root: Path) -> dict:
     return parts
 
 
+def write_lines(header: dict, parts: dict) -> str:
+    lines = [json.dumps(header, sort_keys=True)]
+    lines.extend(f"{number}\t{json.dumps(parts[number], separators=(',', ':'), sort_keys=True)}" for number in sorted(parts))
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ldraw", type=Path, required=True, help="LDraw.org parts library folder (parts/, p/)")
     parser.add_argument("--shadow", type=Path, required=True, help="LDCad shadow library folder (parts/, p/)")
-    parser.add_argument("--out", type=Path, required=True, help="output .json.gz")
+    parser.add_argument("--out", type=Path, required=True, help="output .tsv.gz")
     parser.add_argument("--source", default="", help="versions of the two libraries, recorded in the file")
     args = parser.parse_args(argv)
     parts = derive(args.ldraw, args.shadow)
-    body = {"source": args.source, "units": "LDU, part frame, -y up", "parts": parts}
-    data = json.dumps(body, separators=(",", ":"), sort_keys=True).encode()
+    data = write_lines({"source": args.source, "units": "LDU, part frame, -y up"}, parts).encode()
     with open(args.out, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
         handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
     print(f"{len(parts)} parts with snap information written to {args.out}", file=sys.stderr)

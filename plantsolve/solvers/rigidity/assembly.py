@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, MATES, OPPOSED, PartShape, collision_boxes, lookup
+from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -31,8 +31,8 @@ from plantsolve.solvers.rigidity.screws import FREEDOM
 SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) are one point
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
-            "ball": "ball", "clip": "hinge"}
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge"}  # one part inside (or interlocked with) the other: not a collision
+            "ball": "ball", "clip": "hinge", "group": "rigid"}
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group"}  # one part inside (or interlocked with) the other: not a collision
 
 
 @dataclass
@@ -135,7 +135,7 @@ class Assembly:
             mine = shape.connectors[ci].type
             for other, oi in self._slots.get(key, ()):
                 theirs = self.parts[other].shape.connectors[oi].type
-                kind = MATES.get((mine, theirs))
+                kind = mate(mine, theirs)
                 if kind is None:
                     continue
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])

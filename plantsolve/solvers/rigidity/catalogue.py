@@ -150,6 +150,28 @@ MATES = {
 }
 """Connector types that fit together -> the connection they make."""
 
+GROUP = "group"  # the connection of a grouped generic snap pair (generated parts)
+
+
+def mate(a: str, b: str) -> str | None:
+    """The connection two connector types make, or None: :data:`MATES`, or the male and female of one
+    generic snap group (``group:<name>:M`` with ``group:<name>:F``)."""
+    kind = MATES.get((a, b))
+    if kind is None and a.startswith("group:") and b.startswith("group:"):
+        ga, gb = a.rsplit(":", 1), b.rsplit(":", 1)
+        if ga[0] == gb[0] and ga[1] != gb[1]:
+            return GROUP
+    return kind
+
+
+def counterparts(a: str) -> set[str]:
+    """Every connector type that fits a connector of type ``a``."""
+    if a.startswith("group:"):
+        name, gender = a.rsplit(":", 1)
+        return {f"{name}:{'F' if gender == 'M' else 'M'}"}
+    return {t for (x, t) in MATES if x == a}
+
+
 OPPOSED = {"stud"}  # connections whose directions must be opposite (the others only parallel)
 ANY_DIRECTION = {"ball"}  # connections at a point whatever the directions
 

@@ -20,7 +20,7 @@ import itertools
 import numpy as np
 
 from plantsolve.solvers.rigidity.assembly import INSERTED, Assembly, part_solid
-from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, MATES, OPPOSED, lookup
+from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, counterparts, lookup, mate
 from plantsolve.solvers.rigidity.collisions import penetration
 
 
@@ -100,8 +100,8 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     reps = np.array(coset_representatives(shape))  # the part's own symmetries give no new placements
     for (ctype, direction), members_of_group in groups.items():
         turned_all = CUBE[reps] @ np.asarray(direction, dtype=float)  # the direction under each rotation
-        for mate_type in {t for (a, t) in MATES if a == ctype}:
-            kind = MATES[(ctype, mate_type)]
+        for mate_type in counterparts(ctype):
+            kind = mate(ctype, mate_type)
             sel = np.flatnonzero(types == mate_type)
             if sel.size == 0:
                 continue

@@ -1,6 +1,6 @@
 """The generated part of the catalogue: thousands of LDraw parts from the LDCad shadow library's snap data.
 
-``data/ldcad_parts.json.gz`` is written by ``scripts/ldcad_catalogue.py`` (its docstring gives the
+``data/ldcad_parts.tsv.gz`` is written by ``scripts/ldcad_catalogue.py`` (its docstring gives the
 format; the data's licence and attribution are in ``data/README.md``). Each part there is its name,
 the bounding box of its drawn geometry and its snaps (cylinders, clips, hinge fingers, ball joints) in
 the part's LDraw frame. This module turns snaps into the catalogue's connection points, so that two
@@ -27,7 +27,11 @@ grid and compatible types, :data:`catalogue.MATES`):
 - A ball (``SNAP_GEN`` sphere, male) is a ``ball`` point at its centre, its socket a ``socket``: a
   ball joint, any direction.
 
-Other snaps (tubes under plates, bar holes, generic boxes) make no point. Collision shapes: the data
+- A generic snap of a ``group`` (a tyre on its rim, a drawer in its cabinet) is a ``group:<name>:M``
+  or ``…:F`` point at its centre along its axis: male and female of one group at one point make a
+  rigid connection (the fit holds).
+
+Other snaps (tubes under plates, bar holes, ungrouped generic boxes) make no point. Collision shapes: the data
 has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
 LDraw name is a plain brick, plate, tile or technic brick (``Brick  2 x  4``, ``Technic Brick  1 x  4
 with Holes``) gets that box less its studs (from y = 0 down) and less its technic holes; a studless
@@ -48,7 +52,7 @@ import numpy as np
 Point = tuple  # (type, point, direction): the catalogue's Connector fields, built there
 
 
-DATA = Path(__file__).with_name("data") / "ldcad_parts.json.gz"
+DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
 AXLE_STEP = 10.0
 BAR_STEP = 2.0
@@ -58,13 +62,25 @@ BEAM = re.compile(r"^technic beam\s+\d+$")
 
 
 @functools.lru_cache(maxsize=1)
-def _parts() -> dict:
+def _lines() -> dict[str, str]:
+    """Part number -> its line's JSON text (parsed when the part is looked up: the file is 22 MB of JSON)."""
     with gzip.open(DATA, "rt", encoding="utf-8") as handle:
-        return json.load(handle)["parts"]
+        text = handle.read()
+    return dict(line.split("\t", 1) for line in text.splitlines()[1:] if "\t" in line)
+
+
+def _part(number: str) -> dict | None:
+    line = _lines().get(number)
+    return None if line is None else json.loads(line)
+
+
+def group_type(group: str, gender: str) -> str:
+    """The connector type of a grouped generic snap: ``group:<name>:M`` fits ``group:<name>:F``."""
+    return f"group:{group}:{gender}"
 
 
 def numbers() -> frozenset[str]:
-    return frozenset(_parts())
+    return frozenset(_lines())
 
 
 def _near(value: float, target: float) -> bool:
@@ -141,6 +157,8 @@ def connectors(snaps: list) -> tuple[Point, ...]:
             out.append(("clip", _point(snap[1]), _point(snap[2])))
         elif kind == "fgr":
             out.append(("finger", _point(snap[2]), _point(snap[3])))
+        elif kind == "gen":
+            out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "sph":
             out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
     unique, seen = [], set()
@@ -155,7 +173,7 @@ def connectors(snaps: list) -> tuple[Point, ...]:
 
 def entry(number: str) -> dict | None:
     """The generated catalogue's part ``number`` (normalised) as the catalogue's PartShape fields, or None."""
-    entry = _parts().get(number)
+    entry = _part(number)
     if entry is None:
         return None
     lo, hi = np.array(entry["b"][:3], float), np.array(entry["b"][3:], float)
