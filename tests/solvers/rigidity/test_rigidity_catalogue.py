@@ -230,3 +230,10 @@ def test_a_tyre_fits_its_rim_through_their_snap_group_and_nothing_else():
     other = Assembly()
     other.add_part("rim", "4624", (0, 0, 0))
     assert other.add_part("tyre", "3641", (0, 0, 10)) == []  # off the rim: no fit
+
+
+def test_docking_offers_poses_for_a_generated_part():
+    path = HERE / "official_parts.ldr"
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"dock": {"part": "3023b", "limit": 3}})
+    poses = solve(request).result.docking
+    assert len(poses) == 3 and all(p.part == "3023b" and p.connections == 2 for p in poses)
