@@ -144,7 +144,8 @@ class Assembly:
                 elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
                 point = tuple(_clean(v) for v in points[ci])
-                axis = tuple(_clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
+                axis = None if kind in ANY_DIRECTION else tuple(  # a ball joint has no axis
+                    _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
             self._slots.setdefault(key, []).append((id, ci))
         for other, conns in found.items():

@@ -171,6 +171,11 @@ def test_a_model_of_official_parts_is_known_and_makes_exactly_its_joints():
     assert len(request.parts) == 30 and result.unknown_parts == []
     assert _joints(request, result) == EXPECTED
     assert result.collisions == []  # pins in holes, axle in beam and bush, ball in socket, clip on bar, hinges
+    # each pin spins (2), the axle with its bush turns and slides in the beam's round hole (2), the socket
+    # plate turns on the ball (3), the clip plate on its one stud and the bar in the clip (2), the hinge
+    # top (1), four parts on one stud each (4); the locking hinge plates both sit on the base
+    assert result.dof == 14
+    assert [j.axis for j in result.joints if j.type == "ball"] == [None]
 
 
 def test_a_generated_box_part_pushed_into_another_is_a_collision():
