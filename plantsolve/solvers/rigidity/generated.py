@@ -2,8 +2,8 @@
 
 ``data/ldcad_parts.tsv.gz`` is written by ``scripts/ldcad_catalogue.py`` (its docstring gives the
 format; the data's licence and attribution are in ``data/README.md``). Each part there is its name,
-the bounding box of its drawn geometry and its snaps (cylinders, clips, hinge fingers, ball joints) in
-the part's LDraw frame. This module turns snaps into the catalogue's connection points, so that two
+the bounding box of its drawn geometry and its snaps (cylinders, clips, hinge fingers, ball joints,
+grouped fits) in the part's LDraw frame. This module turns snaps into the catalogue's connection points, so that two
 snaps that fit make a connection where their points meet (the assembly matches points on a 0.001 LDU
 grid and compatible types, :data:`catalogue.MATES`):
 
@@ -26,13 +26,13 @@ grid and compatible types, :data:`catalogue.MATES`):
   first (the data's ``genderOfs``), and so do a finger run and a hand-coded hinge half.
 - A ball (``SNAP_GEN`` sphere, male) is a ``ball`` point at its centre, its socket a ``socket``: a
   ball joint, any direction.
-
 - A generic snap of a ``group`` (a tyre on its rim, a drawer in its cabinet) is a ``group:<name>:M``
   or ``…:F`` point at its centre along its axis: male and female of one group at one point make a
   rigid connection (the fit holds).
 
-Other snaps (tubes under plates, bar holes, ungrouped generic boxes) make no point. Collision shapes: the data
-has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
+Other snaps (tubes under plates, bar holes, ungrouped generic boxes) make no point.
+
+Collision shapes: the data has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
 LDraw name is a plain brick, plate, tile or technic brick (``Brick  2 x  4``, ``Technic Brick  1 x  4
 with Holes``) gets that box less its studs (from y = 0 down) and less its technic holes; a studless
 technic beam its bounding box less its holes. Every other generated part has no collision shape
@@ -50,7 +50,6 @@ from pathlib import Path
 import numpy as np
 
 Point = tuple  # (type, point, direction): the catalogue's Connector fields, built there
-
 
 DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
@@ -146,6 +145,12 @@ def _point(v) -> tuple[float, float, float]:
     return tuple(round(float(x), 3) + 0.0 for x in v)
 
 
+def _line(direction: tuple) -> tuple:
+    """An axis without its sign (the first non-zero component made positive)."""
+    lead = next((x for x in direction if abs(x) > 1e-9), 1.0)
+    return tuple(x if lead > 0 else -x for x in direction)
+
+
 def connectors(snaps: list) -> tuple[Point, ...]:
     """The connection points of a part's snaps (see the module docstring), each once."""
     out: list[Point] = []
@@ -164,7 +169,7 @@ def connectors(snaps: list) -> tuple[Point, ...]:
     unique, seen = [], set()
     for c in out:
         kind, point, direction = c
-        key = (kind, point, direction if kind in ("stud", "antistud") else tuple(abs(x) for x in direction))
+        key = (kind, point, direction if kind in ("stud", "antistud") else _line(direction))
         if key not in seen:
             seen.add(key)
             unique.append(c)
