@@ -108,7 +108,8 @@ class JointResult(BaseModel):
     bodies: list[str]
     point: list[float]
     axis: list[float] | None
-    origin: str = Field(description="input (a request joint) or the inferred LEGO connection: stud, pin, axle, hinge.")
+    origin: str = Field(description="input (a request joint) or the inferred LEGO connection: stud, pin, axle, "
+                        "hinge, ball (ball in socket), clip (clip on bar), group (a grouped fit, e.g. tyre on rim).")
     connections: int = Field(description="Connection points behind the joint (several studs make one rigid joint).")
     moves: bool = Field(description="The joint's relative twist is non-zero in some motion of the model.")
 

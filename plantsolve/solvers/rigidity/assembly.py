@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, PartShape, collision_boxes, lookup
+from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -30,8 +30,9 @@ from plantsolve.solvers.rigidity.screws import FREEDOM
 
 SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) are one point
 ALIGN = 0.999  # |cos| between directions that count as parallel
-JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid"}
-INSERTED = {"pin", "axle", "axle_round"}  # one part inside the other's hole: not a collision
+JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
+            "ball": "ball", "clip": "hinge", "group": "rigid"}
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group"}  # one part inside (or interlocked with) the other: not a collision
 
 
 @dataclass
@@ -49,10 +50,13 @@ class Placed:
         return part_solid(self.shape, self.rotation, self.position)
 
 
-def part_solid(shape: PartShape, rotation: np.ndarray, position: np.ndarray) -> Solid:
-    """A catalogue part's collision shape placed in the world: one box, or its pieces with the holes cut."""
+def part_solid(shape: PartShape, rotation: np.ndarray, position: np.ndarray) -> Solid | None:
+    """A catalogue part's collision shape placed in the world: one box, or its pieces with the holes cut;
+    None for a part without a collision shape."""
     boxes = [Solid(center=rotation @ np.asarray(c, dtype=float) + position, size=np.asarray(s, dtype=float),
                    rotation=rotation) for c, s in collision_boxes(shape)]
+    if not boxes:
+        return None
     return boxes[0] if len(boxes) == 1 else Solid(pieces=tuple(boxes))
 
 
@@ -131,14 +135,17 @@ class Assembly:
             mine = shape.connectors[ci].type
             for other, oi in self._slots.get(key, ()):
                 theirs = self.parts[other].shape.connectors[oi].type
-                kind = MATES.get((mine, theirs))
+                kind = mate(mine, theirs)
                 if kind is None:
                     continue
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])
-                if (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
+                if kind in ANY_DIRECTION:
+                    pass
+                elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
                 point = tuple(_clean(v) for v in points[ci])
-                axis = tuple(_clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
+                axis = None if kind in ANY_DIRECTION else tuple(  # a ball joint has no axis
+                    _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
             self._slots.setdefault(key, []).append((id, ci))
         for other, conns in found.items():

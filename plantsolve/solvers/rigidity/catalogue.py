@@ -37,8 +37,11 @@ Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by defau
 less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
 pins and axles are 12 LDU across, so a rod in or through a hole touches its part without entering
 it. A gear is its pitch disc (three boxes inscribed in the circle) and hub: gears in mesh do not
-overlap. Everything here is numbers per part (frame, boxes, connection points), so a catalogue
-generated from a parts library can replace the hand-written one.
+overlap. Everything here is numbers per part (frame, boxes, connection points).
+
+:func:`lookup` finds a part here first, then in the catalogue generated from the LDCad shadow library
+(:mod:`generated`: thousands of official parts, their connection points from snap data, a collision
+shape only for plain rectangular parts), which adds ball/socket, clip/bar and hinge-finger connections.
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from plantsolve.solvers.rigidity import generated
 
 BRICK = 24
 PLATE = 8
@@ -81,6 +86,7 @@ class PartShape:
     box_size: tuple[float, float, float]
     connectors: tuple[Connector, ...]
     solids: tuple[Box, ...] = ()
+    collides: bool = True  # false: no collision shape known (a generated part that is not a plain box)
 
     def points(self) -> np.ndarray:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
@@ -93,7 +99,10 @@ HOLES = {"pinhole", "axlehole"}
 def _cut(box: Box, hole: Connector) -> list[Box]:
     """``box`` less the square prism of half-width HOLE_RADIUS around the hole's axis, which runs through
     the whole box: up to four boxes (two beside the hole, one on each side between them)."""
-    axis = int(np.flatnonzero(np.asarray(hole.direction))[0])
+    direction = np.abs(np.asarray(hole.direction, float))
+    axis = int(np.argmax(direction))
+    if direction[axis] < 0.999:  # a hole at an angle to the box: not cut (its part is then solid there)
+        return [box]
     u, v = [k for k in range(3) if k != axis]
     center, size = np.asarray(box[0], float), np.asarray(box[1], float)
     lo, hi = center - size / 2, center + size / 2
@@ -118,7 +127,10 @@ def _cut(box: Box, hole: Connector) -> list[Box]:
 def collision_boxes(shape: PartShape) -> tuple[Box, ...]:
     """The part's collision shape as boxes in its own frame: its solids (or its bounding box) with every
     pin and axle hole cut through, so a pin or an axle in a hole, or passing through it, touches the part
-    without entering it (square holes and rods of side 2 · HOLE_RADIUS: a rod fits its hole exactly)."""
+    without entering it (square holes and rods of side 2 · HOLE_RADIUS: a rod fits its hole exactly).
+    Empty for a part without a collision shape."""
+    if not shape.collides:
+        return ()
     boxes = list(shape.solids) or [(shape.box_center, shape.box_size)]
     for hole in (c for c in shape.connectors if c.type in HOLES):
         boxes = [piece for box in boxes for piece in _cut(box, hole)]
@@ -131,10 +143,37 @@ MATES = {
     ("axle", "axlehole"): "axle", ("axlehole", "axle"): "axle",
     ("axle", "pinhole"): "axle_round", ("pinhole", "axle"): "axle_round",
     ("hinge_a", "hinge_b"): "hinge", ("hinge_b", "hinge_a"): "hinge",
+    ("finger", "finger"): "hinge", ("finger", "hinge_a"): "hinge", ("hinge_a", "finger"): "hinge",
+    ("finger", "hinge_b"): "hinge", ("hinge_b", "finger"): "hinge",
+    ("ball", "socket"): "ball", ("socket", "ball"): "ball",
+    ("clip", "bar"): "clip", ("bar", "clip"): "clip",
 }
 """Connector types that fit together -> the connection they make."""
 
+GROUP = "group"  # the connection of a grouped generic snap pair (generated parts)
+
+
+def mate(a: str, b: str) -> str | None:
+    """The connection two connector types make, or None: :data:`MATES`, or the male and female of one
+    generic snap group (``group:<name>:M`` with ``group:<name>:F``)."""
+    kind = MATES.get((a, b))
+    if kind is None and a.startswith("group:") and b.startswith("group:"):
+        ga, gb = a.rsplit(":", 1), b.rsplit(":", 1)
+        if ga[0] == gb[0] and ga[1] != gb[1]:
+            return GROUP
+    return kind
+
+
+def counterparts(a: str) -> set[str]:
+    """Every connector type that fits a connector of type ``a``."""
+    if a.startswith("group:"):
+        name, gender = a.rsplit(":", 1)
+        return {f"{name}:{'F' if gender == 'M' else 'M'}"}
+    return {t for (x, t) in MATES if x == a}
+
+
 OPPOSED = {"stud"}  # connections whose directions must be opposite (the others only parallel)
+ANY_DIRECTION = {"ball"}  # connections at a point whatever the directions
 
 
 def _grid(width: int, length: int) -> list[tuple[int, int]]:
@@ -265,4 +304,19 @@ def normalise_number(name: str) -> str:
 
 
 def lookup(name: str) -> PartShape | None:
-    return CATALOGUE.get(normalise_number(name))
+    """A part by its file name: the hand-coded catalogue first, then the one generated from the LDCad shadow
+    library (:mod:`generated`)."""
+    number = normalise_number(name)
+    found = CATALOGUE.get(number)
+    if found is not None:
+        return found
+    return generated_part(number)
+
+
+@functools.lru_cache(maxsize=4096)
+def generated_part(number: str) -> PartShape | None:
+    fields = generated.entry(number)
+    if fields is None:
+        return None
+    connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
+    return PartShape(connectors=connectors, **fields)

@@ -20,7 +20,7 @@ import itertools
 import numpy as np
 
 from plantsolve.solvers.rigidity.assembly import INSERTED, Assembly, part_solid
-from plantsolve.solvers.rigidity.catalogue import MATES, OPPOSED, lookup
+from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, counterparts, lookup, mate
 from plantsolve.solvers.rigidity.collisions import penetration
 
 
@@ -46,7 +46,8 @@ def _signature(shape, h: np.ndarray) -> frozenset:
     box = tuple(np.round(h @ np.asarray(shape.box_center), 6)) + tuple(np.round(np.abs(h) @ shape.box_size, 6))
     items = set()
     for c, p, d in zip(shape.connectors, pts, dirs):
-        if c.type not in ("stud", "antistud") and d[np.flatnonzero(np.abs(d) > 1e-9)[0]] < 0:
+        lead = np.flatnonzero(np.abs(d) > 1e-9)
+        if c.type not in ("stud", "antistud") and lead.size and d[lead[0]] < 0:
             d = -d  # an axis (pin, hole, axle, hinge) has no sign
         items.add((c.type, tuple(p), tuple(np.round(d, 6))))
     return frozenset(items) | {box}
@@ -99,13 +100,16 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     reps = np.array(coset_representatives(shape))  # the part's own symmetries give no new placements
     for (ctype, direction), members_of_group in groups.items():
         turned_all = CUBE[reps] @ np.asarray(direction, dtype=float)  # the direction under each rotation
-        for mate_type in {t for (a, t) in MATES if a == ctype}:
-            kind = MATES[(ctype, mate_type)]
+        for mate_type in counterparts(ctype):
+            kind = mate(ctype, mate_type)
             sel = np.flatnonzero(types == mate_type)
             if sel.size == 0:
                 continue
             dots = local_dir[sel] @ turned_all.T  # (k, 24)
-            match = dots < -0.999 if kind in OPPOSED else np.abs(dots) > 0.999
+            if kind in ANY_DIRECTION:
+                match = np.ones_like(dots, dtype=bool)
+            else:
+                match = dots < -0.999 if kind in OPPOSED else np.abs(dots) > 0.999
             for ri in np.flatnonzero(match.any(axis=0)):
                 ok = sel[match[:, ri]]
                 gi = reps[ri]
@@ -154,8 +158,11 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
         seen.add(footprint)
         pinned = {owner[sources[m]] for m in members if inserted[m]}
         candidate = part_solid(shape, rot, pos)
-        c_lo, c_hi = candidate.aabb()
-        near = np.flatnonzero(((c_lo < hi - tolerance) & (lo < c_hi - tolerance)).all(axis=1))
+        if candidate is None:  # no collision shape: nothing can block it
+            near = np.zeros(0, dtype=int)
+        else:
+            c_lo, c_hi = candidate.aabb()
+            near = np.flatnonzero(((c_lo < hi - tolerance) & (lo < c_hi - tolerance)).all(axis=1))
         blocked = False
         if near.size:
             obj = candidate.fcl_object()

@@ -1,0 +1,195 @@
+"""The generated part of the catalogue: thousands of LDraw parts from the LDCad shadow library's snap data.
+
+``data/ldcad_parts.tsv.gz`` is written by ``scripts/ldcad_catalogue.py`` (its docstring gives the
+format; the data's licence and attribution are in ``data/README.md``). Each part there is its name,
+the bounding box of its drawn geometry and its snaps (cylinders, clips, hinge fingers, ball joints,
+grouped fits) in the part's LDraw frame. This module turns snaps into the catalogue's connection points, so that two
+snaps that fit make a connection where their points meet (the assembly matches points on a 0.001 LDU
+grid and compatible types, :data:`catalogue.MATES`):
+
+- A stud is a male round (or square) section of radius 6 at most 6 LDU long, wherever it sits on its
+  cylinder (a round plate's stud above its rim, a half pin's short end): one ``stud`` point at its
+  base, pointing out along the cylinder; so is a closed male cylinder of radius 6 that does not slide
+  (a minifigure's hip pegs), at its start. A female cylinder starting with radius 6 that does not slide
+  through (or is under half a stud long) is an ``antistud`` at its mouth, pointing out of the part.
+  Parts stacked as designed have their studs' bases on the anti-studs' mouths.
+- Otherwise a cylinder (technic holes, pins, axles) is cut into 20 LDU slots from its start (one slot
+  when shorter), one point at each slot's centre, typed by the section there: shape ``A`` an ``axle``
+  or ``axlehole``, round radius 6 a ``pin`` or ``pinhole``. A male axle slides in its holes, so it has
+  a point every 10 LDU (a hole meets it at whole or half studs), as the hand-coded axles do. A pin in a
+  hole has both points at the hole's centre: coaxial, overlapping along the axis.
+- A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
+  anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre. Clip on bar: a hinge about the bar.
+  Female radius-4 holes (hollow studs, a pin's bore) make no point.
+- Hinge fingers (``SNAP_FGR``) are one ``finger`` point at the centre of the finger run, along the
+  hinge axis; two finger runs on one axis with one centre interlock (a hinge), whichever finger comes
+  first (the data's ``genderOfs``), and so do a finger run and a hand-coded hinge half.
+- A ball (``SNAP_GEN`` sphere, male) is a ``ball`` point at its centre, its socket a ``socket``: a
+  ball joint, any direction.
+- A generic snap of a ``group`` (a tyre on its rim, a drawer in its cabinet) is a ``group:<name>:M``
+  or ``…:F`` point at its centre along its axis: male and female of one group at one point make a
+  rigid connection (the fit holds).
+
+Other snaps (tubes under plates, bar holes, ungrouped generic boxes) make no point.
+
+Collision shapes: the data has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
+LDraw name is a plain brick, plate, tile or technic brick (``Brick  2 x  4``, ``Technic Brick  1 x  4
+with Holes``) gets that box less its studs (from y = 0 down) and less its technic holes; a studless
+technic beam its bounding box less its holes. Every other generated part has no collision shape
+(``collides`` false): it connects but is never reported in a collision.
+"""
+
+from __future__ import annotations
+
+import functools
+import gzip
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+Point = tuple  # (type, point, direction): the catalogue's Connector fields, built there
+
+DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
+SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
+AXLE_STEP = 10.0
+BAR_STEP = 2.0
+STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
+BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
+BEAM = re.compile(r"^technic beam\s+\d+$")
+
+
+@functools.lru_cache(maxsize=1)
+def _lines() -> dict[str, str]:
+    """Part number -> its line's JSON text (parsed when the part is looked up: the file is 22 MB of JSON)."""
+    with gzip.open(DATA, "rt", encoding="utf-8") as handle:
+        text = handle.read()
+    return dict(line.split("\t", 1) for line in text.splitlines()[1:] if "\t" in line)
+
+
+def _part(number: str) -> dict | None:
+    line = _lines().get(number)
+    return None if line is None else json.loads(line)
+
+
+def group_type(group: str, gender: str) -> str:
+    """The connector type of a grouped generic snap: ``group:<name>:M`` fits ``group:<name>:F``."""
+    return f"group:{group}:{gender}"
+
+
+def numbers() -> frozenset[str]:
+    return frozenset(_lines())
+
+
+def _near(value: float, target: float) -> bool:
+    return abs(value - target) < 0.5
+
+
+def _section_at(secs: list, t: float) -> tuple[str, float, float] | None:
+    """(shape, radius, length) of the section at ``t`` LDU along the cylinder."""
+    run = 0.0
+    for shape, radius, length in secs:
+        if run <= t <= run + length:
+            return shape, radius, length
+        run += length
+    return None
+
+
+def _is_stud(shape: str, radius: float, length: float) -> bool:
+    return shape in ("R", "S") and _near(radius, 6) and length <= STUD_LENGTH
+
+
+def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Point]:
+    start, axis = np.asarray(start, float), np.asarray(axis, float)
+    length = sum(s[2] for s in secs)
+    male = gender == "M"
+    shape0, radius0 = secs[0][0], secs[0][1]
+    if not male and shape0 in ("R", "S") and _near(radius0, 6) and (not slide or length < SEGMENT / 2):
+        return [("antistud", _point(start), _point(-axis))]  # its mouth, opening out of the part
+    if male and not slide and caps != "none" and shape0 in ("R", "S") and _near(radius0, 6):
+        return [("stud", _point(start), _point(axis))]  # a closed peg that does not slide: a (long) stud
+    out = []
+    run = 0.0
+    for shape, radius, piece in secs:
+        if male and _is_stud(shape, radius, piece):  # a stud (a half pin's short end too): its base
+            out.append(("stud", _point(start + axis * run), _point(axis)))
+        elif male and shape == "R" and _near(radius, 4):  # a bar: a clip holds it anywhere along it
+            out.extend(("bar", _point(start + axis * t), _point(axis))
+                       for t in np.arange(run, run + piece + 1e-9, BAR_STEP))
+        run += piece
+    # 20 LDU slots from the start (a pin's or a hole's length); a shorter cylinder is one slot
+    centres = [length / 2] if length < SEGMENT else [SEGMENT / 2 + k * SEGMENT
+                                                      for k in range(int(length / SEGMENT + 0.25))]
+    for t in centres:
+        section = _section_at(secs, t)
+        if section is None:
+            continue
+        shape, radius, piece = section
+        if shape == "A":
+            kind = "axle" if male else "axlehole"
+        elif shape in ("R", "S") and _near(radius, 6) and not (male and _is_stud(shape, radius, piece)):
+            kind = "pin" if male else "pinhole"
+        else:
+            continue
+        if kind == "axle" and length >= SEGMENT:
+            ts = np.arange(AXLE_STEP, length - AXLE_STEP + 1e-9, AXLE_STEP)
+            out.extend(("axle", _point(start + axis * u), _point(axis)) for u in ts
+                       if (_section_at(secs, u) or ("",))[0] == "A")
+            continue
+        out.append((kind, _point(start + axis * t), _point(axis)))
+    return out
+
+
+def _point(v) -> tuple[float, float, float]:
+    return tuple(round(float(x), 3) + 0.0 for x in v)
+
+
+def _line(direction: tuple) -> tuple:
+    """An axis without its sign (the first non-zero component made positive)."""
+    lead = next((x for x in direction if abs(x) > 1e-9), 1.0)
+    return tuple(x if lead > 0 else -x for x in direction)
+
+
+def connectors(snaps: list) -> tuple[Point, ...]:
+    """The connection points of a part's snaps (see the module docstring), each once."""
+    out: list[Point] = []
+    for snap in snaps:
+        kind = snap[0]
+        if kind == "cyl":
+            out.extend(_cylinder(*snap[1:]))
+        elif kind == "clp":
+            out.append(("clip", _point(snap[1]), _point(snap[2])))
+        elif kind == "fgr":
+            out.append(("finger", _point(snap[2]), _point(snap[3])))
+        elif kind == "gen":
+            out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
+        elif kind == "sph":
+            out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
+    unique, seen = [], set()
+    for c in out:
+        kind, point, direction = c
+        key = (kind, point, direction if kind in ("stud", "antistud") else _line(direction))
+        if key not in seen:
+            seen.add(key)
+            unique.append(c)
+    return tuple(unique)
+
+
+def entry(number: str) -> dict | None:
+    """The generated catalogue's part ``number`` (normalised) as the catalogue's PartShape fields, or None."""
+    entry = _part(number)
+    if entry is None:
+        return None
+    lo, hi = np.array(entry["b"][:3], float), np.array(entry["b"][3:], float)
+    name = entry["n"]
+    plain = " ".join(name.lower().split())
+    conns = connectors(entry["s"])
+    collides = True
+    if BOXED.match(plain):
+        lo[1] = max(lo[1], 0.0)  # the studs stand above y = 0 inside the anti-studs of the part on top
+    elif not BEAM.match(plain):
+        collides = False
+    centre, size = (lo + hi) / 2, hi - lo
+    return {"number": number, "name": name, "box_center": tuple(float(v) for v in centre),
+            "box_size": tuple(float(v) for v in size), "connectors": conns, "collides": collides}

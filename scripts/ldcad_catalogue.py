@@ -1,0 +1,319 @@
+"""Derive the rigidity kind's parts catalogue from the LDCad shadow library and the LDraw parts library.
+
+Usage: ``python scripts/ldcad_catalogue.py --ldraw DIR --shadow DIR --out FILE.tsv.gz``
+
+``--ldraw`` is an LDraw.org parts library (``parts/``, ``p/``; CC BY 4.0), ``--shadow`` a checkout of
+the LDCad shadow library (``parts/``, ``p/``; CC BY-SA 4.0, by Roland Melkert and contributors). The
+shadow library holds ``0 !LDCAD SNAP_*`` meta lines for a part or primitive under the same file name
+as the LDraw file they belong to; LDCad appends them to that file when it loads it. A part's snap
+information is therefore its own shadow lines plus, through every type-1 line of its LDraw file, the
+snap information of the files it draws (``stud.dat``, ``connhole.dat``, subparts …), placed by that
+line's matrix, unless the part's shadow clears the inherited information (``SNAP_CLEAR``, all or by
+``id``). ``SNAP_INCL`` places another file's snap information (with ``pos``, ``ori`` and ``grid``).
+
+What is read of each meta line (LDCad's meta syntax, ``[key=value]`` pairs):
+
+- ``SNAP_CYL``: ``gender`` (M/F), ``caps``, ``secs`` (sections ``shape radius length``; shape R round,
+  A axle, S square, ``L_``/``_L`` chamfers), ``center``, ``slide``, ``pos``, ``ori``, ``grid``,
+  ``scale``. The cylinder's axis is the local −y of ``ori``: it runs from ``pos`` along −y for the
+  sum of its section lengths (or is centred on ``pos`` with ``center=true``).
+- ``SNAP_CLP`` (a clip: ``radius``, ``length``, ``center``), ``SNAP_FGR`` (hinge fingers:
+  ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``), ``SNAP_GEN`` with
+  ``bounding=sph`` (a ball joint when male, its socket when female), or with a ``group`` (a fit made
+  only within the group: a tyre on its rim); other generic snaps are skipped.
+
+The output is gzip text: a first line of JSON ``{"source": …, "units": …}``, then one line per part,
+``number<TAB>{"n": name, "b": [xmin, ymin, zmin, xmax, ymax, zmax], "s": [snap, …]}`` (JSON after the
+tab, so a reader parses only the parts it looks up), in LDraw units in the part's frame, with ``b``
+the bounding box of the part's drawn geometry and each snap one of
+
+- ``["cyl", gender, caps, slide, start, axis, [[shape, radius, length], …]]``: sections from ``start``
+  along the unit vector ``axis``;
+- ``["clp", centre, axis, length]``; ``["fgr", gender, centre, axis, length]``;
+- ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``.
+
+Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
+become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import json
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+META = re.compile(r"\[([A-Za-z]+)=([^\]]*)\]")
+SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
+
+
+class Library:
+    """An LDraw-style folder tree (``parts/``, ``parts/s/``, ``p/``, ``p/48/``) looked up by file name."""
+
+    def __init__(self, root: Path):
+        self.files: dict[str, Path] = {}
+        for folder in ("p", "parts"):  # parts/ wins over p/ for a name in both, as LDraw's search order has it
+            base = root / folder
+            if not base.is_dir():
+                continue
+            for path in base.rglob("*"):
+                if path.is_file():
+                    rel = path.relative_to(base).as_posix().lower()
+                    self.files[rel] = path
+
+    def find(self, name: str) -> Path | None:
+        key = name.strip().replace("\\", "/").lower()
+        return self.files.get(key)
+
+    def text(self, name: str) -> str | None:
+        path = self.find(name)
+        return None if path is None else path.read_text(encoding="utf-8", errors="replace")
+
+
+def _floats(value: str) -> list[float]:
+    return [float(v) for v in value.split()]
+
+
+def _grid_offsets(value: str | None) -> list[np.ndarray]:
+    """The offsets (in the snap's local frame) of a ``grid=[C] nx [C] nz sx sz`` or 3-D ``[C] nx [C] ny [C] nz
+    sx sy sz`` repetition; ``C`` centres that axis' run on the position."""
+    if not value:
+        return [np.zeros(3)]
+    tokens = value.split()
+    counts, centred, i = [], [], 0
+    numbers = [t for t in tokens if t.upper() != "C"]
+    dims = 2 if len(numbers) == 4 else 3
+    while len(counts) < dims and i < len(tokens):
+        if tokens[i].upper() == "C":
+            centred.append(True)
+            counts.append(int(float(tokens[i + 1])))
+            i += 2
+        else:
+            centred.append(False)
+            counts.append(int(float(tokens[i])))
+            i += 1
+    steps = [float(t) for t in tokens[i:i + dims]]
+    axes = (0, 2) if dims == 2 else (0, 1, 2)
+    runs = []
+    for n, c, s in zip(counts, centred, steps):
+        runs.append([(k - (n - 1) / 2 if c else k) * s for k in range(max(n, 1))])
+    out = []
+    for combo in np.array(np.meshgrid(*runs, indexing="ij")).reshape(len(runs), -1).T:
+        offset = np.zeros(3)
+        offset[list(axes)] = combo
+        out.append(offset)
+    return out
+
+
+def _frame(params: dict) -> tuple[np.ndarray, np.ndarray]:
+    pos = np.array(_floats(params["pos"])) if "pos" in params else np.zeros(3)
+    ori = np.array(_floats(params["ori"])).reshape(3, 3) if "ori" in params else np.eye(3)
+    return pos, ori
+
+
+def _sections(value: str) -> list[list]:
+    tokens = value.split()
+    out = []
+    for k in range(0, len(tokens) - 2, 3):
+        out.append([tokens[k], float(tokens[k + 1]), float(tokens[k + 2])])
+    return out
+
+
+def _own_snaps(line: str, params: dict, place) -> list[dict]:
+    """The snaps of one SNAP_CYL/CLP/FGR/GEN line in the file's frame (one per grid position)."""
+    kind = line.split()[2].upper()
+    pos, ori = _frame(params)
+    snap_id = (params.get("id") or params.get("ID") or "").lower()
+    out = []
+    for offset in _grid_offsets(params.get("grid")):
+        origin = pos + ori @ offset
+        down = ori @ np.array([0.0, -1.0, 0.0])  # the snap's axis: local −y
+        if kind == "SNAP_CYL":
+            secs = _sections(params.get("secs", ""))
+            if not secs:
+                continue
+            length = sum(s[2] for s in secs)
+            start = origin - down * length / 2 if params.get("center", "").lower() == "true" else origin
+            out.append({"id": snap_id, "kind": "cyl", "gender": params.get("gender", "M").upper()[:1],
+                        "caps": params.get("caps", "one").lower(), "slide": params.get("slide", "").lower() == "true",
+                        "start": start, "axis": down, "secs": secs,
+                        "scale": params.get("scale", "").lower() in ("yonly", "yandr")})
+        elif kind == "SNAP_CLP":
+            length = float(params.get("length", 8))
+            centre = origin if params.get("center", "").lower() == "true" else origin + down * length / 2
+            out.append({"id": snap_id, "kind": "clp", "centre": centre, "axis": down, "length": length})
+        elif kind == "SNAP_FGR":
+            seq = _floats(params.get("seq", "0"))
+            out.append({"id": snap_id, "kind": "fgr", "gender": params.get("genderOfs", "M").upper()[:1],
+                        "centre": origin, "axis": down, "length": sum(seq)})
+        elif kind == "SNAP_GEN":
+            bounding = params.get("bounding", "").split()
+            if bounding[:1] == ["sph"] and len(bounding) >= 2:
+                out.append({"id": snap_id, "kind": "sph", "gender": params.get("gender", "M").upper()[:1],
+                            "centre": origin, "radius": float(bounding[1])})
+            elif params.get("group"):  # a fit only parts of one group make (a tyre on its rim, a drawer)
+                out.append({"id": snap_id, "kind": "gen", "gender": params.get("gender", "M").upper()[:1],
+                            "group": params["group"].lower(), "centre": origin, "axis": down})
+    return [place(s) for s in out]
+
+
+def transform(snap: dict, rot: np.ndarray, pos: np.ndarray) -> dict:
+    """``snap`` seen from a file that places its file with matrix ``rot`` at ``pos`` (a scaled placement
+    stretches a cylinder's sections only when the snap allows it, as ``axle.dat``'s ``scale=YOnly``)."""
+    out = dict(snap)
+    for key in ("start", "centre"):
+        if key in snap:
+            out[key] = rot @ snap[key] + pos
+    if "axis" in snap:
+        v = rot @ snap["axis"]
+        stretch = float(np.linalg.norm(v))
+        out["axis"] = v / stretch if stretch > 0 else v
+        if snap["kind"] == "cyl" and snap.get("scale") and abs(stretch - 1) > 1e-9:
+            out["secs"] = [[s, r, length * stretch] for s, r, length in snap["secs"]]
+        if snap["kind"] == "cyl" and not snap.get("scale") and abs(stretch - 1) > 1e-9:
+            centre = snap["start"] + snap["axis"] * sum(s[2] for s in snap["secs"]) / 2
+            out["start"] = rot @ centre + pos - out["axis"] * sum(s[2] for s in snap["secs"]) / 2
+    return out
+
+
+class Deriver:
+    def __init__(self, ldraw: Library, shadow: Library):
+        self.ldraw, self.shadow = ldraw, shadow
+        self._snaps: dict[str, list[dict]] = {}
+        self._boxes: dict[str, np.ndarray | None] = {}
+        self._stack: set[str] = set()
+
+    def snaps(self, name: str) -> list[dict]:
+        key = name.strip().replace("\\", "/").lower()
+        if key in self._snaps:
+            return self._snaps[key]
+        if key in self._stack:
+            return []
+        self._stack.add(key)
+        own, clear_all, clear_ids = [], False, set()
+        for raw in (self.shadow.text(key) or "").splitlines():
+            tokens = raw.split()
+            if len(tokens) < 3 or tokens[0] != "0" or tokens[1] != "!LDCAD" or tokens[2] not in SNAP_KINDS:
+                continue
+            params = dict(META.findall(raw))
+            if tokens[2] == "SNAP_CLEAR":
+                snap_id = (params.get("id") or params.get("ID") or "").lower()
+                if snap_id:
+                    clear_ids.add(snap_id)
+                else:
+                    clear_all = True
+            elif tokens[2] == "SNAP_INCL":
+                pos, ori = _frame(params)
+                for offset in _grid_offsets(params.get("grid")):
+                    own.extend(transform(s, ori, pos + ori @ offset) for s in self.snaps(params.get("ref", "")))
+            else:
+                own.extend(_own_snaps(raw, params, lambda s: s))
+        inherited = []
+        if not clear_all:
+            for rot, pos, child in self._children(key):
+                inherited.extend(transform(s, rot, pos) for s in self.snaps(child) if s["id"] not in clear_ids)
+        self._stack.discard(key)
+        self._snaps[key] = own + inherited
+        return self._snaps[key]
+
+    def _children(self, key: str):
+        for raw in (self.ldraw.text(key) or "").splitlines():
+            tokens = raw.split()
+            if len(tokens) < 15 or tokens[0] != "1":
+                continue
+            try:
+                values = [float(t) for t in tokens[2:14]]
+            except ValueError:
+                continue
+            yield np.array(values[3:]).reshape(3, 3), np.array(values[:3]), raw.split(None, 14)[14].strip()
+
+    def box(self, name: str) -> np.ndarray | None:
+        """The bounding box (2 × 3: lower, upper corner) of the file's drawn geometry in its frame."""
+        key = name.strip().replace("\\", "/").lower()
+        if key in self._boxes:
+            return self._boxes[key]
+        self._boxes[key] = None  # a file that includes itself adds nothing
+        points = []
+        for raw in (self.ldraw.text(key) or "").splitlines():
+            tokens = raw.split()
+            if tokens[:1] in (["2"], ["3"], ["4"]):
+                count = int(tokens[0])
+                try:
+                    points.extend(np.array([float(t) for t in tokens[2:2 + 3 * count]]).reshape(count, 3))
+                except ValueError:
+                    continue
+        for rot, pos, child in self._children(key):
+            sub = self.box(child)
+            if sub is not None:
+                corners = np.array([[sub[i, 0], sub[j, 1], sub[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+                points.extend(corners @ rot.T + pos)
+        self._boxes[key] = np.array([np.min(points, axis=0), np.max(points, axis=0)]) if points else None
+        return self._boxes[key]
+
+
+def _r(v) -> list[float]:
+    return [round(float(x), 3) + 0.0 for x in v]
+
+
+def _record(snap: dict) -> list:
+    if snap["kind"] == "cyl":
+        return ["cyl", snap["gender"], snap["caps"], int(snap["slide"]), _r(snap["start"]), _r(snap["axis"]),
+                [[s, round(r, 3), round(length, 3)] for s, r, length in snap["secs"]]]
+    if snap["kind"] == "clp":
+        return ["clp", _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
+    if snap["kind"] == "fgr":
+        return ["fgr", snap["gender"], _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
+    if snap["kind"] == "gen":
+        return ["gen", snap["gender"], snap["group"], _r(snap["centre"]), _r(snap["axis"])]
+    return ["sph", snap["gender"], _r(snap["centre"]), round(snap["radius"], 3)]
+
+
+def _title(text: str) -> str:
+    for raw in text.splitlines():
+        tokens = raw.split(None, 1)
+        if tokens and tokens[0] == "0":
+            return tokens[1].strip() if len(tokens) > 1 else ""
+    return ""
+
+
+def derive(ldraw_root: Path, shadow_root: Path) -> dict:
+    ldraw, shadow = Library(ldraw_root), Library(shadow_root)
+    deriver = Deriver(ldraw, shadow)
+    parts = {}
+    for rel in sorted(k for k in ldraw.files if "/" not in k and k.endswith(".dat")
+                      and ldraw.find(k).parent.name == "parts"):
+        snaps = deriver.snaps(rel)
+        box = deriver.box(rel)
+        if not snaps or box is None:
+            continue
+        parts[rel[:-4]] = {"n": _title(ldraw.text(rel)), "b": _r(box.reshape(-1)), "s": [_record(s) for s in snaps]}
+    return parts
+
+
+def write_lines(header: dict, parts: dict) -> str:
+    lines = [json.dumps(header, sort_keys=True)]
+    lines.extend(f"{number}\t{json.dumps(parts[number], separators=(',', ':'), sort_keys=True)}" for number in sorted(parts))
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--ldraw", type=Path, required=True, help="LDraw.org parts library folder (parts/, p/)")
+    parser.add_argument("--shadow", type=Path, required=True, help="LDCad shadow library folder (parts/, p/)")
+    parser.add_argument("--out", type=Path, required=True, help="output .tsv.gz")
+    parser.add_argument("--source", default="", help="versions of the two libraries, recorded in the file")
+    args = parser.parse_args(argv)
+    parts = derive(args.ldraw, args.shadow)
+    data = write_lines({"source": args.source, "units": "LDU, part frame, -y up"}, parts).encode()
+    with open(args.out, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
+        handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
+    print(f"{len(parts)} parts with snap information written to {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,244 @@
+"""The generated parts catalogue (LDCad shadow library snaps): the derivation script on a small library
+written the way the shadow library writes it, the data file against the hand-coded parts, and models of
+official parts: known parts, exactly the joints they are built with, no collision."""
+
+from __future__ import annotations
+
+import gzip
+import importlib.util
+import json
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.rigidity import generated
+from plantsolve.solvers.rigidity.assembly import Assembly
+from plantsolve.solvers.rigidity.catalogue import CATALOGUE, generated_part, lookup
+from plantsolve.solvers.rigidity.solve import solve
+from plantsolve.solvers.rigidity.upload import parse_upload
+
+HERE = Path(__file__).parent
+SCRIPT = HERE.parents[2] / "scripts" / "ldcad_catalogue.py"
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("ldcad_catalogue", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _write(root: Path, rel: str, text: str) -> None:
+    path = root / rel
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+
+
+def test_script_resolves_inheritance_includes_grids_clears_and_scaling(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    # a 1 x 2 technic brick drawn as LDraw draws it: studs through stud.dat, a subpart, an axle primitive
+    _write(ldraw, "parts/9001.dat", "0 Technic Brick  1 x  2 Test\n0 Name: 9001.dat\n"
+           "1 16 -10 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n1 16 10 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n"
+           "1 16 0 0 0 1 0 0 0 1 0 0 0 1 s\\9001s01.dat\n")
+    _write(ldraw, "parts/s/9001s01.dat", "0 ~sub\n4 16 -20 0 -10 20 0 -10 20 24 -10 -20 24 -10\n"
+           "4 16 -20 0 10 20 0 10 20 24 10 -20 24 10\n")
+    _write(ldraw, "p/stud.dat", "0 Stud\n4 16 -6 0 -6 6 0 -6 6 -4 -6 -6 -4 -6\n")
+    _write(ldraw, "p/axle.dat", "0 Technic Axle\n2 24 0 0 0 0 1 0\n")
+    # an axle drawn as axle.dat stretched 40 along y, turned onto x
+    _write(ldraw, "parts/9002.dat", "0 Technic Axle  2 Test\n1 16 -20 0 0 0 40 0 -1 0 0 0 0 1 axle.dat\n")
+    # a part whose shadow clears what it inherits and says it itself
+    _write(ldraw, "parts/9003.dat", "0 Plate Test\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
+    _write(shadow, "p/stud.dat", "0 !LDCAD SNAP_CYL [ID=studC] [gender=M] [caps=one] [secs=R 6 4]\n")
+    _write(shadow, "p/axle.dat", "0 !LDCAD SNAP_CYL [id=axle] [gender=M] [caps=none] [secs=A 6 1] [slide=true] "
+           "[pos=0 1 0] [scale=YOnly]\n")
+    _write(shadow, "p/connhole.dat", "0 !LDCAD SNAP_CYL [id=connhole] [gender=F] [caps=none] "
+           "[secs=R 8 2   R 6 16   R 8 2] [center=true] [slide=true]\n")
+    _write(shadow, "parts/s/9001s01.dat", "0 !LDCAD SNAP_CYL [gender=F] [caps=one] [secs=R 6 20] [pos=0 24 0] "
+           "[grid=C 2 1 20 0]\n")
+    _write(shadow, "parts/9001.dat", "0 !LDCAD SNAP_INCL [ref=connhole.dat] [pos=0 10 0] [ori=1 0 0 0 0 1 0 -1 0] "
+           "[grid=C 1 1 20 0]\n")
+    _write(shadow, "parts/9003.dat", "0 !LDCAD SNAP_CLEAR\n0 !LDCAD SNAP_CYL [gender=M] [caps=one] [secs=R 6 4] "
+           "[pos=0 0 10]\n")
+    parts = _script().derive(ldraw, shadow)
+    assert set(parts) == {"9001", "9002", "9003"}
+    assert parts["9001"]["b"] == [-20.0, -4.0, -10.0, 20.0, 24.0, 10.0]
+
+    def points(number):
+        return Counter((t, p, d) for t, p, d in generated.connectors(parts[number]["s"]))
+    assert points("9001") == Counter({("stud", (-10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
+                                      ("stud", (10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
+                                      ("antistud", (-10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
+                                      ("antistud", (10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
+                                      ("pinhole", (0.0, 10.0, 0.0), (0.0, 0.0, 1.0)): 1})
+    # 40 LDU of axle: a point every 10 LDU from 10 LDU in, as the hand-coded 3704
+    assert sorted(p[0] for t, p, d in points("9002")) == [-10.0, 0.0, 10.0]
+    assert {t for t, p, d in points("9002")} == {"axle"}
+    assert list(points("9003")) == [("stud", (0.0, 0.0, 10.0), (0.0, -1.0, 0.0))]
+
+
+def test_script_writes_the_same_bytes_twice(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9004.dat", "0 Brick Test\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
+    _write(ldraw, "p/stud.dat", "0 Stud\n2 24 0 0 0 0 -4 0\n")
+    _write(shadow, "p/stud.dat", "0 !LDCAD SNAP_CYL [gender=M] [caps=one] [secs=R 6 4]\n")
+    script = _script()
+    outs = []
+    for k in range(2):
+        out = tmp_path / f"out{k}.tsv.gz"
+        assert script.main(["--ldraw", str(ldraw), "--shadow", str(shadow), "--out", str(out)]) == 0
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1]
+    header, part = gzip.decompress(outs[0]).decode().splitlines()
+    assert json.loads(header)["units"].startswith("LDU") and part.startswith("9004\t")
+    assert json.loads(part.split("\t", 1)[1])["n"] == "Brick Test"
+
+
+def test_the_data_file_holds_thousands_of_parts_with_licence_and_attribution():
+    assert len(generated.numbers()) > 10_000
+    data = Path(generated.DATA).parent
+    assert "Attribution-ShareAlike 4.0" in (data / "LICENSE").read_text()
+    readme = (data / "README.md").read_text()
+    assert "Roland Melkert" in readme and "CC BY-SA 4.0" in readme and "LDraw.org" in readme
+
+
+COMPARABLE = {"stud", "antistud", "pin", "pinhole", "axle", "axlehole"}
+
+
+def _comparable(shape) -> set:
+    out = set()
+    for c in shape.connectors:
+        kind = "hinge" if c.type in ("hinge_a", "hinge_b", "finger") else c.type
+        if kind not in COMPARABLE | {"hinge"}:
+            continue
+        direction = c.direction if kind in ("stud", "antistud") else tuple(abs(v) for v in c.direction)
+        out.add((kind, tuple(float(v) for v in c.point), tuple(float(v) for v in direction)))
+    return out
+
+
+@pytest.mark.parametrize("number", sorted(CATALOGUE))
+def test_generated_parts_match_the_hand_coded_ones(number):
+    hand, made = _comparable(CATALOGUE[number]), _comparable(generated_shape(number))
+    if number in ("3648", "3648a", "3648b", "3649"):  # the real gears have more holes than the hand-coded axle hole
+        assert hand <= made
+    else:
+        assert made == hand
+
+
+def generated_shape(number):
+    shape = generated_part(number)
+    assert shape is not None, number
+    return shape
+
+
+def test_lookup_prefers_the_hand_coded_part_and_finds_the_rest_in_the_generated_catalogue():
+    assert lookup("3001.dat") is CATALOGUE["3001"]
+    plate = lookup("parts\\3023B.DAT")
+    assert plate is not None and "Plate" in plate.name and plate.box_size == (40.0, 8.0, 20.0)
+    assert lookup("no_such_part.dat") is None
+
+
+def parse(path: Path):
+    return parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
+
+
+EXPECTED = Counter({
+    ("rigid", "stud", "3035", "3001"): 1, ("rigid", "stud", "3035", "3003"): 1, ("rigid", "stud", "3035", "3010"): 1,
+    ("rigid", "stud", "3035", "3022"): 1, ("rigid", "stud", "3035", "3701"): 1, ("rigid", "stud", "3035", "3937"): 1,
+    ("rigid", "stud", "3035", "44301"): 1, ("rigid", "stud", "3035", "44302"): 1,
+    ("rigid", "stud", "3001", "14417"): 1, ("rigid", "stud", "3001", "3023b"): 1, ("rigid", "stud", "3001", "3623"): 1,
+    ("rigid", "stud", "3003", "3068b"): 1, ("rigid", "stud", "3010", "3710"): 1, ("rigid", "stud", "3710", "3069b"): 1,
+    ("rigid", "stud", "3701", "3623"): 1, ("rigid", "stud", "3938", "3004"): 1,
+    ("hinge", "stud", "3001", "4085c"): 1, ("hinge", "stud", "3022", "3005"): 1, ("hinge", "stud", "3022", "3062b"): 1,
+    ("hinge", "stud", "3022", "4073"): 1, ("hinge", "stud", "3701", "3024"): 1,
+    ("hinge", "pin", "3701", "3673"): 2, ("hinge", "pin", "3673", "32524"): 2,
+    ("cylindrical", "axle", "32524", "3705"): 1, ("rigid", "axle", "3705", "3713"): 1,
+    ("ball", "ball", "14417", "14704"): 1, ("hinge", "clip", "4085c", "87994"): 1,
+    ("hinge", "hinge", "44302", "44301"): 1, ("hinge", "hinge", "3937", "3938"): 1,
+})
+
+
+def _joints(request, result) -> Counter:
+    number = {p.id: p.part for p in request.parts}
+    return Counter((j.type, j.origin, number[j.bodies[0]], number[j.bodies[1]]) for j in result.joints)
+
+
+def test_a_model_of_official_parts_is_known_and_makes_exactly_its_joints():
+    request = parse(HERE / "official_parts.ldr")
+    result = solve(request).result
+    assert len(request.parts) == 30 and result.unknown_parts == []
+    assert _joints(request, result) == EXPECTED
+    assert result.collisions == []  # pins in holes, axle in beam and bush, ball in socket, clip on bar, hinges
+    # each pin spins (2), the axle with its bush turns and slides in the beam's round hole (2), the socket
+    # plate turns on the ball (3), the clip plate on its one stud and the bar in the clip (2), the hinge
+    # top (1), four parts on one stud each (4); the locking hinge plates both sit on the base
+    assert result.dof == 14
+    assert [j.axis for j in result.joints if j.type == "ball"] == [None]
+
+
+def test_a_generated_box_part_pushed_into_another_is_a_collision():
+    text = (HERE / "official_parts.ldr").read_text().replace("1 16 20 -32 -20 1 0 0 0 1 0 0 0 1 3068b.dat",
+                                                           "1 16 20 -28 -20 1 0 0 0 1 0 0 0 1 3068b.dat")
+    request = parse_upload(StoredInput.from_bytes("sunk.ldr", text.encode()), None)
+    result = solve(request).result
+    number = {p.id: p.part for p in request.parts}
+    assert [(number[c.bodies[0]], number[c.bodies[1]], round(c.depth, 6)) for c in result.collisions] == \
+        [("3003", "3068b", 4.0)]
+
+
+def test_a_ball_joint_connects_whatever_the_socket_turns():
+    assembly = Assembly()
+    assembly.add_part("ball", "14417", (0, 0, 0))
+    turned = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # a quarter turn about z
+    ball = np.array([0.0, 4.0, -20.0])
+    socket = np.array(next(c.point for c in lookup("14704").connectors if c.type == "socket"))
+    found = assembly.add_part("socket", "14704", ball - turned @ socket, turned.reshape(-1))
+    assert [(c.kind, c.point) for c in found] == [("ball", (0, 4, -20))]
+
+
+def test_an_official_set_model_is_mostly_known():
+    """OMR 889 Radar Truck (CC BY 2.0, omr/README.md): every part known (the four tyres too, though the
+    wheel holders 122c01 carry no rim snap for them to fit)."""
+    request = parse(HERE / "omr" / "889-1-RadarTruck.mpd")
+    result = solve(request).result
+    assert len(request.parts) == 35 and result.unknown_parts == []
+    joints = _joints(request, result)
+    assert joints[("hinge", "hinge", "3938", "3937")] == 1  # the radar dish's hinge, tilted as the set has it
+    assert joints[("rigid", "stud", "3795", "122c01")] == 2  # both wheel holders under the chassis plate
+    assert result.collisions == []
+
+
+def test_an_official_mini_set_is_all_known_every_part_joined_and_nothing_collides():
+    """OMR 30051 X-wing Mini (CC BY 2.0, omr/README.md): round plates on a half pin's short end, an
+    antenna in a round brick, clips on bars, wings on brackets."""
+    request = parse(HERE / "omr" / "30051-1-X-wingFighter-Mini.mpd")
+    result = solve(request).result
+    assert len(request.parts) == 61 and result.unknown_parts == []
+    joined = {b for j in result.joints for b in j.bodies}
+    assert {p.id for p in request.parts} == joined
+    joints = _joints(request, result)
+    assert joints[("hinge", "stud", "4274", "6141")] == 4  # each engine's half pin holds a round plate
+    assert joints[("hinge", "stud", "6141", "6141")] == 4  # and that one the next
+    assert joints[("hinge", "stud", "3957a", "3062b")] == 4
+    assert joints[("hinge", "clip", "6019", "61184")] == 4
+    assert result.collisions == []
+
+
+def test_a_tyre_fits_its_rim_through_their_snap_group_and_nothing_else():
+    assembly = Assembly()
+    assembly.add_part("rim", "4624", (0, 0, 0))
+    found = assembly.add_part("tyre", "3641", (0, 0, 0))
+    assert [c.kind for c in found] == ["group"]
+    assert assembly.analyse().mobility.dof == 0
+    other = Assembly()
+    other.add_part("rim", "4624", (0, 0, 0))
+    assert other.add_part("tyre", "3641", (0, 0, 10)) == []  # off the rim: no fit
+
+
+def test_docking_offers_poses_for_a_generated_part():
+    path = HERE / "official_parts.ldr"
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"dock": {"part": "3023b", "limit": 3}})
+    poses = solve(request).result.docking
+    assert len(poses) == 3 and all(p.part == "3023b" and p.connections == 2 for p in poses)
