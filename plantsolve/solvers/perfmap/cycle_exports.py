@@ -141,8 +141,11 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         W, P, E = _tables(result, ks)
         speeds = [result.beta_map.lines[k].setting[-1] for k in ks]
         where = ", ".join(f"{n}={_g(v)}" for n, v in zip(result.setting_names[:-1], key))
+        # no block keyword in the title: readers find the blocks by scanning for them
+        b = result.beta_map
         title = (f"99    plantsolve perfmap compressor map{' (' + where + ')' if where else ''}; flow "
-                 f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}; {_limits_text(result)}")
+                 f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}; beta 0 at choke, 1 at surge, "
+                 f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}")
         surge, choke = np.argsort(W[:, -1]), np.argsort(W[:, 0])
         text = [title, "Reynolds: RNI=1 f=1 RNI=1 f=1"]
         text += _block("Mass Flow", beta, speeds, W) + _block("Efficiency", beta, speeds, E)

@@ -98,7 +98,12 @@ def test_gasturb_table_of_the_closed_form_map_holds_its_values_and_surge_line():
     res = solve(closed_form_request("parabola")).result
     text = artifacts(res)["map_gasturb.txt"].decode()
     tables = read_gasturb(text)
-    assert text.splitlines()[0].startswith("99 ") and text.splitlines()[1].startswith("Reynolds:")
+    head = text.splitlines()[0]
+    assert head.startswith("99 ") and text.splitlines()[1] == "Reynolds: RNI=1 f=1 RNI=1 f=1"
+    # readers find blocks by scanning for their titles, in this order
+    assert not re.search("MASS FLOW|EFFICIENCY|PRESSURE RATIO|SURGE LINE", head.upper())
+    at = [text.index(f"\n{t}\n") for t in ("Mass Flow", "Efficiency", "Pressure Ratio", "Surge Line")]
+    assert at == sorted(at)
     speeds, beta, wc = tables["Mass Flow"]
     assert speeds == pytest.approx(SPEEDS) and beta == pytest.approx(np.linspace(0, 1, 11))
     assert wc == pytest.approx(np.array([line.flow for line in res.beta_map.lines]), rel=1e-6)
@@ -268,3 +273,18 @@ def test_query_with_alpha_and_refusals_name_the_point():
     with pytest.raises(ResultNotUsable):
         answer_beta_query(res.model_copy(update={"beta_map": None}),
                           PerfmapBetaQueryRequest.model_validate({"speed": 0.9, "beta": 0.5}))
+
+
+def test_the_example_beta_query_on_the_n3_job(n3_result):
+    """examples/perfmap/beta_query.json on the example job (theta, speed): lines at 0.9 and 0.95 are fitted
+    lines, 0.85 lies between 0.8 and 0.9."""
+    body = (Path(__file__).parents[3] / "examples" / "perfmap" / "beta_query.json").read_text()
+    on, surge, between = answer_beta_query(n3_result, PerfmapBetaQueryRequest.model_validate_json(body)).points
+    lines = {tuple(line.setting): line for line in n3_result.beta_map.lines}
+    assert on.on_speed_line and not between.on_speed_line
+    k = {tuple(s.setting or (s.theta, s.phi)): i for i, s in enumerate(n3_result.settings)}[(5.0, 0.95)]
+    assert (surge.flow, surge.pressure) == pytest.approx((n3_result.surge_line[k].flow, n3_result.surge_line[k].pressure))
+    lo, hi = lines[(0.0, 0.8)], lines[(0.0, 0.9)]
+    j = n3_result.beta_map.beta.index(0.25)
+    assert between.flow == pytest.approx((lo.flow[j] + hi.flow[j]) / 2, rel=1e-9)
+    assert between.efficiency == pytest.approx((lo.efficiency[j] + hi.efficiency[j]) / 2, rel=1e-9)
