@@ -399,6 +399,17 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
                       efficiency=table.efficiency[k].tolist(), t=table.t[k].tolist(),
                       c_choke=float(table.c_choke[k]), c_surge=float(table.c_surge[k]))
              for k, s in enumerate(settings)]
+    # a reader that takes flows within CHOKE_FLOW_TOLERANCE of a line's largest as its vertical choke segment
+    # (this project's, for pyCycle's repeated choke flows) would read such nodes as one
+    span = table.flow.max(axis=1) - table.flow.min(axis=1)
+    close = [list(settings[k].values) for k in np.flatnonzero(table.flow[:, 0] - table.flow[:, 1]
+                                                              <= CHOKE_FLOW_TOLERANCE * span)]
+    if close:
+        warnings.append(Diagnostic(
+            code="beta_grid_choke_nodes", message=f"{len(close)} speed line(s) fall so steeply at choke that their "
+            f"first two beta nodes lie within {CHOKE_FLOW_TOLERANCE:g} of the line's flow range: a reader that "
+            "takes such flows as a vertical choke segment merges them; fewer beta lines avoid it.",
+            details={"values": close[:100], "lines": option.lines}))
     f = table.frame
     return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv,
                    beta=table.beta.tolist(), lines=lines)
