@@ -6,7 +6,8 @@ Layouts:
 - ``map_pycycle.py``: ``alphaMap``, ``NcMap``, ``RlineMap`` and ``WcMap``/``PRmap``/``effMap`` indexed
   [alpha][Nc][R-line], R = 1 + 2 (1 - beta) ascending from ``RlineStall = 1`` (surge) to 3 (choke), as the
   maps shipped with pyCycle; the surge and choke lines as ``WcSurge``/``PRSurge``/``WcChoke``/``PRChoke``.
-  Written when the settings are a full (alpha x speed) grid of at most two parameters.
+  Written when the settings are a full (alpha x speed) grid of at most two parameters; a map with one alpha
+  (or speed only) is repeated at alpha + 90, as pyCycle's own maps without variable geometry are.
 - ``map_gasturb.txt``: a ``99 title`` line, a ``Reynolds:`` line (no correction), then the blocks
   ``Mass Flow``, ``Efficiency``, ``Pressure Ratio``: each opens with ``R.CCC`` (R = speed lines + 1 rows,
   CCC = beta values + 1 columns) followed by the beta values, then one row per speed: the speed and its
@@ -72,6 +73,10 @@ def pycycle_module(result: PerfmapResult) -> bytes | None:
     W, P, E = (np.stack([t[:, order] for t in tabs]) for tabs in zip(*(_tables(result, ks) for _, ks in gs)))
     alpha = [key[0] if key else 0.0 for key, _ in gs]
     a, n, r = np.unravel_index(int(np.argmax(E)), E.shape)
+    repeated = len(alpha) == 1
+    if repeated:  # pyCycle interpolates in alpha too, which needs two values: its own maps repeat the table
+        alpha = [alpha[0], alpha[0] + 90.0]
+        W, P, E = (np.concatenate([v, v]) for v in (W, P, E))
 
     def array(a3: np.ndarray) -> str:
         return "np.array([" + ",\n  ".join(
@@ -83,6 +88,8 @@ def pycycle_module(result: PerfmapResult) -> bytes | None:
     choke = np.array([[result.beta_map.lines[k].flow[0], result.beta_map.lines[k].pressure[0]]
                       for _, ks in gs for k in ks])
     names = ", ".join(result.setting_names)
+    repeat_note = (f"\nThe map has one alpha: its table is repeated at alpha {_g(alpha[1])}, as pyCycle's maps without "
+                   "variable geometry do." if repeated else "")
     text = f'''import numpy as np
 
 from pycycle.maps.map_data import MapData
@@ -91,7 +98,7 @@ from pycycle.maps.map_data import MapData
 """Compressor map exported by plantsolve perfmap from the fitted speed lines ({names}).
 WcMap: flow {_unit(result, "flow")}, PRmap: pressure {_unit(result, "pressure")}, effMap: a fraction.
 R-line R = 1 + 2 (1 - beta): RlineStall = 1 is the surge line, R = 3 the choke line;
-{_limits_text(result)}."""
+{_limits_text(result)}.{repeat_note}"""
 ExportMap = MapData()
 
 # Map design point values: the node of highest efficiency

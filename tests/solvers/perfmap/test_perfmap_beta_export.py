@@ -246,6 +246,17 @@ def test_the_pycycle_module_has_pycycles_layout_r_lines_from_stall_to_choke():
         assert exported == pytest.approx(np.array(sorted((p.flow, p.pressure) for p in points)), rel=1e-9)
 
 
+def test_a_speed_only_map_is_written_for_pycycle_at_two_equal_alphas():
+    """pyCycle interpolates in alpha as well; its maps without variable geometry repeat the table at two alphas."""
+    res = solve(closed_form_request("parabola")).result
+    req = parse_upload(StoredInput.from_bytes("m.py", artifacts(res)["map_pycycle.py"]), {"map": False})
+    assert req.setting_names == ["alpha", "Nc"]
+    by_alpha = {a: [p for p in req.positions if p.setting[0] == a] for a in (0.0, 90.0)}
+    assert [p.setting[1] for p in by_alpha[0.0]] == SPEEDS
+    assert [p.flow for p in by_alpha[0.0]] == [p.flow for p in by_alpha[90.0]]
+    assert by_alpha[0.0][1].flow == pytest.approx(res.beta_map.lines[1].flow[::-1], rel=1e-9)
+
+
 def test_no_pycycle_module_when_the_settings_are_no_full_alpha_speed_grid():
     res = fitted("N3_Fan_map.py")
     cut = res.model_copy(update={"beta_map": res.beta_map.model_copy(update={"lines": res.beta_map.lines[:-1]})})
