@@ -21,6 +21,7 @@ Layouts:
 from __future__ import annotations
 
 import io
+import re
 
 import numpy as np
 
@@ -159,8 +160,9 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         text += _block("Pressure Ratio", beta, speeds, P)
         text += _line_block("Surge Line", W[surge, -1], P[surge, -1])
         text += _line_block("Choke Line", W[choke, 0], P[choke, 0])
-        name = "map_gasturb.txt" if len(gs) == 1 else (
-            "map_gasturb_" + "_".join(f"{n}{_g(v)}" for n, v in zip(result.setting_names[:-1], key)) + ".txt")
+        tag = "_".join(f"{n}{_g(v)}" for n, v in zip(result.setting_names[:-1], key))
+        # a file name, whatever the setting is called ('IGV [deg]', 'N/sqrt(T)')
+        name = "map_gasturb.txt" if len(gs) == 1 else f"map_gasturb_{re.sub(r'[^A-Za-z0-9.+-]+', '_', tag)}.txt"
         out[name] = "\n".join(text).encode()
     return out
 

@@ -5,17 +5,26 @@ from __future__ import annotations
 
 import ast
 import re
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from plantsolve.schemas.perfmap import BetaGridOption, PerfmapBetaQueryRequest, PerfmapRequest
+from plantsolve.schemas.perfmap import (
+    BetaGridOption,
+    PerfmapBetaQueryRequest,
+    PerfmapRequest,
+)
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, StoredInput
 from plantsolve.solvers.perfmap import parse_upload, solve
 from plantsolve.solvers.perfmap.artifacts import cycle_code_artifacts
-from plantsolve.solvers.perfmap.beta_grid import BetaFrame, BetaGridError, check_single_crossings
+from plantsolve.solvers.perfmap.beta_grid import (
+    BetaFrame,
+    BetaGridError,
+    check_single_crossings,
+)
+from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.query import answer_beta_query
 
@@ -29,7 +38,7 @@ PRESSURE_ROUND_TRIP = 0.025  # pressure, relative, anywhere (pyCycle's maps: 2.0
 PRESSURE_ROUND_TRIP_BODY = 0.013  # pressure, relative, on the first 90 % of the flow range (1.2 % at most)
 
 
-@lru_cache(maxsize=None)
+@cache
 def fitted(name: str):
     req = parse_upload(StoredInput.from_bytes(name, (PYCYCLE / name).read_bytes()), {"map": False})
     return solve(req).result
@@ -234,7 +243,7 @@ def test_the_pycycle_module_has_pycycles_layout_r_lines_from_stall_to_choke():
     res = fitted("N3_Fan_map.py")
     text = artifacts(res)["map_pycycle.py"].decode()
     arrays = {m.group(1): np.array(ast.literal_eval(m.group(2)))
-              for m in re.finditer(r"^ExportMap\.(\w+) = np\.array\((.*?)\)$", text, re.M | re.S)}
+              for m in re.finditer(r"^ExportMap\.(\w+) = np\.array\((.*?)\)$", text, re.MULTILINE | re.DOTALL)}
     assert "ExportMap.RlineStall = 1.0" in text and "from pycycle.maps.map_data import MapData" in text
     assert arrays["alphaMap"].tolist() == [0, 5] and len(arrays["NcMap"]) == 9
     assert arrays["RlineMap"] == pytest.approx(np.linspace(1, 3, 21))
@@ -255,6 +264,12 @@ def test_a_speed_only_map_is_written_for_pycycle_at_two_equal_alphas():
     assert [p.setting[1] for p in by_alpha[0.0]] == SPEEDS
     assert [p.flow for p in by_alpha[0.0]] == [p.flow for p in by_alpha[90.0]]
     assert by_alpha[0.0][1].flow == pytest.approx(res.beta_map.lines[1].flow[::-1], rel=1e-9)
+
+
+def test_gasturb_file_names_are_file_names_whatever_the_settings_are_called():
+    res = fitted("N3_Fan_map.py")
+    renamed = res.model_copy(update={"setting_names": ["IGV/VGV [deg]", "Nc"]})
+    assert sorted(gasturb_tables(renamed)) == ["map_gasturb_IGV_VGV_deg_0.txt", "map_gasturb_IGV_VGV_deg_5.txt"]
 
 
 def test_no_pycycle_module_when_the_settings_are_no_full_alpha_speed_grid():
