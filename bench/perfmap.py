@@ -11,7 +11,8 @@ decreasing concave curve reaches) with the families chosen and the time; then, f
 map shipped with pyCycle, the worst speed line of 'auto' against its floor, before (least-squares fits
 only, the previous rule) and after (minimax where no least-squares fit reaches the floor).
 
-    python bench/perfmap.py --pycycle  # the pyCycle table only
+    python bench/perfmap.py --pycycle  # the pyCycle table only (and the exports)
+    python bench/perfmap.py --export   # the beta grid and cycle-code exports only: time, round-trip error
 """
 
 from __future__ import annotations
@@ -252,12 +253,82 @@ def pycycle_floor() -> None:
               f"{sum(r.minimax for r in after):7d} | {c3 - c2:7.2f}")
 
 
+def beta_export() -> None:
+    """Per pyCycle map: the beta grid and the cycle-code exports. CPU seconds (``time.process_time``) of the solve
+    without a map (which includes the beta grid), of the grid alone and of writing the three exports; then the
+    round trip: each export read back by the upload reader and fitted again, against the fitted map (pressure at
+    the same flow, relative, on the whole line and on its first 90 %; efficiency absolute), for 21 (default) and
+    41 beta lines; and the known-answer check (closed-form speed lines, parabolic surge/choke lines)."""
+    import resource
+
+    from plantsolve.schemas.perfmap import BetaGridOption
+    from plantsolve.solvers.perfmap.artifacts import cycle_code_artifacts
+    from plantsolve.solvers.perfmap.beta_grid import tabulate
+
+    def agree(res, again):
+        c1, c2 = curveset_from_fits(res.settings), curveset_from_fits(again.settings)
+        by = {tuple(x.setting): k for k, x in enumerate(res.settings)}
+        t = np.linspace(0, 1, 401)
+        pa = pb = ea = 0.0
+        for k2, x in enumerate(again.settings):
+            k = by[tuple(x.setting)]
+            _, y1, e1 = c1.evaluate(np.full(401, k), t)
+            _, y2, e2 = c2.evaluate(np.full(401, k2), t)
+            rel = np.abs(y2 - y1) / y1
+            pa, pb, ea = max(pa, rel.max()), max(pb, rel[t <= 0.9].max()), max(ea, np.abs(e2 - e1).max())
+        return pa, pb, ea
+
+    data = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle"
+    print("\nBeta grid and cycle-code exports on pyCycle's maps (CPU s; round trip = export read back and fitted "
+          "again: pressure rel. err. at the same flow, whole line / first 90 %, efficiency abs. err.)")
+    print(f"{'map':14s} {'lines':>5s} {'beta':>4s} | {'solve s':>7s} {'grid s':>7s} {'export s':>8s} | "
+          f"{'pyCycle p all/body':>19s} {'eta':>8s} | {'CSV p all/body':>15s} {'eta':>8s}")
+    for path in sorted(data.glob("*.py")):
+        for n in (21, 41):
+            req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"map": False})
+            req = req.model_copy(update={"options": req.options.model_copy(update={"beta_grid": BetaGridOption(lines=n)})})
+            c0 = time.process_time()
+            res = solve(req).result
+            c1 = time.process_time()
+            tabulate(curveset_from_fits(res.settings), n, "parabola", True)
+            c2 = time.process_time()
+            arts = {a.name: a.data for a in cycle_code_artifacts(res)}
+            c3 = time.process_time()
+            row = []
+            for name in ("map_pycycle.py", "map_beta.csv"):
+                again = solve(parse_upload(StoredInput.from_bytes(name, arts[name]), {"map": False})).result
+                pa, pb, ea = agree(res, again)
+                row.append(f"{100 * pa:8.2f}% /{100 * pb:6.2f}% {ea:8.1e}")
+            print(f"{path.stem:14s} {len(res.settings):5d} {n:4d} | {c1 - c0:7.2f} {c2 - c1:7.3f} {c3 - c2:8.3f} | "
+                  f"{row[0]} | {row[1][:-9]:>15s} {row[1][-8:]}")
+    # known answer: PR = a - 0.02 Wc^2 between the parabolas PR - 1 = 0.05 Wc^2 (surge) and 0.01 Wc^2 (choke)
+    worst = 0.0
+    positions, lines = [], []
+    for a, n in zip((1.6, 2.2, 3.0, 4.0), (0.6, 0.7, 0.8, 0.9)):
+        xs, xc = np.sqrt((a - 1) / (0.02 + np.array([0.05, 0.01])))
+        x = np.linspace(xs, xc, 7)
+        positions.append({"setting": [n], "flow": x.tolist(), "pressure": (a - 0.02 * x * x).tolist(),
+                          "efficiency": (0.9 - 0.1 * (x - x.mean()) ** 2 / (xc - xs) ** 2).tolist()})
+        lines.append(a)
+    res = solve(PerfmapRequest.model_validate({"setting_names": ["Nc"], "units": {"pressure": "1"}, "positions": positions,
+                                               "options": {"map": False, "model": "parabola"}})).result
+    beta = np.array(res.beta_map.beta)
+    for a, line in zip(lines, res.beta_map.lines):
+        x = np.sqrt((a - 1) / (0.02 + 0.01 + beta * 0.04))
+        worst = max(worst, np.max(np.abs(np.array(line.flow) - x) / x))
+    print(f"known answer (closed-form parabolic beta lines, 4 lines x 21 betas): max rel. flow error {worst:.1e}")
+    print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--pycycle", action="store_true", help="only the pyCycle maps against their floors")
+    ap.add_argument("--export", action="store_true", help="only the beta grid and cycle-code exports")
     args = ap.parse_args()
-    if not args.pycycle:
-        main(args)
-        pressure_reach()
-    pycycle_floor()
+    if not args.export:
+        if not args.pycycle:
+            main(args)
+            pressure_reach()
+        pycycle_floor()
+    beta_export()

@@ -93,6 +93,28 @@ class ResultUnitsOption(StrictModel):
     pressure: UnitText | None = Field(default=None, examples=["kPa"])
 
 
+BETA_CONVENTION = (
+    "Auxiliary coordinate beta (GasTurb's convention): beta = 0 at the choke end of every speed line (its "
+    "largest fitted flow), beta = 1 at its surge end (smallest fitted flow). pyCycle's R-line is "
+    "R = 1 + 2 (1 - beta): RlineStall = 1 at surge, R = 3 at choke. Beta lines are Smooth C's family "
+    "y - y_v = c (x - x_v)^p through a common vertex (x_v, y_v) (p = 2: 'parabola', p = 1: 'straight'); "
+    "on each speed line the node of beta lies where c = c_choke + beta (c_surge - c_choke), c_surge and "
+    "c_choke being the values through the line's own ends. When the surge and choke lines are themselves "
+    "such curves every beta line is one exactly; otherwise the lines bend to meet every speed line's ends. "
+    "c falls strictly along a speed line above the vertex (pressure non-increasing, flow increasing): each "
+    "beta line crosses each speed line exactly once.")
+
+
+class BetaGridOption(StrictModel):
+    """The auxiliary-coordinate (beta/R-line) grid the fitted map is tabulated on for cycle codes."""
+
+    lines: Integer = Field(default=21, ge=2, le=201, description="Number of beta lines, evenly spaced in "
+                           "beta from 0 (choke) to 1 (surge).")
+    shape: Literal["parabola", "straight"] = Field(
+        default="parabola", description="Beta lines as parabolas (p = 2) or straight lines (p = 1) "
+        "through the vertex. " + BETA_CONVENTION)
+
+
 class PerfmapOptions(StrictModel):
     model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3", "concave"] = Field(
         default="auto",
@@ -148,6 +170,10 @@ class PerfmapOptions(StrictModel):
     result_units: ResultUnitsOption | None = Field(
         default=None, description="Convert flow and/or pressure to these units (same dimensions as the request's "
         "units) before solving: the result, its plots and its exports are in them.")
+    beta_grid: BetaGridOption = Field(
+        default_factory=BetaGridOption,
+        description="The beta/R-line grid of the cycle-code exports (map_pycycle.py, map_gasturb.txt, "
+        "map_beta.csv) and of the (speed, beta) query.")
     sheet: Annotated[str, Field(min_length=1, max_length=100)] | None = Field(
         default=None, description="Excel uploads: the worksheet to read (default: the first sheet with a "
         "recognisable header).")
@@ -334,6 +360,30 @@ class PerformanceMap(BaseModel):
     reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.")
 
 
+class BetaLine(BaseModel):
+    """One speed line tabulated at the grid's beta values (same order as ``BetaMap.beta``)."""
+
+    setting: list[float] = Field(description="Setting values of the line (speed last), in the order of "
+                                 "setting_names.")
+    flow: list[float] = Field(description="Corrected flow at each beta (the result's flow unit).")
+    pressure: list[float] = Field(description="Pressure (ratio) at each beta (the result's pressure unit).")
+    efficiency: list[float] = Field(description="Efficiency (fraction) at each beta.")
+    t: list[float] = Field(description="Curve parameter t of each node on the fitted characteristic.")
+    c_choke: float = Field(description="Beta-line constant c through the choke end (beta = 0).")
+    c_surge: float = Field(description="Beta-line constant c through the surge end (beta = 1).")
+
+
+class BetaMap(BaseModel):
+    """The fitted map tabulated on auxiliary coordinates (speed, beta) for cycle codes. """ + BETA_CONVENTION
+
+    shape: Literal["parabola", "straight"]
+    exponent: int = Field(description="p of y - y_v = c (x - x_v)^p: 2 (parabola) or 1 (straight).")
+    vertex_flow: float = Field(description="x_v: 0 when every flow is positive, else below the smallest flow.")
+    vertex_pressure: float = Field(description="y_v: 1 for a pressure ratio above 1 everywhere, else 0.")
+    beta: list[float] = Field(description="Beta values, 0 (choke) to 1 (surge), ascending.")
+    lines: list[BetaLine] = Field(description="One per speed line, in the order of `settings`.")
+
+
 class ResultUnits(BaseModel):
     """Which unit each quantity of the result is in."""
 
@@ -377,6 +427,8 @@ class PerfmapResult(BaseModel):
         "range-normalised (theta, phi); settings on one line (one setting parameter) are chained as "
         "segments written (i, j, j).")
     map: PerformanceMap | None = None
+    beta_map: BetaMap | None = Field(default=None, description="The speed lines tabulated on the beta grid "
+                                     "(options.beta_grid); the cycle-code exports are written from it.")
     flow_range: list[float] = Field(description="[min, max] flow over all characteristics.")
     pressure_range: list[float] = Field(description="[min, max] pressure over all characteristics.")
 
@@ -418,3 +470,49 @@ class PerfmapQueryResult(BaseModel):
     points: list[QueryAnswer]
     units: ResultUnits | None = Field(default=None, description="Units of flow, pressure and settings (the map's; "
                                       "duty points are read in them too).")
+
+
+class BetaPoint(StrictModel):
+    """A map lookup as a cycle code does it: setting values (speed last) and beta."""
+
+    setting: list[FiniteFloat] | None = Field(
+        default=None, min_length=1, max_length=3,
+        description="Setting values in the order of the result's setting_names (speed last). The leading "
+        "ones (e.g. alpha) must be values of the map; the last is interpolated between speed lines.")
+    speed: FiniteFloat | None = Field(default=None, description="One-setting maps: the speed (instead of setting).")
+    beta: FiniteFloat = Field(ge=0.0, le=1.0, description="Beta: 0 at choke, 1 at surge.")
+
+    @model_validator(mode="after")
+    def _one_of(self) -> "BetaPoint":
+        if (self.setting is None) == (self.speed is None):
+            raise ValueError("give either 'setting' (all setting values) or 'speed' (one-setting maps)")
+        return self
+
+
+class PerfmapBetaQueryRequest(StrictModel):
+    """``{"points": [{"speed": 0.9, "beta": 0.5}, ...]}`` or a single ``{"speed": ..., "beta": ...}``."""
+
+    points: list[BetaPoint] = Field(min_length=1, max_length=10_000)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _single_point(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "points" not in data and "beta" in data:
+            return {"points": [data]}
+        return data
+
+
+class BetaAnswer(BaseModel):
+    setting: list[float] = Field(description="Setting values asked for (speed last).")
+    beta: float
+    flow: float = Field(description="Corrected flow (the result's flow unit).")
+    pressure: float = Field(description="Pressure (ratio) (the result's pressure unit).")
+    efficiency: float = Field(description="Efficiency, a fraction.")
+    on_speed_line: bool = Field(description="True when the speed is a fitted speed line (exact on the fitted "
+                                "curve); otherwise linear in speed between the two neighbouring lines at the "
+                                "same beta, as cycle codes interpolate their tables.")
+
+
+class PerfmapBetaQueryResult(BaseModel):
+    points: list[BetaAnswer]
+    units: ResultUnits | None = None

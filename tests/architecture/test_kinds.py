@@ -12,7 +12,7 @@ from plantsolve.schemas.common import Report
 from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, rigidity, tube
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 from plantsolve.solvers.kinds import KINDS, load_kinds
-from plantsolve.solvers.perfmap.query import answer_query
+from plantsolve.solvers.perfmap.query import answer_beta_query, answer_query
 
 
 class _Req(BaseModel):
@@ -44,8 +44,9 @@ def test_the_map_lists_each_package_spec_under_its_own_kind():
 
 
 def test_perfmap_declares_its_query_as_an_operation():
-    (operation,) = perfmap.SPEC.operations
+    operation, beta = perfmap.SPEC.operations
     assert operation.name == "query" and operation.answer is answer_query
+    assert beta.name == "beta" and beta.answer is answer_beta_query
     assert alignment.SPEC.operations == tube.SPEC.operations == polyhedra.SPEC.operations == flowmeter.SPEC.operations == ()
     assert rigidity.SPEC.operations == dedup.SPEC.operations == ()
 

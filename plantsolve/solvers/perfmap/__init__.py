@@ -1,13 +1,21 @@
 """Compressor performance maps from rig measurements (ESGI 51, HV-Turbo chapter).
 
-The job computes characteristics, envelopes and the maximum-efficiency map; the inverse
-query (``POST /v1/perfmap/jobs/{id}/query``) answers duty points from a finished map.
+The job computes characteristics, envelopes, the maximum-efficiency map and the speed lines on a beta grid
+(exported for cycle codes); the inverse query (``POST /v1/perfmap/jobs/{id}/query``) answers duty points from a
+finished map, ``POST /v1/perfmap/jobs/{id}/beta`` answers (speed, beta) lookups.
 """
 
-from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapQueryResult, PerfmapRequest, PerfmapResult
+from plantsolve.schemas.perfmap import (
+    PerfmapBetaQueryRequest,
+    PerfmapBetaQueryResult,
+    PerfmapQueryRequest,
+    PerfmapQueryResult,
+    PerfmapRequest,
+    PerfmapResult,
+)
 from plantsolve.solvers.base import ResultOperation, SolverSpec
 from plantsolve.solvers.perfmap.artifacts import render_artifacts
-from plantsolve.solvers.perfmap.query import answer_query, query
+from plantsolve.solvers.perfmap.query import answer_beta_query, answer_query, query
 from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.synthetic import example
 from plantsolve.solvers.perfmap.upload import UPLOAD_EXTENSIONS, parse_upload
@@ -41,6 +49,17 @@ SPEC = SolverSpec(
             description="One `{flow, pressure}` or `{points: [...]}`. Points outside the reachable region "
             "come back with `feasible: false` and their distance to the map instead of an extrapolation.",
             example=lambda: {"points": [{"flow": 2000.0, "pressure": 1.15}, {"flow": 1000.0, "pressure": 1.6}]},
+        ),
+        ResultOperation(
+            name="beta",
+            request_model=PerfmapBetaQueryRequest,
+            response_model=PerfmapBetaQueryResult,
+            answer=answer_beta_query,
+            summary="Map lookup by (speed, beta): corrected flow, pressure ratio and efficiency",
+            description="One `{speed, beta}` (or `{setting: [...], beta}` with several setting parameters) or "
+            "`{points: [...]}`. Beta 0 is the choke line, 1 the surge line. Exact on a fitted speed line, linear in "
+            "speed between neighbouring lines; speeds outside the lines are refused (422), not extrapolated.",
+            example=lambda: {"points": [{"speed": 0.9, "beta": 0.5}, {"speed": 0.95, "beta": 1.0}]},
         ),
     ),
 )

@@ -1,6 +1,7 @@
 """Plots of a perfmap result (PNG and SVG): characteristics, envelopes, performance map; and its exports:
-``map.csv`` (the max-efficiency grid) and ``curves.csv`` (the fitted characteristics), units in every
-axis label and column header (the result's ``units``)."""
+``map.csv`` (the max-efficiency grid), ``curves.csv`` (the fitted characteristics) and the cycle-code tables
+on the beta grid (``map_pycycle.py``, ``map_gasturb.txt``, ``map_beta.csv``), units in every axis label and
+column header (the result's ``units``)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from scipy import ndimage
 
 from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
 from plantsolve.solvers.base import Artifact, Solved
+from plantsolve.solvers.perfmap.cycle_exports import beta_csv, gasturb_tables, pycycle_module
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.performance_map import distance_to_region
 from plantsolve.solvers.plots import figure_artifact
@@ -415,4 +417,21 @@ def render_artifacts(request: PerfmapRequest, solved: Solved) -> list[Artifact]:
     out.append(Artifact(name="curves.csv", media_type="text/csv", data=curves_csv(result)))
     if result.map is not None:
         out.append(Artifact(name="map.csv", media_type="text/csv", data=map_csv(result)))
+    return out + cycle_code_artifacts(result)
+
+
+def cycle_code_artifacts(result: PerfmapResult) -> list[Artifact]:
+    """The beta-grid exports (:mod:`~plantsolve.solvers.perfmap.cycle_exports`): map_pycycle.py (a full
+    alpha x speed grid only), map_gasturb*.txt, map_beta.csv."""
+    if result.beta_map is None:
+        return []
+    out = []
+    module = pycycle_module(result)
+    if module is not None:
+        out.append(Artifact(name="map_pycycle.py", media_type="text/x-python", data=module))
+    for name, data in gasturb_tables(result).items():
+        out.append(Artifact(name=name, media_type="text/plain; charset=utf-8", data=data))
+    flow = "corrected " + _csv_header(result, "flow")
+    out.append(Artifact(name="map_beta.csv", media_type="text/csv", data=beta_csv(
+        result, _setting_headers(result), flow, _csv_header(result, "pressure").replace("pressure [-]", "pressure ratio [-]"))))
     return out

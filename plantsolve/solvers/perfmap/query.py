@@ -1,11 +1,21 @@
-"""Inverse query on a finished result: the best setting for duty points (flow, pressure)."""
+"""Queries of a finished result: the best setting for duty points (flow, pressure), and the map as a cycle code
+reads it, at (speed, beta)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapQueryResult, PerfmapResult, QueryAnswer
+from plantsolve.schemas.perfmap import (
+    BetaAnswer,
+    PerfmapBetaQueryRequest,
+    PerfmapBetaQueryResult,
+    PerfmapQueryRequest,
+    PerfmapQueryResult,
+    PerfmapResult,
+    QueryAnswer,
+)
 from plantsolve.solvers.base import FieldError, InputRejected, ResultNotUsable
+from plantsolve.solvers.perfmap.beta_grid import BetaFrame, values_at
 from plantsolve.solvers.perfmap.performance_map import distance_to_region, max_efficiency
 from plantsolve.solvers.perfmap.families import CurveSet, curveset_from_fits
 from plantsolve.solvers.perfmap.triangulation import locate
@@ -81,3 +91,70 @@ def characteristic_at(result: PerfmapResult, theta: float, phi: float):
         return w @ x, w @ y, w @ e
 
     return curve
+
+
+def _speed_bracket(speeds: np.ndarray, speed: float) -> tuple[int, int, float] | None:
+    """(lower, upper, weight of upper) of ``speed`` among ascending ``speeds``; one line when it is one."""
+    tol = 1e-9 * max(1.0, float(np.abs(speeds).max()))
+    hit = np.flatnonzero(np.abs(speeds - speed) <= tol)
+    if len(hit):
+        return int(hit[0]), int(hit[0]), 0.0
+    if not speeds[0] < speed < speeds[-1]:
+        return None
+    j = int(np.searchsorted(speeds, speed))
+    return j - 1, j, float((speed - speeds[j - 1]) / (speeds[j] - speeds[j - 1]))
+
+
+def answer_beta_query(result: PerfmapResult, q: PerfmapBetaQueryRequest) -> PerfmapBetaQueryResult:
+    """Flow, pressure and efficiency at (setting, beta): exact on a fitted speed line (the node of beta on the
+    fitted curve, not the table's interpolation), linear in speed between the two neighbouring lines at the
+    same beta. Speeds outside the map's lines and leading settings (alpha) that are no map value are refused
+    (422 naming the point), not extrapolated."""
+    b = result.beta_map
+    if b is None:
+        raise ResultNotUsable("has no beta grid (see the report's 'beta_grid_not_possible' warning).")
+    names = result.setting_names
+    lines = b.lines
+    errors, asks = [], []
+    for i, p in enumerate(q.points):
+        if p.speed is not None and len(names) != 1:
+            errors.append(FieldError(("points", i, "speed"), f"this map has {len(names)} setting parameters "
+                                     f"({', '.join(names)}): give 'setting' with all of them"))
+            continue
+        setting = [float(p.speed)] if p.speed is not None else [float(v) for v in p.setting]
+        field = "speed" if p.speed is not None else "setting"
+        if len(setting) != len(names):
+            errors.append(FieldError(("points", i, field), f"needs {len(names)} values ({', '.join(names)})"))
+            continue
+        members = [k for k, line in enumerate(lines) if np.allclose(line.setting[:-1], setting[:-1], rtol=1e-9,
+                                                                     atol=1e-12)]
+        if not members:
+            known = sorted({tuple(line.setting[:-1]) for line in lines})
+            errors.append(FieldError(("points", i, field, 0), f"{', '.join(names[:-1])} = {setting[:-1]} is no "
+                                     f"value of the map (it has {known[:10]})"))
+            continue
+        members.sort(key=lambda k: lines[k].setting[-1])
+        speeds = np.array([lines[k].setting[-1] for k in members])
+        bracket = _speed_bracket(speeds, setting[-1])
+        if bracket is None:
+            errors.append(FieldError(("points", i, field) + ((len(names) - 1,) if field == "setting" else ()),
+                                     f"{names[-1]} {setting[-1]:g} is outside the map's speed lines "
+                                     f"({speeds[0]:g} to {speeds[-1]:g}); no extrapolation"))
+            continue
+        lo, hi, w = bracket
+        asks.append((setting, float(p.beta), members[lo], members[hi], w))
+    if errors:
+        raise InputRejected(errors)
+    curves = curveset_from_fits(result.settings)
+    frame = BetaFrame(b.exponent, b.vertex_flow, b.vertex_pressure)
+    c_choke = np.array([line.c_choke for line in lines])
+    c_surge = np.array([line.c_surge for line in lines])
+    idx = np.array([a[2] for a in asks] + [a[3] for a in asks], dtype=int)
+    beta = np.array([a[1] for a in asks] * 2)
+    x, y, e = values_at(curves, frame, idx, beta, c_choke, c_surge)
+    n = len(asks)
+    w = np.array([a[4] for a in asks])
+    flow, pressure, eff = ((1 - w) * v[:n] + w * v[n:] for v in (x, y, e))
+    answers = [BetaAnswer(setting=a[0], beta=a[1], flow=float(flow[j]), pressure=float(pressure[j]),
+                          efficiency=float(eff[j]), on_speed_line=a[2] == a[3]) for j, a in enumerate(asks)]
+    return PerfmapBetaQueryResult(points=answers, units=result.units)

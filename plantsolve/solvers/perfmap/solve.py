@@ -13,6 +13,8 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.perfmap import (
+    BetaLine,
+    BetaMap,
     EfficiencyErrorRow,
     Envelope,
     ErrorTableRow,
@@ -23,6 +25,7 @@ from plantsolve.schemas.perfmap import (
     SettingFit,
 )
 from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
+from plantsolve.solvers.perfmap.beta_grid import BetaGridError, tabulate
 from plantsolve.solvers.perfmap.envelopes import envelope
 from plantsolve.solvers.perfmap.families import (
     EFFICIENCY_FAMILY,
@@ -380,6 +383,38 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
     return surge, choke, line
 
 
+def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnings: list[Diagnostic]) -> BetaMap | None:
+    """Every speed line tabulated on the beta grid (:mod:`~plantsolve.solvers.perfmap.beta_grid`); None, with a
+    warning naming the line, when some beta line would cross a speed line twice."""
+    ratio = units is not None and units.pressure in ("1", "-")
+    try:
+        table = tabulate(curves, option.lines, option.shape, ratio)
+    except BetaGridError as e:
+        s = settings[e.line]
+        warnings.append(Diagnostic(
+            code="beta_grid_not_possible", message=f"No beta grid (no cycle-code exports): setting {s.label}: "
+            f"{e.reason}.", details={"values": list(s.values), "reason": e.reason}))
+        return None
+    lines = [BetaLine(setting=list(s.values), flow=table.flow[k].tolist(), pressure=table.pressure[k].tolist(),
+                      efficiency=table.efficiency[k].tolist(), t=table.t[k].tolist(),
+                      c_choke=float(table.c_choke[k]), c_surge=float(table.c_surge[k]))
+             for k, s in enumerate(settings)]
+    # a reader that takes flows within CHOKE_FLOW_TOLERANCE of a line's largest as its vertical choke segment
+    # (this project's, for pyCycle's repeated choke flows) would read such nodes as one
+    span = table.flow.max(axis=1) - table.flow.min(axis=1)
+    close = [list(settings[k].values) for k in np.flatnonzero(table.flow[:, 0] - table.flow[:, 1]
+                                                              <= CHOKE_FLOW_TOLERANCE * span)]
+    if close:
+        warnings.append(Diagnostic(
+            code="beta_grid_choke_nodes", message=f"{len(close)} speed line(s) fall so steeply at choke that their "
+            f"first two beta nodes lie within {CHOKE_FLOW_TOLERANCE:g} of the line's flow range: a reader that "
+            "takes such flows as a vertical choke segment merges them; fewer beta lines avoid it.",
+            details={"values": close[:100], "lines": option.lines}))
+    f = table.frame
+    return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv,
+                   beta=table.beta.tolist(), lines=lines)
+
+
 def envelopes(curves: CurveSet, values: np.ndarray, opts, progress: Progress = no_progress) -> list[Envelope]:
     """§3, "The Envelope": for each inlet angle θ, the upper envelope of its characteristics
     interpolated over the diffuser positions φ, with φ(x) and η along it. In general: for each value of
@@ -476,7 +511,8 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
     values = np.array([s.values for s in settings], dtype=float).reshape(len(settings), -1)
     envs = envelopes(curves, values, opts, progress)
     surge, choke, margin_line = limit_lines(curves, settings, opts.surge_margin)
-    progress(0.62, "surge and choke lines done")
+    beta_map = beta_tables(curves, settings, opts.beta_grid, units, warnings)
+    progress(0.62, "surge and choke lines and the beta grid done")
 
     ranges = curve_ranges(curves)
     pmap, triangles = performance_map(curves, settings, values, ranges, opts, progress, warnings)
@@ -492,5 +528,5 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
                          setting_units=request.setting_units, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,
                          surge_line=surge, choke_line=choke, surge_margin_line=margin_line,
-                         triangles=triangles.tolist(), map=pmap, flow_range=[ranges[0], ranges[1]],
+                         triangles=triangles.tolist(), map=pmap, beta_map=beta_map, flow_range=[ranges[0], ranges[1]],
                          pressure_range=[ranges[2], ranges[3]])
