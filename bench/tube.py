@@ -255,15 +255,15 @@ def solve_cases(path: str) -> None:
         try:
             res = solve(TubeRequest(points=pts.tolist())).result
         except SolverError:
-            print(json.dumps(dict(case=name, got=-1, cpu=time.process_time() - t0)), flush=True)
+            print(json.dumps({"case": name, "got": -1, "cpu": time.process_time() - t0}), flush=True)
             continue
         cpu = time.process_time() - t0
         da, dr, t, _ = compare(truth, res)
         big = np.degrees(t.angles) >= 10 if da is not None else None
-        print(json.dumps(dict(case=name, got=len(res.lra) - 1, cpu=cpu,
-                              angle=float(da.max()) if da is not None else None,
-                              radius=float(dr.max()) if da is not None else None,
-                              radius_big=float(dr[big].max()) if da is not None and big.any() else None)), flush=True)
+        print(json.dumps({"case": name, "got": len(res.lra) - 1, "cpu": cpu,
+                          "angle": float(da.max()) if da is not None else None,
+                          "radius": float(dr.max()) if da is not None else None,
+                          "radius_big": float(dr[big].max()) if da is not None and big.any() else None}), flush=True)
 
 
 def before_after(n_tubes: int, ref: str) -> None:
@@ -305,12 +305,13 @@ def before_after(n_tubes: int, ref: str) -> None:
         for side, rows in sides.items():
             rows = [r for r in rows if r["case"].startswith(fam + "-")]
             ok = [r for r in rows if r["got"] == truth_n[r["case"]]]
-            worst = lambda key: max((r[key] for r in ok if r[key] is not None), default=None)  # noqa: E731
-            pct = lambda v: f"{100 * v:.1f} %" if v is not None else "n/a"  # noqa: E731
+            worst = {key: max((r[key] for r in ok if r[key] is not None), default=None)
+                     for key in ("radius", "radius_big", "angle")}
+            pct = {key: f"{100 * v:.1f} %" if v is not None else "n/a" for key, v in worst.items()}
             cpu = np.array([r["cpu"] for r in rows])
             print(f"| {fam} | {side} | {len(ok)}/{len(rows)} = {100 * len(ok) / max(len(rows), 1):.0f} % "
-                  f"| {pct(worst('radius'))} | {pct(worst('radius_big'))} "
-                  f"| {worst('angle') if worst('angle') is not None else float('nan'):.3f}° "
+                  f"| {pct['radius']} | {pct['radius_big']} "
+                  f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
                   f"| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
 
 

@@ -73,7 +73,9 @@ def test_off_die_bends_are_the_ones_far_from_the_others_radius():
 
 def test_recheck_keeps_a_removal_only_when_bic_is_no_worse():
     m = make_model([[30, 0, 40, 12], [20, 10, 0.2, 4000], [25, 0, 0, 0]], 2.0)
-    refit = lambda cand: (cand, "info")  # noqa: E731
+    def refit(cand):
+        return cand, "info"
+
     kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: -100.0 * x.n_bends, 0.1)
     assert kept[0].n_bends == 2 and changes == []
     kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: 10.0 * x.n_bends, 0.1)
