@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.solvers.geometry import rotate_about, wrap_angle
-from plantsolve.solvers.tube.model import TubeModel
+from plantsolve.solvers.tube.model import TubeModel, control_polygon, model_from_control_polygon
 
 
 def without_bend(model: TubeModel, k: int) -> TubeModel:
@@ -54,6 +54,33 @@ def merged(model: TubeModel, k: int) -> TubeModel:
     m.rotations = np.delete(rots, k + 1)
     m.angles = np.concatenate([m.angles[:k], [min(a, 2 * np.pi - 1e-3)], m.angles[k + 2:]])
     m.radii = np.concatenate([m.radii[:k], [R], m.radii[k + 2:]])
+    return m
+
+
+def merged_at_corner(model: TubeModel, k: int) -> TubeModel:
+    """Bends k and k+1 as one arc tangent to the straight before k and the one after k+1: the two corners of
+    the control polygon replaced by the point where those lines meet (nearest point of the two lines), the
+    radius as in :func:`merged`. Every other corner stays, so the tube after the pair does not move, as it
+    does when the straight between the two arcs is dropped (:func:`merged`, also used when a bend of 170° or
+    more has no corner)."""
+    if np.any(model.angles >= np.radians(170.0)):
+        return merged(model, k)
+    pts, clr = control_polygon(model)
+    a, b = pts[k + 1], pts[k + 2]
+    u = (a - pts[k]) / max(np.linalg.norm(a - pts[k]), 1e-300)
+    v = (pts[k + 3] - b) / max(np.linalg.norm(pts[k + 3] - b), 1e-300)
+    w = a - b
+    den = 1.0 - float(u @ v) ** 2
+    if den < 1e-12:
+        return merged(model, k)
+    s = (float(u @ v) * float(v @ w) - float(u @ w)) / den
+    t = (float(v @ w) - float(u @ v) * float(u @ w)) / den
+    corner = 0.5 * ((a + s * u) + (b + t * v))
+    m = model_from_control_polygon(np.vstack([pts[:k + 1], corner, pts[k + 3:]]),
+                                   np.concatenate([clr[:k], [merged(model, k).radii[k]], clr[k + 2:]]), model.pipe_radius)
+    if not np.all(np.isfinite(m.lengths)) or m.lengths[1:-1].min(initial=0.0) < -model.pipe_radius:
+        return merged(model, k)
+    m.lengths = np.maximum(m.lengths, 0.0)
     return m
 
 
@@ -222,7 +249,7 @@ def recheck_candidates(model: TubeModel, eps: float) -> list[tuple[str, int, Tub
         for j in (k - 1, k):
             if 0 <= j < n - 1 and j not in seen and model.lengths[j + 1] < max(eps, 0.5 * model.pipe_radius):
                 seen.add(j)
-                out.append(("merge", j, merged(model, j)))
+                out.append(("merge", j, merged_at_corner(model, j)))
     return out
 
 

@@ -348,6 +348,20 @@ def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:
     return tuple(int(d) for d in dies)
 
 
+def _common_starts(model: TubeModel, weight: np.ndarray) -> list[float]:
+    """Start values of one shared radius: the weighted one (``_shared_radius``), and the median radius of the
+    bends of 20 degrees or more when it differs by over 5 %. The sigmas of bends of a few degrees can be as
+    spurious as their radii (a sharp side minimum): three such bends can pull the weighted start twice the
+    die off, and the shared fit stops in a minimum far above the per-bend one."""
+    starts = [_shared_radius(model.radii, weight)]
+    big = model.angles >= np.radians(20.0)
+    if big.any():
+        r_big = float(np.median(model.radii[big]))
+        if abs(np.log(r_big / starts[0])) > 0.05:
+            starts.append(r_big)
+    return starts
+
+
 def _shared_radius(radii: np.ndarray, weight: np.ndarray) -> float:
     """Start value of a radius shared by bends: their free radii averaged with weights 1 / sigma^2. A bend
     of a few degrees wanders to any radius in a free fit (often a bound); an unweighted median or mean
@@ -386,9 +400,13 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     # sigma says nothing about the die, and as a start it would drag the shared radius down to it
     weight[model.radii < model.pipe_radius] = 1e-12 * weight.max()
     if forced in ("auto", "common"):
-        m = with_radii(model, np.full(n, _shared_radius(model.radii, weight)))
-        m, info, t2, _ = rounds(m, P, thr, 2, 30, "common")
-        candidates["common"] = (m, info, t2, {"radius_mode": "common"})
+        best = None
+        for r0 in _common_starts(model, weight):
+            m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
+            r = fit.assign(m, P, margin)[0][keep]
+            if best is None or float(r @ r) < best[0]:
+                best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
+        candidates["common"] = best[1]
     dies = _two_dies(model.radii, weight) if n >= 3 else ()
     if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
         die_arr = np.asarray(dies)

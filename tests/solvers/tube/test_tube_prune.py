@@ -89,3 +89,15 @@ def test_new_radii_keep_the_control_polygon():
     m2 = with_radii(m, [5.0, 30.0, 11.0])
     np.testing.assert_allclose(m2.radii, [5.0, 30.0, 11.0])
     np.testing.assert_allclose(control_polygon(m2)[0], control_polygon(m)[0], atol=1e-9)
+
+
+def test_merge_at_the_corner_keeps_the_lines_before_and_after():
+    """Two coplanar arcs with a straight between become one arc tangent to the outer straights: the tube
+    after them stays where it was (the corner where those straights meet is the merged bend's)."""
+    from plantsolve.solvers.tube.model import control_polygon
+
+    pair = make_model([[30, 0, 2.5, 10], [6, 0, 2.3, 100], [20, 40, 60, 12], [25, 0, 0, 0]], 2.0)
+    one = prune.merged_at_corner(pair, 0)
+    assert one.n_bends == 2
+    np.testing.assert_allclose(np.degrees(one.angles), [4.8, 60.0], atol=1e-9)
+    np.testing.assert_allclose(control_polygon(one)[0][[0, 2, 3]], control_polygon(pair)[0][[0, 3, 4]], atol=1e-9)
