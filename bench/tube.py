@@ -5,6 +5,7 @@
     python bench/tube.py --families 50   # only the hard scenario families (short arcs, small bends far
                                          # apart, nearly coplanar back-to-back bends)
     python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
+    python bench/tube.py --before-after 10 [--ref main]   # every family, main's solver vs this tree's
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -22,7 +23,8 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+# --before-after solves the same cases with another revision's solver: its sources come first on the path
+sys.path.insert(0, os.environ.get("TUBE_BENCH_CODE") or os.path.join(os.path.dirname(__file__), ".."))
 
 import numpy as np  # noqa: E402
 
@@ -146,10 +148,17 @@ def family_tube(family: str, seed: int):
     short_arc: 3-5 bends of 12-22 degrees on a 2.4 r die (arcs shorter than the pipe radius);
     small_far: two bends of 3-5 degrees 6-8 r apart with 30-60 degrees of rotation between them;
     b2b_coplanar: two bends of 90-115 degrees with 0.15-0.3 r of straight and under 1.5 degrees of
-    rotation between them. 6000 single-view samples, noise 1.2 % of r, 0.5 % outliers."""
-    from plantsolve.solvers.tube.synthetic import make_model, random_rotation
+    rotation between them; small_bends: seven bends on a 3 r die, three of them 3.6-5 degrees, straights
+    of 3-9 r, pipe radius 20 (``synthetic.small_bends_tube``). 6000 single-view samples, noise 1.2 % of r,
+    0.5 % outliers."""
+    from plantsolve.solvers.tube.synthetic import make_model, random_rotation, small_bends_tube
 
     rng = np.random.default_rng(seed)
+    if family == "small_bends":
+        m = small_bends_tube(rng)
+        pts = surface_samples(m, 6000, rng, view=rng.normal(size=3), noise=0.012 * m.pipe_radius,
+                              outlier_fraction=0.005)
+        return m, pts
     rp = float(rng.uniform(3.0, 20.0))
     if family == "short_arc":
         die = 2.4 * rp
@@ -169,6 +178,9 @@ def family_tube(family: str, seed: int):
     return m, pts
 
 
+FAMILIES = ("short_arc", "small_far", "b2b_coplanar", "small_bends")
+
+
 def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
     """Per hard family and radius model ('auto': chosen by the data; 'per_bend': one free radius per bend).
 
@@ -181,7 +193,7 @@ def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
           "(all bends) | radius err median / p95 / max (determined) | radius σ median | undetermined bends | within 2σ "
           "(angle, radius) | centreline rms (median, % r) | chosen | time median s |")
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|")
-    for family in ("short_arc", "small_far", "b2b_coplanar"):
+    for family in FAMILIES:
         for model in radius_models:
             ok, ang, rad, rad_det, n_undet, n_bends, za, zr, rsig, crms, chosen, times = 0, [], [], [], 0, 0, [], [], [], [], {}, []
             for i in range(n_tubes):
@@ -223,6 +235,86 @@ def families(n_tubes: int, radius_models: tuple[str, ...] = ("auto",)) -> None:
                   f"| {np.median(times):.2f} |", flush=True)
 
 
+def _case(family: str, seed: int):
+    if family == "random":
+        m, pts, _ = make_case(seed, 6000)
+        return m, pts
+    return family_tube(family, seed)
+
+
+def solve_cases(path: str) -> None:
+    """Child of --before-after: solve every case in the .npz at ``path`` with the solver on the path, one JSON
+    line per case (bend count, worst radius and angle errors against the truth, CPU seconds)."""
+    from plantsolve.solvers.tube.synthetic import make_model
+
+    data = np.load(path)
+    for name in sorted({k.rsplit("/", 1)[0] for k in data.files}):
+        rows, pts = data[name + "/rows"], data[name + "/pts"]
+        truth = make_model(rows, float(data[name + "/rp"]), start=data[name + "/start"], frame=data[name + "/frame"])
+        t0 = time.process_time()
+        try:
+            res = solve(TubeRequest(points=pts.tolist())).result
+        except SolverError:
+            print(json.dumps({"case": name, "got": -1, "cpu": time.process_time() - t0}), flush=True)
+            continue
+        cpu = time.process_time() - t0
+        da, dr, t, _ = compare(truth, res)
+        big = np.degrees(t.angles) >= 10 if da is not None else None
+        print(json.dumps({"case": name, "got": len(res.lra) - 1, "cpu": cpu,
+                          "angle": float(da.max()) if da is not None else None,
+                          "radius": float(dr.max()) if da is not None else None,
+                          "radius_big": float(dr[big].max()) if da is not None and big.any() else None}), flush=True)
+
+
+def before_after(n_tubes: int, ref: str) -> None:
+    """Every family (the random tubes too), n_tubes seeds each, solved by the solver of git revision ``ref``
+    and by this tree's, each in a fresh process on the same saved samples, one after the other."""
+    import tempfile
+
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    fams = ("random",) + FAMILIES
+    with tempfile.TemporaryDirectory() as tmp:
+        arrays, truth_n = {}, {}
+        for fam in fams:
+            for i in range(n_tubes):
+                m, pts = _case(fam, (1000 if fam == "random" else 5000) + i)
+                name = f"{fam}-{i:03d}"
+                truth_n[name] = m.n_bends
+                arrays.update({f"{name}/rows": np.column_stack([m.lengths, np.degrees(m.rotations), np.degrees(
+                    np.append(m.angles, 0.0)), np.append(m.radii, 0.0)]), f"{name}/pts": pts,
+                    f"{name}/rp": m.pipe_radius, f"{name}/start": m.start, f"{name}/frame": m.frame})
+        cases = os.path.join(tmp, "cases.npz")
+        np.savez(cases, **arrays)
+        before_code = os.path.join(tmp, "before")
+        os.makedirs(before_code)
+        archive = subprocess.run(["git", "-C", repo, "archive", ref, "plantsolve"], capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", before_code], input=archive.stdout, check=True)
+        sides = {}
+        for side, code in ((f"before ({ref})", before_code), ("after (this tree)", "")):
+            env = {**os.environ, "TUBE_BENCH_CODE": code}
+            out = subprocess.run([sys.executable, __file__, "--solve-cases", cases], capture_output=True, text=True,
+                                 check=True, env=env)
+            sides[side] = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+    print(f"before / after: {n_tubes} tubes per family, 6000 points; CPU s = time.process_time() of the solve "
+          "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
+          "bend count")
+    print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
+          "| worst angle err | CPU s median / worst |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for fam in fams:
+        for side, rows in sides.items():
+            rows = [r for r in rows if r["case"].startswith(fam + "-")]
+            ok = [r for r in rows if r["got"] == truth_n[r["case"]]]
+            worst = {key: max((r[key] for r in ok if r[key] is not None), default=None)
+                     for key in ("radius", "radius_big", "angle")}
+            pct = {key: f"{100 * v:.1f} %" if v is not None else "n/a" for key, v in worst.items()}
+            cpu = np.array([r["cpu"] for r in rows])
+            print(f"| {fam} | {side} | {len(ok)}/{len(rows)} = {100 * len(ok) / max(len(rows), 1):.0f} % "
+                  f"| {pct['radius']} | {pct['radius_big']} "
+                  f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
+                  f"| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
@@ -234,7 +326,17 @@ def main():
     ap.add_argument("--families", type=int, help="only the hard scenario families, this many tubes each")
     ap.add_argument("--radius-models", default="auto",
                     help="comma-separated bend radius models for the families (auto, per_bend, common)")
+    ap.add_argument("--before-after", type=int, metavar="N",
+                    help="every family, N tubes each, with the solver of --ref and this tree's (same samples)")
+    ap.add_argument("--ref", default="main", help="git revision of the 'before' solver (default main)")
+    ap.add_argument("--solve-cases", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.solve_cases:
+        solve_cases(a.solve_cases)
+        return
+    if a.before_after:
+        before_after(a.before_after, a.ref)
+        return
     if a.families:
         families(a.families, tuple(a.radius_models.split(",")))
         return

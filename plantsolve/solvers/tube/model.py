@@ -186,6 +186,22 @@ def control_polygon(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
     return np.array(pts), np.array(clr)
 
 
+def with_radii(model: TubeModel, radii) -> TubeModel:
+    """The model with other bend radii and the same control polygon: each straight shortened by the growth
+    of its bends' tangent lengths R tan(θ/2) (bends of 170° or more, whose corner lies far off, keep their
+    straights). A radius changed on its own moves everything after the bend by the change in its arc's
+    chord, which a least-squares start many radii off can only partly undo."""
+    m = model.copy()
+    radii = np.asarray(radii, float)
+    grow = np.where(m.angles < np.radians(170.0), (radii - m.radii) * np.tan(m.angles / 2), 0.0)
+    m.lengths = m.lengths.copy()
+    m.lengths[:-1] -= grow
+    m.lengths[1:] -= grow
+    m.lengths = np.maximum(m.lengths, 0.0)
+    m.radii = radii.copy()
+    return m
+
+
 def model_from_control_polygon(pts: np.ndarray, clr: np.ndarray, pipe_radius: float = 0.0) -> TubeModel:
     """XYZ + CLR → LRA (bends below 180°). Inverse of :func:`control_polygon`."""
     pts = np.asarray(pts, float)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.solvers.geometry import rotate_about, wrap_angle
-from plantsolve.solvers.tube.model import TubeModel
+from plantsolve.solvers.tube.model import TubeModel, control_polygon, model_from_control_polygon
 
 
 def without_bend(model: TubeModel, k: int) -> TubeModel:
@@ -54,6 +54,33 @@ def merged(model: TubeModel, k: int) -> TubeModel:
     m.rotations = np.delete(rots, k + 1)
     m.angles = np.concatenate([m.angles[:k], [min(a, 2 * np.pi - 1e-3)], m.angles[k + 2:]])
     m.radii = np.concatenate([m.radii[:k], [R], m.radii[k + 2:]])
+    return m
+
+
+def merged_at_corner(model: TubeModel, k: int) -> TubeModel:
+    """Bends k and k+1 as one arc tangent to the straight before k and the one after k+1: the two corners of
+    the control polygon replaced by the point where those lines meet (nearest point of the two lines), the
+    radius as in :func:`merged`. Every other corner stays, so the tube after the pair does not move, as it
+    does when the straight between the two arcs is dropped (:func:`merged`, also used when a bend of 170° or
+    more has no corner)."""
+    if np.any(model.angles >= np.radians(170.0)):
+        return merged(model, k)
+    pts, clr = control_polygon(model)
+    a, b = pts[k + 1], pts[k + 2]
+    u = (a - pts[k]) / max(np.linalg.norm(a - pts[k]), 1e-300)
+    v = (pts[k + 3] - b) / max(np.linalg.norm(pts[k + 3] - b), 1e-300)
+    w = a - b
+    den = 1.0 - float(u @ v) ** 2
+    if den < 1e-12:
+        return merged(model, k)
+    s = (float(u @ v) * float(v @ w) - float(u @ w)) / den
+    t = (float(v @ w) - float(u @ v) * float(u @ w)) / den
+    corner = 0.5 * ((a + s * u) + (b + t * v))
+    m = model_from_control_polygon(np.vstack([pts[:k + 1], corner, pts[k + 3:]]),
+                                   np.concatenate([clr[:k], [merged(model, k).radii[k]], clr[k + 2:]]), model.pipe_radius)
+    if not np.all(np.isfinite(m.lengths)) or m.lengths[1:-1].min(initial=0.0) < -model.pipe_radius:
+        return merged(model, k)
+    m.lengths = np.maximum(m.lengths, 0.0)
     return m
 
 
@@ -198,3 +225,56 @@ def split_by_evidence(model: TubeModel, refit, scale: float, max_tries: int = 8)
             if tries >= max_tries:
                 break
     return model, changes
+
+
+def off_die(model: TubeModel, factor: float = 3.0) -> list[int]:
+    """Bends whose radius is more than ``factor`` times off the die the other bends share (the median of
+    their radii), farthest first. A bender has few dies; such a radius is what a fit gives a bend that
+    the samples do not hold (a sliver left by a split, half of a bend cut in two)."""
+    n = model.n_bends
+    if n < 2:
+        return []
+    off = [(abs(float(np.log(model.radii[k] / np.median(np.delete(model.radii, k))))), k) for k in range(n)]
+    return [k for d, k in sorted(off, reverse=True) if d > np.log(factor)]
+
+
+def recheck_candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]:
+    """The model without each off-die bend (:func:`off_die`) of under 20 degrees, and with each off-die bend
+    merged into a neighbour it touches (a straight shorter than half a pipe radius, or ε, between)."""
+    out, seen = [], set()
+    n = model.n_bends
+    for k in off_die(model):
+        if model.angles[k] < np.radians(20):
+            out.append(("remove", k, without_bend(model, k)))
+        for j in (k - 1, k):
+            if 0 <= j < n - 1 and j not in seen and model.lengths[j + 1] < max(eps, 0.5 * model.pipe_radius):
+                seen.add(j)
+                out.append(("merge", j, merged_at_corner(model, j)))
+    return out
+
+
+def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6):
+    """Every split and merge decision taken on the subsample, re-checked on the final fit: an off-die bend
+    is removed or merged into its neighbour when the Bayesian information criterion of the refitted model
+    with one bend fewer is no worse (``bic(model)``: the same samples for every model). ``fitted`` and
+    ``refit(model)`` are tuples whose first item is the model (the rest travels with it). Returns the
+    kept tuple and the changes."""
+    model = fitted[0]
+    b = bic(model)
+    changes = []
+    tries = 0
+    improved = True
+    while improved and tries < max_tries:
+        improved = False
+        for kind, k, cand in recheck_candidates(model, eps):
+            tries += 1
+            out = refit(cand)
+            bc = bic(out[0])
+            if bc <= b:
+                changes.append({"change": kind, "bend": k + 1, "bic_before": b, "bic_after": bc})
+                fitted, model, b = out, out[0], bc
+                improved = True
+                break
+            if tries >= max_tries:
+                break
+    return fitted, changes

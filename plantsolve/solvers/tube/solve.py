@@ -20,7 +20,8 @@ from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segme
 from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
-from plantsolve.solvers.tube.model import TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
+                                          with_radii)
 from plantsolve.solvers.tube.inspection import inspect
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.scan import TubeScan
@@ -291,6 +292,10 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         changes = changes + splits
     st.stage(0.75, 0.8, "least-squares fit")
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
+    if model.n_bends > 1 and mode == "free":
+        (model, lm_info, thr, sig), rechecked = recheck_on_final_fit(model, pts_sub, thr, margin, opts, rounds,
+                                                                     lm_info, sig, eps_used)
+        changes = changes + rechecked
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
     final_mode: dict = {}
     if model.n_bends and not opts.bend_radius:
@@ -311,6 +316,21 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes, radius)
 
 
+def recheck_on_final_fit(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
+                         lm_info: dict, sig: float, eps: float):
+    """The bend count re-checked on the final fit (``prune.recheck_by_bic``): BIC n ln(RSS/n) + p ln n over
+    the samples within the threshold of the fit so far, each candidate refitted as that fit was."""
+    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
+    N = int(keep.sum())
+
+    def bic(m: TubeModel) -> float:
+        r = fit.assign(m, P[keep], margin)[0]
+        p = fit.Layout(m.n_bends, "free", None, opts.pipe_radius is None).size
+        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
+
+    return prune.recheck_by_bic((model, lm_info, thr, sig), lambda m: rounds(m, P, thr, 2, 30), bic, eps)
+
+
 def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:
     """The split of the bends' radii into two groups (in log radius) with the least within-group spread,
     each bend weighted by the information the samples hold on its radius (1 / sigma^2), so that a bend
@@ -326,6 +346,20 @@ def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:
     dies = np.zeros(len(radii), dtype=int)
     dies[order[cut:]] = 1
     return tuple(int(d) for d in dies)
+
+
+def _common_starts(model: TubeModel, weight: np.ndarray) -> list[float]:
+    """Start values of one shared radius: the weighted one (``_shared_radius``), and the median radius of the
+    bends of 20 degrees or more when it differs by over 5 %. The sigmas of bends of a few degrees can be as
+    spurious as their radii (a sharp side minimum): three such bends can pull the weighted start twice the
+    die off, and the shared fit stops in a minimum far above the per-bend one."""
+    starts = [_shared_radius(model.radii, weight)]
+    big = model.angles >= np.radians(20.0)
+    if big.any():
+        r_big = float(np.median(model.radii[big]))
+        if abs(np.log(r_big / starts[0])) > 0.05:
+            starts.append(r_big)
+    return starts
 
 
 def _shared_radius(radii: np.ndarray, weight: np.ndarray) -> float:
@@ -362,16 +396,21 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     free_layout = fit.Layout(n, "free", None, opts.pipe_radius is None)
     sd_free = fit.parameter_sigmas(model, P[keep], seg_free[keep], free_layout)["radii"]
     weight = 1.0 / np.maximum(sd_free / model.radii, 1e-9) ** 2
+    # a radius below the pipe radius is the folded inner wall's spurious minimum (see add_sigmas): its sharp
+    # sigma says nothing about the die, and as a start it would drag the shared radius down to it
+    weight[model.radii < model.pipe_radius] = 1e-12 * weight.max()
     if forced in ("auto", "common"):
-        m = model.copy()
-        m.radii = np.full(n, _shared_radius(model.radii, weight))
-        m, info, t2, _ = rounds(m, P, thr, 2, 30, "common")
-        candidates["common"] = (m, info, t2, {"radius_mode": "common"})
+        best = None
+        for r0 in _common_starts(model, weight):
+            m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
+            r = fit.assign(m, P, margin)[0][keep]
+            if best is None or float(r @ r) < best[0]:
+                best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
+        candidates["common"] = best[1]
     dies = _two_dies(model.radii, weight) if n >= 3 else ()
     if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
-        m = model.copy()
         die_arr = np.asarray(dies)
-        m.radii = np.array([_shared_radius(model.radii[die_arr == d], weight[die_arr == d]) for d in dies])
+        m = with_radii(model, [_shared_radius(model.radii[die_arr == d], weight[die_arr == d]) for d in dies])
         m, info, t2, _ = rounds(m, P, thr, 2, 30, "dies", dies)
         candidates["dies"] = (m, info, t2, {"radius_mode": "dies", "dies": dies})
     N = int(keep.sum())

@@ -130,7 +130,25 @@ def surface_samples(model: TubeModel, n: int, rng: np.random.Generator, view: np
     return pts[rng.permutation(len(pts))]
 
 
-__all__ = ["make_model", "random_tube", "surface_samples", "random_rotation", "clearance"]
+def small_bends_tube(rng: np.random.Generator, pipe_radius: float = 20.0, n_bends: int = 7, n_small: int = 3) -> TubeModel:
+    """Many bends on one die of 3 r, ``n_small`` of them only 3.6–5° (the others 15–90°), straights of
+    3–9 r between them and 6–9 r at the ends, bend planes turned at random; redrawn until the tube
+    clears itself by 2.5 r."""
+    r = float(pipe_radius)
+    while True:
+        ang = rng.uniform(15.0, 90.0, size=n_bends)
+        ang[rng.choice(n_bends, n_small, replace=False)] = rng.uniform(3.6, 5.0, size=n_small)
+        lengths = rng.uniform(3.0, 9.0, size=n_bends + 1) * r
+        lengths[[0, -1]] = rng.uniform(6.0, 9.0, size=2) * r
+        rot = rng.uniform(-180.0, 180.0, size=n_bends + 1)
+        rot[[0, -1]] = 0.0
+        rows = np.column_stack([lengths, rot, np.append(ang, 0.0), np.append(np.full(n_bends, 3.0 * r), 0.0)])
+        m = make_model(rows, r, start=rng.normal(size=3) * 10 * r, frame=random_rotation(rng))
+        if clearance(m) > 2.5:
+            return m
+
+
+__all__ = ["make_model", "random_tube", "surface_samples", "random_rotation", "clearance", "small_bends_tube"]
 
 
 def example() -> dict:

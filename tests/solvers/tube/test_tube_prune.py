@@ -61,3 +61,43 @@ def test_merge_folds_the_dropped_rotation_into_the_next_bend():
     mm = prune.merged(m, 0)
     assert mm.n_bends == 2
     np.testing.assert_allclose(np.degrees(mm.rotations), [0, 35, 0], atol=1e-12)
+
+
+def test_off_die_bends_are_the_ones_far_from_the_others_radius():
+    m = make_model([[30, 0, 40, 12], [20, 10, 0.2, 4000], [0.5, 0, 3, 1.5], [20, 30, 60, 13], [25, 0, 0, 0]], 2.0)
+    assert prune.off_die(m) == [1, 2]
+    kinds = {(kind, k) for kind, k, _ in prune.recheck_candidates(m, 0.1)}
+    # both slivers can go, and they touch each other (0.25 r of straight between): merged once
+    assert kinds == {("remove", 1), ("remove", 2), ("merge", 1)}
+
+
+def test_recheck_keeps_a_removal_only_when_bic_is_no_worse():
+    m = make_model([[30, 0, 40, 12], [20, 10, 0.2, 4000], [25, 0, 0, 0]], 2.0)
+    def refit(cand):
+        return cand, "info"
+
+    kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: -100.0 * x.n_bends, 0.1)
+    assert kept[0].n_bends == 2 and changes == []
+    kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: 10.0 * x.n_bends, 0.1)
+    assert kept[0].n_bends == 1 and changes[0]["change"] == "remove" and changes[0]["bend"] == 2
+
+
+def test_new_radii_keep_the_control_polygon():
+    from plantsolve.solvers.tube.model import control_polygon, with_radii
+
+    m = make_model([[30, 0, 40, 12], [20, 70, 25, 12], [25, -40, 90, 9], [25, 0, 0, 0]], 2.0)
+    m2 = with_radii(m, [5.0, 30.0, 11.0])
+    np.testing.assert_allclose(m2.radii, [5.0, 30.0, 11.0])
+    np.testing.assert_allclose(control_polygon(m2)[0], control_polygon(m)[0], atol=1e-9)
+
+
+def test_merge_at_the_corner_keeps_the_lines_before_and_after():
+    """Two coplanar arcs with a straight between become one arc tangent to the outer straights: the tube
+    after them stays where it was (the corner where those straights meet is the merged bend's)."""
+    from plantsolve.solvers.tube.model import control_polygon
+
+    pair = make_model([[30, 0, 2.5, 10], [6, 0, 2.3, 100], [20, 40, 60, 12], [25, 0, 0, 0]], 2.0)
+    one = prune.merged_at_corner(pair, 0)
+    assert one.n_bends == 2
+    np.testing.assert_allclose(np.degrees(one.angles), [4.8, 60.0], atol=1e-9)
+    np.testing.assert_allclose(control_polygon(one)[0][[0, 2, 3]], control_polygon(pair)[0][[0, 3, 4]], atol=1e-9)
