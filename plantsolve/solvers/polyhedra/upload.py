@@ -13,7 +13,10 @@ coordinate system), ``BuildingSurface:Detailed``, ``Wall:Detailed``, ``RoofCeili
 ``Floor:Detailed`` (with or without the Space Name field of EnergyPlus 9.6+) and
 ``FenestrationSurface:Detailed`` (windows and doors, as subsurfaces of their host; with or
 without the Shading Control Name field of EnergyPlus before 9.0). Interzone surfaces are written
-once per zone; the solver pairs coincident faces of different zones as adjacency.
+once per zone; the solver pairs coincident faces of different zones as adjacency. The simple-geometry
+rectangles (``Wall:Exterior`` … ``Floor:Interzone``, ``Window`` … ``GlazedDoor:Interzone``) are built as
+EnergyPlus builds them (``idf_rectangles``), in zone coordinates unless GlobalGeometryRules' Rectangular
+Surface Coordinate System says World.
 
 OBJ: ``v`` vertices, ``f`` faces (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``; negative indices count
 back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` continues a line;
@@ -36,6 +39,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
@@ -179,7 +183,16 @@ def parse_idf(text: str) -> dict:
                         "reason": "the file ends inside this object (no closing ';'): not read"})
         warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
                                        object=label).model_dump())
-    clockwise, relative = False, False
+    return surfaces_from_objects(objects, skipped, warnings, "idf")
+
+
+def _where(line: int | None) -> str:
+    return f" (line {line})" if line else ""
+
+
+def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warnings: list[dict], fmt: str) -> dict:
+    """The request body of EnergyPlus' objects (from an IDF or an epJSON file, fields in IDD order)."""
+    clockwise, relative, rect_relative = False, False, True
     zones: dict[str, tuple[float, float, float, float]] = {}
     zone_names: dict[str, str] = {}
     for cls, fields, lines, line in objects:
@@ -188,6 +201,9 @@ def parse_idf(text: str) -> dict:
                 clockwise = True
             if len(fields) > 2 and fields[2].strip().lower() == "relative":
                 relative = True
+            # the simple-geometry rectangles have their own field, Relative unless it says World
+            if len(fields) > 4 and fields[4].strip().lower() == "world":
+                rect_relative = False
         elif cls == "zone" and fields and fields[0]:
             try:
                 values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
@@ -217,7 +233,7 @@ def parse_idf(text: str) -> dict:
                 if relative and zone_key in zones:
                     points = _to_world(points, zones[zone_key])
                 if name.lower() in face_line:
-                    raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+                    raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
                 skipped.append({"line": line, "object": label, "reason": str(e)})
                 continue
@@ -225,38 +241,65 @@ def parse_idf(text: str) -> dict:
             faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "zones": [zone]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
-        elif cls == "fenestrationsurface:detailed":
-            windows.append((fields, lines, line))
+        elif cls in SIMPLE_SURFACES:
+            name = fields[0] if fields else ""
+            label = f"{cls} {name!r}"
+            try:
+                if not name:
+                    raise ValueError("no name")
+                zone, points = base_surface(cls, fields)
+                zone_key = zone.lower()
+                if rect_relative and zone_key in zones:
+                    points = _to_world(points, zones[zone_key])
+                if name.lower() in face_line:
+                    raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+            except ValueError as e:
+                skipped.append({"line": line, "object": label, "reason": str(e)})
+                continue
+            faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
+            face_line[name.lower()] = line
+            surface_zone[name.lower()] = zone_key
+        elif cls == "fenestrationsurface:detailed" or cls in SIMPLE_SUBSURFACES:
+            windows.append((cls, fields, lines, line))
     by_name = {f["id"].lower(): f["id"] for f in faces}
-    for fields, lines, line in windows:
+    loops = {f["id"].lower(): f["loops"][0] for f in faces}
+    for cls, fields, lines, line in windows:
         name = fields[0] if fields else ""
-        label = f"fenestrationsurface:detailed {name!r}"
+        label = f"{cls} {name!r}"
+        host = 3 if cls == "fenestrationsurface:detailed" else 2
         try:
             if not name:
                 raise ValueError("no name")
-            if len(fields) < 4 or fields[3].lower() not in by_name:
-                raise ValueError(f"its building surface {fields[3] if len(fields) > 3 else ''!r} is not a surface "
-                                 "read from this file")
-            n_index = _fenestration_layout(fields)
-            points = _vertices(fields, lines, n_index)
-            zone_key = surface_zone[fields[3].lower()]
-            if relative and zone_key in zones:
-                points = _to_world(points, zones[zone_key])
+            if len(fields) <= host or fields[host].lower() not in by_name:
+                raise ValueError(f"its building surface {fields[host] if len(fields) > host else ''!r} is not a "
+                                 "surface read from this file")
+            if cls in SIMPLE_SUBSURFACES:  # placed on its host, already in world coordinates
+                points = subsurface(cls, fields, loops[fields[host].lower()])
+            else:
+                n_index = _fenestration_layout(fields)
+                points = _vertices(fields, lines, n_index)
+                zone_key = surface_zone[fields[host].lower()]
+                if relative and zone_key in zones:
+                    points = _to_world(points, zones[zone_key])
+                if clockwise:
+                    points = points[::-1]
             if name.lower() in face_line:
-                raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+                raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
         except ValueError as e:
             skipped.append({"line": line, "object": label, "reason": str(e)})
             continue
-        faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "parent": by_name[fields[3].lower()]})
+        faces.append({"id": name, "loops": [points], "parent": by_name[fields[host].lower()]})
         face_line[name.lower()] = line
     if not any("parent" not in f for f in faces):
         first = skipped[0] if skipped else None
-        where = ("file", "line", first["line"]) if first else ("file",)
-        reason = (f"no usable surface: {first['object']} (line {first['line']}): {first['reason']}" if first else
-                  "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed or Floor:Detailed object")
+        where = (("file", "line", first["line"]) if first["line"] else ("file", first["object"])) if first else \
+            ("file",)
+        reason = (f"no usable surface: {first['object']}{_where(first['line'])}: {first['reason']}" if first else
+                  "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed, Floor:Detailed or simple-geometry "
+                  "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     return {"units": "m", "faces": faces,
-            "source": {"format": "idf", "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
+            "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",
                        "coordinates": "relative" if relative else "world", "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
