@@ -1,4 +1,4 @@
-"""Files the zones come in: EnergyPlus IDF, Wavefront OBJ, STL, or a JSON request.
+"""Files the zones come in: EnergyPlus IDF or epJSON, Wavefront OBJ, STL, or a JSON request.
 
 Item by item: an object that cannot be read (a vertex that is not a number, a window whose host
 surface does not exist, a face with fewer than three vertices) is skipped and listed in the
@@ -23,6 +23,8 @@ back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` con
 everything else (``vn``, ``vt``, ``usemtl``, ``mtllib``, ``s``, ``l``) is ignored. SketchUp and
 Revit write unwelded, triangulated faces: coincident vertices are merged by the solver.
 
+epJSON (``.epJSON``): the same objects in EnergyPlus' JSON form (``epjson``), read by the IDF reader.
+
 STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
 ``t1``, ``t2``, … in file order).
 """
@@ -39,11 +41,12 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.polyhedra.epjson import epjson_objects
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
-UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
+UPLOAD_EXTENSIONS = (".idf", ".epjson", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
 
@@ -113,7 +116,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
     while coords and coords[-1] == "":
         coords.pop()
     if len(coords) % 3:
-        raise ValueError(f"{len(coords)} coordinates after 'Number of Vertices' (line {lines[n_index]}): not a "
+        raise ValueError(f"{len(coords)} coordinates after 'Number of Vertices'{_where(lines[n_index])}: not a "
                          "multiple of 3")
     count = fields[n_index].strip().lower()
     if count not in ("", "autocalculate"):
@@ -128,7 +131,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
         try:
             points.append([_number(c) for c in coords[k:k + 3]])
         except ValueError as e:
-            raise ValueError(f"vertex {k // 3 + 1} (line {lines[n_index + 1 + k]}): {e}") from None
+            raise ValueError(f"vertex {k // 3 + 1}{_where(lines[n_index + 1 + k])}: {e}") from None
     if len({tuple(p) for p in points}) < 3:
         raise ValueError(f"{len({tuple(p) for p in points})} distinct vertices; a surface needs at least 3")
     return points
@@ -314,6 +317,13 @@ def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]
     return [[x * c - y * s + x0, x * s + y * c + y0, z + z0] for x, y, z in points]
 
 
+def parse_epjson(text: str) -> dict:
+    objects, skipped = epjson_objects(text)
+    if not objects and not skipped:
+        raise reject("no EnergyPlus surface object (BuildingSurface:Detailed, Wall:Exterior, …) in this epJSON file")
+    return surfaces_from_objects(objects, skipped, [], "epjson")
+
+
 def parse_obj(text: str) -> dict:
     vertices: list[list[float]] = []
     faces: list[dict] = []
@@ -453,7 +463,7 @@ def parse_stl(content: bytes) -> dict:
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
-    """An IDF, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
+    """An IDF, epJSON, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
     form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
     content = source.read()
     if not content.strip():
@@ -462,7 +472,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
         body = parse_stl(content)
     else:
         text = decode_text(content)
-        body = {".idf": parse_idf, ".obj": parse_obj}.get(source.extension, json_object)(text)
+        body = {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(source.extension, json_object)(text)
     try:
         return validated_upload(PolyhedraRequest, body, options)
     except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file
