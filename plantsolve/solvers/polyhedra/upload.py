@@ -1,4 +1,4 @@
-"""Files the zones come in: EnergyPlus IDF or epJSON, gbXML, Wavefront OBJ, STL, or a JSON request.
+"""Files the zones come in: EnergyPlus IDF or epJSON, gbXML, IFC spaces, Wavefront OBJ, STL, or a JSON request.
 
 Item by item: an object that cannot be read (a vertex that is not a number, a window whose host
 surface does not exist, a face with fewer than three vertices) is skipped and listed in the
@@ -27,6 +27,8 @@ epJSON (``.epJSON``): the same objects in EnergyPlus' JSON form (``epjson``), re
 
 gbXML (``.xml``, ``.gbxml``): ``Campus/Surface`` PolyLoops with their AdjacentSpaceIds (``gbxml``).
 
+IFC: ``IfcSpace`` bodies tessellated by IfcOpenShell (``ifc_spaces``), with their base quantities.
+
 STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
 ``t1``, ``t2``, … in file order).
 """
@@ -45,11 +47,12 @@ from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.polyhedra.epjson import epjson_objects
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
+from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
-UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".obj", ".stl", ".json")
+UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
 
@@ -466,7 +469,7 @@ def parse_stl(content: bytes) -> dict:
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
-    """An IDF, epJSON, gbXML, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
+    """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
     form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
     content = source.read()
     if not content.strip():
@@ -475,6 +478,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
         body = parse_stl(content)
     elif source.extension in (".xml", ".gbxml"):
         body = parse_gbxml(content)
+    elif source.extension == ".ifc":
+        body = parse_ifc(content)
     else:
         text = decode_text(content)
         body = {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(source.extension, json_object)(text)
