@@ -154,7 +154,7 @@ def parse_gbxml(content: bytes) -> dict:
     spaces: dict[str, ET.Element] = {}
     for campus in campuses:
         for building in _children(campus, "Building"):
-            for space in _children(building, "Space"):
+            for space in (e for e in building.iter() if _local(e.tag) == "Space"):
                 sid = (space.get("id") or "").strip()
                 if not sid:
                     skipped.append({"line": lines.get(id(space)), "object": "Space", "reason": "no id"})

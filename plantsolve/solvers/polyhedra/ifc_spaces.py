@@ -1,6 +1,6 @@
 """IFC spaces (``IfcSpace``) as zones: each space's body tessellated by IfcOpenShell's geometry kernel
 in world coordinates and metres (its triangles are the zone's faces, ``<zone> t1``, ``t2``, …; coplanar
-triangles are fine for the volume), compared with the space's own ``Qto_SpaceBaseQuantities``.
+triangles are fine for the volume), compared with the space's own ``Qto_SpaceBaseQuantities`` (IFC2X3 exporters' ``BaseQuantities``).
 
 Zones are named by the space's ``Name`` (its ``GlobalId`` when the name is missing or not unique);
 ``source.spaces`` lists GlobalId, Name and LongName. A space the kernel cannot tessellate, or without a
@@ -89,7 +89,9 @@ def parse_ifc(content: bytes) -> dict:
     for s in spaces:
         if s.id() not in shaped:
             continue
-        qto = ifcopenshell.util.element.get_psets(s, qtos_only=True).get("Qto_SpaceBaseQuantities") or {}
+        sets = ifcopenshell.util.element.get_psets(s, qtos_only=True)
+        # IFC2X3 exporters (Revit, ArchiCAD) name the set "BaseQuantities"
+        qto = sets.get("Qto_SpaceBaseQuantities") or sets.get("BaseQuantities") or {}
         volume = _quantity(qto, "NetVolume", "GrossVolume")
         floor = _quantity(qto, "NetFloorArea", "GrossFloorArea")
         entry, used = {}, {}

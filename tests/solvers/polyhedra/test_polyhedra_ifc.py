@@ -42,3 +42,10 @@ def test_ifc_without_spaces_or_geometry_is_refused():
         parse_upload(StoredInput.from_bytes("a.ifc", no_spaces.encode()), None)
     with pytest.raises(InputRejected, match="unreadable IFC file"):
         parse_upload(StoredInput.from_bytes("a.ifc", b"ISO-10303-21;\nHEADER;\ngarbage"), None)
+
+
+def test_ifc2x3_exporters_base_quantities_set_is_read_too():
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text().replace("'Qto_SpaceBaseQuantities'", "'BaseQuantities'")
+    assert "'BaseQuantities'" in text
+    request = parse_upload(StoredInput.from_bytes("a.ifc", text.encode()), None)
+    assert request.source["declared"]["101"] == {"volume": pytest.approx(60.0), "floor_area": pytest.approx(20.0)}
