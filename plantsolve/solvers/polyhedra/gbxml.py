@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from xml.parsers import expat
 from typing import Any
+from xml.parsers import expat
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
