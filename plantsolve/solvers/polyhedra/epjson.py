@@ -28,7 +28,8 @@ _WINDOW = ("construction_name", "building_surface_name", "frame_and_divider_name
 _INTERZONE_SUB = ("construction_name", "building_surface_name", "outside_boundary_condition_object", "multiplier",
                   *_SUB)
 FIELDS: dict[str, tuple[str, ...]] = {
-    "zone": ("direction_of_relative_north", "x_origin", "y_origin", "z_origin"),
+    "zone": ("direction_of_relative_north", "x_origin", "y_origin", "z_origin", "type", "multiplier",
+             "ceiling_height", "volume", "floor_area"),
     "buildingsurface:detailed": ("surface_type", *_DETAILED),
     "wall:detailed": _DETAILED,
     "roofceiling:detailed": _DETAILED,

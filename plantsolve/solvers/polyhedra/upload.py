@@ -203,6 +203,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     """The request body of EnergyPlus' objects (from an IDF or an epJSON file, fields in IDD order)."""
     clockwise, relative, rect_relative = False, False, True
     zones: dict[str, tuple[float, float, float, float]] = {}
+    declared: dict[str, dict[str, float]] = {}
     zone_names: dict[str, str] = {}
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
@@ -221,6 +222,17 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 values = [0.0] * 4
             zones[fields[0].lower()] = tuple(values)
             zone_names[fields[0].lower()] = fields[0]
+            # Volume and Floor Area (fields 9 and 10) when the file gives numbers, not autocalculate
+            claim = {}
+            for key, index in (("volume", 8), ("floor_area", 9)):
+                try:
+                    value = _number(fields[index]) if index < len(fields) else 0.0
+                except ValueError:
+                    continue
+                if value > 0:
+                    claim[key] = value
+            if claim:
+                declared[fields[0]] = claim
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
@@ -307,10 +319,14 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed, Floor:Detailed or simple-geometry "
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
+    used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     return {"units": "m", "faces": faces,
             "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",
-                       "coordinates": "relative" if relative else "world", "skipped": skipped[:MAX_SKIPPED_LISTED],
+                       "coordinates": "relative" if relative else "world",
+                       "declared": {zone_names.get(k.lower(), k): v for k, v in declared.items()
+                                    if k.lower() in used_zones},
+                       "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
 
 

@@ -125,3 +125,16 @@ def test_bad_simple_objects_are_skipped_naming_line_and_reason():
     with pytest.raises(InputRejected) as e:
         upload("bad.idf", b"Zone,Z;\nRoof,BadRoof,C,Z,180,0,0,0,x,4,3;\n")
     assert e.value.errors[0].loc == ("file", "line", 2) and "Starting Z Coordinate" in e.value.errors[0].msg
+
+
+def test_zone_volume_and_floor_area_given_in_the_file_are_compared():
+    header = ("GlobalGeometryRules,UpperLeftCorner,Counterclockwise,World;\n"
+              "Zone,Z,0,0,0,0,1,1,autocalculate,30,13.2;")  # 30 m3 right, 13.2 m2 of floor (12 measured) wrong
+    result = solve(upload("box.idf", _box(header).encode())).result
+    (row,) = result.report.details["declared_comparison"]
+    assert row["declared_volume"] == 30 and row["volume_difference"] == pytest.approx(0.0)
+    assert row["floor_area"] == pytest.approx(12.0) and row["floor_area_difference"] == pytest.approx(12 / 13.2 - 1)
+    (warning,) = [w for w in result.report.warnings if w.code == "declared_measures_differ"]
+    assert warning.details["zones"] == ["Z"]
+    autocalculated = upload("box.idf", _box("Zone,Z,0,0,0,0,1,1,autocalculate,autocalculate;").encode())
+    assert autocalculated.source["declared"] == {}
