@@ -3,6 +3,7 @@
     python bench/polyhedra.py            # 10, 100, 1,000-zone buildings and a 1,000,000-triangle torus
     python bench/polyhedra.py --quick    # 10 and 100 zones, a 100,000-triangle torus
     python bench/polyhedra.py --before /work/main   # also the code of another checkout (its .venv), same run
+    python bench/polyhedra.py --formats-only     # the same rooms read from each upload format
 
 Prints per generated building (floors x rooms, a window subsurface on every exterior wall; the
 "paneled" one has every wall and slab split 4 x 4, 53,200 faces): zones, faces, time of the
@@ -264,14 +265,87 @@ def mesh(n_major, n_minor):
           f"closed={closed}, genus={genus}, darts={an.gmap.n_darts:,}")
 
 
+def _rooms(n_x: int, n_y: int, height: float = 3.0, size: float = 5.0):
+    """A one-storey grid of size x size x height rooms: (zone, name, azimuth, tilt, start, length, height) of
+    every rectangle, in world coordinates; shared walls written once per room, as EnergyPlus has them."""
+    for i in range(n_x):
+        for j in range(n_y):
+            x, y, zone = i * size, j * size, f"R{i}_{j}"
+            yield zone, f"{zone} S", 180, 90, (x, y, 0), size, height
+            yield zone, f"{zone} E", 90, 90, (x + size, y, 0), size, height
+            yield zone, f"{zone} N", 0, 90, (x + size, y + size, 0), size, height
+            yield zone, f"{zone} W", 270, 90, (x, y + size, 0), size, height
+            yield zone, f"{zone} F", 90, 180, (x, y, 0), size, size
+            yield zone, f"{zone} C", 180, 0, (x, y, height), size, size
+
+
+def format_texts(n_x: int, n_y: int) -> dict[str, tuple[str, bytes]]:
+    """The same rooms as a detailed IDF (the reader before this work), a simple-geometry IDF, its epJSON
+    and a gbXML file (each room's faces as Surfaces of one space)."""
+    from plantsolve.solvers.polyhedra.idf_rectangles import rectangle  # noqa: PLC0415
+
+    rules = "GlobalGeometryRules,UpperLeftCorner,Counterclockwise,World,World,World;\n"
+    detailed, simple, epjson, gb = [rules], [rules], {"GlobalGeometryRules": {"g": {
+        "starting_vertex_position": "UpperLeftCorner", "vertex_entry_direction": "Counterclockwise",
+        "coordinate_system": "World", "rectangular_surface_coordinate_system": "World"}}}, []
+    classes = {"S": "Wall:Exterior", "E": "Wall:Exterior", "N": "Wall:Exterior", "W": "Wall:Exterior",
+               "F": "Floor:GroundContact", "C": "Roof"}
+    for zone, name, az, tilt, start, length, height in _rooms(n_x, n_y):
+        points = rectangle(az, tilt, np.array(start, dtype=float), length, height)
+        coords = ",".join(f"{c:g}" for p in points for c in p)
+        detailed.append(f"BuildingSurface:Detailed,{name},Wall,C,{zone},Outdoors,,SunExposed,WindExposed,,4,{coords};\n")
+        cls = classes[name[-1]]
+        simple.append(f"{cls},{name},C,{zone},{az},{tilt},{start[0]},{start[1]},{start[2]},{length},{height};\n")
+        key = "height" if cls.startswith("Wall") else "width"
+        epjson.setdefault(cls, {})[name] = {"zone_name": zone, "azimuth_angle": az, "tilt_angle": tilt,
+                                            "starting_x_coordinate": start[0], "starting_y_coordinate": start[1],
+                                            "starting_z_coordinate": start[2], "length": length, key: height}
+        loop = "".join("<CartesianPoint>" + "".join(f"<Coordinate>{c:g}</Coordinate>" for c in p) + "</CartesianPoint>"
+                       for p in points)
+        gb.append(f'<Surface id="{name}" surfaceType="ExteriorWall"><AdjacentSpaceId spaceIdRef="{zone}"/>'
+                  f"<PlanarGeometry><PolyLoop>{loop}</PolyLoop></PlanarGeometry></Surface>\n")
+    spaces = "".join(f'<Space id="R{i}_{j}"><Volume>75</Volume><Area>25</Area></Space>'
+                     for i in range(n_x) for j in range(n_y))
+    gbxml = (f'<?xml version="1.0"?>\n<gbXML xmlns="http://www.gbxml.org/schema" lengthUnit="Meters"><Campus id="c">'
+             f'<Building id="b">{spaces}</Building>\n{"".join(gb)}</Campus></gbXML>\n')
+    return {"IDF *:Detailed (before)": (".idf", "".join(detailed).encode()),
+            "IDF simple geometry": (".idf", "".join(simple).encode()),
+            "epJSON simple geometry": (".epJSON", json.dumps(epjson).encode()),
+            "gbXML": (".xml", gbxml.encode())}
+
+
+def formats(n_x: int, n_y: int) -> None:
+    """Reading the same rooms from each format, in this run: CPU seconds (best of 3) and peak memory of
+    the reader, and the solve of what it read (every room must close at 75 m³)."""
+    from plantsolve.solvers.base import StoredInput  # noqa: PLC0415
+    from plantsolve.solvers.polyhedra import parse_upload  # noqa: PLC0415
+
+    print(f"\n{n_x * n_y} rooms of 5 x 5 x 3 m, {6 * n_x * n_y} faces, in each format:\n")
+    print("| format | file [kB] | read CPU [s] | read peak [MiB] | solve CPU [s] | rooms closed at 75 m³ |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    for label, (ext, content) in format_texts(n_x, n_y).items():
+        def read(ext=ext, content=content):
+            return parse_upload(StoredInput.from_bytes(f"b{ext}", content), None)
+        t_read, request = timed(read)
+        mem = peak(read)
+        t_solve, result = timed(lambda request=request: solve(request).result, reps=1)
+        good = sum(1 for z in result.zones if z.volume is not None and abs(z.volume - 75) < 1e-6)
+        print(f"| {label} | {len(content) / 1000:.0f} | {t_read:.3f} | {mem:.1f} | {t_solve:.3f} | {good} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--before", type=Path, help="a checkout of other code (with its .venv) measured beside this one")
     parser.add_argument("--mesh-only", action="store_true", help="skip the buildings")
+    parser.add_argument("--formats-only", action="store_true", help="only the same rooms read from each format")
     args = parser.parse_args()
+    if args.formats_only:
+        formats(*((10, 10) if args.quick else (30, 30)))
+        return
     if not args.mesh_only:
         buildings(["10", "100"] if args.quick else list(BUILDINGS))
+        formats(*((10, 10) if args.quick else (30, 30)))
     size = (500, 100) if args.quick else (1000, 500)
     mesh(*size)
     checkouts = {"this": REPO, **({"before": args.before.resolve()} if args.before else {})}

@@ -19,6 +19,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
+from plantsolve.solvers.polyhedra.declared import compare, floor_areas
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
@@ -237,6 +238,13 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             warnings.append(skipped_lines(skipped, "object", count if isinstance(count, int) else None,
                                           code="objects_skipped"))
         warnings.extend(source_warnings(request.source))
+        if isinstance(request.source.get("declared"), dict) and request.source["declared"]:
+            floors = floor_areas(n_zones, poly.face_zones, poly.face_parent, area, normal)
+            rows, differ = compare(request.source["declared"], zones,
+                                   {poly.zone_ids[z]: float(floors[z]) for z in range(n_zones)})
+            details["declared_comparison"] = rows
+            if differ:
+                warnings.append(differ)
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")

@@ -1,4 +1,4 @@
-"""Files the zones come in: EnergyPlus IDF, Wavefront OBJ, STL, or a JSON request.
+"""Files the zones come in: EnergyPlus IDF or epJSON, gbXML, IFC spaces, Wavefront OBJ, STL, or a JSON request.
 
 Item by item: an object that cannot be read (a vertex that is not a number, a window whose host
 surface does not exist, a face with fewer than three vertices) is skipped and listed in the
@@ -13,12 +13,21 @@ coordinate system), ``BuildingSurface:Detailed``, ``Wall:Detailed``, ``RoofCeili
 ``Floor:Detailed`` (with or without the Space Name field of EnergyPlus 9.6+) and
 ``FenestrationSurface:Detailed`` (windows and doors, as subsurfaces of their host; with or
 without the Shading Control Name field of EnergyPlus before 9.0). Interzone surfaces are written
-once per zone; the solver pairs coincident faces of different zones as adjacency.
+once per zone; the solver pairs coincident faces of different zones as adjacency. The simple-geometry
+rectangles (``Wall:Exterior`` … ``Floor:Interzone``, ``Window`` … ``GlazedDoor:Interzone``) are built as
+EnergyPlus builds them (``idf_rectangles``), in zone coordinates unless GlobalGeometryRules' Rectangular
+Surface Coordinate System says World.
 
 OBJ: ``v`` vertices, ``f`` faces (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``; negative indices count
 back), ``g`` (or else ``o``) names the zone of the faces that follow; ``\\`` continues a line;
 everything else (``vn``, ``vt``, ``usemtl``, ``mtllib``, ``s``, ``l``) is ignored. SketchUp and
 Revit write unwelded, triangulated faces: coincident vertices are merged by the solver.
+
+epJSON (``.epJSON``): the same objects in EnergyPlus' JSON form (``epjson``), read by the IDF reader.
+
+gbXML (``.xml``, ``.gbxml``): ``Campus/Surface`` PolyLoops with their AdjacentSpaceIds (``gbxml``).
+
+IFC: ``IfcSpace`` bodies tessellated by IfcOpenShell (``ifc_spaces``), with their base quantities.
 
 STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
 ``t1``, ``t2``, … in file order).
@@ -36,10 +45,14 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.polyhedra.epjson import epjson_objects
+from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
+from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
+from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
-UPLOAD_EXTENSIONS = (".idf", ".obj", ".stl", ".json")
+UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
 
@@ -109,7 +122,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
     while coords and coords[-1] == "":
         coords.pop()
     if len(coords) % 3:
-        raise ValueError(f"{len(coords)} coordinates after 'Number of Vertices' (line {lines[n_index]}): not a "
+        raise ValueError(f"{len(coords)} coordinates after 'Number of Vertices'{_where(lines[n_index])}: not a "
                          "multiple of 3")
     count = fields[n_index].strip().lower()
     if count not in ("", "autocalculate"):
@@ -124,7 +137,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
         try:
             points.append([_number(c) for c in coords[k:k + 3]])
         except ValueError as e:
-            raise ValueError(f"vertex {k // 3 + 1} (line {lines[n_index + 1 + k]}): {e}") from None
+            raise ValueError(f"vertex {k // 3 + 1}{_where(lines[n_index + 1 + k])}: {e}") from None
     if len({tuple(p) for p in points}) < 3:
         raise ValueError(f"{len({tuple(p) for p in points})} distinct vertices; a surface needs at least 3")
     return points
@@ -179,8 +192,18 @@ def parse_idf(text: str) -> dict:
                         "reason": "the file ends inside this object (no closing ';'): not read"})
         warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
                                        object=label).model_dump())
-    clockwise, relative = False, False
+    return surfaces_from_objects(objects, skipped, warnings, "idf")
+
+
+def _where(line: int | None) -> str:
+    return f" (line {line})" if line else ""
+
+
+def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warnings: list[dict], fmt: str) -> dict:
+    """The request body of EnergyPlus' objects (from an IDF or an epJSON file, fields in IDD order)."""
+    clockwise, relative, rect_relative = False, False, True
     zones: dict[str, tuple[float, float, float, float]] = {}
+    declared: dict[str, dict[str, float]] = {}
     zone_names: dict[str, str] = {}
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
@@ -188,6 +211,9 @@ def parse_idf(text: str) -> dict:
                 clockwise = True
             if len(fields) > 2 and fields[2].strip().lower() == "relative":
                 relative = True
+            # the simple-geometry rectangles have their own field, Relative unless it says World
+            if len(fields) > 4 and fields[4].strip().lower() == "world":
+                rect_relative = False
         elif cls == "zone" and fields and fields[0]:
             try:
                 values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
@@ -196,6 +222,17 @@ def parse_idf(text: str) -> dict:
                 values = [0.0] * 4
             zones[fields[0].lower()] = tuple(values)
             zone_names[fields[0].lower()] = fields[0]
+            # Volume and Floor Area (fields 9 and 10) when the file gives numbers, not autocalculate
+            claim = {}
+            for key, index in (("volume", 8), ("floor_area", 9)):
+                try:
+                    value = _number(fields[index]) if index < len(fields) else 0.0
+                except ValueError:
+                    continue
+                if value > 0:
+                    claim[key] = value
+            if claim:
+                declared[fields[0]] = claim
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
@@ -217,7 +254,7 @@ def parse_idf(text: str) -> dict:
                 if relative and zone_key in zones:
                     points = _to_world(points, zones[zone_key])
                 if name.lower() in face_line:
-                    raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+                    raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
                 skipped.append({"line": line, "object": label, "reason": str(e)})
                 continue
@@ -225,40 +262,71 @@ def parse_idf(text: str) -> dict:
             faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "zones": [zone]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
-        elif cls == "fenestrationsurface:detailed":
-            windows.append((fields, lines, line))
+        elif cls in SIMPLE_SURFACES:
+            name = fields[0] if fields else ""
+            label = f"{cls} {name!r}"
+            try:
+                if not name:
+                    raise ValueError("no name")
+                zone, points = base_surface(cls, fields)
+                zone_key = zone.lower()
+                if rect_relative and zone_key in zones:
+                    points = _to_world(points, zones[zone_key])
+                if name.lower() in face_line:
+                    raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+            except ValueError as e:
+                skipped.append({"line": line, "object": label, "reason": str(e)})
+                continue
+            faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
+            face_line[name.lower()] = line
+            surface_zone[name.lower()] = zone_key
+        elif cls == "fenestrationsurface:detailed" or cls in SIMPLE_SUBSURFACES:
+            windows.append((cls, fields, lines, line))
     by_name = {f["id"].lower(): f["id"] for f in faces}
-    for fields, lines, line in windows:
+    loops = {f["id"].lower(): f["loops"][0] for f in faces}
+    for cls, fields, lines, line in windows:
         name = fields[0] if fields else ""
-        label = f"fenestrationsurface:detailed {name!r}"
+        label = f"{cls} {name!r}"
+        host = 3 if cls == "fenestrationsurface:detailed" else 2
         try:
             if not name:
                 raise ValueError("no name")
-            if len(fields) < 4 or fields[3].lower() not in by_name:
-                raise ValueError(f"its building surface {fields[3] if len(fields) > 3 else ''!r} is not a surface "
-                                 "read from this file")
-            n_index = _fenestration_layout(fields)
-            points = _vertices(fields, lines, n_index)
-            zone_key = surface_zone[fields[3].lower()]
-            if relative and zone_key in zones:
-                points = _to_world(points, zones[zone_key])
+            if len(fields) <= host or fields[host].lower() not in by_name:
+                raise ValueError(f"its building surface {fields[host] if len(fields) > host else ''!r} is not a "
+                                 "surface read from this file")
+            if cls in SIMPLE_SUBSURFACES:  # placed on its host, already in world coordinates
+                points = subsurface(cls, fields, loops[fields[host].lower()])
+            else:
+                n_index = _fenestration_layout(fields)
+                points = _vertices(fields, lines, n_index)
+                zone_key = surface_zone[fields[host].lower()]
+                if relative and zone_key in zones:
+                    points = _to_world(points, zones[zone_key])
+                if clockwise:
+                    points = points[::-1]
             if name.lower() in face_line:
-                raise ValueError(f"a surface of this name is already on line {face_line[name.lower()]}")
+                raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
         except ValueError as e:
             skipped.append({"line": line, "object": label, "reason": str(e)})
             continue
-        faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "parent": by_name[fields[3].lower()]})
+        faces.append({"id": name, "loops": [points], "parent": by_name[fields[host].lower()]})
         face_line[name.lower()] = line
     if not any("parent" not in f for f in faces):
         first = skipped[0] if skipped else None
-        where = ("file", "line", first["line"]) if first else ("file",)
-        reason = (f"no usable surface: {first['object']} (line {first['line']}): {first['reason']}" if first else
-                  "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed or Floor:Detailed object")
+        where = (("file", "line", first["line"]) if first["line"] else ("file", first["object"])) if first else \
+            ("file",)
+        reason = (f"no usable surface: {first['object']}{_where(first['line'])}: {first['reason']}" if first else
+                  "no BuildingSurface:Detailed, Wall:Detailed, RoofCeiling:Detailed, Floor:Detailed or simple-geometry "
+                  "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
+    used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     return {"units": "m", "faces": faces,
-            "source": {"format": "idf", "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
+            "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",
-                       "coordinates": "relative" if relative else "world", "skipped": skipped[:MAX_SKIPPED_LISTED],
+                       "coordinates": "relative" if relative else "world",
+                       "declared": {zone_names.get(k.lower(), k): v for k, v in declared.items()
+                                    if k.lower() in used_zones},
+                       "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
 
 
@@ -269,6 +337,13 @@ def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]
     angle = -math.radians(north)
     c, s = math.cos(angle), math.sin(angle)
     return [[x * c - y * s + x0, x * s + y * c + y0, z + z0] for x, y, z in points]
+
+
+def parse_epjson(text: str) -> dict:
+    objects, skipped = epjson_objects(text)
+    if not objects and not skipped:
+        raise reject("no EnergyPlus surface object (BuildingSurface:Detailed, Wall:Exterior, …) in this epJSON file")
+    return surfaces_from_objects(objects, skipped, [], "epjson")
 
 
 def parse_obj(text: str) -> dict:
@@ -410,16 +485,20 @@ def parse_stl(content: bytes) -> dict:
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
-    """An IDF, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
+    """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
     form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
     if source.extension == ".stl":
         body = parse_stl(content)
+    elif source.extension in (".xml", ".gbxml"):
+        body = parse_gbxml(content)
+    elif source.extension == ".ifc":
+        body = parse_ifc(content)
     else:
         text = decode_text(content)
-        body = {".idf": parse_idf, ".obj": parse_obj}.get(source.extension, json_object)(text)
+        body = {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(source.extension, json_object)(text)
     try:
         return validated_upload(PolyhedraRequest, body, options)
     except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file

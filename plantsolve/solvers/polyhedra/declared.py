@@ -1,0 +1,58 @@
+"""What a file says about its own zones (gbXML's ``Space/Volume`` and ``Space/Area``) against what
+the solver measures: a table in the report's details and one warning when they differ by more than 1 %."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+
+TOLERANCE = 0.01  # relative
+DOWNWARD = -0.7  # a face whose outward normal has z below this is floor (within ~45 degrees of straight down)
+
+
+def floor_areas(n_zones: int, face_zones: Sequence[Sequence[int]], face_parent: np.ndarray, area: np.ndarray,
+                normal: np.ndarray) -> np.ndarray:
+    """Per zone, the area of its faces that face down seen from inside it: the floor. A face between two
+    zones faces the other way for its second zone."""
+    floors = np.zeros(n_zones)
+    for f, zones in enumerate(face_zones):
+        if face_parent[f] >= 0:
+            continue
+        for k, z in enumerate(zones):
+            if (normal[f, 2] if k == 0 else -normal[f, 2]) < DOWNWARD:
+                floors[z] += area[f]
+    return floors
+
+
+def compare(declared: Mapping[str, Mapping[str, Any]], zones: Sequence[Mapping[str, Any]],
+            floors: Mapping[str, float]) -> tuple[list[dict], Diagnostic | None]:
+    """Rows of declared and measured volume (m3 or units3) and floor area per zone the file declares."""
+    rows, differ = [], []
+    for zone in zones:
+        claim = declared.get(zone["id"])
+        if not isinstance(claim, Mapping):
+            continue
+        row: dict[str, Any] = {"zone": zone["id"]}
+        for key, measured in (("volume", zone.get("volume")), ("floor_area", floors.get(zone["id"]))):
+            value = claim.get(key)
+            if not isinstance(value, (int, float)) or value <= 0:
+                continue
+            row[f"declared_{key}"] = float(value)
+            row[key] = measured
+            if measured is not None:
+                row[f"{key}_difference"] = (measured - value) / value
+                if abs(measured - value) > TOLERANCE * value:
+                    differ.append(zone["id"])
+        if len(row) > 1:
+            rows.append(row)
+    warning = None
+    if differ:
+        names = sorted(set(differ))
+        warning = Diagnostic(code="declared_measures_differ", message=(
+            f"{len(names)} zone(s) measure more than {TOLERANCE:.0%} away from the volume or floor area the file "
+            "declares for them (see details.declared_comparison)."), details={"zones": names[:1000]})
+    return rows, warning

@@ -1,0 +1,260 @@
+"""gbXML (as Revit, OpenStudio and the gbXML test cases write it) as a polyhedra request.
+
+Faces come from ``Campus/Surface``: its ``PlanarGeometry/PolyLoop`` of ``CartesianPoint/Coordinate``
+triples, counter-clockwise seen from outside its first ``AdjacentSpaceId`` (a second one makes it the
+wall between two spaces, written once; the same space twice, as Revit writes a slab on grade, is one); each ``Opening``'s PolyLoop is a subsurface of its surface.
+A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops. Zones are named
+by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface without an adjacent space
+(``Shade``) bounds no zone and is skipped, like anything else that cannot be read, with its line and
+reason.
+
+Units: coordinates are converted to metres from the root's ``lengthUnit`` (the schema's default,
+Meters, when absent) and a warning says so when they were not metres; the file's own ``Space/Volume``
+and ``Space/Area`` (floor area), converted from ``volumeUnit`` and ``areaUnit``, are kept in
+``source.declared`` for the solver to compare with what it measures.
+
+The XML is read by the standard library's expat parser (no lxml or defusedxml here); a file with a
+DOCTYPE or an entity declaration (which gbXML never has, and which is the way in for entity expansion)
+is refused.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from typing import Any
+from xml.parsers import expat
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.base import reject
+
+MAX_SKIPPED_LISTED = 200
+LENGTH = {"meters": 1.0, "centimeters": 0.01, "millimeters": 0.001, "kilometers": 1000.0, "feet": 0.3048,
+          "inches": 0.0254, "yards": 0.9144, "miles": 1609.344}
+AREA = {"squaremeters": 1.0, "squarecentimeters": 1e-4, "squaremillimeters": 1e-6, "squarekilometers": 1e6,
+        "squarefeet": 0.09290304, "squareinches": 0.00064516, "squareyards": 0.83612736,
+        "squaremiles": 2589988.110336}
+VOLUME = {"cubicmeters": 1.0, "cubiccentimeters": 1e-6, "cubicmillimeters": 1e-9, "cubickilometers": 1e9,
+          "cubicfeet": 0.028316846592, "cubicinches": 1.6387064e-5, "cubicyards": 0.764554857984,
+          "cubicmiles": 4168181825.440579}
+
+
+def _local(tag: Any) -> str:
+    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
+
+
+def _children(element: ET.Element, name: str) -> list[ET.Element]:
+    return [c for c in element if _local(c.tag) == name]
+
+
+def _child(element: ET.Element, name: str) -> ET.Element | None:
+    found = _children(element, name)
+    return found[0] if found else None
+
+
+def _unit(root: ET.Element, attribute: str, table: dict[str, float], default: str) -> tuple[str, float | None]:
+    name = (root.get(attribute) or default).strip()
+    return name, table.get(name.lower())
+
+
+def _polyloop(loop: ET.Element, scale: float) -> list[list[float]]:
+    points = []
+    for k, point in enumerate(_children(loop, "CartesianPoint"), 1):
+        coordinates = _children(point, "Coordinate")
+        if len(coordinates) != 3:
+            raise ValueError(f"CartesianPoint {k} has {len(coordinates)} Coordinate(s), not 3")
+        try:
+            xyz = [float((c.text or "").strip()) * scale for c in coordinates]
+        except ValueError:
+            raise ValueError(f"CartesianPoint {k}: {[c.text for c in coordinates]} are not numbers") from None
+        if not all(math.isfinite(v) for v in xyz):
+            raise ValueError(f"CartesianPoint {k} is not finite")
+        points.append(xyz)
+    if len({tuple(p) for p in points}) < 3:
+        raise ValueError(f"{len({tuple(p) for p in points})} distinct points; a face needs at least 3")
+    return points
+
+
+def _planar(element: ET.Element, scale: float) -> list[list[float]]:
+    planar = _child(element, "PlanarGeometry")
+    loop = _child(planar, "PolyLoop") if planar is not None else None
+    if loop is None:
+        raise ValueError("no PlanarGeometry/PolyLoop" + (" (only RectangularGeometry)"
+                                                          if _child(element, "RectangularGeometry") is not None else ""))
+    return _polyloop(loop, scale)
+
+
+def _declared(space: ET.Element, name: str, factor: float | None) -> float | None:
+    node = _child(space, name)
+    if node is None or factor is None:
+        return None
+    try:
+        value = float((node.text or "").strip()) * factor
+    except ValueError:
+        return None
+    return value if math.isfinite(value) and value > 0 else None
+
+
+class _Doctype(Exception):
+    pass
+
+
+def _refuse_doctype(*_args: Any) -> None:
+    raise _Doctype
+
+
+def _parse(content: bytes) -> tuple[ET.Element, dict[int, int]]:
+    """The document as an ElementTree, and the line each element starts on (by the element's id)."""
+    builder = ET.TreeBuilder()
+    lines: dict[int, int] = {}
+    parser = expat.ParserCreate(namespace_separator="}")
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        lines[id(builder.start(tag, attrs))] = parser.CurrentLineNumber
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = builder.end
+    parser.CharacterDataHandler = builder.data
+    parser.StartDoctypeDeclHandler = _refuse_doctype
+    parser.EntityDeclHandler = _refuse_doctype
+    try:
+        parser.Parse(content, True)
+    except _Doctype:
+        raise reject("the XML file has a DOCTYPE or ENTITY declaration; gbXML has none, and it is not read",
+                     ("file", "line", parser.CurrentLineNumber)) from None
+    except expat.ExpatError as e:
+        raise reject(f"not well-formed XML: {expat.ErrorString(e.code)} (line {e.lineno}, column {e.offset})",
+                     ("file", "line", e.lineno)) from None
+    return builder.close(), lines
+
+
+def parse_gbxml(content: bytes) -> dict:
+    root, lines = _parse(content)
+    if _local(root.tag) != "gbXML":
+        raise reject(f"the XML file's root element is {_local(root.tag)!r}, not gbXML")
+    warnings: list[dict] = []
+    skipped: list[dict] = []
+    length_name, scale = _unit(root, "lengthUnit", LENGTH, "Meters")
+    if scale is None:
+        raise reject(f"lengthUnit {length_name!r} is not a gbXML length unit ({', '.join(LENGTH)})",
+                     ("file", "line", lines.get(id(root), 1)))
+    if scale != 1.0:
+        warnings.append(Diagnostic(code="units_converted", message=(
+            f"The file's lengthUnit is {length_name}: its coordinates were converted to metres (x {scale:g})."),
+            details={"lengthUnit": length_name, "factor": scale}).model_dump())
+    area_name, area_factor = _unit(root, "areaUnit", AREA, "SquareMeters")
+    volume_name, volume_factor = _unit(root, "volumeUnit", VOLUME, "CubicMeters")
+    for label, name, factor in (("areaUnit", area_name, area_factor), ("volumeUnit", volume_name, volume_factor)):
+        if factor is None:
+            warnings.append(Diagnostic(code="unknown_unit", message=(
+                f"The file's {label} {name!r} is not a gbXML unit: its declared space measures are not compared."),
+                details={label: name}).model_dump())
+
+    campuses = _children(root, "Campus")
+    spaces: dict[str, ET.Element] = {}
+    for campus in campuses:
+        for building in _children(campus, "Building"):
+            for space in (e for e in building.iter() if _local(e.tag) == "Space"):
+                sid = (space.get("id") or "").strip()
+                if not sid:
+                    skipped.append({"line": lines.get(id(space)), "object": "Space", "reason": "no id"})
+                elif sid in spaces:
+                    skipped.append({"line": lines.get(id(space)), "object": f"Space {sid!r}",
+                                    "reason": f"a space of this id is already on line {lines.get(id(spaces[sid]))}"})
+                else:
+                    spaces[sid] = space
+
+    faces: list[dict] = []
+    face_line: dict[str, int | None] = {}
+
+    def add(face: dict, element: ET.Element, label: str) -> None:
+        if face["id"] in face_line:
+            where = face_line[face["id"]]
+            skipped.append({"line": lines.get(id(element)), "object": label,
+                            "reason": f"a surface of this id is already on line {where}"})
+            return
+        faces.append(face)
+        face_line[face["id"]] = lines.get(id(element))
+
+    bounded: set[str] = set()
+    for campus in campuses:
+        for surface in _children(campus, "Surface"):
+            sid = (surface.get("id") or "").strip()
+            label = f"Surface {sid!r}" if sid else "Surface"
+            try:
+                if not sid:
+                    raise ValueError("no id")
+                adjacent = [(a.get("spaceIdRef") or "").strip() for a in _children(surface, "AdjacentSpaceId")]
+                adjacent = [a for a in adjacent if a]
+                if not adjacent:
+                    raise ValueError(f"no AdjacentSpaceId (a {surface.get('surfaceType') or 'surface'} bounding no "
+                                     "space)")
+                if len(adjacent) > 2:
+                    raise ValueError(f"{len(adjacent)} AdjacentSpaceIds; a surface has one or two")
+                if len(adjacent) == 2 and adjacent[0] == adjacent[1]:
+                    adjacent = adjacent[:1]  # Revit writes a slab on grade's one space twice
+                unknown = [a for a in adjacent if spaces and a not in spaces]
+                if unknown:
+                    raise ValueError(f"AdjacentSpaceId {unknown[0]!r} names no Space of the file")
+                points = _planar(surface, scale)
+            except ValueError as e:
+                skipped.append({"line": lines.get(id(surface)), "object": label, "reason": str(e)})
+                continue
+            before = len(faces)
+            add({"id": sid, "loops": [points], "zones": adjacent}, surface, label)
+            if len(faces) == before:
+                continue
+            bounded.update(adjacent)
+            for opening in _children(surface, "Opening"):
+                oid = (opening.get("id") or "").strip()
+                olabel = f"Opening {oid!r}" if oid else "Opening"
+                try:
+                    if not oid:
+                        raise ValueError("no id")
+                    opoints = _planar(opening, scale)
+                except ValueError as e:
+                    skipped.append({"line": lines.get(id(opening)), "object": olabel, "reason": str(e)})
+                    continue
+                add({"id": oid, "loops": [opoints], "parent": sid}, opening, olabel)
+
+    for sid, space in spaces.items():
+        if sid in bounded:
+            continue
+        shell = _child(space, "ShellGeometry")
+        closed = _child(shell, "ClosedShell") if shell is not None else None
+        if closed is None:
+            skipped.append({"line": lines.get(id(space)), "object": f"Space {sid!r}",
+                            "reason": "no Surface names it and it has no ShellGeometry/ClosedShell"})
+            continue
+        for k, loop in enumerate(_children(closed, "PolyLoop"), 1):
+            label = f"Space {sid!r} ClosedShell PolyLoop {k}"
+            try:
+                points = _polyloop(loop, scale)
+            except ValueError as e:
+                skipped.append({"line": lines.get(id(loop)), "object": label, "reason": str(e)})
+                continue
+            add({"id": f"{sid} shell {k}", "loops": [points], "zones": [sid]}, loop, label)
+
+    if not any("parent" not in f for f in faces):
+        first = skipped[0] if skipped else None
+        if first:
+            where = ("file", "line", first["line"]) if first["line"] else ("file",)
+            at = f" (line {first['line']})" if first["line"] else ""
+            raise reject(f"no usable surface: {first['object']}{at}: {first['reason']}", where)
+        raise reject("no Campus/Surface with a PlanarGeometry and no Space with a ShellGeometry in this gbXML file")
+
+    names = {sid: ((_child(s, "Name").text or "").strip() if _child(s, "Name") is not None else "")
+             for sid, s in spaces.items()}
+    declared = {}
+    for sid, space in spaces.items():
+        entry = {k: v for k, v in (("volume", _declared(space, "Volume", volume_factor)),
+                                   ("floor_area", _declared(space, "Area", area_factor))) if v is not None}
+        if entry:
+            declared[sid] = entry
+    zones = {z for f in faces for z in f.get("zones", [])}
+    return {"units": "m", "faces": faces,
+            "source": {"format": "gbxml", "faces": len(faces), "zones": len(zones),
+                       "units": {"lengthUnit": length_name, "areaUnit": area_name, "volumeUnit": volume_name},
+                       "spaces": {sid: names[sid] for sid in spaces if sid in zones},
+                       "declared": {sid: v for sid, v in declared.items() if sid in zones},
+                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}

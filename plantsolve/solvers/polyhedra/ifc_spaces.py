@@ -1,0 +1,115 @@
+"""IFC spaces (``IfcSpace``) as zones: each space's body tessellated by IfcOpenShell's geometry kernel
+in world coordinates and metres (its triangles are the zone's faces, ``<zone> t1``, ``t2``, …; coplanar
+triangles are fine for the volume), compared with the space's own ``Qto_SpaceBaseQuantities`` (IFC2X3 exporters' ``BaseQuantities``).
+
+Zones are named by the space's ``Name`` (its ``GlobalId`` when the name is missing or not unique);
+``source.spaces`` lists GlobalId, Name and LongName. A space the kernel cannot tessellate, or without a
+representation, is skipped with its ``#id`` and reason; the file is refused (422) when no space is left.
+The quantities ``NetVolume`` (else ``GrossVolume``) and ``NetFloorArea`` (else ``GrossFloorArea``),
+converted from the project's volume and area units, go to ``source.declared`` for the solver to set
+against what it measures.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.base import reject
+
+MAX_SKIPPED_LISTED = 200
+
+
+def _quantity(quantities: dict[str, Any], *names: str) -> tuple[str, float] | None:
+    for name in names:
+        value = quantities.get(name)
+        if isinstance(value, (int, float)) and np.isfinite(value) and value > 0:
+            return name, float(value)
+    return None
+
+
+def parse_ifc(content: bytes) -> dict:
+    import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
+    import ifcopenshell.geom  # noqa: PLC0415
+    import ifcopenshell.util.element  # noqa: PLC0415
+    import ifcopenshell.util.unit  # noqa: PLC0415
+
+    try:
+        model = ifcopenshell.file.from_string(content.decode("latin-1"))
+        spaces = model.by_type("IfcSpace")  # a file without a schema fails only here
+    except Exception as e:  # the parser raises several kinds for a broken file
+        raise reject(f"unreadable IFC file: {str(e) or type(e).__name__}") from None
+    if not spaces:
+        raise reject("the IFC file has no IfcSpace")
+    skipped: list[dict] = []
+    names = Counter((s.Name or "").strip() for s in spaces)
+    zone_of = {s.id(): ((s.Name or "").strip() if (s.Name or "").strip() and names[(s.Name or "").strip()] == 1
+                        else s.GlobalId) for s in spaces}
+    label = {s.id(): f"#{s.id()} IfcSpace {(s.Name or s.GlobalId)!r}" for s in spaces}
+    with_body = [s for s in spaces if s.Representation is not None]
+    for s in spaces:
+        if s.Representation is None:
+            skipped.append({"line": None, "object": label[s.id()], "reason": "no representation"})
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    vertices: list[np.ndarray] = []
+    faces: list[dict] = []
+    shaped: set[int] = set()
+    offset = 0
+    if with_body:
+        iterator = ifcopenshell.geom.iterator(settings, model, 1, include=with_body)
+        if iterator.initialize():
+            while True:
+                shape = iterator.get()
+                verts = np.asarray(shape.geometry.verts, dtype=float).reshape(-1, 3)  # metres
+                triangles = np.asarray(shape.geometry.faces, dtype=np.int64).reshape(-1, 3)
+                zone = zone_of[shape.id]
+                if len(triangles):
+                    shaped.add(shape.id)
+                    vertices.append(verts)
+                    faces.extend({"id": f"{zone} t{k + 1}", "loops": [(t + offset).tolist()], "zones": [zone]}
+                                 for k, t in enumerate(triangles))
+                    offset += len(verts)
+                if not iterator.next():
+                    break
+    for s in with_body:
+        if s.id() not in shaped:
+            skipped.append({"line": None, "object": label[s.id()],
+                            "reason": "IfcOpenShell's geometry kernel made no triangles of its representation"})
+    if not faces:
+        first = skipped[0]
+        raise reject(f"no usable IfcSpace: {first['object']}: {first['reason']}", ("file", first["object"]))
+    area_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "AREAUNIT")
+    volume_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "VOLUMEUNIT")
+    declared: dict[str, dict] = {}
+    quantities_used: dict[str, dict] = {}
+    for s in spaces:
+        if s.id() not in shaped:
+            continue
+        sets = ifcopenshell.util.element.get_psets(s, qtos_only=True)
+        # IFC2X3 exporters (Revit, ArchiCAD) name the set "BaseQuantities"
+        qto = sets.get("Qto_SpaceBaseQuantities") or sets.get("BaseQuantities") or {}
+        volume = _quantity(qto, "NetVolume", "GrossVolume")
+        floor = _quantity(qto, "NetFloorArea", "GrossFloorArea")
+        entry, used = {}, {}
+        if volume:
+            entry["volume"], used["volume"] = volume[1] * volume_scale, volume[0]
+        if floor:
+            entry["floor_area"], used["floor_area"] = floor[1] * area_scale, floor[0]
+        if entry:
+            declared[zone_of[s.id()]], quantities_used[zone_of[s.id()]] = entry, used
+    warnings = []
+    length_scale = ifcopenshell.util.unit.calculate_unit_scale(model)
+    if length_scale != 1.0:
+        warnings.append(Diagnostic(code="units_converted", message=(
+            f"The IFC project's length unit is {length_scale:g} m: IfcOpenShell's geometry is in metres, and the "
+            "spaces' quantities were converted to m² and m³."), details={"length_unit_m": length_scale}).model_dump())
+    spaces_listed = {zone_of[s.id()]: {"global_id": s.GlobalId, "name": s.Name, "long_name": s.LongName}
+                     for s in spaces if s.id() in shaped}
+    return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
+            "source": {"format": "ifc", "schema": model.schema, "faces": len(faces), "zones": len(shaped),
+                       "spaces": spaces_listed, "declared": declared, "declared_quantities": quantities_used,
+                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}

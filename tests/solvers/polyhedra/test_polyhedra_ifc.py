@@ -1,0 +1,51 @@
+"""IFC spaces through IfcOpenShell's geometry kernel, set against their Qto_SpaceBaseQuantities."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.polyhedra import parse_upload, solve
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_ifc_spaces_volumes_adjacency_and_base_quantities():
+    request = parse_upload(StoredInput.from_path(DATA / "ifcopenshell_spaces.ifc"), None)
+    result = solve(request).result
+    zones = {z.id: z for z in result.zones}
+    assert set(zones) == {"101", "102", "103"} and all(z.closed and z.orientation == "outward" for z in zones.values())
+    # the file is in millimetres: the kernel's metres are kept, and the report says so
+    assert zones["101"].volume == pytest.approx(5 * 4 * 3) and zones["102"].volume == pytest.approx(4 * 4 * 3)
+    assert zones["103"].volume == pytest.approx(1.0) and zones["101"].surface_area == pytest.approx(94.0)
+    (adjacent,) = result.adjacency
+    assert adjacent.zones == ["101", "102"] and adjacent.area == pytest.approx(12.0)
+    assert request.source["spaces"]["101"]["long_name"] == "Office"
+    (skipped,) = request.source["skipped"]
+    assert skipped["object"].endswith("IfcSpace '104'") and skipped["reason"] == "no representation"
+    # 101 declares net 60 m3 / 20 m2 (as measured); 102 gross 50 m3 against 48 measured: warned
+    rows = {r["zone"]: r for r in result.report.details["declared_comparison"]}
+    assert set(rows) == {"101", "102"}
+    assert rows["101"]["volume_difference"] == pytest.approx(0.0) and rows["101"]["floor_area"] == pytest.approx(20.0)
+    assert rows["102"]["volume_difference"] == pytest.approx(-0.04)
+    assert request.source["declared_quantities"]["102"] == {"volume": "GrossVolume", "floor_area": "GrossFloorArea"}
+    codes = {w.code: w for w in result.report.warnings}
+    assert codes["declared_measures_differ"].details["zones"] == ["102"] and "units_converted" in codes
+
+
+def test_ifc_without_spaces_or_geometry_is_refused():
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text()
+    no_spaces = "\n".join(line for line in text.splitlines() if "IFCSPACE(" not in line)
+    with pytest.raises(InputRejected, match="no IfcSpace"):
+        parse_upload(StoredInput.from_bytes("a.ifc", no_spaces.encode()), None)
+    with pytest.raises(InputRejected, match="unreadable IFC file"):
+        parse_upload(StoredInput.from_bytes("a.ifc", b"ISO-10303-21;\nHEADER;\ngarbage"), None)
+
+
+def test_ifc2x3_exporters_base_quantities_set_is_read_too():
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text().replace("'Qto_SpaceBaseQuantities'", "'BaseQuantities'")
+    assert "'BaseQuantities'" in text
+    request = parse_upload(StoredInput.from_bytes("a.ifc", text.encode()), None)
+    assert request.source["declared"]["101"] == {"volume": pytest.approx(60.0), "floor_area": pytest.approx(20.0)}
