@@ -472,21 +472,33 @@ class PerfmapQueryResult(BaseModel):
                                       "duty points are read in them too).")
 
 
-class BetaPoint(StrictModel):
+class BetaPointBySetting(StrictModel):
     """A map lookup as a cycle code does it: setting values (speed last) and beta."""
 
-    setting: list[FiniteFloat] | None = Field(
-        default=None, min_length=1, max_length=3,
+    setting: list[FiniteFloat] = Field(
+        min_length=1, max_length=3,
         description="Setting values in the order of the result's setting_names (speed last). The leading "
         "ones (e.g. alpha) must be values of the map; the last is interpolated between speed lines.")
-    speed: FiniteFloat | None = Field(default=None, description="One-setting maps: the speed (instead of setting).")
     beta: FiniteFloat = Field(ge=0.0, le=1.0, description="Beta: 0 at choke, 1 at surge.")
 
-    @model_validator(mode="after")
-    def _one_of(self) -> "BetaPoint":
-        if (self.setting is None) == (self.speed is None):
-            raise ValueError("give either 'setting' (all setting values) or 'speed' (one-setting maps)")
-        return self
+    @property
+    def speed(self) -> None:
+        return None
+
+
+class BetaPointBySpeed(StrictModel):
+    """A lookup on a one-setting map: the speed and beta."""
+
+    speed: FiniteFloat = Field(description="The speed (maps whose only setting is the speed).")
+    beta: FiniteFloat = Field(ge=0.0, le=1.0, description="Beta: 0 at choke, 1 at surge.")
+
+    @property
+    def setting(self) -> None:
+        return None
+
+
+# one or the other, never both: two closed objects, so the contract itself says so
+BetaPoint = BetaPointBySetting | BetaPointBySpeed
 
 
 class PerfmapBetaQueryRequest(StrictModel):
