@@ -238,9 +238,23 @@ def off_die(model: TubeModel, factor: float = 3.0) -> list[int]:
     return [k for d, k in sorted(off, reverse=True) if d > np.log(factor)]
 
 
+def adjacent_small_pairs(model: TubeModel, eps: float, small_deg: float = 20.0, factor: float = 3.0) -> list[int]:
+    """Each k where bends k and k+1 are both under ``small_deg``, joined by a straight shorter than a pipe
+    radius (or ε), and on one die: neither off the others' die (:func:`off_die`) and their radii within
+    ``factor`` of each other. A bend cut in two by a split on the subsample leaves such a pair, both halves
+    near the die, so the off-die re-check does not see it."""
+    off = set(off_die(model, factor))
+    small = model.angles < np.radians(small_deg)
+    gap = max(eps, model.pipe_radius)
+    return [k for k in range(model.n_bends - 1)
+            if small[k] and small[k + 1] and model.lengths[k + 1] < gap and not {k, k + 1} & off
+            and abs(float(np.log(model.radii[k] / model.radii[k + 1]))) <= np.log(factor)]
+
+
 def recheck_candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]:
-    """The model without each off-die bend (:func:`off_die`) of under 20 degrees, and with each off-die bend
-    merged into a neighbour it touches (a straight shorter than half a pipe radius, or ε, between)."""
+    """The model without each off-die bend (:func:`off_die`) of under 20 degrees, with each off-die bend
+    merged into a neighbour it touches (a straight shorter than half a pipe radius, or ε, between), and with
+    each pair of adjacent small bends on one die merged (:func:`adjacent_small_pairs`)."""
     out, seen = [], set()
     n = model.n_bends
     for k in off_die(model):
@@ -250,15 +264,30 @@ def recheck_candidates(model: TubeModel, eps: float) -> list[tuple[str, int, Tub
             if 0 <= j < n - 1 and j not in seen and model.lengths[j + 1] < max(eps, 0.5 * model.pipe_radius):
                 seen.add(j)
                 out.append(("merge", j, merged_at_corner(model, j)))
+    for j in adjacent_small_pairs(model, eps):
+        if j not in seen:
+            seen.add(j)
+            out.append(("merge", j, merged_at_corner(model, j)))
     return out
 
 
-def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6):
-    """Every split and merge decision taken on the subsample, re-checked on the final fit: an off-die bend
-    is removed or merged into its neighbour when the Bayesian information criterion of the refitted model
-    with one bend fewer is no worse (``bic(model)``: the same samples for every model). ``fitted`` and
-    ``refit(model)`` are tuples whose first item is the model (the rest travels with it). Returns the
-    kept tuple and the changes."""
+def pair_merge_candidates(model: TubeModel, eps: float) -> list[tuple[str, int, TubeModel]]:
+    """Each pair of adjacent small bends on one die (:func:`adjacent_small_pairs`) merged into one arc."""
+    return [("merge", j, merged_at_corner(model, j)) for j in adjacent_small_pairs(model, eps)]
+
+
+def nearest_die(radii: np.ndarray, die_radii) -> tuple[int, ...]:
+    """The die (index into ``die_radii``) nearest each radius, in log radius."""
+    logd = np.log(np.asarray(die_radii, float))
+    return tuple(int(np.argmin(np.abs(np.log(r) - logd))) for r in np.asarray(radii, float))
+
+
+def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6, candidates=recheck_candidates):
+    """Every split and merge decision taken on the subsample, re-checked on the final fit: each of
+    ``candidates(model, eps)`` (by default :func:`recheck_candidates`) is refitted and kept when the Bayesian
+    information criterion of the model with one bend fewer is no worse (``bic(model)``: the same samples
+    for every model). ``fitted`` and ``refit(model)`` are tuples whose first item is the model (the rest
+    travels with it). Returns the kept tuple and the changes."""
     model = fitted[0]
     b = bic(model)
     changes = []
@@ -266,7 +295,7 @@ def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6):
     improved = True
     while improved and tries < max_tries:
         improved = False
-        for kind, k, cand in recheck_candidates(model, eps):
+        for kind, k, cand in candidates(model, eps):
             tries += 1
             out = refit(cand)
             bc = bic(out[0])

@@ -101,3 +101,91 @@ def test_merge_at_the_corner_keeps_the_lines_before_and_after():
     assert one.n_bends == 2
     np.testing.assert_allclose(np.degrees(one.angles), [4.8, 60.0], atol=1e-9)
     np.testing.assert_allclose(control_polygon(one)[0][[0, 2, 3]], control_polygon(pair)[0][[0, 3, 4]], atol=1e-9)
+
+
+def _seven_on_one_die(gap_rp: float):
+    """A 4.8 degree bend of the die cut in two (2.7 + 2.1 degrees, the die's radius, ``gap_rp`` pipe radii of
+    straight between, 20 degrees of rotation), between large bends on the same die (pipe radius 20, die 60)."""
+    return make_model([[120, 0, 2.7, 60], [gap_rp * 20, 20, 2.1, 60], [130, 50, 72, 60], [170, -85, 64, 60],
+                       [120, 0, 0, 0]], 20.0)
+
+
+def test_adjacent_small_bends_on_one_die_are_merge_candidates():
+    """Both halves near the die, so neither is off-die: only the pair rule makes them a candidate."""
+    m = _seven_on_one_die(0.3)
+    assert prune.off_die(m) == []
+    assert prune.adjacent_small_pairs(m, 0.1) == [0]
+    assert [(kind, k) for kind, k, _ in prune.pair_merge_candidates(m, 0.1)] == [("merge", 0)]
+    assert ("merge", 0) in {(kind, k) for kind, k, _ in prune.recheck_candidates(m, 0.1)}
+    # a straight of 3 pipe radii between them: two bends (the family's smallest straight), not a split
+    assert prune.adjacent_small_pairs(_seven_on_one_die(3.0), 0.1) == []
+    # a large bend next to a small one is no pair, nor are two small bends far off each other's radius
+    big = make_model([[120, 0, 2.7, 60], [6, 20, 30, 60], [130, 50, 72, 60], [120, 0, 0, 0]], 20.0)
+    assert prune.adjacent_small_pairs(big, 0.1) == []
+    apart = make_model([[120, 0, 2.7, 60], [6, 20, 2.1, 400], [130, 50, 72, 60], [170, -85, 64, 60],
+                        [120, 0, 0, 0]], 20.0)
+    assert prune.adjacent_small_pairs(apart, 0.1) == []
+
+
+def test_merging_the_halves_of_a_split_bend_gives_the_bend_back():
+    """A bend split in its plane with no straight between the halves (``prune.split``), merged at the corner:
+    the same angle, radius and centreline, the tube after it unmoved."""
+    one = make_model([[120, 0, 4.8, 60], [130, 50, 72, 60], [170, -85, 64, 60], [120, 0, 0, 0]], 20.0)
+    two = prune.split(one, 0, 0.57, 60.0, 0.0)
+    assert two.n_bends == 4 and prune.adjacent_small_pairs(two, 0.1) == [0]
+    (_, _, back), = prune.pair_merge_candidates(two, 0.1)
+    np.testing.assert_allclose(np.degrees(back.angles), np.degrees(one.angles), atol=1e-9)
+    np.testing.assert_allclose(back.radii, one.radii, atol=1e-9)
+    d, _ = spine_distance(sample_centreline(one, 1.0)[0], build_spine(back))
+    assert d.max() < 1e-6
+
+
+def test_recheck_runs_on_the_given_candidates_and_keeps_a_merge_only_when_bic_is_no_worse():
+    m = _seven_on_one_die(0.3)
+
+    def refit(cand):
+        return cand, "info"
+
+    kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: 10.0 * x.n_bends, 0.1,
+                                         candidates=prune.pair_merge_candidates)
+    assert kept[0].n_bends == 3 and changes[0]["change"] == "merge" and changes[0]["bend"] == 1
+    # one arc turning the tube from the straight before the pair to the one after it
+    sp = build_spine(m)
+    turn = np.degrees(np.arccos(sp.tangent[0] @ sp.tangent[4]))
+    assert 4.7 < turn < 4.8
+    np.testing.assert_allclose(np.degrees(kept[0].angles[0]), turn, atol=1e-4)  # the outer lines are skew
+    kept, changes = prune.recheck_by_bic((m, "info"), refit, lambda x: -10.0 * x.n_bends, 0.1,
+                                         candidates=prune.pair_merge_candidates)
+    assert kept[0].n_bends == 4 and changes == []
+
+
+def test_nearest_die_in_log_radius():
+    assert prune.nearest_die([58.0, 61.0, 150.0, 95.0], [60.0, 180.0]) == (0, 0, 1, 0)
+
+
+def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
+    """Two dies (60 and 200): the halves of a 4.8 degree bend of the 60 die are merged, the candidate refitted
+    in the 'dies' model with one die per remaining bend (the merged one on the 60 die) and its radii held
+    there; kept because the merged arc is the same curve with four parameters fewer."""
+    import importlib
+
+    from plantsolve.schemas.tube import TubeOptions
+    from plantsolve.solvers.tube.synthetic import surface_samples
+
+    solve_mod = importlib.import_module("plantsolve.solvers.tube.solve")
+    one = make_model([[120, 0, 4.8, 60], [130, 50, 72, 200], [170, -85, 64, 60], [120, 0, 0, 0]], 20.0)
+    two = prune.split(one, 0, 0.57, 60.0, 0.0)
+    pts = surface_samples(one, 3000, np.random.default_rng(4), noise=0.2)
+    calls = []
+
+    def rounds(m, P, thr, n_rounds, max_nfev, radius_mode=None, dies=(), fixed_radii=()):
+        calls.append((radius_mode, dies, m.radii.copy()))
+        return m, {"refit": True}, thr, 0.2
+
+    (kept, info, _, mode), changes = solve_mod.recheck_with_held_radii(
+        two, pts, 2.0, 40.0, TubeOptions(), rounds, {}, {"radius_mode": "dies", "dies": (0, 0, 1, 0)}, 0.1)
+    assert [c["change"] for c in changes] == ["merge"] and kept.n_bends == 3 and info == {"refit": True}
+    assert calls[0][:2] == ("dies", (0, 1, 0)) and mode == {"radius_mode": "dies", "dies": (0, 1, 0)}
+    np.testing.assert_allclose(calls[0][2], [60.0, 200.0, 60.0])
+    d, _ = spine_distance(sample_centreline(one, 1.0)[0], build_spine(kept))
+    assert d.max() < 1e-6
