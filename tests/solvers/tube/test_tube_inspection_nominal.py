@@ -133,3 +133,16 @@ def test_unusable_xyz_clr_is_a_422_naming_the_point(cloud, tk_module):
     pts = [dict(x=0, y=0, z=0), dict(x=100, y=0, z=0), dict(x=100, y=100, z=0)]
     errors = _rejected(cloud, tk_module, nominal_xyz_clr=pts)
     assert errors[0].loc == ("options", "nominal_xyz_clr", 1, "clr")
+
+
+def test_example_nominal_files_are_the_example_requests_nominal():
+    import json
+
+    from tests.conftest import REPO
+
+    ex = REPO / "examples" / "tube"
+    want = lra([TubeOptions(**json.loads((ex / "scan_request.json").read_text())["options"]).nominal][0])
+    for name in ("nominal_lra.csv", "nominal_xyz_clr.csv"):
+        got = read_nominal_csv((ex / name).read_text())
+        np.testing.assert_allclose(lra(got.rows), want, atol=1e-3)  # the XYZ file holds 4 decimals
+        assert not got.warnings
