@@ -19,7 +19,6 @@ from plantsolve.schemas.tube import TubeRequest, TubeResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
 from plantsolve.solvers.tube.lra import model_from_rows
-from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.model import (
     TubeModel,
     build_spine,
@@ -30,6 +29,7 @@ from plantsolve.solvers.tube.model import (
     spine_distance,
     tube_mesh_arrays,
 )
+from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.scan import TubeScan
 
 

@@ -20,18 +20,22 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_angle
-
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow, TubeOptions
+from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_angle
 from plantsolve.solvers.tube import corrections as next_part
 from plantsolve.solvers.tube import tolerances as tol_check
-
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
+from plantsolve.solvers.tube.model import (
+    TubeModel,
+    build_spine,
+    closest_points,
+    distance_frames,
+    reverse_model,
+    sample_centreline,
+    spine_distance,
+)
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, distance_frames, reverse_model,
-                       sample_centreline, spine_distance)
-
 
 QUICK_NFEV = 15  # alignment steps that decide the walking direction
 

@@ -238,9 +238,9 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     rows = []
     for i, v in enumerate(values):
         last = i == len(values) - 1
-        rows.append(dict(length=v["length"], rotation=v.get("rotation") or 0.0,
-                         angle=0.0 if last else (v.get("angle") or 0.0),
-                         bend_radius=0.0 if last else (v.get("clr") or 0.0)))
+        rows.append({"length": v["length"], "rotation": v.get("rotation") or 0.0,
+                         "angle": 0.0 if last else (v.get("angle") or 0.0),
+                         "bend_radius": 0.0 if last else (v.get("clr") or 0.0)})
         if last and (v.get("angle") or 0.0) != 0:
             raise NominalError(value_lines[i], "angle", "the last LRA row is the final straight: its angle must be 0 "
                                "(add the final straight as a row of its own)")

@@ -5,8 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from plantsolve.schemas.tube import (INSPECTION_DEFAULTS_DEG, INSPECTION_DEFAULTS_MM, EndPointCheck, FieldCheck,
-                                     InspectionRow, InspectionTolerances, LraRow)
+from plantsolve.schemas.tube import (
+    INSPECTION_DEFAULTS_DEG,
+    INSPECTION_DEFAULTS_MM,
+    EndPointCheck,
+    FieldCheck,
+    InspectionRow,
+    InspectionTolerances,
+    LraRow,
+)
 from plantsolve.solvers.geometry import wrap_angle
 from plantsolve.solvers.tube.nominal_files import UNIT_MM
 

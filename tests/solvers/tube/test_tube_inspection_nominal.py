@@ -10,8 +10,13 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.tube import TubeOptions
 from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.tube.nominal_files import (NominalError, read_nominal_csv, resolve_nominal,
-                                                   rows_from_xyz_clr, xyz_clr_from_rows)
+from plantsolve.solvers.tube.nominal_files import (
+    NominalError,
+    read_nominal_csv,
+    resolve_nominal,
+    rows_from_xyz_clr,
+    xyz_clr_from_rows,
+)
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.validation import check_input
 
@@ -99,11 +104,11 @@ def test_first_rotation_is_read_as_zero_with_a_warning():
 
 
 def test_nominal_in_the_options_takes_any_form():
-    a = resolve_nominal(TubeOptions(nominal_xyz_clr=[dict(x=p[0], y=p[1], z=p[2], clr=c)
+    a = resolve_nominal(TubeOptions(nominal_xyz_clr=[{"x": p[0], "y": p[1], "z": p[2], "clr": c}
                                                      for p, c in zip(CORNER, [None, 20, 20, None])]))
     np.testing.assert_allclose(lra(a.rows)[1], [60, 90, 90, 20], atol=1e-9)
     with pytest.raises(ValidationError, match="give the nominal once"):
-        TubeOptions(nominal=[dict(length=10)], nominal_csv="10\n")
+        TubeOptions(nominal=[{"length": 10}], nominal_csv="10\n")
 
 
 @pytest.fixture(scope="module")
@@ -130,7 +135,7 @@ def test_unusable_csv_is_a_422_naming_the_line(cloud, tk_module, text, loc, word
 
 
 def test_unusable_xyz_clr_is_a_422_naming_the_point(cloud, tk_module):
-    pts = [dict(x=0, y=0, z=0), dict(x=100, y=0, z=0), dict(x=100, y=100, z=0)]
+    pts = [{"x": 0, "y": 0, "z": 0}, {"x": 100, "y": 0, "z": 0}, {"x": 100, "y": 100, "z": 0}]
     errors = _rejected(cloud, tk_module, nominal_xyz_clr=pts)
     assert errors[0].loc == ("options", "nominal_xyz_clr", 1, "clr")
 

@@ -13,8 +13,14 @@ import pytest
 
 from plantsolve.schemas.tube import TubeOptions, TubeRequest
 from plantsolve.solvers.tube import TubeScan, solve
-from plantsolve.solvers.tube.artifacts import (corrections_csv, figures, lra_csv, model_from_result,
-                                               render_artifacts, xyz_clr_csv)
+from plantsolve.solvers.tube.artifacts import (
+    corrections_csv,
+    figures,
+    lra_csv,
+    model_from_result,
+    render_artifacts,
+    xyz_clr_csv,
+)
 from plantsolve.solvers.tube.inspection import inspect_request
 from plantsolve.solvers.tube.nominal_files import read_nominal_csv
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
@@ -32,7 +38,7 @@ def solved():
     model = make_model(made, 4.0, start=(10.0, -5.0, 3.0))
     pts = surface_samples(model, 5000, np.random.default_rng(0), noise=0.02)
     scan = TubeScan(TubeRequest(points=pts.tolist(), options={
-        "nominal": [dict(length=a, rotation=b, angle=c, bend_radius=d) for a, b, c, d in NOMINAL]}))
+        "nominal": [{"length": a, "rotation": b, "angle": c, "bend_radius": d} for a, b, c, d in NOMINAL]}))
     return scan, solve(scan)
 
 
@@ -103,7 +109,7 @@ def test_overlay_plot_labels_the_rows_out_of_tolerance(solved):
 
 
 def test_own_lra_and_xyz_clr_output_are_accepted_as_nominal(solved):
-    scan, s = solved
+    _scan, s = solved
     result = s.result
     model = model_from_result(result)
     want = np.array([[r.length, r.rotation, r.angle, r.bend_radius] for r in result.lra])
