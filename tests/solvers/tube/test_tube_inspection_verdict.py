@@ -9,7 +9,7 @@ import pytest
 from plantsolve.schemas.tube import InspectionTolerances, LraRow, TubeOptions
 from plantsolve.solvers.tube.corrections import corrections
 from plantsolve.solvers.tube.inspection import inspect
-from plantsolve.solvers.tube.model import control_polygon
+from plantsolve.solvers.tube.model import control_polygon, reverse_model
 from plantsolve.solvers.tube.synthetic import make_model, random_rotation
 from plantsolve.solvers.tube.tolerances import resolved
 
@@ -117,3 +117,18 @@ def test_linear_springback_per_die():
     per_bend, _ = corrections(nominal, measured)
     np.testing.assert_allclose([f.delta_angle for f in per_bend[:-1]], [n.angle - m.angle for n, m in
                                                                         zip(nominal[:-1], measured[:-1])])
+
+
+def test_a_scan_walked_backwards_is_inspected_in_the_nominal_order(inspected):
+    backwards = inspect(reverse_model(placed(made_with_errors())), rows(NOMINAL), 1.0, TubeOptions())
+    assert backwards.reversed and backwards.failed_rows == inspected.failed_rows
+    for a, b in zip(backwards.rows, inspected.rows):
+        assert a.failed == b.failed and a.length.deviation == pytest.approx(b.length.deviation, abs=1e-6)
+    np.testing.assert_allclose([c.delta_angle for c in backwards.corrections],
+                               [c.delta_angle for c in inspected.corrections], atol=1e-6)
+
+
+def test_other_bend_count_fails_without_rows():
+    ins = inspect(placed(np.array([[50, 0, 90, 16], [60, 0, 0, 0]], float)), rows(NOMINAL), 1.0, TubeOptions())
+    assert not ins.matched and ins.verdict == "fail"
+    assert ins.rows == [] and ins.corrections == [] and len(ins.end_points) == 2
