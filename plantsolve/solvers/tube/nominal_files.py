@@ -162,16 +162,26 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     if not lines:
         raise NominalError(None, None, "the nominal CSV holds no rows")
     delim = _delimiter([ln for _, ln in lines])
-    first_line, first = lines[0]
-    head = _split(first, delim)
     decimal_comma = delim in (";", "\t", None) and any(re.fullmatch(r"-?\d+,\d+", c.strip()) for _, ln in lines[:5]
                                                        for c in _split(ln, delim))
-    try:
-        [_number(c, decimal_comma) for c in head]
-        header = False
-    except ValueError:
-        header = True
+
+    def numeric(line: str) -> bool:
+        try:
+            [_number(c, decimal_comma) for c in _split(line, delim)]
+        except ValueError:
+            return False
+        return True
+
     warnings: list[Diagnostic] = []
+    # title lines above the header (part number, customer, ...): text lines that name no column of ours
+    while len(lines) > 2 and not numeric(lines[0][1]) and not numeric(lines[1][1]) and \
+            not {"length", "x"} & set(_header_columns(_split(lines[0][1], delim))[0]):
+        warnings.append(Diagnostic(code="nominal_line_skipped", message=f"nominal CSV line {lines[0][0]} skipped: "
+                                   "text above the header", details={"line": lines[0][0], "text": lines[0][1][:120]}))
+        lines = lines[1:]
+    first_line, first = lines[0]
+    head = _split(first, delim)
+    header = not numeric(first)
     if header:
         roles, col_units = _header_columns(head)
         body = lines[1:]

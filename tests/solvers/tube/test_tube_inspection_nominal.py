@@ -151,3 +151,9 @@ def test_example_nominal_files_are_the_example_requests_nominal():
         got = read_nominal_csv((ex / name).read_text())
         np.testing.assert_allclose(lra(got.rows), want, atol=1e-3)  # the XYZ file holds 4 decimals
         assert not got.warnings
+
+
+def test_title_lines_above_the_header_are_skipped_with_a_warning():
+    got = read_nominal_csv("Part 4711 rev B\nCustomer: ACME\nL;R;A;CLR\n80;0;90;20\n60;90;90;20\n80;0;0;0\n")
+    np.testing.assert_allclose(lra(got.rows), [[80, 0, 90, 20], [60, 90, 90, 20], [80, 0, 0, 0]])
+    assert [w.details["line"] for w in got.warnings] == [1, 2]
