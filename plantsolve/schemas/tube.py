@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, Tag
+from pydantic import BaseModel, Discriminator, Field, Tag, model_validator
 
 from plantsolve.schemas.common import (Diagnostic, FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel,
                                       Units, Vec3)
@@ -77,6 +77,36 @@ class LraRow(StrictModel):
     )
 
 
+class XyzClrPoint(StrictModel):
+    """One point of an XYZ-CLR nominal: the intersection of two consecutive straights of the centreline (or an
+    end of the tube) and the centreline bend radius of the bend there."""
+
+    x: FiniteFloat
+    y: FiniteFloat
+    z: FiniteFloat
+    clr: FiniteFloat | None = Field(default=None, ge=0, description="Centreline bend radius of the bend at this "
+                                    "point, request units; null (or 0) at the two ends.")
+
+
+NOMINAL_CSV_MAX = 1_000_000
+
+INSPECTION_DEFAULTS_MM = {"length": 1.0, "bend_radius": 1.0, "end_point": 2.0}
+INSPECTION_DEFAULTS_DEG = {"rotation": 1.0, "angle": 0.5}
+
+
+class InspectionTolerances(StrictModel):
+    """Symmetric tolerances (±) of an inspection per field. Null takes the default: length ±1 mm, rotation ±1°,
+    angle ±0.5°, bend radius (CLR) ±1 mm, end point ±2 mm (the millimetre defaults are converted into the
+    request's units)."""
+
+    length: FiniteFloat | None = Field(default=None, gt=0, description="Straight length, request units.")
+    rotation: FiniteFloat | None = Field(default=None, gt=0, description="Rotation of the bend plane, degrees.")
+    angle: FiniteFloat | None = Field(default=None, gt=0, description="Bend angle, degrees.")
+    bend_radius: FiniteFloat | None = Field(default=None, gt=0, description="Centreline bend radius, request units.")
+    end_point: FiniteFloat | None = Field(default=None, gt=0, description="Distance of each measured tube end from "
+                                          "the nominal one after best-fit alignment, request units.")
+
+
 class TubeOptions(StrictModel):
     tolerance: FiniteFloat | None = Field(
         default=None,
@@ -122,8 +152,40 @@ class TubeOptions(StrictModel):
         description="Springback-correction damping factor: corrected = nominal + damping · "
         "(nominal − measured), for angle, rotation and length.",
     )
+    nominal_xyz_clr: list[XyzClrPoint] | None = Field(
+        default=None, min_length=2,
+        description="Nominal as XYZ-CLR (start, intersection points of consecutive straights, end; CLR per bend), "
+        "request units; converted to LRA (L = straight between tangent points, R = rotation between consecutive "
+        "bend planes, A = angle between straights). Bends below 180° only. Instead of `nominal`.",
+    )
+    nominal_csv: str | None = Field(
+        default=None, min_length=1, max_length=NOMINAL_CSV_MAX,
+        description="Nominal as the text of a CSV file: LRA rows (length, rotation, angle, CLR; e.g. this "
+        "service's lra.csv) or XYZ-CLR points (x, y, z, clr; e.g. its xyz_clr.csv). Comma, semicolon, tab or "
+        "blank separated; a header names the columns (unit suffixes such as _mm or [in] are converted into the "
+        "request's units), without one 4 numeric columns are LRA unless the first row has no CLR (then XYZ-CLR), "
+        "and 5 start with a row number. Lines that cannot be read are skipped with a warning. Instead of `nominal`.",
+    )
+    nominal_format: Literal["auto", "lra", "xyz_clr"] = Field(
+        default="auto", description="Format of `nominal_csv`: 'auto' (by its header, else by its first row).")
+    inspection_tolerances: InspectionTolerances = Field(
+        default_factory=InspectionTolerances, description="Tolerances of the inspection's pass/fail per field.")
+    springback_model: Literal["per_bend", "linear_per_die"] = Field(
+        default="per_bend",
+        description="Angle correction: 'per_bend' (next command = nominal + springback of that bend, springback = "
+        "commanded − measured with the nominal as commanded) or 'linear_per_die' (bends sharing a nominal CLR fit "
+        "angle_out = k·angle_cmd + b; next command = (nominal − b)/k; a die with fewer than two distinct "
+        "commanded angles falls back to k = 1).",
+    )
     seed: Integer = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
     file_units: Units | None = Field(default=None, description=FILE_UNITS_HELP)
+
+    @model_validator(mode="after")
+    def _one_nominal(self):
+        given = [name for name in ("nominal", "nominal_xyz_clr", "nominal_csv") if getattr(self, name) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give the nominal once: {', '.join(given)} are all set")
+        return self
 
 
 def _points_form(value: Any) -> str:
@@ -238,6 +300,57 @@ class BendDeviation(BaseModel):
     bend_radius: float = Field(description="measured − nominal bend radius")
 
 
+class FieldCheck(BaseModel):
+    """One field of one row: nominal, measured, deviation (measured − nominal) and the verdict."""
+
+    nominal: float
+    measured: float
+    deviation: float
+    tolerance: float
+    ok: bool
+
+
+class InspectionRow(BaseModel):
+    """One LRA row checked: straight length before the bend, rotation, bend angle, CLR (the last row: length only)."""
+
+    row: int = Field(description="1-based LRA row, in the nominal's order.")
+    length: FieldCheck = Field(description="Request units.")
+    rotation: FieldCheck | None = Field(default=None, description="Degrees, deviation wrapped to ±180 (rows 2..n).")
+    angle: FieldCheck | None = Field(default=None, description="Degrees (bend rows).")
+    bend_radius: FieldCheck | None = Field(default=None, description="Request units (bend rows).")
+    failed: list[str] = Field(default_factory=list, description="Fields out of tolerance.")
+    ok: bool
+
+
+class EndPointCheck(BaseModel):
+    end: Literal["start", "end"]
+    deviation: float = Field(description="Distance of the measured end from the nominal one after best-fit "
+                             "alignment, request units.")
+    tolerance: float
+    ok: bool
+
+
+class SpringbackFit(BaseModel):
+    """The bends of one die (one nominal CLR): measured angle = k · commanded angle + b (degrees)."""
+
+    bend_radius: float = Field(description="The die's nominal CLR, request units.")
+    bends: list[int] = Field(description="1-based bend numbers.")
+    k: float
+    b: float = Field(description="Degrees.")
+
+
+class Correction(BaseModel):
+    """Values for the next part of one LRA row: deltas to add to the nominal, and the resulting command."""
+
+    row: int
+    delta_length: float = Field(description="−(length deviation), request units.")
+    delta_rotation: float = Field(description="−(rotation deviation), degrees.")
+    delta_angle: float = Field(description="Next command − nominal angle, degrees (the springback to add).")
+    springback: float | None = Field(default=None, description="Commanded − measured bend angle, degrees (bend rows; "
+                                     "the nominal is taken as commanded).")
+    next: LraRow = Field(description="LRA row to command next (CLR is tooling and stays nominal).")
+
+
 class Inspection(BaseModel):
     matched: bool = Field(description="False when the bend counts differ (then only sheath data is given).")
     reversed: bool = Field(description="True when the scan was matched to the nominal in reverse direction.")
@@ -252,6 +365,17 @@ class Inspection(BaseModel):
         description="Rigid motion mapping the nominal frame to the scan: 'translation' and 'quaternion' [w,x,y,z]."
     )
     corrected_lra: list[LraRow] = Field(description="LRA to send to the bender (springback correction).")
+    tolerances: InspectionTolerances | None = Field(default=None, description="The tolerances applied (defaults "
+                                                     "filled in).")
+    rows: list[InspectionRow] = Field(default_factory=list, description="Per-row check (bend counts matched only).")
+    end_points: list[EndPointCheck] = Field(default_factory=list)
+    verdict: Literal["pass", "fail"] = Field(default="fail", description="'pass' when every row and end point is "
+                                             "within tolerance and the bend counts match.")
+    failed_rows: list[int] = Field(default_factory=list, description="1-based LRA rows out of tolerance.")
+    corrections: list[Correction] = Field(default_factory=list, description="For the next part (undamped).")
+    springback_fits: list[SpringbackFit] = Field(default_factory=list, description="'linear_per_die' only.")
+    nominal_source: str = Field(default="nominal", description="How the nominal was given and read.")
+    warnings: list[Diagnostic] = Field(default_factory=list, description="Lines of a nominal CSV that were skipped.")
 
 
 LRA_CONVENTION = (

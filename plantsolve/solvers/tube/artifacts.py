@@ -1,5 +1,6 @@
 """Files from a result: tube mesh (STL, GLB), deviation-coloured cloud (PLY), LRA and
-XYZ+CLR tables (CSV), overview plot (PNG) and, with a nominal LRA, the inspection plot (PNG)."""
+XYZ+CLR tables (CSV), overview plot (PNG) and, with a nominal, the inspection plot, the overlay of
+nominal and measured centrelines (PNG) and the corrections for the next part (CSV)."""
 
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ from plantsolve.solvers.tube.model import (
     spine_distance,
     tube_mesh_arrays,
 )
+from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.scan import TubeScan
 
 
@@ -131,6 +133,8 @@ def render_artifacts(scan: TubeScan, solved: Solved) -> list[Artifact]:
     out.append(Artifact("lra.csv", "text/csv", lra_csv(result)))
     out.append(Artifact("xyz_clr.csv", "text/csv", xyz_clr_csv(result, model)))
     out.append(Artifact("centreline.dxf", "image/vnd.dxf", centreline_dxf(model, result.units)))
+    if result.inspection is not None and result.inspection.corrections:
+        out.append(Artifact("corrections.csv", "text/csv", corrections_csv(result)))
 
     for name, fig in figures(scan, result, pts=pts, dev=dev, outlier=outlier, lim=lim).items():
         out.append(figure_artifact(f"{name}.png", fig))
@@ -186,13 +190,107 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
     return fig
 
 
+def corrections_csv(result: TubeResult) -> bytes:
+    """Per LRA row: nominal, measured, deviation (measured − nominal), pass/fail with the failed fields, and
+    the next part's deltas, springback (commanded − measured) and command. Units in the header."""
+    ins, u = result.inspection, result.units
+    head = ["row"]
+    for what in ("nominal", "measured", "deviation"):
+        head += [f"{what}_length_{u}", f"{what}_rotation_deg", f"{what}_angle_deg", f"{what}_clr_{u}"]
+    head += ["status", "failed_fields", f"delta_length_{u}", "delta_rotation_deg", "delta_angle_deg",
+             "springback_deg", f"next_length_{u}", "next_rotation_deg", "next_angle_deg", f"next_clr_{u}"]
+    rows = [head]
+
+    def num(v):
+        return "" if v is None else f"{v:.6f}"
+
+    for r, c in zip(ins.rows, ins.corrections):
+        checks = [r.length, r.rotation, r.angle, r.bend_radius]
+        line = [r.row]
+        for what in ("nominal", "measured", "deviation"):
+            line += [num(getattr(f, what)) if f is not None else "" for f in checks]
+        line += ["pass" if r.ok else "fail", " ".join(r.failed), num(c.delta_length), num(c.delta_rotation),
+                 num(c.delta_angle), num(c.springback), num(c.next.length), num(c.next.rotation), num(c.next.angle),
+                 num(c.next.bend_radius)]
+        rows.append(line)
+    return _csv(rows)
+
+
+def _row_anchors(model: TubeModel) -> np.ndarray:
+    """Where each LRA row is shown: the middle of its bend's arc, and for the last row the middle of the last
+    straight."""
+    sp = build_spine(model)
+    out = []
+    for k in np.flatnonzero(sp.kind == 1):
+        phi = 0.5 * sp.angle[k]
+        out.append(sp.centre[k] - sp.radius[k] * np.cos(phi) * sp.normal[k] + sp.radius[k] * np.sin(phi) * sp.tangent[k])
+    out.append(0.5 * (sp.start[-1] + sp.end[-1]))
+    return np.array(out)
+
+
+def _row_label(row) -> str:
+    units = {"length": "L", "rotation": "R", "angle": "A", "bend_radius": "CLR"}
+    parts = [f"{units[f]} {getattr(row, f).deviation:+.2f}" for f in row.failed]
+    return f"row {row.row}: " + ", ".join(parts)
+
+
+def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
+    """Nominal (aligned onto the scan by the inspection's best-fit motion) and measured centrelines projected
+    on the measured tube's principal planes (plan: 1st–2nd axes, elevation: 1st–3rd), rows out of tolerance
+    marked and labelled with their failed fields' deviations (L, CLR in request units; R, A in degrees)."""
+    ins = result.inspection
+    nominal_given = resolve_nominal(request.options, request.units) if ins is not None else None
+    if ins is None or nominal_given is None:
+        return None
+    u = result.units
+    measured = model_from_result(result)
+    if ins.reversed:
+        measured = reverse_model(measured)
+    nominal = model_from_rows(nominal_given.rows, measured.pipe_radius)
+    R = quaternion_frame(ins.alignment["quaternion"])
+    t = np.asarray(ins.alignment["translation"], float)
+    step = max(build_spine(measured).length.sum() / 800, 1e-9)
+    qm, _ = sample_centreline(measured, step)
+    qn = sample_centreline(nominal, step)[0] @ R.T + t
+    centre = qm.mean(0)
+    axes = np.linalg.svd(qm - centre, full_matrices=False)[2]
+    anchors = (_row_anchors(measured) - centre) @ axes.T if ins.matched else np.zeros((0, 3))
+    bad = [r for r in ins.rows if not r.ok]
+    fig = Figure(figsize=(12, 5.6), layout="constrained")
+    for ax, (i, j), view in zip(fig.subplots(1, 2), ((0, 1), (0, 2)), ("plan", "elevation")):
+        pm, pn = (qm - centre) @ axes.T, (qn - centre) @ axes.T
+        ax.plot(pn[:, i], pn[:, j], "k--", lw=1.2)
+        ax.plot(pm[:, i], pm[:, j], "C0-", lw=1.6)
+        for r in bad:
+            a = anchors[r.row - 1]
+            ax.plot(a[i], a[j], "o", color="C3", ms=7, mfc="none", mew=1.8)
+            ax.annotate(_row_label(r), (a[i], a[j]), xytext=(6, 6), textcoords="offset points", fontsize=8,
+                        color="C3")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"1st principal axis of the measured centreline [{u}]")
+        ax.set_ylabel(f"{'2nd' if j == 1 else '3rd'} principal axis [{u}]")
+        ax.set_title(view)
+    ends = ", ".join(f"{e.end} {e.deviation:.3g} {u}" for e in ins.end_points)
+    fig.suptitle(f"Inspection {ins.verdict.upper()}: rows out of tolerance "
+                 f"{', '.join(map(str, ins.failed_rows)) or 'none'}; end points {ends}"
+                 + ("" if ins.matched else "; bend counts differ"))
+    handles = [Line2D([], [], color="k", ls="--", lw=1.2, label="nominal (best-fit aligned)"),
+               Line2D([], [], color="C0", lw=1.6, label="measured"),
+               Line2D([], [], color="C3", marker="o", ls="", mfc="none", mew=1.8,
+                      label="row out of tolerance (deviation: L, CLR [" + u + "], R, A [deg])")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8)
+    return fig
+
+
 def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
     """Deviation along the tube (top): distance of the measured centreline from the nominal one after the
     inspection's best-fit motion, against arc length, bends shaded; per-bend deviations (bottom) of angle
     and rotation (degrees) and of length and radius (request units, right axis)."""
-    ins, nominal_rows = result.inspection, request.options.nominal
-    if ins is None or not nominal_rows:
+    ins = result.inspection
+    nominal_given = resolve_nominal(request.options, request.units) if ins is not None else None
+    if ins is None or nominal_given is None:
         return None
+    nominal_rows = nominal_given.rows
     u = result.units
     measured = model_from_result(result)
     if ins.reversed:
@@ -247,7 +345,7 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
 
 def figures(scan: TubeScan, result: TubeResult, pts: np.ndarray | None = None, dev: np.ndarray | None = None,
             outlier: np.ndarray | None = None, lim: float | None = None) -> dict[str, Figure]:
-    """Every plot by artifact stem: ``overview`` and, with a nominal LRA, ``inspection``."""
+    """Every plot by artifact stem: ``overview`` and, with a nominal, ``inspection`` and ``inspection_overlay``."""
     model = model_from_result(result)
     if pts is None:
         pts, dev, outlier, lim = _deviations(scan, result, model)
@@ -255,4 +353,5 @@ def figures(scan: TubeScan, result: TubeResult, pts: np.ndarray | None = None, d
     fig = inspection_figure(scan.request, result)
     if fig is not None:
         out["inspection"] = fig
+        out["inspection_overlay"] = overlay_figure(scan.request, result)
     return out

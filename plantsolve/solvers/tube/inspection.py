@@ -8,6 +8,10 @@ smaller rms wins. Reported: per-bend deviations (measured − nominal), the shea
 (max distance of the measured centreline from the aligned nominal one) and the corrected
 LRA for the bender: corrected = nominal + damping · (nominal − measured) for bend angle,
 rotation and length (springback compensation); radii are tooling and stay nominal.
+
+With equal bend counts every LRA row is checked per field against the tolerances (``tolerances``), both
+tube ends by their distance from the aligned nominal ends, and the corrections for the next part are given
+per row (``corrections``). The nominal may be given as LRA rows, XYZ-CLR points or a CSV (``nominal_files``).
 """
 
 from __future__ import annotations
@@ -16,14 +20,22 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow, TubeOptions
 from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_angle
-
-from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow
-
+from plantsolve.solvers.tube import corrections as next_part
+from plantsolve.solvers.tube import tolerances as tol_check
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, distance_frames, reverse_model,
-                       sample_centreline, spine_distance)
-
+from plantsolve.solvers.tube.model import (
+    TubeModel,
+    build_spine,
+    closest_points,
+    distance_frames,
+    reverse_model,
+    sample_centreline,
+    spine_distance,
+)
+from plantsolve.solvers.tube.nominal_files import resolve_nominal
 
 QUICK_NFEV = 15  # alignment steps that decide the walking direction
 
@@ -88,7 +100,17 @@ def align(measured: TubeModel, nominal: TubeModel,
     return R, t0 + sol.x[3:], res(sol.x)
 
 
-def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> Inspection:
+def inspect_request(measured: TubeModel, opts: TubeOptions, units: str) -> Inspection | None:
+    """The inspection the options ask for (None without a nominal)."""
+    nominal = resolve_nominal(opts, units)
+    if nominal is None:
+        return None
+    return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, nominal.warnings)
+
+
+def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opts: TubeOptions | None = None,
+            units: str = "mm", source: str = "nominal: LRA rows",
+            warnings: list[Diagnostic] | None = None) -> Inspection:
     nominal = model_from_rows(nominal_rows, measured.pipe_radius)
     best = None
     cands = [(False, measured), (True, reverse_model(measured))]
@@ -125,8 +147,21 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float) -> 
         corrected[n] = LraRow(length=max(nominal_rows[n].length - damping * last_length, 0.0), rotation=0.0,
                               angle=0.0, bend_radius=0.0)
     quat = [float(v) for v in quaternion(Rotation.from_matrix(R), positive_w=True)]
+    opts = opts or TubeOptions()
+    tol = tol_check.resolved(opts.inspection_tolerances, units)
+    sp_n, sp_m = build_spine(nominal), build_spine(m)
+    nominal_ends = np.array([t, R @ sp_n.end[-1] + t])
+    ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol)
+    rows, fixes, fits = [], [], []
+    if matched:
+        rows = tol_check.check_rows(nominal_rows, meas_rows, tol)
+        fixes, fits = next_part.corrections(nominal_rows, meas_rows, opts.springback_model)
+    failed = [r.row for r in rows if not r.ok]
+    verdict = "pass" if matched and not failed and all(e.ok for e in ends) else "fail"
     return Inspection(matched=matched, reversed=reversed_, measured_lra=meas_rows, bends=bends,
                       last_length=last_length, sheath_deviation=float(d.max()),
                       sheath_rms=float(np.sqrt(np.mean(d ** 2))),
                       alignment={"translation": [float(v) for v in t], "quaternion": quat},
-                      corrected_lra=corrected)
+                      corrected_lra=corrected, tolerances=tol, rows=rows, end_points=ends, verdict=verdict,
+                      failed_rows=failed, corrections=fixes, springback_fits=fits, nominal_source=source,
+                      warnings=list(warnings or []))

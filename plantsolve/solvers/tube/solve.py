@@ -22,7 +22,7 @@ from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
-from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.inspection import inspect_request
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.validation import implausible_extent, implausible_radius
@@ -604,8 +604,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report,
                                ls.radius_model)
     add_sigmas(result, ls, pts, opts)
-    if opts.nominal:
-        result.inspection = inspect(ls.model, opts.nominal, opts.damping)
+    result.inspection = inspect_request(ls.model, opts, request.units)
     progress(1.0, "done")
     return Solved(result)
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
 
 MIN_POINTS = 100
@@ -65,6 +66,7 @@ def check_input(scan: TubeScan) -> None:
         if rows[-1].angle != 0:
             errors.append(FieldError(loc=("options", "nominal", len(rows) - 1, "angle"),
                                      msg="the last row is the final straight: angle must be 0"))
+    errors.extend(nominal_errors(o, scan.request.units))
     if errors:
         raise InputRejected(errors)
 

@@ -38,7 +38,7 @@ def test_inspection_plot_shows_the_deviation_along_the_tube(inspected):
     scan, solved = inspected
     res = solved.result
     figs = figures(scan, res)
-    assert set(figs) == {"overview", "inspection"}
+    assert set(figs) == {"overview", "inspection", "inspection_overlay"}
     fig = figs["inspection"]
     check_figure(fig)
     top, bars = fig.axes[0], fig.axes[1]

@@ -1,0 +1,301 @@
+"""The nominal of an inspection as a bender shop gives it: LRA rows, XYZ-CLR points, or the text of a CSV file
+holding either (this service's own ``lra.csv`` and ``xyz_clr.csv`` included), read into LRA rows.
+
+XYZ-CLR → LRA is the standard conversion (done by :func:`model_from_control_polygon`): L = straight between
+the tangent points of consecutive bends (leg length minus CLR·tan(A/2) at each end), R = dihedral rotation
+between consecutive bend planes, A = angle between consecutive straights. LRA → XYZ-CLR is its inverse
+(:func:`control_polygon`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.tube import LraRow, TubeOptions
+from plantsolve.solvers.base import FieldError
+from plantsolve.solvers.tube.lra import model_from_rows, model_rows
+from plantsolve.solvers.tube.model import control_polygon, model_from_control_polygon
+
+UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "ft": 304.8}
+ANGLE_DEG = {"deg": 1.0, "°": 1.0, "degree": 1.0, "degrees": 1.0, "rad": float(np.degrees(1.0))}
+
+# column names of the shops' tables (YBC: Y feed, B rotation, C bend angle), lower case, units stripped
+COLUMNS = {
+    "length": {"length", "l", "feed", "y", "len", "straight", "distance", "dist", "feed_length", "straight_length"},
+    "rotation": {"rotation", "r", "rot", "b", "plane_rotation", "twist", "rotation_angle"},
+    "angle": {"angle", "a", "c", "ang", "bend_angle"},
+    "clr": {"clr", "bend_radius", "radius", "rad", "clr_radius", "centreline_radius", "centerline_radius",
+            "cl_radius", "r_bend"},
+    "x": {"x"}, "y_xyz": {"y"}, "z": {"z"},
+    "index": {"row", "point", "pt", "no", "nr", "index", "idx", "#", "bend", "n", "id", "step"},
+}
+HEADER_UNIT = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z°]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft|deg|rad))?$")
+MIN_ANGLE_DEG = 1e-6
+
+
+class NominalError(ValueError):
+    """A nominal that cannot be used: ``where`` is a line number (CSV) or a point index (XYZ-CLR)."""
+
+    def __init__(self, where: int | None, field_name: str | None, msg: str):
+        self.where, self.field_name, self.msg = where, field_name, msg
+        super().__init__(msg)
+
+
+@dataclass
+class Nominal:
+    rows: list[LraRow]
+    source: str
+    warnings: list[Diagnostic] = field(default_factory=list)
+
+
+def xyz_clr_from_rows(rows: list[LraRow]) -> tuple[np.ndarray, np.ndarray]:
+    """LRA → XYZ-CLR in the LRA's own frame (start at the origin, first straight along x)."""
+    return control_polygon(model_from_rows(rows, 0.0))
+
+
+def rows_from_xyz_clr(points, clr) -> list[LraRow]:
+    """XYZ-CLR → LRA; ``points`` (n + 2, 3) start, intersection points, end; ``clr`` (n,) of the interior points.
+    Raises NominalError naming the point (0-based) that makes it impossible."""
+    pts = np.asarray(points, float).reshape(-1, 3)
+    clr = np.asarray(clr, float)
+    if len(pts) < 2:
+        raise NominalError(None, None, "at least two points (start and end) are needed")
+    legs = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    scale = max(float(legs.sum()), 1e-300)
+    for i in np.flatnonzero(legs <= 1e-12 * scale):
+        raise NominalError(int(i) + 1, None, f"point {i + 1} coincides with point {i}")
+    for i, c in enumerate(clr, 1):
+        if not c > 0:
+            raise NominalError(i, "clr", f"point {i} is a bend: it needs a CLR > 0")
+    d = np.diff(pts, axis=0) / legs[:, None]
+    for i in range(len(pts) - 2):
+        a = float(np.degrees(np.arccos(np.clip(d[i] @ d[i + 1], -1, 1))))
+        if a < MIN_ANGLE_DEG:
+            raise NominalError(i + 1, None, f"points {i}, {i + 1}, {i + 2} are collinear: no bend at point {i + 1}")
+        if a > 180 - MIN_ANGLE_DEG:
+            raise NominalError(i + 1, None, f"the tube turns back on itself at point {i + 1} (180°): a 180° bend has "
+                               "no intersection point; give such a tube as LRA")
+    model = model_from_control_polygon(pts, clr)
+    for i, length in enumerate(model.lengths):
+        if length < -1e-9 * scale:
+            raise NominalError(i + 1 if i < len(model.lengths) - 1 else i, None,
+                               f"the bends at both ends of the straight to point {i + 1} overlap (their tangent "
+                               f"lengths exceed the leg by {-length:.6g}): CLR too large for that leg")
+    model.lengths = np.maximum(model.lengths, 0.0)
+    return model_rows(model)
+
+
+def _split(line: str, delim: str | None) -> list[str]:
+    if delim is None:
+        return line.split()
+    return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
+
+
+def _delimiter(lines: list[str]) -> str | None:
+    sample = "\n".join(lines[:5])
+    for d in (";", "\t", ","):
+        if d in sample:
+            return d
+    return None
+
+
+def _number(cell: str, decimal_comma: bool) -> float | None:
+    """A cell's value; None when empty. Raises ValueError on text."""
+    cell = cell.strip()
+    if not cell:
+        return None
+    v = float(cell.replace(",", ".") if decimal_comma else cell)
+    if not np.isfinite(v):
+        raise ValueError(f"{cell!r} is not finite")
+    return v
+
+
+def _header_columns(cells: list[str]) -> tuple[list[str | None], list[str | None]]:
+    """Column roles and units from a header row; a role None is a column that is not read."""
+    roles, units = [], []
+    names = [c.strip().lower() for c in cells]
+    plain = [HEADER_UNIT.match(n).group("name").strip().replace(" ", "_").replace("-", "_") for n in names]
+    is_xyz = "x" in plain and "z" in plain
+    for raw, name in zip(names, plain):
+        m = HEADER_UNIT.match(raw)
+        unit = m.group("u1") or m.group("u2")
+        role = None
+        for key, words in COLUMNS.items():
+            if name in words:
+                role = key
+                break
+        if role == "length" and name == "y" and is_xyz:
+            role = "y_xyz"
+        if role == "y_xyz" and not is_xyz:
+            role = "length"
+        roles.append(None if role == "index" else role)
+        units.append(unit)
+    return roles, units
+
+
+def _length_factor(unit: str | None, units: str, line: int, name: str) -> float:
+    if unit is None:
+        return 1.0
+    if unit not in UNIT_MM:
+        raise NominalError(line, name, f"unknown length unit {unit!r} in the header (mm, cm, m, in, ft)")
+    return UNIT_MM[unit] / UNIT_MM[units]
+
+
+def _angle_factor(unit: str | None, line: int, name: str) -> float:
+    if unit is None:
+        return 1.0
+    if unit not in ANGLE_DEG:
+        raise NominalError(line, name, f"unknown angle unit {unit!r} in the header (deg, rad)")
+    return ANGLE_DEG[unit]
+
+
+def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal:
+    """LRA rows from the text of an LRA or XYZ-CLR CSV (see ``TubeOptions.nominal_csv``). Unreadable lines are
+    skipped with a warning naming the line; raises NominalError (with the line) when nothing usable is left."""
+    lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise NominalError(None, None, "the nominal CSV holds no rows")
+    delim = _delimiter([ln for _, ln in lines])
+    decimal_comma = delim in (";", "\t", None) and any(re.fullmatch(r"-?\d+,\d+", c.strip()) for _, ln in lines[:5]
+                                                       for c in _split(ln, delim))
+
+    def numeric(line: str) -> bool:
+        try:
+            [_number(c, decimal_comma) for c in _split(line, delim)]
+        except ValueError:
+            return False
+        return True
+
+    warnings: list[Diagnostic] = []
+    # title lines above the header (part number, customer, ...): text lines that name no column of ours
+    while len(lines) > 2 and not numeric(lines[0][1]) and not numeric(lines[1][1]) and \
+            not {"length", "x"} & set(_header_columns(_split(lines[0][1], delim))[0]):
+        warnings.append(Diagnostic(code="nominal_line_skipped", message=f"nominal CSV line {lines[0][0]} skipped: "
+                                   "text above the header", details={"line": lines[0][0], "text": lines[0][1][:120]}))
+        lines = lines[1:]
+    first_line, first = lines[0]
+    head = _split(first, delim)
+    header = not numeric(first)
+    if header:
+        roles, col_units = _header_columns(head)
+        body = lines[1:]
+        kind = "xyz_clr" if {"x", "y_xyz", "z"} <= set(roles) else "lra"
+        if fmt != "auto" and fmt != kind:
+            raise NominalError(first_line, None, f"the header names {kind} columns ({', '.join(head)}), not {fmt}")
+        need = ["x", "y_xyz", "z", "clr"] if kind == "xyz_clr" else ["length", "rotation", "angle", "clr"]
+        missing = [n for n in need if n not in roles and not (kind == "xyz_clr" and n == "clr")]
+        if missing:
+            raise NominalError(first_line, None, f"the header ({', '.join(head)}) has no column for "
+                               f"{', '.join(m.replace('_xyz', '') for m in missing)}")
+        cols = {r: roles.index(r) for r in need if r in roles}
+        fac = {r: (_angle_factor(col_units[c], first_line, head[c]) if r in ("rotation", "angle")
+                   else _length_factor(col_units[c], units, first_line, head[c])) for r, c in cols.items()}
+        described = f"header {', '.join(head)}"
+    else:
+        body = lines
+        width = max(len(_split(ln, delim)) for _, ln in lines[:10])
+        if width not in (4, 5):
+            raise NominalError(first_line, None, f"{width} columns without a header: expected 4 (L, R, A, CLR or "
+                               "x, y, z, CLR) or 5 (a row number first); add a header naming the columns")
+        off = width - 4
+        kind = fmt
+        if kind == "auto":
+            # an LRA's first row is a bend (CLR > 0) unless the tube is straight; an XYZ-CLR's first point is an end
+            c0 = _number(head[off + 3], decimal_comma) if len(head) > off + 3 else None
+            kind = "xyz_clr" if (c0 is None or c0 == 0) and len(lines) > 2 else "lra"
+        need = ["x", "y_xyz", "z", "clr"] if kind == "xyz_clr" else ["length", "rotation", "angle", "clr"]
+        cols = {r: off + k for k, r in enumerate(need)}
+        fac = {r: 1.0 for r in need}
+        described = f"no header, {width} columns read as {'x, y, z, CLR' if kind == 'xyz_clr' else 'L, R, A, CLR'}"
+    values: list[dict] = []
+    value_lines: list[int] = []
+    for line_no, ln in body:
+        cells = _split(ln, delim)
+        try:
+            row = {}
+            for r, c in cols.items():
+                # a trailing field left out is empty (an end point's CLR, the last row's angle)
+                v = _number(cells[c], decimal_comma) if c < len(cells) else None
+                row[r] = None if v is None else v * fac[r]
+            if kind == "xyz_clr" and any(row[r] is None for r in ("x", "y_xyz", "z")):
+                raise ValueError("x, y and z are needed")
+            if kind == "lra" and row["length"] is None:
+                raise ValueError("no length")
+        except ValueError as exc:
+            warnings.append(Diagnostic(code="nominal_line_skipped", message=f"nominal CSV line {line_no} skipped: "
+                                       f"{exc}", details={"line": line_no, "text": ln[:120]}))
+            continue
+        values.append(row)
+        value_lines.append(line_no)
+    if not values:
+        raise NominalError(None, None, "no row of the nominal CSV could be read" +
+                           (f" ({warnings[0].message})" if warnings else ""))
+    if kind == "xyz_clr":
+        pts = np.array([[v["x"], v["y_xyz"], v["z"]] for v in values])
+        clr = np.array([v.get("clr") or 0.0 for v in values[1:-1]])
+        try:
+            rows = rows_from_xyz_clr(pts, clr)
+        except NominalError as exc:
+            line = value_lines[exc.where] if exc.where is not None and exc.where < len(value_lines) else None
+            raise NominalError(line, exc.field_name, exc.msg) from None
+        return Nominal(rows, f"nominal_csv: XYZ-CLR, {len(pts)} points ({described})", warnings)
+    rows = []
+    for i, v in enumerate(values):
+        last = i == len(values) - 1
+        rows.append({"length": v["length"], "rotation": v.get("rotation") or 0.0,
+                         "angle": 0.0 if last else (v.get("angle") or 0.0),
+                         "bend_radius": 0.0 if last else (v.get("clr") or 0.0)})
+        if last and (v.get("angle") or 0.0) != 0:
+            raise NominalError(value_lines[i], "angle", "the last LRA row is the final straight: its angle must be 0 "
+                               "(add the final straight as a row of its own)")
+    if rows[0]["rotation"] != 0:
+        warnings.append(Diagnostic(code="nominal_first_rotation", message=f"nominal CSV line {value_lines[0]}: the "
+                                   f"first rotation ({rows[0]['rotation']:g}°) turns the whole part only; read as 0",
+                                   details={"line": value_lines[0]}))
+        rows[0]["rotation"] = 0.0
+    if rows[-1]["rotation"] != 0:
+        rows[-1]["rotation"] = 0.0
+    out = []
+    for line_no, r in zip(value_lines, rows):
+        try:
+            out.append(LraRow(**r))
+        except ValueError as exc:
+            raise NominalError(line_no, None, f"not a valid LRA row: {exc.errors()[0]['msg']}") from None
+    for line_no, r in zip(value_lines[:-1], out[:-1]):
+        if r.angle <= 0 or r.bend_radius <= 0:
+            raise NominalError(line_no, "angle" if r.angle <= 0 else "bend_radius",
+                               "every LRA row but the last needs a bend angle > 0 and a CLR > 0")
+    return Nominal(out, f"nominal_csv: LRA, {len(out)} rows ({described})", warnings)
+
+
+def resolve_nominal(opts: TubeOptions, units: str = "mm") -> Nominal | None:
+    """The nominal of the options as LRA rows (None without one); raises NominalError."""
+    if opts.nominal:
+        return Nominal(list(opts.nominal), "nominal: LRA rows")
+    if opts.nominal_xyz_clr:
+        p = opts.nominal_xyz_clr
+        rows = rows_from_xyz_clr([[q.x, q.y, q.z] for q in p], [q.clr or 0.0 for q in p[1:-1]])
+        return Nominal(rows, f"nominal_xyz_clr: {len(p)} points")
+    if opts.nominal_csv:
+        return read_nominal_csv(opts.nominal_csv, opts.nominal_format, units)
+    return None
+
+
+def nominal_errors(opts: TubeOptions, units: str = "mm") -> list[FieldError]:
+    """The 422 errors of an unusable XYZ-CLR or CSV nominal, naming the point or the line."""
+    try:
+        resolve_nominal(opts, units)
+    except NominalError as exc:
+        if opts.nominal_xyz_clr:
+            loc = ("options", "nominal_xyz_clr") + ((exc.where,) if exc.where is not None else ()) + \
+                ((exc.field_name,) if exc.field_name else ())
+            return [FieldError(loc=loc, msg=exc.msg)]
+        where = f"line {exc.where}: " if exc.where is not None else ""
+        return [FieldError(loc=("options", "nominal_csv"), msg=where + exc.msg)]
+    return []
