@@ -10,6 +10,7 @@ VENV       ?= .venv
 BIN        := $(VENV)/bin
 HOST       ?= 127.0.0.1
 PORT       ?= 8000
+TEST_WORKERS ?= 2
 UV_VERSION := 0.13.8
 UV         := .tools/bin/uv
 # never let uv fetch a Python of its own: the venv is made with $(PYTHON)
@@ -40,12 +41,13 @@ install-service: $(VENV)/.installed-service
 run: install-service
 	$(BIN)/plantsolve serve --host $(HOST) --port $(PORT)
 
+# the suite over TEST_WORKERS processes (pytest-xdist); the integration tests stay together on one of them
 test: install
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadgroup
 
 # Everything but the PostgreSQL/Redis/Celery integration tests.
 test-fast: install
-	$(BIN)/python -m pytest -m "not integration"
+	$(BIN)/python -m pytest -n $(TEST_WORKERS) --dist loadgroup -m "not integration"
 
 worker: install
 	$(BIN)/plantsolve worker

@@ -19,7 +19,9 @@ from plantsolve.app.settings import AppSettings
 
 REPO = Path(__file__).resolve().parents[1]
 PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
-REDIS_URL = os.environ.get("TEST_REDIS_URL", "redis://127.0.0.1:6379/9")
+# one Redis database per pytest-xdist worker (gw0 -> 9, gw1 -> 10, ...): a session's flush never empties another's queue
+REDIS_URL = os.environ.get(
+    "TEST_REDIS_URL", f"redis://127.0.0.1:6379/{9 + int(os.environ.get('PYTEST_XDIST_WORKER', 'gw0')[2:] or 0)}")
 
 
 def service_settings(tmp_path: Path, **overrides) -> AppSettings:
@@ -124,3 +126,11 @@ def redis_url():
     connection.flushdb()
     yield REDIS_URL
     connection.flushdb()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist (``make test``: ``-n 2 --dist loadgroup``) the integration tests run together on one
+    worker: they start Celery workers and servers of their own, and two such at once would only fight for the cores."""
+    for item in items:
+        if item.get_closest_marker("integration") is not None:
+            item.add_marker(pytest.mark.xdist_group("integration"))
