@@ -157,6 +157,15 @@ def _surface_layout(cls: str, fields: list[str]) -> tuple[int, int]:
     return zone_index + 1, zone_index + 6
 
 
+def _detailed_surface(cls: str, fields: list[str], lines: list[int]) -> tuple[str, list[list[float]]]:
+    """The zone name and the vertices, as the file lists them, of a ``*:Detailed`` base surface."""
+    zone_index, _ = SURFACE_CLASSES[cls]
+    if len(fields) <= zone_index or not fields[zone_index]:
+        raise ValueError("no zone name")
+    _, n_index = _surface_layout(cls, fields)
+    return fields[zone_index], _vertices(fields, lines, n_index)
+
+
 def _fenestration_layout(fields: list[str]) -> int:
     for n_index in (8, 9):  # 9: the Shading Control Name field of EnergyPlus before 9.0
         if n_index >= len(fields):
@@ -238,45 +247,24 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     surface_zone: dict[str, str] = {}
     windows = []
     for cls, fields, lines, line in objects:
-        if cls in SURFACE_CLASSES:
+        if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
             name = fields[0] if fields else ""
-            label = f"{cls} {name!r}"
+            detailed = cls in SURFACE_CLASSES
             try:
-                zone_index, _ = SURFACE_CLASSES[cls]
                 if not name:
                     raise ValueError("no name")
-                if len(fields) <= zone_index or not fields[zone_index]:
-                    raise ValueError("no zone name")
-                _, n_index = _surface_layout(cls, fields)
-                points = _vertices(fields, lines, n_index)
-                zone = fields[zone_index]
+                zone, points = _detailed_surface(cls, fields, lines) if detailed else base_surface(cls, fields)
                 zone_key = zone.lower()
-                if relative and zone_key in zones:
+                # the rectangles have their own coordinate-system field (rect_relative)
+                if (relative if detailed else rect_relative) and zone_key in zones:
                     points = _to_world(points, zones[zone_key])
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
-                skipped.append({"line": line, "object": label, "reason": str(e)})
+                skipped.append({"line": line, "object": f"{cls} {name!r}", "reason": str(e)})
                 continue
-            zone = zone_names.get(zone_key, zone)
-            faces.append({"id": name, "loops": [points[::-1] if clockwise else points], "zones": [zone]})
-            face_line[name.lower()] = line
-            surface_zone[name.lower()] = zone_key
-        elif cls in SIMPLE_SURFACES:
-            name = fields[0] if fields else ""
-            label = f"{cls} {name!r}"
-            try:
-                if not name:
-                    raise ValueError("no name")
-                zone, points = base_surface(cls, fields)
-                zone_key = zone.lower()
-                if rect_relative and zone_key in zones:
-                    points = _to_world(points, zones[zone_key])
-                if name.lower() in face_line:
-                    raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
-            except ValueError as e:
-                skipped.append({"line": line, "object": label, "reason": str(e)})
-                continue
+            if detailed and clockwise:  # idf_rectangles builds the rectangles counter-clockwise already
+                points = points[::-1]
             faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
