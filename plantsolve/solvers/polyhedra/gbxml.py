@@ -84,6 +84,12 @@ def _planar(element: ET.Element, scale: float) -> list[list[float]]:
     return _polyloop(loop, scale)
 
 
+def _id_and_label(element: ET.Element, tag: str) -> tuple[str, str]:
+    """The element's ``id`` (blank when it has none) and the label a skipped-object entry names it by."""
+    eid = (element.get("id") or "").strip()
+    return eid, f"{tag} {eid!r}" if eid else tag
+
+
 def _declared(space: ET.Element, name: str, factor: float | None) -> float | None:
     node = _child(space, name)
     if node is None or factor is None:
@@ -150,17 +156,19 @@ def parse_gbxml(content: bytes) -> dict:
                 f"The file's {label} {name!r} is not a gbXML unit: its declared space measures are not compared."),
                 details={label: name}).model_dump())
 
+    def skip(element: ET.Element, label: str, reason: str) -> None:
+        skipped.append({"line": lines.get(id(element)), "object": label, "reason": reason})
+
     campuses = _children(root, "Campus")
     spaces: dict[str, ET.Element] = {}
     for campus in campuses:
         for building in _children(campus, "Building"):
             for space in (e for e in building.iter() if _local(e.tag) == "Space"):
-                sid = (space.get("id") or "").strip()
+                sid, label = _id_and_label(space, "Space")
                 if not sid:
-                    skipped.append({"line": lines.get(id(space)), "object": "Space", "reason": "no id"})
+                    skip(space, label, "no id")
                 elif sid in spaces:
-                    skipped.append({"line": lines.get(id(space)), "object": f"Space {sid!r}",
-                                    "reason": f"a space of this id is already on line {lines.get(id(spaces[sid]))}"})
+                    skip(space, label, f"a space of this id is already on line {lines.get(id(spaces[sid]))}")
                 else:
                     spaces[sid] = space
 
@@ -169,9 +177,7 @@ def parse_gbxml(content: bytes) -> dict:
 
     def add(face: dict, element: ET.Element, label: str) -> None:
         if face["id"] in face_line:
-            where = face_line[face["id"]]
-            skipped.append({"line": lines.get(id(element)), "object": label,
-                            "reason": f"a surface of this id is already on line {where}"})
+            skip(element, label, f"a surface of this id is already on line {face_line[face['id']]}")
             return
         faces.append(face)
         face_line[face["id"]] = lines.get(id(element))
@@ -179,8 +185,7 @@ def parse_gbxml(content: bytes) -> dict:
     bounded: set[str] = set()
     for campus in campuses:
         for surface in _children(campus, "Surface"):
-            sid = (surface.get("id") or "").strip()
-            label = f"Surface {sid!r}" if sid else "Surface"
+            sid, label = _id_and_label(surface, "Surface")
             try:
                 if not sid:
                     raise ValueError("no id")
@@ -198,7 +203,7 @@ def parse_gbxml(content: bytes) -> dict:
                     raise ValueError(f"AdjacentSpaceId {unknown[0]!r} names no Space of the file")
                 points = _planar(surface, scale)
             except ValueError as e:
-                skipped.append({"line": lines.get(id(surface)), "object": label, "reason": str(e)})
+                skip(surface, label, str(e))
                 continue
             before = len(faces)
             add({"id": sid, "loops": [points], "zones": adjacent}, surface, label)
@@ -206,14 +211,13 @@ def parse_gbxml(content: bytes) -> dict:
                 continue
             bounded.update(adjacent)
             for opening in _children(surface, "Opening"):
-                oid = (opening.get("id") or "").strip()
-                olabel = f"Opening {oid!r}" if oid else "Opening"
+                oid, olabel = _id_and_label(opening, "Opening")
                 try:
                     if not oid:
                         raise ValueError("no id")
                     opoints = _planar(opening, scale)
                 except ValueError as e:
-                    skipped.append({"line": lines.get(id(opening)), "object": olabel, "reason": str(e)})
+                    skip(opening, olabel, str(e))
                     continue
                 add({"id": oid, "loops": [opoints], "parent": sid}, opening, olabel)
 
@@ -223,15 +227,14 @@ def parse_gbxml(content: bytes) -> dict:
         shell = _child(space, "ShellGeometry")
         closed = _child(shell, "ClosedShell") if shell is not None else None
         if closed is None:
-            skipped.append({"line": lines.get(id(space)), "object": f"Space {sid!r}",
-                            "reason": "no Surface names it and it has no ShellGeometry/ClosedShell"})
+            skip(space, f"Space {sid!r}", "no Surface names it and it has no ShellGeometry/ClosedShell")
             continue
         for k, loop in enumerate(_children(closed, "PolyLoop"), 1):
             label = f"Space {sid!r} ClosedShell PolyLoop {k}"
             try:
                 points = _polyloop(loop, scale)
             except ValueError as e:
-                skipped.append({"line": lines.get(id(loop)), "object": label, "reason": str(e)})
+                skip(loop, label, str(e))
                 continue
             add({"id": f"{sid} shell {k}", "loops": [points], "zones": [sid]}, loop, label)
 
