@@ -26,14 +26,25 @@ def stable_order(key: np.ndarray, bound: int) -> np.ndarray:
     return np.argsort(key, kind="stable")
 
 
+def _table_fits(n: int, bound: int) -> bool:
+    """Whether a table with an entry for every possible value (a bitmap, a bincount) beats sorting ``n`` keys:
+    it does while the table is at most a few times as long as the keys."""
+    return bound <= 8 * n + 1024
+
+
+def _present(key: np.ndarray, bound: int) -> np.ndarray:
+    """A bitmap over 0 … ``bound`` - 1: which values ``key`` holds."""
+    seen = np.zeros(bound, dtype=bool)
+    seen[key] = True
+    return seen
+
+
 def distinct(key: np.ndarray, bound: int) -> np.ndarray:
     """The distinct values of non-negative ``key`` (every value < ``bound``), sorted."""
     if len(key) == 0:
         return np.zeros(0, dtype=np.int64)
-    if bound <= 8 * len(key) + 1024:
-        seen = np.zeros(bound, dtype=bool)
-        seen[key] = True
-        return np.flatnonzero(seen)
+    if _table_fits(len(key), bound):
+        return np.flatnonzero(_present(key, bound))
     s = np.sort(key)
     return s[np.r_[True, s[1:] != s[:-1]]]
 
@@ -42,10 +53,8 @@ def dense_labels(label: np.ndarray, bound: int) -> np.ndarray:
     """``label`` renumbered 0, 1, … in the order of its values (``np.unique``'s inverse); values < ``bound``."""
     if len(label) == 0:
         return np.zeros(0, dtype=np.int64)
-    if bound <= 8 * len(label) + 1024:
-        seen = np.zeros(bound, dtype=bool)
-        seen[label] = True
-        return (np.cumsum(seen) - 1)[label]
+    if _table_fits(len(label), bound):
+        return (np.cumsum(_present(label, bound)) - 1)[label]
     return np.searchsorted(distinct(label, bound), label)
 
 
@@ -53,7 +62,7 @@ def counts_of(key: np.ndarray, bound: int) -> tuple[np.ndarray, np.ndarray]:
     """The distinct values of ``key`` (sorted) and how often each occurs (``np.unique(..., return_counts=True)``)."""
     if len(key) == 0:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    if bound <= 8 * len(key) + 1024:
+    if _table_fits(len(key), bound):
         count = np.bincount(key, minlength=bound)
         values = np.flatnonzero(count)
         return values, count[values]
