@@ -46,6 +46,17 @@ class Setting:
         return (self.x - self.x[0]) / (self.x[-1] - self.x[0])
 
 
+def _not_positive(values: np.ndarray, i: int, name: str, plural: str, errors: list[FieldError]) -> bool:
+    """Whether some of a position's ``values`` are not positive, with an error naming the first (the fits'
+    errors are relative, so a value at or below zero has none)."""
+    if not np.any(values <= 0):
+        return False
+    k = int(np.argmax(values <= 0))
+    errors.append(FieldError(("positions", i, name, k),
+                             f"{plural} must be positive (errors are relative); got {values[k]:g}"))
+    return True
+
+
 def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float, ...] = (),
                       names: tuple[str, ...] = ("theta", "phi"),
                       choke_tolerance: float = CHOKE_FLOW_TOLERANCE) -> Setting | None:
@@ -61,17 +72,8 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
     x, y, eta = (np.asarray(v, dtype=float) for v in (pos.flow, pos.pressure, pos.efficiency))
     # Point-specific errors name the point (loc ..., field, k; k = index in the submitted
     # list) so that a CSV upload can point at the file row.
-    if np.any(y <= 0):
-        k = int(np.argmax(y <= 0))
-        errors.append(FieldError(("positions", i, "pressure", k),
-                                 f"pressures must be positive (errors are relative); got "
-                                 f"{y[k]:g}"))
-        bad = True
-    if np.any(eta <= 0):
-        k = int(np.argmax(eta <= 0))
-        errors.append(FieldError(("positions", i, "efficiency", k),
-                                 f"efficiencies must be positive (errors are relative); got "
-                                 f"{eta[k]:g}"))
+    bad = _not_positive(y, i, "pressure", "pressures", errors)
+    if _not_positive(eta, i, "efficiency", "efficiencies", errors):
         bad = True
     elif np.any(eta > 1):  # fitted curves are held to 0 <= eta <= 1
         k = int(np.argmax(eta > 1))  # the first offending point
