@@ -191,11 +191,7 @@ def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint]
         block[:, col[k]:col[k] + screws[k].shape[1]] -= screws[k]
         rows.append(block)
     matrix = np.vstack(rows)
-    if exact:
-        rank, basis, p = modrank.exact_nullspace(matrix)
-    else:
-        rank, basis = _svd_nullspace(matrix, rank_tolerance)
-        p = None
+    rank, basis, p = _nullspace(matrix, exact, rank_tolerance)
     nullity = basis.shape[1]
     twists = {root: np.zeros((6, nullity), dtype=basis.dtype)}
     for x in order[1:]:
@@ -211,6 +207,15 @@ def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint]
         else:
             twists[x] = twists[px] + sign * (s_mat @ rates)
     return rank, basis, twists, col, screws, p
+
+
+def _nullspace(matrix: np.ndarray, exact: bool, tolerance: float) -> tuple[int, np.ndarray, int | None]:
+    """Rank and null-space basis of ``matrix``, with the prime of the arithmetic: exact (modular) for integer
+    entries, else by SVD (prime None)."""
+    if exact:
+        return modrank.exact_nullspace(matrix)
+    rank, basis = _svd_nullspace(matrix, tolerance)
+    return rank, basis, None
 
 
 def _svd_nullspace(matrix: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
@@ -283,11 +288,7 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
         else:
             matrix, col = block_matrix(bodies, block_joints, joints, sb_of, exact, centre, size)
             total_rows += matrix.shape[0]
-            if exact:
-                rank, basis, p = modrank.exact_nullspace(matrix)
-            else:
-                rank, basis = _svd_nullspace(matrix, rank_tolerance)
-                p = None
+            rank, basis, p = _nullspace(matrix, exact, rank_tolerance)
             nullity = basis.shape[1]
             redundant += matrix.shape[0] - rank
             twists = {b: basis[col[b]:col[b] + 6] if b in col else np.zeros((6, nullity), dtype=basis.dtype)

@@ -34,16 +34,23 @@ def _perpendiculars(axis: np.ndarray) -> list[np.ndarray]:
     return [cross(axis, e[k]) for k in range(3) if k != big]
 
 
+def _one_arithmetic(point, axis) -> tuple[np.ndarray, np.ndarray]:
+    """``point`` and ``axis`` as arrays of one dtype, the one both promote to."""
+    p = np.asarray(point)
+    a = np.asarray(axis)
+    if p.dtype != a.dtype:
+        zero = np.promote_types(p.dtype, a.dtype).type(0)
+        p, a = zero + p, zero + a
+    return p, a
+
+
 def constraint_rows(kind: str, point, axis) -> np.ndarray:
     """The ``(6 − freedom) × 6`` constraint rows of a joint, on the relative twist ``(ω, v)``.
 
     ``point`` and ``axis`` may be integer or float arrays; the result has their dtype's arithmetic
     (object arrays of Python ints stay exact).
     """
-    p = np.asarray(point)
-    a = np.asarray(axis)
-    if p.dtype != a.dtype:
-        p, a = np.promote_types(p.dtype, a.dtype).type(0) + p, np.promote_types(p.dtype, a.dtype).type(0) + a
+    p, a = _one_arithmetic(point, axis)
     zero = np.zeros(3, dtype=p.dtype)
     e = np.eye(3, dtype=p.dtype)
     rows = []
@@ -85,10 +92,7 @@ def constraint_rows(kind: str, point, axis) -> np.ndarray:
 def freedom_screws(kind: str, point, axis) -> np.ndarray:
     """The ``6 × freedom`` screws (columns ``(ω, v)``) a joint allows, in the inputs' arithmetic
     (integer points and axes give integer screws): the columns of the loop-closure matrix."""
-    p = np.asarray(point)
-    a = np.asarray(axis)
-    if p.dtype != a.dtype:
-        p, a = np.promote_types(p.dtype, a.dtype).type(0) + p, np.promote_types(p.dtype, a.dtype).type(0) + a
+    p, a = _one_arithmetic(point, axis)
     zero = np.zeros(3, dtype=p.dtype)
     e = np.eye(3, dtype=p.dtype)
     cols = {"rigid": [], "hinge": [np.concatenate([a, cross(p, a)])], "slider": [np.concatenate([zero, a])],
