@@ -118,6 +118,9 @@ def _number(value: str) -> float:
 
 def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[float]]:
     """The vertex list after the Number of Vertices field at ``n_index``."""
+    if n_index >= len(fields):
+        # an object cut short (``Wall:Detailed, W1, C, Z1, Outdoors;``) is skipped with this reason
+        raise ValueError(f"{len(fields)} fields: the object ends before its 'Number of Vertices' field")
     coords = [f for f in fields[n_index + 1:]]
     while coords and coords[-1] == "":
         coords.pop()

@@ -175,6 +175,21 @@ def test_idf_whose_only_surface_is_cut_is_refused_naming_its_line():
     assert fe.loc == ("file", "line", 3) and "no closing ';'" in fe.msg
 
 
+def test_surface_objects_ending_before_their_vertex_fields_are_skipped_naming_their_lines():
+    # each object is closed but stops short of its Number of Vertices field: skipped with a reason, the rest read
+    lines = (DATA / "1ZoneUncontrolled.idf").read_bytes()
+    text = lines + b"\nWall:Detailed, Stub Wall, C, ZONE ONE, Outdoors;\n" \
+        b"FenestrationSurface:Detailed, Stub Window, Window, C, Zn001:Wall001;\n"
+    request = upload("short.idf", text)
+    skipped = {s["object"]: s for s in request.source["skipped"]}
+    wall = skipped["wall:detailed 'Stub Wall'"]
+    assert "ends before its 'Number of Vertices'" in wall["reason"]
+    assert wall["line"] == text.count(b"\n", 0, text.index(b"Stub Wall")) + 1
+    assert "ends before its 'Number of Vertices'" in skipped["fenestrationsurface:detailed 'Stub Window'"]["reason"]
+    (z,) = solve(request).result.zones
+    assert z.volume == pytest.approx(1061.88, abs=0.005)  # the six real surfaces still close the zone
+
+
 def test_obj_cut_inside_its_last_face_line_warns_naming_the_line():
     content = (DATA / "sketchup_two_rooms.obj").read_bytes().rstrip()
     cut = content[:content.rfind(b" ")]  # 'f 70/70/24 71/71/24': two vertices of the last triangle
