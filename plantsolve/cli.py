@@ -207,6 +207,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
+    from plantsolve.jobs import intake
     from plantsolve.jobs.context import ServiceContext, worker_name
     from plantsolve.jobs.errors import ProblemError
     from plantsolve.jobs.lifecycle import SUCCEEDED
@@ -215,11 +216,14 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
 
     ctx = ServiceContext.create(settings, migrate=True)
     try:
+        upload = not (path.suffix.lower() == ".json" and args.options is None)
+        # the upload reader's process imports this kind's reader only (a JSON request is read here, in this process)
+        intake.preload_readers([ctx.kinds[args.kind]] if upload else [])
         dispatcher = _InlineDispatcher()
         service = JobService(ctx, dispatcher)
         content = path.read_bytes()
         try:
-            if path.suffix.lower() == ".json" and args.options is None:
+            if not upload:
                 submitted = service.submit_json(args.kind, content, None)
             else:
                 submitted = service.submit_upload(args.kind, path.name, content, args.options, None)
