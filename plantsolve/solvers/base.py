@@ -27,6 +27,8 @@ import re
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import partial
+from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Protocol, Sequence
 
@@ -272,6 +274,16 @@ class Deferred:
 def deferred(value: Any) -> Any:
     """A ``"module:attribute"`` string as a :class:`Deferred`; a function (or None) as it is."""
     return Deferred(value) if isinstance(value, str) else value
+
+
+def stored_example(package: str, name: str = "example.json") -> Callable[[], dict[str, Any]]:
+    """A kind's ``example`` read from a JSON file in its package: the output of its ``synthetic.example()``, written
+    out (a test holds the two equal), so that documenting the kinds (OpenAPI, dashboard) imports no generator."""
+    return partial(_read_json_resource, package, name)
+
+
+def _read_json_resource(package: str, name: str) -> dict[str, Any]:
+    return json.loads(resources.files(package).joinpath(name).read_text(encoding="utf-8"))
 
 
 class ResultNotUsable(Exception):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import subprocess
 import sys
 import types
@@ -60,7 +61,7 @@ def test_each_function_of_a_spec_is_its_own_package_function_named_by_reference(
     spec = KINDS[kind]
     for role in SolverSpec.FUNCTIONS:
         function = getattr(spec, role)
-        if function is None:
+        if function is None or role == "example":  # the example is JSON in the package (test_kinds_examples.py)
             continue
         assert isinstance(function, Deferred), f"{kind}.{role} is imported with the map"
         assert function.module.startswith(f"plantsolve.solvers.{kind}."), function
@@ -91,6 +92,21 @@ def test_listing_the_kinds_imports_no_solver():
     assert not {m for m in loaded if m.startswith("plantsolve.solvers.") and m.count(".") > 2}
 
 
+def test_the_api_process_imports_no_solver(tmp_path):
+    """The app with its routes and OpenAPI document (every kind's schemas and example) imports no solver module:
+    uploads are read in the readers' processes, jobs run in job processes."""
+    code = ("import sys\nfrom plantsolve.app.main import create_app\nfrom plantsolve.app.settings import get_settings\n"
+            "create_app(get_settings()).openapi()\n"
+            "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))\n"
+            "print(' '.join(m for m in sys.modules if m.startswith('plantsolve.solvers.') and m.count('.') > 2))")
+    env = {name: value for name, value in os.environ.items() if name not in ("DATABASE_URL", "ARTIFACT_DIR", "BROKER_URL")}
+    env["DATA_DIR"] = str(tmp_path)
+    libraries, solvers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                                        env=env, cwd=tmp_path).stdout.split("\n")[:2]
+    assert not set(libraries.split()) & set(HEAVY) - {"sqlalchemy", "fastapi"}, libraries
+    assert not solvers.split(), solvers
+
+
 def test_a_deferred_function_is_imported_on_first_use_and_travels_by_name():
     import pickle
 
@@ -100,7 +116,8 @@ def test_a_deferred_function_is_imported_on_first_use_and_travels_by_name():
     copy = pickle.loads(pickle.dumps(function))
     assert copy == function and copy.target is answer_query
     assert Deferred("plantsolve.solvers.tube.scan:TubeScan.load").target.__qualname__ == "TubeScan.load"
-    assert pickle.loads(pickle.dumps(tube.SPEC)) == tube.SPEC
+    copy = pickle.loads(pickle.dumps(tube.SPEC))
+    assert copy.solve == tube.SPEC.solve and copy.example() == tube.SPEC.example()
     with pytest.raises(ValueError, match="reference"):
         Deferred("plantsolve.solvers.perfmap.query.answer_query")
     with pytest.raises(ModuleNotFoundError):

@@ -7,7 +7,7 @@ constrained pipe systems*. Two methods share model, validation, cuts and report:
 """
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -25,7 +25,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.alignment.upload:parse_upload",
     render_artifacts="plantsolve.solvers.alignment.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.alignment.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],

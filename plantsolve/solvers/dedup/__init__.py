@@ -7,7 +7,7 @@ shared IfcProductDefinitionShape in IFC4+) → schema-aware post-pass → proof 
 """
 
 from plantsolve.schemas.dedup import DedupRequest, DedupResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -26,7 +26,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.dedup.upload:parse_upload",
     render_artifacts="plantsolve.solvers.dedup.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.dedup.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     # the 4,240-segment tunnel takes about a minute, most of it tessellating and validating twice
     soft_time_limit=1200,
     time_limit=1320,

@@ -9,7 +9,7 @@ density.
 """
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -27,7 +27,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.flowmeter.upload:parse_upload",
     render_artifacts="plantsolve.solvers.flowmeter.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.flowmeter.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     # closed forms take well under a second; the FEM reference a few seconds at its finest mesh
     soft_time_limit=120,
     time_limit=300,

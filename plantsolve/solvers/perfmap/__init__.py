@@ -13,7 +13,7 @@ from plantsolve.schemas.perfmap import (
     PerfmapRequest,
     PerfmapResult,
 )
-from plantsolve.solvers.base import ResultOperation, SolverSpec
+from plantsolve.solvers.base import ResultOperation, SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -31,7 +31,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.perfmap.upload:parse_upload",
     render_artifacts="plantsolve.solvers.perfmap.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.perfmap.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     # Typical runs take about a second (28 settings, 64x64 map); minimax with the log family
     # and 1000x1000 maps take tens of seconds.
     soft_time_limit=120,

@@ -7,7 +7,7 @@ frame) → diagnostics (open/non-manifold edges, orientation, Euler characterist
 """
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest, PolyhedraResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -25,7 +25,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.polyhedra.upload:parse_upload",
     render_artifacts="plantsolve.solvers.polyhedra.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.polyhedra.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     # A 1,000-zone building solves in well under a second; a million-triangle STL in a few seconds
     # (bench/polyhedra.py).
     soft_time_limit=300,

@@ -9,7 +9,7 @@ and FCL, §4) → docking at free connection points (§5).
 """
 
 from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -27,7 +27,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.rigidity.upload:parse_upload",
     render_artifacts="plantsolve.solvers.rigidity.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.rigidity.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     # A 1,000-part model is analysed in well under a second; the limits are for huge uploads.
     soft_time_limit=300,
     time_limit=600,

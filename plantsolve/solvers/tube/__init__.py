@@ -10,7 +10,7 @@ against a nominal LRA (``inspection``); ``solve.solve`` runs them in order on a 
 from __future__ import annotations
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
@@ -29,7 +29,7 @@ SPEC = SolverSpec(
     parse_upload="plantsolve.solvers.tube.upload:parse_upload",
     render_artifacts="plantsolve.solvers.tube.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example="plantsolve.solvers.tube.synthetic:example",
+    example=stored_example(__name__),  # synthetic.example(), written out
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],
