@@ -123,10 +123,12 @@ _forkserver = multiprocessing.get_context("forkserver")
 
 
 def preload_readers(kinds: Iterable[SolverSpec]) -> None:
-    """The forkserver (not started yet) imports these kinds' readers and checks once; each reading process forks from
-    it with them imported. The built-in kinds' by default; a process that reads one kind only names that one."""
+    """The forkserver (not started yet) imports this module and these kinds' readers and checks once; each reading
+    process forks from it with them imported. The built-in kinds' by default; a process that reads one kind's uploads
+    only names that one, a process that reads none (the CLI with a JSON request) none, and its forkserver imports
+    nothing."""
     modules = [module for spec in kinds for module in spec.modules(SolverSpec.READERS)]
-    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)])
+    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)] if modules else [])
 
 
 preload_readers(KINDS.values())
