@@ -271,7 +271,7 @@ class Deferred:
         return Deferred, (self.reference,)  # a pickled spec travels by name; the other process imports it itself
 
 
-def deferred(value: Any) -> Any:
+def _deferred(value: Any) -> Any:
     """A ``"module:attribute"`` string as a :class:`Deferred`; a function (or None) as it is."""
     return Deferred(value) if isinstance(value, str) else value
 
@@ -311,7 +311,7 @@ class ResultOperation:
 
     def __post_init__(self) -> None:
         for name in ("answer", "example"):
-            object.__setattr__(self, name, deferred(getattr(self, name)))
+            object.__setattr__(self, name, _deferred(getattr(self, name)))
 
 
 _KIND = re.compile(r"^[a-z][a-z0-9_-]{0,39}$")
@@ -365,7 +365,7 @@ class SolverSpec:
 
     def __post_init__(self) -> None:
         for name in self.FUNCTIONS:
-            object.__setattr__(self, name, deferred(getattr(self, name)))
+            object.__setattr__(self, name, _deferred(getattr(self, name)))
         if not _KIND.match(self.kind):
             raise ValueError(f"solver kind {self.kind!r} is not a lower-case name usable in a URL")
         if not 0 < self.soft_time_limit <= self.time_limit:
