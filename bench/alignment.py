@@ -134,7 +134,7 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         sys.path.insert(0, code)
     import contextlib
 
-    from plantsolve.solvers.alignment import solve
+    from plantsolve.solvers.alignment.solve import solve
     from plantsolve.solvers.alignment.synthetic import grid_network
 
     options = {"method": method} if max_iterations is None else {"method": method, "max_iterations": max_iterations}

@@ -67,7 +67,9 @@ def run(name: str, raw: bytes, fixed: list[str], method: str) -> dict:
     import numpy as np
 
     from plantsolve.schemas.alignment import AlignmentRequest
-    from plantsolve.solvers.alignment import check_input, parse_upload, solve
+    from plantsolve.solvers.alignment.solve import solve
+    from plantsolve.solvers.alignment.upload import parse_upload
+    from plantsolve.solvers.alignment.validation import check_input
     from plantsolve.solvers.alignment.model import build_model, connection_errors
     from plantsolve.solvers.alignment.pcf import interpret_pcf, read_document
     from plantsolve.solvers.alignment.pcf_write import write_aligned_pcf

@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest  # noqa: E402
 from plantsolve.solvers.base import no_progress  # noqa: E402
-from plantsolve.solvers.flowmeter import solve  # noqa: E402
+from plantsolve.solvers.flowmeter.solve import solve  # noqa: E402
 from plantsolve.solvers.flowmeter.synthetic import exact_full_length, grid_field, meter  # noqa: E402
 
 

@@ -29,7 +29,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest  # noqa: E402
 from plantsolve.solvers.base import StoredInput  # noqa: E402
-from plantsolve.solvers.perfmap import parse_upload, query, solve  # noqa: E402
+from plantsolve.solvers.perfmap.query import query  # noqa: E402
+from plantsolve.solvers.perfmap.solve import solve  # noqa: E402
+from plantsolve.solvers.perfmap.upload import parse_upload  # noqa: E402
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges  # noqa: E402
 from plantsolve.solvers.perfmap.families import curveset_from_fits  # noqa: E402
 from plantsolve.solvers.perfmap.synthetic import request_body, speed_lines, true_map  # noqa: E402

@@ -40,7 +40,8 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest  # noqa: E402
-from plantsolve.solvers.polyhedra import check_input, solve  # noqa: E402
+from plantsolve.solvers.polyhedra.solve import solve  # noqa: E402
+from plantsolve.solvers.polyhedra.validation import check_input  # noqa: E402
 from plantsolve.solvers.polyhedra.measures import face_measures, use_terms  # noqa: E402
 from plantsolve.solvers.polyhedra.polygons import from_mesh, from_request  # noqa: E402
 from plantsolve.solvers.polyhedra.solve import analyse  # noqa: E402
@@ -137,7 +138,10 @@ CHILD_PIPELINE = """
 import json, sys, time
 sys.path.insert(0, sys.argv[1])
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.polyhedra import check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.polyhedra.artifacts import render_artifacts
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
+from plantsolve.solvers.polyhedra.validation import check_input
 t0 = time.process_time()
 request = parse_upload(StoredInput.from_path(sys.argv[2]), None)
 check_input(request)
@@ -318,7 +322,7 @@ def formats(n_x: int, n_y: int) -> None:
     """Reading the same rooms from each format, in this run: CPU seconds (best of 3) and peak memory of
     the reader, and the solve of what it read (every room must close at 75 m³)."""
     from plantsolve.solvers.base import StoredInput  # noqa: PLC0415
-    from plantsolve.solvers.polyhedra import parse_upload  # noqa: PLC0415
+    from plantsolve.solvers.polyhedra.upload import parse_upload  # noqa: PLC0415
 
     print(f"\n{n_x * n_y} rooms of 5 x 5 x 3 m, {6 * n_x * n_y} faces, in each format:\n")
     print("| format | file [kB] | read CPU [s] | read peak [MiB] | solve CPU [s] | rooms closed at 75 m³ |")

@@ -31,7 +31,8 @@ import numpy as np
 from plantsolve.schemas.tube import TubeOptions, TubeRequest
 from plantsolve.solvers.base import SolverError
 from plantsolve.solvers.plots import figure_bytes
-from plantsolve.solvers.tube import TubeScan, solve
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube import artifacts as new_artifacts
 from plantsolve.solvers.tube import inspection as new_inspection
 from plantsolve.solvers.tube.lra import model_rows

@@ -73,7 +73,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         args.log_level = settings.log_level
         app = create_app(settings)
         warn_if_exposed(args.host, app.state.keys)
-        # Everything imported so far (numpy, scipy, every solver kind) lives as long as the process: out of
+        # Everything imported so far (FastAPI, SQLAlchemy, every kind's schemas) lives as long as the process: out of
         # the collector's sight, a full collection no longer walks it and stalls requests for tens of ms.
         gc.collect()
         gc.freeze()
@@ -207,6 +207,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
+    from plantsolve.jobs import intake
     from plantsolve.jobs.context import ServiceContext, worker_name
     from plantsolve.jobs.errors import ProblemError
     from plantsolve.jobs.lifecycle import SUCCEEDED
@@ -215,11 +216,14 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
 
     ctx = ServiceContext.create(settings, migrate=True)
     try:
+        upload = not (path.suffix.lower() == ".json" and args.options is None)
+        # the upload reader's process imports this kind's reader only (a JSON request is read here, in this process)
+        intake.preload_readers([ctx.kinds[args.kind]] if upload else [])
         dispatcher = _InlineDispatcher()
         service = JobService(ctx, dispatcher)
         content = path.read_bytes()
         try:
-            if path.suffix.lower() == ".json" and args.options is None:
+            if not upload:
                 submitted = service.submit_json(args.kind, content, None)
             else:
                 submitted = service.submit_upload(args.kind, path.name, content, args.options, None)
@@ -396,8 +400,9 @@ def kinds_epilog(kinds: Mapping[str, Any]) -> str:
 
 
 def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
-    """The command line; ``kinds`` (the kind map) makes ``solve``'s KIND a choice among them, with help. Without it
-    (every command but ``solve``) no solver is imported, so that ``--help`` and ``--version`` answer at once."""
+    """The command line; ``kinds`` (the kind map) makes ``solve``'s KIND a choice among them, with help. The map
+    imports no solver (a spec's functions are imported when first used); without it (every command but ``solve``)
+    neither the settings nor the schemas are read, so that ``--help`` and ``--version`` answer at once."""
     parser = argparse.ArgumentParser(prog="plantsolve", description=__doc__.split("\n\n")[0].replace("``", ""),
                                      formatter_class=HelpFormatter)
     parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
@@ -492,7 +497,7 @@ def main(argv: list[str] | None = None) -> int:
     _single_threaded_blas()
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     argv = sys.argv[1:] if argv is None else argv
-    # the kind map (every solver's imports) only when solving, which imports it anyway
+    # the kind map (the settings for its plugins, every kind's schemas) only for solve; no solver until one runs
     args = build_parser(_kinds() if _command(argv) == "solve" else None).parse_args(argv)
     return args.func(args)
 

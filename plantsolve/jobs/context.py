@@ -45,6 +45,13 @@ class ServiceContext:
     def spec(self, kind: str) -> SolverSpec | None:
         return self.kinds.get(kind)
 
+    def preload(self) -> None:
+        """Import every kind's functions now: a job process pays its imports once, at start, and no job pays them
+        within its time limit. (The map itself imports none of them; a process that only lists the kinds, the CLI's
+        help or the API, never does.)"""
+        for spec in self.kinds.values():
+            spec.preload()
+
     def limits(self, spec: SolverSpec) -> tuple[float, float]:
         """(soft, hard) time limit of a kind: the settings' override, else the kind's own."""
         hard = float(self.settings.time_limits.get(spec.kind, spec.time_limit))

@@ -10,7 +10,7 @@ copy that lives as long as the ``with`` block of :func:`read_stored`).
 
 Uploads are read outside the API process: :func:`read_upload_bounded` runs
 :func:`read_upload` and :func:`check` on the stored file in a child process forked from a forkserver
-that has the kinds imported, with its address space limited to ``UPLOAD_READ_MEMORY`` bytes beyond what
+that has the kinds' readers imported, with its address space limited to ``UPLOAD_READ_MEMORY`` bytes beyond what
 it starts with (RLIMIT_AS) and its CPU time to ``UPLOAD_READ_SECONDS`` (RLIMIT_CPU: a busy machine must not turn
 a file that reads in 5 CPU seconds into a refusal; the API's wall-clock wait, ``UPLOAD_READ_WALL_FACTOR`` times
 that, is the backstop for a reader that waits instead of computing). The child sends back only the outcome (accepted, or the 422's fields), so a zip
@@ -50,7 +50,7 @@ from plantsolve.jobs.errors import (
     prescan_json,
 )
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
-from plantsolve.solvers.kinds import load_kinds
+from plantsolve.solvers.kinds import KINDS, load_kinds
 from plantsolve.store.blobs import BlobMissing, BlobStore
 from plantsolve.store.models import Job
 
@@ -120,12 +120,23 @@ TEXT_EXTENSIONS = (".xyz", ".csv", ".txt", ".pts", ".asc", ".tsv")
 
 log = logging.getLogger("plantsolve.api")
 _forkserver = multiprocessing.get_context("forkserver")
-# the forkserver imports these once; each reading process forks from it with the kinds already imported
-_forkserver.set_forkserver_preload(["plantsolve.jobs.intake", "plantsolve.solvers.kinds"])
+
+
+def preload_readers(kinds: Iterable[SolverSpec]) -> None:
+    """The forkserver (not started yet) imports this module and these kinds' readers and checks once; each reading
+    process forks from it with them imported. The built-in kinds' by default; a process that reads one kind's uploads
+    only names that one, a process that reads none (the CLI with a JSON request) none, and its forkserver imports
+    nothing."""
+    modules = [module for spec in kinds for module in spec.modules(SolverSpec.READERS)]
+    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)] if modules else [])
+
+
+preload_readers(KINDS.values())
 
 
 def start_readers() -> None:
-    """Start the forkserver (it imports every kind, seconds) in the background, so the first upload does not wait."""
+    """Start the forkserver (it imports the kinds' readers, seconds) in the background, so the first upload does not
+    wait."""
     threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
 
 

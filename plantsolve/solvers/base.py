@@ -4,7 +4,8 @@ Every solver package exports ``SPEC``, a :class:`SolverSpec` that declares its k
 request and result schemas, its solve function, upload parser, input checker, artifact
 writer, synchronous result operations and limits. The kind map
 (:mod:`plantsolve.solvers.kinds`) lists the packages' specs; nothing is found by naming
-convention.
+convention. A spec names its functions as ``"module:attribute"`` (a :class:`Deferred`), so that
+listing the kinds imports no numerics: each function's module is imported when it is first called.
 
 A solver receives a :class:`Progress` callback. It calls ``progress(fraction, message)``
 between iterations; the callback raises :class:`Cancelled` when the job has been
@@ -20,11 +21,14 @@ Errors a solver may raise:
 
 from __future__ import annotations
 
+import importlib
 import json
 import re
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import partial
+from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping, Protocol, Sequence
 
@@ -218,6 +222,70 @@ def decode_text(content: bytes, what: str = "text file") -> str:
         return content.decode("cp1252", errors="replace")
 
 
+_REFERENCE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")
+
+
+class Deferred:
+    """A function named ``"package.module:attribute"`` (``"plantsolve.solvers.tube.scan:TubeScan.load"``), imported
+    when it is first called or asked for (:attr:`target`) and kept by this object from then on: a spec's functions
+    cost nothing until a process uses them, and each process imports only the modules it runs."""
+
+    __slots__ = ("reference", "_target")
+
+    def __init__(self, reference: str) -> None:
+        if not _REFERENCE.match(reference):
+            raise ValueError(f"{reference!r} is not a 'package.module:attribute' reference")
+        self.reference = reference
+        self._target: Callable[..., Any] | None = None
+
+    @property
+    def module(self) -> str:
+        return self.reference.partition(":")[0]
+
+    @property
+    def target(self) -> Callable[..., Any]:
+        """The function itself (its module imported on the first ask; importing is thread-safe and idempotent)."""
+        if self._target is None:
+            module, _, attribute = self.reference.partition(":")
+            value: Any = importlib.import_module(module)
+            for name in attribute.split("."):
+                value = getattr(value, name)
+            if not callable(value):
+                raise TypeError(f"{self.reference} is not callable")
+            self._target = value
+        return self._target
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self.target(*args, **kwargs)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Deferred) and other.reference == self.reference
+
+    def __hash__(self) -> int:
+        return hash(self.reference)
+
+    def __repr__(self) -> str:
+        return f"Deferred({self.reference!r})"
+
+    def __reduce__(self) -> tuple:
+        return Deferred, (self.reference,)  # a pickled spec travels by name; the other process imports it itself
+
+
+def _deferred(value: Any) -> Any:
+    """A ``"module:attribute"`` string as a :class:`Deferred`; a function (or None) as it is."""
+    return Deferred(value) if isinstance(value, str) else value
+
+
+def stored_example(package: str, name: str = "example.json") -> Callable[[], dict[str, Any]]:
+    """A kind's ``example`` read from a JSON file in its package: the output of its ``synthetic.example()``, written
+    out (a test holds the two equal), so that documenting the kinds (OpenAPI, dashboard) imports no generator."""
+    return partial(_read_json_resource, package, name)
+
+
+def _read_json_resource(package: str, name: str) -> dict[str, Any]:
+    return json.loads(resources.files(package).joinpath(name).read_text(encoding="utf-8"))
+
+
 class ResultNotUsable(Exception):
     """A finished result cannot answer a :class:`ResultOperation` (the service answers 409)."""
 
@@ -229,16 +297,21 @@ class ResultOperation:
 
     ``answer(result, request)`` takes the stored result (as ``result_model`` of the spec) and
     the validated ``request_model``; it raises :class:`InputRejected` (422) for a bad request
-    and :class:`ResultNotUsable` (409) when this result cannot answer at all.
+    and :class:`ResultNotUsable` (409) when this result cannot answer at all. ``answer`` and
+    ``example`` may be ``"module:attribute"`` references (:class:`Deferred`).
     """
 
     name: str
     request_model: type[BaseModel]
     response_model: type[BaseModel]
-    answer: Callable[[Any, Any], BaseModel]
+    answer: Callable[[Any, Any], BaseModel] | str
     summary: str = ""
     description: str = ""
-    example: Callable[[], dict[str, Any]] | None = None  # a valid request body, shown in the API documentation
+    example: Callable[[], dict[str, Any]] | str | None = None  # a valid request body, shown in the API documentation
+
+    def __post_init__(self) -> None:
+        for name in ("answer", "example"):
+            object.__setattr__(self, name, _deferred(getattr(self, name)))
 
 
 _KIND = re.compile(r"^[a-z][a-z0-9_-]{0,39}$")
@@ -263,26 +336,36 @@ class SolverSpec:
       OpenAPI document shows it and the contract test runs every kind through it.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
       stopped), ``max_attempts`` (``None``: the service's ``MAX_ATTEMPTS``).
+
+    The functions may be given as ``"module:attribute"`` strings: they become :class:`Deferred`
+    functions, imported on first use, so that the kind map (names, schemas, upload extensions, limits)
+    is read without importing any solver. :meth:`preload` imports them all ahead of use.
     """
 
     kind: str
     request_model: type[BaseModel]
     result_model: type[BaseModel]
-    solve: Callable[[Any, Progress], Solved]
+    solve: Callable[[Any, Progress], Solved] | str
     version: str
-    load: Callable[[Any, StoredInput | None], Any] | None = None
-    check_input: Callable[[Any], None] | None = None
-    parse_upload: Callable[[StoredInput, dict | None], BaseModel] | None = None
-    render_artifacts: Callable[[Any, Solved], list[Artifact]] | None = None
+    load: Callable[[Any, StoredInput | None], Any] | str | None = None
+    check_input: Callable[[Any], None] | str | None = None
+    parse_upload: Callable[[StoredInput, dict | None], BaseModel] | str | None = None
+    render_artifacts: Callable[[Any, Solved], list[Artifact]] | str | None = None
     upload_extensions: tuple[str, ...] = ()
     soft_time_limit: float = 600.0
     time_limit: float = 660.0
     max_attempts: int | None = None
     description: str = ""
     operations: tuple[ResultOperation, ...] = ()
-    example: Callable[[], dict[str, Any]] | None = None
+    example: Callable[[], dict[str, Any]] | str | None = None
+
+    FUNCTIONS = ("solve", "load", "check_input", "parse_upload", "render_artifacts", "example")
+    # what reading an upload and checking it runs (the upload readers' processes import these ahead)
+    READERS = ("parse_upload", "load", "check_input")
 
     def __post_init__(self) -> None:
+        for name in self.FUNCTIONS:
+            object.__setattr__(self, name, _deferred(getattr(self, name)))
         if not _KIND.match(self.kind):
             raise ValueError(f"solver kind {self.kind!r} is not a lower-case name usable in a URL")
         if not 0 < self.soft_time_limit <= self.time_limit:
@@ -298,3 +381,19 @@ class SolverSpec:
     def input_of(self, request: BaseModel, source: StoredInput | None = None) -> Any:
         """The kind's input value for a request (and its stored file, for an upload)."""
         return request if self.load is None else self.load(request, source)
+
+    def deferred(self, roles: Sequence[str] | None = None) -> list[Deferred]:
+        """The spec's :class:`Deferred` functions in ``roles`` (default: all of them, its operations' too)."""
+        functions = [getattr(self, role) for role in (self.FUNCTIONS if roles is None else roles)]
+        if roles is None:
+            functions += [f for op in self.operations for f in (op.answer, op.example)]
+        return [f for f in functions if isinstance(f, Deferred)]
+
+    def modules(self, roles: Sequence[str] | None = None) -> list[str]:
+        """The modules that define the spec's functions in ``roles`` (what a process preloads by name)."""
+        return list(dict.fromkeys(f.module for f in self.deferred(roles)))
+
+    def preload(self, roles: Sequence[str] | None = None) -> None:
+        """Import the functions in ``roles`` now (a job process before its first job), not at their first use."""
+        for function in self.deferred(roles):
+            function.target

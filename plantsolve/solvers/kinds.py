@@ -3,6 +3,11 @@
 Adding a kind is one solver package exporting ``SPEC``, one schema module and one line here.
 Extra kinds for tests and benchmarks come from plugin modules that export ``SPECS`` (named in
 the ``PLUGINS`` setting); :func:`load_kinds` returns a new map each call and keeps no state.
+
+Importing the map imports each package's ``__init__`` only: the specs with their schemas, upload
+extensions and limits. A spec's functions (solve, readers, checks, artifacts, examples) are imported
+when first used, so listing the kinds (``plantsolve solve --help``, the API's routes) costs no solver's
+imports and a process that runs one kind imports that kind alone.
 """
 
 from __future__ import annotations

@@ -1,14 +1,19 @@
 """Saving the kinds' matplotlib figures: one place for the format, the resolution and the media type.
 
-Figures are made with ``matplotlib.figure.Figure`` (no pyplot: no global figure state, safe in threads)."""
+Figures are made with ``matplotlib.figure.Figure`` (no pyplot: no global figure state, safe in threads, and no
+interactive backend: a figure without a canvas is saved through Agg for PNG, matplotlib's SVG and PDF backends for
+the others). This module imports no matplotlib itself: a process imports it with the first kind's artifacts it
+draws, not with the kind map."""
 
 from __future__ import annotations
 
 import io
-
-from matplotlib.figure import Figure
+from typing import TYPE_CHECKING
 
 from plantsolve.solvers.base import Artifact
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 DPI = 110
 MEDIA_TYPES = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}

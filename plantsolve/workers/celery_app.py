@@ -117,6 +117,14 @@ def _run_job_task(task, job_id: str) -> str:
     return outcome
 
 
+@signals.worker_init.connect
+def _preload_kinds(**_kwargs) -> None:
+    """In the worker's main process, before it forks its pool: every kind's solver imported once, shared by the
+    pool processes (the kind map alone imports none; a process that only sends tasks, the API, never needs them)."""
+    for spec in load_kinds(get_job_settings().plugins).values():
+        spec.preload()
+
+
 @signals.task_failure.connect
 def _hard_time_limit(sender=None, exception=None, args=None, **_kwargs) -> None:
     """The pool killed a task's process at its hard time limit (a solver deaf even to the soft

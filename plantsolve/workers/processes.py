@@ -57,7 +57,8 @@ def _die_with_parent(parent: int) -> None:
 
 
 def _start_worker(settings_json: str, parent: int) -> None:
-    """Initializer of each worker process: its own settings object and database connections."""
+    """Initializer of each worker process: its own settings object and database connections, and every kind's
+    solver imported before the first job."""
     global _worker_ctx
     _die_with_parent(parent)
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -67,6 +68,7 @@ def _start_worker(settings_json: str, parent: int) -> None:
     os.nice(settings.job_niceness)
     configure_logging(settings.log_format, settings.log_level)
     _worker_ctx = ServiceContext.create(settings)
+    _worker_ctx.preload()
 
 
 def _run(job_id: str) -> str:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import importlib
+import os
+import subprocess
 import sys
 import types
 
@@ -10,7 +13,7 @@ from pydantic import BaseModel
 
 from plantsolve.schemas.common import Report
 from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, rigidity, tube
-from plantsolve.solvers.base import ResultOperation, SolverSpec
+from plantsolve.solvers.base import Deferred, ResultOperation, SolverSpec
 from plantsolve.solvers.kinds import KINDS, load_kinds
 from plantsolve.solvers.perfmap.query import answer_beta_query, answer_query
 
@@ -45,10 +48,89 @@ def test_the_map_lists_each_package_spec_under_its_own_kind():
 
 def test_perfmap_declares_its_query_as_an_operation():
     operation, beta = perfmap.SPEC.operations
-    assert operation.name == "query" and operation.answer is answer_query
-    assert beta.name == "beta" and beta.answer is answer_beta_query
+    assert operation.name == "query" and operation.answer.target is answer_query
+    assert beta.name == "beta" and beta.answer.target is answer_beta_query
     assert alignment.SPEC.operations == tube.SPEC.operations == polyhedra.SPEC.operations == flowmeter.SPEC.operations == ()
     assert rigidity.SPEC.operations == dedup.SPEC.operations == ()
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+def test_each_function_of_a_spec_is_its_own_package_function_named_by_reference(kind):
+    """A spec names its functions ("module:attribute"), so the map imports no solver; each reference resolves to
+    a function of the kind's own package (the import rules hold for the imports these references make)."""
+    spec = KINDS[kind]
+    for role in SolverSpec.FUNCTIONS:
+        function = getattr(spec, role)
+        if function is None or role == "example":  # the example is JSON in the package (test_kinds_examples.py)
+            continue
+        assert isinstance(function, Deferred), f"{kind}.{role} is imported with the map"
+        assert function.module.startswith(f"plantsolve.solvers.{kind}."), function
+        assert callable(function.target)
+    for operation in spec.operations:
+        assert isinstance(operation.answer, Deferred) and callable(operation.answer.target)
+    assert spec.modules(SolverSpec.READERS) and set(spec.modules(SolverSpec.READERS)) <= set(spec.modules())
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+def test_the_upload_extensions_of_a_spec_are_those_its_reader_reads(kind):
+    upload = importlib.import_module(f"plantsolve.solvers.{kind}.upload")
+    assert KINDS[kind].upload_extensions == upload.UPLOAD_EXTENSIONS
+
+
+HEAVY = ("scipy", "matplotlib", "ifcopenshell", "networkx", "skfem", "trimesh", "pyamg", "fcl", "openpyxl", "laspy",
+         "sqlalchemy", "fastapi")
+
+
+def test_listing_the_kinds_imports_no_solver():
+    """The kind map, its schemas and ``plantsolve solve --help``'s parser, in a fresh interpreter: none of the
+    solvers' libraries is imported (they cost seconds and hundreds of MiB per process)."""
+    code = ("import sys\nfrom plantsolve.solvers.kinds import KINDS\nfrom plantsolve.cli import build_parser\n"
+            "build_parser(KINDS).format_help()\n"
+            "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))")
+    loaded = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split())
+    assert not loaded & set(HEAVY), sorted(loaded & set(HEAVY))
+    assert not {m for m in loaded if m.startswith("plantsolve.solvers.") and m.count(".") > 2}
+
+
+def test_the_api_process_imports_no_solver(tmp_path):
+    """The app with its routes and OpenAPI document (every kind's schemas and example) imports no solver module:
+    uploads are read in the readers' processes, jobs run in job processes."""
+    code = ("import sys\nfrom plantsolve.app.main import create_app\nfrom plantsolve.app.settings import get_settings\n"
+            "create_app(get_settings()).openapi()\n"
+            "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))\n"
+            "print(' '.join(m for m in sys.modules if m.startswith('plantsolve.solvers.') and m.count('.') > 2))")
+    env = {name: value for name, value in os.environ.items() if name not in ("DATABASE_URL", "ARTIFACT_DIR", "BROKER_URL")}
+    env["DATA_DIR"] = str(tmp_path)
+    libraries, solvers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                                        env=env, cwd=tmp_path).stdout.split("\n")[:2]
+    assert not set(libraries.split()) & set(HEAVY) - {"sqlalchemy", "fastapi"}, libraries
+    assert not solvers.split(), solvers
+
+
+def test_a_deferred_function_is_imported_on_first_use_and_travels_by_name():
+    import pickle
+
+    function = Deferred("plantsolve.solvers.perfmap.query:answer_query")
+    assert function == Deferred("plantsolve.solvers.perfmap.query:answer_query") and "answer_query" in repr(function)
+    assert function.target is answer_query and function.target is function.target
+    copy = pickle.loads(pickle.dumps(function))
+    assert copy == function and copy.target is answer_query
+    assert Deferred("plantsolve.solvers.tube.scan:TubeScan.load").target.__qualname__ == "TubeScan.load"
+    copy = pickle.loads(pickle.dumps(tube.SPEC))
+    assert copy.solve == tube.SPEC.solve and copy.example() == tube.SPEC.example()
+    with pytest.raises(ValueError, match="reference"):
+        Deferred("plantsolve.solvers.perfmap.query.answer_query")
+    with pytest.raises(ModuleNotFoundError):
+        Deferred("plantsolve.solvers.perfmap.no_such_module:f").target
+    with pytest.raises(TypeError, match="not callable"):
+        Deferred("plantsolve.solvers.perfmap:__version__").target
+
+
+def test_a_spec_made_of_references_validates_them_when_made():
+    spec = _spec(check_input="plantsolve.solvers.perfmap.validation:check_input")
+    assert isinstance(spec.check_input, Deferred) and spec.modules() == ["plantsolve.solvers.perfmap.validation"]
+    with pytest.raises(ValueError, match="reference"):
+        _spec(check_input="not a reference")
 
 
 def _plugin(name: str, **attributes) -> str:

@@ -7,12 +7,11 @@ constrained pipe systems*. Two methods share model, validation, cuts and report:
 """
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
-from plantsolve.solvers.alignment.artifacts import render_artifacts
-from plantsolve.solvers.alignment.solve import solve
-from plantsolve.solvers.alignment.synthetic import example
-from plantsolve.solvers.alignment.upload import UPLOAD_EXTENSIONS, parse_upload
-from plantsolve.solvers.alignment.validation import check_input
-from plantsolve.solvers.base import SolverSpec
+from plantsolve.solvers.base import SolverSpec, stored_example
+
+# the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
+# the two lists equal)
+UPLOAD_EXTENSIONS = (".pcf", ".json")
 
 __version__ = "1.0.0"
 
@@ -20,16 +19,16 @@ SPEC = SolverSpec(
     kind="alignment",
     request_model=AlignmentRequest,
     result_model=AlignmentResult,
-    solve=solve,
+    solve="plantsolve.solvers.alignment.solve:solve",
     version=__version__,
-    check_input=check_input,
-    parse_upload=parse_upload,
-    render_artifacts=render_artifacts,
+    check_input="plantsolve.solvers.alignment.validation:check_input",
+    parse_upload="plantsolve.solvers.alignment.upload:parse_upload",
+    render_artifacts="plantsolve.solvers.alignment.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example=example,
+    example=stored_example(__name__),  # synthetic.example(), written out
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],
 )
 
-__all__ = ["SPEC", "solve", "check_input", "parse_upload", "render_artifacts", "__version__"]
+__all__ = ["SPEC", "UPLOAD_EXTENSIONS", "__version__"]

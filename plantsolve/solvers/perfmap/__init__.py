@@ -13,13 +13,11 @@ from plantsolve.schemas.perfmap import (
     PerfmapRequest,
     PerfmapResult,
 )
-from plantsolve.solvers.base import ResultOperation, SolverSpec
-from plantsolve.solvers.perfmap.artifacts import render_artifacts
-from plantsolve.solvers.perfmap.query import answer_beta_query, answer_query, query
-from plantsolve.solvers.perfmap.solve import solve
-from plantsolve.solvers.perfmap.synthetic import example
-from plantsolve.solvers.perfmap.upload import UPLOAD_EXTENSIONS, parse_upload
-from plantsolve.solvers.perfmap.validation import check_input
+from plantsolve.solvers.base import ResultOperation, SolverSpec, stored_example
+
+# the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
+# the two lists equal)
+UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 
 __version__ = "1.2.0"
 
@@ -27,13 +25,13 @@ SPEC = SolverSpec(
     kind="perfmap",
     request_model=PerfmapRequest,
     result_model=PerfmapResult,
-    solve=solve,
+    solve="plantsolve.solvers.perfmap.solve:solve",
     version=__version__,
-    check_input=check_input,
-    parse_upload=parse_upload,
-    render_artifacts=render_artifacts,
+    check_input="plantsolve.solvers.perfmap.validation:check_input",
+    parse_upload="plantsolve.solvers.perfmap.upload:parse_upload",
+    render_artifacts="plantsolve.solvers.perfmap.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example=example,
+    example=stored_example(__name__),  # synthetic.example(), written out
     # Typical runs take about a second (28 settings, 64x64 map); minimax with the log family
     # and 1000x1000 maps take tens of seconds.
     soft_time_limit=120,
@@ -44,7 +42,7 @@ SPEC = SolverSpec(
             name="query",
             request_model=PerfmapQueryRequest,
             response_model=PerfmapQueryResult,
-            answer=answer_query,
+            answer="plantsolve.solvers.perfmap.query:answer_query",
             summary="Inverse query: optimal settings and efficiency for duty points",
             description="One `{flow, pressure}` or `{points: [...]}`. Points outside the reachable region "
             "come back with `feasible: false` and their distance to the map instead of an extrapolation.",
@@ -54,7 +52,7 @@ SPEC = SolverSpec(
             name="beta",
             request_model=PerfmapBetaQueryRequest,
             response_model=PerfmapBetaQueryResult,
-            answer=answer_beta_query,
+            answer="plantsolve.solvers.perfmap.query:answer_beta_query",
             summary="Map lookup by (speed, beta): corrected flow, pressure ratio and efficiency",
             description="One `{speed, beta}` (or `{setting: [...], beta}` with several setting parameters) or "
             "`{points: [...]}`. Beta 0 is the choke line, 1 the surge line. Exact on a fitted speed line, linear in "
@@ -64,4 +62,4 @@ SPEC = SolverSpec(
     ),
 )
 
-__all__ = ["SPEC", "solve", "check_input", "parse_upload", "render_artifacts", "query", "__version__"]
+__all__ = ["SPEC", "UPLOAD_EXTENSIONS", "__version__"]

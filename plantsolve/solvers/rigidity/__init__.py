@@ -9,12 +9,11 @@ and FCL, §4) → docking at free connection points (§5).
 """
 
 from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
-from plantsolve.solvers.base import SolverSpec
-from plantsolve.solvers.rigidity.artifacts import render_artifacts
-from plantsolve.solvers.rigidity.solve import solve
-from plantsolve.solvers.rigidity.synthetic import example
-from plantsolve.solvers.rigidity.upload import UPLOAD_EXTENSIONS, parse_upload
-from plantsolve.solvers.rigidity.validation import check_input
+from plantsolve.solvers.base import SolverSpec, stored_example
+
+# the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
+# the two lists equal)
+UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 
 __version__ = "1.0.0"
 
@@ -22,17 +21,17 @@ SPEC = SolverSpec(
     kind="rigidity",
     request_model=RigidityRequest,
     result_model=RigidityResult,
-    solve=solve,
+    solve="plantsolve.solvers.rigidity.solve:solve",
     version=__version__,
-    check_input=check_input,
-    parse_upload=parse_upload,
-    render_artifacts=render_artifacts,
+    check_input="plantsolve.solvers.rigidity.validation:check_input",
+    parse_upload="plantsolve.solvers.rigidity.upload:parse_upload",
+    render_artifacts="plantsolve.solvers.rigidity.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example=example,
+    example=stored_example(__name__),  # synthetic.example(), written out
     # A 1,000-part model is analysed in well under a second; the limits are for huge uploads.
     soft_time_limit=300,
     time_limit=600,
     description=__doc__.split("\n\n")[0],
 )
 
-__all__ = ["SPEC", "solve", "check_input", "parse_upload", "render_artifacts", "__version__"]
+__all__ = ["SPEC", "UPLOAD_EXTENSIONS", "__version__"]

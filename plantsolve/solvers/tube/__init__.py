@@ -10,13 +10,11 @@ against a nominal LRA (``inspection``); ``solve.solve`` runs them in order on a 
 from __future__ import annotations
 
 from plantsolve.schemas.tube import TubeRequest, TubeResult
-from plantsolve.solvers.base import SolverSpec
-from plantsolve.solvers.tube.artifacts import render_artifacts
-from plantsolve.solvers.tube.scan import TubeScan
-from plantsolve.solvers.tube.solve import solve
-from plantsolve.solvers.tube.synthetic import example
-from plantsolve.solvers.tube.upload import UPLOAD_EXTENSIONS, parse_upload
-from plantsolve.solvers.tube.validation import check_input
+from plantsolve.solvers.base import SolverSpec, stored_example
+
+# the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
+# the two lists equal)
+UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
 
 __version__ = "1.0.0"
 
@@ -24,17 +22,17 @@ SPEC = SolverSpec(
     kind="tube",
     request_model=TubeRequest,
     result_model=TubeResult,
-    solve=solve,
+    solve="plantsolve.solvers.tube.solve:solve",
     version=__version__,
-    load=TubeScan.load,
-    check_input=check_input,
-    parse_upload=parse_upload,
-    render_artifacts=render_artifacts,
+    load="plantsolve.solvers.tube.scan:TubeScan.load",
+    check_input="plantsolve.solvers.tube.validation:check_input",
+    parse_upload="plantsolve.solvers.tube.upload:parse_upload",
+    render_artifacts="plantsolve.solvers.tube.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
-    example=example,
+    example=stored_example(__name__),  # synthetic.example(), written out
     soft_time_limit=300,
     time_limit=900,
     description=__doc__.split("\n\n")[0],
 )
 
-__all__ = ["SPEC", "TubeScan", "solve", "check_input", "parse_upload", "render_artifacts", "__version__"]
+__all__ = ["SPEC", "UPLOAD_EXTENSIONS", "__version__"]

@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.geometry import rotation
-from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.synthetic import grid_network
 
 from alignment_cases import conn, elbow, pipe, port, request

@@ -10,7 +10,9 @@ import pytest
 
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.alignment import parse_upload, render_artifacts, solve
+from plantsolve.solvers.alignment.artifacts import render_artifacts
+from plantsolve.solvers.alignment.solve import solve
+from plantsolve.solvers.alignment.upload import parse_upload
 from plantsolve.solvers.alignment.model import build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import read_document
 from plantsolve.solvers.alignment.synthetic import grid_network

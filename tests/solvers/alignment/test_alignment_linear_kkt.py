@@ -6,7 +6,7 @@ import qdldl
 import scipy.sparse as sp
 
 from plantsolve.schemas.alignment import AlignmentResult, Port
-from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_ldl
 from plantsolve.solvers.alignment.model import build_model

@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment import check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.alignment.artifacts import render_artifacts
+from plantsolve.solvers.alignment.solve import solve
+from plantsolve.solvers.alignment.upload import parse_upload
+from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.alignment.model import build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import interpret_pcf
 from plantsolve.solvers.alignment.pcf_write import reread_check, write_aligned_pcf

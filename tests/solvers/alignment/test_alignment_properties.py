@@ -6,7 +6,7 @@ from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.geometry import rotation
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.synthetic import grid_network
 
 

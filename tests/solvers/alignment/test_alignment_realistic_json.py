@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment import check_input, solve
+from plantsolve.solvers.alignment.solve import solve
+from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.base import InputRejected
 
 from alignment_cases import conn, elbow, pipe, port, request, route

@@ -12,7 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plantsolve.solvers.alignment import check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.alignment.artifacts import render_artifacts
+from plantsolve.solvers.alignment.solve import solve
+from plantsolve.solvers.alignment.upload import parse_upload
+from plantsolve.solvers.alignment.validation import check_input
 from plantsolve.solvers.base import InputRejected, SolverError, StoredInput
 
 DATA = Path(__file__).parent / "data"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.artifacts import figures
 from plantsolve.solvers.alignment.synthetic import example
 from tests.support.plots import check_figure

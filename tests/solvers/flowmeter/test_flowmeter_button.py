@@ -8,7 +8,8 @@ import pytest
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, no_progress
-from plantsolve.solvers.flowmeter import check_input, solve
+from plantsolve.solvers.flowmeter.solve import solve
+from plantsolve.solvers.flowmeter.validation import check_input
 from plantsolve.solvers.flowmeter.fem import solve_button
 from plantsolve.solvers.flowmeter.synthetic import meter, small_button
 from plantsolve.solvers.flowmeter.weight2d import sensitivity_first_order_button

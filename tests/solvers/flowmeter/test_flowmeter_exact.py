@@ -8,7 +8,7 @@ import pytest
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import no_progress
-from plantsolve.solvers.flowmeter import solve
+from plantsolve.solvers.flowmeter.solve import solve
 from plantsolve.solvers.flowmeter.synthetic import exact_full_length, meter, shercliff
 from plantsolve.solvers.flowmeter.weight2d import electrode_current_integral, weight_first_order, weight_full_length
 

@@ -12,7 +12,7 @@ import pytest
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import no_progress
-from plantsolve.solvers.flowmeter import solve
+from plantsolve.solvers.flowmeter.solve import solve
 from plantsolve.solvers.flowmeter.fem import extrude, quarter_disc, solve_patch
 from plantsolve.solvers.flowmeter.synthetic import exact_full_length, meter
 

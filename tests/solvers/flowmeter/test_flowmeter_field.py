@@ -8,7 +8,8 @@ import pytest
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, no_progress
-from plantsolve.solvers.flowmeter import check_input, solve
+from plantsolve.solvers.flowmeter.solve import solve
+from plantsolve.solvers.flowmeter.validation import check_input
 from plantsolve.solvers.flowmeter.synthetic import exact_full_length, grid_field, meter
 from plantsolve.solvers.flowmeter.weight2d import complex_weight_full_length
 

@@ -10,7 +10,8 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.flowmeter import check_input, parse_upload
+from plantsolve.solvers.flowmeter.upload import parse_upload
+from plantsolve.solvers.flowmeter.validation import check_input
 from plantsolve.solvers.flowmeter.synthetic import example, meter
 from tests.conftest import REPO, run_plantsolve, wait_for
 

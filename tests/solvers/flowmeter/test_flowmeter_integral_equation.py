@@ -9,7 +9,7 @@ from scipy.special import iv
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import no_progress
-from plantsolve.solvers.flowmeter import solve
+from plantsolve.solvers.flowmeter.solve import solve
 from plantsolve.solvers.flowmeter.integral_equation import bessel_ratio_table, solve_patch
 from plantsolve.solvers.flowmeter.synthetic import exact_full_length, meter
 

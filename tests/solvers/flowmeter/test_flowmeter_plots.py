@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import no_progress
-from plantsolve.solvers.flowmeter import solve
+from plantsolve.solvers.flowmeter.solve import solve
 from plantsolve.solvers.flowmeter.artifacts import figures
 from plantsolve.solvers.flowmeter.synthetic import meter
 from plantsolve.solvers.plots import DPI

@@ -8,7 +8,8 @@ import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.synthetic import request_body
 
 DATA = Path(__file__).parent / "data"

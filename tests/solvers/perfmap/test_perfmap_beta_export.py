@@ -17,7 +17,8 @@ from plantsolve.schemas.perfmap import (
     PerfmapRequest,
 )
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.artifacts import cycle_code_artifacts
 from plantsolve.solvers.perfmap.beta_grid import (
     BetaFrame,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.perfmap import solve
+from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.fitting import concave_floor, fit_concave
 
@@ -90,7 +90,7 @@ def test_repeated_flows_and_a_vertical_choke_segment_are_accepted():
 
 def test_speed_lines_give_a_speed_map_and_the_query_finds_the_speed():
     from plantsolve.schemas.perfmap import PerfmapQueryRequest
-    from plantsolve.solvers.perfmap import query
+    from plantsolve.solvers.perfmap.query import query
     from plantsolve.solvers.perfmap.synthetic import speed_lines
 
     res = solve(PerfmapRequest.model_validate(speed_lines(6, 12, options={"grid": [48, 48]}))).result
@@ -110,7 +110,7 @@ def test_speed_lines_give_a_speed_map_and_the_query_finds_the_speed():
 
 
 def test_surge_choke_and_margin_lines_are_returned_and_drawn():
-    from plantsolve.solvers.perfmap import render_artifacts
+    from plantsolve.solvers.perfmap.artifacts import render_artifacts
     from plantsolve.solvers.perfmap.synthetic import speed_lines
 
     req = PerfmapRequest.model_validate(speed_lines(5, 10, options={"grid": [32, 32], "surge_margin": 0.1}))

@@ -10,7 +10,8 @@ import pytest
 from scipy.optimize import lsq_linear
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-from plantsolve.solvers.perfmap import query, solve
+from plantsolve.solvers.perfmap.query import query
+from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.efficiency import (
     EFFICIENCY_FAMILIES,
     N_EFF_COEFFICIENTS,
@@ -213,7 +214,7 @@ def test_closed_form_loo_equals_explicit_bounded_refits(family, concave):
 
 def test_efficiency_in_percent_is_rejected_with_its_field():
     from plantsolve.solvers.base import InputRejected
-    from plantsolve.solvers.perfmap import check_input
+    from plantsolve.solvers.perfmap.validation import check_input
 
     body = request_body(n_theta=3, n_phi=3)
     body["positions"][4]["efficiency"] = [100 * e for e in body["positions"][4]["efficiency"]]

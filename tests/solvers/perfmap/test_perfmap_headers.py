@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 
 DATA = Path(__file__).parent / "data"
@@ -130,7 +131,7 @@ def test_three_setting_parameters_give_the_maximum_efficiency_map_over_them():
     """Speed, IGV and VGV each varied: the map is the max over the faces of the settings' tetrahedra;
     a duty point on a measured line is matched by a setting whose efficiency is at least that line's."""
     from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
-    from plantsolve.solvers.perfmap import query
+    from plantsolve.solvers.perfmap.query import query
     from plantsolve.solvers.perfmap.families import curveset_from_fits
 
     positions = []

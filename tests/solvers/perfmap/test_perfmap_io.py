@@ -11,14 +11,11 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
 from plantsolve.solvers.base import InputRejected, Solved, StoredInput
-from plantsolve.solvers.perfmap import (
-    SPEC,
-    __version__,
-    check_input,
-    parse_upload,
-    render_artifacts,
-    solve,
-)
+from plantsolve.solvers.perfmap import SPEC, __version__
+from plantsolve.solvers.perfmap.artifacts import render_artifacts
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
+from plantsolve.solvers.perfmap.validation import check_input
 from plantsolve.solvers.perfmap.synthetic import request_body
 
 

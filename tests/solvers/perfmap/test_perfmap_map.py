@@ -7,7 +7,8 @@ import pytest
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
 from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.perfmap import query, solve
+from plantsolve.solvers.perfmap.query import query
+from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges
 from plantsolve.solvers.perfmap.query import characteristic_at
 from plantsolve.solvers.perfmap.families import curveset_from_fits

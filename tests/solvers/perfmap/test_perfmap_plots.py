@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import Solved, StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.artifacts import (curves_csv, figures, map_csv, reachable_boundary,
                                                   render_artifacts, smooth_on_finer_grid)
 from plantsolve.solvers.perfmap.performance_map import distance_to_region

@@ -14,7 +14,8 @@ import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.families import FAMILIES, curveset_from_fits
 from plantsolve.solvers.perfmap.fitting import concave_floor, fit_pressure_setting
 from plantsolve.solvers.perfmap.validation import prepare

@@ -15,7 +15,8 @@ from plantsolve.solvers.perfmap.families import curveset_from_fits
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapResult
 from plantsolve.solvers.base import Solved
-from plantsolve.solvers.perfmap import query, render_artifacts
+from plantsolve.solvers.perfmap.artifacts import render_artifacts
+from plantsolve.solvers.perfmap.query import query
 from plantsolve.solvers.perfmap.families import log_eval, log_params_from_public
 
 
@@ -64,7 +65,7 @@ def test_n3_query_and_plots(n3_request, n3_result):
 
 
 def test_n3_all_models_and_minimax(n3_request):
-    from plantsolve.solvers.perfmap import solve
+    from plantsolve.solvers.perfmap.solve import solve
 
     for model in ("parabola", "log", "spline3"):
         for fit in ("least_squares", "minimax"):

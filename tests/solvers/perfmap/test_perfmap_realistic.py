@@ -13,7 +13,9 @@ import pytest
 
 from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.perfmap import parse_upload, query, solve
+from plantsolve.solvers.perfmap.query import query
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor
 from plantsolve.solvers.perfmap.performance_map import cross2, distance_to_region, max_efficiency

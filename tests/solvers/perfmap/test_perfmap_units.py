@@ -8,7 +8,9 @@ import pytest
 
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.perfmap import check_input, parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
+from plantsolve.solvers.perfmap.validation import check_input
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_unit
 
@@ -107,7 +109,7 @@ def test_result_units_convert_without_changing_the_answer():
     assert np.array_equal(np.isfinite(a), np.isfinite(b)) and np.nanmax(abs(a - b)) < 1e-9
     # a duty point in the map's units: the same answer in lbm/s and in kg/s, and the answer says its units
     from plantsolve.schemas.perfmap import PerfmapQueryRequest
-    from plantsolve.solvers.perfmap import query
+    from plantsolve.solvers.perfmap.query import query
     x = 0.5 * sum(plain.flow_range)
     y = 0.5 * sum(plain.pressure_range)
     pa = query(plain, PerfmapQueryRequest.model_validate({"flow": x, "pressure": y}))

@@ -9,7 +9,8 @@ import openpyxl
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.perfmap import parse_upload, solve
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 
 LINES = speed_lines(4, 8, steep=6.0)["positions"]

@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.polyhedra import parse_upload, solve
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
 
 DATA = Path(__file__).parent / "data"
 HEAD = '<?xml version="1.0"?>\n<gbXML xmlns="http://www.gbxml.org/schema" lengthUnit="Meters">\n<Campus id="c">\n'

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.polyhedra import parse_upload, solve
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
 from plantsolve.solvers.polyhedra.artifacts import figures
 from tests.support.plots import check_figure
 

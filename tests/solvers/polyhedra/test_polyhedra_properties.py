@@ -10,7 +10,8 @@ from scipy.spatial.transform import Rotation
 from tests.solvers.polyhedra.openstudio_cases import TILTED_ROOF, TILTED_ROOF_VOLUME, request
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected
-from plantsolve.solvers.polyhedra import check_input, solve
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.validation import check_input
 from plantsolve.solvers.polyhedra import synthetic as shapes
 
 

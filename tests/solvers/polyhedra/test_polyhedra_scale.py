@@ -15,7 +15,10 @@ import trimesh
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.polyhedra import artifacts, bulk_csv, check_input, parse_upload, solve
+from plantsolve.solvers.polyhedra import artifacts, bulk_csv
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
+from plantsolve.solvers.polyhedra.validation import check_input
 from plantsolve.solvers.polyhedra import synthetic as shapes
 from plantsolve.solvers.polyhedra.polygons import from_mesh, from_request
 from plantsolve.solvers.polyhedra.repair import merge_vertices

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 from tests.solvers.polyhedra.openstudio_cases import (BOX_WITH_HOLE, BOX_WITH_HOLE_VOLUME, PLENUM_SPLIT_WALL, PLENUM_VOLUME, TILTED_ROOF,
                               TILTED_ROOF_VOLUME, request)
 from plantsolve.schemas.polyhedra import PolyhedraRequest
-from plantsolve.solvers.polyhedra import solve
+from plantsolve.solvers.polyhedra.solve import solve
 from plantsolve.solvers.polyhedra import synthetic as shapes
 from plantsolve.solvers.polyhedra.gmap import build_gmap
 from plantsolve.solvers.polyhedra.polygons import from_request

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.polyhedra import parse_upload, solve
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
 from plantsolve.solvers.polyhedra.idf_rectangles import rectangle
 
 DATA = Path(__file__).parent / "data"

@@ -10,7 +10,8 @@ import pytest
 import trimesh
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.polyhedra import parse_upload, solve
+from plantsolve.solvers.polyhedra.solve import solve
+from plantsolve.solvers.polyhedra.upload import parse_upload
 
 DATA = Path(__file__).parent / "data"
 

@@ -12,7 +12,10 @@ import trimesh
 
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.tube import TubeScan, parse_upload, render_artifacts, solve
+from plantsolve.solvers.tube.artifacts import render_artifacts
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.upload import parse_upload
 from plantsolve.solvers.tube.model import tube_mesh_arrays
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.tube import TubeRequest
-from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.artifacts import model_from_result
 from plantsolve.solvers.tube.model import build_spine, reverse_model, sample_centreline, spine_distance
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.tube import TubeOptions, TubeRequest
-from plantsolve.solvers.tube import TubeScan, solve
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.artifacts import (
     corrections_csv,
     figures,

@@ -12,7 +12,12 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.tube import SPEC, TubeScan, __version__, check_input, parse_upload, render_artifacts, solve
+from plantsolve.solvers.tube import SPEC, __version__
+from plantsolve.solvers.tube.artifacts import render_artifacts
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.upload import parse_upload
+from plantsolve.solvers.tube.validation import check_input
 from plantsolve.solvers.tube.model import build_spine, model_from_control_polygon, spine_distance
 
 

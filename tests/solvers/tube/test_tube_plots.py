@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube import TubeScan, solve
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.artifacts import figures, render_artifacts
 from tests.support.plots import check_figure
 

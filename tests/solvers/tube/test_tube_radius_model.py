@@ -7,7 +7,7 @@ import numpy as np
 
 from plantsolve.schemas.tube import TubeRequest
 from plantsolve.solvers.tube import fit as lsq
-from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 RP = 4.0

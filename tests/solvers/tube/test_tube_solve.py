@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube import solve
+from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.synthetic import random_rotation
 
 

@@ -9,7 +9,9 @@ import pytest
 import trimesh
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.tube import TubeScan, parse_upload, solve
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.upload import parse_upload
 from plantsolve.solvers.tube.model import tube_mesh_arrays
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 

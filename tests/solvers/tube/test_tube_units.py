@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.tube import TubeScan, parse_upload, solve
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.upload import parse_upload
 from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 ROWS = [(40, 0, 60, 12.0), (25, 45, 90, 16.0), (30, 0, 0, 0)]  # mm; pipe radius 4 mm
