@@ -228,6 +228,18 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
 
 def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     """Two-way Hausdorff distance between ``member`` and ``rep`` moved by ``m`` (world frame, centred
-    on the member for accuracy)."""
+    on the member for accuracy); past ``tol`` only a value above ``tol``, found with one direction.
+
+    When every moved point has a different nearest member point and the sets are equally large, the
+    nearest-point map is one-to-one: every member point is then within the largest of those
+    distances of its preimage, so the way back adds nothing and needs no tree of its own."""
     moved = (rep.points - rep.centre) @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
+    if len(moved) == 0 or len(moved) != len(member.local):
+        return hausdorff(moved, member.local, member.tree)
+    dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
+    first = float(np.max(dist))
+    if first > tol:
+        return first
+    if len(np.unique(idx)) == len(idx):
+        return first
     return hausdorff(moved, member.local, member.tree)

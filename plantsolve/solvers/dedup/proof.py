@@ -25,8 +25,29 @@ WHOLE_OUTPUT_BELOW = 1 / 25
 SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
 
 
-def entity_counts(model: ifcopenshell.file) -> dict[str, int]:
-    return dict(sorted(Counter(inst.is_a() for inst in model).items()))
+def entity_counts(model: ifcopenshell.file, walked: dict[int, np.ndarray] | None = None,
+                  walked_entities: dict[int, Counter] | None = None) -> dict[str, int]:
+    """Instances per entity. ``walked`` (id → the ids of an instance's traversal) and ``walked_entities``
+    (the same id → its traversal's entity counts) are what a reader already counted: when those
+    traversals are disjoint, only the instances outside them are looked at (a geometry-heavy model:
+    millions fewer)."""
+    counts: Counter = Counter()
+    rest = None
+    if walked and walked_entities is not None and walked.keys() == walked_entities.keys():
+        everything = np.fromiter(model.entity_names(), dtype=np.int64)
+        ids = np.concatenate(list(walked.values()))
+        inside = np.zeros(int(max(everything.max(initial=0), ids.max(initial=0))) + 1, dtype=bool)
+        inside[ids] = True
+        if int(inside.sum()) == len(ids) and inside[everything].sum() == len(ids):  # disjoint, all in the model
+            for entities in walked_entities.values():
+                counts.update(entities)
+            rest = everything[~inside[everything]].tolist()
+    if rest is None:
+        counts.update(inst.is_a() for inst in model)
+    else:
+        by_id = model.by_id
+        counts.update(by_id(i).is_a() for i in rest)
+    return dict(sorted(counts.items()))
 
 
 def _item_styles(item, styled_by: dict[int, list], depth: int = 0) -> list[str]:
