@@ -54,23 +54,21 @@ class ExplicitReader:
     def _loop_points(self, item) -> tuple[list, int] | None:
         """(points, face count) of a faceted item: every IfcCartesianPoint under it (each once)."""
         instances = self.model.traverse(item)
-        names = [e.is_a() for e in instances]
+        names = list(map(ifcopenshell.entity_instance.is_a, instances))
+        entities = Counter(names)
         if self.closures is not None:
-            self.closures[item.id()] = np.fromiter((e.id() for e in instances), dtype=np.int64, count=len(instances))
-            self.closure_entities[item.id()] = Counter(names)
+            self.closures[item.id()] = np.fromiter(map(ifcopenshell.entity_instance.id, instances), dtype=np.int64,
+                                                   count=len(instances))
+            self.closure_entities[item.id()] = entities
         roles = self._roles
-        points, faces = [], 0
-        for inst, name in zip(instances, names):
+        for name in entities:
             role = roles.get(name)
             if role is None:
                 role = roles[name] = _role(name)
-            if role == _POINT:
-                points.append(inst.get_argument(0))
-            elif role == _FACE:
-                faces += 1
-            elif role == _CURVED:
+            if role == _CURVED:
                 return None
-        return points, faces
+        points = [inst.get_argument(0) for inst, name in zip(instances, names) if name == "IfcCartesianPoint"]
+        return points, entities.get("IfcFace", 0)
 
     def item_points(self, item, depth: int = 0) -> tuple[np.ndarray, int] | None:
         """(points in the item's representation frame, face count), or None when not explicit."""

@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 import ifcopenshell
+import ifcopenshell.util.element
 
 from plantsolve.solvers.dedup import compaction, proof, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows
@@ -68,8 +70,6 @@ def test_every_way_of_deleting_gives_the_same_model(make, mode):
 def test_what_goes_is_what_remove_deep2_would_delete():
     """On the tunnel the reference is the library's own: each old product shape removed with
     ``remove_deep2``, one by one, leaves the same instances."""
-    import ifcopenshell.util.element
-
     model = tunnel_file(2, "IFC4", face_set="surface_model")
     detached, reader = _shared(model, "product_shape")
     gone, everything = compaction.going(model, detached.roots, detached.styled_by, known=reader.closures)
@@ -145,3 +145,20 @@ def test_verify_in_one_direction_is_the_two_way_hausdorff_distance():
     full = _both_ways(rep, member, exact)
     assert verify(rep, member, exact, 10.0) == full and full > 1e-3
     assert verify(rep, member, exact, 1e-5) > 1e-5
+
+
+def test_the_proofs_deviation_in_one_direction_is_the_two_way_distance():
+    def both_ways(before, after):
+        c = before.mean(axis=0)
+        a, b = before - c, after - c
+        return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
+
+    rng = np.random.default_rng(1)
+    for k in range(200):
+        a = rng.normal(size=(int(rng.integers(2, 50)), 3)) + 1e6
+        b = a[rng.permutation(len(a))] + rng.normal(scale=10 ** rng.uniform(-9, 0), size=a.shape)
+        if k % 3 == 0:  # two points onto one
+            b = np.concatenate([b[:-1], b[:1]])
+        if k % 5 == 0:  # one fewer
+            b = b[:-1]
+        assert proof.deviation(a, b) == both_ways(a, b)
