@@ -16,6 +16,7 @@ from plantsolve.solvers.dedup import changes as diffing
 from plantsolve.solvers.dedup import ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
+from plantsolve.solvers.dedup.matching import one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
@@ -131,7 +132,7 @@ def deviation(before: np.ndarray, after: np.ndarray) -> float:
     a, b = before - c, after - c
     dist, idx = cKDTree(b).query(a)
     first = float(np.max(dist))
-    if len(a) == len(b) and len(np.unique(idx)) == len(idx):
+    if len(a) == len(b) and one_to_one(idx, len(b)):
         return first
     return max(first, float(np.max(cKDTree(a).query(b)[0])))
 

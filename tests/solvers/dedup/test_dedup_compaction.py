@@ -15,7 +15,7 @@ import ifcopenshell.util.element
 from plantsolve.solvers.dedup import compaction, proof, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate
-from plantsolve.solvers.dedup.matching import Match, hausdorff, make_shape, verify
+from plantsolve.solvers.dedup.matching import Match, det3, hausdorff, make_shape, one_to_one, verify
 from plantsolve.solvers.dedup.synthetic import (WORLD_ORIGIN, ModelSpec, Product, apply, build_model, pose,
                                                  segment_mesh, tunnel_file, zoo_spec)
 from plantsolve.solvers.dedup.worldgeom import world_points
@@ -162,3 +162,13 @@ def test_the_proofs_deviation_in_one_direction_is_the_two_way_distance():
         if k % 5 == 0:  # one fewer
             b = b[:-1]
         assert proof.deviation(a, b) == both_ways(a, b)
+
+
+def test_det3_and_one_to_one_are_numpys():
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        m = rng.normal(size=(3, 3))
+        assert det3(m) == pytest.approx(np.linalg.det(m), rel=1e-12, abs=1e-12)
+        idx = rng.integers(0, 6, size=6)
+        assert one_to_one(idx, 6) == (len(np.unique(idx)) == 6)
+    assert one_to_one(np.array([2, 0, 1]), 3) and not one_to_one(np.array([0, 1]), 3)
