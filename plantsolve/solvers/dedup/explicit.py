@@ -49,6 +49,7 @@ class ExplicitReader:
         self.closure_entities: dict[int, Counter] = {}  # item id → entity counts of its closure
         self._roles: dict[str, int] = {}
         self._bodies: dict[int, tuple[np.ndarray, int] | None] = {}
+        self._items: dict[int, tuple[np.ndarray, int] | None] = {}
         self._placements: dict[int, np.ndarray] = {}
 
     def _loop_points(self, item) -> tuple[list, int] | None:
@@ -71,9 +72,17 @@ class ExplicitReader:
         return points, entities.get("IfcFace", 0)
 
     def item_points(self, item, depth: int = 0) -> tuple[np.ndarray, int] | None:
-        """(points in the item's representation frame, face count), or None when not explicit."""
+        """(points in the item's representation frame, face count), or None when not explicit. An item
+        is read once (a representation map's items, mapped by every member)."""
         if depth > 8:
             return None
+        key = item.id()
+        if key in self._items:
+            return self._items[key]
+        got = self._items[key] = self._item_points(item, depth)
+        return got
+
+    def _item_points(self, item, depth: int) -> tuple[np.ndarray, int] | None:
         if item.is_a("IfcMappedItem"):
             inner = item.MappingSource.MappedRepresentation
             if not item.MappingTarget.is_a("IfcCartesianTransformationOperator3D"):
