@@ -247,7 +247,7 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     When every moved point has a different nearest member point and the sets are equally large, the
     nearest-point map is one-to-one: every member point is then within the largest of those
     distances of its preimage, so the way back adds nothing and needs no tree of its own."""
-    moved = (rep.points - rep.centre) @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
+    moved = rep.local @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
     if len(moved) == 0 or len(moved) != len(member.local):
         return hausdorff(moved, member.local, member.tree)
     dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
