@@ -20,7 +20,7 @@ import numpy as np
 import ifcopenshell
 import ifcopenshell.util.placement
 
-from plantsolve.solvers.dedup.sharing import body_representation
+from plantsolve.solvers.dedup.sharing import Placements, body_representation
 
 FACE_SETS = ("IfcPolygonalFaceSet", "IfcTriangulatedFaceSet")
 FACE_MODELS = ("IfcFacetedBrep", "IfcFaceBasedSurfaceModel", "IfcShellBasedSurfaceModel")
@@ -50,7 +50,7 @@ class ExplicitReader:
         self._roles: dict[str, int] = {}
         self._bodies: dict[int, tuple[np.ndarray, int] | None] = {}
         self._items: dict[int, tuple[np.ndarray, int] | None] = {}
-        self._placements: dict[int, np.ndarray] = {}
+        self._placements = Placements()
 
     def _loop_points(self, item) -> tuple[list, int] | None:
         """(points, face count) of a faceted item: every IfcCartesianPoint under it (each once)."""
@@ -118,22 +118,6 @@ class ExplicitReader:
             return None
         return np.concatenate(parts), faces
 
-    def placement(self, placement) -> np.ndarray:
-        """``ifcopenshell.util.placement.get_local_placement``, each placement evaluated once (the same
-        products in the same order as the library multiplies them)."""
-        if placement is None:
-            return np.eye(4)
-        key = placement.id()
-        matrix = self._placements.get(key)
-        if matrix is None:
-            if not placement.is_a("IfcLocalPlacement"):
-                matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(placement), dtype=float)
-            else:
-                parent = self.placement(placement.PlacementRelTo)
-                matrix = np.dot(parent, ifcopenshell.util.placement.get_axis2placement(placement.RelativePlacement))
-            self._placements[key] = matrix
-        return matrix
-
     def product_points(self, product) -> tuple[np.ndarray, int] | None:
         """(unique world points in file units, face count) of the product's body, or None."""
         body = body_representation(product)
@@ -147,7 +131,7 @@ class ExplicitReader:
         if got is None:
             return None
         pts, faces = got
-        p = self.placement(product.ObjectPlacement)
+        p = self._placements.of(product)
         return unique_rows(pts @ p[:3, :3].T + p[:3, 3]), faces
 
 

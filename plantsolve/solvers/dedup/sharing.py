@@ -32,10 +32,30 @@ from plantsolve.solvers.dedup import compaction
 from plantsolve.solvers.dedup.grouping import CongruenceClass
 
 
-def placement_matrix(product) -> np.ndarray:
-    if product.ObjectPlacement is None:
-        return np.eye(4)
-    return np.asarray(ifcopenshell.util.placement.get_local_placement(product.ObjectPlacement), dtype=float)
+class Placements:
+    """``ifcopenshell.util.placement.get_local_placement``, each placement evaluated once (the same
+    products in the same order as the library multiplies them): the members of a ring share its
+    placement, and the proof's products their few parents."""
+
+    def __init__(self):
+        self._matrices: dict[int, np.ndarray] = {}
+
+    def matrix(self, placement) -> np.ndarray:
+        if placement is None:
+            return np.eye(4)
+        key = placement.id()
+        matrix = self._matrices.get(key)
+        if matrix is None:
+            if not placement.is_a("IfcLocalPlacement"):
+                matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(placement), dtype=float)
+            else:
+                parent = self.matrix(placement.PlacementRelTo)
+                matrix = np.dot(parent, ifcopenshell.util.placement.get_axis2placement(placement.RelativePlacement))
+            self._matrices[key] = matrix
+        return matrix
+
+    def of(self, product) -> np.ndarray:
+        return self.matrix(product.ObjectPlacement)
 
 
 def body_representation(product):
@@ -137,22 +157,13 @@ def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *
 
 def _apply(model, multi, mode, counts, progress, span, garbage: Detached) -> None:
     lo, hi = span
-    parents: dict[int, np.ndarray] = {}  # members of a ring share its placement: evaluate it once
-
-    def parent_matrix(parent) -> np.ndarray:
-        if parent is None:
-            return np.eye(4)
-        matrix = parents.get(parent.id())
-        if matrix is None:
-            matrix = parents[parent.id()] = np.asarray(
-                ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
-        return matrix
+    placements = Placements()  # members of a ring share its placement: evaluate it once
 
     for k, cls in enumerate(multi):
         if k % 8 == 0:
             progress(lo + (hi - lo) * k / max(len(multi), 1), "sharing")
         rep = cls.representative.product
-        p_rep = placement_matrix(rep)
+        p_rep = placements.of(rep)
         shape_mode = mode == "product_shape" and can_share_product_shape(model, cls)
         mapped = []  # members written as mapped items
         for cand, m in cls.members[1:]:
@@ -169,7 +180,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached) -> Non
                 continue
             old_shape = member.Representation
             parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = parent_matrix(parent)
+            p_parent = placements.matrix(parent)
             relative = np.linalg.inv(p_parent) @ t_world @ p_rep
             old_placement = member.ObjectPlacement
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
@@ -190,7 +201,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached) -> Non
         counts["mapped_items"] += 1
         for member, t_world in mapped:
             old = body_representation(member)
-            local = np.linalg.inv(placement_matrix(member)) @ t_world @ p_rep
+            local = np.linalg.inv(placements.of(member)) @ t_world @ p_rep
             item = model.create_entity("IfcMappedItem", source, operator(model, local))
             new = model.create_entity("IfcShapeRepresentation", old.ContextOfItems, old.RepresentationIdentifier,
                                       "MappedRepresentation", [item])
