@@ -71,7 +71,8 @@ def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
         return np.zeros(0, dtype=np.int64), everything
     size = int(everything.max()) + 1
     detached = np.zeros(size, dtype=bool)
-    detached[closure(model, roots, known)] = True
+    held = closure(model, roots, known)
+    detached[held[held < size]] = True
     styled = [st for item, sts in styled_by.items() if item < size and detached[item] for st in sts]
     if styled:
         detached[closure(model, styled)] = True

@@ -67,14 +67,15 @@ def test_every_way_of_deleting_gives_the_same_model(make, mode):
     assert len(gone_sets) == 1 and len(texts) == 1 and gone_sets.pop()
 
 
-def test_what_goes_is_what_remove_deep2_would_delete():
-    """On the tunnel the reference is the library's own: each old product shape removed with
+@pytest.mark.parametrize("mode", ["product_shape", "mapped_item"])
+def test_what_goes_is_what_remove_deep2_would_delete(mode):
+    """On the tunnel the reference is the library's own: each detached root removed with
     ``remove_deep2``, one by one, leaves the same instances."""
     model = tunnel_file(2, "IFC4", face_set="surface_model")
-    detached, reader = _shared(model, "product_shape")
+    detached, reader = _shared(model, mode)
     gone, everything = compaction.going(model, detached.roots, detached.styled_by, known=reader.closures)
     expected = tunnel_file(2, "IFC4", face_set="surface_model")
-    detached2, _ = _shared(expected, "product_shape")
+    detached2, _ = _shared(expected, mode)
     for root_id in [root.id() for root in detached2.roots]:
         try:
             root = expected.by_id(root_id)
