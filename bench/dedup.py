@@ -9,6 +9,12 @@ write, verification), peak memory; side by side with a generic syntactic optimiz
     .venv/bin/python bench/dedup.py                  # 530 rings at the paper's density
     .venv/bin/python bench/dedup.py --growth         # also 1,060 and 2,120 rings (lighter meshes)
     .venv/bin/python bench/dedup.py --proof --rings 60 --model some.ifc   # the proof's cost, before/after
+    .venv/bin/python bench/dedup.py --before /tmp/base   # also main's code (a checkout there), same input
+
+``--before ROOT`` runs the IFC4 post-pass configurations with the code of another checkout (e.g.
+``git worktree add --detach /tmp/base main``) and with this one, each in a fresh process on the same
+generated file, and prints CPU seconds per phase (the solve's own process time), peak memory and the
+result side by side: whether the output is byte for byte the same is printed too.
 
 ``--proof`` prints what validating the result costs (CPU seconds of the job's process): the proof as it
 is (what changed, checked with the rules compiled once) against, measured in the same process on the
@@ -43,17 +49,25 @@ def _generate(rings: int, arcs: int, schema: str, path: Path) -> int:
     return path.stat().st_size
 
 
-def _dedup(path: str, options: dict) -> dict:
+def _dedup(path: str, options: dict, root: str | None = None) -> dict:
+    if root is not None:  # another checkout's code: imported before anything of ours is
+        sys.path.insert(0, root)
+    import hashlib
+
     from plantsolve.solvers.base import StoredInput
     from plantsolve.solvers.dedup import SPEC
 
     source = StoredInput.from_path(path)  # opened where it lies, as the runner hands a stored upload
     value = SPEC.input_of(SPEC.parse_upload(source, options), source)
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     solved = SPEC.solve(value)
+    cpu_total = time.process_time() - cpu_start
     result = solved.result
     v = result.verification
-    return {"original": result.original_bytes, "optimized": result.optimized_bytes, "rate": result.optimization_rate,
+    written = solved.files.get("optimized.ifc")
+    return {"code": str(Path(sys.modules["plantsolve"].__file__).parents[1]), "cpu": result.report.details["cpu_seconds"],
+            "cpu_total": cpu_total, "digest": hashlib.sha256(written).hexdigest() if written else None,
+            "original": result.original_bytes, "optimized": result.optimized_bytes, "rate": result.optimization_rate,
             "classes": len(result.classes), "shared": result.products_shared, "products": result.products_total,
             "timings": result.timings, "total": time.perf_counter() - start,
             "valid": v.schema_valid, "rules": v.express_rules, "deviation": v.max_deviation,
@@ -205,6 +219,53 @@ def run_size(rings: int, arcs: int, folder: Path, *, full: bool, headline: bool 
     return rows
 
 
+CPU_PHASES = ("parse", "geometry", "grouping", "matching", "sharing", "postpass", "write", "verification")
+COMPARE_HEADER = ("| configuration | code | " + " | ".join(f"{k} CPU s" for k in CPU_PHASES)
+                  + " | (of it: validation) | grouping+matching | total CPU s | peak MiB | rate % | classes | shared | "
+                    "valid | max dev m | output |")
+
+
+def _compare_row(name: str, code: str, r: dict, same: str) -> str:
+    if "error" in r:
+        return f"| {name} | {code} | {r['error'][:100]} |" + " |" * 16
+    c = r["cpu"]
+    dev = "–" if r["deviation"] is None else f"{r['deviation']:.1e}"
+    return (f"| {name} | {code} | " + " | ".join(f"{c.get(k, 0.0):.2f}" for k in CPU_PHASES)
+            + f" | {c.get('validation', 0.0):.2f} | {c['grouping'] + c['matching']:.2f} | {r['cpu_total']:.1f} | "
+            f"{r['peak_mb']:.0f} | {100 * r['rate']:.2f} | {r['classes']} | {r['shared']} | "
+            f"{'yes' if r['valid'] else 'NO'}{' +rules' if r['rules'] else ''} | {dev} | {same} |")
+
+
+def run_compare(rings: int, arcs: int, before: str, folder: Path) -> None:
+    """Before (another checkout's code) and after (this one) on one generated file, IFC4 with the post-pass."""
+    path = folder / f"tunnel_{rings}_IFC4.ifc"
+    size = _in_fresh_process(_generate, rings, arcs, "IFC4", path)
+    print(f"generated {path.name}: {size / 1e6:.1f} MB", file=sys.stderr)
+    here = str(Path(__file__).resolve().parents[1])
+    rows = []
+    for sharing in ("product_shape", "mapped_item"):
+        options = {"sharing": sharing, "postpass": True, "express_rules": sharing == "product_shape"}
+        old = _in_fresh_process(_dedup, str(path), options, str(Path(before).resolve()))
+        new = _in_fresh_process(_dedup, str(path), options, here)
+        print(f"  {sharing}: done", file=sys.stderr)
+        same = ("same bytes" if old.get("digest") and old.get("digest") == new.get("digest") else
+                "differs" if old.get("digest") and new.get("digest") else "not offered")
+        rows.append((f"{rings} rings IFC4 {sharing} + post-pass", old, new, same))
+    path.unlink(missing_ok=True)
+    print(f"\nBefore ({before}) and after (this checkout), CPU seconds of the solve's process, "
+          f"{rings} rings × 8 segments, {arcs} facets per arc, {size / 1e6:.0f} MB IFC4\n")
+    print(COMPARE_HEADER)
+    print("|" + " --- |" * (COMPARE_HEADER.count("|") - 1))
+    for name, old, new, same in rows:
+        print(_compare_row(name, "before", old, ""))
+        print(_compare_row(name, "after", new, same))
+    for name, old, new, _ in rows:
+        if "error" in old or "error" in new:
+            continue
+        print(f"- {name}: total CPU {old['cpu_total']:.1f} s → {new['cpu_total']:.1f} s "
+              f"({old['cpu_total'] / new['cpu_total']:.1f}×), peak {old['peak_mb']:.0f} → {new['peak_mb']:.0f} MiB")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="20 rings, 12 facets per arc")
@@ -216,10 +277,16 @@ def main() -> None:
     parser.add_argument("--proof", action="store_true", help="only the proof's cost, before/after, on a tunnel of "
                         "--rings rings and on each --model")
     parser.add_argument("--model", action="append", default=[], help="an IFC file for --proof (repeatable)")
+    parser.add_argument("--before", metavar="ROOT", help="only before/after: the IFC4 post-pass configurations "
+                        "with the code of the checkout at ROOT and with this one (CPU s per phase, peak MiB)")
     parser.add_argument("--headline", action="store_true", help="only IFC4 with the post-pass (both sharing "
                         "modes) and the baseline")
     args = parser.parse_args()
     rings, arcs = (20, 12) if args.quick else (args.rings, args.arcs)
+    if args.before:
+        with tempfile.TemporaryDirectory(prefix="bench-dedup-") as tmp:
+            run_compare(rings, arcs, args.before, Path(tmp))
+        return
     if args.proof:
         with tempfile.TemporaryDirectory(prefix="bench-dedup-") as tmp:
             run_proof(rings, arcs, args.model, Path(tmp))

@@ -126,15 +126,17 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
     for index, (ci, k) in enumerate(entries):
         cls = classes[ci]
         cand, m = cls.members[k]
-        tried: set[int] = set()
+        tried: set[tuple] = set()
         for n in np.atleast_1d(near[index]):
             cj, kj = entries[n]
             if cj >= ci:  # only members of earlier classes, whose transforms are final
                 continue
             other = classes[cj].members[kj][1]
-            if id(other) in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
+            # a pooled transform is the same arrays in every member that took it: tried once
+            key = (id(other.rotation), id(other.translation), other.scale)
+            if key in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
                 continue
-            tried.add(id(other))
+            tried.add(key)
             dev = verify(cls.representative.shape, cand.shape, other, tol)
             if dev <= tol:
                 cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))

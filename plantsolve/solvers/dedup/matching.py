@@ -70,6 +70,20 @@ class Match:
         return m
 
 
+def det3(m: np.ndarray) -> float:
+    """The determinant of a 3×3 matrix, written out (``np.linalg.det`` costs a LAPACK call; only its
+    sign is asked of a rotation's ±1)."""
+    (a, b, c), (d, e, f), (g, h, i) = m.tolist()
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def one_to_one(idx: np.ndarray, n: int) -> bool:
+    """Whether ``idx`` (``n`` indices into ``n`` points) names every point once."""
+    hit = np.zeros(n, dtype=bool)
+    hit[idx] = True
+    return len(idx) == n and bool(hit.all())
+
+
 def hausdorff(a: np.ndarray, b: np.ndarray, tree_b: cKDTree | None = None, tree_a: cKDTree | None = None,
               bound: float = np.inf) -> float:
     """Two-way Hausdorff distance of point sets ``a`` and ``b`` (stops early past ``bound``)."""
@@ -94,7 +108,7 @@ def _axis_guesses(rep: Shape, member: Shape, tol: float, allow_mirror: bool) -> 
         member_axes = member.axes[:, list(perm)]
         for signs in itertools.product((1.0, -1.0), repeat=3):
             r = (member_axes * np.array(signs)) @ rep.axes.T
-            if np.linalg.det(r) < 0 and not allow_mirror:
+            if det3(r) < 0 and not allow_mirror:
                 continue
             guesses.append(r)
     return guesses
@@ -152,7 +166,7 @@ def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: 
     for _ in range(MAX_ICP_STEPS):
         moved = rep_local @ rotation.T + t
         dist, idx = member.tree.query(moved, k=1)
-        err = float(np.max(dist))
+        err = float(dist.max())
         if err <= stop or err >= last * 0.999999:
             break
         last = err
@@ -201,19 +215,19 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
 
     def consider(r0: np.ndarray) -> None:
         nonlocal best
-        proper = np.linalg.det(r0) > 0
+        proper = det3(r0) > 0
         r, t, dist, idx = _refine(rep_local, member, r0, proper, 1e-3 * tol)
-        dev = float(np.max(dist))
+        dev = float(dist.max())
         if dev > tol:
             return
-        if len(np.unique(idx)) != len(idx):
+        if not one_to_one(idx, len(member.local)):
             # not one-to-one: the way back needs its own search
             dev = hausdorff(rep_local @ r.T + t, member.local, member.tree, bound=tol)
             if dev > tol:
                 return
         # one-to-one within tol: every member point is within dev of its preimage, so the two-way
         # Hausdorff distance is dev itself
-        cand = Match(r, scale, member.centre + t - r @ (rep.centre * scale), dev, bool(np.linalg.det(r) < 0))
+        cand = Match(r, scale, member.centre + t - r @ (rep.centre * scale), dev, bool(det3(r) < 0))
         key = (round(float(np.trace(r)), 9) * -1, dev)
         if best is None or key < (round(float(np.trace(best.rotation)), 9) * -1, best.deviation):
             best = cand
@@ -228,6 +242,18 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
 
 def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     """Two-way Hausdorff distance between ``member`` and ``rep`` moved by ``m`` (world frame, centred
-    on the member for accuracy)."""
-    moved = (rep.points - rep.centre) @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
+    on the member for accuracy); past ``tol`` only a value above ``tol``, found with one direction.
+
+    When every moved point has a different nearest member point and the sets are equally large, the
+    nearest-point map is one-to-one: every member point is then within the largest of those
+    distances of its preimage, so the way back adds nothing and needs no tree of its own."""
+    moved = rep.local @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
+    if len(moved) == 0 or len(moved) != len(member.local):
+        return hausdorff(moved, member.local, member.tree)
+    dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
+    first = float(np.max(dist))
+    if first > tol:
+        return first
+    if one_to_one(idx, len(member.local)):
+        return first
     return hausdorff(moved, member.local, member.tree)

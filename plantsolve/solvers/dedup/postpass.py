@@ -17,7 +17,7 @@ import ifcopenshell
 import ifcopenshell.ifcopenshell_wrapper as wrapper
 
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.sharing import remove_batch
+from plantsolve.solvers.dedup.compaction import remove_batch
 
 NEVER_MERGED = ("IfcRoot", "IfcRepresentation", "IfcRepresentationContext", "IfcProductRepresentation")
 
@@ -52,10 +52,14 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
 
 
 def _topological(model: ifcopenshell.file) -> list:
+    """Every instance after what it references; roots taken in id order, so the first of identical
+    instances (the one kept) does not depend on how the model's storage happens to be ordered."""
     order, state = [], {}
-    for root in model:
-        if root.id() in state:
+    by_id = model.by_id
+    for first in sorted(model.entity_names()):
+        if first in state:
             continue
+        root = by_id(first)
         stack = [(root, False)]
         while stack:
             inst, expanded = stack.pop()

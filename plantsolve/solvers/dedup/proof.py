@@ -16,6 +16,7 @@ from plantsolve.solvers.dedup import changes as diffing
 from plantsolve.solvers.dedup import ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
+from plantsolve.solvers.dedup.matching import one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
@@ -25,8 +26,29 @@ WHOLE_OUTPUT_BELOW = 1 / 25
 SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "IfcObject", "IfcTypeObject")
 
 
-def entity_counts(model: ifcopenshell.file) -> dict[str, int]:
-    return dict(sorted(Counter(inst.is_a() for inst in model).items()))
+def entity_counts(model: ifcopenshell.file, walked: dict[int, np.ndarray] | None = None,
+                  walked_entities: dict[int, Counter] | None = None) -> dict[str, int]:
+    """Instances per entity. ``walked`` (id → the ids of an instance's traversal) and ``walked_entities``
+    (the same id → its traversal's entity counts) are what a reader already counted: when those
+    traversals are disjoint, only the instances outside them are looked at (a geometry-heavy model:
+    millions fewer)."""
+    counts: Counter = Counter()
+    rest = None
+    if walked and walked_entities is not None and walked.keys() == walked_entities.keys():
+        everything = np.fromiter(model.entity_names(), dtype=np.int64)
+        ids = np.concatenate(list(walked.values()))
+        inside = np.zeros(int(max(everything.max(initial=0), ids.max(initial=0))) + 1, dtype=bool)
+        inside[ids] = True
+        if int(inside.sum()) == len(ids) and inside[everything].sum() == len(ids):  # disjoint, all in the model
+            for entities in walked_entities.values():
+                counts.update(entities)
+            rest = everything[~inside[everything]].tolist()
+    if rest is None:
+        counts.update(inst.is_a() for inst in model)
+    else:
+        by_id = model.by_id
+        counts.update(by_id(i).is_a() for i in rest)
+    return dict(sorted(counts.items()))
 
 
 def _item_styles(item, styled_by: dict[int, list], depth: int = 0) -> list[str]:
@@ -103,10 +125,16 @@ def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[
 
 
 def deviation(before: np.ndarray, after: np.ndarray) -> float:
-    """Two-way Hausdorff distance of two point sets, centred on the first for accuracy."""
+    """Two-way Hausdorff distance of two point sets, centred on the first for accuracy. When the sets
+    are equally large and every point of the first has another nearest point in the second, that
+    map is one-to-one and the way back is no farther: one tree, one query."""
     c = before.mean(axis=0)
     a, b = before - c, after - c
-    return max(float(np.max(cKDTree(b).query(a)[0])), float(np.max(cKDTree(a).query(b)[0])))
+    dist, idx = cKDTree(b).query(a)
+    first = float(np.max(dist))
+    if len(a) == len(b) and one_to_one(idx, len(b)):
+        return first
+    return max(first, float(np.max(cKDTree(a).query(b)[0])))
 
 
 def affected(model: ifcopenshell.file, changes: Changes, *, output: bool = True, depth: int = 2) -> list:

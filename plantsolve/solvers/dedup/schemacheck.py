@@ -159,9 +159,17 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
     out: list[Finding] = []
     wrapper = ifcopenshell.ifcopenshell_wrapper
 
-    def violated(rule, name: str, error: Exception, inst) -> None:
-        out.append(Finding(name, inst.is_a(), normalised(f"Rule {name}:\n    {rules.definition(error)}"), str(inst),
-                           inst.id()))
+    def run(found: Iterable, value, inst) -> None:
+        """Each where-rule of ``found`` on ``value``, a violation recorded against ``inst``."""
+        for rule in found:
+            try:
+                rule()(value)
+            except RecursionError:
+                pass
+            except Exception as e:  # noqa: BLE001 (a rule that cannot be evaluated is violated, as in the library)
+                name = f"{rule.TYPE_NAME}.{rule.RULE_NAME}"
+                out.append(Finding(name, inst.is_a(), normalised(f"Rule {name}:\n    {rules.definition(e)}"),
+                                   str(inst), inst.id()))
 
     def type_name(ty):
         while isinstance(ty, wrapper.named_type):
@@ -173,13 +181,7 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
     def check(value, ty, inst) -> None:  # rule_executor.run's own walk through a value
         if value is None:
             return
-        for rule in rules.type_rules.get(type_name(ty), ()):
-            try:
-                rule()(value)
-            except RecursionError:
-                pass
-            except Exception as e:  # noqa: BLE001
-                violated(rule, f"{rule.TYPE_NAME}.{rule.RULE_NAME}", e, inst)
+        run(rules.type_rules.get(type_name(ty), ()), value, inst)
         while isinstance(ty, (wrapper.named_type, wrapper.type_declaration)):
             ty = ty.declared_type()
         if isinstance(value, (list, tuple)):
@@ -204,11 +206,5 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
             for attr, value, derived in zip(entity.all_attributes(), values, entity.derived()):
                 if not derived:
                     check(value, attr.type_of_attribute(), inst)
-            for rule in rules.entity_rules(inst.is_a()):
-                try:
-                    rule()(inst)
-                except RecursionError:
-                    pass
-                except Exception as e:  # noqa: BLE001
-                    violated(rule, f"{rule.TYPE_NAME}.{rule.RULE_NAME}", e, inst)
+            run(rules.entity_rules(inst.is_a()), inst, inst)
     return out

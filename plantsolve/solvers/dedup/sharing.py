@@ -14,10 +14,9 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
 - An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
 
 Old representations, product shapes and placements are deleted with the instances only they used
-(what ``remove_deep2`` deletes, found for all of them at once after the rewrite and deleted in one
-batch, so the phase grows linearly with the model); styled items of their items go with them
-(grouping guarantees the representative carries equal styles); a presentation layer that held an
-old representation holds the new one.
+(what ``remove_deep2`` deletes, found for all of them at once after the rewrite: ``compaction``);
+styled items of their items go with them (grouping guarantees the representative carries equal
+styles); a presentation layer that held an old representation holds the new one.
 """
 
 from __future__ import annotations
@@ -29,13 +28,34 @@ import ifcopenshell.api
 import ifcopenshell.util.placement
 
 from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup import compaction
 from plantsolve.solvers.dedup.grouping import CongruenceClass
 
 
-def placement_matrix(product) -> np.ndarray:
-    if product.ObjectPlacement is None:
-        return np.eye(4)
-    return np.asarray(ifcopenshell.util.placement.get_local_placement(product.ObjectPlacement), dtype=float)
+class Placements:
+    """``ifcopenshell.util.placement.get_local_placement``, each placement evaluated once (the same
+    products in the same order as the library multiplies them): the members of a ring share its
+    placement, and the proof's products their few parents."""
+
+    def __init__(self):
+        self._matrices: dict[int, np.ndarray] = {}
+
+    def matrix(self, placement) -> np.ndarray:
+        if placement is None:
+            return np.eye(4)
+        key = placement.id()
+        matrix = self._matrices.get(key)
+        if matrix is None:
+            if not placement.is_a("IfcLocalPlacement"):
+                matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(placement), dtype=float)
+            else:
+                parent = self.matrix(placement.PlacementRelTo)
+                matrix = np.dot(parent, ifcopenshell.util.placement.get_axis2placement(placement.RelativePlacement))
+            self._matrices[key] = matrix
+        return matrix
+
+    def of(self, product) -> np.ndarray:
+        return self.matrix(product.ObjectPlacement)
 
 
 def body_representation(product):
@@ -80,45 +100,10 @@ def _replace_in_list(owner, attribute: str, old, new) -> None:
     setattr(owner, attribute, [new if v == old else v for v in values if v != old or new is not None])
 
 
-def _exclusive(model: ifcopenshell.file, sub: dict[int, object]) -> dict[int, object]:
-    """The part of ``sub`` (id → instance, closed under references; pruned in place) that nothing outside it
-    references: what ``ifcopenshell.util.element.remove_deep2`` deletes, found for the whole set at
-    once. One call into the C++ core finds the instances of ``sub`` referenced from outside; they
-    stay, and so does everything they reference (their traversal), the rest goes: every referrer of
-    an instance not reached that way is itself in ``sub`` and goes too."""
-    inside = set(model._ids_referenced_only_within(list(sub)))
-    kept: set[int] = set()
-    for i in sub:
-        if i not in inside and i not in kept:
-            kept.update(e.id() for e in model.traverse(sub[i]))
-    del inside
-    for i in kept:  # in place: ``sub`` holds every detached instance (millions in a large model)
-        sub.pop(i, None)
-    return sub
-
-
-def remove_batch(model: ifcopenshell.file, instances) -> None:
-    """Delete ``instances`` (an iterable, or a dict id → instance) in one batch, highest id first.
-
-    One batch, because removing instance by instance rewrites the inverse maps once per instance.
-    Highest id first, because the core keeps its instances in id-sorted arrays and erases each one
-    in place: erasing from the end moves only the few kept instances behind it, while the hash
-    order of a set made the batch quadratic (530 rings: most of the sharing phase)."""
-    by_id = instances if isinstance(instances, dict) else {e.id(): e for e in instances}
-    remove = model.remove
-    model.batch()
-    try:
-        for i in sorted(by_id, reverse=True):
-            remove(by_id[i])
-    finally:
-        model.unbatch()
-
-
-class _Garbage:
-    """What the rewrite detached: old representations, product shapes and placements. Layers that
-    held an old representation are pointed at its replacement at once; the deletion (each root with
-    what only the detached roots use, the styled items of their items included: grouping
-    guarantees the representative carries equal styles) happens for all of them together."""
+class Detached:
+    """What the rewrite detached: old representations, product shapes and placements (``roots``),
+    deleted together afterwards by ``compaction``. Layers that held an old representation are
+    pointed at its replacement at once."""
 
     def __init__(self, model: ifcopenshell.file):
         self.model = model
@@ -143,25 +128,6 @@ class _Garbage:
     def detached(self, instance) -> None:
         self.roots.append(instance)
 
-    def collect(self) -> dict[int, object]:
-        model = self.model
-        sub: dict[int, object] = {}
-        for root in self.roots:
-            if root.id() not in sub:
-                sub.update((e.id(), e) for e in model.traverse(root) if e.id())
-        if not sub:
-            return {}
-        going = _exclusive(model, sub)
-        # the styled items of the items that go: an item still used elsewhere (inside a representation
-        # map the representative shares, as ArchiCAD writes its beams) keeps its style
-        styled = [st for i in list(going) for st in self.styled_by.get(i, ())]
-        if not styled:
-            return going
-        for st in styled:
-            if st.id() not in going:
-                going.update((e.id(), e) for e in model.traverse(st) if e.id())
-        return _exclusive(model, going)
-
 
 def _is_shared(model: ifcopenshell.file, instance, allowed: int = 1) -> bool:
     return model.get_total_inverses(instance) > allowed
@@ -173,36 +139,31 @@ def can_share_product_shape(model: ifcopenshell.file, cls: CongruenceClass) -> b
 
 
 def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *,
-          progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0)) -> dict[str, int]:
-    """Rewrite every class with at least two members; returns counts of what was written."""
+          progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
+          detached: Detached | None = None) -> dict[str, int]:
+    """Rewrite every class with at least two members; returns counts of what was written. What the
+    rewrite detached is deleted from ``model`` before returning, or, given ``detached``, recorded there
+    for the caller to delete (``compaction.compacted``)."""
     counts = {"mapped_items": 0, "shared_product_shapes": 0, "fallback_to_mapped_item": 0}
     multi = [c for c in classes if len(c.members) > 1]
-    garbage = _Garbage(model)
+    garbage = detached if detached is not None else Detached(model)
     try:
         _apply(model, multi, mode, counts, progress, span, garbage)
     finally:
-        remove_batch(model, garbage.collect())
+        if detached is None:
+            compaction.compacted(model, garbage.roots, garbage.styled_by, rebuild=False)
     return counts
 
 
-def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> None:
+def _apply(model, multi, mode, counts, progress, span, garbage: Detached) -> None:
     lo, hi = span
-    parents: dict[int, np.ndarray] = {}  # members of a ring share its placement: evaluate it once
-
-    def parent_matrix(parent) -> np.ndarray:
-        if parent is None:
-            return np.eye(4)
-        matrix = parents.get(parent.id())
-        if matrix is None:
-            matrix = parents[parent.id()] = np.asarray(
-                ifcopenshell.util.placement.get_local_placement(parent), dtype=float)
-        return matrix
+    placements = Placements()  # members of a ring share its placement: evaluate it once
 
     for k, cls in enumerate(multi):
         if k % 8 == 0:
             progress(lo + (hi - lo) * k / max(len(multi), 1), "sharing")
         rep = cls.representative.product
-        p_rep = placement_matrix(rep)
+        p_rep = placements.of(rep)
         shape_mode = mode == "product_shape" and can_share_product_shape(model, cls)
         mapped = []  # members written as mapped items
         for cand, m in cls.members[1:]:
@@ -219,7 +180,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> Non
                 continue
             old_shape = member.Representation
             parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = parent_matrix(parent)
+            p_parent = placements.matrix(parent)
             relative = np.linalg.inv(p_parent) @ t_world @ p_rep
             old_placement = member.ObjectPlacement
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
@@ -240,7 +201,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: _Garbage) -> Non
         counts["mapped_items"] += 1
         for member, t_world in mapped:
             old = body_representation(member)
-            local = np.linalg.inv(placement_matrix(member)) @ t_world @ p_rep
+            local = np.linalg.inv(placements.of(member)) @ t_world @ p_rep
             item = model.create_entity("IfcMappedItem", source, operator(model, local))
             new = model.create_entity("IfcShapeRepresentation", old.ContextOfItems, old.RepresentationIdentifier,
                                       "MappedRepresentation", [item])

@@ -11,7 +11,8 @@ import ifcopenshell.util.unit
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
 from plantsolve.solvers.base import Progress, Solved, no_progress, reject
-from plantsolve.solvers.dedup import ifcio, postpass, proof, sharing
+from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing
+from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.worldgeom import world_points
@@ -59,6 +60,25 @@ def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
     return None
 
 
+def described(classes: list) -> tuple[list[DedupClass], int]:
+    """The result's classes (those of two or more members) and how many products share geometry."""
+    out_classes = []
+    shared = 0
+    for cls in classes:
+        if len(cls.members) < 2:
+            continue
+        shared += len(cls.members) - 1
+        rep = cls.representative.product
+        out_classes.append(DedupClass(
+            representative=rep.GlobalId, members=[c.product.GlobalId for c, _ in cls.members],
+            entity=rep.is_a(), object_type=getattr(rep, "ObjectType", None),
+            transforms=[[float(v) for v in m.matrix.reshape(-1)] for _, m in cls.members],
+            max_deviation=float(max(m.deviation for _, m in cls.members)),
+            mirror=any(m.mirror for _, m in cls.members),
+            scale=any(abs(m.scale - 1.0) > 1e-12 for _, m in cls.members)))
+    return out_classes, shared
+
+
 def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     """The deduplicated model's result and, when it passed its proof, the optimized file itself."""
     opts = source.options
@@ -86,13 +106,14 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         unit = ifcopenshell.util.unit.calculate_unit_scale(model)
         unit_name = length_unit_name(model)
         tol = float(opts.tolerance) if opts.tolerance is not None else model_tolerance(model, unit)
-        counts_before = proof.entity_counts(model)
         semantic_before = proof.semantic_fingerprint(model)
         products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
         if not products:
             raise reject("the file has no product with geometry (no IfcProduct has a Representation)")
         progress(0.05, "tessellating products in world coordinates")
-        points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35))
+        reader = ExplicitReader(model, record_closures=True)  # the closures: the sharing's old geometry
+        points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
+        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities)
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
         before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
@@ -116,7 +137,13 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                 progress=progress, span=(0.35, 0.55))
         pooled = pool_transforms(classes, tol)
         lap("matching")
-        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65))
+        detached = sharing.Detached(model)
+        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached)
+        out_classes, shared = described(classes)
+        products_total = len(products)
+        # the old model's instances are not used past this point: a rebuilt model replaces it
+        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures)
+        del detached, reader, classes, candidates, products, points, triangles, p
         lap("sharing")
         removed = {}
         if opts.postpass:
@@ -166,20 +193,6 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         warnings.append(Diagnostic(code="input_invalid", message=f"The output has {len(errors)} validation error(s), "
                                    "all of them already in the input file", details={}))
     ok = semantic_equal and (not errors or inherited_errors) and (max_dev is None or max_dev <= tol)
-    out_classes = []
-    shared = 0
-    for cls in classes:
-        if len(cls.members) < 2:
-            continue
-        shared += len(cls.members) - 1
-        rep = cls.representative.product
-        out_classes.append(DedupClass(
-            representative=rep.GlobalId, members=[c.product.GlobalId for c, _ in cls.members],
-            entity=rep.is_a(), object_type=getattr(rep, "ObjectType", None),
-            transforms=[[float(v) for v in m.matrix.reshape(-1)] for _, m in cls.members],
-            max_deviation=float(max(m.deviation for _, m in cls.members)),
-            mirror=any(m.mirror for _, m in cls.members),
-            scale=any(abs(m.scale - 1.0) > 1e-12 for _, m in cls.members)))
     if skipped:
         warnings.append(Diagnostic(code="left_unchanged", message=f"{len(skipped)} product(s) were left as they "
                                    "were (their geometry could not be processed or is not deduplicable)",
@@ -193,14 +206,14 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                    "it is not offered as an artifact", details={"max_deviation": max_dev,
                                                                                   "semantic_differences": differences}))
     report = Report(status="ok" if not warnings else "warning",
-                    message=(f"{len(out_classes)} classes, {shared} of {len(products)} products share geometry; "
+                    message=(f"{len(out_classes)} classes, {shared} of {products_total} products share geometry; "
                              f"{len(optimized)} of {original_bytes} bytes ({mode})"),
                     warnings=warnings,
                     details={"cpu_seconds": cpu, "written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
     ratio = len(optimized) / original_bytes if original_bytes else 1.0
     result = DedupResult(
         schema=schema, length_unit=unit_name, tolerance=tol, sharing=mode,
-        products_total=len(products), products_shared=shared, classes=out_classes,
+        products_total=products_total, products_shared=shared, classes=out_classes,
         original_bytes=original_bytes, optimized_bytes=len(optimized), optimization_ratio=ratio,
         optimization_rate=1.0 - ratio, entity_counts_before=counts_before, entity_counts_after=counts_after,
         verification=verification, timings=timings, report=report)

@@ -11,7 +11,7 @@ import ifcopenshell.geom
 import ifcopenshell.util.unit
 
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.explicit import product_points
+from plantsolve.solvers.dedup.explicit import ExplicitReader
 
 
 def geometry_settings() -> ifcopenshell.geom.settings:
@@ -22,15 +22,18 @@ def geometry_settings() -> ifcopenshell.geom.settings:
 
 def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
                  progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
-                 message: str = "geometry") -> tuple[dict[int, np.ndarray], dict[int, int]]:
+                 message: str = "geometry", reader: ExplicitReader | None = None,
+                 ) -> tuple[dict[int, np.ndarray], dict[int, int]]:
     """``{product id: unique world points (n, 3) in file units}`` and ``{product id: face count}``
-    (explicit meshes: their points and polygons as written; anything else: the kernel's tessellation,
-    its vertices and triangles); a product the kernel cannot tessellate is missing from both."""
+    (explicit meshes: their points and polygons as written, through ``reader`` when given; anything
+    else: the kernel's tessellation, its vertices and triangles); a product the kernel cannot
+    tessellate is missing from both."""
     points: dict[int, np.ndarray] = {}
     triangles: dict[int, int] = {}
     rest = []
+    reader = reader or ExplicitReader(model)
     for k, product in enumerate(products):
-        got = product_points(model, product)
+        got = reader.product_points(product)
         if got is None:
             rest.append(product)
         else:
