@@ -120,7 +120,7 @@ class JobService:
     def _create(
         self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
     ) -> Submitted:
-        stored, created = self.ctx.repo.insert(dict(
+        stored, created = self.ctx.repo.create(dict(
             id=job_id,
             kind=spec.kind,
             status=QUEUED,

@@ -78,28 +78,28 @@ class JobRepository:
 
     # ---- submission and reads -------------------------------------------------------------
 
-    def create(self, job: Job) -> tuple[Job, bool]:
-        """Insert ``job``; with an idempotency key already taken, return the existing job.
+    def create(self, job: Job | dict[str, Any]) -> tuple[Any, bool]:
+        """Insert a job, given as a model instance or as its columns (the columns' defaults fill what is left
+        out); with an idempotency key already taken, return the existing job instead.
 
-        Returns ``(job, created)``. The caller compares body hashes of an existing job.
-        """
-        _apply_defaults(job)
-        stored, created = self.insert({column.key: getattr(job, column.key) for column in JOBS.columns})
-        return (job if created else stored), created
-
-    def insert(self, values: dict[str, Any]) -> tuple[Any, bool]:
-        """Insert the job of the columns ``values`` (the columns' defaults fill what is left out): ``(the new job as
-        a :class:`JobRecord`, True)``, or ``(the existing job, False)`` when its idempotency key is already taken.
-        One Core INSERT and no ORM instance: on the submit path the ORM's unit of work and instance bookkeeping
-        cost more than the write itself."""
+        Returns ``(job, created)``: the new job is the instance given, or for columns a :class:`JobRecord` of
+        them. The caller compares body hashes of an existing job. One Core INSERT and no ORM instance: on the
+        submit path the ORM's unit of work and instance bookkeeping cost more than the write itself."""
+        if isinstance(job, Job):
+            _apply_defaults(job)
+            stored, created = self.create({column.key: getattr(job, column.key) for column in JOBS.columns})
+            return (job if created else stored), created
+        values = job
         key = values.get("idempotency_key")
         if key is not None:
             existing = self.get_by_idempotency_key(key)
             if existing is not None:
                 return existing, False
         record = {name: None for name in COLUMN_KEYS}
-        record.update((name, default()) for name, default in COLUMN_DEFAULTS)
         record.update(values)
+        for name, default in COLUMN_DEFAULTS:
+            if record[name] is None:
+                record[name] = default()
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
         try:
             with self.writing(), self._core() as connection:
