@@ -11,7 +11,8 @@ Submissions run for a fixed time from 1 connection, then from C connections (eac
 in embedded mode the pool runs them meanwhile), then GET /v1/jobs/{id} is read from 1 connection
 (latency of a polling client) and from 8 (throughput), while the backlog of jobs is still running.
 The trivial app (bench/baseline_app.py: FastAPI + SQLite, same uvicorn settings) runs first in the
-same run. Targets: submit p99 < 20 ms at 16 connections while jobs run, status p99 < 20 ms at 8
+same run, then each mode with the code of ``main`` (a temporary git worktree, or ``--before DIR``; ``--before none``
+leaves it out) and with this checkout's code. Targets: submit p99 < 20 ms at 16 connections while jobs run, status p99 < 20 ms at 8
 connections, single-connection submits >= 0.5x the trivial app's.
 
 Beside the rates (which a loaded machine lowers), the table gives the CPU milliseconds the server's own process
@@ -20,7 +21,7 @@ spends per single-connection submit, read from /proc: the measure that holds whe
 table, not that the targets hold.
 
     python bench/api.py [--quick | --smoke] [--seconds S] [--concurrency C] [--modes embedded,scaled]
-                        [--client wrk|python]
+                        [--client wrk|python] [--before main|DIR|none]
 """
 
 from __future__ import annotations
@@ -58,7 +59,8 @@ def launch(command: list[str], env: dict[str, str], data_dir: str | Path) -> sub
 
 
 def start_server(env: dict[str, str], port: int) -> subprocess.Popen:
-    process = launch([str(BIN / "plantsolve"), "serve", "--port", str(port), "--log-level", "warning"], env,
+    # ``-m plantsolve.cli``: the package is imported from PYTHONPATH first (this checkout, or the code compared with)
+    process = launch([sys.executable, "-m", "plantsolve.cli", "serve", "--port", str(port), "--log-level", "warning"], env,
                      env["DATA_DIR"])
     return wait_ready(process, f"http://127.0.0.1:{port}/readyz")
 
@@ -184,9 +186,10 @@ def wait_ready(process: subprocess.Popen, url: str) -> subprocess.Popen:
     raise SystemExit("server did not become ready")
 
 
-def run_mode(mode: str, args, port: int) -> dict:
+def run_mode(mode: str, args, port: int, code: Path = REPO, label: str | None = None) -> dict:
+    """One server (the trivial app, or plantsolve in ``mode`` with the code in ``code``) under the load phases."""
     data_dir = Path(tempfile.mkdtemp(prefix=f"bench-{mode}-"))
-    env = dict(os.environ, DATA_DIR=str(data_dir), PLUGINS="tests.support.kinds", PYTHONPATH=str(REPO))
+    env = dict(os.environ, DATA_DIR=str(data_dir), PLUGINS="tests.support.kinds", PYTHONPATH=str(code))
     cleanup = None
     submit_path = "/v1/test-compute/jobs"
     if mode == "baseline":
@@ -221,7 +224,16 @@ def run_mode(mode: str, args, port: int) -> dict:
         server.wait(timeout=30)
         if cleanup:
             cleanup()
-    return {"mode": mode, **row}
+    return {"mode": label or mode, **row}
+
+
+def main_checkout() -> tuple[Path, callable]:
+    """A temporary worktree of ``main`` (the code before this branch), and the function that removes it."""
+    path = Path(tempfile.mkdtemp(prefix="bench-api-main-")) / "main"
+    subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(path), "main"], check=True,
+                   capture_output=True)
+    return path, lambda: subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(path)],
+                                        check=False, capture_output=True)
 
 
 def main() -> None:
@@ -236,17 +248,29 @@ def main() -> None:
     parser.add_argument("--concurrency", type=int, default=16)
     parser.add_argument("--modes", default="embedded,scaled")
     parser.add_argument("--port", type=int, default=18765)
+    parser.add_argument("--before", default="main",
+                        help="the code to compare with in the same run: 'main' (a temporary worktree), a directory "
+                             "holding the plantsolve package, or 'none'")
     args = parser.parse_args()
     if args.smoke:
         args.seconds, args.read_seconds, args.jobs, args.reads, args.modes = 1, 1, 60, 60, "embedded"
+        args.before = "none"
     args.seconds = args.seconds or (4 if args.quick else 10)
     args.read_seconds = args.read_seconds or (3 if args.quick else 6)
     args.jobs = args.jobs or (500 if args.quick else 2000)
     args.reads = args.reads or (1000 if args.quick else 3000)
-    modes = args.modes.split(",")
-    if "baseline" not in modes:
-        modes.insert(0, "baseline")
-    rows = [run_mode(mode, args, args.port + i) for i, mode in enumerate(modes)]
+    modes = [mode for mode in args.modes.split(",") if mode != "baseline"]
+    before, remove = (None, None) if args.before == "none" else main_checkout() if args.before == "main" else \
+        (Path(args.before), None)
+    try:
+        rows = [run_mode("baseline", args, args.port)]
+        for i, mode in enumerate(modes):
+            if before is not None:
+                rows.append(run_mode(mode, args, args.port + 1 + 2 * i, before, f"{mode} ({args.before if args.before != 'main' else 'main'})"[:20]))
+            rows.append(run_mode(mode, args, args.port + 2 + 2 * i))
+    finally:
+        if remove is not None:
+            remove()
     baseline = next(row for row in rows if row["mode"] == "baseline")
     load = f"wrk, {args.seconds:g} s per phase" if args.client == "wrk" else "python httpx"
     print(
@@ -255,7 +279,7 @@ def main() -> None:
         "(baseline: bench/baseline_app.py, FastAPI + SQLite, no jobs)"
     )
     header = (
-        f"{'mode':<9} {'jobs':>6} {'1-conn submits/s':>17} {'vs baseline':>11} {f'{args.concurrency}-conn submits/s':>18} "
+        f"{'mode':<20} {'jobs':>6} {'1-conn submits/s':>17} {'vs baseline':>11} {f'{args.concurrency}-conn submits/s':>18} "
         f"{'submit p50/p99 ms':>18} {'status p50/p99 ms':>18} {'8-conn reads/s':>15} {'8-conn p50/p99 ms':>18} "
         f"{'CPU ms/submit':>13} {'vs baseline':>11}  targets"
     )
@@ -266,7 +290,7 @@ def main() -> None:
         met = row["submit_p99"] < 20 and row["loaded_p99"] < 20 and ratio >= 0.5
         verdict = "-" if row is baseline else ("met" if met else "MISSED")
         print(
-            f"{row['mode']:<9} {row['jobs']:>6} {row['single_rate']:>17.0f} {ratio:>10.2f}x {row['rate']:>18.0f} "
+            f"{row['mode']:<20} {row['jobs']:>6} {row['single_rate']:>17.0f} {ratio:>10.2f}x {row['rate']:>18.0f} "
             f"{row['submit_p50']:>8.1f}/{row['submit_p99']:<9.1f} {row['read_p50']:>8.1f}/{row['read_p99']:<9.1f} "
             f"{row['read_rate']:>15.0f} {row['loaded_p50']:>8.1f}/{row['loaded_p99']:<9.1f} "
             f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
