@@ -85,7 +85,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.state.webhooks = WebhookNotifier(app.state.jobs, app.state.webhook_secrets, settings)
     # one layer for request id, security headers, CORS, the caller and the body limit (in that order, see
     # edge.py), which also answers the hot submit and status routes without the router
-    lean = LeanRoutes(app.state.jobs, ctx.kinds, inline=ctx.db.is_sqlite)
+    lean = LeanRoutes(app.state.jobs, ctx.kinds, inline_reads=ctx.db.is_sqlite)
     app.add_middleware(EdgeMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs,
                        max_body_bytes=settings.max_body_bytes, cors_origins=settings.cors_origins, lean=lean)
     problems.install(app)

@@ -33,13 +33,15 @@ LeanRoute = Callable[[Scope, Receive, Send, Principal], Awaitable[None]]
 
 
 class LeanRoutes:
-    """``inline``: run the service call on the event loop instead of in a worker thread. Right for a local SQLite
-    database, whose reads and writes take tens of microseconds, less than the hop to a thread and back; a
-    database across the network is waited for in a thread, so that the loop serves other requests meanwhile."""
+    """``inline_reads``: read a job's status on the event loop instead of in a worker thread. Right for a local
+    SQLite database, where that read takes tens of microseconds (less than the hop to a thread and back) and never
+    waits for a writer (WAL); a database across the network is waited for in a thread, so that the loop serves
+    other requests meanwhile. A submission always goes to a thread: it parses and checks a body of any size, and
+    its write may wait for another process's (a job process storing a large result)."""
 
-    def __init__(self, service: JobService, kinds: Iterable[str], *, inline: bool = False):
+    def __init__(self, service: JobService, kinds: Iterable[str], *, inline_reads: bool = False):
         self.service = service
-        self.inline = inline
+        self.inline_reads = inline_reads
         self.submit_paths = {f"/v1/{kind}/jobs": kind for kind in kinds}
 
     def match(self, scope: Scope) -> LeanRoute | None:
@@ -71,8 +73,8 @@ class LeanRoutes:
                      caller: Principal) -> None:
         _require(caller)
         body = await _body(receive)
-        call = partial(self.service.submit_json_view, kind, body, idempotency_key, caller.owner, None)
-        submitted = call() if self.inline else await run_in_threadpool(call)
+        submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key, caller.owner,
+                                            None)
         location = f"/v1/jobs/{submitted.job.id}".encode()
         await _send_json(send, 202 if submitted.created else 200, submitted.view.model_dump_json().encode(),
                          [(b"location", location)])
@@ -80,7 +82,7 @@ class LeanRoutes:
     async def get_job(self, job_id: uuid.UUID, scope: Scope, receive: Receive, send: Send, caller: Principal) -> None:
         _require(caller)
         call = partial(self._job_json, job_id, caller.sees)
-        await _send_json(send, 200, call() if self.inline else await run_in_threadpool(call))
+        await _send_json(send, 200, call() if self.inline_reads else await run_in_threadpool(call))
 
     def _job_json(self, job_id: uuid.UUID, sees: str | None) -> bytes:
         return self.service.view(self.service.get(job_id, sees, brief=True)).model_dump_json().encode()
