@@ -11,7 +11,8 @@ Submissions run for a fixed time from 1 connection, then from C connections (eac
 in embedded mode the pool runs them meanwhile), then GET /v1/jobs/{id} is read from 1 connection
 (latency of a polling client) and from 8 (throughput), while the backlog of jobs is still running.
 The trivial app (bench/baseline_app.py: FastAPI + SQLite, same uvicorn settings) runs first in the
-same run. Targets: submit p99 < 20 ms at 16 connections while jobs run, status p99 < 20 ms at 8
+same run, then each mode with the code of ``main`` (a temporary git worktree, or ``--before DIR``; ``--before none``
+leaves it out) and with this checkout's code. Targets: submit p99 < 20 ms at 16 connections while jobs run, status p99 < 20 ms at 8
 connections, single-connection submits >= 0.5x the trivial app's.
 
 Beside the rates (which a loaded machine lowers), the table gives the CPU milliseconds the server's own process
@@ -20,13 +21,14 @@ spends per single-connection submit, read from /proc: the measure that holds whe
 table, not that the targets hold.
 
     python bench/api.py [--quick | --smoke] [--seconds S] [--concurrency C] [--modes embedded,scaled]
-                        [--client wrk|python]
+                        [--client wrk|python] [--before main|DIR|none]
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import os
 import random
 import re
@@ -58,7 +60,8 @@ def launch(command: list[str], env: dict[str, str], data_dir: str | Path) -> sub
 
 
 def start_server(env: dict[str, str], port: int) -> subprocess.Popen:
-    process = launch([str(BIN / "plantsolve"), "serve", "--port", str(port), "--log-level", "warning"], env,
+    # ``-m plantsolve.cli``: the package is imported from PYTHONPATH first (this checkout, or the code compared with)
+    process = launch([sys.executable, "-m", "plantsolve.cli", "serve", "--port", str(port), "--log-level", "warning"], env,
                      env["DATA_DIR"])
     return wait_ready(process, f"http://127.0.0.1:{port}/readyz")
 
@@ -184,9 +187,10 @@ def wait_ready(process: subprocess.Popen, url: str) -> subprocess.Popen:
     raise SystemExit("server did not become ready")
 
 
-def run_mode(mode: str, args, port: int) -> dict:
+def run_mode(mode: str, args, port: int, code: Path = REPO, label: str | None = None) -> dict:
+    """One server (the trivial app, or plantsolve in ``mode`` with the code in ``code``) under the load phases."""
     data_dir = Path(tempfile.mkdtemp(prefix=f"bench-{mode}-"))
-    env = dict(os.environ, DATA_DIR=str(data_dir), PLUGINS="tests.support.kinds", PYTHONPATH=str(REPO))
+    env = dict(os.environ, DATA_DIR=str(data_dir), PLUGINS="tests.support.kinds", PYTHONPATH=str(code))
     cleanup = None
     submit_path = "/v1/test-compute/jobs"
     if mode == "baseline":
@@ -221,7 +225,81 @@ def run_mode(mode: str, args, port: int) -> dict:
         server.wait(timeout=30)
         if cleanup:
             cleanup()
-    return {"mode": mode, **row}
+    return {"mode": label or mode, **row}
+
+
+# The app called in process (ASGI, no network, no client): the CPU seconds of the app's own code per request,
+# which other work on the machine does not inflate the way it does rates and latencies. Jobs run meanwhile
+# (the embedded pool). Prints one JSON line: CPU ms per submit and per status read.
+IN_PROCESS = r"""
+import asyncio, importlib.util, json, os, sys, time
+N, APP = int(sys.argv[1]), sys.argv[2]
+if APP == "baseline":
+    spec = importlib.util.spec_from_file_location("baseline_app", sys.argv[3])
+    module = importlib.util.module_from_spec(spec); spec.loader.exec_module(module)
+    app, submit_path = module.create_app(os.path.join(os.environ["DATA_DIR"], "b.db")), "/v1/jobs"
+else:
+    from plantsolve.app.main import create_app
+    from plantsolve.app.settings import AppSettings
+    app, submit_path = create_app(AppSettings()), "/v1/test-compute/jobs"
+BODY = b'{"values": [1.5, 2.5]}'
+
+async def call(method, path, body=b""):
+    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json"), (b"content-length", b"%d" % len(body))]
+    scope = {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": method, "scheme": "http",
+             "path": path, "raw_path": path.encode(), "query_string": b"", "root_path": "", "headers": headers,
+             "client": ("127.0.0.1", 5555), "server": ("127.0.0.1", 8000)}
+    messages = [{"type": "http.request", "body": body, "more_body": False}]
+    answer = {}
+
+    async def receive():
+        return messages.pop() if messages else await asyncio.Event().wait()
+
+    async def send(message):
+        answer.setdefault("status", message.get("status"))
+        answer["body"] = answer.get("body", b"") + message.get("body", b"")
+
+    await app(scope, receive, send)
+    return answer
+
+async def measure():
+    async with app.router.lifespan_context(app):
+        job_id = json.loads((await call("POST", submit_path, BODY))["body"])["id"]
+        for _ in range(200):  # warm up: statement caches, first-use imports
+            await call("POST", submit_path, BODY); await call("GET", f"/v1/jobs/{job_id}")
+        started = time.process_time()
+        for _ in range(N):
+            assert (await call("POST", submit_path, BODY))["status"] in (200, 202)
+        submit = (time.process_time() - started) / N
+        started = time.process_time()
+        for _ in range(N):
+            assert (await call("GET", f"/v1/jobs/{job_id}"))["status"] == 200
+        read = (time.process_time() - started) / N
+    print(json.dumps({"submit_ms": 1000 * submit, "read_ms": 1000 * read}))
+
+import uvloop; uvloop.run(measure())
+"""
+
+
+def in_process(label: str, code: Path, requests: int) -> dict:
+    """CPU ms per submit and per status read of an app called in process (see IN_PROCESS); ``label`` 'baseline' is
+    the trivial app."""
+    data_dir = tempfile.mkdtemp(prefix="bench-inprocess-")
+    env = dict(os.environ, DATA_DIR=data_dir, PLUGINS="tests.support.kinds", PYTHONPATH=str(code), LOG_LEVEL="warning")
+    args = [sys.executable, "-c", IN_PROCESS, str(requests), "baseline" if label == "baseline" else "plantsolve",
+            str(REPO / "bench" / "baseline_app.py")]
+    out = subprocess.run(args, cwd=data_dir, env=env, capture_output=True, text=True, check=True).stdout
+    shutil.rmtree(data_dir, ignore_errors=True)
+    return {"mode": label, **json.loads(out.strip().splitlines()[-1])}
+
+
+def main_checkout() -> tuple[Path, callable]:
+    """A temporary worktree of ``main`` (the code before this branch), and the function that removes it."""
+    path = Path(tempfile.mkdtemp(prefix="bench-api-main-")) / "main"
+    subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(path), "main"], check=True,
+                   capture_output=True)
+    return path, lambda: subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(path)],
+                                        check=False, capture_output=True)
 
 
 def main() -> None:
@@ -236,17 +314,37 @@ def main() -> None:
     parser.add_argument("--concurrency", type=int, default=16)
     parser.add_argument("--modes", default="embedded,scaled")
     parser.add_argument("--port", type=int, default=18765)
+    parser.add_argument("--in-process", type=int, default=None, metavar="N",
+                        help="requests of each kind in the in-process CPU table (0: no table)")
+    parser.add_argument("--before", default="main",
+                        help="the code to compare with in the same run: 'main' (a temporary worktree), a directory "
+                             "holding the plantsolve package, or 'none'")
     args = parser.parse_args()
     if args.smoke:
         args.seconds, args.read_seconds, args.jobs, args.reads, args.modes = 1, 1, 60, 60, "embedded"
+        args.before = "none"
     args.seconds = args.seconds or (4 if args.quick else 10)
     args.read_seconds = args.read_seconds or (3 if args.quick else 6)
     args.jobs = args.jobs or (500 if args.quick else 2000)
     args.reads = args.reads or (1000 if args.quick else 3000)
-    modes = args.modes.split(",")
-    if "baseline" not in modes:
-        modes.insert(0, "baseline")
-    rows = [run_mode(mode, args, args.port + i) for i, mode in enumerate(modes)]
+    modes = [mode for mode in args.modes.split(",") if mode != "baseline"]
+    before, remove = (None, None) if args.before == "none" else main_checkout() if args.before == "main" else \
+        (Path(args.before), None)
+    try:
+        requests = args.in_process if args.in_process is not None else (0 if args.smoke else 1000 if args.quick else 3000)
+        cpu_rows = [in_process("baseline", REPO, requests)] if requests else []
+        if requests and before is not None:
+            cpu_rows.append(in_process("embedded (main)", before, requests))
+        if requests:
+            cpu_rows.append(in_process("embedded", REPO, requests))
+        rows = [run_mode("baseline", args, args.port)]
+        for i, mode in enumerate(modes):
+            if before is not None:
+                rows.append(run_mode(mode, args, args.port + 1 + 2 * i, before, f"{mode} ({args.before if args.before != 'main' else 'main'})"[:20]))
+            rows.append(run_mode(mode, args, args.port + 2 + 2 * i))
+    finally:
+        if remove is not None:
+            remove()
     baseline = next(row for row in rows if row["mode"] == "baseline")
     load = f"wrk, {args.seconds:g} s per phase" if args.client == "wrk" else "python httpx"
     print(
@@ -255,7 +353,7 @@ def main() -> None:
         "(baseline: bench/baseline_app.py, FastAPI + SQLite, no jobs)"
     )
     header = (
-        f"{'mode':<9} {'jobs':>6} {'1-conn submits/s':>17} {'vs baseline':>11} {f'{args.concurrency}-conn submits/s':>18} "
+        f"{'mode':<20} {'jobs':>6} {'1-conn submits/s':>17} {'vs baseline':>11} {f'{args.concurrency}-conn submits/s':>18} "
         f"{'submit p50/p99 ms':>18} {'status p50/p99 ms':>18} {'8-conn reads/s':>15} {'8-conn p50/p99 ms':>18} "
         f"{'CPU ms/submit':>13} {'vs baseline':>11}  targets"
     )
@@ -266,11 +364,17 @@ def main() -> None:
         met = row["submit_p99"] < 20 and row["loaded_p99"] < 20 and ratio >= 0.5
         verdict = "-" if row is baseline else ("met" if met else "MISSED")
         print(
-            f"{row['mode']:<9} {row['jobs']:>6} {row['single_rate']:>17.0f} {ratio:>10.2f}x {row['rate']:>18.0f} "
+            f"{row['mode']:<20} {row['jobs']:>6} {row['single_rate']:>17.0f} {ratio:>10.2f}x {row['rate']:>18.0f} "
             f"{row['submit_p50']:>8.1f}/{row['submit_p99']:<9.1f} {row['read_p50']:>8.1f}/{row['read_p99']:<9.1f} "
             f"{row['read_rate']:>15.0f} {row['loaded_p50']:>8.1f}/{row['loaded_p99']:<9.1f} "
             f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
         )
+    if cpu_rows:
+        print(f"\nIn process (the ASGI app called directly: no network, no client; SQLite, jobs running): CPU ms per request")
+        print(f"{'mode':<20} {'submit':>8} {'vs baseline':>11} {'status read':>12} {'vs baseline':>11}")
+        for row in cpu_rows:
+            print(f"{row['mode']:<20} {row['submit_ms']:>8.3f} {row['submit_ms'] / cpu_rows[0]['submit_ms']:>10.2f}x "
+                  f"{row['read_ms']:>12.3f} {row['read_ms'] / cpu_rows[0]['read_ms']:>10.2f}x")
     print(f"targets: submit p99 < 20 ms at {args.concurrency} connections, 8-connection status p99 < 20 ms, "
           "1-connection submits >= 0.5x the baseline. CPU ms/submit: the server process alone (its job processes "
           "not counted), during the 1-connection phase")

@@ -194,7 +194,7 @@ def warn_if_exposed(host: str, keys: KeyRing) -> bool:
 class AuthMiddleware:
     """Resolves the caller before the route (and before any body is read) and refuses protected paths."""
 
-    def __init__(self, app: ASGIApp, keys: KeyRing, protect_docs: bool):
+    def __init__(self, app: ASGIApp | None, keys: KeyRing, protect_docs: bool):
         self.app, self.keys, self.protect_docs = app, keys, protect_docs
         self._warned = False  # once per process
         self._loopback: set[str] = set()  # server addresses seen to be loopback (a health check's, say)
@@ -210,6 +210,12 @@ class AuthMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
+        if await self.admit(scope, receive, send) is not None:
+            await self.app(scope, receive, send)
+
+    async def admit(self, scope: Scope, receive: Receive, send: Send) -> Principal | None:
+        """The caller of an HTTP request, also put in ``scope["state"]["principal"]``; None when the request was
+        refused (or redirected to the login page): then the answer has been sent."""
         if not self.keys:
             if not self._warned:  # the server's own address as this request reached it: loopback, or exposed?
                 server = scope.get("server")
@@ -232,15 +238,15 @@ class AuthMiddleware:
             path = scope.get("path", "")
             if principal is None and path == "/dashboard" and key is None:  # no session, or one that has ended
                 await RedirectResponse("/dashboard/login", status_code=303)(scope, receive, send)  # a browser
-                return
+                return None
             if principal is None and self.protected(path):
                 detail = ("Send 'Authorization: Bearer <key>'." if token is None else "The API key is not valid."
                           if key else "The dashboard session has ended: log in again.")
                 await problem_response(Unauthorized(detail))(scope, receive, send)
-                return
+                return None
             principal = principal or NOBODY
         scope.setdefault("state", {})["principal"] = principal
-        await self.app(scope, receive, send)
+        return principal
 
 
 def principal(request: Request) -> Principal:

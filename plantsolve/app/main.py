@@ -6,20 +6,20 @@ import logging
 from contextlib import asynccontextmanager
 from typing import Any
 
-from asgi_correlation_id import CorrelationIdMiddleware, correlation_id
+from asgi_correlation_id import correlation_id
 from fastapi import FastAPI, Request
-from fastapi.middleware.cors import CORSMiddleware
 from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
-from plantsolve.app.auth import AuthMiddleware, KeyRing, principal
+from plantsolve.app.auth import KeyRing, principal
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
+from plantsolve.app.edge import EdgeMiddleware
 from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router, declares_kind, upload_options_model
+from plantsolve.app.jobs.lean import LeanRoutes
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.metrics import build_metrics
-from plantsolve.app.middleware import BodyLimitMiddleware, SecurityHeadersMiddleware
 from plantsolve.app.settings import AppSettings, get_settings
 from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
 from plantsolve.jobs.context import ServiceContext
@@ -80,20 +80,14 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     app.state.ctx = ctx
     app.state.dispatcher = dispatcher
     app.state.jobs = JobService(ctx, dispatcher)
-    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes)
-    # added last = runs first: the caller is known (or refused) before any body is read
     app.state.keys = KeyRing(settings.api_keys, settings.admin_keys)
     app.state.webhook_secrets = WebhookSecrets(settings.webhook_secrets, app.state.keys)
     app.state.webhooks = WebhookNotifier(app.state.jobs, app.state.webhook_secrets, settings)
-    app.add_middleware(AuthMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs)
-    app.add_middleware(SecurityHeadersMiddleware)  # outside auth: its refusals and redirects carry them too
-    if settings.cors_origins:
-        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origins, allow_methods=["GET", "POST"],
-                           allow_headers=["Authorization", "Content-Type", "Idempotency-Key", "X-Request-ID"],
-                           expose_headers=["Location", "X-Request-ID"])
-    # outermost: every answer, a refusal by the auth middleware too, carries X-Request-ID (the caller's, if it
-    # sent a valid one), and every log line written while serving it names it
-    app.add_middleware(CorrelationIdMiddleware, header_name="X-Request-ID")
+    # one layer for request id, security headers, CORS, the caller and the body limit (in that order, see
+    # edge.py), which also answers the hot submit and status routes without the router
+    lean = LeanRoutes(app.state.jobs, ctx.kinds, inline_reads=ctx.db.is_sqlite)
+    app.add_middleware(EdgeMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs,
+                       max_body_bytes=settings.max_body_bytes, cors_origins=settings.cors_origins, lean=lean)
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))

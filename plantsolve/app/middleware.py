@@ -25,31 +25,38 @@ class BodyLimitMiddleware:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        limit = self.max_bytes
-        declared = dict(scope.get("headers") or []).get(b"content-length")
-        if declared is not None:
-            try:
-                too_large = int(declared) > limit
-            except ValueError:
-                too_large = False
-            if too_large:
-                response = problem_response(
-                    PayloadTooLarge(f"The body declares {int(declared)} bytes; the limit is {limit} bytes.")
-                )
-                await response(scope, receive, send)
-                return
-        received = 0
+        refusal = declared_too_large(dict(scope.get("headers") or []).get(b"content-length"), self.max_bytes)
+        if refusal is not None:
+            await problem_response(refusal)(scope, receive, send)
+            return
+        await self.app(scope, limited(receive, self.max_bytes), send)
 
-        async def counting_receive() -> Message:
-            nonlocal received
-            message = await receive()
-            if message["type"] == "http.request":
-                received += len(message.get("body", b""))
-                if received > limit:
-                    raise PayloadTooLarge(f"The body passed the limit of {limit} bytes.")
-            return message
 
-        await self.app(scope, counting_receive, send)
+def declared_too_large(declared: bytes | None, limit: int) -> PayloadTooLarge | None:
+    """The 413 of a body whose ``Content-Length`` is above ``limit`` (None when it is not, or says nothing)."""
+    if declared is None:
+        return None
+    try:
+        too_large = int(declared) > limit
+    except ValueError:
+        return None
+    return PayloadTooLarge(f"The body declares {int(declared)} bytes; the limit is {limit} bytes.") if too_large else None
+
+
+def limited(receive: Receive, limit: int) -> Receive:
+    """``receive`` that counts the body as it streams and raises the 413 once it passes ``limit``."""
+    received = 0
+
+    async def counting_receive() -> Message:
+        nonlocal received
+        message = await receive()
+        if message["type"] == "http.request":
+            received += len(message.get("body", b""))
+            if received > limit:
+                raise PayloadTooLarge(f"The body passed the limit of {limit} bytes.")
+        return message
+
+    return counting_receive
 
 
 # ---- security headers -----------------------------------------------------------------------------------
@@ -64,6 +71,7 @@ PAGE_POLICY = ("default-src 'self'; script-src 'self'{scripts}; style-src 'self'
 # an SVG artifact opened on its own is a document too: it runs nothing
 SVG_POLICY = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; sandbox"
 INLINE_SCRIPT = re.compile(rb"<script>(.*?)</script>", re.DOTALL | re.IGNORECASE)
+INLINE_SCRIPT_PATHS = ("/docs", "/docs/oauth2-redirect")  # Swagger UI's pages: FastAPI writes their bootstrap inline
 
 
 class SecurityHeadersMiddleware:
@@ -76,47 +84,62 @@ class SecurityHeadersMiddleware:
     the service wrote, where ``'unsafe-inline'`` would admit an injected one too. Every other page runs
     no inline script at all."""
 
-    def __init__(self, app: ASGIApp, inline_script_paths: tuple[str, ...] = ("/docs", "/docs/oauth2-redirect")):
+    def __init__(self, app: ASGIApp, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS):
         self.app, self.inline_script_paths = app, inline_script_paths
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        hashed = scope.get("path") in self.inline_script_paths
-        start: Message | None = None
-        body: list[bytes] = []
+        await self.app(scope, receive, secured(scope, send, self.inline_script_paths))
 
-        async def sending(message: Message) -> None:
-            nonlocal start
-            if message["type"] == "http.response.start":
-                headers = MutableHeaders(scope=message)
-                headers["X-Content-Type-Options"] = "nosniff"
-                media = headers.get("content-type", "").split(";")[0].strip().lower()
-                if media == "image/svg+xml":
-                    headers["Content-Security-Policy"] = SVG_POLICY
-                if media != "text/html":
-                    hashed_html = False
-                else:
-                    headers["X-Frame-Options"] = "DENY"
-                    headers["Referrer-Policy"] = "no-referrer"
-                    hashed_html = hashed
-                    if not hashed:
-                        headers["Content-Security-Policy"] = PAGE_POLICY.format(scripts="")
-                if hashed_html:  # held back until the body (a small page) has been seen
-                    start = message
-                    return
-            elif message["type"] == "http.response.body" and start is not None:
-                body.append(message.get("body", b""))
-                if message.get("more_body", False):
-                    return
-                page = b"".join(body)
-                hashes = "".join(f" 'sha256-{base64.b64encode(hashlib.sha256(script).digest()).decode()}'"
-                                 for script in INLINE_SCRIPT.findall(page))
-                MutableHeaders(scope=start)["Content-Security-Policy"] = PAGE_POLICY.format(scripts=hashes)
-                await send(start)
-                await send({"type": "http.response.body", "body": page, "more_body": False})
+
+NOSNIFF = (b"x-content-type-options", b"nosniff")
+
+
+def secured(scope: Scope, send: Send, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS) -> Send:
+    """``send`` with the security headers of :class:`SecurityHeadersMiddleware` put on the answer's start."""
+    hashed = scope.get("path") in inline_script_paths
+    start: Message | None = None
+    body: list[bytes] = []
+
+    async def sending(message: Message) -> None:
+        nonlocal start
+        if message["type"] == "http.response.start":
+            raw = message.setdefault("headers", [])
+            media = next((value for name, value in raw if name.lower() == b"content-type"), b"")
+            media = media.split(b";")[0].strip().lower()
+            if media not in (b"text/html", b"image/svg+xml") and not any(name.lower() == NOSNIFF[0] for name, _ in raw):
+                # the common answer (JSON, files): one header appended to the raw list, no header object built
+                message["headers"] = [*raw, NOSNIFF]
+                await send(message)
                 return
-            await send(message)
+            headers = MutableHeaders(scope=message)
+            headers["X-Content-Type-Options"] = "nosniff"
+            if media == b"image/svg+xml":
+                headers["Content-Security-Policy"] = SVG_POLICY
+            if media != b"text/html":
+                hashed_html = False
+            else:
+                headers["X-Frame-Options"] = "DENY"
+                headers["Referrer-Policy"] = "no-referrer"
+                hashed_html = hashed
+                if not hashed:
+                    headers["Content-Security-Policy"] = PAGE_POLICY.format(scripts="")
+            if hashed_html:  # held back until the body (a small page) has been seen
+                start = message
+                return
+        elif message["type"] == "http.response.body" and start is not None:
+            body.append(message.get("body", b""))
+            if message.get("more_body", False):
+                return
+            page = b"".join(body)
+            hashes = "".join(f" 'sha256-{base64.b64encode(hashlib.sha256(script).digest()).decode()}'"
+                             for script in INLINE_SCRIPT.findall(page))
+            MutableHeaders(scope=start)["Content-Security-Policy"] = PAGE_POLICY.format(scripts=hashes)
+            await send(start)
+            await send({"type": "http.response.body", "body": page, "more_body": False})
+            return
+        await send(message)
 
-        await self.app(scope, receive, sending)
+    return sending

@@ -32,7 +32,7 @@ log = logging.getLogger("plantsolve.api")
 
 @dataclass
 class Submitted:
-    job: Job
+    job: Any  # the job's columns by attribute: the model, or the store's record of a new job
     created: bool
     view: JobView | None = None
 
@@ -120,7 +120,7 @@ class JobService:
     def _create(
         self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
     ) -> Submitted:
-        job = Job(
+        stored, created = self.ctx.repo.create(dict(
             id=job_id,
             kind=spec.kind,
             status=QUEUED,
@@ -134,8 +134,7 @@ class JobService:
             solver_version=spec.version,
             enqueued_at=utcnow(),  # enqueued right after the commit; cleared if that fails
             **fields,
-        )
-        stored, created = self.ctx.repo.create(job)
+        ))
         if not created:
             if stored.body_hash != body_hash or stored.kind != spec.kind:
                 raise Unprocessable(

@@ -11,10 +11,11 @@ from __future__ import annotations
 import uuid
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
 
-from sqlalchemy import String, Text, and_, case, cast, delete, func, insert, or_, select, update
+from sqlalchemy import String, Text, and_, bindparam, case, cast, delete, func, insert, or_, select, update
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, defer, sessionmaker
 
@@ -77,37 +78,48 @@ class JobRepository:
 
     # ---- submission and reads -------------------------------------------------------------
 
-    def create(self, job: Job) -> tuple[Job, bool]:
-        """Insert ``job``; with an idempotency key already taken, return the existing job.
+    def create(self, job: Job | dict[str, Any]) -> tuple[Any, bool]:
+        """Insert a job, given as a model instance or as its columns (the columns' defaults fill what is left
+        out); with an idempotency key already taken, return the existing job instead.
 
-        Returns ``(job, created)``. The caller compares body hashes of an existing job.
-        """
-        if job.idempotency_key is not None:
-            existing = self.get_by_idempotency_key(job.idempotency_key)
+        Returns ``(job, created)``: the new job is the instance given, or for columns a :class:`JobRecord` of
+        them. The caller compares body hashes of an existing job. One Core INSERT and no ORM instance: on the
+        submit path the ORM's unit of work and instance bookkeeping cost more than the write itself."""
+        if isinstance(job, Job):
+            _apply_defaults(job)
+            stored, created = self.create({column.key: getattr(job, column.key) for column in JOBS.columns})
+            return (job if created else stored), created
+        values = job
+        key = values.get("idempotency_key")
+        if key is not None:
+            existing = self.get_by_idempotency_key(key)
             if existing is not None:
                 return existing, False
-        _apply_defaults(job)
+        record = {name: None for name in COLUMN_KEYS}
+        record.update(values)
+        for name, default in COLUMN_DEFAULTS:
+            if record[name] is None:
+                record[name] = default()
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
-        values = {column.key: value for column in Job.__table__.columns if (value := getattr(job, column.key)) is not None}
-        # one Core INSERT: the ORM's unit of work costs more than the write itself on the submit path
         try:
             with self.writing(), self._core() as connection:
-                connection.execute(JOBS.insert(), values)
+                connection.execute(INSERT_JOB, {name: value for name, value in record.items() if value is not None})
         except IntegrityError:
-            existing = self.get_by_idempotency_key(job.idempotency_key) if job.idempotency_key is not None else None
+            existing = self.get_by_idempotency_key(key) if key is not None else None
             if existing is None:
                 raise
             return existing, False
-        return job, True
+        return JobRecord(**record), True
 
-    def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Job | None:
+    def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Any:
         """The job; ``brief`` leaves out the input and the result (a status read must not load
-        and decode a result of many megabytes that it does not show)."""
+        and decode a result of many megabytes that it does not show), and is read as a Core row (its columns by
+        attribute, as on the model) without an ORM instance."""
+        if brief:
+            with self.sessions.kw["bind"].connect() as connection:
+                return connection.execute(BRIEF_BY_ID, {"job_id": job_id}).first()
         with self.sessions() as session:
-            if not brief:
-                return session.get(Job, job_id)
-            query = select(Job).where(Job.id == job_id).options(*BRIEF)
-            return session.scalars(query).first()
+            return session.get(Job, job_id)
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The columns an event stream watches, read by primary key (no input, result or report)."""
@@ -486,11 +498,25 @@ def _contains_text(text: str):
     )
 
 
+def _default(column) -> Callable[[], Any]:
+    default = column.default
+    return (lambda: default.arg(None)) if default.is_callable else (lambda: default.arg)
+
+
+COLUMN_KEYS = tuple(column.key for column in JOBS.columns)
+COLUMN_DEFAULTS = tuple((column.key, _default(column)) for column in JOBS.columns if column.default is not None)
+INSERT_JOB = JOBS.insert()
+# the columns a job's view shows: all but the input and the result
+BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in ("input", "input_options", "result"))
+BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
+
+
+class JobRecord(SimpleNamespace):
+    """A job's columns by attribute, as the model has them, without an ORM instance: a job as submitted."""
+
+
 def _apply_defaults(job: Job) -> None:
     """Fill the columns' Python-side defaults that the ORM would have applied on flush."""
-    for column in Job.__table__.columns:
-        if getattr(job, column.key) is None and column.default is not None:
-            default = column.default
-            value = default.arg(None) if default.is_callable else default.arg
-            setattr(job, column.key, value)
-
+    for name, default in COLUMN_DEFAULTS:
+        if getattr(job, name) is None:
+            setattr(job, name, default())

@@ -1,0 +1,110 @@
+"""The lean path of the two hottest routes: ``POST /v1/<kind>/jobs`` with a JSON body and ``GET /v1/jobs/{id}``.
+
+A client that submits and polls spends most of its requests here, and for such a small request the router's
+route matching and dependency solving cost more than the database work. The edge middleware
+(:mod:`plantsolve.app.edge`) has resolved the caller and applied the body limit; :meth:`LeanRoutes.match` takes
+only the plain form of each request (no query string, a well-formed ``Idempotency-Key``, a canonical job id)
+and leaves everything else, a malformed request too, to the routes in :mod:`plantsolve.app.jobs.endpoints`,
+which stay the contract (the OpenAPI document) and give the 422 of a bad parameter. Both call the same service
+methods and serialise the same view model, so the answer is the same byte for byte.
+"""
+
+from __future__ import annotations
+
+import re
+import uuid
+from functools import partial
+from typing import Awaitable, Callable, Iterable
+
+from starlette.concurrency import run_in_threadpool
+from starlette.requests import ClientDisconnect
+from starlette.types import Receive, Scope, Send
+
+from plantsolve.app.auth import Principal
+from plantsolve.app.problems import Unauthorized
+from plantsolve.jobs.service import JobService
+
+# the Idempotency-Key header's constraints in the route (1 to 255 printable ASCII characters, no leading space)
+IDEMPOTENCY_KEY = re.compile(r"[\x21-\x7e][\x20-\x7e]{0,254}")
+JOB_PATH = re.compile(r"/v1/jobs/([0-9a-fA-F]{8}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{12})")
+JSON_HEADERS = [(b"content-type", b"application/json")]
+
+LeanRoute = Callable[[Scope, Receive, Send, Principal], Awaitable[None]]
+
+
+class LeanRoutes:
+    """``inline_reads``: read a job's status on the event loop instead of in a worker thread. Right for a local
+    SQLite database, where that read takes tens of microseconds (less than the hop to a thread and back) and never
+    waits for a writer (WAL); a database across the network is waited for in a thread, so that the loop serves
+    other requests meanwhile. A submission always goes to a thread: it parses and checks a body of any size, and
+    its write may wait for another process's (a job process storing a large result)."""
+
+    def __init__(self, service: JobService, kinds: Iterable[str], *, inline_reads: bool = False):
+        self.service = service
+        self.inline_reads = inline_reads
+        self.submit_paths = {f"/v1/{kind}/jobs": kind for kind in kinds}
+
+    def match(self, scope: Scope) -> LeanRoute | None:
+        """The lean handler of this request, or None when the app's routes answer it."""
+        if scope["query_string"] or scope.get("root_path"):
+            return None
+        method, path = scope["method"], scope["path"]
+        if method == "POST":
+            kind = self.submit_paths.get(path)
+            if kind is None:
+                return None
+            content_type, keys = None, []
+            for name, value in scope["headers"]:
+                name = name.lower()
+                if name == b"content-type" and content_type is None:
+                    content_type = value.decode("latin-1").split(";")[0].strip().lower()
+                elif name == b"idempotency-key":
+                    keys.append(value.decode("latin-1"))
+            if not content_type or not (content_type == "application/json" or content_type.endswith("+json")):
+                return None  # an upload, or a content type the route refuses (415)
+            if len(keys) > 1 or (keys and not IDEMPOTENCY_KEY.fullmatch(keys[0])):
+                return None  # the route's header validation answers
+            return partial(self.submit, kind, keys[0] if keys else None)
+        if method == "GET" and (found := JOB_PATH.fullmatch(path)):
+            return partial(self.get_job, uuid.UUID(found.group(1)))
+        return None
+
+    async def submit(self, kind: str, idempotency_key: str | None, scope: Scope, receive: Receive, send: Send,
+                     caller: Principal) -> None:
+        _require(caller)
+        body = await _body(receive)
+        submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key, caller.owner,
+                                            None)
+        location = f"/v1/jobs/{submitted.job.id}".encode()
+        await _send_json(send, 202 if submitted.created else 200, submitted.view.model_dump_json().encode(),
+                         [(b"location", location)])
+
+    async def get_job(self, job_id: uuid.UUID, scope: Scope, receive: Receive, send: Send, caller: Principal) -> None:
+        _require(caller)
+        call = partial(self._job_json, job_id, caller.sees)
+        await _send_json(send, 200, call() if self.inline_reads else await run_in_threadpool(call))
+
+    def _job_json(self, job_id: uuid.UUID, sees: str | None) -> bytes:
+        return self.service.view(self.service.get(job_id, sees, brief=True)).model_dump_json().encode()
+
+
+def _require(caller: Principal) -> None:
+    if not caller.authenticated:  # as the routes' dependency (the middleware has refused unknown keys already)
+        raise Unauthorized("Send 'Authorization: Bearer <key>'.")
+
+
+async def _body(receive: Receive) -> bytes:
+    chunks: list[bytes] = []
+    while True:
+        message = await receive()
+        if message["type"] == "http.disconnect":
+            raise ClientDisconnect()
+        chunks.append(message.get("body", b""))
+        if not message.get("more_body", False):
+            return b"".join(chunks)
+
+
+async def _send_json(send: Send, status: int, body: bytes, headers: list[tuple[bytes, bytes]] = ()) -> None:
+    await send({"type": "http.response.start", "status": status,
+                "headers": [*headers, (b"content-length", str(len(body)).encode()), *JSON_HEADERS]})
+    await send({"type": "http.response.body", "body": body})
