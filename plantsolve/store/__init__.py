@@ -7,52 +7,22 @@ of them, nor any solver.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import importlib
 
-from plantsolve.store.engine import Database
-from plantsolve.store.blobs import BlobMissing, BlobStore, BlobStoreUnavailable, LocalBlobStore
-from plantsolve.store.blobs_database import DatabaseBlobStore
-from plantsolve.store.blobs_s3 import S3BlobStore
-from plantsolve.store.repository import JobRepository
-from plantsolve.store.sessions import SessionRepository
-from plantsolve.store.settings import StoreSettings
-
-
-@dataclass
-class Store:
-    """One process's handle on the store: database, job repository, blobs (``files``), dashboard sessions, and
-    ``spool``: this machine's folder, where a computed result waits when the blob store cannot take it either
-    (the PostgreSQL back-end during a database outage)."""
-
-    db: Database
-    repo: JobRepository
-    files: BlobStore
-    sessions: SessionRepository
-    spool: LocalBlobStore
-
-    @classmethod
-    def open(cls, settings: StoreSettings, *, migrate: bool = False) -> "Store":
-        db = Database(settings.resolved_database_url)
-        if migrate:
-            db.migrate()
-        local = LocalBlobStore(settings.resolved_artifact_dir)
-        return cls(db=db, repo=JobRepository(db.sessions, db.writing), files=open_blob_store(settings, db, local),
-                   sessions=SessionRepository(db.sessions, db.writing), spool=local)
-
-    def close(self) -> None:
-        self.db.dispose()
+# Names re-exported from the modules that define them, imported on first use: a process that only reads the
+# settings (``plantsolve solve --help``, the settings of the app) does not pay for SQLAlchemy and the blob clients.
+_EXPORTS = {
+    "BlobMissing": "blobs", "BlobStore": "blobs", "BlobStoreUnavailable": "blobs", "LocalBlobStore": "blobs",
+    "Database": "engine", "JobRepository": "repository", "SessionRepository": "sessions",
+    "StoreSettings": "settings", "Store": "handle", "open_blob_store": "handle",
+}
 
 
-def open_blob_store(settings: StoreSettings, db: Database, local: LocalBlobStore) -> BlobStore:
-    kind = settings.resolved_blob_store
-    if kind == "postgres":
-        return DatabaseBlobStore(db)
-    if kind == "s3":
-        if not settings.s3_bucket:
-            raise ValueError("BLOB_STORE=s3 needs S3_BUCKET")
-        return S3BlobStore(settings.s3_bucket, endpoint_url=settings.s3_endpoint_url, region=settings.s3_region)
-    return local
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"{__name__}.{module}"), name)
 
 
-__all__ = ["BlobMissing", "BlobStore", "BlobStoreUnavailable", "Database", "JobRepository", "LocalBlobStore",
-           "SessionRepository", "Store", "StoreSettings"]
+__all__ = sorted(_EXPORTS)

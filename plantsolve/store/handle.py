@@ -1,0 +1,50 @@
+"""One process's handle on the store (database, job repository, blobs, dashboard sessions, spool)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from plantsolve.store.blobs import BlobStore, LocalBlobStore
+from plantsolve.store.blobs_database import DatabaseBlobStore
+from plantsolve.store.blobs_s3 import S3BlobStore
+from plantsolve.store.engine import Database
+from plantsolve.store.repository import JobRepository
+from plantsolve.store.sessions import SessionRepository
+from plantsolve.store.settings import StoreSettings
+
+
+@dataclass
+class Store:
+    """One process's handle on the store: database, job repository, blobs (``files``), dashboard sessions, and
+    ``spool``: this machine's folder, where a computed result waits when the blob store cannot take it either
+    (the PostgreSQL back-end during a database outage)."""
+
+    db: Database
+    repo: JobRepository
+    files: BlobStore
+    sessions: SessionRepository
+    spool: LocalBlobStore
+
+    @classmethod
+    def open(cls, settings: StoreSettings, *, migrate: bool = False) -> "Store":
+        db = Database(settings.resolved_database_url)
+        if migrate:
+            db.migrate()
+        local = LocalBlobStore(settings.resolved_artifact_dir)
+        return cls(db=db, repo=JobRepository(db.sessions, db.writing), files=open_blob_store(settings, db, local),
+                   sessions=SessionRepository(db.sessions, db.writing), spool=local)
+
+    def close(self) -> None:
+        self.db.dispose()
+
+
+def open_blob_store(settings: StoreSettings, db: Database, local: LocalBlobStore) -> BlobStore:
+    kind = settings.resolved_blob_store
+    if kind == "postgres":
+        return DatabaseBlobStore(db)
+    if kind == "s3":
+        if not settings.s3_bucket:
+            raise ValueError("BLOB_STORE=s3 needs S3_BUCKET")
+        return S3BlobStore(settings.s3_bucket, endpoint_url=settings.s3_endpoint_url, region=settings.s3_region)
+    return local
+
