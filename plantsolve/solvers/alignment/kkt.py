@@ -15,15 +15,15 @@ current ``H`` and ``A``, converges with a slightly stale preconditioner too.
 
 The regularised matrix is symmetric quasi-definite, so it has an ``LDL^T`` factorisation
 under any symmetric ordering (Vanderbei 1995, "Symmetric quasidefinite matrices", Thm 2.1).
-Within :func:`use_ldl` it is factored that way (QDLDL, approximate minimum degree ordering;
-the pattern's ordering is kept while a Gauss-Newton sequence keeps the pattern), trusted only
-when its inertia is that of the exact matrix (``n`` positive, ``m`` negative pivots):
-redundant constraints (planar loops of rotation constraints) make ``A H^-1 A^T`` singular to
-round-off, the ``-delta`` pivots lose their sign, and those systems use the LU. It is not the
-default: on well-posed networks it reaches the LU's answer to round-off (loop grids: 1e-12 mm
-at 1e6 mm coordinates) in 0.55-0.7 of the time, but wherever the outer loops decide on the last
-digits (conflicts and the cuts they lead to, Gauss-Newton sequences stopped before they
-settle) its round-off leads elsewhere than the LU's, as the Schur-complement variant's did.
+It is factored that way (QDLDL, approximate minimum degree ordering; the pattern's ordering is
+kept while a Gauss-Newton sequence keeps the pattern), trusted only when its inertia is that of
+the exact matrix (``n`` positive, ``m`` negative pivots): redundant constraints (planar loops of
+rotation constraints) make ``A H^-1 A^T`` singular to round-off, the ``-delta`` pivots lose their
+sign, and those systems use the pivoted sparse LU. The LDL^T eliminates the cost block first, so
+on inconsistent constraints (conflicts) ``x`` is the weighted least-squares compromise to
+round-off; the LU's pivoting mixes the ``1/delta``-sized multipliers into ``x`` there, which is
+why conflict poses (and the cuts read from them) followed the LU's round-off. :func:`use_lu`
+forces the LU (a reference for comparisons).
 """
 
 from __future__ import annotations
@@ -38,17 +38,17 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 # per thread and task, as numpy's errstate: one solve's choice never leaks into another running beside it
-_USE_LDL: ContextVar[bool] = ContextVar("use_ldl", default=False)
+_FORCE_LU: ContextVar[bool] = ContextVar("force_lu", default=False)
 
 
 @contextmanager
-def use_ldl() -> Iterator[None]:
-    """Within this block KKT systems are factored by LDL^T where its inertia is exact (see the module doc)."""
-    token = _USE_LDL.set(True)
+def use_lu() -> Iterator[None]:
+    """Within this block every KKT system is factored by the pivoted LU (the reference; see the module doc)."""
+    token = _FORCE_LU.set(True)
     try:
         yield
     finally:
-        _USE_LDL.reset(token)
+        _FORCE_LU.reset(token)
 
 
 def constrained_lstsq(
@@ -90,7 +90,7 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
-    if _USE_LDL.get():
+    if not _FORCE_LU.get():
         upper = sp.bmat([[sp.triu(H), A.T], [None, -delta * sp.identity(m)]], format="csc")
         ldl = _ldl(upper, n, cache)
         if ldl is not None:

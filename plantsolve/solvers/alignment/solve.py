@@ -9,6 +9,7 @@ from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
@@ -160,19 +161,23 @@ def _align(request: AlignmentRequest, progress: Progress) -> AlignmentResult:
                       stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool),
                       snap=False)
         return _finish(request, model, out, progress, anchors, gap0, ang0)
+    canon, ports, conns = canonical_order(work)
+    out = _solve_methods(build_model(canon), canon, progress)
+    return _finish(request, model, out.reordered(ports, conns), progress, anchors, gap0, ang0)
+
+
+def _solve_methods(model: Model, work: AlignmentRequest, progress: Progress) -> Outcome:
     try:
         conflict = _direct_with_cuts(model, work, progress)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
         raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
-    progress(0.7, "direct solve done" + ("" if request.options.method == "direct" else "; dual-quaternion iteration"))
-    if request.options.method == "direct":
-        out = conflict
-    else:
-        out = solve_dual_quaternion(model, work.options, conflict.active, progress,
-                                    may_cut=bool(conflict.cut_reason))
-        out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
-        out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
-    return _finish(request, model, out, progress, anchors, gap0, ang0)
+    progress(0.7, "direct solve done" + ("" if work.options.method == "direct" else "; dual-quaternion iteration"))
+    if work.options.method == "direct":
+        return conflict
+    out = solve_dual_quaternion(model, work.options, conflict.active, progress, may_cut=bool(conflict.cut_reason))
+    out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
+    out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
+    return out
 
 
 def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress, anchors: list[dict],

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_ldl
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_lu
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -44,27 +44,25 @@ def _dense_minimiser(H, g, A, b):
 def test_ldl_solve_is_the_exact_constrained_minimiser():
     H, g, A, b = _problem()
     cache: dict = {}
-    with use_ldl():
-        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert isinstance(cache["lu"], qdldl.Solver)  # the LDL^T was used, not the LU
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
 
 
-def test_default_is_the_lu_and_gives_the_same_minimiser():
+def test_reference_lu_gives_the_same_minimiser():
     H, g, A, b = _problem(seed=3)
     cache: dict = {}
-    x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    with use_lu():
+        x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert not isinstance(cache["lu"], qdldl.Solver)
-    with use_ldl():
-        y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
 
 
 def test_redundant_constraint_still_gives_the_minimiser():
     H, g, A, b = _problem(seed=5, duplicate=True)
-    with use_ldl():
-        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-9 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-10 * np.max(np.abs(b))
 
@@ -81,26 +79,24 @@ def test_wrong_inertia_is_refused_and_remembered():
     bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite
     bad = bad.tocsc()
     cache: dict = {}
-    with use_ldl():
-        for refusals in (1, 2):
-            x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-            assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
-            assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
-        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-        assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
-        fresh: dict = {}
-        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
-        assert isinstance(fresh["lu"], qdldl.Solver)
+    for refusals in (1, 2):
+        x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+        assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
+        assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
+    constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
+    fresh: dict = {}
+    constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
+    assert isinstance(fresh["lu"], qdldl.Solver)
 
 
 def test_same_pattern_refactors_numbers_only():
     H, g, A, b = _problem(seed=2)
     cache: dict = {}
-    with use_ldl():
-        constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-        first = cache["ldl"][0]
-        H2 = (2.5 * H).tocsc()
-        x, _, _ = constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    first = cache["ldl"][0]
+    H2 = (2.5 * H).tocsc()
+    x, _, _ = constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert cache["ldl"][0] is first
     assert np.max(np.abs(x - _dense_minimiser(H2, g, A, b))) < 1e-11 * np.max(np.abs(x))
 
@@ -108,9 +104,9 @@ def test_same_pattern_refactors_numbers_only():
 def test_ldl_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
     req = grid_network(6, 6, valve_every=3, tie_ins=((0, 0), (5, 5)), origin=(1.0e6, 2.0e5, 1.0e4), seed=9,
                        options={"method": "direct"})
-    lu = solve(req).result
-    with use_ldl():
-        ldl = solve(req).result
+    with use_lu():
+        lu = solve(req).result
+    ldl = solve(req).result
     P = [np.array([p.position for c in r.components for p in c.ports]) for r in (lu, ldl)]
     assert lu.converged and ldl.converged and lu.cut_connections == ldl.cut_connections == []
     assert np.max(np.abs(P[0] - P[1])) < 1e-9  # mm, at coordinates of 1e6 mm (spacing of doubles there: 1.2e-10)
