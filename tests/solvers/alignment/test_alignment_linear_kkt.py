@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_lu
+from plantsolve.solvers.alignment.kkt import _Schur, block_inverse, constrained_lstsq, use_lu
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -45,7 +45,7 @@ def test_ldl_solve_is_the_exact_constrained_minimiser():
     H, g, A, b = _problem()
     cache: dict = {}
     x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert isinstance(cache["lu"], qdldl.Solver)  # the LDL^T was used, not the LU
+    assert isinstance(cache["lu"], _Schur)  # the LDL^T was used, not the LU
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
 
@@ -55,7 +55,7 @@ def test_reference_lu_gives_the_same_minimiser():
     cache: dict = {}
     with use_lu():
         x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert not isinstance(cache["lu"], qdldl.Solver)
+    assert not isinstance(cache["lu"], _Schur)
     y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
 
@@ -73,21 +73,24 @@ def _kkt_point(H, g, A, b):
     return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
 
 
-def test_wrong_inertia_is_refused_and_remembered():
+def test_indefinite_cost_falls_back_to_the_lu():
     good, g, A, b = _problem(seed=1)
     bad = good.tolil()
-    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite
+    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite, no Schur complement
     bad = bad.tocsc()
+    assert block_inverse(bad) is None
     cache: dict = {}
-    for refusals in (1, 2):
-        x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-        assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
-        assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
-    constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
-    fresh: dict = {}
-    constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
-    assert isinstance(fresh["lu"], qdldl.Solver)
+    x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert not isinstance(cache["lu"], _Schur)
+    assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
+
+
+def test_block_inverse_of_the_per_component_cost():
+    H, *_ = _problem(seed=6)
+    Hp = H[np.random.default_rng(1).permutation(30)][:, np.random.default_rng(1).permutation(30)]
+    for M in (H, Hp.tocsc()):
+        np.testing.assert_allclose((block_inverse(M) @ M).toarray(), np.eye(30), atol=1e-12)
+    assert block_inverse(sp.random(30, 30, density=0.5, random_state=0) + sp.eye(30)) is None  # one big block
 
 
 def test_same_pattern_refactors_numbers_only():
