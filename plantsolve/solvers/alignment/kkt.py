@@ -52,6 +52,10 @@ def use_lu() -> Iterator[None]:
         _FORCE_LU.reset(token)
 
 
+def lu_forced() -> bool:
+    return _FORCE_LU.get()
+
+
 def constrained_lstsq(
     H: sp.spmatrix,
     g: np.ndarray,
