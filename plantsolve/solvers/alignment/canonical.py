@@ -37,8 +37,8 @@ def canonical_order(request: AlignmentRequest) -> tuple[AlignmentRequest, np.nda
     connections = []
     for k in corder:
         c = request.connections[k]
-        a, b = ends(k)
-        connections.append(c if (c.from_[0], int(c.from_[1])) == a else c.model_copy(update={"from_": c.to, "to": c.from_}))
+        first = ends(k)[0]
+        connections.append(c if (c.from_[0], int(c.from_[1])) == first else c.model_copy(update={"from_": c.to, "to": c.from_}))
     if order == list(range(len(comps))) and corder == list(range(len(corder))) and \
             all(x is y for x, y in zip(connections, request.connections)):
         return request, ports, conns

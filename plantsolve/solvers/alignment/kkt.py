@@ -87,9 +87,9 @@ def constrained_lstsq(
 
 
 def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
-    """Factorisation of the regularised (quasi-definite) KKT matrix: LDL^T when its inertia is right,
-    else the sparse LU (see the module doc)."""
-    n, m = H.shape[0], A.shape[0]
+    """Factorisation of the regularised (quasi-definite) KKT matrix: by its Schur complement when that is
+    positive definite, else the sparse LU (see the module doc)."""
+    m = A.shape[0]
     hd = H.diagonal()
     col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
@@ -102,12 +102,12 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
             S = (A @ HiAt + delta * sp.identity(m)).tocsc()
             ldl = _ldl(sp.triu(S, format="csc"), m, cache)
             if ldl is not None:
-                return _Schur(Hinv, A, HiAt, ldl)
+                return SchurSolve(Hinv, A, HiAt, ldl)
     K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
     return splu(K)
 
 
-class _Schur:
+class SchurSolve:
     """Solves with the regularised KKT matrix by eliminating the block-diagonal cost first:
     ``(A H^-1 A^T + delta I) dl = A H^-1 r1 - r2``, ``dx = H^-1 (r1 - A^T dl)``.
 

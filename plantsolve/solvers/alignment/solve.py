@@ -15,8 +15,8 @@ from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.kkt import lu_forced, use_lu
-from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
+from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.base import InputRejected, Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 

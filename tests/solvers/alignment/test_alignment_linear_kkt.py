@@ -1,14 +1,13 @@
-"""The KKT solve's two factorisations (pivoted LU, quasi-definite LDL^T) and the result built from arrays."""
+"""The KKT solve's two factorisations (LDL^T of the Schur complement, pivoted LU) and the result built from arrays."""
 
 import numpy as np
 import pytest
-import qdldl
 import scipy.sparse as sp
 
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import _Schur, block_inverse, constrained_lstsq, use_lu
+from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse, constrained_lstsq, use_lu
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -45,7 +44,7 @@ def test_ldl_solve_is_the_exact_constrained_minimiser():
     H, g, A, b = _problem()
     cache: dict = {}
     x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert isinstance(cache["lu"], _Schur)  # the LDL^T was used, not the LU
+    assert isinstance(cache["lu"], SchurSolve)  # the LDL^T was used, not the LU
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
 
@@ -55,7 +54,7 @@ def test_reference_lu_gives_the_same_minimiser():
     cache: dict = {}
     with use_lu():
         x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert not isinstance(cache["lu"], _Schur)
+    assert not isinstance(cache["lu"], SchurSolve)
     y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
 
@@ -81,7 +80,7 @@ def test_indefinite_cost_falls_back_to_the_lu():
     assert block_inverse(bad) is None
     cache: dict = {}
     x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert not isinstance(cache["lu"], _Schur)
+    assert not isinstance(cache["lu"], SchurSolve)
     assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
 
 
