@@ -4,7 +4,6 @@ broken by the connections' (id, port) keys."""
 
 import numpy as np
 import pytest
-from alignment_cases import conn, elbow, pipe, request, route
 from scipy.spatial.transform import Rotation
 
 from plantsolve.schemas.alignment import AlignmentRequest
@@ -12,6 +11,8 @@ from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.cuts import choose_cut, tie_width
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
+
+from alignment_cases import conn, elbow, pipe, request, route
 
 NOISE = (2.0, 0.3, 6.0, 1.5)
 
