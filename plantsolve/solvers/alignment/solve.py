@@ -14,7 +14,7 @@ from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
-from plantsolve.solvers.alignment.kkt import lu_forced, use_lu
+from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.base import InputRejected, Progress, Solved, SolverError, no_progress
@@ -41,10 +41,10 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
             break
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
-        if k is not None and not lu_forced():
-            # a cut is decided on the reference LU's pose: on singular loops the fast factorisation's
-            # Gauss-Newton can stall short of closing where the LU's closes (see kkt)
-            with use_lu():
+        if k is not None and schur_in_use():
+            # a cut is decided on the LU's pose: on singular loops the Schur complement's Gauss-Newton
+            # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice)
+            with use_schur(False):
                 pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - before,
                                     step=lambda message: st.tick(f"direct solve (reference LU): {message}{cuts}"))
             iterations = before + pose.iterations  # the pose returned is the LU's

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse, constrained_lstsq, use_lu
+from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse, constrained_lstsq, use_schur
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -40,28 +40,30 @@ def _dense_minimiser(H, g, A, b):
     return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
 
 
-def test_ldl_solve_is_the_exact_constrained_minimiser():
+def test_schur_solve_is_the_exact_constrained_minimiser():
     H, g, A, b = _problem()
     cache: dict = {}
-    x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert isinstance(cache["lu"], SchurSolve)  # the LDL^T was used, not the LU
+    with use_schur():
+        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert isinstance(cache["lu"], SchurSolve)  # the Schur complement's LDL^T was used, not the LU
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
 
 
-def test_reference_lu_gives_the_same_minimiser():
+def test_default_is_the_lu_and_gives_the_same_minimiser():
     H, g, A, b = _problem(seed=3)
     cache: dict = {}
-    with use_lu():
-        x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert not isinstance(cache["lu"], SchurSolve)
-    y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    with use_schur():
+        y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
 
 
 def test_redundant_constraint_still_gives_the_minimiser():
     H, g, A, b = _problem(seed=5, duplicate=True)
-    x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
+    with use_schur():
+        x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-9 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-10 * np.max(np.abs(b))
 
@@ -79,7 +81,8 @@ def test_indefinite_cost_falls_back_to_the_lu():
     bad = bad.tocsc()
     assert block_inverse(bad) is None
     cache: dict = {}
-    x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    with use_schur():
+        x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert not isinstance(cache["lu"], SchurSolve)
     assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
 
@@ -95,20 +98,21 @@ def test_block_inverse_of_the_per_component_cost():
 def test_same_pattern_refactors_numbers_only():
     H, g, A, b = _problem(seed=2)
     cache: dict = {}
-    constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    first = cache["ldl"][0]
-    H2 = (2.5 * H).tocsc()
-    x, _, _ = constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    with use_schur():
+        constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+        first = cache["ldl"][0]
+        H2 = (2.5 * H).tocsc()
+        x, _, _ = constrained_lstsq(H2, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
     assert cache["ldl"][0] is first
     assert np.max(np.abs(x - _dense_minimiser(H2, g, A, b))) < 1e-11 * np.max(np.abs(x))
 
 
-def test_ldl_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
+def test_schur_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
     req = grid_network(6, 6, valve_every=3, tie_ins=((0, 0), (5, 5)), origin=(1.0e6, 2.0e5, 1.0e4), seed=9,
                        options={"method": "direct"})
-    with use_lu():
-        lu = solve(req).result
-    ldl = solve(req).result
+    lu = solve(req).result
+    with use_schur():
+        ldl = solve(req).result
     P = [np.array([p.position for c in r.components for p in c.ports]) for r in (lu, ldl)]
     assert lu.converged and ldl.converged and lu.cut_connections == ldl.cut_connections == []
     assert np.max(np.abs(P[0] - P[1])) < 1e-9  # mm, at coordinates of 1e6 mm (spacing of doubles there: 1.2e-10)
