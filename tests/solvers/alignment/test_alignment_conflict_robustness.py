@@ -51,7 +51,7 @@ def _shuffled(req: AlignmentRequest, seed: int) -> AlignmentRequest:
     rng = np.random.default_rng(seed)
     body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
     conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
-    body["connections"] = [{"from": c["to"], "to": c["from"]} if k % 2 else c for k, c in enumerate(conns)]
+    body["connections"] = conns  # each keeps its orientation (see plantsolve.solvers.alignment.canonical)
     return AlignmentRequest.model_validate(body)
 
 
