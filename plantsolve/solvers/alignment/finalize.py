@@ -38,6 +38,16 @@ class Outcome:
     extra: dict = field(default_factory=dict)
     snap: bool = True  # False: the input is returned as it is (already within tolerance)
 
+    def reordered(self, ports: np.ndarray, conns: np.ndarray) -> Outcome:
+        """This outcome of a reordered request in the request's own order: its port ``i`` is our port
+        ``ports[i]``, its connection ``k`` our connection ``conns[k]`` (see :mod:`canonical`)."""
+        back = np.empty_like(conns)
+        back[conns] = np.arange(len(conns))
+        return Outcome(P=self.P[ports], D=self.D[ports], iterations=self.iterations, stop_reason=self.stop_reason,
+                       active=self.active[conns], cut_reason={int(back[k]): v for k, v in self.cut_reason.items()},
+                       cut_errors={int(back[k]): v for k, v in self.cut_errors.items()}, extra=self.extra,
+                       snap=self.snap)
+
 
 def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Final float64 world positions and directions, and which connections were snapped."""

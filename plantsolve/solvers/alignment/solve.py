@@ -9,12 +9,14 @@ from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
-from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
+from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
+from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.base import InputRejected, Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
 
@@ -32,12 +34,22 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         cuts = f" ({len(reasons)} cut(s) so far)" if reasons else ""
         pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations,
                             step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
+        before = iterations
         iterations += pose.iterations
         if iterations >= opts.max_iterations:
             reason = f"iteration cap ({opts.max_iterations}) reached"
             break
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
+        if k is not None and schur_in_use():
+            # a cut is decided on the LU's pose: on singular loops the Schur complement's Gauss-Newton
+            # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice)
+            with use_schur(False):
+                pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - before,
+                                    step=lambda message: st.tick(f"direct solve (reference LU): {message}{cuts}"))
+            iterations = before + pose.iterations  # the pose returned is the LU's
+            gap, ang = connection_errors(model, pose.P, pose.D)
+            k = choose_cut(model, active, gap, ang)
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
@@ -160,19 +172,23 @@ def _align(request: AlignmentRequest, progress: Progress) -> AlignmentResult:
                       stop_reason="input already within tolerance", active=np.ones(model.n_conn, dtype=bool),
                       snap=False)
         return _finish(request, model, out, progress, anchors, gap0, ang0)
+    canon, ports, conns = canonical_order(work)
+    out = _solve_methods(build_model(canon), canon, progress)
+    return _finish(request, model, out.reordered(ports, conns), progress, anchors, gap0, ang0)
+
+
+def _solve_methods(model: Model, work: AlignmentRequest, progress: Progress) -> Outcome:
     try:
         conflict = _direct_with_cuts(model, work, progress)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:  # singular factorisation and friends
         raise SolverError("direct", f"the constrained least-squares solve failed: {exc}") from exc
-    progress(0.7, "direct solve done" + ("" if request.options.method == "direct" else "; dual-quaternion iteration"))
-    if request.options.method == "direct":
-        out = conflict
-    else:
-        out = solve_dual_quaternion(model, work.options, conflict.active, progress,
-                                    may_cut=bool(conflict.cut_reason))
-        out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
-        out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
-    return _finish(request, model, out, progress, anchors, gap0, ang0)
+    progress(0.7, "direct solve done" + ("" if work.options.method == "direct" else "; dual-quaternion iteration"))
+    if work.options.method == "direct":
+        return conflict
+    out = solve_dual_quaternion(model, work.options, conflict.active, progress, may_cut=bool(conflict.cut_reason))
+    out.cut_reason = {**conflict.cut_reason, **out.cut_reason}
+    out.cut_errors = {**conflict.cut_errors, **out.cut_errors}
+    return out
 
 
 def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Progress, anchors: list[dict],

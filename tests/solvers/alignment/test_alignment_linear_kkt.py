@@ -1,14 +1,13 @@
-"""The KKT solve's two factorisations (pivoted LU, quasi-definite LDL^T) and the result built from arrays."""
+"""The KKT solve's two factorisations (LDL^T of the Schur complement, pivoted LU) and the result built from arrays."""
 
 import numpy as np
 import pytest
-import qdldl
 import scipy.sparse as sp
 
 from plantsolve.schemas.alignment import AlignmentResult, Port
 from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
-from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_ldl
+from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse, constrained_lstsq, use_schur
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 from plantsolve.solvers.base import SolverError
@@ -41,12 +40,12 @@ def _dense_minimiser(H, g, A, b):
     return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
 
 
-def test_ldl_solve_is_the_exact_constrained_minimiser():
+def test_schur_solve_is_the_exact_constrained_minimiser():
     H, g, A, b = _problem()
     cache: dict = {}
-    with use_ldl():
+    with use_schur():
         x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert isinstance(cache["lu"], qdldl.Solver)  # the LDL^T was used, not the LU
+    assert isinstance(cache["lu"], SchurSolve)  # the Schur complement's LDL^T was used, not the LU
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-11 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-12 * np.max(np.abs(b))
 
@@ -55,15 +54,15 @@ def test_default_is_the_lu_and_gives_the_same_minimiser():
     H, g, A, b = _problem(seed=3)
     cache: dict = {}
     x, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-    assert not isinstance(cache["lu"], qdldl.Solver)
-    with use_ldl():
+    assert not isinstance(cache["lu"], SchurSolve)
+    with use_schur():
         y, _, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - y)) < 1e-12 * np.max(np.abs(x))
 
 
 def test_redundant_constraint_still_gives_the_minimiser():
     H, g, A, b = _problem(seed=5, duplicate=True)
-    with use_ldl():
+    with use_schur():
         x, r, _ = constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17)
     assert np.max(np.abs(x - _dense_minimiser(H, g, A, b))) < 1e-9 * np.max(np.abs(x))
     assert np.max(np.abs(r)) < 1e-10 * np.max(np.abs(b))
@@ -75,28 +74,31 @@ def _kkt_point(H, g, A, b):
     return np.linalg.solve(K, np.concatenate([-g, b]))[:n]
 
 
-def test_wrong_inertia_is_refused_and_remembered():
+def test_indefinite_cost_falls_back_to_the_lu():
     good, g, A, b = _problem(seed=1)
     bad = good.tolil()
-    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite
+    bad[0, 0] = -1.0  # an indefinite cost: the KKT matrix is no longer quasi-definite, no Schur complement
     bad = bad.tocsc()
+    assert block_inverse(bad) is None
     cache: dict = {}
-    with use_ldl():
-        for refusals in (1, 2):
-            x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-            assert cache["ldl_refused"] == refusals and not isinstance(cache["lu"], qdldl.Solver)
-            assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
-        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
-        assert not isinstance(cache["lu"], qdldl.Solver)  # refused twice in a sequence: not tried again
-        fresh: dict = {}
-        constrained_lstsq(good, g, A, lambda x: b - A @ x, stop=1e-17, cache=fresh)
-        assert isinstance(fresh["lu"], qdldl.Solver)
+    with use_schur():
+        x, _, _ = constrained_lstsq(bad, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
+    assert not isinstance(cache["lu"], SchurSolve)
+    assert np.max(np.abs(x - _kkt_point(bad, g, A, b))) < 1e-9 * np.max(np.abs(x))  # the LU solved it
+
+
+def test_block_inverse_of_the_per_component_cost():
+    H, *_ = _problem(seed=6)
+    Hp = H[np.random.default_rng(1).permutation(30)][:, np.random.default_rng(1).permutation(30)]
+    for M in (H, Hp.tocsc()):
+        np.testing.assert_allclose((block_inverse(M) @ M).toarray(), np.eye(30), atol=1e-12)
+    assert block_inverse(sp.random(30, 30, density=0.5, random_state=0) + sp.eye(30)) is None  # one big block
 
 
 def test_same_pattern_refactors_numbers_only():
     H, g, A, b = _problem(seed=2)
     cache: dict = {}
-    with use_ldl():
+    with use_schur():
         constrained_lstsq(H, g, A, lambda x: b - A @ x, stop=1e-17, cache=cache)
         first = cache["ldl"][0]
         H2 = (2.5 * H).tocsc()
@@ -105,11 +107,11 @@ def test_same_pattern_refactors_numbers_only():
     assert np.max(np.abs(x - _dense_minimiser(H2, g, A, b))) < 1e-11 * np.max(np.abs(x))
 
 
-def test_ldl_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
+def test_schur_agrees_with_lu_on_a_loop_grid_at_plant_coordinates():
     req = grid_network(6, 6, valve_every=3, tie_ins=((0, 0), (5, 5)), origin=(1.0e6, 2.0e5, 1.0e4), seed=9,
                        options={"method": "direct"})
     lu = solve(req).result
-    with use_ldl():
+    with use_schur():
         ldl = solve(req).result
     P = [np.array([p.position for c in r.components for p in c.ports]) for r in (lu, ldl)]
     assert lu.converged and ldl.converged and lu.cut_connections == ldl.cut_connections == []

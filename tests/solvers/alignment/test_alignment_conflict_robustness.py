@@ -1,0 +1,100 @@
+"""Conflicts are decided by the problem, not by the input order or round-off: shuffled requests cut the
+same connections and put every port at the same place; impacts the solver cannot tell apart are ties,
+broken by the connections' (id, port) keys."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.cuts import choose_cut, tie_width
+from plantsolve.solvers.alignment.model import build_model
+from plantsolve.solvers.alignment.synthetic import grid_network
+
+from alignment_cases import conn, elbow, pipe, request, route
+
+NOISE = (2.0, 0.3, 6.0, 1.5)
+
+
+def _straight_run_between_tie_ins():
+    # symmetric: the 10 mm offset is spread evenly over the run's two end connections, an exact tie
+    comps, conns = route([[0, 0, 0], [6000, 0, 0]], perturb=NOISE, seed=3, fixed_ends=(True, True))
+    for p in comps[-1]["ports"]:
+        p["position"][1] += 10.0
+    return request(comps, conns, method="direct", max_iterations=200)
+
+
+def _conflicting_tie_ins_and_a_free_branch():
+    e1 = elbow("E1", [0, 0, 0], [0, -1, 0], [1, 0, 0], fixed=True)
+    e2 = elbow("E2", [2000, 5.0, 0], [-1, 0, 0], [0, 1, 0], fixed=True)
+    comps = [e1, e2, pipe("P", [151.0, 0.8, -0.5], [1849.0, 3.0, 0.7]), pipe("Q", [0, -150, 0], [0, -1150, 0]),
+             elbow("E3", [0, -1300, 0], [0, 1, 0], [1, 0, 0], shift=(1.0, -2.0, 0.5), rot=[0, 0, 0.01]),
+             pipe("R", [150, -1300, 0], [1150, -1300, 0])]
+    conns = [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0), conn("E1", 0, "Q", 0), conn("Q", 1, "E3", 0),
+             conn("E3", 1, "R", 0)]
+    return request(comps, conns, method="direct")
+
+
+def _loop_grid_with_a_turned_tie_in():
+    req = grid_network(3, 3, seed=2, tie_ins=((0, 0), (2, 2)), origin=(1.0e6, 2.0e5, 1.0e4),
+                       options={"method": "direct", "max_cuts": 5})
+    comps = [c.model_copy(deep=True) for c in req.components]
+    moved = [c for c in comps if c.fixed][-1]
+    for p in moved.ports:
+        p.direction = Rotation.from_rotvec([0.0, 0.0, np.radians(3.0)]).apply(p.direction).tolist()
+    return req.model_copy(update={"components": comps})
+
+
+def _shuffled(req: AlignmentRequest, seed: int) -> AlignmentRequest:
+    body = req.model_dump(mode="json", by_alias=True)
+    rng = np.random.default_rng(seed)
+    body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
+    conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
+    body["connections"] = conns  # each keeps its orientation (see plantsolve.solvers.alignment.canonical)
+    return AlignmentRequest.model_validate(body)
+
+
+def _outcome(req: AlignmentRequest, res) -> tuple[set, dict]:
+    cuts = {frozenset((tuple(res.connections[k].from_), tuple(res.connections[k].to))) for k in res.cut_connections}
+    return cuts, {c.id: np.array([p.position for p in c.ports]) for c in res.components}
+
+
+@pytest.mark.parametrize("case", [_straight_run_between_tie_ins, _conflicting_tie_ins_and_a_free_branch,
+                                  _loop_grid_with_a_turned_tie_in])
+def test_conflicts_are_cut_the_same_whatever_the_input_order(case):
+    req = case()
+    ref = solve(req).result
+    assert ref.cut_connections, "the case must be a conflict"
+    cuts, P = _outcome(req, ref)
+    for seed in (0, 1, 2):
+        res = solve(_shuffled(req, seed)).result
+        cuts2, P2 = _outcome(req, res)
+        assert cuts2 == cuts and res.converged == ref.converged
+        assert max(float(np.max(np.abs(P[cid] - P2[cid]))) for cid in P) < 1e-6  # mm
+
+
+def test_impacts_within_the_snapped_residue_are_ties():
+    req = _straight_run_between_tie_ins()
+    model = build_model(req)
+    k = model.n_conn
+    ang = np.zeros(k)
+    gap = np.zeros(k)
+    small, large = 1, 0  # connection 1 (P-0 to F-end) has the smaller key: ("F-end", 0) < ("F-start", 1)
+    assert min(model.key[model.conn_a[small]], model.key[model.conn_b[small]]) < \
+        min(model.key[model.conn_a[large]], model.key[model.conn_b[large]])
+    for bump in (0.5, -0.5):  # either one larger by less than the solver can resolve
+        gap[small], gap[large] = 5.0, 5.0 + bump * tie_width(model, 5.0)
+        assert choose_cut(model, np.ones(k, dtype=bool), gap, ang) == small
+    gap[large] = 5.0 + 2 * tie_width(model, 5.0)  # beyond it: the larger impact is cut
+    assert choose_cut(model, np.ones(k, dtype=bool), gap, ang) == large
+
+
+def test_shuffled_request_gives_the_bit_identical_result():
+    # the solvers see every request in one canonical order (components by id, connections by their ends)
+    req = grid_network(3, 3, valve_every=4, tie_ins=((0, 0),), seed=4, options={"method": "direct"})
+    a = solve(req).result
+    b = solve(_shuffled(req, 5)).result
+    pa = {c.id: [p.position for p in c.ports] for c in a.components}
+    pb = {c.id: [p.position for p in c.ports] for c in b.components}
+    assert pa == pb
