@@ -24,6 +24,7 @@ Every refusal is an :class:`~plantsolve.jobs.errors.Unprocessable` (422) or
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 import multiprocessing
@@ -63,8 +64,46 @@ def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
         # strict JSON: a number is a number (no `false` for 0, no "5" for 5), as the schema says
         request = spec.request_model.model_validate_json(body, strict=True)
     except ValidationError as error:
-        raise from_validation_error(error, document=raw) from None
+        integral = _with_integral_numbers_as_integers(raw, error)
+        if integral is None:
+            raise from_validation_error(error, document=raw) from None
+        raw = integral
+        try:
+            request = spec.request_model.model_validate_json(json.dumps(raw), strict=True)
+        except ValidationError as error:
+            raise from_validation_error(error, document=raw) from None
     return raw, _input(spec, request)
+
+
+def _with_integral_numbers_as_integers(document: Any, error: ValidationError) -> Any | None:
+    """The document with each number written with a zero fraction (``3.0``) where an integer is expected made an
+    integer, when that is all the validation refused; else None.
+
+    JSON Schema, and so the OpenAPI document, counts ``3.0`` as an integer; pydantic's strict mode does not. Only the
+    refused places change, so ``3.5`` (not an integer) and ``true`` (not a number) are still refused, and so is a
+    number past 2**53, which a float does not hold exactly."""
+    errors = error.errors(include_url=False, include_context=False)
+    places = []
+    for item in errors:
+        value = item.get("input")
+        if item["type"] != "int_type" or type(value) is not float or not value.is_integer() or abs(value) > 2 ** 53:
+            return None
+        places.append(item["loc"])
+    for loc in places:
+        node, path = document, list(loc)
+        while len(path) > 1:
+            key = path.pop(0)
+            if isinstance(node, dict) and key in node or isinstance(node, list) and isinstance(key, int) \
+                    and 0 <= key < len(node):
+                node = node[key]
+            # else: a union's branch tag in the location, not a step in the document
+        key = path[0]
+        if not (isinstance(node, (dict, list)) and (key in node if isinstance(node, dict) else
+                                                     isinstance(key, int) and 0 <= key < len(node))):
+            return None
+        if type(node[key]) is float and node[key].is_integer():
+            node[key] = int(node[key])
+    return document
 
 
 def upload_extension(spec: SolverSpec, filename: str) -> str:

@@ -110,3 +110,26 @@ def test_stored_input_from_bytes_or_path(tmp_path):
     assert (stored.name, stored.size) == ("model.ifc", 3)
     with pytest.raises(ValueError):
         StoredInput("x.txt")
+
+
+@pytest.mark.parametrize("value, accepted", [(3.0, 3), (0.0, 0), (3.5, None), (True, None), ("3", None),
+                                             (2.0 ** 60, None)])
+def test_an_integer_written_with_a_zero_fraction_is_an_integer(value, accepted):
+    # the OpenAPI document's JSON Schema counts 3.0 as an integer; strict JSON still refuses a fraction, a boolean,
+    # a string, and a float past 2**53 (not an exact integer)
+    import json
+
+    from plantsolve.jobs import intake
+    from plantsolve.solvers.kinds import KINDS
+
+    units = {"basis": "format", "factor": 1.0, "file_unit": "", "request_unit": "mm"}
+    body = {"points": [[float(i), 0.0, 0.0] for i in range(100)],
+            "source": {"format": "xyz", "points": value, "units": units}}
+    if accepted is None:
+        with pytest.raises(Unprocessable) as refused:
+            intake.read_json(KINDS["tube"], json.dumps(body).encode())
+        (error,) = refused.value.errors
+        assert error["loc"] == ["source", "points"] and error["type"] == "int_type"
+        return
+    raw, _ = intake.read_json(KINDS["tube"], json.dumps(body).encode())
+    assert raw["source"]["points"] == accepted and type(raw["source"]["points"]) is int

@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment import solve
+from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.cuts import choose_cut, tie_width
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
