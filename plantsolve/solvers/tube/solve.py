@@ -19,7 +19,7 @@ from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segme
                                      TubeRequest, TubeResult)
 from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
-from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
+from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sample_order, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
 from plantsolve.solvers.tube.inspection import inspect_request
@@ -28,7 +28,8 @@ from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.validation import implausible_extent, implausible_radius
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
-LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
+LM_SUBSAMPLE = 20_000  # early least-squares rounds
+ALL_SAMPLES_AT_ONCE = 50_000  # above: the end lengths and margins of a fit re-assign the samples at the ends only
 SIMPLIFY_FRACTION = 0.25  # polygon simplification tolerance as a fraction of ε (§4.5)
 PRUNE_SUBSAMPLE = 3_000  # candidate refits when choosing the number of bends
 
@@ -244,6 +245,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     def tick():
         st.tick()  # lets a cancellation through between LM iterations
 
+    last_assignment: list = []  # [model, residuals, segments] of every sample after a round on all of them
+
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
                dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
         """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
@@ -257,15 +260,14 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
             m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
-            # stop (after a bend was merged or removed the far end can be many radii off)
-            for _ in range(12):
-                res, seg = fit.assign(m, P, margin)
-                near = np.abs(res) <= thr
-                m_new = fit.set_end_lengths(m, P[near], seg[near])
-                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-3 * rp:
-                    break
-                m = m_new
+            # stop (after a bend was merged or removed the far end can be many radii off);
+            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
+            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
+            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
+            if P is pts:
+                last_assignment[:] = [m, res, seg] if settled else []
             r_in = res[inl]
             sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
             thr = max(6.0 * sig, 0.05 * rp)
@@ -315,10 +317,19 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     st.stage(0.85, 0.97, "final least-squares fit on all samples")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
-    res_all, seg_all = fit.assign(model, pts, margin)
-    # final extents without the margin
-    inlier = np.abs(res_all) <= thr
-    res_all, seg_all = fit.assign(model, pts, 0.0)
+    if N > ALL_SAMPLES_AT_ONCE:
+        # the margin only reaches the samples at the ends: assigned once with it, then those again without
+        if last_assignment and last_assignment[0] is model:
+            _, res_all, seg_all = last_assignment
+        else:
+            res_all, seg_all = fit.assign(model, pts, margin)
+        inlier = np.abs(res_all) <= thr
+        ends = fit.near_ends(model, seg_all)
+        res_all[ends], seg_all[ends] = fit.assign(model, pts[ends], 0.0)
+    else:
+        inlier = np.abs(fit.assign(model, pts, margin)[0]) <= thr
+        # final extents without the margin
+        res_all, seg_all = fit.assign(model, pts, 0.0)
     last_rel = lm_info.get("last_relative_decrease")
     if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
@@ -535,7 +546,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     pts_in = scan.points
     rng = np.random.default_rng(opts.seed)
     # canonical order: the result must not depend on the order of the input samples
-    order = np.lexsort(pts_in.T[::-1])
+    order = sample_order.lexicographic(pts_in)
     pts = pts_in[order]
     N = len(pts)
 
