@@ -30,6 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
+from plantsolve.solvers.tube.vec3 import cross
 
 
 @dataclass
@@ -117,14 +118,6 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    out = np.empty(a.shape)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
@@ -160,12 +153,12 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         if k == n:
             break
         c_r, s_r = np.cos(rots[:, k:k + 1]), np.sin(rots[:, k:k + 1])
-        nv = nv * c_r + _cross(t, nv) * s_r
+        nv = nv * c_r + cross(t, nv) * s_r
         R = rad[:, k:k + 1]
         a = ang[:, k:k + 1]
         centre = p + R * nv
         g[:, 2 * k + 1, :3] = centre
-        g[:, 2 * k + 1, 3:6] = _cross(t, nv)
+        g[:, 2 * k + 1, 3:6] = cross(t, nv)
         g[:, 2 * k + 1, 6] = R[:, 0]
         ca, sa = np.cos(a), np.sin(a)
         p = centre - R * nv * ca + R * t * sa
@@ -373,9 +366,8 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
                 G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
             gram[k] += G.T @ (G * w[m_k, None])
             rhs[k] += G.T @ wr[m_k]
-        A = np.einsum("skp,skl,slq->pq", dG, gram, dG, optimize=True)
-        b = np.einsum("skp,sk->p", dG, rhs)
-        return A, b
+        D = dG.reshape(-1, P)
+        return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
     return x0, lo, hi, fun, normal_equations, frame0, rp
 

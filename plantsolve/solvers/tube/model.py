@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotate_about, rotation, signed_angle
+from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotation, signed_angle
+from plantsolve.solvers.tube.vec3 import cross, rotate_about
 
 TWO_PI = 2.0 * np.pi
 
@@ -72,7 +73,7 @@ class Spine:
     @property
     def axis(self) -> np.ndarray:
         """Arc plane normals (t × n): the arc runs counter-clockwise about them."""
-        return np.cross(self.tangent, self.normal)
+        return cross(self.tangent, self.normal)
 
 
 def build_spine(model: TubeModel) -> Spine:
@@ -258,7 +259,7 @@ def _segment_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray]:
     line = (sp.kind == 0)[:, None]
     b1 = np.where(line, t, -sp.normal)
     b2 = np.where(line, p, sp.tangent)
-    basis = np.stack([b1, b2, np.cross(b1, b2)], 1)
+    basis = np.stack([b1, b2, cross(b1, b2)], 1)
     origin = np.where(line, sp.start, sp.centre[:S] if len(sp.centre) else sp.start)
     return basis, np.einsum("sjk,sk->sj", basis, origin)
 
@@ -320,6 +321,7 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
     d = np.empty(len(pts)); idx = np.empty(len(pts), int)
     step = max(1, chunk // max(len(sp.kind), 1))
     tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + float(np.abs(pts).max(initial=0.0)) + 1e-300)
+    frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
         m = _segment_distances(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a
