@@ -295,8 +295,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     st.stage(0.75, 0.8, "least-squares fit")
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     if model.n_bends > 1 and mode == "free":
-        (model, lm_info, thr, sig), rechecked = recheck_on_final_fit(model, pts_sub, thr, margin, opts, rounds,
-                                                                     lm_info, sig, eps_used)
+        (model, lm_info, thr, sig), rechecked = prune.recheck_on_fit((model, lm_info, thr, sig), pts_sub, thr, margin,
+                                                                     fit_rp, rounds, eps_used)
         changes = changes + rechecked
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
     final_mode: dict = {}
@@ -305,8 +305,9 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
                                                                       lm_info)
         if model.n_bends > 1 and mode == "free" and final_mode.get("radius_mode") in ("common", "dies"):
-            (model, lm_info, thr, final_mode), merged = recheck_with_held_radii(model, pts_sub, thr, margin, opts,
-                                                                                rounds, lm_info, final_mode, eps_used)
+            (model, lm_info, thr, final_mode), merged = prune.recheck_on_fit((model, lm_info, thr, final_mode), pts_sub,
+                                                                             thr, margin, fit_rp, rounds, eps_used,
+                                                                             final_mode["radius_mode"])
             if merged:
                 changes = changes + merged
                 # the radius models compared again for the tube with fewer bends, from its free fit
@@ -335,51 +336,6 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
                                    "limit; the result is the best found.", details=lm_info))
     return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes, radius)
-
-
-def recheck_on_final_fit(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                         lm_info: dict, sig: float, eps: float):
-    """The bend count re-checked on the final fit (``prune.recheck_by_bic``): BIC n ln(RSS/n) + p ln n over
-    the samples within the threshold of the fit so far, each candidate refitted as that fit was."""
-    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
-    N = int(keep.sum())
-
-    def bic(m: TubeModel) -> float:
-        r = fit.assign(m, P[keep], margin)[0]
-        p = fit.Layout(m.n_bends, "free", None, opts.pipe_radius is None).size
-        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
-
-    return prune.recheck_by_bic((model, lm_info, thr, sig), lambda m: rounds(m, P, thr, 2, 30), bic, eps)
-
-
-def recheck_with_held_radii(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                            lm_info: dict, final_mode: dict, eps: float):
-    """Adjacent small bends on one die re-checked as one bend (``prune.pair_merge_candidates``) in the shared
-    radius model the fit chose ('common' or 'dies'): each candidate refitted with its radii held to the
-    die(s), so that no free radius of a bend of a few degrees can run off during the comparison, and kept
-    when BIC n ln(RSS/n) + p ln n over the samples within the threshold of the fit so far is no worse."""
-    radius_mode = final_mode["radius_mode"]
-    die_radii = sorted({round(float(r), 9) for r in model.radii}) if radius_mode == "dies" else [float(model.radii[0])]
-    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
-    N = int(keep.sum())
-
-    def dies_of(m: TubeModel) -> tuple[int, ...]:
-        return prune.nearest_die(m.radii, die_radii) if radius_mode == "dies" else ()
-
-    def bic(m: TubeModel) -> float:
-        r = fit.assign(m, P[keep], margin)[0]
-        p = fit.Layout(m.n_bends, radius_mode, None, opts.pipe_radius is None, dies_of(m)).size
-        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
-
-    def refit(m: TubeModel):
-        d = dies_of(m)
-        held = with_radii(m, np.asarray(die_radii)[list(d)] if d else np.full(m.n_bends, die_radii[0]))
-        mode = {"radius_mode": radius_mode, "dies": d} if d else {"radius_mode": radius_mode}
-        m2, info, t2, _ = rounds(held, P, thr, 2, 30, **mode)
-        return m2, info, t2, mode
-
-    return prune.recheck_by_bic((model, lm_info, thr, final_mode), refit, bic, eps,
-                                candidates=prune.pair_merge_candidates)
 
 
 def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:

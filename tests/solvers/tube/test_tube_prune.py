@@ -167,12 +167,8 @@ def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
     """Two dies (60 and 200): the halves of a 4.8 degree bend of the 60 die are merged, the candidate refitted
     in the 'dies' model with one die per remaining bend (the merged one on the 60 die) and its radii held
     there; kept because the merged arc is the same curve with four parameters fewer."""
-    import importlib
-
-    from plantsolve.schemas.tube import TubeOptions
     from plantsolve.solvers.tube.synthetic import surface_samples
 
-    solve_mod = importlib.import_module("plantsolve.solvers.tube.solve")
     one = make_model([[120, 0, 4.8, 60], [130, 50, 72, 200], [170, -85, 64, 60], [120, 0, 0, 0]], 20.0)
     two = prune.split(one, 0, 0.57, 60.0, 0.0)
     pts = surface_samples(one, 3000, np.random.default_rng(4), noise=0.2)
@@ -182,8 +178,8 @@ def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
         calls.append((radius_mode, dies, m.radii.copy()))
         return m, {"refit": True}, thr, 0.2
 
-    (kept, info, _, mode), changes = solve_mod.recheck_with_held_radii(
-        two, pts, 2.0, 40.0, TubeOptions(), rounds, {}, {"radius_mode": "dies", "dies": (0, 0, 1, 0)}, 0.1)
+    (kept, info, _, mode), changes = prune.recheck_on_fit(
+        (two, {}, 2.0, {"radius_mode": "dies", "dies": (0, 0, 1, 0)}), pts, 2.0, 40.0, True, rounds, 0.1, "dies")
     assert [c["change"] for c in changes] == ["merge"] and kept.n_bends == 3 and info == {"refit": True}
     assert calls[0][:2] == ("dies", (0, 1, 0)) and mode == {"radius_mode": "dies", "dies": (0, 1, 0)}
     np.testing.assert_allclose(calls[0][2], [60.0, 200.0, 60.0])
