@@ -272,9 +272,10 @@ def solve_cases(path: str) -> None:
                           "radius_big": float(dr[big].max()) if da is not None and big.any() else None}), flush=True)
 
 
-def before_after(n_tubes: int, ref: str) -> None:
-    """Every family (the random tubes too), n_tubes seeds each, solved by the solver of git revision ``ref``
-    and by this tree's, each in a fresh process on the same saved samples, one after the other."""
+def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
+    """Every family (the random tubes too), n_tubes seeds each (``n_random`` random tubes when given), solved by
+    the solver of git revision ``ref`` and by this tree's, each in a fresh process on the same saved samples,
+    one after the other."""
     import tempfile
 
     repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -282,7 +283,7 @@ def before_after(n_tubes: int, ref: str) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         arrays, truth_n = {}, {}
         for fam in fams:
-            for i in range(n_tubes):
+            for i in range(n_random if fam == "random" and n_random is not None else n_tubes):
                 m, pts = _case(fam, (1000 if fam == "random" else 5000) + i)
                 name = f"{fam}-{i:03d}"
                 truth_n[name] = m.n_bends
@@ -301,7 +302,8 @@ def before_after(n_tubes: int, ref: str) -> None:
             out = subprocess.run([sys.executable, __file__, "--solve-cases", cases], capture_output=True, text=True,
                                  check=True, env=env)
             sides[side] = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
-    print(f"before / after: {n_tubes} tubes per family, 6000 points; CPU s = time.process_time() of the solve "
+    print(f"before / after: {n_tubes} tubes per family ({n_random if n_random is not None else n_tubes} random), "
+          "6000 points; CPU s = time.process_time() of the solve "
           "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
           "bend count")
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
@@ -394,6 +396,7 @@ def main():
     ap.add_argument("--before-after", type=int, metavar="N",
                     help="every family, N tubes each, with the solver of --ref and this tree's (same samples)")
     ap.add_argument("--ref", default="main", help="git revision of the 'before' solver (default main)")
+    ap.add_argument("--random-tubes", type=int, help="--before-after: this many random tubes (default: N)")
     ap.add_argument("--solve-cases", help=argparse.SUPPRESS)
     ap.add_argument("--scale", help="comma-separated point counts (1e6,3e6,1e7): large scans, --ref's solver and "
                     "this tree's")
@@ -410,7 +413,7 @@ def main():
         solve_cases(a.solve_cases)
         return
     if a.before_after:
-        before_after(a.before_after, a.ref)
+        before_after(a.before_after, a.ref, a.random_tubes)
         return
     if a.families:
         families(a.families, tuple(a.radius_models.split(",")))

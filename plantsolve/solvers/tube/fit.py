@@ -296,6 +296,19 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
+def with_end_lengths(model: TubeModel, before: TubeModel) -> TubeModel:
+    """A solved model (:func:`solve_lm` returns its end straights with length 0: they are infinite lines
+    during the solve) with the end lengths of the model it started from, the first arc where the solve put
+    it: a start for :func:`end_lengths` a fraction of a margin off instead of a whole end straight."""
+    if model.n_bends == 0 or model.lengths[0] or model.lengths[-1]:
+        return model
+    m = model.copy()
+    m.start = m.start - before.lengths[0] * m.frame[:, 0]
+    m.lengths = m.lengths.copy()
+    m.lengths[0], m.lengths[-1] = before.lengths[0], before.lengths[-1]
+    return m
+
+
 def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     """Indices of the samples ``seg`` puts on the two outer segments at either end (the straight and the
     arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube
@@ -311,6 +324,7 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     ``seg`` are the samples' assignment (:func:`assign`) to ``model``. Returns the model, the last
     assignment and whether the ends settled (then that assignment is the returned model's)."""
     rp = model.pipe_radius
+    seen = []  # (model, res, seg) of every iteration
     for i in range(max_rounds):
         if i:
             res, seg = assign(model, pts, margin)
@@ -318,6 +332,17 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
         m_new = set_end_lengths(model, pts[near], seg[near])
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
             return model, res, seg, True
+        seen.append((model, res, seg))
+        if i >= 2 and np.array_equal(model.start, seen[i - 2][0].start) and np.array_equal(model.lengths,
+                                                                                         seen[i - 2][0].lengths):
+            # the ends swing between two lengths (the outermost samples with company differ by a stray sample
+            # within the margin): every further iteration repeats one of the last two, so the outcome of all
+            # of them is known
+            def at(t: int) -> tuple:
+                return seen[i - 2 + (t - (i - 2)) % 2]
+
+            last = max_rounds - 1
+            return at(last + 1)[0], at(last)[1], at(last)[2], False
         model = m_new
     return model, res, seg, False
 

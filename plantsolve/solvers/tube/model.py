@@ -320,7 +320,9 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
     cache (twice as fast on a million samples as blocks of ten times the size)."""
     d = np.empty(len(pts)); idx = np.empty(len(pts), int)
     step = max(1, chunk // max(len(sp.kind), 1))
-    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + float(np.abs(pts).max(initial=0.0)) + 1e-300)
+    # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
+    p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0
+    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
     frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
         m = _segment_distances(pts[a:a + step], sp, frames)

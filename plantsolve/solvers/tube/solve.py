@@ -259,12 +259,16 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
+            m_ends = m
             m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            large = len(P) > ALL_SAMPLES_AT_ONCE
+            if large:  # the ends re-grown from where they were, not from the first and last arc
+                m = fit.with_end_lengths(m, m_ends)
             res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
             # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
-            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
+            ends = fit.near_ends(m, seg) if large else slice(None)
             m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
             if P is pts:
                 last_assignment[:] = [m, res, seg] if settled else []
@@ -445,8 +449,12 @@ def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
     same tube gives the same LRA whichever way the scan was walked."""
     rev = reverse_model(ls.model)
     if _prefer(rev, ls.model, ls.eps_used):
+        if len(pts) > ALL_SAMPLES_AT_ONCE:
+            # the same segments walked the other way: the distances stay, the segment numbers turn round
+            ls.segment = 2 * ls.model.n_bends - ls.segment
+        else:
+            ls.residuals, ls.segment = fit.assign(rev, pts, 0.0)
         ls.model = rev
-        ls.residuals, ls.segment = fit.assign(rev, pts, 0.0)
 
 
 def outlier_report(ls: LeastSquaresFit, lf: LocalFits, ss: SpineSamples, order: np.ndarray) -> Outliers:
