@@ -296,19 +296,6 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
-def with_end_lengths(model: TubeModel, before: TubeModel) -> TubeModel:
-    """A solved model (:func:`solve_lm` returns its end straights with length 0: they are infinite lines
-    during the solve) with the end lengths of the model it started from, the first arc where the solve put
-    it: a start for :func:`end_lengths` a fraction of a margin off instead of a whole end straight."""
-    if model.n_bends == 0 or model.lengths[0] or model.lengths[-1]:
-        return model
-    m = model.copy()
-    m.start = m.start - before.lengths[0] * m.frame[:, 0]
-    m.lengths = m.lengths.copy()
-    m.lengths[0], m.lengths[-1] = before.lengths[0], before.lengths[-1]
-    return m
-
-
 def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     """Indices of the samples ``seg`` puts on the two outer segments at either end (the straight and the
     arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube

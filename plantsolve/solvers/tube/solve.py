@@ -259,16 +259,12 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
-            m_ends = m
             m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
-            large = len(P) > ALL_SAMPLES_AT_ONCE
-            if large:  # the ends re-grown from where they were, not from the first and last arc
-                m = fit.with_end_lengths(m, m_ends)
             res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
             # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
-            ends = fit.near_ends(m, seg) if large else slice(None)
+            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
             m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
             if P is pts:
                 last_assignment[:] = [m, res, seg] if settled else []
