@@ -36,7 +36,8 @@ import numpy as np  # noqa: E402
 
 from plantsolve.schemas.tube import TubeRequest  # noqa: E402
 from plantsolve.solvers.base import SolverError, StoredInput  # noqa: E402
-from plantsolve.solvers.tube import parse_upload, solve  # noqa: E402
+from plantsolve.solvers.tube.solve import solve  # noqa: E402
+from plantsolve.solvers.tube.upload import parse_upload  # noqa: E402
 from plantsolve.solvers.tube.artifacts import model_from_result  # noqa: E402
 from plantsolve.solvers.tube.model import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
 from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples  # noqa: E402
