@@ -6,6 +6,8 @@
                                          # apart, nearly coplanar back-to-back bends)
     python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
     python bench/tube.py --before-after 10 [--ref main]   # every family, main's solver vs this tree's
+    python bench/tube.py --scale 1e6,3e6,1e7 [--ref main] [--ref-max 3e6]   # large scans, main's solver vs
+                                         # this tree's, CPU seconds and peak RSS of a fresh process each
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -18,6 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+
+# CPU seconds of one solver thread, as the workers run it (they set these too)
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
 import resource
 import subprocess
 import sys
@@ -267,9 +273,10 @@ def solve_cases(path: str) -> None:
                           "radius_big": float(dr[big].max()) if da is not None and big.any() else None}), flush=True)
 
 
-def before_after(n_tubes: int, ref: str) -> None:
-    """Every family (the random tubes too), n_tubes seeds each, solved by the solver of git revision ``ref``
-    and by this tree's, each in a fresh process on the same saved samples, one after the other."""
+def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
+    """Every family (the random tubes too), n_tubes seeds each (``n_random`` random tubes when given), solved by
+    the solver of git revision ``ref`` and by this tree's, each in a fresh process on the same saved samples,
+    one after the other."""
     import tempfile
 
     repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -277,7 +284,7 @@ def before_after(n_tubes: int, ref: str) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         arrays, truth_n = {}, {}
         for fam in fams:
-            for i in range(n_tubes):
+            for i in range(n_random if fam == "random" and n_random is not None else n_tubes):
                 m, pts = _case(fam, (1000 if fam == "random" else 5000) + i)
                 name = f"{fam}-{i:03d}"
                 truth_n[name] = m.n_bends
@@ -296,7 +303,8 @@ def before_after(n_tubes: int, ref: str) -> None:
             out = subprocess.run([sys.executable, __file__, "--solve-cases", cases], capture_output=True, text=True,
                                  check=True, env=env)
             sides[side] = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
-    print(f"before / after: {n_tubes} tubes per family, 6000 points; CPU s = time.process_time() of the solve "
+    print(f"before / after: {n_tubes} tubes per family ({n_random if n_random is not None else n_tubes} random), "
+          "6000 points; CPU s = time.process_time() of the solve "
           "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
           "bend count")
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
@@ -316,6 +324,65 @@ def before_after(n_tubes: int, ref: str) -> None:
                   f"| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
 
 
+def scale_one(path: str) -> None:
+    """Child of --scale: solve the scan at ``path`` with the solver on the path. The samples go to the solver
+    as an array (an upload holds at most 5 million points, ``MAX_POINTS``); prints CPU seconds of the solve,
+    the peak RSS of this process and the errors against the truth."""
+    from plantsolve.solvers.tube.scan import TubeScan
+
+    pts = np.load(path)
+    pts.setflags(write=False)
+    m, _, _ = make_case(77, 1000, n_bends=4, pipe_radius=10.0)  # the tube of --make: the truth
+    scan = TubeScan(TubeRequest(points=pts[:100].tolist()))
+    scan.__dict__["points"] = pts  # the cached decoded samples
+    t0 = time.process_time()
+    r = solve(scan).result
+    cpu = time.process_time() - t0
+    da, _, _, dc = compare(m, r)
+    print(json.dumps({"n": len(pts), "cpu": cpu, "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                      "bends_ok": da is not None, "angle_err": float(np.max(da)) if da is not None else None,
+                      "centre_rms": float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius)}), flush=True)
+
+
+def scale(sizes: list[int], ref: str, ref_max: int) -> None:
+    """Large scans of the --make tube (4 bends, pipe radius 10), each solved in a fresh process by the solver
+    of git revision ``ref`` (up to ``ref_max`` points) and by this tree's."""
+    import tempfile
+
+    repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        before_code = os.path.join(tmp, "before")
+        os.makedirs(before_code)
+        archive = subprocess.run(["git", "-C", repo, "archive", ref, "plantsolve"], capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", before_code], input=archive.stdout, check=True)
+        for n in sizes:
+            path = os.path.join(tmp, f"scan_{n}.npy")
+            subprocess.run([sys.executable, __file__, "--make", str(n), path], check=True)
+            for side, code in ((f"before ({ref})", before_code), ("after (this tree)", "")):
+                if code and n > ref_max:
+                    continue
+                env = {**os.environ, "TUBE_BENCH_CODE": code}
+                out = subprocess.run([sys.executable, __file__, "--scale-one", path], capture_output=True, text=True,
+                                     check=True, env=env)
+                rows.append({"side": side, **json.loads(out.stdout.strip().splitlines()[-1])})
+                print(f"  {n:,} points, {side}: {rows[-1]['cpu']:.1f} s CPU", flush=True)
+            os.remove(path)
+    print(f"large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
+          f"the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
+    print("| points | solver | CPU s | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) |")
+    print("|---:|---|---:|---:|---|---:|---:|")
+    for r in sorted(rows, key=lambda r: (r["n"], r["side"])):
+        err = f"{r['angle_err']:.4f}°" if r["angle_err"] is not None else "n/a"
+        print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
+              f"| {100 * r['centre_rms']:.4f} |")
+    for side in sorted({r["side"] for r in rows}):
+        pts = sorted((r["n"], r["cpu"]) for r in rows if r["side"] == side)
+        if len(pts) >= 2:
+            (n0, t0), (n1, t1) = pts[-2], pts[-1]
+            print(f"{side}: CPU growth exponent {np.log(t1 / t0) / np.log(n1 / n0):.2f} from {n0:,} to {n1:,} points")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
@@ -330,13 +397,24 @@ def main():
     ap.add_argument("--before-after", type=int, metavar="N",
                     help="every family, N tubes each, with the solver of --ref and this tree's (same samples)")
     ap.add_argument("--ref", default="main", help="git revision of the 'before' solver (default main)")
+    ap.add_argument("--random-tubes", type=int, help="--before-after: this many random tubes (default: N)")
     ap.add_argument("--solve-cases", help=argparse.SUPPRESS)
+    ap.add_argument("--scale", help="comma-separated point counts (1e6,3e6,1e7): large scans, --ref's solver and "
+                    "this tree's")
+    ap.add_argument("--ref-max", type=float, default=3e6, help="largest scan --scale gives the --ref solver")
+    ap.add_argument("--scale-one", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.scale_one:
+        scale_one(a.scale_one)
+        return
+    if a.scale:
+        scale([int(float(v)) for v in a.scale.split(",")], a.ref, int(a.ref_max))
+        return
     if a.solve_cases:
         solve_cases(a.solve_cases)
         return
     if a.before_after:
-        before_after(a.before_after, a.ref)
+        before_after(a.before_after, a.ref, a.random_tubes)
         return
     if a.families:
         families(a.families, tuple(a.radius_models.split(",")))

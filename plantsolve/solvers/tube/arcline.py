@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from plantsolve.solvers.tube.model import Spine, TubeModel, model_from_spine
+from plantsolve.solvers.tube.vec3 import cross
 
 
 _TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
@@ -59,10 +60,6 @@ class Edge:
 def _norm3(v: np.ndarray) -> float:
     """Norm of a 3-vector without np.linalg.norm's per-call overhead (hot loop)."""
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-
-
-def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 _RAMPS: dict[int, np.ndarray] = {}
@@ -107,16 +104,17 @@ def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
 
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
-             eps: float, r_min: float, grid: int = 64, t_hi: float | None = None):
+             eps: float, r_min: float, grid: int = 64, t_hi: float | None = None, plane_only: bool = False):
     """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None.
 
     ``chain`` holds the vertices that must lie within ε; ``t_hi`` bounds the arc end on l_j
     (default: the projection of p_{j+1}). Returns ``_TOO_FAR`` when a vertex is more than
-    2ε off the best plane through l_i (then no longer chain can succeed either)."""
+    2ε off the best plane through l_i (then no longer chain can succeed either). With ``plane_only``
+    only that test is made (None when it passes): the caller needs to know whether to go on, not the arc."""
     rel = chain - a1
     along = rel @ u1
     dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
-    cr = _cross3(u1, dj)
+    cr = cross(u1, dj)
     perp = rel - along[:, None] * u1
     cov = perp.T @ perp
     w, V = np.linalg.eigh(cov + np.outer(u1, u1) * (np.trace(cov) + 1.0) * 10)
@@ -130,8 +128,10 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
     h = rel @ m
     if np.any(np.abs(h) > eps):
         return _TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
+    if plane_only:
+        return None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
-    Y = _cross3(m, u1)
+    Y = cross(m, u1)
     q = np.stack([along, rel @ Y], -1)
     a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
     d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
@@ -240,6 +240,9 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:
                     continue
+                # a full beam keeps a state of as many arcs only if its error is smaller, and an edge
+                # adds error: then only whether the chain leaves every plane (ending the j loop) matters
+                lost = worst is not None and st.d + 1 == worst.d and st.sse >= worst.sse
                 # p_{j+1} only fixes the direction of l_j; it is checked by j's outgoing edge (it
                 # lies in the next bend's plane when two bends follow each other directly)
                 chain = poly[i:j + 2] if j == last else poly[i:j + 1]
@@ -247,7 +250,7 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
                 e = edge_fit(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
-                             eps, r_min)
+                             eps, r_min, plane_only=lost)
                 if e is _TOO_FAR:
                     break
                 if e is None:

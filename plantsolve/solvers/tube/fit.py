@@ -30,6 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
+from plantsolve.solvers.tube.vec3 import cross
 
 
 @dataclass
@@ -117,14 +118,6 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    out = np.empty(a.shape)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
@@ -160,12 +153,12 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         if k == n:
             break
         c_r, s_r = np.cos(rots[:, k:k + 1]), np.sin(rots[:, k:k + 1])
-        nv = nv * c_r + _cross(t, nv) * s_r
+        nv = nv * c_r + cross(t, nv) * s_r
         R = rad[:, k:k + 1]
         a = ang[:, k:k + 1]
         centre = p + R * nv
         g[:, 2 * k + 1, :3] = centre
-        g[:, 2 * k + 1, 3:6] = _cross(t, nv)
+        g[:, 2 * k + 1, 3:6] = cross(t, nv)
         g[:, 2 * k + 1, 6] = R[:, 0]
         ca, sa = np.cos(a), np.sin(a)
         p = centre - R * nv * ca + R * t * sa
@@ -186,11 +179,41 @@ def _geometry_jacobian(x, lay, frame0, rp, scale):
     return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
 
 
-def _groups(seg: np.ndarray) -> list[tuple[int, slice]]:
-    """(segment, slice) runs of a segment array sorted by segment."""
+def _groups(seg: np.ndarray, block: int = 65_536) -> list[tuple[int, slice]]:
+    """(segment, slice) runs of a segment array sorted by segment, cut into blocks of at most ``block``
+    samples (the per-sample temporaries of a block stay in the processor's cache)."""
     ks, starts = np.unique(seg, return_index=True)
     ends = np.r_[starts[1:], len(seg)]
-    return [(int(k), slice(int(a), int(b))) for k, a, b in zip(ks, starts, ends)]
+    return [(int(k), slice(int(a), int(min(a + block, b)))) for k, a0, b in zip(ks, starts, ends)
+            for a in range(int(a0), int(b), block)]
+
+
+def _run_dist_and_grad(q: np.ndarray, gk: np.ndarray, arc: bool, want_grad: bool):
+    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`)
+    and d dist / d geometry (None unless ``want_grad``)."""
+    c, a = gk[:3], gk[3:6]
+    w = q - c
+    s = w @ a
+    perp = w - s[:, None] * a
+    rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
+    e = perp / np.maximum(rho, 1e-300)[:, None]
+    if not arc:
+        if not want_grad:
+            return rho, None
+        grad = np.zeros((len(q), 7))
+        grad[:, :3] = -e
+        grad[:, 3:6] = -s[:, None] * e
+        return rho, grad
+    R = gk[6]
+    dd = np.hypot(rho - R, s)
+    if not want_grad:
+        return dd, None
+    grad = np.empty((len(q), 7))
+    inv = 1.0 / np.maximum(dd, 1e-300)
+    grad[:, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
+    grad[:, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
+    grad[:, 6] = -(rho - R) * inv
+    return dd, grad
 
 
 def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
@@ -202,27 +225,9 @@ def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarr
     d = np.empty(N)
     grad = np.zeros((N, 7)) if want_grad else None
     for k, m in groups:
-        q = pts[m]
-        c, a = g[k, :3], g[k, 3:6]
-        w = q - c
-        s = w @ a
-        perp = w - s[:, None] * a
-        rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
-        e = perp / np.maximum(rho, 1e-300)[:, None]
-        if kind[k] == 0:
-            d[m] = rho
-            if want_grad:
-                grad[m, :3] = -e
-                grad[m, 3:6] = -s[:, None] * e
-        else:
-            R = g[k, 6]
-            dd = np.hypot(rho - R, s)
-            d[m] = dd
-            if want_grad:
-                inv = 1.0 / np.maximum(dd, 1e-300)
-                grad[m, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
-                grad[m, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
-                grad[m, 6] = -(rho - R) * inv
+        d[m], gr = _run_dist_and_grad(pts[m], g[k], bool(kind[k]), want_grad)
+        if want_grad:
+            grad[m] = gr
     return d, grad
 
 
@@ -291,6 +296,44 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
+def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
+    """Indices of the samples ``seg`` puts on the two outer segments at either end (the straight and the
+    arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube
+    passes within a few pipe radii of its own end)."""
+    S = 2 * model.n_bends + 1
+    return np.flatnonzero(np.isin(seg, np.unique([0, 1, S - 2, S - 1])))
+
+
+def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndarray, thr: float, margin: float,
+                max_rounds: int = 12) -> tuple[TubeModel, np.ndarray, np.ndarray, bool]:
+    """First/last straight lengths (:func:`set_end_lengths`) from the samples within ``thr`` of the surface,
+    re-assigned until the ends stop moving (they grow by at most ``margin`` per assignment). ``res`` and
+    ``seg`` are the samples' assignment (:func:`assign`) to ``model``. Returns the model, the last
+    assignment and whether the ends settled (then that assignment is the returned model's)."""
+    rp = model.pipe_radius
+    seen = []  # (model, res, seg) of every iteration
+    for i in range(max_rounds):
+        if i:
+            res, seg = assign(model, pts, margin)
+        near = np.abs(res) <= thr
+        m_new = set_end_lengths(model, pts[near], seg[near])
+        if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
+            return model, res, seg, True
+        seen.append((model, res, seg))
+        if i >= 2 and np.array_equal(model.start, seen[i - 2][0].start) and np.array_equal(model.lengths,
+                                                                                         seen[i - 2][0].lengths):
+            # the ends swing between two lengths (the outermost samples with company differ by a stray sample
+            # within the margin): every further iteration repeats one of the last two, so the outcome of all
+            # of them is known
+            def at(t: int) -> tuple:
+                return seen[i - 2 + (t - (i - 2)) % 2]
+
+            last = max_rounds - 1
+            return at(last + 1)[0], at(last)[1], at(last)[2], False
+        model = m_new
+    return model, res, seg, False
+
+
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
     frame0 = model.frame.copy()
@@ -313,25 +356,39 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         d, _ = _dist_and_grad(pts, groups, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
-    def jac(x):
+    def normal_equations(x, w, r):
+        """Jᵀ W J and Jᵀ W r without the (N, P) Jacobian J. A sample's row of J is its distance gradient
+        with respect to its segment's geometry (7 numbers, and -1 for the pipe radius) times that
+        segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
+        G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
         g = geometry_batch(x[None], lay, frame0, rp)[0]
-        _, gr = _dist_and_grad(pts, groups, g, kind, True)
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
-        J = np.empty((len(pts), len(x)))
+        P = len(x)
+        if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
+            last = np.zeros((len(dG), 1, P))
+            last[:, 0, -1] = -1.0
+            dG = np.concatenate([dG, last], axis=1)
+        k_dim = dG.shape[1]
+        gram = np.zeros((len(dG), k_dim, k_dim))
+        rhs = np.zeros((len(dG), k_dim))
+        wr = w * r
         for k, m_k in groups:
-            np.matmul(gr[m_k], dG[k], out=J[m_k])
-        if lay.fit_pipe_radius:
-            J[:, -1] -= 1.0
-        return J
+            _, G = _run_dist_and_grad(pts[m_k], g[k], bool(kind[k]), True)
+            if lay.fit_pipe_radius:
+                G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
+            gram[k] += G.T @ (G * w[m_k, None])
+            rhs[k] += G.T @ wr[m_k]
+        D = dG.reshape(-1, P)
+        return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
-    return x0, lo, hi, fun, jac, frame0, rp
+    return x0, lo, hi, fun, normal_equations, frame0, rp
 
 
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
              max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment."""
-    x0, lo, hi, fun, jac, frame0, rp = _problem(model, pts, seg, lay)
-    x, info = levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev, tick=tick)
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay)
+    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
@@ -341,12 +398,12 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
     covariance s^2 (J^T J)^+ with s^2 = RSS / (N - P) from the residuals of the given (inlier) samples.
     Returns arrays 'lengths' (inner straights, n - 1), 'rotations' (n - 1), 'angles' (n, radians) and
     'radii' (n; a shared radius gives every bend its sigma, a held one 0)."""
-    x0, _, _, fun, jac, _, _ = _problem(model, pts, seg, lay)
+    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay)
     r = fun(x0)
-    J = jac(x0)
-    N, P = J.shape
+    A, _ = normal_equations(x0, np.ones(len(r)), r)
+    N, P = len(r), len(x0)
     s2 = float(r @ r) / max(N - P, 1)
-    cov = s2 * np.linalg.pinv(J.T @ J)
+    cov = s2 * np.linalg.pinv(A)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     n = lay.n
     i = 6
@@ -376,8 +433,9 @@ def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
     return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
 
 
-def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
-    """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc).
+def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
+    """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc):
+    ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r.
 
     ``tick()`` is called once per iteration (progress / cancellation)."""
     x = x0.copy()
@@ -391,12 +449,7 @@ def levenberg_marquardt(fun, jac, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, t
         it += 1
         if tick is not None:
             tick()
-        J = jac(x)
-        sw = np.sqrt(w)
-        J *= sw[:, None]  # in place: with a million samples J is the biggest array here
-        A = J.T @ J
-        g = J.T @ (sw * r)
-        del J
+        A, g = normal_equations(x, w, r)
         dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
         # active set: a parameter on its bound whose descent direction points outward stays
         # there (a zero-length straight, say); clipping its step instead stalls the iteration

