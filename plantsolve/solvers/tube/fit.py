@@ -246,15 +246,49 @@ def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray
     return d - model.pipe_radius, seg
 
 
+HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
+HALO_DENSITY = 0.25  # a halo is at most this fraction of the end's density along the axis
+
+
+def _halo_cut(p: np.ndarray) -> float | None:
+    """Projection below which the samples are the tube's end, when the outermost of ``p`` (descending) are
+    a sparse halo of stray samples beyond it; None when they are not.
+
+    Along a straight the samples are uniform in projection up to the cut end, so the spacing between
+    neighbours in projection is exponential with the end's density λ (from the middle half of ``p``). A
+    halo is an outer minority (a quarter of ``p`` at most) that starts with a gap of ``HALO_GAP`` / λ and
+    holds fewer samples than ``HALO_DENSITY`` times the end's density would over its span. Both are in
+    units of the sample spacing, so the rule does not depend on the scan's density (a fixed neighbour
+    count does: in a dense scan every stray within reach of the end has company)."""
+    n = len(p)
+    if n < 20:
+        return None
+    iqr = p[n // 4] - p[3 * n // 4]
+    if iqr <= 0:
+        return None
+    lam = (3 * n // 4 - n // 4) / iqr
+    gaps = p[:n // 4] - p[1:n // 4 + 1]
+    k = np.arange(1, len(gaps) + 1)  # samples outside the gap after p[k - 1]
+    halo = (gaps > HALO_GAP / lam) & (k < HALO_DENSITY * lam * (p[0] - p[1:n // 4 + 1]))
+    if not halo.any():
+        return None
+    return float(p[np.flatnonzero(halo)[-1] + 1])
+
+
 def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
     """Largest projection among samples that have company: an isolated stray sample just
-    beyond a tube end must not lengthen the tube (≥ 3 neighbours within 0.5 r)."""
+    beyond a tube end must not lengthen the tube (≥ 3 neighbours within 0.5 r), nor a sparse
+    halo of them (:func:`_halo_cut`), which in a dense scan has company from the end itself."""
     if len(proj) == 0:
         return 0.0
     zone = proj >= proj.max() - 3.0 * rp
     cand = np.flatnonzero(zone)
     if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
         cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
+    cut = _halo_cut(np.sort(proj[cand])[::-1])
+    if cut is not None:
+        body = proj <= cut
+        return _robust_max(proj[body], pts[body], rp)
     if len(cand) > 4:
         from scipy.spatial import cKDTree
 
