@@ -267,10 +267,15 @@ def solve_cases(path: str) -> None:
         cpu = time.process_time() - t0
         da, dr, t, _ = compare(truth, res)
         big = np.degrees(t.angles) >= 10 if da is not None else None
+        if da is not None:  # end straights: the ones the sample extent sets, in pipe radii
+            got = model_from_result(res)
+            end_err = float(np.abs(got.lengths[[0, -1]] - t.lengths[[0, -1]]).max() / t.pipe_radius)
         print(json.dumps({"case": name, "got": len(res.lra) - 1, "cpu": cpu,
                           "angle": float(da.max()) if da is not None else None,
                           "radius": float(dr.max()) if da is not None else None,
-                          "radius_big": float(dr[big].max()) if da is not None and big.any() else None}), flush=True)
+                          "radius_big": float(dr[big].max()) if da is not None and big.any() else None,
+                          "end": end_err if da is not None else None,
+                          "ends": sorted([res.lra[0].length, res.lra[-1].length])}), flush=True)
 
 
 def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
@@ -308,20 +313,26 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
           "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
           "bend count")
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
-          "| worst angle err | CPU s median / worst |")
-    print("|---|---|---:|---:|---:|---:|---:|")
+          "| worst angle err | worst end straight err (% r) | CPU s median / worst |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
     for fam in fams:
         for side, rows in sides.items():
             rows = [r for r in rows if r["case"].startswith(fam + "-")]
             ok = [r for r in rows if r["got"] == truth_n[r["case"]]]
             worst = {key: max((r[key] for r in ok if r[key] is not None), default=None)
-                     for key in ("radius", "radius_big", "angle")}
+                     for key in ("radius", "radius_big", "angle", "end")}
             pct = {key: f"{100 * v:.1f} %" if v is not None else "n/a" for key, v in worst.items()}
             cpu = np.array([r["cpu"] for r in rows])
             print(f"| {fam} | {side} | {len(ok)}/{len(rows)} = {100 * len(ok) / max(len(rows), 1):.0f} % "
                   f"| {pct['radius']} | {pct['radius_big']} "
                   f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
+                  f"| {100 * worst['end'] if worst['end'] is not None else float('nan'):.4f} "
                   f"| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
+    before, after = ({r["case"]: r for r in rows} for rows in sides.values())
+    moved = {c: abs(np.subtract(before[c]["ends"], after[c]["ends"])).max() for c in before
+             if c in after and "ends" in before[c] and "ends" in after[c] and before[c]["ends"] != after[c]["ends"]}
+    print(f"cases whose end straight lengths differ between the sides: {len(moved)}/{len(before)}"
+          + "".join(f"; {c}: {d:.3g}" for c, d in sorted(moved.items())))
 
 
 def scale_one(path: str) -> None:
@@ -341,7 +352,9 @@ def scale_one(path: str) -> None:
     da, _, _, dc = compare(m, r)
     print(json.dumps({"n": len(pts), "cpu": cpu, "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "bends_ok": da is not None, "angle_err": float(np.max(da)) if da is not None else None,
-                      "centre_rms": float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius)}), flush=True)
+                      "centre_rms": float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
+                      "ends": sorted([r.lra[0].length, r.lra[-1].length]),
+                      "true_ends": sorted(m.lengths[[0, -1]].tolist())}), flush=True)
 
 
 def scale(sizes: list[int], ref: str, ref_max: int) -> None:
@@ -370,12 +383,15 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
             os.remove(path)
     print(f"large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
           f"the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
-    print("| points | solver | CPU s | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) |")
-    print("|---:|---|---:|---:|---|---:|---:|")
+    print("| points | solver | CPU s | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
+          "| end straights (true) mm |")
+    print("|---:|---|---:|---:|---|---:|---:|---|")
     for r in sorted(rows, key=lambda r: (r["n"], r["side"])):
         err = f"{r['angle_err']:.4f}°" if r["angle_err"] is not None else "n/a"
+        ends = " / ".join(f"{v:.6f}" for v in r.get("ends", []))
+        true_ends = " / ".join(f"{v:.2f}" for v in r.get("true_ends", []))
         print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
-              f"| {100 * r['centre_rms']:.4f} |")
+              f"| {100 * r['centre_rms']:.4f} | {ends} ({true_ends}) |")
     for side in sorted({r["side"] for r in rows}):
         pts = sorted((r["n"], r["cpu"]) for r in rows if r["side"] == side)
         if len(pts) >= 2:
