@@ -330,17 +330,18 @@ def main() -> None:
     modes = [mode for mode in args.modes.split(",") if mode != "baseline"]
     before, remove = (None, None) if args.before == "none" else main_checkout() if args.before == "main" else \
         (Path(args.before), None)
+    before_label = "main" if args.before == "main" else Path(args.before).name
     try:
         requests = args.in_process if args.in_process is not None else (0 if args.smoke else 1000 if args.quick else 3000)
         cpu_rows = [in_process("baseline", REPO, requests)] if requests else []
         if requests and before is not None:
-            cpu_rows.append(in_process("embedded (main)", before, requests))
+            cpu_rows.append(in_process(f"embedded ({before_label})"[:20], before, requests))
         if requests:
             cpu_rows.append(in_process("embedded", REPO, requests))
         rows = [run_mode("baseline", args, args.port)]
         for i, mode in enumerate(modes):
             if before is not None:
-                rows.append(run_mode(mode, args, args.port + 1 + 2 * i, before, f"{mode} ({args.before if args.before != 'main' else 'main'})"[:20]))
+                rows.append(run_mode(mode, args, args.port + 1 + 2 * i, before, f"{mode} ({before_label})"[:20]))
             rows.append(run_mode(mode, args, args.port + 2 + 2 * i))
     finally:
         if remove is not None:
