@@ -177,14 +177,15 @@ def upload_extension(filename: str, accepted: Sequence[str]) -> str:
     return ext
 
 
-def json_object(text: str | bytes) -> dict:
-    """An uploaded JSON file that must hold a request object; a 422 on ``file`` saying why it does not."""
+def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object") -> dict:
+    """An uploaded JSON file that must hold one object; a 422 on ``file`` saying why it does not (``not_an_object``
+    names what the format's object is)."""
     try:
         body = json.loads(text)
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise reject(f"invalid JSON: {e}") from None
     if not isinstance(body, dict):
-        raise reject("the JSON file must hold a request object")
+        raise reject(not_an_object)
     return body
 
 

@@ -15,7 +15,7 @@ import json
 import math
 from typing import Any
 
-from plantsolve.solvers.base import reject
+from plantsolve.solvers.base import json_object
 
 # type -> its fields after the name, in the IDD's order ("vertices": the extensible vertex list)
 _DETAILED = ("construction_name", "zone_name", "space_name", "outside_boundary_condition",
@@ -99,12 +99,7 @@ def _fields(cls: str, name: str, body: dict) -> list[str]:
 def epjson_objects(text: str) -> tuple[list[tuple[str, list[str], list[int], None]], list[dict]]:
     """The objects the IDF reader uses, as (class, fields, field lines, line) with no lines; and the
     objects skipped (type and name, reason)."""
-    try:
-        document = json.loads(text)
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
-        raise reject(f"invalid JSON: {e}") from None
-    if not isinstance(document, dict):
-        raise reject("an epJSON file holds one object: object types, then names, then fields")
+    document = json_object(text, "an epJSON file holds one object: object types, then names, then fields")
     objects, skipped = [], []
     for type_name, named in document.items():
         cls = type_name.lower()
