@@ -16,6 +16,7 @@ from starlette.datastructures import UploadFile
 from plantsolve.app.auth import require_api_key
 from plantsolve.app.deps import Caller, Service
 from plantsolve.app.jobs.events import add_event_routes
+from plantsolve.app.jobs.lean import is_json
 from plantsolve.app.problems import PayloadTooLarge, responses
 from plantsolve.app.webhooks import check_callback_url
 from plantsolve.jobs.errors import NotFound, Unprocessable, UnsupportedMediaType, field_problem
@@ -86,7 +87,7 @@ def submit_route(kind: str):
                                                    request.app.state.webhook_secrets,
                                                    request.app.state.settings.webhook_private_targets)
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-        if content_type == "application/json" or content_type.endswith("+json"):
+        if is_json(content_type):
             body = await request.body()
             submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner,
                                                 callback_url)

@@ -29,6 +29,11 @@ IDEMPOTENCY_KEY = re.compile(r"[\x21-\x7e][\x20-\x7e]{0,254}")
 JOB_PATH = re.compile(r"/v1/jobs/([0-9a-fA-F]{8}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{12})")
 JSON_HEADERS = [(b"content-type", b"application/json")]
 
+def is_json(media_type: str) -> bool:
+    """Whether a submission's media type (lower case, no parameters) is JSON: ``application/json`` or a ``+json``."""
+    return media_type == "application/json" or media_type.endswith("+json")
+
+
 LeanRoute = Callable[[Scope, Receive, Send, Principal], Awaitable[None]]
 
 
@@ -60,7 +65,7 @@ class LeanRoutes:
                     content_type = value.decode("latin-1").split(";")[0].strip().lower()
                 elif name == b"idempotency-key":
                     keys.append(value.decode("latin-1"))
-            if not content_type or not (content_type == "application/json" or content_type.endswith("+json")):
+            if not content_type or not is_json(content_type):
                 return None  # an upload, or a content type the route refuses (415)
             if len(keys) > 1 or (keys and not IDEMPOTENCY_KEY.fullmatch(keys[0])):
                 return None  # the route's header validation answers
