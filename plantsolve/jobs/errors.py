@@ -76,22 +76,22 @@ class Unprocessable(ProblemError):
 def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (), document: Any = None) -> Unprocessable:
     """422 naming each bad field; with the submitted ``document`` the locations are its JSON paths (the tags
     pydantic puts in them for a member of a union are left out)."""
-    errors = [field_problem([*prefix, *json_path(document, e["loc"])], e["msg"], e["type"])
+    errors = [field_problem([*prefix, *json_path(document, e["loc"], e["type"])], e["msg"], e["type"])
               for e in error.errors(include_url=False)]
     return Unprocessable(summary(errors), errors=errors)
 
 
-def json_path(document: Any, loc: Sequence[str | int]) -> list[str | int]:
-    """``loc`` as a path into ``document``: a string step where the document has no such key and the path
-    goes on (a union member's tag such as ``list[...]``) is dropped; a missing field, the last step, stays."""
+def json_path(document: Any, loc: Sequence[str | int], error_type: str = "") -> list[str | int]:
+    """``loc`` as a path into ``document``: a string step that names no key of the value it stands on (a
+    union member's tag such as ``list[...]``) is dropped, except a missing field's name, the last step of a
+    ``missing`` error."""
     if document is None:
         return list(loc)
     path: list[str | int] = []
     node: Any = document
     for i, step in enumerate(loc):
-        tag = isinstance(step, str) and (isinstance(node, list) or
-                                         (isinstance(node, dict) and step not in node and i < len(loc) - 1))
-        if tag:
+        last = i == len(loc) - 1
+        if isinstance(step, str) and not (isinstance(node, dict) and (step in node or (last and error_type == "missing"))):
             continue
         path.append(step)
         if isinstance(node, dict) and isinstance(step, str):

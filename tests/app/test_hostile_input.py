@@ -135,3 +135,14 @@ def test_tube_and_perfmap_values_beyond_1e12_are_refused_naming_the_value(client
     body["positions"][1]["flow"][2] = 1e200
     response = client.post("/v1/perfmap/jobs", json=body)
     assert response.status_code == 422 and response.json()["errors"][0]["loc"] == ["positions", 1, "flow", 2]
+
+
+@pytest.mark.parametrize("points, pointers", [
+    ("abc", ["/points"]),  # pydantic's location is points -> list[...] (the union member tried): no such key
+    (17, ["/points"]),
+    ([[1, 2, "x"]], ["/points/0/2"]),
+    ({"a": 1}, ["/points/npy_base64", "/points/a"]),  # an object is the other member: its missing and extra keys
+])
+def test_an_error_inside_a_union_field_points_into_the_document(client, points, pointers):
+    problem = client.post("/v1/tube/jobs", json={"points": points}).json()
+    assert [e["pointer"] for e in problem["errors"]] == pointers, problem
