@@ -27,10 +27,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from plantsolve.solvers.tube import residuals
 from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
-from plantsolve.solvers.tube.vec3 import cross
+from plantsolve.solvers.tube.vec3 import cross, rotvec_matrices
 
 
 @dataclass
@@ -86,7 +86,7 @@ def unpack(x: np.ndarray, lay: Layout, frame0: np.ndarray, pipe_radius: float) -
     else:
         rad = np.full(n, lay.fixed_bend_radius or 0.0)
     rp = x[i] if lay.fit_pipe_radius else pipe_radius
-    frame = Rotation.from_rotvec(x[3:6]).as_matrix() @ frame0
+    frame = rotvec_matrices(x[None, 3:6])[0] @ frame0
     lengths = np.concatenate([[0.0], lm, [0.0]]) if n else np.zeros(1)
     rots = np.concatenate([[0.0], rm, [0.0]]) if n else np.zeros(1)
     return TubeModel(x[:3].copy(), frame, lengths, rots, ang.copy(), rad.copy(), float(rp))
@@ -139,7 +139,7 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
-    frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0
+    frames = rotvec_matrices(X[:, 3:6]) @ frame0
     lengths = np.concatenate([np.zeros((B, 1)), lm, np.zeros((B, 1))], 1) if n else np.zeros((B, 1))
     rots = np.concatenate([np.zeros((B, 1)), rm], 1) if n else np.zeros((B, 1))
     g = np.zeros((B, 2 * n + 1, 7))
@@ -177,58 +177,6 @@ def _geometry_jacobian(x, lay, frame0, rp, scale):
     X = np.concatenate([x + np.diag(steps), x - np.diag(steps)])
     G = geometry_batch(X, lay, frame0, rp)
     return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
-
-
-def _groups(seg: np.ndarray, block: int = 65_536) -> list[tuple[int, slice]]:
-    """(segment, slice) runs of a segment array sorted by segment, cut into blocks of at most ``block``
-    samples (the per-sample temporaries of a block stay in the processor's cache)."""
-    ks, starts = np.unique(seg, return_index=True)
-    ends = np.r_[starts[1:], len(seg)]
-    return [(int(k), slice(int(a), int(min(a + block, b)))) for k, a0, b in zip(ks, starts, ends)
-            for a in range(int(a0), int(b), block)]
-
-
-def _run_dist_and_grad(q: np.ndarray, gk: np.ndarray, arc: bool, want_grad: bool):
-    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`)
-    and d dist / d geometry (None unless ``want_grad``)."""
-    c, a = gk[:3], gk[3:6]
-    w = q - c
-    s = w @ a
-    perp = w - s[:, None] * a
-    rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
-    e = perp / np.maximum(rho, 1e-300)[:, None]
-    if not arc:
-        if not want_grad:
-            return rho, None
-        grad = np.zeros((len(q), 7))
-        grad[:, :3] = -e
-        grad[:, 3:6] = -s[:, None] * e
-        return rho, grad
-    R = gk[6]
-    dd = np.hypot(rho - R, s)
-    if not want_grad:
-        return dd, None
-    grad = np.empty((len(q), 7))
-    inv = 1.0 / np.maximum(dd, 1e-300)
-    grad[:, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
-    grad[:, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
-    grad[:, 6] = -(rho - R) * inv
-    return dd, grad
-
-
-def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
-                   want_grad: bool):
-    """Distance of each point to its (unbounded) assigned line / circle and d dist / d geometry.
-
-    ``pts`` are sorted by assigned segment; ``groups`` are the runs (see :func:`_groups`)."""
-    N = len(pts)
-    d = np.empty(N)
-    grad = np.zeros((N, 7)) if want_grad else None
-    for k, m in groups:
-        d[m], gr = _run_dist_and_grad(pts[m], g[k], bool(kind[k]), want_grad)
-        if want_grad:
-            grad[m] = gr
-    return d, grad
 
 
 def extended(model: TubeModel, margin: float) -> TubeModel:
@@ -380,14 +328,29 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
     kind = build_spine(unpack(x0, lay, frame0, rp)).kind
     scale = max(rp, 1e-9)
-    # samples grouped by their (fixed) segment: slices instead of masks in every evaluation;
+    # samples sorted by their (fixed) segment: contiguous runs per segment in every evaluation;
     # the residual order is irrelevant to the solver
     order = np.argsort(seg, kind="stable")
     pts = pts[order]
-    groups = _groups(seg[order])
+    seg = seg[order]
+    arc = kind[seg] != 0
+    parts = residuals.blocks(seg)
+    last: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
+
+    def evaluate(x) -> tuple[np.ndarray, list]:
+        """Distances of every sample at x and, for one block of samples, the terms of their gradients."""
+        key = x.tobytes()
+        if last.get("x") != key:
+            g = geometry_batch(x[None], lay, frame0, rp)[0]
+            dist = [residuals.Distances(pts[b], g[seg[b]], arc[b]) for b, _ in parts]
+            d = dist[0].distance if len(dist) == 1 else np.concatenate([e.distance for e in dist])
+            last.clear()
+            # a large scan's blocks are evaluated again for their gradients rather than held
+            last.update(x=key, g=g, d=d, dist=dist if len(dist) == 1 else None)
+        return last["d"], last["dist"]
 
     def fun(x):
-        d, _ = _dist_and_grad(pts, groups, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
+        d, _ = evaluate(x)
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def normal_equations(x, w, r):
@@ -395,23 +358,26 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         with respect to its segment's geometry (7 numbers, and -1 for the pipe radius) times that
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
-        g = geometry_batch(x[None], lay, frame0, rp)[0]
+        _, dist = evaluate(x)
+        g = last["g"]
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
-            last = np.zeros((len(dG), 1, P))
-            last[:, 0, -1] = -1.0
-            dG = np.concatenate([dG, last], axis=1)
+            extra = np.zeros((len(dG), 1, P))
+            extra[:, 0, -1] = -1.0
+            dG = np.concatenate([dG, extra], axis=1)
         k_dim = dG.shape[1]
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
-        wr = w * r
-        for k, m_k in groups:
-            _, G = _run_dist_and_grad(pts[m_k], g[k], bool(kind[k]), True)
-            if lay.fit_pipe_radius:
-                G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
-            gram[k] += G.T @ (G * w[m_k, None])
-            rhs[k] += G.T @ wr[m_k]
+        for i, (b, runs) in enumerate(parts):
+            e = dist[i] if dist is not None else residuals.Distances(pts[b], g[seg[b]], arc[b])
+            G = np.ones((b.stop - b.start, k_dim))
+            G[:, :7] = e.gradient()
+            Gw = G * w[b, None]
+            wr = w[b] * r[b]
+            for k, m in runs:
+                gram[k] += G[m].T @ Gw[m]
+                rhs[k] += G[m].T @ wr[m]
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
