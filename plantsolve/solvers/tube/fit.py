@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from plantsolve.solvers.tube import residuals
-from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, distance_tolerance, segment_distances, spine_distance,
+                                          sub_spine)
 from plantsolve.solvers.tube.vec3 import cross, rotvec_matrices
 
 
@@ -194,6 +195,39 @@ def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray
     return d - model.pipe_radius, seg
 
 
+def reassign_ends(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndarray,
+                  margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`assign` for a model that differs from the one ``res`` and ``seg`` were assigned to only in its end
+    straights (:func:`set_end_lengths` moves the start and the two end lengths, the first arc's start stays). The
+    segments between the two outer ones at either end then stay where they were (to round-off): a sample on one
+    of them keeps it unless one of the four outer segments has come nearer (the same rule as
+    :func:`model.spine_distance`: the first segment within round-off of the nearest), and only the samples on the
+    outer segments are assigned afresh, to every segment."""
+    S = 2 * model.n_bends + 1
+    if S <= 4:
+        return assign(model, pts, margin)
+    sp = build_spine(extended(model, margin))
+    outer = np.array([0, 1, S - 2, S - 1])
+    res, seg = res.copy(), seg.copy()
+    on_outer = (seg <= 1) | (seg >= S - 2)
+    idx = np.flatnonzero(on_outer)
+    if len(idx):
+        d, seg[idx] = spine_distance(pts[idx], sp)
+        res[idx] = d - model.pipe_radius
+    mid = np.flatnonzero(~on_outer)
+    if len(mid):
+        d_outer = segment_distances(pts[mid], sub_spine(sp, outer))
+        d_own = res[mid] + model.pipe_radius
+        cand = np.column_stack([d_outer[:, :2], d_own, d_outer[:, 2:]])  # in segment order
+        tol = distance_tolerance(pts, sp)
+        first = np.argmax(cand <= (cand.min(axis=1) + tol)[:, None], axis=1)
+        moved = first != 2
+        rows = mid[moved]
+        seg[rows] = np.array([0, 1, -1, S - 2, S - 1])[first[moved]]
+        res[rows] = cand[moved, first[moved]] - model.pipe_radius
+    return res, seg
+
+
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
 HALO_DENSITY = 0.25  # a halo is at most this fraction of the end's density along the axis
 
@@ -295,8 +329,8 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     rp = model.pipe_radius
     seen = []  # (model, res, seg) of every iteration
     for i in range(max_rounds):
-        if i:
-            res, seg = assign(model, pts, margin)
+        if i:  # only the ends moved since the last assignment
+            res, seg = reassign_ends(model, pts, res, seg, margin)
         near = np.abs(res) <= thr
         m_new = set_end_lengths(model, pts[near], seg[near])
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
