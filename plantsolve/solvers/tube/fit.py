@@ -27,11 +27,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.tube import residuals
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, distance_tolerance, segment_distances, spine_distance,
-                                          sub_spine)
-from plantsolve.solvers.tube.vec3 import cross, rotvec_matrices
+from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
+from plantsolve.solvers.tube.vec3 import cross
 
 
 @dataclass
@@ -87,7 +86,7 @@ def unpack(x: np.ndarray, lay: Layout, frame0: np.ndarray, pipe_radius: float) -
     else:
         rad = np.full(n, lay.fixed_bend_radius or 0.0)
     rp = x[i] if lay.fit_pipe_radius else pipe_radius
-    frame = rotvec_matrices(x[None, 3:6])[0] @ frame0
+    frame = Rotation.from_rotvec(x[3:6]).as_matrix() @ frame0
     lengths = np.concatenate([[0.0], lm, [0.0]]) if n else np.zeros(1)
     rots = np.concatenate([[0.0], rm, [0.0]]) if n else np.zeros(1)
     return TubeModel(x[:3].copy(), frame, lengths, rots, ang.copy(), rad.copy(), float(rp))
@@ -140,7 +139,7 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
-    frames = rotvec_matrices(X[:, 3:6]) @ frame0
+    frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0
     lengths = np.concatenate([np.zeros((B, 1)), lm, np.zeros((B, 1))], 1) if n else np.zeros((B, 1))
     rots = np.concatenate([np.zeros((B, 1)), rm], 1) if n else np.zeros((B, 1))
     g = np.zeros((B, 2 * n + 1, 7))
@@ -180,6 +179,69 @@ def _geometry_jacobian(x, lay, frame0, rp, scale):
     return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
 
 
+def _groups(seg: np.ndarray, block: int = 65_536) -> list[tuple[int, slice]]:
+    """(segment, slice) runs of a segment array sorted by segment, cut into blocks of at most ``block``
+    samples (the per-sample temporaries of a block stay in the processor's cache)."""
+    ks, starts = np.unique(seg, return_index=True)
+    ends = np.r_[starts[1:], len(seg)]
+    return [(int(k), slice(int(a), int(min(a + block, b)))) for k, a0, b in zip(ks, starts, ends)
+            for a in range(int(a0), int(b), block)]
+
+
+def _run_distance(q: np.ndarray, gk: np.ndarray, arc: bool) -> tuple[np.ndarray, tuple]:
+    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`), and the
+    terms :func:`_run_gradient` takes on from."""
+    c, a = gk[:3], gk[3:6]
+    w = q - c
+    s = w @ a
+    perp = w - s[:, None] * a
+    rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
+    if not arc:
+        return rho, (w, s, perp, rho, a, None, rho)
+    R = gk[6]
+    dd = np.hypot(rho - R, s)
+    return dd, (w, s, perp, rho, a, R, dd)
+
+
+def _run_gradient(terms: tuple) -> np.ndarray:
+    """d dist / d geometry (n, 7) from the terms of :func:`_run_distance`."""
+    w, s, perp, rho, a, R, dd = terms
+    e = perp / np.maximum(rho, 1e-300)[:, None]
+    if R is None:  # a line
+        grad = np.zeros((len(w), 7))
+        grad[:, :3] = -e
+        grad[:, 3:6] = -s[:, None] * e
+        return grad
+    grad = np.empty((len(w), 7))
+    inv = 1.0 / np.maximum(dd, 1e-300)
+    grad[:, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
+    grad[:, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
+    grad[:, 6] = -(rho - R) * inv
+    return grad
+
+
+def _run_dist_and_grad(q: np.ndarray, gk: np.ndarray, arc: bool, want_grad: bool):
+    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`)
+    and d dist / d geometry (None unless ``want_grad``)."""
+    d, terms = _run_distance(q, gk, arc)
+    return d, (_run_gradient(terms) if want_grad else None)
+
+
+def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
+                   want_grad: bool):
+    """Distance of each point to its (unbounded) assigned line / circle and d dist / d geometry.
+
+    ``pts`` are sorted by assigned segment; ``groups`` are the runs (see :func:`_groups`)."""
+    N = len(pts)
+    d = np.empty(N)
+    grad = np.zeros((N, 7)) if want_grad else None
+    for k, m in groups:
+        d[m], gr = _run_dist_and_grad(pts[m], g[k], bool(kind[k]), want_grad)
+        if want_grad:
+            grad[m] = gr
+    return d, grad
+
+
 def extended(model: TubeModel, margin: float) -> TubeModel:
     m = model.copy()
     m.start = m.start - margin * m.frame[:, 0]
@@ -193,39 +255,6 @@ def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray
     """Residual (bounded distance − pipe radius) and nearest segment of every sample."""
     d, seg = spine_distance(pts, build_spine(extended(model, margin)))
     return d - model.pipe_radius, seg
-
-
-def reassign_ends(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndarray,
-                  margin: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`assign` for a model that differs from the one ``res`` and ``seg`` were assigned to only in its end
-    straights (:func:`set_end_lengths` moves the start and the two end lengths, the first arc's start stays). The
-    segments between the two outer ones at either end then stay where they were (to round-off): a sample on one
-    of them keeps it unless one of the four outer segments has come nearer (the same rule as
-    :func:`model.spine_distance`: the first segment within round-off of the nearest), and only the samples on the
-    outer segments are assigned afresh, to every segment."""
-    S = 2 * model.n_bends + 1
-    if S <= 4:
-        return assign(model, pts, margin)
-    sp = build_spine(extended(model, margin))
-    outer = np.array([0, 1, S - 2, S - 1])
-    res, seg = res.copy(), seg.copy()
-    on_outer = (seg <= 1) | (seg >= S - 2)
-    idx = np.flatnonzero(on_outer)
-    if len(idx):
-        d, seg[idx] = spine_distance(pts[idx], sp)
-        res[idx] = d - model.pipe_radius
-    mid = np.flatnonzero(~on_outer)
-    if len(mid):
-        d_outer = segment_distances(pts[mid], sub_spine(sp, outer))
-        d_own = res[mid] + model.pipe_radius
-        cand = np.column_stack([d_outer[:, :2], d_own, d_outer[:, 2:]])  # in segment order
-        tol = distance_tolerance(pts, sp)
-        first = np.argmax(cand <= (cand.min(axis=1) + tol)[:, None], axis=1)
-        moved = first != 2
-        rows = mid[moved]
-        seg[rows] = np.array([0, 1, -1, S - 2, S - 1])[first[moved]]
-        res[rows] = cand[moved, first[moved]] - model.pipe_radius
-    return res, seg
 
 
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
@@ -329,8 +358,8 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     rp = model.pipe_radius
     seen = []  # (model, res, seg) of every iteration
     for i in range(max_rounds):
-        if i:  # only the ends moved since the last assignment
-            res, seg = reassign_ends(model, pts, res, seg, margin)
+        if i:
+            res, seg = assign(model, pts, margin)
         near = np.abs(res) <= thr
         m_new = set_end_lengths(model, pts[near], seg[near])
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
@@ -350,6 +379,9 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     return model, res, seg, False
 
 
+KEEP_TERMS = 65_536  # samples up to which fun keeps its per-sample terms for the normal equations (memory)
+
+
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
     frame0 = model.frame.copy()
@@ -362,29 +394,25 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
     kind = build_spine(unpack(x0, lay, frame0, rp)).kind
     scale = max(rp, 1e-9)
-    # samples sorted by their (fixed) segment: contiguous runs per segment in every evaluation;
+    # samples grouped by their (fixed) segment: slices instead of masks in every evaluation;
     # the residual order is irrelevant to the solver
     order = np.argsort(seg, kind="stable")
     pts = pts[order]
-    seg = seg[order]
-    arc = kind[seg] != 0
-    parts = residuals.blocks(seg)
-    last: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
+    groups = _groups(seg[order])
 
-    def evaluate(x) -> tuple[np.ndarray, list]:
-        """Distances of every sample at x and, for one block of samples, the terms of their gradients."""
-        key = x.tobytes()
-        if last.get("x") != key:
-            g = geometry_batch(x[None], lay, frame0, rp)[0]
-            dist = [residuals.Distances(pts[b], g[seg[b]], arc[b]) for b, _ in parts]
-            d = dist[0].distance if len(dist) == 1 else np.concatenate([e.distance for e in dist])
-            last.clear()
-            # a large scan's blocks are evaluated again for their gradients rather than held
-            last.update(x=key, g=g, d=d, dist=dist if len(dist) == 1 else None)
-        return last["d"], last["dist"]
+    keep_terms = len(pts) <= KEEP_TERMS
+    latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
     def fun(x):
-        d, _ = evaluate(x)
+        g = geometry_batch(x[None], lay, frame0, rp)[0]
+        d = np.empty(len(pts))
+        terms = []
+        for k, m in groups:
+            d[m], t = _run_distance(pts[m], g[k], bool(kind[k]))
+            if keep_terms:
+                terms.append(t)
+        latest.clear()
+        latest.update(x=x.tobytes(), g=g, terms=terms if keep_terms else None)
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def normal_equations(x, w, r):
@@ -392,26 +420,26 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         with respect to its segment's geometry (7 numbers, and -1 for the pipe radius) times that
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
-        _, dist = evaluate(x)
-        g = last["g"]
+        # the geometry and the distances' terms at x, as fun has just computed them (the same numbers again)
+        same = latest.get("x") == x.tobytes()
+        g = latest["g"] if same else geometry_batch(x[None], lay, frame0, rp)[0]
+        terms = latest["terms"] if same else None
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
-            extra = np.zeros((len(dG), 1, P))
-            extra[:, 0, -1] = -1.0
-            dG = np.concatenate([dG, extra], axis=1)
+            last = np.zeros((len(dG), 1, P))
+            last[:, 0, -1] = -1.0
+            dG = np.concatenate([dG, last], axis=1)
         k_dim = dG.shape[1]
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
-        for i, (b, runs) in enumerate(parts):
-            e = dist[i] if dist is not None else residuals.Distances(pts[b], g[seg[b]], arc[b])
-            G = np.ones((b.stop - b.start, k_dim))
-            G[:, :7] = e.gradient()
-            Gw = G * w[b, None]
-            wr = w[b] * r[b]
-            for k, m in runs:
-                gram[k] += G[m].T @ Gw[m]
-                rhs[k] += G[m].T @ wr[m]
+        wr = w * r
+        for i, (k, m_k) in enumerate(groups):
+            G = _run_gradient(terms[i] if terms is not None else _run_distance(pts[m_k], g[k], bool(kind[k]))[1])
+            if lay.fit_pipe_radius:
+                G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
+            gram[k] += G.T @ (G * w[m_k, None])
+            rhs[k] += G.T @ wr[m_k]
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 

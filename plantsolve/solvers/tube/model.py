@@ -276,7 +276,7 @@ def distance_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     return W, off, lines, arcs
 
 
-def segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
+def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
     """Distance of each point to each (bounded) segment: (N, S).
 
     All segments at once: one product gives every point's coordinates in every segment's
@@ -312,20 +312,6 @@ def segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
     return out
 
 
-def sub_spine(sp: Spine, idx: np.ndarray) -> Spine:
-    """The segments ``idx`` of a spine (for distances to some of them only)."""
-    return Spine(sp.kind[idx], sp.start[idx], sp.end[idx], sp.tangent[idx], sp.normal[idx], sp.length[idx],
-                 sp.centre[idx], sp.radius[idx], sp.angle[idx])
-
-
-def distance_tolerance(pts: np.ndarray, sp: Spine) -> float:
-    """Round-off of a distance between the samples and the spine: segments this close to a sample's nearest count
-    as nearest too (:func:`spine_distance` takes the first of them)."""
-    # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
-    p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0
-    return 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
-
-
 def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
                    frames=None) -> tuple[np.ndarray, np.ndarray]:
     """Distance of each point to the centreline and the index of the closest segment.
@@ -334,10 +320,12 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
     cache (twice as fast on a million samples as blocks of ten times the size)."""
     d = np.empty(len(pts)); idx = np.empty(len(pts), int)
     step = max(1, chunk // max(len(sp.kind), 1))
-    tol = distance_tolerance(pts, sp)
+    # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
+    p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0
+    tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
     frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
-        m = segment_distances(pts[a:a + step], sp, frames)
+        m = _segment_distances(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a
         # zero-length straight) goes to the earlier segment, independent of round-off
         lo = m.min(axis=1)
