@@ -40,6 +40,8 @@ from plantsolve.solvers.tube.vec3 import cross
 
 
 _TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
+_X2 = np.array([1.0, 0.0])
+_MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 
 @dataclass
@@ -138,7 +140,7 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     cr = cross(u1, dj)
     perp = rel - along[:, None] * u1
     cov = perp.T @ perp
-    w, V = np.linalg.eigh(cov + np.outer(u1, u1) * (np.trace(cov) + 1.0) * 10)
+    w, V = np.linalg.eigh(cov + u1[:, None] * u1[None, :] * (np.trace(cov) + 1.0) * 10)  # np.outer, written out
     if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
         # the chain bends well beyond the noise: its least-squares plane through l_i
         m = V[:, 0]
@@ -153,21 +155,23 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
         return None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     Y = cross(m, u1)
-    q = np.stack([along, rel @ Y], -1)
+    q = np.empty((len(chain), 2))
+    q[:, 0], q[:, 1] = along, rel @ Y
     a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
     d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
     nd = math.hypot(d2[0], d2[1])
     if nd < 1e-12 * (_norm3(pj1 - pj) + 1e-300):
         return None
     u2 = d2 / nd
-    seg = np.diff(q, axis=0)
-    seg = seg[np.linalg.norm(seg, axis=1) > 1e-12]
-    dirs = np.vstack([[1.0, 0.0], seg, u2])
+    seg = q[1:] - q[:-1]
+    seg = seg[np.sqrt(np.add.reduce(seg * seg, axis=1)) > 1e-12]
+    dirs = np.empty((len(seg) + 2, 2))
+    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, u2
     turn = np.sum(np.arctan2(dirs[:-1, 0] * dirs[1:, 1] - dirs[:-1, 1] * dirs[1:, 0],
                              (dirs[:-1] * dirs[1:]).sum(1)))
     sign = 1.0 if turn >= 0 else -1.0
     if sign < 0:  # mirror to a left turn
-        q = q * [1, -1]; a2 = a2 * [1, -1]; u2 = u2 * [1, -1]
+        q = q * _MIRROR; a2 = a2 * _MIRROR; u2 = u2 * _MIRROR
     phi = np.mod(np.arctan2(u2[1], u2[0]), 2 * np.pi)
     if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
         return None
