@@ -40,6 +40,8 @@ from plantsolve.solvers.tube.vec3 import cross
 
 
 _TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
+_X2 = np.array([1.0, 0.0])
+_MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 
 @dataclass
@@ -103,21 +105,42 @@ def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
     return np.minimum(np.minimum(d1, d2), d3), t2
 
 
-def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
-             eps: float, r_min: float, grid: int = 64, t_hi: float | None = None, plane_only: bool = False):
-    """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None.
+@dataclass
+class _Arcs:
+    """The arcs that may join l_i and l_j, in the plane of the edge with l_i along +x (mirrored to a left turn):
+    start t1 on l_i in [lo, hi], radius alpha + beta·t1; the chain points q must lie within epsk of the curve."""
 
-    ``chain`` holds the vertices that must lie within ε; ``t_hi`` bounds the arc end on l_j
-    (default: the projection of p_{j+1}). Returns ``_TOO_FAR`` when a vertex is more than
-    2ε off the best plane through l_i (then no longer chain can succeed either). With ``plane_only``
-    only that test is made (None when it passes): the caller needs to know whether to go on, not the arc."""
+    q: np.ndarray  # (K, 2) chain vertices in the plane
+    epsk: np.ndarray  # (K,) in-plane tolerance of each
+    a2: np.ndarray  # point of l_j
+    u2: np.ndarray  # direction of l_j
+    n2: np.ndarray  # its normal (toward the arc centres)
+    along2: np.ndarray  # (K,) coordinate of each q along l_j from a2
+    off2: np.ndarray  # (K,) distance of each q from l_j
+    phi: float  # turning angle
+    alpha: float
+    beta: float
+    lo: float
+    hi: float
+    a1: np.ndarray  # l_i in 3D
+    u1: np.ndarray
+    Ym: np.ndarray  # the plane's second axis in 3D (mirrored)
+
+
+def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
+               eps: float, r_min: float, t_hi: float | None = None, plane_only: bool = False):
+    """The arcs joining l_i = (a1, u1) and l_j = p_j p_{j+1} that keep ``chain`` within ε (:class:`_Arcs`), or
+    None when there are none; ``_TOO_FAR`` when a vertex is more than 2ε off the best plane through l_i (then no
+    longer chain can succeed either). ``t_hi`` bounds the arc end on l_j (default: the projection of p_{j+1}).
+    With ``plane_only`` only that test is made (None when it passes): the caller needs to know whether to go on,
+    not the arc."""
     rel = chain - a1
     along = rel @ u1
     dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
     cr = cross(u1, dj)
     perp = rel - along[:, None] * u1
     cov = perp.T @ perp
-    w, V = np.linalg.eigh(cov + np.outer(u1, u1) * (np.trace(cov) + 1.0) * 10)
+    w, V = np.linalg.eigh(cov + u1[:, None] * u1[None, :] * (np.trace(cov) + 1.0) * 10)  # np.outer, written out
     if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
         # the chain bends well beyond the noise: its least-squares plane through l_i
         m = V[:, 0]
@@ -132,21 +155,23 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
         return None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     Y = cross(m, u1)
-    q = np.stack([along, rel @ Y], -1)
+    q = np.empty((len(chain), 2))
+    q[:, 0], q[:, 1] = along, rel @ Y
     a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
     d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
     nd = math.hypot(d2[0], d2[1])
     if nd < 1e-12 * (_norm3(pj1 - pj) + 1e-300):
         return None
     u2 = d2 / nd
-    seg = np.diff(q, axis=0)
-    seg = seg[np.linalg.norm(seg, axis=1) > 1e-12]
-    dirs = np.vstack([[1.0, 0.0], seg, u2])
+    seg = q[1:] - q[:-1]
+    seg = seg[np.sqrt(np.add.reduce(seg * seg, axis=1)) > 1e-12]
+    dirs = np.empty((len(seg) + 2, 2))
+    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, u2
     turn = np.sum(np.arctan2(dirs[:-1, 0] * dirs[1:, 1] - dirs[:-1, 1] * dirs[1:, 0],
                              (dirs[:-1] * dirs[1:]).sum(1)))
     sign = 1.0 if turn >= 0 else -1.0
     if sign < 0:  # mirror to a left turn
-        q = q * [1, -1]; a2 = a2 * [1, -1]; u2 = u2 * [1, -1]
+        q = q * _MIRROR; a2 = a2 * _MIRROR; u2 = u2 * _MIRROR
     phi = np.mod(np.arctan2(u2[1], u2[0]), 2 * np.pi)
     if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
         return None
@@ -172,36 +197,136 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
             hi = min(hi, b / a)
     if hi < lo:
         return None
-    best = None
-    t_grid = _linspace(lo, hi, grid) if hi > lo else np.array([lo])
+    qa = q - a2
+    return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
+
+
+def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarray, along2: np.ndarray,
+                      off2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_dist_to_arcline` for the arc families ``f`` at once: chain points q (J, K, 2) (padded), arc
+    starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances from it (J, K).
+    Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
+    a2 = np.array([e.a2 for e in f])[:, :, None]
+    u2 = np.array([e.u2 for e in f])[:, :, None]
+    n2 = np.array([e.n2 for e in f])[:, :, None]
+    phi = np.array([e.phi for e in f])[:, None, None]
+    T2x, T2y = t1 - R * n2[:, 0], R - R * n2[:, 1]
+    t2 = (T2x - a2[:, 0]) * u2[:, 0] + (T2y - a2[:, 1]) * u2[:, 1]
+    qx, qy = q[:, None, :, 0], q[:, None, :, 1]
+    dx1 = qx - t1[:, :, None]
+    dT1 = np.hypot(dx1, qy)
+    d1 = np.where(qx <= t1[:, :, None], np.abs(qy), dT1)
+    dT2 = np.hypot(qx - T2x[:, :, None], qy - T2y[:, :, None])
+    d3 = np.where(along2[:, None, :] >= t2[:, :, None], off2[:, None, :], dT2)
+    vy = qy - R[:, :, None]
+    th = np.mod(np.arctan2(dx1, -vy), 2 * np.pi)
+    rho = np.hypot(dx1, vy)
+    d2 = np.where(th <= phi, np.abs(rho - R[:, :, None]), np.minimum(dT1, dT2))
+    return np.minimum(np.minimum(d1, d2), d3), t2
+
+
+def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge | None]:
+    """The best arc (least squared error) of each family, or None: a t1 grid of ``grid`` points zoomed in three
+    times around the best (or least violating) sample, all families at once (the arc search of one beam state
+    over every j it reaches). Element for element the operations of a search of one family, and the sums of
+    squares over exactly its chain, so the arcs are those a search of each alone finds."""
+    out: list[Edge | None] = [None] * len(families)
+    idx = [k for k, f in enumerate(families) if f.hi > f.lo]
+    for k, f in enumerate(families):
+        if not f.hi > f.lo:  # one start only
+            out[k] = _best_arc_alone(f, r_min)
+    if not idx:
+        return out
+    f = [families[k] for k in idx]
+    J = len(f)
+    sizes = [len(e.q) for e in f]
+    Kmax = max(sizes)
+    q = np.empty((J, Kmax, 2))
+    epsk = np.full((J, Kmax), np.inf)  # padding: never violates, never summed
+    along2 = np.zeros((J, Kmax))
+    off2 = np.zeros((J, Kmax))
+    for r, (e, K) in enumerate(zip(f, sizes)):
+        q[r, :K], q[r, K:] = e.q, e.q[0]
+        epsk[r, :K], along2[r, :K], off2[r, :K] = e.epsk, e.along2, e.off2
+    lo = np.array([e.lo for e in f])
+    hi = np.array([e.hi for e in f])
+    alpha = np.array([e.alpha for e in f])[:, None]
+    beta = np.array([e.beta for e in f])[:, None]
+    rows = np.arange(J)
+    t_grid = _linspaces(lo, hi, grid)
+    best_cost = np.full(J, np.inf)
+    best_t1, best_R, best_t2 = np.zeros(J), np.zeros(J), np.zeros(J)
     for _ in range(4):
         R = alpha + beta * t_grid
-        d, t2 = _dist_to_arcline(q, t_grid, R, phi, a2, u2, n2)
-        viol = np.max(d - epsk[None], axis=1)
+        d, t2 = _dist_to_arclines(f, q, t_grid, R, along2, off2)
+        viol = np.max(d - epsk[:, None, :], axis=2)
         valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
-        cost = np.where(valid, (d * d).sum(1), np.inf)
-        if valid.any():
-            g = int(np.argmin(cost))
-            if best is None or cost[g] < best[0]:
-                best = (cost[g], t_grid[g], R[g], t2[g])
-        else:
-            g = int(np.argmin(viol))  # zoom in on the least violation: valid sets can be narrow
-        if len(t_grid) == 1:
-            break
-        step = t_grid[1] - t_grid[0]
-        t_grid = _linspace(max(lo, t_grid[g] - step), min(hi, t_grid[g] + step), 17)
-    if best is None:
-        return None
+        dd = d * d
+        sums = np.empty(valid.shape)
+        for r, K in enumerate(sizes):
+            sums[r] = np.ascontiguousarray(dd[r, :, :K]).sum(1)
+        cost = np.where(valid, sums, np.inf)
+        some = valid.any(1)
+        # the cheapest valid start, or the least violating one: valid sets can be narrow
+        g = np.where(some, np.argmin(cost, 1), np.argmin(viol, 1))
+        c = cost[rows, g]
+        better = some & (c < best_cost)
+        best_cost = np.where(better, c, best_cost)
+        best_t1 = np.where(better, t_grid[rows, g], best_t1)
+        best_R = np.where(better, R[rows, g], best_R)
+        best_t2 = np.where(better, t2[rows, g], best_t2)
+        step = t_grid[:, 1] - t_grid[:, 0]
+        t = t_grid[rows, g]
+        t_grid = _linspaces(np.maximum(lo, t - step), np.minimum(hi, t + step), 17)
+    for r, k in enumerate(idx):
+        if np.isfinite(best_cost[r]):
+            out[k] = _edge(f[r], (best_cost[r], best_t1[r], best_R[r], best_t2[r]))
+    return out
+
+
+def _linspaces(lo: np.ndarray, hi: np.ndarray, num: int) -> np.ndarray:
+    """(J, num): :func:`_linspace` of every (lo, hi) pair, the same operations on every element."""
+    ramp = _RAMPS.get(num)
+    if ramp is None:
+        ramp = _RAMPS.setdefault(num, np.arange(num, dtype=float))
+    step = (hi - lo) / (num - 1)
+    y = ramp[None, :] * step[:, None]
+    y += lo[:, None]
+    y[:, -1] = hi
+    return y
+
+
+def _best_arc_alone(f: _Arcs, r_min: float) -> Edge | None:
+    """The search of a family whose arcs all start at one point."""
+    t_grid = np.array([f.lo])
+    R = f.alpha + f.beta * t_grid
+    d, t2 = _dist_to_arcline(f.q, t_grid, R, f.phi, f.a2, f.u2, f.n2)
+    viol = np.max(d - f.epsk[None], axis=1)
+    if viol[0] <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
+        return _edge(f, (float((d * d).sum(1)[0]), t_grid[0], R[0], t2[0]))
+    return None
+
+
+def _edge(f: _Arcs, best: tuple) -> Edge:
     cost, t1, R, t2 = best
-    Ym = Y * sign
-    to3 = lambda p: a1 + p[0] * u1 + p[1] * Ym  # noqa: E731
+    to3 = lambda p: f.a1 + p[0] * f.u1 + p[1] * f.Ym  # noqa: E731
     centre = to3(np.array([t1, R]))
     start = to3(np.array([t1, 0.0]))
-    out_point = to3(a2)
-    out_dir = u2[0] * u1 + u2[1] * Ym
+    out_point = to3(f.a2)
+    out_dir = f.u2[0] * f.u1 + f.u2[1] * f.Ym
     end = out_point + t2 * out_dir
-    return Edge(float(t1), float(t2), centre, float(R), float(phi), start, end, Ym.copy(),
+    return Edge(float(t1), float(t2), centre, float(R), float(f.phi), start, end, f.Ym.copy(),
                 out_point, out_dir / np.linalg.norm(out_dir), float(cost))
+
+
+def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
+             eps: float, r_min: float, grid: int = 64, t_hi: float | None = None, plane_only: bool = False):
+    """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None; ``_TOO_FAR`` and
+    ``plane_only`` as in :func:`arc_family`."""
+    f = arc_family(chain, a1, u1, t_lo, pj, pj1, eps, r_min, t_hi, plane_only)
+    if f is None or f is _TOO_FAR:
+        return f
+    return best_arcs([f], r_min, grid)[0]
 
 
 @dataclass
@@ -236,6 +361,7 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
         if i == last:
             break
         for si, st in enumerate(states[i]):
+            reached = []  # (j, arcs) of every edge out of this state to search; a search changes no state of j
             for j in range(i + 1, n - 1):
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:
@@ -249,10 +375,14 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 # an arc may start up to ε before the previous one ended (the straight between
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
-                e = edge_fit(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
-                             eps, r_min, plane_only=lost)
-                if e is _TOO_FAR:
+                f = arc_family(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
+                               eps, r_min, plane_only=lost)
+                if f is _TOO_FAR:
                     break
+                if f is not None:
+                    reached.append((j, f))
+            # the arcs of all of them searched at once
+            for (j, _), e in zip(reached, best_arcs([f for _, f in reached], r_min) if reached else []):
                 if e is None:
                     continue
                 cand = _State(st.d + 1, st.sse + e.cost, i, si, e.out_point, e.out_dir, e.t2, e)

@@ -23,6 +23,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import minimum_spanning_tree, shortest_path
 from scipy.spatial import cKDTree
 
+from plantsolve.solvers.tube.vec3 import cross
+
 
 def thin(points: np.ndarray, spacing: float) -> np.ndarray:
     """Poisson-disk subsample at ``spacing``, each kept point averaged over its δ-ball."""
@@ -152,33 +154,66 @@ def _seg_dist(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.norm(pts - a - t[..., None] * ab, axis=-1)
 
 
+CONE_MARGIN = 1e-6  # radians: the disjoint-cone test below must hold beyond any round-off of its angles
+
+
+def _reach(poly: np.ndarray, i: int, eps: float) -> int:
+    """Last vertex j that a shortcut i → j may reach: for every later j, two of the vertices it would skip
+    cannot both lie within ε of it.
+
+    A skipped vertex k at distance r_k > ε from p_i is within ε of the segment only if the segment's
+    direction is within α_k = asin(ε / r_k) of the direction u_k to it (the segment lies on the ray from
+    p_i, and the ray's distance is r_k sin θ, or r_k beyond 90°). Once the cone of a vertex K and that of
+    the narrowest cone before it are disjoint (angle between the axes beyond the sum of the half-angles),
+    no direction serves both, so no shortcut that skips both, i.e. none to a j > K, is within ε."""
+    rel = poly[i + 1:] - poly[i]
+    r = np.sqrt((rel * rel).sum(1))
+    far = r > eps
+    u = rel / np.where(far, r, 1.0)[:, None]
+    alpha = np.where(far, np.arcsin(np.minimum(eps / np.where(far, r, 1.0), 1.0)), np.pi)
+    k = np.arange(len(r))
+    narrowest = np.maximum.accumulate(np.where(alpha <= np.minimum.accumulate(alpha), k, 0))
+    ur = u[narrowest]
+    between = np.arctan2(np.sqrt((cross(ur, u) ** 2).sum(1)), (ur * u).sum(1))
+    apart = np.flatnonzero(between > alpha[narrowest] + alpha + CONE_MARGIN)
+    return i + 1 + int(apart[0]) if len(apart) else len(poly) - 1
+
+
 def simplify(poly: np.ndarray, eps: float) -> np.ndarray:
     """§4.5: minimum-vertex sub-polygon within ε, least squared error among minima."""
     n = len(poly)
     if n <= 2:
         return poly.copy()
-    best = np.full(n, np.iinfo(np.int64).max)
+    unreached = np.iinfo(np.int64).max
+    best = np.full(n, unreached)
     sse = np.full(n, np.inf)
     prev = np.full(n, -1)
     best[0] = 0
     sse[0] = 0.0
-    ks = np.arange(n)
     for i in range(n - 1):
-        if best[i] == np.iinfo(np.int64).max:
+        if best[i] == unreached:
             continue
-        js = np.arange(i + 1, n)
-        # D[j, k] distance of vertex k to segment i→j for i < k < j
-        D = _seg_dist(poly[None, :, :], poly[i][None, None, :], poly[js][:, None, :])
-        inside = (ks[None, :] > i) & (ks[None, :] < js[:, None])
-        Dm = np.where(inside, D, 0.0)
-        ok = Dm.max(1) <= eps
-        cost = (Dm ** 2).sum(1)
-        for j, good, c in zip(js, ok, cost):
-            if not good:
-                continue
-            nb, ns = best[i] + 1, sse[i] + c
-            if nb < best[j] or (nb == best[j] and ns < sse[j]):
-                best[j], sse[j], prev[j] = nb, ns, i
+        nb = best[i] + 1
+        # only a shortcut i → j that reaches j with as few vertices as its best so far can change j, and
+        # none beyond the reach of i is within ε
+        open_ = best[i + 1:] >= nb
+        if not open_.any():
+            continue
+        reach = _reach(poly, i, eps)
+        js = i + 1 + np.flatnonzero(open_[:reach - i])
+        if not len(js):
+            continue
+        # D[j, k] distance of vertex k to segment i→j for i < k < j (the vertices the shortcut skips)
+        D = _seg_dist(poly[None, i + 1:reach, :], poly[i][None, None, :], poly[js][:, None, :])
+        Dm = np.where(np.arange(i + 1, reach)[None, :] < js[:, None], D, 0.0)
+        ok = Dm.max(1, initial=0.0) <= eps
+        # the squared errors summed over a row of all n vertices (zeros outside the skipped ones), as the sum
+        # has always been taken: the same additions in the same order give the same least-squares tie-break
+        sq = np.zeros((len(js), n))
+        sq[:, i + 1:reach] = Dm ** 2
+        ns = sse[i] + sq.sum(1)
+        better = ok & ((nb < best[js]) | ((nb == best[js]) & (ns < sse[js])))
+        best[js[better]], sse[js[better]], prev[js[better]] = nb, ns[better], i
     out = [n - 1]
     while out[-1] != 0:
         out.append(int(prev[out[-1]]))

@@ -188,32 +188,43 @@ def _groups(seg: np.ndarray, block: int = 65_536) -> list[tuple[int, slice]]:
             for a in range(int(a0), int(b), block)]
 
 
-def _run_dist_and_grad(q: np.ndarray, gk: np.ndarray, arc: bool, want_grad: bool):
-    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`)
-    and d dist / d geometry (None unless ``want_grad``)."""
+def _run_distance(q: np.ndarray, gk: np.ndarray, arc: bool) -> tuple[np.ndarray, tuple]:
+    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`), and the
+    terms :func:`_run_gradient` takes on from."""
     c, a = gk[:3], gk[3:6]
     w = q - c
     s = w @ a
     perp = w - s[:, None] * a
     rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
-    e = perp / np.maximum(rho, 1e-300)[:, None]
     if not arc:
-        if not want_grad:
-            return rho, None
-        grad = np.zeros((len(q), 7))
-        grad[:, :3] = -e
-        grad[:, 3:6] = -s[:, None] * e
-        return rho, grad
+        return rho, (w, s, perp, rho, a, None, rho)
     R = gk[6]
     dd = np.hypot(rho - R, s)
-    if not want_grad:
-        return dd, None
-    grad = np.empty((len(q), 7))
+    return dd, (w, s, perp, rho, a, R, dd)
+
+
+def _run_gradient(terms: tuple) -> np.ndarray:
+    """d dist / d geometry (n, 7) from the terms of :func:`_run_distance`."""
+    w, s, perp, rho, a, R, dd = terms
+    e = perp / np.maximum(rho, 1e-300)[:, None]
+    if R is None:  # a line
+        grad = np.zeros((len(w), 7))
+        grad[:, :3] = -e
+        grad[:, 3:6] = -s[:, None] * e
+        return grad
+    grad = np.empty((len(w), 7))
     inv = 1.0 / np.maximum(dd, 1e-300)
     grad[:, :3] = -((rho - R)[:, None] * e + s[:, None] * a) * inv[:, None]
     grad[:, 3:6] = ((rho - R)[:, None] * (-s[:, None] * e) + s[:, None] * w) * inv[:, None]
     grad[:, 6] = -(rho - R) * inv
-    return dd, grad
+    return grad
+
+
+def _run_dist_and_grad(q: np.ndarray, gk: np.ndarray, arc: bool, want_grad: bool):
+    """Distance of the points q to one (unbounded) line or circle ``gk`` (a row of :func:`_geometry`)
+    and d dist / d geometry (None unless ``want_grad``)."""
+    d, terms = _run_distance(q, gk, arc)
+    return d, (_run_gradient(terms) if want_grad else None)
 
 
 def _dist_and_grad(pts: np.ndarray, groups: list[tuple[int, slice]], g: np.ndarray, kind: np.ndarray,
@@ -368,6 +379,9 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     return model, res, seg, False
 
 
+KEEP_TERMS = 65_536  # samples up to which fun keeps its per-sample terms for the normal equations (memory)
+
+
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
     frame0 = model.frame.copy()
@@ -386,8 +400,19 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     pts = pts[order]
     groups = _groups(seg[order])
 
+    keep_terms = len(pts) <= KEEP_TERMS
+    latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
+
     def fun(x):
-        d, _ = _dist_and_grad(pts, groups, geometry_batch(x[None], lay, frame0, rp)[0], kind, False)
+        g = geometry_batch(x[None], lay, frame0, rp)[0]
+        d = np.empty(len(pts))
+        terms = []
+        for k, m in groups:
+            d[m], t = _run_distance(pts[m], g[k], bool(kind[k]))
+            if keep_terms:
+                terms.append(t)
+        latest.clear()
+        latest.update(x=x.tobytes(), g=g, terms=terms if keep_terms else None)
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def normal_equations(x, w, r):
@@ -395,7 +420,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         with respect to its segment's geometry (7 numbers, and -1 for the pipe radius) times that
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
-        g = geometry_batch(x[None], lay, frame0, rp)[0]
+        # the geometry and the distances' terms at x, as fun has just computed them (the same numbers again)
+        same = latest.get("x") == x.tobytes()
+        g = latest["g"] if same else geometry_batch(x[None], lay, frame0, rp)[0]
+        terms = latest["terms"] if same else None
         dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
@@ -406,8 +434,8 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
         wr = w * r
-        for k, m_k in groups:
-            _, G = _run_dist_and_grad(pts[m_k], g[k], bool(kind[k]), True)
+        for i, (k, m_k) in enumerate(groups):
+            G = _run_gradient(terms[i] if terms is not None else _run_distance(pts[m_k], g[k], bool(kind[k]))[1])
             if lay.fit_pipe_radius:
                 G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
             gram[k] += G.T @ (G * w[m_k, None])

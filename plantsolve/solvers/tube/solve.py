@@ -246,6 +246,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         st.tick()  # lets a cancellation through between LM iterations
 
     last_assignment: list = []  # [model, residuals, segments] of every sample after a round on all of them
+    last_round: list = []  # [model, samples, residuals] after the latest round, when its ends settled
 
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
                dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
@@ -268,6 +269,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
             m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
             if P is pts:
                 last_assignment[:] = [m, res, seg] if settled else []
+            # the settled ends' last assignment is the returned model's (what fit.assign gives it again)
+            last_round[:] = [m, P, res] if settled and len(P) <= ALL_SAMPLES_AT_ONCE else []
             r_in = res[inl]
             sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
             thr = max(6.0 * sig, 0.05 * rp)
@@ -279,6 +282,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
 
     def refit(m: TubeModel):
         m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
+        if last_round and last_round[0] is m2 and last_round[1] is pts_prune:
+            return m2, last_round[2]
         return m2, fit.assign(m2, pts_prune, margin)[0]
 
     st.stage(0.6, 0.75, "choosing the number of bends")

@@ -210,3 +210,21 @@ def test_normal_equations_match_the_dense_jacobian():
             J[:, -1] -= 1.0
         np.testing.assert_allclose(A, J.T @ (w[:, None] * J), rtol=1e-10, atol=1e-10 * np.abs(A).max())
         np.testing.assert_allclose(b, J.T @ (w * r), rtol=1e-10, atol=1e-10 * np.abs(b).max())
+
+
+def test_normal_equations_after_fun_are_those_computed_afresh():
+    # the normal equations at the point fun has just evaluated reuse its geometry and distance terms: the same
+    # numbers as computed from nothing
+    rng = np.random.default_rng(5)
+    m = make_model([[30, 0, 40, 10], [12, 70, 100, 9], [20, -30, 15, 12], [25, 0, 0, 0]], 2.0)
+    pts = surface_samples(m, 2000, rng, noise=0.02)
+    _, seg = fit.assign(m, pts, 4.0)
+    lay = fit.Layout(m.n_bends, "free", None, True)
+    x0, _, _, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay)
+    x1 = x0 + rng.normal(size=len(x0)) * 1e-4
+    r = fun(x1)
+    w = rng.uniform(0.2, 1.0, len(r))
+    A1, b1 = normal_equations(x1, w, r)
+    fun(x0)  # the latest evaluation is now another point
+    A2, b2 = normal_equations(x1, w, r)
+    assert np.array_equal(A1, A2) and np.array_equal(b1, b2)

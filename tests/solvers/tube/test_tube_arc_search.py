@@ -1,0 +1,63 @@
+"""The batched arc search of Algorithm 1's edges against the search of one edge at a time."""
+
+import numpy as np
+
+from plantsolve.solvers.tube import arcline, curve
+from plantsolve.solvers.tube.arcline import _TOO_FAR
+from plantsolve.solvers.tube.model import sample_centreline
+from plantsolve.solvers.tube.synthetic import make_model
+
+
+def _search_alone(f, r_min, grid=64):
+    """The zoomed grid search of one family of arcs, written as one loop over its grid (no batching)."""
+    best = None
+    t_grid = arcline._linspace(f.lo, f.hi, grid) if f.hi > f.lo else np.array([f.lo])
+    for _ in range(4):
+        R = f.alpha + f.beta * t_grid
+        d, t2 = arcline._dist_to_arcline(f.q, t_grid, R, f.phi, f.a2, f.u2, f.n2)
+        viol = np.max(d - f.epsk[None], axis=1)
+        valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
+        cost = np.where(valid, (d * d).sum(1), np.inf)
+        if valid.any():
+            g = int(np.argmin(cost))
+            if best is None or cost[g] < best[0]:
+                best = (cost[g], t_grid[g], R[g], t2[g])
+        else:
+            g = int(np.argmin(viol))
+        if len(t_grid) == 1:
+            break
+        step = t_grid[1] - t_grid[0]
+        t_grid = arcline._linspace(max(f.lo, t_grid[g] - step), min(f.hi, t_grid[g] + step), 17)
+    return best
+
+
+def _families(poly, eps, r_min):
+    """The arc families of every edge out of vertex 0 (the first tangent line), as Algorithm 1 meets them."""
+    d0 = (poly[1] - poly[0]) / np.linalg.norm(poly[1] - poly[0])
+    out = []
+    for j in range(1, len(poly) - 1):
+        f = arcline.arc_family(poly[:j + 1], poly[0], d0, 0.0, poly[j], poly[j + 1], eps, r_min)
+        if f is _TOO_FAR:
+            break
+        if f is not None:
+            out.append(f)
+    return out
+
+
+def test_batched_search_finds_the_arcs_of_the_search_one_at_a_time_bit_for_bit():
+    rng = np.random.default_rng(0)
+    m = make_model([[30, 0, 50, 10], [15, 70, 100, 14], [25, 0, 0, 0]], 4.0)
+    c, _ = sample_centreline(m, 0.5)
+    c = c + rng.normal(scale=0.01, size=c.shape)
+    poly = curve.simplify(c, 0.05)
+    fams = _families(poly, 0.2, 1.0)
+    assert len(fams) >= 3 and len({len(f.q) for f in fams}) >= 3  # chains of several lengths at once
+    edges = arcline.best_arcs(fams, 1.0)
+    found = 0
+    for f, e in zip(fams, edges):
+        want = _search_alone(f, 1.0)
+        assert (e is None) == (want is None)
+        if e is not None:
+            found += 1
+            assert (e.cost, e.t1, e.radius, e.t2) == tuple(float(v) for v in want)
+    assert found >= 1

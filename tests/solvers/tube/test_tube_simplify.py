@@ -1,0 +1,68 @@
+"""§4.5 polygon simplification against a brute-force shortest path over every shortcut."""
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.tube import curve
+
+
+def _seg_dist(p, a, b):
+    ab = b - a
+    t = np.clip((p - a) @ ab / max(ab @ ab, 1e-300), 0.0, 1.0)
+    return np.linalg.norm(p - a - t[:, None] * ab, axis=1)
+
+
+def _shortcuts(poly, eps):
+    """Every shortcut i → j whose skipped vertices lie within eps of it, with its squared error."""
+    n = len(poly)
+    out = {}
+    for i in range(n - 1):
+        for j in range(i + 1, n):
+            d = _seg_dist(poly[i + 1:j], poly[i], poly[j])
+            if d.size == 0 or d.max() <= eps:
+                out[i, j] = float(d @ d)
+    return out
+
+
+def _brute_force(poly, eps):
+    """Fewest vertices, then least summed squared error, by dynamic programming over all shortcuts."""
+    n = len(poly)
+    cuts = _shortcuts(poly, eps)
+    best = [(0, 0.0)] + [(np.inf, np.inf)] * (n - 1)
+    for j in range(1, n):
+        best[j] = min((best[i][0] + 1, best[i][1] + c) for (i, jj), c in cuts.items() if jj == j)
+    return best[-1]
+
+
+def _noisy_curve(rng, n):
+    t = np.linspace(0.0, rng.uniform(2.0, 9.0), n)
+    bend = np.column_stack([np.cos(t) * 10, np.sin(0.7 * t) * 10, np.where(t > 4, 3 * (t - 4), 0.0)])
+    return bend + rng.normal(scale=rng.uniform(0.001, 0.1), size=(n, 3))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_simplify_is_the_fewest_vertex_least_error_polygon(seed):
+    rng = np.random.default_rng(seed)
+    poly = _noisy_curve(rng, int(rng.integers(20, 70)))
+    eps = float(rng.uniform(0.05, 1.0))
+    got = curve.simplify(poly, eps)
+    idx = [int(np.flatnonzero((poly == v).all(1))[0]) for v in got]
+    assert idx[0] == 0 and idx[-1] == len(poly) - 1
+    cuts = _shortcuts(poly, eps)
+    assert all((a, b) in cuts for a, b in zip(idx, idx[1:]))  # every kept segment within ε
+    count, sse = _brute_force(poly, eps)
+    assert len(idx) - 1 == count
+    assert sum(cuts[a, b] for a, b in zip(idx, idx[1:])) == pytest.approx(sse, rel=1e-12, abs=1e-300)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_reach_never_cuts_a_shortcut_within_eps(seed):
+    rng = np.random.default_rng(100 + seed)
+    poly = _noisy_curve(rng, 60)
+    for eps in (0.02, 0.3, 2.0):
+        cuts = _shortcuts(poly, eps)
+        for i in range(len(poly) - 1):
+            reach = curve._reach(poly, i, eps)
+            assert max(j for a, j in cuts if a == i) <= reach
+        # the bound prunes: on a curved stretch a vertex cannot see to the far end
+        assert curve._reach(poly, 0, 0.02) < len(poly) - 1
