@@ -82,6 +82,8 @@ def _run(job_id: str) -> str:
 class ProcessDispatcher:
     """Job ids go to a supervised pool of worker processes (``EMBEDDED_WORKERS`` of them)."""
 
+    in_process = True  # enqueue hands the id over in memory and returns at once
+
     def __init__(self, ctx: ServiceContext, workers: int | None = None):
         self.ctx = ctx
         self.size = workers or ctx.settings.embedded_workers
