@@ -56,15 +56,69 @@ class JobWriter:
         self._queue: queue.SimpleQueue[tuple[dict, Future] | None] = queue.SimpleQueue()
         self._thread: threading.Thread | None = None
         self._start_lock = threading.Lock()
+        self._unwaiting = None  # see _unwaiting_connection
 
     def create(self, record: dict[str, Any]) -> Future:
-        """Queue a row; the future answers ``(made(**record), True)`` once it is committed, ``(existing job, False)`` when its
-        idempotency key was taken, or raises what the write raised."""
+        """Write a row: the future answers ``(made(**record), True)`` once it is committed, ``(existing job, False)``
+        when its idempotency key was taken, or raises what the write raised.
+
+        When no other write is under way or waiting, the row is written at once on the calling thread and the future
+        comes back done: handing a lone row to the writer thread and back costs more than the write (two thread
+        wake-ups). That write never waits: it takes the in-process write lock only if free, and its connection
+        gives up at once (no busy timeout) when another process holds SQLite's; then the row goes to the writer
+        thread as any other."""
         future: Future = Future()
+        if self._queue.empty() and self._write_now(record):
+            future.set_result((self.made(**record), True))
+            return future
         if self._thread is None:
             self._start()
         self._queue.put((record, future))
         return future
+
+    def _write_now(self, record: dict[str, Any]) -> bool:
+        """Insert and commit ``record`` on this thread if that needs no waiting; False (nothing written) otherwise,
+        and for any error (the writer thread then writes it, or raises the error as the database gives it)."""
+        lock = self.writing()
+        if not lock.acquire(blocking=False):
+            return False
+        try:
+            connection = self._unwaiting_connection()
+            try:
+                connection.execute(self.sql, self._row(record))
+                connection.commit()
+                return True
+            except Exception:  # busy, a taken key, anything: rolled back, so the writer thread may write it
+                try:
+                    connection.rollback()
+                except Exception:
+                    self._drop_unwaiting()
+                return False
+        except Exception:
+            return False
+        finally:
+            lock.release()
+
+    def _unwaiting_connection(self):
+        """The DB-API connection of :meth:`_write_now` (used under the write lock only): no busy timeout, and no
+        automatic WAL checkpoint (a checkpoint writes the database file and syncs; the writer thread's connections
+        and the job processes' run them)."""
+        if self._unwaiting is None:
+            connection = self.engine.raw_connection()
+            cursor = connection.cursor()
+            cursor.execute("PRAGMA busy_timeout=0")
+            cursor.execute("PRAGMA wal_autocheckpoint=0")
+            cursor.close()
+            self._unwaiting = connection
+        return self._unwaiting
+
+    def _drop_unwaiting(self) -> None:
+        connection, self._unwaiting = self._unwaiting, None
+        if connection is not None:
+            try:
+                connection.invalidate()
+            except Exception:
+                pass
 
     def close(self) -> None:
         """Write what is queued, then end the thread (a later :meth:`create` starts another)."""
@@ -83,6 +137,11 @@ class JobWriter:
                 leftover.append(item)
         if leftover:
             self._write(leftover)
+        lock = self.writing()
+        with lock:
+            if self._unwaiting is not None:
+                self._unwaiting.close()  # back to the pool
+                self._unwaiting = None
 
     def _start(self) -> None:
         with self._start_lock:

@@ -130,3 +130,26 @@ def test_close_writes_what_is_queued_and_a_later_submission_starts_the_writer_ag
     assert all(future.done() and future.result()[1] for future in futures)
     job, created = ctx.repo.create(_columns(input={"after": 1}))
     assert created and job.id in _stored_ids(ctx)
+
+
+def test_a_lone_submission_is_written_at_once_on_the_calling_thread(ctx):
+    commits = _commits(ctx.db.engine)  # the writer thread's transactions (the direct write uses no Connection)
+    future = ctx.repo.create_later(_columns(input={"alone": 1}))
+    assert future.done() and future.result()[1]
+    assert future.result()[0].id in _stored_ids(ctx)
+    assert ctx.repo.writer._thread is None and commits == []  # no hand-over to the writer thread
+
+
+def test_a_write_held_by_another_process_is_never_waited_for_on_the_calling_thread(ctx, tmp_path):
+    import sqlite3
+    import time
+
+    other = sqlite3.connect(ctx.db.engine.url.database, isolation_level=None)  # as a job process would
+    other.execute("BEGIN IMMEDIATE")  # holds SQLite's write lock
+    started = time.perf_counter()
+    future = ctx.repo.create_later(_columns(input={"behind": 1}))
+    assert time.perf_counter() - started < 0.5 and not future.done()  # handed to the writer thread, which waits
+    other.execute("COMMIT")
+    job, created = future.result(timeout=30)
+    assert created and job.id in _stored_ids(ctx)
+    other.close()

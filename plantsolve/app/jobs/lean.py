@@ -93,8 +93,10 @@ class LeanRoutes:
             submitted = await run_in_threadpool(self.service.store_view, new)
             await self._send_submitted(send, submitted)
             return
-        # group commit (SQLite): answered after the commit that holds the row; the view's reads are local
-        submitted = self.service.stored(new, *await asyncio.wrap_future(pending))
+        # group commit (SQLite): answered after the commit that holds the row (written already when nothing else
+        # was being written); the view's reads are local
+        submitted = self.service.stored(new, *(pending.result() if pending.done() else
+                                               await asyncio.wrap_future(pending)))
         submitted.view = self.service.view(submitted.job)
         await self._send_submitted(send, submitted)
         if submitted.created:  # after the answer: the client does not wait for the hand-over to the pool
