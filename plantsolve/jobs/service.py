@@ -63,6 +63,7 @@ class JobService:
     def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
         self.ctx = ctx
         self.dispatcher = dispatcher
+        self._intake_loaded: set[str] = set()
         intake.start_readers()  # uploads are read in processes forked from it
 
     @property
@@ -105,6 +106,7 @@ class JobService:
         spec = self.spec(kind)
         raw, job_input = intake.read_json(spec, body)
         intake.check(spec, job_input)
+        self._intake_loaded.add(kind)
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
         if not self.stores_inline(len(body)):
@@ -113,6 +115,11 @@ class JobService:
         else:
             fields = {"input_kind": "json", "input": raw}
         return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
+
+    def intake_loaded(self, kind: str) -> bool:
+        """Whether this process has read a JSON submission of ``kind`` (so the kind's checks, imported on first use,
+        are loaded: reading another costs microseconds, not an import)."""
+        return kind in self._intake_loaded
 
     def stores_inline(self, size: int) -> bool:
         """Whether a JSON request of ``size`` bytes is kept in the job row (else :meth:`take_json` writes it to the

@@ -441,8 +441,10 @@ class JobRepository:
         read of each row to find its time limit)."""
         query = (select(JOBS.c.id, JOBS.c.kind).where(JOBS.c.status == QUEUED, JOBS.c.attempt < JOBS.c.max_attempts)
                  .order_by(JOBS.c.created_at, JOBS.c.id).limit(limit))
-        with self.sessions() as session:
-            return [(job_id, kind) for job_id, kind in session.execute(query)]
+        # a Core read on a plain connection: the embedded pool runs it as jobs finish while a backlog waits, in the
+        # API process, where an ORM session's bookkeeping would cost more than the read
+        with self.sessions.kw["bind"].connect() as connection:
+            return [(job_id, kind) for job_id, kind in connection.execute(query)]
 
     # ---- the completion webhook ---------------------------------------------------------------
 

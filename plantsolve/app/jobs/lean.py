@@ -30,7 +30,8 @@ IDEMPOTENCY_KEY = re.compile(r"[\x21-\x7e][\x20-\x7e]{0,254}")
 JOB_PATH = re.compile(r"/v1/jobs/([0-9a-fA-F]{8}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{12})")
 JSON_HEADERS = [(b"content-type", b"application/json")]
 # A JSON submission up to this size is read and checked on the event loop (tens of microseconds: less than the hop
-# to a worker thread and back); a larger one in a thread, so that the loop serves other requests meanwhile.
+# to a worker thread and back); a larger one in a thread, so that the loop serves other requests meanwhile (and so
+# is a process's first submission of a kind, which imports the kind's checks).
 LOOP_INTAKE_BYTES = 16 * 1024
 
 def is_json(media_type: str) -> bool:
@@ -82,7 +83,8 @@ class LeanRoutes:
                      caller: Principal) -> None:
         _require(caller)
         body = await _body(receive)
-        if len(body) > LOOP_INTAKE_BYTES or not self.service.stores_inline(len(body)):
+        if len(body) > LOOP_INTAKE_BYTES or not self.service.stores_inline(len(body)) \
+                or not self.service.intake_loaded(kind):  # the first of a kind imports its checks: not on the loop
             submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key,
                                                 caller.owner, None)
             await self._send_submitted(send, submitted)
