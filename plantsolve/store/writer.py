@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import logging
 import queue
+import sqlite3
 import threading
+import time
 from concurrent.futures import Future
 from contextlib import AbstractContextManager
 from typing import Any, Callable
@@ -34,6 +36,10 @@ log = logging.getLogger("plantsolve.store")
 
 # rows one transaction takes at most: bounds how long the first submission of a large burst waits for its commit
 MAX_BATCH = 64
+# how long the writer thread retries at short intervals while another process holds SQLite's write lock, before
+# it leaves the waiting to SQLite's busy handler (see JobWriter._write_unwaiting)
+UNWAITING_PATIENCE = 0.25
+SQLITE_BUSY = 5
 
 
 class JobWriter:
@@ -83,21 +89,37 @@ class JobWriter:
         if not lock.acquire(blocking=False):
             return False
         try:
-            connection = self._unwaiting_connection()
-            try:
-                connection.execute(self.sql, self._row(record))
-                connection.commit()
-                return True
-            except Exception:  # busy, a taken key, anything: rolled back, so the writer thread may write it
-                try:
-                    connection.rollback()
-                except Exception:
-                    self._drop_unwaiting()
-                return False
+            return self._write_unwaiting([self._row(record)], patience=0.0)
         except Exception:
             return False
         finally:
             lock.release()
+
+    def _write_unwaiting(self, rows: list[tuple], *, patience: float) -> bool:
+        """Insert and commit ``rows`` on the connection without busy timeout (the caller holds the write lock); while
+        another process holds SQLite's write lock, try again after short pauses for up to ``patience`` seconds.
+        SQLite's own busy handler sleeps 1, 2, 5, 10, 15 ... ms between tries, far longer than a job process's
+        write holds the lock, and a submission would wait that out. False (nothing written) when the lock stays
+        taken, and for any other error: the caller then writes through SQLAlchemy, which waits with the busy
+        handler and raises the error as SQLAlchemy's (a taken key, an unreachable database)."""
+        deadline, pause = time.monotonic() + patience, 0.0001
+        while True:
+            try:
+                connection = self._unwaiting_connection()
+                connection.cursor().executemany(self.sql, rows)
+                connection.commit()
+                return True
+            except Exception as error:  # rolled back, so that the caller may write the rows
+                try:
+                    self._unwaiting.rollback()
+                except Exception:
+                    self._drop_unwaiting()
+                busy = isinstance(error, sqlite3.OperationalError) and \
+                    (getattr(error, "sqlite_errorcode", 0) & 0xFF) == SQLITE_BUSY
+                if not busy or time.monotonic() + pause > deadline:
+                    return False
+                time.sleep(pause)
+                pause = min(2 * pause, 0.001)
 
     def _unwaiting_connection(self):
         """The DB-API connection of :meth:`_write_now` (used under the write lock only): no busy timeout, and no
@@ -171,8 +193,11 @@ class JobWriter:
     def _write(self, batch: list[tuple[dict, Future]]) -> None:
         batch = [(record, future) for record, future in batch if future.set_running_or_notify_cancel()]
         try:
-            with self.writing(), self.engine.begin() as connection:
-                connection.exec_driver_sql(self.sql, [self._row(record) for record, _ in batch])
+            rows = [self._row(record) for record, _ in batch]
+            with self.writing():
+                if not self._write_unwaiting(rows, patience=UNWAITING_PATIENCE):
+                    with self.engine.begin() as connection:  # SQLite's busy handler waits; errors as SQLAlchemy's
+                        connection.exec_driver_sql(self.sql, rows)
         except IntegrityError:
             self._write_one_by_one(batch)
             return
