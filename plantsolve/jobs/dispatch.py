@@ -9,6 +9,10 @@ from typing import Protocol
 
 
 class Dispatcher(Protocol):
+    # True when enqueue hands the id over in this process's memory and returns at once (no broker across the
+    # network): an event loop may call it. Transports without it are called from a thread.
+    in_process: bool = False
+
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None: ...
 
     def ping(self) -> None:

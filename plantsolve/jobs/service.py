@@ -11,6 +11,7 @@ import json
 import logging
 import re
 import uuid
+from concurrent.futures import Future
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Mapping
@@ -28,6 +29,18 @@ from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import JobState, as_utc
 
 log = logging.getLogger("plantsolve.api")
+
+
+@dataclass
+class NewJob:
+    """A submission read and checked, not stored yet: its row's columns but the defaults."""
+
+    spec: SolverSpec
+    job_id: uuid.UUID
+    body_hash: str
+    idempotency_key: str | None
+    fields: dict[str, Any]
+    owner: str = ""
 
 
 @dataclass
@@ -50,6 +63,7 @@ class JobService:
     def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
         self.ctx = ctx
         self.dispatcher = dispatcher
+        self._intake_loaded: set[str] = set()
         intake.start_readers()  # uploads are read in processes forked from it
 
     @property
@@ -71,6 +85,12 @@ class JobService:
         submitted.view = self.view(submitted.job)
         return submitted
 
+    def store_view(self, new: NewJob) -> Submitted:
+        """store plus the job's view, in one thread hop for the async route."""
+        submitted = self.store(new)
+        submitted.view = self.view(submitted.job)
+        return submitted
+
     def submit_upload_view(self, *args, owner: str = "", callback_url: str | None = None) -> Submitted:
         submitted = self.submit_upload(*args, owner=owner, callback_url=callback_url)
         submitted.view = self.view(submitted.job)
@@ -78,17 +98,33 @@ class JobService:
 
     def submit_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "",
                     callback_url: str | None = None) -> Submitted:
+        return self.store(self.take_json(kind, body, idempotency_key, owner=owner, callback_url=callback_url))
+
+    def take_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "",
+                  callback_url: str | None = None) -> NewJob:
+        """A JSON submission read, checked and ready to store (a large request's input stored as a file already)."""
         spec = self.spec(kind)
         raw, job_input = intake.read_json(spec, body)
         intake.check(spec, job_input)
+        self._intake_loaded.add(kind)
         body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
-        if len(body) > self.ctx.settings.inline_input_bytes:
+        if not self.stores_inline(len(body)):
             blob = self.ctx.files.put(f"{job_id}/input/request.json", _canonical(raw))
             fields = {"input_kind": "json_file", "input_file": blob.key}
         else:
             fields = {"input_kind": "json", "input": raw}
-        return self._create(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
+        return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
+
+    def intake_loaded(self, kind: str) -> bool:
+        """Whether this process has read a JSON submission of ``kind`` (so the kind's checks, imported on first use,
+        are loaded: reading another costs microseconds, not an import)."""
+        return kind in self._intake_loaded
+
+    def stores_inline(self, size: int) -> bool:
+        """Whether a JSON request of ``size`` bytes is kept in the job row (else :meth:`take_json` writes it to the
+        blob store)."""
+        return size <= self.ctx.settings.inline_input_bytes
 
     def submit_upload(
         self, kind: str, filename: str, content: bytes, options_text: str | None, idempotency_key: str | None,
@@ -120,23 +156,27 @@ class JobService:
     def _create(
         self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
     ) -> Submitted:
-        stored, created = self.ctx.repo.create(dict(
-            id=job_id,
-            kind=spec.kind,
-            status=QUEUED,
-            attempt=0,
-            max_attempts=spec.max_attempts or self.ctx.settings.max_attempts,
-            progress=0.0,
-            progress_message="queued",
-            idempotency_key=f"{owner}:{key}" if key is not None and owner else key,
-            owner=owner,
-            body_hash=body_hash,
-            solver_version=spec.version,
-            enqueued_at=utcnow(),  # enqueued right after the commit; cleared if that fails
-            **fields,
-        ))
+        return self.store(NewJob(spec, job_id, body_hash, key, fields, owner))
+
+    def store(self, new: NewJob) -> Submitted:
+        """Store a submission (or find the job its idempotency key names) and, once committed, hand it to the
+        queue."""
+        submitted = self.stored(new, *self.ctx.repo.create(self._columns(new)))
+        if submitted.created:
+            self.dispatch(submitted.job)
+        return submitted
+
+    def store_later(self, new: NewJob) -> Future | None:
+        """Store a submission through the store's group commit: a future of what :meth:`stored` takes, answered once
+        the row is committed; None when the store writes each submission itself (then call :meth:`store`). The
+        caller hands a new job to the queue (:meth:`dispatch`) after the commit."""
+        return self.ctx.repo.create_later(self._columns(new))
+
+    def stored(self, new: NewJob, stored: Any, created: bool) -> Submitted:
+        """The outcome of storing ``new``: the new job, or the job of the same idempotency key (the same request:
+        200; another: 422)."""
         if not created:
-            if stored.body_hash != body_hash or stored.kind != spec.kind:
+            if stored.body_hash != new.body_hash or stored.kind != new.spec.kind:
                 raise Unprocessable(
                     "This Idempotency-Key was already used with a different request.",
                     errors=[field_problem(["header", "Idempotency-Key"], "already used with a different body", "idempotency_conflict")],
@@ -144,13 +184,39 @@ class JobService:
             return Submitted(stored, False)
         log.info("job %s (%s) submitted", stored.id, stored.kind,
                  extra={"job_id": str(stored.id), "kind": stored.kind, "status": QUEUED.value})
-        # Enqueue only after the row is committed: a worker must always find the job.
-        try:
-            self.dispatcher.enqueue(stored.id, stored.kind)
-        except Exception:  # the broker is down: the row is safe; unmarked, the next sweep sends it
-            log.warning("enqueue of job %s failed; the sweeper will send it", stored.id, exc_info=True)
-            self.ctx.repo.clear_enqueued(stored.id)
         return Submitted(stored, True)
+
+    @property
+    def dispatches_at_once(self) -> bool:
+        """Whether handing a job to the queue returns at once (an in-process queue, no broker across the network):
+        then an event loop may do it."""
+        return getattr(self.dispatcher, "in_process", False)
+
+    def dispatch(self, job: Any) -> None:
+        """Hand a committed new job to the queue (only after the commit: a worker must always find the job)."""
+        try:
+            self.dispatcher.enqueue(job.id, job.kind)
+        except Exception:  # the broker is down: the row is safe; unmarked, the next sweep sends it
+            log.warning("enqueue of job %s failed; the sweeper will send it", job.id, exc_info=True)
+            self.ctx.repo.clear_enqueued(job.id)
+
+    def _columns(self, new: NewJob) -> dict[str, Any]:
+        owner, key = new.owner, new.idempotency_key
+        return dict(
+            id=new.job_id,
+            kind=new.spec.kind,
+            status=QUEUED,
+            attempt=0,
+            max_attempts=new.spec.max_attempts or self.ctx.settings.max_attempts,
+            progress=0.0,
+            progress_message="queued",
+            idempotency_key=f"{owner}:{key}" if key is not None and owner else key,
+            owner=owner,
+            body_hash=new.body_hash,
+            solver_version=new.spec.version,
+            enqueued_at=utcnow(),  # enqueued right after the commit; cleared if that fails
+            **new.fields,
+        )
 
     # ---- reads and cancel -------------------------------------------------------------------
 

@@ -31,10 +31,13 @@ class Store:
         if migrate:
             db.migrate()
         local = LocalBlobStore(settings.resolved_artifact_dir)
-        return cls(db=db, repo=JobRepository(db.sessions, db.writing), files=open_blob_store(settings, db, local),
+        # SQLite writes one transaction at a time: concurrent submissions share one (see store/writer.py)
+        repo = JobRepository(db.sessions, db.writing, group_commit=db.is_sqlite)
+        return cls(db=db, repo=repo, files=open_blob_store(settings, db, local),
                    sessions=SessionRepository(db.sessions, db.writing), spool=local)
 
     def close(self) -> None:
+        self.repo.close()
         self.db.dispose()
 
 

@@ -9,6 +9,7 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 from __future__ import annotations
 
 import uuid
+from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from types import SimpleNamespace
@@ -21,6 +22,7 @@ from sqlalchemy.orm import Session, defer, sessionmaker
 
 from plantsolve.jobs.lifecycle import ACTIVE, CANCEL, CLAIM, FAIL, FINISHED, QUEUED, REQUEUE, RUNNING, SUCCEED
 from plantsolve.store.models import Artifact, Job, utcnow
+from plantsolve.store.writer import JobWriter
 
 
 def as_utc(value: datetime | None) -> datetime | None:
@@ -67,9 +69,21 @@ class SweepOutcome:
 
 
 class JobRepository:
-    def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext):
+    """``group_commit``: new jobs are inserted by one writer thread, in one transaction per batch of concurrent
+    submissions (:mod:`plantsolve.store.writer`; right for SQLite, which has one writer at a time anyway)."""
+
+    def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext,
+                 *, group_commit: bool = False):
         self.sessions = sessions
         self.writing = writing  # see Database.writing
+        self.writer = JobWriter(sessions.kw["bind"], JOBS, writing, self.get_by_idempotency_key,
+                                 made=JobRecord) if group_commit \
+            else None
+
+    def close(self) -> None:
+        """Write the submissions still queued for the writer thread, and end it."""
+        if self.writer is not None:
+            self.writer.close()
 
     def _core(self):
         """A connection in a transaction, committed on leaving (rolled back on an error), for Core statements on the
@@ -90,16 +104,14 @@ class JobRepository:
             stored, created = self.create({column.key: getattr(job, column.key) for column in JOBS.columns})
             return (job if created else stored), created
         values = job
+        if self.writer is not None:
+            return self.create_later(values).result()
         key = values.get("idempotency_key")
         if key is not None:
             existing = self.get_by_idempotency_key(key)
             if existing is not None:
                 return existing, False
-        record = {name: None for name in COLUMN_KEYS}
-        record.update(values)
-        for name, default in COLUMN_DEFAULTS:
-            if record[name] is None:
-                record[name] = default()
+        record = _record(values)
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
         try:
             with self.writing(), self._core() as connection:
@@ -110,6 +122,14 @@ class JobRepository:
                 raise
             return existing, False
         return JobRecord(**record), True
+
+    def create_later(self, values: dict[str, Any]) -> Future | None:
+        """:meth:`create` of a job given as its columns through the writer thread: a future of ``(job, created)``
+        answered once the row is committed (None without group commit). A taken idempotency key is found by the
+        insert itself (the key's unique index), not by a read before it."""
+        if self.writer is None:
+            return None
+        return self.writer.create(_record(values))
 
     def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Any:
         """The job; ``brief`` leaves out the input and the result (a status read must not load
@@ -421,8 +441,10 @@ class JobRepository:
         read of each row to find its time limit)."""
         query = (select(JOBS.c.id, JOBS.c.kind).where(JOBS.c.status == QUEUED, JOBS.c.attempt < JOBS.c.max_attempts)
                  .order_by(JOBS.c.created_at, JOBS.c.id).limit(limit))
-        with self.sessions() as session:
-            return [(job_id, kind) for job_id, kind in session.execute(query)]
+        # a Core read on a plain connection: the embedded pool runs it as jobs finish while a backlog waits, in the
+        # API process, where an ORM session's bookkeeping would cost more than the read
+        with self.sessions.kw["bind"].connect() as connection:
+            return [(job_id, kind) for job_id, kind in connection.execute(query)]
 
     # ---- the completion webhook ---------------------------------------------------------------
 
@@ -509,6 +531,17 @@ INSERT_JOB = JOBS.insert()
 # the columns a job's view shows: all but the input and the result
 BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in ("input", "input_options", "result"))
 BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
+
+
+def _record(values: dict[str, Any]) -> dict[str, Any]:
+    """Every column of a new job: the values given, the columns' Python-side defaults for what is left out, None for
+    the rest."""
+    record = {name: None for name in COLUMN_KEYS}
+    record.update(values)
+    for name, default in COLUMN_DEFAULTS:
+        if record[name] is None:
+            record[name] = default()
+    return record
 
 
 class JobRecord(SimpleNamespace):

@@ -18,6 +18,8 @@ log = logging.getLogger("plantsolve.embedded")
 class EmbeddedDispatcher:
     """Job ids go on an in-memory queue; each pool thread runs :func:`run_job` on them."""
 
+    in_process = True  # enqueue hands the id over in memory and returns at once
+
     def __init__(self, ctx: ServiceContext, workers: int | None = None):
         self.ctx = ctx
         self.size = workers or ctx.settings.embedded_workers

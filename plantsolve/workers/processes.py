@@ -82,6 +82,8 @@ def _run(job_id: str) -> str:
 class ProcessDispatcher:
     """Job ids go to a supervised pool of worker processes (``EMBEDDED_WORKERS`` of them)."""
 
+    in_process = True  # enqueue hands the id over in memory and returns at once
+
     def __init__(self, ctx: ServiceContext, workers: int | None = None):
         self.ctx = ctx
         self.size = workers or ctx.settings.embedded_workers
@@ -93,7 +95,12 @@ class ProcessDispatcher:
         self._pending: set[uuid.UUID] = set()
         self._lock = threading.Lock()
         self._stopping = False
-        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=self._refill)
+        # Whether a job may wait in its row beyond the window: set when an enqueue found the window full, cleared by a
+        # refill that found no more. A finished job refills from the database only then: with nothing waiting, a
+        # read per finished job would cost the API process more than the job's hand-over. The sweeper's pass
+        # refills regardless (jobs queued by another process, or re-queued by the sweep itself).
+        self._overflow = True
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=partial(self._refill, always=True))
 
     def start(self) -> None:
         self._stopping = False
@@ -138,8 +145,11 @@ class ProcessDispatcher:
         if self._pool is None:
             raise RuntimeError("the job process pool is not running")
         with self._lock:
-            if job_id in self._pending or len(self._pending) >= self.window:
-                return  # running, or waiting in its row until a process frees up (_refill)
+            if job_id in self._pending:
+                return  # handed to the pool already
+            if len(self._pending) >= self.window:
+                self._overflow = True
+                return  # waiting in its row until a process frees up (_refill)
             self._pending.add(job_id)
         spec = self.ctx.spec(kind) if kind else None
         if spec is None:
@@ -180,17 +190,25 @@ class ProcessDispatcher:
             except RuntimeError:  # stopping: the next start (or the sweeper) picks it up
                 pass
 
-    def _refill(self) -> None:
-        """Hand the oldest queued jobs to the pool until the window is full again."""
+    def _refill(self, always: bool = False) -> None:
+        """Hand the oldest queued jobs to the pool until the window is full again (after a finished job only when
+        some may be waiting beyond the window: see ``_overflow``)."""
         with self._lock:
             free = self.window - len(self._pending)
             held = set(self._pending)
-        if free <= 0 or self._stopping:
-            return
+            if free <= 0 or self._stopping or not (always or self._overflow):
+                return
+            # cleared before the read: an enqueue that overflows after it sets it again (its row is committed before
+            # the enqueue, so a read after the clear sees it either way)
+            self._overflow = False
         try:
-            waiting = [(j, kind) for j, kind in self.ctx.repo.queued_jobs(limit=free + len(held)) if j not in held]
+            # one more than fits: whether more wait than this refill takes
+            waiting = [(j, kind) for j, kind in self.ctx.repo.queued_jobs(limit=free + len(held) + 1) if j not in held]
+            if len(waiting) > free:
+                self._overflow = True
             for job_id, kind in waiting[:free]:
                 self.enqueue(job_id, kind)
         except Exception:  # the database is away (or the pool is stopping): the next pass refills
+            self._overflow = True
             if not self._stopping:
                 log.warning("refilling the job pool failed", exc_info=True)

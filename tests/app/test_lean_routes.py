@@ -71,6 +71,33 @@ def test_refusals_answer_as_the_routes_do(client):
     assert refused.headers["x-content-type-options"] == "nosniff"
 
 
+def test_submissions_read_on_the_event_loop_answer_as_the_routes_do(client):
+    service = client.app.state.jobs
+    first = client.post("/v1/test-compute/jobs", json={"values": [1.0]}, headers=ALICE)  # in a thread: imports checks
+    assert first.status_code == 202 and service.intake_loaded("test-compute")
+    # from here on a small body is read, checked and stored on the event loop
+    for body in (b'{"values": []}', b'{"values": [1.0', b'{"values": ["1"]}', b'{"values": [666]}'):
+        lean = client.post("/v1/test-compute/jobs", content=body, headers={**ALICE, "Content-Type": "application/json"})
+        routed = client.post(f"/v1/test-compute/jobs{ROUTED}", content=body,
+                             headers={**ALICE, "Content-Type": "application/json"})
+        assert lean.status_code == 422, body
+        _same_answer(lean, routed)
+    new = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    assert new.status_code == 202
+    read_back = client.get(f"/v1/jobs/{new.json()['id']}", headers=ALICE)
+    assert new.content == read_back.content  # the view of the stored columns is the view of the stored row
+    again = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    routed = client.post(f"/v1/test-compute/jobs{ROUTED}", json={"values": [2.0]},
+                         headers={**ALICE, "Idempotency-Key": "loop-1"})
+    assert again.status_code == 200 and again.json()["id"] == new.json()["id"]
+    _same_answer(again, routed)
+    other = client.post("/v1/test-compute/jobs", json={"values": [3.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    other_routed = client.post(f"/v1/test-compute/jobs{ROUTED}", json={"values": [3.0]},
+                               headers={**ALICE, "Idempotency-Key": "loop-1"})
+    assert other.status_code == 422
+    _same_answer(other, other_routed)
+
+
 def test_lean_answers_carry_the_request_id_and_the_security_headers(client):
     request_id = str(uuid.uuid4())
     submitted = client.post("/v1/test-compute/jobs", json={"values": [1.0]}, headers={**ALICE, "X-Request-ID": request_id})

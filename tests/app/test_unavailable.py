@@ -34,16 +34,32 @@ def _unavailable(response):
     return response
 
 
-@pytest.mark.parametrize("method", ["get", "list", "create", "count_by_status"])
+class _AwayEngine:
+    def begin(self):
+        _away()
+
+
+def _database_away(app, monkeypatch, method: str) -> None:
+    repo = app.state.jobs.ctx.repo
+    if method == "writer":  # the group-commit thread's transaction fails: every submission in it is a 503
+        monkeypatch.setattr(repo.writer, "engine", _AwayEngine())
+    elif method == "create":  # a submission is stored one at a time, or through the group commit
+        monkeypatch.setattr(repo, "create", _away)
+        monkeypatch.setattr(repo, "create_later", _away)
+    else:
+        monkeypatch.setattr(repo, method, _away)
+
+
+@pytest.mark.parametrize("method", ["get", "list", "create", "writer", "count_by_status"])
 def test_reads_submits_and_the_dashboard_answer_503_while_the_database_is_away(app_and_client, monkeypatch, method):
     app, client = app_and_client
-    monkeypatch.setattr(app.state.jobs.ctx.repo, method, _away)
+    _database_away(app, monkeypatch, method)
     request_id = str(uuid.uuid4())
     if method == "get":
         response = client.get(f"/v1/jobs/{uuid.uuid4()}", headers={"X-Request-ID": request_id})
     elif method == "list":
         response = client.get("/v1/jobs", headers={"X-Request-ID": request_id})
-    elif method == "create":
+    elif method in ("create", "writer"):
         response = client.post("/v1/test-compute/jobs", json={"values": [1]}, headers={"X-Request-ID": request_id})
     else:
         response = client.get("/dashboard", headers={"X-Request-ID": request_id})
@@ -64,7 +80,7 @@ def test_an_unexpected_error_is_a_500_problem_with_the_request_id(app_and_client
 
 def test_the_database_back_answers_again(app_and_client, monkeypatch):
     app, client = app_and_client
-    monkeypatch.setattr(app.state.jobs.ctx.repo, "create", _away)
+    _database_away(app, monkeypatch, "create")
     _unavailable(client.post("/v1/test-compute/jobs", json={"values": [1]}))
     monkeypatch.undo()
     assert client.post("/v1/test-compute/jobs", json={"values": [1]}).status_code == 202

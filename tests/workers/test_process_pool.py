@@ -45,6 +45,16 @@ def test_a_backlog_waits_in_the_database_and_is_resumed_after_a_stop(tmp_path, c
         assert all(wait_for(client, job_id, timeout=90)["status"] == "succeeded" for job_id in ids)
 
 
+def test_a_backlog_beyond_the_window_is_pulled_in_as_jobs_finish_without_waiting_for_a_sweep(tmp_path):
+    settings = service_settings(tmp_path, embedded_mode="process", embedded_workers=1, sweep_seconds=600.0)
+    with TestClient(create_app(settings)) as client:
+        assert client.post("/v1/test-compute/jobs", json={"values": [0.0]}).status_code == 202  # the pool is up
+        wait_for(client, client.get("/v1/jobs").json()["items"][0]["id"], timeout=60)
+        ids = [client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 0.05}).json()["id"]
+               for _ in range(3 * client.app.state.dispatcher.window)]
+        assert all(wait_for(client, job_id, timeout=60)["status"] == "succeeded" for job_id in ids)
+
+
 def test_a_solver_deaf_to_its_soft_limit_is_killed_at_the_hard_limit(pooled):
     before = {thread.ident for thread in threading.enumerate()}
     started = time.monotonic()

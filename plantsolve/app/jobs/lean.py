@@ -11,6 +11,7 @@ methods and serialise the same view model, so the answer is the same byte for by
 
 from __future__ import annotations
 
+import asyncio
 import re
 import uuid
 from functools import partial
@@ -22,12 +23,16 @@ from starlette.types import Receive, Scope, Send
 
 from plantsolve.app.auth import Principal
 from plantsolve.app.problems import Unauthorized
-from plantsolve.jobs.service import JobService
+from plantsolve.jobs.service import JobService, Submitted
 
 # the Idempotency-Key header's constraints in the route (1 to 255 printable ASCII characters, no leading space)
 IDEMPOTENCY_KEY = re.compile(r"[\x21-\x7e][\x20-\x7e]{0,254}")
 JOB_PATH = re.compile(r"/v1/jobs/([0-9a-fA-F]{8}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{4}-[0-9a-fA-F]{12})")
 JSON_HEADERS = [(b"content-type", b"application/json")]
+# A JSON submission up to this size is read and checked on the event loop (tens of microseconds: less than the hop
+# to a worker thread and back); a larger one in a thread, so that the loop serves other requests meanwhile (and so
+# is a process's first submission of a kind, which imports the kind's checks).
+LOOP_INTAKE_BYTES = 16 * 1024
 
 def is_json(media_type: str) -> bool:
     """Whether a submission's media type (lower case, no parameters) is JSON: ``application/json`` or a ``+json``."""
@@ -78,8 +83,32 @@ class LeanRoutes:
                      caller: Principal) -> None:
         _require(caller)
         body = await _body(receive)
-        submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key, caller.owner,
-                                            None)
+        if len(body) > LOOP_INTAKE_BYTES or not self.service.stores_inline(len(body)) \
+                or not self.service.intake_loaded(kind):  # the first of a kind imports its checks: not on the loop
+            submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key,
+                                                caller.owner, None)
+            await self._send_submitted(send, submitted)
+            return
+        new = self.service.take_json(kind, body, idempotency_key, owner=caller.owner)
+        pending = self.service.store_later(new)
+        if pending is None:  # a database that takes concurrent writers: the write (and view) in a thread
+            submitted = await run_in_threadpool(self.service.store_view, new)
+            await self._send_submitted(send, submitted)
+            return
+        # group commit (SQLite): answered after the commit that holds the row (written already when nothing else
+        # was being written); the view's reads are local
+        submitted = self.service.stored(new, *(pending.result() if pending.done() else
+                                               await asyncio.wrap_future(pending)))
+        submitted.view = self.service.view(submitted.job)
+        await self._send_submitted(send, submitted)
+        if submitted.created:  # after the answer: the client does not wait for the hand-over to the pool
+            if self.service.dispatches_at_once:
+                self.service.dispatch(submitted.job)
+            else:
+                await run_in_threadpool(self.service.dispatch, submitted.job)
+
+    @staticmethod
+    async def _send_submitted(send: Send, submitted: Submitted) -> None:
         location = f"/v1/jobs/{submitted.job.id}".encode()
         await _send_json(send, 202 if submitted.created else 200, submitted.view.model_dump_json().encode(),
                          [(b"location", location)])
