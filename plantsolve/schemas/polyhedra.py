@@ -69,8 +69,8 @@ def _mesh_vertices(value: Any) -> np.ndarray:
     if not isinstance(value, np.ndarray):
         value = _POINTS.validate_python(value, strict=True)
     array = np.asarray(value, dtype=np.float64).reshape(-1, 3) if np.size(value) else np.zeros((0, 3))
-    if not len(array):
-        raise ValueError("a mesh needs at least 3 vertices")
+    if len(array) < 3:
+        raise ValueError(f"a mesh needs at least 3 vertices, got {len(array)}")
     if len(array) > MAX_VERTICES:
         raise ValueError(f"at most {MAX_VERTICES} vertices, got {len(array)}")
     if not (array.min() >= -MAX_COORDINATE and array.max() <= MAX_COORDINATE):  # NaN fails both
@@ -95,17 +95,17 @@ _POINTS = TypeAdapter(list[Point3])
 _TRIANGLES = TypeAdapter(list[Annotated[list[VertexIndex], Field(min_length=3, max_length=3)]])
 
 
-def _array_schema(items: dict, bound: int, description: str) -> WithJsonSchema:
-    return WithJsonSchema({"type": "array", "maxItems": bound, "description": description,
+def _array_schema(items: dict, least: int, bound: int, description: str) -> WithJsonSchema:
+    return WithJsonSchema({"type": "array", "minItems": least, "maxItems": bound, "description": description,
                            "items": {"type": "array", "minItems": 3, "maxItems": 3, "items": items}})
 
 
 MeshVertices = Annotated[
     Any, PlainValidator(_mesh_vertices), PlainSerializer(lambda a: a.tolist()),
-    _array_schema({"type": "number"}, MAX_VERTICES, "Vertex coordinates [x, y, z] (request units).")]
+    _array_schema({"type": "number", "minimum": -MAX_COORDINATE, "maximum": MAX_COORDINATE}, 3, MAX_VERTICES, "Vertex coordinates [x, y, z] (request units).")]
 MeshTriangles = Annotated[
     Any, PlainValidator(_mesh_triangles), PlainSerializer(lambda a: a.tolist()),
-    _array_schema({"type": "integer", "minimum": 0}, MAX_FACES,
+    _array_schema({"type": "integer", "minimum": 0, "maximum": MAX_VERTICES - 1}, 1, MAX_FACES,
                   "Vertex indices [i, j, k] into the mesh's vertices, counter-clockwise seen from outside.")]
 
 

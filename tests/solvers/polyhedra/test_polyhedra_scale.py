@@ -11,9 +11,10 @@ import json
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 import trimesh
 
-from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.schemas.polyhedra import MAX_VERTICES, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.polyhedra import artifacts, bulk_csv
 from plantsolve.solvers.polyhedra.solve import solve
@@ -71,6 +72,21 @@ def test_a_mesh_in_a_json_body_is_checked_naming_the_field():
         with pytest.raises(Exception) as error:
             PolyhedraRequest.model_validate({"mesh": broken})
         assert error.value.errors()[0]["loc"][:2] == ("mesh", "vertices")
+
+
+def test_the_mesh_json_schema_states_every_bound_the_validator_holds():
+    # a schema-valid mesh is refused only for what no JSON Schema can say (an index past the vertices)
+    schema = PolyhedraRequest.model_json_schema(mode="validation")["$defs"]["TriangleMesh"]["properties"]
+    vertices, triangles = schema["vertices"], schema["triangles"]
+    assert vertices["minItems"] == 3 and vertices["items"]["items"] == {"type": "number", "minimum": -1e12,
+                                                                        "maximum": 1e12}
+    assert triangles["minItems"] == 1 and triangles["items"]["items"]["maximum"] == MAX_VERTICES - 1
+    for broken in ({"vertices": [[0, 0, 1.0000001e12], [0, 1, 0], [1, 0, 0]], "triangles": [[0, 1, 2]]},
+                   {"vertices": [[0, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 1]]},
+                   {"vertices": [[0, 0, 0], [0, 1, 0], [1, 0, 0]], "triangles": []}):
+        with pytest.raises(ValidationError):
+            PolyhedraRequest.model_validate({"mesh": broken})
+    PolyhedraRequest.model_validate({"mesh": {"vertices": [[0, 0, -1e12], [0, 1, 0], [1, 0, 0]], "triangles": [[0, 1, 2]]}})
 
 
 def test_faces_given_with_a_mesh_come_first_and_keep_their_names():
