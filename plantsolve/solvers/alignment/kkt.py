@@ -98,18 +98,19 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
     positive definite, else the sparse LU (see the module doc)."""
     m = A.shape[0]
     hd = H.diagonal()
-    col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
+    Ar = sp.csr_matrix(A)  # no copy when it is one
+    col = np.bincount(Ar.indices, weights=Ar.data**2, minlength=A.shape[1])  # squared column norms, no copy of A
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
     if _SCHUR.get():
         Hinv = block_inverse(H)
         if Hinv is not None:
-            HiAt = (Hinv @ A.T).tocsc()
-            S = (A @ HiAt + delta * sp.identity(m)).tocsc()
-            ldl = _ldl(sp.triu(S, format="csc"), m, cache)
+            upper = sp.triu(A @ (Hinv @ A.T) + delta * sp.identity(m), format="csc")  # the rest is never held
+            ldl = _ldl(upper, m, cache)
+            del upper
             if ldl is not None:
-                return SchurSolve(H, Hinv, A, HiAt, ldl, delta)
+                return SchurSolve(H, Hinv, A, ldl, delta)
     K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
     return splu(K)
 
@@ -129,22 +130,22 @@ class SchurSolve:
 
     refinements = 3  # at most; each costs one more elimination (measured: the third rarely helps)
 
-    def __init__(self, H: sp.spmatrix, Hinv: sp.csr_matrix, A: sp.csr_matrix, HiAt: sp.csc_matrix, ldl,
-                 delta: float):
-        self.H, self.Hinv, self.A, self.HiAt, self.ldl, self.delta = sp.csr_matrix(H), Hinv, A, HiAt, ldl, delta
-        self.At = A.T.tocsr()
+    def __init__(self, H: sp.spmatrix, Hinv: sp.csr_matrix, A: sp.spmatrix, ldl, delta: float):
+        # held by reference (the caller's matrices, A^T a view): a 100,000-component network's factorisation
+        # is the largest thing alive during the solve, nothing beside it should be a copy
+        self.H, self.Hinv, self.A, self.ldl, self.delta = H, Hinv, A, ldl, delta
 
     def _eliminate(self, rhs: np.ndarray) -> np.ndarray:
         n = self.Hinv.shape[0]
         w = self.Hinv @ rhs[:n]
         dl = self.ldl.solve(self.A @ w - rhs[n:])
-        return np.concatenate([w - self.HiAt @ dl, dl])
+        return np.concatenate([w - self.Hinv @ (self.A.T @ dl), dl])
 
     def _residual(self, rhs: np.ndarray, sol: np.ndarray) -> np.ndarray:
         """``rhs`` minus the regularised KKT matrix times ``sol``."""
         n = self.Hinv.shape[0]
         x, lam = sol[:n], sol[n:]
-        return rhs - np.concatenate([self.H @ x + self.At @ lam, self.A @ x - self.delta * lam])
+        return rhs - np.concatenate([self.H @ x + self.A.T @ lam, self.A @ x - self.delta * lam])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         sol = self._eliminate(rhs)
