@@ -256,10 +256,10 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         if nv == 0 or (not np.any(short) and err <= tight):
             break
         # near a singular loop feasibility steps crawl (the residual falls by ~0.9 a step, the Jacobian losing
-        # rank at the solution): a stall is a step that does not lower it at all, so where the crawl stops is
-        # the problem's (its round-off or max_gn), not which side of 0.9 a ratio fell on (that moved the
-        # point by 2.4e-3 mm with the connections given in another order)
-        if not use_cost and err >= prev and not np.any(short):
+        # rank at the solution): a stall is a step that does not lower it at all or is at float64's end, so
+        # where the crawl stops is the problem's (round-off or max_gn), not which side of 0.9 a ratio fell on
+        # (that moved the point by 2.4e-3 mm with the connections given in another order)
+        if not use_cost and (err >= prev or err <= 1e-14) and not np.any(short):
             stalls += 1
             if stalls >= 3:
                 break
