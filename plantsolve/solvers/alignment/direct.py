@@ -232,6 +232,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     pf = np.flatnonzero(free & model.is_pipe)
     sv[var[pf] + 6] = model.lref
     best, first = (np.inf, None), np.inf
+    snapped = min(model.snap_pos / pos_scale, float(np.min(model.snap_ang, initial=1.0)))  # relative, as err
     for it in range(max_gn):
         if step is not None:
             step(f"joint constrained Gauss-Newton, step {it + 1}")
@@ -256,10 +257,13 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         if nv == 0 or (not np.any(short) and err <= tight):
             break
         # near a singular loop feasibility steps crawl (the residual falls by ~0.9 a step, the Jacobian losing
-        # rank at the solution): a stall is a step that does not lower it at all or is at float64's end, so
-        # where the crawl stops is the problem's (round-off or max_gn), not which side of 0.9 a ratio fell on
-        # (that moved the point by 2.4e-3 mm with the connections given in another order)
-        if not use_cost and (err >= prev or err <= 1e-14) and not np.any(short):
+        # rank at the solution). Once every connection is within what snapping closes, a stall is a step that
+        # does not lower the residual at all or is at float64's end, so where the crawl stops is the problem's
+        # (round-off or max_gn), not which side of 0.9 a ratio fell on (that moved the point by 2.4e-3 mm with
+        # the connections given in another order). Above it (a conflict's plateau) less than 10% is a stall:
+        # the pose the cut is chosen on stays the one it was
+        crawl = err <= snapped
+        if not use_cost and not np.any(short) and (err >= prev or err <= 1e-14 or (not crawl and err >= 0.9 * prev)):
             stalls += 1
             if stalls >= 3:
                 break
