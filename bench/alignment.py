@@ -14,8 +14,8 @@ Then the scaling tables of the direct method, for two families: the square loop 
 a loop per ~500 nodes, a tie-in at every 500th run end: 10,000, 40,000 and 100,000 components;
 --quick stops at 10,000 and 10,000). Wall and CPU time, peak memory, the largest gap left, the
 exponent k of CPU time ~ components^k (and of memory) fitted between each size and the one before.
-Every size runs as ``this`` (the default: every KKT system by the pivoted LU), as ``schur`` (the
-same code within ``kkt.use_schur()``: the Schur complement's LDL^T where it is positive definite),
+Every size runs as ``this`` (the default: the Schur complement's LDL^T where it is positive definite),
+as ``lu`` (the same code within ``kkt.use_schur(False)``: every KKT system by the pivoted LU),
 and with ``--before DIR`` on the code in DIR (a checkout of another revision, only read, e.g.
 main), side by side, each with the largest difference of any port position from ``this``:
 
@@ -127,7 +127,7 @@ def plant_network(side: int, seed: int = 7, options: dict | None = None):
 
 
 def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None,
-         family: str = "grid", schur: bool = False) -> None:
+         family: str = "grid", lu: bool = False) -> None:
     if code is not None:
         # the child has imported nothing of plantsolve yet, so this checkout is the one it loads
         sys.path.insert(0, code)
@@ -143,9 +143,9 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
                            origin=(1.0e6, 2.0e5, 1.0e4), seed=2024, options=options)
     mode = contextlib.nullcontext()
-    if schur:
+    if lu:
         from plantsolve.solvers.alignment.kkt import use_schur
-        mode = use_schur()
+        mode = use_schur(False)
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
     with mode:
@@ -164,10 +164,10 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
 
 
 def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None, family: str = "grid",
-             schur: bool = False) -> dict:
+             lu: bool = False) -> dict:
     ctx = mp.get_context("fork")
     q = ctx.Queue()
-    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, schur))
+    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, lu))
     p.start()
     out = q.get()
     p.join()
@@ -181,12 +181,12 @@ def _exponent(small: dict | None, large: dict, key: str) -> str:
 
 
 def scaling(quick: bool, before: str | None, family: str = "grid") -> None:
-    """Direct method on growing networks of one family: this code, the same code within ``use_schur()``,
+    """Direct method on growing networks of one family: this code, the same code within ``use_schur(False)``,
     and with ``before`` the code in that directory, on the same networks."""
     import numpy as np
 
     sides = {"grid": SCALING_SIDES[:-1] if quick else SCALING_SIDES, "plant": PLANT_SIDES[:1] if quick else PLANT_SIDES}[family]
-    runs = [("this", None, False), ("schur", None, True)] + ([("before", before, False)] if before else [])
+    runs = [("this", None, False), ("lu", None, True)] + ([("before", before, False)] if before else [])
     head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'max gap':>9} "
             f"{'k cpu':>6} {'k mem':>6} {'iter':>5} {'max |dP|':>9}  stop")
     print(f"\nDirect method, scaling on {'square loop grids' if family == 'grid' else 'plant-like networks'} "
@@ -197,8 +197,8 @@ def scaling(quick: bool, before: str | None, family: str = "grid") -> None:
     rows: dict[str, list[dict]] = {}
     for side in sides:
         here = None
-        for label, code, schur in runs:
-            r = run_case(side, "direct", None, code, family, schur)
+        for label, code, lu in runs:
+            r = run_case(side, "direct", None, code, family, lu)
             pos = np.array(r.pop("positions"))
             here = here or {**r, "P": pos}
             dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")

@@ -13,18 +13,28 @@ A factorisation may be passed back in (``cache``): near convergence of an outer
 Gauss-Newton loop the matrix barely changes, and the refinement, which always uses the
 current ``H`` and ``A``, converges with a slightly stale preconditioner too.
 
-The default is a pivoted sparse LU of the regularised matrix. The cost is block diagonal (one
-small block per component), so within :func:`use_schur` the system is solved by eliminating it
-instead: the Schur complement ``A H^-1 A^T + delta I`` is symmetric positive definite and factored
-by LDL^T (QDLDL, approximate minimum degree ordering, kept while a Gauss-Newton sequence keeps the
-pattern); the LU where a pivot is not positive or the cost is not block diagonal. Positive
-definiteness makes it stable under any ordering, unlike an LDL^T of the quasi-definite KKT matrix
-itself, whose tiny ``-delta`` pivots, once the ordering takes them before their cost block, grow
-the factors by ``1/delta`` (measured: backward errors of 1e20 on a 47-row system whose inertia was
-right). It is not the default: each of its solves agrees with the LU's to round-off, but the
-Gauss-Newton sequences built on them end elsewhere along the flat directions of loops and where
-the cost was dropped (1.3e-4 mm on a plant-like network of 10,000 components, 5.8e-11 mm on loop
-grids), in 0.4-0.5 of the LU's CPU time on loop grids and 0.7 on plant-like networks.
+The cost is block diagonal (one small block per component), so by default the system is solved
+by eliminating it: the Schur complement ``A H^-1 A^T + delta I`` is symmetric positive definite and
+factored by LDL^T (QDLDL, approximate minimum degree ordering, kept while a Gauss-Newton sequence
+keeps the pattern); a pivoted sparse LU of the regularised matrix where a pivot is not positive, the
+cost is not block diagonal, or within ``use_schur(False)``. Positive definiteness makes it stable
+under any ordering, unlike an LDL^T of the quasi-definite KKT matrix itself, whose tiny ``-delta``
+pivots, once the ordering takes them before their cost block, grow the factors by ``1/delta``
+(measured: backward errors of 1e20 on a 47-row system whose inertia was right).
+
+Forming the complement squares the condition number, which matters where a loop is nearly
+singular: a planar loop of catalogue fittings is a singular point of its constraints (the
+Jacobian loses rank at the solution, Gauss-Newton halves its distance per step there), and one
+elimination is then off by up to 1e-2 of the step where the LU is not. The Gauss-Newton sequences
+built on the two followed different paths along the loops' flat directions and ended up to
+3.5e-4 mm apart (1.3e-4 mm on the 10,000-component plant-like bench network). Each Schur solve
+is therefore refined on the same regularised matrix (:class:`SchurSolve`), which gives the LU's
+solution back: the sequences then end 1e-7 mm apart on plant-like networks, 3e-11 mm on loop grids.
+Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
+and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
+0.8 of its memory on plant-like networks of 10,000 and 100,000. Where a connection has to be cut,
+the cut is decided on an LU pass (solve.py), one pass more per cut: 1.3 times the LU's time on the
+40,000-component plant-like network, which needs one.
 """
 
 from __future__ import annotations
@@ -40,7 +50,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
 # per thread and task, as numpy's errstate: one solve's choice never leaks into another running beside it
-_SCHUR: ContextVar[bool] = ContextVar("schur", default=False)
+_SCHUR: ContextVar[bool] = ContextVar("schur", default=True)
 
 
 @contextmanager
@@ -93,18 +103,19 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
     positive definite, else the sparse LU (see the module doc)."""
     m = A.shape[0]
     hd = H.diagonal()
-    col = np.asarray(abs(A).power(2).sum(axis=0)).ravel()
+    Ar = sp.csr_matrix(A)  # no copy when it is one
+    col = np.bincount(Ar.indices, weights=Ar.data**2, minlength=A.shape[1])  # squared column norms, no copy of A
     scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
     if _SCHUR.get():
         Hinv = block_inverse(H)
         if Hinv is not None:
-            HiAt = (Hinv @ A.T).tocsc()
-            S = (A @ HiAt + delta * sp.identity(m)).tocsc()
-            ldl = _ldl(sp.triu(S, format="csc"), m, cache)
+            upper = sp.triu(A @ (Hinv @ A.T) + delta * sp.identity(m), format="csc")  # the rest is never held
+            ldl = _ldl(upper, m, cache)
+            del upper
             if ldl is not None:
-                return SchurSolve(Hinv, A, HiAt, ldl)
+                return SchurSolve(H, Hinv, A, ldl, delta)
     K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
     return splu(K)
 
@@ -115,16 +126,45 @@ class SchurSolve:
 
     The Schur complement is symmetric positive definite, so its LDL^T is stable under any ordering;
     ``x`` only sees ``A^T dl``, in which the directions of redundant constraints (where the complement
-    is singular but for ``delta``) cancel."""
+    is singular but for ``delta``) cancel. But forming it squares the condition number: where a loop
+    is nearly singular (the Jacobian of a planar loop of catalogue fittings loses rank at the solution)
+    one elimination leaves errors of 1e-2 of the step in ``x`` (measured), where the LU of the
+    regularised matrix itself leaves round-off. A few steps of refinement on that same regularised
+    matrix recover the LU's solution, so that the Gauss-Newton sequences built on either are the
+    same (see the module doc)."""
 
-    def __init__(self, Hinv: sp.csr_matrix, A: sp.csr_matrix, HiAt: sp.csc_matrix, ldl):
-        self.Hinv, self.A, self.HiAt, self.ldl = Hinv, A, HiAt, ldl
+    refinements = 3  # at most; each costs one more elimination (measured: the third rarely helps)
 
-    def solve(self, rhs: np.ndarray) -> np.ndarray:
+    def __init__(self, H: sp.spmatrix, Hinv: sp.csr_matrix, A: sp.spmatrix, ldl, delta: float):
+        # held by reference (the caller's matrices, A^T a view): a 100,000-component network's factorisation
+        # is the largest thing alive during the solve, nothing beside it should be a copy
+        self.H, self.Hinv, self.A, self.ldl, self.delta = H, Hinv, A, ldl, delta
+
+    def _eliminate(self, rhs: np.ndarray) -> np.ndarray:
         n = self.Hinv.shape[0]
         w = self.Hinv @ rhs[:n]
         dl = self.ldl.solve(self.A @ w - rhs[n:])
-        return np.concatenate([w - self.HiAt @ dl, dl])
+        return np.concatenate([w - self.Hinv @ (self.A.T @ dl), dl])
+
+    def _residual(self, rhs: np.ndarray, sol: np.ndarray) -> np.ndarray:
+        """``rhs`` minus the regularised KKT matrix times ``sol``."""
+        n = self.Hinv.shape[0]
+        x, lam = sol[:n], sol[n:]
+        return rhs - np.concatenate([self.H @ x + self.A.T @ lam, self.A @ x - self.delta * lam])
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        sol = self._eliminate(rhs)
+        last = np.inf
+        for _ in range(self.refinements):
+            res = self._residual(rhs, sol)
+            size = float(np.max(np.abs(res), initial=0.0))
+            # the residual's floor is the round-off of the multipliers of redundant rows (1/delta times
+            # their conflict), not the error of x: refine while it contracts, whatever its size
+            if not 0.0 < size < 0.25 * last:
+                break
+            last = size
+            sol += self._eliminate(res)
+        return sol
 
 
 def block_inverse(H: sp.spmatrix, largest: int = 16) -> sp.csr_matrix | None:
