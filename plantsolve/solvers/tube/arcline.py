@@ -39,7 +39,7 @@ from plantsolve.solvers.tube.model import Spine, TubeModel, model_from_spine
 from plantsolve.solvers.tube.vec3 import cross
 
 
-_TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
+TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
 _X2 = np.array([1.0, 0.0])
 _MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
@@ -130,7 +130,7 @@ class _Arcs:
 def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
                eps: float, r_min: float, t_hi: float | None = None, plane_only: bool = False):
     """The arcs joining l_i = (a1, u1) and l_j = p_j p_{j+1} that keep ``chain`` within ε (:class:`_Arcs`), or
-    None when there are none; ``_TOO_FAR`` when a vertex is more than 2ε off the best plane through l_i (then no
+    None when there are none; ``TOO_FAR`` when a vertex is more than 2ε off the best plane through l_i (then no
     longer chain can succeed either). ``t_hi`` bounds the arc end on l_j (default: the projection of p_{j+1}).
     With ``plane_only`` only that test is made (None when it passes): the caller needs to know whether to go on,
     not the arc."""
@@ -150,7 +150,7 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
         m = cr / _norm3(cr)
     h = rel @ m
     if np.any(np.abs(h) > eps):
-        return _TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
+        return TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
     if plane_only:
         return None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
@@ -321,10 +321,10 @@ def _edge(f: _Arcs, best: tuple) -> Edge:
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
              eps: float, r_min: float, grid: int = 64, t_hi: float | None = None, plane_only: bool = False):
-    """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None; ``_TOO_FAR`` and
+    """Best arc (least squared error) joining l_i = (a1, u1) and l_j = p_j p_{j+1}, or None; ``TOO_FAR`` and
     ``plane_only`` as in :func:`arc_family`."""
     f = arc_family(chain, a1, u1, t_lo, pj, pj1, eps, r_min, t_hi, plane_only)
-    if f is None or f is _TOO_FAR:
+    if f is None or f is TOO_FAR:
         return f
     return best_arcs([f], r_min, grid)[0]
 
@@ -377,7 +377,7 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 # about that
                 f = arc_family(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
                                eps, r_min, plane_only=lost)
-                if f is _TOO_FAR:
+                if f is TOO_FAR:
                     break
                 if f is not None:
                     reached.append((j, f))

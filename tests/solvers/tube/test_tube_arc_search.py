@@ -3,7 +3,7 @@
 import numpy as np
 
 from plantsolve.solvers.tube import arcline, curve
-from plantsolve.solvers.tube.arcline import _TOO_FAR
+from plantsolve.solvers.tube.arcline import TOO_FAR
 from plantsolve.solvers.tube.model import sample_centreline
 from plantsolve.solvers.tube.synthetic import make_model
 
@@ -37,7 +37,7 @@ def _families(poly, eps, r_min):
     out = []
     for j in range(1, len(poly) - 1):
         f = arcline.arc_family(poly[:j + 1], poly[0], d0, 0.0, poly[j], poly[j + 1], eps, r_min)
-        if f is _TOO_FAR:
+        if f is TOO_FAR:
             break
         if f is not None:
             out.append(f)
