@@ -111,7 +111,10 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
     if _SCHUR.get():
         Hinv = block_inverse(H)
         if Hinv is not None:
-            upper = sp.triu(A @ (Hinv @ A.T) + delta * sp.identity(m), format="csc")  # the rest is never held
+            # the complement's upper triangle, then delta on its diagonal: the whole complement and a shifted copy
+            # of it are never held side by side (the same numbers as triu(A H^-1 A^T + delta I))
+            upper = sp.triu(A @ (Hinv @ A.T), format="csc")
+            upper.setdiag(upper.diagonal() + delta)
             ldl = _ldl(upper, m, cache)
             del upper
             if ldl is not None:
