@@ -10,17 +10,7 @@ import uuid
 import pytest
 from sqlalchemy import event, text
 
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.store.repository import JobRepository
-from tests.conftest import service_settings
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path))
-    context.db.migrate()
-    yield context
-    context.close()
 
 
 def _columns(**fields) -> dict:

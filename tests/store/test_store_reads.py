@@ -7,17 +7,7 @@ import uuid
 import pytest
 from sqlalchemy import text
 
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.store.models import Job
-from tests.conftest import service_settings
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path))
-    context.db.migrate()
-    yield context
-    context.close()
 
 
 def _job(**fields) -> Job:
