@@ -43,7 +43,7 @@ from dataclasses import replace
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
-from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.polyhedra.epjson import epjson_objects
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
@@ -453,15 +453,16 @@ def parse_stl(content: bytes) -> dict:
     vertices, triangles = vertices.reshape(-1, 3), triangles.reshape(-1, 3)
     if len(triangles) == 0:
         raise reject("the STL file holds no triangle")
-    finite = np.isfinite(vertices).all(axis=1)
+    # NaN, infinity and a coordinate past the schema's bound (a float the writer never meant) fail alike
+    finite = (np.abs(vertices) <= MAX_COORDINATE).all(axis=1)
     good = finite[triangles].all(axis=1) & (triangles[:, 0] != triangles[:, 1]) & \
         (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
-    skipped = [{"object": f"facet {int(k) + 1}", "reason": "non-finite or repeated vertex"}
+    skipped = [{"object": f"facet {int(k) + 1}", "reason": f"non-finite, beyond {MAX_COORDINATE:g} or repeated vertex"}
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
     if not good.all():
         triangles = triangles[good]
     if len(triangles) == 0:
-        raise reject("no usable triangle in the STL file (non-finite or repeated vertices)")
+        raise reject(f"no usable triangle in the STL file (non-finite, beyond {MAX_COORDINATE:g} or repeated vertices)")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
     # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them

@@ -150,6 +150,21 @@ def test_a_binary_stl_is_read_into_a_mesh_with_its_bad_facets_skipped():
     assert not zone.closed and zone.open_edge_count == 3
 
 
+def test_a_binary_stl_facet_beyond_the_coordinate_bound_is_skipped_not_the_whole_file():
+    vertices, triangles = shapes.torus_mesh(20, 8)
+    content = bytearray(trimesh.exchange.stl.export_stl(trimesh.Trimesh(vertices, triangles, process=False)))
+    content[84 + 4 * 50 + 20:84 + 4 * 50 + 24] = np.float32(3e20).tobytes()  # facet 5's first vertex, its y
+    request = parse_upload(StoredInput.from_bytes("ring.stl", bytes(content)), None)
+    assert request.mesh.triangles.shape == (len(triangles) - 1, 3)
+    assert request.source["skipped"] == [{"object": "facet 5", "reason": "non-finite, beyond 1e+12 or repeated vertex"}]
+    # random bytes read as a cut binary STL: each of its 398 whole facets is read or skipped with its reason
+    noise = np.random.default_rng(3).integers(0, 256, 20_000, dtype=np.uint8).tobytes()
+    read = parse_upload(StoredInput.from_bytes("noise.stl", noise), None)
+    assert len(read.mesh.triangles) + read.source["skipped_count"] == (20_000 - 84) // 50
+    assert read.source["warnings"][0]["code"] == "truncated_file"
+    assert np.all(np.abs(read.mesh.vertices) <= 1e12)
+
+
 def test_faces_are_listed_only_when_asked_but_zones_csv_has_every_face(monkeypatch):
     body = shapes.inside_out_cube()
     listed = solve(PolyhedraRequest.model_validate(body)).result
