@@ -81,9 +81,7 @@ class JobService:
     def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None, owner: str = "",
                          callback_url: str | None = None) -> Submitted:
         """submit_json plus the job's view, in one thread hop for the async route."""
-        submitted = self.submit_json(kind, body, idempotency_key, owner=owner, callback_url=callback_url)
-        submitted.view = self.view(submitted.job)
-        return submitted
+        return self.store_view(self.take_json(kind, body, idempotency_key, owner=owner, callback_url=callback_url))
 
     def store_view(self, new: NewJob) -> Submitted:
         """store plus the job's view, in one thread hop for the async route."""
@@ -151,12 +149,7 @@ class JobService:
             raise
         fields = {"input_kind": "upload", "input_file": blob.key, "input_filename": filename, "input_options": options,
                   **_callback(callback_url)}
-        return self._create(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner)
-
-    def _create(
-        self, spec: SolverSpec, job_id: uuid.UUID, body_hash: str, key: str | None, fields: dict, owner: str = ""
-    ) -> Submitted:
-        return self.store(NewJob(spec, job_id, body_hash, key, fields, owner))
+        return self.store(NewJob(spec, job_id, digest.hexdigest(), idempotency_key, fields, owner))
 
     def store(self, new: NewJob) -> Submitted:
         """Store a submission (or find the job its idempotency key names) and, once committed, hand it to the

@@ -82,29 +82,6 @@ def _linspace(lo: float, hi: float, num: int) -> np.ndarray:
     return y
 
 
-def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
-                     a2: np.ndarray, u2: np.ndarray, n2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """2D distances of chain points q (K, 2) to the left-turning curves given by t1 (G,):
-    ray along +x ending at (t1, 0), arc about C = (t1, R) by phi, ray along u2 from T2."""
-    # centre C = (t1, R), arc end T2 = C − R·n2; all (G, K) arrays built from coordinates
-    T2x, T2y = t1 - R * n2[0], R - R * n2[1]
-    t2 = (T2x - a2[0]) * u2[0] + (T2y - a2[1]) * u2[1]
-    qx, qy = q[None, :, 0], q[None, :, 1]
-    dx1 = qx - t1[:, None]
-    dT1 = np.hypot(dx1, qy)
-    d1 = np.where(qx <= t1[:, None], np.abs(qy), dT1)
-    qa = q - a2
-    s2 = (qa @ u2)[None]  # (1, K)
-    dT2 = np.hypot(qx - T2x[:, None], qy - T2y[:, None])
-    d3 = np.where(s2 >= t2[:, None], np.abs(qa @ n2)[None], dT2)
-    vy = qy - R[:, None]  # v = q − C = (dx1, vy)
-    # angle from the start direction (0, -1) counter-clockwise
-    th = np.mod(np.arctan2(dx1, -vy), 2 * np.pi)
-    rho = np.hypot(dx1, vy)
-    d2 = np.where(th <= phi, np.abs(rho - R[:, None]), np.minimum(dT1, dT2))
-    return np.minimum(np.minimum(d1, d2), d3), t2
-
-
 @dataclass
 class _Arcs:
     """The arcs that may join l_i and l_j, in the plane of the edge with l_i along +x (mirrored to a left turn):
@@ -203,9 +180,10 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
 
 def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarray, along2: np.ndarray,
                       off2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_dist_to_arcline` for the arc families ``f`` at once: chain points q (J, K, 2) (padded), arc
-    starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances from it (J, K).
-    Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
+    """2D distances of chain points to the left-turning curves of the arc families ``f`` (ray along +x ending at
+    (t1, 0), arc about C = (t1, R) by phi, ray along u2 from its end T2), all families at once: chain points q
+    (J, K, 2) (padded), arc starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances
+    from it (J, K). Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
     a2 = np.array([e.a2 for e in f])[:, :, None]
     u2 = np.array([e.u2 for e in f])[:, :, None]
     n2 = np.array([e.n2 for e in f])[:, :, None]
@@ -300,7 +278,8 @@ def _best_arc_alone(f: _Arcs, r_min: float) -> Edge | None:
     """The search of a family whose arcs all start at one point."""
     t_grid = np.array([f.lo])
     R = f.alpha + f.beta * t_grid
-    d, t2 = _dist_to_arcline(f.q, t_grid, R, f.phi, f.a2, f.u2, f.n2)
+    d, t2 = _dist_to_arclines([f], f.q[None], t_grid[None], R[None], f.along2[None], f.off2[None])
+    d, t2 = d[0], t2[0]
     viol = np.max(d - f.epsk[None], axis=1)
     if viol[0] <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
         return _edge(f, (float((d * d).sum(1)[0]), t_grid[0], R[0], t2[0]))

@@ -8,13 +8,37 @@ from plantsolve.solvers.tube.model import sample_centreline
 from plantsolve.solvers.tube.synthetic import make_model
 
 
+def _dist_to_arcline(q: np.ndarray, t1: np.ndarray, R: np.ndarray, phi: float,
+                     a2: np.ndarray, u2: np.ndarray, n2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The reference: the one-family formula the search used before batching. 2D distances of chain points q
+    (K, 2) to the left-turning curves given by t1 (G,): ray along +x ending at (t1, 0), arc about C = (t1, R) by
+    phi, ray along u2 from T2."""
+    # centre C = (t1, R), arc end T2 = C − R·n2; all (G, K) arrays built from coordinates
+    T2x, T2y = t1 - R * n2[0], R - R * n2[1]
+    t2 = (T2x - a2[0]) * u2[0] + (T2y - a2[1]) * u2[1]
+    qx, qy = q[None, :, 0], q[None, :, 1]
+    dx1 = qx - t1[:, None]
+    dT1 = np.hypot(dx1, qy)
+    d1 = np.where(qx <= t1[:, None], np.abs(qy), dT1)
+    qa = q - a2
+    s2 = (qa @ u2)[None]  # (1, K)
+    dT2 = np.hypot(qx - T2x[:, None], qy - T2y[:, None])
+    d3 = np.where(s2 >= t2[:, None], np.abs(qa @ n2)[None], dT2)
+    vy = qy - R[:, None]  # v = q − C = (dx1, vy)
+    # angle from the start direction (0, -1) counter-clockwise
+    th = np.mod(np.arctan2(dx1, -vy), 2 * np.pi)
+    rho = np.hypot(dx1, vy)
+    d2 = np.where(th <= phi, np.abs(rho - R[:, None]), np.minimum(dT1, dT2))
+    return np.minimum(np.minimum(d1, d2), d3), t2
+
+
 def _search_alone(f, r_min, grid=64):
     """The zoomed grid search of one family of arcs, written as one loop over its grid (no batching)."""
     best = None
     t_grid = arcline._linspace(f.lo, f.hi, grid) if f.hi > f.lo else np.array([f.lo])
     for _ in range(4):
         R = f.alpha + f.beta * t_grid
-        d, t2 = arcline._dist_to_arcline(f.q, t_grid, R, f.phi, f.a2, f.u2, f.n2)
+        d, t2 = _dist_to_arcline(f.q, t_grid, R, f.phi, f.a2, f.u2, f.n2)
         viol = np.max(d - f.epsk[None], axis=1)
         valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
         cost = np.where(valid, (d * d).sum(1), np.inf)
