@@ -1,4 +1,5 @@
-"""Request-body size limit, enforced before the body is read whole; security headers on every answer.
+"""Request-body size limit, enforced before the body is read whole; security headers on every answer (both
+applied by :class:`~plantsolve.app.edge.EdgeMiddleware`).
 
 A declared ``Content-Length`` above the limit is refused at once; a body without one (chunked)
 is counted as it streams and refused as soon as it passes the limit.
@@ -11,25 +12,9 @@ import hashlib
 import re
 
 from starlette.datastructures import MutableHeaders
-from starlette.types import ASGIApp, Message, Receive, Scope, Send
+from starlette.types import Message, Receive, Scope, Send
 
-from plantsolve.app.problems import PayloadTooLarge, problem_response
-
-
-class BodyLimitMiddleware:
-    def __init__(self, app: ASGIApp, max_bytes: int):
-        self.app = app
-        self.max_bytes = max_bytes
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        refusal = declared_too_large(dict(scope.get("headers") or []).get(b"content-length"), self.max_bytes)
-        if refusal is not None:
-            await problem_response(refusal)(scope, receive, send)
-            return
-        await self.app(scope, limited(receive, self.max_bytes), send)
+from plantsolve.app.problems import PayloadTooLarge
 
 
 def declared_too_large(declared: bytes | None, limit: int) -> PayloadTooLarge | None:
@@ -74,31 +59,18 @@ INLINE_SCRIPT = re.compile(rb"<script>(.*?)</script>", re.DOTALL | re.IGNORECASE
 INLINE_SCRIPT_PATHS = ("/docs", "/docs/oauth2-redirect")  # Swagger UI's pages: FastAPI writes their bootstrap inline
 
 
-class SecurityHeadersMiddleware:
-    """Every answer carries ``X-Content-Type-Options: nosniff``; every HTML page (dashboard, docs, errors)
-    also ``Content-Security-Policy``, ``X-Frame-Options: DENY`` and ``Referrer-Policy: no-referrer``.
+NOSNIFF = (b"x-content-type-options", b"nosniff")
+
+
+def secured(scope: Scope, send: Send, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS) -> Send:
+    """``send`` with the security headers put on the answer's start. Every answer carries
+    ``X-Content-Type-Options: nosniff``; every HTML page (dashboard, docs, errors) also ``Content-Security-Policy``, ``X-Frame-Options: DENY`` and ``Referrer-Policy: no-referrer``.
 
     The pages named in ``inline_script_paths`` (Swagger UI's, whose bootstrap script FastAPI writes inline)
     get the SHA-256 of each of their inline scripts in ``script-src``: those pages are made from the app's
     configuration alone (nothing of the request is echoed into them), so the hash admits exactly the script
     the service wrote, where ``'unsafe-inline'`` would admit an injected one too. Every other page runs
     no inline script at all."""
-
-    def __init__(self, app: ASGIApp, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS):
-        self.app, self.inline_script_paths = app, inline_script_paths
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        await self.app(scope, receive, secured(scope, send, self.inline_script_paths))
-
-
-NOSNIFF = (b"x-content-type-options", b"nosniff")
-
-
-def secured(scope: Scope, send: Send, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS) -> Send:
-    """``send`` with the security headers of :class:`SecurityHeadersMiddleware` put on the answer's start."""
     hashed = scope.get("path") in inline_script_paths
     start: Message | None = None
     body: list[bytes] = []

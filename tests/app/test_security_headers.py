@@ -15,7 +15,7 @@ from starlette.responses import Response
 from starlette.routing import Route
 
 from plantsolve.app.main import create_app
-from plantsolve.app.middleware import SecurityHeadersMiddleware
+from plantsolve.app.middleware import secured
 from tests.conftest import service_settings
 from tests.support import browser
 
@@ -67,8 +67,11 @@ def test_every_html_page_carries_the_security_headers(client):
 
 def test_an_svg_opened_on_its_own_runs_nothing():
     svg = b'<svg xmlns="http://www.w3.org/2000/svg"><script>alert(1)</script></svg>'
-    app = SecurityHeadersMiddleware(Starlette(routes=[
-        Route("/plot.svg", lambda request: Response(svg, media_type="image/svg+xml"))]))
+    inner = Starlette(routes=[Route("/plot.svg", lambda request: Response(svg, media_type="image/svg+xml"))])
+
+    async def app(scope, receive, send):
+        await inner(scope, receive, secured(scope, send))
+
     response = TestClient(app).get("/plot.svg")
     assert response.content == svg
     assert "sandbox" in _policy(response) and _policy(response)["default-src"] == ["'none'"]
