@@ -455,8 +455,11 @@ def parse_stl(content: bytes) -> dict:
         raise reject("the STL file holds no triangle")
     # NaN, infinity and a coordinate past the schema's bound (a float the writer never meant) fail alike
     finite = (np.abs(vertices) <= MAX_COORDINATE).all(axis=1)
-    good = finite[triangles].all(axis=1) & (triangles[:, 0] != triangles[:, 1]) & \
-        (triangles[:, 1] != triangles[:, 2]) & (triangles[:, 0] != triangles[:, 2])
+    good = finite[triangles].all(axis=1)
+    # a corner repeated by index or by its coordinates (exporters write such zero-area facets; the reader keeps every
+    # facet's corners apart, so only the coordinates tell): no area, and its loop would collapse in the solver
+    for i, j in ((0, 1), (1, 2), (0, 2)):
+        good &= (triangles[:, i] != triangles[:, j]) & (vertices[triangles[:, i]] != vertices[triangles[:, j]]).any(axis=1)
     skipped = [{"object": f"facet {int(k) + 1}", "reason": f"non-finite, beyond {MAX_COORDINATE:g} or repeated vertex"}
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
     if not good.all():

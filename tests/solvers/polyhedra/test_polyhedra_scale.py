@@ -165,6 +165,21 @@ def test_a_binary_stl_facet_beyond_the_coordinate_bound_is_skipped_not_the_whole
     assert np.all(np.abs(read.mesh.vertices) <= 1e12)
 
 
+def test_a_zero_area_stl_facet_with_a_repeated_corner_is_skipped_and_the_mesh_stays_closed():
+    vertices, triangles = shapes.torus_mesh(20, 8)
+    corners = vertices[triangles]
+    sliver = np.array([[corners[0, 0], corners[0, 0], corners[0, 1]]])  # as exporters write degenerate facets
+    both = np.concatenate([corners, sliver]).reshape(-1, 3)
+    content = trimesh.exchange.stl.export_stl(trimesh.Trimesh(both, np.arange(len(both)).reshape(-1, 3), process=False))
+    request = parse_upload(StoredInput.from_bytes("ring.stl", content), None)
+    assert request.source["skipped"] == [{"object": f"facet {len(triangles) + 1}",
+                                          "reason": "non-finite, beyond 1e+12 or repeated vertex"}]
+    check_input(request)
+    (zone,) = solve(request).result.zones
+    welded = trimesh.Trimesh(vertices, triangles)
+    assert zone.closed and zone.volume == pytest.approx(welded.volume, rel=1e-6)
+
+
 def test_faces_are_listed_only_when_asked_but_zones_csv_has_every_face(monkeypatch):
     body = shapes.inside_out_cube()
     listed = solve(PolyhedraRequest.model_validate(body)).result
