@@ -9,7 +9,7 @@ collinear points), plus turning a hole that runs the same way as its outer loop.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -26,6 +26,8 @@ class Repairs:
     dropped_repeats: int
     holes_reversed: list[str]
     t_junctions_per_zone: np.ndarray  # vertices inserted into faces of each zone
+    collapsed_faces: np.ndarray  # faces whose outer loop collapsed: kept, with no area, bounding no zone
+    collapsed_holes: list[str]  # faces that lost an inner loop which collapsed
 
 
 HASH = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
@@ -103,29 +105,55 @@ def merge_vertices(poly: Polygons, tolerance: float) -> tuple[Polygons, int]:
     return poly.with_loops(mapping[poly.loop_vertices], poly.loop_start), merged
 
 
-def drop_repeats(poly: Polygons) -> tuple[Polygons, int]:
+def drop_repeats(poly: Polygons) -> tuple[Polygons, int, np.ndarray, list[str]]:
     """Remove a vertex equal to the one after it along its loop (after merging, a closing vertex that
-    repeats the first one, or two exporter points that became one). A loop left with fewer than three
-    vertices is refused, naming the face and loop."""
+    repeats the first one, or two exporter points that became one).
+
+    A loop left with fewer than three distinct vertices has no area: the sliver facets exporters
+    write, a window narrower than the merge tolerance. An inner loop of that kind is removed; a face
+    whose outer loop collapses is kept (its id, its area of 0) but bounds no zone any more, so the
+    faces around it close up as they do in the solid. Returns the polygons, the vertices dropped, the
+    collapsed faces and the ids of faces that lost a hole. Only when no face is left to bound a zone
+    is the request refused, naming the loops."""
     lv = poly.loop_vertices
     keep = lv != lv[poly.next_position()]
     dropped = int((~keep).sum())
+    none = np.zeros(0, dtype=np.int64)
     if dropped == 0:
-        return poly, 0
+        return poly, 0, none, []
     loop_of = poly.position_loop
-    lengths = np.bincount(loop_of[keep], minlength=len(poly.loop_start) - 1)
-    short = np.flatnonzero(lengths < 3)
-    if len(short):
+    n_loops = len(poly.loop_start) - 1
+    lengths = np.bincount(loop_of[keep], minlength=n_loops)
+    short = lengths < 3
+    if not short.any():
+        start = np.zeros(n_loops + 1, dtype=np.int64)
+        np.cumsum(lengths, out=start[1:])
+        return poly.with_loops(lv[keep], start), dropped, none, []
+    outer = np.zeros(n_loops, dtype=bool)
+    outer[poly.face_loop_start[:-1]] = True
+    collapsed = np.unique(poly.loop_face[short & outer])
+    bounding = poly.face_zone[:, 0] >= 0
+    bounding[collapsed] = False
+    if not bounding.any():
         errors = []
-        for loop in short[:50]:
+        for loop in np.flatnonzero(short)[:50]:
             face = int(poly.loop_face[loop])
             k = int(loop - poly.face_loop_start[face])
             errors.append(FieldError(("faces", face, "loops", k), f"face {poly.face_ids[face]!r}: the loop has fewer "
                                      "than 3 distinct vertices after merging vertices closer than merge_tolerance"))
         raise InputRejected(errors)
+    holes = short & ~outer
+    # a collapsed outer loop keeps every position (its repeats give it no area); a collapsed hole goes
+    keep_position = np.where(short[loop_of], outer[loop_of], keep)
+    lengths = np.bincount(loop_of[keep_position], minlength=n_loops)[~holes]
     start = np.zeros(len(lengths) + 1, dtype=np.int64)
     np.cumsum(lengths, out=start[1:])
-    return poly.with_loops(lv[keep], start), dropped
+    face_zone = poly.face_zone.copy()
+    face_zone[collapsed] = -1
+    out = replace(poly, loop_vertices=lv[keep_position], loop_start=start, loop_face=poly.loop_face[~holes],
+                  face_zone=face_zone)
+    hole_faces = [poly.face_ids[f] for f in np.unique(poly.loop_face[holes])]
+    return out, int(len(lv) - keep_position.sum()), collapsed, hole_faces
 
 
 def loop_area_vectors(poly: Polygons, loops: np.ndarray) -> np.ndarray:
@@ -231,8 +259,8 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
 def repair(poly: Polygons, merge_tolerance: float) -> tuple[Polygons, Repairs]:
     """The repairs in the order they depend on each other: merge, drop repeats, holes, T-junctions."""
     poly, merged = merge_vertices(poly, merge_tolerance)
-    poly, dropped = drop_repeats(poly)
+    poly, dropped, collapsed, holes_collapsed = drop_repeats(poly)
     poly, holes = orient_holes(poly)
     poly, per_zone = insert_t_junctions(poly, merge_tolerance)
     return poly, Repairs(merged_vertices=merged, dropped_repeats=dropped, holes_reversed=holes,
-                         t_junctions_per_zone=per_zone)
+                         t_junctions_per_zone=per_zone, collapsed_faces=collapsed, collapsed_holes=holes_collapsed)

@@ -133,7 +133,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         factor = an.orientation.factor[uses]
         conflict = bool(an.orientation.conflict[uses].any())
         n_open = int((open_zone == z).sum())
-        closed = n_open == 0
+        closed = n_open == 0 and len(uses) > 0  # a zone whose every face collapsed bounds nothing
         oriented_volume = float((factor * use_volume[uses]).sum())
         signed = float(use_volume[uses].sum())
         volume = abs(oriented_volume) if closed and not conflict else None
@@ -173,7 +173,11 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             "faces": [poly.face_ids[f] for f in faces] if listed else [],
             "face_count": int(len(faces)),
         })
-        if not closed:
+        if not len(uses):
+            warnings.append(Diagnostic(code="zone_without_faces", message=(
+                f"zone {zone_id!r} has no face left after merging vertices closer than merge_tolerance; "
+                "its volume is not given."), details={"zone": zone_id}))
+        elif not closed:
             warnings.append(Diagnostic(code="zone_not_closed", message=(
                 f"zone {zone_id!r} is not closed: {n_open} open edge(s); its volume is not given."),
                 details={"zone": zone_id, "open_edges": n_open}))
@@ -195,7 +199,17 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             f"{len(nonplanar)} face(s) deviate from their plane by more than {opts.planarity_tolerance:g} "
             f"{request.units}; areas are Newell's projected areas."),
             details={"faces": {poly.face_ids[f]: float(planarity[f]) for f in nonplanar[:MAX_LISTED_EDGES]}}))
-    degenerate = np.flatnonzero(area <= 0)
+    collapsed = an.repairs.collapsed_faces
+    if len(collapsed):
+        warnings.append(Diagnostic(code="collapsed_faces_skipped", message=(
+            f"{len(collapsed)} face(s) have fewer than 3 distinct vertices after merging vertices closer than "
+            f"merge_tolerance ({opts.merge_tolerance:g} {request.units}); they have no area and bound no zone."),
+            details={"count": len(collapsed), "faces": [poly.face_ids[f] for f in collapsed[:MAX_LISTED_EDGES]]}))
+    if an.repairs.collapsed_holes:
+        warnings.append(Diagnostic(code="collapsed_holes_skipped", message=(
+            f"{len(an.repairs.collapsed_holes)} face(s) had an inner loop with fewer than 3 distinct vertices after "
+            "merging; it was removed."), details={"faces": an.repairs.collapsed_holes[:MAX_LISTED_EDGES]}))
+    degenerate = np.setdiff1d(np.flatnonzero(area <= 0), collapsed)
     if len(degenerate):
         warnings.append(Diagnostic(code="zero_area_faces", message=f"{len(degenerate)} face(s) have no area.",
                                    details={"faces": [poly.face_ids[f] for f in degenerate[:MAX_LISTED_EDGES]]}))
@@ -228,6 +242,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,
         "merged_vertices": an.repairs.merged_vertices, "repeated_vertices_dropped": an.repairs.dropped_repeats,
         "t_junctions_repaired": int(an.repairs.t_junctions_per_zone.sum()),
+        "collapsed_faces": len(an.repairs.collapsed_faces),
         "method": "Newell area vectors and divergence-theorem volumes over the generalized map's orbits",
     }
     if request.source:

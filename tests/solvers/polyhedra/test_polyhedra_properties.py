@@ -137,3 +137,24 @@ def test_a_loop_that_collapses_when_merging_is_refused_naming_the_face():
     with pytest.raises(InputRejected) as error:
         solve(PolyhedraRequest.model_validate(body))
     assert error.value.errors[0].loc == ("faces", 0, "loops", 0) and "sliver" in error.value.errors[0].msg
+
+
+def test_a_collapsed_hole_is_removed_and_a_zone_of_collapsed_faces_has_no_volume():
+    """A window narrower than merge_tolerance is no hole: the wall keeps its whole area, with a warning.
+    A second zone whose only face collapses is reported without a volume, while the cube beside it
+    keeps its volume (the request is refused only when no face is left to bound a zone)."""
+    cube = shapes.unit_cube()
+    west = cube["faces"][0]
+    ring = [[0.4, 0.5, 0.5], [0.4 + 1e-9, 0.5, 0.5], [0.4, 0.5, 0.5 + 1e-9]]
+    corners = [cube["vertices"][i] for i in west["loops"][0]]
+    holed = {**cube, "faces": [{"id": west["id"], "loops": [corners, ring[::-1]]}, *cube["faces"][1:],
+                               {"id": "sliver", "zones": ["B"], "loops": [[[5, 0, 0], [6, 0, 0], [6, 1e-9, 0]]]}]}
+    plain = solve(PolyhedraRequest.model_validate(cube)).result
+    result = solve(PolyhedraRequest.model_validate(holed)).result
+    a, b = result.zones
+    assert a.closed and a.volume == pytest.approx(plain.zones[0].volume, rel=1e-12)
+    assert a.surface_area == pytest.approx(plain.zones[0].surface_area, rel=1e-12)
+    assert b.id == "B" and not b.closed and b.volume is None and result.total_volume is None
+    codes = {w.code: w.details for w in result.report.warnings}
+    assert codes["collapsed_holes_skipped"]["faces"] == [west["id"]]
+    assert codes["collapsed_faces_skipped"]["faces"] == ["sliver"] and codes["zone_without_faces"] == {"zone": "B"}
