@@ -448,7 +448,9 @@ def parse_stl(content: bytes) -> dict:
                       "metadata": getattr(mesh, "metadata", {})}
     except Exception as e:  # trimesh raises many kinds for a broken file
         raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
-    vertices = np.asarray(loaded["vertices"] if loaded.get("vertices") is not None else np.zeros((0, 3)), dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):  # a broken file's garbage floats are sorted out below
+        vertices = np.asarray(loaded["vertices"] if loaded.get("vertices") is not None else np.zeros((0, 3)),
+                              dtype=float)
     triangles = np.asarray(loaded["faces"] if loaded.get("faces") is not None else np.zeros((0, 3)), dtype=np.int64)
     vertices, triangles = vertices.reshape(-1, 3), triangles.reshape(-1, 3)
     if len(triangles) == 0:
