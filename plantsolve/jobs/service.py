@@ -14,7 +14,7 @@ import uuid
 from concurrent.futures import Future
 from dataclasses import dataclass
 from datetime import datetime
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
@@ -78,19 +78,10 @@ class JobService:
             raise NotFound(f"No solver kind {kind!r}. Known kinds: {', '.join(sorted(self.ctx.kinds))}.")
         return spec
 
-    def submit_json_view(self, kind: str, body: bytes, idempotency_key: str | None, owner: str = "",
-                         callback_url: str | None = None) -> Submitted:
-        """submit_json plus the job's view, in one thread hop for the async route."""
-        return self.store_view(self.take_json(kind, body, idempotency_key, owner=owner, callback_url=callback_url))
-
-    def store_view(self, new: NewJob) -> Submitted:
-        """store plus the job's view, in one thread hop for the async route."""
-        submitted = self.store(new)
-        submitted.view = self.view(submitted.job)
-        return submitted
-
-    def submit_upload_view(self, *args, owner: str = "", callback_url: str | None = None) -> Submitted:
-        submitted = self.submit_upload(*args, owner=owner, callback_url=callback_url)
+    def with_view(self, submit: Callable[..., Submitted], *args: Any, **kwargs: Any) -> Submitted:
+        """``submit(*args, **kwargs)`` (a submission method of this service) plus the job's view: one thread hop for
+        an async route."""
+        submitted = submit(*args, **kwargs)
         submitted.view = self.view(submitted.job)
         return submitted
 

@@ -89,8 +89,8 @@ def submit_route(kind: str):
         content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
         if is_json(content_type):
             body = await request.body()
-            submitted = await run_in_threadpool(service.submit_json_view, kind, body, idempotency_key, caller.owner,
-                                                callback_url)
+            submitted = await run_in_threadpool(service.with_view, service.submit_json, kind, body, idempotency_key,
+                                                owner=caller.owner, callback_url=callback_url)
         elif content_type == "multipart/form-data":
             limit = request.app.state.settings.max_body_bytes
             form = await request.form(max_files=1, max_fields=4, max_part_size=min(limit, 16 * 1024 * 1024))
@@ -107,10 +107,9 @@ def submit_route(kind: str):
             options = form.get("options")
             if options is not None and not isinstance(options, str):
                 options = (await options.read()).decode("utf-8", "replace")
-            submitted = await run_in_threadpool(
-                lambda: service.submit_upload_view(kind, upload.filename or "upload", content, options, idempotency_key,
-                                                   owner=caller.owner, callback_url=callback_url)
-            )
+            submitted = await run_in_threadpool(service.with_view, service.submit_upload, kind,
+                                                upload.filename or "upload", content, options, idempotency_key,
+                                                owner=caller.owner, callback_url=callback_url)
         else:
             raise UnsupportedMediaType(
                 f"Content-Type {content_type or '(none)'!r} is not accepted: send application/json or multipart/form-data."

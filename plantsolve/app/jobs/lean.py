@@ -85,14 +85,14 @@ class LeanRoutes:
         body = await _body(receive)
         if len(body) > LOOP_INTAKE_BYTES or not self.service.stores_inline(len(body)) \
                 or not self.service.intake_loaded(kind):  # the first of a kind imports its checks: not on the loop
-            submitted = await run_in_threadpool(self.service.submit_json_view, kind, body, idempotency_key,
-                                                caller.owner, None)
+            submitted = await run_in_threadpool(self.service.with_view, self.service.submit_json, kind, body,
+                                                idempotency_key, owner=caller.owner)
             await self._send_submitted(send, submitted)
             return
         new = self.service.take_json(kind, body, idempotency_key, owner=caller.owner)
         pending = self.service.store_later(new)
         if pending is None:  # a database that takes concurrent writers: the write (and view) in a thread
-            submitted = await run_in_threadpool(self.service.store_view, new)
+            submitted = await run_in_threadpool(self.service.with_view, self.service.store, new)
             await self._send_submitted(send, submitted)
             return
         # group commit (SQLite): answered after the commit that holds the row (written already when nothing else
