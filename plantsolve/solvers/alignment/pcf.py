@@ -41,6 +41,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
 from plantsolve.solvers.alignment.pcf_model_check import TURNING, closed_rings, failing_components
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
@@ -255,6 +256,8 @@ def read_point(line: str) -> tuple[np.ndarray, float | None]:
         raise ItemProblem(f"cannot read the coordinates of {line.strip()!r}")
     if not np.all(np.isfinite(xyz)):
         raise ItemProblem(f"non-finite coordinate in {line.strip()!r}")
+    if np.any(np.abs(xyz) > MAX_COORDINATE):  # an absurd float: the item is held like a non-finite one
+        raise ItemProblem(f"coordinate beyond {MAX_COORDINATE:g} in {line.strip()!r}")
     bore = None
     if len(parts) > 4:
         try:
