@@ -13,6 +13,7 @@ import io
 import shutil
 import tempfile
 import zipfile
+import zlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -115,8 +116,13 @@ class IfcSource:
                                  f"{MAX_IFC_INFLATED:,} are read")
                 with archive.open(names[0]) as member:
                     yield InflationCounter(member)
-        except zipfile.BadZipFile:
-            raise reject("not a zip archive (an .ifczip is a zip holding one .ifc file)") from None
+        except zipfile.BadZipFile as error:
+            # parse_upload saw the 'PK' of a zip: an archive whose directory at the end is missing was cut short
+            raise reject(f"the zip archive is damaged or cut short ({error}); an .ifczip is a zip holding one .ifc "
+                         "file") from None
+        except (zlib.error, EOFError) as error:  # the member's compressed bytes are corrupt or end early
+            raise reject(f"the .ifc inside this .ifczip cannot be inflated: the archive is damaged or cut short "
+                         f"({error})") from None
 
 
 # the most an .ifczip's model may inflate to, counted on the inflated bytes as they come (a zip may lie

@@ -60,3 +60,17 @@ def test_inflated_bytes_are_counted_whatever_the_zip_declares(monkeypatch):
     assert len(counted.read(600)) == 600
     with pytest.raises(InputRejected, match="more than 1,000 bytes"):
         counted.read(600)
+
+
+def test_an_ifczip_damaged_in_its_compressed_bytes_or_cut_short_says_so_naming_the_file():
+    """Corrupt deflate data raised zlib.error out of the reader (a 422 calling the file malformed; in a worker an
+    EOFError from a cut stream counts as an infrastructure failure and is retried), and a cut archive was called
+    'not a zip archive'. Both now say the archive is damaged or cut short."""
+    archive = bytearray(_zipped(points_only(2000)))
+    start = 30 + len("model.ifc")  # the local header, then the compressed bytes
+    archive[start + 40:start + 48] = b"\xff" * 8
+    for name, content in (("damaged.ifczip", bytes(archive)), ("cut.ifczip", _zipped(points_only(2000))[:3000])):
+        with pytest.raises(InputRejected) as refused:
+            _input(name, content).header()
+        (error,) = refused.value.errors
+        assert error.loc == ("file",) and "damaged or cut short" in error.msg, error.msg
