@@ -8,7 +8,7 @@ import re
 
 TRAILER_BYTES = 256  # END-ISO-10303-21; is looked for this far from the end
 
-_TRAILING_COMMENT = re.compile(rb"/\*(?:(?!\*/).)*\*/\s*$", re.S)
+_TRAILING_COMMENT = re.compile(rb"/\*(?:(?!\*/).)*\*/\s*$", re.DOTALL)
 _ENTITY = re.compile(rb"#(\d+)\s*=")
 
 

@@ -473,3 +473,14 @@ def test_an_item_with_a_coordinate_beyond_the_bound_is_held_not_the_file_refused
     res = solve(req).result
     (entry,) = next(w for w in res.report.warnings if w.code == "pcf_items_held").details["items"]
     assert "beyond 1e+12" in entry["reason"] and entry["line"] == 5
+
+
+def test_a_plant3d_export_cut_inside_a_record_after_the_points_warns_that_what_followed_is_missing():
+    """Cut in the middle of an item's ITEM-CODE line (its points whole), the file was aligned as if it were complete:
+    every item after the cut was lost without a word."""
+    lines = _plant3d_lines()
+    code = next(n for n, ln in enumerate(lines, 1) if n > 60 and ln.strip().startswith("ITEM-CODE"))
+    text = "".join(lines[:code - 1]) + lines[code - 1][:-6]  # '    ITEM-CODE PIPSML' of 'PIPSMLS4S40'
+    res = solve(parse_upload(StoredInput.from_bytes("cut.pcf", text.encode()), None)).result
+    cut = next(w for w in res.report.warnings if w.code == "truncated_file")
+    assert cut.details["last_line"] == code and "any items the file held after it are missing" in cut.message
