@@ -16,7 +16,8 @@ the main model's lines before the first ``0 FILE`` and the parts' own definition
 and is placed, not expanded; subparts and primitives are drawn geometry. Item by item: a type-1 line
 that cannot be read (a matrix that scales or shears, a position beyond 1e12 LDU) is skipped and listed in the
 report with its line and reason, and a rotation printed with few digits (``0.985 -0.17 0``) is read as the
-nearest rotation (``source.rotations_rounded`` counts them); parts not in the
+nearest rotation (``source.rotations_rounded`` counts them), and a line placing a ``.ldr`` or ``.mpd`` the file
+does not hold (a cut ``.mpd``, an ``.ldr`` without its sub-model files) is skipped naming it; parts not in the
 catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
 the file is refused (422 naming the file) only when it places no part at all.
 Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models.
@@ -140,6 +141,7 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
 
 
 PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
+MODEL_EXTENSIONS = (".ldr", ".mpd")  # the library's parts are .dat files: these name (sub-)models
 
 
 def _cut_last_line(text: str) -> int | None:
@@ -221,6 +223,11 @@ def parse_ldraw(text: str) -> dict:
             ident = f"{prefix}L{number}"
             sub = _resolve(file_name, files)
             role = roles.get(sub, "model") if sub is not None else None
+            if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
+                skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
+                                "hold (an .mpd cut short, or an .ldr whose sub-models are separate files: send them "
+                                "as one .mpd)"})
+                continue
             if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws, it is no part
                 continue
@@ -249,6 +256,12 @@ def parse_ldraw(text: str) -> dict:
     if cut is not None:
         warnings.append(truncated_file(cut, "the file ends inside this type-1 line (the file was cut?); the part it "
                                        "placed was not read.").model_dump())
+    elif ends_mid_line(text) and text.splitlines()[-1].split()[:1] != ["1"]:
+        # a comment or meta line cut (a whole part line is taken as written, as _cut_last_line says): what followed
+        # it is gone
+        last = len(text.splitlines())
+        warnings.append(truncated_file(last, "its last line has no line ending (the file was cut?): it was read as "
+                                       "written, and whatever the file held after it is missing.").model_dump())
     if not parts:
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))

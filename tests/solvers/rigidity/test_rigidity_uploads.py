@@ -267,3 +267,20 @@ def test_a_part_line_scaled_or_placed_beyond_the_bound_is_skipped_not_the_file_r
     (skipped,) = request.source["skipped"]
     assert skipped["line"] == 3 and reason in skipped["reason"]
     assert next(w for w in solve(request).result.report.warnings if w.code == "skipped_lines").details["lines"] == [3]
+
+
+def test_an_mpd_cut_before_its_sub_models_or_inside_a_comment_says_so():
+    """OMR 889 Radar Truck (CC BY 2.0, omr/README.md) cut after its main model placed its two sub-models as two
+    'parts not in the catalogue'; cut inside a comment it lost the lines after it without a word."""
+    from pathlib import Path
+
+    content = (Path(__file__).parent / "omr" / "889-1-RadarTruck.mpd").read_bytes()
+    main_end = content.index(b"889 - Minifig.ldr") + len(b"889 - Minifig.ldr\n")
+    with pytest.raises(InputRejected) as refused:
+        parse("cut.mpd", content[:main_end])
+    message = refused.value.errors[0].msg
+    assert "line 14: places sub-model '889 - Truck.ldr', which the file does not hold" in message
+    comment = content.index(b"0 !LICENSE", main_end + 200)
+    request = parse("cut.mpd", content[:comment + 20])
+    note = next(w for w in solve(request).result.report.warnings if w.code == "truncated_file")
+    assert note.details["line"] == content[:comment].count(b"\n") + 1 and "no line ending" in note.message
