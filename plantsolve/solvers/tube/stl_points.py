@@ -32,17 +32,20 @@ def read_stl(content: bytes, log: ReadLog) -> np.ndarray:
 
 def _ascii_text(content: bytes) -> str | None:
     """The text of an ASCII STL (behind a UTF-8 mark, or re-saved as UTF-16 by a Windows editor, which a binary
-    reader would take for triangles of garbage), or None when the content is not one."""
+    reader would take for triangles of garbage), or None when the content is not one (its start is looked at
+    first: a binary file is not decoded whole)."""
     if content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
-        text = content.decode("utf-16", errors="replace")
+        encoding = "utf-16"
     elif content[1:8:2] == b"\0\0\0\0" and content[:8:2].isalpha():  # UTF-16 LE without its mark
-        text = content.decode("utf-16-le", errors="replace")
+        encoding = "utf-16-le"
     elif content[0:8:2] == b"\0\0\0\0" and content[1:8:2].isalpha():  # UTF-16 BE without its mark
-        text = content.decode("utf-16-be", errors="replace")
+        encoding = "utf-16-be"
     else:
-        text = content.removeprefix(codecs.BOM_UTF8).decode("utf-8", errors="replace")
-    head = text[:1000].lower()
-    return text if head.lstrip().startswith("solid") and "facet" in head else None
+        encoding, content = "utf-8", content.removeprefix(codecs.BOM_UTF8)
+    head = content[:2000].decode(encoding, errors="replace").lower()
+    if not (head.lstrip().startswith("solid") and "facet" in head):
+        return None
+    return content.decode(encoding, errors="replace")
 
 
 def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
