@@ -204,7 +204,8 @@ def parse_ldraw(text: str) -> dict:
             if abs(np.linalg.det(local_rot)) < 1e-6:
                 skipped.append({"line": number, "reason": "the rotation matrix is singular"})
                 continue
-            off = float(np.abs(local_rot @ local_rot.T - np.eye(3)).max())
+            with np.errstate(over="ignore", invalid="ignore"):  # entries of 1e308: off is inf, the line skipped
+                off = float(np.abs(local_rot @ local_rot.T - np.eye(3)).max())
             if off > ROUNDED_ROTATION:
                 skipped.append({"line": number, "reason": f"the matrix is not a rotation (scaled or sheared: its rows "
                                 f"are off orthonormal by {off:.3g})"})
