@@ -6,7 +6,12 @@ API process's RSS over its idle baseline (peak sampled every 50 ms while the cas
 process tree (the forkserver and the bounded reading processes included). Last, SIGTERM during a hostile
 parse: how long the server takes to exit.
 
-    python bench/hostile.py [--port 8765]
+The damaged-file cases are the repository's own example and public files with one flaw each (a coordinate of
+1e308, a UTF-16 save, a stray quote, a corrupt deflate stream, a cut IFC): their status says whether the file
+is read (202) or refused (422), and the server log whether a reader failed ('failed in the reader').
+``--before DIR`` runs every case on the checkout in DIR too (its own ``.venv``), after this one, in the same run.
+
+    python bench/hostile.py [--port 8765] [--before /tmp/base]
 """
 
 from __future__ import annotations
@@ -75,6 +80,42 @@ def ldraw_fan_out() -> bytes:
     return ("\n".join(lines) + "\n").encode()
 
 
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def damaged_files():
+    """(case, kind, file name, bytes): example and public files of the repository, each with one flaw."""
+    pcf = (ROOT / "examples/alignment/ladder.pcf").read_text()
+    yield "PCF, one coordinate 1e308", "alignment", "ladder.pcf", pcf.replace("200000.0000", "1e308", 1).encode()
+    yield "PCF saved as UTF-16", "alignment", "ladder.pcf", pcf.encode("utf-16")
+    yield "OMR 889 .mpd (rotations to 3 digits)", "rigidity", "889.mpd", \
+        (ROOT / "tests/solvers/rigidity/omr/889-1-RadarTruck.mpd").read_bytes()
+    ldr = (ROOT / "examples/rigidity/hinged_wall.ldr").read_text().splitlines(keepends=True)
+    part = next(i for i, line in enumerate(ldr) if line.startswith("1 "))
+    ldr[part] = "1 4 1e308 " + ldr[part].split(None, 3)[3]  # its x
+    yield "LDraw, one position 1e308", "rigidity", "wall.ldr", "".join(ldr).encode()
+    meter = (ROOT / "examples/flowmeter/meter.json").read_text()
+    yield "flowmeter JSON saved as UTF-16", "flowmeter", "meter.json", meter.encode("utf-16")
+    lines = (ROOT / "examples/perfmap/n3_fan_map.csv").read_text().splitlines()
+    lines[5] = '"' + lines[5]
+    yield "perfmap CSV, one stray quote", "perfmap", "map.csv", ("\n".join(lines) + "\n").encode()
+    lines[5] = "1 " * 100_000
+    yield "perfmap CSV, one 200 KB field", "perfmap", "map.csv", ("\n".join(lines) + "\n").encode()
+    xyz = (ROOT / "examples/tube/scan.xyz").read_text().splitlines()
+    xyz[10] = "1e308 0 0"
+    yield "XYZ, one line 1e308", "tube", "scan.xyz", ("\n".join(xyz) + "\n").encode()
+    yield "XYZ saved as UTF-16", "tube", "scan.xyz", (ROOT / "examples/tube/scan.xyz").read_text().encode("utf-16")
+    ifc = (ROOT / "examples/dedup/tunnel_3rings.ifc").read_bytes()
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("model.ifc", ifc)
+    damaged = bytearray(buffer.getvalue())
+    damaged[30 + len("model.ifc") + 40:30 + len("model.ifc") + 48] = b"\xff" * 8
+    yield ".ifczip, corrupt deflate stream", "dedup", "model.ifczip", bytes(damaged)
+    yield "IFC behind a UTF-8 mark", "polyhedra", "spaces.ifc", \
+        b"\xef\xbb\xbf" + (ROOT / "tests/solvers/polyhedra/data/ifcopenshell_spaces.ifc").read_bytes()
+
+
 def cases():
     yield "alignment 10^6 connections (JSON)", *alignment_connections(1_000_000), None
     yield "rigidity 10^6 joints (JSON)", *rigidity_joints(1_000_000), None
@@ -86,6 +127,8 @@ def cases():
     yield "LDraw .mpd fan-out 8 x 10", "rigidity", None, None, ("fan.mpd", ldraw_fan_out())
     line = b"1234.5678 2345.6789 3456.7891\n"
     yield "64 MB .xyz", "tube", None, None, ("scan.xyz", line * (64 * 1024 * 1024 // len(line)))
+    for name, kind, file_name, content in damaged_files():  # last: the jobs they start run after the cases above
+        yield name, kind, None, None, (file_name, content)
 
 
 def rss(pid: int) -> int:
@@ -143,11 +186,11 @@ class Peak:
         self._thread.join()
 
 
-def start(port: int, data_dir: str, log_path: Path) -> subprocess.Popen:
+def start(port: int, data_dir: str, log_path: Path, bin_dir: Path = BIN) -> subprocess.Popen:
     env = {**os.environ, "DATA_DIR": data_dir, "API_KEYS": "", "EMBEDDED_WORKERS": "1"}
     log = open(log_path, "wb")
-    server = subprocess.Popen([str(BIN / "plantsolve"), "serve", "--host", "127.0.0.1", "--port", str(port)],
-                              stdout=log, stderr=subprocess.STDOUT, env=env)
+    server = subprocess.Popen([str(bin_dir / "plantsolve"), "serve", "--host", "127.0.0.1", "--port", str(port)],
+                              stdout=log, stderr=subprocess.STDOUT, env=env, cwd=bin_dir.parents[1])
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         try:
@@ -158,37 +201,53 @@ def start(port: int, data_dir: str, log_path: Path) -> subprocess.Popen:
     raise SystemExit(f"the server did not start; see {log_path}")
 
 
-def send(base: str, kind: str, body, headers, upload) -> tuple[int, float]:
+def send(base: str, kind: str, body, headers, upload) -> tuple[int, float, str | None]:
+    """Status and seconds of the answer, and the job's id when one was accepted."""
     begin = time.monotonic()
     with httpx.Client(timeout=120) as client:
         if upload is not None:
             response = client.post(f"{base}/v1/{kind}/jobs", files={"file": upload})
         else:
             response = client.post(f"{base}/v1/{kind}/jobs", content=body, headers=headers)
-    return response.status_code, time.monotonic() - begin
+    job = response.json().get("id") if response.status_code == 202 else None
+    return response.status_code, time.monotonic() - begin, job
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--port", type=int, default=8765)
-    args = parser.parse_args()
-    base = f"http://127.0.0.1:{args.port}"
+def outcome(base: str, job: str | None, timeout: float = 300) -> str:
+    """How an accepted job ended: its status, with the warnings it carries ('-' when none was accepted)."""
+    if job is None:
+        return "-"
+    deadline = time.monotonic() + timeout
+    with httpx.Client(timeout=30) as client:
+        while time.monotonic() < deadline:
+            view = client.get(f"{base}/v1/jobs/{job}").json()
+            if view["status"] in ("succeeded", "failed", "cancelled"):
+                warnings = len((view.get("report") or {}).get("warnings") or [])
+                return f"{view['status']}" + (f" ({warnings} w)" if warnings else "")
+            time.sleep(0.5)
+    return "running"
+
+
+def run(label: str, port: int, bin_dir: Path) -> dict[str, tuple[int, float, int, int, bool]]:
+    """Every case against a server started from ``bin_dir``: status, seconds, server and tree RSS growth, and
+    whether the server log says a reader failed on it."""
+    base = f"http://127.0.0.1:{port}"
+    rows = {}
     with tempfile.TemporaryDirectory(prefix="plantsolve-hostile-") as data_dir:
         log_path = Path(data_dir) / "server.log"
-        server = start(args.port, data_dir, log_path)
+        server = start(port, data_dir, log_path, bin_dir)
         time.sleep(5)  # the forkserver of the upload readers starts in the background
         baseline, tree_base = rss(server.pid), tree_rss(server.pid)
-        print(f"server idle RSS {baseline / 2**20:.0f} MiB (tree {tree_base / 2**20:.0f} MiB); log: {log_path}")
-        print(f"{'case':36} {'status':>6} {'seconds':>8} {'server RSS growth':>18} {'tree RSS growth':>16}")
-        worst = 0
+        print(f"[{label}] server idle RSS {baseline / 2**20:.0f} MiB (tree {tree_base / 2**20:.0f} MiB)", flush=True)
         for name, kind, body, headers, upload in cases():
+            logged = log_path.stat().st_size
             with Peak(server.pid) as peak:
-                status, seconds = send(base, kind, body, headers, upload)
-            growth, tree = peak.server - baseline, peak.tree - tree_base
-            worst = max(worst, growth)
-            print(f"{name:36} {status:>6} {seconds:>8.2f} {growth / 2**20:>14.0f} MiB {tree / 2**20:>12.0f} MiB",
-                  flush=True)
-        print(f"peak API process RSS growth across the cases: {worst / 2**20:.0f} MiB")
+                status, seconds, job = send(base, kind, body, headers, upload)
+            ended = outcome(base, job)  # waited for, so that no job runs under the next case
+            with open(log_path, "rb") as log:
+                log.seek(logged)
+                crashed = b"failed in the reader" in log.read()
+            rows[name] = (status, seconds, peak.server - baseline, peak.tree - tree_base, crashed, ended)
         # SIGTERM while a hostile upload is being read
         _, kind, body, headers, upload = next(c for c in cases() if c[0].startswith("64 MB"))
         sender = threading.Thread(target=lambda: send(base, kind, body, headers, upload), daemon=True)
@@ -198,11 +257,37 @@ def main() -> int:
         server.send_signal(signal.SIGTERM)
         try:
             server.wait(timeout=30)
-            print(f"SIGTERM during a hostile upload: the server exited after {time.monotonic() - begin:.2f} s")
+            print(f"[{label}] SIGTERM during a hostile upload: the server exited after {time.monotonic() - begin:.2f} s")
         except subprocess.TimeoutExpired:
-            print("SIGTERM during a hostile upload: the server did not exit within 30 s; killing it")
+            print(f"[{label}] SIGTERM during a hostile upload: the server did not exit within 30 s; killing it")
             server.kill()
             server.wait()
+    return rows
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--port", type=int, default=8765)
+    parser.add_argument("--before", metavar="DIR", help="also run every case on the checkout in DIR (its .venv)")
+    args = parser.parse_args()
+    runs = {"after": run("this checkout", args.port, BIN)}
+    if args.before:
+        runs["before"] = run(args.before, args.port + 1, Path(args.before).resolve() / ".venv" / "bin")
+    order = [r for r in ("before", "after") if r in runs]
+    head = "".join(f" | {r:>6} {'s':>5} {'API MiB':>7} {'tree MiB':>8} {'job':>17}" for r in order)
+    print(f"\n{'case':38}{head}")
+    for name in runs["after"]:
+        cells = ""
+        for r in order:
+            status, seconds, growth, tree, crashed, ended = runs[r][name]
+            mark = "*" if crashed else " "
+            cells += f" | {status:>5}{mark} {seconds:>5.2f} {growth / 2**20:>7.0f} {tree / 2**20:>8.0f} {ended:>17}"
+        print(f"{name:38}{cells}")
+    print("* the server log says the reader failed on this file (a 422 that calls it malformed, naming no line)")
+    print("job: how an accepted (202) job ended, with its warning count; the tree column includes the job process")
+    for r in order:
+        print(f"peak API process RSS growth across the cases ({r}): "
+              f"{max(row[2] for row in runs[r].values()) / 2**20:.0f} MiB")
     return 0
 
 

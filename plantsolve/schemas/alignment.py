@@ -162,7 +162,7 @@ class AlignmentRequest(StrictModel):
         description="Original PCF text when the request came from a .pcf upload; used to write aligned.pcf "
         "with every untouched attribute preserved. Component ids map to its component blocks.",
     )
-    source_encoding: Literal["utf-8", "utf-8-sig", "cp1252", "latin-1"] | None = Field(
+    source_encoding: Literal["utf-8", "utf-8-sig", "utf-16", "cp1252", "latin-1"] | None = Field(
         default=None,
         description="Text encoding of the uploaded PCF (Windows plant-design tools write cp1252); aligned.pcf "
         "is written back in the same encoding.",

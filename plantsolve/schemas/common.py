@@ -38,7 +38,8 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
 # Input magnitudes a plant model can have: coordinates within 1e12 of the unit (a light-hour in mm),
 # direction components within 1e9 (they are normalised; 1e200 only overflows the solvers' products).
-Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
+MAX_COORDINATE = 1e12
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
 Measured = Annotated[float, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
 """A measured value (flow, pressure, a setting) within 1e12 of its unit: beyond that only overflows."""
 Point3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]

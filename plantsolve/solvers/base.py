@@ -179,7 +179,10 @@ def upload_extension(filename: str, accepted: Sequence[str]) -> str:
 
 def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object") -> dict:
     """An uploaded JSON file that must hold one object; a 422 on ``file`` saying why it does not (``not_an_object``
-    names what the format's object is)."""
+    names what the format's object is). Bytes are read as :func:`decode_text` reads text (a Windows editor's UTF-16
+    or Windows-1252)."""
+    if isinstance(text, bytes):
+        text = decode_text(text, "JSON file")
     try:
         body = json.loads(text)
     except (json.JSONDecodeError, UnicodeDecodeError) as e:

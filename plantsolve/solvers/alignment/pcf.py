@@ -41,6 +41,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
 from plantsolve.solvers.alignment.pcf_model_check import TURNING, closed_rings, failing_components
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
@@ -255,6 +256,8 @@ def read_point(line: str) -> tuple[np.ndarray, float | None]:
         raise ItemProblem(f"cannot read the coordinates of {line.strip()!r}")
     if not np.all(np.isfinite(xyz)):
         raise ItemProblem(f"non-finite coordinate in {line.strip()!r}")
+    if np.any(np.abs(xyz) > MAX_COORDINATE):  # an absurd float: the item is held like a non-finite one
+        raise ItemProblem(f"coordinate beyond {MAX_COORDINATE:g} in {line.strip()!r}")
     bore = None
     if len(parts) > 4:
         try:
@@ -651,8 +654,9 @@ def _body(units, comps_json, connections, opts, alias, text) -> dict:
 def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | None:
     """The ``truncated_file`` note when the file ends inside its last item: a component keyword with no point
     line after it (the file stops at 'PIPE'), or a last line without a line ending (exporters end every line)
-    that is one of the item's point lines or leaves it unreadable. An item followed by the MATERIALS section
-    (or any record) was written whole."""
+    inside the item: one of its point lines, a line that leaves it unreadable, or one of its other records (the
+    item is whole, what followed it is lost). An item followed by the MATERIALS section (or any record) was
+    written whole."""
     tops = [i for i, line in enumerate(doc.lines) if line.strip() and not line[0].isspace()]
     if not doc.items or not tops or doc.items[-1].line != tops[-1]:
         return None
@@ -666,6 +670,10 @@ def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | N
     elif unterminated and item.id in unread and last >= item.line:
         lost = (f"the last line ({last + 1}) has no line ending and {item.keyword} {item.id!r} could not be read "
                 "whole (see pcf_items_held / pcf_items_unread).")
+    elif unterminated and last > item.line:
+        # cut inside a record after the points (SKEY, ITEM-CODE, UCI): the item is whole, what followed is gone
+        lost = (f"the last line ({last + 1}) has no line ending; {item.keyword} {item.id!r} was read whole, any "
+                "items the file held after it are missing.")
     else:
         return None
     line = item.line + 1

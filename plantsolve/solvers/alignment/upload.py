@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import codecs
+
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.pcf import parse_pcf
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, validated
@@ -11,6 +13,11 @@ UPLOAD_EXTENSIONS = (".pcf", ".json")
 
 def _decoded(content: bytes) -> tuple[str, str]:
     """The text and the encoding it was read with (the aligned PCF is written back in it)."""
+    if content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):  # Windows "Unicode" text: read as such, not
+        try:  # as cp1252 bytes in which no keyword is found
+            return content.decode("utf-16"), "utf-16"
+        except UnicodeDecodeError:
+            pass
     encoding = "utf-8-sig" if content.startswith(b"\xef\xbb\xbf") else "utf-8"
     for enc in (encoding, "cp1252"):
         try:

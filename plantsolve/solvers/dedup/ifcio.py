@@ -5,15 +5,14 @@ is refused with a 422 naming the file. The optimized model is written to and rea
 from __future__ import annotations
 
 import itertools
-import re
 from collections import Counter
 
 import ifcopenshell
 
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.step_file import where_cut
 
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
-TRAILER_BYTES = 256  # END-ISO-10303-21; is looked for this far from the end
 
 
 def check_header(head: bytes, tail: bytes) -> None:
@@ -23,27 +22,10 @@ def check_header(head: bytes, tail: bytes) -> None:
         raise reject("not an IFC file: a STEP physical file starts with 'ISO-10303-21;'")
     if b"FILE_SCHEMA" not in head.upper():
         raise reject("not an IFC file: no FILE_SCHEMA in the header")
-    trailer = tail[-TRAILER_BYTES:].rstrip(b" \t\r\n\x00\x1a")  # NUL padding, the DOS end-of-file mark
-    trailer = _TRAILING_COMMENT.sub(b"", trailer).rstrip()  # ISO 10303-21 allows a comment after the end
-    if not trailer.endswith(b"END-ISO-10303-21;"):
-        raise reject(f"truncated STEP file: it does not end with 'END-ISO-10303-21;' — {_where_cut(trailer)}; the "
+    cut = where_cut(tail)
+    if cut is not None:
+        raise reject(f"truncated STEP file: it does not end with 'END-ISO-10303-21;' — {cut}; the "
                      "file was cut in transfer or export, and nothing of a cut model is optimized (send the whole file)")
-
-
-_TRAILING_COMMENT = re.compile(rb"/\*(?:(?!\*/).)*\*/\s*$", re.S)
-_ENTITY = re.compile(rb"#(\d+)\s*=")
-
-
-def _where_cut(trailer: bytes) -> str:
-    """Where the STEP text stops, told by its last entity instance (the file's own numbering)."""
-    last = _ENTITY.findall(trailer)
-    if not last:
-        return "it stops after " + repr(trailer[-40:].decode("latin-1"))
-    if trailer.endswith(b";") and trailer.rsplit(b";", 2)[-2].lstrip().startswith(b"#" + last[-1]):
-        return f"it stops after entity #{last[-1].decode()}, before 'ENDSEC;'"
-    if trailer.rstrip().endswith(b"ENDSEC;"):
-        return "it stops after its DATA section's 'ENDSEC;'"
-    return f"it stops inside entity #{last[-1].decode()}"
 
 
 def open_path(path: str) -> ifcopenshell.file:

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import base64
 import binascii
+import codecs
 import io
 import shutil
 import tempfile
 import zipfile
+import zlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -22,7 +24,8 @@ from typing import IO
 
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
 from plantsolve.solvers.base import StoredInput, reject
-from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, TRAILER_BYTES, check_header
+from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, check_header
+from plantsolve.solvers.step_file import TRAILER_BYTES
 
 ZIP_MAGIC = b"PK\x03\x04"
 SCHEMA_BYTES = 65536  # FILE_SCHEMA is looked for this far into the STEP text
@@ -87,18 +90,30 @@ class IfcSource:
 
     @contextmanager
     def step_file(self) -> Iterator[tuple[Path, int]]:
-        """A path to the STEP text on disk and its size in bytes: the stored ``.ifc`` itself, or the
-        ``.ifc`` of an ``.ifczip`` extracted once (removed when the block ends)."""
-        if not self.zipped:
+        """A path to the STEP text on disk and its size in bytes: the stored ``.ifc`` itself, or a copy (removed
+        when the block ends): the ``.ifc`` of an ``.ifczip`` extracted once, or the text after the UTF-8 byte-order
+        mark an editor put before 'ISO-10303-21;' (IfcOpenShell's parser stops at it)."""
+        if not self.zipped and ends(self.stored, len(codecs.BOM_UTF8), 0)[0] != codecs.BOM_UTF8:
             with self.stored.as_file() as path:
                 yield path, self.stored.size
             return
         with tempfile.TemporaryDirectory(prefix="dedup-") as folder:
             path = Path(folder) / "input.ifc"
-            with self._member() as member, path.open("wb") as out:
-                shutil.copyfileobj(member, out, 1 << 20)
+            with self._stream() as stream, path.open("wb") as out:
+                out.write(stream.read(len(codecs.BOM_UTF8)).removeprefix(codecs.BOM_UTF8))
+                shutil.copyfileobj(stream, out, 1 << 20)
             check_header(*ends(StoredInput.from_path(path), HEADER_BYTES, TRAILER_BYTES))
             yield path, path.stat().st_size
+
+    @contextmanager
+    def _stream(self) -> Iterator[IO[bytes]]:
+        """The STEP text as a stream: the ``.ifczip``'s member, or the stored file."""
+        if self.zipped:
+            with self._member() as member:
+                yield member
+        else:
+            with self.stored.as_file() as path, path.open("rb") as handle:
+                yield handle
 
     @contextmanager
     def _member(self) -> Iterator[IO[bytes]]:
@@ -115,8 +130,13 @@ class IfcSource:
                                  f"{MAX_IFC_INFLATED:,} are read")
                 with archive.open(names[0]) as member:
                     yield InflationCounter(member)
-        except zipfile.BadZipFile:
-            raise reject("not a zip archive (an .ifczip is a zip holding one .ifc file)") from None
+        except zipfile.BadZipFile as error:
+            # parse_upload saw the 'PK' of a zip: an archive whose directory at the end is missing was cut short
+            raise reject(f"the zip archive is damaged or cut short ({error}); an .ifczip is a zip holding one .ifc "
+                         "file") from None
+        except (zlib.error, EOFError) as error:  # the member's compressed bytes are corrupt or end early
+            raise reject(f"the .ifc inside this .ifczip cannot be inflated: the archive is damaged or cut short "
+                         f"({error})") from None
 
 
 # the most an .ifczip's model may inflate to, counted on the inflated bytes as they come (a zip may lie

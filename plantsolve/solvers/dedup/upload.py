@@ -7,9 +7,10 @@ from __future__ import annotations
 
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
 from plantsolve.solvers.base import StoredInput, json_object, reject, validated
-from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, TRAILER_BYTES, check_header
+from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, check_header
 from plantsolve.solvers.dedup.source import ZIP_MAGIC, ends, is_blank
 from plantsolve.solvers.skipped_input import refuse_cut_json
+from plantsolve.solvers.step_file import TRAILER_BYTES
 
 UPLOAD_EXTENSIONS = (".ifc", ".ifczip", ".json")
 

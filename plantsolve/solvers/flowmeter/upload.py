@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import InputRejected, StoredInput, json_object, reject, validated
+from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.skipped_input import refuse_cut_json
 
 UPLOAD_EXTENSIONS = (".json",)
@@ -16,10 +16,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
-    try:
-        text = content.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise reject(f"invalid JSON: {e}") from None
+    text = decode_text(content, "JSON file")
     refuse_cut_json(text)
     body = json_object(text)
     if options:

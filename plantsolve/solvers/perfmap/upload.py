@@ -217,24 +217,63 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         lines = lines[1:]
         if not lines:
             raise reject("the CSV file has no header (only a 'sep=' line)")
-    numbers = [n for n, _ in lines]
     candidates = [forced.group(1)] if forced else []
     candidates += [d for d in ("\t", ";", ",") if d in lines[0][1]] + ["\t", ";", ","]
     for delim in candidates:  # the separator whose split finds a header (title lines may precede it)
-        rows = list(csv.reader([ln for _, ln in lines], delimiter=delim))
+        rows, numbers, ends = _head_rows(lines, delim)
         h = _find_header(rows, column_roles)
         if h or len(rows[0]) > 1 and len({_header_field(c)[0] for c in rows[0]} & set(MEASURED)) >= 2:
             break
     else:
         h_line = lines[0][1]
         delim = (forced.group(1) if forced else "\t" if "\t" in h_line else ";" if ";" in h_line else ",")
-        rows, h = list(csv.reader([ln for _, ln in lines], delimiter=delim)), 0
+        (rows, numbers, ends), h = _head_rows(lines, delim), 0
+    rows, numbers = rows[:h + 1], numbers[:h + 1]
+    for number, line in lines[ends[h]:]:  # each data line on its own: a stray quote cannot swallow the next lines
+        try:
+            rows.append(next(csv.reader([line], delimiter=delim), []))
+        except csv.Error as e:
+            rows.append(_Unreadable(f"the line cannot be split into cells ({e})"))
+        numbers.append(number)
     hint = ("" if delim != "," or ";" not in text[:2000] else
             " — if the file uses ';' separators, put them in the header too")
     # exporters end every row: a last row without a line ending is where a copy or an export stopped
     cut = lines[-1][0] if ends_mid_line(text) and lines[-1][0] == len(text.splitlines()) else None
     return _parse_table(rows, numbers, delim != ",", column_roles, hint, comma_separated=delim == ",", header=h,
                         what="line", cut_line=cut)
+
+
+class _Unreadable(list):
+    """A line the csv module cannot split (a field past its size limit): no cells, and the reason."""
+
+    def __init__(self, reason: str):
+        super().__init__()
+        self.reason = reason
+
+
+def _head_rows(lines: list[tuple[int, str]], delim: str) -> tuple[list[list[str]], list[int], list[int]]:
+    """The first rows of the file as the csv module splits them (a quoted header cell may hold a line break, as
+    Excel writes 'Speed<Alt+Enter>[rpm]'), enough to find the header and a units row under it: the rows, the
+    file line each starts on, and the index into ``lines`` after each. A line the csv module refuses ends them;
+    when that is the first, it is a header row that names nothing."""
+    rows: list[list[str]] = []
+    numbers: list[int] = []
+    ends: list[int] = []
+    reader = csv.reader((line for _, line in lines), delimiter=delim)
+    while len(rows) < _HEADER_SEARCH_ROWS + 2 and reader.line_num < len(lines):
+        start = reader.line_num
+        try:
+            row = next(reader)
+        except csv.Error as e:
+            if not rows:
+                raise reject(f"line {lines[start][0]} cannot be split into cells ({e})", ("file", "header")) from None
+            break
+        except StopIteration:
+            break
+        rows.append(row)
+        numbers.append(lines[start][0])
+        ends.append(reader.line_num)
+    return rows, numbers, ends
 
 
 # Most bytes an .xlsx may inflate to, counted on the bytes the decompressor actually gives (a zip's declared
@@ -412,7 +451,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
     for n, r in zip(numbers[1:], rows[1:]):
         row_start = len(errors)
         vals = {}
-        for c in roles:
+        if isinstance(r, _Unreadable):
+            errors.append(FieldError(("file", "row", n), f"{what} {n}: {r.reason}"))
+        for c in () if isinstance(r, _Unreadable) else roles:
             j = col[c]
             cell = r[j].strip() if j < len(r) else ""
             if not cell:
@@ -519,6 +560,19 @@ def _bracketed(text: str, start: int) -> str:
     raise ValueError("unbalanced brackets")
 
 
+def _floats(value):
+    """A literal's nested lists with each number a float; an integer past the float range (400 digits) is
+    infinite, so its point is dropped like any non-finite one instead of the array refused."""
+    if isinstance(value, (list, tuple)):
+        return [_floats(v) for v in value]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError("not a number")
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
+
+
 def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]:
     """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
     ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
@@ -526,6 +580,7 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     speed line (theta = alpha, phi = Nc); points whose values are not positive and finite are dropped and
     reported; a line with fewer than 3 points left is dropped and reported."""
     arrays: dict[str, np.ndarray] = {}
+    text = text.replace("\r\n", "\n").replace("\r", "\n")  # classic Mac line ends: ``^`` sees only LF
     for m in _MAP_ARRAY.finditer(text):
         name = m.group(1)
         try:
@@ -535,7 +590,7 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
             raise reject(f"{name} (line {line}) is not closed before the file ends: the file was cut? The map "
                          "needs the whole table.", ("file", name), type="truncated_file") from None
         try:
-            arrays[name] = np.array(ast.literal_eval(literal), dtype=float)
+            arrays[name] = np.array(_floats(ast.literal_eval(literal)), dtype=float)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
             raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
     missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]

@@ -4,7 +4,10 @@ triangles are fine for the volume), compared with the space's own ``Qto_SpaceBas
 
 Zones are named by the space's ``Name`` (its ``GlobalId`` when the name is missing or not unique);
 ``source.spaces`` lists GlobalId, Name and LongName. A space the kernel cannot tessellate, or without a
-representation, is skipped with its ``#id`` and reason; the file is refused (422) when no space is left.
+representation, is skipped with its ``#id`` and reason; the file is refused (422) when no space is left. A file
+cut short (no ``END-ISO-10303-21;`` at its end) is read as far as it goes with a ``truncated_file`` warning,
+and a space whose property sets refer to entities the file lacks keeps its zone without declared quantities
+(``ifc_quantities_unreadable``).
 The quantities ``NetVolume`` (else ``GrossVolume``) and ``NetFloorArea`` (else ``GrossFloorArea``),
 converted from the project's volume and area units, go to ``source.declared`` for the solver to set
 against what it measures.
@@ -12,6 +15,7 @@ against what it measures.
 
 from __future__ import annotations
 
+import codecs
 from collections import Counter
 from typing import Any
 
@@ -19,6 +23,8 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.skipped_input import truncated_file
+from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
 MAX_SKIPPED_LISTED = 200
 
@@ -37,13 +43,25 @@ def parse_ifc(content: bytes) -> dict:
     import ifcopenshell.util.element  # noqa: PLC0415
     import ifcopenshell.util.unit  # noqa: PLC0415
 
+    if content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):  # a STEP file re-saved by a Windows editor
+        text = content.decode("utf-16", errors="replace")
+    else:  # ISO 10303-21 text is ISO 8859-1 (other characters escaped); an editor's UTF-8 mark goes
+        text = content.removeprefix(codecs.BOM_UTF8).decode("latin-1")
     try:
-        model = ifcopenshell.file.from_string(content.decode("latin-1"))
+        model = ifcopenshell.file.from_string(text)
         spaces = model.by_type("IfcSpace")  # a file without a schema fails only here
     except Exception as e:  # the parser raises several kinds for a broken file
         raise reject(f"unreadable IFC file: {str(e) or type(e).__name__}") from None
+    warnings = []
+    cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
+    if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
+        line = text.count("\n", 0, len(text.rstrip())) + 1
+        warnings.append(truncated_file(line, f"the file does not end with 'END-ISO-10303-21;' ({cut}): it was cut "
+                                       "in transfer or export. The spaces, quantities and relations after the cut "
+                                       "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
+    was_cut = f" (the file was cut short: {cut})" if cut else ""
     if not spaces:
-        raise reject("the IFC file has no IfcSpace")
+        raise reject(f"the IFC file has no IfcSpace{was_cut}")
     skipped: list[dict] = []
     names = Counter((s.Name or "").strip() for s in spaces)
     zone_of = {s.id(): ((s.Name or "").strip() if (s.Name or "").strip() and names[(s.Name or "").strip()] == 1
@@ -81,15 +99,20 @@ def parse_ifc(content: bytes) -> dict:
                             "reason": "IfcOpenShell's geometry kernel made no triangles of its representation"})
     if not faces:
         first = skipped[0]
-        raise reject(f"no usable IfcSpace: {first['object']}: {first['reason']}", ("file", first["object"]))
+        raise reject(f"no usable IfcSpace: {first['object']}: {first['reason']}{was_cut}", ("file", first["object"]))
     area_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "AREAUNIT")
     volume_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "VOLUMEUNIT")
     declared: dict[str, dict] = {}
     quantities_used: dict[str, dict] = {}
+    unreadable = []
     for s in spaces:
         if s.id() not in shaped:
             continue
-        sets = ifcopenshell.util.element.get_psets(s, qtos_only=True)
+        try:
+            sets = ifcopenshell.util.element.get_psets(s, qtos_only=True)
+        except (AttributeError, RuntimeError, TypeError):  # a relation naming an entity the file lacks (damaged, cut)
+            unreadable.append(label[s.id()])
+            continue
         # IFC2X3 exporters (Revit, ArchiCAD) name the set "BaseQuantities"
         qto = sets.get("Qto_SpaceBaseQuantities") or sets.get("BaseQuantities") or {}
         volume = _quantity(qto, "NetVolume", "GrossVolume")
@@ -101,7 +124,11 @@ def parse_ifc(content: bytes) -> dict:
             entry["floor_area"], used["floor_area"] = floor[1] * area_scale, floor[0]
         if entry:
             declared[zone_of[s.id()]], quantities_used[zone_of[s.id()]] = entry, used
-    warnings = []
+    if unreadable:
+        warnings.append(Diagnostic(code="ifc_quantities_unreadable", message=(
+            f"The property sets of {len(unreadable)} space(s) cannot be read (they refer to entities the file does "
+            f"not hold): their declared quantities were not compared, first {unreadable[0]}."),
+            details={"spaces": unreadable[:MAX_SKIPPED_LISTED]}).model_dump())
     length_scale = ifcopenshell.util.unit.calculate_unit_scale(model)
     if length_scale != 1.0:
         warnings.append(Diagnostic(code="units_converted", message=(

@@ -204,6 +204,11 @@ def parse_idf(text: str) -> dict:
                         "reason": "the file ends inside this object (no closing ';'): not read"})
         warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
                                        object=label).model_dump())
+    elif ends_mid_line(text) and objects:  # cut after a ';', in a comment or blanks: the objects after it are gone
+        last = len(text.splitlines())
+        warnings.append(truncated_file(last, f"its last line has no line ending (the file was cut?): every object up "
+                                       f"to the last ';' was read, whatever the file held after line {last} is "
+                                       "missing.").model_dump())
     return surfaces_from_objects(objects, skipped, warnings, "idf")
 
 
@@ -391,6 +396,9 @@ def parse_obj(text: str) -> dict:
     if ends_mid_line(text) and skipped and skipped[-1]["line"] == last:
         warnings.append(truncated_file(last, f"its last line has no line ending and could not be read "
                                        f"({skipped[-1]['reason']}): the file was cut?").model_dump())
+    elif ends_mid_line(text):  # read as written, but a face cut to three of its corners reads too
+        warnings.append(truncated_file(last, "its last line has no line ending (the file was cut?): it was read as "
+                                       "written, and whatever the file held after it is missing.").model_dump())
     if not faces:
         first = skipped[0] if skipped else None
         if first:

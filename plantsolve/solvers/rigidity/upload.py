@@ -14,7 +14,10 @@ the main model's lines before the first ``0 FILE`` and the parts' own definition
 ``\\`` or ``/``, and with or without the library folder. A section headed ``!LDRAW_ORG Part`` or
 ``Shortcut`` (``Unofficial_`` or not), or without a header but named for a catalogue part, is that part
 and is placed, not expanded; subparts and primitives are drawn geometry. Item by item: a type-1 line
-that cannot be read is skipped and listed in the report with its line and reason; parts not in the
+that cannot be read (a matrix that scales or shears, a position beyond 1e12 LDU) is skipped and listed in the
+report with its line and reason, and a rotation printed with few digits (``0.985 -0.17 0``) is read as the
+nearest rotation (``source.rotations_rounded`` counts them), and a line placing a ``.ldr`` or ``.mpd`` the file
+does not hold (a cut ``.mpd``, an ``.ldr`` without its sub-model files) is skipped naming it; parts not in the
 catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
 the file is refused (422 naming the file) only when it places no part at all.
 Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models.
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
@@ -35,6 +39,9 @@ UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
 MAX_SKIPPED_LISTED = 200
 MAX_PARTS = 20_000
+# Rows of a placement's matrix off orthonormal by up to this are a rotation printed with few digits, read as the
+# nearest rotation; further off, the line scales or shears its part and is skipped.
+ROUNDED_ROTATION = 1e-2
 PRELUDE = "<main>"  # the text before the first '0 FILE'
 FOLDERS = ("parts/", "p/", "models/")  # where LDraw's search path looks; packers write the folder into the name
 GEOMETRY_FOLDERS = ("p/", "s/", "parts/s/", "48/", "8/")  # primitives and subparts: drawn geometry, not parts
@@ -134,6 +141,7 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
 
 
 PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
+MODEL_EXTENSIONS = (".ldr", ".mpd")  # the library's parts are .dat files: these name (sub-)models
 
 
 def _cut_last_line(text: str) -> int | None:
@@ -158,7 +166,7 @@ def parse_ldraw(text: str) -> dict:
     skipped: list[dict] = []
     warnings: list[dict] = []
     cut = _cut_last_line(text)
-    counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0}
+    counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0}
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -196,11 +204,31 @@ def parse_ldraw(text: str) -> dict:
             if abs(np.linalg.det(local_rot)) < 1e-6:
                 skipped.append({"line": number, "reason": "the rotation matrix is singular"})
                 continue
+            with np.errstate(over="ignore", invalid="ignore"):  # entries of 1e308: off is inf, the line skipped
+                off = float(np.abs(local_rot @ local_rot.T - np.eye(3)).max())
+            if off > ROUNDED_ROTATION:
+                skipped.append({"line": number, "reason": f"the matrix is not a rotation (scaled or sheared: its rows "
+                                f"are off orthonormal by {off:.3g})"})
+                continue
+            if off > 1e-12:
+                # a rotation printed with few digits (0.707, 0.985 and 0.17): the nearest rotation, so that
+                # sub-model placements composed of such matrices stay rotations
+                u, _, vt = np.linalg.svd(local_rot)
+                local_rot = u @ vt
+                counts["rotations_rounded"] += 1
             world_rot = rot @ local_rot
             world_pos = rot @ local_pos + pos
+            if not np.all(np.abs(world_pos) <= MAX_COORDINATE):  # NaN fails too: an absurd float, or its overflow
+                skipped.append({"line": number, "reason": f"the position is beyond {MAX_COORDINATE:g} LDU"})
+                continue
             ident = f"{prefix}L{number}"
             sub = _resolve(file_name, files)
             role = roles.get(sub, "model") if sub is not None else None
+            if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
+                skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
+                                "hold (an .mpd cut short, or an .ldr whose sub-models are separate files: send them "
+                                "as one .mpd)"})
+                continue
             if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws, it is no part
                 continue
@@ -229,6 +257,12 @@ def parse_ldraw(text: str) -> dict:
     if cut is not None:
         warnings.append(truncated_file(cut, "the file ends inside this type-1 line (the file was cut?); the part it "
                                        "placed was not read.").model_dump())
+    elif ends_mid_line(text) and text.splitlines()[-1].split()[:1] != ["1"]:
+        # a comment or meta line cut (a whole part line is taken as written, as _cut_last_line says): what followed
+        # it is gone
+        last = len(text.splitlines())
+        warnings.append(truncated_file(last, "its last line has no line ending (the file was cut?): it was read as "
+                                       "written, and whatever the file held after it is missing.").model_dump())
     if not parts:
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))

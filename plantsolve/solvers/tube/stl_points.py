@@ -6,10 +6,11 @@ facet cut off at the end of the file or holding a vertex line that cannot be rea
 
 from __future__ import annotations
 
-import math
+import codecs
 
 import numpy as np
 
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.tube.read_log import ReadLog
 
@@ -21,13 +22,30 @@ def read_stl(content: bytes, log: ReadLog) -> np.ndarray:
     """The triangles' corners, (M, 3, 3)."""
     if len(content) >= BINARY_HEADER:
         count = int(np.frombuffer(content, "<u4", 1, offset=80)[0])
-        if BINARY_HEADER + BINARY_TRIANGLE * count == len(content) or not _looks_ascii(content):
+        if BINARY_HEADER + BINARY_TRIANGLE * count == len(content):
             return _binary(content, count, log)
-    return _ascii(content, log)
+    text = _ascii_text(content)
+    if text is None and len(content) >= BINARY_HEADER:
+        return _binary(content, count, log)
+    return _ascii(text or "", log)
 
 
-def _looks_ascii(content: bytes) -> bool:
-    return content.lstrip()[:5].lower() == b"solid" and b"facet" in content[:1000]
+def _ascii_text(content: bytes) -> str | None:
+    """The text of an ASCII STL (behind a UTF-8 mark, or re-saved as UTF-16 by a Windows editor, which a binary
+    reader would take for triangles of garbage), or None when the content is not one (its start is looked at
+    first: a binary file is not decoded whole)."""
+    if content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+        encoding = "utf-16"
+    elif content[1:8:2] == b"\0\0\0\0" and content[:8:2].isalpha():  # UTF-16 LE without its mark
+        encoding = "utf-16-le"
+    elif content[0:8:2] == b"\0\0\0\0" and content[1:8:2].isalpha():  # UTF-16 BE without its mark
+        encoding = "utf-16-be"
+    else:
+        encoding, content = "utf-8", content.removeprefix(codecs.BOM_UTF8)
+    head = content[:2000].decode(encoding, errors="replace").lower()
+    if not (head.lstrip().startswith("solid") and "facet" in head):
+        return None
+    return content.decode(encoding, errors="replace")
 
 
 def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
@@ -36,14 +54,14 @@ def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
     if n < count:
         log.truncate(f"the file ends after {n} of {count} triangles", element="triangle", read=n, declared=count)
     tri = np.frombuffer(content, _TRIANGLE, n, offset=BINARY_HEADER)["corners"].astype(np.float64)
-    ok = np.isfinite(tri).all((1, 2))
+    ok = (np.abs(tri) <= MAX_COORDINATE).all((1, 2))  # NaN fails too: a float the writer never meant
     for _ in range(int((~ok).sum())):
-        log.skip(None, "non-finite coordinate")
+        log.skip(None, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}")
     return tri[ok]
 
 
-def _ascii(content: bytes, log: ReadLog) -> np.ndarray:
-    lines = content.decode("utf-8", errors="replace").splitlines()
+def _ascii(text: str, log: ReadLog) -> np.ndarray:
+    lines = text.splitlines()
     triangles, corners, facet_line, bad = [], [], None, None
     ended = False
     for lineno, line in enumerate(lines, 1):
@@ -58,8 +76,8 @@ def _ascii(content: bytes, log: ReadLog) -> np.ndarray:
                 xyz = [float(w) for w in words[1:4]]
                 if len(xyz) < 3:
                     bad = bad or (lineno, "vertex cut short")
-                elif not all(math.isfinite(v) for v in xyz):
-                    bad = bad or (lineno, "non-finite coordinate")
+                elif not all(abs(v) <= MAX_COORDINATE for v in xyz):  # NaN fails too
+                    bad = bad or (lineno, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}")
                 corners.append(xyz)
             except ValueError:
                 bad = bad or (lineno, "vertex not numbers")

@@ -1,8 +1,9 @@
 """XYZ, CSV and TXT point lists: one point a line, ``x y z`` first (more columns allowed, e.g. colour or intensity).
 
 A line that cannot be read — cut short (fewer columns than the file's other rows), not numbers, a NaN or an
-infinite coordinate — is left out and logged with its line number; the file is refused only when no point is
-left. Non-numeric lines before the first point are a header; lines starting with # / or % are comments."""
+infinite coordinate, stray bytes — is left out and logged with its line number; the file is refused only when no
+point is left. Text is read as exporters write it (UTF-8, UTF-16 with its mark, else Windows-1252). Non-numeric
+lines before the first point are a header; lines starting with # / or % are comments."""
 
 from __future__ import annotations
 
@@ -12,17 +13,19 @@ from collections import Counter
 
 import numpy as np
 
-from plantsolve.solvers.base import reject
+from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.solvers.base import InputRejected, decode_text, reject
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
 
 
 def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
+    # UTF-8, UTF-16 with its mark or Windows-1252: a line of stray bytes is one unreadable line, not the file's end
     try:
-        text = content.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise reject("text file is not UTF-8") from None
+        text = decode_text(content, "point list")
+    except InputRejected as e:
+        raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
     lines = text.splitlines()
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns
@@ -43,6 +46,8 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
             bad.append((lineno, "fewer than 3 coordinates"))
         elif not all(math.isfinite(v) for v in vals):
             bad.append((lineno, "non-finite coordinate"))
+        elif not all(abs(v) <= MAX_COORDINATE for v in vals):  # a float the writer never meant
+            bad.append((lineno, f"coordinate beyond {MAX_COORDINATE:g}"))
         else:
             rows.append((lineno, vals, len(fields)))
             decimals.append(_decimals(fields[-1]))

@@ -13,9 +13,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import PointSource, TubeRequest, UnitConversion
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, reject, validated
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, reject, validated
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -247,8 +247,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
                                             "its `units` (set units instead)")])
         try:
-            doc = json.loads(source.read().decode("utf-8-sig"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            doc = json.loads(decode_text(source.read(), "JSON file"))
+        except json.JSONDecodeError as exc:
             raise reject(f"invalid JSON: {exc}") from None
         if isinstance(doc, list):
             doc = {"points": doc}
@@ -278,6 +278,13 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target)
         if not (factors == 1.0).all():
             pts = pts * factors
+        bounded = (np.abs(pts) <= MAX_COORDINATE).all(1)
+        if not bounded.all():  # one absurd float of a binary file (LAS, NPY, a PLY cut in its header) is one point
+            if not bounded.any():
+                raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
+            for _ in range(int((~bounded).sum())):
+                log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}")
+            pts = pts[bounded]
         source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
                                     skipped_lines=log.lines, truncated=log.truncation is not None,
                                     warnings=log.warnings() + unit_warnings)

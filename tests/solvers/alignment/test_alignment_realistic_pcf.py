@@ -462,3 +462,25 @@ def test_a_pcf_cut_after_its_only_component_keyword_is_refused_on_the_file():
         parse_upload(StoredInput.from_bytes("cut.pcf", b"ISOGEN-FILES ISOGEN.FLS\r\nUNITS-CO-ORDS MM\r\nPIPE\r\n"), None)
     (fe,) = e.value.errors
     assert fe.loc == ("file",) and "line 3" in fe.msg and "no END-POINT" in fe.msg
+
+
+@pytest.mark.parametrize("value", ["1e308", "-3e15"])
+def test_an_item_with_a_coordinate_beyond_the_bound_is_held_not_the_file_refused(value):
+    """A finite but absurd coordinate (an exporter's garbage float) is read like a non-finite one: its item is
+    held and reported with its line; before, it overflowed the reader's neighbour search and refused the file."""
+    text = "UNITS-CO-ORDS MM\n" + GOOD + f"PIPE\n    END-POINT 1000 0 0 100\n    END-POINT 2000 {value} 0 100\n"
+    req = parse_upload(StoredInput.from_bytes("x.pcf", text.encode()), None)
+    res = solve(req).result
+    (entry,) = next(w for w in res.report.warnings if w.code == "pcf_items_held").details["items"]
+    assert "beyond 1e+12" in entry["reason"] and entry["line"] == 5
+
+
+def test_a_plant3d_export_cut_inside_a_record_after_the_points_warns_that_what_followed_is_missing():
+    """Cut in the middle of an item's ITEM-CODE line (its points whole), the file was aligned as if it were complete:
+    every item after the cut was lost without a word."""
+    lines = _plant3d_lines()
+    code = next(n for n, ln in enumerate(lines, 1) if n > 60 and ln.strip().startswith("ITEM-CODE"))
+    text = "".join(lines[:code - 1]) + lines[code - 1][:-6]  # '    ITEM-CODE PIPSML' of 'PIPSMLS4S40'
+    res = solve(parse_upload(StoredInput.from_bytes("cut.pcf", text.encode()), None)).result
+    cut = next(w for w in res.report.warnings if w.code == "truncated_file")
+    assert cut.details["last_line"] == code and "any items the file held after it are missing" in cut.message

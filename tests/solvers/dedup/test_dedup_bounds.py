@@ -60,3 +60,32 @@ def test_inflated_bytes_are_counted_whatever_the_zip_declares(monkeypatch):
     assert len(counted.read(600)) == 600
     with pytest.raises(InputRejected, match="more than 1,000 bytes"):
         counted.read(600)
+
+
+def test_an_ifczip_damaged_in_its_compressed_bytes_or_cut_short_says_so_naming_the_file():
+    """Corrupt deflate data raised zlib.error out of the reader (a 422 calling the file malformed; in a worker an
+    EOFError from a cut stream counts as an infrastructure failure and is retried), and a cut archive was called
+    'not a zip archive'. Both now say the archive is damaged or cut short."""
+    archive = bytearray(_zipped(points_only(2000)))
+    start = 30 + len("model.ifc")  # the local header, then the compressed bytes
+    archive[start + 40:start + 48] = b"\xff" * 8
+    for name, content in (("damaged.ifczip", bytes(archive)), ("cut.ifczip", _zipped(points_only(2000))[:3000])):
+        with pytest.raises(InputRejected) as refused:
+            _input(name, content).header()
+        (error,) = refused.value.errors
+        assert error.loc == ("file",) and "damaged or cut short" in error.msg, error.msg
+
+
+def test_an_ifc_behind_an_editors_byte_order_mark_is_optimized_like_the_file_without_it():
+    """The header check let a UTF-8 byte-order mark before 'ISO-10303-21;' through (202), then IfcOpenShell's parser
+    stopped at it and the job failed at stage input ('Unable to parse IFC SPF header'). The solve now reads the text
+    after the mark, in an .ifc and inside an .ifczip."""
+    from pathlib import Path
+
+    plain = (Path(__file__).parents[3] / "examples" / "dedup" / "tunnel_3rings.ifc").read_bytes()
+    marked = b"\xef\xbb\xbf" + plain
+    solved = [SPEC.solve(_input(name, content), lambda *a, **k: None).result
+              for name, content in (("t.ifc", plain), ("t.ifc", marked), ("t.ifczip", _zipped(marked)))]
+    assert {(r.products_shared, r.optimized_bytes) for r in solved} == {(solved[0].products_shared,
+                                                                        solved[0].optimized_bytes)}
+    assert solved[0].products_shared > 0

@@ -262,3 +262,35 @@ def test_a_json_request_cut_short_is_refused_naming_where_it_stops():
         parse_upload(StoredInput.from_bytes("m.json", cut.encode()), None)
     (fe,) = exc.value.errors
     assert fe.loc == ("file",) and "ends before" in fe.msg and f"line {cut.count(chr(10)) + 1}" in fe.msg
+
+
+def _counts(request) -> tuple[int, int]:
+    return len(request.positions), sum(len(p.flow) for p in request.positions)
+
+
+def test_a_stray_quote_or_an_overlong_field_costs_its_own_line_only(n3_csv):
+    """A data line opening a quote it never closes used to swallow every line after it into one cell (130 of the
+    fan map's 134 points lost, reported as one skipped line); a field past the csv module's 128 KiB limit refused
+    the file as malformed. Now each data line is split on its own: that line is skipped, named, the rest read."""
+    lines = n3_csv.decode().splitlines()
+    whole = _counts(parse_upload(StoredInput.from_bytes("m.csv", n3_csv), None))
+    for bad, reason in (('"' + lines[5], "theta '0.0,0.5,"), ("1 " * 100_000, "cannot be split into cells")):
+        text = "\n".join(lines[:5] + [bad] + lines[6:]) + "\n"
+        request = parse_upload(StoredInput.from_bytes("m.csv", text.encode()), None)
+        assert _counts(request) == (whole[0], whole[1] - 1)
+        (note,) = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
+        assert note.details["lines"] == [6] and reason in note.details["skipped"][0]["reason"]
+
+
+def test_a_header_cell_with_a_line_break_keeps_the_line_numbers_of_the_rows_below(n3_csv):
+    """Excel writes a header cell typed with Alt+Enter as one quoted cell over two lines ('"theta<LF>[deg]"'): its
+    unit is read, and a bad row below is named by its line in the file (before, one line too early)."""
+    lines = n3_csv.decode().splitlines()
+    header = lines[0].split(",")
+    header[0] = '"' + header[0] + '\n[deg]"'
+    lines[6] = lines[6].replace("0.0", "abc", 1)
+    request = parse_upload(StoredInput.from_bytes("m.csv", ("\n".join([",".join(header)] + lines[1:]) + "\n").encode()),
+                           None)
+    assert request.setting_units[0] == "deg"
+    (note,) = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
+    assert note.details["lines"] == [8]  # line 7 of the one-line header's file

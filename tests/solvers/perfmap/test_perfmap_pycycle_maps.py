@@ -164,3 +164,19 @@ def test_choke_tolerance_is_a_fraction_of_the_flow_range():
             other = {**pos, "setting": [2.0]}
             s = prepare(PerfmapRequest.model_validate({"positions": [pos, other], "setting_names": ["Nc"]}))[0]
             assert (s.choke_pressures == [1.3, 1.5]) is merged and len(s.x) == (5 if merged else 6)
+
+
+def test_a_map_value_past_the_float_range_drops_its_point_and_classic_mac_line_ends_read():
+    """Two damaged copies of pyCycle's LPC map: a 400-digit integer in WcMap overflowed the conversion (a 422
+    calling the file malformed) and is now a non-finite value whose point is dropped; CR-only line ends hid
+    every array but the first ('no compressor MAP_DATA here')."""
+    text = (PYCYCLE / "LPC_map.py").read_text()
+    whole = pycycle_request("LPC_map.py")
+    poisoned = text.replace("17.907", "9" * 400, 1)
+    req = parse_upload(StoredInput.from_bytes("LPC_map.py", poisoned.encode()), {"map": False})
+    assert sum(len(p.flow) for p in req.positions) == sum(len(p.flow) for p in whole.positions) - 1
+    dropped = [next(w for w in r.upload_warnings if w.code == "upload_points_dropped").details["points"]
+               for r in (req, whole)]
+    assert dropped[0] == dropped[1] + 1
+    mac = parse_upload(StoredInput.from_bytes("LPC_map.py", text.replace("\n", "\r").encode()), {"map": False})
+    assert mac.positions == whole.positions

@@ -50,3 +50,40 @@ def test_ifc2x3_exporters_base_quantities_set_is_read_too():
     assert "'BaseQuantities'" in text
     request = parse_upload(StoredInput.from_bytes("a.ifc", text.encode()), None)
     assert request.source["declared"]["101"] == {"volume": pytest.approx(60.0), "floor_area": pytest.approx(20.0)}
+
+
+def _codes(result) -> dict:
+    return {w.code: w for w in result.report.warnings}
+
+
+def test_an_ifc_cut_short_is_read_as_far_as_it_goes_and_says_so():
+    """Cut inside space 103's entities, the file used to be read without a word: zones went missing silently.
+    Now the spaces read are kept and the report says where the file stops."""
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text()
+    cut = text[:text.index("#56=")]
+    request = parse_upload(StoredInput.from_bytes("cut.ifc", cut.encode()), None)
+    result = solve(request).result
+    assert {z.id for z in result.zones} == {"101", "102"}
+    note = _codes(result)["truncated_file"]
+    assert "END-ISO-10303-21" in note.message and note.details["line"] == cut.count("\n")
+    with pytest.raises(InputRejected, match="no IfcSpace .the file was cut short"):
+        parse_upload(StoredInput.from_bytes("cut.ifc", text[:text.index("#18=")].encode()), None)
+
+
+def test_a_space_whose_quantities_name_a_missing_entity_keeps_its_zone_without_them():
+    """Space 101's relation to its quantities names #32, which this damaged copy lacks: IfcOpenShell's get_psets
+    raised and the file was refused as malformed. Now 101 is measured and its quantities are reported unreadable."""
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text()
+    damaged = "\n".join(line for line in text.splitlines() if not line.startswith("#32="))
+    request = parse_upload(StoredInput.from_bytes("damaged.ifc", damaged.encode()), None)
+    result = solve(request).result
+    assert {z.id for z in result.zones} == {"101", "102", "103"} and "101" not in request.source["declared"]
+    assert _codes(result)["ifc_quantities_unreadable"].details["spaces"] == ["#18 IfcSpace '101'"]
+
+
+@pytest.mark.parametrize("encode", [lambda t: b"\xef\xbb\xbf" + t.encode(), lambda t: t.encode("utf-16")])
+def test_an_ifc_with_a_byte_order_mark_is_read(encode):
+    """A STEP file re-saved by a Windows editor starts with a byte-order mark: 'No schema loaded' before."""
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text()
+    request = parse_upload(StoredInput.from_bytes("bom.ifc", encode(text)), None)
+    assert set(request.source["spaces"]) == {"101", "102", "103"}

@@ -223,3 +223,25 @@ def test_binary_stl_cut_short_reads_its_whole_triangles_and_warns():
     assert warning.details == {"declared": 12, "read": 9, "bytes": 84 + 50 * 9 + 17}
     with pytest.raises(InputRejected, match="ends before the first"):
         upload("cut.stl", content[:84 + 30])
+
+
+def test_obj_cut_inside_a_line_that_still_reads_warns_that_the_file_was_cut():
+    """Revit's room cut inside a quad's face line ('f 1//1 3//1 4//1' of 'f 1//1 3//1 4//1 2//1') read a triangle,
+    and a SketchUp file cut in a 'vn' line lost its later faces: both without a word before."""
+    revit = (DATA / "revit_room.obj").read_bytes()
+    quad = revit.index(b"f 1//1 3//1 4//1 2//1")
+    sketchup = (DATA / "sketchup_two_rooms.obj").read_bytes()
+    for cut in (revit[:quad + len(b"f 1//1 3//1 4//1")], sketchup[:sketchup.index(b"vn ", 500) + 10]):
+        result = solve(upload("cut.obj", cut)).result
+        note = next(w for w in result.report.warnings if w.code == "truncated_file")
+        assert note.details["line"] == cut.count(b"\n") + 1 and "no line ending" in note.message
+
+
+def test_idf_cut_after_an_objects_semicolon_warns_that_the_objects_after_it_are_missing():
+    """EnergyPlus' 1ZoneUncontrolled cut inside the comment after a ';' lost every later surface without a word."""
+    content = (DATA / "1ZoneUncontrolled.idf").read_bytes()
+    end = content.index(b";", content.index(b"BuildingSurface:Detailed"))
+    cut = content[:end + 6]  # ';  !-' of a surface's last vertex
+    result = solve(upload("cut.idf", cut)).result
+    note = next(w for w in result.report.warnings if w.code == "truncated_file")
+    assert note.details["line"] == cut.count(b"\n") + 1 and "every object up to the last ';' was read" in note.message

@@ -225,3 +225,62 @@ def test_an_embedded_dat_without_header_is_a_part_when_it_only_draws_and_a_submo
     request = parse("x.mpd", text)
     assert [(p.id, p.part) for p in request.parts] == [("L2", "sticker"), ("L3/L10", "3001")]
     assert request.source["embedded_parts"] == ["sticker.dat"] and request.source["submodels"] == 1
+
+
+def test_an_official_model_with_rotations_printed_to_three_digits_passes_the_checks_as_rotations():
+    """OMR 889 Radar Truck (CC BY 2.0, omr/README.md) writes its radar's tilt as ``0.985 -0.17 0`` (cos and sin of
+    10 degrees to two and three digits); composed with its sub-model's placement the matrix was 1.2e-3 off
+    orthonormal and the whole file was refused at /parts/31/rotation. Read as the nearest rotations, it passes."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from plantsolve.solvers.rigidity.validation import check_input
+
+    content = (Path(__file__).parent / "omr" / "889-1-RadarTruck.mpd").read_bytes()
+    request = parse("889-1-RadarTruck.mpd", content)
+    check_input(request)
+    assert request.source["rotations_rounded"] > 0 and request.source["skipped_count"] == 0
+    for part in request.parts:
+        m = np.array(part.rotation).reshape(3, 3)
+        assert np.allclose(m @ m.T, np.eye(3), atol=1e-4)  # the reader tidies values within 1e-5 of an integer
+    lines = content.decode().splitlines()
+    written = [np.array([float(v) for v in lines[n - 1].split()[5:14]]).reshape(3, 3) for n in (15, 89)]
+    tilted = next(p for p in request.parts if p.id == "L15/L89")  # line 89 placed by the sub-model at line 15
+    assert np.allclose(np.reshape(tilted.rotation, (3, 3)), written[0] @ written[1], atol=2e-3)  # as written, rounded
+
+
+@pytest.mark.parametrize("line, reason", [
+    ("1 4 0 -24 0 2 0 0 0 1 0 0 0 1 3001.dat", "not a rotation (scaled or sheared"),
+    ("1 4 0 -24 1e308 1 0 0 0 1 0 0 0 1 3001.dat", "beyond 1e+12 LDU"),
+    ("1 4 1e13 -24 0 1 0 0 0 1 0 0 0 1 3001.dat", "beyond 1e+12 LDU"),
+])
+def test_a_part_line_scaled_or_placed_beyond_the_bound_is_skipped_not_the_file_refused(line, reason):
+    """Before: a scaled matrix refused the whole file at /parts/1/rotation, and a 1e308 position overflowed the reader
+    (a 422 calling the file malformed). Now the line is skipped with its reason and the rest is analysed."""
+    from plantsolve.solvers.rigidity.validation import check_input
+
+    request = parse("poisoned.ldr", "0 Untitled\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n" + line + "\n"
+                    "1 4 0 -48 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    check_input(request)
+    assert [p.id for p in request.parts] == ["L2", "L4"]
+    (skipped,) = request.source["skipped"]
+    assert skipped["line"] == 3 and reason in skipped["reason"]
+    assert next(w for w in solve(request).result.report.warnings if w.code == "skipped_lines").details["lines"] == [3]
+
+
+def test_an_mpd_cut_before_its_sub_models_or_inside_a_comment_says_so():
+    """OMR 889 Radar Truck (CC BY 2.0, omr/README.md) cut after its main model placed its two sub-models as two
+    'parts not in the catalogue'; cut inside a comment it lost the lines after it without a word."""
+    from pathlib import Path
+
+    content = (Path(__file__).parent / "omr" / "889-1-RadarTruck.mpd").read_bytes()
+    main_end = content.index(b"889 - Minifig.ldr") + len(b"889 - Minifig.ldr\n")
+    with pytest.raises(InputRejected) as refused:
+        parse("cut.mpd", content[:main_end])
+    message = refused.value.errors[0].msg
+    assert "line 14: places sub-model '889 - Truck.ldr', which the file does not hold" in message
+    comment = content.index(b"0 !LICENSE", main_end + 200)
+    request = parse("cut.mpd", content[:comment + 20])
+    note = next(w for w in solve(request).result.report.warnings if w.code == "truncated_file")
+    assert note.details["line"] == content[:comment].count(b"\n") + 1 and "no line ending" in note.message

@@ -199,3 +199,47 @@ def test_npy_rows_with_nan_are_left_out_and_counted():
     assert len(TubeScan(req).points) == 2998
     w = warning(req, "records_skipped")
     assert w.details["count"] == 2 and w.details["reasons"] == {"non-finite coordinate": 2}
+
+
+@pytest.mark.parametrize("encode", [
+    lambda t: t.encode("utf-16"), lambda t: t.encode("utf-16-le"), lambda t: t.encode("utf-16-be"),
+    lambda t: b"\xef\xbb\xbf" + t.encode()])
+def test_an_ascii_stl_saved_as_utf16_or_behind_a_mark_is_read_as_text_not_as_binary_garbage(encode):
+    """Re-saved by a Windows editor, an ASCII STL no longer started with 'solid' byte for byte: it was read as a
+    binary STL 'cut short' whose triangles were its characters taken for floats, and accepted (or refused naming
+    points[0] beyond 1e12)."""
+    verts, faces = tube_mesh_arrays(make_model(ROWS, 4.0))
+    text = trimesh.exchange.stl.export_stl_ascii(trimesh.Trimesh(verts, faces, process=False))
+    plain = TubeScan(parse_upload(StoredInput.from_bytes("scan.stl", text.encode()), None)).points
+    req = parse_upload(StoredInput.from_bytes("scan.stl", encode(text)), None)
+    assert np.array_equal(TubeScan(req).points, plain) and req.source.skipped == 0 and not req.source.truncated
+
+
+def test_one_absurd_coordinate_costs_its_point_not_the_file():
+    """A coordinate past the schema's 1e12 bound (1e308 in a text line, 3e20 in a binary STL facet, 1e300 in an NPY
+    row) refused the whole file naming points[i]; now its line, triangle or row is skipped and reported."""
+    import io
+
+    pts = cloud()
+    lines = xyz_lines(pts)
+    lines[10] = "1e308 0 0"
+    req = parse_upload(StoredInput.from_bytes("scan.xyz", ("\n".join(lines) + "\n").encode()), None)
+    assert len(TubeScan(req).points) == 2999 and warning(req, "records_skipped").details["lines"] == [11]
+    verts, faces = tube_mesh_arrays(make_model(ROWS, 4.0))
+    data = bytearray(trimesh.exchange.stl.export_stl(trimesh.Trimesh(verts, faces, process=False)))
+    data[84 + 50 * 5 + 16:84 + 50 * 5 + 20] = np.float32(3e20).tobytes()  # facet 6's first corner, its y
+    req = parse_upload(StoredInput.from_bytes("scan.stl", bytes(data)), None)
+    assert req.source.skipped == 1 and np.abs(TubeScan(req).points).max() < 1e3
+    pts[[7]] = 1e300
+    buffer = io.BytesIO()
+    np.save(buffer, pts)
+    req = parse_upload(StoredInput.from_bytes("scan.npy", buffer.getvalue()), None)
+    assert len(TubeScan(req).points) == 2999 and req.source.skipped == 1
+
+
+def test_a_line_of_stray_bytes_costs_its_line_not_the_file():
+    """One line of bytes that are not UTF-8 refused the whole point list ('text file is not UTF-8')."""
+    lines = [s.encode() for s in xyz_lines(cloud())]
+    lines[20] = b"\xff\xfe\x01 garbage"
+    req = parse_upload(StoredInput.from_bytes("scan.xyz", b"\n".join(lines) + b"\n"), None)
+    assert len(TubeScan(req).points) == 2999 and warning(req, "records_skipped").details["lines"] == [21]

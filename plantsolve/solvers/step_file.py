@@ -1,0 +1,29 @@
+"""STEP physical files (ISO 10303-21, the text IFC models are written in): whether one ends where the standard
+says it ends, and where one that was cut stops. Shared by the kinds that read IFC (dedup refuses a cut model,
+polyhedra reads the spaces it holds and says the file was cut)."""
+
+from __future__ import annotations
+
+import re
+
+TRAILER_BYTES = 256  # END-ISO-10303-21; is looked for this far from the end
+
+_TRAILING_COMMENT = re.compile(rb"/\*(?:(?!\*/).)*\*/\s*$", re.DOTALL)
+_ENTITY = re.compile(rb"#(\d+)\s*=")
+
+
+def where_cut(tail: bytes) -> str | None:
+    """None when the text whose last bytes are ``tail`` ends with 'END-ISO-10303-21;' (a comment after it is
+    allowed); else where it stops, told by its last entity instance (the file's own numbering)."""
+    trailer = tail[-TRAILER_BYTES:].rstrip(b" \t\r\n\x00\x1a")  # NUL padding, the DOS end-of-file mark
+    trailer = _TRAILING_COMMENT.sub(b"", trailer).rstrip()
+    if trailer.endswith(b"END-ISO-10303-21;"):
+        return None
+    last = _ENTITY.findall(trailer)
+    if not last:
+        return "it stops after " + repr(trailer[-40:].decode("latin-1"))
+    if trailer.endswith(b";") and trailer.rsplit(b";", 2)[-2].lstrip().startswith(b"#" + last[-1]):
+        return f"it stops after entity #{last[-1].decode()}, before 'ENDSEC;'"
+    if trailer.rstrip().endswith(b"ENDSEC;"):
+        return "it stops after its DATA section's 'ENDSEC;'"
+    return f"it stops inside entity #{last[-1].decode()}"
