@@ -623,17 +623,54 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
     # a radius below the pipe radius is no bend a bender makes: the tube surface there is a spindle torus,
     # whose folded inner wall gives a bend of a few degrees a sharp but spurious minimum, so its sigma
     # (often a few percent) describes that fold, not the die
-    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
-             or rows[k].bend_radius < model.pipe_radius]
+    loose = {k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
+             or rows[k].bend_radius < model.pipe_radius}
+    if mode == "free":
+        loose |= set(radii_fitting_as_well(model, pts[ls.inlier], loose))
+    loose = sorted(loose)
     if loose:
         result.report.warnings.append(Diagnostic(
             code="bend_radius_undetermined",
             message=f"The radius of bend(s) {', '.join(str(k + 1) for k in loose)} is not determined by the data "
-            "(standard deviation above 10 % of the radius, or a radius below the pipe radius): give the die radius "
-            "(options.bend_radius or dies).",
+            "(standard deviation above 10 % of the radius, a radius below the pipe radius, or half or twice the "
+            "radius fitting about as well): give the die radius (options.bend_radius or dies).",
             details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
                                 "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
         result.report.status = "warning"
+
+
+def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[int]:
+    """Bends (other than ``skip``) whose free radius the samples do not pin down beyond the point it was fitted
+    at: with the radius held at half or at twice its value (within the fit's bounds) and the control polygon
+    kept (``with_radii``), the sum of squared residuals rises by less than a standard deviation of 10 % of the
+    radius predicts, Δχ² < ((R' - R) / 0.1 R)² (25 at half, 100 at twice), in units of the fit's residual
+    variance. The sigma from the Jacobian describes the minimum the fit stopped in; for a bend of a few degrees
+    that can be one of several (a tiny radius, or one of hundreds of pipe radii with a sigma of 2 %), chosen by
+    round-off, and this secant test sees the cost stay flat (or fall) across them. Without a refit the rise is
+    an upper bound of the profile's, so no bend is flagged that a refit would show determined."""
+    n = model.n_bends
+    rp = model.pipe_radius
+    r0 = fit.assign(model, pts, 0.0)[0]
+    rss0 = float(r0 @ r0)
+    s2 = rss0 / max(len(pts) - fit.Layout(n, "free", None, True).size, 1)
+    if s2 <= 0:
+        return []
+    lo, hi = 0.5 * rp, 200.0 * rp  # the radius bounds of the fit (``fit.bounds``)
+    out = []
+    for k in range(n):
+        if k in skip:
+            continue
+        R = float(model.radii[k])
+        for R_held in (max(0.5 * R, lo), min(2.0 * R, hi)):
+            if abs(R_held - R) <= 1e-3 * R:
+                continue
+            radii = model.radii.copy()
+            radii[k] = R_held
+            r = fit.assign(with_radii(model, radii), pts, 0.0)[0]
+            if (float(r @ r) - rss0) / s2 < ((R_held - R) / (0.1 * R)) ** 2:
+                out.append(k)
+                break
+    return out
 
 
 def _same_shape(a: TubeModel, b: TubeModel) -> bool:
