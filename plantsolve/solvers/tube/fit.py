@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from plantsolve.solvers.tube.model import Spine, TubeModel, _segment_distances, build_spine, spine_distance
 
 
