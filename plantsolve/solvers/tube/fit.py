@@ -28,7 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from plantsolve.solvers.tube.model import Spine, TubeModel, _segment_distances, build_spine, spine_distance
+from plantsolve.solvers.tube.model import (
+    Spine,
+    TubeModel,
+    _segment_distances,
+    build_spine,
+    spine_distance,
+)
 
 
 @dataclass
