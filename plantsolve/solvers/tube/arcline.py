@@ -41,6 +41,8 @@ from plantsolve.solvers.tube.vec3 import cross
 
 TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
 _X2 = np.array([1.0, 0.0])
+_X3 = np.array([1.0, 0.0, 0.0])
+_Y3 = np.array([0.0, 1.0, 0.0])
 _MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 
@@ -115,12 +117,23 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     along = rel @ u1
     dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
     cr = cross(u1, dj)
-    perp = rel - along[:, None] * u1
-    cov = perp.T @ perp
-    w, V = np.linalg.eigh(cov + u1[:, None] * u1[None, :] * (np.trace(cov) + 1.0) * 10)  # np.outer, written out
-    if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
+    # the least-squares planes through l_i: the offsets from l_i in a basis (e1, e2) of the plane normal to
+    # it, and the 2 × 2 eigenproblem of their scatter in closed form (the plane's normal is the eigenvector
+    # of the smaller eigenvalue)
+    e1 = cross(u1, _X3 if abs(u1[0]) < 0.9 else _Y3)
+    e1 = e1 / _norm3(e1)
+    e2 = cross(u1, e1)
+    x1, x2 = rel @ e1, rel @ e2
+    a, b, d = float(x1 @ x1), float(x1 @ x2), float(x2 @ x2)
+    half, mean = 0.5 * (a - d), 0.5 * (a + d)
+    root = math.hypot(half, b)
+    if math.sqrt(max(mean + root, 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
         # the chain bends well beyond the noise: its least-squares plane through l_i
-        m = V[:, 0]
+        small = mean - root
+        # eigenvector of the smaller eigenvalue, from the row of (C - small I) with the larger entries
+        v = (b, small - a) if abs(small - a) >= abs(small - d) else (small - d, b)
+        nv = math.hypot(v[0], v[1])
+        m = (v[0] * e1 + v[1] * e2) / nv if nv > 0 else e1
     else:
         # nearly straight chain (small bend): its own plane would be arbitrary; the plane
         # spanned by both tangent directions is well defined

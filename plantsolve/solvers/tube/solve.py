@@ -198,7 +198,8 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
     for f in factors:
         e = eps * f
-        simp_e = curve.simplify(poly, SIMPLIFY_FRACTION * e)
+        # at ε itself the polygon simplified is the stage's own (the same call)
+        simp_e = pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * e)
         mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp)
         if mdl is None:  # every kept prefix ran into a dead end: search wider before giving up ε
             mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp, beam=8)
