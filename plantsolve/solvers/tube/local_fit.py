@@ -51,7 +51,8 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
     ws_safe = np.where(ws > 0, ws, 1.0)
     bary = (w[..., None] * nb).sum(1) / ws_safe
     rel_b = nb - bary[:, None]
-    cov = np.einsum("mk,mki,mkj->mij", w, rel_b, rel_b)
+    # weighted scatter and normal equations as batched products (a three-operand einsum takes no BLAS path)
+    cov = np.matmul((rel_b * w[..., None]).transpose(0, 2, 1), rel_b)
     _, vec = np.linalg.eigh(cov)  # ascending: vec[..., 0] = normal of the PCA plane
     e1, e2, e3 = vec[..., 2], vec[..., 1], vec[..., 0]
     rel = nb - centres[:, None]
@@ -59,8 +60,9 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
     y = np.einsum("mki,mi->mk", rel, e2)
     z = np.einsum("mki,mi->mk", rel, e3)
     A = np.stack([x * x, y * y, x * y, x, y, np.ones_like(x)], -1)  # (M, K, 6)
-    AtA = np.einsum("mk,mki,mkj->mij", w, A, A)
-    Atz = np.einsum("mk,mki,mk->mi", w, A, z)
+    Aw = A * w[..., None]
+    AtA = np.matmul(Aw.transpose(0, 2, 1), A)
+    Atz = np.einsum("mki,mk->mi", Aw, z)
     scale = np.maximum(np.einsum("mii->mi", AtA).max(1), 1e-300)
     reg = 1e-10 * scale[:, None, None] * np.eye(6)
     ok = count >= 6
