@@ -31,8 +31,8 @@ import numpy as np
 from plantsolve.solvers.tube.model import (
     Spine,
     TubeModel,
-    _segment_distances,
     build_spine,
+    segment_distances_t,
     spine_distance,
 )
 
@@ -332,10 +332,10 @@ class EndAssignment:
         step = max(1, INNER_CHUNK // max(len(inner), 1))
         tol = self._tol(sp)
         for a in range(0, len(pts), step):
-            m = _segment_distances(pts[a:a + step], sub)
-            lo = m.min(axis=1)
+            m = segment_distances_t(pts[a:a + step], sub)
+            lo = m.min(axis=0)
             self.lo[a:a + step] = lo
-            self.idx[a:a + step] = 1 + np.argmax(m <= (lo + tol)[:, None], axis=1)
+            self.idx[a:a + step] = 1 + np.argmax(m <= lo + tol, axis=0)
 
     def _tol(self, sp: Spine) -> float:
         p_abs = max(float(-self.pts.min(initial=0.0)), float(self.pts.max(initial=0.0))) if self.pts.size else 0.0
@@ -343,8 +343,7 @@ class EndAssignment:
 
     def __call__(self, model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
         sp = build_spine(extended(model, self.margin))
-        d_end = _segment_distances(self.pts, _sub_spine(sp, np.array([0, self.S - 1])))
-        d0, d1 = d_end[:, 0], d_end[:, 1]
+        d0, d1 = segment_distances_t(self.pts, _sub_spine(sp, np.array([0, self.S - 1])))
         lo = np.minimum(np.minimum(d0, self.lo), d1)
         cut = lo + self._tol(sp)
         first = d0 <= cut
@@ -448,6 +447,19 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
+def with_end_lengths(model: TubeModel, ends: TubeModel) -> TubeModel:
+    """``model`` (a solve's, whose end straights have length 0: they are unbounded lines during it) with the
+    end straight lengths of ``ends``, its first arc where it was: the start for :func:`end_lengths`, which
+    then moves the ends by what the solve changed instead of growing them from nothing a margin at a time."""
+    m = model.copy()
+    m.lengths = m.lengths.copy()
+    first_arc_start = m.start + m.lengths[0] * m.frame[:, 0]
+    m.lengths[0] = ends.lengths[0]
+    m.lengths[-1] = ends.lengths[-1]
+    m.start = first_arc_start - m.lengths[0] * m.frame[:, 0]
+    return m
+
+
 def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     """Indices of the samples ``seg`` puts on the two outer segments at either end (the straight and the
     arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube
@@ -530,8 +542,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     pad_lo = np.where(np.isfinite(lo), 1e-9 * (np.abs(lo) + 1), 0.0)
     pad_hi = np.where(np.isfinite(hi), 1e-9 * (np.abs(hi) + 1), 0.0)
     x0 = np.clip(x0, lo + pad_lo, hi - pad_hi)
-    # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
-    kind = build_spine(unpack(x0, lay, frame0, rp)).kind
+    # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment); lines and
+    # arcs alternate
+    kind = np.arange(2 * lay.n + 1) % 2
     scale = max(rp, 1e-9)
     # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
     # Gram matrix is one product; the residual order is irrelevant to the solver

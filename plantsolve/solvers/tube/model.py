@@ -277,25 +277,33 @@ def distance_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
 
 
 def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
-    """Distance of each point to each (bounded) segment: (N, S).
+    """Distance of each point to each (bounded) segment: (N, S) (a view of :func:`segment_distances_t`)."""
+    return segment_distances_t(pts, sp, frames).T
+
+
+def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
+    """Distance of each point to each (bounded) segment, segments by rows: (S, N).
 
     All segments at once: one product gives every point's coordinates in every segment's
-    frame; the distances then follow elementwise from those coordinates."""
+    frame; the distances then follow elementwise from those coordinates. Segment-major, so that every
+    elementwise operation runs over contiguous rows of points (point-major slices of a few segments are
+    strided, several times slower)."""
     S = len(sp.kind)
     W, off, lines, arcs = frames if frames is not None else distance_frames(sp)
-    c = pts @ W
-    c -= off
+    # both operands C-contiguous: numpy hands strided ones to a loop far slower than BLAS
+    c = np.ascontiguousarray(W.T) @ np.ascontiguousarray(pts.T)
+    c -= off[:, None]
     L, A = len(lines), len(arcs)
-    out = np.empty((len(pts), S))
+    out = np.empty((S, len(pts)))
     if L:
-        a, b, h = c[:, :L], c[:, L:2 * L], c[:, 2 * L:3 * L]
+        a, b, h = c[:L], c[L:2 * L], c[2 * L:3 * L]
         # a − clip(a, 0, length): the offset beyond either end of the straight
-        da = np.maximum(a - sp.length[lines], 0.0) + np.minimum(a, 0.0)
-        out[:, lines] = np.sqrt(da * da + b * b + h * h)
+        da = np.maximum(a - sp.length[lines][:, None], 0.0) + np.minimum(a, 0.0)
+        out[lines] = np.sqrt(da * da + b * b + h * h)
     if A:
         o = 3 * L
-        x, y, z = c[:, o:o + A], c[:, o + A:o + 2 * A], c[:, o + 2 * A:]
-        R, ang = sp.radius[arcs], sp.angle[arcs]
+        x, y, z = c[o:o + A], c[o + A:o + 2 * A], c[o + 2 * A:]
+        R, ang = sp.radius[arcs][:, None], sp.angle[arcs][:, None]
         ca, sa = np.cos(ang), np.sin(ang)
         z2 = z * z
         rho = np.sqrt(x * x + y * y)
@@ -308,7 +316,7 @@ def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         before_end = ca * y - sa * x <= 0.0
         upper = y >= 0.0
         inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
-        out[:, arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
+        out[arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
     return out
 
 
@@ -325,13 +333,13 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
     tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
     frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
-        m = _segment_distances(pts[a:a + step], sp, frames)
+        m = segment_distances_t(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a
         # zero-length straight) goes to the earlier segment, independent of round-off
-        lo = m.min(axis=1)
-        i = np.argmax(m <= (lo + tol)[:, None], axis=1)
+        lo = m.min(axis=0)
+        i = np.argmax(m <= lo + tol, axis=0)
         idx[a:a + step] = i
-        d[a:a + step] = np.take_along_axis(m, i[:, None], 1)[:, 0]
+        d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
     return d, idx
 
 

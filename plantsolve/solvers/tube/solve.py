@@ -261,7 +261,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
-            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            m = fit.with_end_lengths(solved, m)
             res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
