@@ -114,7 +114,6 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     With ``plane_only`` only that test is made (None when it passes): the caller needs to know whether to go on,
     not the arc."""
     rel = chain - a1
-    along = rel @ u1
     dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
     cr = cross(u1, dj)
     # the least-squares planes through l_i: the offsets from l_i in a basis (e1, e2) of the plane normal to
@@ -123,7 +122,7 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     e1 = cross(u1, _X3 if abs(u1[0]) < 0.9 else _Y3)
     e1 = e1 / _norm3(e1)
     e2 = cross(u1, e1)
-    x1, x2 = rel @ e1, rel @ e2
+    along, x1, x2 = (rel @ np.column_stack([u1, e1, e2])).T
     a, b, d = float(x1 @ x1), float(x1 @ x2), float(x2 @ x2)
     half, mean = 0.5 * (a - d), 0.5 * (a + d)
     root = math.hypot(half, b)
@@ -133,48 +132,53 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
         # eigenvector of the smaller eigenvalue, from the row of (C - small I) with the larger entries
         v = (b, small - a) if abs(small - a) >= abs(small - d) else (small - d, b)
         nv = math.hypot(v[0], v[1])
-        m = (v[0] * e1 + v[1] * e2) / nv if nv > 0 else e1
+        m1, m2 = (v[0] / nv, v[1] / nv) if nv > 0 else (1.0, 0.0)
     else:
         # nearly straight chain (small bend): its own plane would be arbitrary; the plane
         # spanned by both tangent directions is well defined
         m = cr / _norm3(cr)
-    h = rel @ m
-    if np.any(np.abs(h) > eps):
-        return TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
+        m1, m2 = float(m @ e1), float(m @ e2)
+    # m = m1 e1 + m2 e2 is normal to u1, and Y = m × u1 = m2 e1 - m1 e2 (u1, e1, e2 right-handed)
+    h = m1 * x1 + m2 * x2
+    ah = np.abs(h)
+    if ah.max() > eps:
+        return TOO_FAR if ah.max() > 2 * eps else None
     if plane_only:
         return None
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
-    Y = cross(m, u1)
+    Y = m2 * e1 - m1 * e2
     q = np.empty((len(chain), 2))
-    q[:, 0], q[:, 1] = along, rel @ Y
-    a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
-    d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
-    nd = math.hypot(d2[0], d2[1])
-    if nd < 1e-12 * (_norm3(pj1 - pj) + 1e-300):
+    q[:, 0], q[:, 1] = along, m2 * x1 - m1 * x2
+    rj, dj_ = pj - a1, pj1 - pj
+    a2x, a2y = float(rj @ u1), float(rj @ Y)
+    d2x, d2y = float(dj_ @ u1), float(dj_ @ Y)
+    nd = math.hypot(d2x, d2y)
+    if nd < 1e-12 * (_norm3(dj_) + 1e-300):
         return None
-    u2 = d2 / nd
+    u2x, u2y = d2x / nd, d2y / nd
     seg = q[1:] - q[:-1]
     seg = seg[np.sqrt(np.add.reduce(seg * seg, axis=1)) > 1e-12]
     dirs = np.empty((len(seg) + 2, 2))
-    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, u2
+    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, (u2x, u2y)
     turn = np.sum(np.arctan2(dirs[:-1, 0] * dirs[1:, 1] - dirs[:-1, 1] * dirs[1:, 0],
                              (dirs[:-1] * dirs[1:]).sum(1)))
     sign = 1.0 if turn >= 0 else -1.0
     if sign < 0:  # mirror to a left turn
-        q = q * _MIRROR; a2 = a2 * _MIRROR; u2 = u2 * _MIRROR
-    phi = np.mod(np.arctan2(u2[1], u2[0]), 2 * np.pi)
+        q = q * _MIRROR; a2y = -a2y; u2y = -u2y
+    phi = math.atan2(u2y, u2x) % (2 * math.pi)
     if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
         return None
-    n2 = np.array([-u2[1], u2[0]])
-    den = n2[1] - 1.0
-    alpha = (a2 @ n2) / den
-    beta = -(n2[0]) / den  # u1 = (1, 0)
+    n2x, n2y = -u2y, u2x
+    den = n2y - 1.0
+    alpha = (a2x * n2x + a2y * n2y) / den
+    beta = -n2x / den  # u1 = (1, 0)
     # t2 = t1·u2x − a2·u2 + R (n1·u2), n1 = (0, 1)
-    gam0, gam1 = -(a2 @ u2), u2[0]
-    pj1_2 = np.array([(pj1 - a1) @ u1, (pj1 - a1) @ Y * sign])
-    t_hi_line = (pj1_2 - a2) @ u2 if t_hi is None else t_hi
-    lo, hi = t_lo, max(q[:, 0].max(), pj1_2[0], t_lo)
-    cons = [(beta, r_min - alpha), (-(gam1 + u2[1] * beta), -(t_hi_line - gam0 - u2[1] * alpha))]
+    gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
+    rj1 = pj1 - a1
+    p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
+    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y if t_hi is None else t_hi
+    lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
+    cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
     # constraints a·t1 ≥ b
     for a, b in cons:
         if abs(a) < 1e-14:
@@ -187,6 +191,7 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
             hi = min(hi, b / a)
     if hi < lo:
         return None
+    a2, u2, n2 = np.array([a2x, a2y]), np.array([u2x, u2y]), np.array([n2x, n2y])
     qa = q - a2
     return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
 
@@ -197,10 +202,7 @@ def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarr
     (t1, 0), arc about C = (t1, R) by phi, ray along u2 from its end T2), all families at once: chain points q
     (J, K, 2) (padded), arc starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances
     from it (J, K). Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
-    a2 = np.array([e.a2 for e in f])[:, :, None]
-    u2 = np.array([e.u2 for e in f])[:, :, None]
-    n2 = np.array([e.n2 for e in f])[:, :, None]
-    phi = np.array([e.phi for e in f])[:, None, None]
+    a2, u2, n2, phi = f if isinstance(f, tuple) else _family_lines(f)
     T2x, T2y = t1 - R * n2[:, 0], R - R * n2[:, 1]
     t2 = (T2x - a2[:, 0]) * u2[:, 0] + (T2y - a2[:, 1]) * u2[:, 1]
     qx, qy = q[:, None, :, 0], q[:, None, :, 1]
@@ -214,6 +216,12 @@ def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarr
     rho = np.hypot(dx1, vy)
     d2 = np.where(th <= phi, np.abs(rho - R[:, :, None]), np.minimum(dT1, dT2))
     return np.minimum(np.minimum(d1, d2), d3), t2
+
+
+def _family_lines(f: list[_Arcs]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """l_j of every family (point, direction, normal: (J, 2, 1)) and the turning angles (J, 1, 1)."""
+    return (np.array([e.a2 for e in f])[:, :, None], np.array([e.u2 for e in f])[:, :, None],
+            np.array([e.n2 for e in f])[:, :, None], np.array([e.phi for e in f])[:, None, None])
 
 
 def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge | None]:
@@ -247,9 +255,10 @@ def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge 
     t_grid = _linspaces(lo, hi, grid)
     best_cost = np.full(J, np.inf)
     best_t1, best_R, best_t2 = np.zeros(J), np.zeros(J), np.zeros(J)
+    lines = _family_lines(f)
     for _ in range(4):
         R = alpha + beta * t_grid
-        d, t2 = _dist_to_arclines(f, q, t_grid, R, along2, off2)
+        d, t2 = _dist_to_arclines(lines, q, t_grid, R, along2, off2)
         viol = np.max(d - epsk[:, None, :], axis=2)
         valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
         dd = d * d
