@@ -12,13 +12,14 @@ rotate the normal about the tangent by ``rotations[i]``, bend by ``angles[i]`` w
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotation, signed_angle
-from plantsolve.solvers.tube.vec3 import cross, rotate_about
+from plantsolve.solvers.tube.vec3 import cross
 
 TWO_PI = 2.0 * np.pi
 
@@ -83,33 +84,44 @@ def build_spine(model: TubeModel) -> Spine:
 
 
 def _build_spine(model: TubeModel) -> Spine:
+    """The forward kinematics on Python floats: a spine has a few segments, and numpy's per-call overhead on
+    3-vectors cost more than the arithmetic (the solver builds spines hundreds of times per scan)."""
     n = model.n_bends
-    p = np.asarray(model.start, float).copy()
-    t = model.frame[:, 0].copy()
-    nv = model.frame[:, 1].copy()
+    px, py, pz = (float(v) for v in model.start)
+    (tx, nx, _), (ty, ny, _), (tz, nz, _) = model.frame.tolist()
+    lengths, rotations = model.lengths.tolist(), model.rotations.tolist()
+    angles, radii = model.angles.tolist(), model.radii.tolist()
     S = 2 * n + 1
-    kind = np.zeros(S, int)
-    st = np.zeros((S, 3)); en = np.zeros((S, 3)); tg = np.zeros((S, 3)); nm = np.zeros((S, 3))
-    ln = np.zeros(S); ce = np.zeros((S, 3)); ra = np.zeros(S); an = np.zeros(S)
+    kind = [0, 1] * n + [0]
+    st, en, tg, nm, ce = [], [], [], [], []
+    ln, ra, an = [], [], []
     for i in range(n + 1):
-        k = 2 * i
-        st[k] = p; tg[k] = t; nm[k] = nv
-        p = p + model.lengths[i] * t
-        en[k] = p; ln[k] = model.lengths[i]
+        st.append((px, py, pz)); tg.append((tx, ty, tz)); nm.append((nx, ny, nz))
+        L = lengths[i]
+        px, py, pz = px + L * tx, py + L * ty, pz + L * tz
+        en.append((px, py, pz)); ln.append(L); ce.append((0.0, 0.0, 0.0)); ra.append(0.0); an.append(0.0)
         if i == n:
             break
-        nv = rotate_about(nv, t, model.rotations[i])
-        a, R = model.angles[i], model.radii[i]
-        k += 1
-        kind[k] = 1; st[k] = p; tg[k] = t; nm[k] = nv
-        c = p + R * nv
-        ca, sa = np.cos(a), np.sin(a)
-        p = c - R * (nv * ca) + R * (t * sa)
-        t, nv = t * ca + nv * sa, nv * ca - t * sa
-        en[k] = p; ce[k] = c; ra[k] = R; an[k] = a; ln[k] = R * a
-    for array in (kind, st, en, tg, nm, ln, ce, ra, an):
+        # the normal turned about the tangent by the rotation (Rodrigues, as ``vec3.rotate_about``)
+        c, s = math.cos(rotations[i]), math.sin(rotations[i])
+        cx, cy, cz = ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx
+        k = (tx * nx + ty * ny + tz * nz) * (1.0 - c)
+        nx, ny, nz = nx * c + cx * s + tx * k, ny * c + cy * s + ty * k, nz * c + cz * s + tz * k
+        a, R = angles[i], radii[i]
+        st.append((px, py, pz)); tg.append((tx, ty, tz)); nm.append((nx, ny, nz))
+        cx, cy, cz = px + R * nx, py + R * ny, pz + R * nz
+        ca, sa = math.cos(a), math.sin(a)
+        px, py, pz = cx - R * (nx * ca) + R * (tx * sa), cy - R * (ny * ca) + R * (ty * sa), cz - R * (nz * ca) + R * (tz * sa)
+        (tx, ty, tz), (nx, ny, nz) = ((tx * ca + nx * sa, ty * ca + ny * sa, tz * ca + nz * sa),
+                                      (nx * ca - tx * sa, ny * ca - ty * sa, nz * ca - tz * sa))
+        en.append((px, py, pz)); ce.append((cx, cy, cz)); ra.append(R); an.append(a); ln.append(R * a)
+    arrays = [np.array(kind, dtype=int)] + [np.array(v, dtype=float).reshape(S, 3) for v in (st, en, tg, nm)] + [
+        np.array(ln, dtype=float), np.array(ce, dtype=float).reshape(S, 3), np.array(ra, dtype=float),
+        np.array(an, dtype=float)]
+    for array in arrays:
         array.setflags(write=False)
-    return Spine(kind, st, en, tg, nm, ln, ce, ra, an)
+    kind_, st_, en_, tg_, nm_, ln_, ce_, ra_, an_ = arrays
+    return Spine(kind_, st_, en_, tg_, nm_, ln_, ce_, ra_, an_)
 
 
 def end_frame(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
