@@ -119,10 +119,8 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     # the least-squares planes through l_i: the offsets from l_i in a basis (e1, e2) of the plane normal to
     # it, and the 2 × 2 eigenproblem of their scatter in closed form (the plane's normal is the eigenvector
     # of the smaller eigenvalue)
-    e1 = cross(u1, _X3 if abs(u1[0]) < 0.9 else _Y3)
-    e1 = e1 / _norm3(e1)
-    e2 = cross(u1, e1)
-    along, x1, x2 = (rel @ np.column_stack([u1, e1, e2])).T
+    e1, e2 = _basis(u1)
+    along, x1, x2 = (rel @ np.array((u1, e1, e2)).T).T
     a, b, d = float(x1 @ x1), float(x1 @ x2), float(x2 @ x2)
     half, mean = 0.5 * (a - d), 0.5 * (a + d)
     root = math.hypot(half, b)
@@ -145,9 +143,24 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
         return TOO_FAR if ah.max() > 2 * eps else None
     if plane_only:
         return None
+    return _arcs_in_plane(along, x1, x2, h, m1, m2, e1, e2, a1, u1, t_lo, pj, pj1, eps, r_min, t_hi)
+
+
+def _basis(u1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(e1, e2) with (u1, e1, e2) a right-handed orthonormal basis."""
+    e1 = cross(u1, _X3 if abs(u1[0]) < 0.9 else _Y3)
+    e1 = e1 / _norm3(e1)
+    return e1, cross(u1, e1)
+
+
+def _arcs_in_plane(along: np.ndarray, x1: np.ndarray, x2: np.ndarray, h: np.ndarray, m1: float, m2: float,
+                   e1: np.ndarray, e2: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray,
+                   pj1: np.ndarray, eps: float, r_min: float, t_hi: float | None):
+    """:func:`arc_family` once the chain passed its plane test: the chain's coordinates along l_i (``along``)
+    and in (e1, e2), its offsets ``h`` from the plane of normal m1 e1 + m2 e2."""
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     Y = m2 * e1 - m1 * e2
-    q = np.empty((len(chain), 2))
+    q = np.empty((len(along), 2))
     q[:, 0], q[:, 1] = along, m2 * x1 - m1 * x2
     rj, dj_ = pj - a1, pj1 - pj
     a2x, a2y = float(rj @ u1), float(rj @ Y)
@@ -330,6 +343,38 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
     return best_arcs([f], r_min, grid)[0]
 
 
+def _planes(poly: np.ndarray, i: int, last: int, a1: np.ndarray, u1: np.ndarray, eps: float):
+    """The plane tests of :func:`arc_family` for the chains of every edge out of vertex i (j = i+1 … n-2, the
+    chain p_i … p_j, and p_{j+1} too at the last vertex) at once: the chains grow by a vertex per j, so their
+    coordinates are those of one array and their scatter sums running sums. Returns the basis (e1, e2), the
+    coordinates (along, x1, x2) of p_i … p_{n-1}, and per j the chain length, the plane normal (m1, m2) and
+    the largest distance of a chain vertex from the plane."""
+    n = len(poly)
+    e1, e2 = _basis(u1)
+    along, x1, x2 = ((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
+    js = np.arange(i + 1, n - 1)
+    K = js - i + 1 + (js == last)
+    a, b, d = np.cumsum(x1 * x1)[K - 1], np.cumsum(x1 * x2)[K - 1], np.cumsum(x2 * x2)[K - 1]
+    dv = poly[js + 1] - poly[js]
+    dj = dv / np.maximum(np.sqrt(np.einsum("jk,jk->j", dv, dv)), 1e-300)[:, None]
+    cr = cross(np.broadcast_to(u1, dj.shape), dj)
+    crn = np.sqrt(np.einsum("jk,jk->j", cr, cr))
+    half, mean = 0.5 * (a - d), 0.5 * (a + d)
+    root = np.hypot(half, b)
+    own = (np.sqrt(np.maximum(mean + root, 0.0) / K) > 2 * eps) | (crn < 1e-9)
+    small = mean - root
+    row1 = np.abs(small - a) >= np.abs(small - d)
+    v0, v1 = np.where(row1, b, small - d), np.where(row1, small - a, b)
+    nv = np.hypot(v0, v1)
+    nv_safe = np.where(nv > 0, nv, 1.0)
+    mc = cr / np.where(crn > 0, crn, 1.0)[:, None]
+    m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc @ e1)
+    m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc @ e2)
+    off = np.abs(m1[:, None] * x1[None, :] + m2[:, None] * x2[None, :])
+    off[np.arange(len(x1))[None, :] >= K[:, None]] = 0.0
+    return e1, e2, along, x1, x2, K, m1, m2, off.max(1)
+
+
 @dataclass
 class _State:
     """A way to reach vertex j: arc count, squared error, predecessor, modified line l'_j."""
@@ -363,7 +408,9 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
             break
         for si, st in enumerate(states[i]):
             reached = []  # (j, arcs) of every edge out of this state to search; a search changes no state of j
-            for j in range(i + 1, n - 1):
+            # every edge's plane test at once (:func:`arc_family`'s, the same rule)
+            e1, e2, along, x1, x2, K, m1, m2, off = _planes(poly, i, last, st.point, st.direction, eps)
+            for jj, j in enumerate(range(i + 1, n - 1)):
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:
                     continue
@@ -371,15 +418,21 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 # adds error: then only whether the chain leaves every plane (ending the j loop) matters
                 lost = worst is not None and st.d + 1 == worst.d and st.sse >= worst.sse
                 # p_{j+1} only fixes the direction of l_j; it is checked by j's outgoing edge (it
-                # lies in the next bend's plane when two bends follow each other directly)
-                chain = poly[i:j + 2] if j == last else poly[i:j + 1]
+                # lies in the next bend's plane when two bends follow each other directly): the chain is
+                # p_i … p_j, and p_{j+1} too at the last vertex
+                if off[jj] > eps:
+                    if off[jj] > 2 * eps:  # TOO_FAR: longer chains leave every plane too
+                        break
+                    continue
+                if lost:
+                    continue
+                k = K[jj]
+                h = m1[jj] * x1[:k] + m2[jj] * x2[:k]
                 # an arc may start up to ε before the previous one ended (the straight between
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
-                f = arc_family(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
-                               eps, r_min, plane_only=lost)
-                if f is TOO_FAR:
-                    break
+                f = _arcs_in_plane(along[:k], x1[:k], x2[:k], h, float(m1[jj]), float(m2[jj]), e1, e2, st.point,
+                                   st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1], eps, r_min, None)
                 if f is not None:
                     reached.append((j, f))
             # the arcs of all of them searched at once
