@@ -151,9 +151,9 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
     The same forward kinematics as model.build_spine, vectorised over the batch (the
-    finite-difference Jacobian evaluates 2P models at once). The moving frame is carried as
-    its three axes (tangent t, normal n, binormal b = t × n): a rotation about t and a bend
-    about b then mix two axes each, with no cross product per bend."""
+    finite-difference Jacobian evaluates 2P models at once) and over the bends: each bend is a rigid
+    step whose 4 × 4 matrix follows from its parameters elementwise, so the only loop over the bends is
+    one matrix product per bend."""
     B = len(X)
     n = lay.n
     i = 6
@@ -172,34 +172,43 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
     frames = rotvec_matrices(X[:, 3:6]) @ frame0
     g = np.zeros((B, 2 * n + 1, 7))
-    if n:
-        # every bend's trigonometry at once: columns [cos rot, cos ang | sin rot, sin ang]
-        rots = np.concatenate([np.zeros((B, 1)), rm], 1)
-        cs = np.cos(np.concatenate([rots, ang], 1))
-        sn = np.sin(np.concatenate([rots, ang], 1))
-        inner = np.concatenate([lm, np.zeros((B, 1))], 1)
-    p = X[:, :3].copy()
-    t = frames[:, :, 0].copy()
-    nv = frames[:, :, 1].copy()
-    bv = frames[:, :, 2].copy()
+    p0, t0 = X[:, :3], frames[:, :, 0]
+    g[:, 0, :3] = p0
+    g[:, 0, 3:6] = t0
+    if not n:
+        return g
+    # bend k as one rigid step from its arc start (frame F_k, point p_k) to the next arc start: turn about the
+    # tangent by the rotation (Rx), bend about the binormal by the angle (Rz, offset (R sin a, R (1 - cos a),
+    # 0) in the turned frame), then the straight after it along the new tangent; in homogeneous 4 x 4 form
+    # the frames of all bends are one product per bend for the whole batch
+    rots = np.concatenate([np.zeros((B, 1)), rm], 1)
+    after = np.concatenate([lm, np.zeros((B, 1))], 1)  # the straight after each bend (the end one: 0)
+    c, s_ = np.cos(rots), np.sin(rots)
+    ca, sa = np.cos(ang), np.sin(ang)
+    M = np.zeros((B, n, 4, 4))
+    M[..., 0, 0], M[..., 0, 1] = ca, -sa
+    M[..., 1, 0], M[..., 1, 1], M[..., 1, 2] = c * sa, c * ca, -s_
+    M[..., 2, 0], M[..., 2, 1], M[..., 2, 2] = s_ * sa, s_ * ca, c
+    off = rad * (1.0 - ca)
+    M[..., 0, 3] = rad * sa + after * ca
+    M[..., 1, 3] = c * (off + after * sa)
+    M[..., 2, 3] = s_ * (off + after * sa)
+    M[..., 3, 3] = 1.0
+    T = np.empty((B, n + 1, 4, 4))
+    T[:, 0, :3, :3] = frames
+    T[:, 0, :3, 3] = p0
+    T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
     for k in range(n):
-        g[:, 2 * k, :3] = p
-        g[:, 2 * k, 3:6] = t
-        if k:
-            p = p + inner[:, k - 1:k] * t
-        c_r, s_r = cs[:, k:k + 1], sn[:, k:k + 1]
-        nv, bv = nv * c_r + bv * s_r, bv * c_r - nv * s_r
-        R = rad[:, k:k + 1]
-        Rn = R * nv
-        centre = p + Rn
-        g[:, 2 * k + 1, :3] = centre
-        g[:, 2 * k + 1, 3:6] = bv
-        g[:, 2 * k + 1, 6] = R[:, 0]
-        ca, sa = cs[:, n + k:n + k + 1], sn[:, n + k:n + k + 1]
-        p = centre - Rn * ca + (R * t) * sa
-        t, nv = t * ca + nv * sa, nv * ca - t * sa
-    g[:, 2 * n, :3] = p
-    g[:, 2 * n, 3:6] = t
+        T[:, k + 1] = T[:, k] @ M[:, k]
+    F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
+    nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
+    bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
+    g[:, 1::2, :3] = P + rad[..., None] * nt
+    g[:, 1::2, 3:6] = bt
+    g[:, 1::2, 6] = rad
+    # the straights after the bends start at the arc ends, along the next frames' tangents
+    g[:, 2::2, :3] = P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt
+    g[:, 2::2, 3:6] = T[:, 1:, :3, 0]
     return g
 
 
