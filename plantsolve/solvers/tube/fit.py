@@ -329,22 +329,34 @@ class EndAssignment:
     computed once, each model then costs the distances to its two end segments. The same rule as
     ``spine_distance``: the first segment within round-off of the minimum."""
 
-    def __init__(self, model: TubeModel, pts: np.ndarray, margin: float):
+    def __init__(self, model: TubeModel, pts: np.ndarray, margin: float, full: bool = False):
+        """With ``full`` the assignment of ``model`` itself comes from the same distances (``res``, ``seg``)."""
         self.pts, self.margin = pts, margin
         sp = build_spine(extended(model, margin))
         S = len(sp.kind)
         self.S = S
-        inner = np.arange(1, S - 1)
-        sub = _sub_spine(sp, inner)
+        rows = np.arange(S) if full else np.arange(1, S - 1)
+        sub = _sub_spine(sp, rows)
         self.lo = np.empty(len(pts))
         self.idx = np.empty(len(pts), int)
-        step = max(1, INNER_CHUNK // max(len(inner), 1))
+        if full:
+            d, seg = np.empty(len(pts)), np.empty(len(pts), int)
+        step = max(1, INNER_CHUNK // max(len(rows), 1))
         tol = self._tol(sp)
         for a in range(0, len(pts), step):
             m = segment_distances_t(pts[a:a + step], sub)
+            if full:
+                lo = m.min(axis=0)
+                i = np.argmax(m <= lo + tol, axis=0)
+                seg[a:a + step] = i
+                d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
+                m = m[1:S - 1]
             lo = m.min(axis=0)
             self.lo[a:a + step] = lo
             self.idx[a:a + step] = 1 + np.argmax(m <= lo + tol, axis=0)
+        if full:
+            self.res, self.seg = d - model.pipe_radius, seg
+
 
     def _tol(self, sp: Spine) -> float:
         p_abs = max(float(-self.pts.min(initial=0.0)), float(self.pts.max(initial=0.0))) if self.pts.size else 0.0
@@ -477,15 +489,24 @@ def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     return np.flatnonzero(np.isin(seg, np.unique([0, 1, S - 2, S - 1])))
 
 
+def assign_for_ends(model: TubeModel, pts: np.ndarray, margin: float):
+    """:func:`assign` of the samples to a model with bends, and the :class:`EndAssignment` of its end straights
+    from the same distances (for :func:`end_lengths`); a straight tube's assignment and None."""
+    if not model.n_bends:
+        return *assign(model, pts, margin), None
+    ea = EndAssignment(model, pts, margin, full=True)
+    return ea.res, ea.seg, ea
+
+
 def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndarray, thr: float, margin: float,
-                max_rounds: int = 12) -> tuple[TubeModel, np.ndarray, np.ndarray, bool]:
+                max_rounds: int = 12, again: EndAssignment | None = None) -> tuple[TubeModel, np.ndarray, np.ndarray, bool]:
     """First/last straight lengths (:func:`set_end_lengths`) from the samples within ``thr`` of the surface,
     re-assigned until the ends stop moving (they grow by at most ``margin`` per assignment). ``res`` and
-    ``seg`` are the samples' assignment (:func:`assign`) to ``model``. Returns the model, the last
-    assignment and whether the ends settled (then that assignment is the returned model's)."""
+    ``seg`` are the samples' assignment (:func:`assign`) to ``model``, ``again`` its :class:`EndAssignment`
+    when the caller has it. Returns the model, the last assignment and whether the ends settled (then that
+    assignment is the returned model's)."""
     rp = model.pipe_radius
     seen = []  # (model, res, seg) of every iteration
-    again = None
     for i in range(max_rounds):
         if i:
             if again is None:

@@ -263,12 +263,18 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
             m = fit.set_end_lengths(m, P[inl], seg[inl])
             solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
             m = fit.with_end_lengths(solved, m)
-            res, seg = fit.assign(m, P, margin)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
-            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
-            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
-            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
+            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``), a small one
+            # keeps the inner segments' distances of this assignment for it
+            if len(P) > ALL_SAMPLES_AT_ONCE:
+                res, seg = fit.assign(m, P, margin)
+                ends, again = fit.near_ends(m, seg), None
+            else:
+                res, seg, again = fit.assign_for_ends(m, P, margin)
+                ends = slice(None)
+            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin,
+                                                               again=again)
             if P is pts:
                 last_assignment[:] = [m, res, seg] if settled else []
             # the settled ends' last assignment is the returned model's (what fit.assign gives it again)
