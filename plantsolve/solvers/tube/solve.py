@@ -412,6 +412,13 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                                               assignment=list(assign)), {"radius_mode": "fixed", "fixed_radii": fixed}
     candidates = {"per_bend": (model, lm_info, thr, {"radius_mode": "free"})}
     res_free, seg_free = fit.assign(model, P, margin)
+    assigned = {id(model): (model, res_free)}  # each candidate's residuals, computed once
+
+    def residuals(m: TubeModel) -> np.ndarray:
+        if id(m) not in assigned:
+            assigned[id(m)] = (m, fit.assign(m, P, margin)[0])
+        return assigned[id(m)][1]
+
     keep = np.abs(res_free) <= thr
     free_layout = fit.Layout(n, "free", None, opts.pipe_radius is None)
     sd_free = fit.parameter_sigmas(model, P[keep], seg_free[keep], free_layout)["radii"]
@@ -423,7 +430,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
         best = None
         for r0 in _common_starts(model, weight):
             m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
-            r = fit.assign(m, P, margin)[0][keep]
+            r = residuals(m)[keep]
             if best is None or float(r @ r) < best[0]:
                 best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
         candidates["common"] = best[1]
@@ -437,7 +444,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     size = {"per_bend": n, "common": 1, "dies": 2}
     rss, bic, n_par = {}, {}, {}
     for name, (m, _, _, _) in candidates.items():
-        r = fit.assign(m, P, margin)[0][keep]
+        r = residuals(m)[keep]
         rss[name] = float(np.sum(r * r))
         n_par[name] = 6 + 2 * max(n - 1, 0) + n + size[name] + int(opts.pipe_radius is None)
         bic[name] = float(N * np.log(max(rss[name], 1e-300) / N) + n_par[name] * np.log(N))
