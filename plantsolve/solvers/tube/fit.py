@@ -642,11 +642,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
 
 
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60, tick=None, hold: np.ndarray | None = None) -> tuple[TubeModel, dict]:
-    """One least-squares round with a fixed sample-to-segment assignment; the parameters ``hold`` marks (a
-    boolean mask of the packed vector, :func:`pack`) keep their start values."""
+             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment."""
     x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay)
-    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick, hold=hold)
+    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
@@ -691,10 +690,9 @@ def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
     return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
 
 
-def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None, hold=None):
+def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
     """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc):
-    ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r; the
-    parameters the boolean mask ``hold`` marks stay at their start values.
+    ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r.
 
     ``tick()`` is called once per iteration (progress / cancellation)."""
     x = x0.copy()
@@ -715,7 +713,7 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
         span = np.where(np.isfinite(hi - lo), hi - lo, np.abs(x) + 1.0)
         at_lo = (x <= lo + 1e-9 * span) & (g > 0)
         at_hi = (x >= hi - 1e-9 * span) & (g < 0)
-        free = ~(at_lo | at_hi) if hold is None else ~(at_lo | at_hi | hold)
+        free = ~(at_lo | at_hi)
         Af = A[np.ix_(free, free)]
         improved = False
         while nfev < max_nfev:

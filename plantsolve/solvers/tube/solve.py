@@ -660,7 +660,7 @@ def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[in
     kept (``with_radii``), the sum of squared residuals rises by less than a standard deviation of 10 % of the
     radius predicts, Δχ² < ((R' - R) / 0.1 R)² (25 at half, 100 at twice), in units of the fit's residual
     variance. The sigma from the Jacobian describes the minimum the fit stopped in; for a bend of a few degrees
-    that can be one of several (a tiny radius, or one of hundreds of pipe radii with a sigma of 2 %), chosen by
+    that can be one of several (a radius below the pipe's, or one of 150 pipe radii with a sigma of 2 %), chosen by
     round-off, and this secant test sees the cost stay flat (or fall) across them. Without a refit the rise is
     an upper bound of the profile's, so no bend is flagged that a refit would show determined."""
     n = model.n_bends
