@@ -584,7 +584,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     arc = kind[seg] != 0
     N = len(pts)
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
-    runs = [[(k, slice(sl.start - b.start, sl.stop - b.start)) for k, sl in _groups(seg[b])] for b in blocks]
+    runs = [_groups(seg[b]) for b in blocks]  # each block's segment runs, as slices of the block
 
     keep_terms = len(blocks) == 1
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
