@@ -580,8 +580,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     # Gram matrix is one product; the residual order is irrelevant to the solver
     order = np.argsort(seg, kind="stable")
     pts = pts[order]
-    seg = seg[order]
-    arc = kind[seg] != 0
+    # the sorted segment numbers in the smallest integers that hold them, the arcs per block (a scan of
+    # millions of samples holds no second full-size array of either)
+    seg = seg[order].astype(np.int16 if len(kind) < 2 ** 15 else np.int64)
+    is_arc = kind != 0
     N = len(pts)
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
     runs = [_groups(seg[b]) for b in blocks]  # each block's segment runs, as slices of the block
@@ -602,7 +604,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         d = np.empty(N)
         terms = []
         for b in blocks:
-            d[b], t = _sample_distance(pts[b], g[seg[b]], arc[b])
+            d[b], t = _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])
             if keep_terms:
                 terms.append(t)
         latest["terms"] = terms if keep_terms else None
@@ -625,7 +627,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
         for i, b in enumerate(blocks):
-            t = terms[i] if terms is not None else _sample_distance(pts[b], g[seg[b]], arc[b])[1]
+            t = terms[i] if terms is not None else _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])[1]
             G = np.empty((b.stop - b.start, k_dim))
             G[:, :7] = _sample_gradient(t)
             if lay.fit_pipe_radius:
