@@ -276,6 +276,7 @@ def solve_cases(path: str) -> None:
                           "radius_big": float(dr[big].max()) if da is not None and big.any() else None,
                           "end": end_err if da is not None else None,
                           "ends": sorted([res.lra[0].length, res.lra[-1].length])}), flush=True)
+    print(json.dumps({"peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}), flush=True)
 
 
 def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
@@ -302,12 +303,14 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
         os.makedirs(before_code)
         archive = subprocess.run(["git", "-C", repo, "archive", ref, "plantsolve"], capture_output=True, check=True)
         subprocess.run(["tar", "-x", "-C", before_code], input=archive.stdout, check=True)
-        sides = {}
+        sides, peak = {}, {}
         for side, code in ((f"before ({ref})", before_code), ("after (this tree)", "")):
             env = {**os.environ, "TUBE_BENCH_CODE": code}
             out = subprocess.run([sys.executable, __file__, "--solve-cases", cases], capture_output=True, text=True,
                                  check=True, env=env)
-            sides[side] = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+            rows = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+            sides[side] = [r for r in rows if "case" in r]
+            peak[side] = max((r["peak_rss_mb"] for r in rows if "peak_rss_mb" in r), default=float("nan"))
     print(f"before / after: {n_tubes} tubes per family ({n_random if n_random is not None else n_tubes} random), "
           "6000 points; CPU s = time.process_time() of the solve "
           "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
@@ -331,6 +334,7 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
     before, after = ({r["case"]: r for r in rows} for rows in sides.values())
     moved = {c: abs(np.subtract(before[c]["ends"], after[c]["ends"])).max() for c in before
              if c in after and "ends" in before[c] and "ends" in after[c] and before[c]["ends"] != after[c]["ends"]}
+    print("peak RSS of each side's process (all its cases): " + ", ".join(f"{side} {v:.0f} MiB" for side, v in peak.items()))
     print(f"cases whose end straight lengths differ between the sides: {len(moved)}/{len(before)}"
           + "".join(f"; {c}: {d:.3g}" for c, d in sorted(moved.items())))
 

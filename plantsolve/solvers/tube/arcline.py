@@ -41,6 +41,8 @@ from plantsolve.solvers.tube.vec3 import cross
 
 TOO_FAR = "too_far"  # the chain left every plane through l_i: longer chains fail too
 _X2 = np.array([1.0, 0.0])
+_X3 = np.array([1.0, 0.0, 0.0])
+_Y3 = np.array([0.0, 1.0, 0.0])
 _MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 
@@ -112,56 +114,84 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
     With ``plane_only`` only that test is made (None when it passes): the caller needs to know whether to go on,
     not the arc."""
     rel = chain - a1
-    along = rel @ u1
     dj = (pj1 - pj) / max(_norm3(pj1 - pj), 1e-300)
     cr = cross(u1, dj)
-    perp = rel - along[:, None] * u1
-    cov = perp.T @ perp
-    w, V = np.linalg.eigh(cov + u1[:, None] * u1[None, :] * (np.trace(cov) + 1.0) * 10)  # np.outer, written out
-    if np.sqrt(max(w[1], 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
+    # the least-squares planes through l_i: the offsets from l_i in a basis (e1, e2) of the plane normal to
+    # it, and the 2 × 2 eigenproblem of their scatter in closed form (the plane's normal is the eigenvector
+    # of the smaller eigenvalue)
+    e1, e2 = _basis(u1)
+    along, x1, x2 = (rel @ np.array((u1, e1, e2)).T).T
+    a, b, d = float(x1 @ x1), float(x1 @ x2), float(x2 @ x2)
+    half, mean = 0.5 * (a - d), 0.5 * (a + d)
+    root = math.hypot(half, b)
+    if math.sqrt(max(mean + root, 0.0) / len(chain)) > 2 * eps or _norm3(cr) < 1e-9:
         # the chain bends well beyond the noise: its least-squares plane through l_i
-        m = V[:, 0]
+        small = mean - root
+        # eigenvector of the smaller eigenvalue, from the row of (C - small I) with the larger entries
+        v = (b, small - a) if abs(small - a) >= abs(small - d) else (small - d, b)
+        nv = math.hypot(v[0], v[1])
+        m1, m2 = (v[0] / nv, v[1] / nv) if nv > 0 else (1.0, 0.0)
     else:
         # nearly straight chain (small bend): its own plane would be arbitrary; the plane
         # spanned by both tangent directions is well defined
         m = cr / _norm3(cr)
-    h = rel @ m
-    if np.any(np.abs(h) > eps):
-        return TOO_FAR if np.any(np.abs(h) > 2 * eps) else None
+        m1, m2 = float(m @ e1), float(m @ e2)
+    # m = m1 e1 + m2 e2 is normal to u1, and Y = m × u1 = m2 e1 - m1 e2 (u1, e1, e2 right-handed)
+    h = m1 * x1 + m2 * x2
+    ah = np.abs(h)
+    if ah.max() > eps:
+        return TOO_FAR if ah.max() > 2 * eps else None
     if plane_only:
         return None
+    return _arcs_in_plane(along, x1, x2, h, m1, m2, e1, e2, a1, u1, t_lo, pj, pj1, eps, r_min, t_hi)
+
+
+def _basis(u1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(e1, e2) with (u1, e1, e2) a right-handed orthonormal basis."""
+    e1 = cross(u1, _X3 if abs(u1[0]) < 0.9 else _Y3)
+    e1 = e1 / _norm3(e1)
+    return e1, cross(u1, e1)
+
+
+def _arcs_in_plane(along: np.ndarray, x1: np.ndarray, x2: np.ndarray, h: np.ndarray, m1: float, m2: float,
+                   e1: np.ndarray, e2: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray,
+                   pj1: np.ndarray, eps: float, r_min: float, t_hi: float | None):
+    """:func:`arc_family` once the chain passed its plane test: the chain's coordinates along l_i (``along``)
+    and in (e1, e2), its offsets ``h`` from the plane of normal m1 e1 + m2 e2."""
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
-    Y = cross(m, u1)
-    q = np.empty((len(chain), 2))
-    q[:, 0], q[:, 1] = along, rel @ Y
-    a2 = np.array([(pj - a1) @ u1, (pj - a1) @ Y])
-    d2 = np.array([(pj1 - pj) @ u1, (pj1 - pj) @ Y])
-    nd = math.hypot(d2[0], d2[1])
-    if nd < 1e-12 * (_norm3(pj1 - pj) + 1e-300):
+    Y = m2 * e1 - m1 * e2
+    q = np.empty((len(along), 2))
+    q[:, 0], q[:, 1] = along, m2 * x1 - m1 * x2
+    rj, dj_ = pj - a1, pj1 - pj
+    a2x, a2y = float(rj @ u1), float(rj @ Y)
+    d2x, d2y = float(dj_ @ u1), float(dj_ @ Y)
+    nd = math.hypot(d2x, d2y)
+    if nd < 1e-12 * (_norm3(dj_) + 1e-300):
         return None
-    u2 = d2 / nd
+    u2x, u2y = d2x / nd, d2y / nd
     seg = q[1:] - q[:-1]
     seg = seg[np.sqrt(np.add.reduce(seg * seg, axis=1)) > 1e-12]
     dirs = np.empty((len(seg) + 2, 2))
-    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, u2
+    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, (u2x, u2y)
     turn = np.sum(np.arctan2(dirs[:-1, 0] * dirs[1:, 1] - dirs[:-1, 1] * dirs[1:, 0],
                              (dirs[:-1] * dirs[1:]).sum(1)))
     sign = 1.0 if turn >= 0 else -1.0
     if sign < 0:  # mirror to a left turn
-        q = q * _MIRROR; a2 = a2 * _MIRROR; u2 = u2 * _MIRROR
-    phi = np.mod(np.arctan2(u2[1], u2[0]), 2 * np.pi)
+        q = q * _MIRROR; a2y = -a2y; u2y = -u2y
+    phi = math.atan2(u2y, u2x) % (2 * math.pi)
     if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
         return None
-    n2 = np.array([-u2[1], u2[0]])
-    den = n2[1] - 1.0
-    alpha = (a2 @ n2) / den
-    beta = -(n2[0]) / den  # u1 = (1, 0)
+    n2x, n2y = -u2y, u2x
+    den = n2y - 1.0
+    alpha = (a2x * n2x + a2y * n2y) / den
+    beta = -n2x / den  # u1 = (1, 0)
     # t2 = t1·u2x − a2·u2 + R (n1·u2), n1 = (0, 1)
-    gam0, gam1 = -(a2 @ u2), u2[0]
-    pj1_2 = np.array([(pj1 - a1) @ u1, (pj1 - a1) @ Y * sign])
-    t_hi_line = (pj1_2 - a2) @ u2 if t_hi is None else t_hi
-    lo, hi = t_lo, max(q[:, 0].max(), pj1_2[0], t_lo)
-    cons = [(beta, r_min - alpha), (-(gam1 + u2[1] * beta), -(t_hi_line - gam0 - u2[1] * alpha))]
+    gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
+    rj1 = pj1 - a1
+    p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
+    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y if t_hi is None else t_hi
+    lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
+    cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
     # constraints a·t1 ≥ b
     for a, b in cons:
         if abs(a) < 1e-14:
@@ -174,6 +204,7 @@ def arc_family(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, p
             hi = min(hi, b / a)
     if hi < lo:
         return None
+    a2, u2, n2 = np.array([a2x, a2y]), np.array([u2x, u2y]), np.array([n2x, n2y])
     qa = q - a2
     return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
 
@@ -184,10 +215,7 @@ def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarr
     (t1, 0), arc about C = (t1, R) by phi, ray along u2 from its end T2), all families at once: chain points q
     (J, K, 2) (padded), arc starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances
     from it (J, K). Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
-    a2 = np.array([e.a2 for e in f])[:, :, None]
-    u2 = np.array([e.u2 for e in f])[:, :, None]
-    n2 = np.array([e.n2 for e in f])[:, :, None]
-    phi = np.array([e.phi for e in f])[:, None, None]
+    a2, u2, n2, phi = f if isinstance(f, tuple) else _family_lines(f)
     T2x, T2y = t1 - R * n2[:, 0], R - R * n2[:, 1]
     t2 = (T2x - a2[:, 0]) * u2[:, 0] + (T2y - a2[:, 1]) * u2[:, 1]
     qx, qy = q[:, None, :, 0], q[:, None, :, 1]
@@ -201,6 +229,12 @@ def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarr
     rho = np.hypot(dx1, vy)
     d2 = np.where(th <= phi, np.abs(rho - R[:, :, None]), np.minimum(dT1, dT2))
     return np.minimum(np.minimum(d1, d2), d3), t2
+
+
+def _family_lines(f: list[_Arcs]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """l_j of every family (point, direction, normal: (J, 2, 1)) and the turning angles (J, 1, 1)."""
+    return (np.array([e.a2 for e in f])[:, :, None], np.array([e.u2 for e in f])[:, :, None],
+            np.array([e.n2 for e in f])[:, :, None], np.array([e.phi for e in f])[:, None, None])
 
 
 def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge | None]:
@@ -234,9 +268,10 @@ def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge 
     t_grid = _linspaces(lo, hi, grid)
     best_cost = np.full(J, np.inf)
     best_t1, best_R, best_t2 = np.zeros(J), np.zeros(J), np.zeros(J)
+    lines = _family_lines(f)
     for _ in range(4):
         R = alpha + beta * t_grid
-        d, t2 = _dist_to_arclines(f, q, t_grid, R, along2, off2)
+        d, t2 = _dist_to_arclines(lines, q, t_grid, R, along2, off2)
         viol = np.max(d - epsk[:, None, :], axis=2)
         valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
         dd = d * d
@@ -308,6 +343,38 @@ def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj:
     return best_arcs([f], r_min, grid)[0]
 
 
+def _planes(poly: np.ndarray, i: int, last: int, a1: np.ndarray, u1: np.ndarray, eps: float):
+    """The plane tests of :func:`arc_family` for the chains of every edge out of vertex i (j = i+1 … n-2, the
+    chain p_i … p_j, and p_{j+1} too at the last vertex) at once: the chains grow by a vertex per j, so their
+    coordinates are those of one array and their scatter sums running sums. Returns the basis (e1, e2), the
+    coordinates (along, x1, x2) of p_i … p_{n-1}, and per j the chain length, the plane normal (m1, m2) and
+    the largest distance of a chain vertex from the plane."""
+    n = len(poly)
+    e1, e2 = _basis(u1)
+    along, x1, x2 = ((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
+    js = np.arange(i + 1, n - 1)
+    K = js - i + 1 + (js == last)
+    a, b, d = np.cumsum(x1 * x1)[K - 1], np.cumsum(x1 * x2)[K - 1], np.cumsum(x2 * x2)[K - 1]
+    dv = poly[js + 1] - poly[js]
+    dj = dv / np.maximum(np.sqrt(np.einsum("jk,jk->j", dv, dv)), 1e-300)[:, None]
+    cr = cross(np.broadcast_to(u1, dj.shape), dj)
+    crn = np.sqrt(np.einsum("jk,jk->j", cr, cr))
+    half, mean = 0.5 * (a - d), 0.5 * (a + d)
+    root = np.hypot(half, b)
+    own = (np.sqrt(np.maximum(mean + root, 0.0) / K) > 2 * eps) | (crn < 1e-9)
+    small = mean - root
+    row1 = np.abs(small - a) >= np.abs(small - d)
+    v0, v1 = np.where(row1, b, small - d), np.where(row1, small - a, b)
+    nv = np.hypot(v0, v1)
+    nv_safe = np.where(nv > 0, nv, 1.0)
+    mc = cr / np.where(crn > 0, crn, 1.0)[:, None]
+    m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc @ e1)
+    m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc @ e2)
+    off = np.abs(m1[:, None] * x1[None, :] + m2[:, None] * x2[None, :])
+    off[np.arange(len(x1))[None, :] >= K[:, None]] = 0.0
+    return e1, e2, along, x1, x2, K, m1, m2, off.max(1)
+
+
 @dataclass
 class _State:
     """A way to reach vertex j: arc count, squared error, predecessor, modified line l'_j."""
@@ -341,7 +408,9 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
             break
         for si, st in enumerate(states[i]):
             reached = []  # (j, arcs) of every edge out of this state to search; a search changes no state of j
-            for j in range(i + 1, n - 1):
+            # every edge's plane test at once (:func:`arc_family`'s, the same rule)
+            e1, e2, along, x1, x2, K, m1, m2, off = _planes(poly, i, last, st.point, st.direction, eps)
+            for jj, j in enumerate(range(i + 1, n - 1)):
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:
                     continue
@@ -349,15 +418,21 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                 # adds error: then only whether the chain leaves every plane (ending the j loop) matters
                 lost = worst is not None and st.d + 1 == worst.d and st.sse >= worst.sse
                 # p_{j+1} only fixes the direction of l_j; it is checked by j's outgoing edge (it
-                # lies in the next bend's plane when two bends follow each other directly)
-                chain = poly[i:j + 2] if j == last else poly[i:j + 1]
+                # lies in the next bend's plane when two bends follow each other directly): the chain is
+                # p_i … p_j, and p_{j+1} too at the last vertex
+                if off[jj] > eps:
+                    if off[jj] > 2 * eps:  # TOO_FAR: longer chains leave every plane too
+                        break
+                    continue
+                if lost:
+                    continue
+                k = K[jj]
+                h = m1[jj] * x1[:k] + m2[jj] * x2[:k]
                 # an arc may start up to ε before the previous one ended (the straight between
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
-                f = arc_family(chain, st.point, st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1],
-                               eps, r_min, plane_only=lost)
-                if f is TOO_FAR:
-                    break
+                f = _arcs_in_plane(along[:k], x1[:k], x2[:k], h, float(m1[jj]), float(m2[jj]), e1, e2, st.point,
+                                   st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1], eps, r_min, None)
                 if f is not None:
                     reached.append((j, f))
             # the arcs of all of them searched at once

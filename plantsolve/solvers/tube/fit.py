@@ -27,10 +27,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.tube.model import TubeModel, build_spine, spine_distance
-from plantsolve.solvers.tube.vec3 import cross
+from plantsolve.solvers.tube.model import (
+    Spine,
+    TubeModel,
+    build_spine,
+    segment_distances_t,
+    spine_distance,
+)
 
 
 @dataclass
@@ -86,7 +90,7 @@ def unpack(x: np.ndarray, lay: Layout, frame0: np.ndarray, pipe_radius: float) -
     else:
         rad = np.full(n, lay.fixed_bend_radius or 0.0)
     rp = x[i] if lay.fit_pipe_radius else pipe_radius
-    frame = Rotation.from_rotvec(x[3:6]).as_matrix() @ frame0
+    frame = rotvec_matrices(x[None, 3:6])[0] @ frame0
     lengths = np.concatenate([[0.0], lm, [0.0]]) if n else np.zeros(1)
     rots = np.concatenate([[0.0], rm, [0.0]]) if n else np.zeros(1)
     return TubeModel(x[:3].copy(), frame, lengths, rots, ang.copy(), rad.copy(), float(rp))
@@ -118,11 +122,38 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
+def rotvec_matrices(V: np.ndarray) -> np.ndarray:
+    """Rotation matrices (B, 3, 3) of rotation vectors V (B, 3) by Rodrigues' formula; below 1e-3 rad the
+    coefficients sin θ / θ and (1 - cos θ) / θ² from their Taylor series (the finite-difference steps of the
+    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits)."""
+    th2 = np.einsum("bi,bi->b", V, V)
+    th = np.sqrt(th2)
+    small = th < 1e-3
+    th_safe = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th2 / 6.0 + th2 * th2 / 120.0, np.sin(th_safe) / th_safe)
+    b = np.where(small, 0.5 - th2 / 24.0 + th2 * th2 / 720.0, (1.0 - np.cos(th_safe)) / (th_safe * th_safe))
+    x, y, z = V[:, 0], V[:, 1], V[:, 2]
+    M = np.empty((len(V), 3, 3))
+    M[:, 0, 0] = 1.0 - b * (y * y + z * z)
+    M[:, 1, 1] = 1.0 - b * (x * x + z * z)
+    M[:, 2, 2] = 1.0 - b * (x * x + y * y)
+    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
+    M[:, 0, 1] = bxy - a * z
+    M[:, 1, 0] = bxy + a * z
+    M[:, 0, 2] = bxz + a * y
+    M[:, 2, 0] = bxz - a * y
+    M[:, 1, 2] = byz - a * x
+    M[:, 2, 1] = byz + a * x
+    return M
+
+
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
     The same forward kinematics as model.build_spine, vectorised over the batch (the
-    finite-difference Jacobian evaluates 2P models at once)."""
+    finite-difference Jacobian evaluates 2P models at once) and over the bends: each bend is a rigid
+    step whose 4 × 4 matrix follows from its parameters elementwise, so the only loop over the bends is
+    one matrix product per bend."""
     B = len(X)
     n = lay.n
     i = 6
@@ -139,41 +170,73 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
-    frames = Rotation.from_rotvec(X[:, 3:6]).as_matrix() @ frame0
-    lengths = np.concatenate([np.zeros((B, 1)), lm, np.zeros((B, 1))], 1) if n else np.zeros((B, 1))
-    rots = np.concatenate([np.zeros((B, 1)), rm], 1) if n else np.zeros((B, 1))
+    frames = rotvec_matrices(X[:, 3:6]) @ frame0
     g = np.zeros((B, 2 * n + 1, 7))
-    p = X[:, :3].copy()
-    t = frames[:, :, 0].copy()
-    nv = frames[:, :, 1].copy()
-    for k in range(n + 1):
-        g[:, 2 * k, :3] = p
-        g[:, 2 * k, 3:6] = t
-        p = p + lengths[:, k:k + 1] * t
-        if k == n:
-            break
-        c_r, s_r = np.cos(rots[:, k:k + 1]), np.sin(rots[:, k:k + 1])
-        nv = nv * c_r + cross(t, nv) * s_r
-        R = rad[:, k:k + 1]
-        a = ang[:, k:k + 1]
-        centre = p + R * nv
-        g[:, 2 * k + 1, :3] = centre
-        g[:, 2 * k + 1, 3:6] = cross(t, nv)
-        g[:, 2 * k + 1, 6] = R[:, 0]
-        ca, sa = np.cos(a), np.sin(a)
-        p = centre - R * nv * ca + R * t * sa
-        t, nv = t * ca + nv * sa, nv * ca - t * sa
+    p0, t0 = X[:, :3], frames[:, :, 0]
+    g[:, 0, :3] = p0
+    g[:, 0, 3:6] = t0
+    if not n:
+        return g
+    # bend k as one rigid step from its arc start (frame F_k, point p_k) to the next arc start: turn about the
+    # tangent by the rotation (Rx), bend about the binormal by the angle (Rz, offset (R sin a, R (1 - cos a),
+    # 0) in the turned frame), then the straight after it along the new tangent; in homogeneous 4 x 4 form
+    # the frames of all bends are one product per bend for the whole batch
+    rots = np.concatenate([np.zeros((B, 1)), rm], 1)
+    after = np.concatenate([lm, np.zeros((B, 1))], 1)  # the straight after each bend (the end one: 0)
+    c, s_ = np.cos(rots), np.sin(rots)
+    ca, sa = np.cos(ang), np.sin(ang)
+    M = np.zeros((B, n, 4, 4))
+    M[..., 0, 0], M[..., 0, 1] = ca, -sa
+    M[..., 1, 0], M[..., 1, 1], M[..., 1, 2] = c * sa, c * ca, -s_
+    M[..., 2, 0], M[..., 2, 1], M[..., 2, 2] = s_ * sa, s_ * ca, c
+    off = rad * (1.0 - ca)
+    M[..., 0, 3] = rad * sa + after * ca
+    M[..., 1, 3] = c * (off + after * sa)
+    M[..., 2, 3] = s_ * (off + after * sa)
+    M[..., 3, 3] = 1.0
+    T = np.empty((B, n + 1, 4, 4))
+    T[:, 0, :3, :3] = frames
+    T[:, 0, :3, 3] = p0
+    T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
+    for k in range(n):
+        T[:, k + 1] = T[:, k] @ M[:, k]
+    F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
+    nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
+    bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
+    g[:, 1::2, :3] = P + rad[..., None] * nt
+    g[:, 1::2, 3:6] = bt
+    g[:, 1::2, 6] = rad
+    # the straights after the bends start at the arc ends, along the next frames' tangents
+    g[:, 2::2, :3] = P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt
+    g[:, 2::2, 3:6] = T[:, 1:, :3, 0]
     return g
 
 
-def _geometry_jacobian(x, lay, frame0, rp, scale):
-    """d(geometry)/d(params) by central differences: (S, 7, P)."""
-    P = len(x)
+def _steps(P: int, lay: Layout, scale: float) -> np.ndarray:
+    """Central-difference steps of the parameters: 1e-6 of the pipe radius for lengths, 1e-6 rad for angles."""
     steps = np.full(P, 1e-6)
     steps[:3] = 1e-6 * scale
     i = 6 + max(lay.n - 1, 0)
     steps[6:i] = 1e-6 * scale
     steps[i + max(lay.n - 1, 0) + lay.n:] = 1e-6 * scale
+    return steps
+
+
+def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
+                          scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """The geometry at x (S, 7) and its derivative by central differences (S, 7, P), from one batch: the
+    batch costs little more than one model (the forward kinematics is a loop over the bends)."""
+    P = len(x)
+    steps = _steps(P, lay, scale)
+    X = np.concatenate([x[None], x + np.diag(steps), x - np.diag(steps)])
+    G = geometry_batch(X, lay, frame0, rp)
+    return G[0], np.moveaxis((G[1:P + 1] - G[P + 1:]) / (2 * steps[:, None, None]), 0, -1)
+
+
+def _geometry_jacobian(x, lay, frame0, rp, scale):
+    """d(geometry)/d(params) by central differences: (S, 7, P)."""
+    P = len(x)
+    steps = _steps(P, lay, scale)
     X = np.concatenate([x + np.diag(steps), x - np.diag(steps)])
     G = geometry_batch(X, lay, frame0, rp)
     return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
@@ -257,6 +320,65 @@ def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray
     return d - model.pipe_radius, seg
 
 
+INNER_CHUNK = 200_000  # points × segments per block of :class:`EndAssignment` (as ``spine_distance``)
+
+
+class EndAssignment:
+    """:func:`assign` of the same samples to models that differ in their end straights only (the start point
+    and the first and last lengths; :func:`end_lengths`): the inner segments' nearest distance and index are
+    computed once, each model then costs the distances to its two end segments. The same rule as
+    ``spine_distance``: the first segment within round-off of the minimum."""
+
+    def __init__(self, model: TubeModel, pts: np.ndarray, margin: float, full: bool = False):
+        """With ``full`` the assignment of ``model`` itself comes from the same distances (``res``, ``seg``)."""
+        self.pts, self.margin = pts, margin
+        sp = build_spine(extended(model, margin))
+        S = len(sp.kind)
+        self.S = S
+        rows = np.arange(S) if full else np.arange(1, S - 1)
+        sub = _sub_spine(sp, rows)
+        self.lo = np.empty(len(pts))
+        self.idx = np.empty(len(pts), int)
+        if full:
+            d, seg = np.empty(len(pts)), np.empty(len(pts), int)
+        step = max(1, INNER_CHUNK // max(len(rows), 1))
+        tol = self._tol(sp)
+        for a in range(0, len(pts), step):
+            m = segment_distances_t(pts[a:a + step], sub)
+            if full:
+                lo = m.min(axis=0)
+                i = np.argmax(m <= lo + tol, axis=0)
+                seg[a:a + step] = i
+                d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
+                m = m[1:S - 1]
+            lo = m.min(axis=0)
+            self.lo[a:a + step] = lo
+            self.idx[a:a + step] = 1 + np.argmax(m <= lo + tol, axis=0)
+        if full:
+            self.res, self.seg = d - model.pipe_radius, seg
+
+
+    def _tol(self, sp: Spine) -> float:
+        p_abs = max(float(-self.pts.min(initial=0.0)), float(self.pts.max(initial=0.0))) if self.pts.size else 0.0
+        return 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
+
+    def __call__(self, model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
+        sp = build_spine(extended(model, self.margin))
+        d0, d1 = segment_distances_t(self.pts, _sub_spine(sp, np.array([0, self.S - 1])))
+        lo = np.minimum(np.minimum(d0, self.lo), d1)
+        cut = lo + self._tol(sp)
+        first = d0 <= cut
+        mid = ~first & (self.lo <= cut)
+        seg = np.where(first, 0, np.where(mid, self.idx, self.S - 1))
+        d = np.where(first, d0, np.where(mid, self.lo, d1))
+        return d - model.pipe_radius, seg
+
+
+def _sub_spine(sp: Spine, k: np.ndarray) -> Spine:
+    return Spine(sp.kind[k], sp.start[k], sp.end[k], sp.tangent[k], sp.normal[k], sp.length[k], sp.centre[k],
+                 sp.radius[k], sp.angle[k])
+
+
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
 HALO_DENSITY = 0.25  # a halo is at most this fraction of the end's density along the axis
 
@@ -301,12 +423,17 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
         body = proj <= cut
         return _robust_max(proj[body], pts[body], rp)
     if len(cand) > 4:
-        from scipy.spatial import cKDTree
-
-        cnt = cKDTree(pts[cand]).query_ball_point(pts[cand], 0.5 * rp, return_length=True)
-        dense = cand[cnt >= 4]
-        if len(dense):
-            return float(proj[dense].max())
+        # the outermost candidates first, a few at a time: the first with company is the answer, and it is
+        # nearly always among the first few (counts by brute force: no tree of all candidates per call)
+        cand = cand[np.argsort(-proj[cand], kind="stable")]
+        q = pts[cand]
+        r2 = (0.5 * rp) ** 2
+        for a in range(0, len(cand), 32):
+            diff = q[a:a + 32, None, :] - q[None, :, :]
+            cnt = np.count_nonzero(np.einsum("ijk,ijk->ij", diff, diff) <= r2, axis=1)
+            dense = np.flatnonzero(cnt >= 4)
+            if len(dense):
+                return float(proj[cand[a + dense[0]]])
     return float(np.percentile(proj, 99.5))
 
 
@@ -341,6 +468,19 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
     return m
 
 
+def with_end_lengths(model: TubeModel, ends: TubeModel) -> TubeModel:
+    """``model`` (a solve's, whose end straights have length 0: they are unbounded lines during it) with the
+    end straight lengths of ``ends``, its first arc where it was: the start for :func:`end_lengths`, which
+    then moves the ends by what the solve changed instead of growing them from nothing a margin at a time."""
+    m = model.copy()
+    m.lengths = m.lengths.copy()
+    first_arc_start = m.start + m.lengths[0] * m.frame[:, 0]
+    m.lengths[0] = ends.lengths[0]
+    m.lengths[-1] = ends.lengths[-1]
+    m.start = first_arc_start - m.lengths[0] * m.frame[:, 0]
+    return m
+
+
 def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     """Indices of the samples ``seg`` puts on the two outer segments at either end (the straight and the
     arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube
@@ -349,17 +489,29 @@ def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     return np.flatnonzero(np.isin(seg, np.unique([0, 1, S - 2, S - 1])))
 
 
+def assign_for_ends(model: TubeModel, pts: np.ndarray, margin: float):
+    """:func:`assign` of the samples to a model with bends, and the :class:`EndAssignment` of its end straights
+    from the same distances (for :func:`end_lengths`); a straight tube's assignment and None."""
+    if not model.n_bends:
+        return *assign(model, pts, margin), None
+    ea = EndAssignment(model, pts, margin, full=True)
+    return ea.res, ea.seg, ea
+
+
 def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndarray, thr: float, margin: float,
-                max_rounds: int = 12) -> tuple[TubeModel, np.ndarray, np.ndarray, bool]:
+                max_rounds: int = 12, again: EndAssignment | None = None) -> tuple[TubeModel, np.ndarray, np.ndarray, bool]:
     """First/last straight lengths (:func:`set_end_lengths`) from the samples within ``thr`` of the surface,
     re-assigned until the ends stop moving (they grow by at most ``margin`` per assignment). ``res`` and
-    ``seg`` are the samples' assignment (:func:`assign`) to ``model``. Returns the model, the last
-    assignment and whether the ends settled (then that assignment is the returned model's)."""
+    ``seg`` are the samples' assignment (:func:`assign`) to ``model``, ``again`` its :class:`EndAssignment`
+    when the caller has it. Returns the model, the last assignment and whether the ends settled (then that
+    assignment is the returned model's)."""
     rp = model.pipe_radius
     seen = []  # (model, res, seg) of every iteration
     for i in range(max_rounds):
         if i:
-            res, seg = assign(model, pts, margin)
+            if again is None:
+                again = EndAssignment(model, pts, margin) if model.n_bends else (lambda m: assign(m, pts, margin))
+            res, seg = again(model)
         near = np.abs(res) <= thr
         m_new = set_end_lengths(model, pts[near], seg[near])
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
@@ -379,7 +531,36 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
     return model, res, seg, False
 
 
-KEEP_TERMS = 65_536  # samples up to which fun keeps its per-sample terms for the normal equations (memory)
+BLOCK = 65_536  # samples per pass of fun and the normal equations (the per-sample temporaries stay in cache)
+
+
+def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np.ndarray, tuple]:
+    """Distance of each point q (n, 3) to its own (unbounded) line or circle ``gs`` (n, 7; rows of
+    :func:`_geometry`, ``arc`` marks the circles), all samples in one pass, and the terms
+    :func:`_sample_gradient` takes on from."""
+    c, a, R = gs[:, :3], gs[:, 3:6], gs[:, 6]
+    w = q - c
+    s = np.einsum("nk,nk->n", w, a)
+    perp = w - s[:, None] * a
+    rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
+    # a line's R is 0 and its distance the perpendicular one
+    dd = np.where(arc, np.hypot(rho - R, s), rho)
+    return dd, (w, s, perp, rho, a, R, dd, arc)
+
+
+def _sample_gradient(terms: tuple) -> np.ndarray:
+    """d dist / d geometry (n, 7) from the terms of :func:`_sample_distance` (the formulas of
+    :func:`_run_gradient`, a line's as an arc's with (rho - R) / dist = 1 and s / dist = 0)."""
+    w, s, perp, rho, a, R, dd, arc = terms
+    e = perp / np.maximum(rho, 1e-300)[:, None]
+    inv = 1.0 / np.maximum(dd, 1e-300)
+    u = np.where(arc, (rho - R) * inv, 1.0)
+    v = np.where(arc, s * inv, 0.0)
+    grad = np.empty((len(w), 7))
+    grad[:, :3] = -(u[:, None] * e + v[:, None] * a)
+    grad[:, 3:6] = v[:, None] * w - (u * s)[:, None] * e
+    grad[:, 6] = np.where(arc, -u, 0.0)
+    return grad
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
@@ -391,28 +572,42 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     pad_lo = np.where(np.isfinite(lo), 1e-9 * (np.abs(lo) + 1), 0.0)
     pad_hi = np.where(np.isfinite(hi), 1e-9 * (np.abs(hi) + 1), 0.0)
     x0 = np.clip(x0, lo + pad_lo, hi - pad_hi)
-    # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment)
-    kind = build_spine(unpack(x0, lay, frame0, rp)).kind
+    # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment); lines and
+    # arcs alternate
+    kind = np.arange(2 * lay.n + 1) % 2
     scale = max(rp, 1e-9)
-    # samples grouped by their (fixed) segment: slices instead of masks in every evaluation;
-    # the residual order is irrelevant to the solver
+    # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
+    # Gram matrix is one product; the residual order is irrelevant to the solver
     order = np.argsort(seg, kind="stable")
     pts = pts[order]
-    groups = _groups(seg[order])
+    # the sorted segment numbers in the smallest integers that hold them, the arcs per block (a scan of
+    # millions of samples holds no second full-size array of either)
+    seg = seg[order].astype(np.int16 if len(kind) < 2 ** 15 else np.int64)
+    is_arc = kind != 0
+    N = len(pts)
+    blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
+    runs = [_groups(seg[b]) for b in blocks]  # each block's segment runs, as slices of the block
 
-    keep_terms = len(pts) <= KEEP_TERMS
+    keep_terms = len(blocks) == 1
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
+    def geometry(x):
+        key = x.tobytes()
+        if latest.get("x") != key:
+            g, dG = geometry_and_jacobian(x, lay, frame0, rp, scale)
+            latest.clear()
+            latest.update(x=key, g=g, dG=dG)
+        return latest["g"], latest["dG"]
+
     def fun(x):
-        g = geometry_batch(x[None], lay, frame0, rp)[0]
-        d = np.empty(len(pts))
+        g, _ = geometry(x)
+        d = np.empty(N)
         terms = []
-        for k, m in groups:
-            d[m], t = _run_distance(pts[m], g[k], bool(kind[k]))
+        for b in blocks:
+            d[b], t = _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])
             if keep_terms:
                 terms.append(t)
-        latest.clear()
-        latest.update(x=x.tobytes(), g=g, terms=terms if keep_terms else None)
+        latest["terms"] = terms if keep_terms else None
         return d - (x[-1] if lay.fit_pipe_radius else rp)
 
     def normal_equations(x, w, r):
@@ -421,10 +616,8 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
         # the geometry and the distances' terms at x, as fun has just computed them (the same numbers again)
-        same = latest.get("x") == x.tobytes()
-        g = latest["g"] if same else geometry_batch(x[None], lay, frame0, rp)[0]
-        terms = latest["terms"] if same else None
-        dG = _geometry_jacobian(x, lay, frame0, rp, scale)  # (S, 7, P)
+        g, dG = geometry(x)
+        terms = latest.get("terms")
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
             last = np.zeros((len(dG), 1, P))
@@ -433,13 +626,17 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         k_dim = dG.shape[1]
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
-        wr = w * r
-        for i, (k, m_k) in enumerate(groups):
-            G = _run_gradient(terms[i] if terms is not None else _run_distance(pts[m_k], g[k], bool(kind[k]))[1])
+        for i, b in enumerate(blocks):
+            t = terms[i] if terms is not None else _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])[1]
+            G = np.empty((b.stop - b.start, k_dim))
+            G[:, :7] = _sample_gradient(t)
             if lay.fit_pipe_radius:
-                G = np.concatenate([G, np.ones((len(G), 1))], axis=1)
-            gram[k] += G.T @ (G * w[m_k, None])
-            rhs[k] += G.T @ wr[m_k]
+                G[:, 7] = 1.0
+            Gw = G * w[b, None]
+            rb = r[b]
+            for k, sl in runs[i]:
+                gram[k] += G[sl].T @ Gw[sl]
+                rhs[k] += Gw[sl].T @ rb[sl]
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 

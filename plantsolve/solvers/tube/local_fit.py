@@ -43,6 +43,16 @@ def neighbourhoods(tree: cKDTree, pts: np.ndarray, centres: np.ndarray, h: float
     return pts[idx], np.where(valid, d, np.inf), valid
 
 
+def _weighted_gram(X: np.ndarray, w: np.ndarray, chunk: int = 1024) -> np.ndarray:
+    """Σ_k w_mk X_mk X_mkᵀ for every m: (M, K, p), (M, K) -> (M, p, p), as batched products over a few probes
+    at a time (the weighted copy of X stays small)."""
+    out = np.empty((len(X), X.shape[2], X.shape[2]))
+    for a in range(0, len(X), chunk):
+        Xc = X[a:a + chunk]
+        out[a:a + chunk] = np.matmul((Xc * w[a:a + chunk, :, None]).transpose(0, 2, 1), Xc)
+    return out
+
+
 def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFits:
     """Batched weighted quadric fits; ``nb`` (M, K, 3), ``w`` (M, K) zero for absent points."""
     M = len(nb)
@@ -51,7 +61,8 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
     ws_safe = np.where(ws > 0, ws, 1.0)
     bary = (w[..., None] * nb).sum(1) / ws_safe
     rel_b = nb - bary[:, None]
-    cov = np.einsum("mk,mki,mkj->mij", w, rel_b, rel_b)
+    # weighted scatter and normal equations as batched products (a three-operand einsum takes no BLAS path)
+    cov = _weighted_gram(rel_b, w)
     _, vec = np.linalg.eigh(cov)  # ascending: vec[..., 0] = normal of the PCA plane
     e1, e2, e3 = vec[..., 2], vec[..., 1], vec[..., 0]
     rel = nb - centres[:, None]
@@ -59,8 +70,8 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
     y = np.einsum("mki,mi->mk", rel, e2)
     z = np.einsum("mki,mi->mk", rel, e3)
     A = np.stack([x * x, y * y, x * y, x, y, np.ones_like(x)], -1)  # (M, K, 6)
-    AtA = np.einsum("mk,mki,mkj->mij", w, A, A)
-    Atz = np.einsum("mk,mki,mk->mi", w, A, z)
+    AtA = _weighted_gram(A, w)
+    Atz = np.einsum("mki,mk->mi", A, w * z)
     scale = np.maximum(np.einsum("mii->mi", AtA).max(1), 1e-300)
     reg = 1e-10 * scale[:, None, None] * np.eye(6)
     ok = count >= 6

@@ -12,13 +12,14 @@ rotate the normal about the tangent by ``rotations[i]``, bend by ``angles[i]`` w
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.geometry import any_perpendicular, quaternion, rotation, signed_angle
-from plantsolve.solvers.tube.vec3 import cross, rotate_about
+from plantsolve.solvers.tube.vec3 import cross
 
 TWO_PI = 2.0 * np.pi
 
@@ -83,33 +84,44 @@ def build_spine(model: TubeModel) -> Spine:
 
 
 def _build_spine(model: TubeModel) -> Spine:
+    """The forward kinematics on Python floats: a spine has a few segments, and numpy's per-call overhead on
+    3-vectors cost more than the arithmetic (the solver builds spines hundreds of times per scan)."""
     n = model.n_bends
-    p = np.asarray(model.start, float).copy()
-    t = model.frame[:, 0].copy()
-    nv = model.frame[:, 1].copy()
+    px, py, pz = (float(v) for v in model.start)
+    (tx, nx, _), (ty, ny, _), (tz, nz, _) = model.frame.tolist()
+    lengths, rotations = model.lengths.tolist(), model.rotations.tolist()
+    angles, radii = model.angles.tolist(), model.radii.tolist()
     S = 2 * n + 1
-    kind = np.zeros(S, int)
-    st = np.zeros((S, 3)); en = np.zeros((S, 3)); tg = np.zeros((S, 3)); nm = np.zeros((S, 3))
-    ln = np.zeros(S); ce = np.zeros((S, 3)); ra = np.zeros(S); an = np.zeros(S)
+    kind = [0, 1] * n + [0]
+    st, en, tg, nm, ce = [], [], [], [], []
+    ln, ra, an = [], [], []
     for i in range(n + 1):
-        k = 2 * i
-        st[k] = p; tg[k] = t; nm[k] = nv
-        p = p + model.lengths[i] * t
-        en[k] = p; ln[k] = model.lengths[i]
+        st.append((px, py, pz)); tg.append((tx, ty, tz)); nm.append((nx, ny, nz))
+        L = lengths[i]
+        px, py, pz = px + L * tx, py + L * ty, pz + L * tz
+        en.append((px, py, pz)); ln.append(L); ce.append((0.0, 0.0, 0.0)); ra.append(0.0); an.append(0.0)
         if i == n:
             break
-        nv = rotate_about(nv, t, model.rotations[i])
-        a, R = model.angles[i], model.radii[i]
-        k += 1
-        kind[k] = 1; st[k] = p; tg[k] = t; nm[k] = nv
-        c = p + R * nv
-        ca, sa = np.cos(a), np.sin(a)
-        p = c - R * (nv * ca) + R * (t * sa)
-        t, nv = t * ca + nv * sa, nv * ca - t * sa
-        en[k] = p; ce[k] = c; ra[k] = R; an[k] = a; ln[k] = R * a
-    for array in (kind, st, en, tg, nm, ln, ce, ra, an):
+        # the normal turned about the tangent by the rotation (Rodrigues, as ``vec3.rotate_about``)
+        c, s = math.cos(rotations[i]), math.sin(rotations[i])
+        cx, cy, cz = ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx
+        k = (tx * nx + ty * ny + tz * nz) * (1.0 - c)
+        nx, ny, nz = nx * c + cx * s + tx * k, ny * c + cy * s + ty * k, nz * c + cz * s + tz * k
+        a, R = angles[i], radii[i]
+        st.append((px, py, pz)); tg.append((tx, ty, tz)); nm.append((nx, ny, nz))
+        cx, cy, cz = px + R * nx, py + R * ny, pz + R * nz
+        ca, sa = math.cos(a), math.sin(a)
+        px, py, pz = cx - R * (nx * ca) + R * (tx * sa), cy - R * (ny * ca) + R * (ty * sa), cz - R * (nz * ca) + R * (tz * sa)
+        (tx, ty, tz), (nx, ny, nz) = ((tx * ca + nx * sa, ty * ca + ny * sa, tz * ca + nz * sa),
+                                      (nx * ca - tx * sa, ny * ca - ty * sa, nz * ca - tz * sa))
+        en.append((px, py, pz)); ce.append((cx, cy, cz)); ra.append(R); an.append(a); ln.append(R * a)
+    arrays = [np.array(kind, dtype=int)] + [np.array(v, dtype=float).reshape(S, 3) for v in (st, en, tg, nm)] + [
+        np.array(ln, dtype=float), np.array(ce, dtype=float).reshape(S, 3), np.array(ra, dtype=float),
+        np.array(an, dtype=float)]
+    for array in arrays:
         array.setflags(write=False)
-    return Spine(kind, st, en, tg, nm, ln, ce, ra, an)
+    kind_, st_, en_, tg_, nm_, ln_, ce_, ra_, an_ = arrays
+    return Spine(kind_, st_, en_, tg_, nm_, ln_, ce_, ra_, an_)
 
 
 def end_frame(model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
@@ -277,25 +289,33 @@ def distance_frames(sp: Spine) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
 
 
 def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
-    """Distance of each point to each (bounded) segment: (N, S).
+    """Distance of each point to each (bounded) segment: (N, S) (a view of :func:`segment_distances_t`)."""
+    return segment_distances_t(pts, sp, frames).T
+
+
+def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
+    """Distance of each point to each (bounded) segment, segments by rows: (S, N).
 
     All segments at once: one product gives every point's coordinates in every segment's
-    frame; the distances then follow elementwise from those coordinates."""
+    frame; the distances then follow elementwise from those coordinates. Segment-major, so that every
+    elementwise operation runs over contiguous rows of points (point-major slices of a few segments are
+    strided, several times slower)."""
     S = len(sp.kind)
     W, off, lines, arcs = frames if frames is not None else distance_frames(sp)
-    c = pts @ W
-    c -= off
+    # both operands C-contiguous: numpy hands strided ones to a loop far slower than BLAS
+    c = np.ascontiguousarray(W.T) @ np.ascontiguousarray(pts.T)
+    c -= off[:, None]
     L, A = len(lines), len(arcs)
-    out = np.empty((len(pts), S))
+    out = np.empty((S, len(pts)))
     if L:
-        a, b, h = c[:, :L], c[:, L:2 * L], c[:, 2 * L:3 * L]
+        a, b, h = c[:L], c[L:2 * L], c[2 * L:3 * L]
         # a − clip(a, 0, length): the offset beyond either end of the straight
-        da = np.maximum(a - sp.length[lines], 0.0) + np.minimum(a, 0.0)
-        out[:, lines] = np.sqrt(da * da + b * b + h * h)
+        da = np.maximum(a - sp.length[lines][:, None], 0.0) + np.minimum(a, 0.0)
+        out[lines] = np.sqrt(da * da + b * b + h * h)
     if A:
         o = 3 * L
-        x, y, z = c[:, o:o + A], c[:, o + A:o + 2 * A], c[:, o + 2 * A:]
-        R, ang = sp.radius[arcs], sp.angle[arcs]
+        x, y, z = c[o:o + A], c[o + A:o + 2 * A], c[o + 2 * A:]
+        R, ang = sp.radius[arcs][:, None], sp.angle[arcs][:, None]
         ca, sa = np.cos(ang), np.sin(ang)
         z2 = z * z
         rho = np.sqrt(x * x + y * y)
@@ -308,7 +328,7 @@ def _segment_distances(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         before_end = ca * y - sa * x <= 0.0
         upper = y >= 0.0
         inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
-        out[:, arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
+        out[arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
     return out
 
 
@@ -325,13 +345,13 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
     tol = 1e-12 * (float(np.abs(sp.start).max(initial=0.0)) + p_abs + 1e-300)
     frames = frames if frames is not None else distance_frames(sp)
     for a in range(0, len(pts), step):
-        m = _segment_distances(pts[a:a + step], sp, frames)
+        m = segment_distances_t(pts[a:a + step], sp, frames)
         # first segment within round-off of the minimum: a point at a junction (or at a
         # zero-length straight) goes to the earlier segment, independent of round-off
-        lo = m.min(axis=1)
-        i = np.argmax(m <= (lo + tol)[:, None], axis=1)
+        lo = m.min(axis=0)
+        i = np.argmax(m <= lo + tol, axis=0)
         idx[a:a + step] = i
-        d[a:a + step] = np.take_along_axis(m, i[:, None], 1)[:, 0]
+        d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
     return d, idx
 
 

@@ -198,7 +198,8 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
     for f in factors:
         e = eps * f
-        simp_e = curve.simplify(poly, SIMPLIFY_FRACTION * e)
+        # at ε itself the polygon simplified is the stage's own (the same call)
+        simp_e = pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * e)
         mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp)
         if mdl is None:  # every kept prefix ran into a dead end: search wider before giving up ε
             mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp, beam=8)
@@ -260,13 +261,20 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
-            m, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
-            res, seg = fit.assign(m, P, margin)
+            solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            m = fit.with_end_lengths(solved, m)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
-            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``)
-            ends = fit.near_ends(m, seg) if len(P) > ALL_SAMPLES_AT_ONCE else slice(None)
-            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin)
+            # a large scan re-assigns only its samples at the ends (``fit.end_lengths``), a small one
+            # keeps the inner segments' distances of this assignment for it
+            if len(P) > ALL_SAMPLES_AT_ONCE:
+                res, seg = fit.assign(m, P, margin)
+                ends, again = fit.near_ends(m, seg), None
+            else:
+                res, seg, again = fit.assign_for_ends(m, P, margin)
+                ends = slice(None)
+            m, res[ends], seg[ends], settled = fit.end_lengths(m, P[ends], res[ends], seg[ends], thr, margin,
+                                                               again=again)
             if P is pts:
                 last_assignment[:] = [m, res, seg] if settled else []
             # the settled ends' last assignment is the returned model's (what fit.assign gives it again)
@@ -404,6 +412,13 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                                               assignment=list(assign)), {"radius_mode": "fixed", "fixed_radii": fixed}
     candidates = {"per_bend": (model, lm_info, thr, {"radius_mode": "free"})}
     res_free, seg_free = fit.assign(model, P, margin)
+    assigned = {id(model): (model, res_free)}  # each candidate's residuals, computed once
+
+    def residuals(m: TubeModel) -> np.ndarray:
+        if id(m) not in assigned:
+            assigned[id(m)] = (m, fit.assign(m, P, margin)[0])
+        return assigned[id(m)][1]
+
     keep = np.abs(res_free) <= thr
     free_layout = fit.Layout(n, "free", None, opts.pipe_radius is None)
     sd_free = fit.parameter_sigmas(model, P[keep], seg_free[keep], free_layout)["radii"]
@@ -415,7 +430,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
         best = None
         for r0 in _common_starts(model, weight):
             m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
-            r = fit.assign(m, P, margin)[0][keep]
+            r = residuals(m)[keep]
             if best is None or float(r @ r) < best[0]:
                 best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
         candidates["common"] = best[1]
@@ -429,7 +444,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     size = {"per_bend": n, "common": 1, "dies": 2}
     rss, bic, n_par = {}, {}, {}
     for name, (m, _, _, _) in candidates.items():
-        r = fit.assign(m, P, margin)[0][keep]
+        r = residuals(m)[keep]
         rss[name] = float(np.sum(r * r))
         n_par[name] = 6 + 2 * max(n - 1, 0) + n + size[name] + int(opts.pipe_radius is None)
         bic[name] = float(N * np.log(max(rss[name], 1e-300) / N) + n_par[name] * np.log(N))
@@ -623,17 +638,54 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
     # a radius below the pipe radius is no bend a bender makes: the tube surface there is a spindle torus,
     # whose folded inner wall gives a bend of a few degrees a sharp but spurious minimum, so its sigma
     # (often a few percent) describes that fold, not the die
-    loose = [k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
-             or rows[k].bend_radius < model.pipe_radius]
+    loose = {k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
+             or rows[k].bend_radius < model.pipe_radius}
+    if mode == "free":
+        loose |= set(radii_fitting_as_well(model, pts[ls.inlier], loose))
+    loose = sorted(loose)
     if loose:
         result.report.warnings.append(Diagnostic(
             code="bend_radius_undetermined",
             message=f"The radius of bend(s) {', '.join(str(k + 1) for k in loose)} is not determined by the data "
-            "(standard deviation above 10 % of the radius, or a radius below the pipe radius): give the die radius "
-            "(options.bend_radius or dies).",
+            "(standard deviation above 10 % of the radius, a radius below the pipe radius, or half or twice the "
+            "radius fitting about as well): give the die radius (options.bend_radius or dies).",
             details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
                                 "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
         result.report.status = "warning"
+
+
+def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[int]:
+    """Bends (other than ``skip``) whose free radius the samples do not pin down beyond the point it was fitted
+    at: with the radius held at half or at twice its value (within the fit's bounds) and the control polygon
+    kept (``with_radii``), the sum of squared residuals rises by less than a standard deviation of 10 % of the
+    radius predicts, Δχ² < ((R' - R) / 0.1 R)² (25 at half, 100 at twice), in units of the fit's residual
+    variance. The sigma from the Jacobian describes the minimum the fit stopped in; for a bend of a few degrees
+    that can be one of several (a radius below the pipe's, or one of 150 pipe radii with a sigma of 2 %), chosen by
+    round-off, and this secant test sees the cost stay flat (or fall) across them. Without a refit the rise is
+    an upper bound of the profile's, so no bend is flagged that a refit would show determined."""
+    n = model.n_bends
+    rp = model.pipe_radius
+    r0 = fit.assign(model, pts, 0.0)[0]
+    rss0 = float(r0 @ r0)
+    s2 = rss0 / max(len(pts) - fit.Layout(n, "free", None, True).size, 1)
+    if s2 <= 0:
+        return []
+    lo, hi = 0.5 * rp, 200.0 * rp  # the radius bounds of the fit (``fit.bounds``)
+    out = []
+    for k in range(n):
+        if k in skip:
+            continue
+        R = float(model.radii[k])
+        for R_held in (max(0.5 * R, lo), min(2.0 * R, hi)):
+            if abs(R_held - R) <= 1e-3 * R:
+                continue
+            radii = model.radii.copy()
+            radii[k] = R_held
+            r = fit.assign(with_radii(model, radii), pts, 0.0)[0]
+            if (float(r @ r) - rss0) / s2 < ((R_held - R) / (0.1 * R)) ** 2:
+                out.append(k)
+                break
+    return out
 
 
 def _same_shape(a: TubeModel, b: TubeModel) -> bool:

@@ -53,22 +53,25 @@ def fit_cylinders(nb: np.ndarray, w0: np.ndarray, x: np.ndarray, t: np.ndarray, 
     npar = 5 if free_radius else 4
     for _ in range(iters):
         e1, e2 = _basis(t)
-        wv = nb - x[:, None]
-        s = np.einsum("mki,mi->mk", wv, t)
-        perp = wv - s[..., None] * t[:, None]
-        rho = np.linalg.norm(perp, axis=2)
-        e = perp / np.maximum(rho, 1e-300)[..., None]
-        g1 = np.einsum("mki,mi->mk", e, e1)
-        g2 = np.einsum("mki,mi->mk", e, e2)
-        cols = [-g1, -g2, -s * g1, -s * g2]
+        # the neighbours in the frame (t, e1, e2) of the axis, one batched product: along the axis s, and
+        # the offset from it (a1, a2), whose direction is the distance's gradient
+        c = np.matmul(nb - x[:, None], np.stack([t, e1, e2], 2))
+        s = c[..., 0]
+        rho = np.sqrt(c[..., 1] ** 2 + c[..., 2] ** 2)
+        inv = 1.0 / np.maximum(rho, 1e-300)
+        J = np.empty(rho.shape + (npar,))
+        J[..., 0] = -c[..., 1] * inv
+        J[..., 1] = -c[..., 2] * inv
+        J[..., 2] = s * J[..., 0]
+        J[..., 3] = s * J[..., 1]
         if free_radius:
-            cols.append(-np.ones_like(g1))
-        J = np.stack(cols, -1)
+            J[..., 4] = -1.0
         res = rho - r[:, None]
         if robust_scale is not None:
             w = w0 / (1.0 + (res / robust_scale) ** 2)
-        A = np.einsum("mk,mki,mkj->mij", w, J, J) + 1e-9 * np.eye(npar) * (w.sum(1)[:, None, None] + 1e-300)
-        b = -np.einsum("mk,mki,mk->mi", w, J, res)
+        # weighted normal equations as batched products (a three-operand einsum takes no BLAS path)
+        A = np.matmul((J * w[..., None]).transpose(0, 2, 1), J) + 1e-9 * np.eye(npar) * (w.sum(1)[:, None, None] + 1e-300)
+        b = -np.einsum("mki,mk->mi", J, w * res)
         try:
             step = np.linalg.solve(A, b[..., None])[..., 0]
         except np.linalg.LinAlgError:
@@ -81,9 +84,9 @@ def fit_cylinders(nb: np.ndarray, w0: np.ndarray, x: np.ndarray, t: np.ndarray, 
         t /= np.linalg.norm(t, axis=1, keepdims=True)
         if free_radius:
             r = np.maximum(r + step[:, 4], 1e-6 * r)
-    wv = nb - x[:, None]
-    s = np.einsum("mki,mi->mk", wv, t)
-    rho = np.linalg.norm(wv - s[..., None] * t[:, None], axis=2)
+    e1, e2 = _basis(t)
+    c = np.matmul(nb - x[:, None], np.stack([e1, e2], 2))
+    rho = np.sqrt(c[..., 0] ** 2 + c[..., 1] ** 2)
     ws = np.maximum(w.sum(1), 1e-300)
     rms = np.sqrt((w * (rho - r[:, None]) ** 2).sum(1) / ws)
     return x, t, r, rms

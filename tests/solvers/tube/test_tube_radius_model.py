@@ -114,3 +114,16 @@ def test_a_radius_the_data_cannot_tell_is_flagged():
     flagged = [w for w in res.report.warnings if w.code == "bend_radius_undetermined"]
     row = res.lra[0]
     assert row.sigma_bend_radius > 0.1 * row.bend_radius and flagged
+
+
+def test_secant_test_flags_the_radius_of_a_few_degree_bend_and_not_of_a_large_one():
+    # at the true model: holding the 4 degree bend's radius at half or twice its value moves its arc by a few
+    # hundredths of the noise, the 60 degree bend's by many times it; the result is the same for the samples in
+    # another order (sums of squares in another order: round-off only)
+    from plantsolve.solvers.tube.solve import radii_fitting_as_well
+
+    truth = make_model([(40, 0, 60, 12.0), (8 * RP, 45, 4.0, 12.0), (40, 0, 0, 0)], RP)
+    pts = surface_samples(truth, 4000, np.random.default_rng(3), noise=0.012 * RP)
+    assert radii_fitting_as_well(truth, pts) == [1]
+    assert radii_fitting_as_well(truth, pts[::-1]) == [1]
+    assert radii_fitting_as_well(truth, pts, skip={1}) == []
