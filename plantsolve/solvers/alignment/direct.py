@@ -390,7 +390,11 @@ def _joint_cost(model: Model, st: JointState, P: np.ndarray, var: np.ndarray, nv
         B1 = B0.copy(); B1[:, :, 0:3] = -_skew(u) * st.L[pipes][:, None, None]; B1[:, :, 6] = u
         c0 = (P[st.s0[pipes]] - e0).astype(float)
         c1 = (P[st.s0[pipes] + 1] - e1).astype(float)
-        Hp = 2 * (np.einsum("kia,kij,kjb->kab", B0, M, B0) + np.einsum("kia,kij,kjb->kab", B1, M, B1))
+        # B0 picks the translation: its term is M in the translation block, exactly what the sum of products
+        # over B0's zeros and ones gives, without the generic three-operand einsum (half of this function's time)
+        Hp = np.einsum("kia,kij,kjb->kab", B1, M, B1)
+        Hp[:, 3:6, 3:6] += M
+        Hp *= 2
         gp = 2 * (np.einsum("kia,kij,kj->ka", B0, M, c0) + np.einsum("kia,kij,kj->ka", B1, M, c1))
         for i in range(7):
             for j in range(7):
