@@ -89,3 +89,21 @@ def test_an_ifc_behind_an_editors_byte_order_mark_is_optimized_like_the_file_wit
     assert {(r.products_shared, r.optimized_bytes) for r in solved} == {(solved[0].products_shared,
                                                                         solved[0].optimized_bytes)}
     assert solved[0].products_shared > 0
+
+
+@pytest.mark.parametrize("value", [b"1e308", b"1,5"])
+def test_a_product_with_an_absurd_or_unreadable_point_is_left_unchanged_not_the_job_failed(value):
+    """One IfcCartesianPoint of the example tunnel written as 1e308 (or as '1,5', which IfcOpenShell reads as no
+    number) passed the intake and failed the job at stage solver ('data must be finite' in the matching's k-d
+    tree; an inhomogeneous array in the explicit reader). Now that product is left unchanged and reported."""
+    import re
+    from pathlib import Path
+
+    plain = (Path(__file__).parents[3] / "examples" / "dedup" / "tunnel_3rings.ifc").read_bytes()
+    numbers = list(re.finditer(rb"(?<![\w.])-?\d+\.\d+", plain))
+    middle = numbers[len(numbers) // 2]
+    poisoned = plain[:middle.start()] + value + plain[middle.end():]
+    whole, damaged = (SPEC.solve(_input("t.ifc", content), lambda *a, **k: None).result for content in (plain, poisoned))
+    left = next(w for w in damaged.report.warnings if w.code == "left_unchanged")
+    assert left.details["count"] == 1 and left.details["products"][0]["reason"] == "geometry could not be processed"
+    assert damaged.products_total == whole.products_total and damaged.products_shared == whole.products_shared - 1
