@@ -59,7 +59,20 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     if not products:
         return points, triangles
     unit = ifcopenshell.util.unit.calculate_unit_scale(model)
-    iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
+    try:
+        iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
+    except RuntimeError:  # a reference the file does not resolve refuses the whole batch: each product alone
+        for product in products:
+            try:
+                one = ifcopenshell.geom.iterator(geometry_settings(), model, 1, include=[product])
+            except RuntimeError:
+                continue  # this one's geometry names a missing entity: left unchanged with a warning
+            if one.initialize():
+                verts = np.asarray(one.get().geometry.verts, dtype=float).reshape(-1, 3) / unit
+                if len(verts) and _usable(verts):
+                    points[product.id()] = np.unique(verts, axis=0)
+                    triangles[product.id()] = len(one.get().geometry.faces) // 3
+        return points, triangles
     total = len(products)
     done = len(points)
     if not iterator.initialize():
