@@ -14,6 +14,17 @@ from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 
 
+# Coordinates past this (in the file's unit) are a writer's garbage: 1e308 or NaN in one IfcCartesianPoint
+# overflowed the matching's signatures and failed the job.
+MAX_COORDINATE = 1e12
+
+
+def _usable(points: np.ndarray) -> bool:
+    """Finite points within :data:`MAX_COORDINATE`: a product whose geometry is not is left unchanged."""
+    with np.errstate(invalid="ignore"):
+        return bool((np.abs(points) <= MAX_COORDINATE).all())
+
+
 def geometry_settings() -> ifcopenshell.geom.settings:
     settings = ifcopenshell.geom.settings()
     settings.set("use-world-coords", True)
@@ -27,16 +38,20 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     """``{product id: unique world points (n, 3) in file units}`` and ``{product id: face count}``
     (explicit meshes: their points and polygons as written, through ``reader`` when given; anything
     else: the kernel's tessellation, its vertices and triangles); a product the kernel cannot
-    tessellate is missing from both."""
+    tessellate, or whose points are not numbers, not finite or beyond :data:`MAX_COORDINATE`, is missing
+    from both."""
     points: dict[int, np.ndarray] = {}
     triangles: dict[int, int] = {}
     rest = []
     reader = reader or ExplicitReader(model)
     for k, product in enumerate(products):
-        got = reader.product_points(product)
+        try:
+            got = reader.product_points(product)
+        except (ValueError, TypeError, IndexError, AttributeError):  # a point that is no triple of numbers
+            continue  # missing from both, as the kernel's failures: left unchanged with a warning
         if got is None:
             rest.append(product)
-        else:
+        elif _usable(got[0]):
             points[product.id()], triangles[product.id()] = got
         if k % 500 == 0:
             progress(span[0] + (span[1] - span[0]) * 0.5 * k / len(products), message)
@@ -44,7 +59,20 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     if not products:
         return points, triangles
     unit = ifcopenshell.util.unit.calculate_unit_scale(model)
-    iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
+    try:
+        iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
+    except RuntimeError:  # a reference the file does not resolve refuses the whole batch: each product alone
+        for product in products:
+            try:
+                one = ifcopenshell.geom.iterator(geometry_settings(), model, 1, include=[product])
+            except RuntimeError:
+                continue  # this one's geometry names a missing entity: left unchanged with a warning
+            if one.initialize():
+                verts = np.asarray(one.get().geometry.verts, dtype=float).reshape(-1, 3) / unit
+                if len(verts) and _usable(verts):
+                    points[product.id()] = np.unique(verts, axis=0)
+                    triangles[product.id()] = len(one.get().geometry.faces) // 3
+        return points, triangles
     total = len(products)
     done = len(points)
     if not iterator.initialize():
@@ -53,7 +81,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     while True:
         shape = iterator.get()
         verts = np.asarray(shape.geometry.verts, dtype=float).reshape(-1, 3) / unit
-        if len(verts):
+        if len(verts) and _usable(verts):
             points[shape.id] = np.unique(verts, axis=0)
             triangles[shape.id] = len(shape.geometry.faces) // 3
         if (len(points) - done) % 200 == 0:

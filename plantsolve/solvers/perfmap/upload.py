@@ -229,12 +229,15 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         delim = (forced.group(1) if forced else "\t" if "\t" in h_line else ";" if ";" in h_line else ",")
         (rows, numbers, ends), h = _head_rows(lines, delim), 0
     rows, numbers = rows[:h + 1], numbers[:h + 1]
-    for number, line in lines[ends[h]:]:  # each data line on its own: a stray quote cannot swallow the next lines
-        try:
-            rows.append(next(csv.reader([line], delimiter=delim), []))
-        except csv.Error as e:
-            rows.append(_Unreadable(f"the line cannot be split into cells ({e})"))
+    i = ends[h]
+    width = len(rows[h])
+    while i < len(lines):  # row by row: a stray quote cannot swallow the lines after it
+        number, line = lines[i]
+        # without a quote the csv module splits a line at its separators, and has no field size limit to pass
+        row, used = _data_row(lines, i, delim, width) if '"' in line else (line.split(delim), 1)
+        rows.append(row)
         numbers.append(number)
+        i += used
     hint = ("" if delim != "," or ";" not in text[:2000] else
             " — if the file uses ';' separators, put them in the header too")
     # exporters end every row: a last row without a line ending is where a copy or an export stopped
@@ -249,6 +252,34 @@ class _Unreadable(list):
     def __init__(self, reason: str):
         super().__init__()
         self.reason = reason
+
+
+_CELL_LINES = 10  # most lines one quoted data cell may span (a note typed with Alt+Enter)
+
+
+def _data_row(lines: list[tuple[int, str]], i: int, delim: str, width: int) -> tuple[list[str], int]:
+    """The row that starts at ``lines[i]`` and how many lines it takes. A line that leaves a quote open goes on
+    into the next lines only when they close it within :data:`_CELL_LINES` lines, none of them looks like a row of
+    the table (as many separators as the header) and the row then has as many cells as the header (a quoted cell
+    holding line breaks); otherwise the quote is a stray one and the line is a row of its own."""
+    line = lines[i][1]
+    try:
+        cells = next(csv.reader([line], delimiter=delim), [])
+    except csv.Error as e:
+        return _Unreadable(f"the line cannot be split into cells ({e})"), 1
+    if line.count('"') % 2 == 0:
+        return cells, 1
+    for extra in range(1, min(_CELL_LINES, len(lines) - i)):
+        if lines[i + extra][1].count(delim) + 1 >= width:  # a row of the table, not the rest of a note
+            break
+        text = "\n".join(part for _, part in lines[i:i + extra + 1])
+        if text.count('"') % 2 == 0:
+            try:
+                merged = next(csv.reader(io.StringIO(text), delimiter=delim), [])
+            except csv.Error:
+                break
+            return (merged, extra + 1) if len(merged) == width else (cells, 1)
+    return cells, 1
 
 
 def _head_rows(lines: list[tuple[int, str]], delim: str) -> tuple[list[list[str]], list[int], list[int]]:
@@ -470,8 +501,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
                         if comma_separated and re.fullmatch(r"-?\d+,\d+", cell) else
                         " (a formula never calculated: open and save the workbook in Excel, or paste values)"
                         if cell.startswith("=") else "")
+                shown = cell if len(cell) <= 40 else cell[:40] + "…"  # a 100 KB cell is not repeated in the report
                 errors.append(FieldError(("file", "row", n, c),
-                                         f"{what} {n}: {c} {cell!r} is not a number{hint}"))
+                                         f"{what} {n}: {c} {shown!r} is not a number{hint}"))
                 continue
             if not math.isfinite(v):
                 errors.append(FieldError(("file", "row", n, c),

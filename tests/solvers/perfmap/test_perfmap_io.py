@@ -274,7 +274,8 @@ def test_a_stray_quote_or_an_overlong_field_costs_its_own_line_only(n3_csv):
     the file as malformed. Now each data line is split on its own: that line is skipped, named, the rest read."""
     lines = n3_csv.decode().splitlines()
     whole = _counts(parse_upload(StoredInput.from_bytes("m.csv", n3_csv), None))
-    for bad, reason in (('"' + lines[5], "theta '0.0,0.5,"), ("1 " * 100_000, "cannot be split into cells")):
+    for bad, reason in (('"' + lines[5], "theta '0.0,0.5,"), ('"' + "1 " * 100_000, "cannot be split into cells"),
+                        ("1 " * 100_000, "theta '1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 …' is not a number")):
         text = "\n".join(lines[:5] + [bad] + lines[6:]) + "\n"
         request = parse_upload(StoredInput.from_bytes("m.csv", text.encode()), None)
         assert _counts(request) == (whole[0], whole[1] - 1)
@@ -294,3 +295,26 @@ def test_a_header_cell_with_a_line_break_keeps_the_line_numbers_of_the_rows_belo
     assert request.setting_units[0] == "deg"
     (note,) = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
     assert note.details["lines"] == [8]  # line 7 of the one-line header's file
+
+
+def test_a_quoted_note_over_two_lines_stays_one_row_and_a_stray_quote_stays_one_line(n3_csv):
+    """A notes column typed with Alt+Enter in Excel writes one quoted cell over two lines: that row is read whole
+    (its note ignored like any unknown column) and the rows below keep their file line numbers."""
+    lines = n3_csv.decode().splitlines()
+    lines[0] += ",note"
+    lines[3] += ',"surge at\nthe end"'
+    lines[5] = lines[5].replace("0.0", "abc", 1)
+    request = parse_upload(StoredInput.from_bytes("m.csv", ("\n".join(lines) + "\n").encode()), None)
+    whole = _counts(parse_upload(StoredInput.from_bytes("m.csv", n3_csv), None))
+    assert _counts(request) == (whole[0], whole[1] - 1)  # only the row made bad on purpose is skipped
+    (note,) = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
+    assert note.details["lines"] == [7]  # its line 6 in the list, one further down in the file
+
+
+def test_two_stray_quotes_a_few_lines_apart_do_not_make_one_row_of_the_lines_between(n3_csv):
+    lines = n3_csv.decode().splitlines()
+    whole = _counts(parse_upload(StoredInput.from_bytes("m.csv", n3_csv), None))
+    lines[5] = '"' + lines[5]
+    lines[8] = lines[8].replace(",", '",', 1)
+    request = parse_upload(StoredInput.from_bytes("m.csv", ("\n".join(lines) + "\n").encode()), None)
+    assert _counts(request) == (whole[0], whole[1] - 1)
