@@ -1,6 +1,7 @@
 """Bend pruning and model selection helpers (beyond the paper) and the LM solver."""
 
 import numpy as np
+import pytest
 
 from plantsolve.solvers.tube import fit, prune
 from plantsolve.solvers.tube.model import build_spine, sample_centreline, spine_distance
@@ -187,8 +188,12 @@ def test_recheck_with_held_radii_refits_the_merge_on_the_dies_of_its_bends():
     assert d.max() < 1e-6
 
 
-def test_normal_equations_match_the_dense_jacobian():
-    # Jᵀ W J and Jᵀ W r from the per-segment 7 × 7 products equal those of the (N, P) Jacobian built row by row
+@pytest.mark.parametrize("block", [None, 700], ids=["one block", "blocks of 700"])
+def test_normal_equations_match_the_dense_jacobian(block, monkeypatch):
+    # Jᵀ W J and Jᵀ W r from the per-segment 7 × 7 products equal those of the (N, P) Jacobian built row by row;
+    # a scan of more samples than one block (fit.BLOCK) sums them block by block
+    if block is not None:
+        monkeypatch.setattr(fit, "BLOCK", block)
     rng = np.random.default_rng(4)
     m = make_model([[30, 0, 40, 10], [12, 70, 100, 9], [20, -30, 15, 12], [25, 0, 0, 0]], 2.0)
     pts = surface_samples(m, 3000, rng, noise=0.02)
@@ -228,28 +233,3 @@ def test_normal_equations_after_fun_are_those_computed_afresh():
     fun(x0)  # the latest evaluation is now another point
     A2, b2 = normal_equations(x1, w, r)
     assert np.array_equal(A1, A2) and np.array_equal(b1, b2)
-
-
-def test_normal_equations_over_several_blocks_of_samples(monkeypatch):
-    # a scan of more samples than one block (fit.BLOCK) sums the normal equations block by block: the same as
-    # those of the (N, P) Jacobian built row by row
-    monkeypatch.setattr(fit, "BLOCK", 700)
-    rng = np.random.default_rng(6)
-    m = make_model([[30, 0, 40, 10], [12, 70, 100, 9], [20, -30, 15, 12], [25, 0, 0, 0]], 2.0)
-    pts = surface_samples(m, 3000, rng, noise=0.02)
-    _, seg = fit.assign(m, pts, 4.0)
-    lay = fit.Layout(m.n_bends, "free", None, True)
-    x0, _, _, fun, normal_equations, frame0, rp = fit._problem(m, pts, seg, lay)
-    r = fun(x0)
-    w = rng.uniform(0.2, 1.0, len(r))
-    A, b = normal_equations(x0, w, r)
-    order = np.argsort(seg, kind="stable")
-    groups = fit._groups(seg[order])
-    g = fit.geometry_batch(x0[None], lay, frame0, rp)[0]
-    kind = fit.build_spine(fit.unpack(x0, lay, frame0, rp)).kind
-    _, gr = fit._dist_and_grad(pts[order], groups, g, kind, True)
-    dG = fit._geometry_jacobian(x0, lay, frame0, rp, rp)
-    J = np.concatenate([gr[sl] @ dG[k] for k, sl in groups])
-    J[:, -1] -= 1.0
-    np.testing.assert_allclose(A, J.T @ (w[:, None] * J), rtol=1e-10, atol=1e-10 * np.abs(A).max())
-    np.testing.assert_allclose(b, J.T @ (w * r), rtol=1e-10, atol=1e-10 * np.abs(b).max())
