@@ -30,6 +30,9 @@ built on the two followed different paths along the loops' flat directions and e
 3.5e-4 mm apart (1.3e-4 mm on the 10,000-component plant-like bench network). Each Schur solve
 is therefore refined on the same regularised matrix (:class:`SchurSolve`), which gives the LU's
 solution back: the sequences then end 1e-7 mm apart on plant-like networks, 3e-11 mm on loop grids.
+Where that refinement does not converge (at a singular point one elimination can be off by more than
+the step itself), the system and its later right-hand sides go to the pivoted LU of the regularised
+matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
 0.8 of its memory on plant-like networks of 10,000 and 100,000. Where a connection has to be cut,
@@ -137,11 +140,13 @@ class SchurSolve:
     same (see the module doc)."""
 
     refinements = 3  # at most; each costs one more elimination (measured: the third rarely helps)
+    diverged = 0.1  # a last correction of x this large, relative to x, is no convergence
 
     def __init__(self, H: sp.spmatrix, Hinv: sp.csr_matrix, A: sp.spmatrix, ldl, delta: float):
         # held by reference (the caller's matrices, A^T a view): a 100,000-component network's factorisation
         # is the largest thing alive during the solve, nothing beside it should be a copy
         self.H, self.Hinv, self.A, self.ldl, self.delta = H, Hinv, A, ldl, delta
+        self.lu = None  # the LU that replaces the elimination once it did not converge
 
     def _eliminate(self, rhs: np.ndarray) -> np.ndarray:
         n = self.Hinv.shape[0]
@@ -156,8 +161,12 @@ class SchurSolve:
         return rhs - np.concatenate([self.H @ x + self.A.T @ lam, self.A @ x - self.delta * lam])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
+        if self.lu is not None:
+            return self.lu.solve(rhs)
+        n = self.Hinv.shape[0]
         sol = self._eliminate(rhs)
         last = np.inf
+        step = 0.0
         for _ in range(self.refinements):
             res = self._residual(rhs, sol)
             size = float(np.max(np.abs(res), initial=0.0))
@@ -166,13 +175,26 @@ class SchurSolve:
             if not 0.0 < size < 0.25 * last:
                 break
             last = size
-            sol += self._eliminate(res)
+            fix = self._eliminate(res)
+            sol += fix
+            step = float(np.max(np.abs(fix[:n]), initial=0.0))
+        if step > self.diverged * float(np.max(np.abs(sol[:n]), initial=0.0)):
+            # the elimination is no approximate inverse here (a loop at its singular point: the complement's
+            # condition number, the square of the KKT matrix's, past 1/eps), refinement does not converge on it:
+            # this matrix and its later right-hand sides go to the pivoted LU of the regularised matrix itself
+            m = self.A.shape[0]
+            self.lu = splu(sp.bmat([[self.H, self.A.T], [self.A, -self.delta * sp.identity(m)]], format="csc"))
+            return self.lu.solve(rhs)
         return sol
 
 
 def block_inverse(H: sp.spmatrix, largest: int = 16) -> sp.csr_matrix | None:
     """Inverse of a symmetric positive-definite block-diagonal matrix (the per-component cost), or None
-    when it is not one (a block larger than ``largest`` or not positive definite)."""
+    when it is not one (a block larger than ``largest`` or not positive definite).
+
+    Blocks of one variable (a fitting's cost is diagonal: six of them per fitting) are inverted as numbers,
+    the others as one stack padded to the largest: padding every block to a pipe's seven variables made the
+    stack seven times as large as the blocks that need it on plant-like networks (time and peak memory)."""
     n = H.shape[0]
     if n == 0:
         return sp.csr_matrix((0, 0))
@@ -181,26 +203,45 @@ def block_inverse(H: sp.spmatrix, largest: int = 16) -> sp.csr_matrix | None:
     big = int(sizes.max())
     if big > largest:
         return None
-    order = np.argsort(label, kind="stable")
-    start = np.concatenate([[0], np.cumsum(sizes)])
-    pos = np.empty(n, dtype=np.intp)
-    pos[order] = np.arange(n) - start[label[order]]
     C = sp.coo_matrix(H)
-    B = np.zeros((nb, big, big))
-    np.add.at(B, (label[C.row], pos[C.row], pos[C.col]), C.data)
-    pad = np.arange(big)[None, :] >= sizes[:, None]
-    B[:, np.arange(big), np.arange(big)] += pad  # unit diagonal in the padding
-    try:
-        np.linalg.cholesky(B)
-    except np.linalg.LinAlgError:
+    one = sizes[label] == 1  # variables that are a block alone
+    diag = np.zeros(n)
+    on = one[C.row]  # an entry of a block of one is on the diagonal
+    np.add.at(diag, C.row[on], C.data[on])
+    if not np.all(diag[one] > 0):
         return None
-    Bi = np.linalg.inv(B)
-    member = np.full((nb, big), -1, dtype=np.intp)
-    member[label, pos] = np.arange(n)
-    rows = np.broadcast_to(member[:, :, None], B.shape)
-    cols = np.broadcast_to(member[:, None, :], B.shape)
-    keep = (rows >= 0) & (cols >= 0)
-    return sp.csr_matrix((Bi[keep], (rows[keep], cols[keep])), shape=(n, n))
+    rest = np.flatnonzero(~one)
+    rows_out, cols_out, vals_out = [np.flatnonzero(one)], [np.flatnonzero(one)], [1.0 / diag[one]]
+    if len(rest):
+        # blocks of two or more variables, renumbered 0..nr-1, padded to the largest as before
+        blocks, local = np.unique(label[rest], return_inverse=True)
+        nr, size = len(blocks), sizes[blocks]
+        big = int(size.max())
+        lab = np.full(nb, -1, dtype=np.intp)
+        lab[blocks] = np.arange(nr)
+        rl = lab[label]  # block of each variable in the stack, -1 for blocks of one
+        order = rest[np.argsort(local, kind="stable")]
+        start = np.concatenate([[0], np.cumsum(size)])
+        pos = np.full(n, -1, dtype=np.intp)
+        pos[order] = np.arange(len(rest)) - start[rl[order]]
+        off = ~on
+        B = np.zeros((nr, big, big))
+        np.add.at(B, (rl[C.row[off]], pos[C.row[off]], pos[C.col[off]]), C.data[off])
+        pad = np.arange(big)[None, :] >= size[:, None]
+        B[:, np.arange(big), np.arange(big)] += pad  # unit diagonal in the padding
+        try:
+            np.linalg.cholesky(B)
+        except np.linalg.LinAlgError:
+            return None
+        Bi = np.linalg.inv(B)
+        member = np.full((nr, big), -1, dtype=np.intp)
+        member[rl[rest], pos[rest]] = rest
+        rows = np.broadcast_to(member[:, :, None], B.shape)
+        cols = np.broadcast_to(member[:, None, :], B.shape)
+        keep = (rows >= 0) & (cols >= 0)
+        rows_out.append(rows[keep]); cols_out.append(cols[keep]); vals_out.append(Bi[keep])
+    return sp.csr_matrix((np.concatenate(vals_out), (np.concatenate(rows_out), np.concatenate(cols_out))),
+                         shape=(n, n))
 
 
 def _ldl(upper: sp.csc_matrix, n: int, cache: dict | None):
