@@ -132,7 +132,8 @@ class ExplicitReader:
             return None
         pts, faces = got
         p = self._placements.of(product)
-        return unique_rows(pts @ p[:3, :3].T + p[:3, 3]), faces
+        with np.errstate(invalid="ignore"):  # a placement the file cannot resolve: its product is left unchanged later
+            return unique_rows(pts @ p[:3, :3].T + p[:3, 3]), faces
 
 
 def unique_rows(points: np.ndarray) -> np.ndarray:
