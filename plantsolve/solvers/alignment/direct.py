@@ -128,7 +128,7 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
         phi = quaternion_to_rotvec(q[free]).ravel()
         g = hdiag * phi if use_cost else np.zeros(nv)
         x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=min(6, budget - steps),
-                                    cache=cache)
+                                    cache=cache, owner=_owners(var, free, nv))
         steps += k
         dq = rotvec_to_quaternion(x.reshape(-1, 3))
         q[free] = qmul(dq, q[free])
@@ -282,7 +282,8 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         As = (A @ Ssv).tocsr()
         del A, H  # only the scaled copies are needed from here (peak memory: never both held into the solve)
         y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
-                                    max_iter=min(8 if use_cost else 30, budget - steps), cache=cache)
+                                    max_iter=min(8 if use_cost else 30, budget - steps), cache=cache,
+                                    owner=_owners(var, ~model.fixed, nv))
         Hs = As = None  # else held while the next step builds its own
         x = sv * y
         steps += k
@@ -412,3 +413,10 @@ def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int
     st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step)
     P, D = st.geometry()
     return Pose(q=st.q, P=P, D=D, iterations=k1 + k2)
+
+
+def _owners(var: np.ndarray, free: np.ndarray, nv: int) -> np.ndarray:
+    """The component of each of the ``nv`` variables, where free component ``c``'s run starts at ``var[c]``."""
+    starts = var[free]
+    order = np.argsort(starts, kind="stable")
+    return np.flatnonzero(free)[order][np.searchsorted(starts[order], np.arange(nv), side="right") - 1]

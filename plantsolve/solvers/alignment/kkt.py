@@ -47,6 +47,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 import numpy as np
+import pymetis
 import qdldl
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
@@ -80,10 +81,12 @@ def constrained_lstsq(
     stop: float,
     max_iter: int = 12,
     cache: dict | None = None,
+    owner: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Minimise ``0.5 x'Hx + g'x`` subject to ``A x = b`` with ``residual(x) = b - A x``.
 
-    Returns ``(x, residual(x), refinement steps)``.
+    ``owner`` (optional): the component of each variable, so that the factorised complement keeps one pattern
+    while the connections stay (:func:`coupling_pattern`). Returns ``(x, residual(x), refinement steps)``.
     """
     n, m = H.shape[0], A.shape[0]
     if m == 0:
@@ -95,13 +98,13 @@ def constrained_lstsq(
             return out
     if cache is not None:
         cache.pop("lu", None)  # never hold two factorisations at once (peak memory)
-    lu = _factor(H, A, cache)
+    lu = _factor(H, A, cache, owner)
     if cache is not None:
         cache.update(lu=lu, shape=(n, m))
     return _refine(H, g, A, residual, lu, stop, max_iter, stale=False)
 
 
-def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
+def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np.ndarray | None = None):
     """Factorisation of the regularised (quasi-definite) KKT matrix: by its Schur complement when that is
     positive definite, else the sparse LU (see the module doc)."""
     m = A.shape[0]
@@ -117,8 +120,10 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None):
             # the complement's upper triangle, then delta on its diagonal: the whole complement and a shifted copy
             # of it are never held side by side (the same numbers as triu(A H^-1 A^T + delta I))
             upper = sp.triu(A @ (Hinv @ A.T), format="csc")
+            if owner is not None and cache is not None and cache.get("dissect"):
+                upper = coupling_pattern(upper, A, owner)  # one pattern for the sequence: one dissection
             upper.setdiag(upper.diagonal() + delta)
-            ldl = _ldl(upper, m, cache)
+            ldl = complement_factor(upper, m, cache)
             del upper
             if ldl is not None:
                 return SchurSolve(H, Hinv, A, ldl, delta)
@@ -244,33 +249,124 @@ def block_inverse(H: sp.spmatrix, largest: int = 16) -> sp.csr_matrix | None:
                          shape=(n, n))
 
 
-def _ldl(upper: sp.csc_matrix, n: int, cache: dict | None):
-    """QDLDL of the quasi-definite matrix given by its upper triangle, or None when a pivot has the wrong sign.
+def complement_factor(upper: sp.csc_matrix, n: int, cache: dict | None):
+    """A factorisation of the symmetric matrix given by its upper triangle, or None when it is not positive definite
+    in floating point (a pivot that is not positive).
 
-    A sequence whose LDL^T was refused twice in a row (redundant constraints that stay) stops trying it."""
+    A new pattern is factored by QDLDL (LDL^T, approximate minimum degree), whose ordering and analysis are kept
+    while the pattern is. Where that factor filled in more than :data:`FILL_FOR_DISSECTION` times the matrix, as
+    on loop grids, the rest of the sequence (``cache["dissect"]``) is held in the pattern of the couplings
+    (:func:`coupling_pattern`, which stays while the connections do), ordered once by METIS's nested dissection and
+    factored by SuperLU without pivoting: separators cost far less fill on a network that is a mesh of loops, and
+    SuperLU's supernodes use BLAS. On a tree-like network minimum degree is near the best and QDLDL the fastest,
+    and the complement keeps its own, sparser pattern. A sequence whose factorisation was refused twice
+    in a row (redundant constraints that stay) stops trying it."""
     if cache is not None and cache.get("ldl_refused", 0) >= 2:
         return None
     upper.sort_indices()
     pattern = (upper.indptr, upper.indices)
     old = cache.pop("ldl", None) if cache is not None else None
+    known = old is not None and all(np.array_equal(x, y) for x, y in zip(old[1], pattern))
+    kept = old[0] if known else None  # a QDLDL solver to refactor, or the dissection found for this pattern
+    del old
+    factor = None
+    if cache is not None and cache.get("dissect") and not isinstance(kept, np.ndarray):
+        kept = _dissection(upper)  # a sequence whose minimum-degree factor filled in: dissected from here on
     try:
-        if old is not None and all(np.array_equal(x, y) for x, y in zip(old[1], pattern)):
-            f = old[0]  # same pattern as the last Gauss-Newton step: keep its ordering, refactor the numbers
-            f.update(upper, upper=True)
+        if isinstance(kept, np.ndarray):
+            factor = DissectionFactor.of(upper, kept)
+            ok = factor.positive_definite()
         else:
-            del old
-            f = qdldl.Solver(upper, upper=True)
-        d = f.factors()[1]
+            if kept is not None:
+                kept.update(upper, upper=True)
+                factor = kept
+            else:
+                factor = qdldl.Solver(upper, upper=True)
+            low, d, _ = factor.factors()
+            # d belongs to the permuted matrix: only the counts of signs are comparable (Sylvester's law of inertia)
+            ok = bool(np.all(np.isfinite(d)) and np.all(d > 0))
+            if ok and kept is None and low.nnz > FILL_FOR_DISSECTION * upper.nnz and cache is not None:
+                cache["dissect"] = True  # the next factorisations: the couplings' pattern, nested dissection
+            if kept is None:
+                kept = factor
+            del low, d
     except (ValueError, RuntimeError):  # a zero pivot
-        d = None
-    # d belongs to the permuted matrix: only the counts of signs are comparable (Sylvester's law of inertia)
-    ok = d is not None and bool(np.all(np.isfinite(d)) and np.sum(d > 0) == n and np.sum(d < 0) == len(d) - n)
+        ok = False
     if cache is not None:
         cache["ldl_refused"] = 0 if ok else cache.get("ldl_refused", 0) + 1
         if ok:
-            cache["ldl"] = (f, pattern)
-    return f if ok else None
+            cache["ldl"] = (kept, pattern)
+    return factor if ok else None
 
+
+FILL_FOR_DISSECTION = 3.0  # factor entries per entry of the matrix's triangle above which dissection pays
+
+
+def _dissection(upper: sp.csc_matrix) -> np.ndarray:
+    """METIS's nested-dissection ordering of the graph of the symmetric matrix given by its upper triangle."""
+    graph = (upper + upper.T).tocsr()
+    graph.setdiag(0)
+    graph.eliminate_zeros()
+    perm, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr.astype(np.int32),
+                                                             graph.indices.astype(np.int32)))
+    return np.asarray(perm, dtype=np.intp)
+
+
+class DissectionFactor:
+    """Solves with SuperLU's unpivoted factors of a symmetric matrix ordered by ``perm``."""
+
+    def __init__(self, lu, perm: np.ndarray):
+        self.lu, self.perm = lu, perm
+
+    @classmethod
+    def of(cls, upper: sp.csc_matrix, perm: np.ndarray) -> DissectionFactor:
+        """The factors of the symmetric matrix given by its upper triangle, ordered by ``perm`` (row and column
+        ``perm[k]`` become ``k``; SymmetricMode and no pivoting keep that one ordering, as a Cholesky's)."""
+        full = (upper + sp.triu(upper, 1).T).tocsc()
+        ordered = full[perm][:, perm].tocsc()
+        del full
+        return cls(splu(ordered, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True}), perm)
+
+    def positive_definite(self) -> bool:
+        """No row exchanged and every pivot positive and finite (the diagonal of U)."""
+        lu = self.lu
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            return False
+        d = lu.U.diagonal()
+        return bool(np.all(np.isfinite(d)) and np.all(d > 0.0))
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        y = self.lu.solve(np.asarray(b, dtype=float)[self.perm])
+        x = np.empty_like(y)
+        x[self.perm] = y
+        return x
+
+
+def coupling_pattern(upper: sp.csc_matrix, A: sp.spmatrix, owner: np.ndarray) -> sp.csc_matrix:
+    """``upper`` (the upper triangle of ``A H^-1 A^T``, H block diagonal by component) in the pattern of the
+    couplings of constraint rows: rows i and j are coupled where both touch a variable of one component
+    (``owner``: the component of each variable). Its own pattern changes at every Gauss-Newton step (an exact zero
+    of the Jacobian on an axis-aligned run, a product that cancels: sparse products drop them); the couplings stay
+    while the connections do, so a factorisation's ordering and analysis are kept for the sequence. The same
+    numbers, explicit zeros where a coupling is zero at this step; ``upper`` as it is where an entry lies outside
+    the couplings (a cost that is not block diagonal by component)."""
+    Ar = sp.csr_matrix(A)
+    m = Ar.shape[0]
+    rows = np.repeat(np.arange(m), np.diff(Ar.indptr))
+    n_owners = int(owner.max()) + 1 if len(owner) else 0
+    touch = sp.csr_matrix((np.ones(len(rows), dtype=np.float32), (rows, owner[Ar.indices])), shape=(m, n_owners))
+    touch.data[:] = 1.0  # duplicates summed: one per component a row touches
+    coupled = sp.triu(touch @ touch.T, format="csc")
+    coupled.sort_indices()
+    keys = np.repeat(np.arange(m, dtype=np.int64), np.diff(coupled.indptr)) * m + coupled.indices
+    upper.sort_indices()
+    mine = np.repeat(np.arange(m, dtype=np.int64), np.diff(upper.indptr)) * m + upper.indices
+    at = np.searchsorted(keys, mine)
+    if len(mine) and (at.max() >= len(keys) or not np.array_equal(keys[at], mine)):
+        return upper
+    data = np.zeros(len(keys))
+    data[at] = upper.data
+    return sp.csc_matrix((data, coupled.indices, coupled.indptr), shape=(m, m))
 
 
 def _refine(H, g, A, residual, lu, stop, max_iter, stale):

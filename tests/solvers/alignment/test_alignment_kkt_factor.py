@@ -2,10 +2,17 @@
 
 import numpy as np
 import pytest
+import qdldl
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
+from scipy.sparse.linalg import splu, spsolve
 
-from plantsolve.solvers.alignment.kkt import SchurSolve, block_inverse
+from plantsolve.solvers.alignment.kkt import (
+    DissectionFactor,
+    SchurSolve,
+    block_inverse,
+    complement_factor,
+    coupling_pattern,
+)
 
 
 def test_block_inverse_of_numbers_and_blocks():
@@ -78,3 +85,76 @@ def test_a_schur_solve_that_does_not_converge_is_the_lus():
     x = sound.solve(rhs)
     assert sound.lu is None
     assert np.max(np.abs(x - lu)[:30]) < 1e-12 * np.max(np.abs(lu[:30]))
+
+
+def _laplacian_3d(side: int, shift: float) -> sp.csc_matrix:
+    """The 7-point Laplacian of a side^3 grid plus ``shift`` on the diagonal: eigenvalues ``shift`` plus three of
+    ``2 - 2 cos(k pi / (side + 1))``, so ``shift > 0`` is positive definite and ``shift = -1`` is not."""
+    one = sp.diags([-np.ones(side - 1), 2 * np.ones(side), -np.ones(side - 1)], [-1, 0, 1])
+    eye = sp.identity(side)
+    lap = sp.kron(sp.kron(one, eye), eye) + sp.kron(sp.kron(eye, one), eye) + sp.kron(sp.kron(eye, eye), one)
+    return (lap + shift * sp.identity(side**3)).tocsc()
+
+
+def _tridiagonal(n: int, shift: float) -> sp.csc_matrix:
+    """A path's Laplacian plus ``shift``: eigenvalues ``shift + 2 - 2 cos(k pi / (n + 1))``."""
+    return (sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+            + shift * sp.identity(n)).tocsc()
+
+
+@pytest.mark.parametrize("matrix, dissected", [(_laplacian_3d(12, 1e-3), True), (_tridiagonal(500, 1e-3), False)],
+                         ids=["grid", "path"])
+def test_a_filling_sequence_is_dissected_from_its_second_factorisation(matrix, dissected):
+    # QDLDL first; the 3-D grid's minimum-degree factor fills in many times the matrix, so the sequence's next
+    # factorisations are ordered by nested dissection (SuperLU), once; the path's LDL^T has no fill and stays QDLDL's
+    n = matrix.shape[0]
+    b = np.random.default_rng(0).normal(size=n)
+    x = spsolve(matrix, b)
+    atol = 1e-10 * np.max(np.abs(x))
+    cache: dict = {}
+    first = complement_factor(sp.triu(matrix, format="csc"), n, cache)
+    assert isinstance(first, qdldl.Solver)
+    np.testing.assert_allclose(first.solve(b), x, rtol=0, atol=atol)
+    assert bool(cache.get("dissect")) == dissected
+    second = complement_factor(sp.triu(matrix, format="csc"), n, cache)
+    assert isinstance(second, DissectionFactor) == dissected
+    np.testing.assert_allclose(second.solve(b), x, rtol=0, atol=atol)
+    if dissected:
+        assert np.array_equal(np.sort(second.perm), np.arange(n)) and second.lu.nnz < 2 * first.factors()[0].nnz
+        third = complement_factor(sp.triu(matrix * 1.5, format="csc"), n, cache)
+        assert third.perm is second.perm  # the same pattern: the same ordering
+        np.testing.assert_allclose(third.solve(b), x / 1.5, rtol=0, atol=atol)
+
+
+@pytest.mark.parametrize("matrix", [_laplacian_3d(12, -1.0), _tridiagonal(500, -1.0)], ids=["grid", "path"])
+def test_an_indefinite_matrix_is_refused_by_either_factorisation(matrix):
+    n = matrix.shape[0]
+    assert complement_factor(sp.triu(matrix, format="csc"), n, None) is None
+    cache: dict = {}
+    complement_factor(sp.triu(_laplacian_3d(12, 1e-3), format="csc"), 1728, cache)  # the pattern is dissected from here on
+    assert complement_factor(sp.triu(_laplacian_3d(12, -1.0), format="csc"), 1728, cache) is None
+
+
+def test_the_complement_keeps_the_couplings_pattern_when_the_jacobian_has_exact_zeros():
+    # two steps of a 3-component chain: at the second, an axis-aligned run makes Jacobian entries and a coupling
+    # exactly 0, and the product's pattern loses them; in the couplings' pattern the numbers are the same and the
+    # pattern is not
+    owner = np.repeat(np.arange(3), 3)
+    rng = np.random.default_rng(4)
+    dense = rng.normal(size=(4, 9))
+    dense[:2, 6:] = 0.0  # rows 0, 1 join components 0 and 1; rows 2, 3 components 1 and 2
+    dense[2:, :3] = 0.0
+    Hinv = sp.block_diag([np.eye(3)] * 3, format="csr")
+    patterns = []
+    for step in range(2):
+        A = dense.copy()
+        if step:  # an axis-aligned step: rows 1 and 2 act on component 1 along perpendicular axes, their coupling is 0
+            A[1, 3:6] = [1.0, 0.0, 0.0]
+            A[2, 3:6] = [0.0, 1.0, 0.0]
+        A = sp.csr_matrix(A)
+        upper = sp.triu(A @ (Hinv @ A.T), format="csc")
+        kept = coupling_pattern(upper.copy(), A, owner)
+        np.testing.assert_array_equal(kept.toarray(), upper.toarray())
+        patterns.append((kept.indptr.copy(), kept.indices.copy(), upper.nnz))
+    assert patterns[0][2] != patterns[1][2]  # the product's own pattern changed
+    assert all(np.array_equal(p, q) for p, q in zip(patterns[0][:2], patterns[1][:2]))
