@@ -237,16 +237,18 @@ def _family_lines(f: list[_Arcs]) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
             np.array([e.n2 for e in f])[:, :, None], np.array([e.phi for e in f])[:, None, None])
 
 
-def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge | None]:
+def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64) -> list[Edge | None]:
     """The best arc (least squared error) of each family, or None: a t1 grid of ``grid`` points zoomed in three
     times around the best (or least violating) sample, all families at once (the arc search of one beam state
     over every j it reaches). Element for element the operations of a search of one family, and the sums of
-    squares over exactly its chain, so the arcs are those a search of each alone finds."""
+    squares over exactly its chain, so the arcs are those a search of each alone finds. ``r_min``: the least
+    bend radius, of all families or of each."""
     out: list[Edge | None] = [None] * len(families)
+    r_mins = [float(r_min)] * len(families) if np.isscalar(r_min) else [float(r) for r in r_min]
     idx = [k for k, f in enumerate(families) if f.hi > f.lo]
     for k, f in enumerate(families):
         if not f.hi > f.lo:  # one start only
-            out[k] = _best_arc_alone(f, r_min)
+            out[k] = _best_arc_alone(f, r_mins[k])
     if not idx:
         return out
     f = [families[k] for k in idx]
@@ -264,6 +266,7 @@ def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge 
     hi = np.array([e.hi for e in f])
     alpha = np.array([e.alpha for e in f])[:, None]
     beta = np.array([e.beta for e in f])[:, None]
+    r_least = np.array([r_mins[k] for k in idx])[:, None] * (1 - 1e-9)
     rows = np.arange(J)
     t_grid = _linspaces(lo, hi, grid)
     best_cost = np.full(J, np.inf)
@@ -273,7 +276,7 @@ def best_arcs(families: list[_Arcs], r_min: float, grid: int = 64) -> list[Edge 
         R = alpha + beta * t_grid
         d, t2 = _dist_to_arclines(lines, q, t_grid, R, along2, off2)
         viol = np.max(d - epsk[:, None, :], axis=2)
-        valid = (viol <= 1e-12) & (R >= r_min * (1 - 1e-9))
+        valid = (viol <= 1e-12) & (R >= r_least)
         dd = d * d
         sums = np.empty(valid.shape)
         for r, K in enumerate(sizes):
@@ -396,6 +399,40 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
     prefix that is optimal so far can be a dead end later (e.g. two small bends merged into
     one arc within ε leave a tangent a few degrees off), so up to ``beam`` states per vertex
     are kept, ordered by (arc count, squared error); with beam = 1 this is exactly Alg. 1."""
+    return fit_arclines([(poly, eps, r_min, beam)])[0]
+
+
+def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[TubeModel | None]:
+    """:func:`fit_arcline` of every (polygon, ε, r_min, beam) in ``searches``, run in lockstep: the arcs that
+    the current states of all of them ask for are searched in one :func:`best_arcs` call. That search is
+    element for element the search of each family alone, so every result is the one its own run gives;
+    the batch only spreads numpy's per-call overhead (a state asks for ~3 arcs of ~8 chain points)."""
+    runs = [_search_states(*s) for s in searches]
+    out: list[TubeModel | None] = [None] * len(runs)
+    asks: dict[int, list[_Arcs]] = {}
+    answers: dict[int, list[Edge | None] | None] = {k: None for k in range(len(runs))}
+    while answers:
+        for k, edges in answers.items():
+            try:
+                asks[k] = runs[k].send(edges)
+            except StopIteration as done:
+                out[k] = done.value
+        answers = {}
+        if not asks:
+            break
+        fams = [f for k in asks for f in asks[k]]
+        edges = best_arcs(fams, [r for k in asks for r in [searches[k][2]] * len(asks[k])])
+        at = 0
+        for k, fs in asks.items():
+            answers[k] = edges[at:at + len(fs)]
+            at += len(fs)
+        asks = {}
+    return out
+
+
+def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
+    """Algorithm 1 as a generator: it yields the arc families one state needs searched (every edge out of it
+    that passes the plane test) and is sent their best arcs (:func:`best_arcs`); it returns the model."""
     n = len(poly)
     if n < 2:
         return None
@@ -435,8 +472,11 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
                                    st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1], eps, r_min, None)
                 if f is not None:
                     reached.append((j, f))
-            # the arcs of all of them searched at once
-            for (j, _), e in zip(reached, best_arcs([f for _, f in reached], r_min) if reached else []):
+            if not reached:
+                continue
+            # the arcs of all of them searched at once (with those other runs ask for)
+            edges = yield [f for _, f in reached]
+            for (j, _), e in zip(reached, edges):
                 if e is None:
                     continue
                 cand = _State(st.d + 1, st.sse + e.cost, i, si, e.out_point, e.out_dir, e.t2, e)

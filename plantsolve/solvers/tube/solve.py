@@ -196,15 +196,17 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     eps, poly = pc.eps, pc.poly
     inits: list[tuple[float, TubeModel]] = []
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
-    for f in factors:
-        e = eps * f
-        # at ε itself the polygon simplified is the stage's own (the same call)
-        simp_e = pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * e)
-        mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp)
-        if mdl is None:  # every kept prefix ran into a dead end: search wider before giving up ε
-            mdl = arcline.fit_arcline(simp_e, e, 0.5 * rp, beam=8)
+    # at ε itself the polygon simplified is the stage's own (the same call)
+    simps = [pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * eps * f) for f in factors]
+    # the searches of all tolerances at once (each gives what it gives alone)
+    mdls = arcline.fit_arclines([(simp, eps * f, 0.5 * rp, 3) for simp, f in zip(simps, factors)])
+    dead = [k for k, mdl in enumerate(mdls) if mdl is None]
+    # every kept prefix ran into a dead end: search wider before giving up ε
+    for k, mdl in zip(dead, arcline.fit_arclines([(simps[k], eps * factors[k], 0.5 * rp, 8) for k in dead])):
+        mdls[k] = mdl
+    for f, mdl in zip(factors, mdls):
         if mdl is not None and all(not _same_shape(mdl, m0) for _, m0 in inits):
-            inits.append((e, mdl))
+            inits.append((eps * f, mdl))
     eps_used = eps * factors[-1]
     while not inits and eps_used < 40 * eps:
         eps_used *= 1.5
