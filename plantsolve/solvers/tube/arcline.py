@@ -214,20 +214,29 @@ def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarr
     """2D distances of chain points to the left-turning curves of the arc families ``f`` (ray along +x ending at
     (t1, 0), arc about C = (t1, R) by phi, ray along u2 from its end T2), all families at once: chain points q
     (J, K, 2) (padded), arc starts t1 and radii R (J, G), the chain points' coordinates along l_j and distances
-    from it (J, K). Returns (J, G, K) distances and (J, G) arc ends on l_j; the same operations on every element."""
+    from it (J, K). Returns (J, K, G) distances (a chain point's row over the grid is contiguous, so reductions
+    over the chain are row operations) and (J, G) arc ends on l_j; the same operations on every element.
+    Norms are square roots of sums of squares: np.hypot's overflow-safe loop costs 6x as much, and these
+    coordinates (relative to l_i, within the 1e12 coordinate bound) square without overflow."""
     a2, u2, n2, phi = f if isinstance(f, tuple) else _family_lines(f)
     T2x, T2y = t1 - R * n2[:, 0], R - R * n2[:, 1]
     t2 = (T2x - a2[:, 0]) * u2[:, 0] + (T2y - a2[:, 1]) * u2[:, 1]
-    qx, qy = q[:, None, :, 0], q[:, None, :, 1]
-    dx1 = qx - t1[:, :, None]
-    dT1 = np.hypot(dx1, qy)
-    d1 = np.where(qx <= t1[:, :, None], np.abs(qy), dT1)
-    dT2 = np.hypot(qx - T2x[:, :, None], qy - T2y[:, :, None])
-    d3 = np.where(along2[:, None, :] >= t2[:, :, None], off2[:, None, :], dT2)
-    vy = qy - R[:, :, None]
-    th = np.mod(np.arctan2(dx1, -vy), 2 * np.pi)
-    rho = np.hypot(dx1, vy)
-    d2 = np.where(th <= phi, np.abs(rho - R[:, :, None]), np.minimum(dT1, dT2))
+    qx, qy = q[:, :, 0, None], q[:, :, 1, None]
+    t1_, R_ = t1[:, None, :], R[:, None, :]
+    dx1 = qx - t1_
+    dx1sq = dx1 * dx1
+    qysq = qy * qy
+    dT1 = np.sqrt(dx1sq + qysq)
+    d1 = np.where(qx <= t1_, np.abs(qy), dT1)
+    ex, ey = qx - T2x[:, None, :], qy - T2y[:, None, :]
+    dT2 = np.sqrt(ex * ex + ey * ey)
+    d3 = np.where(along2[:, :, None] >= t2[:, None, :], off2[:, :, None], dT2)
+    vy = qy - R_
+    # angle from the arc's start direction (0, -1) counter-clockwise, in [0, 2π)
+    th = np.arctan2(dx1, -vy)
+    th[th < 0] += 2 * np.pi
+    rho = np.sqrt(dx1sq + vy * vy)
+    d2 = np.where(th <= phi, np.abs(rho - R_), np.minimum(dT1, dT2))
     return np.minimum(np.minimum(d1, d2), d3), t2
 
 
@@ -262,6 +271,7 @@ def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64)
     for r, (e, K) in enumerate(zip(f, sizes)):
         q[r, :K], q[r, K:] = e.q, e.q[0]
         epsk[r, :K], along2[r, :K], off2[r, :K] = e.epsk, e.along2, e.off2
+    inside = (np.arange(Kmax)[None, :] < np.array(sizes)[:, None])[:, :, None].astype(float)
     lo = np.array([e.lo for e in f])
     hi = np.array([e.hi for e in f])
     alpha = np.array([e.alpha for e in f])[:, None]
@@ -275,13 +285,11 @@ def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64)
     for _ in range(4):
         R = alpha + beta * t_grid
         d, t2 = _dist_to_arclines(lines, q, t_grid, R, along2, off2)
-        viol = np.max(d - epsk[:, None, :], axis=2)
+        viol = np.max(d - epsk[:, :, None], axis=1)
         valid = (viol <= 1e-12) & (R >= r_least)
         dd = d * d
-        sums = np.empty(valid.shape)
-        for r, K in enumerate(sizes):
-            sums[r] = np.ascontiguousarray(dd[r, :, :K]).sum(1)
-        cost = np.where(valid, sums, np.inf)
+        dd *= inside  # padding adds exact zeros to the row-by-row sums over each chain
+        cost = np.where(valid, np.add.reduce(dd, axis=1), np.inf)
         some = valid.any(1)
         # the cheapest valid start, or the least violating one: valid sets can be narrow
         g = np.where(some, np.argmin(cost, 1), np.argmin(viol, 1))
@@ -317,10 +325,10 @@ def _best_arc_alone(f: _Arcs, r_min: float) -> Edge | None:
     t_grid = np.array([f.lo])
     R = f.alpha + f.beta * t_grid
     d, t2 = _dist_to_arclines([f], f.q[None], t_grid[None], R[None], f.along2[None], f.off2[None])
-    d, t2 = d[0], t2[0]
-    viol = np.max(d - f.epsk[None], axis=1)
-    if viol[0] <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
-        return _edge(f, (float((d * d).sum(1)[0]), t_grid[0], R[0], t2[0]))
+    d, t2 = d[0, :, 0], t2[0]
+    if np.max(d - f.epsk) <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
+        # the chain's squares summed in order, as the batched search's row-by-row sums do
+        return _edge(f, (float(np.cumsum(d * d)[-1]), t_grid[0], R[0], t2[0]))
     return None
 
 
