@@ -70,6 +70,8 @@ def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
     if not len(everything) or not roots:
         return np.zeros(0, dtype=np.int64), everything
     size = int(everything.max()) + 1
+    if sparse_ids(size, len(everything)):
+        return _going_sparse(model, roots, styled_by, known, everything)
     detached = np.zeros(size, dtype=bool)
     held = closure(model, roots, known)
     detached[held[held < size]] = True
@@ -94,6 +96,47 @@ def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
         live[kept_styles] = True
         _spread(model, kept_styles, live)
     return everything[~live[everything]], everything
+
+
+def sparse_ids(size: int, count: int) -> bool:
+    """Whether masks as long as the largest instance number (``size``) would be mostly empty: a model of
+    ``count`` instances numbered up into the billions (a hostile file, or an exporter's odd numbering) would
+    otherwise take a gigabyte per mask."""
+    return size > 8 * count + (1 << 24)
+
+
+def _going_sparse(model: ifcopenshell.file, roots, styled_by: dict[int, list], known: dict[int, np.ndarray] | None,
+                  everything: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`going` for sparse instance numbers (:func:`sparse_ids`): the same sets, held as Python sets of
+    the numbers instead of masks indexed by them; what stays is found from the detached side."""
+    numbers = set(everything.tolist())
+    detached = {i for i in closure(model, roots, known).tolist() if i in numbers}
+    styled = [st for item, sts in styled_by.items() if item in detached for st in sts]
+    if styled:
+        detached.update(closure(model, styled).tolist())
+    inside = [i for i in everything.tolist() if i in detached]
+    only_within = set(model._ids_referenced_only_within(inside))
+    dead = set(detached)
+    entries = [i for i in inside if i not in only_within]
+    dead.difference_update(entries)
+    _spread_sparse(model, entries, dead)
+    kept_styles = [st.id() for st in styled if st.id() in dead and st.Item is not None and st.Item.id() not in dead]
+    if kept_styles:  # an item that stays keeps its style
+        dead.difference_update(kept_styles)
+        _spread_sparse(model, kept_styles, dead)
+    return everything[np.isin(everything, np.fromiter(dead, dtype=np.int64, count=len(dead)))], everything
+
+
+def _spread_sparse(model: ifcopenshell.file, starts, dead: set[int]) -> None:
+    """:func:`_spread` on the set of what is not live: everything ``starts`` reference leaves ``dead``."""
+    stack = [int(i) for i in starts]
+    by_id, traverse = model.by_id, model.traverse
+    while stack:
+        for child in traverse(by_id(stack.pop()), max_levels=1)[1:]:
+            c = child.id()
+            if c in dead:
+                dead.discard(c)
+                stack.append(c)
 
 
 def remove_batch(model: ifcopenshell.file, instances) -> None:

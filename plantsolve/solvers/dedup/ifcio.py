@@ -13,6 +13,7 @@ from plantsolve.solvers.base import reject
 from plantsolve.solvers.step_file import where_cut
 
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
+MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 
 
 def check_header(head: bytes, tail: bytes) -> None:
@@ -36,6 +37,13 @@ def open_path(path: str) -> ifcopenshell.file:
         if "schema" in message.lower():
             raise reject(f"unknown or unsupported IFC schema: {message}") from None
         raise reject(f"unreadable IFC file: {message}") from None
+    numbers = model.entity_names()
+    largest = max(numbers, default=0)
+    # the optimization numbers what it adds after the largest instance: at most a few per instance there is
+    if largest + 2 * len(numbers) + 1000 > MAX_INSTANCE_NUMBER:
+        raise reject(f"instance #{largest}: IfcOpenShell addresses instance numbers up to #{MAX_INSTANCE_NUMBER:,}, "
+                     "and the optimized model numbers what it adds after the largest; renumber the file's instances "
+                     "from #1, as any IFC export or STEP tool does")
     if model.schema not in ("IFC2X3", "IFC4") and not model.schema.startswith("IFC4X3"):
         raise reject(f"unsupported IFC schema {model.schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
     if not model.by_type("IfcProject"):

@@ -15,6 +15,7 @@ from scipy.spatial import cKDTree
 from plantsolve.solvers.dedup import changes as diffing
 from plantsolve.solvers.dedup import ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
+from plantsolve.solvers.dedup.compaction import sparse_ids
 from plantsolve.solvers.dedup.grouping import canonical
 from plantsolve.solvers.dedup.matching import one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
@@ -37,12 +38,15 @@ def entity_counts(model: ifcopenshell.file, walked: dict[int, np.ndarray] | None
     if walked and walked_entities is not None and walked.keys() == walked_entities.keys():
         everything = np.fromiter(model.entity_names(), dtype=np.int64)
         ids = np.concatenate(list(walked.values()))
-        inside = np.zeros(int(max(everything.max(initial=0), ids.max(initial=0))) + 1, dtype=bool)
-        inside[ids] = True
-        if int(inside.sum()) == len(ids) and inside[everything].sum() == len(ids):  # disjoint, all in the model
-            for entities in walked_entities.values():
-                counts.update(entities)
-            rest = everything[~inside[everything]].tolist()
+        size = int(max(everything.max(initial=0), ids.max(initial=0))) + 1
+        # instance numbers far sparser than the instances: a mask as long as the largest is not bounded
+        if not sparse_ids(size, len(everything)):
+            inside = np.zeros(size, dtype=bool)
+            inside[ids] = True
+            if int(inside.sum()) == len(ids) and inside[everything].sum() == len(ids):  # disjoint, all in the model
+                for entities in walked_entities.values():
+                    counts.update(entities)
+                rest = everything[~inside[everything]].tolist()
     if rest is None:
         counts.update(inst.is_a() for inst in model)
     else:

@@ -124,3 +124,42 @@ def test_a_geometry_naming_an_entity_the_file_lacks_leaves_its_products_unchange
     result = SPEC.solve(_input("zoo.ifc", damaged), lambda *a, **k: None).result
     codes = {w.code: w for w in result.report.warnings}
     assert codes["left_unchanged"].details["count"] >= 1 and result.products_total > 0
+
+
+def _renumbered(plain: bytes, number: int) -> bytes:
+    """The file with its middle instance renumbered to ``number`` (its definition and every reference)."""
+    import re
+
+    ids = [int(m.group(1)) for m in re.finditer(rb"^#(\d+)=", plain, re.M)]
+    return re.sub(rb"#%d\b" % ids[len(ids) // 2], b"#%d" % number, plain)
+
+
+def test_an_instance_numbered_in_the_billions_costs_no_mask_that_long():
+    """One instance of the example tunnel numbered #2,000,000,000: masks indexed by instance number took 2 GB
+    (and #2,147,483,647 then failed the job at stage solver, IfcOpenShell's by_id overflowing). Now it is optimized
+    like the file numbered from 1, in bounded memory."""
+    import tracemalloc
+    from pathlib import Path
+
+    plain = (Path(__file__).parents[3] / "examples" / "dedup" / "tunnel_3rings.ifc").read_bytes()
+    whole = SPEC.solve(_input("t.ifc", plain), lambda *a, **k: None).result
+    tracemalloc.start()
+    try:
+        sparse = SPEC.solve(_input("t.ifc", _renumbered(plain, 2_000_000_000)), lambda *a, **k: None).result
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 100 * 2**20, peak
+    assert (sparse.products_shared, sparse.products_total) == (whole.products_shared, whole.products_total) != (0, 0)
+    assert sparse.verification.semantic_counts_equal and sparse.verification.schema_valid
+    assert sparse.optimized_bytes < sparse.original_bytes
+
+
+def test_instance_numbers_beyond_what_ifcopenshell_addresses_are_refused_naming_the_instance():
+    from pathlib import Path
+
+    plain = (Path(__file__).parents[3] / "examples" / "dedup" / "tunnel_3rings.ifc").read_bytes()
+    with pytest.raises(InputRejected) as refused:
+        SPEC.solve(_input("t.ifc", _renumbered(plain, 2_147_483_646)), lambda *a, **k: None)
+    (error,) = refused.value.errors
+    assert error.loc == ("file",) and "#2147483646" in error.msg
