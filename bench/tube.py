@@ -250,12 +250,14 @@ def _case(family: str, seed: int):
 
 
 def solve_cases(path: str) -> None:
-    """Child of --before-after: solve every case in the .npz at ``path`` with the solver on the path, one JSON
-    line per case (bend count, worst radius and angle errors against the truth, CPU seconds)."""
+    """Child of --before-after: solves the cases of the .npz at ``path`` whose names it reads on stdin, one per
+    line, with the solver on the path; one JSON line per case (bend count, worst radius and angle errors against
+    the truth, CPU seconds), and on end of input its peak RSS."""
     from plantsolve.solvers.tube.synthetic import make_model
 
     data = np.load(path)
-    for name in sorted({k.rsplit("/", 1)[0] for k in data.files}):
+    for line in sys.stdin:
+        name = line.strip()
         rows, pts = data[name + "/rows"], data[name + "/pts"]
         truth = make_model(rows, float(data[name + "/rp"]), start=data[name + "/start"], frame=data[name + "/frame"])
         t0 = time.process_time()
@@ -279,10 +281,10 @@ def solve_cases(path: str) -> None:
     print(json.dumps({"peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}), flush=True)
 
 
-def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
+def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: int = 1) -> None:
     """Every family (the random tubes too), n_tubes seeds each (``n_random`` random tubes when given), solved by
-    the solver of git revision ``ref`` and by this tree's, each in a fresh process on the same saved samples,
-    one after the other."""
+    the solver of git revision ``ref`` and by this tree's, each side in its own process on the same saved
+    samples, case by case in turn, each case ``repeat`` times (the least CPU time kept)."""
     import tempfile
 
     repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -303,18 +305,34 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None) -> None:
         os.makedirs(before_code)
         archive = subprocess.run(["git", "-C", repo, "archive", ref, "plantsolve"], capture_output=True, check=True)
         subprocess.run(["tar", "-x", "-C", before_code], input=archive.stdout, check=True)
-        sides, peak = {}, {}
-        for side, code in ((f"before ({ref})", before_code), ("after (this tree)", "")):
-            env = {**os.environ, "TUBE_BENCH_CODE": code}
-            out = subprocess.run([sys.executable, __file__, "--solve-cases", cases], capture_output=True, text=True,
-                                 check=True, env=env)
-            rows = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
-            sides[side] = [r for r in rows if "case" in r]
-            peak[side] = max((r["peak_rss_mb"] for r in rows if "peak_rss_mb" in r), default=float("nan"))
+        # both solvers in their own process, fed the same case in turn (``repeat`` rounds, the least CPU time of
+        # each case kept): drift in the machine's load then hits both sides alike
+        labels = (f"before ({ref})", "after (this tree)")
+        procs = [subprocess.Popen([sys.executable, __file__, "--solve-cases", cases], stdin=subprocess.PIPE,
+                                  stdout=subprocess.PIPE, text=True, env={**os.environ, "TUBE_BENCH_CODE": code})
+                 for code in (before_code, "")]
+        sides: dict[str, list[dict]] = {label: [] for label in labels}
+        for name in sorted(truth_n):
+            for side in range(repeat):
+                for label, proc in zip(labels if side % 2 == 0 else labels[::-1],
+                                       procs if side % 2 == 0 else procs[::-1]):
+                    proc.stdin.write(name + "\n")
+                    proc.stdin.flush()
+                    row = json.loads(proc.stdout.readline())
+                    kept = sides[label]
+                    if kept and kept[-1]["case"] == name:
+                        kept[-1]["cpu"] = min(kept[-1]["cpu"], row["cpu"])
+                    else:
+                        kept.append(row)
+        peak = {}
+        for label, proc in zip(labels, procs):
+            out, _ = proc.communicate("")
+            peak[label] = max((json.loads(x)["peak_rss_mb"] for x in out.splitlines() if "peak_rss_mb" in x),
+                              default=float("nan"))
     print(f"before / after: {n_tubes} tubes per family ({n_random if n_random is not None else n_tubes} random), "
-          "6000 points; CPU s = time.process_time() of the solve "
-          "in a fresh process per side; radius error = worst |R - R_true| / R_true over the tubes with the right "
-          "bend count")
+          "6000 points; CPU s = time.process_time() of the solve in one process per side, the sides solving each "
+          f"case in turn, least of {repeat} run(s); radius error = worst |R - R_true| / R_true over the tubes with "
+          "the right bend count")
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
           "| worst angle err | worst end straight err (% r) | CPU s median / worst |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
@@ -418,6 +436,8 @@ def main():
                     help="every family, N tubes each, with the solver of --ref and this tree's (same samples)")
     ap.add_argument("--ref", default="main", help="git revision of the 'before' solver (default main)")
     ap.add_argument("--random-tubes", type=int, help="--before-after: this many random tubes (default: N)")
+    ap.add_argument("--repeat", type=int, default=1, help="--before-after: solve every case this many times a side "
+                    "(the least CPU time is kept)")
     ap.add_argument("--solve-cases", help=argparse.SUPPRESS)
     ap.add_argument("--scale", help="comma-separated point counts (1e6,3e6,1e7): large scans, --ref's solver and "
                     "this tree's")
@@ -434,7 +454,7 @@ def main():
         solve_cases(a.solve_cases)
         return
     if a.before_after:
-        before_after(a.before_after, a.ref, a.random_tubes)
+        before_after(a.before_after, a.ref, a.random_tubes, a.repeat)
         return
     if a.families:
         families(a.families, tuple(a.radius_models.split(",")))
