@@ -476,6 +476,13 @@ def parse_stl(content: bytes) -> dict:
         triangles = triangles[good]
     if len(triangles) == 0:
         raise reject(f"no usable triangle in the STL file (non-finite, beyond {MAX_COORDINATE:g} or repeated vertices)")
+    cut = bool(warnings) and not ascii_like
+    if cut and 2 * len(triangles) < len(good):
+        # a size that disagrees with the count and mostly unreadable triangles: bytes no STL writer wrote
+        # (random data, another format renamed); reading the few floats that pass would report garbage as a zone
+        raise reject(f"not a binary STL: it says {declared} triangles but holds {len(good)} whole ones, and "
+                     f"{int((~good).sum())} of those have non-finite coordinates, coordinates beyond "
+                     f"{MAX_COORDINATE:g} or repeated corners")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
     # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them

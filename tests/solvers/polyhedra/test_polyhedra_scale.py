@@ -157,12 +157,7 @@ def test_a_binary_stl_facet_beyond_the_coordinate_bound_is_skipped_not_the_whole
     request = parse_upload(StoredInput.from_bytes("ring.stl", bytes(content)), None)
     assert request.mesh.triangles.shape == (len(triangles) - 1, 3)
     assert request.source["skipped"] == [{"object": "facet 5", "reason": "non-finite, beyond 1e+12 or repeated vertex"}]
-    # random bytes read as a cut binary STL: each of its 398 whole facets is read or skipped with its reason
-    noise = np.random.default_rng(3).integers(0, 256, 20_000, dtype=np.uint8).tobytes()
-    read = parse_upload(StoredInput.from_bytes("noise.stl", noise), None)
-    assert len(read.mesh.triangles) + read.source["skipped_count"] == (20_000 - 84) // 50
-    assert read.source["warnings"][0]["code"] == "truncated_file"
-    assert np.all(np.abs(read.mesh.vertices) <= 1e12)
+    # random bytes (a cut binary STL whose triangles are mostly unreadable): test_polyhedra_uploads refuses them
 
 
 def test_a_zero_area_stl_facet_with_a_repeated_corner_is_skipped_and_the_mesh_stays_closed():

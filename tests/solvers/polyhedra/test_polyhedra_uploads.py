@@ -225,6 +225,18 @@ def test_binary_stl_cut_short_reads_its_whole_triangles_and_warns():
         upload("cut.stl", content[:84 + 30])
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_random_bytes_named_stl_are_refused_not_read_as_a_cut_binary_stl(seed):
+    """Random bytes read as a binary STL cut short (their count field says billions): the 2 % of triangles whose
+    garbage floats passed were reported as an open zone of 1e23 m³. A cut file whose triangles are mostly
+    unreadable is refused; a cut real file still reads (the test above)."""
+    import numpy as np
+
+    content = np.random.default_rng(seed).bytes(20_000)
+    with pytest.raises(InputRejected, match="not a binary STL"):
+        upload("noise.stl", content)
+
+
 def test_obj_cut_inside_a_line_that_still_reads_warns_that_the_file_was_cut():
     """Revit's room cut inside a quad's face line ('f 1//1 3//1 4//1' of 'f 1//1 3//1 4//1 2//1') read a triangle,
     and a SketchUp file cut in a 'vn' line lost its later faces: both without a word before."""
