@@ -21,6 +21,7 @@ class ReadLog:
         self.count = 0
         self.reasons: Counter[str] = Counter()
         self.truncation: Diagnostic | None = None
+        self.notes: list[Diagnostic] = []
 
     def skip(self, line: int | None, reason: str) -> None:
         """One record left out; ``line`` is its 1-based line number (None in binary files)."""
@@ -34,13 +35,17 @@ class ReadLog:
         self.truncation = Diagnostic(code="file_truncated", message=f"{self.fmt.upper()} file: {message}",
                                      details=details)
 
+    def warn(self, note: Diagnostic) -> None:
+        """Something about the file as a whole that its reader noticed (read anyway)."""
+        self.notes.append(note)
+
     def summary(self) -> str:
         """What was left out, for the refusal of a file with nothing usable left: '' when nothing was."""
         parts = [w.message for w in self.warnings()]
         return f" ({' '.join(parts)})" if parts else ""
 
     def warnings(self) -> list[Diagnostic]:
-        out = [self.truncation] if self.truncation else []
+        out = ([self.truncation] if self.truncation else []) + self.notes
         if self.count:
             where = ""
             if self.lines:

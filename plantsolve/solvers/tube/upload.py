@@ -124,21 +124,60 @@ def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
     return _mesh_points(data.vertices, data.triangles, "ply", log)
 
 
-def _read_las(content: bytes) -> tuple[np.ndarray, CrsUnit | str | None]:
+def _read_las(content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
     """LAS/LAZ point clouds (laspy; LAZ through its lazrs backend): scaled x, y, z, and the unit the file's CRS
-    states (a message instead when it states one that cannot be read)."""
+    states (a message instead when it states one that cannot be read). An uncompressed file cut short gives its
+    whole point records with a warning; points outside the bounds the header states are reported (a damaged
+    scale or offset misplaces every point, silently otherwise)."""
     import laspy
 
     try:
-        las = laspy.read(io.BytesIO(content))
+        with laspy.open(io.BytesIO(content)) as reader:
+            header = reader.header
+            count = header.point_count
+            if not header.are_points_compressed:
+                held = max(len(content) - header.offset_to_point_data, 0) // header.point_format.size
+                if held < count:
+                    log.truncate(f"the header says {count} points but the file holds {held} whole ones (the file "
+                                 "was cut?); those were read.", declared=count, read=held)
+                    count = held
+            las = reader.read_points(count) if count else None
     except Exception as exc:  # laspy raises its own and OS errors on corrupt files
         raise reject(f"unreadable LAS/LAZ file: {exc}") from None
+    if las is None or len(las) == 0:
+        raise reject("the LAS/LAZ file holds no whole point record" + log.summary())
     try:
-        unit = las_crs_unit(las)
+        unit = las_crs_unit(laspy.LasData(header, las))
     except (ValueError, IndexError) as exc:
         unit = f"the file's CRS record cannot be read ({exc})"
     pts = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
+    _check_las_bounds(pts, header, log)
     return pts, unit
+
+
+def _check_las_bounds(pts: np.ndarray, header, log: ReadLog) -> None:
+    """A warning when the points' extent leaves the box the header states by more than a few scale steps: the
+    writer computed that box from the same records, so a damaged scale or offset shows up here."""
+    lo, hi = np.asarray(header.mins, dtype=float), np.asarray(header.maxs, dtype=float)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or (lo == 0).all() and (hi == 0).all():
+        return  # a writer that left the box unset
+    slack = 4 * np.abs(np.asarray(header.scales, dtype=float)) + 1e-9 * np.maximum(np.abs(lo), np.abs(hi))
+    with np.errstate(invalid="ignore"):
+        got_lo, got_hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
+    off = (got_lo < lo - slack) | (got_hi > hi + slack)
+    scales, offsets = np.asarray(header.scales, dtype=float), np.asarray(header.offsets, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):  # some writers store the box in record units
+        raw_lo, raw_hi = (got_lo - offsets) / scales, (got_hi - offsets) / scales
+    in_record_units = np.isclose(np.minimum(raw_lo, raw_hi), lo, rtol=1e-9, atol=4) & \
+        np.isclose(np.maximum(raw_lo, raw_hi), hi, rtol=1e-9, atol=4)
+    if off.any() and not in_record_units.all():
+        axes = ", ".join(f"{a}: points {got_lo[i]:.6g} to {got_hi[i]:.6g}, header {lo[i]:.6g} to {hi[i]:.6g}"
+                         for i, a in enumerate("xyz") if off[i])
+        log.warn(Diagnostic(code="header_bounds_disagree", message=(
+            f"LAS file: the points leave the box its header states ({axes}): either that box was written wrongly "
+            "or a damaged scale or offset misplaces every point. Check the file against its source."),
+            details={"axes": ["xyz"[i] for i in np.flatnonzero(off)], "header_mins": lo.tolist(),
+                     "header_maxs": hi.tolist(), "point_mins": got_lo.tolist(), "point_maxs": got_hi.tolist()}))
 
 
 def _read_e57(source: StoredInput) -> np.ndarray:
@@ -180,7 +219,7 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
         return _read_e57(source), E57_METRES
     content = source.read()
     if ext in (".las", ".laz"):
-        return _read_las(content)
+        return _read_las(content, log)
     if ext == ".ply":
         return _read_ply(content, log), None
     if ext == ".stl":

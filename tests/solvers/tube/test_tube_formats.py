@@ -65,6 +65,45 @@ def test_las_point_cloud_with_declared_units():
     assert "file_units" in str(e.value)
 
 
+def _las_bytes(pts: np.ndarray) -> bytes:
+    import laspy
+
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = np.array([1e-6, 1e-6, 1e-6])
+    header.offsets = pts.min(axis=0)
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+    buf = io.BytesIO()
+    las.write(buf)
+    return buf.getvalue()
+
+
+def test_a_las_file_cut_short_reads_its_whole_points_and_says_so():
+    """A LAS cut in transfer was refused as 'buffer size must be a multiple of element size'; it now reads as far
+    as its whole point records go, like the other scan formats, with the declared and read counts."""
+    pts = cloud() / 1000.0
+    data = _las_bytes(pts)
+    cut = data[:len(data) - 34 * 1000 - 17]  # point format 3: 34 bytes a record; the last one cut inside
+    req = parse_upload(StoredInput.from_bytes("scan.las", cut), {"file_units": "m", "pipe_radius": 4.0})
+    assert np.allclose(TubeScan(req).points, pts[:len(pts) - 1001] * 1000.0, atol=2e-3)
+    (warning,) = [w for w in req.source.warnings if w.code == "file_truncated"]
+    assert warning.details == {"declared": len(pts), "read": len(pts) - 1001} and req.source.truncated
+
+
+def test_a_las_file_whose_points_leave_its_header_box_says_so():
+    """A damaged x scale (1000 times the written one) misplaced every point silently; the header's box, which the
+    writer computed from the same records, now tells. An intact file has no such warning."""
+    pts = cloud() / 1000.0
+    data = _las_bytes(pts)
+    intact = parse_upload(StoredInput.from_bytes("scan.las", data), {"file_units": "m"})
+    assert not [w for w in intact.source.warnings if w.code == "header_bounds_disagree"]
+    damaged = bytearray(data)
+    damaged[131:139] = np.float64(1e-3).tobytes()  # the x scale factor of a LAS 1.2 header
+    req = parse_upload(StoredInput.from_bytes("scan.las", bytes(damaged)), {"file_units": "m"})
+    (warning,) = [w for w in req.source.warnings if w.code == "header_bounds_disagree"]
+    assert warning.details["axes"] == ["x"] and "x: points" in warning.message
+
+
 def test_e57_scan_in_metres_by_its_standard():
     import pye57
 
