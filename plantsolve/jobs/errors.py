@@ -13,7 +13,7 @@ from pydantic import ValidationError
 from sqlalchemy import exc as sqlalchemy_exc
 
 from plantsolve.schemas.jobs import Problem
-from plantsolve.solvers.base import InputRejected
+from plantsolve.solvers.base import DuplicateKey, InputRejected, loads_json
 
 TYPE_BASE = "https://plantsolve.dev/problems/"
 
@@ -120,7 +120,10 @@ MAX_JSON_DEPTH = 200
 def loads_bounded(data: bytes | str, loc: Sequence[str | int], what: str) -> Any:
     """json.loads with a nesting limit: deeper documents (or unreadable ones) are a 422 naming ``loc``."""
     try:
-        value = json.loads(data)
+        value = loads_json(data)
+    except DuplicateKey as error:
+        raise Unprocessable(f"{what} names a key twice: {error}",
+                            errors=[field_problem(loc, str(error), "json_duplicate_key")]) from None
     except RecursionError:
         raise Unprocessable(f"{what} is nested too deeply to be read.",
                             errors=[field_problem(loc, f"JSON nested deeper than {MAX_JSON_DEPTH} levels",

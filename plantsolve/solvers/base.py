@@ -177,6 +177,31 @@ def upload_extension(filename: str, accepted: Sequence[str]) -> str:
     return ext
 
 
+class DuplicateKey(ValueError):
+    """A JSON object naming one key twice: which value was meant is unknown (json.loads keeps the last)."""
+
+    def __init__(self, key: str):
+        super().__init__(f"the key {key!r} appears twice in one object; which value is meant is not known")
+        self.key = key
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
+    out = dict(pairs)
+    if len(out) < len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise DuplicateKey(key)
+            seen.add(key)
+    return out
+
+
+def loads_json(text: str | bytes) -> Any:
+    """json.loads refusing an object that names a key twice (:class:`DuplicateKey`): ``{"units": "mm", …,
+    "units": "m"}`` would otherwise be read in metres without a word."""
+    return json.loads(text, object_pairs_hook=_unique_keys)
+
+
 def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object") -> dict:
     """An uploaded JSON file that must hold one object; a 422 on ``file`` saying why it does not (``not_an_object``
     names what the format's object is). Bytes are read as :func:`decode_text` reads text (a Windows editor's UTF-16
@@ -184,8 +209,8 @@ def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold
     if isinstance(text, bytes):
         text = decode_text(text, "JSON file")
     try:
-        body = json.loads(text)
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        body = loads_json(text)
+    except (json.JSONDecodeError, UnicodeDecodeError, DuplicateKey) as e:
         raise reject(f"invalid JSON: {e}") from None
     if not isinstance(body, dict):
         raise reject(not_an_object)

@@ -42,6 +42,28 @@ def test_deeply_nested_options_field_and_json_upload_are_422(client):
     assert response.status_code == 422 and response.json()["errors"][0]["loc"][0] == "file"
 
 
+def test_a_key_named_twice_in_one_object_is_a_422_not_the_last_value_taken(client):
+    """json.loads keeps the last of two equal keys: '"units": "mm", …, "units": "m"' was solved in metres without a
+    word. A body, the options field and an uploaded JSON file naming a key twice are refused naming the key."""
+    body = '{"units": "mm", "components": [' + json.dumps(pipe()) + '], "units": "m"}'
+    response = client.post("/v1/alignment/jobs", content=body, headers={"Content-Type": "application/json"})
+    assert response.status_code == 422 and response.headers["content-type"] == PROBLEM
+    (error,) = response.json()["errors"]
+    assert error["type"] == "json_duplicate_key" and "'units' appears twice" in error["msg"]
+    files = {"file": ("numbers.txt", b"1\n2\n", "text/plain")}
+    response = client.post("/v1/test-compute/jobs", files=files, data={"options": '{"a": 1, "a": 2}'})
+    assert response.status_code == 422 and response.json()["errors"][0]["loc"] == ["options"]
+    for kind, name in (("alignment", "model.json"), ("tube", "scan.json"), ("perfmap", "map.json"),
+                       ("flowmeter", "meter.json")):
+        files = {"file": (name, body.encode(), "application/json")}
+        response = client.post(f"/v1/{kind}/jobs", files=files)
+        assert response.status_code == 422, (kind, response.text)
+        assert response.json()["errors"][0]["loc"][0] == "file" and "appears twice" in response.text, kind
+    # the same key in two different objects is no duplicate
+    fine = {"units": "mm", "components": [pipe(), {**pipe(), "id": "Q"}]}
+    assert client.post("/v1/alignment/jobs", json=fine).status_code == 202
+
+
 @pytest.mark.parametrize("component, loc", [
     (pipe(direction0=(-1e200, 1.0, 0.0)), ["components", 0, "ports", 0, "direction", 0]),
     (pipe(position1=(1e13, 0.0, 0.0)), ["components", 0, "ports", 1, "position", 0]),

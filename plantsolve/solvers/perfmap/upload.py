@@ -59,7 +59,8 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, reject, validated
+from plantsolve.solvers.base import (DuplicateKey, FieldError, InputRejected, StoredInput, decode_text, loads_json, reject,
+                                     validated)
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
@@ -724,8 +725,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     else:
         refuse_cut_json(text)
         try:
-            body = json.loads(text)
-        except json.JSONDecodeError as e:
+            body = loads_json(text)
+        except (json.JSONDecodeError, DuplicateKey) as e:
             raise reject(f"invalid JSON: {e}") from None
         if isinstance(body, list):
             body = {"positions": body}

@@ -15,7 +15,8 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import PointSource, TubeRequest, UnitConversion
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, reject, validated
+from plantsolve.solvers.base import (DuplicateKey, FieldError, InputRejected, StoredInput, decode_text, loads_json, reject,
+                                     validated)
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -286,8 +287,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
                                             "its `units` (set units instead)")])
         try:
-            doc = json.loads(decode_text(source.read(), "JSON file"))
-        except json.JSONDecodeError as exc:
+            doc = loads_json(decode_text(source.read(), "JSON file"))
+        except (json.JSONDecodeError, DuplicateKey) as exc:
             raise reject(f"invalid JSON: {exc}") from None
         if isinstance(doc, list):
             doc = {"points": doc}
