@@ -212,7 +212,7 @@ def _ragged_aranges(starts: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray
     return owner, starts[owner] + np.arange(len(owner)) - first[owner]
 
 
-def _shortcut_rows(poly: np.ndarray, first_j: np.ndarray, count: np.ndarray, block: int = 1_000_000):
+def _shortcut_rows(poly: np.ndarray, first_j: np.ndarray, count: np.ndarray, block: int = 250_000):
     """For every vertex i and the ``count[i]`` shortcuts i → j from j = ``first_j[i]`` on: the largest distance
     of a vertex the shortcut skips to it, and the sum of their squared distances. Vertices in blocks of a
     few array operations each (the search's loop over the vertices is left with the bookkeeping). The
