@@ -17,6 +17,8 @@
 
 from __future__ import annotations
 
+import threading
+
 import networkx as nx
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -179,6 +181,97 @@ def _reach(poly: np.ndarray, i: int, eps: float) -> int:
     return i + 1 + int(apart[0]) if len(apart) else len(poly) - 1
 
 
+def _reaches(poly: np.ndarray, eps: float, block: int = 200_000) -> np.ndarray:
+    """:func:`_reach` of every vertex but the last, rows of vertices at a time (the same elementwise
+    operations on the same numbers, so the same reaches); ``block`` bounds the pairs held at once."""
+    n = len(poly)
+    out = np.empty(n - 1, dtype=np.int64)
+    rows = max(1, block // n)
+    for i0 in range(0, n - 1, rows):
+        i = np.arange(i0, min(i0 + rows, n - 1))
+        k = np.arange(n - 1 - i0)
+        valid = k[None, :] < (n - 1 - i)[:, None]
+        rel = poly[np.minimum(i[:, None] + 1 + k[None, :], n - 1)] - poly[i][:, None, :]
+        r = np.sqrt((rel * rel).sum(-1))
+        far = r > eps
+        u = rel / np.where(far, r, 1.0)[..., None]
+        alpha = np.where(far, np.arcsin(np.minimum(eps / np.where(far, r, 1.0), 1.0)), np.pi)
+        narrowest = np.maximum.accumulate(np.where(alpha <= np.minimum.accumulate(alpha, axis=1), k, 0), axis=1)
+        ur = np.take_along_axis(u, narrowest[..., None], axis=1)
+        c = cross(ur.reshape(-1, 3), u.reshape(-1, 3)).reshape(u.shape)
+        between = np.arctan2(np.sqrt((c ** 2).sum(-1)), (ur * u).sum(-1))
+        apart = valid & (between > np.take_along_axis(alpha, narrowest, axis=1) + alpha + CONE_MARGIN)
+        out[i] = np.where(apart.any(1), i + 1 + np.argmax(apart, axis=1), n - 1)
+    return out
+
+
+def _ragged_aranges(starts: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ranges starts[r] ... starts[r] + lengths[r] - 1 one after another, and the r of each item."""
+    owner = np.repeat(np.arange(len(lengths)), lengths)
+    first = np.cumsum(lengths) - lengths
+    return owner, starts[owner] + np.arange(len(owner)) - first[owner]
+
+
+def _shortcut_rows(poly: np.ndarray, first_j: np.ndarray, count: np.ndarray, block: int = 250_000):
+    """For every vertex i and the ``count[i]`` shortcuts i → j from j = ``first_j[i]`` on: the largest distance
+    of a vertex the shortcut skips to it, and the sum of their squared distances. Vertices in blocks of a
+    few array operations each (the search's loop over the vertices is left with the bookkeeping). The
+    squared distances are summed over a row of all n vertices (zeros outside the skipped ones), as they
+    have always been: the same additions in the same order give the same least-squares tie-break.
+    ``block`` bounds the entries of those rows held at once."""
+    n = len(poly)
+    dmax, sums = [None] * (n - 1), [None] * (n - 1)
+    rows_per_block = max(block // n, int(count.max(initial=1)))
+    i0 = 0
+    while i0 < n - 1:
+        i1 = i0 + max(1, int(np.searchsorted(np.cumsum(count[i0:]), rows_per_block, side="right")))
+        i = np.arange(i0, i1)
+        owner, j = _ragged_aranges(first_j[i0:i1], count[i0:i1])
+        first = i[owner]
+        row, k = _ragged_aranges(first + 1, j - first - 1)
+        # D[row, k] distance of vertex k to the row's segment i → j (zero where the shortcut keeps k)
+        D = np.zeros((len(j), n))
+        D[row, k] = _seg_dist(poly[k], poly[first[row]], poly[j[row]])
+        row_max = D.max(1)
+        row_sums = (D ** 2).sum(1)
+        cuts = np.cumsum(count[i0:i1])[:-1]
+        for ic, m_i, s_i in zip(i, np.split(row_max, cuts), np.split(row_sums, cuts)):
+            dmax[ic], sums[ic] = m_i, s_i
+        i0 = i1
+    return dmax, sums
+
+
+class _ShortcutCache(threading.local):
+    """The shortcut rows (:func:`_shortcut_rows`) of the latest polygon simplified in this thread. They do not
+    depend on ε, and the solver simplifies one polygon with a few tolerances: each tolerance computes only
+    the shortcuts beyond the reaches of the ones before it."""
+
+    def __init__(self):
+        self.key: bytes | None = None
+        self.width = np.zeros(0, dtype=np.int64)
+        self.dmax: list = []
+        self.sums: list = []
+
+    def rows(self, poly: np.ndarray, reach: np.ndarray) -> tuple[list, list]:
+        key = poly.tobytes() + str(poly.shape).encode()
+        n = len(poly)
+        if key != self.key:
+            self.key, self.width = key, np.zeros(n - 1, dtype=np.int64)
+            self.dmax, self.sums = [np.zeros(0)] * (n - 1), [np.zeros(0)] * (n - 1)
+        width = reach - np.arange(n - 1)
+        more = np.maximum(width - self.width, 0)
+        if more.any():
+            dmax, sums = _shortcut_rows(poly, np.arange(n - 1) + 1 + self.width, more)
+            for i in np.flatnonzero(more):
+                self.dmax[i] = np.concatenate([self.dmax[i], dmax[i]])
+                self.sums[i] = np.concatenate([self.sums[i], sums[i]])
+            self.width = self.width + more
+        return ([m[:w] for m, w in zip(self.dmax, width)], [s[:w] for s, w in zip(self.sums, width)])
+
+
+_shortcut_cache = _ShortcutCache()
+
+
 def simplify(poly: np.ndarray, eps: float) -> np.ndarray:
     """§4.5: minimum-vertex sub-polygon within ε, least squared error among minima."""
     n = len(poly)
@@ -190,29 +283,17 @@ def simplify(poly: np.ndarray, eps: float) -> np.ndarray:
     prev = np.full(n, -1)
     best[0] = 0
     sse[0] = 0.0
+    # none beyond the reach of i is within ε
+    reach = _reaches(poly, eps)
+    dmax, sums = _shortcut_cache.rows(poly, reach)
     for i in range(n - 1):
         if best[i] == unreached:
             continue
         nb = best[i] + 1
-        # only a shortcut i → j that reaches j with as few vertices as its best so far can change j, and
-        # none beyond the reach of i is within ε
-        open_ = best[i + 1:] >= nb
-        if not open_.any():
-            continue
-        reach = _reach(poly, i, eps)
-        js = i + 1 + np.flatnonzero(open_[:reach - i])
-        if not len(js):
-            continue
-        # D[j, k] distance of vertex k to segment i→j for i < k < j (the vertices the shortcut skips)
-        D = _seg_dist(poly[None, i + 1:reach, :], poly[i][None, None, :], poly[js][:, None, :])
-        Dm = np.where(np.arange(i + 1, reach)[None, :] < js[:, None], D, 0.0)
-        ok = Dm.max(1, initial=0.0) <= eps
-        # the squared errors summed over a row of all n vertices (zeros outside the skipped ones), as the sum
-        # has always been taken: the same additions in the same order give the same least-squares tie-break
-        sq = np.zeros((len(js), n))
-        sq[:, i + 1:reach] = Dm ** 2
-        ns = sse[i] + sq.sum(1)
-        better = ok & ((nb < best[js]) | ((nb == best[js]) & (ns < sse[js])))
+        js = np.arange(i + 1, reach[i] + 1)
+        ns = sse[i] + sums[i]
+        bj = best[js]
+        better = (dmax[i] <= eps) & ((nb < bj) | ((nb == bj) & (ns < sse[js])))
         best[js[better]], sse[js[better]], prev[js[better]] = nb, ns[better], i
     out = [n - 1]
     while out[-1] != 0:

@@ -535,32 +535,33 @@ BLOCK = 65_536  # samples per pass of fun and the normal equations (the per-samp
 
 
 def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np.ndarray, tuple]:
-    """Distance of each point q (n, 3) to its own (unbounded) line or circle ``gs`` (n, 7; rows of
-    :func:`_geometry`, ``arc`` marks the circles), all samples in one pass, and the terms
-    :func:`_sample_gradient` takes on from."""
-    c, a, R = gs[:, :3], gs[:, 3:6], gs[:, 6]
+    """Distance of each point to its own (unbounded) line or circle, all samples in one pass, and the terms
+    :func:`_sample_gradient` takes on from. Component-major: ``q`` (3, n) the points, ``gs`` (7, n) the
+    geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles; every
+    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3)."""
+    c, a, R = gs[:3], gs[3:6], gs[6]
     w = q - c
-    s = np.einsum("nk,nk->n", w, a)
-    perp = w - s[:, None] * a
-    rho = np.sqrt(np.einsum("nk,nk->n", perp, perp))
+    # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
+    # distances to the last bit
+    s = (w[0] * a[0] + w[2] * a[2]) + w[1] * a[1]
+    perp = w - s * a
+    rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
     # a line's R is 0 and its distance the perpendicular one
     dd = np.where(arc, np.hypot(rho - R, s), rho)
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
-def _sample_gradient(terms: tuple) -> np.ndarray:
-    """d dist / d geometry (n, 7) from the terms of :func:`_sample_distance` (the formulas of
-    :func:`_run_gradient`, a line's as an arc's with (rho - R) / dist = 1 and s / dist = 0)."""
+def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
+    """d dist / d geometry into the rows 0-6 of ``out`` (k, n) from the terms of :func:`_sample_distance`
+    (the formulas of :func:`_run_gradient`, a line's as an arc's with (rho - R) / dist = 1 and s / dist = 0)."""
     w, s, perp, rho, a, R, dd, arc = terms
-    e = perp / np.maximum(rho, 1e-300)[:, None]
+    e = perp / np.maximum(rho, 1e-300)
     inv = 1.0 / np.maximum(dd, 1e-300)
     u = np.where(arc, (rho - R) * inv, 1.0)
     v = np.where(arc, s * inv, 0.0)
-    grad = np.empty((len(w), 7))
-    grad[:, :3] = -(u[:, None] * e + v[:, None] * a)
-    grad[:, 3:6] = v[:, None] * w - (u * s)[:, None] * e
-    grad[:, 6] = np.where(arc, -u, 0.0)
-    return grad
+    out[:3] = -(u * e + v * a)
+    out[3:6] = v * w - (u * s) * e
+    out[6] = np.where(arc, -u, 0.0)
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
@@ -579,14 +580,18 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
     # Gram matrix is one product; the residual order is irrelevant to the solver
     order = np.argsort(seg, kind="stable")
-    pts = pts[order]
+    # the points component-major (3, N), as the distances take them
+    pts_t = np.ascontiguousarray(pts[order].T)
     # the sorted segment numbers in the smallest integers that hold them, the arcs per block (a scan of
     # millions of samples holds no second full-size array of either)
     seg = seg[order].astype(np.int16 if len(kind) < 2 ** 15 else np.int64)
     is_arc = kind != 0
-    N = len(pts)
+    N = pts_t.shape[1]
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
     runs = [_groups(seg[b]) for b in blocks]  # each block's segment runs, as slices of the block
+    # each block's samples per segment: their geometry is each segment's repeated (the samples are sorted)
+    counts = [np.bincount(seg[b], minlength=len(kind)) for b in blocks]
+    arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
 
     keep_terms = len(blocks) == 1
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
@@ -599,12 +604,17 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
             latest.update(x=key, g=g, dG=dG)
         return latest["g"], latest["dG"]
 
+    def distance(g_t: np.ndarray, i: int, b: slice):
+        arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
+        return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arc)
+
     def fun(x):
         g, _ = geometry(x)
+        g_t = g.T.copy()
         d = np.empty(N)
         terms = []
-        for b in blocks:
-            d[b], t = _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])
+        for i, b in enumerate(blocks):
+            d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
         latest["terms"] = terms if keep_terms else None
@@ -626,13 +636,16 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         k_dim = dG.shape[1]
         gram = np.zeros((len(dG), k_dim, k_dim))
         rhs = np.zeros((len(dG), k_dim))
+        g_t = g.T.copy() if terms is None else None
         for i, b in enumerate(blocks):
-            t = terms[i] if terms is not None else _sample_distance(pts[b], g[seg[b]], is_arc[seg[b]])[1]
-            G = np.empty((b.stop - b.start, k_dim))
-            G[:, :7] = _sample_gradient(t)
+            t = terms[i] if terms is not None else distance(g_t, i, b)[1]
+            G_t = np.empty((k_dim, b.stop - b.start))
+            _sample_gradient(t, G_t)
             if lay.fit_pipe_radius:
-                G[:, 7] = 1.0
-            Gw = G * w[b, None]
+                G_t[7] = 1.0
+            # sample-major for the products below (the layout their BLAS calls have always had)
+            G = G_t.T.copy()
+            Gw = (G_t * w[b]).T.copy()
             rb = r[b]
             for k, sl in runs[i]:
                 gram[k] += G[sl].T @ Gw[sl]

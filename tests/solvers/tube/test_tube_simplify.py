@@ -66,3 +66,40 @@ def test_reach_never_cuts_a_shortcut_within_eps(seed):
             assert max(j for a, j in cuts if a == i) <= reach
         # the bound prunes: on a curved stretch a vertex cannot see to the far end
         assert curve._reach(poly, 0, 0.02) < len(poly) - 1
+
+
+@pytest.mark.parametrize("block", [1, 500, 200_000])
+def test_reaches_of_all_vertices_are_each_vertex_reach(block):
+    rng = np.random.default_rng(7)
+    poly = _noisy_curve(rng, 70)
+    for eps in (0.02, 0.3, 2.0):
+        want = [curve._reach(poly, i, eps) for i in range(len(poly) - 1)]
+        assert curve._reaches(poly, eps, block=block).tolist() == want
+
+
+def test_shortcut_rows_in_blocks_match_one_block():
+    rng = np.random.default_rng(8)
+    poly = _noisy_curve(rng, 50)
+    first = np.arange(1, 50)
+    count = np.minimum(np.full(49, 12), 50 - first)
+    m1, s1 = curve._shortcut_rows(poly, first, count)
+    m2, s2 = curve._shortcut_rows(poly, first, count, block=1)
+    cuts = _shortcuts(poly, np.inf)  # every shortcut, with its squared error
+    for i in range(49):
+        assert np.array_equal(m1[i], m2[i]) and np.array_equal(s1[i], s2[i])
+        for a, j in enumerate(range(i + 1, i + 1 + count[i])):
+            assert s1[i][a] == pytest.approx(cuts[i, j], rel=1e-12, abs=1e-300)
+            assert m1[i][a] == pytest.approx(_seg_dist(poly[i + 1:j], poly[i], poly[j]).max(initial=0.0), rel=1e-12)
+
+
+def test_simplify_with_several_tolerances_on_one_polygon_is_each_ones_answer():
+    """The shortcut rows kept from one tolerance serve the next (smaller or larger) one."""
+    rng = np.random.default_rng(9)
+    poly = _noisy_curve(rng, 60)
+    for eps in (0.1, 0.25, 0.05, 0.6, 0.1):
+        got = curve.simplify(poly, eps)
+        idx = [int(np.flatnonzero((poly == v).all(1))[0]) for v in got]
+        cuts = _shortcuts(poly, eps)
+        count, sse = _brute_force(poly, eps)
+        assert len(idx) - 1 == count
+        assert sum(cuts[a, b] for a, b in zip(idx, idx[1:])) == pytest.approx(sse, rel=1e-12, abs=1e-300)
