@@ -17,7 +17,6 @@
 
 from __future__ import annotations
 
-import threading
 
 import networkx as nx
 import numpy as np
@@ -241,27 +240,25 @@ def _shortcut_rows(poly: np.ndarray, first_j: np.ndarray, count: np.ndarray, blo
     return dmax, sums
 
 
-class _ShortcutCache(threading.local):
-    """The shortcut rows (:func:`_shortcut_rows`) of the latest polygon simplified in this thread. They do not
-    depend on ε, and the solver simplifies one polygon with a few tolerances: each tolerance computes only
-    the shortcuts beyond the reaches of the ones before it."""
+class Shortcuts:
+    """The shortcut rows (:func:`_shortcut_rows`) of one polygon, computed as far as the tolerances asked so far
+    reach. They do not depend on ε, and the solver simplifies one polygon with a few tolerances: pass the same
+    object to each :func:`simplify` of that polygon and each computes only the shortcuts beyond the reaches of
+    the ones before it."""
 
-    def __init__(self):
-        self.key: bytes | None = None
-        self.width = np.zeros(0, dtype=np.int64)
-        self.dmax: list = []
-        self.sums: list = []
-
-    def rows(self, poly: np.ndarray, reach: np.ndarray) -> tuple[list, list]:
-        key = poly.tobytes() + str(poly.shape).encode()
+    def __init__(self, poly: np.ndarray):
         n = len(poly)
-        if key != self.key:
-            self.key, self.width = key, np.zeros(n - 1, dtype=np.int64)
-            self.dmax, self.sums = [np.zeros(0)] * (n - 1), [np.zeros(0)] * (n - 1)
+        self.poly = poly
+        self.width = np.zeros(max(n - 1, 0), dtype=np.int64)
+        self.dmax: list = [np.zeros(0)] * max(n - 1, 0)
+        self.sums: list = [np.zeros(0)] * max(n - 1, 0)
+
+    def rows(self, reach: np.ndarray) -> tuple[list, list]:
+        n = len(self.poly)
         width = reach - np.arange(n - 1)
         more = np.maximum(width - self.width, 0)
         if more.any():
-            dmax, sums = _shortcut_rows(poly, np.arange(n - 1) + 1 + self.width, more)
+            dmax, sums = _shortcut_rows(self.poly, np.arange(n - 1) + 1 + self.width, more)
             for i in np.flatnonzero(more):
                 self.dmax[i] = np.concatenate([self.dmax[i], dmax[i]])
                 self.sums[i] = np.concatenate([self.sums[i], sums[i]])
@@ -269,11 +266,9 @@ class _ShortcutCache(threading.local):
         return ([m[:w] for m, w in zip(self.dmax, width)], [s[:w] for s, w in zip(self.sums, width)])
 
 
-_shortcut_cache = _ShortcutCache()
-
-
-def simplify(poly: np.ndarray, eps: float) -> np.ndarray:
-    """§4.5: minimum-vertex sub-polygon within ε, least squared error among minima."""
+def simplify(poly: np.ndarray, eps: float, shortcuts: Shortcuts | None = None) -> np.ndarray:
+    """§4.5: minimum-vertex sub-polygon within ε, least squared error among minima. ``shortcuts``: the
+    :class:`Shortcuts` of ``poly`` kept from its simplification with another tolerance."""
     n = len(poly)
     if n <= 2:
         return poly.copy()
@@ -285,7 +280,9 @@ def simplify(poly: np.ndarray, eps: float) -> np.ndarray:
     sse[0] = 0.0
     # none beyond the reach of i is within ε
     reach = _reaches(poly, eps)
-    dmax, sums = _shortcut_cache.rows(poly, reach)
+    if shortcuts is None or shortcuts.poly is not poly:
+        shortcuts = Shortcuts(poly)
+    dmax, sums = shortcuts.rows(reach)
     for i in range(n - 1):
         if best[i] == unreached:
             continue

@@ -70,6 +70,7 @@ class PolygonalCurve:
     sigma_spine: float
     eps: float
     simplified: np.ndarray
+    shortcuts: curve.Shortcuts  # the polygon's shortcut distances, shared by its simplifications
 
 
 @dataclass
@@ -184,8 +185,9 @@ def polygonal_curve(ss: SpineSamples, opts: TubeOptions, warnings: list[Diagnost
     eps = float(opts.tolerance) if opts.tolerance else max(0.08 * rp, 4.0 * sigma_spine)
     # a finer simplification than ε keeps the chord tangent estimates close to the curve
     # where two bends in different planes meet (§4.5 leaves the simplification tolerance open)
-    simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps)
-    return PolygonalCurve(poly, poly_method, sigma_spine, eps, simp)
+    shortcuts = curve.Shortcuts(poly)
+    simp = curve.simplify(poly, SIMPLIFY_FRACTION * eps, shortcuts)
+    return PolygonalCurve(poly, poly_method, sigma_spine, eps, simp, shortcuts)
 
 
 def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
@@ -197,7 +199,8 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     inits: list[tuple[float, TubeModel]] = []
     factors = (1.0,) if opts.tolerance else (1.0, 1.5, 2.0)
     # at ε itself the polygon simplified is the stage's own (the same call)
-    simps = [pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * eps * f) for f in factors]
+    simps = [pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * eps * f, pc.shortcuts)
+             for f in factors]
     # the searches of all tolerances at once (each gives what it gives alone)
     mdls = arcline.fit_arclines([(simp, eps * f, 0.5 * rp, 3) for simp, f in zip(simps, factors)])
     dead = [k for k, mdl in enumerate(mdls) if mdl is None]
@@ -210,7 +213,8 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     eps_used = eps * factors[-1]
     while not inits and eps_used < 40 * eps:
         eps_used *= 1.5
-        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * eps_used), eps_used, 0.5 * rp)
+        mdl = arcline.fit_arcline(curve.simplify(poly, SIMPLIFY_FRACTION * eps_used, pc.shortcuts), eps_used,
+                                   0.5 * rp)
         if mdl is not None:
             inits.append((eps_used, mdl))
             warnings.append(Diagnostic(code="tolerance_increased", message=f"No arc-line spline met ε = {eps:.4g}; "

@@ -96,8 +96,10 @@ def test_simplify_with_several_tolerances_on_one_polygon_is_each_ones_answer():
     """The shortcut rows kept from one tolerance serve the next (smaller or larger) one."""
     rng = np.random.default_rng(9)
     poly = _noisy_curve(rng, 60)
+    shared = curve.Shortcuts(poly)
     for eps in (0.1, 0.25, 0.05, 0.6, 0.1):
-        got = curve.simplify(poly, eps)
+        got = curve.simplify(poly, eps, shared)
+        assert np.array_equal(got, curve.simplify(poly, eps))  # the same as computed afresh
         idx = [int(np.flatnonzero((poly == v).all(1))[0]) for v in got]
         cuts = _shortcuts(poly, eps)
         count, sse = _brute_force(poly, eps)
