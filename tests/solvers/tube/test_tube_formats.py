@@ -47,24 +47,6 @@ def test_meshes_give_their_vertices_or_samples_on_their_faces(file_type):
     assert r.max() <= 4.0 + 1e-9
 
 
-def test_las_point_cloud_with_declared_units():
-    import laspy
-
-    pts = cloud() / 1000.0  # metres in the file
-    header = laspy.LasHeader(point_format=3, version="1.2")
-    header.scales = np.array([1e-6, 1e-6, 1e-6])
-    header.offsets = pts.min(axis=0)
-    las = laspy.LasData(header)
-    las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
-    buf = io.BytesIO()
-    las.write(buf)
-    req = parse_upload(StoredInput.from_bytes("scan.las", buf.getvalue()), {"file_units": "m", "pipe_radius": 4.0})
-    assert np.allclose(TubeScan(req).points, pts * 1000.0, atol=2e-3)
-    with pytest.raises(Exception) as e:
-        parse_upload(StoredInput.from_bytes("scan.las", buf.getvalue()), {"file_units": "furlong"})
-    assert "file_units" in str(e.value)
-
-
 def _las_bytes(pts: np.ndarray) -> bytes:
     import laspy
 
@@ -76,6 +58,16 @@ def _las_bytes(pts: np.ndarray) -> bytes:
     buf = io.BytesIO()
     las.write(buf)
     return buf.getvalue()
+
+
+def test_las_point_cloud_with_declared_units():
+    pts = cloud() / 1000.0  # metres in the file
+    data = _las_bytes(pts)
+    req = parse_upload(StoredInput.from_bytes("scan.las", data), {"file_units": "m", "pipe_radius": 4.0})
+    assert np.allclose(TubeScan(req).points, pts * 1000.0, atol=2e-3)
+    with pytest.raises(Exception) as e:
+        parse_upload(StoredInput.from_bytes("scan.las", data), {"file_units": "furlong"})
+    assert "file_units" in str(e.value)
 
 
 def test_a_las_file_cut_short_reads_its_whole_points_and_says_so():
