@@ -202,16 +202,20 @@ def loads_json(text: str | bytes) -> Any:
     return json.loads(text, object_pairs_hook=_unique_keys)
 
 
-def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object") -> dict:
+def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object",
+                list_as: str | None = None) -> dict:
     """An uploaded JSON file that must hold one object; a 422 on ``file`` saying why it does not (``not_an_object``
-    names what the format's object is). Bytes are read as :func:`decode_text` reads text (a Windows editor's UTF-16
-    or Windows-1252)."""
+    names what the format's object is). With ``list_as`` a bare list is the request's field of that name (a
+    point or position list saved on its own). Bytes are read as :func:`decode_text` reads text (a Windows
+    editor's UTF-16 or Windows-1252)."""
     if isinstance(text, bytes):
         text = decode_text(text, "JSON file")
     try:
         body = loads_json(text)
     except (json.JSONDecodeError, UnicodeDecodeError, DuplicateKey) as e:
         raise reject(f"invalid JSON: {e}") from None
+    if list_as is not None and isinstance(body, list):
+        body = {list_as: body}
     if not isinstance(body, dict):
         raise reject(not_an_object)
     return body

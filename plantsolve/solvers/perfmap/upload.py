@@ -49,7 +49,6 @@ from __future__ import annotations
 import ast
 import csv
 import io
-import json
 import math
 import re
 import zipfile
@@ -59,8 +58,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import (DuplicateKey, FieldError, InputRejected, StoredInput, decode_text, loads_json, reject,
-                                     validated)
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
@@ -724,14 +722,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     else:
         refuse_cut_json(text)
-        try:
-            body = loads_json(text)
-        except (json.JSONDecodeError, DuplicateKey) as e:
-            raise reject(f"invalid JSON: {e}") from None
-        if isinstance(body, list):
-            body = {"positions": body}
-        if not isinstance(body, dict):
-            raise reject("the JSON file must hold a request object or a list of positions")
+        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions")
     return _validated(body, options, lines)
 
 

@@ -93,8 +93,8 @@ def read_ply(content: bytes, log: ReadLog, faces_below: int) -> PlyData:
         triangles = np.asarray(tri, dtype=np.int64).reshape(-1, 3)
         ok = (triangles >= 0).all(1) & (triangles < len(verts)).all(1)
         ok[ok] = np.isfinite(verts[triangles[ok]]).all((1, 2))
-        for _ in range(int((~ok).sum())):  # faces on a vertex left out (or past the last): they go too
-            log.skip(None, "face on a missing vertex")
+        # faces on a vertex left out (or past the last): they go too
+        log.skip(None, "face on a missing vertex", count=int((~ok).sum()))
         triangles = triangles[ok]
     return PlyData(verts, triangles)
 
@@ -186,8 +186,7 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
     verts = out.get("vertex")
     if verts is not None:
         bad = ~np.isfinite(verts).all(1)
-        for _ in range(int(bad.sum())):
-            log.skip(None, "non-finite coordinate")
+        log.skip(None, "non-finite coordinate", count=int(bad.sum()))
         verts[bad] = np.nan
     return out
 

@@ -23,10 +23,13 @@ class ReadLog:
         self.truncation: Diagnostic | None = None
         self.notes: list[Diagnostic] = []
 
-    def skip(self, line: int | None, reason: str) -> None:
-        """One record left out; ``line`` is its 1-based line number (None in binary files)."""
-        self.count += 1
-        self.reasons[reason] += 1
+    def skip(self, line: int | None, reason: str, count: int = 1) -> None:
+        """A record left out (``count`` records, for the same reason); ``line`` is its 1-based line number (None
+        in binary files)."""
+        if count <= 0:
+            return
+        self.count += count
+        self.reasons[reason] += count
         if line is not None and len(self.lines) < SHOW_LINES:
             self.lines.append(line)
 

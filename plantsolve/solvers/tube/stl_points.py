@@ -55,8 +55,7 @@ def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
         log.truncate(f"the file ends after {n} of {count} triangles", element="triangle", read=n, declared=count)
     tri = np.frombuffer(content, _TRIANGLE, n, offset=BINARY_HEADER)["corners"].astype(np.float64)
     ok = (np.abs(tri) <= MAX_COORDINATE).all((1, 2))  # NaN fails too: a float the writer never meant
-    for _ in range(int((~ok).sum())):
-        log.skip(None, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}")
+    log.skip(None, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}", count=int((~ok).sum()))
     return tri[ok]
 
 

@@ -8,15 +8,13 @@ from __future__ import annotations
 
 import base64
 import io
-import json
 from dataclasses import replace
 
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import PointSource, TubeRequest, UnitConversion
-from plantsolve.solvers.base import (DuplicateKey, FieldError, InputRejected, StoredInput, decode_text, loads_json, reject,
-                                     validated)
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -162,11 +160,10 @@ def _check_las_bounds(pts: np.ndarray, header, log: ReadLog) -> None:
     lo, hi = np.asarray(header.mins, dtype=float), np.asarray(header.maxs, dtype=float)
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()) or (lo == 0).all() and (hi == 0).all():
         return  # a writer that left the box unset
-    slack = 4 * np.abs(np.asarray(header.scales, dtype=float)) + 1e-9 * np.maximum(np.abs(lo), np.abs(hi))
-    with np.errstate(invalid="ignore"):
-        got_lo, got_hi = np.nanmin(pts, axis=0), np.nanmax(pts, axis=0)
-    off = (got_lo < lo - slack) | (got_hi > hi + slack)
     scales, offsets = np.asarray(header.scales, dtype=float), np.asarray(header.offsets, dtype=float)
+    got_lo, got_hi = pts.min(axis=0), pts.max(axis=0)  # scaled integers: always finite
+    slack = 4 * np.abs(scales) + 1e-9 * np.maximum(np.abs(lo), np.abs(hi))
+    off = (got_lo < lo - slack) | (got_hi > hi + slack)
     with np.errstate(divide="ignore", invalid="ignore"):  # some writers store the box in record units
         raw_lo, raw_hi = (got_lo - offsets) / scales, (got_hi - offsets) / scales
     in_record_units = np.isclose(np.minimum(raw_lo, raw_hi), lo, rtol=1e-9, atol=4) & \
@@ -286,14 +283,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         if file_units is not None:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
                                             "its `units` (set units instead)")])
-        try:
-            doc = loads_json(decode_text(source.read(), "JSON file"))
-        except (json.JSONDecodeError, DuplicateKey) as exc:
-            raise reject(f"invalid JSON: {exc}") from None
-        if isinstance(doc, list):
-            doc = {"points": doc}
-        if not isinstance(doc, dict):
-            raise reject("JSON must be a request object or a list of [x, y, z]")
+        doc = json_object(source.read(), "JSON must be a request object or a list of [x, y, z]", list_as="points")
         body = dict(doc)
         body["options"] = {**(body.get("options") or {}), **opts}
         if units:
@@ -312,8 +302,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             bad = np.flatnonzero(~finite)
             if len(bad) == len(pts):
                 raise reject("every point of the file has a non-finite coordinate")
-            for _ in bad:
-                log.skip(None, "non-finite coordinate")
+            log.skip(None, "non-finite coordinate", count=len(bad))
             pts = pts[finite]
         conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target)
         if not (factors == 1.0).all():
@@ -322,8 +311,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         if not bounded.all():  # one absurd float of a binary file (LAS, NPY, a PLY cut in its header) is one point
             if not bounded.any():
                 raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
-            for _ in range(int((~bounded).sum())):
-                log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}")
+            log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
             pts = pts[bounded]
         source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
                                     skipped_lines=log.lines, truncated=log.truncation is not None,
