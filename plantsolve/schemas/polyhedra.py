@@ -20,13 +20,12 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, PlainSerializer, PlainValidator, Tag, \
     TypeAdapter, WithJsonSchema
 
-from plantsolve.schemas.common import FiniteFloat, Point3, Report, StrictModel, Units, json_integer
+from plantsolve.schemas.common import MAX_COORDINATE, FiniteFloat, Point3, Report, StrictModel, Units, json_integer
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000
 MAX_LOOP = 100_000
 MAX_LISTED_FACES = 10_000  # above this many faces a result lists them only when asked (list_faces)
-MAX_COORDINATE = 1e12  # as schemas.common.Coordinate
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]

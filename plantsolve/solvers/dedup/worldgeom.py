@@ -10,17 +10,14 @@ import ifcopenshell
 import ifcopenshell.geom
 import ifcopenshell.util.unit
 
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 
 
-# Coordinates past this (in the file's unit) are a writer's garbage: 1e308 or NaN in one IfcCartesianPoint
-# overflowed the matching's signatures and failed the job.
-MAX_COORDINATE = 1e12
-
-
 def _usable(points: np.ndarray) -> bool:
-    """Finite points within :data:`MAX_COORDINATE`: a product whose geometry is not is left unchanged."""
+    """Finite points within :data:`MAX_COORDINATE` of the file's unit: a product whose geometry is not is left
+    unchanged (1e308 or NaN in one IfcCartesianPoint, a writer's garbage, overflowed the matching's signatures)."""
     with np.errstate(invalid="ignore"):
         return bool((np.abs(points) <= MAX_COORDINATE).all())
 

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
 
 MIN_POINTS = 100
-MAX_COORDINATE = 1e12
 
 
 def check_points(pts: np.ndarray, loc: tuple) -> None:
