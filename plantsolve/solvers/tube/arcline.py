@@ -429,7 +429,7 @@ def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[T
         if not asks:
             break
         fams = [f for k in asks for f in asks[k]]
-        edges = best_arcs(fams, [r for k in asks for r in [searches[k][2]] * len(asks[k])])
+        edges = best_arcs(fams, [searches[k][2] for k in asks for _ in asks[k]])
         at = 0
         for k, fs in asks.items():
             answers[k] = edges[at:at + len(fs)]

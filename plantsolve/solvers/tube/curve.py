@@ -158,31 +158,16 @@ def _seg_dist(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 CONE_MARGIN = 1e-6  # radians: the disjoint-cone test below must hold beyond any round-off of its angles
 
 
-def _reach(poly: np.ndarray, i: int, eps: float) -> int:
-    """Last vertex j that a shortcut i → j may reach: for every later j, two of the vertices it would skip
-    cannot both lie within ε of it.
+def _reaches(poly: np.ndarray, eps: float, block: int = 200_000) -> np.ndarray:
+    """For every vertex i but the last, the last vertex j that a shortcut i → j may reach: for every later j,
+    two of the vertices it would skip cannot both lie within ε of it. Rows of vertices at a time; ``block``
+    bounds the pairs held at once.
 
     A skipped vertex k at distance r_k > ε from p_i is within ε of the segment only if the segment's
     direction is within α_k = asin(ε / r_k) of the direction u_k to it (the segment lies on the ray from
     p_i, and the ray's distance is r_k sin θ, or r_k beyond 90°). Once the cone of a vertex K and that of
     the narrowest cone before it are disjoint (angle between the axes beyond the sum of the half-angles),
     no direction serves both, so no shortcut that skips both, i.e. none to a j > K, is within ε."""
-    rel = poly[i + 1:] - poly[i]
-    r = np.sqrt((rel * rel).sum(1))
-    far = r > eps
-    u = rel / np.where(far, r, 1.0)[:, None]
-    alpha = np.where(far, np.arcsin(np.minimum(eps / np.where(far, r, 1.0), 1.0)), np.pi)
-    k = np.arange(len(r))
-    narrowest = np.maximum.accumulate(np.where(alpha <= np.minimum.accumulate(alpha), k, 0))
-    ur = u[narrowest]
-    between = np.arctan2(np.sqrt((cross(ur, u) ** 2).sum(1)), (ur * u).sum(1))
-    apart = np.flatnonzero(between > alpha[narrowest] + alpha + CONE_MARGIN)
-    return i + 1 + int(apart[0]) if len(apart) else len(poly) - 1
-
-
-def _reaches(poly: np.ndarray, eps: float, block: int = 200_000) -> np.ndarray:
-    """:func:`_reach` of every vertex but the last, rows of vertices at a time (the same elementwise
-    operations on the same numbers, so the same reaches); ``block`` bounds the pairs held at once."""
     n = len(poly)
     out = np.empty(n - 1, dtype=np.int64)
     rows = max(1, block // n)
