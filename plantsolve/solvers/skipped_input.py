@@ -92,3 +92,13 @@ def refuse_cut_json(text: str | bytes) -> None:
                          f"{e.msg}); the file was cut? Nothing of a cut request is used") from None
     except (UnicodeDecodeError, RecursionError):
         return
+
+
+def refuse_noise_stl(declared: int, whole: int, unreadable: int, why: str) -> None:
+    """A 422 on ``file`` for a binary STL cut short (its size disagrees with its triangle count) whose whole
+    triangles are mostly unreadable (``unreadable`` of ``whole``, for the reason ``why``): bytes no STL writer
+    wrote (random data, another format renamed .stl), whose few passing floats would be read as garbage
+    geometry. A real file cut in transfer keeps its whole triangles readable and is read as far as it goes."""
+    if 2 * unreadable > whole:
+        raise reject(f"not a binary STL: it says {declared} triangles but holds {whole} whole ones, and {unreadable} "
+                     f"of those have {why}")

@@ -49,7 +49,7 @@ from plantsolve.solvers.polyhedra.epjson import epjson_objects
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
-from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
+from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
@@ -423,6 +423,7 @@ def parse_stl(content: bytes) -> dict:
     declared = struct.unpack("<I", content[80:84])[0] if len(content) >= 84 else 0
     binary_like = len(content) >= 84 and 84 + 50 * declared == len(content)
     warnings: list[dict] = []
+    cut_binary = False
     if ascii_like and not content.rstrip().lower().rsplit(b"\n", 1)[-1].lstrip().startswith(b"endsolid"):
         # cut before 'endsolid': the whole facets up to the last 'endfacet' are read, the cut one is not
         end = content.lower().rfind(b"endfacet")
@@ -443,7 +444,7 @@ def parse_stl(content: bytes) -> dict:
             f"The binary STL says {declared} triangles but holds {whole} whole ones (the file was cut?); those were "
             "read."), details={"declared": declared, "read": whole, "bytes": len(content)}).model_dump())
         content = content[:80] + struct.pack("<I", whole) + content[84:84 + 50 * whole]
-        binary_like = True
+        binary_like = cut_binary = True
     if not (ascii_like or binary_like):
         raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
                      "triangle count)")
@@ -476,13 +477,9 @@ def parse_stl(content: bytes) -> dict:
         triangles = triangles[good]
     if len(triangles) == 0:
         raise reject(f"no usable triangle in the STL file (non-finite, beyond {MAX_COORDINATE:g} or repeated vertices)")
-    cut = bool(warnings) and not ascii_like
-    if cut and 2 * len(triangles) < len(good):
-        # a size that disagrees with the count and mostly unreadable triangles: bytes no STL writer wrote
-        # (random data, another format renamed); reading the few floats that pass would report garbage as a zone
-        raise reject(f"not a binary STL: it says {declared} triangles but holds {len(good)} whole ones, and "
-                     f"{int((~good).sum())} of those have non-finite coordinates, coordinates beyond "
-                     f"{MAX_COORDINATE:g} or repeated corners")
+    if cut_binary:
+        refuse_noise_stl(declared, len(good), int((~good).sum()),
+                         f"non-finite coordinates, coordinates beyond {MAX_COORDINATE:g} or repeated corners")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
     # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them

@@ -12,6 +12,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.skipped_input import refuse_noise_stl
 from plantsolve.solvers.tube.read_log import ReadLog
 
 BINARY_HEADER, BINARY_TRIANGLE = 84, 50  # bytes: 80 header + uint32 count; 12 float32 + uint16 per triangle
@@ -55,6 +56,8 @@ def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
         log.truncate(f"the file ends after {n} of {count} triangles", element="triangle", read=n, declared=count)
     tri = np.frombuffer(content, _TRIANGLE, n, offset=BINARY_HEADER)["corners"].astype(np.float64)
     ok = (np.abs(tri) <= MAX_COORDINATE).all((1, 2))  # NaN fails too: a float the writer never meant
+    if n < count:
+        refuse_noise_stl(count, n, int((~ok).sum()), f"non-finite coordinates or coordinates beyond {MAX_COORDINATE:g}")
     log.skip(None, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}", count=int((~ok).sum()))
     return tri[ok]
 

@@ -129,3 +129,14 @@ def test_dxf_centreline_reads_back_as_the_segments():
     (poly,) = [e for e in msp if e.dxftype() == "POLYLINE"]
     ends = [v.dxf.location for v in poly.vertices]
     assert np.allclose(ends[0], segs[0].start, atol=1e-6) and np.allclose(ends[-1], segs[-1].end, atol=1e-6)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_random_bytes_named_stl_are_refused_as_no_stl(seed):
+    """Random bytes read as a binary STL cut short: a 422 saying so (they were read and refused later as 'all
+    points are coplanar', which sent the user looking at their scan)."""
+    from plantsolve.solvers.base import InputRejected
+
+    noise = np.random.default_rng(seed).bytes(20_000)
+    with pytest.raises(InputRejected, match="not a binary STL"):
+        TubeScan(parse_upload(StoredInput.from_bytes("noise.stl", noise), None))
