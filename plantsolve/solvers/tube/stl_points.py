@@ -54,7 +54,8 @@ def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
     n = min(count, available)
     if n < count:
         log.truncate(f"the file ends after {n} of {count} triangles", element="triangle", read=n, declared=count)
-    tri = np.frombuffer(content, _TRIANGLE, n, offset=BINARY_HEADER)["corners"].astype(np.float64)
+    with np.errstate(invalid="ignore"):  # a signalling NaN of a damaged file: sorted out on the next line
+        tri = np.frombuffer(content, _TRIANGLE, n, offset=BINARY_HEADER)["corners"].astype(np.float64)
     ok = (np.abs(tri) <= MAX_COORDINATE).all((1, 2))  # NaN fails too: a float the writer never meant
     if n < count:
         refuse_noise_stl(count, n, int((~ok).sum()), f"non-finite coordinates or coordinates beyond {MAX_COORDINATE:g}")
