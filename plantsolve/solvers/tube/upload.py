@@ -13,7 +13,7 @@ from dataclasses import replace
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
-from plantsolve.schemas.tube import PointSource, TubeRequest, UnitConversion
+from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
@@ -140,9 +140,14 @@ def _read_las(content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str |
                     log.truncate(f"the header says {count} points but the file holds {held} whole ones (the file "
                                  "was cut?); those were read.", declared=count, read=held)
                     count = held
+            if count > MAX_POINTS:  # refused before laspy allocates them (a damaged LAZ count asks for terabytes)
+                raise reject(f"the file declares {count:,} points; at most {MAX_POINTS:,} are read (thin the scan, "
+                             "e.g. with PDAL or CloudCompare)")
             las = reader.read_points(count) if count else None
+    except InputRejected:
+        raise
     except Exception as exc:  # laspy raises its own and OS errors on corrupt files
-        raise reject(f"unreadable LAS/LAZ file: {exc}") from None
+        raise reject(f"unreadable LAS/LAZ file: {str(exc) or type(exc).__name__}") from None
     if las is None or len(las) == 0:
         raise reject("the LAS/LAZ file holds no whole point record" + log.summary())
     try:

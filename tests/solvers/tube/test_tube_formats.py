@@ -47,7 +47,7 @@ def test_meshes_give_their_vertices_or_samples_on_their_faces(file_type):
     assert r.max() <= 4.0 + 1e-9
 
 
-def _las_bytes(pts: np.ndarray) -> bytes:
+def _las_bytes(pts: np.ndarray, compress: bool = False) -> bytes:
     import laspy
 
     header = laspy.LasHeader(point_format=3, version="1.2")
@@ -56,7 +56,7 @@ def _las_bytes(pts: np.ndarray) -> bytes:
     las = laspy.LasData(header)
     las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
     buf = io.BytesIO()
-    las.write(buf)
+    las.write(buf, do_compress=compress)
     return buf.getvalue()
 
 
@@ -80,6 +80,32 @@ def test_a_las_file_cut_short_reads_its_whole_points_and_says_so():
     assert np.allclose(TubeScan(req).points, pts[:len(pts) - 1001] * 1000.0, atol=2e-3)
     (warning,) = [w for w in req.source.warnings if w.code == "file_truncated"]
     assert warning.details == {"declared": len(pts), "read": len(pts) - 1001} and req.source.truncated
+
+
+def test_a_point_count_past_the_limit_is_refused_before_it_is_allocated_and_a_las_reads_what_it_holds():
+    """A LAZ whose header was damaged to declare 4e9 points made laspy ask for 136 GB (a MemoryError here, a
+    machine's memory where overcommit grants it); it is refused from its header. An uncompressed LAS with the same
+    count holds only its records: those are read, with the declared and read counts."""
+    import tracemalloc
+
+    from plantsolve.solvers.base import InputRejected
+
+    pts = cloud() / 1000.0
+    for compress in (True, False):
+        damaged = bytearray(_las_bytes(pts, compress))
+        damaged[107:111] = np.uint32(4_000_000_000).tobytes()  # the point count of a LAS 1.2 header
+        tracemalloc.start()
+        try:
+            if compress:
+                with pytest.raises(InputRejected, match="declares 4,000,000,000 points"):
+                    parse_upload(StoredInput.from_bytes("scan.laz", bytes(damaged)), {"file_units": "m"})
+            else:
+                req = parse_upload(StoredInput.from_bytes("scan.las", bytes(damaged)), {"file_units": "m"})
+                (warning,) = [w for w in req.source.warnings if w.code == "file_truncated"]
+                assert warning.details == {"declared": 4_000_000_000, "read": len(pts)}
+            assert tracemalloc.get_traced_memory()[1] < 50 * 2**20
+        finally:
+            tracemalloc.stop()
 
 
 def test_a_las_file_whose_points_leave_its_header_box_says_so():
