@@ -184,9 +184,11 @@ def split(model: TubeModel, k: int, fraction: float, radius: float, gap: float) 
     return m
 
 
-def split_candidates(model: TubeModel) -> list[tuple[str, int, TubeModel]]:
+def split_candidates(model: TubeModel) -> list[tuple[str, int, TubeModel, bool]]:
     """Bends the spline stage may have merged: a large one (two nearly coplanar back-to-back bends) and one
-    whose radius is far beyond the others' or the pipe's (two small bends far apart on one long arc)."""
+    whose radius is far beyond the others' or the pipe's (two small bends far apart on one long arc). The
+    last item marks a fallback: the same large bend split off-centre (0.4, 0.6), tried only when the even
+    split before it showed some gain (:func:`split_by_evidence`)."""
     n = model.n_bends
     rp = model.pipe_radius
     out = []
@@ -195,9 +197,9 @@ def split_candidates(model: TubeModel) -> list[tuple[str, int, TubeModel]]:
         typical = float(np.median(others)) if len(others) else 4.0 * rp
         if model.angles[k] > np.radians(150):
             for f in (0.5, 0.4, 0.6):
-                out.append(("split", k, split(model, k, f, model.radii[k], 0.25 * rp)))
+                out.append(("split", k, split(model, k, f, model.radii[k], 0.25 * rp), f != 0.5))
         if model.radii[k] > 3.0 * typical or (len(others) == 0 and model.radii[k] > 25.0 * rp):
-            out.append(("split", k, split(model, k, 0.5, min(model.radii[k], max(typical, 4.0 * rp)), rp)))
+            out.append(("split", k, split(model, k, 0.5, min(model.radii[k], max(typical, 4.0 * rp)), rp), False))
     return out
 
 
@@ -213,14 +215,22 @@ def split_by_evidence(model: TubeModel, refit, scale: float, max_tries: int = 8)
     improved = True
     while improved and tries < max_tries:
         improved = False
-        for kind, k, cand in split_candidates(model):
+        hopeless = set()  # bends whose even split gained under a quarter of the evidence at its first refit
+        for kind, k, cand, fallback in split_candidates(model):
+            if fallback and k in hopeless:
+                continue
             tries += 1
             fitted, r = refit(cand)
             tol = evidence_tolerance(len(r))
+            s = _score(r, cap)
             # the second refit settles a candidate that the first has brought near the evidence asked for;
             # one whose first refit gained less than half of it is no split (a split the spline stage merged
-            # gains over ten times that at once, a bend that is one arc a few hundredths of it)
-            if _score(r, cap) * (1 + 0.5 * tol) < sigma:
+            # gains over ten times that at once, a bend that is one arc a few hundredths of it), and a bend
+            # whose even split gains less than a quarter of it is one arc: its off-centre splits start no
+            # nearer two bends (each costs a refit)
+            if not fallback and s * (1 + 0.25 * tol) >= sigma:
+                hopeless.add(k)
+            if s * (1 + 0.5 * tol) < sigma:
                 fitted, r = refit(fitted)
             s = _score(r, cap)
             if s * (1 + tol) + 1e-4 * scale < sigma:

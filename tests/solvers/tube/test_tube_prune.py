@@ -233,3 +233,33 @@ def test_normal_equations_after_fun_are_those_computed_afresh():
     fun(x0)  # the latest evaluation is now another point
     A2, b2 = normal_equations(x1, w, r)
     assert np.array_equal(A1, A2) and np.array_equal(b1, b2)
+
+
+def _split_trial(gain_of_even_split: float):
+    """split_by_evidence on a tube with one 200 degree bend, with a refit that returns the same residuals for
+    the model and every candidate except the even split, whose residuals shrink by ``gain_of_even_split``
+    times the evidence tolerance; returns the bend fractions of the candidates refitted."""
+    m = make_model([[30, 0, 200, 10], [30, 0, 0, 0]], 2.0)
+    res = np.random.default_rng(3).normal(0.0, 0.02, 3000)
+    tol = prune.evidence_tolerance(len(res))
+    tried = []
+
+    def refit(model):
+        if model.n_bends == 1:
+            return model, res
+        frac = round(float(model.angles[0] / (model.angles[0] + model.angles[1])), 2)
+        tried.append(frac)
+        return model, res / (1 + gain_of_even_split * tol) if frac == 0.5 else res
+
+    model, changes = prune.split_by_evidence(m, refit, 2.0)
+    assert model.n_bends == 1 and not changes
+    return tried
+
+
+def test_off_centre_splits_are_tried_only_after_an_even_split_showed_some_gain():
+    # the even split of one arc gains nothing: its off-centre splits start no nearer two bends
+    assert _split_trial(0.0) == [0.5]
+    # a gain short of the evidence but over a quarter of it: 0.4 and 0.6 tried too
+    assert _split_trial(0.3) == [0.5, 0.4, 0.6]
+    # over half of it: the even split refitted once more first
+    assert _split_trial(0.7) == [0.5, 0.5, 0.4, 0.6]
