@@ -386,6 +386,49 @@ def _planes(poly: np.ndarray, i: int, last: int, a1: np.ndarray, u1: np.ndarray,
     return e1, e2, along, x1, x2, K, m1, m2, off.max(1)
 
 
+def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarray], directions: list[np.ndarray],
+                      eps: float) -> list[tuple]:
+    """:func:`_planes` of every state of vertex i (its modified tangent lines ``points``, ``directions``) at once:
+    the products that depend on one line (its basis, the chain's coordinates in it, the normals' components)
+    are each state's own calls, every elementwise step runs over the stacked states. The same operations on
+    every element, so each state gets what :func:`_planes` gives it."""
+    S = len(points)
+    if S == 1:
+        return [_planes(poly, i, last, points[0], directions[0], eps)]
+    n = len(poly)
+    bases = [_basis(u1) for u1 in directions]
+    coords = np.stack([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
+                       for a1, u1, (e1, e2) in zip(points, directions, bases)])  # (S, 3, L)
+    along, x1, x2 = coords[:, 0], coords[:, 1], coords[:, 2]
+    js = np.arange(i + 1, n - 1)
+    K = js - i + 1 + (js == last)
+    a = np.cumsum(x1 * x1, axis=1)[:, K - 1]
+    b = np.cumsum(x1 * x2, axis=1)[:, K - 1]
+    d = np.cumsum(x2 * x2, axis=1)[:, K - 1]
+    dv = poly[js + 1] - poly[js]
+    dj = dv / np.maximum(np.sqrt(np.einsum("jk,jk->j", dv, dv)), 1e-300)[:, None]
+    J = len(js)
+    cr = cross(np.repeat(np.asarray(directions), J, axis=0), np.tile(dj, (S, 1)))  # (S J, 3)
+    crn = np.sqrt(np.einsum("jk,jk->j", cr, cr)).reshape(S, J)
+    half, mean = 0.5 * (a - d), 0.5 * (a + d)
+    root = np.hypot(half, b)
+    own = (np.sqrt(np.maximum(mean + root, 0.0) / K) > 2 * eps) | (crn < 1e-9)
+    small = mean - root
+    row1 = np.abs(small - a) >= np.abs(small - d)
+    v0, v1 = np.where(row1, b, small - d), np.where(row1, small - a, b)
+    nv = np.hypot(v0, v1)
+    nv_safe = np.where(nv > 0, nv, 1.0)
+    mc = (cr / np.where(crn > 0, crn, 1.0).reshape(-1)[:, None]).reshape(S, J, 3)
+    mc1 = np.stack([mc[k] @ e1 for k, (e1, _) in enumerate(bases)])
+    mc2 = np.stack([mc[k] @ e2 for k, (_, e2) in enumerate(bases)])
+    m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc1)
+    m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc2)
+    off = np.abs(m1[:, :, None] * x1[:, None, :] + m2[:, :, None] * x2[:, None, :])
+    off[:, np.arange(x1.shape[1])[None, :] >= K[:, None]] = 0.0
+    worst = off.max(2)
+    return [(e1, e2, along[k], x1[k], x2[k], K, m1[k], m2[k], worst[k]) for k, (e1, e2) in enumerate(bases)]
+
+
 @dataclass
 class _State:
     """A way to reach vertex j: arc count, squared error, predecessor, modified line l'_j."""
@@ -451,10 +494,17 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
     for i in range(n - 1):
         if i == last:
             break
+        # the edges out of every state of vertex i searched at once: a state's edges change only the states of
+        # the vertices they reach, never another state of i, so the order of the insertions below is all that
+        # matters. The beam tests then see the states of j as they were before any edge of i: an edge they let
+        # through that a sibling's insertion would have stopped sorts behind a full beam and is cut (the sort is
+        # stable, and the skipped edges are those with more arcs, or as many and no smaller error)
+        reached = []  # (state index, j, arcs) of every edge out of vertex i to search
+        # every edge's plane test at once (:func:`arc_family`'s, the same rule), for every state of i
+        planes = _planes_of_states(poly, i, last, [st.point for st in states[i]], [st.direction for st in states[i]],
+                                   eps) if states[i] else []
         for si, st in enumerate(states[i]):
-            reached = []  # (j, arcs) of every edge out of this state to search; a search changes no state of j
-            # every edge's plane test at once (:func:`arc_family`'s, the same rule)
-            e1, e2, along, x1, x2, K, m1, m2, off = _planes(poly, i, last, st.point, st.direction, eps)
+            e1, e2, along, x1, x2, K, m1, m2, off = planes[si]
             for jj, j in enumerate(range(i + 1, n - 1)):
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:
@@ -479,19 +529,20 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
                 f = _arcs_in_plane(along[:k], x1[:k], x2[:k], h, float(m1[jj]), float(m2[jj]), e1, e2, st.point,
                                    st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1], eps, r_min, None)
                 if f is not None:
-                    reached.append((j, f))
-            if not reached:
+                    reached.append((si, j, f))
+        if not reached:
+            continue
+        # the arcs of all of them searched at once (with those other runs ask for)
+        edges = yield [f for _, _, f in reached]
+        for (si, j, _), e in zip(reached, edges):
+            if e is None:
                 continue
-            # the arcs of all of them searched at once (with those other runs ask for)
-            edges = yield [f for _, f in reached]
-            for (j, _), e in zip(reached, edges):
-                if e is None:
-                    continue
-                cand = _State(st.d + 1, st.sse + e.cost, i, si, e.out_point, e.out_dir, e.t2, e)
-                lst = states[j]
-                lst.append(cand)
-                lst.sort(key=lambda x: (x.d, x.sse))
-                del lst[beam:]
+            st = states[i][si]
+            cand = _State(st.d + 1, st.sse + e.cost, i, si, e.out_point, e.out_dir, e.t2, e)
+            lst = states[j]
+            lst.append(cand)
+            lst.sort(key=lambda x: (x.d, x.sse))
+            del lst[beam:]
     if not states[last]:
         return None
     path, edges = [last], []

@@ -119,3 +119,24 @@ def test_distances_to_the_arc_line_are_those_of_the_densely_sampled_curve():
         brute = np.sqrt(((q[:, None, :] - curve_pts[None]) ** 2).sum(-1)).min(1)
         assert np.allclose(d[0], brute, atol=5e-4)
         assert abs(t2[0, 0] - 5.0) < 1e-12
+
+
+def test_plane_tests_of_several_states_are_each_states_own_bit_for_bit():
+    """The plane tests of every state of a vertex, stacked, against :func:`arcline._planes` of each alone: the
+    chains of a noisy two-bend centreline seen from tangent lines turned and moved as modified lines are."""
+    rng = np.random.default_rng(5)
+    m = make_model([[30, 0, 50, 10], [15, 70, 100, 14], [25, 0, 0, 0]], 4.0)
+    c, _ = sample_centreline(m, 0.5)
+    poly = curve.simplify(c + rng.normal(scale=0.01, size=c.shape), 0.05)
+    last = len(poly) - 2
+    for i in (0, 3, len(poly) // 2, last - 1):
+        d = poly[i + 1] - poly[i]
+        points = [poly[i] + rng.normal(scale=0.05, size=3) for _ in range(3)]
+        directions = [(d + rng.normal(scale=0.05 * np.linalg.norm(d), size=3)) for _ in range(3)]
+        directions = [u / np.linalg.norm(u) for u in directions]
+        stacked = arcline._planes_of_states(poly, i, last, points, directions, 0.2)
+        for got, a1, u1 in zip(stacked, points, directions):
+            want = arcline._planes(poly, i, last, a1, u1, 0.2)
+            assert len(got) == len(want)
+            for g, w in zip(got, want):
+                assert np.array_equal(np.asarray(g), np.asarray(w))
