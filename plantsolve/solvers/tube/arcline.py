@@ -209,6 +209,98 @@ def _arcs_in_plane(along: np.ndarray, x1: np.ndarray, x2: np.ndarray, h: np.ndar
     return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
 
 
+def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, eps: float,
+                    r_min: float) -> list[_Arcs | None]:
+    """:func:`_arcs_in_plane` of every edge in ``asks`` at once: (state index into ``planes``, j, chain length k,
+    index of j in the plane tests, the state's line point, direction and t_lo). The chains of one vertex are
+    prefixes of its states' coordinates, so the elementwise steps run over them stacked; the products of
+    3-vectors and the sums over a chain stay each edge's own calls (numpy's dot is not a sum in order). Each
+    edge gets what :func:`_arcs_in_plane` gives it; a chain with a repeated vertex goes there itself."""
+    F = len(asks)
+    if not F:
+        return []
+    si = np.array([a[0] for a in asks])
+    jj = np.array([a[3] for a in asks])
+    ks = np.array([a[2] for a in asks])
+    along = np.stack([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
+    x1 = np.stack([p[3] for p in planes])[si]
+    x2 = np.stack([p[4] for p in planes])[si]
+    m1 = np.stack([p[6] for p in planes])[si, jj]
+    m2 = np.stack([p[7] for p in planes])[si, jj]
+    L = along.shape[1]
+    inside = np.arange(L)[None, :] < ks[:, None]
+    h = m1[:, None] * x1 + m2[:, None] * x2
+    epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
+    qy = m2[:, None] * x1 - m1[:, None] * x2
+    # each chain's segments in the plane and the turning angles between consecutive directions (the first
+    # from l_i's direction (1, 0), the last to l_j's, which each edge adds below)
+    sx, sy = along[:, 1:] - along[:, :-1], qy[:, 1:] - qy[:, :-1]
+    seg_ok = np.sqrt(sx * sx + sy * sy) > 1e-12
+    out: list[_Arcs | None] = []
+    for f, (s_i, j, k, _, a1, u1, t_lo) in enumerate(asks):
+        if not seg_ok[f, :k - 1].all():
+            e1, e2 = planes[s_i][0], planes[s_i][1]
+            out.append(_arcs_in_plane(along[f, :k], x1[f, :k], x2[f, :k], h[f, :k], float(m1[f]), float(m2[f]),
+                                      e1, e2, a1, u1, t_lo, poly[j], poly[j + 1], eps, r_min, None))
+            continue
+        out.append(_arcs_of_chain(planes[s_i][0], planes[s_i][1], along[f, :k], qy[f, :k], h[f, :k], epsk[f, :k],
+                                  sx[f, :k - 1], sy[f, :k - 1], float(m1[f]), float(m2[f]), a1, u1, t_lo, poly[j],
+                                  poly[j + 1], r_min))
+    return out
+
+
+def _arcs_of_chain(e1, e2, along, qy, h, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj, pj1, r_min):
+    """The rest of :func:`_arcs_in_plane` for one chain whose in-plane coordinates (``along``, ``qy``), tolerances
+    and segments (no zero one) :func:`_arcs_in_planes` computed; the same operations in the same order."""
+    Y = m2 * e1 - m1 * e2
+    rj, dj_ = pj - a1, pj1 - pj
+    a2x, a2y = float(rj @ u1), float(rj @ Y)
+    d2x, d2y = float(dj_ @ u1), float(dj_ @ Y)
+    nd = math.hypot(d2x, d2y)
+    if nd < 1e-12 * (_norm3(dj_) + 1e-300):
+        return None
+    u2x, u2y = d2x / nd, d2y / nd
+    K = len(along)
+    dx = np.empty(K + 1)
+    dy = np.empty(K + 1)
+    dx[0], dy[0] = 1.0, 0.0
+    dx[1:-1], dy[1:-1] = sx, sy
+    dx[-1], dy[-1] = u2x, u2y
+    turn = np.sum(np.arctan2(dx[:-1] * dy[1:] - dy[:-1] * dx[1:], dx[:-1] * dx[1:] + dy[:-1] * dy[1:]))
+    sign = 1.0 if turn >= 0 else -1.0
+    q = np.empty((K, 2))
+    q[:, 0], q[:, 1] = along, qy
+    if sign < 0:  # mirror to a left turn
+        q = q * _MIRROR; a2y = -a2y; u2y = -u2y
+    phi = math.atan2(u2y, u2x) % (2 * math.pi)
+    if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
+        return None
+    n2x, n2y = -u2y, u2x
+    den = n2y - 1.0
+    alpha = (a2x * n2x + a2y * n2y) / den
+    beta = -n2x / den  # u1 = (1, 0)
+    gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
+    rj1 = pj1 - a1
+    p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
+    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y
+    lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
+    cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
+    for a, b in cons:  # constraints a·t1 ≥ b
+        if abs(a) < 1e-14:
+            if b > 0:
+                return None
+            continue
+        if a > 0:
+            lo = max(lo, b / a)
+        else:
+            hi = min(hi, b / a)
+    if hi < lo:
+        return None
+    a2, u2, n2 = np.array([a2x, a2y]), np.array([u2x, u2y]), np.array([n2x, n2y])
+    qa = q - a2
+    return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
+
+
 def _dist_to_arclines(f: list[_Arcs], q: np.ndarray, t1: np.ndarray, R: np.ndarray, along2: np.ndarray,
                       off2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """2D distances of chain points to the left-turning curves of the arc families ``f`` (ray along +x ending at
@@ -499,7 +591,7 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
         # matters. The beam tests then see the states of j as they were before any edge of i: an edge they let
         # through that a sibling's insertion would have stopped sorts behind a full beam and is cut (the sort is
         # stable, and the skipped edges are those with more arcs, or as many and no smaller error)
-        reached = []  # (state index, j, arcs) of every edge out of vertex i to search
+        asks = []  # (state index, j, chain length, ...) of every edge out of vertex i that passed its plane test
         # every edge's plane test at once (:func:`arc_family`'s, the same rule), for every state of i
         planes = _planes_of_states(poly, i, last, [st.point for st in states[i]], [st.direction for st in states[i]],
                                    eps) if states[i] else []
@@ -521,15 +613,12 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
                     continue
                 if lost:
                     continue
-                k = K[jj]
-                h = m1[jj] * x1[:k] + m2[jj] * x2[:k]
                 # an arc may start up to ε before the previous one ended (the straight between
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
-                f = _arcs_in_plane(along[:k], x1[:k], x2[:k], h, float(m1[jj]), float(m2[jj]), e1, e2, st.point,
-                                   st.direction, st.t_lo - (eps if i else 0.0), poly[j], poly[j + 1], eps, r_min, None)
-                if f is not None:
-                    reached.append((si, j, f))
+                asks.append((si, j, int(K[jj]), jj, st.point, st.direction, st.t_lo - (eps if i else 0.0)))
+        reached = [(a[0], a[1], f) for a, f in zip(asks, _arcs_in_planes(planes, asks, poly, eps, r_min))
+                   if f is not None]
         if not reached:
             continue
         # the arcs of all of them searched at once (with those other runs ask for)

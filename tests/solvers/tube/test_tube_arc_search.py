@@ -140,3 +140,41 @@ def test_plane_tests_of_several_states_are_each_states_own_bit_for_bit():
             assert len(got) == len(want)
             for g, w in zip(got, want):
                 assert np.array_equal(np.asarray(g), np.asarray(w))
+
+
+def test_arc_families_of_a_vertex_stacked_are_each_edges_own_bit_for_bit():
+    """The arc families of every edge out of the states of a vertex, from the stacked chains, against
+    :func:`arcline._arcs_in_plane` of each edge alone (every field, bit for bit), a chain with a repeated vertex
+    among them."""
+    rng = np.random.default_rng(7)
+    m = make_model([[30, 0, 50, 10], [15, 70, 100, 14], [25, 0, 0, 0]], 4.0)
+    c, _ = sample_centreline(m, 0.5)
+    poly = curve.simplify(c + rng.normal(scale=0.01, size=c.shape), 0.05)
+    poly = np.insert(poly, 5, poly[5], axis=0)  # a repeated vertex: a zero segment in the chains past it
+    last, eps, compared, repeated = len(poly) - 2, 0.3, 0, 0
+    for i in (0, 2, 4, len(poly) // 2):
+        d = poly[i + 1] - poly[i]
+        points = [poly[i] + rng.normal(scale=0.03, size=3) for _ in range(3)]
+        directions = [d + rng.normal(scale=0.03 * np.linalg.norm(d), size=3) for _ in range(3)]
+        directions = [u / np.linalg.norm(u) for u in directions]
+        planes = arcline._planes_of_states(poly, i, last, points, directions, eps)
+        asks = []
+        for si, (e1, e2, along, x1, x2, K, m1, m2, off) in enumerate(planes):
+            for jj, j in enumerate(range(i + 1, len(poly) - 1)):
+                if off[jj] > 2 * eps:
+                    break
+                if off[jj] <= eps:
+                    asks.append((si, j, int(K[jj]), jj, points[si], directions[si], 0.1 * si - 0.2))
+        got = arcline._arcs_in_planes(planes, asks, poly, eps, 1.0)
+        for (si, j, k, jj, a1, u1, t_lo), f in zip(asks, got):
+            e1, e2, along, x1, x2, K, m1, m2, _ = planes[si]
+            h = m1[jj] * x1[:k] + m2[jj] * x2[:k]
+            want = arcline._arcs_in_plane(along[:k], x1[:k], x2[:k], h, float(m1[jj]), float(m2[jj]), e1, e2, a1, u1,
+                                          t_lo, poly[j], poly[j + 1], eps, 1.0, None)
+            assert (f is None) == (want is None)
+            if want is not None:
+                compared += 1
+                repeated += i < 5 < i + k
+                for name in want.__dataclass_fields__:
+                    assert np.array_equal(np.asarray(getattr(f, name)), np.asarray(getattr(want, name))), name
+    assert compared >= 10 and repeated >= 1
