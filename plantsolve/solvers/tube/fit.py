@@ -657,10 +657,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
 
 
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60, tick=None, tol: float = 1e-10) -> tuple[TubeModel, dict]:
-    """One least-squares round with a fixed sample-to-segment assignment (``tol``: :func:`levenberg_marquardt`'s)."""
+             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment."""
     x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay)
-    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tol=tol, tick=tick)
+    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 

@@ -32,10 +32,6 @@ LM_SUBSAMPLE = 20_000  # early least-squares rounds
 ALL_SAMPLES_AT_ONCE = 50_000  # above: the end lengths and margins of a fit re-assign the samples at the ends only
 SIMPLIFY_FRACTION = 0.25  # polygon simplification tolerance as a fraction of ε (§4.5)
 PRUNE_SUBSAMPLE = 3_000  # candidate refits when choosing the number of bends
-# candidate refits stop at a relative cost decrease of 1e-5 (levenberg_marquardt's tol × 1e3): they are
-# compared on scores that differ by per cent (prune) or tenths of one (BIC), and the final rounds converge
-# to the default 1e-7
-REFIT_TOL = 1e-8
 
 
 def _subsample(n: int, m: int, rng: np.random.Generator) -> np.ndarray:
@@ -260,7 +256,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     last_round: list = []  # [model, samples, residuals] after the latest round, when its ends settled
 
     def rounds(m: TubeModel, P: np.ndarray, thr: float, n_rounds: int, max_nfev: int, radius_mode: str | None = None,
-               dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = (), tol: float = 1e-10):
+               dies: tuple[int, ...] = (), fixed_radii: tuple[float, ...] = ()):
         """Assign samples, fix end lengths, solve; repeated (the assignment changes)."""
         lay = fit.Layout(m.n_bends, radius_mode or mode, opts.bend_radius, fit_rp, dies, fixed_radii)
         info = {}
@@ -271,7 +267,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
             m = fit.set_end_lengths(m, P[inl], seg[inl])
-            solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick, tol=tol)
+            solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
             m = fit.with_end_lengths(solved, m)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
@@ -299,7 +295,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     thr0 = max(0.35 * rp, 3 * max(e for e, _ in inits))
 
     def refit(m: TubeModel):
-        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15, tol=REFIT_TOL)
+        m2, _, _, _ = rounds(m, pts_prune, thr0, 2, 15)
         if last_round and last_round[0] is m2 and last_round[1] is pts_prune:
             return m2, last_round[2]
         return m2, fit.assign(m2, pts_prune, margin)[0]
