@@ -221,14 +221,11 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
         return []
     si = np.array([a[0] for a in asks])
     jj = np.array([a[3] for a in asks])
-    ks = np.array([a[2] for a in asks])
     along = np.stack([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
     x1 = np.stack([p[3] for p in planes])[si]
     x2 = np.stack([p[4] for p in planes])[si]
     m1 = np.stack([p[6] for p in planes])[si, jj]
     m2 = np.stack([p[7] for p in planes])[si, jj]
-    L = along.shape[1]
-    inside = np.arange(L)[None, :] < ks[:, None]
     h = m1[:, None] * x1 + m2[:, None] * x2
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     qy = m2[:, None] * x1 - m1[:, None] * x2
@@ -596,7 +593,7 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
         planes = _planes_of_states(poly, i, last, [st.point for st in states[i]], [st.direction for st in states[i]],
                                    eps) if states[i] else []
         for si, st in enumerate(states[i]):
-            e1, e2, along, x1, x2, K, m1, m2, off = planes[si]
+            K, off = planes[si][5], planes[si][8]  # chain lengths and plane distances per j
             for jj, j in enumerate(range(i + 1, n - 1)):
                 worst = states[j][-1] if len(states[j]) >= beam else None
                 if worst is not None and st.d + 1 > worst.d:

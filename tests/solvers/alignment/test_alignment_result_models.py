@@ -14,14 +14,14 @@ def _same(made, want):
 
 
 def test_trusted_models_are_those_model_construct_makes_field_for_field():
-    port = dict(position=[1.0, 2.0, 3.0], direction=[0.0, 0.0, 1.0])
+    port = {"position": [1.0, 2.0, 3.0], "direction": [0.0, 0.0, 1.0]}
     _same(finalize._trusted(Port)(**port), Port.model_construct(**port))
-    tr = dict(dual_quaternion=[1.0, 0, 0, 0, 0, 0.5, 0, 0], rotation=[1.0, 0, 0, 0], translation=[1.0, 0, 0])
+    tr = {"dual_quaternion": [1.0, 0, 0, 0, 0, 0.5, 0, 0], "rotation": [1.0, 0, 0, 0], "translation": [1.0, 0, 0]}
     _same(finalize._trusted(Transform)(**tr), Transform.model_construct(**tr))
-    comp = dict(id="P1", ports=[Port.model_construct(**port)], transform=Transform.model_construct(**tr),
-                displacement=1.5, rotation_angle=0.25, length_change=None, up=[0.0, 0.0, 1.0])
+    comp = {"id": "P1", "ports": [Port.model_construct(**port)], "transform": Transform.model_construct(**tr),
+            "displacement": 1.5, "rotation_angle": 0.25, "length_change": None, "up": [0.0, 0.0, 1.0]}
     _same(finalize._trusted(ComponentResult)(**comp), ComponentResult.model_construct(**comp))
-    conn = dict(from_=("P1", 0), to=("P2", 1), position_error=0.0, angle_error=0.1, cut=False)
+    conn = {"from_": ("P1", 0), "to": ("P2", 1), "position_error": 0.0, "angle_error": 0.1, "cut": False}
     _same(finalize._trusted(ConnectionResult)(**conn), ConnectionResult.model_construct(**conn))
 
 
