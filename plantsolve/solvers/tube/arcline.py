@@ -337,8 +337,8 @@ def _family_lines(f: list[_Arcs]) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
 
 def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64) -> list[Edge | None]:
     """The best arc (least squared error) of each family, or None: a t1 grid of ``grid`` points zoomed in three
-    times around the best (or least violating) sample, all families at once (the arc search of one beam state
-    over every j it reaches). Element for element the operations of a search of one family, and the sums of
+    times around the best (or least violating) sample, all families at once (the arc search of the beam states
+    of a vertex over every j they reach). Element for element the operations of a search of one family, and the sums of
     squares over exactly its chain, so the arcs are those a search of each alone finds. ``r_min``: the least
     bend radius, of all families or of each."""
     out: list[Edge | None] = [None] * len(families)
@@ -546,7 +546,7 @@ def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[T
     """:func:`fit_arcline` of every (polygon, ε, r_min, beam) in ``searches``, run in lockstep: the arcs that
     the current states of all of them ask for are searched in one :func:`best_arcs` call. That search is
     element for element the search of each family alone, so every result is the one its own run gives;
-    the batch only spreads numpy's per-call overhead (a state asks for ~3 arcs of ~8 chain points)."""
+    the batch only spreads numpy's per-call overhead (the states of a vertex ask for ~10 arcs of ~8 chain points)."""
     runs = [_search_states(*s) for s in searches]
     out: list[TubeModel | None] = [None] * len(runs)
     asks: dict[int, list[_Arcs]] = {}
@@ -571,8 +571,9 @@ def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[T
 
 
 def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
-    """Algorithm 1 as a generator: it yields the arc families one state needs searched (every edge out of it
-    that passes the plane test) and is sent their best arcs (:func:`best_arcs`); it returns the model."""
+    """Algorithm 1 as a generator: it yields the arc families the states of one vertex need searched (every edge
+    out of them that passes the plane test) and is sent their best arcs (:func:`best_arcs`); it returns the
+    model."""
     n = len(poly)
     if n < 2:
         return None
