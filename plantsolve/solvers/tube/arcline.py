@@ -159,54 +159,10 @@ def _arcs_in_plane(along: np.ndarray, x1: np.ndarray, x2: np.ndarray, h: np.ndar
     """:func:`arc_family` once the chain passed its plane test: the chain's coordinates along l_i (``along``)
     and in (e1, e2), its offsets ``h`` from the plane of normal m1 e1 + m2 e2."""
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
-    Y = m2 * e1 - m1 * e2
-    q = np.empty((len(along), 2))
-    q[:, 0], q[:, 1] = along, m2 * x1 - m1 * x2
-    rj, dj_ = pj - a1, pj1 - pj
-    a2x, a2y = float(rj @ u1), float(rj @ Y)
-    d2x, d2y = float(dj_ @ u1), float(dj_ @ Y)
-    nd = math.hypot(d2x, d2y)
-    if nd < 1e-12 * (_norm3(dj_) + 1e-300):
-        return None
-    u2x, u2y = d2x / nd, d2y / nd
-    seg = q[1:] - q[:-1]
-    seg = seg[np.sqrt(np.add.reduce(seg * seg, axis=1)) > 1e-12]
-    dirs = np.empty((len(seg) + 2, 2))
-    dirs[0], dirs[1:-1], dirs[-1] = _X2, seg, (u2x, u2y)
-    turn = np.sum(np.arctan2(dirs[:-1, 0] * dirs[1:, 1] - dirs[:-1, 1] * dirs[1:, 0],
-                             (dirs[:-1] * dirs[1:]).sum(1)))
-    sign = 1.0 if turn >= 0 else -1.0
-    if sign < 0:  # mirror to a left turn
-        q = q * _MIRROR; a2y = -a2y; u2y = -u2y
-    phi = math.atan2(u2y, u2x) % (2 * math.pi)
-    if phi < 1e-7 or phi > 2 * np.pi - 1e-7:
-        return None
-    n2x, n2y = -u2y, u2x
-    den = n2y - 1.0
-    alpha = (a2x * n2x + a2y * n2y) / den
-    beta = -n2x / den  # u1 = (1, 0)
-    # t2 = t1·u2x − a2·u2 + R (n1·u2), n1 = (0, 1)
-    gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
-    rj1 = pj1 - a1
-    p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
-    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y if t_hi is None else t_hi
-    lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
-    cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
-    # constraints a·t1 ≥ b
-    for a, b in cons:
-        if abs(a) < 1e-14:
-            if b > 0:
-                return None
-            continue
-        if a > 0:
-            lo = max(lo, b / a)
-        else:
-            hi = min(hi, b / a)
-    if hi < lo:
-        return None
-    a2, u2, n2 = np.array([a2x, a2y]), np.array([u2x, u2y]), np.array([n2x, n2y])
-    qa = q - a2
-    return _Arcs(q, epsk, a2, u2, n2, qa @ u2, np.abs(qa @ n2), phi, alpha, beta, lo, hi, a1, u1, Y * sign)
+    qy = m2 * x1 - m1 * x2
+    sx, sy = along[1:] - along[:-1], qy[1:] - qy[:-1]
+    keep = np.sqrt(sx * sx + sy * sy) > 1e-12
+    return _arcs_of_chain(e1, e2, along, qy, epsk, sx[keep], sy[keep], m1, m2, a1, u1, t_lo, pj, pj1, r_min, t_hi)
 
 
 def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, eps: float,
@@ -215,7 +171,7 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
     index of j in the plane tests, the state's line point, direction and t_lo). The chains of one vertex are
     prefixes of its states' coordinates, so the elementwise steps run over them stacked; the products of
     3-vectors and the sums over a chain stay each edge's own calls (numpy's dot is not a sum in order). Each
-    edge gets what :func:`_arcs_in_plane` gives it; a chain with a repeated vertex goes there itself."""
+    edge gets what :func:`_arcs_in_plane` gives it."""
     F = len(asks)
     if not F:
         return []
@@ -235,20 +191,17 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
     seg_ok = np.sqrt(sx * sx + sy * sy) > 1e-12
     out: list[_Arcs | None] = []
     for f, (s_i, j, k, _, a1, u1, t_lo) in enumerate(asks):
-        if not seg_ok[f, :k - 1].all():
-            e1, e2 = planes[s_i][0], planes[s_i][1]
-            out.append(_arcs_in_plane(along[f, :k], x1[f, :k], x2[f, :k], h[f, :k], float(m1[f]), float(m2[f]),
-                                      e1, e2, a1, u1, t_lo, poly[j], poly[j + 1], eps, r_min, None))
-            continue
-        out.append(_arcs_of_chain(planes[s_i][0], planes[s_i][1], along[f, :k], qy[f, :k], h[f, :k], epsk[f, :k],
-                                  sx[f, :k - 1], sy[f, :k - 1], float(m1[f]), float(m2[f]), a1, u1, t_lo, poly[j],
-                                  poly[j + 1], r_min))
+        sxf, syf, ok = sx[f, :k - 1], sy[f, :k - 1], seg_ok[f, :k - 1]
+        if not ok.all():  # a repeated vertex: its zero segment turns nothing
+            sxf, syf = sxf[ok], syf[ok]
+        out.append(_arcs_of_chain(planes[s_i][0], planes[s_i][1], along[f, :k], qy[f, :k], epsk[f, :k], sxf, syf,
+                                  float(m1[f]), float(m2[f]), a1, u1, t_lo, poly[j], poly[j + 1], r_min, None))
     return out
 
 
-def _arcs_of_chain(e1, e2, along, qy, h, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj, pj1, r_min):
-    """The rest of :func:`_arcs_in_plane` for one chain whose in-plane coordinates (``along``, ``qy``), tolerances
-    and segments (no zero one) :func:`_arcs_in_planes` computed; the same operations in the same order."""
+def _arcs_of_chain(e1, e2, along, qy, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj, pj1, r_min, t_hi):
+    """:func:`_arcs_in_plane` once the chain's in-plane coordinates (``along``, ``qy``), tolerances and segments
+    (``sx``, ``sy``, none of zero length) are known (computed there, or for the chains of a vertex stacked)."""
     Y = m2 * e1 - m1 * e2
     rj, dj_ = pj - a1, pj1 - pj
     a2x, a2y = float(rj @ u1), float(rj @ Y)
@@ -258,8 +211,8 @@ def _arcs_of_chain(e1, e2, along, qy, h, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj,
         return None
     u2x, u2y = d2x / nd, d2y / nd
     K = len(along)
-    dx = np.empty(K + 1)
-    dy = np.empty(K + 1)
+    dx = np.empty(len(sx) + 2)
+    dy = np.empty(len(sx) + 2)
     dx[0], dy[0] = 1.0, 0.0
     dx[1:-1], dy[1:-1] = sx, sy
     dx[-1], dy[-1] = u2x, u2y
@@ -276,10 +229,11 @@ def _arcs_of_chain(e1, e2, along, qy, h, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj,
     den = n2y - 1.0
     alpha = (a2x * n2x + a2y * n2y) / den
     beta = -n2x / den  # u1 = (1, 0)
+    # t2 = t1·u2x − a2·u2 + R (n1·u2), n1 = (0, 1)
     gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
     rj1 = pj1 - a1
     p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
-    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y
+    t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y if t_hi is None else t_hi
     lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
     cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
     for a, b in cons:  # constraints a·t1 ≥ b
@@ -449,30 +403,7 @@ def _planes(poly: np.ndarray, i: int, last: int, a1: np.ndarray, u1: np.ndarray,
     coordinates are those of one array and their scatter sums running sums. Returns the basis (e1, e2), the
     coordinates (along, x1, x2) of p_i … p_{n-1}, and per j the chain length, the plane normal (m1, m2) and
     the largest distance of a chain vertex from the plane."""
-    n = len(poly)
-    e1, e2 = _basis(u1)
-    along, x1, x2 = ((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
-    js = np.arange(i + 1, n - 1)
-    K = js - i + 1 + (js == last)
-    a, b, d = np.cumsum(x1 * x1)[K - 1], np.cumsum(x1 * x2)[K - 1], np.cumsum(x2 * x2)[K - 1]
-    dv = poly[js + 1] - poly[js]
-    dj = dv / np.maximum(np.sqrt(np.einsum("jk,jk->j", dv, dv)), 1e-300)[:, None]
-    cr = cross(np.broadcast_to(u1, dj.shape), dj)
-    crn = np.sqrt(np.einsum("jk,jk->j", cr, cr))
-    half, mean = 0.5 * (a - d), 0.5 * (a + d)
-    root = np.hypot(half, b)
-    own = (np.sqrt(np.maximum(mean + root, 0.0) / K) > 2 * eps) | (crn < 1e-9)
-    small = mean - root
-    row1 = np.abs(small - a) >= np.abs(small - d)
-    v0, v1 = np.where(row1, b, small - d), np.where(row1, small - a, b)
-    nv = np.hypot(v0, v1)
-    nv_safe = np.where(nv > 0, nv, 1.0)
-    mc = cr / np.where(crn > 0, crn, 1.0)[:, None]
-    m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc @ e1)
-    m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc @ e2)
-    off = np.abs(m1[:, None] * x1[None, :] + m2[:, None] * x2[None, :])
-    off[np.arange(len(x1))[None, :] >= K[:, None]] = 0.0
-    return e1, e2, along, x1, x2, K, m1, m2, off.max(1)
+    return _planes_of_states(poly, i, last, [a1], [u1], eps)[0]
 
 
 def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarray], directions: list[np.ndarray],
@@ -480,10 +411,8 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     """:func:`_planes` of every state of vertex i (its modified tangent lines ``points``, ``directions``) at once:
     the products that depend on one line (its basis, the chain's coordinates in it, the normals' components)
     are each state's own calls, every elementwise step runs over the stacked states. The same operations on
-    every element, so each state gets what :func:`_planes` gives it."""
+    every element, so each state gets what it gets alone (:func:`_planes`)."""
     S = len(points)
-    if S == 1:
-        return [_planes(poly, i, last, points[0], directions[0], eps)]
     n = len(poly)
     bases = [_basis(u1) for u1 in directions]
     coords = np.stack([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
