@@ -202,17 +202,32 @@ def loads_json(text: str | bytes) -> Any:
     return json.loads(text, object_pairs_hook=_unique_keys)
 
 
+def _refuse_cut(error: json.JSONDecodeError) -> None:
+    """A 422 on ``file`` saying that a JSON upload ends before its document is complete (a request is one
+    object: nothing of a cut one is usable), with the line and column where it stops; other JSON errors
+    return."""
+    # a string still open runs to the end of the text too (a raw line break inside one is another error)
+    if error.pos >= len(error.doc.rstrip()) or error.msg.startswith("Unterminated string"):
+        raise reject(f"the JSON ends before its document is complete (at line {error.lineno}, column {error.colno}: "
+                     f"{error.msg}); the file was cut? Nothing of a cut request is used") from None
+
+
 def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold a request object",
-                list_as: str | None = None) -> dict:
+                list_as: str | None = None, refuse_cut: bool = False) -> dict:
     """An uploaded JSON file that must hold one object; a 422 on ``file`` saying why it does not (``not_an_object``
     names what the format's object is). With ``list_as`` a bare list is the request's field of that name (a
-    point or position list saved on its own). Bytes are read as :func:`decode_text` reads text (a Windows
-    editor's UTF-16 or Windows-1252)."""
+    point or position list saved on its own). With ``refuse_cut`` a document that ends before it is complete is
+    said to be cut (:func:`_refuse_cut`) rather than invalid. Bytes are read as :func:`decode_text` reads text (a
+    Windows editor's UTF-16 or Windows-1252)."""
     if isinstance(text, bytes):
         text = decode_text(text, "JSON file")
     try:
         body = loads_json(text)
-    except (json.JSONDecodeError, UnicodeDecodeError, DuplicateKey) as e:
+    except json.JSONDecodeError as e:
+        if refuse_cut:
+            _refuse_cut(e)
+        raise reject(f"invalid JSON: {e}") from None
+    except (UnicodeDecodeError, DuplicateKey) as e:
         raise reject(f"invalid JSON: {e}") from None
     if list_as is not None and isinstance(body, list):
         body = {list_as: body}

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from typing import Any, Mapping, Sequence
 
-import json
 
 from pydantic import ValidationError
 
@@ -77,21 +76,6 @@ def source_warnings(source: Mapping[str, Any] | None) -> list[Diagnostic]:
         except ValidationError:
             continue
     return found
-
-
-def refuse_cut_json(text: str | bytes) -> None:
-    """A 422 on ``file`` saying that a JSON upload ends before its document is complete (a request is one
-    object: nothing of a cut one is usable), with the line and column where it stops; other JSON errors
-    are left to the kind's reader."""
-    try:
-        json.loads(text)
-    except json.JSONDecodeError as e:
-        # a string still open runs to the end of the text too (a raw line break inside one is another error)
-        if e.pos >= len(e.doc.rstrip()) or e.msg.startswith("Unterminated string"):
-            raise reject(f"the JSON ends before its document is complete (at line {e.lineno}, column {e.colno}: "
-                         f"{e.msg}); the file was cut? Nothing of a cut request is used") from None
-    except (UnicodeDecodeError, RecursionError):
-        return
 
 
 def refuse_noise_stl(declared: int, whole: int, unreadable: int, why: str) -> None:

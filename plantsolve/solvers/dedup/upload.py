@@ -9,7 +9,6 @@ from plantsolve.schemas.dedup import DedupOptions, DedupRequest
 from plantsolve.solvers.base import StoredInput, json_object, reject, validated
 from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, check_header
 from plantsolve.solvers.dedup.source import ZIP_MAGIC, ends, is_blank
-from plantsolve.solvers.skipped_input import refuse_cut_json
 from plantsolve.solvers.step_file import TRAILER_BYTES
 
 UPLOAD_EXTENSIONS = (".ifc", ".ifczip", ".json")
@@ -29,8 +28,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> DedupRequest:
     if is_blank(source):
         raise reject("the file is empty")
     if source.extension == ".json":
-        refuse_cut_json(source.read())
-        body = json_object(source.read())
+        body = json_object(source.read(), refuse_cut=True)
         if options:
             body = {**body, "options": {**(body.get("options") or {}), **_options(options).model_dump(exclude_unset=True)}}
         return validated(DedupRequest, body, ("file",))

@@ -6,7 +6,6 @@ from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject, validated
-from plantsolve.solvers.skipped_input import refuse_cut_json
 
 UPLOAD_EXTENSIONS = (".json",)
 
@@ -17,8 +16,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
     if not content.strip():
         raise reject("the file is empty")
     text = decode_text(content, "JSON file")
-    refuse_cut_json(text)
-    body = json_object(text)
+    body = json_object(text, refuse_cut=True)
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:

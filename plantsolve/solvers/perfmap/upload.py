@@ -62,7 +62,7 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, deco
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
-from plantsolve.solvers.skipped_input import skipped_lines, ends_mid_line, refuse_cut_json, truncated_file
+from plantsolve.solvers.skipped_input import skipped_lines, ends_mid_line, truncated_file
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -721,8 +721,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     else:
-        refuse_cut_json(text)
-        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions")
+        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
+                           refuse_cut=True)
     return _validated(body, options, lines)
 
 
