@@ -17,7 +17,6 @@
 
 from __future__ import annotations
 
-
 import networkx as nx
 import numpy as np
 from scipy.sparse import coo_matrix
