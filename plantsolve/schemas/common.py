@@ -53,6 +53,20 @@ Quaternion = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]
 Units = Literal["mm", "cm", "m", "in", "ft"]
 """Length unit of a request; results are given in the same unit."""
 
+LENGTH = "{units}"
+"""The unit of a result's lengths: the result's own ``units`` field (the request's length unit)."""
+
+
+def unit(symbol: str) -> dict[str, str]:
+    """The unit of a result field as the OpenAPI document states it: ``{"x-unit": symbol}``.
+
+    ``symbol`` is a unit expression pint reads (``"V"``, ``"m/s"``, ``"deg"``, ``"1"`` for a pure number or a
+    fraction), in which ``{name}`` stands for the unit held by the result's field ``name`` (dotted for a nested
+    one): ``unit(LENGTH)``, ``unit(LENGTH + "^3")``, ``unit("{units.flow}")``. Pass it as a field's
+    ``json_schema_extra``; every number of every result carries one (a test walks the result schemas).
+    """
+    return {"x-unit": symbol}
+
 
 class StrictModel(BaseModel):
     """Base of request models: unknown fields are an error, not silently dropped."""
