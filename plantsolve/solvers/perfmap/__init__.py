@@ -17,7 +17,7 @@ from plantsolve.solvers.base import ResultOperation, SolverSpec, stored_example
 
 # the files upload.py reads, named here so that the kind map lists them without importing the reader (a test holds
 # the two lists equal)
-UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
+UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py", ".map")
 
 __version__ = "1.2.0"
 

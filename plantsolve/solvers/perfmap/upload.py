@@ -59,12 +59,13 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.validation import prepare
 from plantsolve.solvers.perfmap.workbook import read_workbook
 from plantsolve.solvers.skipped_input import skipped_lines, ends_mid_line, truncated_file
 
-UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
+UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py", ".map")
 MEASURED = ("flow", "pressure", "efficiency")
 # Names rig software and cycle codes give their columns (matched after units and separators are
 # stripped, case-insensitively). Setting parameters have roles of their own; the solver takes the
@@ -700,6 +701,9 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
             raise reject("options.sheet must be a sheet name", ("options", "sheet"))
         positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
+        return _validated(body, options, lines)
+    if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
+        body, lines, options = gasturb_request_body(content, options)
         return _validated(body, options, lines)
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:

@@ -129,24 +129,39 @@ def test_gasturb_table_of_the_closed_form_map_holds_its_values_and_surge_line():
     assert choke_w == pytest.approx(xc, rel=1e-6) and choke_pr == pytest.approx(1 + C_CHOKE * xc ** 2, rel=1e-6)
 
 
+def _record(lines: list[str], i: int, n: int) -> tuple[list[float], int]:
+    """A record of the published layout at line i: a leading number (key or speed) and n values, four on the first
+    line and five on each further line; (its numbers, the next line)."""
+    out = []
+    for k in range(1 + max(0, -(-(n - 4) // 5))):
+        cells = lines[i + k].split()
+        assert len(cells) == (5 if k == 0 else min(5, n - 4 - 5 * (k - 1))) or (k == 0 and n < 4 and len(cells) == n + 1)
+        out += [float(c) for c in cells]
+    return out, i + 1 + max(0, -(-(n - 4) // 5))
+
+
 def read_gasturb(text: str) -> dict:
     """The GasTurb layout as map readers parse it: a block title, 'R.CCC' (R - 1 rows, CCC - 1 columns) and the
-    column values, then one row per speed; a limit line is 'R.CCC' + flows, then a label + pressure ratios."""
+    column values, then one row per speed, each record four values after its first number and five a line after
+    that; a limit line is 'R.CCC' + flows, then a label + pressure ratios; a blank line closes each table."""
     lines = text.splitlines()
     out = {}
     for i, title in enumerate(lines):
-        if title in ("Mass Flow", "Efficiency", "Pressure Ratio"):
-            head = lines[i + 1].split()
-            rows, cols = divmod(float(head[0]), 1)
-            n_speed, n_beta = round(rows) - 1, round(cols * 1000) - 1
-            beta = np.array(head[1:], dtype=float)
-            body = np.array([lines[i + 2 + k].split() for k in range(n_speed)], dtype=float)
-            assert len(beta) == n_beta and body.shape == (n_speed, n_beta + 1) and lines[i + 2 + n_speed] == ""
-            out[title] = (body[:, 0], beta, body[:, 1:])
-        elif title in ("Surge Line", "Choke Line"):
-            head = lines[i + 1].split()
-            assert round(float(head[0])) == 2 and round(float(head[0]) % 1 * 1000) - 1 == len(head) - 1
-            out[title] = (np.array(head[1:], dtype=float), np.array(lines[i + 2].split()[1:], dtype=float))
+        if title in ("Mass Flow", "Efficiency", "Pressure Ratio", "Surge Line", "Choke Line"):
+            rows, cols = divmod(float(lines[i + 1].split()[0]), 1)
+            n_rows, n_cols = round(rows) - 1, round(cols * 1000) - 1
+            head, j = _record(lines, i + 1, n_cols)
+            body = []
+            for _ in range(n_rows):
+                row, j = _record(lines, j, n_cols)
+                body.append(row)
+            body = np.array(body)
+            assert lines[j] == ""
+            if title in ("Surge Line", "Choke Line"):
+                assert n_rows == 1
+                out[title] = (np.array(head[1:]), body[0, 1:])
+            else:
+                out[title] = (body[:, 0], np.array(head[1:]), body[:, 1:])
     return out
 
 

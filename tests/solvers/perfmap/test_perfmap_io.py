@@ -30,7 +30,7 @@ def _rejected_locs(body) -> list[tuple]:
 
 
 def test_contract_constants():
-    assert SPEC.upload_extensions == (".csv", ".xlsx", ".json", ".py")
+    assert SPEC.upload_extensions == (".csv", ".xlsx", ".json", ".py", ".map")
     assert SPEC.soft_time_limit < SPEC.time_limit
     assert isinstance(__version__, str) and SPEC.version == __version__
 

@@ -1,0 +1,499 @@
+"""GasTurb / GSP compressor and fan map files (``.map``) read into speed lines.
+
+The layout GasTurb writes and GSP and GSPy read:
+
+- a first line with the map type indicator and a title (``99    Sample Axial compressor map``); 99 is the usual
+  type, any whole number is taken (the type is reported);
+- ``Reynolds: RNI=x1 f=y1 RNI=x2 f=y2`` (optional): the cycle code's Reynolds-number correction, reported and
+  not applied (the tables are the map at its reference Reynolds number);
+- tables, each under its keyword line: ``Mass Flow``, ``Efficiency``, ``Pressure Ratio`` (beta the argument, the
+  speed the parameter), ``Surge Line`` and optionally ``Choke Line`` (corrected flows the arguments, then one row
+  of pressure ratios). A table is a key, ``rows + columns / 1000`` (rows = speeds + 1, columns = arguments + 1),
+  the arguments, then per speed the speed and its values. The published layout puts the key and four values on
+  a line and five a line after that, every speed starting a line; files that write each record on one line read
+  the same. A blank line (or the next keyword) closes a table.
+- A map with variable geometry holds one such set of tables per geometry setting, each set after a line naming
+  the setting (``VG angle = -5``, ``Alpha: 10``): the setting is then a second parameter before the speed.
+
+A turbine map (``Min Pressure Ratio``/``Max Pressure Ratio`` tables) is refused naming what it is: perfmap fits
+compressor characteristics (pressure falling with flow). The speed is GasTurb's relative corrected speed
+(N/sqrt(T) over its map reference value, dimensionless) and the flow the corrected mass flow W sqrt(T)/P; the file
+states no flow unit, so the upload's ``units`` option (``{"flow": "kg/s"}``) or a ``flow [unit]`` in the title
+(as this package's own export writes) states it, else the result says none. Each beta point of a speed line is a
+measured point; the beta values themselves are reported and not needed.
+
+Every refusal names the line (``("file", "line", n)``, or ``("file", "row", n, field)`` for a value); a file
+that ends inside a speed table is refused as ``truncated_file``, one that ends inside a limit line (surge, choke)
+is read with a ``truncated_file`` warning.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity
+from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE
+from plantsolve.solvers.skipped_input import truncated_file
+
+SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
+LIMIT_TABLES = ("Surge Line", "Choke Line")
+TURBINE_TABLES = ("Min Pressure Ratio", "Max Pressure Ratio")
+_KEYWORDS = {k.lower(): k for k in SPEED_TABLES + LIMIT_TABLES + TURBINE_TABLES}
+# bounds on a table's key: beyond them no cycle code reads the map (GSP: 40 beta values, 150 speeds), and a
+# garbled key must not make the reader allocate for millions of values
+MAX_ARGUMENTS = 200
+MAX_ROWS = 2000
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
+_SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
+                           r"(?:\[([^\]]*)\])?\s*$")
+_TITLE_UNIT = re.compile(r"\b(flow|pressure)\s*\[([^\]]+)\]", re.I)
+_REYNOLDS = re.compile(r"RNI\s*=\s*(\S+?)\s+f\s*=\s*(\S+)", re.I)
+
+
+@dataclass
+class Table:
+    """One table of the file: its keyword, the arguments (beta, or flows for a limit line), the parameters
+    (speeds) and the values [parameter][argument], with the file line of the keyword and of each value."""
+
+    name: str
+    line: int
+    args: np.ndarray
+    params: np.ndarray
+    values: np.ndarray
+    value_lines: np.ndarray
+    param_lines: list[int]
+
+
+@dataclass
+class TableSet:
+    """The tables of one geometry setting (all of the file when it has no setting lines)."""
+
+    setting: float | None = None
+    label: str = ""
+    unit: str = ""
+    line: int = 0
+    tables: dict[str, Table] = field(default_factory=dict)
+
+
+def _number(token: str) -> float:
+    """A number as map files write it: decimal point, or a decimal comma (no separator can be a comma here:
+    values are separated by blanks), a Fortran ``D`` exponent."""
+    t = token.strip()
+    if _DECIMAL_COMMA.match(t):
+        t = t.replace(",", ".")
+    return float(t.replace("D", "E").replace("d", "e"))
+
+
+def _is_number(token: str) -> bool:
+    try:
+        _number(token)
+        return True
+    except ValueError:
+        return False
+
+
+class _Lines:
+    """The file's lines with a cursor; line numbers are 1-based, as an editor shows them."""
+
+    def __init__(self, text: str):
+        self.lines = text.splitlines()
+        self.i = 0
+
+    def done(self) -> bool:
+        return self.i >= len(self.lines)
+
+    def number(self) -> int:
+        return self.i + 1
+
+    def peek(self) -> str:
+        return self.lines[self.i]
+
+
+def _keyword(line: str) -> str | None:
+    key = re.sub(r"\s+", " ", line.strip().rstrip(":").strip()).lower()
+    return _KEYWORDS.get(key)
+
+
+def _numbers(line: str, n: int, what: str) -> list[float]:
+    values = []
+    for token in line.split():
+        try:
+            v = _number(token)
+        except ValueError:
+            shown = token if len(token) <= 30 else token[:30] + "…"
+            raise reject(f"line {n}: {shown!r} is not a number ({what})", ("file", "line", n)) from None
+        values.append(v)
+    return values
+
+
+class _Cut(Exception):
+    """The file ends inside a table."""
+
+    def __init__(self, table: str, line: int, got: str):
+        super().__init__(table)
+        self.table, self.line, self.got = table, line, got
+
+
+def _read_values(src: _Lines, first: list[float], count: int, name: str, start: int, what: str
+                 ) -> tuple[list[float], list[int]]:
+    """``count`` values: ``first`` (read from the current record's first line) and the continuation lines after
+    it; a continuation line that is blank, a keyword or text ends the table early (refused naming the line)."""
+    values, lines = list(first), [src.number() - 1] * len(first)
+    while len(values) < count:
+        if src.done():
+            raise _Cut(name, start, f"{len(values)} of the {count} values of {what}")
+        line = src.peek()
+        n = src.number()
+        if not line.strip() or _keyword(line):
+            raise reject(f"line {n}: the {name} table (line {start}) ends after {len(values)} of the {count} values "
+                         f"of {what} that its key announces", ("file", "line", n))
+        more = _numbers(line, n, f"{name} table, {what}")
+        values += more
+        lines += [n] * len(more)
+        src.i += 1
+    if len(values) > count:
+        n = lines[count]
+        raise reject(f"line {n}: {len(values) - count} value(s) more than the {count} of {what} that the {name} "
+                     f"table's key (line {start + 1}) announces; each speed starts a new line", ("file", "line", n))
+    return values, lines
+
+
+def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
+    while not src.done() and not src.peek().strip():  # a blank line between keyword and key is tolerated
+        src.i += 1
+    if src.done():
+        raise _Cut(name, keyword_line, "no key")
+    n = src.number()
+    head = _numbers(src.peek(), n, f"{name} table key")
+    if not head:
+        raise reject(f"line {n}: the {name} table has no key", ("file", "line", n))
+    key = head[0]
+    rows = int(key) if math.isfinite(key) and key > 0 else 0
+    cols = round((key - rows) * 1000) if rows else 0
+    if rows < 2 or cols < 2 or abs((key - rows) * 1000 - cols) > 1e-6:
+        raise reject(f"line {n}: {key:g} is no table key of the {name} table (rows + columns / 1000, e.g. 15.010 for "
+                     "14 speeds of 9 beta values)", ("file", "line", n))
+    if cols - 1 > MAX_ARGUMENTS or rows - 1 > MAX_ROWS:
+        raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
+                     f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads 150 of 40)", ("file", "line", n))
+    src.i += 1
+    args, _ = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
+    params, values, value_lines, param_lines = [], [], [], []
+    for r in range(rows - 1):
+        if src.done():
+            raise _Cut(name, keyword_line, f"{r} of the {rows - 1} rows")
+        line, m = src.peek(), src.number()
+        if not line.strip() or _keyword(line):
+            raise reject(f"line {m}: the {name} table (line {keyword_line}) ends after {r} of the {rows - 1} rows "
+                         f"that its key (line {n}) announces", ("file", "line", m))
+        row = _numbers(line, m, f"{name} table")
+        src.i += 1
+        vals, lines = _read_values(src, row[1:], cols - 1, name, keyword_line, f"row {r + 1}")
+        params.append(row[0])
+        values.append(vals)
+        value_lines.append(lines)
+        param_lines.append(m)
+    if not src.done() and src.peek().strip() and not _keyword(src.peek()) and _is_number(src.peek().split()[0]):
+        m = src.number()
+        raise reject(f"line {m}: more rows than the {rows - 1} that the {name} table's key (line {n}) announces",
+                     ("file", "line", m))
+    return Table(name, keyword_line, np.array(args), np.array(params), np.array(values), np.array(value_lines),
+                 param_lines)
+
+
+def _key_follows(src: _Lines) -> bool:
+    """The next non-blank line after the current one starts with a table key (rows + columns / 1000)."""
+    for line in src.lines[src.i + 1:src.i + 3]:
+        if line.strip():
+            try:
+                key = _number(line.split()[0])
+            except ValueError:
+                return False
+            return math.isfinite(key) and key >= 2 and abs((key - int(key)) * 1000 - round((key - int(key)) * 1000)) \
+                < 1e-6 and round((key - int(key)) * 1000) >= 2
+    return False
+
+
+def _skip_table(src: _Lines, name: str, n: int) -> dict:
+    try:
+        t = _read_table(src, name, n)
+    except _Cut as cut:
+        raise reject(f"the file ends inside the {name!r} table (line {cut.line}; {cut.got}): the file was cut?",
+                     ("file", "line", cut.line), type="truncated_file") from None
+    return {"rows": int(t.values.shape[0]), "columns": int(t.values.shape[1])}
+
+
+def _not_a_map(text: str) -> InputRejected:
+    head = text.lstrip()[:2000]
+    if "MapData" in head or "np.array(" in head or head.startswith(("import ", "from ")):
+        hint = "it is Python text (a pyCycle/NPSS MapData module?): upload it as .py"
+    elif head[:1] in "{[":
+        hint = "it looks like JSON: upload a JSON request as .json"
+    elif "," in head.split("\n", 1)[0] or ";" in head.split("\n", 1)[0] or "\t" in head.split("\n", 1)[0]:
+        hint = "it looks like a table with separators (CSV?): upload it as .csv"
+    else:
+        hint = "a GasTurb/GSP map has a '99 title' line and the tables Mass Flow, Efficiency, Pressure Ratio"
+    return reject(f"no GasTurb/GSP compressor map here: none of its tables (Mass Flow, Efficiency, Pressure Ratio) "
+                  f"was found; {hint}")
+
+
+def read_map(text: str) -> tuple[int | None, str, dict, list[TableSet], list[Diagnostic]]:
+    """(map type, title, Reynolds data, table sets, notes) of a map file's text; raises :class:`InputRejected`
+    naming the line."""
+    src = _Lines(text.replace("\x1a", ""))
+    notes: list[Diagnostic] = []
+    map_type, title, reynolds = None, "", {}
+    sets: list[TableSet] = [TableSet()]
+    seen_header = False
+    ignored: list[dict] = []  # tables of other names: read (so that a garbled one is refused) and left out
+    while not src.done():
+        line, n = src.peek(), src.number()
+        stripped = line.strip()
+        if not stripped:
+            src.i += 1
+            continue
+        tokens = stripped.split()
+        if not seen_header:
+            seen_header = True
+            if re.fullmatch(r"[+-]?\d+", tokens[0]):
+                map_type, title = int(tokens[0]), stripped[len(tokens[0]):].strip()
+                src.i += 1
+                continue
+            if not _keyword(stripped) and not stripped.lower().startswith("reynolds"):
+                if not any(_keyword(ln) for ln in src.lines):
+                    raise _not_a_map(text)
+                raise reject(f"line {n}: {stripped[:60]!r} is not a map type indicator and title (e.g. '99 title')",
+                             ("file", "line", n))
+        if stripped.lower().startswith("reynolds"):
+            pairs = _REYNOLDS.findall(stripped)
+            try:
+                reynolds = {"RNI": [_number(a) for a, _ in pairs], "f": [_number(b) for _, b in pairs], "line": n}
+            except ValueError:
+                pairs = []
+            if not pairs:
+                raise reject(f"line {n}: the Reynolds line is not 'Reynolds: RNI=x1 f=y1 RNI=x2 f=y2'",
+                             ("file", "line", n))
+            src.i += 1
+            continue
+        name = _keyword(stripped)
+        if name in TURBINE_TABLES:
+            raise reject(f"this is a turbine map (its '{name}' table, line {n}): perfmap reads compressor and fan maps "
+                         "(Mass Flow, Efficiency, Pressure Ratio over beta and speed; Surge Line), whose pressure falls "
+                         "with flow", ("file", "line", n))
+        if name is None and (setting := _SETTING_LINE.match(stripped)):
+            label, value, unit = setting.group(1).strip(), _number(setting.group(2)), (setting.group(3) or "").strip()
+            current = sets[-1]
+            if current.tables or current.setting is not None:
+                if current.setting is None:
+                    raise reject(f"line {n}: a geometry setting ({label} = {value:g}) after tables that had none: "
+                                 "each set of tables needs its setting line", ("file", "line", n))
+                sets.append(TableSet())
+            sets[-1].setting, sets[-1].label, sets[-1].unit, sets[-1].line = value, label, unit, n
+            src.i += 1
+            continue
+        if name is None:
+            if not _is_number(tokens[0]) and _key_follows(src):
+                src.i += 1  # a table a compressor map does not have (GasTurb writes some for its own use)
+                ignored.append({"table": stripped[:60], "line": n, **_skip_table(src, stripped, n)})
+                continue
+            raise reject(f"line {n}: {stripped[:60]!r} is neither a table keyword of a compressor map "
+                         f"({', '.join(SPEED_TABLES + LIMIT_TABLES)}) nor part of a table", ("file", "line", n))
+        src.i += 1
+        current = sets[-1]
+        if name in current.tables:
+            raise reject(f"line {n}: a second {name} table (the first is at line {current.tables[name].line}); a map "
+                         "with variable geometry names the setting of each set of tables on a line before it "
+                         "('VG angle = -5')", ("file", "line", n))
+        try:
+            current.tables[name] = _read_table(src, name, n)
+        except _Cut as cut:
+            if name in LIMIT_TABLES and all(t in current.tables for t in SPEED_TABLES):
+                notes.append(truncated_file(cut.line, f"the {name} table is cut ({cut.got} read): it was left out.",
+                                            table=name))
+                break
+            raise reject(f"the file ends inside the {name} table (line {cut.line}; {cut.got}): the file was cut? "
+                         "The map needs every speed table whole.", ("file", "line", cut.line),
+                         type="truncated_file") from None
+        continue
+    if ignored:
+        notes.append(Diagnostic(code="upload_tables_ignored", message=(
+            f"Table(s) a compressor map does not need, read and left out: "
+            f"{', '.join(repr(t['table']) + ' (line ' + str(t['line']) + ')' for t in ignored)}."),
+            details={"tables": ignored}))
+    if not any(s.tables for s in sets):
+        raise _not_a_map(text)
+    return map_type, title, reynolds, sets, notes
+
+
+def _distinct_flows(flow: np.ndarray) -> int:
+    """Distinct flows of a speed line as the solver counts them: flows at the top within its choke tolerance are
+    one (a vertical choke segment)."""
+    if flow.size == 0:
+        return 0
+    x = np.sort(flow)
+    top = x >= x[-1] - CHOKE_FLOW_TOLERANCE * (x[-1] - x[0])
+    return int(np.unique(x[~top]).size) + 1
+
+
+def _check_set(s: TableSet, cut_line: int | None) -> None:
+    missing = [t for t in SPEED_TABLES if t not in s.tables]
+    where = f" of the set at line {s.line} ({s.label} = {s.setting:g})" if s.setting is not None else ""
+    if missing:
+        raise reject(f"no {' and no '.join(missing)} table{where}: a compressor map needs Mass Flow, Efficiency and "
+                     "Pressure Ratio over the same speeds and beta values", ("file", missing[0]),
+                     type="truncated_file" if cut_line else "value_error")
+    flow = s.tables["Mass Flow"]
+    for name in SPEED_TABLES[1:]:
+        t = s.tables[name]
+        if t.values.shape != flow.values.shape:
+            raise reject(f"line {t.line}: the {name} table has {t.values.shape[0]} speeds of {t.values.shape[1]} beta "
+                         f"values, the Mass Flow table (line {flow.line}) {flow.values.shape[0]} of "
+                         f"{flow.values.shape[1]}", ("file", "line", t.line))
+        for what, a, b, lines in (("speeds", t.params, flow.params, t.param_lines),
+                                  ("beta values", t.args, flow.args, [t.line + 1] * len(t.args))):
+            bad = np.flatnonzero(~np.isclose(a, b, rtol=1e-6, atol=1e-9))
+            if bad.size:
+                k = int(bad[0])
+                raise reject(f"line {lines[k]}: the {name} table's {what} differ from the Mass Flow table's "
+                             f"({a[k]:g} where line {flow.line} has {b[k]:g})", ("file", "line", lines[k]))
+    dup = np.flatnonzero(np.diff(np.sort(flow.params)) == 0)
+    if dup.size:
+        v = np.sort(flow.params)[dup[0]]
+        lines = [ln for p, ln in zip(flow.params, flow.param_lines) if p == v]
+        raise reject(f"line {lines[-1]}: speed {v:g} appears twice in the Mass Flow table (lines {lines[0]} and "
+                     f"{lines[-1]})", ("file", "line", lines[-1]))
+    eff = s.tables["Efficiency"]
+    over = np.argwhere(np.isfinite(eff.values) & (eff.values > 1.0))
+    if over.size:
+        r, c = over[0]
+        n = int(eff.value_lines[r, c])
+        percent = bool(np.nanmax(eff.values) <= 100.0 and np.nanmedian(eff.values) > 1.0)
+        raise InputRejected(FieldError(("file", "row", n, "efficiency"), (
+            f"line {n}: efficiency {eff.values[r, c]:g} at speed {eff.params[r]:g} is above 1"
+            + ("; the table looks like percent: GasTurb and GSP maps hold fractions (0.86)" if percent else
+               "; map efficiencies are fractions (0.86)"))))
+
+
+def _flow_unit(options: dict, title: str) -> tuple[dict, str | None]:
+    """(units, where the flow unit came from)."""
+    given = options.get("units")
+    if given is not None and not isinstance(given, dict):
+        raise reject("options.units must be an object such as {\"flow\": \"kg/s\"}", ("options", "units"))
+    units = {"pressure": "1", "efficiency": "1"}
+    source = None
+    for quantity, unit in _TITLE_UNIT.findall(title):
+        unit = unit.strip()
+        if unit.lower() not in ("unit not stated",):
+            units[quantity.lower()] = "1" if unit in ("-", "1") else unit
+            source = "title"
+    for quantity, unit in (given or {}).items():
+        if quantity not in ("flow", "pressure", "efficiency"):
+            raise reject(f"options.units.{quantity}: a map's units are flow, pressure and efficiency",
+                         ("options", "units", quantity))
+        if not isinstance(unit, str):
+            raise reject(f"options.units.{quantity} must be a unit text such as 'kg/s'", ("options", "units", quantity))
+        try:
+            check_quantity(quantity, unit)
+        except UnitError as e:
+            raise reject(f"options.units.{quantity}: {e}", ("options", "units", quantity)) from None
+        units[quantity] = unit
+        source = "options.units" if quantity == "flow" else source
+    return units, source if "flow" in units else None
+
+
+def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[int]], dict | None]:
+    """(request body, file line of each point of each position, the options left for the request) of an uploaded
+    map file; the upload's ``units`` option states the file's units (a map states none)."""
+    text = decode_text(content, "GasTurb/GSP map text file")
+    options = dict(options or {})
+    map_type, title, reynolds, sets, notes = read_map(text)
+    cut = next((d.details.get("line") for d in notes if d.code == "truncated_file"), None)
+    for s in sets:
+        _check_set(s, cut)
+    if any(s.setting is not None for s in sets):
+        labels = {s.label.lower() for s in sets}
+        if len(labels) > 1 or any(s.setting is None for s in sets):
+            s = next(s for s in sets if s.setting is None or s.label.lower() != sets[0].label.lower())
+            n = s.line or next(iter(s.tables.values())).line
+            raise reject(f"line {n}: every set of tables needs a setting line with the same name as the first "
+                         f"({sets[0].label!r}, line {sets[0].line})", ("file", "line", n))
+        values = [s.setting for s in sets]
+        if len(set(values)) < len(values):
+            s = next(s for i, s in enumerate(sets) if s.setting in values[:i])
+            raise reject(f"line {s.line}: {s.label} = {s.setting:g} appears twice", ("file", "line", s.line))
+    units, unit_source = _flow_unit(options, title)
+    options.pop("units", None)
+    positions, lines = [], []
+    dropped, short = 0, []
+    for s in sets:
+        W, E, P = (s.tables[t] for t in SPEED_TABLES)
+        for r, speed in enumerate(W.params):
+            w, e, p = W.values[r], E.values[r], P.values[r]
+            ok = np.isfinite(w) & np.isfinite(e) & np.isfinite(p) & (w > 0) & (p > 0) & (e > 0)
+            dropped += int(np.sum(~ok))
+            setting = [float(speed)] if s.setting is None else [float(s.setting), float(speed)]
+            distinct = _distinct_flows(w[ok])
+            if distinct < 3:  # GasTurb's sample maps end in fully choked lines: one flow at every beta
+                short.append({"setting": setting, "points": int(ok.sum()), "distinct_flows": distinct,
+                              "line": W.param_lines[r]})
+                continue
+            positions.append({"setting": setting, "flow": w[ok].tolist(), "pressure": p[ok].tolist(),
+                              "efficiency": e[ok].tolist()})
+            lines.append([int(n) for n in W.value_lines[r][ok]])
+    if not positions:
+        raise reject("no speed line of the map has 3 usable points (positive flow, pressure ratio and efficiency)",
+                     ("file", "Mass Flow"))
+    vg = sets[0].setting is not None
+    names = [sets[0].label, "Nc"] if vg else ["Nc"]
+    setting_units = [sets[0].unit, "1"] if vg else ["1"]
+    flow = sets[0].tables["Mass Flow"]
+    flow_unit = units.get("flow")
+    limits = {}
+    for s in sets:
+        for t in LIMIT_TABLES:
+            if t in s.tables:
+                lt = s.tables[t]
+                limits.setdefault(t, []).append({"setting": s.setting, "line": lt.line, "flow": lt.args.tolist(),
+                                                 "pressure": lt.values[0].tolist()})
+    what = (f"GasTurb/GSP compressor map (type {map_type if map_type is not None else 'not stated'}"
+            f"{', ' + repr(title) if title else ''}): {len(positions)} speed lines of {len(flow.args)} beta points"
+            f"{f' at {len(sets)} values of {sets[0].label}' if vg else ''}. Speed: relative corrected speed "
+            f"N/sqrt(T) over its map reference (dimensionless); flow: corrected mass flow W sqrt(T)/P "
+            f"({'in ' + flow_unit + ', from the ' + unit_source if flow_unit else 'the file states no unit: GasTurb writes kg/s in SI, lb/s in imperial units; give it with the units option'}); "
+            "pressure ratio; efficiency a fraction.")
+    notes.insert(0, Diagnostic(code="upload_settings", message=what, details={
+        "format": "gasturb", "map_type": map_type, "title": title, "names": names, "units": setting_units,
+        "speed": "relative corrected speed (N/sqrt(T)) / (N/sqrt(T))_ref, dimensionless",
+        "flow": f"corrected mass flow W sqrt(T)/P [{flow_unit or 'unit not stated'}]", "flow_unit_from": unit_source,
+        "beta": [float(b) for b in flow.args], "reynolds": reynolds,
+        "surge_line": limits.get("Surge Line"), "choke_line": limits.get("Choke Line")}))
+    notes.append(Diagnostic(code="upload_rline_not_needed", message=(
+        f"Beta values {', '.join(f'{b:g}' for b in flow.args[:6])}{', …' if len(flow.args) > 6 else ''} recognised "
+        "and not needed: each beta point is a measured point, each line is parametrised by its flow."),
+        details={"beta": [float(b) for b in flow.args]}))
+    if reynolds and any(f != 1.0 for f in reynolds["f"]):
+        notes.append(Diagnostic(code="upload_reynolds_correction", message=(
+            f"The map's Reynolds correction (line {reynolds['line']}: " + ", ".join(
+                f"RNI {a:g} -> f {b:g}" for a, b in zip(reynolds["RNI"], reynolds["f"]))
+            + ") belongs to the cycle code: the tables are read as they stand, the map at its reference Reynolds "
+            "number."), details=reynolds))
+    if "Surge Line" not in limits:
+        notes.append(Diagnostic(code="upload_no_surge_line", message=(
+            "The map has no Surge Line table (GasTurb and GSP read one with every compressor map; the file was cut?): "
+            "the result's surge line is the speed lines' surge ends."), details={}))
+    if dropped or short:
+        lines_out = ", ".join(f"{d['setting'][-1]:g} (line {d['line']}, {d['distinct_flows']} distinct flows)"
+                              for d in short[:10])
+        notes.append(Diagnostic(code="upload_points_dropped", message=(
+            f"{dropped} map point(s) without positive finite values dropped; {len(short)} speed line(s) with fewer "
+            f"than 3 distinct flows (choked: vertical in the map) left out{': speed ' + lines_out if short else ''}."),
+            details={"points": dropped, "lines": short[:100]}))
+    body = {"positions": positions, "setting_names": names, "setting_units": setting_units, "units": units,
+            "upload_warnings": [d.model_dump() for d in notes]}
+    return body, lines, options or None
