@@ -180,3 +180,164 @@ def test_a_map_value_past_the_float_range_drops_its_point_and_classic_mac_line_e
     assert dropped[0] == dropped[1] + 1
     mac = parse_upload(StoredInput.from_bytes("LPC_map.py", text.replace("\n", "\r").encode()), {"map": False})
     assert mac.positions == whole.positions
+
+
+# ---------------------------------------------------------------- the export run in pyCycle itself
+
+A = np.array([1.6, 2.2, 3.0, 4.0])  # PR = A_k - B Wc^2 on line k (speeds 0.6 ... 0.9)
+B = 0.02
+C_SURGE, C_CHOKE = 0.05, 0.01  # surge and choke lines: PR - 1 = c Wc^2
+SPEEDS = [0.6, 0.7, 0.8, 0.9]
+
+
+def _closed_form_result():
+    """Speed lines PR = A_k - B Wc^2 between the parabolas PR - 1 = 0.05 Wc^2 (surge) and 0.01 Wc^2 (choke), flow in
+    kg/s, fitted exactly (parabola family); the 21-line beta grid's nodes are the closed-form crossings."""
+    positions = []
+    for a, n in zip(A, SPEEDS):
+        xs, xc = np.sqrt((a - 1) / (B + np.array([C_SURGE, C_CHOKE])))
+        x = np.linspace(xs, xc, 7)
+        eta = 0.9 - 0.2 * ((x - xs) / (xc - xs) - 0.4) ** 2
+        positions.append({"setting": [n], "flow": x.tolist(), "pressure": (a - B * x * x).tolist(),
+                          "efficiency": eta.tolist()})
+    req = PerfmapRequest.model_validate({
+        "setting_names": ["Nc"], "units": {"flow": "kg/s", "pressure": "1"}, "positions": positions,
+        "options": {"map": False, "model": "parabola", "efficiency_model": "parabola"}})
+    return solve(req).result
+
+
+def _load(module_text: str):
+    namespace: dict = {}
+    exec(compile(module_text, "map_pycycle.py", "exec"), namespace)  # what `from map_pycycle import ExportMap` runs
+    return namespace["ExportMap"]
+
+
+def _problem(map_data, design: bool):
+    om = pytest.importorskip("openmdao.api")
+    from pycycle.elements.compressor_map import CompressorMap
+
+    p = om.Problem()
+    # off design with extrapolation, as pyCycle's example cycles run their compressors (map_extrap=True): Newton's
+    # first steps on the stall-margin balance leave the table before they converge inside it
+    p.model.add_subsystem("map", CompressorMap(map_data=map_data, design=design, extrap=not design), promotes=["*"])
+    if not design:  # the operating point's balances (NcMap, RlineMap against Nc, Wc) need Newton
+        p.model.nonlinear_solver = om.NewtonSolver(solve_subsystems=False, iprint=-1, maxiter=30, atol=1e-12,
+                                                   rtol=1e-12)
+        p.model.linear_solver = om.DirectSolver()
+    p.setup()
+    p.final_setup()  # where OpenMDAO checks the connected units
+    return p
+
+
+def _beta_lookup(result, speed, beta):
+    from plantsolve.schemas.perfmap import PerfmapBetaQueryRequest
+    from plantsolve.solvers.perfmap.query import answer_beta_query
+
+    a = answer_beta_query(result, PerfmapBetaQueryRequest.model_validate({"speed": speed, "beta": beta})).points[0]
+    return np.array([a.flow, a.pressure, a.efficiency])
+
+
+def test_pycycle_reads_the_exported_module_as_shipped_at_three_nc_rline_points():
+    """pyCycle's CompressorMap (design mode: the map read at NcMap, RlineMap) on the exported module: at a node
+    exactly the fitted beta map; between two speed lines linear in Nc, as the beta query; between two R-lines
+    pyCycle's linear interpolation of the nodes, within the tabulation error of the fitted (here closed-form) map."""
+    from plantsolve.solvers.perfmap.cycle_exports import pycycle_module
+
+    res = _closed_form_result()
+    module = _load(pycycle_module(res).decode())
+    assert [d["name"] for d in module.param_data] == ["alphaMap", "NcMap", "RlineMap"]
+    assert [d["name"] for d in module.output_data] == ["WcMap", "effMap", "PRmap"]
+    assert set(module.defaults) == {"alphaMap", "NcMap", "RlineMap", "WcMap", "PRmap", "effMap"}
+    assert module.units == {"NcMap": "rpm", "WcMap": "kg/s"} and module.RlineStall == 1.0
+    p = _problem(module, design=True)
+    beta = np.array(res.beta_map.beta)
+
+    def read(nc, rline):
+        p.set_val("alphaMap", 0.0)
+        p.set_val("NcMap", nc, units="rpm")
+        p.set_val("RlineMap", rline)
+        p.run_model()
+        return np.array([p.get_val("WcMap", units="kg/s")[0], p.get_val("PRmap")[0], p.get_val("effMap")[0]])
+
+    # 1. on the 0.7 line at R = 1.7 (beta 0.65, a node): the closed-form crossing with c = c_choke + beta (c_s - c_c)
+    got = read(0.7, 1.7)
+    j = int(np.argmin(np.abs(beta - 0.65)))
+    line = res.beta_map.lines[1]
+    assert got == pytest.approx([line.flow[j], line.pressure[j], line.efficiency[j]], rel=1e-9)
+    x = np.sqrt((A[1] - 1) / (B + C_CHOKE + 0.65 * (C_SURGE - C_CHOKE)))
+    assert got[:2] == pytest.approx([x, A[1] - B * x * x], rel=1e-9)
+    # in pyCycle's own unit too: the declared kg/s is converted
+    assert p.get_val("WcMap", units="lbm/s")[0] == pytest.approx(x / 0.45359237, rel=1e-9)
+    # 2. between the 0.7 and 0.8 lines at R = 2.2 (beta 0.4): linear in speed, as the beta query
+    assert read(0.75, 2.2) == pytest.approx(_beta_lookup(res, 0.75, 0.4), rel=1e-9)
+    # 3. on the 0.8 line between R-lines 2.2 and 2.3: pyCycle interpolates the two nodes linearly ...
+    k = int(np.argmin(np.abs(beta - 0.4)))
+    lo, hi = (np.array([getattr(res.beta_map.lines[2], q)[i] for q in ("flow", "pressure", "efficiency")])
+              for i in (k, k - 1))
+    got = read(0.8, 2.25)
+    assert got == pytest.approx((lo + hi) / 2, rel=1e-9)
+    # ... which is the fitted map (exact on the line at beta 0.375) within the tabulation error of a 21-line grid
+    exact = _beta_lookup(res, 0.8, 0.375)
+    assert np.abs(got - exact) / exact == pytest.approx(0.0, abs=5e-4)
+
+
+def test_pycycle_off_design_solve_lands_on_the_known_r_line():
+    """Off design pyCycle balances NcMap and RlineMap against the corrected speed and flow: given the speed of the
+    0.7 line and the flow of its beta 0.65 node (R = 1.7), Newton lands on R = 1.7 and reads that node's pressure
+    ratio and efficiency (map scalars 1)."""
+    from plantsolve.solvers.perfmap.cycle_exports import pycycle_module
+
+    res = _closed_form_result()
+    p = _problem(_load(pycycle_module(res).decode()), design=False)
+    line = res.beta_map.lines[1]
+    j = int(np.argmin(np.abs(np.array(res.beta_map.beta) - 0.65)))
+    for name in ("s_Nc", "s_Wc", "s_PR", "s_eff"):
+        p.set_val(name, 1.0)
+    p.set_val("alphaMap", 0.0)
+    p.set_val("Nc", 0.7, units="rpm")
+    p.set_val("Wc", line.flow[j], units="kg/s")
+    p.set_val("RlineMap", 2.0)
+    p.set_val("NcMap", 0.75, units="rpm")
+    p.run_model()
+    assert p.get_val("RlineMap")[0] == pytest.approx(1.7, abs=1e-8)
+    assert p.get_val("NcMap", units="rpm")[0] == pytest.approx(0.7, abs=1e-10)
+    assert p.get_val("PR")[0] == pytest.approx(line.pressure[j], rel=1e-9)
+    assert p.get_val("eff")[0] == pytest.approx(line.efficiency[j], rel=1e-9)
+    x = np.sqrt((A[1] - 1) / (B + C_CHOKE + 0.65 * (C_SURGE - C_CHOKE)))
+    assert p.get_val("PR")[0] == pytest.approx(A[1] - B * x * x, rel=1e-9)
+
+
+def test_a_real_two_alpha_map_runs_in_pycycle_and_a_map_without_flow_unit_says_so():
+    """N3_Fan_map (alpha 0 and 5): pyCycle reads the exported tables at a node of the alpha-5 plane exactly; its
+    flow unit was never stated, so WcMap has none (OpenMDAO warns and takes CompressorMap's lbm/s) and the module
+    says so."""
+    from plantsolve.solvers.perfmap.cycle_exports import pycycle_module
+
+    _, res = solved("N3_Fan_map.py")
+    text = pycycle_module(res).decode()
+    assert "the flow unit was not stated" in text
+    module = _load(text)
+    assert module.units["WcMap"] is None and module.output_data[0]["units"] is None
+    with pytest.warns(Warning, match="no units"):
+        p = _problem(module, design=True)
+    line = next(line for line in res.beta_map.lines if line.setting == [5.0, 0.9])
+    j = res.beta_map.beta.index(0.5)
+    p.set_val("alphaMap", 5.0)
+    p.set_val("NcMap", 0.9, units="rpm")
+    p.set_val("RlineMap", 2.0)
+    p.run_model()
+    got = [p.get_val("WcMap")[0], p.get_val("PRmap")[0], p.get_val("effMap")[0]]
+    assert got == pytest.approx([line.flow[j], line.pressure[j], line.efficiency[j]], rel=1e-9)
+
+
+@pytest.mark.parametrize("unit, declared, factor", [("lbm/s", "lbm/s", 1.0), ("kg/h", "kg/h", 1.0),
+                                                    ("g/min", "kg/s", 1e-3 / 60)])
+def test_the_flow_unit_is_declared_in_openmdaos_spelling_or_converted_to_kg_per_s(unit, declared, factor):
+    from plantsolve.solvers.perfmap.cycle_exports import pycycle_module
+
+    res = _closed_form_result()
+    res = res.model_copy(update={"units": res.units.model_copy(update={"flow": unit})})
+    module = _load(pycycle_module(res).decode())
+    assert module.units["WcMap"] == declared
+    assert module.WcMap[0, 1] == pytest.approx(np.array(res.beta_map.lines[1].flow[::-1]) * factor, rel=1e-9)
+    assert module.WcSurge == pytest.approx([line.flow[-1] * factor for line in res.beta_map.lines], rel=1e-9)
