@@ -349,6 +349,12 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
                      "Pressure Ratio over the same speeds and beta values", ("file", missing[0]),
                      type="truncated_file" if cut_line else "value_error")
     flow = s.tables["Mass Flow"]
+    dup = np.flatnonzero(np.diff(np.sort(flow.params)) == 0)
+    if dup.size:
+        v = np.sort(flow.params)[dup[0]]
+        lines = [ln for p, ln in zip(flow.params, flow.param_lines) if p == v]
+        raise reject(f"line {lines[-1]}: speed {v:g} appears twice in the Mass Flow table (lines {lines[0]} and "
+                     f"{lines[-1]})", ("file", "line", lines[-1]))
     for name in SPEED_TABLES[1:]:
         t = s.tables[name]
         if t.values.shape != flow.values.shape:
@@ -362,12 +368,6 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
                 k = int(bad[0])
                 raise reject(f"line {lines[k]}: the {name} table's {what} differ from the Mass Flow table's "
                              f"({a[k]:g} where line {flow.line} has {b[k]:g})", ("file", "line", lines[k]))
-    dup = np.flatnonzero(np.diff(np.sort(flow.params)) == 0)
-    if dup.size:
-        v = np.sort(flow.params)[dup[0]]
-        lines = [ln for p, ln in zip(flow.params, flow.param_lines) if p == v]
-        raise reject(f"line {lines[-1]}: speed {v:g} appears twice in the Mass Flow table (lines {lines[0]} and "
-                     f"{lines[-1]})", ("file", "line", lines[-1]))
     eff = s.tables["Efficiency"]
     over = np.argwhere(np.isfinite(eff.values) & (eff.values > 1.0))
     if over.size:
