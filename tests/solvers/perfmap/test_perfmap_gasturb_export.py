@@ -1,0 +1,203 @@
+"""GasTurb map text out (``map_gasturb*.txt``) in the layout of GasTurb's own maps: read at the published
+positions (key and four values on a record's first line, five a line after, every speed starting a line, a blank
+line closing each table), read back by the project's ``.map`` reader, and round trips in -> fit -> out -> in on a
+closed-form map and on GSPy's sample maps (data/gasturb)."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
+from plantsolve.solvers.perfmap.families import curveset_from_fits
+from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.upload import parse_upload
+
+GASTURB = Path(__file__).parent / "data" / "gasturb"
+TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio", "Surge Line", "Choke Line")
+
+
+def read_at_published_positions(text: str) -> dict:
+    """A reader that takes the published positions and nothing else: after a table's title, the key
+    rows + columns / 1000 and the first four arguments on one line, the other arguments five a line; each row a
+    parameter and four values on a new line, five a line after; the table closed by a blank line. Any other count
+    on a line fails."""
+    lines = text.split("\n")
+    assert lines[0].split()[0] == "99" and lines[1].startswith("Reynolds: RNI=")
+
+    def record(i: int, n: int) -> tuple[list[float], int]:
+        first = lines[i].split()
+        assert len(first) == 1 + min(4, n), (i + 1, lines[i])
+        values = [float(c) for c in first]
+        i += 1
+        while len(values) < n + 1:
+            cells = lines[i].split()
+            assert len(cells) == min(5, n + 1 - len(values)), (i + 1, lines[i])
+            values += [float(c) for c in cells]
+            i += 1
+        return values, i
+
+    out = {}
+    i = 2
+    while i < len(lines) and lines[i]:
+        title = lines[i]
+        assert title in TABLES and title not in out
+        key = float(lines[i + 1].split()[0])
+        rows, cols = int(key) - 1, round((key - int(key)) * 1000) - 1
+        head, i = record(i + 1, cols)
+        params, values = [], []
+        for _ in range(rows):
+            row, i = record(i, cols)
+            params.append(row[0])
+            values.append(row[1:])
+        assert lines[i] == ""  # a blank line closes the table
+        i += 1
+        out[title] = (np.array(head[1:]), np.array(params), np.array(values))
+    assert i >= len(lines) - 1
+    return out
+
+
+def read_map(data: bytes, options: dict | None = None):
+    return parse_upload(StoredInput.from_bytes("again.map", data), {"map": False, **(options or {})})
+
+
+@cache
+def fitted(name: str, lines: int = 21):
+    req = parse_upload(StoredInput.from_bytes(name, (GASTURB / name).read_bytes()),
+                       {"map": False, "beta_grid": {"lines": lines}})
+    return solve(req).result
+
+
+def only_table(result) -> bytes:
+    (data,) = gasturb_tables(result).values()
+    return data
+
+
+def agree(original, again) -> tuple[float, float, float]:
+    """Max differences of two fits of the same lines at the same curve parameter: pressure relative (all, first
+    90 % of the flow range) and efficiency absolute."""
+    c1, c2 = curveset_from_fits(original.settings), curveset_from_fits(again.settings)
+    by = {tuple(s.setting): k for k, s in enumerate(original.settings)}
+    assert sorted(by) == sorted(tuple(s.setting) for s in again.settings)
+    t = np.linspace(0, 1, 401)
+    p_all = p_body = e_all = 0.0
+    for k2, s in enumerate(again.settings):
+        k = by[tuple(s.setting)]
+        o = original.settings[k]
+        assert (s.x_min, s.x_max) == pytest.approx((o.x_min, o.x_max), rel=1e-6)
+        _, y1, e1 = c1.evaluate(np.full(t.size, k), t)
+        _, y2, e2 = c2.evaluate(np.full(t.size, k2), t)
+        rel = np.abs(y2 - y1) / y1
+        p_all, p_body = max(p_all, rel.max()), max(p_body, rel[t <= 0.9].max())
+        e_all = max(e_all, np.abs(e2 - e1).max())
+    return p_all, p_body, e_all
+
+
+@pytest.mark.parametrize("name", ["compmap.map", "bigfanc.map"])
+def test_the_export_has_gasturbs_layout_and_holds_the_fitted_beta_map(name):
+    res = fitted(name)
+    text = only_table(res).decode()
+    tables = read_at_published_positions(text)
+    b = res.beta_map
+    speeds = [line.setting[-1] for line in b.lines]
+    for title, quantity in (("Mass Flow", "flow"), ("Efficiency", "efficiency"), ("Pressure Ratio", "pressure")):
+        beta, params, values = tables[title]
+        assert beta == pytest.approx(b.beta, abs=5e-8) and params == pytest.approx(speeds, rel=5e-7)
+        assert values == pytest.approx(np.array([getattr(line, quantity) for line in b.lines]), rel=5e-7)
+    flows, _, pressures = tables["Surge Line"]
+    surge = sorted((p.flow, p.pressure) for p in res.surge_line)
+    assert np.column_stack([flows, pressures[0]]) == pytest.approx(np.array(surge), rel=5e-7)
+    # what GSP's reader relies on: the title holds no table keyword, the tables come in GasTurb's order
+    assert not any(t.upper() in text.split("\n")[0].upper() for t in TABLES + ("Reynolds",))
+    order = [text.index(f"\n{t}\n") for t in TABLES]
+    assert order == sorted(order)
+
+
+def test_the_exports_one_line_records_are_gone():
+    """Before: every row on one line (22 numbers for a 21-line grid). Now no line holds more than five."""
+    text = only_table(fitted("compmap.map")).decode()
+    assert max(len(line.split()) for line in text.split("\n")[2:]) == 5
+
+
+@pytest.mark.parametrize("name", ["compmap.map", "bigfanc.map"])
+def test_the_project_reader_reads_the_export_back_as_the_fitted_beta_map(name):
+    res = fitted(name)
+    req = read_map(only_table(res))
+    assert req.setting_names == ["Nc"] and len(req.positions) == len(res.beta_map.lines)
+    for p, line in zip(req.positions, res.beta_map.lines):
+        assert p.setting == pytest.approx(line.setting, rel=5e-7)
+        assert p.flow == pytest.approx(line.flow, rel=5e-7) and p.pressure == pytest.approx(line.pressure, rel=5e-7)
+        assert p.efficiency == pytest.approx(line.efficiency, rel=5e-7)
+    surge = [w for w in req.upload_warnings if w.code == "upload_settings"][0].details["surge_line"][0]
+    assert sorted(surge["flow"]) == pytest.approx(sorted(p.flow for p in res.surge_line), rel=5e-7)
+
+
+def test_a_stated_flow_unit_survives_the_round_trip_through_the_title():
+    req = parse_upload(StoredInput.from_bytes("c.map", (GASTURB / "compmap.map").read_bytes()),
+                       {"map": False, "units": {"flow": "kg/s"}})
+    res = solve(req).result
+    assert res.units.flow == "kg/s"
+    again = read_map(only_table(res))
+    assert again.units.flow == "kg/s" and again.units.pressure == "1"
+
+
+def _closed_form_map() -> bytes:
+    """Speed lines PR = A - 0.02 Wc^2 between the beta parabolas PR - 1 = 0.05 Wc^2 (beta 1) and 0.01 Wc^2
+    (beta 0), 9 beta values, efficiency a parabola in flow; written in the published layout."""
+    beta = np.linspace(0, 1, 9)
+    c = 0.01 + beta * 0.04
+    rows = {"Mass Flow": [], "Efficiency": [], "Pressure Ratio": []}
+    speeds = [0.6, 0.7, 0.8, 0.9]
+    for a in (1.6, 2.2, 3.0, 4.0):
+        w = np.sqrt((a - 1) / (0.02 + c))
+        u = (w - w[-1]) / (w[0] - w[-1])
+        rows["Mass Flow"].append(w)
+        rows["Pressure Ratio"].append(a - 0.02 * w * w)
+        rows["Efficiency"].append(0.9 - 0.2 * (u - 0.4) ** 2)
+
+    def rec(first, values):
+        cells = [f"{v:.12g}" for v in values]
+        return [" ".join([first] + cells[:4])] + [" ".join(cells[i:i + 5]) for i in range(4, len(cells), 5)]
+
+    out = ["99 closed form", "Reynolds: RNI=0.1 f=1 RNI=1 f=1"]
+    for name, table in rows.items():
+        out += [name] + rec("5.010", beta)
+        for s, row in zip(speeds, table):
+            out += rec(f"{s:g}", row)
+        out.append("")
+    w, p = np.array(rows["Mass Flow"])[:, -1], np.array(rows["Pressure Ratio"])[:, -1]
+    out += ["Surge Line"] + rec("2.005", w) + rec("1.0", p) + [""]
+    return ("\n".join(out) + "\n").encode()
+
+
+def test_round_trip_of_a_closed_form_map_is_exact_to_the_printed_digits():
+    """in -> fit (exact: parabolas) -> out -> in -> fit: the same speed lines within 1e-6 (the export prints seven
+    digits), far inside the fits' stated error plus that."""
+    options = {"map": False, "model": "parabola", "efficiency_model": "parabola"}
+    first = solve(parse_upload(StoredInput.from_bytes("cf.map", _closed_form_map()), options)).result
+    assert max(s.pressure_max_rel_error for s in first.settings) < 1e-9
+    again = solve(parse_upload(StoredInput.from_bytes("cf2.map", only_table(first)), options)).result
+    p_all, p_body, e_all = agree(first, again)
+    assert p_all < 1e-6 and e_all < 1e-6
+    assert max(s.pressure_max_rel_error for s in again.settings) < 1e-6
+
+
+@pytest.mark.parametrize("name, lines, p_max, p_body_max", [
+    ("compmap.map", 21, 0.025, 0.015), ("bigfanc.map", 21, 0.035, 0.005),
+    ("compmap.map", 41, 0.008, 0.003), ("bigfanc.map", 41, 0.02, 0.002)])
+def test_round_trip_of_gspys_sample_maps(name, lines, p_max, p_body_max):
+    """in -> fit -> out -> in: the tables read back are the fitted beta map (seven digits) and fitted again give
+    the same speed lines within the grid's tabulation error: largest at the steep choke ends (bigfanc's 0.9 to 1.2
+    lines, 3.1 % at 21 beta lines), falling with more beta lines; efficiency within 1e-5."""
+    res = fitted(name, lines)
+    data = only_table(res)
+    again_req = read_map(data)
+    for p, line in zip(again_req.positions, res.beta_map.lines):
+        assert p.flow == pytest.approx(line.flow, rel=5e-7) and p.pressure == pytest.approx(line.pressure, rel=5e-7)
+    again = solve(again_req).result
+    p_all, p_body, e_all = agree(res, again)
+    assert p_all <= p_max and p_body <= p_body_max and e_all <= 1e-5
