@@ -49,11 +49,12 @@ _KEYWORDS = {k.lower(): k for k in SPEED_TABLES + LIMIT_TABLES + TURBINE_TABLES}
 # garbled key must not make the reader allocate for millions of values
 MAX_ARGUMENTS = 200
 MAX_ROWS = 2000
+MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
                            r"(?:\[([^\]]*)\])?\s*$")
-_TITLE_UNIT = re.compile(r"\b(flow|pressure)\s*\[([^\]]+)\]", re.I)
-_REYNOLDS = re.compile(r"RNI\s*=\s*(\S+?)\s+f\s*=\s*(\S+)", re.I)
+_TITLE_UNIT = re.compile(r"\b(flow|pressure)\s*\[([^\]]+)\]", re.IGNORECASE)
+_REYNOLDS = re.compile(r"RNI\s*=\s*(\S+?)\s+f\s*=\s*(\S+)", re.IGNORECASE)
 
 
 @dataclass
@@ -68,6 +69,7 @@ class Table:
     values: np.ndarray
     value_lines: np.ndarray
     param_lines: list[int]
+    heading: str = ""  # the keyword line as written ('Mass Flow [kg/s]')
 
 
 @dataclass
@@ -116,8 +118,16 @@ class _Lines:
 
 
 def _keyword(line: str) -> str | None:
+    """The table keyword a line names: the keyword alone, or followed by a note or unit after a blank, colon or
+    bracket ('Mass Flow [kg/s]', 'Efficiency: isentropic'); the longest keyword first ('Min Pressure Ratio' is
+    not 'Pressure Ratio')."""
     key = re.sub(r"\s+", " ", line.strip().rstrip(":").strip()).lower()
-    return _KEYWORDS.get(key)
+    if key in _KEYWORDS:
+        return _KEYWORDS[key]
+    for k in sorted(_KEYWORDS, key=len, reverse=True):
+        if key.startswith(k) and key[len(k)] in " :[(" and not _is_number(key[len(k):].strip(" :")):
+            return _KEYWORDS[k]
+    return None
 
 
 def _numbers(line: str, n: int, what: str) -> list[float]:
@@ -259,6 +269,9 @@ def read_map(text: str) -> tuple[int | None, str, dict, list[TableSet], list[Dia
             src.i += 1
             continue
         tokens = stripped.split()
+        if not seen_header and stripped.startswith(("#", "!", "//")):
+            src.i += 1  # a comment some tools put above the map type line
+            continue
         if not seen_header:
             seen_header = True
             if re.fullmatch(r"[+-]?\d+", tokens[0]):
@@ -311,7 +324,13 @@ def read_map(text: str) -> tuple[int | None, str, dict, list[TableSet], list[Dia
                          "with variable geometry names the setting of each set of tables on a line before it "
                          "('VG angle = -5')", ("file", "line", n))
         try:
-            current.tables[name] = _read_table(src, name, n)
+            table = _read_table(src, name, n)
+            if name in LIMIT_TABLES and table.values.shape[0] != 1:
+                raise reject(f"line {n + 1}: the {name} table's key announces {table.values.shape[0]} rows of "
+                             "pressure ratios; a limit line is a 2-row table (2.CCC: the flows, then one row)",
+                             ("file", "line", n + 1))
+            table.heading = stripped
+            current.tables[name] = table
         except _Cut as cut:
             if name in LIMIT_TABLES and all(t in current.tables for t in SPEED_TABLES):
                 notes.append(truncated_file(cut.line, f"the {name} table is cut ({cut.got} read): it was left out.",
@@ -380,8 +399,9 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
                "; map efficiencies are fractions (0.86)"))))
 
 
-def _flow_unit(options: dict, title: str) -> tuple[dict, str | None]:
-    """(units, where the flow unit came from)."""
+def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
+    """(units, where the flow unit came from): the upload's units option, else a unit in brackets on the Mass Flow
+    table's line ('Mass Flow [kg/s]'), else a 'flow [unit]' in the title."""
     given = options.get("units")
     if given is not None and not isinstance(given, dict):
         raise reject("options.units must be an object such as {\"flow\": \"kg/s\"}", ("options", "units"))
@@ -392,6 +412,12 @@ def _flow_unit(options: dict, title: str) -> tuple[dict, str | None]:
         if unit.lower() not in ("unit not stated",):
             units[quantity.lower()] = "1" if unit in ("-", "1") else unit
             source = "title"
+    if (m := re.search(r"\[([^\]]+)\]", heading)) is not None:
+        try:
+            check_quantity("flow", m.group(1))
+        except UnitError as e:
+            raise reject(f"the Mass Flow table's unit: {e}", ("file", "Mass Flow")) from None
+        units["flow"], source = m.group(1).strip(), "Mass Flow table's line"
     for quantity, unit in (given or {}).items():
         if quantity not in ("flow", "pressure", "efficiency"):
             raise reject(f"options.units.{quantity}: a map's units are flow, pressure and efficiency",
@@ -427,7 +453,7 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
         if len(set(values)) < len(values):
             s = next(s for i, s in enumerate(sets) if s.setting in values[:i])
             raise reject(f"line {s.line}: {s.label} = {s.setting:g} appears twice", ("file", "line", s.line))
-    units, unit_source = _flow_unit(options, title)
+    units, unit_source = _flow_unit(options, title, sets[0].tables["Mass Flow"].heading)
     options.pop("units", None)
     positions, lines = [], []
     dropped, short = 0, []
@@ -450,8 +476,16 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
         raise reject("no speed line of the map has 3 usable points (positive flow, pressure ratio and efficiency)",
                      ("file", "Mass Flow"))
     vg = sets[0].setting is not None
+    top_speed = max(p["setting"][-1] for p in positions)
+    relative = top_speed <= MAX_RELATIVE_SPEED
     names = [sets[0].label, "Nc"] if vg else ["Nc"]
-    setting_units = [sets[0].unit, "1"] if vg else ["1"]
+    setting_units = [sets[0].unit, "1" if relative else ""] if vg else ["1" if relative else ""]
+    if not relative:
+        notes.append(Diagnostic(code="implausible_speed", message=(
+            f"Speed {top_speed:g} in a GasTurb/GSP map: plausible relative corrected speeds are 0 to "
+            f"{MAX_RELATIVE_SPEED:g} (GasTurb writes N/sqrt(T) over its reference value, e.g. 0.45 to 1.1); percent or "
+            "rpm read as relative speed? The speeds are kept as written, without a unit."),
+            details={"value": top_speed, "range": [0.0, MAX_RELATIVE_SPEED]}))
     flow = sets[0].tables["Mass Flow"]
     flow_unit = units.get("flow")
     limits = {}

@@ -328,3 +328,29 @@ def test_maps_through_the_service_a_sample_map_runs_and_a_turbine_map_is_a_422(t
                                                              "application/octet-stream")})
         assert bad.status_code == 422 and bad.headers["content-type"] == "application/problem+json"
         assert ["file", "line", 3] in [e["loc"] for e in bad.json()["errors"]]
+
+
+def test_keyword_lines_with_a_unit_comments_above_the_header_and_limit_lines_of_two_rows():
+    W, E, P = closed_form_tables()
+    text = write_map(W, E, P)
+    req = read("# exported by a rig tool\n" + text.replace("Mass Flow\n", "Mass Flow [kg/s]\n", 1)
+               .replace("Efficiency\n", "Efficiency: isentropic\n", 1))
+    assert req.positions == read(text).positions and req.units.flow == "kg/s"
+    assert note(req, "upload_settings").details["flow_unit_from"] == "Mass Flow table's line"
+    (err,) = refused(text.replace("Mass Flow\n", "Mass Flow [kg]\n", 1))
+    assert err.loc == ("file", "Mass Flow") and "not a unit of flow" in err.msg
+    lines = text.split("\n")
+    k = lines.index("Surge Line")
+    lines[k + 1] = lines[k + 1].replace("2.005", "3.005", 1)
+    lines.insert(k + 3, lines[k + 2])  # a second row of pressure ratios, as the key says
+    (err,) = refused("\n".join(lines))
+    assert err.loc == ("file", "line", k + 2) and "2-row table" in err.msg
+
+
+def test_speeds_in_percent_are_kept_and_warned_about():
+    W, E, P = closed_form_tables()
+    req = read(write_map(W, E, P, speeds=[60, 70, 80, 90]))
+    w = note(req, "implausible_speed")
+    assert w.details == {"value": 90.0, "range": [0.0, 3.0]} and "percent or rpm" in w.message
+    assert req.setting_units == [""] and [p.setting for p in req.positions] == [[60.0], [70.0], [80.0], [90.0]]
+    assert solve(req).result.units.settings == [None]

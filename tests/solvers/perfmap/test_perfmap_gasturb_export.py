@@ -132,7 +132,7 @@ def test_the_project_reader_reads_the_export_back_as_the_fitted_beta_map(name):
         assert p.setting == pytest.approx(line.setting, rel=5e-7)
         assert p.flow == pytest.approx(line.flow, rel=5e-7) and p.pressure == pytest.approx(line.pressure, rel=5e-7)
         assert p.efficiency == pytest.approx(line.efficiency, rel=5e-7)
-    surge = [w for w in req.upload_warnings if w.code == "upload_settings"][0].details["surge_line"][0]
+    surge = next(w for w in req.upload_warnings if w.code == "upload_settings").details["surge_line"][0]
     assert sorted(surge["flow"]) == pytest.approx(sorted(p.flow for p in res.surge_line), rel=5e-7)
 
 
@@ -181,7 +181,7 @@ def test_round_trip_of_a_closed_form_map_is_exact_to_the_printed_digits():
     first = solve(parse_upload(StoredInput.from_bytes("cf.map", _closed_form_map()), options)).result
     assert max(s.pressure_max_rel_error for s in first.settings) < 1e-9
     again = solve(parse_upload(StoredInput.from_bytes("cf2.map", only_table(first)), options)).result
-    p_all, p_body, e_all = agree(first, again)
+    p_all, _, e_all = agree(first, again)
     assert p_all < 1e-6 and e_all < 1e-6
     assert max(s.pressure_max_rel_error for s in again.settings) < 1e-6
 

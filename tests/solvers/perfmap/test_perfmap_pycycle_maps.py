@@ -207,9 +207,17 @@ def _closed_form_result():
 
 
 def _load(module_text: str):
-    namespace: dict = {}
-    exec(compile(module_text, "map_pycycle.py", "exec"), namespace)  # what `from map_pycycle import ExportMap` runs
-    return namespace["ExportMap"]
+    """The module as a user imports it: written to a file, imported, its ExportMap."""
+    import importlib.util
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "map_pycycle.py"
+        path.write_text(module_text)
+        spec = importlib.util.spec_from_file_location("map_pycycle", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return module.ExportMap
 
 
 def _problem(map_data, design: bool):
