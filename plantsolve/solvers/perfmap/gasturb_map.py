@@ -364,9 +364,14 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
     missing = [t for t in SPEED_TABLES if t not in s.tables]
     where = f" of the set at line {s.line} ({s.label} = {s.setting:g})" if s.setting is not None else ""
     if missing:
-        raise reject(f"no {' and no '.join(missing)} table{where}: a compressor map needs Mass Flow, Efficiency and "
-                     "Pressure Ratio over the same speeds and beta values", ("file", missing[0]),
-                     type="truncated_file" if cut_line else "value_error")
+        # the last tables missing and nothing after them: the file stops where they would begin
+        present = [t for t in SPEED_TABLES if t in s.tables]
+        trailing = SPEED_TABLES[len(present):] == tuple(missing) and not any(t in s.tables for t in LIMIT_TABLES)
+        cut = trailing or cut_line is not None
+        raise reject(f"no {' and no '.join(missing)} table{where}"
+                     f"{' (the file ends before it: cut?)' if trailing and present else ''}: a compressor map needs "
+                     "Mass Flow, Efficiency and Pressure Ratio over the same speeds and beta values",
+                     ("file", missing[0]), type="truncated_file" if cut else "value_error")
     flow = s.tables["Mass Flow"]
     dup = np.flatnonzero(np.diff(np.sort(flow.params)) == 0)
     if dup.size:
@@ -442,6 +447,13 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
     cut = next((d.details.get("line") for d in notes if d.code == "truncated_file"), None)
     for s in sets:
         _check_set(s, cut)
+    if len(sets) == 1 and sets[0].setting is not None:  # one geometry: its setting is a note, not a parameter
+        only = sets[0]
+        notes.append(Diagnostic(code="upload_geometry_setting", message=(
+            f"One set of tables, at {only.label} = {only.setting:g}{' ' + only.unit if only.unit else ''} (line "
+            f"{only.line}): read as a map of speed alone."), details={"label": only.label, "value": only.setting,
+                                                                       "unit": only.unit, "line": only.line}))
+        sets = [TableSet(tables=only.tables)]
     if any(s.setting is not None for s in sets):
         labels = {s.label.lower() for s in sets}
         if len(labels) > 1 or any(s.setting is None for s in sets):

@@ -354,3 +354,12 @@ def test_speeds_in_percent_are_kept_and_warned_about():
     assert w.details == {"value": 90.0, "range": [0.0, 3.0]} and "percent or rpm" in w.message
     assert req.setting_units == [""] and [p.setting for p in req.positions] == [[60.0], [70.0], [80.0], [90.0]]
     assert solve(req).result.units.settings == [None]
+
+
+def test_a_file_ending_before_its_pressure_ratio_table_is_truncated_and_one_geometry_is_a_note():
+    W, E, P = closed_form_tables()
+    text = write_map(W, E, P)
+    (err,) = refused(text[:text.index("Pressure Ratio")])
+    assert err.type == "truncated_file" and err.loc == ("file", "Pressure Ratio") and "cut?" in err.msg
+    req = read(text.replace("Mass Flow\n", "IGV = 10 [deg]\nMass Flow\n", 1))
+    assert req.setting_names == ["Nc"] and note(req, "upload_geometry_setting").details["value"] == 10.0
