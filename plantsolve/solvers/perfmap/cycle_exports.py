@@ -77,7 +77,7 @@ def _pycycle_flow_unit(result: PerfmapResult) -> tuple[str | None, float, str]:
     """(OpenMDAO unit of WcMap or None, factor applied to the flows, a sentence for the module docstring)."""
     stated = result.units.flow if result.units else None
     if not stated:
-        return None, 1.0, ("the flow unit was not stated: WcMap has no units (OpenMDAO warns and takes it as "
+        return None, 1.0, ("the flow unit was not stated: WcMap has no units (OpenMDAO warns and takes it as\n"
                            "CompressorMap's lbm/s); set ExportMap.units['WcMap'] to its unit")
     try:
         to_kg_s = check_quantity("flow", stated)
@@ -140,7 +140,8 @@ from pycycle.maps.map_data import MapData
 
 
 """Compressor map exported by plantsolve perfmap from the fitted speed lines ({names}), for pyCycle's
-CompressorMap(map_data=ExportMap). NcMap: the speed lines' values (CompressorMap labels them rpm); {flow_note};
+CompressorMap(map_data=ExportMap). NcMap: the speed lines' values (CompressorMap labels them rpm);
+{flow_note};
 PRmap: pressure {_unit(result, "pressure")}; effMap: a fraction.
 R-line R = 1 + 2 (1 - beta): RlineStall = 1 is the surge line, R = 3 the choke line;
 {_limits_text(result)}.{repeat_note}"""
