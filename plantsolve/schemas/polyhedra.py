@@ -127,6 +127,12 @@ class PolyhedraOptions(StrictModel):
         default=1e-4, ge=0.0, le=1e3,
         description="Largest distance (request units) of a face's vertex from the face's plane before the face "
         "is reported non-planar (EnergyPlus uses 1e-4 m).")
+    file_units: Units | None = Field(
+        default=None,
+        description="The length unit of the uploaded file's coordinates, overriding what the file states (a gbXML "
+        "lengthUnit that contradicts its numbers) or saying what it does not (OBJ and STL state none: they are read "
+        "in the request's units unless this is given). The numbers are converted to the request's units; "
+        "report.details.source.units says how.")
     list_faces: bool | None = Field(
         default=None,
         description=f"List every face in the result (faces, each zone's faces and misoriented faces): true always, "
