@@ -3,6 +3,7 @@ naming what it holds, instead of a list of 'extra fields not permitted'."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -36,7 +37,9 @@ def held_kind(body: Mapping[str, Any], own: str) -> str | None:
     know (at least one)."""
     kind = body.get("kind")
     if isinstance(kind, str) and kind in REQUESTS and kind != own:
-        return f"a {kind} result (its 'kind' is {kind!r})"
+        return f"{_a(kind)} result (its 'kind' is {kind!r})"
+    if kind == own and "report" in body:
+        return f"{_a(own)} result (its 'kind' is {own!r} and it has a 'report'), not a request"
     ours = request_fields(own)
     foreign = set(body) - ours
     if not foreign:
@@ -46,7 +49,11 @@ def held_kind(body: Mapping[str, Any], own: str) -> str | None:
     if not scores[best]:
         return None
     named = sorted(foreign & request_fields(best))[:KEYS_NAMED]
-    return f"a {best} request (its keys {', '.join(map(repr, named))} are {best}'s request fields)"
+    return f"{_a(best)} request (its keys {', '.join(map(repr, named))} are {best}'s request fields)"
+
+
+def _a(word: str) -> str:
+    return f"{'an' if word[0] in 'aeiou' else 'a'} {word}"
 
 
 def refuse_other_kind(body: Mapping[str, Any], own: str) -> None:
@@ -54,6 +61,46 @@ def refuse_other_kind(body: Mapping[str, Any], own: str) -> None:
     held = held_kind(body, own)
     if held is not None:
         expected = ", ".join(sorted(request_fields(own) - {"source"}))
-        raise reject(f"this JSON holds {held}, not a {own} request (whose fields are {expected}); send it to "
-                     f"/v1/{held.split()[1]}/jobs" if "request" in held else
-                     f"this JSON holds {held}, not a {own} request (whose fields are {expected})")
+        kind = held.split()[1]
+        where = f"; send it to /v1/{kind}/jobs" if held.split()[2] == "request" else ""
+        raise reject(f"this JSON holds {held}, not a {own} request (whose fields are {expected}){where}")
+
+
+_STEP_SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_ ]+)", re.IGNORECASE)
+_IDF_OBJECT = re.compile(rb"^\s*(version|zone|buildingsurface:detailed|building|globalgeometryrules|simulationcontrol)\s*,",
+                         re.IGNORECASE | re.MULTILINE)
+_CAD_SCHEMAS = {"AUTOMOTIVE_DESIGN": "AP214", "CONFIG_CONTROL_DESIGN": "AP203", "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING": "AP242"}
+
+
+def file_holds(head: bytes) -> str | None:
+    """What the start of a file shows it to be (a phrase: 'an EnergyPlus IDF'), when it is a format users mix up
+    between the kinds; None when nothing is recognised."""
+    text = head.lstrip(b"\xef\xbb\xbf \r\n\t")
+    low = text[:4096].lower()
+    if text.startswith(b"ISO-10303-21;"):
+        found = _STEP_SCHEMA.search(text[:65536])
+        schema = found.group(1).decode().strip().upper() if found else ""
+        if schema.startswith("IFC"):
+            return f"an IFC model ({schema})"
+        return f"a STEP CAD model ({_CAD_SCHEMAS.get(schema, schema or 'no FILE_SCHEMA')})"
+    if text.startswith(b"PK\x03\x04"):
+        return "a zip archive (an .ifczip, or an Excel workbook?)"
+    if text.startswith(b"<"):
+        return "a gbXML building model" if b"<gbxml" in low else "an XML document"
+    if text[:1] in (b"{", b"["):
+        return "a JSON document"
+    if low.startswith(b"solid") and b"facet" in low:
+        return "an ASCII STL mesh"
+    if low.startswith(b"ply"):
+        return "a PLY point cloud or mesh"
+    if _IDF_OBJECT.search(text[:65536]):
+        return "an EnergyPlus IDF"
+    lines = [line.split() for line in text[:65536].splitlines() if line.strip() and not line.startswith(b"#")]
+    keys = {line[0] for line in lines}
+    if b"v" in keys:
+        return "a Wavefront OBJ mesh" if b"f" in keys else "a Wavefront OBJ of vertices only (a point cloud)"
+    if any(k.startswith((b"PIPELINE-REFERENCE", b"UNITS-BORE", b"PIPE")) for k in keys):
+        return "a piping component file (PCF)"
+    if lines and b"," in lines[0][0] and not lines[0][0][:1].isdigit():
+        return "a CSV table with a header row"
+    return None

@@ -6,26 +6,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
-
 from plantsolve.schemas.common import Diagnostic
 
 TOLERANCE = 0.01  # relative
-DOWNWARD = -0.7  # a face whose outward normal has z below this is floor (within ~45 degrees of straight down)
-
-
-def floor_areas(n_zones: int, face_zones: Sequence[Sequence[int]], face_parent: np.ndarray, area: np.ndarray,
-                normal: np.ndarray) -> np.ndarray:
-    """Per zone, the area of its faces that face down seen from inside it: the floor. A face between two
-    zones faces the other way for its second zone."""
-    floors = np.zeros(n_zones)
-    for f, zones in enumerate(face_zones):
-        if face_parent[f] >= 0:
-            continue
-        for k, z in enumerate(zones):
-            if (normal[f, 2] if k == 0 else -normal[f, 2]) < DOWNWARD:
-                floors[z] += area[f]
-    return floors
 
 
 def compare(declared: Mapping[str, Mapping[str, Any]], zones: Sequence[Mapping[str, Any]],

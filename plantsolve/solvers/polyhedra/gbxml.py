@@ -130,6 +130,13 @@ def _parse(content: bytes) -> tuple[ET.Element, dict[int, int]]:
         raise reject("the XML file has a DOCTYPE or ENTITY declaration; gbXML has none, and it is not read",
                      ("file", "line", parser.CurrentLineNumber)) from None
     except expat.ExpatError as e:
+        last = content.rstrip().count(b"\n") + 1
+        if e.lineno >= last and e.code in (expat.errors.codes[expat.errors.XML_ERROR_NO_ELEMENTS],
+                                           expat.errors.codes[expat.errors.XML_ERROR_UNCLOSED_TOKEN],
+                                           expat.errors.codes[expat.errors.XML_ERROR_PARTIAL_CHAR]):
+            raise reject(f"the XML ends before its document is complete (line {e.lineno}, column {e.offset}: "
+                         f"{expat.ErrorString(e.code)}): the file was cut? Nothing of a cut gbXML is used",
+                         ("file", "line", e.lineno)) from None
         raise reject(f"not well-formed XML: {expat.ErrorString(e.code)} (line {e.lineno}, column {e.offset})",
                      ("file", "line", e.lineno)) from None
     return builder.close(), lines

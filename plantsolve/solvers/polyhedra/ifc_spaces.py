@@ -62,7 +62,11 @@ def parse_ifc(content: bytes) -> dict:
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
     if not spaces:
-        raise reject(f"the IFC file has no IfcSpace{was_cut}")
+        products = Counter(p.is_a() for p in model.by_type("IfcProduct"))
+        held = ", ".join(f"{n} {name}" for name, n in products.most_common(4)) or "no product"
+        raise reject(f"the IFC file has no IfcSpace{was_cut}: it holds {sum(products.values())} product(s) "
+                     f"({held}) and no space, so it has no zone to measure (a model for dedup? zones are IfcSpace "
+                     "bodies)")
     skipped: list[dict] = []
     names = Counter((s.Name or "").strip() for s in spaces)
     zone_of = {s.id(): ((s.Name or "").strip() if (s.Name or "").strip() and names[(s.Name or "").strip()] == 1

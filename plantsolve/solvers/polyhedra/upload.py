@@ -46,7 +46,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
     reject, validated
-from plantsolve.solvers.other_kinds import refuse_other_kind
+from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
@@ -504,6 +504,34 @@ def parse_json(text: str) -> dict:
     return body
 
 
+EXPECTED = {".idf": "an EnergyPlus IDF", ".epjson": "a JSON document", ".json": "a JSON document",
+            ".xml": "a gbXML building model", ".gbxml": "a gbXML building model", ".ifc": "an IFC model",
+            ".obj": "a Wavefront OBJ mesh", ".stl": "an ASCII STL mesh"}
+
+
+def read_file(extension: str, content: bytes) -> dict:
+    """The request body the extension's reader makes of ``content``."""
+    if extension == ".stl":
+        return parse_stl(content)
+    if extension in (".xml", ".gbxml"):
+        return parse_gbxml(content)
+    if extension == ".ifc":
+        return parse_ifc(content)
+    text = decode_text(content)
+    return {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(extension, parse_json)(text)
+
+
+def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -> InputRejected:
+    """A reader's refusal, said to be about a file of another format when its start shows one (a CSV named
+    .idf, a STEP CAD model named .ifc, an OBJ point cloud)."""
+    holds = file_holds(content[:65536])
+    if holds is None or holds.startswith(EXPECTED.get(extension, "?")) or extension == ".stl" and "STL" in holds:
+        return refused
+    first, *rest = refused.errors
+    return InputRejected([replace(first, msg=f"this file holds {holds}, not {EXPECTED[extension]} as its name "
+                                             f"says: {first.msg}"), *rest])
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
     form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``, ``file_units``) override what the file
@@ -512,15 +540,10 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
-    if source.extension == ".stl":
-        body = parse_stl(content)
-    elif source.extension in (".xml", ".gbxml"):
-        body = parse_gbxml(content)
-    elif source.extension == ".ifc":
-        body = parse_ifc(content)
-    else:
-        text = decode_text(content)
-        body = {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(source.extension, parse_json)(text)
+    try:
+        body = read_file(source.extension, content)
+    except InputRejected as refused:
+        raise name_what_it_holds(refused, source.extension, content) from None
     fmt = (body.get("source") or {}).get("format") if isinstance(body.get("source"), dict) else None
     body = reconcile(body, form.units if form is not None and "units" in form.model_fields_set else None,
                      form.options.file_units if form is not None else None, fmt or source.extension[1:])

@@ -1,0 +1,91 @@
+"""Zone measures that no building has: a room written in millimetres and read as metres (6e10 m³), metres
+read as millimetres (6e-8 m³), a header whose unit contradicts its numbers. Each quantity out of its physical
+range is one warning ``implausible_<quantity>`` naming the zones, the values, the range and the unit mix-up that
+would make them plausible (the ranges are the README's table, polyhedra section)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.polyhedra.file_units import METRES
+
+MAX_ZONES_LISTED = 100
+
+
+@dataclass(frozen=True)
+class Range:
+    code: str
+    quantity: str
+    power: int  # 1 length, 2 area, 3 volume
+    low: float  # SI (m, m², m³)
+    high: float
+    typical: float  # what a room has: the mix-up named is the one that comes closest to it
+
+
+RANGES = (
+    Range("implausible_zone_volume", "volume", 3, 0.1, 1e7, 100.0),
+    Range("implausible_floor_area", "floor area", 2, 0.1, 1e6, 30.0),
+    Range("implausible_zone_height", "height", 1, 0.3, 300.0, 3.0),
+    Range("implausible_zone_extent", "horizontal extent", 1, 0.3, 3000.0, 10.0),
+)
+SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
+
+
+def _mix_up(value_si: float, rng: Range, units: str) -> tuple[str, float] | None:
+    """The unit the numbers were more likely written in (plausible when read so, closest to a room's), and the
+    value read so in SI; None when no other unit makes it plausible."""
+    best = None
+    for name, size in METRES.items():
+        if name == units:
+            continue
+        alt = value_si * (size / METRES[units]) ** rng.power
+        if rng.low <= alt <= rng.high:
+            distance = abs(math.log(alt / rng.typical))
+            if best is None or distance < best[0]:
+                best = (distance, name, alt)
+    return (best[1], best[2]) if best else None
+
+
+def _range_text(rng: Range, units: str) -> str:
+    k = METRES[units] ** rng.power
+    return f"{rng.low / k:.3g}–{rng.high / k:.3g} {units}{SUPERSCRIPT[rng.power]}"
+
+
+def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mapping[str, float]], units: str,
+                hint: str) -> list[Diagnostic]:
+    """One warning per quantity out of range; ``measures`` per zone id holds ``height`` and ``extent`` (request
+    units); ``hint`` says how to give the right unit (``options.file_units`` for an upload, ``units`` for JSON)."""
+    warnings = []
+    for rng in RANGES:
+        found = []
+        for zone in zones:
+            size = measures.get(zone["id"]) or {}
+            value = {"volume": zone.get("volume"), "floor area": zone.get("floor_area"), "height": size.get("height"),
+                     "horizontal extent": size.get("extent")}[rng.quantity]
+            if value is None or value <= 0:  # no volume (not closed), no floor: nothing to judge
+                continue
+            si = value * METRES[units] ** rng.power
+            if not rng.low <= si <= rng.high:
+                found.append((zone["id"], value, si))
+        if not found:
+            continue
+        zone_id, value, si = found[0]
+        unit_text = f"{units}{SUPERSCRIPT[rng.power]}"
+        mix = _mix_up(si, rng, units)
+        in_si = f" = {mix[1]:.4g} m{SUPERSCRIPT[rng.power]}" if mix and mix[0] != "m" else ""
+        likely = (f"the numbers look like {mix[0]} read as {units} ({value:.4g} {mix[0]}{SUPERSCRIPT[rng.power]}"
+                  f"{in_si}): {hint.format(unit=mix[0])}") if mix else \
+            "no length unit makes it plausible: check the coordinates"
+        more = f" (and {len(found) - 1} more zone(s))" if len(found) > 1 else ""
+        warnings.append(Diagnostic(code=rng.code, message=(
+            f"Zone {zone_id!r}{more}: {rng.quantity} {value:.4g} {unit_text} is outside the plausible "
+            f"{_range_text(rng, units)} of a building zone; {likely}."),
+            details={"quantity": rng.quantity, "units": unit_text, "plausible_range": [
+                rng.low / METRES[units] ** rng.power, rng.high / METRES[units] ** rng.power],
+                "likely_file_unit": mix[0] if mix else None,
+                "zones": {z: v for z, v, _ in found[:MAX_ZONES_LISTED]}, "count": len(found)}))
+    return warnings
