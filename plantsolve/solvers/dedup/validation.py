@@ -7,6 +7,7 @@ import re
 
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.dedup.source import IfcSource
+from plantsolve.solvers.other_kinds import file_holds
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)'", re.IGNORECASE)
 
@@ -20,6 +21,9 @@ def check_input(source: IfcSource) -> None:
     schema = header_schema(source.header())
     if schema is None:
         raise reject("no FILE_SCHEMA in the STEP header")
+    if not schema.startswith("IFC"):
+        raise reject(f"not an IFC model: it holds {file_holds(source.header())} (FILE_SCHEMA {schema!r}); dedup reads "
+                     "IFC2X3, IFC4 and IFC4X3 models")
     if not (schema in ("IFC2X3", "IFC4") or schema.startswith("IFC4X3")):
         raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
     if source.options.sharing == "product_shape" and schema == "IFC2X3":
