@@ -101,6 +101,16 @@ def file_holds(head: bytes) -> str | None:
         return "a Wavefront OBJ mesh" if b"f" in keys else "a Wavefront OBJ of vertices only (a point cloud)"
     if any(k.startswith((b"PIPELINE-REFERENCE", b"UNITS-BORE", b"PIPE")) for k in keys):
         return "a piping component file (PCF)"
-    if lines and b"," in lines[0][0] and not lines[0][0][:1].isdigit():
-        return "a CSV table with a header row"
+    rows = [line for line in text[:65536].splitlines() if line.strip() and not line.startswith(b"#")][:3]
+    for sep in (b",", b";", b"\t"):
+        if len(rows) >= 2 and sep in rows[0] and all(_numbers(row.split(sep)) for row in rows[1:]):
+            return "a CSV table with a header row" if not _numbers(rows[0].split(sep)) else "a CSV table of numbers"
     return None
+
+
+def _numbers(cells: list[bytes]) -> bool:
+    """Two or more cells, each a number."""
+    try:
+        return len(cells) >= 2 and all(float(c) == float(c) for c in cells)
+    except ValueError:
+        return False

@@ -21,6 +21,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 
+FORMATS = {"idf": "IDF", "epjson": "epJSON", "gbxml": "gbXML", "ifc": "IFC", "obj": "OBJ", "stl": "STL", "json": "JSON"}
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # metres per unit of each request unit
 
 
@@ -50,7 +51,7 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
         number_m = METRES[file_units] / (said["file_unit_m"] if in_metres else 1.0)
         file_unit, basis, factor = file_units, "options.file_units", METRES[file_units] / METRES[target]
         evidence = (f"overrides the file's {said['file_unit']} ({said['evidence']})" if in_metres else
-                    f"{fmt.upper()} states no unit; options.file_units says {file_units}")
+                    f"{FORMATS.get(fmt, fmt)} states no unit; options.file_units says {file_units}")
     elif in_metres:
         number_m, file_unit, basis, evidence = 1.0, said["file_unit"], said["basis"], said["evidence"]
         factor = said["file_unit_m"] / METRES[target]  # file unit → request unit, the reader's step included
@@ -60,7 +61,7 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
         factor = number_m / METRES[target]
     else:
         number_m, file_unit, basis, factor = METRES[target], target, "request", 1.0
-        evidence = f"{fmt.upper()} files state no unit: read in the request's"
+        evidence = f"{FORMATS.get(fmt, fmt)} files state no unit: read in the request's"
     scale = number_m / METRES[target]  # what the body's numbers are multiplied by
     extra = {k: v for k, v in (said or {}).items() if k not in ("file_unit", "file_unit_m", "basis", "evidence")}
     source["units"] = {"file_unit": file_unit, "request_unit": target, "factor": factor, "basis": basis,
@@ -70,7 +71,7 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
         _scale(out, scale)
     if factor != 1.0:
         source["warnings"] = [*(source.get("warnings") or []), Diagnostic(code="units_converted", message=(
-            f"The {fmt.upper()} file's lengths are in {file_unit} ({evidence}): converted to the request's {target} "
+            f"The {FORMATS.get(fmt, fmt)} file's lengths are in {file_unit} ({evidence}): converted to the request's {target} "
             f"(× {factor:.6g}; areas × {factor ** 2:.6g}, volumes × {factor ** 3:.6g})."),
             details={k: source["units"][k] for k in ("file_unit", "request_unit", "factor", "basis")}).model_dump()]
     return out

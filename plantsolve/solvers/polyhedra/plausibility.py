@@ -35,14 +35,15 @@ RANGES = (
 SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
 
 
-def _mix_up(value_si: float, rng: Range, units: str) -> tuple[str, float] | None:
-    """The unit the numbers were more likely written in (plausible when read so, closest to a room's), and the
-    value read so in SI; None when no other unit makes it plausible."""
+def _mix_up(value_si: float, rng: Range, read_as: tuple[str, float]) -> tuple[str, float] | None:
+    """The unit the file's numbers were more likely written in (plausible when read so, closest to a room's) than
+    ``read_as`` (the unit they were read in: name, metres), and the value read so in SI; None when no other unit
+    makes it plausible."""
     best = None
     for name, size in METRES.items():
-        if name == units:
+        if abs(size - read_as[1]) <= 1e-12 * size:
             continue
-        alt = value_si * (size / METRES[units]) ** rng.power
+        alt = value_si * (size / read_as[1]) ** rng.power
         if rng.low <= alt <= rng.high:
             distance = abs(math.log(alt / rng.typical))
             if best is None or distance < best[0]:
@@ -56,9 +57,11 @@ def _range_text(rng: Range, units: str) -> str:
 
 
 def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mapping[str, float]], units: str,
-                hint: str) -> list[Diagnostic]:
+                hint: str, read_as: tuple[str, float] | None = None) -> list[Diagnostic]:
     """One warning per quantity out of range; ``measures`` per zone id holds ``height`` and ``extent`` (request
-    units); ``hint`` says how to give the right unit (``options.file_units`` for an upload, ``units`` for JSON)."""
+    units); ``hint`` says how to give the right unit (``options.file_units`` for an upload, ``units`` for JSON);
+    ``read_as`` is the unit the file's numbers were read in (name, metres), the request's when not given."""
+    read_as = read_as or (units, METRES[units])
     warnings = []
     for rng in RANGES:
         found = []
@@ -75,11 +78,12 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
             continue
         zone_id, value, si = found[0]
         unit_text = f"{units}{SUPERSCRIPT[rng.power]}"
-        mix = _mix_up(si, rng, units)
-        in_si = f" = {mix[1]:.4g} m{SUPERSCRIPT[rng.power]}" if mix and mix[0] != "m" else ""
-        likely = (f"the numbers look like {mix[0]} read as {units} ({value:.4g} {mix[0]}{SUPERSCRIPT[rng.power]}"
-                  f"{in_si}): {hint.format(unit=mix[0])}") if mix else \
-            "no length unit makes it plausible: check the coordinates"
+        mix = _mix_up(si, rng, read_as)
+        power = SUPERSCRIPT[rng.power]
+        in_si = f" = {mix[1]:.4g} m{power}" if mix and mix[0] != "m" else ""
+        file_value = si / read_as[1] ** rng.power
+        likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({file_value:.4g} {mix[0]}{power}{in_si}): "
+                  f"{hint.format(unit=mix[0])}") if mix else "no length unit makes it plausible: check the coordinates"
         more = f" (and {len(found) - 1} more zone(s))" if len(found) > 1 else ""
         warnings.append(Diagnostic(code=rng.code, message=(
             f"Zone {zone_id!r}{more}: {rng.quantity} {value:.4g} {unit_text} is outside the plausible "

@@ -23,6 +23,7 @@ from plantsolve.solvers.polyhedra.declared import compare
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
+from plantsolve.solvers.polyhedra.file_units import METRES
 from plantsolve.solvers.polyhedra.plausibility import implausible
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
@@ -122,15 +123,26 @@ def zone_sizes(poly: Polygons, gmap: GMap, n_zones: int) -> np.ndarray:
     return hi - lo
 
 
+def read_as(request: PolyhedraRequest) -> tuple[str, float] | None:
+    """The unit the file's numbers were read in (its name, metres), from the reader's ``source.units``."""
+    said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
+    try:
+        return str(said["file_unit"]), float(said["factor"]) * METRES[request.units]
+    except (TypeError, KeyError, ValueError):
+        return None
+
+
 def unit_hint(request: PolyhedraRequest) -> str:
     """How to give the unit an implausible zone suggests (``{unit}`` stands for it): what the file said of its unit
     first, when it said something."""
     said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
     if not isinstance(said, dict):
         return f"if so, send units '{{unit}}' (the results then in {{unit}})"
-    stated = (f"the file's unit was taken as {said.get('file_unit')} ({said.get('evidence')}), but if the numbers are "
-              "in {unit}, " if said.get("basis") not in ("request", "units") else "if so, ")
-    return stated + f"upload with options.file_units '{{unit}}' (converted to {request.units}) or units '{{unit}}'"
+    if said.get("basis") in ("request", "units"):
+        return (f"if so, upload with options.file_units '{{unit}}' (converted to {request.units}) or send units "
+                "'{unit}' (the results then in {unit})")
+    return (f"the file's unit was taken as {said.get('file_unit')} ({said.get('evidence')}), but if the numbers are "
+            f"in {{unit}}, upload with options.file_units '{{unit}}' (converted to {request.units})")
 
 
 def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved:
@@ -305,7 +317,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(implausible(zones, {poly.zone_ids[z]: {"height": float(sizes[z, 2]),
                                                            "extent": float(sizes[z, :2].max())}
                                         for z in range(n_zones) if np.isfinite(sizes[z]).all()},
-                                request.units, hint))
+                                request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
