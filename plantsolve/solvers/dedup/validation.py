@@ -9,7 +9,7 @@ from plantsolve.solvers.base import reject
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.other_kinds import file_holds
 
-_SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)'", re.IGNORECASE)
+_SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
 
 def header_schema(text: bytes) -> str | None:
