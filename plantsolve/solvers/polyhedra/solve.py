@@ -109,6 +109,11 @@ def zone_sizes(poly: Polygons, gmap: GMap, n_zones: int) -> np.ndarray:
     """(Z, 3) extent of each zone's bounding box along x, y, z (inf where a zone has no face)."""
     lo = np.full((n_zones, 3), np.inf)
     hi = np.full((n_zones, 3), -np.inf)
+    if n_zones == 1 and len(poly.points):  # one zone (a mesh): no sort by zone
+        mark = np.zeros(len(poly.points), dtype=bool)
+        mark[poly.loop_vertices[poly.face_zone[poly.position_face, 0] >= 0]] = True
+        used = poly.points[mark]
+        return (used.max(axis=0) - used.min(axis=0))[None, :] if len(used) else hi - lo
     position_face = poly.position_face
     for column in range(poly.face_zone.shape[1]):
         zone = poly.face_zone[position_face, column]
