@@ -262,3 +262,15 @@ def test_a_cut_idf_is_a_truncated_file_warning_naming_the_line():
     _, result = upload("two_offices.idf", cut)
     warning = codes(result)["truncated_file"]
     assert warning.details["line"] <= cut.count(b"\n") + 1 and "Office B" in warning.message
+
+
+def test_a_declared_volume_written_in_cubic_feet_is_named_as_such():
+    text = (EXAMPLES / "two_offices.idf").read_text()
+    field = ",                                       !- Volume {m3}"
+    assert field in text
+    declared = text.replace(field, f"{60 / FT ** 3:.2f},                                       !- Volume {{m3}}", 1)
+    _, result = upload("two_offices.idf", declared.encode())
+    warning = codes(result)["declared_measures_differ"]
+    assert "ft³ taken as m³" in warning.message and warning.details["zones"] == ["Office A Thermal Zone"]
+    (row,) = result.report.details["declared_comparison"]
+    assert row["volume"] == pytest.approx(60.0) and row["declared_volume"] == pytest.approx(2118.88)
