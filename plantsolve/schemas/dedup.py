@@ -35,8 +35,8 @@ class DedupOptions(StrictModel):
         description="Largest allowed distance between a member's points and its transformed representative, both "
         "ways, in the IFC file's own length unit (its IfcUnitAssignment: metres for most exports, millimetres for "
         "some; the result's units says which), not in the request's. Default: the model context's Precision (1e-5 m "
-        "when absent). A tolerance of 5 % of the median product's size or more is refused (options.tolerance); "
-        "above 5 mm or 0.5 % of it is warned (implausible_tolerance).")
+        "when absent). Refused beyond 0.1 m or from 5 % of the median product's size; warned above 5 mm or 0.5 % "
+        "of it (implausible_tolerance).")
     allow_mirror: bool = Field(default=False, description="Let mirrored copies join a class (written as IfcMappedItem).")
     allow_scale: bool = Field(default=False, description="Let uniformly scaled copies join a class (IfcMappedItem).")
     postpass: bool = Field(default=True, description="Merge identical non-rooted instances afterwards (points, "

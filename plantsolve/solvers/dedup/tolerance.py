@@ -5,13 +5,16 @@ the tolerance, the unit, the product sizes and the model's extent. The ranges ar
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
+from typing import IO
 
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
 
+INTAKE_REFUSE_M = 0.1  # refused at submission: no two products 10 cm apart are one shape
 WARN_M = 0.005  # a tolerance above 5 mm merges what a drawing tells apart
 WARN_OF_SIZE = 0.005  # … or above 0.5 % of the median product size
 REFUSE_OF_SIZE = 0.05  # from 5 % of the median product size on, different shapes verify as one: refused
@@ -73,3 +76,44 @@ def judge(tolerance: float, explicit: bool, unit_name: str, metres_per_unit: flo
             f"({FLOAT_RESOLUTION * far:.3g} {unit_name}) or below a nanometre: only bit-identical copies can verify. "
             "Meant in a larger unit (metres given to a millimetre model)?"), details=details)]
     return []
+
+
+_SI_LENGTH = re.compile(rb"IFCSIUNIT\s*\(\s*\*\s*,\s*\.LENGTHUNIT\.\s*,\s*(?:\.(\w+)\.|\$)\s*,\s*\.METRE\.\s*\)",
+                        re.IGNORECASE)
+_NAMED_LENGTH = re.compile(rb"IFCCONVERSIONBASEDUNIT\s*\(\s*#\d+\s*,\s*\.LENGTHUNIT\.\s*,\s*'([^']*)'", re.IGNORECASE)
+_PREFIX = {b"": 1.0, b"MILLI": 1e-3, b"CENTI": 1e-2, b"DECI": 0.1, b"KILO": 1e3, b"MICRO": 1e-6}
+_NAMED = {b"FOOT": 0.3048, b"FEET": 0.3048, b"INCH": 0.0254, b"YARD": 0.9144, b"MILE": 1609.344}
+CHUNK = 1 << 20
+
+
+def stated_length_unit(stream: IO[bytes]) -> tuple[str, float] | None:
+    """The one length unit the STEP text defines (its words as written, metres), read in chunks without parsing
+    the model; None when it defines none, several, or one this scan does not know (the solve reads it properly)."""
+    found: set[tuple[str, float]] = set()
+    carry = b""
+    while chunk := stream.read(CHUNK):
+        text = carry + chunk
+        carry = text[-200:]  # a definition across the chunks' border is seen whole in the next text
+        if b"LENGTHUNIT" not in text and b"lengthunit" not in text.lower():  # STEP writes keywords in capitals
+            continue
+        for match in _SI_LENGTH.finditer(text):
+            prefix = (match.group(1) or b"").upper()
+            if prefix not in _PREFIX:
+                return None
+            found.add(((prefix + b"METRE").decode(), _PREFIX[prefix]))
+        for match in _NAMED_LENGTH.finditer(text):
+            name = match.group(1).strip().upper()
+            if name not in _NAMED:
+                return None
+            found.add((name.decode(), _NAMED[name]))
+    return found.pop() if len(found) == 1 else None
+
+
+def refuse_at_intake(tolerance: float, unit: tuple[str, float]) -> None:
+    """A 422 on ``options.tolerance`` when it is beyond any plausible tolerance whatever the model."""
+    name, metres = unit
+    if tolerance * metres > INTAKE_REFUSE_M:
+        raise reject(f"tolerance {tolerance:g} {name} = {tolerance * metres:g} m (a tolerance is in the file's length "
+                     f"unit, {name}, from its IfcUnitAssignment): more than {INTAKE_REFUSE_M:g} m, products that differ "
+                     f"by that much are not copies of one shape{_meant(tolerance, metres)} Give it in {name}",
+                     ("options", "tolerance"))

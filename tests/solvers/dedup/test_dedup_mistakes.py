@@ -10,6 +10,8 @@ import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup.artifacts import classes_csv
+from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
 from tests.conftest import REPO
 from tests.solvers.dedup.support import run
@@ -25,12 +27,26 @@ def zoo() -> ifcopenshell.file:
     return ifcopenshell.open(str(ZOO))
 
 
-def test_a_tolerance_meant_in_mm_given_to_a_metre_model_is_refused_naming_tolerance_unit_and_model():
+def test_a_tolerance_meant_in_mm_given_to_a_metre_model_is_refused_at_submission():
     with pytest.raises(InputRejected) as refused:
         run(zoo(), tolerance=1)
     (error,) = refused.value.errors
     assert error.loc == ("options", "tolerance")
-    for said in ("tolerance 1 m", "IfcUnitAssignment", "2.083 m across", "104.3 m", "meant in mm"):
+    for said in ("tolerance 1 METRE = 1 m", "IfcUnitAssignment", "meant in mm"):
+        assert said in error.msg, said
+    # the same number in a millimetre model is 1 mm: accepted at submission
+    model = ifcopenshell.util.unit.convert_file_length_units(zoo(), "MILLIMETER")
+    source = StoredInput.from_bytes("model.ifc", model.to_string().encode())
+    SPEC.check_input(SPEC.input_of(parse_upload(source, {"tolerance": 1}), source))
+
+
+def test_a_tolerance_the_intake_scan_could_not_judge_is_refused_by_the_solve_naming_product_size_and_extent():
+    source = StoredInput.from_path(ZOO)  # check_input not run: as for a file whose unit the text scan cannot read
+    with pytest.raises(InputRejected) as refused:
+        solve(SPEC.input_of(parse_upload(source, {"tolerance": 0.5}), source))
+    (error,) = refused.value.errors
+    assert error.loc == ("options", "tolerance")
+    for said in ("tolerance 0.5 m", "24% of a product's size", "2.083 m across", "104.3 m", "meant in mm"):
         assert said in error.msg, said
 
 
@@ -99,3 +115,10 @@ def test_a_tolerance_beyond_its_schema_bound_is_a_422_at_intake():
         with pytest.raises(InputRejected) as refused:
             parse_upload(source, {"tolerance": bad})
         assert refused.value.errors[0].loc == ("options", "tolerance")
+
+
+def test_classes_csv_names_the_unit_of_its_lengths():
+    model = ifcopenshell.util.unit.convert_file_length_units(zoo(), "MILLIMETER")
+    header = classes_csv(run(model).result).decode().splitlines()[0].split(",")
+    assert "class_max_deviation [mm]" in header and "t03 [mm]" in header and "t23 [mm]" in header
+    assert "t00 [1]" in header and "t33 [1]" in header
