@@ -41,10 +41,12 @@ def symbol(metres: float) -> str:
 def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | None, fmt: str) -> dict[str, Any]:
     """``body`` with its coordinates (and declared measures) in ``request_unit`` and ``source["units"]`` saying so.
     ``request_unit`` None: the body's own ``units`` (a JSON request's), else the schema's default, metres."""
+    if not isinstance(body.get("source") or {}, dict) or body.get("units", "m") not in METRES:
+        return body  # the schema refuses it, naming the field
     source = dict(body.get("source") or {})
     said = source.get("units") if isinstance(source.get("units"), dict) else None
     in_metres = said is not None and "file_unit_m" in said  # a reader that converted to metres
-    written = body.get("units") if isinstance(body.get("units"), str) and body.get("units") in METRES else None
+    written = body.get("units")
     target = request_unit or (None if in_metres else written) or "m"
     if file_units is not None:
         # the body's numbers are the file's own, or metres made from the unit the file stated
@@ -71,8 +73,8 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
         _scale(out, scale)
     if factor != 1.0:
         source["warnings"] = [*(source.get("warnings") or []), Diagnostic(code="units_converted", message=(
-            f"The {FORMATS.get(fmt, fmt)} file's lengths are in {file_unit} ({evidence}): converted to the request's {target} "
-            f"(× {factor:.6g}; areas × {factor ** 2:.6g}, volumes × {factor ** 3:.6g})."),
+            f"The {FORMATS.get(fmt, fmt)} file's lengths are in {file_unit} ({evidence}): converted to the request's "
+            f"{target} (× {factor:.6g}; areas × {factor ** 2:.6g}, volumes × {factor ** 3:.6g})."),
             details={k: source["units"][k] for k in ("file_unit", "request_unit", "factor", "basis")}).model_dump()]
     return out
 

@@ -142,7 +142,7 @@ def unit_hint(request: PolyhedraRequest) -> str:
     first, when it said something."""
     said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
     if not isinstance(said, dict):
-        return f"if so, send units '{{unit}}' (the results then in {{unit}})"
+        return "if so, send units '{unit}' (the results then in {unit})"
     if said.get("basis") in ("request", "units"):
         return (f"if so, upload with options.file_units '{{unit}}' (converted to {request.units}) or send units "
                 "'{unit}' (the results then in {unit})")

@@ -44,7 +44,7 @@ def box_obj(a: float, b: float, c: float, group: str = "room") -> bytes:
 
 def test_an_idf_is_metres_whatever_the_request_says_and_is_converted_to_feet():
     content = (EXAMPLES / "two_offices.idf").read_bytes()
-    request, result = upload("two_offices.idf", content, {"units": "ft"})
+    _, result = upload("two_offices.idf", content, {"units": "ft"})
     assert result.units == "ft" and result.total_volume == pytest.approx(120 / FT ** 3, rel=1e-12)  # 4,237.8 ft³
     assert result.total_volume == pytest.approx(4237.76, abs=0.01)
     assert [z.floor_area for z in result.zones] == pytest.approx([20 / FT ** 2] * 2, rel=1e-12)
@@ -274,3 +274,13 @@ def test_a_declared_volume_written_in_cubic_feet_is_named_as_such():
     assert "ft³ taken as m³" in warning.message and warning.details["zones"] == ["Office A Thermal Zone"]
     (row,) = result.report.details["declared_comparison"]
     assert row["volume"] == pytest.approx(60.0) and row["declared_volume"] == pytest.approx(2118.88)
+
+
+def test_a_json_file_with_an_unknown_unit_is_refused_naming_units_not_read_as_metres():
+    body = {"units": "km", "faces": synthetic.box_faces([0, 0, 0], [5, 4, 3])}
+    with pytest.raises(InputRejected) as refused:
+        upload("room.json", json.dumps(body).encode())
+    assert refused.value.errors[0].loc[:2] == ("file", "units")
+    with pytest.raises(InputRejected) as refused:
+        upload("room.json", json.dumps({**body, "units": "m", "source": [1]}).encode())
+    assert refused.value.errors[0].loc[:2] == ("file", "source")
