@@ -81,13 +81,15 @@ def judge(tolerance: float, explicit: bool, unit_name: str, metres_per_unit: flo
 _SI_LENGTH = re.compile(rb"IFCSIUNIT\s*\(\s*\*\s*,\s*\.LENGTHUNIT\.\s*,\s*(?:\.(\w+)\.|\$)\s*,\s*\.METRE\.\s*\)",
                         re.IGNORECASE)
 _NAMED_LENGTH = re.compile(rb"IFCCONVERSIONBASEDUNIT\s*\(\s*#\d+\s*,\s*\.LENGTHUNIT\.\s*,\s*'([^']*)'", re.IGNORECASE)
-_PREFIX = {b"": 1.0, b"MILLI": 1e-3, b"CENTI": 1e-2, b"DECI": 0.1, b"KILO": 1e3, b"MICRO": 1e-6}
-_NAMED = {b"FOOT": 0.3048, b"FEET": 0.3048, b"INCH": 0.0254, b"YARD": 0.9144, b"MILE": 1609.344}
+_PREFIX = {b"": ("m", 1.0), b"MILLI": ("mm", 1e-3), b"CENTI": ("cm", 1e-2), b"DECI": ("dm", 0.1),
+           b"KILO": ("km", 1e3), b"MICRO": ("um", 1e-6)}
+_NAMED = {b"FOOT": ("ft", 0.3048), b"FEET": ("ft", 0.3048), b"INCH": ("in", 0.0254), b"YARD": ("yd", 0.9144),
+          b"MILE": ("mi", 1609.344)}
 CHUNK = 1 << 20
 
 
 def stated_length_unit(stream: IO[bytes]) -> tuple[str, float] | None:
-    """The one length unit the STEP text defines (its words as written, metres), read in chunks without parsing
+    """The one length unit the STEP text defines (its symbol, metres), read in chunks without parsing
     the model; None when it defines none, several, or one this scan does not know (the solve reads it properly)."""
     found: set[tuple[str, float]] = set()
     carry = b""
@@ -100,12 +102,12 @@ def stated_length_unit(stream: IO[bytes]) -> tuple[str, float] | None:
             prefix = (match.group(1) or b"").upper()
             if prefix not in _PREFIX:
                 return None
-            found.add(((prefix + b"METRE").decode(), _PREFIX[prefix]))
+            found.add(_PREFIX[prefix])
         for match in _NAMED_LENGTH.finditer(text):
             name = match.group(1).strip().upper()
             if name not in _NAMED:
                 return None
-            found.add((name.decode(), _NAMED[name]))
+            found.add(_NAMED[name])
     return found.pop() if len(found) == 1 else None
 
 
@@ -113,7 +115,8 @@ def refuse_at_intake(tolerance: float, unit: tuple[str, float]) -> None:
     """A 422 on ``options.tolerance`` when it is beyond any plausible tolerance whatever the model."""
     name, metres = unit
     if tolerance * metres > INTAKE_REFUSE_M:
-        raise reject(f"tolerance {tolerance:g} {name} = {tolerance * metres:g} m (a tolerance is in the file's length "
+        in_metres = f" = {tolerance * metres:g} m" if name != "m" else ""
+        raise reject(f"tolerance {tolerance:g} {name}{in_metres} (a tolerance is in the file's length "
                      f"unit, {name}, from its IfcUnitAssignment): more than {INTAKE_REFUSE_M:g} m, products that differ "
                      f"by that much are not copies of one shape{_meant(tolerance, metres)} Give it in {name}",
                      ("options", "tolerance"))

@@ -97,7 +97,8 @@ def _option_errors(request: PolyhedraRequest) -> list[FieldError]:
         value = getattr(request.options, name)
         bound = bound_m / METRES[request.units]
         if value > bound:
+            in_metres = f" ({bound_m:g} m)" if request.units != "m" else ""
             errors.append(FieldError(("options", name), f"{name} {value:g} {request.units} is more than "
-                                     f"{bound:g} {request.units} ({bound_m:g} m), beyond any building's: a value "
+                                     f"{bound:g} {request.units}{in_metres}, beyond any building's: a value "
                                      "meant in another unit?"))
     return errors

@@ -32,12 +32,16 @@ def test_a_tolerance_meant_in_mm_given_to_a_metre_model_is_refused_at_submission
         run(zoo(), tolerance=1)
     (error,) = refused.value.errors
     assert error.loc == ("options", "tolerance")
-    for said in ("tolerance 1 METRE = 1 m", "IfcUnitAssignment", "meant in mm"):
+    for said in ("tolerance 1 m (", "IfcUnitAssignment", "more than 0.1 m", "meant in mm"):
         assert said in error.msg, said
     # the same number in a millimetre model is 1 mm: accepted at submission
     model = ifcopenshell.util.unit.convert_file_length_units(zoo(), "MILLIMETER")
     source = StoredInput.from_bytes("model.ifc", model.to_string().encode())
     SPEC.check_input(SPEC.input_of(parse_upload(source, {"tolerance": 1}), source))
+    source = StoredInput.from_bytes("model.ifc", model.to_string().encode())
+    with pytest.raises(InputRejected) as refused:  # 200 mm is not
+        SPEC.check_input(SPEC.input_of(parse_upload(source, {"tolerance": 200}), source))
+    assert "tolerance 200 mm = 0.2 m" in refused.value.errors[0].msg
 
 
 def test_a_tolerance_the_intake_scan_could_not_judge_is_refused_by_the_solve_naming_product_size_and_extent():
