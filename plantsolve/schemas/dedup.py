@@ -105,9 +105,9 @@ class DedupResult(BaseModel):
                                    "results of GET /v1/jobs/{id}/result apart).")
     schema_: str = Field(alias="schema", description="IFC schema of the file, e.g. 'IFC4'.")
     length_unit: str = Field(description="The file's length unit as IFC names it (e.g. 'METRE', 'MILLIMETRE', 'FOOT').")
-    units: str = Field(default="m", description="The file's length unit as a symbol ('m', 'mm', 'ft', …): the unit of "
+    units: str = Field(description="The file's length unit as a symbol ('m', 'mm', 'ft', …): the unit of "
                        "tolerance, every deviation and every transform's translation.")
-    metres_per_unit: FiniteFloat = Field(default=1.0, description="Metres in one of units (the project's unit scale).",
+    metres_per_unit: FiniteFloat = Field(description="Metres in one of units (the project's unit scale).",
                                          json_schema_extra=unit("m"))
     tolerance: FiniteFloat = Field(description="The tolerance used (units): options.tolerance, else the model "
                                    "context's Precision.", json_schema_extra=unit("{units}"))

@@ -251,6 +251,6 @@ class PolyhedraResult(BaseModel):
     adjacency: list[Adjacency]
     total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not closed.",
                                        json_schema_extra=unit(VOLUME))
-    total_floor_area: float = Field(default=0.0, description="Sum of the zones' floor areas (units²).",
+    total_floor_area: float = Field(description="Sum of the zones' floor areas (units²).",
                                     json_schema_extra=unit(AREA))
     report: Report

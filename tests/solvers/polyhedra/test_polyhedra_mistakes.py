@@ -9,6 +9,7 @@ import json
 from pathlib import Path
 
 import pytest
+import trimesh
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
@@ -284,3 +285,16 @@ def test_a_json_file_with_an_unknown_unit_is_refused_naming_units_not_read_as_me
     with pytest.raises(InputRejected) as refused:
         upload("room.json", json.dumps({**body, "units": "m", "source": [1]}).encode())
     assert refused.value.errors[0].loc[:2] == ("file", "source")
+
+
+def test_a_binary_stl_room_in_millimetres_is_warned_and_read_right_with_its_unit():
+    room = trimesh.creation.box(extents=(5000.0, 4000.0, 3000.0)).export(file_type="stl")
+    _, result = upload("room.stl", room)
+    warning = codes(result)["implausible_zone_volume"]
+    assert warning.details["likely_file_unit"] == "mm" and result.zones[0].volume == pytest.approx(6e10)
+    _, fixed = upload("room.stl", room, {"options": {"file_units": "mm"}})
+    (zone,) = fixed.zones
+    assert zone.volume == pytest.approx(60.0) and zone.floor_area == pytest.approx(20.0)
+    assert fixed.report.details["source"]["units"]["factor"] == pytest.approx(1e-3)
+    _, in_mm = upload("room.stl", room, {"units": "mm"})
+    assert in_mm.zones[0].volume == pytest.approx(6e10) and "implausible_zone_volume" not in codes(in_mm)
