@@ -27,10 +27,11 @@ class Range:
 
 
 RANGES = (
-    Range("implausible_zone_volume", "volume", 3, 0.1, 1e7, 100.0),
-    Range("implausible_floor_area", "floor area", 2, 0.1, 1e6, 30.0),
-    Range("implausible_zone_height", "height", 1, 0.3, 300.0, 3.0),
-    Range("implausible_zone_extent", "horizontal extent", 1, 0.3, 3000.0, 10.0),
+    # low ends below a riser shaft's or a plenum's, high ends above a stadium hall's
+    Range("implausible_zone_volume", "volume", 3, 0.01, 1e7, 100.0),
+    Range("implausible_floor_area", "floor area", 2, 0.01, 1e6, 30.0),
+    Range("implausible_zone_height", "height", 1, 0.1, 300.0, 3.0),
+    Range("implausible_zone_extent", "horizontal extent", 1, 0.1, 3000.0, 10.0),
 )
 SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
 

@@ -136,6 +136,9 @@ def test_a_plausible_building_in_any_unit_is_not_warned():
         body = synthetic.building(2, 2, 1, room=(5.0 * k, 4.0 * k, 3.0 * k))
         result = solve(PolyhedraRequest.model_validate({**body, "units": units})).result
         assert not [w.code for w in result.report.warnings if w.code.startswith("implausible")], units
+    shaft = {"faces": synthetic.box_faces([0, 0, 0], [0.2, 0.2, 3.0])}  # a riser shaft: small, yet a zone
+    result = solve(PolyhedraRequest.model_validate(shaft)).result
+    assert not [w.code for w in result.report.warnings if w.code.startswith("implausible")]
 
 
 def test_a_gbxml_whose_length_unit_contradicts_its_numbers_is_warned_naming_the_header():
