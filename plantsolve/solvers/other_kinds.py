@@ -23,6 +23,7 @@ REQUESTS: Mapping[str, type[BaseModel]] = {
     "flowmeter": FlowmeterRequest, "rigidity": RigidityRequest, "dedup": DedupRequest,
 }
 KEYS_NAMED = 4
+SHARED_FIELDS = {"units", "options", "source"}  # fields many kinds' requests have: they tell no kind apart
 
 
 def request_fields(kind: str) -> set[str]:
@@ -34,7 +35,7 @@ def request_fields(kind: str) -> set[str]:
 def held_kind(body: Mapping[str, Any], own: str) -> str | None:
     """What ``body`` holds when it is another kind's request or result (a sentence), else None: a result names
     its ``kind``; a request is the kind whose request fields take most of the keys ``own``'s request does not
-    know (at least one)."""
+    know (at least one, and more than the body holds of ``own``'s own fields)."""
     kind = body.get("kind")
     if isinstance(kind, str) and kind in REQUESTS and kind != own:
         return f"{_a(kind)} result (its 'kind' is {kind!r})"
@@ -46,7 +47,9 @@ def held_kind(body: Mapping[str, Any], own: str) -> str | None:
         return None
     scores = {k: len(foreign & request_fields(k)) for k in REQUESTS if k != own}
     best = max(scores, key=lambda k: (scores[k], -list(REQUESTS).index(k)))
-    if not scores[best]:
+    # a request of our kind with a stray key is ours: it must hold fewer of our own fields than of the other's
+    own_held = len((set(body) & ours) - SHARED_FIELDS)
+    if not scores[best] or own_held >= scores[best]:
         return None
     named = sorted(foreign & request_fields(best))[:KEYS_NAMED]
     return f"{_a(best)} request (its keys {', '.join(map(repr, named))} are {best}'s request fields)"

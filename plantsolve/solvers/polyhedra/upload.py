@@ -550,4 +550,14 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     try:
         return validated_upload(PolyhedraRequest, body, options)
     except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file
-        raise InputRejected([replace(e, loc=tuple(p for p in e.loc if p not in LOOP_KINDS)) for e in rejected.errors]) from None
+        raise InputRejected([replace(e, loc=_without_branch(e.loc)) for e in rejected.errors]) from None
+
+
+def _without_branch(loc: tuple) -> tuple:
+    """``loc`` without the union branch pydantic puts after ``loops, <j>`` (a top-level key 'points' stays)."""
+    out: list = []
+    for part in loc:
+        if part in LOOP_KINDS and len(out) >= 2 and out[-2] == "loops":
+            continue
+        out.append(part)
+    return tuple(out)

@@ -301,3 +301,10 @@ def test_a_binary_stl_room_in_millimetres_is_warned_and_read_right_with_its_unit
     assert fixed.report.details["source"]["units"]["factor"] == pytest.approx(1e-3)
     _, in_mm = upload("room.stl", room, {"units": "mm"})
     assert in_mm.zones[0].volume == pytest.approx(6e10) and "implausible_zone_volume" not in codes(in_mm)
+
+
+def test_a_polyhedra_request_with_a_stray_key_is_refused_by_the_schema_not_called_another_kind():
+    body = {"faces": synthetic.box_faces([0, 0, 0], [5, 4, 3]), "points": []}
+    with pytest.raises(InputRejected) as refused:
+        upload("room.json", json.dumps(body).encode())
+    assert refused.value.errors[0].loc == ("file", "points") and "tube" not in refused.value.errors[0].msg
