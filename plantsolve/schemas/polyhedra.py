@@ -125,12 +125,13 @@ class PolyhedraOptions(StrictModel):
     merge_tolerance: FiniteFloat = Field(
         default=1e-6, ge=0.0, le=100.0,
         description="Vertices closer than this (request units) are one vertex; also the distance within which a "
-        "vertex lies on an edge (T-junction). At most 0.05 m in the request's units (checked at submission).")
+        "vertex lies on an edge (T-junction). Default 1e-6 m (in the request's units: 1e-3 for mm). At most 0.05 m "
+        "in the request's units (checked at submission).")
     planarity_tolerance: FiniteFloat = Field(
         default=1e-4, ge=0.0, le=1e3,
         description="Largest distance (request units) of a face's vertex from the face's plane before the face "
-        "is reported non-planar (EnergyPlus uses 1e-4 m). At most 0.5 m in the request's units (checked at "
-        "submission).")
+        "is reported non-planar (EnergyPlus uses 1e-4 m). Default 1e-4 m (in the request's units: 0.1 for mm). "
+        "At most 0.5 m in the request's units (checked at submission).")
     file_units: Units | None = Field(
         default=None,
         description="The length unit of the uploaded file's coordinates, overriding what the file states (a gbXML "

@@ -128,6 +128,15 @@ def zone_sizes(poly: Polygons, gmap: GMap, n_zones: int) -> np.ndarray:
     return hi - lo
 
 
+def tolerances(request: PolyhedraRequest) -> tuple[float, float]:
+    """merge_tolerance and planarity_tolerance in the request's units: as given, or their defaults, which are
+    metres (a request in millimetres merges within 1e-6 m, not 1e-6 mm)."""
+    opts, per_metre = request.options, 1.0 / METRES[request.units]
+    fields = opts.model_fields_set
+    return tuple(getattr(opts, name) if name in fields else type(opts).model_fields[name].default * per_metre
+                 for name in ("merge_tolerance", "planarity_tolerance"))
+
+
 def read_as(request: PolyhedraRequest) -> tuple[str, float] | None:
     """The unit the file's numbers were read in (its name, metres), from the reader's ``source.units``."""
     said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
@@ -159,7 +168,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     poly = from_request(request)
     opts = request.options
     listed = lists_faces(request, poly.n_faces)
-    an = analyse(poly, opts.merge_tolerance, progress)
+    merge_tolerance, planarity_tolerance = tolerances(request)
+    an = analyse(poly, merge_tolerance, progress)
     poly, gmap, topo = an.poly, an.gmap, an.topology
     progress(0.85, "results")
     area = an.measures.area
@@ -251,17 +261,17 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
                 details={"zone": zone_id, "faces": bad[:MAX_LISTED_EDGES]}))
 
     planarity = an.measures.planarity_error
-    nonplanar = np.flatnonzero(planarity > opts.planarity_tolerance)
+    nonplanar = np.flatnonzero(planarity > planarity_tolerance)
     if len(nonplanar):
         warnings.append(Diagnostic(code="non_planar_faces", message=(
-            f"{len(nonplanar)} face(s) deviate from their plane by more than {opts.planarity_tolerance:g} "
+            f"{len(nonplanar)} face(s) deviate from their plane by more than {planarity_tolerance:g} "
             f"{request.units}; areas are Newell's projected areas."),
             details={"faces": {poly.face_ids[f]: float(planarity[f]) for f in nonplanar[:MAX_LISTED_EDGES]}}))
     collapsed = an.repairs.collapsed_faces
     if len(collapsed):
         warnings.append(Diagnostic(code="collapsed_faces_skipped", message=(
             f"{len(collapsed)} face(s) have fewer than 3 distinct vertices after merging vertices closer than "
-            f"merge_tolerance ({opts.merge_tolerance:g} {request.units}); they have no area and bound no zone."),
+            f"merge_tolerance ({merge_tolerance:g} {request.units}); they have no area and bound no zone."),
             details={"count": len(collapsed), "faces": [poly.face_ids[f] for f in collapsed[:MAX_LISTED_EDGES]]}))
     if an.repairs.collapsed_holes:
         warnings.append(Diagnostic(code="collapsed_holes_skipped", message=(

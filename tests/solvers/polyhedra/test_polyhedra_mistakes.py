@@ -308,3 +308,17 @@ def test_a_polyhedra_request_with_a_stray_key_is_refused_by_the_schema_not_calle
     with pytest.raises(InputRejected) as refused:
         upload("room.json", json.dumps(body).encode())
     assert refused.value.errors[0].loc == ("file", "points") and "tube" not in refused.value.errors[0].msg
+
+
+def test_default_tolerances_are_metres_so_a_file_asked_in_mm_is_judged_as_in_metres():
+    content = (DATA / "1ZoneUncontrolled.idf").read_bytes()
+    _, metres = upload("one.idf", content)
+    _, mm = upload("one.idf", content, {"units": "mm"})
+    assert set(codes(mm)) == set(codes(metres)) | {"units_converted"}
+    assert mm.zones[0].volume == pytest.approx(metres.zones[0].volume * 1e9, rel=1e-12)
+    tilted = {"units": "mm", "faces": synthetic.box_faces([0, 0, 0], [5000, 4000, 3000])}
+    tilted["faces"][1]["loops"][0][0][2] += 0.05  # a roof corner 0.05 mm off its plane: within 1e-4 m
+    result = solve(PolyhedraRequest.model_validate(tilted)).result
+    assert "non_planar_faces" not in codes(result)
+    tilted["options"] = {"planarity_tolerance": 0.01}  # given: taken in the request's unit
+    assert "non_planar_faces" in codes(solve(PolyhedraRequest.model_validate(tilted)).result)
