@@ -198,8 +198,8 @@ class ZoneResult(BaseModel):
     flux_volumes: list[float] = Field(
         description="Volumes (units³) from the flux of x, y and z alone through the surface: equal to each other "
         "only when the surface is closed.", json_schema_extra=unit(VOLUME))
-    vector_area_sum: list[float] = Field(description="Sum of the faces' area vectors (units²): zero for a closed surface.",
-                                         json_schema_extra=unit(AREA))
+    vector_area_sum: list[float] = Field(
+        description="Sum of the faces' area vectors (units²): zero for a closed surface.", json_schema_extra=unit(AREA))
     open_edges: list[EdgeReport] = Field(description="Edges used by an odd number of the zone's faces (the first 1000).")
     open_edge_count: int
     non_manifold_edges: list[EdgeReport] = Field(description="Edges used by more than two of the zone's faces (the first 1000).")
@@ -250,8 +250,8 @@ class PolyhedraResult(BaseModel):
     edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.",
                                      json_schema_extra=unit(LENGTH))
     adjacency: list[Adjacency]
-    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not closed.",
-                                       json_schema_extra=unit(VOLUME))
+    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not "
+                                       "closed.", json_schema_extra=unit(VOLUME))
     total_floor_area: float = Field(description="Sum of the zones' floor areas (units²).",
                                     json_schema_extra=unit(AREA))
     report: Report

@@ -70,9 +70,11 @@ def refuse_other_kind(body: Mapping[str, Any], own: str) -> None:
 
 
 _STEP_SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_ ]+)", re.IGNORECASE)
-_IDF_OBJECT = re.compile(rb"^\s*(version|zone|buildingsurface:detailed|building|globalgeometryrules|simulationcontrol)\s*,",
-                         re.IGNORECASE | re.MULTILINE)
-_CAD_SCHEMAS = {"AUTOMOTIVE_DESIGN": "AP214", "CONFIG_CONTROL_DESIGN": "AP203", "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING": "AP242"}
+_IDF_OBJECT = re.compile(
+    rb"^\s*(version|zone|buildingsurface:detailed|building|globalgeometryrules|simulationcontrol)\s*,",
+    re.IGNORECASE | re.MULTILINE)
+_CAD_SCHEMAS = {"AUTOMOTIVE_DESIGN": "AP214", "CONFIG_CONTROL_DESIGN": "AP203",
+                "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING": "AP242"}
 
 
 def file_holds(head: bytes) -> str | None:

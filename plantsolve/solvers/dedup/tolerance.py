@@ -117,6 +117,6 @@ def refuse_at_intake(tolerance: float, unit: tuple[str, float]) -> None:
     if tolerance * metres > INTAKE_REFUSE_M:
         in_metres = f" = {tolerance * metres:g} m" if name != "m" else ""
         raise reject(f"tolerance {tolerance:g} {name}{in_metres} (a tolerance is in the file's length "
-                     f"unit, {name}, from its IfcUnitAssignment): more than {INTAKE_REFUSE_M:g} m, products that differ "
-                     f"by that much are not copies of one shape{_meant(tolerance, metres)} Give it in {name}",
+                     f"unit, {name}, from its IfcUnitAssignment): more than {INTAKE_REFUSE_M:g} m, products that "
+                     f"differ by that much are not copies of one shape{_meant(tolerance, metres)} Give it in {name}",
                      ("options", "tolerance"))
