@@ -3,7 +3,8 @@
 Conventions
 -----------
 - Lengths (``tolerance``, deviations, transform translations) are in the IFC file's own length
-  unit (the project's ``IfcUnitAssignment``; metres when it says metres).
+  unit (the project's ``IfcUnitAssignment``; metres when it says metres): the option ``tolerance`` too, and the
+  result's ``units`` names that unit (``report.details.source.units`` says where it came from).
 - A transform is a 4 × 4 row-major matrix mapping the class representative's world geometry onto the
   member's: ``member = T · representative`` (homogeneous points as columns). Rigid unless the class
   says ``mirror`` or ``scale`` (only with ``allow_mirror`` / ``allow_scale``).
@@ -17,7 +18,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import FiniteFloat, Report, StrictModel
+from plantsolve.schemas.common import FiniteFloat, Report, StrictModel, unit
 
 MAX_FILE_CHARS = 96 * 1024 * 1024
 EntityName = Annotated[str, Field(min_length=3, max_length=100, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")]
@@ -31,8 +32,11 @@ class DedupOptions(StrictModel):
         "carry the transform in their placement; IFC4 and later only), 'auto' (the smallest valid for the schema).")
     tolerance: Annotated[float, Field(gt=0, le=1e3, allow_inf_nan=False)] | None = Field(
         default=None,
-        description="Largest allowed distance (file length units) between a member's points and its transformed "
-        "representative, both ways. Default: the model context's Precision (1e-5 m when absent).")
+        description="Largest allowed distance between a member's points and its transformed representative, both "
+        "ways, in the IFC file's own length unit (its IfcUnitAssignment: metres for most exports, millimetres for "
+        "some; the result's units says which), not in the request's. Default: the model context's Precision (1e-5 m "
+        "when absent). Refused beyond 0.1 m or from 5 % of the median product's size; warned above 5 mm or 0.5 % "
+        "of it (implausible_tolerance).")
     allow_mirror: bool = Field(default=False, description="Let mirrored copies join a class (written as IfcMappedItem).")
     allow_scale: bool = Field(default=False, description="Let uniformly scaled copies join a class (IfcMappedItem).")
     postpass: bool = Field(default=True, description="Merge identical non-rooted instances afterwards (points, "
@@ -62,16 +66,18 @@ class DedupClass(BaseModel):
     object_type: str | None = None
     transforms: list[list[FiniteFloat]] = Field(
         description="Per member (same order): 4x4 row-major matrix (16 numbers) taking the representative's world "
-        "geometry onto the member's, lengths in file units.")
-    max_deviation: FiniteFloat = Field(description="Largest two-way Hausdorff distance of a member (file units).")
+        "geometry onto the member's: the translation entries (indices 3, 7, 11) in units, the rest pure numbers.",
+        json_schema_extra=unit("{units}"))
+    max_deviation: FiniteFloat = Field(description="Largest two-way Hausdorff distance of a member (units).",
+                                       json_schema_extra=unit("{units}"))
     mirror: bool = False
     scale: bool = False
 
 
 class Verification(BaseModel):
     max_deviation: FiniteFloat | None = Field(
-        description="Largest distance (file units) between a product's world geometry before and after, read "
-        "back from the written file (two-way Hausdorff per product).")
+        description="Largest distance (units) between a product's world geometry before and after, read "
+        "back from the written file (two-way Hausdorff per product).", json_schema_extra=unit("{units}"))
     products_checked: int
     semantic_counts_equal: bool = Field(description="Rooted instances per entity (products, property sets, "
                                         "spatial elements, relationships), GlobalIds, property values and each "
@@ -98,8 +104,13 @@ class DedupResult(BaseModel):
     kind: Literal["dedup"] = Field(default="dedup", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
     schema_: str = Field(alias="schema", description="IFC schema of the file, e.g. 'IFC4'.")
-    length_unit: str = Field(description="The file's length unit (tolerances and transforms are in it).")
-    tolerance: FiniteFloat
+    length_unit: str = Field(description="The file's length unit as IFC names it (e.g. 'METRE', 'MILLIMETRE', 'FOOT').")
+    units: str = Field(description="The file's length unit as a symbol ('m', 'mm', 'ft', …): the unit of "
+                       "tolerance, every deviation and every transform's translation.")
+    metres_per_unit: FiniteFloat = Field(description="Metres in one of units (the project's unit scale).",
+                                         json_schema_extra=unit("m"))
+    tolerance: FiniteFloat = Field(description="The tolerance used (units): options.tolerance, else the model "
+                                   "context's Precision.", json_schema_extra=unit("{units}"))
     sharing: Literal["mapped_item", "product_shape"] = Field(description="The sharing mode used.")
     products_total: int
     products_shared: int = Field(description="Products now using another product's geometry (class members "
@@ -107,12 +118,13 @@ class DedupResult(BaseModel):
     classes: list[DedupClass] = Field(description="Congruence classes with at least two members.")
     original_bytes: int = Field(description="Size of the input's STEP text (of the .ifc inside an .ifczip).")
     optimized_bytes: int = Field(description="Size of the optimized STEP text (optimized.ifc).")
-    optimization_ratio: FiniteFloat
-    optimization_rate: FiniteFloat
+    optimization_ratio: FiniteFloat = Field(description="optimized_bytes / original_bytes (Eq. 25).",
+                                            json_schema_extra=unit("1"))
+    optimization_rate: FiniteFloat = Field(description="1 - optimization_ratio (Eq. 26).", json_schema_extra=unit("1"))
     entity_counts_before: dict[str, int]
     entity_counts_after: dict[str, int]
     verification: Verification
-    timings: dict[str, FiniteFloat] = Field(description="Seconds per phase.")
+    timings: dict[str, FiniteFloat] = Field(description="Wall seconds per phase.", json_schema_extra=unit("s"))
     report: Report = Field(default_factory=Report)
 
     model_config = {"populate_by_name": True}

@@ -20,12 +20,15 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, PlainSerializer, PlainValidator, Tag, \
     TypeAdapter, WithJsonSchema
 
-from plantsolve.schemas.common import MAX_COORDINATE, FiniteFloat, Point3, Report, StrictModel, Units, json_integer
+from plantsolve.schemas.common import LENGTH, MAX_COORDINATE, FiniteFloat, Point3, Report, StrictModel, Units, \
+    json_integer, unit
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000
 MAX_LOOP = 100_000
 MAX_LISTED_FACES = 10_000  # above this many faces a result lists them only when asked (list_faces)
+FLOOR_CONE_DEG = 45.0  # a face whose outward normal is within this of straight down is floor
+AREA, VOLUME = LENGTH + "^2", LENGTH + "^3"
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
@@ -120,13 +123,21 @@ class TriangleMesh(StrictModel):
 
 class PolyhedraOptions(StrictModel):
     merge_tolerance: FiniteFloat = Field(
-        default=1e-6, ge=0.0, le=1.0,
+        default=1e-6, ge=0.0, le=100.0,
         description="Vertices closer than this (request units) are one vertex; also the distance within which a "
-        "vertex lies on an edge (T-junction).")
+        "vertex lies on an edge (T-junction). Default 1e-6 m (in the request's units: 1e-3 for mm). At most 0.05 m "
+        "in the request's units (checked at submission).")
     planarity_tolerance: FiniteFloat = Field(
         default=1e-4, ge=0.0, le=1e3,
         description="Largest distance (request units) of a face's vertex from the face's plane before the face "
-        "is reported non-planar (EnergyPlus uses 1e-4 m).")
+        "is reported non-planar (EnergyPlus uses 1e-4 m). Default 1e-4 m (in the request's units: 0.1 for mm). "
+        "At most 0.5 m in the request's units (checked at submission).")
+    file_units: Units | None = Field(
+        default=None,
+        description="The length unit of the uploaded file's coordinates, overriding what the file states (a gbXML "
+        "lengthUnit that contradicts its numbers) or saying what it does not (OBJ and STL state none: they are read "
+        "in the request's units unless this is given). The numbers are converted to the request's units; "
+        "report.details.source.units says how.")
     list_faces: bool | None = Field(
         default=None,
         description=f"List every face in the result (faces, each zone's faces and misoriented faces): true always, "
@@ -154,8 +165,8 @@ class PolyhedraRequest(StrictModel):
 class EdgeReport(BaseModel):
     """An edge of a zone's surface that is not shared by exactly two faces."""
 
-    start: Point3 = Field(description="One end [x, y, z] (request units).")
-    end: Point3 = Field(description="The other end [x, y, z] (request units).")
+    start: Point3 = Field(description="One end [x, y, z] (request units).", json_schema_extra=unit(LENGTH))
+    end: Point3 = Field(description="The other end [x, y, z] (request units).", json_schema_extra=unit(LENGTH))
     faces: list[str] = Field(description="Ids of the faces using this edge in this zone.")
     uses: int = Field(description="How many face boundaries run along the edge in this zone (2 when manifold).")
 
@@ -164,11 +175,19 @@ class ZoneResult(BaseModel):
     id: str
     volume: float | None = Field(
         description="Enclosed volume (units³), null unless the zone's surface is closed; faces turned the wrong "
-        "way are counted the right way (they are listed in misoriented_faces).")
+        "way are counted the right way (they are listed in misoriented_faces).", json_schema_extra=unit(VOLUME))
     signed_volume: float = Field(
-        description="Divergence-theorem volume (units³) with the faces as given: negative when inside out.")
-    surface_area: float = Field(description="Sum of the enclosure faces' areas (units², net of holes, gross of subsurfaces).")
-    net_surface_area: float = Field(description="surface_area minus the subsurfaces' areas (units²): the opaque area.")
+        description="Divergence-theorem volume (units³) with the faces as given: negative when inside out.",
+        json_schema_extra=unit(VOLUME))
+    surface_area: float = Field(description="Sum of the enclosure faces' areas (units², net of holes, gross of "
+                                "subsurfaces).", json_schema_extra=unit(AREA))
+    net_surface_area: float = Field(description="surface_area minus the subsurfaces' areas (units²): the opaque area.",
+                                    json_schema_extra=unit(AREA))
+    floor_area: float = Field(
+        description="Floor area (units²): the area of the zone's faces whose outward normal points down within "
+        f"{FLOOR_CONE_DEG:g}° of vertical (the horizontal faces the zone stands on, a sloped floor's projection "
+        "not taken: each face's own area), net of their holes, gross of their subsurfaces; faces turned the wrong "
+        "way are counted by their corrected orientation. 0 when no face faces down.", json_schema_extra=unit(AREA))
     closed: bool = Field(description="Every edge is used by an even number of the zone's faces (no open edge).")
     orientation: Literal["outward", "inward", "mixed"] = Field(
         description="outward: every face's normal points out of the zone; inward: every face points in; mixed: "
@@ -178,13 +197,15 @@ class ZoneResult(BaseModel):
     misoriented_face_count: int | None = Field(default=None, description="How many faces are misoriented.")
     flux_volumes: list[float] = Field(
         description="Volumes (units³) from the flux of x, y and z alone through the surface: equal to each other "
-        "only when the surface is closed.")
-    vector_area_sum: list[float] = Field(description="Sum of the faces' area vectors (units²): zero for a closed surface.")
+        "only when the surface is closed.", json_schema_extra=unit(VOLUME))
+    vector_area_sum: list[float] = Field(
+        description="Sum of the faces' area vectors (units²): zero for a closed surface.", json_schema_extra=unit(AREA))
     open_edges: list[EdgeReport] = Field(description="Edges used by an odd number of the zone's faces (the first 1000).")
     open_edge_count: int
     non_manifold_edges: list[EdgeReport] = Field(description="Edges used by more than two of the zone's faces (the first 1000).")
     non_manifold_edge_count: int
-    non_manifold_vertices: list[Point3] = Field(description="Vertices where separate sheets of the zone's surface touch.")
+    non_manifold_vertices: list[Point3] = Field(description="Vertices where separate sheets of the zone's surface "
+                                                "touch (request units).", json_schema_extra=unit(LENGTH))
     t_junctions_repaired: int = Field(description="Vertices inserted into face loops because they lay on an edge.")
     components: int = Field(description="Connected pieces of the zone's surface (across manifold edges).")
     euler_characteristic: int = Field(description="V - E + F - (inner loops), over the zone's surface.")
@@ -198,29 +219,39 @@ class FaceResult(BaseModel):
     id: str
     zones: list[str]
     parent: str | None = None
-    area: float = Field(description="Area (units²) of the face net of its holes, gross of its subsurfaces.")
-    net_area: float = Field(description="area minus the subsurfaces' areas (units²).")
-    perimeter: float = Field(description="Length of all the face's loops (units).")
-    normal: list[float] = Field(description="Unit normal (Newell), pointing out of the first zone as given.")
-    planarity_error: float = Field(description="Largest distance of a vertex from the face's plane (units).")
+    area: float = Field(description="Area (units²) of the face net of its holes, gross of its subsurfaces.",
+                        json_schema_extra=unit(AREA))
+    net_area: float = Field(description="area minus the subsurfaces' areas (units²).", json_schema_extra=unit(AREA))
+    perimeter: float = Field(description="Length of all the face's loops (units).", json_schema_extra=unit(LENGTH))
+    normal: list[float] = Field(description="Unit normal (Newell), pointing out of the first zone as given.",
+                                json_schema_extra=unit("1"))
+    planarity_error: float = Field(description="Largest distance of a vertex from the face's plane (units).",
+                                   json_schema_extra=unit(LENGTH))
 
 
 class Adjacency(BaseModel):
     zones: list[str] = Field(description="The two zones [a, b].")
     faces: list[str] = Field(description="The faces they share (one face listed with both zones, or two coincident faces).")
-    area: float = Field(description="Shared area (units²).")
+    area: float = Field(description="Shared area (units²).", json_schema_extra=unit(AREA))
 
 
 class PolyhedraResult(BaseModel):
+    """Lengths in ``units``, areas in ``units``², volumes in ``units``³ (the request's unit; a file's own unit is
+    converted to it, as report.details.source.units says)."""
+
     kind: Literal["polyhedra"] = Field(default="polyhedra", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
-    units: Units
+    units: Units = Field(description="The length unit of every length, area (units²) and volume (units³) here.")
     zones: list[ZoneResult]
     faces: list[FaceResult] = Field(description="Every face, when faces_listed (else empty: the zones.csv artifact "
                                     "has them).")
     faces_listed: bool = Field(default=True, description="Whether faces and each zone's faces list every face "
                                "(the option list_faces).")
-    edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.")
+    edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.",
+                                     json_schema_extra=unit(LENGTH))
     adjacency: list[Adjacency]
-    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not closed.")
+    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not "
+                                       "closed.", json_schema_extra=unit(VOLUME))
+    total_floor_area: float = Field(description="Sum of the zones' floor areas (units²).",
+                                    json_schema_extra=unit(AREA))
     report: Report

@@ -20,8 +20,11 @@ MAX_BARS = 24
 def classes_csv(result: DedupResult) -> bytes:
     out = io.StringIO()
     writer = csv.writer(out)
+    u = result.units
+    # the transform's translation column is a length; the rotation (and scale) entries are pure numbers
     writer.writerow(["class", "representative", "member", "entity", "object_type", "mirror", "scale",
-                     "class_max_deviation", *[f"t{r}{c}" for r in range(4) for c in range(4)]])
+                     f"class_max_deviation [{u}]", *[f"t{r}{c} [{u}]" if c == 3 and r < 3 else f"t{r}{c} [1]"
+                                                     for r in range(4) for c in range(4)]])
     for k, cls in enumerate(result.classes):
         for member, t in zip(cls.members, cls.transforms):
             writer.writerow([k + 1, cls.representative, member, cls.entity, cls.object_type or "", cls.mirror,

@@ -10,6 +10,7 @@ from collections import Counter
 import ifcopenshell
 
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.step_file import where_cut
 
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
@@ -20,7 +21,9 @@ def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
     if not head.startswith(b"ISO-10303-21;"):
-        raise reject("not an IFC file: a STEP physical file starts with 'ISO-10303-21;'")
+        holds = file_holds(head)
+        raise reject(f"not an IFC file{f': it holds {holds}' if holds else ''} (a STEP physical file starts with "
+                     "'ISO-10303-21;')")
     if b"FILE_SCHEMA" not in head.upper():
         raise reject("not an IFC file: no FILE_SCHEMA in the header")
     cut = where_cut(tail)

@@ -15,6 +15,7 @@ from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
+from plantsolve.solvers.dedup.tolerance import UNITS_M, judge, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5
@@ -27,11 +28,17 @@ def resolve_mode(requested: str, schema: str) -> str:
     return requested
 
 
-def model_tolerance(model: ifcopenshell.file, unit: float) -> float:
-    """The Model context's Precision (file units), else 1e-5 m."""
+def model_precision(model: ifcopenshell.file) -> float | None:
+    """The Model context's Precision (file units), when it states one."""
     values = [c.Precision for c in model.by_type("IfcGeometricRepresentationContext")
               if not c.is_a("IfcGeometricRepresentationSubContext") and c.Precision]
-    return float(max(values)) if values else DEFAULT_PRECISION_M / unit
+    return float(max(values)) if values else None
+
+
+def model_tolerance(model: ifcopenshell.file, unit: float) -> float:
+    """The Model context's Precision (file units), else 1e-5 m."""
+    precision = model_precision(model)
+    return precision if precision is not None else DEFAULT_PRECISION_M / unit
 
 
 def length_unit_name(model: ifcopenshell.file) -> str:
@@ -41,6 +48,16 @@ def length_unit_name(model: ifcopenshell.file) -> str:
     if unit.is_a("IfcSIUnit"):
         return f"{unit.Prefix or ''}{unit.Name}"
     return str(getattr(unit, "Name", unit.is_a()))
+
+
+def length_unit_symbol(model: ifcopenshell.file, metres: float) -> str:
+    """The project's length unit as a symbol pint reads ('mm', 'ft'), else its size in metres."""
+    unit = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT")
+    for name, size in UNITS_M.items():
+        if abs(size - metres) <= 1e-12 * size:
+            return name
+    symbol = ifcopenshell.util.unit.get_unit_symbol(unit) if unit is not None else ""
+    return symbol if symbol and symbol.isalpha() else f"{metres:g} m"
 
 
 def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
@@ -105,7 +122,13 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                          "exactly one product (ShapeOfProduct [1:1]); use 'mapped_item'", ("options", "sharing"))
         unit = ifcopenshell.util.unit.calculate_unit_scale(model)
         unit_name = length_unit_name(model)
+        symbol = length_unit_symbol(model, unit)
         tol = float(opts.tolerance) if opts.tolerance is not None else model_tolerance(model, unit)
+        source_units = {"file_unit": symbol, "ifc_name": unit_name, "metres_per_unit": unit, "basis":
+                        "IfcUnitAssignment" if ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT") else
+                        "none assigned: metres", "tolerance": tol, "tolerance_unit": symbol,
+                        "tolerance_from": "options.tolerance" if opts.tolerance is not None else
+                        "the model context's Precision" if model_precision(model) else f"{DEFAULT_PRECISION_M:g} m"}
         semantic_before = proof.semantic_fingerprint(model)
         products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
         if not products:
@@ -116,6 +139,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities)
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
+        warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, model_sizes(points.values())))
         before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
         skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": "geometry could not be processed"}
                    for p in products if p.id() not in points]
@@ -209,10 +233,10 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                     message=(f"{len(out_classes)} classes, {shared} of {products_total} products share geometry; "
                              f"{len(optimized)} of {original_bytes} bytes ({mode})"),
                     warnings=warnings,
-                    details={"cpu_seconds": cpu, "written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
+                    details={"source": {"format": "ifc", "schema": schema, "units": source_units}, "cpu_seconds": cpu, "written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
     ratio = len(optimized) / original_bytes if original_bytes else 1.0
     result = DedupResult(
-        schema=schema, length_unit=unit_name, tolerance=tol, sharing=mode,
+        schema=schema, length_unit=unit_name, units=symbol, metres_per_unit=unit, tolerance=tol, sharing=mode,
         products_total=products_total, products_shared=shared, classes=out_classes,
         original_bytes=original_bytes, optimized_bytes=len(optimized), optimization_ratio=ratio,
         optimization_rate=1.0 - ratio, entity_counts_before=counts_before, entity_counts_after=counts_after,

@@ -99,14 +99,14 @@ class IfcSource:
             return
         with tempfile.TemporaryDirectory(prefix="dedup-") as folder:
             path = Path(folder) / "input.ifc"
-            with self._stream() as stream, path.open("wb") as out:
+            with self.stream() as stream, path.open("wb") as out:
                 out.write(stream.read(len(codecs.BOM_UTF8)).removeprefix(codecs.BOM_UTF8))
                 shutil.copyfileobj(stream, out, 1 << 20)
             check_header(*ends(StoredInput.from_path(path), HEADER_BYTES, TRAILER_BYTES))
             yield path, path.stat().st_size
 
     @contextmanager
-    def _stream(self) -> Iterator[IO[bytes]]:
+    def stream(self) -> Iterator[IO[bytes]]:
         """The STEP text as a stream: the ``.ifczip``'s member, or the stored file."""
         if self.zipped:
             with self._member() as member:

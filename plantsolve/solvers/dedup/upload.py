@@ -9,6 +9,7 @@ from plantsolve.schemas.dedup import DedupOptions, DedupRequest
 from plantsolve.solvers.base import StoredInput, json_object, reject, validated
 from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, check_header
 from plantsolve.solvers.dedup.source import ZIP_MAGIC, ends, is_blank
+from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.step_file import TRAILER_BYTES
 
 UPLOAD_EXTENSIONS = (".ifc", ".ifczip", ".json")
@@ -29,6 +30,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> DedupRequest:
         raise reject("the file is empty")
     if source.extension == ".json":
         body = json_object(source.read(), refuse_cut=True)
+        refuse_other_kind(body, "dedup")
         if options:
             body = {**body, "options": {**(body.get("options") or {}), **_options(options).model_dump(exclude_unset=True)}}
         return validated(DedupRequest, body, ("file",))

@@ -109,15 +109,17 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     u = result.units
     writer.writerow(["record", "id", "zones", "parent", f"volume [{u}3]", f"signed_volume [{u}3]", f"area [{u}2]",
                      f"net_area [{u}2]", f"perimeter [{u}]", "closed", "orientation", "open_edges",
-                     "non_manifold_edges", "normal_x", "normal_y", "normal_z", f"planarity_error [{u}]"])
+                     "non_manifold_edges", "normal_x", "normal_y", "normal_z", f"planarity_error [{u}]",
+                     f"floor_area [{u}2]"])
     for z in result.zones:
         writer.writerow(["zone", z.id, "", "", "" if z.volume is None else repr(z.volume), repr(z.signed_volume),
                          repr(z.surface_area), repr(z.net_surface_area), "", z.closed, z.orientation,
-                         z.open_edge_count, z.non_manifold_edge_count, "", "", "", ""])
+                         z.open_edge_count, z.non_manifold_edge_count, "", "", "", "", repr(z.floor_area)])
     if face_table is None:  # a result solved before the face table was handed over
         for f in result.faces:
             writer.writerow(["face", f.id, " ".join(f.zones), f.parent or "", "", "", repr(f.area), repr(f.net_area),
-                             repr(f.perimeter), "", "", "", "", *[repr(c) for c in f.normal], repr(f.planarity_error)])
+                             repr(f.perimeter), "", "", "", "", *[repr(c) for c in f.normal], repr(f.planarity_error),
+                             ""])
         return out.getvalue().encode()
     host = np.where(poly.face_parent >= 0, poly.face_parent, np.arange(poly.n_faces))
     fz = poly.face_zone[host]  # a subsurface is listed with its host's zones
@@ -138,7 +140,7 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     area, perimeter, nx, ny, nz, planarity = columns
     blank = repeat("")
     writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
-                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity))
+                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank))
     return out.getvalue().encode()
 
 
@@ -168,7 +170,7 @@ def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face
             bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
             _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
             bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
-            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal("\n", n)]))
+            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",\n", n)]))
     return b"".join(parts)
 
 

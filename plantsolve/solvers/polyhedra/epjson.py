@@ -99,7 +99,8 @@ def _fields(cls: str, name: str, body: dict) -> list[str]:
 def epjson_objects(text: str) -> tuple[list[tuple[str, list[str], list[int], None]], list[dict]]:
     """The objects the IDF reader uses, as (class, fields, field lines, line) with no lines; and the
     objects skipped (type and name, reason)."""
-    document = json_object(text, "an epJSON file holds one object: object types, then names, then fields")
+    document = json_object(text, "an epJSON file holds one object: object types, then names, then fields",
+                           refuse_cut=True)
     objects, skipped = [], []
     for type_name, named in document.items():
         cls = type_name.lower()

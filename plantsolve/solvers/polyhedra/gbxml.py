@@ -9,7 +9,7 @@ by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface w
 reason.
 
 Units: coordinates are converted to metres from the root's ``lengthUnit`` (the schema's default,
-Meters, when absent) and a warning says so when they were not metres; the file's own ``Space/Volume``
+Meters, when absent; ``source.units`` says so, and :mod:`.file_units` goes on to the request's unit); the file's own ``Space/Volume``
 and ``Space/Area`` (floor area), converted from ``volumeUnit`` and ``areaUnit``, are kept in
 ``source.declared`` for the solver to compare with what it measures.
 
@@ -27,6 +27,7 @@ from xml.parsers import expat
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.polyhedra.file_units import stated, symbol
 
 MAX_SKIPPED_LISTED = 200
 LENGTH = {"meters": 1.0, "centimeters": 0.01, "millimeters": 0.001, "kilometers": 1000.0, "feet": 0.3048,
@@ -129,6 +130,13 @@ def _parse(content: bytes) -> tuple[ET.Element, dict[int, int]]:
         raise reject("the XML file has a DOCTYPE or ENTITY declaration; gbXML has none, and it is not read",
                      ("file", "line", parser.CurrentLineNumber)) from None
     except expat.ExpatError as e:
+        last = content.rstrip().count(b"\n") + 1
+        if e.lineno >= last and e.code in (expat.errors.codes[expat.errors.XML_ERROR_NO_ELEMENTS],
+                                           expat.errors.codes[expat.errors.XML_ERROR_UNCLOSED_TOKEN],
+                                           expat.errors.codes[expat.errors.XML_ERROR_PARTIAL_CHAR]):
+            raise reject(f"the XML ends before its document is complete (line {e.lineno}, column {e.offset}: "
+                         f"{expat.ErrorString(e.code)}): the file was cut? Nothing of a cut gbXML is used",
+                         ("file", "line", e.lineno)) from None
         raise reject(f"not well-formed XML: {expat.ErrorString(e.code)} (line {e.lineno}, column {e.offset})",
                      ("file", "line", e.lineno)) from None
     return builder.close(), lines
@@ -144,10 +152,6 @@ def parse_gbxml(content: bytes) -> dict:
     if scale is None:
         raise reject(f"lengthUnit {length_name!r} is not a gbXML length unit ({', '.join(LENGTH)})",
                      ("file", "line", lines.get(id(root), 1)))
-    if scale != 1.0:
-        warnings.append(Diagnostic(code="units_converted", message=(
-            f"The file's lengthUnit is {length_name}: its coordinates were converted to metres (x {scale:g})."),
-            details={"lengthUnit": length_name, "factor": scale}).model_dump())
     area_name, area_factor = _unit(root, "areaUnit", AREA, "SquareMeters")
     volume_name, volume_factor = _unit(root, "volumeUnit", VOLUME, "CubicMeters")
     for label, name, factor in (("areaUnit", area_name, area_factor), ("volumeUnit", volume_name, volume_factor)):
@@ -257,7 +261,8 @@ def parse_gbxml(content: bytes) -> dict:
     zones = {z for f in faces for z in f.get("zones", [])}
     return {"units": "m", "faces": faces,
             "source": {"format": "gbxml", "faces": len(faces), "zones": len(zones),
-                       "units": {"lengthUnit": length_name, "areaUnit": area_name, "volumeUnit": volume_name},
+                       "units": stated(symbol(scale), scale, "lengthUnit", f"gbXML lengthUnit={length_name!r}",
+                                       lengthUnit=length_name, areaUnit=area_name, volumeUnit=volume_name),
                        "spaces": {sid: names[sid] for sid in spaces if sid in zones},
                        "declared": {sid: v for sid, v in declared.items() if sid in zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}

@@ -23,6 +23,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.polyhedra.file_units import stated, symbol
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
@@ -61,7 +62,11 @@ def parse_ifc(content: bytes) -> dict:
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
     if not spaces:
-        raise reject(f"the IFC file has no IfcSpace{was_cut}")
+        products = Counter(p.is_a() for p in model.by_type("IfcProduct"))
+        held = ", ".join(f"{n} {name}" for name, n in products.most_common(4)) or "no product"
+        raise reject(f"the IFC file has no IfcSpace{was_cut}: it holds {sum(products.values())} product(s) "
+                     f"({held}) and no space, so it has no zone to measure (a model for dedup? zones are IfcSpace "
+                     "bodies)")
     skipped: list[dict] = []
     names = Counter((s.Name or "").strip() for s in spaces)
     zone_of = {s.id(): ((s.Name or "").strip() if (s.Name or "").strip() and names[(s.Name or "").strip()] == 1
@@ -130,13 +135,13 @@ def parse_ifc(content: bytes) -> dict:
             f"not hold): their declared quantities were not compared, first {unreadable[0]}."),
             details={"spaces": unreadable[:MAX_SKIPPED_LISTED]}).model_dump())
     length_scale = ifcopenshell.util.unit.calculate_unit_scale(model)
-    if length_scale != 1.0:
-        warnings.append(Diagnostic(code="units_converted", message=(
-            f"The IFC project's length unit is {length_scale:g} m: IfcOpenShell's geometry is in metres, and the "
-            "spaces' quantities were converted to m² and m³."), details={"length_unit_m": length_scale}).model_dump())
+    length = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT")
+    length_name = ifcopenshell.util.unit.get_full_unit_name(length) if length is not None else "none assigned: metres"
     spaces_listed = {zone_of[s.id()]: {"global_id": s.GlobalId, "name": s.Name, "long_name": s.LongName}
                      for s in spaces if s.id() in shaped}
     return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
-            "source": {"format": "ifc", "schema": model.schema, "faces": len(faces), "zones": len(shaped),
+            "source": {"format": "ifc", "schema": model.schema,
+                       "units": stated(symbol(length_scale), length_scale, "IfcUnitAssignment",
+                                       f"the IFC project's length unit, {length_name}"), "faces": len(faces), "zones": len(shaped),
                        "spaces": spaces_listed, "declared": declared, "declared_quantities": quantities_used,
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}

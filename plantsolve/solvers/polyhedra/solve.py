@@ -14,15 +14,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.polyhedra import MAX_LISTED_FACES, PolyhedraRequest, PolyhedraResult
+from plantsolve.schemas.polyhedra import FLOOR_CONE_DEG, MAX_LISTED_FACES, PolyhedraRequest, PolyhedraResult
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
-from plantsolve.solvers.polyhedra.declared import compare, floor_areas
+from plantsolve.solvers.polyhedra.declared import compare
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
+from plantsolve.solvers.polyhedra.file_units import METRES
+from plantsolve.solvers.polyhedra.plausibility import implausible
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
 from plantsolve.solvers.polyhedra.sorting import distinct
@@ -94,6 +96,69 @@ def distinct_edge_length(poly: Polygons) -> float:
     return float(np.sqrt(np.einsum("ij,ij->i", d, d)).sum())
 
 
+def floor_areas(an: Analysis, n_zones: int) -> np.ndarray:
+    """Per zone, the area of its faces whose outward normal (the orientation found, not the faces' own) points down
+    within FLOOR_CONE_DEG of vertical."""
+    gmap = an.gmap
+    outward_z = an.orientation.factor * gmap.use_sign * an.measures.normal[gmap.use_face, 2]
+    down = outward_z < -np.cos(np.radians(FLOOR_CONE_DEG))
+    return np.bincount(gmap.use_zone[down], weights=an.measures.area[gmap.use_face[down]], minlength=n_zones)
+
+
+def zone_sizes(poly: Polygons, gmap: GMap, n_zones: int) -> np.ndarray:
+    """(Z, 3) extent of each zone's bounding box along x, y, z (inf where a zone has no face)."""
+    lo = np.full((n_zones, 3), np.inf)
+    hi = np.full((n_zones, 3), -np.inf)
+    if n_zones == 1 and len(poly.points):  # one zone (a mesh): no sort by zone
+        mark = np.zeros(len(poly.points), dtype=bool)
+        mark[poly.loop_vertices[poly.face_zone[poly.position_face, 0] >= 0]] = True
+        used = poly.points[mark]
+        return (used.max(axis=0) - used.min(axis=0))[None, :] if len(used) else hi - lo
+    position_face = poly.position_face
+    for column in range(poly.face_zone.shape[1]):
+        zone = poly.face_zone[position_face, column]
+        keep = zone >= 0
+        order = np.argsort(zone[keep], kind="stable")
+        zs, pts = zone[keep][order], poly.points[poly.loop_vertices[keep]][order]
+        if not len(zs):
+            continue
+        starts = np.flatnonzero(np.r_[True, zs[1:] != zs[:-1]])
+        lo[zs[starts]] = np.minimum(lo[zs[starts]], np.minimum.reduceat(pts, starts, axis=0))
+        hi[zs[starts]] = np.maximum(hi[zs[starts]], np.maximum.reduceat(pts, starts, axis=0))
+    return hi - lo
+
+
+def tolerances(request: PolyhedraRequest) -> tuple[float, float]:
+    """merge_tolerance and planarity_tolerance in the request's units: as given, or their defaults, which are
+    metres (a request in millimetres merges within 1e-6 m, not 1e-6 mm)."""
+    opts, per_metre = request.options, 1.0 / METRES[request.units]
+    fields = opts.model_fields_set
+    return tuple(getattr(opts, name) if name in fields else type(opts).model_fields[name].default * per_metre
+                 for name in ("merge_tolerance", "planarity_tolerance"))
+
+
+def read_as(request: PolyhedraRequest) -> tuple[str, float] | None:
+    """The unit the file's numbers were read in (its name, metres), from the reader's ``source.units``."""
+    said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
+    try:
+        return str(said["file_unit"]), float(said["factor"]) * METRES[request.units]
+    except (TypeError, KeyError, ValueError):
+        return None
+
+
+def unit_hint(request: PolyhedraRequest) -> str:
+    """How to give the unit an implausible zone suggests (``{unit}`` stands for it): what the file said of its unit
+    first, when it said something."""
+    said = (request.source or {}).get("units") if isinstance(request.source, dict) else None
+    if not isinstance(said, dict):
+        return "if so, send units '{unit}' (the results then in {unit})"
+    if said.get("basis") in ("request", "units"):
+        return (f"if so, upload with options.file_units '{{unit}}' (converted to {request.units}) or send units "
+                "'{unit}' (the results then in {unit})")
+    return (f"the file's unit was taken as {said.get('file_unit')} ({said.get('evidence')}), but if the numbers are "
+            f"in {{unit}}, upload with options.file_units '{{unit}}' (converted to {request.units})")
+
+
 def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved:
     """Zone volumes, areas and closure diagnostics of polygonal zones (the paper's method: a
     generalized map of the faces, measures per orbit, diagnostics from the orbits). The request has
@@ -103,7 +168,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     poly = from_request(request)
     opts = request.options
     listed = lists_faces(request, poly.n_faces)
-    an = analyse(poly, opts.merge_tolerance, progress)
+    merge_tolerance, planarity_tolerance = tolerances(request)
+    an = analyse(poly, merge_tolerance, progress)
     poly, gmap, topo = an.poly, an.gmap, an.topology
     progress(0.85, "results")
     area = an.measures.area
@@ -125,6 +191,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     total = 0.0
     by_zone = np.argsort(gmap.use_zone, kind="stable")
     zone_bounds = np.searchsorted(gmap.use_zone[by_zone], np.arange(n_zones + 1))
+    floors = floor_areas(an, n_zones)
     for z in range(n_zones):
         if z % max(1, n_zones // 20) == 0:
             progress(0.85 + 0.08 * z / max(n_zones, 1), f"results: zone {z + 1} of {n_zones}")
@@ -155,6 +222,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         zones.append({
             "id": zone_id, "volume": volume, "signed_volume": signed,
             "surface_area": float(area[faces].sum()), "net_surface_area": float(net_area[faces].sum()),
+            "floor_area": float(floors[z]),
             "closed": closed, "orientation": label,
             "misoriented_faces": [poly.face_ids[f] for f in (misoriented if listed else misoriented[:MAX_LISTED_EDGES])],
             "misoriented_face_count": int(len(misoriented)),
@@ -193,17 +261,17 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
                 details={"zone": zone_id, "faces": bad[:MAX_LISTED_EDGES]}))
 
     planarity = an.measures.planarity_error
-    nonplanar = np.flatnonzero(planarity > opts.planarity_tolerance)
+    nonplanar = np.flatnonzero(planarity > planarity_tolerance)
     if len(nonplanar):
         warnings.append(Diagnostic(code="non_planar_faces", message=(
-            f"{len(nonplanar)} face(s) deviate from their plane by more than {opts.planarity_tolerance:g} "
+            f"{len(nonplanar)} face(s) deviate from their plane by more than {planarity_tolerance:g} "
             f"{request.units}; areas are Newell's projected areas."),
             details={"faces": {poly.face_ids[f]: float(planarity[f]) for f in nonplanar[:MAX_LISTED_EDGES]}}))
     collapsed = an.repairs.collapsed_faces
     if len(collapsed):
         warnings.append(Diagnostic(code="collapsed_faces_skipped", message=(
             f"{len(collapsed)} face(s) have fewer than 3 distinct vertices after merging vertices closer than "
-            f"merge_tolerance ({opts.merge_tolerance:g} {request.units}); they have no area and bound no zone."),
+            f"merge_tolerance ({merge_tolerance:g} {request.units}); they have no area and bound no zone."),
             details={"count": len(collapsed), "faces": [poly.face_ids[f] for f in collapsed[:MAX_LISTED_EDGES]]}))
     if an.repairs.collapsed_holes:
         warnings.append(Diagnostic(code="collapsed_holes_skipped", message=(
@@ -254,19 +322,24 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
                                           code="objects_skipped"))
         warnings.extend(source_warnings(request.source))
         if isinstance(request.source.get("declared"), dict) and request.source["declared"]:
-            floors = floor_areas(n_zones, poly.face_zones, poly.face_parent, area, normal)
             rows, differ = compare(request.source["declared"], zones,
                                    {poly.zone_ids[z]: float(floors[z]) for z in range(n_zones)})
             details["declared_comparison"] = rows
             if differ:
                 warnings.append(differ)
+    sizes = zone_sizes(poly, gmap, n_zones)
+    hint = unit_hint(request)
+    warnings.extend(implausible(zones, {poly.zone_ids[z]: {"height": float(sizes[z, 2]),
+                                                           "extent": float(sizes[z, :2].max())}
+                                        for z in range(n_zones) if np.isfinite(sizes[z]).all()},
+                                request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
-        adjacency=adjacent, total_volume=total if all_closed else None,
+        adjacency=adjacent, total_volume=total if all_closed else None, total_floor_area=float(floors.sum()),
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(table)})

@@ -44,13 +44,16 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
-from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject
+from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
+    reject, validated
+from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import epjson_objects
+from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
-from plantsolve.solvers.upload_form import validated_upload
+from plantsolve.solvers.upload_form import form_model, validated_upload
 
 UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
@@ -318,6 +321,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     return {"units": "m", "faces": faces,
             "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
+                       "units": stated("m", 1.0, "format", "EnergyPlus lengths are always metres"),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",
                        "coordinates": "relative" if relative else "world",
                        "declared": {zone_names.get(k.lower(), k): v for k, v in declared.items()
@@ -493,22 +497,67 @@ def parse_stl(content: bytes) -> dict:
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
 
 
+def parse_json(text: str) -> dict:
+    """A JSON request as a file; another kind's request or result is refused naming what it holds."""
+    body = json_object(text, refuse_cut=True)
+    refuse_other_kind(body, "polyhedra")
+    return body
+
+
+EXPECTED = {".idf": "an EnergyPlus IDF", ".epjson": "a JSON document", ".json": "a JSON document",
+            ".xml": "a gbXML building model", ".gbxml": "a gbXML building model", ".ifc": "an IFC model",
+            ".obj": "a Wavefront OBJ mesh", ".stl": "an ASCII STL mesh"}
+
+
+def read_file(extension: str, content: bytes) -> dict:
+    """The request body the extension's reader makes of ``content``."""
+    if extension == ".stl":
+        return parse_stl(content)
+    if extension in (".xml", ".gbxml"):
+        return parse_gbxml(content)
+    if extension == ".ifc":
+        return parse_ifc(content)
+    text = decode_text(content)
+    return {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(extension, parse_json)(text)
+
+
+def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -> InputRejected:
+    """A reader's refusal, said to be about a file of another format when its start shows one (a CSV named
+    .idf, a STEP CAD model named .ifc, an OBJ point cloud)."""
+    holds = file_holds(content[:65536])
+    if holds is None or holds.startswith(EXPECTED.get(extension, "?")) or extension == ".stl" and "STL" in holds:
+        return refused
+    first, *rest = refused.errors
+    return InputRejected([replace(first, msg=f"this file holds {holds}, not {EXPECTED[extension]} as its name "
+                                             f"says: {first.msg}"), *rest])
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
-    form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``) override what the file says."""
+    form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``, ``file_units``) override what the file
+    says, and the file's lengths are converted to the request's ``units`` (:mod:`.file_units`)."""
+    form = validated(form_model(PolyhedraRequest), merge_upload_options({}, options), ()) if options else None
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
-    if source.extension == ".stl":
-        body = parse_stl(content)
-    elif source.extension in (".xml", ".gbxml"):
-        body = parse_gbxml(content)
-    elif source.extension == ".ifc":
-        body = parse_ifc(content)
-    else:
-        text = decode_text(content)
-        body = {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(source.extension, json_object)(text)
+    try:
+        body = read_file(source.extension, content)
+    except InputRejected as refused:
+        raise name_what_it_holds(refused, source.extension, content) from None
+    fmt = (body.get("source") or {}).get("format") if isinstance(body.get("source"), dict) else None
+    body = reconcile(body, form.units if form is not None and "units" in form.model_fields_set else None,
+                     form.options.file_units if form is not None else None, fmt or source.extension[1:])
     try:
         return validated_upload(PolyhedraRequest, body, options)
     except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file
-        raise InputRejected([replace(e, loc=tuple(p for p in e.loc if p not in LOOP_KINDS)) for e in rejected.errors]) from None
+        raise InputRejected([replace(e, loc=_without_branch(e.loc)) for e in rejected.errors]) from None
+
+
+def _without_branch(loc: tuple) -> tuple:
+    """``loc`` without the union branch pydantic puts after ``loops, <j>`` (a top-level key 'points' stays)."""
+    out: list = []
+    for part in loc:
+        if part in LOOP_KINDS and len(out) >= 2 and out[-2] == "loops":
+            continue
+        out.append(part)
+    return tuple(out)

@@ -6,14 +6,18 @@ import numpy as np
 
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.polyhedra.file_units import METRES
 
 MAX_ERRORS = 50
+# physical bounds of the options, in metres: merging vertices 5 cm apart closes the gap of a thin wall, and a face
+# half a metre out of its plane is no plane
+OPTION_BOUNDS_M = {"merge_tolerance": 0.05, "planarity_tolerance": 0.5}
 
 
 def check_input(request: PolyhedraRequest) -> None:
     """Unique face ids, vertex indices in range, at least three distinct points per loop, parents that
     exist and are enclosure faces, no zone listed twice on a face, at least one enclosure face."""
-    errors: list[FieldError] = []
+    errors: list[FieldError] = _option_errors(request)
     n_vertices = len(request.vertices)
     seen: dict[str, int] = {}
     for i, face in enumerate(request.faces):
@@ -83,4 +87,18 @@ def _mesh_errors(request: PolyhedraRequest, face_ids: dict[str, int]) -> list[Fi
                 1 <= int(number) <= len(tri):
             errors.append(FieldError(("faces", i, "id"), f"face id {face_id!r} is the name of the mesh's triangle "
                                      f"{number} (mesh.id_prefix {prefix!r})"))
+    return errors
+
+
+def _option_errors(request: PolyhedraRequest) -> list[FieldError]:
+    """The options beyond their physical bounds, in the request's units (the schema's bounds are unit-free)."""
+    errors = []
+    for name, bound_m in OPTION_BOUNDS_M.items():
+        value = getattr(request.options, name)
+        bound = bound_m / METRES[request.units]
+        if value > bound:
+            in_metres = f" ({bound_m:g} m)" if request.units != "m" else ""
+            errors.append(FieldError(("options", name), f"{name} {value:g} {request.units} is more than "
+                                     f"{bound:g} {request.units}{in_metres}, beyond any building's: a value "
+                                     "meant in another unit?"))
     return errors

@@ -85,5 +85,5 @@ def test_epjson_with_nothing_usable_is_refused_naming_the_object():
     assert error.loc == ("file", "roof 'R'") and "starting_x_coordinate" in error.msg
     with pytest.raises(InputRejected, match="no EnergyPlus surface"):
         upload("empty.epJSON", {"Version": {"Version 1": {"version_identifier": "24.1"}}})
-    with pytest.raises(InputRejected, match="invalid JSON"):
+    with pytest.raises(InputRejected, match="the file was cut"):
         parse_upload(StoredInput.from_bytes("cut.epJSON", b'{"Zone": {'), None)

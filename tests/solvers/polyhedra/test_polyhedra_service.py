@@ -59,3 +59,25 @@ def test_cli_solves_an_idf(tmp_path):
     result = json.loads((tmp_path / "out.json").read_text())
     assert result["total_volume"] == pytest.approx(120.0)
     assert (tmp_path / "out_artifacts" / "zones.csv").exists()
+
+
+def test_an_idf_asked_in_feet_through_the_api_is_converted_and_says_so(client):
+    content = (EXAMPLES / "two_offices.idf").read_bytes()
+    job, result = _result(client, client.post("/v1/polyhedra/jobs", files={"file": ("two_offices.idf", content)},
+                                              data={"options": json.dumps({"units": "ft"})}))
+    assert result["units"] == "ft" and result["total_volume"] == pytest.approx(4237.76, abs=0.01)
+    assert result["total_floor_area"] == pytest.approx(40 / 0.3048 ** 2)
+    assert result["report"]["details"]["source"]["units"]["factor"] == pytest.approx(1 / 0.3048)
+    table = client.get({a["name"]: a for a in job["artifacts"]}["zones.csv"]["url"]).text.splitlines()
+    header = table[0].split(",")
+    assert "volume [ft3]" in header and header[-1] == "floor_area [ft2]"
+    assert float(table[1].split(",")[-1]) == pytest.approx(20 / 0.3048 ** 2)
+
+
+def test_an_absurd_option_and_another_kinds_file_are_422_at_submission(client):
+    body = json.loads((EXAMPLES / "gable_house.json").read_text())
+    problem = client.post("/v1/polyhedra/jobs", json={**body, "options": {"merge_tolerance": 0.3}}).json()
+    assert problem["status"] == 422 and problem["errors"][0]["loc"] == ["options", "merge_tolerance"]
+    tube = (REPO / "plantsolve" / "solvers" / "tube" / "example.json").read_bytes()
+    problem = client.post("/v1/polyhedra/jobs", files={"file": ("scan.json", tube)}).json()
+    assert problem["status"] == 422 and "a tube request" in problem["errors"][0]["msg"]

@@ -1,0 +1,122 @@
+"""The matching tolerance judged against the model it is used on: in the file's length unit (the project's
+``IfcUnitAssignment``), set against the sizes of the products and the model's extent. A tolerance meant in
+millimetres given to a metre model (``1``) would share products that differ by most of a metre: refused, naming
+the tolerance, the unit, the product sizes and the model's extent. The ranges are the README's table (dedup)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from typing import IO
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.base import reject
+
+INTAKE_REFUSE_M = 0.1  # refused at submission: no two products 10 cm apart are one shape
+WARN_M = 0.005  # a tolerance above 5 mm merges what a drawing tells apart
+WARN_OF_SIZE = 0.005  # … or above 0.5 % of the median product size
+REFUSE_OF_SIZE = 0.05  # from 5 % of the median product size on, different shapes verify as one: refused
+FLOAT_RESOLUTION = 1e-14  # a tolerance below this many times the coordinates' magnitude cannot verify anything
+UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
+
+
+def model_sizes(points: Iterable[np.ndarray]) -> tuple[float, float, float]:
+    """(median product size, model extent, largest coordinate magnitude), in file units: sizes are bounding-box
+    diagonals."""
+    sizes, lo, hi, far = [], None, None, 0.0
+    for p in points:
+        a, b = p.min(axis=0), p.max(axis=0)
+        sizes.append(float(np.linalg.norm(b - a)))
+        lo = a if lo is None else np.minimum(lo, a)
+        hi = b if hi is None else np.maximum(hi, b)
+        far = max(far, float(np.abs(p).max()))
+    if not sizes:
+        return 0.0, 0.0, 0.0
+    return float(np.median(sizes)), float(np.linalg.norm(hi - lo)), far
+
+
+def _meant(tolerance: float, metres_per_unit: float) -> str:
+    """The unit the number was likely meant in: the largest smaller unit in which it is at most WARN_M."""
+    for name in ("mm", "cm", "in"):
+        if UNITS_M[name] < metres_per_unit and tolerance * UNITS_M[name] <= WARN_M:
+            return f"; meant in {name} ({tolerance:g} {name} = {tolerance * UNITS_M[name] / metres_per_unit:g} " \
+                   "in the file's unit)?"
+    return ""
+
+
+def judge(tolerance: float, explicit: bool, unit_name: str, metres_per_unit: float,
+          sizes: tuple[float, float, float]) -> list[Diagnostic]:
+    """Warnings on a tolerance out of its plausible range; a 422 on ``options.tolerance`` when it would let
+    different shapes verify as one."""
+    median, extent, far = sizes
+    metres = tolerance * metres_per_unit
+    of_size = tolerance / median if median > 0 else 0.0
+    in_metres = f" = {metres:g} m" if unit_name != "m" else ""
+    said = (f"tolerance {tolerance:g} {unit_name}{in_metres} (a tolerance is in the file's length unit, {unit_name}, "
+            "from its IfcUnitAssignment)")
+    facts = (f"the median product measures {median:.4g} {unit_name} across and the model {extent:.4g} {unit_name}")
+    details = {"tolerance": tolerance, "unit": unit_name, "metres_per_unit": metres_per_unit, "tolerance_m": metres,
+               "median_product_size": median, "model_extent": extent, "fraction_of_product_size": of_size}
+    where = "options.tolerance" if explicit else "the model context's Precision"
+    if of_size >= REFUSE_OF_SIZE and explicit:
+        raise reject(f"{said} is {of_size:.0%} of a product's size: {facts}, and products that differ by that much "
+                     f"would share one geometry{_meant(tolerance, metres_per_unit)} Give it in {unit_name}, below "
+                     f"{REFUSE_OF_SIZE * median:.3g} {unit_name}",
+                     ("options", "tolerance"))
+    if metres > WARN_M or of_size > WARN_OF_SIZE:
+        return [Diagnostic(code="implausible_tolerance", message=(
+            f"The {said}, from {where}, is more than {WARN_M * 1000:g} mm or {WARN_OF_SIZE:.1%} of a product's size: "
+            f"{facts}; products that differ by up to it share geometry (see each class's max_deviation)"
+            f"{_meant(tolerance, metres_per_unit) or '.'}"), details=details)]
+    if tolerance < FLOAT_RESOLUTION * far or metres < 1e-9:
+        return [Diagnostic(code="implausible_tolerance", message=(
+            f"The {said}, from {where}, is below what coordinates up to {far:.3g} {unit_name} resolve "
+            f"({FLOAT_RESOLUTION * far:.3g} {unit_name}) or below a nanometre: only bit-identical copies can verify. "
+            "Meant in a larger unit (metres given to a millimetre model)?"), details=details)]
+    return []
+
+
+_SI_LENGTH = re.compile(rb"IFCSIUNIT\s*\(\s*\*\s*,\s*\.LENGTHUNIT\.\s*,\s*(?:\.(\w+)\.|\$)\s*,\s*\.METRE\.\s*\)",
+                        re.IGNORECASE)
+_NAMED_LENGTH = re.compile(rb"IFCCONVERSIONBASEDUNIT\s*\(\s*#\d+\s*,\s*\.LENGTHUNIT\.\s*,\s*'([^']*)'", re.IGNORECASE)
+_PREFIX = {b"": ("m", 1.0), b"MILLI": ("mm", 1e-3), b"CENTI": ("cm", 1e-2), b"DECI": ("dm", 0.1),
+           b"KILO": ("km", 1e3), b"MICRO": ("um", 1e-6)}
+_NAMED = {b"FOOT": ("ft", 0.3048), b"FEET": ("ft", 0.3048), b"INCH": ("in", 0.0254), b"YARD": ("yd", 0.9144),
+          b"MILE": ("mi", 1609.344)}
+CHUNK = 1 << 20
+
+
+def stated_length_unit(stream: IO[bytes]) -> tuple[str, float] | None:
+    """The one length unit the STEP text defines (its symbol, metres), read in chunks without parsing
+    the model; None when it defines none, several, or one this scan does not know (the solve reads it properly)."""
+    found: set[tuple[str, float]] = set()
+    carry = b""
+    while chunk := stream.read(CHUNK):
+        text = carry + chunk
+        carry = text[-200:]  # a definition across the chunks' border is seen whole in the next text
+        if b"LENGTHUNIT" not in text and b"lengthunit" not in text.lower():  # STEP writes keywords in capitals
+            continue
+        for match in _SI_LENGTH.finditer(text):
+            prefix = (match.group(1) or b"").upper()
+            if prefix not in _PREFIX:
+                return None
+            found.add(_PREFIX[prefix])
+        for match in _NAMED_LENGTH.finditer(text):
+            name = match.group(1).strip().upper()
+            if name not in _NAMED:
+                return None
+            found.add(_NAMED[name])
+    return found.pop() if len(found) == 1 else None
+
+
+def refuse_at_intake(tolerance: float, unit: tuple[str, float]) -> None:
+    """A 422 on ``options.tolerance`` when it is beyond any plausible tolerance whatever the model."""
+    name, metres = unit
+    if tolerance * metres > INTAKE_REFUSE_M:
+        in_metres = f" = {tolerance * metres:g} m" if name != "m" else ""
+        raise reject(f"tolerance {tolerance:g} {name}{in_metres} (a tolerance is in the file's length "
+                     f"unit, {name}, from its IfcUnitAssignment): more than {INTAKE_REFUSE_M:g} m, products that "
+                     f"differ by that much are not copies of one shape{_meant(tolerance, metres)} Give it in {name}",
+                     ("options", "tolerance"))
