@@ -6,7 +6,14 @@ import codecs
 
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.pcf import parse_pcf
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, validated
+from plantsolve.solvers.alignment.sniff import refuse_other_json, refuse_other_text
+from plantsolve.solvers.base import (
+    FieldError,
+    InputRejected,
+    StoredInput,
+    json_object,
+    validated,
+)
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -32,8 +39,10 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     (the upload form's) override options given inside a JSON file."""
     text, encoding = _decoded(source.read())
     if source.extension == ".pcf":
+        refuse_other_text(text)
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
-    body = json_object(text)
+    body = json_object(text, refuse_cut=True)
+    refuse_other_json(body)
     if options:
         if not isinstance(options, dict):
             raise InputRejected([FieldError(("options",), "options must be an object")])
