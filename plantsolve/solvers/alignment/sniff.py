@@ -8,6 +8,7 @@ sees the wrong file at once rather than an empty result or a failure later.
 
 from __future__ import annotations
 
+import json
 import re
 
 from plantsolve.solvers.base import reject
@@ -25,6 +26,42 @@ OTHER_KINDS = (
     ("dedup", ("filename", "file")),
     ("tube", ("points",)),  # a perfmap query holds points too: said in the message
 )
+
+
+_TOKEN_START = re.compile(r"-?(\d+\.?\d*([eE][-+]?\d*)?)?|t(r(ue?)?)?|f(a(l(se?)?)?)?|n(u(ll?)?)?")
+
+
+def cut_json(text: str) -> int:
+    """How many objects, arrays and strings a JSON text that the parser refuses leaves open, when what stops the
+    parser is only the start of its last token (a text cut right after a minus sign, inside ``tru``: the parser
+    says "Expecting value" one character before the end, not at it); 0 when the text is not cut that way."""
+    try:
+        json.loads(text)
+    except json.JSONDecodeError as error:
+        if _TOKEN_START.fullmatch(text[error.pos:].strip()):
+            return open_at_end(text)
+    return 0
+
+
+def open_at_end(text: str) -> int:
+    """How many objects, arrays and strings a JSON text leaves open at its end (0 for a complete one)."""
+    depth = 0
+    in_string = escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "{[":
+            depth += 1
+        elif ch in "}]":
+            depth -= 1
+    return max(depth, 0) + in_string
 
 
 def refuse_other_json(body: dict) -> None:

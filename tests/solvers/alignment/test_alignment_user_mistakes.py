@@ -166,10 +166,18 @@ def test_a_json_request_of_another_kind_is_refused_naming_its_fields_and_kind(pa
     assert f"a {kind} request" in said and "no 'components'" in said
 
 
-def test_a_cut_json_upload_is_said_to_be_cut():
+@pytest.mark.parametrize("cut", [0.5, 6000, 0.99, 12])
+def test_a_cut_json_upload_is_said_to_be_cut(cut):
     data = (EXAMPLES / "ladder.json").read_bytes()
+    at = int(len(data) * cut) if cut < 1 else cut  # 6000: right after a minus sign, "Expecting value" before the end
     with pytest.raises(InputRejected, match="ends before its document is complete"):
-        _upload("ladder.json", data[: len(data) // 2])
+        _upload("ladder.json", data[:at])
+
+
+def test_an_invalid_but_complete_json_is_not_said_to_be_cut():
+    with pytest.raises(InputRejected) as caught:
+        _upload("ladder.json", b'{"units": "mm", "components": [1, 2,, 3]}')
+    assert "invalid JSON" in str(caught.value) and "cut" not in str(caught.value)
 
 
 @pytest.mark.parametrize("fraction", [0.5, 0.77, 0.95])
