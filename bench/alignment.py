@@ -20,6 +20,13 @@ and with ``--before DIR`` on the code in DIR (a checkout of another revision, on
 main), side by side, each with the largest difference of any port position from ``this``:
 
     python bench/alignment.py --scaling-only --before /path/to/main/checkout
+
+``--family conflict``: the same grids with the second tie-in placed 30 mm and 2 degrees off, so connections are
+cut; every family also runs the request shuffled (``shuf``, ``shufLU``: components and connections in another
+order, about half the connections named from their other end), and says whether the same connections were cut
+(``same``). ``--side N`` runs only that size (a short run):
+
+    python bench/alignment.py --scaling-only --family conflict --side 12
 """
 
 from __future__ import annotations
@@ -37,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 SIZES = {100: 6, 1000: 18, 10000: 55}  # target size -> grid side
 SCALING_SIDES = (18, 31, 55, 99)  # 1,161 / 3,351 / 10,661 / 34,749 components
 PLANT_SIDES = (66, 132, 208)  # plant-like: about 10,000 / 40,000 / 100,000 components
+CONFLICT_SIDES = (12, 31)  # loop grids with a misplaced tie-in: about 520 / 3,351 components, cut
 
 
 def _rss_kib(field: str) -> int:
@@ -126,8 +134,23 @@ def plant_network(side: int, seed: int = 7, options: dict | None = None):
                                             "options": options or {}})
 
 
+def _reordered(req, seed: int = 1):
+    """The request with components and connections shuffled and about half the connections named from their other
+    end (seeded): the same network, another order."""
+    import numpy as np
+
+    from plantsolve.schemas.alignment import AlignmentRequest
+
+    body = req.model_dump(mode="json", by_alias=True)
+    rng = np.random.default_rng(seed)
+    body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
+    conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
+    body["connections"] = [{"from": c["to"], "to": c["from"]} if rng.random() < 0.5 else c for c in conns]
+    return AlignmentRequest.model_validate(body)
+
+
 def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None,
-         family: str = "grid", lu: bool = False) -> None:
+         family: str = "grid", lu: bool = False, shuffled: bool = False) -> None:
     if code is not None:
         # the child has imported nothing of plantsolve yet, so this checkout is the one it loads
         sys.path.insert(0, code)
@@ -139,6 +162,11 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     options = {"method": method} if max_iterations is None else {"method": method, "max_iterations": max_iterations}
     if family == "plant":
         req = plant_network(side, options=options)
+    elif family == "conflict":
+        from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins
+
+        req = conflicting_tie_ins(side, side, seed=2024, shift=(0.0, 30.0, 0.0), turn=2.0, valve_every=7,
+                                  options=options)
     else:
         req = grid_network(side, side, valve_every=7, tie_ins=((0, 0), (side - 1, side - 1)),
                            origin=(1.0e6, 2.0e5, 1.0e4), seed=2024, options=options)
@@ -146,15 +174,19 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     if lu:
         from plantsolve.solvers.alignment.kkt import use_schur
         mode = use_schur(False)
+    given = _reordered(req) if shuffled else req
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
     with mode:
-        solved = solve(req)
+        solved = solve(given)
     res = getattr(solved, "result", solved)  # a --before checkout older than the Solved contract returns the result
     wall, cpu = time.perf_counter() - t0, _cpu_s() - c0
     d = res.report.details
+    by_id = {c.id: c for c in res.components}  # in the order of the request as generated, whatever was solved
+    cut = {frozenset((tuple(res.connections[k].from_), tuple(res.connections[k].to))) for k in res.cut_connections}
     queue.put({
-        "positions": [p.position for c in res.components for p in c.ports],
+        "positions": [p.position for c in req.components for p in by_id[c.id].ports],
+        "cut_set": sorted(tuple(sorted(x)) for x in cut),
         "components": len(req.components), "connections": len(req.connections), "method": method, "converged": res.converged,
         "iterations": res.iterations, "wall_s": wall, "cpu_s": cpu, "peak_mib": (_rss_kib("VmHWM") - base) / 1024.0,
         "max_gap": res.max_position_error, "solver_residual": d["snap_distortion"]["position"] if res.converged else res.max_position_error,
@@ -164,10 +196,10 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
 
 
 def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None, family: str = "grid",
-             lu: bool = False) -> dict:
+             lu: bool = False, shuffled: bool = False) -> dict:
     ctx = mp.get_context("fork")
     q = ctx.Queue()
-    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, lu))
+    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, lu, shuffled))
     p.start()
     out = q.get()
     p.join()
@@ -180,33 +212,40 @@ def _exponent(small: dict | None, large: dict, key: str) -> str:
     return f"{math.log(large[key] / small[key]) / math.log(large['components'] / small['components']):.2f}"
 
 
-def scaling(quick: bool, before: str | None, family: str = "grid") -> None:
+def scaling(quick: bool, before: str | None, family: str = "grid", only: list[int] | None = None) -> None:
     """Direct method on growing networks of one family: this code, the same code within ``use_schur(False)``,
-    and with ``before`` the code in that directory, on the same networks."""
+    the same network shuffled (order and connection ends), and with ``before`` the code in that directory."""
     import numpy as np
 
-    sides = {"grid": SCALING_SIDES[:-1] if quick else SCALING_SIDES, "plant": PLANT_SIDES[:1] if quick else PLANT_SIDES}[family]
-    runs = [("this", None, False), ("lu", None, True)] + ([("before", before, False)] if before else [])
+    sides = {"grid": SCALING_SIDES[:-1] if quick else SCALING_SIDES, "plant": PLANT_SIDES[:1] if quick else PLANT_SIDES,
+             "conflict": CONFLICT_SIDES[:1] if quick else CONFLICT_SIDES}[family]
+    sides = only or sides
+    runs = [("this", None, False, False), ("lu", None, True, False), ("shuf", None, False, True),
+            ("shufLU", None, True, True)] + ([("before", before, False, False)] if before else [])
     head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'max gap':>9} "
-            f"{'k cpu':>6} {'k mem':>6} {'iter':>5} {'max |dP|':>9}  stop")
-    print(f"\nDirect method, scaling on {'square loop grids' if family == 'grid' else 'plant-like networks'} "
+            f"{'k cpu':>6} {'k mem':>6} {'iter':>5} {'max |dP|':>9} {'cuts':>4} {'same':>4}  stop")
+    what = {"grid": "square loop grids", "plant": "plant-like networks",
+            "conflict": "square loop grids whose second tie-in is 30 mm and 2 deg off"}[family]
+    print(f"\nDirect method, scaling on {what} "
           "(k: exponent of CPU time or memory ~ components^k since the size before; max |dP|: largest difference "
-          "of a port position from 'this', in mm)")
+          "of a port position from 'this', in mm; same: the same connections cut as 'this'; shuf: the request "
+          "shuffled, half its connections named from the other end)")
     print(head)
     print("-" * len(head))
     rows: dict[str, list[dict]] = {}
     for side in sides:
         here = None
-        for label, code, lu in runs:
-            r = run_case(side, "direct", None, code, family, lu)
+        for label, code, lu, shuffled in runs:
+            r = run_case(side, "direct", None, code, family, lu, shuffled)
             pos = np.array(r.pop("positions"))
             here = here or {**r, "P": pos}
             dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")
+            same = "yes" if r.get("cut_set") == here.get("cut_set") else "NO"
             prev = rows.get(label, [None])[-1]
             rows.setdefault(label, []).append(r)
             print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
                   f"{r['peak_mib']:>9.1f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
-                  f"{r['iterations']:>5} {dp:>9.1e}  {r['stop']}", flush=True)
+                  f"{r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4}  {r['stop']}", flush=True)
     for label in [x for x, *_ in runs[1:] if x in rows]:
         print(f"\nthis / {label}:")
         for now, old in zip(rows["this"], rows[label]):
@@ -222,12 +261,14 @@ def main() -> None:
     ap.add_argument("--dq-iterations", type=int, default=4000, help="iteration cap of the dual-quaternion method")
     ap.add_argument("--scaling-only", action="store_true", help="only the scaling table of the direct method")
     ap.add_argument("--before", metavar="DIR", help="also run the scaling table on the plantsolve checkout in DIR")
-    ap.add_argument("--family", action="append", choices=("grid", "plant"), help="only this family's scaling table")
+    ap.add_argument("--family", action="append", choices=("grid", "plant", "conflict"),
+                    help="only this family's scaling table")
+    ap.add_argument("--side", type=int, action="append", help="only networks of this side (a short run)")
     args = ap.parse_args()
     if not args.scaling_only:
         methods(args.quick, args.dq_iterations)
-    for family in args.family or ("grid", "plant"):
-        scaling(args.quick, args.before, family)
+    for family in args.family or ("grid", "plant", "conflict"):
+        scaling(args.quick, args.before, family, args.side)
 
 
 def methods(quick: bool, dq_iterations: int) -> None:

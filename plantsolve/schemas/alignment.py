@@ -17,7 +17,19 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from plantsolve.schemas.common import Direction3, FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel, Units, Vec3
+from plantsolve.schemas.common import (
+    LENGTH,
+    Direction3,
+    FiniteFloat,
+    Integer,
+    Point3,
+    Quaternion,
+    Report,
+    StrictModel,
+    Units,
+    Vec3,
+    unit,
+)
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -27,10 +39,12 @@ FittingType = Literal[
 class Port(StrictModel):
     """A ConnectionPoint: where a component joins its neighbour."""
 
-    position: Point3 = Field(description="Port centre point, in the request's units (|x| <= 1e12).")
+    position: Point3 = Field(description="Port centre point, in the request's units (|x| <= 1e12).",
+                             json_schema_extra=unit(LENGTH))
     direction: Direction3 = Field(
         description="Direction pointing out of the component (any non-zero length, components within 1e9; "
-        "normalised by the solver)."
+        "normalised by the solver; a result's are unit vectors).",
+        json_schema_extra=unit("1"),
     )
 
 
@@ -63,6 +77,7 @@ class Component(StrictModel):
     )
     up: Direction3 | None = Field(
         default=None,
+        json_schema_extra=unit("1"),
         description="Up vector of a fitting whose ports are collinear (e.g. a valve stem). After alignment it is "
         "re-established as the original up projected onto the plane normal to the new port axis.",
     )
@@ -90,13 +105,16 @@ class AlignmentOptions(StrictModel):
         "Explicit position_tolerance / angle_tolerance override the profile. The report names what was used.",
     )
     position_tolerance: FiniteFloat | None = Field(
-        default=None, gt=0, description="Largest accepted port gap, in the request's units."
+        default=None, gt=0, le=1000.0,
+        description="Largest accepted port gap, in the request's units (at most 1000: a metre in mm; a gap wider "
+        "than a pipe run is no scan tolerance)."
     )
     angle_tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
+        le=10.0,
         description="Largest accepted angle between a port direction and the reversed direction of its "
-        "partner, in degrees (1e-10 rad = 5.73e-9 deg).",
+        "partner, in degrees (1e-10 rad = 5.73e-9 deg; at most 10: beyond it two ports do not face each other).",
     )
     max_iterations: Integer = Field(
         default=4000, ge=1, le=1_000_000,
@@ -115,37 +133,47 @@ class AlignmentOptions(StrictModel):
     )
     pipe_stiffness: FiniteFloat = Field(
         default=10.0,
-        gt=0,
-        description="How much more a pipe axis resists moving than a fitting of the same length.",
+        ge=1e-6,
+        le=1e6,
+        description="How much more a pipe axis resists moving than a fitting of the same length (1e-6 to 1e6: "
+        "beyond, one of the two weights vanishes in the other's round-off).",
     )
     min_pipe_length_factor: FiniteFloat = Field(
-        default=0.1, gt=0, description="Minimum pipe length as a multiple of the pipe radius (no flips)."
+        default=0.1, gt=0, le=100.0,
+        description="Minimum pipe length as a multiple of the pipe radius (no flips; at most 100 radii)."
     )
     step_limit: FiniteFloat | None = Field(
         default=None,
         gt=0,
-        description="Dual-quaternion method: largest port movement of a fitting per step, in units "
+        le=1e6,
+        description="Dual-quaternion method: largest port movement of a fitting per step, in units (at most 1e6) "
         "(pipes get half, long pipes less). Default: half the largest initial gap.",
     )
     explosion_factor: FiniteFloat = Field(
         default=50.0,
         gt=1,
-        description="Dual-quaternion method: if the largest gap exceeds this multiple of the initial largest gap, "
+        le=1e9,
+        description="Dual-quaternion method (more than 1, at most 1e9): if the largest gap exceeds this multiple of the initial largest gap, "
         "the connection with the highest error is cut and the run restarts.",
     )
-    max_cuts: Integer = Field(default=50, ge=0, description="Most connections the solver may cut.")
+    max_cuts: Integer = Field(default=50, ge=0, le=1_000_000,
+                              description="Most connections the solver may cut (at most the 1,000,000 connections "
+                              "a request may hold).")
     fixed_components: list[str] = Field(
         default_factory=list, description="Ids of additional tie-ins (same as fixed=true on the component)."
     )
     shape_tolerance: FiniteFloat = Field(
         default=1.0,
         gt=0,
-        description="Degrees: how far a pipe's ports may be from collinear-and-opposite before the input is rejected.",
+        le=45.0,
+        description="Degrees: how far a pipe's ports may be from collinear-and-opposite before the input is rejected "
+        "(at most 45: beyond, a bend is no straight pipe).",
     )
     connection_tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
-        description="PCF upload only: end points closer than this (units) are connected. "
+        le=1000.0,
+        description="PCF upload only: end points closer than this (units, at most 1000) are connected. "
         "Default: half the smaller bore radius.",
     )
 
@@ -172,9 +200,13 @@ class AlignmentRequest(StrictModel):
 class Transform(BaseModel):
     """Rigid motion ``x -> R x + t`` taking the input pose to the output pose."""
 
-    dual_quaternion: list[float] = Field(description="[w, x, y, z, w', x', y', z'] (unit dual quaternion).")
-    rotation: Quaternion = Field(description="Rotation quaternion [w, x, y, z].")
-    translation: Vec3 = Field(description="Translation in units (applied after the rotation).")
+    dual_quaternion: list[float] = Field(
+        description="[w, x, y, z, w', x', y', z'] (unit dual quaternion): the real part [w, x, y, z] is a pure number, "
+        "the dual part [w', x', y', z'] = 0.5 (0, t) * real is in the result's units (x-unit-dual).",
+        json_schema_extra={**unit("1"), "x-unit-dual": LENGTH})
+    rotation: Quaternion = Field(description="Rotation quaternion [w, x, y, z].", json_schema_extra=unit("1"))
+    translation: Vec3 = Field(description="Translation in units (applied after the rotation).",
+                              json_schema_extra=unit(LENGTH))
 
 
 class ComponentResult(BaseModel):
@@ -184,10 +216,13 @@ class ComponentResult(BaseModel):
         description="Rigid part of the motion (for pipes: the axis motion; port 0 maps exactly, port 1 also moves "
         "by length_change along the axis)."
     )
-    displacement: float = Field(description="Largest movement of any of its ports, in units.")
-    rotation_angle: float = Field(description="Rotation angle of the transform, degrees.")
-    length_change: float | None = Field(default=None, description="Pipes: new length minus old length, units.")
-    up: list[float] | None = Field(default=None, description="Re-established up vector (fittings with an up).")
+    displacement: float = Field(description="Largest movement of any of its ports, in units.",
+                                json_schema_extra=unit(LENGTH))
+    rotation_angle: float = Field(description="Rotation angle of the transform, degrees.", json_schema_extra=unit("deg"))
+    length_change: float | None = Field(default=None, description="Pipes: new length minus old length, units.",
+                                        json_schema_extra=unit(LENGTH))
+    up: list[float] | None = Field(default=None, description="Re-established up vector (fittings with an up).",
+                                   json_schema_extra=unit("1"))
 
 
 class ConnectionResult(BaseModel):
@@ -195,8 +230,10 @@ class ConnectionResult(BaseModel):
 
     from_: tuple[str, int] = Field(alias="from")
     to: tuple[str, int]
-    position_error: float = Field(description="Distance between the two ports after alignment, units.")
-    angle_error: float = Field(description="Angle between one direction and the reversed other, degrees.")
+    position_error: float = Field(description="Distance between the two ports after alignment, units.",
+                                  json_schema_extra=unit(LENGTH))
+    angle_error: float = Field(description="Angle between one direction and the reversed other, degrees.",
+                               json_schema_extra=unit("deg"))
     cut: bool = Field(description="True if the solver cut this connection to resolve a conflict or explosion.")
 
 
@@ -208,8 +245,10 @@ class AlignmentResult(BaseModel):
     angle_unit: Literal["deg"] = Field(default="deg", description="Unit of every angle in this result.")
     converged: bool
     iterations: int = Field(description="Iterations of the chosen method (direct: Gauss-Newton + refinement steps).")
-    max_position_error: float = Field(description="Largest gap over connections that were not cut, units.")
-    max_angle_error: float = Field(description="Largest angle error over connections that were not cut, degrees.")
+    max_position_error: float = Field(description="Largest gap over connections that were not cut, units.",
+                                      json_schema_extra=unit(LENGTH))
+    max_angle_error: float = Field(description="Largest angle error over connections that were not cut, degrees.",
+                                   json_schema_extra=unit("deg"))
     components: list[ComponentResult]
     connections: list[ConnectionResult]
     cut_connections: list[int] = Field(description="Indices (request order) of the connections that were cut.")

@@ -51,6 +51,17 @@ def _weights(model: Model, stiffness: float) -> tuple[np.ndarray, np.ndarray]:
     return w, w * rel**2
 
 
+def connection_basis(ua: np.ndarray, ub: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Tangent basis of each connection's common axis ``(ua - ub) / |ua - ub|`` (``ua`` where the two point the
+    same way): the direction constraint is written in it. Swapping a connection's ends negates the axis, hence the
+    first basis vector and its constraint row exactly (IEEE negation), and keeps the second: the system is the
+    same up to the sign of rows, so the answer does not depend on which end a request names first."""
+    w = ua - ub
+    size = np.linalg.norm(w, axis=1, keepdims=True)
+    w = np.where(size > 1e-3, w / np.where(size > 0, size, 1.0), ua)
+    return _tangent_basis(w)
+
+
 def _tangent_basis(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     helper = np.where(np.abs(u[:, :1]) < 0.6, np.array([1.0, 0, 0]), np.array([0.0, 1, 0]))
     e1 = np.cross(u, helper)
@@ -110,7 +121,7 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
             # from here on take minimum-norm feasibility steps only
             use_cost = False
         prev = err
-        e1, e2 = _tangent_basis(ua)
+        e1, e2 = connection_basis(ua, ub)
         rows, cols, vals = [], [], []
         for side_u, side_c in ((ua, ca), (ub, cb)):
             ok = free[side_c]
@@ -347,7 +358,7 @@ def _joint_constraints(model: Model, st: JointState, P: np.ndarray, D: np.ndarra
     ib = (3 * b[:, None] + np.arange(3)).ravel()
     Apos = (Jp[ia] - Jp[ib]) / pos_scale
     del Jp  # each port Jacobian is as large as what is taken from it
-    e1b, e2b = _tangent_basis(D[a])
+    e1b, e2b = connection_basis(D[a], D[b])
     Jdsum = (Jd[ia] + Jd[ib]).tocsr()
     del Jd
     er = np.repeat(np.arange(2 * m_conn), 3)

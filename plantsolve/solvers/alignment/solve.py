@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
@@ -10,14 +12,31 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import choose_cut, error_impact
+from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
 from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
 from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
-from plantsolve.solvers.base import InputRejected, Progress, Solved, SolverError, no_progress
+from plantsolve.solvers.alignment.plausibility import (
+    FITTING_SPAN,
+    METRES,
+    MOVE_ANGLES,
+    MOVE_EXTENT,
+    MOVE_GAPS,
+    PIPE_RADIUS_M,
+    TYPICAL_SPAN,
+    fitting_span_in_bores,
+    moved_far,
+)
+from plantsolve.solvers.base import (
+    InputRejected,
+    Progress,
+    Solved,
+    SolverError,
+    no_progress,
+)
 from plantsolve.solvers.stages import Stages
 
 
@@ -30,10 +49,12 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     iterations = 0
     st = Stages(progress)
     st.stage(0.1, 0.7, "direct solve")
+    on_lu = not schur_in_use()  # once a cut is decided on the LU's pose, every round after it is solved on the LU
     while True:
         cuts = f" ({len(reasons)} cut(s) so far)" if reasons else ""
-        pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations,
-                            step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
+        with use_schur(False) if on_lu else contextlib.nullcontext():
+            pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - iterations,
+                                step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
         before = iterations
         iterations += pose.iterations
         if iterations >= opts.max_iterations:
@@ -41,15 +62,19 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
             break
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
-        if k is not None and schur_in_use():
+        if k is not None and not on_lu:
             # a cut is decided on the LU's pose: on singular loops the Schur complement's Gauss-Newton
-            # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice)
+            # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice).
+            # A network that needs one cut usually needs more, and each LDL^T round would be followed by
+            # an LU round anyway (measured: 1.7 times the LU's CPU on a 482-component grid cut 33 times):
+            # the rounds after a cut are the LU's, so a cut network's answer is the all-LU one, bit for bit
             with use_schur(False):
                 pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - before,
                                     step=lambda message: st.tick(f"direct solve (reference LU): {message}{cuts}"))
             iterations = before + pose.iterations  # the pose returned is the LU's
             gap, ang = connection_errors(model, pose.P, pose.D)
             k = choose_cut(model, active, gap, ang)
+            on_lu = k is not None
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
@@ -86,7 +111,7 @@ def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
         return None
     gap0, ang0 = connection_errors(model, model.P0, model.D0)
     impact = error_impact(model, gap0[cand], ang0[cand])
-    keys = [min(model.key[model.conn_a[k]], model.key[model.conn_b[k]]) for k in cand]
+    keys = [connection_key(model, k) for k in cand]
     return int(cand[min(range(len(cand)), key=lambda i: (-impact[i], keys[i]))])
 
 
@@ -220,7 +245,7 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
         spacers = {c.id for c in request.components if c.id.startswith("gasket-gap-")}
         joined = {c.from_[0] for c in request.connections} | {c.to[0] for c in request.connections}
         alone = [c.id for c in request.components if c.id not in joined and c.id not in spacers]
-        if alone and len(alone) < len(request.components):
+        if alone:
             _warn(result, "pcf_unconnected_items",
                   f"{len(alone)} PCF item(s) share no end point with any other within the connection tolerance "
                   "and were not aligned; raise options.connection_tolerance if they belong to the line.",
@@ -236,8 +261,113 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
                 details[code] = extra.get("items", extra) if code == "pcf_zero_length_items" else extra
             else:
                 _warn(result, code, message, extra)
+    _warn_moved_far(request, model, result, gap0, ang0)
+    _warn_fitting_span(request, model, result)
+    _warn_radius(request, model, result)
+    result.report.message += _cuts_said(request, result, gap0, ang0)
     progress(1.0, "done")
     return result
+
+
+def _end(request: AlignmentRequest, k: int) -> str:
+    """Connection ``k`` by its two ends, the smaller (id, port) first: the same words whichever end the request
+    names first."""
+    c = request.connections[k]
+    a, b = sorted([(c.from_[0], int(c.from_[1])), (c.to[0], int(c.to[1]))])
+    return f"{a[0]} port {a[1]} - {b[0]} port {b[1]}"
+
+
+def _cuts_said(request: AlignmentRequest, result: AlignmentResult, gap0: np.ndarray, ang0: np.ndarray) -> str:
+    """What the summary says of the cuts: each connection cut, by its components and ports, with the gap and angle
+    it had in the input and why it was cut (the first five in the order of their ends, then how many more)."""
+    cuts = sorted(result.cut_connections, key=lambda k: _end(request, k))
+    if not cuts:
+        return ""
+    flips = {c["index"] for w in result.report.warnings if w.code == "connections_cut" for c in w.details["cuts"]
+             if c["reason"] == "pipe_flip"}
+    u = request.units
+    said = [f"{_end(request, k)} (input gap {gap0[k]:.3g} {u}, {np.degrees(ang0[k]):.3g} deg; "
+            f"{'closing it turned a pipe inside out' if k in flips else 'it could not close with the rest: conflict'})"
+            for k in cuts[:5]]
+    more = f" and {len(cuts) - 5} more" if len(cuts) > 5 else ""
+    return f" Cut {len(cuts)} connection(s): {'; '.join(said)}{more}."
+
+
+def _warn_fitting_span(request: AlignmentRequest, model: Model, result: AlignmentResult) -> None:
+    """``implausible_fitting_span``: fittings whose ports span far more or far less than their bore (see
+    :func:`fitting_span_in_bores`), said with the unit mix-up the factor points to."""
+    counts = np.diff(model.port_start)
+    found = fitting_span_in_bores(model.P_in, counts, model.radius, ~model.is_pipe)
+    if found is None:
+        return
+    median, n = found
+    lo, hi = FITTING_SPAN
+    if lo <= median <= hi:
+        return
+    u = request.units
+    factor = TYPICAL_SPAN / median  # what would bring the median to a typical fitting's
+    likely = min(((f, name) for f, name in _UNIT_MIXUPS), key=lambda x: abs(np.log(x[0] / factor)))
+    mixup = (f"the coordinates look {likely[1]} (a factor of {likely[0]:.4g})"
+             if abs(np.log(likely[0] / factor)) < np.log(3.0) else "the coordinates and the bores are not in one unit")
+    source = " (a PCF: its UNITS-CO-ORDS and UNITS-BORE headers)" if request.source_pcf is not None else \
+        f" (the request says units '{u}')"
+    _warn(result, "implausible_fitting_span",
+          f"the ports of the {n} fitting(s) with a radius span {median:.3g} bores (median; plausible "
+          f"{lo:g}-{hi:g}): {mixup}{source}; the tolerances, pipe lengths and gaps read in {u} are then off too.",
+          {"median_span_in_bores": median, "fittings": n, "plausible": [lo, hi], "units": u})
+
+
+def _warn_radius(request: AlignmentRequest, model: Model, result: AlignmentResult) -> None:
+    """``implausible_pipe_radius``: the components' median outside radius, in metres, outside what plants are built
+    of (:data:`PIPE_RADIUS_M`): the whole request in another unit than it says."""
+    radius = model.radius[np.isfinite(model.radius)]
+    if len(radius) == 0:
+        return
+    u = request.units
+    metres = float(np.median(radius)) * METRES[u]
+    lo, hi = PIPE_RADIUS_M
+    if lo <= metres <= hi:
+        return
+    likely = "mm read as m or inches" if metres > hi else "m read as mm (or inches or feet read as mm)"
+    _warn(result, "implausible_pipe_radius",
+          f"the median outside radius of the {len(radius)} component(s) with one is {np.median(radius):.4g} {u} = "
+          f"{metres:.4g} m (plausible {lo * 1000:g} mm to {hi:g} m): the request's numbers look to be in another "
+          f"unit than '{u}' ({likely}); every length of the result is read in {u}.",
+          {"median_radius": float(np.median(radius)), "median_radius_m": metres, "plausible_m": [lo, hi], "units": u})
+
+
+# factors that turn the coordinates' apparent size into the bores' unit, with the mix-up each means
+_UNIT_MIXUPS = ((1e-3, "1000 times too large: mm read as m"), (1e3, "1000 times too small: m read as mm"),
+                (1 / 25.4, "25.4 times too large: mm read as inches"), (25.4, "25.4 times too small: inches read as mm"),
+                (1 / 304.8, "304.8 times too large: mm read as feet"), (304.8, "304.8 times too small: feet read as mm"),
+                (1e-2, "100 times too large: cm read as m"), (1e1, "10 times too small: cm read as mm"))
+
+
+def _warn_moved_far(request: AlignmentRequest, model: Model, result: AlignmentResult, gap0: np.ndarray,
+                    ang0: np.ndarray) -> None:
+    """``implausible_displacement``: components moved beyond their network's limit (see :func:`moved_far`), named in
+    the warning and the summary with the connection of the largest starting gap, the likely cause."""
+    disp = np.array([c.displacement for c in result.components])
+    far, limit = moved_far(disp, model.P_in, model.port_comp, model.port_comp[model.conn_a],
+                           model.port_comp[model.conn_b], gap0, ang0)
+    if len(far) == 0:
+        return
+    u = request.units
+    worst = int(np.argmax(gap0))
+    moved = [{"id": model.ids[c], "displacement": float(disp[c]), "limit": float(limit[c])} for c in far[:200]]
+    named = ", ".join(f"{m['id']} {m['displacement']:.3g} {u}" for m in moved[:5])
+    more = f" and {len(far) - 5} more" if len(far) > 5 else ""
+    _warn(result, "implausible_displacement",
+          f"{len(far)} component(s) moved further than closing scan gaps moves anything ({named}{more}; limit "
+          f"{float(limit[far[0]]):.3g} {u}, the largest of {MOVE_GAPS:g} times the network's median starting gap, "
+          f"{MOVE_ANGLES:g} times its median starting angle error times its extent and {100 * MOVE_EXTENT:g} % of "
+          "its extent): something dragged them, most likely a mistyped "
+          f"port (the largest starting gap is {gap0[worst]:.4g} {u} at {_end(request, worst)}), a wrong "
+          "connection or a misplaced tie-in.",
+          {"components": moved, "largest_starting_gap": {"index": worst, "from": list(request.connections[worst].from_),
+                                                           "to": list(request.connections[worst].to),
+                                                           "position_error": float(gap0[worst])}})
+    result.report.message += f" {len(far)} component(s) moved beyond the plausible limit: {named}{more}."
 
 
 def _nozzles(request: AlignmentRequest) -> frozenset[str]:

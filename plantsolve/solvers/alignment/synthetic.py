@@ -1,6 +1,7 @@
 """Scan-like test networks: a grid of fittings joined by pipes (every cell is a loop).
 
-Used by the tests, the benchmark and the examples. Nodes of degree 2/3/4 get an elbow, a
+Used by the tests, the benchmark and the examples; :func:`conflicting_tie_ins` moves one of two
+tie-ins so that the network has to be cut. Nodes of degree 2/3/4 get an elbow, a
 tee or a cross; every ``valve_every``-th edge gets an inline valve (pipe-valve-pipe); the
 listed corners are tie-ins placed exactly; everything else is perturbed like a scan fit
 (pipes ~2 mm / 0.3 deg, fittings ~6 mm / 1.5 deg by default). Seeded, so deterministic.
@@ -92,3 +93,20 @@ def example() -> dict:
     valve and one tie-in, scan-like gaps, solved in well under a second."""
     request = grid_network(2, 2, valve_every=3, tie_ins=((0, 0),), seed=1)
     return request.model_dump(mode="json", exclude_none=True)
+
+
+def conflicting_tie_ins(nx: int, ny: int, *, seed: int = 0, shift: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                        turn: float = 0.0, valve_every: int = 0, options: dict | None = None) -> AlignmentRequest:
+    """A scan-like grid (:func:`grid_network`, plant coordinates around 1e6 mm) with tie-ins at two opposite
+    corners, the second placed ``shift`` (mm) and ``turn`` (degrees about z) away from where the grid has it:
+    the network cannot close as measured, so connections have to be cut (or pipes stretched)."""
+    req = grid_network(nx, ny, seed=seed, valve_every=valve_every, tie_ins=((0, 0), (nx - 1, ny - 1)),
+                       origin=(1.0e6, 2.0e5, 1.0e4), options={"method": "direct", **(options or {})})
+    comps = [c.model_copy(deep=True) for c in req.components]
+    moved = next(c for c in comps if c.id == f"N{nx - 1}-{ny - 1}")
+    R = Rotation.from_rotvec([0.0, 0.0, np.radians(turn)])
+    centre = np.mean([p.position for p in moved.ports], axis=0)
+    for p in moved.ports:
+        p.position = (R.apply(np.array(p.position) - centre) + centre + np.asarray(shift, dtype=float)).tolist()
+        p.direction = R.apply(p.direction).tolist()
+    return req.model_copy(update={"components": comps})

@@ -6,7 +6,19 @@ import codecs
 
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.pcf import parse_pcf
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, validated
+from plantsolve.solvers.alignment.sniff import (
+    cut_json,
+    refuse_other_json,
+    refuse_other_text,
+)
+from plantsolve.solvers.base import (
+    FieldError,
+    InputRejected,
+    StoredInput,
+    json_object,
+    reject,
+    validated,
+)
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -32,8 +44,18 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     (the upload form's) override options given inside a JSON file."""
     text, encoding = _decoded(source.read())
     if source.extension == ".pcf":
+        refuse_other_text(text)
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
-    body = json_object(text)
+    try:
+        body = json_object(text, refuse_cut=True)
+    except InputRejected as refused:
+        still_open = cut_json(text) if "invalid JSON" in str(refused) else 0
+        if still_open:
+            raise reject(f"the JSON ends before its document is complete ({still_open} object(s), array(s) or "
+                         "string(s) still open at its end); the file was cut? Nothing of a cut request is "
+                         "used") from None
+        raise
+    refuse_other_json(body)
     if options:
         if not isinstance(options, dict):
             raise InputRejected([FieldError(("options",), "options must be an object")])

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest
+from plantsolve.solvers.alignment.plausibility import FAR, METRES, far_ports
 from plantsolve.solvers.base import FieldError, InputRejected
 
 MIN_PORTS = {
@@ -92,6 +93,7 @@ def check_input(request: AlignmentRequest) -> None:
             errors.append(FieldError(("components", i, "up"), "up must not be parallel to the port axis"))
 
     used: dict[tuple[str, int], tuple[int, str]] = {}
+    joined: list[tuple[int, int]] = []
     for j, conn in enumerate(request.connections):
         ends = (("from", conn.from_), ("to", conn.to))
         ok = True
@@ -116,9 +118,40 @@ def check_input(request: AlignmentRequest) -> None:
                 used[(cid, port)] = (j, name)
         if ok and conn.from_[0] == conn.to[0]:
             errors.append(FieldError(("connections", j, "to"), "a connection must join two different components"))
+        elif ok:
+            joined.append((index[conn.from_[0]], index[conn.to[0]]))
+    far = _far_ports(request, pos, owner, start, joined, counts)
+    if far:
+        # a port far out also turns its fitting's centroid or its pipe's axis: those refusals only repeat it
+        culprits = {e.loc[1] for e in far}
+        errors = [e for e in errors if not (len(e.loc) > 2 and e.loc[0] == "components" and e.loc[1] in culprits
+                                            and e.loc[2] == "ports")] + far
 
     for k, cid in enumerate(opts.fixed_components):
         if cid not in index:
             errors.append(FieldError(("options", "fixed_components", k), f"unknown component {cid!r}"))
     if errors:
         raise InputRejected(errors)
+
+
+def _far_ports(request: AlignmentRequest, pos: np.ndarray, owner: np.ndarray, start: np.ndarray,
+               joined: list[tuple[int, int]], counts: np.ndarray) -> list[FieldError]:
+    """A refusal for every port far outside its connected network (see :mod:`plausibility`)."""
+    if not joined or not np.all(np.isfinite(pos)):
+        return []
+    ab = np.array(joined, dtype=np.intp)
+    u = request.units
+    pipes = np.flatnonzero(np.array([c.kind == "pipe" for c in request.components]) & (counts == 2))
+    length = np.linalg.norm(pos[start[pipes] + 1] - pos[start[pipes]], axis=1)
+    out = []
+    for far in far_ports(pos, owner, ab[:, 0], ab[:, 1], len(request.components),
+                         pipe_ends=(start[pipes], length * METRES[u]))[:50]:
+        k = far["port"]
+        c = int(owner[k])
+        out.append(FieldError(
+            ("components", c, "ports", int(k - start[c]), "position"),
+            f"port {int(k - start[c])} of component {request.components[c].id!r} lies {far['distance']:.4g} {u} from "
+            f"the middle of its network, more than {FAR:g} times further out than its {far['closer_in']} other "
+            f"port(s) closer in (all within {far['extent']:.4g} {u}): a mistyped coordinate (a wrong digit or "
+            "exponent, or a value in another unit such as m in a mm file)? Correct the position."))
+    return out
