@@ -28,7 +28,11 @@ from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
 from plantsolve.solvers.rigidity.screws import FREEDOM
 
-SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) are one point
+# LDU: connection points closer than this are one point. Editors write positions with 2 to 3 decimals and
+# rotations with 6 (0.707107): a part on a turned plate, or in a turned sub-model, lands its studs 1e-3 to a few
+# 1e-2 LDU off the grid the library's frames give; the closest distinct points of one part are a bar's, 2 LDU
+# apart.
+SNAP = 0.1
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
             "ball": "ball", "clip": "hinge", "group": "rigid"}
@@ -124,7 +128,7 @@ class Assembly:
         local = shape.points()
         points = local @ rot.T + pos
         dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
-        keys = [tuple(k) for k in np.round(points / SNAP).astype(np.int64).tolist()]
+        keys = [tuple(k) for k in np.floor(points / SNAP).astype(np.int64).tolist()]
         placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
         self._free_table = self._boxes = None
         self.parts[id] = placed
@@ -133,7 +137,7 @@ class Assembly:
         found: dict[str, list[Connection]] = {}
         for ci, key in enumerate(keys):
             mine = shape.connectors[ci].type
-            for other, oi in self._slots.get(key, ()):
+            for other, oi in self._near(key, points[ci]):
                 theirs = self.parts[other].shape.connectors[oi].type
                 kind = mate(mine, theirs)
                 if kind is None:
@@ -156,6 +160,17 @@ class Assembly:
                 for j in self._pair_joints(other, id, conns):
                     self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
         return [c for conns in found.values() for c in conns]
+
+    def _near(self, key: tuple, point: np.ndarray):
+        """The (part, connector) slots within SNAP of ``point``, whose cell is ``key``: the cell and its 26
+        neighbours hold every one (cells are SNAP wide)."""
+        x, y, z = key
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for dz in (-1, 0, 1):
+                    for other, oi in self._slots.get((x + dx, y + dy, z + dz), ()):
+                        if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
+                            yield other, oi
 
     def remove_part(self, id: str) -> None:
         placed = self.parts.pop(id)

@@ -110,6 +110,12 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
     if male and not slide and caps != "none" and shape0 in ("R", "S") and _near(radius0, 6):
         return [("stud", _point(start), _point(axis))]  # a closed peg that does not slide: a (long) stud
     out = []
+    if not male:  # a stud enters any open mouth of radius 6 (a dish's or a cone's bore, a headlight brick's back)
+        last = secs[-1]
+        if caps not in ("two", "a") and shape0 in ("R", "S") and _near(radius0, 6):
+            out.append(("antistud", _point(start), _point(-axis)))
+        if caps in ("none", "a") and last[0] in ("R", "S") and _near(last[1], 6):
+            out.append(("antistud", _point(start + axis * length), _point(axis)))
     run = 0.0
     for shape, radius, piece in secs:
         if male and _is_stud(shape, radius, piece):  # a stud (a half pin's short end too): its base
