@@ -22,7 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate,
+                                                   samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -33,10 +34,11 @@ from plantsolve.solvers.rigidity.screws import FREEDOM
 # 1e-2 LDU off the grid the library's frames give; the closest distinct points of one part are a bar's, 2 LDU
 # apart.
 SNAP = 0.1
+RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
-            "ball": "ball", "clip": "hinge", "group": "rigid"}
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group"}  # one part inside (or interlocked with) the other: not a collision
+            "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical"}
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar"}  # one part inside (or interlocked with) the other: not a collision
 
 
 @dataclass
@@ -95,6 +97,23 @@ class Analysis:
     details: dict = field(default_factory=dict)
 
 
+def _cell(point: np.ndarray) -> tuple:
+    return tuple(int(v) for v in np.floor(np.asarray(point) / RUN_CELL))
+
+
+def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
+    """The RUN_CELL cells a run passes (sampled every half cell, both ends included)."""
+    ts = np.append(np.arange(0.0, length, RUN_CELL / 2), length)
+    return {_cell(start + axis * t) for t in ts}
+
+
+def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
+    """``point`` within SNAP of the run: on its line and between its ends."""
+    v = np.asarray(point, float) - start
+    t = float(v @ axis)
+    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= SNAP
+
+
 def _clean(x: float) -> float | int:
     """Integer-valued coordinates as ints (LDraw units), so the exact pass can use them."""
     r = round(float(x))
@@ -108,7 +127,9 @@ class Assembly:
         self.parts: dict[str, Placed] = {}
         self.bodies: dict[str, Solid | None] = {}
         self.joints: dict[str, JointSpec] = {}
-        self._slots: dict[tuple, list[tuple[str, int]]] = {}
+        self._slots: dict[tuple, list[tuple[str, int]]] = {}  # connection points by their SNAP cell
+        self._coarse: dict[tuple, list[tuple[str, int]]] = {}  # the same by their RUN_CELL cell
+        self._runs: dict[tuple, list[tuple[str, int]]] = {}  # runs by every RUN_CELL cell they pass
         self._links: dict[tuple[str, str], list[Connection]] = {}
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
@@ -128,7 +149,9 @@ class Assembly:
         local = shape.points()
         points = local @ rot.T + pos
         dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
-        keys = [tuple(k) for k in np.floor(points / SNAP).astype(np.int64).tolist()]
+        runs = np.array([c.length for c in shape.connectors], dtype=float)
+        keys = [None if runs[k] > 0 else tuple(v) for k, v in
+                enumerate(np.floor(points / SNAP).astype(np.int64).tolist())]
         placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
         self._free_table = self._boxes = None
         self.parts[id] = placed
@@ -137,7 +160,17 @@ class Assembly:
         found: dict[str, list[Connection]] = {}
         for ci, key in enumerate(keys):
             mine = shape.connectors[ci].type
-            for other, oi in self._near(key, points[ci]):
+            if key is not None:
+                candidates = [(o, oi, points[ci]) for o, oi in self._near(key, points[ci])]
+                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci])]
+            else:
+                candidates = [(o, oi, self.parts[o].points[oi]) for o, oi in self._points_along(points[ci], dirs[ci],
+                                                                                            runs[ci])]
+            seen = set()
+            for other, oi, where in candidates:
+                if (other, oi) in seen:
+                    continue
+                seen.add((other, oi))
                 theirs = self.parts[other].shape.connectors[oi].type
                 kind = mate(mine, theirs)
                 if kind is None:
@@ -147,11 +180,16 @@ class Assembly:
                     pass
                 elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
-                point = tuple(_clean(v) for v in points[ci])
+                point = tuple(_clean(v) for v in where)
                 axis = None if kind in ANY_DIRECTION else tuple(  # a ball joint has no axis
                     _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
-            self._slots.setdefault(key, []).append((id, ci))
+            if key is not None:
+                self._slots.setdefault(key, []).append((id, ci))
+                self._coarse.setdefault(_cell(points[ci]), []).append((id, ci))
+            else:
+                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
+                    self._runs.setdefault(cell, []).append((id, ci))
         for other, conns in found.items():
             self._links[(other, id)] = conns
             self._neighbours[other].add(id)
@@ -160,6 +198,27 @@ class Assembly:
                 for j in self._pair_joints(other, id, conns):
                     self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
         return [c for conns in found.values() for c in conns]
+
+    def _runs_near(self, point: np.ndarray):
+        """The runs (axles, bars) that pass within SNAP of ``point``."""
+        x, y, z = _cell(point)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for dz in (-1, 0, 1):
+                    for other, oi in self._runs.get((x + dx, y + dy, z + dz), ()):
+                        o = self.parts[other]
+                        if _on_run(point, o.points[oi], o.directions[oi], o.shape.connectors[oi].length):
+                            yield other, oi
+
+    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float):
+        """The connection points within SNAP of the run from ``start`` along ``axis`` for ``length``."""
+        cells = set()
+        for x, y, z in _run_cells(start, axis, length):
+            cells.update((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1))
+        for cell in cells:
+            for other, oi in self._coarse.get(cell, ()):
+                if _on_run(self.parts[other].points[oi], start, axis, length):
+                    yield other, oi
 
     def _near(self, key: tuple, point: np.ndarray):
         """The (part, connector) slots within SNAP of ``point``, whose cell is ``key``: the cell and its 26
@@ -175,12 +234,19 @@ class Assembly:
     def remove_part(self, id: str) -> None:
         placed = self.parts.pop(id)
         self._free_table = self._boxes = None
-        for key in placed.keys:
-            slot = [s for s in self._slots.get(key, []) if s[0] != id]
-            if slot:
-                self._slots[key] = slot
+        registered = [(self._slots, key) for key in placed.keys if key is not None]
+        for ci, key in enumerate(placed.keys):
+            if key is not None:
+                registered.append((self._coarse, _cell(placed.points[ci])))
             else:
-                self._slots.pop(key, None)
+                registered.extend((self._runs, cell) for cell in _run_cells(
+                    placed.points[ci], placed.directions[ci], placed.shape.connectors[ci].length))
+        for table, key in registered:
+            slot = [s for s in table.get(key, []) if s[0] != id]
+            if slot:
+                table[key] = slot
+            else:
+                table.pop(key, None)
         for other in self._neighbours.pop(id):
             self._links.pop((other, id), None)
             self._links.pop((id, other), None)
@@ -294,26 +360,33 @@ class Assembly:
         return [(ids[i], ids[j], d) for i, j, d in find_collisions(solids, tolerance, exclude)]
 
     def free_connectors(self) -> list[tuple[str, int]]:
-        """Connection points not used by any connection."""
+        """Connection points not used by any connection, and every run (an axle or a bar takes more holes
+        and clips along it)."""
         used = set()
         for conns in self._links.values():
             for c in conns:
                 used.add((c.a, c.ca))
                 used.add((c.b, c.cb))
-        return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys)) if (pid, ci) not in used]
+        return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys))
+                if (pid, ci) not in used or p.keys[ci] is None]
 
     def free_table(self):
         """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free
-        connection points, as arrays for docking; kept until the next add or remove."""
+        connection points (runs as points along them, :func:`catalogue.samples`), as arrays for docking;
+        kept until the next add or remove."""
         if self._free_table is None:
-            free = self.free_connectors()
+            free = []
+            for pid, ci in self.free_connectors():
+                placed = self.parts[pid]
+                for c in samples(placed.shape.connectors[ci]):
+                    free.append((pid, c, placed.rotation @ np.asarray(c.point, float) + placed.position))
             if not free:
                 return None
             parts = self.parts
             self._free_table = (
-                np.array([p for p, _ in free], dtype=object),
-                np.array([parts[p].shape.connectors[c].type for p, c in free], dtype=object),
-                np.array([parts[p].shape.connectors[c].direction for p, c in free], dtype=float),
-                np.array([parts[p].points[c] for p, c in free]),
-                np.array([parts[p].rotation for p, _ in free]))
+                np.array([p for p, _, _ in free], dtype=object),
+                np.array([c.type for _, c, _ in free], dtype=object),
+                np.array([c.direction for _, c, _ in free], dtype=float),
+                np.array([w for _, _, w in free]),
+                np.array([parts[p].rotation for p, _, _ in free]))
         return self._free_table

@@ -10,9 +10,8 @@ library's snap meta lines):
 - 1×N technic bricks (3700, 3701, 3894, 3702): N − 1 pin holes between the studs at y = 10, their
   axis along z; 32064 has one axle hole there. Anti-studs at y = 24 under the studs.
 - Pins (3673, 2780) and axles (3704–3707) lie along x, centred on the origin: a pin is 40 LDU long,
-  its two 20-LDU halves centred at x = ±10 with the collar at x = 0; axle N is 20·N LDU long with a
-  point every 10 LDU from x = −10·(N − 1) to 10·(N − 1) (it slides: a hole may sit at any whole or
-  half stud along it). A pin joining two side-by-side technic bricks is
+  its two 20-LDU halves centred at x = ±10 with the collar at x = 0; axle N is 20·N LDU long, one run
+  from x = −10·N to 10·N (it slides: a hole may sit anywhere along it). A pin joining two side-by-side technic bricks is
   therefore placed turned a quarter turn about y (its x axis onto z), e.g. the LDraw matrix ``0 0 1 0 1 0
   −1 0 0``.
 - Studless beams (32523 … 32278, 3 to 15 holes) as 32524 is drawn: along z, centred on the middle
@@ -48,7 +47,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -66,9 +65,33 @@ X = (1, 0, 0)  # pins, axles, hinge lines
 
 @dataclass(frozen=True)
 class Connector:
+    """A connection point, or with ``length`` > 0 a run along ``direction`` from ``point`` (an axle, a bar):
+    a hole or a clip whose centre lies anywhere on the run meets it."""
+
     type: str
     point: tuple[int, int, int]
     direction: tuple[int, int, int]
+    length: float = 0.0
+
+
+SAMPLE_STEP = {"axle": 10.0, "bar": 2.0}  # LDU: where docking tries a run (a hole every half stud, a clip anywhere)
+
+
+def samples(connector: Connector) -> tuple[Connector, ...]:
+    """A run as points (every SAMPLE_STEP from its start, inset by half a step for an axle so that a hole's
+    centre meets it at whole or half studs); a point as itself."""
+    if connector.length <= 0:
+        return (connector,)
+    step = SAMPLE_STEP.get(connector.type, PITCH / 2)
+    inset = step if connector.type == "axle" and connector.length >= 2 * step else 0.0
+    start, axis = np.asarray(connector.point, float), np.asarray(connector.direction, float)
+    ts = np.arange(inset, connector.length - inset + 1e-9, step) if connector.length > 2 * inset else [connector.length / 2]
+    return tuple(Connector(connector.type, tuple(_tidy(v) for v in start + axis * t), connector.direction) for t in ts)
+
+
+def _tidy(v: float) -> float | int:
+    r = round(float(v))
+    return r if abs(float(v) - r) < 1e-9 else round(float(v), 6)
 
 
 Box = tuple[tuple[float, float, float], tuple[float, float, float]]  # (centre, size) in the part's frame
@@ -90,6 +113,12 @@ class PartShape:
 
     def points(self) -> np.ndarray:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
+
+    def sampled(self) -> PartShape:
+        """The part with every run (axle, bar) as points along it: how docking tries poses."""
+        if all(c.length <= 0 for c in self.connectors):
+            return self
+        return replace(self, connectors=tuple(p for c in self.connectors for p in samples(c)))
 
 
 HOLE_RADIUS = 6  # LDU: a technic hole's and a pin's or axle's radius (LDraw's peghole and axle primitives)
@@ -147,6 +176,7 @@ MATES = {
     ("finger", "hinge_b"): "hinge", ("hinge_b", "finger"): "hinge",
     ("ball", "socket"): "ball", ("socket", "ball"): "ball",
     ("clip", "bar"): "clip", ("bar", "clip"): "clip",
+    ("bar", "barhole"): "bar", ("barhole", "bar"): "bar",
 }
 """Connector types that fit together -> the connection they make."""
 
@@ -202,15 +232,13 @@ def _technic_brick(number, length, holes="pinhole") -> PartShape:
 
 def _rod(number, name, kind, length_studs, half_width=float(HOLE_RADIUS)) -> PartShape:
     """A pin or an axle along x, centred on the origin. A pin's points are its two halves' centres
-    (x = ±10); an axle slides in its holes, so it has a point every half pitch from the centre of its
-    first 20-LDU segment to that of its last: a hole meets it whether the axle is centred in the hole
-    (an even axle through a 1-wide brick, as editors snap it) or offset by whole studs."""
+    (x = ±10); an axle slides in its holes, so it is one run from end to end: a hole whose centre lies on
+    it meets it, however deep the axle went in."""
     half = PITCH // 2
     if kind == "pin":
-        xs = [-half, half]
-    else:
-        xs = list(range(-half * (length_studs - 1), half * (length_studs - 1) + 1, half))
-    connectors = tuple(Connector(kind, (x, 0, 0), X) for x in xs)
+        connectors = tuple(Connector(kind, (x, 0, 0), X) for x in (-half, half))
+    else:  # an axle: one run along its length
+        connectors = (Connector(kind, (-half * length_studs, 0, 0), X, float(PITCH * length_studs)),)
     return PartShape(number, name, (0.0, 0.0, 0.0), (float(PITCH * length_studs), 2 * half_width, 2 * half_width),
                      connectors)
 

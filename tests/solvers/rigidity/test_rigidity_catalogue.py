@@ -67,15 +67,17 @@ def test_script_resolves_inheritance_includes_grids_clears_and_scaling(tmp_path)
     assert parts["9001"]["b"] == [-20.0, -4.0, -10.0, 20.0, 24.0, 10.0]
 
     def points(number):
-        return Counter((t, p, d) for t, p, d in generated.connectors(parts[number]["s"]))
+        return Counter(generated.connectors(parts[number]["s"]))
     assert points("9001") == Counter({("stud", (-10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("stud", (10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("antistud", (-10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
                                       ("antistud", (10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
                                       ("pinhole", (0.0, 10.0, 0.0), (0.0, 0.0, 1.0)): 1})
-    # 40 LDU of axle: a point every 10 LDU from 10 LDU in, as the hand-coded 3704
-    assert sorted(p[0] for t, p, d in points("9002")) == [-10.0, 0.0, 10.0]
-    assert {t for t, p, d in points("9002")} == {"axle"}
+    # 40 LDU of axle: one run from end to end along x (its direction the stretched primitive's), as the
+    # hand-coded 3704
+    (axle,) = points("9002")
+    assert axle[0] == "axle" and axle[3] == 40.0 and abs(axle[2][0]) == 1.0
+    assert axle[1][0] + axle[2][0] * 40.0 / 2 == 0.0  # centred on the origin
     assert list(points("9003")) == [("stud", (0.0, 0.0, 10.0), (0.0, -1.0, 0.0))]
 
 
@@ -114,6 +116,10 @@ def _comparable(shape) -> set:
         if kind not in COMPARABLE | {"hinge"}:
             continue
         direction = c.direction if kind in ("stud", "antistud") else tuple(abs(v) for v in c.direction)
+        if c.length > 0:  # a run (an axle): its two ends, whichever it starts from
+            ends = np.array([c.point, np.asarray(c.point) + np.asarray(c.direction) * c.length], float)
+            out.add((kind, frozenset(tuple(float(v) for v in e) for e in ends), tuple(float(v) for v in direction)))
+            continue
         out.add((kind, tuple(float(v) for v in c.point), tuple(float(v) for v in direction)))
     return out
 
