@@ -53,6 +53,8 @@ Point = tuple  # (type, point, direction): the catalogue's Connector fields, bui
 
 DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
+STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into an anti-stud (stud.dat's height)
+SLIDE_MIN = 0.5  # LDU: a sliding bore shorter than a stud and this is one anti-stud point at its mouth
 STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
 BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
 BEAM = re.compile(r"^technic beam\s+\d+$")
@@ -112,9 +114,9 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
     if not male:  # a stud enters any open mouth of radius 6 (a dish's or a cone's bore, a headlight brick's back)
         last = secs[-1]
         if caps not in ("two", "a") and shape0 in ("R", "S") and _near(radius0, 6):
-            out.append(("antistud", _point(start), _point(-axis)))
+            out.append(_mouth(start, axis, secs[0][2], slide))
         if caps in ("none", "a") and last[0] in ("R", "S") and _near(last[1], 6):
-            out.append(("antistud", _point(start + axis * length), _point(axis)))
+            out.append(_mouth(start + axis * length, -axis, last[2], slide))
     run = 0.0
     axle_from = None
     for k, (shape, radius, piece) in enumerate(secs):
@@ -154,6 +156,16 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             continue
         out.append((kind, _point(start + axis * t), _point(axis)))
     return out
+
+
+def _mouth(mouth, inward, depth: float, slide: bool) -> Point:
+    """The anti-stud of an open radius-6 mouth, pointing out of the part. A bore the stud slides in
+    (``slide``: a dish's, a brick's through hole) holds its base anywhere from the mouth to where the stud's
+    tip meets the end of the radius-6 section: a run from there out to the mouth."""
+    reach = depth - STUD_LENGTH_IN if slide else 0.0
+    if reach <= SLIDE_MIN:
+        return ("antistud", _point(mouth), _point(-inward))
+    return ("antistud", _point(mouth + inward * reach), _point(-inward), round(float(reach), 3))
 
 
 def _point(v) -> tuple[float, float, float]:
