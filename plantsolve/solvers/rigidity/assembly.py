@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate,
-                                                   samples)
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FITS, OPPOSED, PartShape, collision_boxes, fit,
+                                                   lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -34,11 +34,17 @@ from plantsolve.solvers.rigidity.screws import FREEDOM
 # 1e-2 LDU off the grid the library's frames give; the closest distinct points of one part are a bar's, 2 LDU
 # apart.
 SNAP = 0.1
+# LDU: a male snap cylinder whose axis is this close to a female bore's, over a depth they share, is inside it
+# (beside it, it would cut the bore's wall). Looser than SNAP: a minifigure's arm turned by a rotation printed
+# with 3 digits (0.985 0.17) puts the hand's peg 0.44 LDU off the arm's socket.
+FIT_SNAP = 1.0
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
-            "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical"}
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar"}  # one part inside (or interlocked with) the other: not a collision
+            "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical", "fit": "hinge",
+            "fit_keyed": "rigid"}
+ORIGIN_OF = {"axle_round": "axle", "fit_keyed": "fit"}  # the connection kinds results name by what is inserted
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar", "fit", "fit_keyed"}  # one part inside (or interlocked with) the other: not a collision
 
 
 @dataclass
@@ -108,10 +114,11 @@ def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
 
 
 def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
-    """``point`` within SNAP of the run: on its line and between its ends."""
+    """``point`` on the run: within FIT_SNAP of its line (a hole or a clip that far off an axle's or a bar's axis
+    holds it all the same: nearer, it would cut into the rod) and between its ends (within SNAP)."""
     v = np.asarray(point, float) - start
     t = float(v @ axis)
-    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= SNAP
+    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= FIT_SNAP
 
 
 def _clean(x: float) -> float | int:
@@ -158,8 +165,17 @@ class Assembly:
         self._neighbours[id] = set()
         self._pebble.add_body(id)
         found: dict[str, list[Connection]] = {}
+        fits: dict[str, list[Connection]] = {}
         for ci, key in enumerate(keys):
             mine = shape.connectors[ci].type
+            if mine in FITS:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
+                    fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                 tuple(_clean(v) for v in where),
+                                                                 tuple(_clean(v) for v in dirs[ci])))
+                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
+                    self._runs.setdefault(cell, []).append((id, ci))
+                continue
             if key is not None:
                 candidates = [(o, oi, points[ci]) for o, oi in self._near(key, points[ci])]
                 candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci])]
@@ -190,6 +206,9 @@ class Assembly:
             else:
                 for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
                     self._runs.setdefault(cell, []).append((id, ci))
+        for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
+            if other not in found:
+                found[other] = conns
         for other, conns in found.items():
             self._links[(other, id)] = conns
             self._neighbours[other].add(id)
@@ -198,6 +217,37 @@ class Assembly:
                 for j in self._pair_joints(other, id, conns):
                     self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
         return [c for conns in found.values() for c in conns]
+
+    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray):
+        """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
+        (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
+        ``fit_keyed``; the point is the middle of the overlap."""
+        cells = set()
+        for x, y, z in _run_cells(start, axis, mine.length):
+            cells.update((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1))
+        seen = set()
+        for cell in cells:
+            for other, oi in self._runs.get(cell, ()):
+                if (other, oi) in seen:
+                    continue
+                seen.add((other, oi))
+                o = self.parts[other]
+                theirs = o.shape.connectors[oi]
+                if mate(mine.type, theirs.type) != "fit" or abs(float(axis @ o.directions[oi])) < ALIGN:
+                    continue
+                v = o.points[oi] - start
+                along = float(v @ axis)
+                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
+                    continue
+                o_end = along + theirs.length * float(o.directions[oi] @ axis)
+                male, female = (mine, theirs) if mine.type == "fit_m" else (theirs, mine)
+                m_span, f_span = ((0.0, mine.length), (along, o_end)) if mine.type == "fit_m" else (
+                    (along, o_end), (0.0, mine.length))
+                how = fit(male.profile, female.profile, *m_span, *f_span)
+                if how is None:
+                    continue
+                lo, hi = max(min(m_span), min(f_span)), min(max(m_span), max(f_span))
+                yield other, oi, ("fit_keyed" if how == "keyed" else "fit"), start + axis * (lo + hi) / 2
 
     def _runs_near(self, point: np.ndarray):
         """The runs (axles, bars) that pass within SNAP of ``point``."""
@@ -278,7 +328,7 @@ class Assembly:
             return [JointSpec(f"{a}~{b}", "rigid", (a, b), c.point, c.axis,
                               "axle" if any(x.kind == "axle" for x in conns) else "stud", len(conns))]
         return [JointSpec(f"{a}~{b}" + (f"#{k + 1}" if len(conns) > 1 else ""), JOINT_OF[c.kind], (a, b), c.point,
-                          c.axis, c.kind if c.kind != "axle_round" else "axle", 1) for k, c in enumerate(conns)]
+                          c.axis, ORIGIN_OF.get(c.kind, c.kind), 1) for k, c in enumerate(conns)]
 
     def all_joints(self) -> list[JointSpec]:
         out = list(self.joints.values())
@@ -368,7 +418,7 @@ class Assembly:
                 used.add((c.a, c.ca))
                 used.add((c.b, c.cb))
         return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys))
-                if (pid, ci) not in used or p.keys[ci] is None]
+                if ((pid, ci) not in used or p.keys[ci] is None) and p.shape.connectors[ci].type not in FITS]
 
     def free_table(self):
         """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free

@@ -72,8 +72,10 @@ class Connector:
     point: tuple[int, int, int]
     direction: tuple[int, int, int]
     length: float = 0.0
+    profile: tuple = ()  # a fit cylinder's sections ((shape, radius, length), …) from ``point`` along ``direction``
 
 
+FITS = ("fit_m", "fit_f")  # a snap cylinder as the data states it (male, female): see :func:`fit`
 SAMPLE_STEP = {"axle": 10.0, "bar": 2.0}  # LDU: where docking tries a run (a hole every half stud, a clip anywhere)
 
 
@@ -115,10 +117,11 @@ class PartShape:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
 
     def sampled(self) -> PartShape:
-        """The part with every run (axle, bar) as points along it: how docking tries poses."""
+        """The part with every run (axle, bar) as points along it and without its fit cylinders: how docking
+        tries poses."""
         if all(c.length <= 0 for c in self.connectors):
             return self
-        return replace(self, connectors=tuple(p for c in self.connectors for p in samples(c)))
+        return replace(self, connectors=tuple(p for c in self.connectors if c.type not in FITS for p in samples(c)))
 
 
 HOLE_RADIUS = 6  # LDU: a technic hole's and a pin's or axle's radius (LDraw's peghole and axle primitives)
@@ -177,6 +180,7 @@ MATES = {
     ("ball", "socket"): "ball", ("socket", "ball"): "ball",
     ("clip", "bar"): "clip", ("bar", "clip"): "clip",
     ("bar", "barhole"): "bar", ("barhole", "bar"): "bar",
+    ("fit_m", "fit_f"): "fit", ("fit_f", "fit_m"): "fit",
 }
 """Connector types that fit together -> the connection they make."""
 
@@ -348,3 +352,53 @@ def generated_part(number: str) -> PartShape | None:
         return None
     connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
     return PartShape(connectors=connectors, **fields)
+
+
+FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)
+FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
+FIT_OVERLAP = 1.0  # LDU: the least depth of a fit
+BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
+
+
+def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float, f_end: float) -> str | None:
+    """How a male snap cylinder sits in a female one on the same line, from the data's sections alone: None
+    when they do not fit (too shallow, a section too wide for the bore, nowhere a grip, a round peg in an axle
+    hole), ``"keyed"`` when an axle or square peg sits in an axle or square bore over its grip (no turning),
+    else ``"round"`` (it turns). ``m_*`` and ``f_*`` are where each cylinder starts and ends along the common
+    line; each profile runs from its start to its end."""
+    lo, hi = max(min(m_start, m_end), min(f_start, f_end)), min(max(m_start, m_end), max(f_start, f_end))
+    if hi - lo < FIT_OVERLAP:
+        return None
+    cuts = {lo, hi}
+    for start, end, profile in ((m_start, m_end, male), (f_start, f_end, female)):
+        sign, run = (1.0 if end >= start else -1.0), 0.0
+        for _, _, piece in profile:
+            run += piece
+            if lo < start + sign * run < hi:
+                cuts.add(start + sign * run)
+    edges = sorted(cuts)
+    grip, keyed = False, True
+    for a, b in zip(edges, edges[1:]):
+        t = (a + b) / 2
+        m, f = _section(male, m_start, m_end, t), _section(female, f_start, f_end, t)
+        if m is None or f is None:
+            continue
+        (m_shape, m_radius), (f_shape, f_radius) = m, f
+        bar_in_axle_hole = f_shape == "A" and m_shape != "A" and abs(m_radius - BAR_RADIUS) <= FIT_GRIP
+        if m_radius > f_radius + FIT_PLAY or (f_shape == "A" and m_shape != "A" and not bar_in_axle_hole):
+            return None
+        if f_radius - m_radius <= FIT_GRIP or bar_in_axle_hole:  # a bar is held between an axle hole's ribs
+            grip = True
+            keyed = keyed and m_shape in ("A", "S") and f_shape == m_shape
+    return None if not grip else ("keyed" if keyed else "round")
+
+
+def _section(profile: tuple, start: float, end: float, t: float) -> tuple[str, float] | None:
+    """(shape, radius) of the profile at ``t`` on the line (chamfers ``L_``/``_L`` as round)."""
+    u = (t - start) if end >= start else (start - t)
+    run = 0.0
+    for shape, radius, piece in profile:
+        if run <= u <= run + piece:
+            return ("R" if "L" in shape else shape), float(radius)
+        run += piece
+    return None

@@ -185,6 +185,11 @@ def connectors(snaps: list) -> tuple[Point, ...]:
         kind = snap[0]
         if kind == "cyl":
             out.extend(_cylinder(*snap[1:]))
+            gender, _, _, start, axis, secs = snap[1:]
+            length = round(float(sum(sec[2] for sec in secs)), 3)
+            if length > 0:  # the cylinder as stated, for the fits the points above do not name
+                out.append(("fit_m" if gender == "M" else "fit_f", _point(start), _point(axis), length,
+                            tuple((str(shape), float(radius), float(piece)) for shape, radius, piece in secs)))
         elif kind == "clp":
             out.append(("clip", _point(snap[1]), _point(snap[2])))
         elif kind == "fgr":

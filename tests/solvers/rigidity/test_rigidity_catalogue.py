@@ -67,7 +67,14 @@ def test_script_resolves_inheritance_includes_grids_clears_and_scaling(tmp_path)
     assert parts["9001"]["b"] == [-20.0, -4.0, -10.0, 20.0, 24.0, 10.0]
 
     def points(number):
-        return Counter(generated.connectors(parts[number]["s"]))
+        return Counter(c for c in generated.connectors(parts[number]["s"]) if not c[0].startswith("fit_"))
+
+    # every cylinder also as stated (the fits the points do not name): the included technic hole as connhole.dat
+    # says it, centred on (0, 10, 0) along z
+    fits = Counter(c for c in generated.connectors(parts["9001"]["s"]) if c[0].startswith("fit_"))
+    assert fits[("fit_f", (0.0, 10.0, -10.0), (0.0, 0.0, 1.0), 20.0, (("R", 8.0, 2.0), ("R", 6.0, 16.0),
+                                                                      ("R", 8.0, 2.0)))] == 1
+    assert sum(fits.values()) == 5 and sum(1 for c in fits if c[0] == "fit_m") == 2
     assert points("9001") == Counter({("stud", (-10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("stud", (10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("antistud", (-10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
