@@ -29,8 +29,9 @@ is the axis (sign irrelevant). Compatible pairs (``MATES``) that meet at one poi
 connection: stud/anti-stud with opposite directions (one stud alone is a hinge about its axis;
 two or more between the same two parts are rigid), pin/pin hole with parallel axes (a hinge),
 axle/axle hole (rigid), axle/pin hole (a cylindrical joint: the axle turns and slides),
-hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs only (the tubes
-between them, which also grip studs, are not modelled).
+hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs and, on parts two or more
+studs wide, at the tubes between each four studs (a stud placed there, half a pitch off in both
+directions, is gripped by the tube).
 
 Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by default its bounding box)
 less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
@@ -223,6 +224,8 @@ def _block(number, name, width, length, height, studs=True, antistuds=True, extr
             connectors.append(Connector("stud", (x, 0, z), UP))
         if antistuds:
             connectors.append(Connector("antistud", (x, height, z), DOWN))
+    if antistuds and width >= 2 and length >= 2:  # the tubes between each four studs grip a stud too
+        connectors.extend(Connector("antistud", (x, height, z), DOWN) for x, z in _grid(width - 1, length - 1))
     connectors.extend(extra)
     return PartShape(number, name, (0.0, height / 2, 0.0),
                      (float(PITCH * length), float(height), float(PITCH * width)), tuple(connectors))

@@ -105,9 +105,6 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
     length = sum(s[2] for s in secs)
     male = gender == "M"
     shape0, radius0 = secs[0][0], secs[0][1]
-    if (not male and shape0 in ("R", "S") and _near(radius0, 6) and (not slide or length < SEGMENT / 2)
-            and all(sec[0] != "A" for sec in secs)):
-        return [("antistud", _point(start), _point(-axis))]  # its mouth, opening out of the part
     if male and not slide and caps != "none" and shape0 in ("R", "S") and _near(radius0, 6):
         return [("stud", _point(start), _point(axis))]  # a closed peg that does not slide: a (long) stud
     out = []
@@ -117,6 +114,8 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             out.append(_mouth(start, axis, secs[0][2], slide))
         if caps in ("none", "a") and last[0] in ("R", "S") and _near(last[1], 6):
             out.append(_mouth(start + axis * length, -axis, last[2], slide))
+        if out and (not slide or length < SEGMENT / 2) and all(sec[0] != "A" for sec in secs):
+            return out  # an anti-stud (a brick's, a tube's): its mouths only, no technic hole
     run = 0.0
     axle_from = None
     for k, (shape, radius, piece) in enumerate(secs):
