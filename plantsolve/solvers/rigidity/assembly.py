@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FITS, OPPOSED, PartShape, collision_boxes, fit,
-                                                   lookup, mate, samples)
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, NOT_DOCKED, OPPOSED, RING_REACH,
+                                                   PartShape, collision_boxes, fit, lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -189,7 +189,7 @@ class Assembly:
                 seen.add((other, oi))
                 theirs = self.parts[other].shape.connectors[oi].type
                 kind = mate(mine, theirs)
-                if kind is None:
+                if kind is None or kind == "ring":  # a ring holds the studs around it, not one at its centre
                     continue
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])
                 if kind in ANY_DIRECTION:
@@ -200,6 +200,17 @@ class Assembly:
                 axis = None if kind in ANY_DIRECTION else tuple(  # a ball joint has no axis
                     _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
+            if mine in ("ring", "stud"):
+                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci]):
+                    axis = dirs[ci] if mine == "stud" else self.parts[other].directions[oi]
+                    found.setdefault(other, []).append(Connection(other, oi, id, ci, "stud",
+                                                                  tuple(_clean(v) for v in where),
+                                                                  tuple(_clean(v) for v in axis)))
+            if mine == "finger" and key is None:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
+                    found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                  tuple(_clean(v) for v in where),
+                                                                  tuple(_clean(v) for v in dirs[ci])))
             if key is not None:
                 self._slots.setdefault(key, []).append((id, ci))
                 self._coarse.setdefault(_cell(points[ci]), []).append((id, ci))
@@ -221,7 +232,8 @@ class Assembly:
     def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray):
         """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
         (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
-        ``fit_keyed``; the point is the middle of the overlap."""
+        ``fit_keyed``; for a run of hinge fingers the runs of fingers it interlocks with (kind ``hinge``). The
+        point is the middle of the overlap."""
         cells = set()
         for x, y, z in _run_cells(start, axis, mine.length):
             cells.update((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1))
@@ -233,13 +245,19 @@ class Assembly:
                 seen.add((other, oi))
                 o = self.parts[other]
                 theirs = o.shape.connectors[oi]
-                if mate(mine.type, theirs.type) != "fit" or abs(float(axis @ o.directions[oi])) < ALIGN:
+                kind = mate(mine.type, theirs.type)
+                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(float(axis @ o.directions[oi])) < ALIGN:
                     continue
                 v = o.points[oi] - start
                 along = float(v @ axis)
                 if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
                     continue
                 o_end = along + theirs.length * float(o.directions[oi] @ axis)
+                if kind == "hinge":  # two runs of hinge fingers on one axis interlock where they overlap
+                    lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
+                    if hi - lo >= FIT_OVERLAP:
+                        yield other, oi, "hinge", start + axis * (lo + hi) / 2
+                    continue
                 male, female = (mine, theirs) if mine.type == "fit_m" else (theirs, mine)
                 m_span, f_span = ((0.0, mine.length), (along, o_end)) if mine.type == "fit_m" else (
                     (along, o_end), (0.0, mine.length))
@@ -248,6 +266,19 @@ class Assembly:
                     continue
                 lo, hi = max(min(m_span), min(f_span)), min(max(m_span), max(f_span))
                 yield other, oi, ("fit_keyed" if how == "keyed" else "fit"), start + axis * (lo + hi) / 2
+
+    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray):
+        """(part, connector, stud point) of the studs a ring stands between (for a stud: the rings it is one of
+        the four studs around): facing it, in its plane, RING_REACH from its centre (within FIT_SNAP)."""
+        x, y, z = _cell(point)
+        for cell in ((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                if mate(mine, o.shape.connectors[oi].type) != "ring" or float(direction @ o.directions[oi]) > -ALIGN:
+                    continue
+                v = o.points[oi] - point
+                if abs(float(v @ direction)) <= SNAP and abs(float(np.linalg.norm(v)) - RING_REACH) <= FIT_SNAP / 2:
+                    yield other, oi, (point + v if mine == "ring" else point)
 
     def _runs_near(self, point: np.ndarray):
         """The runs (axles, bars) that pass within SNAP of ``point``."""
@@ -418,7 +449,7 @@ class Assembly:
                 used.add((c.a, c.ca))
                 used.add((c.b, c.cb))
         return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys))
-                if ((pid, ci) not in used or p.keys[ci] is None) and p.shape.connectors[ci].type not in FITS]
+                if ((pid, ci) not in used or p.keys[ci] is None) and p.shape.connectors[ci].type not in NOT_DOCKED]
 
     def free_table(self):
         """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free

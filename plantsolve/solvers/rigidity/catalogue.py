@@ -76,7 +76,9 @@ class Connector:
     profile: tuple = ()  # a fit cylinder's sections ((shape, radius, length), …) from ``point`` along ``direction``
 
 
+RING_REACH = 10.0 * 2 ** 0.5  # LDU: from a ring's centre to each of the four studs it stands between
 FITS = ("fit_m", "fit_f")  # a snap cylinder as the data states it (male, female): see :func:`fit`
+NOT_DOCKED = (*FITS, "ring")  # found between placed parts only (docking poses come from points that meet)
 SAMPLE_STEP = {"axle": 10.0, "bar": 2.0}  # LDU: where docking tries a run (a hole every half stud, a clip anywhere)
 
 
@@ -118,11 +120,12 @@ class PartShape:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
 
     def sampled(self) -> PartShape:
-        """The part with every run (axle, bar) as points along it and without its fit cylinders: how docking
-        tries poses."""
-        if all(c.length <= 0 for c in self.connectors):
+        """The part with every run (axle, bar) as points along it and without its fit cylinders and rings: how
+        docking tries poses."""
+        if all(c.length <= 0 and c.type not in NOT_DOCKED for c in self.connectors):
             return self
-        return replace(self, connectors=tuple(p for c in self.connectors if c.type not in FITS for p in samples(c)))
+        return replace(self, connectors=tuple(p for c in self.connectors if c.type not in NOT_DOCKED
+                                              for p in samples(c)))
 
 
 HOLE_RADIUS = 6  # LDU: a technic hole's and a pin's or axle's radius (LDraw's peghole and axle primitives)
@@ -182,6 +185,7 @@ MATES = {
     ("clip", "bar"): "clip", ("bar", "clip"): "clip",
     ("bar", "barhole"): "bar", ("barhole", "bar"): "bar",
     ("fit_m", "fit_f"): "fit", ("fit_f", "fit_m"): "fit",
+    ("ring", "stud"): "ring", ("stud", "ring"): "ring",
 }
 """Connector types that fit together -> the connection they make."""
 

@@ -53,6 +53,7 @@ Point = tuple  # (type, point, direction): the catalogue's Connector fields, bui
 
 DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
+RING_RADIUS = 8.0  # LDU: a round part's bottom ring, which fits between four studs (their gap is 10√2 − 6)
 STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into an anti-stud (stud.dat's height)
 SLIDE_MIN = 0.5  # LDU: a sliding bore shorter than a stud and this is one anti-stud point at its mouth
 STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
@@ -116,6 +117,11 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             out.append(_mouth(start + axis * length, -axis, last[2], slide))
         if out and (not slide or length < SEGMENT / 2) and all(sec[0] != "A" for sec in secs):
             return out  # an anti-stud (a brick's, a tube's): its mouths only, no technic hole
+    if male and caps != "two":  # a ring of radius 8 at an open end: it stands between four studs (a round 1 x 1)
+        if secs[0][0] == "R" and _near(secs[0][1], RING_RADIUS):
+            out.append(("ring", _point(start), _point(-axis)))
+        if secs[-1][0] == "R" and _near(secs[-1][1], RING_RADIUS):
+            out.append(("ring", _point(start + axis * length), _point(axis)))
     run = 0.0
     axle_from = None
     for k, (shape, radius, piece) in enumerate(secs):
@@ -191,8 +197,9 @@ def connectors(snaps: list) -> tuple[Point, ...]:
                             tuple((str(shape), float(radius), float(piece)) for shape, radius, piece in secs)))
         elif kind == "clp":
             out.append(("clip", _point(snap[1]), _point(snap[2])))
-        elif kind == "fgr":
-            out.append(("finger", _point(snap[2]), _point(snap[3])))
+        elif kind == "fgr":  # a run of fingers along the hinge axis, centred on the snap's position
+            centre, axis, length = np.asarray(snap[2], float), np.asarray(snap[3], float), float(snap[4])
+            out.append(("finger", _point(centre - axis * length / 2), _point(axis), round(length, 3)))
         elif kind == "gen":
             out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "sph":

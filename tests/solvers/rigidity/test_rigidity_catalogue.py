@@ -123,6 +123,10 @@ def _comparable(shape) -> set:
         if kind not in COMPARABLE | {"hinge"}:
             continue
         direction = c.direction if kind in ("stud", "antistud") else tuple(abs(v) for v in c.direction)
+        if c.length > 0 and kind == "hinge":  # a run of hinge fingers: its centre on the hinge line
+            centre = np.asarray(c.point) + np.asarray(c.direction) * c.length / 2
+            out.add((kind, tuple(float(v) for v in centre), tuple(float(v) for v in direction)))
+            continue
         if c.length > 0:  # a run (an axle): its two ends, whichever it starts from
             ends = np.array([c.point, np.asarray(c.point) + np.asarray(c.direction) * c.length], float)
             out.add((kind, frozenset(tuple(float(v) for v in e) for e in ends), tuple(float(v) for v in direction)))
