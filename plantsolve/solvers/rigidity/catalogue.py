@@ -363,7 +363,7 @@ def generated_part(number: str) -> PartShape | None:
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)
 FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
-FIT_OVERLAP = 1.0  # LDU: the least depth of a fit
+FIT_OVERLAP = 3.0  # LDU: the least depth of a fit (most of a stud's 4: a stud 2 LDU in is not held)
 BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
 
 

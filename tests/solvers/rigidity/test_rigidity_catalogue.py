@@ -259,3 +259,20 @@ def test_docking_offers_poses_for_a_generated_part():
     request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"dock": {"part": "3023b", "limit": 3}})
     poses = solve(request).result.docking
     assert len(poses) == 3 and all(p.part == "3023b" and p.connections == 2 for p in poses)
+
+
+def test_script_gives_stud_tubes_their_anti_stud_at_the_mouth_whatever_their_height(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    # a 2 x 2 brick's tube (stud4.dat drawn from y = -4 to 0, placed upside down and stretched 5 times: y 4..24)
+    # and a plate's (stretched once: y 4..8); the shadow states nothing for stud4.dat, as the real one
+    _write(ldraw, "p/stud4.dat", "0 Stud Tube Open\n4 16 -8 -4 -8 8 -4 -8 8 0 -8 -8 0 -8\n")
+    _write(ldraw, "parts/9005.dat", "0 Brick  2 x  2 Test\n1 16 0 4 0 1 0 0 0 -5 0 0 0 1 stud4.dat\n"
+           "4 16 -20 0 -20 20 0 -20 20 24 -20 -20 24 -20\n")
+    _write(ldraw, "parts/9006.dat", "0 Plate  2 x  2 Test\n1 16 0 4 0 1 0 0 0 -1 0 0 0 1 stud4.dat\n"
+           "4 16 -20 0 -20 20 0 -20 20 8 -20 -20 8 -20\n")
+    _write(shadow, "p/stud4.dat", "0 LDCad shadow info\n0 //!LDCAD SNAP_CYL [id=aStud] [gender=F] [caps=one] "
+           "[secs=R 6 4]\n")
+    parts = _script().derive(ldraw, shadow)
+    for number, bottom in (("9005", 24.0), ("9006", 8.0)):
+        points = [c for c in generated.connectors(parts[number]["s"]) if not c[0].startswith("fit_")]
+        assert points == [("antistud", (0.0, bottom, 0.0), (0.0, 1.0, 0.0))], number
