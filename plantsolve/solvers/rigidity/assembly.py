@@ -18,6 +18,8 @@ pin free to spin.
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,14 +105,43 @@ class Analysis:
     details: dict = field(default_factory=dict)
 
 
+POINT_CELL, POINT_OFFSET = 1.0, 0.37  # LDU: fine cells, their edges where no LDraw grid puts a point
+RUN_OFFSET = 7.3  # LDU: the coarse cells' edges likewise off the stud grid
+
+
+def _key(point, size: float, offset: float) -> tuple:
+    return tuple(math.floor((float(v) - offset) / size) for v in point)
+
+
+def _around(point, reach: float, size: float, offset: float) -> list[tuple]:
+    """The cells (``size`` wide, edges at ``offset``) that hold every point within ``reach`` of ``point``: one
+    for most points (cell edges lie off the LDraw grid), up to eight near an edge. (Plain floats: numpy's
+    overhead on three numbers was most of the time of adding a part.)"""
+    return list(itertools.product(*(range(math.floor((float(v) - reach - offset) / size),
+                                          math.floor((float(v) + reach - offset) / size) + 1) for v in point)))
+
+
 def _cell(point: np.ndarray) -> tuple:
-    return tuple(int(v) for v in np.floor(np.asarray(point) / RUN_CELL))
+    return _key(point, RUN_CELL, RUN_OFFSET)
+
+
+def _run_samples(start: np.ndarray, axis: np.ndarray, length: float) -> np.ndarray:
+    """Points along a run every LDU at most, both ends included."""
+    return start + np.outer(np.linspace(0.0, length, int(np.ceil(length)) + 1), axis)
 
 
 def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
-    """The RUN_CELL cells a run passes (sampled every half cell, both ends included)."""
-    ts = np.append(np.arange(0.0, length, RUN_CELL / 2), length)
-    return {_cell(start + axis * t) for t in ts}
+    """The RUN_CELL cells a run passes (through its samples)."""
+    return {_cell(p) for p in _run_samples(start, axis, length)}
+
+
+def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: float) -> set:
+    """The RUN_CELL cells that hold every point within ``reach`` of the run (its samples are 0.5 LDU apart
+    at most from any point of it)."""
+    out = set()
+    for p in _run_samples(start, axis, length):
+        out.update(_around(p, reach + 0.5, RUN_CELL, RUN_OFFSET))
+    return out
 
 
 def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
@@ -137,6 +168,7 @@ class Assembly:
         self._slots: dict[tuple, list[tuple[str, int]]] = {}  # connection points by their SNAP cell
         self._coarse: dict[tuple, list[tuple[str, int]]] = {}  # the same by their RUN_CELL cell
         self._runs: dict[tuple, list[tuple[str, int]]] = {}  # runs by every RUN_CELL cell they pass
+        self._rings: dict[tuple, list[tuple[str, int]]] = {}  # rings (kept apart: only studs look for them)
         self._links: dict[tuple[str, str], list[Connection]] = {}
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
@@ -157,8 +189,7 @@ class Assembly:
         points = local @ rot.T + pos
         dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
         runs = np.array([c.length for c in shape.connectors], dtype=float)
-        keys = [None if runs[k] > 0 else tuple(v) for k, v in
-                enumerate(np.floor(points / SNAP).astype(np.int64).tolist())]
+        keys = [None if runs[k] > 0 else _key(points[k], POINT_CELL, POINT_OFFSET) for k in range(len(points))]
         placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
         self._free_table = self._boxes = None
         self.parts[id] = placed
@@ -213,7 +244,7 @@ class Assembly:
                                                                   tuple(_clean(v) for v in dirs[ci])))
             if key is not None:
                 self._slots.setdefault(key, []).append((id, ci))
-                self._coarse.setdefault(_cell(points[ci]), []).append((id, ci))
+                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
             else:
                 for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
                     self._runs.setdefault(cell, []).append((id, ci))
@@ -234,11 +265,8 @@ class Assembly:
         (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
         ``fit_keyed``; for a run of hinge fingers the runs of fingers it interlocks with (kind ``hinge``). The
         point is the middle of the overlap."""
-        cells = set()
-        for x, y, z in _run_cells(start, axis, mine.length):
-            cells.update((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1))
         seen = set()
-        for cell in cells:
+        for cell in _cells_along(start, axis, mine.length, FIT_SNAP):
             for other, oi in self._runs.get(cell, ()):
                 if (other, oi) in seen:
                     continue
@@ -270,9 +298,11 @@ class Assembly:
     def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray):
         """(part, connector, stud point) of the studs a ring stands between (for a stud: the rings it is one of
         the four studs around): facing it, in its plane, RING_REACH from its centre (within FIT_SNAP)."""
-        x, y, z = _cell(point)
-        for cell in ((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)):
-            for other, oi in self._coarse.get(cell, ()):
+        table = self._coarse if mine == "ring" else self._rings
+        if not table:
+            return
+        for cell in _around(point, RING_REACH + FIT_SNAP, RUN_CELL, RUN_OFFSET):
+            for other, oi in table.get(cell, ()):
                 o = self.parts[other]
                 if mate(mine, o.shape.connectors[oi].type) != "ring" or float(direction @ o.directions[oi]) > -ALIGN:
                     continue
@@ -281,36 +311,32 @@ class Assembly:
                     yield other, oi, (point + v if mine == "ring" else point)
 
     def _runs_near(self, point: np.ndarray):
-        """The runs (axles, bars) that pass within SNAP of ``point``."""
-        x, y, z = _cell(point)
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                for dz in (-1, 0, 1):
-                    for other, oi in self._runs.get((x + dx, y + dy, z + dz), ()):
-                        o = self.parts[other]
-                        if _on_run(point, o.points[oi], o.directions[oi], o.shape.connectors[oi].length):
-                            yield other, oi
+        """The runs (axles, bars) that ``point`` lies on (:func:`_on_run`)."""
+        if not self._runs:
+            return
+        seen = set()
+        for cell in _around(point, FIT_SNAP + 0.5, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._runs.get(cell, ()):
+                o = self.parts[other]
+                if (other, oi) not in seen and _on_run(point, o.points[oi], o.directions[oi],
+                                                       o.shape.connectors[oi].length):
+                    seen.add((other, oi))
+                    yield other, oi
 
     def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float):
         """The connection points within SNAP of the run from ``start`` along ``axis`` for ``length``."""
-        cells = set()
-        for x, y, z in _run_cells(start, axis, length):
-            cells.update((x + dx, y + dy, z + dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1))
-        for cell in cells:
+        for cell in _cells_along(start, axis, length, FIT_SNAP):
             for other, oi in self._coarse.get(cell, ()):
                 if _on_run(self.parts[other].points[oi], start, axis, length):
                     yield other, oi
 
     def _near(self, key: tuple, point: np.ndarray):
-        """The (part, connector) slots within SNAP of ``point``, whose cell is ``key``: the cell and its 26
-        neighbours hold every one (cells are SNAP wide)."""
-        x, y, z = key
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                for dz in (-1, 0, 1):
-                    for other, oi in self._slots.get((x + dx, y + dy, z + dz), ()):
-                        if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
-                            yield other, oi
+        """The (part, connector) slots within SNAP of ``point`` (whose own cell is ``key``)."""
+        cells = _around(point, SNAP, POINT_CELL, POINT_OFFSET)
+        for cell in cells if len(cells) > 1 else (key,):
+            for other, oi in self._slots.get(cell, ()):
+                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
+                    yield other, oi
 
     def remove_part(self, id: str) -> None:
         placed = self.parts.pop(id)
@@ -318,7 +344,8 @@ class Assembly:
         registered = [(self._slots, key) for key in placed.keys if key is not None]
         for ci, key in enumerate(placed.keys):
             if key is not None:
-                registered.append((self._coarse, _cell(placed.points[ci])))
+                table = self._rings if placed.shape.connectors[ci].type == "ring" else self._coarse
+                registered.append((table, _cell(placed.points[ci])))
             else:
                 registered.extend((self._runs, cell) for cell in _run_cells(
                     placed.points[ci], placed.directions[ci], placed.shape.connectors[ci].length))
