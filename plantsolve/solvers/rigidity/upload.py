@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
@@ -368,8 +369,6 @@ def _refuse_other_request(body: dict) -> None:
 def other_kind(keys: set[str]) -> str | None:
     """The kind whose request schema has every one of ``keys`` among its fields (and needs no field they lack),
     or None."""
-    from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
-
     requests = {"alignment": alignment.AlignmentRequest, "dedup": dedup.DedupRequest,
                 "flowmeter": flowmeter.FlowmeterRequest, "perfmap": perfmap.PerfmapRequest,
                 "polyhedra": polyhedra.PolyhedraRequest, "tube": tube.TubeRequest}
