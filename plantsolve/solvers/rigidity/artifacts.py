@@ -17,6 +17,7 @@ from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
 
 MAX_NODES_DRAWN = 3000
+SPACING = 3.0  # spring layout's optimal node distance, times 1/sqrt(nodes) (networkx's default is 1)
 MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share light grey (counted in the legend)
 PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
 
@@ -37,7 +38,8 @@ def graph_figure(request: RigidityRequest, result: RigidityResult) -> Figure:
             graph.add_edge(a, b, moves=j.moves, type=j.type)
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
-    pos = nx.spring_layout(graph, seed=1) if graph.number_of_nodes() else {}
+    # three times networkx's default spacing: room beside each node for its label
+    pos = nx.spring_layout(graph, seed=1, k=SPACING / graph.number_of_nodes() ** 0.5) if graph.number_of_nodes() else {}
     cmap = colormaps["tab20"]
 
     def colour(r):
