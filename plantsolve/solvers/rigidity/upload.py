@@ -312,8 +312,8 @@ def other_format(text: str) -> str | None:
         return (f"a Wavefront OBJ mesh ({vertices} vertex and {faces} face lines among its first "
                 f"{len(lines)}: 'v x y z', 'f i j k')")
     if any(raw.rstrip().endswith(";") for raw in lines) and sum("," in raw for raw in lines) >= len(lines) // 2:
-        objects = sorted({raw.split(",")[0].strip() for raw in lines if "," in raw and raw.split(",")[0].strip()
-                          and raw.split(",")[0].strip()[0].isalpha()})[:5]
+        objects = sorted({raw.split(",")[0].strip() for raw in lines if "," in raw and "!-" not in raw  # not a field
+                          and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
         return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"
     delimiter = next((d for d in (",", ";", "\t") if all(d in raw for raw in lines[:5])), None)
     if delimiter is not None:
@@ -361,7 +361,7 @@ def _refuse_other_request(body: dict) -> None:
         return
     keys = sorted(str(k) for k in body)[:12]
     kind = other_kind(set(body))
-    held = f"a {kind} request" if kind else "no rigidity model"
+    held = f"{'an' if kind and kind[0] in 'aeiou' else 'a'} {kind} request" if kind else "no rigidity model"
     raise reject(f"the JSON file holds {held} (its fields: {', '.join(keys) or 'none'}); a rigidity request holds "
                  "'parts' (LEGO parts) or 'bodies' and 'joints'")
 

@@ -30,7 +30,7 @@ STEP = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nENDSEC;\n"
 
 @pytest.mark.parametrize("text, holds", [
     (OBJ, "a Wavefront OBJ mesh (4 vertex and 2 face lines"),
-    (IDF, "an EnergyPlus IDF building model"),
+    (IDF, "an EnergyPlus IDF building model (objects such as Version, Zone)"),
     (CSV, "a table of 5 columns (flow [m3/s], head [m], efficiency [%], speed [rpm], power [kW])"),
     (XYZ, "a list of numbers, 3 per line"),
     (STEP, "a STEP model"),
@@ -50,7 +50,7 @@ def test_another_kinds_json_request_is_refused_naming_that_kind_and_its_fields(k
         parse("model.json", json.dumps(example))
     (error,) = caught.value.errors
     assert error.loc == ("file",)
-    assert f"holds a {kind} request (its fields: " in error.msg
+    assert f"holds {'an' if kind == 'alignment' else 'a'} {kind} request (its fields: " in error.msg
     assert all(key in error.msg for key in sorted(example)[:3])
 
 
