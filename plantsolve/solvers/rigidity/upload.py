@@ -297,7 +297,13 @@ def other_format(text: str) -> str | None:
     head = lines[0]
     first_tokens = [raw.split()[0] for raw in lines if not raw.startswith("#")]
     if head.startswith("ISO-10303-21"):
-        return "a STEP model (ISO-10303-21)"
+        schema = next((raw for raw in lines if raw.upper().startswith("FILE_SCHEMA")), "")
+        return "an IFC model (ISO-10303-21)" if "IFC" in schema.upper() else "a STEP model (ISO-10303-21)"
+    if head.lower().startswith("solid") and any(raw.lower().startswith("facet") for raw in lines):
+        return "an ASCII STL mesh (solid, facet normal, vertex lines)"
+    upper = {raw.upper() for raw in lines}
+    if "SECTION" in upper and upper & {"HEADER", "ENTITIES", "TABLES", "EOF"}:
+        return "a DXF drawing (group codes and SECTION / ENTITIES names)"
     if head.startswith("<"):
         root = next((raw[1:].split()[0].rstrip(">") for raw in lines if raw.startswith("<") and
                      not raw.startswith(("<?", "<!"))), "?")

@@ -26,6 +26,10 @@ IDF = "Version,9.2;\n\nZone,\n  Office,                  !- Name\n  0,          
 CSV = "flow [m3/s],head [m],efficiency [%],speed [rpm],power [kW]\n0.1,25.2,71,1450,35.1\n0.2,24.1,80,1450,58.0\n"
 XYZ = "10.5 2.25 3.0\n11.0 2.5 3.1\n11.5 2.75 3.2\n"
 STEP = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nENDSEC;\n"
+IFC = "ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n#1=IFCPROJECT('x',$,$,$,$,$,$,$,$);\n"
+STL = "solid part\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n" \
+      "  endloop\n endfacet\nendsolid part\n"
+DXF = "0\nSECTION\n2\nENTITIES\n0\nLINE\n8\n0\n10\n0.0\n20\n0.0\n0\nENDSEC\n0\nEOF\n"
 
 
 @pytest.mark.parametrize("text, holds", [
@@ -34,6 +38,9 @@ STEP = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nENDSEC;\n"
     (CSV, "a table of 5 columns (flow [m3/s], head [m], efficiency [%], speed [rpm], power [kW])"),
     (XYZ, "a list of numbers, 3 per line"),
     (STEP, "a STEP model"),
+    (IFC, "an IFC model"),
+    (STL, "an ASCII STL mesh"),
+    (DXF, "a DXF drawing"),
 ])
 def test_a_file_of_another_kind_renamed_ldr_is_refused_naming_what_it_holds(text, holds):
     with pytest.raises(InputRejected) as caught:
