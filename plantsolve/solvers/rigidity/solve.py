@@ -133,6 +133,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     piece_results = _pieces(part_ids, by_part, assembly, source)
     warnings.extend(_piece_warnings(part_results, piece_results, assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
+    warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
     superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
     special = mob.dof > analysis.generic_dof
@@ -191,6 +192,35 @@ def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assem
                               + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE]),
                               details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]]}))
     return out
+
+
+# Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts
+# mostly float but join once its positions are scaled by one of these was written in that unit.
+OTHER_UNITS = {"mm": 2.5, "studs": 20.0, "cm": 25.0}
+SPACING_CHECK_PARTS = 2000  # the check rebuilds the model once per unit: only models up to this size
+
+
+def _spacing_warnings(parts: list[PartJoints], assembly: Assembly) -> list[Diagnostic]:
+    """``implausible_part_spacing`` when most known parts are joined to nothing and the positions scaled from
+    another unit to LDU join most of them."""
+    floating = sum(1 for p in parts if not p.joints)
+    if len(parts) < 3 or floating * 2 <= len(parts) or len(parts) > SPACING_CHECK_PARTS:
+        return []
+    for unit_name, factor in OTHER_UNITS.items():
+        trial = Assembly()
+        for p in parts:
+            placed = assembly.parts[p.id]
+            trial.add_part(p.id, placed.number, placed.position * factor, placed.rotation)
+        joined = {b for j in trial.all_joints() for b in j.bodies}
+        if (len(parts) - len(joined)) * 2 < floating:
+            return [Diagnostic(code="implausible_part_spacing", message=f"part spacing: {floating} of {len(parts)} "
+                               f"parts are joined to nothing at the positions as written, but only "
+                               f"{len(parts) - len(joined)} once the positions are multiplied by {factor:g} — "
+                               f"positions written in {unit_name} read as LDU (1 LDU = 0.4 mm, a stud 20 LDU, a "
+                               "brick 24 high)?",
+                               details={"unit": unit_name, "factor_to_ldu": factor, "floating_as_written": floating,
+                                        "floating_scaled": len(parts) - len(joined)})]
+    return []
 
 
 def _far_part_warnings(part_ids: list[str], assembly: Assembly) -> list[Diagnostic]:

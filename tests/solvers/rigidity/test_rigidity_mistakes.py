@@ -98,3 +98,26 @@ def test_absurd_scalar_options_are_refused_at_intake_naming_the_field(field, val
                                         "options": {field: value}})
     assert [e["loc"] for e in caught.value.errors()] == [("options", field)]
     assert RigidityOptions.model_fields[field].metadata  # the bound is in the schema (OpenAPI), not in code
+
+
+@pytest.mark.parametrize("unit, factor", [("mm", 2.5), ("studs", 20.0)])
+def test_a_model_written_in_another_unit_is_warned_naming_the_unit(unit, factor):
+    """The tests' official-parts model with every position divided by the unit's factor to LDU: nothing
+    meets as written; scaled back, everything does."""
+    lines = []
+    for raw in (REPO / "tests" / "solvers" / "rigidity" / "official_parts.ldr").read_text().splitlines():
+        tokens = raw.split()
+        if tokens[:1] == ["1"]:
+            tokens[2:5] = [repr(float(v) / factor) for v in tokens[2:5]]
+            raw = " ".join(tokens)
+        lines.append(raw)
+    result = solve(parse("scaled.ldr", "\n".join(lines) + "\n")).result
+    warning = next(w for w in result.report.warnings if w.code == "implausible_part_spacing")
+    assert warning.details["unit"] == unit and warning.details["factor_to_ldu"] == factor
+    assert warning.details["floating_scaled"] == 0 and warning.details["floating_as_written"] > 15
+    assert f"positions written in {unit} read as LDU" in warning.message
+
+
+def test_a_model_in_ldu_is_not_warned_about_its_spacing():
+    result = solve(parse("stack.ldr", STACK)).result
+    assert "implausible_part_spacing" not in {w.code for w in result.report.warnings}
