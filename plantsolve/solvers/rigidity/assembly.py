@@ -46,7 +46,8 @@ JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge
             "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical", "fit": "hinge",
             "fit_keyed": "rigid"}
 ORIGIN_OF = {"axle_round": "axle", "fit_keyed": "fit"}  # the connection kinds results name by what is inserted
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar", "fit", "fit_keyed"}  # one part inside (or interlocked with) the other: not a collision
+# one part inside (or interlocked with) the other: not a collision
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar", "fit", "fit_keyed"}
 
 
 @dataclass

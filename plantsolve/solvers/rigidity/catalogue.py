@@ -47,6 +47,7 @@ shape only for plain rectangular parts), which adds ball/socket, clip/bar and hi
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from dataclasses import dataclass, replace
 
@@ -90,7 +91,10 @@ def samples(connector: Connector) -> tuple[Connector, ...]:
     step = SAMPLE_STEP.get(connector.type, PITCH / 2)
     inset = step if connector.type == "axle" and connector.length >= 2 * step else 0.0
     start, axis = np.asarray(connector.point, float), np.asarray(connector.direction, float)
-    ts = np.arange(inset, connector.length - inset + 1e-9, step) if connector.length > 2 * inset else [connector.length / 2]
+    if connector.length > 2 * inset:
+        ts = np.arange(inset, connector.length - inset + 1e-9, step)
+    else:
+        ts = [connector.length / 2]
     return tuple(Connector(connector.type, tuple(_tidy(v) for v in start + axis * t), connector.direction) for t in ts)
 
 
@@ -385,7 +389,7 @@ def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float
                 cuts.add(start + sign * run)
     edges = sorted(cuts)
     grip, keyed = False, True
-    for a, b in zip(edges, edges[1:]):
+    for a, b in itertools.pairwise(edges):
         t = (a + b) / 2
         m, f = _section(male, m_start, m_end, t), _section(female, f_start, f_end, t)
         if m is None or f is None:

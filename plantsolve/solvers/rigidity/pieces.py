@@ -24,7 +24,8 @@ PITCH = 20.0  # LDU: added to the median distance so that a model of a few stack
 MINIFIG = "minifig"
 
 
-def joints_by_part(part_ids: Sequence[str], joints: Iterable[tuple[str, Sequence[str]]]) -> dict[str, tuple[list, list]]:
+def joints_by_part(part_ids: Sequence[str],
+                   joints: Iterable[tuple[str, Sequence[str]]]) -> dict[str, tuple[list, list]]:
     """part id -> (ids of the joints it is in, ids of the parts they join it to), for every part."""
     out: dict[str, tuple[list, list]] = {p: ([], []) for p in part_ids}
     for joint_id, bodies in joints:

@@ -146,7 +146,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
-        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build} for pc in piece_results[1:] if pc.sub_build],
+        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build}
+                        for pc in piece_results[1:] if pc.sub_build],
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")

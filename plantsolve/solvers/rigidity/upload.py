@@ -26,7 +26,6 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
@@ -39,6 +38,9 @@ from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
+# LDraw has one length unit; results of parts keep it (length_unit 'ldu'): no conversion, said where it comes from
+LDRAW_UNITS = {"file_unit": "ldu", "result_unit": "ldu", "factor": 1.0,
+               "from": "the LDraw format: positions are LDraw units (1 LDU = 0.4 mm, a stud pitch 20, a brick 24 high)"}
 MAX_SKIPPED_LISTED = 200
 MAX_PLACEMENTS_LISTED = 2000  # sub-model placements named in source (the solver tells sub-builds by them)
 MAX_PARTS = 20_000
@@ -276,7 +278,8 @@ def parse_ldraw(text: str) -> dict:
                          ".mpd: type-1 lines placing parts) or a rigidity request as .json")
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
-    return {"parts": parts, "source": {"format": "ldraw", "main_model": main, "parts": len(parts),
+    return {"parts": parts, "source": {"format": "ldraw", "units": LDRAW_UNITS, "main_model": main,
+                                       "parts": len(parts),
                                        "submodels": sum(r == "model" for n, r in roles.items() if n != main),
                                        "embedded_parts": sorted(embedded), **counts,
                                        "submodel_placements": placements,

@@ -121,3 +121,11 @@ def test_a_model_written_in_another_unit_is_warned_naming_the_unit(unit, factor)
 def test_a_model_in_ldu_is_not_warned_about_its_spacing():
     result = solve(parse("stack.ldr", STACK)).result
     assert "implausible_part_spacing" not in {w.code for w in result.report.warnings}
+
+
+def test_the_ldraw_unit_is_stated_in_the_source_with_its_factor():
+    request = parse("stack.ldr", STACK)
+    assert request.source["units"]["file_unit"] == request.source["units"]["result_unit"] == "ldu"
+    assert request.source["units"]["factor"] == 1.0 and "0.4 mm" in request.source["units"]["from"]
+    result = solve(request).result
+    assert result.length_unit == "ldu" and result.report.details["source"]["units"]["file_unit"] == "ldu"
