@@ -32,6 +32,9 @@ the bounding box of the part's drawn geometry and each snap one of
 - ``["clp", centre, axis, length]``; ``["fgr", gender, centre, axis, length]``;
 - ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``.
 
+The open stud tube primitives (``stud4.dat``, ``stud4a.dat``, ``stud4f*.dat``, ``stud4h.dat``) get the
+anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``).
+
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
 """
@@ -48,6 +51,13 @@ from pathlib import Path
 import numpy as np
 
 META = re.compile(r"\[([A-Za-z]+)=([^\]]*)\]")
+# The tubes under bricks and plates (LDraw's open stud tube primitives) grip a stud placed between four studs.
+# The shadow library states this only for stud4o.dat and stud4od.dat (LDCad leaves it out of the others so that
+# its editor does not offer those placements while a part is dragged); a solver that checks a model as built
+# needs it for all of them: the same line, an anti-stud open at the tube's mouth (local y = -4, scaled with the
+# tube's height).
+TUBE = re.compile(r"^stud4(a|f\d[nsw]|h|o|od)?\.dat$")
+TUBE_SNAP = "0 !LDCAD SNAP_CYL [ID=aStud] [gender=F] [caps=A] [secs=R 6 4] [scale=YOnly]"
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -195,7 +205,10 @@ class Deriver:
             return []
         self._stack.add(key)
         own, clear_all, clear_ids = [], False, set()
-        for raw in (self.shadow.text(key) or "").splitlines():
+        shadow = self.shadow.text(key) or ""
+        if TUBE.match(key) and not any(line.split()[:2] == ["0", "!LDCAD"] for line in shadow.splitlines()):
+            shadow = TUBE_SNAP
+        for raw in shadow.splitlines():
             tokens = raw.split()
             if len(tokens) < 3 or tokens[0] != "0" or tokens[1] != "!LDCAD" or tokens[2] not in SNAP_KINDS:
                 continue

@@ -19,7 +19,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, Field
 
 from plantsolve.schemas.common import (Direction3, FiniteFloat, Point3, Quaternion, Report, StrictModel, Units,
-                                       json_integer)
+                                       json_integer, unit)
 
 MAX_BODIES = 20_000
 MAX_JOINTS = 100_000
@@ -83,8 +83,9 @@ class DockOptions(StrictModel):
 class RigidityOptions(StrictModel):
     dock: DockOptions | None = Field(default=None, description="A part to find docking poses for (parts models).")
     contact_tolerance: FiniteFloat = Field(
-        default=0.01, ge=0.0, le=1e6,
-        description="Penetration depth (model length unit) up to which touching shapes are contact, not collision.")
+        default=0.01, ge=0.0, le=100.0,
+        description="Penetration depth (model length unit; LDU for parts) up to which touching shapes are contact, "
+        "not collision: at most 100 (4 cm of LEGO, 10 cm in mm; a deeper overlap is no contact in any unit).")
     rank_tolerance: FiniteFloat = Field(
         default=1e-9, ge=1e-15, le=1e-3,
         description="Float rank cut-off (non-integer geometry only): singular values below rank_tolerance · "
@@ -102,27 +103,35 @@ class RigidityRequest(StrictModel):
         default=None, description="What the upload parser read (lines skipped with reasons); set by the parser.")
 
 
+LENGTH_UNIT = "{length_unit}"  # the result's own length_unit field ('ldu' for parts: 1 LDU = 0.4 mm)
+
+
 class JointResult(BaseModel):
     id: str
     type: JointType
     bodies: list[str]
-    point: list[float]
-    axis: list[float] | None
+    point: list[float] = Field(description="A point of the joint [x, y, z] (length_unit).",
+                               json_schema_extra=unit(LENGTH_UNIT))
+    axis: list[float] | None = Field(description="Unit axis [dx, dy, dz] of a hinge, slider or cylindrical joint; "
+                                     "null for a ball joint.", json_schema_extra=unit("1"))
     origin: str = Field(description="input (a request joint) or the inferred LEGO connection: stud, pin, axle, "
-                        "hinge, ball (ball in socket), clip (clip on bar), group (a grouped fit, e.g. tyre on rim).")
+                        "hinge, ball (ball in socket), clip (clip on bar), bar (bar in a bar or axle hole), "
+                        "group (a grouped fit, e.g. tyre on rim), fit (a snap cylinder in its bore: an arm in a "
+                        "torso).")
     connections: int = Field(description="Connection points behind the joint (several studs make one rigid joint).")
     moves: bool = Field(description="The joint's relative twist is non-zero in some motion of the model.")
 
 
 class Collision(BaseModel):
     bodies: list[str] = Field(description="The two ids.")
-    depth: float = Field(description="Penetration depth (length unit).")
+    depth: float = Field(description="Penetration depth (length_unit).", json_schema_extra=unit(LENGTH_UNIT))
 
 
 class DockingCandidate(BaseModel):
     part: str
-    position: list[float] = Field(description="Origin of the docked part [x, y, z] (LDU).")
-    rotation: list[float] = Field(description="3 x 3 rotation, row-major.")
+    position: list[float] = Field(description="Origin of the docked part [x, y, z] (LDU).",
+                                  json_schema_extra=unit(LENGTH_UNIT))
+    rotation: list[float] = Field(description="3 x 3 rotation, row-major.", json_schema_extra=unit("1"))
     connections: int = Field(description="Connection points the pose joins.")
     connects_to: list[str] = Field(description="Parts it connects to.")
 
@@ -132,10 +141,25 @@ class UnknownPart(BaseModel):
     part: str
 
 
+class PartJoints(BaseModel):
+    id: str
+    part: str = Field(description="The part number.")
+    joints: list[str] = Field(description="Ids of the joints the part is in (empty: joined to nothing).")
+    joined_to: list[str] = Field(description="Ids of the parts those joints join it to.")
+
+
+class Piece(BaseModel):
+    parts: list[str] = Field(description="Ids of the parts of one connected piece.")
+    sub_build: str | None = Field(description="What the piece is when it is a sub-build that may stand apart: the "
+                                  "name of the LDraw sub-model whose every part it is (and only those), or "
+                                  "'minifigure' (only minifigure parts); null for a piece of the build itself.")
+
+
 class RigidityResult(BaseModel):
     kind: Literal["rigidity"] = Field(default="rigidity", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
-    length_unit: str = Field(description="Unit of every length in the result: the request's units, or 'ldu' for parts.")
+    length_unit: str = Field(description="Unit of every length in the result: the request's units, or 'ldu' for parts "
+                             "(LDraw units: 1 LDU = 0.4 mm, a stud pitch 20).")
     dof: int = Field(description="Degrees of freedom relative to each other (6 rigid motions of the whole excluded; "
                      "each further unconnected piece adds 6).")
     generic_dof: int = Field(description="The (6,6) pebble game's count for generic positions (exact for hinges and "
@@ -149,5 +173,9 @@ class RigidityResult(BaseModel):
     collisions: list[Collision]
     docking: list[DockingCandidate]
     unknown_parts: list[UnknownPart] = Field(description="Parts not in the catalogue: not analysed.")
+    parts: list[PartJoints] = Field(default_factory=list, description="Each known LEGO part with its joints, in the "
+                                    "request's order.")
+    pieces: list[Piece] = Field(default_factory=list, description="The connected pieces of the known parts, largest "
+                                "first (bodies and joints models: empty).")
     rank_method: Literal["modular", "svd"] = Field(description="modular: exact integer rank; svd: float rank.")
     report: Report

@@ -7,15 +7,17 @@ import io
 
 import networkx as nx
 from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure  # no pyplot: no global figure state
 from matplotlib.lines import Line2D
-from matplotlib.transforms import ScaledTranslation
+from matplotlib.transforms import Bbox
 
 from plantsolve.schemas.rigidity import RigidityRequest, RigidityResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
 
 MAX_NODES_DRAWN = 3000
+SPACING = 3.0  # spring layout's optimal node distance, times 1/sqrt(nodes) (networkx's default is 1)
 MAX_COLOURED = 18  # the largest clusters get their own colour; the rest share light grey (counted in the legend)
 PALETTE = [k for k in range(20) if k not in (14, 15)]  # tab20 without its greys
 
@@ -36,7 +38,8 @@ def graph_figure(request: RigidityRequest, result: RigidityResult) -> Figure:
             graph.add_edge(a, b, moves=j.moves, type=j.type)
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
-    pos = nx.spring_layout(graph, seed=1) if graph.number_of_nodes() else {}
+    # three times networkx's default spacing: room beside each node for its label
+    pos = nx.spring_layout(graph, seed=1, k=SPACING / graph.number_of_nodes() ** 0.5) if graph.number_of_nodes() else {}
     cmap = colormaps["tab20"]
 
     def colour(r):
@@ -49,14 +52,6 @@ def graph_figure(request: RigidityRequest, result: RigidityResult) -> Figure:
             nx.draw_networkx_edges(graph, pos, edgelist=edges, ax=ax, style=style, width=1.2, edge_color="#444444")
     nx.draw_networkx_nodes(graph, pos, ax=ax, node_size=260 if small else 30,
                            node_color=[colour(cluster_of[n]) for n in graph.nodes], edgecolors="#444444")
-    if small:
-        # beside the node, not inside it: a name in a 15 px disc had to be 6 pt (unreadable)
-        number = {p.id: p.part for p in request.parts}
-        labels = {n: f"{n} ({number[n]})" if n in number else n for n in graph.nodes}
-        texts = nx.draw_networkx_labels(graph, pos, labels=labels, ax=ax, font_size=9, verticalalignment="bottom")
-        for text in texts.values():
-            text.set_bbox({"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.7})
-            text.set_transform(ax.transData + ScaledTranslation(0, 9 / 72, fig.dpi_scale_trans))
     handles = [Line2D([], [], color=colour(r), marker="o", linestyle="", markersize=8,
                       label=f"cluster {r + 1} ({_count(len(result.clusters[k]))})")
                for r, k in enumerate(order[:MAX_COLOURED])]
@@ -71,9 +66,64 @@ def graph_figure(request: RigidityRequest, result: RigidityResult) -> Figure:
     ax.set_axis_off()
     ax.margins(0.12)
     shown = "" if len(cluster_of) <= MAX_NODES_DRAWN else f", first {MAX_NODES_DRAWN} of {len(cluster_of)} bodies drawn"
-    ax.set_title(f"body–joint graph: dof {result.dof} (generic {result.generic_dof}), "
-                 f"{len(result.clusters)} rigid clusters{shown}", fontsize=9)
+    title = ax.set_title(f"body–joint graph: dof {result.dof} (generic {result.generic_dof}), "
+                         f"{len(result.clusters)} rigid clusters{shown}", fontsize=9)
+    if small:
+        number = {p.id: p.part for p in request.parts}
+        labels = {n: f"{n} ({number[n]})" if n in number else n for n in graph.nodes}
+        left_out = _place_labels(fig, ax, graph, pos, labels)
+        if left_out:
+            title.set_text(title.get_text() + f"; {left_out} label(s) left out (no free place)")
     return fig
+
+
+LABEL_RINGS = (9.0, 18.0, 30.0, 44.0, 60.0)  # points from the node: where a label is tried, nearest first
+LABEL_DIRECTIONS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (-1, 1), (1, -1), (-1, -1))
+LEADER_FROM = 18.0  # points: a label this far from its node is joined to it by a thin line
+
+
+def _place_labels(fig: Figure, ax, graph, pos: dict, labels: dict) -> int:
+    """Each node's label beside it (not inside: a name in a 15 px disc had to be 6 pt), at the nearest of a
+    few places around it that overlaps no label placed before it, no node, the title or the legend, and stays
+    in the figure; a label with no such place is left out. Returns how many were left out. The layout is
+    fixed first (constrained layout would move the axes after the labels were placed)."""
+    renderer = FigureCanvasAgg(fig).get_renderer()  # text extents need a renderer; Agg's is the PNG's
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    page = fig.bbox
+    taken = [t.get_window_extent(renderer) for t in (ax.title, *ax.get_legend().get_texts())]
+    taken.append(ax.get_legend().get_window_extent(renderer))
+    node_px = 8 * fig.dpi / 72  # half a drawn node (a 260 pt^2 marker is 16 pt across)
+    nodes = {n: Bbox.from_extents(x - node_px, y - node_px, x + node_px, y + node_px)
+             for n, (x, y) in ((n, ax.transData.transform(pos[n])) for n in graph.nodes)}
+    left_out = 0
+    for n in sorted(graph.nodes, key=lambda v: (-graph.degree(v), str(v))):  # crowded nodes choose first
+        placed = None
+        for radius in LABEL_RINGS:
+            for dx, dy in LABEL_DIRECTIONS:
+                norm = (dx * dx + dy * dy) ** 0.5
+                offset = (dx / norm * radius, dy / norm * radius)
+                text = ax.annotate(labels[n], xy=pos[n], xytext=offset, textcoords="offset points", fontsize=9,
+                                   ha="center" if dx == 0 else ("left" if dx > 0 else "right"),
+                                   va="center" if dy == 0 else ("bottom" if dy > 0 else "top"),
+                                   bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none",
+                                         "alpha": 0.8},
+                                   arrowprops={"arrowstyle": "-", "color": "#888888", "lw": 0.6,
+                                               "shrinkA": 0, "shrinkB": 5} if radius >= LEADER_FROM else None)
+                box = text.get_window_extent(renderer).expanded(1.04, 1.1)
+                inside = page.x0 <= box.x0 and box.x1 <= page.x1 and page.y0 <= box.y0 and box.y1 <= page.y1
+                if inside and not any(box.overlaps(other) for other in taken) and not any(
+                        box.overlaps(disc) for m, disc in nodes.items() if m != n):
+                    placed = box
+                    break
+                text.remove()
+            if placed is not None:
+                break
+        if placed is None:
+            left_out += 1
+        else:
+            taken.append(placed)
+    return left_out
 
 
 def _count(n: int) -> str:

@@ -18,21 +18,36 @@ pin free to spin.
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, OPPOSED, PartShape, collision_boxes, lookup, mate
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, NOT_DOCKED, OPPOSED, RING_REACH,
+                                                   PartShape, collision_boxes, fit, lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
 from plantsolve.solvers.rigidity.screws import FREEDOM
 
-SNAP = 1e-3  # LDU: connection points closer than this (on the rounding grid) are one point
+# LDU: connection points closer than this are one point. Editors write positions with 2 to 3 decimals and
+# rotations with 6 (0.707107): a part on a turned plate, or in a turned sub-model, lands its studs 1e-3 to a few
+# 1e-2 LDU off the grid the library's frames give; the closest distinct points of one part are a bar's, 2 LDU
+# apart.
+SNAP = 0.1
+# LDU: a male snap cylinder whose axis is this close to a female bore's, over a depth they share, is inside it
+# (beside it, it would cut the bore's wall). Looser than SNAP: a minifigure's arm turned by a rotation printed
+# with 3 digits (0.985 0.17) puts the hand's peg 0.44 LDU off the arm's socket.
+FIT_SNAP = 1.0
+RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
-            "ball": "ball", "clip": "hinge", "group": "rigid"}
-INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group"}  # one part inside (or interlocked with) the other: not a collision
+            "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical", "fit": "hinge",
+            "fit_keyed": "rigid"}
+ORIGIN_OF = {"axle_round": "axle", "fit_keyed": "fit"}  # the connection kinds results name by what is inserted
+# one part inside (or interlocked with) the other: not a collision
+INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar", "fit", "fit_keyed"}
 
 
 @dataclass
@@ -91,6 +106,53 @@ class Analysis:
     details: dict = field(default_factory=dict)
 
 
+POINT_CELL, POINT_OFFSET = 1.0, 0.37  # LDU: fine cells, their edges where no LDraw grid puts a point
+RUN_OFFSET = 7.3  # LDU: the coarse cells' edges likewise off the stud grid
+
+
+def _key(point, size: float, offset: float) -> tuple:
+    return tuple(math.floor((float(v) - offset) / size) for v in point)
+
+
+def _around(point, reach: float, size: float, offset: float) -> list[tuple]:
+    """The cells (``size`` wide, edges at ``offset``) that hold every point within ``reach`` of ``point``: one
+    for most points (cell edges lie off the LDraw grid), up to eight near an edge. (Plain floats: numpy's
+    overhead on three numbers was most of the time of adding a part.)"""
+    return list(itertools.product(*(range(math.floor((float(v) - reach - offset) / size),
+                                          math.floor((float(v) + reach - offset) / size) + 1) for v in point)))
+
+
+def _cell(point: np.ndarray) -> tuple:
+    return _key(point, RUN_CELL, RUN_OFFSET)
+
+
+def _run_samples(start: np.ndarray, axis: np.ndarray, length: float) -> np.ndarray:
+    """Points along a run every LDU at most, both ends included."""
+    return start + np.outer(np.linspace(0.0, length, int(np.ceil(length)) + 1), axis)
+
+
+def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
+    """The RUN_CELL cells a run passes (through its samples)."""
+    return {_cell(p) for p in _run_samples(start, axis, length)}
+
+
+def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: float) -> set:
+    """The RUN_CELL cells that hold every point within ``reach`` of the run (its samples are 0.5 LDU apart
+    at most from any point of it)."""
+    out = set()
+    for p in _run_samples(start, axis, length):
+        out.update(_around(p, reach + 0.5, RUN_CELL, RUN_OFFSET))
+    return out
+
+
+def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
+    """``point`` on the run: within FIT_SNAP of its line (a hole or a clip that far off an axle's or a bar's axis
+    holds it all the same: nearer, it would cut into the rod) and between its ends (within SNAP)."""
+    v = np.asarray(point, float) - start
+    t = float(v @ axis)
+    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= FIT_SNAP
+
+
 def _clean(x: float) -> float | int:
     """Integer-valued coordinates as ints (LDraw units), so the exact pass can use them."""
     r = round(float(x))
@@ -104,7 +166,10 @@ class Assembly:
         self.parts: dict[str, Placed] = {}
         self.bodies: dict[str, Solid | None] = {}
         self.joints: dict[str, JointSpec] = {}
-        self._slots: dict[tuple, list[tuple[str, int]]] = {}
+        self._slots: dict[tuple, list[tuple[str, int]]] = {}  # connection points by their SNAP cell
+        self._coarse: dict[tuple, list[tuple[str, int]]] = {}  # the same by their RUN_CELL cell
+        self._runs: dict[tuple, list[tuple[str, int]]] = {}  # runs by every RUN_CELL cell they pass
+        self._rings: dict[tuple, list[tuple[str, int]]] = {}  # rings (kept apart: only studs look for them)
         self._links: dict[tuple[str, str], list[Connection]] = {}
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
@@ -124,30 +189,69 @@ class Assembly:
         local = shape.points()
         points = local @ rot.T + pos
         dirs = np.array([c.direction for c in shape.connectors], dtype=float).reshape(-1, 3) @ rot.T
-        keys = [tuple(k) for k in np.round(points / SNAP).astype(np.int64).tolist()]
+        runs = np.array([c.length for c in shape.connectors], dtype=float)
+        keys = [None if runs[k] > 0 else _key(points[k], POINT_CELL, POINT_OFFSET) for k in range(len(points))]
         placed = Placed(id, shape.number, shape, pos, rot, points, dirs, keys)
         self._free_table = self._boxes = None
         self.parts[id] = placed
         self._neighbours[id] = set()
         self._pebble.add_body(id)
         found: dict[str, list[Connection]] = {}
+        fits: dict[str, list[Connection]] = {}
         for ci, key in enumerate(keys):
             mine = shape.connectors[ci].type
-            for other, oi in self._slots.get(key, ()):
+            if mine in FITS:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
+                    fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                 tuple(_clean(v) for v in where),
+                                                                 tuple(_clean(v) for v in dirs[ci])))
+                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
+                    self._runs.setdefault(cell, []).append((id, ci))
+                continue
+            if key is not None:
+                candidates = [(o, oi, points[ci]) for o, oi in self._near(key, points[ci])]
+                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci])]
+            else:
+                candidates = [(o, oi, self.parts[o].points[oi]) for o, oi in self._points_along(points[ci], dirs[ci],
+                                                                                            runs[ci])]
+            seen = set()
+            for other, oi, where in candidates:
+                if (other, oi) in seen:
+                    continue
+                seen.add((other, oi))
                 theirs = self.parts[other].shape.connectors[oi].type
                 kind = mate(mine, theirs)
-                if kind is None:
+                if kind is None or kind == "ring":  # a ring holds the studs around it, not one at its centre
                     continue
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])
                 if kind in ANY_DIRECTION:
                     pass
                 elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
-                point = tuple(_clean(v) for v in points[ci])
+                point = tuple(_clean(v) for v in where)
                 axis = None if kind in ANY_DIRECTION else tuple(  # a ball joint has no axis
                     _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
-            self._slots.setdefault(key, []).append((id, ci))
+            if mine in ("ring", "stud"):
+                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci]):
+                    axis = dirs[ci] if mine == "stud" else self.parts[other].directions[oi]
+                    found.setdefault(other, []).append(Connection(other, oi, id, ci, "stud",
+                                                                  tuple(_clean(v) for v in where),
+                                                                  tuple(_clean(v) for v in axis)))
+            if mine == "finger" and key is None:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
+                    found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                  tuple(_clean(v) for v in where),
+                                                                  tuple(_clean(v) for v in dirs[ci])))
+            if key is not None:
+                self._slots.setdefault(key, []).append((id, ci))
+                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
+            else:
+                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
+                    self._runs.setdefault(cell, []).append((id, ci))
+        for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
+            if other not in found:
+                found[other] = conns
         for other, conns in found.items():
             self._links[(other, id)] = conns
             self._neighbours[other].add(id)
@@ -157,15 +261,101 @@ class Assembly:
                     self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
         return [c for conns in found.values() for c in conns]
 
+    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray):
+        """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
+        (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
+        ``fit_keyed``; for a run of hinge fingers the runs of fingers it interlocks with (kind ``hinge``). The
+        point is the middle of the overlap."""
+        seen = set()
+        for cell in _cells_along(start, axis, mine.length, FIT_SNAP):
+            for other, oi in self._runs.get(cell, ()):
+                if (other, oi) in seen:
+                    continue
+                seen.add((other, oi))
+                o = self.parts[other]
+                theirs = o.shape.connectors[oi]
+                kind = mate(mine.type, theirs.type)
+                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(float(axis @ o.directions[oi])) < ALIGN:
+                    continue
+                v = o.points[oi] - start
+                along = float(v @ axis)
+                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
+                    continue
+                o_end = along + theirs.length * float(o.directions[oi] @ axis)
+                if kind == "hinge":  # two runs of hinge fingers on one axis interlock where they overlap
+                    lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
+                    if hi - lo >= FIT_OVERLAP:
+                        yield other, oi, "hinge", start + axis * (lo + hi) / 2
+                    continue
+                male, female = (mine, theirs) if mine.type == "fit_m" else (theirs, mine)
+                m_span, f_span = ((0.0, mine.length), (along, o_end)) if mine.type == "fit_m" else (
+                    (along, o_end), (0.0, mine.length))
+                how = fit(male.profile, female.profile, *m_span, *f_span)
+                if how is None:
+                    continue
+                lo, hi = max(min(m_span), min(f_span)), min(max(m_span), max(f_span))
+                yield other, oi, ("fit_keyed" if how == "keyed" else "fit"), start + axis * (lo + hi) / 2
+
+    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray):
+        """(part, connector, stud point) of the studs a ring stands between (for a stud: the rings it is one of
+        the four studs around): facing it, in its plane, RING_REACH from its centre (within FIT_SNAP)."""
+        table = self._coarse if mine == "ring" else self._rings
+        if not table:
+            return
+        for cell in _around(point, RING_REACH + FIT_SNAP, RUN_CELL, RUN_OFFSET):
+            for other, oi in table.get(cell, ()):
+                o = self.parts[other]
+                if mate(mine, o.shape.connectors[oi].type) != "ring" or float(direction @ o.directions[oi]) > -ALIGN:
+                    continue
+                v = o.points[oi] - point
+                if abs(float(v @ direction)) <= SNAP and abs(float(np.linalg.norm(v)) - RING_REACH) <= FIT_SNAP / 2:
+                    yield other, oi, (point + v if mine == "ring" else point)
+
+    def _runs_near(self, point: np.ndarray):
+        """The runs (axles, bars) that ``point`` lies on (:func:`_on_run`)."""
+        if not self._runs:
+            return
+        seen = set()
+        for cell in _around(point, FIT_SNAP + 0.5, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._runs.get(cell, ()):
+                o = self.parts[other]
+                if (other, oi) not in seen and _on_run(point, o.points[oi], o.directions[oi],
+                                                       o.shape.connectors[oi].length):
+                    seen.add((other, oi))
+                    yield other, oi
+
+    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float):
+        """The connection points within SNAP of the run from ``start`` along ``axis`` for ``length``."""
+        for cell in _cells_along(start, axis, length, FIT_SNAP):
+            for other, oi in self._coarse.get(cell, ()):
+                if _on_run(self.parts[other].points[oi], start, axis, length):
+                    yield other, oi
+
+    def _near(self, key: tuple, point: np.ndarray):
+        """The (part, connector) slots within SNAP of ``point`` (whose own cell is ``key``)."""
+        cells = _around(point, SNAP, POINT_CELL, POINT_OFFSET)
+        for cell in cells if len(cells) > 1 else (key,):
+            for other, oi in self._slots.get(cell, ()):
+                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
+                    yield other, oi
+
     def remove_part(self, id: str) -> None:
         placed = self.parts.pop(id)
         self._free_table = self._boxes = None
-        for key in placed.keys:
-            slot = [s for s in self._slots.get(key, []) if s[0] != id]
-            if slot:
-                self._slots[key] = slot
+        registered = [(self._slots, key) for key in placed.keys if key is not None]
+        for ci, key in enumerate(placed.keys):
+            if key is not None:
+                table = self._rings if placed.shape.connectors[ci].type == "ring" else self._coarse
+                registered.append((table, _cell(placed.points[ci])))
             else:
-                self._slots.pop(key, None)
+                registered.extend((self._runs, cell) for cell in _run_cells(
+                    placed.points[ci], placed.directions[ci], placed.shape.connectors[ci].length))
+        for table, key in registered:
+            slot = [s for s in table.get(key, []) if s[0] != id]
+            if slot:
+                table[key] = slot
+            else:
+                table.pop(key, None)
         for other in self._neighbours.pop(id):
             self._links.pop((other, id), None)
             self._links.pop((id, other), None)
@@ -197,7 +387,7 @@ class Assembly:
             return [JointSpec(f"{a}~{b}", "rigid", (a, b), c.point, c.axis,
                               "axle" if any(x.kind == "axle" for x in conns) else "stud", len(conns))]
         return [JointSpec(f"{a}~{b}" + (f"#{k + 1}" if len(conns) > 1 else ""), JOINT_OF[c.kind], (a, b), c.point,
-                          c.axis, c.kind if c.kind != "axle_round" else "axle", 1) for k, c in enumerate(conns)]
+                          c.axis, ORIGIN_OF.get(c.kind, c.kind), 1) for k, c in enumerate(conns)]
 
     def all_joints(self) -> list[JointSpec]:
         out = list(self.joints.values())
@@ -279,26 +469,33 @@ class Assembly:
         return [(ids[i], ids[j], d) for i, j, d in find_collisions(solids, tolerance, exclude)]
 
     def free_connectors(self) -> list[tuple[str, int]]:
-        """Connection points not used by any connection."""
+        """Connection points not used by any connection, and every run (an axle or a bar takes more holes
+        and clips along it)."""
         used = set()
         for conns in self._links.values():
             for c in conns:
                 used.add((c.a, c.ca))
                 used.add((c.b, c.cb))
-        return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys)) if (pid, ci) not in used]
+        return [(pid, ci) for pid, p in self.parts.items() for ci in range(len(p.keys))
+                if ((pid, ci) not in used or p.keys[ci] is None) and p.shape.connectors[ci].type not in NOT_DOCKED]
 
     def free_table(self):
         """(owner ids, types, directions in the owner's frame, world points, owner rotations) of the free
-        connection points, as arrays for docking; kept until the next add or remove."""
+        connection points (runs as points along them, :func:`catalogue.samples`), as arrays for docking;
+        kept until the next add or remove."""
         if self._free_table is None:
-            free = self.free_connectors()
+            free = []
+            for pid, ci in self.free_connectors():
+                placed = self.parts[pid]
+                for c in samples(placed.shape.connectors[ci]):
+                    free.append((pid, c, placed.rotation @ np.asarray(c.point, float) + placed.position))
             if not free:
                 return None
             parts = self.parts
             self._free_table = (
-                np.array([p for p, _ in free], dtype=object),
-                np.array([parts[p].shape.connectors[c].type for p, c in free], dtype=object),
-                np.array([parts[p].shape.connectors[c].direction for p, c in free], dtype=float),
-                np.array([parts[p].points[c] for p, c in free]),
-                np.array([parts[p].rotation for p, _ in free]))
+                np.array([p for p, _, _ in free], dtype=object),
+                np.array([c.type for _, c, _ in free], dtype=object),
+                np.array([c.direction for _, c, _ in free], dtype=float),
+                np.array([w for _, _, w in free]),
+                np.array([parts[p].rotation for p, _, _ in free]))
         return self._free_table

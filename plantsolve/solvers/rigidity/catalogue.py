@@ -10,9 +10,8 @@ library's snap meta lines):
 - 1×N technic bricks (3700, 3701, 3894, 3702): N − 1 pin holes between the studs at y = 10, their
   axis along z; 32064 has one axle hole there. Anti-studs at y = 24 under the studs.
 - Pins (3673, 2780) and axles (3704–3707) lie along x, centred on the origin: a pin is 40 LDU long,
-  its two 20-LDU halves centred at x = ±10 with the collar at x = 0; axle N is 20·N LDU long with a
-  point every 10 LDU from x = −10·(N − 1) to 10·(N − 1) (it slides: a hole may sit at any whole or
-  half stud along it). A pin joining two side-by-side technic bricks is
+  its two 20-LDU halves centred at x = ±10 with the collar at x = 0; axle N is 20·N LDU long, one run
+  from x = −10·N to 10·N (it slides: a hole may sit anywhere along it). A pin joining two side-by-side technic bricks is
   therefore placed turned a quarter turn about y (its x axis onto z), e.g. the LDraw matrix ``0 0 1 0 1 0
   −1 0 0``.
 - Studless beams (32523 … 32278, 3 to 15 holes) as 32524 is drawn: along z, centred on the middle
@@ -30,8 +29,9 @@ is the axis (sign irrelevant). Compatible pairs (``MATES``) that meet at one poi
 connection: stud/anti-stud with opposite directions (one stud alone is a hinge about its axis;
 two or more between the same two parts are rigid), pin/pin hole with parallel axes (a hinge),
 axle/axle hole (rigid), axle/pin hole (a cylindrical joint: the axle turns and slides),
-hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs only (the tubes
-between them, which also grip studs, are not modelled).
+hinge_a/hinge_b with parallel axes (a hinge). Anti-studs sit under the studs and, on parts two or more
+studs wide, at the tubes between each four studs (a stud placed there, half a pitch off in both
+directions, is gripped by the tube).
 
 Collision shapes (:func:`collision_boxes`): a part's ``solids`` (boxes; by default its bounding box)
 less a square prism of side 12 LDU through every pin and axle hole, the diameter of LDraw's peghole;
@@ -47,8 +47,9 @@ shape only for plain rectangular parts), which adds ball/socket, clip/bar and hi
 from __future__ import annotations
 
 import functools
+import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -66,9 +67,40 @@ X = (1, 0, 0)  # pins, axles, hinge lines
 
 @dataclass(frozen=True)
 class Connector:
+    """A connection point, or with ``length`` > 0 a run along ``direction`` from ``point`` (an axle, a bar):
+    a hole or a clip whose centre lies anywhere on the run meets it."""
+
     type: str
     point: tuple[int, int, int]
     direction: tuple[int, int, int]
+    length: float = 0.0
+    profile: tuple = ()  # a fit cylinder's sections ((shape, radius, length), …) from ``point`` along ``direction``
+
+
+RING_REACH = 10.0 * 2 ** 0.5  # LDU: from a ring's centre to each of the four studs it stands between
+FITS = ("fit_m", "fit_f")  # a snap cylinder as the data states it (male, female): see :func:`fit`
+NOT_DOCKED = (*FITS, "ring")  # found between placed parts only (docking poses come from points that meet)
+SAMPLE_STEP = {"axle": 10.0, "bar": 2.0}  # LDU: where docking tries a run (a hole every half stud, a clip anywhere)
+
+
+def samples(connector: Connector) -> tuple[Connector, ...]:
+    """A run as points (every SAMPLE_STEP from its start, inset by half a step for an axle so that a hole's
+    centre meets it at whole or half studs); a point as itself."""
+    if connector.length <= 0:
+        return (connector,)
+    step = SAMPLE_STEP.get(connector.type, PITCH / 2)
+    inset = step if connector.type == "axle" and connector.length >= 2 * step else 0.0
+    start, axis = np.asarray(connector.point, float), np.asarray(connector.direction, float)
+    if connector.length > 2 * inset:
+        ts = np.arange(inset, connector.length - inset + 1e-9, step)
+    else:
+        ts = [connector.length / 2]
+    return tuple(Connector(connector.type, tuple(_tidy(v) for v in start + axis * t), connector.direction) for t in ts)
+
+
+def _tidy(v: float) -> float | int:
+    r = round(float(v))
+    return r if abs(float(v) - r) < 1e-9 else round(float(v), 6)
 
 
 Box = tuple[tuple[float, float, float], tuple[float, float, float]]  # (centre, size) in the part's frame
@@ -90,6 +122,14 @@ class PartShape:
 
     def points(self) -> np.ndarray:
         return np.array([c.point for c in self.connectors], dtype=float).reshape(-1, 3)
+
+    def sampled(self) -> PartShape:
+        """The part with every run (axle, bar) as points along it and without its fit cylinders and rings: how
+        docking tries poses."""
+        if all(c.length <= 0 and c.type not in NOT_DOCKED for c in self.connectors):
+            return self
+        return replace(self, connectors=tuple(p for c in self.connectors if c.type not in NOT_DOCKED
+                                              for p in samples(c)))
 
 
 HOLE_RADIUS = 6  # LDU: a technic hole's and a pin's or axle's radius (LDraw's peghole and axle primitives)
@@ -147,6 +187,9 @@ MATES = {
     ("finger", "hinge_b"): "hinge", ("hinge_b", "finger"): "hinge",
     ("ball", "socket"): "ball", ("socket", "ball"): "ball",
     ("clip", "bar"): "clip", ("bar", "clip"): "clip",
+    ("bar", "barhole"): "bar", ("barhole", "bar"): "bar",
+    ("fit_m", "fit_f"): "fit", ("fit_f", "fit_m"): "fit",
+    ("ring", "stud"): "ring", ("stud", "ring"): "ring",
 }
 """Connector types that fit together -> the connection they make."""
 
@@ -189,6 +232,8 @@ def _block(number, name, width, length, height, studs=True, antistuds=True, extr
             connectors.append(Connector("stud", (x, 0, z), UP))
         if antistuds:
             connectors.append(Connector("antistud", (x, height, z), DOWN))
+    if antistuds and width >= 2 and length >= 2:  # the tubes between each four studs grip a stud too
+        connectors.extend(Connector("antistud", (x, height, z), DOWN) for x, z in _grid(width - 1, length - 1))
     connectors.extend(extra)
     return PartShape(number, name, (0.0, height / 2, 0.0),
                      (float(PITCH * length), float(height), float(PITCH * width)), tuple(connectors))
@@ -202,15 +247,13 @@ def _technic_brick(number, length, holes="pinhole") -> PartShape:
 
 def _rod(number, name, kind, length_studs, half_width=float(HOLE_RADIUS)) -> PartShape:
     """A pin or an axle along x, centred on the origin. A pin's points are its two halves' centres
-    (x = ±10); an axle slides in its holes, so it has a point every half pitch from the centre of its
-    first 20-LDU segment to that of its last: a hole meets it whether the axle is centred in the hole
-    (an even axle through a 1-wide brick, as editors snap it) or offset by whole studs."""
+    (x = ±10); an axle slides in its holes, so it is one run from end to end: a hole whose centre lies on
+    it meets it, however deep the axle went in."""
     half = PITCH // 2
     if kind == "pin":
-        xs = [-half, half]
-    else:
-        xs = list(range(-half * (length_studs - 1), half * (length_studs - 1) + 1, half))
-    connectors = tuple(Connector(kind, (x, 0, 0), X) for x in xs)
+        connectors = tuple(Connector(kind, (x, 0, 0), X) for x in (-half, half))
+    else:  # an axle: one run along its length
+        connectors = (Connector(kind, (-half * length_studs, 0, 0), X, float(PITCH * length_studs)),)
     return PartShape(number, name, (0.0, 0.0, 0.0), (float(PITCH * length_studs), 2 * half_width, 2 * half_width),
                      connectors)
 
@@ -320,3 +363,53 @@ def generated_part(number: str) -> PartShape | None:
         return None
     connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
     return PartShape(connectors=connectors, **fields)
+
+
+FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)
+FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
+FIT_OVERLAP = 3.0  # LDU: the least depth of a fit (most of a stud's 4: a stud 2 LDU in is not held)
+BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
+
+
+def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float, f_end: float) -> str | None:
+    """How a male snap cylinder sits in a female one on the same line, from the data's sections alone: None
+    when they do not fit (too shallow, a section too wide for the bore, nowhere a grip, a round peg in an axle
+    hole), ``"keyed"`` when an axle or square peg sits in an axle or square bore over its grip (no turning),
+    else ``"round"`` (it turns). ``m_*`` and ``f_*`` are where each cylinder starts and ends along the common
+    line; each profile runs from its start to its end."""
+    lo, hi = max(min(m_start, m_end), min(f_start, f_end)), min(max(m_start, m_end), max(f_start, f_end))
+    if hi - lo < FIT_OVERLAP:
+        return None
+    cuts = {lo, hi}
+    for start, end, profile in ((m_start, m_end, male), (f_start, f_end, female)):
+        sign, run = (1.0 if end >= start else -1.0), 0.0
+        for _, _, piece in profile:
+            run += piece
+            if lo < start + sign * run < hi:
+                cuts.add(start + sign * run)
+    edges = sorted(cuts)
+    grip, keyed = False, True
+    for a, b in itertools.pairwise(edges):
+        t = (a + b) / 2
+        m, f = _section(male, m_start, m_end, t), _section(female, f_start, f_end, t)
+        if m is None or f is None:
+            continue
+        (m_shape, m_radius), (f_shape, f_radius) = m, f
+        bar_in_axle_hole = f_shape == "A" and m_shape != "A" and abs(m_radius - BAR_RADIUS) <= FIT_GRIP
+        if m_radius > f_radius + FIT_PLAY or (f_shape == "A" and m_shape != "A" and not bar_in_axle_hole):
+            return None
+        if f_radius - m_radius <= FIT_GRIP or bar_in_axle_hole:  # a bar is held between an axle hole's ribs
+            grip = True
+            keyed = keyed and m_shape in ("A", "S") and f_shape == m_shape
+    return None if not grip else ("keyed" if keyed else "round")
+
+
+def _section(profile: tuple, start: float, end: float, t: float) -> tuple[str, float] | None:
+    """(shape, radius) of the profile at ``t`` on the line (chamfers ``L_``/``_L`` as round)."""
+    u = (t - start) if end >= start else (start - t)
+    run = 0.0
+    for shape, radius, piece in profile:
+        if run <= u <= run + piece:
+            return ("R" if "L" in shape else shape), float(radius)
+        run += piece
+    return None

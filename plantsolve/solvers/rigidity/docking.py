@@ -73,6 +73,7 @@ def dock(assembly: Assembly, number: str, limit: int = 10, tolerance: float = 0.
     shape = lookup(number)
     if shape is None:
         raise KeyError(number)
+    shape = shape.sampled()  # its axles and bars as points along them
     table = assembly.free_table()
     if table is None:
         return []

@@ -53,8 +53,9 @@ Point = tuple  # (type, point, direction): the catalogue's Connector fields, bui
 
 DATA = Path(__file__).with_name("data") / "ldcad_parts.tsv.gz"
 SEGMENT = 20.0  # LDU: one stud pitch, the length of a technic hole
-AXLE_STEP = 10.0
-BAR_STEP = 2.0
+RING_RADIUS = 8.0  # LDU: a round part's bottom ring, which fits between four studs (their gap is 10√2 − 6)
+STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into an anti-stud (stud.dat's height)
+SLIDE_MIN = 0.5  # LDU: a sliding bore shorter than a stud and this is one anti-stud point at its mouth
 STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
 BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
 BEAM = re.compile(r"^technic beam\s+\d+$")
@@ -105,19 +106,45 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
     length = sum(s[2] for s in secs)
     male = gender == "M"
     shape0, radius0 = secs[0][0], secs[0][1]
-    if not male and shape0 in ("R", "S") and _near(radius0, 6) and (not slide or length < SEGMENT / 2):
-        return [("antistud", _point(start), _point(-axis))]  # its mouth, opening out of the part
     if male and not slide and caps != "none" and shape0 in ("R", "S") and _near(radius0, 6):
         return [("stud", _point(start), _point(axis))]  # a closed peg that does not slide: a (long) stud
     out = []
+    if not male:  # a stud enters any open mouth of radius 6 (a dish's or a cone's bore, a headlight brick's back)
+        last = secs[-1]
+        if caps not in ("two", "a") and shape0 in ("R", "S") and _near(radius0, 6):
+            out.append(_mouth(start, axis, secs[0][2], slide))
+        if caps in ("none", "a") and last[0] in ("R", "S") and _near(last[1], 6):
+            out.append(_mouth(start + axis * length, -axis, last[2], slide))
+        if out and (not slide or length < SEGMENT / 2) and all(sec[0] != "A" for sec in secs):
+            return out  # an anti-stud (a brick's, a tube's): its mouths only, no technic hole
+    if male and caps != "two":  # a ring of radius 8 at an open end: it stands between four studs (a round 1 x 1)
+        if secs[0][0] == "R" and _near(secs[0][1], RING_RADIUS):
+            out.append(("ring", _point(start), _point(-axis)))
+        if secs[-1][0] == "R" and _near(secs[-1][1], RING_RADIUS):
+            out.append(("ring", _point(start + axis * length), _point(axis)))
     run = 0.0
-    for shape, radius, piece in secs:
+    axle_from = None
+    for k, (shape, radius, piece) in enumerate(secs):
         if male and _is_stud(shape, radius, piece):  # a stud (a half pin's short end too): its base
             out.append(("stud", _point(start + axis * run), _point(axis)))
-        elif male and shape == "R" and _near(radius, 4):  # a bar: a clip holds it anywhere along it
-            out.extend(("bar", _point(start + axis * t), _point(axis))
-                       for t in np.arange(run, run + piece + 1e-9, BAR_STEP))
+        elif male and shape == "R" and _near(radius, 4):  # a bar: a clip or a bar hole holds it anywhere along it
+            out.append(("bar", _point(start + axis * run), _point(axis), round(float(piece), 3)))
+        elif not male and shape == "R" and _near(radius, 4):
+            # a bar hole (a hollow stud, a holder's bore): a bar enters it at an open mouth
+            if k == 0 and caps not in ("two", "a"):
+                out.append(("barhole", _point(start + axis * run), _point(axis)))
+            if k == len(secs) - 1 and caps in ("none", "a"):
+                out.append(("barhole", _point(start + axis * (run + piece)), _point(axis)))
+        if male and shape == "A" and axle_from is None:
+            axle_from = run
+        if male and shape != "A" and axle_from is not None:
+            out.append(("axle", _point(start + axis * axle_from), _point(axis), round(run - axle_from, 3)))
+            axle_from = None
+        if not male and shape == "A":  # an axle hole: its centre, wherever it is along the bore (a round plate's)
+            out.append(("axlehole", _point(start + axis * (run + piece / 2)), _point(axis)))
         run += piece
+    if axle_from is not None:  # one run from where the axle shape starts to its end: it slides in its holes
+        out.append(("axle", _point(start + axis * axle_from), _point(axis), round(run - axle_from, 3)))
     # 20 LDU slots from the start (a pin's or a hole's length); a shorter cylinder is one slot
     centres = [length / 2] if length < SEGMENT else [SEGMENT / 2 + k * SEGMENT
                                                       for k in range(int(length / SEGMENT + 0.25))]
@@ -127,18 +154,23 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             continue
         shape, radius, piece = section
         if shape == "A":
-            kind = "axle" if male else "axlehole"
+            continue  # axles are runs and axle holes centres of their sections, above
         elif shape in ("R", "S") and _near(radius, 6) and not (male and _is_stud(shape, radius, piece)):
             kind = "pin" if male else "pinhole"
         else:
             continue
-        if kind == "axle" and length >= SEGMENT:
-            ts = np.arange(AXLE_STEP, length - AXLE_STEP + 1e-9, AXLE_STEP)
-            out.extend(("axle", _point(start + axis * u), _point(axis)) for u in ts
-                       if (_section_at(secs, u) or ("",))[0] == "A")
-            continue
         out.append((kind, _point(start + axis * t), _point(axis)))
     return out
+
+
+def _mouth(mouth, inward, depth: float, slide: bool) -> Point:
+    """The anti-stud of an open radius-6 mouth, pointing out of the part. A bore the stud slides in
+    (``slide``: a dish's, a brick's through hole) holds its base anywhere from the mouth to where the stud's
+    tip meets the end of the radius-6 section: a run from there out to the mouth."""
+    reach = depth - STUD_LENGTH_IN if slide else 0.0
+    if reach <= SLIDE_MIN:
+        return ("antistud", _point(mouth), _point(-inward))
+    return ("antistud", _point(mouth + inward * reach), _point(-inward), round(float(reach), 3))
 
 
 def _point(v) -> tuple[float, float, float]:
@@ -158,18 +190,24 @@ def connectors(snaps: list) -> tuple[Point, ...]:
         kind = snap[0]
         if kind == "cyl":
             out.extend(_cylinder(*snap[1:]))
+            gender, _, _, start, axis, secs = snap[1:]
+            length = round(float(sum(sec[2] for sec in secs)), 3)
+            if length > 0:  # the cylinder as stated, for the fits the points above do not name
+                out.append(("fit_m" if gender == "M" else "fit_f", _point(start), _point(axis), length,
+                            tuple((str(shape), float(radius), float(piece)) for shape, radius, piece in secs)))
         elif kind == "clp":
             out.append(("clip", _point(snap[1]), _point(snap[2])))
-        elif kind == "fgr":
-            out.append(("finger", _point(snap[2]), _point(snap[3])))
+        elif kind == "fgr":  # a run of fingers along the hinge axis, centred on the snap's position
+            centre, axis, length = np.asarray(snap[2], float), np.asarray(snap[3], float), float(snap[4])
+            out.append(("finger", _point(centre - axis * length / 2), _point(axis), round(length, 3)))
         elif kind == "gen":
             out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "sph":
             out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
     unique, seen = [], set()
     for c in out:
-        kind, point, direction = c
-        key = (kind, point, direction if kind in ("stud", "antistud") else _line(direction))
+        kind, point, direction = c[:3]
+        key = (kind, point, direction if kind in ("stud", "antistud") else _line(direction), c[3:])
         if key not in seen:
             seen.add(key)
             unique.append(c)

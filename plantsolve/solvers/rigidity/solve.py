@@ -8,17 +8,19 @@ import math
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, RigidityRequest, RigidityResult,
-                                         UnknownPart)
+from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, PartJoints, Piece, RigidityRequest,
+                                         RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.rigidity.pieces import far_parts, joints_by_part, line_of, pieces, sub_build
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
+LISTED_IN_MESSAGE = 10
 
 
 def _solid(body) -> Solid | None:
@@ -124,6 +126,14 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                           axis=None if s.axis is None else [float(v) for v in s.axis], origin=s.origin,
                           connections=s.connections, moves=m)
               for s, m in zip(analysis.joints, mob.moves)]
+    part_ids = list(assembly.parts)
+    by_part = joints_by_part(part_ids, ((j.id, j.bodies) for j in joints))
+    part_results = [PartJoints(id=p, part=assembly.parts[p].number, joints=by_part[p][0], joined_to=by_part[p][1])
+                    for p in part_ids]
+    piece_results = _pieces(part_ids, by_part, assembly, source)
+    warnings.extend(_piece_warnings(part_results, piece_results, assembly))
+    warnings.extend(_far_part_warnings(part_ids, assembly))
+    warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
     superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
     special = mob.dof > analysis.generic_dof
@@ -135,7 +145,10 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                f"{len(ids)} bodies; {movable} of {len(joints)} joints move; {len(collisions)} collision(s)")
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
-        "largest_block": mob.largest_block, "connected_pieces": n_pieces, "rank_method": mob.rank_method,
+        "largest_block": mob.largest_block, "connected_pieces": n_pieces,
+        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build}
+                        for pc in piece_results[1:] if pc.sub_build],
+        "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
     return Solved(RigidityResult(
@@ -144,4 +157,84 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],
-        docking=docking, unknown_parts=unknown, rank_method=mob.rank_method, report=report))
+        docking=docking, unknown_parts=unknown, parts=part_results, pieces=piece_results, rank_method=mob.rank_method,
+        report=report))
+
+
+def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly, source: dict) -> list[Piece]:
+    """The connected pieces of the known parts, largest first; the others named when they are sub-builds."""
+    placements = source.get("submodel_placements") if isinstance(source.get("submodel_placements"), dict) else {}
+    names = {p: assembly.parts[p].shape.name for p in part_ids}
+    groups = pieces(part_ids, {p: joined for p, (_, joined) in by_part.items()})
+    return [Piece(parts=g, sub_build=None if k == 0 else sub_build(g, part_ids, placements, names))
+            for k, g in enumerate(groups)]
+
+
+def _named(ids, assembly: Assembly) -> str:
+    shown = [f"{p} ({assembly.parts[p].number})" for p in ids[:LISTED_IN_MESSAGE]]
+    return ", ".join(shown) + (f" and {len(ids) - len(shown)} more" if len(ids) > len(shown) else "")
+
+
+def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assembly) -> list[Diagnostic]:
+    out = []
+    floating = [p.id for p in parts if not p.joints]
+    if floating and len(parts) > 1:
+        out.append(Diagnostic(code="floating_parts", message=f"{len(floating)} of {len(parts)} known part(s) are "
+                              f"joined to nothing (no connection of the catalogue meets them): "
+                              f"{_named(floating, assembly)}",
+                              details={"parts": [{"id": p, "part": assembly.parts[p].number, "line": line_of(p)}
+                                                 for p in floating[:MAX_LISTED]],
+                                       "count": len(floating), "known_parts": len(parts)}))
+    apart = [pc for pc in found[1:] if pc.sub_build is None and len(pc.parts) > 1]
+    if apart:
+        out.append(Diagnostic(code="separate_pieces", message=f"besides the largest piece ({len(found[0].parts)} "
+                              f"parts), {len(apart)} piece(s) of several parts are joined to nothing else and are "
+                              f"no sub-build (a sub-model or a minifigure): "
+                              + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE]),
+                              details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]]}))
+    return out
+
+
+# Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts
+# mostly float but join once its positions are scaled by one of these was written in that unit.
+OTHER_UNITS = {"mm": 2.5, "studs": 20.0, "cm": 25.0}
+SPACING_CHECK_PARTS = 2000  # the check rebuilds the model once per unit: only models up to this size
+
+
+def _spacing_warnings(parts: list[PartJoints], assembly: Assembly) -> list[Diagnostic]:
+    """``implausible_part_spacing`` when most known parts are joined to nothing and the positions scaled from
+    another unit to LDU join most of them."""
+    floating = sum(1 for p in parts if not p.joints)
+    if len(parts) < 3 or floating * 2 <= len(parts) or len(parts) > SPACING_CHECK_PARTS:
+        return []
+    for unit_name, factor in OTHER_UNITS.items():
+        trial = Assembly()
+        for p in parts:
+            placed = assembly.parts[p.id]
+            trial.add_part(p.id, placed.number, placed.position * factor, placed.rotation)
+        joined = {b for j in trial.all_joints() for b in j.bodies}
+        if (len(parts) - len(joined)) * 2 < floating:
+            return [Diagnostic(code="implausible_part_spacing", message=f"part spacing: {floating} of {len(parts)} "
+                               f"parts are joined to nothing at the positions as written, but only "
+                               f"{len(parts) - len(joined)} once the positions are multiplied by {factor:g} — "
+                               f"positions written in {unit_name} read as LDU (1 LDU = 0.4 mm, a stud 20 LDU, a "
+                               "brick 24 high)?",
+                               details={"unit": unit_name, "factor_to_ldu": factor, "floating_as_written": floating,
+                                        "floating_scaled": len(parts) - len(joined)})]
+    return []
+
+
+def _far_part_warnings(part_ids: list[str], assembly: Assembly) -> list[Diagnostic]:
+    positions = np.array([assembly.parts[p].position for p in part_ids], dtype=float).reshape(-1, 3)
+    far = far_parts(part_ids, positions)
+    if not far:
+        return []
+    described = "; ".join(f"{p} ({assembly.parts[p].number}" + (f", line {line_of(p)}" if line_of(p) else "")
+                          + f") at {d:.3g} LDU" for p, d, _ in far[:LISTED_IN_MESSAGE])
+    return [Diagnostic(code="implausible_part_position", message=f"part position: {len(far)} part(s) lie implausibly "
+                       f"far from the middle of the model (plausible: within {far[0][2]:.3g} LDU; 1 LDU = 0.4 mm): "
+                       f"{described} — digits typed twice, or a position in another unit (mm, or a CAD export's "
+                       "units) read as LDU?",
+                       details={"parts": [{"id": p, "part": assembly.parts[p].number, "line": line_of(p),
+                                           "distance_ldu": d} for p, d, _ in far[:MAX_LISTED]],
+                                "bound_ldu": far[0][2]})]

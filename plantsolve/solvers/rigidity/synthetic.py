@@ -238,8 +238,8 @@ BRICK_HOLES_ALONG_Y = [0, 1, 0, 0, 0, 1, 1, 0, 0]  # a 1 x N technic brick on it
 def gearbox(copies: int = 1, twice: bool = True) -> list[dict]:
     """Technic gearboxes side by side 80 LDU apart along x: two 7-hole beams as walls, two axles through
     both with a 24- and an 8-tooth gear in mesh, a 5-hole beam and a 1 x 4 technic brick pinned outside
-    the walls with the output axle through them, a 3-long axle through a wall's end hole off its
-    connection grid. With ``twice`` each box places one pin and the 8-tooth gear a second time at the
+    the walls with the output axle through them, a 3-long axle through a wall's end hole 5 LDU off the
+    half-stud grid (it slides: it is in the hole all the same). With ``twice`` each box places one pin and the 8-tooth gear a second time at the
     same pose: the only collisions, two per box."""
     parts = []
     for k in range(copies):

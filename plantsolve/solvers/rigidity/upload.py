@@ -20,14 +20,15 @@ nearest rotation (``source.rotations_rounded`` counts them), and a line placing 
 does not hold (a cut ``.mpd``, an ``.ldr`` without its sub-model files) is skipped naming it; parts not in the
 catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
 the file is refused (422 naming the file) only when it places no part at all.
-Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models.
+Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models;
+``source.submodel_placements`` maps each placed sub-model's id prefix (``L12/``) to its file name.
 """
 
 from __future__ import annotations
 
-
 import numpy as np
 
+from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
@@ -37,7 +38,11 @@ from plantsolve.solvers.upload_form import validated_upload
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
+# LDraw has one length unit; results of parts keep it (length_unit 'ldu'): no conversion, said where it comes from
+LDRAW_UNITS = {"file_unit": "ldu", "result_unit": "ldu", "factor": 1.0,
+               "from": "the LDraw format: positions are LDraw units (1 LDU = 0.4 mm, a stud pitch 20, a brick 24 high)"}
 MAX_SKIPPED_LISTED = 200
+MAX_PLACEMENTS_LISTED = 2000  # sub-model placements named in source (the solver tells sub-builds by them)
 MAX_PARTS = 20_000
 # Rows of a placement's matrix off orthonormal by up to this are a rotation printed with few digits, read as the
 # nearest rotation; further off, the line scales or shears its part and is skipped.
@@ -167,6 +172,7 @@ def parse_ldraw(text: str) -> dict:
     warnings: list[dict] = []
     cut = _cut_last_line(text)
     counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0}
+    placements: dict[str, str] = {}  # part id prefix of each placed sub-model -> its file name
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -242,6 +248,8 @@ def parse_ldraw(text: str) -> dict:
                     raise reject(f"the model expands to more than {MAX_PARTS} parts and sub-model placements "
                                  f"(line {number} places {file_name!r} once more); at most {MAX_PARTS} are read")
                 counts["submodels_expanded"] += 1
+                if len(placements) < MAX_PLACEMENTS_LISTED:
+                    placements[ident + "/"] = file_name
                 expand(sub, world_rot, world_pos, ident + "/", (*stack, sub))
                 continue
             if len(parts) >= MAX_PARTS:
@@ -264,13 +272,73 @@ def parse_ldraw(text: str) -> dict:
         warnings.append(truncated_file(last, "its last line has no line ending (the file was cut?): it was read as "
                                        "written, and whatever the file held after it is missing.").model_dump())
     if not parts:
+        other = other_format(text)
+        if other:
+            raise reject(f"the file is not LDraw: it holds {other}; the rigidity kind reads LDraw models (.ldr, "
+                         ".mpd: type-1 lines placing parts) or a rigidity request as .json")
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
-    return {"parts": parts, "source": {"format": "ldraw", "main_model": main, "parts": len(parts),
+    return {"parts": parts, "source": {"format": "ldraw", "units": LDRAW_UNITS, "main_model": main,
+                                       "parts": len(parts),
                                        "submodels": sum(r == "model" for n, r in roles.items() if n != main),
                                        "embedded_parts": sorted(embedded), **counts,
+                                       "submodel_placements": placements,
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
+
+
+OBJ_KEYWORDS = {"v", "vn", "vt", "f", "o", "g", "s", "l", "usemtl", "mtllib"}
+SNIFFED_LINES = 200
+
+
+def other_format(text: str) -> str | None:
+    """What a text that is no LDraw holds, when its first lines say so (a mesh, a building model, a table …):
+    a phrase for the refusal, or None."""
+    lines = [raw.strip() for raw in text.splitlines()[:SNIFFED_LINES] if raw.strip()]
+    if not lines:
+        return None
+    head = lines[0]
+    first_tokens = [raw.split()[0] for raw in lines if not raw.startswith("#")]
+    if head.startswith("ISO-10303-21"):
+        schema = next((raw for raw in lines if raw.upper().startswith("FILE_SCHEMA")), "")
+        return "an IFC model (ISO-10303-21)" if "IFC" in schema.upper() else "a STEP model (ISO-10303-21)"
+    if head.lower().startswith("solid") and any(raw.lower().startswith("facet") for raw in lines):
+        return "an ASCII STL mesh (solid, facet normal, vertex lines)"
+    upper = {raw.upper() for raw in lines}
+    if "SECTION" in upper and upper & {"HEADER", "ENTITIES", "TABLES", "EOF"}:
+        return "a DXF drawing (group codes and SECTION / ENTITIES names)"
+    if head.startswith("<"):
+        root = next((raw[1:].split()[0].rstrip(">") for raw in lines if raw.startswith("<") and
+                     not raw.startswith(("<?", "<!"))), "?")
+        return f"an XML document (root element <{root}>: gbXML, IFC-XML or another)"
+    if head.startswith(("{", "[")):
+        return "a JSON document (send a rigidity request as a .json file)"
+    if any(raw.upper().startswith(("ISO-TOP-HEADER", "PIPELINE-REFERENCE", "UNITS-BORE")) for raw in lines):
+        return "a PCF piping file (ISO-TOP-HEADER, PIPELINE-REFERENCE … lines)"
+    if first_tokens and sum(t in OBJ_KEYWORDS for t in first_tokens) >= max(1, len(first_tokens) // 2):
+        vertices = sum(t == "v" for t in first_tokens)
+        faces = sum(t == "f" for t in first_tokens)
+        return (f"a Wavefront OBJ mesh ({vertices} vertex and {faces} face lines among its first "
+                f"{len(lines)}: 'v x y z', 'f i j k')")
+    if any(raw.rstrip().endswith(";") for raw in lines) and sum("," in raw for raw in lines) >= len(lines) // 2:
+        objects = sorted({raw.split(",")[0].strip() for raw in lines if "," in raw and "!-" not in raw  # not a field
+                          and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
+        return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"
+    delimiter = next((d for d in (",", ";", "\t") if all(d in raw for raw in lines[:5])), None)
+    if delimiter is not None:
+        columns = [c.strip() for c in lines[0].split(delimiter)]
+        return f"a table of {len(columns)} columns ({', '.join(columns[:8])})"
+    if all(_numbers(raw) for raw in lines[:20]) and lines[0].split()[0] not in ("0", "1", "2", "3", "4", "5"):
+        return f"a list of numbers, {len(lines[0].split())} per line (a point cloud or a scan, not part placements)"
+    return None
+
+
+def _numbers(raw: str) -> bool:
+    try:
+        [float(t) for t in raw.replace(",", " ").split()]
+    except ValueError:
+        return False
+    return True
 
 
 def _tidy(v: float) -> float:
@@ -287,4 +355,37 @@ def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
         raise reject("the file is empty")
     text = decode_text(content, "LDraw or JSON file")
     body = json_object(text) if source.extension == ".json" else parse_ldraw(text)
+    if source.extension == ".json":
+        _refuse_other_request(body)
     return validated_upload(RigidityRequest, body, options)
+
+
+MODEL_FIELDS = ("bodies", "joints", "parts")
+
+
+def _refuse_other_request(body: dict) -> None:
+    """A JSON object without any of a rigidity request's model fields is another kind's request (or no request):
+    refused naming what it holds, and the kind whose request has those fields, when one has."""
+    if any(key in body for key in MODEL_FIELDS):
+        return
+    keys = sorted(str(k) for k in body)[:12]
+    kind = other_kind(set(body))
+    held = f"{'an' if kind and kind[0] in 'aeiou' else 'a'} {kind} request" if kind else "no rigidity model"
+    raise reject(f"the JSON file holds {held} (its fields: {', '.join(keys) or 'none'}); a rigidity request holds "
+                 "'parts' (LEGO parts) or 'bodies' and 'joints'")
+
+
+def other_kind(keys: set[str]) -> str | None:
+    """The kind whose request schema has every one of ``keys`` among its fields (and needs no field they lack),
+    or None."""
+    requests = {"alignment": alignment.AlignmentRequest, "dedup": dedup.DedupRequest,
+                "flowmeter": flowmeter.FlowmeterRequest, "perfmap": perfmap.PerfmapRequest,
+                "polyhedra": polyhedra.PolyhedraRequest, "tube": tube.TubeRequest}
+    best = None
+    for kind, model in requests.items():
+        fields = set(model.model_fields)
+        required = {n for n, f in model.model_fields.items() if f.is_required()}
+        shared = keys & fields - {"units", "options", "source", "name"}
+        if shared and keys <= fields and required <= keys and (best is None or len(shared) > best[1]):
+            best = (kind, len(shared))
+    return best[0] if best else None

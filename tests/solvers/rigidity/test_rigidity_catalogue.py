@@ -67,15 +67,24 @@ def test_script_resolves_inheritance_includes_grids_clears_and_scaling(tmp_path)
     assert parts["9001"]["b"] == [-20.0, -4.0, -10.0, 20.0, 24.0, 10.0]
 
     def points(number):
-        return Counter((t, p, d) for t, p, d in generated.connectors(parts[number]["s"]))
+        return Counter(c for c in generated.connectors(parts[number]["s"]) if not c[0].startswith("fit_"))
+
+    # every cylinder also as stated (the fits the points do not name): the included technic hole as connhole.dat
+    # says it, centred on (0, 10, 0) along z
+    fits = Counter(c for c in generated.connectors(parts["9001"]["s"]) if c[0].startswith("fit_"))
+    assert fits[("fit_f", (0.0, 10.0, -10.0), (0.0, 0.0, 1.0), 20.0, (("R", 8.0, 2.0), ("R", 6.0, 16.0),
+                                                                      ("R", 8.0, 2.0)))] == 1
+    assert sum(fits.values()) == 5 and sum(1 for c in fits if c[0] == "fit_m") == 2
     assert points("9001") == Counter({("stud", (-10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("stud", (10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("antistud", (-10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
                                       ("antistud", (10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
                                       ("pinhole", (0.0, 10.0, 0.0), (0.0, 0.0, 1.0)): 1})
-    # 40 LDU of axle: a point every 10 LDU from 10 LDU in, as the hand-coded 3704
-    assert sorted(p[0] for t, p, d in points("9002")) == [-10.0, 0.0, 10.0]
-    assert {t for t, p, d in points("9002")} == {"axle"}
+    # 40 LDU of axle: one run from end to end along x (its direction the stretched primitive's), as the
+    # hand-coded 3704
+    (axle,) = points("9002")
+    assert axle[0] == "axle" and axle[3] == 40.0 and abs(axle[2][0]) == 1.0
+    assert axle[1][0] + axle[2][0] * 40.0 / 2 == 0.0  # centred on the origin
     assert list(points("9003")) == [("stud", (0.0, 0.0, 10.0), (0.0, -1.0, 0.0))]
 
 
@@ -114,6 +123,14 @@ def _comparable(shape) -> set:
         if kind not in COMPARABLE | {"hinge"}:
             continue
         direction = c.direction if kind in ("stud", "antistud") else tuple(abs(v) for v in c.direction)
+        if c.length > 0 and kind == "hinge":  # a run of hinge fingers: its centre on the hinge line
+            centre = np.asarray(c.point) + np.asarray(c.direction) * c.length / 2
+            out.add((kind, tuple(float(v) for v in centre), tuple(float(v) for v in direction)))
+            continue
+        if c.length > 0:  # a run (an axle): its two ends, whichever it starts from
+            ends = np.array([c.point, np.asarray(c.point) + np.asarray(c.direction) * c.length], float)
+            out.add((kind, frozenset(tuple(float(v) for v in e) for e in ends), tuple(float(v) for v in direction)))
+            continue
         out.add((kind, tuple(float(v) for v in c.point), tuple(float(v) for v in direction)))
     return out
 
@@ -242,3 +259,20 @@ def test_docking_offers_poses_for_a_generated_part():
     request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"dock": {"part": "3023b", "limit": 3}})
     poses = solve(request).result.docking
     assert len(poses) == 3 and all(p.part == "3023b" and p.connections == 2 for p in poses)
+
+
+def test_script_gives_stud_tubes_their_anti_stud_at_the_mouth_whatever_their_height(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    # a 2 x 2 brick's tube (stud4.dat drawn from y = -4 to 0, placed upside down and stretched 5 times: y 4..24)
+    # and a plate's (stretched once: y 4..8); the shadow states nothing for stud4.dat, as the real one
+    _write(ldraw, "p/stud4.dat", "0 Stud Tube Open\n4 16 -8 -4 -8 8 -4 -8 8 0 -8 -8 0 -8\n")
+    _write(ldraw, "parts/9005.dat", "0 Brick  2 x  2 Test\n1 16 0 4 0 1 0 0 0 -5 0 0 0 1 stud4.dat\n"
+           "4 16 -20 0 -20 20 0 -20 20 24 -20 -20 24 -20\n")
+    _write(ldraw, "parts/9006.dat", "0 Plate  2 x  2 Test\n1 16 0 4 0 1 0 0 0 -1 0 0 0 1 stud4.dat\n"
+           "4 16 -20 0 -20 20 0 -20 20 8 -20 -20 8 -20\n")
+    _write(shadow, "p/stud4.dat", "0 LDCad shadow info\n0 //!LDCAD SNAP_CYL [id=aStud] [gender=F] [caps=one] "
+           "[secs=R 6 4]\n")
+    parts = _script().derive(ldraw, shadow)
+    for number, bottom in (("9005", 24.0), ("9006", 8.0)):
+        points = [c for c in generated.connectors(parts[number]["s"]) if not c[0].startswith("fit_")]
+        assert points == [("antistud", (0.0, bottom, 0.0), (0.0, 1.0, 0.0))], number

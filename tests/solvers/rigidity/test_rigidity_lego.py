@@ -102,9 +102,9 @@ def test_catalogue_frames_are_the_ldraw_library_frames():
     for pin in ("3673", "2780"):  # along x, centred, 40 LDU: two halves at x = -10 and +10
         assert conns(pin, "pin") == [((-10, 0, 0), x), ((10, 0, 0), x)] and CATALOGUE[pin].box_size[0] == 40
     for axle, n in {"3704": 2, "3705": 4, "3706": 6, "3707": 8}.items():  # along x, centred, 20 N LDU
-        points = [p for p, d in conns(axle, "axle")]
-        assert {d for p, d in conns(axle, "axle")} == {x} and CATALOGUE[axle].box_size[0] == 20 * n
-        assert points[0] == (-10 * (n - 1), 0, 0) and points[-1] == (10 * (n - 1), 0, 0)
+        (run,) = [c for c in CATALOGUE[axle].connectors if c.type == "axle"]  # one run from end to end
+        assert run.direction == x and CATALOGUE[axle].box_size[0] == 20 * n
+        assert run.point == (-10 * n, 0, 0) and run.length == 20 * n
     assert conns("3700", "pinhole") == [((0, 10, 0), z)] and conns("32064", "axlehole") == [((0, 10, 0), z)]
     assert [p for p, _ in conns("3701", "pinhole")] == [(-20, 10, 0), (0, 10, 0), (20, 10, 0)]
     # hinge brick: both halves' axis along x through (0, 10, 0) of their own frame

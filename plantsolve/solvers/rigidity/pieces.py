@@ -1,0 +1,93 @@
+"""What a LEGO model's joints say about its parts: each part's joints, the connected pieces, which pieces are
+sub-builds that may stand apart, and parts placed implausibly far from the rest.
+
+A piece besides the largest is a **sub-build** when it is exactly the known parts of one placed LDraw
+sub-model (every part of that placement and nothing else: a droid standing beside its vehicle, a minifigure
+modelled as its own sub-model), or when it holds minifigure parts only (a minifigure whose hands hold
+nothing of the build). Any other piece means joints the catalogue did not find, or a model that really is
+in pieces: the solver warns about it.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Mapping, Sequence
+
+import numpy as np
+
+LINE = re.compile(r"L(\d+)$")
+# LDU: a part this far from the middle of the model (40 m of LEGO) is a typing slip or another unit; so is one
+# FAR_FACTOR times further out than the parts' median distance from the middle.
+FAR_LDU = 1e5
+FAR_FACTOR = 100.0
+PITCH = 20.0  # LDU: added to the median distance so that a model of a few stacked parts has a scale
+MINIFIG = "minifig"
+
+
+def joints_by_part(part_ids: Sequence[str],
+                   joints: Iterable[tuple[str, Sequence[str]]]) -> dict[str, tuple[list, list]]:
+    """part id -> (ids of the joints it is in, ids of the parts they join it to), for every part."""
+    out: dict[str, tuple[list, list]] = {p: ([], []) for p in part_ids}
+    for joint_id, bodies in joints:
+        for b in bodies:
+            if b in out:
+                out[b][0].append(joint_id)
+                out[b][1].extend(o for o in bodies if o != b and o not in out[b][1])
+    return out
+
+
+def pieces(part_ids: Sequence[str], joined: Mapping[str, Sequence[str]]) -> list[list[str]]:
+    """The connected pieces of the parts (joined: part -> parts joined to it), largest first, parts in request
+    order."""
+    root = {p: p for p in part_ids}
+
+    def find(x: str) -> str:
+        while root[x] != x:
+            root[x] = root[root[x]]
+            x = root[x]
+        return x
+
+    for p in part_ids:
+        for q in joined.get(p, ()):
+            if q in root:
+                root[find(q)] = find(p)
+    groups: dict[str, list[str]] = {}
+    for p in part_ids:
+        groups.setdefault(find(p), []).append(p)
+    order = {p: k for k, p in enumerate(part_ids)}
+    return sorted(groups.values(), key=lambda g: (-len(g), order[g[0]]))
+
+
+def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping[str, str],
+              names: Mapping[str, str]) -> str | None:
+    """The sub-model whose known parts are exactly ``piece`` (its file name), 'minifigure' for a piece of
+    minifigure parts only, else None."""
+    common = None
+    for p in piece:
+        prefixes = {p[:m.end() + 1] for m in re.finditer(r"L\d+(?=/)", p)}
+        common = prefixes if common is None else common & prefixes
+    members = set(piece)
+    for prefix in sorted(common or (), key=len, reverse=True):
+        if {p for p in part_ids if p.startswith(prefix)} == members:
+            return placements.get(prefix, prefix.rstrip("/"))
+    if all(names.get(p, "").lower().startswith(MINIFIG) for p in piece):
+        return "minifigure"
+    return None
+
+
+def line_of(part_id: str) -> int | None:
+    """The file line a part id names (``L12``, ``L3/L40`` -> 40): the id's last ``L<n>``."""
+    m = LINE.search(part_id)
+    return int(m.group(1)) if m else None
+
+
+def far_parts(part_ids: Sequence[str], positions: np.ndarray) -> list[tuple[str, float, float]]:
+    """(id, distance from the middle, the bound it passed) of parts implausibly far from the middle of the
+    model (the median of the part positions): beyond FAR_LDU and beyond FAR_FACTOR times the median distance
+    of the parts from the middle. Needs three parts at least (two have no middle to stand apart from)."""
+    if len(part_ids) < 3:
+        return []
+    middle = np.median(positions, axis=0)
+    distance = np.linalg.norm(positions - middle, axis=1)
+    bound = max(FAR_LDU, FAR_FACTOR * (float(np.median(distance)) + PITCH))
+    return [(p, float(d), bound) for p, d in zip(part_ids, distance) if d > bound]

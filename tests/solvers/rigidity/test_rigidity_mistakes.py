@@ -1,0 +1,131 @@
+"""Mistakes users make with a rigidity model: a file of another kind, a part typed far away, an absurd option.
+Each is refused naming the file or field, or warned naming the part and line — never a confident answer."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from pydantic import ValidationError
+
+from plantsolve.schemas.rigidity import RigidityOptions, RigidityRequest
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.rigidity.solve import solve
+from plantsolve.solvers.rigidity.upload import parse_upload
+
+REPO = Path(__file__).resolve().parents[3]
+
+
+def parse(name, text, options=None):
+    return parse_upload(StoredInput.from_bytes(name, text.encode()), options)
+
+
+OBJ = "# Blender 3.6\nmtllib room.mtl\no Room\nv 0 0 0\nv 5000 0 0\nv 5000 4000 0\nv 0 4000 3000\nf 1 2 3\nf 1 3 4\n"
+IDF = "Version,9.2;\n\nZone,\n  Office,                  !- Name\n  0,                       !- Direction\n  1;\n"
+CSV = "flow [m3/s],head [m],efficiency [%],speed [rpm],power [kW]\n0.1,25.2,71,1450,35.1\n0.2,24.1,80,1450,58.0\n"
+XYZ = "10.5 2.25 3.0\n11.0 2.5 3.1\n11.5 2.75 3.2\n"
+STEP = "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nENDSEC;\n"
+IFC = "ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n#1=IFCPROJECT('x',$,$,$,$,$,$,$,$);\n"
+STL = "solid part\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n" \
+      "  endloop\n endfacet\nendsolid part\n"
+DXF = "0\nSECTION\n2\nENTITIES\n0\nLINE\n8\n0\n10\n0.0\n20\n0.0\n0\nENDSEC\n0\nEOF\n"
+
+
+@pytest.mark.parametrize("text, holds", [
+    (OBJ, "a Wavefront OBJ mesh (4 vertex and 2 face lines"),
+    (IDF, "an EnergyPlus IDF building model (objects such as Version, Zone)"),
+    (CSV, "a table of 5 columns (flow [m3/s], head [m], efficiency [%], speed [rpm], power [kW])"),
+    (XYZ, "a list of numbers, 3 per line"),
+    (STEP, "a STEP model"),
+    (IFC, "an IFC model"),
+    (STL, "an ASCII STL mesh"),
+    (DXF, "a DXF drawing"),
+])
+def test_a_file_of_another_kind_renamed_ldr_is_refused_naming_what_it_holds(text, holds):
+    with pytest.raises(InputRejected) as caught:
+        parse("model.ldr", text)
+    (error,) = caught.value.errors
+    assert error.loc == ("file",)
+    assert error.msg.startswith("the file is not LDraw: it holds " + holds)
+
+
+@pytest.mark.parametrize("kind", ["alignment", "tube", "perfmap", "flowmeter", "polyhedra"])
+def test_another_kinds_json_request_is_refused_naming_that_kind_and_its_fields(kind):
+    example = json.loads((REPO / "plantsolve" / "solvers" / kind / "example.json").read_text())
+    with pytest.raises(InputRejected) as caught:
+        parse("model.json", json.dumps(example))
+    (error,) = caught.value.errors
+    assert error.loc == ("file",)
+    assert f"holds {'an' if kind == 'alignment' else 'a'} {kind} request (its fields: " in error.msg
+    assert all(key in error.msg for key in sorted(example)[:3])
+
+
+def test_a_json_of_no_kind_is_refused_naming_its_fields():
+    with pytest.raises(InputRejected, match=r"holds no rigidity model \(its fields: colour, name\)"):
+        parse("model.json", json.dumps({"name": "x", "colour": 4}))
+
+
+STACK = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n" \
+        "1 4 0 -48 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+
+
+def test_a_part_typed_1e7_ldu_away_is_warned_naming_the_part_and_its_line():
+    text = STACK + "1 4 10000000 -72 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+    result = solve(parse("far.ldr", text)).result
+    warnings = {w.code: w for w in result.report.warnings}
+    far = warnings["implausible_part_position"]
+    assert [p["id"] for p in far.details["parts"]] == ["L4"] and far.details["parts"][0]["line"] == 4
+    assert far.details["parts"][0]["distance_ldu"] == pytest.approx(1e7, rel=1e-6)
+    assert "L4 (3001, line 4)" in far.message and "part position" in far.message and "LDU" in far.message
+    # and the far part is joined to nothing
+    assert [p["id"] for p in warnings["floating_parts"].details["parts"]] == ["L4"]
+
+
+def test_a_large_model_spread_over_metres_is_not_warned():
+    # four stacks 2,000 LDU (80 cm) apart: a big layout, every part plausible
+    text = "".join(f"1 4 {x} 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 {x} -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+                   for x in (0, 2000, 4000, 6000))
+    result = solve(parse("layout.ldr", text)).result
+    assert "implausible_part_position" not in {w.code for w in result.report.warnings}
+
+
+@pytest.mark.parametrize("field, value", [("contact_tolerance", 1e6), ("contact_tolerance", -1.0),
+                                          ("rank_tolerance", 1.0), ("rank_tolerance", 0.0)])
+def test_absurd_scalar_options_are_refused_at_intake_naming_the_field(field, value):
+    with pytest.raises(ValidationError) as caught:
+        RigidityRequest.model_validate({"parts": [{"id": "a", "part": "3001", "position": [0, 0, 0]}],
+                                        "options": {field: value}})
+    assert [e["loc"] for e in caught.value.errors()] == [("options", field)]
+    assert RigidityOptions.model_fields[field].metadata  # the bound is in the schema (OpenAPI), not in code
+
+
+@pytest.mark.parametrize("unit, factor", [("mm", 2.5), ("studs", 20.0)])
+def test_a_model_written_in_another_unit_is_warned_naming_the_unit(unit, factor):
+    """The tests' official-parts model with every position divided by the unit's factor to LDU: nothing
+    meets as written; scaled back, everything does."""
+    lines = []
+    for raw in (REPO / "tests" / "solvers" / "rigidity" / "official_parts.ldr").read_text().splitlines():
+        tokens = raw.split()
+        if tokens[:1] == ["1"]:
+            tokens[2:5] = [repr(float(v) / factor) for v in tokens[2:5]]
+            raw = " ".join(tokens)
+        lines.append(raw)
+    result = solve(parse("scaled.ldr", "\n".join(lines) + "\n")).result
+    warning = next(w for w in result.report.warnings if w.code == "implausible_part_spacing")
+    assert warning.details["unit"] == unit and warning.details["factor_to_ldu"] == factor
+    assert warning.details["floating_scaled"] == 0 and warning.details["floating_as_written"] > 15
+    assert f"positions written in {unit} read as LDU" in warning.message
+
+
+def test_a_model_in_ldu_is_not_warned_about_its_spacing():
+    result = solve(parse("stack.ldr", STACK)).result
+    assert "implausible_part_spacing" not in {w.code for w in result.report.warnings}
+
+
+def test_the_ldraw_unit_is_stated_in_the_source_with_its_factor():
+    request = parse("stack.ldr", STACK)
+    assert request.source["units"]["file_unit"] == request.source["units"]["result_unit"] == "ldu"
+    assert request.source["units"]["factor"] == 1.0 and "0.4 mm" in request.source["units"]["from"]
+    result = solve(request).result
+    assert result.length_unit == "ldu" and result.report.details["source"]["units"]["file_unit"] == "ldu"
