@@ -86,6 +86,20 @@ def cmd_serve(args: argparse.Namespace) -> int:
 SHUTDOWN_SECONDS = 5
 
 
+def server_config(app, args: argparse.Namespace):
+    """uvicorn's configuration for ``app``: X-Forwarded-For/-Proto are believed only from the addresses in
+    ``FORWARDED_ALLOW_IPS`` (uvicorn's own default trusts loopback: any local process, or a local proxy passing
+    the header on, would choose the client address the login limit counts); no ``server: uvicorn`` banner."""
+    import uvicorn
+
+    proxies = app.state.settings.forwarded_allow_ips
+    # SIGTERM: open requests get SHUTDOWN_SECONDS to finish, then the lifespan stops the job processes
+    # (running jobs are handed back to the queue; see workers/processes.py)
+    return uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level,
+                          timeout_graceful_shutdown=SHUTDOWN_SECONDS, server_header=False,
+                          proxy_headers=bool(proxies), forwarded_allow_ips=",".join(proxies) or None)
+
+
 def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
     """uvicorn on the socket bound by :func:`bind` (what ``uvicorn.run`` does, minus the binding)."""
     import uvicorn
@@ -98,10 +112,7 @@ def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
                 logging.getLogger("uvicorn.error").info(
                     "Uvicorn running on http://%s:%d (Press CTRL+C to quit)", f"[{host}]" if ":" in host else host, port)
 
-    # SIGTERM: open requests get SHUTDOWN_SECONDS to finish, then the lifespan stops the job processes
-    # (running jobs are handed back to the queue; see workers/processes.py)
-    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level,
-                                   timeout_graceful_shutdown=SHUTDOWN_SECONDS))
+    server = Server(server_config(app, args))
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:

@@ -50,6 +50,16 @@ class ServiceUnavailable(ProblemError):
     status, title, slug = 503, "Service unavailable", "unavailable"
 
 
+def unavailable(error: BaseException, path: str) -> ServiceUnavailable:
+    """The 503 of an infrastructure failure (``is_infrastructure_failure``), logged as one line without a
+    traceback: an outage answers many requests, and its cause is the same in each."""
+    reason = (str(error).strip().splitlines() or [""])[0][:200]
+    log.warning("503 on %s: %s%s", path, type(error).__name__, f": {reason}" if reason else "")
+    return ServiceUnavailable(
+        "A service this request needs (the database, the queue or the file store) is unreachable; "
+        "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+
+
 def problem_response(error: ProblemError, request: Request | None = None) -> JSONResponse:
     problem = error.to_problem(instance=str(request.url.path) if request is not None else None)
     return JSONResponse(
@@ -101,11 +111,8 @@ def install(app: FastAPI) -> None:
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, error: Exception):
         # Starlette answers these outside every middleware: the request id is set here
-        if is_infrastructure_failure(error):
-            log.warning("infrastructure unavailable on %s: %s", request.url.path, type(error).__name__)
-            problem = ServiceUnavailable(
-                "A service this request needs (the database, the queue or the file store) is unreachable; "
-                "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+        if is_infrastructure_failure(error):  # (the edge answers most of these before they get here)
+            problem = unavailable(error, request.url.path)
         else:
             log.exception("unhandled error on %s", request.url.path)
             problem = ProblemError("An unexpected error occurred; it has been logged.")
