@@ -24,6 +24,7 @@ from plantsolve.jobs.errors import (
     UnsupportedMediaType,
     field_problem,
     is_infrastructure_failure,
+    json_path,
     summary,
 )
 from plantsolve.schemas.jobs import Problem
@@ -73,6 +74,16 @@ def problem_response(error: ProblemError, request: Request | None = None) -> JSO
 _STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, PayloadTooLarge, UnsupportedMediaType, Unprocessable)}
 
 
+def _place(error: dict[str, Any], body: Any) -> list[str | int]:
+    """Where a routed request's validation error is: a JSON body's field by its path in the body as sent (as
+    the submit routes name it: ``points/0/beta``, without the tags pydantic puts in for the member of a union);
+    a query, path or header parameter as FastAPI names it (``query/limit``)."""
+    loc = list(error["loc"])
+    if loc[:1] == ["body"] and isinstance(body, (dict, list)) and error["type"] != "json_invalid":
+        return json_path(body, loc[1:], error["type"])
+    return loc
+
+
 def install(app: FastAPI) -> None:
     @app.exception_handler(ProblemError)
     async def _problem(request: Request, error: ProblemError):
@@ -80,7 +91,7 @@ def install(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, error: RequestValidationError):
-        errors = [field_problem(e["loc"], e["msg"], e["type"]) for e in error.errors()]
+        errors = [field_problem(_place(e, error.body), e["msg"], e["type"]) for e in error.errors()]
         return problem_response(Unprocessable(summary(errors), errors=errors), request)
 
     @app.exception_handler(StarletteHTTPException)
