@@ -163,6 +163,10 @@
     var choices = schema.anyOf || schema.oneOf;
     if (choices) {
       var real = choices.map(function (c) { return resolve(c, root); }).filter(function (c) { return c.type !== "null"; });
+      if (real.length === 1 && real[0].type === "boolean") {
+        // null is a third answer ("the kind decides"): a choice of (not set), true, false, not a check box
+        return { enum: [true, false], nullable: true, description: schema.description || real[0].description };
+      }
       if (real.length === 1) return Object.assign({}, real[0], { nullable: true, description: schema.description || real[0].description });
       if (real.every(function (c) { return c.const !== undefined || c.enum; })) {
         var values = [];
