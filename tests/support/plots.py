@@ -295,6 +295,8 @@ def contrast_problems(fig: Figure, dpi: float | None = None) -> list[str]:
     renderer = fig.canvas.get_renderer()
     boxes = [t.get_window_extent(renderer) for t in texts]
     shown = [t.get_visible() for t in texts]
+    engine = fig.get_layout_engine()
+    fig.set_layout_engine("none")  # the places as drawn: a layout engine would give the hidden texts' room away
     for t in texts:
         t.set_visible(False)
     try:
@@ -302,6 +304,7 @@ def contrast_problems(fig: Figure, dpi: float | None = None) -> list[str]:
     finally:
         for t, visible in zip(texts, shown):
             t.set_visible(visible)
+        fig.set_layout_engine(engine)
     problems = []
     for t, box in zip(texts, boxes):
         place = _pixels(box, under.shape)
