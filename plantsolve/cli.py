@@ -84,6 +84,21 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 SHUTDOWN_SECONDS = 5
+LOG_LEVELS = ["critical", "error", "warning", "info", "debug"]
+
+
+def server_config(app, args: argparse.Namespace):
+    """uvicorn's configuration for ``app``: X-Forwarded-For/-Proto are believed only from the addresses in
+    ``FORWARDED_ALLOW_IPS`` (uvicorn's own default trusts loopback: any local process, or a local proxy passing
+    the header on, would choose the client address the login limit counts); no ``server: uvicorn`` banner."""
+    import uvicorn
+
+    proxies = app.state.settings.forwarded_allow_ips
+    # SIGTERM: open requests get SHUTDOWN_SECONDS to finish, then the lifespan stops the job processes
+    # (running jobs are handed back to the queue; see workers/processes.py)
+    return uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level,
+                          timeout_graceful_shutdown=SHUTDOWN_SECONDS, server_header=False,
+                          proxy_headers=bool(proxies), forwarded_allow_ips=",".join(proxies) or None)
 
 
 def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
@@ -98,10 +113,7 @@ def serve_on(app, sock: socket.socket, args: argparse.Namespace) -> None:
                 logging.getLogger("uvicorn.error").info(
                     "Uvicorn running on http://%s:%d (Press CTRL+C to quit)", f"[{host}]" if ":" in host else host, port)
 
-    # SIGTERM: open requests get SHUTDOWN_SECONDS to finish, then the lifespan stops the job processes
-    # (running jobs are handed back to the queue; see workers/processes.py)
-    server = Server(uvicorn.Config(app, host=args.host, port=args.port, log_level=args.log_level,
-                                   timeout_graceful_shutdown=SHUTDOWN_SECONDS))
+    server = Server(server_config(app, args))
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:
@@ -407,7 +419,7 @@ def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentPar
                                      formatter_class=HelpFormatter)
     parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    log_levels = ["critical", "error", "warning", "info", "debug"]
+    log_levels = LOG_LEVELS
 
     serve = commands.add_parser("serve", formatter_class=HelpFormatter,
                                 help="start the API (and, without BROKER_URL, the in-process job pool)",
@@ -462,6 +474,10 @@ def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentPar
     solve.add_argument("--json", action="store_true",
                        help="print an invalid input's problem document and a failure's report as JSON on standard "
                        "error, instead of one line per field")
+    solve.add_argument("--log-level", default=None, choices=log_levels,
+                       help="also print the run's log lines (the job runner's, third-party libraries', Python "
+                       "warnings) at this level and above on standard error (default: none; the report's warnings "
+                       "are printed either way)")
     solve.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="a progress bar on standard error while the job runs (default: when standard error is "
                        "a terminal)")
@@ -493,10 +509,27 @@ def _single_threaded_blas() -> None:
         os.environ.setdefault(name, "1")
 
 
+def _configure_logs(argv: list[str]) -> None:
+    """Where log lines go before any library is imported. ``serve`` and ``worker``: nowhere yet, the service's own
+    set-up (JSON lines, third-party lines and Python warnings included) follows. The other commands print their
+    own lines; log lines of the job's run and of third-party libraries (pint's unit definitions, matplotlib's
+    warnings), and Python warnings, only with ``--log-level``."""
+    if _command(argv) in ("serve", "worker"):
+        return
+    logging.captureWarnings(True)
+    wanted = argparse.ArgumentParser(add_help=False)
+    wanted.add_argument("--log-level")
+    level = wanted.parse_known_args(argv)[0].log_level
+    if level in LOG_LEVELS:  # (another value is refused by the command's parser)
+        logging.basicConfig(level=level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    else:  # a handler that drops them (without any, Python's last resort prints warnings to stderr)
+        logging.basicConfig(handlers=[logging.NullHandler()])
+
+
 def main(argv: list[str] | None = None) -> int:
     _single_threaded_blas()
-    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     argv = sys.argv[1:] if argv is None else argv
+    _configure_logs(argv)
     # the kind map (the settings for its plugins, every kind's schemas) only for solve; no solver until one runs
     args = build_parser(_kinds() if _command(argv) == "solve" else None).parse_args(argv)
     return args.func(args)

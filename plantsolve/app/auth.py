@@ -12,10 +12,13 @@ is dead from then on, and removing a key from ``API_KEYS`` ends its sessions. Th
 ``SameSite=Strict`` (``Secure`` over https) and honoured for reads (GET/HEAD) and for the dashboard's own
 forms (POST under ``/dashboard/``), never for a ``/v1`` write. A dashboard form must also carry the token
 :func:`form_token` derives from the session (a page of another site cannot know it) and must not come from
-another site (``Sec-Fetch-Site``). The login form itself carries a CSRF token that must match the login
-cookie set with it (double submit), and an address with ``LOGIN_FAILURES`` failed logins within
-``LOGIN_WINDOW_SECONDS`` is answered 429 with ``Retry-After`` until the oldest of them leaves the window
-(counted in the database: every API process sees the same count).
+another site (``Sec-Fetch-Site``). The login form itself carries a CSRF token the server issued
+(:class:`LoginTokens`: signed with a server secret and dated, so a token a page of another site makes up is
+refused, cookie or not), which must also match the login cookie set with it; an address with
+``LOGIN_FAILURES`` failed logins within ``LOGIN_WINDOW_SECONDS`` is answered 429 with ``Retry-After`` until
+the oldest of them leaves the window (counted in the database: every API process sees the same count). The
+address is the connection's peer, or what a proxy named in ``FORWARDED_ALLOW_IPS`` says it is: a header
+from anyone else cannot choose the key it is counted under.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import ipaddress
 import logging
 import math
 import secrets
+import time
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 
@@ -45,6 +49,7 @@ PUBLIC_ASSETS = "/dashboard-static/"  # the dashboard's style and script: no ses
 SESSION_SECONDS = 8 * 3600.0  # a session's lifetime from login (absolute: a working day)
 LOGIN_FAILURES = 10  # failed logins of one client address ...
 LOGIN_WINDOW_SECONDS = 60.0  # ... within this sliding window, before it is answered 429
+LOGIN_FORM_SECONDS = 3600  # how long a login form's CSRF token is honoured
 
 
 @dataclass(frozen=True)
@@ -134,6 +139,40 @@ class Sessions:
     def failed(self, address: str) -> None:
         now = datetime.now(timezone.utc)
         self.table.record_failure(address, now, now - timedelta(seconds=self.window_seconds))
+
+
+class LoginTokens:
+    """The login form's CSRF tokens: ``<issued>-<nonce>-<HMAC-SHA256>`` (hex digits and dashes), made and checked with a server secret,
+    so a token is one this service issued (within ``lifetime_seconds``) and nothing a client chose. Stateless:
+    every API process with the same secret checks the others' tokens."""
+
+    def __init__(self, secret: bytes, lifetime_seconds: float = LOGIN_FORM_SECONDS):
+        self.secret, self.lifetime_seconds = secret, lifetime_seconds
+
+    @classmethod
+    def for_settings(cls, login_secret: str | None, api_keys: list[str], admin_keys: list[str]) -> "LoginTokens":
+        """``LOGIN_SECRET``, else a key derived from the configured API keys (shared by every API process; a
+        client that does not hold them all cannot derive it)."""
+        if login_secret:
+            return cls(login_secret.encode())
+        keys = "\0".join(sorted([*api_keys, *admin_keys]))
+        return cls(hashlib.sha256(b"plantsolve login form\0" + keys.encode()).digest())
+
+    def _signature(self, body: str) -> str:
+        return hmac.new(self.secret, body.encode(), hashlib.sha256).hexdigest()
+
+    def issue(self) -> str:
+        body = f"{int(time.time())}-{secrets.token_hex(16)}"
+        return f"{body}-{self._signature(body)}"
+
+    def valid(self, token: str) -> bool:
+        body, _, signature = token.rpartition("-")
+        issued, _, nonce = body.partition("-")
+        if not (issued.isdigit() and nonce and signature):
+            return False
+        if not hmac.compare_digest(signature.encode(), self._signature(body).encode()):
+            return False
+        return 0 <= time.time() - int(issued) <= self.lifetime_seconds
 
 
 def _credentials(scope: Scope) -> tuple[str | None, str | None]:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import hmac
 import json
-import secrets
 import uuid
 from pathlib import Path
 from typing import Annotated, Any
@@ -25,7 +24,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from plantsolve.app import dashboard_views as views
-from plantsolve.app.auth import (COOKIE, LOGIN_COOKIE, Sessions, cookie_key, form_token, principal,
+from plantsolve.app.auth import (COOKIE, LOGIN_COOKIE, LoginTokens, Sessions, cookie_key, form_token, principal,
                                  require_api_key)
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
@@ -56,6 +55,8 @@ class Forbidden(ProblemError):
 def install_dashboard(app: FastAPI) -> None:
     # the login sessions live in the store's session table (see auth.Sessions)
     app.state.sessions = Sessions(app.state.ctx.store.sessions, app.state.keys)
+    settings = app.state.settings
+    app.state.login_tokens = LoginTokens.for_settings(settings.login_secret, settings.api_keys, settings.admin_keys)
     app.include_router(build_dashboard())
     app.mount(STATIC, StaticFiles(directory=HERE / "static"), name="dashboard-static")
 
@@ -67,11 +68,13 @@ def _page(request: Request, name: str, status_code: int = 200, **context: Any) -
 
 
 def _login_page(request: Request, status_code: int, message: str, csrf: str | None = None) -> HTMLResponse:
-    """The login form with its CSRF token, which is also set as a cookie scoped to the login: the post must
-    send both and they must match (double submit; no server state, so any API process checks it)."""
-    csrf = csrf or secrets.token_urlsafe(32)
+    """The login form with a CSRF token the server signed (see ``auth.LoginTokens``), also set as a cookie scoped
+    to the login: the post must send both, they must match, and the server must have issued the token (signed
+    and dated, so any API process checks it without state)."""
+    tokens: LoginTokens = request.app.state.login_tokens
+    csrf = csrf if csrf and tokens.valid(csrf) else tokens.issue()
     response = _page(request, "login.html", status_code, message=message, csrf=csrf)
-    response.set_cookie(LOGIN_COOKIE, csrf, max_age=3600, httponly=True, samesite="strict",
+    response.set_cookie(LOGIN_COOKIE, csrf, max_age=int(tokens.lifetime_seconds), httponly=True, samesite="strict",
                         secure=request.url.scheme == "https", path="/dashboard/login")
     return response
 
@@ -153,7 +156,8 @@ def build_dashboard() -> APIRouter:
         keys, sessions = request.app.state.keys, request.app.state.sessions
         sent = request.cookies.get(LOGIN_COOKIE, "")
         if (request.headers.get("sec-fetch-site", "same-origin") in ("cross-site", "same-site")
-                or not csrf or not hmac.compare_digest(csrf.encode(), sent.encode())):
+                or not csrf or not hmac.compare_digest(csrf.encode(), sent.encode())
+                or not request.app.state.login_tokens.valid(csrf)):
             raise Forbidden("The login form's token is missing or stale: reload the login page and send it again.")
         if not keys:  # no keys: nothing to log in to
             return RedirectResponse("/dashboard", status_code=303)

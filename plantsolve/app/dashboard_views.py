@@ -57,6 +57,8 @@ class Row:
     created: str
     run: str
     input: str = "JSON"
+    first_warning: str = ""  # the report's first warning's code (a kind puts its gravest first: a failed inspection)
+    first_warning_message: str = ""
 
 
 def input_label(job: Any) -> str:
@@ -66,6 +68,7 @@ def input_label(job: Any) -> str:
 
 def row(view: JobView, input: str = "JSON") -> Row:
     report = view.report
+    first = report.warnings[0] if report is not None and report.warnings else None
     message = (report.message if report is not None and report.message else "") or view.progress.message
     if view.status in ("queued", "running"):
         message = view.progress.message
@@ -81,6 +84,8 @@ def row(view: JobView, input: str = "JSON") -> Row:
         created=when(view.timings.created_at),
         run=seconds(view.timings.run_seconds),
         input=input,
+        first_warning=first.code if first is not None else "",
+        first_warning_message=first.message[:300] if first is not None else "",
     )
 
 

@@ -20,8 +20,10 @@ and one scan of its headers instead of five. The order of the checks is the orde
    than the database work); every other request goes on to the app.
 
 A crash in a lean route propagates exactly as from a route: a problem error is rendered by the app's handler for
-its class, anything else reaches Starlette's outermost error middleware (503 for an unreachable database, 500
-otherwise).
+its class. An infrastructure failure (an unreachable database, queue or file store) raised by any route is
+answered here, 503 with ``Retry-After`` and one log line (:func:`~plantsolve.app.problems.unavailable`): past this
+layer Starlette's outermost error middleware would re-raise it to the server, which logs a full traceback per
+request of an outage. Anything else reaches that middleware (500, with its traceback in the log).
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from plantsolve.app.auth import AuthMiddleware, KeyRing
 from plantsolve.app.jobs.lean import LeanRoutes
 from plantsolve.app.middleware import declared_too_large, limited, secured
-from plantsolve.app.problems import problem_response
+from plantsolve.app.problems import problem_response, unavailable
+from plantsolve.jobs.errors import is_infrastructure_failure
 
 REQUEST_ID = b"x-request-id"
 log = logging.getLogger("asgi_correlation_id")  # the logger (and message) of the middleware this replaces
@@ -72,13 +75,22 @@ class EdgeMiddleware:
         request_id = self._request_id(scope)
         correlation_id.set(request_id)
         header = (REQUEST_ID, request_id.encode("latin-1"))
+        started = False
 
         async def identified(message) -> None:
+            nonlocal started
             if message["type"] == "http.response.start":
                 message["headers"] = [*message.get("headers", ()), header]
+                started = True
             await send(message)
 
-        await self.entry(scope, receive, secured(scope, identified))
+        try:
+            await self.entry(scope, receive, secured(scope, identified))
+        except Exception as error:
+            if started or not is_infrastructure_failure(error):
+                raise
+            response = problem_response(unavailable(error, scope.get("path", "")))
+            await response(scope, receive, secured(scope, identified))
 
     @staticmethod
     def _request_id(scope: Scope) -> str:

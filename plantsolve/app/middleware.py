@@ -60,11 +60,32 @@ INLINE_SCRIPT_PATHS = ("/docs", "/docs/oauth2-redirect")  # Swagger UI's pages: 
 
 
 NOSNIFF = (b"x-content-type-options", b"nosniff")
+# a year; sent only on answers that came over TLS (a browser ignores it on http, and a plain-http deployment
+# must not be told to refuse itself)
+HSTS = (b"strict-transport-security", b"max-age=31536000")
+NO_STORE = (b"cache-control", b"no-store")
+# answers that may hold a tenant's data (pages, jobs, results, metrics): no shared cache, no disk cache keeps them
+PRIVATE_PATHS = ("/dashboard/", "/v1/", "/metrics")
+
+
+def _extra_headers(scope: Scope, raw: list[tuple[bytes, bytes]], media: bytes) -> list[tuple[bytes, bytes]]:
+    """HSTS over TLS; ``Cache-Control: no-store`` on every page and every private answer that sets no cache
+    policy of its own."""
+    extra = []
+    if scope.get("scheme") == "https":
+        extra.append(HSTS)
+    path = scope.get("path", "")
+    if (media == b"text/html" or path == "/dashboard" or path.startswith(PRIVATE_PATHS)) \
+            and not any(name.lower() == NO_STORE[0] for name, _ in raw):
+        extra.append(NO_STORE)
+    return extra
 
 
 def secured(scope: Scope, send: Send, inline_script_paths: tuple[str, ...] = INLINE_SCRIPT_PATHS) -> Send:
     """``send`` with the security headers put on the answer's start. Every answer carries
-    ``X-Content-Type-Options: nosniff``; every HTML page (dashboard, docs, errors) also ``Content-Security-Policy``, ``X-Frame-Options: DENY`` and ``Referrer-Policy: no-referrer``.
+    ``X-Content-Type-Options: nosniff``; every HTML page (dashboard, docs, errors) also ``Content-Security-Policy``, ``X-Frame-Options: DENY`` and ``Referrer-Policy: no-referrer``;
+    every page and every answer under ``/v1/``, ``/dashboard`` and ``/metrics`` ``Cache-Control: no-store``
+    (unless it sets a cache policy itself); every answer over https ``Strict-Transport-Security``.
 
     The pages named in ``inline_script_paths`` (Swagger UI's, whose bootstrap script FastAPI writes inline)
     get the SHA-256 of each of their inline scripts in ``script-src``: those pages are made from the app's
@@ -81,11 +102,13 @@ def secured(scope: Scope, send: Send, inline_script_paths: tuple[str, ...] = INL
             raw = message.setdefault("headers", [])
             media = next((value for name, value in raw if name.lower() == b"content-type"), b"")
             media = media.split(b";")[0].strip().lower()
+            extra = _extra_headers(scope, raw, media)
             if media not in (b"text/html", b"image/svg+xml") and not any(name.lower() == NOSNIFF[0] for name, _ in raw):
-                # the common answer (JSON, files): one header appended to the raw list, no header object built
-                message["headers"] = [*raw, NOSNIFF]
+                # the common answer (JSON, files): headers appended to the raw list, no header object built
+                message["headers"] = [*raw, NOSNIFF, *extra]
                 await send(message)
                 return
+            message["headers"] = raw = [*raw, *extra]
             headers = MutableHeaders(scope=message)
             headers["X-Content-Type-Options"] = "nosniff"
             if media == b"image/svg+xml":

@@ -24,6 +24,7 @@ from plantsolve.jobs.errors import (
     UnsupportedMediaType,
     field_problem,
     is_infrastructure_failure,
+    json_path,
     summary,
 )
 from plantsolve.schemas.jobs import Problem
@@ -50,6 +51,16 @@ class ServiceUnavailable(ProblemError):
     status, title, slug = 503, "Service unavailable", "unavailable"
 
 
+def unavailable(error: BaseException, path: str) -> ServiceUnavailable:
+    """The 503 of an infrastructure failure (``is_infrastructure_failure``), logged as one line without a
+    traceback: an outage answers many requests, and its cause is the same in each."""
+    reason = (str(error).strip().splitlines() or [""])[0][:200]
+    log.warning("503 on %s: %s%s", path, type(error).__name__, f": {reason}" if reason else "")
+    return ServiceUnavailable(
+        "A service this request needs (the database, the queue or the file store) is unreachable; "
+        "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+
+
 def problem_response(error: ProblemError, request: Request | None = None) -> JSONResponse:
     problem = error.to_problem(instance=str(request.url.path) if request is not None else None)
     return JSONResponse(
@@ -63,6 +74,16 @@ def problem_response(error: ProblemError, request: Request | None = None) -> JSO
 _STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, PayloadTooLarge, UnsupportedMediaType, Unprocessable)}
 
 
+def _place(error: dict[str, Any], body: Any) -> list[str | int]:
+    """Where a routed request's validation error is: a JSON body's field by its path in the body as sent (as
+    the submit routes name it: ``points/0/beta``, without the tags pydantic puts in for the member of a union);
+    a query, path or header parameter as FastAPI names it (``query/limit``)."""
+    loc = list(error["loc"])
+    if loc[:1] == ["body"] and isinstance(body, (dict, list)) and error["type"] != "json_invalid":
+        return json_path(body, loc[1:], error["type"])
+    return loc
+
+
 def install(app: FastAPI) -> None:
     @app.exception_handler(ProblemError)
     async def _problem(request: Request, error: ProblemError):
@@ -70,7 +91,7 @@ def install(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, error: RequestValidationError):
-        errors = [field_problem(e["loc"], e["msg"], e["type"]) for e in error.errors()]
+        errors = [field_problem(_place(e, error.body), e["msg"], e["type"]) for e in error.errors()]
         return problem_response(Unprocessable(summary(errors), errors=errors), request)
 
     @app.exception_handler(StarletteHTTPException)
@@ -101,11 +122,8 @@ def install(app: FastAPI) -> None:
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, error: Exception):
         # Starlette answers these outside every middleware: the request id is set here
-        if is_infrastructure_failure(error):
-            log.warning("infrastructure unavailable on %s: %s", request.url.path, type(error).__name__)
-            problem = ServiceUnavailable(
-                "A service this request needs (the database, the queue or the file store) is unreachable; "
-                "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
+        if is_infrastructure_failure(error):  # (the edge answers most of these before they get here)
+            problem = unavailable(error, request.url.path)
         else:
             log.exception("unhandled error on %s", request.url.path)
             problem = ProblemError("An unexpected error occurred; it has been logged.")

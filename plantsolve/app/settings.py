@@ -28,6 +28,18 @@ class AppSettings(JobSettings):
     cors_origins: Annotated[list[str], NoDecode] = Field(
         default_factory=list, description="Comma-separated origins allowed to call the API from a browser (CORS off when empty)."
     )
+    forwarded_allow_ips: Annotated[list[str], NoDecode] = Field(
+        default_factory=list,
+        description="Comma-separated addresses (or networks, or '*') of reverse proxies whose X-Forwarded-For and "
+        "X-Forwarded-Proto are believed: the client address (the login limit's key) and the scheme come from "
+        "those headers only when the connection comes from one of them. Empty: the headers are ignored, "
+        "loopback included.",
+    )
+    login_secret: str | None = Field(
+        default=None, min_length=16,
+        description="Key signing the login form's CSRF token (every API process must share it). Unset: derived "
+        "from API_KEYS and ADMIN_KEYS, which every process shares already.",
+    )
     max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, description="Largest accepted uploaded file (413 above).")
     auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
@@ -60,7 +72,7 @@ class AppSettings(JobSettings):
         default=1.0, gt=0, le=60, description="How often the API process looks for finished jobs with a webhook to send."
     )
 
-    @field_validator("api_keys", "admin_keys", "cors_origins", "webhook_secrets", mode="before")
+    @field_validator("api_keys", "admin_keys", "cors_origins", "webhook_secrets", "forwarded_allow_ips", mode="before")
     @classmethod
     def _split_keys(cls, value: object) -> object:
         return split_commas(value)

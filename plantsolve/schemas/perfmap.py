@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, model_validator
 
 from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel
 
@@ -475,6 +475,8 @@ class PerfmapQueryResult(BaseModel):
 class BetaPointBySetting(StrictModel):
     """A map lookup as a cycle code does it: setting values (speed last) and beta."""
 
+    model_config = ConfigDict(extra="forbid", strict=True)  # strict: "0.9" is no number
+
     setting: list[FiniteFloat] = Field(
         min_length=1, max_length=3,
         description="Setting values in the order of the result's setting_names (speed last). The leading "
@@ -489,6 +491,8 @@ class BetaPointBySetting(StrictModel):
 class BetaPointBySpeed(StrictModel):
     """A lookup on a one-setting map: the speed and beta."""
 
+    model_config = ConfigDict(extra="forbid", strict=True)
+
     speed: FiniteFloat = Field(description="The speed (maps whose only setting is the speed).")
     beta: FiniteFloat = Field(ge=0.0, le=1.0, description="Beta: 0 at choke, 1 at surge.")
 
@@ -497,21 +501,50 @@ class BetaPointBySpeed(StrictModel):
         return None
 
 
+def _beta_form(value: Any) -> str | None:
+    """Which form a point (or a whole request) is in, so that only that form's rules judge it: one error per
+    bad field, not one per form it might have been. A point naming ``speed`` is the speed form; any other
+    object the setting form (which then names what is missing or extra)."""
+    if isinstance(value, dict):
+        return "points_list" if "points" in value else "by_speed" if "speed" in value else "by_setting"
+    return {BetaPoints: "points_list", BetaPointBySpeed: "by_speed", BetaPointBySetting: "by_setting"}.get(type(value))
+
+
+_POINT_FORMS = 'a point is an object: {"speed": number, "beta": number} or {"setting": [numbers], "beta": number}'
+
 # one or the other, never both: two closed objects, so the contract itself says so
-BetaPoint = BetaPointBySetting | BetaPointBySpeed
+BetaPoint = Annotated[
+    Annotated[BetaPointBySetting, Tag("by_setting")] | Annotated[BetaPointBySpeed, Tag("by_speed")],
+    Discriminator(_beta_form, custom_error_type="beta_point_type", custom_error_message=_POINT_FORMS),
+]
 
 
-class PerfmapBetaQueryRequest(StrictModel):
-    """``{"points": [{"speed": 0.9, "beta": 0.5}, ...]}`` or a single ``{"speed": ..., "beta": ...}``."""
+class BetaPoints(StrictModel):
+    """Several lookups: ``{"points": [...]}``."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     points: list[BetaPoint] = Field(min_length=1, max_length=10_000)
 
-    @model_validator(mode="before")
-    @classmethod
-    def _single_point(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "points" not in data and "beta" in data:
-            return {"points": [data]}
-        return data
+
+class PerfmapBetaQueryRequest(RootModel):
+    """``{"points": [{"speed": 0.9, "beta": 0.5}, ...]}``, or one point alone: ``{"speed": 0.9, "beta": 0.5}``
+    (or ``{"setting": [...], "beta": ...}``). Numbers are JSON numbers (strict)."""
+
+    root: Annotated[
+        Annotated[BetaPoints, Tag("points_list")] | Annotated[BetaPointBySetting, Tag("by_setting")]
+        | Annotated[BetaPointBySpeed, Tag("by_speed")],
+        Discriminator(_beta_form, custom_error_type="beta_query_type",
+                      custom_error_message='the body is an object: {"points": [...]} or one point; ' + _POINT_FORMS),
+    ]
+
+    @property
+    def points(self) -> list[BetaPointBySetting | BetaPointBySpeed]:
+        return list(self.root.points) if isinstance(self.root, BetaPoints) else [self.root]
+
+    def place(self, i: int) -> tuple[str | int, ...]:
+        """Where point ``i`` is in the body: ``("points", i)``, or the body itself for the one-point form."""
+        return ("points", i) if isinstance(self.root, BetaPoints) else ()
 
 
 class BetaAnswer(BaseModel):

@@ -5,6 +5,10 @@ Fields: ``time`` (UTC, ISO 8601), ``level``, ``logger``, ``message``, and whatev
 ``duration_seconds``, ``outcome``, ``worker``; an HTTP request's log lines carry ``request_id``, the
 ``X-Request-ID`` the API answered with). ``LOG_FORMAT=text`` gives plain lines instead. The
 ``plantsolve`` logger then writes its lines itself and does not pass them on to the root logger.
+
+Third-party libraries' log lines (pint, matplotlib, …, warning and above) and Python ``warnings`` are written by
+the same handler, so every line of a process's log is in its format: it is put on the root logger when nothing
+else (a host application, Celery) has configured that one.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ def configure_logging(log_format: str = "json", level: int | str = logging.INFO,
     (a name such as ``"warning"`` or a number): the least severe line they write."""
     logger = logging.getLogger("plantsolve")
     logger.setLevel(level.upper() if isinstance(level, str) else level)
+    logging.captureWarnings(True)  # Python warnings become log records (logger py.warnings), not stderr text
     for handler in logger.handlers:
         if getattr(handler, _MARK, False):
             return handler
@@ -52,4 +57,8 @@ def configure_logging(log_format: str = "json", level: int | str = logging.INFO,
     logger.addHandler(handler)
     # written once, here: a root handler set up by the command line or a host application would repeat each line
     logger.propagate = False
+    root = logging.getLogger()
+    if not root.handlers:  # third-party lines: ours to write only where nobody else writes them
+        root.addHandler(handler)
+        root.setLevel(max(logging.WARNING, logger.level))
     return handler

@@ -39,7 +39,7 @@ def test_submit_watch_and_list_in_a_browser(site):
     from selenium.webdriver.support.ui import Select, WebDriverWait
 
     app, base, driver = site
-    wait = WebDriverWait(driver, 30, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
+    wait = WebDriverWait(driver, 120, poll_frequency=0.1, ignored_exceptions=(StaleElementReferenceException,))
     api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
     other = api.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]}).json()  # a second kind for the filter
 
@@ -185,3 +185,118 @@ def test_pages_poll_when_the_browser_has_no_event_stream(site):
     assert driver.execute_script("return window.sameDocument === true;")
     assert driver.find_element(By.TAG_NAME, "body").get_attribute("data-transport") == "polling"
     assert "1 warning" in driver.find_element(By.CSS_SELECTOR, ".headline .warn").text
+
+
+UPLOADS = {"alignment": "alignment/ladder.pcf", "tube": "tube/scan.xyz", "perfmap": "perfmap/n3_fan_map.csv",
+           "dedup": "dedup/tunnel_3rings.ifc", "flowmeter": "flowmeter/meter.json",
+           "polyhedra": "polyhedra/two_offices.idf", "rigidity": "rigidity/hinged_wall.ldr"}
+ERRORS = "window.pageErrors = []; window.addEventListener('error', e => window.pageErrors.push(String(e.message)));"
+
+
+@pytest.mark.parametrize("kind", sorted(UPLOADS))
+def test_every_kinds_generated_option_form_writes_back_what_it_shows_and_submits(site, kind):
+    """Each kind's upload form, generated from its options schema: a field per option, each writing back exactly
+    the value it shows when touched (no number made a string, no text's lines lost, no choice changed), no script
+    error; the upload of the kind's example file through it is accepted."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = site
+    assert set(UPLOADS) == {k for k, spec in KINDS.items() if spec.upload_extensions}  # every kind that reads files
+    wait = WebDriverWait(driver, 30, poll_frequency=0.1)
+    driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": ERRORS})
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/submit/{kind}")
+    schema = json.loads(driver.find_element(By.ID, "options-schema").get_attribute("textContent"))
+    fields = driver.find_elements(By.CSS_SELECTOR, "#option-fields [data-option]")
+    assert sorted(f.get_attribute("data-option") for f in fields) == sorted(schema["properties"])
+    text = driver.find_element(By.ID, "options-json")
+    before = json.loads(text.get_attribute("value"))
+    driver.execute_script("document.querySelectorAll('#option-fields [data-option]')"
+                          ".forEach(i => i.dispatchEvent(new Event('change')));")
+    assert json.loads(text.get_attribute("value")) == before
+    form = driver.find_element(By.ID, "upload-form")
+    form.find_element(By.NAME, "file").send_keys(str(REPO / "examples" / UPLOADS[kind]))
+    form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
+    wait.until(lambda d: "/dashboard/jobs/" in d.current_url or d.find_elements(By.ID, "problem"))
+    problem = driver.find_elements(By.ID, "problem")
+    assert not problem, problem[0].text
+    assert driver.execute_script("return window.pageErrors;") == []
+    job_id = re.search(r"/dashboard/jobs/([0-9a-f-]{36})", driver.current_url).group(1)
+    httpx.post(f"{base}/v1/jobs/{job_id}/cancel", headers={"Authorization": f"Bearer {KEY}"})  # not needed further
+
+
+def test_a_tube_nominal_is_typed_in_lines_or_read_from_a_file(site):
+    """The nominal CSV was a one-line text field that dropped its line breaks (422 'holds no rows'): now a
+    multi-line field, filled from a chosen file; the upload then carries the CSV whole."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = site
+    wait = WebDriverWait(driver, 30, poll_frequency=0.1)
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/submit/tube")
+    nominal = driver.find_element(By.CSS_SELECTOR, '#option-fields [data-option="nominal_csv"]')
+    assert nominal.tag_name == "textarea"
+    nominal.send_keys("1,80,0,90,18\n2,45,90,45,18")
+    assert json.loads(driver.find_element(By.ID, "options-json").get_attribute("value"))["nominal_csv"] == \
+        "1,80,0,90,18\n2,45,90,45,18"
+    csv = REPO / "examples" / "tube" / "nominal_lra.csv"
+    driver.find_element(By.CSS_SELECTOR, 'input[type=file][data-file-for="nominal_csv"]').send_keys(str(csv))
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, '[data-option="nominal_csv"]').get_attribute("value")
+               == csv.read_text())
+    shown = json.loads(driver.find_element(By.ID, "options-json").get_attribute("value"))
+    assert shown["nominal_csv"] == csv.read_text()
+    form = driver.find_element(By.ID, "upload-form")
+    form.find_element(By.NAME, "file").send_keys(str(REPO / "examples" / "tube" / "scan.xyz"))
+    form.find_element(By.CSS_SELECTOR, "button[type=submit]").click()
+    wait.until(lambda d: "/dashboard/jobs/" in d.current_url or d.find_elements(By.ID, "problem"))
+    assert not driver.find_elements(By.ID, "problem"), driver.find_element(By.ID, "problem").text
+    job_id = re.search(r"/dashboard/jobs/([0-9a-f-]{36})", driver.current_url).group(1)
+    api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
+    assert api.get(f"/v1/jobs/{job_id}/input").json()["options"]["nominal_csv"] == csv.read_text()
+    api.post(f"/v1/jobs/{job_id}/cancel")
+
+
+def test_a_plot_opens_full_size_and_the_first_warning_heads_the_page(site):
+    from selenium.webdriver.common.by import By
+    from selenium.common.exceptions import StaleElementReferenceException
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = site
+    wait = WebDriverWait(driver, 120, poll_frequency=0.2, ignored_exceptions=(StaleElementReferenceException,))
+    api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
+    job = api.post("/v1/polyhedra/jobs", json=KINDS["polyhedra"].example()).json()
+    warned = api.post("/v1/test-compute/jobs", json={"values": [-1.0]}).json()
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    driver.get(f"{base}/dashboard/jobs/{job['id']}")
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, "#job-detail [data-field=status]").text == "succeeded")
+    wait.until(lambda d: d.execute_script(
+        "const i = document.querySelector('.plots img'); return i && i.complete && i.naturalWidth > 0;"))
+    inline, page = driver.execute_script(
+        "return [document.querySelector('.plots img').getBoundingClientRect().width,"
+        " document.querySelector('main').getBoundingClientRect().width];")
+    assert inline > 0.85 * page - 64  # the page's width (less its padding), not half of it
+    driver.find_element(By.CSS_SELECTOR, ".plots a.plot-open").click()
+    wait.until(lambda d: d.execute_script(
+        "const v = document.getElementById('plot-viewer'); const i = v && v.querySelector('img');"
+        "return v && v.open && i.complete && i.naturalWidth > 0;"))
+    natural, shown = driver.execute_script(
+        "const i = document.querySelector('#plot-viewer img'); return [i.naturalWidth, i.getBoundingClientRect().width];")
+    assert abs(shown - natural) <= 1  # its own resolution, scrolled in the viewer
+    assert "/dashboard/jobs/" in driver.current_url  # no navigation (the artifact link would download)
+    driver.find_element(By.TAG_NAME, "body").send_keys(Keys.ESCAPE)
+    wait.until(lambda d: not d.execute_script("return document.getElementById('plot-viewer').open;"))
+
+    driver.get(f"{base}/dashboard/jobs/{warned['id']}")
+    wait.until(lambda d: d.find_elements(By.ID, "report-banner"))
+    banner = driver.find_element(By.ID, "report-banner")
+    assert banner.text.startswith("⚠ negative Some values are negative.") and banner.is_displayed()
+    assert banner.location["y"] < driver.find_element(By.CSS_SELECTOR, ".facts").location["y"]
+    driver.get(f"{base}/dashboard")
+    row = driver.find_element(By.CSS_SELECTOR, f'tr[data-job="{warned["id"]}"]')
+    assert row.find_element(By.CSS_SELECTOR, "[data-field=first-warning]").text == "negative"

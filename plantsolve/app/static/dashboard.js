@@ -143,11 +143,14 @@
 })();
 
 // The upload form's options, generated from the kind's options JSON schema (embedded in the page as
-// #options-schema): a number, check box, choice or text field per option, each starting at the value the
-// JSON text shows (the defaults); nested objects and lists stay JSON. Every change writes the JSON text,
+// #options-schema): a number, check box, choice or text field per option (a multi-line field with a file
+// picker for an option that holds a file's text), each starting at the value the JSON text shows (the
+// defaults); nested objects and lists stay JSON. Every change writes the JSON text,
 // which is what the form posts; without this script the JSON text alone is the form.
 (function () {
   "use strict";
+  // a string option longer than this is the text of a file: a multi-line field with a file picker
+  var LONG_TEXT = 1000;
 
   function resolve(schema, root) {
     while (schema && schema.$ref) schema = root.$defs[schema.$ref.split("/").pop()];
@@ -160,6 +163,10 @@
     var choices = schema.anyOf || schema.oneOf;
     if (choices) {
       var real = choices.map(function (c) { return resolve(c, root); }).filter(function (c) { return c.type !== "null"; });
+      if (real.length === 1 && real[0].type === "boolean") {
+        // null is a third answer ("the kind decides"): a choice of (not set), true, false, not a check box
+        return { enum: [true, false], nullable: true, description: schema.description || real[0].description };
+      }
       if (real.length === 1) return Object.assign({}, real[0], { nullable: true, description: schema.description || real[0].description });
       if (real.every(function (c) { return c.const !== undefined || c.enum; })) {
         var values = [];
@@ -178,7 +185,7 @@
     wrap.title = schema.description || "";
     var caption = document.createElement("span");
     caption.textContent = name;
-    var input;
+    var input, picker;
     if (schema.enum) {
       input = document.createElement("select");
       var list = schema.nullable ? [null].concat(schema.enum) : schema.enum;
@@ -203,6 +210,26 @@
       if (schema.maximum !== undefined) input.max = schema.maximum;
       input.value = value === undefined || value === null ? "" : String(value);
       input.read = function () { return input.value === "" ? undefined : Number(input.value); };
+    } else if (schema.type === "string" && schema.maxLength > LONG_TEXT) {
+      // the text of a file (a tube's nominal CSV): lines kept, typed or pasted here or read from a chosen file
+      input = document.createElement("textarea");
+      input.rows = 6;
+      input.spellcheck = false;
+      input.wrap = "off";
+      input.value = value === undefined || value === null ? "" : value;
+      input.read = function () { return input.value === "" ? undefined : input.value; };
+      var picker = document.createElement("input");
+      picker.type = "file";
+      picker.name = "";  // not posted: its text goes into the field
+      picker.dataset.fileFor = name;
+      picker.addEventListener("change", function () {
+        var file = picker.files && picker.files[0];
+        if (!file) return;
+        file.text().then(function (text) {
+          input.value = text;
+          input.dispatchEvent(new Event("change"));
+        });
+      });
     } else if (schema.type === "string") {
       input = document.createElement("input");
       input.type = "text";
@@ -223,6 +250,14 @@
     input.dataset.option = name;
     wrap.appendChild(caption);
     wrap.appendChild(input);
+    if (picker) {
+      wrap.classList.add("option-text");
+      var from = document.createElement("span");
+      from.className = "file-source";
+      from.textContent = "or read it from a file: ";
+      from.appendChild(picker);
+      wrap.appendChild(from);
+    }
     if (schema.description) {
       var help = document.createElement("small");
       help.textContent = schema.description;
@@ -264,4 +299,58 @@
   }
 
   document.addEventListener("DOMContentLoaded", build);
+})();
+
+// Plots open full size: a click on a plot shows it at its own resolution in a viewer over the page (scrolled
+// when larger than the window; a click on the image toggles fitting it to the window); Escape or the close
+// button ends it. Delegated from the document: the job's detail is swapped in anew on status changes.
+(function () {
+  "use strict";
+
+  function viewer() {
+    var dialog = document.getElementById("plot-viewer");
+    if (dialog) return dialog;
+    dialog = document.createElement("dialog");
+    dialog.id = "plot-viewer";
+    dialog.className = "plot-viewer";
+    var bar = document.createElement("div");
+    bar.className = "viewer-bar";
+    var title = document.createElement("span");
+    title.className = "viewer-title";
+    var download = document.createElement("a");
+    download.className = "viewer-download";
+    download.textContent = "download";
+    download.setAttribute("download", "");
+    var close = document.createElement("button");
+    close.type = "button";
+    close.className = "viewer-close";
+    close.textContent = "Close";
+    close.addEventListener("click", function () { dialog.close(); });
+    bar.appendChild(title);
+    bar.appendChild(download);
+    bar.appendChild(close);
+    var frame = document.createElement("div");
+    frame.className = "viewer-frame";
+    var img = document.createElement("img");
+    img.addEventListener("click", function () { dialog.classList.toggle("fit"); });
+    frame.appendChild(img);
+    dialog.appendChild(bar);
+    dialog.appendChild(frame);
+    dialog.addEventListener("click", function (event) { if (event.target === dialog) dialog.close(); });
+    document.body.appendChild(dialog);
+    return dialog;
+  }
+
+  document.addEventListener("click", function (event) {
+    var link = event.target.closest && event.target.closest("a.plot-open");
+    if (!link || event.ctrlKey || event.metaKey || event.shiftKey) return;
+    event.preventDefault();
+    var dialog = viewer();
+    dialog.classList.remove("fit");
+    dialog.querySelector("img").src = link.href;
+    dialog.querySelector("img").alt = link.dataset.name || "";
+    dialog.querySelector(".viewer-title").textContent = link.dataset.name || "";
+    dialog.querySelector(".viewer-download").href = link.href;
+    dialog.showModal();
+  });
 })();

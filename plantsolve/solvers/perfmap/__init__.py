@@ -57,7 +57,7 @@ SPEC = SolverSpec(
             description="One `{speed, beta}` (or `{setting: [...], beta}` with several setting parameters) or "
             "`{points: [...]}`. Beta 0 is the choke line, 1 the surge line. Exact on a fitted speed line, linear in "
             "speed between neighbouring lines; speeds outside the lines are refused (422), not extrapolated.",
-            example=lambda: {"points": [{"speed": 0.9, "beta": 0.5}, {"speed": 0.95, "beta": 1.0}]},
+            example=lambda: {"points": [{"setting": [0.0, 0.9], "beta": 0.5}, {"setting": [0.0, 1.0], "beta": 1.0}]},
         ),
     ),
 )

@@ -105,6 +105,11 @@ def _speed_bracket(speeds: np.ndarray, speed: float) -> tuple[int, int, float] |
     return j - 1, j, float((speed - speeds[j - 1]) / (speeds[j] - speeds[j - 1]))
 
 
+def _values(values) -> str:
+    """Setting values as text: ``0, 5`` (no Python brackets or tuples in a message)."""
+    return ", ".join(f"{float(v):g}" for v in values)
+
+
 def answer_beta_query(result: PerfmapResult, q: PerfmapBetaQueryRequest) -> PerfmapBetaQueryResult:
     """Flow, pressure and efficiency at (setting, beta): exact on a fitted speed line (the node of beta on the
     fitted curve, not the table's interpolation), linear in speed between the two neighbouring lines at the
@@ -118,26 +123,27 @@ def answer_beta_query(result: PerfmapResult, q: PerfmapBetaQueryRequest) -> Perf
     errors, asks = [], []
     for i, p in enumerate(q.points):
         if p.speed is not None and len(names) != 1:
-            errors.append(FieldError(("points", i, "speed"), f"this map has {len(names)} setting parameters "
+            errors.append(FieldError((*q.place(i), "speed"), f"this map has {len(names)} setting parameters "
                                      f"({', '.join(names)}): give 'setting' with all of them"))
             continue
         setting = [float(p.speed)] if p.speed is not None else [float(v) for v in p.setting]
         field = "speed" if p.speed is not None else "setting"
         if len(setting) != len(names):
-            errors.append(FieldError(("points", i, field), f"needs {len(names)} values ({', '.join(names)})"))
+            errors.append(FieldError((*q.place(i), field), f"needs {len(names)} values ({', '.join(names)})"))
             continue
         members = [k for k, line in enumerate(lines) if np.allclose(line.setting[:-1], setting[:-1], rtol=1e-9,
                                                                      atol=1e-12)]
         if not members:
             known = sorted({tuple(line.setting[:-1]) for line in lines})
-            errors.append(FieldError(("points", i, field, 0), f"{', '.join(names[:-1])} = {setting[:-1]} is no "
-                                     f"value of the map (it has {known[:10]})"))
+            errors.append(FieldError((*q.place(i), field, 0), f"{', '.join(names[:-1])} = {_values(setting[:-1])} "
+                                     f"is no value of the map (it has {'; '.join(_values(k) for k in known[:10])}"
+                                     f"{' …' if len(known) > 10 else ''})"))
             continue
         members.sort(key=lambda k: lines[k].setting[-1])
         speeds = np.array([lines[k].setting[-1] for k in members])
         bracket = _speed_bracket(speeds, setting[-1])
         if bracket is None:
-            errors.append(FieldError(("points", i, field) + ((len(names) - 1,) if field == "setting" else ()),
+            errors.append(FieldError((*q.place(i), field) + ((len(names) - 1,) if field == "setting" else ()),
                                      f"{names[-1]} {setting[-1]:g} is outside the map's speed lines "
                                      f"({speeds[0]:g} to {speeds[-1]:g}); no extrapolation"))
             continue
