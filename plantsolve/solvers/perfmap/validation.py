@@ -8,7 +8,6 @@ import numpy as np
 
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected
-from plantsolve.solvers.perfmap.units import to_internal
 
 CHOKE_FLOW_TOLERANCE = 1e-4  # flows this close to the largest (fraction of the line's flow range) are the same
 
@@ -189,8 +188,3 @@ def prepare(request: PerfmapRequest, choke_tolerance: float = CHOKE_FLOW_TOLERAN
         raise InputRejected(errors)
     settings.sort(key=lambda s: s.values)
     return settings
-
-
-def check_input(request: PerfmapRequest) -> None:
-    """Fast semantic validation (units included); raises :class:`InputRejected` naming each bad field."""
-    prepare(to_internal(request)[0])

@@ -1,0 +1,105 @@
+"""The perfmap job's input, made once (``SPEC.load``): the request in the solver's units, its settings read and
+checked, and what the reader and the plausibility checks have to say. The checks at submission, the solve and
+the artifacts share it, so the table is prepared once per process, never again by each of them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
+from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
+from plantsolve.solvers.perfmap.units import UnitError, fraction_factor, request_conversions, to_internal
+from plantsolve.solvers.perfmap.validation import Setting, prepare
+
+
+FRACTIONS = 1.5  # efficiencies all within this are fractions, whatever unit is stated for them
+
+
+@dataclass(frozen=True)
+class PerfmapInput:
+    """What check, solve and artifacts take: ``request`` as submitted, ``internal`` in the solver's units (the
+    result's), its ``settings`` prepared, the ``source`` stated in the report and the input's ``warnings``."""
+
+    request: PerfmapRequest
+    internal: PerfmapRequest
+    units: ResultUnits
+    settings: list[Setting]
+    source: dict[str, Any] = field(default_factory=dict)
+    warnings: list[Diagnostic] = field(default_factory=list)
+
+
+def file_loc(loc: tuple, rows_of: list[list[int]], values_of: Callable[[int], tuple], what: str = "line",
+             ) -> tuple[tuple, str]:
+    """A request loc ("positions", i, field, k) as ("file", "row", row, field), where ``rows_of[i][k]`` is the file
+    row of point k of position i, and a prefix naming the setting (``values_of(i)``) and its rows."""
+    if len(loc) < 2 or loc[0] != "positions" or not isinstance(loc[1], int) or loc[1] >= len(rows_of):
+        return ("file",), ""
+    i = loc[1]
+    rows = rows_of[i]
+    where = (f"setting {', '.join(f'{v:g}' for v in values_of(i))} "
+             f"({what}s {', '.join(map(str, rows[:12]))}{', ...' if len(rows) > 12 else ''}): ")
+    name = loc[2] if len(loc) > 2 and isinstance(loc[2], str) else None
+    k = loc[3] if len(loc) > 3 and isinstance(loc[3], int) and loc[3] < len(rows) else 0
+    return (("file", "row", rows[k], name) if name else ("file", "row", rows[k])), where
+
+
+def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapInput:
+    """The request converted (``units``, ``options.result_units``) and prepared; raises :class:`InputRejected`
+    naming the field, or for a table the file row, of each bad value."""
+    stated, contradicted = _efficiency_unit_against_values(request)
+    internal, units = to_internal(stated)
+    try:
+        settings = prepare(internal)
+    except InputRejected as error:
+        if not (request.source and request.source.rows):
+            raise
+        errors = []
+        for e in error.errors:
+            where, prefix = file_loc(tuple(e.loc), request.source.rows, request.setting_values,
+                                     request.source.row_label)
+            errors.append(FieldError(where, prefix + e.msg, e.type))
+        raise InputRejected(errors) from None
+    conversions = [c.model_dump() for c in (request.source.conversions if request.source else [])]
+    conversions += request_conversions(stated)
+    info: dict[str, Any] = {"format": request.source.format if request.source else "json",
+                            "conversions": conversions}
+    if source is not None:
+        info["file"] = source.name
+    return PerfmapInput(request, internal, units, settings, info,
+                        contradicted + plausibility_warnings(internal, units, settings))
+
+
+def _efficiency_unit_against_values(request: PerfmapRequest) -> tuple[PerfmapRequest, list[Diagnostic]]:
+    """A request whose ``units.efficiency`` is a per cent or per mille while every efficiency is a fraction
+    already (all within 1.5) is read as fractions, with a warning, instead of being divided again."""
+    unit = request.units.efficiency if request.units else None
+    try:
+        factor = fraction_factor(unit)
+    except UnitError:
+        return request, []  # to_internal refuses it naming units.efficiency
+    values = np.array([v for p in request.positions for v in p.efficiency], dtype=float)
+    if factor == 1.0 or not len(values) or np.abs(values).max() > FRACTIONS:
+        return request, []
+    note = Diagnostic(
+        code="unit_contradicted_by_values",
+        message=f"units.efficiency says {unit!r} but the efficiencies lie in {values.min():.4g}..{values.max():.4g}: "
+        f"fractions already, read as they are (not divided by {1 / factor:g} again).",
+        details={"field": "units.efficiency", "unit": unit, "values": [float(values.min()), float(values.max())],
+                 "reading": "fractions"})
+    return request.model_copy(update={"units": request.units.model_copy(update={"efficiency": "1"})}), [note]
+
+
+def loaded(value: PerfmapRequest | PerfmapInput) -> PerfmapInput:
+    """A loaded input from either (library use and tests pass the request itself)."""
+    return value if isinstance(value, PerfmapInput) else load(value)
+
+
+def check_input(value: PerfmapRequest | PerfmapInput) -> None:
+    """The checks across fields (units included), raising :class:`InputRejected` naming each bad field: loading
+    runs them, so a loaded input has passed them."""
+    loaded(value)
