@@ -8,8 +8,11 @@ CSV rules (as rig software and Excel write them):
   first non-blank character is ``#`` are skipped (also before the header);
 - separator: the one of an Excel ``sep=;`` first line, else tab if the header line holds
   one, else ``;`` if it holds one, else ``,``;
-  with ``;`` or tab a comma inside a number is a decimal comma (European Excel:
-  ``0,85``; ``1.234,5`` with thousands dots too);
+- numbers: one convention per column, read from its cells (:mod:`~plantsolve.solvers.perfmap.numbers`): a decimal
+  point with thousands commas (``1,104.338``; unquoted in a comma-separated file its groups are joined back when
+  the row then has the header's width) or a decimal comma with thousands dots (``0,85``, ``1.234,5``); a column
+  whose cells read both ways with nothing in the file to decide, or that mixes both, is refused naming its lines;
+  a row with more cells than the header is not read (its line named);
 - header: the first remaining line. A column's name is matched case-insensitively after
   stripping unit suffixes in brackets or parentheses (``Flow (m3/s)``, ``Theta [deg]``) and
   folding ``_``/``-``/blanks; accepted names per role are in :data:`HEADER_ALIASES` (rig and
@@ -19,8 +22,12 @@ CSV rules (as rig software and Excel write them):
   header to a role. A table needs flow, pressure, efficiency and one or two setting
   parameters: one is given as phi (theta = 0), two as (theta, phi) in the order of
   :data:`SETTING_ROLES`. An efficiency column whose unit is ``%`` (``Efficiency [%]``) is
-  divided by 100; efficiencies above 1 without that unit are rejected (percent is not
-  guessed). Other columns are reported in the result, not fatal;
+  divided by 100, unless its values are all fractions already (within 1.5: read as they are, with a warning); a
+  ``[-]`` efficiency holding 1.5..100 is per cent (warned); efficiencies above 1 without any unit are rejected
+  (percent is not guessed). Other columns are reported in the result, not fatal;
+- a file that is no rig table but another kind's (a point cloud, a bending table, an IDF …) is refused naming
+  what it holds; a last row without a line ending that is short or cut inside its last number (fewer decimals
+  than its column) is not read, with a ``truncated_file`` warning;
 - rows: any order; rows with equal (theta, phi) form one setting (in order of first
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
   different values is rejected (flow must increase along a characteristic after sorting).
@@ -272,9 +279,12 @@ def _what_it_holds(text: str, lines: list[tuple[int, str]]) -> str | None:
             return f"{held} (for {kind})" if kind != "perfmap" else held
     rows = [re.split(r"[\s,;]+", line.strip()) for _, line in lines[:20]]
     numeric = [r for r in rows if r and all(_is_number(c) for c in r)]
-    if len(numeric) >= min(3, len(rows)) and numeric == rows[:len(numeric)] and {len(r) for r in numeric} <= {3, 4, 6}:
+    # three (x y z) or six (and normals) numeric columns and no header; four or five may be a rig table whose header
+    # is missing, which the header's own message explains
+    if len(numeric) >= min(3, len(rows)) and numeric == rows[:len(numeric)] and len({len(r) for r in numeric}) == 1 \
+            and len(numeric[0]) in (3, 6):
         return (f"an XYZ point cloud ({len(numeric[0])} numeric columns, no header: x y z"
-                f"{' and more' if len(numeric[0]) > 3 else ''}) (for tube)")
+                f"{' and normals' if len(numeric[0]) == 6 else ''}) (for tube)")
     names = {re.sub(r"\s*[\[(].*$", "", c).strip().lower() for c in rows[0] if c.strip()} if rows else set()
     if len(names) >= 3 and names <= {"x", "y", "z", "nx", "ny", "nz", "intensity", "i", "r", "g", "b", "#"}:
         return f"a point cloud (columns {', '.join(sorted(names))}) (for tube)"
