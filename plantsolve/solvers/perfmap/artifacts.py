@@ -20,7 +20,7 @@ from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.perfmap.cycle_exports import beta_csv, gasturb_tables, pycycle_module
 from plantsolve.solvers.perfmap.families import curveset_from_fits
-from plantsolve.solvers.perfmap.loading import PerfmapInput, loaded
+from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
 from plantsolve.solvers.perfmap.performance_map import distance_to_region
 from plantsolve.solvers.plots import figure_artifact
 

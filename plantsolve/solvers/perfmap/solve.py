@@ -46,8 +46,8 @@ from plantsolve.solvers.perfmap.fitting import (
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
-from plantsolve.solvers.perfmap.loading import PerfmapInput, loaded
-from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE, Setting, map_impossible
+from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
+from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE, Setting, map_impossible
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error

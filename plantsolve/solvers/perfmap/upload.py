@@ -66,7 +66,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
-from plantsolve.solvers.perfmap.loading import FRACTIONS, file_loc
+from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
 from plantsolve.solvers.perfmap.workbook import read_workbook

@@ -214,7 +214,7 @@ def test_closed_form_loo_equals_explicit_bounded_refits(family, concave):
 
 def test_efficiency_in_percent_is_rejected_with_its_field():
     from plantsolve.solvers.base import InputRejected
-    from plantsolve.solvers.perfmap.loading import check_input
+    from plantsolve.solvers.perfmap.validation import check_input
 
     body = request_body(n_theta=3, n_phi=3)
     body["positions"][4]["efficiency"] = [100 * e for e in body["positions"][4]["efficiency"]]

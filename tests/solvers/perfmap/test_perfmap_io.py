@@ -15,7 +15,7 @@ from plantsolve.solvers.perfmap import SPEC, __version__
 from plantsolve.solvers.perfmap.artifacts import render_artifacts
 from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.upload import parse_upload
-from plantsolve.solvers.perfmap.loading import check_input
+from plantsolve.solvers.perfmap.validation import check_input
 from plantsolve.solvers.perfmap.synthetic import request_body
 
 

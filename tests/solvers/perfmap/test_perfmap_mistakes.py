@@ -13,7 +13,7 @@ import pytest
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap import SPEC
-from plantsolve.solvers.perfmap.loading import load
+from plantsolve.solvers.perfmap.validation import load
 from plantsolve.solvers.perfmap.synthetic import request_body
 from plantsolve.solvers.perfmap.units import registry
 from plantsolve.solvers.perfmap.upload import parse_upload
@@ -239,7 +239,7 @@ def test_another_kinds_json_request_is_refused_naming_the_kind():
 # ---------------------------------------------------------------- one load per job, no pint noise
 
 def test_the_table_is_prepared_once_for_check_solve_and_artifacts(monkeypatch):
-    from plantsolve.solvers.perfmap import loading
+    from plantsolve.solvers.perfmap import validation as loading
 
     calls = []
     real = loading.prepare

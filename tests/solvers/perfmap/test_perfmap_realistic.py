@@ -15,7 +15,7 @@ from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap.query import query
 from plantsolve.solvers.perfmap.solve import solve
-from plantsolve.solvers.perfmap.loading import load
+from plantsolve.solvers.perfmap.validation import load
 from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor

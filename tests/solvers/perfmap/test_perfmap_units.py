@@ -10,7 +10,7 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.upload import parse_upload
-from plantsolve.solvers.perfmap.loading import check_input
+from plantsolve.solvers.perfmap.validation import check_input
 from plantsolve.solvers.perfmap.synthetic import speed_lines
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, parse_unit
 
