@@ -25,7 +25,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import LENGTH, FiniteFloat, Measured, Report, StrictModel, Units, unit
+from plantsolve.schemas.common import Measured, Report, StrictModel, Units, unit
 
 
 # a field component in tesla: the strongest magnets built reach tens of tesla

@@ -198,7 +198,7 @@ class PerfmapOptions(StrictModel):
         return self
 
 
-class UnitConversion(StrictModel):
+class ValueConversion(StrictModel):
     """One conversion the reader made: value used = value read × factor."""
 
     quantity: str = Field(max_length=100, description="What was converted: 'flow', 'pressure', 'efficiency' or a "
@@ -222,7 +222,7 @@ class PerfmapSource(StrictModel):
         default_factory=list, max_length=2000,
         description="Per position, the file row of each of its points (in the order of its values): what a "
         "refusal of a value names.")
-    conversions: list[UnitConversion] = Field(default_factory=list, max_length=20,
+    conversions: list[ValueConversion] = Field(default_factory=list, max_length=20,
                                               description="Unit conversions the reader made.")
 
 

@@ -13,8 +13,8 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
-from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry
 from plantsolve.solvers.perfmap.setting_lines import Setting
+from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry
 
 # peak isentropic/polytropic efficiency of a compressor's speed line
 EFFICIENCY_PEAK = (0.2, 0.98)

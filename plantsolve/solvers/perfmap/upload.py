@@ -66,11 +66,11 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
-from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc
+from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
+from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc
 from plantsolve.solvers.perfmap.workbook import read_workbook
-from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py")
@@ -265,9 +265,24 @@ _OTHER_FORMATS = (
     (re.compile(r"^\s*0\s+(FILE|Name:|!LDRAW_ORG)\b", re.M), "an LDraw model", "rigidity"),
     (re.compile(r"\A\s*[\[{]"), "a JSON document (upload it as .json)", "perfmap"),
 )
-# the column names of a tube's bending table (LRA, or YBC: length, rotation, angle, centreline radius)
-_LRA_NAMES = {"l", "r", "a", "length", "rotation", "angle", "clr", "bend", "feed", "rot", "y", "b", "c",
-              "bend angle", "bend radius", "rotation angle", "straight"}
+# unit words tube tables append to their column names ('length_mm', 'angle_deg')
+_UNIT_WORDS = {"mm", "cm", "m", "in", "inch", "ft", "deg", "degree", "degrees", "rad"}
+# a tube's bending table (LRA: length, rotation, angle; YBC: feed, rotation, bend) and its points (x y z, XYZ-CLR)
+_BENDING_COLUMNS = ({"length", "rotation", "angle"}, {"l", "r", "a"}, {"y", "b", "c"}, {"feed", "rotation", "bend"})
+_POINT_COLUMNS = {"x", "y", "z", "nx", "ny", "nz", "intensity", "i", "r", "g", "b", "point", "row", "index", "id", "no",
+                  "clr", "bend radius", "radius"}
+
+
+def _column_names(line: str) -> set[str]:
+    """A header line's column names, lower case, without units in brackets or as a last word ('x_mm' -> 'x')."""
+    names = set()
+    for cell in re.split(r"[,;\t]", line):
+        cell = re.sub(r"\s*[\[(].*$", "", cell.strip().strip('"')).lower()
+        words = [w for w in re.split(r"[\s_\-]+", cell) if w]
+        while len(words) > 1 and words[-1] in _UNIT_WORDS:
+            words.pop()
+        names.add(" ".join(words))
+    return names - {""}
 
 
 def _what_it_holds(text: str, lines: list[tuple[int, str]]) -> str | None:
@@ -285,11 +300,11 @@ def _what_it_holds(text: str, lines: list[tuple[int, str]]) -> str | None:
             and len(numeric[0]) in (3, 6):
         return (f"an XYZ point cloud ({len(numeric[0])} numeric columns, no header: x y z"
                 f"{' and normals' if len(numeric[0]) == 6 else ''}) (for tube)")
-    names = {re.sub(r"\s*[\[(].*$", "", c).strip().lower() for c in rows[0] if c.strip()} if rows else set()
-    if len(names) >= 3 and names <= {"x", "y", "z", "nx", "ny", "nz", "intensity", "i", "r", "g", "b", "#"}:
-        return f"a point cloud (columns {', '.join(sorted(names))}) (for tube)"
-    if len(names) >= 3 and names <= _LRA_NAMES | {"", "#", "no", "n", "bend no", "index"}:
-        return f"a bending table (columns {', '.join(sorted(names))}: length, rotation, angle) (for tube)"
+    names = _column_names(lines[0][1]) if lines else set()
+    if any(columns <= names for columns in _BENDING_COLUMNS):
+        return f"a tube's bending table (columns {', '.join(sorted(names))}) (for tube)"
+    if {"x", "y", "z"} <= names and names <= _POINT_COLUMNS:
+        return f"points in x, y, z (columns {', '.join(sorted(names))}: a point cloud or an XYZ-CLR nominal) (for tube)"
     return None
 
 

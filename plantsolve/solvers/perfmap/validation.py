@@ -15,8 +15,12 @@ from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
 from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
-from plantsolve.solvers.perfmap.units import UnitError, fraction_factor, request_conversions, to_internal
-
+from plantsolve.solvers.perfmap.units import (
+    UnitError,
+    fraction_factor,
+    request_conversions,
+    to_internal,
+)
 
 FRACTIONS = 1.5  # efficiencies all within this are fractions, whatever unit is stated for them
 

@@ -15,7 +15,7 @@ from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.flowmeter.artifacts import figures, render_artifacts
 from plantsolve.solvers.flowmeter.solve import solve
-from plantsolve.solvers.flowmeter.synthetic import example, exact_full_length, meter
+from plantsolve.solvers.flowmeter.synthetic import exact_full_length, example, meter
 from plantsolve.solvers.flowmeter.upload import parse_upload
 from plantsolve.solvers.flowmeter.validation import check_input
 

@@ -13,11 +13,11 @@ import pytest
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap import SPEC
-from plantsolve.solvers.perfmap.validation import load
 from plantsolve.solvers.perfmap.synthetic import request_body
 from plantsolve.solvers.perfmap.units import registry
 from plantsolve.solvers.perfmap.upload import parse_upload
-
+from plantsolve.solvers.perfmap.validation import load
+from tests.conftest import REPO
 from tests.solvers.perfmap.conftest import DATA
 
 TEXT = (DATA / "n3_fan_map.csv").read_text().replace("\r\n", "\n")
@@ -223,6 +223,9 @@ def test_a_relative_speed_labelled_rpm_is_warned_about():
     ("scan.csv", b"0.0 0.0 0.0\n1.0 0.5 0.2\n2.0 1.0 0.4\n3.0 1.5 0.6\n", "XYZ point cloud"),
     ("scan.csv", b"x,y,z\n0,0,0\n1,0.5,0.2\n2,1,0.4\n", "point cloud"),
     ("nominal.csv", b"L,R,A,CLR\n100,0,90,50\n200,90,45,50\n", "bending table"),
+    ("nominal_lra.csv", (REPO / "examples" / "tube" / "nominal_lra.csv").read_bytes(), "bending table"),
+    ("nominal_xyz_clr.csv", (REPO / "examples" / "tube" / "nominal_xyz_clr.csv").read_bytes(), "x, y, z"),
+    ("scan.csv", (REPO / "examples" / "tube" / "scan.xyz").read_bytes(), "XYZ point cloud"),
     ("offices.csv", b"Version,9.6;\n\nZone,\n  Office 1;  !- Name\n", "EnergyPlus IDF"),
     ("line.csv", b"ISOGEN-FILES ISOGEN.FLS\nUNITS-BORE MM\nPIPE\n", "PCF"),
 ])
