@@ -263,3 +263,23 @@ def test_building_the_unit_registry_logs_no_redefinition(caplog):
     assert not [r for r in caplog.records if "Redefin" in r.getMessage()]
     assert reg.Quantity(5, "permille").to("dimensionless").magnitude == pytest.approx(0.005)
     assert reg.Quantity(1, "lbm/s").to("kg/s").magnitude == pytest.approx(0.45359237)
+
+
+def test_a_workbook_with_a_percent_header_over_fractions_is_read_as_fractions(plain):
+    import io
+
+    import openpyxl
+
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.title = "Map"
+    sheet.append(["theta", "phi", "flow", "pressure", "Efficiency [%]"])
+    for line in LINES[1:]:
+        sheet.append([float(v) for v in line.split(",")])
+    buffer = io.BytesIO()
+    book.save(buffer)
+    source = StoredInput.from_bytes("rig.xlsx", buffer.getvalue())
+    value = load(parse_upload(source, {"map": False}), source)
+    np.testing.assert_array_equal(_efficiencies(value), _efficiencies(plain))
+    assert _codes(value)["unit_contradicted_by_values"].details["column"] == "Efficiency [%]"
+    assert value.request.source.format == "xlsx" and value.request.source.row_label == "sheet 'Map' row"
