@@ -9,8 +9,8 @@ Conventions
   of the result states its unit (``x-unit`` in the OpenAPI document; rows of mixed columns in a ``*_units``
   field beside them).
 - Bounds: the schema holds each scalar to what is physical whatever the length unit (a field of at most 100 T,
-  a mean velocity of at most 1000 m/s); the input check holds lengths to a bore of at most 1 km and at least
-  0.01 mm (422 naming the field), and the report warns (``implausible_*``) outside what meters are built for.
+  a mean velocity of at most 1000 m/s); the input check holds the pipe radius to 0.01 mm..1 km in any unit
+  (422 naming the field), and the report warns (``implausible_*``) outside what meters are built for.
 - The cross-section weight function W(x, y) is the weight vector's z-component integrated along z
   and normalised so that, for uniform B, ``S = (1/(pi R^2)) * integral W dA`` and
   ``U = 2 R B (1/(pi R^2)) * integral W v dA``; S = U / (2 R B v_mean) is the sensitivity.

@@ -366,7 +366,8 @@ def linearity(field: WeightField, reynolds: list[float]) -> list[LinearityPoint]
 def cross_section_nodes() -> tuple[np.ndarray, np.ndarray]:
     """Nodes of the W table on the unit disc: a square grid inside and a ring on the wall (a hair inside, where W
     is finite off the electrode edges), so that the table and its plot cover the section up to the wall; the
-    ring's angles fall between the electrodes' centres."""
+    ring's angles are offset by half a step from the electrodes' centres (0 and 180 degrees), where the W of point
+    electrodes is unbounded."""
     axis = np.linspace(-1, 1, GRID_SIZE)
     gx, gy = np.meshgrid(axis, axis)
     inside = np.hypot(gx, gy) < 1 - 1e-9
