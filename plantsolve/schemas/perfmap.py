@@ -514,17 +514,20 @@ class PerfmapQueryRequest(StrictModel):
 
 
 class QueryAnswer(BaseModel):
-    flow: float
-    pressure: float
+    flow: float = Field(json_schema_extra=FLOW)
+    pressure: float = Field(json_schema_extra=PRESSURE)
     feasible: bool = Field(description="True when some setting in the map reaches the point.")
-    setting: list[float] | None = Field(default=None, description="Optimal setting values (None when infeasible).")
-    theta: float | None = Field(default=None, description="Two setting parameters: the first (None when infeasible).")
-    phi: float | None = Field(default=None, description="Two setting parameters: the second (None when infeasible).")
+    setting: list[float] | None = Field(default=None, description="Optimal setting values (None when infeasible).",
+                                        json_schema_extra=SETTINGS)
+    theta: float | None = Field(default=None, description="Two setting parameters: the first (None when infeasible).",
+                                json_schema_extra=FIRST_SETTING)
+    phi: float | None = Field(default=None, description="Two setting parameters: the second (None when infeasible).",
+                              json_schema_extra=SECOND_SETTING)
     efficiency: float | None = Field(
-        description="Max efficiency at the point (None when infeasible).")
+        description="Max efficiency at the point (None when infeasible).", json_schema_extra=ONE)
     distance_to_map: float = Field(
         description="Distance to the reachable region in range-normalised units "
-        "(flow/flow span, pressure/pressure span); 0 when feasible.")
+        "(flow/flow span, pressure/pressure span); 0 when feasible.", json_schema_extra=ONE)
 
 
 class PerfmapQueryResult(BaseModel):
