@@ -5,7 +5,12 @@ Conventions
 - The pipe axis is z and the liquid flows along +z; the magnetic field B points along +y; the two
   electrodes are centred at (+R, 0) and (-R, 0) in the cross-section (R the pipe radius).
 - Lengths are in the request's ``units``, angles in degrees, the field in tesla, velocities in m/s
-  and the signal in volts (the signal needs the diameter in metres, so ``units`` matters there).
+  and the signal in volts (the signal needs the diameter in metres, so ``units`` matters there); every number
+  of the result states its unit (``x-unit`` in the OpenAPI document; rows of mixed columns in a ``*_units``
+  field beside them).
+- Bounds: the schema holds each scalar to what is physical whatever the length unit (a field of at most 100 T,
+  a mean velocity of at most 1000 m/s); the input check holds the pipe radius to 0.01 mm..1 km in any unit
+  (422 naming the field), and the report warns (``implausible_*``) outside what meters are built for.
 - The cross-section weight function W(x, y) is the weight vector's z-component integrated along z
   and normalised so that, for uniform B, ``S = (1/(pi R^2)) * integral W dA`` and
   ``U = 2 R B (1/(pi R^2)) * integral W v dA``; S = U / (2 R B v_mean) is the sensitivity.
@@ -20,7 +25,11 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import FiniteFloat, Measured, Report, StrictModel, Units
+from plantsolve.schemas.common import Measured, Report, StrictModel, Units, unit
+
+
+# a field component in tesla: the strongest magnets built reach tens of tesla
+Tesla = Annotated[float, Field(allow_inf_nan=False, ge=-100, le=100)]
 
 
 class Pipe(StrictModel):
@@ -56,8 +65,8 @@ class Electrodes(StrictModel):
 
 class UniformField(StrictModel):
     type: Literal["uniform"] = Field(description="The field's form; it selects the model (uniform or grid).")
-    magnitude: float = Field(default=0.01, gt=0, le=1e3, allow_inf_nan=False,
-                             description="|B| in tesla, along +y.")
+    magnitude: float = Field(default=0.01, gt=0, le=100, allow_inf_nan=False,
+                             description="|B| in tesla, along +y (at most 100 T; meters use a few mT).")
 
 
 class GridField(StrictModel):
@@ -72,10 +81,10 @@ class GridField(StrictModel):
     x: list[Measured] = Field(min_length=2, max_length=400, description="Grid x coordinates, increasing (units).")
     y: list[Measured] = Field(min_length=2, max_length=400, description="Grid y coordinates, increasing (units).")
     z: list[Measured] = Field(min_length=2, max_length=400, description="Grid z coordinates, increasing (units).")
-    bx: list[Measured] = Field(max_length=2_000_000, description="B_x in tesla per grid point (C order).")
-    by: list[Measured] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
-    bz: list[Measured] | None = Field(default=None, max_length=2_000_000,
-                                      description="B_z per grid point; it does not enter U (the flow is axial).")
+    bx: list[Tesla] = Field(max_length=2_000_000, description="B_x in tesla per grid point (C order).")
+    by: list[Tesla] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
+    bz: list[Tesla] | None = Field(default=None, max_length=2_000_000,
+                                   description="B_z per grid point; it does not enter U (the flow is axial).")
 
 
 class Velocity(StrictModel):
@@ -84,14 +93,14 @@ class Velocity(StrictModel):
         description="'uniform': v = mean; 'laminar': 2 mean (1 - r^2/R^2); 'power_law': "
         "mean (n+1)(2n+1)/(2n^2) (1 - r/R)^(1/n); 'samples': values at points of the cross-section, "
         "linearly interpolated on their Delaunay triangulation.")
-    mean: float = Field(default=1.0, gt=-1e6, lt=1e6, allow_inf_nan=False,
-                        description="Mean axial velocity (m/s), for the analytic profiles.")
+    mean: float = Field(default=1.0, ge=-1000, le=1000, allow_inf_nan=False,
+                        description="Mean axial velocity (m/s), for the analytic profiles; |v| <= 1000 m/s.")
     n: float = Field(default=7.0, ge=1, le=100, allow_inf_nan=False, description="Power-law exponent.")
     points: list[list[Measured]] | None = Field(
         default=None, max_length=100_000,
         description="Sample points [x, y] in the request's units (for 'samples'); they must cover the cross-section.")
-    values: list[Measured] | None = Field(default=None, max_length=100_000,
-                                          description="Axial velocity (m/s) at each sample point.")
+    values: list[Annotated[float, Field(allow_inf_nan=False, ge=-1000, le=1000)]] | None = Field(
+        default=None, max_length=100_000, description="Axial velocity (m/s) at each sample point, |v| <= 1000 m/s.")
 
 
 class FlowmeterOptions(StrictModel):
@@ -117,41 +126,59 @@ class FlowmeterRequest(StrictModel):
     magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(
         default_factory=lambda: UniformField(type="uniform"))
     velocity: Velocity = Field(default_factory=Velocity)
-    reynolds: list[FiniteFloat] = Field(
+    reynolds: list[Annotated[float, Field(allow_inf_nan=False, gt=0, le=1e9)]] = Field(
         default_factory=list, max_length=1000,
         description="Reynolds numbers for the linearity curve: laminar profile below 2300, else the power "
         "law with n = -1.7 + 1.8 log10(Re) (at least that of Re = 4000).")
     options: FlowmeterOptions = Field(default_factory=FlowmeterOptions)
 
 
+ONE = unit("1")
+
+
 class LinearityPoint(BaseModel):
-    reynolds: float
+    reynolds: float = Field(json_schema_extra=ONE, description="Reynolds number.")
     profile: str
-    n: float | None = None
-    sensitivity: float
+    n: float | None = Field(default=None, json_schema_extra=ONE, description="Power-law exponent (turbulent).")
+    sensitivity: float = Field(json_schema_extra=ONE, description="S for this profile.")
 
 
 class FlowmeterResult(BaseModel):
     kind: Literal["flowmeter"] = Field(default="flowmeter", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
-    sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.")
+    sensitivity: float = Field(description="S = U / (2 R B v_mean) for the request's velocity.", json_schema_extra=ONE)
     sensitivity_first_order: float = Field(
-        description="The uniform current-density iterate: sin(beta)/beta for patches, 1 for points, for buttons "
+        json_schema_extra=ONE, description="The uniform current-density iterate: sin(beta)/beta for patches, 1 for points, for buttons "
         "that of the flush disc, pi r^2 / integral 2 sqrt(r^2 - y^2) / sqrt(1 - y^2) dy (R = 1).")
-    signal: float = Field(description="U in volts for the field and mean velocity.")
-    probes: list[float] = Field(default_factory=list, description="W at each probe point.")
+    signal: float = Field(description="U in volts for the field and mean velocity (signal_unit).",
+                          json_schema_extra=unit("V"))
+    signal_unit: Literal["V"] = Field(default="V", description="The signal's unit: volts (a meter's signal is "
+                                      "microvolts to millivolts).")
+    signal_mv: float = Field(default=0.0, description="The signal in millivolts (the unit meters are read in).",
+                             json_schema_extra=unit("mV"))
+    units: Units = Field(default="mm", description="The request's length unit: that of grid, electrode_current_map "
+                         "and every length here.")
+    probes: list[float] = Field(default_factory=list, description="W at each probe point.", json_schema_extra=ONE)
     linearity: list[LinearityPoint] = Field(default_factory=list)
     ideal_meter_residual: float = Field(
-        description="Bevir's ideal-meter residual for rectilinear flow: curl W = 0 means W constant over the "
+        json_schema_extra=ONE, description="Bevir's ideal-meter residual for rectilinear flow: curl W = 0 means W constant over the "
         "cross-section; given as (1/(pi R^2)) integral |W - S_uniform| dA / S_uniform, 0 for an ideal meter.")
     method: str
-    error_estimate: float = Field(description="Estimated absolute error of S.")
-    grid: list[list[float]] = Field(default_factory=list, description="W on a cross-section grid: rows [x, y, W] (units).")
+    error_estimate: float = Field(description="Estimated absolute error of S.", json_schema_extra=ONE)
+    grid: list[list[float]] = Field(
+        default_factory=list, json_schema_extra=unit("{grid_units}"),
+        description="W on a cross-section grid reaching the wall: rows [x, y, W]; x, y in units, W dimensionless "
+        "(grid_units).")
+    grid_units: list[str] = Field(default_factory=list, description="Unit of each column of grid's rows.")
     electrode_current: list[list[float]] = Field(
-        default_factory=list, description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
+        default_factory=list, json_schema_extra=unit("{electrode_current_units}"), description="Electrode current density across the electrode (at z = 0 for finite patches): rows "
         "[theta deg, j R^2 / I] for patches and buttons, [theta deg, j R / I'] (I' per unit length) along the whole liner. "
         "From the integral equation or the closed form; the finite elements report none.")
+    electrode_current_units: list[str] = Field(default_factory=list,
+                                               description="Unit of each column of electrode_current's rows.")
     electrode_current_map: list[list[float]] = Field(
-        default_factory=list, description="The electrode current density over the electrode at +R (integral equation "
+        default_factory=list, json_schema_extra=unit("{electrode_current_map_units}"), description="The electrode current density over the electrode at +R (integral equation "
         "only): rows [theta deg, z (units), j R^2 / I] on Chebyshev points, the edges singular (inverse square root).")
+    electrode_current_map_units: list[str] = Field(
+        default_factory=list, description="Unit of each column of electrode_current_map's rows.")
     report: Report

@@ -20,7 +20,15 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, model_validator
 
-from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel, unit
+
+# units of result fields (x-unit in the OpenAPI document): placeholders name the result's ``units`` fields
+FLOW = unit("{units.flow}")
+PRESSURE = unit("{units.pressure}")
+ONE = unit("1")
+SETTINGS = unit("{units.settings}")
+FIRST_SETTING = unit("{units.settings.0}")
+SECOND_SETTING = unit("{units.settings.1}")
 
 Family = Literal["parabola", "log", "cubic", "spline2", "spline3", "concave"]
 FAMILY_DESCRIPTION = (
@@ -190,6 +198,34 @@ class PerfmapOptions(StrictModel):
         return self
 
 
+class ValueConversion(StrictModel):
+    """One conversion the reader made: value used = value read × factor."""
+
+    quantity: str = Field(max_length=100, description="What was converted: 'flow', 'pressure', 'efficiency' or a "
+                          "setting's name.")
+    column: str | None = Field(default=None, max_length=200, description="The file's column header (uploads).")
+    from_unit: str = Field(max_length=40, description="The unit the values were read in ('%', 'lbm/s', ...).")
+    to_unit: str = Field(max_length=40, description="The unit they are used in ('1' for a fraction).")
+    factor: float = Field(gt=0, le=1e12, description="Multiplier from the values read to the values used.")
+    basis: Literal["header", "units_row", "request", "result_units", "values"] = Field(
+        description="Where the unit came from: the column header, the row of units under it, the request's "
+        "units, options.result_units, or the values themselves (a header unit they contradict).")
+
+
+class PerfmapSource(StrictModel):
+    """What the upload reader found: set by the upload parser, not needed in JSON bodies."""
+
+    format: Literal["csv", "xlsx", "pycycle", "json"] = Field(description="The format read.")
+    row_label: str = Field(default="line", max_length=200,
+                           description="How the file's rows are named in messages ('line', \"sheet 'Map' row\").")
+    rows: list[list[Integer]] = Field(
+        default_factory=list, max_length=2000,
+        description="Per position, the file row of each of its points (in the order of its values): what a "
+        "refusal of a value names.")
+    conversions: list[ValueConversion] = Field(default_factory=list, max_length=20,
+                                              description="Unit conversions the reader made.")
+
+
 class PerfmapRequest(StrictModel):
     """Rig measurements at several settings and what to compute from them."""
 
@@ -211,6 +247,9 @@ class PerfmapRequest(StrictModel):
         default_factory=list, max_length=100,
         description="Notes of the file parser (e.g. ignored CSV columns), repeated in the "
         "result's report; set by the upload parser, not needed in JSON bodies.")
+    source: PerfmapSource | None = Field(
+        default=None, description="Set by the upload parser: the format read, the file rows of the points and the "
+        "unit conversions made (stated again in the result's report.details.source).")
 
     @model_validator(mode="after")
     def _settings_given(self) -> "PerfmapRequest":
@@ -236,44 +275,54 @@ class PerfmapRequest(StrictModel):
 class SettingFit(BaseModel):
     """The fitted characteristic y(x) and efficiency eta(x) of one setting."""
 
-    setting: list[float] = Field(default_factory=list, description="Setting values, in the order of setting_names.")
-    theta: float | None = Field(default=None, description="With two setting parameters: the first.")
-    phi: float | None = Field(default=None, description="With two setting parameters: the second.")
+    setting: list[float] = Field(default_factory=list, description="Setting values, in the order of setting_names.",
+                                 json_schema_extra=SETTINGS)
+    theta: float | None = Field(default=None, description="With two setting parameters: the first.",
+                                json_schema_extra=FIRST_SETTING)
+    phi: float | None = Field(default=None, description="With two setting parameters: the second.",
+                              json_schema_extra=SECOND_SETTING)
     family: Family = Field(description="Family of the pressure curve. " + FAMILY_DESCRIPTION)
     efficiency_family: EfficiencyFamily = Field(
         description="Family of the efficiency curve. " + EFFICIENCY_FAMILY_DESCRIPTION)
-    x_min: float = Field(description="Smallest measured flow (t = 0).")
-    x_max: float = Field(description="Largest measured flow (t = 1).")
-    pressure_coefficients: list[float]
-    efficiency_coefficients: list[float]
+    x_min: float = Field(description="Smallest measured flow (t = 0).", json_schema_extra=FLOW)
+    x_max: float = Field(description="Largest measured flow (t = 1).", json_schema_extra=FLOW)
+    pressure_coefficients: list[float] = Field(
+        description="The family's coefficients; the unit of each is in pressure_coefficient_units (control "
+        "values are pressures; 'log' has [a, b, c] with b a flow; 'concave' lists knot flows, then pressures).",
+        json_schema_extra=unit("{settings.pressure_coefficient_units}"))
+    pressure_coefficient_units: list[str | None] = Field(
+        default_factory=list, description="Unit of each pressure coefficient (null: the request stated none).")
+    efficiency_coefficients: list[float] = Field(
+        description="Control values (fractions) and, for 'parabola_log', a and beta (in t units).", json_schema_extra=ONE)
     n_points: int
     pressure_fit: Literal["least_squares", "minimax"] = Field(
         default="least_squares", description="Criterion of this setting's pressure fit: options.fit, except "
         "where 'auto' found no least-squares fit within 1 % of the floor and took a minimax one (a "
         "'pressure_fit_minimax' warning says so).")
-    pressure_max_rel_error: float = Field(description="max_i |y(x_i) - y_i| / |y_i|.")
-    efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.")
+    pressure_max_rel_error: float = Field(description="max_i |y(x_i) - y_i| / |y_i|.", json_schema_extra=ONE)
+    efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.", json_schema_extra=ONE)
     pressure_loo: float | None = Field(
-        default=None, description="Leave-one-out: max relative error of each point predicted "
+        default=None, json_schema_extra=ONE, description="Leave-one-out: max relative error of each point predicted "
         "by a least-squares fit to the other points (None when too few points; on settings "
         "with more than 20 points, 20 evenly spread points are left out).")
-    efficiency_loo: float | None = None
+    efficiency_loo: float | None = Field(default=None, description="Leave-one-out max relative efficiency error.",
+                                         json_schema_extra=ONE)
     efficiency_max_abs_error: float = Field(
-        default=0.0, description="max_i |eta(x_i) - eta_i| (efficiency points).")
+        default=0.0, description="max_i |eta(x_i) - eta_i| (efficiency points).", json_schema_extra=ONE)
     efficiency_loo_abs: float | None = Field(
-        default=None, description="Leave-one-out max absolute efficiency error ('auto' "
+        default=None, json_schema_extra=ONE, description="Leave-one-out max absolute efficiency error ('auto' "
         "criterion for the efficiency family).")
     efficiency_peak: float = Field(
-        default=0.0, description="Maximum of the fitted efficiency curve over [x_min, x_max] "
+        default=0.0, json_schema_extra=ONE, description="Maximum of the fitted efficiency curve over [x_min, x_max] "
         "(exact); compare with the measured maximum of the setting.")
     efficiency_bounds_active: int = Field(
         default=0, description="Number of points where the physical bound 0 <= eta <= 1 had "
         "to be imposed on the fitted curve (0: the unconstrained fit was already physical).")
     floor: float = Field(
-        description="Best max relative error of the pressure that ANY decreasing concave "
+        json_schema_extra=ONE, description="Best max relative error of the pressure that ANY decreasing concave "
         "function can reach on these points (0 when the data are decreasing and concave).")
     pressure_excess: float = Field(
-        default=0.0, description="pressure_max_rel_error - floor: what the fitted family loses against the "
+        default=0.0, json_schema_extra=ONE, description="pressure_max_rel_error - floor: what the fitted family loses against the "
         "best decreasing concave curve (a 'pressure_fit_poor' warning above 0.01).")
     active_side_conditions: int = Field(
         default=0, description="Number of side conditions (y' <= 0 at the surge end, y'' <= 0 "
@@ -285,14 +334,14 @@ class ErrorTableRow(BaseModel):
 
     family: Family
     n_coefficients: int
-    pressure_max_rel_error: float
+    pressure_max_rel_error: float = Field(json_schema_extra=ONE, description="Max over settings (relative).")
     efficiency_max_rel_error: float | None = Field(
-        description="None for 'log' (the paper has no log efficiency curve).")
-    pressure_loo: float | None
-    efficiency_loo: float | None
+        description="None for 'log' (the paper has no log efficiency curve).", json_schema_extra=ONE)
+    pressure_loo: float | None = Field(json_schema_extra=ONE, description="Leave-one-out, max over settings.")
+    efficiency_loo: float | None = Field(json_schema_extra=ONE, description="Leave-one-out, max over settings.")
     efficiency_max_abs_error: float | None = Field(
-        default=None, description="Max over settings of max_i |eta(x_i) - eta_i|.")
-    floor: float = Field(description="Max over settings of the per-setting floor.")
+        default=None, description="Max over settings of max_i |eta(x_i) - eta_i|.", json_schema_extra=ONE)
+    floor: float = Field(description="Max over settings of the per-setting floor.", json_schema_extra=ONE)
     worst_setting: int = Field(description="Index in `settings` of the worst pressure fit.")
 
 
@@ -301,13 +350,13 @@ class EfficiencyErrorRow(BaseModel):
 
     family: EfficiencyFamily
     n_coefficients: int
-    max_rel_error: float
-    max_abs_error: float
+    max_rel_error: float = Field(json_schema_extra=ONE, description="Max over settings, relative.")
+    max_abs_error: float = Field(json_schema_extra=ONE, description="Max over settings, absolute (fraction).")
     loo_rel: float | None = Field(description="Max over settings of the leave-one-out max "
-                                  "relative error (None when some setting has too few points).")
-    loo_abs: float | None
+                                  "relative error (None when some setting has too few points).", json_schema_extra=ONE)
+    loo_abs: float | None = Field(json_schema_extra=ONE, description="Leave-one-out max absolute error.")
     max_overshoot: float = Field(
-        description="Max over settings of (fitted peak - measured max efficiency).")
+        description="Max over settings of (fitted peak - measured max efficiency).", json_schema_extra=ONE)
     chosen: int = Field(description="Number of settings that use this family.")
 
 
@@ -316,27 +365,28 @@ class Envelope(BaseModel):
     of the other setting parameters over the last one."""
 
     fixed: list[float] = Field(default_factory=list, description="Values of the settings held fixed (all but the "
-                               "last setting name; empty with one setting parameter).")
-    theta: float | None = None
-    flow: list[float]
+                               "last setting name; empty with one setting parameter).", json_schema_extra=SETTINGS)
+    theta: float | None = Field(default=None, json_schema_extra=FIRST_SETTING)
+    flow: list[float] = Field(json_schema_extra=FLOW)
     pressure: list[float | None] = Field(
-        description="max over phi of the interpolated characteristics (null: no curve).")
-    phi: list[float | None] = Field(description="The last setting parameter (phi) attaining the max (paper eq. 48).")
+        description="max over phi of the interpolated characteristics (null: no curve).", json_schema_extra=PRESSURE)
+    phi: list[float | None] = Field(description="The last setting parameter (phi) attaining the max (paper eq. 48), "
+                                    "in the last setting's unit.", json_schema_extra=SETTINGS)
     efficiency: list[float | None] = Field(
-        description="eta along the max-curve (paper eq. 50).")
+        description="eta along the max-curve (paper eq. 50).", json_schema_extra=ONE)
 
 
 class LimitPoint(BaseModel):
     """One end of a characteristic (surge or choke), or its surge-margin point."""
 
-    setting: list[float] = Field(default_factory=list)
-    theta: float | None = None
-    phi: float | None = None
-    flow: float
-    pressure: float
-    efficiency: float
+    setting: list[float] = Field(default_factory=list, json_schema_extra=SETTINGS)
+    theta: float | None = Field(default=None, json_schema_extra=FIRST_SETTING)
+    phi: float | None = Field(default=None, json_schema_extra=SECOND_SETTING)
+    flow: float = Field(json_schema_extra=FLOW)
+    pressure: float = Field(json_schema_extra=PRESSURE)
+    efficiency: float = Field(json_schema_extra=ONE)
     vertical_to: float | None = Field(
-        default=None, description="Choke: the lowest pressure measured at this same flow (a vertical choke "
+        default=None, json_schema_extra=PRESSURE, description="Choke: the lowest pressure measured at this same flow (a vertical choke "
         "segment from `pressure` down to it), null when there is none.")
 
 
@@ -348,29 +398,35 @@ class PerformanceMap(BaseModel):
     """
 
     method: Literal["exact", "binning"]
-    flow: list[float]
-    pressure: list[float]
-    efficiency: list[list[float | None]]
+    flow: list[float] = Field(json_schema_extra=FLOW)
+    pressure: list[float] = Field(json_schema_extra=PRESSURE)
+    efficiency: list[list[float | None]] = Field(json_schema_extra=ONE)
     settings: list[list[list[float | None]]] = Field(
-        default_factory=list, description="Optimal value of each setting parameter (in the order of setting_names) "
+        default_factory=list, json_schema_extra=SETTINGS, description="Optimal value of each setting parameter (in the order of setting_names) "
         "per node.")
-    theta: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the first.")
-    phi: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the second.")
+    theta: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the first.",
+                                                   json_schema_extra=FIRST_SETTING)
+    phi: list[list[float | None]] | None = Field(default=None, description="Two setting parameters: the second.",
+                                                 json_schema_extra=SECOND_SETTING)
     t_samples: int
-    reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.")
+    reachable_fraction: float = Field(description="Fraction of grid nodes that are reachable.", json_schema_extra=ONE)
 
 
 class BetaLine(BaseModel):
     """One speed line tabulated at the grid's beta values (same order as ``BetaMap.beta``)."""
 
     setting: list[float] = Field(description="Setting values of the line (speed last), in the order of "
-                                 "setting_names.")
-    flow: list[float] = Field(description="Corrected flow at each beta (the result's flow unit).")
-    pressure: list[float] = Field(description="Pressure (ratio) at each beta (the result's pressure unit).")
-    efficiency: list[float] = Field(description="Efficiency (fraction) at each beta.")
-    t: list[float] = Field(description="Curve parameter t of each node on the fitted characteristic.")
-    c_choke: float = Field(description="Beta-line constant c through the choke end (beta = 0).")
-    c_surge: float = Field(description="Beta-line constant c through the surge end (beta = 1).")
+                                 "setting_names.", json_schema_extra=SETTINGS)
+    flow: list[float] = Field(description="Corrected flow at each beta (the result's flow unit).", json_schema_extra=FLOW)
+    pressure: list[float] = Field(description="Pressure (ratio) at each beta (the result's pressure unit).",
+                                  json_schema_extra=PRESSURE)
+    efficiency: list[float] = Field(description="Efficiency (fraction) at each beta.", json_schema_extra=ONE)
+    t: list[float] = Field(description="Curve parameter t of each node on the fitted characteristic.",
+                           json_schema_extra=ONE)
+    c_choke: float = Field(description="Beta-line constant c through the choke end (beta = 0).",
+                           json_schema_extra=unit("{beta_map.c_unit}"))
+    c_surge: float = Field(description="Beta-line constant c through the surge end (beta = 1).",
+                           json_schema_extra=unit("{beta_map.c_unit}"))
 
 
 class BetaMap(BaseModel):
@@ -378,9 +434,13 @@ class BetaMap(BaseModel):
 
     shape: Literal["parabola", "straight"]
     exponent: int = Field(description="p of y - y_v = c (x - x_v)^p: 2 (parabola) or 1 (straight).")
-    vertex_flow: float = Field(description="x_v: 0 when every flow is positive, else below the smallest flow.")
-    vertex_pressure: float = Field(description="y_v: 1 for a pressure ratio above 1 everywhere, else 0.")
-    beta: list[float] = Field(description="Beta values, 0 (choke) to 1 (surge), ascending.")
+    vertex_flow: float = Field(description="x_v: 0 when every flow is positive, else below the smallest flow.",
+                               json_schema_extra=FLOW)
+    vertex_pressure: float = Field(description="y_v: 1 for a pressure ratio above 1 everywhere, else 0.",
+                                   json_schema_extra=PRESSURE)
+    c_unit: str | None = Field(default=None, description="Unit of the lines' c_choke and c_surge: pressure / flow^p "
+                               "(null when the request stated neither unit).")
+    beta: list[float] = Field(description="Beta values, 0 (choke) to 1 (surge), ascending.", json_schema_extra=ONE)
     lines: list[BetaLine] = Field(description="One per speed line, in the order of `settings`.")
 
 
@@ -429,8 +489,9 @@ class PerfmapResult(BaseModel):
     map: PerformanceMap | None = None
     beta_map: BetaMap | None = Field(default=None, description="The speed lines tabulated on the beta grid "
                                      "(options.beta_grid); the cycle-code exports are written from it.")
-    flow_range: list[float] = Field(description="[min, max] flow over all characteristics.")
-    pressure_range: list[float] = Field(description="[min, max] pressure over all characteristics.")
+    flow_range: list[float] = Field(description="[min, max] flow over all characteristics.", json_schema_extra=FLOW)
+    pressure_range: list[float] = Field(description="[min, max] pressure over all characteristics.",
+                                        json_schema_extra=PRESSURE)
 
 
 class QueryPoint(StrictModel):
@@ -453,17 +514,20 @@ class PerfmapQueryRequest(StrictModel):
 
 
 class QueryAnswer(BaseModel):
-    flow: float
-    pressure: float
+    flow: float = Field(json_schema_extra=FLOW)
+    pressure: float = Field(json_schema_extra=PRESSURE)
     feasible: bool = Field(description="True when some setting in the map reaches the point.")
-    setting: list[float] | None = Field(default=None, description="Optimal setting values (None when infeasible).")
-    theta: float | None = Field(default=None, description="Two setting parameters: the first (None when infeasible).")
-    phi: float | None = Field(default=None, description="Two setting parameters: the second (None when infeasible).")
+    setting: list[float] | None = Field(default=None, description="Optimal setting values (None when infeasible).",
+                                        json_schema_extra=SETTINGS)
+    theta: float | None = Field(default=None, description="Two setting parameters: the first (None when infeasible).",
+                                json_schema_extra=FIRST_SETTING)
+    phi: float | None = Field(default=None, description="Two setting parameters: the second (None when infeasible).",
+                              json_schema_extra=SECOND_SETTING)
     efficiency: float | None = Field(
-        description="Max efficiency at the point (None when infeasible).")
+        description="Max efficiency at the point (None when infeasible).", json_schema_extra=ONE)
     distance_to_map: float = Field(
         description="Distance to the reachable region in range-normalised units "
-        "(flow/flow span, pressure/pressure span); 0 when feasible.")
+        "(flow/flow span, pressure/pressure span); 0 when feasible.", json_schema_extra=ONE)
 
 
 class PerfmapQueryResult(BaseModel):

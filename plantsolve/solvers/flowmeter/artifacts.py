@@ -123,6 +123,6 @@ def render_artifacts(request: FlowmeterRequest, solved: Solved) -> list[Artifact
     """weight_function.png, electrode_current.png, linearity.png (with Reynolds numbers), weight_grid.csv."""
     result = solved.result
     out = [figure_artifact(f"{stem}.png", fig) for stem, fig in figures(request, result).items()]
-    rows = [f"x [{request.units}],y [{request.units}],W"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
+    rows = [f"x [{request.units}],y [{request.units}],W [-]"] + [f"{x:.9g},{y:.9g},{w:.9g}" for x, y, w in result.grid]
     out.append(Artifact(name="weight_grid.csv", media_type="text/csv", data=("\n".join(rows) + "\n").encode()))
     return out

@@ -21,10 +21,11 @@ from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, Line
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
 from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
+from plantsolve.solvers.flowmeter.plausibility import METRES, request_warnings, signal_warnings
 from plantsolve.solvers.flowmeter.validation import meter_shape
 
-METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 GRID_SIZE = 41
+WALL_NODES = 4 * GRID_SIZE  # the grid's ring on the wall: its plot and table reach the wall
 
 
 @dataclass
@@ -362,6 +363,19 @@ def linearity(field: WeightField, reynolds: list[float]) -> list[LinearityPoint]
     return out
 
 
+def cross_section_nodes() -> tuple[np.ndarray, np.ndarray]:
+    """Nodes of the W table on the unit disc: a square grid inside and a ring on the wall (a hair inside, where W
+    is finite off the electrode edges), so that the table and its plot cover the section up to the wall; the
+    ring's angles are offset by half a step from the electrodes' centres (0 and 180 degrees), where the W of point
+    electrodes is unbounded."""
+    axis = np.linspace(-1, 1, GRID_SIZE)
+    gx, gy = np.meshgrid(axis, axis)
+    inside = np.hypot(gx, gy) < 1 - 1e-9
+    angles = 2 * np.pi * (np.arange(WALL_NODES) + 0.5) / WALL_NODES
+    wall = 1 - 1e-6
+    return (np.concatenate([gx[inside], wall * np.cos(angles)]), np.concatenate([gy[inside], wall * np.sin(angles)]))
+
+
 def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved:
     """The job on a checked request (``check_input``)."""
     g = meter_shape(request)
@@ -380,11 +394,9 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
     if request.options.probe_points:
         pts = np.asarray([p[:2] for p in request.options.probe_points], dtype=float) / radius
         probes = [float(v) for v in field.values(pts[:, 0], pts[:, 1])]
-    axis = np.linspace(-1, 1, GRID_SIZE)
-    gx, gy = np.meshgrid(axis, axis)
-    inside = np.hypot(gx, gy) < 1 - 1e-9
-    gw = field.values(gx[inside], gy[inside])
-    grid = np.column_stack([gx[inside] * radius, gy[inside] * radius, gw]).tolist()
+    gx, gy = cross_section_nodes()
+    gw = field.values(gx, gy)
+    grid = np.column_stack([gx * radius, gy * radius, gw]).tolist()
     if g.button is not None:
         first_order = weight2d.sensitivity_first_order_button(g.button[0])
     else:
@@ -392,9 +404,16 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
     current_map = [] if field.current_map is None else [
         [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
+    notes = request_warnings(request, b) + notes + signal_warnings(signal, request)
+    source = {"conversions": [{"quantity": "length", "from_unit": request.units, "to_unit": "m",
+                               "factor": METRES[request.units], "basis": "request",
+                               "used_for": "the signal U = 2 R B v_mean S (R in metres)"}]}
     progress(1.0, "done")
     return Solved(FlowmeterResult(
-        sensitivity=s, sensitivity_first_order=first_order, signal=signal, probes=probes,
+        sensitivity=s, sensitivity_first_order=first_order, signal=signal, signal_mv=signal * 1e3,
+        units=request.units, grid_units=[request.units, request.units, "1"],
+        electrode_current_units=["deg", "1"] if current else [],
+        electrode_current_map_units=["deg", request.units, "1"] if current_map else [], probes=probes,
         linearity=linearity(field, list(request.reynolds)),
         ideal_meter_residual=ideal_meter_residual(field, field.integrate(lambda x, y: np.ones_like(x))),
         method=field.method, error_estimate=field.error_estimate, grid=grid, electrode_current=current,
@@ -404,5 +423,6 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
                               f"first-order sin(beta)/beta = {first_order:.6f}.",
                       warnings=notes,
                       details={**field.details, "profile": profile, "mean_velocity": mean_velocity,
+                               "source": source,
                                "scaling": "S depends only on beta, a/R and L/R: reuse this result for any R "
                                           "with the geometry scaled"})))

@@ -6,6 +6,7 @@ from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.other_kinds import refuse_other_kind
 
 UPLOAD_EXTENSIONS = (".json",)
 
@@ -17,6 +18,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
         raise reject("the file is empty")
     text = decode_text(content, "JSON file")
     body = json_object(text, refuse_cut=True)
+    refuse_other_kind(body, "flowmeter")
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:

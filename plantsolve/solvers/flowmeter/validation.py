@@ -12,6 +12,7 @@ from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.flowmeter.integral_equation import feasible
 from plantsolve.solvers.flowmeter.integral_equation_button import feasible as feasible_button
+from plantsolve.solvers.flowmeter.plausibility import METRES
 from plantsolve.solvers.flowmeter.profiles import disc_quadrature, sampled
 
 
@@ -41,10 +42,19 @@ def meter_shape(request: FlowmeterRequest) -> MeterShape:
     return MeterShape(float(np.radians(e.half_angle)), a, half_liner, full)
 
 
+# hard bounds of the bore (radius) in metres, whatever the unit: outside them no pipe exists
+RADIUS_M = (1e-5, 1000.0)
+
+
 def check_input(request: FlowmeterRequest) -> None:
     """Fast semantic validation; raises :class:`InputRejected` naming each bad field."""
     errors: list[FieldError] = []
     radius = request.pipe.radius
+    metres = radius * METRES[request.units]
+    if not RADIUS_M[0] <= metres <= RADIUS_M[1]:
+        raise InputRejected(FieldError(("pipe", "radius"), (
+            f"a radius of {radius:g} {request.units} is {metres:g} m; a pipe's radius lies within "
+            f"{RADIUS_M[0] * 1000:g} mm and {RADIUS_M[1]:g} m (is 'units' right?)")))
     liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
     e = request.electrodes
     if e.shape == "patch" and e.half_length is not None and e.half_length > liner / 2 * (1 + 1e-12):
@@ -96,9 +106,6 @@ def check_input(request: FlowmeterRequest) -> None:
         elif not np.hypot(p[0], p[1]) < radius:
             errors.append(FieldError(("options", "probe_points", k),
                                      f"({p[0]:g}, {p[1]:g}) is not inside the pipe (radius {radius:g})"))
-    for k, re in enumerate(request.reynolds):
-        if not 0 < re <= 1e9:
-            errors.append(FieldError(("reynolds", k), f"a Reynolds number is positive and at most 1e9; got {re:g}"))
     if request.magnetic_field.type == "grid":
         errors += grid_errors(request, liner)
     v = request.velocity

@@ -27,6 +27,7 @@ SPEC = SolverSpec(
     result_model=PerfmapResult,
     solve="plantsolve.solvers.perfmap.solve:solve",
     version=__version__,
+    load="plantsolve.solvers.perfmap.validation:load",
     check_input="plantsolve.solvers.perfmap.validation:check_input",
     parse_upload="plantsolve.solvers.perfmap.upload:parse_upload",
     render_artifacts="plantsolve.solvers.perfmap.artifacts:render_artifacts",

@@ -10,6 +10,7 @@ import io
 import math
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator  # no pyplot: no global figure state; PNG/SVG via Agg/SVG
@@ -19,6 +20,7 @@ from plantsolve.schemas.perfmap import PerfmapRequest, PerfmapResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.perfmap.cycle_exports import beta_csv, gasturb_tables, pycycle_module
 from plantsolve.solvers.perfmap.families import curveset_from_fits
+from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
 from plantsolve.solvers.perfmap.performance_map import distance_to_region
 from plantsolve.solvers.plots import figure_artifact
 
@@ -192,6 +194,10 @@ def _envelopes(result: PerfmapResult) -> Figure:
 # contour colour and style of the optimal setting parameters (1, 2 or 3 of them)
 CONTOUR_STYLES = ([("orange", "-")], [("white", "--"), ("orange", "-")],
                   [("white", "--"), ("pink", ":"), ("orange", "-")])
+# Their labels: a dark shade of the line's colour on a light box, readable on every colour of the map (orange or
+# white text straight on viridis' yellow was not); the lines get a dark edge for the same reason.
+LABEL_COLOURS = {"orange": "#7a3e00", "white": "black", "pink": "#8b1a4a"}
+LABEL_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.9}
 _REFINE = 4  # contour grids are refined this many times per map cell
 _BOUNDARY_NODES = 160  # nodes per axis of the distance field the reachable boundary is drawn from
 
@@ -300,7 +306,9 @@ def _map(result: PerfmapResult) -> Figure:
                 fx, fy, fine = smooth_on_finer_grid(gx, gy, grid, sigma=1.2)
                 cs = ax.contour(fx, fy, np.ma.masked_invalid(fine), levels=setting_levels(measured[:, k]),
                                 colors=colour, linewidths=1.0, linestyles=style)
-                ax.clabel(cs, fontsize=8, fmt=f"{_bare(name)}=%.3g")
+                cs.set_path_effects([patheffects.Stroke(linewidth=2.2, foreground="0.15"), patheffects.Normal()])
+                for text in ax.clabel(cs, fontsize=8, fmt=f"{_bare(name)}=%.3g", colors=LABEL_COLOURS[colour]):
+                    text.set_bbox(LABEL_BOX)
         ax.contour(bx, by, d, levels=[0.25 * h], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
@@ -402,17 +410,18 @@ def map_csv(result: PerfmapResult) -> bytes:
     return _to_csv(header, rows)
 
 
-def figures(request: PerfmapRequest, result: PerfmapResult) -> dict[str, Figure]:
-    """Every plot of the result by artifact stem (tests read their axes)."""
-    return {"characteristics": _characteristics(request, result), "envelopes": _envelopes(result),
+def figures(value: PerfmapInput | PerfmapRequest, result: PerfmapResult) -> dict[str, Figure]:
+    """Every plot of the result by artifact stem (tests read their axes); the measured points are drawn in the
+    result's units (the loaded input's)."""
+    return {"characteristics": _characteristics(loaded(value).internal, result), "envelopes": _envelopes(result),
             "map": _map(result)}
 
 
-def render_artifacts(request: PerfmapRequest, solved: Solved) -> list[Artifact]:
+def render_artifacts(value: PerfmapInput | PerfmapRequest, solved: Solved) -> list[Artifact]:
     """characteristics, envelopes and map, each as .png and .svg; curves.csv and (with a map) map.csv."""
     result = solved.result
     out = []
-    for stem, fig in figures(request, result).items():
+    for stem, fig in figures(value, result).items():
         out += _save(fig, stem)
     out.append(Artifact(name="curves.csv", media_type="text/csv", data=curves_csv(result)))
     if result.map is not None:

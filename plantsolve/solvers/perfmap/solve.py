@@ -46,8 +46,8 @@ from plantsolve.solvers.perfmap.fitting import (
 )
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
-from plantsolve.solvers.perfmap.units import to_internal
-from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE, Setting, map_impossible, prepare
+from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
+from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE, Setting, map_impossible
 
 
 EFFICIENCY_POOR_REL = 0.05  # efficiency_fit_poor above a 5 % max relative error
@@ -487,17 +487,34 @@ def performance_map(curves: CurveSet, settings: list[Setting], values: np.ndarra
     return pmap, triangles
 
 
-def solve(request: PerfmapRequest, progress: Progress = no_progress) -> Solved:
-    """Characteristics, envelopes, surge and choke lines and (options.map) the maximum-efficiency map."""
-    return Solved(_performance(request, progress))
+def solve(value: PerfmapInput | PerfmapRequest, progress: Progress = no_progress) -> Solved:
+    """Characteristics, envelopes, surge and choke lines and (options.map) the maximum-efficiency map, from the
+    loaded input (``SPEC.load``; a request is loaded first)."""
+    return Solved(_performance(loaded(value), progress))
 
 
-def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
+def _coefficient_units(family: str, n: int, units) -> list[str | None]:
+    """The unit of each public pressure coefficient of a family (``_public_coefficients``)."""
+    if family == "concave":
+        return [units.flow] * (n // 2) + [units.pressure] * (n - n // 2)
+    if family == "log":  # a log(b - x) + c: b is a flow
+        return [units.pressure, units.flow, units.pressure]
+    return [units.pressure] * n
+
+
+def _c_unit(units, exponent: int) -> str | None:
+    """The unit of a beta line's c in y - y_v = c (x - x_v)^p."""
+    if units.flow is None or units.pressure is None:
+        return None
+    flow = units.flow if exponent == 1 else f"({units.flow})^{exponent}"
+    return f"({units.pressure})/{flow}" if units.pressure != "1" else f"1/{flow}"
+
+
+def _performance(value: PerfmapInput, progress: Progress) -> PerfmapResult:
+    request, units, settings = value.internal, value.units, value.settings
     opts = request.options
-    request, units = to_internal(request)
-    settings = prepare(request)
     progress(0.02, "input checked")
-    warnings: list[Diagnostic] = list(request.upload_warnings)
+    warnings: list[Diagnostic] = list(request.upload_warnings) + list(value.warnings)
 
     ch = fit_characteristics(settings, opts.fit == "minimax", opts.concave_efficiency, progress)
     progress(0.6, "choosing the curve families")
@@ -505,6 +522,8 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
     family, pressure_choice, eta_choice, details = choose_families(ch, settings, opts, warnings)
     eta_table = efficiency_error_table(ch, settings, eta_choice)
     out_settings = setting_results(ch, settings, pressure_choice, eta_choice, opts, warnings)
+    for fit in out_settings:
+        fit.pressure_coefficient_units = _coefficient_units(fit.family, len(fit.pressure_coefficients), units)
 
     progress(0.605, "per-setting results")
     curves = curveset_from_fits(out_settings)
@@ -512,6 +531,8 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
     envs = envelopes(curves, values, opts, progress)
     surge, choke, margin_line = limit_lines(curves, settings, opts.surge_margin)
     beta_map = beta_tables(curves, settings, opts.beta_grid, units, warnings)
+    if beta_map is not None:
+        beta_map.c_unit = _c_unit(units, beta_map.exponent)
     progress(0.62, "surge and choke lines and the beta grid done")
 
     ranges = curve_ranges(curves)
@@ -523,7 +544,7 @@ def _performance(request: PerfmapRequest, progress: Progress) -> PerfmapResult:
                     f"({opts.fit}); {len(envs)} envelope(s)"
                     + (f"; map {opts.grid[0]}x{opts.grid[1]} over {len(triangles)} triangles"
                        if pmap else ""),
-                    warnings=warnings, details={"family_choice": details})
+                    warnings=warnings, details={"family_choice": details, "source": value.source})
     return PerfmapResult(report=report, units=units, setting_names=list(request.setting_names),
                          setting_units=request.setting_units, family=family, fit=opts.fit, settings=out_settings,
                          error_table=table, efficiency_error_table=eta_table, envelopes=envs,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import Delaunay
 
-from plantsolve.solvers.perfmap.validation import normalised_settings
+from plantsolve.solvers.perfmap.setting_lines import normalised_settings
 
 
 def triangulate(theta: np.ndarray, phi: np.ndarray) -> np.ndarray:

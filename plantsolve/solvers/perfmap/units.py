@@ -22,9 +22,10 @@ import pint
 from plantsolve.schemas.perfmap import PerfmapRequest, QuantityUnits, ResultUnits, ResultUnitsOption
 from plantsolve.solvers.base import FieldError, InputRejected
 
-# Spellings of rig software and cycle codes that pint does not know.
+# Spellings of rig software and cycle codes that pint does not know (pint has ‰ as 'permille' already:
+# defining it again logs a redefinition warning on every run).
 _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
-                "bara = bar", "mbarg = millibar", "permille = 0.001 = ‰")
+                "bara = bar", "mbarg = millibar")
 
 
 @functools.cache
@@ -177,3 +178,21 @@ def to_internal(request: PerfmapRequest) -> tuple[PerfmapRequest, ResultUnits]:
         "positions": positions,
         "units": QuantityUnits(flow=units.flow, pressure=units.pressure, efficiency="1")})
     return converted, units
+
+
+def request_conversions(request: PerfmapRequest) -> list[dict]:
+    """The conversions :func:`to_internal` makes, as ``report.details.source`` states them (called on a request
+    that passed it): the efficiency unit to a fraction, flow and pressure to ``options.result_units``."""
+    given = request.units or QuantityUnits()
+    wanted = request.options.result_units or ResultUnitsOption()
+    out = []
+    factor = fraction_factor(given.efficiency)
+    if factor != 1.0:
+        out.append({"quantity": "efficiency", "column": None, "from_unit": given.efficiency, "to_unit": "1",
+                    "factor": factor, "basis": "request"})
+    for quantity in ("flow", "pressure"):
+        src, dst = check_quantity(quantity, getattr(given, quantity)), check_quantity(quantity, getattr(wanted, quantity))
+        if src is not None and dst is not None and src.unit != dst.unit:
+            out.append({"quantity": quantity, "column": None, "from_unit": src.text, "to_unit": dst.text,
+                        "factor": src.factor_to(dst), "basis": "result_units"})
+    return out

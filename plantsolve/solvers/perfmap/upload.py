@@ -8,8 +8,11 @@ CSV rules (as rig software and Excel write them):
   first non-blank character is ``#`` are skipped (also before the header);
 - separator: the one of an Excel ``sep=;`` first line, else tab if the header line holds
   one, else ``;`` if it holds one, else ``,``;
-  with ``;`` or tab a comma inside a number is a decimal comma (European Excel:
-  ``0,85``; ``1.234,5`` with thousands dots too);
+- numbers: one convention per column, read from its cells (:mod:`~plantsolve.solvers.perfmap.numbers`): a decimal
+  point with thousands commas (``1,104.338``; unquoted in a comma-separated file its groups are joined back when
+  the row then has the header's width) or a decimal comma with thousands dots (``0,85``, ``1.234,5``); a column
+  whose cells read both ways with nothing in the file to decide, or that mixes both, is refused naming its lines;
+  a row with more cells than the header is not read (its line named);
 - header: the first remaining line. A column's name is matched case-insensitively after
   stripping unit suffixes in brackets or parentheses (``Flow (m3/s)``, ``Theta [deg]``) and
   folding ``_``/``-``/blanks; accepted names per role are in :data:`HEADER_ALIASES` (rig and
@@ -19,8 +22,12 @@ CSV rules (as rig software and Excel write them):
   header to a role. A table needs flow, pressure, efficiency and one or two setting
   parameters: one is given as phi (theta = 0), two as (theta, phi) in the order of
   :data:`SETTING_ROLES`. An efficiency column whose unit is ``%`` (``Efficiency [%]``) is
-  divided by 100; efficiencies above 1 without that unit are rejected (percent is not
-  guessed). Other columns are reported in the result, not fatal;
+  divided by 100, unless its values are all fractions already (within 1.5: read as they are, with a warning); a
+  ``[-]`` efficiency holding 1.5..100 is per cent (warned); efficiencies above 1 without any unit are rejected
+  (percent is not guessed). Other columns are reported in the result, not fatal;
+- a file that is no rig table but another kind's (a point cloud, a bending table, an IDF …) is refused naming
+  what it holds; a last row without a line ending that is short or cut inside its last number (fewer decimals
+  than its column) is not read, with a ``truncated_file`` warning;
 - rows: any order; rows with equal (theta, phi) form one setting (in order of first
   appearance). Exact duplicate rows are merged with a warning; the same flow twice with
   different values is rejected (flow must increase along a characteristic after sorting).
@@ -60,10 +67,12 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
+from plantsolve.solvers.other_kinds import refuse_other_kind
+from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
-from plantsolve.solvers.perfmap.validation import prepare
+from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc
 from plantsolve.solvers.perfmap.workbook import read_workbook
-from plantsolve.solvers.skipped_input import skipped_lines, ends_mid_line, truncated_file
+from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py", ".map")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -98,7 +107,6 @@ SETTING_ROLES = ("theta", "igv", "vgv", "alpha", "phi", "speed", "diffuser")
 ROLES = tuple(HEADER_ALIASES) + ("ignore",)
 _ALIAS = {a: field for field, names in HEADER_ALIASES.items() for a in names}
 _UNIT_SUFFIX = re.compile(r"\s*[\[(]([^\[\]()]*)[\])]\s*$")
-_DECIMAL_COMMA = re.compile(r"^[+-]?(\d+|\d{1,3}(\.\d{3})+),\d*([eE][+-]?\d+)?$")
 _MAX_ROW_ERRORS = 20
 _HEADER_SEARCH_ROWS = 30
 # Pressure names that are ratios: such a column without a unit is dimensionless.
@@ -159,18 +167,13 @@ def _split_unit(name: str) -> tuple[str, str]:
 
 
 def _is_number(cell: str) -> bool:
-    try:
-        _number(cell, True)
-        return True
-    except ValueError:
-        return False
-
-
-def _number(cell: str, decimal_comma: bool) -> float:
-    s = cell.strip().strip('"').strip().replace("\u00a0", "").replace("\u2212", "-")
-    if decimal_comma and "," in s and _DECIMAL_COMMA.match(s):
-        s = s.replace(".", "").replace(",", ".")
-    return float(s)
+    for convention in (POINT, COMMA):
+        try:
+            number(cell, convention)
+            return True
+        except ValueError:
+            continue
+    return False
 
 
 def _role_key(name: str) -> str:
@@ -225,6 +228,10 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
         if h or len(rows[0]) > 1 and len({_header_field(c)[0] for c in rows[0]} & set(MEASURED)) >= 2:
             break
     else:
+        if (held := _what_it_holds(text, lines)) is not None:
+            raise reject(f"this file holds {held}, not a compressor map: a perfmap table has a header naming flow, "
+                         "pressure, efficiency and a setting (speed, IGV, ...), one row per measured point",
+                         type="wrong_kind")
         h_line = lines[0][1]
         delim = (forced.group(1) if forced else "\t" if "\t" in h_line else ";" if ";" in h_line else ",")
         (rows, numbers, ends), h = _head_rows(lines, delim), 0
@@ -242,8 +249,64 @@ def _parse_csv(text: str, column_roles: dict | None = None) -> tuple[list[dict],
             " — if the file uses ';' separators, put them in the header too")
     # exporters end every row: a last row without a line ending is where a copy or an export stopped
     cut = lines[-1][0] if ends_mid_line(text) and lines[-1][0] == len(text.splitlines()) else None
-    return _parse_table(rows, numbers, delim != ",", column_roles, hint, comma_separated=delim == ",", header=h,
+    return _parse_table(rows, numbers, column_roles, hint, comma_separated=delim == ",", header=h,
                         what="line", cut_line=cut)
+
+
+# What files of other kinds look like, told by their text: (pattern, what it holds, where it goes)
+_OTHER_FORMATS = (
+    (re.compile(r"^\s*Version\s*,[^;\n]*;", re.M | re.I), "an EnergyPlus IDF model", "polyhedra"),
+    (re.compile(r"^\s*(Zone|BuildingSurface:Detailed|FenestrationSurface:Detailed)\s*,", re.M | re.I),
+     "an EnergyPlus IDF model", "polyhedra"),
+    (re.compile(r"<gbXML\b"), "a gbXML model", "polyhedra"),
+    (re.compile(r"ISO-10303-21"), "an IFC/STEP model", "dedup or polyhedra"),
+    (re.compile(r"^\s*(ISOGEN-FILES|PIPELINE-REFERENCE|UNITS-BORE)\b", re.M), "a PCF piping file", "alignment"),
+    (re.compile(r"\Aply\s*\n\s*format\b"), "a PLY point cloud or mesh", "tube"),
+    (re.compile(r"\A\s*solid\b.*\n\s*facet normal\b", re.S), "an ASCII STL mesh", "polyhedra"),
+    (re.compile(r"^\s*0\s+(FILE|Name:|!LDRAW_ORG)\b", re.M), "an LDraw model", "rigidity"),
+    (re.compile(r"\A\s*[\[{]"), "a JSON document (upload it as .json)", "perfmap"),
+)
+# unit words tube tables append to their column names ('length_mm', 'angle_deg')
+_UNIT_WORDS = {"mm", "cm", "m", "in", "inch", "ft", "deg", "degree", "degrees", "rad"}
+# a tube's bending table (LRA: length, rotation, angle; YBC: feed, rotation, bend) and its points (x y z, XYZ-CLR)
+_BENDING_COLUMNS = ({"length", "rotation", "angle"}, {"l", "r", "a"}, {"y", "b", "c"}, {"feed", "rotation", "bend"})
+_POINT_COLUMNS = {"x", "y", "z", "nx", "ny", "nz", "intensity", "i", "r", "g", "b", "point", "row", "index", "id", "no",
+                  "clr", "bend radius", "radius"}
+
+
+def _column_names(line: str) -> set[str]:
+    """A header line's column names, lower case, without units in brackets or as a last word ('x_mm' -> 'x')."""
+    names = set()
+    for cell in re.split(r"[,;\t]", line):
+        cell = re.sub(r"\s*[\[(].*$", "", cell.strip().strip('"')).lower()
+        words = [w for w in re.split(r"[\s_\-]+", cell) if w]
+        while len(words) > 1 and words[-1] in _UNIT_WORDS:
+            words.pop()
+        names.add(" ".join(words))
+    return names - {""}
+
+
+def _what_it_holds(text: str, lines: list[tuple[int, str]]) -> str | None:
+    """A sentence naming what a file that is no rig table holds (another kind's file renamed or saved as .csv),
+    or None when it looks like no other kind's file either."""
+    head = text[:20_000]
+    for pattern, held, kind in _OTHER_FORMATS:
+        if pattern.search(head):
+            return f"{held} (for {kind})" if kind != "perfmap" else held
+    rows = [re.split(r"[\s,;]+", line.strip()) for _, line in lines[:20]]
+    numeric = [r for r in rows if r and all(_is_number(c) for c in r)]
+    # three (x y z) or six (and normals) numeric columns and no header; four or five may be a rig table whose header
+    # is missing, which the header's own message explains
+    if len(numeric) >= min(3, len(rows)) and numeric == rows[:len(numeric)] and len({len(r) for r in numeric}) == 1 \
+            and len(numeric[0]) in (3, 6):
+        return (f"an XYZ point cloud ({len(numeric[0])} numeric columns, no header: x y z"
+                f"{' and normals' if len(numeric[0]) == 6 else ''}) (for tube)")
+    names = _column_names(lines[0][1]) if lines else set()
+    if any(columns <= names for columns in _BENDING_COLUMNS):
+        return f"a tube's bending table (columns {', '.join(sorted(names))}) (for tube)"
+    if {"x", "y", "z"} <= names and names <= _POINT_COLUMNS:
+        return f"points in x, y, z (columns {', '.join(sorted(names))}: a point cloud or an XYZ-CLR nominal) (for tube)"
+    return None
 
 
 class _Unreadable(list):
@@ -369,7 +432,7 @@ def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
         ws = (found or usable)[0]
     if not ws.rows:
         raise reject(f"sheet {ws.name!r} is empty", ("options", "sheet"))
-    positions, lines, notes, meta = _parse_table(ws.rows, ws.numbers, True, column_roles,
+    positions, lines, notes, meta = _parse_table(ws.rows, ws.numbers, column_roles,
                                                  header=_find_header(ws.rows, column_roles),
                                                  what=f"sheet {ws.name!r} row")
     if len(sheets) > 1:
@@ -379,7 +442,7 @@ def _parse_xlsx(content: bytes, column_roles: dict | None, sheet: str | None,
     return positions, lines, notes, meta
 
 
-def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool, column_roles: dict | None,
+def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict | None,
                  hint: str = "", comma_separated: bool = False, header: int = 0, what: str = "line",
                  cut_line: int | None = None,
                  ) -> tuple[list[dict], list[list[int]], list[Diagnostic], dict]:
@@ -405,6 +468,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
     col: dict[str, int] = {}
     scale: dict[str, float] = {}
     unit_of: dict[str, str] = {}
+    basis_of: dict[str, str] = {}  # where each column's unit came from: its header or the row of units under it
     measured_units: dict[str, str] = {}
     ignored, recognised = [], []
     columns = {re.sub(r"[\s_\-]+", " ", k.strip().lower()): v for k, v in (column_roles or {}).items()}
@@ -424,8 +488,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
             raise reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
                           f"name the {field}; say which is which with the 'columns' option", ("file", "header"))
         col[field] = j
+        basis_of[field] = "header"
         if not unit and j < len(header_units):
-            unit = header_units[j]
+            unit, basis_of[field] = header_units[j], "units_row"
         unit_of[field] = unit
         scale[field] = 1.0
         if field in MEASURED:
@@ -473,13 +538,29 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
         scale.setdefault(r, 1.0)
     roles = tuple(setting_cols) + MEASURED
 
-    errors: list[FieldError] = []
+    width = len(rows[0])
+    regrouped: list[int] = []
+    data = []
+    for n, r in zip(numbers[1:], rows[1:]):
+        if not isinstance(r, _Unreadable) and any(c.strip() for c in r[width:]):
+            merged = _thousands_regrouped(r, width) if comma_separated else None
+            if merged is None:
+                r = _Unreadable(f"{len([c for c in r if c.strip()])} cells where the header has {width}"
+                                + (": a thousands separator or a decimal comma in a comma-separated file? Quote such "
+                                   "numbers, or separate the columns with ';'" if comma_separated else ""))
+            else:
+                r = merged
+                regrouped.append(n)
+        data.append((n, r))
+    convention, errors = _conventions(data, roles, col, rows[0], what)
+    if errors:
+        raise InputRejected(errors)
     groups: dict[tuple[float, float], dict] = {}
     lines_of: dict[tuple[float, float], list[int]] = {}
     cut_note: Diagnostic | None = None
     skipped: list[dict] = []  # rows that could not be read: skipped with a warning while others are usable
     skipped_count = 0
-    for n, r in zip(numbers[1:], rows[1:]):
+    for n, r in data:
         row_start = len(errors)
         vals = {}
         if isinstance(r, _Unreadable):
@@ -495,7 +576,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
                                          f"{len(roles)} values{hint}"))
                 continue
             try:
-                v = _number(cell, decimal_comma) * scale[c]
+                v = number(cell, convention.get(c))
             except ValueError:
                 hint = (" (decimal comma with ',' separators? use ';' as separator)"
                         if comma_separated and re.fullmatch(r"-?\d+,\d+", cell) else
@@ -510,11 +591,15 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
                                          f"{what} {n}: {c} is {cell!r} (NaN or infinite)"))
                 continue
             vals[c] = v
-        if n == cut_line and (len(errors) > row_start or len(r) < len(rows[0])):
-            why = [e.msg for e in errors[row_start:]] or [f"{len(r)} of the header's {len(rows[0])} cells"]
+        cut_number = _cut_number(data, n, r) if n == cut_line and len(errors) == row_start else None
+        if n == cut_line and (len(errors) > row_start or len(r) < width or cut_number):
+            why = ([e.msg for e in errors[row_start:]] or ([cut_number["reason"]] if cut_number else [])
+                   or [f"{len(r)} of the header's {width} cells"])
             del errors[row_start:]
             cut_note = truncated_file(n, f"its last row has no line ending and is incomplete ({why[0]}): the file "
-                                      "was cut? That row was not read.", reason=why[0])
+                                      "was cut, and the table may go on beyond it? That row was not read.",
+                                      reason=why[0], cells=len(r), header_cells=width,
+                                      **{k: v for k, v in (cut_number or {}).items() if k != "reason"})
             continue
         if len(errors) > row_start:
             skipped_count += 1
@@ -536,21 +621,40 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
             raise InputRejected(errors)
         cut = f" (its only data row, {what} {cut_line}, is cut short)" if cut_note else ""
         raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows{cut}")
-    notes = notes_before + ([cut_note] if cut_note else [])
+    names = {r: rows[0][col[r]].strip() for r in col}
+    reading, contradictions = _values_against_units(groups, setting_cols, names, unit_of, scale)
+    conversions = []
+    if reading["efficiency"] != 1.0:
+        for g in groups.values():
+            g["efficiency"] = [v * reading["efficiency"] for v in g["efficiency"]]
+    if reading["efficiency"] != 1.0:
+        stated = scale["efficiency"] != 1.0
+        conversions.append({"quantity": "efficiency", "column": names["efficiency"],
+                            "from_unit": unit_of["efficiency"] if stated else "%", "to_unit": "1",
+                            "factor": reading["efficiency"], "basis": basis_of["efficiency"] if stated else "values"})
+    notes = notes_before + ([cut_note] if cut_note else []) + contradictions
+    if regrouped:
+        notes.append(Diagnostic(
+            code="upload_thousands_separators",
+            message=f"Numbers with thousands separators in a comma-separated file ({what} {line_list(regrouped)}): "
+            "their groups, split at the separators, were read as one number each (1,104.338 as 1104.338).",
+            details={"lines": regrouped[:10], "count": len(regrouped)}))
     if skipped_count:
         notes.append(skipped_lines(skipped, what=what, count=skipped_count, code="upload_rows_skipped"))
     order = [c.strip() for c in rows[0]]
     ignored.sort(key=order.index)
-    names = {r: rows[0][col[r]].strip() for r in col}
     labels, units = [], []
     for r in setting_cols:
         label, unit = _split_unit(names[r])
         labels.append(label or r)
-        units.append(unit or unit_of.get(r, ""))
+        units.append("1" if r in reading and reading[r] == "1" else unit or unit_of.get(r, ""))
     meta: dict = {} if setting_cols == ["theta", "phi"] else {"setting_names": labels, "setting_units": units}
     if setting_cols == ["theta", "phi"] and any(units):
         meta["setting_units"] = units
+    if reading.get("flow_unit"):
+        measured_units["flow"] = reading["flow_unit"]
     meta["units"] = {**measured_units, "efficiency": "1"}
+    meta["source"] = {"row_label": what, "conversions": conversions}
     if "setting_names" in meta:
         notes.append(Diagnostic(
             code="upload_settings",
@@ -567,11 +671,136 @@ def _parse_table(rows: list[list[str]], numbers: list[int], decimal_comma: bool,
             code="upload_rline_not_needed",
             message=f"Column(s) {', '.join(recognised)} (R-line / beta) recognised and not needed: each line is "
             "parametrised by its flow.", details={"columns": recognised}))
-    if scale["efficiency"] != 1.0:
+    if scale["efficiency"] != 1.0 and reading["efficiency"] != 1.0:
+        eff = np.concatenate([g["efficiency"] for g in groups.values()])
         notes.append(Diagnostic(code="upload_efficiency_percent",
-                                message=f"Efficiency column given in {unit_of['efficiency']} : converted to a "
-                                "fraction.", details={"factor": scale["efficiency"]}))
+                                message=f"Efficiency column {names['efficiency']!r} given in {unit_of['efficiency']}: "
+                                f"converted to a fraction (× {scale['efficiency']:g}; now {eff.min():.4g}.."
+                                f"{eff.max():.4g}).", details={"factor": scale["efficiency"],
+                                                              "column": names["efficiency"]}))
     return list(groups.values()), list(lines_of.values()), notes, meta
+
+
+_PERCENTS = (FRACTIONS, 100.0)  # a column whose values lie in here (none at or below 1.5) holds per cent
+
+
+def _values_against_units(groups: dict, setting_cols: list[str], names: dict[str, str], unit_of: dict[str, str],
+                          scale: dict[str, float]) -> tuple[dict, list[Diagnostic]]:
+    """The reading the values support where a column's unit says otherwise: ``{"efficiency": factor to a
+    fraction, setting role: "1" for a '%' setting holding fractions, "flow_unit": "1" for such a flow}`` and a
+    warning naming each contradicted column with its values. A '%' efficiency holding fractions is not divided by
+    100 again; a '-' (fraction) efficiency holding 1.5..100 is per cent."""
+    reading: dict = {"efficiency": scale["efficiency"]}
+    notes = []
+
+    def note(role: str, values: np.ndarray, unit: str, used: str) -> None:
+        notes.append(Diagnostic(
+            code="unit_contradicted_by_values",
+            message=f"Column {names[role]!r} says {unit!r} but its values lie in {values.min():.4g}..{values.max():.4g}"
+            f": {used}.", details={"column": names[role], "unit": unit, "values": [float(values.min()),
+                                                                                     float(values.max())],
+                                   "reading": used}))
+
+    eff = np.concatenate([g["efficiency"] for g in groups.values()])
+    unit = unit_of.get("efficiency") or ""
+    if scale["efficiency"] != 1.0 and np.all(np.abs(eff) <= FRACTIONS):
+        reading["efficiency"] = 1.0
+        note("efficiency", eff, unit, "fractions already, read as they are (not divided by "
+             f"{1 / scale['efficiency']:g} again)")
+    elif unit and scale["efficiency"] == 1.0 and eff.min() > _PERCENTS[0] and eff.max() <= _PERCENTS[1]:
+        reading["efficiency"] = 0.01
+        note("efficiency", eff, unit, "per cent, divided by 100")
+    keys = list(groups)
+    for k, role in enumerate(setting_cols):
+        if _is_percent(unit_of.get(role)):
+            values = np.array([key[k] for key in keys], dtype=float)
+            if np.all(np.abs(values) <= FRACTIONS):
+                reading[role] = "1"
+                note(role, values, unit_of[role], "fractions (of design), stated as unit '1', not per cent")
+    if _is_percent(unit_of.get("flow")):
+        flow = np.concatenate([g["flow"] for g in groups.values()])
+        if np.all(np.abs(flow) <= FRACTIONS):
+            reading["flow_unit"] = "1"
+            note("flow", flow, unit_of["flow"], "fractions, stated as unit '1', not per cent")
+    return reading, notes
+
+
+def _is_percent(unit: str | None) -> bool:
+    return bool(unit) and unit.strip().strip("[]()").strip() == "%"
+
+
+def _thousands_regrouped(row: list[str], width: int) -> list[str] | None:
+    """A comma-separated row split inside its numbers' thousands separators (``1,104.338`` unquoted gives the
+    cells ``1`` and ``104.338``) joined back to the header's width; None when the split is not exactly that (too
+    few or too many places where a 1-3 digit cell is followed by a 3-digit group)."""
+    extra = len(row) - width
+    places = [i for i in range(len(row) - 1)
+              if re.fullmatch(r"[+-]?[1-9]\d{0,2}", row[i].strip()) and re.fullmatch(r"\d{3}(\.\d*)?", row[i + 1].strip())]
+    if len(places) != extra or any(b - a < 2 for a, b in zip(places, places[1:])):
+        return None
+    out, i = [], 0
+    while i < len(row):
+        if i in places:
+            out.append(row[i].strip() + "," + row[i + 1].strip())
+            i += 2
+        else:
+            out.append(row[i])
+            i += 1
+    return out
+
+
+def _conventions(data: list[tuple[int, list[str]]], roles: tuple[str, ...], col: dict[str, int], header: list[str],
+                 what: str) -> tuple[dict[str, str], list[FieldError]]:
+    """The number convention of each column (:mod:`~plantsolve.solvers.perfmap.numbers`), and a refusal naming the
+    column, its pattern and its lines where its cells mix conventions or nothing in the file says which applies."""
+    surveys = {c: survey([(n, r[col[c]]) for n, r in data if not isinstance(r, _Unreadable) and col[c] < len(r)])
+               for c in roles}
+    file_point = any(sv.point for sv in surveys.values())
+    file_comma = any(sv.comma for sv in surveys.values())
+    fallback = POINT if file_point and not file_comma else COMMA if file_comma and not file_point else None
+    convention, errors = {}, []
+    for c, sv in surveys.items():
+        name = header[col[c]].strip()
+        if sv.point and sv.comma:
+            minority = sv.comma if len(sv.comma) <= len(sv.point) else sv.point
+            errors.append(FieldError(("file", "row", minority[0], c), (
+                f"column {name!r} mixes decimal points ({what} {line_list(sv.point)}: e.g. {sv.examples[POINT]!r}) and "
+                f"decimal commas ({what} {line_list(sv.comma)}: e.g. {sv.examples[COMMA]!r}): one convention per "
+                "column"), "ambiguous_number"))
+        elif sv.convention:
+            convention[c] = sv.convention
+        elif sv.either:
+            example = sv.examples["either"]
+            if fallback:
+                convention[c] = fallback
+            elif "," in example:
+                whole = example.replace(",", "")
+                errors.append(FieldError(("file", "row", sv.either[0], c), (
+                    f"column {name!r}: {example!r} ({what} {line_list(sv.either)}) reads as "
+                    f"{example.replace(',', '.')} with a decimal comma or {whole} with a thousands separator, and no "
+                    "number of the file says which: write the numbers without thousands separators, or with a "
+                    "decimal point"), "ambiguous_number"))
+    return convention, errors
+
+
+def _cut_number(data: list[tuple[int, list[str]]], line: int, row: list[str]) -> dict | None:
+    """The last row of a file without a final line ending, read whole, may still be cut inside its last number
+    (0.9278 -> 0.9): its last cell then has fewer decimals than (nearly) every other cell of its column. The facts,
+    or None."""
+    j = max((i for i, c in enumerate(row) if c.strip()), default=None)
+    if j is None:
+        return None
+    last = decimals(row[j])
+    column = [decimals(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
+              and r[j].strip()]
+    column = [d for d in column if d is not None]
+    # fewer decimals than nearly every cell of the column (exporters drop trailing zeros now and then: one in a
+    # hundred cells may be that short)
+    if last is None or not column or sum(d <= last for d in column) > 0.02 * len(column):
+        return None
+    return {"column": j + 1, "value": row[j].strip(), "decimals": last, "column_decimals": [min(column), max(column)],
+            "reason": f"its last value {row[j].strip()!r} has {last} decimal(s) where the column's other values have "
+                      f"{min(column)}" + (f" to {max(column)}" if max(column) != min(column) else "")}
 
 
 _MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
@@ -666,22 +895,6 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     return positions, notes, names
 
 
-def _file_loc(loc: tuple, lines: list[list[int]], positions: list[dict]) -> tuple[tuple, str]:
-    """A request loc ("positions", i, field, k) as ("file", "row", line, field) and a prefix
-    naming the setting."""
-    if len(loc) < 2 or loc[0] != "positions" or not isinstance(loc[1], int) \
-            or loc[1] >= len(lines):
-        return ("file",), ""
-    i = loc[1]
-    rows = lines[i]
-    values = positions[i].get("setting") or [positions[i]["theta"], positions[i]["phi"]]
-    where = (f"setting {', '.join(f'{v:g}' for v in values)} "
-             f"(lines {', '.join(map(str, rows[:12]))}{', ...' if len(rows) > 12 else ''}): ")
-    field = loc[2] if len(loc) > 2 and isinstance(loc[2], str) else None
-    k = loc[3] if len(loc) > 3 and isinstance(loc[3], int) and loc[3] < len(rows) else 0
-    return (("file", "row", rows[k], field) if field else ("file", "row", rows[k])), where
-
-
 MAX_CSV_ROWS = 200_000
 
 
@@ -701,6 +914,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
             raise reject("options.sheet must be a sheet name", ("options", "sheet"))
         positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
+        body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
         return _validated(body, options, lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
         body, lines, options = gasturb_request_body(content, options)
@@ -715,18 +929,20 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
         body = {"positions": positions, "setting_names": names, "units": {"pressure": "1", "efficiency": "1"},
-                "upload_warnings": [d.model_dump() for d in notes]}
+                "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
     elif ext == ".csv":
         roles = (options or {}).get("columns") if isinstance(options, dict) else None
         if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
             raise reject("options.columns must map header names to roles", ("options", "columns"))
         positions, lines, notes, meta = _parse_csv(text, roles)
         body: dict = {"positions": positions, **meta}
+        body["source"] = {**body["source"], "format": "csv", "rows": lines}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     else:
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
+        refuse_other_kind(body, "perfmap")
     return _validated(body, options, lines)
 
 
@@ -743,7 +959,8 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
             if options and loc[:1] == ("options",):  # form options point at the options
                 errs.append(FieldError(loc, f"{path}: {fe.msg}", fe.type))
             elif lines:
-                where, prefix = _file_loc(loc, lines, body["positions"])
+                where, prefix = file_loc(loc, lines, lambda i: _setting_of(body["positions"][i]),
+                                         body["source"]["row_label"])
                 msg = fe.msg
                 if fe.type == "too_short" and len(loc) == 3:
                     msg, where = "needs at least 3 measured points (rows)", where[:3]
@@ -756,15 +973,8 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
                 seen.add((fe.loc, fe.msg))
                 unique.append(fe)
         raise InputRejected(unique) from None
-    if lines:
-        # Semantic checks here too, so that a CSV user is pointed at file rows rather than
-        # at positions of a request they never wrote.
-        try:
-            prepare(request)
-        except InputRejected as e:
-            errs = []
-            for fe in e.errors:
-                where, prefix = _file_loc(tuple(fe.loc), lines, body["positions"])
-                errs.append(FieldError(where, prefix + fe.msg, fe.type))
-            raise InputRejected(errs) from None
     return request
+
+
+def _setting_of(position: dict) -> tuple:
+    return tuple(position.get("setting") or (position["theta"], position["phi"]))

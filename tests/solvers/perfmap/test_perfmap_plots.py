@@ -146,3 +146,37 @@ def test_a_setting_with_few_values_is_contoured_where_the_optimum_changes_side()
     assert setting_levels(np.array([0.0, 5.0, 0.0, 5.0])) == [2.5]
     assert setting_levels(np.array([0.0, 2.0, 6.0])) == [1.0, 4.0]
     assert setting_levels(np.linspace(0.5, 1.1, 9)) == 8
+
+
+def _luminance(colour) -> float:
+    """WCAG relative luminance of an RGB(A) colour."""
+    from matplotlib.colors import to_rgb
+
+    c = np.array(to_rgb(colour))
+    c = np.where(c <= 0.03928, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+
+
+def _contrast(a, b) -> float:
+    la, lb = sorted((_luminance(a), _luminance(b)), reverse=True)
+    return (la + 0.05) / (lb + 0.05)
+
+
+def test_the_maps_contour_labels_read_on_every_colour_of_the_map(synthetic_request, synthetic_result):
+    """Orange or white label text straight on viridis' yellow had a contrast near 1.5:1; each label now sits on a
+    light box in a dark shade of its line's colour, whatever lies beneath (WCAG asks 4.5:1 of small text)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import to_rgb
+    from matplotlib import colormaps
+
+    fig = figures(synthetic_request, synthetic_result)["map"]
+    FigureCanvasAgg(fig).draw()
+    labels = [t for t in fig.axes[0].texts if "=" in t.get_text()]
+    assert {t.get_text().split("=")[0] for t in labels} == {"θ", "φ"}
+    for text in labels:
+        box = text.get_bbox_patch()
+        assert box is not None, text.get_text()
+        alpha = box.get_alpha() if box.get_alpha() is not None else 1.0
+        for under in (colormaps["viridis"](0.0), colormaps["viridis"](1.0)):  # darkest and lightest of the map
+            seen = alpha * np.array(to_rgb(box.get_facecolor())) + (1 - alpha) * np.array(to_rgb(under))
+            assert _contrast(text.get_color(), seen) >= 4.5, (text.get_text(), text.get_color())

@@ -15,6 +15,7 @@ from plantsolve.schemas.perfmap import PerfmapQueryRequest, PerfmapRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.perfmap.query import query
 from plantsolve.solvers.perfmap.solve import solve
+from plantsolve.solvers.perfmap.validation import load
 from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.families import bernstein
 from plantsolve.solvers.perfmap.fitting import concave_floor
@@ -86,8 +87,10 @@ def test_extra_columns_ignored_with_a_warning_in_the_report(n3_csv):
 
 
 def _reject(content: bytes, options=None):
+    """The refusal of a table, by the reader or by loading it (the checks at submission)."""
     with pytest.raises(InputRejected) as exc:
-        parse_upload(StoredInput.from_bytes("rig.csv", content), options)
+        source = StoredInput.from_bytes("rig.csv", content)
+        load(parse_upload(source, options), source)
     return exc.value.errors
 
 
@@ -111,9 +114,13 @@ def test_an_unreadable_row_is_skipped_with_a_warning_naming_its_file_row_and_col
         assert [e.loc for e in errs] == [(*loc[:2], 2, loc[3]), (*loc[:2], 3, loc[3])] and needle in errs[0].msg
 
 
-def test_decimal_comma_with_comma_separator_says_how_to_fix():
-    errs = _reject(b"theta,phi,flow,pressure,efficiency\n0,0,\"1,5\",1.1,0.8\n")
-    assert errs[0].loc == ("file", "row", 2, "flow") and "';' as separator" in errs[0].msg
+def test_decimal_comma_with_comma_separator_is_read_quoted_and_refused_split():
+    rows = [b"0,0,\"1,5\",1.1,0.8", b"0,0,\"2,5\",1.05,0.85", b"0,0,\"3,5\",1.0,0.7"]
+    req = parse_upload(StoredInput.from_bytes("rig.csv", b"\n".join([b"theta,phi,flow,pressure,efficiency", *rows])
+                                              + b"\n"), {"map": False})
+    assert req.positions[0].flow == [1.5, 2.5, 3.5]
+    errs = _reject(b"theta,phi,flow,pressure,efficiency\n0,0,1,5,1.1,0.8\n")  # unquoted: six cells
+    assert errs[0].loc == ("file", "row", 2) and "';'" in errs[0].msg and "6 cells" in errs[0].msg
 
 
 def test_semantic_rejections_point_at_file_rows(n3_csv):

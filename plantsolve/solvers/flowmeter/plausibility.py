@@ -1,0 +1,64 @@
+"""Plausibility of an electromagnetic flow meter's request and signal: warnings ``implausible_<quantity>`` naming
+the quantity, its value, the range meters are built for and the likely mix-up (the README's flowmeter section lists
+them). Outside these ranges the physics still holds (S depends on shape only), so nothing is refused here; the
+hard bounds are the schema's and the input check's."""
+
+from __future__ import annotations
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.flowmeter import FlowmeterRequest
+
+METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
+BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic meters made
+FIELD_T = (1e-4, 0.5)  # |B| at the pipe centre: a meter's coils give a few mT
+VELOCITY_M_S = (1e-3, 20.0)  # |mean velocity| of liquids in a meter
+SIGNAL_V = (1e-7, 0.1)  # |U|: 0.1 µV to 100 mV across the electrodes
+
+
+def _outside(value: float, bounds: tuple[float, float]) -> bool:
+    return not bounds[0] <= abs(value) <= bounds[1]
+
+
+def request_warnings(request: FlowmeterRequest, field_tesla: float) -> list[Diagnostic]:
+    """Bore, field and velocity against what meters are built for."""
+    out = []
+    diameter = 2 * request.pipe.radius * METRES[request.units]
+    if _outside(diameter, BORE_M):
+        big = diameter > BORE_M[1]
+        out.append(Diagnostic(
+            code="implausible_meter_bore",
+            message=f"Meter bore: a pipe radius of {request.pipe.radius:g} {request.units} is a {diameter:.4g} m bore; "
+            f"electromagnetic meters are {BORE_M[0] * 1000:g} mm to {BORE_M[1]:g} m: "
+            + (f"the numbers of a pipe in mm with units '{request.units}'?" if big else
+               "a radius in m with units 'mm'?") + " The signal scales with the bore.",
+            details={"quantity": "pipe.radius", "value": request.pipe.radius, "units": request.units,
+                     "diameter_m": diameter, "range_m": list(BORE_M)}))
+    if _outside(field_tesla, FIELD_T):
+        out.append(Diagnostic(
+            code="implausible_magnetic_field",
+            message=f"Magnetic field: |B| = {field_tesla:g} T at the pipe centre; a meter's coils give "
+            f"{FIELD_T[0]:g} to {FIELD_T[1]:g} T: " + ("mT written as T?" if abs(field_tesla) > FIELD_T[1]
+                                                         else "gauss or µT written as T?"),
+            details={"quantity": "magnetic_field", "value": field_tesla, "range_t": list(FIELD_T)}))
+    v = request.velocity
+    if v.type != "samples" and _outside(v.mean, VELOCITY_M_S) and v.mean != 0:
+        out.append(Diagnostic(
+            code="implausible_velocity",
+            message=f"Mean velocity: {v.mean:g} m/s; liquids pass meters at {VELOCITY_M_S[0]:g} to "
+            f"{VELOCITY_M_S[1]:g} m/s: " + ("mm/s or cm/s written as m/s?" if abs(v.mean) > VELOCITY_M_S[1]
+                                            else "a flow rate instead of a velocity?"),
+            details={"quantity": "velocity.mean", "value": v.mean, "range_m_s": list(VELOCITY_M_S)}))
+    return out
+
+
+def signal_warnings(signal: float, request: FlowmeterRequest) -> list[Diagnostic]:
+    """The signal against what a meter's electrodes give."""
+    if signal == 0 or not _outside(signal, SIGNAL_V):
+        return []
+    return [Diagnostic(
+        code="implausible_signal",
+        message=f"Signal: U = {signal:.4g} V ({signal * 1000:.4g} mV); a meter's electrodes give {SIGNAL_V[0] * 1e6:g} µV "
+        f"to {SIGNAL_V[1] * 1000:g} mV: " + (f"a length unit too large (units '{request.units}' for numbers in mm?), "
+                                            "or the field or velocity too large?" if abs(signal) > SIGNAL_V[1] else
+                                            "a length unit too small, or the field or velocity too small?"),
+        details={"quantity": "signal", "value_v": signal, "range_v": list(SIGNAL_V), "units": request.units})]

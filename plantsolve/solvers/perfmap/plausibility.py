@@ -1,0 +1,158 @@
+"""Plausibility of a rig table's values for a compressor: warnings ``implausible_<quantity>`` naming the
+quantity, the values, the plausible range and the likely mix-up (the README's perfmap section lists them).
+
+The values are those the solver uses (efficiency a fraction, flow and pressure in the result's units). A range
+is checked only where the unit says what the numbers mean: a flow or pressure stated in no unit may be anything.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
+from plantsolve.solvers.perfmap.setting_lines import Setting
+from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry
+
+# peak isentropic/polytropic efficiency of a compressor's speed line
+EFFICIENCY_PEAK = (0.2, 0.98)
+# total pressure ratio of one compressor (fans from 1.02, centrifugal stages to about 12, whole cores to 60)
+PRESSURE_RATIO = (1.0, 60.0)
+# pressures (a rise or an absolute level) in Pa: a low-pressure fan's 100 Pa to 500 bar
+PRESSURE_PA = (10.0, 5e7)
+# mass flows in kg/s (a test rig's turbocharger to the largest fan) and volume flows in m³/s
+MASS_FLOW_KG_S = (1e-4, 1e4)
+VOLUME_FLOW_M3_S = (1e-6, 1e4)
+# corrected speeds: as a fraction of design, in per cent, and in rpm
+SPEED_FRACTION = (0.05, 1.5)
+SPEED_PERCENT = (5.0, 150.0)
+SPEED_RPM = (100.0, 250_000.0)
+SPEED_NAMES = {"speed", "corrected speed", "nc", "n c", "nc map", "ncmap", "relative speed", "rel speed", "rpm",
+               "n", "shaft speed", "rotational speed", "corrected rotational speed", "nmech", "pcn", "% speed",
+               "percent speed", "n/sqrt(theta)", "n/√θ", "speed line"}
+
+
+def _range(values: np.ndarray) -> str:
+    return f"{values.min():.4g}..{values.max():.4g}"
+
+
+def _warning(code: str, message: str, **details) -> Diagnostic:
+    return Diagnostic(code=code, message=message, details=details)
+
+
+def _efficiency(settings: list[Setting]) -> list[Diagnostic]:
+    peaks = np.array([s.eta.max() for s in settings])
+    lo, hi = EFFICIENCY_PEAK
+    low = [s.label for s, p in zip(settings, peaks) if p < lo]
+    high = [s.label for s, p in zip(settings, peaks) if p > hi]
+    out = []
+    if low:
+        out.append(_warning(
+            "implausible_efficiency",
+            f"Efficiency: the peak of {len(low)} of {len(settings)} speed line(s) is below {lo:g} (peaks "
+            f"{_range(peaks)}; a compressor's peak isentropic efficiency lies in {lo:g}..{hi:g}): a fraction divided "
+            "by 100 again (a '%' header over values already fractions), or another column read as efficiency?",
+            quantity="efficiency", range=list(EFFICIENCY_PEAK), peaks=[float(p) for p in peaks[:100]],
+            settings=low[:100]))
+    if high:
+        out.append(_warning(
+            "implausible_efficiency",
+            f"Efficiency: the peak of {len(high)} speed line(s) is above {hi:g} (up to {peaks.max():.4g}); no "
+            f"compressor reaches that: a polytropic or another efficiency, or values rounded up?",
+            quantity="efficiency", range=list(EFFICIENCY_PEAK), peaks=[float(p) for p in peaks[:100]],
+            settings=high[:100]))
+    return out
+
+
+def _pressure(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
+    if unit is None:
+        return []
+    values = np.concatenate([s.y for s in settings])
+    if unit in ("1", "-"):
+        lo, hi = PRESSURE_RATIO
+        if values.min() < lo or values.max() > hi:
+            return [_warning(
+                "implausible_pressure_ratio",
+                f"Pressure ratio: values {_range(values)} lie outside {lo:g}..{hi:g}, the range of a compressor's "
+                "total pressure ratio: " + ("an inverse ratio p1/p2, or a pressure rise read as a ratio?"
+                                            if values.min() < lo else "a pressure (kPa, psi) read as a ratio?"),
+                quantity="pressure", unit="1", range=[lo, hi], values=[float(values.min()), float(values.max())])]
+        return []
+    try:
+        parsed = parse_unit(unit)
+        pa = values * float(registry().Quantity(1.0, parsed.unit).to("Pa").magnitude)
+    except (UnitError, Exception):  # a head or a specific work: no pressure range applies
+        return []
+    lo, hi = PRESSURE_PA
+    if pa.min() < lo or pa.max() > hi:
+        return [_warning(
+            "implausible_pressure",
+            f"Pressure: values {_range(values)} {unit} ({_range(pa)} Pa) lie outside {lo:g}..{hi:g} Pa: "
+            + ("Pa read as bar or kPa?" if pa.max() > hi else "a ratio or bar read as Pa?"),
+            quantity="pressure", unit=unit, range_pa=[lo, hi], values=[float(values.min()), float(values.max())])]
+    return []
+
+
+def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
+    if unit is None or unit in ("1", "-"):
+        return []
+    values = np.concatenate([s.x for s in settings])
+    try:
+        q = registry().Quantity(1.0, parse_unit(unit).unit)
+    except UnitError:
+        return []
+    for target, (lo, hi), words in (("kg/s", MASS_FLOW_KG_S, "mass flow"), ("m**3/s", VOLUME_FLOW_M3_S, "volume flow")):
+        if q.check(registry().parse_units(target).dimensionality):
+            si = values * float(q.to(target).magnitude)
+            if si.min() < lo or si.max() > hi:
+                return [_warning(
+                    "implausible_flow",
+                    f"Flow: {words} {_range(values)} {unit} ({_range(si)} {target.replace('**', '^')}) lies outside "
+                    f"{lo:g}..{hi:g} {target.replace('**', '^')}, the range of compressors: "
+                    + ("g/s or lbm/min read as kg/s, or m3/h as m3/s?" if si.max() > hi
+                       else "kg/h read as kg/s, or a relative flow with a unit?"),
+                    quantity="flow", unit=unit, range=[lo, hi], values=[float(values.min()), float(values.max())])]
+            return []
+    return []
+
+
+def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
+    out = []
+    for k, name in enumerate(request.setting_names):
+        if re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) not in SPEED_NAMES:
+            continue
+        values = np.array([s.values[k] for s in settings], dtype=float)
+        unit = units.settings[k] if k < len(units.settings) else None
+        try:
+            parsed = parse_unit(unit) if unit else None
+        except UnitError:
+            continue
+        if parsed is None:
+            continue
+        if parsed.dimensionless and parsed.text in ("1", "%"):
+            lo, hi = SPEED_PERCENT if parsed.text == "%" else SPEED_FRACTION
+            mixup = ("fractions of design speed labelled %?" if parsed.text == "%" and values.max() <= SPEED_FRACTION[1]
+                     else "per cent or rpm labelled as a fraction?")
+        else:
+            try:
+                rpm = float(registry().Quantity(1.0, parsed.unit).to("rpm").magnitude)
+            except Exception:  # not a rotational speed: a label pint reads as something else
+                continue
+            values = values * rpm
+            lo, hi = SPEED_RPM
+            mixup = "a relative speed (fraction or %) labelled rpm?"
+        if values.min() < lo or values.max() > hi:
+            out.append(_warning(
+                "implausible_speed",
+                f"Corrected speed {name!r}: values {_range(values)} {unit if parsed.text != 'rpm' else 'rpm'} lie outside "
+                f"{lo:g}..{hi:g}: {mixup}",
+                quantity=name, unit=unit, range=[lo, hi], values=[float(values.min()), float(values.max())]))
+    return out
+
+
+def plausibility_warnings(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
+    """Every ``implausible_*`` warning of a prepared request (in the solver's units)."""
+    return (_efficiency(settings) + _pressure(settings, units.pressure) + _flow(settings, units.flow)
+            + _speed(request, units, settings))
