@@ -25,6 +25,8 @@ from plantsolve.solvers.perfmap.performance_map import distance_to_region
 from plantsolve.solvers.plots import figure_artifact
 
 _SMALL_MULTIPLES_MAX = 36
+# the efficiency axis's colour: matplotlib's orange (C1) is 2.5:1 on white, too faint for its tick labels
+EFFICIENCY_COLOUR = "#b35806"
 
 
 def _save(fig: Figure, stem: str) -> list[Artifact]:
@@ -111,17 +113,17 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
             p = meas.get(_values(s))
             ax.plot(X[k], Y[k], "C0-", lw=1.5, label=f"{pname} (fit)")
             ax2 = ax.twinx()
-            ax2.plot(X[k], E[k], "C1--", lw=1.2, label="efficiency (fit)")
+            ax2.plot(X[k], E[k], "--", color=EFFICIENCY_COLOUR, lw=1.2, label="efficiency (fit)")
             if p is not None:
                 ax.plot(p.flow, p.pressure, "C0o", ms=3.5, label=f"{pname} (measured)")
-                ax2.plot(p.flow, p.efficiency, "C1^", ms=3.5, label="efficiency (measured)")
+                ax2.plot(p.flow, p.efficiency, "^", color=EFFICIENCY_COLOUR, ms=3.5, label="efficiency (measured)")
             ax.set_title(f"{_label(result, _values(s))}  (p {100 * s.pressure_max_rel_error:.1f}%,"
                          f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
             ax.set_xlabel(xlabel, fontsize=8)
             ax.set_ylabel(ylabel, fontsize=8, color="C0")
-            ax2.set_ylabel(elabel, fontsize=8, color="C1")
+            ax2.set_ylabel(elabel, fontsize=8, color=EFFICIENCY_COLOUR)
             ax.tick_params(labelsize=8)
-            ax2.tick_params(labelsize=8, colors="C1")
+            ax2.tick_params(labelsize=8, colors=EFFICIENCY_COLOUR)
         for ax in axes[n:]:
             ax.set_visible(False)
         fig.legend(handles=_legend_handles(pname), loc="lower center", ncol=4, fontsize=8, frameon=False)
@@ -156,7 +158,8 @@ def _line(style: str, label: str, **kw):
 
 def _legend_handles(pname: str = "pressure"):
     return [_line("C0-", f"{pname} (fit, left axis)"), _line("C0o", f"{pname} (measured)", ms=3.5),
-            _line("C1--", "efficiency (fit, right axis)"), _line("C1^", "efficiency (measured)", ms=3.5)]
+            _line("--", "efficiency (fit, right axis)", color=EFFICIENCY_COLOUR),
+            _line("^", "efficiency (measured)", color=EFFICIENCY_COLOUR, ms=3.5)]
 
 
 def _envelopes(result: PerfmapResult) -> Figure:

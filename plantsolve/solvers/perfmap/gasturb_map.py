@@ -38,7 +38,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity
-from plantsolve.solvers.perfmap.validation import CHOKE_FLOW_TOLERANCE
+from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
 from plantsolve.solvers.skipped_input import truncated_file
 
 SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")

@@ -105,7 +105,7 @@ def _speed_bracket(speeds: np.ndarray, speed: float) -> tuple[int, int, float] |
     return j - 1, j, float((speed - speeds[j - 1]) / (speeds[j] - speeds[j - 1]))
 
 
-def _values(values) -> str:
+def _as_text(values) -> str:
     """Setting values as text: ``0, 5`` (no Python brackets or tuples in a message)."""
     return ", ".join(f"{float(v):g}" for v in values)
 
@@ -135,8 +135,8 @@ def answer_beta_query(result: PerfmapResult, q: PerfmapBetaQueryRequest) -> Perf
                                                                      atol=1e-12)]
         if not members:
             known = sorted({tuple(line.setting[:-1]) for line in lines})
-            errors.append(FieldError((*q.place(i), field, 0), f"{', '.join(names[:-1])} = {_values(setting[:-1])} "
-                                     f"is no value of the map (it has {'; '.join(_values(k) for k in known[:10])}"
+            errors.append(FieldError((*q.place(i), field, 0), f"{', '.join(names[:-1])} = {_as_text(setting[:-1])} "
+                                     f"is no value of the map (it has {'; '.join(_as_text(k) for k in known[:10])}"
                                      f"{' …' if len(known) > 10 else ''})"))
             continue
         members.sort(key=lambda k: lines[k].setting[-1])

@@ -99,7 +99,7 @@ def test_another_kinds_request_uploaded_as_a_meter_is_refused_naming_the_kind(bo
     with pytest.raises(InputRejected) as error:
         parse_upload(StoredInput.from_bytes("request.json", json.dumps(body).encode()), None)
     (e,) = error.value.errors
-    assert e.loc == ("file",) and f"this is a {kind} request" in e.msg and f"/v1/{kind}/jobs" in e.msg
+    assert e.loc == ("file",) and f" {kind} request" in e.msg and f"/v1/{kind}/jobs" in e.msg
 
 
 def test_the_weight_function_plot_and_table_reach_the_wall(in_mm):
