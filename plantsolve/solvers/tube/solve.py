@@ -423,7 +423,8 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                         lm_info: dict, nominal_clr: list[float] | None = None):
     """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
     bends assigned by their free radii ('dies', three bends or more), with a nominal one die per CLR it names
-    started at those CLRs and each bend on its nominal bend's die ('nominal_dies'), a radius per bend
+    started at those CLRs and each bend on its nominal bend's die ('nominal_dies'; with the scan's bend count it
+    replaces 'common' and 'dies', whose groupings the nominal's tooling contradicts), a radius per bend
     ('per_bend', the model fitted so far). Each is refitted in LRA parameters, the shared radii starting from
     the free ones weighted by the information the samples hold on each (``_shared_radius``); the one with the
     smallest BIC (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless
@@ -458,7 +459,12 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     # a radius below the pipe radius is the folded inner wall's spurious minimum (see add_sigmas): its sharp
     # sigma says nothing about the die, and as a start it would drag the shared radius down to it
     weight[model.radii < model.pipe_radius] = 1e-12 * weight.max()
-    if forced in ("auto", "common"):
+    # a nominal of the scan's bend count names each bend's die: a candidate sharing one radius across bends the
+    # nominal puts on different dies (or splitting one of its dies in two) contradicts the tooling, and its
+    # fewer parameters can win the BIC while the radii it gives are several sigma off (one radius for CLRs of
+    # 22.5 to 32.6); its dies are the 'nominal_dies' candidate instead
+    by_nominal = forced == "auto" and nominal_clr is not None and len(nominal_clr) == n
+    if forced == "common" or (forced == "auto" and not by_nominal):
         best = None
         for r0 in _common_starts(model, weight):
             m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
@@ -467,7 +473,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                 best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
         candidates["common"] = best[1]
     dies = _two_dies(model.radii, weight) if n >= 3 else ()
-    if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
+    if (forced == "dies" or (forced == "auto" and not by_nominal)) and dies and len(set(dies)) == 2:
         die_arr = np.asarray(dies)
         m = with_radii(model, [_shared_radius(model.radii[die_arr == d], weight[die_arr == d]) for d in dies])
         m, info, t2, _ = rounds(m, P, thr, 2, 30, "dies", dies)
@@ -493,6 +499,8 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     else:
         chosen = min(bic, key=lambda k: (bic[k], size[k]))
         how = "BIC"
+        if "nominal_dies" in bic and bic["nominal_dies"] - bic[chosen] < NOMINAL_PREFERRED_BIC:
+            chosen = "nominal_dies"
     m, info, t2, mode = candidates[chosen]
     die_radii = assignment = None
     if chosen == "dies":
@@ -507,6 +515,9 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
 
 
 TIED_BIC = 0.05  # BIC differences below this are one fit reached from two starts
+# the nominal's dies are kept unless another model beats them by this much: a BIC difference under 2 is no
+# evidence worth more than a bare mention (Kass and Raftery), and the tooling is what the bender used
+NOMINAL_PREFERRED_BIC = 2.0
 
 
 def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii: list[float]) -> str:
@@ -516,9 +527,14 @@ def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii:
 
     def versus(other: str) -> str:
         gap = bic[other] - bic[chosen]
-        return f"tied with '{other}' (the same fit)" if gap < TIED_BIC else f"over '{other}' by {gap:.1f}"
+        if abs(gap) < TIED_BIC:
+            return f"tied with '{other}' (the same fit)"
+        if gap < 0:  # the nominal's dies kept within NOMINAL_PREFERRED_BIC
+            return (f"though '{other}' scores {-gap:.1f} less (under {NOMINAL_PREFERRED_BIC:g}: no evidence against "
+                    "the nominal's tooling)")
+        return f"over '{other}' by {gap:.1f}"
 
-    others = sorted((v, k) for k, v in bic.items() if k != chosen)
+    others = sorted((v, k) for k, v in bic.items() if k != chosen)  # the runner-up first
     text = f"BIC chose '{chosen}'" + (f" {versus(others[0][1])}" if others else "")
     if nominal_radii:
         clrs = ", ".join(f"{c:.4g}" for c in nominal_radii)
