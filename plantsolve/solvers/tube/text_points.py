@@ -6,7 +6,8 @@ point is left. Text is read as exporters write it (UTF-8, UTF-16 with its mark, 
 lines before the first point are a header; lines starting with # or % are comments (``//X,Y,Z``, CloudCompare's
 header, is one too).
 
-A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``) are
+A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
+easting, northing, elevation) are
 the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
 unit. A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
 nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
@@ -28,6 +29,8 @@ from plantsolve.solvers.tube.read_log import ReadLog
 _SPLIT = re.compile(r"[,;\s]+")
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
+SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
+               "height": "z"}  # a surveyor's export names the axes so
 HEADER_UNITS = {"mm": "mm", "cm": "cm", "m": "m", "in": "in", "inch": "in", "ft": "ft", "feet": "ft"}
 NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
 MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
@@ -70,8 +73,9 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
     axes = {}
     for i, (n, _) in enumerate(parsed):
         m = _COORDINATE.match(n)
-        if m and m.group("axis") not in axes:
-            axes[m.group("axis")] = i
+        axis = m.group("axis") if m else SURVEY_AXES.get(n)
+        if axis and axis not in axes:
+            axes[axis] = i
     plain = [n for n, _ in parsed]
     nominal = sorted(NOMINAL_NAMES & set(plain))
     if commented and (nominal or len(axes) < 3):

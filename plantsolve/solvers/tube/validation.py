@@ -11,6 +11,10 @@ from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
 
 MIN_POINTS = 100
+# a coordinate with fewer distinct values puts every sample on that many parallel planes: a table's setting
+# column (speed lines, angles), not a scan, whose coordinates vary continuously (even one rounded to 1 mm has
+# hundreds of values over a tube)
+MIN_LEVELS = 12
 
 
 def check_points(pts: np.ndarray, loc: tuple) -> None:
@@ -34,6 +38,13 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
         raise InputRejected([FieldError(loc=loc, msg="all points lie on a line: not a tube surface")])
     if s[2] < 1e-6 * s[0]:
         raise InputRejected([FieldError(loc=loc, msg="all points are coplanar: not a tube surface")])
+    levels = [len(np.unique(sample[:, k])) for k in range(3)]
+    if min(levels) < MIN_LEVELS:
+        k = int(np.argmin(levels))
+        raise InputRejected([FieldError(loc=loc, msg=(
+            f"the {'xyz'[k]} coordinates take only {levels[k]} distinct values over {len(pts)} points: the samples "
+            f"lie on {levels[k]} parallel planes, like the setting columns of a table (a compressor map's speed "
+            "lines), not on a scanned surface; is this a file for another kind?"))])
     head = sample[:5000]
     if len(np.unique(np.round(head / (s[0] * 1e-9)), axis=0)) < min(MIN_POINTS, len(head)):
         raise InputRejected([FieldError(loc=loc, msg=f"fewer than {MIN_POINTS} distinct points")])
@@ -91,21 +102,25 @@ def sample_spacing(pts: np.ndarray, rng_seed: int = 0) -> float:
 
 def options_against_scan(pts: np.ndarray, o, units: str) -> list[FieldError]:
     """Given radii and tolerances that cannot belong to this scan, named at intake (the fit would fail or
-    answer a tube of another size): a pipe radius larger than the whole scan or under half the samples'
-    spacing (no sample would see its curvature), an ε larger than the scan (every spline fits: a straight
-    tube)."""
+    answer a tube of another size): a pipe radius larger than the whole scan, a pipe, bend or die radius under
+    half the samples' spacing (no sample would see its curvature), an ε larger than the scan (every spline fits:
+    a straight tube)."""
     errors = []
     extent = scan_extent(pts)
     if o.pipe_radius and o.pipe_radius > extent:
         errors.append(FieldError(loc=("options", "pipe_radius"), msg=(
             f"implausible pipe radius: {o.pipe_radius:g} {units} is larger than the whole scan (its extent is "
             f"{extent:.4g} {units}); check the value and its unit (a diameter, or another unit than {units}?)")))
-    elif o.pipe_radius:
-        spacing = sample_spacing(pts)
-        if o.pipe_radius < 0.5 * spacing:
-            errors.append(FieldError(loc=("options", "pipe_radius"), msg=(
-                f"implausible pipe radius: {o.pipe_radius:g} {units} is under half the samples' spacing "
-                f"({spacing:.4g} {units}): no local fit could see its curvature; check the value and its unit")))
+    radii = [(("options", "pipe_radius"), "pipe radius", o.pipe_radius)] if o.pipe_radius and o.pipe_radius <= extent \
+        else []
+    radii += [(("options", "bend_radius"), "bend radius", o.bend_radius)] if o.bend_radius else []
+    radii += [(("options", "dies", i), "die radius", d) for i, d in enumerate(o.dies or [])]
+    spacing = sample_spacing(pts) if radii else 0.0
+    for loc, name, r in radii:
+        if r < 0.5 * spacing:
+            errors.append(FieldError(loc=loc, msg=(
+                f"implausible {name}: {r:g} {units} is under half the samples' spacing ({spacing:.4g} {units}): no "
+                "fit could see a curvature that tight; check the value and its unit")))
     if o.tolerance and o.tolerance > extent:
         errors.append(FieldError(loc=("options", "tolerance"), msg=(
             f"implausible tolerance: ε = {o.tolerance:g} {units} is larger than the whole scan (extent "

@@ -58,6 +58,19 @@ def test_another_kinds_json_request_uploaded_to_tube_is_refused_naming_what_it_h
     assert text.startswith("file: ") and ", ".join(keys[:3]) in text and "`points`" in text
 
 
+def test_a_perfmap_table_without_its_header_is_refused_as_points_on_few_planes(client):
+    lines = (EXAMPLES / "perfmap" / "n3_fan_map.csv").read_text().splitlines()[1:]
+    text = _refusal(client.post("/v1/tube/jobs", files={"file": ("map.csv", "\n".join(lines).encode(), "text/csv")}))
+    # theta takes 2 values, phi 9: every "sample" lies on 2 parallel planes
+    assert text.startswith("points: the x coordinates take only 2 distinct values over 134 points")
+
+
+def test_a_surveyors_header_names_the_axes():
+    rows = np.column_stack([POINTS[:, 1], POINTS[:, 0], POINTS[:, 2]])
+    request = parse_upload(_csv("Northing,Easting,Elevation", rows), {})
+    np.testing.assert_allclose(np.asarray(request.points, float), POINTS, atol=1e-6)
+
+
 def test_an_lra_table_given_as_the_scan_is_refused_pointing_to_nominal_csv(client):
     # the service's own lra.csv, and the same table without its header
     with_header = (EXAMPLES / "tube" / "nominal_lra.csv").read_bytes()
@@ -155,6 +168,15 @@ def test_a_pipe_radius_far_under_the_sample_spacing_is_refused():
     with pytest.raises(InputRejected) as exc:
         check_input(scan)
     assert exc.value.errors[0].loc == ("options", "pipe_radius") and "spacing" in exc.value.errors[0].msg
+
+
+@pytest.mark.parametrize("options, loc", [({"bend_radius": 0.018}, ("options", "bend_radius")),
+                                          ({"dies": [18.0, 0.018]}, ("options", "dies", 1))])
+def test_a_bend_radius_far_under_the_sample_spacing_is_refused(options, loc):
+    scan = TubeScan(TubeRequest(points=EXAMPLE["points"], options=options))  # 18 mm typed as metres
+    with pytest.raises(InputRejected) as exc:
+        check_input(scan)
+    assert exc.value.errors[0].loc == loc and "spacing" in exc.value.errors[0].msg
 
 
 def test_a_tolerance_larger_than_the_scan_is_refused():
