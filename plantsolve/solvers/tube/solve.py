@@ -482,9 +482,8 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     if forced == "auto" and nominal_radii:
         mode = ({"radius_mode": "dies", "dies": nominal_assignment} if len(nominal_radii) > 1
                 else {"radius_mode": "common"})
-        m = with_radii(model, [nominal_radii[d] for d in nominal_assignment])
-        m, info, t2, _ = rounds(m, P, thr, 2, 30, mode["radius_mode"], nominal_assignment if len(nominal_radii) > 1
-                                else ())
+        m, info, t2, _ = rounds(with_radii(model, [nominal_radii[d] for d in nominal_assignment]), P, thr, 2, 30,
+                                **mode)
         candidates["nominal_dies"] = (m, info, t2, mode)
     N = int(keep.sum())
     size = {"per_bend": n, "common": 1, "dies": 2, "nominal_dies": len(nominal_radii)}
