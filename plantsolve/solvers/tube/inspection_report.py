@@ -51,6 +51,8 @@ def inspection_outcome(ins: Inspection, units: str) -> tuple[str, Diagnostic | N
             parts.append("end points " + ", ".join(f"{e.end} {e.deviation:.3g} {units}" for e in bad_ends)
                          + f" off (tolerance {bad_ends[0].tolerance:.3g} {units})")
         text = "; ".join(parts)
+        if ins.undetermined_rows:  # the rows the samples leave open are named beside the failures
+            text += f"; not determined: {_rows_text(ins.rows, 'undetermined')}"
         return f"inspection FAIL: {text}", Diagnostic(
             code="inspection_failed", message=f"Inspection FAIL: {text} out of tolerance (corrections for the next "
             "part in inspection.corrections).",

@@ -212,6 +212,9 @@ def test_a_short_end_straight_next_to_a_failed_bend_still_fails_the_part():
     ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=measured_knowing(made))
     assert ins.verdict == "fail" and ins.failed_rows == [1, 2, 3] and ins.undetermined_rows == [1]
     assert ins.rows[0].failed == ["angle"] and ins.rows[0].undetermined == ["length"]
+    clause, warning = inspection_outcome(ins, "mm")
+    assert clause.startswith("inspection FAIL: rows 1, 2, 3 (length, rotation, angle)")
+    assert clause.endswith("; not determined: rows 1 (length)") and warning.details["undetermined_rows"] == [1]
 
 
 def test_a_bend_seen_from_one_side_is_a_lower_bound():
