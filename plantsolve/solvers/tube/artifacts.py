@@ -355,7 +355,8 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
         for e, x in zip(ins.end_points, (0.0, arc[-1])):
             ax.plot(x, e.deviation, "D", color="C3" if not e.ok else "C0", ms=6)
         handles += [Patch(color="C2", alpha=0.18, label=f"end-point tolerance (±{tol:.3g} {u})"),
-                    Line2D([], [], color="C0", marker="D", ls="", label="end point (after best fit)")]
+                    Line2D([], [], color="0.3", marker="D", ls="",
+                           label="end point after best fit (blue: within, red: out)")]
         ax.set_ylim(0.0, 1.1 * max(float(d.max()), tol, *(e.deviation for e in ins.end_points)))
     ax.set_xlabel(f"arc length along the measured centreline [{u}]")
     ax.set_ylabel(f"distance from nominal centreline [{u}]")
@@ -370,7 +371,7 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
                     Patch(color=VERDICT_COLOURS["pass"], label="within tolerance"),
                     Patch(color=VERDICT_COLOURS["fail"], label="out of tolerance"),
                     Patch(facecolor=VERDICT_COLOURS["not determined"], hatch="//", edgecolor="0.35",
-                          label="not determined (a bound, or sigma > tolerance)"),
+                          label="not determined (a bound, or σ > tolerance)"),
                     Line2D([], [], color="k", lw=0.8, label="±2 sigma")]
     else:
         fig.delaxes(panels[1]), fig.delaxes(panels[2]), fig.delaxes(panels[3])
@@ -382,7 +383,7 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
         a.set_yticks([])
         a.set_xlabel("LRA row [number]")
         a.set_ylabel("deviation [-]")
-    fig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
     return fig
 
 

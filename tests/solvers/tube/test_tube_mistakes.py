@@ -11,12 +11,14 @@ import pytest
 
 from plantsolve.schemas.tube import TubeOptions, TubeRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.tube.artifacts import figures
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.synthetic import make_model
 from plantsolve.solvers.tube.upload import parse_upload
 from plantsolve.solvers.tube.validation import check_input, implausible_against_scan, sample_spacing, scan_extent
 from tests.conftest import REPO, wait_for
+from tests.support.plots import check_figure
 
 EXAMPLES = REPO / "examples"
 EXAMPLE = json.loads((EXAMPLES / "tube" / "scan_request.json").read_text())
@@ -233,13 +235,21 @@ def test_a_nominal_with_another_bend_count_is_not_comparable_naming_both_counts(
     nominal = [{"length": 80, "angle": 90, "bend_radius": 18}, {"length": 45, "rotation": 90, "angle": 45,
                                                                  "bend_radius": 18}, {"length": 70}]
     body = {**EXAMPLE, "options": {"nominal": nominal}}
-    result = solve(TubeScan(TubeRequest.model_validate(body))).result
+    scan = TubeScan(TubeRequest.model_validate(body))
+    result = solve(scan).result
     ins = result.inspection
     assert ins.verdict == "not_comparable" and not ins.matched and ins.failed_rows == []
     assert (ins.nominal_bends, ins.measured_bends) == (2, 3)
     first = result.report.warnings[0]
     assert first.code == "inspection_not_comparable" and "the nominal has 2 bend(s), the scan 3" in first.message
     assert result.report.status == "warning" and "inspection NOT COMPARABLE" in result.report.message
+    # the plots say it too, and read as every plot must
+    figs = figures(scan, result)
+    for name in ("inspection", "inspection_overlay"):
+        check_figure(figs[name])
+    texts = [t.get_text() for ax in figs["inspection"].axes for t in ax.texts]
+    assert any(t.startswith("not comparable: the nominal has 2 bend(s), the scan 3") for t in texts)
+    assert figs["inspection"].axes[0].get_title().startswith("Inspection NOT COMPARABLE")
 
 
 def test_extent_is_the_bounding_box_diagonal():
