@@ -21,19 +21,26 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
 
-from plantsolve.schemas.common import (Diagnostic, FiniteFloat, Integer, Point3, Quaternion, Report, StrictModel,
-                                      Units, Vec3)
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Point3, Quaternion,
+                                      Report, StrictModel, Units, Vec3, json_integer, unit)
 
 MAX_POINTS = 5_000_000
+# the largest length an option may hold, in the request's units: 1e6 is a kilometre in millimetres and 300 km in
+# feet, far beyond any tube; beyond it a number is a typing accident (1e300), refused at intake naming the field.
+# How a radius compares with the scan itself is checked against the samples (``validation``).
+MAX_OPTION_LENGTH = 1e6
+MAX_NOMINAL_LENGTH = 1e12  # a nominal's lengths: the coordinates' bound (``common.MAX_COORDINATE``)
+DEG = unit("deg")
+LEN = unit(LENGTH)
 
 FILE_UNITS_HELP = (
     "Length unit of the coordinates in an uploaded point file (uploads only). It overrides the file format's own "
     "convention, which is: LAS/LAZ — the linear unit of the file's CRS (OGC WKT VLR/EVLR, else GeoTIFF keys "
     "ProjLinearUnits 3076 / VerticalUnits 4099), metres when the file states none (as scanners write them; the "
-    "report then warns 'file_units_assumed'); E57 — metres (the standard's); PLY, STL, OBJ, XYZ, CSV, TXT, NPY — "
-    "no unit: read in the request's `units` unless this says otherwise. Points are converted into the request's "
+    "report then warns 'file_units_assumed'); E57 — metres (the standard's); XYZ, CSV, TXT — the unit their column "
+    "header states for x, y, z (`x [m]`, `x_mm`), if any; PLY, STL, OBJ, NPY and headers without one — no unit: read in the request's `units` unless this says otherwise. Points are converted into the request's "
     "`units`, and the report states the conversion (`report.details.source.units`: file unit, request unit, "
     "factor, and where the file unit came from). Not accepted with a .json upload (a JSON request states its "
     "own `units`); ignored, with a warning, in a JSON request body."
@@ -54,37 +61,57 @@ class NpyPoints(StrictModel):
 class LraRow(StrictModel):
     """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
 
-    length: FiniteFloat = Field(ge=0, description="Straight length before the bend, in the request's units.")
+    length: FiniteFloat = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
+                                description="Straight length before the bend, in the request's units.")
     rotation: FiniteFloat = Field(
-        default=0.0,
+        default=0.0, ge=-360, le=360, json_schema_extra=DEG,
         description="Rotation of the in-plane normal about the current tangent before the bend, "
         "degrees, right-hand rule. 0 in the first row.",
     )
     angle: FiniteFloat = Field(
-        default=0.0, ge=0, lt=360, description="Bend angle in degrees (0 in the last row)."
+        default=0.0, ge=0, lt=360, json_schema_extra=DEG, description="Bend angle in degrees (0 in the last row)."
     )
     bend_radius: FiniteFloat = Field(
-        default=0.0, ge=0, description="Centreline bend radius (CLR) of this bend; 0 in the last row."
+        default=0.0, ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
+        description="Centreline bend radius (CLR) of this bend; 0 in the last row."
     )
     sigma_length: FiniteFloat | None = Field(
-        default=None, ge=0, description="Results: standard deviation of the length (null for the end straights, "
-        "whose extent is where the samples end)."
+        default=None, ge=0, json_schema_extra=LEN, description="Results: standard deviation of the length. For an end "
+        "straight, whose extent is where the samples end, the spacing of the samples along the tube there: the tube "
+        "ends about one to three times this beyond the last sample when they reach its cut end (its length is a "
+        "lower bound, `length_bound`)."
     )
-    sigma_rotation: FiniteFloat | None = Field(default=None, ge=0, description="Results: standard deviation, degrees.")
-    sigma_angle: FiniteFloat | None = Field(default=None, ge=0, description="Results: standard deviation, degrees.")
+    sigma_rotation: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
+                                               description="Results: standard deviation, degrees.")
+    sigma_angle: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
+                                            description="Results: standard deviation, degrees.")
     sigma_bend_radius: FiniteFloat | None = Field(
-        default=None, ge=0, description="Results: standard deviation of the bend radius (0 when held by the options)."
+        default=None, ge=0, json_schema_extra=LEN,
+        description="Results: standard deviation of the bend radius (0 when held by the options)."
     )
+    determined: bool | None = Field(
+        default=None, description="Results: false when a field of this row is not determined by the samples "
+        "(listed in `undetermined`): an end straight the samples stop short on, or a bend they see from one side "
+        "only. Null in a nominal.")
+    undetermined: list[Literal["length", "rotation", "angle", "bend_radius"]] = Field(
+        default_factory=list, description="Results: the fields of this row the samples do not determine; each has a "
+        "bound (`length_bound`, `angle_bound`) or a sigma too large for its value.")
+    length_bound: Literal["lower"] | None = Field(
+        default=None, description="Results: 'lower' on the two end straights: their length is where the samples end, "
+        "so the tube is at least this long (by up to about `sigma_length` more when the samples reach its end).")
+    angle_bound: Literal["lower"] | None = Field(
+        default=None, description="Results: 'lower' on a bend seen from one side only (the samples stop inside it or "
+        "just after it): it turns at least this far.")
 
 
 class XyzClrPoint(StrictModel):
     """One point of an XYZ-CLR nominal: the intersection of two consecutive straights of the centreline (or an
     end of the tube) and the centreline bend radius of the bend there."""
 
-    x: FiniteFloat
-    y: FiniteFloat
-    z: FiniteFloat
-    clr: FiniteFloat | None = Field(default=None, ge=0, description="Centreline bend radius of the bend at this "
+    x: Coordinate
+    y: Coordinate
+    z: Coordinate
+    clr: FiniteFloat | None = Field(default=None, ge=0, le=MAX_NOMINAL_LENGTH, description="Centreline bend radius of the bend at this "
                                     "point, request units; null (or 0) at the two ends.")
 
 
@@ -99,11 +126,16 @@ class InspectionTolerances(StrictModel):
     angle ±0.5°, bend radius (CLR) ±1 mm, end point ±2 mm (the millimetre defaults are converted into the
     request's units)."""
 
-    length: FiniteFloat | None = Field(default=None, gt=0, description="Straight length, request units.")
-    rotation: FiniteFloat | None = Field(default=None, gt=0, description="Rotation of the bend plane, degrees.")
-    angle: FiniteFloat | None = Field(default=None, gt=0, description="Bend angle, degrees.")
-    bend_radius: FiniteFloat | None = Field(default=None, gt=0, description="Centreline bend radius, request units.")
-    end_point: FiniteFloat | None = Field(default=None, gt=0, description="Distance of each measured tube end from "
+    length: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+                                       description="Straight length, request units.")
+    rotation: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+                                         description="Rotation of the bend plane, degrees.")
+    angle: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+                                      description="Bend angle, degrees.")
+    bend_radius: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+                                            description="Centreline bend radius, request units.")
+    end_point: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+                                          description="Distance of each measured tube end from "
                                           "the nominal one after best-fit alignment, request units.")
 
 
@@ -111,16 +143,20 @@ class TubeOptions(StrictModel):
     tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
+        le=MAX_OPTION_LENGTH,
         description="ε: maximum distance of the reconstructed spine polygon from the arc-line "
         "spline when choosing the number of segments (request units). Default: derived from the "
         "pipe radius and the estimated noise (max(0.08·pipe radius, 4·spine noise)).",
     )
     pipe_radius: FiniteFloat | None = Field(
-        default=None, gt=0, description="Known outer pipe radius (request units); fixed in every fit when given."
+        default=None, gt=0, le=MAX_OPTION_LENGTH,
+        description="Known outer pipe radius (request units); fixed in every fit when given. It must fit the scan: "
+        "no larger than the samples' extent, no smaller than half their spacing (else 422 naming it)."
     )
     bend_radius: FiniteFloat | None = Field(
         default=None,
         gt=0,
+        le=MAX_OPTION_LENGTH,
         description="Known centreline bend radius (request units); when given all bends are "
         "fitted with this fixed radius.",
     )
@@ -134,7 +170,7 @@ class TubeOptions(StrictModel):
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
         "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
     )
-    dies: list[Annotated[float, Field(gt=0, allow_inf_nan=False)]] | None = Field(
+    dies: list[Annotated[float, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
         default=None, min_length=1, max_length=20,
         description="Centreline radii of the dies available (request units): each bend gets the nearest die "
         "(by its freely fitted radius), and its radius is held at that die's.",
@@ -142,6 +178,7 @@ class TubeOptions(StrictModel):
     nominal: list[LraRow] | None = Field(
         default=None,
         min_length=1,
+        max_length=10_000,
         description="Nominal LRA table (same convention and units) for inspection: the "
         "reconstruction is aligned to it and per-bend deviations and corrected LRA are reported.",
     )
@@ -153,7 +190,7 @@ class TubeOptions(StrictModel):
         "(nominal − measured), for angle, rotation and length.",
     )
     nominal_xyz_clr: list[XyzClrPoint] | None = Field(
-        default=None, min_length=2,
+        default=None, min_length=2, max_length=10_000,
         description="Nominal as XYZ-CLR (start, intersection points of consecutive straights, end; CLR per bend), "
         "request units; converted to LRA (L = straight between tangent points, R = rotation between consecutive "
         "bend planes, A = angle between straights). Bends below 180° only. Instead of `nominal`.",
@@ -177,7 +214,7 @@ class TubeOptions(StrictModel):
         "angle_out = k·angle_cmd + b; next command = (nominal − b)/k; a die with fewer than two distinct "
         "commanded angles falls back to k = 1).",
     )
-    seed: Integer = Field(default=0, ge=0, description="Seed of the subsampling random generator.")
+    seed: Annotated[int, Field(ge=0, le=2**32 - 1), BeforeValidator(json_integer)] = Field(default=0, description="Seed of the subsampling random generator.")
     file_units: Units | None = Field(default=None, description=FILE_UNITS_HELP)
 
     @model_validator(mode="after")
@@ -204,9 +241,10 @@ class UnitConversion(StrictModel):
     z_file_unit: str | None = Field(default=None, description="The z unit when the file's CRS states a vertical unit "
                                     "other than the horizontal one.")
     z_factor: float | None = Field(default=None, gt=0, description="Multiplier for z when z_file_unit is given.")
-    basis: Literal["options.file_units", "crs", "format", "assumed", "request"] = Field(
-        description="Where the file unit came from: the option, the file's CRS, the format's standard (E57: "
-        "metres), assumed (a LAS/LAZ file stating no unit: metres), or none stated (the request's unit).")
+    basis: Literal["options.file_units", "crs", "header", "format", "assumed", "request"] = Field(
+        description="Where the file unit came from: the option, the file's CRS, a text file's column header "
+        "(`x [m]`, `x_mm`), the format's standard (E57: metres), assumed (a LAS/LAZ file stating no unit: metres), "
+        "or none stated (the request's unit).")
     evidence: str = Field(default="", description="What in the file stated it, e.g. 'WKT UNIT[\"US survey foot\", "
                           "0.3048006096012192]' or 'GeoTIFF ProjLinearUnitsGeoKey 9002'.")
 
@@ -249,13 +287,16 @@ class Segment(BaseModel):
     """One piece of the spine (centreline), in order from the start."""
 
     type: Literal["line", "arc"]
-    start: Vec3
-    end: Vec3
-    centre: Vec3 | None = Field(default=None, description="Arc centre (arcs only).")
-    radius: float | None = Field(default=None, description="Arc radius = bend radius (arcs only).")
-    angle: float | None = Field(default=None, description="Arc apex angle in degrees (arcs only).")
+    start: Vec3 = Field(json_schema_extra=LEN)
+    end: Vec3 = Field(json_schema_extra=LEN)
+    centre: Vec3 | None = Field(default=None, json_schema_extra=LEN, description="Arc centre (arcs only).")
+    radius: float | None = Field(default=None, json_schema_extra=LEN,
+                                 description="Arc radius = bend radius (arcs only).")
+    angle: float | None = Field(default=None, json_schema_extra=DEG,
+                                description="Arc apex angle in degrees (arcs only).")
     normal: Vec3 | None = Field(
         default=None,
+        json_schema_extra=unit("1"),
         description="Unit normal of the arc's plane, oriented so that the arc runs from start to "
         "end counter-clockwise about it (arcs only).",
     )
@@ -265,10 +306,10 @@ class Residuals(BaseModel):
     """Unsigned point-to-surface distances of the inlier samples (request units)."""
 
     count: int
-    median: float
-    p95: float
-    max: float
-    rms: float
+    median: float = Field(json_schema_extra=LEN)
+    p95: float = Field(json_schema_extra=LEN)
+    max: float = Field(json_schema_extra=LEN)
+    rms: float = Field(json_schema_extra=LEN)
 
 
 class Outliers(BaseModel):
@@ -287,91 +328,142 @@ class SegmentQuality(BaseModel):
     index: int = Field(description="Index into `segments`.")
     type: Literal["line", "arc"]
     count: int = Field(description="Inlier samples closest to this segment.")
-    median: float
-    rms: float
-    max: float
+    median: float = Field(json_schema_extra=LEN)
+    rms: float = Field(json_schema_extra=LEN)
+    max: float = Field(json_schema_extra=LEN)
 
 
 class BendDeviation(BaseModel):
     bend: int = Field(description="1-based bend number.")
-    angle: float = Field(description="measured − nominal bend angle, degrees")
-    rotation: float = Field(description="measured − nominal rotation, degrees (wrapped to ±180)")
-    length: float = Field(description="measured − nominal straight length before this bend")
-    bend_radius: float = Field(description="measured − nominal bend radius")
+    angle: float = Field(json_schema_extra=DEG, description="measured − nominal bend angle, degrees")
+    rotation: float = Field(json_schema_extra=DEG, description="measured − nominal rotation, degrees (wrapped to ±180)")
+    length: float = Field(json_schema_extra=LEN, description="measured − nominal straight length before this bend")
+    bend_radius: float = Field(json_schema_extra=LEN, description="measured − nominal bend radius")
 
 
-class FieldCheck(BaseModel):
-    """One field of one row: nominal, measured, deviation (measured − nominal) and the verdict."""
+FIELD_DETERMINED = ("False when the samples do not determine this field (an end straight they stop short on, a bend "
+                    "they see from one side, a sigma larger than the tolerance): then `ok` is not a verdict, the row "
+                    "lists it in `undetermined`, and `bound` or `sigma` says what is known.")
 
-    nominal: float
-    measured: float
-    deviation: float
-    tolerance: float
-    ok: bool
+
+class LengthCheck(BaseModel):
+    """One length of one row (straight length, CLR): nominal, measured, deviation (measured − nominal), the
+    verdict, and whether the samples determine it."""
+
+    nominal: float = Field(json_schema_extra=LEN)
+    measured: float = Field(json_schema_extra=LEN)
+    deviation: float = Field(json_schema_extra=LEN)
+    tolerance: float = Field(json_schema_extra=LEN)
+    ok: bool = Field(description="Within tolerance (true, and not a verdict, when not determined).")
+    determined: bool = Field(default=True, description=FIELD_DETERMINED)
+    sigma: float | None = Field(default=None, json_schema_extra=LEN, description="Standard deviation of the "
+                                "measured value (for an end straight: the samples' spacing at its end).")
+    bound: Literal["lower"] | None = Field(default=None, description="'lower': the measured value is a lower "
+                                           "bound (the samples end there; the true value may be larger).")
+
+
+class AngleCheck(BaseModel):
+    """One angle of one row (rotation, bend angle), degrees: as :class:`LengthCheck`."""
+
+    nominal: float = Field(json_schema_extra=DEG)
+    measured: float = Field(json_schema_extra=DEG)
+    deviation: float = Field(json_schema_extra=DEG)
+    tolerance: float = Field(json_schema_extra=DEG)
+    ok: bool = Field(description="Within tolerance (true, and not a verdict, when not determined).")
+    determined: bool = Field(default=True, description=FIELD_DETERMINED)
+    sigma: float | None = Field(default=None, json_schema_extra=DEG, description="Standard deviation of the "
+                                "measured value.")
+    bound: Literal["lower"] | None = Field(default=None, description="'lower': the measured value is a lower "
+                                           "bound (a bend seen from one side turns at least this far).")
 
 
 class InspectionRow(BaseModel):
     """One LRA row checked: straight length before the bend, rotation, bend angle, CLR (the last row: length only)."""
 
     row: int = Field(description="1-based LRA row, in the nominal's order.")
-    length: FieldCheck = Field(description="Request units.")
-    rotation: FieldCheck | None = Field(default=None, description="Degrees, deviation wrapped to ±180 (rows 2..n).")
-    angle: FieldCheck | None = Field(default=None, description="Degrees (bend rows).")
-    bend_radius: FieldCheck | None = Field(default=None, description="Request units (bend rows).")
-    failed: list[str] = Field(default_factory=list, description="Fields out of tolerance.")
-    ok: bool
+    length: LengthCheck = Field(description="Request units.")
+    rotation: AngleCheck | None = Field(default=None, description="Degrees, deviation wrapped to ±180 (rows 2..n).")
+    angle: AngleCheck | None = Field(default=None, description="Degrees (bend rows).")
+    bend_radius: LengthCheck | None = Field(default=None, description="Request units (bend rows).")
+    failed: list[str] = Field(default_factory=list, description="Determined fields out of tolerance.")
+    undetermined: list[str] = Field(default_factory=list, description="Fields the samples do not determine (no "
+                                    "verdict on them).")
+    ok: bool = Field(description="No determined field out of tolerance.")
 
 
 class EndPointCheck(BaseModel):
     end: Literal["start", "end"]
-    deviation: float = Field(description="Distance of the measured end from the nominal one after best-fit "
-                             "alignment, request units.")
-    tolerance: float
+    deviation: float = Field(json_schema_extra=LEN, description="Distance of the measured end from the nominal one "
+                             "after best-fit alignment, request units.")
+    tolerance: float = Field(json_schema_extra=LEN)
     ok: bool
+    determined: bool = Field(default=True, description="False when the samples stop short of the nominal end on "
+                             "this end's straight (its length is a lower bound): the distance is then no verdict.")
 
 
 class SpringbackFit(BaseModel):
     """The bends of one die (one nominal CLR): measured angle = k · commanded angle + b (degrees)."""
 
-    bend_radius: float = Field(description="The die's nominal CLR, request units.")
+    bend_radius: float = Field(json_schema_extra=LEN, description="The die's nominal CLR, request units.")
     bends: list[int] = Field(description="1-based bend numbers.")
-    k: float
-    b: float = Field(description="Degrees.")
+    k: float = Field(json_schema_extra=unit("1"), description="Slope, degrees per degree.")
+    b: float = Field(json_schema_extra=DEG, description="Degrees.")
 
 
 class Correction(BaseModel):
     """Values for the next part of one LRA row: deltas to add to the nominal, and the resulting command."""
 
     row: int
-    delta_length: float = Field(description="−(length deviation), request units.")
-    delta_rotation: float = Field(description="−(rotation deviation), degrees.")
-    delta_angle: float = Field(description="Next command − nominal angle, degrees (the springback to add).")
-    springback: float | None = Field(default=None, description="Commanded − measured bend angle, degrees (bend rows; "
+    delta_length: float = Field(json_schema_extra=LEN, description="−(length deviation), request units.")
+    delta_rotation: float = Field(json_schema_extra=DEG, description="−(rotation deviation), degrees.")
+    delta_angle: float = Field(json_schema_extra=DEG,
+                               description="Next command − nominal angle, degrees (the springback to add).")
+    springback: float | None = Field(default=None, json_schema_extra=DEG,
+                                     description="Commanded − measured bend angle, degrees (bend rows; "
                                      "the nominal is taken as commanded).")
     next: LraRow = Field(description="LRA row to command next (CLR is tooling and stays nominal).")
 
 
+class Alignment(BaseModel):
+    """Rigid motion mapping the nominal frame to the scan: x_scan = R(quaternion) x_nominal + translation."""
+
+    translation: Vec3 = Field(json_schema_extra=LEN)
+    quaternion: Quaternion = Field(json_schema_extra=unit("1"), description="[w, x, y, z], w ≥ 0.")
+
+
+Verdict = Literal["pass", "fail", "not_determined", "not_comparable"]
+
+
 class Inspection(BaseModel):
     matched: bool = Field(description="False when the bend counts differ (then only sheath data is given).")
+    nominal_bends: int = Field(default=0, description="Bends of the nominal.")
+    measured_bends: int = Field(default=0, description="Bends reconstructed from the scan.")
     reversed: bool = Field(description="True when the scan was matched to the nominal in reverse direction.")
     measured_lra: list[LraRow] = Field(description="Measured LRA in the nominal's direction.")
     bends: list[BendDeviation]
-    last_length: float | None = Field(default=None, description="measured − nominal length of the last straight")
+    last_length: float | None = Field(default=None, json_schema_extra=LEN,
+                                      description="measured − nominal length of the last straight")
     sheath_deviation: float = Field(
+        json_schema_extra=LEN,
         description="Max distance of the measured centreline from the nominal centreline after best-fit alignment."
     )
-    sheath_rms: float
-    alignment: dict[str, list[float]] = Field(
-        description="Rigid motion mapping the nominal frame to the scan: 'translation' and 'quaternion' [w,x,y,z]."
-    )
+    sheath_rms: float = Field(json_schema_extra=LEN)
+    alignment: Alignment = Field(description="Rigid motion mapping the nominal frame to the scan.")
     corrected_lra: list[LraRow] = Field(description="LRA to send to the bender (springback correction).")
     tolerances: InspectionTolerances | None = Field(default=None, description="The tolerances applied (defaults "
                                                      "filled in).")
     rows: list[InspectionRow] = Field(default_factory=list, description="Per-row check (bend counts matched only).")
     end_points: list[EndPointCheck] = Field(default_factory=list)
-    verdict: Literal["pass", "fail"] = Field(default="fail", description="'pass' when every row and end point is "
-                                             "within tolerance and the bend counts match.")
-    failed_rows: list[int] = Field(default_factory=list, description="1-based LRA rows out of tolerance.")
+    verdict: Verdict = Field(
+        default="fail", description="'pass': every row and end point determined and within tolerance; 'fail': a "
+        "determined field or end point out of tolerance (`failed_rows`); 'not_determined': none out of tolerance "
+        "but some the samples do not determine (`undetermined_rows`), so the part is neither passed nor failed; "
+        "'not_comparable': the nominal's bend count differs from the scan's (`nominal_bends`, `measured_bends`): "
+        "no row is compared.")
+    failed_rows: list[int] = Field(default_factory=list, description="1-based LRA rows with a determined field out "
+                                   "of tolerance.")
+    undetermined_rows: list[int] = Field(default_factory=list, description="1-based LRA rows with a field the "
+                                         "samples do not determine.")
     corrections: list[Correction] = Field(default_factory=list, description="For the next part (undamped).")
     springback_fits: list[SpringbackFit] = Field(default_factory=list, description="'linear_per_die' only.")
     nominal_source: str = Field(default="nominal", description="How the nominal was given and read.")
@@ -393,14 +485,25 @@ LRA_CONVENTION = (
 class BendRadiusModel(BaseModel):
     """Which radius model the fit used, and the evidence."""
 
-    chosen: Literal["common", "dies", "per_bend", "fixed", "given_dies"]
+    chosen: Literal["common", "dies", "nominal_dies", "per_bend", "fixed", "given_dies"] = Field(
+        description="'common' one radius for all bends, 'dies' two radii with the bends assigned by the data, "
+        "'nominal_dies' one radius per distinct CLR of the nominal (started at those CLRs, each bend on its "
+        "nominal bend's die), 'per_bend' a radius per bend, 'fixed' options.bend_radius, 'given_dies' options.dies.")
     criterion: str = Field(description="How it was chosen: 'BIC' (n ln(RSS/n) + p ln n on the inlier surface "
                            "residuals, smaller is better), or 'options' when forced.")
-    values: dict[str, float] = Field(default_factory=dict, description="Criterion value per candidate model.")
-    rss: dict[str, float] = Field(default_factory=dict, description="Sum of squared inlier residuals per candidate.")
+    values: dict[str, float] = Field(default_factory=dict, json_schema_extra=unit("1"),
+                                     description="Criterion value per candidate model.")
+    rss: dict[str, float] = Field(default_factory=dict, json_schema_extra=unit(LENGTH + "^2"),
+                                  description="Sum of squared inlier residuals per candidate.")
     n_parameters: dict[str, int] = Field(default_factory=dict)
-    die_radii: list[float] | None = Field(default=None, description="'dies'/'given_dies': the radius of each die.")
-    assignment: list[int] | None = Field(default=None, description="'dies'/'given_dies': the die of each bend.")
+    die_radii: list[float] | None = Field(default=None, json_schema_extra=LEN,
+                                          description="'dies', 'nominal_dies', 'given_dies': the radius of each die.")
+    assignment: list[int] | None = Field(default=None, description="'dies', 'nominal_dies', 'given_dies': the die "
+                                         "of each bend.")
+    nominal_clrs: list[float] | None = Field(default=None, json_schema_extra=LEN,
+                                             description="With a nominal: its distinct CLRs, where the "
+                                             "'nominal_dies' candidate started.")
+    summary: str = Field(default="", description="Which candidate won and by how much, in words.")
 
 
 class TubeResult(BaseModel):
@@ -410,18 +513,19 @@ class TubeResult(BaseModel):
 
     kind: Literal["tube"] = Field(default="tube", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
-    pipe_radius: float
-    start: Vec3 = Field(description="World position of the tube start (first end of the centreline).")
-    orientation: Quaternion = Field(description="Maps the local start frame (see LRA convention) to world, [w,x,y,z].")
+    pipe_radius: float = Field(json_schema_extra=LEN)
+    start: Vec3 = Field(json_schema_extra=LEN, description="World position of the tube start (first end of the centreline).")
+    orientation: Quaternion = Field(json_schema_extra=unit("1"), description="Maps the local start frame (see LRA convention) to world, [w,x,y,z].")
     lra: list[LraRow] = Field(description=LRA_CONVENTION)
     control_polygon: list[Vec3] = Field(
+        json_schema_extra=LEN,
         description="Start, intersection points of consecutive straights (bends < 180° only), end."
     )
     segments: list[Segment]
     residuals: Residuals
     outliers: Outliers
     segment_quality: list[SegmentQuality] = Field(default_factory=list)
-    tolerance: float = Field(description="ε used for the segment count (request units).")
+    tolerance: float = Field(json_schema_extra=LEN, description="ε used for the segment count (request units).")
     units: Units = Field(default="mm", description="Unit of every length in the result: the request's. How an "
                          "uploaded file's coordinates were converted into it is in report.details.source.units.")
     inspection: Inspection | None = None

@@ -167,7 +167,8 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
     ax.set_xlim(mid[0] - span, mid[0] + span); ax.set_ylim(mid[1] - span, mid[1] + span)
     ax.set_zlim(mid[2] - span, mid[2] + span)
     ax.set_title(f"{len(result.lra) - 1} bends, pipe radius {result.pipe_radius:.4g} {u}")
-    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.12, label=f"deviation [{u}]")
+    # padded clear of the z label, which matplotlib puts to the right of the 3-D box
+    fig.colorbar(sc, ax=ax, shrink=0.6, pad=0.22, label=f"deviation [{u}]")
     ax2 = fig.add_subplot(grid[1])
     ax2.hist(dev[~outlier], bins=80, color="steelblue", label="inlier samples")
     ax2.set_xlabel(f"signed distance to surface [{u}]")
@@ -191,13 +192,13 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
 
 
 def corrections_csv(result: TubeResult) -> bytes:
-    """Per LRA row: nominal, measured, deviation (measured − nominal), pass/fail with the failed fields, and
-    the next part's deltas, springback (commanded − measured) and command. Units in the header."""
+    """Per LRA row: nominal, measured, deviation (measured − nominal), pass / fail / not determined with the
+    failed and the undetermined fields, and the next part's deltas, springback (commanded − measured) and command. Units in the header."""
     ins, u = result.inspection, result.units
     head = ["row"]
     for what in ("nominal", "measured", "deviation"):
         head += [f"{what}_length_{u}", f"{what}_rotation_deg", f"{what}_angle_deg", f"{what}_clr_{u}"]
-    head += ["status", "failed_fields", f"delta_length_{u}", "delta_rotation_deg", "delta_angle_deg",
+    head += ["status", "failed_fields", "undetermined_fields", f"delta_length_{u}", "delta_rotation_deg", "delta_angle_deg",
              "springback_deg", f"next_length_{u}", "next_rotation_deg", "next_angle_deg", f"next_clr_{u}"]
     rows = [head]
 
@@ -209,7 +210,8 @@ def corrections_csv(result: TubeResult) -> bytes:
         line = [r.row]
         for what in ("nominal", "measured", "deviation"):
             line += [num(getattr(f, what)) if f is not None else "" for f in checks]
-        line += ["pass" if r.ok else "fail", " ".join(r.failed), num(c.delta_length), num(c.delta_rotation),
+        status = "fail" if not r.ok else "not determined" if r.undetermined else "pass"
+        line += [status, " ".join(r.failed), " ".join(r.undetermined), num(c.delta_length), num(c.delta_rotation),
                  num(c.delta_angle), num(c.springback), num(c.next.length), num(c.next.rotation), num(c.next.angle),
                  num(c.next.bend_radius)]
         rows.append(line)
@@ -247,8 +249,8 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
     if ins.reversed:
         measured = reverse_model(measured)
     nominal = model_from_rows(nominal_given.rows, measured.pipe_radius)
-    R = quaternion_frame(ins.alignment["quaternion"])
-    t = np.asarray(ins.alignment["translation"], float)
+    R = quaternion_frame(ins.alignment.quaternion)
+    t = np.asarray(ins.alignment.translation, float)
     step = max(build_spine(measured).length.sum() / 800, 1e-9)
     qm, _ = sample_centreline(measured, step)
     qn = sample_centreline(nominal, step)[0] @ R.T + t
@@ -271,9 +273,9 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
         ax.set_ylabel(f"{'2nd' if j == 1 else '3rd'} principal axis [{u}]")
         ax.set_title(view)
     ends = ", ".join(f"{e.end} {e.deviation:.3g} {u}" for e in ins.end_points)
-    fig.suptitle(f"Inspection {ins.verdict.upper()}: rows out of tolerance "
+    fig.suptitle(f"Inspection {ins.verdict.replace('_', ' ').upper()}: rows out of tolerance "
                  f"{', '.join(map(str, ins.failed_rows)) or 'none'}; end points {ends}"
-                 + ("" if ins.matched else "; bend counts differ"))
+                 + ("" if ins.matched else f"; nominal {ins.nominal_bends} bends, scan {ins.measured_bends}"))
     handles = [Line2D([], [], color="k", ls="--", lw=1.2, label="nominal (best-fit aligned)"),
                Line2D([], [], color="C0", lw=1.6, label="measured"),
                Line2D([], [], color="C3", marker="o", ls="", mfc="none", mew=1.8,
@@ -282,10 +284,42 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
     return fig
 
 
+# the per-row panels of the inspection plot: field, axis label and unit ("{u}": the result's length unit)
+ROW_FIELDS = (("length", "length", "{u}"), ("rotation", "rotation", "deg"), ("angle", "bend angle", "deg"),
+              ("bend_radius", "CLR", "{u}"))
+VERDICT_COLOURS = {"pass": "C0", "fail": "C3", "not determined": "0.7"}
+
+
+def _row_panel(ax, ins, name: str, label: str, unit: str) -> None:
+    """Deviation (measured − nominal) of one field per LRA row: bars coloured by verdict, ±2 sigma whiskers,
+    and the tolerance band (±tolerance about zero) the verdict is taken against."""
+    checks = [(r.row, getattr(r, name)) for r in ins.rows if getattr(r, name) is not None]
+    tol = getattr(ins.tolerances, name) if ins.tolerances is not None else None
+    if tol:
+        ax.axhspan(-tol, tol, color="C2", alpha=0.18, lw=0, label="tolerance band")
+        for y in (-tol, tol):
+            ax.axhline(y, color="C2", lw=0.8)
+    ax.axhline(0.0, color="0.4", lw=0.6)
+    lim = max([abs(c.deviation) + 2 * (c.sigma or 0.0) for _, c in checks] + [1.3 * tol if tol else 0.0, 1e-12])
+    for row, c in checks:
+        state = "not determined" if not c.determined else ("pass" if c.ok else "fail")
+        ax.bar(row, c.deviation, 0.6, color=VERDICT_COLOURS[state], hatch="//" if state == "not determined" else None,
+               edgecolor="0.35" if state == "not determined" else None, lw=0.5)
+        if c.sigma:
+            ax.errorbar(row, c.deviation, yerr=2 * c.sigma, color="k", lw=0.8, capsize=2)
+    ax.set_ylim(-1.15 * lim, 1.15 * lim)
+    ax.set_xticks([row for row, _ in checks])
+    ax.set_xlim(0.4, max([row for row, _ in checks] + [1]) + 0.6)
+    ax.set_xlabel("LRA row [number]")
+    ax.set_ylabel(f"{label} deviation [{unit}]")
+    ax.set_title(f"{label}" + (f" (±{tol:.3g} {unit})" if tol else ""), fontsize=9)
+
+
 def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
     """Deviation along the tube (top): distance of the measured centreline from the nominal one after the
-    inspection's best-fit motion, against arc length, bends shaded; per-bend deviations (bottom) of angle
-    and rotation (degrees) and of length and radius (request units, right axis)."""
+    inspection's best-fit motion, against arc length, bends shaded, with the end points' tolerance at both
+    ends; per LRA row (bottom, one panel per field in its unit): the deviation, coloured pass / fail / not
+    determined, ±2 sigma, against the tolerance band."""
     ins = result.inspection
     nominal_given = resolve_nominal(request.options, request.units) if ins is not None else None
     if ins is None or nominal_given is None:
@@ -296,49 +330,59 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
     if ins.reversed:
         measured = reverse_model(measured)
     nominal = model_from_rows(nominal_rows, measured.pipe_radius)
-    R = quaternion_frame(ins.alignment["quaternion"])
-    t = np.asarray(ins.alignment["translation"], float)
+    R = quaternion_frame(ins.alignment.quaternion)
+    t = np.asarray(ins.alignment.translation, float)
     q, _ = sample_centreline(measured, max(build_spine(measured).length.sum() / 800, 1e-9))
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
     d, _ = spine_distance((q - t) @ R, build_spine(nominal))
-    fig = Figure(figsize=(10, 6.8), layout="constrained")
-    ax, ax_b = fig.subplots(2, 1, height_ratios=[3, 2])
+    fig = Figure(figsize=(12, 7.6), layout="constrained")
+    grid = fig.add_gridspec(2, 4, height_ratios=[3, 2])
+    ax = fig.add_subplot(grid[0, :])
     sp = build_spine(measured)
     ends = np.cumsum(sp.length)
     for k in np.flatnonzero(sp.kind == 1):
         ax.axvspan(ends[k] - sp.length[k], ends[k], color="0.88", lw=0)
     ax.plot(arc, d, "C3-", lw=1.4)
     ax.axhline(ins.sheath_deviation, color="C3", ls=":", lw=1)
-    ax.set_xlabel(f"arc length along the measured centreline [{u}]")
-    ax.set_ylabel(f"distance from nominal centreline [{u}]")
-    ax.set_title(f"Inspection: sheath deviation {ins.sheath_deviation:.3g} {u} (rms {ins.sheath_rms:.3g} {u})"
-                 + ("" if ins.matched else "; bend counts differ"))
     handles = [Line2D([], [], color="C3", lw=1.4, label="deviation along the tube"),
                Line2D([], [], color="C3", ls=":", lw=1, label="sheath deviation (max)"),
                Patch(color="0.88", label="bends")]
-    if ins.bends:
-        b = np.array([x.bend for x in ins.bends])
-        w = 0.2
-        ax_b.bar(b - 1.5 * w, [x.angle for x in ins.bends], w, color="C0")
-        ax_b.bar(b - 0.5 * w, [x.rotation for x in ins.bends], w, color="C1")
-        ax_b.set_ylabel("angle, rotation deviation [deg]")
-        ax_l = ax_b.twinx()
-        ax_l.bar(b + 0.5 * w, [x.length for x in ins.bends], w, color="C2")
-        ax_l.bar(b + 1.5 * w, [x.bend_radius for x in ins.bends], w, color="C4")
-        ax_l.set_ylabel(f"length, radius deviation [{u}]")
-        for a in (ax_b, ax_l):
-            lim_b = max(float(np.max(np.abs(a.get_ylim()))), 1e-12)
-            a.set_ylim(-lim_b, lim_b)
-        ax_b.axhline(0.0, color="0.5", lw=0.6)
-        ax_b.set_xticks(b)
-        handles += [Patch(color="C0", label="angle (measured − nominal)"), Patch(color="C1", label="rotation"),
-                    Patch(color="C2", label="length before the bend"), Patch(color="C4", label="bend radius")]
+    if ins.tolerances is not None and ins.tolerances.end_point:
+        # the end points are checked against their tolerance: a band over the first and last tenth of the tube
+        tol, span = ins.tolerances.end_point, 0.1 * arc[-1]
+        for a, b in ((0.0, span), (arc[-1] - span, arc[-1])):
+            ax.fill_between([a, b], 0.0, tol, color="C2", alpha=0.18, lw=0)
+        for e, x in zip(ins.end_points, (0.0, arc[-1])):
+            ax.plot(x, e.deviation, "D", color="C3" if not e.ok else "C0", ms=6)
+        handles += [Patch(color="C2", alpha=0.18, label=f"end-point tolerance (±{tol:.3g} {u})"),
+                    Line2D([], [], color="0.3", marker="D", ls="",
+                           label="end point after best fit (blue: within, red: out)")]
+        ax.set_ylim(0.0, 1.1 * max(float(d.max()), tol, *(e.deviation for e in ins.end_points)))
+    ax.set_xlabel(f"arc length along the measured centreline [{u}]")
+    ax.set_ylabel(f"distance from nominal centreline [{u}]")
+    verdict = ins.verdict.replace("_", " ").upper()
+    ax.set_title(f"Inspection {verdict}: sheath deviation {ins.sheath_deviation:.3g} {u} (rms {ins.sheath_rms:.3g} {u})"
+                 + ("" if ins.matched else f"; nominal {ins.nominal_bends} bends, scan {ins.measured_bends}"))
+    panels = [fig.add_subplot(grid[1, k]) for k in range(4)]
+    if ins.rows:
+        for a, (name, label, unit) in zip(panels, ROW_FIELDS):
+            _row_panel(a, ins, name, label, unit.format(u=u))
+        handles += [Patch(color="C2", alpha=0.18, label="tolerance band"),
+                    Patch(color=VERDICT_COLOURS["pass"], label="within tolerance"),
+                    Patch(color=VERDICT_COLOURS["fail"], label="out of tolerance"),
+                    Patch(facecolor=VERDICT_COLOURS["not determined"], hatch="//", edgecolor="0.35",
+                          label="not determined (a bound, or σ > tolerance)"),
+                    Line2D([], [], color="k", lw=0.8, label="±2 sigma")]
     else:
-        ax_b.text(0.5, 0.5, "bend counts differ: no per-bend deviations", ha="center", va="center",
-                  transform=ax_b.transAxes)
-        ax_b.set_yticks([])
-        ax_b.set_ylabel("deviation [-]")
-    ax_b.set_xlabel("bend [number, in the nominal's order]")
+        fig.delaxes(panels[1]), fig.delaxes(panels[2]), fig.delaxes(panels[3])
+        a = panels[0]
+        a.set_subplotspec(grid[1, :])
+        a.text(0.5, 0.5, f"not comparable: the nominal has {ins.nominal_bends} bend(s), the scan "
+               f"{ins.measured_bends}; no per-row deviations", ha="center", va="center", transform=a.transAxes)
+        a.set_xticks([])
+        a.set_yticks([])
+        a.set_xlabel("LRA row [number]")
+        a.set_ylabel("deviation [-]")
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)
     return fig
 

@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from plantsolve.schemas.common import Diagnostic
-from plantsolve.schemas.tube import BendDeviation, Inspection, LraRow, TubeOptions
+from plantsolve.schemas.tube import Alignment, BendDeviation, Inspection, LraRow, TubeOptions
 from plantsolve.solvers.geometry import kabsch, quaternion, rotvec_matrix, wrap_angle
 from plantsolve.solvers.tube import corrections as next_part
 from plantsolve.solvers.tube import tolerances as tol_check
@@ -100,17 +100,58 @@ def align(measured: TubeModel, nominal: TubeModel,
     return R, t0 + sol.x[3:], res(sol.x)
 
 
-def inspect_request(measured: TubeModel, opts: TubeOptions, units: str) -> Inspection | None:
+def inspect_request(measured: TubeModel, opts: TubeOptions, units: str,
+                    measured_rows: list[LraRow] | None = None) -> Inspection | None:
     """The inspection the options ask for (None without a nominal)."""
     nominal = resolve_nominal(opts, units)
     if nominal is None:
         return None
-    return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, nominal.warnings)
+    return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, nominal.warnings, measured_rows)
+
+
+def reversed_rows(rows: list[LraRow]) -> list[LraRow]:
+    """What the samples determine of each row (sigmas, bounds, ``undetermined``) walked from the other end: row
+    i's straight and rotation are row n − i's, its bend is bend n − 1 − i's."""
+    n = len(rows) - 1
+    out = []
+    for i in range(n + 1):
+        s, b = rows[n - i], rows[n - 1 - i] if i < n else None
+        fields = {"length": s, "rotation": s if 0 < i < n else None, "angle": b, "bend_radius": b}
+        undetermined = [f for f, src in fields.items() if src is not None and f in src.undetermined]
+        out.append(LraRow(length=s.length, sigma_length=s.sigma_length, length_bound=s.length_bound,
+                          sigma_rotation=s.sigma_rotation if 0 < i < n else (0.0 if i == 0 and n else None),
+                          sigma_angle=b.sigma_angle if b else None, angle_bound=b.angle_bound if b else None,
+                          sigma_bend_radius=b.sigma_bend_radius if b else None, undetermined=undetermined,
+                          determined=not undetermined if s.determined is not None else None))
+    return out
+
+
+def _with_knowledge(rows: list[LraRow], known: list[LraRow] | None) -> list[LraRow]:
+    """The measured rows (values from the aligned model) with what the samples determine of each."""
+    if known is None or len(known) != len(rows):
+        return rows
+    keep = ("sigma_length", "sigma_rotation", "sigma_angle", "sigma_bend_radius", "determined", "undetermined",
+            "length_bound", "angle_bound")
+    return [r.model_copy(update={k: getattr(k_row, k) for k in keep}) for r, k_row in zip(rows, known)]
+
+
+def _verdict(matched: bool, rows, ends) -> tuple[str, list[int], list[int]]:
+    failed = [r.row for r in rows if not r.ok]
+    undetermined = [r.row for r in rows if r.undetermined]
+    if not matched:
+        return "not_comparable", [], []
+    if failed or not all(e.ok for e in ends):
+        return "fail", failed, undetermined
+    if undetermined or not all(e.determined for e in ends):
+        return "not_determined", failed, undetermined
+    return "pass", failed, undetermined
 
 
 def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opts: TubeOptions | None = None,
             units: str = "mm", source: str = "nominal: LRA rows",
-            warnings: list[Diagnostic] | None = None) -> Inspection:
+            warnings: list[Diagnostic] | None = None, measured_rows: list[LraRow] | None = None) -> Inspection:
+    """``measured_rows``: the result's LRA rows of ``measured`` (sigmas, bounds, fields not determined), in its
+    own walking direction; without them every field is taken as determined."""
     nominal = model_from_rows(nominal_rows, measured.pipe_radius)
     best = None
     cands = [(False, measured), (True, reverse_model(measured))]
@@ -127,7 +168,8 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opt
         if best is None or key < best[0]:
             best = (key, reversed_, m, R, t, d)
     _, reversed_, m, R, t, d = best
-    meas_rows = model_rows(m)
+    known = reversed_rows(measured_rows) if reversed_ and measured_rows else measured_rows
+    meas_rows = _with_knowledge(model_rows(m), known)
     matched = m.n_bends == nominal.n_bends
     bends: list[BendDeviation] = []
     corrected = [row.model_copy() for row in nominal_rows]
@@ -151,17 +193,17 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opt
     tol = tol_check.resolved(opts.inspection_tolerances, units)
     sp_n, sp_m = build_spine(nominal), build_spine(m)
     nominal_ends = np.array([t, R @ sp_n.end[-1] + t])
-    ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol)
     rows, fixes, fits = [], [], []
     if matched:
         rows = tol_check.check_rows(nominal_rows, meas_rows, tol)
         fixes, fits = next_part.corrections(nominal_rows, meas_rows, opts.springback_model)
-    failed = [r.row for r in rows if not r.ok]
-    verdict = "pass" if matched and not failed and all(e.ok for e in ends) else "fail"
-    return Inspection(matched=matched, reversed=reversed_, measured_lra=meas_rows, bends=bends,
-                      last_length=last_length, sheath_deviation=float(d.max()),
+    short = (bool(rows) and not rows[0].length.determined, bool(rows) and not rows[-1].length.determined)
+    ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol, short)
+    verdict, failed, undetermined = _verdict(matched, rows, ends)
+    return Inspection(matched=matched, nominal_bends=nominal.n_bends, measured_bends=m.n_bends, reversed=reversed_,
+                      measured_lra=meas_rows, bends=bends, last_length=last_length, sheath_deviation=float(d.max()),
                       sheath_rms=float(np.sqrt(np.mean(d ** 2))),
-                      alignment={"translation": [float(v) for v in t], "quaternion": quat},
+                      alignment=Alignment(translation=[float(v) for v in t], quaternion=quat),
                       corrected_lra=corrected, tolerances=tol, rows=rows, end_points=ends, verdict=verdict,
-                      failed_rows=failed, corrections=fixes, springback_fits=fits, nominal_source=source,
-                      warnings=list(warnings or []))
+                      failed_rows=failed, undetermined_rows=undetermined, corrections=fixes, springback_fits=fits,
+                      nominal_source=source, warnings=list(warnings or []))

@@ -22,10 +22,13 @@ from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sample_order, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
+from plantsolve.solvers.tube.determined import mark_rows
 from plantsolve.solvers.tube.inspection import inspect_request
+from plantsolve.solvers.tube.inspection_report import report_inspection
+from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.scan import TubeScan
-from plantsolve.solvers.tube.validation import implausible_extent, implausible_radius
+from plantsolve.solvers.tube.validation import implausible_against_scan, implausible_extent, scan_extent
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000  # early least-squares rounds
@@ -229,10 +232,11 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
 
 def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp: float, sigma_surface: float,
                       opts: TubeOptions, rng: np.random.Generator, progress: Progress,
-                      warnings: list[Diagnostic]) -> LeastSquaresFit:
+                      warnings: list[Diagnostic], nominal_clr: list[float] | None = None) -> LeastSquaresFit:
     """§6, least-squares distance fitting of the tube surface to the samples in LRA parameters.
     Early rounds and the choice of the number of bends (``prune``) use subsamples, the final
-    round every sample; each round re-assigns samples to segments and re-fits the end straights."""
+    round every sample; each round re-assigns samples to segments and re-fits the end straights.
+    ``nominal_clr``: the CLR of each bend of the nominal, when one is given (a radius model candidate)."""
     N = len(pts)
     if opts.bend_radius:
         for _, mdl in inits:
@@ -322,7 +326,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     if model.n_bends and not opts.bend_radius:
         st.stage(0.8, 0.85, "choosing the bend radius model")
         model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
-                                                                      lm_info)
+                                                                      lm_info, nominal_clr)
         if model.n_bends > 1 and mode == "free" and final_mode.get("radius_mode") in ("common", "dies"):
             (model, lm_info, thr, final_mode), merged = prune.recheck_on_fit((model, lm_info, thr, final_mode), pts_sub,
                                                                              thr, margin, fit_rp, rounds, eps_used,
@@ -333,7 +337,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 # (started at the converged shared fit, so no radius has room to run off)
                 free, lm_info, thr, _ = rounds(model, pts_sub, thr, 2, 30)
                 model, lm_info, thr, radius, final_mode = choose_radius_model(free, pts_sub, thr, margin, opts,
-                                                                              rounds, lm_info)
+                                                                              rounds, lm_info, nominal_clr)
     st.stage(0.85, 0.97, "final least-squares fit on all samples")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
@@ -395,16 +399,39 @@ def _shared_radius(radii: np.ndarray, weight: np.ndarray) -> float:
     return float(np.exp(np.average(np.log(radii), weights=weight)))
 
 
+def nominal_dies(model: TubeModel, weight: np.ndarray, nominal_clr: list[float]) -> tuple[list[float], tuple[int, ...]]:
+    """The nominal's distinct CLRs that bends of ``model`` sit on, and each bend's die (an index into them). With
+    the nominal's bend count, bend i is nominal bend i in the walking direction whose CLRs lie nearer the free
+    radii (in log radius, weighted by what the samples hold on each); otherwise each bend takes the CLR nearest
+    its free radius."""
+    clr = np.asarray(nominal_clr, float)
+    distinct: list[float] = []
+    for c in clr:
+        if all(abs(c - d) > 1e-9 * max(c, d) for d in distinct):
+            distinct.append(float(c))
+    logr = np.log(model.radii)
+    if len(clr) == model.n_bends:
+        per_bend = min((clr, clr[::-1]), key=lambda c: float(np.sum(weight * (logr - np.log(c)) ** 2)))
+    else:
+        per_bend = np.array([distinct[int(np.argmin(np.abs(np.log(distinct) - r)))] for r in logr])
+    die = [int(np.argmin([abs(c - d) for d in distinct])) for c in per_bend]
+    used = sorted(set(die))  # dies no bend sits on are left out: their radius would be free of any sample
+    return [distinct[k] for k in used], tuple(used.index(k) for k in die)
+
+
 def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                        lm_info: dict):
+                        lm_info: dict, nominal_clr: list[float] | None = None):
     """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
-    bends assigned by their free radii ('dies', three bends or more), a radius per bend ('per_bend', the
-    model fitted so far). Each is refitted in LRA parameters, the shared radii starting from the free ones
-    weighted by the information the samples hold on each (``_shared_radius``); the one with the smallest BIC
-    (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless the
-    options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
-    bender did and what the data support. Returns the model, its fit info, the threshold, the report
-    and the mode for the final fit on all samples."""
+    bends assigned by their free radii ('dies', three bends or more), with a nominal one die per CLR it names
+    started at those CLRs and each bend on its nominal bend's die ('nominal_dies'; with the scan's bend count it
+    replaces 'common' and 'dies', whose groupings the nominal's tooling contradicts), a radius per bend
+    ('per_bend', the model fitted so far). Each is refitted in LRA parameters, the shared radii starting from
+    the free ones weighted by the information the samples hold on each (``_shared_radius``); the one with the
+    smallest BIC (n ln(RSS/n) + p ln n over the samples within the threshold of the per-bend fit) is kept, unless
+    the options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
+    bender did and what the data support; the nominal's CLRs are the dies the bender was meant to use, a start
+    the free radii of small bends do not give. Returns the model, its fit info, the threshold, the report and
+    the mode for the final fit on all samples."""
     n = model.n_bends
     forced = "common" if opts.common_bend_radius else opts.bend_radius_model
     if opts.dies:
@@ -432,7 +459,12 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     # a radius below the pipe radius is the folded inner wall's spurious minimum (see add_sigmas): its sharp
     # sigma says nothing about the die, and as a start it would drag the shared radius down to it
     weight[model.radii < model.pipe_radius] = 1e-12 * weight.max()
-    if forced in ("auto", "common"):
+    # a nominal of the scan's bend count names each bend's die: a candidate sharing one radius across bends the
+    # nominal puts on different dies (or splitting one of its dies in two) contradicts the tooling, and its
+    # fewer parameters can win the BIC while the radii it gives are several sigma off (one radius for CLRs of
+    # 22.5 to 32.6); its dies are the 'nominal_dies' candidate instead
+    by_nominal = forced == "auto" and nominal_clr is not None and len(nominal_clr) == n
+    if forced == "common" or (forced == "auto" and not by_nominal):
         best = None
         for r0 in _common_starts(model, weight):
             m, info, t2, _ = rounds(with_radii(model, np.full(n, r0)), P, thr, 2, 30, "common")
@@ -441,13 +473,20 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
                 best = (float(r @ r), (m, info, t2, {"radius_mode": "common"}))
         candidates["common"] = best[1]
     dies = _two_dies(model.radii, weight) if n >= 3 else ()
-    if forced in ("auto", "dies") and dies and len(set(dies)) == 2:
+    if (forced == "dies" or (forced == "auto" and not by_nominal)) and dies and len(set(dies)) == 2:
         die_arr = np.asarray(dies)
         m = with_radii(model, [_shared_radius(model.radii[die_arr == d], weight[die_arr == d]) for d in dies])
         m, info, t2, _ = rounds(m, P, thr, 2, 30, "dies", dies)
         candidates["dies"] = (m, info, t2, {"radius_mode": "dies", "dies": dies})
+    nominal_radii, nominal_assignment = nominal_dies(model, weight, nominal_clr) if nominal_clr else ([], ())
+    if forced == "auto" and nominal_radii:
+        mode = ({"radius_mode": "dies", "dies": nominal_assignment} if len(nominal_radii) > 1
+                else {"radius_mode": "common"})
+        m, info, t2, _ = rounds(with_radii(model, [nominal_radii[d] for d in nominal_assignment]), P, thr, 2, 30,
+                                **mode)
+        candidates["nominal_dies"] = (m, info, t2, mode)
     N = int(keep.sum())
-    size = {"per_bend": n, "common": 1, "dies": 2}
+    size = {"per_bend": n, "common": 1, "dies": 2, "nominal_dies": len(nominal_radii)}
     rss, bic, n_par = {}, {}, {}
     for name, (m, _, _, _) in candidates.items():
         r = residuals(m)[keep]
@@ -459,11 +498,50 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     else:
         chosen = min(bic, key=lambda k: (bic[k], size[k]))
         how = "BIC"
+        if "nominal_dies" in bic and bic["nominal_dies"] - bic[chosen] < NOMINAL_PREFERRED_BIC:
+            chosen = "nominal_dies"
     m, info, t2, mode = candidates[chosen]
+    die_radii = assignment = None
+    if chosen == "dies":
+        die_radii, assignment = [float(m.radii[list(dies).index(k)]) for k in (0, 1)], list(dies)
+    elif chosen == "nominal_dies":
+        assignment = list(nominal_assignment)
+        die_radii = [float(m.radii[assignment.index(k)]) for k in range(len(nominal_radii))]
     report = BendRadiusModel(chosen=chosen, criterion=how, values=bic, rss=rss, n_parameters=n_par,
-                             die_radii=([float(m.radii[list(dies).index(k)]) for k in (0, 1)] if chosen == "dies" else None),
-                             assignment=list(dies) if chosen == "dies" else None)
+                             die_radii=die_radii, assignment=assignment, nominal_clrs=nominal_radii or None,
+                             summary=_radius_summary(chosen, how, bic, nominal_radii))
     return m, info, t2, report, mode
+
+
+TIED_BIC = 0.05  # BIC differences below this are one fit reached from two starts
+# the nominal's dies are kept unless another model beats them by this much: a BIC difference under 2 is no
+# evidence worth more than a bare mention (Kass and Raftery), and the tooling is what the bender used
+NOMINAL_PREFERRED_BIC = 2.0
+
+
+def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii: list[float]) -> str:
+    """Which radius model won, in words: by the options, or by how much BIC over the runner-up."""
+    if how != "BIC":
+        return f"'{chosen}' as the options ask"
+
+    def versus(other: str) -> str:
+        gap = bic[other] - bic[chosen]
+        if abs(gap) < TIED_BIC:
+            return f"tied with '{other}' (the same fit)"
+        if gap < 0:  # the nominal's dies kept within NOMINAL_PREFERRED_BIC
+            return (f"though '{other}' scores {-gap:.1f} less (under {NOMINAL_PREFERRED_BIC:g}: no evidence against "
+                    "the nominal's tooling)")
+        return f"over '{other}' by {gap:.1f}"
+
+    others = sorted((v, k) for k, v in bic.items() if k != chosen)  # the runner-up first
+    text = f"BIC chose '{chosen}'" + (f" {versus(others[0][1])}" if others else "")
+    if nominal_radii:
+        clrs = ", ".join(f"{c:.4g}" for c in nominal_radii)
+        gap = bic.get("nominal_dies", bic[chosen]) - bic[chosen]
+        outcome = ("won" if chosen == "nominal_dies" else "the same fit" if gap < TIED_BIC
+                   else f"{gap:.1f} worse")
+        text += f"; the nominal's CLRs ({clrs}) as dies ('nominal_dies'): {outcome}"
+    return text
 
 
 def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
@@ -563,7 +641,9 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     timings["arcline"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings)
+    nominal = resolve_nominal(opts, request.units)
+    nominal_clr = [r.bend_radius for r in nominal.rows[:-1]] if nominal is not None and not opts.bend_radius else None
+    ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings, nominal_clr)
     timings["least_squares"] = time.perf_counter() - t0
     canonical_direction(ls, pts)
 
@@ -592,16 +672,19 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     }
     if request.source:
         details["source"] = request.source.model_dump()
-    radius_warning = implausible_radius(float(ls.model.pipe_radius), request.units,
-                                        request.source.units.file_unit if request.source else None)
-    if radius_warning:
-        warnings.append(radius_warning)
+    warnings.extend(implausible_against_scan(ls.model, opts, request.units, scan_extent(pts),
+                                             request.source.units.file_unit if request.source else None))
+    if ls.radius_model is not None and ls.radius_model.summary:
+        details["bend_radius_model"] = ls.radius_model.summary
     report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",
                     warnings=warnings, details=details)
     result = result_from_model(ls.model, ls.eps_used, request.units, residuals, outliers, quality, report,
                                ls.radius_model)
-    add_sigmas(result, ls, pts, opts)
-    result.inspection = inspect_request(ls.model, opts, request.units)
+    loose = add_sigmas(result, ls, pts, opts)
+    mark_rows(result.lra, ls.model, ls.segment[ls.inlier], loose)
+    result.inspection = inspect_request(ls.model, opts, request.units, result.lra)
+    if result.inspection is not None:
+        report_inspection(result.report, result.inspection, request.units)
     progress(1.0, "done")
     return Solved(result)
 
@@ -616,16 +699,16 @@ def with_unit_hint(exc: SolverError, pts: np.ndarray, request: TubeRequest) -> S
     return SolverError(exc.stage, f"{exc.message}; {hint}", {**exc.details, "extent": extent, "units": request.units})
 
 
-def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> None:
+def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: TubeOptions) -> list[int]:
     """Standard deviations of every LRA row from the Jacobian at the solution (inlier samples), and a
     warning for bends whose radius the data do not determine (sigma above 10 % of the radius, or a
-    radius below the pipe radius)."""
+    radius below the pipe radius); returns those bends (0-based)."""
     model = ls.model
     n = model.n_bends
     if n == 0:
-        return
+        return []
     chosen = ls.radius_model.chosen if ls.radius_model is not None else ("common" if opts.common_bend_radius else "per_bend")
-    mode = {"common": "common", "dies": "dies", "per_bend": "free"}.get(chosen, "fixed")
+    mode = {"common": "common", "dies": "dies", "nominal_dies": "dies", "per_bend": "free"}.get(chosen, "fixed")
     die_r = sorted({float(r) for r in model.radii})
     dies = tuple(int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii) if mode == "dies" else ()
     fixed = tuple(float(r) for r in model.radii) if mode == "fixed" else ()
@@ -658,6 +741,7 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
             details={"bends": [{"bend": k + 1, "bend_radius": rows[k].bend_radius,
                                 "sigma_bend_radius": rows[k].sigma_bend_radius} for k in loose]}))
         result.report.status = "warning"
+    return loose
 
 
 def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[int]:
@@ -743,7 +827,7 @@ def result_from_model(model: TubeModel, eps: float, units, residuals, outliers, 
         die_r = sorted({float(r) for r in model.radii})
         radius_model.die_radii = die_r
         radius_model.assignment = [int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii]
-    elif radius_model is not None and radius_model.chosen == "given_dies":
+    elif radius_model is not None and radius_model.chosen in ("given_dies", "nominal_dies"):
         die_r = radius_model.die_radii
         radius_model.assignment = [int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii]
     return TubeResult(pipe_radius=float(model.pipe_radius), start=model.start.tolist(), bend_radius_model=radius_model,

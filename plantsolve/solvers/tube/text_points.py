@@ -3,13 +3,22 @@
 A line that cannot be read — cut short (fewer columns than the file's other rows), not numbers, a NaN or an
 infinite coordinate, stray bytes — is left out and logged with its line number; the file is refused only when no
 point is left. Text is read as exporters write it (UTF-8, UTF-16 with its mark, else Windows-1252). Non-numeric
-lines before the first point are a header; lines starting with # / or % are comments."""
+lines before the first point are a header; lines starting with # or % are comments (``//X,Y,Z``, CloudCompare's
+header, is one too).
+
+A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
+easting, northing, elevation) are
+the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
+unit. A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
+nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
+nominal without a header): a tube scan is three coordinates per sample."""
 
 from __future__ import annotations
 
 import math
 import re
 from collections import Counter
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -18,15 +27,106 @@ from plantsolve.solvers.base import InputRejected, decode_text, reject
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
+_UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
+_COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
+SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
+               "height": "z"}  # a surveyor's export names the axes so
+HEADER_UNITS = {"mm": "mm", "cm": "cm", "m": "m", "in": "in", "inch": "in", "ft": "ft", "feet": "ft"}
+NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
+MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
 
 
-def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
+@dataclass
+class Columns:
+    """Where x, y, z stand in each row, and the unit the header states for them (None: none)."""
+
+    index: tuple[int, int, int] = (0, 1, 2)
+    unit: str | None = None
+    names: list[str] | None = None
+
+
+def _header_names(line: str) -> list[str]:
+    """A header line split as its delimiter says (a comma, semicolon or tab, else blanks): ``x [mm]`` is one name."""
+    s = line.strip().lstrip("/#").strip()
+    for delim in (",", ";", "\t"):
+        if delim in s:
+            return [c.strip() for c in s.split(delim)]
+    return s.split()
+
+
+def _name_and_unit(name: str) -> tuple[str, str | None]:
+    m = _UNIT_SUFFIX.match(name.strip().lower())
+    if m is None:
+        return name.strip().lower(), None
+    return m.group("name").strip(), m.group("u1") or m.group("u2")
+
+
+def _columns(header: str | None, width: int, header_line: int) -> Columns:
+    """The coordinate columns of rows ``width`` numbers wide under ``header`` (the last header line before them).
+    A header is a column header when it names as many columns as the rows hold, each name starting with a
+    letter; refused (a file of another kind) when such a header names no x, y, z, or names a nominal's CLR."""
+    names = _header_names(header) if header else []
+    if len(names) != width or not all(n[:1].isalpha() for n in names):
+        return Columns()
+    commented = header.startswith(("//", "#"))  # a comment names columns only when it names x, y, z
+    parsed = [_name_and_unit(n) for n in names]
+    axes = {}
+    for i, (n, _) in enumerate(parsed):
+        m = _COORDINATE.match(n)
+        axis = m.group("axis") if m else SURVEY_AXES.get(n)
+        if axis and axis not in axes:
+            axes[axis] = i
+    plain = [n for n, _ in parsed]
+    nominal = sorted(NOMINAL_NAMES & set(plain))
+    if commented and (nominal or len(axes) < 3):
+        return Columns()
+    if nominal:
+        raise reject(f"line {header_line}: the columns are {', '.join(names)}: a nominal table (its "
+                     f"{', '.join(nominal)} column), not scan points. Give it as options.nominal_csv (or "
+                     "nominal_xyz_clr) with the scan as the file; a scan holds x, y, z per sample")
+    if len(axes) < 3:
+        raise reject(f"line {header_line}: the file's columns are {', '.join(names)}: "
+                     f"{'no' if not axes else 'not all of'} x, y, z. A tube scan holds three coordinates per "
+                     "sample (x, y, z columns); is this a file for another kind (a rig or compressor-map table?)")
+    index = (axes["x"], axes["y"], axes["z"])
+    units = {parsed[i][1] for i in index}
+    unit = None
+    if len(units) == 1 and None not in units:
+        (u,) = units
+        if u not in HEADER_UNITS:
+            raise reject(f"line {header_line}: the coordinate columns state the unit {u!r}, which is not a length "
+                         f"unit read here ({', '.join(sorted(set(HEADER_UNITS.values())))})")
+        unit = HEADER_UNITS[u]
+    return Columns(index, unit, names)
+
+
+def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
+    """The last header line before the first row of numbers, its line number, and that row's width."""
+    header, header_line = None, 0
+    for lineno, line in enumerate(lines, 1):
+        s = line.strip()
+        if not s or s[0] in "#%" or (s[0] == "/" and not s.startswith("//")):
+            continue
+        fields = [f for f in _SPLIT.split(s.lstrip("/")) if f]
+        try:
+            [float(f) for f in fields]
+        except ValueError:
+            header, header_line = s, lineno
+            continue
+        return header, header_line, len(fields)
+    return header, header_line, 0
+
+
+def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]:
     # UTF-8, UTF-16 with its mark or Windows-1252: a line of stray bytes is one unreadable line, not the file's end
     try:
         text = decode_text(content, "point list")
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
     lines = text.splitlines()
+    header, header_line, width = _first_row(lines)
+    cols = _columns(header, width, header_line)
+    need = max(cols.index) + 1
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns
     decimals: list[int] = []  # of each row's last number
@@ -37,11 +137,12 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
             continue
         fields = [f for f in _SPLIT.split(s) if f]
         try:
-            vals = [float(f) for f in fields[:3]]
+            vals = [float(f) for f in fields[:need]]
         except ValueError:
             if rows or bad:  # only lines before the first point can be a header
                 bad.append((lineno, "not numbers"))
             continue
+        vals = [vals[i] for i in cols.index] if len(vals) >= need else vals
         if len(vals) < 3:
             bad.append((lineno, "fewer than 3 coordinates"))
         elif not all(math.isfinite(v) for v in vals):
@@ -65,7 +166,11 @@ def read_text_points(content: bytes, log: ReadLog) -> np.ndarray:
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
     if not kept:
         raise reject(f"no readable 'x y z' rows found{log.summary()}")
-    return np.array(kept, dtype=np.float64)
+    if len(kept) < MIN_SCAN_ROWS and usual in (4, 5):
+        raise reject(f"the file holds {len(kept)} rows of {usual} numbers: a nominal table (LRA or XYZ-CLR), not a "
+                     f"scan, which needs at least {MIN_SCAN_ROWS} x, y, z samples. Give a nominal as "
+                     "options.nominal_csv with the scan as the file")
+    return np.array(kept, dtype=np.float64), cols
 
 
 def _decimals(field: str) -> int:

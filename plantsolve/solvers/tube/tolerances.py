@@ -1,5 +1,15 @@
 """Pass/fail of an inspection per LRA row and field, against symmetric tolerances (defaults in
-``schemas.tube.INSPECTION_DEFAULTS_MM`` / ``_DEG``, the millimetre ones converted into the request's units)."""
+``schemas.tube.INSPECTION_DEFAULTS_MM`` / ``_DEG``, the millimetre ones converted into the request's units).
+
+A field the samples do not determine gets no verdict (``determined`` false) unless its deviation is proven
+beyond the tolerance anyway:
+
+* a lower bound (an end straight's length is where the samples end; a bend seen from one side turns at least
+  its measured angle) that falls short of the nominal by more than the tolerance: the part may be right and the
+  scan short. Beyond the nominal by more than the tolerance it is a proven failure (the samples are there);
+* a field whose standard deviation is larger than its tolerance (the scan cannot resolve the tolerance), or that
+  the reconstruction flagged undetermined (a bend radius the samples do not pin down), unless
+  |deviation| > tolerance + 3 sigma."""
 
 from __future__ import annotations
 
@@ -9,9 +19,10 @@ from plantsolve.schemas.tube import (
     INSPECTION_DEFAULTS_DEG,
     INSPECTION_DEFAULTS_MM,
     EndPointCheck,
-    FieldCheck,
+    AngleCheck,
     InspectionRow,
     InspectionTolerances,
+    LengthCheck,
     LraRow,
 )
 from plantsolve.solvers.geometry import wrap_angle
@@ -31,34 +42,52 @@ def resolved(tol: InspectionTolerances | None, units: str) -> InspectionToleranc
     return InspectionTolerances(**values)
 
 
-def _check(nominal: float, measured: float, tolerance: float, wrap: bool = False) -> FieldCheck:
-    dev = float(wrap_angle(measured - nominal, 360.0)) if wrap else measured - nominal
+PROVEN = 3.0  # standard deviations beyond the tolerance that make a failure proven on an undetermined field
+
+
+def _check(nominal: float, measured: LraRow, name: str, tolerance: float, wrap: bool = False):
+    value = float(getattr(measured, name))
+    dev = float(wrap_angle(value - nominal, 360.0)) if wrap else value - nominal
     # a relative slack so that a deviation equal to the tolerance, up to rounding, passes
-    return FieldCheck(nominal=nominal, measured=measured, deviation=dev, tolerance=tolerance,
-                      ok=bool(abs(dev) <= tolerance * (1 + 1e-9)))
+    ok = bool(abs(dev) <= tolerance * (1 + 1e-9))
+    sigma = getattr(measured, f"sigma_{name}", None)
+    bound = getattr(measured, f"{name}_bound", None)
+    determined = True
+    if bound == "lower":
+        determined = dev >= -tolerance * (1 + 1e-9)
+    elif name in measured.undetermined or (sigma is not None and sigma > tolerance):
+        determined = abs(dev) > tolerance + PROVEN * (sigma or 0.0)
+    model = AngleCheck if name in ("rotation", "angle") else LengthCheck
+    return model(nominal=nominal, measured=value, deviation=dev, tolerance=tolerance, ok=ok or not determined,
+                 determined=determined, sigma=sigma, bound=bound)
 
 
 def check_rows(nominal: list[LraRow], measured: list[LraRow], tol: InspectionTolerances) -> list[InspectionRow]:
     """Rows of equal bend counts, in the nominal's order: length on every row, rotation on rows 2..n (the first
-    and last rotation are 0 by convention), angle and CLR on the bend rows."""
+    and last rotation are 0 by convention), angle and CLR on the bend rows. ``measured`` rows carry what the
+    samples determine (sigmas, bounds, ``undetermined``) in the nominal's order."""
     n = len(nominal) - 1
     out = []
     for i, (nr, mr) in enumerate(zip(nominal, measured)):
-        fields = {"length": _check(nr.length, mr.length, tol.length)}
+        fields = {"length": _check(nr.length, mr, "length", tol.length)}
         if 0 < i < n:
-            fields["rotation"] = _check(nr.rotation, mr.rotation, tol.rotation, wrap=True)
+            fields["rotation"] = _check(nr.rotation, mr, "rotation", tol.rotation, wrap=True)
         if i < n:
-            fields["angle"] = _check(nr.angle, mr.angle, tol.angle)
-            fields["bend_radius"] = _check(nr.bend_radius, mr.bend_radius, tol.bend_radius)
+            fields["angle"] = _check(nr.angle, mr, "angle", tol.angle)
+            fields["bend_radius"] = _check(nr.bend_radius, mr, "bend_radius", tol.bend_radius)
         failed = [k for k, v in fields.items() if not v.ok]
-        out.append(InspectionRow(row=i + 1, failed=failed, ok=not failed, **fields))
+        undetermined = [k for k, v in fields.items() if not v.determined]
+        out.append(InspectionRow(row=i + 1, failed=failed, undetermined=undetermined, ok=not failed, **fields))
     return out
 
 
-def check_end_points(nominal_ends: np.ndarray, measured_ends: np.ndarray, tol: InspectionTolerances) -> list[EndPointCheck]:
-    """Both ends (start, end), each a distance after the best-fit alignment."""
+def check_end_points(nominal_ends: np.ndarray, measured_ends: np.ndarray, tol: InspectionTolerances,
+                     short: tuple[bool, bool] = (False, False)) -> list[EndPointCheck]:
+    """Both ends (start, end), each a distance after the best-fit alignment; an end whose straight the samples
+    stop short on (``short``) is no verdict unless it lies beyond the tolerance on the far side."""
     out = []
-    for name, a, b in zip(("start", "end"), nominal_ends, measured_ends):
+    for name, a, b, s in zip(("start", "end"), nominal_ends, measured_ends, short):
         d = float(np.linalg.norm(np.asarray(a) - np.asarray(b)))
-        out.append(EndPointCheck(end=name, deviation=d, tolerance=tol.end_point, ok=bool(d <= tol.end_point)))
+        ok = bool(d <= tol.end_point)
+        out.append(EndPointCheck(end=name, deviation=d, tolerance=tol.end_point, ok=ok or s, determined=ok or not s))
     return out

@@ -214,6 +214,10 @@ def _read_npy(content: bytes) -> np.ndarray:
 E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
 
 
+class HeaderUnit(CrsUnit):
+    """The unit a text file's column header states for x, y, z (``x [m]``, ``x_mm``)."""
+
+
 def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
     """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
     the file or its format states (None: none)."""
@@ -231,7 +235,11 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
         return _read_mesh(content, "obj", log), None
     if ext == ".npy":
         return _read_npy(content), None
-    return read_text_points(content, log), None  # .xyz, .csv, .txt
+    pts, columns = read_text_points(content, log)  # .xyz, .csv, .txt
+    if columns.unit is None:
+        return pts, None
+    return pts, HeaderUnit(columns.unit, TO_MM[columns.unit] / 1000.0,
+                           f"the header's columns {', '.join(columns.names or [])}")
 
 
 def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
@@ -251,7 +259,7 @@ def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
                      "a tube scan needs a projected or local CRS (set options.file_units if x, y are lengths)")
     elif stated is not None:
         name, metres, evidence = short_name(stated.name, stated.metres), stated.metres, stated.evidence
-        basis = "format" if stated is E57_METRES else "crs"
+        basis = "format" if stated is E57_METRES else "header" if isinstance(stated, HeaderUnit) else "crs"
         if stated.z_metres is not None:
             z_name, z_metres = short_name(stated.z_name, stated.z_metres), stated.z_metres
     elif ext in (".las", ".laz"):
@@ -289,6 +297,10 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
                                             "its `units` (set units instead)")])
         doc = json_object(source.read(), "JSON must be a request object or a list of [x, y, z]", list_as="points")
+        if "points" not in doc:
+            keys = ", ".join(sorted(map(str, doc))[:12]) or "nothing"
+            raise reject(f"the JSON holds {keys}: not a tube request, which holds `points` (the x, y, z samples of "
+                         "the scan); is it a request for another kind?")
         body = dict(doc)
         body["options"] = {**(body.get("options") or {}), **opts}
         if units:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
@@ -10,6 +11,10 @@ from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
 
 MIN_POINTS = 100
+# a coordinate with fewer distinct values puts every sample on that many parallel planes: a table's setting
+# column (speed lines, angles), not a scan, whose coordinates vary continuously (even one rounded to 1 mm has
+# hundreds of values over a tube)
+MIN_LEVELS = 12
 
 
 def check_points(pts: np.ndarray, loc: tuple) -> None:
@@ -33,6 +38,13 @@ def check_points(pts: np.ndarray, loc: tuple) -> None:
         raise InputRejected([FieldError(loc=loc, msg="all points lie on a line: not a tube surface")])
     if s[2] < 1e-6 * s[0]:
         raise InputRejected([FieldError(loc=loc, msg="all points are coplanar: not a tube surface")])
+    levels = [len(np.unique(sample[:, k])) for k in range(3)]
+    if min(levels) < MIN_LEVELS:
+        k = int(np.argmin(levels))
+        raise InputRejected([FieldError(loc=loc, msg=(
+            f"the {'xyz'[k]} coordinates take only {levels[k]} distinct values over {len(pts)} points: the samples "
+            f"lie on {levels[k]} parallel planes, like the setting columns of a table (a compressor map's speed "
+            "lines), not on a scanned surface; is this a file for another kind?"))])
     head = sample[:5000]
     if len(np.unique(np.round(head / (s[0] * 1e-9)), axis=0)) < min(MIN_POINTS, len(head)):
         raise InputRejected([FieldError(loc=loc, msg=f"fewer than {MIN_POINTS} distinct points")])
@@ -66,8 +78,55 @@ def check_input(scan: TubeScan) -> None:
             errors.append(FieldError(loc=("options", "nominal", len(rows) - 1, "angle"),
                                      msg="the last row is the final straight: angle must be 0"))
     errors.extend(nominal_errors(o, scan.request.units))
+    if not errors:
+        errors.extend(options_against_scan(scan.points, o, scan.request.units))
     if errors:
         raise InputRejected(errors)
+
+
+def scan_extent(pts: np.ndarray) -> float:
+    """The diagonal of the samples' bounding box."""
+    return float(np.linalg.norm(pts.max(0) - pts.min(0)))
+
+
+def sample_spacing(pts: np.ndarray, rng_seed: int = 0) -> float:
+    """Median distance of a sample to its nearest neighbour. Large scans are measured on a subset and scaled
+    back (on a surface the spacing goes with 1 / √density)."""
+    n = len(pts)
+    m = min(n, 50_000)
+    sub = pts if m == n else pts[np.random.default_rng(rng_seed).choice(n, m, replace=False)]
+    probes = sub[: min(m, 2000)]
+    d, _ = cKDTree(sub).query(probes, k=2)
+    return float(np.median(d[:, 1]) * np.sqrt(m / n))
+
+
+def options_against_scan(pts: np.ndarray, o, units: str) -> list[FieldError]:
+    """Given radii and tolerances that cannot belong to this scan, named at intake (the fit would fail or
+    answer a tube of another size): a pipe radius larger than the whole scan, a pipe, bend or die radius under
+    half the samples' spacing (no sample would see its curvature), an ε larger than the scan (every spline fits:
+    a straight tube)."""
+    errors = []
+    extent = scan_extent(pts)
+    if o.pipe_radius and o.pipe_radius > extent:
+        errors.append(FieldError(loc=("options", "pipe_radius"), msg=(
+            f"implausible pipe radius: {o.pipe_radius:g} {units} is larger than the whole scan (its extent is "
+            f"{extent:.4g} {units}); check the value and its unit (a diameter, or another unit than {units}?)")))
+    radii = [(("options", "pipe_radius"), "pipe radius", o.pipe_radius)] if o.pipe_radius and o.pipe_radius <= extent \
+        else []
+    radii += [(("options", "bend_radius"), "bend radius", o.bend_radius)] if o.bend_radius else []
+    radii += [(("options", "dies", i), "die radius", d) for i, d in enumerate(o.dies or [])]
+    spacing = sample_spacing(pts) if radii else 0.0
+    for loc, name, r in radii:
+        if r < 0.5 * spacing:
+            errors.append(FieldError(loc=loc, msg=(
+                f"implausible {name}: {r:g} {units} is under half the samples' spacing ({spacing:.4g} {units}): no "
+                "fit could see a curvature that tight; check the value and its unit")))
+    if o.tolerance and o.tolerance > extent:
+        errors.append(FieldError(loc=("options", "tolerance"), msg=(
+            f"implausible tolerance: ε = {o.tolerance:g} {units} is larger than the whole scan (extent "
+            f"{extent:.4g} {units}): every spline would fit, a straight tube; ε is a distance from the spine, "
+            "typically a tenth of the pipe radius")))
+    return errors
 
 
 # physical bounds of a pipe's outer radius: thinner than a hypodermic tube or wider than a 4 m main is
@@ -91,7 +150,7 @@ def _read_as(units: str, file_units: str | None) -> str:
     return file_units if file_units in UNIT_MM else units  # a CRS's own unit name: judged in the request's
 
 
-def implausible_radius(pipe_radius: float, units: str, file_units: str | None = None) -> Diagnostic | None:
+def implausible_pipe_radius(pipe_radius: float, units: str, file_units: str | None = None) -> Diagnostic | None:
     """A warning when the pipe radius, in physical terms, is outside ``RADIUS_MM_PLAUSIBLE``, naming the units
     in which the same number would be plausible (the likely mix-up); None when it is plausible."""
     lo, hi = RADIUS_MM_PLAUSIBLE
@@ -103,11 +162,53 @@ def implausible_radius(pipe_radius: float, units: str, file_units: str | None = 
     hint = (f"the coordinates are likely in {' or '.join(likely)} but were read as {read_as}" if likely
             else "check the units")
     return Diagnostic(
-        code="implausible_radius",
+        code="implausible_pipe_radius",
         message=f"A pipe radius of {pipe_radius:.4g} {units} ({mm:.4g} mm) is implausible for a tube "
         f"(expected {lo:g} mm to {hi / 1000:g} m): {hint}; set options.file_units (uploads) or units.",
         details={"pipe_radius": pipe_radius, "units": units, "pipe_radius_mm": mm, "plausible_mm": [lo, hi],
                  "read_as": read_as, "likely_units": likely})
+
+
+# a bend radius (CLR) under the pipe radius is no bend a bender makes (the inner wall would fold); one over
+# BEND_RADIUS_MAX_PIPE pipe radii is beyond the fit's own bound (``fit.bounds``: a 1° bend needs no more)
+BEND_RADIUS_MAX_PIPE = 200.0
+TOLERANCE_MAX_PIPE = 1.0  # ε above the pipe radius merges bends whose arcs bulge less than a radius
+
+
+def implausible_against_scan(model, opts, units: str, extent: float, file_units: str | None = None) -> list[Diagnostic]:
+    """Warnings for radii and tolerances the solve ran with but that do not fit the scan: the pipe radius in
+    physical terms (``implausible_pipe_radius``), a given bend radius or die under the pipe radius or beyond
+    ``BEND_RADIUS_MAX_PIPE`` pipe radii or the scan's extent, an ε above the pipe radius."""
+    out = []
+    rp = float(model.pipe_radius)
+    pipe = implausible_pipe_radius(rp, units, file_units)
+    if pipe:
+        out.append(pipe)
+    given = ([("options.bend_radius", float(opts.bend_radius))] if opts.bend_radius else []) + \
+        [(f"options.dies[{i}]", float(d)) for i, d in enumerate(opts.dies or [])]
+    hi = min(BEND_RADIUS_MAX_PIPE * rp, extent)
+    for name, r in given:
+        if r < rp:
+            why = f"under the pipe radius {rp:.4g} {units}: no bender makes it (the inner wall would fold)"
+        elif r > hi:
+            # a bend whose chord fits in the scan turns at most 2 asin(extent / 2R)
+            turn = np.degrees(2 * np.arcsin(min(1.0, extent / (2 * r))))
+            why = (f"over {hi:.4g} {units} (the smaller of {BEND_RADIUS_MAX_PIPE:g} pipe radii and the scan's "
+                   f"extent): a bend on it turns at most {turn:.2g}° within the scan")
+        else:
+            continue
+        out.append(Diagnostic(code="implausible_bend_radius", message=(
+            f"{name} = {r:.4g} {units} is implausible: {why}; check the value (a diameter?) and its unit."),
+            details={"field": name, "bend_radius": r, "pipe_radius": rp, "extent": extent, "units": units,
+                     "plausible": [rp, hi]}))
+    if opts.tolerance and opts.tolerance > TOLERANCE_MAX_PIPE * rp:
+        out.append(Diagnostic(code="implausible_tolerance", message=(
+            f"options.tolerance ε = {opts.tolerance:.4g} {units} is above the pipe radius ({rp:.4g} {units}): "
+            "bends whose arcs bulge less than ε from their chord are merged into straights; the default is "
+            "0.08 pipe radii or four times the spine noise."),
+            details={"tolerance": float(opts.tolerance), "pipe_radius": rp, "units": units,
+                     "plausible": [0.0, TOLERANCE_MAX_PIPE * rp]}))
+    return out
 
 
 def implausible_extent(extent: float, units: str, file_units: str | None = None) -> str | None:

@@ -6,9 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.tube import InspectionTolerances, LraRow, TubeOptions
 from plantsolve.solvers.tube.corrections import corrections
-from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.inspection import inspect, reversed_rows
+from plantsolve.solvers.tube.inspection_report import inspection_outcome, report_inspection
 from plantsolve.solvers.tube.model import control_polygon, reverse_model
 from plantsolve.solvers.tube.synthetic import make_model, random_rotation
 from plantsolve.solvers.tube.tolerances import resolved
@@ -128,7 +130,133 @@ def test_a_scan_walked_backwards_is_inspected_in_the_nominal_order(inspected):
                                [c.delta_angle for c in inspected.corrections], atol=1e-6)
 
 
-def test_other_bend_count_fails_without_rows():
+def test_other_bend_count_is_not_comparable_and_names_both_counts():
     ins = inspect(placed(np.array([[50, 0, 90, 16], [60, 0, 0, 0]], float)), rows(NOMINAL), 1.0, TubeOptions())
-    assert not ins.matched and ins.verdict == "fail"
-    assert ins.rows == [] and ins.corrections == [] and len(ins.end_points) == 2
+    assert not ins.matched and ins.verdict == "not_comparable"
+    assert (ins.nominal_bends, ins.measured_bends) == (3, 1)
+    assert ins.rows == [] and ins.corrections == [] and ins.failed_rows == [] and len(ins.end_points) == 2
+    clause, warning = inspection_outcome(ins, "mm")
+    assert warning.code == "inspection_not_comparable" and "NOT COMPARABLE" in clause
+    assert "3 bend(s), the scan 1" in warning.message
+    assert warning.details == {"nominal_bends": 3, "measured_bends": 1, "sheath_deviation": ins.sheath_deviation}
+
+
+def test_a_failed_inspection_is_a_report_level_warning_first_in_the_list(inspected):
+    report = Report(status="ok", message="3 bends reconstructed.",
+                    warnings=[Diagnostic(code="many_outliers", message="x")])
+    report_inspection(report, inspected, "mm")
+    assert report.status == "warning"
+    # the made tube's errors move both ends by about 3 mm after the best fit: they fail too, and are named
+    assert report.message == ("3 bends reconstructed; inspection FAIL: rows 1, 2, 3 (length, rotation, angle); end "
+                              f"points start {inspected.end_points[0].deviation:.3g} mm, end "
+                              f"{inspected.end_points[1].deviation:.3g} mm off (tolerance 2 mm).")
+    first = report.warnings[0]
+    assert first.code == "inspection_failed" and [w.code for w in report.warnings] == ["inspection_failed",
+                                                                                       "many_outliers"]
+    assert first.details["rows"] == [1, 2, 3] and first.details["fields"] == ["length", "rotation", "angle"]
+    assert first.details["end_points"] == ["start", "end"]
+    by_row = {(f["row"], f["field"]): f for f in first.details["failed"]}
+    assert by_row[(3, "length")]["deviation"] == pytest.approx(3.0) and by_row[(3, "length")]["unit"] == "mm"
+    assert by_row[(2, "rotation")]["unit"] == "deg"
+
+
+def test_a_passed_inspection_says_so_and_adds_no_warning():
+    ins = inspect(placed(np.array(NOMINAL, float)), rows(NOMINAL), 1.0, TubeOptions())
+    report = Report(status="ok", message="3 bends reconstructed.")
+    report_inspection(report, ins, "mm")
+    assert (report.status, report.warnings) == ("ok", [])
+    assert report.message == "3 bends reconstructed; inspection PASS."
+
+
+def measured_knowing(table, changes=None):
+    """The made tube's LRA rows with what a scan determined of them: the end straights lower bounds (``spacing``
+    their sigma), plus ``changes`` per row index."""
+    out = rows(table)
+    for i in (0, len(out) - 1):
+        out[i].length_bound, out[i].sigma_length, out[i].undetermined = "lower", 0.05, ["length"]
+    for i, update in (changes or {}).items():
+        for k, v in update.items():
+            setattr(out[i], k, v)
+    return out
+
+
+def test_an_end_straight_the_samples_stop_short_on_is_not_determined():
+    # the scan stops 2.2 mm short of the last straight's end: the made tube may be right
+    short = np.array(NOMINAL, float)
+    short[-1, 0] -= 2.2
+    ins = inspect(placed(short), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=measured_knowing(short))
+    last = ins.rows[-1]
+    assert last.length.deviation == pytest.approx(-2.2)
+    assert not last.length.determined and last.length.bound == "lower" and last.length.sigma == 0.05
+    assert last.failed == [] and last.undetermined == ["length"] and last.ok
+    assert ins.failed_rows == [] and ins.undetermined_rows == [4] and ins.verdict == "not_determined"
+    assert not ins.end_points[1].determined and ins.end_points[1].ok
+    report = Report(message="3 bends reconstructed.")
+    report_inspection(report, ins, "mm")
+    assert report.status == "warning" and report.warnings[0].code == "inspection_not_determined"
+    assert report.message == "3 bends reconstructed; inspection NOT DETERMINED: rows 4 (length); end points end."
+
+
+def test_an_end_straight_longer_than_the_nominal_is_a_proven_failure():
+    # samples beyond the nominal end: the tube is at least that long, whatever the scan missed
+    longer = np.array(NOMINAL, float)
+    longer[-1, 0] += 6.0
+    ins = inspect(placed(longer), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=measured_knowing(longer))
+    assert ins.rows[-1].failed == ["length"] and ins.rows[-1].length.determined
+    assert ins.verdict == "fail" and ins.failed_rows == [4]
+
+
+def test_a_short_end_straight_next_to_a_failed_bend_still_fails_the_part():
+    made = made_with_errors()
+    made[0, 0] -= 3.0  # and the scan stops short at the start
+    ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=measured_knowing(made))
+    assert ins.verdict == "fail" and ins.failed_rows == [1, 2, 3] and ins.undetermined_rows == [1]
+    assert ins.rows[0].failed == ["angle"] and ins.rows[0].undetermined == ["length"]
+    clause, warning = inspection_outcome(ins, "mm")
+    assert clause.startswith("inspection FAIL: rows 1, 2, 3 (length, rotation, angle)")
+    assert clause.endswith("; not determined: rows 1 (length)") and warning.details["undetermined_rows"] == [1]
+
+
+def test_a_bend_seen_from_one_side_is_a_lower_bound():
+    made = np.array(NOMINAL, float)
+    made[2, 2] -= 4.0  # the samples stop 4° into the last bend
+    known = measured_knowing(made, {2: {"angle_bound": "lower", "undetermined": ["angle"]}})
+    ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=known)
+    assert ins.rows[2].undetermined == ["angle"] and not ins.rows[2].angle.determined
+    assert ins.rows[2].angle.bound == "lower" and ins.rows[2].failed == []
+    # over-bent by 4° is proven whatever the samples missed
+    over = np.array(NOMINAL, float)
+    over[2, 2] += 4.0
+    known = measured_knowing(over, {2: {"angle_bound": "lower", "undetermined": ["angle"]}})
+    ins = inspect(placed(over), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=known)
+    assert ins.rows[2].failed == ["angle"] and ins.verdict == "fail"
+
+
+def test_a_sigma_larger_than_the_tolerance_decides_nothing_unless_the_deviation_is_proven():
+    made = np.array(NOMINAL, float)
+    made[1, 3] += 1.5  # CLR 1.5 mm over its ±1 mm
+    loose = measured_knowing(made, {1: {"sigma_bend_radius": 1.2}})
+    ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=loose)
+    assert ins.rows[1].undetermined == ["bend_radius"] and ins.rows[1].bend_radius.sigma == 1.2
+    tight = measured_knowing(made, {1: {"sigma_bend_radius": 0.1}})
+    ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=tight)
+    assert ins.rows[1].failed == ["bend_radius"] and ins.rows[1].undetermined == []
+    # 8 mm off with a sigma of 1.2 mm: beyond the tolerance by more than 3 sigma, a proven failure
+    made[1, 3] += 6.5
+    ins = inspect(placed(made), rows(NOMINAL), 1.0, TubeOptions(), measured_rows=loose)
+    assert ins.rows[1].failed == ["bend_radius"]
+
+
+def test_what_the_samples_determine_follows_a_scan_walked_backwards():
+    short = np.array(NOMINAL, float)
+    short[-1, 0] -= 2.2
+    known = measured_knowing(short, {2: {"angle_bound": "lower", "undetermined": ["angle"], "sigma_angle": 0.1}})
+    model = placed(short)
+    back = reverse_model(model)
+    ins = inspect(back, rows(NOMINAL), 1.0, TubeOptions(), measured_rows=reversed_rows(known))
+    assert ins.reversed
+    assert ins.rows[-1].length.bound == "lower" and ins.rows[-1].undetermined == ["length"]
+    assert ins.rows[2].angle.bound == "lower" and ins.rows[2].angle.sigma == pytest.approx(0.1)
+    knowledge = ("sigma_length", "sigma_angle", "sigma_bend_radius", "undetermined", "length_bound", "angle_bound")
+    twice = reversed_rows(reversed_rows(known))
+    assert [[getattr(r, k) for k in knowledge] for r in twice] == [[getattr(r, k) for k in knowledge] for r in known]

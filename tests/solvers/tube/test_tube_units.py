@@ -102,7 +102,7 @@ def test_las_in_metres_without_crs_is_read_as_metres_and_solves_in_mm(ext):
     assert res.lra[0].bend_radius == pytest.approx(16.0, rel=0.02) or res.lra[0].bend_radius == pytest.approx(12.0, rel=0.02)
     # the conversion is stated, and that it was assumed is a warning
     assert "file_units_assumed" in codes(res.report) and res.report.status == "warning"
-    assert "implausible_radius" not in codes(res.report)
+    assert "implausible_pipe_radius" not in codes(res.report)
     units = res.report.details["source"]["units"]
     assert units["file_unit"] == "m" and units["factor"] == pytest.approx(1000.0) and units["basis"] == "assumed"
 
@@ -209,7 +209,7 @@ def test_metres_read_as_millimetres_give_an_implausible_radius_warning():
     text = "\n".join(" ".join(f"{v:.9f}" for v in p) for p in pts).encode()
     res = solve(parse_upload(StoredInput.from_bytes("scan.xyz", text), None)).result
     assert res.pipe_radius == pytest.approx(0.05, rel=0.01)
-    warning = next(w for w in res.report.warnings if w.code == "implausible_radius")
+    warning = next(w for w in res.report.warnings if w.code == "implausible_pipe_radius")
     assert res.report.status == "warning"
     assert warning.details["likely_units"][0] == "m" and "likely in m" in warning.message
 
@@ -218,7 +218,7 @@ def test_millimetres_read_as_metres_give_an_implausible_radius_warning():
     from plantsolve.schemas.tube import TubeRequest
 
     res = solve(TubeRequest(points=cloud_mm().tolist(), units="m")).result  # a 4 m pipe radius
-    warning = next(w for w in res.report.warnings if w.code == "implausible_radius")
+    warning = next(w for w in res.report.warnings if w.code == "implausible_pipe_radius")
     assert warning.details["pipe_radius_mm"] == pytest.approx(4000, rel=0.01)
     assert warning.details["likely_units"][0] == "mm"
 
