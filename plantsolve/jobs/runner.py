@@ -132,17 +132,12 @@ def failure_report(stage: str, message: str, **details: Any) -> dict:
     return Report(status="failed", stage=stage, message=message, details=details).model_dump(mode="json")
 
 
-def lost_worker_report(attempt: int, max_attempts: int, previous: Any) -> dict:
-    """Report for a job whose worker stopped heartbeating (killed, crashed host, OOM)."""
-    history = list((previous or {}).get("details", {}).get("attempts", []))
-    history.append({"attempt": attempt, "error": "worker lost: lease lapsed without a heartbeat"})
+def lost_worker_report(attempt: int, max_attempts: int) -> dict:
+    """Report for a job whose worker is gone (killed, crashed host, out of memory); the attempts' history says
+    how each attempt ended."""
     if attempt >= max_attempts:
-        return failure_report(
-            "worker",
-            f"The job's worker stopped responding on each of {attempt} attempts; giving up.",
-            attempts=history,
-        )
-    return failure_report("worker", "The worker stopped responding; the job was re-queued.", attempts=history)
+        return failure_report("worker", f"The job's worker stopped responding on each of {attempt} attempts; giving up.")
+    return failure_report("worker", "The worker stopped responding; the job was re-queued.")
 
 
 def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> Any:
@@ -464,12 +459,12 @@ def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, moni
                          spooled_in=holder)
 
 
-def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
-    """A pool killed a job's process at its hard time limit (a solver deaf even to the soft limit): fail
-    the running attempt now with a report, instead of letting the lease lapse and retrying a job that
-    would hang again. Fenced on the attempt that was running."""
-    job = ctx.repo.get(job_id)
-    if job is None or job.status != RUNNING:
+def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker: str | None = None) -> bool:
+    """A job's process was killed at its hard time limit (a solver deaf even to the soft limit): fail the running
+    attempt now with a report, instead of retrying a job that would hang again. Fenced on the attempt that was
+    running (and, given ``worker``, only when that worker held it)."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is None or job.status != RUNNING or (worker is not None and job.worker != worker):
         return False
     spec = ctx.spec(job.kind)
     limit = ctx.limits(spec)[1] if spec is not None else None

@@ -27,7 +27,8 @@ class Store:
 
     @classmethod
     def open(cls, settings: StoreSettings, *, migrate: bool = False) -> "Store":
-        db = Database(settings.resolved_database_url)
+        db = Database(settings.resolved_database_url, wait=settings.database_wait_seconds,
+                      statement=settings.database_statement_seconds)
         if migrate:
             db.migrate()
         local = LocalBlobStore(settings.resolved_artifact_dir)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import uuid
 from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import SimpleNamespace
 from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
@@ -62,10 +62,16 @@ class JobState:
 
 
 @dataclass(frozen=True)
-class SweepOutcome:
-    requeued: list[uuid.UUID]
-    failed: list[uuid.UUID]
-    waiting: list[tuple[uuid.UUID, bool]] = field(default_factory=list)  # queued: (id, reached the broker), oldest first
+class LapsedAttempt:
+    """A running attempt whose lease lapsed: what the lease policy needs to decide its fate."""
+
+    id: uuid.UUID
+    kind: str
+    attempt: int
+    max_attempts: int
+    attempts: list
+    worker: str | None
+    heartbeat_at: datetime | None
 
 
 class JobRepository:
@@ -332,11 +338,13 @@ class JobRepository:
             return True
 
     def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None,
-                       attempts: list | None = None) -> bool:
+                       attempts: list | None = None, lapsed_before: datetime | None = None) -> bool:
+        """Fail the attempt (fenced); with ``lapsed_before``, only while its lease lapsed before that time."""
         extra = {} if attempts is None else {"attempts": attempts}
         return self._fenced(
             job_id,
             attempt,
+            lapsed_before,
             status=FAIL.target,
             report=report,
             finished_at=utcnow(),
@@ -346,15 +354,15 @@ class JobRepository:
         )
 
     def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any, attempts: list | None = None,
-                grant_attempt: bool = False) -> bool:
+                grant_attempt: bool = False, lapsed_before: datetime | None = None) -> bool:
         """Give a crashed attempt's job back to the queue (the caller enqueues it again). ``grant_attempt``
         adds one attempt to the cap: for a result that waits on disk, whose storing must not be refused
         because the attempt that computed it was the last."""
         extra: dict[str, Any] = {} if attempts is None else {"attempts": attempts}
         if grant_attempt:
             extra["max_attempts"] = Job.max_attempts + 1
-        return self._fenced(job_id, attempt, status=REQUEUE.target, report=report, lease_until=None, worker=None,
-                            **extra)
+        return self._fenced(job_id, attempt, lapsed_before, status=REQUEUE.target, report=report, lease_until=None,
+                            worker=None, **extra)
 
     def extend_leases(self, lease_seconds: float) -> int:
         """Give every running attempt a full lease from now (after the database was away, so that no
@@ -384,45 +392,25 @@ class JobRepository:
             job = session.get(Job, job_id)
             return job.status if job is not None else None
 
-    def sweep(self, *, requeue_queued_after: float, report_for_lost,
-              result_waiting: Callable[[uuid.UUID], bool] = lambda job_id: False) -> SweepOutcome:
-        """Re-queue running jobs whose lease lapsed (their worker is gone), fail those that have
-        used up their attempts (unless ``result_waiting``: a computed result waits to be stored, which
-        gets one more attempt), and re-enqueue queued jobs whose message may have been lost."""
-        now = utcnow()
-        requeued: list[uuid.UUID] = []
-        failed: list[uuid.UUID] = []
-        with self.sessions() as session:
-            lapsed = session.execute(
-                select(Job.id, Job.attempt, Job.max_attempts, Job.report, Job.attempts, Job.worker,
-                       Job.heartbeat_at).where(Job.status == RUNNING, Job.lease_until < now)
-            ).all()
-        for job_id, attempt, max_attempts, report, history, worker, beat in lapsed:
-            if attempt >= max_attempts and result_waiting(job_id):
-                max_attempts = attempt + 1
-            lost = report_for_lost(attempt, max_attempts, report)
-            earlier = [h for h in (history or []) if h.get("attempt") != attempt]
-            same = next((h for h in (history or []) if h.get("attempt") == attempt), {})
-            history = earlier + [{
-                **same, "attempt": attempt, "worker": worker, "finished_at": now.isoformat(),
-                "outcome": "lost" if same.get("outcome") != "result_pending" else "result_pending",
-                "error": f"no heartbeat since {as_utc(beat).isoformat() if beat else 'the start'}"}]
-            if attempt >= max_attempts:
-                if self._fenced_lapsed(job_id, attempt, now, status=FAIL.target, report=lost, finished_at=now,
-                                       lease_until=None, attempts=history):
-                    failed.append(job_id)
-            elif self._fenced_lapsed(job_id, attempt, now, status=REQUEUE.target, report=lost, lease_until=None, worker=None,
-                                     attempts=history, max_attempts=max_attempts):
-                requeued.append(job_id)
-        stale = now - timedelta(seconds=requeue_queued_after)
-        with self.sessions() as session:
-            waiting = session.execute(
-                select(Job.id, Job.enqueued_at).where(
-                    Job.status == QUEUED, or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
-                ).order_by(Job.enqueued_at.is_not(None), Job.created_at).limit(SWEEP_BATCH)
-            ).all()
-        return SweepOutcome(requeued=requeued, failed=failed,
-                            waiting=[(job_id, sent is not None) for job_id, sent in waiting if job_id not in requeued])
+    def lapsed(self, now: datetime) -> list["LapsedAttempt"]:
+        """Running attempts whose lease lapsed before ``now`` (their worker stopped heartbeating). The lease policy
+        (:mod:`plantsolve.jobs.leases`) decides what becomes of each."""
+        with self.sessions.kw["bind"].connect() as connection:
+            rows = connection.execute(
+                select(JOBS.c.id, JOBS.c.kind, JOBS.c.attempt, JOBS.c.max_attempts, JOBS.c.attempts, JOBS.c.worker,
+                       JOBS.c.heartbeat_at).where(JOBS.c.status == RUNNING, JOBS.c.lease_until < now)).all()
+        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat))
+                for job_id, kind, attempt, max_attempts, history, worker, beat in rows]
+
+    def unsent(self, *, sent_before: datetime, limit: int = 1000) -> list[tuple[uuid.UUID, bool]]:
+        """Queued jobs whose message never reached the broker, or reached it before ``sent_before``: ``(id, reached
+        the broker)``, never sent first, then the oldest."""
+        with self.sessions.kw["bind"].connect() as connection:
+            rows = connection.execute(
+                select(JOBS.c.id, JOBS.c.enqueued_at).where(
+                    JOBS.c.status == QUEUED, or_(JOBS.c.enqueued_at.is_(None), JOBS.c.enqueued_at < sent_before)
+                ).order_by(JOBS.c.enqueued_at.is_not(None), JOBS.c.created_at).limit(limit)).all()
+        return [(job_id, sent is not None) for job_id, sent in rows]
 
     def count_queued(self) -> int:
         with self.sessions() as session:
@@ -484,11 +472,11 @@ class JobRepository:
         # table: an ORM-enabled UPDATE costs several times its own write in statement building and session sync
         return update(JOBS).where(JOBS.c.id == job_id, JOBS.c.attempt == attempt, JOBS.c.status == RUNNING)
 
-    def _fenced(self, job_id: uuid.UUID, attempt: int, **values: Any) -> bool:
-        return self._execute(self._fence(job_id, attempt).values(**values)) == 1
-
-    def _fenced_lapsed(self, job_id: uuid.UUID, attempt: int, now: datetime, **values: Any) -> bool:
-        return self._execute(self._fence(job_id, attempt).where(JOBS.c.lease_until < now).values(**values)) == 1
+    def _fenced(self, job_id: uuid.UUID, attempt: int, lapsed_before: datetime | None = None, **values: Any) -> bool:
+        statement = self._fence(job_id, attempt)
+        if lapsed_before is not None:  # a sweeper's write: only while no heartbeat renewed the lease meanwhile
+            statement = statement.where(JOBS.c.lease_until < lapsed_before)
+        return self._execute(statement.values(**values)) == 1
 
     def _execute(self, statement) -> int:
         with self.writing(), self._core() as connection:
@@ -497,9 +485,6 @@ class JobRepository:
 
 JOBS = Job.__table__
 ARTIFACTS = Artifact.__table__
-# queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
-# sweeps instead of loaded whole every time
-SWEEP_BATCH = 1000
 STATE = (Job.id, Job.kind, Job.status, Job.attempt, Job.progress, Job.progress_message)
 BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
 
