@@ -382,7 +382,7 @@ def main() -> None:
             f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
         )
     if cpu_rows:
-        print(f"\nIn process (the ASGI app called directly: no network, no client; SQLite, jobs running): CPU ms per request")
+        print("\nIn process (the ASGI app called directly: no network, no client; SQLite, jobs running): CPU ms per request")
         print(f"{'mode':<20} {'submit':>8} {'vs baseline':>11} {'status read':>12} {'vs baseline':>11}")
         for row in cpu_rows:
             print(f"{row['mode']:<20} {row['submit_ms']:>8.3f} {row['submit_ms'] / cpu_rows[0]['submit_ms']:>10.2f}x "

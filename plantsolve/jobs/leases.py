@@ -12,6 +12,7 @@ import uuid
 from datetime import datetime, timedelta
 from typing import Callable
 
+from plantsolve.jobs import attempts
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED, RUNNING
 from plantsolve.jobs.runner import lost_worker_report, pending_holder
@@ -37,9 +38,8 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
         lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
     report = lost_worker_report(lost.attempt, cap)
-    history = [h for h in lost.attempts if h.get("attempt") != lost.attempt] + [{
-        **previous, "attempt": lost.attempt, "worker": lost.worker, "finished_at": utcnow().isoformat(),
-        "outcome": "result_pending" if previous.get("outcome") == "result_pending" else "lost", "error": why}]
+    history = attempts.ended(lost.attempts, lost.attempt, lost.worker,
+                             "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why)
     if lost.attempt >= cap:
         written = ctx.repo.finish_failure(lost.id, lost.attempt, report=report, run_seconds=None, attempts=history,
                                           lapsed_before=lapsed_before)

@@ -20,7 +20,7 @@ from typing import Any, Callable
 from pydantic import ValidationError
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
-from plantsolve.jobs import intake
+from plantsolve.jobs import attempts, intake
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
@@ -174,8 +174,9 @@ def run_job(
     requeue: Callable[[uuid.UUID, str], None],
     hard_limit_in_thread: bool = True,
     time_limit_errors: tuple[type[BaseException], ...] = (),
+    on_claim: Callable[[], None] | None = None,
 ) -> str:
-    """Run one delivery of ``job_id``. Returns what happened: the final status, ``"requeued"``,
+    """Run one delivery of ``job_id`` (``on_claim`` is called once the attempt is claimed, before the solve). Returns what happened: the final status, ``"requeued"``,
     ``"skipped"`` (not claimable: already running elsewhere, finished or cancelled) or
     ``"stale"`` (this attempt lost the job before it could store anything). Each claimed attempt
     logs one line when it starts and one when it ends (job id, kind, attempt, duration, outcome)."""
@@ -184,7 +185,7 @@ def run_job(
     outcome = "crashed"
     try:
         outcome = _run_claimed(ctx, job_id, worker=worker, requeue=requeue, hard_limit_in_thread=hard_limit_in_thread,
-                               time_limit_errors=time_limit_errors, claimed=claimed)
+                               time_limit_errors=time_limit_errors, claimed=claimed, on_claim=on_claim)
         return outcome
     finally:
         if claimed:
@@ -204,6 +205,7 @@ def _run_claimed(
     hard_limit_in_thread: bool,
     time_limit_errors: tuple[type[BaseException], ...],
     claimed: dict[str, Any],
+    on_claim: Callable[[], None] | None,
 ) -> str:
     job = ctx.repo.get(job_id)
     if job is None:
@@ -212,6 +214,8 @@ def _run_claimed(
     if attempt is None:
         return "skipped"
     claimed.update(kind=job.kind, attempt=attempt)
+    if on_claim is not None:
+        on_claim()
     log.info("job %s (%s) attempt %d started", job_id, job.kind, attempt,
              extra={"job_id": str(job_id), "kind": job.kind, "attempt": attempt, "outcome": "started", "worker": worker})
     spec = ctx.spec(job.kind)
@@ -221,7 +225,6 @@ def _run_claimed(
         )
         return "failed"
 
-    history = list(((job.report or {}).get("details") or {}).get("attempts", []))
     log_book = AttemptLog(job.attempts, attempt, worker)
     soft_limit, hard_limit = ctx.limits(spec)
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
@@ -244,7 +247,7 @@ def _run_claimed(
         except ResultPending:
             log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
             report = failure_report("result", "The result was computed but the database did not take it; the next "
-                                    "attempt stores it without solving again.", attempts=history)
+                                    "attempt stores it without solving again.")
             if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending"),
                                 grant_attempt=attempt >= job.max_attempts):
                 requeue(job_id, job.kind)
@@ -263,21 +266,19 @@ def _run_claimed(
         except Exception as error:
             log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
             # reports say what happened in words; exception class names stay in the server log (above)
-            history.append({"attempt": attempt, "worker": worker, "error": _clean(error) or "internal error"})
             if not is_infrastructure_failure(error):
                 # the same input gives the same failure: retrying would only repeat it
                 report = failure_report(
                     "solver",
-                    "The solver failed on this input; it was not retried because the same input fails the same way. "
-                    "Check the input's values (scale, degenerate geometry); the server log has the details of job "
-                    f"{job_id}, attempt {attempt}.",
-                    attempts=history,
+                    f"The solver failed on this input ({_clean(error) or 'internal error'}); it was not retried "
+                    "because the same input fails the same way. Check the input's values (scale, degenerate "
+                    f"geometry); the server log has the details of job {job_id}, attempt {attempt}.",
                 )
                 written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
                                                   attempts=log_book.add("failed", _clean(error)))
                 return "failed" if written else "stale"
             if attempt < job.max_attempts:
-                report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
+                report = failure_report("solver", "The solver crashed; the job was re-queued.")
                 if ctx.repo.requeue(job_id, attempt, report=report,
                                     attempts=log_book.add("requeued", _clean(error) or "internal error")):
                     requeue(job_id, job.kind)
@@ -286,7 +287,6 @@ def _run_claimed(
             report = failure_report(
                 "solver", f"The solver crashed on each of {attempt} attempts: {_clean(error)} (the server log has the "
                           f"details of job {job_id}).",
-                attempts=history,
             )
     written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
                                       attempts=log_book.add("failed", report.get("message")))
@@ -294,18 +294,13 @@ def _run_claimed(
 
 
 class AttemptLog:
-    """The job's attempts history, and this attempt's entry to add when it ends."""
+    """The job's attempt history, and this attempt's entry to add when it ends."""
 
     def __init__(self, previous: Any, attempt: int, worker: str):
-        self.previous = [h for h in (previous or []) if h.get("attempt") != attempt]
-        self.attempt, self.worker, self.started = attempt, worker, utcnow()
+        self.previous, self.attempt, self.worker, self.started = previous, attempt, worker, utcnow()
 
     def add(self, outcome: str, error: str | None = None) -> list[dict]:
-        entry = {"attempt": self.attempt, "worker": self.worker, "started_at": self.started.isoformat(),
-                 "finished_at": utcnow().isoformat(), "outcome": outcome}
-        if error:
-            entry["error"] = str(error)[:300]
-        return self.previous + [entry]
+        return attempts.ended(self.previous, self.attempt, self.worker, outcome, error=error, started_at=self.started)
 
 
 _PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")
@@ -473,9 +468,7 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker:
         f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
         if limit else "The solver was killed at its hard time limit.",
         time_limit=limit, killed=True)
-    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
-        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "time_limit",
-        "error": "killed at the hard time limit"}]
+    history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit")
     return ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None, attempts=history)
 
 
@@ -486,9 +479,8 @@ def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     job = ctx.repo.get(job_id, brief=True)
     if job is None or job.status != RUNNING:
         return False
-    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
-        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "handed_back",
-        "error": "the service stopped while the job ran"}]
+    history = attempts.ended(job.attempts, job.attempt, job.worker, "handed_back",
+                             error="the service stopped while the job ran")
     report = failure_report("worker", "The service stopped while the job ran; it was re-queued and runs again "
                             "at the next start (this attempt is not counted).")
     return ctx.repo.requeue(job_id, job.attempt, report=report, attempts=history, grant_attempt=True)

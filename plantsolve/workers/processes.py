@@ -87,14 +87,15 @@ def _job_process(settings_json: str, job_id: str, sender: Connection) -> None:
     gc.freeze()
     _watch_parent()
     settings = JobSettings.model_validate_json(settings_json)
-    # a solver must never slow down the API process that shares this machine with it
-    os.nice(settings.job_niceness)
     configure_logging(settings.log_format, settings.log_level)
     ctx = ServiceContext.create(settings)
     try:
         requeued: list[str] = []
+        # A solver must never slow down the API process that shares this machine with it: yielded from the claim on
+        # (before it, at the API's priority, so that a job starts at once on a busy machine).
         outcome = run_job(ctx, uuid.UUID(job_id), worker=worker_name("process"), hard_limit_in_thread=False,
-                          requeue=lambda jid, kind="": requeued.append(str(jid)))
+                          requeue=lambda jid, kind="": requeued.append(str(jid)),
+                          on_claim=lambda: os.nice(settings.job_niceness))
     finally:
         ctx.close()
     sender.send("requeued" if requeued else outcome)
