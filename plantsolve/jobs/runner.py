@@ -11,31 +11,25 @@ import dataclasses
 import json
 import logging
 import math
-import re
 import threading
 import time
 import uuid
 from typing import Any, Callable
 
-from pydantic import ValidationError
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
 from plantsolve.jobs import attempts, intake
+from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_report, judge
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
 from plantsolve.schemas.common import Report
-from plantsolve.solvers.base import Artifact, Cancelled, InputRejected, Solved, SolverError
+from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
 
 log = logging.getLogger("plantsolve.runner")
-
-
-class ResultPending(ConnectionError):
-    """A computed result the database did not take in time: it waits in the blob store (or, when that is
-    away too, in this machine's spool folder) for the next attempt."""
 
 
 def pending_path(job_id: uuid.UUID) -> str:
@@ -62,14 +56,6 @@ def pending_holder(ctx: ServiceContext, job_id: uuid.UUID) -> BlobStore | None:
         except BlobStoreUnavailable:
             continue
     return None
-
-
-class _Stop(Cancelled):
-    """Raised inside the solver (through the progress callback) to end the attempt."""
-
-    def __init__(self, reason: str):
-        self.reason = reason  # "cancelled" (or lost lease) | "time_limit"
-        super().__init__(reason)
 
 
 class AttemptMonitor:
@@ -109,10 +95,10 @@ class AttemptMonitor:
 
     def progress(self, fraction: float, message: str = "") -> None:
         if self.stop_reason:
-            raise _Stop(self.stop_reason)
+            raise Stop(self.stop_reason)
         if self.elapsed > self.soft_limit:
             self.stop_reason = "time_limit"
-            raise _Stop("time_limit")
+            raise Stop("time_limit")
         now = time.monotonic()
         if now - self._last_write < self.ctx.settings.progress_write_seconds:
             return
@@ -125,11 +111,7 @@ class AttemptMonitor:
             return
         if not still_ours:
             self.stop_reason = "cancelled"
-            raise _Stop("cancelled")
-
-
-def failure_report(stage: str, message: str, **details: Any) -> dict:
-    return Report(status="failed", stage=stage, message=message, details=details).model_dump(mode="json")
+            raise Stop("cancelled")
 
 
 def lost_worker_report(attempt: int, max_attempts: int) -> dict:
@@ -160,7 +142,7 @@ def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> 
     thread.start()
     thread.join(deadline)
     if thread.is_alive():
-        raise _Stop("time_limit")
+        raise Stop("time_limit")
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]
@@ -238,58 +220,30 @@ def _run_claimed(
                     hard_limit if hard_limit_in_thread else None,
                 )
                 return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
-        except _Stop as stop:
-            if stop.reason != "time_limit":
-                return "cancelled"  # by the user, or the lease went to a newer attempt
-            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
-        except time_limit_errors:
-            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
-        except ResultPending:
-            log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
-            report = failure_report("result", "The result was computed but the database did not take it; the next "
-                                    "attempt stores it without solving again.")
-            if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending"),
-                                grant_attempt=attempt >= job.max_attempts):
-                requeue(job_id, job.kind)
-                return "requeued"
-            return "stale"
-        except InputRejected as error:
-            report = failure_report(
-                "input",
-                error.title,
-                errors=[{"loc": list(e.loc), "msg": e.msg, "type": e.type} for e in error.errors],
-            )
-        except ValidationError as error:
-            report = failure_report("input", "The stored input no longer validates.", errors=error.errors(include_url=False, include_context=False))
-        except SolverError as error:
-            report = failure_report(error.stage, error.message, **error.details)
-        except Exception as error:
-            log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
-            # reports say what happened in words; exception class names stay in the server log (above)
-            if not is_infrastructure_failure(error):
-                # the same input gives the same failure: retrying would only repeat it
-                report = failure_report(
-                    "solver",
-                    f"The solver failed on this input ({_clean(error) or 'internal error'}); it was not retried "
-                    "because the same input fails the same way. Check the input's values (scale, degenerate "
-                    f"geometry); the server log has the details of job {job_id}, attempt {attempt}.",
-                )
-                written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                                  attempts=log_book.add("failed", _clean(error)))
-                return "failed" if written else "stale"
-            if attempt < job.max_attempts:
-                report = failure_report("solver", "The solver crashed; the job was re-queued.")
-                if ctx.repo.requeue(job_id, attempt, report=report,
-                                    attempts=log_book.add("requeued", _clean(error) or "internal error")):
-                    requeue(job_id, job.kind)
-                    return "requeued"
-                return "stale"
-            report = failure_report(
-                "solver", f"The solver crashed on each of {attempt} attempts: {_clean(error)} (the server log has the "
-                          f"details of job {job_id}).",
-            )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                      attempts=log_book.add("failed", report.get("message")))
+        except Exception as error:  # the retry policy decides (attempts.judge)
+            verdict = judge(error, job_id=job_id, attempt=attempt, max_attempts=job.max_attempts,
+                            limits=ctx.limits(spec), elapsed=monitor.elapsed, time_limit_errors=time_limit_errors)
+            if verdict.outcome == "result_pending":
+                log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
+            elif verdict.crash:
+                log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
+    return _conclude(ctx, job, attempt, verdict, monitor, log_book, requeue)
+
+
+def _conclude(ctx: ServiceContext, job, attempt: int, verdict: Verdict, monitor: AttemptMonitor,
+              log_book: "AttemptLog", requeue: Callable[[uuid.UUID, str], None]) -> str:
+    """Write what the retry policy decided, fenced on the attempt: back to the queue, or failed."""
+    if verdict.outcome == "cancelled":
+        return "cancelled"  # by the user, or the lease went to a newer attempt: nothing of this attempt is written
+    history = log_book.add(verdict.outcome, verdict.error)
+    if verdict.retry:
+        if ctx.repo.requeue(job.id, attempt, report=verdict.report, attempts=history,
+                            grant_attempt=verdict.grant_attempt):
+            requeue(job.id, job.kind)
+            return "requeued"
+        return "stale"
+    written = ctx.repo.finish_failure(job.id, attempt, report=verdict.report, run_seconds=monitor.elapsed,
+                                      attempts=history)
     return "failed" if written else "stale"
 
 
@@ -303,15 +257,6 @@ class AttemptLog:
         return attempts.ended(self.previous, self.attempt, self.worker, outcome, error=error, started_at=self.started)
 
 
-_PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")
-
-
-def _clean(error: BaseException) -> str:
-    """The error's message for a client: one line, server paths removed, at most 300 characters."""
-    text = " ".join(str(error).split())
-    return _PATHS.sub("<path>", text)[:300]
-
-
 def _non_finite_paths(value: Any, path: str = "") -> list[str]:
     if isinstance(value, float):
         return [] if math.isfinite(value) else [path or "/"]
@@ -320,21 +265,6 @@ def _non_finite_paths(value: Any, path: str = "") -> list[str]:
     if isinstance(value, list):
         return [p for index, item in enumerate(value) for p in _non_finite_paths(item, f"{path}/{index}")]
     return []
-
-
-def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor,
-                log_book: AttemptLog) -> str:
-    soft, hard = ctx.limits(spec)
-    report = failure_report(
-        "time_limit",
-        f"The solver ran past its time limit ({soft:g} s soft, {hard:g} s hard) and was stopped.",
-        soft_time_limit=soft,
-        time_limit=hard,
-        elapsed_seconds=round(monitor.elapsed, 3),
-    )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                      attempts=log_book.add("time_limit"))
-    return "failed" if written else "stale"
 
 
 def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved: Solved, monitor: AttemptMonitor,
