@@ -139,7 +139,8 @@ def test_crash_is_retried_then_failed_with_report(scaled):
     client, _, _ = scaled
     done = wait_for(client, client.post("/v1/test-crash/jobs", json={"message": "kaputt"}).json()["id"], timeout=60)
     assert done["status"] == "failed" and done["attempt"] == 2
-    assert [a["attempt"] for a in done["report"]["details"]["attempts"]] == [1, 2]
+    assert [(a["attempt"], a["outcome"]) for a in done["attempts"]] == [(1, "requeued"), (2, "failed")]
+    assert "kaputt" in done["report"]["message"] and "attempts" not in done["report"]["details"]
 
 
 def test_hanging_solver_hits_celery_time_limit(scaled):
