@@ -90,8 +90,9 @@ class AttemptMonitor:
                 if not self.ctx.repo.heartbeat(self.job_id, self.attempt, lease_seconds=settings.lease_seconds):
                     self.stop_reason = self.stop_reason or "cancelled"
                     return
-            except Exception:  # a database hiccup must not kill the attempt; the next beat retries
-                log.exception("heartbeat failed for job %s", self.job_id)
+            except Exception as error:  # a database hiccup must not kill the attempt; the next beat retries
+                log.warning("heartbeat failed for job %s: %s", self.job_id, type(error).__name__,
+                            exc_info=not is_infrastructure_failure(error))
 
     def progress(self, fraction: float, message: str = "") -> None:
         if self.stop_reason:
