@@ -6,17 +6,20 @@ checkout: the CPU seconds (user + system) of the whole process tree (the command
 and the readers: this script is their subreaper, so processes orphaned at the command's exit are waited for and
 counted), the command's peak resident memory, the wall time, and the sizes of what it wrote. The floor in the same
 run: ``plantsolve solve --help`` and ``python -c pass``. Then the API process's start-up (``plantsolve serve``
-until ``/healthz`` answers: its CPU seconds and resident memory then), and with ``--importtime`` the libraries that
-``solve --help`` spends its imports on. Numbers are best of ``--repeat``, the two checkouts interleaved (CPU seconds
+until ``/healthz`` answers: its CPU seconds and resident memory then); the service's warm start (until ``/readyz``
+says 200, then how soon a job submitted at once runs, and the memory of each of its processes while it does: RSS,
+PSS and private, from ``smaps_rollup``); and with ``--importtime`` the libraries that ``solve --help`` spends its
+imports on. Numbers are best of ``--repeat``, the two checkouts interleaved (CPU seconds
 hold on a loaded machine; wall time does not).
 
-    python bench/cli.py [--repeat N] [--kinds tube,perfmap] [--before main|DIR|''] [--importtime]
+    python bench/cli.py [--repeat N] [--kinds tube,perfmap] [--before main|DIR|''] [--no-api] [--no-serve] [--importtime]
 """
 
 from __future__ import annotations
 
 import argparse
 import ctypes
+import json
 import os
 import shutil
 import signal
@@ -25,6 +28,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import urllib.error
 import urllib.request
 from collections import defaultdict
 from pathlib import Path
@@ -32,6 +36,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "examples"
 PR_SET_CHILD_SUBREAPER = 36
+# how long a service may take to answer ready, and its first job to start
+START_SECONDS = 300.0
 
 # (kind, example file, options JSON or None): each kind's shipped inputs, JSON and the files other tools write
 CASES = [
@@ -162,6 +168,112 @@ def api_start(checkout: Checkout, scratch: Path) -> tuple[float, float, float, f
     return status["cpu"], status["VmRSS"] / 1024, status["VmHWM"] / 1024, wall
 
 
+def memory(pid: int) -> tuple[float, float, float]:
+    """(RSS, PSS, private) MiB of a live process (smaps_rollup): private is what it holds alone, PSS its fair share of
+    what it shares (a fork's inherited pages count once across the family)."""
+    fields = {}
+    for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines()[1:]:
+        name, _, value = line.partition(":")
+        fields[name] = int(value.split()[0])
+    private = fields.get("Private_Clean", 0) + fields.get("Private_Dirty", 0)
+    return fields.get("Rss", 0) / 1024, fields.get("Pss", 0) / 1024, private / 1024
+
+
+def descendants(pid: int) -> list[int]:
+    found, todo = [], [pid]
+    while todo:
+        parent = todo.pop()
+        for task in Path(f"/proc/{parent}/task").glob("*"):
+            try:
+                children = [int(c) for c in (task / "children").read_text().split()]
+            except OSError:
+                continue
+            found += children
+            todo += children
+    return found
+
+
+def role(pid: int) -> str:
+    try:
+        line = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+    except OSError:
+        return "gone"
+    for word, name in (("forkserver", "warm parent / forkserver"), ("resource_tracker", "resource tracker"),
+                       ("spawn_main", "pool worker (spawned)")):
+        if word in line:
+            return name
+    return "process"
+
+
+def warm_start(checkout: Checkout, scratch: Path) -> dict:
+    """``plantsolve serve`` (embedded default, 2 job processes) from its start: wall seconds until /readyz answers 200,
+    then one job submitted at once (a 3 s test job): seconds from its submission until it runs; meanwhile the private
+    memory and PSS of the API process, of the process running the job and of every other process of the service."""
+    port, data = free_port(), Path(tempfile.mkdtemp(prefix="warm-", dir=scratch))
+    env = {**checkout.env, "DATA_DIR": str(data), "PLUGINS": "tests.support.kinds", "EMBEDDED_WORKERS": "2",
+           "PYTHONPATH": f"{checkout.env['PYTHONPATH']}:{REPO}"}
+    for name in ("DATABASE_URL", "BROKER_URL", "ARTIFACT_DIR", "BLOB_STORE"):
+        env.pop(name, None)
+    base = f"http://127.0.0.1:{port}"
+    started = time.perf_counter()
+    process = subprocess.Popen(checkout.command("serve", "--port", str(port), "--log-level", "warning"), cwd=data,
+                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def call(method: str, path: str, body: bytes | None = None) -> tuple[int, dict]:
+        request = urllib.request.Request(base + path, data=body, method=method,
+                                         headers={"Content-Type": "application/json"})
+        try:
+            with urllib.request.urlopen(request, timeout=5) as answer:
+                return answer.status, json.loads(answer.read() or b"{}")
+        except urllib.error.HTTPError as error:
+            return error.code, {}
+
+    try:
+        deadline = started + START_SECONDS
+        while True:
+            if process.poll() is not None or time.perf_counter() > deadline:
+                raise SystemExit(f"plantsolve serve ({checkout.name}) did not get ready")
+            try:
+                if call("GET", "/readyz")[0] == 200:
+                    break
+            except OSError:
+                pass
+            time.sleep(0.05)
+        ready = time.perf_counter() - started
+        submitted = time.perf_counter()
+        job_id = call("POST", "/v1/test-compute/jobs", b'{"values": [3, 4], "seconds": 3}')[1]["id"]
+        while call("GET", f"/v1/jobs/{job_id}")[1]["status"] == "queued":
+            if time.perf_counter() - submitted > START_SECONDS:
+                raise SystemExit(f"({checkout.name}) the first job did not start")
+            time.sleep(0.01)
+        first_job = time.perf_counter() - submitted
+        time.sleep(0.5)  # the job runs: its process holds what a job costs
+        sampled = {}
+        for pid in [process.pid, *descendants(process.pid)]:
+            try:
+                sampled[pid] = (role(pid), *memory(pid))
+            except OSError:
+                continue
+        while call("GET", f"/v1/jobs/{job_id}")[1]["status"] not in ("succeeded", "failed"):
+            time.sleep(0.1)
+        worker = int(call("GET", f"/v1/jobs/{job_id}")[1]["attempts"][-1]["worker"].rsplit(":", 1)[1])
+    finally:
+        process.send_signal(signal.SIGTERM)
+        try:
+            process.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+        reap_orphans()
+    rows = {"API process": sampled.pop(process.pid)[1:]}
+    if worker in sampled:
+        rows["the job's process"] = sampled.pop(worker)[1:]
+    for pid, (name, *numbers) in sorted(sampled.items()):
+        rows[f"{name} {pid}" if name.startswith("process") else name + ("" if name not in rows else f" {pid}")] = numbers
+    return {"ready": ready, "first_job": first_job, "memory": rows,
+            "pss": sum(numbers[1] for numbers in rows.values())}
+
+
 def import_offenders(checkout: Checkout, scratch: Path, top: int) -> list[tuple[str, float]]:
     """The top-level packages ``solve --help`` spends its import time on (own time of their modules, ms)."""
     result = subprocess.run([sys.executable, "-X", "importtime", "-m", "plantsolve.cli", "solve", "--help"],
@@ -197,6 +309,7 @@ def main() -> None:
                         help="the checkout to compare with: a directory, or a git revision (checked out for the run); "
                         "'' for this checkout alone")
     parser.add_argument("--no-api", action="store_true", help="leave out the API start-up")
+    parser.add_argument("--no-serve", action="store_true", help="leave out the warm start of the service")
     parser.add_argument("--importtime", action="store_true", help="the libraries `solve --help` imports, by time")
     args = parser.parse_args()
     kinds = {k for k in args.kinds.split(",") if k}
@@ -278,6 +391,16 @@ def run(args: argparse.Namespace, kinds: set[str], sides: list[Checkout], scratc
         for side in sides:
             cpu, rss, peak, wall = (min(s[i] for s in starts[side.name]) for i in range(4))
             print(f"{side.name:<10} {cpu:>7.2f} {rss:>8.0f} {peak:>9.0f} {wall:>7.2f}")
+
+    if not args.no_serve:
+        print("\nWarm start (`plantsolve serve`, embedded default, 2 job processes): until /readyz says 200, then one job "
+              "submitted at once; memory while it runs (MiB: RSS / PSS / private)")
+        for side in sides:
+            found = warm_start(side, scratch)
+            print(f"{side.name}: ready after {found['ready']:.1f} s; first job running {found['first_job']:.2f} s after its "
+                  f"submission; PSS of every process {found['pss']:.0f} MiB")
+            for name, (rss, pss, private) in found["memory"].items():
+                print(f"    {name:<32} {rss:>6.0f} / {pss:>6.0f} / {private:>6.0f}")
 
     if args.importtime:
         print("\n`plantsolve solve --help`: import time by top-level package (own time of its modules, ms; "

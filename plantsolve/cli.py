@@ -226,7 +226,8 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
     from plantsolve.jobs.runner import run_job
     from plantsolve.jobs.service import JobService
 
-    ctx = ServiceContext.create(settings, migrate=True)
+    # a temporary store of this run alone gets its tables at once; a named one (--store, --data-dir) is migrated
+    ctx = ServiceContext.create(settings, migrate=True if args.store or args.data_dir else "scratch")
     try:
         upload = not (path.suffix.lower() == ".json" and args.options is None)
         # the upload reader's process imports this kind's reader only (a JSON request is read here, in this process)

@@ -12,7 +12,7 @@ from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse, RedirectResponse
 
 from plantsolve.app import problems
-from plantsolve.app.auth import KeyRing, principal
+from plantsolve.app.auth import KeyRing
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
 from plantsolve.app.edge import EdgeMiddleware
@@ -114,24 +114,35 @@ def _install_health(app: FastAPI) -> None:
         "/readyz",
         response_model=HealthStatus,
         tags=["health"],
-        summary="Database (and broker, when configured) reachable",
+        summary="Whether the service can take a job now: the database takes a write, the blob store a file, and a job "
+                "can start",
         operation_id="getReadiness",
-        responses={503: {"model": HealthStatus, "description": "A dependency is unreachable"}, **problems.responses(500)},
+        responses={503: {"model": HealthStatus, "description": "A part cannot (named in checks; details in the log)"},
+                   **problems.responses(500)},
     )
     def readyz(request: Request) -> Any:
-        checks: dict[str, str] = {}
-        ok = True
-        for name, probe in (("database", request.app.state.ctx.db.ping), ("queue", request.app.state.dispatcher.ping)):
-            try:
-                probe()
-                checks[name] = "ok"
-            except Exception as error:
-                ok = False
-                checks[name] = f"unreachable: {type(error).__name__}: {error}"[:300]
-        if not principal(request).authenticated:  # dependency addresses are for operators only
-            checks = {name: ("ok" if value == "ok" else "unreachable") for name, value in checks.items()}
-        status = HealthStatus(status="ok" if ok else "unavailable", checks=checks)
-        return JSONResponse(status.model_dump(), status_code=200 if ok else 503)
+        status = readiness(request.app.state.ctx, request.app.state.dispatcher)
+        return JSONResponse(status.model_dump(), status_code=200 if status.status == "ok" else 503)
+
+
+READINESS_PROBE = ".readiness-probe"
+
+
+def readiness(ctx: ServiceContext, dispatcher) -> HealthStatus:
+    """Each part ``ok`` or ``unavailable``; why a part is unavailable goes to the log only (it may hold addresses and
+    driver messages)."""
+    probes = (("database", ctx.db.ping), ("files", lambda: ctx.files.put(READINESS_PROBE, b"ok")),
+              ("jobs", dispatcher.ping))
+    checks: dict[str, str] = {}
+    for name, probe in probes:
+        try:
+            probe()
+            checks[name] = "ok"
+        except Exception as error:
+            checks[name] = "unavailable"
+            log.warning("not ready: %s: %s: %s", name, type(error).__name__, " ".join(str(error).split())[:500])
+    ok = all(value == "ok" for value in checks.values())
+    return HealthStatus(status="ok" if ok else "unavailable", checks=checks)
 
 
 def _openapi(app: FastAPI) -> dict[str, Any]:

@@ -20,7 +20,7 @@ class ServiceContext:
     kinds: Mapping[str, SolverSpec]
 
     @classmethod
-    def create(cls, settings: JobSettings, *, migrate: bool = False) -> "ServiceContext":
+    def create(cls, settings: JobSettings, *, migrate: bool | str = False) -> "ServiceContext":
         """The built-in kinds plus those of the ``PLUGINS`` modules; an import error is raised."""
         return cls(settings=settings, store=Store.open(settings, migrate=migrate), kinds=load_kinds(settings.plugins))
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+import sys
 from typing import Any, Iterable, Sequence
 
 from pydantic import ValidationError
@@ -131,11 +132,50 @@ def loads_bounded(data: bytes | str, loc: Sequence[str | int], what: str) -> Any
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise Unprocessable(f"{what} is not valid JSON: {error}",
                             errors=[field_problem(loc, f"invalid JSON: {error}", "json_invalid")]) from None
+    except ValueError:  # an integer longer than Python converts from text (sys.get_int_max_str_digits)
+        errors = [field_problem([*loc, *path], f"an integer of {digits} digits; a number may have at most "
+                                f"{sys.get_int_max_str_digits()} (no quantity needs more)", "int_too_long")
+                  for path, digits in _long_integers(data)]
+        if not errors:
+            raise
+        raise Unprocessable(f"{what} holds a number too long to be read: {summary(errors)}", errors=errors) from None
     if _depth(value) > MAX_JSON_DEPTH:
         raise Unprocessable(f"{what} is nested too deeply to be read.",
                             errors=[field_problem(loc, f"JSON nested deeper than {MAX_JSON_DEPTH} levels",
                                                   "json_too_deep")])
     return value
+
+
+class _LongInteger:
+    """Stands for an integer whose digits Python refuses to convert (the place and length are what a 422 names)."""
+
+    def __init__(self, digits: int):
+        self.digits = digits
+
+
+def _integer(text: str) -> int | _LongInteger:
+    digits = len(text.lstrip("-"))
+    limit = sys.get_int_max_str_digits()
+    return _LongInteger(digits) if limit and digits > limit else int(text)
+
+
+def _long_integers(data: bytes | str) -> list[tuple[list[str | int], int]]:
+    """Where a JSON document holds integers too long to convert, and their lengths (the document read again, such
+    integers left unconverted)."""
+    try:
+        document = json.loads(data, parse_int=_integer)
+    except ValueError:
+        return []
+    found, stack = [], [(document, [])]
+    while stack:
+        item, path = stack.pop()
+        if isinstance(item, _LongInteger):
+            found.append((path, item.digits))
+        elif isinstance(item, dict):
+            stack.extend((v, [*path, k]) for k, v in item.items())
+        elif isinstance(item, list):
+            stack.extend((v, [*path, i]) for i, v in enumerate(item))
+    return sorted(found, key=lambda place: [str(step) for step in place[0]])[:20]
 
 
 def _depth(value: Any) -> int:

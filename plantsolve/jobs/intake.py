@@ -53,7 +53,7 @@ from plantsolve.jobs.errors import (
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
 from plantsolve.solvers.kinds import KINDS, load_kinds
 from plantsolve.store.blobs import BlobMissing, BlobStore
-from plantsolve.store.models import Job
+from plantsolve.store.repository import JobRecord
 
 
 def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
@@ -284,7 +284,7 @@ def check(spec: SolverSpec, job_input: Any) -> None:
 
 
 @contextmanager
-def read_stored(spec: SolverSpec, job: Job, files: BlobStore) -> Iterator[Any]:
+def read_stored(spec: SolverSpec, job: JobRecord, files: BlobStore) -> Iterator[Any]:
     """The kind's input value re-read from a job's stored input (in the worker; not checked again), for
     the duration of the ``with`` block (a temporary copy of an upload is removed after it)."""
     try:

@@ -1,31 +1,79 @@
-"""The lease policy: what becomes of a job whose worker stopped heartbeating (its lease lapsed) or
-whose queue message may have been lost. Re-queued until its attempt cap, then failed with a report;
-a result that waits to be stored gets one more attempt. Every change is a conditional update of
-the lifecycle, so the sweepers of many processes never double up. :mod:`plantsolve.workers.sweeper`
-runs :func:`sweep_once` periodically."""
+"""The lease policy: what becomes of an attempt whose worker is gone (its process died, or its lease lapsed
+without a heartbeat) and of a queued job whose message may have been lost. A lost attempt is re-queued until
+the job's attempt cap, then failed with a report; a result that waits to be stored gets one more attempt.
+The repository only lists the rows and writes the fenced transitions decided here, so the sweepers of many
+processes never double up. :mod:`plantsolve.workers.sweeper` runs :func:`sweep_once` periodically; the
+embedded pool calls :func:`lose_attempt` at once when a job process dies."""
 
 from __future__ import annotations
 
 import logging
 import uuid
+from datetime import datetime, timedelta
 from typing import Callable
 
+from plantsolve.jobs import attempts
 from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.lifecycle import QUEUED
+from plantsolve.jobs.lifecycle import QUEUED, RUNNING
 from plantsolve.jobs.runner import lost_worker_report, pending_holder
+from plantsolve.store.models import utcnow
+from plantsolve.store.repository import LapsedAttempt
 
 log = logging.getLogger("plantsolve.sweeper")
 
 Enqueue = Callable[[uuid.UUID, str], None]
 Pending = Callable[[], "int | None"]
 
+# queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
+# sweeps instead of loaded whole every time
+SWEEP_BATCH = 1000
+
+
+def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_before: datetime | None = None) -> str:
+    """Decide and write the fate of a lost attempt: ``"requeued"`` (the caller enqueues it), ``"failed"``, or
+    ``"stale"`` (the fenced write found the attempt no longer running: it finished, was cancelled, or, with
+    ``lapsed_before``, heartbeated meanwhile)."""
+    previous = next((h for h in lost.attempts if h.get("attempt") == lost.attempt), {})
+    waiting = previous.get("outcome") == "result_pending" or (
+        lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
+    cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
+    report = lost_worker_report(lost.attempt, cap)
+    history = attempts.ended(lost.attempts, lost.attempt, lost.worker,
+                             "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why)
+    if lost.attempt >= cap:
+        written = ctx.repo.finish_failure(lost.id, lost.attempt, report=report, run_seconds=None, attempts=history,
+                                          lapsed_before=lapsed_before)
+        return "failed" if written else "stale"
+    written = ctx.repo.requeue(lost.id, lost.attempt, report=report, attempts=history,
+                               grant_attempt=cap > lost.max_attempts, lapsed_before=lapsed_before)
+    return "requeued" if written else "stale"
+
+
+def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: int | None) -> str:
+    """A job process ended without saying how its job ended (killed, out of memory, a crash in native code): if
+    it held the job's running attempt, that attempt is lost now, without waiting for its lease to lapse.
+    Returns ``"requeued"`` or ``"queued"`` (the caller enqueues it), ``"failed"``, or ``"none"``."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is None:
+        return "none"
+    if job.status == QUEUED:
+        return "queued"  # it died before its claim
+    if job.status != RUNNING or job.worker != worker:
+        return "none"
+    how = f"the job process was killed by signal {-exitcode}" if exitcode is not None and exitcode < 0 \
+        else f"the job process exited with code {exitcode}"
+    lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
+                         job.heartbeat_at)
+    return lose_attempt(ctx, lost, why=how)
+
 
 def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, *,
                after_outage: bool = False) -> None:
-    """One pass. Queued jobs are enqueued again when their message never reached the broker
-    (``enqueued_at`` unset), or when it is older than ``requeue_queued_after`` and the broker holds
-    fewer messages than there are such jobs (the oldest first: a restarted Redis without persistence
-    lost them). A duplicate message is harmless: the claim lets one delivery run.
+    """One pass. Running attempts whose lease lapsed are lost (:func:`lose_attempt`). Queued jobs are enqueued
+    again when their message never reached the broker (``enqueued_at`` unset), or when it is older than
+    ``requeue_queued_after`` and the broker holds fewer messages than there are such jobs (the oldest first: a
+    restarted Redis without persistence lost them). A duplicate message is harmless: the claim lets one delivery
+    run.
 
     ``after_outage``: the previous pass could not reach the database. Nobody could heartbeat meanwhile,
     so a lapsed lease says nothing about its worker: every running attempt first gets a full lease
@@ -35,18 +83,27 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
         extended = ctx.repo.extend_leases(ctx.settings.lease_seconds)
         if extended:
             log.warning("sweeper: the database was away; %d running lease(s) extended instead of lapsing", extended)
-    outcome = ctx.repo.sweep(requeue_queued_after=ctx.settings.requeue_queued_after,
-                             report_for_lost=lost_worker_report,
-                             result_waiting=lambda job_id: pending_holder(ctx, job_id) is not None)
-    again = list(outcome.requeued) + [job_id for job_id, sent in outcome.waiting if not sent]
-    stale = [job_id for job_id, sent in outcome.waiting if sent]
+    now = utcnow()
+    requeued: list[uuid.UUID] = []
+    failed = 0
+    for lost in ctx.repo.lapsed(now):
+        beat = lost.heartbeat_at.isoformat() if lost.heartbeat_at else "the start"
+        fate = lose_attempt(ctx, lost, why=f"no heartbeat since {beat}", lapsed_before=now)
+        if fate == "requeued":
+            requeued.append(lost.id)
+        failed += fate == "failed"
+    waiting = [(job_id, sent) for job_id, sent in
+               ctx.repo.unsent(sent_before=now - timedelta(seconds=ctx.settings.requeue_queued_after),
+                               limit=SWEEP_BATCH) if job_id not in requeued]
+    again = requeued + [job_id for job_id, sent in waiting if not sent]
+    stale = [job_id for job_id, sent in waiting if sent]
     if stale:
         held = pending() if pending is not None else None
         missing = len(stale) if held is None else max(0, ctx.repo.count_queued() - held)
         again += stale[:missing]
     sent = 0
     for job_id in dict.fromkeys(again):
-        job = ctx.repo.get(job_id)
+        job = ctx.repo.get(job_id, brief=True)
         if job is None or job.status != QUEUED:
             continue
         try:
@@ -56,8 +113,8 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
             continue
         ctx.repo.mark_enqueued(job_id)
         sent += 1
-    if sent or outcome.failed:
-        log.info("sweeper: enqueued %d again, failed %d", sent, len(outcome.failed))
+    if sent or failed:
+        log.info("sweeper: enqueued %d again, failed %d", sent, failed)
 
 
 def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None) -> None:

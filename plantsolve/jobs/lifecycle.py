@@ -10,7 +10,7 @@
                     ▼
                 cancelled  ◀──cancel── running
 
-Every status write of the store is one of :data:`TRANSITIONS`: the repository takes a
+Every status write of the store is one of the transitions below (``CLAIM`` … ``CANCEL``): the repository takes a
 transition's ``sources`` for its conditional update (``WHERE status IN sources``) and its
 ``target`` for the new value, so a status can only change along an arrow drawn here. The
 runner, the sweeper, the views and the event streams read :func:`is_finished` from here too.
@@ -38,9 +38,6 @@ class Transition:
     sources: tuple[JobStatus, ...]
     target: JobStatus
 
-    def allows(self, status: str) -> bool:
-        return status in self.sources
-
 
 # a running job is claimed again only when its lease lapsed (the repository adds that condition)
 CLAIM = Transition("claim", (QUEUED, RUNNING), RUNNING)
@@ -49,14 +46,7 @@ FAIL = Transition("fail", (RUNNING,), FAILED)
 REQUEUE = Transition("requeue", (RUNNING,), QUEUED)
 CANCEL = Transition("cancel", (QUEUED, RUNNING), CANCELLED)
 
-TRANSITIONS: tuple[Transition, ...] = (CLAIM, SUCCEED, FAIL, REQUEUE, CANCEL)
-
 
 def is_finished(status: str) -> bool:
     """True for a status no transition leaves."""
     return status in FINISHED
-
-
-def allowed(source: str, target: str) -> bool:
-    """Whether some transition goes from ``source`` to ``target``."""
-    return any(t.target == target and t.allows(source) for t in TRANSITIONS)

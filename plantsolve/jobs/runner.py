@@ -11,31 +11,25 @@ import dataclasses
 import json
 import logging
 import math
-import re
 import threading
 import time
 import uuid
 from typing import Any, Callable
 
-from pydantic import ValidationError
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
-from plantsolve.jobs import intake
+from plantsolve.jobs import attempts, intake
+from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_report, judge
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
 from plantsolve.schemas.common import Report
-from plantsolve.solvers.base import Artifact, Cancelled, InputRejected, Solved, SolverError
+from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact
 
 log = logging.getLogger("plantsolve.runner")
-
-
-class ResultPending(ConnectionError):
-    """A computed result the database did not take in time: it waits in the blob store (or, when that is
-    away too, in this machine's spool folder) for the next attempt."""
 
 
 def pending_path(job_id: uuid.UUID) -> str:
@@ -62,14 +56,6 @@ def pending_holder(ctx: ServiceContext, job_id: uuid.UUID) -> BlobStore | None:
         except BlobStoreUnavailable:
             continue
     return None
-
-
-class _Stop(Cancelled):
-    """Raised inside the solver (through the progress callback) to end the attempt."""
-
-    def __init__(self, reason: str):
-        self.reason = reason  # "cancelled" (or lost lease) | "time_limit"
-        super().__init__(reason)
 
 
 class AttemptMonitor:
@@ -104,15 +90,16 @@ class AttemptMonitor:
                 if not self.ctx.repo.heartbeat(self.job_id, self.attempt, lease_seconds=settings.lease_seconds):
                     self.stop_reason = self.stop_reason or "cancelled"
                     return
-            except Exception:  # a database hiccup must not kill the attempt; the next beat retries
-                log.exception("heartbeat failed for job %s", self.job_id)
+            except Exception as error:  # a database hiccup must not kill the attempt; the next beat retries
+                log.warning("heartbeat failed for job %s: %s", self.job_id, type(error).__name__,
+                            exc_info=not is_infrastructure_failure(error))
 
     def progress(self, fraction: float, message: str = "") -> None:
         if self.stop_reason:
-            raise _Stop(self.stop_reason)
+            raise Stop(self.stop_reason)
         if self.elapsed > self.soft_limit:
             self.stop_reason = "time_limit"
-            raise _Stop("time_limit")
+            raise Stop("time_limit")
         now = time.monotonic()
         if now - self._last_write < self.ctx.settings.progress_write_seconds:
             return
@@ -125,24 +112,15 @@ class AttemptMonitor:
             return
         if not still_ours:
             self.stop_reason = "cancelled"
-            raise _Stop("cancelled")
+            raise Stop("cancelled")
 
 
-def failure_report(stage: str, message: str, **details: Any) -> dict:
-    return Report(status="failed", stage=stage, message=message, details=details).model_dump(mode="json")
-
-
-def lost_worker_report(attempt: int, max_attempts: int, previous: Any) -> dict:
-    """Report for a job whose worker stopped heartbeating (killed, crashed host, OOM)."""
-    history = list((previous or {}).get("details", {}).get("attempts", []))
-    history.append({"attempt": attempt, "error": "worker lost: lease lapsed without a heartbeat"})
+def lost_worker_report(attempt: int, max_attempts: int) -> dict:
+    """Report for a job whose worker is gone (killed, crashed host, out of memory); the attempts' history says
+    how each attempt ended."""
     if attempt >= max_attempts:
-        return failure_report(
-            "worker",
-            f"The job's worker stopped responding on each of {attempt} attempts; giving up.",
-            attempts=history,
-        )
-    return failure_report("worker", "The worker stopped responding; the job was re-queued.", attempts=history)
+        return failure_report("worker", f"The job's worker stopped responding on each of {attempt} attempts; giving up.")
+    return failure_report("worker", "The worker stopped responding; the job was re-queued.")
 
 
 def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> Any:
@@ -165,7 +143,7 @@ def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> 
     thread.start()
     thread.join(deadline)
     if thread.is_alive():
-        raise _Stop("time_limit")
+        raise Stop("time_limit")
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]
@@ -179,8 +157,9 @@ def run_job(
     requeue: Callable[[uuid.UUID, str], None],
     hard_limit_in_thread: bool = True,
     time_limit_errors: tuple[type[BaseException], ...] = (),
+    on_claim: Callable[[], None] | None = None,
 ) -> str:
-    """Run one delivery of ``job_id``. Returns what happened: the final status, ``"requeued"``,
+    """Run one delivery of ``job_id`` (``on_claim`` is called once the attempt is claimed, before the solve). Returns what happened: the final status, ``"requeued"``,
     ``"skipped"`` (not claimable: already running elsewhere, finished or cancelled) or
     ``"stale"`` (this attempt lost the job before it could store anything). Each claimed attempt
     logs one line when it starts and one when it ends (job id, kind, attempt, duration, outcome)."""
@@ -189,7 +168,7 @@ def run_job(
     outcome = "crashed"
     try:
         outcome = _run_claimed(ctx, job_id, worker=worker, requeue=requeue, hard_limit_in_thread=hard_limit_in_thread,
-                               time_limit_errors=time_limit_errors, claimed=claimed)
+                               time_limit_errors=time_limit_errors, claimed=claimed, on_claim=on_claim)
         return outcome
     finally:
         if claimed:
@@ -209,6 +188,7 @@ def _run_claimed(
     hard_limit_in_thread: bool,
     time_limit_errors: tuple[type[BaseException], ...],
     claimed: dict[str, Any],
+    on_claim: Callable[[], None] | None,
 ) -> str:
     job = ctx.repo.get(job_id)
     if job is None:
@@ -217,6 +197,8 @@ def _run_claimed(
     if attempt is None:
         return "skipped"
     claimed.update(kind=job.kind, attempt=attempt)
+    if on_claim is not None:
+        on_claim()
     log.info("job %s (%s) attempt %d started", job_id, job.kind, attempt,
              extra={"job_id": str(job_id), "kind": job.kind, "attempt": attempt, "outcome": "started", "worker": worker})
     spec = ctx.spec(job.kind)
@@ -226,7 +208,6 @@ def _run_claimed(
         )
         return "failed"
 
-    history = list(((job.report or {}).get("details") or {}).get("attempts", []))
     log_book = AttemptLog(job.attempts, attempt, worker)
     soft_limit, hard_limit = ctx.limits(spec)
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
@@ -240,86 +221,41 @@ def _run_claimed(
                     hard_limit if hard_limit_in_thread else None,
                 )
                 return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
-        except _Stop as stop:
-            if stop.reason != "time_limit":
-                return "cancelled"  # by the user, or the lease went to a newer attempt
-            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
-        except time_limit_errors:
-            return _time_limit(ctx, spec, job_id, attempt, monitor, log_book)
-        except ResultPending:
-            log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
-            report = failure_report("result", "The result was computed but the database did not take it; the next "
-                                    "attempt stores it without solving again.", attempts=history)
-            if ctx.repo.requeue(job_id, attempt, report=report, attempts=log_book.add("result_pending"),
-                                grant_attempt=attempt >= job.max_attempts):
-                requeue(job_id, job.kind)
-                return "requeued"
-            return "stale"
-        except InputRejected as error:
-            report = failure_report(
-                "input",
-                error.title,
-                errors=[{"loc": list(e.loc), "msg": e.msg, "type": e.type} for e in error.errors],
-            )
-        except ValidationError as error:
-            report = failure_report("input", "The stored input no longer validates.", errors=error.errors(include_url=False, include_context=False))
-        except SolverError as error:
-            report = failure_report(error.stage, error.message, **error.details)
-        except Exception as error:
-            log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
-            # reports say what happened in words; exception class names stay in the server log (above)
-            history.append({"attempt": attempt, "worker": worker, "error": _clean(error) or "internal error"})
-            if not is_infrastructure_failure(error):
-                # the same input gives the same failure: retrying would only repeat it
-                report = failure_report(
-                    "solver",
-                    "The solver failed on this input; it was not retried because the same input fails the same way. "
-                    "Check the input's values (scale, degenerate geometry); the server log has the details of job "
-                    f"{job_id}, attempt {attempt}.",
-                    attempts=history,
-                )
-                written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                                  attempts=log_book.add("failed", _clean(error)))
-                return "failed" if written else "stale"
-            if attempt < job.max_attempts:
-                report = failure_report("solver", "The solver crashed; the job was re-queued.", attempts=history)
-                if ctx.repo.requeue(job_id, attempt, report=report,
-                                    attempts=log_book.add("requeued", _clean(error) or "internal error")):
-                    requeue(job_id, job.kind)
-                    return "requeued"
-                return "stale"
-            report = failure_report(
-                "solver", f"The solver crashed on each of {attempt} attempts: {_clean(error)} (the server log has the "
-                          f"details of job {job_id}).",
-                attempts=history,
-            )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                      attempts=log_book.add("failed", report.get("message")))
+        except Exception as error:  # the retry policy decides (attempts.judge)
+            verdict = judge(error, job_id=job_id, attempt=attempt, max_attempts=job.max_attempts,
+                            limits=ctx.limits(spec), elapsed=monitor.elapsed, time_limit_errors=time_limit_errors)
+            if verdict.outcome == "result_pending":
+                log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
+            elif verdict.crash:
+                log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
+    return _conclude(ctx, job, attempt, verdict, monitor, log_book, requeue)
+
+
+def _conclude(ctx: ServiceContext, job, attempt: int, verdict: Verdict, monitor: AttemptMonitor,
+              log_book: "AttemptLog", requeue: Callable[[uuid.UUID, str], None]) -> str:
+    """Write what the retry policy decided, fenced on the attempt: back to the queue, or failed."""
+    if verdict.outcome == "cancelled":
+        return "cancelled"  # by the user, or the lease went to a newer attempt: nothing of this attempt is written
+    history = log_book.add(verdict.outcome, verdict.error)
+    if verdict.retry:
+        if ctx.repo.requeue(job.id, attempt, report=verdict.report, attempts=history,
+                            grant_attempt=verdict.grant_attempt):
+            requeue(job.id, job.kind)
+            return "requeued"
+        return "stale"
+    written = ctx.repo.finish_failure(job.id, attempt, report=verdict.report, run_seconds=monitor.elapsed,
+                                      attempts=history)
     return "failed" if written else "stale"
 
 
 class AttemptLog:
-    """The job's attempts history, and this attempt's entry to add when it ends."""
+    """The job's attempt history, and this attempt's entry to add when it ends."""
 
     def __init__(self, previous: Any, attempt: int, worker: str):
-        self.previous = [h for h in (previous or []) if h.get("attempt") != attempt]
-        self.attempt, self.worker, self.started = attempt, worker, utcnow()
+        self.previous, self.attempt, self.worker, self.started = previous, attempt, worker, utcnow()
 
     def add(self, outcome: str, error: str | None = None) -> list[dict]:
-        entry = {"attempt": self.attempt, "worker": self.worker, "started_at": self.started.isoformat(),
-                 "finished_at": utcnow().isoformat(), "outcome": outcome}
-        if error:
-            entry["error"] = str(error)[:300]
-        return self.previous + [entry]
-
-
-_PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")
-
-
-def _clean(error: BaseException) -> str:
-    """The error's message for a client: one line, server paths removed, at most 300 characters."""
-    text = " ".join(str(error).split())
-    return _PATHS.sub("<path>", text)[:300]
+        return attempts.ended(self.previous, self.attempt, self.worker, outcome, error=error, started_at=self.started)
 
 
 def _non_finite_paths(value: Any, path: str = "") -> list[str]:
@@ -330,21 +266,6 @@ def _non_finite_paths(value: Any, path: str = "") -> list[str]:
     if isinstance(value, list):
         return [p for index, item in enumerate(value) for p in _non_finite_paths(item, f"{path}/{index}")]
     return []
-
-
-def _time_limit(ctx: ServiceContext, spec, job_id: uuid.UUID, attempt: int, monitor: AttemptMonitor,
-                log_book: AttemptLog) -> str:
-    soft, hard = ctx.limits(spec)
-    report = failure_report(
-        "time_limit",
-        f"The solver ran past its time limit ({soft:g} s soft, {hard:g} s hard) and was stopped.",
-        soft_time_limit=soft,
-        time_limit=hard,
-        elapsed_seconds=round(monitor.elapsed, 3),
-    )
-    written = ctx.repo.finish_failure(job_id, attempt, report=report, run_seconds=monitor.elapsed,
-                                      attempts=log_book.add("time_limit"))
-    return "failed" if written else "stale"
 
 
 def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved: Solved, monitor: AttemptMonitor,
@@ -464,12 +385,12 @@ def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, moni
                          spooled_in=holder)
 
 
-def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
-    """A pool killed a job's process at its hard time limit (a solver deaf even to the soft limit): fail
-    the running attempt now with a report, instead of letting the lease lapse and retrying a job that
-    would hang again. Fenced on the attempt that was running."""
-    job = ctx.repo.get(job_id)
-    if job is None or job.status != RUNNING:
+def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker: str | None = None) -> bool:
+    """A job's process was killed at its hard time limit (a solver deaf even to the soft limit): fail the running
+    attempt now with a report, instead of retrying a job that would hang again. Fenced on the attempt that was
+    running (and, given ``worker``, only when that worker held it)."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is None or job.status != RUNNING or (worker is not None and job.worker != worker):
         return False
     spec = ctx.spec(job.kind)
     limit = ctx.limits(spec)[1] if spec is not None else None
@@ -478,9 +399,7 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
         f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
         if limit else "The solver was killed at its hard time limit.",
         time_limit=limit, killed=True)
-    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
-        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "time_limit",
-        "error": "killed at the hard time limit"}]
+    history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit")
     return ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None, attempts=history)
 
 
@@ -491,9 +410,8 @@ def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     job = ctx.repo.get(job_id, brief=True)
     if job is None or job.status != RUNNING:
         return False
-    history = [h for h in (job.attempts or []) if h.get("attempt") != job.attempt] + [{
-        "attempt": job.attempt, "worker": job.worker, "finished_at": utcnow().isoformat(), "outcome": "handed_back",
-        "error": "the service stopped while the job ran"}]
+    history = attempts.ended(job.attempts, job.attempt, job.worker, "handed_back",
+                             error="the service stopped while the job ran")
     report = failure_report("worker", "The service stopped while the job ran; it was re-queued and runs again "
                             "at the next start (this attempt is not counted).")
     return ctx.repo.requeue(job_id, job.attempt, report=report, attempts=history, grant_attempt=True)

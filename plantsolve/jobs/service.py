@@ -25,7 +25,8 @@ from plantsolve.jobs.runner import failure_report
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
 from plantsolve.store.blobs import BlobMissing, BlobReader
-from plantsolve.store.models import Job, utcnow
+from plantsolve.store.models import utcnow
+from plantsolve.store.repository import JobRecord
 from plantsolve.store.repository import JobState, as_utc
 
 log = logging.getLogger("plantsolve.api")
@@ -45,7 +46,7 @@ class NewJob:
 
 @dataclass
 class Submitted:
-    job: Any  # the job's columns by attribute: the model, or the store's record of a new job
+    job: JobRecord
     created: bool
     view: JobView | None = None
 
@@ -156,7 +157,7 @@ class JobService:
         caller hands a new job to the queue (:meth:`dispatch`) after the commit."""
         return self.ctx.repo.create_later(self._columns(new))
 
-    def stored(self, new: NewJob, stored: Any, created: bool) -> Submitted:
+    def stored(self, new: NewJob, stored: JobRecord, created: bool) -> Submitted:
         """The outcome of storing ``new``: the new job, or the job of the same idempotency key (the same request:
         200; another: 422)."""
         if not created:
@@ -176,7 +177,7 @@ class JobService:
         then an event loop may do it."""
         return getattr(self.dispatcher, "in_process", False)
 
-    def dispatch(self, job: Any) -> None:
+    def dispatch(self, job: JobRecord) -> None:
         """Hand a committed new job to the queue (only after the commit: a worker must always find the job)."""
         try:
             self.dispatcher.enqueue(job.id, job.kind)
@@ -204,7 +205,7 @@ class JobService:
 
     # ---- reads and cancel -------------------------------------------------------------------
 
-    def get(self, job_id: uuid.UUID, sees: str | None = None, *, brief: bool = False) -> Job:
+    def get(self, job_id: uuid.UUID, sees: str | None = None, *, brief: bool = False) -> JobRecord:
         """The job, if the caller may see it (``sees``: the caller's tenant, None for all); ``brief``
         without its input and result (enough for its view)."""
         job = self.ctx.repo.get(job_id, brief=brief)
@@ -221,7 +222,7 @@ class JobService:
         return self.ctx.repo.states(**filters)
 
     def search(self, *, kind: str | None, status: str | None, text: str | None, after: tuple | None, limit: int,
-               sees: str | None) -> list[Job]:
+               sees: str | None) -> list[JobRecord]:
         """A page of jobs the caller may see, newest first, filtered by kind, status and a text (without their
         inputs and results: enough for their views)."""
         return self.ctx.repo.list(kind=kind, status=status, text=text, after=after, limit=limit, owner=sees, brief=True)
@@ -229,7 +230,7 @@ class JobService:
     def count_by_status(self, sees: str | None) -> dict[str, int]:
         return self.ctx.repo.count_by_status(owner=sees)
 
-    def input_file(self, job: Job) -> BlobReader:
+    def input_file(self, job: JobRecord) -> BlobReader:
         """A job's stored input file (an upload, or a large JSON request), opened from the blob store: its
         ``size`` and ``chunks()`` (read once), or ``close()``. A blob store that cannot be reached raises a
         ``ConnectionError`` (503) here, before a response starts."""
@@ -274,7 +275,7 @@ class JobService:
     def record_callback(self, job_id: uuid.UUID, attempt: int, **outcome: Any) -> bool:
         return self.ctx.repo.record_callback(job_id, attempt, **outcome)
 
-    def cancel(self, job_id: uuid.UUID, sees: str | None = None) -> Job:
+    def cancel(self, job_id: uuid.UUID, sees: str | None = None) -> JobRecord:
         self.get(job_id, sees)
         outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."))
         if outcome is None:
@@ -325,7 +326,7 @@ class JobService:
         next_cursor = encode_cursor(jobs[-1]) if more and jobs else None
         return JobList(items=[self.view(job, with_artifacts=False) for job in jobs], next_cursor=next_cursor)
 
-    def view(self, job: Job, *, with_artifacts: bool = True) -> JobView:
+    def view(self, job: JobRecord, *, with_artifacts: bool = True) -> JobView:
         created, started, finished = as_utc(job.created_at), as_utc(job.started_at), as_utc(job.finished_at)
         base = f"/v1/jobs/{job.id}"
         artifacts = []
@@ -369,7 +370,7 @@ def _callback(url: str | None) -> dict[str, Any]:
     return {"callback_url": url, "callback_state": "pending", "callback_attempts": 0, "callback_next_at": utcnow()}
 
 
-def _summary(job: Job) -> str:
+def _summary(job: JobRecord) -> str:
     report = job.report or {}
     if job.status == QUEUED:
         return "Waiting for a worker." if job.attempt == 0 else f"Re-queued after attempt {job.attempt}: {report.get('message', '')}"
@@ -381,7 +382,7 @@ def _summary(job: Job) -> str:
     return report.get("message") or job.status.capitalize() + "."
 
 
-def encode_cursor(job: Job) -> str:
+def encode_cursor(job: JobRecord) -> str:
     payload = json.dumps([as_utc(job.created_at).isoformat(), str(job.id)]).encode()
     return base64.urlsafe_b64encode(payload).decode().rstrip("=")
 

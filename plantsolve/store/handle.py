@@ -8,6 +8,7 @@ from plantsolve.store.blobs import BlobStore, LocalBlobStore
 from plantsolve.store.blobs_database import DatabaseBlobStore
 from plantsolve.store.blobs_s3 import S3BlobStore
 from plantsolve.store.engine import Database
+from plantsolve.store.models import Base
 from plantsolve.store.repository import JobRepository
 from plantsolve.store.sessions import SessionRepository
 from plantsolve.store.settings import StoreSettings
@@ -26,9 +27,13 @@ class Store:
     spool: LocalBlobStore
 
     @classmethod
-    def open(cls, settings: StoreSettings, *, migrate: bool = False) -> "Store":
-        db = Database(settings.resolved_database_url)
-        if migrate:
+    def open(cls, settings: StoreSettings, *, migrate: bool | str = False) -> "Store":
+        """``migrate``: True upgrades the schema (Alembic); ``"scratch"`` creates it on a new throwaway database."""
+        db = Database(settings.resolved_database_url, wait=settings.database_wait_seconds,
+                      statement=settings.database_statement_seconds)
+        if migrate == "scratch":  # lives as long as one process (a CLI run): no history to keep, no Alembic to replay
+            Base.metadata.create_all(db.engine)
+        elif migrate:
             db.migrate()
         local = LocalBlobStore(settings.resolved_artifact_dir)
         # SQLite writes one transaction at a time: concurrent submissions share one (see store/writer.py)

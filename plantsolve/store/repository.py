@@ -11,14 +11,13 @@ from __future__ import annotations
 import uuid
 from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
-from dataclasses import dataclass, field
-from types import SimpleNamespace
+from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
 
 from sqlalchemy import String, Text, and_, bindparam, case, cast, delete, func, insert, or_, select, update
 from sqlalchemy.exc import IntegrityError
-from sqlalchemy.orm import Session, defer, sessionmaker
+from sqlalchemy.orm import Session, sessionmaker
 
 from plantsolve.jobs.lifecycle import ACTIVE, CANCEL, CLAIM, FAIL, FINISHED, QUEUED, REQUEUE, RUNNING, SUCCEED
 from plantsolve.store.models import Artifact, Job, utcnow
@@ -61,11 +60,80 @@ class JobState:
         return self.status, self.attempt, self.progress, self.progress_message
 
 
+@dataclass(frozen=True, slots=True, eq=False, repr=False)
+class JobRecord:
+    """A job as the store holds it: every column, read once and never changed (a write is a new read). Every read
+    of the repository returns this type, whatever query made it. A *brief* record (``complete`` False) leaves out
+    the input and the result: a status read must not load and decode a result of many megabytes it does not show."""
+
+    id: uuid.UUID
+    kind: str
+    status: str
+    attempt: int
+    max_attempts: int
+    lease_until: datetime | None
+    heartbeat_at: datetime | None
+    worker: str | None
+    progress: float
+    progress_message: str
+    input_kind: str
+    input: Any
+    input_file: str | None
+    input_filename: str | None
+    input_options: Any
+    result: Any
+    report: dict | None
+    idempotency_key: str | None
+    owner: str
+    attempts: list | None
+    body_hash: str
+    solver_version: str
+    created_at: datetime
+    enqueued_at: datetime | None
+    started_at: datetime | None
+    finished_at: datetime | None
+    run_seconds: float | None
+    callback_url: str | None
+    callback_state: str | None
+    callback_attempts: int
+    callback_next_at: datetime | None
+    callback_error: str | None
+    complete: bool = True
+
+    @classmethod
+    def of(cls, row: Any, *, complete: bool = True) -> "JobRecord":
+        """From a row of the jobs table (its columns by name). A brief record has no input, input options or
+        result at all (reading one is an AttributeError, not a None that would pass for "none given")."""
+        values = dict(row._mapping) if hasattr(row, "_mapping") else dict(row)
+        for name in LEFT_OUT_OF_BRIEF:
+            values.setdefault(name, None)
+        values["progress_message"] = values.get("progress_message") or ""
+        values["owner"] = values.get("owner") or ""
+        values["callback_attempts"] = values.get("callback_attempts") or 0
+        record = cls(**values, complete=complete)
+        if not complete:
+            for name in LEFT_OUT_OF_BRIEF:
+                object.__delattr__(record, name)
+        return record
+
+    def __repr__(self) -> str:
+        return f"JobRecord(id={self.id}, kind={self.kind!r}, status={self.status!r}, attempt={self.attempt})"
+
+
+LEFT_OUT_OF_BRIEF = ("input", "input_options", "result")
+
+
 @dataclass(frozen=True)
-class SweepOutcome:
-    requeued: list[uuid.UUID]
-    failed: list[uuid.UUID]
-    waiting: list[tuple[uuid.UUID, bool]] = field(default_factory=list)  # queued: (id, reached the broker), oldest first
+class LapsedAttempt:
+    """A running attempt whose lease lapsed: what the lease policy needs to decide its fate."""
+
+    id: uuid.UUID
+    kind: str
+    attempt: int
+    max_attempts: int
+    attempts: list
+    worker: str | None
+    heartbeat_at: datetime | None
 
 
 class JobRepository:
@@ -77,7 +145,7 @@ class JobRepository:
         self.sessions = sessions
         self.writing = writing  # see Database.writing
         self.writer = JobWriter(sessions.kw["bind"], JOBS, writing, self.get_by_idempotency_key,
-                                 made=JobRecord) if group_commit \
+                                 made=JobRecord.of) if group_commit \
             else None
 
     def close(self) -> None:
@@ -92,18 +160,11 @@ class JobRepository:
 
     # ---- submission and reads -------------------------------------------------------------
 
-    def create(self, job: Job | dict[str, Any]) -> tuple[Any, bool]:
-        """Insert a job, given as a model instance or as its columns (the columns' defaults fill what is left
-        out); with an idempotency key already taken, return the existing job instead.
-
-        Returns ``(job, created)``: the new job is the instance given, or for columns a :class:`JobRecord` of
-        them. The caller compares body hashes of an existing job. One Core INSERT and no ORM instance: on the
-        submit path the ORM's unit of work and instance bookkeeping cost more than the write itself."""
-        if isinstance(job, Job):
-            _apply_defaults(job)
-            stored, created = self.create({column.key: getattr(job, column.key) for column in JOBS.columns})
-            return (job if created else stored), created
-        values = job
+    def create(self, values: dict[str, Any]) -> tuple[JobRecord, bool]:
+        """Insert a job given as its columns (the columns' defaults fill what is left out); with an idempotency key
+        already taken, return the existing job instead. Returns ``(job, created)``; the caller compares body hashes
+        of an existing job. One Core INSERT and no ORM instance: on the submit path the ORM's unit of work and
+        instance bookkeeping cost more than the write itself."""
         if self.writer is not None:
             return self.create_later(values).result()
         key = values.get("idempotency_key")
@@ -121,7 +182,7 @@ class JobRepository:
             if existing is None:
                 raise
             return existing, False
-        return JobRecord(**record), True
+        return JobRecord.of(record), True
 
     def create_later(self, values: dict[str, Any]) -> Future | None:
         """:meth:`create` of a job given as its columns through the writer thread: a future of ``(job, created)``
@@ -131,15 +192,11 @@ class JobRepository:
             return None
         return self.writer.create(_record(values))
 
-    def get(self, job_id: uuid.UUID, *, brief: bool = False) -> Any:
-        """The job; ``brief`` leaves out the input and the result (a status read must not load
-        and decode a result of many megabytes that it does not show), and is read as a Core row (its columns by
-        attribute, as on the model) without an ORM instance."""
-        if brief:
-            with self.sessions.kw["bind"].connect() as connection:
-                return connection.execute(BRIEF_BY_ID, {"job_id": job_id}).first()
-        with self.sessions() as session:
-            return session.get(Job, job_id)
+    def get(self, job_id: uuid.UUID, *, brief: bool = False) -> JobRecord | None:
+        """The job; ``brief`` leaves out the input and the result (see :class:`JobRecord`)."""
+        with self.sessions.kw["bind"].connect() as connection:
+            row = connection.execute(BRIEF_BY_ID if brief else FULL_BY_ID, {"job_id": job_id}).first()
+        return JobRecord.of(row, complete=not brief) if row is not None else None
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The columns an event stream watches, read by primary key (no input, result or report)."""
@@ -167,9 +224,10 @@ class JobRepository:
                     found[row[0]] = JobState(*row)
         return list(found.values())
 
-    def get_by_idempotency_key(self, key: str) -> Job | None:
-        with self.sessions() as session:
-            return session.scalars(select(Job).where(Job.idempotency_key == key)).first()
+    def get_by_idempotency_key(self, key: str) -> JobRecord | None:
+        with self.sessions.kw["bind"].connect() as connection:
+            row = connection.execute(select(JOBS).where(JOBS.c.idempotency_key == key)).first()
+        return JobRecord.of(row) if row is not None else None
 
     def list(
         self,
@@ -181,13 +239,12 @@ class JobRepository:
         owner: str | None = None,
         text: str | None = None,
         brief: bool = False,
-    ) -> list[Job]:
+    ) -> list[JobRecord]:
         """Newest first; ``after`` is the (created_at, id) of the last job of the previous page; ``owner``
         None lists every tenant's jobs; ``text`` keeps jobs whose id, kind, progress message or report
         contains it (case-insensitive); ``brief`` leaves out inputs and results."""
-        query = select(Job).order_by(Job.created_at.desc(), Job.id.desc()).limit(limit)
-        if brief:
-            query = query.options(*BRIEF)
+        query = select(*(BRIEF_COLUMNS if brief else JOBS.columns)).order_by(Job.created_at.desc(), Job.id.desc()) \
+            .limit(limit)
         if text:
             query = query.where(_contains_text(text))
         if owner is not None:
@@ -201,8 +258,8 @@ class JobRepository:
             query = query.where(
                 or_(Job.created_at < created, and_(Job.created_at == created, Job.id < last_id))
             )
-        with self.sessions() as session:
-            return list(session.scalars(query))
+        with self.sessions.kw["bind"].connect() as connection:
+            return [JobRecord.of(row, complete=not brief) for row in connection.execute(query)]
 
     def count_by_status(self, owner: str | None = None) -> dict[str, int]:
         query = select(Job.status, func.count()).group_by(Job.status)
@@ -332,11 +389,13 @@ class JobRepository:
             return True
 
     def finish_failure(self, job_id: uuid.UUID, attempt: int, *, report: Any, run_seconds: float | None,
-                       attempts: list | None = None) -> bool:
+                       attempts: list | None = None, lapsed_before: datetime | None = None) -> bool:
+        """Fail the attempt (fenced); with ``lapsed_before``, only while its lease lapsed before that time."""
         extra = {} if attempts is None else {"attempts": attempts}
         return self._fenced(
             job_id,
             attempt,
+            lapsed_before,
             status=FAIL.target,
             report=report,
             finished_at=utcnow(),
@@ -346,15 +405,15 @@ class JobRepository:
         )
 
     def requeue(self, job_id: uuid.UUID, attempt: int, *, report: Any, attempts: list | None = None,
-                grant_attempt: bool = False) -> bool:
+                grant_attempt: bool = False, lapsed_before: datetime | None = None) -> bool:
         """Give a crashed attempt's job back to the queue (the caller enqueues it again). ``grant_attempt``
         adds one attempt to the cap: for a result that waits on disk, whose storing must not be refused
         because the attempt that computed it was the last."""
         extra: dict[str, Any] = {} if attempts is None else {"attempts": attempts}
         if grant_attempt:
             extra["max_attempts"] = Job.max_attempts + 1
-        return self._fenced(job_id, attempt, status=REQUEUE.target, report=report, lease_until=None, worker=None,
-                            **extra)
+        return self._fenced(job_id, attempt, lapsed_before, status=REQUEUE.target, report=report, lease_until=None,
+                            worker=None, **extra)
 
     def extend_leases(self, lease_seconds: float) -> int:
         """Give every running attempt a full lease from now (after the database was away, so that no
@@ -362,10 +421,6 @@ class JobRepository:
         until = utcnow() + timedelta(seconds=lease_seconds)
         return self._execute(update(JOBS).where(JOBS.c.status == RUNNING, JOBS.c.lease_until < until)
                              .values(lease_until=until))
-
-    def record_attempt(self, job_id: uuid.UUID, attempt: int, attempts: list) -> bool:
-        """The attempts history of a running attempt (e.g. a result waiting to be stored)."""
-        return self._fenced(job_id, attempt, attempts=attempts)
 
     # ---- user actions and housekeeping -----------------------------------------------------
 
@@ -384,45 +439,25 @@ class JobRepository:
             job = session.get(Job, job_id)
             return job.status if job is not None else None
 
-    def sweep(self, *, requeue_queued_after: float, report_for_lost,
-              result_waiting: Callable[[uuid.UUID], bool] = lambda job_id: False) -> SweepOutcome:
-        """Re-queue running jobs whose lease lapsed (their worker is gone), fail those that have
-        used up their attempts (unless ``result_waiting``: a computed result waits to be stored, which
-        gets one more attempt), and re-enqueue queued jobs whose message may have been lost."""
-        now = utcnow()
-        requeued: list[uuid.UUID] = []
-        failed: list[uuid.UUID] = []
-        with self.sessions() as session:
-            lapsed = session.execute(
-                select(Job.id, Job.attempt, Job.max_attempts, Job.report, Job.attempts, Job.worker,
-                       Job.heartbeat_at).where(Job.status == RUNNING, Job.lease_until < now)
-            ).all()
-        for job_id, attempt, max_attempts, report, history, worker, beat in lapsed:
-            if attempt >= max_attempts and result_waiting(job_id):
-                max_attempts = attempt + 1
-            lost = report_for_lost(attempt, max_attempts, report)
-            earlier = [h for h in (history or []) if h.get("attempt") != attempt]
-            same = next((h for h in (history or []) if h.get("attempt") == attempt), {})
-            history = earlier + [{
-                **same, "attempt": attempt, "worker": worker, "finished_at": now.isoformat(),
-                "outcome": "lost" if same.get("outcome") != "result_pending" else "result_pending",
-                "error": f"no heartbeat since {as_utc(beat).isoformat() if beat else 'the start'}"}]
-            if attempt >= max_attempts:
-                if self._fenced_lapsed(job_id, attempt, now, status=FAIL.target, report=lost, finished_at=now,
-                                       lease_until=None, attempts=history):
-                    failed.append(job_id)
-            elif self._fenced_lapsed(job_id, attempt, now, status=REQUEUE.target, report=lost, lease_until=None, worker=None,
-                                     attempts=history, max_attempts=max_attempts):
-                requeued.append(job_id)
-        stale = now - timedelta(seconds=requeue_queued_after)
-        with self.sessions() as session:
-            waiting = session.execute(
-                select(Job.id, Job.enqueued_at).where(
-                    Job.status == QUEUED, or_(Job.enqueued_at.is_(None), Job.enqueued_at < stale)
-                ).order_by(Job.enqueued_at.is_not(None), Job.created_at).limit(SWEEP_BATCH)
-            ).all()
-        return SweepOutcome(requeued=requeued, failed=failed,
-                            waiting=[(job_id, sent is not None) for job_id, sent in waiting if job_id not in requeued])
+    def lapsed(self, now: datetime) -> list["LapsedAttempt"]:
+        """Running attempts whose lease lapsed before ``now`` (their worker stopped heartbeating). The lease policy
+        (:mod:`plantsolve.jobs.leases`) decides what becomes of each."""
+        with self.sessions.kw["bind"].connect() as connection:
+            rows = connection.execute(
+                select(JOBS.c.id, JOBS.c.kind, JOBS.c.attempt, JOBS.c.max_attempts, JOBS.c.attempts, JOBS.c.worker,
+                       JOBS.c.heartbeat_at).where(JOBS.c.status == RUNNING, JOBS.c.lease_until < now)).all()
+        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat))
+                for job_id, kind, attempt, max_attempts, history, worker, beat in rows]
+
+    def unsent(self, *, sent_before: datetime, limit: int = 1000) -> list[tuple[uuid.UUID, bool]]:
+        """Queued jobs whose message never reached the broker, or reached it before ``sent_before``: ``(id, reached
+        the broker)``, never sent first, then the oldest."""
+        with self.sessions.kw["bind"].connect() as connection:
+            rows = connection.execute(
+                select(JOBS.c.id, JOBS.c.enqueued_at).where(
+                    JOBS.c.status == QUEUED, or_(JOBS.c.enqueued_at.is_(None), JOBS.c.enqueued_at < sent_before)
+                ).order_by(JOBS.c.enqueued_at.is_not(None), JOBS.c.created_at).limit(limit)).all()
+        return [(job_id, sent is not None) for job_id, sent in rows]
 
     def count_queued(self) -> int:
         with self.sessions() as session:
@@ -431,10 +466,6 @@ class JobRepository:
     def clear_enqueued(self, job_id: uuid.UUID) -> None:
         """The message never reached the broker: the next sweep sends it."""
         self._execute(update(JOBS).where(JOBS.c.id == job_id).values(enqueued_at=None))
-
-    def queued_ids(self, limit: int | None = None) -> list[uuid.UUID]:
-        """Queued jobs that a worker can claim, oldest first."""
-        return [job_id for job_id, _ in self.queued_jobs(limit)]
 
     def queued_jobs(self, limit: int | None = None) -> list[tuple[uuid.UUID, str]]:
         """``(id, kind)`` of the queued jobs that a worker can claim, oldest first (the kind spares the caller a
@@ -484,11 +515,11 @@ class JobRepository:
         # table: an ORM-enabled UPDATE costs several times its own write in statement building and session sync
         return update(JOBS).where(JOBS.c.id == job_id, JOBS.c.attempt == attempt, JOBS.c.status == RUNNING)
 
-    def _fenced(self, job_id: uuid.UUID, attempt: int, **values: Any) -> bool:
-        return self._execute(self._fence(job_id, attempt).values(**values)) == 1
-
-    def _fenced_lapsed(self, job_id: uuid.UUID, attempt: int, now: datetime, **values: Any) -> bool:
-        return self._execute(self._fence(job_id, attempt).where(JOBS.c.lease_until < now).values(**values)) == 1
+    def _fenced(self, job_id: uuid.UUID, attempt: int, lapsed_before: datetime | None = None, **values: Any) -> bool:
+        statement = self._fence(job_id, attempt)
+        if lapsed_before is not None:  # a sweeper's write: only while no heartbeat renewed the lease meanwhile
+            statement = statement.where(JOBS.c.lease_until < lapsed_before)
+        return self._execute(statement.values(**values)) == 1
 
     def _execute(self, statement) -> int:
         with self.writing(), self._core() as connection:
@@ -497,11 +528,7 @@ class JobRepository:
 
 JOBS = Job.__table__
 ARTIFACTS = Artifact.__table__
-# queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
-# sweeps instead of loaded whole every time
-SWEEP_BATCH = 1000
 STATE = (Job.id, Job.kind, Job.status, Job.attempt, Job.progress, Job.progress_message)
-BRIEF = (defer(Job.input, raiseload=True), defer(Job.input_options, raiseload=True), defer(Job.result, raiseload=True))
 
 
 def _contains_text(text: str):
@@ -529,8 +556,9 @@ COLUMN_KEYS = tuple(column.key for column in JOBS.columns)
 COLUMN_DEFAULTS = tuple((column.key, _default(column)) for column in JOBS.columns if column.default is not None)
 INSERT_JOB = JOBS.insert()
 # the columns a job's view shows: all but the input and the result
-BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in ("input", "input_options", "result"))
+BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in LEFT_OUT_OF_BRIEF)
 BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
+FULL_BY_ID = select(JOBS).where(JOBS.c.id == bindparam("job_id"))
 
 
 def _record(values: dict[str, Any]) -> dict[str, Any]:
@@ -542,14 +570,3 @@ def _record(values: dict[str, Any]) -> dict[str, Any]:
         if record[name] is None:
             record[name] = default()
     return record
-
-
-class JobRecord(SimpleNamespace):
-    """A job's columns by attribute, as the model has them, without an ORM instance: a job as submitted."""
-
-
-def _apply_defaults(job: Job) -> None:
-    """Fill the columns' Python-side defaults that the ORM would have applied on flush."""
-    for name, default in COLUMN_DEFAULTS:
-        if getattr(job, name) is None:
-            setattr(job, name, default())

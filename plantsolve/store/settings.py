@@ -38,6 +38,15 @@ class StoreSettings(BaseSettings):
         "or a shared volume), 'postgres' (a table in the jobs' database), 's3' (S3_BUCKET). Unset: 'postgres' when "
         "DATABASE_URL is PostgreSQL, else 'local'.",
     )
+    database_wait_seconds: float = Field(
+        default=3.0, gt=0, le=60,
+        description="How long a write waits for the database before the request answers 503: SQLite's busy timeout "
+        "(a file another process holds locked) and this process's write lock; PostgreSQL's connect timeout, lock "
+        "timeout and pooled-connection checkout.")
+    database_statement_seconds: float = Field(
+        default=10.0, gt=0, le=600,
+        description="PostgreSQL: how long one statement may run (statement_timeout) and data may wait unacknowledged "
+        "on a dead link (tcp_user_timeout), so a black-holed database answers 503 in seconds.")
     s3_bucket: str | None = Field(default=None, description="BLOB_STORE=s3: the bucket (it must exist).")
     s3_endpoint_url: str | None = Field(
         default=None, description="BLOB_STORE=s3: the server's URL when it is not AWS (MinIO, Ceph, Garage …).")

@@ -45,7 +45,7 @@ SQLITE_BUSY = 5
 class JobWriter:
     """Inserts job rows (complete column dicts) from one thread, in one transaction per batch of waiting rows.
 
-    ``find_by_key(key)`` looks up the job holding an idempotency key (for a row whose key was taken); ``made(**row)``
+    ``find_by_key(key)`` looks up the job holding an idempotency key (for a row whose key was taken); ``made(row)``
     is what a stored row is answered as."""
 
     def __init__(self, engine: Engine, table: Table, writing: Callable[[], AbstractContextManager],
@@ -65,7 +65,7 @@ class JobWriter:
         self._unwaiting = None  # see _unwaiting_connection
 
     def create(self, record: dict[str, Any]) -> Future:
-        """Write a row: the future answers ``(made(**record), True)`` once it is committed, ``(existing job, False)``
+        """Write a row: the future answers ``(made(record), True)`` once it is committed, ``(existing job, False)``
         when its idempotency key was taken, or raises what the write raised.
 
         When no other write is under way or waiting, the row is written at once on the calling thread and the future
@@ -75,7 +75,7 @@ class JobWriter:
         thread as any other."""
         future: Future = Future()
         if self._queue.empty() and self._write_now(record):
-            future.set_result((self.made(**record), True))
+            future.set_result((self.made(record), True))
             return future
         if self._thread is None:
             self._start()
@@ -206,7 +206,7 @@ class JobWriter:
                 future.set_exception(error)
             return
         for record, future in batch:
-            future.set_result((self.made(**record), True))
+            future.set_result((self.made(record), True))
 
     def _write_one_by_one(self, batch: list[tuple[dict, Future]]) -> None:
         """Each row in its own transaction: the rows whose key is free are stored, a taken key answers its job."""
@@ -215,7 +215,7 @@ class JobWriter:
                 try:
                     with self.writing(), self.engine.begin() as connection:
                         connection.exec_driver_sql(self.sql, [self._row(record)])
-                    outcome = (self.made(**record), True)
+                    outcome = (self.made(record), True)
                 except IntegrityError:
                     key = record.get("idempotency_key")
                     existing = self.find_by_key(key) if key is not None else None

@@ -11,8 +11,13 @@ import logging
 import threading
 import uuid
 
+from contextlib import contextmanager
+from functools import cached_property
+
 from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
+from kombu.transport.redis import Channel as RedisChannel
+from kombu.transport.redis import Transport as RedisTransport
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
@@ -24,10 +29,33 @@ from plantsolve.workers.sweeper import Sweeper
 log = logging.getLogger("plantsolve.celery")
 
 
-def create_celery(settings: JobSettings) -> Celery:
+class _PublishingChannel(RedisChannel):
+    """A Redis channel that publishes through one client of its connection pool: kombu's own builds a new client
+    object for each message (``conn_or_acquire``), which costs a submission more than its database write."""
+
+    @cached_property
+    def _publisher(self):
+        return self._create_client()
+
+    @contextmanager
+    def conn_or_acquire(self, client=None):
+        yield client or self._publisher
+
+
+class PublishingTransport(RedisTransport):
+    """The Redis transport with :class:`_PublishingChannel`: the API's (it only publishes)."""
+
+    Channel = _PublishingChannel
+
+
+def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
+    """The Celery app; ``publisher``: a process that only sends tasks (the API), whose Redis messages go out
+    through one client per pooled channel (:class:`PublishingTransport`)."""
     longest = max((float(settings.time_limits.get(spec.kind, spec.time_limit))
                    for spec in load_kinds(settings.plugins).values()), default=660.0)
     app = Celery("plantsolve", broker=settings.broker_url)
+    if publisher and (settings.broker_url or "").split("://", 1)[0] in ("redis", "rediss"):
+        app.conf.broker_transport = f"{__name__}:PublishingTransport"
     app.conf.update(
         task_acks_late=True,
         task_reject_on_worker_lost=True,
@@ -51,7 +79,7 @@ class CeleryDispatcher:
 
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
-        self.celery = create_celery(ctx.settings)
+        self.celery = create_celery(ctx.settings, publisher=True)
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:

@@ -1,31 +1,38 @@
-"""The embedded default: job processes that the API process starts and supervises.
+"""The embedded default: one process per job, forked from a warm parent that has every kind imported.
 
-The API process never computes: each job runs in a worker process of a ``pebble`` pool (spawned,
-each with its own database connection), through the same :func:`run_job` as Celery workers, with
-the same claim and fencing. The pool kills a worker at the kind's hard time limit (the job is then
-failed with a report) and replaces dead workers; a worker that dies otherwise (out of memory, a
-crash in native code) loses its lease and the sweeper re-queues the job. Readers never wait on a
-solver: solvers write only through short fenced updates from their own processes.
+The API process never computes. Its supervisor thread hands each job to a new process forked from the
+warm parent (``multiprocessing``'s forkserver, started once with every kind's modules imported), so a job
+starts in milliseconds and shares the imported code with its parent instead of holding its own copy. There
+is no pool to break: a process that dies (killed, out of memory, a crash in native code) ends its job's
+attempt at once (:func:`plantsolve.jobs.leases.process_died`: re-queued until the attempt cap, then failed)
+and the next job gets a new process; a dead warm parent is started again (its imports cost seconds, during
+which ``/readyz`` says no job can start). The supervisor kills a process at its kind's hard time limit (the job
+is then failed with a report). Each process runs :func:`run_job` with its own database connection, the same
+claim and fencing as a Celery worker.
 """
 
 from __future__ import annotations
 
+import gc
 import logging
 import multiprocessing
 import os
+import signal
+import socket
 import threading
 import time
 import uuid
-from concurrent.futures import CancelledError
-from concurrent.futures import TimeoutError as FutureTimeout
-from functools import partial
-
-from pebble import ProcessExpired, ProcessPool
+from collections import deque
+from dataclasses import dataclass
+from multiprocessing.connection import Connection, wait
+from pathlib import Path
+from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
-from plantsolve.jobs.leases import resume
+from plantsolve.jobs.leases import process_died, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
+from plantsolve.solvers.base import SolverSpec
 from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
 
@@ -35,168 +42,333 @@ log = logging.getLogger("plantsolve.processes")
 HARD_LIMIT_GRACE = 5.0
 # how long a stop waits for the job processes to end after the running jobs were handed back
 STOP_SECONDS = 5.0
+# how often the supervisor looks at the warm parent and the deadlines when no process ends meanwhile
+TICK_SECONDS = 0.5
+# the wait before starting a process again after a start failed (the warm parent was away)
+RETRY_SECONDS = 1.0
 
-_worker_ctx: ServiceContext | None = None
+_warm = multiprocessing.get_context("forkserver")
 
 
-PARENT_WATCH_SECONDS = 0.5
+def warm_modules(kinds: Iterable[SolverSpec], plugins: Iterable[str]) -> list[str]:
+    """What the warm parent imports before its first fork: this module (which limits the numeric libraries to one
+    thread each before they load), the plugins, and every function of every kind."""
+    modules = [__name__, "plantsolve.jobs.intake", *plugins]
+    modules += [module for spec in kinds for module in spec.modules()]
+    return list(dict.fromkeys(modules))
 
 
-def _die_with_parent(parent: int) -> None:
-    """End this job process as soon as its parent (the service that supervises it) is gone: a job
-    process nobody supervises must not go on and write a result after the service was killed (the
-    job's lease lapses and the next service re-queues it). An orphan is re-parented, so its parent
-    pid changes; a daemon thread watches for that."""
+# Imported first in the warm parent (see warm_modules): its forks compute one job each, side by side with the API
+# process, so each numeric library may use one thread.
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
+
+def _watch_parent() -> None:
+    """End this job process as soon as the service that supervises it is gone: a job process nobody supervises
+    must not go on and write a result after the service was killed (the job's lease lapses and the next service
+    re-queues it). The parent's end of a pipe closes when it dies; a daemon thread waits for that."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
+        return
+
     def watch() -> None:
-        while True:
-            time.sleep(PARENT_WATCH_SECONDS)
-            if os.getppid() != parent:
-                os._exit(70)
+        wait([parent.sentinel])
+        os._exit(70)
 
     threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
-def _start_worker(settings_json: str, parent: int) -> None:
-    """Initializer of each worker process: its own settings object and database connections, and every kind's
-    solver imported before the first job."""
-    global _worker_ctx
-    _die_with_parent(parent)
-    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(name, "1")
+def _job_process(settings_json: str, job_id: str, sender: Connection) -> None:
+    """One job in its own process: the outcome goes back through ``sender`` (a process that ends without sending
+    one died)."""
+    # the objects inherited from the warm parent are never collected here: a collection would write to their
+    # pages and copy them into this process
+    gc.freeze()
+    _watch_parent()
     settings = JobSettings.model_validate_json(settings_json)
-    # a solver must never slow down the API process that shares this machine with it
-    os.nice(settings.job_niceness)
     configure_logging(settings.log_format, settings.log_level)
-    _worker_ctx = ServiceContext.create(settings)
-    _worker_ctx.preload()
+    ctx = ServiceContext.create(settings)
+    try:
+        requeued: list[str] = []
+        # A solver must never slow down the API process that shares this machine with it: yielded from the claim on
+        # (before it, at the API's priority, so that a job starts at once on a busy machine).
+        outcome = run_job(ctx, uuid.UUID(job_id), worker=worker_name("process"), hard_limit_in_thread=False,
+                          requeue=lambda jid, kind="": requeued.append(str(jid)),
+                          on_claim=lambda: os.nice(settings.job_niceness))
+    finally:
+        ctx.close()
+    sender.send("requeued" if requeued else outcome)
 
 
-def _run(job_id: str) -> str:
-    """One delivery in a worker process; a re-queued job is handed back to the pool by the parent."""
-    requeued: list[str] = []
-    outcome = run_job(_worker_ctx, uuid.UUID(job_id), worker=worker_name("process"),
-                      requeue=lambda jid, kind="": requeued.append(str(jid)), hard_limit_in_thread=False)
-    return "requeued" if requeued else outcome
+def _parent_pid(sender: Connection) -> None:
+    """A fork that says which process it was forked from: the warm parent, once its imports are done."""
+    sender.send(os.getppid())
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie does not: it died and waits to be reaped)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+@dataclass
+class _Running:
+    job_id: uuid.UUID
+    process: multiprocessing.process.BaseProcess
+    receiver: Connection
+    worker: str
+    deadline: float | None
+    killed_at_limit: bool = False
 
 
 class ProcessDispatcher:
-    """Job ids go to a supervised pool of worker processes (``EMBEDDED_WORKERS`` of them)."""
+    """Job ids go to processes forked from the warm parent, at most ``EMBEDDED_WORKERS`` at once."""
 
     in_process = True  # enqueue hands the id over in memory and returns at once
 
     def __init__(self, ctx: ServiceContext, workers: int | None = None):
         self.ctx = ctx
         self.size = workers or ctx.settings.embedded_workers
-        # Jobs handed to the pool at once. The database is this dispatcher's queue: beyond the window a
-        # job stays queued in its row and is pulled when a process frees up, so a backlog of thousands
-        # costs the API process no memory (and no garbage-collector pauses) for pool tasks.
+        # Jobs held in memory (running or next in line). The database is this dispatcher's queue: beyond the window a
+        # job stays queued in its row and is pulled when a process frees up, so a backlog of thousands costs the API
+        # process no memory.
         self.window = max(4, 2 * self.size)
-        self._pool: ProcessPool | None = None
-        self._pending: set[uuid.UUID] = set()
+        self._running: dict[uuid.UUID, _Running] = {}
+        self._waiting: deque[tuple[uuid.UUID, str]] = deque()
+        self._starting: uuid.UUID | None = None  # taken from the line, its process not started yet
         self._lock = threading.Lock()
-        self._stopping = False
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_w, False)
+        self._stopping = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._warm_parent: int | None = None  # its pid once a fork has come back from it
+        self._start_failed: str | None = None
         # Whether a job may wait in its row beyond the window: set when an enqueue found the window full, cleared by a
-        # refill that found no more. A finished job refills from the database only then: with nothing waiting, a
-        # read per finished job would cost the API process more than the job's hand-over. The sweeper's pass
-        # refills regardless (jobs queued by another process, or re-queued by the sweep itself).
+        # refill that found no more. A finished job refills from the database only then; the sweeper's pass refills
+        # regardless (jobs queued by another process, or re-queued by the sweep itself).
         self._overflow = True
-        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=partial(self._refill, always=True))
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=lambda: self._refill(always=True))
+        settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
+        self._settings_json = settings.model_dump_json()
+        # before anything starts the forkserver (the upload readers share it): it imports all a job needs
+        _warm.set_forkserver_preload(warm_modules(ctx.kinds.values(), ctx.settings.plugins))
+
+    # ---- the dispatcher protocol ----------------------------------------------------------------
 
     def start(self) -> None:
-        self._stopping = False
-        settings = JobSettings.model_validate(self.ctx.settings.model_dump(include=set(JobSettings.model_fields)))
-        self._pool = ProcessPool(max_workers=self.size, initializer=_start_worker,
-                                 initargs=(settings.model_dump_json(), os.getpid()), context=multiprocessing.get_context("spawn"))
+        self._stopping.clear()
+        self._thread = threading.Thread(target=self._supervise, name="job-supervisor", daemon=True)
+        self._thread.start()
         resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
     def stop(self) -> None:
-        """Drain: stop taking jobs, hand the running ones back to the queue (their attempt not counted:
-        the service stopped, the job did not fail), then end the job processes (within ``STOP_SECONDS``).
-        Jobs waiting for a process stay queued in the database; the next start resumes them all."""
-        self._stopping = True
+        """Drain: stop taking jobs, hand the running ones back to the queue (their attempt not counted: the service
+        stopped, the job did not fail), then end their processes (within ``STOP_SECONDS``). Jobs waiting for a
+        process stay queued in the database; the next start resumes them all."""
+        self._stopping.set()
         self._sweeper.stop()
+        self._wake()
+        if self._thread is not None:
+            self._thread.join(timeout=STOP_SECONDS)
+            self._thread = None
         with self._lock:
-            running = list(self._pending)
-        for job_id in running:
+            running = list(self._running.values())
+            self._running.clear()
+            self._waiting.clear()
+        for child in running:
             try:
-                handed_back(self.ctx, job_id)
+                handed_back(self.ctx, child.job_id)
             except Exception:  # the database is away: the lease lapses and the next start re-queues it
-                log.warning("job %s: could not be handed back at stop", job_id, exc_info=True)
-        if self._pool is not None:
-            self._pool.stop()
-            self._pool.join(timeout=STOP_SECONDS)
-            self._pool = None
+                log.warning("job %s: could not be handed back at stop", child.job_id, exc_info=True)
+        for child in running:
+            if child.process.pid is not None:
+                try:
+                    os.kill(child.process.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+        until = time.monotonic() + STOP_SECONDS
+        for child in running:
+            child.process.join(max(0.0, until - time.monotonic()))
+            child.receiver.close()
 
     def ping(self) -> None:
-        if self._pool is None or not self._pool.active:
-            raise RuntimeError("the job process pool is not running")
+        """Raises when no job can start now: the supervisor is not running, or the warm parent is not (yet) up."""
+        if self._thread is None or not self._thread.is_alive():
+            raise RuntimeError("the job supervisor is not running")
+        if self._warm_parent is None or not _alive(self._warm_parent):
+            raise RuntimeError("the job processes' warm parent is starting")
+        if self._start_failed is not None:
+            raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
 
     def in_flight(self) -> int:
-        """Jobs handed to the pool and not finished (at most ``window``)."""
+        """Jobs running or next in line in memory (at most ``window``)."""
         with self._lock:
-            return len(self._pending)
+            return len(self._held())
+
+    def _held(self) -> set[uuid.UUID]:
+        """The jobs in hand (under the lock): running, starting, next in line."""
+        return {*self._running, *(j for j, _ in self._waiting), *([self._starting] if self._starting else [])}
+
+    def running(self) -> dict[uuid.UUID, int]:
+        """The process id of each running job."""
+        with self._lock:
+            return {job_id: child.process.pid for job_id, child in self._running.items()}
 
     def pending(self) -> int:
         """Queued jobs this dispatcher holds: all of them, since it pulls them from the database."""
         return self.ctx.repo.count_queued()
 
     def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
-        if self._pool is None:
-            raise RuntimeError("the job process pool is not running")
+        if self._thread is None or self._stopping.is_set():
+            raise RuntimeError("the job supervisor is not running")
         with self._lock:
-            if job_id in self._pending:
-                return  # handed to the pool already
-            if len(self._pending) >= self.window:
+            held = self._held()
+            if job_id in held:
+                return  # in hand already
+            if len(held) >= self.window:
                 self._overflow = True
                 return  # waiting in its row until a process frees up (_refill)
-            self._pending.add(job_id)
-        spec = self.ctx.spec(kind) if kind else None
-        if spec is None:
-            job = self.ctx.repo.get(job_id)
-            spec = self.ctx.spec(job.kind) if job is not None else None
-        timeout = self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
-        future = self._pool.schedule(_run, args=(str(job_id),), timeout=timeout)
-        future.add_done_callback(partial(self._done, job_id))
+            self._waiting.append((job_id, kind))
+        self._wake()
 
-    def _done(self, job_id: uuid.UUID, future) -> None:
-        with self._lock:
-            self._pending.discard(job_id)
-        if self._stopping:
-            return
-        try:
-            self._outcome(job_id, future)
-        finally:
-            self._refill()
+    # ---- the supervisor thread -----------------------------------------------------------------
 
-    def _outcome(self, job_id: uuid.UUID, future) -> None:
+    def _wake(self) -> None:
         try:
-            outcome = future.result()
-        except FutureTimeout:  # the pool killed the worker at the hard limit
-            if fail_killed_at_hard_limit(self.ctx, job_id):
-                log.warning("job %s killed at its hard time limit", job_id)
-            return
-        except ProcessExpired as error:  # the worker died: its lease lapses, the sweeper re-queues
-            log.error("job %s: worker process died (%s)", job_id, error)
-            return
-        except CancelledError:
-            return
-        except Exception:  # the pool must survive anything a job does
-            log.exception("job %s: runner error", job_id)
-            return
-        if outcome == "requeued":
+            os.write(self._wake_w, b"x")
+        except BlockingIOError:  # a wake-up is pending already
+            pass
+
+    def _supervise(self) -> None:
+        self._warm_up()
+        while not self._stopping.is_set():
             try:
-                self.enqueue(job_id)
-            except RuntimeError:  # stopping: the next start (or the sweeper) picks it up
-                pass
+                self._launch()
+                with self._lock:
+                    watched = {child.receiver: child for child in self._running.values()}
+                ready = wait([*watched, self._wake_r], timeout=TICK_SECONDS if self._start_failed is None
+                             else RETRY_SECONDS)
+                if self._wake_r in ready:
+                    os.read(self._wake_r, 4096)
+                ended = [watched[r] for r in ready if r in watched]
+                for child in ended:
+                    self._ended(child)
+                self._enforce_deadlines()
+                if self._warm_parent is not None and not _alive(self._warm_parent):
+                    log.error("the job processes' warm parent died; starting it again")
+                    self._warm_parent = None
+                    self._warm_up()
+                if ended:
+                    self._refill()
+            except Exception:  # the supervisor must survive anything
+                log.exception("job supervisor error")
+                self._stopping.wait(RETRY_SECONDS)
+
+    def _warm_up(self) -> None:
+        """Fork once from the warm parent (starting it, which imports every kind, when it is not running) and
+        learn its pid: from then on a job starts in milliseconds."""
+        while not self._stopping.is_set():
+            started = time.monotonic()
+            receiver, sender = _warm.Pipe(duplex=False)
+            try:
+                probe = _warm.Process(target=_parent_pid, args=(sender,), daemon=True, name="warm-probe")
+                probe.start()
+                sender.close()
+                self._warm_parent = receiver.recv()
+                probe.join(5)
+                self._start_failed = None
+                log.info("job processes ready: warm parent %d up in %.1f s", self._warm_parent,
+                         time.monotonic() - started)
+                return
+            except Exception as error:
+                self._start_failed = type(error).__name__
+                log.error("the job processes' warm parent could not be started (%s); trying again", error)
+                self._stopping.wait(RETRY_SECONDS)
+            finally:
+                receiver.close()
+
+    def _launch(self) -> None:
+        """Start a process for each job next in line while fewer than ``size`` run. A job is recorded as running
+        only once its process started; one whose start failed goes back to the head of the line."""
+        while not self._stopping.is_set():
+            with self._lock:
+                if len(self._running) >= self.size or not self._waiting:
+                    return
+                job_id, kind = self._waiting.popleft()
+                self._starting = job_id
+            spec = self.ctx.spec(kind) if kind else None
+            if spec is None:
+                job = self.ctx.repo.get(job_id, brief=True)
+                spec = self.ctx.spec(job.kind) if job is not None else None
+            receiver, sender = _warm.Pipe(duplex=False)
+            try:
+                process = _warm.Process(target=_job_process, daemon=True, name=f"job-{job_id}",
+                                        args=(self._settings_json, str(job_id), sender))
+                process.start()
+            except Exception as error:
+                receiver.close()
+                with self._lock:
+                    self._waiting.appendleft((job_id, kind))
+                    self._starting = None
+                self._start_failed = type(error).__name__
+                log.error("job %s: its process could not be started (%s); trying again", job_id, error)
+                return
+            finally:
+                sender.close()
+            self._start_failed = None
+            deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
+            with self._lock:
+                self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline)
+                self._starting = None
+
+    def _ended(self, child: _Running) -> None:
+        try:
+            outcome = child.receiver.recv()
+        except (EOFError, OSError):
+            outcome = None  # it died without a word
+        child.receiver.close()
+        child.process.join(1.0)
+        if child.process.exitcode is None:
+            child.process.kill()
+            child.process.join(1.0)
+        with self._lock:
+            self._running.pop(child.job_id, None)
+        if self._stopping.is_set():
+            return
+        if child.killed_at_limit:
+            if fail_killed_at_hard_limit(self.ctx, child.job_id, worker=child.worker):
+                log.warning("job %s killed at its hard time limit", child.job_id)
+            return
+        if outcome is None:
+            fate = process_died(self.ctx, child.job_id, child.worker, child.process.exitcode)
+            log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
+                      child.process.exitcode, fate)
+            if fate in ("requeued", "queued"):
+                self.enqueue(child.job_id)
+        elif outcome == "requeued":
+            self.enqueue(child.job_id)
+
+    def _enforce_deadlines(self) -> None:
+        now = time.monotonic()
+        with self._lock:
+            overdue = [c for c in self._running.values() if c.deadline is not None and now > c.deadline
+                       and not c.killed_at_limit]
+        for child in overdue:
+            child.killed_at_limit = True
+            child.process.kill()
 
     def _refill(self, always: bool = False) -> None:
-        """Hand the oldest queued jobs to the pool until the window is full again (after a finished job only when
-        some may be waiting beyond the window: see ``_overflow``)."""
+        """Take the oldest queued jobs into the window until it is full again (after a finished job only when some
+        may be waiting beyond the window: see ``_overflow``)."""
         with self._lock:
-            free = self.window - len(self._pending)
-            held = set(self._pending)
-            if free <= 0 or self._stopping or not (always or self._overflow):
+            held = self._held()
+            free = self.window - len(held)
+            if free <= 0 or self._stopping.is_set() or not (always or self._overflow):
                 return
             # cleared before the read: an enqueue that overflows after it sets it again (its row is committed before
             # the enqueue, so a read after the clear sees it either way)
@@ -208,7 +380,12 @@ class ProcessDispatcher:
                 self._overflow = True
             for job_id, kind in waiting[:free]:
                 self.enqueue(job_id, kind)
-        except Exception:  # the database is away (or the pool is stopping): the next pass refills
+        except Exception:  # the database is away (or the dispatcher is stopping): the next pass refills
             self._overflow = True
-            if not self._stopping:
-                log.warning("refilling the job pool failed", exc_info=True)
+            if not self._stopping.is_set():
+                log.warning("refilling the job processes failed", exc_info=True)
+
+
+def worker_of(pid: int) -> str:
+    """The worker name job process ``pid`` gives itself (:func:`plantsolve.jobs.context.worker_name`)."""
+    return f"process@{socket.gethostname()}:{pid}"

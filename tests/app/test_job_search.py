@@ -8,12 +8,9 @@ import uuid
 import pytest
 
 from plantsolve.store import Database, JobRepository
-from plantsolve.store.models import Job
-
-
-def _job(kind: str, message: str, report: dict | None = None, owner: str = "") -> Job:
-    return Job(id=uuid.uuid4(), kind=kind, status="succeeded", progress_message=message, report=report, owner=owner,
-               body_hash="0" * 64, solver_version="1", input={"secret": "not searched"})
+def _job(kind: str, message: str, report: dict | None = None, owner: str = "") -> dict:
+    return dict(id=uuid.uuid4(), kind=kind, status="succeeded", progress_message=message, report=report, owner=owner,
+                body_hash="0" * 64, solver_version="1", input={"secret": "not searched"})
 
 
 def _check_search(db: Database) -> None:
@@ -23,8 +20,7 @@ def _check_search(db: Database) -> None:
         {"code": "pressure_fit_poor", "message": "Setting theta=0: misses by 2.26%", "details": {}}]})
     house = _job("polyhedra", "done", {"status": "ok", "message": "1 of 1 zone(s) closed", "warnings": []})
     other = _job("polyhedra", "Zone_B closed", None, owner="bob")
-    for job in (fan, house, other):
-        repo.create(job)
+    fan, house, other = (repo.create(job)[0] for job in (fan, house, other))
 
     mine = {fan.id, house.id, other.id}  # the PostgreSQL database is shared by the session's other tests
 

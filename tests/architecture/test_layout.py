@@ -152,3 +152,26 @@ def test_no_private_name_is_imported_from_another_module():
                 offenders += [f"{path.relative_to(REPO)}:{node.lineno} {alias.name}" for alias in node.names
                               if alias.name.startswith("_") and not alias.name.startswith("__")]
     assert not offenders, offenders
+
+
+def test_every_read_of_a_job_is_typed_as_the_one_job_record():
+    """The repository hands out one shape of job, whatever query made it, and the job domain passes it on typed."""
+    import typing
+
+    from plantsolve.jobs.service import JobService, Submitted
+    from plantsolve.store.repository import JobRecord, JobRepository
+
+    for method in (JobRepository.get, JobRepository.get_by_idempotency_key, JobRepository.list, JobRepository.create,
+                   JobService.get, JobService.cancel):
+        hint = typing.get_type_hints(method)["return"]
+        assert JobRecord in (hint, *typing.get_args(hint), *(a for arg in typing.get_args(hint)
+                                                             for a in typing.get_args(arg))), (method, hint)
+    assert typing.get_type_hints(Submitted)["job"] is JobRecord
+
+
+def test_the_store_decides_nothing_about_lost_attempts():
+    """The lease policy lives in jobs/leases.py: the repository takes no report builder or policy callback and
+    names no outcome of an attempt."""
+    source = (PACKAGE / "store" / "repository.py").read_text()
+    for word in ("report_for_lost", "result_waiting", '"lost"', '"result_pending"', "max_attempts = attempt"):
+        assert word not in source, word

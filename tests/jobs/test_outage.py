@@ -57,11 +57,11 @@ def test_the_pass_after_a_failed_one_extends_the_leases(ctx, monkeypatch):
     job_id = JobService(ctx, Recorder()).submit_json("test-compute", b'{"values": [1]}', None).job.id
     assert ctx.repo.claim(job_id, lease_seconds=0.8, worker="w") == 1
     sweeper = Sweeper(ctx, lambda *a: None)
-    sweep = ctx.repo.sweep
-    monkeypatch.setattr(ctx.repo, "sweep", _away)
+    lapsed = ctx.repo.lapsed
+    monkeypatch.setattr(ctx.repo, "lapsed", _away)
     assert not sweeper.run_pass()
     _lapse(ctx, job_id)
-    monkeypatch.setattr(ctx.repo, "sweep", sweep)
+    monkeypatch.setattr(ctx.repo, "lapsed", lapsed)
     assert sweeper.run_pass()
     assert ctx.repo.get(job_id).status == RUNNING
     _lapse(ctx, job_id)
@@ -81,7 +81,7 @@ def test_a_running_job_survives_an_outage_longer_than_its_lease_and_is_solved_on
         run_job(ctx, job_id, worker="w", requeue=lambda *a: None)))
     runner.start()
     time.sleep(0.4)
-    saved = {name: getattr(ctx.repo, name) for name in ("heartbeat", "set_progress", "sweep")}
+    saved = {name: getattr(ctx.repo, name) for name in ("heartbeat", "set_progress", "lapsed")}
     for name in saved:  # the database goes away for twice the lease
         monkeypatch.setattr(ctx.repo, name, _away)
     time.sleep(1.6)

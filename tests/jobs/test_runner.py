@@ -12,10 +12,12 @@ from datetime import timedelta
 import pytest
 from sqlalchemy import update
 
+from plantsolve.jobs.attempts import ResultPending, Stop, judge
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import sweep_once
 from plantsolve.jobs.runner import lost_worker_report, run_job
 from plantsolve.jobs.service import JobService
+from plantsolve.solvers.base import SolverError
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import StoredArtifact
 from tests.conftest import service_settings
@@ -99,7 +101,9 @@ def test_crashing_solver_retries_then_fails_with_a_report(ctx):
     report = job.report
     assert report["status"] == "failed" and report["stage"] == "solver"
     assert "division by zero" in report["message"]
-    assert [a["attempt"] for a in report["details"]["attempts"]] == [1, 2]
+    # one history, the job's: the report says what happened in words
+    assert [(a["attempt"], a["outcome"]) for a in job.attempts] == [(1, "requeued"), (2, "failed")]
+    assert "attempts" not in report["details"]
     assert "ConnectionError" not in json.dumps(report)  # class names stay in the server log
     assert run_job(ctx, job_id, worker="w", requeue=queue.enqueue) == "skipped"
 
@@ -155,15 +159,13 @@ def test_sweeper_requeues_lapsed_leases_and_fails_after_the_cap(ctx):
         sweep_once(ctx, queue.enqueue)
     job = ctx.repo.get(job_id)
     assert job.status == "failed" and job.attempt == 3 == job.max_attempts
-    assert job.report["stage"] == "worker" and len(job.report["details"]["attempts"]) == 3
+    assert job.report["stage"] == "worker" and [a["outcome"] for a in job.attempts] == ["lost"] * 3
     assert queue.enqueued.count(job_id) >= 2
 
 
-def test_lost_worker_report_keeps_history():
-    first = lost_worker_report(1, 3, None)
-    second = lost_worker_report(2, 3, first)
-    assert [a["attempt"] for a in second["details"]["attempts"]] == [1, 2]
-    assert "re-queued" in second["message"]
+def test_lost_worker_report_says_whether_the_job_goes_on():
+    assert "re-queued" in lost_worker_report(2, 3)["message"]
+    assert "each of 3 attempts" in lost_worker_report(3, 3)["message"]
 
 
 def test_solver_deaf_to_cancellation_is_abandoned_at_the_hard_limit(ctx):
@@ -363,3 +365,20 @@ def test_a_job_shorter_than_the_write_interval_makes_no_progress_write_and_a_lon
     # one write per 0.25 s interval, the first not before 0.25 s: about 3 of the 20 reports, each the latest
     assert 2 <= len(written) <= 5, written
     assert [f for f, _ in written] == sorted(f for f, _ in written) and written[0][0] >= 0.2
+
+
+@pytest.mark.parametrize("error, attempt, outcome, retry", [
+    (ConnectionError("reset"), 1, "requeued", True),  # the machine's services: retried
+    (ConnectionError("reset"), 3, "failed", False),  # until the cap
+    (ValueError("singular"), 1, "failed", False),  # the input decides: never retried
+    (SolverError("fit", "no fit", {}), 1, "failed", False),
+    (Stop("cancelled"), 1, "cancelled", False),
+    (Stop("time_limit"), 1, "time_limit", False),
+    (ResultPending("db away"), 3, "result_pending", True),
+])
+def test_the_retry_policy_is_one_function_of_the_error_and_the_attempt(error, attempt, outcome, retry):
+    verdict = judge(error, job_id=uuid.uuid4(), attempt=attempt, max_attempts=3, limits=(1.0, 2.0), elapsed=0.5)
+    assert (verdict.outcome, verdict.retry) == (outcome, retry)
+    assert verdict.grant_attempt == isinstance(error, ResultPending)  # a waiting result gets the attempt it needs
+    if outcome != "cancelled":
+        assert verdict.report["status"] == "failed" and "attempts" not in verdict.report["details"]

@@ -7,11 +7,11 @@ import uuid
 import pytest
 from sqlalchemy import text
 
-from plantsolve.store.models import Job
+from plantsolve.store.repository import JobRecord
 
 
-def _job(**fields) -> Job:
-    return Job(id=uuid.uuid4(), kind="test-compute", body_hash="0" * 64, solver_version="1", **fields)
+def _job(**fields) -> dict:
+    return dict(id=uuid.uuid4(), kind="test-compute", body_hash="0" * 64, solver_version="1", **fields)
 
 
 def test_insert_applies_defaults_and_leaves_unset_json_columns_sql_null(ctx):
@@ -40,3 +40,12 @@ def test_a_brief_read_never_loads_the_input_or_the_result(ctx):
         with pytest.raises(AttributeError):
             getattr(brief, name)
     assert ctx.repo.get(job.id).input["values"][-1] == 999
+
+
+def test_every_read_gives_the_one_frozen_job_record(ctx):
+    job, _ = ctx.repo.create(_job(idempotency_key="k-2", input={"a": 1}))
+    reads = [job, ctx.repo.get(job.id), ctx.repo.get(job.id, brief=True), ctx.repo.get_by_idempotency_key("k-2"),
+             *ctx.repo.list(), *ctx.repo.list(brief=True), ctx.repo.create(_job(idempotency_key="k-2"))[0]]
+    assert {type(read) for read in reads} == {JobRecord} and {read.id for read in reads} == {job.id}
+    with pytest.raises(AttributeError):  # frozen: a change is a write, and a write a new read
+        reads[1].status = "failed"

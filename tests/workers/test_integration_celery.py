@@ -104,7 +104,7 @@ def test_job_runs_end_to_end_on_postgres_and_celery(scaled):
     assert client.get(f"/v1/jobs/{done['id']}/result").json()["norm"] == 5.0
     artifact = client.get(f"/v1/jobs/{done['id']}/artifacts/values.txt")
     assert artifact.status_code == 200 and artifact.content == b"3.0\n4.0"
-    assert client.get("/readyz").json()["checks"] == {"database": "ok", "queue": "ok"}
+    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok"}
 
 
 def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
@@ -139,7 +139,8 @@ def test_crash_is_retried_then_failed_with_report(scaled):
     client, _, _ = scaled
     done = wait_for(client, client.post("/v1/test-crash/jobs", json={"message": "kaputt"}).json()["id"], timeout=60)
     assert done["status"] == "failed" and done["attempt"] == 2
-    assert [a["attempt"] for a in done["report"]["details"]["attempts"]] == [1, 2]
+    assert [(a["attempt"], a["outcome"]) for a in done["attempts"]] == [(1, "requeued"), (2, "failed")]
+    assert "kaputt" in done["report"]["message"] and "attempts" not in done["report"]["details"]
 
 
 def test_hanging_solver_hits_celery_time_limit(scaled):

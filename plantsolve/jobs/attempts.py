@@ -1,0 +1,121 @@
+"""How an attempt ends: the retry policy (:func:`judge`: what an error means for the job) and the job's one attempt
+history (:func:`ended`: the entry each attempt leaves, made here and nowhere else).
+
+The history is the job's ``attempts`` column, a list of :class:`AttemptEntry` (the job's view shows it as it is);
+a failure report, a typed :class:`Report`, says what went wrong in words and carries no history of its own.
+"""
+
+from __future__ import annotations
+
+import re
+import uuid
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any
+
+from pydantic import ValidationError
+
+from plantsolve.jobs.errors import is_infrastructure_failure
+from plantsolve.schemas.common import Report
+from plantsolve.schemas.jobs import AttemptInfo as AttemptEntry
+from plantsolve.solvers.base import Cancelled, InputRejected, SolverError
+from plantsolve.store.models import utcnow
+
+__all__ = ["AttemptEntry", "Report", "Stop", "ResultPending", "Verdict", "judge", "ended", "failure_report", "clean"]
+
+
+class Stop(Cancelled):
+    """Raised inside the solver (through the progress callback) to end the attempt."""
+
+    def __init__(self, reason: str):
+        self.reason = reason  # "cancelled" (or lost lease) | "time_limit"
+        super().__init__(reason)
+
+
+class ResultPending(ConnectionError):
+    """A computed result the database did not take in time: it waits in the blob store (or, when that is
+    away too, in this machine's spool folder) for the next attempt."""
+
+
+def failure_report(stage: str, message: str, **details: Any) -> dict:
+    return Report(status="failed", stage=stage, message=message, details=details).model_dump(mode="json")
+
+
+_PATHS = re.compile(r"(?:[A-Za-z]:)?(?:[\\/][\w.@+-]+){2,}")
+
+
+def clean(error: BaseException) -> str:
+    """The error's message for a client: one line, server paths removed, at most 300 characters."""
+    text = " ".join(str(error).split())
+    return _PATHS.sub("<path>", text)[:300]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What becomes of a job whose attempt ended with an error: its attempt entry's ``outcome`` and ``error``, the
+    job's ``report``, and whether it goes back to the queue (``retry``, with one more attempt granted when
+    ``grant_attempt``) or ends failed. ``outcome`` "cancelled": the job was cancelled (or another attempt holds it):
+    nothing to write."""
+
+    outcome: str
+    report: dict | None = None
+    error: str | None = None
+    retry: bool = False
+    grant_attempt: bool = False
+    crash: bool = False  # an error no rule names: its traceback belongs in the server log
+
+
+def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: int, limits: tuple[float, float],
+          elapsed: float, time_limit_errors: tuple[type[BaseException], ...] = ()) -> Verdict:
+    """The retry policy. A stop asked for (cancelled, lease lost) ends the attempt quietly; the time limit, a refused
+    input and a solver's own failure fail the job; a result that the database did not take is stored by the next
+    attempt (granted one when this was the last); a crash of the machine's services (network, disk, database) is
+    retried until the attempt cap; any other crash repeats on the same input and fails the job at once."""
+    if isinstance(error, Stop) and error.reason != "time_limit":
+        return Verdict("cancelled")
+    if isinstance(error, Stop) or isinstance(error, time_limit_errors):
+        soft, hard = limits
+        return Verdict("time_limit", failure_report(
+            "time_limit", f"The solver ran past its time limit ({soft:g} s soft, {hard:g} s hard) and was stopped.",
+            soft_time_limit=soft, time_limit=hard, elapsed_seconds=round(elapsed, 3)))
+    if isinstance(error, ResultPending):
+        return Verdict("result_pending", failure_report(
+            "result", "The result was computed but the database did not take it; the next attempt stores it without "
+                      "solving again."), retry=True, grant_attempt=attempt >= max_attempts)
+    if isinstance(error, InputRejected):
+        report = failure_report("input", error.title,
+                                errors=[{"loc": list(e.loc), "msg": e.msg, "type": e.type} for e in error.errors])
+        return Verdict("failed", report, error=report["message"])
+    if isinstance(error, ValidationError):
+        report = failure_report("input", "The stored input no longer validates.",
+                                errors=error.errors(include_url=False, include_context=False))
+        return Verdict("failed", report, error=report["message"])
+    if isinstance(error, SolverError):
+        return Verdict("failed", failure_report(error.stage, error.message, **error.details), error=error.message)
+    # reports say what happened in words; exception class names stay in the server log
+    said = clean(error) or "internal error"
+    if not is_infrastructure_failure(error):
+        return Verdict("failed", failure_report(
+            "solver", f"The solver failed on this input ({said}); it was not retried because the same input fails "
+                      "the same way. Check the input's values (scale, degenerate geometry); the server log has the "
+                      f"details of job {job_id}, attempt {attempt}."), error=said, crash=True)
+    if attempt < max_attempts:
+        return Verdict("requeued", failure_report("solver", "The solver crashed; the job was re-queued."), error=said,
+                       retry=True, crash=True)
+    return Verdict("failed", failure_report(
+        "solver", f"The solver crashed on each of {attempt} attempts: {said} (the server log has the details of job "
+                  f"{job_id})."), error=said, crash=True)
+
+ERROR_CHARACTERS = 300
+
+
+def ended(previous: list | None, attempt: int, worker: str | None, outcome: str, *, error: str | None = None,
+          started_at: datetime | None = None) -> list[dict]:
+    """The history ``previous`` with attempt ``attempt``'s entry (ended now with ``outcome``) in place of any earlier
+    entry of the same attempt (whose start it keeps when none is given)."""
+    earlier = [h for h in (previous or []) if h.get("attempt") != attempt]
+    same = next((h for h in (previous or []) if h.get("attempt") == attempt), {})
+    entry = AttemptEntry(attempt=attempt, worker=worker, started_at=started_at or same.get("started_at"),
+                         finished_at=utcnow(), outcome=outcome,
+                         error=str(error)[:ERROR_CHARACTERS] if error else None)
+    return earlier + [entry.model_dump(mode="json", exclude_none=True)]
