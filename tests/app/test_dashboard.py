@@ -122,7 +122,7 @@ def test_unknown_job_and_kind_are_404_pages(client):
 
 def test_the_submit_form_is_prefilled_and_posts_through_the_service(client):
     page = client.get("/dashboard/submit/perfmap").text
-    assert 'name="file" accept=".csv,.xlsx,.json,.py"' in page
+    assert 'name="file" accept=".csv,.xlsx,.json,.py,.map"' in page
     assert "&#34;cubic&#34;" in page or "&quot;cubic&quot;" in page  # the example's options
     response = client.post("/dashboard/submit/test-compute", data={"source": "json", "body": '{"values": [4.0, 5.0]}'},
                            follow_redirects=False)

@@ -298,5 +298,6 @@ def test_a_plot_opens_full_size_and_the_first_warning_heads_the_page(site):
     assert banner.text.startswith("⚠ negative Some values are negative.") and banner.is_displayed()
     assert banner.location["y"] < driver.find_element(By.CSS_SELECTOR, ".facts").location["y"]
     driver.get(f"{base}/dashboard")
-    row = driver.find_element(By.CSS_SELECTOR, f'tr[data-job="{warned["id"]}"]')
-    assert row.find_element(By.CSS_SELECTOR, "[data-field=first-warning]").text == "negative"
+    # the live list swaps a row in when its job changes: read it afresh until it shows the finished job
+    first_warning = f'tr[data-job="{warned["id"]}"] [data-field=first-warning]'
+    wait.until(lambda d: d.find_element(By.CSS_SELECTOR, first_warning).text == "negative")
