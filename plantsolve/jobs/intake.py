@@ -49,7 +49,9 @@ from plantsolve.jobs.errors import (
     from_validation_error,
     loads_bounded,
     prescan_json,
+    summary,
 )
+from plantsolve.solvers import other_kinds
 from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
 from plantsolve.solvers.kinds import KINDS, load_kinds
 from plantsolve.store.blobs import BlobMissing, BlobStore
@@ -66,13 +68,25 @@ def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
     except ValidationError as error:
         integral = _with_integral_numbers_as_integers(raw, error)
         if integral is None:
-            raise from_validation_error(error, document=raw) from None
+            raise _another_kinds(spec, raw) or from_validation_error(error, document=raw) from None
         raw = integral
         try:
             request = spec.request_model.model_validate_json(json.dumps(raw), strict=True)
         except ValidationError as error:
-            raise from_validation_error(error, document=raw) from None
+            raise _another_kinds(spec, raw) or from_validation_error(error, document=raw) from None
     return raw, _input(spec, request)
+
+
+def _another_kinds(spec: SolverSpec, document: Any) -> Unprocessable | None:
+    """One 422 naming the kind a body was written for, when it is another kind's request or result: a list of
+    'extra inputs' against the wrong schema would not say that the route is what is wrong."""
+    if spec.kind not in other_kinds.REQUESTS or not isinstance(document, dict):
+        return None
+    held = other_kinds.held_kind(document, spec.kind)
+    if held is None:
+        return None
+    error = field_problem([], f"the body holds {held}, not a {spec.kind} request", "wrong_kind")
+    return Unprocessable(summary([error]), errors=[error])
 
 
 def _with_integral_numbers_as_integers(document: Any, error: ValidationError) -> Any | None:
