@@ -224,7 +224,7 @@ def _problem(map_data, design: bool):
     om = pytest.importorskip("openmdao.api")
     from pycycle.elements.compressor_map import CompressorMap
 
-    p = om.Problem()
+    p = om.Problem(reports=False)  # no report folders written into the working directory
     # off design with extrapolation, as pyCycle's example cycles run their compressors (map_extrap=True): Newton's
     # first steps on the stall-margin balance leave the table before they converge inside it
     p.model.add_subsystem("map", CompressorMap(map_data=map_data, design=design, extrap=not design), promotes=["*"])
