@@ -33,6 +33,8 @@ import urllib.request
 from collections import defaultdict
 from pathlib import Path
 
+from hostile import descendants  # this folder is on the path of a script run from it
+
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "examples"
 PR_SET_CHILD_SUBREAPER = 36
@@ -118,6 +120,17 @@ def best(measures: list[tuple[float, float, float]]) -> tuple[float, float, floa
     return tuple(min(m[i] for m in measures) for i in range(3))
 
 
+def stop(process: subprocess.Popen) -> None:
+    """The service stopped as an operator stops it (SIGTERM, then SIGKILL after 30 s), its orphans reaped."""
+    process.send_signal(signal.SIGTERM)
+    try:
+        process.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+    reap_orphans()
+
+
 def free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -158,13 +171,7 @@ def api_start(checkout: Checkout, scratch: Path) -> tuple[float, float, float, f
         wall = time.perf_counter() - started
         status = proc_status(process.pid)
     finally:
-        process.send_signal(signal.SIGTERM)
-        try:
-            process.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-        reap_orphans()
+        stop(process)
     return status["cpu"], status["VmRSS"] / 1024, status["VmHWM"] / 1024, wall
 
 
@@ -177,20 +184,6 @@ def memory(pid: int) -> tuple[float, float, float]:
         fields[name] = int(value.split()[0])
     private = fields.get("Private_Clean", 0) + fields.get("Private_Dirty", 0)
     return fields.get("Rss", 0) / 1024, fields.get("Pss", 0) / 1024, private / 1024
-
-
-def descendants(pid: int) -> list[int]:
-    found, todo = [], [pid]
-    while todo:
-        parent = todo.pop()
-        for task in Path(f"/proc/{parent}/task").glob("*"):
-            try:
-                children = [int(c) for c in (task / "children").read_text().split()]
-            except OSError:
-                continue
-            found += children
-            todo += children
-    return found
 
 
 def role(pid: int) -> str:
@@ -258,13 +251,7 @@ def warm_start(checkout: Checkout, scratch: Path) -> dict:
             time.sleep(0.1)
         worker = int(call("GET", f"/v1/jobs/{job_id}")[1]["attempts"][-1]["worker"].rsplit(":", 1)[1])
     finally:
-        process.send_signal(signal.SIGTERM)
-        try:
-            process.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-        reap_orphans()
+        stop(process)
     rows = {"API process": sampled.pop(process.pid)[1:]}
     if worker in sampled:
         rows["the job's process"] = sampled.pop(worker)[1:]
