@@ -28,6 +28,7 @@ from plantsolve.solvers.perfmap.beta_grid import (
 from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.query import answer_beta_query
+from tests.support.perfmap_fits import fits_agree
 
 PYCYCLE = Path(__file__).parent / "data" / "pycycle"
 
@@ -198,32 +199,12 @@ def test_a_vertex_a_speed_line_reaches_is_refused_naming_the_line():
 
 # ---------------------------------------------------------------- round trips through the project's reader
 
-def _agree(original, again) -> tuple[float, float, float]:
-    """Max differences at the same flow: pressure relative (all, first 90 %) and efficiency absolute."""
-    c1, c2 = curveset_from_fits(original.settings), curveset_from_fits(again.settings)
-    by = {tuple(s.setting): k for k, s in enumerate(original.settings)}
-    assert sorted(by) == sorted(tuple(s.setting) for s in again.settings)
-    t = np.linspace(0, 1, 401)
-    p_all = p_body = e_all = 0.0
-    for k2, s in enumerate(again.settings):
-        k = by[tuple(s.setting)]
-        # the read-back line spans exactly the fitted one's flows: its surge and choke nodes are the ends
-        o = original.settings[k]
-        assert (s.x_min, s.x_max) == pytest.approx((o.x_min, o.x_max), abs=1e-4 * (o.x_max - o.x_min))
-        _, y1, e1 = c1.evaluate(np.full(401, k), t)
-        _, y2, e2 = c2.evaluate(np.full(401, k2), t)
-        rel = np.abs(y2 - y1) / y1
-        p_all, p_body = max(p_all, rel.max()), max(p_body, rel[t <= 0.9].max())
-        e_all = max(e_all, np.abs(e2 - e1).max())
-    return p_all, p_body, e_all
-
-
 @pytest.mark.parametrize("name, export", [("N3_Fan_map.py", "map_pycycle.py"), ("HPC_map.py", "map_pycycle.py"),
                                           ("axi3_2.py", "map_pycycle.py"), ("axi3_2.py", "map_beta.csv")])
 def test_an_export_read_back_and_fitted_again_gives_the_same_speed_lines(name, export):
     res = fitted(name)
     again = solve(parse_upload(StoredInput.from_bytes(export, artifacts(res)[export]), {"map": False})).result
-    p_all, p_body, e_all = _agree(res, again)
+    p_all, p_body, e_all = fits_agree(res, again, abs=1e-4)
     assert p_all <= PRESSURE_ROUND_TRIP and p_body <= PRESSURE_ROUND_TRIP_BODY and e_all <= EFF_ROUND_TRIP
 
 
@@ -236,7 +217,8 @@ def test_the_round_trip_error_is_the_grids_tabulation_error_it_falls_with_more_b
         res = solve(req.model_copy(update={"positions": hard, "options": req.options.model_copy(
             update={"beta_grid": BetaGridOption(lines=lines)})})).result
         data = artifacts(res)["map_beta.csv"]
-        errors.append(_agree(res, solve(parse_upload(StoredInput.from_bytes("b.csv", data), {"map": False})).result))
+        errors.append(fits_agree(res, solve(parse_upload(StoredInput.from_bytes("b.csv", data), {"map": False})).result,
+                                  abs=1e-4))
     (all11, body11, _), (all41, body41, _) = errors
     assert body41 < 0.5 * body11 and all41 < 0.5 * all11 and body41 <= 0.006
 

@@ -13,9 +13,9 @@ import pytest
 
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
-from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.solve import solve
 from plantsolve.solvers.perfmap.upload import parse_upload
+from tests.support.perfmap_fits import fits_agree
 
 GASTURB = Path(__file__).parent / "data" / "gasturb"
 TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio", "Surge Line", "Choke Line")
@@ -75,26 +75,6 @@ def fitted(name: str, lines: int = 21):
 def only_table(result) -> bytes:
     (data,) = gasturb_tables(result).values()
     return data
-
-
-def agree(original, again) -> tuple[float, float, float]:
-    """Max differences of two fits of the same lines at the same curve parameter: pressure relative (all, first
-    90 % of the flow range) and efficiency absolute."""
-    c1, c2 = curveset_from_fits(original.settings), curveset_from_fits(again.settings)
-    by = {tuple(s.setting): k for k, s in enumerate(original.settings)}
-    assert sorted(by) == sorted(tuple(s.setting) for s in again.settings)
-    t = np.linspace(0, 1, 401)
-    p_all = p_body = e_all = 0.0
-    for k2, s in enumerate(again.settings):
-        k = by[tuple(s.setting)]
-        o = original.settings[k]
-        assert (s.x_min, s.x_max) == pytest.approx((o.x_min, o.x_max), rel=1e-6)
-        _, y1, e1 = c1.evaluate(np.full(t.size, k), t)
-        _, y2, e2 = c2.evaluate(np.full(t.size, k2), t)
-        rel = np.abs(y2 - y1) / y1
-        p_all, p_body = max(p_all, rel.max()), max(p_body, rel[t <= 0.9].max())
-        e_all = max(e_all, np.abs(e2 - e1).max())
-    return p_all, p_body, e_all
 
 
 @pytest.mark.parametrize("name", ["compmap.map", "bigfanc.map"])
@@ -181,7 +161,7 @@ def test_round_trip_of_a_closed_form_map_is_exact_to_the_printed_digits():
     first = solve(parse_upload(StoredInput.from_bytes("cf.map", _closed_form_map()), options)).result
     assert max(s.pressure_max_rel_error for s in first.settings) < 1e-9
     again = solve(parse_upload(StoredInput.from_bytes("cf2.map", only_table(first)), options)).result
-    p_all, _, e_all = agree(first, again)
+    p_all, _, e_all = fits_agree(first, again, rel=1e-6)
     assert p_all < 1e-6 and e_all < 1e-6
     assert max(s.pressure_max_rel_error for s in again.settings) < 1e-6
 
@@ -199,5 +179,5 @@ def test_round_trip_of_gspys_sample_maps(name, lines, p_max, p_body_max):
     for p, line in zip(again_req.positions, res.beta_map.lines):
         assert p.flow == pytest.approx(line.flow, rel=5e-7) and p.pressure == pytest.approx(line.pressure, rel=5e-7)
     again = solve(again_req).result
-    p_all, p_body, e_all = agree(res, again)
+    p_all, p_body, e_all = fits_agree(res, again, rel=1e-6)
     assert p_all <= p_max and p_body <= p_body_max and e_all <= 1e-5
