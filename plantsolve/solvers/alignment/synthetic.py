@@ -110,3 +110,14 @@ def conflicting_tie_ins(nx: int, ny: int, *, seed: int = 0, shift: tuple[float, 
         p.position = (R.apply(np.array(p.position) - centre) + centre + np.asarray(shift, dtype=float)).tolist()
         p.direction = R.apply(p.direction).tolist()
     return req.model_copy(update={"components": comps})
+
+
+def reordered(req: AlignmentRequest, seed: int = 1) -> AlignmentRequest:
+    """The same network written in another order: components and connections shuffled and about half the
+    connections named from their other end (seeded). A solve must not tell the two apart."""
+    body = req.model_dump(mode="json", by_alias=True)
+    rng = np.random.default_rng(seed)
+    body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
+    conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
+    body["connections"] = [{"from": c["to"], "to": c["from"]} if rng.random() < 0.5 else c for c in conns]
+    return AlignmentRequest.model_validate(body)

@@ -17,7 +17,7 @@ from plantsolve.solvers.alignment.direct import connection_basis
 from plantsolve.solvers.alignment.kkt import use_schur
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.solve import solve
-from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins
+from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins, reordered
 
 # scan-like loop grids whose second tie-in was placed off (shift in mm, turn in degrees): each must be cut
 CASES = {
@@ -29,16 +29,6 @@ CASES = {
     "4x2 valves, shifted and turned": {"nx": 4, "ny": 2, "seed": 42, "shift": (4.4, -6.4, -3.6), "turn": 3.0,
                                        "valve_every": 3},
 }
-
-
-def _reordered(req: AlignmentRequest, seed: int) -> AlignmentRequest:
-    """Components and connections shuffled, about half the connections named from their other end."""
-    body = req.model_dump(mode="json", by_alias=True)
-    rng = np.random.default_rng(seed)
-    body["components"] = [body["components"][i] for i in rng.permutation(len(body["components"]))]
-    conns = [body["connections"][i] for i in rng.permutation(len(body["connections"]))]
-    body["connections"] = [{"from": c["to"], "to": c["from"]} if rng.random() < 0.5 else c for c in conns]
-    return AlignmentRequest.model_validate(body)
 
 
 def _answer(res) -> tuple[set, dict]:
@@ -61,7 +51,7 @@ def test_any_order_and_either_end_first_gives_the_bit_identical_answer(solved, n
     cuts, positions = _answer(ref)
     assert cuts, "the case must be a conflict"
     for seed in (0, 1, 2):
-        shuffled = _reordered(req, seed)
+        shuffled = reordered(req, seed)
         res = solve(shuffled).result
         assert _answer(res) == (cuts, positions)
         assert res.converged == ref.converged and res.report.message == ref.report.message
@@ -117,7 +107,7 @@ def test_the_cut_does_not_depend_on_which_end_a_connection_names_first():
 
 
 def test_canonical_order_runs_every_connection_from_its_smaller_end():
-    req = _reordered(conflicting_tie_ins(3, 2, seed=13, valve_every=2), seed=4)
+    req = reordered(conflicting_tie_ins(3, 2, seed=13, valve_every=2), seed=4)
     canon, _, conns = canonical_order(req)
     ends = [((c.from_[0], c.from_[1]), (c.to[0], c.to[1])) for c in canon.connections]
     assert all(a < b for a, b in ends) and ends == sorted(ends)
