@@ -202,12 +202,18 @@ def loads_json(text: str | bytes) -> Any:
     return json.loads(text, object_pairs_hook=_unique_keys)
 
 
+_TOKEN_START = re.compile(r"-?(\d+\.?\d*([eE][-+]?\d*)?)?|t(r(ue?)?)?|f(a(l(se?)?)?)?|n(u(ll?)?)?")
+"""What may stand at the end of a JSON text cut inside its last value: the start of a number or literal."""
+
+
 def _refuse_cut(error: json.JSONDecodeError) -> None:
     """A 422 on ``file`` saying that a JSON upload ends before its document is complete (a request is one
     object: nothing of a cut one is usable), with the line and column where it stops; other JSON errors
     return."""
-    # a string still open runs to the end of the text too (a raw line break inside one is another error)
-    if error.pos >= len(error.doc.rstrip()) or error.msg.startswith("Unterminated string"):
+    # a string still open runs to the end of the text too (a raw line break inside one is another error), and a text
+    # cut inside its last token (after a minus sign, inside `tru`) stops the parser just before that token
+    if error.pos >= len(error.doc.rstrip()) or error.msg.startswith("Unterminated string") \
+            or _TOKEN_START.fullmatch(error.doc[error.pos:].strip()):
         raise reject(f"the JSON ends before its document is complete (at line {error.lineno}, column {error.colno}: "
                      f"{error.msg}); the file was cut? Nothing of a cut request is used") from None
 

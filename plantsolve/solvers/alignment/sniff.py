@@ -8,60 +8,14 @@ sees the wrong file at once rather than an empty result or a failure later.
 
 from __future__ import annotations
 
-import json
 import re
 
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.other_kinds import held_kind
 
 PCF_KEYWORDS = re.compile(r"^\s*(END-POINT|CENTRE-POINT|BRANCH1-POINT|CO-ORDS|PIPELINE-REFERENCE|ISOGEN-FILES|UNITS-BORE|"
                           r"UNITS-CO-ORDS|PIPE|ELBOW|TEE|FLANGE|VALVE)\b", re.MULTILINE)
 _NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
-
-# top-level fields of the other kinds' JSON requests (plantsolve.schemas), the distinctive ones first
-OTHER_KINDS = (
-    ("flowmeter", ("pipe", "electrodes", "magnetic_field")),
-    ("perfmap", ("positions", "setting_names")),
-    ("polyhedra", ("vertices", "faces", "mesh")),
-    ("rigidity", ("bodies", "joints", "parts")),
-    ("dedup", ("filename", "file")),
-    ("tube", ("points",)),  # a perfmap query holds points too: said in the message
-)
-
-
-_TOKEN_START = re.compile(r"-?(\d+\.?\d*([eE][-+]?\d*)?)?|t(r(ue?)?)?|f(a(l(se?)?)?)?|n(u(ll?)?)?")
-
-
-def cut_json(text: str) -> int:
-    """How many objects, arrays and strings a JSON text that the parser refuses leaves open, when what stops the
-    parser is only the start of its last token (a text cut right after a minus sign, inside ``tru``: the parser
-    says "Expecting value" one character before the end, not at it); 0 when the text is not cut that way."""
-    try:
-        json.loads(text)
-    except json.JSONDecodeError as error:
-        if _TOKEN_START.fullmatch(text[error.pos:].strip()):
-            return open_at_end(text)
-    return 0
-
-
-def open_at_end(text: str) -> int:
-    """How many objects, arrays and strings a JSON text leaves open at its end (0 for a complete one)."""
-    depth = 0
-    in_string = escaped = False
-    for ch in text:
-        if in_string:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "{[":
-            depth += 1
-        elif ch in "}]":
-            depth -= 1
-    return max(depth, 0) + in_string
 
 
 def refuse_other_json(body: dict) -> None:
@@ -70,12 +24,9 @@ def refuse_other_json(body: dict) -> None:
     if "components" in body:
         return
     keys = [str(k) for k in body][:12]
-    kind = next((k for k, fields in OTHER_KINDS if any(f in body for f in fields)), None)
-    guess = f": the fields of a {kind} request, upload it to /v1/{kind}/jobs" if kind else ""
-    if kind == "tube":
-        guess = ": the fields of a tube request (or of a perfmap query)"
+    held = held_kind(body, "alignment")
     raise reject(f"the JSON holds no alignment request (no 'components'); it holds {', '.join(map(repr, keys)) or 'an empty object'}"
-                 f"{guess}")
+                 f"{f': it is {held}' if held else ''}")
 
 
 def refuse_other_text(text: str) -> None:

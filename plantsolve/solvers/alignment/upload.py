@@ -7,7 +7,6 @@ import codecs
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.pcf import parse_pcf
 from plantsolve.solvers.alignment.sniff import (
-    cut_json,
     refuse_other_json,
     refuse_other_text,
 )
@@ -16,7 +15,6 @@ from plantsolve.solvers.base import (
     InputRejected,
     StoredInput,
     json_object,
-    reject,
     validated,
 )
 
@@ -46,15 +44,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     if source.extension == ".pcf":
         refuse_other_text(text)
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
-    try:
-        body = json_object(text, refuse_cut=True)
-    except InputRejected as refused:
-        still_open = cut_json(text) if "invalid JSON" in str(refused) else 0
-        if still_open:
-            raise reject(f"the JSON ends before its document is complete ({still_open} object(s), array(s) or "
-                         "string(s) still open at its end); the file was cut? Nothing of a cut request is "
-                         "used") from None
-        raise
+    body = json_object(text, refuse_cut=True)
     refuse_other_json(body)
     if options:
         if not isinstance(options, dict):
