@@ -219,7 +219,6 @@ def cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
-    from plantsolve.jobs import intake
     from plantsolve.jobs.context import ServiceContext, worker_name
     from plantsolve.jobs.errors import ProblemError
     from plantsolve.jobs.lifecycle import SUCCEEDED
@@ -231,9 +230,8 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
     try:
         upload = not (path.suffix.lower() == ".json" and args.options is None)
         # the upload reader's process imports this kind's reader only (a JSON request is read here, in this process)
-        intake.preload_readers([ctx.kinds[args.kind]] if upload else [])
         dispatcher = _InlineDispatcher()
-        service = JobService(ctx, dispatcher)
+        service = JobService(ctx, dispatcher, readers=[ctx.kinds[args.kind]] if upload else [])
         content = path.read_bytes()
         try:
             if not upload:
@@ -412,10 +410,11 @@ def kinds_epilog(kinds: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentParser:
-    """The command line; ``kinds`` (the kind map) makes ``solve``'s KIND a choice among them, with help. The map
-    imports no solver (a spec's functions are imported when first used); without it (every command but ``solve``)
-    neither the settings nor the schemas are read, so that ``--help`` and ``--version`` answer at once."""
+def build_parser(kinds: Mapping[str, Any] | None = None, *, describe_kinds: bool = True) -> argparse.ArgumentParser:
+    """The command line; ``kinds`` (the kind map) makes ``solve``'s KIND a choice among them, and with
+    ``describe_kinds`` the help describes each (which imports every kind's package: its spec and schemas; a run of
+    one kind imports that one alone). Without the map (every command but ``solve``) neither the settings nor the
+    schemas are read, so that ``--help`` and ``--version`` answer at once."""
     parser = argparse.ArgumentParser(prog="plantsolve", description=__doc__.split("\n\n")[0].replace("``", ""),
                                      formatter_class=HelpFormatter)
     parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
@@ -450,7 +449,8 @@ def build_parser(kinds: Mapping[str, Any] | None = None) -> argparse.ArgumentPar
     solve = commands.add_parser("solve", formatter_class=HelpFormatter,
                                 help="run one job in this process and write its result",
                                 description=__doc__.split("\n\n")[1].replace("``", ""),
-                                epilog=kinds_epilog(kinds) if kinds else "kinds: see 'plantsolve solve --help'")
+                                epilog=kinds_epilog(kinds) if kinds and describe_kinds
+                                else "kinds: see 'plantsolve solve --help'")
     if kinds:
         solve.add_argument("kind", choices=sorted(kinds), metavar="KIND",
                            help=f"solver kind: one of {', '.join(sorted(kinds))} (below)")
@@ -531,8 +531,9 @@ def main(argv: list[str] | None = None) -> int:
     _single_threaded_blas()
     argv = sys.argv[1:] if argv is None else argv
     _configure_logs(argv)
-    # the kind map (the settings for its plugins, every kind's schemas) only for solve; no solver until one runs
-    args = build_parser(_kinds() if _command(argv) == "solve" else None).parse_args(argv)
+    # the kind map (the settings for its plugins) only for solve; every kind's package only for its help
+    wants_help = bool({"-h", "--help"} & set(argv))
+    args = build_parser(_kinds() if _command(argv) == "solve" else None, describe_kinds=wants_help).parse_args(argv)
     return args.func(args)
 
 

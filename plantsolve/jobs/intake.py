@@ -51,9 +51,8 @@ from plantsolve.jobs.errors import (
     prescan_json,
     summary,
 )
-from plantsolve.solvers import other_kinds
-from plantsolve.solvers.base import InputRejected, SolverError, SolverSpec, StoredInput
-from plantsolve.solvers.kinds import KINDS, load_kinds
+from plantsolve.solvers.base import Deferred, InputRejected, SolverError, SolverSpec, StoredInput
+from plantsolve.solvers.kinds import PACKAGES, load_kinds
 from plantsolve.store.blobs import BlobMissing, BlobStore
 from plantsolve.store.repository import JobRecord
 
@@ -80,9 +79,9 @@ def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
 def _another_kinds(spec: SolverSpec, document: Any) -> Unprocessable | None:
     """One 422 naming the kind a body was written for, when it is another kind's request or result: a list of
     'extra inputs' against the wrong schema would not say that the route is what is wrong."""
-    if spec.kind not in other_kinds.REQUESTS or not isinstance(document, dict):
+    if spec.kind not in PACKAGES or not isinstance(document, dict):  # (a plugin's kind: its fields are unknown)
         return None
-    held = other_kinds.held_kind(document, spec.kind)
+    held = _held_kind(document, spec.kind)
     if held is None:
         return None
     error = field_problem([], f"the body holds {held}, not a {spec.kind} request", "wrong_kind")
@@ -172,24 +171,20 @@ MAX_TEXT_LINES = 1_000_000
 TEXT_EXTENSIONS = (".xyz", ".csv", ".txt", ".pts", ".asc", ".tsv")
 
 log = logging.getLogger("plantsolve.api")
+# it imports every kind's schemas: a body refused is its first use, so a process that runs one kind imports that one's
+_held_kind = Deferred("plantsolve.solvers.other_kinds:held_kind")
 _forkserver = multiprocessing.get_context("forkserver")
 
 
-def preload_readers(kinds: Iterable[SolverSpec]) -> None:
-    """The forkserver (not started yet) imports this module and these kinds' readers and checks once; each reading
-    process forks from it with them imported. The built-in kinds' by default; a process that reads one kind's uploads
-    only names that one, a process that reads none (the CLI with a JSON request) none, and its forkserver imports
-    nothing."""
+def start_readers(kinds: Iterable[SolverSpec]) -> None:
+    """Start the readers' forkserver in the background, so the first upload does not wait: it imports this module
+    and these kinds' readers and checks once (seconds), and each reading process forks from it with them imported.
+    The service names every kind; the CLI the one kind it reads an upload of, or none for a JSON request (then no
+    forkserver starts here: a reading process, should one be asked for, starts it and imports what it runs)."""
     modules = [module for spec in kinds for module in spec.modules(SolverSpec.READERS)]
-    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)] if modules else [])
-
-
-preload_readers(KINDS.values())
-
-
-def start_readers() -> None:
-    """Start the forkserver (it imports the kinds' readers, seconds) in the background, so the first upload does not
-    wait."""
+    if not modules:
+        return
+    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)])
     threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
 
 

@@ -14,7 +14,7 @@ import uuid
 from concurrent.futures import Future
 from dataclasses import dataclass
 from datetime import datetime
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
@@ -61,11 +61,13 @@ def safe_filename(name: str) -> str:
 
 
 class JobService:
-    def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher):
+    def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher, readers: Iterable[SolverSpec] | None = None):
+        """``readers``: the kinds whose uploads this service reads (their readers are imported ahead, in the
+        forkserver that reading processes fork from); every kind of the map by default."""
         self.ctx = ctx
         self.dispatcher = dispatcher
         self._intake_loaded: set[str] = set()
-        intake.start_readers()  # uploads are read in processes forked from it
+        intake.start_readers(ctx.kinds.values() if readers is None else readers)
 
     @property
     def kinds(self) -> Mapping[str, SolverSpec]:

@@ -14,7 +14,8 @@ from pydantic import BaseModel
 from plantsolve.schemas.common import Report
 from plantsolve.solvers import alignment, dedup, flowmeter, perfmap, polyhedra, rigidity, tube
 from plantsolve.solvers.base import Deferred, ResultOperation, SolverSpec
-from plantsolve.solvers.kinds import KINDS, load_kinds
+from plantsolve.solvers.kinds import KINDS, PACKAGES, KindMap, load_kinds
+from plantsolve.workers.processes import warm_modules
 from plantsolve.solvers.perfmap.query import answer_beta_query, answer_query
 
 
@@ -44,6 +45,46 @@ def test_the_map_lists_each_package_spec_under_its_own_kind():
         assert 0 < spec.soft_time_limit <= spec.time_limit
     with pytest.raises(TypeError):
         KINDS["new"] = alignment.SPEC  # read-only: kinds are added in the source, not at run time
+    assert PACKAGES == {kind: f"plantsolve.solvers.{kind}" for kind in KINDS}
+
+
+def test_a_kind_named_by_another_kinds_package_is_refused_when_asked_for():
+    wrong = KindMap({"tube": "plantsolve.solvers.rigidity"})
+    assert list(wrong) == ["tube"]
+    with pytest.raises(ValueError, match="'tube' names plantsolve.solvers.rigidity"):
+        wrong["tube"]
+    with pytest.raises(KeyError):
+        KINDS["no_such_kind"]
+    assert "tube" in KINDS and "no_such_kind" not in KINDS and KINDS.get("no_such_kind") is None
+
+
+def _imported_after(code: str) -> set[str]:
+    """The modules a fresh interpreter holds after ``code``."""
+    code += "\nprint(' '.join(sorted(sys.modules)))"
+    return set(subprocess.run([sys.executable, "-c", "import sys\n" + code], capture_output=True, text=True,
+                              check=True).stdout.split())
+
+
+def test_the_map_imports_a_kind_when_it_is_asked_for_and_that_kind_alone():
+    """Listing the kinds imports none of their packages; a run of one kind (``plantsolve solve tube``: the parser
+    without the kinds' descriptions, then the spec) imports that kind's package and schema, no other kind's."""
+    listed = _imported_after("from plantsolve.solvers.kinds import KINDS\nsorted(KINDS)")
+    assert not {m for m in listed if m.startswith(("plantsolve.solvers.", "plantsolve.schemas.")) and
+                m.removeprefix("plantsolve.solvers.").removeprefix("plantsolve.schemas.") in KINDS}
+    one = _imported_after("from plantsolve.solvers.kinds import KINDS\nfrom plantsolve.cli import build_parser\n"
+                          "build_parser(KINDS, describe_kinds=False).parse_args(['solve', 'tube', 'x.json'])\n"
+                          "KINDS['tube'].request_model")
+    for kind in KINDS:
+        held = {f"plantsolve.solvers.{kind}", f"plantsolve.schemas.{kind}"} & one
+        assert held == ({f"plantsolve.solvers.{kind}", f"plantsolve.schemas.{kind}"} if kind == "tube" else set()), held
+
+
+def test_the_warm_parent_of_the_job_processes_imports_every_function_of_every_kind():
+    """The job processes start warm because their parent asks the map for every kind, explicitly."""
+    modules = warm_modules(KINDS.values(), ["plantsolve_test_plugin"])
+    for kind, spec in KINDS.items():
+        assert set(spec.modules()) <= set(modules) and any(m.startswith(f"plantsolve.solvers.{kind}.") for m in modules)
+    assert modules[:3] == ["plantsolve.workers.processes", "plantsolve.jobs.intake", "plantsolve_test_plugin"]
 
 
 def test_perfmap_declares_its_query_as_an_operation():
