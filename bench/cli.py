@@ -12,7 +12,8 @@ PSS and private, from ``smaps_rollup``); and with ``--importtime`` the libraries
 imports on. Numbers are best of ``--repeat``, the two checkouts interleaved (CPU seconds
 hold on a loaded machine; wall time does not).
 
-    python bench/cli.py [--repeat N] [--kinds tube,perfmap] [--before main|DIR|''] [--no-api] [--no-serve] [--importtime]
+    python bench/cli.py [--repeat N] [--kinds tube,perfmap] [--before main|DIR|''] [--no-bytecode-side] [--no-api]
+                        [--no-serve] [--importtime]
 """
 
 from __future__ import annotations
@@ -62,11 +63,17 @@ CASES = [
 
 
 class Checkout:
-    """A source tree whose ``plantsolve`` runs with this interpreter (its directory first on PYTHONPATH)."""
+    """A source tree whose ``plantsolve`` runs with this interpreter (its directory first on PYTHONPATH). With
+    ``no_bytecode`` (a folder) its processes find no compiled module and write none (PYTHONPYCACHEPREFIX names that
+    empty folder, PYTHONDONTWRITEBYTECODE is set): every module is compiled from source as it is imported, as in an
+    install that was not compiled to bytecode where no process may write ``__pycache__`` (the image's)."""
 
-    def __init__(self, name: str, root: Path) -> None:
+    def __init__(self, name: str, root: Path, no_bytecode: Path | None = None) -> None:
         self.name, self.root = name, root
         self.env = {**os.environ, "PYTHONPATH": str(root)}
+        if no_bytecode is not None:
+            no_bytecode.mkdir(parents=True, exist_ok=True)
+            self.env.update(PYTHONPYCACHEPREFIX=str(no_bytecode), PYTHONDONTWRITEBYTECODE="1")
 
     def command(self, *args: str) -> list[str]:
         return [sys.executable, "-m", "plantsolve.cli", *args]
@@ -261,9 +268,13 @@ def warm_start(checkout: Checkout, scratch: Path) -> dict:
             "pss": sum(numbers[1] for numbers in rows.values())}
 
 
-def import_offenders(checkout: Checkout, scratch: Path, top: int) -> list[tuple[str, float]]:
-    """The top-level packages ``solve --help`` spends its import time on (own time of their modules, ms)."""
-    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "plantsolve.cli", "solve", "--help"],
+# the small job whose imports --importtime lists (with `solve --help`'s)
+IMPORTTIME_CASE = ("rigidity", "rigidity/four_bar_and_door.json")
+
+
+def import_offenders(checkout: Checkout, scratch: Path, top: int, *args: str) -> list[tuple[str, float]]:
+    """The top-level packages ``plantsolve ARGS`` spends its import time on (own time of their modules, ms)."""
+    result = subprocess.run([sys.executable, "-X", "importtime", "-m", "plantsolve.cli", *args],
                             cwd=scratch, env=checkout.env, capture_output=True, text=True, check=True)
     own: dict[str, float] = defaultdict(float)
     for line in result.stderr.splitlines():
@@ -277,7 +288,8 @@ def import_offenders(checkout: Checkout, scratch: Path, top: int) -> list[tuple[
 
 
 def before_checkout(spec: str, scratch: Path) -> tuple[Checkout | None, Path | None]:
-    """``--before``: a directory as it is, a git revision checked out into a temporary worktree, '' for none."""
+    """``--before``: a directory as it is, a git revision checked out into a temporary worktree (and compiled), ''
+    for none."""
     if not spec:
         return None, None
     if Path(spec).is_dir():
@@ -285,6 +297,8 @@ def before_checkout(spec: str, scratch: Path) -> tuple[Checkout | None, Path | N
     folder = scratch / "before"
     subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), spec], check=True,
                    capture_output=True)
+    # compiled as `make install` compiles this checkout: both sides start from bytecode
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(folder / "plantsolve")], check=True)
     return Checkout(spec, folder), folder
 
 
@@ -297,13 +311,20 @@ def main() -> None:
                         "'' for this checkout alone")
     parser.add_argument("--no-api", action="store_true", help="leave out the API start-up")
     parser.add_argument("--no-serve", action="store_true", help="leave out the warm start of the service")
-    parser.add_argument("--importtime", action="store_true", help="the libraries `solve --help` imports, by time")
+    parser.add_argument("--importtime", action="store_true",
+                        help="the libraries `solve --help` and a small job import, by time")
+    parser.add_argument("--no-bytecode-side", action="store_true",
+                        help="also the --before checkout with no compiled module (as an install that was not compiled "
+                        "to bytecode runs where no process writes __pycache__)")
     args = parser.parse_args()
     kinds = {k for k in args.kinds.split(",") if k}
     become_subreaper()
     scratch = Path(tempfile.mkdtemp(prefix="bench-cli-"))
     before, worktree = before_checkout(args.before, scratch)
-    sides = [side for side in (before, Checkout("this", REPO)) if side is not None]
+    cold = None
+    if before is not None and args.no_bytecode_side:
+        cold = Checkout(f"{before.name}-no-pyc", before.root, no_bytecode=scratch / "no-bytecode")
+    sides = [side for side in (cold, before, Checkout("this", REPO)) if side is not None]
     try:
         run(args, kinds, sides, scratch)
     finally:
@@ -390,11 +411,16 @@ def run(args: argparse.Namespace, kinds: set[str], sides: list[Checkout], scratc
                 print(f"    {name:<32} {rss:>6.0f} / {pss:>6.0f} / {private:>6.0f}")
 
     if args.importtime:
-        print("\n`plantsolve solve --help`: import time by top-level package (own time of its modules, ms; "
-              "-X importtime inflates it)")
-        for side in sides:
-            offenders = import_offenders(side, scratch, 10)
-            print(f"{side.name:<10} " + ", ".join(f"{name} {ms:.0f}" for name, ms in offenders))
+        kind, example = IMPORTTIME_CASE
+        out = str(scratch / "importtime.json")
+        for title, command in (("solve --help", ["solve", "--help"]),
+                               (f"solve {kind} {example.split('/')[-1]}",
+                                ["solve", kind, str(EXAMPLES / example), "-o", out, "--no-progress"])):
+            print(f"\n`plantsolve {title}`: import time by top-level package (own time of its modules, ms; "
+                  "-X importtime inflates it)")
+            for side in sides:
+                offenders = import_offenders(side, scratch, 12, *command)
+                print(f"{side.name:<14} " + ", ".join(f"{name} {ms:.0f}" for name, ms in offenders))
 
 
 if __name__ == "__main__":
