@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import functools
 import sqlite3
 import threading
+import time
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
 from sqlalchemy import Engine, create_engine, event, text
 from sqlalchemy.engine import make_url
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import InvalidatePoolError, OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 MIGRATIONS_DIR = Path(__file__).parent / "migrations"
@@ -47,15 +49,85 @@ def make_engine(url: str, *, wait: float = WAIT_SECONDS, statement: float = STAT
         return engine
     # Every request is bounded: a connect that gets no answer (a black-holed link) gives up after ``wait``, a
     # statement after ``statement`` on the server, and unacknowledged data (a link that died under a pooled
-    # connection, which the pre-ping would otherwise wait on for minutes) after ``statement`` in the kernel.
+    # connection) after ``statement`` in the kernel. Where the kernel sees nothing wrong (the server's host, or a
+    # proxy between, takes the bytes and never answers; a server that hangs) the client bounds each round trip
+    # itself (bounded_connection_class).
     bounds = {"connect_timeout": max(1, round(wait)), "tcp_user_timeout": int(statement * 1000),
               "keepalives": 1, "keepalives_idle": 5, "keepalives_interval": 2, "keepalives_count": 2,
               "options": f"-c statement_timeout={int(statement * 1000)} -c lock_timeout={int(wait * 1000)}"}
     given = set(parsed.query)
     # Connections above pool_size are closed on return; under a burst of submissions that
     # means a new PostgreSQL connection (several ms) per request, so keep the pool wide.
-    return create_engine(url, pool_pre_ping=True, pool_size=24, max_overflow=16, pool_recycle=1800, pool_timeout=wait,
-                         connect_args={k: v for k, v in bounds.items() if k not in given})
+    engine = create_engine(url, pool_size=24, max_overflow=16, pool_recycle=1800, pool_timeout=wait,
+                           connect_args={k: v for k, v in bounds.items() if k not in given})
+    _bound_round_trips(engine, wait=wait, statement=statement)
+    return engine
+
+
+# A pooled connection that was idle this long is pinged before a request uses it (one that came back a moment
+# ago is not: under load a ping per request cost a round trip and a fifth of a submission's CPU time)
+PING_IDLE_SECONDS = 1.0
+
+
+@functools.cache
+def bounded_connection_class() -> type:
+    """``BoundedConnection``: a psycopg connection whose every wait for the server (``Connection.wait``, where each
+    round trip of psycopg waits) lasts at most ``round_trip_seconds``; then the connection is closed and the call
+    raises ``OperationalError``: SQLAlchemy sees a closed connection (a disconnect), drops it from the pool, and
+    the request answers 503. The bound is above the server's statement timeout, so that a slow statement ends with
+    the server's own error first. (A function: psycopg is the [scaled] extra, imported for PostgreSQL only.)"""
+    import psycopg
+
+    class BoundedConnection(psycopg.Connection):
+        round_trip_seconds: float | None = None
+
+        def wait(self, gen, *args, **kwargs):
+            bound = self.round_trip_seconds
+            if bound is None or args[1:] or kwargs.get("timeout") is not None:  # a caller's own bound wins
+                return super().wait(gen, *args, **kwargs)
+            started = time.monotonic()
+            try:
+                return super().wait(gen, *args, **kwargs, timeout=bound)
+            except psycopg.OperationalError:
+                if time.monotonic() - started < bound:
+                    raise
+                self.close()
+                raise psycopg.OperationalError(f"no answer from the database within {bound:g} s (the connection "
+                                               "is closed)") from None
+
+    return BoundedConnection
+
+
+def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None:
+    """Connections made as ``BoundedConnection`` (a round trip waits at most ``statement + wait``); a pooled
+    connection idle for :data:`PING_IDLE_SECONDS` is pinged first with the bound ``wait`` (a ping that gets no
+    answer in time, or fails, drops the pool's connections and the checkout connects anew: SQLAlchemy's
+    pessimistic disconnect handling, with a bounded ping)."""
+
+    @event.listens_for(engine, "do_connect")
+    def connect(dialect, record, cargs, cparams):
+        connection = bounded_connection_class().connect(*cargs, **cparams)
+        connection.round_trip_seconds = statement + wait
+        record.info["returned"] = time.monotonic()
+        return connection
+
+    @event.listens_for(engine, "checkin")
+    def returned(dbapi_connection, record) -> None:
+        record.info["returned"] = time.monotonic()
+
+    @event.listens_for(engine, "checkout")
+    def ping_after_idle(dbapi_connection, record, proxy) -> None:
+        if time.monotonic() - record.info.get("returned", 0.0) < PING_IDLE_SECONDS:
+            return
+        bound = dbapi_connection.round_trip_seconds
+        dbapi_connection.round_trip_seconds = wait
+        try:
+            engine.dialect.do_ping(dbapi_connection)
+        except Exception as error:
+            # the server or the link is gone: every pooled connection is made anew (on its next checkout)
+            raise InvalidatePoolError(f"a pooled connection did not answer a ping: {error}") from error
+        finally:
+            dbapi_connection.round_trip_seconds = bound
 
 
 class WriteLock:
@@ -112,10 +184,17 @@ class Database:
         config = Config()
         config.set_main_option("script_location", str(MIGRATIONS_DIR))
         with self.engine.begin() as connection:
+            dbapi_connection = connection.connection.dbapi_connection
+            bound = getattr(dbapi_connection, "round_trip_seconds", None)
             if not self.is_sqlite:  # a migration may rewrite a large table: no request's statement bound
                 connection.exec_driver_sql("SET LOCAL statement_timeout = 0")
-            config.attributes["connection"] = connection
-            command.upgrade(config, "head")
+                dbapi_connection.round_trip_seconds = None
+            try:
+                config.attributes["connection"] = connection
+                command.upgrade(config, "head")
+            finally:
+                if bound is not None:
+                    dbapi_connection.round_trip_seconds = bound
 
     def ping(self) -> None:
         """Raises unless the database can take a write now (within the bounds above): on SQLite the write lock is

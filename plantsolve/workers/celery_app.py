@@ -16,6 +16,7 @@ from functools import cached_property
 
 from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
+from kombu import Producer
 from kombu.transport.redis import Channel as RedisChannel
 from kombu.transport.redis import Transport as RedisTransport
 
@@ -27,6 +28,7 @@ from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
 
 log = logging.getLogger("plantsolve.celery")
+PERSISTENT = 2  # the delivery mode send_task gives a task message
 
 
 class _PublishingChannel(RedisChannel):
@@ -75,12 +77,24 @@ def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
 
 
 class CeleryDispatcher:
-    """Sends ``plantsolve.run_job(job_id)`` with the kind's time limits (scaled mode)."""
+    """Sends ``plantsolve.run_job(job_id)`` with the kind's time limits (scaled mode).
+
+    Every message of the process goes out through one producer on one broker connection, kept open between
+    messages: the message is Celery's own (``app.amqp.as_task_v2``: task protocol 2, the limits in its headers),
+    published straight onto the task queue (the nameless exchange routes by queue name; the worker declares the
+    queue). ``send_task`` did the same with a producer taken from a pool, the routing worked out, the queue
+    declared and the publish wrapped in retries, for each message: most of a submission's CPU time. A publish
+    that fails drops the connection (the next message opens another) and raises: the caller leaves the job to the
+    sweeper, as before."""
 
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
         self.celery = create_celery(ctx.settings, publisher=True)
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
+        self._queue = self.celery.conf.task_default_queue or "celery"
+        self._publishing = threading.Lock()  # a kombu channel serves one thread at a time
+        self._connection = None
+        self._producer = None
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
         spec = self.ctx.spec(kind)
@@ -88,7 +102,26 @@ class CeleryDispatcher:
         if spec is not None:
             soft, hard = self.ctx.limits(spec)
             limits = {"soft_time_limit": soft, "time_limit": hard}
-        self.celery.send_task("plantsolve.run_job", args=[str(job_id)], **limits)
+        message = self.celery.amqp.as_task_v2(str(uuid.uuid4()), "plantsolve.run_job", args=[str(job_id)], **limits)
+        with self._publishing:
+            try:
+                if self._producer is None:
+                    self._connection = self.celery.connection_for_write()
+                    self._producer = Producer(self._connection.default_channel, auto_declare=False)
+                self._producer.publish(message.body, exchange="", routing_key=self._queue, headers=message.headers,
+                                       serializer="json", delivery_mode=PERSISTENT, declare=(), retry=False,
+                                       **message.properties)
+            except Exception:
+                self._close_producer()
+                raise
+
+    def _close_producer(self) -> None:
+        connection, self._connection, self._producer = self._connection, None, None
+        if connection is not None:
+            try:
+                connection.release()
+            except Exception:  # a connection that broke under the publish: nothing left to release
+                log.debug("releasing the broken broker connection failed", exc_info=True)
 
     def pending(self) -> int | None:
         """Messages waiting in the broker's queue (Redis), or None when it cannot tell."""
@@ -111,6 +144,8 @@ class CeleryDispatcher:
 
     def stop(self) -> None:
         self._sweeper.stop()
+        with self._publishing:
+            self._close_producer()
 
 
 _ctx_lock = threading.Lock()
