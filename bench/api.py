@@ -156,10 +156,12 @@ def run_with_wrk(base: str, submit_path: str, seconds: float, concurrency: int, 
 
 
 def run_with_python(base: str, submit_path: str, jobs: int, concurrency: int, reads: int, server_pid: int) -> dict:
+    # enough single submits that the kernel's 10 ms CPU clock tick is a small part of their CPU time
+    single = max(jobs // 2, 100)
     started, cpu_before = time.perf_counter(), process_cpu_seconds(server_pid)
-    asyncio.run(submit_all(base, submit_path, max(jobs // 10, 20), 1))
-    single_rate = max(jobs // 10, 20) / (time.perf_counter() - started)
-    cpu_per_submit = (process_cpu_seconds(server_pid) - cpu_before) / max(jobs // 10, 20)
+    asyncio.run(submit_all(base, submit_path, single, 1))
+    single_rate = single / (time.perf_counter() - started)
+    cpu_per_submit = (process_cpu_seconds(server_pid) - cpu_before) / single
     elapsed, submit_latency, ids = asyncio.run(submit_all(base, submit_path, jobs, concurrency))
     read_latency = asyncio.run(read_all(base, ids, reads, 1))
     started = time.perf_counter()
@@ -210,19 +212,8 @@ def run_mode(mode: str, args, port: int, code: Path = REPO, label: str | None = 
             env, data_dir), f"http://127.0.0.1:{port}/v1/jobs/none")
     else:
         if mode == "scaled":
-            import psycopg
-            import redis
-
-            name = f"plantsolve_bench_{uuid.uuid4().hex[:8]}"
-            admin = psycopg.connect(PG_ADMIN, autocommit=True)
-            admin.execute(f'CREATE DATABASE "{name}"')
-            redis.Redis.from_url(REDIS).flushdb()
-            env.update(DATABASE_URL=PG_ADMIN.rsplit("/", 1)[0].replace("postgresql://", "postgresql+psycopg://") + "/" + name, BROKER_URL=REDIS)
-
-            def cleanup() -> None:
-                admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
-                redis.Redis.from_url(REDIS).flushdb()
-
+            services, cleanup = scaled_services()
+            env.update(services)
         server = start_server(env, port)
     try:
         base = f"http://127.0.0.1:{port}"
@@ -291,16 +282,45 @@ import uvloop; uvloop.run(measure())
 """
 
 
-def in_process(label: str, code: Path, requests: int) -> dict:
+def scaled_services() -> tuple[dict[str, str], callable]:
+    """A new PostgreSQL database and the emptied Redis database: the settings of scaled mode on them, and the
+    function that drops the database and empties Redis again."""
+    import psycopg
+    import redis
+
+    name = f"plantsolve_bench_{uuid.uuid4().hex[:8]}"
+    admin = psycopg.connect(PG_ADMIN, autocommit=True)
+    admin.execute(f'CREATE DATABASE "{name}"')
+    redis.Redis.from_url(REDIS).flushdb()
+    env = {"DATABASE_URL": PG_ADMIN.rsplit("/", 1)[0].replace("postgresql://", "postgresql+psycopg://") + "/" + name,
+           "BROKER_URL": REDIS}
+
+    def cleanup() -> None:
+        admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+        admin.close()
+        redis.Redis.from_url(REDIS).flushdb()
+
+    return env, cleanup
+
+
+def in_process(label: str, code: Path, requests: int, *, scaled: bool = False) -> dict:
     """CPU ms per submit and per status read of an app called in process (see IN_PROCESS); ``label`` 'baseline' is
-    the trivial app."""
+    the trivial app; ``scaled``: on PostgreSQL and Redis (no worker: the messages wait in the queue)."""
     data_dir = tempfile.mkdtemp(prefix="bench-inprocess-")
     env = dict(os.environ, DATA_DIR=data_dir, PLUGINS="tests.support.kinds", PYTHONPATH=str(code), LOG_LEVEL="warning")
+    cleanup = None
+    if scaled:
+        services, cleanup = scaled_services()
+        env.update(services)
     args = [sys.executable, "-c", IN_PROCESS, str(requests), "baseline" if label == "baseline" else "plantsolve",
             str(REPO / "bench" / "baseline_app.py")]
-    out = subprocess.run(args, cwd=data_dir, env=env, capture_output=True, text=True, check=True,
-                         timeout=IN_PROCESS_SECONDS).stdout
-    shutil.rmtree(data_dir, ignore_errors=True)
+    try:
+        out = subprocess.run(args, cwd=data_dir, env=env, capture_output=True, text=True, check=True,
+                             timeout=IN_PROCESS_SECONDS).stdout
+    finally:
+        shutil.rmtree(data_dir, ignore_errors=True)
+        if cleanup is not None:
+            cleanup()
     return {"mode": label, **json.loads(out.strip().splitlines()[-1])}
 
 
@@ -345,10 +365,10 @@ def main() -> None:
     try:
         requests = args.in_process if args.in_process is not None else (0 if args.smoke else 1000 if args.quick else 3000)
         cpu_rows = [in_process("baseline", REPO, requests)] if requests else []
-        if requests and before is not None:
-            cpu_rows.append(in_process(f"embedded ({before_label})"[:20], before, requests))
-        if requests:
-            cpu_rows.append(in_process("embedded", REPO, requests))
+        for mode in modes if requests else ():
+            if before is not None:
+                cpu_rows.append(in_process(f"{mode} ({before_label})"[:20], before, requests, scaled=mode == "scaled"))
+            cpu_rows.append(in_process(mode, REPO, requests, scaled=mode == "scaled"))
         rows = [run_mode("baseline", args, args.port)]
         for i, mode in enumerate(modes):
             if before is not None:
@@ -382,7 +402,8 @@ def main() -> None:
             f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
         )
     if cpu_rows:
-        print("\nIn process (the ASGI app called directly: no network, no client; SQLite, jobs running): CPU ms per request")
+        print("\nIn process (the ASGI app called directly: no network, no client; embedded: SQLite, jobs running; scaled: "
+              "PostgreSQL and Redis, the messages queued): CPU ms per request of every thread of the process")
         print(f"{'mode':<20} {'submit':>8} {'vs baseline':>11} {'status read':>12} {'vs baseline':>11}")
         for row in cpu_rows:
             print(f"{row['mode']:<20} {row['submit_ms']:>8.3f} {row['submit_ms'] / cpu_rows[0]['submit_ms']:>10.2f}x "

@@ -9,12 +9,22 @@ how the job ended: succeeded on attempt 1 and solved once (its marker files coun
 Needs root (it stops and starts the cluster with ``pg_ctlcluster``); never run it while tests use the
 database.
 
+``--black-hole``: the link dies without a word instead (PostgreSQL reached through a proxy that, at a moment,
+passes nothing on and closes nothing: tests/support/black_hole.py), for this checkout and the one ``--before``
+names (default ``main``, in a temporary worktree) in the same run: how long a submit and ``/readyz`` take to
+answer, and what, once the connections pooled before are dead; how soon the service answers again once the link
+does. The shipped DATABASE_WAIT_SECONDS and DATABASE_STATEMENT_SECONDS, the API process's job threads
+(EMBEDDED_MODE=thread: the bounds are the API process's); a request gets ``--patience`` seconds before the
+bench gives up on it. This mode stops nothing and may run beside the tests.
+
     python bench/outage.py [--outage 20] [--lease 8]
+    python bench/outage.py --black-hole [--before main|DIR|none] [--patience 60]
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import os
 import socket
 import subprocess
@@ -29,6 +39,8 @@ import psycopg
 
 REPO = Path(__file__).resolve().parents[1]
 ADMIN = "postgresql://postgres@127.0.0.1:5432/postgres"
+sys.path.insert(0, str(REPO))
+from tests.support.black_hole import BlackHoleProxy  # noqa: E402  (the tests' proxy: one black hole, not two)
 
 
 def cluster(action: str) -> None:
@@ -43,11 +55,105 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
+def _timed(call) -> tuple[str, float]:
+    """(the answer's status, or the error's name; seconds it took)."""
+    started = time.monotonic()
+    try:
+        answer = str(call().status_code)
+    except httpx.HTTPError as error:
+        answer = f"no answer ({type(error).__name__})"
+    return answer, time.monotonic() - started
+
+
+def black_hole_side(code: Path, patience: float) -> list[tuple[str, str]]:
+    """One checkout's server through a proxy that turns into a black hole: what each request answered, and when."""
+    name = f"plantsolve_blackhole_{uuid.uuid4().hex[:8]}"
+    with psycopg.connect(ADMIN, autocommit=True) as admin:
+        admin.execute(f'CREATE DATABASE "{name}"')
+    proxy = BlackHoleProxy(("127.0.0.1", 5432))
+    work = Path(tempfile.mkdtemp(prefix="black-hole-"))
+    port = free_port()
+    env = {**os.environ, "DATA_DIR": str(work / "var"), "PYTHONPATH": f"{code}{os.pathsep}{REPO}",
+           "PLUGINS": "tests.support.kinds", "BLOB_STORE": "local", "EMBEDDED_MODE": "thread", "LOG_FORMAT": "text",
+           "DATABASE_URL": f"postgresql+psycopg://postgres@127.0.0.1:{proxy.port}/{name}"}
+    log = (work / "server.log").open("w")
+    server = subprocess.Popen([sys.executable, "-m", "plantsolve.cli", "serve", "--port", str(port)], env=env,
+                              stdout=log, stderr=subprocess.STDOUT, cwd=work)
+    base = f"http://127.0.0.1:{port}"
+    submit = lambda: httpx.post(f"{base}/v1/test-compute/jobs", json={"values": [1.5, 2.5]}, timeout=patience)  # noqa: E731
+    ready = lambda: httpx.get(f"{base}/readyz", timeout=patience)  # noqa: E731
+    rows = []
+    try:
+        deadline = time.monotonic() + 120
+        while _timed(ready)[0] != "200":
+            if time.monotonic() > deadline or server.poll() is not None:
+                raise SystemExit(f"the server did not start: {(work / 'server.log').read_text()[-2000:]}")
+            time.sleep(0.3)
+        with concurrent.futures.ThreadPoolExecutor(8) as pool:  # connections pooled while the link works
+            list(pool.map(lambda _: submit(), range(32)))
+        time.sleep(1.0)  # idle in the pool, as between requests
+        proxy.swallow()
+        for label, call in (("submit", submit), ("/readyz", ready), ("submit again", submit),
+                            ("/readyz again", ready)):
+            answer, took = _timed(call)
+            rows.append((f"{label} through the black hole", f"{answer} after {took:.1f} s"))
+        proxy.forward()
+        back = time.monotonic()
+        while _timed(ready)[0] != "200" and time.monotonic() - back < 2 * patience:
+            time.sleep(0.2)
+        answer, took = _timed(submit)
+        rows.append(("/readyz 200 after the link is back", f"{time.monotonic() - back - took:.1f} s"))
+        rows.append(("submit after", f"{answer} after {took:.2f} s"))
+    finally:
+        proxy.close()
+        server.terminate()
+        try:
+            server.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            server.kill()
+            server.wait()
+        log.close()
+        with psycopg.connect(ADMIN, autocommit=True) as admin:
+            admin.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+    return rows
+
+
+def black_hole(args: argparse.Namespace) -> int:
+    sides = [("this", REPO)]
+    remove = None
+    if args.before != "none":
+        if Path(args.before).is_dir():
+            sides.insert(0, (Path(args.before).name, Path(args.before)))
+        else:
+            folder = Path(tempfile.mkdtemp(prefix="outage-before-")) / "before"
+            subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), args.before],
+                           check=True, capture_output=True)
+            remove = folder
+            sides.insert(0, (args.before, folder))
+    try:
+        measured = [(label, black_hole_side(code, args.patience)) for label, code in sides]
+    finally:
+        if remove is not None:
+            subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(remove)], check=False)
+    print(f"PostgreSQL through a black hole (DATABASE_WAIT_SECONDS 3, DATABASE_STATEMENT_SECONDS 10: the shipped "
+          f"defaults; a request given {args.patience:g} s)\n")
+    print("| measure | " + " | ".join(label for label, _ in measured) + " |")
+    print("| --- |" + " --- |" * len(measured))
+    for i, (measure, _) in enumerate(measured[0][1]):
+        print(f"| {measure} | " + " | ".join(rows[i][1] for _, rows in measured) + " |")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--outage", type=float, default=20.0, help="seconds PostgreSQL is down (default 20)")
     parser.add_argument("--lease", type=float, default=8.0, help="LEASE_SECONDS of the server (default 8)")
+    parser.add_argument("--black-hole", action="store_true", help="a link that dies without a word (see above)")
+    parser.add_argument("--before", default="main", help="--black-hole: the checkout beside this one ('none': none)")
+    parser.add_argument("--patience", type=float, default=60.0, help="--black-hole: seconds a request is given")
     args = parser.parse_args()
+    if args.black_hole:
+        return black_hole(args)
     name = f"plantsolve_outage_{uuid.uuid4().hex[:8]}"
     with psycopg.connect(ADMIN, autocommit=True) as admin:
         admin.execute(f'CREATE DATABASE "{name}"')

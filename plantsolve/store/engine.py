@@ -66,7 +66,7 @@ def make_engine(url: str, *, wait: float = WAIT_SECONDS, statement: float = STAT
 
 # A pooled connection that was idle this long is pinged before a request uses it (one that came back a moment
 # ago is not: under load a ping per request cost a round trip and a fifth of a submission's CPU time)
-PING_IDLE_SECONDS = 1.0
+PING_IDLE_SECONDS = 0.25
 
 
 @functools.cache

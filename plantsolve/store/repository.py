@@ -153,6 +153,10 @@ class JobRepository:
         if self.writer is not None:
             self.writer.close()
 
+    @property
+    def _engine(self):
+        return self.sessions.kw["bind"]
+
     def _core(self):
         """A connection in a transaction, committed on leaving (rolled back on an error), for Core statements on the
         hot paths (submit, claim, progress, finish): an ORM session's bookkeeping costs more than such a write."""
@@ -175,7 +179,8 @@ class JobRepository:
         record = _record(values)
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
         try:
-            with self.writing(), self._core() as connection:
+            # one statement is its own transaction: no BEGIN and COMMIT round trips around it (PostgreSQL)
+            with self.writing(), self._engine.connect().execution_options(isolation_level="AUTOCOMMIT") as connection:
                 connection.execute(INSERT_JOB, {name: value for name, value in record.items() if value is not None})
         except IntegrityError:
             existing = self.get_by_idempotency_key(key) if key is not None else None
