@@ -102,7 +102,10 @@ class CeleryDispatcher:
         if spec is not None:
             soft, hard = self.ctx.limits(spec)
             limits = {"soft_time_limit": soft, "time_limit": hard}
-        message = self.celery.amqp.as_task_v2(str(uuid.uuid4()), "plantsolve.run_job", args=[str(job_id)], **limits)
+        args = [str(job_id)]
+        # the representations the worker logs, given: Celery's own (saferepr, bounded for any argument) cost more
+        message = self.celery.amqp.as_task_v2(str(uuid.uuid4()), "plantsolve.run_job", args=args, argsrepr=repr(args),
+                                              kwargsrepr="{}", **limits)
         with self._publishing:
             try:
                 if self._producer is None:
