@@ -105,7 +105,7 @@ def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None
     pessimistic disconnect handling, with a bounded ping)."""
 
     @event.listens_for(engine, "do_connect")
-    def connect(dialect, record, cargs, cparams):
+    def connect(_dialect, record, cargs, cparams):
         connection = bounded_connection_class().connect(*cargs, **cparams)
         connection.round_trip_seconds = statement + wait
         record.info["returned"] = time.monotonic()
@@ -116,7 +116,7 @@ def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None
         record.info["returned"] = time.monotonic()
 
     @event.listens_for(engine, "checkout")
-    def ping_after_idle(dbapi_connection, record, proxy) -> None:
+    def ping_after_idle(dbapi_connection, record, *_proxy) -> None:
         if time.monotonic() - record.info.get("returned", 0.0) < PING_IDLE_SECONDS:
             return
         bound = dbapi_connection.round_trip_seconds

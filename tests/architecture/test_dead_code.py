@@ -16,8 +16,9 @@ REPO = Path(__file__).resolve().parents[2]
 ROOMS = ["plantsolve/jobs", "plantsolve/store", "plantsolve/workers", "plantsolve/app/main.py", "plantsolve/cli.py"]
 # Alembic reads a revision's module-level names and calls upgrade/downgrade by name
 EXCLUDE = ["plantsolve/store/migrations"]
-# decorated functions a framework calls: FastAPI routes, Celery signal handlers, pydantic validators
-DECORATORS = ["@app.get", "@signals.*", "@field_validator", "@contextmanager"]
+# decorated functions a framework calls: FastAPI routes, Celery signal handlers, pydantic validators, SQLAlchemy
+# event listeners
+DECORATORS = ["@app.get", "@signals.*", "@field_validator", "@contextmanager", "@event.listens_for"]
 STAY = {
     "__getattr__": "plantsolve.store's lazy re-exports (PEP 562: Python calls it)",
     "openapi": "FastAPI reads app.openapi",
