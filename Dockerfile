@@ -12,7 +12,7 @@ WORKDIR /src
 COPY requirements/image.txt ./requirements/image.txt
 # compiled to bytecode here: the image's processes write none (PYTHONDONTWRITEBYTECODE) and would otherwise compile
 # every module they import, seconds of CPU for each `plantsolve solve` and each worker
-RUN uv pip install --python /opt/venv/bin/python --require-hashes --compile-bytecode -r requirements/image.txt
+RUN uv pip install --python /opt/venv/bin/python --compile-bytecode --require-hashes -r requirements/image.txt
 COPY pyproject.toml README.md ./
 COPY plantsolve ./plantsolve
 RUN uv pip install --python /opt/venv/bin/python --no-deps --compile-bytecode .
