@@ -45,10 +45,12 @@ SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
 LIMIT_TABLES = ("Surge Line", "Choke Line")
 TURBINE_TABLES = ("Min Pressure Ratio", "Max Pressure Ratio")
 _KEYWORDS = {k.lower(): k for k in SPEED_TABLES + LIMIT_TABLES + TURBINE_TABLES}
-# bounds on a table's key: beyond them no cycle code reads the map (GSP: 40 beta values, 150 speeds), and a
-# garbled key must not make the reader allocate for millions of values
+# bounds on a table's key: a garbled key must not make the reader allocate for millions of values; GSP itself
+# reads at most 40 arguments (beta values, or the flows of a limit line) and 150 parameters (speeds) a table
 MAX_ARGUMENTS = 200
 MAX_ROWS = 2000
+GSP_MAX_ARGUMENTS = 40
+GSP_MAX_PARAMETERS = 150
 MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
@@ -191,7 +193,7 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
                      "14 speeds of 9 beta values)", ("file", "line", n))
     if cols - 1 > MAX_ARGUMENTS or rows - 1 > MAX_ROWS:
         raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
-                     f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads 150 of 40)", ("file", "line", n))
+                     f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads {GSP_MAX_PARAMETERS} of {GSP_MAX_ARGUMENTS})", ("file", "line", n))
     src.i += 1
     args, _ = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
     params, values, value_lines, param_lines = [], [], [], []
