@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
 
 from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel, unit
 
@@ -113,10 +113,13 @@ BETA_CONVENTION = (
     "beta line crosses each speed line exactly once.")
 
 
+MAX_BETA_LINES = 40  # GSP's map table format: at most 40 argument values a table
+
+
 class BetaGridOption(StrictModel):
     """The auxiliary-coordinate (beta/R-line) grid the fitted map is tabulated on for cycle codes."""
 
-    lines: Integer = Field(default=21, ge=2, le=40, description="Number of beta lines, from 0 (choke) to 1 "
+    lines: Integer = Field(default=21, ge=2, le=MAX_BETA_LINES, description="Number of beta lines, from 0 (choke) to 1 "
                            "(surge). At most 40: GSP reads at most 40 argument values in a map table (its 'Map "
                            "table format'), and one grid feeds every export and the (speed, beta) query.")
     spacing: Literal["adaptive", "even"] = Field(
@@ -125,6 +128,16 @@ class BetaGridOption(StrictModel):
         "fitted lines most (Ramer-Douglas-Peucker splitting): steep choke ends and the kinks of broken-line fits "
         "get nodes. 'even': evenly spaced, as Smooth C writes them. Either way beta_map states how far the "
         "table departs from each line.")
+
+    @field_validator("lines", mode="before")
+    @classmethod
+    def _within_gsp(cls, value: Any) -> Any:
+        # refused rather than capped: the one grid feeds every export and the (speed, beta) query, so a capped
+        # GasTurb file would disagree with the others; 40 adaptive lines already bring the table far inside the fit
+        if isinstance(value, int) and not isinstance(value, bool) and value > MAX_BETA_LINES:
+            raise ValueError(f"at most {MAX_BETA_LINES} beta lines: GSP reads at most {MAX_BETA_LINES} values a map "
+                             f"table row (the GasTurb export's beta values); got {value}")
+        return value
     shape: Literal["parabola", "straight"] = Field(
         default="parabola", description="Beta lines as parabolas (p = 2) or straight lines (p = 1) "
         "through the vertex. " + BETA_CONVENTION)
