@@ -249,7 +249,9 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         b = result.beta_map
         title = (f"99    plantsolve perfmap compressor map{' (' + where + ')' if where else ''}; flow "
                  f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}; beta 0 at choke, 1 at surge, "
-                 f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}")
+                 f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}"
+                 + ("" if b.table_pressure_max_rel_error is None else
+                    f"; table within {100 * b.table_pressure_max_rel_error:.2g} % of the fitted pressure"))
         surge, choke = np.argsort(W[:, -1]), np.argsort(W[:, 0])
         text = [title, "Reynolds: RNI=1 f=1 RNI=1 f=1"]
         text += _block("Mass Flow", beta, speeds, W) + _block("Efficiency", beta, speeds, E)
