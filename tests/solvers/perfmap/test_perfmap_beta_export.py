@@ -23,6 +23,7 @@ from plantsolve.solvers.perfmap.artifacts import cycle_code_artifacts
 from plantsolve.solvers.perfmap.beta_grid import (
     BetaFrame,
     BetaGridError,
+    adaptive_beta,
     check_single_crossings,
 )
 from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
@@ -111,6 +112,24 @@ def test_beta_nodes_of_closed_form_speed_lines_match_the_closed_form(shape, p, s
         xs, xc = ends[1], ends[0]
         assert np.array(line.efficiency) == pytest.approx(0.9 - 0.2 * ((x - xs) / (xc - xs) - 0.4) ** 2, abs=1e-9)
         assert line.flow[0] == pytest.approx(xc, rel=1e-12) and line.flow[-1] == pytest.approx(xs, rel=1e-12)
+
+
+def test_adaptive_beta_puts_the_nodes_on_the_kinks_of_broken_lines():
+    """Two broken lines over 1001 candidate betas (flow falling with beta): one with kinks at beta 0.3 and 0.7, one
+    with a kink at 0.05 near its choke end. Five beta values: the ends and exactly the three kinks, so the chords
+    are the lines; with three the sharper kinks win; nodes never closer than 2e-4 of a line's flow range."""
+    candidates = np.round(np.linspace(0, 1, 1001), 12)
+    x = np.vstack([10 - 5 * candidates, 20 - 8 * candidates])
+    y1 = np.interp(candidates, [0, 0.3, 0.7, 1], [1.2, 1.6, 1.8, 1.85])
+    y2 = np.interp(candidates, [0, 0.05, 1], [1.0, 2.0, 2.4])
+    y = np.vstack([y1, y2])
+    assert adaptive_beta(x, y, candidates, 5).tolist() == [0.0, 0.05, 0.3, 0.7, 1.0]
+    assert adaptive_beta(x, y, candidates, 3).tolist() == [0.0, 0.05, 1.0]
+    steep = np.vstack([10 - 5 * candidates ** 8, 20 - 8 * candidates])  # line 1 barely moves near beta 0
+    beta = adaptive_beta(steep, y, candidates, 8)
+    k = np.searchsorted(candidates, beta)
+    gaps = np.abs(np.diff(steep[:, k], axis=1)) / np.ptp(steep, axis=1)[:, None]
+    assert len(beta) == 8 and gaps.min() >= 2e-4
 
 
 def test_gasturb_table_of_the_closed_form_map_holds_its_values_and_surge_line():
