@@ -38,7 +38,7 @@ and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86
 0.8 of its memory on plant-like networks of 10,000 and 100,000. Where a connection has to be cut,
 the rounds after the cut run on the LU and the cut is the LU's (solve.py): decided on the LDL^T round's
 pose where that settles it (cuts.settled_cut), else on an LU pass (measured: 0.90 times the LU's time on
-the 40,000-component plant-like network, which needs one cut; 1.12-1.30 with an LU pass always).
+the 40,000-component plant-like network, which needs one cut; 1.19 in the same run with an LU pass always).
 """
 
 from __future__ import annotations
