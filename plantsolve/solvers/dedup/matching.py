@@ -22,6 +22,7 @@ from plantsolve.solvers.geometry import kabsch
 
 MAX_ICP_STEPS = 30
 MAX_ANCHORS = 6
+VERIFY_SAMPLE = 16  # points a transform is tried on before all of them
 
 
 @dataclass
@@ -250,6 +251,11 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     moved = rep.local @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
     if len(moved) == 0 or len(moved) != len(member.local):
         return hausdorff(moved, member.local, member.tree)
+    # a wrong transform (most the pool tries) already moves some of a few points farther than tol from the
+    # member: that alone is a value above tol, and the whole set is queried only for the others
+    few = member.tree.query(moved[::max(1, len(moved) // VERIFY_SAMPLE)], k=1, distance_upper_bound=tol * 1.0001)[0]
+    if float(np.max(few)) > tol:
+        return float(np.max(few))
     dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
     first = float(np.max(dist))
     if first > tol:

@@ -136,7 +136,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         progress(0.05, "tessellating products in world coordinates")
         reader = ExplicitReader(model, record_closures=True)  # the closures: the sharing's old geometry
         points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
-        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities)
+        ids_before = compaction.instance_ids(model)
+        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities, ids_before)
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
         warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, model_sizes(points.values())))
@@ -162,12 +163,14 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         pooled = pool_transforms(classes, tol)
         lap("matching")
         detached = sharing.Detached(model)
-        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached)
+        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
+                                placements=reader.placements)
         out_classes, shared = described(classes)
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
-        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures)
-        del detached, reader, classes, candidates, products, points, triangles, p
+        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
+                                     everything=compaction.grown(model, ids_before))
+        del detached, reader, classes, candidates, products, points, triangles, p, ids_before
         lap("sharing")
         removed = {}
         if opts.postpass:
