@@ -16,7 +16,7 @@ from plantsolve.solvers.dedup import changes as diffing
 from plantsolve.solvers.dedup import compaction, ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
-from plantsolve.solvers.dedup.matching import one_to_one
+from plantsolve.solvers.dedup.matching import Shape, one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
@@ -128,10 +128,19 @@ def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[
     return out[:limit]
 
 
-def deviation(before: np.ndarray, after: np.ndarray) -> float:
+def deviation(before: np.ndarray, after: np.ndarray, known: Shape | None = None) -> float:
     """Two-way Hausdorff distance of two point sets, centred on the first for accuracy. When the sets
-    are equally large and every point of the first has another nearest point in the second, that
-    map is one-to-one and the way back is no farther: one tree, one query."""
+    are equally large and every point of one has another nearest point in the other, that map is
+    one-to-one and the way back is no farther: one tree, one query. ``known``: the matching's shape of
+    ``before`` (its centre, centred points and k-d tree, built while matching): the written points are
+    then looked up in that tree, and only a map that is not one-to-one needs a tree of theirs."""
+    if known is not None:
+        a, b = known.local, after - known.centre
+        dist, idx = known.tree.query(b)
+        first = float(np.max(dist))
+        if len(a) == len(b) and one_to_one(idx, len(a)):
+            return first
+        return max(first, float(np.max(cKDTree(b).query(a)[0])))
     c = before.mean(axis=0)
     a, b = before - c, after - c
     dist, idx = cKDTree(b).query(a)

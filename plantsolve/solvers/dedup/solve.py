@@ -166,6 +166,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
                                 placements=reader.placements)
         out_classes, shared = described(classes)
+        # the proof looks the written points up in the trees the matching built of the products' own
+        shapes = {c.product.GlobalId: c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
         model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
@@ -193,7 +195,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             if prod is None or prod.id() not in after_points:
                 missing.append(g)
                 continue
-            deviations.append(proof.deviation(pts, after_points[prod.id()]))
+            deviations.append(proof.deviation(pts, after_points[prod.id()], shapes.get(g)))
         semantic_after = proof.semantic_fingerprint(check)
         semantic_equal = semantic_after == semantic_before and not missing
         differences = proof.fingerprint_differences(semantic_before, semantic_after)
@@ -205,7 +207,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         judged = proof.verdict(check, optimized, path, rules)
         found, inherited_errors = judged.errors, judged.inherited
         counts_after = proof.entity_counts(check)
-        del check, again, back_products
+        del check, again, back_products, shapes
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)
