@@ -97,17 +97,19 @@ def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
     detached = np.zeros(size, dtype=bool)
     held = closure(model, roots, known)
     detached[held[held < size]] = True
+    del held  # the mask says it (the ids of the old geometry are as many as the model's instances)
     styled = [st for item, sts in styled_by.items() if item < size and detached[item] for st in sts]
     if styled:
         detached[closure(model, styled)] = True
-    inside = everything[detached[everything]]
-    outside = everything[~detached[everything]]
+    within = detached[everything]
     if from_outside is None:
-        from_outside = len(outside) * TRAVERSE_ONE_LEVEL_US < len(inside) * REFERENCED_WITHIN_US
+        n_inside = int(np.count_nonzero(within))
+        from_outside = (len(everything) - n_inside) * TRAVERSE_ONE_LEVEL_US < n_inside * REFERENCED_WITHIN_US
     live = ~detached
     if from_outside:  # every instance outside marks what it references inside
-        _spread(model, outside, live)
+        _spread(model, everything[~within], live)
     else:  # the core names the detached instances referenced only from inside; the others stay
+        inside = everything[within]
         only_within = np.zeros(size, dtype=bool)
         only_within[np.asarray(model._ids_referenced_only_within(inside.tolist()), dtype=np.int64)] = True
         entries = inside[~only_within[inside]]

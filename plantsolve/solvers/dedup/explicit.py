@@ -52,6 +52,12 @@ class ExplicitReader:
         self._items: dict[int, tuple[np.ndarray, int] | None] = {}
         self.placements = Placements()  # the sharing places the same products again
 
+    def forget_points(self) -> None:
+        """Drop the points read so far (each body's and item's, in their own frames), keeping the closures
+        and the placements: what the phases after the geometry still ask of the reader."""
+        self._bodies.clear()
+        self._items.clear()
+
     def _loop_points(self, item) -> tuple[list, int] | None:
         """(points, face count) of a faceted item: every IfcCartesianPoint under it (each once)."""
         instances = self.model.traverse(item)

@@ -136,6 +136,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         progress(0.05, "tessellating products in world coordinates")
         reader = ExplicitReader(model, record_closures=True)  # the closures: the sharing's old geometry
         points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
+        reader.forget_points()  # the world points are all the matching needs
         ids_before = compaction.instance_ids(model)
         counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities, ids_before)
         if not points:
@@ -170,9 +171,11 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         shapes = {c.product.GlobalId: c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
+        ids_now = compaction.grown(model, ids_before)
+        del ids_before
         model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
-                                     everything=compaction.grown(model, ids_before))
-        del detached, reader, classes, candidates, products, points, triangles, p, ids_before
+                                     everything=ids_now)
+        del detached, reader, classes, candidates, products, points, triangles, p, ids_now
         lap("sharing")
         removed = {}
         if opts.postpass:
