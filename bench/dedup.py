@@ -260,12 +260,13 @@ def _goal_rows(rings: int, old: dict, new: dict, recycle: dict) -> list[str]:
     if "error" not in recycle:
         rows.append(("against ifcpatch RecycleNonRootedElements (CPU s, this run: "
                      f"{recycle['cpu_total']:.1f} s, rate {100 * recycle['rate']:.2f} %)",
-                     f"{old['cpu_total'] / recycle['cpu_total']:.2f}×", f"{new['cpu_total'] / recycle['cpu_total']:.2f}×",
+                     f"{old['cpu_total'] / recycle['cpu_total']:.2f}×",
+                     f"{new['cpu_total'] / recycle['cpu_total']:.2f}×",
                      "faster", new["cpu_total"] < recycle["cpu_total"]))
     same = all(old[k] == new[k] for k in ("shared", "classes", "deviation", "rate", "valid", "optimized"))
     rows.append(("accuracy: shared, classes, max deviation, rate, validity, bytes",
-                 f"{old['shared']}, {old['classes']}, {old['deviation']:.3e}, {100 * old['rate']:.4f} %, {old['valid']}, "
-                 f"{old['optimized']:,}", f"{new['shared']}, {new['classes']}, {new['deviation']:.3e}, "
+                 f"{old['shared']}, {old['classes']}, {old['deviation']:.3e}, {100 * old['rate']:.4f} %, "
+                 f"{old['valid']}, {old['optimized']:,}", f"{new['shared']}, {new['classes']}, {new['deviation']:.3e}, "
                  f"{100 * new['rate']:.4f} %, {new['valid']}, {new['optimized']:,}", "identical", same))
     out = [f"\nGoals, dedup of {products:,} products ({rings} rings IFC4 product_shape + post-pass), CPU seconds of "
            "the solve's process; baseline = the other checkout's code in this run\n",

@@ -43,7 +43,8 @@ def open_path(path: str) -> ifcopenshell.file:
     largest = model.get_max_id()
     # the optimization numbers what it adds after the largest instance: at most a few per instance there is;
     # the instances are counted only when the largest number alone leaves doubt (there are at most that many)
-    if 3 * largest + 1000 > MAX_INSTANCE_NUMBER and largest + 2 * len(model.entity_names()) + 1000 > MAX_INSTANCE_NUMBER:
+    if 3 * largest + 1000 > MAX_INSTANCE_NUMBER and \
+            largest + 2 * len(model.entity_names()) + 1000 > MAX_INSTANCE_NUMBER:
         raise reject(f"instance #{largest}: IfcOpenShell addresses instance numbers up to #{MAX_INSTANCE_NUMBER:,}, "
                      "and the optimized model numbers what it adds after the largest; renumber the file's instances "
                      "from #1, as any IFC export or STEP tool does")

@@ -163,6 +163,20 @@ def _both_ways(rep, member, m: Match) -> float:
     return hausdorff(moved, member.local)
 
 
+def test_a_groups_signatures_are_each_shapes_own():
+    """The group's signatures in one quantile call are, row by row and bit for bit, each shape's computed alone."""
+    from plantsolve.solvers.dedup.grouping import QUANTILES, signatures
+
+    rng = np.random.default_rng(3)
+    base = rng.normal(size=(40, 3)) * [3.0, 2.0, 1.0]
+    shapes = [make_shape(base @ pose(10 * k, 20, 30 * k, WORLD_ORIGIN)[:3, :3].T + k
+                         + rng.normal(scale=1e-3, size=(40, 3))) for k in range(6)]
+    for row, shape in zip(signatures(shapes), shapes):
+        d = np.sqrt(np.sum(shape.local * shape.local, axis=1))
+        alone = np.concatenate([np.sqrt(np.maximum(shape.eigenvalues, 0.0)), [shape.radius], np.quantile(d, QUANTILES)])
+        assert np.array_equal(row, alone)
+
+
 def test_verify_in_one_direction_is_the_two_way_hausdorff_distance():
     rng = np.random.default_rng(5)
     rep_points = rng.normal(size=(60, 3)) + 1e6
