@@ -145,12 +145,12 @@ def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: floa
     return out
 
 
-def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
-    """``point`` on the run: within FIT_SNAP of its line (a hole or a clip that far off an axle's or a bar's axis
-    holds it all the same: nearer, it would cut into the rod) and between its ends (within SNAP)."""
+def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP) -> bool:
+    """``point`` on the run: within ``reach`` of its line (FIT_SNAP: a hole or a clip that far off an axle's or a
+    bar's axis holds it all the same; nearer, it would cut into the rod) and between its ends (within SNAP)."""
     v = np.asarray(point, float) - start
     t = float(v @ axis)
-    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= FIT_SNAP
+    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= reach
 
 
 def _clean(x: float) -> float | int:
@@ -196,27 +196,51 @@ class Assembly:
         self.parts[id] = placed
         self._neighbours[id] = set()
         self._pebble.add_body(id)
-        found: dict[str, list[Connection]] = {}
-        fits: dict[str, list[Connection]] = {}
-        for ci, key in enumerate(keys):
+        found = self._matches(id, SNAP, FIT_SNAP)
+        for ci, key in enumerate(keys):  # its points go into the tables only now: a part does not meet itself
             mine = shape.connectors[ci].type
-            if mine in FITS:
-                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
-                    fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
-                                                                 tuple(_clean(v) for v in where),
-                                                                 tuple(_clean(v) for v in dirs[ci])))
+            if key is not None:
+                self._slots.setdefault(key, []).append((id, ci))
+                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
+            else:
                 for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
                     self._runs.setdefault(cell, []).append((id, ci))
+        for other, conns in found.items():
+            self._links[(other, id)] = conns
+            self._neighbours[other].add(id)
+            self._neighbours[id].add(other)
+            if not self._pebble_stale:
+                for j in self._pair_joints(other, id, conns):
+                    self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
+        return [c for conns in found.values() for c in conns]
+
+    def _matches(self, id: str, reach: float, fit_reach: float) -> dict[str, list[Connection]]:
+        """The connections placed part ``id`` makes with the parts in the tables (itself left out): points that meet
+        within ``reach`` (a hole or a clip within ``fit_reach`` of a run's line), cylinders that fit within
+        ``fit_reach`` of a bore's line. A fit counts only between parts that no typed point joins."""
+        placed = self.parts[id]
+        shape, points, dirs = placed.shape, placed.points, placed.directions
+        found: dict[str, list[Connection]] = {}
+        fits: dict[str, list[Connection]] = {}
+        for ci, key in enumerate(placed.keys):
+            mine = shape.connectors[ci].type
+            length = shape.connectors[ci].length
+            if mine in FITS:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci], fit_reach):
+                    if other != id:
+                        fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                     tuple(_clean(v) for v in where),
+                                                                     tuple(_clean(v) for v in dirs[ci])))
                 continue
             if key is not None:
-                candidates = [(o, oi, points[ci]) for o, oi in self._near(key, points[ci])]
-                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci])]
+                candidates = [(o, oi, points[ci]) for o, oi in self._near(points[ci], reach)]
+                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci], fit_reach)]
             else:
-                candidates = [(o, oi, self.parts[o].points[oi]) for o, oi in self._points_along(points[ci], dirs[ci],
-                                                                                            runs[ci])]
+                candidates = [(o, oi, self.parts[o].points[oi])
+                              for o, oi in self._points_along(points[ci], dirs[ci], length, fit_reach)]
             seen = set()
             for other, oi, where in candidates:
-                if (other, oi) in seen:
+                if (other, oi) in seen or other == id:
                     continue
                 seen.add((other, oi))
                 theirs = self.parts[other].shape.connectors[oi].type
@@ -233,41 +257,31 @@ class Assembly:
                     _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
             if mine in ("ring", "stud"):
-                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci]):
+                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci], reach):
+                    if other == id:
+                        continue
                     axis = dirs[ci] if mine == "stud" else self.parts[other].directions[oi]
                     found.setdefault(other, []).append(Connection(other, oi, id, ci, "stud",
                                                                   tuple(_clean(v) for v in where),
                                                                   tuple(_clean(v) for v in axis)))
             if mine == "finger" and key is None:
-                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
-                    found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
-                                                                  tuple(_clean(v) for v in where),
-                                                                  tuple(_clean(v) for v in dirs[ci])))
-            if key is not None:
-                self._slots.setdefault(key, []).append((id, ci))
-                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
-            else:
-                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
-                    self._runs.setdefault(cell, []).append((id, ci))
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci], fit_reach):
+                    if other != id:
+                        found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                      tuple(_clean(v) for v in where),
+                                                                      tuple(_clean(v) for v in dirs[ci])))
         for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
             if other not in found:
                 found[other] = conns
-        for other, conns in found.items():
-            self._links[(other, id)] = conns
-            self._neighbours[other].add(id)
-            self._neighbours[id].add(other)
-            if not self._pebble_stale:
-                for j in self._pair_joints(other, id, conns):
-                    self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
-        return [c for conns in found.values() for c in conns]
+        return found
 
-    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray):
+    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray, reach: float = FIT_SNAP):
         """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
         (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
         ``fit_keyed``; for a run of hinge fingers the runs of fingers it interlocks with (kind ``hinge``). The
         point is the middle of the overlap."""
         seen = set()
-        for cell in _cells_along(start, axis, mine.length, FIT_SNAP):
+        for cell in _cells_along(start, axis, mine.length, reach):
             for other, oi in self._runs.get(cell, ()):
                 if (other, oi) in seen:
                     continue
@@ -279,7 +293,7 @@ class Assembly:
                     continue
                 v = o.points[oi] - start
                 along = float(v @ axis)
-                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
+                if float(np.linalg.norm(v - along * axis)) > reach:
                     continue
                 o_end = along + theirs.length * float(o.directions[oi] @ axis)
                 if kind == "hinge":  # two runs of hinge fingers on one axis interlock where they overlap
@@ -296,47 +310,49 @@ class Assembly:
                 lo, hi = max(min(m_span), min(f_span)), min(max(m_span), max(f_span))
                 yield other, oi, ("fit_keyed" if how == "keyed" else "fit"), start + axis * (lo + hi) / 2
 
-    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray):
+    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray, reach: float = SNAP):
         """(part, connector, stud point) of the studs a ring stands between (for a stud: the rings it is one of
-        the four studs around): facing it, in its plane, RING_REACH from its centre (within FIT_SNAP)."""
+        the four studs around): facing it, in its plane (within ``reach``), RING_REACH from its centre (within
+        FIT_SNAP / 2, or ``reach`` when that is more)."""
         table = self._coarse if mine == "ring" else self._rings
         if not table:
             return
-        for cell in _around(point, RING_REACH + FIT_SNAP, RUN_CELL, RUN_OFFSET):
+        spread = max(FIT_SNAP / 2, reach)
+        for cell in _around(point, RING_REACH + 2 * spread, RUN_CELL, RUN_OFFSET):
             for other, oi in table.get(cell, ()):
                 o = self.parts[other]
                 if mate(mine, o.shape.connectors[oi].type) != "ring" or float(direction @ o.directions[oi]) > -ALIGN:
                     continue
                 v = o.points[oi] - point
-                if abs(float(v @ direction)) <= SNAP and abs(float(np.linalg.norm(v)) - RING_REACH) <= FIT_SNAP / 2:
+                if abs(float(v @ direction)) <= reach and abs(float(np.linalg.norm(v)) - RING_REACH) <= spread:
                     yield other, oi, (point + v if mine == "ring" else point)
 
-    def _runs_near(self, point: np.ndarray):
-        """The runs (axles, bars) that ``point`` lies on (:func:`_on_run`)."""
+    def _runs_near(self, point: np.ndarray, reach: float = FIT_SNAP):
+        """The runs (axles, bars) that ``point`` lies on (within ``reach`` of their line: :func:`_on_run`)."""
         if not self._runs:
             return
         seen = set()
-        for cell in _around(point, FIT_SNAP + 0.5, RUN_CELL, RUN_OFFSET):
+        for cell in _around(point, reach + 0.5, RUN_CELL, RUN_OFFSET):
             for other, oi in self._runs.get(cell, ()):
                 o = self.parts[other]
                 if (other, oi) not in seen and _on_run(point, o.points[oi], o.directions[oi],
-                                                       o.shape.connectors[oi].length):
+                                                       o.shape.connectors[oi].length, reach):
                     seen.add((other, oi))
                     yield other, oi
 
-    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float):
-        """The connection points within SNAP of the run from ``start`` along ``axis`` for ``length``."""
-        for cell in _cells_along(start, axis, length, FIT_SNAP):
+    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP):
+        """The connection points within ``reach`` of the line of the run from ``start`` along ``axis`` for
+        ``length`` (:func:`_on_run`)."""
+        for cell in _cells_along(start, axis, length, reach):
             for other, oi in self._coarse.get(cell, ()):
-                if _on_run(self.parts[other].points[oi], start, axis, length):
+                if _on_run(self.parts[other].points[oi], start, axis, length, reach):
                     yield other, oi
 
-    def _near(self, key: tuple, point: np.ndarray):
-        """The (part, connector) slots within SNAP of ``point`` (whose own cell is ``key``)."""
-        cells = _around(point, SNAP, POINT_CELL, POINT_OFFSET)
-        for cell in cells if len(cells) > 1 else (key,):
+    def _near(self, point: np.ndarray, reach: float):
+        """The (part, connector) slots within ``reach`` of ``point``."""
+        for cell in _around(point, reach, POINT_CELL, POINT_OFFSET):
             for other, oi in self._slots.get(cell, ()):
-                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
+                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= reach * reach:
                     yield other, oi
 
     def remove_part(self, id: str) -> None:
