@@ -24,11 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, NOT_DOCKED, OPPOSED, RING_REACH,
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, NOT_DOCKED, OPPOSED,
+                                                   RING_REACH,
                                                    PartShape, collision_boxes, fit, lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
+from plantsolve.solvers.rigidity.pieces import pieces
 from plantsolve.solvers.rigidity.screws import FREEDOM
 
 # LDU: connection points closer than this are one point. Editors write positions with 2 to 3 decimals and
@@ -40,6 +42,16 @@ SNAP = 0.1
 # (beside it, it would cut the bore's wall). Looser than SNAP: a minifigure's arm turned by a rotation printed
 # with 3 digits (0.985 0.17) puts the hand's peg 0.44 LDU off the arm's socket.
 FIT_SNAP = 1.0
+# LDU: how far a connection point may miss its mate for join_pieces to join two pieces the matching within rounding
+# left apart. Models made with an older library keep parts where it drew them (OMR 4489 hangs a head on hinge
+# fingers the 2024 library draws 2 LDU higher); editors' grid snapping leaves a part 2 LDU off (a turntable on a
+# helicopter). Under a quarter of the closest spacing of like points (a stud and a tube 10√2 = 14 LDU apart), so a
+# point still meets one mate at most.
+OFFSET_REACH = 3.0 + SNAP
+# |cos| between a male snap cylinder and the bore it is in: a minifigure's arm swung about the torso's x axis
+# instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
+# FIT_SNAP of each other over the depth they share.
+FIT_ALIGN = math.cos(math.radians(10.0))
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
@@ -171,6 +183,7 @@ class Assembly:
         self._runs: dict[tuple, list[tuple[str, int]]] = {}  # runs by every RUN_CELL cell they pass
         self._rings: dict[tuple, list[tuple[str, int]]] = {}  # rings (kept apart: only studs look for them)
         self._links: dict[tuple[str, str], list[Connection]] = {}
+        self._offsets: dict[tuple[str, str], float] = {}  # pairs joined by join_pieces: their offset
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
         self._pebble_stale = False
@@ -275,6 +288,102 @@ class Assembly:
                 found[other] = conns
         return found
 
+    def part_pieces(self) -> list[list[str]]:
+        """The connected pieces of the parts as joined so far, largest first, parts in the order they were added."""
+        return pieces(list(self.parts), {p: sorted(n) for p, n in self._neighbours.items()})
+
+    def join_pieces(self, reach: float = OFFSET_REACH) -> list[tuple[str, str, float]]:
+        """Join the pieces that the matching within rounding left apart where their connection points miss each
+        other by at most ``reach`` (a part drawn a little off its mate: a slip of the model, or a part the library
+        has redrawn since the model was made). Only between parts of different pieces as matched before this pass,
+        so the result does not depend on the order of the pieces. Returns (part, part, offset in LDU) of each pair
+        joined, the offset the largest of its connections' (:meth:`_gap`)."""
+        groups = self.part_pieces()
+        label = {p: k for k, g in enumerate(groups) for p in g}
+        joined = []
+        for group in groups[1:]:
+            for id in group:
+                for other, conns in self._matches(id, reach, reach).items():
+                    if label[other] == label[id] or (other, id) in self._links or (id, other) in self._links:
+                        continue
+                    gap = max(self._gap(c) for c in conns)
+                    self._links[(other, id)] = conns
+                    self._neighbours[other].add(id)
+                    self._neighbours[id].add(other)
+                    self._offsets[(other, id)] = gap
+                    joined.append((other, id, gap))
+        if joined:
+            self._pebble_stale = True
+        return joined
+
+    def seat_tyres(self) -> list[tuple[str, str]]:
+        """Seat the grouped female fits that no male of their group meets (a tyre whose wheel the snap data gives no
+        rim, such as 122c01's) on the male snap cylinder of another part whose line passes through the fit's centre
+        (within FIT_SNAP, parallel) inside the part's width along that line: the wheel the tyre is pushed onto. A
+        rigid ``group`` connection at the centre. Returns the (tyre, wheel) pairs seated."""
+        seated = []
+        for id, placed in self.parts.items():
+            linked = {c.cb if c.b == id else c.ca for (a, b), conns in self._links.items() if id in (a, b)
+                      for c in conns if c.kind == GROUP}
+            for ci, c in enumerate(placed.shape.connectors):
+                if not (c.type.startswith("group:") and c.type.endswith(":F")) or ci in linked:
+                    continue
+                centre, axis = placed.points[ci], placed.directions[ci]
+                local = np.abs(np.asarray(c.direction, float))
+                half = float(np.asarray(placed.shape.box_size, float) @ local) / 2 / float(np.linalg.norm(local))
+                wheel = self._cylinder_through(id, centre, axis, half)
+                if wheel is None or (wheel[0], id) in self._links or (id, wheel[0]) in self._links:
+                    continue
+                other, oi = wheel
+                self._links[(other, id)] = [Connection(other, oi, id, ci, GROUP, tuple(_clean(v) for v in centre),
+                                                       tuple(_clean(v) for v in axis))]
+                self._neighbours[other].add(id)
+                self._neighbours[id].add(other)
+                seated.append((id, other))
+        if seated:
+            self._pebble_stale = True
+        return seated
+
+    def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
+        """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along
+        ``axis`` (parallel, within FIT_SNAP) that reaches within ``half`` of ``centre`` along it, or None."""
+        for cell in _cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP):
+            for other, oi in self._runs.get(cell, ()):
+                o = self.parts[other]
+                theirs = o.shape.connectors[oi]
+                cos = float(axis @ o.directions[oi])
+                if other == id or theirs.type != "fit_m" or abs(cos) < ALIGN:
+                    continue
+                v = o.points[oi] - centre
+                along = float(v @ axis)
+                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
+                    continue
+                ends = (along, along + theirs.length * cos)
+                if min(max(ends), half) - max(min(ends), -half) > SNAP:
+                    return other, oi
+        return None
+
+    def _gap(self, c: Connection) -> float:
+        """How far a connection's two points miss each other (LDU): between two points their distance; for a run
+        (axle, bar, hinge fingers, a fit cylinder) the other's distance from its line; for a ring how far the stud
+        is off its place around it."""
+        a, b = self.parts[c.a], self.parts[c.b]
+        ca, cb = a.shape.connectors[c.ca], b.shape.connectors[c.cb]
+        pa, pb = a.points[c.ca], b.points[c.cb]
+        v = pb - pa
+        if "ring" in (ca.type, cb.type):
+            axis = a.directions[c.ca]
+            along = float(v @ axis)
+            return math.hypot(along, float(np.linalg.norm(v - along * axis)) - RING_REACH)
+        if ca.length <= 0 and cb.length <= 0:
+            return float(np.linalg.norm(v))
+        axis = a.directions[c.ca] if ca.length > 0 else b.directions[c.cb]
+        return float(np.linalg.norm(v - float(v @ axis) * axis))
+
+    def offsets(self) -> dict[tuple[str, str], float]:
+        """(part, part) -> offset (LDU) of the pairs :meth:`join_pieces` joined."""
+        return dict(self._offsets)
+
     def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray, reach: float = FIT_SNAP):
         """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
         (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
@@ -289,17 +398,23 @@ class Assembly:
                 o = self.parts[other]
                 theirs = o.shape.connectors[oi]
                 kind = mate(mine.type, theirs.type)
-                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(float(axis @ o.directions[oi])) < ALIGN:
+                cos = float(axis @ o.directions[oi])
+                parallel = FIT_ALIGN if kind == "fit" else ALIGN
+                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(cos) < parallel:
                     continue
                 v = o.points[oi] - start
                 along = float(v @ axis)
-                if float(np.linalg.norm(v - along * axis)) > reach:
-                    continue
-                o_end = along + theirs.length * float(o.directions[oi] @ axis)
+                o_end = along + theirs.length * cos
                 if kind == "hinge":  # two runs of hinge fingers on one axis interlock where they overlap
                     lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
-                    if hi - lo >= FIT_OVERLAP:
+                    if float(np.linalg.norm(v - along * axis)) <= reach and hi - lo >= FIT_OVERLAP:
                         yield other, oi, "hinge", start + axis * (lo + hi) / 2
+                    continue
+                # a cylinder is in the other where their axes stay within reach of each other over their overlap
+                lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
+                if hi - lo < FIT_OVERLAP or any(
+                        float(np.linalg.norm(q - float(q @ axis) * axis)) > reach
+                        for q in (v + o.directions[oi] * ((t - along) / cos) for t in (lo, hi))):
                     continue
                 male, female = (mine, theirs) if mine.type == "fit_m" else (theirs, mine)
                 m_span, f_span = ((0.0, mine.length), (along, o_end)) if mine.type == "fit_m" else (
@@ -373,8 +488,9 @@ class Assembly:
             else:
                 table.pop(key, None)
         for other in self._neighbours.pop(id):
-            self._links.pop((other, id), None)
-            self._links.pop((id, other), None)
+            for pair in ((other, id), (id, other)):
+                self._links.pop(pair, None)
+                self._offsets.pop(pair, None)
             self._neighbours[other].discard(id)
         self._pebble_stale = True
 

@@ -367,6 +367,7 @@ def generated_part(number: str) -> PartShape | None:
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)
 FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
+FIT_STEP = 0.5  # LDU: steps of the two profiles this close along the line are one step (a placement's rounding)
 FIT_OVERLAP = 3.0  # LDU: the least depth of a fit (most of a stud's 4: a stud 2 LDU in is not held)
 BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
 
@@ -392,7 +393,7 @@ def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float
     for a, b in itertools.pairwise(edges):
         t = (a + b) / 2
         m, f = _section(male, m_start, m_end, t), _section(female, f_start, f_end, t)
-        if m is None or f is None:
+        if m is None or f is None or b - a < FIT_STEP:  # a sliver between two steps drawn a little apart
             continue
         (m_shape, m_radius), (f_shape, f_radius) = m, f
         bar_in_axle_hole = f_shape == "A" and m_shape != "A" and abs(m_radius - BAR_RADIUS) <= FIT_GRIP

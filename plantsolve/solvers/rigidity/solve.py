@@ -12,7 +12,7 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
+from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, JointSpec
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
@@ -84,6 +84,8 @@ def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
             unknown.append(UnknownPart(id=part.id, part=part.part))
             continue
         assembly.add_part(part.id, part.part, part.position, part.rotation)
+    assembly.seat_tyres()
+    assembly.join_pieces()
     return assembly, unknown
 
 
@@ -132,6 +134,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                     for p in part_ids]
     piece_results = _pieces(part_ids, by_part, assembly, source)
     warnings.extend(_piece_warnings(part_results, piece_results, assembly))
+    warnings.extend(_offset_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
@@ -193,6 +196,25 @@ def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assem
                               + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE]),
                               details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]]}))
     return out
+
+
+def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
+    """``offset_joints``: the part pairs joined although their connection points miss each other by more than
+    rounding (:meth:`Assembly.join_pieces`), each with its offset."""
+    offsets = assembly.offsets()
+    if not offsets:
+        return []
+    worst = max(offsets.values())
+    listed = sorted(offsets.items(), key=lambda item: -item[1])
+    return [Diagnostic(code="offset_joints", message=f"{len(offsets)} pair(s) of parts are joined although their "
+                       f"connection points miss each other by more than rounding ({SNAP:g} LDU), up to {worst:.3g} LDU "
+                       f"(at most {OFFSET_REACH:g} is taken for a part drawn off its mate; 1 LDU = 0.4 mm): "
+                       + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
+                                   f"{gap:.3g} LDU" for (a, b), gap in listed[:LISTED_IN_MESSAGE]),
+                       details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
+                                                                         assembly.parts[b].number],
+                                           "offset_ldu": round(gap, 3)} for (a, b), gap in listed[:MAX_LISTED]],
+                                "reach_ldu": OFFSET_REACH})]
 
 
 # Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts
