@@ -52,6 +52,7 @@ OFFSET_REACH = 3.0 + SNAP
 # instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
 # FIT_SNAP of each other over the depth they share.
 FIT_ALIGN = math.cos(math.radians(10.0))
+HALF_PITCH = 10.0  # LDU: half a stud pitch
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
@@ -315,6 +316,65 @@ class Assembly:
         if joined:
             self._pebble_stale = True
         return joined
+
+    def seat_offset_studs(self) -> list[tuple[str, str]]:
+        """Seat the studs of pieces left apart that sit half a stud along an outer row of a part above them: midway
+        between two of its anti-studs (a stud pitch apart, facing the stud, in its plane), with a tube of the part
+        half a pitch inward and the part's side half a pitch outward, the stud is gripped between the tube and the
+        wall (a half-stud offset under a 2-wide plate, as OMR 5935 hangs its skis). Returns the (stud's part,
+        part) pairs seated."""
+        groups = self.part_pieces()
+        label = {p: k for k, g in enumerate(groups) for p in g}
+        seated = []
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type != "stud" or c.length > 0:
+                        continue
+                    for other, oi in self._wall_and_tube(id, placed.points[ci], placed.directions[ci], label):
+                        key = (id, other) if (id, other) in self._links else (other, id)
+                        if key not in self._links:
+                            self._neighbours[other].add(id)
+                            self._neighbours[id].add(other)
+                            seated.append((id, other))
+                        self._links.setdefault(key, []).append(Connection(
+                            other, oi, id, ci, "stud", tuple(_clean(v) for v in placed.points[ci]),
+                            tuple(_clean(v) for v in placed.directions[ci])))
+        if seated:
+            self._pebble_stale = True
+        return seated
+
+    def _wall_and_tube(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict):
+        """(part, tube anti-stud) of each part of another piece that grips the stud at ``point`` (pointing along
+        ``direction``) between a tube and its side (:meth:`seat_offset_studs`)."""
+        mouths: dict[str, list[tuple[int, np.ndarray]]] = {}
+        for cell in _around(point, HALF_PITCH + SNAP, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                v = o.points[oi] - point
+                if (label[other] != label[id] and o.shape.connectors[oi].type == "antistud"
+                        and float(direction @ o.directions[oi]) <= -ALIGN and abs(float(v @ direction)) <= SNAP
+                        and float(np.linalg.norm(v)) <= HALF_PITCH + SNAP):
+                    mouths.setdefault(other, []).append((oi, v))
+        for other, found in mouths.items():
+            ends = [v for _, v in found if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP]
+            pairs = [(a, b) for a, b in itertools.combinations(ends, 2) if float(np.linalg.norm(a + b)) <= SNAP]
+            if not pairs:
+                continue
+            o = self.parts[other]
+            gripped = next((oi for row, _ in pairs for oi, v in found  # the tube half a pitch across the row
+                            if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP and abs(float(v @ row)) <= SNAP
+                            and self._outside(o, point - v, v)), None)
+            if gripped is not None:
+                yield other, gripped
+
+    @staticmethod
+    def _outside(o: Placed, point: np.ndarray, along: np.ndarray) -> bool:
+        """``point`` on or beyond the side of ``o``'s box that the direction ``along`` crosses."""
+        local = o.rotation.T @ (point - o.position) - np.asarray(o.shape.box_center, float)
+        k = int(np.argmax(np.abs(o.rotation.T @ along)))
+        return abs(float(local[k])) >= float(o.shape.box_size[k]) / 2 - SNAP
 
     def seat_tyres(self) -> list[tuple[str, str]]:
         """Seat the grouped female fits that no male of their group meets (a tyre whose wheel the snap data gives no

@@ -85,6 +85,7 @@ def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
             continue
         assembly.add_part(part.id, part.part, part.position, part.rotation)
     assembly.seat_tyres()
+    assembly.seat_offset_studs()
     assembly.join_pieces()
     return assembly, unknown
 
