@@ -30,7 +30,7 @@ from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, F
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
-from plantsolve.solvers.rigidity.pieces import pieces
+from plantsolve.solvers.rigidity.pieces import mostly_floating, pieces
 from plantsolve.solvers.rigidity.screws import FREEDOM
 
 # LDU: connection points closer than this are one point. Editors write positions with 2 to 3 decimals and
@@ -297,9 +297,12 @@ class Assembly:
         """Join the pieces that the matching within rounding left apart where their connection points miss each
         other by at most ``reach`` (a part drawn a little off its mate: a slip of the model, or a part the library
         has redrawn since the model was made). Only between parts of different pieces as matched before this pass,
-        so the result does not depend on the order of the pieces. Returns (part, part, offset in LDU) of each pair
-        joined, the offset the largest of its connections' (:meth:`_gap`)."""
+        so the result does not depend on the order of the pieces; not at all when most parts are joined to nothing.
+        Returns (part, part, offset in LDU) of each pair joined, the offset the largest of its connections'
+        (:meth:`_gap`)."""
         groups = self.part_pieces()
+        if mostly_floating(sum(len(g) == 1 for g in groups), len(self.parts)):
+            return []  # no slip is assumed where most parts meet nothing
         label = {p: k for k, g in enumerate(groups) for p in g}
         joined = []
         for group in groups[1:]:
@@ -524,9 +527,12 @@ class Assembly:
                     yield other, oi
 
     def _near(self, point: np.ndarray, reach: float):
-        """The (part, connector) slots within ``reach`` of ``point``."""
-        for cell in _around(point, reach, POINT_CELL, POINT_OFFSET):
-            for other, oi in self._slots.get(cell, ()):
+        """The (part, connector) slots within ``reach`` of ``point`` (rings only within a fine cell's reach: further
+        out only studs look for them, :meth:`_ring_mates`)."""
+        table, size, offset = (self._slots, POINT_CELL, POINT_OFFSET) if reach <= POINT_CELL else (
+            self._coarse, RUN_CELL, RUN_OFFSET)
+        for cell in _around(point, reach, size, offset):
+            for other, oi in table.get(cell, ()):
                 if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= reach * reach:
                     yield other, oi
 

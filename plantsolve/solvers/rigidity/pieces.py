@@ -24,6 +24,11 @@ PITCH = 20.0  # LDU: added to the median distance so that a model of a few stack
 MINIFIG = "minifig"
 
 
+def mostly_floating(floating: int, parts: int) -> bool:
+    """More than half of three or more parts joined to nothing: positions in another unit, or no build."""
+    return parts >= 3 and 2 * floating > parts
+
+
 def joints_by_part(part_ids: Sequence[str],
                    joints: Iterable[tuple[str, Sequence[str]]]) -> dict[str, tuple[list, list]]:
     """part id -> (ids of the joints it is in, ids of the parts they join it to), for every part."""

@@ -16,7 +16,8 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import far_parts, joints_by_part, line_of, pieces, sub_build
+from plantsolve.solvers.rigidity.pieces import (far_parts, joints_by_part, line_of, mostly_floating, pieces,
+                                                sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -228,7 +229,7 @@ def _spacing_warnings(parts: list[PartJoints], assembly: Assembly) -> list[Diagn
     """``implausible_part_spacing`` when most known parts are joined to nothing and the positions scaled from
     another unit to LDU join most of them."""
     floating = sum(1 for p in parts if not p.joints)
-    if len(parts) < 3 or floating * 2 <= len(parts) or len(parts) > SPACING_CHECK_PARTS:
+    if not mostly_floating(floating, len(parts)) or len(parts) > SPACING_CHECK_PARTS:
         return []
     for unit_name, factor in OTHER_UNITS.items():
         trial = Assembly()

@@ -96,6 +96,18 @@ def test_parts_four_ldu_off_their_mate_are_not_joined(text):
     assert far != text and joints(far) == []
 
 
+def test_no_offset_is_assumed_where_most_parts_meet_nothing():
+    # three round plates each 2 LDU above a stud of their own brick, bricks a stud apart: six parts, all floating
+    # as matched within rounding; a model this far off is read in another unit or as no build, not joined by slips
+    text = "".join(f"1 4 {x} 0 0 1 0 0 0 1 0 0 0 1 3005.dat\n1 4 {x} -10 0 1 0 0 0 1 0 0 0 1 4073.dat\n"
+                   for x in (0, 200, 400))
+    result = solve(parse("model.ldr", text)).result
+    assert result.joints == [] and "offset_joints" not in {w.code for w in result.report.warnings}
+    # with a seventh part that meets a brick as drawn, 4 of 7 still float: the same
+    result = solve(parse("model.ldr", text + "1 4 0 24 0 1 0 0 0 1 0 0 0 1 3005.dat\n")).result
+    assert len(result.joints) == 1
+
+
 def test_parts_meeting_within_rounding_carry_no_offset_warning():
     # a round plate on one stud as drawn, and a second one 2 LDU beside the next stud: only the second is named
     text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 10 -8 10 1 0 0 0 1 0 0 0 1 6141.dat\n"
