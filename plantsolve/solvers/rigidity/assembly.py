@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, NOT_DOCKED, OPPOSED,
-                                                   RING_REACH,
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS, NOT_DOCKED,
+                                                   OPPOSED, RING_REACH,
                                                    PartShape, collision_boxes, fit, lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
@@ -321,21 +321,22 @@ class Assembly:
         return joined
 
     def seat_offset_studs(self) -> list[tuple[str, str]]:
-        """Seat the studs of pieces left apart that sit half a stud along an outer row of a part above them: midway
-        between two of its anti-studs (a stud pitch apart, facing the stud, in its plane), with a tube of the part
-        half a pitch inward and the part's side half a pitch outward, the stud is gripped between the tube and the
-        wall (a half-stud offset under a 2-wide plate, as OMR 5935 hangs its skis). Returns the (stud's part,
-        part) pairs seated."""
+        """Seat the studs of pieces left apart where a part above grips them between a tube and its walls although
+        the snap data states no anti-stud there: half a stud along an outer row (midway between two of its
+        anti-studs a pitch apart, a tube half a pitch inward, the part's side half a pitch outward: a half-stud
+        offset under a 2-wide plate, as OMR 5935 hangs its skis), or under a part whose data states its tubes
+        only (6192: a tube half a pitch away diagonally, no anti-stud within half a pitch, the stud a stud's radius
+        inside the part's sides). Returns the (stud's part, part) pairs seated."""
         groups = self.part_pieces()
         label = {p: k for k, g in enumerate(groups) for p in g}
         seated = []
-        for group in groups[1:]:
+        for group in groups:  # the largest piece's studs too: a part of another piece may sit on them
             for id in group:
                 placed = self.parts[id]
                 for ci, c in enumerate(placed.shape.connectors):
                     if c.type != "stud" or c.length > 0:
                         continue
-                    for other, oi in self._wall_and_tube(id, placed.points[ci], placed.directions[ci], label):
+                    for other, oi in self._grips(id, placed.points[ci], placed.directions[ci], label):
                         key = (id, other) if (id, other) in self._links else (other, id)
                         if key not in self._links:
                             self._neighbours[other].add(id)
@@ -348,29 +349,39 @@ class Assembly:
             self._pebble_stale = True
         return seated
 
-    def _wall_and_tube(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict):
+    def _grips(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict):
         """(part, tube anti-stud) of each part of another piece that grips the stud at ``point`` (pointing along
-        ``direction``) between a tube and its side (:meth:`seat_offset_studs`)."""
+        ``direction``) between a tube and its walls (:meth:`seat_offset_studs`)."""
         mouths: dict[str, list[tuple[int, np.ndarray]]] = {}
-        for cell in _around(point, HALF_PITCH + SNAP, RUN_CELL, RUN_OFFSET):
+        for cell in _around(point, RING_REACH + SNAP, RUN_CELL, RUN_OFFSET):
             for other, oi in self._coarse.get(cell, ()):
                 o = self.parts[other]
                 v = o.points[oi] - point
                 if (label[other] != label[id] and o.shape.connectors[oi].type == "antistud"
                         and float(direction @ o.directions[oi]) <= -ALIGN and abs(float(v @ direction)) <= SNAP
-                        and float(np.linalg.norm(v)) <= HALF_PITCH + SNAP):
+                        and float(np.linalg.norm(v)) <= RING_REACH + SNAP):
                     mouths.setdefault(other, []).append((oi, v))
         for other, found in mouths.items():
+            o = self.parts[other]
             ends = [v for _, v in found if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP]
             pairs = [(a, b) for a, b in itertools.combinations(ends, 2) if float(np.linalg.norm(a + b)) <= SNAP]
-            if not pairs:
-                continue
-            o = self.parts[other]
             gripped = next((oi for row, _ in pairs for oi, v in found  # the tube half a pitch across the row
                             if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP and abs(float(v @ row)) <= SNAP
                             and self._outside(o, point - v, v)), None)
+            if gripped is None and all(float(np.linalg.norm(v)) > HALF_PITCH + SNAP for _, v in found):
+                gripped = next((oi for oi, v in found  # a tube diagonally, the stud well inside the part's sides
+                                if abs(float(np.linalg.norm(v)) - RING_REACH) <= SNAP and self._inside(o, point)),
+                               None)
             if gripped is not None:
                 yield other, gripped
+
+    @staticmethod
+    def _inside(o: Placed, point: np.ndarray) -> bool:
+        """``point`` (on a face of ``o``'s box) at least a stud's radius (6 LDU) inside the box in both directions
+        along that face."""
+        local = np.abs(o.rotation.T @ (point - o.position) - np.asarray(o.shape.box_center, float))
+        room = np.asarray(o.shape.box_size, float) / 2 - local
+        return bool(np.sort(room)[1] >= HOLE_RADIUS - SNAP)
 
     @staticmethod
     def _outside(o: Placed, point: np.ndarray, along: np.ndarray) -> bool:

@@ -127,6 +127,15 @@ def test_a_stud_half_a_stud_along_the_outer_row_of_a_2_wide_plate_is_gripped_bet
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 10 8 0 1 0 0 0 1 0 0 0 1 3024.dat\n") == []
 
 
+def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them():
+    # 6192 (2 x 4 brick with curved top) states three tubes and no anti-stud under its studs: on a 2 x 4 plate
+    # each of the plate's eight studs stands half a pitch diagonally from a tube, inside the brick's walls
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == [
+        ("rigid", "stud", "3020", "6192", 8)]
+    # a 1 x 4 plate's studs would stand half a pitch from the tubes, in them: nothing
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3710.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == []
+
+
 def test_a_tyre_on_a_wheel_the_snap_data_gives_no_rim_is_held_by_it():
     # 122c01 (plate with wheels) states no rim: the tyre pushed onto its wheel (OMR 889's placement) is held by the
     # hub's cylinder on its axis; the same tyre a stud further out is held by nothing
