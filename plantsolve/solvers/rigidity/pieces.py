@@ -21,7 +21,8 @@ LINE = re.compile(r"L(\d+)$")
 FAR_LDU = 1e5
 FAR_FACTOR = 100.0
 PITCH = 20.0  # LDU: added to the median distance so that a model of a few stacked parts has a scale
-MINIFIG = "minifig"
+MINIFIG = "minifig"  # LDraw names of minifigure parts start with it
+MINIFIGURE = "minifigure"  # the sub_build of a piece of minifigure parts only
 
 
 def mostly_floating(floating: int, parts: int) -> bool:
@@ -84,7 +85,7 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     if chosen:
         return " + ".join(placements.get(prefix, prefix.rstrip("/")) for prefix in chosen)
     if all(names.get(p, "").lower().startswith(MINIFIG) for p in piece):
-        return "minifigure"
+        return MINIFIGURE
     return None
 
 

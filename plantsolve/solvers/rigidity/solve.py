@@ -16,11 +16,13 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import (far_parts, joints_by_part, line_of, mostly_floating, pieces,
-                                                sub_build)
+from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, far_parts, joints_by_part, line_of, mostly_floating,
+                                                pieces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
+HELD_BY = {False: "every known part of the named placed sub-model(s) and nothing else",
+           True: "minifigure parts only"}  # how report.details.held_pieces recognised each piece (pieces.sub_build)
 LISTED_IN_MESSAGE = 10
 
 
@@ -151,8 +153,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
-        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build}
-                        for pc in piece_results[1:] if pc.sub_build],
+        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": HELD_BY[
+            pc.sub_build == MINIFIGURE]} for pc in piece_results[1:] if pc.sub_build],
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
