@@ -14,6 +14,11 @@ pin in a pin hole a hinge, an axle in a round hole a cylindrical joint, two hing
 Two parts held by two pins (or axles) in distinct parallel holes are reported in one superbrick
 (:meth:`Assembly.rod_pairs`); the exact pass finds them rigid to each other on its own, with each
 pin free to spin.
+
+A whole model read from a file then gets three passes (the job runs them once all parts are placed):
+:meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_offset_studs` (studs
+gripped between a tube and a wall where the data states no anti-stud) and :meth:`Assembly.join_pieces`
+(pieces joined where a point misses its mate by at most ``OFFSET_REACH``: a part drawn off its mate).
 """
 
 from __future__ import annotations
