@@ -155,12 +155,12 @@ def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
 
 
 def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: float) -> set:
-    """The RUN_CELL cells that hold every point within ``reach`` of the run (its samples are 0.5 LDU apart
-    at most from any point of it)."""
-    out = set()
-    for p in _run_samples(start, axis, length):
-        out.update(_around(p, reach + 0.5, RUN_CELL, RUN_OFFSET))
-    return out
+    """The RUN_CELL cells that hold every point within ``reach`` of the run: those of the run's box grown by
+    ``reach`` (runs are a few studs long, so the box's extra cells cost less than walking the run)."""
+    end = start + axis * length
+    lo, hi = np.minimum(start, end) - reach, np.maximum(start, end) + reach
+    return set(itertools.product(*(range(math.floor((float(a) - RUN_OFFSET) / RUN_CELL),
+                                         math.floor((float(b) - RUN_OFFSET) / RUN_CELL) + 1) for a, b in zip(lo, hi))))
 
 
 def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP) -> bool:
