@@ -46,6 +46,16 @@ def test_an_axle_pushed_into_a_hole_off_the_half_stud_grid_is_in_the_hole():
     assert joints(text) == [("cylindrical", "axle", "3700", "3705", 1)]
 
 
+def test_a_pin_through_two_half_thick_liftarms_turns_in_both():
+    # 2825's holes are 10 LDU deep, centred 5 LDU from the centres of the pin's halves: the pin's stated cylinder
+    # fits each (a hinge), the liftarms themselves share no connection
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 2825.dat\n1 4 0 10 0 1 0 0 0 1 0 0 0 1 2825.dat\n"
+            "1 0 0 10 20 0 -1 0 1 0 0 0 0 1 3673.dat\n")
+    assert joints(text) == [("hinge", "fit", "2825", "3673", 1)] * 2
+    # the pin a stud along, in no hole: nothing
+    assert joints(text.replace(" 10 20 0 -1", " 10 30 0 -1")) == []
+
+
 @pytest.mark.parametrize("shift", [0, 3, 7])
 def test_a_clip_holds_a_bar_wherever_along_it(shift):
     text = ("1 4 -10 -32 -10 -1 0 0 0 1 0 0 0 -1 4085c.dat\n"
