@@ -402,10 +402,15 @@ class Assembly:
         rigid ``group`` connection at the centre. Returns the (tyre, wheel) pairs seated."""
         seated = []
         for id, placed in self.parts.items():
-            linked = {c.cb if c.b == id else c.ca for (a, b), conns in self._links.items() if id in (a, b)
-                      for c in conns if c.kind == GROUP}
-            for ci, c in enumerate(placed.shape.connectors):
-                if not (c.type.startswith("group:") and c.type.endswith(":F")) or ci in linked:
+            tyres = [ci for ci, c in enumerate(placed.shape.connectors)
+                     if c.type.startswith("group:") and c.type.endswith(":F")]
+            if not tyres:
+                continue
+            linked = {c.cb if c.b == id else c.ca for other in self._neighbours[id]
+                      for c in self._links.get((other, id), []) + self._links.get((id, other), []) if c.kind == GROUP}
+            for ci in tyres:
+                c = placed.shape.connectors[ci]
+                if ci in linked:
                     continue
                 centre, axis = placed.points[ci], placed.directions[ci]
                 local = np.abs(np.asarray(c.direction, float))
