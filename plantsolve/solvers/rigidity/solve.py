@@ -150,11 +150,15 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     movable = sum(m for m in mob.moves)
     message = (f"dof {mob.dof} (generic count {analysis.generic_dof}); {len(mob.clusters)} rigid cluster(s) of "
                f"{len(ids)} bodies; {movable} of {len(joints)} joints move; {len(collisions)} collision(s)")
+    held = [pc for pc in piece_results[1:] if pc.sub_build]
+    if held:  # a held sub-build is not a fault, but a reader of the message must not take the set for one piece
+        message += (f"; {len(held)} sub-build(s) stand apart as held pieces: "
+                    + ", ".join(f"{pc.sub_build} ({len(pc.parts)} parts)" for pc in held[:LISTED_IN_MESSAGE]))
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
         "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": HELD_BY[
-            pc.sub_build == MINIFIGURE]} for pc in piece_results[1:] if pc.sub_build],
+            pc.sub_build == MINIFIGURE]} for pc in held],
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")

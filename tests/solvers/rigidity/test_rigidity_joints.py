@@ -218,6 +218,8 @@ def test_an_official_set_has_every_known_part_joined_and_is_one_build(name):
     assert [p.sub_build for p in result.pieces if p.sub_build] == apart
     assert [(h["sub_build"], h["recognised_by"]) for h in result.report.details["held_pieces"]] == [
         (name, "every known part of the named placed sub-model(s) and nothing else") for name in apart]
+    assert ("stand apart as held pieces" in result.report.message) == bool(apart)
+    assert all(held in result.report.message for held in apart)
     assert result.collisions == []
 
 
