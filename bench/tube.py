@@ -55,6 +55,35 @@ def make_case(seed: int, n_points: int, n_bends: int | None = None, pipe_radius:
     return m, pts, sigma
 
 
+MAKE_ALONE = 1_000_000  # --make draws scans up to this size in one call (make_case's scan)
+MAKE_CHUNK = 250_000  # and larger ones this many samples at a time
+
+
+def make_scan(n_points: int, path: str) -> None:
+    """The scan of --make (the tube of ``make_case(77, ...)``: 4 bends, pipe radius 10) saved to the .npy at
+    ``path``. Up to ``MAKE_ALONE`` samples it is make_case's scan; a larger one is drawn ``MAKE_CHUNK`` samples
+    at a time (each chunk with its own seed, noise and outliers as make_case's) straight into the file, so
+    the simulator's temporaries are one chunk's (one call for 10 million samples would hold about 20 GB). The solver sorts its input, so the chunks need no shuffle."""
+    if n_points <= MAKE_ALONE:
+        _, pts, _ = make_case(77, n_points, n_bends=4, pipe_radius=10.0)
+        np.save(path, pts)
+        return
+    rng = np.random.default_rng(77)
+    while True:  # make_case's draws, in its order: the same tube, noise and viewpoint
+        m = random_tube(rng, pipe_radius=10.0, n_bends=4)
+        if clearance(m) > 2.5:
+            break
+    sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
+    view = rng.normal(size=3)
+    out = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=(n_points, 3))
+    for i, a in enumerate(range(0, n_points, MAKE_CHUNK)):
+        b = min(a + MAKE_CHUNK, n_points)
+        out[a:b] = surface_samples(m, b - a, np.random.default_rng([77, i]), view=view, noise=sigma,
+                                   outlier_fraction=0.005)
+    out.flush()
+    del out
+
+
 def compare(truth, result):
     """Errors of a result against the true model (best of both walking directions)."""
     got = model_from_result(result)
@@ -460,8 +489,7 @@ def main():
         families(a.families, tuple(a.radius_models.split(",")))
         return
     if a.make:
-        _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
-        np.save(a.make[1], pts)
+        make_scan(int(a.make[0]), a.make[1])
         return
     if a.single:
         print(json.dumps(single(a.single)))

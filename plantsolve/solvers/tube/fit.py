@@ -379,6 +379,46 @@ def _sub_spine(sp: Spine, k: np.ndarray) -> Spine:
                  sp.radius[k], sp.angle[k])
 
 
+def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
+                    keep: np.ndarray | None = None) -> tuple[float, list[float]]:
+    """Σ (distance − pipe radius)² of the samples to ``model`` and to each of ``variants`` (models that differ
+    from it near a few segments, such as :func:`model.with_radii` of one bend), the distance to the nearest
+    (bounded) segment. A block of samples takes its distances to every segment of ``model`` once; a variant
+    adds the distances to its segments that moved (further than round-off: a straight clipped to length 0
+    moves everything after it) and takes the others from ``model``'s (the same to round-off). Ten variants
+    then cost about what four assignments do, and no array of the samples' size is made. ``keep``: the samples
+    to sum over (a mask; default all)."""
+    base = build_spine(model)
+    S = len(base.kind)
+    scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
+    moved = []
+    for v in variants:
+        sp = build_spine(v)
+        diff = np.zeros(S, bool)
+        for a, b in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
+                     (base.normal, sp.normal)):
+            diff |= np.abs(a - b).max(axis=1) > 1e-12 * scale
+        diff |= np.abs(base.radius - sp.radius) > 1e-12 * scale
+        diff |= np.abs(base.angle - sp.angle) > 1e-12
+        rows = np.flatnonzero(diff)
+        moved.append((rows, np.flatnonzero(~diff), _sub_spine(sp, rows), v.pipe_radius))
+    rp = model.pipe_radius
+    rss0, rss = 0.0, [0.0] * len(variants)
+    step = max(1, INNER_CHUNK // S)
+    for a in range(0, len(pts), step):
+        q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
+        D = segment_distances_t(q, base)
+        r = D.min(axis=0) - rp
+        rss0 += float(r @ r)
+        for i, (rows, kept, sub, rp_v) in enumerate(moved):
+            d = segment_distances_t(q, sub).min(axis=0) if len(rows) else np.full(len(q), np.inf)
+            if len(kept):
+                d = np.minimum(d, D[kept].min(axis=0))
+            d -= rp_v
+            rss[i] += float(d @ d)
+    return rss0, rss
+
+
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
 HALO_DENSITY = 0.25  # a halo is at most this fraction of the end's density along the axis
 
@@ -437,15 +477,15 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
     return float(np.percentile(proj, 99.5))
 
 
-def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeModel:
-    """First/last straight lengths from the extent of their samples."""
+def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None = None) -> TubeModel:
+    """First/last straight lengths from the extent of their samples (those ``keep`` marks, when given)."""
     m = model.copy()
     rp = max(m.pipe_radius, 1e-12)
     sp = build_spine(m)
     last = len(sp.kind) - 1
     t0 = m.frame[:, 0]
     if last == 0:  # straight tube: one line holds both ends
-        sel = seg == 0
+        sel = _on(seg, 0, keep)
         if sel.any():
             proj = (pts[sel] - m.start) @ t0
             hi = _robust_max(proj, pts[sel], rp)
@@ -454,18 +494,25 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeM
             m.lengths = np.array([max(hi - lo, 0.0)])
         return m
     first_arc_start = sp.end[0]
-    sel = seg == 0
+    sel = _on(seg, 0, keep)
     L0 = max(0.0, _robust_max(-((pts[sel] - first_arc_start) @ t0), pts[sel], rp)) if sel.any() else 0.0
     m.start = first_arc_start - L0 * t0
     lengths = m.lengths.copy()
     lengths[0] = L0
-    sel = seg == last
+    sel = _on(seg, last, keep)
     if sel.any():
         lengths[-1] = max(0.0, _robust_max((pts[sel] - sp.start[last]) @ sp.tangent[last], pts[sel], rp))
     else:
         lengths[-1] = 0.0
     m.lengths = lengths
     return m
+
+
+def _on(seg: np.ndarray, k: int, keep: np.ndarray | None) -> np.ndarray:
+    sel = seg == k
+    if keep is not None:
+        sel &= keep
+    return sel
 
 
 def with_end_lengths(model: TubeModel, ends: TubeModel) -> TubeModel:
@@ -564,8 +611,9 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     out[6] = np.where(arc, -u, 0.0)
 
 
-def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
-    """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
+def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None):
+    """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
+    (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -579,12 +627,23 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     scale = max(rp, 1e-9)
     # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
     # Gram matrix is one product; the residual order is irrelevant to the solver
-    order = np.argsort(seg, kind="stable")
-    # the points component-major (3, N), as the distances take them
-    pts_t = np.ascontiguousarray(pts[order].T)
-    # the sorted segment numbers in the smallest integers that hold them, the arcs per block (a scan of
-    # millions of samples holds no second full-size array of either)
-    seg = seg[order].astype(np.int16 if len(kind) < 2 ** 15 else np.int64)
+    # (a stable sort of the segment numbers in the smallest integers that hold them: a radix sort)
+    small = np.int16 if len(kind) < 2 ** 15 else np.int64
+    if keep is None:
+        order = np.argsort(seg.astype(small), kind="stable")
+    else:
+        rows = np.flatnonzero(keep)
+        order = rows[np.argsort(seg[rows].astype(small), kind="stable")]
+        del rows
+    # the points component-major (3, N), as the distances take them, gathered a coordinate at a time (no
+    # sample-major copy of a large scan on the way)
+    pts_t = np.empty((3, len(order)))
+    for j in range(3):
+        np.take(pts[:, j], order, out=pts_t[j])
+    # the sorted segment numbers, the arcs per block (a scan of millions of samples holds no second
+    # full-size array of either)
+    seg = seg[order].astype(small)
+    del order
     is_arc = kind != 0
     N = pts_t.shape[1]
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
@@ -618,7 +677,8 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
             if keep_terms:
                 terms.append(t)
         latest["terms"] = terms if keep_terms else None
-        return d - (x[-1] if lay.fit_pipe_radius else rp)
+        d -= x[-1] if lay.fit_pipe_radius else rp
+        return d
 
     def normal_equations(x, w, r):
         """Jᵀ W J and Jᵀ W r without the (N, P) Jacobian J. A sample's row of J is its distance gradient
@@ -657,20 +717,22 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
 
 
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
-    """One least-squares round with a fixed sample-to-segment assignment."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay)
+             max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
+    given)."""
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep)
     x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
 
-def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout) -> dict[str, np.ndarray]:
+def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout,
+                     keep: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Standard deviations of the LRA parameters at the solution (§6's least squares, linearised): the
     covariance s^2 (J^T J)^+ with s^2 = RSS / (N - P) from the residuals of the given (inlier) samples.
     Returns arrays 'lengths' (inner straights, n - 1), 'rotations' (n - 1), 'angles' (n, radians) and
-    'radii' (n; a shared radius gives every bend its sigma, a held one 0)."""
-    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay)
+    'radii' (n; a shared radius gives every bend its sigma, a held one 0). ``keep``: as :func:`solve_lm`'s."""
+    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay, keep)
     r = fun(x0)
     A, _ = normal_equations(x0, np.ones(len(r)), r)
     N, P = len(r), len(x0)
@@ -700,9 +762,17 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
 
 def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
     """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z)."""
-    z = (r / f) ** 2
-    sq = np.sqrt(1.0 + z)
-    return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
+    # in place: the same numbers as (r / f) ** 2, sqrt(1 + z), 2 (sq - 1) with two arrays of the samples' size
+    # made instead of seven (on a large scan each is fresh memory the system has to map)
+    sq = np.divide(r, f)
+    np.square(sq, out=sq)
+    sq += 1.0
+    np.sqrt(sq, out=sq)
+    terms = sq - 1.0
+    terms *= 2.0
+    cost = float(f * f * np.sum(terms))
+    np.divide(1.0, sq, out=terms)
+    return cost, terms
 
 
 def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
