@@ -32,6 +32,7 @@ from plantsolve.solvers.tube.model import (
     Spine,
     TubeModel,
     build_spine,
+    distance_frames,
     segment_distances_t,
     spine_distance,
 )
@@ -383,38 +384,42 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
                     keep: np.ndarray | None = None) -> tuple[float, list[float]]:
     """Σ (distance − pipe radius)² of the samples to ``model`` and to each of ``variants`` (models that differ
     from it near a few segments, such as :func:`model.with_radii` of one bend), the distance to the nearest
-    (bounded) segment. A block of samples takes its distances to every segment of ``model`` once; a variant
-    adds the distances to its segments that moved (further than round-off: a straight clipped to length 0
-    moves everything after it) and takes the others from ``model``'s (the same to round-off). Ten variants
+    (bounded) segment. The segments of ``model`` and those of the variants that moved (further than round-off:
+    a straight clipped to length 0 moves everything after it) are one spine, whose distances a block of
+    samples takes at once; a variant's other segments are ``model``'s (the same to round-off). Ten variants
     then cost about what four assignments do, and no array of the samples' size is made. ``keep``: the samples
     to sum over (a mask; default all)."""
     base = build_spine(model)
     S = len(base.kind)
     scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
-    moved = []
+    parts, rows_of = [np.arange(S)], []  # each variant's moved segments, then its rows of the joint spine
+    spines = [base]
+    n_rows = S
     for v in variants:
         sp = build_spine(v)
         diff = np.zeros(S, bool)
-        for a, b in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
+        for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
                      (base.normal, sp.normal)):
-            diff |= np.abs(a - b).max(axis=1) > 1e-12 * scale
-        diff |= np.abs(base.radius - sp.radius) > 1e-12 * scale
-        diff |= np.abs(base.angle - sp.angle) > 1e-12
-        rows = np.flatnonzero(diff)
-        moved.append((rows, np.flatnonzero(~diff), _sub_spine(sp, rows), v.pipe_radius))
+            diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
+        diff |= (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+        moved = np.flatnonzero(diff)
+        parts.append(moved)
+        spines.append(sp)
+        rows_of.append((np.arange(n_rows, n_rows + len(moved)), np.flatnonzero(~diff)))
+        n_rows += len(moved)
+    joint = Spine(*(np.concatenate([getattr(sp, f)[k] for sp, k in zip(spines, parts)])
+                    for f in ("kind", "start", "end", "tangent", "normal", "length", "centre", "radius", "angle")))
+    frames = distance_frames(joint)
     rp = model.pipe_radius
     rss0, rss = 0.0, [0.0] * len(variants)
-    step = max(1, INNER_CHUNK // S)
+    step = max(1, INNER_CHUNK // n_rows)
     for a in range(0, len(pts), step):
         q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
-        D = segment_distances_t(q, base)
-        r = D.min(axis=0) - rp
+        D = segment_distances_t(q, joint, frames)
+        r = D[:S].min(axis=0) - rp
         rss0 += float(r @ r)
-        for i, (rows, kept, sub, rp_v) in enumerate(moved):
-            d = segment_distances_t(q, sub).min(axis=0) if len(rows) else np.full(len(q), np.inf)
-            if len(kept):
-                d = np.minimum(d, D[kept].min(axis=0))
-            d -= rp_v
+        for i, ((own, kept), v) in enumerate(zip(rows_of, variants)):
+            d = np.min(D[np.concatenate([own, kept])], axis=0) - v.pipe_radius
             rss[i] += float(d @ d)
     return rss0, rss
 
@@ -487,21 +492,24 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np
     if last == 0:  # straight tube: one line holds both ends
         sel = _on(seg, 0, keep)
         if sel.any():
-            proj = (pts[sel] - m.start) @ t0
-            hi = _robust_max(proj, pts[sel], rp)
-            lo = -_robust_max(-proj, pts[sel], rp)
+            q = pts[sel]
+            proj = (q - m.start) @ t0
+            hi = _robust_max(proj, q, rp)
+            lo = -_robust_max(-proj, q, rp)
             m.start = m.start + lo * t0
             m.lengths = np.array([max(hi - lo, 0.0)])
         return m
     first_arc_start = sp.end[0]
     sel = _on(seg, 0, keep)
-    L0 = max(0.0, _robust_max(-((pts[sel] - first_arc_start) @ t0), pts[sel], rp)) if sel.any() else 0.0
+    q = pts[sel]
+    L0 = max(0.0, _robust_max(-((q - first_arc_start) @ t0), q, rp)) if sel.any() else 0.0
     m.start = first_arc_start - L0 * t0
     lengths = m.lengths.copy()
     lengths[0] = L0
     sel = _on(seg, last, keep)
     if sel.any():
-        lengths[-1] = max(0.0, _robust_max((pts[sel] - sp.start[last]) @ sp.tangent[last], pts[sel], rp))
+        q = pts[sel]
+        lengths[-1] = max(0.0, _robust_max((q - sp.start[last]) @ sp.tangent[last], q, rp))
     else:
         lengths[-1] = 0.0
     m.lengths = lengths
@@ -559,8 +567,7 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
             if again is None:
                 again = EndAssignment(model, pts, margin) if model.n_bends else (lambda m: assign(m, pts, margin))
             res, seg = again(model)
-        near = np.abs(res) <= thr
-        m_new = set_end_lengths(model, pts[near], seg[near])
+        m_new = set_end_lengths(model, pts, seg, np.abs(res) <= thr)
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
             return model, res, seg, True
         seen.append((model, res, seg))
@@ -593,8 +600,11 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     s = (w[0] * a[0] + w[2] * a[2]) + w[1] * a[1]
     perp = w - s * a
     rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
-    # a line's R is 0 and its distance the perpendicular one
-    dd = np.where(arc, np.hypot(rho - R, s), rho)
+    # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
+    # product, so it runs on the arcs' samples only
+    dd = rho.copy()
+    if arc.any():
+        dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -667,10 +677,12 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
         return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arc)
 
-    def fun(x):
+    def fun(x, out=None):
+        """The residuals at x, into ``out`` when given (a large scan's array, reused: fresh memory of its
+        size costs the system more than filling it)."""
         g, _ = geometry(x)
         g_t = g.T.copy()
-        d = np.empty(N)
+        d = np.empty(N) if out is None else out
         terms = []
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
@@ -760,15 +772,16 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
     return out
 
 
-def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
-    """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z)."""
-    # in place: the same numbers as (r / f) ** 2, sqrt(1 + z), 2 (sq - 1) with two arrays of the samples' size
-    # made instead of seven (on a large scan each is fresh memory the system has to map)
-    sq = np.divide(r, f)
+def _soft_l1(r: np.ndarray, f: float, out: np.ndarray | None = None,
+             scratch: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z) (into ``out``, with
+    ``scratch`` for √(1+z), when given: arrays of the samples' size, reused)."""
+    # in place: the same numbers as (r / f) ** 2, sqrt(1 + z), 2 (sq - 1), 1 / sq
+    sq = np.divide(r, f, out=scratch)
     np.square(sq, out=sq)
     sq += 1.0
     np.sqrt(sq, out=sq)
-    terms = sq - 1.0
+    terms = np.subtract(sq, 1.0, out=out)
     terms *= 2.0
     cost = float(f * f * np.sum(terms))
     np.divide(1.0, sq, out=terms)
@@ -779,10 +792,14 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
     """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc):
     ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r.
 
-    ``tick()`` is called once per iteration (progress / cancellation)."""
+    ``tick()`` is called once per iteration (progress / cancellation). ``fun(x, out)`` writes the residuals
+    into ``out`` when it is an array: a trial's residuals and weights go into the arrays of the last rejected
+    trial or the last replaced point (a large scan makes no fresh arrays of its size per evaluation)."""
     x = x0.copy()
-    r = fun(x)
-    cost, w = _soft_l1(r, f_scale)
+    r = fun(x, out=None)
+    scratch = np.empty_like(r)
+    cost, w = _soft_l1(r, f_scale, scratch=scratch)
+    spare_r = spare_w = None
     lam = 1e-3
     nfev, status = 1, 0
     it = 0
@@ -811,13 +828,15 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
                     break
                 continue
             xn = np.clip(x + step, lo, hi)
-            rn = fun(xn)
+            rn = fun(xn, out=spare_r)
             nfev += 1
-            cn, wn = _soft_l1(rn, f_scale)
+            cn, wn = _soft_l1(rn, f_scale, out=spare_w, scratch=scratch)
+            spare_r, spare_w = rn, wn  # a rejected trial's arrays take the next one
             if np.isfinite(cn) and cn <= cost:
                 dcost = cost - cn
                 last_rel = dcost / max(cost, 1e-300)
                 small_step = np.all(np.abs(xn - x) <= tol * (np.abs(x) + 1e-3) * 1e3)
+                spare_r, spare_w = r, w  # the point left behind
                 x, r, w = xn, rn, wn
                 lam = max(lam / 5, 1e-12)
                 improved = True
