@@ -99,7 +99,7 @@ def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Genera
     """§2 (2.1 local polynomial surface approximation, 2.2 shape operator) on a working subset,
     the pipe radius from the curvatures (§3.1), and the §7 flags of unreliable fits."""
     N = len(pts)
-    scale0 = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    scale0 = scan_extent(pts)
     work_idx = rng.permutation(N)[:WORK_MAX].copy()  # (not a view that keeps a permutation of every sample)
     work = pts[work_idx]
     tree = cKDTree(work)
@@ -696,7 +696,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
 def with_unit_hint(exc: SolverError, pts: np.ndarray, request: TubeRequest) -> SolverError:
     """A failed local fit on a scan whose size is implausible in the request's unit (a scan in metres read as
     millimetres spans a few millimetres) says so and names the likely unit: that is the likely cause."""
-    extent = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    extent = scan_extent(pts)
     hint = implausible_extent(extent, request.units, request.source.units.file_unit if request.source else None)
     if hint is None:
         return exc
