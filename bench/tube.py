@@ -6,8 +6,8 @@
                                          # apart, nearly coplanar back-to-back bends)
     python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
     python bench/tube.py --before-after 10 [--ref main]   # every family, main's solver vs this tree's
-    python bench/tube.py --scale 1e6,3e6,1e7 [--ref main] [--ref-max 3e6]   # large scans, main's solver vs
-                                         # this tree's, CPU seconds and peak RSS of a fresh process each
+    python bench/tube.py --scale 3e5,1.2e6,3e6,1e7,3e7 [--ref main] [--ref-max 1e7]   # large scans, main's solver
+                                         # vs this tree's, CPU seconds and peak RSS of a fresh process each
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -397,11 +397,14 @@ def scale_one(path: str) -> None:
     m, _, _ = make_case(77, 1000, n_bends=4, pipe_radius=10.0)  # the tube of --make: the truth
     scan = TubeScan(TubeRequest(points=pts[:100].tolist()))
     scan.__dict__["points"] = pts  # the cached decoded samples
+    ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t0 = time.process_time()
     r = solve(scan).result
     cpu = time.process_time() - t0
+    sys_s = resource.getrusage(resource.RUSAGE_SELF).ru_stime - ru0.ru_stime
     da, _, _, dc = compare(m, r)
-    print(json.dumps({"n": len(pts), "cpu": cpu, "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    print(json.dumps({"n": len(pts), "cpu": cpu, "sys": sys_s,
+                      "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "bends_ok": da is not None, "angle_err": float(np.max(da)) if da is not None else None,
                       "centre_rms": float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
                       "ends": sorted([r.lra[0].length, r.lra[-1].length]),
@@ -434,20 +437,20 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
             os.remove(path)
     print(f"large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
           f"the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
-    print("| points | solver | CPU s | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
+    print("| points | solver | CPU s (of it system) | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
           "| end straights (true) mm |")
     print("|---:|---|---:|---:|---|---:|---:|---|")
     for r in sorted(rows, key=lambda r: (r["n"], r["side"])):
         err = f"{r['angle_err']:.4f}°" if r["angle_err"] is not None else "n/a"
         ends = " / ".join(f"{v:.6f}" for v in r.get("ends", []))
         true_ends = " / ".join(f"{v:.2f}" for v in r.get("true_ends", []))
-        print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
+        print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} ({r['sys']:.1f}) | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
               f"| {100 * r['centre_rms']:.4f} | {ends} ({true_ends}) |")
     for side in sorted({r["side"] for r in rows}):
-        pts = sorted((r["n"], r["cpu"]) for r in rows if r["side"] == side)
-        if len(pts) >= 2:
-            (n0, t0), (n1, t1) = pts[-2], pts[-1]
-            print(f"{side}: CPU growth exponent {np.log(t1 / t0) / np.log(n1 / n0):.2f} from {n0:,} to {n1:,} points")
+        pts = sorted((r["n"], r["cpu"], r["rss_mb"]) for r in rows if r["side"] == side)
+        for (n0, t0, m0), (n1, t1, m1) in zip(pts, pts[1:]):
+            print(f"{side}: from {n0:,} to {n1:,} points, growth exponent of CPU {np.log(t1 / t0) / np.log(n1 / n0):.2f}, "
+                  f"of peak RSS {np.log(m1 / m0) / np.log(n1 / n0):.2f}")
 
 
 def main():
