@@ -621,9 +621,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     out[6] = np.where(arc, -u, 0.0)
 
 
-def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None):
+def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
+             f_scale: float | None = None):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
-    (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``."""
+    (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``. With ``f_scale`` (the soft-L1
+    scale :func:`levenberg_marquardt` weights by) a large scan's residuals come with the normal equations at the
+    same point, one pass over the samples instead of two."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -663,6 +666,12 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
 
     keep_terms = len(blocks) == 1
+    # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
+    # computing them again costs a third of an LM iteration: with the weights' scale known, each block's share of
+    # the normal equations is summed while its distances are at hand (the weights are elementwise, so a block's
+    # are the very numbers ``_soft_l1`` gives over all samples); a rejected trial's sums are wasted, a
+    # quarter of the evaluations
+    fused = f_scale is not None and not keep_terms
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
     def geometry(x):
@@ -684,13 +693,38 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         g_t = g.T.copy()
         d = np.empty(N) if out is None else out
         terms = []
+        r_p = x[-1] if lay.fit_pipe_radius else rp
+        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if fused else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
+            if fused:
+                rb = d[b] - r_p
+                w = np.divide(rb, f_scale)
+                np.square(w, out=w)
+                w += 1.0
+                np.sqrt(w, out=w)
+                np.divide(1.0, w, out=w)
+                add_block(sums, i, t, w, rb)
         latest["terms"] = terms if keep_terms else None
-        d -= x[-1] if lay.fit_pipe_radius else rp
+        latest["sums"] = sums
+        d -= r_p
         return d
+
+    def add_block(sums, i: int, t: tuple, w: np.ndarray, rb: np.ndarray) -> None:
+        """A block's share of the normal equations' per-segment sums, Gᵀ W G and Gᵀ W r."""
+        gram, rhs = sums
+        G_t = np.empty((gram.shape[1], len(w)))
+        _sample_gradient(t, G_t)
+        if lay.fit_pipe_radius:
+            G_t[7] = 1.0
+        # sample-major for the products below (the layout their BLAS calls have always had)
+        G = G_t.T.copy()
+        Gw = (G_t * w).T.copy()
+        for k, sl in runs[i]:
+            gram[k] += G[sl].T @ Gw[sl]
+            rhs[k] += Gw[sl].T @ rb[sl]
 
     def normal_equations(x, w, r):
         """Jᵀ W J and Jᵀ W r without the (N, P) Jacobian J. A sample's row of J is its distance gradient
@@ -705,34 +739,28 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
             last = np.zeros((len(dG), 1, P))
             last[:, 0, -1] = -1.0
             dG = np.concatenate([dG, last], axis=1)
-        k_dim = dG.shape[1]
-        gram = np.zeros((len(dG), k_dim, k_dim))
-        rhs = np.zeros((len(dG), k_dim))
-        g_t = g.T.copy() if terms is None else None
-        for i, b in enumerate(blocks):
-            t = terms[i] if terms is not None else distance(g_t, i, b)[1]
-            G_t = np.empty((k_dim, b.stop - b.start))
-            _sample_gradient(t, G_t)
-            if lay.fit_pipe_radius:
-                G_t[7] = 1.0
-            # sample-major for the products below (the layout their BLAS calls have always had)
-            G = G_t.T.copy()
-            Gw = (G_t * w[b]).T.copy()
-            rb = r[b]
-            for k, sl in runs[i]:
-                gram[k] += G[sl].T @ Gw[sl]
-                rhs[k] += Gw[sl].T @ rb[sl]
+        sums = latest.get("sums")
+        if sums is None:  # (fused: fun has summed them at x with these weights)
+            sums = _gram_sums(dG.shape[1], len(dG))
+            g_t = g.T.copy() if terms is None else None
+            for i, b in enumerate(blocks):
+                add_block(sums, i, terms[i] if terms is not None else distance(g_t, i, b)[1], w[b], r[b])
+        gram, rhs = sums
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
     return x0, lo, hi, fun, normal_equations, frame0, rp
 
 
+def _gram_sums(k_dim: int, n_segments: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.zeros((n_segments, k_dim, k_dim)), np.zeros((n_segments, k_dim))
+
+
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
              max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
     given)."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep)
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale)
     x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info

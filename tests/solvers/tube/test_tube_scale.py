@@ -94,6 +94,15 @@ def test_a_round_on_the_samples_a_mask_keeps_is_the_round_on_their_copy_bit_for_
         np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(fit.set_end_lengths(m, pts, seg, keep).lengths,
                                   fit.set_end_lengths(m, pts[keep], seg[keep]).lengths)
+    # with the weights' scale given, the normal equations are summed during the evaluation: the same numbers
+    f = 0.06
+    _, _, _, fun_f, normal_equations_f, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=f)
+    x1 = x0 + 1e-4
+    r1 = fun(x1)
+    np.testing.assert_array_equal(fun_f(x1), r1)
+    _, w1 = fit._soft_l1(r1, f)
+    for a, b in zip(normal_equations_f(x1, w1, r1), normal_equations(x1, w1, r1)):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_levenberg_marquardt_reusing_its_arrays_is_the_one_making_fresh_ones():
