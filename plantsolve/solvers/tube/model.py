@@ -338,7 +338,8 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
 
     ``chunk`` bounds points × segments per block: the (chunk,) temporaries stay in the processor's
     cache (twice as fast on a million samples as blocks of ten times the size)."""
-    d = np.empty(len(pts)); idx = np.empty(len(pts), int)
+    # the segment numbers in 16 bits when they fit: a large scan holds several such arrays (8 bytes a sample each)
+    d = np.empty(len(pts)); idx = np.empty(len(pts), np.int16 if len(sp.kind) < 2 ** 15 else np.intp)
     step = max(1, chunk // max(len(sp.kind), 1))
     # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
     p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0
