@@ -715,13 +715,13 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     def add_block(sums, i: int, t: tuple, w: np.ndarray, rb: np.ndarray) -> None:
         """A block's share of the normal equations' per-segment sums, Gᵀ W G and Gᵀ W r."""
         gram, rhs = sums
-        G_t = np.empty((gram.shape[1], len(w)))
-        _sample_gradient(t, G_t)
+        # sample-major for the products below (the layout their BLAS calls have always had), written so by
+        # the gradient through a transposed view: a transposing copy costs six times the writes
+        G = np.empty((len(w), gram.shape[1]))
+        _sample_gradient(t, G.T)
         if lay.fit_pipe_radius:
-            G_t[7] = 1.0
-        # sample-major for the products below (the layout their BLAS calls have always had)
-        G = G_t.T.copy()
-        Gw = (G_t * w).T.copy()
+            G[:, 7] = 1.0
+        Gw = G * w[:, None]
         for k, sl in runs[i]:
             gram[k] += G[sl].T @ Gw[sl]
             rhs[k] += Gw[sl].T @ rb[sl]
