@@ -319,7 +319,7 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         ca, sa = np.cos(ang), np.sin(ang)
         z2 = z * z
         rho = np.sqrt(x * x + y * y)
-        d_in = np.sqrt((rho - R) ** 2 + z2)
+        d_in2 = (rho - R) ** 2 + z2
         # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
         d_s = (x - R) ** 2 + y * y + z2
         d_e = (x - R * ca) ** 2 + (y - R * sa) ** 2 + z2
@@ -328,7 +328,8 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         before_end = ca * y - sa * x <= 0.0
         upper = y >= 0.0
         inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
-        out[arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
+        # one square root of whichever squared distance applies (the same numbers as a root of each)
+        out[arcs] = np.sqrt(np.where(inside, d_in2, np.minimum(d_s, d_e)))
     return out
 
 
