@@ -18,6 +18,7 @@ and over 180°. Timings and peak memory for large scans run in a fresh subproces
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 
@@ -448,7 +449,7 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
               f"| {100 * r['centre_rms']:.4f} | {ends} ({true_ends}) |")
     for side in sorted({r["side"] for r in rows}):
         pts = sorted((r["n"], r["cpu"], r["rss_mb"]) for r in rows if r["side"] == side)
-        for (n0, t0, m0), (n1, t1, m1) in zip(pts, pts[1:]):
+        for (n0, t0, m0), (n1, t1, m1) in itertools.pairwise(pts):
             print(f"{side}: from {n0:,} to {n1:,} points, growth exponent of CPU {np.log(t1 / t0) / np.log(n1 / n0):.2f}, "
                   f"of peak RSS {np.log(m1 / m0) / np.log(n1 / n0):.2f}")
 
