@@ -24,9 +24,10 @@ main), side by side, each with the largest difference of any port position from 
 ``--family conflict``: the same grids with the second tie-in placed 30 mm and 2 degrees off, so connections are
 cut; every family also runs the request shuffled (``shuf``, ``shufLU``: components and connections in another
 order, about half the connections named from their other end), and says whether the same connections were cut
-(``same``). ``--side N`` runs only that size (a short run):
+(``same``). ``--side N`` runs only that size (a short run), ``--code`` only the rows named beside ``this``:
 
     python bench/alignment.py --scaling-only --family conflict --side 12
+    python bench/alignment.py --scaling-only --family plant --side 132 --code lu --code before --before DIR
 """
 
 from __future__ import annotations
@@ -178,9 +179,12 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         "cut_set": sorted(tuple(sorted(x)) for x in cut),
         "components": len(req.components), "connections": len(req.connections), "method": method, "converged": res.converged,
         "iterations": res.iterations, "wall_s": wall, "cpu_s": cpu, "peak_mib": (_rss_kib("VmHWM") - base) / 1024.0,
+        "process_mib": _rss_kib("VmHWM") / 1024.0,
         "max_gap": res.max_position_error, "solver_residual": d["snap_distortion"]["position"] if res.converged else res.max_position_error,
         "pipe_axis_mean": d["pipe_axis_movement"]["mean"], "fitting_mean": d["fitting_displacement"]["mean"],
         "cuts": len(res.cut_connections), "stop": d["stop_reason"],
+        "rounds": " + ".join(f"{r['iterations']} {r['factorisation']}" + ("" if r["counted"] else " (not counted)")
+                             for r in d.get("rounds") or []),
     })
 
 
@@ -201,7 +205,8 @@ def _exponent(small: dict | None, large: dict, key: str) -> str:
     return f"{math.log(large[key] / small[key]) / math.log(large['components'] / small['components']):.2f}"
 
 
-def scaling(quick: bool, before: str | None, family: str = "grid", only: list[int] | None = None) -> None:
+def scaling(quick: bool, before: str | None, family: str = "grid", only: list[int] | None = None,
+            codes: list[str] | None = None) -> None:
     """Direct method on growing networks of one family: this code, the same code within ``use_schur(False)``,
     the same network shuffled (order and connection ends), and with ``before`` the code in that directory."""
     import numpy as np
@@ -211,7 +216,9 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
     sides = only or sides
     runs = [("this", None, False, False), ("lu", None, True, False), ("shuf", None, False, True),
             ("shufLU", None, True, True)] + ([("before", before, False, False)] if before else [])
-    head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'max gap':>9} "
+    runs = [r for r in runs if codes is None or r[0] in codes or r[0] == "this"]
+    head = (f"{'code':>6} {'components':>10} {'connections':>11} {'wall s':>8} {'cpu s':>8} {'peak MiB':>9} {'proc MiB':>9} "
+            f"{'max gap':>9} "
             f"{'k cpu':>6} {'k mem':>6} {'iter':>5} {'max |dP|':>9} {'cuts':>4} {'same':>4}  stop")
     what = {"grid": "square loop grids", "plant": "plant-like networks",
             "conflict": "square loop grids whose second tie-in is 30 mm and 2 deg off"}[family]
@@ -233,15 +240,19 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
             prev = rows.get(label, [None])[-1]
             rows.setdefault(label, []).append(r)
             print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
-                  f"{r['peak_mib']:>9.1f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
-                  f"{r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4}  {r['stop']}", flush=True)
+                  f"{r['peak_mib']:>9.1f} {r['process_mib']:>9.0f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
+                  f"{r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4}  {r['stop']}"
+                  + (f"; rounds: {r['rounds']}" if r["rounds"] else ""), flush=True)
     for label in [x for x, *_ in runs[1:] if x in rows]:
         print(f"\nthis / {label}:")
         for now, old in zip(rows["this"], rows[label]):
             print(f"  {now['components']:>6} components: CPU time {now['cpu_s'] / old['cpu_s']:.2f}, "
                   f"peak memory {now['peak_mib'] / max(old['peak_mib'], 1e-9):.2f}")
     print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
-          "growth of the resident set during the solve (the request is built before).")
+          "growth of the resident set during the solve (the request is built before); proc MiB: the process's peak "
+          "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
+          "counted (rounds: each round's, with the factorisation it ran on; an LDL^T round whose cut an LU pass "
+          "had to decide is not counted, the LU pass is).")
 
 
 def main() -> None:
@@ -253,11 +264,13 @@ def main() -> None:
     ap.add_argument("--family", action="append", choices=("grid", "plant", "conflict"),
                     help="only this family's scaling table")
     ap.add_argument("--side", type=int, action="append", help="only networks of this side (a short run)")
+    ap.add_argument("--code", action="append", choices=("lu", "shuf", "shufLU", "before"),
+                    help="only these rows beside 'this' (a large network once: --code lu --code before)")
     args = ap.parse_args()
     if not args.scaling_only:
         methods(args.quick, args.dq_iterations)
     for family in args.family or ("grid", "plant", "conflict"):
-        scaling(args.quick, args.before, family, args.side)
+        scaling(args.quick, args.before, family, args.side, args.code)
 
 
 def methods(quick: bool, dq_iterations: int) -> None:

@@ -13,6 +13,8 @@ only, the previous rule) and after (minimax where no least-squares fit reaches t
 
     python bench/perfmap.py --pycycle  # the pyCycle table only (and the exports)
     python bench/perfmap.py --export   # the beta grid and cycle-code exports only: time, round-trip error
+    python bench/perfmap.py --gasturb  # GSPy's GasTurb/GSP maps: settings found, excess over the floor, round trip
+                                       # of the .map export with evenly spaced beta (before) and adaptive (after)
 """
 
 from __future__ import annotations
@@ -255,44 +257,102 @@ def pycycle_floor() -> None:
               f"{sum(r.minimax for r in after):7d} | {c3 - c2:7.2f}")
 
 
+def agree(res, again):
+    """Two fits of the same lines at the same curve parameter: max relative pressure difference (whole line, first
+    90 %), max absolute efficiency difference."""
+    c1, c2 = curveset_from_fits(res.settings), curveset_from_fits(again.settings)
+    by = {tuple(x.setting): k for k, x in enumerate(res.settings)}
+    t = np.linspace(0, 1, 401)
+    pa = pb = ea = 0.0
+    for k2, x in enumerate(again.settings):
+        k = by[tuple(x.setting)]
+        _, y1, e1 = c1.evaluate(np.full(401, k), t)
+        _, y2, e2 = c2.evaluate(np.full(401, k2), t)
+        rel = np.abs(y2 - y1) / y1
+        pa, pb, ea = max(pa, rel.max()), max(pb, rel[t <= 0.9].max()), max(ea, np.abs(e2 - e1).max())
+    return pa, pb, ea
+
+
+def gasturb_round_trip() -> None:
+    """Per GasTurb/GSP map file shipped with GSPy (tests/solvers/perfmap/data/gasturb): the settings read, the worst
+    excess of a line's pressure error over its floor, the fit's stated error, then per beta grid (21 evenly spaced:
+    the grid before; 21 and 40 adaptive: after) the table error the result states, the map read back from the .map
+    export against the file's points (read linearly between beta nodes; bound: fit error + table error of the line),
+    and the read-back map fitted again against the first fit (bound: table error + the refit's own error); CPU
+    seconds of the grid (tabulate)."""
+    from plantsolve.solvers.base import InputRejected
+    from plantsolve.solvers.perfmap.beta_grid import tabulate
+    from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
+    from plantsolve.solvers.perfmap.validation import loaded
+
+    data = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "gasturb"
+    print("\nGSPy's GasTurb/GSP maps: in -> fit -> .map out -> in (pressure, relative; CPU s)")
+    print(f"{'map':12s} {'lines':>5s} {'excess':>7s} {'fit err':>7s} | {'beta grid':>12s} {'grid s':>6s} "
+          f"{'table err':>9s} | {'read back vs file':>17s} {'bound':>6s} | {'refit vs fit':>12s} {'bound':>6s}")
+    for path in sorted(data.glob("*.map")):
+        for lines, spacing in ((21, "even"), (21, "adaptive"), (40, "adaptive")):
+            options = {"map": False, "beta_grid": {"lines": lines, "spacing": spacing}}
+            try:
+                req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), options)
+            except InputRejected as e:
+                print(f"{path.name:12s} refused: {e.errors[0].msg[:90]}")
+                break
+            res = solve(req).result
+            curves = curveset_from_fits(res.settings)
+            c0 = time.process_time()
+            tabulate(curves, lines, "parabola", True, spacing)
+            grid_s = time.process_time() - c0
+            fits = {tuple(x.setting): x for x in res.settings}
+            tables = {tuple(x.setting): x for x in res.beta_map.lines}
+            (text,) = gasturb_tables(res).values()
+            back = parse_upload(StoredInput.from_bytes("again.map", text), {"map": False})
+            read_back = {tuple(p.setting): p for p in back.positions}
+            vs_file = bound_file = 0.0
+            for st in loaded(req).settings:
+                p = read_back[st.values]
+                order = np.argsort(p.flow)
+                err = np.max(np.abs(np.interp(st.x, np.array(p.flow)[order], np.array(p.pressure)[order]) - st.y)
+                             / st.y)
+                vs_file = max(vs_file, err)
+                bound_file = max(bound_file, fits[st.values].pressure_max_rel_error
+                                 + tables[st.values].table_pressure_max_rel_error)
+            again = solve(back).result
+            refit, _, _ = agree(res, again)
+            bound_refit = max(tables[tuple(x.setting)].table_pressure_max_rel_error + x.pressure_max_rel_error
+                              for x in again.settings)
+            print(f"{path.name:12s} {len(res.settings):5d} {100 * max(x.pressure_excess for x in res.settings):6.2f}% "
+                  f"{100 * max(x.pressure_max_rel_error for x in res.settings):6.2f}% | {lines:3d} {spacing:8s} "
+                  f"{grid_s:6.3f} {100 * res.beta_map.table_pressure_max_rel_error:8.2f}% | {100 * vs_file:16.2f}% "
+                  f"{100 * bound_file:5.2f}% | {100 * refit:11.2f}% {100 * bound_refit:5.2f}%")
+
+
 def beta_export() -> None:
     """Per pyCycle map: the beta grid and the cycle-code exports. CPU seconds (``time.process_time``) of the solve
     without a map (which includes the beta grid), of the grid alone and of writing the three exports; then the
     round trip: each export read back by the upload reader and fitted again, against the fitted map (pressure at
-    the same flow, relative, on the whole line and on its first 90 %; efficiency absolute), for 21 (default) and
-    41 beta lines; and the known-answer check (closed-form speed lines, parabolic surge/choke lines)."""
+    the same flow, relative, on the whole line and on its first 90 %; efficiency absolute), for 21 evenly spaced
+    beta lines (the grid before), 21 and 40 adaptive ones (the default spacing); and the known-answer check
+    (closed-form speed lines, parabolic surge/choke lines)."""
     import resource
 
     from plantsolve.schemas.perfmap import BetaGridOption
     from plantsolve.solvers.perfmap.artifacts import cycle_code_artifacts
     from plantsolve.solvers.perfmap.beta_grid import tabulate
 
-    def agree(res, again):
-        c1, c2 = curveset_from_fits(res.settings), curveset_from_fits(again.settings)
-        by = {tuple(x.setting): k for k, x in enumerate(res.settings)}
-        t = np.linspace(0, 1, 401)
-        pa = pb = ea = 0.0
-        for k2, x in enumerate(again.settings):
-            k = by[tuple(x.setting)]
-            _, y1, e1 = c1.evaluate(np.full(401, k), t)
-            _, y2, e2 = c2.evaluate(np.full(401, k2), t)
-            rel = np.abs(y2 - y1) / y1
-            pa, pb, ea = max(pa, rel.max()), max(pb, rel[t <= 0.9].max()), max(ea, np.abs(e2 - e1).max())
-        return pa, pb, ea
-
     data = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "perfmap" / "data" / "pycycle"
     print("\nBeta grid and cycle-code exports on pyCycle's maps (CPU s; round trip = export read back and fitted "
           "again: pressure rel. err. at the same flow, whole line / first 90 %, efficiency abs. err.)")
-    print(f"{'map':14s} {'lines':>5s} {'beta':>4s} | {'solve s':>7s} {'grid s':>7s} {'export s':>8s} | "
-          f"{'pyCycle p all/body':>19s} {'eta':>8s} | {'CSV p all/body':>15s} {'eta':>8s}")
+    print(f"{'map':14s} {'lines':>5s} {'beta':>13s} | {'solve s':>7s} {'grid s':>7s} {'export s':>8s} | "
+          f"{'table err':>9s} | {'pyCycle p all/body':>19s} {'eta':>8s} | {'CSV p all/body':>15s} {'eta':>8s}")
     for path in sorted(data.glob("*.py")):
-        for n in (21, 41):
+        for n, spacing in ((21, "even"), (21, "adaptive"), (40, "adaptive")):
             req = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), {"map": False})
-            req = req.model_copy(update={"options": req.options.model_copy(update={"beta_grid": BetaGridOption(lines=n)})})
+            req = req.model_copy(update={"options": req.options.model_copy(
+                update={"beta_grid": BetaGridOption(lines=n, spacing=spacing)})})
             c0 = time.process_time()
             res = solve(req).result
             c1 = time.process_time()
-            tabulate(curveset_from_fits(res.settings), n, "parabola", True)
+            tabulate(curveset_from_fits(res.settings), n, "parabola", True, spacing)
             c2 = time.process_time()
             arts = {a.name: a.data for a in cycle_code_artifacts(res)}
             c3 = time.process_time()
@@ -301,7 +361,8 @@ def beta_export() -> None:
                 again = solve(parse_upload(StoredInput.from_bytes(name, arts[name]), {"map": False})).result
                 pa, pb, ea = agree(res, again)
                 row.append(f"{100 * pa:8.2f}% /{100 * pb:6.2f}% {ea:8.1e}")
-            print(f"{path.stem:14s} {len(res.settings):5d} {n:4d} | {c1 - c0:7.2f} {c2 - c1:7.3f} {c3 - c2:8.3f} | "
+            print(f"{path.stem:14s} {len(res.settings):5d} {n:4d} {spacing:8s} | {c1 - c0:7.2f} {c2 - c1:7.3f} "
+                  f"{c3 - c2:8.3f} | {100 * res.beta_map.table_pressure_max_rel_error:8.2f}% | "
                   f"{row[0]} | {row[1][:-9]:>15s} {row[1][-8:]}")
     # known answer: PR = a - 0.02 Wc^2 between the parabolas PR - 1 = 0.05 Wc^2 (surge) and 0.01 Wc^2 (choke)
     worst = 0.0
@@ -313,7 +374,8 @@ def beta_export() -> None:
                           "efficiency": (0.9 - 0.1 * (x - x.mean()) ** 2 / (xc - xs) ** 2).tolist()})
         lines.append(a)
     res = solve(PerfmapRequest.model_validate({"setting_names": ["Nc"], "units": {"pressure": "1"}, "positions": positions,
-                                               "options": {"map": False, "model": "parabola"}})).result
+                                               "options": {"map": False, "model": "parabola",
+                                                           "beta_grid": {"spacing": "even"}}})).result
     beta = np.array(res.beta_map.beta)
     for a, line in zip(lines, res.beta_map.lines):
         x = np.sqrt((a - 1) / (0.02 + 0.01 + beta * 0.04))
@@ -327,10 +389,15 @@ if __name__ == "__main__":
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--pycycle", action="store_true", help="only the pyCycle maps against their floors")
     ap.add_argument("--export", action="store_true", help="only the beta grid and cycle-code exports")
+    ap.add_argument("--gasturb", action="store_true", help="only GSPy's GasTurb/GSP maps and their .map round trip")
     args = ap.parse_args()
+    if args.gasturb:
+        gasturb_round_trip()
+        sys.exit()
     if not args.export:
         if not args.pycycle:
             main(args)
             pressure_reach()
         pycycle_floor()
     beta_export()
+    gasturb_round_trip()

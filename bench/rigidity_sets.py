@@ -1,37 +1,45 @@
-"""How much of an official LDraw set the rigidity solver joins: parts known, parts joined to nothing, pieces.
+"""How much of an official LDraw set the rigidity solver joins, before and after a change, in one run.
 
-    python bench/rigidity_sets.py FOLDER [FOLDER ...]    # every .ldr / .mpd in the folders
-    python bench/rigidity_sets.py FILE.mpd ...           # or the files themselves
+    python bench/rigidity_sets.py FOLDER [FOLDER ...]             # every .ldr / .mpd in the folders
+    python bench/rigidity_sets.py FILE.mpd ... --before main      # the baseline: the solver as git ref 'main' has it
 
-Nothing is fetched: the models are read from what is named (the OMR sets of three.js' examples are
-in ``tests/solvers/rigidity/omr/``). Per model:
+Nothing is fetched: the models are read from what is named (the OMR sets of three.js' examples are in
+``tests/solvers/rigidity/omr/``). The baseline is the ``plantsolve`` package of ``--before`` (default ``main``;
+``--before none`` skips it), taken out of git into a temporary folder and run in a child process on the same
+files. Per model, ``before -> after``:
 
-- ``parts``: parts the file places; ``unknown``: not in the catalogue (left out of the analysis);
-- ``floating``: known parts joined to nothing, and their share of the known parts (the target is
-  at most 5 %);
-- ``pieces``: connected pieces of the known parts (a set that is one build is one piece; held
-  sub-builds such as a minifigure may stand apart), and ``held``: how many of the pieces the solver
-  recognises as held sub-builds (``report.details.held_pieces``);
-- ``dof`` of the whole model, joints found, CPU seconds of the solve;
-- the part numbers of the floating parts (with counts).
+- ``known``: parts in the catalogue (the others are left out of the analysis);
+- ``floating``: known parts joined to nothing, and their share of the known parts (the target is at most 5 %);
+- ``pieces``: connected pieces of the known parts that are no held sub-build (a set that is one build is one
+  piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
+  placed sub-models, or minifigure parts only; ``report.details.held_pieces``);
+- ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
+- CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
+import tarfile
+import tempfile
 import time
 from collections import Counter
+from io import BytesIO
 from pathlib import Path
 
-from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.rigidity.solve import solve
-from plantsolve.solvers.rigidity.upload import parse_upload
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def measure(path: Path) -> dict:
-    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.rigidity.solve import solve
+    from plantsolve.solvers.rigidity.upload import parse_upload
+
     start = time.process_time()
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
     result = solve(request).result
     seconds = time.process_time() - start
     unknown = {u.id for u in result.unknown_parts}
@@ -39,28 +47,58 @@ def measure(path: Path) -> dict:
     joined = {b for j in result.joints for b in j.bodies}
     floating = [p for p in known if p.id not in joined]
     details = result.report.details
-    return {"model": path.name, "parts": len(request.parts), "unknown": len(unknown), "known": len(known),
-            "floating": len(floating), "pieces": details.get("connected_pieces"),
-            "held": len(details.get("held_pieces") or []), "dof": result.dof, "joints": len(result.joints),
-            "seconds": seconds, "floating_parts": Counter(p.part for p in floating)}
+    held = len(details.get("held_pieces") or [])
+    offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
+    return {"model": path.name, "known": len(known), "floating": len(floating),
+            "pieces": details.get("connected_pieces") - held, "held": held, "offset": offsets, "seconds": seconds,
+            "floating_parts": dict(Counter(p.part for p in floating))}
+
+
+def baseline(ref: str, files: list[Path]) -> dict[str, dict]:
+    """The rows of ``files`` measured with the ``plantsolve`` package of git ``ref``, in a child process."""
+    archive = subprocess.run(["git", "archive", "--format=tar", ref, "plantsolve"], cwd=ROOT, check=True,
+                             capture_output=True).stdout
+    with tempfile.TemporaryDirectory() as folder:
+        with tarfile.open(fileobj=BytesIO(archive)) as tar:
+            tar.extractall(folder, filter="data")
+        # the editable install's import hook would find this checkout's package first: drop it for the child
+        boot = ("import runpy, sys; sys.meta_path[:] = [f for f in sys.meta_path if '__editable__' not in "
+                f"repr(f)]; sys.path.insert(0, {folder!r}); sys.argv = sys.argv[1:]; "
+                "runpy.run_path(sys.argv[0], run_name='__main__')")
+        out = subprocess.run([sys.executable, "-c", boot, __file__, "--json", "--before", "none",
+                              *map(str, files)], check=True, capture_output=True, text=True).stdout
+    return {row["model"]: row for row in map(json.loads, out.splitlines())}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("paths", nargs="+", type=Path, help="folders of .ldr/.mpd models, or model files")
+    parser.add_argument("--before", default="main", help="git ref of the baseline solver, or 'none'")
+    parser.add_argument("--json", action="store_true", help="one JSON row per model (the baseline's child uses it)")
     args = parser.parse_args(argv)
     files = []
     for path in args.paths:
         files.extend(sorted(p for p in path.iterdir() if p.suffix.lower() in (".ldr", ".mpd")) if path.is_dir()
                      else [path])
-    print(f"{'model':38s} {'parts':>5s} {'unkn':>4s} {'floating':>12s} {'pieces':>6s} {'held':>4s} {'dof':>4s} "
-          f"{'joints':>6s} {'cpu s':>6s}  floating parts")
+    if args.json:
+        for path in files:
+            print(json.dumps(measure(path)), flush=True)
+        return 0
+    before = baseline(args.before, files) if args.before != "none" else {}
+    print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
+    print(f"{'model':34s} {'known':>5s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
+          f"{'cpu s':>11s}  floating parts (after)")
     for path in files:
         row = measure(path)
+        old = before.get(row["model"], row if not before else None)
+
+        def pair(key, fmt="d", row=row, old=old):
+            return f"{old[key]:{fmt}}>{row[key]:{fmt}}" if old is not None else f"?>{row[key]:{fmt}}"
+
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
-        print(f"{row['model'][:38]:38s} {row['parts']:5d} {row['unknown']:4d} {row['floating']:4d} ({share:4.1f} %) "
-              f"{row['pieces']:6d} {row['held']:4d} {row['dof']:4d} {row['joints']:6d} {row['seconds']:6.2f}  {names}")
+        print(f"{row['model'][:34]:34s} {row['known']:5d} {pair('floating'):>8s} ({share:4.1f} %) "
+              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('seconds', '.2f'):>11s}  {names}")
     return 0
 
 

@@ -6,8 +6,8 @@
                                          # apart, nearly coplanar back-to-back bends)
     python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
     python bench/tube.py --before-after 10 [--ref main]   # every family, main's solver vs this tree's
-    python bench/tube.py --scale 1e6,3e6,1e7 [--ref main] [--ref-max 3e6]   # large scans, main's solver vs
-                                         # this tree's, CPU seconds and peak RSS of a fresh process each
+    python bench/tube.py --scale 3e5,1.2e6,3e6,1e7,3e7 [--ref main] [--ref-max 1e7]   # large scans, main's solver
+                                         # vs this tree's, CPU seconds and peak RSS of a fresh process each
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -18,6 +18,7 @@ and over 180°. Timings and peak memory for large scans run in a fresh subproces
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 
@@ -53,6 +54,35 @@ def make_case(seed: int, n_points: int, n_bends: int | None = None, pipe_radius:
     view = rng.normal(size=3)
     pts = surface_samples(m, n_points, rng, view=view, noise=sigma, outlier_fraction=0.005)
     return m, pts, sigma
+
+
+MAKE_ALONE = 1_000_000  # --make draws scans up to this size in one call (make_case's scan)
+MAKE_CHUNK = 250_000  # and larger ones this many samples at a time
+
+
+def make_scan(n_points: int, path: str) -> None:
+    """The scan of --make (the tube of ``make_case(77, ...)``: 4 bends, pipe radius 10) saved to the .npy at
+    ``path``. Up to ``MAKE_ALONE`` samples it is make_case's scan; a larger one is drawn ``MAKE_CHUNK`` samples
+    at a time (each chunk with its own seed, noise and outliers as make_case's) straight into the file, so
+    the simulator's temporaries are one chunk's (one call for 10 million samples would hold about 20 GB). The solver sorts its input, so the chunks need no shuffle."""
+    if n_points <= MAKE_ALONE:
+        _, pts, _ = make_case(77, n_points, n_bends=4, pipe_radius=10.0)
+        np.save(path, pts)
+        return
+    rng = np.random.default_rng(77)
+    while True:  # make_case's draws, in its order: the same tube, noise and viewpoint
+        m = random_tube(rng, pipe_radius=10.0, n_bends=4)
+        if clearance(m) > 2.5:
+            break
+    sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
+    view = rng.normal(size=3)
+    out = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=(n_points, 3))
+    for i, a in enumerate(range(0, n_points, MAKE_CHUNK)):
+        b = min(a + MAKE_CHUNK, n_points)
+        out[a:b] = surface_samples(m, b - a, np.random.default_rng([77, i]), view=view, noise=sigma,
+                                   outlier_fraction=0.005)
+    out.flush()
+    del out
 
 
 def compare(truth, result):
@@ -368,11 +398,14 @@ def scale_one(path: str) -> None:
     m, _, _ = make_case(77, 1000, n_bends=4, pipe_radius=10.0)  # the tube of --make: the truth
     scan = TubeScan(TubeRequest(points=pts[:100].tolist()))
     scan.__dict__["points"] = pts  # the cached decoded samples
+    ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t0 = time.process_time()
     r = solve(scan).result
     cpu = time.process_time() - t0
+    sys_s = resource.getrusage(resource.RUSAGE_SELF).ru_stime - ru0.ru_stime
     da, _, _, dc = compare(m, r)
-    print(json.dumps({"n": len(pts), "cpu": cpu, "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    print(json.dumps({"n": len(pts), "cpu": cpu, "sys": sys_s,
+                      "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "bends_ok": da is not None, "angle_err": float(np.max(da)) if da is not None else None,
                       "centre_rms": float(np.sqrt(np.mean(dc ** 2)) / m.pipe_radius),
                       "ends": sorted([r.lra[0].length, r.lra[-1].length]),
@@ -405,20 +438,20 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
             os.remove(path)
     print(f"large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
           f"the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
-    print("| points | solver | CPU s | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
+    print("| points | solver | CPU s (of it system) | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
           "| end straights (true) mm |")
     print("|---:|---|---:|---:|---|---:|---:|---|")
     for r in sorted(rows, key=lambda r: (r["n"], r["side"])):
         err = f"{r['angle_err']:.4f}°" if r["angle_err"] is not None else "n/a"
         ends = " / ".join(f"{v:.6f}" for v in r.get("ends", []))
         true_ends = " / ".join(f"{v:.2f}" for v in r.get("true_ends", []))
-        print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
+        print(f"| {r['n']:,} | {r['side']} | {r['cpu']:.1f} ({r['sys']:.1f}) | {r['rss_mb']:.0f} | {r['bends_ok']} | {err} "
               f"| {100 * r['centre_rms']:.4f} | {ends} ({true_ends}) |")
     for side in sorted({r["side"] for r in rows}):
-        pts = sorted((r["n"], r["cpu"]) for r in rows if r["side"] == side)
-        if len(pts) >= 2:
-            (n0, t0), (n1, t1) = pts[-2], pts[-1]
-            print(f"{side}: CPU growth exponent {np.log(t1 / t0) / np.log(n1 / n0):.2f} from {n0:,} to {n1:,} points")
+        pts = sorted((r["n"], r["cpu"], r["rss_mb"]) for r in rows if r["side"] == side)
+        for (n0, t0, m0), (n1, t1, m1) in itertools.pairwise(pts):
+            print(f"{side}: from {n0:,} to {n1:,} points, growth exponent of CPU {np.log(t1 / t0) / np.log(n1 / n0):.2f}, "
+                  f"of peak RSS {np.log(m1 / m0) / np.log(n1 / n0):.2f}")
 
 
 def main():
@@ -460,8 +493,7 @@ def main():
         families(a.families, tuple(a.radius_models.split(",")))
         return
     if a.make:
-        _, pts, _ = make_case(77, int(a.make[0]), n_bends=4, pipe_radius=10.0)
-        np.save(a.make[1], pts)
+        make_scan(int(a.make[0]), a.make[1])
         return
     if a.single:
         print(json.dumps(single(a.single)))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
 
 from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel, unit
 
@@ -113,11 +113,31 @@ BETA_CONVENTION = (
     "beta line crosses each speed line exactly once.")
 
 
+MAX_BETA_LINES = 40  # GSP's map table format: at most 40 argument values a table
+
+
 class BetaGridOption(StrictModel):
     """The auxiliary-coordinate (beta/R-line) grid the fitted map is tabulated on for cycle codes."""
 
-    lines: Integer = Field(default=21, ge=2, le=201, description="Number of beta lines, evenly spaced in "
-                           "beta from 0 (choke) to 1 (surge).")
+    lines: Integer = Field(default=21, ge=2, le=MAX_BETA_LINES, description="Number of beta lines, from 0 (choke) to 1 "
+                           "(surge). At most 40: GSP reads at most 40 argument values in a map table (its 'Map "
+                           "table format'), and one grid feeds every export and the (speed, beta) query.")
+    spacing: Literal["adaptive", "even"] = Field(
+        default="adaptive", description="'adaptive': the beta values (multiples of 0.001, shared by all lines) "
+        "are placed where the table read linearly between its nodes, as cycle codes read it, would leave the "
+        "fitted lines most (Ramer-Douglas-Peucker splitting): steep choke ends and the kinks of broken-line fits "
+        "get nodes. 'even': evenly spaced, as Smooth C writes them. Either way beta_map states how far the "
+        "table departs from each line.")
+
+    @field_validator("lines", mode="before")
+    @classmethod
+    def _within_gsp(cls, value: Any) -> Any:
+        # refused rather than capped: the one grid feeds every export and the (speed, beta) query, so a capped
+        # GasTurb file would disagree with the others; 40 adaptive lines already bring the table far inside the fit
+        if isinstance(value, int) and not isinstance(value, bool) and value > MAX_BETA_LINES:
+            raise ValueError(f"at most {MAX_BETA_LINES} beta lines: GSP reads at most {MAX_BETA_LINES} values a map "
+                             f"table row (the GasTurb export's beta values); got {value}")
+        return value
     shape: Literal["parabola", "straight"] = Field(
         default="parabola", description="Beta lines as parabolas (p = 2) or straight lines (p = 1) "
         "through the vertex. " + BETA_CONVENTION)
@@ -180,7 +200,7 @@ class PerfmapOptions(StrictModel):
         "units) before solving: the result, its plots and its exports are in them.")
     beta_grid: BetaGridOption = Field(
         default_factory=BetaGridOption,
-        description="The beta/R-line grid of the cycle-code exports (map_pycycle.py, map_gasturb.txt, "
+        description="The beta/R-line grid of the cycle-code exports (map_pycycle.py, map_gasturb.map, "
         "map_beta.csv) and of the (speed, beta) query.")
     sheet: Annotated[str, Field(min_length=1, max_length=100)] | None = Field(
         default=None, description="Excel uploads: the worksheet to read (default: the first sheet with a "
@@ -427,6 +447,13 @@ class BetaLine(BaseModel):
                            json_schema_extra=unit("{beta_map.c_unit}"))
     c_surge: float = Field(description="Beta-line constant c through the surge end (beta = 1).",
                            json_schema_extra=unit("{beta_map.c_unit}"))
+    table_pressure_max_rel_error: float | None = Field(
+        default=None, description="Largest relative pressure difference, at the same flow, between the fitted line and the "
+        "table read linearly between its beta nodes (the chords): at a measured point the table departs from the "
+        "data by at most this plus the setting's pressure_max_rel_error.", json_schema_extra=ONE)
+    table_efficiency_max_abs_error: float | None = Field(
+        default=None, description="The same for the efficiency, absolute (fraction). (Both are null in results "
+        "stored before they were stated.)", json_schema_extra=ONE)
 
 
 class BetaMap(BaseModel):
@@ -440,8 +467,15 @@ class BetaMap(BaseModel):
                                    json_schema_extra=PRESSURE)
     c_unit: str | None = Field(default=None, description="Unit of the lines' c_choke and c_surge: pressure / flow^p "
                                "(null when the request stated neither unit).")
+    spacing: Literal["adaptive", "even"] = Field(default="even", description="How the beta values were placed "
+                                                 "(options.beta_grid.spacing).")
     beta: list[float] = Field(description="Beta values, 0 (choke) to 1 (surge), ascending.", json_schema_extra=ONE)
     lines: list[BetaLine] = Field(description="One per speed line, in the order of `settings`.")
+    table_pressure_max_rel_error: float | None = Field(
+        default=None, json_schema_extra=ONE, description="Max over lines of table_pressure_max_rel_error: how far "
+        "the exported tables, read linearly between nodes, depart from the fitted map.")
+    table_efficiency_max_abs_error: float | None = Field(
+        default=None, json_schema_extra=ONE, description="Max over lines of table_efficiency_max_abs_error.")
 
 
 class ResultUnits(BaseModel):

@@ -142,7 +142,12 @@ class PolyhedraOptions(StrictModel):
         default=None,
         description=f"List every face in the result (faces, each zone's faces and misoriented faces): true always, "
         f"false never; omitted: when the request has at most {MAX_LISTED_FACES} faces. The zones.csv artifact "
-        "always has every face.")
+        "lists them as faces_csv says.")
+    faces_csv: bool | None = Field(
+        default=None,
+        description=f"A row per face in the zones.csv artifact (area, net area, perimeter, normal, planarity error) "
+        f"after the zone rows: true always, false never; omitted: when the request has at most {MAX_LISTED_FACES} "
+        "faces (a million-triangle mesh's face rows are some 180 MB, written only when asked).")
 
 
 class PolyhedraRequest(StrictModel):

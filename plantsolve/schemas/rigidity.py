@@ -151,8 +151,9 @@ class PartJoints(BaseModel):
 class Piece(BaseModel):
     parts: list[str] = Field(description="Ids of the parts of one connected piece.")
     sub_build: str | None = Field(description="What the piece is when it is a sub-build that may stand apart: the "
-                                  "name of the LDraw sub-model whose every part it is (and only those), or "
-                                  "'minifigure' (only minifigure parts); null for a piece of the build itself.")
+                                  "names of the placed LDraw sub-models whose every known part it is (and only "
+                                  "those), joined by ' + ', or 'minifigure' (only minifigure parts); null for a "
+                                  "piece of the build itself.")
 
 
 class RigidityResult(BaseModel):

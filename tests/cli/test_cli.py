@@ -123,7 +123,7 @@ def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
     assert f"with {len(warnings)} warning(s)" in done.stderr
     assert sorted(p.name for p in (tmp_path / "map_artifacts").iterdir()) == sorted(
         ["characteristics.png", "characteristics.svg", "envelopes.png", "envelopes.svg", "map.png", "map.svg",
-         "curves.csv", "map.csv", "map_beta.csv", "map_gasturb_theta0.txt", "map_gasturb_theta5.txt",
+         "curves.csv", "map.csv", "map_beta.csv", "map_gasturb_theta0.map", "map_gasturb_theta5.map",
          "map_pycycle.py"])
 
 

@@ -31,3 +31,16 @@ def fits_agree(original, again, **span_approx) -> tuple[float, float, float]:
         p_all, p_body = max(p_all, rel.max()), max(p_body, rel[t <= 0.9].max())
         e_all = max(e_all, np.abs(e2 - e1).max())
     return p_all, p_body, e_all
+
+
+def pressure_differences(original, again) -> dict[tuple[float, ...], float]:
+    """Per setting: the max relative pressure difference of the two fits at the same curve parameter."""
+    c1, c2 = curveset_from_fits(original.settings), curveset_from_fits(again.settings)
+    by = {tuple(s.setting): k for k, s in enumerate(original.settings)}
+    t = np.linspace(0, 1, 401)
+    out = {}
+    for k2, s in enumerate(again.settings):
+        _, y1, _ = c1.evaluate(np.full(t.size, by[tuple(s.setting)]), t)
+        _, y2, _ = c2.evaluate(np.full(t.size, k2), t)
+        out[tuple(s.setting)] = float(np.max(np.abs(y2 - y1) / y1))
+    return out

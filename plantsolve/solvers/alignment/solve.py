@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact
+from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact, settled_cut
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
@@ -47,6 +47,7 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     reasons: dict[int, str] = {}
     errors: dict[int, tuple[float, float]] = {}
     iterations = 0
+    rounds: list[dict] = []  # what each round solved on and the iterations it counted (the report's details)
     st = Stages(progress)
     st.stage(0.1, 0.7, "direct solve")
     on_lu = not schur_in_use()  # once a cut is decided on the LU's pose, every round after it is solved on the LU
@@ -57,6 +58,7 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
                                 step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
         before = iterations
         iterations += pose.iterations
+        rounds.append({"factorisation": "LU" if on_lu else "LDL^T", "iterations": pose.iterations, "counted": True})
         if iterations >= opts.max_iterations:
             reason = f"iteration cap ({opts.max_iterations}) reached"
             break
@@ -67,14 +69,22 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
             # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice).
             # A network that needs one cut usually needs more, and each LDL^T round would be followed by
             # an LU round anyway (measured: 1.7 times the LU's CPU on a 482-component grid cut 33 times):
-            # the rounds after a cut are the LU's, so a cut network's answer is the all-LU one, bit for bit
-            with use_schur(False):
-                pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - before,
-                                    step=lambda message: st.tick(f"direct solve (reference LU): {message}{cuts}"))
-            iterations = before + pose.iterations  # the pose returned is the LU's
-            gap, ang = connection_errors(model, pose.P, pose.D)
-            k = choose_cut(model, active, gap, ang)
-            on_lu = k is not None
+            # the rounds after a cut are the LU's, so a cut network's answer is the all-LU one, bit for bit.
+            # Where the LDL^T's pose settles the choice (a conflict far above snapping, every impact clear of
+            # the tie width by more than the two factorisations' poses differ) the LU's pass would choose the
+            # same cut and is not run: the round after it starts from the input again, so the answer is the same
+            # (unless no cut may be made: then this pose would be the answer)
+            on_lu = True
+            if len(reasons) >= opts.max_cuts or settled_cut(model, active, gap, ang) is None:
+                with use_schur(False):
+                    pose = solve_direct(model, active, opts.pipe_stiffness, budget=opts.max_iterations - before,
+                                        step=lambda message: st.tick(f"direct solve (reference LU): {message}{cuts}"))
+                iterations = before + pose.iterations  # the pose returned is the LU's
+                rounds[-1]["counted"] = False
+                rounds.append({"factorisation": "LU", "iterations": pose.iterations, "counted": True})
+                gap, ang = connection_errors(model, pose.P, pose.D)
+                k = choose_cut(model, active, gap, ang)
+                on_lu = k is not None
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
@@ -91,7 +101,7 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         reasons[k] = why
         errors[k] = (float(gap[k]), float(ang[k]))
     return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
-                   cut_reason=reasons, cut_errors=errors)
+                   cut_reason=reasons, cut_errors=errors, extra={"rounds": rounds})
 
 
 def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:

@@ -61,12 +61,34 @@ def _spread(model: ifcopenshell.file, starts, live: np.ndarray) -> None:
                 stack.append(c)
 
 
+def instance_ids(model: ifcopenshell.file) -> np.ndarray:
+    """The ids of every instance of ``model`` (the core lists them as Python ints: 0.3 s and 100 MB for the
+    paper's tunnel, so they are listed once and grown, see :func:`grown`)."""
+    return np.fromiter(model.entity_names(), dtype=np.int64)
+
+
+def grown(model: ifcopenshell.file, before: np.ndarray) -> np.ndarray:
+    """The ids of ``model``, which held ``before`` and has only gained instances since (the sharing adds and
+    deletes nothing itself): the core numbers each new instance after the largest, so they are the numbers
+    past ``before``'s largest; listed again when one of those numbers is not an instance after all."""
+    start = int(before.max(initial=0)) + 1
+    added = np.arange(start, max(model.get_max_id() + 1, start), dtype=np.int64)
+    try:
+        for i in added.tolist():
+            model.by_id(i)
+    except RuntimeError:  # a gap: not numbered as assumed
+        return instance_ids(model)
+    return np.concatenate([before, added])
+
+
 def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
-          known: dict[int, np.ndarray] | None = None, from_outside: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+          known: dict[int, np.ndarray] | None = None, from_outside: bool | None = None,
+          everything: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(ids that go, ids of the whole model): the detached ``roots`` with what only they use, and the
     styled items (``styled_by``: item id → its IfcStyledItems) of the items that go, with what only
-    those use. ``from_outside`` forces how the referenced part is found (None: the cheaper way)."""
-    everything = np.fromiter(model.entity_names(), dtype=np.int64)
+    those use. ``from_outside`` forces how the referenced part is found (None: the cheaper way);
+    ``everything``: the ids of the model's instances, when the caller has them."""
+    everything = instance_ids(model) if everything is None else everything
     if not len(everything) or not roots:
         return np.zeros(0, dtype=np.int64), everything
     size = int(everything.max()) + 1
@@ -75,17 +97,19 @@ def going(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
     detached = np.zeros(size, dtype=bool)
     held = closure(model, roots, known)
     detached[held[held < size]] = True
+    del held  # the mask says it (the ids of the old geometry are as many as the model's instances)
     styled = [st for item, sts in styled_by.items() if item < size and detached[item] for st in sts]
     if styled:
         detached[closure(model, styled)] = True
-    inside = everything[detached[everything]]
-    outside = everything[~detached[everything]]
+    within = detached[everything]
     if from_outside is None:
-        from_outside = len(outside) * TRAVERSE_ONE_LEVEL_US < len(inside) * REFERENCED_WITHIN_US
+        n_inside = int(np.count_nonzero(within))
+        from_outside = (len(everything) - n_inside) * TRAVERSE_ONE_LEVEL_US < n_inside * REFERENCED_WITHIN_US
     live = ~detached
     if from_outside:  # every instance outside marks what it references inside
-        _spread(model, outside, live)
+        _spread(model, everything[~within], live)
     else:  # the core names the detached instances referenced only from inside; the others stay
+        inside = everything[within]
         only_within = np.zeros(size, dtype=bool)
         only_within[np.asarray(model._ids_referenced_only_within(inside.tolist()), dtype=np.int64)] = True
         entries = inside[~only_within[inside]]
@@ -168,11 +192,12 @@ def rebuilt(model: ifcopenshell.file, keep: np.ndarray) -> ifcopenshell.file:
 
 
 def compacted(model: ifcopenshell.file, roots, styled_by: dict[int, list], *,
-              known: dict[int, np.ndarray] | None = None, rebuild: bool | None = None) -> ifcopenshell.file:
+              known: dict[int, np.ndarray] | None = None, rebuild: bool | None = None,
+              everything: np.ndarray | None = None) -> ifcopenshell.file:
     """``model`` without what goes (see ``going``): the same model, or a rebuilt one when most of it
     goes (``rebuild`` forces the choice). Entity instances of ``model`` must not be used afterwards
     when a new model is returned."""
-    gone, everything = going(model, roots, styled_by, known=known)
+    gone, everything = going(model, roots, styled_by, known=known, everything=everything)
     if not len(gone):
         return model
     kept = len(everything) - len(gone)

@@ -50,7 +50,13 @@ class ExplicitReader:
         self._roles: dict[str, int] = {}
         self._bodies: dict[int, tuple[np.ndarray, int] | None] = {}
         self._items: dict[int, tuple[np.ndarray, int] | None] = {}
-        self._placements = Placements()
+        self.placements = Placements()  # the sharing places the same products again
+
+    def forget_points(self) -> None:
+        """Drop the points read so far (each body's and item's, in their own frames), keeping the closures
+        and the placements: what the phases after the geometry still ask of the reader."""
+        self._bodies.clear()
+        self._items.clear()
 
     def _loop_points(self, item) -> tuple[list, int] | None:
         """(points, face count) of a faceted item: every IfcCartesianPoint under it (each once)."""
@@ -131,7 +137,7 @@ class ExplicitReader:
         if got is None:
             return None
         pts, faces = got
-        p = self._placements.of(product)
+        p = self.placements.of(product)
         with np.errstate(invalid="ignore"):  # a placement the file cannot resolve: its product is left unchanged later
             return unique_rows(pts @ p[:3, :3].T + p[:3, 3]), faces
 

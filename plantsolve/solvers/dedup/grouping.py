@@ -56,10 +56,15 @@ def style_key(model, representation) -> tuple:
     return tuple(sorted(map(repr, keys)))
 
 
-def signature(shape: Shape) -> np.ndarray:
-    d = np.sqrt(np.sum(shape.local * shape.local, axis=1))
-    return np.concatenate([np.sqrt(np.maximum(shape.eigenvalues, 0.0)), [shape.radius],
-                           np.quantile(d, QUANTILES)])
+def signatures(shapes: list[Shape]) -> np.ndarray:
+    """Each shape's principal spreads, RMS radius and centred-distance quantiles, one row per shape. A
+    group's shapes have as many points each (the group key counts them): their distances are one array
+    and its quantiles one call, row by row the values of one shape's alone."""
+    local = np.stack([s.local for s in shapes])
+    d = np.sqrt(np.sum(local * local, axis=2))
+    spreads = np.sqrt(np.maximum(np.stack([s.eigenvalues for s in shapes]), 0.0))
+    radii = np.array([[s.radius] for s in shapes])
+    return np.concatenate([spreads, radii, np.quantile(d, QUANTILES, axis=1).T], axis=1)
 
 
 def product_key(product, representation, model, n_points: int, n_triangles: int) -> tuple:
@@ -80,7 +85,7 @@ def build_classes(candidates: list[Candidate], tol: float, *, allow_mirror: bool
     for group in groups.values():
         progress(lo + (hi - lo) * done / max(len(candidates), 1), f"matching {len(group)} products of "
                  f"{group[0].key[0]} {group[0].key[1] or ''}".rstrip())
-        sig = np.array([signature(c.shape) for c in group])
+        sig = signatures([c.shape for c in group])
         if allow_scale:  # scale-free: divide by the RMS radius
             sig = sig / np.maximum(sig[:, 3:4], 1e-300)
         tree = cKDTree(sig)

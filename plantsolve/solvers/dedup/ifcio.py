@@ -40,10 +40,11 @@ def open_path(path: str) -> ifcopenshell.file:
         if "schema" in message.lower():
             raise reject(f"unknown or unsupported IFC schema: {message}") from None
         raise reject(f"unreadable IFC file: {message}") from None
-    numbers = model.entity_names()
-    largest = max(numbers, default=0)
-    # the optimization numbers what it adds after the largest instance: at most a few per instance there is
-    if largest + 2 * len(numbers) + 1000 > MAX_INSTANCE_NUMBER:
+    largest = model.get_max_id()
+    # the optimization numbers what it adds after the largest instance: at most a few per instance there is;
+    # the instances are counted only when the largest number alone leaves doubt (there are at most that many)
+    if 3 * largest + 1000 > MAX_INSTANCE_NUMBER and \
+            largest + 2 * len(model.entity_names()) + 1000 > MAX_INSTANCE_NUMBER:
         raise reject(f"instance #{largest}: IfcOpenShell addresses instance numbers up to #{MAX_INSTANCE_NUMBER:,}, "
                      "and the optimized model numbers what it adds after the largest; renumber the file's instances "
                      "from #1, as any IFC export or STEP tool does")

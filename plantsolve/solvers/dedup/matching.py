@@ -13,7 +13,7 @@ All numerics run on centred coordinates: world coordinates of 1e6 m would cost t
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -22,6 +22,7 @@ from plantsolve.solvers.geometry import kabsch
 
 MAX_ICP_STEPS = 30
 MAX_ANCHORS = 6
+VERIFY_SAMPLE = 16  # points a transform is tried on before all of them
 
 
 @dataclass
@@ -35,6 +36,7 @@ class Shape:
     axes: np.ndarray  # columns: principal axes (matching eigenvalues)
     radius: float  # RMS distance from the centre
     _tree: cKDTree | None = None
+    memo: dict = field(default_factory=dict)  # what matching derives from this shape alone, kept for its next match
 
     @property
     def tree(self) -> cKDTree:
@@ -77,6 +79,14 @@ def det3(m: np.ndarray) -> float:
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
+def det3s(m: np.ndarray) -> np.ndarray:
+    """:func:`det3` of a stack of 3×3 matrices (the same products and sums, element by element)."""
+    a, b, c = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2]
+    d, e, f = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2]
+    g, h, i = m[:, 2, 0], m[:, 2, 1], m[:, 2, 2]
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
 def one_to_one(idx: np.ndarray, n: int) -> bool:
     """Whether ``idx`` (``n`` indices into ``n`` points) names every point once."""
     hit = np.zeros(n, dtype=bool)
@@ -97,18 +107,28 @@ def hausdorff(a: np.ndarray, b: np.ndarray, tree_b: cKDTree | None = None, tree_
     return max(first, float(np.max(d_ba)) if len(d_ba) else 0.0)
 
 
+SIGNS = np.array(list(itertools.product((1.0, -1.0), repeat=3)))  # every sign flip of the three axes
+
+
+def _axis_orders(rep: Shape, tol: float) -> list[list[int]]:
+    """The orders of rep's principal axes whose eigenvalues cannot be told apart (rep's alone: asked
+    once per representative, whatever the member)."""
+    key = ("orders", tol)
+    if key not in rep.memo:
+        sd = np.sqrt(np.maximum(rep.eigenvalues, 0.0))
+        same = lambda i, j: abs(sd[i] - sd[j]) < 2 * tol + 1e-9 * max(rep.radius, tol)  # noqa: E731
+        rep.memo[key] = [list(p) for p in itertools.permutations(range(3)) if all(same(i, p[i]) for i in range(3))]
+    return rep.memo[key]
+
+
 def _axis_guesses(rep: Shape, member: Shape, tol: float, allow_mirror: bool) -> list[np.ndarray]:
     """Rotations that map rep's principal frame onto member's: all sign flips, and all orders of axes
     whose eigenvalues cannot be told apart."""
-    sd = np.sqrt(np.maximum(rep.eigenvalues, 0.0))
-    same = lambda i, j: abs(sd[i] - sd[j]) < 2 * tol + 1e-9 * max(rep.radius, tol)  # noqa: E731
-    perms = [p for p in itertools.permutations(range(3)) if all(same(i, p[i]) for i in range(3))]
     guesses = []
-    for perm in perms:
-        member_axes = member.axes[:, list(perm)]
-        for signs in itertools.product((1.0, -1.0), repeat=3):
-            r = (member_axes * np.array(signs)) @ rep.axes.T
-            if det3(r) < 0 and not allow_mirror:
+    for perm in _axis_orders(rep, tol):
+        flipped = (member.axes[:, perm] * SIGNS[:, None, :]) @ rep.axes.T  # the eight flips at once
+        for r, det in zip(flipped, det3s(flipped).tolist()):
+            if det < 0 and not allow_mirror:
                 continue
             guesses.append(r)
     return guesses
@@ -250,6 +270,11 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     moved = rep.local @ (m.rotation * m.scale).T + (m.rotation * m.scale) @ rep.centre + m.translation - member.centre
     if len(moved) == 0 or len(moved) != len(member.local):
         return hausdorff(moved, member.local, member.tree)
+    # a wrong transform (most the pool tries) already moves some of a few points farther than tol from the
+    # member: that alone is a value above tol, and the whole set is queried only for the others
+    few = member.tree.query(moved[::max(1, len(moved) // VERIFY_SAMPLE)], k=1, distance_upper_bound=tol * 1.0001)[0]
+    if float(np.max(few)) > tol:
+        return float(np.max(few))
     dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
     first = float(np.max(dist))
     if first > tol:

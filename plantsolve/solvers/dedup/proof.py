@@ -13,11 +13,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.dedup import changes as diffing
-from plantsolve.solvers.dedup import ifcio, schemacheck
+from plantsolve.solvers.dedup import compaction, ifcio, schemacheck
 from plantsolve.solvers.dedup.changes import Changes
-from plantsolve.solvers.dedup.compaction import sparse_ids
 from plantsolve.solvers.dedup.grouping import canonical
-from plantsolve.solvers.dedup.matching import one_to_one
+from plantsolve.solvers.dedup.matching import Shape, one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
 
 MAX_ERRORS_LISTED = 50
@@ -28,19 +27,20 @@ SEMANTIC_ROOTS = ("IfcProduct", "IfcPropertyDefinition", "IfcRelationship", "Ifc
 
 
 def entity_counts(model: ifcopenshell.file, walked: dict[int, np.ndarray] | None = None,
-                  walked_entities: dict[int, Counter] | None = None) -> dict[str, int]:
+                  walked_entities: dict[int, Counter] | None = None, everything: np.ndarray | None = None,
+                  ) -> dict[str, int]:
     """Instances per entity. ``walked`` (id → the ids of an instance's traversal) and ``walked_entities``
     (the same id → its traversal's entity counts) are what a reader already counted: when those
     traversals are disjoint, only the instances outside them are looked at (a geometry-heavy model:
-    millions fewer)."""
+    millions fewer); ``everything``: the model's instance ids, when the caller has them."""
     counts: Counter = Counter()
     rest = None
     if walked and walked_entities is not None and walked.keys() == walked_entities.keys():
-        everything = np.fromiter(model.entity_names(), dtype=np.int64)
+        everything = compaction.instance_ids(model) if everything is None else everything
         ids = np.concatenate(list(walked.values()))
         size = int(max(everything.max(initial=0), ids.max(initial=0))) + 1
         # instance numbers far sparser than the instances: a mask as long as the largest is not bounded
-        if not sparse_ids(size, len(everything)):
+        if not compaction.sparse_ids(size, len(everything)):
             inside = np.zeros(size, dtype=bool)
             inside[ids] = True
             if int(inside.sum()) == len(ids) and inside[everything].sum() == len(ids):  # disjoint, all in the model
@@ -128,10 +128,19 @@ def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[
     return out[:limit]
 
 
-def deviation(before: np.ndarray, after: np.ndarray) -> float:
+def deviation(before: np.ndarray, after: np.ndarray, known: Shape | None = None) -> float:
     """Two-way Hausdorff distance of two point sets, centred on the first for accuracy. When the sets
-    are equally large and every point of the first has another nearest point in the second, that
-    map is one-to-one and the way back is no farther: one tree, one query."""
+    are equally large and every point of one has another nearest point in the other, that map is
+    one-to-one and the way back is no farther: one tree, one query. ``known``: the matching's shape of
+    ``before`` (its centre, centred points and k-d tree, built while matching): the written points are
+    then looked up in that tree, and only a map that is not one-to-one needs a tree of theirs."""
+    if known is not None:
+        a, b = known.local, after - known.centre
+        dist, idx = known.tree.query(b)
+        first = float(np.max(dist))
+        if len(a) == len(b) and one_to_one(idx, len(a)):
+            return first
+        return max(first, float(np.max(cKDTree(b).query(a)[0])))
     c = before.mean(axis=0)
     a, b = before - c, after - c
     dist, idx = cKDTree(b).query(a)

@@ -140,24 +140,24 @@ def can_share_product_shape(model: ifcopenshell.file, cls: CongruenceClass) -> b
 
 def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *,
           progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
-          detached: Detached | None = None) -> dict[str, int]:
+          detached: Detached | None = None, placements: Placements | None = None) -> dict[str, int]:
     """Rewrite every class with at least two members; returns counts of what was written. What the
     rewrite detached is deleted from ``model`` before returning, or, given ``detached``, recorded there
-    for the caller to delete (``compaction.compacted``)."""
+    for the caller to delete (``compaction.compacted``). ``placements``: the matrices the geometry reader
+    already evaluated (members of a ring share its placement: each is evaluated once either way)."""
     counts = {"mapped_items": 0, "shared_product_shapes": 0, "fallback_to_mapped_item": 0}
     multi = [c for c in classes if len(c.members) > 1]
     garbage = detached if detached is not None else Detached(model)
     try:
-        _apply(model, multi, mode, counts, progress, span, garbage)
+        _apply(model, multi, mode, counts, progress, span, garbage, placements or Placements())
     finally:
         if detached is None:
             compaction.compacted(model, garbage.roots, garbage.styled_by, rebuild=False)
     return counts
 
 
-def _apply(model, multi, mode, counts, progress, span, garbage: Detached) -> None:
+def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placements: Placements) -> None:
     lo, hi = span
-    placements = Placements()  # members of a ring share its placement: evaluate it once
 
     for k, cls in enumerate(multi):
         if k % 8 == 0:

@@ -136,7 +136,9 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         progress(0.05, "tessellating products in world coordinates")
         reader = ExplicitReader(model, record_closures=True)  # the closures: the sharing's old geometry
         points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
-        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities)
+        reader.forget_points()  # the world points are all the matching needs
+        ids_before = compaction.instance_ids(model)
+        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities, ids_before)
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
         warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, model_sizes(points.values())))
@@ -162,12 +164,18 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         pooled = pool_transforms(classes, tol)
         lap("matching")
         detached = sharing.Detached(model)
-        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached)
+        written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
+                                placements=reader.placements)
         out_classes, shared = described(classes)
+        # the proof looks the written points up in the trees the matching built of the products' own
+        shapes = {c.product.GlobalId: c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
-        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures)
-        del detached, reader, classes, candidates, products, points, triangles, p
+        ids_now = compaction.grown(model, ids_before)
+        del ids_before
+        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
+                                     everything=ids_now)
+        del detached, reader, classes, candidates, products, points, triangles, p, ids_now
         lap("sharing")
         removed = {}
         if opts.postpass:
@@ -190,7 +198,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             if prod is None or prod.id() not in after_points:
                 missing.append(g)
                 continue
-            deviations.append(proof.deviation(pts, after_points[prod.id()]))
+            deviations.append(proof.deviation(pts, after_points[prod.id()], shapes.get(g)))
         semantic_after = proof.semantic_fingerprint(check)
         semantic_equal = semantic_after == semantic_before and not missing
         differences = proof.fingerprint_differences(semantic_before, semantic_after)
@@ -202,7 +210,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         judged = proof.verdict(check, optimized, path, rules)
         found, inherited_errors = judged.errors, judged.inherited
         counts_after = proof.entity_counts(check)
-        del check, again, back_products
+        del check, again, back_products, shapes
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)

@@ -1,6 +1,6 @@
 """Plots of a perfmap result (PNG and SVG): characteristics, envelopes, performance map; and its exports:
 ``map.csv`` (the max-efficiency grid), ``curves.csv`` (the fitted characteristics) and the cycle-code tables
-on the beta grid (``map_pycycle.py``, ``map_gasturb.txt``, ``map_beta.csv``), units in every axis label and
+on the beta grid (``map_pycycle.py``, ``map_gasturb.map``, ``map_beta.csv``), units in every axis label and
 column header (the result's ``units``)."""
 
 from __future__ import annotations
@@ -434,7 +434,7 @@ def render_artifacts(value: PerfmapInput | PerfmapRequest, solved: Solved) -> li
 
 def cycle_code_artifacts(result: PerfmapResult) -> list[Artifact]:
     """The beta-grid exports (:mod:`~plantsolve.solvers.perfmap.cycle_exports`): map_pycycle.py (a full
-    alpha x speed grid only), map_gasturb*.txt, map_beta.csv."""
+    alpha x speed grid only), map_gasturb*.map, map_beta.csv."""
     if result.beta_map is None:
         return []
     out = []

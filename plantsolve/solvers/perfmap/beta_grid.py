@@ -8,6 +8,15 @@ each beta line crosses each speed line once, and the crossing is found by bisect
 Beta runs from 0 at choke to 1 at surge (GasTurb's convention); on each speed line the node of beta lies
 where ``c = c_choke + beta (c_surge - c_choke)``, the two constants being those through the line's own
 ends, so that beta = 1 is the surge line and beta = 0 the choke line exactly.
+
+Which beta values the table holds is a choice of its own. Cycle codes read a table between its nodes
+(linearly, or by splines through them); read linearly, a speed line becomes the chords between its nodes.
+Evenly spaced beta values (Smooth C's) put few nodes where a line bends sharply, at a steep choke end or at
+the kinks of a broken-line fit, and there the chords leave the fitted line by more than the fit leaves
+the data. The 'adaptive' spacing places the beta values shared by all lines by Ramer-Douglas-Peucker
+splitting: start from the two ends, split the segment whose chord leaves some line the most at the point
+where it does, until the grid holds its number of values. Either way the table's departure from every fitted
+line is measured (:func:`table_errors`) and stated with the result.
 """
 
 from __future__ import annotations
@@ -17,10 +26,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from plantsolve.solvers.perfmap.families import CurveSet
+from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
 
 EXPONENT = {"parabola": 2, "straight": 1}
 _CHECK_SAMPLES = 257
 _BISECTIONS = 60
+# the adaptive spacing picks beta values among multiples of 0.001 (printed exactly by every export)
+_CANDIDATE_BETAS = 1001
+# two nodes of a line closer in flow than this (fraction of its flow range) would read as a vertical choke
+# segment to a reader that merges flows within CHOKE_FLOW_TOLERANCE: the adaptive spacing keeps them apart
+_NODE_GAP = 2 * CHOKE_FLOW_TOLERANCE
+_TABLE_CHECK_SAMPLES = 4097  # samples of each fitted line where the table's departure from it is measured
 
 
 class BetaGridError(ValueError):
@@ -103,18 +119,94 @@ class BetaTable:
     efficiency: np.ndarray
     c_choke: np.ndarray  # (n,)
     c_surge: np.ndarray
+    pressure_error: np.ndarray  # (n,) see table_errors
+    efficiency_error: np.ndarray
 
 
-def tabulate(curves: CurveSet, n_beta: int, shape: str, pressure_is_ratio: bool) -> BetaTable:
-    """Every speed line at ``n_beta`` evenly spaced beta values (0 = choke ... 1 = surge)."""
-    frame = choose_frame(curves, shape, pressure_is_ratio)
-    c_choke, c_surge = check_single_crossings(curves, frame)
-    beta = np.linspace(0.0, 1.0, n_beta)
-    idx = np.repeat(np.arange(curves.n)[:, None], n_beta, axis=1)
+def _nodes(curves: CurveSet, frame: BetaFrame, beta: np.ndarray, c_choke: np.ndarray, c_surge: np.ndarray):
+    """(t, x, y, eta), each (lines, len(beta)): every line's nodes at ``beta``."""
+    idx = np.repeat(np.arange(curves.n)[:, None], len(beta), axis=1)
     B = np.broadcast_to(beta, idx.shape)
     t = node_parameters(curves, frame, idx.ravel(), B.ravel(), c_choke, c_surge).reshape(idx.shape)
-    x, y, e = curves.evaluate(idx, t)
-    return BetaTable(frame, beta, t, x, y, e, c_choke, c_surge)
+    return (t, *curves.evaluate(idx, t))
+
+
+def _chord_departure(x: np.ndarray, y: np.ndarray, i: int, j: int) -> np.ndarray:
+    """|y - chord| / y at the candidates strictly between i and j, (lines, j - i - 1): the chord of each line
+    from its candidate i to its candidate j."""
+    xi, xj, yi, yj = x[:, i:i + 1], x[:, j:j + 1], y[:, i:i + 1], y[:, j:j + 1]
+    xs, ys = x[:, i + 1:j], y[:, i + 1:j]
+    return np.abs(ys - (yi + (yj - yi) * (xs - xi) / (xj - xi))) / np.abs(ys)
+
+
+def adaptive_beta(x: np.ndarray, y: np.ndarray, candidates: np.ndarray, n_beta: int) -> np.ndarray:
+    """``n_beta`` of the ascending ``candidates`` (both ends among them) by Ramer-Douglas-Peucker splitting shared
+    by all lines: ``x``, ``y`` (lines, candidates) are the lines at the candidates. The segment whose chords leave
+    some line the most is split where they do, never closer to a node than _NODE_GAP of a line's flow range;
+    a grid with no such split left takes the middle of its widest segment."""
+    span = (x.max(axis=1) - x.min(axis=1))[:, None]
+    m = x.shape[1]
+    nodes = [0, m - 1]
+
+    def split(i: int, j: int) -> tuple[float, int | None]:
+        if j - i < 2:
+            return -1.0, None
+        worst = _chord_departure(x, y, i, j).max(axis=0)
+        xs = x[:, i + 1:j]
+        apart = np.all((np.abs(xs - x[:, i:i + 1]) >= _NODE_GAP * span)
+                       & (np.abs(x[:, j:j + 1] - xs) >= _NODE_GAP * span), axis=0)
+        if not apart.any():
+            return -1.0, None
+        return float(worst.max()), i + 1 + int(np.argmax(np.where(apart, worst, -1.0)))
+
+    segments = {(0, m - 1): split(0, m - 1)}
+    while len(nodes) < min(n_beta, m):
+        (i, j), (err, k) = max(segments.items(), key=lambda s: s[1][0])
+        if k is None:  # nothing left to split apart: the widest segment's middle
+            (i, j) = max(segments, key=lambda s: s[1] - s[0])
+            k = (i + j) // 2
+            if k == i:
+                break
+        del segments[(i, j)]
+        segments[(i, k)], segments[(k, j)] = split(i, k), split(k, j)
+        nodes.append(k)
+    return candidates[np.sort(nodes)]
+
+
+def table_errors(curves: CurveSet, t_nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per line, how far the table read linearly between its nodes (the chords) departs from the fitted line:
+    the largest relative pressure and absolute efficiency difference at the same flow, sampled densely along
+    the line, and at every knot of a broken-line fit (where the chords leave it most). At a measured point the
+    table then departs from the data by at most this plus the fit's own error there."""
+    dense = np.linspace(0.0, 1.0, _TABLE_CHECK_SAMPLES)
+    idx = np.repeat(np.arange(curves.n)[:, None], t_nodes.shape[1], axis=1)
+    xn, yn, en = curves.evaluate(idx, t_nodes)
+    p_err, e_err = np.zeros(curves.n), np.zeros(curves.n)
+    for k in range(curves.n):
+        t = np.union1d(dense, curves.knots[k][0]) if k in curves.knots else dense
+        x, y, e = curves.evaluate(np.full(t.size, k), t)
+        order = np.argsort(xn[k])
+        p_err[k] = np.max(np.abs(np.interp(x, xn[k][order], yn[k][order]) - y) / np.abs(y))
+        e_err[k] = np.max(np.abs(np.interp(x, xn[k][order], en[k][order]) - e))
+    return p_err, e_err
+
+
+def tabulate(curves: CurveSet, n_beta: int, shape: str, pressure_is_ratio: bool, spacing: str = "adaptive"
+             ) -> BetaTable:
+    """Every speed line at ``n_beta`` beta values (0 = choke ... 1 = surge): evenly spaced (``spacing`` 'even')
+    or placed where the chords between nodes would leave the lines most ('adaptive', :func:`adaptive_beta`),
+    with the table's departure from each fitted line (:func:`table_errors`)."""
+    frame = choose_frame(curves, shape, pressure_is_ratio)
+    c_choke, c_surge = check_single_crossings(curves, frame)
+    if spacing == "even":
+        beta = np.linspace(0.0, 1.0, n_beta)
+    else:
+        candidates = np.round(np.linspace(0.0, 1.0, _CANDIDATE_BETAS), 12)
+        _, xc, yc, _ = _nodes(curves, frame, candidates, c_choke, c_surge)
+        beta = adaptive_beta(xc, yc, candidates, n_beta)
+    t, x, y, e = _nodes(curves, frame, beta, c_choke, c_surge)
+    p_err, e_err = table_errors(curves, t)
+    return BetaTable(frame, beta, t, x, y, e, c_choke, c_surge, p_err, e_err)
 
 
 def values_at(curves: CurveSet, frame: BetaFrame, idx: np.ndarray, beta: np.ndarray,

@@ -12,13 +12,17 @@ Layouts:
   most two parameters; a map with one alpha (or speed only) is repeated at alpha + 90, as pyCycle's own maps
   without variable geometry are. WcMap carries the fitted flow unit in OpenMDAO's spelling (a mass flow: kg/s,
   lbm/s, ...; another mass-flow unit is converted to kg/s); without a mass-flow unit it has none.
-- ``map_gasturb.txt``: the layout of GasTurb's and GSP's maps (read back by
+- ``map_gasturb.map``: the layout of GasTurb's and GSP's maps, under the extension their map files have (GSPy's
+  sample maps, GSP's map dialogs), read back by
   :mod:`~plantsolve.solvers.perfmap.gasturb_map`): a ``99 title`` line, a ``Reynolds:`` line (no correction),
   then the tables ``Mass Flow``, ``Efficiency``, ``Pressure Ratio``: each opens with its key ``R.CCC``
   (R = speed lines + 1 rows, CCC = beta values + 1 columns) and the first four beta values, five values a line
   after that; each speed starts a line with its first four values; ``Surge Line`` (and ``Choke Line``) are
   2-row tables: ``2.CCC`` and the flows, then ``1.0`` and the pressure ratios. A blank line closes each table.
-  One file per value of the leading settings (alpha) when there are several.
+  One file per value of the leading settings (alpha) when there are several (``map_gasturb_<setting><value>.map``).
+  GSP reads at most 40 values a table row and 150 rows (its "Map table format" page): beta_grid.lines stops at 40,
+  and a group of more than 40 speed lines (its Surge Line table holds one flow per line) is written with the
+  result's ``gasturb_beyond_gsp_limits`` warning.
 - ``map_beta.csv``: one row per (line, beta): the setting values, beta, flow, pressure, efficiency, with
   units in the headers; ``#`` lines say where the surge (beta = 1) and choke (beta = 0) lines are. The
   project's upload reader reads it back (beta is recognised and not needed).
@@ -63,8 +67,11 @@ def _unit(result: PerfmapResult, quantity: str) -> str:
 def _limits_text(result: PerfmapResult) -> str:
     b = result.beta_map
     p = "parabolas" if b.exponent == 2 else "straight lines"
+    table = ("" if b.table_pressure_max_rel_error is None else
+             f"; read linearly between nodes the table is within {100 * b.table_pressure_max_rel_error:.2g} % of the "
+             "fitted pressure")
     return (f"beta lines: {p} y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}; "
-            "beta = 0 choke line, beta = 1 surge line")
+            f"beta = 0 choke line, beta = 1 surge line{table}")
 
 
 # OpenMDAO spellings of the mass-flow units pyCycle's CompressorMap converts (its own maps state lbm/s), with their
@@ -209,7 +216,9 @@ def _wrapped(first: list[str], rest: list[str]) -> list[str]:
 
 
 def _num(v: float) -> str:
-    return f"{float(v):12.7g}"
+    # ten digits: at a steep choke end a flow rounded to seven would move the pressure read back by 1e-5, more
+    # than the table error the result states leaves room for (readers take any width: values are blank-separated)
+    return f"{float(v):16.10g}"
 
 
 def _block(title: str, beta: np.ndarray, speeds: list[float], table: np.ndarray) -> list[str]:
@@ -240,7 +249,9 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         b = result.beta_map
         title = (f"99    plantsolve perfmap compressor map{' (' + where + ')' if where else ''}; flow "
                  f"{_unit(result, 'flow')}, pressure {_unit(result, 'pressure')}; beta 0 at choke, 1 at surge, "
-                 f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}")
+                 f"beta lines y - {_g(b.vertex_pressure)} = c (x - {_g(b.vertex_flow)})^{b.exponent}"
+                 + ("" if b.table_pressure_max_rel_error is None else
+                    f"; table within {100 * b.table_pressure_max_rel_error:.2g} % of the fitted pressure"))
         surge, choke = np.argsort(W[:, -1]), np.argsort(W[:, 0])
         text = [title, "Reynolds: RNI=1 f=1 RNI=1 f=1"]
         text += _block("Mass Flow", beta, speeds, W) + _block("Efficiency", beta, speeds, E)
@@ -249,7 +260,7 @@ def gasturb_tables(result: PerfmapResult) -> dict[str, bytes]:
         text += _line_block("Choke Line", W[choke, 0], P[choke, 0])
         tag = "_".join(f"{n}{_g(v)}" for n, v in zip(result.setting_names[:-1], key))
         # a file name, whatever the setting is called ('IGV [deg]', 'N/sqrt(T)')
-        name = "map_gasturb.txt" if len(gs) == 1 else f"map_gasturb_{re.sub(r'[^A-Za-z0-9.+-]+', '_', tag)}.txt"
+        name = "map_gasturb.map" if len(gs) == 1 else f"map_gasturb_{re.sub(r'[^A-Za-z0-9.+-]+', '_', tag)}.map"
         out[name] = ("\n".join(text) + "\n").encode()
     return out
 

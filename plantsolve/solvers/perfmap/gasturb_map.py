@@ -45,10 +45,12 @@ SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
 LIMIT_TABLES = ("Surge Line", "Choke Line")
 TURBINE_TABLES = ("Min Pressure Ratio", "Max Pressure Ratio")
 _KEYWORDS = {k.lower(): k for k in SPEED_TABLES + LIMIT_TABLES + TURBINE_TABLES}
-# bounds on a table's key: beyond them no cycle code reads the map (GSP: 40 beta values, 150 speeds), and a
-# garbled key must not make the reader allocate for millions of values
+# bounds on a table's key: a garbled key must not make the reader allocate for millions of values; GSP itself
+# reads at most 40 arguments (beta values, or the flows of a limit line) and 150 parameters (speeds) a table
 MAX_ARGUMENTS = 200
 MAX_ROWS = 2000
+GSP_MAX_ARGUMENTS = 40
+GSP_MAX_PARAMETERS = 150
 MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
@@ -191,7 +193,7 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
                      "14 speeds of 9 beta values)", ("file", "line", n))
     if cols - 1 > MAX_ARGUMENTS or rows - 1 > MAX_ROWS:
         raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
-                     f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads 150 of 40)", ("file", "line", n))
+                     f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads {GSP_MAX_PARAMETERS} of {GSP_MAX_ARGUMENTS})", ("file", "line", n))
     src.i += 1
     args, _ = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
     params, values, value_lines, param_lines = [], [], [], []
@@ -360,7 +362,53 @@ def _distinct_flows(flow: np.ndarray) -> int:
     return int(np.unique(x[~top]).size) + 1
 
 
-def _check_set(s: TableSet, cut_line: int | None) -> None:
+def _match_rows(t: Table, flow: Table) -> Diagnostic | None:
+    """Rows of ``t`` put in the Mass Flow table's speed order when they hold the same speeds in another order (a
+    table written or pasted in another order: each row is keyed by its speed, so the right row is known)."""
+    if t.params.shape != flow.params.shape or np.allclose(t.params, flow.params, rtol=1e-6, atol=1e-9):
+        return None
+    order, wanted = np.argsort(t.params, kind="stable"), np.argsort(flow.params, kind="stable")
+    if not np.allclose(t.params[order], flow.params[wanted], rtol=1e-6, atol=1e-9):
+        return None
+    perm = np.empty_like(order)
+    perm[wanted] = order  # row perm[i] of t has the speed of the Mass Flow table's row i
+    t.params, t.values, t.value_lines = t.params[perm], t.values[perm], t.value_lines[perm]
+    t.param_lines = [t.param_lines[i] for i in perm]
+    return Diagnostic(code="upload_rows_reordered", message=(
+        f"The {t.name} table (line {t.line}) lists the speeds of the Mass Flow table (line {flow.line}) in another "
+        "order: its rows were matched to them by speed."), details={"table": t.name, "line": t.line,
+                                                                    "speeds": [float(v) for v in t.params]})
+
+
+def _limit_line_off_map(s: TableSet) -> list[Diagnostic]:
+    """A Surge or Choke Line whose points lie outside the flows or pressure ratios of the speed tables by more
+    than a tenth of their range: its values contradict the tables (another map, another flow unit?). Kept as a
+    note, since the result's limit lines are the fitted speed lines' own ends."""
+    out = []
+    W, P = s.tables["Mass Flow"].values, s.tables["Pressure Ratio"].values
+    ok = np.isfinite(W) & np.isfinite(P)
+    if not ok.any():
+        return out
+    for name in LIMIT_TABLES:
+        if name not in s.tables:
+            continue
+        t = s.tables[name]
+        for quantity, values, table in (("flow", t.args, W[ok]), ("pressure ratio", t.values[0], P[ok])):
+            lo, hi = float(table.min()), float(table.max())
+            margin = 0.1 * (hi - lo)
+            off = np.flatnonzero((values < lo - margin) | (values > hi + margin))
+            if off.size:
+                k = int(off[0])
+                out.append(Diagnostic(code="upload_limit_line_off_map", message=(
+                    f"The {name} table (line {t.line}): {off.size} of its {len(values)} points have a {quantity} "
+                    f"outside the speed tables' {lo:g} to {hi:g} (first: {values[k]:g}); another map or another "
+                    f"unit? The result's {name.lower()} is the fitted speed lines' own ends."),
+                    details={"table": name, "line": t.line, "quantity": quantity, "values": values[off].tolist()[:100],
+                             "range": [lo, hi]}))
+    return out
+
+
+def _check_set(s: TableSet, cut_line: int | None) -> list[Diagnostic]:
     missing = [t for t in SPEED_TABLES if t not in s.tables]
     where = f" of the set at line {s.line} ({s.label} = {s.setting:g})" if s.setting is not None else ""
     if missing:
@@ -379,8 +427,11 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
         lines = [ln for p, ln in zip(flow.params, flow.param_lines) if p == v]
         raise reject(f"line {lines[-1]}: speed {v:g} appears twice in the Mass Flow table (lines {lines[0]} and "
                      f"{lines[-1]})", ("file", "line", lines[-1]))
+    notes = []
     for name in SPEED_TABLES[1:]:
         t = s.tables[name]
+        if (reordered := _match_rows(t, flow)) is not None:
+            notes.append(reordered)
         if t.values.shape != flow.values.shape:
             raise reject(f"line {t.line}: the {name} table has {t.values.shape[0]} speeds of {t.values.shape[1]} beta "
                          f"values, the Mass Flow table (line {flow.line}) {flow.values.shape[0]} of "
@@ -402,6 +453,7 @@ def _check_set(s: TableSet, cut_line: int | None) -> None:
             f"line {n}: efficiency {eff.values[r, c]:g} at speed {eff.params[r]:g} is above 1"
             + ("; the table looks like percent: GasTurb and GSP maps hold fractions (0.86)" if percent else
                "; map efficiencies are fractions (0.86)"))))
+    return notes + _limit_line_off_map(s)
 
 
 def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
@@ -446,7 +498,7 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
     map_type, title, reynolds, sets, notes = read_map(text)
     cut = next((d.details.get("line") for d in notes if d.code == "truncated_file"), None)
     for s in sets:
-        _check_set(s, cut)
+        notes.extend(_check_set(s, cut))
     if len(sets) == 1 and sets[0].setting is not None:  # one geometry: its setting is a note, not a parameter
         only = sets[0]
         notes.append(Diagnostic(code="upload_geometry_setting", message=(

@@ -37,6 +37,7 @@ from plantsolve.solvers.perfmap.families import (
     log_params_to_public,
 )
 from plantsolve.solvers.perfmap.efficiency import EFFICIENCY_FAMILIES, N_EFF_COEFFICIENTS
+from plantsolve.solvers.perfmap.gasturb_map import GSP_MAX_ARGUMENTS, GSP_MAX_PARAMETERS
 from plantsolve.solvers.perfmap.fitting import (
     EtaResult,
     PressureResult,
@@ -383,12 +384,33 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
     return surge, choke, line
 
 
+def _warn_beyond_gsp(settings: list[Setting], warnings: list[Diagnostic]) -> None:
+    """The GasTurb export writes one file per value of the leading settings, its Surge and Choke Line tables one
+    flow per speed line: more lines than GSP reads in a table are said (the file is still written: GasTurb and
+    GSPy read longer tables)."""
+    groups: dict[tuple, int] = {}
+    for s in settings:
+        groups[tuple(s.values[:-1])] = groups.get(tuple(s.values[:-1]), 0) + 1
+    over = {k: n for k, n in groups.items() if n > GSP_MAX_ARGUMENTS}
+    if over:
+        key, n = max(over.items(), key=lambda kv: kv[1])
+        where = f" ({', '.join(f'{v:g}' for v in key)})" if key else ""
+        rows = f"; its {n} speed rows are more than GSP's {GSP_MAX_PARAMETERS} too" if n > GSP_MAX_PARAMETERS else ""
+        warnings.append(Diagnostic(
+            code="gasturb_beyond_gsp_limits", message=f"{n} speed lines in one GasTurb map file{where}: its Surge "
+            f"Line and Choke Line tables hold one flow per line, and GSP reads at most {GSP_MAX_ARGUMENTS} values a "
+            f"table (GasTurb and GSPy read more){rows}. For GSP, submit at most {GSP_MAX_ARGUMENTS} speed lines a "
+            "file.",
+            details={"speed_lines": n, "limit": GSP_MAX_ARGUMENTS, "rows_limit": GSP_MAX_PARAMETERS,
+                     "files": [list(k) for k in over][:100]}))
+
+
 def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnings: list[Diagnostic]) -> BetaMap | None:
     """Every speed line tabulated on the beta grid (:mod:`~plantsolve.solvers.perfmap.beta_grid`); None, with a
     warning naming the line, when some beta line would cross a speed line twice."""
     ratio = units is not None and units.pressure in ("1", "-")
     try:
-        table = tabulate(curves, option.lines, option.shape, ratio)
+        table = tabulate(curves, option.lines, option.shape, ratio, option.spacing)
     except BetaGridError as e:
         s = settings[e.line]
         warnings.append(Diagnostic(
@@ -397,8 +419,21 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
         return None
     lines = [BetaLine(setting=list(s.values), flow=table.flow[k].tolist(), pressure=table.pressure[k].tolist(),
                       efficiency=table.efficiency[k].tolist(), t=table.t[k].tolist(),
-                      c_choke=float(table.c_choke[k]), c_surge=float(table.c_surge[k]))
+                      c_choke=float(table.c_choke[k]), c_surge=float(table.c_surge[k]),
+                      table_pressure_max_rel_error=float(table.pressure_error[k]),
+                      table_efficiency_max_abs_error=float(table.efficiency_error[k]))
              for k, s in enumerate(settings)]
+    coarse = np.flatnonzero(table.pressure_error > PRESSURE_EXCESS)
+    if coarse.size:
+        worst = int(coarse[np.argmax(table.pressure_error[coarse])])
+        warnings.append(Diagnostic(
+            code="beta_grid_coarse", message=f"{coarse.size} speed line(s) depart from their table, read linearly "
+            f"between its {option.lines} beta nodes, by more than {PRESSURE_EXCESS:.0%} in pressure (worst "
+            f"{100 * table.pressure_error[worst]:.2f}% at setting {settings[worst].label}): more beta lines"
+            f"{' or spacing adaptive' if option.spacing == 'even' else ''} bring the exports closer to the fit.",
+            details={"values": [list(settings[k].values) for k in coarse[:100]],
+                     "errors": table.pressure_error[coarse[:100]].tolist(), "lines": option.lines,
+                     "spacing": option.spacing}))
     # a reader that takes flows within CHOKE_FLOW_TOLERANCE of a line's largest as its vertical choke segment
     # (this project's, for pyCycle's repeated choke flows) would read such nodes as one
     span = table.flow.max(axis=1) - table.flow.min(axis=1)
@@ -410,9 +445,12 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
             f"first two beta nodes lie within {CHOKE_FLOW_TOLERANCE:g} of the line's flow range: a reader that "
             "takes such flows as a vertical choke segment merges them; fewer beta lines avoid it.",
             details={"values": close[:100], "lines": option.lines}))
+    _warn_beyond_gsp(settings, warnings)
     f = table.frame
-    return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv,
-                   beta=table.beta.tolist(), lines=lines)
+    return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv, spacing=option.spacing,
+                   beta=table.beta.tolist(), lines=lines,
+                   table_pressure_max_rel_error=float(table.pressure_error.max()),
+                   table_efficiency_max_abs_error=float(table.efficiency_error.max()))
 
 
 def envelopes(curves: CurveSet, values: np.ndarray, opts, progress: Progress = no_progress) -> list[Envelope]:

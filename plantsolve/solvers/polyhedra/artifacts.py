@@ -1,7 +1,8 @@
 """A 3-D view of every zone (open and non-manifold edges drawn over it) and a CSV of zones and faces.
 
-The CSV lists every face whether or not the result does (a million-triangle mesh's result does not):
-its per-face numbers come from the solve (``Solved.files``), its names from the request."""
+The CSV lists every face when the options' faces_csv says so (by default up to MAX_LISTED_FACES faces),
+whether or not the result does: its per-face numbers come from the solve (``Solved.files``, present only
+then), its names from the request."""
 
 from __future__ import annotations
 
@@ -103,7 +104,7 @@ def figures(request: PolyhedraRequest, result: PolyhedraResult) -> dict[str, Fig
 
 
 def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | None) -> bytes:
-    """Zones, then every face (the numbers of the solve's face table, else of the result's face list)."""
+    """Zones, then every face when the solve handed over its face table (faces_csv)."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     u = result.units
@@ -115,11 +116,7 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
         writer.writerow(["zone", z.id, "", "", "" if z.volume is None else repr(z.volume), repr(z.signed_volume),
                          repr(z.surface_area), repr(z.net_surface_area), "", z.closed, z.orientation,
                          z.open_edge_count, z.non_manifold_edge_count, "", "", "", "", repr(z.floor_area)])
-    if face_table is None:  # a result solved before the face table was handed over
-        for f in result.faces:
-            writer.writerow(["face", f.id, " ".join(f.zones), f.parent or "", "", "", repr(f.area), repr(f.net_area),
-                             repr(f.perimeter), "", "", "", "", *[repr(c) for c in f.normal], repr(f.planarity_error),
-                             ""])
+    if face_table is None:
         return out.getvalue().encode()
     host = np.where(poly.face_parent >= 0, poly.face_parent, np.arange(poly.n_faces))
     fz = poly.face_zone[host]  # a subsurface is listed with its host's zones
@@ -134,7 +131,8 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     named = ids.names if isinstance(ids, FaceIds) else ids
     if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]) and \
             np.isfinite(face_table).all():
-        return out.getvalue().encode() + _bulk_face_rows(poly, zones, parents, face_table)
+        # one copy of the rows: the chunks joined behind the zone rows
+        return b"".join([out.getvalue().encode(), *_bulk_face_rows(poly, zones, parents, face_table)])
     columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
     net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
     area, perimeter, nx, ny, nz, planarity = columns
@@ -158,8 +156,8 @@ def _label_cells(labels: np.ndarray) -> np.ndarray:
 
 
 def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face_table: np.ndarray,
-                    chunk: int = 20_000) -> bytes:
-    """The face rows of a large table (bulk_csv: 17 significant digits, written by array operations)."""
+                    chunk: int = 20_000) -> list[bytes]:
+    """The face rows of a large table in chunks (bulk_csv: 17 significant digits, written by array operations)."""
     parts = []
     for s in range(0, poly.n_faces, chunk):
         e = min(s + chunk, poly.n_faces)
@@ -171,7 +169,7 @@ def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face
             _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
             bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
             num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",\n", n)]))
-    return b"".join(parts)
+    return parts
 
 
 def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact]:

@@ -6,16 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-
-from plantsolve.solvers.polyhedra.gmap import GMap
+from plantsolve.solvers.polyhedra.gmap import GMap, components
 from plantsolve.solvers.polyhedra.sorting import counts_of, dense_labels, distinct
-
-
-def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
-    return connected_components(graph, directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -35,9 +27,7 @@ def orient(gmap: GMap, weight: np.ndarray, volume: np.ndarray, n_zones: int) -> 
     n = len(gmap.use_face)
     u1, u2 = gmap.use[gmap.pair_first], gmap.use[gmap.pair_second]
     c = gmap.pair_consistent
-    a = np.concatenate([u1, u1 + n])
-    b = np.concatenate([np.where(c, u2, u2 + n), np.where(c, u2 + n, u2)])
-    comp = _components(2 * n, a, b)
+    comp = components(2 * n, (u1, u1 + n), (np.where(c, u2, u2 + n), np.where(c, u2 + n, u2)))
     mine, other = comp[:n], comp[n:]
     conflict = mine == other
     sheet_label = np.minimum(mine, other)
@@ -82,14 +72,16 @@ def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones:
     edges = np.bincount(group_zone, minlength=n_zones)
     faces = np.bincount(gmap.use_zone, minlength=n_zones)
     inner = np.bincount(gmap.use_zone, weights=loops_per_face[gmap.use_face] - 1, minlength=n_zones).astype(np.int64)
+    # vertex fans: ⟨α1, α2⟩ orbits; more than one at a vertex of a zone means sheets touching there (found first:
+    # their graph is the largest temporary here, and the per-corner keys below need not be alive meanwhile)
+    fan = gmap.vertex_fans()
     corner_vertex = gmap.loop_vertices[gmap.position]  # every vertex of a loop is the first vertex of one edge-use
     n_points = int(corner_vertex.max()) + 1 if len(corner_vertex) else 1
     zv = gmap.use_zone[gmap.use] * n_points + corner_vertex
+    del corner_vertex
     zv_bound = max(n_zones, 1) * n_points
     zv_unique = distinct(zv, zv_bound)
     vertices = np.bincount(zv_unique // n_points, minlength=n_zones)
-    # vertex fans: ⟨α1, α2⟩ orbits; more than one at a vertex of a zone means sheets touching there
-    fan = gmap.vertex_fans()
     fan_first = np.full(int(fan.max()) + 1 if len(fan) else 0, -1, dtype=np.int64)
     fan_first[fan[::-1]] = np.arange(len(fan))[::-1]
     fan_keys, fans_per_vertex = counts_of(zv[fan_first], zv_bound)
@@ -99,13 +91,13 @@ def topology(gmap: GMap, loops_per_face: np.ndarray, sheet: np.ndarray, n_zones:
     boundary = np.zeros(n_zones, dtype=np.int64)
     if len(open_groups):
         z = group_zone[open_groups]
-        ends_lo = z * n_points + groups.lo[groups.order[groups.starts[open_groups]]]
-        ends_hi = z * n_points + groups.hi[groups.order[groups.starts[open_groups]]]
+        ends_lo = z * n_points + groups.lo[open_groups]
+        ends_hi = z * n_points + groups.hi[open_groups]
         ends = np.concatenate([ends_lo, ends_hi])
         nodes = distinct(ends, zv_bound)
         inverse = np.searchsorted(nodes, ends)
         k = len(open_groups)
-        label = _components(len(nodes), inverse[:k], inverse[k:])
+        label = components(len(nodes), (inverse[:k],), (inverse[k:],))
         comp_zone = np.zeros(label.max() + 1, dtype=np.int64)
         comp_zone[label] = nodes // n_points
         boundary = np.bincount(comp_zone, minlength=n_zones)

@@ -15,12 +15,18 @@ class EdgeGroups:
     """Edge-uses grouped by (zone, undirected edge): one group per edge of each zone's surface."""
 
     order: np.ndarray  # edge-uses sorted by group (stable: by edge-use within a group)
-    group: np.ndarray  # group of each edge-use
     starts: np.ndarray  # first index into ``order`` of each group
     counts: np.ndarray  # edge-uses per group (2 when manifold)
-    lo: np.ndarray  # smaller vertex index of each edge-use's edge
+    lo: np.ndarray  # smaller vertex index of each group's edge (per group, not per edge-use: half the memory)
     hi: np.ndarray
     zone: np.ndarray  # zone of each edge-use
+
+    def group(self) -> np.ndarray:
+        """The group of each edge-use (made when asked: the map keeps the groups, and this is as long as the
+        edge-uses)."""
+        group = np.empty(len(self.order), dtype=np.int64)
+        group[self.order] = np.repeat(np.arange(len(self.starts)), self.counts)
+        return group
 
     @property
     def edge_manifold(self) -> bool:
@@ -46,6 +52,5 @@ def group_edges(a: np.ndarray, b: np.ndarray, zone: np.ndarray, n_points: int, n
         new[1:] = (zs[1:] != zs[:-1]) | (ls[1:] != ls[:-1]) | (hs[1:] != hs[:-1])
     starts = np.flatnonzero(new)
     counts = np.diff(np.append(starts, len(order)))
-    group = np.empty(len(order), dtype=np.int64)
-    group[order] = np.cumsum(new) - 1
-    return EdgeGroups(order=order, group=group, starts=starts, counts=counts, lo=lo, hi=hi, zone=zone)
+    first = order[starts]
+    return EdgeGroups(order=order, starts=starts, counts=counts, lo=lo[first], hi=hi[first], zone=zone)

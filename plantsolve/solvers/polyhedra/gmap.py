@@ -111,14 +111,30 @@ class GMap:
         first, second = self.pair_first, self.pair_second
         first_end, second_end = self.next_edge_use[first], self.next_edge_use[second]
         same = self.pair_same_start
-        a = np.concatenate([first, first_end])
-        b = np.concatenate([np.where(same, second, second_end), np.where(same, second_end, second)])
-        graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_eu, n_eu))
-        return connected_components(graph, directed=False)[1]
+        return components(n_eu, (first, first_end),
+                          (np.where(same, second, second_end), np.where(same, second_end, second)))
 
     def is_involution(self) -> bool:
         """Every αi is its own inverse (a well-formed G-map)."""
         return all(np.array_equal(a[a], np.arange(self.n_darts)) for a in self.alpha)
+
+
+def components(n: int, a_parts: tuple[np.ndarray, ...], b_parts: tuple[np.ndarray, ...]) -> np.ndarray:
+    """The connected component of each of ``n`` nodes joined by the edges ``a[i]``–``b[i]`` (``a``, ``b`` the
+    parts concatenated). The edge lists are written straight into 32-bit indices and the graph handed over as
+    CSR with float data (what ``connected_components`` converts to anyway): a third less peak memory than a
+    COO matrix of 64-bit indices for the three million edge-uses of a million-triangle mesh."""
+    index = np.int32 if n < 2 ** 31 else np.int64
+    ends = []
+    for parts in (a_parts, b_parts):
+        out, at = np.empty(sum(len(p) for p in parts), dtype=index), 0
+        for p in parts:
+            out[at:at + len(p)] = p
+            at += len(p)
+        ends.append(out)
+    graph = coo_matrix((np.ones(len(ends[0])), tuple(ends)), shape=(n, n)).tocsr()
+    del ends
+    return connected_components(graph, directed=False)[1]
 
 
 def build_gmap(poly: Polygons, groups: EdgeGroups | None = None) -> GMap:

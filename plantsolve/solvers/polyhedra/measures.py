@@ -22,9 +22,10 @@ from plantsolve.solvers.polyhedra.polygons import Polygons
 
 @dataclass(frozen=True)
 class FaceMeasures:
-    origin: np.ndarray  # (F, 3) first vertex of the face: the frame of the face terms
+    # origin and flux are what use_terms needs; None in an analysis, which keeps the use terms made of them
+    origin: np.ndarray | None  # (F, 3) first vertex of the face: the frame of the face terms
     area_vector: np.ndarray  # (F, 3) Newell vector, holes subtracted (they run the other way)
-    flux: np.ndarray  # (F, 3) per axis k: integral of (x_k - origin_k) n_k over the face
+    flux: np.ndarray | None  # (F, 3) per axis k: integral of (x_k - origin_k) n_k over the face
     perimeter: np.ndarray  # (F,)
     planarity_error: np.ndarray  # (F,)
 

@@ -202,7 +202,7 @@ def insert_t_junctions(poly: Polygons, tolerance: float, max_passes: int = 4) ->
         odd = groups.counts % 2 == 1
         if not odd.any() or pass_no == max_passes:
             break
-        open_eu = np.flatnonzero(odd[groups.group])
+        open_eu = np.flatnonzero(odd[groups.group()])
         nxt = poly.next_position()
         lv = poly.loop_vertices
         inserts: dict[int, list[tuple[float, int]]] = {}

@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -27,7 +27,6 @@ from plantsolve.solvers.polyhedra.file_units import METRES
 from plantsolve.solvers.polyhedra.plausibility import implausible
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
-from plantsolve.solvers.polyhedra.sorting import distinct
 
 MAX_LISTED_EDGES = 1000
 FACE_TABLE = "faces.npy"  # the per-face numbers the zones.csv artifact lists (Solved.files)
@@ -57,6 +56,8 @@ def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = 
     n_zones = len(poly.zone_ids)
     st.stage(0.55, 0.65, "measures: volume terms per face use")
     terms = use_terms(measures, gmap.use_face, gmap.use_zone, gmap.use_sign, n_zones)
+    # the face terms live on in the use terms: not kept twice (a million faces' origins and fluxes, 46 MB)
+    measures = replace(measures, origin=None, flux=None)
     st.stage(0.65, 0.75, "diagnostics: orientation of the sheets")
     volume = terms.flux.sum(axis=1) / 3.0
     orientation = orient(gmap, measures.area[gmap.use_face], volume, n_zones)
@@ -72,9 +73,8 @@ def _edge_reports(an: Analysis, groups_idx: np.ndarray) -> list[dict]:
     out = []
     for gi in groups_idx[:MAX_LISTED_EDGES]:
         members = g.order[g.starts[gi]:g.starts[gi] + g.counts[gi]]
-        e0 = members[0]
         faces = sorted({an.poly.face_ids[an.gmap.use_face[an.gmap.use[e]]] for e in members})
-        out.append({"start": pts[g.lo[e0]].tolist(), "end": pts[g.hi[e0]].tolist(), "faces": faces,
+        out.append({"start": pts[g.lo[gi]].tolist(), "end": pts[g.hi[gi]].tolist(), "faces": faces,
                     "uses": int(g.counts[gi])})
     return out
 
@@ -85,12 +85,25 @@ def lists_faces(request: PolyhedraRequest, n_faces: int) -> bool:
     return n_faces <= MAX_LISTED_FACES if asked is None else asked
 
 
+def tables_faces(request: PolyhedraRequest, n_faces: int) -> bool:
+    """Whether zones.csv has a row per face: as the option says, else up to MAX_LISTED_FACES faces."""
+    asked = request.options.faces_csv
+    return n_faces <= MAX_LISTED_FACES if asked is None else asked
+
+
 def distinct_edge_length(poly: Polygons) -> float:
     """Total length of the distinct undirected edges of every loop (subsurfaces included)."""
     lv = poly.loop_vertices
-    a, b = lv, lv[poly.next_position()]
     n_points = max(len(poly.points), 1)
-    keys = distinct(np.minimum(a, b) * n_points + np.maximum(a, b), n_points * n_points)
+    # the key (lo, hi) built and sorted in place: two temporaries of the edge-uses' length, not five
+    other = lv[poly.next_position()]
+    key = np.minimum(lv, other)
+    key *= n_points
+    key += np.maximum(lv, other, out=other)
+    del other
+    key.sort()
+    keys = key[np.r_[True, key[1:] != key[:-1]]] if len(key) else key
+    del key
     lo, hi = keys // n_points, keys % n_points
     d = poly.points[hi] - poly.points[lo]
     return float(np.sqrt(np.einsum("ij,ij->i", d, d)).sum())
@@ -165,12 +178,11 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     passed ``check_input`` (the job domain runs it once, at submission)."""
     n_mesh = len(request.mesh.triangles) if request.mesh is not None else 0
     progress(0.0, f"reading {len(request.faces) + n_mesh} faces")
-    poly = from_request(request)
-    opts = request.options
-    listed = lists_faces(request, poly.n_faces)
     merge_tolerance, planarity_tolerance = tolerances(request)
-    an = analyse(poly, merge_tolerance, progress)
+    # no reference kept to the polygons as given: repaired, they are freed (a mesh's loops, tens of MB)
+    an = analyse(from_request(request), merge_tolerance, progress)
     poly, gmap, topo = an.poly, an.gmap, an.topology
+    listed, tabled = lists_faces(request, poly.n_faces), tables_faces(request, poly.n_faces)  # repair keeps faces
     progress(0.85, "results")
     area = an.measures.area
     n_faces = poly.n_faces
@@ -304,7 +316,6 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
             "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
             "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
-    table = np.column_stack([area, net_area, an.measures.perimeter, normal, planarity])
 
     details = {
         "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,
@@ -342,10 +353,12 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         adjacency=adjacent, total_volume=total if all_closed else None, total_floor_area=float(floors.sum()),
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
-    ), files={FACE_TABLE: _npy(table)})
+    ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}
+        if tabled else {})
 
 
-def _npy(array: np.ndarray) -> bytes:
+def _npy(*columns: np.ndarray) -> bytes:
+    """The columns side by side as one .npy file (the per-face numbers zones.csv lists)."""
     out = io.BytesIO()
-    np.save(out, array, allow_pickle=False)
+    np.save(out, np.column_stack(columns), allow_pickle=False)
     return out.getvalue()

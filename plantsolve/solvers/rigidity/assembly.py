@@ -14,6 +14,11 @@ pin in a pin hole a hinge, an axle in a round hole a cylindrical joint, two hing
 Two parts held by two pins (or axles) in distinct parallel holes are reported in one superbrick
 (:meth:`Assembly.rod_pairs`); the exact pass finds them rigid to each other on its own, with each
 pin free to spin.
+
+A whole model read from a file then gets three passes (the job runs them once all parts are placed):
+:meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_offset_studs` (studs
+gripped between a tube and a wall where the data states no anti-stud) and :meth:`Assembly.join_pieces`
+(pieces joined where a point misses its mate by at most ``OFFSET_REACH``: a part drawn off its mate).
 """
 
 from __future__ import annotations
@@ -24,11 +29,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, NOT_DOCKED, OPPOSED, RING_REACH,
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS, NOT_DOCKED,
+                                                   OPPOSED, RING_REACH,
                                                    PartShape, collision_boxes, fit, lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
+from plantsolve.solvers.rigidity.pieces import mostly_floating, pieces
 from plantsolve.solvers.rigidity.screws import FREEDOM
 
 # LDU: connection points closer than this are one point. Editors write positions with 2 to 3 decimals and
@@ -40,6 +47,17 @@ SNAP = 0.1
 # (beside it, it would cut the bore's wall). Looser than SNAP: a minifigure's arm turned by a rotation printed
 # with 3 digits (0.985 0.17) puts the hand's peg 0.44 LDU off the arm's socket.
 FIT_SNAP = 1.0
+# LDU: how far a connection point may miss its mate for join_pieces to join two pieces the matching within rounding
+# left apart. Models made with an older library keep parts where it drew them (OMR 4489 hangs a head on hinge
+# fingers the 2024 library draws 2 LDU higher); editors' grid snapping leaves a part 2 LDU off (a turntable on a
+# helicopter). Under a quarter of the closest spacing of like points (a stud and a tube 10√2 = 14 LDU apart), so a
+# point still meets one mate at most.
+OFFSET_REACH = 3.0 + SNAP
+# |cos| between a male snap cylinder and the bore it is in: a minifigure's arm swung about the torso's x axis
+# instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
+# FIT_SNAP of each other over the depth they share.
+FIT_ALIGN = math.cos(math.radians(10.0))
+HALF_PITCH = 10.0  # LDU: half a stud pitch
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
@@ -137,20 +155,20 @@ def _run_cells(start: np.ndarray, axis: np.ndarray, length: float) -> set:
 
 
 def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: float) -> set:
-    """The RUN_CELL cells that hold every point within ``reach`` of the run (its samples are 0.5 LDU apart
-    at most from any point of it)."""
-    out = set()
-    for p in _run_samples(start, axis, length):
-        out.update(_around(p, reach + 0.5, RUN_CELL, RUN_OFFSET))
-    return out
+    """The RUN_CELL cells that hold every point within ``reach`` of the run: those of the run's box grown by
+    ``reach`` (runs are a few studs long, so the box's extra cells cost less than walking the run)."""
+    end = start + axis * length
+    lo, hi = np.minimum(start, end) - reach, np.maximum(start, end) + reach
+    return set(itertools.product(*(range(math.floor((float(a) - RUN_OFFSET) / RUN_CELL),
+                                         math.floor((float(b) - RUN_OFFSET) / RUN_CELL) + 1) for a, b in zip(lo, hi))))
 
 
-def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float) -> bool:
-    """``point`` on the run: within FIT_SNAP of its line (a hole or a clip that far off an axle's or a bar's axis
-    holds it all the same: nearer, it would cut into the rod) and between its ends (within SNAP)."""
+def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP) -> bool:
+    """``point`` on the run: within ``reach`` of its line (FIT_SNAP: a hole or a clip that far off an axle's or a
+    bar's axis holds it all the same; nearer, it would cut into the rod) and between its ends (within SNAP)."""
     v = np.asarray(point, float) - start
     t = float(v @ axis)
-    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= FIT_SNAP
+    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= reach
 
 
 def _clean(x: float) -> float | int:
@@ -171,6 +189,7 @@ class Assembly:
         self._runs: dict[tuple, list[tuple[str, int]]] = {}  # runs by every RUN_CELL cell they pass
         self._rings: dict[tuple, list[tuple[str, int]]] = {}  # rings (kept apart: only studs look for them)
         self._links: dict[tuple[str, str], list[Connection]] = {}
+        self._offsets: dict[tuple[str, str], float] = {}  # pairs joined by join_pieces: their offset
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
         self._pebble_stale = False
@@ -196,27 +215,51 @@ class Assembly:
         self.parts[id] = placed
         self._neighbours[id] = set()
         self._pebble.add_body(id)
-        found: dict[str, list[Connection]] = {}
-        fits: dict[str, list[Connection]] = {}
-        for ci, key in enumerate(keys):
+        found = self._matches(id, SNAP, FIT_SNAP)
+        for ci, key in enumerate(keys):  # its points go into the tables only now: a part does not meet itself
             mine = shape.connectors[ci].type
-            if mine in FITS:
-                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
-                    fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
-                                                                 tuple(_clean(v) for v in where),
-                                                                 tuple(_clean(v) for v in dirs[ci])))
+            if key is not None:
+                self._slots.setdefault(key, []).append((id, ci))
+                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
+            else:
                 for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
                     self._runs.setdefault(cell, []).append((id, ci))
+        for other, conns in found.items():
+            self._links[(other, id)] = conns
+            self._neighbours[other].add(id)
+            self._neighbours[id].add(other)
+            if not self._pebble_stale:
+                for j in self._pair_joints(other, id, conns):
+                    self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
+        return [c for conns in found.values() for c in conns]
+
+    def _matches(self, id: str, reach: float, fit_reach: float) -> dict[str, list[Connection]]:
+        """The connections placed part ``id`` makes with the parts in the tables (itself left out): points that meet
+        within ``reach`` (a hole or a clip within ``fit_reach`` of a run's line), cylinders that fit within
+        ``fit_reach`` of a bore's line. A fit counts only between parts that no typed point joins."""
+        placed = self.parts[id]
+        shape, points, dirs = placed.shape, placed.points, placed.directions
+        found: dict[str, list[Connection]] = {}
+        fits: dict[str, list[Connection]] = {}
+        for ci, key in enumerate(placed.keys):
+            mine = shape.connectors[ci].type
+            length = shape.connectors[ci].length
+            if mine in FITS:
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci], fit_reach):
+                    if other != id:
+                        fits.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                     tuple(_clean(v) for v in where),
+                                                                     tuple(_clean(v) for v in dirs[ci])))
                 continue
             if key is not None:
-                candidates = [(o, oi, points[ci]) for o, oi in self._near(key, points[ci])]
-                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci])]
+                candidates = [(o, oi, points[ci]) for o, oi in self._near(points[ci], reach)]
+                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci], fit_reach)]
             else:
-                candidates = [(o, oi, self.parts[o].points[oi]) for o, oi in self._points_along(points[ci], dirs[ci],
-                                                                                            runs[ci])]
+                candidates = [(o, oi, self.parts[o].points[oi])
+                              for o, oi in self._points_along(points[ci], dirs[ci], length, fit_reach)]
             seen = set()
             for other, oi, where in candidates:
-                if (other, oi) in seen:
+                if (other, oi) in seen or other == id:
                     continue
                 seen.add((other, oi))
                 theirs = self.parts[other].shape.connectors[oi].type
@@ -233,41 +276,205 @@ class Assembly:
                     _clean(v) for v in (dirs[ci] if kind not in OPPOSED else self.parts[other].directions[oi]))
                 found.setdefault(other, []).append(Connection(other, oi, id, ci, kind, point, axis))
             if mine in ("ring", "stud"):
-                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci]):
+                for other, oi, where in self._ring_mates(mine, points[ci], dirs[ci], reach):
+                    if other == id:
+                        continue
                     axis = dirs[ci] if mine == "stud" else self.parts[other].directions[oi]
                     found.setdefault(other, []).append(Connection(other, oi, id, ci, "stud",
                                                                   tuple(_clean(v) for v in where),
                                                                   tuple(_clean(v) for v in axis)))
             if mine == "finger" and key is None:
-                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci]):
-                    found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
-                                                                  tuple(_clean(v) for v in where),
-                                                                  tuple(_clean(v) for v in dirs[ci])))
-            if key is not None:
-                self._slots.setdefault(key, []).append((id, ci))
-                (self._rings if mine == "ring" else self._coarse).setdefault(_cell(points[ci]), []).append((id, ci))
-            else:
-                for cell in _run_cells(points[ci], dirs[ci], runs[ci]):
-                    self._runs.setdefault(cell, []).append((id, ci))
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci], fit_reach):
+                    if other != id:
+                        found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
+                                                                      tuple(_clean(v) for v in where),
+                                                                      tuple(_clean(v) for v in dirs[ci])))
         for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
             if other not in found:
                 found[other] = conns
-        for other, conns in found.items():
-            self._links[(other, id)] = conns
-            self._neighbours[other].add(id)
-            self._neighbours[id].add(other)
-            if not self._pebble_stale:
-                for j in self._pair_joints(other, id, conns):
-                    self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
-        return [c for conns in found.values() for c in conns]
+        return found
 
-    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray):
+    def part_pieces(self) -> list[list[str]]:
+        """The connected pieces of the parts as joined so far, largest first, parts in the order they were added."""
+        return pieces(list(self.parts), {p: sorted(n) for p, n in self._neighbours.items()})
+
+    def join_pieces(self, reach: float = OFFSET_REACH) -> list[tuple[str, str, float]]:
+        """Join the pieces that the matching within rounding left apart where their connection points miss each
+        other by at most ``reach`` (a part drawn a little off its mate: a slip of the model, or a part the library
+        has redrawn since the model was made). Only between parts of different pieces as matched before this pass,
+        so the result does not depend on the order of the pieces; not at all when most parts are joined to nothing.
+        Returns (part, part, offset in LDU) of each pair joined, the offset the largest of its connections'
+        (:meth:`_gap`)."""
+        groups = self.part_pieces()
+        if mostly_floating(sum(len(g) == 1 for g in groups), len(self.parts)):
+            return []  # no slip is assumed where most parts meet nothing
+        label = {p: k for k, g in enumerate(groups) for p in g}
+        joined = []
+        for group in groups[1:]:
+            for id in group:
+                for other, conns in self._matches(id, reach, reach).items():
+                    if label[other] == label[id] or (other, id) in self._links or (id, other) in self._links:
+                        continue
+                    gap = max(self._gap(c) for c in conns)
+                    self._links[(other, id)] = conns
+                    self._neighbours[other].add(id)
+                    self._neighbours[id].add(other)
+                    self._offsets[(other, id)] = gap
+                    joined.append((other, id, gap))
+        if joined:
+            self._pebble_stale = True
+        return joined
+
+    def seat_offset_studs(self) -> list[tuple[str, str]]:
+        """Seat the studs of pieces left apart where a part above grips them between a tube and its walls although
+        the snap data states no anti-stud there: half a stud along an outer row (midway between two of its
+        anti-studs a pitch apart, a tube half a pitch inward, the part's side half a pitch outward: a half-stud
+        offset under a 2-wide plate, as OMR 5935 hangs its skis), or under a part whose data states its tubes
+        only (6192: a tube half a pitch away diagonally, no anti-stud within half a pitch, the stud a stud's radius
+        inside the part's sides). Returns the (stud's part, part) pairs seated."""
+        groups = self.part_pieces()
+        label = {p: k for k, g in enumerate(groups) for p in g}
+        seated = []
+        for group in groups:  # the largest piece's studs too: a part of another piece may sit on them
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type != "stud" or c.length > 0:
+                        continue
+                    for other, oi in self._grips(id, placed.points[ci], placed.directions[ci], label):
+                        key = (id, other) if (id, other) in self._links else (other, id)
+                        if key not in self._links:
+                            self._neighbours[other].add(id)
+                            self._neighbours[id].add(other)
+                            seated.append((id, other))
+                        self._links.setdefault(key, []).append(Connection(
+                            other, oi, id, ci, "stud", tuple(_clean(v) for v in placed.points[ci]),
+                            tuple(_clean(v) for v in placed.directions[ci])))
+        if seated:
+            self._pebble_stale = True
+        return seated
+
+    def _grips(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict):
+        """(part, tube anti-stud) of each part of another piece that grips the stud at ``point`` (pointing along
+        ``direction``) between a tube and its walls (:meth:`seat_offset_studs`)."""
+        mouths: dict[str, list[tuple[int, np.ndarray]]] = {}
+        for cell in _around(point, RING_REACH + SNAP, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                v = o.points[oi] - point
+                if (label[other] != label[id] and o.shape.connectors[oi].type == "antistud"
+                        and float(direction @ o.directions[oi]) <= -ALIGN and abs(float(v @ direction)) <= SNAP
+                        and float(np.linalg.norm(v)) <= RING_REACH + SNAP):
+                    mouths.setdefault(other, []).append((oi, v))
+        for other, found in mouths.items():
+            o = self.parts[other]
+            ends = [v for _, v in found if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP]
+            pairs = [(a, b) for a, b in itertools.combinations(ends, 2) if float(np.linalg.norm(a + b)) <= SNAP]
+            gripped = next((oi for row, _ in pairs for oi, v in found  # the tube half a pitch across the row
+                            if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP and abs(float(v @ row)) <= SNAP
+                            and self._outside(o, point - v, v)), None)
+            if gripped is None and all(float(np.linalg.norm(v)) > HALF_PITCH + SNAP for _, v in found):
+                gripped = next((oi for oi, v in found  # a tube diagonally, the stud well inside the part's sides
+                                if abs(float(np.linalg.norm(v)) - RING_REACH) <= SNAP and self._inside(o, point)),
+                               None)
+            if gripped is not None:
+                yield other, gripped
+
+    @staticmethod
+    def _inside(o: Placed, point: np.ndarray) -> bool:
+        """``point`` (on a face of ``o``'s box) at least a stud's radius (6 LDU) inside the box in both directions
+        along that face."""
+        local = np.abs(o.rotation.T @ (point - o.position) - np.asarray(o.shape.box_center, float))
+        room = np.asarray(o.shape.box_size, float) / 2 - local
+        return bool(np.sort(room)[1] >= HOLE_RADIUS - SNAP)
+
+    @staticmethod
+    def _outside(o: Placed, point: np.ndarray, along: np.ndarray) -> bool:
+        """``point`` on or beyond the side of ``o``'s box that the direction ``along`` crosses."""
+        local = o.rotation.T @ (point - o.position) - np.asarray(o.shape.box_center, float)
+        k = int(np.argmax(np.abs(o.rotation.T @ along)))
+        return abs(float(local[k])) >= float(o.shape.box_size[k]) / 2 - SNAP
+
+    def seat_tyres(self) -> list[tuple[str, str]]:
+        """Seat the grouped female fits that no male of their group meets (a tyre whose wheel the snap data gives no
+        rim, such as 122c01's) on the male snap cylinder of another part whose line passes through the fit's centre
+        (within FIT_SNAP, parallel) inside the part's width along that line: the wheel the tyre is pushed onto. A
+        rigid ``group`` connection at the centre. Returns the (tyre, wheel) pairs seated."""
+        seated = []
+        for id, placed in self.parts.items():
+            tyres = [ci for ci, c in enumerate(placed.shape.connectors)
+                     if c.type.startswith("group:") and c.type.endswith(":F")]
+            if not tyres:
+                continue
+            linked = {c.cb if c.b == id else c.ca for other in self._neighbours[id]
+                      for c in self._links.get((other, id), []) + self._links.get((id, other), []) if c.kind == GROUP}
+            for ci in tyres:
+                c = placed.shape.connectors[ci]
+                if ci in linked:
+                    continue
+                centre, axis = placed.points[ci], placed.directions[ci]
+                local = np.abs(np.asarray(c.direction, float))
+                half = float(np.asarray(placed.shape.box_size, float) @ local) / 2 / float(np.linalg.norm(local))
+                wheel = self._cylinder_through(id, centre, axis, half)
+                if wheel is None or (wheel[0], id) in self._links or (id, wheel[0]) in self._links:
+                    continue
+                other, oi = wheel
+                self._links[(other, id)] = [Connection(other, oi, id, ci, GROUP, tuple(_clean(v) for v in centre),
+                                                       tuple(_clean(v) for v in axis))]
+                self._neighbours[other].add(id)
+                self._neighbours[id].add(other)
+                seated.append((id, other))
+        if seated:
+            self._pebble_stale = True
+        return seated
+
+    def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
+        """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along
+        ``axis`` (parallel, within FIT_SNAP) that reaches within ``half`` of ``centre`` along it, or None."""
+        for cell in _cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP):
+            for other, oi in self._runs.get(cell, ()):
+                o = self.parts[other]
+                theirs = o.shape.connectors[oi]
+                cos = float(axis @ o.directions[oi])
+                if other == id or theirs.type != "fit_m" or abs(cos) < ALIGN:
+                    continue
+                v = o.points[oi] - centre
+                along = float(v @ axis)
+                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
+                    continue
+                ends = (along, along + theirs.length * cos)
+                if min(max(ends), half) - max(min(ends), -half) > SNAP:
+                    return other, oi
+        return None
+
+    def _gap(self, c: Connection) -> float:
+        """How far a connection's two points miss each other (LDU): between two points their distance; for a run
+        (axle, bar, hinge fingers, a fit cylinder) the other's distance from its line; for a ring how far the stud
+        is off its place around it."""
+        a, b = self.parts[c.a], self.parts[c.b]
+        ca, cb = a.shape.connectors[c.ca], b.shape.connectors[c.cb]
+        pa, pb = a.points[c.ca], b.points[c.cb]
+        v = pb - pa
+        if "ring" in (ca.type, cb.type):
+            axis = a.directions[c.ca]
+            along = float(v @ axis)
+            return math.hypot(along, float(np.linalg.norm(v - along * axis)) - RING_REACH)
+        if ca.length <= 0 and cb.length <= 0:
+            return float(np.linalg.norm(v))
+        axis = a.directions[c.ca] if ca.length > 0 else b.directions[c.cb]
+        return float(np.linalg.norm(v - float(v @ axis) * axis))
+
+    def offsets(self) -> dict[tuple[str, str], float]:
+        """(part, part) -> offset (LDU) of the pairs :meth:`join_pieces` joined."""
+        return dict(self._offsets)
+
+    def _fits_along(self, mine, start: np.ndarray, axis: np.ndarray, reach: float = FIT_SNAP):
         """(part, connector, kind, point) of the placed fit cylinders of the other gender on the line of ``mine``
         (placed at ``start`` along ``axis``) that it fits (:func:`catalogue.fit`): kind ``fit`` (turns) or
         ``fit_keyed``; for a run of hinge fingers the runs of fingers it interlocks with (kind ``hinge``). The
         point is the middle of the overlap."""
         seen = set()
-        for cell in _cells_along(start, axis, mine.length, FIT_SNAP):
+        for cell in _cells_along(start, axis, mine.length, reach):
             for other, oi in self._runs.get(cell, ()):
                 if (other, oi) in seen:
                     continue
@@ -275,17 +482,23 @@ class Assembly:
                 o = self.parts[other]
                 theirs = o.shape.connectors[oi]
                 kind = mate(mine.type, theirs.type)
-                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(float(axis @ o.directions[oi])) < ALIGN:
+                cos = float(axis @ o.directions[oi])
+                parallel = FIT_ALIGN if kind == "fit" else ALIGN
+                if kind not in ("fit", "hinge") or theirs.length <= 0 or abs(cos) < parallel:
                     continue
                 v = o.points[oi] - start
                 along = float(v @ axis)
-                if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
-                    continue
-                o_end = along + theirs.length * float(o.directions[oi] @ axis)
+                o_end = along + theirs.length * cos
                 if kind == "hinge":  # two runs of hinge fingers on one axis interlock where they overlap
                     lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
-                    if hi - lo >= FIT_OVERLAP:
+                    if float(np.linalg.norm(v - along * axis)) <= reach and hi - lo >= FIT_OVERLAP:
                         yield other, oi, "hinge", start + axis * (lo + hi) / 2
+                    continue
+                # a cylinder is in the other where their axes stay within reach of each other over their overlap
+                lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
+                if hi - lo < FIT_OVERLAP or any(
+                        float(np.linalg.norm(q - float(q @ axis) * axis)) > reach
+                        for q in (v + o.directions[oi] * ((t - along) / cos) for t in (lo, hi))):
                     continue
                 male, female = (mine, theirs) if mine.type == "fit_m" else (theirs, mine)
                 m_span, f_span = ((0.0, mine.length), (along, o_end)) if mine.type == "fit_m" else (
@@ -296,47 +509,52 @@ class Assembly:
                 lo, hi = max(min(m_span), min(f_span)), min(max(m_span), max(f_span))
                 yield other, oi, ("fit_keyed" if how == "keyed" else "fit"), start + axis * (lo + hi) / 2
 
-    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray):
+    def _ring_mates(self, mine: str, point: np.ndarray, direction: np.ndarray, reach: float = SNAP):
         """(part, connector, stud point) of the studs a ring stands between (for a stud: the rings it is one of
-        the four studs around): facing it, in its plane, RING_REACH from its centre (within FIT_SNAP)."""
+        the four studs around): facing it, in its plane (within ``reach``), RING_REACH from its centre (within
+        FIT_SNAP / 2, or ``reach`` when that is more)."""
         table = self._coarse if mine == "ring" else self._rings
         if not table:
             return
-        for cell in _around(point, RING_REACH + FIT_SNAP, RUN_CELL, RUN_OFFSET):
+        spread = max(FIT_SNAP / 2, reach)
+        for cell in _around(point, RING_REACH + 2 * spread, RUN_CELL, RUN_OFFSET):
             for other, oi in table.get(cell, ()):
                 o = self.parts[other]
                 if mate(mine, o.shape.connectors[oi].type) != "ring" or float(direction @ o.directions[oi]) > -ALIGN:
                     continue
                 v = o.points[oi] - point
-                if abs(float(v @ direction)) <= SNAP and abs(float(np.linalg.norm(v)) - RING_REACH) <= FIT_SNAP / 2:
+                if abs(float(v @ direction)) <= reach and abs(float(np.linalg.norm(v)) - RING_REACH) <= spread:
                     yield other, oi, (point + v if mine == "ring" else point)
 
-    def _runs_near(self, point: np.ndarray):
-        """The runs (axles, bars) that ``point`` lies on (:func:`_on_run`)."""
+    def _runs_near(self, point: np.ndarray, reach: float = FIT_SNAP):
+        """The runs (axles, bars) that ``point`` lies on (within ``reach`` of their line: :func:`_on_run`)."""
         if not self._runs:
             return
         seen = set()
-        for cell in _around(point, FIT_SNAP + 0.5, RUN_CELL, RUN_OFFSET):
+        for cell in _around(point, reach + 0.5, RUN_CELL, RUN_OFFSET):
             for other, oi in self._runs.get(cell, ()):
                 o = self.parts[other]
                 if (other, oi) not in seen and _on_run(point, o.points[oi], o.directions[oi],
-                                                       o.shape.connectors[oi].length):
+                                                       o.shape.connectors[oi].length, reach):
                     seen.add((other, oi))
                     yield other, oi
 
-    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float):
-        """The connection points within SNAP of the run from ``start`` along ``axis`` for ``length``."""
-        for cell in _cells_along(start, axis, length, FIT_SNAP):
+    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP):
+        """The connection points within ``reach`` of the line of the run from ``start`` along ``axis`` for
+        ``length`` (:func:`_on_run`)."""
+        for cell in _cells_along(start, axis, length, reach):
             for other, oi in self._coarse.get(cell, ()):
-                if _on_run(self.parts[other].points[oi], start, axis, length):
+                if _on_run(self.parts[other].points[oi], start, axis, length, reach):
                     yield other, oi
 
-    def _near(self, key: tuple, point: np.ndarray):
-        """The (part, connector) slots within SNAP of ``point`` (whose own cell is ``key``)."""
-        cells = _around(point, SNAP, POINT_CELL, POINT_OFFSET)
-        for cell in cells if len(cells) > 1 else (key,):
-            for other, oi in self._slots.get(cell, ()):
-                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= SNAP * SNAP:
+    def _near(self, point: np.ndarray, reach: float):
+        """The (part, connector) slots within ``reach`` of ``point`` (rings only within a fine cell's reach: further
+        out only studs look for them, :meth:`_ring_mates`)."""
+        table, size, offset = (self._slots, POINT_CELL, POINT_OFFSET) if reach <= POINT_CELL else (
+            self._coarse, RUN_CELL, RUN_OFFSET)
+        for cell in _around(point, reach, size, offset):
+            for other, oi in table.get(cell, ()):
+                if float(np.sum((self.parts[other].points[oi] - point) ** 2)) <= reach * reach:
                     yield other, oi
 
     def remove_part(self, id: str) -> None:
@@ -357,8 +575,9 @@ class Assembly:
             else:
                 table.pop(key, None)
         for other in self._neighbours.pop(id):
-            self._links.pop((other, id), None)
-            self._links.pop((id, other), None)
+            for pair in ((other, id), (id, other)):
+                self._links.pop(pair, None)
+                self._offsets.pop(pair, None)
             self._neighbours[other].discard(id)
         self._pebble_stale = True
 

@@ -245,13 +245,20 @@ def _technic_brick(number, length, holes="pinhole") -> PartShape:
     return _block(number, f"Technic Brick 1 x {length} with Holes", 1, length, BRICK, extra=extra)
 
 
+# (shape, radius, length) from one tip to the other: chamfered tips, two 16-LDU shafts, the collar between them
+PIN_PROFILE = (("L_", 6.25, 2.0), ("R", 6.0, 16.0), ("R", 8.0, 4.0), ("R", 6.0, 16.0), ("_L", 6.25, 2.0))
+
+
 def _rod(number, name, kind, length_studs, half_width=float(HOLE_RADIUS)) -> PartShape:
     """A pin or an axle along x, centred on the origin. A pin's points are its two halves' centres
-    (x = ±10); an axle slides in its holes, so it is one run from end to end: a hole whose centre lies on
-    it meets it, however deep the axle went in."""
+    (x = ±10), and it is also its snap cylinder as the shadow library states 3673's (:data:`PIN_PROFILE`), so a
+    hole that is not centred on a half holds it too (a half-thick liftarm's, 10 LDU deep); an axle slides in its
+    holes, so it is one run from end to end: a hole whose centre lies on it meets it, however deep the axle went
+    in."""
     half = PITCH // 2
     if kind == "pin":
-        connectors = tuple(Connector(kind, (x, 0, 0), X) for x in (-half, half))
+        connectors = tuple(Connector(kind, (x, 0, 0), X) for x in (-half, half)) + (
+            Connector("fit_m", (-PITCH, 0, 0), X, float(2 * PITCH), PIN_PROFILE),)
     else:  # an axle: one run along its length
         connectors = (Connector(kind, (-half * length_studs, 0, 0), X, float(PITCH * length_studs)),)
     return PartShape(number, name, (0.0, 0.0, 0.0), (float(PITCH * length_studs), 2 * half_width, 2 * half_width),
@@ -367,6 +374,7 @@ def generated_part(number: str) -> PartShape | None:
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)
 FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
+FIT_STEP = 0.5  # LDU: steps of the two profiles this close along the line are one step (a placement's rounding)
 FIT_OVERLAP = 3.0  # LDU: the least depth of a fit (most of a stud's 4: a stud 2 LDU in is not held)
 BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
 
@@ -392,7 +400,7 @@ def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float
     for a, b in itertools.pairwise(edges):
         t = (a + b) / 2
         m, f = _section(male, m_start, m_end, t), _section(female, f_start, f_end, t)
-        if m is None or f is None:
+        if m is None or f is None or b - a < FIT_STEP:  # a sliver between two steps drawn a little apart
             continue
         (m_shape, m_radius), (f_shape, f_radius) = m, f
         bar_in_axle_hole = f_shape == "A" and m_shape != "A" and abs(m_radius - BAR_RADIUS) <= FIT_GRIP

@@ -1,10 +1,10 @@
 """What a LEGO model's joints say about its parts: each part's joints, the connected pieces, which pieces are
 sub-builds that may stand apart, and parts placed implausibly far from the rest.
 
-A piece besides the largest is a **sub-build** when it is exactly the known parts of one placed LDraw
-sub-model (every part of that placement and nothing else: a droid standing beside its vehicle, a minifigure
-modelled as its own sub-model), or when it holds minifigure parts only (a minifigure whose hands hold
-nothing of the build). Any other piece means joints the catalogue did not find, or a model that really is
+A piece besides the largest is a **sub-build** when it is exactly the known parts of whole placed LDraw
+sub-models (every part of each placement and nothing else: a droid standing beside its vehicle, a minifigure
+modelled as its own sub-model, a cart with the minifigure standing on it), or when it holds minifigure parts
+only (a minifigure whose hands hold nothing of the build). Any other piece means joints the catalogue did not find, or a model that really is
 in pieces: the solver warns about it.
 """
 
@@ -21,7 +21,13 @@ LINE = re.compile(r"L(\d+)$")
 FAR_LDU = 1e5
 FAR_FACTOR = 100.0
 PITCH = 20.0  # LDU: added to the median distance so that a model of a few stacked parts has a scale
-MINIFIG = "minifig"
+MINIFIG = "minifig"  # LDraw names of minifigure parts start with it
+MINIFIGURE = "minifigure"  # the sub_build of a piece of minifigure parts only
+
+
+def mostly_floating(floating: int, parts: int) -> bool:
+    """More than half of three or more parts joined to nothing: positions in another unit, or no build."""
+    return parts >= 3 and 2 * floating > parts
 
 
 def joints_by_part(part_ids: Sequence[str],
@@ -60,19 +66,32 @@ def pieces(part_ids: Sequence[str], joined: Mapping[str, Sequence[str]]) -> list
 
 def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping[str, str],
               names: Mapping[str, str]) -> str | None:
-    """The sub-model whose known parts are exactly ``piece`` (its file name), 'minifigure' for a piece of
-    minifigure parts only, else None."""
-    common = None
-    for p in piece:
-        prefixes = {p[:m.end() + 1] for m in re.finditer(r"L\d+(?=/)", p)}
-        common = prefixes if common is None else common & prefixes
+    """What makes ``piece`` a sub-build that may stand apart: the file names of the placed sub-models whose known
+    parts it is, whole (one, or several: a cart with the minifigure standing on it), joined by ' + '; 'minifigure'
+    for a piece of minifigure parts only; else None."""
     members = set(piece)
-    for prefix in sorted(common or (), key=len, reverse=True):
-        if {p for p in part_ids if p.startswith(prefix)} == members:
-            return placements.get(prefix, prefix.rstrip("/"))
+    by_prefix: dict[str, set[str]] = {}
+    for p in part_ids:
+        for prefix in _prefixes(p):
+            by_prefix.setdefault(prefix, set()).add(p)
+    chosen: list[str] = []
+    for p in piece:  # the outermost placement holding p whose known parts are all in the piece
+        whole = next((prefix for prefix in _prefixes(p) if by_prefix[prefix] <= members), None)
+        if whole is None:
+            chosen = []
+            break
+        if whole not in chosen:
+            chosen.append(whole)
+    if chosen:
+        return " + ".join(placements.get(prefix, prefix.rstrip("/")) for prefix in chosen)
     if all(names.get(p, "").lower().startswith(MINIFIG) for p in piece):
-        return "minifigure"
+        return MINIFIGURE
     return None
+
+
+def _prefixes(part_id: str) -> list[str]:
+    """The sub-model placements a part id lies in, outermost first (``L3/L40/L7`` -> ``L3/``, ``L3/L40/``)."""
+    return [part_id[:m.end() + 1] for m in re.finditer(r"L\d+(?=/)", part_id)]
 
 
 def line_of(part_id: str) -> int | None:

@@ -12,14 +12,17 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import Assembly, JointSpec
+from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, JointSpec
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import far_parts, joints_by_part, line_of, pieces, sub_build
+from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, far_parts, joints_by_part, line_of, mostly_floating,
+                                                pieces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
+HELD_BY = {False: "every known part of the named placed sub-model(s) and nothing else",
+           True: "minifigure parts only"}  # how report.details.held_pieces recognised each piece (pieces.sub_build)
 LISTED_IN_MESSAGE = 10
 
 
@@ -84,6 +87,9 @@ def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
             unknown.append(UnknownPart(id=part.id, part=part.part))
             continue
         assembly.add_part(part.id, part.part, part.position, part.rotation)
+    assembly.seat_tyres()
+    assembly.seat_offset_studs()
+    assembly.join_pieces()
     return assembly, unknown
 
 
@@ -132,6 +138,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                     for p in part_ids]
     piece_results = _pieces(part_ids, by_part, assembly, source)
     warnings.extend(_piece_warnings(part_results, piece_results, assembly))
+    warnings.extend(_offset_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
@@ -143,11 +150,15 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     movable = sum(m for m in mob.moves)
     message = (f"dof {mob.dof} (generic count {analysis.generic_dof}); {len(mob.clusters)} rigid cluster(s) of "
                f"{len(ids)} bodies; {movable} of {len(joints)} joints move; {len(collisions)} collision(s)")
+    held = [pc for pc in piece_results[1:] if pc.sub_build]
+    if held:  # a held sub-build is not a fault, but a reader of the message must not take the set for one piece
+        message += (f"; {len(held)} sub-build(s) stand apart as held pieces: "
+                    + ", ".join(f"{pc.sub_build} ({len(pc.parts)} parts)" for pc in held[:LISTED_IN_MESSAGE]))
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
-        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build}
-                        for pc in piece_results[1:] if pc.sub_build],
+        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": HELD_BY[
+            pc.sub_build == MINIFIGURE]} for pc in held],
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
@@ -195,6 +206,25 @@ def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assem
     return out
 
 
+def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
+    """``offset_joints``: the part pairs joined although their connection points miss each other by more than
+    rounding (:meth:`Assembly.join_pieces`), each with its offset."""
+    offsets = assembly.offsets()
+    if not offsets:
+        return []
+    worst = max(offsets.values())
+    listed = sorted(offsets.items(), key=lambda item: -item[1])
+    return [Diagnostic(code="offset_joints", message=f"{len(offsets)} pair(s) of parts are joined although their "
+                       f"connection points miss each other by more than rounding ({SNAP:g} LDU), up to {worst:.3g} LDU "
+                       f"(at most {OFFSET_REACH:g} is taken for a part drawn off its mate; 1 LDU = 0.4 mm): "
+                       + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
+                                   f"{gap:.3g} LDU" for (a, b), gap in listed[:LISTED_IN_MESSAGE]),
+                       details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
+                                                                         assembly.parts[b].number],
+                                           "offset_ldu": round(gap, 3)} for (a, b), gap in listed[:MAX_LISTED]],
+                                "reach_ldu": OFFSET_REACH})]
+
+
 # Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts
 # mostly float but join once its positions are scaled by one of these was written in that unit.
 OTHER_UNITS = {"mm": 2.5, "studs": 20.0, "cm": 25.0}
@@ -205,7 +235,7 @@ def _spacing_warnings(parts: list[PartJoints], assembly: Assembly) -> list[Diagn
     """``implausible_part_spacing`` when most known parts are joined to nothing and the positions scaled from
     another unit to LDU join most of them."""
     floating = sum(1 for p in parts if not p.joints)
-    if len(parts) < 3 or floating * 2 <= len(parts) or len(parts) > SPACING_CHECK_PARTS:
+    if not mostly_floating(floating, len(parts)) or len(parts) > SPACING_CHECK_PARTS:
         return []
     for unit_name, factor in OTHER_UNITS.items():
         trial = Assembly()

@@ -32,6 +32,7 @@ from plantsolve.solvers.tube.model import (
     Spine,
     TubeModel,
     build_spine,
+    distance_frames,
     segment_distances_t,
     spine_distance,
 )
@@ -379,6 +380,50 @@ def _sub_spine(sp: Spine, k: np.ndarray) -> Spine:
                  sp.radius[k], sp.angle[k])
 
 
+def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
+                    keep: np.ndarray | None = None) -> tuple[float, list[float]]:
+    """Σ (distance − pipe radius)² of the samples to ``model`` and to each of ``variants`` (models that differ
+    from it near a few segments, such as :func:`model.with_radii` of one bend), the distance to the nearest
+    (bounded) segment. The segments of ``model`` and those of the variants that moved (further than round-off:
+    a straight clipped to length 0 moves everything after it) are one spine, whose distances a block of
+    samples takes at once; a variant's other segments are ``model``'s (the same to round-off). Ten variants
+    then cost about what four assignments do, and no array of the samples' size is made. ``keep``: the samples
+    to sum over (a mask; default all)."""
+    base = build_spine(model)
+    S = len(base.kind)
+    scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
+    parts, rows_of = [np.arange(S)], []  # each variant's moved segments, then its rows of the joint spine
+    spines = [base]
+    n_rows = S
+    for v in variants:
+        sp = build_spine(v)
+        diff = np.zeros(S, bool)
+        for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
+                     (base.normal, sp.normal)):
+            diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
+        diff |= (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+        moved = np.flatnonzero(diff)
+        parts.append(moved)
+        spines.append(sp)
+        rows_of.append((np.arange(n_rows, n_rows + len(moved)), np.flatnonzero(~diff)))
+        n_rows += len(moved)
+    joint = Spine(*(np.concatenate([getattr(sp, f)[k] for sp, k in zip(spines, parts)])
+                    for f in ("kind", "start", "end", "tangent", "normal", "length", "centre", "radius", "angle")))
+    frames = distance_frames(joint)
+    rp = model.pipe_radius
+    rss0, rss = 0.0, [0.0] * len(variants)
+    step = max(1, INNER_CHUNK // n_rows)
+    for a in range(0, len(pts), step):
+        q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
+        D = segment_distances_t(q, joint, frames)
+        r = D[:S].min(axis=0) - rp
+        rss0 += float(r @ r)
+        for i, ((own, kept), v) in enumerate(zip(rows_of, variants)):
+            d = np.min(D[np.concatenate([own, kept])], axis=0) - v.pipe_radius
+            rss[i] += float(d @ d)
+    return rss0, rss
+
+
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
 HALO_DENSITY = 0.25  # a halo is at most this fraction of the end's density along the axis
 
@@ -437,35 +482,45 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
     return float(np.percentile(proj, 99.5))
 
 
-def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray) -> TubeModel:
-    """First/last straight lengths from the extent of their samples."""
+def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None = None) -> TubeModel:
+    """First/last straight lengths from the extent of their samples (those ``keep`` marks, when given)."""
     m = model.copy()
     rp = max(m.pipe_radius, 1e-12)
     sp = build_spine(m)
     last = len(sp.kind) - 1
     t0 = m.frame[:, 0]
     if last == 0:  # straight tube: one line holds both ends
-        sel = seg == 0
+        sel = _on(seg, 0, keep)
         if sel.any():
-            proj = (pts[sel] - m.start) @ t0
-            hi = _robust_max(proj, pts[sel], rp)
-            lo = -_robust_max(-proj, pts[sel], rp)
+            q = pts[sel]
+            proj = (q - m.start) @ t0
+            hi = _robust_max(proj, q, rp)
+            lo = -_robust_max(-proj, q, rp)
             m.start = m.start + lo * t0
             m.lengths = np.array([max(hi - lo, 0.0)])
         return m
     first_arc_start = sp.end[0]
-    sel = seg == 0
-    L0 = max(0.0, _robust_max(-((pts[sel] - first_arc_start) @ t0), pts[sel], rp)) if sel.any() else 0.0
+    sel = _on(seg, 0, keep)
+    q = pts[sel]
+    L0 = max(0.0, _robust_max(-((q - first_arc_start) @ t0), q, rp)) if sel.any() else 0.0
     m.start = first_arc_start - L0 * t0
     lengths = m.lengths.copy()
     lengths[0] = L0
-    sel = seg == last
+    sel = _on(seg, last, keep)
     if sel.any():
-        lengths[-1] = max(0.0, _robust_max((pts[sel] - sp.start[last]) @ sp.tangent[last], pts[sel], rp))
+        q = pts[sel]
+        lengths[-1] = max(0.0, _robust_max((q - sp.start[last]) @ sp.tangent[last], q, rp))
     else:
         lengths[-1] = 0.0
     m.lengths = lengths
     return m
+
+
+def _on(seg: np.ndarray, k: int, keep: np.ndarray | None) -> np.ndarray:
+    sel = seg == k
+    if keep is not None:
+        sel &= keep
+    return sel
 
 
 def with_end_lengths(model: TubeModel, ends: TubeModel) -> TubeModel:
@@ -512,8 +567,7 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
             if again is None:
                 again = EndAssignment(model, pts, margin) if model.n_bends else (lambda m: assign(m, pts, margin))
             res, seg = again(model)
-        near = np.abs(res) <= thr
-        m_new = set_end_lengths(model, pts[near], seg[near])
+        m_new = set_end_lengths(model, pts, seg, np.abs(res) <= thr)
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
             return model, res, seg, True
         seen.append((model, res, seg))
@@ -546,8 +600,11 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     s = (w[0] * a[0] + w[2] * a[2]) + w[1] * a[1]
     perp = w - s * a
     rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
-    # a line's R is 0 and its distance the perpendicular one
-    dd = np.where(arc, np.hypot(rho - R, s), rho)
+    # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
+    # product, so it runs on the arcs' samples only
+    dd = rho.copy()
+    if arc.any():
+        dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -564,8 +621,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     out[6] = np.where(arc, -u, 0.0)
 
 
-def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
-    """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment."""
+def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
+             f_scale: float | None = None):
+    """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
+    (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``. With ``f_scale`` (the soft-L1
+    scale :func:`levenberg_marquardt` weights by) a large scan's residuals come with the normal equations at the
+    same point, one pass over the samples instead of two."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -579,12 +640,23 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     scale = max(rp, 1e-9)
     # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
     # Gram matrix is one product; the residual order is irrelevant to the solver
-    order = np.argsort(seg, kind="stable")
-    # the points component-major (3, N), as the distances take them
-    pts_t = np.ascontiguousarray(pts[order].T)
-    # the sorted segment numbers in the smallest integers that hold them, the arcs per block (a scan of
-    # millions of samples holds no second full-size array of either)
-    seg = seg[order].astype(np.int16 if len(kind) < 2 ** 15 else np.int64)
+    # (a stable sort of the segment numbers in the smallest integers that hold them: a radix sort)
+    small = np.int16 if len(kind) < 2 ** 15 else np.int64
+    if keep is None:
+        order = np.argsort(seg.astype(small), kind="stable")
+    else:
+        rows = np.flatnonzero(keep)
+        order = rows[np.argsort(seg[rows].astype(small), kind="stable")]
+        del rows
+    # the points component-major (3, N), as the distances take them, gathered a coordinate at a time (no
+    # sample-major copy of a large scan on the way)
+    pts_t = np.empty((3, len(order)))
+    for j in range(3):
+        np.take(pts[:, j], order, out=pts_t[j])
+    # the sorted segment numbers, the arcs per block (a scan of millions of samples holds no second
+    # full-size array of either)
+    seg = seg[order].astype(small)
+    del order
     is_arc = kind != 0
     N = pts_t.shape[1]
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
@@ -594,6 +666,12 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
 
     keep_terms = len(blocks) == 1
+    # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
+    # computing them again costs a third of an LM iteration: with the weights' scale known, each block's share of
+    # the normal equations is summed while its distances are at hand (the weights are elementwise, so a block's
+    # are the very numbers ``_soft_l1`` gives over all samples); a rejected trial's sums are wasted, a
+    # quarter of the evaluations
+    fused = f_scale is not None and not keep_terms
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
     def geometry(x):
@@ -608,17 +686,45 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
         arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
         return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arc)
 
-    def fun(x):
+    def fun(x, out=None):
+        """The residuals at x, into ``out`` when given (a large scan's array, reused: fresh memory of its
+        size costs the system more than filling it)."""
         g, _ = geometry(x)
         g_t = g.T.copy()
-        d = np.empty(N)
+        d = np.empty(N) if out is None else out
         terms = []
+        r_p = x[-1] if lay.fit_pipe_radius else rp
+        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if fused else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
+            if fused:
+                rb = d[b] - r_p
+                w = np.divide(rb, f_scale)
+                np.square(w, out=w)
+                w += 1.0
+                np.sqrt(w, out=w)
+                np.divide(1.0, w, out=w)
+                add_block(sums, i, t, w, rb)
         latest["terms"] = terms if keep_terms else None
-        return d - (x[-1] if lay.fit_pipe_radius else rp)
+        latest["sums"] = sums
+        d -= r_p
+        return d
+
+    def add_block(sums, i: int, t: tuple, w: np.ndarray, rb: np.ndarray) -> None:
+        """A block's share of the normal equations' per-segment sums, Gᵀ W G and Gᵀ W r."""
+        gram, rhs = sums
+        # sample-major for the products below (the layout their BLAS calls have always had), written so by
+        # the gradient through a transposed view: a transposing copy costs six times the writes
+        G = np.empty((len(w), gram.shape[1]))
+        _sample_gradient(t, G.T)
+        if lay.fit_pipe_radius:
+            G[:, 7] = 1.0
+        Gw = G * w[:, None]
+        for k, sl in runs[i]:
+            gram[k] += G[sl].T @ Gw[sl]
+            rhs[k] += Gw[sl].T @ rb[sl]
 
     def normal_equations(x, w, r):
         """Jᵀ W J and Jᵀ W r without the (N, P) Jacobian J. A sample's row of J is its distance gradient
@@ -633,44 +739,40 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout):
             last = np.zeros((len(dG), 1, P))
             last[:, 0, -1] = -1.0
             dG = np.concatenate([dG, last], axis=1)
-        k_dim = dG.shape[1]
-        gram = np.zeros((len(dG), k_dim, k_dim))
-        rhs = np.zeros((len(dG), k_dim))
-        g_t = g.T.copy() if terms is None else None
-        for i, b in enumerate(blocks):
-            t = terms[i] if terms is not None else distance(g_t, i, b)[1]
-            G_t = np.empty((k_dim, b.stop - b.start))
-            _sample_gradient(t, G_t)
-            if lay.fit_pipe_radius:
-                G_t[7] = 1.0
-            # sample-major for the products below (the layout their BLAS calls have always had)
-            G = G_t.T.copy()
-            Gw = (G_t * w[b]).T.copy()
-            rb = r[b]
-            for k, sl in runs[i]:
-                gram[k] += G[sl].T @ Gw[sl]
-                rhs[k] += Gw[sl].T @ rb[sl]
+        sums = latest.get("sums")
+        if sums is None:  # (fused: fun has summed them at x with these weights)
+            sums = _gram_sums(dG.shape[1], len(dG))
+            g_t = g.T.copy() if terms is None else None
+            for i, b in enumerate(blocks):
+                add_block(sums, i, terms[i] if terms is not None else distance(g_t, i, b)[1], w[b], r[b])
+        gram, rhs = sums
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
     return x0, lo, hi, fun, normal_equations, frame0, rp
 
 
+def _gram_sums(k_dim: int, n_segments: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.zeros((n_segments, k_dim, k_dim)), np.zeros((n_segments, k_dim))
+
+
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
-             max_nfev: int = 60, tick=None) -> tuple[TubeModel, dict]:
-    """One least-squares round with a fixed sample-to-segment assignment."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay)
+             max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
+    """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
+    given)."""
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale)
     x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
 
-def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout) -> dict[str, np.ndarray]:
+def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout,
+                     keep: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Standard deviations of the LRA parameters at the solution (§6's least squares, linearised): the
     covariance s^2 (J^T J)^+ with s^2 = RSS / (N - P) from the residuals of the given (inlier) samples.
     Returns arrays 'lengths' (inner straights, n - 1), 'rotations' (n - 1), 'angles' (n, radians) and
-    'radii' (n; a shared radius gives every bend its sigma, a held one 0)."""
-    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay)
+    'radii' (n; a shared radius gives every bend its sigma, a held one 0). ``keep``: as :func:`solve_lm`'s."""
+    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay, keep)
     r = fun(x0)
     A, _ = normal_equations(x0, np.ones(len(r)), r)
     N, P = len(r), len(x0)
@@ -698,21 +800,34 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
     return out
 
 
-def _soft_l1(r: np.ndarray, f: float) -> tuple[float, np.ndarray]:
-    """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z)."""
-    z = (r / f) ** 2
-    sq = np.sqrt(1.0 + z)
-    return float(f * f * np.sum(2.0 * (sq - 1.0))), 1.0 / sq
+def _soft_l1(r: np.ndarray, f: float, out: np.ndarray | None = None,
+             scratch: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """Cost Σ f²·2(√(1+z) − 1), z = (r/f)², and the IRLS weights ρ'(z) = 1/√(1+z) (into ``out``, with
+    ``scratch`` for √(1+z), when given: arrays of the samples' size, reused)."""
+    # in place: the same numbers as (r / f) ** 2, sqrt(1 + z), 2 (sq - 1), 1 / sq
+    sq = np.divide(r, f, out=scratch)
+    np.square(sq, out=sq)
+    sq += 1.0
+    np.sqrt(sq, out=sq)
+    terms = np.subtract(sq, 1.0, out=out)
+    terms *= 2.0
+    cost = float(f * f * np.sum(terms))
+    np.divide(1.0, sq, out=terms)
+    return cost, terms
 
 
 def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
     """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc):
     ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r.
 
-    ``tick()`` is called once per iteration (progress / cancellation)."""
+    ``tick()`` is called once per iteration (progress / cancellation). ``fun(x, out)`` writes the residuals
+    into ``out`` when it is an array: a trial's residuals and weights go into the arrays of the last rejected
+    trial or the last replaced point (a large scan makes no fresh arrays of its size per evaluation)."""
     x = x0.copy()
-    r = fun(x)
-    cost, w = _soft_l1(r, f_scale)
+    r = fun(x, out=None)
+    scratch = np.empty_like(r)
+    cost, w = _soft_l1(r, f_scale, scratch=scratch)
+    spare_r = spare_w = None
     lam = 1e-3
     nfev, status = 1, 0
     it = 0
@@ -741,13 +856,15 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
                     break
                 continue
             xn = np.clip(x + step, lo, hi)
-            rn = fun(xn)
+            rn = fun(xn, out=spare_r)
             nfev += 1
-            cn, wn = _soft_l1(rn, f_scale)
+            cn, wn = _soft_l1(rn, f_scale, out=spare_w, scratch=scratch)
+            spare_r, spare_w = rn, wn  # a rejected trial's arrays take the next one
             if np.isfinite(cn) and cn <= cost:
                 dcost = cost - cn
                 last_rel = dcost / max(cost, 1e-300)
                 small_step = np.all(np.abs(xn - x) <= tol * (np.abs(x) + 1e-3) * 1e3)
+                spare_r, spare_w = r, w  # the point left behind
                 x, r, w = xn, rn, wn
                 lam = max(lam / 5, 1e-12)
                 improved = True

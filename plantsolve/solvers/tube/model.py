@@ -319,7 +319,7 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         ca, sa = np.cos(ang), np.sin(ang)
         z2 = z * z
         rho = np.sqrt(x * x + y * y)
-        d_in = np.sqrt((rho - R) ** 2 + z2)
+        d_in2 = (rho - R) ** 2 + z2
         # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
         d_s = (x - R) ** 2 + y * y + z2
         d_e = (x - R * ca) ** 2 + (y - R * sa) ** 2 + z2
@@ -328,7 +328,8 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
         before_end = ca * y - sa * x <= 0.0
         upper = y >= 0.0
         inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
-        out[arcs] = np.where(inside, d_in, np.sqrt(np.minimum(d_s, d_e)))
+        # one square root of whichever squared distance applies (the same numbers as a root of each)
+        out[arcs] = np.sqrt(np.where(inside, d_in2, np.minimum(d_s, d_e)))
     return out
 
 
@@ -338,7 +339,8 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
 
     ``chunk`` bounds points × segments per block: the (chunk,) temporaries stay in the processor's
     cache (twice as fast on a million samples as blocks of ten times the size)."""
-    d = np.empty(len(pts)); idx = np.empty(len(pts), int)
+    # the segment numbers in 16 bits when they fit: a large scan holds several such arrays (8 bytes a sample each)
+    d = np.empty(len(pts)); idx = np.empty(len(pts), np.int16 if len(sp.kind) < 2 ** 15 else np.intp)
     step = max(1, chunk // max(len(sp.kind), 1))
     # max |coordinate| from the extremes: no |pts| temporary of the size of a large scan
     p_abs = max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))) if pts.size else 0.0

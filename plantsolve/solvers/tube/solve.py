@@ -99,9 +99,8 @@ def local_surface_fits(pts: np.ndarray, opts: TubeOptions, rng: np.random.Genera
     """§2 (2.1 local polynomial surface approximation, 2.2 shape operator) on a working subset,
     the pipe radius from the curvatures (§3.1), and the §7 flags of unreliable fits."""
     N = len(pts)
-    scale0 = float(np.linalg.norm(pts.max(0) - pts.min(0)))
-    perm = rng.permutation(N)
-    work_idx = perm[:WORK_MAX]
+    scale0 = scan_extent(pts)
+    work_idx = rng.permutation(N)[:WORK_MAX].copy()  # (not a view that keeps a permutation of every sample)
     work = pts[work_idx]
     tree = cKDTree(work)
     n_probe0 = min(len(work), 1500)
@@ -270,13 +269,14 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
             if inl.sum() < 10 + lay.size:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
-            m = fit.set_end_lengths(m, P[inl], seg[inl])
-            solved, info = fit.solve_lm(m, P[inl], seg[inl], lay, f_scale, max_nfev=max_nfev, tick=tick)
+            m = fit.set_end_lengths(m, P, seg, inl)
+            solved, info = fit.solve_lm(m, P, seg, lay, f_scale, max_nfev=max_nfev, tick=tick, keep=inl)
             m = fit.with_end_lengths(solved, m)
             # the end straights grow by at most the margin per assignment: repeat until they
             # stop (after a bend was merged or removed the far end can be many radii off);
             # a large scan re-assigns only its samples at the ends (``fit.end_lengths``), a small one
             # keeps the inner segments' distances of this assignment for it
+            res = seg = None  # (a large scan's old assignment makes room for the new one)
             if len(P) > ALL_SAMPLES_AT_ONCE:
                 res, seg = fit.assign(m, P, margin)
                 ends, again = fit.near_ends(m, seg), None
@@ -289,8 +289,11 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
                 last_assignment[:] = [m, res, seg] if settled else []
             # the settled ends' last assignment is the returned model's (what fit.assign gives it again)
             last_round[:] = [m, P, res] if settled and len(P) <= ALL_SAMPLES_AT_ONCE else []
+            # the median absolute deviation in place (a median's partition may reorder what it is taken of)
             r_in = res[inl]
-            sig = 1.4826 * float(np.median(np.abs(r_in - np.median(r_in))))
+            r_in -= np.median(r_in, overwrite_input=True)
+            sig = 1.4826 * float(np.median(np.abs(r_in, out=r_in), overwrite_input=True))
+            del r_in
             thr = max(6.0 * sig, 0.05 * rp)
         return m, info, thr, sig
 
@@ -560,15 +563,16 @@ def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:
 def outlier_report(ls: LeastSquaresFit, lf: LocalFits, ss: SpineSamples, order: np.ndarray) -> Outliers:
     """§7: every sample left out of the final fit, in input order, with the stage that flagged
     it (local fit, spine projection) or ``residual``."""
-    N = len(order)
-    reasons_sorted = np.full(N, "residual", dtype=object)
-    reasons_sorted[lf.probe_idx[lf.labels != 0]] = "local_fit"
-    reasons_sorted[ss.seed_idx[~ss.result.ok]] = "spine_projection"
     out_sorted = np.flatnonzero(~ls.inlier)
+    # the reasons of the left-out samples only (a label per sample of a large scan is an array of its size)
+    reasons = np.array(["residual", "local_fit", "spine_projection"])
+    code = np.zeros(len(out_sorted), np.int8)
+    code[np.isin(out_sorted, lf.probe_idx[lf.labels != 0])] = 1
+    code[np.isin(out_sorted, ss.seed_idx[~ss.result.ok])] = 2  # a later stage's flag is the one given
     out_orig = order[out_sorted]
     srt = np.argsort(out_orig)
     out_idx = out_orig[srt]
-    out_reason = reasons_sorted[out_sorted][srt]
+    out_reason = reasons[code[srt]]
     by_reason: dict[str, int] = {}
     for r in out_reason:
         by_reason[r] = by_reason.get(r, 0) + 1
@@ -692,7 +696,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
 def with_unit_hint(exc: SolverError, pts: np.ndarray, request: TubeRequest) -> SolverError:
     """A failed local fit on a scan whose size is implausible in the request's unit (a scan in metres read as
     millimetres spans a few millimetres) says so and names the likely unit: that is the likely cause."""
-    extent = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    extent = scan_extent(pts)
     hint = implausible_extent(extent, request.units, request.source.units.file_unit if request.source else None)
     if hint is None:
         return exc
@@ -713,7 +717,7 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
     dies = tuple(int(np.argmin([abs(r - d) for d in die_r])) for r in model.radii) if mode == "dies" else ()
     fixed = tuple(float(r) for r in model.radii) if mode == "fixed" else ()
     lay = fit.Layout(n, mode, opts.bend_radius, opts.pipe_radius is None, dies, fixed)
-    sd = fit.parameter_sigmas(model, pts[ls.inlier], ls.segment[ls.inlier], lay)
+    sd = fit.parameter_sigmas(model, pts, ls.segment, lay, keep=ls.inlier)
     rows = result.lra
     for k, row in enumerate(rows):
         if 1 <= k <= n - 1:
@@ -730,7 +734,7 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
     loose = {k for k in range(n) if rows[k].sigma_bend_radius > 0.1 * rows[k].bend_radius
              or rows[k].bend_radius < model.pipe_radius}
     if mode == "free":
-        loose |= set(radii_fitting_as_well(model, pts[ls.inlier], loose))
+        loose |= set(radii_fitting_as_well(model, pts, loose, keep=ls.inlier))
     loose = sorted(loose)
     if loose:
         result.report.warnings.append(Diagnostic(
@@ -744,7 +748,7 @@ def add_sigmas(result: TubeResult, ls: LeastSquaresFit, pts: np.ndarray, opts: T
     return loose
 
 
-def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[int]:
+def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=(), keep: np.ndarray | None = None) -> list[int]:
     """Bends (other than ``skip``) whose free radius the samples do not pin down beyond the point it was fitted
     at: with the radius held at half or at twice its value (within the fit's bounds) and the control polygon
     kept (``with_radii``), the sum of squared residuals rises by less than a standard deviation of 10 % of the
@@ -752,29 +756,32 @@ def radii_fitting_as_well(model: TubeModel, pts: np.ndarray, skip=()) -> list[in
     variance. The sigma from the Jacobian describes the minimum the fit stopped in; for a bend of a few degrees
     that can be one of several (a radius below the pipe's, or one of 150 pipe radii with a sigma of 2 %), chosen by
     round-off, and this secant test sees the cost stay flat (or fall) across them. Without a refit the rise is
-    an upper bound of the profile's, so no bend is flagged that a refit would show determined."""
+    an upper bound of the profile's, so no bend is flagged that a refit would show determined. ``keep``: the
+    samples to test on (a mask; default all)."""
     n = model.n_bends
     rp = model.pipe_radius
-    r0 = fit.assign(model, pts, 0.0)[0]
-    rss0 = float(r0 @ r0)
-    s2 = rss0 / max(len(pts) - fit.Layout(n, "free", None, True).size, 1)
-    if s2 <= 0:
-        return []
     lo, hi = 0.5 * rp, 200.0 * rp  # the radius bounds of the fit (``fit.bounds``)
-    out = []
+    held = []  # (bend, held radius, its model), the lower one of a bend first
     for k in range(n):
         if k in skip:
             continue
         R = float(model.radii[k])
         for R_held in (max(0.5 * R, lo), min(2.0 * R, hi)):
-            if abs(R_held - R) <= 1e-3 * R:
-                continue
-            radii = model.radii.copy()
-            radii[k] = R_held
-            r = fit.assign(with_radii(model, radii), pts, 0.0)[0]
-            if (float(r @ r) - rss0) / s2 < ((R_held - R) / (0.1 * R)) ** 2:
-                out.append(k)
-                break
+            if abs(R_held - R) > 1e-3 * R:
+                radii = model.radii.copy()
+                radii[k] = R_held
+                held.append((k, R_held, with_radii(model, radii)))
+    # every model's sum of squares in one pass over the samples, each block's distances to the fitted model's
+    # segments shared by the held ones (a held radius moves its bend and the straights on either side)
+    rss0, rss = fit.sums_of_squares(model, [m for _, _, m in held], pts, keep)
+    n_samples = len(pts) if keep is None else int(np.count_nonzero(keep))
+    s2 = rss0 / max(n_samples - fit.Layout(n, "free", None, True).size, 1)
+    if s2 <= 0:
+        return []
+    out = []
+    for (k, R_held, _), rss_k in zip(held, rss):
+        if k not in out and (rss_k - rss0) / s2 < ((R_held - model.radii[k]) / (0.1 * model.radii[k])) ** 2:
+            out.append(k)
     return out
 
 

@@ -9,8 +9,10 @@ from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import (
     CUT_MARGIN,
+    RESOLUTION,
     choose_cut,
     connection_key,
+    settled_cut,
     tie_width,
 )
 from plantsolve.solvers.alignment.direct import connection_basis
@@ -70,6 +72,38 @@ def test_lu_and_ldl_cut_the_same_connections_and_put_every_port_at_the_same_plac
     with use_schur(False):
         lu = solve(req).result
     assert _answer(lu) == _answer(ref) and lu.converged == ref.converged
+
+
+def test_a_cut_the_ldl_pose_settles_skips_the_lu_pass_and_still_gives_the_lu_answer(solved):
+    # the 30 mm conflict's impacts stand apart: the LDL^T round decides the cut and its LU reference pass is not run
+    # (the round counted); the answer is the all-LU one bit for bit (the test above), the rounds say which ran
+    req, ref = solved["5x3 valves, shifted 30 mm and turned"]
+    rounds = ref.report.details["rounds"]
+    assert [r["factorisation"] for r in rounds] == ["LDL^T"] + ["LU"] * (len(rounds) - 1)
+    assert all(r["counted"] for r in rounds) and sum(r["iterations"] for r in rounds) == ref.iterations
+    with use_schur(False):
+        lu = solve(req).result
+    assert lu.report.details["rounds"][0]["factorisation"] == "LU" and len(lu.report.details["rounds"]) == len(rounds)
+
+
+def test_a_cut_is_settled_only_clear_of_the_tie_width_and_far_above_snapping():
+    req = conflicting_tie_ins(3, 3, seed=2, turn=3.0)
+    model, gap, ang, first, second = _two_conflicting(req)
+    active = np.ones(model.n_conn, dtype=bool)
+    top = 5.0  # mm
+    gap[first], gap[second] = top, 0.5 * top  # far apart: the choice is the larger, settled
+    assert settled_cut(model, active, gap, ang) == choose_cut(model, active, gap, ang) == first
+    gap[second] = top  # an exact tie: both surely tied, the smaller key, settled
+    assert settled_cut(model, active, gap, ang) == first
+    # the first (smaller key) right at the tie width's edge below the second: a pose RESOLUTION away could put it
+    # on either side, and the choice with it (the first tied, else the second)
+    gap[second], gap[first] = top, top * (1 - CUT_MARGIN) + 0.5 * RESOLUTION * top
+    assert choose_cut(model, active, gap, ang) == first and settled_cut(model, active, gap, ang) is None
+    gap[first] = top * (1 - CUT_MARGIN) - 0.5 * RESOLUTION * top
+    assert choose_cut(model, active, gap, ang) == second and settled_cut(model, active, gap, ang) is None
+    gap[second] = 0.0
+    gap[first] = 10 * model.snap_pos  # open, but within what a crawl short of closing may leave: not settled
+    assert choose_cut(model, active, gap, ang) == first and settled_cut(model, active, gap, ang) is None
 
 
 def _two_conflicting(req: AlignmentRequest):

@@ -1,7 +1,8 @@
 """Deleting what the sharing detached (``compaction``), and the shortcuts the speed work took: each
 way of finding what stays and each way of deleting it give the same model; styled duplicates lose
 their old geometry and its style; entity counts from the geometry reader's walk, the lexsort unique
-and the one-directional verification equal the plain computations."""
+and the one-directional verification equal the plain computations; what the phases hand each other (the
+input's ids, the reader's placements, the matching's k-d trees) gives what each computing its own gave."""
 
 from __future__ import annotations
 
@@ -86,6 +87,39 @@ def test_what_goes_is_what_remove_deep2_would_delete(mode):
     assert sorted(set(everything.tolist()) - set(gone.tolist())) == sorted(expected.entity_names())
 
 
+@pytest.mark.parametrize("make", [lambda: tunnel_file(2, "IFC4", face_set="surface_model"),
+                                  lambda: build_model(zoo_spec("IFC2X3"))], ids=["tunnel", "zoo"])
+@pytest.mark.parametrize("mode", ["product_shape", "mapped_item"])
+def test_the_ids_grown_by_the_sharing_are_the_models_ids(make, mode):
+    """The input's ids listed once and grown by what the sharing added are the ids the core lists after it;
+    a number past the input's largest that is no instance (a deleted one) makes them listed again."""
+    model = make()
+    before = compaction.instance_ids(model)
+    _shared(model, mode)
+    assert sorted(compaction.grown(model, before).tolist()) == sorted(model.entity_names())
+    assert len(compaction.grown(model, before)) > len(before)
+    model.remove(model.by_id(int(model.get_max_id()) - 1))  # a gap among the added numbers
+    assert sorted(compaction.grown(model, before).tolist()) == sorted(model.entity_names())
+
+
+def test_the_sharing_places_members_alike_with_the_readers_matrices_or_its_own():
+    """The placements the geometry reader evaluated, handed to the sharing, write the file a sharing
+    evaluating its own would: byte for byte, in both modes."""
+    for mode in ("product_shape", "mapped_item"):
+        texts = set()
+        for reuse in (True, False):
+            model = tunnel_file(3, "IFC4", face_set="surface_model")
+            products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
+            reader = ExplicitReader(model)
+            points, faces = world_points(model, products, reader=reader)
+            candidates = [make_candidate(p, sharing.body_representation(p), model, points[p.id()], faces[p.id()])
+                          for p in products]
+            classes = build_classes(candidates, 1e-5, allow_mirror=False, allow_scale=False)
+            sharing.apply(model, classes, mode, placements=reader.placements if reuse else None)
+            texts.add(model.to_string().split("DATA;", 1)[1])
+        assert len(texts) == 1
+
+
 def test_styled_duplicates_lose_their_old_geometry_and_its_style():
     model = build_model(_styled_duplicates())
     for mode in ("product_shape", "mapped_item"):
@@ -129,6 +163,20 @@ def _both_ways(rep, member, m: Match) -> float:
     return hausdorff(moved, member.local)
 
 
+def test_a_groups_signatures_are_each_shapes_own():
+    """The group's signatures in one quantile call are, row by row and bit for bit, each shape's computed alone."""
+    from plantsolve.solvers.dedup.grouping import QUANTILES, signatures
+
+    rng = np.random.default_rng(3)
+    base = rng.normal(size=(40, 3)) * [3.0, 2.0, 1.0]
+    shapes = [make_shape(base @ pose(10 * k, 20, 30 * k, WORLD_ORIGIN)[:3, :3].T + k
+                         + rng.normal(scale=1e-3, size=(40, 3))) for k in range(6)]
+    for row, shape in zip(signatures(shapes), shapes):
+        d = np.sqrt(np.sum(shape.local * shape.local, axis=1))
+        alone = np.concatenate([np.sqrt(np.maximum(shape.eigenvalues, 0.0)), [shape.radius], np.quantile(d, QUANTILES)])
+        assert np.array_equal(row, alone)
+
+
 def test_verify_in_one_direction_is_the_two_way_hausdorff_distance():
     rng = np.random.default_rng(5)
     rep_points = rng.normal(size=(60, 3)) + 1e6
@@ -163,6 +211,8 @@ def test_the_proofs_deviation_in_one_direction_is_the_two_way_distance():
         if k % 5 == 0:  # one fewer
             b = b[:-1]
         assert proof.deviation(a, b) == both_ways(a, b)
+        # the matching's shape of the points before: the written points looked up in its tree
+        assert proof.deviation(a, b, make_shape(a)) == both_ways(a, b)
 
 
 def test_det3_and_one_to_one_are_numpys():

@@ -363,3 +363,78 @@ def test_a_file_ending_before_its_pressure_ratio_table_is_truncated_and_one_geom
     assert err.type == "truncated_file" and err.loc == ("file", "Pressure Ratio") and "cut?" in err.msg
     req = read(text.replace("Mass Flow\n", "IGV = 10 [deg]\nMass Flow\n", 1))
     assert req.setting_names == ["Nc"] and note(req, "upload_geometry_setting").details["value"] == 10.0
+
+
+def test_one_table_with_its_speed_rows_in_another_order_is_matched_by_speed():
+    """The Efficiency table lists the speeds in reverse (pasted from another tool): each row is keyed by its speed,
+    so the rows are matched to the Mass Flow table's and the map reads as the ordered one, with a note naming the
+    table; rows of other speeds are still refused."""
+    W, E, P = closed_form_tables()
+    base = read(write_map(W, E, P))
+    lines = write_map(W, E, P).split("\n")
+    start = lines.index("Efficiency")
+    rows = [lines[start + 4 + 3 * k:start + 4 + 3 * (k + 1)] for k in range(4)]  # 3 lines a record of 11 values
+    assert all(r[0].split()[0] == f"{s:g}" for r, s in zip(rows, SPEEDS))
+    shuffled = lines[:start + 4] + [ln for r in rows[::-1] for ln in r] + lines[start + 16:]
+    req = read("\n".join(shuffled))
+    assert req.positions == base.positions
+    n = note(req, "upload_rows_reordered")
+    assert n.details["table"] == "Efficiency" and n.details["line"] == start + 1
+    other = "\n".join(shuffled).replace(f"\n{SPEEDS[0]:g} ", "\n0.65 ", 1)
+    (err,) = refused(other)
+    assert "differ from the Mass Flow" in err.msg
+
+
+def test_a_surge_line_contradicting_the_speed_tables_is_said_naming_its_line():
+    """A Surge Line in lbm/s under speed tables in kg/s (every flow 2.2 times too large): read, and a note names
+    the table, its line and the quantity; the result's surge line is the fitted lines' ends either way."""
+    W, E, P = closed_form_tables()
+    text = write_map(W, E, P)
+    lines = text.split("\n")
+    n = lines.index("Surge Line") + 1
+    flows = [f"{v:.10g}" for v in W[:, -1] * 2.20462]
+    lines[n] = " ".join([lines[n].split()[0], *flows])
+    req = read("\n".join(lines))
+    (w,) = [w for w in req.upload_warnings if w.code == "upload_limit_line_off_map"]
+    assert w.details["table"] == "Surge Line" and w.details["line"] == n and w.details["quantity"] == "flow"
+    assert f"line {n}" in w.message and "another unit" in w.message
+    assert "upload_limit_line_off_map" not in {x.code for x in read(text).upload_warnings}
+    res = solve(req).result
+    assert sorted(p.flow for p in res.surge_line) == pytest.approx(sorted(W[:, -1]), rel=1e-6)
+
+
+def test_a_file_cut_at_a_line_end_inside_a_wrapped_record_is_truncated():
+    """Cut where a line ends (the file then looks whole): bigfanc's records are wrapped, so a record missing its
+    continuation lines is a cut, named as such."""
+    lines = _lines_of("bigfanc.map")
+    for keep in (5, 6, 20):
+        (err,) = refused("\n".join(lines[:keep]) + "\n")
+        assert err.type == "truncated_file" and "Mass Flow" in err.msg and err.loc == ("file", "line", 3)
+
+
+def test_more_beta_lines_than_gsp_reads_are_refused_naming_the_field():
+    """GSP reads at most 40 values a table row: 41 beta lines are refused (not capped), naming the option."""
+    (err,) = refused(sample("compmap.map"), {"beta_grid": {"lines": 41}})
+    assert err.loc == ("options", "beta_grid", "lines") and "GSP" in err.msg and "40" in err.msg
+    assert len(read(sample("compmap.map"), {"beta_grid": {"lines": 40}}).options.beta_grid.model_dump()) == 3
+
+
+def test_more_speed_lines_in_a_file_than_gsp_reads_in_a_limit_line_table_are_warned_about():
+    """45 speed lines: the GasTurb file's Surge and Choke Line tables hold 45 flows, beyond GSP's 40; said, and the
+    file still written (GasTurb and GSPy read it)."""
+    from plantsolve.schemas.perfmap import PerfmapRequest
+    from plantsolve.solvers.perfmap.cycle_exports import gasturb_tables
+
+    speeds = np.linspace(0.5, 1.0, 45)
+    positions = []
+    for k, speed in enumerate(speeds):
+        a = 1.5 + 2.5 * k / 44
+        x = np.linspace(np.sqrt((a - 1) / (B + C_SURGE)), np.sqrt((a - 1) / (B + C_CHOKE)), 5)
+        positions.append({"setting": [float(speed)], "flow": x.tolist(), "pressure": (a - B * x * x).tolist(),
+                          "efficiency": (0.9 - 0.01 * (x - x.mean()) ** 2).tolist()})
+    res = solve(PerfmapRequest.model_validate({"setting_names": ["Nc"], "positions": positions, "options": {
+        "map": False, "model": "parabola", "efficiency_model": "parabola", "beta_grid": {"lines": 5}}})).result
+    (w,) = [w for w in res.report.warnings if w.code == "gasturb_beyond_gsp_limits"]
+    assert w.details["speed_lines"] == 45 and w.details["limit"] == 40 and "GSP" in w.message
+    (text,) = gasturb_tables(res).values()
+    assert "\n       46.006" in text.decode() and "\n        2.046" in text.decode()

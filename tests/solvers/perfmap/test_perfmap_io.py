@@ -185,7 +185,7 @@ def test_render_artifacts(synthetic_request, synthetic_result):
     names = [a.name for a in arts]
     assert sorted(names) == sorted([f"{s}.{e}" for s in ("characteristics", "envelopes", "map")
                                     for e in ("png", "svg")] + ["curves.csv", "map.csv", "map_pycycle.py", "map_beta.csv"]
-                                   + [f"map_gasturb_theta{v:g}.txt" for v in (0, 15, 30)])
+                                   + [f"map_gasturb_theta{v:g}.map" for v in (0, 15, 30)])
     for a in arts:
         if a.name == "map_beta.csv":
             assert a.media_type == "text/csv" and b"\ntheta,phi,beta [-]," in a.data
@@ -195,7 +195,7 @@ def test_render_artifacts(synthetic_request, synthetic_result):
             assert a.media_type == "image/png" and a.data[:8] == b"\x89PNG\r\n\x1a\n"
         elif a.name.endswith(".py"):
             assert a.media_type == "text/x-python" and b"ExportMap.WcMap = np.array(" in a.data
-        elif a.name.endswith(".txt"):
+        elif a.name.endswith(".map"):
             assert a.media_type.startswith("text/plain") and a.data.startswith(b"99 ") and b"\nSurge Line\n" in a.data
         else:
             assert a.media_type == "image/svg+xml" and b"<svg" in a.data[:2000]

@@ -192,7 +192,8 @@ SPEEDS = [0.6, 0.7, 0.8, 0.9]
 
 def _closed_form_result():
     """Speed lines PR = A_k - B Wc^2 between the parabolas PR - 1 = 0.05 Wc^2 (surge) and 0.01 Wc^2 (choke), flow in
-    kg/s, fitted exactly (parabola family); the 21-line beta grid's nodes are the closed-form crossings."""
+    kg/s, fitted exactly (parabola family); the 21-line beta grid's nodes (evenly spaced, R = 1, 1.1, ... 3) are the
+    closed-form crossings."""
     positions = []
     for a, n in zip(A, SPEEDS):
         xs, xc = np.sqrt((a - 1) / (B + np.array([C_SURGE, C_CHOKE])))
@@ -202,7 +203,8 @@ def _closed_form_result():
                           "efficiency": eta.tolist()})
     req = PerfmapRequest.model_validate({
         "setting_names": ["Nc"], "units": {"flow": "kg/s", "pressure": "1"}, "positions": positions,
-        "options": {"map": False, "model": "parabola", "efficiency_model": "parabola"}})
+        "options": {"map": False, "model": "parabola", "efficiency_model": "parabola",
+                    "beta_grid": {"spacing": "even"}}})
     return solve(req).result
 
 
@@ -329,10 +331,10 @@ def test_a_real_two_alpha_map_runs_in_pycycle_and_a_map_without_flow_unit_says_s
     with pytest.warns(Warning, match="no units"):
         p = _problem(module, design=True)
     line = next(line for line in res.beta_map.lines if line.setting == [5.0, 0.9])
-    j = res.beta_map.beta.index(0.5)
+    j = int(np.argmin(np.abs(np.array(res.beta_map.beta) - 0.5)))  # a node near the middle (adaptive spacing)
     p.set_val("alphaMap", 5.0)
     p.set_val("NcMap", 0.9, units="rpm")
-    p.set_val("RlineMap", 2.0)
+    p.set_val("RlineMap", 1.0 + 2.0 * (1.0 - res.beta_map.beta[j]))
     p.run_model()
     got = [p.get_val("WcMap")[0], p.get_val("PRmap")[0], p.get_val("effMap")[0]]
     assert got == pytest.approx([line.flow[j], line.pressure[j], line.efficiency[j]], rel=1e-9)

@@ -61,7 +61,7 @@ def test_n3_query_and_plots(n3_request, n3_result):
     arts = render_artifacts(n3_request, Solved(n3_result))
     # 3 plots as PNG and SVG, curves.csv, map.csv; the beta-grid exports: pyCycle, GasTurb per theta (0, 5), CSV
     assert len(arts) == 12 and all(len(x.data) > 1000 for x in arts)
-    assert {"map_pycycle.py", "map_gasturb_theta0.txt", "map_gasturb_theta5.txt", "map_beta.csv"} <= {a.name for a in arts}
+    assert {"map_pycycle.py", "map_gasturb_theta0.map", "map_gasturb_theta5.map", "map_beta.csv"} <= {a.name for a in arts}
 
 
 def test_n3_all_models_and_minimax(n3_request):

@@ -1,6 +1,7 @@
 """Large meshes: a mesh given as arrays answers as the same triangles given as faces; the edges are grouped
-once and shared; equal vertices are merged by hashing; results list faces only when asked while zones.csv
-lists every face; the bulk CSV writer and the sort helpers agree with their slow references."""
+once and shared; equal vertices are merged by hashing; results list faces, and zones.csv has a row per face, up
+to 10,000 faces or as the options say (each independently); the bulk CSV writer and the sort helpers agree with
+their slow references."""
 
 from __future__ import annotations
 
@@ -111,7 +112,9 @@ def test_the_edges_are_sorted_once_and_shared_by_repair_the_map_and_the_diagnost
     a, b = tri.reshape(-1), tri[:, [1, 2, 0]].reshape(-1)
     _, reference = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1), axis=0, return_counts=True)
     assert sorted(groups.counts.tolist()) == sorted(reference.tolist())
-    assert (np.diff(groups.group[groups.order]) >= 0).all()
+    assert (np.diff(groups.group()[groups.order]) >= 0).all()
+    first = groups.order[groups.starts]  # each group's edge, kept once per group
+    assert (groups.lo == np.minimum(a, b)[first]).all() and (groups.hi == np.maximum(a, b)[first]).all()
 
 
 def test_an_unwelded_mesh_merges_by_hashing_to_the_welded_answer():
@@ -187,10 +190,27 @@ def test_faces_are_listed_only_when_asked_but_zones_csv_has_every_face(monkeypat
     quiet_csv = _csv(artifacts.render_artifacts(request, quiet))
     listed_csv = _csv(artifacts.render_artifacts(request, solve(request)))
     assert quiet_csv == listed_csv and sum(row[0] == "face" for row in quiet_csv) == 6
-    # above MAX_LISTED_FACES faces the default is not to list them
+    # above MAX_LISTED_FACES faces the default is not to list them, in the result nor in zones.csv
     monkeypatch.setattr(solve_module, "MAX_LISTED_FACES", 5)
-    assert solve(request).result.faces == []
+    big = solve(request)
+    assert big.result.faces == [] and solve_module.FACE_TABLE not in big.files
+    assert _csv(artifacts.render_artifacts(request, big)) == [row for row in listed_csv if row[0] != "face"]
     assert len(solve(PolyhedraRequest.model_validate({**body, "options": {"list_faces": True}})).result.faces) == 6
+
+
+@pytest.mark.parametrize(("options", "listed", "rows"), [
+    ({"faces_csv": True}, False, 6), ({"faces_csv": False, "list_faces": True}, True, 0), ({}, False, 0)])
+def test_the_face_rows_of_zones_csv_are_written_when_asked_whatever_the_result_lists(monkeypatch, options, listed,
+                                                                                       rows):
+    monkeypatch.setattr(solve_module, "MAX_LISTED_FACES", 5)  # the cube's 6 faces count as a large request
+    request = PolyhedraRequest.model_validate({**shapes.inside_out_cube(), "options": options})
+    solved = solve(request)
+    table = _csv(artifacts.render_artifacts(request, solved))
+    assert solved.result.faces_listed is listed and sum(row[0] == "face" for row in table) == rows
+    assert [row[0] for row in table[:2]] == ["record", "zone"] and float(table[1][4]) == pytest.approx(1.0)
+    if rows:  # the areas of a unit cube's faces, each once
+        assert sorted(row[1] for row in table[2:]) == sorted(shapes.CUBE_NAMES)
+        assert [float(row[6]) for row in table[2:]] == pytest.approx([1.0] * 6)
 
 
 def _csv(artifact_list):

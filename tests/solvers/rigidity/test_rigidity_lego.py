@@ -143,7 +143,7 @@ def test_unknown_parts_are_reported_not_guessed():
 
 
 def test_every_catalogue_part_has_a_box_and_typed_connectors():
-    kinds = {"stud", "antistud", "pin", "pinhole", "axle", "axlehole", "hinge_a", "hinge_b"}
+    kinds = {"stud", "antistud", "pin", "pinhole", "axle", "axlehole", "hinge_a", "hinge_b", "fit_m"}  # fit_m: pins as stated
     for number, shape in CATALOGUE.items():
         assert all(s > 0 for s in shape.box_size) and shape.connectors, number
         assert {c.type for c in shape.connectors} <= kinds

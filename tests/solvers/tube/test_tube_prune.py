@@ -39,7 +39,7 @@ def test_candidates_and_selection_prefer_fewer_bends():
 
 def test_levenberg_marquardt_with_active_bound():
     # minimise (x0 − 3)² + (x1 + 2)² with x1 ≥ 0: the solution sits on the bound
-    fun = lambda x: np.array([x[0] - 3.0, x[1] + 2.0])  # noqa: E731
+    fun = lambda x, out=None: np.array([x[0] - 3.0, x[1] + 2.0])  # noqa: E731
     normal_equations = lambda x, w, r: (np.diag(w), w * r)  # noqa: E731  (J = identity)
     x, info = fit.levenberg_marquardt(fun, normal_equations, np.array([0.0, 1.0]), np.array([-np.inf, 0.0]),
                                       np.array([np.inf, np.inf]), f_scale=10.0)

@@ -45,3 +45,73 @@ def test_end_lengths_from_the_samples_at_the_ends_match_all_samples():
     np.testing.assert_allclose(part.lengths, full.lengths, rtol=0, atol=1e-12)
     np.testing.assert_allclose(part.start, full.start, rtol=0, atol=1e-12)
     np.testing.assert_allclose(full.lengths[[0, -1]], truth.lengths[[0, -1]], atol=0.3)
+
+
+def test_sums_of_squares_of_held_radii_are_those_of_whole_assignments():
+    # the secant test's models (a bend's radius held at half or twice, the control polygon kept) share the fitted
+    # model's distances to the segments they do not move; the sums are those of assigning every sample to each
+    # model, also where doubling the first or the second bend's radius clips the 3 mm straight between them to 0
+    # and moves everything beyond
+    from plantsolve.solvers.tube.model import with_radii
+
+    rng = np.random.default_rng(4)
+    model = make_model([[40, 0, 60, 12], [3, 45, 80, 12], [25, -30, 30, 12], [35, 0, 0, 0]], 3.0)
+    pts = surface_samples(model, 30000, rng, noise=0.03, outlier_fraction=0.01)
+    keep = rng.random(len(pts)) < 0.9
+    variants = []
+    for k in range(3):
+        for f in (0.5, 2.0):
+            radii = model.radii.copy()
+            radii[k] *= f
+            variants.append(with_radii(model, radii))
+    assert variants[1].lengths[1] == 0.0 and variants[3].lengths[1] == 0.0
+    rss0, rss = fit.sums_of_squares(model, variants, pts, keep)
+    for m, got in zip([model] + variants, [rss0] + rss):
+        r = fit.assign(m, pts[keep], 0.0)[0]
+        np.testing.assert_allclose(got, float(r @ r), rtol=1e-12)
+
+
+def _scan_problem(n_samples: int):
+    rng = np.random.default_rng(6)
+    truth = make_model([[40, 0, 60, 12], [20, 45, 80, 12], [35, 0, 0, 0]], 3.0)
+    pts = surface_samples(truth, n_samples, rng, noise=0.03, outlier_fraction=0.01)
+    start = truth.copy()
+    start.angles = start.angles + 0.02
+    res, seg = fit.assign(start, pts, 6.0)
+    return start, pts, res, seg, np.abs(res) <= 1.0, fit.Layout(2, "free", None, True)
+
+
+def test_a_round_on_the_samples_a_mask_keeps_is_the_round_on_their_copy_bit_for_bit():
+    # more samples than one block of the normal equations: the large-scan path
+    m, pts, _, seg, keep, lay = _scan_problem(2 * fit.BLOCK)
+    x0, _, _, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep)
+    y0, _, _, fun_c, normal_equations_c, _, _ = fit._problem(m, pts[keep], seg[keep], lay)
+    np.testing.assert_array_equal(x0, y0)
+    r, r_c = fun(x0), fun_c(x0)
+    np.testing.assert_array_equal(r, r_c)
+    w = 1.0 / np.sqrt(1.0 + r * r)
+    for a, b in zip(normal_equations(x0, w, r), normal_equations_c(x0, w, r)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(fit.set_end_lengths(m, pts, seg, keep).lengths,
+                                  fit.set_end_lengths(m, pts[keep], seg[keep]).lengths)
+    # with the weights' scale given, the normal equations are summed during the evaluation: the same numbers
+    f = 0.06
+    _, _, _, fun_f, normal_equations_f, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=f)
+    x1 = x0 + 1e-4
+    r1 = fun(x1)
+    np.testing.assert_array_equal(fun_f(x1), r1)
+    _, w1 = fit._soft_l1(r1, f)
+    for a, b in zip(normal_equations_f(x1, w1, r1), normal_equations(x1, w1, r1)):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_levenberg_marquardt_reusing_its_arrays_is_the_one_making_fresh_ones():
+    # a trial's residuals and weights go into the arrays of the last rejected trial or the point left behind:
+    # the iterates are those of fresh arrays each evaluation
+    m, pts, _, seg, keep, lay = _scan_problem(20000)
+    x0, lo, hi, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep)
+    fresh = lambda x, out=None: fun(x)  # noqa: E731
+    xa, info_a = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=30)
+    xb, info_b = fit.levenberg_marquardt(fresh, normal_equations, x0, lo, hi, 0.06, max_nfev=30)
+    np.testing.assert_array_equal(xa, xb)
+    assert info_a == info_b and info_a["nfev"] > 3
