@@ -51,10 +51,12 @@ def make_engine(url: str, *, wait: float = WAIT_SECONDS, statement: float = STAT
     # statement after ``statement`` on the server, and unacknowledged data (a link that died under a pooled
     # connection) after ``statement`` in the kernel. Where the kernel sees nothing wrong (the server's host, or a
     # proxy between, takes the bytes and never answers; a server that hangs) the client bounds each round trip
-    # itself (bounded_connection_class).
+    # itself (bounded_connection_class). The server's side of such a link: a session left inside a transaction
+    # (its client gone mid-write) ends after statement + wait, so its row locks do not stall every later write.
     bounds = {"connect_timeout": max(1, round(wait)), "tcp_user_timeout": int(statement * 1000),
               "keepalives": 1, "keepalives_idle": 5, "keepalives_interval": 2, "keepalives_count": 2,
-              "options": f"-c statement_timeout={int(statement * 1000)} -c lock_timeout={int(wait * 1000)}"}
+              "options": f"-c statement_timeout={int(statement * 1000)} -c lock_timeout={int(wait * 1000)} "
+                         f"-c idle_in_transaction_session_timeout={int((statement + wait) * 1000)}"}
     given = set(parsed.query)
     # Connections above pool_size are closed on return; under a burst of submissions that
     # means a new PostgreSQL connection (several ms) per request, so keep the pool wide.

@@ -10,9 +10,10 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy.engine import make_url
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import DBAPIError, OperationalError
 
 from plantsolve.app.main import create_app
+from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.store.engine import PING_IDLE_SECONDS, Database
 from tests.conftest import service_settings
 from tests.support.black_hole import BlackHoleProxy
@@ -87,3 +88,19 @@ def test_submits_and_readiness_answer_503_in_seconds_through_a_black_hole_and_re
             time.sleep(0.2)
         response, took = _timed(lambda: client.post(SUBMIT[0], json=SUBMIT[1]))
         assert response.status_code == 202 and took < WAIT, took
+
+
+def test_a_session_left_inside_a_transaction_is_ended_by_the_server(pg_url):
+    """The server's side of a dead link: a client gone mid-transaction would keep its row locks (every later write
+    of those rows waits out its lock timeout); the server ends such a session after statement + wait."""
+    wait, statement = 0.5, 1.0
+    db = Database(pg_url, wait=wait, statement=statement)
+    try:
+        with db.engine.connect() as connection:
+            connection.exec_driver_sql("SELECT 1")  # a transaction is open (SQLAlchemy begins on first use)
+            time.sleep(statement + wait + 1.0)
+            with pytest.raises(DBAPIError, match="idle-in-transaction") as ended:
+                connection.exec_driver_sql("SELECT 2")
+            assert is_infrastructure_failure(ended.value)  # a 503 to a request, another attempt to a job
+    finally:
+        db.dispose()

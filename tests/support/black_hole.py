@@ -40,6 +40,12 @@ class BlackHoleProxy:
         with self._lock:
             sockets, self._sockets = self._sockets + [self._listener], []
         for sock in sockets:
+            # shutdown first: a close alone leaves the socket open while a pump thread is blocked in recv on it, and
+            # the server then keeps that session, with the row locks of its open transaction, for later tests
+            try:
+                sock.shutdown(socket.SHUT_RDWR)
+            except OSError:  # never connected, or already gone
+                pass
             sock.close()
 
     def _passes(self, generation: int) -> bool:
