@@ -366,6 +366,7 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
           "| worst angle err | worst end straight err (% r) | CPU s median / worst |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
+    accuracy: dict[str, list[str]] = {side: [] for side in sides}  # each side's accuracy columns, as printed
     for fam in fams:
         for side, rows in sides.items():
             rows = [r for r in rows if r["case"].startswith(fam + "-")]
@@ -374,15 +375,19 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
                      for key in ("radius", "radius_big", "angle", "end")}
             pct = {key: f"{100 * v:.1f} %" if v is not None else "n/a" for key, v in worst.items()}
             cpu = np.array([r["cpu"] for r in rows])
-            print(f"| {fam} | {side} | {len(ok)}/{len(rows)} = {100 * len(ok) / max(len(rows), 1):.0f} % "
-                  f"| {pct['radius']} | {pct['radius_big']} "
-                  f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
-                  f"| {100 * worst['end'] if worst['end'] is not None else float('nan'):.4f} "
-                  f"| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
+            columns = (f"| {len(ok)}/{len(rows)} = {100 * len(ok) / max(len(rows), 1):.0f} % "
+                       f"| {pct['radius']} | {pct['radius_big']} "
+                       f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
+                       f"| {100 * worst['end'] if worst['end'] is not None else float('nan'):.4f} ")
+            accuracy[side].append(columns)
+            print(f"| {fam} | {side} {columns}| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
     before, after = ({r["case"]: r for r in rows} for rows in sides.values())
     moved = {c: abs(np.subtract(before[c]["ends"], after[c]["ends"])).max() for c in before
              if c in after and "ends" in before[c] and "ends" in after[c] and before[c]["ends"] != after[c]["ends"]}
     print("peak RSS of each side's process (all its cases): " + ", ".join(f"{side} {v:.0f} MiB" for side, v in peak.items()))
+    # the contract of a speed-up: these columns the same on both sides
+    print("accuracy columns the same on both sides: " + ("yes" if len({tuple(v) for v in accuracy.values()}) == 1
+                                                         else "NO"))
     print(f"cases whose end straight lengths differ between the sides: {len(moved)}/{len(before)}"
           + "".join(f"; {c}: {d:.3g}" for c, d in sorted(moved.items())))
 

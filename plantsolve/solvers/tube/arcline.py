@@ -471,12 +471,16 @@ def fit_arcline(poly: np.ndarray, eps: float, r_min: float, beam: int = 3) -> Tu
     return fit_arclines([(poly, eps, r_min, beam)])[0]
 
 
-def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[TubeModel | None]:
+def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]],
+                 memos: list[dict] | None = None) -> list[TubeModel | None]:
     """:func:`fit_arcline` of every (polygon, ε, r_min, beam) in ``searches``, run in lockstep: the arcs that
     the current states of all of them ask for are searched in one :func:`best_arcs` call. That search is
     element for element the search of each family alone, so every result is the one its own run gives;
-    the batch only spreads numpy's per-call overhead (the states of a vertex ask for ~10 arcs of ~8 chain points)."""
-    runs = [_search_states(*s) for s in searches]
+    the batch only spreads numpy's per-call overhead (the states of a vertex ask for ~10 arcs of ~8 chain points).
+    ``memos``: a dict per search that keeps its plane tests and edges for another search of the same polygon, ε
+    and r_min (a wider beam's, after a dead end: most of its states are the narrower one's, and a state's edges
+    depend on nothing else)."""
+    runs = [_search_states(*s, memo=memos[k] if memos is not None else None) for k, s in enumerate(searches)]
     out: list[TubeModel | None] = [None] * len(runs)
     asks: dict[int, list[_Arcs]] = {}
     answers: dict[int, list[Edge | None] | None] = {k: None for k in range(len(runs))}
@@ -499,10 +503,11 @@ def fit_arclines(searches: list[tuple[np.ndarray, float, float, int]]) -> list[T
     return out
 
 
-def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
+def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int, memo: dict | None = None):
     """Algorithm 1 as a generator: it yields the arc families the states of one vertex need searched (every edge
     out of them that passes the plane test) and is sent their best arcs (:func:`best_arcs`); it returns the
-    model."""
+    model. ``memo``: the plane tests and edges of states met before (see :func:`fit_arclines`), added to."""
+    memo = {} if memo is None else memo
     n = len(poly)
     if n < 2:
         return None
@@ -519,9 +524,15 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
         # through that a sibling's insertion would have stopped sorts behind a full beam and is cut (the sort is
         # stable, and the skipped edges are those with more arcs, or as many and no smaller error)
         asks = []  # (state index, j, chain length, ...) of every edge out of vertex i that passed its plane test
-        # every edge's plane test at once (:func:`arc_family`'s, the same rule), for every state of i
-        planes = _planes_of_states(poly, i, last, [st.point for st in states[i]], [st.direction for st in states[i]],
-                                   eps) if states[i] else []
+        # every edge's plane test at once (:func:`arc_family`'s, the same rule), for every state of i not met before
+        # (a state's tests are what it gets alone, whichever states are tested with it)
+        keys = [(i, st.point.tobytes(), st.direction.tobytes(), st.t_lo) for st in states[i]]
+        new = [si for si, key in enumerate(keys) if ("planes",) + key not in memo]
+        if new:
+            for si, pl in zip(new, _planes_of_states(poly, i, last, [states[i][si].point for si in new],
+                                                     [states[i][si].direction for si in new], eps)):
+                memo[("planes",) + keys[si]] = pl
+        planes = [memo[("planes",) + key] for key in keys]
         for si, st in enumerate(states[i]):
             K, off = planes[si][5], planes[si][8]  # chain lengths and plane distances per j
             for jj, j in enumerate(range(i + 1, n - 1)):
@@ -544,13 +555,21 @@ def _search_states(poly: np.ndarray, eps: float, r_min: float, beam: int):
                 # them is then 0): chord tangent estimates at a junction of two bends are off by
                 # about that
                 asks.append((si, j, int(K[jj]), jj, st.point, st.direction, st.t_lo - (eps if i else 0.0)))
-        reached = [(a[0], a[1], f) for a, f in zip(asks, _arcs_in_planes(planes, asks, poly, eps, r_min))
-                   if f is not None]
-        if not reached:
-            continue
-        # the arcs of all of them searched at once (with those other runs ask for)
-        edges = yield [f for _, _, f in reached]
-        for (si, j, _), e in zip(reached, edges):
+        # each edge's best arc (None: no arc family, or no arc within ε), those met before from the memo
+        edge_keys = [("edge", a[1]) + keys[a[0]] for a in asks]
+        todo = [a for a, key in enumerate(edge_keys) if key not in memo]
+        families = _arcs_in_planes(planes, [asks[a] for a in todo], poly, eps, r_min)
+        reached = [(a, f) for a, f in zip(todo, families) if f is not None]
+        for a, f in zip(todo, families):
+            if f is None:
+                memo[edge_keys[a]] = None
+        if reached:
+            # the arcs of all of them searched at once (with those other runs ask for)
+            edges = yield [f for _, f in reached]
+            for (a, _), e in zip(reached, edges):
+                memo[edge_keys[a]] = e
+        for (si, j, *_), key in zip(asks, edge_keys):
+            e = memo[key]
             if e is None:
                 continue
             st = states[i][si]

@@ -204,10 +204,12 @@ def arcline_candidates(pc: PolygonalCurve, rp: float, opts: TubeOptions,
     simps = [pc.simplified if f == 1.0 else curve.simplify(poly, SIMPLIFY_FRACTION * eps * f, pc.shortcuts)
              for f in factors]
     # the searches of all tolerances at once (each gives what it gives alone)
-    mdls = arcline.fit_arclines([(simp, eps * f, 0.5 * rp, 3) for simp, f in zip(simps, factors)])
+    memos: list[dict] = [{} for _ in factors]  # each search's edges, for its wider search
+    mdls = arcline.fit_arclines([(simp, eps * f, 0.5 * rp, 3) for simp, f in zip(simps, factors)], memos)
     dead = [k for k, mdl in enumerate(mdls) if mdl is None]
     # every kept prefix ran into a dead end: search wider before giving up ε
-    for k, mdl in zip(dead, arcline.fit_arclines([(simps[k], eps * factors[k], 0.5 * rp, 8) for k in dead])):
+    for k, mdl in zip(dead, arcline.fit_arclines([(simps[k], eps * factors[k], 0.5 * rp, 8) for k in dead],
+                                                 [memos[k] for k in dead])):
         mdls[k] = mdl
     for f, mdl in zip(factors, mdls):
         if mdl is not None and all(not _same_shape(mdl, m0) for _, m0 in inits):
