@@ -16,13 +16,15 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, far_parts, joints_by_part, line_of, mostly_floating,
-                                                pieces, sub_build)
+from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, TOUCH_GAP, far_parts, joints_by_part, line_of,
+                                                mostly_floating, pieces, sub_build, touching)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
-HELD_BY = {False: "every known part of the named placed sub-model(s) and nothing else",
-           True: "minifigure parts only"}  # how report.details.held_pieces recognised each piece (pieces.sub_build)
+# how report.details.held_pieces recognised each piece (pieces.sub_build, pieces.touching)
+HELD_BY = {False: f"every known part of the named placed sub-model(s) and nothing else, none touching a part of "
+                  f"the largest piece (collision boxes at least {TOUCH_GAP:g} LDU apart)",
+           True: "minifigure parts only"}
 LISTED_IN_MESSAGE = 10
 
 
@@ -177,8 +179,17 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly, source: dict
     placements = source.get("submodel_placements") if isinstance(source.get("submodel_placements"), dict) else {}
     names = {p: assembly.parts[p].shape.name for p in part_ids}
     groups = pieces(part_ids, {p: joined for p, (_, joined) in by_part.items()})
-    return [Piece(parts=g, sub_build=None if k == 0 else sub_build(g, part_ids, placements, names))
-            for k, g in enumerate(groups)]
+    ids, _, lower, upper = assembly.solid_boxes()
+    finite = np.isfinite(lower).all(axis=1)
+    lows = {b: lo for b, lo, ok in zip(ids, lower, finite) if ok}
+    highs = {b: hi for b, hi, ok in zip(ids, upper, finite) if ok}
+    out = [Piece(parts=groups[0], sub_build=None)] if groups else []
+    for g in groups[1:]:
+        found = sub_build(g, part_ids, placements, names)
+        if found not in (None, MINIFIGURE) and touching(g, groups[0], lows, highs):
+            found = None  # whole sub-models lying against the build: a part of it whose joint was not found
+        out.append(Piece(parts=g, sub_build=found))
+    return out
 
 
 def _named(ids, assembly: Assembly) -> str:

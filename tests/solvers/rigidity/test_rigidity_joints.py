@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.rigidity.pieces import sub_build
-from plantsolve.solvers.rigidity.solve import solve
+from plantsolve.solvers.rigidity.pieces import sub_build, touching
+from plantsolve.solvers.rigidity.solve import HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
 HERE = Path(__file__).parent
@@ -217,7 +217,7 @@ def test_an_official_set_has_every_known_part_joined_and_is_one_build(name):
     assert len([p for p in result.pieces if p.sub_build is None]) == build_pieces
     assert [p.sub_build for p in result.pieces if p.sub_build] == apart
     assert [(h["sub_build"], h["recognised_by"]) for h in result.report.details["held_pieces"]] == [
-        (name, "every known part of the named placed sub-model(s) and nothing else") for name in apart]
+        (name, HELD_BY[False]) for name in apart]
     assert ("stand apart as held pieces" in result.report.message) == bool(apart)
     assert all(held in result.report.message for held in apart)
     assert result.collisions == []
@@ -270,3 +270,34 @@ def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_
     assert sub_build(["L3/L4/L8", "L3/L4/L9"], ids, placements, names) == "legs.ldr"
     assert sub_build(["L2/L5", "L3/L4/L8", "L3/L4/L9"], ids, placements, names) is None  # half the cart
     assert sub_build(["L2/L5"], ids, placements, {**names, "L2/L5": "Minifig Arm Left"}) == "minifigure"
+
+
+S9, C9 = "0.156434", "0.987688"  # sin and cos of 9 degrees
+
+
+@pytest.mark.parametrize("placement, held", [
+    (f"1 4 0 -24 0 1 0 0 0 {C9} -{S9} 0 {S9} {C9} roof.ldr", False),  # tilted 9 degrees, lying on the top brick
+    ("1 4 100 0 0 1 0 0 0 1 0 0 0 1 roof.ldr", True),  # beside them, its lower brick level with the top one
+])
+def test_whole_sub_models_lying_against_the_build_are_no_held_sub_build(placement, held):
+    """OMR 10174 (UCS AT-ST) draws its roof, a sub-model of 36 parts, 9 degrees off the head it sits on: no stud
+    meets, and the roof came out as a held sub-build, a broken build passed off as one standing apart. Two
+    stacked 2x2 bricks (one joint) as a sub-model on three stacked 2x4 bricks: tilted 9 degrees on them, their
+    boxes overlap the top brick's and the piece is named in separate_pieces; beside them (60 LDU apart), held."""
+    text = ("0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n{placement}\n0 FILE roof.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3003.dat\n")
+    result = solve(parse("roof.mpd", text)).result
+    assert [(pc.parts, pc.sub_build) for pc in result.pieces] == [
+        (["L2", "L3", "L4"], None), (["L5/L7", "L5/L8"], "roof.ldr" if held else None)]
+    warnings = {w.code: w for w in result.report.warnings}
+    assert ("separate_pieces" in warnings) != held
+    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY[False]] * held
+
+
+def test_pieces_touch_when_a_pair_of_their_boxes_comes_within_half_an_ldu():
+    lower = {"a": np.zeros(3), "b": np.array([10.0, 0, 0]), "c": np.array([10.4, 0, 0]), "d": np.array([10.6, 0, 0])}
+    upper = {k: v + 10.0 for k, v in lower.items()}  # 10 LDU cubes: a spans 0..10 in x
+    assert touching(["b"], ["a"], lower, upper) and touching(["c"], ["a"], lower, upper)  # 0 and 0.4 apart
+    assert not touching(["d"], ["a"], lower, upper)  # 0.6 apart
+    assert not touching(["minifig arm"], ["a"], lower, upper)  # no collision box: it touches nothing
