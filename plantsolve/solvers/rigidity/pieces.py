@@ -92,6 +92,54 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     return None
 
 
+def loose_sub_builds(apart: Sequence[Sequence[str]], part_ids: Sequence[str],
+                     placements: Mapping[str, str]) -> list[str | None]:
+    """For pieces that stand apart from the build (none touching it) and are no sub-build each: the sub-build they
+    are together, as :func:`sub_build` names it, where some of them are exactly the known parts of whole placed
+    sub-models (a cart with the pilot on it and the cargo lying loose in it: OMR 7140), else None, per piece."""
+    members = {p: k for k, piece in enumerate(apart) for p in piece}
+    order = {p: k for k, p in enumerate(part_ids)}
+    by_prefix: dict[str, set[str]] = {}
+    for p in part_ids:
+        for prefix in _prefixes(p):
+            by_prefix.setdefault(prefix, set()).add(p)
+    outermost: dict[str, str] = {}  # part -> the outermost placement holding it whose known parts all stand apart
+    for p in members:
+        whole = next((prefix for prefix in _prefixes(p) if by_prefix[prefix] <= members.keys()), None)
+        if whole is not None:
+            outermost[p] = whole
+    groups: dict[str, set[int]] = {}  # placement -> the pieces its parts lie in
+    for p, prefix in outermost.items():
+        groups.setdefault(prefix, set()).add(members[p])
+    # placements sharing a piece are one sub-build; it holds when each of its pieces lies in its placements only
+    root = {prefix: prefix for prefix in groups}
+    by_piece: dict[int, str] = {}
+    for prefix, held in groups.items():
+        for k in held:
+            other = by_piece.setdefault(k, prefix)
+            root[_root(root, other)] = _root(root, prefix)
+    names: list[str | None] = [None] * len(apart)
+    joined: dict[str, list[str]] = {}
+    for prefix in groups:
+        joined.setdefault(_root(root, prefix), []).append(prefix)
+    for chosen in joined.values():
+        pieces_in = set().union(*(groups[prefix] for prefix in chosen))
+        if len(pieces_in) < 2 or any(p not in outermost or _root(root, outermost[p]) != _root(root, chosen[0])
+                                     for k in pieces_in for p in apart[k]):
+            continue  # one piece is judged by sub_build alone; a piece reaching beyond the placements is no part
+        ordered = sorted(chosen, key=lambda prefix: min(order[p] for p in by_prefix[prefix]))
+        for k in pieces_in:
+            names[k] = " + ".join(placements.get(prefix, prefix.rstrip("/")) for prefix in ordered)
+    return names
+
+
+def _root(root: dict[str, str], x: str) -> str:
+    while root[x] != x:
+        root[x] = root[root[x]]
+        x = root[x]
+    return x
+
+
 def touching(piece: Sequence[str], build: Sequence[str], lower: Mapping[str, np.ndarray],
              upper: Mapping[str, np.ndarray], gap: float = TOUCH_GAP) -> bool:
     """Whether a part of ``piece`` touches or overlaps a part of ``build``: their world-aligned collision boxes

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.rigidity.pieces import sub_build, touching
+from plantsolve.solvers.rigidity.pieces import loose_sub_builds, sub_build, touching
 from plantsolve.solvers.rigidity.solve import HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -217,7 +217,7 @@ def test_an_official_set_has_every_known_part_joined_and_is_one_build(name):
     assert len([p for p in result.pieces if p.sub_build is None]) == build_pieces
     assert [p.sub_build for p in result.pieces if p.sub_build] == apart
     assert [(h["sub_build"], h["recognised_by"]) for h in result.report.details["held_pieces"]] == [
-        (name, HELD_BY[False]) for name in apart]
+        (name, HELD_BY["whole"]) for name in apart]
     assert ("stand apart as held pieces" in result.report.message) == bool(apart)
     assert all(held in result.report.message for held in apart)
     assert result.collisions == []
@@ -240,9 +240,9 @@ def test_the_at_at_head_hangs_on_a_hinge_drawn_two_ldu_off_its_fingers():
 def test_larger_sets_leave_at_most_five_percent_of_their_known_parts_joined_to_nothing():
     """Island Hopper (5935: its pteranodon is placed in the air beside the plane; the skis hang half a stud along
     the wings' outer rows) and the X-wing with its support cart (7140, 48 parts not in the catalogue; the cart
-    with the pilot on it and two pairs of its parts are held by nothing found)."""
+    with the pilot on it stands apart, two pairs of its parts joined to nothing of it: held, see below)."""
     for name, floating_parts, build_pieces in (("5935-1-IslandHopper.mpd", ["30478"], 2),
-                                               ("7140-1-X-wingFighter.mpd", [], 4)):
+                                               ("7140-1-X-wingFighter.mpd", [], 1)):
         request, result = omr(name)
         floating = [p.part for p in result.parts if not p.joints]
         assert floating == floating_parts and len(floating) <= 0.05 * len(result.parts)
@@ -292,7 +292,7 @@ def test_whole_sub_models_lying_against_the_build_are_no_held_sub_build(placemen
         (["L2", "L3", "L4"], None), (["L5/L7", "L5/L8"], "roof.ldr" if held else None)]
     warnings = {w.code: w for w in result.report.warnings}
     assert ("separate_pieces" in warnings) != held
-    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY[False]] * held
+    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["whole"]] * held
 
 
 def test_pieces_touch_when_a_pair_of_their_boxes_comes_within_half_an_ldu():
@@ -301,3 +301,32 @@ def test_pieces_touch_when_a_pair_of_their_boxes_comes_within_half_an_ldu():
     assert touching(["b"], ["a"], lower, upper) and touching(["c"], ["a"], lower, upper)  # 0 and 0.4 apart
     assert not touching(["d"], ["a"], lower, upper)  # 0.6 apart
     assert not touching(["minifig arm"], ["a"], lower, upper)  # no collision box: it touches nothing
+
+
+def test_the_x_wings_support_cart_and_the_parts_loose_in_it_stand_apart_as_one_held_sub_build():
+    """OMR 7140: the support vehicle (sub-model at line 18) with its technician (line 16) standing on it is 67
+    parts in one piece; two 3003 bricks lying on their side in its bed, and a 750/755 pair among the hose's 756
+    segments (not in the catalogue), are pieces of their own. Together they are every known part of the two
+    sub-models and touch nothing of the X-wing: the three pieces are one held sub-build, each named so, and
+    the report says how it was recognised. Biggs and R2-D2 are held sub-builds of one piece each."""
+    request, result = omr("7140-1-X-wingFighter.mpd")
+    number = {p.id: p.part for p in request.parts}
+    cart = "7140 - Minifig - Rebel Technician.ldr + 7140 - Support Vehicle.ldr"
+    assert [(len(pc.parts), pc.sub_build) for pc in result.pieces[1:]] == [
+        (67, cart), (10, "7140 - Minifig - Biggs Darklighter.ldr"), (4, "7140 - Minifig - R2-D2.ldr"),
+        (2, cart), (2, cart)]
+    assert [sorted(number[p] for p in pc.parts) for pc in result.pieces[4:]] == [["3003", "3003"], ["750", "755"]]
+    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [
+        HELD_BY["loose"], HELD_BY["whole"], HELD_BY["whole"], HELD_BY["loose"], HELD_BY["loose"]]
+    assert "separate_pieces" not in {w.code for w in result.report.warnings}
+
+
+def test_pieces_standing_apart_are_one_sub_build_only_when_together_they_are_whole_sub_models():
+    ids = ["L1", "L2/L5", "L2/L6", "L2/L7", "L3/L8", "L4/L9", "L4/L10"]
+    placements = {"L2/": "cart.ldr", "L3/": "pilot.ldr", "L4/": "crate.ldr"}
+    # the cart and its pilot in one piece, a brick loose in the cart, and half of a crate
+    apart = [["L2/L5", "L2/L6", "L3/L8"], ["L2/L7"], ["L4/L9"]]
+    assert loose_sub_builds(apart, ids, placements) == ["cart.ldr + pilot.ldr", "cart.ldr + pilot.ldr", None]
+    # the loose brick bound to the main build's part: the cart's pieces are not the cart's parts only
+    assert loose_sub_builds([["L2/L5", "L2/L6", "L3/L8"], ["L2/L7", "L1"]], ids, placements) == [None, None]
+    assert loose_sub_builds([["L2/L5", "L2/L6"]], ids, placements) == [None]  # one piece: sub_build's to judge
