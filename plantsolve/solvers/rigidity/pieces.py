@@ -4,8 +4,8 @@ sub-builds that may stand apart, and parts placed implausibly far from the rest.
 A piece besides the largest is a **sub-build** when it is exactly the known parts of whole placed LDraw
 sub-models (every part of each placement and nothing else: a droid standing beside its vehicle, a minifigure
 modelled as its own sub-model, a cart with the minifigure standing on it) none of whose parts touches a part of
-the largest piece (:func:`touching`: a sub-model lying against the build is a part of it whose joint was not
-found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only (a minifigure
+the largest piece (:func:`clearance` under TOUCH_GAP: a sub-model lying against the build is a part of it whose
+joint was not found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only (a minifigure
 whose hands hold nothing of the build). Any other piece means joints the catalogue did not find, or a model that
 really is in pieces: the solver warns about it.
 """
@@ -26,6 +26,10 @@ PITCH = 20.0  # LDU: added to the median distance so that a model of a few stack
 MINIFIG = "minifig"  # LDraw names of minifigure parts start with it
 MINIFIGURE = "minifigure"  # the sub_build of a piece of minifigure parts only
 TOUCH_GAP = 0.5  # LDU: boxes this close touch (a part resting on another whose joint was not found meets it at 0)
+# LDU: two stud pitches, how far pieces must stay from the build, parts without a collision shape counted at their
+# origin, to be one sub-build together (loose_sub_builds). Hose and cable segments joined through parts not in
+# the catalogue lie within a stud of the build (OMR 8002: 6-34 LDU, 21309: 20-23); a cart beside its X-wing 105.
+LOOSE_CLEARANCE = 40.0
 
 
 def mostly_floating(floating: int, parts: int) -> bool:
@@ -94,7 +98,7 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
 
 def loose_sub_builds(apart: Sequence[Sequence[str]], part_ids: Sequence[str],
                      placements: Mapping[str, str]) -> list[str | None]:
-    """For pieces that stand apart from the build (none touching it) and are no sub-build each: the sub-build they
+    """For pieces that stand clear of the build (LOOSE_CLEARANCE) and are no sub-build each: the sub-build they
     are together, as :func:`sub_build` names it, where some of them are exactly the known parts of whole placed
     sub-models (a cart with the pilot on it and the cargo lying loose in it: OMR 7140), else None, per piece."""
     members = {p: k for k, piece in enumerate(apart) for p in piece}
@@ -140,24 +144,19 @@ def _root(root: dict[str, str], x: str) -> str:
     return x
 
 
-def touching(piece: Sequence[str], build: Sequence[str], lower: Mapping[str, np.ndarray],
-             upper: Mapping[str, np.ndarray], gap: float = TOUCH_GAP) -> bool:
-    """Whether a part of ``piece`` touches or overlaps a part of ``build``: their world-aligned collision boxes
-    (lower and upper corners by part id; parts without a collision shape are left out) come within ``gap``. Boxes
-    of turned parts are larger than the parts, so this errs towards touching: towards calling a piece part of
-    the build rather than a sub-build standing apart."""
+def clearance(piece: Sequence[str], build: Sequence[str], lower: Mapping[str, np.ndarray],
+              upper: Mapping[str, np.ndarray]) -> float:
+    """How far the parts of ``piece`` stay from those of ``build``: the least gap between a box of one and a box of
+    the other (world-aligned, lower and upper corners by part id; parts not in them are left out), along the axis
+    that separates them most (negative: the boxes overlap that deep); infinite when either side has no box. Boxes of
+    turned parts are larger than the parts, so this errs towards close: towards calling a piece part of the build
+    rather than a sub-build standing apart."""
     mine = [p for p in piece if p in lower]
     theirs = [p for p in build if p in lower]
     if not mine or not theirs:
-        return False
-    lo_a, hi_a = np.array([lower[p] for p in mine]), np.array([upper[p] for p in mine])
+        return float("inf")
     lo_b, hi_b = np.array([lower[p] for p in theirs]), np.array([upper[p] for p in theirs])
-    if np.any(lo_a.min(0) > hi_b.max(0) + gap) or np.any(lo_b.min(0) > hi_a.max(0) + gap):
-        return False  # the pieces' own boxes are apart: no pair can touch
-    for lo, hi in zip(lo_a, hi_a):
-        if np.any(np.all((lo_b <= hi + gap) & (lo <= hi_b + gap), axis=1)):
-            return True
-    return False
+    return min(float(np.max(np.maximum(lower[p] - hi_b, lo_b - upper[p]), axis=1).min()) for p in mine)
 
 
 def _prefixes(part_id: str) -> list[str]:

@@ -16,19 +16,20 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, TOUCH_GAP, far_parts, joints_by_part, line_of,
-                                                loose_sub_builds, mostly_floating, pieces, sub_build, touching)
+from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
+                                                joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
+                                                sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
-# how report.details.held_pieces recognised each piece (pieces.sub_build, pieces.touching, pieces.loose_sub_builds)
+# how report.details.held_pieces recognised each piece (pieces.sub_build, pieces.clearance, pieces.loose_sub_builds)
 HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and nothing else, none touching a part of "
                     f"the largest piece (collision boxes at least {TOUCH_GAP:g} LDU apart)",
            "minifigure": "minifigure parts only",
            "loose": f"one of the pieces that together are every known part of the named placed sub-model(s) and "
-                    f"nothing else, none touching a part of the largest piece (collision boxes at least "
-                    f"{TOUCH_GAP:g} LDU apart): parts loose in a sub-build, or joined to it by parts not in the "
-                    f"catalogue"}
+                    f"nothing else, all at least {LOOSE_CLEARANCE:g} LDU clear of the largest piece (collision "
+                    f"boxes, or the origins of parts without one): parts loose in a sub-build, or joined to it by "
+                    f"parts not in the catalogue"}
 LISTED_IN_MESSAGE = 10
 
 
@@ -191,6 +192,9 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
     finite = np.isfinite(lower).all(axis=1)
     lows = {b: lo for b, lo, ok in zip(ids, lower, finite) if ok}
     highs = {b: hi for b, hi, ok in zip(ids, upper, finite) if ok}
+    # a part without a collision shape (a minifigure's, a hose segment) is its origin when pieces must stand clear
+    points = {p: assembly.parts[p].position for p in part_ids if p not in lows}
+    lows_or_points, highs_or_points = {**lows, **points}, {**highs, **points}
     found: list[str | None] = [None]
     held_by: dict[int, str] = {}
     apart: list[int] = []  # pieces standing apart from the largest that are no sub-build each
@@ -198,11 +202,11 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
         name = sub_build(g, part_ids, placements, names)
         if name == MINIFIGURE:
             held_by[k] = "minifigure"
-        elif touching(g, groups[0], lows, highs):
+        elif clearance(g, groups[0], lows, highs) < TOUCH_GAP:
             name = None  # whole sub-models lying against the build: a part of it whose joint was not found
         elif name is not None:
             held_by[k] = "whole"
-        else:
+        elif clearance(g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
             apart.append(k)
         found.append(name)
     for k, name in zip(apart, loose_sub_builds([groups[k] for k in apart], part_ids, placements)):

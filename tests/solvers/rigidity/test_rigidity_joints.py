@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.rigidity.pieces import loose_sub_builds, sub_build, touching
+from plantsolve.solvers.rigidity.pieces import clearance, loose_sub_builds, sub_build
 from plantsolve.solvers.rigidity.solve import HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -295,12 +295,17 @@ def test_whole_sub_models_lying_against_the_build_are_no_held_sub_build(placemen
     assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["whole"]] * held
 
 
-def test_pieces_touch_when_a_pair_of_their_boxes_comes_within_half_an_ldu():
-    lower = {"a": np.zeros(3), "b": np.array([10.0, 0, 0]), "c": np.array([10.4, 0, 0]), "d": np.array([10.6, 0, 0])}
-    upper = {k: v + 10.0 for k, v in lower.items()}  # 10 LDU cubes: a spans 0..10 in x
-    assert touching(["b"], ["a"], lower, upper) and touching(["c"], ["a"], lower, upper)  # 0 and 0.4 apart
-    assert not touching(["d"], ["a"], lower, upper)  # 0.6 apart
-    assert not touching(["minifig arm"], ["a"], lower, upper)  # no collision box: it touches nothing
+def test_the_clearance_of_two_pieces_is_the_least_gap_between_their_boxes():
+    lower = {"a": np.zeros(3), "b": np.array([10.0, 0, 0]), "c": np.array([10.4, 3, 0]), "d": np.array([5, 40, 5])}
+    upper = {k: v + 10.0 for k, v in lower.items()}  # 10 LDU cubes: a spans 0..10 in x, y and z
+    assert clearance(["b"], ["a"], lower, upper) == 0.0  # face to face
+    assert abs(clearance(["c"], ["a"], lower, upper) - 0.4) < 1e-12  # 0.4 apart in x, overlapping in y and z
+    assert clearance(["d"], ["a"], lower, upper) == 30.0  # above it, overlapping in x and z
+    assert clearance(["b", "d"], ["a"], lower, upper) == 0.0  # the closest part counts
+    assert clearance(["minifig arm"], ["a"], lower, upper) == float("inf")  # no box: nothing to be close to
+    points = {**lower, "p": np.array([5.0, -6, 5])}
+    assert clearance(["p"], ["a"], points, {**upper, "p": points["p"]}) == 6.0  # a part at its origin, 6 above a
+
 
 
 def test_the_x_wings_support_cart_and_the_parts_loose_in_it_stand_apart_as_one_held_sub_build():
@@ -330,3 +335,18 @@ def test_pieces_standing_apart_are_one_sub_build_only_when_together_they_are_who
     # the loose brick bound to the main build's part: the cart's pieces are not the cart's parts only
     assert loose_sub_builds([["L2/L5", "L2/L6", "L3/L8"], ["L2/L7", "L1"]], ids, placements) == [None, None]
     assert loose_sub_builds([["L2/L5", "L2/L6"]], ids, placements) == [None]  # one piece: sub_build's to judge
+
+
+@pytest.mark.parametrize("x, held", [(100, True), (50, False)])
+def test_loose_pieces_of_a_sub_model_are_held_only_two_studs_clear_of_the_build(x, held):
+    """Three stacked 2x4 bricks (x from -20 to 20) and a sub-model of two 2x2 bricks 60 apart, joined to nothing:
+    placed at x = 100 its bricks start 70 LDU clear of the build (at least 40): the two pieces are the sub-model
+    loose, held; at x = 50 they are 20 clear, as close as hose segments joined through unknown parts: not held."""
+    text = ("0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 {x} 0 0 1 0 0 0 1 0 0 0 1 cart.ldr\n0 FILE cart.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 60 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n")
+    result = solve(parse("cart.mpd", text)).result
+    assert [(pc.parts, pc.sub_build) for pc in result.pieces] == [
+        (["L2", "L3", "L4"], None), (["L5/L7"], "cart.ldr" if held else None),
+        (["L5/L8"], "cart.ldr" if held else None)]
+    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["loose"]] * (2 * held)
