@@ -5,9 +5,11 @@ A piece besides the largest is a **sub-build** when it is exactly the known part
 sub-models (every part of each placement and nothing else: a droid standing beside its vehicle, a minifigure
 modelled as its own sub-model, a cart with the minifigure standing on it) none of whose parts touches a part of
 the largest piece (:func:`clearance` under TOUCH_GAP: a sub-model lying against the build is a part of it whose
-joint was not found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only (a minifigure
-whose hands hold nothing of the build). Any other piece means joints the catalogue did not find, or a model that
-really is in pieces: the solver warns about it.
+joint was not found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only
+(a minifigure whose hands hold nothing of the build). Pieces that are no sub-build each are one together when
+they are the known parts of whole placed sub-models and stand LOOSE_CLEARANCE clear of the build
+(:func:`loose_sub_builds`). Any other piece means joints the catalogue did not find, or a model that really is
+in pieces: the solver warns about it.
 """
 
 from __future__ import annotations

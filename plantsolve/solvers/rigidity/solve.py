@@ -202,12 +202,12 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
         name = sub_build(g, part_ids, placements, names)
         if name == MINIFIGURE:
             held_by[k] = "minifigure"
-        elif clearance(g, groups[0], lows, highs) < TOUCH_GAP:
+        elif name is not None and clearance(g, groups[0], lows, highs) < TOUCH_GAP:
             name = None  # whole sub-models lying against the build: a part of it whose joint was not found
         elif name is not None:
             held_by[k] = "whole"
-        elif clearance(g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
-            apart.append(k)
+        elif all("/" in p for p in g) and clearance(g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
+            apart.append(k)  # (a part of the main model lies in no placement: it cannot be of a sub-build)
         found.append(name)
     for k, name in zip(apart, loose_sub_builds([groups[k] for k in apart], part_ids, placements)):
         if name is not None:
