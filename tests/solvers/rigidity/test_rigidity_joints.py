@@ -350,3 +350,13 @@ def test_loose_pieces_of_a_sub_model_are_held_only_two_studs_clear_of_the_build(
         (["L2", "L3", "L4"], None), (["L5/L7"], "cart.ldr" if held else None),
         (["L5/L8"], "cart.ldr" if held else None)]
     assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["loose"]] * (2 * held)
+
+
+def test_wheels_turn_on_the_pull_back_motors_wheel_pins():
+    """10039 (pull-back motor, Speed Champions) draws its axle's ends with wpin4.dat, a wheel holding pin the
+    shadow library states no snap for: OMR 40190's rear rims were joined to nothing. The catalogue gives it
+    wpin.dat's pin (radius 4, 12 long, x from 32 to 44 at y = 5, z = 60 in 10039's frame): a notched rim pushed on
+    each end turns on it (a hinge each, two in all); the same rim 10 LDU further out meets nothing."""
+    assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 10039.dat\n1 0 43 5 60 0 0 -1 0 1 0 1 0 0 30027b.dat\n"
+                  "1 0 -43 5 60 0 0 1 0 1 0 -1 0 0 30027b.dat\n") == [("hinge", "fit", "10039", "30027b", 1)] * 2
+    assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 10039.dat\n1 0 53 5 60 0 0 -1 0 1 0 1 0 0 30027b.dat\n") == []
