@@ -8,7 +8,8 @@ Nothing is fetched: the models are read from what is named (the OMR sets of thre
 ``--before none`` skips it), taken out of git into a temporary folder and run in a child process on the same
 files. Per model, ``before -> after``:
 
-- ``known``: parts in the catalogue (the others are left out of the analysis);
+- ``known``: parts read and in the catalogue (the others are left out of the analysis; a reader that skips fewer
+  lines reads more);
 - ``floating``: known parts joined to nothing, and their share of the known parts (the target is at most 5 %);
 - ``pieces``: connected pieces of the known parts that are no held sub-build (a set that is one build is one
   piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
@@ -86,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
-    print(f"{'model':34s} {'known':>5s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
+    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
           f"{'cpu s':>11s}  floating parts (after)")
     for path in files:
         row = measure(path)
@@ -97,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
 
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
-        print(f"{row['model'][:34]:34s} {row['known']:5d} {pair('floating'):>8s} ({share:4.1f} %) "
+        print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
               f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('seconds', '.2f'):>11s}  {names}")
     return 0
 

@@ -33,7 +33,9 @@ the bounding box of the part's drawn geometry and each snap one of
 - ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``.
 
 The open stud tube primitives (``stud4.dat``, ``stud4a.dat``, ``stud4f*.dat``, ``stud4h.dat``) get the
-anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``).
+anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``), and a
+wheel holding pin primitive without shadow lines that does not draw ``wpin.dat`` (``wpin4.dat``) gets
+``wpin.dat``'s pin (see ``WHEEL_PIN``).
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -58,6 +60,12 @@ META = re.compile(r"\[([A-Za-z]+)=([^\]]*)\]")
 # tube's height).
 TUBE = re.compile(r"^stud4(a|f\d[nsw]|h|o|od)?\.dat$")
 TUBE_SNAP = "0 !LDCAD SNAP_CYL [ID=aStud] [gender=F] [caps=A] [secs=R 6 4] [scale=YOnly]"
+# The wheel holding pin primitives draw one pin (radius 4, from y = 0 to y = -12, as wpin.dat); the shadow library
+# states it for wpin.dat (and wpin2.dat by SNAP_INCL), wpin2a.dat and wpin3.dat draw wpin.dat, but wpin4.dat (the
+# pull-back motor's, 2024) draws the pin itself and has no shadow: the axle of 10039 held no wheel. A wheel pin
+# primitive without shadow lines that does not draw wpin.dat gets wpin.dat's snap.
+WHEEL_PIN = re.compile(r"^wpin\d+a?\.dat$")
+WHEEL_PIN_SNAP = "0 !LDCAD SNAP_INCL [ref=wpin.dat]"
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -206,8 +214,12 @@ class Deriver:
         self._stack.add(key)
         own, clear_all, clear_ids = [], False, set()
         shadow = self.shadow.text(key) or ""
-        if TUBE.match(key) and not any(line.split()[:2] == ["0", "!LDCAD"] for line in shadow.splitlines()):
+        unstated = not any(line.split()[:2] == ["0", "!LDCAD"] for line in shadow.splitlines())
+        if TUBE.match(key) and unstated:
             shadow = TUBE_SNAP
+        elif WHEEL_PIN.match(key) and unstated and all(child.lower() != "wpin.dat"
+                                                        for _, _, child in self._children(key)):
+            shadow = WHEEL_PIN_SNAP
         for raw in shadow.splitlines():
             tokens = raw.split()
             if len(tokens) < 3 or tokens[0] != "0" or tokens[1] != "!LDCAD" or tokens[2] not in SNAP_KINDS:

@@ -152,8 +152,9 @@ class Piece(BaseModel):
     parts: list[str] = Field(description="Ids of the parts of one connected piece.")
     sub_build: str | None = Field(description="What the piece is when it is a sub-build that may stand apart: the "
                                   "names of the placed LDraw sub-models whose every known part it is (and only "
-                                  "those), joined by ' + ', or 'minifigure' (only minifigure parts); null for a "
-                                  "piece of the build itself.")
+                                  "those, none touching a part of the largest piece: whole sub-models lying against "
+                                  "the build are a part of it whose joint was not found), joined by ' + ', or "
+                                  "'minifigure' (only minifigure parts); null for a piece of the build itself.")
 
 
 class RigidityResult(BaseModel):

@@ -3,8 +3,12 @@ sub-builds that may stand apart, and parts placed implausibly far from the rest.
 
 A piece besides the largest is a **sub-build** when it is exactly the known parts of whole placed LDraw
 sub-models (every part of each placement and nothing else: a droid standing beside its vehicle, a minifigure
-modelled as its own sub-model, a cart with the minifigure standing on it), or when it holds minifigure parts
-only (a minifigure whose hands hold nothing of the build). Any other piece means joints the catalogue did not find, or a model that really is
+modelled as its own sub-model, a cart with the minifigure standing on it) none of whose parts touches a part of
+the largest piece (:func:`clearance` under TOUCH_GAP: a sub-model lying against the build is a part of it whose
+joint was not found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only
+(a minifigure whose hands hold nothing of the build). Pieces that are no sub-build each are one together when
+they are the known parts of whole placed sub-models and stand LOOSE_CLEARANCE clear of the build
+(:func:`loose_sub_builds`). Any other piece means joints the catalogue did not find, or a model that really is
 in pieces: the solver warns about it.
 """
 
@@ -23,6 +27,11 @@ FAR_FACTOR = 100.0
 PITCH = 20.0  # LDU: added to the median distance so that a model of a few stacked parts has a scale
 MINIFIG = "minifig"  # LDraw names of minifigure parts start with it
 MINIFIGURE = "minifigure"  # the sub_build of a piece of minifigure parts only
+TOUCH_GAP = 0.5  # LDU: boxes this close touch (a part resting on another whose joint was not found meets it at 0)
+# LDU: two stud pitches, how far pieces must stay from the build, parts without a collision shape counted at their
+# origin, to be one sub-build together (loose_sub_builds). Hose and cable segments joined through parts not in
+# the catalogue lie within a stud of the build (OMR 8002: 6-34 LDU, 21309: 20-23); a cart beside its X-wing 105.
+LOOSE_CLEARANCE = 40.0
 
 
 def mostly_floating(floating: int, parts: int) -> bool:
@@ -87,6 +96,69 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     if all(names.get(p, "").lower().startswith(MINIFIG) for p in piece):
         return MINIFIGURE
     return None
+
+
+def loose_sub_builds(apart: Sequence[Sequence[str]], part_ids: Sequence[str],
+                     placements: Mapping[str, str]) -> list[str | None]:
+    """For pieces that stand clear of the build (LOOSE_CLEARANCE) and are no sub-build each: the sub-build they
+    are together, as :func:`sub_build` names it, where some of them are exactly the known parts of whole placed
+    sub-models (a cart with the pilot on it and the cargo lying loose in it: OMR 7140), else None, per piece."""
+    members = {p: k for k, piece in enumerate(apart) for p in piece}
+    order = {p: k for k, p in enumerate(part_ids)}
+    by_prefix: dict[str, set[str]] = {}
+    for p in part_ids:
+        for prefix in _prefixes(p):
+            by_prefix.setdefault(prefix, set()).add(p)
+    outermost: dict[str, str] = {}  # part -> the outermost placement holding it whose known parts all stand apart
+    for p in members:
+        whole = next((prefix for prefix in _prefixes(p) if by_prefix[prefix] <= members.keys()), None)
+        if whole is not None:
+            outermost[p] = whole
+    groups: dict[str, set[int]] = {}  # placement -> the pieces its parts lie in
+    for p, prefix in outermost.items():
+        groups.setdefault(prefix, set()).add(members[p])
+    # placements sharing a piece are one sub-build; it holds when each of its pieces lies in its placements only
+    root = {prefix: prefix for prefix in groups}
+    by_piece: dict[int, str] = {}
+    for prefix, held in groups.items():
+        for k in held:
+            other = by_piece.setdefault(k, prefix)
+            root[_root(root, other)] = _root(root, prefix)
+    names: list[str | None] = [None] * len(apart)
+    joined: dict[str, list[str]] = {}
+    for prefix in groups:
+        joined.setdefault(_root(root, prefix), []).append(prefix)
+    for chosen in joined.values():
+        pieces_in = set().union(*(groups[prefix] for prefix in chosen))
+        if len(pieces_in) < 2 or any(p not in outermost or _root(root, outermost[p]) != _root(root, chosen[0])
+                                     for k in pieces_in for p in apart[k]):
+            continue  # one piece is judged by sub_build alone; a piece reaching beyond the placements is no part
+        ordered = sorted(chosen, key=lambda prefix: min(order[p] for p in by_prefix[prefix]))
+        for k in pieces_in:
+            names[k] = " + ".join(placements.get(prefix, prefix.rstrip("/")) for prefix in ordered)
+    return names
+
+
+def _root(root: dict[str, str], x: str) -> str:
+    while root[x] != x:
+        root[x] = root[root[x]]
+        x = root[x]
+    return x
+
+
+def clearance(piece: Sequence[str], build: Sequence[str], lower: Mapping[str, np.ndarray],
+              upper: Mapping[str, np.ndarray]) -> float:
+    """How far the parts of ``piece`` stay from those of ``build``: the least gap between a box of one and a box of
+    the other (world-aligned, lower and upper corners by part id; parts not in them are left out), along the axis
+    that separates them most (negative: the boxes overlap that deep); infinite when either side has no box. Boxes of
+    turned parts are larger than the parts, so this errs towards close: towards calling a piece part of the build
+    rather than a sub-build standing apart."""
+    mine = [p for p in piece if p in lower]
+    theirs = [p for p in build if p in lower]
+    if not mine or not theirs:
+        return float("inf")
+    lo_b, hi_b = np.array([lower[p] for p in theirs]), np.array([upper[p] for p in theirs])
+    return min(float(np.max(np.maximum(lower[p] - hi_b, lo_b - upper[p]), axis=1).min()) for p in mine)
 
 
 def _prefixes(part_id: str) -> list[str]:

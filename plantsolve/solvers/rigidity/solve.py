@@ -16,13 +16,20 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.pieces import (MINIFIGURE, far_parts, joints_by_part, line_of, mostly_floating,
-                                                pieces, sub_build)
+from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
+                                                joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
+                                                sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
-HELD_BY = {False: "every known part of the named placed sub-model(s) and nothing else",
-           True: "minifigure parts only"}  # how report.details.held_pieces recognised each piece (pieces.sub_build)
+# how report.details.held_pieces recognised each piece (pieces.sub_build, pieces.clearance, pieces.loose_sub_builds)
+HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and nothing else, none touching a part of "
+                    f"the largest piece (collision boxes at least {TOUCH_GAP:g} LDU apart)",
+           "minifigure": "minifigure parts only",
+           "loose": f"one of the pieces that together are every known part of the named placed sub-model(s) and "
+                    f"nothing else, all at least {LOOSE_CLEARANCE:g} LDU clear of the largest piece (collision "
+                    f"boxes, or the origins of parts without one): parts loose in a sub-build, or joined to it by "
+                    f"parts not in the catalogue"}
 LISTED_IN_MESSAGE = 10
 
 
@@ -136,7 +143,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     by_part = joints_by_part(part_ids, ((j.id, j.bodies) for j in joints))
     part_results = [PartJoints(id=p, part=assembly.parts[p].number, joints=by_part[p][0], joined_to=by_part[p][1])
                     for p in part_ids]
-    piece_results = _pieces(part_ids, by_part, assembly, source)
+    piece_results, held_by = _pieces(part_ids, by_part, assembly, source)
     warnings.extend(_piece_warnings(part_results, piece_results, assembly))
     warnings.extend(_offset_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
@@ -157,8 +164,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
-        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": HELD_BY[
-            pc.sub_build == MINIFIGURE]} for pc in held],
+        "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": held_by[k]}
+                        for k, pc in enumerate(piece_results) if k in held_by],
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
@@ -172,13 +179,41 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         report=report))
 
 
-def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly, source: dict) -> list[Piece]:
-    """The connected pieces of the known parts, largest first; the others named when they are sub-builds."""
+def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
+            source: dict) -> tuple[list[Piece], dict[int, str]]:
+    """The connected pieces of the known parts, largest first, the others named when they are sub-builds; and for
+    each held piece (by index) the rule that recognised it (HELD_BY)."""
     placements = source.get("submodel_placements") if isinstance(source.get("submodel_placements"), dict) else {}
     names = {p: assembly.parts[p].shape.name for p in part_ids}
     groups = pieces(part_ids, {p: joined for p, (_, joined) in by_part.items()})
-    return [Piece(parts=g, sub_build=None if k == 0 else sub_build(g, part_ids, placements, names))
-            for k, g in enumerate(groups)]
+    if not groups:
+        return [], {}
+    ids, _, lower, upper = assembly.solid_boxes()
+    finite = np.isfinite(lower).all(axis=1)
+    lows = {b: lo for b, lo, ok in zip(ids, lower, finite) if ok}
+    highs = {b: hi for b, hi, ok in zip(ids, upper, finite) if ok}
+    # a part without a collision shape (a minifigure's, a hose segment) is its origin when pieces must stand clear
+    points = {p: assembly.parts[p].position for p in part_ids if p not in lows}
+    lows_or_points, highs_or_points = {**lows, **points}, {**highs, **points}
+    found: list[str | None] = [None]
+    held_by: dict[int, str] = {}
+    apart: list[int] = []  # pieces standing apart from the largest that are no sub-build each
+    for k, g in enumerate(groups[1:], start=1):
+        name = sub_build(g, part_ids, placements, names)
+        if name == MINIFIGURE:
+            held_by[k] = "minifigure"
+        elif name is not None and clearance(g, groups[0], lows, highs) < TOUCH_GAP:
+            name = None  # whole sub-models lying against the build: a part of it whose joint was not found
+        elif name is not None:
+            held_by[k] = "whole"
+        elif all("/" in p for p in g) and clearance(g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
+            apart.append(k)  # (a part of the main model lies in no placement: it cannot be of a sub-build)
+        found.append(name)
+    for k, name in zip(apart, loose_sub_builds([groups[k] for k in apart], part_ids, placements)):
+        if name is not None:
+            found[k], held_by[k] = name, "loose"
+    return [Piece(parts=g, sub_build=name) for g, name in zip(groups, found)], {k: HELD_BY[v] for k, v in
+                                                                               held_by.items()}
 
 
 def _named(ids, assembly: Assembly) -> str:

@@ -15,8 +15,10 @@ the main model's lines before the first ``0 FILE`` and the parts' own definition
 ``Shortcut`` (``Unofficial_`` or not), or without a header but named for a catalogue part, is that part
 and is placed, not expanded; subparts and primitives are drawn geometry. Item by item: a type-1 line
 that cannot be read (a matrix that scales or shears, a position beyond 1e12 LDU) is skipped and listed in the
-report with its line and reason, and a rotation printed with few digits (``0.985 -0.17 0``) is read as the
-nearest rotation (``source.rotations_rounded`` counts them), and a line placing a ``.ldr`` or ``.mpd`` the file
+report with its line and reason, a rotation printed with few digits (``0.985 -0.17 0``) is read as the
+nearest rotation (``source.rotations_rounded`` counts them; a sub-model's placement up to a few per cent
+off, typed by hand, too, with a ``rotation_rounded`` warning naming its lines), a primitive placed in a model
+is drawn geometry however it is scaled, and a line placing a ``.ldr`` or ``.mpd`` the file
 does not hold (a cut ``.mpd``, an ``.ldr`` without its sub-model files) is skipped naming it; parts not in the
 catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
 the file is refused (422 naming the file) only when it places no part at all.
@@ -29,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
-from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
@@ -47,6 +49,10 @@ MAX_PARTS = 20_000
 # Rows of a placement's matrix off orthonormal by up to this are a rotation printed with few digits, read as the
 # nearest rotation; further off, the line scales or shears its part and is skipped.
 ROUNDED_ROTATION = 1e-2
+# A sub-model's placement whose rows are off by up to this (a few per cent: rotations typed by hand, 0.99 -0.194
+# 0) is read as the nearest rotation too, with a warning naming the lines: skipping it would drop every part
+# of the sub-model (OMR 10174 lost 291 of 1065 parts so), and scaling a sub-model is no way to build one.
+HAND_TYPED_ROTATION = 6e-2
 PRELUDE = "<main>"  # the text before the first '0 FILE'
 FOLDERS = ("parts/", "p/", "models/")  # where LDraw's search path looks; packers write the folder into the name
 GEOMETRY_FOLDERS = ("p/", "s/", "parts/s/", "48/", "8/")  # primitives and subparts: drawn geometry, not parts
@@ -173,6 +179,7 @@ def parse_ldraw(text: str) -> dict:
     cut = _cut_last_line(text)
     counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0}
     placements: dict[str, str] = {}  # part id prefix of each placed sub-model -> its file name
+    hand_typed: list[tuple[int, float]] = []  # (line, off) of sub-model placements read as the nearest rotation
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -207,15 +214,22 @@ def parse_ldraw(text: str) -> dict:
             file_name = raw.split(None, 14)[14].strip()
             local_pos = np.array(values[:3])
             local_rot = np.array(values[3:]).reshape(3, 3)
+            sub = _resolve(file_name, files)
+            role = roles.get(sub, "model") if sub is not None else None
+            if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
+                counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws (scaled or not)
+                continue
             if abs(np.linalg.det(local_rot)) < 1e-6:
                 skipped.append({"line": number, "reason": "the rotation matrix is singular"})
                 continue
             with np.errstate(over="ignore", invalid="ignore"):  # entries of 1e308: off is inf, the line skipped
                 off = float(np.abs(local_rot @ local_rot.T - np.eye(3)).max())
-            if off > ROUNDED_ROTATION:
+            if off > (HAND_TYPED_ROTATION if role == "model" else ROUNDED_ROTATION):
                 skipped.append({"line": number, "reason": f"the matrix is not a rotation (scaled or sheared: its rows "
                                 f"are off orthonormal by {off:.3g})"})
                 continue
+            if off > ROUNDED_ROTATION:
+                hand_typed.append((number, off))
             if off > 1e-12:
                 # a rotation printed with few digits (0.707, 0.985 and 0.17): the nearest rotation, so that
                 # sub-model placements composed of such matrices stay rotations
@@ -228,15 +242,10 @@ def parse_ldraw(text: str) -> dict:
                 skipped.append({"line": number, "reason": f"the position is beyond {MAX_COORDINATE:g} LDU"})
                 continue
             ident = f"{prefix}L{number}"
-            sub = _resolve(file_name, files)
-            role = roles.get(sub, "model") if sub is not None else None
             if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
                 skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
                                 "hold (an .mpd cut short, or an .ldr whose sub-models are separate files: send them "
                                 "as one .mpd)"})
-                continue
-            if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
-                counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws, it is no part
                 continue
             if role == "model":
                 if sub in stack or len(stack) >= MAX_DEPTH:
@@ -262,6 +271,15 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    if hand_typed:
+        worst = max(off for _, off in hand_typed)
+        lines = sorted({n for n, _ in hand_typed})
+        warnings.append(Diagnostic(
+            code="rotation_rounded", message=f"{len(lines)} sub-model placement(s) have matrices off a rotation by "
+            f"more than printing rounding ({ROUNDED_ROTATION:g}), up to {worst:.3g} (rotations typed by hand?), at "
+            f"line {', '.join(map(str, lines[:10]))}{' and more' if len(lines) > 10 else ''}: each was read as the "
+            "nearest rotation, so the sub-model's parts stand up to a few degrees off where the matrix puts them",
+            details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if cut is not None:
         warnings.append(truncated_file(cut, "the file ends inside this type-1 line (the file was cut?); the part it "
                                        "placed was not read.").model_dump())

@@ -276,3 +276,21 @@ def test_script_gives_stud_tubes_their_anti_stud_at_the_mouth_whatever_their_hei
     for number, bottom in (("9005", 24.0), ("9006", 8.0)):
         points = [c for c in generated.connectors(parts[number]["s"]) if not c[0].startswith("fit_")]
         assert points == [("antistud", (0.0, bottom, 0.0), (0.0, 1.0, 0.0))], number
+
+
+def test_script_gives_a_wheel_pin_without_shadow_the_pin_of_wpin_dat_once(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    # wpin4.dat draws its pin itself and has no shadow (as the real one); wpin3.dat draws wpin.dat and inherits it
+    _write(ldraw, "p/wpin.dat", "0 Wheel Holding Pin\n4 16 -4 0 0 4 0 0 4 -12 0 -4 -12 0\n")
+    _write(ldraw, "p/wpin4.dat", "0 Wheel Holding Pin for Pull Back Motor\n4 16 -4 0 0 4 0 0 4 -12 0 -4 -12 0\n")
+    _write(ldraw, "p/wpin3.dat", "0 Wheel Holding Pin with 3 Fillets\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 wpin.dat\n")
+    _write(shadow, "p/wpin.dat", "0 LDCad shadow info\n"
+           "0 !LDCAD SNAP_CYL [gender=M] [caps=one] [secs=R 4 11   _L 4.25 1]\n")
+    # two parts with a pin on their right side along +x at y = 5 (the pull-back motor's placement, turned)
+    for number, pin in (("9007", "wpin4.dat"), ("9008", "wpin3.dat")):
+        _write(ldraw, f"parts/{number}.dat", f"0 Motor Test\n1 16 32 5 0 0 -1 0 -1 0 0 0 0 -1 {pin}\n"
+               "4 16 -20 0 -20 20 0 -20 20 8 -20 -20 8 -20\n")
+    parts = _script().derive(ldraw, shadow)
+    for number in ("9007", "9008"):
+        (snap,) = parts[number]["s"]  # one pin, not one own and one inherited
+        assert snap == ["cyl", "M", "one", 0, [32.0, 5.0, 0.0], [1.0, 0.0, 0.0], [["R", 4.0, 11.0], ["_L", 4.25, 1.0]]]

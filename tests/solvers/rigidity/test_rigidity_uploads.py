@@ -269,6 +269,35 @@ def test_a_part_line_scaled_or_placed_beyond_the_bound_is_skipped_not_the_file_r
     assert next(w for w in solve(request).result.report.warnings if w.code == "skipped_lines").details["lines"] == [3]
 
 
+def test_a_sub_model_placed_by_a_hand_typed_rotation_is_read_as_the_nearest_rotation_and_said():
+    """OMR 10174 (UCS AT-ST) places five sub-models with matrices like ``0 0 1.018 / 0.994 -0.171 0 / 0.176 0.958
+    0.003`` (rows up to 0.051 off orthonormal); each line was skipped and with it all 291 parts of the sub-models.
+    A sub-model placed 2.5 per cent off a quarter turn about y: its two bricks are read, stacked as the matrix's
+    nearest rotation puts them, and a warning names the line; the same matrix on a part line still skips it, and
+    a scaled primitive is drawn geometry, not a skipped line."""
+    import numpy as np
+
+    text = ("0 FILE main.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            "1 4 0 -24 0 0 0 1.025 0 1 0 -1 0 0 tower.ldr\n"
+            "1 4 0 -72 0 0 0 1.025 0 1 0 -1 0 0 3001.dat\n"
+            "1 16 0 0 0 2 0 0 0 1 0 0 0 2 p/4-4cyli.dat\n"
+            "0 FILE tower.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    request = parse("hand.mpd", text.encode())
+    assert [p.id for p in request.parts] == ["L2", "L3/L7", "L3/L8"]
+    assert [s["line"] for s in request.source["skipped"]] == [4]  # the part line; the primitive is geometry
+    quarter = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], float)  # the nearest rotation of the typed matrix
+    for part, height in zip(request.parts[1:], (-24, -48)):
+        assert np.allclose(np.reshape(part.rotation, (3, 3)), quarter, atol=1e-9)
+        assert np.allclose(part.position, [0, height, 0])
+    (warning,) = [w for w in request.source["warnings"] if w["code"] == "rotation_rounded"]
+    assert warning["details"]["lines"] == [3] and abs(warning["details"]["max_off"] - 0.0506) < 1e-3
+    result = solve(request).result
+    assert result.report.details["connected_pieces"] == 1  # the sub-model's bricks stand on the first one
+
+
 def test_an_mpd_cut_before_its_sub_models_or_inside_a_comment_says_so():
     """OMR 889 Radar Truck (CC BY 2.0, omr/README.md) cut after its main model placed its two sub-models as two
     'parts not in the catalogue'; cut inside a comment it lost the lines after it without a word."""
