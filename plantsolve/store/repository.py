@@ -174,10 +174,8 @@ class JobRepository:
         if self.writer is not None:
             return self.create_later(values).result()
         key = values.get("idempotency_key")
-        if key is not None:
-            existing = self.get_by_idempotency_key(key)
-            if existing is not None:
-                return existing, False
+        # a taken key is found by the insert itself (the key's unique index), as by the group commit: no read before
+        # it, which a new key (the common case) would pay for in a round trip
         record = new_job_row(values)
         # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
         given = {name: value for name, value in record.items() if value is not None}

@@ -64,22 +64,16 @@ def test_the_driver_insert_writes_the_row_sqlalchemys_insert_writes(repo):
 
 
 def test_a_taken_idempotency_key_answers_with_the_job_that_holds_it(repo, monkeypatch):
+    """The unique index finds a taken key: a new key costs no read before the insert, a taken one one read after."""
+    real, reads = repo.get_by_idempotency_key, []
+    monkeypatch.setattr(repo, "get_by_idempotency_key", lambda key_read: reads.append(key_read) or real(key_read))
     key = f"k-{uuid.uuid4()}"
     first, created = repo.create(_job(idempotency_key=key))
+    assert created and reads == []
     again, created_again = repo.create(_job(idempotency_key=key))
-    assert created and not created_again and again.id == first.id
-    # the race the read before the insert cannot see (the key taken between the two): the unique index refuses the
-    # row, and the job holding the key is read after
-    real, reads = repo.get_by_idempotency_key, []
-
-    def not_yet_taken(key_read: str):
-        reads.append(key_read)
-        return None if len(reads) == 1 else real(key_read)
-
-    monkeypatch.setattr(repo, "get_by_idempotency_key", not_yet_taken)
-    raced, created_raced = repo.create(_job(idempotency_key=key))
-    assert not created_raced and raced.id == first.id and len(reads) == 2
-
+    assert not created_again and again.id == first.id and reads == [key]
+    with repo._engine.connect() as connection:
+        assert connection.execute(text("SELECT count(*) FROM jobs WHERE idempotency_key = :key"), {"key": key}).scalar() == 1
 
 def test_a_connection_broken_under_the_insert_is_an_infrastructure_error_and_the_next_submit_works(repo, admin, monkeypatch):
     monkeypatch.setattr(engine, "PING_IDLE_SECONDS", 3600.0)  # no ping on checkout: the insert meets the break
