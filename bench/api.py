@@ -232,7 +232,7 @@ def run_mode(mode: str, args, port: int, code: Path = REPO, label: str | None = 
 
 # The app called in process (ASGI, no network, no client): the CPU seconds of the app's own code per request,
 # which other work on the machine does not inflate the way it does rates and latencies. Jobs run meanwhile
-# (the embedded pool). Prints one JSON line: CPU ms per submit and per status read.
+# (the embedded pool). Prints one JSON line: CPU ms per submit, per submit with an Idempotency-Key and per status read.
 IN_PROCESS = r"""
 import asyncio, importlib.util, json, os, sys, time
 N, APP = int(sys.argv[1]), sys.argv[2]
@@ -246,8 +246,9 @@ else:
     app, submit_path = create_app(AppSettings()), "/v1/test-compute/jobs"
 BODY = b'{"values": [1.5, 2.5]}'
 
-async def call(method, path, body=b""):
-    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json"), (b"content-length", b"%d" % len(body))]
+async def call(method, path, body=b"", extra=()):
+    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json"), (b"content-length", b"%d" % len(body)),
+               *extra]
     scope = {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": method, "scheme": "http",
              "path": path, "raw_path": path.encode(), "query_string": b"", "root_path": "", "headers": headers,
              "client": ("127.0.0.1", 5555), "server": ("127.0.0.1", 8000)}
@@ -274,10 +275,14 @@ async def measure():
             assert (await call("POST", submit_path, BODY))["status"] in (200, 202)
         submit = (time.process_time() - started) / N
         started = time.process_time()
+        for i in range(N):  # each with a key of its own (the trivial app ignores the header)
+            assert (await call("POST", submit_path, BODY, [(b"idempotency-key", b"bench-%d" % i)]))["status"] == 202
+        keyed = (time.process_time() - started) / N
+        started = time.process_time()
         for _ in range(N):
             assert (await call("GET", f"/v1/jobs/{job_id}"))["status"] == 200
         read = (time.process_time() - started) / N
-    print(json.dumps({"submit_ms": 1000 * submit, "read_ms": 1000 * read}))
+    print(json.dumps({"submit_ms": 1000 * submit, "keyed_ms": 1000 * keyed, "read_ms": 1000 * read}))
 
 import uvloop; uvloop.run(measure())
 """
@@ -382,11 +387,15 @@ def main() -> None:
         print(f"\nIn process (the ASGI app called directly: no network, no client; embedded: SQLite, jobs running; scaled: "
               f"PostgreSQL and Redis, the messages queued): CPU ms per request of every thread of the process, least and "
               f"median of {args.rounds} runs taken in turn (the least is the run other work on the machine disturbed least)")
-        print(f"{'mode':<20} {'submit':>8} {'median':>8} {'vs baseline':>11} {'status read':>12} {'median':>8} {'vs baseline':>11}")
+        print(f"{'mode':<20}" + "".join(f" {title:>12} {'median':>8} {'vs baseline':>11}" for title in
+                                        ("submit", "keyed submit", "status read")))
+        base = cpu_rows[0]
         for row in cpu_rows:
-            print(f"{row['mode']:<20} {row['submit_ms']:>8.3f} {row['submit_median']:>8.3f} "
-                  f"{row['submit_ms'] / cpu_rows[0]['submit_ms']:>10.2f}x {row['read_ms']:>12.3f} {row['read_median']:>8.3f} "
-                  f"{row['read_ms'] / cpu_rows[0]['read_ms']:>10.2f}x")
+            print(f"{row['mode']:<20}" + "".join(f" {row[f'{name}_ms']:>12.3f} {row[f'{name}_median']:>8.3f} "
+                                                 f"{row[f'{name}_ms'] / base[f'{name}_ms']:>10.2f}x" for name in MEASURES))
+        print("keyed submit: each with an Idempotency-Key of its own (the trivial app ignores it)")
+
+MEASURES = ("submit", "keyed", "read")
 
 
 def in_process_rows(modes: list[str], before: Path | None, before_label: str, requests: int, rounds: int) -> list[dict]:
@@ -402,8 +411,8 @@ def in_process_rows(modes: list[str], before: Path | None, before_label: str, re
     for _ in range(rounds):
         for label, code, scaled in runs:
             samples[label].append(in_process(label, code, requests, scaled=scaled))
-    return [{"mode": label, **{f"{name}_ms": min(run[f"{name}_ms"] for run in taken) for name in ("submit", "read")},
-             **{f"{name}_median": float(np.median([run[f"{name}_ms"] for run in taken])) for name in ("submit", "read")}}
+    return [{"mode": label, **{f"{name}_ms": min(run[f"{name}_ms"] for run in taken) for name in MEASURES},
+             **{f"{name}_median": float(np.median([run[f"{name}_ms"] for run in taken])) for name in MEASURES}}
             for label, taken in samples.items()]
 
 
