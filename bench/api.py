@@ -18,10 +18,11 @@ connections, single-connection submits >= 0.5x the trivial app's.
 Beside the rates (which a loaded machine lowers), the table gives the CPU milliseconds the server's own process
 spends per single-connection submit, read from /proc: the measure that holds where other work shares the cores.
 ``--smoke`` (CI runs it) makes each phase about a second long, embedded mode only: it proves the bench runs to its
-table, not that the targets hold.
+table, not that the targets hold. The in-process table runs each row ``--rounds`` times in turn and gives the least and
+the median (``--no-server``: that table alone).
 
     python bench/api.py [--quick | --smoke] [--seconds S] [--concurrency C] [--modes embedded,scaled]
-                        [--client wrk|python] [--before main|DIR|none]
+                        [--client wrk|python] [--before main|DIR|none] [--in-process N] [--rounds R] [--no-server]
 """
 
 from __future__ import annotations
@@ -231,7 +232,7 @@ def run_mode(mode: str, args, port: int, code: Path = REPO, label: str | None = 
 
 # The app called in process (ASGI, no network, no client): the CPU seconds of the app's own code per request,
 # which other work on the machine does not inflate the way it does rates and latencies. Jobs run meanwhile
-# (the embedded pool). Prints one JSON line: CPU ms per submit and per status read.
+# (the embedded pool). Prints one JSON line: CPU ms per submit, per submit with an Idempotency-Key and per status read.
 IN_PROCESS = r"""
 import asyncio, importlib.util, json, os, sys, time
 N, APP = int(sys.argv[1]), sys.argv[2]
@@ -245,8 +246,9 @@ else:
     app, submit_path = create_app(AppSettings()), "/v1/test-compute/jobs"
 BODY = b'{"values": [1.5, 2.5]}'
 
-async def call(method, path, body=b""):
-    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json"), (b"content-length", b"%d" % len(body))]
+async def call(method, path, body=b"", extra=()):
+    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json"), (b"content-length", b"%d" % len(body)),
+               *extra]
     scope = {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1", "method": method, "scheme": "http",
              "path": path, "raw_path": path.encode(), "query_string": b"", "root_path": "", "headers": headers,
              "client": ("127.0.0.1", 5555), "server": ("127.0.0.1", 8000)}
@@ -273,10 +275,14 @@ async def measure():
             assert (await call("POST", submit_path, BODY))["status"] in (200, 202)
         submit = (time.process_time() - started) / N
         started = time.process_time()
+        for i in range(N):  # each with a key of its own (the trivial app ignores the header)
+            assert (await call("POST", submit_path, BODY, [(b"idempotency-key", b"bench-%d" % i)]))["status"] == 202
+        keyed = (time.process_time() - started) / N
+        started = time.process_time()
         for _ in range(N):
             assert (await call("GET", f"/v1/jobs/{job_id}"))["status"] == 200
         read = (time.process_time() - started) / N
-    print(json.dumps({"submit_ms": 1000 * submit, "read_ms": 1000 * read}))
+    print(json.dumps({"submit_ms": 1000 * submit, "keyed_ms": 1000 * keyed, "read_ms": 1000 * read}))
 
 import uvloop; uvloop.run(measure())
 """
@@ -347,6 +353,8 @@ def main() -> None:
     parser.add_argument("--port", type=int, default=18765)
     parser.add_argument("--in-process", type=int, default=None, metavar="N",
                         help="requests of each kind in the in-process CPU table (0: no table)")
+    parser.add_argument("--rounds", type=int, default=3, help="runs of each row of the in-process table, in turn")
+    parser.add_argument("--no-server", action="store_true", help="the in-process table alone (no server, no load)")
     parser.add_argument("--before", default="main",
                         help="the code to compare with in the same run: 'main' (a temporary worktree), a directory "
                              "holding the plantsolve package, or 'none'")
@@ -364,19 +372,51 @@ def main() -> None:
     before_label = "main" if args.before == "main" else Path(args.before).name
     try:
         requests = args.in_process if args.in_process is not None else (0 if args.smoke else 1000 if args.quick else 3000)
-        cpu_rows = [in_process("baseline", REPO, requests)] if requests else []
-        for mode in modes if requests else ():
-            if before is not None:
-                cpu_rows.append(in_process(f"{mode} ({before_label})"[:20], before, requests, scaled=mode == "scaled"))
-            cpu_rows.append(in_process(mode, REPO, requests, scaled=mode == "scaled"))
-        rows = [run_mode("baseline", args, args.port)]
-        for i, mode in enumerate(modes):
+        cpu_rows = in_process_rows(modes, before, before_label, requests, args.rounds) if requests else []
+        rows = [] if args.no_server else [run_mode("baseline", args, args.port)]
+        for i, mode in enumerate(modes if rows else ()):
             if before is not None:
                 rows.append(run_mode(mode, args, args.port + 1 + 2 * i, before, f"{mode} ({before_label})"[:20]))
             rows.append(run_mode(mode, args, args.port + 2 + 2 * i))
     finally:
         if remove is not None:
             remove()
+    if rows:
+        print_server_table(rows, args)
+    if cpu_rows:
+        print(f"\nIn process (the ASGI app called directly: no network, no client; embedded: SQLite, jobs running; scaled: "
+              f"PostgreSQL and Redis, the messages queued): CPU ms per request of every thread of the process, least and "
+              f"median of {args.rounds} runs taken in turn (the least is the run other work on the machine disturbed least)")
+        print(f"{'mode':<20}" + "".join(f" {title:>12} {'median':>8} {'vs baseline':>11}" for title in
+                                        ("submit", "keyed submit", "status read")))
+        base = cpu_rows[0]
+        for row in cpu_rows:
+            print(f"{row['mode']:<20}" + "".join(f" {row[f'{name}_ms']:>12.3f} {row[f'{name}_median']:>8.3f} "
+                                                 f"{row[f'{name}_ms'] / base[f'{name}_ms']:>10.2f}x" for name in MEASURES))
+        print("keyed submit: each with an Idempotency-Key of its own (the trivial app ignores it)")
+
+MEASURES = ("submit", "keyed", "read")
+
+
+def in_process_rows(modes: list[str], before: Path | None, before_label: str, requests: int, rounds: int) -> list[dict]:
+    """The in-process measure of the trivial app and of each mode (with the code compared with, then this checkout's),
+    ``rounds`` times in turn, so that a spell of load elsewhere on the machine falls on every row alike: per row the
+    least CPU ms per request and the median."""
+    runs = [("baseline", REPO, False)]
+    for mode in modes:
+        if before is not None:
+            runs.append((f"{mode} ({before_label})"[:20], before, mode == "scaled"))
+        runs.append((mode, REPO, mode == "scaled"))
+    samples: dict[str, list[dict]] = {label: [] for label, _, _ in runs}
+    for _ in range(rounds):
+        for label, code, scaled in runs:
+            samples[label].append(in_process(label, code, requests, scaled=scaled))
+    return [{"mode": label, **{f"{name}_ms": min(run[f"{name}_ms"] for run in taken) for name in MEASURES},
+             **{f"{name}_median": float(np.median([run[f"{name}_ms"] for run in taken])) for name in MEASURES}}
+            for label, taken in samples.items()]
+
+
+def print_server_table(rows: list[dict], args) -> None:
     baseline = next(row for row in rows if row["mode"] == "baseline")
     load = f"wrk, {args.seconds:g} s per phase" if args.client == "wrk" else "python httpx"
     print(
@@ -401,13 +441,6 @@ def main() -> None:
             f"{row['read_rate']:>15.0f} {row['loaded_p50']:>8.1f}/{row['loaded_p99']:<9.1f} "
             f"{1000 * row['cpu_per_submit']:>13.2f} {row['cpu_per_submit'] / baseline['cpu_per_submit']:>10.2f}x  {verdict}"
         )
-    if cpu_rows:
-        print("\nIn process (the ASGI app called directly: no network, no client; embedded: SQLite, jobs running; scaled: "
-              "PostgreSQL and Redis, the messages queued): CPU ms per request of every thread of the process")
-        print(f"{'mode':<20} {'submit':>8} {'vs baseline':>11} {'status read':>12} {'vs baseline':>11}")
-        for row in cpu_rows:
-            print(f"{row['mode']:<20} {row['submit_ms']:>8.3f} {row['submit_ms'] / cpu_rows[0]['submit_ms']:>10.2f}x "
-                  f"{row['read_ms']:>12.3f} {row['read_ms'] / cpu_rows[0]['read_ms']:>10.2f}x")
     print(f"targets: submit p99 < 20 ms at {args.concurrency} connections, 8-connection status p99 < 20 ms, "
           "1-connection submits >= 0.5x the baseline. CPU ms/submit: the server process alone (its job processes "
           "not counted), during the 1-connection phase")
