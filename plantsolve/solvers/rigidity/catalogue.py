@@ -358,9 +358,23 @@ def lookup(name: str) -> PartShape | None:
     library (:mod:`generated`)."""
     number = normalise_number(name)
     found = CATALOGUE.get(number)
-    if found is not None:
-        return found
-    return generated_part(number)
+    if found is None:
+        return generated_part(number)
+    return _with_fits(found)
+
+
+@functools.lru_cache(maxsize=256)
+def _with_fits(shape: PartShape) -> PartShape:
+    """A hand-coded part with the snap cylinders the generated catalogue gives the same part: its typed points
+    (an axle, a pin hole) mate only typed points, so without them a hand-coded axle would join no generated
+    part whose holes the data states as cylinders alone (an axle through a Technic plate's round hole). The
+    generated part's lines are in the same LDraw part frame."""
+    generated_shape = generated_part(shape.number)
+    if generated_shape is None:
+        return shape
+    stated = {c.type for c in shape.connectors}  # a gender it states already (a pin's cylinder) is not doubled
+    extra = tuple(c for c in generated_shape.connectors if c.type in FITS and c.type not in stated)
+    return replace(shape, connectors=shape.connectors + extra) if extra else shape
 
 
 @functools.lru_cache(maxsize=4096)

@@ -151,7 +151,11 @@ def generated_shape(number):
 
 
 def test_lookup_prefers_the_hand_coded_part_and_finds_the_rest_in_the_generated_catalogue():
-    assert lookup("3001.dat") is CATALOGUE["3001"]
+    brick = lookup("3001.dat")  # the hand-coded brick, with the generated part's snap cylinders added
+    assert brick.connectors[:len(CATALOGUE["3001"].connectors)] == CATALOGUE["3001"].connectors
+    assert {c.type for c in brick.connectors[len(CATALOGUE["3001"].connectors):]} <= {"fit_m", "fit_f"}
+    axle = lookup("3707")  # the hand-coded axle 8 alone states only its typed run: one cylinder more, 160 LDU
+    assert [(c.type, c.length, c.profile) for c in axle.connectors[1:]] == [("fit_m", 160.0, (("A", 6.0, 160.0),))]
     plate = lookup("parts\\3023B.DAT")
     assert plate is not None and "Plate" in plate.name and plate.box_size == (40.0, 8.0, 20.0)
     assert lookup("no_such_part.dat") is None

@@ -46,6 +46,16 @@ def test_an_axle_pushed_into_a_hole_off_the_half_stud_grid_is_in_the_hole():
     assert joints(text) == [("cylindrical", "axle", "3700", "3705", 1)]
 
 
+def test_a_hand_coded_axle_through_the_round_hole_of_a_generated_technic_plate_turns_in_it():
+    # as set 392-1 draws its axles: 3707 (160 LDU, along x) through the round hole of 3709a that the snap data
+    # states as a cylinder only (local z at x = 0, 10 LDU below the plate's top): one turning fit, nothing else
+    text = ("1 7 20 -32 440 0 0 -1 0 1 0 1 0 0 3709a.dat\n"
+            "1 15 40 -22 440 -1 0 0 0 1 0 0 0 -1 3707.dat\n")
+    assert joints(text) == [("hinge", "fit", "3707", "3709a", 1)]
+    # the axle a stud beside the hole (z = 450, between two holes): in none of them
+    assert joints(text.replace("40 -22 440", "40 -22 450")) == []
+
+
 def test_a_pin_through_two_half_thick_liftarms_turns_in_both():
     # 2825's holes are 10 LDU deep, centred 5 LDU from the centres of the pin's halves: the pin's stated cylinder
     # fits each (a hinge), the liftarms themselves share no connection
