@@ -41,15 +41,12 @@ from plantsolve.solvers.tube.solve import solve  # noqa: E402
 from plantsolve.solvers.tube.upload import parse_upload  # noqa: E402
 from plantsolve.solvers.tube.artifacts import model_from_result  # noqa: E402
 from plantsolve.solvers.tube.model import build_spine, reverse_model, sample_centreline, spine_distance  # noqa: E402
-from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples  # noqa: E402
+from plantsolve.solvers.tube.synthetic import clear_tube, surface_samples  # noqa: E402
 
 
 def make_case(seed: int, n_points: int, n_bends: int | None = None, pipe_radius: float | None = None):
     rng = np.random.default_rng(seed)
-    while True:
-        m = random_tube(rng, pipe_radius=pipe_radius, n_bends=n_bends)
-        if clearance(m) > 2.5:
-            break
+    m = clear_tube(rng, pipe_radius=pipe_radius, n_bends=n_bends)
     sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
     view = rng.normal(size=3)
     pts = surface_samples(m, n_points, rng, view=view, noise=sigma, outlier_fraction=0.005)
@@ -70,10 +67,7 @@ def make_scan(n_points: int, path: str) -> None:
         np.save(path, pts)
         return
     rng = np.random.default_rng(77)
-    while True:  # make_case's draws, in its order: the same tube, noise and viewpoint
-        m = random_tube(rng, pipe_radius=10.0, n_bends=4)
-        if clearance(m) > 2.5:
-            break
+    m = clear_tube(rng, pipe_radius=10.0, n_bends=4)  # make_case's draws, in its order: the same tube, noise, view
     sigma = rng.uniform(0.01, 0.015) * m.pipe_radius
     view = rng.normal(size=3)
     out = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=(n_points, 3))
@@ -441,8 +435,8 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
                 rows.append({"side": side, **json.loads(out.stdout.strip().splitlines()[-1])})
                 print(f"  {n:,} points, {side}: {rows[-1]['cpu']:.1f} s CPU", flush=True)
             os.remove(path)
-    print(f"large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
-          f"the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
+    print("large scans (4 bends, pipe radius 10, noise 1-1.5 % r, 0.5 % outliers); CPU s = time.process_time() of "
+          "the solve, one solver thread; peak RSS of the fresh process (samples loaded as an array)")
     print("| points | solver | CPU s (of it system) | peak RSS MiB | bend count ok | max angle err | centreline rms (% r) "
           "| end straights (true) mm |")
     print("|---:|---|---:|---:|---|---:|---:|---|")

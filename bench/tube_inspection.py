@@ -36,7 +36,7 @@ from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube import artifacts as new_artifacts
 from plantsolve.solvers.tube import inspection as new_inspection
 from plantsolve.solvers.tube.lra import model_rows
-from plantsolve.solvers.tube.synthetic import clearance, random_tube, surface_samples
+from plantsolve.solvers.tube.synthetic import clear_tube, surface_samples
 
 REPO = os.path.join(os.path.dirname(__file__), "..")
 
@@ -51,10 +51,7 @@ def main_module(path: str, name: str) -> types.ModuleType:
 
 def case(seed: int):
     rng = np.random.default_rng(seed)
-    while True:
-        made = random_tube(rng)
-        if made.n_bends >= 2 and clearance(made) > 2.5:
-            break
+    made = clear_tube(rng, min_bends=2)
     nominal = model_rows(made)
     n = made.n_bends
     made.angles = made.angles - np.radians(1.5)

@@ -66,6 +66,16 @@ def random_tube(rng: np.random.Generator, pipe_radius: float | None = None, n_be
     return m
 
 
+def clear_tube(rng: np.random.Generator, *, pipe_radius: float | None = None, n_bends: int | None = None,
+               min_bends: int = 0) -> TubeModel:
+    """:func:`random_tube` drawn again until it bends at least ``min_bends`` times and keeps 2.5 pipe radii clear
+    of itself (:func:`clearance`), so that a scan of it has one reading."""
+    while True:
+        model = random_tube(rng, pipe_radius=pipe_radius, n_bends=n_bends)
+        if model.n_bends >= min_bends and clearance(model) > 2.5:
+            return model
+
+
 def clearance(model: TubeModel) -> float:
     """Smallest distance between centreline points more than π·r_B + 4 r apart along the
     tube, in pipe radii (< 2 means the tube runs through itself)."""
@@ -148,7 +158,7 @@ def small_bends_tube(rng: np.random.Generator, pipe_radius: float = 20.0, n_bend
             return m
 
 
-__all__ = ["make_model", "random_tube", "surface_samples", "random_rotation", "clearance", "small_bends_tube"]
+__all__ = ["make_model", "random_tube", "clear_tube", "surface_samples", "random_rotation", "clearance", "small_bends_tube"]
 
 
 def example() -> dict:

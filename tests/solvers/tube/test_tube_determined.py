@@ -13,7 +13,7 @@ from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.model import build_spine
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.solve import solve
-from plantsolve.solvers.tube.synthetic import clearance, make_model, random_rotation, random_tube, surface_samples
+from plantsolve.solvers.tube.synthetic import clear_tube, make_model, random_rotation, surface_samples
 
 NOMINAL = [[50, 0, 90, 16], [30, 60, 45, 16], [40, -90, 60, 16], [50, 0, 0, 0]]
 MODEL = make_model(NOMINAL, 4.0)
@@ -105,10 +105,7 @@ def test_no_radius_is_shared_across_the_nominals_different_clrs():
     the scan alone BIC shared two radii across those five dies and reported the deviations up to 8.8 sigma
     off the known errors. With the nominal's dies every determined deviation is within 3.5 sigma."""
     rng = np.random.default_rng(6)
-    while True:
-        made = random_tube(rng)
-        if made.n_bends >= 2 and clearance(made) > 2.5:
-            break
+    made = clear_tube(rng, min_bends=2)
     nominal = model_rows(made)
     n = made.n_bends
     made.angles = made.angles - np.radians(1.5)
