@@ -147,13 +147,33 @@ def test_a_stud_half_a_stud_along_the_outer_row_of_a_2_wide_plate_is_gripped_bet
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 10 8 0 1 0 0 0 1 0 0 0 1 3024.dat\n") == []
 
 
-def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them():
-    # 6192 (2 x 4 brick with curved top) states three tubes and no anti-stud under its studs: on a 2 x 4 plate
-    # each of the plate's eight studs stands half a pitch diagonally from a tube, inside the brick's walls
+def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them(monkeypatch):
+    # 6192 (2 x 4 brick with curved top) as its sub-files alone state it (the data before its own shadow lines were
+    # restored): three tubes and no anti-stud under its studs. On a 2 x 4 plate each of the plate's eight studs
+    # stands half a pitch diagonally from a tube, inside the brick's walls.
+    from dataclasses import replace
+
+    from plantsolve.solvers.rigidity import assembly, catalogue
+
+    def tubes_only(name):
+        shape = catalogue.lookup(name)
+        if shape is None or shape.number != "6192":
+            return shape
+        return replace(shape, connectors=tuple(c for c in shape.connectors if c.type != "antistud"
+                                               or (c.point[0], c.point[2]) in ((-20.0, 0.0), (0.0, 0.0), (20.0, 0.0))))
+
+    monkeypatch.setattr(assembly, "lookup", tubes_only)
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == [
         ("rigid", "stud", "3020", "6192", 8)]
     # a 1 x 4 plate's studs would stand half a pitch from the tubes, in them: nothing
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3710.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == []
+
+
+def test_6192_with_its_own_shadow_lines_sits_on_studs_as_a_2_x_4_brick_does():
+    for plate in ("3020", "3710"):
+        placed = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 {plate}.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 {{}}.dat\n"
+        curved = [j[:2] + j[4:] for j in joints(placed.format("6192"))]
+        assert curved == [j[:2] + j[4:] for j in joints(placed.format("3001"))] != []
 
 
 def test_a_tyre_on_a_wheel_the_snap_data_gives_no_rim_is_held_by_it():
