@@ -169,6 +169,20 @@ def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them(m
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3710.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == []
 
 
+def test_a_stud_midway_under_a_part_one_stud_wide_is_held_by_its_walls_unless_a_post_stands_there():
+    # OMR 21309 hangs 1 x 2 Technic bricks on jumper plates (15573): the jumper's one stud midway between the brick's
+    # two anti-studs, gripped by its long walls (a Technic brick has no post between them)
+    jumper = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 15573.dat\n"
+    assert joints(jumper + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
+    # turned a quarter turn it is the same grip; a quarter pitch along, the stud is neither midway nor under one
+    assert joints(jumper + "1 4 0 -24 0 0 0 1 0 1 0 -1 0 0 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
+    assert joints(jumper + "1 4 5 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == []
+    # a 1 x 2 brick states the post under its middle (the data's male cylinder): no room for a 1 x 1 plate's stud
+    plate = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n"
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "3024", "3700", 1)]
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3004.dat\n") == []
+
+
 def test_6192_with_its_own_shadow_lines_sits_on_studs_as_a_2_x_4_brick_does():
     for plate in ("3020", "3710"):
         placed = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 {plate}.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 {{}}.dat\n"
