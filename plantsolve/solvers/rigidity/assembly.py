@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS, NOT_DOCKED,
-                                                   OPPOSED, RING_REACH,
-                                                   PartShape, collision_boxes, fit, lookup, mate, samples)
+                                                   OPPOSED, RING_REACH, PartShape, collision_boxes, fit, fit_depth,
+                                                   lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -292,8 +292,15 @@ class Assembly:
                                                                       tuple(_clean(v) for v in dirs[ci])))
         for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
             if other not in found:
-                found[other] = conns
+                deep = [c for c in conns if not self._stub(c)]
+                found[other] = deep or conns  # a stub only where nothing deeper fits (an arm's collar beside its peg)
         return found
+
+    def _stub(self, c: Connection) -> bool:
+        """The male cylinder of a fit shorter than FIT_OVERLAP (in by all of its length: :func:`catalogue.fit_depth`)."""
+        male = next(self.parts[p].shape.connectors[k] for p, k in ((c.a, c.ca), (c.b, c.cb))
+                    if self.parts[p].shape.connectors[k].type == "fit_m")
+        return male.length < FIT_OVERLAP
 
     def part_pieces(self) -> list[list[str]]:
         """The connected pieces of the parts as joined so far, largest first, parts in the order they were added."""
@@ -523,7 +530,7 @@ class Assembly:
                     continue
                 # a cylinder is in the other where their axes stay within reach of each other over their overlap
                 lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
-                if hi - lo < FIT_OVERLAP or any(
+                if hi - lo < fit_depth((mine if mine.type == "fit_m" else theirs).length) or any(
                         float(np.linalg.norm(q - float(q @ axis) * axis)) > reach
                         for q in (v + o.directions[oi] * ((t - along) / cos) for t in (lo, hi))):
                     continue

@@ -183,6 +183,15 @@ def test_a_stud_midway_under_a_part_one_stud_wide_is_held_by_its_walls_unless_a_
     assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3004.dat\n") == []
 
 
+def test_a_male_cylinder_shorter_than_a_fit_depth_is_held_when_all_of_it_is_in_the_bore():
+    # the flex-system hose end u9053 states a 1-LDU bar stub: in 32039's axle hole it is held by the hole's ribs
+    # (OMR 8002's eight hose ends), half out of the hole it is not
+    bush = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 32039.dat\n"
+    end = "1 4 0 0 {z} 1 0 0 0 0 1 0 -1 0 u9053.dat\n"
+    assert joints(bush + end.format(z=4)) == [("hinge", "fit", "32039", "u9053", 1)]
+    assert joints(bush + end.format(z=10.5)) == []
+
+
 def test_6192_with_its_own_shadow_lines_sits_on_studs_as_a_2_x_4_brick_does():
     for plate in ("3020", "3710"):
         placed = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 {plate}.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 {{}}.dat\n"
