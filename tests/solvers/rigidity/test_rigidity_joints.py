@@ -323,6 +323,10 @@ def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_
     assert sub_build(["L3/L4/L8", "L3/L4/L9"], ids, placements, names) == "legs.ldr"
     assert sub_build(["L2/L5", "L3/L4/L8", "L3/L4/L9"], ids, placements, names) is None  # half the cart
     assert sub_build(["L2/L5"], ids, placements, {**names, "L2/L5": "Minifig Arm Left"}) == "minifigure"
+    # LDraw marks obsolete parts with '~' before the name (OMR 31066's legs 3816/3817): still minifigure parts
+    legs = {**names, "L2/L5": "~Minifig Leg Right (Obsolete)", "L2/L6": "Minifig Hand"}
+    assert sub_build(["L2/L5", "L1/L5"], ids, placements, {**legs, "L1/L5": "Minifig Hand"}) == "minifigure"
+    assert sub_build(["L2/L5", "L1/L5"], ids, placements, legs) is None
 
 
 S9, C9 = "0.156434", "0.987688"  # sin and cos of 9 degrees
