@@ -313,6 +313,28 @@ def test_a_part_joined_to_nothing_is_named_in_a_floating_parts_warning():
         ("L1", ["L1~L2"], ["L2"]), ("L2", ["L1~L2"], ["L1"]), ("L3", [], [])]
 
 
+def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_unknown_part_lies_beside_it():
+    # on a stack of two 2 x 2 bricks, a third resting on the tips of the studs (4 LDU up: more than the 3 LDU a slip
+    # is joined at); a 1 x 1 plate beside a part the catalogue does not know; a pair of plates far from anything
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+            "1 4 0 -52 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+            "1 4 0 -8 100 1 0 0 0 1 0 0 0 1 3024.dat\n1 4 0 0 110 1 0 0 0 1 0 0 0 1 no_such_part.dat\n"
+            "1 4 500 -8 0 1 0 0 0 1 0 0 0 1 3023.dat\n1 4 500 -16 0 1 0 0 0 1 0 0 0 1 3023.dat\n")
+    result = solve(parse("apart.ldr", text)).result
+    warnings = {w.code: w for w in result.report.warnings}
+    floating = warnings["floating_parts"]
+    assert [p["id"] for p in floating.details["parts"]] == ["L3", "L4"]
+    brick, plate = floating.details["why"]
+    assert brick == {"nearest": {"part": "L3", "number": "3003", "type": "antistud", "other": "L2",
+                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 4.0}, "unknown_near": []}
+    assert plate == {"nearest": None, "unknown_near": ["L5"]}
+    assert "L3 (3003) antistud 4 LDU from L2 (3003) stud" in floating.message
+    assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
+    pieces = warnings["separate_pieces"]
+    assert pieces.details["why"] == [{"nearest": None, "unknown_near": []}]
+    assert "L6: no mate within 40 LDU" in pieces.message
+
+
 def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_one_is_not():
     # a cart (sub-model at line 2) with a minifigure (line 3) standing on it, apart from the main build (line 1)
     ids = ["L1/L5", "L1/L6", "L2/L5", "L2/L6", "L3/L4/L8", "L3/L4/L9", "L3/L7"]
