@@ -3,6 +3,7 @@
     python bench/rigidity.py            # 50, 200, 500 and 1,000 parts
     python bench/rigidity.py --quick    # 50 and 200 parts
     python bench/rigidity.py --catalogue [MODEL.ldr ...]   # parts known / unknown on real models
+    python bench/rigidity.py --before main [--sizes 500]    # whole-job CPU s of git ref 'main' and of this code
 
 Models come from ``synthetic.random_lego``: bricks and plates stacked on random earlier parts with
 random overlaps (two or more studs rigid, one stud a hinge), hinge bricks 3937 + 3938 (both at one
@@ -31,6 +32,11 @@ the collision shape before holes were cut, with pairs joined pin- or axle-in-hol
 connected pairs out. Collisions found (2 per gearbox are real) and CPU seconds of the collision pass
 (``time.process_time``, best of 3); peak RSS of the process after the row.
 
+With ``--before REF``: only the whole job (``full``) per size, as CPU seconds (``time.process_time``), the
+``plantsolve`` package of git ``REF`` (taken out of git into a temporary folder) and this checkout each in a child
+process of their own, taken in turn for ``--rounds`` rounds (best of 3 solves per round, best round kept): the
+baseline comes from the same run and the same load on the machine.
+
 A third table: the parts catalogue on real LDraw models (the tests' official-parts fixture, the OMR
 model 889 in ``tests/solvers/rigidity/omr/``, and every ``.ldr``/``.mpd`` given with ``--models``).
 ``before``: parts not in the 37 hand-coded parts (the catalogue before the generated one; measured in
@@ -42,10 +48,15 @@ alone on the ``load`` line).
 from __future__ import annotations
 
 import argparse
+import json
 import resource
 import statistics
+import subprocess
 import sys
+import tarfile
+import tempfile
 import time
+from io import BytesIO
 from pathlib import Path
 
 import numpy as np
@@ -194,8 +205,62 @@ def catalogue_table(models: list[Path]) -> None:
               f"{len(result.joints):>7} {len(result.collisions):>10} {took:>8.3f}")
 
 
+def full_cpu(sizes: list[int]) -> dict[int, float]:
+    """CPU seconds of the whole job per size (best of 3), in this process."""
+    out = {}
+    for n in sizes:
+        request = RigidityRequest.model_validate({"parts": random_lego(n, seed=n)})
+        solve(request)  # the first solve also loads the catalogue's data and imports: not timed
+        out[n] = cpu_timed(lambda request=request: solve(request), reps=3)[0]
+    return out
+
+
+def _child(folder: str | None, sizes: list[int]) -> dict[int, float]:
+    """full_cpu in a child process: of the package in ``folder`` (a git ref taken out), or of this checkout."""
+    boot = "import runpy, sys; sys.argv = sys.argv[1:]; runpy.run_path(sys.argv[0], run_name='__main__')"
+    if folder is not None:  # the editable install's import hook would find this checkout's package first: drop it
+        boot = ("import sys; sys.meta_path[:] = [f for f in sys.meta_path if '__editable__' not in repr(f)]; "
+                f"sys.path.insert(0, {folder!r}); import plantsolve; " + boot)  # imported before this file's path
+    out = subprocess.run([sys.executable, "-c", boot, __file__, "--full-cpu", *map(str, sizes)], check=True,
+                         capture_output=True, text=True).stdout
+    package, row = out.splitlines()[-2:]
+    assert (folder is None) != package.startswith(folder or "//"), package  # the baseline runs the ref's package
+    return {int(k): v for k, v in json.loads(row).items()}
+
+
+def compare(ref: str, sizes: list[int], rounds: int) -> None:
+    root = Path(__file__).resolve().parents[1]
+    archive = subprocess.run(["git", "archive", "--format=tar", ref, "plantsolve"], cwd=root, check=True,
+                             capture_output=True).stdout
+    best_before = {n: float("inf") for n in sizes}
+    best_after = dict(best_before)
+    with tempfile.TemporaryDirectory() as folder:
+        with tarfile.open(fileobj=BytesIO(archive)) as tar:
+            tar.extractall(folder, filter="data")
+        for _ in range(rounds):
+            for n, t in _child(folder, sizes).items():
+                best_before[n] = min(best_before[n], t)
+            for n, t in _child(None, sizes).items():
+                best_after[n] = min(best_after[n], t)
+    print(f"whole job, CPU s (best of 3 solves x {rounds} rounds, taken in turn): {ref} -> this checkout")
+    print(f"{'parts':>6} {ref[:12]:>12} {'now':>8} {'now/' + ref[:8]:>13}")
+    for n in sizes:
+        print(f"{n:>6} {best_before[n]:>12.3f} {best_after[n]:>8.3f} {best_after[n] / best_before[n]:>13.2f}")
+
+
 if __name__ == "__main__":
-    if "--catalogue" in sys.argv:
+    if "--full-cpu" in sys.argv:  # a child of --before
+        import plantsolve
+        print(plantsolve.__file__)
+        print(json.dumps(full_cpu([int(a) for a in sys.argv[sys.argv.index("--full-cpu") + 1:]])))
+    elif "--before" in sys.argv:
+        extra = argparse.ArgumentParser(description="whole-job CPU s of a git ref and of this checkout, in turn")
+        extra.add_argument("--before", required=True, help="git ref of the baseline")
+        extra.add_argument("--sizes", type=int, nargs="+", default=[500], help="model sizes (parts)")
+        extra.add_argument("--rounds", type=int, default=3, help="rounds of both children taken in turn")
+        options = extra.parse_args()
+        compare(options.before, options.sizes, options.rounds)
+    elif "--catalogue" in sys.argv:
         here = Path(__file__).resolve().parents[1] / "tests" / "solvers" / "rigidity"
         extra = [Path(a) for a in sys.argv[sys.argv.index("--catalogue") + 1:]]
         catalogue_table([here / "official_parts.ldr", *sorted((here / "omr").glob("*.mpd")), *extra])

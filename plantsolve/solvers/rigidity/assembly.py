@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS, NOT_DOCKED,
-                                                   OPPOSED, RING_REACH,
-                                                   PartShape, collision_boxes, fit, lookup, mate, samples)
+                                                   OPPOSED, RING_REACH, PartShape, collision_boxes, fit, fit_depth,
+                                                   lookup, mate, samples)
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -58,6 +58,7 @@ OFFSET_REACH = 3.0 + SNAP
 # FIT_SNAP of each other over the depth they share.
 FIT_ALIGN = math.cos(math.radians(10.0))
 HALF_PITCH = 10.0  # LDU: half a stud pitch
+STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into the part above it (stud.dat's height)
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
@@ -291,8 +292,15 @@ class Assembly:
                                                                       tuple(_clean(v) for v in dirs[ci])))
         for other, conns in fits.items():  # a fit the typed points do not already make (an arm in a torso)
             if other not in found:
-                found[other] = conns
+                deep = [c for c in conns if not self._stub(c)]
+                found[other] = deep or conns  # a stub only where nothing deeper fits (an arm's collar beside its peg)
         return found
+
+    def _stub(self, c: Connection) -> bool:
+        """The male cylinder of a fit shorter than FIT_OVERLAP (in by all of its length: :func:`catalogue.fit_depth`)."""
+        male = next(self.parts[p].shape.connectors[k] for p, k in ((c.a, c.ca), (c.b, c.cb))
+                    if self.parts[p].shape.connectors[k].type == "fit_m")
+        return male.length < FIT_OVERLAP
 
     def part_pieces(self) -> list[list[str]]:
         """The connected pieces of the parts as joined so far, largest first, parts in the order they were added."""
@@ -329,9 +337,11 @@ class Assembly:
         """Seat the studs of pieces left apart where a part above grips them between a tube and its walls although
         the snap data states no anti-stud there: half a stud along an outer row (midway between two of its
         anti-studs a pitch apart, a tube half a pitch inward, the part's side half a pitch outward: a half-stud
-        offset under a 2-wide plate, as OMR 5935 hangs its skis), or under a part whose data states its tubes
-        only (6192: a tube half a pitch away diagonally, no anti-stud within half a pitch, the stud a stud's radius
-        inside the part's sides). Returns the (stud's part, part) pairs seated."""
+        offset under a 2-wide plate, as OMR 5935 hangs its skis), midway between two anti-studs of a part one stud
+        wide that states no post there (its long walls grip it: a Technic brick on a jumper plate, as OMR 21309 hangs
+        them), or under a part whose data states its tubes only (a tube half a pitch away diagonally, no anti-stud
+        within half a pitch, the stud a stud's radius inside the part's sides). Returns the (stud's part, part) pairs
+        seated."""
         groups = self.part_pieces()
         label = {p: k for k, g in enumerate(groups) for p in g}
         seated = []
@@ -368,17 +378,41 @@ class Assembly:
                     mouths.setdefault(other, []).append((oi, v))
         for other, found in mouths.items():
             o = self.parts[other]
-            ends = [v for _, v in found if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP]
-            pairs = [(a, b) for a, b in itertools.combinations(ends, 2) if float(np.linalg.norm(a + b)) <= SNAP]
-            gripped = next((oi for row, _ in pairs for oi, v in found  # the tube half a pitch across the row
+            ends = [(oi, v) for oi, v in found if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP]
+            pairs = [(a, b) for a, b in itertools.combinations(ends, 2) if float(np.linalg.norm(a[1] + b[1])) <= SNAP]
+            gripped = next((oi for (_, row), _ in pairs for oi, v in found  # the tube half a pitch across the row
                             if abs(float(np.linalg.norm(v)) - HALF_PITCH) <= SNAP and abs(float(v @ row)) <= SNAP
                             and self._outside(o, point - v, v)), None)
+            if gripped is None and pairs and not self._post_at(o, point):  # one stud wide, no post: its long walls
+                gripped = next((oi for (oi, row), _ in pairs if self._walls_across(o, point, row, direction)), None)
             if gripped is None and all(float(np.linalg.norm(v)) > HALF_PITCH + SNAP for _, v in found):
                 gripped = next((oi for oi, v in found  # a tube diagonally, the stud well inside the part's sides
                                 if abs(float(np.linalg.norm(v)) - RING_REACH) <= SNAP and self._inside(o, point)),
                                None)
             if gripped is not None:
                 yield other, gripped
+
+    @staticmethod
+    def _walls_across(o: Placed, point: np.ndarray, row: np.ndarray, direction: np.ndarray) -> bool:
+        """``o``'s sides both half a pitch from ``point`` across the row of anti-studs (``row``: from the point to one
+        of them) in the face the stud points into: the part is one stud wide there, and its walls grip the stud."""
+        across = np.cross(row, direction)
+        across = across / float(np.linalg.norm(across)) * HALF_PITCH
+        return Assembly._outside(o, point + across, across) and Assembly._outside(o, point - across, -across)
+
+    @staticmethod
+    def _post_at(o: Placed, point: np.ndarray) -> bool:
+        """A male snap cylinder of ``o`` within a stud's radius of ``point``'s line and reaching within a stud's length
+        of it: the post under a 1 x N plate or brick between its anti-studs, which leaves no room for a stud there."""
+        for k, c in enumerate(o.shape.connectors):
+            if c.type != "fit_m":
+                continue
+            v = point - o.points[k]
+            t = float(v @ o.directions[k])
+            if (-STUD_LENGTH_IN - SNAP <= t <= c.length + STUD_LENGTH_IN + SNAP
+                    and float(np.linalg.norm(v - t * o.directions[k])) < HOLE_RADIUS):
+                return True
+        return False
 
     @staticmethod
     def _inside(o: Placed, point: np.ndarray) -> bool:
@@ -496,7 +530,7 @@ class Assembly:
                     continue
                 # a cylinder is in the other where their axes stay within reach of each other over their overlap
                 lo, hi = max(0.0, min(along, o_end)), min(mine.length, max(along, o_end))
-                if hi - lo < FIT_OVERLAP or any(
+                if hi - lo < fit_depth((mine if mine.type == "fit_m" else theirs).length) or any(
                         float(np.linalg.norm(q - float(q @ axis) * axis)) > reach
                         for q in (v + o.directions[oi] * ((t - along) / cos) for t in (lo, hi))):
                     continue

@@ -394,6 +394,13 @@ FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips
 FIT_PLAY = 0.25  # LDU: a male section this much over the female's radius still fits (LDraw's rounding)
 FIT_STEP = 0.5  # LDU: steps of the two profiles this close along the line are one step (a placement's rounding)
 FIT_OVERLAP = 3.0  # LDU: the least depth of a fit (most of a stud's 4: a stud 2 LDU in is not held)
+FIT_WHOLE = 0.1  # LDU: a male cylinder this close to all its length inside the bore is all the way in
+
+
+def fit_depth(male_length: float) -> float:
+    """The least overlap that makes a fit of a male cylinder this long: FIT_OVERLAP, or for a male the data states
+    shorter than that (a flex-system hose end's 1-LDU stub) all of it: it is in as far as it goes."""
+    return min(FIT_OVERLAP, male_length - FIT_WHOLE)
 BAR_RADIUS = 4.0  # LDU: a bar's (3.2 mm), which an axle hole's ribs hold
 
 
@@ -404,7 +411,7 @@ def fit(male: tuple, female: tuple, m_start: float, m_end: float, f_start: float
     else ``"round"`` (it turns). ``m_*`` and ``f_*`` are where each cylinder starts and ends along the common
     line; each profile runs from its start to its end."""
     lo, hi = max(min(m_start, m_end), min(f_start, f_end)), min(max(m_start, m_end), max(f_start, f_end))
-    if hi - lo < FIT_OVERLAP:
+    if hi - lo < fit_depth(abs(m_end - m_start)):
         return None
     cuts = {lo, hi}
     for start, end, profile in ((m_start, m_end, male), (f_start, f_end, female)):

@@ -26,6 +26,9 @@ FAR_LDU = 1e5
 FAR_FACTOR = 100.0
 PITCH = 20.0  # LDU: added to the median distance so that a model of a few stacked parts has a scale
 MINIFIG = "minifig"  # LDraw names of minifigure parts start with it
+# what LDraw puts before a part's name to mark it, not to name it: '~' an obsolete, moved or hidden part ("~Minifig Hips
+# (Obsolete)"), '_' a physical colour's variant, '|' an alias
+NAME_MARKS = "~_|"
 MINIFIGURE = "minifigure"  # the sub_build of a piece of minifigure parts only
 TOUCH_GAP = 0.5  # LDU: boxes this close touch (a part resting on another whose joint was not found meets it at 0)
 # LDU: two stud pitches, how far pieces must stay from the build, parts without a collision shape counted at their
@@ -93,7 +96,7 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
             chosen.append(whole)
     if chosen:
         return " + ".join(placements.get(prefix, prefix.rstrip("/")) for prefix in chosen)
-    if all(names.get(p, "").lower().startswith(MINIFIG) for p in piece):
+    if all(names.get(p, "").lstrip(NAME_MARKS).lower().startswith(MINIFIG) for p in piece):
         return MINIFIGURE
     return None
 

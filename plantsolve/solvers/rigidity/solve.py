@@ -16,6 +16,7 @@ from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, J
 from plantsolve.solvers.rigidity.catalogue import lookup
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.rigidity.misses import REACH, Misses, unknown_near
 from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
                                                 joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
                                                 sub_build)
@@ -31,6 +32,7 @@ HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and noth
                     f"boxes, or the origins of parts without one): parts loose in a sub-build, or joined to it by "
                     f"parts not in the catalogue"}
 LISTED_IN_MESSAGE = 10
+LISTED_MISSES = 20  # floating parts and separate pieces whose nearest miss the warnings give (details.why)
 
 
 def _solid(body) -> Solid | None:
@@ -144,7 +146,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     part_results = [PartJoints(id=p, part=assembly.parts[p].number, joints=by_part[p][0], joined_to=by_part[p][1])
                     for p in part_ids]
     piece_results, held_by = _pieces(part_ids, by_part, assembly, source)
-    warnings.extend(_piece_warnings(part_results, piece_results, assembly))
+    positions = {p.id: np.asarray(p.position, float) for p in request.parts}
+    warnings.extend(_piece_warnings(part_results, piece_results, assembly, positions, [u.id for u in unknown]))
     warnings.extend(_offset_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
@@ -221,24 +224,51 @@ def _named(ids, assembly: Assembly) -> str:
     return ", ".join(shown) + (f" and {len(ids) - len(shown)} more" if len(ids) > len(shown) else "")
 
 
-def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assembly) -> list[Diagnostic]:
+def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assembly, positions: dict,
+                    unknown: list[str]) -> list[Diagnostic]:
     out = []
     floating = [p.id for p in parts if not p.joints]
+    apart = [pc for pc in found[1:] if pc.sub_build is None and len(pc.parts) > 1]
+    misses = Misses(assembly) if (floating and len(parts) > 1) or apart else None
     if floating and len(parts) > 1:
+        why = [_why([p], misses, positions, unknown) for p in floating[:LISTED_MISSES]]
         out.append(Diagnostic(code="floating_parts", message=f"{len(floating)} of {len(parts)} known part(s) are "
                               f"joined to nothing (no connection of the catalogue meets them): "
-                              f"{_named(floating, assembly)}",
+                              f"{_named(floating, assembly)}; {_why_text(floating, why, assembly)}",
                               details={"parts": [{"id": p, "part": assembly.parts[p].number, "line": line_of(p)}
                                                  for p in floating[:MAX_LISTED]],
-                                       "count": len(floating), "known_parts": len(parts)}))
-    apart = [pc for pc in found[1:] if pc.sub_build is None and len(pc.parts) > 1]
+                                       "count": len(floating), "known_parts": len(parts), "why": why}))
     if apart:
+        why = [_why(pc.parts, misses, positions, unknown) for pc in apart[:LISTED_MISSES]]
         out.append(Diagnostic(code="separate_pieces", message=f"besides the largest piece ({len(found[0].parts)} "
                               f"parts), {len(apart)} piece(s) of several parts are joined to nothing else and are "
                               f"no sub-build (a sub-model or a minifigure): "
-                              + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE]),
-                              details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]]}))
+                              + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE])
+                              + "; " + _why_text([pc.parts[0] for pc in apart], why, assembly),
+                              details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]], "why": why}))
     return out
+
+
+def _why(piece: list[str], misses: Misses, positions: dict, unknown: list[str]) -> dict:
+    """What the drawing shows between a piece (or a part) and the rest: its nearest miss
+    (:meth:`misses.Misses.nearest`, None: no mate within misses.REACH) and the parts not in the catalogue beside it."""
+    return {"nearest": misses.nearest(piece), "unknown_near": unknown_near(piece, positions, unknown)[:LISTED_IN_MESSAGE]}
+
+
+def _why_text(first: list[str], why: list[dict], assembly: Assembly) -> str:
+    """The nearest misses in words: each is further off than the OFFSET_REACH a slip is joined within, so the drawing
+    places no joint there, unless a part the catalogue does not know holds it."""
+    said = []
+    for pid, w in zip(first[:LISTED_IN_MESSAGE], why):
+        near = w["nearest"]
+        text = (f"{pid}: no mate within {REACH:g} LDU" if near is None else
+                f"{near['part']} ({near['number']}) {near['type']} {near['gap_ldu']:g} LDU from {near['other']} "
+                f"({near['other_number']}) {near['other_type']}")
+        if w["unknown_near"]:
+            text += " beside part(s) not in the catalogue: " + ", ".join(w["unknown_near"][:3])
+        said.append(text)
+    return (f"no joint in the drawing within the {OFFSET_REACH - SNAP:g} LDU a slip is joined at, nearest misses: "
+            + "; ".join(said))
 
 
 def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:

@@ -298,3 +298,16 @@ def test_script_gives_a_wheel_pin_without_shadow_the_pin_of_wpin_dat_once(tmp_pa
     for number in ("9007", "9008"):
         (snap,) = parts[number]["s"]  # one pin, not one own and one inherited
         assert snap == ["cyl", "M", "one", 0, [32.0, 5.0, 0.0], [1.0, 0.0, 0.0], [["R", 4.0, 11.0], ["_L", 4.25, 1.0]]]
+
+
+def test_parts_the_shadow_library_renamed_since_the_ldraw_release_keep_their_own_lines():
+    # The shadow library renamed 32556 to 32556a and 6192 to 6192a with LDraw's 2026-02 release; the 2024-05 library
+    # still names them so. Their own lines (restored, data/README.md): the long pin one 60-LDU cylinder centred on
+    # its collar (not the one 20-LDU half its sub-files state), 6192 an anti-stud under each of its 4 x 2 studs.
+    pin = generated_shape("32556")
+    assert [(c.point, abs(c.direction[0]), c.length) for c in pin.connectors if c.type == "fit_m"] == [
+        ((-30.0, 0.0, 0.0), 1.0, 60.0)]
+    assert sorted(c.point[0] for c in pin.connectors if c.type == "pin") == [-20.0, 0.0, 20.0]
+    curved = generated_shape("6192")
+    under = {c.point for c in curved.connectors if c.type == "antistud" and c.point[1] == 24.0}
+    assert {(x, 24.0, z) for x in (-30.0, -10.0, 10.0, 30.0) for z in (-10.0, 10.0)} <= under

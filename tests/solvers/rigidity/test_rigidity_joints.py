@@ -147,13 +147,56 @@ def test_a_stud_half_a_stud_along_the_outer_row_of_a_2_wide_plate_is_gripped_bet
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 10 8 0 1 0 0 0 1 0 0 0 1 3024.dat\n") == []
 
 
-def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them():
-    # 6192 (2 x 4 brick with curved top) states three tubes and no anti-stud under its studs: on a 2 x 4 plate
-    # each of the plate's eight studs stands half a pitch diagonally from a tube, inside the brick's walls
+def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them(monkeypatch):
+    # 6192 (2 x 4 brick with curved top) as its sub-files alone state it (the data before its own shadow lines were
+    # restored): three tubes and no anti-stud under its studs. On a 2 x 4 plate each of the plate's eight studs
+    # stands half a pitch diagonally from a tube, inside the brick's walls.
+    from dataclasses import replace
+
+    from plantsolve.solvers.rigidity import assembly, catalogue
+
+    def tubes_only(name):
+        shape = catalogue.lookup(name)
+        if shape is None or shape.number != "6192":
+            return shape
+        return replace(shape, connectors=tuple(c for c in shape.connectors if c.type != "antistud"
+                                               or (c.point[0], c.point[2]) in ((-20.0, 0.0), (0.0, 0.0), (20.0, 0.0))))
+
+    monkeypatch.setattr(assembly, "lookup", tubes_only)
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == [
         ("rigid", "stud", "3020", "6192", 8)]
     # a 1 x 4 plate's studs would stand half a pitch from the tubes, in them: nothing
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3710.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 6192.dat\n") == []
+
+
+def test_a_stud_midway_under_a_part_one_stud_wide_is_held_by_its_walls_unless_a_post_stands_there():
+    # OMR 21309 hangs 1 x 2 Technic bricks on jumper plates (15573): the jumper's one stud midway between the brick's
+    # two anti-studs, gripped by its long walls (a Technic brick has no post between them)
+    jumper = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 15573.dat\n"
+    assert joints(jumper + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
+    # turned a quarter turn it is the same grip; a quarter pitch along, the stud is neither midway nor under one
+    assert joints(jumper + "1 4 0 -24 0 0 0 1 0 1 0 -1 0 0 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
+    assert joints(jumper + "1 4 5 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == []
+    # a 1 x 2 brick states the post under its middle (the data's male cylinder): no room for a 1 x 1 plate's stud
+    plate = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n"
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "3024", "3700", 1)]
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3004.dat\n") == []
+
+
+def test_a_male_cylinder_shorter_than_a_fit_depth_is_held_when_all_of_it_is_in_the_bore():
+    # the flex-system hose end u9053 states a 1-LDU bar stub: in 32039's axle hole it is held by the hole's ribs
+    # (OMR 8002's eight hose ends), half out of the hole it is not
+    bush = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 32039.dat\n"
+    end = "1 4 0 0 {z} 1 0 0 0 0 1 0 -1 0 u9053.dat\n"
+    assert joints(bush + end.format(z=4)) == [("hinge", "fit", "32039", "u9053", 1)]
+    assert joints(bush + end.format(z=10.5)) == []
+
+
+def test_6192_with_its_own_shadow_lines_sits_on_studs_as_a_2_x_4_brick_does():
+    for plate in ("3020", "3710"):
+        placed = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 {plate}.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 {{}}.dat\n"
+        curved = [j[:2] + j[4:] for j in joints(placed.format("6192"))]
+        assert curved == [j[:2] + j[4:] for j in joints(placed.format("3001"))] != []
 
 
 def test_a_tyre_on_a_wheel_the_snap_data_gives_no_rim_is_held_by_it():
@@ -270,6 +313,28 @@ def test_a_part_joined_to_nothing_is_named_in_a_floating_parts_warning():
         ("L1", ["L1~L2"], ["L2"]), ("L2", ["L1~L2"], ["L1"]), ("L3", [], [])]
 
 
+def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_unknown_part_lies_beside_it():
+    # on a stack of two 2 x 2 bricks, a third resting on the tips of the studs (4 LDU up: more than the 3 LDU a slip
+    # is joined at); a 1 x 1 plate beside a part the catalogue does not know; a pair of plates far from anything
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+            "1 4 0 -52 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+            "1 4 0 -8 100 1 0 0 0 1 0 0 0 1 3024.dat\n1 4 0 0 110 1 0 0 0 1 0 0 0 1 no_such_part.dat\n"
+            "1 4 500 -8 0 1 0 0 0 1 0 0 0 1 3023.dat\n1 4 500 -16 0 1 0 0 0 1 0 0 0 1 3023.dat\n")
+    result = solve(parse("apart.ldr", text)).result
+    warnings = {w.code: w for w in result.report.warnings}
+    floating = warnings["floating_parts"]
+    assert [p["id"] for p in floating.details["parts"]] == ["L3", "L4"]
+    brick, plate = floating.details["why"]
+    assert brick == {"nearest": {"part": "L3", "number": "3003", "type": "antistud", "other": "L2",
+                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 4.0}, "unknown_near": []}
+    assert plate == {"nearest": None, "unknown_near": ["L5"]}
+    assert "L3 (3003) antistud 4 LDU from L2 (3003) stud" in floating.message
+    assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
+    pieces = warnings["separate_pieces"]
+    assert pieces.details["why"] == [{"nearest": None, "unknown_near": []}]
+    assert "L6: no mate within 40 LDU" in pieces.message
+
+
 def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_one_is_not():
     # a cart (sub-model at line 2) with a minifigure (line 3) standing on it, apart from the main build (line 1)
     ids = ["L1/L5", "L1/L6", "L2/L5", "L2/L6", "L3/L4/L8", "L3/L4/L9", "L3/L7"]
@@ -280,6 +345,10 @@ def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_
     assert sub_build(["L3/L4/L8", "L3/L4/L9"], ids, placements, names) == "legs.ldr"
     assert sub_build(["L2/L5", "L3/L4/L8", "L3/L4/L9"], ids, placements, names) is None  # half the cart
     assert sub_build(["L2/L5"], ids, placements, {**names, "L2/L5": "Minifig Arm Left"}) == "minifigure"
+    # LDraw marks obsolete parts with '~' before the name (OMR 31066's legs 3816/3817): still minifigure parts
+    legs = {**names, "L2/L5": "~Minifig Leg Right (Obsolete)", "L2/L6": "Minifig Hand"}
+    assert sub_build(["L2/L5", "L1/L5"], ids, placements, {**legs, "L1/L5": "Minifig Hand"}) == "minifigure"
+    assert sub_build(["L2/L5", "L1/L5"], ids, placements, legs) is None
 
 
 S9, C9 = "0.156434", "0.987688"  # sin and cos of 9 degrees
