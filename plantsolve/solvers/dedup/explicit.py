@@ -21,6 +21,7 @@ import ifcopenshell
 import ifcopenshell.util.placement
 
 from plantsolve.solvers.dedup.sharing import Placements, body_representation
+from plantsolve.solvers.dedup.skeleton import Skeleton
 
 FACE_SETS = ("IfcPolygonalFaceSet", "IfcTriangulatedFaceSet")
 FACE_MODELS = ("IfcFacetedBrep", "IfcFaceBasedSurfaceModel", "IfcShellBasedSurfaceModel")
@@ -43,8 +44,11 @@ class ExplicitReader:
     """Explicit geometry of one model (see the module's docstring). The model must not change while
     a reader is in use: what it remembers is keyed by instance id."""
 
-    def __init__(self, model: ifcopenshell.file, *, record_closures: bool = False):
+    def __init__(self, model: ifcopenshell.file, *, record_closures: bool = False, streamed: Skeleton | None = None):
         self.model = model
+        self.streamed = streamed  # the faceted items read from the file's text, absent from ``model``
+        # a product the kernel would tessellate holds a streamed item (whose instances ``model`` lacks)
+        self.needs_whole_model = False
         self.closures: dict[int, np.ndarray] | None = {} if record_closures else None
         self.closure_entities: dict[int, Counter] = {}  # item id → entity counts of its closure
         self._roles: dict[str, int] = {}
@@ -106,6 +110,8 @@ class ExplicitReader:
             faces = item.Faces if item.is_a("IfcPolygonalFaceSet") else item.CoordIndex
             return coords, len(faces)
         if any(item.is_a(t) for t in FACE_MODELS):
+            if self.streamed is not None and item.id() in self.streamed.points:
+                return self.streamed.points[item.id()]
             got = self._loop_points(item)
             if got is None or not got[0] or any(len(p) != 3 for p in got[0]):
                 return None
@@ -135,6 +141,8 @@ class ExplicitReader:
         else:
             got = self._bodies[key] = self.items_points(body.Items or ())
         if got is None:
+            if self.streamed is not None and any(i.id() in self.streamed.closures for i in self.model.traverse(body)):
+                self.needs_whole_model = True
             return None
         pts, faces = got
         p = self.placements.of(product)
