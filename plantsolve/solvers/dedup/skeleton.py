@@ -50,9 +50,9 @@ _PLAIN[np.frombuffer(b"0123456789.+-eE,", dtype=np.uint8)] = True
 def _where(seg: np.ndarray, byte: int, at_least: bool = False) -> np.ndarray:
     """Positions of ``byte`` (or, ``at_least``, of any byte from it up) in ``seg``, a chunk at a time (no mask as
     long as the file)."""
-    parts = [np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte) + i
+    parts = [(np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte) + i).astype(np.int32)
              for i in range(0, len(seg), CHUNK)]
-    return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
+    return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int32)
 
 
 _IN_CACHE = 1 << 16
@@ -67,8 +67,8 @@ def _numbers(text: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     digits each has (0 digits: value 0; -1: more than an instance number has). The eight bytes at each position
     are read as one 64-bit word and turned into a number with three multiplications (eight digits at once, as
     simdjson does); the few numbers of more than eight digits digit by digit."""
-    value = np.empty(len(pos), dtype=np.int64)
-    count = np.empty(len(pos), dtype=np.int64)
+    value = np.empty(len(pos), dtype=np.int32)
+    count = np.empty(len(pos), dtype=np.int8)
     table = np.lib.stride_tricks.as_strided(text, shape=(len(text) - 7, 8), strides=(1, 1))
     for c in range(0, len(pos), _IN_CACHE):  # a piece at a time: a dozen passes over what the cache holds
         words = table[pos[c:c + _IN_CACHE]].view("<u8")[:, 0]
@@ -83,7 +83,9 @@ def _numbers(text: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         count[c:c + len(words)] = n
     longer = np.flatnonzero(count == 8)
     if len(longer):
-        value[longer], count[longer] = _slow_numbers(text, pos[longer])
+        slow, many = _slow_numbers(text, pos[longer].astype(np.int64))
+        many[slow > np.iinfo(np.int32).max] = -1  # no instance number: past what IfcOpenShell addresses
+        value[longer], count[longer] = np.minimum(slow, np.iinfo(np.int32).max), many
     return value, count
 
 
@@ -147,6 +149,8 @@ class Skeleton:
 def read(path: Path, schema: str | None = None) -> Skeleton | None:
     """The file's faceted items read from its text, or None when the scan cannot vouch for the file."""
     data = Path(path).read_bytes()
+    if len(data) >= 1 << 31:  # positions are held in 32 bits
+        return None
     at = data.find(b"\nDATA;")
     if at < 0:
         return None
@@ -159,6 +163,7 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
     if got is None:
         return None
     ids, starts, ends, names_at, code, name_len, src, dst, line_of = got
+    offsets = (starts + body, ends + body)  # of each line in the file (without its line break)
     n = len(ids)
     level = LEVEL_OF[code]
     bad = np.zeros(n, dtype=bool)
@@ -172,11 +177,11 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
     outside = ~faceted & (dst >= 0)
     outside &= level[np.maximum(dst, 0)] >= 1
     bad[dst[outside]] = True
-    label = -np.arange(1, n + 1, dtype=np.int64)  # every line its own; an item's closure takes its item's
+    label = -np.arange(1, n + 1, dtype=np.int32)  # every line its own; an item's closure takes its item's
     items = np.flatnonzero(level == 0)
     label[items] = items + 1
     conflict: list[np.ndarray] = []
-    edge_level = np.where(faceted & ok, level[src], -1)
+    edge_level = np.where(faceted & ok, level[src], np.int8(-1))
     for depth in range(POINT_LEVEL):
         e = np.flatnonzero(edge_level == depth)
         s, d = label[src[e]], dst[e]
@@ -204,8 +209,12 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
         listed = np.fromiter(bad_labels, dtype=np.int64, count=len(bad_labels))
         good[listed[(listed > 0) & (listed <= n)]] = False
     member = (label > 0) & good[np.maximum(label, 0)] & (level >= 0)
-    return _assemble(Path(path), data, body, end, seg, ids, starts, ends, names_at, code, name_len, level, label,
-                     member, points, coords, dims, src, dst, ok, schema, line_of)
+    del bad, ok, faceted, outside, edge_level, good, has_points
+    text = _skeleton_text(data, body, end, seg, ids, starts, names_at, name_len, level, member)
+    names = _entity_names(data[:body], schema)
+    del data, seg, starts, names_at, name_len
+    return _items(Path(path), text, ids, offsets, code, level, label, member, points, coords, dims, src, dst,
+                  names, line_of)
 
 
 def _scan(seg: np.ndarray, length: int):
@@ -215,7 +224,7 @@ def _scan(seg: np.ndarray, length: int):
     nl = _where(seg[:length], 10)
     if not len(nl) or nl[-1] != length - 1:
         return None
-    starts = np.concatenate([[0], nl[:-1] + 1])
+    starts = np.concatenate([np.zeros(1, dtype=np.int32), nl[:-1] + 1])
     ends = nl - (seg[np.maximum(nl - 1, 0)] == 13)
     if np.any(ends <= starts) or np.any(seg[starts] != 35) or np.any(seg[ends - 1] != 59):
         return None
@@ -225,8 +234,11 @@ def _scan(seg: np.ndarray, length: int):
     if int(np.count_nonzero(opens)) != len(starts):
         return None
     numbers, digits = _numbers(seg, hashes + 1)
-    ids, after = numbers[opens], hashes[opens] + 1 + digits[opens]
-    if np.any(digits[opens] <= 0) or np.any(seg[after] != 61):
+    ids, after, id_digits = numbers[opens], hashes[opens] + 1 + digits[opens], digits[opens]
+    refs = ~opens
+    numbers, digits, src = numbers[refs], digits[refs], (np.cumsum(opens, dtype=np.int32) - 1)[refs]
+    del hashes, refs
+    if np.any(id_digits <= 0) or np.any(seg[after] != 61):
         return None
     n = len(ids)
     size = int(ids.max()) + 1
@@ -246,22 +258,21 @@ def _scan(seg: np.ndarray, length: int):
         return None
     code = np.zeros(n, dtype=np.int8)
     table = np.lib.stride_tricks.as_strided(seg, shape=(len(seg) - 7, 8), strides=(1, 1))
-    words = [table[names_at + k].view("<u8")[:, 0] for k in range(0, 32, 8)]  # each name and what follows, as words
+    first_word = table[names_at].view("<u8")[:, 0]  # each name's first eight bytes
     for k, name in enumerate(NAMES, start=1):
         rows = None
         for w, part in enumerate(_words(name + b"(")):
             if part is None:
                 continue
             value, mask = part
-            hit = (words[w] if rows is None else words[w][rows]) & mask == value
-            rows = np.flatnonzero(hit) if rows is None else rows[hit]
+            if rows is None:
+                rows = np.flatnonzero(first_word & mask == value)
+            else:
+                rows = rows[table[names_at[rows] + 8 * w].view("<u8")[:, 0] & mask == value]
         code[rows] = k
-    del words
-    name_len = np.array([0] + [len(name) for name in NAMES])[code]
-    src = np.cumsum(opens, dtype=np.int64) - 1
-    refs = ~opens
-    src, value, digits = src[refs], numbers[refs], digits[refs]
-    dst = np.where((value < size) & (digits > 0), line_of[np.minimum(value, size - 1)], -1)
+    del first_word
+    name_len = np.array([0] + [len(name) for name in NAMES], dtype=np.int16)[code]
+    dst = np.where((numbers < size) & (digits > 0), line_of[np.minimum(numbers, size - 1)], -1).astype(np.int32)
     return ids, starts, ends, names_at, code, name_len, src, dst, line_of
 
 
@@ -278,26 +289,12 @@ def _words(name: bytes) -> list[tuple[np.uint64, np.uint64] | None]:
     return out
 
 
-def _spans(seg: np.ndarray, first: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """``seg[first[0]:stop[0]]``, ``seg[first[1]:stop[1]]``, ... in one array (ascending, disjoint spans), a chunk
-    of ``seg`` at a time."""
-    out = []
-    inside = 0
-    for c in range(0, len(seg), CHUNK):
-        d = np.zeros(min(CHUNK, len(seg) - c) + 1, dtype=np.int8)
-        lo, hi = np.searchsorted(first, [c, c + CHUNK]), np.searchsorted(stop, [c, c + CHUNK])
-        d[first[lo[0]:lo[1]] - c] += 1
-        d[stop[hi[0]:hi[1]] - c] -= 1
-        mask = np.cumsum(d[:-1], dtype=np.int8)
-        mask += inside
-        inside = int(mask[-1]) if len(mask) else inside
-        out.append(seg[c:c + len(mask)][mask.view(bool)])
-    return np.concatenate(out) if out else np.zeros(0, dtype=np.uint8)
+POINTS_AT_ONCE = 1 << 16
 
 
 def _coordinates(seg: np.ndarray, names_at: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
     """The coordinates of the point lines (``#i=IFCCARTESIANPOINT((x,y,z));``) in one array and how many each
-    has; None when one is not written plainly."""
+    has; None when one is not written plainly. A few thousand points at a time (their text is copied out)."""
     nothing = np.zeros(0, dtype=np.int64)
     first = names_at + len(b"IFCCARTESIANPOINT((")
     last = ends - len(b"));")
@@ -306,45 +303,74 @@ def _coordinates(seg: np.ndarray, names_at: np.ndarray, ends: np.ndarray) -> tup
     if (np.any(seg[first - 1] != 40) or np.any(seg[first - 2] != 40) or np.any(seg[last] != 41)
             or np.any(seg[last + 1] != 41) or np.any(last <= first)):
         return None, nothing
-    text = _spans(seg, first, last + 1)  # each point's numbers and the ')' after them, which becomes a comma
-    closing = text == 41
-    ends_at = np.flatnonzero(closing)
-    if len(ends_at) != len(first):
-        return None, nothing
-    text[closing] = 44
-    if not _PLAIN[text].all():
-        return None, nothing
-    dims = np.diff(np.searchsorted(np.flatnonzero(text == 44), ends_at, side="right"), prepend=0)
-    expected = int(dims.sum())
-    values = np.fromstring(text[:-1].tobytes(), dtype=float, sep=",")
-    if len(values) != expected or not np.isfinite(values).all():
+    values, dims = [], []
+    for c in range(0, len(first), POINTS_AT_ONCE):
+        a, b = first[c:c + POINTS_AT_ONCE], last[c:c + POINTS_AT_ONCE]
+        width = b - a + 1  # each point's numbers and the ')' after them, which becomes a comma
+        offset = np.cumsum(width, dtype=np.int64)
+        text = seg[np.repeat(a - (offset - width), width) + np.arange(offset[-1], dtype=np.int32)]
+        if np.count_nonzero(text == 41) != len(a):
+            return None, nothing
+        text[offset - 1] = 44
+        if not _PLAIN[text].all():
+            return None, nothing
+        count = np.diff(np.searchsorted(np.flatnonzero(text == 44), offset - 1, side="right"), prepend=0)
+        got = np.fromstring(text[:-1].tobytes(), dtype=float, sep=",")
+        if len(got) != int(count.sum()):
+            return None, nothing
+        values.append(got)
+        dims.append(count)
+    values, dims = np.concatenate(values), np.concatenate(dims)
+    if not np.isfinite(values).all():
         return None, dims
     return values, dims
 
 
-def _assemble(path, data, body, end, seg, ids, starts, ends, names_at, code, name_len, level, label, member,
-              points, coords, dims, src, dst, ok, schema, line_of) -> Skeleton:
+def _skeleton_text(data: bytes, body: int, end: int, seg: np.ndarray, ids, starts, names_at, name_len, level,
+                   member) -> bytes:
+    """The file without the closures' lines, the items' children as empty stand-ins after the other lines."""
+    keep = ~(member & (level >= 1))
+    children = member & (level == 1)
+    change = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(np.int8), [0]])))
+    line_end = np.concatenate([starts[1:], [end + 1 - body]])
+    stand_ins = b"".join(b"#%d=%s(());\n" % (i, seg[a:a + w].tobytes()) for i, a, w in
+                         zip(ids[children].tolist(), names_at[children].tolist(), name_len[children].tolist()))
+    pieces = [data[:body]]
+    pieces += [data[body + starts[a]:body + line_end[b - 1]] for a, b in change.reshape(-1, 2).tolist()]
+    pieces += [stand_ins, data[end + 1:]]
+    return b"".join(pieces)
+
+
+def _items(path, text, ids, offsets, code, level, label, member, points, coords, dims, src, dst, names,
+           line_of) -> Skeleton:
+    """The skeleton's items: their points as traverse visits them, closures and entity counts."""
     n = len(ids)
-    names = _entity_names(data[:body], schema)
     item_lines = np.flatnonzero(member & (level == 0))
     # the points of each item as traverse visits them: its children in order, level by level, each point at its
     # first visit
-    faceted = (level[src] >= 0) & ok
+    faceted = level[src] >= 0
+    faceted[faceted] = (dst[faceted] >= 0) & (level[np.maximum(dst[faceted], 0)] == level[src[faceted]] + 1)
     fsrc, fdst = src[faceted], dst[faceted]
-    degree = np.bincount(fsrc, minlength=n)
-    first_child = np.concatenate([[0], np.cumsum(degree)])
-    seq, owner = item_lines, np.arange(len(item_lines))
+    del faceted, src, dst
+    first_child = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(np.bincount(fsrc, minlength=n), out=first_child[1:])
+    degree = np.diff(first_child)
+    del fsrc
+    seq, owner = item_lines.astype(np.int32), np.arange(len(item_lines), dtype=np.int32)
     for _ in range(POINT_LEVEL):
         count = degree[seq]
         total = int(count.sum())
-        base = np.repeat(first_child[seq] - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
-        seq, owner = fdst[base + np.arange(total)], np.repeat(owner, count)
-    first_visit = np.full(n, -1, dtype=np.int64)
-    first_visit[seq[::-1]] = np.arange(len(seq) - 1, -1, -1)  # of repeated indices the last written stays
+        base = np.repeat(first_child[seq] - (np.cumsum(count, dtype=np.int32) - count), count)
+        seq, owner = fdst[base + np.arange(total, dtype=np.int32)], np.repeat(owner, count)
+        del base
+    first_visit = np.full(n, -1, dtype=np.int32)
+    # of repeated indices the last written stays: each line's first place in the sequence
+    first_visit[seq[::-1]] = np.arange(len(seq) - 1, -1, -1, dtype=np.int32)
     visit = first_visit[seq] == np.arange(len(seq))
     point_lines, point_owner = seq[visit], owner[visit]
-    row = np.full(n, -1, dtype=np.int64)
-    row[points] = np.arange(len(points))
+    del first_visit, visit, seq, owner, fdst, degree, first_child
+    row = np.full(n, -1, dtype=np.int32)
+    row[points] = np.arange(len(points), dtype=np.int32)
     point_start = np.concatenate([[0], np.cumsum(dims)])
     per_item = np.bincount(point_owner, minlength=len(item_lines))
     bounds = np.concatenate([[0], np.cumsum(per_item)])
@@ -366,7 +392,6 @@ def _assemble(path, data, body, end, seg, ids, starts, ends, names_at, code, nam
     counts_top = np.bincount(which[top] * codes + code[lines[top]],
                              minlength=len(item_lines) * codes).reshape(-1, codes)
     closures, entities, parsed, parsed_entities = {}, {}, {}, {}
-    children = member & (level == 1)
     for k, line in enumerate(item_lines.tolist()):
         mine = lines[cuts[k]:cuts[k + 1]]
         i = int(ids[line])
@@ -377,19 +402,9 @@ def _assemble(path, data, body, end, seg, ids, starts, ends, names_at, code, nam
     inner_lines = member & (level >= 2)
     inner = Counter({names[c]: int(v) for c, v in enumerate(np.bincount(code[inner_lines], minlength=len(NAMES) + 1))
                      if v})
-    # the skeleton: every line but the closures', then the items' children as empty stand-ins
-    drop = member & (level >= 1)
-    keep = ~drop
-    change = np.flatnonzero(np.diff(np.concatenate([[0], keep.astype(np.int8), [0]])))
-    runs = change.reshape(-1, 2)
-    line_end = np.concatenate([starts[1:], [end + 1 - body]])
-    stand_ins = b"".join(b"#%d=%s(());\n" % (i, seg[a:a + w].tobytes()) for i, a, w in
-                         zip(ids[children].tolist(), names_at[children].tolist(), name_len[children].tolist()))
-    pieces = [data[:body]]
-    pieces += [data[body + starts[a]:body + line_end[b - 1]] for a, b in runs.tolist()]
-    pieces += [stand_ins, data[end + 1:]]
-    return Skeleton(path, b"".join(pieces), result_points, closures, entities, inner, parsed, parsed_entities, n,
-                    (line_of, starts + body, ends + body))
+    line_start, line_end = offsets
+    return Skeleton(path, text, result_points, closures, entities, inner, parsed, parsed_entities, n,
+                    (line_of, line_start, line_end))
 
 
 def _entity_names(header: bytes, schema: str | None) -> list[str]:
