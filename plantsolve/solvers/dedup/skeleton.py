@@ -126,13 +126,6 @@ class Skeleton:
         """The skeleton parsed by IfcOpenShell (the same bytes as in the file: IfcOpenShell takes text as UTF-8)."""
         return ifcopenshell.file.from_string(self.skeleton.decode("utf-8"))
 
-    def release(self) -> None:
-        self.skeleton = b""
-        self.points.clear()
-
-    def streamed(self, i: int) -> bool:
-        return i in self.closures
-
     def texts(self, ids: np.ndarray, header: str, trailer: str) -> dict[int, str]:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
         children): their lines read from the file and parsed on their own (a closure refers only within
