@@ -431,7 +431,10 @@ def compacted(model: ifcopenshell.file, skeleton: Skeleton, roots, styled_by: di
 def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
     """The model to optimize: the skeleton when the scan vouches for the file and the skeleton passes the checks
     a whole model must, else the whole file (whose refusals then name what is wrong with it)."""
-    found = read(path)
+    try:
+        found = read(path)
+    except Exception:  # noqa: BLE001 (text the scan did not foresee: the whole parse reads it, or refuses it by name)
+        found = None
     if found is not None:
         try:
             model = found.model()
