@@ -180,14 +180,24 @@ def remove_batch(model: ifcopenshell.file, instances) -> None:
         model.unbatch()
 
 
-def rebuilt(model: ifcopenshell.file, keep: np.ndarray) -> ifcopenshell.file:
-    """A new model of the instances ``keep`` (ids, ascending; closed under references), with the
-    same header and the same ids: its STEP text is what ``model.to_string()`` would write of them."""
+def frame(model: ifcopenshell.file) -> tuple[str, str]:
+    """The STEP text of ``model`` before its instances (header and 'DATA;' line excluded) and after them."""
     empty = ifcopenshell.file(schema_identifier=model.schema_identifier)
     empty.assign_header_from(model)
     head, tail = empty.to_string().split("DATA;\n", 1)
+    return head, tail
+
+
+def rebuilt(model: ifcopenshell.file, keep: np.ndarray, texts: dict[int, str] | None = None) -> ifcopenshell.file:
+    """A new model of the instances ``keep`` (ids, ascending; closed under references), with the
+    same header and the same ids: its STEP text is what ``model.to_string()`` would write of them.
+    ``texts``: the STEP text of instances ``model`` holds only as stand-ins (``skeleton``)."""
+    head, tail = frame(model)
     by_id = model.by_id
-    body = "".join(by_id(int(i)).to_string() + ";\n" for i in keep)
+    if texts:
+        body = "".join((texts[i] if i in texts else by_id(i).to_string()) + ";\n" for i in keep.tolist())
+    else:
+        body = "".join(by_id(int(i)).to_string() + ";\n" for i in keep)
     return ifcopenshell.file.from_string(head + "DATA;\n" + body + tail)
 
 

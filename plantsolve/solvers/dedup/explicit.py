@@ -21,6 +21,7 @@ import ifcopenshell
 import ifcopenshell.util.placement
 
 from plantsolve.solvers.dedup.sharing import Placements, body_representation
+from plantsolve.solvers.dedup.skeleton import Skeleton
 
 FACE_SETS = ("IfcPolygonalFaceSet", "IfcTriangulatedFaceSet")
 FACE_MODELS = ("IfcFacetedBrep", "IfcFaceBasedSurfaceModel", "IfcShellBasedSurfaceModel")
@@ -43,8 +44,11 @@ class ExplicitReader:
     """Explicit geometry of one model (see the module's docstring). The model must not change while
     a reader is in use: what it remembers is keyed by instance id."""
 
-    def __init__(self, model: ifcopenshell.file, *, record_closures: bool = False):
+    def __init__(self, model: ifcopenshell.file, *, record_closures: bool = False, streamed: Skeleton | None = None):
         self.model = model
+        self.streamed = streamed  # the faceted items read from the file's text, absent from ``model``
+        # a product the kernel would tessellate holds a streamed item (whose instances ``model`` lacks)
+        self.needs_whole_model = False
         self.closures: dict[int, np.ndarray] | None = {} if record_closures else None
         self.closure_entities: dict[int, Counter] = {}  # item id → entity counts of its closure
         self._roles: dict[str, int] = {}
@@ -106,6 +110,8 @@ class ExplicitReader:
             faces = item.Faces if item.is_a("IfcPolygonalFaceSet") else item.CoordIndex
             return coords, len(faces)
         if any(item.is_a(t) for t in FACE_MODELS):
+            if self.streamed is not None and item.id() in self.streamed.points:
+                return self.streamed.points[item.id()]
             got = self._loop_points(item)
             if got is None or not got[0] or any(len(p) != 3 for p in got[0]):
                 return None
@@ -124,8 +130,9 @@ class ExplicitReader:
             return None
         return np.concatenate(parts), faces
 
-    def product_points(self, product) -> tuple[np.ndarray, int] | None:
-        """(unique world points in file units, face count) of the product's body, or None."""
+    def product_points(self, product, *, unique: bool = True) -> tuple[np.ndarray, int] | None:
+        """(unique world points in file units, face count) of the product's body, or None; ``unique=False``: the
+        world points as read, each product's made unique by the caller (:func:`unique_rows_each`)."""
         body = body_representation(product)
         if body is None:
             return None
@@ -135,11 +142,14 @@ class ExplicitReader:
         else:
             got = self._bodies[key] = self.items_points(body.Items or ())
         if got is None:
+            if self.streamed is not None and any(i.id() in self.streamed.closures for i in self.model.traverse(body)):
+                self.needs_whole_model = True
             return None
         pts, faces = got
         p = self.placements.of(product)
         with np.errstate(invalid="ignore"):  # a placement the file cannot resolve: its product is left unchanged later
-            return unique_rows(pts @ p[:3, :3].T + p[:3, 3]), faces
+            world = pts @ p[:3, :3].T + p[:3, 3]
+        return (unique_rows(world) if unique else world), faces
 
 
 def unique_rows(points: np.ndarray) -> np.ndarray:
@@ -152,6 +162,23 @@ def unique_rows(points: np.ndarray) -> np.ndarray:
     keep[0] = True
     np.any(ordered[1:] != ordered[:-1], axis=1, out=keep[1:])
     return ordered[keep]
+
+
+def unique_rows_each(parts: list[np.ndarray]) -> list[np.ndarray]:
+    """:func:`unique_rows` of each array, in one lexsort of them all (the array it came from first): the same rows
+    in the same order as one by one, without a sort call per product."""
+    if not parts:
+        return []
+    sizes = np.array([len(p) for p in parts])
+    owner = np.repeat(np.arange(len(parts)), sizes)
+    points = np.concatenate(parts)
+    order = np.lexsort((points[:, 2], points[:, 1], points[:, 0], owner))
+    ordered, owner = points[order], owner[order]
+    keep = np.ones(len(ordered), dtype=bool)
+    np.any(ordered[1:] != ordered[:-1], axis=1, out=keep[1:])
+    keep[1:] |= owner[1:] != owner[:-1]
+    kept = np.bincount(owner[keep], minlength=len(parts))
+    return np.split(ordered[keep], np.cumsum(kept)[:-1])
 
 
 def product_points(model: ifcopenshell.file, product) -> tuple[np.ndarray, int] | None:

@@ -40,11 +40,18 @@ def open_path(path: str) -> ifcopenshell.file:
         if "schema" in message.lower():
             raise reject(f"unknown or unsupported IFC schema: {message}") from None
         raise reject(f"unreadable IFC file: {message}") from None
+    check_model(model)
+    return model
+
+
+def check_model(model: ifcopenshell.file, instances: int | None = None) -> None:
+    """Refuses a model this solver cannot optimize; ``instances``: how many the file holds, when ``model`` is
+    only part of it."""
     largest = model.get_max_id()
     # the optimization numbers what it adds after the largest instance: at most a few per instance there is;
     # the instances are counted only when the largest number alone leaves doubt (there are at most that many)
     if 3 * largest + 1000 > MAX_INSTANCE_NUMBER and \
-            largest + 2 * len(model.entity_names()) + 1000 > MAX_INSTANCE_NUMBER:
+            largest + 2 * (instances or len(model.entity_names())) + 1000 > MAX_INSTANCE_NUMBER:
         raise reject(f"instance #{largest}: IfcOpenShell addresses instance numbers up to #{MAX_INSTANCE_NUMBER:,}, "
                      "and the optimized model numbers what it adds after the largest; renumber the file's instances "
                      "from #1, as any IFC export or STEP tool does")
@@ -55,7 +62,6 @@ def open_path(path: str) -> ifcopenshell.file:
         held = ", ".join(f"{n:,} {name}" for name, n in counts.most_common(3)) or "no instances"
         raise reject(f"not an IFC model: the file has no IfcProject (every model has one, with its units and "
                      f"representation contexts); it holds {held}")
-    return model
 
 
 def model_text(model: ifcopenshell.file) -> bytes:

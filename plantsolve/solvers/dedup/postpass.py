@@ -118,20 +118,20 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
         if k % 20000 == 0:
             progress(lo + (hi - lo) * k / max(len(order), 1), "post-pass")
         values = list(inst)
-        for i, v in enumerate(values):
-            s = _substituted(v, remap)
-            if s is not None:
-                inst[i] = s
-                values[i] = s
+        if remap:
+            for i, v in enumerate(values):
+                if isinstance(v, (ifcopenshell.entity_instance, tuple)):  # only references can have been merged
+                    s = _substituted(v, remap)
+                    if s is not None:
+                        inst[i] = s
+                        values[i] = s
         name = inst.is_a()
         mergeable = mergeable_cache.get(name)
         if mergeable is None:
             mergeable = mergeable_cache[name] = not any(inst.is_a(t) for t in NEVER_MERGED)
-        if not mergeable:
+        if not mergeable or inst.id() in pinned:
             continue
         key = (name, tuple(_key_of(v) for v in values))
-        if inst.id() in pinned:
-            continue
         first = canonical.get(key)
         if first is None:
             canonical[key] = inst

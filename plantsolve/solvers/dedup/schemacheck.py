@@ -154,10 +154,54 @@ def global_rule_findings(model: ifcopenshell.file, rules: Rules) -> list[Finding
     return out
 
 
+class _Types:
+    """What the walk through attribute values asks of the schema, asked once per entity and per type: an entity's
+    attributes that are not derived with their types, a type's where-rules, what it declares (an aggregation's
+    element type), and whether a value's entity is a typed value. The schema's wrappers are kept here: a type
+    is known by the identity of the wrapper that was asked."""
+
+    def __init__(self, rules: Rules):
+        self.rules = rules
+        self._attributes: dict[str, list] = {}
+        self._types: dict[int, tuple] = {}
+        self._typed: dict[str, object] = {}
+
+    def attributes(self, entity: str) -> list[tuple[int, object]]:
+        got = self._attributes.get(entity)
+        if got is None:
+            decl = self.rules.schema.declaration_by_name(entity)
+            got = self._attributes[entity] = [(i, attr.type_of_attribute()) for i, (attr, derived) in
+                                              enumerate(zip(decl.all_attributes(), decl.derived())) if not derived]
+        return got
+
+    def of(self, ty) -> tuple[list, object | None]:
+        """(the where-rules of ``ty``, the element type when ``ty`` declares an aggregation, else None)."""
+        got = self._types.get(id(ty))
+        if got is None:
+            wrapper = ifcopenshell.ifcopenshell_wrapper
+            named = ty
+            while isinstance(named, wrapper.named_type):
+                named = named.declared_type()
+            name = None if isinstance(named, (wrapper.aggregation_type, wrapper.simple_type)) else named.name()
+            declared = ty
+            while isinstance(declared, (wrapper.named_type, wrapper.type_declaration)):
+                declared = declared.declared_type()
+            element = declared.type_of_element() if isinstance(declared, wrapper.aggregation_type) else None
+            got = self._types[id(ty)] = (self.rules.type_rules.get(name, ()), element, ty)  # ty: kept, so is its id
+        return got[0], got[1]
+
+    def typed(self, entity: str):
+        """The type declaration of a typed value's entity (``IfcLengthMeasure``), None for an entity."""
+        if entity not in self._typed:
+            decl = self.rules.schema.declaration_by_name(entity)
+            self._typed[entity] = None if isinstance(decl, ifcopenshell.ifcopenshell_wrapper.entity) else decl
+        return self._typed[entity]
+
+
 def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -> list[Finding]:
     """The where-rules of the defined types in each instance's attribute values and of its entity."""
     out: list[Finding] = []
-    wrapper = ifcopenshell.ifcopenshell_wrapper
+    types = _Types(rules)
 
     def run(found: Iterable, value, inst) -> None:
         """Each where-rule of ``found`` on ``value``, a violation recorded against ``inst``."""
@@ -171,26 +215,19 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
                 out.append(Finding(name, inst.is_a(), normalised(f"Rule {name}:\n    {rules.definition(e)}"),
                                    str(inst), inst.id()))
 
-    def type_name(ty):
-        while isinstance(ty, wrapper.named_type):
-            ty = ty.declared_type()
-        if isinstance(ty, (wrapper.aggregation_type, wrapper.simple_type)):
-            return None
-        return ty.name()
-
     def check(value, ty, inst) -> None:  # rule_executor.run's own walk through a value
         if value is None:
             return
-        run(rules.type_rules.get(type_name(ty), ()), value, inst)
-        while isinstance(ty, (wrapper.named_type, wrapper.type_declaration)):
-            ty = ty.declared_type()
+        found, element = types.of(ty)
+        if found:
+            run(found, value, inst)
         if isinstance(value, (list, tuple)):
-            if isinstance(ty, wrapper.aggregation_type):
+            if element is not None:
                 for v in value:
-                    check(v, ty.type_of_element(), inst)
+                    check(v, element, inst)
         elif isinstance(value, ifcopenshell.entity_instance):
-            decl = rules.schema.declaration_by_name(value.is_a())
-            if not isinstance(decl, wrapper.entity):  # a typed value: its type's rules
+            decl = types.typed(value.is_a())
+            if decl is not None:  # a typed value: its type's rules
                 check(value[0], decl, inst)
 
     with _Settings():
@@ -202,9 +239,9 @@ def rule_findings(model: ifcopenshell.file, instances: Iterable, rules: Rules) -
             except Exception as e:  # noqa: BLE001
                 out.append(Finding("", inst.is_a(), normalised(str(e)), str(inst), inst.id()))
                 continue
-            entity = rules.schema.declaration_by_name(inst.is_a())
-            for attr, value, derived in zip(entity.all_attributes(), values, entity.derived()):
-                if not derived:
-                    check(value, attr.type_of_attribute(), inst)
-            run(rules.entity_rules(inst.is_a()), inst, inst)
+            name = inst.is_a()
+            for i, ty in types.attributes(name):
+                if i < len(values):
+                    check(values[i], ty, inst)
+            run(rules.entity_rules(name), inst, inst)
     return out

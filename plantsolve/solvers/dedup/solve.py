@@ -4,6 +4,7 @@ proof (the written file read back). Phases as in the paper's Fig. 4, timed like 
 from __future__ import annotations
 
 import time
+from collections import Counter
 
 import ifcopenshell
 import ifcopenshell.util.unit
@@ -11,7 +12,7 @@ import ifcopenshell.util.unit
 from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
 from plantsolve.solvers.base import Progress, Solved, no_progress, reject
-from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing
+from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing, skeleton
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
@@ -96,6 +97,14 @@ def described(classes: list) -> tuple[list[DedupClass], int]:
     return out_classes, shared
 
 
+def _geometry(model: ifcopenshell.file, streamed: skeleton.Skeleton | None, products: list, progress: Progress):
+    """The products' world points and face counts, and the reader that read them (its closures: the sharing's
+    old geometry)."""
+    reader = ExplicitReader(model, record_closures=True, streamed=streamed)
+    points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
+    return reader, points, triangles
+
+
 def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     """The deduplicated model's result and, when it passed its proof, the optimized file itself."""
     opts = source.options
@@ -113,7 +122,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
 
     progress(0.0, "reading the IFC file")
     with source.step_file() as (path, original_bytes):
-        model = ifcio.open_path(str(path))
+        model, streamed = skeleton.open_model(path)
         lap("parse")
         schema = model.schema
         mode = resolve_mode(opts.sharing, schema)
@@ -134,11 +143,21 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         if not products:
             raise reject("the file has no product with geometry (no IfcProduct has a Representation)")
         progress(0.05, "tessellating products in world coordinates")
-        reader = ExplicitReader(model, record_closures=True)  # the closures: the sharing's old geometry
-        points, triangles = world_points(model, products, progress=progress, span=(0.05, 0.35), reader=reader)
+        reader, points, triangles = _geometry(model, streamed, products, progress)
+        if reader.needs_whole_model:  # the kernel tessellates a product with a streamed item: the whole file it is
+            model, streamed = ifcio.open_path(str(path)), None
+            products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
+            reader, points, triangles = _geometry(model, None, products, progress)
         reader.forget_points()  # the world points are all the matching needs
         ids_before = compaction.instance_ids(model)
-        counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities, ids_before)
+        if streamed is None:
+            counts_before = proof.entity_counts(model, reader.closures, reader.closure_entities, ids_before)
+            known = reader.closures
+        else:  # the skeleton's instances, with the items' as the skeleton holds them, and the rest of the items'
+            known = {**reader.closures, **streamed.parsed}
+            counts = Counter(proof.entity_counts(model, known, {**reader.closure_entities,
+                                                                **streamed.parsed_entities}, ids_before))
+            counts_before = dict(sorted((counts + streamed.inner).items()))
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
         warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, model_sizes(points.values())))
@@ -163,6 +182,12 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                 progress=progress, span=(0.35, 0.55))
         pooled = pool_transforms(classes, tol)
         lap("matching")
+        if streamed is not None and not skeleton.rebuild_expected(streamed, reader.closures, classes):
+            # little goes: removing it from the whole model is cheaper than writing what stays (compaction)
+            model, known = ifcio.open_path(str(path)), {**reader.closures, **streamed.closures}
+            for c in candidates:
+                c.product = model.by_id(c.product.id())
+            ids_before, streamed = compaction.instance_ids(model), None
         detached = sharing.Detached(model)
         written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
                                 placements=reader.placements)
@@ -173,9 +198,12 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         # the old model's instances are not used past this point: a rebuilt model replaces it
         ids_now = compaction.grown(model, ids_before)
         del ids_before
-        model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
-                                     everything=ids_now)
-        del detached, reader, classes, candidates, products, points, triangles, p, ids_now
+        if streamed is None:
+            model = compaction.compacted(model, detached.roots, detached.styled_by, known=known, everything=ids_now)
+        else:
+            model = skeleton.compacted(model, streamed, detached.roots, detached.styled_by, known=known,
+                                       everything=ids_now)
+        del detached, reader, classes, candidates, products, points, triangles, p, ids_now, known, streamed
         lap("sharing")
         removed = {}
         if opts.postpass:

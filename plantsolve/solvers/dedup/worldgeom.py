@@ -12,7 +12,7 @@ import ifcopenshell.util.unit
 
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.explicit import ExplicitReader
+from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows_each
 
 
 def _usable(points: np.ndarray) -> bool:
@@ -41,17 +41,20 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     triangles: dict[int, int] = {}
     rest = []
     reader = reader or ExplicitReader(model)
+    read: dict[int, np.ndarray] = {}
     for k, product in enumerate(products):
         try:
-            got = reader.product_points(product)
+            got = reader.product_points(product, unique=False)
         except (ValueError, TypeError, IndexError, AttributeError):  # a point that is no triple of numbers
             continue  # missing from both, as the kernel's failures: left unchanged with a warning
         if got is None:
             rest.append(product)
         elif _usable(got[0]):
-            points[product.id()], triangles[product.id()] = got
+            read[product.id()], triangles[product.id()] = got
         if k % 500 == 0:
             progress(span[0] + (span[1] - span[0]) * 0.5 * k / len(products), message)
+    points.update(zip(read, unique_rows_each(list(read.values()))))
+    del read
     products = rest
     if not products:
         return points, triangles

@@ -14,7 +14,7 @@ import ifcopenshell
 import ifcopenshell.util.element
 
 from plantsolve.solvers.dedup import compaction, proof, sharing
-from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows
+from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows, unique_rows_each
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate
 from plantsolve.solvers.dedup.matching import Match, det3, hausdorff, make_shape, one_to_one, verify
 from plantsolve.solvers.dedup.synthetic import (WORLD_ORIGIN, ModelSpec, Product, apply, build_model, pose,
@@ -154,6 +154,17 @@ def test_unique_rows_is_numpys_unique():
     points = np.concatenate([points, points[::3], [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]])
     assert np.array_equal(unique_rows(points), np.unique(points, axis=0))
     assert unique_rows(np.zeros((0, 3))).shape == (0, 3)
+
+
+def test_unique_rows_of_many_at_once_are_each_one_s():
+    rng = np.random.default_rng(4)
+    parts = [np.round(rng.normal(size=(int(n), 3)), 1) for n in rng.integers(5, 60, 100)]
+    parts.insert(7, np.zeros((0, 3)))
+    parts[3][:2] = [[-0.0, 0.0, 0.0], [0.0, -0.0, 0.0]]  # equal rows that differ in their zeros' signs
+    parts[5][2:4] = [[np.nan, 1.0, 2.0], [np.nan, 1.0, 2.0]]
+    for one, each in zip(map(unique_rows, parts), unique_rows_each(parts), strict=True):
+        assert one.shape == each.shape and np.array_equal(one, each, equal_nan=True)
+        assert np.array_equal(np.signbit(one), np.signbit(each))
 
 
 def _both_ways(rep, member, m: Match) -> float:
