@@ -24,6 +24,7 @@ which stays fast with many samples and on a loaded machine.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -473,12 +474,16 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
         cand = cand[np.argsort(-proj[cand], kind="stable")]
         q = pts[cand]
         r2 = (0.5 * rp) ** 2
-        for a in range(0, len(cand), 32):
-            diff = q[a:a + 32, None, :] - q[None, :, :]
+        a = 0
+        for size in itertools.chain((4, 28), itertools.repeat(32)):  # the first 4, then 32 at a time
+            if a >= len(cand):
+                break
+            diff = q[a:a + size, None, :] - q[None, :, :]
             cnt = np.count_nonzero(np.einsum("ijk,ijk->ij", diff, diff) <= r2, axis=1)
             dense = np.flatnonzero(cnt >= 4)
             if len(dense):
                 return float(proj[cand[a + dense[0]]])
+            a += size
     return float(np.percentile(proj, 99.5))
 
 
@@ -486,7 +491,7 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np
     """First/last straight lengths from the extent of their samples (those ``keep`` marks, when given)."""
     m = model.copy()
     rp = max(m.pipe_radius, 1e-12)
-    sp = build_spine(m)
+    sp = build_spine(model)  # (the copy's own would be built anew)
     last = len(sp.kind) - 1
     t0 = m.frame[:, 0]
     if last == 0:  # straight tube: one line holds both ends
