@@ -4,6 +4,7 @@ domain's errors (:mod:`plantsolve.jobs.errors`), which the app renders as proble
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import binascii
 import hashlib
@@ -151,6 +152,24 @@ class JobService:
         submitted = self.stored(new, *self.ctx.repo.create(self._columns(new)))
         if submitted.created:
             self.dispatch(submitted.job)
+        return submitted
+
+    @property
+    def stores_on_loop(self) -> bool:
+        """Whether :meth:`store_on_loop` may be awaited: the store writes a new job on the event loop and the queue
+        takes it there (PostgreSQL and Redis)."""
+        return self.ctx.repo.creates_on_loop and getattr(self.dispatcher, "enqueues_on_loop", False)
+
+    async def store_on_loop(self, new: NewJob) -> Submitted:
+        """:meth:`store` awaited on the running event loop, no thread: the row is committed, then the job handed to
+        the queue (a hand-over that fails leaves the job to the sweeper, as in :meth:`dispatch`)."""
+        submitted = self.stored(new, *await self.ctx.repo.create_on_loop(self._columns(new)))
+        if submitted.created:
+            try:
+                await self.dispatcher.enqueue_on_loop(submitted.job.id, submitted.job.kind)
+            except Exception:
+                log.warning("enqueue of job %s failed; the sweeper will send it", submitted.job.id, exc_info=True)
+                await asyncio.to_thread(self.ctx.repo.clear_enqueued, submitted.job.id)
         return submitted
 
     def store_later(self, new: NewJob) -> Future | None:

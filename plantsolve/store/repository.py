@@ -8,6 +8,7 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 
 from __future__ import annotations
 
+import asyncio
 import uuid
 from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
@@ -20,6 +21,7 @@ from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
 
 from plantsolve.jobs.lifecycle import ACTIVE, CANCEL, CLAIM, FAIL, FINISHED, QUEUED, REQUEUE, RUNNING, SUCCEED
+from plantsolve.store.loop_connections import LoopConnections
 from plantsolve.store.models import Artifact, Job, utcnow
 from plantsolve.store.writer import JobWriter
 
@@ -138,17 +140,18 @@ class LapsedAttempt:
 
 class JobRepository:
     """``group_commit``: new jobs are inserted by one writer thread, in one transaction per batch of concurrent
-    submissions (:mod:`plantsolve.store.writer`; right for SQLite, which has one writer at a time anyway)."""
+    submissions (:mod:`plantsolve.store.writer`; right for SQLite, which has one writer at a time anyway).
+    ``loop_connections`` (PostgreSQL): an event loop may insert new jobs itself (:meth:`create_on_loop`)."""
 
     def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext,
-                 *, group_commit: bool = False):
+                 *, group_commit: bool = False, loop_connections: LoopConnections | None = None):
         self.sessions = sessions
         self.writing = writing  # see Database.writing
         self.writer = JobWriter(sessions.kw["bind"], JOBS, writing, self.get_by_idempotency_key,
                                  made=JobRecord.of) if group_commit \
             else None
         engine = sessions.kw["bind"]
-        self._insert = DriverInsert(engine, JOBS) if engine.dialect.driver == "psycopg" else None
+        self._insert = DriverInsert(engine, JOBS, loop_connections) if engine.dialect.driver == "psycopg" else None
 
     def close(self) -> None:
         """Write the submissions still queued for the writer thread, and end it."""
@@ -188,6 +191,26 @@ class JobRepository:
                     connection.execute(INSERT_JOB, given)
         except IntegrityError:
             existing = self.get_by_idempotency_key(key) if key is not None else None
+            if existing is None:
+                raise
+            return existing, False
+        return JobRecord.of(record), True
+
+    @property
+    def creates_on_loop(self) -> bool:
+        """Whether :meth:`create_on_loop` may be awaited (PostgreSQL through psycopg, with loop connections)."""
+        return self._insert is not None and self._insert.loop_connections is not None
+
+    async def create_on_loop(self, values: dict[str, Any]) -> tuple[JobRecord, bool]:
+        """:meth:`create`, awaited on the event loop (the INSERT on one of its connections: no thread); the row
+        committed when it returns. The read of the job that holds a taken idempotency key (a repeated request: rare)
+        goes to a thread."""
+        key = values.get("idempotency_key")
+        record = new_job_row(values)
+        try:
+            await self._insert.on_loop({name: value for name, value in record.items() if value is not None})
+        except IntegrityError:
+            existing = await asyncio.to_thread(self.get_by_idempotency_key, key) if key is not None else None
             if existing is None:
                 raise
             return existing, False
@@ -579,10 +602,12 @@ class DriverInsert:
     level set and reset per checkout cost more than the write on the submit path. The pool's checkout events run as
     for any connection (the ping after idle; the round-trip bound of the connection class), a driver error comes back
     as SQLAlchemy's exception of its class (an ``IntegrityError`` for a taken unique key), and a connection the
-    error broke is invalidated, as SQLAlchemy does."""
+    error broke is invalidated, as SQLAlchemy does. :meth:`on_loop`: the same INSERT awaited on one of the event
+    loop's ``loop_connections`` (same bounds, same errors)."""
 
-    def __init__(self, engine, table):
+    def __init__(self, engine, table, loop_connections: LoopConnections | None = None):
         self.engine = engine
+        self.loop_connections = loop_connections
         self.table = table.name
         quote = engine.dialect.identifier_preparer.quote
         self.names = {column.key: quote(column.name) for column in table.columns}
@@ -592,14 +617,7 @@ class DriverInsert:
 
     def __call__(self, values: dict[str, Any]) -> None:
         """Insert ``values`` (column key to a value that is not None) and commit."""
-        keys = tuple(values)
-        statement = self._statements.get(keys)
-        if statement is None:
-            statement = self._statements[keys] = (f"INSERT INTO {self.table} ({', '.join(self.names[k] for k in keys)})"
-                                                  f" VALUES ({', '.join('%s' for _ in keys)})")
-        params = tuple(value if (process := self.processors[key]) is None else process(value)
-                       for key, value in values.items())
-        dbapi_error = self.engine.dialect.loaded_dbapi.Error
+        statement, params = self._statement(values)
         pooled = None
         try:
             pooled = self.engine.raw_connection()
@@ -610,15 +628,38 @@ class DriverInsert:
             finally:
                 if not driver.closed:
                     driver.set_autocommit(False)
-        except dbapi_error as error:
+        except self.engine.dialect.loaded_dbapi.Error as error:
             invalidated = pooled is not None and self.engine.dialect.is_disconnect(error, pooled.dbapi_connection, None)
             if invalidated:
                 pooled.invalidate(error)
-            raise DBAPIError.instance(statement, params, error, dbapi_error, connection_invalidated=invalidated,
-                                      dialect=self.engine.dialect) from error
+            raise self._error(error, statement, params, invalidated) from error
         finally:
             if pooled is not None:
                 pooled.close()
+
+    async def on_loop(self, values: dict[str, Any]) -> None:
+        """:meth:`__call__` awaited on the running event loop (a connection of it; one that broke is not reused)."""
+        statement, params = self._statement(values)
+        connection = None
+        try:
+            async with self.loop_connections.connection() as connection:
+                await connection.execute(statement, params)
+        except self.engine.dialect.loaded_dbapi.Error as error:
+            invalidated = connection is None or self.engine.dialect.is_disconnect(error, connection, None)
+            raise self._error(error, statement, params, invalidated) from error
+
+    def _statement(self, values: dict[str, Any]) -> tuple[str, tuple]:
+        keys = tuple(values)
+        statement = self._statements.get(keys)
+        if statement is None:
+            statement = self._statements[keys] = (f"INSERT INTO {self.table} ({', '.join(self.names[k] for k in keys)})"
+                                                  f" VALUES ({', '.join('%s' for _ in keys)})")
+        return statement, tuple(value if (process := self.processors[key]) is None else process(value)
+                                for key, value in values.items())
+
+    def _error(self, error: Exception, statement: str, params: tuple, invalidated: bool) -> DBAPIError:
+        return DBAPIError.instance(statement, params, error, self.engine.dialect.loaded_dbapi.Error,
+                                   connection_invalidated=invalidated, dialect=self.engine.dialect)
 
 
 def new_job_row(values: dict[str, Any]) -> dict[str, Any]:
