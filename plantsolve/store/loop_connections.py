@@ -21,6 +21,8 @@ import time
 from contextlib import asynccontextmanager
 from typing import Any, AsyncIterator
 
+from sqlalchemy.exc import DBAPIError
+
 from plantsolve.store import engine as engine_module
 
 # connections at most, as the engine's pool (pool_size + max_overflow)
@@ -60,6 +62,7 @@ class LoopConnections:
     """Autocommit ``AsyncConnection``\\ s to the database of ``engine``, for the event loop that uses them."""
 
     def __init__(self, engine, *, wait: float, statement: float, size: int = SIZE):
+        self.dialect = engine.dialect
         _args, params = engine.dialect.create_connect_args(engine.url)
         self.params = {**engine_module.postgres_bounds(engine.url.render_as_string(hide_password=False), wait=wait,
                                                        statement=statement), **params}
@@ -67,6 +70,20 @@ class LoopConnections:
         self._idle: list[tuple[Any, float]] = []  # (connection, when it came back), the newest last
         self._loop: asyncio.AbstractEventLoop | None = None
         self._slots: asyncio.Semaphore | None = None
+
+    async def run(self, statement: str, params: tuple, *, fetch: bool = False) -> list[tuple] | None:
+        """Execute one statement (its own transaction) on a connection of this loop; ``fetch``: its rows. A driver
+        error comes back as SQLAlchemy's exception of its class (an ``IntegrityError`` for a taken unique key),
+        marked invalidated when the connection broke (then it is not used again), as from the engine."""
+        connection = None
+        try:
+            async with self.connection() as connection:
+                cursor = await connection.execute(statement, params)
+                return await cursor.fetchall() if fetch else None
+        except self.dialect.loaded_dbapi.Error as error:
+            invalidated = connection is None or self.dialect.is_disconnect(error, connection, None)
+            raise DBAPIError.instance(statement, params, error, self.dialect.loaded_dbapi.Error,
+                                      connection_invalidated=invalidated, dialect=self.dialect) from error
 
     @asynccontextmanager
     async def connection(self) -> AsyncIterator[Any]:

@@ -17,6 +17,7 @@ from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
 
 from sqlalchemy import String, Text, and_, bindparam, case, cast, delete, func, insert, or_, select, update
+from sqlalchemy.dialects import postgresql
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -152,6 +153,7 @@ class JobRepository:
             else None
         engine = sessions.kw["bind"]
         self._insert = DriverInsert(engine, JOBS, loop_connections) if engine.dialect.driver == "psycopg" else None
+        self._loop_connections = loop_connections if self._insert is not None else None
 
     def close(self) -> None:
         """Write the submissions still queued for the writer thread, and end it."""
@@ -229,6 +231,24 @@ class JobRepository:
         with self.sessions.kw["bind"].connect() as connection:
             row = connection.execute(BRIEF_BY_ID if brief else FULL_BY_ID, {"job_id": job_id}).first()
         return JobRecord.of(row, complete=not brief) if row is not None else None
+
+    @property
+    def reads_on_loop(self) -> bool:
+        """Whether :meth:`get_brief_on_loop` may be awaited (PostgreSQL through psycopg, with loop connections)."""
+        return self._loop_connections is not None
+
+    async def get_brief_on_loop(self, job_id: uuid.UUID) -> tuple[JobRecord | None, list[StoredArtifact]]:
+        """:meth:`get` of a brief record awaited on the event loop, with the job's artifacts when it succeeded (what
+        its view shows): the rows as psycopg hands them to SQLAlchemy's Core read (the same adapters), without a
+        thread or SQLAlchemy's execution context."""
+        rows = await self._loop_connections.run(BRIEF_BY_ID_SQL, (job_id,), fetch=True)
+        if not rows:
+            return None, []
+        job = JobRecord.of(dict(zip(BRIEF_KEYS, rows[0])), complete=False)
+        if job.status != SUCCEED.target:
+            return job, []
+        return job, [StoredArtifact(*row) for row in
+                     await self._loop_connections.run(ARTIFACTS_OF_JOB_SQL, (job_id,), fetch=True)]
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The columns an event stream watches, read by primary key (no input, result or report)."""
@@ -590,6 +610,12 @@ INSERT_JOB = JOBS.insert()
 # the columns a job's view shows: all but the input and the result
 BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in LEFT_OUT_OF_BRIEF)
 BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
+# the same reads as driver SQL (PostgreSQL), for the event loop's connections
+BRIEF_KEYS = tuple(column.key for column in BRIEF_COLUMNS)
+BRIEF_BY_ID_SQL = (f"SELECT {', '.join(postgresql.dialect().identifier_preparer.quote(c.name) for c in BRIEF_COLUMNS)}"
+                   f" FROM {JOBS.name} WHERE id = %s")
+ARTIFACTS_OF_JOB_SQL = (f"SELECT name, media_type, size, sha256, path FROM {ARTIFACTS.name} WHERE job_id = %s "
+                        "ORDER BY name")
 FULL_BY_ID = select(JOBS).where(JOBS.c.id == bindparam("job_id"))
 
 
@@ -638,15 +664,8 @@ class DriverInsert:
                 pooled.close()
 
     async def on_loop(self, values: dict[str, Any]) -> None:
-        """:meth:`__call__` awaited on the running event loop (a connection of it; one that broke is not reused)."""
-        statement, params = self._statement(values)
-        connection = None
-        try:
-            async with self.loop_connections.connection() as connection:
-                await connection.execute(statement, params)
-        except self.engine.dialect.loaded_dbapi.Error as error:
-            invalidated = connection is None or self.engine.dialect.is_disconnect(error, connection, None)
-            raise self._error(error, statement, params, invalidated) from error
+        """:meth:`__call__` awaited on the running event loop (on one of its connections)."""
+        await self.loop_connections.run(*self._statement(values))
 
     def _statement(self, values: dict[str, Any]) -> tuple[str, tuple]:
         keys = tuple(values)

@@ -46,7 +46,8 @@ class LeanRoutes:
     """``inline_reads``: read a job's status on the event loop instead of in a worker thread. Right for a local
     SQLite database, where that read takes tens of microseconds (less than the hop to a thread and back) and never
     waits for a writer (WAL); a database across the network is waited for in a thread, so that the loop serves
-    other requests meanwhile. A small JSON submission is read and checked on the loop; its write is awaited on the
+    other requests meanwhile, or on the loop where the store can be awaited (PostgreSQL:
+    :meth:`JobService.view_on_loop`). A small JSON submission is read and checked on the loop; its write is awaited on the
     loop where the store and the queue can be awaited (PostgreSQL and Redis: :meth:`JobService.store_on_loop`), goes
     to SQLite's group commit (awaited as a future), or else to a thread. A large body, an upload, and a process's
     first submission of a kind go to a thread whole."""
@@ -124,6 +125,9 @@ class LeanRoutes:
 
     async def get_job(self, job_id: uuid.UUID, scope: Scope, receive: Receive, send: Send, caller: Principal) -> None:
         _require(caller)
+        if self.service.reads_on_loop:  # PostgreSQL: awaited here, no thread
+            await _send_json(send, 200, (await self.service.view_on_loop(job_id, caller.sees)).model_dump_json().encode())
+            return
         call = partial(self._job_json, job_id, caller.sees)
         await _send_json(send, 200, call() if self.inline_reads else await run_in_threadpool(call))
 

@@ -1,5 +1,6 @@
-"""The submit path's INSERT awaited on the event loop (``JobRepository.create_on_loop``, on ``LoopConnections``):
-the row is the one the thread's driver insert writes, a taken idempotency key answers with the job that holds it,
+"""The submit path's INSERT and the status read awaited on the event loop (``JobRepository.create_on_loop`` and
+``get_brief_on_loop``, on ``LoopConnections``): the row is the one the thread's driver insert writes, the record
+read is the one the thread's Core read returns, a taken idempotency key answers with the job that holds it,
 a connection that broke is a 503-class error and is not handed out again, connections of a loop that ended are not
 used by the next, and a black-holed link costs a request the same bounded seconds as on the engine's connections."""
 
@@ -17,7 +18,7 @@ from sqlalchemy.exc import OperationalError
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.store import Database, JobRepository, engine
 from plantsolve.store.loop_connections import LoopConnections
-from plantsolve.store.repository import JOBS
+from plantsolve.store.repository import JOBS, LEFT_OUT_OF_BRIEF, JobRecord, StoredArtifact
 from tests.support.black_hole import BlackHoleProxy
 
 pytestmark = pytest.mark.integration
@@ -58,6 +59,35 @@ def test_the_loop_insert_writes_the_row_the_threads_insert_writes(db):
     assert {k: v for k, v in rows[mine.id].items() if k not in moments} == \
         {k: v for k, v in rows[theirs.id].items() if k not in moments}
     assert rows[mine.id]["created_at"] == mine.created_at and repo.get(mine.id).input == _job()["input"]
+    connections.close()
+
+
+def test_the_loop_read_returns_the_record_and_artifacts_the_threads_read_returns(db):
+    repo, connections = _repo(db)
+    job, _ = repo.create(_job(owner="alice", idempotency_key=f"alice:{uuid.uuid4()}", callback_url="https://x.test/h",
+                              callback_state="pending", callback_attempts=0))
+    attempt = repo.claim(job.id, lease_seconds=60, worker="w@host:1")
+    artifacts = [StoredArtifact("b.txt", "text/plain", 3, "ab" * 32, f"{job.id}/b.txt"),
+                 StoredArtifact("a.json", "application/json", 12, "cd" * 32, f"{job.id}/a.json")]
+    assert repo.finish_success(job.id, attempt, result={"norm": 5.0}, report={"message": "ok", "warnings": [{"code": "x"}]},
+                               artifacts=artifacts, run_seconds=0.25,
+                               attempts=[{"attempt": 1, "worker": "w@host:1", "outcome": "succeeded"}])
+    queued, _ = repo.create(_job())
+
+    async def read():
+        return [await repo.get_brief_on_loop(job_id) for job_id in (job.id, queued.id, uuid.uuid4())]
+
+    (done, listed), (waiting, none_listed), (missing, nothing) = asyncio.run(read())
+    for on_loop, job_id in ((done, job.id), (waiting, queued.id)):
+        in_thread = repo.get(job_id, brief=True)
+        assert not on_loop.complete and not hasattr(on_loop, "result")
+        fields = [name for name in JobRecord.__slots__ if name not in LEFT_OUT_OF_BRIEF]
+        assert {name: getattr(on_loop, name) for name in fields} == {name: getattr(in_thread, name) for name in fields}
+    assert done.status == "succeeded" and done.report["warnings"] == [{"code": "x"}] and done.run_seconds == 0.25
+    assert listed == sorted(artifacts, key=lambda a: a.name) and none_listed == []
+    assert [(a.name, a.media_type, a.size, a.sha256) for a in repo.artifacts(job.id)] == \
+        [(a.name, a.media_type, a.size, a.sha256) for a in listed]
+    assert missing is None and nothing == []
     connections.close()
 
 
