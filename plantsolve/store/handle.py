@@ -9,6 +9,7 @@ from plantsolve.store.blobs_database import DatabaseBlobStore
 from plantsolve.store.blobs_s3 import S3BlobStore
 from plantsolve.store.engine import Database
 from plantsolve.store.loop_connections import LoopConnections
+from plantsolve.store.loop_connections import available as loop_connections_available
 from plantsolve.store.models import Base
 from plantsolve.store.repository import JobRepository
 from plantsolve.store.sessions import SessionRepository
@@ -39,10 +40,10 @@ class Store:
             db.migrate()
         local = LocalBlobStore(settings.resolved_artifact_dir)
         # SQLite writes one transaction at a time: concurrent submissions share one (see store/writer.py)
-        # PostgreSQL through psycopg: an event loop's own connections, for the submissions it writes itself (made on
-        # first use)
+        # PostgreSQL: an event loop's own connections, for the submissions it writes and the statuses it reads itself
+        # (made on first use)
         loop_connections = LoopConnections(db.engine, wait=db.wait, statement=settings.database_statement_seconds) \
-            if db.engine.dialect.driver == "psycopg" else None
+            if loop_connections_available(db.engine) else None
         repo = JobRepository(db.sessions, db.writing, group_commit=db.is_sqlite, loop_connections=loop_connections)
         return cls(db=db, repo=repo, files=open_blob_store(settings, db, local),
                    sessions=SessionRepository(db.sessions, db.writing), spool=local, loop_connections=loop_connections)

@@ -9,6 +9,7 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 from __future__ import annotations
 
 import asyncio
+import functools
 import uuid
 from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
@@ -152,8 +153,8 @@ class JobRepository:
                                  made=JobRecord.of) if group_commit \
             else None
         engine = sessions.kw["bind"]
-        self._insert = DriverInsert(engine, JOBS, loop_connections) if engine.dialect.driver == "psycopg" else None
-        self._loop_connections = loop_connections if self._insert is not None else None
+        self._insert = DriverInsert(engine, JOBS) if engine.dialect.driver == "psycopg" else None
+        self._loop_connections = loop_connections
 
     def close(self) -> None:
         """Write the submissions still queued for the writer thread, and end it."""
@@ -200,8 +201,8 @@ class JobRepository:
 
     @property
     def creates_on_loop(self) -> bool:
-        """Whether :meth:`create_on_loop` may be awaited (PostgreSQL through psycopg, with loop connections)."""
-        return self._insert is not None and self._insert.loop_connections is not None
+        """Whether :meth:`create_on_loop` may be awaited (PostgreSQL, with loop connections)."""
+        return self._loop_connections is not None
 
     async def create_on_loop(self, values: dict[str, Any]) -> tuple[JobRecord, bool]:
         """:meth:`create`, awaited on the event loop (the INSERT on one of its connections: no thread); the row
@@ -209,8 +210,10 @@ class JobRepository:
         goes to a thread."""
         key = values.get("idempotency_key")
         record = new_job_row(values)
+        # unset columns stay SQL NULL, as in create()
+        given = {name: value for name, value in record.items() if value is not None}
         try:
-            await self._insert.on_loop({name: value for name, value in record.items() if value is not None})
+            await self._loop_connections.execute(loop_insert(tuple(given)), *given.values())
         except IntegrityError:
             existing = await asyncio.to_thread(self.get_by_idempotency_key, key) if key is not None else None
             if existing is None:
@@ -234,21 +237,19 @@ class JobRepository:
 
     @property
     def reads_on_loop(self) -> bool:
-        """Whether :meth:`get_brief_on_loop` may be awaited (PostgreSQL through psycopg, with loop connections)."""
+        """Whether :meth:`get_brief_on_loop` may be awaited (PostgreSQL, with loop connections)."""
         return self._loop_connections is not None
 
     async def get_brief_on_loop(self, job_id: uuid.UUID) -> tuple[JobRecord | None, list[StoredArtifact]]:
         """:meth:`get` of a brief record awaited on the event loop, with the job's artifacts when it succeeded (what
-        its view shows): the rows as psycopg hands them to SQLAlchemy's Core read (the same adapters), without a
-        thread or SQLAlchemy's execution context."""
-        rows = await self._loop_connections.run(BRIEF_BY_ID_SQL, (job_id,), fetch=True)
+        its view shows), without a thread or SQLAlchemy's execution context: the values the Core read returns."""
+        rows = await self._loop_connections.fetch(BRIEF_BY_ID_SQL, job_id)
         if not rows:
             return None, []
         job = JobRecord.of(dict(zip(BRIEF_KEYS, rows[0])), complete=False)
         if job.status != SUCCEED.target:
             return job, []
-        return job, [StoredArtifact(*row) for row in
-                     await self._loop_connections.run(ARTIFACTS_OF_JOB_SQL, (job_id,), fetch=True)]
+        return job, [StoredArtifact(*row) for row in await self._loop_connections.fetch(ARTIFACTS_OF_JOB_SQL, job_id)]
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The columns an event stream watches, read by primary key (no input, result or report)."""
@@ -610,12 +611,20 @@ INSERT_JOB = JOBS.insert()
 # the columns a job's view shows: all but the input and the result
 BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in LEFT_OUT_OF_BRIEF)
 BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
-# the same reads as driver SQL (PostgreSQL), for the event loop's connections
+# the statements of the event loop's connections (PostgreSQL, asyncpg's placeholders): the brief read, a succeeded
+# job's artifacts, the INSERT of the given columns
+_quote = postgresql.dialect().identifier_preparer.quote
 BRIEF_KEYS = tuple(column.key for column in BRIEF_COLUMNS)
-BRIEF_BY_ID_SQL = (f"SELECT {', '.join(postgresql.dialect().identifier_preparer.quote(c.name) for c in BRIEF_COLUMNS)}"
-                   f" FROM {JOBS.name} WHERE id = %s")
-ARTIFACTS_OF_JOB_SQL = (f"SELECT name, media_type, size, sha256, path FROM {ARTIFACTS.name} WHERE job_id = %s "
+BRIEF_BY_ID_SQL = f"SELECT {', '.join(_quote(c.name) for c in BRIEF_COLUMNS)} FROM {JOBS.name} WHERE id = $1"
+ARTIFACTS_OF_JOB_SQL = (f"SELECT name, media_type, size, sha256, path FROM {ARTIFACTS.name} WHERE job_id = $1 "
                         "ORDER BY name")
+
+
+@functools.cache
+def loop_insert(keys: tuple[str, ...]) -> str:
+    """The INSERT of a new job's given columns (``keys``), as :class:`DriverInsert` writes it."""
+    return (f"INSERT INTO {JOBS.name} ({', '.join(_quote(JOBS.c[key].name) for key in keys)}) "
+            f"VALUES ({', '.join(f'${i}' for i in range(1, len(keys) + 1))})")
 FULL_BY_ID = select(JOBS).where(JOBS.c.id == bindparam("job_id"))
 
 
@@ -628,12 +637,10 @@ class DriverInsert:
     level set and reset per checkout cost more than the write on the submit path. The pool's checkout events run as
     for any connection (the ping after idle; the round-trip bound of the connection class), a driver error comes back
     as SQLAlchemy's exception of its class (an ``IntegrityError`` for a taken unique key), and a connection the
-    error broke is invalidated, as SQLAlchemy does. :meth:`on_loop`: the same INSERT awaited on one of the event
-    loop's ``loop_connections`` (same bounds, same errors)."""
+    error broke is invalidated, as SQLAlchemy does."""
 
-    def __init__(self, engine, table, loop_connections: LoopConnections | None = None):
+    def __init__(self, engine, table):
         self.engine = engine
-        self.loop_connections = loop_connections
         self.table = table.name
         quote = engine.dialect.identifier_preparer.quote
         self.names = {column.key: quote(column.name) for column in table.columns}
@@ -662,10 +669,6 @@ class DriverInsert:
         finally:
             if pooled is not None:
                 pooled.close()
-
-    async def on_loop(self, values: dict[str, Any]) -> None:
-        """:meth:`__call__` awaited on the running event loop (on one of its connections)."""
-        await self.loop_connections.run(*self._statement(values))
 
     def _statement(self, values: dict[str, Any]) -> tuple[str, tuple]:
         keys = tuple(values)
