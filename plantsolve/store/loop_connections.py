@@ -36,8 +36,9 @@ from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
 
 from plantsolve.store import engine as engine_module
 
-# connections at most, as the engine's pool (pool_size + max_overflow)
-SIZE = 40
+# connections at most (beside the engine's pool, which then serves the other requests: 24 + 16 overflow); requests
+# beyond it wait for one, at most ``wait``
+SIZE = 24
 # SQLSTATE classes of a server error that says the database cannot serve now (503), not that the request is wrong:
 # connection exception, insufficient resources, operator intervention (a cancelled statement, a shutdown), system
 # error; and lock_not_available (the lock timeout)
