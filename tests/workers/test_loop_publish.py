@@ -92,5 +92,5 @@ def test_a_message_redis_did_not_take_is_sent_by_the_sweeper(tmp_path, pg_url, r
             != [[job_id]]
         assert dispatcher._sweeper.run_pass()
         sent = [json.loads(base64.b64decode(json.loads(raw)["body"]))[0][0] for raw in queue.lrange("celery", 0, -1)]
-        assert job_id in sent and len(sent) == 2
+        assert sent.count(job_id) == 1  # (the session's database may hold other jobs left unsent: sent too)
     queue.delete("celery")
