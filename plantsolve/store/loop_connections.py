@@ -40,15 +40,24 @@ from plantsolve.store import engine as engine_module
 # beyond it wait for one, at most ``wait``
 SIZE = 24
 # SQLSTATE classes of a server error that says the database cannot serve now (503), not that the request is wrong:
-# connection exception, insufficient resources, operator intervention (a cancelled statement, a shutdown), system
-# error; and lock_not_available (the lock timeout)
-UNAVAILABLE = ("08", "53", "57", "58", "55P03")
+# connection exception, invalid authorization, no such database (a connect refused, as psycopg's OperationalError),
+# insufficient resources, operator intervention (a cancelled statement, a shutdown), system error; and
+# lock_not_available (the lock timeout)
+UNAVAILABLE = ("08", "28", "3D", "53", "57", "58", "55P03")
+
+
+# the parameters of a database URL that asyncpg reads as libpq does; a URL with any other (``options``,
+# ``connect_timeout``, ``keepalives`` …) is left to the engine's connections alone
+URL_PARAMETERS = {"sslmode", "sslrootcert", "sslcert", "sslkey", "sslpassword", "application_name",
+                  "target_session_attrs"}
 
 
 def available(engine) -> bool:
-    """Whether an event loop can have connections of its own to ``engine``'s database: PostgreSQL, and asyncpg
-    installed (the [scaled] extra; without it the thread's path serves)."""
-    return engine.dialect.name == "postgresql" and importlib.util.find_spec("asyncpg") is not None
+    """Whether an event loop can have connections of its own to ``engine``'s database: PostgreSQL, a URL whose
+    parameters asyncpg reads as libpq does, and asyncpg installed (the [scaled] extra). Otherwise the thread's path
+    serves."""
+    return engine.dialect.name == "postgresql" and set(engine.url.query) <= URL_PARAMETERS \
+        and importlib.util.find_spec("asyncpg") is not None
 
 
 @functools.cache
@@ -62,9 +71,7 @@ class LoopConnections:
     """asyncpg connections to the database of ``engine`` (its URL), for the event loop that uses them."""
 
     def __init__(self, engine, *, wait: float, statement: float, size: int = SIZE):
-        url = engine.url
-        self.params = dict(host=url.host, port=url.port, user=url.username, password=url.password,
-                           database=url.database, **url.query)
+        self.dsn = engine.url.set(drivername="postgresql").render_as_string(hide_password=False)
         self.server_settings = {"statement_timeout": str(int(statement * 1000)), "lock_timeout": str(int(wait * 1000)),
                                 "idle_in_transaction_session_timeout": str(int((statement + wait) * 1000))}
         self.wait, self.statement, self.size = wait, statement, size
@@ -133,9 +140,13 @@ class LoopConnections:
             except Exception:  # the server or the link is gone: every idle connection is made anew
                 _terminate(connection)
                 self.close()
-        connection = await _asyncpg().connect(**self.params, timeout=self.wait, command_timeout=self.statement + self.wait,
-                                           server_settings=self.server_settings)
-        await connection.set_type_codec("json", schema="pg_catalog", encoder=json.dumps, decoder=json.loads)
+        connection = await _asyncpg().connect(self.dsn, timeout=self.wait, command_timeout=self.statement + self.wait,
+                                              server_settings=self.server_settings)
+        try:
+            await connection.set_type_codec("json", schema="pg_catalog", encoder=json.dumps, decoder=json.loads)
+        except BaseException:
+            _terminate(connection)
+            raise
         return connection
 
     def close(self) -> None:

@@ -186,3 +186,33 @@ def test_a_black_holed_link_costs_the_bounded_seconds_on_loop_connections(pg_url
     assert STATEMENT + WAIT <= in_use < STATEMENT + WAIT + 1.0, in_use
     assert WAIT <= idle < 2 * WAIT + 1.5, idle
     assert created
+
+
+def test_a_url_with_parameters_asyncpg_reads_otherwise_is_left_to_the_engines_connections(pg_url):
+    """libpq parameters asyncpg would send to the server as settings (which the server refuses) keep the thread's
+    path; those it reads as libpq does are taken."""
+    from plantsolve.store.loop_connections import available
+
+    url = make_url(pg_url)
+    for query, expected in (({}, True), ({"application_name": "api", "sslmode": "disable"}, True),
+                            ({"connect_timeout": "5"}, False), ({"options": "-c search_path=x"}, False)):
+        db = Database(url.update_query_dict(query).render_as_string(hide_password=False))
+        try:
+            assert available(db.engine) is expected, query
+        finally:
+            db.dispose()
+    db = Database(url.update_query_dict({"application_name": "api-loop", "sslmode": "disable"})
+                  .render_as_string(hide_password=False))
+    db.migrate()
+    repo, connections = _repo(db)
+
+    async def run():
+        await repo.create_on_loop(_job())
+        (connection, _), = connections._idle
+        return await connection.fetchval("SHOW application_name")
+
+    try:
+        assert asyncio.run(run()) == "api-loop"
+    finally:
+        connections.close()
+        db.dispose()
