@@ -61,6 +61,8 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
             if run_jobs:
                 app.state.webhooks.stop()
                 dispatcher.stop()
+            if getattr(dispatcher, "enqueues_on_loop", False):
+                await dispatcher.close_on_loop()
             ctx.close()
 
     app = FastAPI(

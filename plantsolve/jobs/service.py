@@ -4,6 +4,7 @@ domain's errors (:mod:`plantsolve.jobs.errors`), which the app renders as proble
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import binascii
 import hashlib
@@ -153,6 +154,24 @@ class JobService:
             self.dispatch(submitted.job)
         return submitted
 
+    @property
+    def stores_on_loop(self) -> bool:
+        """Whether :meth:`store_on_loop` may be awaited: the store writes a new job on the event loop and the queue
+        takes it there (PostgreSQL and Redis)."""
+        return self.ctx.repo.creates_on_loop and getattr(self.dispatcher, "enqueues_on_loop", False)
+
+    async def store_on_loop(self, new: NewJob) -> Submitted:
+        """:meth:`store` awaited on the running event loop, no thread: the row is committed, then the job handed to
+        the queue (a hand-over that fails leaves the job to the sweeper, as in :meth:`dispatch`)."""
+        submitted = self.stored(new, *await self.ctx.repo.create_on_loop(self._columns(new)))
+        if submitted.created:
+            try:
+                await self.dispatcher.enqueue_on_loop(submitted.job.id, submitted.job.kind)
+            except Exception:
+                log.warning("enqueue of job %s failed; the sweeper will send it", submitted.job.id, exc_info=True)
+                await asyncio.to_thread(self.ctx.repo.clear_enqueued, submitted.job.id)
+        return submitted
+
     def store_later(self, new: NewJob) -> Future | None:
         """Store a submission through the store's group commit: a future of what :meth:`stored` takes, answered once
         the row is committed; None when the store writes each submission itself (then call :meth:`store`). The
@@ -214,6 +233,18 @@ class JobService:
         if job is None or (sees is not None and job.owner != sees):
             raise NotFound(f"No job {job_id}.")
         return job
+
+    @property
+    def reads_on_loop(self) -> bool:
+        """Whether :meth:`view_on_loop` may be awaited (the store reads on the event loop: PostgreSQL)."""
+        return self.ctx.repo.reads_on_loop
+
+    async def view_on_loop(self, job_id: uuid.UUID, sees: str | None = None) -> JobView:
+        """The view of :meth:`get` (brief) awaited on the running event loop, no thread."""
+        job, artifacts = await self.ctx.repo.get_brief_on_loop(job_id)
+        if job is None or (sees is not None and job.owner != sees):
+            raise NotFound(f"No job {job_id}.")
+        return self.view(job, artifacts=artifacts)
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The job's status and progress alone (what an event stream polls)."""
@@ -328,14 +359,15 @@ class JobService:
         next_cursor = encode_cursor(jobs[-1]) if more and jobs else None
         return JobList(items=[self.view(job, with_artifacts=False) for job in jobs], next_cursor=next_cursor)
 
-    def view(self, job: JobRecord, *, with_artifacts: bool = True) -> JobView:
+    def view(self, job: JobRecord, *, with_artifacts: bool = True, artifacts: Iterable[Any] | None = None) -> JobView:
+        """The job's view; ``artifacts``: the succeeded job's, read already (else read here)."""
         created, started, finished = as_utc(job.created_at), as_utc(job.started_at), as_utc(job.finished_at)
         base = f"/v1/jobs/{job.id}"
-        artifacts = []
+        listed = []
         if with_artifacts and job.status == SUCCEEDED:
-            artifacts = [
+            listed = [
                 ArtifactInfo(name=a.name, media_type=a.media_type, size=a.size, sha256=a.sha256, url=f"{base}/artifacts/{a.name}")
-                for a in self.ctx.repo.artifacts(job.id)
+                for a in (self.ctx.repo.artifacts(job.id) if artifacts is None else artifacts)
             ]
         links = {"self": base, "result": f"{base}/result", "cancel": f"{base}/cancel", "input": f"{base}/input"}
         return JobView(
@@ -357,7 +389,7 @@ class JobService:
                              if job.owner and job.idempotency_key else job.idempotency_key),
             summary=_summary(job),
             report=job.report,
-            artifacts=artifacts,
+            artifacts=listed,
             attempts=[AttemptInfo.model_validate(h) for h in (job.attempts or [])],
             links=links,
             callback=(CallbackInfo(url=job.callback_url, state=job.callback_state, attempts=job.callback_attempts or 0,

@@ -53,17 +53,23 @@ def make_engine(url: str, *, wait: float = WAIT_SECONDS, statement: float = STAT
     # proxy between, takes the bytes and never answers; a server that hangs) the client bounds each round trip
     # itself (bounded_connection_class). The server's side of such a link: a session left inside a transaction
     # (its client gone mid-write) ends after statement + wait, so its row locks do not stall every later write.
+    # Connections above pool_size are closed on return; under a burst of submissions that
+    # means a new PostgreSQL connection (several ms) per request, so keep the pool wide.
+    engine = create_engine(url, pool_size=24, max_overflow=16, pool_recycle=1800, pool_timeout=wait,
+                           connect_args=postgres_bounds(url, wait=wait, statement=statement))
+    _bound_round_trips(engine, wait=wait, statement=statement)
+    return engine
+
+
+def postgres_bounds(url: str, *, wait: float, statement: float) -> dict[str, object]:
+    """The connection parameters that bound every PostgreSQL request (see :func:`make_engine`), less those the URL
+    sets itself."""
     bounds = {"connect_timeout": max(1, round(wait)), "tcp_user_timeout": int(statement * 1000),
               "keepalives": 1, "keepalives_idle": 5, "keepalives_interval": 2, "keepalives_count": 2,
               "options": f"-c statement_timeout={int(statement * 1000)} -c lock_timeout={int(wait * 1000)} "
                          f"-c idle_in_transaction_session_timeout={int((statement + wait) * 1000)}"}
-    given = set(parsed.query)
-    # Connections above pool_size are closed on return; under a burst of submissions that
-    # means a new PostgreSQL connection (several ms) per request, so keep the pool wide.
-    engine = create_engine(url, pool_size=24, max_overflow=16, pool_recycle=1800, pool_timeout=wait,
-                           connect_args={k: v for k, v in bounds.items() if k not in given})
-    _bound_round_trips(engine, wait=wait, statement=statement)
-    return engine
+    given = set(make_url(url).query)
+    return {k: v for k, v in bounds.items() if k not in given}
 
 
 # A pooled connection that was idle this long is pinged before a request uses it (one that came back a moment

@@ -8,6 +8,8 @@ from plantsolve.store.blobs import BlobStore, LocalBlobStore
 from plantsolve.store.blobs_database import DatabaseBlobStore
 from plantsolve.store.blobs_s3 import S3BlobStore
 from plantsolve.store.engine import Database
+from plantsolve.store.loop_connections import LoopConnections
+from plantsolve.store.loop_connections import available as loop_connections_available
 from plantsolve.store.models import Base
 from plantsolve.store.repository import JobRepository
 from plantsolve.store.sessions import SessionRepository
@@ -25,6 +27,7 @@ class Store:
     files: BlobStore
     sessions: SessionRepository
     spool: LocalBlobStore
+    loop_connections: LoopConnections | None = None
 
     @classmethod
     def open(cls, settings: StoreSettings, *, migrate: bool | str = False) -> "Store":
@@ -37,13 +40,19 @@ class Store:
             db.migrate()
         local = LocalBlobStore(settings.resolved_artifact_dir)
         # SQLite writes one transaction at a time: concurrent submissions share one (see store/writer.py)
-        repo = JobRepository(db.sessions, db.writing, group_commit=db.is_sqlite)
+        # PostgreSQL: an event loop's own connections, for the submissions it writes and the statuses it reads itself
+        # (made on first use)
+        loop_connections = LoopConnections(db.engine, wait=db.wait, statement=settings.database_statement_seconds) \
+            if loop_connections_available(db.engine) else None
+        repo = JobRepository(db.sessions, db.writing, group_commit=db.is_sqlite, loop_connections=loop_connections)
         return cls(db=db, repo=repo, files=open_blob_store(settings, db, local),
-                   sessions=SessionRepository(db.sessions, db.writing), spool=local)
+                   sessions=SessionRepository(db.sessions, db.writing), spool=local, loop_connections=loop_connections)
 
     def close(self) -> None:
         self.repo.close()
         self.db.dispose()
+        if self.loop_connections is not None:
+            self.loop_connections.close()
 
 
 def open_blob_store(settings: StoreSettings, db: Database, local: LocalBlobStore) -> BlobStore:

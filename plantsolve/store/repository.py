@@ -8,6 +8,8 @@ never overwrite what a newer attempt or the user did: its update matches no row.
 
 from __future__ import annotations
 
+import asyncio
+import functools
 import uuid
 from concurrent.futures import Future
 from contextlib import AbstractContextManager, nullcontext
@@ -16,10 +18,12 @@ from datetime import datetime, timedelta, timezone
 from typing import Any, Callable, Iterable
 
 from sqlalchemy import String, Text, and_, bindparam, case, cast, delete, func, insert, or_, select, update
+from sqlalchemy.dialects import postgresql
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
 
 from plantsolve.jobs.lifecycle import ACTIVE, CANCEL, CLAIM, FAIL, FINISHED, QUEUED, REQUEUE, RUNNING, SUCCEED
+from plantsolve.store.loop_connections import LoopConnections
 from plantsolve.store.models import Artifact, Job, utcnow
 from plantsolve.store.writer import JobWriter
 
@@ -138,10 +142,11 @@ class LapsedAttempt:
 
 class JobRepository:
     """``group_commit``: new jobs are inserted by one writer thread, in one transaction per batch of concurrent
-    submissions (:mod:`plantsolve.store.writer`; right for SQLite, which has one writer at a time anyway)."""
+    submissions (:mod:`plantsolve.store.writer`; right for SQLite, which has one writer at a time anyway).
+    ``loop_connections`` (PostgreSQL): an event loop may insert new jobs itself (:meth:`create_on_loop`)."""
 
     def __init__(self, sessions: sessionmaker[Session], writing: Callable[[], AbstractContextManager] = nullcontext,
-                 *, group_commit: bool = False):
+                 *, group_commit: bool = False, loop_connections: LoopConnections | None = None):
         self.sessions = sessions
         self.writing = writing  # see Database.writing
         self.writer = JobWriter(sessions.kw["bind"], JOBS, writing, self.get_by_idempotency_key,
@@ -149,6 +154,7 @@ class JobRepository:
             else None
         engine = sessions.kw["bind"]
         self._insert = DriverInsert(engine, JOBS) if engine.dialect.driver == "psycopg" else None
+        self._loop_connections = loop_connections
 
     def close(self) -> None:
         """Write the submissions still queued for the writer thread, and end it."""
@@ -193,6 +199,28 @@ class JobRepository:
             return existing, False
         return JobRecord.of(record), True
 
+    @property
+    def creates_on_loop(self) -> bool:
+        """Whether :meth:`create_on_loop` may be awaited (PostgreSQL, with loop connections)."""
+        return self._loop_connections is not None
+
+    async def create_on_loop(self, values: dict[str, Any]) -> tuple[JobRecord, bool]:
+        """:meth:`create`, awaited on the event loop (the INSERT on one of its connections: no thread); the row
+        committed when it returns. The read of the job that holds a taken idempotency key (a repeated request: rare)
+        goes to a thread."""
+        key = values.get("idempotency_key")
+        record = new_job_row(values)
+        # unset columns stay SQL NULL, as in create()
+        given = {name: value for name, value in record.items() if value is not None}
+        try:
+            await self._loop_connections.execute(loop_insert(tuple(given)), *given.values())
+        except IntegrityError:
+            existing = await asyncio.to_thread(self.get_by_idempotency_key, key) if key is not None else None
+            if existing is None:
+                raise
+            return existing, False
+        return JobRecord.of(record), True
+
     def create_later(self, values: dict[str, Any]) -> Future | None:
         """:meth:`create` of a job given as its columns through the writer thread: a future of ``(job, created)``
         answered once the row is committed (None without group commit). A taken idempotency key is found by the
@@ -206,6 +234,22 @@ class JobRepository:
         with self.sessions.kw["bind"].connect() as connection:
             row = connection.execute(BRIEF_BY_ID if brief else FULL_BY_ID, {"job_id": job_id}).first()
         return JobRecord.of(row, complete=not brief) if row is not None else None
+
+    @property
+    def reads_on_loop(self) -> bool:
+        """Whether :meth:`get_brief_on_loop` may be awaited (PostgreSQL, with loop connections)."""
+        return self._loop_connections is not None
+
+    async def get_brief_on_loop(self, job_id: uuid.UUID) -> tuple[JobRecord | None, list[StoredArtifact]]:
+        """:meth:`get` of a brief record awaited on the event loop, with the job's artifacts when it succeeded (what
+        its view shows), without a thread or SQLAlchemy's execution context: the values the Core read returns."""
+        rows = await self._loop_connections.fetch(BRIEF_BY_ID_SQL, job_id)
+        if not rows:
+            return None, []
+        job = JobRecord.of(dict(zip(BRIEF_KEYS, rows[0])), complete=False)
+        if job.status != SUCCEED.target:
+            return job, []
+        return job, [StoredArtifact(*row) for row in await self._loop_connections.fetch(ARTIFACTS_OF_JOB_SQL, job_id)]
 
     def state(self, job_id: uuid.UUID) -> JobState | None:
         """The columns an event stream watches, read by primary key (no input, result or report)."""
@@ -567,6 +611,20 @@ INSERT_JOB = JOBS.insert()
 # the columns a job's view shows: all but the input and the result
 BRIEF_COLUMNS = tuple(column for column in JOBS.columns if column.key not in LEFT_OUT_OF_BRIEF)
 BRIEF_BY_ID = select(*BRIEF_COLUMNS).where(JOBS.c.id == bindparam("job_id"))
+# the statements of the event loop's connections (PostgreSQL, asyncpg's placeholders): the brief read, a succeeded
+# job's artifacts, the INSERT of the given columns
+_quote = postgresql.dialect().identifier_preparer.quote
+BRIEF_KEYS = tuple(column.key for column in BRIEF_COLUMNS)
+BRIEF_BY_ID_SQL = f"SELECT {', '.join(_quote(c.name) for c in BRIEF_COLUMNS)} FROM {JOBS.name} WHERE id = $1"
+ARTIFACTS_OF_JOB_SQL = (f"SELECT name, media_type, size, sha256, path FROM {ARTIFACTS.name} WHERE job_id = $1 "
+                        "ORDER BY name")
+
+
+@functools.cache
+def loop_insert(keys: tuple[str, ...]) -> str:
+    """The INSERT of a new job's given columns (``keys``), as :class:`DriverInsert` writes it."""
+    return (f"INSERT INTO {JOBS.name} ({', '.join(_quote(JOBS.c[key].name) for key in keys)}) "
+            f"VALUES ({', '.join(f'${i}' for i in range(1, len(keys) + 1))})")
 FULL_BY_ID = select(JOBS).where(JOBS.c.id == bindparam("job_id"))
 
 
@@ -592,14 +650,7 @@ class DriverInsert:
 
     def __call__(self, values: dict[str, Any]) -> None:
         """Insert ``values`` (column key to a value that is not None) and commit."""
-        keys = tuple(values)
-        statement = self._statements.get(keys)
-        if statement is None:
-            statement = self._statements[keys] = (f"INSERT INTO {self.table} ({', '.join(self.names[k] for k in keys)})"
-                                                  f" VALUES ({', '.join('%s' for _ in keys)})")
-        params = tuple(value if (process := self.processors[key]) is None else process(value)
-                       for key, value in values.items())
-        dbapi_error = self.engine.dialect.loaded_dbapi.Error
+        statement, params = self._statement(values)
         pooled = None
         try:
             pooled = self.engine.raw_connection()
@@ -610,15 +661,27 @@ class DriverInsert:
             finally:
                 if not driver.closed:
                     driver.set_autocommit(False)
-        except dbapi_error as error:
+        except self.engine.dialect.loaded_dbapi.Error as error:
             invalidated = pooled is not None and self.engine.dialect.is_disconnect(error, pooled.dbapi_connection, None)
             if invalidated:
                 pooled.invalidate(error)
-            raise DBAPIError.instance(statement, params, error, dbapi_error, connection_invalidated=invalidated,
-                                      dialect=self.engine.dialect) from error
+            raise self._error(error, statement, params, invalidated) from error
         finally:
             if pooled is not None:
                 pooled.close()
+
+    def _statement(self, values: dict[str, Any]) -> tuple[str, tuple]:
+        keys = tuple(values)
+        statement = self._statements.get(keys)
+        if statement is None:
+            statement = self._statements[keys] = (f"INSERT INTO {self.table} ({', '.join(self.names[k] for k in keys)})"
+                                                  f" VALUES ({', '.join('%s' for _ in keys)})")
+        return statement, tuple(value if (process := self.processors[key]) is None else process(value)
+                                for key, value in values.items())
+
+    def _error(self, error: Exception, statement: str, params: tuple, invalidated: bool) -> DBAPIError:
+        return DBAPIError.instance(statement, params, error, self.engine.dialect.loaded_dbapi.Error,
+                                   connection_invalidated=invalidated, dialect=self.engine.dialect)
 
 
 def new_job_row(values: dict[str, Any]) -> dict[str, Any]:

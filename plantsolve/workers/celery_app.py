@@ -7,18 +7,22 @@ attempt cap lives in the database, not in Celery's retry counter.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import threading
 import uuid
-
 from contextlib import contextmanager
 from functools import cached_property
+from typing import Any
 
 from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 from kombu import Producer
 from kombu.transport.redis import Channel as RedisChannel
 from kombu.transport.redis import Transport as RedisTransport
+from redis.asyncio import Redis as AsyncRedis
+from redis.asyncio.retry import Retry
+from redis.backoff import NoBackoff
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
@@ -33,7 +37,11 @@ PERSISTENT = 2  # the delivery mode send_task gives a task message
 
 class _PublishingChannel(RedisChannel):
     """A Redis channel that publishes through one client of its connection pool: kombu's own builds a new client
-    object for each message (``conn_or_acquire``), which costs a submission more than its database write."""
+    object for each message (``conn_or_acquire``), which costs a submission more than its database write. While
+    ``recorder`` is set, a message's LPUSH is handed to it instead of the client: kombu builds the message, the
+    caller sends it."""
+
+    recorder = None
 
     @cached_property
     def _publisher(self):
@@ -41,13 +49,28 @@ class _PublishingChannel(RedisChannel):
 
     @contextmanager
     def conn_or_acquire(self, client=None):
-        yield client or self._publisher
+        yield client or self.recorder or self._publisher
+
+
+class _Recorder:
+    """Stands in for the Redis client while kombu puts a message onto the queue: keeps the LPUSH it makes."""
+
+    def __init__(self):
+        self.lpush_args: tuple[str, bytes] | None = None
+
+    def lpush(self, key: str, payload: bytes) -> None:
+        self.lpush_args = (key, payload)
 
 
 class PublishingTransport(RedisTransport):
     """The Redis transport with :class:`_PublishingChannel`: the API's (it only publishes)."""
 
     Channel = _PublishingChannel
+
+
+# How long an event loop's publish waits for Redis (connect, then the LPUSH's answer) before it gives up: the
+# job's row is committed already, so the sweeper sends the message later
+PUBLISH_SECONDS = 5.0
 
 
 def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
@@ -79,24 +102,61 @@ def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
 class CeleryDispatcher:
     """Sends ``plantsolve.run_job(job_id)`` with the kind's time limits (scaled mode).
 
-    Every message of the process goes out through one producer on one broker connection, kept open between
-    messages: the message is Celery's own (``app.amqp.as_task_v2``: task protocol 2, the limits in its headers),
-    published straight onto the task queue (the nameless exchange routes by queue name; the worker declares the
-    queue). ``send_task`` did the same with a producer taken from a pool, the routing worked out, the queue
-    declared and the publish wrapped in retries, for each message: most of a submission's CPU time. A publish
-    that fails drops the connection (the next message opens another) and raises: the caller leaves the job to the
-    sweeper, as before."""
+    Every message is Celery's own (``app.amqp.as_task_v2``: task protocol 2, the limits in its headers), put by one
+    kombu producer straight onto the task queue (the nameless exchange routes by queue name; the worker declares
+    the queue), on one broker connection kept open between messages. ``send_task`` did the same with a producer
+    taken from a pool, the routing worked out, the queue declared and the publish wrapped in retries, for each
+    message: most of a submission's CPU time. kombu builds the message and its Redis command (LPUSH of the encoded
+    message onto the queue's list); the command is then sent through the producer channel's Redis client
+    (:meth:`enqueue`, any thread) or through a Redis client of the running event loop (:meth:`enqueue_on_loop`,
+    awaited: no thread). A publish that fails raises: the caller leaves the job to the sweeper, as before."""
 
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
         self.celery = create_celery(ctx.settings, publisher=True)
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
         self._queue = self.celery.conf.task_default_queue or "celery"
-        self._publishing = threading.Lock()  # a kombu channel serves one thread at a time
+        self._opening = threading.Lock()  # the producer's connection is opened once, by one thread
+        self._building = threading.Lock()  # a kombu channel serves one thread at a time (held for no I/O)
         self._connection = None
         self._producer = None
+        self._redis_url = ctx.settings.broker_url or ""
+        self._loop_client: tuple[asyncio.AbstractEventLoop, Any] | None = None
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
+        channel = self._open()
+        key, payload = self._message(channel, job_id, kind)
+        channel._publisher.lpush(key, payload)
+
+    @property
+    def enqueues_on_loop(self) -> bool:
+        """Whether :meth:`enqueue_on_loop` may be awaited (a Redis broker)."""
+        return self._redis_url.split("://", 1)[0] in ("redis", "rediss")
+
+    async def enqueue_on_loop(self, job_id: uuid.UUID, kind: str) -> None:
+        """:meth:`enqueue` awaited on the running event loop: the same message, sent by the loop's own Redis client
+        (bounded by :data:`PUBLISH_SECONDS`). The producer's connection, when it is not open yet, is opened in a
+        thread (once)."""
+        channel = self._producer.channel if self._producer is not None else await asyncio.to_thread(self._open)
+        key, payload = self._message(channel, job_id, kind)
+        async with asyncio.timeout(PUBLISH_SECONDS):
+            await self._client_of_loop().lpush(channel.global_keyprefix + key, payload)
+
+    def _open(self):
+        """The producer's channel, its broker connection opened if it is not (a failure drops it: the next message
+        opens another)."""
+        with self._opening:
+            if self._producer is None:
+                try:
+                    self._connection = self.celery.connection_for_write()
+                    self._producer = Producer(self._connection.default_channel, auto_declare=False)
+                except Exception:
+                    self._close_producer()
+                    raise
+            return self._producer.channel
+
+    def _message(self, channel, job_id: uuid.UUID, kind: str) -> tuple[str, bytes]:
+        """The task message of ``job_id`` as kombu puts it onto the queue: the Redis key and the encoded message."""
         spec = self.ctx.spec(kind)
         limits = {}
         if spec is not None:
@@ -106,17 +166,39 @@ class CeleryDispatcher:
         # the representations the worker logs, given: Celery's own (saferepr, bounded for any argument) cost more
         message = self.celery.amqp.as_task_v2(str(uuid.uuid4()), "plantsolve.run_job", args=args, argsrepr=repr(args),
                                               kwargsrepr="{}", **limits)
-        with self._publishing:
+        recorder = _Recorder()
+        with self._building:
+            channel.recorder = recorder
             try:
-                if self._producer is None:
-                    self._connection = self.celery.connection_for_write()
-                    self._producer = Producer(self._connection.default_channel, auto_declare=False)
                 self._producer.publish(message.body, exchange="", routing_key=self._queue, headers=message.headers,
                                        serializer="json", delivery_mode=PERSISTENT, declare=(), retry=False,
                                        **message.properties)
-            except Exception:
-                self._close_producer()
-                raise
+            finally:
+                channel.recorder = None
+        return recorder.lpush_args
+
+    def _client_of_loop(self):
+        """The running event loop's Redis client (connections belong to the loop that made them: another loop, such
+        as a test client's next one, gets a client of its own)."""
+        loop = asyncio.get_running_loop()
+        if self._loop_client is None or self._loop_client[0] is not loop:
+            if self._loop_client is not None:
+                # its loop is gone, and its connection with it: dropped without the close that would need that loop
+                self._loop_client[1].connection = None
+            # One connection (an LPUSH holds it for one round trip; a pool's checkout and return cost more than
+            # that). Bounded as a whole by enqueue_on_loop (a socket timeout would wrap every write in a task of its
+            # own). Tried once more at once on a fresh connection (the old one may have died with a restarted Redis),
+            # no backoff: the request is waiting.
+            client = AsyncRedis.from_url(self._redis_url, socket_connect_timeout=PUBLISH_SECONDS,
+                                         single_connection_client=True, retry=Retry(NoBackoff(), 1))
+            self._loop_client = (loop, client)
+        return self._loop_client[1]
+
+    async def close_on_loop(self) -> None:
+        """Close the running loop's Redis client (at the end of the app's lifespan, on its loop)."""
+        held, self._loop_client = self._loop_client, None
+        if held is not None and held[0] is asyncio.get_running_loop():
+            await held[1].aclose()
 
     def _close_producer(self) -> None:
         connection, self._connection, self._producer = self._connection, None, None
@@ -147,7 +229,7 @@ class CeleryDispatcher:
 
     def stop(self) -> None:
         self._sweeper.stop()
-        with self._publishing:
+        with self._opening:
             self._close_producer()
 
 

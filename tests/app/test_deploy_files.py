@@ -174,7 +174,7 @@ def test_the_project_metadata_is_current():
     extras = project["optional-dependencies"]
     assert {"scan", "fem", "lego", "ifc", "kinds", "scaled", "test"} <= set(extras)
     assert _names(extras["ifc"]) == {"ifcopenshell"} and "python-fcl" in _names(extras["lego"])
-    assert {"celery", "redis", "psycopg", "boto3"} == _names(extras["scaled"])
+    assert {"celery", "redis", "psycopg", "asyncpg", "boto3"} == _names(extras["scaled"])
     assert not {"celery", "redis", "psycopg", "ifcopenshell", "python-fcl"} & _names(project["dependencies"])
 
 

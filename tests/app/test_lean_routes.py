@@ -18,10 +18,15 @@ BOB = {"Authorization": "Bearer key-b"}
 ROUTED = "?via=routes"  # any query string: the request goes through the router
 
 
-@pytest.fixture
-def client(tmp_path):
-    settings = service_settings(tmp_path, api_keys=["alice:key-a", "bob:key-b"])
+@pytest.fixture(params=["embedded", pytest.param("scaled", marks=pytest.mark.integration)])
+def client(request, tmp_path):
+    """Embedded (SQLite: group commit, reads on the loop) and scaled (PostgreSQL and Redis: the submission's write
+    and message and the status read awaited on the loop)."""
+    scaled = {"database_url": request.getfixturevalue("pg_url"), "broker_url": request.getfixturevalue("redis_url")} \
+        if request.param == "scaled" else {}
+    settings = service_settings(tmp_path, api_keys=["alice:key-a", "bob:key-b"], **scaled)
     with TestClient(create_app(settings, run_jobs=False)) as client:
+        assert client.app.state.jobs.stores_on_loop == client.app.state.jobs.reads_on_loop == bool(scaled)
         yield client
 
 
@@ -34,13 +39,14 @@ def _same_answer(lean, routed) -> None:
 
 
 def test_submit_and_status_answer_as_the_routes_do(client):
+    key = f"same-{uuid.uuid4()}"  # the scaled database lives as long as the test session
     lean = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]},
-                       headers={**ALICE, "Idempotency-Key": "same-1"})
+                       headers={**ALICE, "Idempotency-Key": key})
     assert lean.status_code == 202 and lean.headers["location"] == f"/v1/jobs/{lean.json()['id']}"
     # the same key and body again: 200 with the stored job, from either path
-    again = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]}, headers={**ALICE, "Idempotency-Key": "same-1"})
+    again = client.post("/v1/test-compute/jobs", json={"values": [1.0, 2.0]}, headers={**ALICE, "Idempotency-Key": key})
     routed = client.post(f"/v1/test-compute/jobs{ROUTED}", json={"values": [1.0, 2.0]},
-                         headers={**ALICE, "Idempotency-Key": "same-1"})
+                         headers={**ALICE, "Idempotency-Key": key})
     assert again.status_code == 200 and again.json()["id"] == lean.json()["id"]
     _same_answer(again, routed)
     # the view made from the submitted columns is the view read back from the database
@@ -81,18 +87,19 @@ def test_submissions_read_on_the_event_loop_answer_as_the_routes_do(client):
     assert first.status_code == 202 and service.intake_loaded("test-compute")
     # from here on a small body is read, checked and stored on the event loop
     _bad_bodies_answer_as_the_route_does(client)
-    new = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    key = f"loop-{uuid.uuid4()}"
+    new = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": key})
     assert new.status_code == 202
     read_back = client.get(f"/v1/jobs/{new.json()['id']}", headers=ALICE)
     assert new.content == read_back.content  # the view of the stored columns is the view of the stored row
-    again = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    again = client.post("/v1/test-compute/jobs", json={"values": [2.0]}, headers={**ALICE, "Idempotency-Key": key})
     routed = client.post(f"/v1/test-compute/jobs{ROUTED}", json={"values": [2.0]},
-                         headers={**ALICE, "Idempotency-Key": "loop-1"})
+                         headers={**ALICE, "Idempotency-Key": key})
     assert again.status_code == 200 and again.json()["id"] == new.json()["id"]
     _same_answer(again, routed)
-    other = client.post("/v1/test-compute/jobs", json={"values": [3.0]}, headers={**ALICE, "Idempotency-Key": "loop-1"})
+    other = client.post("/v1/test-compute/jobs", json={"values": [3.0]}, headers={**ALICE, "Idempotency-Key": key})
     other_routed = client.post(f"/v1/test-compute/jobs{ROUTED}", json={"values": [3.0]},
-                               headers={**ALICE, "Idempotency-Key": "loop-1"})
+                               headers={**ALICE, "Idempotency-Key": key})
     assert other.status_code == 422
     _same_answer(other, other_routed)
 

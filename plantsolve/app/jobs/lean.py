@@ -46,8 +46,11 @@ class LeanRoutes:
     """``inline_reads``: read a job's status on the event loop instead of in a worker thread. Right for a local
     SQLite database, where that read takes tens of microseconds (less than the hop to a thread and back) and never
     waits for a writer (WAL); a database across the network is waited for in a thread, so that the loop serves
-    other requests meanwhile. A submission always goes to a thread: it parses and checks a body of any size, and
-    its write may wait for another process's (a job process storing a large result)."""
+    other requests meanwhile, or on the loop where the store can be awaited (PostgreSQL:
+    :meth:`JobService.view_on_loop`). A small JSON submission is read and checked on the loop; its write is awaited on the
+    loop where the store and the queue can be awaited (PostgreSQL and Redis: :meth:`JobService.store_on_loop`), goes
+    to SQLite's group commit (awaited as a future), or else to a thread. A large body, an upload, and a process's
+    first submission of a kind go to a thread whole."""
 
     def __init__(self, service: JobService, kinds: Iterable[str], *, inline_reads: bool = False):
         self.service = service
@@ -90,6 +93,13 @@ class LeanRoutes:
             await self._send_submitted(send, submitted)
             return
         new = self.service.take_json(kind, body, idempotency_key, owner=caller.owner)
+        if self.service.stores_on_loop:  # PostgreSQL and Redis: both awaited here, no thread
+            submitted = await self.service.store_on_loop(new)
+            # a new job's view reads nothing; an existing one's (a repeated key) may read its artifacts: in a thread
+            submitted.view = self.service.view(submitted.job) if submitted.created else \
+                await run_in_threadpool(self.service.view, submitted.job)
+            await self._send_submitted(send, submitted)
+            return
         pending = self.service.store_later(new)
         if pending is None:  # a database that takes concurrent writers: the write (and view) in a thread
             submitted = await run_in_threadpool(self.service.with_view, self.service.store, new)
@@ -115,6 +125,9 @@ class LeanRoutes:
 
     async def get_job(self, job_id: uuid.UUID, scope: Scope, receive: Receive, send: Send, caller: Principal) -> None:
         _require(caller)
+        if self.service.reads_on_loop:  # PostgreSQL: awaited here, no thread
+            await _send_json(send, 200, (await self.service.view_on_loop(job_id, caller.sees)).model_dump_json().encode())
+            return
         call = partial(self._job_json, job_id, caller.sees)
         await _send_json(send, 200, call() if self.inline_reads else await run_in_threadpool(call))
 
