@@ -243,9 +243,10 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
         upload = not (path.suffix.lower() == ".json" and args.options is None)
         ctx.kinds[args.kind].preload(SOLVE_ROLES + (("parse_upload",) if upload else ()))
         _collect_from_now_on()
-        # the upload reader's process imports this kind's reader only (a JSON request is read here, in this process)
+        # the upload is read in a bounded process forked from this one (one thread, the kind's reader imported
+        # above); a JSON request is read here, in this process
         dispatcher = _InlineDispatcher()
-        service = JobService(ctx, dispatcher, readers=[ctx.kinds[args.kind]] if upload else [])
+        service = JobService(ctx, dispatcher, readers=[], reader_start="fork")
         content = path.read_bytes()
         try:
             if not upload:

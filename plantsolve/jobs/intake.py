@@ -174,6 +174,11 @@ log = logging.getLogger("plantsolve.api")
 # it imports every kind's schemas: a body refused is its first use, so a process that runs one kind imports that one's
 _held_kind = Deferred("plantsolve.solvers.other_kinds:held_kind")
 _forkserver = multiprocessing.get_context("forkserver")
+# A process with one thread (the CLI while it submits) may fork its reading processes from itself, with what it has
+# imported: no forkserver, no second interpreter importing the kind's readers again (about 1.3 CPU s of a small
+# upload's run). A process with threads (the service) must not fork them: a lock held by another thread at the fork
+# stays held in the child.
+READER_STARTS = ("forkserver", "fork")
 
 
 def start_readers(kinds: Iterable[SolverSpec]) -> None:
@@ -202,9 +207,11 @@ def check_text_lines(source: StoredInput) -> None:
 
 
 def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | None, plugins: Iterable[str] = (), *,
-                        memory_bytes: int = UPLOAD_READ_MEMORY, seconds: float = UPLOAD_READ_SECONDS) -> None:
+                        memory_bytes: int = UPLOAD_READ_MEMORY, seconds: float = UPLOAD_READ_SECONDS,
+                        start: str = "forkserver") -> None:
     """:func:`read_upload` and :func:`check` of a stored upload, run in a bounded child process: returns when the
     upload passes, raises the 422 otherwise (also when reading it needs more memory or time than allowed).
+    ``start``: how the child starts (:data:`READER_STARTS`); ``"fork"`` only from a process with one thread.
     The spec travels by reference (its kind and the ``plugins`` of the kind map it is in), else pickled; a spec
     made of local functions (a test's) can do neither, and is read here, in this process."""
     if source.path is None:
@@ -216,8 +223,13 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
     except (pickle.PicklingError, AttributeError, TypeError):
         check(spec, read_upload(spec, source, options))
         return
-    receiver, sender = _forkserver.Pipe(duplex=False)
-    process = _forkserver.Process(
+    if start not in READER_STARTS:
+        raise ValueError(f"no reader start {start!r}; known: {', '.join(READER_STARTS)}")
+    if start == "fork" and threading.active_count() > 1:
+        raise RuntimeError("reading processes are forked only from a process with one thread")
+    context = multiprocessing.get_context(start)
+    receiver, sender = context.Pipe(duplex=False)
+    process = context.Process(
         target=_read_in_child, daemon=True, name=f"read-{spec.kind}",
         args=(sender, pickled, str(source.path), source.name, options, memory_bytes, seconds))
     process.start()

@@ -62,13 +62,17 @@ def safe_filename(name: str) -> str:
 
 
 class JobService:
-    def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher, readers: Iterable[SolverSpec] | None = None):
+    def __init__(self, ctx: ServiceContext, dispatcher: Dispatcher, readers: Iterable[SolverSpec] | None = None,
+                 reader_start: str = "forkserver"):
         """``readers``: the kinds whose uploads this service reads (their readers are imported ahead, in the
-        forkserver that reading processes fork from); every kind of the map by default."""
+        forkserver that reading processes fork from); every kind of the map by default. ``reader_start``
+        ``"fork"``: reading processes fork from this process instead (one with a single thread: the CLI's)."""
         self.ctx = ctx
         self.dispatcher = dispatcher
         self._intake_loaded: set[str] = set()
-        intake.start_readers(ctx.kinds.values() if readers is None else readers)
+        self._reader_start = reader_start
+        if reader_start == "forkserver":
+            intake.start_readers(ctx.kinds.values() if readers is None else readers)
 
     @property
     def kinds(self) -> Mapping[str, SolverSpec]:
@@ -138,7 +142,7 @@ class JobService:
         try:
             with self.ctx.files.local_file(blob.key, filename) as path:
                 intake.read_upload_bounded(spec, StoredInput.from_path(path, filename), options,
-                                           self.ctx.settings.plugins)
+                                           self.ctx.settings.plugins, start=self._reader_start)
         except Exception:
             self.ctx.files.delete(blob.key)
             raise
