@@ -116,7 +116,7 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
     if _SCHUR.get():
-        Hinv = block_inverse(H)
+        Hinv = _held_inverse(H, cache)
         if Hinv is not None:
             # the complement's upper triangle, then delta on its diagonal: the whole complement and a shifted copy
             # of it are never held side by side (the same numbers as triu(A H^-1 A^T + delta I))
@@ -130,6 +130,17 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np
                 return SchurSolve(H, Hinv, A, ldl, delta)
     K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
     return splu(K)
+
+
+def _held_inverse(H: sp.spmatrix, cache: dict | None) -> sp.csr_matrix | None:
+    """:func:`block_inverse` of ``H``, kept in ``cache`` while the caller passes the same matrix (the rotation stage's
+    cost stays one object for its sequence); another matrix lets the one held go first (peak memory)."""
+    held = cache.pop("inverse", None) if cache is not None else None
+    Hinv = held[1] if held is not None and held[0] is H else block_inverse(H)
+    del held
+    if cache is not None:
+        cache["inverse"] = (H, Hinv)
+    return Hinv
 
 
 class SchurSolve:
