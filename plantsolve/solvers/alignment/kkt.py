@@ -35,10 +35,12 @@ the step itself), the system and its later right-hand sides go to the pivoted LU
 matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
-0.8 of its memory on plant-like networks of 10,000 and 100,000. Where a connection has to be cut,
-the rounds after the cut run on the LU and the cut is the LU's (solve.py): decided on the LDL^T round's
-pose where that settles it (cuts.settled_cut), else on an LU pass (measured: 0.90 times the LU's time on
-the 40,000-component plant-like network, which needs one cut; 1.19 in the same run with an LU pass always).
+0.8 of its memory on plant-like networks of 10,000 and 100,000 (with one analysis per sequence: 0.78-0.87
+and 0.82 in three and one runs). Where a connection has to be cut, the rounds after the cut run on the LU
+and the cut is the LU's (solve.py): decided on the LDL^T round's pose where that settles it
+(cuts.settled_cut), else on an LU pass (measured: 0.84-0.90 times the LU's time on the 40,000-component
+plant-like network, which needs one cut, in three runs; 1.19 in one run with an LU pass always). The
+round after the cut is most of it and is the LU's in both: the README's alignment section has the sums.
 """
 
 from __future__ import annotations
