@@ -165,6 +165,7 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         from plantsolve.solvers.alignment.synthetic import reordered
 
         given = reordered(req)
+    stages = _time_stages()
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
     with mode:
@@ -183,9 +184,44 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         "max_gap": res.max_position_error, "solver_residual": d["snap_distortion"]["position"] if res.converged else res.max_position_error,
         "pipe_axis_mean": d["pipe_axis_movement"]["mean"], "fitting_mean": d["fitting_displacement"]["mean"],
         "cuts": len(res.cut_connections), "stop": d["stop_reason"],
-        "rounds": " + ".join(f"{r['iterations']} {r['factorisation']}" + ("" if r["counted"] else " (not counted)")
-                             for r in d.get("rounds") or []),
+        "rounds": _rounds_said(d.get("rounds") or [], stages),
     })
+
+
+def _time_stages() -> list[tuple[int, float]]:
+    """(steps, CPU seconds) of every call of the direct method's two stages (rotation averaging, joint
+    Gauss-Newton) in this child process, in order: two per round. The stage functions are wrapped where
+    ``solve_direct`` looks them up; a checkout without them leaves the list empty."""
+    from plantsolve.solvers.alignment import direct
+
+    calls: list[tuple[int, float]] = []
+    for name in ("solve_rotations", "solve_joint"):
+        inner = getattr(direct, name, None)
+        if inner is None:
+            return []
+
+        def timed(*args, _inner=inner, **kwargs):
+            c0 = _cpu_s()
+            out = _inner(*args, **kwargs)
+            calls.append((int(out[1]), _cpu_s() - c0))
+            return out
+
+        setattr(direct, name, timed)
+    return calls
+
+
+def _rounds_said(rounds: list[dict], stages: list[tuple[int, float]]) -> str:
+    """Each round's iterations and factorisation, with its stages' steps and CPU seconds where they were timed
+    (``rotation steps + joint steps``, ``rotation s + joint s``)."""
+    timed = len(stages) == 2 * len(rounds)
+    said = []
+    for i, r in enumerate(rounds):
+        text = f"{r['iterations']} {r['factorisation']}" + ("" if r["counted"] else " (not counted)")
+        if timed:
+            (k1, c1), (k2, c2) = stages[2 * i], stages[2 * i + 1]
+            text += f" [{k1}+{k2} steps, {c1:.1f}+{c2:.1f} s]"
+        said.append(text)
+    return " + ".join(said)
 
 
 def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None, family: str = "grid",
@@ -251,7 +287,8 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
     print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
           "growth of the resident set during the solve (the request is built before); proc MiB: the process's peak "
           "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
-          "counted (rounds: each round's, with the factorisation it ran on; an LDL^T round whose cut an LU pass "
+          "counted (rounds: each round's, with the factorisation it ran on and, in brackets, the steps and CPU seconds "
+          "of its rotation averaging + joint Gauss-Newton; an LDL^T round whose cut an LU pass "
           "had to decide is not counted, the LU pass is).")
 
 

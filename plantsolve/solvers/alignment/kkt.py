@@ -15,8 +15,8 @@ current ``H`` and ``A``, converges with a slightly stale preconditioner too.
 
 The cost is block diagonal (one small block per component), so by default the system is solved
 by eliminating it: the Schur complement ``A H^-1 A^T + delta I`` is symmetric positive definite and
-factored by LDL^T (QDLDL, approximate minimum degree ordering, kept while a Gauss-Newton sequence
-keeps the pattern); a pivoted sparse LU of the regularised matrix where a pivot is not positive, the
+factored by LDL^T (QDLDL, approximate minimum degree ordering, kept for a Gauss-Newton sequence in
+the pattern of its constraints' couplings); a pivoted sparse LU of the regularised matrix where a pivot is not positive, the
 cost is not block diagonal, or within ``use_schur(False)``. Positive definiteness makes it stable
 under any ordering, unlike an LDL^T of the quasi-definite KKT matrix itself, whose tiny ``-delta``
 pivots, once the ordering takes them before their cost block, grow the factors by ``1/delta``
@@ -35,10 +35,12 @@ the step itself), the system and its later right-hand sides go to the pivoted LU
 matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
-0.8 of its memory on plant-like networks of 10,000 and 100,000. Where a connection has to be cut,
-the rounds after the cut run on the LU and the cut is the LU's (solve.py): decided on the LDL^T round's
-pose where that settles it (cuts.settled_cut), else on an LU pass (measured: 0.90 times the LU's time on
-the 40,000-component plant-like network, which needs one cut; 1.19 in the same run with an LU pass always).
+0.8 of its memory on plant-like networks of 10,000 and 100,000 (with one analysis per sequence: 0.78-0.87
+and 0.82 in three and one runs). Where a connection has to be cut, the rounds after the cut run on the LU
+and the cut is the LU's (solve.py): decided on the LDL^T round's pose where that settles it
+(cuts.settled_cut), else on an LU pass (measured: 0.84-0.90 times the LU's time on the 40,000-component
+plant-like network, which needs one cut, in three runs; 1.19 in one run with an LU pass always). The
+round after the cut is most of it and is the LU's in both: the README's alignment section has the sums.
 """
 
 from __future__ import annotations
@@ -116,13 +118,13 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np
     acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
     delta = 1e-14 * acol / scale
     if _SCHUR.get():
-        Hinv = block_inverse(H)
+        Hinv = _held_inverse(H, cache)
         if Hinv is not None:
             # the complement's upper triangle, then delta on its diagonal: the whole complement and a shifted copy
             # of it are never held side by side (the same numbers as triu(A H^-1 A^T + delta I))
             upper = sp.triu(A @ (Hinv @ A.T), format="csc")
-            if owner is not None and cache is not None and cache.get("dissect"):
-                upper = coupling_pattern(upper, A, owner)  # one pattern for the sequence: one dissection
+            if owner is not None and cache is not None:
+                upper = coupling_pattern(upper, A, owner, cache)  # one pattern for the sequence: one analysis
             upper.setdiag(upper.diagonal() + delta)
             ldl = complement_factor(upper, m, cache)
             del upper
@@ -130,6 +132,17 @@ def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np
                 return SchurSolve(H, Hinv, A, ldl, delta)
     K = sp.bmat([[H, A.T], [A, -delta * sp.identity(m)]], format="csc")
     return splu(K)
+
+
+def _held_inverse(H: sp.spmatrix, cache: dict | None) -> sp.csr_matrix | None:
+    """:func:`block_inverse` of ``H``, kept in ``cache`` while the caller passes the same matrix (the rotation stage's
+    cost stays one object for its sequence); another matrix lets the one held go first (peak memory)."""
+    held = cache.pop("inverse", None) if cache is not None else None
+    Hinv = held[1] if held is not None and held[0] is H else block_inverse(H)
+    del held
+    if cache is not None:
+        cache["inverse"] = (H, Hinv)
+    return Hinv
 
 
 class SchurSolve:
@@ -255,13 +268,15 @@ def complement_factor(upper: sp.csc_matrix, n: int, cache: dict | None):
     in floating point (a pivot that is not positive).
 
     A new pattern is factored by QDLDL (LDL^T, approximate minimum degree), whose ordering and analysis are kept
-    while the pattern is. Where that factor filled in more than :data:`FILL_FOR_DISSECTION` times the matrix, as
-    on loop grids, the rest of the sequence (``cache["dissect"]``) is held in the pattern of the couplings
-    (:func:`coupling_pattern`, which stays while the connections do), ordered once by METIS's nested dissection and
-    factored by SuperLU without pivoting: separators cost far less fill on a network that is a mesh of loops, and
-    SuperLU's supernodes use BLAS. On a tree-like network minimum degree is near the best and QDLDL the fastest,
-    and the complement keeps its own, sparser pattern. A sequence whose factorisation was refused twice
-    in a row (redundant constraints that stay) stops trying it."""
+    while the pattern is: a Gauss-Newton sequence hands its complements in the pattern of the couplings
+    (:func:`coupling_pattern`, which stays while the connections do), so one analysis serves the sequence (the
+    complement's own pattern lost entries at every step: a new minimum-degree ordering and analysis each time, 0.05 s
+    of a 0.06 s factorisation in the rotation stage of a 40,000-component network, 0.2 of 0.26 s in its joint one).
+    Where that factor filled in more than :data:`FILL_FOR_DISSECTION` times the matrix, as on loop grids, the rest
+    of the sequence (``cache["dissect"]``) is ordered once by METIS's nested dissection and factored by SuperLU
+    without pivoting: separators cost far less fill on a network that is a mesh of loops, and SuperLU's supernodes
+    use BLAS. On a tree-like network minimum degree is near the best and QDLDL the fastest. A sequence whose
+    factorisation was refused twice in a row (redundant constraints that stay) stops trying it."""
     if cache is not None and cache.get("ldl_refused", 0) >= 2:
         return None
     upper.sort_indices()
@@ -343,14 +358,39 @@ class DissectionFactor:
         return x
 
 
-def coupling_pattern(upper: sp.csc_matrix, A: sp.spmatrix, owner: np.ndarray) -> sp.csc_matrix:
+def coupling_pattern(upper: sp.csc_matrix, A: sp.spmatrix, owner: np.ndarray,
+                     cache: dict | None = None) -> sp.csc_matrix:
     """``upper`` (the upper triangle of ``A H^-1 A^T``, H block diagonal by component) in the pattern of the
     couplings of constraint rows: rows i and j are coupled where both touch a variable of one component
     (``owner``: the component of each variable). Its own pattern changes at every Gauss-Newton step (an exact zero
     of the Jacobian on an axis-aligned run, a product that cancels: sparse products drop them); the couplings stay
     while the connections do, so a factorisation's ordering and analysis are kept for the sequence. The same
     numbers, explicit zeros where a coupling is zero at this step; ``upper`` as it is where an entry lies outside
-    the couplings (a cost that is not block diagonal by component)."""
+    the couplings (a cost that is not block diagonal by component). The couplings are found once per sequence
+    (``cache``) and number of rows: a row that gains a component later (an exact zero of the first step's
+    Jacobian that is not one now) lies outside them, and they are found again."""
+    m = A.shape[0]
+    known = cache.get("couplings") if cache is not None else None
+    for attempt in range(2):
+        if known is None or known[0] != m:
+            known = (m, *_couplings(A, owner))
+            if cache is not None:
+                cache["couplings"] = known
+        _, indptr, indices = known
+        keys = np.repeat(np.arange(m, dtype=np.int64), np.diff(indptr)) * m + indices
+        upper.sort_indices()
+        mine = np.repeat(np.arange(m, dtype=np.int64), np.diff(upper.indptr)) * m + upper.indices
+        at = np.searchsorted(keys, mine)
+        if not len(mine) or (at.max() < len(keys) and np.array_equal(keys[at], mine)):
+            data = np.zeros(len(keys))
+            data[at] = upper.data
+            return sp.csc_matrix((data, indices, indptr), shape=(m, m))
+        known = None  # found on an earlier step: find them on this one's Jacobian
+    return upper
+
+
+def _couplings(A: sp.spmatrix, owner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(indptr, indices) of the upper triangle of the couplings of ``A``'s rows through components, CSC, sorted."""
     Ar = sp.csr_matrix(A)
     m = Ar.shape[0]
     rows = np.repeat(np.arange(m), np.diff(Ar.indptr))
@@ -359,15 +399,7 @@ def coupling_pattern(upper: sp.csc_matrix, A: sp.spmatrix, owner: np.ndarray) ->
     touch.data[:] = 1.0  # duplicates summed: one per component a row touches
     coupled = sp.triu(touch @ touch.T, format="csc")
     coupled.sort_indices()
-    keys = np.repeat(np.arange(m, dtype=np.int64), np.diff(coupled.indptr)) * m + coupled.indices
-    upper.sort_indices()
-    mine = np.repeat(np.arange(m, dtype=np.int64), np.diff(upper.indptr)) * m + upper.indices
-    at = np.searchsorted(keys, mine)
-    if len(mine) and (at.max() >= len(keys) or not np.array_equal(keys[at], mine)):
-        return upper
-    data = np.zeros(len(keys))
-    data[at] = upper.data
-    return sp.csc_matrix((data, coupled.indices, coupled.indptr), shape=(m, m))
+    return coupled.indptr, coupled.indices
 
 
 def _refine(H, g, A, residual, lu, stop, max_iter, stale):
