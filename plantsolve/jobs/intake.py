@@ -225,8 +225,10 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
         return
     if start not in READER_STARTS:
         raise ValueError(f"no reader start {start!r}; known: {', '.join(READER_STARTS)}")
-    if start == "fork" and threading.active_count() > 1:
-        raise RuntimeError("reading processes are forked only from a process with one thread")
+    if start == "fork":
+        if threading.active_count() > 1:
+            raise RuntimeError("reading processes are forked only from a process with one thread")
+        spec.preload(SolverSpec.READERS)  # here, so the child imports nothing under its memory limit
     context = multiprocessing.get_context(start)
     receiver, sender = context.Pipe(duplex=False)
     process = context.Process(
