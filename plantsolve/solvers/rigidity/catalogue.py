@@ -384,10 +384,21 @@ def _with_fits(shape: PartShape) -> PartShape:
 @functools.lru_cache(maxsize=4096)
 def generated_part(number: str) -> PartShape | None:
     fields = generated.entry(number)
-    if fields is None:
-        return None
+    return None if fields is None else _shape(fields)
+
+
+def _shape(fields: dict) -> PartShape:
     connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
     return PartShape(connectors=connectors, **fields)
+
+
+def recorded_part(number: str, record: dict) -> PartShape:
+    """A part from a catalogue record outside the data file (an embedded part resolved from its primitives:
+    :mod:`embedded`), read as a generated part; ValueError when the record is not one."""
+    try:
+        return _shape(generated.fields(number, record))
+    except (KeyError, TypeError, ValueError, IndexError) as error:
+        raise ValueError(f"part {number!r}: its record is not a catalogue record ({error})") from error
 
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)

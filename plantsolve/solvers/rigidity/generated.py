@@ -216,9 +216,12 @@ def connectors(snaps: list) -> tuple[Point, ...]:
 
 def entry(number: str) -> dict | None:
     """The generated catalogue's part ``number`` (normalised) as the catalogue's PartShape fields, or None."""
-    entry = _part(number)
-    if entry is None:
-        return None
+    record = _part(number)
+    return None if record is None else fields(number, record)
+
+
+def fields(number: str, entry: dict) -> dict:
+    """A catalogue record (``{"n": name, "b": box, "s": snaps}``) as the catalogue's PartShape fields."""
     lo, hi = np.array(entry["b"][:3], float), np.array(entry["b"][3:], float)
     name = entry["n"]
     plain = " ".join(name.lower().split())
