@@ -53,6 +53,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.rigidity import generated
 
 BRICK = 24
@@ -396,9 +397,13 @@ def recorded_part(number: str, record: dict) -> PartShape:
     """A part from a catalogue record outside the data file (an embedded part resolved from its primitives:
     :mod:`embedded`), read as a generated part; ValueError when the record is not one."""
     try:
-        return _shape(generated.fields(number, record))
-    except (KeyError, TypeError, ValueError, IndexError) as error:
+        shape = _shape(generated.fields(number, record))
+        numbers = np.concatenate([shape.points().ravel(), shape.box_center, shape.box_size])
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
         raise ValueError(f"part {number!r}: its record is not a catalogue record ({error})") from error
+    if not np.all(np.abs(numbers) <= MAX_COORDINATE):  # NaN fails too
+        raise ValueError(f"part {number!r}: its record places a point beyond {MAX_COORDINATE:g} LDU")
+    return shape
 
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)

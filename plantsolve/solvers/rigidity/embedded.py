@@ -53,12 +53,11 @@ def official(name: str) -> dict | None:
 @functools.lru_cache(maxsize=4096)
 def _official(key: str) -> dict | None:
     for folder in LIBRARY_FOLDERS:
-        if key.startswith(folder):
-            key = key[len(folder):]
+        key = key.removeprefix(folder)
     if key.endswith(".dat") and "/" not in key:
-        line = generated._lines().get(key[:-4])
-        if line is not None:
-            return json.loads(line)
+        part = generated.record(key[:-4])
+        if part is not None:
+            return part
     line = _subfile_lines().get(key)
     return None if line is None else json.loads(line)
 

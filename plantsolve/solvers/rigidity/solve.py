@@ -8,18 +8,41 @@ import math
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, PartJoints, Piece, RigidityRequest,
-                                         RigidityResult, UnknownPart)
+from plantsolve.schemas.rigidity import (
+    Collision,
+    DockingCandidate,
+    JointResult,
+    PartJoints,
+    Piece,
+    RigidityRequest,
+    RigidityResult,
+    UnknownPart,
+)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, JointSpec
-from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
+from plantsolve.solvers.rigidity.catalogue import (
+    PartShape,
+    lookup,
+    normalise_number,
+    recorded_part,
+)
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, Misses, unknown_near
-from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
-                                                joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
-                                                sub_build)
+from plantsolve.solvers.rigidity.pieces import (
+    LOOSE_CLEARANCE,
+    MINIFIGURE,
+    TOUCH_GAP,
+    clearance,
+    far_parts,
+    joints_by_part,
+    line_of,
+    loose_sub_builds,
+    mostly_floating,
+    pieces,
+    sub_build,
+)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000

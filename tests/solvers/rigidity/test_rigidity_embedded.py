@@ -98,3 +98,22 @@ def test_a_sub_file_that_draws_itself_adds_nothing():
     record = Resolver(files, lambda name: name if name in files else None).record("a.dat")
     assert record is not None and len(record["s"]) == 1
     assert record["b"] == pytest.approx([-6, -4, -6, 6, 0, 6])
+
+
+def test_an_embedded_dat_without_header_that_draws_stud_primitives_is_a_part():
+    text = model("my plate.dat").replace("0 !LDRAW_ORG Unofficial_Part\n", "")
+    request = parse(text)
+    assert [p.part for p in request.parts] == ["my plate", "3003", "3005"]
+    assert joints_of(solve(request).result) == joints_of(solve(parse(model("my plate.dat"))).result)
+
+
+@pytest.mark.parametrize("record", [{"n": "x"}, {"n": "x", "b": [0] * 6, "s": [["cyl", "M"]]},
+                                    {"n": "x", "b": [0, 0, 0, 1, 1, 1], "s": [["sph", "M", [float("nan"), 0, 0], 4]]}])
+def test_a_request_whose_recorded_part_is_no_catalogue_record_leaves_it_unknown_with_a_warning(record):
+    request = parse(model("my plate.dat"))
+    body = request.model_dump()
+    body["source"]["parts_from_primitives"] = {"my plate": record}
+    result = solve(type(request).model_validate(body)).result
+    assert [u.part for u in result.unknown_parts] == ["my plate"]
+    (warning,) = [w for w in result.report.warnings if w.code == "parts_from_primitives_unreadable"]
+    assert warning.details == {"parts": ["my plate"]}
