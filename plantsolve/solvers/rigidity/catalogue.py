@@ -42,6 +42,8 @@ overlap. Everything here is numbers per part (frame, boxes, connection points).
 :func:`lookup` finds a part here first, then in the catalogue generated from the LDCad shadow library
 (:mod:`generated`: thousands of official parts, their connection points from snap data, a collision
 shape only for plain rectangular parts), which adds ball/socket, clip/bar and hinge-finger connections.
+:func:`recorded_part` reads a part from a record of the generated catalogue's format that a model brought
+(an embedded part resolved from the primitives it draws: :mod:`embedded`).
 """
 
 from __future__ import annotations
