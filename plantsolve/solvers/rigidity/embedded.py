@@ -28,6 +28,9 @@ from plantsolve.solvers.rigidity import generated
 SUBFILES = Path(__file__).with_name("data") / "ldcad_subfiles.tsv.gz"
 LIBRARY_FOLDERS = ("parts/", "p/")  # a packer writes the library folder into an embedded file's name
 MAX_DEPTH = 32
+# Snaps one embedded part may gather: a 48 x 48 base plate has 2 304 studs; sub-files placing sub-files ten times
+# over eight levels would gather 10^8, so a part over this stays unknown rather than filling the memory.
+MAX_SNAPS = 20_000
 POSITION = {"cyl": 4, "clp": 1, "fgr": 2, "gen": 3, "sph": 2}  # where a snap record holds its position
 
 Lines = list[tuple[int, str]]
@@ -106,6 +109,10 @@ def _corners(box) -> np.ndarray:
     return np.array([[a, b, c] for a in (lo[0], hi[0]) for b in (lo[1], hi[1]) for c in (lo[2], hi[2])], float)
 
 
+class _TooManySnaps(Exception):
+    pass
+
+
 class Resolver:
     """Resolves embedded sub-files (``files``: name -> numbered lines) through ``find`` (a type-1 line's file
     name -> the embedded file's name, or None)."""
@@ -115,8 +122,12 @@ class Resolver:
         self._done: dict[str, tuple[list, np.ndarray | None]] = {}
 
     def record(self, name: str) -> dict | None:
-        """The catalogue record of embedded part ``name`` (its snaps from what it draws), or None without snaps."""
-        snaps, points = self._walk(name, ())
+        """The catalogue record of embedded part ``name`` (its snaps from what it draws), or None without snaps
+        or with more than :data:`MAX_SNAPS`."""
+        try:
+            snaps, points = self._walk(name, ())
+        except _TooManySnaps:
+            return None
         if not snaps:
             return None
         if points is None:  # nothing drawn but primitives without geometry: the snaps' own positions
@@ -167,6 +178,8 @@ class Resolver:
                 child_snaps, box = self._walk(embedded, (*stack, name))
             else:
                 continue
+            if len(snaps) + len(child_snaps) > MAX_SNAPS:
+                raise _TooManySnaps
             snaps.extend(transform(s, rot, pos) for s in child_snaps)
             if box is not None and len(box):
                 points.extend(np.asarray(box) @ rot.T + pos)

@@ -117,3 +117,14 @@ def test_a_request_whose_recorded_part_is_no_catalogue_record_leaves_it_unknown_
     assert [u.part for u in result.unknown_parts] == ["my plate"]
     (warning,) = [w for w in result.report.warnings if w.code == "parts_from_primitives_unreadable"]
     assert warning.details == {"parts": ["my plate"]}
+
+
+def test_sub_files_fanning_out_past_the_snap_bound_leave_the_part_unknown_quickly():
+    # level k places level k-1 ten times: 10^8 studs at level 8; the part stays unknown, nothing is gathered past
+    # the bound
+    files = {"l0.dat": [(1, "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat")]}
+    for k in range(1, 9):
+        files[f"l{k}.dat"] = [(n, f"1 16 {n} 0 0 1 0 0 0 1 0 0 0 1 l{k - 1}.dat") for n in range(10)]
+    resolver = Resolver(files, lambda name: name if name in files else None)
+    assert resolver.record("l8.dat") is None
+    assert len(resolver.record("l3.dat")["s"]) == 1000
