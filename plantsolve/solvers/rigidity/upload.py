@@ -121,7 +121,8 @@ def _section_type(lines: list[tuple[int, str]]) -> str | None:
 
 
 def _draws_without_parts(lines: list[tuple[int, str]]) -> bool:
-    """Drawn geometry (types 2–5) and no catalogue part placed: how a part's own definition looks."""
+    """Drawn geometry (types 2–5, subparts and primitives, ``stud.dat`` among them) and no catalogue part placed:
+    how a part's own definition looks."""
     draws = False
     for _, raw in lines:
         tokens = raw.split()
