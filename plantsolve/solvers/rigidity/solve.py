@@ -8,41 +8,18 @@ import math
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.rigidity import (
-    Collision,
-    DockingCandidate,
-    JointResult,
-    PartJoints,
-    Piece,
-    RigidityRequest,
-    RigidityResult,
-    UnknownPart,
-)
+from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, PartJoints, Piece, RigidityRequest,
+                                         RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, JointSpec
-from plantsolve.solvers.rigidity.catalogue import (
-    PartShape,
-    lookup,
-    normalise_number,
-    recorded_part,
-)
+from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, Misses, unknown_near
-from plantsolve.solvers.rigidity.pieces import (
-    LOOSE_CLEARANCE,
-    MINIFIGURE,
-    TOUCH_GAP,
-    clearance,
-    far_parts,
-    joints_by_part,
-    line_of,
-    loose_sub_builds,
-    mostly_floating,
-    pieces,
-    sub_build,
-)
+from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
+                                                joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
+                                                sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -131,8 +108,9 @@ def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None
         axis = tuple(joint.axis) if joint.axis is not None else None
         assembly.add_joint(JointSpec(joint.id, joint.type, (joint.bodies[0], joint.bodies[1]), tuple(joint.point), axis))
     for part in request.parts:
-        shape = None if lookup(part.part) is not None else recorded.get(normalise_number(part.part))
-        if shape is None and lookup(part.part) is None:
+        known = lookup(part.part) is not None
+        shape = None if known else recorded.get(normalise_number(part.part))  # a catalogue part keeps its own
+        if not known and shape is None:
             unknown.append(UnknownPart(id=part.id, part=part.part))
             continue
         assembly.add_part(part.id, part.part, part.position, part.rotation, shape=shape)
