@@ -15,6 +15,8 @@ files. Per model, ``before -> after``:
   piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
   placed sub-models, or minifigure parts only; ``report.details.held_pieces``);
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
+- ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
+  definitions draw (the ``parts_from_primitives`` warning);
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 """
 
@@ -50,8 +52,10 @@ def measure(path: Path) -> dict:
     details = result.report.details
     held = len(details.get("held_pieces") or [])
     offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
+    recognised = next((len(w.details["ids"]) for w in result.report.warnings if w.code == "parts_from_primitives"), 0)
     return {"model": path.name, "known": len(known), "floating": len(floating),
-            "pieces": details.get("connected_pieces") - held, "held": held, "offset": offsets, "seconds": seconds,
+            "pieces": details.get("connected_pieces") - held, "held": held, "offset": offsets,
+            "prim": recognised, "seconds": seconds,
             "floating_parts": dict(Counter(p.part for p in floating))}
 
 
@@ -88,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
     print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
-          f"{'cpu s':>11s}  floating parts (after)")
+          f"{'prim':>6s} {'cpu s':>11s}  floating parts (after)")
     for path in files:
         row = measure(path)
         old = before.get(row["model"], row if not before else None)
@@ -99,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
-              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('seconds', '.2f'):>11s}  {names}")
+              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
+              f"{pair('seconds', '.2f'):>11s}  {names}")
     return 0
 
 

@@ -39,6 +39,12 @@ wheel holding pin primitive without shadow lines that does not draw ``wpin.dat``
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
+
+``--subfiles FILE.tsv.gz`` writes the same lines for the library's other files whose snap information is not
+empty: primitives (``p/``, keyed as a part's type-1 line names them: ``stud.dat``, ``48/…``) and subparts
+(``s/3001s01.dat``), keyed with ``.dat`` so that no key is a part number. A model's own (unofficial) part
+draws them; the solver's reader resolves such a part down to them (plantsolve/solvers/rigidity/embedded.py).
+A cylinder there carries an eighth field, 1 when a scaled placement stretches its sections (``scale``).
 """
 
 from __future__ import annotations
@@ -284,10 +290,11 @@ def _r(v) -> list[float]:
     return [round(float(x), 3) + 0.0 for x in v]
 
 
-def _record(snap: dict) -> list:
+def _record(snap: dict, scale: bool = False) -> list:
     if snap["kind"] == "cyl":
-        return ["cyl", snap["gender"], snap["caps"], int(snap["slide"]), _r(snap["start"]), _r(snap["axis"]),
-                [[s, round(r, 3), round(length, 3)] for s, r, length in snap["secs"]]]
+        out = ["cyl", snap["gender"], snap["caps"], int(snap["slide"]), _r(snap["start"]), _r(snap["axis"]),
+               [[s, round(r, 3), round(length, 3)] for s, r, length in snap["secs"]]]
+        return out + [int(bool(snap.get("scale")))] if scale else out
     if snap["kind"] == "clp":
         return ["clp", _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
     if snap["kind"] == "fgr":
@@ -305,18 +312,33 @@ def _title(text: str) -> str:
     return ""
 
 
-def derive(ldraw_root: Path, shadow_root: Path) -> dict:
+def derive(ldraw_root: Path, shadow_root: Path, subfiles: dict | None = None) -> dict:
+    """The parts with snap information (keyed by number); the primitives and subparts with snap information go
+    into ``subfiles`` (keyed by file name) when it is given."""
     ldraw, shadow = Library(ldraw_root), Library(shadow_root)
     deriver = Deriver(ldraw, shadow)
     parts = {}
-    for rel in sorted(k for k in ldraw.files if "/" not in k and k.endswith(".dat")
-                      and ldraw.find(k).parent.name == "parts"):
+    for rel in sorted(k for k in ldraw.files if k.endswith(".dat")):
+        is_part = "/" not in rel and ldraw.find(rel).parent.name == "parts"
+        if not is_part and subfiles is None:
+            continue
         snaps = deriver.snaps(rel)
         box = deriver.box(rel)
         if not snaps or box is None:
             continue
-        parts[rel[:-4]] = {"n": _title(ldraw.text(rel)), "b": _r(box.reshape(-1)), "s": [_record(s) for s in snaps]}
+        record = {"n": _title(ldraw.text(rel)), "b": _r(box.reshape(-1)),
+                  "s": [_record(s, scale=not is_part) for s in snaps]}
+        if is_part:
+            parts[rel[:-4]] = record
+        else:
+            subfiles[rel] = record
     return parts
+
+
+def _write(path: Path, header: dict, records: dict) -> None:
+    data = write_lines(header, records).encode()
+    with open(path, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
+        handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
 
 
 def write_lines(header: dict, parts: dict) -> str:
@@ -330,13 +352,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ldraw", type=Path, required=True, help="LDraw.org parts library folder (parts/, p/)")
     parser.add_argument("--shadow", type=Path, required=True, help="LDCad shadow library folder (parts/, p/)")
     parser.add_argument("--out", type=Path, required=True, help="output .tsv.gz")
+    parser.add_argument("--subfiles", type=Path, help="output .tsv.gz of the primitives and subparts with snaps")
     parser.add_argument("--source", default="", help="versions of the two libraries, recorded in the file")
     args = parser.parse_args(argv)
-    parts = derive(args.ldraw, args.shadow)
-    data = write_lines({"source": args.source, "units": "LDU, part frame, -y up"}, parts).encode()
-    with open(args.out, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
-        handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
+    subfiles: dict = {}
+    parts = derive(args.ldraw, args.shadow, subfiles)
+    header = {"source": args.source, "units": "LDU, part frame, -y up"}
+    _write(args.out, header, parts)
     print(f"{len(parts)} parts with snap information written to {args.out}", file=sys.stderr)
+    if args.subfiles:
+        _write(args.subfiles, header, subfiles)
+        print(f"{len(subfiles)} primitives and subparts with snap information written to {args.subfiles}",
+              file=sys.stderr)
     return 0
 
 

@@ -197,11 +197,12 @@ class Assembly:
         self._free_table = self._boxes = None  # docking's arrays of free connection points, rebuilt after a change
 
     # ---------------------------------------------------------------- building
-    def add_part(self, id: str, number: str, position, rotation=None) -> list[Connection]:
-        """Place a catalogue part; returns the connections it makes. Unknown parts raise KeyError."""
+    def add_part(self, id: str, number: str, position, rotation=None, shape: PartShape | None = None) -> list[Connection]:
+        """Place a catalogue part (or a part of the given ``shape``); returns the connections it makes. Unknown
+        parts raise KeyError."""
         if id in self.parts or id in self.bodies:
             raise ValueError(f"id {id!r} is already in the assembly")
-        shape = lookup(number)
+        shape = shape or lookup(number)
         if shape is None:
             raise KeyError(number)
         rot = np.eye(3) if rotation is None else np.asarray(rotation, dtype=float).reshape(3, 3)

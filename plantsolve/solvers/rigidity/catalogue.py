@@ -42,6 +42,8 @@ overlap. Everything here is numbers per part (frame, boxes, connection points).
 :func:`lookup` finds a part here first, then in the catalogue generated from the LDCad shadow library
 (:mod:`generated`: thousands of official parts, their connection points from snap data, a collision
 shape only for plain rectangular parts), which adds ball/socket, clip/bar and hinge-finger connections.
+:func:`recorded_part` reads a part from a record of the generated catalogue's format that a model brought
+(an embedded part resolved from the primitives it draws: :mod:`embedded`).
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.rigidity import generated
 
 BRICK = 24
@@ -384,10 +387,25 @@ def _with_fits(shape: PartShape) -> PartShape:
 @functools.lru_cache(maxsize=4096)
 def generated_part(number: str) -> PartShape | None:
     fields = generated.entry(number)
-    if fields is None:
-        return None
+    return None if fields is None else _shape(fields)
+
+
+def _shape(fields: dict) -> PartShape:
     connectors = tuple(Connector(*c) for c in fields.pop("connectors"))
     return PartShape(connectors=connectors, **fields)
+
+
+def recorded_part(number: str, record: dict) -> PartShape:
+    """A part from a catalogue record outside the data file (an embedded part resolved from its primitives:
+    :mod:`embedded`), read as a generated part; ValueError when the record is not one."""
+    try:
+        shape = _shape(generated.fields(number, record))
+        numbers = np.concatenate([shape.points().ravel(), shape.box_center, shape.box_size])
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
+        raise ValueError(f"part {number!r}: its record is not a catalogue record ({error})") from error
+    if not np.all(np.abs(numbers) <= MAX_COORDINATE):  # NaN fails too
+        raise ValueError(f"part {number!r}: its record places a point beyond {MAX_COORDINATE:g} LDU")
+    return shape
 
 
 FIT_GRIP = 0.5  # LDU: a male section this close under the female's radius grips it (a stud in a round bore)

@@ -69,7 +69,8 @@ def _lines() -> dict[str, str]:
     return dict(line.split("\t", 1) for line in text.splitlines()[1:] if "\t" in line)
 
 
-def _part(number: str) -> dict | None:
+def record(number: str) -> dict | None:
+    """Part ``number``'s line of the data file (``{"n": name, "b": box, "s": snaps}``), or None."""
     line = _lines().get(number)
     return None if line is None else json.loads(line)
 
@@ -216,9 +217,12 @@ def connectors(snaps: list) -> tuple[Point, ...]:
 
 def entry(number: str) -> dict | None:
     """The generated catalogue's part ``number`` (normalised) as the catalogue's PartShape fields, or None."""
-    entry = _part(number)
-    if entry is None:
-        return None
+    found = record(number)
+    return None if found is None else fields(number, found)
+
+
+def fields(number: str, entry: dict) -> dict:
+    """A catalogue record (``{"n": name, "b": box, "s": snaps}``) as the catalogue's PartShape fields."""
     lo, hi = np.array(entry["b"][:3], float), np.array(entry["b"][3:], float)
     name = entry["n"]
     plain = " ".join(name.lower().split())

@@ -13,7 +13,7 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import OFFSET_REACH, SNAP, Assembly, JointSpec
-from plantsolve.solvers.rigidity.catalogue import lookup
+from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, Misses, unknown_near
@@ -82,20 +82,38 @@ def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
     return out
 
 
-def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
-    """The assembly of a request: bodies and joints, or catalogue parts (unknown parts set aside)."""
+def recorded_parts(source: dict) -> tuple[dict[str, PartShape], list[str]]:
+    """The parts the upload reader recognised from the primitives their embedded definitions draw
+    (``source.parts_from_primitives``: part number -> catalogue record), and the numbers whose record is unreadable
+    (a hand-written request's): those stay unknown."""
+    records = source.get("parts_from_primitives")
+    shapes, unreadable = {}, []
+    for number, record in (records.items() if isinstance(records, dict) else ()):
+        try:
+            shapes[normalise_number(str(number))] = recorded_part(normalise_number(str(number)), record)
+        except ValueError:
+            unreadable.append(str(number))
+    return shapes, unreadable
+
+
+def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None) -> tuple[Assembly, list[UnknownPart]]:
+    """The assembly of a request: bodies and joints, or catalogue parts and the ``recorded`` parts of the file
+    (:func:`recorded_parts`), unknown parts set aside."""
     assembly = Assembly()
     unknown = []
+    recorded = recorded or {}
     for body in request.bodies:
         assembly.add_body(body.id, _solid(body))
     for joint in request.joints:
         axis = tuple(joint.axis) if joint.axis is not None else None
         assembly.add_joint(JointSpec(joint.id, joint.type, (joint.bodies[0], joint.bodies[1]), tuple(joint.point), axis))
     for part in request.parts:
-        if lookup(part.part) is None:
+        known = lookup(part.part) is not None
+        shape = None if known else recorded.get(normalise_number(part.part))  # a catalogue part keeps its own
+        if not known and shape is None:
             unknown.append(UnknownPart(id=part.id, part=part.part))
             continue
-        assembly.add_part(part.id, part.part, part.position, part.rotation)
+        assembly.add_part(part.id, part.part, part.position, part.rotation, shape=shape)
     assembly.seat_tyres()
     assembly.seat_offset_studs()
     assembly.join_pieces()
@@ -104,8 +122,23 @@ def build(request: RigidityRequest) -> tuple[Assembly, list[UnknownPart]]:
 
 def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(0.0, "building the assembly")
-    assembly, unknown = build(request)
+    recorded, unreadable = recorded_parts(request.source or {})
+    assembly, unknown = build(request, recorded)
     warnings: list[Diagnostic] = []
+    recognised = [p.id for p in request.parts if p.id in assembly.parts and lookup(p.part) is None] if recorded else []
+    if recognised:
+        numbers = sorted({assembly.parts[p].number for p in recognised})
+        warnings.append(Diagnostic(
+            code="parts_from_primitives", message=f"{len(recognised)} part(s) ({', '.join(numbers[:LISTED_IN_MESSAGE])}"
+            f"{' and more' if len(numbers) > LISTED_IN_MESSAGE else ''}) are not in the catalogue but defined in the "
+            "file: they were recognised from the official primitives and parts their definitions draw (stud.dat, "
+            "connhole.dat …), whose snap data places their connections; no collision shape",
+            details={"parts": numbers[:100], "ids": recognised[:MAX_LISTED]}))
+    if unreadable:
+        warnings.append(Diagnostic(code="parts_from_primitives_unreadable", message=f"source.parts_from_primitives "
+                                   f"holds no catalogue record for {len(unreadable)} part(s) ("
+                                   f"{', '.join(unreadable[:LISTED_IN_MESSAGE])}): they stay unknown",
+                                   details={"parts": unreadable[:100]}))
     if unknown:
         warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
                                    "were left out of the analysis (not guessed)",

@@ -20,7 +20,11 @@ nearest rotation (``source.rotations_rounded`` counts them; a sub-model's placem
 off, typed by hand, too, with a ``rotation_rounded`` warning naming its lines), a primitive placed in a model
 is drawn geometry however it is scaled, and a line placing a ``.ldr`` or ``.mpd`` the file
 does not hold (a cut ``.mpd``, an ``.ldr`` without its sub-model files) is skipped naming it; parts not in the
-catalogue (embedded custom parts too) are kept and reported as unknown by the solver (never guessed);
+catalogue are kept and reported as unknown by the solver (never guessed), except a part the file defines
+itself (an embedded unofficial part) whose definition draws official primitives, subparts or parts with snap data
+(``stud.dat``, ``connhole.dat``, ``s/3001s01.dat``): its snaps are theirs, placed by the definition's matrices
+(:mod:`embedded`), handed to the solver in ``source.parts_from_primitives`` (part number -> catalogue record),
+and the solver says which parts it recognised so;
 the file is refused (422 naming the file) only when it places no part at all.
 Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models;
 ``source.submodel_placements`` maps each placed sub-model's id prefix (``L12/``) to its file name.
@@ -35,6 +39,7 @@ from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
+from plantsolve.solvers.rigidity.embedded import Resolver, official
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
@@ -116,12 +121,18 @@ def _section_type(lines: list[tuple[int, str]]) -> str | None:
 
 
 def _draws_without_parts(lines: list[tuple[int, str]]) -> bool:
-    """Drawn geometry (types 2–5) and no catalogue part placed: how a part's own definition looks."""
+    """Drawn geometry (types 2–5, subparts and primitives, ``stud.dat`` among them) and no catalogue part placed:
+    how a part's own definition looks."""
     draws = False
     for _, raw in lines:
         tokens = raw.split()
         if tokens[:1] in (["2"], ["3"], ["4"], ["5"]):
             draws = True
+        elif tokens[:1] == ["1"] and len(tokens) >= 15 and _key(raw.split(None, 14)[14]).startswith(GEOMETRY_FOLDERS):
+            draws = True  # a subpart or primitive drawn
+        elif tokens[:1] == ["1"] and len(tokens) >= 15 and official(raw.split(None, 14)[14]) is not None \
+                and lookup(raw.split(None, 14)[14]) is None:
+            draws = True  # a primitive with snap data (stud.dat)
         elif tokens[:1] == ["1"] and len(tokens) >= 15 and lookup(raw.split(None, 14)[14]) is not None:
             return False
     return draws
@@ -180,6 +191,8 @@ def parse_ldraw(text: str) -> dict:
     counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0}
     placements: dict[str, str] = {}  # part id prefix of each placed sub-model -> its file name
     hand_typed: list[tuple[int, float]] = []  # (line, off) of sub-model placements read as the nearest rotation
+    resolver = Resolver(files, lambda name: _resolve(name, files))
+    from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -266,6 +279,11 @@ def parse_ldraw(text: str) -> dict:
                 continue
             if role == "part":
                 embedded.add(sub)
+                number = normalise_number(file_name)
+                if number not in from_primitives and lookup(file_name) is None:
+                    record = resolver.record(sub)
+                    if record is not None:
+                        from_primitives[number] = record
             parts.append({"id": ident, "part": normalise_number(file_name),
                           "position": [_tidy(v) for v in world_pos],
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
@@ -300,6 +318,7 @@ def parse_ldraw(text: str) -> dict:
                                        "parts": len(parts),
                                        "submodels": sum(r == "model" for n, r in roles.items() if n != main),
                                        "embedded_parts": sorted(embedded), **counts,
+                                       "parts_from_primitives": from_primitives,
                                        "submodel_placements": placements,
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}

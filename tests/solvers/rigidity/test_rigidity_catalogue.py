@@ -311,3 +311,23 @@ def test_parts_the_shadow_library_renamed_since_the_ldraw_release_keep_their_own
     curved = generated_shape("6192")
     under = {c.point for c in curved.connectors if c.type == "antistud" and c.point[1] == 24.0}
     assert {(x, 24.0, z) for x in (-30.0, -10.0, 10.0, 30.0) for z in (-10.0, 10.0)} <= under
+
+
+def test_script_writes_primitives_and_subparts_with_snaps_keyed_by_their_reference_and_scale_flag(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9001.dat", "0 Brick Test\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 s\\9001s01.dat\n")
+    _write(ldraw, "parts/s/9001s01.dat", "0 ~sub\n1 16 10 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
+    _write(ldraw, "p/stud.dat", "0 Stud\n4 16 -6 0 -6 6 0 -6 6 -4 -6 -6 -4 -6\n")
+    _write(ldraw, "p/axle.dat", "0 Technic Axle\n2 24 0 0 0 0 1 0\n")
+    _write(ldraw, "p/box5.dat", "0 Box\n4 16 1 0 1 -1 0 1 -1 0 -1 1 0 -1\n")  # no snaps: left out
+    _write(shadow, "p/stud.dat", "0 !LDCAD SNAP_CYL [gender=M] [caps=one] [secs=R 6 4]\n")
+    _write(shadow, "p/axle.dat", "0 !LDCAD SNAP_CYL [gender=M] [caps=none] [secs=A 6 1] [scale=YOnly]\n")
+    subfiles: dict = {}
+    parts = _script().derive(ldraw, shadow, subfiles)
+    assert set(parts) == {"9001"} and set(subfiles) == {"stud.dat", "axle.dat", "s/9001s01.dat"}
+    # the parts' lines keep their 7 fields; a sub-file's cylinder says whether a scaled placement stretches it
+    assert parts["9001"]["s"] == [["cyl", "M", "one", 0, [10.0, 0.0, 0.0], [0.0, -1.0, 0.0], [["R", 6.0, 4.0]]]]
+    assert subfiles["s/9001s01.dat"]["s"] == [["cyl", "M", "one", 0, [10.0, 0.0, 0.0], [0.0, -1.0, 0.0],
+                                               [["R", 6.0, 4.0]], 0]]
+    assert subfiles["axle.dat"]["s"][0][-1] == 1 and subfiles["stud.dat"]["b"] == [-6.0, -4.0, -6.0, 6.0, 0.0, -6.0]
+    assert _script().derive(ldraw, shadow) == parts  # without a subfiles dict: the parts alone, as before

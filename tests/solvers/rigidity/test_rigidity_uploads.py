@@ -175,15 +175,20 @@ def test_threejs_packed_model_places_its_parts_not_their_drawn_definitions():
     assert sorted(j.connections for j in result.joints) == [2, 4]
 
 
-def test_studio_embedded_unofficial_parts_known_number_is_the_part_custom_part_is_unknown():
+def test_studio_embedded_unofficial_parts_known_number_is_the_part_custom_part_is_its_primitives():
     request = parse("main.mpd", files.STUDIO_EMBEDDED)
     assert [(p.id, p.part, p.position) for p in request.parts] == [
         ("L5", "3001", [0, 0, 0]), ("L6", "3701", [0, -24, 10]), ("L7", "custom bracket", [0, -24, -30])]
     assert request.source["embedded_parts"] == ["3701.dat", "custom bracket.dat"]
     assert request.source["submodels"] == 0 and request.source["main_model"] == "main.ldr"
+    # the custom bracket draws one stud.dat: one stud at its origin, in the catalogue record the reader hands on
+    assert request.source["parts_from_primitives"]["custom bracket"]["s"] == [
+        ["cyl", "M", "one", 0, [0.0, 0.0, 0.0], [0.0, -1.0, 0.0], [["R", 6.0, 4.0]]]]
     result = solve(request).result
-    assert [(u.id, u.part) for u in result.unknown_parts] == [("L7", "custom bracket")]
-    assert result.report.status == "warning" and "unknown_parts" in {w.code for w in result.report.warnings}
+    assert result.unknown_parts == []
+    (marked,) = [w for w in result.report.warnings if w.code == "parts_from_primitives"]
+    assert marked.details["ids"] == ["L7"]
+    assert next(p for p in result.parts if p.id == "L7").joints == []  # its stud stands beside the 2 x 4, clear of it
     (joint,) = result.joints  # the technic brick sits on the 2 x 4's back row of studs
     assert (joint.bodies, joint.type, joint.connections) == (["L5", "L6"], "rigid", 4)
 
@@ -214,7 +219,8 @@ def test_a_packed_file_whose_main_model_places_only_unknown_parts_is_read_not_re
            "0 !LDRAW_ORG Unofficial_Part\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 p/stud.dat\n"
     request = parse("x.mpd", text)
     assert [(p.id, p.part) for p in request.parts] == [("L2", "u9001")]
-    assert [u.part for u in solve(request).result.unknown_parts] == ["u9001"]
+    result = solve(request).result  # u9001 draws a stud: known from its primitive, joined to nothing
+    assert result.unknown_parts == [] and [(p.id, p.joints) for p in result.parts] == [("L2", [])]
 
 
 def test_an_embedded_dat_without_header_is_a_part_when_it_only_draws_and_a_submodel_when_it_places_parts():
