@@ -224,13 +224,19 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
     if not candidates:
         return None
     stacked = np.stack(candidates)  # (g, 3, 3): every guess's sample in one tree query
-    d = member.tree.query(np.einsum("gij,nj->gni", stacked, sample).reshape(-1, 3), k=1)[0]
-    worst = d.reshape(len(candidates), -1).max(axis=1)
-    scored = sorted(zip(worst.tolist(), candidates), key=lambda s: s[0])
+    moved = np.einsum("gij,nj->gni", stacked, sample).reshape(-1, 3)
     # a right guess already lands the sample within the tolerance (plus fit noise); refine only those,
-    # and all of the best eight only when none does (a rough guess that ICP still has to pull in)
-    close = [r for d, r in scored if d <= 4 * tol]
-    tries = close or [r for _, r in scored[:8]]
+    # and all of the best eight only when none does (a rough guess that ICP still has to pull in). The
+    # search stops past 4·tol: a point's distance within it is the one an unbounded search finds (the
+    # same nearest point), one past it is only known to be past it, which is all 'close' asks
+    d = member.tree.query(moved, k=1, distance_upper_bound=4 * tol * 1.0001)[0]
+    worst = d.reshape(len(candidates), -1).max(axis=1)
+    close = [r for d, r in sorted(zip(worst.tolist(), candidates), key=lambda s: s[0]) if d <= 4 * tol]
+    if not close:  # the best eight by their true distances
+        d = member.tree.query(moved, k=1)[0]
+        worst = d.reshape(len(candidates), -1).max(axis=1)
+        close = [r for _, r in sorted(zip(worst.tolist(), candidates), key=lambda s: s[0])[:8]]
+    tries = close
     best: Match | None = None
 
     def consider(r0: np.ndarray) -> None:
