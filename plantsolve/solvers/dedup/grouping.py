@@ -14,7 +14,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.matching import Match, Shape, first_verified, make_shape, match
+from plantsolve.solvers.dedup.matching import (
+    Match,
+    Shape,
+    first_verified,
+    make_shape,
+    match,
+)
 
 QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
 CANONICAL_DEPTH = 8

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.dedup.matching import Match, first_verified, make_shape, match, verify
+from plantsolve.solvers.dedup.matching import (
+    Match,
+    first_steps,
+    first_verified,
+    make_shape,
+    match,
+    verify,
+)
 from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh
 
 FAR = np.array([1.0e6, 1.0e6, 30.0])
@@ -95,3 +102,13 @@ def test_stacked_matmul_gives_each_matrix_the_bits_of_its_own_product():
     stacked, offsets = np.matmul(local, scaled.transpose(0, 2, 1)), np.matmul(scaled, centre)
     for k, x in enumerate(scaled):
         assert np.array_equal(stacked[k], local @ x.T) and np.array_equal(offsets[k], x @ centre)
+
+
+def test_the_refinements_first_steps_found_together_are_each_rotations_own():
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)
+    rep, member = make_shape(verts + FAR), make_shape(verts @ Rotation.random(random_state=5).as_matrix().T + FAR)
+    rotations = [Rotation.random(random_state=k).as_matrix() for k in range(6)]
+    for r, (dist, idx) in zip(rotations, first_steps(rep.local, member, rotations), strict=True):
+        own_dist, own_idx = member.tree.query(rep.local @ r.T + np.zeros(3), k=1)
+        assert np.array_equal(dist, own_dist) and np.array_equal(idx, own_idx)
+    assert first_steps(rep.local, member, []) == []
