@@ -14,7 +14,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import Progress, no_progress
-from plantsolve.solvers.dedup.matching import Match, Shape, make_shape, match, verify
+from plantsolve.solvers.dedup.matching import (
+    Match,
+    Shape,
+    first_verified,
+    make_shape,
+    match,
+)
 
 QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
 CANONICAL_DEPTH = 8
@@ -132,6 +138,7 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
         cls = classes[ci]
         cand, m = cls.members[k]
         tried: set[tuple] = set()
+        tries = []
         for n in np.atleast_1d(near[index]):
             cj, kj = entries[n]
             if cj >= ci:  # only members of earlier classes, whose transforms are final
@@ -142,9 +149,10 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
             if key in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
                 continue
             tried.add(key)
-            dev = verify(cls.representative.shape, cand.shape, other, tol)
-            if dev <= tol:
-                cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
-                replaced += 1
-                break
+            tries.append(other)
+        found = first_verified(cls.representative.shape, cand.shape, tries, tol)
+        if found is not None:
+            other, dev = tries[found[0]], found[1]
+            cls.members[k] = (cand, Match(other.rotation, other.scale, other.translation, dev, other.mirror))
+            replaced += 1
     return replaced

@@ -177,15 +177,32 @@ def _anchor_guesses(rep: Shape, member: Shape, tol: float, allow_mirror: bool) -
     return guesses
 
 
-def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: bool, stop: float):
+def first_steps(rep_local: np.ndarray, member: Shape, rotations: list[np.ndarray]) -> list[tuple]:
+    """The nearest member points of ``rep_local`` moved by each rotation, as :func:`_refine`'s first step
+    finds them: one stacked ``np.matmul`` (per matrix the same BLAS call as its ``@``: the same bits) and
+    one tree query for all of them (a point's nearest neighbour does not depend on the other points)."""
+    if not rotations:
+        return []
+    moved = np.matmul(rep_local, np.stack(rotations).transpose(0, 2, 1)) + np.zeros(3)
+    dist, idx = member.tree.query(moved.reshape(-1, 3), k=1)
+    n = len(rep_local)
+    return [(dist[i * n:(i + 1) * n], idx[i * n:(i + 1) * n]) for i in range(len(rotations))]
+
+
+def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: bool, stop: float,
+            first: tuple | None = None):
     """Nearest-neighbour (ICP) refinement of ``member.local ≈ R @ rep_local + t``; returns R, t and the
-    final nearest-neighbour distances and indices."""
+    final nearest-neighbour distances and indices. ``first``: the first step's (distances, indices), when
+    :func:`first_steps` found them."""
     t = np.zeros(3)
     last = np.inf
     flip = np.diag([1.0, 1.0, -1.0])
-    for _ in range(MAX_ICP_STEPS):
-        moved = rep_local @ rotation.T + t
-        dist, idx = member.tree.query(moved, k=1)
+    for step in range(MAX_ICP_STEPS):
+        if step == 0 and first is not None:
+            dist, idx = first
+        else:
+            moved = rep_local @ rotation.T + t
+            dist, idx = member.tree.query(moved, k=1)
         err = float(dist.max())
         if err <= stop or err >= last * 0.999999:
             break
@@ -224,19 +241,25 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
     if not candidates:
         return None
     stacked = np.stack(candidates)  # (g, 3, 3): every guess's sample in one tree query
-    d = member.tree.query(np.einsum("gij,nj->gni", stacked, sample).reshape(-1, 3), k=1)[0]
-    worst = d.reshape(len(candidates), -1).max(axis=1)
-    scored = sorted(zip(worst.tolist(), candidates), key=lambda s: s[0])
+    moved = np.einsum("gij,nj->gni", stacked, sample).reshape(-1, 3)
     # a right guess already lands the sample within the tolerance (plus fit noise); refine only those,
-    # and all of the best eight only when none does (a rough guess that ICP still has to pull in)
-    close = [r for d, r in scored if d <= 4 * tol]
-    tries = close or [r for _, r in scored[:8]]
+    # and all of the best eight only when none does (a rough guess that ICP still has to pull in). The
+    # search stops past 4·tol: a point's distance within it is the one an unbounded search finds (the
+    # same nearest point), one past it is only known to be past it, which is all 'close' asks
+    d = member.tree.query(moved, k=1, distance_upper_bound=4 * tol * 1.0001)[0]
+    worst = d.reshape(len(candidates), -1).max(axis=1)
+    close = [r for d, r in sorted(zip(worst.tolist(), candidates), key=lambda s: s[0]) if d <= 4 * tol]
+    if not close:  # the best eight by their true distances
+        d = member.tree.query(moved, k=1)[0]
+        worst = d.reshape(len(candidates), -1).max(axis=1)
+        close = [r for _, r in sorted(zip(worst.tolist(), candidates), key=lambda s: s[0])[:8]]
+    tries = close
     best: Match | None = None
 
-    def consider(r0: np.ndarray) -> None:
+    def consider(r0: np.ndarray, first: tuple | None = None) -> None:
         nonlocal best
         proper = det3(r0) > 0
-        r, t, dist, idx = _refine(rep_local, member, r0, proper, 1e-3 * tol)
+        r, t, dist, idx = _refine(rep_local, member, r0, proper, 1e-3 * tol, first)
         dev = float(dist.max())
         if dev > tol:
             return
@@ -252,8 +275,8 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
         if best is None or key < (round(float(np.trace(best.rotation)), 9) * -1, best.deviation):
             best = cand
 
-    for r0 in tries:
-        consider(r0)
+    for r0, first in zip(tries, first_steps(rep_local, member, tries)):
+        consider(r0, first)
     if best is None:
         for r0 in _anchor_guesses(rep, member, tol, allow_mirror):
             consider(r0)
@@ -272,9 +295,18 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
         return hausdorff(moved, member.local, member.tree)
     # a wrong transform (most the pool tries) already moves some of a few points farther than tol from the
     # member: that alone is a value above tol, and the whole set is queried only for the others
-    few = member.tree.query(moved[::max(1, len(moved) // VERIFY_SAMPLE)], k=1, distance_upper_bound=tol * 1.0001)[0]
+    few = member.tree.query(_sample(moved), k=1, distance_upper_bound=tol * 1.0001)[0]
     if float(np.max(few)) > tol:
         return float(np.max(few))
+    return _verify_all(moved, member, tol)
+
+
+def _sample(moved: np.ndarray) -> np.ndarray:
+    return moved[::max(1, len(moved) // VERIFY_SAMPLE)]
+
+
+def _verify_all(moved: np.ndarray, member: Shape, tol: float) -> float:
+    """:func:`verify` past its sample."""
     dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
     first = float(np.max(dist))
     if first > tol:
@@ -282,3 +314,29 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
     if one_to_one(idx, len(member.local)):
         return first
     return hausdorff(moved, member.local, member.tree)
+
+
+def first_verified(rep: Shape, member: Shape, tries: list[Match], tol: float) -> tuple[int, float] | None:
+    """The first of ``tries`` (in order) that :func:`verify` finds within ``tol``, and its deviation, else
+    None: the same answer as verifying them one after another. Every try's moved points come from one
+    stacked ``np.matmul`` (per matrix the same BLAS call as ``verify``'s ``@``: the same bits) and the elementwise
+    sums in ``verify``'s order; the samples of all tries go through one tree query (a point's nearest
+    neighbour does not depend on the other points asked with it)."""
+    n = len(rep.local)
+    if not tries or n == 0 or n != len(member.local):
+        for i, m in enumerate(tries):
+            dev = verify(rep, member, m, tol)
+            if dev <= tol:
+                return i, dev
+        return None
+    scaled = np.stack([m.rotation * m.scale for m in tries])
+    moved = (np.matmul(rep.local, scaled.transpose(0, 2, 1)) + np.matmul(scaled, rep.centre)[:, None, :]
+             + np.stack([m.translation for m in tries])[:, None, :] - member.centre)
+    samples = moved[:, ::max(1, n // VERIFY_SAMPLE)]
+    few = member.tree.query(samples.reshape(-1, 3), k=1, distance_upper_bound=tol * 1.0001)[0]
+    worst = few.reshape(len(tries), -1).max(axis=1)
+    for i in np.flatnonzero(~(worst > tol)).tolist():
+        dev = _verify_all(moved[i], member, tol)
+        if dev <= tol:
+            return i, dev
+    return None

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from plantsolve.solvers.dedup.matching import make_shape, match
+from plantsolve.solvers.dedup.matching import (
+    Match,
+    first_steps,
+    first_verified,
+    make_shape,
+    match,
+    verify,
+)
 from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh
 
 FAR = np.array([1.0e6, 1.0e6, 30.0])
@@ -61,3 +68,47 @@ def test_different_shapes_with_equal_point_counts_do_not_match():
     b, _ = segment_mesh(47.5)
     assert len(a) == len(b)
     assert match(make_shape(a + FAR), make_shape(b + FAR), 1e-5) is None
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_first_verified_of_many_tries_is_the_one_verify_finds_in_turn_with_the_same_bits(seed):
+    # the pool's batched tries: every try's deviation as verify() gives it, bit for bit, and the first
+    # within the tolerance chosen (wrong rotations, a near miss, right ones in a shuffled order)
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)
+    rng = np.random.default_rng(seed)
+    rotation = Rotation.random(random_state=seed).as_matrix()
+    rep = make_shape(verts + FAR)
+    member = make_shape((verts @ rotation.T + FAR + 5.0)[rng.permutation(len(verts))])
+    right = match(rep, member, 1e-6)
+    wrong = [Match(Rotation.random(random_state=seed + 10 + k).as_matrix(), 1.0, right.translation, 0.0, False)
+             for k in range(5)]
+    near_miss = Match(right.rotation, 1.0, right.translation + [2e-6, 0.0, 0.0], 0.0, False)
+    tries = wrong[:2] + [near_miss] + wrong[2:] + [right] + wrong[:1]
+    order = rng.permutation(len(tries)).tolist()
+    tries = [tries[i] for i in order]
+    one_by_one = [verify(rep, member, m, 1e-6) for m in tries]
+    expected = next(i for i, d in enumerate(one_by_one) if d <= 1e-6)
+    assert first_verified(rep, member, tries, 1e-6) == (expected, one_by_one[expected])
+    assert tries[expected] is right
+    assert first_verified(rep, member, [m for m in tries if m is not right], 1e-6) is None
+
+
+def test_stacked_matmul_gives_each_matrix_the_bits_of_its_own_product():
+    # what first_verified relies on: np.matmul over a stack calls the same kernel per matrix as '@'
+    rng = np.random.default_rng(3)
+    local = rng.normal(size=(148, 3)) * 7.0
+    centre = FAR + rng.normal(size=3)
+    scaled = np.stack([Rotation.random(random_state=k).as_matrix() * 1.001 for k in range(40)])
+    stacked, offsets = np.matmul(local, scaled.transpose(0, 2, 1)), np.matmul(scaled, centre)
+    for k, x in enumerate(scaled):
+        assert np.array_equal(stacked[k], local @ x.T) and np.array_equal(offsets[k], x @ centre)
+
+
+def test_the_refinements_first_steps_found_together_are_each_rotations_own():
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)
+    rep, member = make_shape(verts + FAR), make_shape(verts @ Rotation.random(random_state=5).as_matrix().T + FAR)
+    rotations = [Rotation.random(random_state=k).as_matrix() for k in range(6)]
+    for r, (dist, idx) in zip(rotations, first_steps(rep.local, member, rotations), strict=True):
+        own_dist, own_idx = member.tree.query(rep.local @ r.T + np.zeros(3), k=1)
+        assert np.array_equal(dist, own_dist) and np.array_equal(idx, own_idx)
+    assert first_steps(rep.local, member, []) == []
