@@ -269,7 +269,7 @@ class Assembly:
             if key is not None:
                 candidates = [(o, oi, points[ci]) for o, oi in self._near(points[ci], reach)]
                 candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(
-                    points[ci], fit_reach, _slip_beyond(shape.connectors[ci], slip))]
+                    points[ci], fit_reach, _slip_beyond(shape.connectors[ci], slip) if slip > 0 else SNAP)]
             else:
                 candidates = [(o, oi, self.parts[o].points[oi])
                               for o, oi in self._points_along(points[ci], dirs[ci], length, fit_reach, slip)]
@@ -599,7 +599,14 @@ class Assembly:
                       slip: float = 0.0):
         """The connection points within ``reach`` of the line of the run from ``start`` along ``axis`` for
         ``length`` (:func:`_on_run`), past its ends as far as :func:`_slip_beyond` lets each."""
-        for cell in _cells_along(start, axis, length, max(reach, SLIP_BORE / 2 + slip if slip > 0 else SNAP)):
+        if slip <= 0:
+            for cell in _cells_along(start, axis, length, reach):
+                for other, oi in self._coarse.get(cell, ()):
+                    if _on_run(self.parts[other].points[oi], start, axis, length, reach):
+                        yield other, oi
+            return
+        past = SLIP_BORE / 2 + slip  # the run's line grown past its ends, not its box grown all round
+        for cell in _cells_along(start - axis * past, axis, length + 2 * past, reach):
             for other, oi in self._coarse.get(cell, ()):
                 if _on_run(self.parts[other].points[oi], start, axis, length, reach,
                            _slip_beyond(self.parts[other].shape.connectors[oi], slip)):
