@@ -53,6 +53,9 @@ FIT_SNAP = 1.0
 # helicopter). Under a quarter of the closest spacing of like points (a stud and a tube 10√2 = 14 LDU apart), so a
 # point still meets one mate at most.
 OFFSET_REACH = 3.0 + SNAP
+# LDU: the longest bore whose mouth the slip pass looks for past a run's end (a technic hole's, one stud long);
+# a longer bore counts from this far around its centre, so the cells searched stay bounded.
+SLIP_BORE = 20.0
 # |cos| between a male snap cylinder and the bore it is in: a minifigure's arm swung about the torso's x axis
 # instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
 # FIT_SNAP of each other over the depth they share.
@@ -164,12 +167,21 @@ def _cells_along(start: np.ndarray, axis: np.ndarray, length: float, reach: floa
                                          math.floor((float(b) - RUN_OFFSET) / RUN_CELL) + 1) for a, b in zip(lo, hi))))
 
 
-def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP) -> bool:
+def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP,
+            beyond: float = SNAP) -> bool:
     """``point`` on the run: within ``reach`` of its line (FIT_SNAP: a hole or a clip that far off an axle's or a
-    bar's axis holds it all the same; nearer, it would cut into the rod) and between its ends (within SNAP)."""
+    bar's axis holds it all the same; nearer, it would cut into the rod) and between its ends (within ``beyond``:
+    SNAP, or in the slip pass how far a hole's centre may lie past an end, :func:`_slip_beyond`)."""
     v = np.asarray(point, float) - start
     t = float(v @ axis)
-    return -SNAP <= t <= length + SNAP and float(np.linalg.norm(v - t * axis)) <= reach
+    return -beyond <= t <= length + beyond and float(np.linalg.norm(v - t * axis)) <= reach
+
+
+def _slip_beyond(connector, slip: float) -> float:
+    """How far past a run's end the centre of ``connector`` (a hole, a clip) may lie for the slip pass to join
+    them: half its bore (its mouth at the end: a bush drawn on an axle's tip) and ``slip`` more; SNAP without a
+    slip (the exact pass: its centre on the run)."""
+    return SNAP if slip <= 0 else min(connector.depth, SLIP_BORE) / 2 + slip
 
 
 def _clean(x: float) -> float | int:
@@ -235,9 +247,10 @@ class Assembly:
                     self._pebble.add_joint(other, id, 6 - FREEDOM[j.type])
         return [c for conns in found.values() for c in conns]
 
-    def _matches(self, id: str, reach: float, fit_reach: float) -> dict[str, list[Connection]]:
+    def _matches(self, id: str, reach: float, fit_reach: float, slip: float = 0.0) -> dict[str, list[Connection]]:
         """The connections placed part ``id`` makes with the parts in the tables (itself left out): points that meet
-        within ``reach`` (a hole or a clip within ``fit_reach`` of a run's line), cylinders that fit within
+        within ``reach`` (a hole or a clip within ``fit_reach`` of a run's line, its centre on the run or, with a
+        ``slip``, its bore within ``slip`` of the run's end: :func:`_slip_beyond`), cylinders that fit within
         ``fit_reach`` of a bore's line. A fit counts only between parts that no typed point joins."""
         placed = self.parts[id]
         shape, points, dirs = placed.shape, placed.points, placed.directions
@@ -255,10 +268,11 @@ class Assembly:
                 continue
             if key is not None:
                 candidates = [(o, oi, points[ci]) for o, oi in self._near(points[ci], reach)]
-                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(points[ci], fit_reach)]
+                candidates += [(o, oi, points[ci]) for o, oi in self._runs_near(
+                    points[ci], fit_reach, _slip_beyond(shape.connectors[ci], slip) if slip > 0 else SNAP)]
             else:
                 candidates = [(o, oi, self.parts[o].points[oi])
-                              for o, oi in self._points_along(points[ci], dirs[ci], length, fit_reach)]
+                              for o, oi in self._points_along(points[ci], dirs[ci], length, fit_reach, slip)]
             seen = set()
             for other, oi, where in candidates:
                 if (other, oi) in seen or other == id:
@@ -321,7 +335,7 @@ class Assembly:
         joined = []
         for group in groups[1:]:
             for id in group:
-                for other, conns in self._matches(id, reach, reach).items():
+                for other, conns in self._matches(id, reach, reach, reach).items():
                     if label[other] == label[id] or (other, id) in self._links or (id, other) in self._links:
                         continue
                     gap = max(self._gap(c) for c in conns)
@@ -484,8 +498,9 @@ class Assembly:
 
     def _gap(self, c: Connection) -> float:
         """How far a connection's two points miss each other (LDU): between two points their distance; for a run
-        (axle, bar, hinge fingers, a fit cylinder) the other's distance from its line; for a ring how far the stud
-        is off its place around it."""
+        (axle, bar, hinge fingers, a fit cylinder) the other's distance from its line, and for a point (a hole, a
+        clip) how far its bore's mouth also lies past the run's end; for a ring how far the stud is off its place
+        around it."""
         a, b = self.parts[c.a], self.parts[c.b]
         ca, cb = a.shape.connectors[c.ca], b.shape.connectors[c.cb]
         pa, pb = a.points[c.ca], b.points[c.cb]
@@ -497,7 +512,12 @@ class Assembly:
         if ca.length <= 0 and cb.length <= 0:
             return float(np.linalg.norm(v))
         axis = a.directions[c.ca] if ca.length > 0 else b.directions[c.cb]
-        return float(np.linalg.norm(v - float(v @ axis) * axis))
+        across = float(np.linalg.norm(v - float(v @ axis) * axis))
+        if ca.length > 0 and cb.length > 0:
+            return across
+        run, point, along = (ca, cb, float(v @ axis)) if ca.length > 0 else (cb, ca, -float(v @ axis))
+        past = max(0.0, -along, along - run.length) - min(point.depth, SLIP_BORE) / 2
+        return math.hypot(across, past) if past > 0 else across
 
     def offsets(self) -> dict[tuple[str, str], float]:
         """(part, part) -> offset (LDU) of the pairs :meth:`join_pieces` joined."""
@@ -561,25 +581,35 @@ class Assembly:
                 if abs(float(v @ direction)) <= reach and abs(float(np.linalg.norm(v)) - RING_REACH) <= spread:
                     yield other, oi, (point + v if mine == "ring" else point)
 
-    def _runs_near(self, point: np.ndarray, reach: float = FIT_SNAP):
-        """The runs (axles, bars) that ``point`` lies on (within ``reach`` of their line: :func:`_on_run`)."""
+    def _runs_near(self, point: np.ndarray, reach: float = FIT_SNAP, beyond: float = SNAP):
+        """The runs (axles, bars) that ``point`` lies on (within ``reach`` of their line, within ``beyond`` of
+        their ends: :func:`_on_run`)."""
         if not self._runs:
             return
         seen = set()
-        for cell in _around(point, reach + 0.5, RUN_CELL, RUN_OFFSET):
+        for cell in _around(point, max(reach, beyond) + 0.5, RUN_CELL, RUN_OFFSET):
             for other, oi in self._runs.get(cell, ()):
                 o = self.parts[other]
                 if (other, oi) not in seen and _on_run(point, o.points[oi], o.directions[oi],
-                                                       o.shape.connectors[oi].length, reach):
+                                                       o.shape.connectors[oi].length, reach, beyond):
                     seen.add((other, oi))
                     yield other, oi
 
-    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP):
+    def _points_along(self, start: np.ndarray, axis: np.ndarray, length: float, reach: float = FIT_SNAP,
+                      slip: float = 0.0):
         """The connection points within ``reach`` of the line of the run from ``start`` along ``axis`` for
-        ``length`` (:func:`_on_run`)."""
-        for cell in _cells_along(start, axis, length, reach):
+        ``length`` (:func:`_on_run`), past its ends as far as :func:`_slip_beyond` lets each."""
+        if slip <= 0:
+            for cell in _cells_along(start, axis, length, reach):
+                for other, oi in self._coarse.get(cell, ()):
+                    if _on_run(self.parts[other].points[oi], start, axis, length, reach):
+                        yield other, oi
+            return
+        past = SLIP_BORE / 2 + slip  # the run's line grown past its ends, not its box grown all round
+        for cell in _cells_along(start - axis * past, axis, length + 2 * past, reach):
             for other, oi in self._coarse.get(cell, ()):
-                if _on_run(self.parts[other].points[oi], start, axis, length, reach):
+                if _on_run(self.parts[other].points[oi], start, axis, length, reach,
+                           _slip_beyond(self.parts[other].shape.connectors[oi], slip)):
                     yield other, oi
 
     def _near(self, point: np.ndarray, reach: float):

@@ -78,6 +78,7 @@ class Connector:
     direction: tuple[int, int, int]
     length: float = 0.0
     profile: tuple = ()  # a fit cylinder's sections ((shape, radius, length), …) from ``point`` along ``direction``
+    depth: float = 0.0  # LDU: a hole's bore along ``direction``, centred on ``point`` (0: not stated)
 
 
 RING_REACH = 10.0 * 2 ** 0.5  # LDU: from a ring's centre to each of the four studs it stands between
@@ -244,7 +245,7 @@ def _block(number, name, width, length, height, studs=True, antistuds=True, extr
 
 def _technic_brick(number, length, holes="pinhole") -> PartShape:
     xs = [PITCH * i - PITCH * (length - 2) // 2 for i in range(length - 1)] if length > 1 else [0]
-    extra = [Connector(holes, (x, 10, 0), Z) for x in xs]
+    extra = [Connector(holes, (x, 10, 0), Z, depth=float(PITCH)) for x in xs]
     return _block(number, f"Technic Brick 1 x {length} with Holes", 1, length, BRICK, extra=extra)
 
 
@@ -273,7 +274,8 @@ def _beam(number, holes) -> PartShape:
     centred on its middle hole, holes every 20 LDU along y through its 20-LDU thickness, 18 LDU wide
     (x ∈ [−9, 9]) with round ends of radius 9 around the end holes (here square)."""
     reach = PITCH // 2 * (holes - 1)
-    connectors = tuple(Connector("pinhole", (0, 0, z), DOWN) for z in range(-reach, reach + 1, PITCH))
+    connectors = tuple(Connector("pinhole", (0, 0, z), DOWN, depth=float(PITCH))
+                       for z in range(-reach, reach + 1, PITCH))
     return PartShape(number, f"Technic Beam {holes}", (0.0, 0.0, 0.0), (18.0, float(PITCH), 2.0 * (reach + 9)),
                      connectors)
 
@@ -295,7 +297,7 @@ def _gear(number, teeth, thickness) -> PartShape:
     solids = tuple([hub, *_inscribed_disc(radius, thickness)]) if thickness < PITCH else tuple(
         _inscribed_disc(max(radius, 8.0), float(PITCH)))
     return PartShape(number, f"Technic Gear {teeth} Tooth", (0.0, 0.0, 0.0), (2 * radius, 2 * radius, float(PITCH)),
-                     (Connector("axlehole", (0, 0, 0), Z),), solids)
+                     (Connector("axlehole", (0, 0, 0), Z, depth=float(PITCH)),), solids)  # through the hub
 
 
 def _hinge_brick() -> tuple[PartShape, PartShape]:
@@ -327,7 +329,7 @@ def _build() -> dict[str, PartShape]:
                            "3703": 16}.items():
         parts[number] = _technic_brick(number, length)
     parts["32064"] = _block("32064", "Technic Brick 1 x 2 with Axle Hole", 1, 2, BRICK,
-                            extra=[Connector("axlehole", (0, 10, 0), Z)])
+                            extra=[Connector("axlehole", (0, 10, 0), Z, depth=float(PITCH))])
     parts["3673"] = _rod("3673", "Technic Pin", "pin", 2)
     parts["2780"] = _rod("2780", "Technic Pin with Friction Ridges", "pin", 2)
     for number, n in {"3704": 2, "3705": 4, "3706": 6, "3707": 8}.items():
@@ -341,7 +343,7 @@ def _build() -> dict[str, PartShape]:
     for number in ("3648", "3648a", "3648b"):  # the library renamed 3648 to 3648b; files carry either name
         parts[number] = _gear(number, 24, 8.0)
     parts["3713"] = PartShape("3713", "Technic Bush", (0.0, 0.0, 0.0), (18.0, 18.0, float(PITCH)),
-                              (Connector("axlehole", (0, 0, 0), Z),))
+                              (Connector("axlehole", (0, 0, 0), Z, depth=float(PITCH)),))
     parts["3649"] = _gear("3649", 40, 8.0)
     parts["3937"], parts["3938"] = _hinge_brick()
     return parts

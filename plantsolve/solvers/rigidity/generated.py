@@ -17,7 +17,8 @@ grid and compatible types, :data:`catalogue.MATES`):
   when shorter), one point at each slot's centre, typed by the section there: shape ``A`` an ``axle``
   or ``axlehole``, round radius 6 a ``pin`` or ``pinhole``. A male axle slides in its holes, so it has
   a point every 10 LDU (a hole meets it at whole or half studs), as the hand-coded axles do. A pin in a
-  hole has both points at the hole's centre: coaxial, overlapping along the axis.
+  hole has both points at the hole's centre: coaxial, overlapping along the axis. A hole states its bore's
+  length (its section's, or its slot's) as its ``depth``.
 - A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
   anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre. Clip on bar: a hinge about the bar.
   Female radius-4 holes (hollow studs, a pin's bore) make no point.
@@ -142,7 +143,8 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             out.append(("axle", _point(start + axis * axle_from), _point(axis), round(run - axle_from, 3)))
             axle_from = None
         if not male and shape == "A":  # an axle hole: its centre, wherever it is along the bore (a round plate's)
-            out.append(("axlehole", _point(start + axis * (run + piece / 2)), _point(axis)))
+            out.append(("axlehole", _point(start + axis * (run + piece / 2)), _point(axis), 0.0, (),
+                        round(float(piece), 3)))
         run += piece
     if axle_from is not None:  # one run from where the axle shape starts to its end: it slides in its holes
         out.append(("axle", _point(start + axis * axle_from), _point(axis), round(run - axle_from, 3)))
@@ -160,7 +162,8 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
             kind = "pin" if male else "pinhole"
         else:
             continue
-        out.append((kind, _point(start + axis * t), _point(axis)))
+        out.append((kind, _point(start + axis * t), _point(axis)) if male else
+                   (kind, _point(start + axis * t), _point(axis), 0.0, (), min(float(length), SEGMENT)))
     return out
 
 

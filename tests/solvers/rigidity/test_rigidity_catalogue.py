@@ -79,7 +79,8 @@ def test_script_resolves_inheritance_includes_grids_clears_and_scaling(tmp_path)
                                       ("stud", (10.0, 0.0, 0.0), (0.0, -1.0, 0.0)): 1,
                                       ("antistud", (-10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
                                       ("antistud", (10.0, 24.0, 0.0), (0.0, 1.0, 0.0)): 1,
-                                      ("pinhole", (0.0, 10.0, 0.0), (0.0, 0.0, 1.0)): 1})
+                                      # the hole with its bore's length: connhole.dat's 20 LDU
+                                      ("pinhole", (0.0, 10.0, 0.0), (0.0, 0.0, 1.0), 0.0, (), 20.0): 1})
     # 40 LDU of axle: one run from end to end along x (its direction the stretched primitive's), as the
     # hand-coded 3704
     (axle,) = points("9002")

@@ -439,3 +439,30 @@ def test_wheels_turn_on_the_pull_back_motors_wheel_pins():
     assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 10039.dat\n1 0 43 5 60 0 0 -1 0 1 0 1 0 0 30027b.dat\n"
                   "1 0 -43 5 60 0 0 1 0 1 0 -1 0 0 30027b.dat\n") == [("hinge", "fit", "10039", "30027b", 1)] * 2
     assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 10039.dat\n1 0 53 5 60 0 0 -1 0 1 0 1 0 0 30027b.dat\n") == []
+
+
+# 4265a's axle hole: an 8 LDU axle section from local z = -5 (its mouth), its point at z = -1; turned so that
+# local z runs along +x, it faces the end of 3705 (x from -40 to 40) with its mouth at x = 40 + gap
+def bush_past_axle_end(gap: float) -> str:
+    return ("1 0 0 0 0 1 0 0 0 1 0 0 0 1 3705.dat\n"
+            f"1 4 {45 + gap:g} 0 0 0 0 1 0 1 0 -1 0 0 4265a.dat\n")
+
+
+def test_a_bush_on_the_tip_of_an_axle_is_held_by_it():
+    # its point 1 LDU inside the axle's end: joined as drawn, no offset
+    result = solve(parse("model.ldr", bush_past_axle_end(-5))).result
+    assert joints(bush_past_axle_end(-5)) == [("rigid", "axle", "3705", "4265a", 1)]
+    assert "offset_joints" not in {w.code for w in result.report.warnings}
+
+
+@pytest.mark.parametrize("gap", [1, 2])
+def test_a_bush_drawn_just_past_the_end_of_its_axle_is_joined_with_the_offset_of_its_mouth(gap):
+    # as 1682-1's tank draws two: the bush's point 5 + gap LDU past the axle's end, its mouth gap LDU past it
+    result = solve(parse("model.ldr", bush_past_axle_end(gap))).result
+    assert [(j.type, j.origin) for j in result.joints] == [("rigid", "axle")]
+    warning = next(w for w in result.report.warnings if w.code == "offset_joints")
+    assert [pair["offset_ldu"] for pair in warning.details["pairs"]] == [float(gap)]
+
+
+def test_a_bush_four_ldu_past_the_end_of_its_axle_is_not_joined():
+    assert joints(bush_past_axle_end(4)) == []
