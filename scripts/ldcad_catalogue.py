@@ -35,7 +35,9 @@ the bounding box of the part's drawn geometry and each snap one of
 The open stud tube primitives (``stud4.dat``, ``stud4a.dat``, ``stud4f*.dat``, ``stud4h.dat``) get the
 anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``), and a
 wheel holding pin primitive without shadow lines that does not draw ``wpin.dat`` (``wpin4.dat``) gets
-``wpin.dat``'s pin (see ``WHEEL_PIN``).
+``wpin.dat``'s pin (see ``WHEEL_PIN``). The open stud without base edges (``stud2a.dat``) gets the hole
+(radius 4, 4 deep) the shadow library states for ``stud2.dat``, dropped in a file whose other snaps hold a female
+radius-4 cylinder on the same axis over it (see ``OPEN_STUD``).
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -72,6 +74,14 @@ TUBE_SNAP = "0 !LDCAD SNAP_CYL [ID=aStud] [gender=F] [caps=A] [secs=R 6 4] [scal
 # primitive without shadow lines that does not draw wpin.dat gets wpin.dat's snap.
 WHEEL_PIN = re.compile(r"^wpin\d+a?\.dat$")
 WHEEL_PIN_SNAP = "0 !LDCAD SNAP_INCL [ref=wpin.dat]"
+# The open stud without base edges (stud2a.dat) is open: a bar (radius 4) goes into it, as 15395's stud takes the bar
+# 30374 in set 21309. The shadow library states the hole for stud2.dat (radius 4, 4 deep from the stud's top) but not
+# for stud2a.dat, leaving it to the parts because in many of them the hole runs deeper than the stud; most parts do
+# not add it. stud2a.dat gets stud2.dat's hole line (same id, so a part that clears the stud by id clears the hole
+# too), and a file drops that added hole where its other snaps already hold a female round radius-4 cylinder on the
+# same axis that overlaps it (the part stated its own, deeper hole).
+OPEN_STUD = "stud2a.dat"
+OPEN_STUD_HOLE = "0 !LDCAD SNAP_CYL [ID=studO] [gender=F] [caps=one] [secs=R 4 4] [pos=0 -4 0] [ori=1 0 0 0 -1 0 0 0 -1]"
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -204,6 +214,29 @@ def transform(snap: dict, rot: np.ndarray, pos: np.ndarray) -> dict:
     return out
 
 
+def _without_restated_holes(snaps: list[dict]) -> list[dict]:
+    """``snaps`` less the holes added to open studs (``OPEN_STUD_HOLE``) that another female round radius-4
+    cylinder on the same axis overlaps."""
+    stated = [s for s in snaps if s["kind"] == "cyl" and s["gender"] == "F" and not s.get("open_stud_hole")
+              and any(shape.upper() == "R" and abs(r - 4) < 1e-6 for shape, r, _ in s["secs"])]
+    if not stated or not any(s.get("open_stud_hole") for s in snaps):
+        return snaps
+    return [s for s in snaps if not (s.get("open_stud_hole") and any(_overlap(s, t) for t in stated))]
+
+
+def _overlap(a: dict, b: dict, tol: float = 0.01) -> bool:
+    """Whether cylinders ``a`` and ``b`` lie on one axis and their spans along it overlap."""
+    if abs(abs(float(a["axis"] @ b["axis"])) - 1) > 1e-6:
+        return False
+    offset = b["start"] - a["start"]
+    along = float(offset @ a["axis"])
+    if np.linalg.norm(offset - along * a["axis"]) > tol:
+        return False
+    length_a = sum(s[2] for s in a["secs"])
+    b_end = along + float(b["axis"] @ a["axis"]) * sum(s[2] for s in b["secs"])
+    return min(along, b_end) < length_a - tol and max(along, b_end) > tol
+
+
 class Deriver:
     def __init__(self, ldraw: Library, shadow: Library):
         self.ldraw, self.shadow = ldraw, shadow
@@ -226,6 +259,9 @@ class Deriver:
         elif WHEEL_PIN.match(key) and unstated and all(child.lower() != "wpin.dat"
                                                         for _, _, child in self._children(key)):
             shadow = WHEEL_PIN_SNAP
+        added_hole = key == OPEN_STUD and not any("gender=F" in line for line in shadow.splitlines())
+        if added_hole:
+            shadow += "\n" + OPEN_STUD_HOLE
         for raw in shadow.splitlines():
             tokens = raw.split()
             if len(tokens) < 3 or tokens[0] != "0" or tokens[1] != "!LDCAD" or tokens[2] not in SNAP_KINDS:
@@ -243,12 +279,14 @@ class Deriver:
                     own.extend(transform(s, ori, pos + ori @ offset) for s in self.snaps(params.get("ref", "")))
             else:
                 own.extend(_own_snaps(raw, params, lambda s: s))
+        if added_hole:
+            own = [dict(s, open_stud_hole=True) if s["kind"] == "cyl" and s["gender"] == "F" else s for s in own]
         inherited = []
         if not clear_all:
             for rot, pos, child in self._children(key):
                 inherited.extend(transform(s, rot, pos) for s in self.snaps(child) if s["id"] not in clear_ids)
         self._stack.discard(key)
-        self._snaps[key] = own + inherited
+        self._snaps[key] = _without_restated_holes(own + inherited)
         return self._snaps[key]
 
     def _children(self, key: str):

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.rigidity import generated
 from plantsolve.solvers.rigidity.pieces import clearance, loose_sub_builds, sub_build
 from plantsolve.solvers.rigidity.solve import HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
@@ -466,3 +467,38 @@ def test_a_bush_drawn_just_past_the_end_of_its_axle_is_joined_with_the_offset_of
 
 def test_a_bush_four_ldu_past_the_end_of_its_axle_is_not_joined():
     assert joints(bush_past_axle_end(4)) == []
+
+
+# 15395 (dome 2 x 2 inverted) draws its top stud with stud2a.dat, the open stud whose shadow lines state no hole:
+# the catalogue gives it stud2.dat's (radius 4, from the stud's top at local y = -4 down to y = 0).
+def part_snaps(number: str) -> list:
+    return generated.record(number)["s"]
+
+
+DOME_ON_BAR = "1 15 0 -19 0 -1 0 0 0 1 0 0 0 -1 30374.dat\n1 135 0 24 0 -1 0 0 0 1 0 0 0 -1 15395.dat\n"
+
+
+def test_a_dome_threaded_on_a_bar_through_its_open_stud_slides_and_turns_on_it():
+    # as set 21309 draws it: the bar (y from -19 to 61) through the stud's hole (y from 20 to 24): one bar fit
+    assert joints(DOME_ON_BAR) == [("cylindrical", "bar", "15395", "30374", 1)]
+    # the bar a stud aside (x = 20) passes the hole by: nothing
+    assert joints(DOME_ON_BAR.replace("0 -19 0", "20 -19 0")) == []
+
+
+@pytest.mark.parametrize("top", [-84, -86])  # the antenna's tip 4 and 2 LDU down the 4 LDU hole
+def test_an_antenna_tip_pushed_into_an_open_stud_is_held_in_its_hole(top):
+    # 3957a upside down: its bar (radius 4) from local y = -4 to -84, world y from top + 4 to top + 84
+    text = f"1 135 0 0 0 1 0 0 0 1 0 0 0 1 15395.dat\n1 4 0 {top} 0 1 0 0 0 -1 0 0 0 -1 3957a.dat\n"
+    assert joints(text) == [("cylindrical", "bar", "15395", "3957a", 1)]
+
+
+def test_an_open_stud_still_holds_a_brick_and_a_part_whose_own_hole_is_stated_keeps_only_it():
+    # a 1 x 1 brick on the dome's open stud, and the dome's tube on one stud of a 2 x 4 brick: one stud each
+    assert joints("1 135 0 0 0 1 0 0 0 1 0 0 0 1 15395.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3005.dat\n") == [
+        ("hinge", "stud", "15395", "3005", 1)]
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 135 10 -8 10 1 0 0 0 1 0 0 0 1 15395.dat\n") == [
+        ("hinge", "stud", "15395", "3001", 1)]
+    # 3062b states its own hole (radius 4 from y = 4 up through the stud to y = -4): no second one is added
+    holes = [s for s in part_snaps("3062b") if s[0] == "cyl" and s[1] == "F" and any(r == 4 for _, r, _ in s[6])]
+    assert holes == [["cyl", "F", "none", 0, [0.0, 24.0, 0.0], [0.0, -1.0, 0.0], [["R", 6.0, 20.0], ["R", 4.0, 8.0]]]]
+    assert ["cyl", "F", "one", 0, [0.0, -4.0, 0.0], [0.0, 1.0, 0.0], [["R", 4.0, 4.0]]] in part_snaps("15395")
