@@ -60,6 +60,8 @@ from pathlib import Path
 
 import numpy as np
 
+from plantsolve.solvers.rigidity.ldraw_lines import drawn_points, placement
+
 META = re.compile(r"\[([A-Za-z]+)=([^\]]*)\]")
 # The tubes under bricks and plates (LDraw's open stud tube primitives) grip a stud placed between four studs.
 # The shadow library states this only for stud4o.dat and stud4od.dat (LDCad leaves it out of the others so that
@@ -291,14 +293,9 @@ class Deriver:
 
     def _children(self, key: str):
         for raw in (self.ldraw.text(key) or "").splitlines():
-            tokens = raw.split()
-            if len(tokens) < 15 or tokens[0] != "1":
-                continue
-            try:
-                values = [float(t) for t in tokens[2:14]]
-            except ValueError:
-                continue
-            yield np.array(values[3:]).reshape(3, 3), np.array(values[:3]), raw.split(None, 14)[14].strip()
+            placed = placement(raw, raw.split())
+            if placed is not None:
+                yield placed
 
     def box(self, name: str) -> np.ndarray | None:
         """The bounding box (2 × 3: lower, upper corner) of the file's drawn geometry in its frame."""
@@ -308,13 +305,9 @@ class Deriver:
         self._boxes[key] = None  # a file that includes itself adds nothing
         points = []
         for raw in (self.ldraw.text(key) or "").splitlines():
-            tokens = raw.split()
-            if tokens[:1] in (["2"], ["3"], ["4"]):
-                count = int(tokens[0])
-                try:
-                    points.extend(np.array([float(t) for t in tokens[2:2 + 3 * count]]).reshape(count, 3))
-                except ValueError:
-                    continue
+            drawn = drawn_points(raw.split())
+            if drawn is not None:
+                points.extend(drawn)
         for rot, pos, child in self._children(key):
             sub = self.box(child)
             if sub is not None:

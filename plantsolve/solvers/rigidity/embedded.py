@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from plantsolve.solvers.rigidity import generated
+from plantsolve.solvers.rigidity.ldraw_lines import drawn_points, placement
 
 SUBFILES = Path(__file__).with_name("data") / "ldcad_subfiles.tsv.gz"
 LIBRARY_FOLDERS = ("parts/", "p/")  # a packer writes the library folder into an embedded file's name
@@ -151,21 +152,14 @@ class Resolver:
         points: list = []
         for _, raw in self.files.get(name, ()):
             tokens = raw.split()
-            if tokens[:1] in (["2"], ["3"], ["4"]):
-                count = int(tokens[0])
-                try:
-                    points.extend(np.array([float(t) for t in tokens[2:2 + 3 * count]]).reshape(count, 3))
-                except ValueError:
-                    continue
+            drawn = drawn_points(tokens)
+            if drawn is not None:
+                points.extend(drawn)
                 continue
-            if tokens[:1] != ["1"] or len(tokens) < 15:
+            placed = placement(raw, tokens)
+            if placed is None:
                 continue
-            try:
-                values = [float(t) for t in tokens[2:14]]
-            except ValueError:
-                continue
-            pos, rot = np.array(values[:3]), np.array(values[3:]).reshape(3, 3)
-            child = raw.split(None, 14)[14].strip()
+            rot, pos, child = placed
             record = official(child)
             embedded = None if record is not None else self.find(child)
             if embedded is not None:
