@@ -183,8 +183,7 @@ class JobRepository:
         # a taken key is found by the insert itself (the key's unique index), as by the group commit: no read before
         # it, which a new key (the common case) would pay for in a round trip
         record = new_job_row(values)
-        # unset columns stay SQL NULL (a None in a JSON column would be stored as JSON null)
-        given = {name: value for name, value in record.items() if value is not None}
+        given = _given(record)
         try:
             if self._insert is not None:
                 self._insert(given)
@@ -210,8 +209,7 @@ class JobRepository:
         goes to a thread."""
         key = values.get("idempotency_key")
         record = new_job_row(values)
-        # unset columns stay SQL NULL, as in create()
-        given = {name: value for name, value in record.items() if value is not None}
+        given = _given(record)
         try:
             await self._loop_connections.execute(loop_insert(tuple(given)), *given.values())
         except IntegrityError:
@@ -618,6 +616,12 @@ BRIEF_KEYS = tuple(column.key for column in BRIEF_COLUMNS)
 BRIEF_BY_ID_SQL = f"SELECT {', '.join(_quote(c.name) for c in BRIEF_COLUMNS)} FROM {JOBS.name} WHERE id = $1"
 ARTIFACTS_OF_JOB_SQL = (f"SELECT name, media_type, size, sha256, path FROM {ARTIFACTS.name} WHERE job_id = $1 "
                         "ORDER BY name")
+
+
+def _given(record: dict[str, Any]) -> dict[str, Any]:
+    """The columns a new job's INSERT sets: unset ones stay SQL NULL (a None in a JSON column would be stored as
+    JSON null)."""
+    return {name: value for name, value in record.items() if value is not None}
 
 
 @functools.cache
