@@ -106,11 +106,25 @@ def file_holds(head: bytes) -> str | None:
         return "a Wavefront OBJ mesh" if b"f" in keys else "a Wavefront OBJ of vertices only (a point cloud)"
     if any(k.startswith((b"PIPELINE-REFERENCE", b"UNITS-BORE", b"PIPE")) for k in keys):
         return "a piping component file (PCF)"
+    if _ldraw(lines[:20]):
+        return "an LDraw model (a rigidity input)"
     rows = [line for line in text[:65536].splitlines() if line.strip() and not line.startswith(b"#")][:3]
     for sep in (b",", b";", b"\t"):
         if len(rows) >= 2 and sep in rows[0] and all(_numbers(row.split(sep)) for row in rows[1:]):
             return "a CSV table with a header row" if not _numbers(rows[0].split(sep)) else "a CSV table of numbers"
     return None
+
+
+def _ldraw(lines: list[list[bytes]]) -> bool:
+    """LDraw's lines: each a line type 0-5 first, and a part placed (type 1: colour, position, matrix, a file name)
+    or a meta-command (type 0: ``FILE``, ``Name:``, ``!LDRAW_ORG``...) among them. Numbers alone (an x y z list
+    whose x is 1) are not."""
+    if not lines or any(line[0] not in (b"0", b"1", b"2", b"3", b"4", b"5") for line in lines):
+        return False
+    return any((line[0] == b"1" and len(line) >= 15 and line[-1].lower().endswith((b".dat", b".ldr", b".mpd")))
+               or (line[0] == b"0" and len(line) > 1 and line[1].upper() in (b"FILE", b"NAME:", b"!LDRAW_ORG",
+                                                                              b"AUTHOR:", b"NOFILE"))
+               for line in lines)
 
 
 def _numbers(cells: list[bytes]) -> bool:

@@ -15,6 +15,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
+from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -218,6 +219,11 @@ class HeaderUnit(CrsUnit):
     """The unit a text file's column header states for x, y, z (``x [m]``, ``x_mm``)."""
 
 
+# what a text scan may look like to :func:`file_holds`: a table of numbers, or a text mesh or cloud of the formats
+# that point lists are exported from under a text extension
+POINT_TEXT = ("a CSV table", "an ASCII STL", "a PLY", "a Wavefront OBJ")
+
+
 def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
     """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
     the file or its format states (None: none)."""
@@ -235,6 +241,9 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
         return _read_mesh(content, "obj", log), None
     if ext == ".npy":
         return _read_npy(content), None
+    holds = file_holds(content[:65536])
+    if holds is not None and not holds.startswith(POINT_TEXT):  # a model of another kind, not a list of samples
+        raise reject(f"the file holds {holds}, not x, y, z samples of a scan")
     pts, columns = read_text_points(content, log)  # .xyz, .csv, .txt
     if columns.unit is None:
         return pts, None
