@@ -15,10 +15,12 @@ Two parts held by two pins (or axles) in distinct parallel holes are reported in
 (:meth:`Assembly.rod_pairs`); the exact pass finds them rigid to each other on its own, with each
 pin free to spin.
 
-A whole model read from a file then gets three passes (the job runs them once all parts are placed):
-:meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_offset_studs` (studs
+A whole model read from a file then gets four passes (the job runs them once all parts are placed):
+:meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_clips_across_gaps` (a clip
+whose jaws reach bar on both sides of a gap the data leaves in it), :meth:`Assembly.seat_offset_studs` (studs
 gripped between a tube and a wall where the data states no anti-stud) and :meth:`Assembly.join_pieces`
-(pieces joined where a point misses its mate by at most ``OFFSET_REACH``: a part drawn off its mate).
+(pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers by ``FINGER_REACH``: a part
+drawn off its mate).
 """
 
 from __future__ import annotations
@@ -53,6 +55,11 @@ FIT_SNAP = 1.0
 # helicopter). Under a quarter of the closest spacing of like points (a stud and a tube 10√2 = 14 LDU apart), so a
 # point still meets one mate at most.
 OFFSET_REACH = 3.0 + SNAP
+# LDU: how far apart the axes of two runs of hinge fingers may be drawn for join_pieces to join them: less than the
+# diameter of the fingers' knuckles (LDCad states them radius 4 about the hinge axis). Closer than that, two runs that
+# overlap along their axis share the room around it, which only fingers interleaved on one pin can: a hinge drawn
+# off its pin (OMR-style arm linkages closed with angles printed to three digits miss by 5.3 to 5.8 LDU, 6544-1).
+FINGER_REACH = 8.0
 # LDU: the longest bore whose mouth the slip pass looks for past a run's end (a technic hole's, one stud long);
 # a longer bore counts from this far around its centre, so the cells searched stay bounded.
 SLIP_BORE = 20.0
@@ -181,7 +188,14 @@ def _slip_beyond(connector, slip: float) -> float:
     """How far past a run's end the centre of ``connector`` (a hole, a clip) may lie for the slip pass to join
     them: half its bore (its mouth at the end: a bush drawn on an axle's tip) and ``slip`` more; SNAP without a
     slip (the exact pass: its centre on the run)."""
-    return SNAP if slip <= 0 else min(connector.depth, SLIP_BORE) / 2 + slip
+    return SNAP if slip <= 0 else _half_bore(connector) + slip
+
+
+def _half_bore(connector) -> float:
+    """Half the bore of a hole along a run (at most SLIP_BORE long): how far its centre lies inside its mouth. 0 for a
+    clip, whose width is its jaws': a clip past a bar's end is no bush on an axle's tip, its jaws at the end do not
+    hold it (:meth:`Assembly.seat_clips_across_gaps` seats a clip whose jaws reach bar on both sides)."""
+    return 0.0 if connector.type == "clip" else min(connector.depth, SLIP_BORE) / 2
 
 
 def _clean(x: float) -> float | int:
@@ -300,7 +314,8 @@ class Assembly:
                                                                   tuple(_clean(v) for v in where),
                                                                   tuple(_clean(v) for v in axis)))
             if mine == "finger" and key is None:
-                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci], fit_reach):
+                for other, oi, kind, where in self._fits_along(shape.connectors[ci], points[ci], dirs[ci],
+                                                               max(fit_reach, FINGER_REACH) if slip > 0 else fit_reach):
                     if other != id:
                         found.setdefault(other, []).append(Connection(other, oi, id, ci, kind,
                                                                       tuple(_clean(v) for v in where),
@@ -477,6 +492,57 @@ class Assembly:
             self._pebble_stale = True
         return seated
 
+    def seat_clips_across_gaps(self) -> list[tuple[str, str]]:
+        """Seat the clips that no bar meets at their centre where their jaws (their width along the bar) reach two bars
+        of one other part on one line, one ending before the centre and one starting after it: the data states the bar
+        in two pieces with the gap between them no wider than the clip (2921's handle: two 8 LDU bars either side of an
+        8 LDU gap, where 6339-1 clips a tile on the handle's middle), and a clip held by bar on both sides is on the
+        bar. A hinge about the bar, as any clip on a bar. Returns the (clip's part, bar's part) pairs seated."""
+        held = {(p, k) for conns in self._links.values() for c in conns if c.kind == "clip"
+                for p, k in ((c.a, c.ca), (c.b, c.cb))}
+        seated = []
+        for id, placed in self.parts.items():
+            for ci, c in enumerate(placed.shape.connectors):
+                if c.type != "clip" or c.depth <= 0 or (id, ci) in held:
+                    continue
+                bar = self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
+                if bar is None:
+                    continue
+                other, oi = bar
+                key = (id, other) if (id, other) in self._links else (other, id)
+                if key not in self._links:
+                    self._neighbours[other].add(id)
+                    self._neighbours[id].add(other)
+                    seated.append((id, other))
+                self._links.setdefault(key, []).append(Connection(
+                    other, oi, id, ci, "clip", tuple(_clean(v) for v in placed.points[ci]),
+                    tuple(_clean(v) for v in placed.directions[ci])))
+        if seated:
+            self._pebble_stale = True
+        return seated
+
+    def _bar_across(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
+        """(part, bar) of the first other part with two bars on the line through ``centre`` along ``axis`` (parallel,
+        within FIT_SNAP) that reach within ``half`` of it from either side, one ending before it and one starting after
+        it; the bar is the one before (:meth:`seat_clips_across_gaps`). None when no part has such bars."""
+        sides: dict[str, dict[int, int]] = {}  # part -> side (-1 before the centre, +1 after) -> its bar
+        for cell in sorted(_cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP)):
+            for other, oi in self._runs.get(cell, ()):
+                o = self.parts[other]
+                theirs = o.shape.connectors[oi]
+                cos = float(axis @ o.directions[oi])
+                if other == id or theirs.type != "bar" or abs(cos) < ALIGN:
+                    continue
+                v = o.points[oi] - centre
+                if float(np.linalg.norm(v - float(v @ axis) * axis)) > FIT_SNAP:
+                    continue
+                ends = sorted((float(v @ axis), float(v @ axis) + theirs.length * cos))
+                if -half <= ends[1] <= SNAP:
+                    sides.setdefault(other, {}).setdefault(-1, oi)
+                elif -SNAP <= ends[0] <= half:
+                    sides.setdefault(other, {}).setdefault(1, oi)
+        return next(((other, found[-1]) for other, found in sorted(sides.items()) if len(found) == 2), None)
+
     def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
         """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along
         ``axis`` (parallel, within FIT_SNAP) that reaches within ``half`` of ``centre`` along it, or None."""
@@ -516,7 +582,7 @@ class Assembly:
         if ca.length > 0 and cb.length > 0:
             return across
         run, point, along = (ca, cb, float(v @ axis)) if ca.length > 0 else (cb, ca, -float(v @ axis))
-        past = max(0.0, -along, along - run.length) - min(point.depth, SLIP_BORE) / 2
+        past = max(0.0, -along, along - run.length) - _half_bore(point)
         return math.hypot(across, past) if past > 0 else across
 
     def offsets(self) -> dict[tuple[str, str], float]:

@@ -78,7 +78,7 @@ class Connector:
     direction: tuple[int, int, int]
     length: float = 0.0
     profile: tuple = ()  # a fit cylinder's sections ((shape, radius, length), …) from ``point`` along ``direction``
-    depth: float = 0.0  # LDU: a hole's bore along ``direction``, centred on ``point`` (0: not stated)
+    depth: float = 0.0  # LDU: a hole's bore (a clip's width) along ``direction``, centred on ``point`` (0: not stated)
 
 
 RING_REACH = 10.0 * 2 ** 0.5  # LDU: from a ring's centre to each of the four studs it stands between

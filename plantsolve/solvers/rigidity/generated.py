@@ -20,7 +20,8 @@ grid and compatible types, :data:`catalogue.MATES`):
   hole has both points at the hole's centre: coaxial, overlapping along the axis. A hole states its bore's
   length (its section's, or its slot's) as its ``depth``.
 - A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
-  anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre. Clip on bar: a hinge about the bar.
+  anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre, its width along the bar its ``depth``.
+  Clip on bar: a hinge about the bar.
   Female radius-4 holes (hollow studs, a pin's bore) make no point.
 - Hinge fingers (``SNAP_FGR``) are one ``finger`` point at the centre of the finger run, along the
   hinge axis; two finger runs on one axis with one centre interlock (a hinge), whichever finger comes
@@ -200,7 +201,7 @@ def connectors(snaps: list) -> tuple[Point, ...]:
                 out.append(("fit_m" if gender == "M" else "fit_f", _point(start), _point(axis), length,
                             tuple((str(shape), float(radius), float(piece)) for shape, radius, piece in secs)))
         elif kind == "clp":
-            out.append(("clip", _point(snap[1]), _point(snap[2])))
+            out.append(("clip", _point(snap[1]), _point(snap[2]), 0.0, (), round(float(snap[3]), 3)))
         elif kind == "fgr":  # a run of fingers along the hinge axis, centred on the snap's position
             centre, axis, length = np.asarray(snap[2], float), np.asarray(snap[3], float), float(snap[4])
             out.append(("finger", _point(centre - axis * length / 2), _point(axis), round(length, 3)))

@@ -74,6 +74,53 @@ def test_a_clip_holds_a_bar_wherever_along_it(shift):
     assert joints(text) == [("hinge", "clip", "4085c", "87994", 1)]
 
 
+# 2921's handle is stated as two 8 LDU bars either side of its middle (local y 0..8 and 16..24 at z = -20); 6339-1 clips
+# a 2555 tile on that middle (as here, y = 12), the clip 8 LDU wide: its jaws reach the bar on both sides.
+CLIP_ON_HANDLE = "1 16 0 0 0 1 0 0 0 1 0 0 0 1 2921.dat\n1 15 0 {y} -26 -1 0 0 0 0 -1 0 -1 0 2555.dat\n"
+
+
+@pytest.mark.parametrize("y", [4, 12, 20])  # on the upper bar, across the gap, on the lower bar
+def test_a_clip_on_the_middle_of_a_handle_the_data_states_in_two_bars_holds_it(y):
+    result = solve(parse("model.ldr", CLIP_ON_HANDLE.format(y=y))).result
+    assert joints(CLIP_ON_HANDLE.format(y=y)) == [("hinge", "clip", "2555", "2921", 1)]
+    assert result.dof == 1 and "offset_joints" not in {w.code for w in result.report.warnings}
+
+
+def test_a_clip_whose_jaws_reach_one_bar_only_is_not_seated_across_the_gap():
+    # 2 LDU down from the middle: the jaws (y 6..14) reach the upper bar's end, not the lower bar's start; the slip
+    # pass joins it as a clip drawn 2 LDU past the upper bar's end, and says so
+    result = solve(parse("model.ldr", CLIP_ON_HANDLE.format(y=10))).result
+    warning = next(w for w in result.report.warnings if w.code == "offset_joints")
+    assert [pair["offset_ldu"] for pair in warning.details["pairs"]] == [2.0]
+    # two bars of two parts on one line with the gap between them: no part holds the clip on both sides
+    two_bars = ("1 0 0 -52 -20 1 0 0 0 1 0 0 0 1 87994.dat\n1 0 0 76 -20 -1 0 0 0 -1 0 0 0 1 87994.dat\n"
+                "1 15 0 12 -26 -1 0 0 0 0 -1 0 -1 0 2555.dat\n")
+    assert [j for j in joints(two_bars) if "2555" in j] == []
+
+
+# Two Technic arms, each on a pin joiner: 6217 (3 fingers) and 6048 (2 fingers) whose finger runs share the x axis,
+# the 6048 drawn ``d`` LDU off the 6217's finger axis (6544-1 closes such a linkage 5.3 and 5.8 LDU off).
+def arms(d: float) -> str:
+    r1, joiner, r2 = "0 -1 0 -1 0 0 0 0 -1", "0 -1 0 0 0 1 -1 0 0", "0 -1 0 1 0 0 0 0 1"
+    return (f"1 0 0 0 0 {r1} 6217.dat\n1 16 0 0 22 {joiner} 75535.dat\n"
+            f"1 0 0 {d} -24 {r2} 6048.dat\n1 16 0 {d} -46 {joiner} 75535.dat\n")
+
+
+ARM_PINS = [("hinge", "pin", "6048", "75535", 1), ("hinge", "pin", "6217", "75535", 1)]
+
+
+@pytest.mark.parametrize("d", [0, 5.8, 7.5])
+def test_hinge_fingers_drawn_off_their_axis_by_less_than_the_knuckles_diameter_are_one_hinge(d):
+    result = solve(parse("model.ldr", arms(d))).result
+    assert joints(arms(d)) == [("hinge", "hinge", "6048", "6217", 1), *ARM_PINS] and result.dof == 3
+    offsets = [w.details["pairs"] for w in result.report.warnings if w.code == "offset_joints"]
+    assert offsets == ([] if d == 0 else [[{"parts": ["L1", "L3"], "numbers": ["6217", "6048"], "offset_ldu": d}]])
+
+
+def test_hinge_fingers_a_knuckles_diameter_apart_are_not_joined():
+    assert joints(arms(8.5)) == ARM_PINS
+
+
 def test_a_dish_sunk_one_ldu_onto_a_stud_sits_on_it():
     # 4740's bore (radius 6, 5.3 deep, the stud slides in it): its mouth 1 LDU below the stud's base
     text = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 6141.dat\n1 4 0 -7 0 1 0 0 0 1 0 0 0 1 4740.dat\n"
