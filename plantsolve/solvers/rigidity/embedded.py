@@ -8,7 +8,11 @@ name a type-1 line gives them (``stud.dat``, ``s/3001s01.dat``, ``48/…``); the
 (``ldcad_parts.tsv.gz``) those of the official parts. An embedded part's snaps are those of its type-1 lines,
 found in that order: an official part, an official primitive or subpart (its data holds the shadow library's
 own lines for it, which the embedded copy of an official subpart lacks), else an embedded sub-file, resolved
-in turn. Its box is that of its drawn geometry (types 2–4) and of its sub-files' boxes. The result is a record
+in turn. Its box is that of its drawn geometry (types 2–4) and of its sub-files' boxes. An embedded copy of an official
+part or subpart, renamed with the model's prefix as the Official Model Repository names them (``8002 - 6643.dat``,
+``s\\40190 - 93589s01.dat``: ``<model> - <official name>``), is that official file when what it draws lies inside the
+official one's box (within ``COPY_BOX``: the same frame): it takes the official record, whose shadow lines
+(a cable end's hole in 6643, 93589s01's underside) its primitives do not carry. The result is a record
 of the parts catalogue's format (``{"n": name, "b": box, "s": snaps}``), so that the catalogue reads it as it
 reads a generated part.
 """
@@ -18,6 +22,7 @@ from __future__ import annotations
 import functools
 import gzip
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -33,6 +38,11 @@ MAX_DEPTH = 32
 # over eight levels would gather 10^8, so a part over this stays unknown rather than filling the memory.
 MAX_SNAPS = 20_000
 POSITION = {"cyl": 4, "clp": 1, "fgr": 2, "gen": 3, "sph": 2}  # where a snap record holds its position
+# ``<model> - <official name>``, in a subpart folder or not: an embedded copy of an official file as the OMR names it
+COPY_NAME = re.compile(r"^(?P<folder>(?:s|48|8)[\\/])?[^\\/]+? - (?P<name>[^\\/]+\.dat)$", re.IGNORECASE)
+# LDU: how far a copy's drawn points may lie outside the official part's box for the copy to be that part: a copy
+# drawn with rounded coordinates or from another library version
+COPY_BOX = 1.0
 
 Lines = list[tuple[int, str]]
 
@@ -64,6 +74,21 @@ def _official(key: str) -> dict | None:
             return part
     line = _subfile_lines().get(key)
     return None if line is None else json.loads(line)
+
+
+def official_copy(name: str, drawn: np.ndarray | None) -> dict | None:
+    """The record of the official part or subpart that embedded file ``name`` is a renamed copy of (:data:`COPY_NAME`),
+    when its drawn points ``drawn`` lie inside the official one's box (within :data:`COPY_BOX`): drawn in the official
+    part's frame, the drawn box no larger (primitives without snap data add no drawn points); else None."""
+    found = COPY_NAME.match(name.strip())
+    if found is None or drawn is None or not len(drawn):
+        return None
+    record = official((found["folder"] or "") + found["name"])
+    if record is None:
+        return None
+    box = np.asarray(record["b"], float)
+    inside = np.all(np.min(drawn, axis=0) >= box[:3] - COPY_BOX) and np.all(np.max(drawn, axis=0) <= box[3:] + COPY_BOX)
+    return record if inside else None
 
 
 def _placed(v, rot: np.ndarray, pos: np.ndarray) -> list[float]:
@@ -129,6 +154,9 @@ class Resolver:
             snaps, points = self._walk(name, ())
         except _TooManySnaps:
             return None
+        copied = official_copy(name, points)
+        if copied is not None:
+            return copied
         if not snaps:
             return None
         if points is None:  # nothing drawn but primitives without geometry: the snaps' own positions
@@ -170,6 +198,9 @@ class Resolver:
                 child_snaps, box = record["s"], _corners(record["b"])
             elif embedded is not None:
                 child_snaps, box = self._walk(embedded, (*stack, name))
+                copied = official_copy(embedded, box)
+                if copied is not None:
+                    child_snaps, box = copied["s"], _corners(copied["b"])
             else:
                 continue
             if len(snaps) + len(child_snaps) > MAX_SNAPS:

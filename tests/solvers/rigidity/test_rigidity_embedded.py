@@ -128,3 +128,28 @@ def test_sub_files_fanning_out_past_the_snap_bound_leave_the_part_unknown_quickl
     resolver = Resolver(files, lambda name: name if name in files else None)
     assert resolver.record("l8.dat") is None
     assert len(resolver.record("l3.dat")["s"]) == 1000
+
+
+# A copy of the official 1 x 1 plate 3024 embedded under the model's prefix, as the OMR names them, drawing its top and
+# bottom faces only (no primitive with snap data): on a 3024 as drawn, one stud between them.
+def renamed_copy(name: str, top: float = 0) -> str:
+    return ("0 FILE main.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n"
+            f"1 14 0 -8 0 1 0 0 0 1 0 0 0 1 {name}\n"
+            "0 NOFILE\n"
+            f"0 FILE {name}\n0 Plate  1 x  1\n0 Name: {name}\n0 !LDRAW_ORG Unofficial_Part\n"
+            f"4 16 -10 {top} -10 10 {top} -10 10 {top} 10 -10 {top} 10\n"
+            "4 16 -10 8 10 10 8 10 10 8 -10 -10 8 -10\n0 NOFILE\n")
+
+
+def test_a_renamed_copy_of_an_official_part_takes_the_official_parts_snaps():
+    request = parse(renamed_copy("9999 - 3024.dat"))
+    assert request.source["parts_from_primitives"]["9999 - 3024"]["n"] == "Plate  1 x  1"
+    result = solve(request).result
+    assert [(j.type, j.origin, j.connections) for j in result.joints] == [("hinge", "stud", 1)] and result.dof == 1
+
+
+@pytest.mark.parametrize("name, top", [("9999 - 3024.dat", -20), ("my 3024.dat", 0)])
+def test_a_copy_drawn_outside_the_official_box_or_not_named_as_a_copy_stays_unknown(name, top):
+    result = solve(parse(renamed_copy(name, top))).result
+    assert result.joints == [] and [u.part for u in result.unknown_parts] == [name[:-4]]
