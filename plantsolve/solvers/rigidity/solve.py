@@ -237,14 +237,15 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
     apart: list[int] = []  # pieces standing apart from the largest that are no sub-build each
     for k, g in enumerate(groups[1:], start=1):
         name = sub_build(g, part_ids, placements, names)
-        if name == MINIFIGURE:
-            held_by[k] = "minifigure"
-        elif name is not None and clearance(g, groups[0], lows, highs) < TOUCH_GAP:
+        if name is not None and name != MINIFIGURE and clearance(g, groups[0], lows, highs) < TOUCH_GAP:
             name = None  # whole sub-models lying against the build: a part of it whose joint was not found
         elif name is not None:
-            held_by[k] = "whole"
-        elif all("/" in p for p in g) and clearance(g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
-            apart.append(k)  # (a part of the main model lies in no placement: it cannot be of a sub-build)
+            held_by[k] = "minifigure" if name == MINIFIGURE else "whole"
+        if name in (None, MINIFIGURE) and all("/" in p for p in g) and clearance(
+                g, groups[0], lows_or_points, highs_or_points) >= LOOSE_CLEARANCE:
+            # (a part of the main model lies in no placement: it cannot be of a sub-build); a piece of minifigure
+            # parts only too, which may be the rest of a vehicle standing apart (3181-1's seat, loose on its car)
+            apart.append(k)
         found.append(name)
     for k, name in zip(apart, loose_sub_builds([groups[k] for k in apart], part_ids, placements)):
         if name is not None:

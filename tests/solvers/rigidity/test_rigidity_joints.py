@@ -479,6 +479,20 @@ def test_loose_pieces_of_a_sub_model_are_held_only_two_studs_clear_of_the_build(
     assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["loose"]] * (2 * held)
 
 
+def test_a_minifigure_part_loose_in_a_sub_model_standing_apart_completes_it():
+    """A cart (a 2 x 4 plate and a 1 x 2 brick on it) with its minifigure seat 4079 drawn 8 LDU above the brick's
+    studs, 70 LDU clear of three stacked bricks (as 3181-1 leaves the seat of its tow car): the seat alone is minifigure
+    parts only, and with it the cart's two pieces are the whole cart standing apart: both held as the cart."""
+    text = ("0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 150 48 0 1 0 0 0 1 0 0 0 1 cart.ldr\n0 FILE cart.ldr\n"
+            "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3020.dat\n1 4 0 -24 10 1 0 0 0 1 0 0 0 1 3004.dat\n"
+            "1 4 0 -40 10 1 0 0 0 1 0 0 0 1 4079.dat\n")
+    result = solve(parse("cart.mpd", text)).result
+    assert [(pc.parts, pc.sub_build) for pc in result.pieces] == [
+        (["L2", "L3", "L4"], None), (["L5/L7", "L5/L8"], "cart.ldr"), (["L5/L9"], "cart.ldr")]
+    assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [HELD_BY["loose"]] * 2
+
+
 def test_wheels_turn_on_the_pull_back_motors_wheel_pins():
     """10039 (pull-back motor, Speed Champions) draws its axle's ends with wpin4.dat, a wheel holding pin the
     shadow library states no snap for: OMR 40190's rear rims were joined to nothing. The catalogue gives it
