@@ -37,7 +37,8 @@ anti-stud the shadow library states for ``stud4o.dat`` when their own shadow sta
 wheel holding pin primitive without shadow lines that does not draw ``wpin.dat`` (``wpin4.dat``) gets
 ``wpin.dat``'s pin (see ``WHEEL_PIN``). The open stud without base edges (``stud2a.dat``) gets the hole
 (radius 4, 4 deep) the shadow library states for ``stud2.dat``, dropped in a file whose other snaps hold a female
-radius-4 cylinder on the same axis over it (see ``OPEN_STUD``).
+radius-4 cylinder on the same axis over it (see ``OPEN_STUD``). The car steering wheel's hub (``3828.dat``), which the
+shadow library states male, is read as the female bore its stand's column enters (see ``HUB_BORE``).
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -84,6 +85,11 @@ WHEEL_PIN_SNAP = "0 !LDCAD SNAP_INCL [ref=wpin.dat]"
 # same axis that overlaps it (the part stated its own, deeper hole).
 OPEN_STUD = "stud2a.dat"
 OPEN_STUD_HOLE = "0 !LDCAD SNAP_CYL [ID=studO] [gender=F] [caps=one] [secs=R 4 4] [pos=0 -4 0] [ori=1 0 0 0 -1 0 0 0 -1]"
+# The car steering wheel 3828 is pushed onto its stand's column (3829a states the column: a male round radius-4
+# cylinder 6 long; 3829c01 draws both parts, the two cylinders on one axis from one point). The shadow library states
+# the wheel's hub as a male cylinder as well, so no snap of the data puts a wheel on a column (1682-1 and 6544-1 float
+# their wheels). The hub is the bore the column enters: its cylinder is read as female.
+HUB_BORE = "3828.dat"
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -261,6 +267,8 @@ class Deriver:
         elif WHEEL_PIN.match(key) and unstated and all(child.lower() != "wpin.dat"
                                                         for _, _, child in self._children(key)):
             shadow = WHEEL_PIN_SNAP
+        if key == HUB_BORE:
+            shadow = shadow.replace("[gender=M]", "[gender=F]")
         added_hole = key == OPEN_STUD and not any("gender=F" in line for line in shadow.splitlines())
         if added_hole:
             shadow += "\n" + OPEN_STUD_HOLE

@@ -121,6 +121,16 @@ def test_hinge_fingers_a_knuckles_diameter_apart_are_not_joined():
     assert joints(arms(8.5)) == ARM_PINS
 
 
+def test_a_steering_wheel_on_its_stands_column_turns_on_it():
+    # as 6544-1 places them: the shadow library states the wheel's hub male, as the column is; the catalogue reads
+    # the hub as the column's bore
+    text = "1 1 0 0 0 1 0 0 0 1 0 0 0 1 3829a.dat\n1 0 0 -26.015 0 0 0 1 -0.8 0.6 0 -0.6 -0.8 0 3828.dat\n"
+    assert joints(text) == [("cylindrical", "bar", "3828", "3829a", 1)]
+    assert solve(parse("model.ldr", text)).result.dof == 2
+    # beside the column (a stud's width along x): nothing
+    assert joints(text.replace("1 0 0 -26.015", "1 0 20 -26.015")) == []
+
+
 def test_a_dish_sunk_one_ldu_onto_a_stud_sits_on_it():
     # 4740's bore (radius 6, 5.3 deep, the stud slides in it): its mouth 1 LDU below the stud's base
     text = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 6141.dat\n1 4 0 -7 0 1 0 0 0 1 0 0 0 1 4740.dat\n"
