@@ -316,8 +316,8 @@ def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
     listed = sorted(offsets.items(), key=lambda item: -item[1])
     return [Diagnostic(code="offset_joints", message=f"{len(offsets)} pair(s) of parts are joined although their "
                        f"connection points miss each other by more than rounding ({SNAP:g} LDU), up to {worst:.3g} LDU "
-                       f"(at most {OFFSET_REACH:g} is taken for a part drawn off its mate, {FINGER_REACH:g} between the axes "
-                       "of interleaved hinge fingers; 1 LDU = 0.4 mm): "
+                       f"(at most {OFFSET_REACH:g} is taken for a part drawn off its mate, {FINGER_REACH:g} between "
+                       "the axes of interleaved hinge fingers; 1 LDU = 0.4 mm): "
                        + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
                                    f"{gap:.3g} LDU" for (a, b), gap in listed[:LISTED_IN_MESSAGE]),
                        details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
