@@ -108,6 +108,37 @@ def _slow_numbers(text: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 @dataclass
+class LineIndex:
+    """Where each instance of the scanned file is written, and how often it is referred to: what the proof
+    compares the written file with (``changes.diff_indexed``), without reading the input again."""
+
+    path: Path  # the STEP text
+    line_of: np.ndarray = field(repr=False)  # id → its line (-1: no instance)
+    starts: np.ndarray = field(repr=False)  # each line's first byte in the file
+    ends: np.ndarray = field(repr=False)  # each line's end (its ';' included, its line break not)
+    referenced: np.ndarray = field(repr=False)  # each line's references from the data section ('#12' in a string too)
+
+    def lines(self, ids: np.ndarray) -> dict[int, str]:
+        """``{id: the instance's STEP line}`` of those of ``ids`` the file holds (read as Latin-1, as the
+        whole-file comparison reads it)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        ids = ids[(ids >= 0) & (ids < len(self.line_of))]
+        ids = ids[self.line_of[ids] >= 0]
+        rows = self.line_of[ids]
+        with open(self.path, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as text:
+            return {i: text[s:e].decode("latin-1") for i, s, e in
+                    zip(ids.tolist(), self.starts[rows].tolist(), self.ends[rows].tolist())}
+
+    def references_to(self, ids: np.ndarray) -> np.ndarray:
+        """How often the data section refers to each of ``ids`` (each an instance the file holds)."""
+        return self.referenced[self.line_of[np.asarray(ids, dtype=np.int64)]]
+
+    def ids(self) -> np.ndarray:
+        """Every instance id of the file."""
+        return np.flatnonzero(self.line_of >= 0)
+
+
+@dataclass
 class Skeleton:
     """What the scan of one file found (see the module's docstring)."""
 
@@ -120,7 +151,7 @@ class Skeleton:
     parsed: dict[int, np.ndarray]  # item id → the ids of it in the skeleton: itself and its stand-ins
     parsed_entities: dict[int, Counter]  # item id → those instances per entity
     instances: int  # in the whole file
-    _offsets: tuple[np.ndarray, np.ndarray, np.ndarray] = field(repr=False)  # line of each id; line starts, ends
+    index: LineIndex = field(repr=False)  # each instance's line and how often it is referred to
 
     def model(self) -> ifcopenshell.file:
         """The skeleton parsed by IfcOpenShell (the same bytes as in the file: IfcOpenShell takes text as UTF-8)."""
@@ -130,10 +161,11 @@ class Skeleton:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
         children): their lines read from the file and parsed on their own (a closure refers only within
         itself)."""
-        line_of, starts, ends = self._offsets
-        lines = line_of[ids]
+        index = self.index
+        lines = index.line_of[ids]
         with open(self.path, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as text:
-            lines_text = b"\n".join(text[s:e] for s, e in zip(starts[lines].tolist(), ends[lines].tolist()))
+            lines_text = b"\n".join(text[s:e] for s, e in zip(index.starts[lines].tolist(),
+                                                              index.ends[lines].tolist()))
         part = ifcopenshell.file.from_string(f"{header}DATA;\n{lines_text.decode('ascii')}\n{trailer}")
         by_id = part.by_id
         return {i: by_id(i).to_string() for i in ids.tolist()}
@@ -344,6 +376,8 @@ def _items(path, text, ids, offsets, code, level, label, member, points, coords,
     faceted = level[src] >= 0
     faceted[faceted] = (dst[faceted] >= 0) & (level[np.maximum(dst[faceted], 0)] == level[src[faceted]] + 1)
     fsrc, fdst = src[faceted], dst[faceted]
+    # how often each line is referred to (what the proof compares the written file's references with)
+    referenced = np.bincount(dst[dst >= 0], minlength=n).astype(np.int32)
     del faceted, src, dst
     first_child = np.zeros(n + 1, dtype=np.int32)
     np.cumsum(np.bincount(fsrc, minlength=n), out=first_child[1:])
@@ -397,7 +431,7 @@ def _items(path, text, ids, offsets, code, level, label, member, points, coords,
                      if v})
     line_start, line_end = offsets
     return Skeleton(path, text, result_points, closures, entities, inner, parsed, parsed_entities, n,
-                    (line_of, line_start, line_end))
+                    LineIndex(path, line_of, line_start, line_end, referenced))
 
 
 def _entity_names(header: bytes, schema: str | None) -> list[str]:

@@ -123,6 +123,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     progress(0.0, "reading the IFC file")
     with source.step_file() as (path, original_bytes):
         model, streamed = skeleton.open_model(path)
+        index = streamed.index if streamed is not None else None  # the input's lines, for the proof's comparison
         lap("parse")
         schema = model.schema
         mode = resolve_mode(opts.sharing, schema)
@@ -235,10 +236,10 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         progress(0.9, "validating the written file")
         verified, cpu_verified = time.perf_counter(), time.process_time()
         rules = proof.Rules(check.schema_identifier) if opts.express_rules else None
-        judged = proof.verdict(check, optimized, path, rules)
+        judged = proof.verdict(check, optimized, path, rules, index)
         found, inherited_errors = judged.errors, judged.inherited
         counts_after = proof.entity_counts(check)
-        del check, again, back_products, shapes
+        del check, again, back_products, shapes, index
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)
