@@ -181,9 +181,11 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
         return None
     body = data.find(b"\n", at + 1) + 1
     end = data.rfind(b"\nENDSEC;", body)  # a second section's lines would not start with '#': refused below
-    if body <= 0 or end < 0 or data.find(b"/*", body, end) >= 0:
+    if body <= 0 or end < 0:
         return None
     seg = np.frombuffer(data, dtype=np.uint8)[body:]  # the data section and, past it, at least its ENDSEC line
+    if np.any(seg[_where(seg[:end - body], 47) + 1] == 42):  # a comment '/*' (bytes.find of two bytes: 5× slower)
+        return None
     got = _scan(seg, end + 1 - body)
     if got is None:
         return None
