@@ -60,7 +60,11 @@ class Placements:
 
 def body_representation(product):
     """The product's body ``IfcShapeRepresentation`` (identifier 'Body', or the only one), or None."""
-    shape = product.Representation
+    return shape_body(product.Representation)
+
+
+def shape_body(shape):
+    """:func:`body_representation` of the products whose ``Representation`` is ``shape``."""
     if shape is None or not shape.is_a("IfcProductDefinitionShape"):
         return None
     reps = [r for r in shape.Representations or () if r.is_a("IfcShapeRepresentation")]

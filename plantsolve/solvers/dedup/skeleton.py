@@ -20,7 +20,7 @@ three plain numbers stays in the skeleton whole, read as before."""
 
 from __future__ import annotations
 
-import mmap
+import os
 import re
 from collections import Counter
 from dataclasses import dataclass, field
@@ -42,6 +42,7 @@ LEVEL_OF = np.array([-1] + [0] * len(ITEMS) + list(LEVELS.values()), dtype=np.in
 POINT_LEVEL, FACE_LEVEL = 5, 2
 MAX_DIGITS = 10  # instance numbers below 2^31
 CHUNK = 1 << 24
+READ_GAP, READ_RUN = 1 << 12, 1 << 20  # lines closer than READ_GAP are read in one call of at most READ_RUN bytes
 # the characters of a point's coordinates written plainly (no '$', '*', string, NaN or spaces)
 _PLAIN = np.zeros(256, dtype=bool)
 _PLAIN[np.frombuffer(b"0123456789.+-eE,", dtype=np.uint8)] = True
@@ -124,10 +125,28 @@ class LineIndex:
         ids = np.asarray(ids, dtype=np.int64)
         ids = ids[(ids >= 0) & (ids < len(self.line_of))]
         ids = ids[self.line_of[ids] >= 0]
-        rows = self.line_of[ids]
-        with open(self.path, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as text:
-            return {i: text[s:e].decode("latin-1") for i, s, e in
-                    zip(ids.tolist(), self.starts[rows].tolist(), self.ends[rows].tolist())}
+        return {i: line.decode("latin-1") for i, line in zip(ids.tolist(), self.raw(self.line_of[ids]))}
+
+    def raw(self, rows: np.ndarray) -> list[bytes]:
+        """The text of lines ``rows``, in that order: read from the file in runs of nearby lines (a file mapped
+        into memory would count every page it touched as the process's for as long as it is mapped)."""
+        starts, ends = self.starts[rows].astype(np.int64), self.ends[rows].astype(np.int64)
+        order = np.argsort(starts, kind="stable")
+        out: list[bytes] = [b""] * len(rows)
+        with open(self.path, "rb") as handle:
+            fd = handle.fileno()
+            k = 0
+            while k < len(order):
+                first = k  # a run: lines less than READ_GAP apart, at most READ_RUN long, read in one call
+                while (k + 1 < len(order) and starts[order[k + 1]] - ends[order[k]] < READ_GAP
+                       and ends[order[k + 1]] - starts[order[first]] <= READ_RUN):
+                    k += 1
+                at = int(starts[order[first]])
+                block = os.pread(fd, int(ends[order[first:k + 1]].max()) - at, at)
+                for j in order[first:k + 1].tolist():
+                    out[j] = block[starts[j] - at:ends[j] - at]
+                k += 1
+        return out
 
     def references_to(self, ids: np.ndarray) -> np.ndarray:
         """How often the data section refers to each of ``ids`` (each an instance the file holds)."""
@@ -161,11 +180,7 @@ class Skeleton:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
         children): their lines read from the file and parsed on their own (a closure refers only within
         itself)."""
-        index = self.index
-        lines = index.line_of[ids]
-        with open(self.path, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as text:
-            lines_text = b"\n".join(text[s:e] for s, e in zip(index.starts[lines].tolist(),
-                                                              index.ends[lines].tolist()))
+        lines_text = b"\n".join(self.index.raw(self.index.line_of[ids]))
         part = ifcopenshell.file.from_string(f"{header}DATA;\n{lines_text.decode('ascii')}\n{trailer}")
         by_id = part.by_id
         return {i: by_id(i).to_string() for i in ids.tolist()}

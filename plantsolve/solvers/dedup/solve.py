@@ -61,11 +61,10 @@ def length_unit_symbol(model: ifcopenshell.file, metres: float) -> str:
     return symbol if symbol and symbol.isalpha() else f"{metres:g} m"
 
 
-def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
-    """Why ``product`` cannot be deduplicated, or None."""
+def _eligible(model, product, wanted: tuple[str, ...] | None, body) -> str | None:
+    """Why ``product`` (whose body representation is ``body``) cannot be deduplicated, or None."""
     if wanted and not any(product.is_a(t) for t in wanted):
         return "entity not selected"
-    body = sharing.body_representation(product)
     if body is None:
         return "no single body representation"
     if model.get_total_inverses(body) > 1 + sum(1 for i in model.get_inverse(body)
@@ -171,13 +170,13 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         for p in products:
             if p.id() not in points:
                 continue
-            why = _eligible(model, p, wanted)
+            body = reader.body(p)
+            why = _eligible(model, p, wanted, body)
             if why is not None:
                 if why != "entity not selected":
                     skipped.append({"global_id": p.GlobalId, "entity": p.is_a(), "reason": why})
                 continue
-            candidates.append(make_candidate(p, sharing.body_representation(p), model, points[p.id()],
-                                             triangles[p.id()]))
+            candidates.append(make_candidate(p, body, model, points[p.id()], triangles[p.id()]))
         lap("grouping")
         classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
                                 progress=progress, span=(0.35, 0.55))
