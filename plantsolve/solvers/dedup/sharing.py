@@ -162,6 +162,7 @@ def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *
 
 def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placements: Placements) -> None:
     lo, hi = span
+    inverses: dict[int, np.ndarray] = {}  # parent placement id → its matrix's inverse (a ring's members share one)
 
     for k, cls in enumerate(multi):
         if k % 8 == 0:
@@ -174,19 +175,20 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placem
             member = cand.product
             t_world = m.matrix
             rigid = not m.mirror and abs(m.scale - 1.0) < 1e-12
-            member_ok = (shape_mode and rigid and len(member.Representation.Representations) == 1
-                         and not _is_shared(model, member.Representation)
-                         and (member.ObjectPlacement is None or member.ObjectPlacement.is_a("IfcLocalPlacement")))
+            old_shape, old_placement = member.Representation, member.ObjectPlacement
+            member_ok = (shape_mode and rigid and len(old_shape.Representations) == 1
+                         and not _is_shared(model, old_shape)
+                         and (old_placement is None or old_placement.is_a("IfcLocalPlacement")))
             if not member_ok:
                 if shape_mode:
                     counts["fallback_to_mapped_item"] += 1
                 mapped.append((member, t_world))
                 continue
-            old_shape = member.Representation
-            parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = placements.matrix(parent)
-            relative = np.linalg.inv(p_parent) @ t_world @ p_rep
-            old_placement = member.ObjectPlacement
+            parent = old_placement.PlacementRelTo if old_placement is not None else None
+            key = parent.id() if parent is not None else 0
+            if key not in inverses:
+                inverses[key] = np.linalg.inv(placements.matrix(parent))
+            relative = inverses[key] @ t_world @ p_rep
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
             member.Representation = rep.Representation
             if old_placement is not None and model.get_total_inverses(old_placement) == 0:

@@ -67,10 +67,12 @@ def _eligible(model, product, wanted: tuple[str, ...] | None, body) -> str | Non
         return "entity not selected"
     if body is None:
         return "no single body representation"
-    if model.get_total_inverses(body) > 1 + sum(1 for i in model.get_inverse(body)
-                                                 if i.is_a("IfcPresentationLayerAssignment")):
+    # the inverses are listed only when there is more than one (most products: their shape's and body's only user)
+    if model.get_total_inverses(body) > 1 and model.get_total_inverses(body) > 1 + sum(
+            1 for i in model.get_inverse(body) if i.is_a("IfcPresentationLayerAssignment")):
         return "body representation already shared"
-    if sum(1 for i in model.get_inverse(product.Representation) if i.is_a("IfcProduct")) > 1:
+    shape = product.Representation
+    if model.get_total_inverses(shape) > 1 and sum(1 for i in model.get_inverse(shape) if i.is_a("IfcProduct")) > 1:
         return "product shape already shared"
     if product.ObjectPlacement is not None and not product.ObjectPlacement.is_a("IfcLocalPlacement"):
         return f"placement {product.ObjectPlacement.is_a()} is not an IfcLocalPlacement"
