@@ -39,6 +39,7 @@ class Placements:
 
     def __init__(self):
         self._matrices: dict[int, np.ndarray] = {}
+        self._axes: dict[str, np.ndarray] = {}  # an IfcAxis2Placement3D's values, written out → its matrix
 
     def matrix(self, placement) -> np.ndarray:
         if placement is None:
@@ -50,8 +51,23 @@ class Placements:
                 matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(placement), dtype=float)
             else:
                 parent = self.matrix(placement.PlacementRelTo)
-                matrix = np.dot(parent, ifcopenshell.util.placement.get_axis2placement(placement.RelativePlacement))
+                matrix = np.dot(parent, self.axes(placement.RelativePlacement))
             self._matrices[key] = matrix
+        return matrix
+
+    def axes(self, axes) -> np.ndarray:
+        """``get_axis2placement(axes)``, worked out once per set of values (each of the tunnel's 4,240 products has
+        a placement of its own, holding one of a few sets): the values are the key as ``repr`` writes them, which
+        tells -0.0 from 0.0, so the matrix is the one the library computes from them, bit for bit."""
+        location = axes.Location if axes.is_a() == "IfcAxis2Placement3D" else None
+        coordinates = getattr(location, "Coordinates", None) if location is not None else None
+        if not coordinates:  # another kind of placement, or a location the library asks the kernel for
+            return ifcopenshell.util.placement.get_axis2placement(axes)
+        z, x = axes.Axis, axes.RefDirection
+        key = repr((coordinates, z.DirectionRatios if z else None, x.DirectionRatios if x else None))
+        matrix = self._axes.get(key)
+        if matrix is None:
+            matrix = self._axes[key] = ifcopenshell.util.placement.get_axis2placement(axes)
         return matrix
 
     def of(self, product) -> np.ndarray:
