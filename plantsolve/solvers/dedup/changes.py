@@ -14,12 +14,10 @@ import re
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from plantsolve.solvers.dedup.skeleton import LineIndex
+from plantsolve.solvers.dedup.skeleton import LineIndex
 
 _INSTANCE = re.compile(r"^#(\d+)\s*=(.*);[ \t]*\r?$", re.MULTILINE)  # one instance a line (quick)
 _INSTANCE_LINES = re.compile(r"^#(\d+)\s*=(.*?);[ \t]*\r?$", re.MULTILINE | re.DOTALL)  # or over several

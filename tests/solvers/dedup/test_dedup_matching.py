@@ -3,6 +3,7 @@ refused unless allowed, a symmetric shape matched with a valid proper rotation, 
 
 from __future__ import annotations
 
+import ifcopenshell.util.placement
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -15,7 +16,8 @@ from plantsolve.solvers.dedup.matching import (
     match,
     verify,
 )
-from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh
+from plantsolve.solvers.dedup.sharing import Placements
+from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh, tunnel_file
 
 FAR = np.array([1.0e6, 1.0e6, 30.0])
 
@@ -118,11 +120,6 @@ def test_placements_evaluated_once_per_set_of_values_are_the_librarys_bit_for_bi
     """``sharing.Placements`` works an IfcAxis2Placement3D out once per set of values (the tunnel's products each
     have a placement of their own, with the same values): every product's matrix is still the one
     ``ifcopenshell.util.placement`` computes, bit for bit, a -0.0 told from a 0.0."""
-    import ifcopenshell.util.placement
-
-    from plantsolve.solvers.dedup.sharing import Placements
-    from plantsolve.solvers.dedup.synthetic import tunnel_file
-
     model = tunnel_file(3, "IFC4")
     products = [p for p in model.by_type("IfcProduct") if p.ObjectPlacement is not None]
     twin, other = products[0].ObjectPlacement.RelativePlacement, products[1].ObjectPlacement.RelativePlacement

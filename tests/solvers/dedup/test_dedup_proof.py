@@ -11,7 +11,14 @@ import ifcopenshell
 import ifcopenshell.validate
 import pytest
 
-from plantsolve.solvers.dedup import changes, postpass, proof, schemacheck, sharing, skeleton
+from plantsolve.solvers.dedup import (
+    changes,
+    postpass,
+    proof,
+    schemacheck,
+    sharing,
+    skeleton,
+)
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
 from tests.solvers.dedup.support import assert_round_trip, reopen, run
 
