@@ -56,6 +56,17 @@ def _where(seg: np.ndarray, byte: int, at_least: bool = False) -> np.ndarray:
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int32)
 
 
+def _has_comment(text: np.ndarray) -> bool:
+    """Whether '/*' is in ``text``: its slashes found a megabyte at a time (``bytes.find`` of two bytes takes five
+    times as long; chunks as large as the scan's would leave their freed pages with the process)."""
+    step = 1 << 20
+    for i in range(0, len(text) - 1, step):
+        part = text[i:i + step + 1]
+        if np.any(part[np.flatnonzero(part[:-1] == 47) + 1] == 42):
+            return True
+    return False
+
+
 _IN_CACHE = 1 << 16
 _LOW_NIBBLES = np.uint64(0x0F0F0F0F0F0F0F0F)
 _HIGH_NIBBLES = np.uint64(0xF0F0F0F0F0F0F0F0)
@@ -199,7 +210,7 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
     if body <= 0 or end < 0:
         return None
     seg = np.frombuffer(data, dtype=np.uint8)[body:]  # the data section and, past it, at least its ENDSEC line
-    if np.any(seg[_where(seg[:end - body], 47) + 1] == 42):  # a comment '/*' (bytes.find of two bytes: 5× slower)
+    if _has_comment(seg[:end - body + 1]):
         return None
     got = _scan(seg, end + 1 - body)
     if got is None:
