@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import re
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
+
+import numpy as np
+
+from plantsolve.solvers.dedup.skeleton import LineIndex
 
 _INSTANCE = re.compile(r"^#(\d+)\s*=(.*);[ \t]*\r?$", re.MULTILINE)  # one instance a line (quick)
 _INSTANCE_LINES = re.compile(r"^#(\d+)\s*=(.*?);[ \t]*\r?$", re.MULTILINE | re.DOTALL)  # or over several
@@ -34,12 +39,15 @@ class Changes:
     _before: str | None = field(default=None, repr=False)
     _output_ids: set[str] = field(default_factory=set, repr=False)
     _removed: set[int] | None = field(default=None, repr=False)
+    _input_ids: Callable[[], np.ndarray] | None = field(default=None, repr=False)  # the input's, when indexed
 
     @property
     def removed(self) -> set[int]:
         """Only in the input (read again when asked: only an output with errors needs them)."""
         if self._removed is None:
             self._removed = set()
+            if self._input_ids is not None:
+                self._removed = set(self._input_ids().tolist()) - {int(i) for i in self._output_ids}
             for piece in _pieces(self._before or ""):
                 self._removed.update(int(i) for i in _instances(piece).keys() - self._output_ids)
         return self._removed
@@ -106,7 +114,6 @@ def diff(before: str, after: str) -> Changes:
     data = after[slice(*_bounds(after))]
     out_lines = _instances(data)
     out_ids = set(out_lines)
-    out_refs = Counter(_REFERENCE.findall(data))
     in_refs: Counter = Counter()
     seen: set[str] = set()
     was: dict[str, str] = {}  # the input's text of the changed instances
@@ -122,6 +129,41 @@ def diff(before: str, after: str) -> Changes:
         refs = Counter(_REFERENCE.findall(piece))
         for i in refs.keys() & out_ids:
             in_refs[i] += refs[i]
+    changes = _judged(out_lines, Counter(_REFERENCE.findall(data)), seen, was, in_refs, unchanged)
+    changes._before = before
+    return changes
+
+
+def diff_indexed(before: LineIndex, after: str) -> Changes:
+    """:func:`diff` against an input the scan indexed (``skeleton.LineIndex``, a file of one instance a line):
+    only the input's lines of the output's ids are read, and how often the input refers to each is the
+    scan's count; the same changes as :func:`diff` finds."""
+    data = after[slice(*_bounds(after))]
+    out_lines = _instances(data)
+    lines = before.lines(np.fromiter(map(int, out_lines), dtype=np.int64, count=len(out_lines)))
+    seen = {str(i) for i in lines}
+    was: dict[str, str] = {}
+    unchanged = 0
+    for i, line in lines.items():
+        key = str(i)
+        text = line[line.index("=") + 1:-1]  # as _INSTANCE reads the line: past '=', without its ';'
+        if same_values(text, out_lines[key]):
+            unchanged += 1
+        else:
+            was[key] = text
+    counts = before.references_to(np.fromiter(lines, dtype=np.int64, count=len(lines)))
+    # the line defining an instance counts as one of its '#12's, as in the whole text
+    in_refs = Counter({str(i): int(n) + 1 for i, n in zip(lines, counts.tolist())})
+    changes = _judged(out_lines, Counter(_REFERENCE.findall(data)), seen, was, in_refs, unchanged)
+    changes._input_ids = before.ids
+    return changes
+
+
+def _judged(out_lines: dict[str, str], out_refs: Counter, seen: set[str], was: dict[str, str], in_refs: Counter,
+            unchanged: int) -> Changes:
+    """The changes, from the output's instances and how often each is referred to, the input's ids among
+    them (``seen``), the input's text of those that differ and how often the input refers to each."""
+    out_ids = set(out_lines)
     new = out_ids - seen
     rewired: set[int] = set()
     for i in new:
@@ -135,4 +177,4 @@ def diff(before: str, after: str) -> Changes:
     changed = {int(i) for i in was}
     new_ids = {int(i) for i in new}
     return Changes(changed=changed, new=new_ids, rewired=rewired - changed - new_ids, unchanged=unchanged,
-                   _before=before, _output_ids=out_ids)
+                   _output_ids=out_ids)

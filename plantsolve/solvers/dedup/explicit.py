@@ -20,7 +20,7 @@ import numpy as np
 import ifcopenshell
 import ifcopenshell.util.placement
 
-from plantsolve.solvers.dedup.sharing import Placements, body_representation
+from plantsolve.solvers.dedup.sharing import Placements, shape_body
 from plantsolve.solvers.dedup.skeleton import Skeleton
 
 FACE_SETS = ("IfcPolygonalFaceSet", "IfcTriangulatedFaceSet")
@@ -54,6 +54,7 @@ class ExplicitReader:
         self._roles: dict[str, int] = {}
         self._bodies: dict[int, tuple[np.ndarray, int] | None] = {}
         self._items: dict[int, tuple[np.ndarray, int] | None] = {}
+        self._shape_bodies: dict[int, object] = {}  # product shape id → its body representation
         self.placements = Placements()  # the sharing places the same products again
 
     def forget_points(self) -> None:
@@ -130,10 +131,21 @@ class ExplicitReader:
             return None
         return np.concatenate(parts), faces
 
+    def body(self, product):
+        """``sharing.body_representation(product)``, found once per product shape (the grouping asks again; the
+        members of a written class share one)."""
+        shape = product.Representation
+        if shape is None:
+            return None
+        key = shape.id()
+        if key not in self._shape_bodies:
+            self._shape_bodies[key] = shape_body(shape)
+        return self._shape_bodies[key]
+
     def product_points(self, product, *, unique: bool = True) -> tuple[np.ndarray, int] | None:
         """(unique world points in file units, face count) of the product's body, or None; ``unique=False``: the
         world points as read, each product's made unique by the caller (:func:`unique_rows_each`)."""
-        body = body_representation(product)
+        body = self.body(product)
         if body is None:
             return None
         key = body.id()

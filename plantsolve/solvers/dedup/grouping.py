@@ -133,16 +133,16 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
     centres = np.array([classes[ci].members[k][0].shape.centre for ci, k in entries])
     tree = cKDTree(centres - centres.mean(axis=0))
     _, near = tree.query(centres - centres.mean(axis=0), k=min(neighbours, len(entries)))
+    class_of = np.array([ci for ci, _ in entries])
     replaced = 0
     for index, (ci, k) in enumerate(entries):
         cls = classes[ci]
         cand, m = cls.members[k]
         tried: set[tuple] = set()
         tries = []
-        for n in np.atleast_1d(near[index]):
+        row = np.atleast_1d(near[index])
+        for n in row[class_of[row] < ci].tolist():  # only members of earlier classes, whose transforms are final
             cj, kj = entries[n]
-            if cj >= ci:  # only members of earlier classes, whose transforms are final
-                continue
             other = classes[cj].members[kj][1]
             # a pooled transform is the same arrays in every member that took it: tried once
             key = (id(other.rotation), id(other.translation), other.scale)

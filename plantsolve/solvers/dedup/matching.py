@@ -108,6 +108,8 @@ def hausdorff(a: np.ndarray, b: np.ndarray, tree_b: cKDTree | None = None, tree_
 
 
 SIGNS = np.array(list(itertools.product((1.0, -1.0), repeat=3)))  # every sign flip of the three axes
+FLIP_Z = np.diag([1.0, 1.0, -1.0])  # mirrors through the xy plane (never written to)
+FLIP_Z.flags.writeable = False
 
 
 def _axis_orders(rep: Shape, tol: float) -> list[list[int]]:
@@ -196,7 +198,7 @@ def _refine(rep_local: np.ndarray, member: Shape, rotation: np.ndarray, proper: 
     :func:`first_steps` found them."""
     t = np.zeros(3)
     last = np.inf
-    flip = np.diag([1.0, 1.0, -1.0])
+    flip = FLIP_Z
     for step in range(MAX_ICP_STEPS):
         if step == 0 and first is not None:
             dist, idx = first

@@ -18,6 +18,7 @@ from plantsolve.solvers.dedup.changes import Changes
 from plantsolve.solvers.dedup.grouping import canonical
 from plantsolve.solvers.dedup.matching import Shape, one_to_one
 from plantsolve.solvers.dedup.schemacheck import Finding, Rules
+from plantsolve.solvers.dedup.skeleton import LineIndex
 
 MAX_ERRORS_LISTED = 50
 # under this many output bytes per input byte the whole output is validated: cheaper than reading the
@@ -218,17 +219,22 @@ class Verdict:
     changed: int | None  # None: the output was validated whole, the input never read
 
 
-def verdict(check: ifcopenshell.file, written: bytes, input_path: Path, rules: Rules | None) -> Verdict:
+def verdict(check: ifcopenshell.file, written: bytes, input_path: Path, rules: Rules | None,
+            index: LineIndex | None = None) -> Verdict:
     """The written file's validation errors and whether the input had them all. The part that changed
     is validated (see ``affected``), or the whole output when it is that much smaller than the input;
     the input's text is compared with the output only then, and its counterpart validated only
-    when the output has errors."""
+    when the output has errors. ``index``: the scan's index of the input's lines, which makes the
+    comparison cost what the output holds, not what the input does: the changed part is then validated
+    whatever the sizes."""
 
     def compared() -> Changes:
+        if index is not None:
+            return diffing.diff_indexed(index, written.decode("latin-1"))
         return diffing.diff(input_path.read_bytes().decode("latin-1"), written.decode("latin-1"))
 
     delta = None
-    whole = len(written) < input_path.stat().st_size * WHOLE_OUTPUT_BELOW
+    whole = index is None and len(written) < input_path.stat().st_size * WHOLE_OUTPUT_BELOW
     if whole:
         part = list(check)
     else:

@@ -39,6 +39,7 @@ class Placements:
 
     def __init__(self):
         self._matrices: dict[int, np.ndarray] = {}
+        self._axes: dict[str, np.ndarray] = {}  # an IfcAxis2Placement3D's values, written out → its matrix
 
     def matrix(self, placement) -> np.ndarray:
         if placement is None:
@@ -50,8 +51,23 @@ class Placements:
                 matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(placement), dtype=float)
             else:
                 parent = self.matrix(placement.PlacementRelTo)
-                matrix = np.dot(parent, ifcopenshell.util.placement.get_axis2placement(placement.RelativePlacement))
+                matrix = np.dot(parent, self.axes(placement.RelativePlacement))
             self._matrices[key] = matrix
+        return matrix
+
+    def axes(self, axes) -> np.ndarray:
+        """``get_axis2placement(axes)``, worked out once per set of values (each of the tunnel's 4,240 products has
+        a placement of its own, holding one of a few sets): the values are the key as ``repr`` writes them, which
+        tells -0.0 from 0.0, so the matrix is the one the library computes from them, bit for bit."""
+        location = axes.Location if axes.is_a() == "IfcAxis2Placement3D" else None
+        coordinates = getattr(location, "Coordinates", None) if location is not None else None
+        if not coordinates:  # another kind of placement, or a location the library asks the kernel for
+            return ifcopenshell.util.placement.get_axis2placement(axes)
+        z, x = axes.Axis, axes.RefDirection
+        key = repr((coordinates, z.DirectionRatios if z else None, x.DirectionRatios if x else None))
+        matrix = self._axes.get(key)
+        if matrix is None:
+            matrix = self._axes[key] = ifcopenshell.util.placement.get_axis2placement(axes)
         return matrix
 
     def of(self, product) -> np.ndarray:
@@ -60,7 +76,11 @@ class Placements:
 
 def body_representation(product):
     """The product's body ``IfcShapeRepresentation`` (identifier 'Body', or the only one), or None."""
-    shape = product.Representation
+    return shape_body(product.Representation)
+
+
+def shape_body(shape):
+    """:func:`body_representation` of the products whose ``Representation`` is ``shape``."""
     if shape is None or not shape.is_a("IfcProductDefinitionShape"):
         return None
     reps = [r for r in shape.Representations or () if r.is_a("IfcShapeRepresentation")]
@@ -158,6 +178,7 @@ def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *
 
 def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placements: Placements) -> None:
     lo, hi = span
+    inverses: dict[int, np.ndarray] = {}  # parent placement id → its matrix's inverse (a ring's members share one)
 
     for k, cls in enumerate(multi):
         if k % 8 == 0:
@@ -170,19 +191,20 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placem
             member = cand.product
             t_world = m.matrix
             rigid = not m.mirror and abs(m.scale - 1.0) < 1e-12
-            member_ok = (shape_mode and rigid and len(member.Representation.Representations) == 1
-                         and not _is_shared(model, member.Representation)
-                         and (member.ObjectPlacement is None or member.ObjectPlacement.is_a("IfcLocalPlacement")))
+            old_shape, old_placement = member.Representation, member.ObjectPlacement
+            member_ok = (shape_mode and rigid and len(old_shape.Representations) == 1
+                         and not _is_shared(model, old_shape)
+                         and (old_placement is None or old_placement.is_a("IfcLocalPlacement")))
             if not member_ok:
                 if shape_mode:
                     counts["fallback_to_mapped_item"] += 1
                 mapped.append((member, t_world))
                 continue
-            old_shape = member.Representation
-            parent = member.ObjectPlacement.PlacementRelTo if member.ObjectPlacement is not None else None
-            p_parent = placements.matrix(parent)
-            relative = np.linalg.inv(p_parent) @ t_world @ p_rep
-            old_placement = member.ObjectPlacement
+            parent = old_placement.PlacementRelTo if old_placement is not None else None
+            key = parent.id() if parent is not None else 0
+            if key not in inverses:
+                inverses[key] = np.linalg.inv(placements.matrix(parent))
+            relative = inverses[key] @ t_world @ p_rep
             member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
             member.Representation = rep.Representation
             if old_placement is not None and model.get_total_inverses(old_placement) == 0:

@@ -20,7 +20,7 @@ three plain numbers stays in the skeleton whole, read as before."""
 
 from __future__ import annotations
 
-import mmap
+import os
 import re
 from collections import Counter
 from dataclasses import dataclass, field
@@ -42,6 +42,7 @@ LEVEL_OF = np.array([-1] + [0] * len(ITEMS) + list(LEVELS.values()), dtype=np.in
 POINT_LEVEL, FACE_LEVEL = 5, 2
 MAX_DIGITS = 10  # instance numbers below 2^31
 CHUNK = 1 << 24
+READ_GAP, READ_RUN = 1 << 12, 1 << 20  # lines closer than READ_GAP are read in one call of at most READ_RUN bytes
 # the characters of a point's coordinates written plainly (no '$', '*', string, NaN or spaces)
 _PLAIN = np.zeros(256, dtype=bool)
 _PLAIN[np.frombuffer(b"0123456789.+-eE,", dtype=np.uint8)] = True
@@ -53,6 +54,17 @@ def _where(seg: np.ndarray, byte: int, at_least: bool = False) -> np.ndarray:
     parts = [(np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte) + i).astype(np.int32)
              for i in range(0, len(seg), CHUNK)]
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int32)
+
+
+def _has_comment(text: np.ndarray) -> bool:
+    """Whether '/*' is in ``text``: its slashes found a megabyte at a time (``bytes.find`` of two bytes takes five
+    times as long; chunks as large as the scan's would leave their freed pages with the process)."""
+    step = 1 << 20
+    for i in range(0, len(text) - 1, step):
+        part = text[i:i + step + 1]
+        if np.any(part[np.flatnonzero(part[:-1] == 47) + 1] == 42):
+            return True
+    return False
 
 
 _IN_CACHE = 1 << 16
@@ -108,6 +120,55 @@ def _slow_numbers(text: np.ndarray, pos: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 @dataclass
+class LineIndex:
+    """Where each instance of the scanned file is written, and how often it is referred to: what the proof
+    compares the written file with (``changes.diff_indexed``), without reading the input again."""
+
+    path: Path  # the STEP text
+    line_of: np.ndarray = field(repr=False)  # id → its line (-1: no instance)
+    starts: np.ndarray = field(repr=False)  # each line's first byte in the file
+    ends: np.ndarray = field(repr=False)  # each line's end (its ';' included, its line break not)
+    referenced: np.ndarray = field(repr=False)  # each line's references from the data section ('#12' in a string too)
+
+    def lines(self, ids: np.ndarray) -> dict[int, str]:
+        """``{id: the instance's STEP line}`` of those of ``ids`` the file holds (read as Latin-1, as the
+        whole-file comparison reads it)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        ids = ids[(ids >= 0) & (ids < len(self.line_of))]
+        ids = ids[self.line_of[ids] >= 0]
+        return {i: line.decode("latin-1") for i, line in zip(ids.tolist(), self.raw(self.line_of[ids]))}
+
+    def raw(self, rows: np.ndarray) -> list[bytes]:
+        """The text of lines ``rows``, in that order: read from the file in runs of nearby lines (a file mapped
+        into memory would count every page it touched as the process's for as long as it is mapped)."""
+        starts, ends = self.starts[rows].astype(np.int64), self.ends[rows].astype(np.int64)
+        order = np.argsort(starts, kind="stable")
+        out: list[bytes] = [b""] * len(rows)
+        with open(self.path, "rb") as handle:
+            fd = handle.fileno()
+            k = 0
+            while k < len(order):
+                first = k  # a run: lines less than READ_GAP apart, at most READ_RUN long, read in one call
+                while (k + 1 < len(order) and starts[order[k + 1]] - ends[order[k]] < READ_GAP
+                       and ends[order[k + 1]] - starts[order[first]] <= READ_RUN):
+                    k += 1
+                at = int(starts[order[first]])
+                block = os.pread(fd, int(ends[order[first:k + 1]].max()) - at, at)
+                for j in order[first:k + 1].tolist():
+                    out[j] = block[starts[j] - at:ends[j] - at]
+                k += 1
+        return out
+
+    def references_to(self, ids: np.ndarray) -> np.ndarray:
+        """How often the data section refers to each of ``ids`` (each an instance the file holds)."""
+        return self.referenced[self.line_of[np.asarray(ids, dtype=np.int64)]]
+
+    def ids(self) -> np.ndarray:
+        """Every instance id of the file."""
+        return np.flatnonzero(self.line_of >= 0)
+
+
+@dataclass
 class Skeleton:
     """What the scan of one file found (see the module's docstring)."""
 
@@ -120,7 +181,7 @@ class Skeleton:
     parsed: dict[int, np.ndarray]  # item id → the ids of it in the skeleton: itself and its stand-ins
     parsed_entities: dict[int, Counter]  # item id → those instances per entity
     instances: int  # in the whole file
-    _offsets: tuple[np.ndarray, np.ndarray, np.ndarray] = field(repr=False)  # line of each id; line starts, ends
+    index: LineIndex = field(repr=False)  # each instance's line and how often it is referred to
 
     def model(self) -> ifcopenshell.file:
         """The skeleton parsed by IfcOpenShell (the same bytes as in the file: IfcOpenShell takes text as UTF-8)."""
@@ -130,10 +191,7 @@ class Skeleton:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
         children): their lines read from the file and parsed on their own (a closure refers only within
         itself)."""
-        line_of, starts, ends = self._offsets
-        lines = line_of[ids]
-        with open(self.path, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as text:
-            lines_text = b"\n".join(text[s:e] for s, e in zip(starts[lines].tolist(), ends[lines].tolist()))
+        lines_text = b"\n".join(self.index.raw(self.index.line_of[ids]))
         part = ifcopenshell.file.from_string(f"{header}DATA;\n{lines_text.decode('ascii')}\n{trailer}")
         by_id = part.by_id
         return {i: by_id(i).to_string() for i in ids.tolist()}
@@ -149,9 +207,11 @@ def read(path: Path, schema: str | None = None) -> Skeleton | None:
         return None
     body = data.find(b"\n", at + 1) + 1
     end = data.rfind(b"\nENDSEC;", body)  # a second section's lines would not start with '#': refused below
-    if body <= 0 or end < 0 or data.find(b"/*", body, end) >= 0:
+    if body <= 0 or end < 0:
         return None
     seg = np.frombuffer(data, dtype=np.uint8)[body:]  # the data section and, past it, at least its ENDSEC line
+    if _has_comment(seg[:end - body + 1]):
+        return None
     got = _scan(seg, end + 1 - body)
     if got is None:
         return None
@@ -344,6 +404,8 @@ def _items(path, text, ids, offsets, code, level, label, member, points, coords,
     faceted = level[src] >= 0
     faceted[faceted] = (dst[faceted] >= 0) & (level[np.maximum(dst[faceted], 0)] == level[src[faceted]] + 1)
     fsrc, fdst = src[faceted], dst[faceted]
+    # how often each line is referred to (what the proof compares the written file's references with)
+    referenced = np.bincount(dst[dst >= 0], minlength=n).astype(np.int32)
     del faceted, src, dst
     first_child = np.zeros(n + 1, dtype=np.int32)
     np.cumsum(np.bincount(fsrc, minlength=n), out=first_child[1:])
@@ -397,7 +459,7 @@ def _items(path, text, ids, offsets, code, level, label, member, points, coords,
                      if v})
     line_start, line_end = offsets
     return Skeleton(path, text, result_points, closures, entities, inner, parsed, parsed_entities, n,
-                    (line_of, line_start, line_end))
+                    LineIndex(path, line_of, line_start, line_end, referenced))
 
 
 def _entity_names(header: bytes, schema: str | None) -> list[str]:

@@ -61,17 +61,18 @@ def length_unit_symbol(model: ifcopenshell.file, metres: float) -> str:
     return symbol if symbol and symbol.isalpha() else f"{metres:g} m"
 
 
-def _eligible(model, product, wanted: tuple[str, ...] | None) -> str | None:
-    """Why ``product`` cannot be deduplicated, or None."""
+def _eligible(model, product, wanted: tuple[str, ...] | None, body) -> str | None:
+    """Why ``product`` (whose body representation is ``body``) cannot be deduplicated, or None."""
     if wanted and not any(product.is_a(t) for t in wanted):
         return "entity not selected"
-    body = sharing.body_representation(product)
     if body is None:
         return "no single body representation"
-    if model.get_total_inverses(body) > 1 + sum(1 for i in model.get_inverse(body)
-                                                 if i.is_a("IfcPresentationLayerAssignment")):
+    # the inverses are listed only when there is more than one (most products: their shape's and body's only user)
+    if model.get_total_inverses(body) > 1 and model.get_total_inverses(body) > 1 + sum(
+            1 for i in model.get_inverse(body) if i.is_a("IfcPresentationLayerAssignment")):
         return "body representation already shared"
-    if sum(1 for i in model.get_inverse(product.Representation) if i.is_a("IfcProduct")) > 1:
+    shape = product.Representation
+    if model.get_total_inverses(shape) > 1 and sum(1 for i in model.get_inverse(shape) if i.is_a("IfcProduct")) > 1:
         return "product shape already shared"
     if product.ObjectPlacement is not None and not product.ObjectPlacement.is_a("IfcLocalPlacement"):
         return f"placement {product.ObjectPlacement.is_a()} is not an IfcLocalPlacement"
@@ -123,6 +124,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     progress(0.0, "reading the IFC file")
     with source.step_file() as (path, original_bytes):
         model, streamed = skeleton.open_model(path)
+        index = streamed.index if streamed is not None else None  # the input's lines, for the proof's comparison
         lap("parse")
         schema = model.schema
         mode = resolve_mode(opts.sharing, schema)
@@ -170,13 +172,13 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         for p in products:
             if p.id() not in points:
                 continue
-            why = _eligible(model, p, wanted)
+            body = reader.body(p)
+            why = _eligible(model, p, wanted, body)
             if why is not None:
                 if why != "entity not selected":
                     skipped.append({"global_id": p.GlobalId, "entity": p.is_a(), "reason": why})
                 continue
-            candidates.append(make_candidate(p, sharing.body_representation(p), model, points[p.id()],
-                                             triangles[p.id()]))
+            candidates.append(make_candidate(p, body, model, points[p.id()], triangles[p.id()]))
         lap("grouping")
         classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
                                 progress=progress, span=(0.35, 0.55))
@@ -235,10 +237,10 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         progress(0.9, "validating the written file")
         verified, cpu_verified = time.perf_counter(), time.process_time()
         rules = proof.Rules(check.schema_identifier) if opts.express_rules else None
-        judged = proof.verdict(check, optimized, path, rules)
+        judged = proof.verdict(check, optimized, path, rules, index)
         found, inherited_errors = judged.errors, judged.inherited
         counts_after = proof.entity_counts(check)
-        del check, again, back_products, shapes
+        del check, again, back_products, shapes, index
         errors = [f.text() for f in found]
         timings["validation"] = round(time.perf_counter() - verified, 4)
         cpu["validation"] = round(time.process_time() - cpu_verified, 4)

@@ -3,6 +3,7 @@ refused unless allowed, a symmetric shape matched with a valid proper rotation, 
 
 from __future__ import annotations
 
+import ifcopenshell.util.placement
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -15,7 +16,8 @@ from plantsolve.solvers.dedup.matching import (
     match,
     verify,
 )
-from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh
+from plantsolve.solvers.dedup.sharing import Placements
+from plantsolve.solvers.dedup.synthetic import box_mesh, segment_mesh, tunnel_file
 
 FAR = np.array([1.0e6, 1.0e6, 30.0])
 
@@ -112,3 +114,21 @@ def test_the_refinements_first_steps_found_together_are_each_rotations_own():
         own_dist, own_idx = member.tree.query(rep.local @ r.T + np.zeros(3), k=1)
         assert np.array_equal(dist, own_dist) and np.array_equal(idx, own_idx)
     assert first_steps(rep.local, member, []) == []
+
+
+def test_placements_evaluated_once_per_set_of_values_are_the_librarys_bit_for_bit():
+    """``sharing.Placements`` works an IfcAxis2Placement3D out once per set of values (the tunnel's products each
+    have a placement of their own, with the same values): every product's matrix is still the one
+    ``ifcopenshell.util.placement`` computes, bit for bit, a -0.0 told from a 0.0."""
+    model = tunnel_file(3, "IFC4")
+    products = [p for p in model.by_type("IfcProduct") if p.ObjectPlacement is not None]
+    twin, other = products[0].ObjectPlacement.RelativePlacement, products[1].ObjectPlacement.RelativePlacement
+    other.Location = model.create_entity("IfcCartesianPoint", [-0.0 if v == 0 else v for v in twin.Location.Coordinates])
+    other.Axis = model.create_entity("IfcDirection", twin.Axis.DirectionRatios if twin.Axis else (0.0, 0.0, 1.0))
+    other.RefDirection = model.create_entity("IfcDirection", [0.0, -1.0, 0.0])
+    placements = Placements()
+    for product in products:
+        ours = placements.of(product)
+        library = np.asarray(ifcopenshell.util.placement.get_local_placement(product.ObjectPlacement), dtype=float)
+        assert ours.tobytes() == library.tobytes(), product
+    assert len(placements._axes) < len(products)  # most placements hold values seen before

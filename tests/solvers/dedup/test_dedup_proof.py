@@ -11,7 +11,14 @@ import ifcopenshell
 import ifcopenshell.validate
 import pytest
 
-from plantsolve.solvers.dedup import changes, postpass, proof, schemacheck, sharing
+from plantsolve.solvers.dedup import (
+    changes,
+    postpass,
+    proof,
+    schemacheck,
+    sharing,
+    skeleton,
+)
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
 from tests.solvers.dedup.support import assert_round_trip, reopen, run
 
@@ -110,6 +117,34 @@ def test_the_diff_tells_changed_new_removed_and_re_referenced_instances(monkeypa
     assert not changes.same_values("IFCX(#1)", "IFCX(#10)") and not changes.same_values("IFCX(1)", "IFCX(1,$)")
 
 
+def _same_changes(a: changes.Changes, b: changes.Changes) -> bool:
+    return (a.changed, a.new, a.rewired, a.unchanged, a.removed) == (b.changed, b.new, b.rewired, b.unchanged, b.removed)
+
+
+def test_the_scans_index_tells_the_same_changes_as_the_whole_input(tmp_path):
+    """The proof's comparison through the scan's index of the input's lines (only the output's ids read, the
+    references counted by the scan, a '#3' in a string too) against the comparison with the whole input text."""
+    before = ("ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n#1= IFCA(#2,'x');\n"
+              "#2= IFCB(1.00000000000E-5,.T.);\n#3= IFCC(#2);\n#4= IFCD(#1,#2);\n#5= IFCE(#1);\n#6= IFCF(#2,'#3');\n"
+              "#7= IFCG(#6);\n#9= IFCH('a;b',0.5);\nENDSEC;\nEND-ISO-10303-21;\n")
+    after = ("ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n#1=IFCA(#2,'x');\n"
+             "#2=IFCB(1.E-05,.T.);\n#3=IFCC(#1);\n#4=IFCD(#1,#2);\n#6=IFCF(#2,'#3');\n#7=IFCG(#6);\n"
+             "#9=IFCH('a;B',0.5);\n#1000=IFCI(#9);\nENDSEC;\nEND-ISO-10303-21;\n")
+    path = tmp_path / "before.ifc"
+    path.write_text(before)
+    indexed = changes.diff_indexed(skeleton.read(path).index, after)
+    assert (indexed.changed, indexed.new, indexed.removed, indexed.rewired) == ({3, 9}, {1000}, {5}, {1, 2})
+    assert _same_changes(indexed, changes.diff(before, after))
+    # a solved tunnel: its output against its input, both ways
+    model = tunnel_file(3, "IFC4")
+    model.write(str(path))
+    solved = run(model, sharing="product_shape")
+    written = solved.files["optimized.ifc"].decode("latin-1")
+    indexed = changes.diff_indexed(skeleton.read(path).index, written)
+    assert indexed.changed and indexed.new and indexed.rewired
+    assert _same_changes(indexed, changes.diff(path.read_bytes().decode("latin-1"), written))
+
+
 def test_the_post_pass_respects_inverse_cardinalities_of_ifc2x3_and_ifc4():
     for schema in ("IFC2X3", "IFC4"):
         model = tunnel_file(2, schema)
@@ -169,9 +204,14 @@ def _without_placements(model: ifcopenshell.file) -> ifcopenshell.file:
 
 @pytest.fixture(params=["changed part", "whole output"])
 def proof_scope(request, monkeypatch):
-    """Both ways the proof validates: the part that changed, or (an output far smaller than its input)
-    the whole output."""
+    """Both ways the proof validates: the part that changed (the scan's index of the input's lines tells it),
+    or, for an input the scan did not index, the whole output when it is far smaller than its input (the input
+    then read whole only when the output has errors)."""
     monkeypatch.setattr(proof, "WHOLE_OUTPUT_BELOW", 0.0 if request.param == "changed part" else 10.0)
+    if request.param == "whole output":
+        verdict = proof.verdict
+        monkeypatch.setattr(proof, "verdict", lambda check, written, path, rules, index=None:
+                            verdict(check, written, path, rules))
     return request.param
 
 

@@ -126,7 +126,7 @@ def test_a_point_also_used_by_a_placement_keeps_its_item_in_the_skeleton(monkeyp
     _same(streamed, whole)
 
 
-@pytest.mark.parametrize("edit", ["two_d", "comment", "wrapped", "text"])
+@pytest.mark.parametrize("edit", ["two_d", "comment", "comment_within", "wrapped", "text"])
 def test_files_the_scan_does_not_vouch_for(monkeypatch, tmp_path, edit):
     text = _text(3)
     point = _mesh_points(text)[5]
@@ -136,6 +136,9 @@ def test_files_the_scan_does_not_vouch_for(monkeypatch, tmp_path, edit):
         text = text.replace(line.group(0), f"#{point}=IFCCARTESIANPOINT(({x},{y}));")
     elif edit == "comment":
         text = text.replace(line.group(0), f"/* moved */ {line.group(0)}")
+    elif edit == "comment_within":  # within a line the scan would otherwise read
+        assert ",'Ring 1 segment A'," in text
+        text = text.replace(",'Ring 1 segment A',", ",'Ring 1 segment A' /* named */,", 1)
     elif edit == "wrapped":  # one instance over two lines
         text = text.replace(line.group(0), f"#{point}=IFCCARTESIANPOINT(({x},\n{y},{z}));")
     else:  # a coordinate that is no number: the whole parse says so, as before
