@@ -837,24 +837,33 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
     nfev, status = 1, 0
     it = 0
     last_rel = np.inf
+    width = hi - lo
+    bounded = np.isfinite(width)
     while nfev < max_nfev:
         it += 1
         if tick is not None:
             tick()
         A, g = normal_equations(x, w, r)
-        dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
+        diag = np.diag(A)
+        dg = np.maximum(diag, 1e-12 * (np.max(diag) + 1e-300))
         # active set: a parameter on its bound whose descent direction points outward stays
         # there (a zero-length straight, say); clipping its step instead stalls the iteration
-        span = np.where(np.isfinite(hi - lo), hi - lo, np.abs(x) + 1.0)
+        span = np.where(bounded, width, np.abs(x) + 1.0)
         at_lo = (x <= lo + 1e-9 * span) & (g > 0)
         at_hi = (x >= hi - 1e-9 * span) & (g < 0)
         free = ~(at_lo | at_hi)
-        Af = A[np.ix_(free, free)]
+        # no parameter held (most iterations): the whole system, without the copies that select its free part
+        all_free = bool(free.all())
+        Af, dgf, rhs = (A, dg, -g) if all_free else (A[np.ix_(free, free)], dg[free], -g[free])
         improved = False
         while nfev < max_nfev:
-            step = np.zeros_like(x)
             try:
-                step[free] = np.linalg.solve(Af + lam * np.diag(dg[free]), -g[free])
+                solved = np.linalg.solve(Af + lam * np.diag(dgf), rhs)
+                if all_free:
+                    step = solved
+                else:
+                    step = np.zeros_like(x)
+                    step[free] = solved
             except np.linalg.LinAlgError:
                 lam *= 10
                 if lam > 1e12:
