@@ -124,29 +124,38 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
+_YXX, _ZZY, _XXY, _YZZ, _ZYX = (np.array(c) for c in ((1, 0, 0), (2, 2, 1), (0, 0, 1), (1, 2, 2), (2, 1, 0)))
+_ENTRIES = np.array([0, 4, 8, 3, 2, 7, 1, 6, 5])  # flat (row-major) index of each entry of a 3 x 3 matrix
+
+
 def rotvec_matrices(V: np.ndarray) -> np.ndarray:
     """Rotation matrices (B, 3, 3) of rotation vectors V (B, 3) by Rodrigues' formula; below 1e-3 rad the
     coefficients sin θ / θ and (1 - cos θ) / θ² from their Taylor series (the finite-difference steps of the
-    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits)."""
+    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits). The entries' three kinds (diagonal,
+    the products b·x·y that both off-diagonal entries of a pair share, a·z that one adds and the other
+    subtracts) each computed for all three components in one operation: a batch of a few rows costs numpy's
+    per-call overhead, not arithmetic."""
     th2 = np.einsum("bi,bi->b", V, V)
     th = np.sqrt(th2)
     small = th < 1e-3
-    th_safe = np.where(small, 1.0, th)
-    a = np.where(small, 1.0 - th2 / 6.0 + th2 * th2 / 120.0, np.sin(th_safe) / th_safe)
-    b = np.where(small, 0.5 - th2 / 24.0 + th2 * th2 / 720.0, (1.0 - np.cos(th_safe)) / (th_safe * th_safe))
-    x, y, z = V[:, 0], V[:, 1], V[:, 2]
-    M = np.empty((len(V), 3, 3))
-    M[:, 0, 0] = 1.0 - b * (y * y + z * z)
-    M[:, 1, 1] = 1.0 - b * (x * x + z * z)
-    M[:, 2, 2] = 1.0 - b * (x * x + y * y)
-    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
-    M[:, 0, 1] = bxy - a * z
-    M[:, 1, 0] = bxy + a * z
-    M[:, 0, 2] = bxz + a * y
-    M[:, 2, 0] = bxz - a * y
-    M[:, 1, 2] = byz - a * x
-    M[:, 2, 1] = byz + a * x
-    return M
+    th4 = th2 * th2
+    a = 1.0 - th2 / 6.0 + th4 / 120.0
+    b = 0.5 - th2 / 24.0 + th4 / 720.0
+    if not small.all():  # (the Jacobian's batches rotate by its steps only: all small)
+        th_safe = np.where(small, 1.0, th)
+        a = np.where(small, a, np.sin(th_safe) / th_safe)
+        b = np.where(small, b, (1.0 - np.cos(th_safe)) / (th_safe * th_safe))
+    sq = V * V
+    # columns (y² + z², x² + z², x² + y²), (b x y, b x z, b y z) and (a z, a y, a x)
+    bc, ac = b[:, None], a[:, None]
+    diag = 1.0 - bc * (sq.take(_YXX, 1) + sq.take(_ZZY, 1))
+    pair = (bc * V).take(_XXY, 1) * V.take(_YZZ, 1)
+    av = ac * V.take(_ZYX, 1)
+    # the matrix's entries in the order of the columns of diag, pair + av and pair - av: (0,0), (1,1), (2,2),
+    # (1,0) bxy + az, (0,2) bxz + ay, (2,1) byz + ax, (0,1) bxy - az, (2,0) bxz - ay, (1,2) byz - ax
+    M = np.empty((len(V), 9))
+    M.T[_ENTRIES] = np.concatenate([diag, pair + av, pair - av], axis=1).T
+    return M.reshape(-1, 3, 3)
 
 
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
