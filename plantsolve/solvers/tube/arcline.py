@@ -48,17 +48,40 @@ _MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 @dataclass
 class Edge:
+    """The best arc of an edge: what the search needs of it (its cost and the modified outgoing line), and its
+    points in 3D for the edges of the path kept (computed on demand: most edges are met and dropped)."""
+
     t1: float  # arc start on the incoming line (param from the line point)
     t2: float  # arc end on the outgoing line
-    centre: np.ndarray  # 3D
     radius: float
     angle: float  # radians
-    start: np.ndarray  # 3D arc start (B)
-    end: np.ndarray  # 3D arc end (E)
-    normal_in: np.ndarray  # 3D unit in-plane normal at the arc start, toward the centre
     out_point: np.ndarray  # 3D point of the modified outgoing line
     out_dir: np.ndarray  # 3D direction of the modified outgoing line
     cost: float
+    family: "_Arcs"  # the edge's plane frame (l_i, its second axis Ym)
+    out_step: np.ndarray  # the outgoing direction as computed in the plane (before its normalisation)
+
+    def _to3(self, x: float, y: float) -> np.ndarray:
+        return self.family.a1 + x * self.family.u1 + y * self.family.Ym
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self._to3(self.t1, self.radius)
+
+    @property
+    def start(self) -> np.ndarray:
+        """3D arc start (B)."""
+        return self._to3(self.t1, 0.0)
+
+    @property
+    def end(self) -> np.ndarray:
+        """3D arc end (E)."""
+        return self.out_point + self.t2 * self.out_step
+
+    @property
+    def normal_in(self) -> np.ndarray:
+        """3D unit in-plane normal at the arc start, toward the centre."""
+        return self.family.Ym.copy()
 
 
 def _norm3(v: np.ndarray) -> float:
@@ -345,9 +368,10 @@ def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64)
         step = t_grid[:, 1] - t_grid[:, 0]
         t = t_grid[rows, g]
         t_grid = _linspaces(np.maximum(lo, t - step), np.minimum(hi, t + step), 17)
-    for r, k in enumerate(idx):
-        if np.isfinite(best_cost[r]):
-            out[k] = _edge(f[r], (best_cost[r], best_t1[r], best_R[r], best_t2[r]))
+    found = np.flatnonzero(np.isfinite(best_cost))
+    for r, e in zip(found, _edges([f[r] for r in found], best_cost[found], best_t1[found], best_R[found],
+                                  best_t2[found])):
+        out[idx[r]] = e
     return out
 
 
@@ -371,20 +395,23 @@ def _best_arc_alone(f: _Arcs, r_min: float) -> Edge | None:
     d, t2 = d[0, :, 0], t2[0]
     if np.max(d - f.epsk) <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
         # the chain's squares summed in order, as the batched search's row-by-row sums do
-        return _edge(f, (float(np.cumsum(d * d)[-1]), t_grid[0], R[0], t2[0]))
+        return _edges([f], np.cumsum(d * d)[-1:], t_grid[:1], R[:1], t2[:1])[0]
     return None
 
 
-def _edge(f: _Arcs, best: tuple) -> Edge:
-    cost, t1, R, t2 = best
-    to3 = lambda p: f.a1 + p[0] * f.u1 + p[1] * f.Ym  # noqa: E731
-    centre = to3(np.array([t1, R]))
-    start = to3(np.array([t1, 0.0]))
-    out_point = to3(f.a2)
-    out_dir = f.u2[0] * f.u1 + f.u2[1] * f.Ym
-    end = out_point + t2 * out_dir
-    return Edge(float(t1), float(t2), centre, float(R), float(f.phi), start, end, f.Ym.copy(),
-                out_point, out_dir / np.linalg.norm(out_dir), float(cost))
+def _edges(fams: list[_Arcs], cost: np.ndarray, t1: np.ndarray, R: np.ndarray, t2: np.ndarray) -> list[Edge]:
+    """The edges of the arc families ``fams`` with their best arcs (arrays of each one's cost, start, radius and
+    end): the outgoing lines of all of them at once, elementwise (l_j's point a1 + a2x u1 + a2y Ym in 3D), each
+    direction's norm as np.linalg.norm takes it (the square root of its own dot product)."""
+    if not fams:
+        return []
+    a1, u1, ym = (np.array([getattr(f, name) for f in fams]) for name in ("a1", "u1", "Ym"))
+    a2, u2 = np.array([f.a2 for f in fams]), np.array([f.u2 for f in fams])
+    out_point = a1 + a2[:, :1] * u1 + a2[:, 1:] * ym
+    step = u2[:, :1] * u1 + u2[:, 1:] * ym
+    unit = step / np.array([math.sqrt(v.dot(v)) for v in step])[:, None]
+    return [Edge(a, b, c, f.phi, p, u, e, f, s) for a, b, c, p, u, e, f, s in
+            zip(t1.tolist(), t2.tolist(), R.tolist(), out_point, unit, cost.tolist(), fams, step)]
 
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
