@@ -203,11 +203,12 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
     jj = np.array([a[3] for a in asks])
     j = np.array([a[1] for a in asks])
     K = np.array([a[2] for a in asks])
-    along = np.stack([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
-    x1 = np.stack([p[3] for p in planes])[si]
-    x2 = np.stack([p[4] for p in planes])[si]
-    m1 = np.stack([p[6] for p in planes])[si, jj]
-    m2 = np.stack([p[7] for p in planes])[si, jj]
+    # (np.array of same-shape arrays stacks them as np.stack does, without its per-call overhead)
+    along = np.array([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
+    x1 = np.array([p[3] for p in planes])[si]
+    x2 = np.array([p[4] for p in planes])[si]
+    m1 = np.array([p[6] for p in planes])[si, jj]
+    m2 = np.array([p[7] for p in planes])[si, jj]
     h = m1[:, None] * x1 + m2[:, None] * x2
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     qy = m2[:, None] * x1 - m1[:, None] * x2
@@ -217,7 +218,7 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
     # the plane's second axis Y = m2 e1 - m1 e2 and the vectors from l_i's point to p_j, p_{j+1}
     a1 = np.array([a[4] for a in asks])
     u1 = [a[5] for a in asks]
-    Y = m2[:, None] * np.stack([p[0] for p in planes])[si] - m1[:, None] * np.stack([p[1] for p in planes])[si]
+    Y = m2[:, None] * np.array([p[0] for p in planes])[si] - m1[:, None] * np.array([p[1] for p in planes])[si]
     pj, pj1 = poly[j], poly[j + 1]
     rj, dj, rj1 = pj - a1, pj1 - pj, pj1 - a1
     lines = [_outgoing_line(rj[f], dj[f], u1[f], Y[f]) for f in range(F)]
@@ -233,7 +234,8 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
     dy[rows, K] = [ln[3] if ln is not None else 0.0 for ln in lines]
     turning = np.arctan2(dx[:, :-1] * dy[:, 1:] - dy[:, :-1] * dx[:, 1:], dx[:, :-1] * dx[:, 1:] + dy[:, :-1] * dy[:, 1:])
     whole = np.where(seg_ok.all(1), L, np.argmin(seg_ok, 1)) >= K - 1  # no zero segment among the chain's
-    q = np.stack([along, qy], -1)
+    q = np.empty(along.shape + (2,))
+    q[..., 0], q[..., 1] = along, qy
     top = np.maximum.accumulate(along, axis=1)[rows, K - 1].tolist()
     out: list[_Arcs | None] = []
     for f, (_, jf, k, _, a1f, u1f, t_lo) in enumerate(asks):
@@ -489,7 +491,7 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     S = len(points)
     n = len(poly)
     bases = [_basis(u1) for u1 in directions]
-    coords = np.stack([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
+    coords = np.array([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
                        for a1, u1, (e1, e2) in zip(points, directions, bases)])  # (S, 3, L)
     along, x1, x2 = coords[:, 0], coords[:, 1], coords[:, 2]
     js = np.arange(i + 1, n - 1)
@@ -511,8 +513,8 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     nv = np.hypot(v0, v1)
     nv_safe = np.where(nv > 0, nv, 1.0)
     mc = (cr / np.where(crn > 0, crn, 1.0).reshape(-1)[:, None]).reshape(S, J, 3)
-    mc1 = np.stack([mc[k] @ e1 for k, (e1, _) in enumerate(bases)])
-    mc2 = np.stack([mc[k] @ e2 for k, (_, e2) in enumerate(bases)])
+    mc1 = np.array([mc[k] @ e1 for k, (e1, _) in enumerate(bases)])
+    mc2 = np.array([mc[k] @ e2 for k, (_, e2) in enumerate(bases)])
     m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc1)
     m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc2)
     off = np.abs(m1[:, :, None] * x1[:, None, :] + m2[:, :, None] * x2[:, None, :])
