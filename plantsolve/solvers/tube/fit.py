@@ -233,15 +233,16 @@ def _steps(P: int, lay: Layout, scale: float) -> np.ndarray:
     return steps
 
 
-def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
-                          scale: float) -> tuple[np.ndarray, np.ndarray]:
+def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float, shift: np.ndarray,
+                          span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The geometry at x (S, 7) and its derivative by central differences (S, 7, P), from one batch: the
-    batch costs little more than one model (the forward kinematics is a loop over the bends)."""
+    batch costs little more than one model (the forward kinematics is a loop over the bends). ``shift`` is
+    ``np.diag(steps)`` and ``span`` ``2 * steps`` as (P, 1, 1), of the :func:`_steps` of the round (the same for
+    all its calls)."""
     P = len(x)
-    steps = _steps(P, lay, scale)
-    X = np.concatenate([x[None], x + np.diag(steps), x - np.diag(steps)])
+    X = np.concatenate([x[None], x + shift, x - shift])
     G = geometry_batch(X, lay, frame0, rp)
-    return G[0], np.moveaxis((G[1:P + 1] - G[P + 1:]) / (2 * steps[:, None, None]), 0, -1)
+    return G[0], ((G[1:P + 1] - G[P + 1:]) / span).transpose(1, 2, 0)
 
 
 def _geometry_jacobian(x, lay, frame0, rp, scale):
@@ -688,10 +689,13 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     fused = f_scale is not None and not keep_terms
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
+    steps = _steps(len(x0), lay, scale)
+    shift, span = np.diag(steps), 2 * steps[:, None, None]
+
     def geometry(x):
         key = x.tobytes()
         if latest.get("x") != key:
-            g, dG = geometry_and_jacobian(x, lay, frame0, rp, scale)
+            g, dG = geometry_and_jacobian(x, lay, frame0, rp, shift, span)
             latest.clear()
             latest.update(x=key, g=g, dG=dG)
         return latest["g"], latest["dG"]
