@@ -518,8 +518,8 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc1)
     m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc2)
     off = np.abs(m1[:, :, None] * x1[:, None, :] + m2[:, :, None] * x2[:, None, :])
-    off[:, np.arange(x1.shape[1])[None, :] >= K[:, None]] = 0.0
-    worst = off.max(2)
+    # the largest over each chain: the running maximum at its last vertex
+    worst = np.maximum.accumulate(off, axis=2)[:, np.arange(J), K - 1]
     return [(e1, e2, along[k], x1[k], x2[k], K, m1[k], m2[k], worst[k]) for k, (e1, e2) in enumerate(bases)]
 
 
