@@ -358,7 +358,7 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
           f"case in turn, least of {repeat} run(s); radius error = worst |R - R_true| / R_true over the tubes with "
           "the right bend count")
     print("| family | solver | bend count correct | worst radius err (all bends) | worst radius err (bends >= 10°) "
-          "| worst angle err | worst end straight err (% r) | CPU s median / worst |")
+          "| worst angle err | worst end straight err (% r) | CPU s median / worst / total |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
     accuracy: dict[str, list[str]] = {side: [] for side in sides}  # each side's accuracy columns, as printed
     for fam in fams:
@@ -374,7 +374,7 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
                        f"| {worst['angle'] if worst['angle'] is not None else float('nan'):.3f}° "
                        f"| {100 * worst['end'] if worst['end'] is not None else float('nan'):.4f} ")
             accuracy[side].append(columns)
-            print(f"| {fam} | {side} {columns}| {np.median(cpu):.2f} / {cpu.max():.2f} |", flush=True)
+            print(f"| {fam} | {side} {columns}| {np.median(cpu):.2f} / {cpu.max():.2f} / {cpu.sum():.1f} |", flush=True)
     before, after = ({r["case"]: r for r in rows} for rows in sides.values())
     moved = {c: abs(np.subtract(before[c]["ends"], after[c]["ends"])).max() for c in before
              if c in after and "ends" in before[c] and "ends" in after[c] and before[c]["ends"] != after[c]["ends"]}

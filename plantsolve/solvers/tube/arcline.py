@@ -48,17 +48,40 @@ _MIRROR = np.array([1.0, -1.0])  # a right turn mirrored to a left one
 
 @dataclass
 class Edge:
+    """The best arc of an edge: what the search needs of it (its cost and the modified outgoing line), and its
+    points in 3D for the edges of the path kept (computed on demand: most edges are met and dropped)."""
+
     t1: float  # arc start on the incoming line (param from the line point)
     t2: float  # arc end on the outgoing line
-    centre: np.ndarray  # 3D
     radius: float
     angle: float  # radians
-    start: np.ndarray  # 3D arc start (B)
-    end: np.ndarray  # 3D arc end (E)
-    normal_in: np.ndarray  # 3D unit in-plane normal at the arc start, toward the centre
     out_point: np.ndarray  # 3D point of the modified outgoing line
     out_dir: np.ndarray  # 3D direction of the modified outgoing line
     cost: float
+    family: "_Arcs"  # the edge's plane frame (l_i, its second axis Ym)
+    out_step: np.ndarray  # the outgoing direction as computed in the plane (before its normalisation)
+
+    def _to3(self, x: float, y: float) -> np.ndarray:
+        return self.family.a1 + x * self.family.u1 + y * self.family.Ym
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self._to3(self.t1, self.radius)
+
+    @property
+    def start(self) -> np.ndarray:
+        """3D arc start (B)."""
+        return self._to3(self.t1, 0.0)
+
+    @property
+    def end(self) -> np.ndarray:
+        """3D arc end (E)."""
+        return self.out_point + self.t2 * self.out_step
+
+    @property
+    def normal_in(self) -> np.ndarray:
+        """3D unit in-plane normal at the arc start, toward the centre."""
+        return self.family.Ym.copy()
 
 
 def _norm3(v: np.ndarray) -> float:
@@ -169,57 +192,107 @@ def _arcs_in_planes(planes: list[tuple], asks: list[tuple], poly: np.ndarray, ep
                     r_min: float) -> list[_Arcs | None]:
     """:func:`_arcs_in_plane` of every edge in ``asks`` at once: (state index into ``planes``, j, chain length k,
     index of j in the plane tests, the state's line point, direction and t_lo). The chains of one vertex are
-    prefixes of its states' coordinates, so the elementwise steps run over them stacked; the products of
-    3-vectors and the sums over a chain stay each edge's own calls (numpy's dot is not a sum in order). Each
-    edge gets what :func:`_arcs_in_plane` gives it."""
+    prefixes of its states' coordinates, so the elementwise steps run over them stacked (the plane's second
+    axis, the vectors to p_j and p_{j+1}, the turning angles along each chain); the products of 3-vectors and
+    the sums over a chain stay each edge's own calls (numpy's dot is not a sum in order). Each edge gets what
+    :func:`_arcs_in_plane` gives it."""
     F = len(asks)
     if not F:
         return []
     si = np.array([a[0] for a in asks])
     jj = np.array([a[3] for a in asks])
-    along = np.stack([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
-    x1 = np.stack([p[3] for p in planes])[si]
-    x2 = np.stack([p[4] for p in planes])[si]
-    m1 = np.stack([p[6] for p in planes])[si, jj]
-    m2 = np.stack([p[7] for p in planes])[si, jj]
+    j = np.array([a[1] for a in asks])
+    K = np.array([a[2] for a in asks])
+    # (np.array of same-shape arrays stacks them as np.stack does, without its per-call overhead)
+    along = np.array([p[2] for p in planes])[si]  # (F, L): every state of a vertex has L = n - i coordinates
+    x1 = np.array([p[3] for p in planes])[si]
+    x2 = np.array([p[4] for p in planes])[si]
+    m1 = np.array([p[6] for p in planes])[si, jj]
+    m2 = np.array([p[7] for p in planes])[si, jj]
     h = m1[:, None] * x1 + m2[:, None] * x2
     epsk = np.sqrt(np.maximum(eps * eps - h * h, 0.0))
     qy = m2[:, None] * x1 - m1[:, None] * x2
-    # each chain's segments in the plane and the turning angles between consecutive directions (the first
-    # from l_i's direction (1, 0), the last to l_j's, which each edge adds below)
+    # each chain's segments in the plane (the turning angles between consecutive directions below)
     sx, sy = along[:, 1:] - along[:, :-1], qy[:, 1:] - qy[:, :-1]
     seg_ok = np.sqrt(sx * sx + sy * sy) > 1e-12
+    # the plane's second axis Y = m2 e1 - m1 e2 and the vectors from l_i's point to p_j, p_{j+1}
+    a1 = np.array([a[4] for a in asks])
+    u1 = [a[5] for a in asks]
+    Y = m2[:, None] * np.array([p[0] for p in planes])[si] - m1[:, None] * np.array([p[1] for p in planes])[si]
+    pj, pj1 = poly[j], poly[j + 1]
+    rj, dj, rj1 = pj - a1, pj1 - pj, pj1 - a1
+    lines = [_outgoing_line(rj[f], dj[f], u1[f], Y[f]) for f in range(F)]
+    # the turning angles of every chain with its l_j (p_j p_{j+1} in the plane), as :func:`_turn` takes them:
+    # the directions (1, 0) (l_i), the chain's segments, l_j's; a chain with a zero segment (a repeated vertex)
+    # takes them alone, without it
+    L = along.shape[1]
+    dx, dy = np.zeros((F, L + 1)), np.zeros((F, L + 1))
+    dx[:, 0] = 1.0
+    dx[:, 1:L], dy[:, 1:L] = sx, sy
+    rows = np.arange(F)
+    dx[rows, K] = [ln[2] if ln is not None else 0.0 for ln in lines]
+    dy[rows, K] = [ln[3] if ln is not None else 0.0 for ln in lines]
+    turning = np.arctan2(dx[:, :-1] * dy[:, 1:] - dy[:, :-1] * dx[:, 1:], dx[:, :-1] * dx[:, 1:] + dy[:, :-1] * dy[:, 1:])
+    whole = np.where(seg_ok.all(1), L, np.argmin(seg_ok, 1)) >= K - 1  # no zero segment among the chain's
+    q = np.empty(along.shape + (2,))
+    q[..., 0], q[..., 1] = along, qy
+    top = np.maximum.accumulate(along, axis=1)[rows, K - 1].tolist()
     out: list[_Arcs | None] = []
-    for f, (s_i, j, k, _, a1, u1, t_lo) in enumerate(asks):
-        sxf, syf, ok = sx[f, :k - 1], sy[f, :k - 1], seg_ok[f, :k - 1]
-        if not ok.all():  # a repeated vertex: its zero segment turns nothing
-            sxf, syf = sxf[ok], syf[ok]
-        out.append(_arcs_of_chain(planes[s_i][0], planes[s_i][1], along[f, :k], qy[f, :k], epsk[f, :k], sxf, syf,
-                                  float(m1[f]), float(m2[f]), a1, u1, t_lo, poly[j], poly[j + 1], r_min, None))
+    for f, (_, jf, k, _, a1f, u1f, t_lo) in enumerate(asks):
+        line = lines[f]
+        if line is None:
+            out.append(None)
+            continue
+        if whole[f]:
+            turn = np.sum(turning[f, :k])
+        else:
+            ok = seg_ok[f, :k - 1]
+            turn = _turn(sx[f, :k - 1][ok], sy[f, :k - 1][ok], line[2], line[3])
+        out.append(_family(q[f, :k], epsk[f, :k], top[f], turn, line, rj1[f], a1f, u1f, Y[f], t_lo, r_min, None))
     return out
 
 
 def _arcs_of_chain(e1, e2, along, qy, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj, pj1, r_min, t_hi):
     """:func:`_arcs_in_plane` once the chain's in-plane coordinates (``along``, ``qy``), tolerances and segments
-    (``sx``, ``sy``, none of zero length) are known (computed there, or for the chains of a vertex stacked)."""
+    (``sx``, ``sy``, none of zero length) are known."""
     Y = m2 * e1 - m1 * e2
-    rj, dj_ = pj - a1, pj1 - pj
-    a2x, a2y = float(rj @ u1), float(rj @ Y)
-    d2x, d2y = float(dj_ @ u1), float(dj_ @ Y)
-    nd = math.hypot(d2x, d2y)
-    if nd < 1e-12 * (_norm3(dj_) + 1e-300):
+    line = _outgoing_line(pj - a1, pj1 - pj, u1, Y)
+    if line is None:
         return None
-    u2x, u2y = d2x / nd, d2y / nd
-    K = len(along)
+    q = np.empty((len(along), 2))
+    q[:, 0], q[:, 1] = along, qy
+    return _family(q, epsk, float(along.max()), _turn(sx, sy, line[2], line[3]), line, pj1 - a1, a1, u1, Y, t_lo,
+                   r_min, t_hi)
+
+
+def _outgoing_line(rj: np.ndarray, dj: np.ndarray, u1: np.ndarray, Y: np.ndarray) -> tuple | None:
+    """l_j in the plane of l_i (axes u1, Y): its point a2 (from l_i's point, ``rj`` = p_j - a1) and unit direction
+    u2 (of ``dj`` = p_{j+1} - p_j), as (a2x, a2y, u2x, u2y); None when p_j p_{j+1} is normal to the plane."""
+    a2x, a2y = float(rj @ u1), float(rj @ Y)
+    d2x, d2y = float(dj @ u1), float(dj @ Y)
+    nd = math.hypot(d2x, d2y)
+    if nd < 1e-12 * (_norm3(dj) + 1e-300):
+        return None
+    return a2x, a2y, d2x / nd, d2y / nd
+
+
+def _turn(sx: np.ndarray, sy: np.ndarray, u2x: float, u2y: float) -> float:
+    """The angle the chain turns through from l_i (direction (1, 0)) along its segments to l_j (u2)."""
     dx = np.empty(len(sx) + 2)
     dy = np.empty(len(sx) + 2)
     dx[0], dy[0] = 1.0, 0.0
     dx[1:-1], dy[1:-1] = sx, sy
     dx[-1], dy[-1] = u2x, u2y
-    turn = np.sum(np.arctan2(dx[:-1] * dy[1:] - dy[:-1] * dx[1:], dx[:-1] * dx[1:] + dy[:-1] * dy[1:]))
+    return np.sum(np.arctan2(dx[:-1] * dy[1:] - dy[:-1] * dx[1:], dx[:-1] * dx[1:] + dy[:-1] * dy[1:]))
+
+
+def _family(q: np.ndarray, epsk: np.ndarray, along_max: float, turn: float, line: tuple, rj1: np.ndarray,
+            a1: np.ndarray, u1: np.ndarray, Y: np.ndarray, t_lo: float, r_min: float, t_hi: float | None):
+    """The arc family of a chain (in-plane points ``q``, tolerances ``epsk``, largest coordinate along l_i
+    ``along_max``) that turns by ``turn`` from l_i to l_j (``line``: :func:`_outgoing_line`), mirrored to a left
+    turn; ``rj1`` = p_{j+1} - a1. None when no arc meets the constraints."""
+    a2x, a2y, u2x, u2y = line
     sign = 1.0 if turn >= 0 else -1.0
-    q = np.empty((K, 2))
-    q[:, 0], q[:, 1] = along, qy
     if sign < 0:  # mirror to a left turn
         q = q * _MIRROR; a2y = -a2y; u2y = -u2y
     phi = math.atan2(u2y, u2x) % (2 * math.pi)
@@ -231,10 +304,9 @@ def _arcs_of_chain(e1, e2, along, qy, epsk, sx, sy, m1, m2, a1, u1, t_lo, pj, pj
     beta = -n2x / den  # u1 = (1, 0)
     # t2 = t1·u2x − a2·u2 + R (n1·u2), n1 = (0, 1)
     gam0, gam1 = -(a2x * u2x + a2y * u2y), u2x
-    rj1 = pj1 - a1
     p1x, p1y = float(rj1 @ u1), float(rj1 @ Y) * sign
     t_hi_line = (p1x - a2x) * u2x + (p1y - a2y) * u2y if t_hi is None else t_hi
-    lo, hi = t_lo, max(float(along.max()), p1x, t_lo)
+    lo, hi = t_lo, max(along_max, p1x, t_lo)
     cons = [(beta, r_min - alpha), (-(gam1 + u2y * beta), -(t_hi_line - gam0 - u2y * alpha))]
     for a, b in cons:  # constraints a·t1 ≥ b
         if abs(a) < 1e-14:
@@ -345,9 +417,10 @@ def best_arcs(families: list[_Arcs], r_min: float | list[float], grid: int = 64)
         step = t_grid[:, 1] - t_grid[:, 0]
         t = t_grid[rows, g]
         t_grid = _linspaces(np.maximum(lo, t - step), np.minimum(hi, t + step), 17)
-    for r, k in enumerate(idx):
-        if np.isfinite(best_cost[r]):
-            out[k] = _edge(f[r], (best_cost[r], best_t1[r], best_R[r], best_t2[r]))
+    found = np.flatnonzero(np.isfinite(best_cost))
+    for r, e in zip(found, _edges([f[r] for r in found], best_cost[found], best_t1[found], best_R[found],
+                                  best_t2[found])):
+        out[idx[r]] = e
     return out
 
 
@@ -371,20 +444,23 @@ def _best_arc_alone(f: _Arcs, r_min: float) -> Edge | None:
     d, t2 = d[0, :, 0], t2[0]
     if np.max(d - f.epsk) <= 1e-12 and R[0] >= r_min * (1 - 1e-9):
         # the chain's squares summed in order, as the batched search's row-by-row sums do
-        return _edge(f, (float(np.cumsum(d * d)[-1]), t_grid[0], R[0], t2[0]))
+        return _edges([f], np.cumsum(d * d)[-1:], t_grid[:1], R[:1], t2[:1])[0]
     return None
 
 
-def _edge(f: _Arcs, best: tuple) -> Edge:
-    cost, t1, R, t2 = best
-    to3 = lambda p: f.a1 + p[0] * f.u1 + p[1] * f.Ym  # noqa: E731
-    centre = to3(np.array([t1, R]))
-    start = to3(np.array([t1, 0.0]))
-    out_point = to3(f.a2)
-    out_dir = f.u2[0] * f.u1 + f.u2[1] * f.Ym
-    end = out_point + t2 * out_dir
-    return Edge(float(t1), float(t2), centre, float(R), float(f.phi), start, end, f.Ym.copy(),
-                out_point, out_dir / np.linalg.norm(out_dir), float(cost))
+def _edges(fams: list[_Arcs], cost: np.ndarray, t1: np.ndarray, R: np.ndarray, t2: np.ndarray) -> list[Edge]:
+    """The edges of the arc families ``fams`` with their best arcs (arrays of each one's cost, start, radius and
+    end): the outgoing lines of all of them at once, elementwise (l_j's point a1 + a2x u1 + a2y Ym in 3D), each
+    direction's norm as np.linalg.norm takes it (the square root of its own dot product)."""
+    if not fams:
+        return []
+    a1, u1, ym = (np.array([getattr(f, name) for f in fams]) for name in ("a1", "u1", "Ym"))
+    a2, u2 = np.array([f.a2 for f in fams]), np.array([f.u2 for f in fams])
+    out_point = a1 + a2[:, :1] * u1 + a2[:, 1:] * ym
+    step = u2[:, :1] * u1 + u2[:, 1:] * ym
+    unit = step / np.array([math.sqrt(v.dot(v)) for v in step])[:, None]
+    return [Edge(a, b, c, f.phi, p, u, e, f, s) for a, b, c, p, u, e, f, s in
+            zip(t1.tolist(), t2.tolist(), R.tolist(), out_point, unit, cost.tolist(), fams, step)]
 
 
 def edge_fit(chain: np.ndarray, a1: np.ndarray, u1: np.ndarray, t_lo: float, pj: np.ndarray, pj1: np.ndarray,
@@ -415,7 +491,7 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     S = len(points)
     n = len(poly)
     bases = [_basis(u1) for u1 in directions]
-    coords = np.stack([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
+    coords = np.array([((poly[i:] - a1) @ np.array((u1, e1, e2)).T).T
                        for a1, u1, (e1, e2) in zip(points, directions, bases)])  # (S, 3, L)
     along, x1, x2 = coords[:, 0], coords[:, 1], coords[:, 2]
     js = np.arange(i + 1, n - 1)
@@ -437,13 +513,13 @@ def _planes_of_states(poly: np.ndarray, i: int, last: int, points: list[np.ndarr
     nv = np.hypot(v0, v1)
     nv_safe = np.where(nv > 0, nv, 1.0)
     mc = (cr / np.where(crn > 0, crn, 1.0).reshape(-1)[:, None]).reshape(S, J, 3)
-    mc1 = np.stack([mc[k] @ e1 for k, (e1, _) in enumerate(bases)])
-    mc2 = np.stack([mc[k] @ e2 for k, (_, e2) in enumerate(bases)])
+    mc1 = np.array([mc[k] @ e1 for k, (e1, _) in enumerate(bases)])
+    mc2 = np.array([mc[k] @ e2 for k, (_, e2) in enumerate(bases)])
     m1 = np.where(own, np.where(nv > 0, v0 / nv_safe, 1.0), mc1)
     m2 = np.where(own, np.where(nv > 0, v1 / nv_safe, 0.0), mc2)
     off = np.abs(m1[:, :, None] * x1[:, None, :] + m2[:, :, None] * x2[:, None, :])
-    off[:, np.arange(x1.shape[1])[None, :] >= K[:, None]] = 0.0
-    worst = off.max(2)
+    # the largest over each chain: the running maximum at its last vertex
+    worst = np.maximum.accumulate(off, axis=2)[:, np.arange(J), K - 1]
     return [(e1, e2, along[k], x1[k], x2[k], K, m1[k], m2[k], worst[k]) for k, (e1, e2) in enumerate(bases)]
 
 

@@ -124,29 +124,38 @@ def _geometry(model: TubeModel) -> np.ndarray:
     return g
 
 
+_YXX, _ZZY, _XXY, _YZZ, _ZYX = (np.array(c) for c in ((1, 0, 0), (2, 2, 1), (0, 0, 1), (1, 2, 2), (2, 1, 0)))
+_ENTRIES = np.array([0, 4, 8, 3, 2, 7, 1, 6, 5])  # flat (row-major) index of each entry of a 3 x 3 matrix
+
+
 def rotvec_matrices(V: np.ndarray) -> np.ndarray:
     """Rotation matrices (B, 3, 3) of rotation vectors V (B, 3) by Rodrigues' formula; below 1e-3 rad the
     coefficients sin θ / θ and (1 - cos θ) / θ² from their Taylor series (the finite-difference steps of the
-    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits)."""
+    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits). The entries' three kinds (diagonal,
+    the products b·x·y that both off-diagonal entries of a pair share, a·z that one adds and the other
+    subtracts) each computed for all three components in one operation: a batch of a few rows costs numpy's
+    per-call overhead, not arithmetic."""
     th2 = np.einsum("bi,bi->b", V, V)
     th = np.sqrt(th2)
     small = th < 1e-3
-    th_safe = np.where(small, 1.0, th)
-    a = np.where(small, 1.0 - th2 / 6.0 + th2 * th2 / 120.0, np.sin(th_safe) / th_safe)
-    b = np.where(small, 0.5 - th2 / 24.0 + th2 * th2 / 720.0, (1.0 - np.cos(th_safe)) / (th_safe * th_safe))
-    x, y, z = V[:, 0], V[:, 1], V[:, 2]
-    M = np.empty((len(V), 3, 3))
-    M[:, 0, 0] = 1.0 - b * (y * y + z * z)
-    M[:, 1, 1] = 1.0 - b * (x * x + z * z)
-    M[:, 2, 2] = 1.0 - b * (x * x + y * y)
-    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
-    M[:, 0, 1] = bxy - a * z
-    M[:, 1, 0] = bxy + a * z
-    M[:, 0, 2] = bxz + a * y
-    M[:, 2, 0] = bxz - a * y
-    M[:, 1, 2] = byz - a * x
-    M[:, 2, 1] = byz + a * x
-    return M
+    th4 = th2 * th2
+    a = 1.0 - th2 / 6.0 + th4 / 120.0
+    b = 0.5 - th2 / 24.0 + th4 / 720.0
+    if not small.all():  # (the Jacobian's batches rotate by its steps only: all small)
+        th_safe = np.where(small, 1.0, th)
+        a = np.where(small, a, np.sin(th_safe) / th_safe)
+        b = np.where(small, b, (1.0 - np.cos(th_safe)) / (th_safe * th_safe))
+    sq = V * V
+    # columns (y² + z², x² + z², x² + y²), (b x y, b x z, b y z) and (a z, a y, a x)
+    bc, ac = b[:, None], a[:, None]
+    diag = 1.0 - bc * (sq.take(_YXX, 1) + sq.take(_ZZY, 1))
+    pair = (bc * V).take(_XXY, 1) * V.take(_YZZ, 1)
+    av = ac * V.take(_ZYX, 1)
+    # the matrix's entries in the order of the columns of diag, pair + av and pair - av: (0,0), (1,1), (2,2),
+    # (1,0) bxy + az, (0,2) bxz + ay, (2,1) byz + ax, (0,1) bxy - az, (2,0) bxz - ay, (1,2) byz - ax
+    M = np.empty((len(V), 9))
+    M.T[_ENTRIES] = np.concatenate([diag, pair + av, pair - av], axis=1).T
+    return M.reshape(-1, 3, 3)
 
 
 def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
@@ -224,15 +233,16 @@ def _steps(P: int, lay: Layout, scale: float) -> np.ndarray:
     return steps
 
 
-def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
-                          scale: float) -> tuple[np.ndarray, np.ndarray]:
+def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float, shift: np.ndarray,
+                          span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The geometry at x (S, 7) and its derivative by central differences (S, 7, P), from one batch: the
-    batch costs little more than one model (the forward kinematics is a loop over the bends)."""
+    batch costs little more than one model (the forward kinematics is a loop over the bends). ``shift`` is
+    ``np.diag(steps)`` and ``span`` ``2 * steps`` as (P, 1, 1), of the :func:`_steps` of the round (the same for
+    all its calls)."""
     P = len(x)
-    steps = _steps(P, lay, scale)
-    X = np.concatenate([x[None], x + np.diag(steps), x - np.diag(steps)])
+    X = np.concatenate([x[None], x + shift, x - shift])
     G = geometry_batch(X, lay, frame0, rp)
-    return G[0], np.moveaxis((G[1:P + 1] - G[P + 1:]) / (2 * steps[:, None, None]), 0, -1)
+    return G[0], ((G[1:P + 1] - G[P + 1:]) / span).transpose(1, 2, 0)
 
 
 def _geometry_jacobian(x, lay, frame0, rp, scale):
@@ -679,10 +689,13 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     fused = f_scale is not None and not keep_terms
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
+    steps = _steps(len(x0), lay, scale)
+    shift, span = np.diag(steps), 2 * steps[:, None, None]
+
     def geometry(x):
         key = x.tobytes()
         if latest.get("x") != key:
-            g, dG = geometry_and_jacobian(x, lay, frame0, rp, scale)
+            g, dG = geometry_and_jacobian(x, lay, frame0, rp, shift, span)
             latest.clear()
             latest.update(x=key, g=g, dG=dG)
         return latest["g"], latest["dG"]
@@ -837,24 +850,33 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
     nfev, status = 1, 0
     it = 0
     last_rel = np.inf
+    width = hi - lo
+    bounded = np.isfinite(width)
     while nfev < max_nfev:
         it += 1
         if tick is not None:
             tick()
         A, g = normal_equations(x, w, r)
-        dg = np.maximum(np.diag(A), 1e-12 * (np.max(np.diag(A)) + 1e-300))
+        diag = np.diag(A)
+        dg = np.maximum(diag, 1e-12 * (np.max(diag) + 1e-300))
         # active set: a parameter on its bound whose descent direction points outward stays
         # there (a zero-length straight, say); clipping its step instead stalls the iteration
-        span = np.where(np.isfinite(hi - lo), hi - lo, np.abs(x) + 1.0)
+        span = np.where(bounded, width, np.abs(x) + 1.0)
         at_lo = (x <= lo + 1e-9 * span) & (g > 0)
         at_hi = (x >= hi - 1e-9 * span) & (g < 0)
         free = ~(at_lo | at_hi)
-        Af = A[np.ix_(free, free)]
+        # no parameter held (most iterations): the whole system, without the copies that select its free part
+        all_free = bool(free.all())
+        Af, dgf, rhs = (A, dg, -g) if all_free else (A[np.ix_(free, free)], dg[free], -g[free])
         improved = False
         while nfev < max_nfev:
-            step = np.zeros_like(x)
             try:
-                step[free] = np.linalg.solve(Af + lam * np.diag(dg[free]), -g[free])
+                solved = np.linalg.solve(Af + lam * np.diag(dgf), rhs)
+                if all_free:
+                    step = solved
+                else:
+                    step = np.zeros_like(x)
+                    step[free] = solved
             except np.linalg.LinAlgError:
                 lam *= 10
                 if lam > 1e12:

@@ -178,3 +178,24 @@ def test_arc_families_of_a_vertex_stacked_are_each_edges_own_bit_for_bit():
                 for name in want.__dataclass_fields__:
                     assert np.array_equal(np.asarray(getattr(f, name)), np.asarray(getattr(want, name))), name
     assert compared >= 10 and repeated >= 1
+
+
+def test_an_edges_arc_in_3d_touches_both_lines_and_turns_by_its_angle():
+    """The arc of every edge found out of vertex 0 (its centre, start and end computed when asked for): start and
+    end at its radius from the centre, the start on l_i and the end on the modified l_j, both lines tangent to
+    the arc there, and the turn from the one tangent to the other its angle."""
+    rng = np.random.default_rng(0)
+    m = make_model([[30, 0, 50, 10], [15, 70, 100, 14], [25, 0, 0, 0]], 4.0)
+    c, _ = sample_centreline(m, 0.5)
+    poly = curve.simplify(c + rng.normal(scale=0.01, size=c.shape), 0.05)
+    d0 = (poly[1] - poly[0]) / np.linalg.norm(poly[1] - poly[0])
+    edges = [e for e in arcline.best_arcs(_families(poly, 0.2, 1.0), 1.0) if e is not None]
+    assert len(edges) >= 2
+    for e in edges:
+        assert abs(np.linalg.norm(e.start - e.centre) - e.radius) < 1e-9 * e.radius
+        assert abs(np.linalg.norm(e.end - e.centre) - e.radius) < 1e-9 * e.radius
+        np.testing.assert_allclose(e.start, poly[0] + e.t1 * d0, atol=1e-9)
+        np.testing.assert_allclose(e.end, e.out_point + e.t2 * e.out_dir, atol=1e-9)
+        assert abs(np.dot(e.start - e.centre, d0)) < 1e-9 and abs(np.dot(e.end - e.centre, e.out_dir)) < 1e-9
+        np.testing.assert_allclose(e.normal_in, (e.centre - e.start) / e.radius, atol=1e-9)
+        assert abs(np.arccos(np.clip(d0 @ e.out_dir, -1, 1)) - min(e.angle, 2 * np.pi - e.angle)) < 1e-9

@@ -57,6 +57,21 @@ def test_geometry_batch_matches_forward_kinematics():
         np.testing.assert_allclose(g1, g2, atol=1e-12)
 
 
+def test_rotation_matrices_of_rotation_vectors_are_scipys_small_and_large_angles_in_one_batch():
+    """Rodrigues' formula with the Taylor coefficients below 1e-3 rad (a Jacobian step's 1e-6 rad) and the closed
+    form above, in one batch and in batches of small angles only, against scipy's rotation vectors."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(4)
+    directions = rng.normal(size=(40, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    angles = np.concatenate([[0.0, 1e-9, 1e-6, 9.9e-4, 1.01e-3], rng.uniform(0.01, 3.1, 35)])
+    V = directions * angles[:, None]
+    for batch in (V, V[:5], V[5:]):
+        np.testing.assert_allclose(fit.rotvec_matrices(batch), Rotation.from_rotvec(batch).as_matrix(), rtol=0,
+                                   atol=1e-15)
+
+
 def test_merge_folds_the_dropped_rotation_into_the_next_bend():
     m = make_model([[30, 0, 40, 10], [0, 10, 50, 10], [20, 25, 30, 8], [20, 0, 0, 0]], 2.0)
     mm = prune.merged(m, 0)
