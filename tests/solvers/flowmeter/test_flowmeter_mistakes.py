@@ -132,3 +132,17 @@ def test_the_weight_function_plot_and_table_reach_the_wall(in_mm):
         assert coloured.all(), f"{(~coloured).sum()} of 360 points {depth} mm inside the wall are blank"
     csv = next(a for a in render_artifacts(request, solved) if a.name == "weight_grid.csv").data.decode()
     assert csv.splitlines()[0] == "x [mm],y [mm],W [-]" and len(csv.splitlines()) == len(grid) + 1
+
+
+def test_a_half_angle_in_radians_is_warned_about_naming_the_field():
+    """0.3927 (pi/8 rad, the example's 22.5 degrees) typed into the degrees field: a patch under 1 degree wide, whose
+    sensitivity (~1.0, point-like) is not the meter's (~0.965)."""
+    from plantsolve.solvers.flowmeter.plausibility import request_warnings
+    as_radians = FlowmeterRequest.model_validate({**example(), "electrodes": {**example()["electrodes"],
+                                                                              "half_angle": np.pi / 8}})
+    (warning,) = [w for w in request_warnings(as_radians, 0.01) if w.code == "implausible_electrode_half_angle"]
+    assert warning.details["quantity"] == "electrodes.half_angle"
+    assert warning.details["as_radians_deg"] == pytest.approx(22.5)
+    assert "radians" in warning.message
+    in_degrees = FlowmeterRequest.model_validate(example())
+    assert not request_warnings(in_degrees, 0.01)
