@@ -72,12 +72,15 @@ def _pressure(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     values = np.concatenate([s.y for s in settings])
     if unit in ("1", "-"):
         lo, hi = PRESSURE_RATIO
-        if values.min() < lo or values.max() > hi:
+        # low speed lines of a real map run below 1 towards choke (GasTurb's own maps do); an inverse ratio or a
+        # pressure rise puts most of the map there
+        low = float(np.median(values)) < lo
+        if low or values.max() > hi:
             return [_warning(
                 "implausible_pressure_ratio",
                 f"Pressure ratio: values {_range(values)} lie outside {lo:g}..{hi:g}, the range of a compressor's "
                 "total pressure ratio: " + ("an inverse ratio p1/p2, or a pressure rise read as a ratio?"
-                                            if values.min() < lo else "a pressure (kPa, psi) read as a ratio?"),
+                                            if low else "a pressure (kPa, psi) read as a ratio?"),
                 quantity="pressure", unit="1", range=[lo, hi], values=[float(values.min()), float(values.max())])]
         return []
     try:
