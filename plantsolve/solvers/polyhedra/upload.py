@@ -47,7 +47,7 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
     reject, validated
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
-from plantsolve.solvers.polyhedra.epjson import epjson_objects
+from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
@@ -521,8 +521,15 @@ def parse_stl(content: bytes) -> dict:
 def parse_json(text: str) -> dict:
     """A JSON request as a file; another kind's request or result is refused naming what it holds."""
     body = json_object(text, refuse_cut=True)
+    if _is_epjson(body):  # an epJSON saved under .json: its geometry, not a refusal of its keys as request fields
+        return parse_epjson(text)
     refuse_other_kind(body, "polyhedra")
     return body
+
+
+def _is_epjson(body: dict) -> bool:
+    """EnergyPlus object types as keys (``Zone``, ``BuildingSurface:Detailed``, …) and no request field."""
+    return not set(body) & set(PolyhedraRequest.model_fields) and any(key.lower() in EPJSON_TYPES for key in body)
 
 
 EXPECTED = {".idf": "an EnergyPlus IDF", ".epjson": "a JSON document", ".json": "a JSON document",

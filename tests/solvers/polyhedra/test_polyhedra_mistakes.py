@@ -338,3 +338,15 @@ def test_world_coordinates_over_zone_origins_warn_that_the_origins_are_ignored()
     assert warning.details["lines"] == [name] and f"(line {name})" in warning.message  # the line of 'Zone,' above it
     _, as_written = upload("two_offices.idf", text.encode())
     assert "zone_origins_ignored" not in codes(as_written) and as_written.adjacency[0].area == pytest.approx(12.0)
+
+
+def test_an_epjson_saved_as_json_is_read_as_the_epjson_it_is():
+    """The epJSON twin of the two offices uploaded as .json: its object types were refused as unknown request fields;
+    it gives the zones and the adjacency of the .epJSON upload."""
+    content = (DATA / "openstudio_two_offices.epJSON").read_bytes()
+    _, as_json = upload("two_offices.json", content)
+    _, as_epjson = upload("two_offices.epJSON", content)
+    assert [(z.id, z.volume) for z in as_json.zones] == [(z.id, z.volume) for z in as_epjson.zones]
+    assert [z.volume for z in as_json.zones] == pytest.approx([60.0, 60.0])
+    assert [a.area for a in as_json.adjacency] == pytest.approx([12.0])
+    assert as_json.report.details["source"]["format"] == "epjson"
