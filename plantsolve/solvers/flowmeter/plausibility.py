@@ -5,6 +5,8 @@ hard bounds are the schema's and the input check's."""
 
 from __future__ import annotations
 
+import math
+
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 
@@ -13,6 +15,7 @@ BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic mete
 FIELD_T = (1e-4, 0.5)  # |B| at the pipe centre: a meter's coils give a few mT
 VELOCITY_M_S = (1e-3, 20.0)  # |mean velocity| of liquids in a meter
 SIGNAL_V = (1e-7, 0.1)  # |U|: 0.1 µV to 100 mV across the electrodes
+RADIAN_HALF_ANGLE = math.pi / 2  # a patch's half-angle in radians is at most this; in degrees no patch is this narrow
 
 
 def _outside(value: float, bounds: tuple[float, float]) -> bool:
@@ -48,6 +51,15 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float) -> list[Diag
             f"{VELOCITY_M_S[1]:g} m/s: " + ("mm/s or cm/s written as m/s?" if abs(v.mean) > VELOCITY_M_S[1]
                                             else "a flow rate instead of a velocity?"),
             details={"quantity": "velocity.mean", "value": v.mean, "range_m_s": list(VELOCITY_M_S)}))
+    e = request.electrodes
+    if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
+        out.append(Diagnostic(
+            code="implausible_electrode_half_angle",
+            message=f"Electrode half-angle: {e.half_angle:g} degrees, a patch {2 * e.half_angle:g} degrees wide; "
+            f"the field is in degrees: radians written as degrees? ({e.half_angle:g} rad = "
+            f"{math.degrees(e.half_angle):.4g} degrees) The sensitivity depends on the half-angle.",
+            details={"quantity": "electrodes.half_angle", "value": e.half_angle, "units": "deg",
+                     "as_radians_deg": math.degrees(e.half_angle)}))
     return out
 
 

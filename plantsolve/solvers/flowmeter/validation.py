@@ -186,6 +186,19 @@ def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
     return errors
 
 
+def _repeated_sample(points: np.ndarray, values: np.ndarray) -> FieldError | None:
+    """A point sampled twice with different values (a row copied and edited): the triangulation would keep one of
+    them without a word. The same value twice is harmless."""
+    _, first, group = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    group = group.ravel()
+    for k in np.flatnonzero(values != values[first[group]]):
+        i = int(first[group[k]])
+        return FieldError(("velocity", "points", int(k)),
+                          f"the sample point ({points[k, 0]:g}, {points[k, 1]:g}) is also points[{i}], with another value "
+                          f"({values[k]:g} against {values[i]:g}): which is meant is not known")
+    return None
+
+
 def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
     v = request.velocity
     radius = request.pipe.radius
@@ -201,6 +214,9 @@ def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
     outside = np.flatnonzero(np.hypot(points[:, 0], points[:, 1]) > 1 + 1e-9)
     if len(outside):
         return [FieldError(("velocity", "points", int(outside[0])), "the sample point lies outside the pipe")]
+    repeated = _repeated_sample(np.asarray(v.points, dtype=float), np.asarray(v.values, dtype=float))
+    if repeated:
+        return [repeated]
     try:
         hull = ConvexHull(points)
     except (QhullError, ValueError):

@@ -72,12 +72,15 @@ def _pressure(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     values = np.concatenate([s.y for s in settings])
     if unit in ("1", "-"):
         lo, hi = PRESSURE_RATIO
-        if values.min() < lo or values.max() > hi:
+        # low speed lines of a real map run below 1 towards choke (GasTurb's own maps do); an inverse ratio or a
+        # pressure rise puts most of the map there
+        low = float(np.median(values)) < lo
+        if low or values.max() > hi:
             return [_warning(
                 "implausible_pressure_ratio",
                 f"Pressure ratio: values {_range(values)} lie outside {lo:g}..{hi:g}, the range of a compressor's "
                 "total pressure ratio: " + ("an inverse ratio p1/p2, or a pressure rise read as a ratio?"
-                                            if values.min() < lo else "a pressure (kPa, psi) read as a ratio?"),
+                                            if low else "a pressure (kPa, psi) read as a ratio?"),
                 quantity="pressure", unit="1", range=[lo, hi], values=[float(values.min()), float(values.max())])]
         return []
     try:
@@ -95,6 +98,23 @@ def _pressure(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     return []
 
 
+def _flow_sign(settings: list[Setting]) -> list[Diagnostic]:
+    """Flows of both signs: a compressor's characteristic runs at one sign of flow in any unit, so the few of the
+    other sign are a lost or stray minus."""
+    values = np.concatenate([s.x for s in settings])
+    negative = values < 0
+    if not negative.any() or negative.all():
+        return []
+    stray_negative = negative.sum() <= (~negative).sum()
+    where = [(s.label, float(x)) for s in settings for x in s.x if (x < 0) == stray_negative]
+    return [_warning(
+        "implausible_flow",
+        f"Flow: {len(where)} of {values.size} flows have the other sign than the rest ("
+        + ", ".join(f"{v:g} at {label}" for label, v in where[:5]) + (" …" if len(where) > 5 else "")
+        + "): a lost or stray minus? The speed lines through them are fitted as given.",
+        quantity="flow", values=[v for _, v in where[:100]], settings=[label for label, _ in where[:100]])]
+
+
 def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     if unit is None or unit in ("1", "-"):
         return []
@@ -105,7 +125,7 @@ def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
         return []
     for target, (lo, hi), words in (("kg/s", MASS_FLOW_KG_S, "mass flow"), ("m**3/s", VOLUME_FLOW_M3_S, "volume flow")):
         if q.check(registry().parse_units(target).dimensionality):
-            si = values * float(q.to(target).magnitude)
+            si = np.abs(values) * float(q.to(target).magnitude)  # a sign is _flow_sign's
             if si.min() < lo or si.max() > hi:
                 return [_warning(
                     "implausible_flow",
@@ -155,4 +175,4 @@ def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting])
 def plausibility_warnings(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
     """Every ``implausible_*`` warning of a prepared request (in the solver's units)."""
     return (_efficiency(settings) + _pressure(settings, units.pressure) + _flow(settings, units.flow)
-            + _speed(request, units, settings))
+            + _flow_sign(settings) + _speed(request, units, settings))

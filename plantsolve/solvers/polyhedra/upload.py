@@ -47,7 +47,7 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
     reject, validated
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
-from plantsolve.solvers.polyhedra.epjson import epjson_objects
+from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
@@ -225,6 +225,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     zones: dict[str, tuple[float, float, float, float]] = {}
     declared: dict[str, dict[str, float]] = {}
     zone_names: dict[str, str] = {}
+    zone_line: dict[str, int] = {}
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
             if len(fields) > 1 and fields[1].strip().lower() in ("clockwise",):
@@ -242,6 +243,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 values = [0.0] * 4
             zones[fields[0].lower()] = tuple(values)
             zone_names[fields[0].lower()] = fields[0]
+            zone_line[fields[0].lower()] = line
             # Volume and Floor Area (fields 9 and 10) when the file gives numbers, not autocalculate
             claim = {}
             for key, index in (("volume", 8), ("floor_area", 9)):
@@ -256,6 +258,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
+    world_zones: set[str] = set()  # zones with surfaces placed in world coordinates: their origin is not used
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -269,6 +272,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 # the rectangles have their own coordinate-system field (rect_relative)
                 if (relative if detailed else rect_relative) and zone_key in zones:
                     points = _to_world(points, zones[zone_key])
+                else:
+                    world_zones.add(zone_key)
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
@@ -319,6 +324,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
+    warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones))
     return {"units": "m", "faces": faces,
             "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "units": stated("m", 1.0, "format", "EnergyPlus lengths are always metres"),
@@ -328,6 +334,21 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                     if k.lower() in used_zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
+
+
+def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],
+                     lines: dict[str, int], world_zones: set[str]) -> list[Diagnostic]:
+    """EnergyPlus' warning for a World coordinate system over zones with an origin or a north axis: both are ignored,
+    so surfaces written relative to their zone (the rule switched without the coordinates) pile up at the origin."""
+    moved = sorted((k for k in world_zones if any(zones.get(k, (0.0,) * 4))), key=lambda k: lines[k])
+    if not moved:
+        return []
+    listed = ", ".join(f"{names[k]!r} (line {lines[k]})" for k in moved[:5]) + (" …" if len(moved) > 5 else "")
+    return [Diagnostic(code="zone_origins_ignored", message=(
+        f"GlobalGeometryRules says World coordinates, so the origin and north axis of {len(moved)} zone(s) are ignored, "
+        f"as EnergyPlus ignores them: {listed}. If their surfaces are written relative to the zone, the zones are "
+        "misplaced (their adjacencies lost): say Relative."),
+        details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]]})]
 
 
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
@@ -500,8 +521,15 @@ def parse_stl(content: bytes) -> dict:
 def parse_json(text: str) -> dict:
     """A JSON request as a file; another kind's request or result is refused naming what it holds."""
     body = json_object(text, refuse_cut=True)
+    if _is_epjson(body):  # an epJSON saved under .json: its geometry, not a refusal of its keys as request fields
+        return parse_epjson(text)
     refuse_other_kind(body, "polyhedra")
     return body
+
+
+def _is_epjson(body: dict) -> bool:
+    """EnergyPlus object types as keys (``Zone``, ``BuildingSurface:Detailed``, …) and no request field."""
+    return not set(body) & set(PolyhedraRequest.model_fields) and any(key.lower() in EPJSON_TYPES for key in body)
 
 
 EXPECTED = {".idf": "an EnergyPlus IDF", ".epjson": "a JSON document", ".json": "a JSON document",

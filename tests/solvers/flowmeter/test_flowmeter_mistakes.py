@@ -132,3 +132,35 @@ def test_the_weight_function_plot_and_table_reach_the_wall(in_mm):
         assert coloured.all(), f"{(~coloured).sum()} of 360 points {depth} mm inside the wall are blank"
     csv = next(a for a in render_artifacts(request, solved) if a.name == "weight_grid.csv").data.decode()
     assert csv.splitlines()[0] == "x [mm],y [mm],W [-]" and len(csv.splitlines()) == len(grid) + 1
+
+
+def test_a_half_angle_in_radians_is_warned_about_naming_the_field():
+    """0.3927 (pi/8 rad, the example's 22.5 degrees) typed into the degrees field: a patch under 1 degree wide, whose
+    sensitivity (~1.0, point-like) is not the meter's (~0.965)."""
+    from plantsolve.solvers.flowmeter.plausibility import request_warnings
+    as_radians = FlowmeterRequest.model_validate({**example(), "electrodes": {**example()["electrodes"],
+                                                                              "half_angle": np.pi / 8}})
+    (warning,) = [w for w in request_warnings(as_radians, 0.01) if w.code == "implausible_electrode_half_angle"]
+    assert warning.details["quantity"] == "electrodes.half_angle"
+    assert warning.details["as_radians_deg"] == pytest.approx(22.5)
+    assert "radians" in warning.message
+    in_degrees = FlowmeterRequest.model_validate(example())
+    assert not request_warnings(in_degrees, 0.01)
+
+
+def _sampled_request(points: list, values: list) -> FlowmeterRequest:
+    return FlowmeterRequest.model_validate({**example(), "velocity": {"type": "samples", "points": points,
+                                                                       "values": values}})
+
+
+def test_a_sample_point_given_twice_with_two_values_is_refused_naming_both():
+    """A uniform 2 m/s profile sampled on rings; a copied row whose value was edited makes the point ambiguous (the
+    triangulation kept one value without a word). The same point with the same value is accepted."""
+    points = [[0.0, 0.0]] + [[r * np.cos(a), r * np.sin(a)] for r in (20.0, 40.0, 50.0)
+                             for a in np.linspace(0, 2 * np.pi, 12, endpoint=False)]
+    values = [2.0] * len(points)
+    check_input(_sampled_request(points + [points[5]], values + [2.0]))
+    with pytest.raises(InputRejected) as refused:
+        check_input(_sampled_request(points + [points[5]], values + [5.0]))
+    (error,) = refused.value.errors
+    assert error.loc == ("velocity", "points", len(points)) and "points[5]" in error.msg and "5 against 2" in error.msg

@@ -205,6 +205,29 @@ def test_implausible_flows_and_pressures_are_warned_about(header, change, code, 
             else mixup in codes[code].message
 
 
+@pytest.mark.parametrize("header", ["theta,phi,flow,pressure,efficiency", "theta,phi,flow [lbm/s],pressure,efficiency"])
+def test_a_stray_minus_on_one_flow_is_warned_about_naming_the_value_and_its_setting(header):
+    """Line 2's flow 1104.338 written -1104.338: fitted as given, the speed line and map reach to negative flow."""
+    lines = [header, LINES[1].replace("0.0,0.5,", "0.0,0.5,-", 1)] + LINES[2:]
+    assert lines[1].split(",")[2] == "-1104.338"
+    warning = _codes(_table(lines))["implausible_flow"]
+    assert warning.details["values"] == [-1104.338] and len(warning.details["settings"]) == 1
+    assert "-1104.34" in warning.message and "minus" in warning.message
+    assert "implausible_flow" not in _codes(_table([header] + LINES[1:]))
+
+
+@pytest.mark.parametrize("name", ["bigfanc.map", "compmap.map"])
+def test_a_published_map_whose_low_speed_lines_dip_below_a_ratio_of_one_is_not_called_inverted(name):
+    """GasTurb's own maps run to PR 0.94 at low speed towards choke: no 'inverse ratio' warning for them, while the
+    same N+3 file with every ratio made a rise (PR - 1) still gets it."""
+    source = StoredInput.from_bytes(name, (DATA / "gasturb" / name).read_bytes())
+    value = load(parse_upload(source, {"map": False}), source)
+    assert min(float(np.min(p.pressure)) for p in value.internal.positions) < 1
+    assert "implausible_pressure_ratio" not in _codes(value)
+    rise = _column(["theta,phi,flow,pressure ratio,efficiency"] + LINES[1:], 3, lambda c: str(float(c) - 1))
+    assert "pressure rise" in _codes(_table(rise))["implausible_pressure_ratio"].message
+
+
 def test_an_efficiency_divided_twice_is_warned_about():
     lines = _column(LINES, 4, lambda c: str(float(c) / 100))
     warning = _codes(_table(lines))["implausible_efficiency"]

@@ -322,3 +322,31 @@ def test_default_tolerances_are_metres_so_a_file_asked_in_mm_is_judged_as_in_met
     assert "non_planar_faces" not in codes(result)
     tilted["options"] = {"planarity_tolerance": 0.01}  # given: taken in the request's unit
     assert "non_planar_faces" in codes(solve(PolyhedraRequest.model_validate(tilted)).result)
+
+
+def test_world_coordinates_over_zone_origins_warn_that_the_origins_are_ignored():
+    """two_offices.idf with its Coordinate System switched to World: EnergyPlus ignores Office B's origin (5, 0, 0),
+    so B's zone-relative walls land on A and the 12 m² adjacency is gone; the warning names the zone and its line."""
+    text = (EXAMPLES / "two_offices.idf").read_text()
+    relative = "  Relative,                               !- Coordinate System"
+    assert text.count(relative) == 1
+    _, world = upload("two_offices.idf", text.replace(relative, relative.replace("Relative,", "World,   ")).encode())
+    assert world.adjacency == []  # what the file now says, as EnergyPlus reads it
+    warning = codes(world)["zone_origins_ignored"]
+    assert warning.details["zones"] == ["Office B Thermal Zone"] and "World" in warning.message
+    name = next(k for k, t in enumerate(text.splitlines()) if t.startswith("  Office B Thermal Zone,") and "!- Name" in t)
+    assert warning.details["lines"] == [name] and f"(line {name})" in warning.message  # the line of 'Zone,' above it
+    _, as_written = upload("two_offices.idf", text.encode())
+    assert "zone_origins_ignored" not in codes(as_written) and as_written.adjacency[0].area == pytest.approx(12.0)
+
+
+def test_an_epjson_saved_as_json_is_read_as_the_epjson_it_is():
+    """The epJSON twin of the two offices uploaded as .json: its object types were refused as unknown request fields;
+    it gives the zones and the adjacency of the .epJSON upload."""
+    content = (DATA / "openstudio_two_offices.epJSON").read_bytes()
+    _, as_json = upload("two_offices.json", content)
+    _, as_epjson = upload("two_offices.epJSON", content)
+    assert [(z.id, z.volume) for z in as_json.zones] == [(z.id, z.volume) for z in as_epjson.zones]
+    assert [z.volume for z in as_json.zones] == pytest.approx([60.0, 60.0])
+    assert [a.area for a in as_json.adjacency] == pytest.approx([12.0])
+    assert as_json.report.details["source"]["format"] == "epjson"
