@@ -12,6 +12,7 @@ with ``--progress``).
 from __future__ import annotations
 
 import argparse
+import codecs
 import gc
 import json
 import logging
@@ -248,6 +249,10 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
         dispatcher = _InlineDispatcher()
         service = JobService(ctx, dispatcher, readers=[], reader_start="fork")
         content = path.read_bytes()
+        if not upload:
+            # a request file saved by an editor that marks UTF-8 (Windows' Notepad): the mark is the file's
+            # encoding, not the request's text (RFC 8259 lets a parser ignore it); over HTTP a body stays as sent
+            content = content.removeprefix(codecs.BOM_UTF8)
         try:
             if not upload:
                 submitted = service.submit_json(args.kind, content, None)

@@ -145,3 +145,10 @@ def test_serve_warns_at_start_when_open_without_keys(tmp_path, monkeypatch, capl
         assert cli.cmd_serve(argparse.Namespace(host=host, port=0, log_level="warning")) == 0
         assert ("API_KEYS is empty" in caplog.text) is warned
     assert started == ["0.0.0.0", "127.0.0.1"]
+
+
+def test_a_request_file_with_a_utf8_mark_is_read_as_its_text(tmp_path):
+    (tmp_path / "in.json").write_bytes(b"\xef\xbb\xbf" + json.dumps({"values": [6.0, 8.0]}).encode())
+    done = run(["solve", "test-compute", "in.json"], tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["norm"] == 10.0
