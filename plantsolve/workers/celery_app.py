@@ -76,13 +76,13 @@ PUBLISH_SECONDS = 5.0
 class _LoopPublisher:
     """One Redis connection of one event loop, that LPUSHes task messages: redis-py's connection, without its client
     (the client's lock, retry wrapper and per-command bookkeeping cost more than the round trip). One command at a
-    time on the connection; bounded as a whole by the caller (a socket timeout would wrap every write in a task of
-    its own). A command that fails on the connection (it may have died with a restarted Redis) is sent once more at
-    once, on a fresh connection, no backoff: the request is waiting."""
+    time on the connection; bounded as a whole by the caller, without a socket timeout (redis-py's default: it
+    wraps every write in a task of its own). A command that fails on the connection (it may have died with a
+    restarted Redis) is sent once more at once, on a fresh connection, no backoff: the request is waiting."""
 
     def __init__(self, url: str, loop: asyncio.AbstractEventLoop):
         self.loop = loop
-        self._pool = ConnectionPool.from_url(url, socket_connect_timeout=PUBLISH_SECONDS)
+        self._pool = ConnectionPool.from_url(url, socket_connect_timeout=PUBLISH_SECONDS, socket_timeout=None)
         self._connection = self._pool.make_connection()
         self._turn = asyncio.Lock()
 
