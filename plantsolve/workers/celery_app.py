@@ -137,7 +137,7 @@ class CeleryDispatcher:
     the queue), on one broker connection kept open between messages. ``send_task`` did the same with a producer
     taken from a pool, the routing worked out, the queue declared and the publish wrapped in retries, for each
     message: most of a submission's CPU time. kombu builds the message and its Redis command (LPUSH of the encoded
-    message onto the queue's list) once per kind's time limits, with ids that stand in for a job's; each job's
+    message onto the queue's list) once per kind, with ids that stand in for a job's; each job's
     message is that text with its own ids (:class:`~plantsolve.workers.task_message.TaskMessageTemplate`: the text
     kombu writes for them). The command is sent through the producer channel's Redis client (:meth:`enqueue`, any
     thread) or through a Redis connection of the running event loop (:meth:`enqueue_on_loop`, awaited: no thread). A
@@ -152,7 +152,7 @@ class CeleryDispatcher:
         self._building = threading.Lock()  # a kombu channel serves one thread at a time (held for no I/O)
         self._connection = None
         self._producer = None
-        self._templates: dict[tuple[float, float] | None, TaskMessageTemplate] = {}
+        self._templates: dict[str, TaskMessageTemplate] = {}  # by kind
         self._redis_url = ctx.settings.broker_url or ""
         self._loop_publisher: _LoopPublisher | None = None
 
@@ -190,11 +190,11 @@ class CeleryDispatcher:
 
     def _message(self, channel, job_id: uuid.UUID, kind: str) -> tuple[str, str]:
         """The task message of ``job_id`` as kombu puts it onto the queue: the Redis key and the encoded message."""
-        spec = self.ctx.spec(kind)
-        limits = self.ctx.limits(spec) if spec is not None else None
-        template = self._templates.get(limits)
-        if template is None:
-            template = self._templates[limits] = TaskMessageTemplate.of(
+        template = self._templates.get(kind)
+        if template is None:  # the kind's first message in this process (its limits are the settings', fixed)
+            spec = self.ctx.spec(kind)
+            limits = self.ctx.limits(spec) if spec is not None else None
+            template = self._templates[kind] = TaskMessageTemplate.of(
                 lambda job, task: self._built(channel, job, task, limits))
         return template.key, template.message(str(job_id), str(uuid.uuid4()), str(uuid.uuid4()))
 
