@@ -11,6 +11,7 @@ import asyncio
 import logging
 import threading
 import uuid
+from collections.abc import Callable
 from contextlib import contextmanager
 from functools import cached_property
 
@@ -86,16 +87,20 @@ class _LoopPublisher:
         self._connection = self._pool.make_connection()
         self._turn = asyncio.Lock()
 
-    async def lpush(self, key: str, payload: str) -> None:
+    async def lpush(self, key: str, payload: str, meanwhile: Callable[[], None] | None = None) -> None:
+        """LPUSH ``payload`` onto ``key``; ``meanwhile()`` (which must not raise) is called once the command is
+        written, before its answer is read: work that the caller needs done anyway then costs no wait of its own."""
         async with self._turn:
             try:
-                await self._lpush(key, payload)
+                await self._lpush(key, payload, meanwhile)
             except (RedisConnectionError, RedisTimeoutError):  # redis-py closed the connection: the next opens anew
-                await self._lpush(key, payload)
+                await self._lpush(key, payload, None)
 
-    async def _lpush(self, key: str, payload: str) -> None:
+    async def _lpush(self, key: str, payload: str, meanwhile: Callable[[], None] | None) -> None:
         connection = self._connection
         await connection.send_packed_command(connection.pack_command("LPUSH", key, payload), check_health=False)
+        if meanwhile is not None:
+            meanwhile()
         await connection.read_response()
 
     async def close(self) -> None:
@@ -166,14 +171,15 @@ class CeleryDispatcher:
         """Whether :meth:`enqueue_on_loop` may be awaited (a Redis broker)."""
         return self._redis_url.split("://", 1)[0] in ("redis", "rediss")
 
-    async def enqueue_on_loop(self, job_id: uuid.UUID, kind: str) -> None:
+    async def enqueue_on_loop(self, job_id: uuid.UUID, kind: str, meanwhile: Callable[[], None] | None = None) -> None:
         """:meth:`enqueue` awaited on the running event loop: the same message, sent by the loop's own Redis
-        connection (bounded by :data:`PUBLISH_SECONDS`). The producer's connection, when it is not open yet, is opened
-        in a thread (once)."""
+        connection (bounded by :data:`PUBLISH_SECONDS`); ``meanwhile()``, when given, runs while Redis answers (see
+        :meth:`_LoopPublisher.lpush`). The producer's connection, when it is not open yet, is opened in a thread
+        (once)."""
         channel = self._producer.channel if self._producer is not None else await asyncio.to_thread(self._open)
         key, payload = self._message(channel, job_id, kind)
         async with asyncio.timeout(PUBLISH_SECONDS):
-            await self._publisher_of_loop().lpush(channel.global_keyprefix + key, payload)
+            await self._publisher_of_loop().lpush(channel.global_keyprefix + key, payload, meanwhile)
 
     def _open(self):
         """The producer's channel, its broker connection opened if it is not (a failure drops it: the next message

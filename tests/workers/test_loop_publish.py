@@ -51,11 +51,15 @@ def test_the_loops_message_is_the_threads_and_celerys_own(dispatcher):
     job_id = uuid.uuid4()
     dispatcher.enqueue(job_id, "test-compute")
 
+    called = []
+
     async def on_loop():
-        await dispatcher.enqueue_on_loop(job_id, "test-compute")
+        # ``meanwhile`` runs once, after the command is written, while Redis answers
+        await dispatcher.enqueue_on_loop(job_id, "test-compute", meanwhile=lambda: called.append(len(called)))
         await dispatcher.close_on_loop()
 
     asyncio.run(on_loop())
+    assert called == [0]
     soft, hard = dispatcher.ctx.limits(dispatcher.ctx.spec("test-compute"))
     dispatcher.celery.send_task("plantsolve.run_job", args=[str(job_id)], soft_time_limit=soft, time_limit=hard)
     celerys, on_loop, in_thread = (json.loads(raw) for raw in client.lrange("celery", 0, -1))  # LPUSH: newest first
