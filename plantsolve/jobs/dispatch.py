@@ -15,8 +15,9 @@ class Dispatcher(Protocol):
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None: ...
 
-    # A transport whose ``enqueues_on_loop`` is True also has ``async def enqueue_on_loop(job_id, kind)``: the same
-    # hand-over awaited on the running event loop (no thread).
+    # A transport whose ``enqueues_on_loop`` is True also has ``async def enqueue_on_loop(job_id, kind, meanwhile)``:
+    # the same hand-over awaited on the running event loop (no thread), calling ``meanwhile()`` (when given) while
+    # the queue answers.
 
     def ping(self) -> None:
         """Raise if the queue cannot accept jobs."""

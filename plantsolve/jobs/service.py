@@ -166,14 +166,21 @@ class JobService:
 
     async def store_on_loop(self, new: NewJob) -> Submitted:
         """:meth:`store` awaited on the running event loop, no thread: the row is committed, then the job handed to
-        the queue (a hand-over that fails leaves the job to the sweeper, as in :meth:`dispatch`)."""
+        the queue (a hand-over that fails leaves the job to the sweeper, as in :meth:`dispatch`). A new job comes
+        with its view (made while the queue answers the hand-over: it reads nothing); an existing one's is left to
+        the caller (it may read the job's artifacts)."""
         submitted = self.stored(new, *await self.ctx.repo.create_on_loop(self._columns(new)))
         if submitted.created:
+            def with_view() -> None:
+                submitted.view = self.view(submitted.job)
+
             try:
-                await self.dispatcher.enqueue_on_loop(submitted.job.id, submitted.job.kind)
+                await self.dispatcher.enqueue_on_loop(submitted.job.id, submitted.job.kind, meanwhile=with_view)
             except Exception:
                 log.warning("enqueue of job %s failed; the sweeper will send it", submitted.job.id, exc_info=True)
                 await asyncio.to_thread(self.ctx.repo.clear_enqueued, submitted.job.id)
+            if submitted.view is None:  # the hand-over failed before it was written
+                with_view()
         return submitted
 
     def store_later(self, new: NewJob) -> Future | None:

@@ -29,8 +29,7 @@ import functools
 import importlib.util
 import json
 import time
-from contextlib import asynccontextmanager
-from typing import Any, AsyncIterator
+from typing import Any
 
 from sqlalchemy.exc import IntegrityError, OperationalError, ProgrammingError
 
@@ -88,39 +87,37 @@ class LoopConnections:
         return await self._run("fetch", statement, args)
 
     async def _run(self, method: str, statement: str, args: tuple) -> Any:
+        """A connection of this loop runs the statement, and is given back afterwards unless the statement failed on
+        it (any error but the server's own answer closes it). No connection free within ``wait``: a disconnect."""
         asyncpg = _asyncpg()
+        slots = self._bind()
         try:
-            async with self.connection() as connection:
-                return await getattr(connection, method)(statement, *args)
+            if slots.locked():
+                await asyncio.wait_for(slots.acquire(), self.wait)
+            else:
+                await slots.acquire()
+        except TimeoutError as error:
+            raise OperationalError(statement, args, error, connection_invalidated=True) from error
+        connection = None
+        try:
+            connection = await self._checkout()
+            result = await getattr(connection, method)(statement, *args)
         except asyncpg.PostgresError as error:  # the server's answer: the connection is fine
             state = error.sqlstate or ""
             kind = IntegrityError if state.startswith("23") else \
                 OperationalError if state.startswith(UNAVAILABLE) else ProgrammingError
             raise kind(statement, args, error) from error
         except (OSError, asyncpg.InterfaceError, asyncpg.InternalClientError) as error:  # timeouts are OSErrors too
+            connection = _terminated(connection)
             raise OperationalError(statement, args, error, connection_invalidated=True) from error
-
-    @asynccontextmanager
-    async def connection(self) -> AsyncIterator[Any]:
-        """A connection of this loop, for one request; given back afterwards unless the request failed on it (any
-        error but the server's own answer closes it). Raises ``TimeoutError`` when none is free within ``wait``."""
-        slots = self._bind()
-        if slots.locked():
-            await asyncio.wait_for(slots.acquire(), self.wait)
-        else:
-            await slots.acquire()
-        connection = None
-        try:
-            connection = await self._checkout()
-            yield connection
-        except BaseException as error:
-            if connection is not None and not isinstance(error, _asyncpg().PostgresError):
-                _terminate(connection)
+        except BaseException:
+            connection = _terminated(connection)
             raise
         finally:
             if connection is not None and not connection.is_closed():
                 self._idle.append((connection, time.monotonic()))
             slots.release()
+        return result
 
     def _bind(self) -> asyncio.Semaphore:
         loop = asyncio.get_running_loop()
@@ -154,6 +151,12 @@ class LoopConnections:
         idle, self._idle = self._idle, []
         for connection, _ in idle:
             _terminate(connection)
+
+
+def _terminated(connection) -> None:
+    """None, once ``connection`` (if any) is closed: a connection a request failed on is not given back."""
+    if connection is not None:
+        _terminate(connection)
 
 
 def _terminate(connection) -> None:

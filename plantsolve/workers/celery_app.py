@@ -11,18 +11,18 @@ import asyncio
 import logging
 import threading
 import uuid
+from collections.abc import Callable
 from contextlib import contextmanager
 from functools import cached_property
-from typing import Any
 
 from celery import Celery, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 from kombu import Producer
 from kombu.transport.redis import Channel as RedisChannel
 from kombu.transport.redis import Transport as RedisTransport
-from redis.asyncio import Redis as AsyncRedis
-from redis.asyncio.retry import Retry
-from redis.backoff import NoBackoff
+from redis.asyncio import ConnectionPool
+from redis.exceptions import ConnectionError as RedisConnectionError
+from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
@@ -30,6 +30,7 @@ from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.workers.logs import configure_logging
 from plantsolve.workers.sweeper import Sweeper
+from plantsolve.workers.task_message import TaskMessageTemplate
 
 log = logging.getLogger("plantsolve.celery")
 PERSISTENT = 2  # the delivery mode send_task gives a task message
@@ -73,6 +74,40 @@ class PublishingTransport(RedisTransport):
 PUBLISH_SECONDS = 5.0
 
 
+class _LoopPublisher:
+    """One Redis connection of one event loop, that LPUSHes task messages: redis-py's connection, without its client
+    (the client's lock, retry wrapper and per-command bookkeeping cost more than the round trip). One command at a
+    time on the connection; bounded as a whole by the caller, without a socket timeout (redis-py's default: it
+    wraps every write in a task of its own). A command that fails on the connection (it may have died with a
+    restarted Redis) is sent once more at once, on a fresh connection, no backoff: the request is waiting."""
+
+    def __init__(self, url: str, loop: asyncio.AbstractEventLoop):
+        self.loop = loop
+        self._pool = ConnectionPool.from_url(url, socket_connect_timeout=PUBLISH_SECONDS, socket_timeout=None)
+        self._connection = self._pool.make_connection()
+        self._turn = asyncio.Lock()
+
+    async def lpush(self, key: str, payload: str, meanwhile: Callable[[], None] | None = None) -> None:
+        """LPUSH ``payload`` onto ``key``; ``meanwhile()`` (which must not raise) is called once the command is
+        written, before its answer is read: work that the caller needs done anyway then costs no wait of its own."""
+        async with self._turn:
+            try:
+                await self._lpush(key, payload, meanwhile)
+            except (RedisConnectionError, RedisTimeoutError):  # redis-py closed the connection: the next opens anew
+                await self._lpush(key, payload, None)
+
+    async def _lpush(self, key: str, payload: str, meanwhile: Callable[[], None] | None) -> None:
+        connection = self._connection
+        await connection.send_packed_command(connection.pack_command("LPUSH", key, payload), check_health=False)
+        if meanwhile is not None:
+            meanwhile()
+        await connection.read_response()
+
+    async def close(self) -> None:
+        await self._connection.disconnect()
+        await self._pool.disconnect()
+
+
 def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
     """The Celery app; ``publisher``: a process that only sends tasks (the API), whose Redis messages go out
     through one client per pooled channel (:class:`PublishingTransport`)."""
@@ -107,9 +142,11 @@ class CeleryDispatcher:
     the queue), on one broker connection kept open between messages. ``send_task`` did the same with a producer
     taken from a pool, the routing worked out, the queue declared and the publish wrapped in retries, for each
     message: most of a submission's CPU time. kombu builds the message and its Redis command (LPUSH of the encoded
-    message onto the queue's list); the command is then sent through the producer channel's Redis client
-    (:meth:`enqueue`, any thread) or through a Redis client of the running event loop (:meth:`enqueue_on_loop`,
-    awaited: no thread). A publish that fails raises: the caller leaves the job to the sweeper, as before."""
+    message onto the queue's list) once per kind, with ids that stand in for a job's; each job's
+    message is that text with its own ids (:class:`~plantsolve.workers.task_message.TaskMessageTemplate`: the text
+    kombu writes for them). The command is sent through the producer channel's Redis client (:meth:`enqueue`, any
+    thread) or through a Redis connection of the running event loop (:meth:`enqueue_on_loop`, awaited: no thread). A
+    publish that fails raises: the caller leaves the job to the sweeper, as before."""
 
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
@@ -120,8 +157,9 @@ class CeleryDispatcher:
         self._building = threading.Lock()  # a kombu channel serves one thread at a time (held for no I/O)
         self._connection = None
         self._producer = None
+        self._templates: dict[str, TaskMessageTemplate] = {}  # by kind
         self._redis_url = ctx.settings.broker_url or ""
-        self._loop_client: tuple[asyncio.AbstractEventLoop, Any] | None = None
+        self._loop_publisher: _LoopPublisher | None = None
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
         channel = self._open()
@@ -133,14 +171,15 @@ class CeleryDispatcher:
         """Whether :meth:`enqueue_on_loop` may be awaited (a Redis broker)."""
         return self._redis_url.split("://", 1)[0] in ("redis", "rediss")
 
-    async def enqueue_on_loop(self, job_id: uuid.UUID, kind: str) -> None:
-        """:meth:`enqueue` awaited on the running event loop: the same message, sent by the loop's own Redis client
-        (bounded by :data:`PUBLISH_SECONDS`). The producer's connection, when it is not open yet, is opened in a
-        thread (once)."""
+    async def enqueue_on_loop(self, job_id: uuid.UUID, kind: str, meanwhile: Callable[[], None] | None = None) -> None:
+        """:meth:`enqueue` awaited on the running event loop: the same message, sent by the loop's own Redis
+        connection (bounded by :data:`PUBLISH_SECONDS`); ``meanwhile()``, when given, runs while Redis answers (see
+        :meth:`_LoopPublisher.lpush`). The producer's connection, when it is not open yet, is opened in a thread
+        (once)."""
         channel = self._producer.channel if self._producer is not None else await asyncio.to_thread(self._open)
         key, payload = self._message(channel, job_id, kind)
         async with asyncio.timeout(PUBLISH_SECONDS):
-            await self._client_of_loop().lpush(channel.global_keyprefix + key, payload)
+            await self._publisher_of_loop().lpush(channel.global_keyprefix + key, payload, meanwhile)
 
     def _open(self):
         """The producer's channel, its broker connection opened if it is not (a failure drops it: the next message
@@ -155,17 +194,23 @@ class CeleryDispatcher:
                     raise
             return self._producer.channel
 
-    def _message(self, channel, job_id: uuid.UUID, kind: str) -> tuple[str, bytes]:
+    def _message(self, channel, job_id: uuid.UUID, kind: str) -> tuple[str, str]:
         """The task message of ``job_id`` as kombu puts it onto the queue: the Redis key and the encoded message."""
-        spec = self.ctx.spec(kind)
-        limits = {}
-        if spec is not None:
-            soft, hard = self.ctx.limits(spec)
-            limits = {"soft_time_limit": soft, "time_limit": hard}
-        args = [str(job_id)]
+        template = self._templates.get(kind)
+        if template is None:  # the kind's first message in this process (its limits are the settings', fixed)
+            spec = self.ctx.spec(kind)
+            limits = self.ctx.limits(spec) if spec is not None else None
+            template = self._templates[kind] = TaskMessageTemplate.of(
+                lambda job, task: self._built(channel, job, task, limits))
+        return template.key, template.message(str(job_id), str(uuid.uuid4()), str(uuid.uuid4()))
+
+    def _built(self, channel, job_id: str, task_id: str, limits: tuple[float, float] | None) -> tuple[str, str]:
+        """The message kombu's producer builds for ``job_id`` as task ``task_id``: its Redis key and text."""
+        soft_hard = {} if limits is None else {"soft_time_limit": limits[0], "time_limit": limits[1]}
+        args = [job_id]
         # the representations the worker logs, given: Celery's own (saferepr, bounded for any argument) cost more
-        message = self.celery.amqp.as_task_v2(str(uuid.uuid4()), "plantsolve.run_job", args=args, argsrepr=repr(args),
-                                              kwargsrepr="{}", **limits)
+        message = self.celery.amqp.as_task_v2(task_id, "plantsolve.run_job", args=args, argsrepr=repr(args),
+                                              kwargsrepr="{}", **soft_hard)
         recorder = _Recorder()
         with self._building:
             channel.recorder = recorder
@@ -177,28 +222,19 @@ class CeleryDispatcher:
                 channel.recorder = None
         return recorder.lpush_args
 
-    def _client_of_loop(self):
-        """The running event loop's Redis client (connections belong to the loop that made them: another loop, such
-        as a test client's next one, gets a client of its own)."""
+    def _publisher_of_loop(self) -> _LoopPublisher:
+        """The running event loop's Redis publisher (connections belong to the loop that made them: another loop, such
+        as a test client's next one, gets a publisher of its own; the old one's connection went with its loop)."""
         loop = asyncio.get_running_loop()
-        if self._loop_client is None or self._loop_client[0] is not loop:
-            if self._loop_client is not None:
-                # its loop is gone, and its connection with it: dropped without the close that would need that loop
-                self._loop_client[1].connection = None
-            # One connection (an LPUSH holds it for one round trip; a pool's checkout and return cost more than
-            # that). Bounded as a whole by enqueue_on_loop (a socket timeout would wrap every write in a task of its
-            # own). Tried once more at once on a fresh connection (the old one may have died with a restarted Redis),
-            # no backoff: the request is waiting.
-            client = AsyncRedis.from_url(self._redis_url, socket_connect_timeout=PUBLISH_SECONDS,
-                                         single_connection_client=True, retry=Retry(NoBackoff(), 1))
-            self._loop_client = (loop, client)
-        return self._loop_client[1]
+        if self._loop_publisher is None or self._loop_publisher.loop is not loop:
+            self._loop_publisher = _LoopPublisher(self._redis_url, loop)
+        return self._loop_publisher
 
     async def close_on_loop(self) -> None:
-        """Close the running loop's Redis client (at the end of the app's lifespan, on its loop)."""
-        held, self._loop_client = self._loop_client, None
-        if held is not None and held[0] is asyncio.get_running_loop():
-            await held[1].aclose()
+        """Close the running loop's Redis connection (at the end of the app's lifespan, on its loop)."""
+        held, self._loop_publisher = self._loop_publisher, None
+        if held is not None and held.loop is asyncio.get_running_loop():
+            await held.close()
 
     def _close_producer(self) -> None:
         connection, self._connection, self._producer = self._connection, None, None

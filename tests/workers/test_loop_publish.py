@@ -51,11 +51,15 @@ def test_the_loops_message_is_the_threads_and_celerys_own(dispatcher):
     job_id = uuid.uuid4()
     dispatcher.enqueue(job_id, "test-compute")
 
+    called = []
+
     async def on_loop():
-        await dispatcher.enqueue_on_loop(job_id, "test-compute")
+        # ``meanwhile`` runs once, after the command is written, while Redis answers
+        await dispatcher.enqueue_on_loop(job_id, "test-compute", meanwhile=lambda: called.append(len(called)))
         await dispatcher.close_on_loop()
 
     asyncio.run(on_loop())
+    assert called == [0]
     soft, hard = dispatcher.ctx.limits(dispatcher.ctx.spec("test-compute"))
     dispatcher.celery.send_task("plantsolve.run_job", args=[str(job_id)], soft_time_limit=soft, time_limit=hard)
     celerys, on_loop, in_thread = (json.loads(raw) for raw in client.lrange("celery", 0, -1))  # LPUSH: newest first
@@ -72,6 +76,25 @@ def test_the_loops_message_is_the_threads_and_celerys_own(dispatcher):
     assert {**ours["properties"], "reply_to": None} == {**theirs["properties"], "reply_to": None}
     assert {k: v for k, v in ours.items() if k not in ("body", "headers", "properties")} == \
         {k: v for k, v in theirs.items() if k not in ("body", "headers", "properties")}
+
+
+@pytest.mark.parametrize("kind", ["test-compute", "test-hang"])  # two kinds' time limits: two templates
+def test_a_jobs_message_is_the_one_kombu_builds_for_its_ids_byte_for_byte(dispatcher, monkeypatch, kind):
+    dispatcher, _ = dispatcher
+    channel = dispatcher._open()
+    messages = {job_id: dispatcher._message(channel, job_id, kind) for job_id in (uuid.uuid4(), uuid.uuid4())}
+    for job_id, (key, text) in messages.items():
+        message = json.loads(text)
+        task_id, tag = message["headers"]["id"], message["properties"]["delivery_tag"]
+        assert len({task_id, tag, str(job_id)}) == 3
+        monkeypatch.setattr(channel, "_next_delivery_tag", lambda: tag)
+        # kombu's producer, as the dispatcher used it for every message before: the same key and text
+        assert dispatcher._built(channel, str(job_id), task_id, dispatcher.ctx.limits(dispatcher.ctx.spec(kind))) == \
+            (key, text)
+        assert json.loads(base64.b64decode(message["body"]))[0] == [str(job_id)]
+        assert message["headers"]["argsrepr"] == repr([str(job_id)])
+        assert message["headers"]["root_id"] == message["properties"]["correlation_id"] == task_id
+    assert len({json.loads(text)["headers"]["id"] for _, text in messages.values()}) == 2
 
 
 def test_a_message_redis_did_not_take_is_sent_by_the_sweeper(tmp_path, pg_url, redis_url):

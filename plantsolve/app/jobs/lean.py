@@ -94,10 +94,9 @@ class LeanRoutes:
             return
         new = self.service.take_json(kind, body, idempotency_key, owner=caller.owner)
         if self.service.stores_on_loop:  # PostgreSQL and Redis: both awaited here, no thread
-            submitted = await self.service.store_on_loop(new)
-            # a new job's view reads nothing; an existing one's (a repeated key) may read its artifacts: in a thread
-            submitted.view = self.service.view(submitted.job) if submitted.created else \
-                await run_in_threadpool(self.service.view, submitted.job)
+            submitted = await self.service.store_on_loop(new)  # a new job's with its view
+            if submitted.view is None:  # an existing one's (a repeated key) may read its artifacts: in a thread
+                submitted.view = await run_in_threadpool(self.service.view, submitted.job)
             await self._send_submitted(send, submitted)
             return
         pending = self.service.store_later(new)
