@@ -9,6 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from plantsolve.solvers.dedup.matching import (
+    TRIES_AT_ONCE,
     Match,
     first_steps,
     first_verified,
@@ -93,6 +94,30 @@ def test_the_first_verified_of_many_tries_is_the_one_verify_finds_in_turn_with_t
     assert first_verified(rep, member, tries, 1e-6) == (expected, one_by_one[expected])
     assert tries[expected] is right
     assert first_verified(rep, member, [m for m in tries if m is not right], 1e-6) is None
+
+
+@pytest.mark.parametrize("position", range(2 * TRIES_AT_ONCE + 3))
+def test_the_first_verified_try_is_found_wherever_the_tries_are_cut_into_batches(position):
+    # the tries go a few at a time: the valid one at every place, before, on and after a batch's edge, a second
+    # valid one (another of the shape's rotations would do as well) after it and a near miss before it; the
+    # answer is the index and the bits of verify() one try after another
+    verts, _ = segment_mesh(15.0, taper_deg=4.0)
+    rotation = Rotation.random(random_state=7).as_matrix()
+    rep = make_shape(verts + FAR)
+    member = make_shape(verts @ rotation.T + FAR + 5.0)
+    right = match(rep, member, 1e-6)
+    near_miss = Match(right.rotation, 1.0, right.translation + [2e-6, 0.0, 0.0], 0.0, False)
+    tries = [Match(Rotation.random(random_state=20 + k).as_matrix(), 1.0, right.translation, 0.0, False)
+             for k in range(2 * TRIES_AT_ONCE + 3)]
+    tries[position] = right
+    if position > 0:
+        tries[position - 1] = near_miss
+    later = Match(right.rotation.copy(), 1.0, right.translation.copy(), 0.0, False)  # the same fit, other arrays
+    tries.append(later)
+    one_by_one = [verify(rep, member, m, 1e-6) for m in tries]
+    assert next(i for i, d in enumerate(one_by_one) if d <= 1e-6) == position
+    assert first_verified(rep, member, tries, 1e-6) == (position, one_by_one[position])
+    assert first_verified(rep, member, tries[position + 1:], 1e-6) == (len(tries) - position - 2, one_by_one[-1])
 
 
 def test_stacked_matmul_gives_each_matrix_the_bits_of_its_own_product():
