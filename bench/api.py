@@ -321,8 +321,10 @@ def in_process(label: str, code: Path, requests: int, *, scaled: bool = False) -
     args = [sys.executable, "-c", IN_PROCESS, str(requests), "baseline" if label == "baseline" else "plantsolve",
             str(REPO / "bench" / "baseline_app.py")]
     try:
-        out = subprocess.run(args, cwd=data_dir, env=env, capture_output=True, text=True, check=True,
-                             timeout=IN_PROCESS_SECONDS).stdout
+        done = subprocess.run(args, cwd=data_dir, env=env, capture_output=True, text=True, timeout=IN_PROCESS_SECONDS)
+        if done.returncode:
+            raise SystemExit(f"the in-process run of {label!r} ({code}) failed:\n{done.stderr[-3000:]}")
+        out = done.stdout
     finally:
         shutil.rmtree(data_dir, ignore_errors=True)
         if cleanup is not None:
