@@ -105,10 +105,14 @@ def _key_of(value):
 
 
 def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
-                    span: tuple[float, float] = (0.0, 1.0)) -> dict[str, int]:
-    """Merge identical non-rooted instances; returns how many of each entity were removed."""
+                    span: tuple[float, float] = (0.0, 1.0), shared=None) -> dict[str, int]:
+    """Merge identical non-rooted instances; returns how many of each entity were removed. ``shared``
+    (``sharing.SharedPlacements``): placements the sharing made once for several members, numbered here
+    as the one this merge would keep; what it did not make is counted as removed."""
     pinned = _pinned(model)
     order = _topological(model)
+    if shared is not None:
+        order = shared.renumbered(model, order)
     remap: dict[int, object] = {}
     canonical: dict[tuple, object] = {}
     mergeable_cache: dict[str, bool] = {}
@@ -143,4 +147,7 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
     for dup in unused:
         removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
     remove_batch(model, unused)
+    if shared is not None:
+        for name, n in shared.counts().items():
+            removed[name] = removed.get(name, 0) + n
     return removed
