@@ -51,18 +51,19 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
     return pinned
 
 
-def _topological(model: ifcopenshell.file) -> list:
+def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, dict[int, int]]:
     """Every instance after what it references; roots taken in id order, so the first of identical
-    instances (the one kept) does not depend on how the model's storage happens to be ordered."""
-    order, state = [], {}
+    instances (the one kept) does not depend on how the model's storage happens to be ordered. With it,
+    for each id in ``watched``: the id of the instance whose expansion reached it (0 for a root)."""
+    order, state, reached = [], {}, {}
     by_id = model.by_id
     for first in sorted(model.entity_names()):
         if first in state:
             continue
         root = by_id(first)
-        stack = [(root, False)]
+        stack = [(root, False, 0)]
         while stack:
-            inst, expanded = stack.pop()
+            inst, expanded, by = stack.pop()
             key = inst.id()
             if expanded:
                 if state.get(key) != 2:
@@ -72,11 +73,13 @@ def _topological(model: ifcopenshell.file) -> list:
             if key in state:
                 continue
             state[key] = 1
-            stack.append((inst, True))
+            if key in watched:
+                reached[key] = by
+            stack.append((inst, True, by))
             for child in model.traverse(inst, max_levels=1)[1:]:
                 if child.id() and child.id() not in state:
-                    stack.append((child, False))
-    return order
+                    stack.append((child, False, key))
+    return order, reached
 
 
 def _substituted(value, remap: dict[int, object]):
@@ -110,9 +113,9 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
     (``sharing.SharedPlacements``): placements the sharing made once for several members, numbered here
     as the one this merge would keep; what it did not make is counted as removed."""
     pinned = _pinned(model)
-    order = _topological(model)
+    order, reached = _topological(model, shared.watched() if shared is not None else frozenset())
     if shared is not None:
-        order = shared.renumbered(model, order)
+        order = shared.renumbered(model, order, reached)
     remap: dict[int, object] = {}
     canonical: dict[tuple, object] = {}
     mergeable_cache: dict[str, bool] = {}

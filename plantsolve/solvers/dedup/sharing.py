@@ -10,7 +10,9 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
 - ``product_shape`` (IFC4 and later; ``ShapeOfProduct`` is [1:1] in IFC2X3): rigid members share the
   representative's ``IfcProductDefinitionShape`` and get a new ``IfcLocalPlacement`` (same parent)
   carrying the transform. A member whose product shape holds more than its body representation, or
-  whose transform mirrors or scales, falls back to a mapped item.
+  whose transform mirrors or scales, falls back to a mapped item. With the post-pass, members whose new
+  placements hold the same values (a ring's segments) get one placement, made once
+  (:class:`SharedPlacements`): the file is the one the post-pass would have made of one per member.
 - An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
 
 Old representations, product shapes and placements are deleted with the instances only they used
@@ -140,7 +142,7 @@ class SharedPlacements:
     one (``postpass``: identical instances, the first in its topological order kept). Each set of values is
     made once; every member's placement is numbered as if all had been made (so everything else keeps its
     number), and the post-pass, once it knows its order, gives the kept placement the numbers of the member
-    it reaches first (:meth:`renumbered`): the output is the one making them all would give.
+    whose expansion reaches it (:meth:`renumbered`): the output is the one making them all would give.
 
     Values are keyed by their bits (the post-pass would also merge -0.0 with 0.0: those stay apart here and
     are merged there as before); a placement whose values are not all finite is made for its member alone."""
@@ -181,31 +183,34 @@ class SharedPlacements:
         if model.get_max_id() + 1 < self.next:
             model.remove(model.create_entity("IfcCartesianPoint", (0.0, 0.0, 0.0), id=self.next - 1))
 
-    def renumbered(self, model: ifcopenshell.file, order: list) -> list:
-        """``order`` (the post-pass's topological order of ``model``, the sharing's model compacted: the same
-        numbers) with each placement made for several members numbered as the placement of the member that
-        comes first in it: of the placements all made, that one is the first of its values in the order (the
-        others come after their own members), the one the post-pass keeps."""
+    def watched(self) -> set[int]:
+        """The numbers of the placements made for several members."""
         parts = len(PLACEMENT_PARTS)
-        group_of = {product: g for g, members in enumerate(self.groups) if len(members) > 1 for product, _ in members}
-        made = {members[0][1] + k: g for g, members in enumerate(self.groups) if len(members) > 1 for k in range(parts)}
-        chosen: dict[int, int] = {}  # group → the first number of its member first in the order
-        where: dict[int, int] = {}  # number of a made part → its position in the order
-        for position, inst in enumerate(order):
-            i = inst.id()
-            g = group_of.get(i)
-            if g is not None:
-                if g not in chosen:
-                    chosen[g] = next(first for product, first in self.groups[g] if product == i)
-            elif i in made:
-                where[i] = position
+        return {members[0][1] + parts - 1 for members in self.groups if len(members) > 1}
+
+    def renumbered(self, model: ifcopenshell.file, order: list, reached: dict[int, int]) -> list:
+        """``order`` (the post-pass's topological order of ``model``, the sharing's model compacted: the same
+        numbers) with each placement made for several members numbered as the placement of the member whose
+        expansion reached it (``reached``: placement → that member): had each member its own, that member's
+        would be the first of them in the order, the one the post-pass keeps."""
+        parts = len(PLACEMENT_PARTS)
+        moves = {}  # made placement's first number → (its group's members, the first number it takes)
+        for members in self.groups:
+            made_first = members[0][1]
+            if len(members) > 1:
+                by = reached[made_first + parts - 1]
+                first = next(first for product, first in members if product == by)
+                if first != made_first:
+                    moves[made_first] = (members, first)
+        moving = {made_first + k for made_first in moves for k in range(parts)}
+        where = {}  # number of a part to renumber → its position in the order
+        if moving:
+            for position, inst in enumerate(order):
+                if inst.id() in moving:
+                    where[inst.id()] = position
         old = []
         create, by_id = model.create_entity, model.by_id
-        for g, first in chosen.items():
-            members = self.groups[g]
-            made_first = members[0][1]
-            if first == made_first:
-                continue
+        for made_first, (members, first) in moves.items():
             point, axis, ref, axes, placement = (by_id(made_first + k) for k in range(parts))
             new = [create("IfcCartesianPoint", point.Coordinates, id=first),
                    create("IfcDirection", axis.DirectionRatios, id=first + 1),

@@ -80,7 +80,7 @@ def test_the_kept_placement_is_numbered_as_the_post_pass_keeps_it(monkeypatch):
     keeping each placement under the numbers it was made with gives another file than main's."""
     text, _ = _optimized(MODELS["tunnel reached backwards"](), None)
     model = MODELS["tunnel reached backwards"]()
-    monkeypatch.setattr(sharing.SharedPlacements, "renumbered", lambda self, model, order: order)
+    monkeypatch.setattr(sharing.SharedPlacements, "renumbered", lambda self, model, order, reached: order)
     text_first_made, _ = _optimized(model, sharing.SharedPlacements(model))
     assert text_first_made != text
 
