@@ -54,16 +54,17 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
 def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, dict[int, int]]:
     """Every instance after what it references; roots taken in id order, so the first of identical
     instances (the one kept) does not depend on how the model's storage happens to be ordered. With it,
-    for each id in ``watched``: the id of the instance whose expansion reached it (0 for a root)."""
+    for each id in ``watched`` reached from another instance: the id of the instance whose expansion
+    reached it (the last to push it: the stack gives that entry first, and nothing pushes it once expanded)."""
     order, state, reached = [], {}, {}
     by_id = model.by_id
     for first in sorted(model.entity_names()):
         if first in state:
             continue
         root = by_id(first)
-        stack = [(root, False, 0)]
+        stack = [(root, False)]
         while stack:
-            inst, expanded, by = stack.pop()
+            inst, expanded = stack.pop()
             key = inst.id()
             if expanded:
                 if state.get(key) != 2:
@@ -73,12 +74,12 @@ def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, d
             if key in state:
                 continue
             state[key] = 1
-            if key in watched:
-                reached[key] = by
-            stack.append((inst, True, by))
+            stack.append((inst, True))
             for child in model.traverse(inst, max_levels=1)[1:]:
                 if child.id() and child.id() not in state:
-                    stack.append((child, False, key))
+                    stack.append((child, False))
+                    if watched and child.id() in watched:
+                        reached[child.id()] = key
     return order, reached
 
 
