@@ -67,12 +67,15 @@ def instance_ids(model: ifcopenshell.file) -> np.ndarray:
     return np.fromiter(model.entity_names(), dtype=np.int64)
 
 
-def grown(model: ifcopenshell.file, before: np.ndarray) -> np.ndarray:
+def grown(model: ifcopenshell.file, before: np.ndarray, skipped=()) -> np.ndarray:
     """The ids of ``model``, which held ``before`` and has only gained instances since (the sharing adds and
     deletes nothing itself): the core numbers each new instance after the largest, so they are the numbers
-    past ``before``'s largest; listed again when one of those numbers is not an instance after all."""
+    past ``before``'s largest but ``skipped`` (numbers the sharing left out: ``sharing.SharedPlacements``);
+    listed again when one of those numbers is not an instance after all."""
     start = int(before.max(initial=0)) + 1
     added = np.arange(start, max(model.get_max_id() + 1, start), dtype=np.int64)
+    if len(skipped):
+        added = np.setdiff1d(added, np.asarray(skipped, dtype=np.int64), assume_unique=True)
     try:
         for i in added.tolist():
             model.by_id(i)

@@ -51,10 +51,12 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
     return pinned
 
 
-def _topological(model: ifcopenshell.file) -> list:
+def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, dict[int, int]]:
     """Every instance after what it references; roots taken in id order, so the first of identical
-    instances (the one kept) does not depend on how the model's storage happens to be ordered."""
-    order, state = [], {}
+    instances (the one kept) does not depend on how the model's storage happens to be ordered. With it,
+    for each id in ``watched`` reached from another instance: the id of the instance whose expansion
+    reached it (the last to push it: the stack gives that entry first, and nothing pushes it once expanded)."""
+    order, state, reached = [], {}, {}
     by_id = model.by_id
     for first in sorted(model.entity_names()):
         if first in state:
@@ -76,7 +78,9 @@ def _topological(model: ifcopenshell.file) -> list:
             for child in model.traverse(inst, max_levels=1)[1:]:
                 if child.id() and child.id() not in state:
                     stack.append((child, False))
-    return order
+                    if watched and child.id() in watched:
+                        reached[child.id()] = key
+    return order, reached
 
 
 def _substituted(value, remap: dict[int, object]):
@@ -105,10 +109,14 @@ def _key_of(value):
 
 
 def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
-                    span: tuple[float, float] = (0.0, 1.0)) -> dict[str, int]:
-    """Merge identical non-rooted instances; returns how many of each entity were removed."""
+                    span: tuple[float, float] = (0.0, 1.0), shared=None) -> dict[str, int]:
+    """Merge identical non-rooted instances; returns how many of each entity were removed. ``shared``
+    (``sharing.SharedPlacements``): placements the sharing made once for several members, numbered here
+    as the one this merge would keep; what it did not make is counted as removed."""
     pinned = _pinned(model)
-    order = _topological(model)
+    order, reached = _topological(model, shared.watched() if shared is not None else frozenset())
+    if shared is not None:
+        order = shared.renumbered(model, order, reached)
     remap: dict[int, object] = {}
     canonical: dict[tuple, object] = {}
     mergeable_cache: dict[str, bool] = {}
@@ -143,4 +151,7 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
     for dup in unused:
         removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
     remove_batch(model, unused)
+    if shared is not None:
+        for name, n in shared.counts().items():
+            removed[name] = removed.get(name, 0) + n
     return removed

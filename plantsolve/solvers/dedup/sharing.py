@@ -10,7 +10,9 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
 - ``product_shape`` (IFC4 and later; ``ShapeOfProduct`` is [1:1] in IFC2X3): rigid members share the
   representative's ``IfcProductDefinitionShape`` and get a new ``IfcLocalPlacement`` (same parent)
   carrying the transform. A member whose product shape holds more than its body representation, or
-  whose transform mirrors or scales, falls back to a mapped item.
+  whose transform mirrors or scales, falls back to a mapped item. With the post-pass, members whose new
+  placements hold the same values (a ring's segments) get one placement, made once
+  (:class:`SharedPlacements`): the file is the one the post-pass would have made of one per member.
 - An ``IfcShapeRepresentation`` is never shared between product shapes (``IfcShapeModel.WR11``).
 
 Old representations, product shapes and placements are deleted with the instances only they used
@@ -25,10 +27,12 @@ import numpy as np
 
 import ifcopenshell
 import ifcopenshell.api
+import ifcopenshell.ifcopenshell_wrapper as wrapper
 import ifcopenshell.util.placement
 
 from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup import compaction
+from plantsolve.solvers.dedup.compaction import remove_batch
 from plantsolve.solvers.dedup.grouping import CongruenceClass
 
 
@@ -115,6 +119,121 @@ def axis_placement(model: ifcopenshell.file, t: np.ndarray):
                                model.create_entity("IfcDirection", _floats(t[:3, 0])))
 
 
+# what a member's new placement consists of, in the order the instances are made (and numbered)
+PLACEMENT_PARTS = ("IfcCartesianPoint", "IfcDirection", "IfcDirection", "IfcAxis2Placement3D", "IfcLocalPlacement")
+# the attributes through which those instances are referenced: an inverse of them bounded to one pins them
+_PLACEMENT_REFERENCES = {"ObjectPlacement", "PlacementRelTo", "RelativePlacement", "Location", "Axis", "RefDirection"}
+
+
+def _placement_parts(model: ifcopenshell.file, ids: tuple[int, ...], parent, t: np.ndarray):
+    """The new ``IfcLocalPlacement`` of transform ``t`` relative to ``parent``, its parts numbered ``ids``
+    (``PLACEMENT_PARTS`` order)."""
+    create = model.create_entity
+    point = create("IfcCartesianPoint", _floats(t[:3, 3]), id=ids[0])
+    axis = create("IfcDirection", _floats(t[:3, 2]), id=ids[1])
+    ref = create("IfcDirection", _floats(t[:3, 0]), id=ids[2])
+    axes = create("IfcAxis2Placement3D", point, axis, ref, id=ids[3])
+    return create("IfcLocalPlacement", parent, axes, id=ids[4])
+
+
+class SharedPlacements:
+    """The post-pass's merge of the members' new placements, done as they are made (product_shape with the
+    post-pass): a ring's members all get placements of the same values, which the post-pass would merge into
+    one (``postpass``: identical instances, the first in its topological order kept). Each set of values is
+    made once; every member's placement is numbered as if all had been made (so everything else keeps its
+    number), and the post-pass, once it knows its order, gives the kept placement the numbers of the member
+    whose expansion reaches it (:meth:`renumbered`): the output is the one making them all would give.
+
+    Values are keyed by their bits (the post-pass would also merge -0.0 with 0.0: those stay apart here and
+    are merged there as before); a placement whose values are not all finite is made for its member alone."""
+
+    def __init__(self, model: ifcopenshell.file):
+        self.next = model.get_max_id() + 1  # the number the next instance would have had
+        self.made: dict[bytes, int] = {}  # parent id and values → index of the group
+        self.groups: list[list[tuple[int, int]]] = []  # per group: (member product id, its first number)
+        self.skipped: list[int] = []  # numbers of the instances not made
+
+    @staticmethod
+    def applies(model: ifcopenshell.file) -> bool:
+        """Whether the post-pass merges such placements in this schema (none of their references pins them)."""
+        schema = wrapper.schema_by_name(model.schema_identifier)
+        return not any(inv.bound2() == 1 and inv.attribute_reference().name() in _PLACEMENT_REFERENCES
+                       for name in set(PLACEMENT_PARTS) for inv in schema.declaration_by_name(name).all_inverse_attributes())
+
+    def placement(self, model: ifcopenshell.file, member, parent, t: np.ndarray):
+        first = max(self.next, model.get_max_id() + 1)
+        ids = tuple(range(first, first + len(PLACEMENT_PARTS)))
+        self.next = first + len(PLACEMENT_PARTS)
+        values = np.ascontiguousarray(t[:3, [3, 2, 0]])
+        if not np.isfinite(values).all():
+            return _placement_parts(model, ids, parent, t)
+        key = (parent.id() if parent is not None else 0).to_bytes(8, "little") + values.tobytes()
+        group = self.made.get(key)
+        if group is None:
+            self.made[key] = len(self.groups)
+            self.groups.append([(member.id(), first)])
+            return _placement_parts(model, ids, parent, t)
+        self.groups[group].append((member.id(), first))
+        self.skipped.extend(ids)
+        return model.by_id(self.groups[group][0][1] + len(PLACEMENT_PARTS) - 1)
+
+    def numbered_on(self, model: ifcopenshell.file) -> None:
+        """Before the core numbers an instance itself: it numbers after the largest, which is then the one
+        before ``next`` (made and removed at once when the last numbers were skipped)."""
+        if model.get_max_id() + 1 < self.next:
+            model.remove(model.create_entity("IfcCartesianPoint", (0.0, 0.0, 0.0), id=self.next - 1))
+
+    def watched(self) -> set[int]:
+        """The numbers of the placements made for several members."""
+        parts = len(PLACEMENT_PARTS)
+        return {members[0][1] + parts - 1 for members in self.groups if len(members) > 1}
+
+    def renumbered(self, model: ifcopenshell.file, order: list, reached: dict[int, int]) -> list:
+        """``order`` (the post-pass's topological order of ``model``, the sharing's model compacted: the same
+        numbers) with each placement made for several members numbered as the placement of the member whose
+        expansion reached it (``reached``: placement → that member): had each member its own, that member's
+        would be the first of them in the order, the one the post-pass keeps."""
+        parts = len(PLACEMENT_PARTS)
+        moves = {}  # made placement's first number → (its group's members, the first number it takes)
+        for members in self.groups:
+            made_first = members[0][1]
+            if len(members) > 1:
+                by = reached[made_first + parts - 1]
+                first = next(first for product, first in members if product == by)
+                if first != made_first:
+                    moves[made_first] = (members, first)
+        moving = {made_first + k for made_first in moves for k in range(parts)}
+        where = {}  # number of a part to renumber → its position in the order
+        if moving:
+            for position, inst in enumerate(order):
+                if inst.id() in moving:
+                    where[inst.id()] = position
+        old = []
+        create, by_id = model.create_entity, model.by_id
+        for made_first, (members, first) in moves.items():
+            point, axis, ref, axes, placement = (by_id(made_first + k) for k in range(parts))
+            new = [create("IfcCartesianPoint", point.Coordinates, id=first),
+                   create("IfcDirection", axis.DirectionRatios, id=first + 1),
+                   create("IfcDirection", ref.DirectionRatios, id=first + 2)]
+            new.append(create("IfcAxis2Placement3D", *new, id=first + 3))
+            new.append(create("IfcLocalPlacement", placement.PlacementRelTo, new[3], id=first + 4))
+            for product, _ in members:
+                by_id(product).ObjectPlacement = new[4]
+            for k, inst in enumerate(new):
+                order[where[made_first + k]] = inst
+            old += [point, axis, ref, axes, placement]
+        remove_batch(model, old)
+        return order
+
+    def counts(self) -> dict[str, int]:
+        """What was not made, per entity (what the post-pass would have removed)."""
+        out: dict[str, int] = {}
+        n = len(self.skipped) // len(PLACEMENT_PARTS)
+        for name in PLACEMENT_PARTS:
+            out[name] = out.get(name, 0) + n
+        return out
+
+
 def _replace_in_list(owner, attribute: str, old, new) -> None:
     values = list(getattr(owner, attribute))
     setattr(owner, attribute, [new if v == old else v for v in values if v != old or new is not None])
@@ -160,23 +279,26 @@ def can_share_product_shape(model: ifcopenshell.file, cls: CongruenceClass) -> b
 
 def apply(model: ifcopenshell.file, classes: list[CongruenceClass], mode: str, *,
           progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
-          detached: Detached | None = None, placements: Placements | None = None) -> dict[str, int]:
+          detached: Detached | None = None, placements: Placements | None = None,
+          shared: SharedPlacements | None = None) -> dict[str, int]:
     """Rewrite every class with at least two members; returns counts of what was written. What the
     rewrite detached is deleted from ``model`` before returning, or, given ``detached``, recorded there
     for the caller to delete (``compaction.compacted``). ``placements``: the matrices the geometry reader
-    already evaluated (members of a ring share its placement: each is evaluated once either way)."""
+    already evaluated (members of a ring share its placement: each is evaluated once either way).
+    ``shared``: the members' new placements made once per set of values, for the post-pass to number."""
     counts = {"mapped_items": 0, "shared_product_shapes": 0, "fallback_to_mapped_item": 0}
     multi = [c for c in classes if len(c.members) > 1]
     garbage = detached if detached is not None else Detached(model)
     try:
-        _apply(model, multi, mode, counts, progress, span, garbage, placements or Placements())
+        _apply(model, multi, mode, counts, progress, span, garbage, placements or Placements(), shared)
     finally:
         if detached is None:
             compaction.compacted(model, garbage.roots, garbage.styled_by, rebuild=False)
     return counts
 
 
-def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placements: Placements) -> None:
+def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placements: Placements,
+           shared: SharedPlacements | None) -> None:
     lo, hi = span
     inverses: dict[int, np.ndarray] = {}  # parent placement id → its matrix's inverse (a ring's members share one)
 
@@ -205,7 +327,10 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placem
             if key not in inverses:
                 inverses[key] = np.linalg.inv(placements.matrix(parent))
             relative = inverses[key] @ t_world @ p_rep
-            member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
+            if shared is None:
+                member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
+            else:
+                member.ObjectPlacement = shared.placement(model, member, parent, relative)
             member.Representation = rep.Representation
             if old_placement is not None and model.get_total_inverses(old_placement) == 0:
                 garbage.detached(old_placement)
@@ -214,6 +339,8 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placem
             counts["shared_product_shapes"] += 1
         if not mapped:
             continue
+        if shared is not None:
+            shared.numbered_on(model)
         body_rep = body_representation(rep)
         new_rep_repr = ifcopenshell.api.run("geometry.map_representation", model, representation=body_rep)
         _replace_in_list(rep.Representation, "Representations", body_rep, new_rep_repr)

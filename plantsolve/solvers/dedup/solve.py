@@ -191,14 +191,17 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                 c.product = model.by_id(c.product.id())
             ids_before, streamed = compaction.instance_ids(model), None
         detached = sharing.Detached(model)
+        # with the post-pass, a ring's members' equal new placements are made once (the post-pass numbers them)
+        shared_placements = (sharing.SharedPlacements(model) if opts.postpass and mode == "product_shape"
+                             and sharing.SharedPlacements.applies(model) else None)
         written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
-                                placements=reader.placements)
+                                placements=reader.placements, shared=shared_placements)
         out_classes, shared = described(classes)
         # the proof looks the written points up in the trees the matching built of the products' own
         shapes = {c.product.GlobalId: c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
-        ids_now = compaction.grown(model, ids_before)
+        ids_now = compaction.grown(model, ids_before, shared_placements.skipped if shared_placements else ())
         del ids_before
         if streamed is None:
             model = compaction.compacted(model, detached.roots, detached.styled_by, known=known, everything=ids_now)
@@ -209,7 +212,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         lap("sharing")
         removed = {}
         if opts.postpass:
-            removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72))
+            removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72), shared=shared_placements)
         lap("postpass")
         progress(0.72, "writing the optimized file")
         optimized = ifcio.model_text(model)
