@@ -382,17 +382,25 @@ class Assembly:
                     if c.type != "stud" or c.length > 0:
                         continue
                     for other, oi in self._grips(id, placed.points[ci], placed.directions[ci], label):
-                        key = (id, other) if (id, other) in self._links else (other, id)
-                        if key not in self._links:
-                            self._neighbours[other].add(id)
-                            self._neighbours[id].add(other)
+                        if self._link_at(id, ci, other, oi, "stud"):
                             seated.append((id, other))
-                        self._links.setdefault(key, []).append(Connection(
-                            other, oi, id, ci, "stud", tuple(_clean(v) for v in placed.points[ci]),
-                            tuple(_clean(v) for v in placed.directions[ci])))
         if seated:
             self._pebble_stale = True
         return seated
+
+    def _link_at(self, id: str, ci: int, other: str, oi: int, kind: str) -> bool:
+        """Record a connection of ``kind`` between part ``id``'s connector ``ci`` (where it is drawn) and ``other``'s
+        connector ``oi``; True when it is the first link between the two parts."""
+        placed = self.parts[id]
+        key = (id, other) if (id, other) in self._links else (other, id)
+        first = key not in self._links
+        if first:
+            self._neighbours[other].add(id)
+            self._neighbours[id].add(other)
+        self._links.setdefault(key, []).append(Connection(
+            other, oi, id, ci, kind, tuple(_clean(v) for v in placed.points[ci]),
+            tuple(_clean(v) for v in placed.directions[ci])))
+        return first
 
     def _grips(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict):
         """(part, tube anti-stud) of each part of another piece that grips the stud at ``point`` (pointing along
@@ -509,14 +517,8 @@ class Assembly:
                 if bar is None:
                     continue
                 other, oi = bar
-                key = (id, other) if (id, other) in self._links else (other, id)
-                if key not in self._links:
-                    self._neighbours[other].add(id)
-                    self._neighbours[id].add(other)
+                if self._link_at(id, ci, other, oi, "clip"):
                     seated.append((id, other))
-                self._links.setdefault(key, []).append(Connection(
-                    other, oi, id, ci, "clip", tuple(_clean(v) for v in placed.points[ci]),
-                    tuple(_clean(v) for v in placed.directions[ci])))
         if seated:
             self._pebble_stale = True
         return seated
