@@ -528,41 +528,38 @@ class Assembly:
         within FIT_SNAP) that reach within ``half`` of it from either side, one ending before it and one starting after
         it; the bar is the one before (:meth:`seat_clips_across_gaps`). None when no part has such bars."""
         sides: dict[str, dict[int, int]] = {}  # part -> side (-1 before the centre, +1 after) -> its bar
-        for cell in sorted(_cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP)):
-            for other, oi in self._runs.get(cell, ()):
-                o = self.parts[other]
-                theirs = o.shape.connectors[oi]
-                cos = float(axis @ o.directions[oi])
-                if other == id or theirs.type != "bar" or abs(cos) < ALIGN:
-                    continue
-                v = o.points[oi] - centre
-                if float(np.linalg.norm(v - float(v @ axis) * axis)) > FIT_SNAP:
-                    continue
-                ends = sorted((float(v @ axis), float(v @ axis) + theirs.length * cos))
-                if -half <= ends[1] <= SNAP:
-                    sides.setdefault(other, {}).setdefault(-1, oi)
-                elif -SNAP <= ends[0] <= half:
-                    sides.setdefault(other, {}).setdefault(1, oi)
+        for other, oi, ends in self._runs_on_line(id, "bar", centre, axis, half):
+            if -half <= ends[1] <= SNAP:
+                sides.setdefault(other, {}).setdefault(-1, oi)
+            elif -SNAP <= ends[0] <= half:
+                sides.setdefault(other, {}).setdefault(1, oi)
         return next(((other, found[-1]) for other, found in sorted(sides.items()) if len(found) == 2), None)
 
     def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
         """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along
         ``axis`` (parallel, within FIT_SNAP) that reaches within ``half`` of ``centre`` along it, or None."""
-        for cell in _cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP):
+        for other, oi, ends in self._runs_on_line(id, "fit_m", centre, axis, half):
+            if min(ends[1], half) - max(ends[0], -half) > SNAP:
+                return other, oi
+        return None
+
+    def _runs_on_line(self, id: str, type: str, centre: np.ndarray, axis: np.ndarray, half: float):
+        """(part, connector, (start, end)) of each run of ``type`` of a part other than ``id`` parallel to ``axis``
+        (within ALIGN) on the line through ``centre`` (within FIT_SNAP), found in the cells within ``half`` of it;
+        start <= end are where the run lies along ``axis`` from ``centre``."""
+        for cell in sorted(_cells_along(centre - axis * half, axis, 2 * half, FIT_SNAP)):
             for other, oi in self._runs.get(cell, ()):
                 o = self.parts[other]
                 theirs = o.shape.connectors[oi]
                 cos = float(axis @ o.directions[oi])
-                if other == id or theirs.type != "fit_m" or abs(cos) < ALIGN:
+                if other == id or theirs.type != type or abs(cos) < ALIGN:
                     continue
                 v = o.points[oi] - centre
                 along = float(v @ axis)
                 if float(np.linalg.norm(v - along * axis)) > FIT_SNAP:
                     continue
-                ends = (along, along + theirs.length * cos)
-                if min(max(ends), half) - max(min(ends), -half) > SNAP:
-                    return other, oi
-        return None
+                start, end = sorted((along, along + theirs.length * cos))
+                yield other, oi, (start, end)
 
     def _gap(self, c: Connection) -> float:
         """How far a connection's two points miss each other (LDU): between two points their distance; for a run
