@@ -11,10 +11,13 @@ import ifcopenshell.geom
 import ifcopenshell.util.unit
 
 from plantsolve.solvers.base import Solved, StoredInput
-from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup import SPEC, sharing
+from plantsolve.solvers.dedup.explicit import ExplicitReader
+from plantsolve.solvers.dedup.grouping import build_classes, make_candidate
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.dedup.worldgeom import world_points
 
 
 def upload(model: ifcopenshell.file, name: str = "model.ifc", **options) -> IfcSource:
@@ -27,6 +30,17 @@ def upload(model: ifcopenshell.file, name: str = "model.ifc", **options) -> IfcS
 
 def run(model: ifcopenshell.file, **options) -> Solved:
     return solve(upload(model, **options))
+
+
+def classes_of(model: ifcopenshell.file, *, allow_mirror: bool = False) -> tuple[list, ExplicitReader]:
+    """The model's classes of congruent products (tolerance 1e-5, no scaling) as the solve groups them, and the
+    geometry reader whose walk of the old geometry found them (its closures recorded)."""
+    products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
+    reader = ExplicitReader(model, record_closures=True)
+    points, faces = world_points(model, products, reader=reader)
+    candidates = [make_candidate(p, sharing.body_representation(p), model, points[p.id()], faces[p.id()])
+                  for p in products if p.id() in points and sharing.body_representation(p) is not None]
+    return build_classes(candidates, 1e-5, allow_mirror=allow_mirror, allow_scale=False), reader
 
 
 def world(model: ifcopenshell.file) -> dict[str, np.ndarray]:

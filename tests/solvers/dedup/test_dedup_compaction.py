@@ -20,17 +20,12 @@ from plantsolve.solvers.dedup.matching import Match, det3, hausdorff, make_shape
 from plantsolve.solvers.dedup.synthetic import (WORLD_ORIGIN, ModelSpec, Product, apply, build_model, pose,
                                                  segment_mesh, tunnel_file, zoo_spec)
 from plantsolve.solvers.dedup.worldgeom import world_points
-from tests.solvers.dedup.support import assert_round_trip, run
+from tests.solvers.dedup.support import assert_round_trip, classes_of, run
 
 
 def _shared(model: ifcopenshell.file, mode: str):
     """The model with its classes shared, what was detached, and the reader's walk of the old geometry."""
-    products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
-    reader = ExplicitReader(model, record_closures=True)
-    points, faces = world_points(model, products, reader=reader)
-    candidates = [make_candidate(p, sharing.body_representation(p), model, points[p.id()], faces[p.id()])
-                  for p in products if p.id() in points and sharing.body_representation(p) is not None]
-    classes = build_classes(candidates, 1e-5, allow_mirror=False, allow_scale=False)
+    classes, reader = classes_of(model)
     detached = sharing.Detached(model)
     sharing.apply(model, classes, mode, detached=detached)
     return detached, reader

@@ -10,22 +10,16 @@ import pytest
 import ifcopenshell
 
 from plantsolve.solvers.dedup import compaction, postpass, sharing
-from plantsolve.solvers.dedup.explicit import ExplicitReader
-from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.grouping import pool_transforms
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
-from plantsolve.solvers.dedup.worldgeom import world_points
+from tests.solvers.dedup.support import classes_of
 
 
 def _optimized(model: ifcopenshell.file, shared: sharing.SharedPlacements | None, *, allow_mirror: bool = False,
                rebuild: bool = True) -> tuple[str, dict[str, int]]:
     """The model shared (product_shape), compacted and merged by the post-pass: its STEP text and the
     post-pass's removed counts."""
-    products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
-    reader = ExplicitReader(model, record_closures=True)
-    points, faces = world_points(model, products, reader=reader)
-    candidates = [make_candidate(p, sharing.body_representation(p), model, points[p.id()], faces[p.id()])
-                  for p in products if p.id() in points and sharing.body_representation(p) is not None]
-    classes = build_classes(candidates, 1e-5, allow_mirror=allow_mirror, allow_scale=False)
+    classes, reader = classes_of(model, allow_mirror=allow_mirror)
     pool_transforms(classes, 1e-5)  # as the solve does: a ring's members then get the same transform
     before = compaction.instance_ids(model)
     detached = sharing.Detached(model)
