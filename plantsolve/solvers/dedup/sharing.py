@@ -113,27 +113,29 @@ def operator(model: ifcopenshell.file, t: np.ndarray):
         s, model.create_entity("IfcDirection", _floats(r[:, 2])))
 
 
-def axis_placement(model: ifcopenshell.file, t: np.ndarray):
-    return model.create_entity("IfcAxis2Placement3D", model.create_entity("IfcCartesianPoint", _floats(t[:3, 3])),
-                               model.create_entity("IfcDirection", _floats(t[:3, 2])),
-                               model.create_entity("IfcDirection", _floats(t[:3, 0])))
-
-
 # what a member's new placement consists of, in the order the instances are made (and numbered)
 PLACEMENT_PARTS = ("IfcCartesianPoint", "IfcDirection", "IfcDirection", "IfcAxis2Placement3D", "IfcLocalPlacement")
 # the attributes through which those instances are referenced: an inverse of them bounded to one pins them
 _PLACEMENT_REFERENCES = {"ObjectPlacement", "PlacementRelTo", "RelativePlacement", "Location", "Axis", "RefDirection"}
 
 
-def _placement_parts(model: ifcopenshell.file, ids: tuple[int, ...], parent, t: np.ndarray):
-    """The new ``IfcLocalPlacement`` of transform ``t`` relative to ``parent``, its parts numbered ``ids``
-    (``PLACEMENT_PARTS`` order)."""
-    create = model.create_entity
-    point = create("IfcCartesianPoint", _floats(t[:3, 3]), id=ids[0])
-    axis = create("IfcDirection", _floats(t[:3, 2]), id=ids[1])
-    ref = create("IfcDirection", _floats(t[:3, 0]), id=ids[2])
-    axes = create("IfcAxis2Placement3D", point, axis, ref, id=ids[3])
-    return create("IfcLocalPlacement", parent, axes, id=ids[4])
+def local_placement(model: ifcopenshell.file, parent, location, axis, ref, ids: range | None = None) -> list:
+    """The parts of a new ``IfcLocalPlacement`` relative to ``parent`` at ``location`` with its z ``axis`` and x
+    ``ref`` direction, in ``PLACEMENT_PARTS`` order (the placement last), numbered ``ids`` or by the library."""
+    numbers = iter(ids) if ids is not None else None
+
+    def create(entity: str, *values):
+        return model.create_entity(entity, *values, **({"id": next(numbers)} if numbers is not None else {}))
+
+    parts = [create("IfcCartesianPoint", location), create("IfcDirection", axis), create("IfcDirection", ref)]
+    parts.append(create("IfcAxis2Placement3D", *parts))
+    parts.append(create("IfcLocalPlacement", parent, parts[3]))
+    return parts
+
+
+def transform_placement(model: ifcopenshell.file, parent, t: np.ndarray, ids: range | None = None):
+    """The new ``IfcLocalPlacement`` of 4×4 transform ``t`` relative to ``parent`` (:func:`local_placement`)."""
+    return local_placement(model, parent, _floats(t[:3, 3]), _floats(t[:3, 2]), _floats(t[:3, 0]), ids)[-1]
 
 
 class SharedPlacements:
@@ -162,17 +164,17 @@ class SharedPlacements:
 
     def placement(self, model: ifcopenshell.file, member, parent, t: np.ndarray):
         first = max(self.next, model.get_max_id() + 1)
-        ids = tuple(range(first, first + len(PLACEMENT_PARTS)))
+        ids = range(first, first + len(PLACEMENT_PARTS))
         self.next = first + len(PLACEMENT_PARTS)
         values = np.ascontiguousarray(t[:3, [3, 2, 0]])
         if not np.isfinite(values).all():
-            return _placement_parts(model, ids, parent, t)
+            return transform_placement(model, parent, t, ids)
         key = (parent.id() if parent is not None else 0).to_bytes(8, "little") + values.tobytes()
         group = self.made.get(key)
         if group is None:
             self.made[key] = len(self.groups)
             self.groups.append([(member.id(), first)])
-            return _placement_parts(model, ids, parent, t)
+            return transform_placement(model, parent, t, ids)
         self.groups[group].append((member.id(), first))
         self.skipped.extend(ids)
         return model.by_id(self.groups[group][0][1] + len(PLACEMENT_PARTS) - 1)
@@ -209,14 +211,11 @@ class SharedPlacements:
                 if inst.id() in moving:
                     where[inst.id()] = position
         old = []
-        create, by_id = model.create_entity, model.by_id
+        by_id = model.by_id
         for made_first, (members, first) in moves.items():
             point, axis, ref, axes, placement = (by_id(made_first + k) for k in range(parts))
-            new = [create("IfcCartesianPoint", point.Coordinates, id=first),
-                   create("IfcDirection", axis.DirectionRatios, id=first + 1),
-                   create("IfcDirection", ref.DirectionRatios, id=first + 2)]
-            new.append(create("IfcAxis2Placement3D", *new, id=first + 3))
-            new.append(create("IfcLocalPlacement", placement.PlacementRelTo, new[3], id=first + 4))
+            new = local_placement(model, placement.PlacementRelTo, point.Coordinates, axis.DirectionRatios,
+                                  ref.DirectionRatios, range(first, first + parts))
             for product, _ in members:
                 by_id(product).ObjectPlacement = new[4]
             for k, inst in enumerate(new):
@@ -328,7 +327,7 @@ def _apply(model, multi, mode, counts, progress, span, garbage: Detached, placem
                 inverses[key] = np.linalg.inv(placements.matrix(parent))
             relative = inverses[key] @ t_world @ p_rep
             if shared is None:
-                member.ObjectPlacement = model.create_entity("IfcLocalPlacement", parent, axis_placement(model, relative))
+                member.ObjectPlacement = transform_placement(model, parent, relative)
             else:
                 member.ObjectPlacement = shared.placement(model, member, parent, relative)
             member.Representation = rep.Representation
