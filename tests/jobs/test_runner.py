@@ -382,3 +382,24 @@ def test_the_retry_policy_is_one_function_of_the_error_and_the_attempt(error, at
     assert verdict.grant_attempt == isinstance(error, ResultPending)  # a waiting result gets the attempt it needs
     if outcome != "cancelled":
         assert verdict.report["status"] == "failed" and "attempts" not in verdict.report["details"]
+
+
+def test_an_export_that_could_not_be_stored_is_a_warning_in_the_results_own_report_too(ctx, monkeypatch):
+    """GET /result (and the CLI's output file) show the result's report: it must say what the job's report says,
+    not "ok" beside a job whose artifact is missing."""
+    job_id = submit(ctx, "test-compute", b'{"values": [2]}')
+    real_put = ctx.files.put
+
+    def put(key, data):
+        if key.endswith("/values.txt"):
+            raise ValueError("the blob store refused this name")
+        return real_put(key, data)
+
+    monkeypatch.setattr(ctx.files, "put", put)
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert [a.name for a in ctx.repo.artifacts(job_id)] == ["summary.json"]
+    assert job.report["status"] == "warning"
+    assert job.result["report"] == job.report
+    assert [w["code"] for w in job.result["report"]["warnings"]] == ["artifacts_failed"]
+    assert "values.txt" in job.result["report"]["warnings"][0]["message"]
