@@ -284,6 +284,13 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved
             {"paths": _non_finite_paths(result_json)[:20]},
         ) from None
     report = dict(result_json.get("report") or Report().model_dump(mode="json"))
+    if report.get("status") == "failed":
+        # a solver that says in its own report that it failed has no result to offer: the job fails with that
+        # report, never "succeeded" beside it
+        raise SolverError(report.get("stage") or "result", report.get("message") or "The solver reported a failure.",
+                          report.get("details") or {})
+    if report.get("status") == "ok" and report.get("warnings"):
+        report["status"] = "warning"  # a warning is never hidden behind "ok"
     rendered: list[Artifact] = []
     if spec.render_artifacts is not None:
         try:
