@@ -228,7 +228,14 @@ def _cut_last_line(text: str) -> int | None:
     return len(lines)
 
 
+# Byte-order marks and zero-width characters carry nothing in LDraw: a BOM inside the text is where files saved by
+# Notepad were joined into one .mpd; left in, it hides the '0 FILE' line it starts, and that sub-model's parts would be
+# read as the previous section's, at the wrong place.
+INVISIBLE = dict.fromkeys(map(ord, "\ufeff\u200b\u200c\u200d\u2060"))
+
+
 def parse_ldraw(text: str) -> dict:
+    text = text.translate(INVISIBLE)
     main, files = _files(text)
     roles = _classify(files, main)
     embedded: set[str] = set()

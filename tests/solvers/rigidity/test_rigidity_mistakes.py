@@ -178,3 +178,13 @@ def test_a_sub_model_the_main_model_never_places_is_warned_naming_it():
 def test_a_section_headed_0_file_without_a_name_is_read():
     request = parse("stack.mpd", "0 FILE\n" + STACK)
     assert len(request.parts) == 3
+
+
+def test_files_saved_with_a_byte_order_mark_and_joined_into_one_mpd_read_as_their_sections():
+    """Notepad writes UTF-8 with a BOM: .ldr files joined into one .mpd carry one at each '0 FILE'. Read as a line
+    type, it hid that header, and the tower's parts were read as the main model's, 40 LDU off where it places them."""
+    main = MAIN.replace("1 4 0 0 0 1 0 0 0 1 0 0 0 1 tower.ldr", "1 4 40 0 0 1 0 0 0 1 0 0 0 1 tower.ldr")
+    joined = parse("tower.mpd", "\ufeff" + main + "\ufeff" + TOWER)
+    assert placed(joined) == placed(parse("tower.mpd", main + TOWER))
+    assert sorted(p.position[0] for p in joined.parts) == [0.0, 40.0, 40.0]
+    assert joined.source["skipped_count"] == 0
