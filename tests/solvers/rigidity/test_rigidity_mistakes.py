@@ -188,3 +188,18 @@ def test_files_saved_with_a_byte_order_mark_and_joined_into_one_mpd_read_as_thei
     assert placed(joined) == placed(parse("tower.mpd", main + TOWER))
     assert sorted(p.position[0] for p in joined.parts) == [0.0, 40.0, 40.0]
     assert joined.source["skipped_count"] == 0
+
+
+def test_a_loop_of_sub_models_is_skipped_naming_the_loop_and_deep_nesting_is_not_called_a_loop():
+    loop = ("0 FILE a.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 b.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            "0 FILE b.ldr\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 a.ldr\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    request = parse("loop.mpd", loop)
+    assert len(request.parts) == 2
+    assert request.source["skipped"] == [{"line": 5, "reason": "sub-model 'a.ldr' includes itself (a.ldr -> b.ldr -> "
+                                                                 "a.ldr)"}]
+    chain = "".join(f"0 FILE m{k}.ldr\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 m{k + 1}.ldr\n"
+                    f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n" for k in range(40))
+    deep = parse("deep.mpd", chain + "0 FILE m40.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    assert len(deep.parts) == 32
+    (skip,) = deep.source["skipped"]
+    assert "nested more than 32 levels deep" in skip["reason"] and "itself" not in skip["reason"]
