@@ -74,6 +74,16 @@ def secret_bytes(text: str) -> bytes:
     return text.encode()
 
 
+def _warn_if_plain(text: str, whose: str) -> None:
+    """A secret without ``whsec_`` signs with its UTF-8 bytes, but a Standard Webhooks library given the same text
+    decodes it as base64 (its secrets are base64, the prefix optional) and refuses every delivery: say so, and what
+    to give the receiver instead (the secret itself is not logged)."""
+    if not text.startswith(SECRET_PREFIX):
+        log.warning("WEBHOOK_SECRETS: the secret of %s is not written as whsec_<base64>: deliveries are signed with its "
+                    "UTF-8 bytes, and a Standard Webhooks library given the same text reads it as base64 and refuses "
+                    "them; give the receiver 'whsec_' + base64(the text), or set that here", whose)
+
+
 def message_id(job_id: uuid.UUID) -> str:
     """``webhook-id``: one per event (a job finishes once), the same on every attempt of its delivery."""
     return f"msg_{job_id.hex}"
@@ -94,8 +104,10 @@ class WebhookSecrets:
             name, sep, secret = entry.partition(":")
             if sep and secret:
                 self.named[name] = secret_bytes(secret)
+                _warn_if_plain(secret, f"tenant {name!r}")
             elif entry:
                 self.default = secret_bytes(entry)
+                _warn_if_plain(entry, "every tenant")
         self.keys = keys
 
     def secret_for(self, owner: str) -> bytes | None:

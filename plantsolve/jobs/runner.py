@@ -284,6 +284,13 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved
             {"paths": _non_finite_paths(result_json)[:20]},
         ) from None
     report = dict(result_json.get("report") or Report().model_dump(mode="json"))
+    if report.get("status") == "failed":
+        # a solver that says in its own report that it failed has no result to offer: the job fails with that
+        # report, never "succeeded" beside it
+        raise SolverError(report.get("stage") or "result", report.get("message") or "The solver reported a failure.",
+                          report.get("details") or {})
+    if report.get("status") == "ok" and report.get("warnings"):
+        report["status"] = "warning"  # a warning is never hidden behind "ok"
     rendered: list[Artifact] = []
     if spec.render_artifacts is not None:
         try:
@@ -301,6 +308,15 @@ def _warn_artifacts(report: dict, message: str) -> None:
     warnings.append({"code": "artifacts_failed", "message": message, "details": {}})
     report["warnings"] = warnings
     report["status"] = "warning" if report.get("status") == "ok" else report.get("status", "warning")
+
+
+def _with_report(result_json: dict, report: dict) -> dict:
+    """The result as stored: its own report is the job's (an export that could not be rendered or stored is a
+    warning there too), so a reader of ``/result`` alone, the CLI's output file or a client, never sees "ok" for a
+    job whose report says otherwise."""
+    if "report" not in result_json or result_json["report"] == report:
+        return result_json
+    return {**result_json, "report": report}
 
 
 def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result_json, report,
@@ -324,8 +340,9 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
             else:
                 stored.append(StoredArtifact(artifact.name, artifact.media_type, blob.size, blob.sha256, blob.key))
             waiting.pop(0)
-        return ctx.repo.finish_success(job_id, attempt, result=result_json, report=report, artifacts=stored,
-                                       run_seconds=run_seconds, attempts=log_book.add("succeeded", note))
+        return ctx.repo.finish_success(job_id, attempt, result=_with_report(result_json, report), report=report,
+                                       artifacts=stored, run_seconds=run_seconds,
+                                       attempts=log_book.add("succeeded", note))
 
     retrying = Retrying(retry=retry_if_exception(is_infrastructure_failure),
                         stop=stop_after_delay(ctx.settings.result_write_seconds),

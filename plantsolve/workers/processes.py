@@ -46,6 +46,10 @@ STOP_SECONDS = 5.0
 TICK_SECONDS = 0.5
 # the wait before starting a process again after a start failed (the warm parent was away)
 RETRY_SECONDS = 1.0
+# A job process starts in milliseconds (a fork by the warm parent); a start that has not come back in this long
+# waits on a warm parent that hangs (stopped, deadlocked): it would wait forever while the service took jobs, so
+# readiness says no job can start and the warm parent is killed, which ends the wait and starts a new one.
+STALL_SECONDS = 10.0
 
 _warm = multiprocessing.get_context("forkserver")
 
@@ -147,6 +151,7 @@ class ProcessDispatcher:
         self._thread: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
         self._start_failed: str | None = None
+        self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
         # Whether a job may wait in its row beyond the window: set when an enqueue found the window full, cleared by a
         # refill that found no more. A finished job refills from the database only then; the sweeper's pass refills
         # regardless (jobs queued by another process, or re-queued by the sweep itself).
@@ -163,6 +168,7 @@ class ProcessDispatcher:
         self._stopping.clear()
         self._thread = threading.Thread(target=self._supervise, name="job-supervisor", daemon=True)
         self._thread.start()
+        threading.Thread(target=self._watch_starts, name="job-start-watch", daemon=True).start()
         resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
@@ -204,6 +210,8 @@ class ProcessDispatcher:
             raise RuntimeError("the job processes' warm parent is starting")
         if self._start_failed is not None:
             raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
+        if self._start_stalled():
+            raise RuntimeError("starting a job process hangs: the warm parent does not answer")
 
     def in_flight(self) -> int:
         """Jobs running or next in line in memory (at most ``window``)."""
@@ -309,7 +317,11 @@ class ProcessDispatcher:
             try:
                 process = _warm.Process(target=_job_process, daemon=True, name=f"job-{job_id}",
                                         args=(self._settings_json, str(job_id), sender))
-                process.start()
+                self._start_began = time.monotonic()
+                try:
+                    process.start()
+                finally:
+                    self._start_began = None
             except Exception as error:
                 receiver.close()
                 with self._lock:
@@ -325,6 +337,23 @@ class ProcessDispatcher:
             with self._lock:
                 self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline)
                 self._starting = None
+
+    def _start_stalled(self) -> bool:
+        began = self._start_began
+        return began is not None and time.monotonic() - began > STALL_SECONDS
+
+    def _watch_starts(self) -> None:
+        """Kill a warm parent that leaves a job process's start waiting (see ``STALL_SECONDS``): the start then fails,
+        its job goes back to the head of the line, and the supervisor starts a new warm parent."""
+        while not self._stopping.wait(TICK_SECONDS):
+            warm = self._warm_parent
+            if self._start_stalled() and warm is not None and _alive(warm):
+                log.error("a job process's start has waited %.0f s on the warm parent %d: killing it",
+                          time.monotonic() - (self._start_began or time.monotonic()), warm)
+                try:
+                    os.kill(warm, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
 
     def _ended(self, child: _Running) -> None:
         try:

@@ -442,3 +442,25 @@ def test_a_name_that_never_resolves_does_not_hold_a_submission(tmp_path, monkeyp
         accepted = client.post("/v1/test-compute/jobs", params={"callback_url": "http://slow.example/x"},
                                json={"values": [1.0]}, headers=ALICE)
         assert accepted.status_code == 202 and time.monotonic() - started < 4  # checked again at delivery
+
+
+def test_a_plain_text_secret_is_said_to_need_its_whsec_form_for_a_standard_webhooks_receiver(caplog):
+    """The same text given to the service and to the standardwebhooks library: the service signs with its UTF-8
+    bytes, the library decodes it as base64, and every delivery is refused. The service says so at start-up and
+    which form the receiver needs; with that form the library verifies the delivery."""
+    import logging
+
+    from plantsolve.app.auth import KeyRing
+    from plantsolve.app.webhooks import WebhookSecrets, signed_headers
+
+    caplog.set_level(logging.WARNING, logger="plantsolve")
+    plain = "rig7-hook-secret"
+    secrets = WebhookSecrets([f"acme:{plain}", "whsec_" + base64.b64encode(b"k" * 32).decode()], KeyRing([], []))
+    body = b'{"id": "x"}'
+    headers = signed_headers(secrets.secret_for("acme"), "msg_1", body)
+    with pytest.raises(Exception, match="No matching signature found"):
+        Webhook(plain).verify(body, headers)
+    assert Webhook("whsec_" + base64.b64encode(plain.encode()).decode()).verify(body, headers) == {"id": "x"}
+    (message,) = {r.getMessage() for r in caplog.records if "WEBHOOK_SECRETS" in r.getMessage()}
+    assert "tenant 'acme'" in message and "whsec_" in message  # the whsec_ secret is not warned about
+    assert plain not in caplog.text  # the secret itself is never logged

@@ -3,6 +3,7 @@ attempt, crashes retry up to the cap, hangs hit the time limit, lapsed leases ar
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import threading
 import time
@@ -17,7 +18,8 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import sweep_once
 from plantsolve.jobs.runner import lost_worker_report, run_job
 from plantsolve.jobs.service import JobService
-from plantsolve.solvers.base import SolverError
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.solvers.base import Solved, SolverError
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import StoredArtifact
 from tests.conftest import service_settings
@@ -382,3 +384,59 @@ def test_the_retry_policy_is_one_function_of_the_error_and_the_attempt(error, at
     assert verdict.grant_attempt == isinstance(error, ResultPending)  # a waiting result gets the attempt it needs
     if outcome != "cancelled":
         assert verdict.report["status"] == "failed" and "attempts" not in verdict.report["details"]
+
+
+def test_an_export_that_could_not_be_stored_is_a_warning_in_the_results_own_report_too(ctx, monkeypatch):
+    """GET /result (and the CLI's output file) show the result's report: it must say what the job's report says,
+    not "ok" beside a job whose artifact is missing."""
+    job_id = submit(ctx, "test-compute", b'{"values": [2]}')
+    real_put = ctx.files.put
+
+    def put(key, data):
+        if key.endswith("/values.txt"):
+            raise ValueError("the blob store refused this name")
+        return real_put(key, data)
+
+    monkeypatch.setattr(ctx.files, "put", put)
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert [a.name for a in ctx.repo.artifacts(job_id)] == ["summary.json"]
+    assert job.report["status"] == "warning"
+    assert job.result["report"] == job.report
+    assert [w["code"] for w in job.result["report"]["warnings"]] == ["artifacts_failed"]
+    assert "values.txt" in job.result["report"]["warnings"][0]["message"]
+
+
+def _spec_solving(ctx, monkeypatch, report: Report):
+    """test-compute whose solver returns its result with ``report``."""
+    spec = ctx.spec("test-compute")
+
+    def solve(request, progress):
+        solved = spec.solve(request, progress)
+        return Solved(solved.result.model_copy(update={"report": report}))
+
+    patched = dataclasses.replace(spec, solve=solve)
+    real = ctx.spec
+    monkeypatch.setattr(ctx, "spec", lambda kind: patched if kind == "test-compute" else real(kind))
+
+
+def test_a_result_whose_own_report_says_failed_is_a_failed_job_not_a_succeeded_one(ctx, monkeypatch):
+    _spec_solving(ctx, monkeypatch, Report(status="failed", stage="fit", message="The fit did not converge.",
+                                           details={"residual": 3.5}))
+    job_id = submit(ctx, "test-compute", b'{"values": [2]}')
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "failed"
+    job = ctx.repo.get(job_id)
+    assert job.status == "failed" and job.result is None and ctx.repo.artifacts(job_id) == []
+    assert (job.report["status"], job.report["stage"], job.report["message"]) == ("failed", "fit",
+                                                                                  "The fit did not converge.")
+    assert job.report["details"]["residual"] == 3.5
+
+
+def test_a_result_reported_ok_beside_warnings_is_stored_as_warning(ctx, monkeypatch):
+    warning = Diagnostic(code="not_converged", message="The fit stopped at its iteration limit.")
+    _spec_solving(ctx, monkeypatch, Report(status="ok", message="computed", warnings=[warning]))
+    job_id = submit(ctx, "test-compute", b'{"values": [2]}')
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert job.report["status"] == job.result["report"]["status"] == "warning"
+    assert [w["code"] for w in job.result["report"]["warnings"]] == ["not_converged"]

@@ -83,3 +83,34 @@ def test_a_killed_idle_warm_parent_is_started_again_and_jobs_go_on(service, tmp_
         assert dispatcher._warm_parent not in (None, warm)
         assert service.get("/readyz").status_code == 200
     assert _runs(markers) == 6
+
+
+def test_a_hung_warm_parent_makes_readiness_fail_and_is_replaced_so_the_job_runs(service, tmp_path, monkeypatch):
+    """A warm parent that is alive but does not answer (stopped here; deadlocked in the wild) would leave the next
+    job's start waiting forever while readiness said 200 and the service took jobs it never ran."""
+    monkeypatch.setattr("plantsolve.workers.processes.STALL_SECONDS", 2.0)
+    markers = tmp_path / "runs"
+    dispatcher = service.app.state.dispatcher
+    warm = dispatcher._warm_parent
+    os.kill(warm, signal.SIGSTOP)
+    try:
+        job_id = service.post("/v1/test-compute/jobs", json={"values": [1.0], "marker_dir": str(markers)}).json()["id"]
+        deadline = time.monotonic() + 30
+        while service.get("/readyz").status_code == 200:
+            assert time.monotonic() < deadline, "readiness said 200 while no job could start"
+            time.sleep(0.05)
+        assert service.get("/readyz").json()["checks"]["jobs"] == "unavailable"
+        assert wait_for(service, job_id, timeout=120)["status"] == "succeeded"
+    finally:
+        if not _gone(warm):
+            os.kill(warm, signal.SIGCONT)
+    assert _gone(warm) and dispatcher._warm_parent != warm
+    assert _ready(service) < 60 and _runs(markers) == 1
+
+
+def _gone(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state in ("Z", "X")

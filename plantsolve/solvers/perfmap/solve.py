@@ -384,13 +384,14 @@ def limit_lines(curves: CurveSet, settings: list[Setting], margin: float):
     return surge, choke, line
 
 
-def _warn_beyond_gsp(settings: list[Setting], warnings: list[Diagnostic]) -> None:
+def _warn_beyond_gsp(settings: list[Setting], beta_values: int, warnings: list[Diagnostic]) -> None:
     """The GasTurb export writes one file per value of the leading settings, its Surge and Choke Line tables one
     flow per speed line: more lines than GSP reads in a table are said (the file is still written: GasTurb and
-    GSPy read longer tables)."""
+    GSPy read longer tables), and so are fewer speed lines or beta values than GSPy can load."""
     groups: dict[tuple, int] = {}
     for s in settings:
         groups[tuple(s.values[:-1])] = groups.get(tuple(s.values[:-1]), 0) + 1
+    _warn_below_gspy(groups, beta_values, warnings)
     over = {k: n for k, n in groups.items() if n > GSP_MAX_ARGUMENTS}
     if over:
         key, n = max(over.items(), key=lambda kv: kv[1])
@@ -403,6 +404,27 @@ def _warn_beyond_gsp(settings: list[Setting], warnings: list[Diagnostic]) -> Non
             "file.",
             details={"speed_lines": n, "limit": GSP_MAX_ARGUMENTS, "rows_limit": GSP_MAX_PARAMETERS,
                      "files": [list(k) for k in over][:100]}))
+
+
+# GSPy reads a compressor map into scipy's cubic grid interpolators over (speed, beta), which need four values
+# along each axis: with fewer its map reader raises, and the file cannot be used there at all.
+GSPY_MIN_VALUES = 4
+
+
+def _warn_below_gspy(groups: dict[tuple, int], beta_values: int, warnings: list[Diagnostic]) -> None:
+    few = {k: n for k, n in groups.items() if n < GSPY_MIN_VALUES}
+    if not few and beta_values >= GSPY_MIN_VALUES:
+        return
+    n = min(few.values()) if few else min(groups.values())
+    what = ([f"{n} speed line(s) in a file"] if few else []) + \
+        ([f"{beta_values} beta values"] if beta_values < GSPY_MIN_VALUES else [])
+    warnings.append(Diagnostic(
+        code="gasturb_below_gspy_minimum", message=f"The GasTurb map export has {' and '.join(what)}: GSPy "
+        f"interpolates a map cubically over speed and beta and needs at least {GSPY_MIN_VALUES} of each, so GSPy "
+        f"cannot load it (this service's reader and pyCycle's linear tables can). For GSPy, fit at least "
+        f"{GSPY_MIN_VALUES} speed lines a file and options.beta_grid.lines of at least {GSPY_MIN_VALUES}.",
+        details={"speed_lines": n, "beta_values": beta_values, "minimum": GSPY_MIN_VALUES,
+                 "files": [list(k) for k in few][:100]}))
 
 
 def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnings: list[Diagnostic]) -> BetaMap | None:
@@ -445,7 +467,7 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
             f"first two beta nodes lie within {CHOKE_FLOW_TOLERANCE:g} of the line's flow range: a reader that "
             "takes such flows as a vertical choke segment merges them; fewer beta lines avoid it.",
             details={"values": close[:100], "lines": option.lines}))
-    _warn_beyond_gsp(settings, warnings)
+    _warn_beyond_gsp(settings, len(table.beta), warnings)
     f = table.frame
     return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv, spacing=option.spacing,
                    beta=table.beta.tolist(), lines=lines,

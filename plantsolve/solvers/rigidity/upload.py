@@ -5,7 +5,9 @@ Type 1 is ``1 <colour> x y z a b c d e f g h i <file>`` (position in LDU, the ro
 the file name possibly with spaces and in any case, with or without ``.dat``); it places a part,
 or a sub-model of the same ``.mpd``, which is expanded with its placement composed (sub-models of
 sub-models too; a sub-model that includes itself is refused at that line). Type 0 lines are
-comments and meta commands (``0 FILE`` and ``0 NOFILE`` delimit the sub-files of an ``.mpd``;
+comments and meta commands (``0 FILE`` and ``0 NOFILE`` delimit the sub-files of an ``.mpd``, in any order: the
+main model is the first that no other places; a name given to two sections of different contents is refused, and a
+sub-model the main model never places is warned about (``unplaced_submodels``);
 ``0 STEP``, ``0 !LDCAD …``, ``0 !LEOCAD …``, ``0 MLCAD …``, ``0 ROTSTEP``, ``0 BFC`` and the rest
 are ignored), types 2–5 are drawn geometry (lines, triangles, quads) and ignored, colours are
 ignored. Packed models (three.js' packer, web viewers; Studio and LDCad embedding unofficial parts) hold
@@ -74,24 +76,70 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
     """The main model's key and every sub-file's numbered lines (one unnamed file for a plain .ldr).
 
     The main model is the text before the first ``0 FILE`` when that text places anything (a packed
-    model, as three.js' packer writes it, has no ``0 FILE`` line of its own), else the first ``0 FILE``."""
+    model, as three.js' packer writes it, has no ``0 FILE`` line of its own), else the first ``0 FILE`` that no
+    other sub-model places (:func:`_main_model`). A name given to two ``0 FILE`` sections of different contents
+    is refused: which one a placement means is unknown."""
     files: dict[str, list[tuple[int, str]]] = {}
-    first = None
+    headers: dict[str, int] = {}  # each sub-file's '0 FILE' line
+    order: list[str] = []
     current = PRELUDE
+    repeated: tuple[str, int] | None = None  # a name met again (its lines collected apart, then compared)
+    again: list[tuple[int, str]] = []
+
+    def close_repeat() -> None:
+        if repeated is not None and _content(again) != _content(files[repeated[0]]):
+            name, line = repeated
+            raise reject(f"the file defines sub-file {name!r} twice with different contents ('0 FILE' at lines "
+                         f"{headers[name]} and {line}): which one its placements mean is unknown; rename one of them")
+
     for number, raw in enumerate(text.splitlines(), 1):
         tokens = raw.split()
-        if len(tokens) >= 2 and tokens[0] == "0" and tokens[1].upper() == "FILE":
-            current = _key(raw.strip()[1:].strip()[4:])
-            files.setdefault(current, [])
-            first = first or current
+        if len(tokens) >= 2 and tokens[0] == "0" and tokens[1].upper() in ("FILE", "NOFILE"):
+            close_repeat()
+            repeated, again = None, []
+            if tokens[1].upper() == "NOFILE":
+                current = ""  # text between files belongs to no model
+                continue
+            # a section without a name is read too (it can be the main model), under a name no line can place
+            current = _key(raw.strip()[1:].strip()[4:]) or f"<unnamed at line {number}>"
+            if current in headers:
+                repeated = (current, number)
+            else:
+                headers[current] = number
+                order.append(current)
+                files[current] = []
             continue
-        if len(tokens) >= 2 and tokens[0] == "0" and tokens[1].upper() == "NOFILE":
-            current = ""  # text between files belongs to no model
-            continue
-        if current:
+        if repeated is not None:
+            again.append((number, raw))
+        elif current:
             files.setdefault(current, []).append((number, raw))
+    close_repeat()
     prelude_places = any(raw.split()[:1] == ["1"] for _, raw in files.get(PRELUDE, ()))
-    return (PRELUDE if prelude_places or first is None else first), files
+    if prelude_places or not order:
+        return PRELUDE, files
+    return _main_model(order, files), files
+
+
+def _content(lines: list[tuple[int, str]]) -> list[str]:
+    """A section's lines as they read (numbers, blank lines and trailing spaces aside)."""
+    return [raw.strip() for _, raw in lines if raw.strip()]
+
+
+def _main_model(order: list[str], files: dict[str, list[tuple[int, str]]]) -> str:
+    """The first ``0 FILE`` section, as the MPD format says, unless another sub-model places it: then it is a
+    sub-model written first (sections shuffled, by hand or by a tool that sorts them), and the main model is the
+    first sub-model that nothing places. So the answer does not depend on the order of the sections."""
+    placed: set[str] = set()
+    for name in order:
+        for _, raw in files[name]:
+            tokens = raw.split()
+            if tokens[:1] == ["1"] and len(tokens) >= 15:
+                sub = _resolve(raw.split(None, 14)[14], files)
+                if sub is not None and sub != name:
+                    placed.add(sub)
+    if order[0] not in placed:
+        return order[0]
+    return next((name for name in order if name not in placed), order[0])
 
 
 def _resolve(name: str, files: dict) -> str | None:
@@ -180,7 +228,14 @@ def _cut_last_line(text: str) -> int | None:
     return len(lines)
 
 
+# Byte-order marks and zero-width characters carry nothing in LDraw: a BOM inside the text is where files saved by
+# Notepad were joined into one .mpd; left in, it hides the '0 FILE' line it starts, and that sub-model's parts would be
+# read as the previous section's, at the wrong place.
+INVISIBLE = dict.fromkeys(map(ord, "\ufeff\u200b\u200c\u200d\u2060"))
+
+
 def parse_ldraw(text: str) -> dict:
+    text = text.translate(INVISIBLE)
     main, files = _files(text)
     roles = _classify(files, main)
     embedded: set[str] = set()
@@ -194,7 +249,10 @@ def parse_ldraw(text: str) -> dict:
     resolver = Resolver(files, lambda name: _resolve(name, files))
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
 
+    expanded: set[str] = set()
+
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
+        expanded.add(name)
         for number, raw in files.get(name, []):
             tokens = raw.split()
             if not tokens:
@@ -261,8 +319,13 @@ def parse_ldraw(text: str) -> dict:
                                 "as one .mpd)"})
                 continue
             if role == "model":
-                if sub in stack or len(stack) >= MAX_DEPTH:
-                    skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself"})
+                if sub in stack:
+                    loop = " -> ".join([*stack[stack.index(sub):], sub])
+                    skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself ({loop})"})
+                    continue
+                if len(stack) >= MAX_DEPTH:
+                    skipped.append({"line": number, "reason": f"sub-model {file_name!r} is nested more than {MAX_DEPTH} "
+                                    "levels deep"})
                     continue
                 # counted as it expands: a fan-out of sub-models (10 includes x 8 levels = 10^8 placements) is
                 # refused once it passes the bound, before it expands further
@@ -298,6 +361,15 @@ def parse_ldraw(text: str) -> dict:
             f"line {', '.join(map(str, lines[:10]))}{' and more' if len(lines) > 10 else ''}: each was read as the "
             "nearest rotation, so the sub-model's parts stand up to a few degrees off where the matrix puts them",
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
+    unplaced = [name for name, role in roles.items() if role == "model" and name not in expanded
+                and any(raw.split()[:1] == ["1"] for _, raw in files[name])]
+    if unplaced:
+        warnings.append(Diagnostic(
+            code="unplaced_submodels", message=f"{len(unplaced)} sub-model(s) of the file are not placed in the main "
+            f"model {main!r}, directly or through its sub-models ({', '.join(repr(n) for n in unplaced[:5])}"
+            f"{' and more' if len(unplaced) > 5 else ''}): their parts are not analysed (a leftover of editing, or "
+            "the main model is another one)",
+            details={"submodels": unplaced[:MAX_SKIPPED_LISTED], "main_model": main}).model_dump())
     if cut is not None:
         warnings.append(truncated_file(cut, "the file ends inside this type-1 line (the file was cut?); the part it "
                                        "placed was not read.").model_dump())

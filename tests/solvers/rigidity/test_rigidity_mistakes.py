@@ -129,3 +129,77 @@ def test_the_ldraw_unit_is_stated_in_the_source_with_its_factor():
     assert request.source["units"]["factor"] == 1.0 and "0.4 mm" in request.source["units"]["from"]
     result = solve(request).result
     assert result.length_unit == "ldu" and result.report.details["source"]["units"]["file_unit"] == "ldu"
+
+
+# A main model placing a sub-model of two stacked bricks, with a brick of its own on top: 3 parts in one piece.
+MAIN = "0 FILE main.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 tower.ldr\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+TOWER = "0 FILE tower.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+
+
+def placed(request):
+    return sorted((p.part, tuple(p.position), tuple(p.rotation or ())) for p in request.parts)
+
+
+@pytest.mark.parametrize("order", [(MAIN, TOWER), (TOWER, MAIN)])
+def test_the_sections_of_an_mpd_may_come_in_any_order(order):
+    """The format says the first '0 FILE' is the main model; a sub-model written first (sections sorted by a tool,
+    or pasted by hand) is placed by another section, so it is not: the model read is the same either way."""
+    request = parse("tower.mpd", "".join(order))
+    assert request.source["main_model"] == "main.ldr"
+    assert placed(request) == [("3001", (0.0, -24.0, 0.0), (1, 0, 0, 0, 1, 0, 0, 0, 1)),
+                               ("3001", (0.0, 0.0, 0.0), (1, 0, 0, 0, 1, 0, 0, 0, 1)),
+                               ("3001", (0.0, 24.0, 0.0), (1, 0, 0, 0, 1, 0, 0, 0, 1))]
+    result = solve(request).result
+    assert (result.dof, len(result.pieces), result.report.warnings) == (0, 1, [])
+
+
+def test_two_sub_files_of_one_name_with_different_contents_are_refused_naming_both_lines():
+    other = "0 FILE tower.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+    for text, lines in ((MAIN + TOWER + other, "lines 4 and 7"), (MAIN + other + TOWER, "lines 4 and 6")):
+        with pytest.raises(InputRejected) as caught:
+            parse("tower.mpd", text)
+        (error,) = caught.value.errors
+        assert error.loc == ("file",)
+        assert f"defines sub-file 'tower.ldr' twice with different contents ('0 FILE' at {lines})" in error.msg
+
+
+def test_a_sub_file_written_twice_alike_is_read_once():
+    assert placed(parse("tower.mpd", MAIN + TOWER + TOWER.replace("\n", "  \n"))) == placed(parse("t.mpd", MAIN + TOWER))
+
+
+def test_a_sub_model_the_main_model_never_places_is_warned_naming_it():
+    request = parse("tower.mpd", MAIN + TOWER + "0 FILE old tower.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    assert len(request.parts) == 3
+    warning = next(w for w in solve(request).result.report.warnings if w.code == "unplaced_submodels")
+    assert warning.details == {"submodels": ["old tower.ldr"], "main_model": "main.ldr"}
+    assert "'old tower.ldr'" in warning.message and "not analysed" in warning.message
+
+
+def test_a_section_headed_0_file_without_a_name_is_read():
+    request = parse("stack.mpd", "0 FILE\n" + STACK)
+    assert len(request.parts) == 3
+
+
+def test_files_saved_with_a_byte_order_mark_and_joined_into_one_mpd_read_as_their_sections():
+    """Notepad writes UTF-8 with a BOM: .ldr files joined into one .mpd carry one at each '0 FILE'. Read as a line
+    type, it hid that header, and the tower's parts were read as the main model's, 40 LDU off where it places them."""
+    main = MAIN.replace("1 4 0 0 0 1 0 0 0 1 0 0 0 1 tower.ldr", "1 4 40 0 0 1 0 0 0 1 0 0 0 1 tower.ldr")
+    joined = parse("tower.mpd", "\ufeff" + main + "\ufeff" + TOWER)
+    assert placed(joined) == placed(parse("tower.mpd", main + TOWER))
+    assert sorted(p.position[0] for p in joined.parts) == [0.0, 40.0, 40.0]
+    assert joined.source["skipped_count"] == 0
+
+
+def test_a_loop_of_sub_models_is_skipped_naming_the_loop_and_deep_nesting_is_not_called_a_loop():
+    loop = ("0 FILE a.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 b.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            "0 FILE b.ldr\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 a.ldr\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    request = parse("loop.mpd", loop)
+    assert len(request.parts) == 2
+    assert request.source["skipped"] == [{"line": 5, "reason": "sub-model 'a.ldr' includes itself (a.ldr -> b.ldr -> "
+                                                                 "a.ldr)"}]
+    chain = "".join(f"0 FILE m{k}.ldr\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 m{k + 1}.ldr\n"
+                    f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n" for k in range(40))
+    deep = parse("deep.mpd", chain + "0 FILE m40.ldr\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n")
+    assert len(deep.parts) == 32
+    (skip,) = deep.source["skipped"]
+    assert "nested more than 32 levels deep" in skip["reason"] and "itself" not in skip["reason"]
