@@ -40,7 +40,8 @@ def neighbourhoods(tree: cKDTree, pts: np.ndarray, centres: np.ndarray, h: float
     d, idx = tree.query(centres, k=k, distance_upper_bound=float(h))
     valid = np.isfinite(d)
     idx = np.where(valid, idx, 0)
-    return pts[idx], np.where(valid, d, np.inf), valid
+    # (np.take gathers the rows several times faster than pts[idx]: the same copy)
+    return np.take(pts, idx, axis=0), np.where(valid, d, np.inf), valid
 
 
 def _weighted_gram(X: np.ndarray, w: np.ndarray, chunk: int = 1024) -> np.ndarray:
@@ -130,7 +131,7 @@ def knn_fit(tree: cKDTree, pts: np.ndarray, probes: np.ndarray, k: int = 40) -> 
     d, idx = tree.query(probes, k=min(k, len(pts)))
     h = d[:, -1:] * 1.0001 + 1e-300
     w = mls_weights(d, h)
-    return fit_quadrics(pts[idx], w, probes)
+    return fit_quadrics(np.take(pts, idx, axis=0), w, probes)
 
 
 def classify(fits: LocalFits, pipe_radius: float) -> np.ndarray:

@@ -24,6 +24,9 @@ from scipy.spatial import cKDTree
 from plantsolve.solvers.tube.local_fit import mls_weights, neighbourhoods
 
 
+SEED_CHUNK = 128  # seeds fitted at once
+
+
 @dataclass
 class SpineCloud:
     points: np.ndarray  # (M, 3) projected axis points
@@ -77,7 +80,7 @@ def fit_cylinders(nb: np.ndarray, w0: np.ndarray, x: np.ndarray, t: np.ndarray, 
         b = -np.matmul(J, (w * res)[..., None])
         try:
             step = np.linalg.solve(A, b)[..., 0]
-        except np.linalg.LinAlgError:
+        except np.linalg.LinAlgError:  # (one singular system holds this batch of seeds, :data:`SEED_CHUNK`)
             step = np.zeros((M, npar))
         # keep steps sane: a GN step larger than r means the local model broke down
         lim = np.maximum(np.abs(step[:, :2]).max(1) / (0.5 * r), 1.0)
@@ -103,6 +106,7 @@ def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.nda
     x = seeds - rp * normals
     t = tangents / np.linalg.norm(tangents, axis=1, keepdims=True)
     r = np.full(len(seeds), rp)
+    rms, cnt = np.empty(len(seeds)), np.empty(len(seeds), int)
     # pass 1 free radius (the curvature-based radius is biased by a few %), then the radius is
     # fixed at the median: a free radius is ill-conditioned on a one-sided patch at tube ends
     schedule = [True] * (outer - 1 if free_radius else 0) + [False] * (2 if free_radius else outer)
@@ -111,17 +115,21 @@ def mls_spine(tree: cKDTree, pts: np.ndarray, seeds: np.ndarray, normals: np.nda
             rp = float(np.median(r[np.isfinite(r)]))
             r = np.full(len(seeds), rp)
         h = support * rp
-        nb, d, valid = neighbourhoods(tree, pts, x, h, k)
-        w = np.where(valid, mls_weights(np.where(valid, d, h), h), 0.0)
-        x_new, t, r, rms = fit_cylinders(nb, w, x, t, r, free, robust_scale=0.1 * rp)
-        # MLS: project the current point onto the axis of its best cylinder
-        x = x_new + np.einsum("mi,mi->m", x - x_new, t)[:, None] * t
+        # a few seeds at a time: each seed's neighbourhood and fit are its own, and a chunk's (k, 3) arrays per
+        # seed stay in the processor's cache (all seeds' at once are megabytes: the fits took twice as long)
+        for a in range(0, len(seeds), SEED_CHUNK):
+            c = slice(a, a + SEED_CHUNK)
+            nb, d, valid = neighbourhoods(tree, pts, x[c], h, k)
+            w = np.where(valid, mls_weights(np.where(valid, d, h), h), 0.0)
+            x_new, t[c], r[c], rms[c] = fit_cylinders(nb, w, x[c], t[c], r[c], free, robust_scale=0.1 * rp)
+            # MLS: project the current point onto the axis of its best cylinder
+            x[c] = x_new + np.einsum("mi,mi->m", x[c] - x_new, t[c])[:, None] * t[c]
+            cnt[c] = valid.sum(1)
         if tick is not None:
             tick(f"MLS spine projection, pass {it + 1} of {len(schedule)}")
     off = seeds - x
     dist = np.linalg.norm(off, axis=1)
     proj_error = np.abs(dist - rp)
-    cnt = valid.sum(1)
     # the sample must also lie on the side its normal points to (a fit that jumped to another
     # part of the tube can still be r away)
     facing = np.einsum("ij,ij->i", off, normals) > 0.7 * np.maximum(dist, 1e-300)
