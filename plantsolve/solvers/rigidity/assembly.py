@@ -67,6 +67,8 @@ SLIP_BORE = 20.0
 # instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
 # FIT_SNAP of each other over the depth they share.
 FIT_ALIGN = math.cos(math.radians(10.0))
+# LDU: a male round section thinner than this is a rod a clip holds but no bar hole (the data's bars are radius 4)
+THIN_ROD = 3.5
 HALF_PITCH = 10.0  # LDU: half a stud pitch
 STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into the part above it (stud.dat's height)
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
@@ -505,7 +507,9 @@ class Assembly:
         of one other part on one line, one ending before the centre and one starting after it: the data states the bar
         in two pieces with the gap between them no wider than the clip (2921's handle: two 8 LDU bars either side of an
         8 LDU gap, where 6339-1 clips a tile on the handle's middle), and a clip held by bar on both sides is on the
-        bar. A hinge about the bar, as any clip on a bar. Returns the (clip's part, bar's part) pairs seated."""
+        bar; or where a rod thinner than a bar runs through the clip's centre along its axis
+        (:meth:`_thin_rod_through`). A hinge about the bar or rod, as any clip on a bar. Returns the (clip's part,
+        bar's part) pairs seated."""
         held = {(p, k) for conns in self._links.values() for c in conns if c.kind == "clip"
                 for p, k in ((c.a, c.ca), (c.b, c.cb))}
         seated = []
@@ -513,7 +517,8 @@ class Assembly:
             for ci, c in enumerate(placed.shape.connectors):
                 if c.type != "clip" or c.depth <= 0 or (id, ci) in held:
                     continue
-                bar = self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
+                bar = (self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
+                       or self._thin_rod_through(id, placed.points[ci], placed.directions[ci]))
                 if bar is None:
                     continue
                 other, oi = bar
@@ -534,6 +539,24 @@ class Assembly:
             elif -SNAP <= ends[0] <= half:
                 sides.setdefault(other, {}).setdefault(1, oi)
         return next(((other, found[-1]) for other, found in sorted(sides.items()) if len(found) == 2), None)
+
+    def _thin_rod_through(self, id: str, centre: np.ndarray, axis: np.ndarray):
+        """(part, snap cylinder) of the first male snap cylinder of another part whose round section at the clip's
+        centre is thinner than a bar, on the clip's axis (parallel, within FIT_SNAP) and reaching past the centre on
+        both sides: the data makes bars of radius-4 sections only, and states a thinner rod only as a cylinder (the
+        chain tread link 3873 clips onto the next link's pin ends, radius 1.5, as set 10227 runs 36 of them); a rod
+        through a clip's centre is inside its jaws. None when no part has one there."""
+        for other, oi, ends in self._runs_on_line(id, "fit_m", centre, axis, SNAP):
+            o = self.parts[other]
+            t = float((centre - o.points[oi]) @ o.directions[oi])  # where the centre lies along the cylinder
+            start = 0.0
+            for shape, radius, length in o.shape.connectors[oi].profile:
+                if start + SNAP < t < start + length - SNAP:
+                    if shape == "R" and radius < THIN_ROD:
+                        return other, oi
+                    break
+                start += length
+        return None
 
     def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
         """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along

@@ -98,6 +98,37 @@ def test_a_clip_whose_jaws_reach_one_bar_only_is_not_seated_across_the_gap():
     assert [j for j in joints(two_bars) if "2555" in j] == []
 
 
+# The chain tread link 3873: two clips on its x axis at x = -8.75 and 8.75 (2.5 wide), and 16 LDU along z its pin,
+# stated as a cylinder only: radius 2 from x = -6 to 6, radius 1.5 from 6 to 10 and from -6 to -10. The next link, 16
+# LDU along z, has its clips round those pin ends, as set 10227 runs 36 links round its sprockets.
+TREAD = "1 0 0 0 0 1 0 0 0 1 0 0 0 1 3873.dat\n1 0 0 {y} 16 1 0 0 0 1 0 0 0 1 3873.dat\n"
+
+
+def test_a_chain_link_clips_onto_the_thin_pin_of_the_next():
+    result = solve(parse("model.ldr", TREAD.format(y=0))).result
+    assert joints(TREAD.format(y=0)) == [("hinge", "clip", "3873", "3873", 1)] * 2
+    assert result.dof == 1  # the two clips on one axis: the links turn about it
+
+
+@pytest.mark.parametrize("y", [1.5, 4])
+def test_a_clip_beside_a_thin_pin_is_not_on_it(y):
+    # drawn more than FIT_SNAP (1 LDU) off the pin's axis, the clip is not round it; the rounding of the slip pass
+    # does not take it either (it joins clips to bars only)
+    assert joints(TREAD.format(y=y)) == []
+
+
+def test_a_clip_on_a_pins_axis_round_a_section_as_thick_as_a_stud_is_not_on_a_thin_rod():
+    # the clip plate 4085c's clip (centre (0, 4, -20), axis y, 8 wide) on the axis of a Technic pin turned along y,
+    # 10 LDU into one radius-6 half: no clip goes round that, and nothing else joins the two
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n"
+            "1 0 0 14 -20 0 -1 0 1 0 0 0 0 1 3673.dat\n")
+    assert joints(text) == []
+    # the same clip round a thin rod there (a chain link's pin end, turned along y): held
+    link = "1 0 0 {y} -36 0 -1 0 1 0 0 0 0 1 3873.dat\n"
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n" + link.format(y=-4.75)) == [
+        ("hinge", "clip", "3873", "4085c", 1)]
+
+
 # Two Technic arms, each on a pin joiner: 6217 (3 fingers) and 6048 (2 fingers) whose finger runs share the x axis,
 # the 6048 drawn ``d`` LDU off the 6217's finger axis (6544-1 closes such a linkage 5.3 and 5.8 LDU off).
 def arms(d: float) -> str:
