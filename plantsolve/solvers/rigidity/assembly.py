@@ -301,6 +301,9 @@ class Assembly:
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])
                 if kind in ANY_DIRECTION:
                     pass
+                elif kind == "clip" and slip == 0 and FIT_ALIGN <= abs(cos) < ALIGN:
+                    if not self._tilted_clip_holds(id, ci, other, oi):
+                        continue
                 elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
                 point = tuple(_clean(v) for v in where)
@@ -327,6 +330,23 @@ class Assembly:
                 deep = [c for c in conns if not self._stub(c)]
                 found[other] = deep or conns  # a stub only where nothing deeper fits (an arm's collar beside its peg)
         return found
+
+    def _tilted_clip_holds(self, id: str, ci: int, other: str, oi: int) -> bool:
+        """A bar up to 10° (FIT_ALIGN) off the axis of a clip its line passes through holds the clip where it stays
+        within FIT_SNAP of the clip's axis across the clip's jaws (its width): a minifigure's hand, turned by
+        rotations printed with 3 digits through arm and hand, holds a revolver's grip 4° off its axis (set 6755-1),
+        the jaws' edges 0.4 LDU off the grip's line."""
+        (cp, ck), (bp, bk) = ((id, ci), (other, oi))
+        if self.parts[cp].shape.connectors[ck].type != "clip":
+            (cp, ck), (bp, bk) = (bp, bk), (cp, ck)
+        clip, bar = self.parts[cp], self.parts[bp]
+        half = clip.shape.connectors[ck].depth / 2
+        axis = bar.directions[bk]
+        for s in (-half, half):
+            w = clip.points[ck] + clip.directions[ck] * s - bar.points[bk]
+            if float(np.linalg.norm(w - float(w @ axis) * axis)) > FIT_SNAP:
+                return False
+        return True
 
     def _stub(self, c: Connection) -> bool:
         """The male cylinder of a fit shorter than FIT_OVERLAP (in by all of its length: :func:`catalogue.fit_depth`)."""

@@ -3,6 +3,7 @@ and official sets (OMR, CC BY 2.0: omr/README.md) whose parts are all joined and
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from pathlib import Path
 
@@ -127,6 +128,33 @@ def test_a_clip_on_a_pins_axis_round_a_section_as_thick_as_a_stud_is_not_on_a_th
     link = "1 0 0 {y} -36 0 -1 0 1 0 0 0 0 1 3873.dat\n"
     assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n" + link.format(y=-4.75)) == [
         ("hinge", "clip", "3873", "4085c", 1)]
+
+
+def hand_and_revolver(tilt: float, cross: float = 0.0) -> str:
+    """A minifigure hand 3820 (its clip centred at (0, -0.823, -9.895) along (0, -0.968, -0.25), 11 LDU wide) and a
+    revolver 30132 (its grip a bar from (0, -3, 0) along y, 9 long) whose grip is turned ``tilt`` degrees off the
+    clip's axis (about x), its middle where its line crosses the clip's axis ``cross`` LDU from the clip's centre."""
+    centre, axis = np.array([0.0, -0.823, -9.895]), np.array([0.0, -0.968, -0.25])
+    axis /= np.linalg.norm(axis)
+    a = math.atan2(0.25, 0.968) + math.radians(tilt)  # turns y onto (0, cos a, sin a): the clip's line, less tilt
+    rotation = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    position = centre + axis * cross - rotation @ np.array([0.0, 1.5, 0.0])
+    numbers = " ".join(f"{v:.6f}" for v in [*position, *rotation.ravel()])
+    return f"1 14 0 0 0 1 0 0 0 1 0 0 0 1 3820.dat\n1 0 {numbers} 30132.dat\n"
+
+
+@pytest.mark.parametrize("tilt", [0, 4, -8])
+def test_a_hand_holds_a_grip_turned_a_few_degrees_off_its_clip(tilt):
+    # rotations printed with 3 digits through arm and hand leave a held accessory 4° off the hand's clip (6755-1);
+    # at 8° the jaws' edges are 5.5 sin 8° = 0.77 LDU off the grip's line, inside FIT_SNAP
+    assert joints(hand_and_revolver(tilt)) == [("hinge", "clip", "30132", "3820", 1)]
+
+
+@pytest.mark.parametrize("tilt, cross", [(15, 0.0), (8, 3.0)])
+def test_a_grip_turned_too_far_or_crossing_the_clip_off_centre_is_not_held(tilt, cross):
+    # 15° off: more than FIT_ALIGN's 10°; 8° off crossing the clip's axis 3 LDU from its centre: the line passes
+    # 0.42 LDU from the centre but 8.5 sin 8° = 1.18 LDU from the far jaw's edge
+    assert joints(hand_and_revolver(tilt, cross)) == []
 
 
 # Two Technic arms, each on a pin joiner: 6217 (3 fingers) and 6048 (2 fingers) whose finger runs share the x axis,
