@@ -381,9 +381,88 @@ class Assembly:
                     self._neighbours[id].add(other)
                     self._offsets[(other, id)] = gap
                     joined.append((other, id, gap))
+        joined += self._join_slipped_grips(groups, label, reach)
         if joined:
             self._pebble_stale = True
         return joined
+
+    def _join_slipped_grips(self, groups: list[list[str]], label: dict, reach: float) -> list[tuple[str, str, float]]:
+        """Join, as :meth:`join_pieces` joins a point drawn off its mate, a stud drawn up to ``reach`` off the place
+        midway between two anti-studs of a part one stud wide where its long walls grip it (:meth:`seat_offset_studs`
+        seats it there within rounding): 21325-1 lays fifteen 1 x 2 tiles on the side studs of 26604 bricks, each 2
+        LDU along the tile from its middle. Only between different pieces as they were before the pass, so a stud or
+        a gripping part is in a piece besides the largest; each pair once, its offset the stud's distance from the
+        midway place."""
+        found = []
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type == "stud" and c.length <= 0:  # this piece's stud in a part of another
+                        found += [(id, ci, other, oi, gap) for other, oi, gap in self._midway_places(
+                            id, placed.points[ci], placed.directions[ci], label, reach, "antistud")]
+                for ci, a, b in self._antistud_pairs(placed):  # another piece's stud in this part
+                    middle = (a + b) / 2
+                    for other, oi, gap in self._midway_places(id, middle, placed.directions[ci], label, reach, "stud"):
+                        if self._grips_midway(placed, a, b, self.parts[other].directions[oi]):
+                            found.append((other, oi, id, ci, gap))
+        joined = []
+        for id, ci, other, oi, gap in found:
+            if (other, id) not in self._links and (id, other) not in self._links:
+                self._link_at(id, ci, other, oi, "stud")
+                self._offsets[(other, id)] = gap
+                joined.append((other, id, gap))
+        return joined
+
+    def _midway_places(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict, reach: float,
+                       type: str):
+        """For a stud at ``point`` (``type`` "antistud"): (part, anti-stud, offset) of the parts of other pieces whose
+        two anti-studs a pitch apart face it in its plane (within SNAP) with their midway place more than SNAP and at
+        most ``reach`` from it, where the part grips it (:meth:`_grips_midway`). For the midway place ``point`` of two
+        anti-studs of ``id`` facing along ``direction`` (``type`` "stud"): (part, stud, offset) of the studs of parts
+        of other pieces facing them there."""
+        near: dict[str, list[tuple[int, np.ndarray]]] = {}
+        span = HALF_PITCH + reach if type == "antistud" else reach
+        for cell in _around(point, span, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                v = o.points[oi] - point
+                if (label[other] != label[id] and o.shape.connectors[oi].type == type
+                        and float(direction @ o.directions[oi]) <= -ALIGN and abs(float(v @ direction)) <= SNAP
+                        and float(np.linalg.norm(v)) <= span):
+                    near.setdefault(other, []).append((oi, o.points[oi]))
+        for other, points in near.items():
+            if type == "stud":
+                for oi, q in points:
+                    gap = float(np.linalg.norm(q - point))
+                    if SNAP < gap <= reach:
+                        yield other, oi, gap
+                continue
+            o = self.parts[other]
+            for (oi, a), (_, b) in itertools.combinations(points, 2):
+                gap = float(np.linalg.norm(point - (a + b) / 2))
+                if (abs(float(np.linalg.norm(a - b)) - 2 * HALF_PITCH) <= SNAP and SNAP < gap <= reach
+                        and self._grips_midway(o, a, b, direction)):
+                    yield other, oi, gap
+                    break
+
+    @staticmethod
+    def _antistud_pairs(placed: Placed):
+        """(connector, point, point) of each two anti-studs of a placed part a pitch apart along an axis of its frame
+        facing one way (found through the part's own coordinates, so a base plate's hundreds cost one look-up each)."""
+        mouths = {(tuple(round(v) for v in c.point), c.direction): k for k, c in enumerate(placed.shape.connectors)
+                  if c.type == "antistud" and c.length <= 0}
+        for (point, direction), k in mouths.items():
+            for step in ((2 * HALF_PITCH, 0, 0), (0, 2 * HALF_PITCH, 0), (0, 0, 2 * HALF_PITCH)):
+                m = mouths.get((tuple(int(p + d) for p, d in zip(point, step)), direction))
+                if m is not None:
+                    yield k, placed.points[k], placed.points[m]
+
+    def _grips_midway(self, o: Placed, a: np.ndarray, b: np.ndarray, direction: np.ndarray) -> bool:
+        """``o`` one stud wide across its anti-studs ``a`` and ``b`` and stating no post between them: its long walls
+        grip a stud pointing along ``direction`` midway between them."""
+        middle = (a + b) / 2
+        return not self._post_at(o, middle) and self._walls_across(o, middle, a - middle, direction)
 
     def seat_offset_studs(self) -> list[tuple[str, str]]:
         """Seat the studs of pieces left apart where a part above grips them between a tube and its walls although

@@ -157,6 +157,26 @@ def test_a_grip_turned_too_far_or_crossing_the_clip_off_centre_is_not_held(tilt,
     assert joints(hand_and_revolver(tilt, cross)) == []
 
 
+# A 1 x 2 tile 3069b (anti-studs at x = -10 and 10, no post between them) on the stud of a 1 x 1 plate, its middle
+# drawn ``s`` LDU along its length from the stud: midway, its long walls grip the stud (seated within rounding); a
+# slip of up to 3 LDU from there is joined as any point drawn off its mate and named with its offset.
+TILE_ON_STUD = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n1 15 {s} -8 0 1 0 0 0 1 0 0 0 1 {part}.dat\n"
+
+
+@pytest.mark.parametrize("s", [2, -3])
+def test_a_one_wide_tile_drawn_a_little_off_the_stud_its_walls_grip_is_joined_and_named(s):
+    result = solve(parse("model.ldr", TILE_ON_STUD.format(s=s, part="3069b"))).result
+    assert [(j.type, j.origin) for j in result.joints] == [("hinge", "stud")]
+    warning = next(w for w in result.report.warnings if w.code == "offset_joints")
+    assert [pair["offset_ldu"] for pair in warning.details["pairs"]] == [abs(s)]
+
+
+@pytest.mark.parametrize("s, part", [(4, "3069b"), (2, "3023")])
+def test_a_stud_further_off_the_midway_place_or_under_a_post_is_not_gripped(s, part):
+    # 4 LDU off: more than a slip; the plate 1 x 2 3023 states a post under its middle, where no stud fits
+    assert joints(TILE_ON_STUD.format(s=s, part=part)) == []
+
+
 # Two Technic arms, each on a pin joiner: 6217 (3 fingers) and 6048 (2 fingers) whose finger runs share the x axis,
 # the 6048 drawn ``d`` LDU off the 6217's finger axis (6544-1 closes such a linkage 5.3 and 5.8 LDU off).
 def arms(d: float) -> str:
