@@ -17,10 +17,11 @@ pin free to spin.
 
 A whole model read from a file then gets four passes (the job runs them once all parts are placed):
 :meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_clips_across_gaps` (a clip
-whose jaws reach bar on both sides of a gap the data leaves in it), :meth:`Assembly.seat_offset_studs` (studs
-gripped between a tube and a wall where the data states no anti-stud) and :meth:`Assembly.join_pieces`
-(pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers by ``FINGER_REACH``: a part
-drawn off its mate).
+whose jaws reach bar on both sides of a gap the data leaves in it, or round a rod thinner than a bar),
+:meth:`Assembly.seat_offset_studs` (studs gripped between a tube and a wall where the data states no anti-stud) and
+:meth:`Assembly.join_pieces` (pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers
+by ``FINGER_REACH``, a stud the place where a one-wide part's walls grip it by ``OFFSET_REACH``: a part drawn off its
+mate).
 """
 
 from __future__ import annotations

@@ -387,11 +387,11 @@ def _with_fits(shape: PartShape) -> PartShape:
 
 
 # Old part numbers whose drawings follow the frame of the part they were moved to, not the library's redirection:
-# the 2022 library moved the open-centre Technic bricks 4 x 6 and 4 x 8 to 32531a and 32532a with a `~Moved to`
+# the 2022 library moved the open-centre Technic bricks 4 x 6 and 6 x 8 to 32531a and 32532a with a `~Moved to`
 # file that turns the new part a quarter turn about y, yet the official models that name the old numbers place them
-# in the new part's own frame (every pin of 10179, 10248, 10252, 70816 and 75144 in a hole of 32531 that way, and
-# 19 LDU off a hole the other way; 75060's in 32532). Other moved parts keep the redirection: 2714's turned frame
-# is the one the models (10212, 5571) are drawn in.
+# in the new part's own frame (the pins of 10030, 10179, 10248, 10252 and 70816 in holes of 32531 that way; 10252's
+# 19 LDU off a hole the other way; those of 75060 and 75827 in 32532's). Other moved parts keep the redirection: 2714's
+# turned frame is the one the models (10212, 5571) are drawn in.
 DRAWN_AS_MOVED = {"32531": "32531a", "32532": "32532a"}
 
 
