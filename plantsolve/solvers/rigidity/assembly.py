@@ -17,10 +17,11 @@ pin free to spin.
 
 A whole model read from a file then gets four passes (the job runs them once all parts are placed):
 :meth:`Assembly.seat_tyres` (a tyre on a wheel that states no rim), :meth:`Assembly.seat_clips_across_gaps` (a clip
-whose jaws reach bar on both sides of a gap the data leaves in it), :meth:`Assembly.seat_offset_studs` (studs
-gripped between a tube and a wall where the data states no anti-stud) and :meth:`Assembly.join_pieces`
-(pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers by ``FINGER_REACH``: a part
-drawn off its mate).
+whose jaws reach bar on both sides of a gap the data leaves in it, or round a rod thinner than a bar),
+:meth:`Assembly.seat_offset_studs` (studs gripped between a tube and a wall where the data states no anti-stud) and
+:meth:`Assembly.join_pieces` (pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers
+by ``FINGER_REACH``, a stud the place where a one-wide part's walls grip it by ``OFFSET_REACH``: a part drawn off its
+mate).
 """
 
 from __future__ import annotations
@@ -67,6 +68,8 @@ SLIP_BORE = 20.0
 # instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
 # FIT_SNAP of each other over the depth they share.
 FIT_ALIGN = math.cos(math.radians(10.0))
+# LDU: a male round section thinner than this is a rod a clip holds but no bar hole (the data's bars are radius 4)
+THIN_ROD = 3.5
 HALF_PITCH = 10.0  # LDU: half a stud pitch
 STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into the part above it (stud.dat's height)
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
@@ -299,6 +302,9 @@ class Assembly:
                 cos = float(dirs[ci] @ self.parts[other].directions[oi])
                 if kind in ANY_DIRECTION:
                     pass
+                elif kind == "clip" and slip == 0 and FIT_ALIGN <= abs(cos) < ALIGN:
+                    if not self._tilted_clip_holds(id, ci, other, oi):
+                        continue
                 elif (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and abs(cos) < ALIGN):
                     continue
                 point = tuple(_clean(v) for v in where)
@@ -325,6 +331,23 @@ class Assembly:
                 deep = [c for c in conns if not self._stub(c)]
                 found[other] = deep or conns  # a stub only where nothing deeper fits (an arm's collar beside its peg)
         return found
+
+    def _tilted_clip_holds(self, id: str, ci: int, other: str, oi: int) -> bool:
+        """A bar up to 10° (FIT_ALIGN) off the axis of a clip its line passes through holds the clip where it stays
+        within FIT_SNAP of the clip's axis across the clip's jaws (its width): a minifigure's hand, turned by
+        rotations printed with 3 digits through arm and hand, holds a revolver's grip 4° off its axis (set 6755-1),
+        the jaws' edges 0.4 LDU off the grip's line."""
+        (cp, ck), (bp, bk) = ((id, ci), (other, oi))
+        if self.parts[cp].shape.connectors[ck].type != "clip":
+            (cp, ck), (bp, bk) = (bp, bk), (cp, ck)
+        clip, bar = self.parts[cp], self.parts[bp]
+        half = clip.shape.connectors[ck].depth / 2
+        axis = bar.directions[bk]
+        for s in (-half, half):
+            w = clip.points[ck] + clip.directions[ck] * s - bar.points[bk]
+            if float(np.linalg.norm(w - float(w @ axis) * axis)) > FIT_SNAP:
+                return False
+        return True
 
     def _stub(self, c: Connection) -> bool:
         """The male cylinder of a fit shorter than FIT_OVERLAP (in by all of its length: :func:`catalogue.fit_depth`)."""
@@ -359,9 +382,88 @@ class Assembly:
                     self._neighbours[id].add(other)
                     self._offsets[(other, id)] = gap
                     joined.append((other, id, gap))
+        joined += self._join_slipped_grips(groups, label, reach)
         if joined:
             self._pebble_stale = True
         return joined
+
+    def _join_slipped_grips(self, groups: list[list[str]], label: dict, reach: float) -> list[tuple[str, str, float]]:
+        """Join, as :meth:`join_pieces` joins a point drawn off its mate, a stud drawn up to ``reach`` off the place
+        midway between two anti-studs of a part one stud wide where its long walls grip it (:meth:`seat_offset_studs`
+        seats it there within rounding): 21325-1 lays fifteen 1 x 2 tiles on the side studs of 26604 bricks, each 2
+        LDU along the tile from its middle. Only between different pieces as they were before the pass, so a stud or
+        a gripping part is in a piece besides the largest; each pair once, its offset the stud's distance from the
+        midway place."""
+        found = []
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type == "stud" and c.length <= 0:  # this piece's stud in a part of another
+                        found += [(id, ci, other, oi, gap) for other, oi, gap in self._midway_places(
+                            id, placed.points[ci], placed.directions[ci], label, reach, "antistud")]
+                for ci, a, b in self._antistud_pairs(placed):  # another piece's stud in this part
+                    middle = (a + b) / 2
+                    for other, oi, gap in self._midway_places(id, middle, placed.directions[ci], label, reach, "stud"):
+                        if self._grips_midway(placed, a, b, self.parts[other].directions[oi]):
+                            found.append((other, oi, id, ci, gap))
+        joined = []
+        for id, ci, other, oi, gap in found:
+            if (other, id) not in self._links and (id, other) not in self._links:
+                self._link_at(id, ci, other, oi, "stud")
+                self._offsets[(other, id)] = gap
+                joined.append((other, id, gap))
+        return joined
+
+    def _midway_places(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict, reach: float,
+                       type: str):
+        """For a stud at ``point`` (``type`` "antistud"): (part, anti-stud, offset) of the parts of other pieces whose
+        two anti-studs a pitch apart face it in its plane (within SNAP) with their midway place more than SNAP and at
+        most ``reach`` from it, where the part grips it (:meth:`_grips_midway`). For the midway place ``point`` of two
+        anti-studs of ``id`` facing along ``direction`` (``type`` "stud"): (part, stud, offset) of the studs of parts
+        of other pieces facing them there."""
+        near: dict[str, list[tuple[int, np.ndarray]]] = {}
+        span = HALF_PITCH + reach if type == "antistud" else reach
+        for cell in _around(point, span, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                v = o.points[oi] - point
+                if (label[other] != label[id] and o.shape.connectors[oi].type == type
+                        and float(direction @ o.directions[oi]) <= -ALIGN and abs(float(v @ direction)) <= SNAP
+                        and float(np.linalg.norm(v)) <= span):
+                    near.setdefault(other, []).append((oi, o.points[oi]))
+        for other, points in near.items():
+            if type == "stud":
+                for oi, q in points:
+                    gap = float(np.linalg.norm(q - point))
+                    if SNAP < gap <= reach:
+                        yield other, oi, gap
+                continue
+            o = self.parts[other]
+            for (oi, a), (_, b) in itertools.combinations(points, 2):
+                gap = float(np.linalg.norm(point - (a + b) / 2))
+                if (abs(float(np.linalg.norm(a - b)) - 2 * HALF_PITCH) <= SNAP and SNAP < gap <= reach
+                        and self._grips_midway(o, a, b, direction)):
+                    yield other, oi, gap
+                    break
+
+    @staticmethod
+    def _antistud_pairs(placed: Placed):
+        """(connector, point, point) of each two anti-studs of a placed part a pitch apart along an axis of its frame
+        facing one way (found through the part's own coordinates, so a base plate's hundreds cost one look-up each)."""
+        mouths = {(tuple(round(v) for v in c.point), c.direction): k for k, c in enumerate(placed.shape.connectors)
+                  if c.type == "antistud" and c.length <= 0}
+        for (point, direction), k in mouths.items():
+            for step in ((2 * HALF_PITCH, 0, 0), (0, 2 * HALF_PITCH, 0), (0, 0, 2 * HALF_PITCH)):
+                m = mouths.get((tuple(int(p + d) for p, d in zip(point, step)), direction))
+                if m is not None:
+                    yield k, placed.points[k], placed.points[m]
+
+    def _grips_midway(self, o: Placed, a: np.ndarray, b: np.ndarray, direction: np.ndarray) -> bool:
+        """``o`` one stud wide across its anti-studs ``a`` and ``b`` and stating no post between them: its long walls
+        grip a stud pointing along ``direction`` midway between them."""
+        middle = (a + b) / 2
+        return not self._post_at(o, middle) and self._walls_across(o, middle, a - middle, direction)
 
     def seat_offset_studs(self) -> list[tuple[str, str]]:
         """Seat the studs of pieces left apart where a part above grips them between a tube and its walls although
@@ -505,7 +607,9 @@ class Assembly:
         of one other part on one line, one ending before the centre and one starting after it: the data states the bar
         in two pieces with the gap between them no wider than the clip (2921's handle: two 8 LDU bars either side of an
         8 LDU gap, where 6339-1 clips a tile on the handle's middle), and a clip held by bar on both sides is on the
-        bar. A hinge about the bar, as any clip on a bar. Returns the (clip's part, bar's part) pairs seated."""
+        bar; or where a rod thinner than a bar runs through the clip's centre along its axis
+        (:meth:`_thin_rod_through`). A hinge about the bar or rod, as any clip on a bar. Returns the (clip's part,
+        bar's part) pairs seated."""
         held = {(p, k) for conns in self._links.values() for c in conns if c.kind == "clip"
                 for p, k in ((c.a, c.ca), (c.b, c.cb))}
         seated = []
@@ -513,7 +617,8 @@ class Assembly:
             for ci, c in enumerate(placed.shape.connectors):
                 if c.type != "clip" or c.depth <= 0 or (id, ci) in held:
                     continue
-                bar = self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
+                bar = (self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
+                       or self._thin_rod_through(id, placed.points[ci], placed.directions[ci]))
                 if bar is None:
                     continue
                 other, oi = bar
@@ -534,6 +639,24 @@ class Assembly:
             elif -SNAP <= ends[0] <= half:
                 sides.setdefault(other, {}).setdefault(1, oi)
         return next(((other, found[-1]) for other, found in sorted(sides.items()) if len(found) == 2), None)
+
+    def _thin_rod_through(self, id: str, centre: np.ndarray, axis: np.ndarray):
+        """(part, snap cylinder) of the first male snap cylinder of another part whose round section at the clip's
+        centre is thinner than a bar, on the clip's axis (parallel, within FIT_SNAP) and reaching past the centre on
+        both sides: the data makes bars of radius-4 sections only, and states a thinner rod only as a cylinder (the
+        chain tread link 3873 clips onto the next link's pin ends, radius 1.5, as set 10227 runs 36 of them); a rod
+        through a clip's centre is inside its jaws. None when no part has one there."""
+        for other, oi, ends in self._runs_on_line(id, "fit_m", centre, axis, SNAP):
+            o = self.parts[other]
+            t = float((centre - o.points[oi]) @ o.directions[oi])  # where the centre lies along the cylinder
+            start = 0.0
+            for shape, radius, length in o.shape.connectors[oi].profile:
+                if start + SNAP < t < start + length - SNAP:
+                    if shape == "R" and radius < THIN_ROD:
+                        return other, oi
+                    break
+                start += length
+        return None
 
     def _cylinder_through(self, id: str, centre: np.ndarray, axis: np.ndarray, half: float):
         """(part, connector) of the first male snap cylinder of another part on the line through ``centre`` along

@@ -386,9 +386,21 @@ def _with_fits(shape: PartShape) -> PartShape:
     return replace(shape, connectors=shape.connectors + extra) if extra else shape
 
 
+# Old part numbers whose drawings follow the frame of the part they were moved to, not the library's redirection:
+# the 2022 library moved the open-centre Technic bricks 4 x 6 and 6 x 8 to 32531a and 32532a with a `~Moved to`
+# file that turns the new part a quarter turn about y, yet the official models that name the old numbers place them
+# in the new part's own frame (the pins of 10030, 10179, 10248, 10252 and 70816 in holes of 32531 that way; 10252's
+# 19 LDU off a hole the other way; those of 75060 and 75827 in 32532's). Other moved parts keep the redirection: 2714's
+# turned frame is the one the models (10212, 5571) are drawn in.
+DRAWN_AS_MOVED = {"32531": "32531a", "32532": "32532a"}
+
+
 @functools.lru_cache(maxsize=4096)
 def generated_part(number: str) -> PartShape | None:
-    fields = generated.entry(number)
+    moved = DRAWN_AS_MOVED.get(number)
+    fields = generated.entry(moved or number)
+    if fields is not None and moved:
+        fields["number"] = number
     return None if fields is None else _shape(fields)
 
 

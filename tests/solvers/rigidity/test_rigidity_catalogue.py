@@ -332,3 +332,20 @@ def test_script_writes_primitives_and_subparts_with_snaps_keyed_by_their_referen
                                                [["R", 6.0, 4.0]], 0]]
     assert subfiles["axle.dat"]["s"][0][-1] == 1 and subfiles["stud.dat"]["b"] == [-6.0, -4.0, -6.0, 6.0, 0.0, -6.0]
     assert _script().derive(ldraw, shadow) == parts  # without a subfiles dict: the parts alone, as before
+
+
+def test_the_open_centre_technic_bricks_keep_the_frame_of_the_part_they_were_moved_to():
+    # 32531 (Technic brick 4 x 6, open centre) is a `~Moved to 32531a` file that turns 32531a a quarter turn about y;
+    # official models naming 32531 draw it in 32531a's own frame: its 6-long side along x, an end hole centred at
+    # x = -50 and one at x = 50 (y = 10), along x. Two pins along x, each with one half in an end hole, are pinned
+    # (a hinge each); a third pin along z where the turned frame would put an end hole (z = -50) meets nothing, as
+    # 32531a has no hole there.
+    text = ("0 Name: moved.ldr\n1 71 0 0 0 1 0 0 0 1 0 0 0 1 32531.dat\n"
+            "1 0 -60 10 0 1 0 0 0 1 0 0 0 1 2780.dat\n1 0 60 10 0 1 0 0 0 1 0 0 0 1 2780.dat\n"
+            "1 0 0 10 -60 0 0 -1 0 1 0 1 0 0 2780.dat\n")
+    request = parse_upload(StoredInput.from_bytes("moved.ldr", text.encode()), None)
+    result = solve(request).result
+    assert result.unknown_parts == []
+    assert _joints(request, result) == Counter({("hinge", "pin", "32531", "2780"): 2})
+    assert lookup("32531").number == "32531" and lookup("32531").box_size == lookup("32531a").box_size
+    assert lookup("32531").box_size[0] == 120.0 and lookup("32532").box_size[0] == 160.0

@@ -3,6 +3,7 @@ and official sets (OMR, CC BY 2.0: omr/README.md) whose parts are all joined and
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from pathlib import Path
 
@@ -96,6 +97,84 @@ def test_a_clip_whose_jaws_reach_one_bar_only_is_not_seated_across_the_gap():
     two_bars = ("1 0 0 -52 -20 1 0 0 0 1 0 0 0 1 87994.dat\n1 0 0 76 -20 -1 0 0 0 -1 0 0 0 1 87994.dat\n"
                 "1 15 0 12 -26 -1 0 0 0 0 -1 0 -1 0 2555.dat\n")
     assert [j for j in joints(two_bars) if "2555" in j] == []
+
+
+# The chain tread link 3873: two clips on its x axis at x = -8.75 and 8.75 (2.5 wide), and 16 LDU along z its pin,
+# stated as a cylinder only: radius 2 from x = -6 to 6, radius 1.5 from 6 to 10 and from -6 to -10. The next link, 16
+# LDU along z, has its clips round those pin ends, as set 10227 runs 36 links round its sprockets.
+TREAD = "1 0 0 0 0 1 0 0 0 1 0 0 0 1 3873.dat\n1 0 0 {y} 16 1 0 0 0 1 0 0 0 1 3873.dat\n"
+
+
+def test_a_chain_link_clips_onto_the_thin_pin_of_the_next():
+    result = solve(parse("model.ldr", TREAD.format(y=0))).result
+    assert joints(TREAD.format(y=0)) == [("hinge", "clip", "3873", "3873", 1)] * 2
+    assert result.dof == 1  # the two clips on one axis: the links turn about it
+
+
+@pytest.mark.parametrize("y", [1.5, 4])
+def test_a_clip_beside_a_thin_pin_is_not_on_it(y):
+    # drawn more than FIT_SNAP (1 LDU) off the pin's axis, the clip is not round it; the rounding of the slip pass
+    # does not take it either (it joins clips to bars only)
+    assert joints(TREAD.format(y=y)) == []
+
+
+def test_a_clip_on_a_pins_axis_round_a_section_as_thick_as_a_stud_is_not_on_a_thin_rod():
+    # the clip plate 4085c's clip (centre (0, 4, -20), axis y, 8 wide) on the axis of a Technic pin turned along y,
+    # 10 LDU into one radius-6 half: no clip goes round that, and nothing else joins the two
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n"
+            "1 0 0 14 -20 0 -1 0 1 0 0 0 0 1 3673.dat\n")
+    assert joints(text) == []
+    # the same clip round a thin rod there (a chain link's pin end, turned along y): held
+    link = "1 0 0 {y} -36 0 -1 0 1 0 0 0 0 1 3873.dat\n"
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n" + link.format(y=-4.75)) == [
+        ("hinge", "clip", "3873", "4085c", 1)]
+
+
+def hand_and_revolver(tilt: float, cross: float = 0.0) -> str:
+    """A minifigure hand 3820 (its clip centred at (0, -0.823, -9.895) along (0, -0.968, -0.25), 11 LDU wide) and a
+    revolver 30132 (its grip a bar from (0, -3, 0) along y, 9 long) whose grip is turned ``tilt`` degrees off the
+    clip's axis (about x), its middle where its line crosses the clip's axis ``cross`` LDU from the clip's centre."""
+    centre, axis = np.array([0.0, -0.823, -9.895]), np.array([0.0, -0.968, -0.25])
+    axis /= np.linalg.norm(axis)
+    a = math.atan2(0.25, 0.968) + math.radians(tilt)  # turns y onto (0, cos a, sin a): the clip's line, less tilt
+    rotation = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+    position = centre + axis * cross - rotation @ np.array([0.0, 1.5, 0.0])
+    numbers = " ".join(f"{v:.6f}" for v in [*position, *rotation.ravel()])
+    return f"1 14 0 0 0 1 0 0 0 1 0 0 0 1 3820.dat\n1 0 {numbers} 30132.dat\n"
+
+
+@pytest.mark.parametrize("tilt", [0, 4, -8])
+def test_a_hand_holds_a_grip_turned_a_few_degrees_off_its_clip(tilt):
+    # rotations printed with 3 digits through arm and hand leave a held accessory 4° off the hand's clip (6755-1);
+    # at 8° the jaws' edges are 5.5 sin 8° = 0.77 LDU off the grip's line, inside FIT_SNAP
+    assert joints(hand_and_revolver(tilt)) == [("hinge", "clip", "30132", "3820", 1)]
+
+
+@pytest.mark.parametrize("tilt, cross", [(15, 0.0), (8, 3.0)])
+def test_a_grip_turned_too_far_or_crossing_the_clip_off_centre_is_not_held(tilt, cross):
+    # 15° off: more than FIT_ALIGN's 10°; 8° off crossing the clip's axis 3 LDU from its centre: the line passes
+    # 0.42 LDU from the centre but 8.5 sin 8° = 1.18 LDU from the far jaw's edge
+    assert joints(hand_and_revolver(tilt, cross)) == []
+
+
+# A 1 x 2 tile 3069b (anti-studs at x = -10 and 10, no post between them) on the stud of a 1 x 1 plate, its middle
+# drawn ``s`` LDU along its length from the stud: midway, its long walls grip the stud (seated within rounding); a
+# slip of up to 3 LDU from there is joined as any point drawn off its mate and named with its offset.
+TILE_ON_STUD = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n1 15 {s} -8 0 1 0 0 0 1 0 0 0 1 {part}.dat\n"
+
+
+@pytest.mark.parametrize("s", [2, -3])
+def test_a_one_wide_tile_drawn_a_little_off_the_stud_its_walls_grip_is_joined_and_named(s):
+    result = solve(parse("model.ldr", TILE_ON_STUD.format(s=s, part="3069b"))).result
+    assert [(j.type, j.origin) for j in result.joints] == [("hinge", "stud")]
+    warning = next(w for w in result.report.warnings if w.code == "offset_joints")
+    assert [pair["offset_ldu"] for pair in warning.details["pairs"]] == [abs(s)]
+
+
+@pytest.mark.parametrize("s, part", [(4, "3069b"), (2, "3023")])
+def test_a_stud_further_off_the_midway_place_or_under_a_post_is_not_gripped(s, part):
+    # 4 LDU off: more than a slip; the plate 1 x 2 3023 states a post under its middle, where no stud fits
+    assert joints(TILE_ON_STUD.format(s=s, part=part)) == []
 
 
 # Two Technic arms, each on a pin joiner: 6217 (3 fingers) and 6048 (2 fingers) whose finger runs share the x axis,
