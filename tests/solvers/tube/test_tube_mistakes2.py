@@ -3,10 +3,19 @@ warning naming the quantity, or a refusal naming the field — never a confident
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from plantsolve.schemas.tube import LraRow, TubeRequest
 from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.tube.inspection import nominal_mixups
+from plantsolve.solvers.tube.read_log import ReadLog
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.synthetic import make_model
+from plantsolve.solvers.tube.text_points import read_text_points
 from plantsolve.solvers.tube.upload import parse_upload
 from tests.conftest import REPO
 
@@ -45,8 +54,52 @@ def test_a_decimal_comma_scan_under_a_semicolon_header_keeps_the_headers_unit():
     ("1,5;2,5;3,5\n4;5;6\n", [[1.5, 2.5, 3.5], [4, 5, 6]]),
 ])
 def test_comma_separated_and_decimal_comma_rows_are_told_apart(text, expected):
-    from plantsolve.solvers.tube.read_log import ReadLog
-    from plantsolve.solvers.tube.text_points import read_text_points
-
     got, _ = read_text_points(text.encode(), ReadLog("csv"))
     np.testing.assert_allclose(got, expected)
+
+
+# --- a nominal that misses the scan the way a mix-up makes it miss ------------------------------------------
+
+EXAMPLE = json.loads((REPO / "examples" / "tube" / "scan_request.json").read_text())
+NOMINAL = EXAMPLE["options"]["nominal"]  # 90, 45 and 30 degree bends on an 18 mm CLR, a 6 mm tube
+MEASURED = make_model([[r["length"], r["rotation"], r["angle"], r["bend_radius"]] for r in NOMINAL], 6.0)
+
+
+def _rows(scale_length=1.0, angle=lambda a: a, clr=None) -> list[LraRow]:
+    return [LraRow(length=r["length"] * scale_length, rotation=r["rotation"], angle=angle(r["angle"]),
+                   bend_radius=(clr if clr is not None and r["bend_radius"] else r["bend_radius"] * scale_length))
+            for r in NOMINAL]
+
+
+def _codes(rows) -> dict:
+    return {w.code: w for w in nominal_mixups(MEASURED, rows, "mm")}
+
+
+def test_a_nominal_that_fits_raises_no_mixup():
+    assert _codes(_rows()) == {}
+
+
+def test_bend_angles_in_radians_in_a_degree_column_are_named():
+    warning = _codes(_rows(angle=np.radians))["nominal_angles_in_radians"]
+    np.testing.assert_allclose(warning.details["as_degrees"], [90, 45, 30])
+    assert "as radians they would be 90.0, 45.0, 30.0°" in warning.message
+
+
+@pytest.mark.parametrize("factor, pair", [(25.4, "inches and mm"), (1000.0, "m and mm"), (1 / 25.4, "inches and mm")])
+def test_nominal_lengths_in_another_unit_are_named_with_the_ratio(factor, pair):
+    warning = _codes(_rows(scale_length=factor))["nominal_unit_mismatch"]
+    assert warning.details["ratio"] == pytest.approx(factor, rel=1e-9)
+    assert pair in warning.message
+
+
+def test_a_clr_below_the_tubes_radius_is_named_by_row():
+    warning = _codes(_rows(clr=3.0))["implausible_nominal_clr"]
+    assert warning.details["rows"] == [1, 2, 3] and "below the tube's radius (6 mm)" in warning.message
+
+
+def test_a_radian_nominal_fails_its_inspection_and_the_report_says_why():
+    # before: "inspection FAIL" on every row and the end points, with no word on the radians
+    nominal = [{**r, "angle": float(np.radians(r["angle"]))} for r in NOMINAL]
+    result = solve(TubeScan(TubeRequest.model_validate({**EXAMPLE, "options": {"nominal": nominal}}))).result
+    codes = [w.code for w in result.report.warnings]
+    assert result.inspection.verdict == "fail" and "nominal_angles_in_radians" in codes
