@@ -103,3 +103,33 @@ def test_a_radian_nominal_fails_its_inspection_and_the_report_says_why():
     result = solve(TubeScan(TubeRequest.model_validate({**EXAMPLE, "options": {"nominal": nominal}}))).result
     codes = [w.code for w in result.report.warnings]
     assert result.inspection.verdict == "fail" and "nominal_angles_in_radians" in codes
+
+
+# --- a PLY header that declares fewer records than the file holds ------------------------------------------
+
+
+def _ascii_ply(points: np.ndarray, declared: int) -> bytes:
+    head = (f"ply\nformat ascii 1.0\nelement vertex {declared}\nproperty double x\nproperty double y\n"
+            "property double z\nend_header\n")
+    return (head + "\n".join(" ".join(f"{v:.3f}" for v in row) for row in points) + "\n").encode()
+
+
+def _warning(name: str, content: bytes, code: str):
+    request = parse_upload(StoredInput.from_bytes(name, content), {})
+    return next((w for w in request.source.warnings if w.code == code), None), np.asarray(request.points)
+
+
+def test_an_ascii_ply_holding_more_vertices_than_its_header_declares_says_so():
+    # before: the last 500 samples were dropped without a word
+    warning, points = _warning("scan.ply", _ascii_ply(POINTS, len(POINTS) - 500), "records_beyond_header")
+    assert len(points) == len(POINTS) - 500
+    assert warning is not None and "500 more line(s) from line 3508 on" in warning.message
+    assert warning.details["declared"] == {"vertex": len(POINTS) - 500}
+    assert _warning("scan.ply", _ascii_ply(POINTS, len(POINTS)), "records_beyond_header")[0] is None
+
+
+def test_a_binary_ply_with_bytes_past_its_declared_vertices_says_so_and_a_final_newline_does_not():
+    content = (REPO / "examples" / "tube" / "scan.ply").read_bytes()
+    warning, _ = _warning("scan.ply", content + np.zeros((2, 3), "<f4").tobytes(), "records_beyond_header")
+    assert warning is not None and "24 more bytes" in warning.message
+    assert _warning("scan.ply", content + b"\n", "records_beyond_header")[0] is None
