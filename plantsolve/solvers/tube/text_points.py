@@ -46,6 +46,7 @@ class Columns:
     index: tuple[int, int, int] = (0, 1, 2)
     unit: str | None = None
     names: list[str] | None = None
+    conflict: str | None = None  # why the header's units cannot be taken (only options.file_units reads the file)
 
 
 def _header_names(line: str) -> list[str]:
@@ -94,6 +95,10 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
     index = (axes["x"], axes["y"], axes["z"])
     units = {parsed[i][1] for i in index}
     unit = None
+    if len(units) > 1:  # x in mm and y in m (or x in m, y and z without one): no one unit is the header's
+        return Columns(index, None, names, conflict=(
+            f"line {header_line}: its coordinate columns {', '.join(names[i] for i in index)} state different units "
+            "(or only some of them one)"))
     if len(units) == 1 and None not in units:
         (u,) = units
         if u not in HEADER_UNITS:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from plantsolve.schemas.tube import LraRow, TubeRequest
-from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube.inspection import nominal_mixups
 from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.scan import TubeScan
@@ -133,3 +133,18 @@ def test_a_binary_ply_with_bytes_past_its_declared_vertices_says_so_and_a_final_
     warning, _ = _warning("scan.ply", content + np.zeros((2, 3), "<f4").tobytes(), "records_beyond_header")
     assert warning is not None and "24 more bytes" in warning.message
     assert _warning("scan.ply", content + b"\n", "records_beyond_header")[0] is None
+
+
+# --- a column header whose units disagree -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("header", ["x [mm],y [m],z [mm]", "x [m],y,z"])
+def test_coordinate_columns_stating_different_units_are_refused_unless_file_units_says(header):
+    body = (header + "\n" + "\n".join(",".join(f"{v:.3f}" for v in row) for row in POINTS) + "\n").encode()
+    # before: read in the request's unit, y (or x) 1000 times off its header, without a word
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("scan.csv", body), {})
+    (error,) = refused.value.errors
+    assert f"columns {header.replace(',', ', ')} state different units" in error.msg
+    assert "options.file_units" in error.msg
+    np.testing.assert_allclose(_points("scan.csv", body, {"file_units": "mm"}), POINTS, atol=5e-4)
