@@ -442,6 +442,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     units = doc.units
     if units is None:
         raise reject(f"unsupported UNITS-CO-ORDS {doc.header.get('UNITS-CO-ORDS')!r}")
+    _refuse_contradicting_units(doc)
     alias = {it.position_id: it.id for it in doc.items}
     _refuse_ambiguous_fixed(doc, opts.fixed_components)
     fixed_ids = {alias.get(f, f) for f in opts.fixed_components}
@@ -518,6 +519,17 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
+
+
+def _refuse_contradicting_units(doc: Document) -> None:
+    """A 422 for a file whose UNITS-CO-ORDS (or UNITS-BORE) records name different units (two files pasted into
+    one): the first was taken for every coordinate, those under the other are then read in the wrong unit."""
+    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
+        found = [(i + 1, line.split()[1].upper()) for i, line in enumerate(doc.lines)
+                 if line[:1].strip() and len(line.split()) > 1 and line.split()[0].upper() == record]
+        if len({UNITS.get(value, value) for _, value in found}) > 1:
+            raise reject(f"{record} names different units: " + ", ".join(f"line {n}: {v}" for n, v in found[:5])
+                         + "; a file holds one unit for all its coordinates (two files pasted into one?)")
 
 
 def _refuse_ambiguous_fixed(doc: Document, fixed: list[str]) -> None:

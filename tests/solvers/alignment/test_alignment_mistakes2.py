@@ -70,3 +70,15 @@ def test_an_item_held_for_an_absurd_coordinate_is_named_by_line_in_the_message()
     item = text.splitlines().index("ELBOW") + 1  # the held item's line, its bad point line quoted
     warning = _warnings(_solve(text, FIXED))["pcf_items_held"]
     assert f"line {item}: coordinate beyond 1e+12 in 'END-POINT 1e300 " in warning.message
+
+
+def test_a_file_whose_units_records_disagree_is_refused_naming_both_lines():
+    text = LADDER.replace("UNITS-CO-ORDS MM\n", "UNITS-CO-ORDS MM\nUNITS-CO-ORDS INCH\n")
+    first = text.splitlines().index("UNITS-CO-ORDS MM") + 1
+    # before: the first record was taken for every coordinate, with no word on the second
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("ladder.pcf", text.encode()), FIXED)
+    assert f"line {first}: MM, line {first + 1}: INCH" in refused.value.errors[0].msg
+    # the same unit written twice (and spelt otherwise) is no contradiction
+    same = LADDER.replace("UNITS-CO-ORDS MM\n", "UNITS-CO-ORDS MM\nUNITS-CO-ORDS MILLIMETRE\n")
+    assert _solve(same, FIXED).converged
