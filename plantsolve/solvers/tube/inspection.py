@@ -106,7 +106,8 @@ def inspect_request(measured: TubeModel, opts: TubeOptions, units: str,
     nominal = resolve_nominal(opts, units)
     if nominal is None:
         return None
-    warnings = list(nominal.warnings) + nominal_mixups(measured, nominal.rows, units)
+    warnings = list(nominal.warnings) + nominal_mixups(measured, nominal.rows, units) + tol_check.implausible(
+        opts.inspection_tolerances, measured.pipe_radius, nominal.rows, units)
     return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, warnings, measured_rows)
 
 

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from plantsolve.schemas.tube import LraRow, TubeRequest
+from plantsolve.schemas.tube import InspectionTolerances, LraRow, TubeRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube.inspection import nominal_mixups
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -16,6 +16,7 @@ from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.synthetic import make_model
 from plantsolve.solvers.tube.text_points import read_text_points
+from plantsolve.solvers.tube.tolerances import implausible
 from plantsolve.solvers.tube.upload import parse_upload
 from tests.conftest import REPO
 
@@ -148,3 +149,25 @@ def test_coordinate_columns_stating_different_units_are_refused_unless_file_unit
     assert f"columns {header.replace(',', ', ')} state different units" in error.msg
     assert "options.file_units" in error.msg
     np.testing.assert_allclose(_points("scan.csv", body, {"file_units": "mm"}), POINTS, atol=5e-4)
+
+
+# --- inspection tolerances that pass anything ---------------------------------------------------------------
+
+
+def test_a_millimetre_tolerance_given_to_a_metre_request_is_named():
+    nominal_m = [LraRow(length=r.length / 1000, rotation=r.rotation, angle=r.angle, bend_radius=r.bend_radius / 1000)
+                 for r in _rows()]
+    # before: "length": 1 in a metre request passed every straight within a metre, without a word
+    (warning,) = implausible(InspectionTolerances(length=1.0), 0.006, nominal_m, "m")
+    assert warning.details["field"] == "length" and "meant in mm (1 mm = 0.001 m)?" in warning.message
+    assert warning.details["plausible_up_to"] == pytest.approx(0.024)  # 4 tube radii, over 5 % of the part's 0.28 m
+    assert implausible(InspectionTolerances(length=0.001, end_point=0.002), 0.006, nominal_m, "m") == []
+    (angle,) = implausible(InspectionTolerances(angle=90.0), 6.0, _rows(), "mm")
+    assert angle.details["field"] == "angle" and "90° is more than 10°" in angle.message
+
+
+def test_tolerances_that_pass_anything_are_warned_in_the_job_report():
+    body = {**EXAMPLE, "options": {**EXAMPLE["options"], "inspection_tolerances": {"angle": 90.0}}}
+    result = solve(TubeScan(TubeRequest.model_validate(body))).result
+    assert result.inspection.verdict == "pass" and result.report.status == "warning"
+    assert "implausible_inspection_tolerance" in [w.code for w in result.report.warnings]
