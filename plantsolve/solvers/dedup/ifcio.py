@@ -24,6 +24,9 @@ MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or head[1:8:2] == b"\x00" * 4 or head[0:8:2] == b"\x00" * 4:
+        raise reject("the file is UTF-16 text (two bytes a character, as Windows 'Unicode' saves it): a STEP physical "
+                     "file is 8-bit text; save it as UTF-8 or ANSI and send it again")
     if not head.startswith(b"ISO-10303-21;"):
         holds = file_holds(head)
         raise reject(f"not an IFC file{f': it holds {holds}' if holds else ''} (a STEP physical file starts with "

@@ -81,3 +81,12 @@ def test_an_ifc2x3_model_labelled_ifc4x3_is_refused_rather_than_optimized_in_par
     # before: the IFC2X3-only style assignments were dropped and the rest optimized, "succeeded"
     msg = _refusal(tmp_path, ZOO.read_text().replace("FILE_SCHEMA(('IFC2X3'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))
     assert "IFCPRESENTATIONSTYLEASSIGNMENT (line" in msg and "FILE_SCHEMA IFC4X3_ADD2" in msg
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])
+def test_an_ifc_saved_as_utf16_is_refused_saying_so(encoding):
+    # before: "not an IFC file (a STEP physical file starts with 'ISO-10303-21;')", which it does, in UTF-16
+    source = StoredInput.from_bytes("model.ifc", ZOO.read_text().encode(encoding))
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(source, {})
+    assert "UTF-16" in refused.value.errors[0].msg
