@@ -171,3 +171,25 @@ def test_tolerances_that_pass_anything_are_warned_in_the_job_report():
     result = solve(TubeScan(TubeRequest.model_validate(body))).result
     assert result.inspection.verdict == "pass" and result.report.status == "warning"
     assert "implausible_inspection_tolerance" in [w.code for w in result.report.warnings]
+
+
+def _binary_ply(declared: str, data: np.ndarray) -> bytes:
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(data)}\nproperty {declared} x\n"
+            f"property {declared} y\nproperty {declared} z\nend_header\n")
+    return head.encode() + data.tobytes()
+
+
+def test_a_binary_ply_in_the_other_byte_order_is_refused_naming_the_format_line():
+    # before: 1,110 of the byte-swapped vertices read as finite noise and were solved, the rest "skipped"
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("scan.ply", _binary_ply("float", POINTS.astype(">f4"))), {})
+    msg = refused.value.errors[0].msg
+    assert "2890 of 4000 vertices are not coordinates" in msg and "'format binary_little_endian' is wrong" in msg
+
+
+def test_an_organized_scans_missing_returns_are_no_sign_of_a_wrong_header():
+    grid = np.full((3 * len(POINTS), 3), np.nan, "<f4")  # two of three cells without a return, NaN in x, y and z
+    grid[::3] = POINTS
+    warning, points = _warning("scan.ply", _binary_ply("float", grid), "records_skipped")
+    np.testing.assert_allclose(points, POINTS, atol=1e-3)
+    assert warning.details["count"] == 2 * len(POINTS)
