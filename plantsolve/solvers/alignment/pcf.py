@@ -442,7 +442,9 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     units = doc.units
     if units is None:
         raise reject(f"unsupported UNITS-CO-ORDS {doc.header.get('UNITS-CO-ORDS')!r}")
+    _refuse_contradicting_units(doc)
     alias = {it.position_id: it.id for it in doc.items}
+    _refuse_ambiguous_fixed(doc, opts.fixed_components)
     fixed_ids = {alias.get(f, f) for f in opts.fixed_components}
     notes: list[tuple[str, str, dict, str]] = []
     held: list[dict] = []
@@ -512,9 +514,40 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     cut = _cut_item(doc, {h["id"] for h in held + dropped + left_out})
     if cut is not None:
         notes.append(cut)
+    notes.extend(_bore_notes(doc))
+    notes.extend(_duplicate_notes(comps, doc))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
+
+
+def _refuse_contradicting_units(doc: Document) -> None:
+    """A 422 for a file whose UNITS-CO-ORDS (or UNITS-BORE) records name different units (two files pasted into
+    one): the first was taken for every coordinate, those under the other are then read in the wrong unit."""
+    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
+        found = [(i + 1, line.split()[1].upper()) for i, line in enumerate(doc.lines)
+                 if line[:1].strip() and len(line.split()) > 1 and line.split()[0].upper() == record]
+        if len({UNITS.get(value, value) for _, value in found}) > 1:
+            raise reject(f"{record} names different units: " + ", ".join(f"line {n}: {v}" for n, v in found[:5])
+                         + "; a file holds one unit for all its coordinates (two files pasted into one?)")
+
+
+def _refuse_ambiguous_fixed(doc: Document, fixed: list[str]) -> None:
+    """A 422 for a fixed component named by an id that several items of the file carry (a COMPONENT-IDENTIFIER
+    written twice): those items got their positional ids, and which of them was meant cannot be told."""
+    ids = {it.id for it in doc.items}
+    errors = []
+    for k, name in enumerate(fixed):
+        if name in ids:
+            continue
+        carriers = [it for it in doc.items if any(it.records.get(rec) == name for rec in ID_RECORDS)]
+        if len(carriers) > 1:
+            errors.append(FieldError(("options", "fixed_components", k), (
+                f"{name!r} is the identifier of {len(carriers)} items (lines "
+                f"{', '.join(str(it.line + 1) for it in carriers[:5])}): give the one meant by its positional id "
+                f"({', '.join(it.position_id for it in carriers[:5])})")))
+    if errors:
+        raise InputRejected(errors)
 
 
 def _connect(comps: list[dict], doc: Document, opts: AlignmentOptions, units: str, pos_tol: float,
@@ -862,17 +895,18 @@ def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, left_out)
                       {"items": joints[:200]}, "detail"))
     if held:
         notes.append(("pcf_items_held",
-                      f"{len(held)} PCF item(s) could not be fully interpreted: kept verbatim and held fixed.",
+                      f"{len(held)} PCF item(s) could not be fully interpreted: kept verbatim and held fixed: "
+                      + _first_reasons(held),
                       {"items": held[:200]}, "warning"))
     if dropped:
         notes.append(("pcf_items_unread",
-                      f"{len(dropped)} PCF item(s) have no readable point: kept verbatim, not aligned.",
+                      f"{len(dropped)} PCF item(s) have no readable point: kept verbatim, not aligned: "
+                      + _first_reasons(dropped),
                       {"items": dropped[:200]}, "warning"))
     if left_out:
         notes.append(("pcf_items_left_out",
                       f"{len(left_out)} PCF item(s) were left out of the alignment (kept verbatim, not moved): "
-                      + "; ".join(f"line {d['line']}: {d['reason']}" for d in left_out[:3])
-                      + ("; ..." if len(left_out) > 3 else ""),
+                      + _first_reasons(left_out),
                       {"items": left_out[:200]}, "warning"))
     if resolved:
         notes.append(("pcf_directions_from_neighbours",
@@ -890,6 +924,60 @@ def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, left_out)
         "items": [{"id": it.id, "keyword": it.keyword, "line": it.line + 1, "position_id": it.position_id}
                   for it in doc.items[:5000]]}, "detail"))
     return notes
+
+
+def _first_reasons(items: list[dict]) -> str:
+    return "; ".join(f"line {d['line']}: {d['reason']}" for d in items[:3]) + ("; ..." if len(items) > 3 else "")
+
+
+def _duplicate_notes(comps: list[dict], doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning naming items whose end points all coincide with another item's (to the printed precision): a
+    block pasted twice. Only one of them can join its neighbours; the other stays where it was, unaligned."""
+    q = max(doc.quantum, 1e-9)
+    first: dict[tuple, dict] = {}
+    pairs = []
+    for c in comps:
+        ports = c["geometry"].ports
+        if len(ports) < 2:
+            continue
+        key = (c["word"],) + tuple(sorted(tuple(np.round(np.asarray(p) / (4.0 * q)).astype(np.int64).tolist())
+                                          for p, _ in ports))
+        if key in first:
+            pairs.append({"id": c["id"], "line": c["line"], "same_as": first[key]["id"],
+                          "same_as_line": first[key]["line"]})
+        else:
+            first[key] = c
+    if not pairs:
+        return []
+    listed = ", ".join(f"{p['id']} (line {p['line']}) = {p['same_as']} (line {p['same_as_line']})" for p in pairs[:5])
+    return [("pcf_duplicate_items",
+             f"{len(pairs)} PCF item(s) have the same keyword and end points as an earlier one ({listed}"
+             f"{', ...' if len(pairs) > 5 else ''}): a block written twice? Only one of each pair joins its "
+             "neighbours; the other is left where it was.", {"items": pairs[:200]}, "warning")]
+
+
+def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning naming the point lines whose bore (the fifth field) is written but is no positive number: such
+    an item connects as one without a bore, with the file's typical reach (10 mm when none has a bore)."""
+    bad = []
+    for it in doc.items:
+        for i in it.point_lines:
+            parts = doc.lines[i].split()
+            if parts[0].upper() == "CENTRE-POINT" or len(parts) < 5:
+                continue
+            try:
+                bore = float(parts[4])
+            except ValueError:
+                bore = float("nan")
+            if not (np.isfinite(bore) and bore > 0):
+                bad.append({"id": it.id, "line": i + 1, "bore": parts[4]})
+    if not bad:
+        return []
+    listed = ", ".join(f"line {b['line']} ({b['bore']})" for b in bad[:5]) + (", ..." if len(bad) > 5 else "")
+    return [("pcf_bore_unreadable",
+             f"{len(bad)} end point(s) state a bore that is no positive number ({listed}): read as no bore, so "
+             "their items connect with the file's typical bore (10 mm when none is readable) and may be left "
+             "unconnected; write the bore in UNITS-BORE.", {"points": bad[:200]}, "warning")]
 
 
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:

@@ -5,6 +5,7 @@ is refused with a 422 naming the file. The optimized model is written to and rea
 from __future__ import annotations
 
 import itertools
+import re
 from collections import Counter
 
 import ifcopenshell
@@ -13,6 +14,9 @@ from plantsolve.solvers.base import reject
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.step_file import where_cut
 
+# an instance's definition: '#12=' after a line's start or the ';' ending the one before
+DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
+MAX_NAMED = 5
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
 MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 
@@ -20,6 +24,9 @@ MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or head[1:8:2] == b"\x00" * 4 or head[0:8:2] == b"\x00" * 4:
+        raise reject("the file is UTF-16 text (two bytes a character, as Windows 'Unicode' saves it): a STEP physical "
+                     "file is 8-bit text; save it as UTF-8 or ANSI and send it again")
     if not head.startswith(b"ISO-10303-21;"):
         holds = file_holds(head)
         raise reject(f"not an IFC file{f': it holds {holds}' if holds else ''} (a STEP physical file starts with "
@@ -72,3 +79,62 @@ def model_text(model: ifcopenshell.file) -> bytes:
 def read_back(text: bytes) -> ifcopenshell.file:
     """A model from STEP text we wrote (the proof reads the optimized file as a user would)."""
     return ifcopenshell.file.from_string(text.decode())
+
+
+def defined_instances(text: bytes) -> int:
+    """How many instances a STEP text defines (IfcOpenShell's count falls short of it where it could not read one)."""
+    return sum(1 for _ in DEFINITION.finditer(text))
+
+
+def refuse_unread(text: bytes, model: ifcopenshell.file) -> None:
+    """Refuses a model IfcOpenShell read only part of, naming the lines it left out and why: an id defined twice
+    (one of the two definitions is lost), an entity the header's FILE_SCHEMA does not have (an IFC4 file labelled
+    IFC2X3), or a line it could not parse (attributes of another schema). Optimizing what was read would write a
+    model without them."""
+    def line(match) -> int:
+        return text.count(b"\n", 0, match.start(1)) + 1
+
+    first: dict[int, re.Match] = {}
+    twice: list[str] = []
+    foreign: dict[str, int] = {}
+    unread: list[str] = []
+    schema = ifcopenshell.ifcopenshell_wrapper.schema_by_name(model.schema_identifier)
+    known: dict[str, bool] = {}
+    for match in DEFINITION.finditer(text):
+        number, name = int(match.group(1)), match.group(2).decode("ascii").upper()
+        if number in first:
+            if len(twice) < MAX_NAMED:
+                twice.append(f"#{number} on lines {line(first[number])} and {line(match)}")
+            continue
+        first[number] = match
+        if name not in known:
+            try:
+                schema.declaration_by_name(name)
+                known[name] = True
+            except (RuntimeError, IndexError):
+                known[name] = False
+        if not known[name]:
+            if name not in foreign and len(foreign) < MAX_NAMED:
+                foreign[name] = line(match)
+        elif len(unread) < MAX_NAMED and _missing(model, number):
+            unread.append(f"{line(match)} ({name})")
+    why = []
+    if twice:
+        why.append(f"instance numbers defined twice ({', '.join(twice)}): IfcOpenShell keeps one of each, and what "
+                   "refers to the other would change")
+    if foreign:
+        listed = ", ".join(f"{name} (line {at})" for name, at in foreign.items())
+        why.append(f"entities the header's FILE_SCHEMA {model.schema_identifier} does not have: {listed}")
+    if unread:
+        why.append(f"lines IfcOpenShell could not read as {model.schema_identifier}: {', '.join(unread)}")
+    if why:
+        raise reject("the model was read only in part, and an optimized model would lose the rest: " + "; ".join(why)
+                     + ("" if twice else "; is the file of another schema than its header's FILE_SCHEMA says?"))
+
+
+def _missing(model: ifcopenshell.file, number: int) -> bool:
+    try:
+        model.by_id(number)
+    except RuntimeError:
+        return True
+    return False

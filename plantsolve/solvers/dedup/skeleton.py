@@ -501,10 +501,18 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
         try:
             model = found.model()
             ifcio.check_model(model, found.instances)
-            return model, found
         except Exception:  # noqa: BLE001 (a refusal or a parse error: the whole file says which, in its words)
             pass
-    return ifcio.open_path(str(path)), None
+        else:
+            # every line of the skeleton is one instance (the scan vouches for it): one fewer is one IfcOpenShell
+            # could not read, which the whole file's parse names
+            if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#"):
+                return model, found
+    model = ifcio.open_path(str(path))
+    text = Path(path).read_bytes()
+    if len(model.entity_names()) < ifcio.defined_instances(text):
+        ifcio.refuse_unread(text, model)
+    return model, None
 
 
 def rebuild_expected(skeleton: Skeleton, walked: dict[int, np.ndarray], classes: list) -> bool:

@@ -16,7 +16,7 @@ from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.dedup.tolerance import UNITS_M, judge, model_sizes
+from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5
@@ -30,16 +30,10 @@ def resolve_mode(requested: str, schema: str) -> str:
 
 
 def model_precision(model: ifcopenshell.file) -> float | None:
-    """The Model context's Precision (file units), when it states one."""
-    values = [c.Precision for c in model.by_type("IfcGeometricRepresentationContext")
-              if not c.is_a("IfcGeometricRepresentationSubContext") and c.Precision]
-    return float(max(values)) if values else None
-
-
-def model_tolerance(model: ifcopenshell.file, unit: float) -> float:
-    """The Model context's Precision (file units), else 1e-5 m."""
-    precision = model_precision(model)
-    return precision if precision is not None else DEFAULT_PRECISION_M / unit
+    """The Model context's Precision (file units), when it states one (whatever its value: judged by the solve)."""
+    values = [float(c.Precision) for c in model.by_type("IfcGeometricRepresentationContext")
+              if not c.is_a("IfcGeometricRepresentationSubContext") and c.Precision is not None]
+    return max(values) if values else None
 
 
 def length_unit_name(model: ifcopenshell.file) -> str:
@@ -134,12 +128,9 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         unit = ifcopenshell.util.unit.calculate_unit_scale(model)
         unit_name = length_unit_name(model)
         symbol = length_unit_symbol(model, unit)
-        tol = float(opts.tolerance) if opts.tolerance is not None else model_tolerance(model, unit)
         source_units = {"file_unit": symbol, "ifc_name": unit_name, "metres_per_unit": unit, "basis":
                         "IfcUnitAssignment" if ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT") else
-                        "none assigned: metres", "tolerance": tol, "tolerance_unit": symbol,
-                        "tolerance_from": "options.tolerance" if opts.tolerance is not None else
-                        "the model context's Precision" if model_precision(model) else f"{DEFAULT_PRECISION_M:g} m"}
+                        "none assigned: metres", "tolerance_unit": symbol}
         semantic_before = proof.semantic_fingerprint(model)
         products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
         if not products:
@@ -162,7 +153,15 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             counts_before = dict(sorted((counts + streamed.inner).items()))
         if not points:
             raise reject("no product geometry could be processed by the geometry kernel")
-        warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, model_sizes(points.values())))
+        sizes = model_sizes(points.values())
+        if opts.tolerance is not None:
+            tol, tolerance_from = float(opts.tolerance), "options.tolerance"
+        else:
+            tol, tolerance_from, precision_warnings = from_precision(model_precision(model), DEFAULT_PRECISION_M / unit,
+                                                                     symbol, unit, sizes)
+            warnings.extend(precision_warnings)
+        source_units.update(tolerance=tol, tolerance_from=tolerance_from)
+        warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, sizes))
         before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
         skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": "geometry could not be processed"}
                    for p in products if p.id() not in points]

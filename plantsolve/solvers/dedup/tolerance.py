@@ -81,6 +81,32 @@ def judge(tolerance: float, explicit: bool, unit_name: str, metres_per_unit: flo
     return []
 
 
+def from_precision(precision: float | None, default: float, unit_name: str, metres_per_unit: float,
+                   sizes: tuple[float, float, float]) -> tuple[float, str, list[Diagnostic]]:
+    """The tolerance when the options give none: the model context's Precision (file units), unless it is none,
+    not a positive number, or so large that the solve would refuse it as ``options.tolerance`` (a Precision is the
+    kernel's, not a statement that products that far apart are one shape); then ``default``, with a warning
+    naming the Precision. Returns (tolerance, where it came from, warnings)."""
+    if precision is None:
+        return default, f"{default * metres_per_unit:g} m", []
+    median = sizes[0]
+    why = None
+    if not math.isfinite(precision) or precision <= 0:
+        why = "is not a positive length"
+    elif precision * metres_per_unit > INTAKE_REFUSE_M:
+        why = f"is more than {INTAKE_REFUSE_M:g} m"
+    elif median > 0 and precision >= REFUSE_OF_SIZE * median:
+        why = (f"is {precision / median:.0%} of the median product's size ({median:.4g} {unit_name}): products that "
+               "differ by that much would share one geometry")
+    if why is None:
+        return precision, "the model context's Precision", []
+    origin = f"{default * metres_per_unit:g} m (the model context's Precision {precision:g} {unit_name} {why})"
+    return default, origin, [Diagnostic(code="implausible_precision", message=(
+        f"The model context's Precision {precision:g} {unit_name} {why}: not used as the matching tolerance; "
+        f"{default:g} {unit_name}" + (f" ({default * metres_per_unit:g} m)" if unit_name != "m" else "") + " was used instead. Give options.tolerance to "
+        "choose another."), details={"precision": precision, "unit": unit_name, "tolerance": default})]
+
+
 _SI_LENGTH = re.compile(rb"IFCSIUNIT\s*\(\s*\*\s*,\s*\.LENGTHUNIT\.\s*,\s*(?:\.(\w+)\.|\$)\s*,\s*\.METRE\.\s*\)",
                         re.IGNORECASE)
 _NAMED_LENGTH = re.compile(rb"IFCCONVERSIONBASEDUNIT\s*\(\s*#\d+\s*,\s*\.LENGTHUNIT\.\s*,\s*'([^']*)'", re.IGNORECASE)

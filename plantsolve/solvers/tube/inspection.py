@@ -106,7 +106,67 @@ def inspect_request(measured: TubeModel, opts: TubeOptions, units: str,
     nominal = resolve_nominal(opts, units)
     if nominal is None:
         return None
-    return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, nominal.warnings, measured_rows)
+    warnings = list(nominal.warnings) + nominal_mixups(measured, nominal.rows, units) + tol_check.implausible(
+        opts.inspection_tolerances, measured.pipe_radius, nominal.rows, units)
+    return inspect(measured, nominal.rows, opts.damping, opts, units, nominal.source, warnings, measured_rows)
+
+
+# unit pairs whose ratio a nominal typed in the other unit shows (the larger per the smaller)
+UNIT_RATIOS = {10.0: "cm and mm", 25.4: "inches and mm", 1000.0: "m and mm", 304.8: "ft and mm", 12.0: "ft and inches",
+               39.37: "m and inches", 100.0: "m and cm", 2.54: "inches and cm"}
+UNIT_RATIO_SLACK = 1.15  # a measured tube is within a few % of its nominal; a unit mix-up is a whole factor off
+
+
+def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> list[Diagnostic]:
+    """Warnings on a nominal that does not fit the scanned tube the way a mix-up would make it miss: bend angles
+    in radians in a degree column, lengths in another unit than the stated one, a CLR smaller than the tube's
+    radius (no bender makes it). The inspection still compares the nominal as given; these say why it fails."""
+    got = model_rows(measured)
+    meas, nom = got[:-1], nominal[:-1]
+    out: list[Diagnostic] = []
+    a_nom = np.array([r.angle for r in nom])
+    a_meas = np.array([r.angle for r in meas])
+    if len(a_nom) and len(a_meas) and a_nom.max() <= np.pi * (1 + 1e-6) and np.median(a_meas) > 5.0:
+        as_deg = np.degrees(a_nom)
+        if len(a_nom) == len(a_meas):
+            off_deg = min(np.abs(a_meas - a_nom).sum(), np.abs(a_meas[::-1] - a_nom).sum())
+            off_rad = min(np.abs(a_meas - as_deg).sum(), np.abs(a_meas[::-1] - as_deg).sum())
+        else:
+            off_deg = abs(np.median(a_meas) - np.median(a_nom))
+            off_rad = abs(np.median(a_meas) - np.median(as_deg))
+        if off_rad < 0.25 * off_deg:
+            out.append(Diagnostic(code="nominal_angles_in_radians", message=(
+                f"The nominal's bend angles ({', '.join(f'{a:.4g}' for a in a_nom[:6])}) are all below π and read as "
+                f"degrees; as radians they would be {', '.join(f'{a:.1f}' for a in as_deg[:6])}°, near the measured "
+                f"{', '.join(f'{a:.1f}' for a in a_meas[:6])}°. Radians in a degree column? Name the column "
+                "angle_rad (or give degrees)."), details={"nominal_angles": a_nom.tolist(),
+                                                          "as_degrees": as_deg.tolist(),
+                                                          "measured_angles": a_meas.tolist()}))
+    ratios = [n.bend_radius / m.bend_radius for n, m in zip(nom, meas) if m.bend_radius > 0 and n.bend_radius > 0] \
+        if len(nom) == len(meas) else []
+    if len(nom) == len(meas):  # the straights between bends are whole in the scan (the end ones may not be)
+        ratios += [n.length / m.length for n, m in zip(nom[1:], meas[1:]) if m.length > measured.pipe_radius
+                   and n.length > 0]
+    elif nom and meas:
+        ratios = [float(np.median([r.bend_radius for r in nom]) / np.median([r.bend_radius for r in meas]))]
+    ratio = float(np.exp(np.median(np.log(ratios)))) if ratios else 1.0
+    for factor, pair in UNIT_RATIOS.items():
+        for r, bigger in ((ratio, "nominal"), (1.0 / ratio, "measured")):
+            if abs(np.log(r / factor)) < np.log(UNIT_RATIO_SLACK):
+                out.append(Diagnostic(code="nominal_unit_mismatch", message=(
+                    f"The nominal's lengths (CLRs and the straights between bends) are {ratio:.4g} × the measured "
+                    f"ones (median): {'larger' if bigger == 'nominal' else 'smaller'} by the ratio of {pair} "
+                    f"({factor:g}). Is the nominal in another unit than it states (its header's unit, or {units} "
+                    "when it names none)?"), details={"ratio": ratio, "unit_ratio": factor, "units": units}))
+    small = [(i + 1, r.bend_radius) for i, r in enumerate(nom) if 0 < r.bend_radius < measured.pipe_radius]
+    if small:
+        out.append(Diagnostic(code="implausible_nominal_clr", message=(
+            f"Nominal rows {', '.join(str(i) for i, _ in small[:10])}: a CLR of "
+            f"{', '.join(f'{c:g}' for _, c in small[:10])} {units} is below the tube's radius "
+            f"({measured.pipe_radius:.4g} {units}); no bender makes such a bend. The tube's radius typed as the "
+            "CLR, or another unit?"), details={"rows": [i for i, _ in small], "clr": [c for _, c in small],
+                               "pipe_radius": measured.pipe_radius}))
+    return out
 
 
 def reversed_rows(rows: list[LraRow]) -> list[LraRow]:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.tube.read_log import ReadLog
 
@@ -136,7 +137,21 @@ def _read_ascii(content, start, header_lines, elements, _order, log, faces_below
         out[el.name] = np.array(records, dtype=np.float64).reshape(-1, 3) if el.name == "vertex" else records
         if log.truncation:
             break
+    else:
+        extra = [k for k in range(pos, len(lines)) if lines[k].strip()]
+        if extra:
+            _beyond_header(log, elements, f"{len(extra)} more line(s) from line {header_lines + extra[0] + 1} on")
     return out
+
+
+def _beyond_header(log: ReadLog, elements: list, what: str) -> None:
+    """A warning that the file holds data past the records its header declares, which were not read: a header
+    whose element count is smaller than what the exporter wrote leaves part of the scan out."""
+    declared = ", ".join(f"{e.count} {e.name}" for e in elements)
+    log.warn(Diagnostic(code="records_beyond_header", message=(
+        f"PLY file: after the records its header declares ({declared}) it holds {what}, which were not read; is "
+        "the header's element count wrong? Only the declared records were used."),
+        details={"declared": {e.name: e.count for e in elements}}))
 
 
 def _ascii_record(el: Element, words: list[str]) -> tuple[dict | None, str]:
@@ -172,7 +187,9 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
             rows = np.frombuffer(content, dt, n, offset=pos)
             pos += n * dt.itemsize
             if el.name == "vertex":
-                out["vertex"] = np.column_stack([rows[c] for c in "xyz"]).astype(np.float64)
+                with np.errstate(invalid="ignore", over="ignore"):  # a mistyped header's noise: refused below
+                    out["vertex"] = np.column_stack([rows[c] for c in "xyz"]).astype(np.float64)
+                _refuse_mistyped(out["vertex"], rows, order)
         else:
             rows, pos, n = _binary_lists(content, pos, el, order)
             if el.name == "face":
@@ -181,6 +198,11 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
             log.truncate(f"the file ends after {n} of {el.count} {el.name} records", element=el.name, read=n,
                          declared=el.count)
             break
+        if el is elements[-1]:
+            # every declared record read: a stray line ending after them is no record, a vertex's worth of bytes is
+            vertex = next(e for e in elements if e.name == "vertex")
+            if len(content) - pos >= max(_record_size(vertex, order), 8):
+                _beyond_header(log, elements, f"{len(content) - pos} more bytes")
         if el.name == "vertex" and len(out["vertex"]) >= faces_below:
             break
     verts = out.get("vertex")
@@ -189,6 +211,39 @@ def _read_binary(content, start, _header_lines, elements, order, log, faces_belo
         log.skip(None, "non-finite coordinate", count=int(bad.sum()))
         verts[bad] = np.nan
     return out
+
+
+def _garbled(xyz: np.ndarray) -> np.ndarray:
+    """Vertices that are no coordinates: infinite, beyond 1e12, or NaN in some of x, y, z only (an organized scan
+    writes a missing return as NaN in all three, which is no sign of a wrong header)."""
+    nan = np.isnan(xyz)
+    with np.errstate(invalid="ignore"):
+        wild = (np.isinf(xyz) | (np.abs(xyz) > MAX_COORDINATE)).any(1)
+    return wild | (nan.any(1) & ~nan.all(1))
+
+
+def _refuse_mistyped(xyz: np.ndarray, rows: np.ndarray, order: str) -> None:
+    """A 422 when most vertices are no coordinates at all: the header's types or byte order are not the data's (a
+    big-endian file declared little-endian, doubles declared float), and what reads as finite among them is noise as
+    well. Naming the byte order when the other one reads every vertex as a coordinate."""
+    read = ~np.isnan(xyz).all(1)
+    bad = _garbled(xyz)
+    if not read.any() or bad.sum() <= 0.5 * read.sum():
+        return
+    swapped = rows.view(rows.dtype.newbyteorder())
+    other = np.column_stack([swapped[c] for c in "xyz"]).astype(np.float64)
+    declared = "binary_big_endian" if order == ">" else "binary_little_endian"
+    hint = (f"; read in the other byte order every vertex is a coordinate: the header's 'format {declared}' is wrong"
+            if not _garbled(other).any() else ": do the header's property types and byte order match the data?")
+    raise reject(f"PLY file: {int(bad.sum())} of {len(xyz)} vertices are not coordinates (infinite, beyond "
+                 f"{MAX_COORDINATE:g}, or NaN in one axis only) as its header describes them{hint}")
+
+
+def _record_size(el: Element, order: str) -> int:
+    """Bytes of one record of an element without lists (0 with lists: their records have no fixed size)."""
+    if any(p.count_type is not None for p in el.props):
+        return 0
+    return np.dtype([(p.name, order + p.type) for p in el.props]).itemsize
 
 
 def _binary_lists(content: bytes, pos: int, el: Element, order: str) -> tuple[list, int, int]:

@@ -4,7 +4,8 @@ A line that cannot be read — cut short (fewer columns than the file's other ro
 infinite coordinate, stray bytes — is left out and logged with its line number; the file is refused only when no
 point is left. Text is read as exporters write it (UTF-8, UTF-16 with its mark, else Windows-1252). Non-numeric
 lines before the first point are a header; lines starting with # or % are comments (``//X,Y,Z``, CloudCompare's
-header, is one too).
+header, is one too). Numbers written with a decimal comma, as a European locale writes them (``251,5;-112,4;30,6`` or
+blank-separated), are read as such: split at the commas they would be six numbers a row, and a wrong point.
 
 A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
 easting, northing, elevation) are
@@ -27,6 +28,8 @@ from plantsolve.solvers.base import InputRejected, decode_text, reject
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
+_SPLIT_NO_COMMA = re.compile(r"[;\s]+")
+_DECIMAL_COMMA_NUMBER = re.compile(r"^[+-]?(?:\d+,\d+|\d+)(?:[eE][+-]?\d+)?$")
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
@@ -43,6 +46,7 @@ class Columns:
     index: tuple[int, int, int] = (0, 1, 2)
     unit: str | None = None
     names: list[str] | None = None
+    conflict: str | None = None  # why the header's units cannot be taken (only options.file_units reads the file)
 
 
 def _header_names(line: str) -> list[str]:
@@ -91,6 +95,10 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
     index = (axes["x"], axes["y"], axes["z"])
     units = {parsed[i][1] for i in index}
     unit = None
+    if len(units) > 1:  # x in mm and y in m (or x in m, y and z without one): no one unit is the header's
+        return Columns(index, None, names, conflict=(
+            f"line {header_line}: its coordinate columns {', '.join(names[i] for i in index)} state different units "
+            "(or only some of them one)"))
     if len(units) == 1 and None not in units:
         (u,) = units
         if u not in HEADER_UNITS:
@@ -117,6 +125,28 @@ def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
     return header, header_line, 0
 
 
+def _decimal_comma(lines: list[str]) -> bool:
+    """Whether the rows write their numbers with a decimal comma: split only at semicolons and blanks, the first
+    rows of numbers hold three or more numbers each, some with a comma and none with a point (a comma-separated
+    row of plain numbers is one field there: ``1,2,3``, ``1, 2, 3``)."""
+    rows, commas = 0, False
+    for line in lines:
+        s = line.strip()
+        if not s or s[0] in "#/%":
+            continue
+        fields = [f for f in _SPLIT_NO_COMMA.split(s) if f]
+        if not all(f[:1].isdigit() or f[:1] in "+-" for f in fields):
+            if rows:
+                return False
+            continue  # a header line
+        if len(fields) < 3 or not all(_DECIMAL_COMMA_NUMBER.match(f) for f in fields):
+            return False
+        rows, commas = rows + 1, commas or "," in s
+        if rows == 20:
+            break
+    return commas
+
+
 def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]:
     # UTF-8, UTF-16 with its mark or Windows-1252: a line of stray bytes is one unreadable line, not the file's end
     try:
@@ -124,6 +154,9 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
     lines = text.splitlines()
+    if _decimal_comma(lines):
+        lines = [line.replace(",", ".") if line.strip()[:1].isdigit() or line.strip()[:1] in "+-" else line
+                 for line in lines]
     header, header_line, width = _first_row(lines)
     cols = _columns(header, width, header_line)
     need = max(cols.index) + 1

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.tube import (
     INSPECTION_DEFAULTS_DEG,
     INSPECTION_DEFAULTS_MM,
@@ -27,6 +28,38 @@ from plantsolve.schemas.tube import (
 )
 from plantsolve.solvers.geometry import wrap_angle
 from plantsolve.solvers.tube.nominal_files import UNIT_MM
+
+
+PLAUSIBLE_ANGLE_DEG = 10.0  # benders hold angles and rotations to a degree or so
+PLAUSIBLE_LENGTH_RADII = 4.0  # … and lengths to a fraction of the tube's diameter
+PLAUSIBLE_LENGTH_OF_PART = 0.05
+
+
+def implausible(tol: InspectionTolerances | None, pipe_radius: float, nominal: list[LraRow],
+                units: str) -> list[Diagnostic]:
+    """Warnings on given tolerances so wide that the inspection cannot fail what they cover: a length beyond 4 tube
+    radii and 5 % of the nominal part's length (a millimetre tolerance given in a metre request), an angle or
+    rotation beyond 10°. The inspection uses them as given."""
+    if tol is None:
+        return []
+    part = sum(r.length for r in nominal) + sum(r.bend_radius * np.radians(r.angle) for r in nominal[:-1])
+    limit = max(PLAUSIBLE_LENGTH_RADII * pipe_radius, PLAUSIBLE_LENGTH_OF_PART * part)
+    out = []
+    for name, value in tol.model_dump(exclude_none=True).items():
+        if name in INSPECTION_DEFAULTS_MM and value > limit:
+            meant = "".join(f"; meant in {u} ({value:g} {u} = {value * UNIT_MM[u] / UNIT_MM[units]:g} {units})?"
+                            for u in ("mm",) if UNIT_MM[u] < UNIT_MM[units])
+            out.append(Diagnostic(code="implausible_inspection_tolerance", message=(
+                f"inspection_tolerances.{name} {value:g} {units} is more than {PLAUSIBLE_LENGTH_RADII:g} tube radii "
+                f"and {PLAUSIBLE_LENGTH_OF_PART:.0%} of the nominal part's length ({limit:.4g} {units}): every "
+                f"deviation within it passes{meant or '.'}"),
+                details={"field": name, "tolerance": value, "units": units, "plausible_up_to": limit}))
+        elif name in INSPECTION_DEFAULTS_DEG and value > PLAUSIBLE_ANGLE_DEG:
+            out.append(Diagnostic(code="implausible_inspection_tolerance", message=(
+                f"inspection_tolerances.{name} {value:g}° is more than {PLAUSIBLE_ANGLE_DEG:g}°: every bend within "
+                f"it passes (benders hold {name}s to about a degree); a typing slip?"),
+                details={"field": name, "tolerance": value, "units": "deg", "plausible_up_to": PLAUSIBLE_ANGLE_DEG}))
+    return out
 
 
 def resolved(tol: InspectionTolerances | None, units: str) -> InspectionTolerances:

@@ -245,6 +245,8 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
     if holds is not None and not holds.startswith(POINT_TEXT):  # a model of another kind, not a list of samples
         raise reject(f"the file holds {holds}, not x, y, z samples of a scan")
     pts, columns = read_text_points(content, log)  # .xyz, .csv, .txt
+    if columns.conflict is not None:
+        return pts, columns.conflict
     if columns.unit is None:
         return pts, None
     return pts, HeaderUnit(columns.unit, TO_MM[columns.unit] / 1000.0,
