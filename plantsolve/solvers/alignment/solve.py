@@ -317,7 +317,8 @@ def _warn_fitting_span(request: AlignmentRequest, model: Model, result: Alignmen
     u = request.units
     factor = TYPICAL_SPAN / median  # what would bring the median to a typical fitting's
     likely = min(((f, name) for f, name in _UNIT_MIXUPS), key=lambda x: abs(np.log(x[0] / factor)))
-    mixup = (f"the coordinates look {likely[1]} (a factor of {likely[0]:.4g})"
+    # the span is a ratio of the two: coordinates too small and bores too large look alike
+    mixup = (f"the coordinates look {likely[1]} (a factor of {likely[0]:.4g}), or the bores the other way round"
              if abs(np.log(likely[0] / factor)) < np.log(3.0) else "the coordinates and the bores are not in one unit")
     source = " (a PCF: its UNITS-CO-ORDS and UNITS-BORE headers)" if request.source_pcf is not None else \
         f" (the request says units '{u}')"

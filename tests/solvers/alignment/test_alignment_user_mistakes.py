@@ -241,3 +241,13 @@ def test_a_json_request_in_the_wrong_unit_is_said():
     warning = next(w for w in res.report.warnings if w.code == "implausible_pipe_radius")
     assert "50 m" in warning.message and "mm read as m" in warning.message
     assert warning.details["median_radius_m"] == pytest.approx(50.0)
+
+
+def test_a_pcf_whose_bore_header_contradicts_its_bores_names_the_bores_too():
+    """Bores in mm under UNITS-BORE INCH make every fitting span 25.4 times fewer bores, as coordinates 25.4 times
+    too small would: the warning must not blame the coordinates alone."""
+    text = (EXAMPLES / "ladder.pcf").read_text().replace("UNITS-BORE MM", "UNITS-BORE INCH")
+    res = solve(_upload("ladder.pcf", text.encode())).result
+    warning = next(w for w in res.report.warnings if w.code == "implausible_fitting_span")
+    assert "or the bores the other way round" in warning.message and "UNITS-BORE" in warning.message
+    assert warning.details["median_span_in_bores"] < 0.2
