@@ -138,10 +138,15 @@ def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     return []
 
 
+def named_as_speed(name: str) -> bool:
+    """Whether a setting's name (its unit in brackets dropped) is one rigs and cycle codes give a speed."""
+    return re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) in SPEED_NAMES
+
+
 def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
     out = []
     for k, name in enumerate(request.setting_names):
-        if re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) not in SPEED_NAMES:
+        if not named_as_speed(name):
             continue
         values = np.array([s.values[k] for s in settings], dtype=float)
         unit = units.settings[k] if k < len(units.settings) else None

@@ -1,0 +1,74 @@
+"""Mistakes of the third probe: a gauge pressure converted to an absolute unit by a factor alone, a temperature
+column taken for the speed, a pyCycle map whose stated flow unit was not read."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.perfmap.upload import parse_upload
+from plantsolve.solvers.perfmap.validation import load
+from tests.solvers.perfmap.conftest import DATA
+
+LINES = (DATA / "n3_fan_map.csv").read_text().replace("\r\n", "\n").splitlines()  # theta,phi,flow,pressure,efficiency
+
+
+def _load(content: str, name: str = "rig.csv", options=None):
+    source = StoredInput.from_bytes(name, content.encode())
+    return load(parse_upload(source, options), source)
+
+
+def _header(header: str) -> str:
+    return "\n".join([header] + LINES[1:]) + "\n"
+
+
+@pytest.mark.parametrize("given, wanted", [("barg", "bar"), ("barg", "kPa"), ("psig", "psi"), ("psia", "psig")])
+def test_a_gauge_pressure_is_not_converted_to_an_absolute_unit_by_a_factor(given, wanted):
+    with pytest.raises(InputRejected) as refused:
+        _load(_header(f"theta,phi,flow,pressure [{given}],efficiency"), options={"result_units": {"pressure": wanted}})
+    (error,) = refused.value.errors
+    assert error.loc == ("options", "result_units", "pressure") and "gauge" in error.msg
+
+
+def test_gauge_to_gauge_and_absolute_to_absolute_still_convert():
+    plain = _load(_header("theta,phi,flow,pressure [bara],efficiency"), options={"result_units": {"pressure": "kPa"}})
+    assert plain.units.pressure == "kPa"
+    gauge = _load(_header("theta,phi,flow,pressure [barg],efficiency"), options={"result_units": {"pressure": "psig"}})
+    (conversion,) = [c for c in gauge.source["conversions"] if c["quantity"] == "pressure"]
+    assert conversion["factor"] == pytest.approx(100_000 / 6894.757293168361, rel=1e-12)
+
+
+@pytest.mark.parametrize("unit", ["K", "degC", "kg"])
+def test_a_speed_column_in_a_unit_no_speed_has_is_refused_naming_the_header(unit):
+    with pytest.raises(InputRejected) as refused:
+        _load(_header(f"theta,speed [{unit}],flow,pressure,efficiency"))
+    (error,) = refused.value.errors
+    assert error.loc == ("file", "header") and "'speed'" in error.msg and "named as a speed" in error.msg
+
+
+@pytest.mark.parametrize("unit", ["rpm", "%", "-", "rad/s", "rpm/K^0.5"])
+def test_speed_units_are_accepted(unit):
+    _load(_header(f"theta,speed [{unit}],flow,pressure,efficiency"))
+
+
+def test_a_json_request_names_the_setting_unit():
+    from plantsolve.schemas.perfmap import PerfmapRequest
+    from plantsolve.solvers.perfmap.synthetic import request_body
+    body = request_body()
+    positions = [{"setting": [p.pop("theta"), p.pop("phi")], **p} for p in body["positions"]]
+    body = {**body, "positions": positions, "setting_names": ["IGV", "Nc"], "setting_units": ["deg", "degF"]}
+    with pytest.raises(InputRejected) as refused:
+        load(PerfmapRequest.model_validate(body))
+    assert refused.value.errors[0].loc == ("setting_units", 1)
+
+
+def test_a_pycycle_map_states_its_flow_unit_and_converts_with_it():
+    text = (DATA / "pycycle_fan_map.py").read_text()
+    assert "units['WcMap'] = 'lbm/s'" in text
+    as_read = _load(text, "fan.py")
+    assert as_read.units.flow == "lbm/s"  # was None: a flow without its unit
+    in_kg = _load(text, "fan.py", {"result_units": {"flow": "kg/s"}})
+    flows = np.concatenate([p.flow for p in as_read.internal.positions])
+    np.testing.assert_allclose(np.concatenate([p.flow for p in in_kg.internal.positions]), flows * 0.45359237,
+                               rtol=1e-12)
