@@ -72,3 +72,30 @@ def test_a_pycycle_map_states_its_flow_unit_and_converts_with_it():
     flows = np.concatenate([p.flow for p in as_read.internal.positions])
     np.testing.assert_allclose(np.concatenate([p.flow for p in in_kg.internal.positions]), flows * 0.45359237,
                                rtol=1e-12)
+
+
+# ---------------------------------------------------------------- GasTurb maps: units the file contradicts
+
+COMPMAP = (DATA / "gasturb" / "compmap.map").read_text()
+
+
+@pytest.mark.parametrize("unit", ["psi", "kPa", "bar"])
+def test_a_pressure_unit_over_a_gasturb_pressure_ratio_table_is_refused(unit):
+    """The Pressure Ratio table holds p2/p1; the option labelled the ratios 0.94..7.9 as psi without a word."""
+    with pytest.raises(InputRejected) as refused:
+        _load(COMPMAP, "compmap.map", {"units": {"pressure": unit}})
+    (error,) = refused.value.errors
+    assert error.loc == ("options", "units", "pressure") and "ratios" in error.msg
+
+
+def test_a_flow_unit_option_contradicting_the_maps_own_is_refused_and_an_agreeing_one_is_read():
+    stated = COMPMAP.replace("Mass Flow\n", "Mass Flow [lb/s]\n", 1)
+    with pytest.raises(InputRejected) as refused:
+        _load(stated, "compmap.map", {"units": {"flow": "kg/s"}})
+    (error,) = refused.value.errors
+    assert error.loc == ("options", "units", "flow") and "'lb/s'" in error.msg and "'kg/s'" in error.msg
+    agreeing = _load(stated, "compmap.map", {"units": {"flow": "lbm/s"}, "result_units": {"flow": "kg/s"}})
+    as_stated = _load(stated, "compmap.map")
+    np.testing.assert_allclose(np.concatenate([p.flow for p in agreeing.internal.positions]),
+                               np.concatenate([p.flow for p in as_stated.internal.positions]) * 0.45359237, rtol=1e-12)
+    assert _load(COMPMAP, "compmap.map", {"units": {"flow": "kg/s", "pressure": "-"}}).units.flow == "kg/s"
