@@ -103,7 +103,16 @@ def _flow_sign(settings: list[Setting]) -> list[Diagnostic]:
     other sign are a lost or stray minus."""
     values = np.concatenate([s.x for s in settings])
     negative = values < 0
-    if not negative.any() or negative.all():
+    if negative.all():
+        # a rig that counts flow against its axis: mirrored, every line's pressure rises with flow and no
+        # decreasing concave curve fits it; the fit warnings alone would not say why
+        return [_warning(
+            "implausible_flow",
+            f"Flow: every flow is negative ({_range(values)}); a compressor's flow is positive: a sign convention "
+            "of the rig (flow counted against the axis)? The speed lines are fitted as given, mirrored: their "
+            "pressure rises with flow. Give the flows without the minus.",
+            quantity="flow", values=[float(values.min()), float(values.max())], settings=[])]
+    if not negative.any():
         return []
     stray_negative = negative.sum() <= (~negative).sum()
     where = [(s.label, float(x)) for s in settings for x in s.x if (x < 0) == stray_negative]

@@ -99,3 +99,15 @@ def test_a_flow_unit_option_contradicting_the_maps_own_is_refused_and_an_agreein
     np.testing.assert_allclose(np.concatenate([p.flow for p in agreeing.internal.positions]),
                                np.concatenate([p.flow for p in as_stated.internal.positions]) * 0.45359237, rtol=1e-12)
     assert _load(COMPMAP, "compmap.map", {"units": {"flow": "kg/s", "pressure": "-"}}).units.flow == "kg/s"
+
+
+def test_a_table_whose_every_flow_is_negative_is_warned_naming_the_flow():
+    """A rig counting flow against its axis: before, 43 fit warnings ('not decreasing and concave' on every line)
+    and none naming the flow's sign."""
+    rows = [",".join(c if k != 2 else f"-{c}" for k, c in enumerate(line.split(","))) for line in LINES[1:]]
+    value = _load("\n".join(["theta,phi,flow [kg/s],pressure,efficiency"] + rows) + "\n")
+    (warning,) = [w for w in value.warnings if w.code == "implausible_flow"]
+    flows = [float(line.split(",")[2]) for line in LINES[1:]]
+    assert "every flow is negative" in warning.message and warning.details["values"] == [-max(flows), -min(flows)]
+    plain = _load("\n".join(["theta,phi,flow [kg/s],pressure,efficiency"] + LINES[1:]) + "\n")
+    assert not [w for w in plain.warnings if w.code == "implausible_flow"]
