@@ -503,6 +503,13 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                 scale[field] = fraction_factor(unit or None)
             elif parsed is not None:
                 measured_units[field] = parsed.text
+                if field == "pressure" and not parsed.dimensionless and _role_key(_split_unit(name)[0]) in _RATIO_NAMES:
+                    notes_before.append(Diagnostic(
+                        code="unit_contradicted_by_name",
+                        message=f"Column {name.strip()!r} ({what} {numbers[0]}) is named as a pressure ratio but "
+                        f"its unit {unit!r} is a pressure: read as pressures in {parsed.text}. If the values are "
+                        "ratios (p2/p1), label the column '[-]'.",
+                        details={"column": name.strip(), "unit": parsed.text, "reading": "pressure"}))
             elif field == "pressure" and _role_key(_split_unit(name)[0]) in _RATIO_NAMES:
                 measured_units[field] = "1"
     unknown_roles = sorted(set(columns.values()) - set(ROLES))

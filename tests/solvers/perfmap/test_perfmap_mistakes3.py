@@ -111,3 +111,13 @@ def test_a_table_whose_every_flow_is_negative_is_warned_naming_the_flow():
     assert "every flow is negative" in warning.message and warning.details["values"] == [-max(flows), -min(flows)]
     plain = _load("\n".join(["theta,phi,flow [kg/s],pressure,efficiency"] + LINES[1:]) + "\n")
     assert not [w for w in plain.warnings if w.code == "implausible_flow"]
+
+
+@pytest.mark.parametrize("header", ["PR [bar]", "pressure ratio [psi]", "p2/p1 [kPa]"])
+def test_a_ratio_named_column_with_a_pressure_unit_is_warned_naming_the_column(header):
+    value = _load(_header(f"theta,phi,flow,{header},efficiency"))
+    (warning,) = [w for w in value.internal.upload_warnings if w.code == "unit_contradicted_by_name"]
+    assert warning.details["column"] == header and f"'{header}'" in warning.message
+    assert value.units.pressure == warning.details["unit"]
+    plain = _load(_header("theta,phi,flow,pressure [bar],efficiency"))
+    assert not [w for w in plain.internal.upload_warnings if w.code == "unit_contradicted_by_name"]
