@@ -22,8 +22,10 @@ def _outside(value: float, bounds: tuple[float, float]) -> bool:
     return not bounds[0] <= abs(value) <= bounds[1]
 
 
-def request_warnings(request: FlowmeterRequest, field_tesla: float) -> list[Diagnostic]:
-    """Bore, field and velocity against what meters are built for."""
+def request_warnings(request: FlowmeterRequest, field_tesla: float,
+                     sampled_mean: float | None = None) -> list[Diagnostic]:
+    """Bore, field and velocity against what meters are built for; sampled profiles are judged on the mean of
+    their interpolated field (``sampled_mean``), as mm/s samples written as m/s mislead just as a mean does."""
     out = []
     diameter = 2 * request.pipe.radius * METRES[request.units]
     if _outside(diameter, BORE_M):
@@ -44,13 +46,16 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float) -> list[Diag
                                                          else "gauss or µT written as T?"),
             details={"quantity": "magnetic_field", "value": field_tesla, "range_t": list(FIELD_T)}))
     v = request.velocity
-    if v.type != "samples" and _outside(v.mean, VELOCITY_M_S) and v.mean != 0:
+    samples = v.type == "samples"
+    mean = sampled_mean if samples else v.mean
+    if mean is not None and mean != 0 and _outside(mean, VELOCITY_M_S):
+        quantity = "velocity.values" if samples else "velocity.mean"
         out.append(Diagnostic(
             code="implausible_velocity",
-            message=f"Mean velocity: {v.mean:g} m/s; liquids pass meters at {VELOCITY_M_S[0]:g} to "
-            f"{VELOCITY_M_S[1]:g} m/s: " + ("mm/s or cm/s written as m/s?" if abs(v.mean) > VELOCITY_M_S[1]
-                                            else "a flow rate instead of a velocity?"),
-            details={"quantity": "velocity.mean", "value": v.mean, "range_m_s": list(VELOCITY_M_S)}))
+            message=f"Mean velocity{' of the samples' if samples else ''} ({quantity}): {mean:g} m/s; liquids pass "
+            f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
+            + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
+            details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(

@@ -34,6 +34,7 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
+import pint
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
@@ -456,6 +457,14 @@ def _check_set(s: TableSet, cut_line: int | None) -> list[Diagnostic]:
     return notes + _limit_line_off_map(s)
 
 
+def _same_unit(a, b) -> bool:
+    """Two spellings of one unit (lb/s and lbm/s)."""
+    try:
+        return abs(a.factor_to(b) - 1.0) < 1e-12
+    except pint.errors.DimensionalityError:  # a mass flow against a volume flow
+        return False
+
+
 def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | None]:
     """(units, where the flow unit came from): the upload's units option, else a unit in brackets on the Mass Flow
     table's line ('Mass Flow [kg/s]'), else a 'flow [unit]' in the title."""
@@ -482,9 +491,18 @@ def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | Non
         if not isinstance(unit, str):
             raise reject(f"options.units.{quantity} must be a unit text such as 'kg/s'", ("options", "units", quantity))
         try:
-            check_quantity(quantity, unit)
+            parsed = check_quantity(quantity, unit)
         except UnitError as e:
             raise reject(f"options.units.{quantity}: {e}", ("options", "units", quantity)) from None
+        if quantity == "pressure" and parsed.text != "1":
+            # the table is GasTurb's Pressure Ratio: a pressure unit would label ratios as pressures
+            raise reject(f"options.units.pressure {unit!r}: a map's Pressure Ratio table holds ratios (p2/p1, "
+                         "dimensionless); leave units.pressure out, or give '-'", ("options", "units", "pressure"))
+        stated = units.get(quantity) if quantity == "flow" and source is not None else None
+        if stated is not None and not _same_unit(check_quantity("flow", stated), parsed):
+            raise reject(f"options.units.flow {unit!r} contradicts the file, whose {source} states {stated!r}: say "
+                         "which is right (leave the option out to use the file's, or correct the file)",
+                         ("options", "units", "flow"))
         units[quantity] = unit
         source = "options.units" if quantity == "flow" else source
     return units, source if "flow" in units else None

@@ -103,7 +103,16 @@ def _flow_sign(settings: list[Setting]) -> list[Diagnostic]:
     other sign are a lost or stray minus."""
     values = np.concatenate([s.x for s in settings])
     negative = values < 0
-    if not negative.any() or negative.all():
+    if negative.all():
+        # a rig that counts flow against its axis: mirrored, every line's pressure rises with flow and no
+        # decreasing concave curve fits it; the fit warnings alone would not say why
+        return [_warning(
+            "implausible_flow",
+            f"Flow: every flow is negative ({_range(values)}); a compressor's flow is positive: a sign convention "
+            "of the rig (flow counted against the axis)? The speed lines are fitted as given, mirrored: their "
+            "pressure rises with flow. Give the flows without the minus.",
+            quantity="flow", values=[float(values.min()), float(values.max())], settings=[])]
+    if not negative.any():
         return []
     stray_negative = negative.sum() <= (~negative).sum()
     where = [(s.label, float(x)) for s in settings for x in s.x if (x < 0) == stray_negative]
@@ -138,10 +147,15 @@ def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     return []
 
 
+def named_as_speed(name: str) -> bool:
+    """Whether a setting's name (its unit in brackets dropped) is one rigs and cycle codes give a speed."""
+    return re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) in SPEED_NAMES
+
+
 def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
     out = []
     for k, name in enumerate(request.setting_names):
-        if re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) not in SPEED_NAMES:
+        if not named_as_speed(name):
             continue
         values = np.array([s.values[k] for s in settings], dtype=float)
         unit = units.settings[k] if k < len(units.settings) else None

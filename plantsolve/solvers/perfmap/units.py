@@ -45,6 +45,13 @@ ALLOWED = {
                  "[length]": "head (m)", "[length] ** 2 / [time] ** 2": "specific work (J/kg)"},
     "efficiency": {"": "fraction or percent (-, %)"},
 }
+# Gauge pressures are above the ambient, which no file states: converting one to an absolute unit (or back)
+# with a factor alone would shift every value by about an atmosphere without a word.
+GAUGE = frozenset({"barg", "psig", "mbarg"})
+# Units whose dimensions a setting named as a speed may have: relative (fraction, %), rotational (rpm, 1/s,
+# rad/s) or corrected rotational (rpm/sqrt(K)).
+SPEED_DIMENSIONS = {"1": "relative (fraction, %)", "rpm": "rotational (rpm, 1/min, rad/s)",
+                    "rpm / K ** 0.5": "corrected (rpm/K^0.5)"}
 _DIMENSIONLESS_WORDS = {"", "-", "–", "1", "—", "/", "ratio", "dimensionless", "frac", "fraction", "n/a", "na"}
 # Exponents written as plain digits after a length ('m3/h', 'cm3/s', 'ft3/min').
 _DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])")
@@ -105,6 +112,28 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
     return u
 
 
+def is_gauge(unit: Unit | None) -> bool:
+    return unit is not None and str(unit.unit) in GAUGE
+
+
+def speed_unit_error(name: str, text: str | None) -> str | None:
+    """Why ``text`` cannot be the unit of the speed setting ``name`` (a temperature, a mass …), or None; a label
+    pint cannot read stays a label (settings' units are labels)."""
+    if not text:
+        return None
+    try:
+        u = parse_unit(text)
+    except UnitError:
+        return None
+    reg = registry()
+    if any(u.unit.dimensionality == reg.parse_units(speed).dimensionality for speed in SPEED_DIMENSIONS):
+        return None
+    return (f"setting {name!r} is named as a speed but its unit {text.strip()!r} is {_dimensions(u.unit)}: expected "
+            "a speed, "
+            f"{' or '.join(SPEED_DIMENSIONS.values())} — another column (a temperature?) read as the speed? Map the "
+            "columns with the 'columns' option, or state the speed's own unit")
+
+
 def fraction_factor(text: str | None) -> float:
     """Factor from an efficiency unit to a fraction (0.01 for '%'); 1 without a unit."""
     u = check_quantity("efficiency", text)
@@ -146,6 +175,12 @@ def to_internal(request: PerfmapRequest) -> tuple[PerfmapRequest, ResultUnits]:
             dst = check_quantity(quantity, dst_text)
         except UnitError as e:
             errors.append(FieldError(("options", "result_units", quantity), str(e)))
+            continue
+        if dst is not None and src is not None and is_gauge(src) != is_gauge(dst):
+            errors.append(FieldError(("options", "result_units", quantity),
+                                     f"{quantity} in {src.text!r} cannot be converted to {dst.text!r}: one is a gauge "
+                                     "pressure (above the ambient) and the other absolute, and the ambient pressure "
+                                     "is not known; ask for a unit of the same kind (barg, psig, mbarg for gauge)"))
             continue
         if dst is None or (src is not None and src.unit == dst.unit):
             factors[quantity], stated[quantity] = 1.0, None if src is None else src.text

@@ -503,6 +503,13 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                 scale[field] = fraction_factor(unit or None)
             elif parsed is not None:
                 measured_units[field] = parsed.text
+                if field == "pressure" and not parsed.dimensionless and _role_key(_split_unit(name)[0]) in _RATIO_NAMES:
+                    notes_before.append(Diagnostic(
+                        code="unit_contradicted_by_name",
+                        message=f"Column {name.strip()!r} ({what} {numbers[0]}) is named as a pressure ratio but "
+                        f"its unit {unit!r} is a pressure: read as pressures in {parsed.text}. If the values are "
+                        "ratios (p2/p1), label the column '[-]'.",
+                        details={"column": name.strip(), "unit": parsed.text, "reading": "pressure"}))
             elif field == "pressure" and _role_key(_split_unit(name)[0]) in _RATIO_NAMES:
                 measured_units[field] = "1"
     unknown_roles = sorted(set(columns.values()) - set(ROLES))
@@ -895,6 +902,24 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     return positions, notes, names
 
 
+# pyCycle states its tables' units beside them: ``Map.units['WcMap'] = 'lbm/s'`` or ``units = {'WcMap': 'lbm/s'}``.
+_MAP_FLOW_UNIT = re.compile(r"""(?:units\s*\[\s*|units\s*=\s*\{[^}]*?)['"]WcMap['"]\s*[\]:]\s*=?\s*['"]([^'"]+)['"]""")
+
+
+def _map_data_flow_unit(text: str) -> str | None:
+    """The unit a pyCycle map states for ``WcMap`` (read, so a map in lbm/s is not a flow without a unit); its
+    ``NcMap`` unit is not read: pyCycle's own maps label relative speeds 'rpm'."""
+    m = _MAP_FLOW_UNIT.search(text)
+    if m is None:
+        return None
+    try:
+        check_quantity("flow", m.group(1))
+    except UnitError as e:
+        raise reject(f"units['WcMap'] = {m.group(1)!r} (line {text.count(chr(10), 0, m.start()) + 1}): {e}",
+                     ("file", "units", "WcMap")) from None
+    return m.group(1)
+
+
 MAX_CSV_ROWS = 200_000
 
 
@@ -928,7 +953,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     lines: list[list[int]] = []
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
-        body = {"positions": positions, "setting_names": names, "units": {"pressure": "1", "efficiency": "1"},
+        body = {"positions": positions, "setting_names": names,
+                "units": {"flow": _map_data_flow_unit(text), "pressure": "1", "efficiency": "1"},
                 "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
     elif ext == ".csv":
         roles = (options or {}).get("columns") if isinstance(options, dict) else None

@@ -13,12 +13,13 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
-from plantsolve.solvers.perfmap.plausibility import plausibility_warnings
+from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
 from plantsolve.solvers.perfmap.units import (
     UnitError,
     fraction_factor,
     request_conversions,
+    speed_unit_error,
     to_internal,
 )
 
@@ -56,6 +57,7 @@ def file_loc(loc: tuple, rows_of: list[list[int]], values_of: Callable[[int], tu
 def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapInput:
     """The request converted (``units``, ``options.result_units``) and prepared; raises :class:`InputRejected`
     naming the field, or for a table the file row, of each bad value."""
+    _check_setting_units(request)
     stated, contradicted = _efficiency_unit_against_values(request)
     internal, units = to_internal(stated)
     try:
@@ -77,6 +79,17 @@ def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapI
         info["file"] = source.name
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings))
+
+
+def _check_setting_units(request: PerfmapRequest) -> None:
+    """A setting named as a speed whose unit is no speed (``speed [K]``: a temperature column taken for it) is
+    refused naming ``setting_units[k]``; the map would be drawn over the wrong quantity."""
+    units = request.setting_units or []
+    table = bool(request.source and request.source.rows)  # a file's setting units come from its header
+    errors = [FieldError(("file", "header") if table else ("setting_units", k), message) for k, (name, unit) in enumerate(zip(request.setting_names, units))
+              if named_as_speed(name) and (message := speed_unit_error(name, unit))]
+    if errors:
+        raise InputRejected(errors)
 
 
 def _efficiency_unit_against_values(request: PerfmapRequest) -> tuple[PerfmapRequest, list[Diagnostic]]:

@@ -20,6 +20,7 @@ from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
 from plantsolve.solvers.polyhedra.declared import compare
+from plantsolve.solvers.polyhedra.duplicates import repeated_faces
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
@@ -215,7 +216,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         closed = n_open == 0 and len(uses) > 0  # a zone whose every face collapsed bounds nothing
         oriented_volume = float((factor * use_volume[uses]).sum())
         signed = float(use_volume[uses].sum())
-        volume = abs(oriented_volume) if closed and not conflict else None
+        repeated = repeated_faces(poly, faces, normal) if (nm_zone == z).any() else []
+        volume = abs(oriented_volume) if closed and not conflict and not repeated else None
         all_closed &= volume is not None
         total += volume or 0.0
         if conflict:
@@ -261,6 +263,13 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             warnings.append(Diagnostic(code="zone_not_closed", message=(
                 f"zone {zone_id!r} is not closed: {n_open} open edge(s); its volume is not given."),
                 details={"zone": zone_id, "open_edges": n_open}))
+        if repeated:
+            warnings.append(Diagnostic(code="duplicate_faces", message=(
+                f"zone {zone_id!r}: {len(repeated)} face(s) repeat another face of the zone (the same vertices, "
+                f"facing the same way: {', '.join(f'{poly.face_ids[f]!r} = {poly.face_ids[g]!r}' for f, g in repeated[:5])}"
+                f"{' ...' if len(repeated) > 5 else ''}); its volume would count them twice and is not given. Remove "
+                "the copies."), details={"zone": zone_id, "count": len(repeated),
+                                          "faces": [[poly.face_ids[f], poly.face_ids[g]] for f, g in repeated[:100]]}))
         if len(nm):
             warnings.append(Diagnostic(code="non_manifold_edges", message=(
                 f"zone {zone_id!r}: {len(nm)} edge(s) shared by more than two faces."),

@@ -7,6 +7,7 @@ import numpy as np
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.polyhedra.file_units import METRES
+from plantsolve.solvers.polyhedra.holes import holes_outside
 
 MAX_ERRORS = 50
 # physical bounds of the options, in metres: merging vertices 5 cm apart closes the gap of a thin wall, and a face
@@ -56,6 +57,8 @@ def check_input(request: PolyhedraRequest) -> None:
                                      f"zones of its parent {face.parent!r}"))
         if len(errors) >= MAX_ERRORS:
             break
+    if not errors:
+        errors.extend(_hole_errors(request)[:MAX_ERRORS])
     if request.mesh is not None and len(errors) < MAX_ERRORS:
         errors.extend(_mesh_errors(request, seen)[:MAX_ERRORS - len(errors)])
     if not errors and request.mesh is None and all(face.parent is not None for face in request.faces):
@@ -63,6 +66,26 @@ def check_input(request: PolyhedraRequest) -> None:
                                  "no face: give faces or a mesh"))
     if errors:
         raise InputRejected(errors[:MAX_ERRORS])
+
+
+def _hole_errors(request: PolyhedraRequest) -> list[FieldError]:
+    """Holes with a vertex outside their face's outer loop (their area would be subtracted from the face)."""
+    errors = []
+    tolerance = max(1e-4 / METRES[request.units], request.options.merge_tolerance)  # 0.1 mm: EnergyPlus' planarity
+    points = np.asarray(request.vertices, dtype=float).reshape(-1, 3) if len(request.vertices) else np.zeros((0, 3))
+    for i, face in enumerate(request.faces):
+        if len(face.loops) < 2:
+            continue
+        loops = [np.asarray(loop, dtype=float) if loop and isinstance(loop[0], list) else points[list(loop)]
+                 for loop in face.loops]
+        for k, v in holes_outside(loops, tolerance):
+            errors.append(FieldError(("faces", i, "loops", k, v), f"face {face.id!r}: hole {k} has vertex "
+                                     f"{loops[k][v].tolist()} outside the face's outer loop (loops[0]); a hole is "
+                                     "subtracted from the face's area, so it must lie within it — another face's "
+                                     "loop, or the loops in the wrong order?"))
+            if len(errors) >= MAX_ERRORS:
+                return errors
+    return errors
 
 
 def _mesh_errors(request: PolyhedraRequest, face_ids: dict[str, int]) -> list[FieldError]:

@@ -318,12 +318,15 @@ def test_pycycle_off_design_solve_lands_on_the_known_r_line():
 
 
 def test_a_real_two_alpha_map_runs_in_pycycle_and_a_map_without_flow_unit_says_so():
-    """N3_Fan_map (alpha 0 and 5): pyCycle reads the exported tables at a node of the alpha-5 plane exactly; its
-    flow unit was never stated, so WcMap has none (OpenMDAO warns and takes CompressorMap's lbm/s) and the module
-    says so."""
+    """N3_Fan_map (alpha 0 and 5): pyCycle reads the exported tables at a node of the alpha-5 plane exactly; with
+    the line stating its flow unit removed (the upload reads it), WcMap has none (OpenMDAO warns and takes
+    CompressorMap's lbm/s) and the module says so."""
     from plantsolve.solvers.perfmap.cycle_exports import pycycle_module
 
-    _, res = solved("N3_Fan_map.py")
+    text = (PYCYCLE / "N3_Fan_map.py").read_text()
+    assert "FanMap.units['WcMap'] = 'lbm/s'\n" in text
+    text = text.replace("FanMap.units['WcMap'] = 'lbm/s'\n", "")
+    res = solve(parse_upload(StoredInput.from_bytes("N3_Fan_map.py", text.encode()), {"map": False})).result
     text = pycycle_module(res).decode()
     assert "the flow unit was not stated" in text
     module = _load(text)
