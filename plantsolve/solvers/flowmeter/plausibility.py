@@ -15,6 +15,7 @@ BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic mete
 FIELD_T = (1e-4, 0.5)  # |B| at the pipe centre: a meter's coils give a few mT
 VELOCITY_M_S = (1e-3, 20.0)  # |mean velocity| of liquids in a meter
 SIGNAL_V = (1e-7, 0.1)  # |U|: 0.1 µV to 100 mV across the electrodes
+PROBE_SPREAD = 1e-3  # probe points all within this fraction of R of the centre: written in a unit 1000x larger
 RADIAN_HALF_ANGLE = math.pi / 2  # a patch's half-angle in radians is at most this; in degrees no patch is this narrow
 
 
@@ -56,6 +57,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
+    out += _probe_warnings(request)
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -66,6 +68,22 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             details={"quantity": "electrodes.half_angle", "value": e.half_angle, "units": "deg",
                      "as_radians_deg": math.degrees(e.half_angle)}))
     return out
+
+
+def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
+    """Several distinct probe points all crowded at the centre: metres given with units 'mm' (25 mm as 0.025)."""
+    points = {(float(p[0]), float(p[1])) for p in request.options.probe_points}
+    radius = request.pipe.radius
+    spread = max((math.hypot(x, y) for x, y in points), default=0.0)
+    if len(points) < 2 or spread == 0 or spread > PROBE_SPREAD * radius:
+        return []
+    return [Diagnostic(
+        code="implausible_probe_points",
+        message=f"Probe points: all {len(points)} lie within {spread:g} {request.units} of the centre of a pipe of "
+        f"radius {radius:g} {request.units} (W there is its centre value): coordinates in m with units "
+        f"'{request.units}'? Probe points are in the request's units.",
+        details={"quantity": "options.probe_points", "largest_radius": spread, "radius": radius,
+                 "units": request.units})]
 
 
 def signal_warnings(signal: float, request: FlowmeterRequest) -> list[Diagnostic]:

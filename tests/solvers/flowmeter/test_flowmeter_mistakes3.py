@@ -32,3 +32,18 @@ def test_samples_of_a_plausible_flow_are_not_warned():
     result = solve(_sampled([2.0] * len(RINGS))).result
     assert abs(result.report.details["mean_velocity"] - 2.0) < 1e-9
     assert not [w for w in result.report.warnings if w.code == "implausible_velocity"]
+
+
+def test_probe_points_in_metres_with_units_mm_are_warned_naming_the_field():
+    """W at (0.025, 0) mm is W at the centre: the probe table looked like a meter's W at 25 mm and 45 mm."""
+    from plantsolve.solvers.flowmeter.plausibility import request_warnings
+    from plantsolve.solvers.flowmeter.synthetic import example
+
+    def warned(points):
+        request = FlowmeterRequest.model_validate({**example(), "options": {"probe_points": points}})
+        assert request.units == "mm" and request.pipe.radius == 50.0
+        return [w for w in request_warnings(request, 0.01) if w.code == "implausible_probe_points"]
+
+    (warning,) = warned([[0.025, 0.0], [0.045, 0.01]])
+    assert warning.details["quantity"] == "options.probe_points" and "in m with units 'mm'" in warning.message
+    assert not warned([[25.0, 0.0], [45.0, 10.0]]) and not warned([[0.0, 0.0]]) and not warned([[0.0, 0.0], [1.0, 0.0]])
