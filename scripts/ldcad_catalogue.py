@@ -38,7 +38,9 @@ wheel holding pin primitive without shadow lines that does not draw ``wpin.dat``
 ``wpin.dat``'s pin (see ``WHEEL_PIN``). The open stud without base edges (``stud2a.dat``) gets the hole
 (radius 4, 4 deep) the shadow library states for ``stud2.dat``, dropped in a file whose other snaps hold a female
 radius-4 cylinder on the same axis over it (see ``OPEN_STUD``). The car steering wheel's hub (``3828.dat``), which the
-shadow library states male, is read as the female bore its stand's column enters (see ``HUB_BORE``).
+shadow library states male, is read as the female bore its stand's column enters (see ``HUB_BORE``), and the solid
+wheel 4288's bore, which the shadow library states as an axle hole from its mouth, is read as drawn: 3 LDU round
+before the axle hole, the mouth a stud enters (see ``ROUND_MOUTH``).
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -90,6 +92,13 @@ OPEN_STUD_HOLE = "0 !LDCAD SNAP_CYL [ID=studO] [gender=F] [caps=one] [secs=R 4 4
 # the wheel's hub as a male cylinder as well, so no snap of the data puts a wheel on a column (1682-1 and 6544-1 float
 # their wheels). The hub is the bore the column enters: its cylinder is read as female.
 HUB_BORE = "3828.dat"
+# The solid rubber wheel 4288 is pushed onto the wheel centre 20.dat (122c01's, 3137c01's: a radius-10 hub with a stud
+# on its outer face): the hub sits in the wheel's recess and the stud in the round mouth of its bore, which 4288 draws
+# radius 6 for 3 LDU before the axle hole starts. The shadow library states the whole bore as an axle hole (20 LDU from
+# the mouth), into which no stud goes, so set 6831's four wheels floated. The bore is read as drawn: a round section
+# 3 LDU long, then the axle hole.
+ROUND_MOUTH = {"4288.dat": "0 !LDCAD SNAP_CYL [id=axleHole] [gender=F] [caps=none] [secs=R 6 3 A 6 17] [slide=true] "
+                           "[pos=0 0 3] [ori=1 0 0 0 0 -1 0 1 0]"}
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -269,6 +278,8 @@ class Deriver:
             shadow = WHEEL_PIN_SNAP
         if key == HUB_BORE:
             shadow = shadow.replace("[gender=M]", "[gender=F]")
+        if key in ROUND_MOUTH:
+            shadow = ROUND_MOUTH[key]
         added_hole = key == OPEN_STUD and not any("gender=F" in line for line in shadow.splitlines())
         if added_hole:
             shadow += "\n" + OPEN_STUD_HOLE

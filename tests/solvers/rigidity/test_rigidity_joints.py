@@ -592,6 +592,44 @@ def test_wheels_turn_on_the_pull_back_motors_wheel_pins():
     assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 10039.dat\n1 0 53 5 60 0 0 -1 0 1 0 1 0 0 30027b.dat\n") == []
 
 
+# 122c01 (plate 2 x 2 with red wheels) draws each wheel centre 20.dat with a stud on its outer face: x from 36 to
+# 40 (y = 6) on the right, -36 to -40 on the left. The solid wheel 4288 is pushed onto it: its bore's mouth (local
+# z = 3, the bore running to -z) turned onto the stud's axis, at x = +-(x - 3). 122c07 (the same plate with the
+# wheels on, as LDraw draws it) places them at x = +-39: the mouth on the stud's base; set 6831 at 40: the stud 3 LDU
+# inside the mouth, which 4288 draws round for 3 LDU before its axle hole starts.
+def wheels_on_holder(x: float = 39.0, up: float = 0.0) -> str:
+    return ("1 0 0 0 0 1 0 0 0 1 0 0 0 1 122c01.dat\n"
+            f"1 256 {x:g} {6 + up:g} 0 0 0 -1 0 1 0 1 0 0 4288.dat\n"
+            f"1 256 {-x:g} {6 + up:g} 0 0 0 1 0 1 0 -1 0 0 4288.dat\n")
+
+
+@pytest.mark.parametrize(("x", "origin"), [(39, "stud"), (40, "fit")])
+def test_solid_wheels_pushed_onto_a_wheel_holders_studs_turn_on_them(x, origin):
+    """The shadow library states 4288's whole bore as an axle hole, into which no stud goes: 6831's four wheels
+    floated. Read as drawn (3 LDU round mouth), each wheel on its stud turns about the axle: the mouth on the stud's
+    base (122c07's placement) a stud's hinge, the stud 3 LDU in (6831's) a round fit. Counted by hand: two revolute
+    joints, one turning freedom per wheel."""
+    result = solve(parse("model.ldr", wheels_on_holder(x))).result
+    assert joints(wheels_on_holder(x)) == [("hinge", origin, "122c01", "4288", 1)] * 2
+    assert result.dof == 2 and result.generic_dof == 2
+    assert not {"offset_joints", "floating_parts"} & {w.code for w in result.report.warnings}
+
+
+def test_the_solid_wheels_bore_is_round_at_its_mouth_and_an_axle_hole_beyond():
+    assert part_snaps("4288") == [["cyl", "F", "none", 1, [0.0, 0.0, 3.0], [0.0, 0.0, -1.0],
+                                   [["R", 6.0, 3.0], ["A", 6.0, 17.0]]]]
+    # an axle through it is still keyed in the axle hole: one rigid joint
+    assert joints("1 0 0 0 0 1 0 0 0 1 0 0 0 1 3705.dat\n1 256 10 0 0 0 0 -1 0 1 0 1 0 0 4288.dat\n") == [
+        ("rigid", "axle", "3705", "4288", 1)]
+
+
+@pytest.mark.parametrize(("x", "up"), [(43, 0), (39, 4)])
+def test_solid_wheels_four_ldu_off_the_holders_studs_are_not_joined(x, up):
+    # the mouth 4 LDU out from the stud's base (the stud's tip only reaches it) or 4 LDU above it: past the 3 LDU an
+    # offset joint reaches, and no fit (no depth shared; the axes 4 LDU apart)
+    assert joints(wheels_on_holder(x, up)) == []
+
+
 # 4265a's axle hole: an 8 LDU axle section from local z = -5 (its mouth), its point at z = -1; turned so that
 # local z runs along +x, it faces the end of 3705 (x from -40 to 40) with its mouth at x = 40 + gap
 def bush_past_axle_end(gap: float) -> str:
