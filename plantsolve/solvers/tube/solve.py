@@ -404,11 +404,8 @@ def _shared_radius(radii: np.ndarray, weight: np.ndarray) -> float:
     return float(np.exp(np.average(np.log(radii), weights=weight)))
 
 
-def nominal_dies(model: TubeModel, weight: np.ndarray, nominal_clr: list[float]) -> tuple[list[float], tuple[int, ...]]:
-    """The nominal's distinct CLRs that bends of ``model`` sit on, and each bend's die (an index into them). With
-    the nominal's bend count, bend i is nominal bend i in the walking direction whose CLRs lie nearer the free
-    radii (in log radius, weighted by what the samples hold on each); otherwise each bend takes the CLR nearest
-    its free radius."""
+def _nominal_per_bend(model: TubeModel, weight: np.ndarray, nominal_clr: list[float]) -> tuple[list[float], np.ndarray]:
+    """The nominal's distinct CLRs, and the CLR of each bend of ``model`` (see :func:`nominal_dies`)."""
     clr = np.asarray(nominal_clr, float)
     distinct: list[float] = []
     for c in clr:
@@ -419,6 +416,36 @@ def nominal_dies(model: TubeModel, weight: np.ndarray, nominal_clr: list[float])
         per_bend = min((clr, clr[::-1]), key=lambda c: float(np.sum(weight * (logr - np.log(c)) ** 2)))
     else:
         per_bend = np.array([distinct[int(np.argmin(np.abs(np.log(distinct) - r)))] for r in logr])
+    return distinct, per_bend
+
+
+# The nominal's CLRs start dies only where they can be the dies this tube was bent on: springback and die wear
+# put a bend's radius within a few per cent of its die's, so CLRs this far from the scan's radii (weighted by
+# what the samples hold on each) are a nominal in another unit or of another part, and dies started there
+# would pull the measured radii (and the lengths beside them) towards a wrong number.
+NOMINAL_CLR_RATIO = 1.5
+
+
+def nominal_clr_mismatch(model: TubeModel, weight: np.ndarray, nominal_clr: list[float]) -> str | None:
+    """Why the nominal's CLRs cannot be this tube's dies (a CLR not above the tube's radius, or the CLRs off the
+    scan's free radii by more than :data:`NOMINAL_CLR_RATIO`), or None when they can."""
+    small = [c for c in nominal_clr if c <= model.pipe_radius]
+    if small:
+        return (f"CLR {', '.join(f'{c:g}' for c in small[:5])} is not above the tube's radius "
+                f"({model.pipe_radius:.4g})")
+    _, per_bend = _nominal_per_bend(model, weight, nominal_clr)
+    ratio = float(np.exp(np.average(np.log(per_bend / model.radii), weights=weight)))
+    if not 1 / NOMINAL_CLR_RATIO <= ratio <= NOMINAL_CLR_RATIO:
+        return f"the CLRs are {ratio:.3g} times the scan's bend radii (weighted mean)"
+    return None
+
+
+def nominal_dies(model: TubeModel, weight: np.ndarray, nominal_clr: list[float]) -> tuple[list[float], tuple[int, ...]]:
+    """The nominal's distinct CLRs that bends of ``model`` sit on, and each bend's die (an index into them). With
+    the nominal's bend count, bend i is nominal bend i in the walking direction whose CLRs lie nearer the free
+    radii (in log radius, weighted by what the samples hold on each); otherwise each bend takes the CLR nearest
+    its free radius."""
+    distinct, per_bend = _nominal_per_bend(model, weight, nominal_clr)
     die = [int(np.argmin([abs(c - d) for d in distinct])) for c in per_bend]
     used = sorted(set(die))  # dies no bend sits on are left out: their radius would be free of any sample
     return [distinct[k] for k in used], tuple(used.index(k) for k in die)
@@ -468,6 +495,9 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     # nominal puts on different dies (or splitting one of its dies in two) contradicts the tooling, and its
     # fewer parameters can win the BIC while the radii it gives are several sigma off (one radius for CLRs of
     # 22.5 to 32.6); its dies are the 'nominal_dies' candidate instead
+    unused = nominal_clr_mismatch(model, weight, nominal_clr) if nominal_clr else None
+    if unused:
+        nominal_clr = None
     by_nominal = forced == "auto" and nominal_clr is not None and len(nominal_clr) == n
     if forced == "common" or (forced == "auto" and not by_nominal):
         best = None
@@ -514,7 +544,7 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
         die_radii = [float(m.radii[assignment.index(k)]) for k in range(len(nominal_radii))]
     report = BendRadiusModel(chosen=chosen, criterion=how, values=bic, rss=rss, n_parameters=n_par,
                              die_radii=die_radii, assignment=assignment, nominal_clrs=nominal_radii or None,
-                             summary=_radius_summary(chosen, how, bic, nominal_radii))
+                             summary=_radius_summary(chosen, how, bic, nominal_radii, unused))
     return m, info, t2, report, mode
 
 
@@ -524,7 +554,8 @@ TIED_BIC = 0.05  # BIC differences below this are one fit reached from two start
 NOMINAL_PREFERRED_BIC = 2.0
 
 
-def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii: list[float]) -> str:
+def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii: list[float],
+                    nominal_unused: str | None = None) -> str:
     """Which radius model won, in words: by the options, or by how much BIC over the runner-up."""
     if how != "BIC":
         return f"'{chosen}' as the options ask"
@@ -546,6 +577,8 @@ def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii:
         outcome = ("won" if chosen == "nominal_dies" else "the same fit" if gap < TIED_BIC
                    else f"{gap:.1f} worse")
         text += f"; the nominal's CLRs ({clrs}) as dies ('nominal_dies'): {outcome}"
+    if nominal_unused:
+        text += f"; the nominal's CLRs not used as dies: {nominal_unused}"
     return text
 
 

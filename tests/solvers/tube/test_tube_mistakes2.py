@@ -193,3 +193,34 @@ def test_an_organized_scans_missing_returns_are_no_sign_of_a_wrong_header():
     warning, points = _warning("scan.ply", _binary_ply("float", grid), "records_skipped")
     np.testing.assert_allclose(points, POINTS, atol=1e-3)
     assert warning.details["count"] == 2 * len(POINTS)
+
+
+# --- a nominal that cannot be this tube's tooling does not move the measurement ------------------------------
+
+
+def _solved(nominal: list[dict] | None):
+    options = {"nominal": nominal} if nominal is not None else {}
+    return solve(TubeScan(TubeRequest.model_validate({**EXAMPLE, "options": options}))).result
+
+
+@pytest.mark.parametrize("case, nominal", [
+    ("inches", [{**r, "length": r["length"] / 25.4, "bend_radius": r["bend_radius"] / 25.4} for r in NOMINAL]),
+    ("CLR below the tube's radius", [{**r, "bend_radius": 3.0 if r["bend_radius"] else 0.0} for r in NOMINAL]),
+    ("CLR 1.6 times", [{**r, "bend_radius": r["bend_radius"] * 1.6} for r in NOMINAL]),
+])
+def test_a_nominal_whose_clrs_cannot_be_the_dies_leaves_the_measured_lra_as_the_scan_alone_gives(case, nominal):
+    """Before: the nominal's CLRs started the dies whatever they were, and a nominal in inches moved the measured
+    bend radius 18.01 -> 16.98 mm and a straight 29.95 -> 30.24 mm."""
+    alone = _solved(None)
+    got = _solved(nominal)
+    for a, b in zip(alone.lra, got.lra):
+        assert (a.length, a.rotation, a.angle, a.bend_radius) == pytest.approx(
+            (b.length, b.rotation, b.angle, b.bend_radius), abs=1e-6)
+    assert "the nominal's CLRs not used as dies" in got.bend_radius_model.summary
+    assert got.bend_radius_model.nominal_clrs is None and got.inspection.verdict == "fail"
+
+
+def test_a_nominal_of_this_tube_still_starts_the_dies():
+    got = _solved(NOMINAL)
+    assert got.bend_radius_model.nominal_clrs == [18.0]
+    assert "not used as dies" not in got.bend_radius_model.summary
