@@ -91,6 +91,18 @@ class LeastSquaresFit:
     radius_model: BendRadiusModel | None = None
 
 
+def within(res: np.ndarray, thr: float, block: int = 65_536) -> np.ndarray:
+    """``np.abs(res) <= thr`` a block of samples at a time: no |res| temporary the size of a large scan (its pages
+    are faulted in and zeroed for one comparison), and each block's stays in the processor's cache."""
+    out = np.empty(len(res), bool)
+    buf = np.empty(min(block, len(res)))
+    for a in range(0, len(res), block):
+        part = buf[:len(res[a:a + block])]
+        np.abs(res[a:a + block], out=part)
+        np.less_equal(part, thr, out=out[a:a + block])
+    return out
+
+
 def no_progress_tick(message: str | None = None) -> None:
     """A tick that reports nothing (stage functions called on their own)."""
 
@@ -267,7 +279,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         info = {}
         res, seg = fit.assign(m, P, margin)
         for _ in range(n_rounds):
-            inl = np.abs(res) <= thr
+            inl = within(res, thr)
             if inl.sum() < 10 + lay.size:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})
@@ -354,7 +366,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
             _, res_all, seg_all = last_assignment
         else:
             res_all, seg_all = fit.assign(model, pts, margin)
-        inlier = np.abs(res_all) <= thr
+        inlier = within(res_all, thr)
         ends = fit.near_ends(model, seg_all)
         res_all[ends], seg_all[ends] = fit.assign(model, np.take(pts, ends, axis=0), 0.0)
     else:
@@ -586,7 +598,8 @@ def outlier_report(ls: LeastSquaresFit, lf: LocalFits, ss: SpineSamples, order: 
 
 def residual_summary(ls: LeastSquaresFit) -> tuple[Residuals, list[SegmentQuality]]:
     """Distances of the inliers to the fitted surface, overall and per segment."""
-    absr = np.abs(np.compress(ls.inlier, ls.residuals))
+    absr = np.compress(ls.inlier, ls.residuals)
+    np.abs(absr, out=absr)
     residuals = Residuals(count=len(absr), median=float(np.median(absr)), p95=float(np.percentile(absr, 95)),
                           max=float(absr.max()), rms=float(np.sqrt(np.mean(absr ** 2))))
     sp = build_spine(ls.model)
