@@ -14,6 +14,14 @@ def test_canonical_order_is_lexsort_with_ties():
     np.testing.assert_array_equal(sample_order.lexicographic(pts), np.lexsort(pts.T[::-1]))
     pts = rng.normal(size=(2000, 3))  # no ties
     np.testing.assert_array_equal(sample_order.lexicographic(pts), np.lexsort(pts.T[::-1]))
+    # x that differ only in their last bits share the sort key's high bits (its low bits hold the position):
+    # those runs are sorted again by the full x
+    pts = rng.normal(size=(5000, 3))
+    pts[:, 0] = 1000.0 + rng.integers(0, 5, len(pts)) * 1e-12
+    pts[::11, 0] = np.nextafter(pts[::11, 0], np.inf)
+    np.testing.assert_array_equal(sample_order.lexicographic(pts), np.lexsort(pts.T[::-1]))
+    pts[:, 0] = -pts[:, 0]  # the same among negative x, whose keys are their bits reversed
+    np.testing.assert_array_equal(sample_order.lexicographic(pts), np.lexsort(pts.T[::-1]))
 
 
 def test_cross_and_rotation_are_numpys_bit_for_bit():
