@@ -476,7 +476,12 @@ def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | Non
     for quantity, unit in _TITLE_UNIT.findall(title):
         unit = unit.strip()
         if unit.lower() not in ("unit not stated",):
-            units[quantity.lower()] = "1" if unit in ("-", "1") else unit
+            unit = "1" if unit in ("-", "1") else unit
+            try:
+                check_quantity(quantity.lower(), unit)
+            except UnitError as e:
+                raise reject(f"the title's {quantity} unit: {e}", ("file", "title")) from None
+            units[quantity.lower()] = unit
             source = "title"
     if (m := re.search(r"\[([^\]]+)\]", heading)) is not None:
         try:

@@ -52,6 +52,10 @@ GAUGE = frozenset({"barg", "psig", "mbarg"})
 # rad/s) or corrected rotational (rpm/sqrt(K)).
 SPEED_DIMENSIONS = {"1": "relative (fraction, %)", "rpm": "rotational (rpm, 1/min, rad/s)",
                     "rpm / K ** 0.5": "corrected (rpm/K^0.5)"}
+# What another column of a rig file holds (a temperature, a pressure, a mass, a length, a flow, a time): a speed
+# setting in one of these units is that column taken for the speed. Any other unit stays a label: cycle codes
+# write corrected speeds in units pint reads otherwise ('rpm/R^0.5' in Rankine, where pint's R is the gas constant).
+OTHER_QUANTITIES = ("K", "Pa", "kg", "m", "kg/s", "m^3/s", "s")
 _DIMENSIONLESS_WORDS = {"", "-", "–", "1", "—", "/", "ratio", "dimensionless", "frac", "fraction", "n/a", "na"}
 # Exponents written as plain digits after a length ('m3/h', 'cm3/s', 'ft3/min').
 _DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])")
@@ -126,7 +130,7 @@ def speed_unit_error(name: str, text: str | None) -> str | None:
     except UnitError:
         return None
     reg = registry()
-    if any(u.unit.dimensionality == reg.parse_units(speed).dimensionality for speed in SPEED_DIMENSIONS):
+    if not any(u.unit.dimensionality == reg.parse_units(other).dimensionality for other in OTHER_QUANTITIES):
         return None
     return (f"setting {name!r} is named as a speed but its unit {text.strip()!r} is {_dimensions(u.unit)}: expected "
             "a speed, "

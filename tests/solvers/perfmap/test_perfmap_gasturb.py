@@ -147,6 +147,12 @@ def test_the_flow_unit_comes_from_the_units_option_or_the_title_and_a_wrong_one_
     assert titled.units.flow == "lbm/s" and note(titled, "upload_settings").details["flow_unit_from"] == "title"
     (err,) = refused(text, {"units": {"flow": "kg"}})
     assert err.loc == ("options", "units", "flow") and "not a unit of flow" in err.msg
+    # a title unit that is no flow unit is refused naming the title, with or without a units option (with one, the
+    # comparison of the two raised an error the upload did not expect: a 500)
+    bogus = text.replace("99    closed form compressor map", "99    rig map; flow [bogusunit]")
+    for options in (None, {"units": {"flow": "kg/s"}}):
+        (err,) = refused(bogus, options)
+        assert err.loc == ("file", "title") and "flow" in err.msg
 
 
 def test_a_map_with_variable_geometry_has_the_setting_before_the_speed():

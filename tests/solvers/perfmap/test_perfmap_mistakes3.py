@@ -39,7 +39,7 @@ def test_gauge_to_gauge_and_absolute_to_absolute_still_convert():
     assert conversion["factor"] == pytest.approx(100_000 / 6894.757293168361, rel=1e-12)
 
 
-@pytest.mark.parametrize("unit", ["K", "degC", "kg"])
+@pytest.mark.parametrize("unit", ["K", "degC", "kg", "bar", "kg/s"])
 def test_a_speed_column_in_a_unit_no_speed_has_is_refused_naming_the_header(unit):
     with pytest.raises(InputRejected) as refused:
         _load(_header(f"theta,speed [{unit}],flow,pressure,efficiency"))
@@ -47,7 +47,7 @@ def test_a_speed_column_in_a_unit_no_speed_has_is_refused_naming_the_header(unit
     assert error.loc == ("file", "header") and "'speed'" in error.msg and "named as a speed" in error.msg
 
 
-@pytest.mark.parametrize("unit", ["rpm", "%", "-", "rad/s", "rpm/K^0.5"])
+@pytest.mark.parametrize("unit", ["rpm", "%", "-", "rad/s", "rpm/K^0.5", "rpm/R^0.5", "rpm/sqrt(degR)"])
 def test_speed_units_are_accepted(unit):
     _load(_header(f"theta,speed [{unit}],flow,pressure,efficiency"))
 
