@@ -142,22 +142,18 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
                 "angle_rad (or give degrees)."), details={"nominal_angles": a_nom.tolist(),
                                                           "as_degrees": as_deg.tolist(),
                                                           "measured_angles": a_meas.tolist()}))
-    ratios = [n.bend_radius / m.bend_radius for n, m in zip(nom, meas) if m.bend_radius > 0 and n.bend_radius > 0] \
-        if len(nom) == len(meas) else []
-    if len(nom) == len(meas):  # the straights between bends are whole in the scan (the end ones may not be)
-        ratios += [n.length / m.length for n, m in zip(nom[1:], meas[1:]) if m.length > measured.pipe_radius
-                   and n.length > 0]
-    elif nom and meas:
-        ratios = [float(np.median([r.bend_radius for r in nom]) / np.median([r.bend_radius for r in meas]))]
-    ratio = float(np.exp(np.median(np.log(ratios)))) if ratios else 1.0
-    for factor, pair in UNIT_RATIOS.items():
-        for r, bigger in ((ratio, "nominal"), (1.0 / ratio, "measured")):
-            if abs(np.log(r / factor)) < np.log(UNIT_RATIO_SLACK):
-                out.append(Diagnostic(code="nominal_unit_mismatch", message=(
-                    f"The nominal's lengths (CLRs and the straights between bends) are {ratio:.4g} × the measured "
-                    f"ones (median): {'larger' if bigger == 'nominal' else 'smaller'} by the ratio of {pair} "
-                    f"({factor:g}). Is the nominal in another unit than it states (its header's unit, or {units} "
-                    "when it names none)?"), details={"ratio": ratio, "unit_ratio": factor, "units": units}))
+    # the scan may run from either end: the rows are paired in the direction whose lengths agree best
+    ratio = min((_length_ratio(nom, rows[:-1], measured.pipe_radius)
+                 for rows in (got, model_rows(reverse_model(measured)))), key=lambda r: abs(np.log(r)))
+    # one mix-up named, the nearest unit ratio (the bands of 10 and 12 overlap)
+    factor, pair, bigger = min(((f, p, b) for f, p in UNIT_RATIOS.items() for b in ("nominal", "measured")),
+                               key=lambda c: abs(np.log((ratio if c[2] == "nominal" else 1.0 / ratio) / c[0])))
+    if abs(np.log((ratio if bigger == "nominal" else 1.0 / ratio) / factor)) < np.log(UNIT_RATIO_SLACK):
+        out.append(Diagnostic(code="nominal_unit_mismatch", message=(
+            f"The nominal's lengths (CLRs and the straights between bends) are {ratio:.4g} × the measured "
+            f"ones (median): {'larger' if bigger == 'nominal' else 'smaller'} by the ratio of {pair} "
+            f"({factor:g}). Is the nominal in another unit than it states (its header's unit, or {units} "
+            "when it names none)?"), details={"ratio": ratio, "unit_ratio": factor, "units": units}))
     small = [(i + 1, r.bend_radius) for i, r in enumerate(nom) if 0 < r.bend_radius < measured.pipe_radius]
     if small:
         out.append(Diagnostic(code="implausible_nominal_clr", message=(
@@ -167,6 +163,20 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
             "CLR, or another unit?"), details={"rows": [i for i, _ in small], "clr": [c for _, c in small],
                                "pipe_radius": measured.pipe_radius}))
     return out
+
+
+def _length_ratio(nom: list[LraRow], meas: list[LraRow], pipe_radius: float) -> float:
+    """The median ratio of the nominal's lengths to the measured ones, row by row: the CLRs and the straights
+    between bends (whole in the scan; the end ones may not be); the median CLRs' ratio when the bend counts
+    differ; 1 when nothing compares."""
+    if len(nom) == len(meas):
+        ratios = [n.bend_radius / m.bend_radius for n, m in zip(nom, meas) if m.bend_radius > 0 and n.bend_radius > 0]
+        ratios += [n.length / m.length for n, m in zip(nom[1:], meas[1:]) if m.length > pipe_radius and n.length > 0]
+    elif nom and meas:
+        ratios = [float(np.median([r.bend_radius for r in nom]) / np.median([r.bend_radius for r in meas]))]
+    else:
+        ratios = []
+    return float(np.exp(np.median(np.log(ratios)))) if ratios else 1.0
 
 
 def reversed_rows(rows: list[LraRow]) -> list[LraRow]:

@@ -571,8 +571,9 @@ NOMINAL_PREFERRED_BIC = 2.0
 def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii: list[float],
                     nominal_unused: str | None = None) -> str:
     """Which radius model won, in words: by the options, or by how much BIC over the runner-up."""
+    unused = f"; the nominal's CLRs not used as dies: {nominal_unused}" if nominal_unused else ""
     if how != "BIC":
-        return f"'{chosen}' as the options ask"
+        return f"'{chosen}' as the options ask{unused}"
 
     def versus(other: str) -> str:
         gap = bic[other] - bic[chosen]
@@ -591,9 +592,7 @@ def _radius_summary(chosen: str, how: str, bic: dict[str, float], nominal_radii:
         outcome = ("won" if chosen == "nominal_dies" else "the same fit" if gap < TIED_BIC
                    else f"{gap:.1f} worse")
         text += f"; the nominal's CLRs ({clrs}) as dies ('nominal_dies'): {outcome}"
-    if nominal_unused:
-        text += f"; the nominal's CLRs not used as dies: {nominal_unused}"
-    return text
+    return text + unused
 
 
 def canonical_direction(ls: LeastSquaresFit, pts: np.ndarray) -> None:

@@ -224,3 +224,15 @@ def test_a_nominal_of_this_tube_still_starts_the_dies():
     got = _solved(NOMINAL)
     assert got.bend_radius_model.nominal_clrs == [18.0]
     assert "not used as dies" not in got.bend_radius_model.summary
+
+
+def test_a_ratio_between_two_unit_ratios_names_one_mixup_the_nearest():
+    # 11 lies within the slack of both 10 (cm and mm) and 12 (ft and inches): one warning, not two that disagree
+    warned = nominal_mixups(MEASURED, _rows(scale_length=11.2), "mm")
+    (warning,) = [w for w in warned if w.code == "nominal_unit_mismatch"]
+    assert warning.details["unit_ratio"] == 12.0
+
+
+def test_a_nominal_written_from_the_other_end_raises_no_mixup():
+    from plantsolve.solvers.tube.inspection import reversed_rows
+    assert _codes(reversed_rows(_rows())) == {}
