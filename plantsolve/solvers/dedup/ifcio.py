@@ -98,7 +98,7 @@ def refuse_unread(text: bytes, model: ifcopenshell.file) -> None:
     twice: list[str] = []
     foreign: dict[str, int] = {}
     unread: list[str] = []
-    schema = ifcopenshell.ifcopenshell_wrapper.schema_by_name(model.schema_identifier)
+    schema = ifcopenshell.schema_by_name(model.schema_identifier)
     known: dict[str, bool] = {}
     for match in DEFINITION.finditer(text):
         number, name = int(match.group(1)), match.group(2).decode("ascii").upper()
@@ -107,6 +107,10 @@ def refuse_unread(text: bytes, model: ifcopenshell.file) -> None:
                 twice.append(f"#{number} on lines {line(first[number])} and {line(match)}")
             continue
         first[number] = match
+        if not name:  # a complex instance, '#12=(IFCA(...)IFCB(...))': its parts are named inside the brackets
+            if len(unread) < MAX_NAMED and _missing(model, number):
+                unread.append(f"{line(match)} (a complex instance)")
+            continue
         if name not in known:
             try:
                 schema.declaration_by_name(name)

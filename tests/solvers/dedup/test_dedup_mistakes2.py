@@ -90,3 +90,14 @@ def test_an_ifc_saved_as_utf16_is_refused_saying_so(encoding):
     with pytest.raises(InputRejected) as refused:
         parse_upload(source, {})
     assert "UTF-16" in refused.value.errors[0].msg
+
+
+def test_a_complex_instance_is_not_named_an_entity_the_schema_lacks(tmp_path):
+    # '#n=(IFCA(...)IFCB(...))' names its entities inside the brackets: before, its empty name was listed as an
+    # entity the FILE_SCHEMA does not have, beside the real reason of the refusal
+    text = ZOO.read_text().replace("#1016=IFCBUILDINGELEMENTPROXY", "#154=IFCBUILDINGELEMENTPROXY", 1)
+    text = text.replace("ENDSEC;\nEND-ISO", "#99990=(IFCNAMEDUNIT(*,.LENGTHUNIT.)IFCSIUNIT(.MILLI.,.METRE.));\n"
+                        "ENDSEC;\nEND-ISO", 1)
+    assert "#99990=(" in text
+    msg = _refusal(tmp_path, text)
+    assert "defined twice" in msg and "does not have" not in msg
