@@ -142,6 +142,22 @@ def _main_model(order: list[str], files: dict[str, list[tuple[int, str]]]) -> st
     return next((name for name in order if name not in placed), order[0])
 
 
+def _placed_submodels(main: str, files: dict, roles: dict) -> set[str]:
+    """The sub-models the main model places, directly or through its sub-models, whatever became of the placing
+    line (a placement skipped for its matrix or its depth still places the sub-model: the file is not at fault)."""
+    placed, todo = {main}, [main]
+    while todo:
+        for _, raw in files.get(todo.pop(), []):
+            fields = raw.split(None, 14)
+            if len(fields) < 15 or fields[0] != "1":
+                continue
+            sub = _resolve(fields[14].strip(), files)
+            if sub is not None and sub not in placed and roles.get(sub, "model") == "model":
+                placed.add(sub)
+                todo.append(sub)
+    return placed
+
+
 def _resolve(name: str, files: dict) -> str | None:
     """The embedded sub-file a type-1 line's file name means: as written, or with its library folder
     added or dropped (``parts/3001.dat`` for ``3001.dat``, ``parts/s/x.dat`` for ``s/x.dat``)."""
@@ -249,10 +265,7 @@ def parse_ldraw(text: str) -> dict:
     resolver = Resolver(files, lambda name: _resolve(name, files))
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
 
-    expanded: set[str] = set()
-
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
-        expanded.add(name)
         for number, raw in files.get(name, []):
             tokens = raw.split()
             if not tokens:
@@ -361,7 +374,8 @@ def parse_ldraw(text: str) -> dict:
             f"line {', '.join(map(str, lines[:10]))}{' and more' if len(lines) > 10 else ''}: each was read as the "
             "nearest rotation, so the sub-model's parts stand up to a few degrees off where the matrix puts them",
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
-    unplaced = [name for name, role in roles.items() if role == "model" and name not in expanded
+    placed = _placed_submodels(main, files, roles)
+    unplaced = [name for name, role in roles.items() if role == "model" and name not in placed
                 and any(raw.split()[:1] == ["1"] for _, raw in files[name])]
     if unplaced:
         warnings.append(Diagnostic(

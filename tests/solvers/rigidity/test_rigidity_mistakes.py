@@ -203,3 +203,5 @@ def test_a_loop_of_sub_models_is_skipped_naming_the_loop_and_deep_nesting_is_not
     assert len(deep.parts) == 32
     (skip,) = deep.source["skipped"]
     assert "nested more than 32 levels deep" in skip["reason"] and "itself" not in skip["reason"]
+    # the sub-models below the depth are placed, only too deep to read: not called unplaced
+    assert "unplaced_submodels" not in [w.code for w in solve(deep).result.report.warnings]
