@@ -79,8 +79,8 @@ def _warn_if_plain(text: str, whose: str) -> None:
     decodes it as base64 (its secrets are base64, the prefix optional) and refuses every delivery: say so, and what
     to give the receiver instead (the secret itself is not logged)."""
     if not text.startswith(SECRET_PREFIX):
-        log.warning("WEBHOOK_SECRETS: the secret of %s is not written as whsec_<base64>: deliveries are signed with its "
-                    "UTF-8 bytes, and a Standard Webhooks library given the same text reads it as base64 and refuses "
+        log.warning("WEBHOOK_SECRETS: the secret of %s is not written as whsec_<base64>: deliveries are signed "
+                    "with its UTF-8 bytes, and a Standard Webhooks library given the same text reads it as base64 and refuses "
                     "them; give the receiver 'whsec_' + base64(the text), or set that here", whose)
 
 

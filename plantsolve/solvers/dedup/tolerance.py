@@ -103,8 +103,8 @@ def from_precision(precision: float | None, default: float, unit_name: str, metr
     origin = f"{default * metres_per_unit:g} m (the model context's Precision {precision:g} {unit_name} {why})"
     return default, origin, [Diagnostic(code="implausible_precision", message=(
         f"The model context's Precision {precision:g} {unit_name} {why}: not used as the matching tolerance; "
-        f"{default:g} {unit_name}" + (f" ({default * metres_per_unit:g} m)" if unit_name != "m" else "") + " was used instead. Give options.tolerance to "
-        "choose another."), details={"precision": precision, "unit": unit_name, "tolerance": default})]
+        f"{default:g} {unit_name}" + (f" ({default * metres_per_unit:g} m)" if unit_name != "m" else "")
+        + " was used instead. Give options.tolerance to choose another."), details={"precision": precision, "unit": unit_name, "tolerance": default})]
 
 
 _SI_LENGTH = re.compile(rb"IFCSIUNIT\s*\(\s*\*\s*,\s*\.LENGTHUNIT\.\s*,\s*(?:\.(\w+)\.|\$)\s*,\s*\.METRE\.\s*\)",

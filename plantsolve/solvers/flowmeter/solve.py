@@ -404,7 +404,8 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
     current_map = [] if field.current_map is None else [
         [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
-    notes = request_warnings(request, b, mean if profile == "samples" else None) + notes + signal_warnings(signal, request)
+    notes = (request_warnings(request, b, mean if profile == "samples" else None) + notes
+             + signal_warnings(signal, request))
     source = {"conversions": [{"quantity": "length", "from_unit": request.units, "to_unit": "m",
                                "factor": METRES[request.units], "basis": "request",
                                "used_for": "the signal U = 2 R B v_mean S (R in metres)"}]}

@@ -86,7 +86,8 @@ def _check_setting_units(request: PerfmapRequest) -> None:
     refused naming ``setting_units[k]``; the map would be drawn over the wrong quantity."""
     units = request.setting_units or []
     table = bool(request.source and request.source.rows)  # a file's setting units come from its header
-    errors = [FieldError(("file", "header") if table else ("setting_units", k), message) for k, (name, unit) in enumerate(zip(request.setting_names, units))
+    errors = [FieldError(("file", "header") if table else ("setting_units", k), message)
+              for k, (name, unit) in enumerate(zip(request.setting_names, units))
               if named_as_speed(name) and (message := speed_unit_error(name, unit))]
     if errors:
         raise InputRejected(errors)

@@ -264,9 +264,10 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
                 f"zone {zone_id!r} is not closed: {n_open} open edge(s); its volume is not given."),
                 details={"zone": zone_id, "open_edges": n_open}))
         if repeated:
+            pairs = ", ".join(f"{poly.face_ids[f]!r} = {poly.face_ids[g]!r}" for f, g in repeated[:5])
             warnings.append(Diagnostic(code="duplicate_faces", message=(
                 f"zone {zone_id!r}: {len(repeated)} face(s) repeat another face of the zone (the same vertices, "
-                f"facing the same way: {', '.join(f'{poly.face_ids[f]!r} = {poly.face_ids[g]!r}' for f, g in repeated[:5])}"
+                f"facing the same way: {pairs}"
                 f"{' ...' if len(repeated) > 5 else ''}); its volume would count them twice and is not given. Remove "
                 "the copies."), details={"zone": zone_id, "count": len(repeated),
                                           "faces": [[poly.face_ids[f], poly.face_ids[g]] for f, g in repeated[:100]]}))

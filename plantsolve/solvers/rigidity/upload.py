@@ -337,8 +337,8 @@ def parse_ldraw(text: str) -> dict:
                     skipped.append({"line": number, "reason": f"sub-model {file_name!r} includes itself ({loop})"})
                     continue
                 if len(stack) >= MAX_DEPTH:
-                    skipped.append({"line": number, "reason": f"sub-model {file_name!r} is nested more than {MAX_DEPTH} "
-                                    "levels deep"})
+                    skipped.append({"line": number,
+                                    "reason": f"sub-model {file_name!r} is nested more than {MAX_DEPTH} levels deep"})
                     continue
                 # counted as it expands: a fan-out of sub-models (10 includes x 8 levels = 10^8 placements) is
                 # refused once it passes the bound, before it expands further
