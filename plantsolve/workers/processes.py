@@ -126,7 +126,7 @@ def _started(pid: int) -> str | None:
     return fields[19] if fields is not None and fields[0] not in ("Z", "X") else None
 
 
-def _is_warm_parent(pid: int) -> bool:
+def is_warm_parent(pid: int) -> bool:
     """Whether ``pid`` is a running forkserver of this process. Until this process reaps its dead child the pid
     cannot be reused; once reaped, the parent and command line tell an unrelated process from it."""
     fields = _stat(pid)
@@ -143,7 +143,7 @@ def _warm_parents() -> list[int]:
     """This process's running forkservers: the one a start waits on may have been started by that very start (the
     known one had died unnoticed), so it is found among this process's children rather than remembered."""
     pids = [int(entry.name) for entry in Path("/proc").iterdir() if entry.name.isdigit()]
-    return [pid for pid in pids if _is_warm_parent(pid)]
+    return [pid for pid in pids if is_warm_parent(pid)]
 
 
 @dataclass
@@ -246,7 +246,7 @@ class ProcessDispatcher:
         """Raises when no job can start now: the supervisor is not running, or the warm parent is not (yet) up."""
         if self._thread is None or not self._thread.is_alive():
             raise RuntimeError("the job supervisor is not running")
-        if self._warm_parent is None or not _is_warm_parent(self._warm_parent):
+        if self._warm_parent is None or not is_warm_parent(self._warm_parent):
             raise RuntimeError("the job processes' warm parent is starting")
         if self._start_failed is not None:
             raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
@@ -307,7 +307,7 @@ class ProcessDispatcher:
                 for child in ended:
                     self._ended(child)
                 self._enforce_deadlines()
-                if self._warm_parent is not None and not _is_warm_parent(self._warm_parent):
+                if self._warm_parent is not None and not is_warm_parent(self._warm_parent):
                     log.error("the job processes' warm parent died; starting it again")
                     self._warm_parent = None
                     self._warm_up()

@@ -16,6 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
+from plantsolve.workers.processes import ProcessDispatcher, is_warm_parent
 from tests.conftest import service_settings, wait_for
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
@@ -176,8 +177,6 @@ def test_a_running_job_still_ends_at_its_hard_limit_after_its_warm_parent_was_ki
 def test_a_stop_ends_the_start_watch_so_a_quick_restart_has_one(service, monkeypatch):
     """A watcher busy when ``stop()`` then ``start()`` ran (its stop event set and cleared meanwhile) would go on
     beside the new one."""
-    from plantsolve.workers.processes import ProcessDispatcher
-
     release = threading.Event()
     checked = threading.Event()
 
@@ -203,8 +202,6 @@ def test_a_stop_ends_the_start_watch_so_a_quick_restart_has_one(service, monkeyp
 def test_only_this_processs_own_forkserver_is_taken_for_the_warm_parent(tmp_path):
     """A pid is the warm parent only while it runs, is a child of this process and runs the forkserver: once the
     dead one is reaped, its pid may name an unrelated process."""
-    from plantsolve.workers.processes import _is_warm_parent
-
     fake = "from multiprocessing.forkserver import main; import time; time.sleep(60)"
     child = subprocess.Popen([sys.executable, "-c", fake])
     grandchild_pid = tmp_path / "pid"
@@ -216,12 +213,12 @@ def test_only_this_processs_own_forkserver_is_taken_for_the_warm_parent(tmp_path
             assert time.monotonic() < deadline
             time.sleep(0.01)
         time.sleep(0.2)  # the exec has happened
-        assert _is_warm_parent(child.pid)
-        assert not _is_warm_parent(int(grandchild_pid.read_text()))  # a forkserver, not this process's
-        assert not _is_warm_parent(other.pid)  # this process's, not a forkserver
+        assert is_warm_parent(child.pid)
+        assert not is_warm_parent(int(grandchild_pid.read_text()))  # a forkserver, not this process's
+        assert not is_warm_parent(other.pid)  # this process's, not a forkserver
         child.kill()
         child.wait()
-        assert not _is_warm_parent(child.pid)
+        assert not is_warm_parent(child.pid)
     finally:
         for process in (child, other, shell):
             process.kill()
