@@ -110,13 +110,40 @@ def _parent_pid(sender: Connection) -> None:
     sender.send(os.getppid())
 
 
-def _alive(pid: int) -> bool:
-    """Whether ``pid`` runs (a zombie does not: it died and waits to be reaped)."""
+def _stat(pid: int) -> list[str] | None:
+    """The fields of ``/proc/<pid>/stat`` after the command name (state first, parent pid second), or None when
+    ``pid`` is gone."""
     try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     except (OSError, IndexError):
+        return None
+
+
+def _started(pid: int) -> str | None:
+    """When running process ``pid`` started (clock ticks since boot), None when it does not run: with its pid this
+    names one process, so a pid freed and reused by an unrelated process is never taken for it."""
+    fields = _stat(pid)
+    return fields[19] if fields is not None and fields[0] not in ("Z", "X") else None
+
+
+def is_warm_parent(pid: int) -> bool:
+    """Whether ``pid`` is a running forkserver of this process. Until this process reaps its dead child the pid
+    cannot be reused; once reaped, the parent and command line tell an unrelated process from it."""
+    fields = _stat(pid)
+    if fields is None or fields[0] in ("Z", "X") or int(fields[1]) != os.getpid():
         return False
-    return state not in ("Z", "X")
+    try:
+        argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:
+        return False
+    return any(arg.startswith(b"from multiprocessing.forkserver import main") for arg in argv)
+
+
+def _warm_parents() -> list[int]:
+    """This process's running forkservers: the one a start waits on may have been started by that very start (the
+    known one had died unnoticed), so it is found among this process's children rather than remembered."""
+    pids = [int(entry.name) for entry in Path("/proc").iterdir() if entry.name.isdigit()]
+    return [pid for pid in pids if is_warm_parent(pid)]
 
 
 @dataclass
@@ -126,7 +153,18 @@ class _Running:
     receiver: Connection
     worker: str
     deadline: float | None
+    started: str | None  # see _started: read right after the start, while the process is surely this job's
     killed_at_limit: bool = False
+
+    def kill(self) -> None:
+        """Kill this job's process by its pid. ``process.kill()`` would not do: once the warm parent died, the
+        process's multiprocessing sentinel is at its end, ``process`` believes it ended (exit code 255) and kills
+        nothing while the job runs on."""
+        if self.started is not None and _started(self.process.pid) == self.started:
+            try:
+                os.kill(self.process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
 
 class ProcessDispatcher:
@@ -149,6 +187,7 @@ class ProcessDispatcher:
         os.set_blocking(self._wake_w, False)
         self._stopping = threading.Event()
         self._thread: threading.Thread | None = None
+        self._start_watch: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
         self._start_failed: str | None = None
         self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
@@ -168,7 +207,8 @@ class ProcessDispatcher:
         self._stopping.clear()
         self._thread = threading.Thread(target=self._supervise, name="job-supervisor", daemon=True)
         self._thread.start()
-        threading.Thread(target=self._watch_starts, name="job-start-watch", daemon=True).start()
+        self._start_watch = threading.Thread(target=self._watch_starts, name="job-start-watch", daemon=True)
+        self._start_watch.start()
         resume(self.ctx, self.enqueue, self.pending)
         self._sweeper.start()
 
@@ -182,6 +222,10 @@ class ProcessDispatcher:
         if self._thread is not None:
             self._thread.join(timeout=STOP_SECONDS)
             self._thread = None
+        # joined, so that a start right after this stop does not leave two watchers
+        if self._start_watch is not None:
+            self._start_watch.join(timeout=STOP_SECONDS)
+            self._start_watch = None
         with self._lock:
             running = list(self._running.values())
             self._running.clear()
@@ -192,11 +236,7 @@ class ProcessDispatcher:
             except Exception:  # the database is away: the lease lapses and the next start re-queues it
                 log.warning("job %s: could not be handed back at stop", child.job_id, exc_info=True)
         for child in running:
-            if child.process.pid is not None:
-                try:
-                    os.kill(child.process.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
+            child.kill()
         until = time.monotonic() + STOP_SECONDS
         for child in running:
             child.process.join(max(0.0, until - time.monotonic()))
@@ -206,7 +246,7 @@ class ProcessDispatcher:
         """Raises when no job can start now: the supervisor is not running, or the warm parent is not (yet) up."""
         if self._thread is None or not self._thread.is_alive():
             raise RuntimeError("the job supervisor is not running")
-        if self._warm_parent is None or not _alive(self._warm_parent):
+        if self._warm_parent is None or not is_warm_parent(self._warm_parent):
             raise RuntimeError("the job processes' warm parent is starting")
         if self._start_failed is not None:
             raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
@@ -267,7 +307,7 @@ class ProcessDispatcher:
                 for child in ended:
                     self._ended(child)
                 self._enforce_deadlines()
-                if self._warm_parent is not None and not _alive(self._warm_parent):
+                if self._warm_parent is not None and not is_warm_parent(self._warm_parent):
                     log.error("the job processes' warm parent died; starting it again")
                     self._warm_parent = None
                     self._warm_up()
@@ -335,7 +375,8 @@ class ProcessDispatcher:
             self._start_failed = None
             deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
             with self._lock:
-                self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline)
+                self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline,
+                                                 _started(process.pid))
                 self._starting = None
 
     def _start_stalled(self) -> bool:
@@ -346,8 +387,9 @@ class ProcessDispatcher:
         """Kill a warm parent that leaves a job process's start waiting (see ``STALL_SECONDS``): the start then fails,
         its job goes back to the head of the line, and the supervisor starts a new warm parent."""
         while not self._stopping.wait(TICK_SECONDS):
-            warm = self._warm_parent
-            if self._start_stalled() and warm is not None and _alive(warm):
+            if not self._start_stalled():
+                continue
+            for warm in _warm_parents():
                 log.error("a job process's start has waited %.0f s on the warm parent %d: killing it",
                           time.monotonic() - (self._start_began or time.monotonic()), warm)
                 try:
@@ -389,7 +431,7 @@ class ProcessDispatcher:
                        and not c.killed_at_limit]
         for child in overdue:
             child.killed_at_limit = True
-            child.process.kill()
+            child.kill()
 
     def _refill(self, always: bool = False) -> None:
         """Take the oldest queued jobs into the window until it is full again (after a finished job only when some
