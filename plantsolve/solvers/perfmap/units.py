@@ -160,6 +160,14 @@ def conversion(quantity: str, given: str | None, wanted: str | None) -> tuple[fl
         raise UnitError(f"{quantity} in {given!r} cannot be converted to {wanted!r} (other dimensions)") from None
 
 
+def _ratio_of(quantity: str, src: Unit | None) -> Unit | None:
+    """A pressure ratio stated in per cent or per mille, as the plain ratio it is (like an efficiency in %): the
+    plausibility range, the plots and the cycle codes' PR tables are ratios (155 % is PR 1.55, not 155)."""
+    if quantity == "pressure" and src is not None and src.dimensionless and src.text != "1":
+        return check_quantity("pressure", "1")
+    return None
+
+
 def to_internal(request: PerfmapRequest) -> tuple[PerfmapRequest, ResultUnits]:
     """The request in the solver's internal units (module docstring) and the units it is then in; raises
     :class:`InputRejected` naming ``units.<quantity>`` or ``options.result_units.<quantity>``."""
@@ -180,6 +188,7 @@ def to_internal(request: PerfmapRequest) -> tuple[PerfmapRequest, ResultUnits]:
         except UnitError as e:
             errors.append(FieldError(("options", "result_units", quantity), str(e)))
             continue
+        dst = dst if dst is not None else _ratio_of(quantity, src)
         if dst is not None and src is not None and is_gauge(src) != is_gauge(dst):
             errors.append(FieldError(("options", "result_units", quantity),
                                      f"{quantity} in {src.text!r} cannot be converted to {dst.text!r}: one is a gauge "
@@ -231,7 +240,9 @@ def request_conversions(request: PerfmapRequest) -> list[dict]:
                     "factor": factor, "basis": "request"})
     for quantity in ("flow", "pressure"):
         src, dst = check_quantity(quantity, getattr(given, quantity)), check_quantity(quantity, getattr(wanted, quantity))
+        basis = "result_units" if dst is not None else "ratio"
+        dst = dst if dst is not None else _ratio_of(quantity, src)
         if src is not None and dst is not None and src.unit != dst.unit:
             out.append({"quantity": quantity, "column": None, "from_unit": src.text, "to_unit": dst.text,
-                        "factor": src.factor_to(dst), "basis": "result_units"})
+                        "factor": src.factor_to(dst), "basis": basis})
     return out

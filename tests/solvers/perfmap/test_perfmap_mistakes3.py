@@ -121,3 +121,25 @@ def test_a_ratio_named_column_with_a_pressure_unit_is_warned_naming_the_column(h
     assert value.units.pressure == warning.details["unit"]
     plain = _load(_header("theta,phi,flow,pressure [bar],efficiency"))
     assert not [w for w in plain.internal.upload_warnings if w.code == "unit_contradicted_by_name"]
+
+
+def _in_percent(lines: list[str]) -> str:
+    rows = [line.split(",") for line in lines[1:]]
+    return "\n".join(["theta,phi,flow,PR [%],efficiency"]
+                     + [",".join([*r[:3], f"{100 * float(r[3]):.6g}", r[4]]) for r in rows]) + "\n"
+
+
+def test_a_pressure_ratio_in_percent_is_the_ratio_it_states():
+    """PR [%] of 107.6 is a ratio of 1.076: before, the map, its plots and the cycle codes' PR tables kept 107.6."""
+    from plantsolve.solvers.perfmap.solve import solve
+    plain = _load(_header("theta,phi,flow,PR,efficiency"))
+    percent = _load(_in_percent(LINES))
+    assert percent.units.pressure == "1"
+    got = [v for p in percent.internal.positions for v in p.pressure]
+    want = [v for p in plain.internal.positions for v in p.pressure]
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    (conversion,) = [c for c in percent.source["conversions"] if c["quantity"] == "pressure"]
+    assert (conversion["from_unit"], conversion["to_unit"], conversion["factor"]) == ("%", "1", pytest.approx(0.01))
+    result = solve(percent).result
+    assert result.units.pressure == "1"
+    assert max(max(line.pressure) for line in result.beta_map.lines) < 60
