@@ -128,9 +128,17 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         unit = ifcopenshell.util.unit.calculate_unit_scale(model)
         unit_name = length_unit_name(model)
         symbol = length_unit_symbol(model, unit)
+        assigned = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT") is not None
         source_units = {"file_unit": symbol, "ifc_name": unit_name, "metres_per_unit": unit, "basis":
-                        "IfcUnitAssignment" if ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT") else
-                        "none assigned: metres", "tolerance_unit": symbol}
+                        "IfcUnitAssignment" if assigned else "none assigned: metres", "tolerance_unit": symbol}
+        if not assigned:
+            # every length of the file, the tolerance and the deviations are then read in metres, whatever the
+            # authoring tool meant (millimetres, most often)
+            warnings.append(Diagnostic(
+                code="length_unit_not_assigned", message="The project assigns no length unit (no LENGTHUNIT in its "
+                "IfcUnitAssignment): its lengths, the tolerance and the deviations are read in metres. If the model is "
+                "in another unit, give options.tolerance in that unit's terms.",
+                details={"quantity": "length unit", "assumed": "METRE"}))
         semantic_before = proof.semantic_fingerprint(model)
         products = [p for p in model.by_type("IfcProduct") if p.Representation is not None]
         if not products:

@@ -101,3 +101,12 @@ def test_a_complex_instance_is_not_named_an_entity_the_schema_lacks(tmp_path):
     assert "#99990=(" in text
     msg = _refusal(tmp_path, text)
     assert "defined twice" in msg and "does not have" not in msg
+
+
+def test_a_model_with_no_length_unit_is_read_in_metres_and_says_so(tmp_path, zoo_result):
+    # before: only report.details said 'none assigned: metres'; a model drawn in millimetres without a unit is
+    # read 1000 times too large, with a tolerance in metres
+    result = _solve(tmp_path, ZOO.read_text().replace("#8=IFCUNITASSIGNMENT((#7));", "#8=IFCUNITASSIGNMENT(());")).result
+    (warning,) = [w for w in result.report.warnings if w.code == "length_unit_not_assigned"]
+    assert "read in metres" in warning.message
+    assert "length_unit_not_assigned" not in [w.code for w in zoo_result.report.warnings]
