@@ -269,11 +269,28 @@ def decode_text(content: bytes, what: str = "text file") -> str:
         except UnicodeDecodeError:
             raise reject("the file starts with a UTF-16 mark but is not UTF-16 text") from None
     if b"\x00" in content:
+        if (text := utf16_without_mark(content)) is not None:
+            return text
         raise reject(f"this is a binary file (it contains NUL bytes), not a {what}")
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError:
         return content.decode("cp1252", errors="replace")
+
+
+def utf16_without_mark(content: bytes) -> str | None:
+    """The text of UTF-16 written without its byte-order mark (some Windows tools), else None: text of ASCII
+    characters has a NUL as every second byte (the high byte of each character) and none in the other half,
+    which binary data does not."""
+    if len(content) < 2 or len(content) % 2:
+        return None
+    for order, nul_at in (("utf-16-le", 1), ("utf-16-be", 0)):
+        if content[1 - nul_at::2].count(0) == 0 and content[nul_at::2].count(0) >= 0.9 * (len(content) // 2):
+            try:
+                return content.decode(order)
+            except UnicodeDecodeError:
+                return None
+    return None
 
 
 _REFERENCE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_][\w.]*$")

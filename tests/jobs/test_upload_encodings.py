@@ -33,6 +33,8 @@ FILES = [
 SAVED_AS = {
     "utf-16-le with mark": lambda text: text.encode("utf-16"),
     "utf-16-be with mark": lambda text: codecs.BOM_UTF16_BE + text.encode("utf-16-be"),
+    "utf-16-le without mark": lambda text: text.encode("utf-16-le"),
+    "utf-16-be without mark": lambda text: text.encode("utf-16-be"),
     "utf-8 with mark": lambda text: codecs.BOM_UTF8 + text.encode(),
     "crlf": lambda text: text.replace("\n", "\r\n").encode(),
 }

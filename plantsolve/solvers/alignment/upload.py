@@ -15,6 +15,7 @@ from plantsolve.solvers.base import (
     InputRejected,
     StoredInput,
     json_object,
+    utf16_without_mark,
     validated,
 )
 
@@ -28,6 +29,8 @@ def _decoded(content: bytes) -> tuple[str, str]:
             return content.decode("utf-16"), "utf-16"
         except UnicodeDecodeError:
             pass
+    if b"\x00" in content[:4096] and (text := utf16_without_mark(content)) is not None:
+        return text, "utf-16-le" if content[1:2] == b"\x00" else "utf-16-be"
     encoding = "utf-8-sig" if content.startswith(b"\xef\xbb\xbf") else "utf-8"
     for enc in (encoding, "cp1252"):
         try:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
-from plantsolve.solvers.base import reject
+from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.polyhedra.file_units import stated, symbol
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
@@ -46,6 +46,8 @@ def parse_ifc(content: bytes) -> dict:
 
     if content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):  # a STEP file re-saved by a Windows editor
         text = content.decode("utf-16", errors="replace")
+    elif b"\x00" in content[:4096] and (utf16 := utf16_without_mark(content)) is not None:
+        text = utf16
     else:  # ISO 10303-21 text is ISO 8859-1 (other characters escaped); an editor's UTF-8 mark goes
         text = content.removeprefix(codecs.BOM_UTF8).decode("latin-1")
     try:
