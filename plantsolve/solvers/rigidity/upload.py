@@ -74,8 +74,9 @@ def _key(name: str) -> str:
     return name.strip().replace("\\", "/").lower()
 
 
-def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
-    """The main model's key and every sub-file's numbered lines (one unnamed file for a plain .ldr).
+def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]], list[int]]:
+    """The main model's key, every sub-file's numbered lines (one unnamed file for a plain .ldr) and the type-1
+    lines after a ``0 NOFILE`` that no ``0 FILE`` section holds (LDraw readers ignore them).
 
     The main model is the text before the first ``0 FILE`` when that text places anything (a packed
     model, as three.js' packer writes it, has no ``0 FILE`` line of its own), else the first ``0 FILE`` that no
@@ -85,6 +86,7 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
     headers: dict[str, int] = {}  # each sub-file's '0 FILE' line
     order: list[str] = []
     current = PRELUDE
+    outside: list[int] = []  # type-1 lines after a '0 NOFILE', in no section: no model holds them
     repeated: tuple[str, int] | None = None  # a name met again (its lines collected apart, then compared)
     again: list[tuple[int, str]] = []
 
@@ -115,11 +117,13 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
             again.append((number, raw))
         elif current:
             files.setdefault(current, []).append((number, raw))
+        elif tokens[:1] == ["1"]:
+            outside.append(number)
     close_repeat()
     prelude_places = any(raw.split()[:1] == ["1"] for _, raw in files.get(PRELUDE, ()))
     if prelude_places or not order:
-        return PRELUDE, files
-    return _main_model(order, files), files
+        return PRELUDE, files, outside
+    return _main_model(order, files), files, outside
 
 
 def _content(lines: list[tuple[int, str]]) -> list[str]:
@@ -254,7 +258,7 @@ INVISIBLE = dict.fromkeys(map(ord, "\ufeff\u200b\u200c\u200d\u2060"))
 
 def parse_ldraw(text: str) -> dict:
     text = text.translate(INVISIBLE)
-    main, files = _files(text)
+    main, files, outside = _files(text)
     roles = _classify(files, main)
     embedded: set[str] = set()
     parts: list[dict] = []
@@ -387,6 +391,12 @@ def parse_ldraw(text: str) -> dict:
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if mirrored:
         warnings.append(mirrored_parts(mirrored).model_dump())
+    if outside:
+        warnings.append(Diagnostic(
+            code="lines_outside_files", message=f"{len(outside)} type-1 line(s) after a '0 NOFILE' and before any "
+            f"'0 FILE' (line {', '.join(map(str, outside[:10]))}{' and more' if len(outside) > 10 else ''}) belong "
+            "to no model: LDraw readers ignore them, and so were they — lines pasted after the model's end, or a "
+            "'0 FILE' line lost?", details={"lines": outside[:MAX_SKIPPED_LISTED], "count": len(outside)}).model_dump())
     placed = _placed_submodels(main, files, roles)
     unplaced = [name for name, role in roles.items() if role == "model" and name not in placed
                 and any(raw.split()[:1] == ["1"] for _, raw in files[name])]
@@ -411,6 +421,10 @@ def parse_ldraw(text: str) -> dict:
         if other:
             raise reject(f"the file is not LDraw: it holds {other}; the rigidity kind reads LDraw models (.ldr, "
                          ".mpd: type-1 lines placing parts) or a rigidity request as .json")
+        if outside:
+            raise reject(f"the file places no part: its type-1 lines (line {', '.join(map(str, outside[:5]))}"
+                         f"{' …' if len(outside) > 5 else ''}) come after a '0 NOFILE' with no '0 FILE' before them, "
+                         "where they belong to no model; move them above it, or give them a '0 FILE' line")
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
     return {"parts": parts, "source": {"format": "ldraw", "units": LDRAW_UNITS, "main_model": main,
@@ -497,7 +511,8 @@ def other_format(text: str) -> str | None:
         faces = sum(t == "f" for t in first_tokens)
         return (f"a Wavefront OBJ mesh ({vertices} vertex and {faces} face lines among its first "
                 f"{len(lines)}: 'v x y z', 'f i j k')")
-    if any(raw.rstrip().endswith(";") for raw in lines) and sum("," in raw for raw in lines) >= len(lines) // 2:
+    fields = [kept for raw in lines if (kept := raw.split("!")[0].strip())]  # an IDF's '!' comments set aside
+    if any(raw.endswith(";") for raw in fields) and sum("," in raw for raw in fields) >= len(fields) // 2:
         objects = sorted({raw.split(",")[0].strip() for raw in lines if "," in raw and "!-" not in raw  # not a field
                           and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
         return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"

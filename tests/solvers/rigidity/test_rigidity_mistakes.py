@@ -240,3 +240,38 @@ def test_a_symmetric_part_placed_mirrored_is_read_as_the_rotation_it_equals():
     assert request.parts[2].rotation == [1, 0, 0, 0, 1, 0, 0, 0, 1]
     a, b = solve(request).result, solve(parse("stack.ldr", STACK)).result
     assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints))
+
+
+# ---------------------------------------------------------------- lines after 0 NOFILE
+
+def test_part_lines_after_nofile_are_warned_naming_them_and_alone_refused():
+    """Text after '0 NOFILE' with no '0 FILE' belongs to no model: LDraw readers ignore it; before, its parts were
+    dropped with no word (lines pasted after the end of hinged_wall.ldr, which ends so)."""
+    wall = (REPO / "examples" / "rigidity" / "hinged_wall.ldr").read_text()
+    assert wall.rstrip().endswith("0 NOFILE")
+    request = parse("wall.ldr", wall + STACK)
+    (warning,) = [w for w in request.source["warnings"] if w["code"] == "lines_outside_files"]
+    n = len(wall.splitlines())
+    assert warning["details"] == {"lines": [n + 1, n + 2, n + 3], "count": 3}
+    assert len(request.parts) == 9  # the model's own parts, as before
+    with pytest.raises(InputRejected) as refused:
+        parse("stack.ldr", "0 NOFILE\n" + STACK)
+    assert "after a '0 NOFILE'" in refused.value.errors[0].msg and "line 2, 3, 4" in refused.value.errors[0].msg
+
+
+def test_the_order_of_part_lines_does_not_change_the_analysis():
+    wall = (REPO / "examples" / "rigidity" / "hinged_wall.ldr").read_text().splitlines()
+    at = [i for i, line in enumerate(wall) if line.startswith("1 ")]
+    shuffled = list(wall)
+    for i, line in zip(at, [wall[i] for i in at][::-1]):
+        shuffled[i] = line
+    a, b = solve(parse("a.ldr", "\n".join(wall) + "\n")).result, solve(parse("b.ldr", "\n".join(shuffled) + "\n")).result
+    assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints)) == (4, False, 9)
+
+
+def test_an_idf_with_comment_lines_and_field_notes_renamed_mpd_is_named_as_an_idf():
+    idf = (REPO / "examples" / "polyhedra" / "two_offices.idf").read_text()
+    assert idf.startswith("!")  # was "places no part — line 1: line type '!' is not an LDraw line type"
+    with pytest.raises(InputRejected) as refused:
+        parse("offices.mpd", idf)
+    assert "an EnergyPlus IDF building model" in refused.value.errors[0].msg
