@@ -362,7 +362,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
-        adjacency=adjacent, total_volume=total if all_closed else None, total_floor_area=float((floors * [z["multiplier"] for z in zones]).sum()),
+        adjacency=adjacent, total_volume=total if all_closed else None,
+        total_floor_area=float((floors * [z["multiplier"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}

@@ -444,8 +444,8 @@ MIRRORS = tuple(np.diag(d) for d in ((-1.0, 1.0, 1.0), (1.0, -1.0, 1.0), (1.0, 1
 def symmetry_plane(file_name: str) -> np.ndarray | None:
     """The mirror of the part's frame (x, y or z flipped) that maps its catalogue shape — every connection point
     with its direction, type and profile, its bounding box and solids — onto itself; None when there is none (a
-    handed part, or symmetric only about another plane) or the part is not in the catalogue. Placed mirrored, such a part is the same as placed by the
-    matrix times this mirror, a rotation."""
+    handed part, or symmetric only about another plane) or the part is not in the catalogue. Placed mirrored, such
+    a part is the same as placed by the matrix times this mirror, a rotation."""
     shape = lookup(file_name)
     if shape is None:
         return None

@@ -265,7 +265,8 @@ def test_the_order_of_part_lines_does_not_change_the_analysis():
     shuffled = list(wall)
     for i, line in zip(at, [wall[i] for i in at][::-1]):
         shuffled[i] = line
-    a, b = solve(parse("a.ldr", "\n".join(wall) + "\n")).result, solve(parse("b.ldr", "\n".join(shuffled) + "\n")).result
+    a = solve(parse("a.ldr", "\n".join(wall) + "\n")).result
+    b = solve(parse("b.ldr", "\n".join(shuffled) + "\n")).result
     assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints)) == (4, False, 9)
 
 
