@@ -31,6 +31,7 @@ FLOOR_CONE_DEG = 45.0  # a face whose outward normal is within this of straight 
 AREA, VOLUME = LENGTH + "^2", LENGTH + "^3"
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
+MAX_ZONE_MULTIPLIER = 1_000_000
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
 
 
@@ -161,6 +162,12 @@ class PolyhedraRequest(StrictModel):
         default=None, description="A zone given as a triangle mesh (an STL upload is read into one); its triangles "
         "follow the faces.")
     options: PolyhedraOptions = Field(default_factory=PolyhedraOptions)
+    zone_multipliers: dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]] = Field(
+        default_factory=dict, max_length=MAX_FACES,
+        description="How many identical copies of a zone the building holds (EnergyPlus' Zone Multiplier times its "
+        "ZoneGroup's Zone List Multiplier, read from an IDF or epJSON upload): total_volume and total_floor_area "
+        "count the zone that many times, as EnergyPlus counts floor area; the zone's own measures are one copy's. "
+        "Zones not named count once.")
     source: dict[str, Any] | None = Field(
         default=None,
         description="What the upload parser read (file format, objects skipped with line and reason); set by the "
@@ -218,6 +225,8 @@ class ZoneResult(BaseModel):
     faces: list[str] = Field(description="Ids of the faces bounding the zone (empty when the result does not list "
                              "every face: see faces_listed).")
     face_count: int | None = Field(default=None, description="How many faces bound the zone.")
+    multiplier: int = Field(default=1, description="How many times the totals count this zone (zone_multipliers); "
+                            "its measures here are one copy's.")
 
 
 class FaceResult(BaseModel):
@@ -255,8 +264,8 @@ class PolyhedraResult(BaseModel):
     edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.",
                                      json_schema_extra=unit(LENGTH))
     adjacency: list[Adjacency]
-    total_volume: float | None = Field(description="Sum of the zones' volumes (units³); null when a zone is not "
-                                       "closed.", json_schema_extra=unit(VOLUME))
-    total_floor_area: float = Field(description="Sum of the zones' floor areas (units²).",
+    total_volume: float | None = Field(description="Sum of the zones' volumes (units³), each times its multiplier; "
+                                       "null when a zone is not closed.", json_schema_extra=unit(VOLUME))
+    total_floor_area: float = Field(description="Sum of the zones' floor areas (units²), each times its multiplier.",
                                     json_schema_extra=unit(AREA))
     report: Report

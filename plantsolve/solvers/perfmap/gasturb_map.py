@@ -52,6 +52,7 @@ MAX_ARGUMENTS = 200
 MAX_ROWS = 2000
 GSP_MAX_ARGUMENTS = 40
 GSP_MAX_PARAMETERS = 150
+MAX_DROPPED_NAMED = 20  # map points left out named with their table, line, speed and beta in the warning
 MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
@@ -543,13 +544,19 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
     units, unit_source = _flow_unit(options, title, sets[0].tables["Mass Flow"].heading)
     options.pop("units", None)
     positions, lines = [], []
-    dropped, short = 0, []
+    dropped, short, dropped_at = 0, [], []
     for s in sets:
         W, E, P = (s.tables[t] for t in SPEED_TABLES)
         for r, speed in enumerate(W.params):
             w, e, p = W.values[r], E.values[r], P.values[r]
             ok = np.isfinite(w) & np.isfinite(e) & np.isfinite(p) & (w > 0) & (p > 0) & (e > 0)
             dropped += int(np.sum(~ok))
+            for j in np.flatnonzero(~ok)[:max(0, MAX_DROPPED_NAMED - len(dropped_at))]:
+                # the first table whose value is not a positive finite number: where the file has to be mended
+                name, table = next((n, t) for n, t in zip(SPEED_TABLES, (W, E, P))
+                                   if not (np.isfinite(t.values[r][j]) and t.values[r][j] > 0))
+                dropped_at.append({"table": name, "line": int(table.value_lines[r][j]), "speed": float(speed),
+                                   "beta": float(W.args[j]), "value": str(table.values[r][j])})
             setting = [float(speed)] if s.setting is None else [float(s.setting), float(speed)]
             distinct = _distinct_flows(w[ok])
             if distinct < 3:  # GasTurb's sample maps end in fully choked lines: one flow at every beta
@@ -611,10 +618,13 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
     if dropped or short:
         lines_out = ", ".join(f"{d['setting'][-1]:g} (line {d['line']}, {d['distinct_flows']} distinct flows)"
                               for d in short[:10])
+        points_at = "; ".join(f"{d['table']} line {d['line']} (speed {d['speed']:g}, beta {d['beta']:g}: "
+                              f"{d['value']})" for d in dropped_at[:5]) + ("; …" if dropped > 5 else "")
         notes.append(Diagnostic(code="upload_points_dropped", message=(
-            f"{dropped} map point(s) without positive finite values dropped; {len(short)} speed line(s) with fewer "
-            f"than 3 distinct flows (choked: vertical in the map) left out{': speed ' + lines_out if short else ''}."),
-            details={"points": dropped, "lines": short[:100]}))
+            f"{dropped} map point(s) without positive finite values dropped{': ' + points_at if dropped else ''}; "
+            f"{len(short)} speed line(s) with fewer than 3 distinct flows (choked: vertical in the map) left out"
+            f"{': speed ' + lines_out if short else ''}."),
+            details={"points": dropped, "at": dropped_at, "lines": short[:100]}))
     body = {"positions": positions, "setting_names": names, "setting_units": setting_units, "units": units,
             "upload_warnings": [d.model_dump() for d in notes]}
     return body, lines, options or None

@@ -66,7 +66,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
-from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
+from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
@@ -458,6 +458,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
             "conditions).", details={"rows": numbers[:header]}))
         rows, numbers = rows[header:], numbers[header:]
     header_units: list[str] = []
+    units_line = numbers[1] if len(numbers) > 1 else None
     if len(rows) > 1 and _units_row(rows[1]):
         header_units = [c.strip().strip("[]()").strip() for c in rows[1]]
         notes_before.append(Diagnostic(code="upload_units_row",
@@ -491,6 +492,10 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         basis_of[field] = "header"
         if not unit and j < len(header_units):
             unit, basis_of[field] = header_units[j], "units_row"
+        elif unit and j < len(header_units) and header_units[j] and not _same_unit(unit, header_units[j]):
+            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}) states {unit!r} but the row of units under "
+                         f"the header ({what} {units_line}) says {header_units[j]!r} for it: which is meant? Give "
+                         "the unit once", ("file", "header"))
         unit_of[field] = unit
         scale[field] = 1.0
         if field in MEASURED:
@@ -629,6 +634,8 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         cut = f" (its only data row, {what} {cut_line}, is cut short)" if cut_note else ""
         raise reject(f"the table has a header ({what} {numbers[0]}) but no data rows{cut}")
     names = {r: rows[0][col[r]].strip() for r in col}
+    if scale["efficiency"] != 1.0:
+        _refuse_mixed_efficiency(groups, lines_of, names["efficiency"], unit_of["efficiency"], what)
     reading, contradictions = _values_against_units(groups, setting_cols, names, unit_of, scale)
     conversions = []
     if reading["efficiency"] != 1.0:
@@ -730,6 +737,33 @@ def _values_against_units(groups: dict, setting_cols: list[str], names: dict[str
             reading["flow_unit"] = "1"
             note("flow", flow, unit_of["flow"], "fractions, stated as unit '1', not per cent")
     return reading, notes
+
+
+def _refuse_mixed_efficiency(groups: dict, lines_of: dict, name: str, unit: str, what: str) -> None:
+    """A per-cent (or per-mille) efficiency column holding both fractions (at most 1.5) and per cent: one reading
+    makes the others 100 times off (0.85 read as 0.85 % beside 85 %), so the rows of the fewer kind are refused,
+    named, whichever way the column is read."""
+    cells = [(line, v) for key, g in groups.items() for line, v in zip(lines_of[key], g["efficiency"])]
+    fractions = [(line, v) for line, v in cells if abs(v) <= FRACTIONS]
+    if not fractions or len(fractions) == len(cells):
+        return
+    others = [(line, v) for line, v in cells if abs(v) > FRACTIONS]
+    odd, usual = (fractions, others) if len(fractions) <= len(others) else (others, fractions)
+    values = np.array([v for _, v in usual])
+    kind = "a fraction" if odd is fractions else "a per-cent value"
+    raise InputRejected([FieldError(("file", "row", line, "efficiency"), (
+        f"{what} {line}: efficiency {v:g} in column {name!r} ({unit}), whose other values lie in {values.min():.4g}.."
+        f"{values.max():.4g}: {kind} among {'per cent' if odd is fractions else 'fractions'}? One reading would "
+        "make these rows or the others 100 times off: write the column in one unit")) for line, v in odd[:10]])
+
+
+def _same_unit(a: str, b: str) -> bool:
+    """Two spellings of one unit (``kg/s`` and ``kg s^-1``; ``-`` and ``1``); as text when pint reads neither."""
+    try:
+        first, second = parse_unit(a), parse_unit(b)
+    except UnitError:
+        return a.strip().strip("[]()").strip().lower() == b.strip().strip("[]()").strip().lower()
+    return first.unit == second.unit
 
 
 def _is_percent(unit: str | None) -> bool:
@@ -878,12 +912,17 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
         tables[name] = a
     if not tables["WcMap"].shape == tables["PRmap"].shape == tables["effMap"].shape:
         raise reject("WcMap, PRmap and effMap differ in shape", ("file",))
-    positions, dropped, short = [], 0, []
+    positions, dropped, short, dropped_at = [], 0, [], []
     for i, al in enumerate(alpha):
         for k, n in enumerate(nc):
             w, pr, eff = tables["WcMap"][i, k], tables["PRmap"][i, k], tables["effMap"][i, k]
             ok = np.isfinite(w) & np.isfinite(pr) & np.isfinite(eff) & (w > 0) & (pr > 0) & (eff > 0) & (eff <= 1)
             dropped += int(np.sum(~ok))
+            for j in np.flatnonzero(~ok)[:max(0, MAX_DROPPED_NAMED - len(dropped_at))]:
+                name = next(t for t, v in (("WcMap", w[j]), ("PRmap", pr[j]), ("effMap", eff[j]))
+                            if not (np.isfinite(v) and v > 0) or (t == "effMap" and v > 1))
+                dropped_at.append({"table": name, "index": [i, k, int(j)] if len(alpha) > 1 else [k, int(j)],
+                                   "Nc": float(n), "value": str(tables[name][i, k, j])})
             if ok.sum() < 3:
                 short.append({"alpha": float(al), "Nc": float(n), "points": int(ok.sum())})
                 continue
@@ -895,10 +934,12 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines over "
                         f"{' and '.join(names)}.", details={"names": names})]
     if dropped or short:
+        points_at = "; ".join(f"{d['table']}{d['index']} = {d['value']} (Nc {d['Nc']:g})" for d in dropped_at[:5])
         notes.append(Diagnostic(code="upload_points_dropped",
                                 message=f"{dropped} map point(s) without positive finite values (or efficiency above "
-                                f"1) dropped; {len(short)} speed line(s) with fewer than 3 points left out.",
-                                details={"points": dropped, "lines": short[:100]}))
+                                f"1) dropped{': ' + points_at + ('; …' if dropped > 5 else '') if dropped else ''}; "
+                                f"{len(short)} speed line(s) with fewer than 3 points left out.",
+                                details={"points": dropped, "at": dropped_at, "lines": short[:100]}))
     return positions, notes, names
 
 

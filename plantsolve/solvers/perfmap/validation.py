@@ -102,7 +102,10 @@ def _efficiency_unit_against_values(request: PerfmapRequest) -> tuple[PerfmapReq
     except UnitError:
         return request, []  # to_internal refuses it naming units.efficiency
     values = np.array([v for p in request.positions for v in p.efficiency], dtype=float)
-    if factor == 1.0 or not len(values) or np.abs(values).max() > FRACTIONS:
+    if factor == 1.0 or not len(values):
+        return request, []
+    if np.abs(values).max() > FRACTIONS:
+        _refuse_mixed(request, unit, values)
         return request, []
     note = Diagnostic(
         code="unit_contradicted_by_values",
@@ -111,6 +114,25 @@ def _efficiency_unit_against_values(request: PerfmapRequest) -> tuple[PerfmapReq
         details={"field": "units.efficiency", "unit": unit, "values": [float(values.min()), float(values.max())],
                  "reading": "fractions"})
     return request.model_copy(update={"units": request.units.model_copy(update={"efficiency": "1"})}), [note]
+
+
+def _refuse_mixed(request: PerfmapRequest, unit: str, values: np.ndarray) -> None:
+    """Efficiencies in per cent with some typed as fractions (or the other way round): the fewer kind is refused,
+    named, since one reading makes them or the others 100 times off."""
+    fractions = np.abs(values) <= FRACTIONS
+    if not fractions.any():
+        return
+    odd = fractions if fractions.sum() <= (~fractions).sum() else ~fractions
+    usual = values[~odd]
+    kind = "a fraction among per cent" if odd is fractions else "a per-cent value among fractions"
+    errors = []
+    for i, p in enumerate(request.positions):
+        for k, v in enumerate(p.efficiency):
+            if (abs(v) <= FRACTIONS) == (odd is fractions) and len(errors) < 10:
+                errors.append(FieldError(("positions", i, "efficiency", k), (
+                    f"efficiency {v:g} where units.efficiency is {unit!r} and the other values lie in "
+                    f"{usual.min():.4g}..{usual.max():.4g}: {kind}? Write them in one unit")))
+    raise InputRejected(errors)
 
 
 def loaded(value: PerfmapRequest | PerfmapInput) -> PerfmapInput:

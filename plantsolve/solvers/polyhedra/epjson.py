@@ -46,6 +46,8 @@ FIELDS: dict[str, tuple[str, ...]] = {
        for cls in ("roof", "ceiling:adiabatic", "floor:groundcontact", "floor:adiabatic")},
     **{cls: ("construction_name", "zone_name", "space_name", "outside_boundary_condition_object", *_RECTANGLE,
              "width") for cls in ("ceiling:interzone", "floor:interzone")},
+    "zonelist": ("zones",),
+    "zonegroup": ("zone_list_name", "zone_list_multiplier"),
     "window": _WINDOW,
     "glazeddoor": _WINDOW,
     "door": ("construction_name", "building_surface_name", "multiplier", *_SUB),
@@ -58,6 +60,7 @@ UNNAMED = {  # unique objects without a name field: the JSON key is not a field
                             "daylighting_reference_point_coordinate_system", "rectangular_surface_coordinate_system"),
 }
 VERTEX_KEYS = ("vertex_x_coordinate", "vertex_y_coordinate", "vertex_z_coordinate")
+EXTENSIBLE = {"vertices": ("vertex", VERTEX_KEYS), "zones": ("zone", ("zone_name",))}  # lists of field groups
 
 
 def _text(value: Any) -> str:
@@ -77,22 +80,23 @@ def _fields(cls: str, name: str, body: dict) -> list[str]:
     keys = UNNAMED.get(cls) or FIELDS[cls]
     fields = [] if cls in UNNAMED else [name]
     for key in keys:
-        if key != "vertices":
+        if key not in EXTENSIBLE:
             try:
                 fields.append(_text(body.get(key)))
             except ValueError as e:
                 raise ValueError(f"{key}: {e}") from None
             continue
-        vertices = body.get("vertices", [])
-        if not isinstance(vertices, list):
-            raise ValueError("'vertices' is not a list")
-        for k, vertex in enumerate(vertices, 1):
-            if not isinstance(vertex, dict):
-                raise ValueError(f"vertex {k} is not an object of {', '.join(VERTEX_KEYS)}")
+        item, item_keys = EXTENSIBLE[key]
+        entries = body.get(key, [])
+        if not isinstance(entries, list):
+            raise ValueError(f"{key!r} is not a list")
+        for k, entry in enumerate(entries, 1):
+            if not isinstance(entry, dict):
+                raise ValueError(f"{item} {k} is not an object of {', '.join(item_keys)}")
             try:
-                fields.extend(_text(vertex.get(axis)) for axis in VERTEX_KEYS)
+                fields.extend(_text(entry.get(axis)) for axis in item_keys)
             except ValueError as e:
-                raise ValueError(f"vertex {k}: {e}") from None
+                raise ValueError(f"{item} {k}: {e}") from None
     return fields
 
 

@@ -71,6 +71,15 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
     out = {**body, "units": target, "source": source}
     if scale != 1.0:
         _scale(out, scale)
+    if file_units is not None and in_metres and said["file_unit"] != file_units:
+        # the file states its unit: an option saying another is a contradiction, followed but never silent (with
+        # the request in the option's unit nothing is converted, so units_converted would not say it)
+        source["warnings"] = [*(source.get("warnings") or []), Diagnostic(code="file_unit_overridden", message=(
+            f"options.file_units says {file_units}, but the {FORMATS.get(fmt, fmt)} file states {said['file_unit']} "
+            f"({said['evidence']}): its lengths were read as {file_units}, × {number_m:.6g} against the file's own "
+            "unit. Leave file_units out unless the file's statement is wrong."),
+            details={"file_unit": said["file_unit"], "option": file_units, "basis": said["basis"],
+                     "factor": number_m}).model_dump()]
     if factor != 1.0:
         source["warnings"] = [*(source.get("warnings") or []), Diagnostic(code="units_converted", message=(
             f"The {FORMATS.get(fmt, fmt)} file's lengths are in {file_unit} ({evidence}): converted to the request's "

@@ -219,7 +219,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         repeated = repeated_faces(poly, faces, normal) if (nm_zone == z).any() else []
         volume = abs(oriented_volume) if closed and not conflict and not repeated else None
         all_closed &= volume is not None
-        total += volume or 0.0
+        multiplier = request.zone_multipliers.get(poly.zone_ids[z], 1)
+        total += (volume or 0.0) * multiplier
         if conflict:
             label = "mixed"
         elif (factor > 0).all():
@@ -236,7 +237,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         zones.append({
             "id": zone_id, "volume": volume, "signed_volume": signed,
             "surface_area": float(area[faces].sum()), "net_surface_area": float(net_area[faces].sum()),
-            "floor_area": float(floors[z]),
+            "floor_area": float(floors[z]), "multiplier": multiplier,
             "closed": closed, "orientation": label,
             "misoriented_faces": [poly.face_ids[f] for f in (misoriented if listed else misoriented[:MAX_LISTED_EDGES])],
             "misoriented_face_count": int(len(misoriented)),
@@ -348,6 +349,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             details["declared_comparison"] = rows
             if differ:
                 warnings.append(differ)
+    warnings.extend(multipliers_applied(zones))
     sizes = zone_sizes(poly, gmap, n_zones)
     hint = unit_hint(request)
     warnings.extend(implausible(zones, {poly.zone_ids[z]: {"height": float(sizes[z, 2]),
@@ -360,11 +362,25 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     closed_count = sum(1 for z in zones if z["volume"] is not None)
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
-        adjacency=adjacent, total_volume=total if all_closed else None, total_floor_area=float(floors.sum()),
+        adjacency=adjacent, total_volume=total if all_closed else None,
+        total_floor_area=float((floors * [z["multiplier"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}
         if tabled else {})
+
+
+def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
+    """The zones the totals count more than once: a sum of the listed zones' measures is not the total."""
+    repeated = [z for z in zones if z["multiplier"] > 1]
+    if not repeated:
+        return []
+    listed = ", ".join(f"{z['id']!r} ×{z['multiplier']}" for z in repeated[:10]) + (" …" if len(repeated) > 10 else "")
+    return [Diagnostic(code="zone_multipliers_applied", message=(
+        f"{len(repeated)} zone(s) stand for several identical zones (EnergyPlus' Zone Multiplier): {listed}. "
+        "total_volume and total_floor_area count each that many times, as EnergyPlus counts floor area; the zones' "
+        "own measures are one copy's."),
+        details={"zones": {z["id"]: z["multiplier"] for z in repeated[:100]}})]
 
 
 def _npy(*columns: np.ndarray) -> bytes:

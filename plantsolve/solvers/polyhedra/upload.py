@@ -52,6 +52,7 @@ from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
@@ -325,7 +326,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones))
-    return {"units": "m", "faces": faces,
+    multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
             "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "units": stated("m", 1.0, "format", "EnergyPlus lengths are always metres"),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",

@@ -64,8 +64,18 @@ def check_input(request: PolyhedraRequest) -> None:
     if not errors and request.mesh is None and all(face.parent is not None for face in request.faces):
         errors.append(FieldError(("faces",), "every face is a subsurface: no face bounds a zone" if request.faces else
                                  "no face: give faces or a mesh"))
+    errors.extend(_multiplier_errors(request)[:max(0, MAX_ERRORS - len(errors))])
     if errors:
         raise InputRejected(errors[:MAX_ERRORS])
+
+
+def _multiplier_errors(request: PolyhedraRequest) -> list[FieldError]:
+    """A multiplier for a zone no face bounds (a misspelt name would leave the zone counted once)."""
+    zones = {zone for face in request.faces for zone in (face.zones or ["default"]) if face.parent is None}
+    if request.mesh is not None:
+        zones.add(request.mesh.zone)
+    return [FieldError(("zone_multipliers", name), f"no face bounds a zone {name!r} (zones: "
+                       f"{', '.join(sorted(zones)[:10])})") for name in request.zone_multipliers if name not in zones]
 
 
 def _hole_errors(request: PolyhedraRequest) -> list[FieldError]:

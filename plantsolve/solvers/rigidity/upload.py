@@ -34,6 +34,8 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from plantsolve.schemas import alignment, dedup, flowmeter, perfmap, polyhedra, tube
@@ -72,8 +74,9 @@ def _key(name: str) -> str:
     return name.strip().replace("\\", "/").lower()
 
 
-def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
-    """The main model's key and every sub-file's numbered lines (one unnamed file for a plain .ldr).
+def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]], list[int]]:
+    """The main model's key, every sub-file's numbered lines (one unnamed file for a plain .ldr) and the type-1
+    lines after a ``0 NOFILE`` that no ``0 FILE`` section holds (LDraw readers ignore them).
 
     The main model is the text before the first ``0 FILE`` when that text places anything (a packed
     model, as three.js' packer writes it, has no ``0 FILE`` line of its own), else the first ``0 FILE`` that no
@@ -83,6 +86,7 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
     headers: dict[str, int] = {}  # each sub-file's '0 FILE' line
     order: list[str] = []
     current = PRELUDE
+    outside: list[int] = []  # type-1 lines after a '0 NOFILE', in no section: no model holds them
     repeated: tuple[str, int] | None = None  # a name met again (its lines collected apart, then compared)
     again: list[tuple[int, str]] = []
 
@@ -113,11 +117,13 @@ def _files(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
             again.append((number, raw))
         elif current:
             files.setdefault(current, []).append((number, raw))
+        elif tokens[:1] == ["1"]:
+            outside.append(number)
     close_repeat()
     prelude_places = any(raw.split()[:1] == ["1"] for _, raw in files.get(PRELUDE, ()))
     if prelude_places or not order:
-        return PRELUDE, files
-    return _main_model(order, files), files
+        return PRELUDE, files, outside
+    return _main_model(order, files), files, outside
 
 
 def _content(lines: list[tuple[int, str]]) -> list[str]:
@@ -252,18 +258,20 @@ INVISIBLE = dict.fromkeys(map(ord, "\ufeff\u200b\u200c\u200d\u2060"))
 
 def parse_ldraw(text: str) -> dict:
     text = text.translate(INVISIBLE)
-    main, files = _files(text)
+    main, files, outside = _files(text)
     roles = _classify(files, main)
     embedded: set[str] = set()
     parts: list[dict] = []
     skipped: list[dict] = []
     warnings: list[dict] = []
     cut = _cut_last_line(text)
-    counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0}
+    counts = {"meta_lines": 0, "geometry_lines": 0, "submodels_expanded": 0, "rotations_rounded": 0,
+              "mirrors_of_symmetric_parts": 0}
     placements: dict[str, str] = {}  # part id prefix of each placed sub-model -> its file name
     hand_typed: list[tuple[int, float]] = []  # (line, off) of sub-model placements read as the nearest rotation
     resolver = Resolver(files, lambda name: _resolve(name, files))
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
+    mirrored: list[tuple[str, int, str]] = []  # (id, line, number) of parts whose placement mirrors them
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -353,6 +361,13 @@ def parse_ldraw(text: str) -> dict:
             if len(parts) >= MAX_PARTS:
                 skipped.append({"line": number, "reason": f"more than {MAX_PARTS} parts"})
                 continue
+            if np.linalg.det(world_rot) < 0 and lookup(file_name) is not None:  # unknown parts: not analysed
+                plane = symmetry_plane(file_name)
+                if plane is None:
+                    mirrored.append((ident, number, normalise_number(file_name)))
+                else:  # the part's mirror image is itself turned: the same connections and boxes, as a rotation
+                    world_rot = world_rot @ plane
+                    counts["mirrors_of_symmetric_parts"] += 1
             if role == "part":
                 embedded.add(sub)
                 number = normalise_number(file_name)
@@ -374,6 +389,14 @@ def parse_ldraw(text: str) -> dict:
             f"line {', '.join(map(str, lines[:10]))}{' and more' if len(lines) > 10 else ''}: each was read as the "
             "nearest rotation, so the sub-model's parts stand up to a few degrees off where the matrix puts them",
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
+    if mirrored:
+        warnings.append(mirrored_parts(mirrored).model_dump())
+    if outside:
+        warnings.append(Diagnostic(
+            code="lines_outside_files", message=f"{len(outside)} type-1 line(s) after a '0 NOFILE' and before any "
+            f"'0 FILE' (line {', '.join(map(str, outside[:10]))}{' and more' if len(outside) > 10 else ''}) belong "
+            "to no model: LDraw readers ignore them, and so were they — lines pasted after the model's end, or a "
+            "'0 FILE' line lost?", details={"lines": outside[:MAX_SKIPPED_LISTED], "count": len(outside)}).model_dump())
     placed = _placed_submodels(main, files, roles)
     unplaced = [name for name, role in roles.items() if role == "model" and name not in placed
                 and any(raw.split()[:1] == ["1"] for _, raw in files[name])]
@@ -398,6 +421,10 @@ def parse_ldraw(text: str) -> dict:
         if other:
             raise reject(f"the file is not LDraw: it holds {other}; the rigidity kind reads LDraw models (.ldr, "
                          ".mpd: type-1 lines placing parts) or a rigidity request as .json")
+        if outside:
+            raise reject(f"the file places no part: its type-1 lines (line {', '.join(map(str, outside[:5]))}"
+                         f"{' …' if len(outside) > 5 else ''}) come after a '0 NOFILE' with no '0 FILE' before them, "
+                         "where they belong to no model; move them above it, or give them a '0 FILE' line")
         reasons = "; ".join(f"line {s['line']}: {s['reason']}" for s in skipped[:5])
         raise reject("the file places no part (no usable type-1 line)" + (f" — {reasons}" if reasons else ""))
     return {"parts": parts, "source": {"format": "ldraw", "units": LDRAW_UNITS, "main_model": main,
@@ -408,6 +435,47 @@ def parse_ldraw(text: str) -> dict:
                                        "submodel_placements": placements,
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
+
+
+MIRRORS = tuple(np.diag(d) for d in ((-1.0, 1.0, 1.0), (1.0, -1.0, 1.0), (1.0, 1.0, -1.0)))
+
+
+@functools.lru_cache(maxsize=1024)
+def symmetry_plane(file_name: str) -> np.ndarray | None:
+    """The mirror of the part's frame (x, y or z flipped) that maps its catalogue shape — every connection point
+    with its direction, type and profile, its bounding box and solids — onto itself; None when there is none (a
+    handed part, or symmetric only about another plane) or the part is not in the catalogue. Placed mirrored, such
+    a part is the same as placed by the matrix times this mirror, a rotation."""
+    shape = lookup(file_name)
+    if shape is None:
+        return None
+
+    def drawn(frame: np.ndarray) -> tuple[list, list]:
+        """The connections and boxes of the shape in ``frame``, rounded, in a canonical order."""
+        connections = sorted((*np.round(frame @ c.point, 6).tolist(), *np.round(frame @ c.direction, 6).tolist(),
+                              c.type, c.length, c.profile, c.depth) for c in shape.connectors)
+        boxes = sorted((*np.round(frame @ centre, 6).tolist(), *size)
+                       for centre, size in ((shape.box_center, shape.box_size), *shape.solids))
+        return connections, boxes
+
+    own = drawn(np.eye(3))
+    return next((mirror for mirror in MIRRORS if drawn(mirror) == own), None)
+
+
+def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:
+    """Parts placed by a matrix of negative determinant (their own line's, or a mirrored sub-model's): no brick can be
+    built mirrored. A symmetric part's mirror image is one of its rotations; a handed part's (a left wing plate) is
+    its twin of the other hand, another part number, whose connections the mirrored one only stands in for."""
+    lines = sorted({line for _, line, _ in mirrored})
+    numbers = sorted({number for _, _, number in mirrored})
+    return Diagnostic(
+        code="mirrored_parts", message=f"{len(mirrored)} part(s) are placed mirrored (a matrix of negative "
+        f"determinant), at line {', '.join(map(str, lines[:10]))}{' and more' if len(lines) > 10 else ''} "
+        f"({', '.join(numbers[:10])}{' …' if len(numbers) > 10 else ''}): no part can be built mirrored — a "
+        "handed part's mirror image is its twin of the other hand, another part number. They were analysed as "
+        "drawn; replace each by its twin, or by a rotation if it is symmetric.",
+        details={"parts": [ident for ident, _, _ in mirrored[:MAX_SKIPPED_LISTED]], "lines": lines[:MAX_SKIPPED_LISTED],
+                 "numbers": numbers[:MAX_SKIPPED_LISTED]})
 
 
 OBJ_KEYWORDS = {"v", "vn", "vt", "f", "o", "g", "s", "l", "usemtl", "mtllib"}
@@ -443,7 +511,8 @@ def other_format(text: str) -> str | None:
         faces = sum(t == "f" for t in first_tokens)
         return (f"a Wavefront OBJ mesh ({vertices} vertex and {faces} face lines among its first "
                 f"{len(lines)}: 'v x y z', 'f i j k')")
-    if any(raw.rstrip().endswith(";") for raw in lines) and sum("," in raw for raw in lines) >= len(lines) // 2:
+    fields = [kept for raw in lines if (kept := raw.split("!")[0].strip())]  # an IDF's '!' comments set aside
+    if any(raw.endswith(";") for raw in fields) and sum("," in raw for raw in fields) >= len(fields) // 2:
         objects = sorted({raw.split(",")[0].strip() for raw in lines if "," in raw and "!-" not in raw  # not a field
                           and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
         return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"

@@ -205,3 +205,74 @@ def test_a_loop_of_sub_models_is_skipped_naming_the_loop_and_deep_nesting_is_not
     assert "nested more than 32 levels deep" in skip["reason"] and "itself" not in skip["reason"]
     # the sub-models below the depth are placed, only too deep to read: not called unplaced
     assert "unplaced_submodels" not in [w.code for w in solve(deep).result.report.warnings]
+
+
+# ---------------------------------------------------------------- mirrored parts
+
+WING = "1 4 0 -32 0 1 0 0 0 1 0 0 0 1 41769.dat\n"  # Wing 2 x 4 Right on the stack (its twin is 41770, Left)
+
+
+def test_a_handed_part_placed_mirrored_is_warned_naming_its_line_and_number():
+    mirrored = WING.replace("1 0 0 0 1 0 0 0 1 41769", "-1 0 0 0 1 0 0 0 1 41769")
+    result = solve(parse("wing.ldr", STACK + mirrored)).result
+    (warning,) = [w for w in result.report.warnings if w.code == "mirrored_parts"]  # was accepted with no word
+    assert warning.details == {"parts": ["L4"], "lines": [4], "numbers": ["41769"]}
+    assert "line 4" in warning.message and "41769" in warning.message
+    plain = solve(parse("wing.ldr", STACK + WING)).result
+    assert not [w for w in plain.report.warnings if w.code == "mirrored_parts"]
+
+
+def test_a_mirrored_sub_model_mirrors_its_parts_and_twice_mirrored_is_none():
+    sub = "0 FILE wing.ldr\n" + WING
+    once = "0 FILE main.ldr\n" + STACK + "1 16 0 0 0 1 0 0 0 1 0 0 0 -1 wing.ldr\n" + sub
+    (warning,) = [w for w in parse("m.mpd", once).source["warnings"] if w["code"] == "mirrored_parts"]
+    assert warning["details"]["parts"] == ["L5/L7"] and warning["details"]["lines"] == [7]  # placed at line 5
+    twice = once.replace("0 0 0 1 41769", "0 0 0 -1 41769")  # the part mirrored back within the mirrored sub-model
+    assert not [w for w in parse("m.mpd", twice).source["warnings"] if w["code"] == "mirrored_parts"]
+
+
+def test_a_symmetric_part_placed_mirrored_is_read_as_the_rotation_it_equals():
+    """A brick mirrored across its own middle is the same brick: read as a rotation, with the same joints."""
+    mirrored = STACK.replace("0 -48 0 1 0 0", "0 -48 0 -1 0 0")
+    request = parse("stack.ldr", mirrored)
+    assert request.source["mirrors_of_symmetric_parts"] == 1
+    assert not [w for w in request.source["warnings"] if w["code"] == "mirrored_parts"]
+    assert request.parts[2].rotation == [1, 0, 0, 0, 1, 0, 0, 0, 1]
+    a, b = solve(request).result, solve(parse("stack.ldr", STACK)).result
+    assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints))
+
+
+# ---------------------------------------------------------------- lines after 0 NOFILE
+
+def test_part_lines_after_nofile_are_warned_naming_them_and_alone_refused():
+    """Text after '0 NOFILE' with no '0 FILE' belongs to no model: LDraw readers ignore it; before, its parts were
+    dropped with no word (lines pasted after the end of hinged_wall.ldr, which ends so)."""
+    wall = (REPO / "examples" / "rigidity" / "hinged_wall.ldr").read_text()
+    assert wall.rstrip().endswith("0 NOFILE")
+    request = parse("wall.ldr", wall + STACK)
+    (warning,) = [w for w in request.source["warnings"] if w["code"] == "lines_outside_files"]
+    n = len(wall.splitlines())
+    assert warning["details"] == {"lines": [n + 1, n + 2, n + 3], "count": 3}
+    assert len(request.parts) == 9  # the model's own parts, as before
+    with pytest.raises(InputRejected) as refused:
+        parse("stack.ldr", "0 NOFILE\n" + STACK)
+    assert "after a '0 NOFILE'" in refused.value.errors[0].msg and "line 2, 3, 4" in refused.value.errors[0].msg
+
+
+def test_the_order_of_part_lines_does_not_change_the_analysis():
+    wall = (REPO / "examples" / "rigidity" / "hinged_wall.ldr").read_text().splitlines()
+    at = [i for i, line in enumerate(wall) if line.startswith("1 ")]
+    shuffled = list(wall)
+    for i, line in zip(at, [wall[i] for i in at][::-1]):
+        shuffled[i] = line
+    a = solve(parse("a.ldr", "\n".join(wall) + "\n")).result
+    b = solve(parse("b.ldr", "\n".join(shuffled) + "\n")).result
+    assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints)) == (4, False, 9)
+
+
+def test_an_idf_with_comment_lines_and_field_notes_renamed_mpd_is_named_as_an_idf():
+    idf = (REPO / "examples" / "polyhedra" / "two_offices.idf").read_text()
+    assert idf.startswith("!")  # was "places no part — line 1: line type '!' is not an LDraw line type"
+    with pytest.raises(InputRejected) as refused:
+        parse("offices.mpd", idf)
+    assert "an EnergyPlus IDF building model" in refused.value.errors[0].msg
