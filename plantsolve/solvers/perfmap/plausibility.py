@@ -14,7 +14,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.perfmap.setting_lines import Setting
-from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry
+from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry, revolutions_per_minute
 
 # peak isentropic/polytropic efficiency of a compressor's speed line
 EFFICIENCY_PEAK = (0.2, 0.98)
@@ -170,9 +170,8 @@ def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting])
             mixup = ("fractions of design speed labelled %?" if parsed.text == "%" and values.max() <= SPEED_FRACTION[1]
                      else "per cent or rpm labelled as a fraction?")
         else:
-            try:
-                rpm = float(registry().Quantity(1.0, parsed.unit).to("rpm").magnitude)
-            except Exception:  # not a rotational speed: a label pint reads as something else
+            rpm = revolutions_per_minute(parsed.unit)
+            if rpm is None:  # not a rotational speed: a label pint reads as something else
                 continue
             values = values * rpm
             lo, hi = SPEED_RPM

@@ -99,6 +99,22 @@ def parse_unit(text: str) -> Unit:
     return Unit(format(unit, "~P") or "1", unit)
 
 
+# pint counts an angle in radians, so a bare frequency (Hz, 1/s, 1/min) is read as radians per time and 1 Hz as
+# 9.55 rpm; a shaft speed written so counts revolutions (1 Hz = 60 rpm, '1/min' is rpm as German rigs write it).
+_ANGLE_WORDS = ("radian", "revolution", "turn", "degree", "cycle", "grade", "arcminute", "arcsecond")
+
+
+def revolutions_per_minute(unit: pint.Unit) -> float | None:
+    """rpm per one ``unit`` of a shaft speed, or None when ``unit`` is no rotational speed; a unit naming no
+    angle counts revolutions."""
+    reg = registry()
+    if unit.dimensionality != reg.parse_units("rpm").dimensionality:
+        return None
+    if any(word in str(unit) for word in _ANGLE_WORDS):
+        return float(reg.Quantity(1.0, unit).to("rpm").magnitude)
+    return float(reg.Quantity(1.0, unit).to("1/min").magnitude)
+
+
 def _dimensions(unit: pint.Unit) -> str:
     return "" if unit.dimensionless else str(unit.dimensionality)
 

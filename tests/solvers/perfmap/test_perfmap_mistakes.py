@@ -240,6 +240,23 @@ def test_a_relative_speed_labelled_rpm_is_warned_about():
     assert warning.details["values"] == [min(SPEEDS), max(SPEEDS)] and "labelled rpm" in warning.message
 
 
+@pytest.mark.parametrize("unit, per_design, warned", [
+    ("Hz", 10.0, False),       # 5-11 Hz = 300-660 rpm (read as radians per second: 48-105, warned)
+    ("1/min", 500.0, False),   # 250-550 rpm as German rigs write it (read as radians: 40-88, warned)
+    ("1/s", 1.0, True),        # 0.5-1.1 revolutions a second: the relative speed labelled 1/s
+    ("rad/s", 20.0, True),     # 10-22 rad/s = 95-210 rpm
+])
+def test_a_shaft_speed_in_a_frequency_counts_revolutions(unit, per_design, warned):
+    lines = [f"speed [{unit}],flow,pressure ratio,efficiency"] + [
+        ",".join([str(per_design * float(line.split(",")[1]))] + line.split(",")[2:]) for line in LINES[1:]]
+    codes = _codes(_table(lines))
+    rpm = {"Hz": 60.0, "1/min": 1.0, "1/s": 60.0, "rad/s": 60 / (2 * np.pi)}[unit]
+    low = per_design * min(SPEEDS) * rpm
+    assert ("implausible_speed" in codes) == (low < 100.0) == warned
+    if warned:
+        assert codes["implausible_speed"].details["values"][0] == pytest.approx(low)
+
+
 # ---------------------------------------------------------------- files of another kind
 
 @pytest.mark.parametrize("name, content, held", [
