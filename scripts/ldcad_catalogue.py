@@ -18,9 +18,10 @@ What is read of each meta line (LDCad's meta syntax, ``[key=value]`` pairs):
   ``scale``. The cylinder's axis is the local −y of ``ori``: it runs from ``pos`` along −y for the
   sum of its section lengths (or is centred on ``pos`` with ``center=true``).
 - ``SNAP_CLP`` (a clip: ``radius``, ``length``, ``center``), ``SNAP_FGR`` (hinge fingers:
-  ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``), ``SNAP_GEN`` with
-  ``bounding=sph`` (a ball joint when male, its socket when female), or with a ``group`` (a fit made
-  only within the group: a tyre on its rim); other generic snaps are skipped.
+  ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``, or starting there along the local
+  −y with ``center=false``), ``SNAP_GEN`` with ``bounding=sph`` (a ball joint when male, its socket when
+  female), with a ``group`` (a fit made only within the group: a tyre on its rim), or an ungrouped ``box`` or
+  ``cyl`` bounding (a fit of that shape and size only: a window's pane in its frame, a lid on its crate).
 
 The output is gzip text: a first line of JSON ``{"source": …, "units": …}``, then one line per part,
 ``number<TAB>{"n": name, "b": [xmin, ymin, zmin, xmax, ymax, zmax], "s": [snap, …]}`` (JSON after the
@@ -30,7 +31,8 @@ the bounding box of the part's drawn geometry and each snap one of
 - ``["cyl", gender, caps, slide, start, axis, [[shape, radius, length], …]]``: sections from ``start``
   along the unit vector ``axis``;
 - ``["clp", centre, axis, length]``; ``["fgr", gender, centre, axis, length]``;
-- ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``.
+- ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``; ``["shp", gender, bounding,
+  centre, axis]`` (``bounding`` as ``box 20 54 2``: an ungrouped generic snap).
 
 The open stud tube primitives (``stud4.dat``, ``stud4a.dat``, ``stud4f*.dat``, ``stud4h.dat``) get the
 anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``), and a
@@ -199,8 +201,11 @@ def _own_snaps(line: str, params: dict, place) -> list[dict]:
             out.append({"id": snap_id, "kind": "clp", "centre": centre, "axis": down, "length": length})
         elif kind == "SNAP_FGR":
             seq = _floats(params.get("seq", "0"))
+            # centred on pos unless center=false, when the run starts at pos (4715's two 11-LDU runs from x = -19
+            # and x = 8: symmetric about the part's centre only so)
+            centre = origin + down * sum(seq) / 2 if params.get("center", "").lower() == "false" else origin
             out.append({"id": snap_id, "kind": "fgr", "gender": params.get("genderOfs", "M").upper()[:1],
-                        "centre": origin, "axis": down, "length": sum(seq)})
+                        "centre": centre, "axis": down, "length": sum(seq)})
         elif kind == "SNAP_GEN":
             bounding = params.get("bounding", "").split()
             if bounding[:1] == ["sph"] and len(bounding) >= 2:
@@ -209,6 +214,10 @@ def _own_snaps(line: str, params: dict, place) -> list[dict]:
             elif params.get("group"):  # a fit only parts of one group make (a tyre on its rim, a drawer)
                 out.append({"id": snap_id, "kind": "gen", "gender": params.get("gender", "M").upper()[:1],
                             "group": params["group"].lower(), "centre": origin, "axis": down})
+            elif bounding[:1] in (["box"], ["cyl"]) and len(bounding) >= 3:  # a fit of one shape and size (a pane)
+                out.append({"id": snap_id, "kind": "shp", "gender": params.get("gender", "M").upper()[:1],
+                            "shape": " ".join([bounding[0]] + [f"{float(v):g}" for v in bounding[1:]]),
+                            "centre": origin, "axis": down})
     return [place(s) for s in out]
 
 
@@ -351,6 +360,8 @@ def _record(snap: dict, scale: bool = False) -> list:
         return ["fgr", snap["gender"], _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
     if snap["kind"] == "gen":
         return ["gen", snap["gender"], snap["group"], _r(snap["centre"]), _r(snap["axis"])]
+    if snap["kind"] == "shp":
+        return ["shp", snap["gender"], snap["shape"], _r(snap["centre"]), _r(snap["axis"])]
     return ["sph", snap["gender"], _r(snap["centre"]), round(snap["radius"], 3)]
 
 

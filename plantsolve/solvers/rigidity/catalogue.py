@@ -200,11 +200,15 @@ MATES = {
 GROUP = "group"  # the connection of a grouped generic snap pair (generated parts)
 
 
+GENERIC = ("group:", "shape:")  # generic snaps: of one group, or ungrouped of one bounding shape and size
+
+
 def mate(a: str, b: str) -> str | None:
     """The connection two connector types make, or None: :data:`MATES`, or the male and female of one
-    generic snap group (``group:<name>:M`` with ``group:<name>:F``)."""
+    generic snap group (``group:<name>:M`` with ``group:<name>:F``) or of one ungrouped bounding (``shape:box 20 54
+    2:M`` with ``shape:box 20 54 2:F``)."""
     kind = MATES.get((a, b))
-    if kind is None and a.startswith("group:") and b.startswith("group:"):
+    if kind is None and a.startswith(GENERIC) and b.startswith(GENERIC):
         ga, gb = a.rsplit(":", 1), b.rsplit(":", 1)
         if ga[0] == gb[0] and ga[1] != gb[1]:
             return GROUP
@@ -213,7 +217,7 @@ def mate(a: str, b: str) -> str | None:
 
 def counterparts(a: str) -> set[str]:
     """Every connector type that fits a connector of type ``a``."""
-    if a.startswith("group:"):
+    if a.startswith(GENERIC):
         name, gender = a.rsplit(":", 1)
         return {f"{name}:{'F' if gender == 'M' else 'M'}"}
     return {t for (x, t) in MATES if x == a}

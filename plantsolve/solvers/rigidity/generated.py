@@ -31,8 +31,11 @@ grid and compatible types, :data:`catalogue.MATES`):
 - A generic snap of a ``group`` (a tyre on its rim, a drawer in its cabinet) is a ``group:<name>:M``
   or ``…:F`` point at its centre along its axis: male and female of one group at one point make a
   rigid connection (the fit holds).
+- An ungrouped generic snap with a box or cylinder bounding (a window's pane, its frame's slot; a lid on its crate)
+  is a ``shape:<bounding>:M`` or ``…:F`` point at its centre along its axis: male and female of one bounding shape
+  and size at one point make a rigid connection, as a group's do.
 
-Other snaps (tubes under plates, bar holes, ungrouped generic boxes) make no point.
+Other snaps (tubes under plates, bar holes) make no point.
 
 Collision shapes: the data has a part's bounding box only, which is the part itself only for plain rectangular parts. A part whose
 LDraw name is a plain brick, plate, tile or technic brick (``Brick  2 x  4``, ``Technic Brick  1 x  4
@@ -80,6 +83,12 @@ def record(number: str) -> dict | None:
 def group_type(group: str, gender: str) -> str:
     """The connector type of a grouped generic snap: ``group:<name>:M`` fits ``group:<name>:F``."""
     return f"group:{group}:{gender}"
+
+
+def shape_type(bounding: str, gender: str) -> str:
+    """The connector type of an ungrouped generic snap: ``shape:<bounding>:M`` fits ``shape:<bounding>:F`` of the
+    same bounding shape and size (``box 20 54 2``)."""
+    return f"shape:{bounding}:{gender}"
 
 
 def numbers() -> frozenset[str]:
@@ -207,6 +216,8 @@ def connectors(snaps: list) -> tuple[Point, ...]:
             out.append(("finger", _point(centre - axis * length / 2), _point(axis), round(length, 3)))
         elif kind == "gen":
             out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
+        elif kind == "shp":
+            out.append((shape_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "sph":
             out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
     unique, seen = [], set()

@@ -16,7 +16,7 @@ import pytest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.rigidity import generated
 from plantsolve.solvers.rigidity.assembly import Assembly
-from plantsolve.solvers.rigidity.catalogue import CATALOGUE, generated_part, lookup
+from plantsolve.solvers.rigidity.catalogue import CATALOGUE, generated_part, lookup, mate
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -349,3 +349,52 @@ def test_the_open_centre_technic_bricks_keep_the_frame_of_the_part_they_were_mov
     assert _joints(request, result) == Counter({("hinge", "pin", "32531", "2780"): 2})
     assert lookup("32531").number == "32531" and lookup("32531").box_size == lookup("32531a").box_size
     assert lookup("32531").box_size[0] == 120.0 and lookup("32532").box_size[0] == 160.0
+
+
+def test_script_starts_a_finger_run_at_its_position_when_it_is_not_centred(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9005.dat", "0 Hinge Test\n2 24 -20 0 0 20 0 0\n")
+    # 4715's lines: two runs of 3 + 4 + 4 LDU along x from x = -19 and x = 8, symmetric about the part's centre
+    _write(shadow, "parts/9005.dat",
+           "0 !LDCAD SNAP_FGR [genderOfs=M] [center=false] [seq=3 4 4] [radius=4] [pos=-19 0 0] "
+           "[ori=0 -1 0 1 0 0 0 0 1]\n"
+           "0 !LDCAD SNAP_FGR [genderOfs=M] [center=false] [seq=4 4 3] [radius=4] [pos=8 0 0] "
+           "[ori=0 -1 0 1 0 0 0 0 1]\n"
+           "0 !LDCAD SNAP_FGR [genderOfs=F] [seq=4 4] [radius=4] [pos=0 -10 0] [ori=0 -1 0 1 0 0 0 0 1]\n")
+    runs = sorted((c[1][0], c[3]) for c in generated.connectors(_script().derive(ldraw, shadow)["9005"]["s"]))
+    assert runs == [(-19.0, 11.0), (-4.0, 8.0), (8.0, 11.0)]  # (start along x, length); the last one centred on x = 0
+
+
+def test_data_file_places_the_uncentred_finger_runs_where_the_shadow_library_states_them():
+    """4715 (stretcher wheels) states two runs of 11 LDU with ``center=false`` from x = -19 and x = 8: symmetric about
+    its centre, each a pitch's half from it; read centred they were (-24.5, -13.5) and (2.5, 13.5)."""
+    spans = sorted(tuple(sorted((c[1][0], c[1][0] + c[2][0] * c[3]))) for c in
+                   generated.connectors(generated.record("4715")["s"]) if c[0] == "finger")
+    assert spans == [(-20.0, 0.0), (-19.0, -8.0), (0.0, 20.0), (8.0, 19.0)]
+
+
+def test_script_reads_an_ungrouped_generic_snap_as_a_fit_of_its_bounding_shape_and_size(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9006.dat", "0 Glass Test\n2 24 -10 0 0 10 0 0\n")
+    _write(shadow, "parts/9006.dat", "0 !LDCAD SNAP_GEN [gender=M] [bounding=box 20 54.0 2] [pos=0 58 -4]\n"
+           "0 !LDCAD SNAP_GEN [gender=M] [bounding=sph 4] [pos=0 0 0]\n")
+    snaps = _script().derive(ldraw, shadow)["9006"]["s"]
+    assert ["shp", "M", "box 20 54 2", [0.0, 58.0, -4.0], [0.0, -1.0, 0.0]] in snaps
+    assert ("shape:box 20 54 2:M", (0.0, 58.0, -4.0), (0.0, -1.0, 0.0)) in generated.connectors(snaps)
+
+
+def test_a_pane_fits_its_frame_through_their_ungrouped_generic_snaps_and_nothing_else():
+    """2494 states only an ungrouped generic box (20 x 54 x 2), the slot of its frame 2493b the same box female: the
+    pane was unknown (no snap read), now it is known and held rigidly in its frame, and only there."""
+    assert lookup("2494") is not None and lookup("87612") is not None  # the plane's front glass the same way
+    assert mate("shape:box 20 54 2:M", "shape:box 20 54 2:F") == "group"
+    assert mate("shape:box 20 54 2:M", "shape:box 26 29.8 2:F") is None  # another size: no fit
+    assert mate("shape:box 20 54 2:M", "group:box 20 54 2:F") is None  # nor a group's snap
+    assembly = Assembly()
+    assembly.add_part("frame", "2493b", (0, 0, 0))
+    found = assembly.add_part("pane", "2494", (0, 0, 0))
+    assert [c.kind for c in found] == ["group"]
+    assert assembly.analyse().mobility.dof == 0
+    other = Assembly()
+    other.add_part("frame", "2493b", (0, 0, 0))
+    assert other.add_part("pane", "2494", (0, 0, 20)) == []  # a stud pitch off the slot: no fit
