@@ -96,4 +96,5 @@ def test_a_quoted_decimal_comma_in_a_comma_separated_file_is_refused_naming_the_
     with pytest.raises(InputRejected) as refused:
         _scan(text)
     msg = refused.value.errors[0].msg
-    assert "(lines 1, 2, 3," in msg and "4000 a number of the other decimal mark (the file writes decimal points)" in msg
+    assert "(lines 1, 2, 3," in msg
+    assert "4000 a number of the other decimal mark (the file writes decimal points)" in msg
