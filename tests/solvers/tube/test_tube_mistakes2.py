@@ -236,3 +236,34 @@ def test_a_ratio_between_two_unit_ratios_names_one_mixup_the_nearest():
 def test_a_nominal_written_from_the_other_end_raises_no_mixup():
     from plantsolve.solvers.tube.inspection import reversed_rows
     assert _codes(reversed_rows(_rows())) == {}
+
+
+# --- a PLY header whose types or counts are not its body's --------------------------------------------------
+
+
+@pytest.mark.parametrize("values", [POINTS, np.round(POINTS, 1)], ids=["3 decimals", "rounded"])
+def test_a_ply_of_doubles_declared_float_is_refused_naming_the_header_line(values):
+    # before: read as floats, the rounded scan's halves of doubles passed as 2,883 coordinates and were solved
+    # (records_beyond_header only); the other was refused as "fewer than 100 distinct points"
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("scan.ply", _binary_ply("float", values.astype("<f8"))), {})
+    msg = refused.value.errors[0].msg
+    assert msg.startswith("PLY header line 4 ('property float x'): the body holds exactly the bytes of the declared "
+                          "records (4000 vertex) with 8-byte doubles")
+    got = _points("scan.ply", _binary_ply("double", values.astype("<f8")))
+    np.testing.assert_allclose(got, values)
+
+
+def test_a_ply_of_floats_with_as_many_bytes_again_is_still_read_with_a_warning():
+    twice = np.vstack([POINTS, POINTS[::-1]]).astype("<f4")  # 8,000 float vertices under a count of 4,000
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(POINTS)}\nproperty float x\n"
+            "property float y\nproperty float z\nend_header\n")
+    warning, points = _warning("scan.ply", head.encode() + twice.tobytes(), "records_beyond_header")
+    assert warning is not None and len(points) == len(POINTS)
+
+
+def test_a_negative_ply_record_count_is_refused_naming_the_header_line():
+    # before: numpy read a count of -5 as "all there are", and the whole body was solved
+    content = _binary_ply("float", POINTS.astype("<f4")).replace(b"element vertex 4000", b"element vertex -5")
+    with pytest.raises(InputRejected, match="PLY header line 3 not understood: 'element vertex -5'"):
+        parse_upload(StoredInput.from_bytes("scan.ply", content), {})
