@@ -267,3 +267,28 @@ def test_a_negative_ply_record_count_is_refused_naming_the_header_line():
     content = _binary_ply("float", POINTS.astype("<f4")).replace(b"element vertex 4000", b"element vertex -5")
     with pytest.raises(InputRejected, match="PLY header line 3 not understood: 'element vertex -5'"):
         parse_upload(StoredInput.from_bytes("scan.ply", content), {})
+
+
+# --- a binary STL whose triangle count is not its body's, text renamed .stl ------------------------------------
+
+
+def _binary_stl(corners: np.ndarray, declared: int) -> bytes:
+    records = np.zeros(len(corners), [("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+    records["corners"] = corners
+    return b"binary stl".ljust(80, b" ") + np.uint32(declared).tobytes() + records.tobytes()
+
+
+@pytest.mark.parametrize("name", ["scan.xyz", "ladder.pcf"])
+def test_text_renamed_stl_is_refused_not_read_as_triangles_of_its_characters(name):
+    content = (SCAN_XYZ if name == "scan.xyz" else REPO / "examples" / "alignment" / "ladder.pcf").read_bytes()
+    # before: its characters were a count of 808,464,685 triangles and 20,000 "points" up to 1e11 were read
+    with pytest.raises(InputRejected, match="not an STL file: it is text"):
+        parse_upload(StoredInput.from_bytes("scan.stl", content), {})
+
+
+def test_a_binary_stl_holding_more_triangles_than_its_header_declares_says_so():
+    corners = POINTS[: 3 * 1000].reshape(-1, 3, 3)
+    warning, _ = _warning("scan.stl", _binary_stl(corners, 600), "records_beyond_header")
+    # before: the last 400 triangles were dropped without a word
+    assert warning is not None and warning.details == {"declared": {"triangle": 600}, "beyond": 400}
+    assert _warning("scan.stl", _binary_stl(corners, 1000), "records_beyond_header")[0] is None
