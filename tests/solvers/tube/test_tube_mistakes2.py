@@ -292,3 +292,11 @@ def test_a_binary_stl_holding_more_triangles_than_its_header_declares_says_so():
     # before: the last 400 triangles were dropped without a word
     assert warning is not None and warning.details == {"declared": {"triangle": 600}, "beyond": 400}
     assert _warning("scan.stl", _binary_stl(corners, 1000), "records_beyond_header")[0] is None
+
+
+def test_an_angle_tolerance_in_radians_is_named():
+    # before: 0.0087 (0.5° in radians) failed the example's bends on the scan's noise, with no word on the tolerance
+    (warning,) = implausible(InspectionTolerances(angle=0.0087), 6.0, _rows(), "mm")
+    assert warning.details == {"field": "angle", "tolerance": 0.0087, "units": "deg", "plausible_from": 0.1}
+    assert "meant in radians (0.0087 rad = 0.498°)?" in warning.message
+    assert implausible(InspectionTolerances(angle=0.5, rotation=0.1), 6.0, _rows(), "mm") == []
