@@ -40,6 +40,7 @@ from plantsolve.solvers.tube.number_cells import (
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
+_NOT_PLAIN_COMMA = ('"', ".", "'", "\u00a0", "\u202f")  # a row of a decimal-comma file read cell by cell
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
@@ -166,10 +167,14 @@ def _plain_rows(lines: list[str]) -> tuple[list[str], dict[int, str]]:
         return lines, {}
     out, unreadable = [], {}
     written = "commas" if mark == "," else "points"
+    not_plain = _NOT_PLAIN_COMMA + (() if blank else (" ",))  # a blank between cells or grouping digits
     for lineno, line in enumerate(lines, 1):
         s = line.strip()
         if not starts_number(s):
             out.append(line)
+            continue
+        if mark == "," and not any(c in s for c in not_plain):  # most rows: only commas to replace
+            out.append(s.replace(",", "."))
             continue
         try:
             out.append(" ".join(plain(c, mark, blank) for c in _cells(s, delimiter)))

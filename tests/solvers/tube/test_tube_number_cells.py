@@ -98,3 +98,9 @@ def test_a_quoted_decimal_comma_in_a_comma_separated_file_is_refused_naming_the_
     msg = refused.value.errors[0].msg
     assert "(lines 1, 2, 3," in msg
     assert "4000 a number of the other decimal mark (the file writes decimal points)" in msg
+
+
+def test_a_row_grouped_by_blanks_among_plain_decimal_comma_rows_is_read_cell_by_cell():
+    rows = [";".join(f"{v:.3f}".replace(".", ",") for v in row) for row in POINTS]
+    rows[40] = ";".join(f"{v:,.3f}".replace(",", " ").replace(".", ",") for v in POINTS[40])  # 2 620,710
+    np.testing.assert_allclose(_scan("\n".join(rows) + "\n"), POINTS, atol=5e-4)
