@@ -152,6 +152,10 @@ def _read_las(content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str |
         raise reject(f"unreadable LAS/LAZ file: {str(exc) or type(exc).__name__}") from None
     if las is None or len(las) == 0:
         raise reject("the LAS/LAZ file holds no whole point record" + log.summary())
+    scales = np.asarray(header.scales, dtype=np.float64)
+    if not (np.isfinite(scales) & (scales != 0)).all():  # x = X * scale + offset: every point at the offset, or NaN
+        raise reject(f"the LAS header's scale factors are {', '.join(f'{v:g}' for v in scales)} (x, y, z): "
+                     "a scale of 0 or a non-finite one makes every coordinate the offset or NaN; the header is damaged")
     try:
         unit = las_crs_unit(laspy.LasData(header, las))
     except (ValueError, IndexError) as exc:
