@@ -262,7 +262,7 @@ def _overridden(ext: str, stated: CrsUnit, file_units: str, metres: float) -> Di
     """A warning that ``options.file_units`` contradicts the unit the file states: one of them is a mistake, and
     every length of the result is off by their ratio if it is the option."""
     own = short_name(stated.name, stated.metres)
-    return Diagnostic(code="file_units_contradict_file", message=(
+    return Diagnostic(code="file_unit_overridden", message=(
         f"options.file_units ({file_units}) overrides the unit the {ext[1:].upper()} file states ({own}: "
         f"{stated.evidence}): its coordinates were read as {file_units}, {metres / stated.metres:g} times what the "
         f"file says. Leave file_units out if the file's {own} is right."),

@@ -246,7 +246,7 @@ def test_a_fit_that_fails_on_a_scan_too_small_for_its_unit_names_the_likely_unit
 
 def _contradiction(name: str, data: bytes, file_units: str):
     req = parse_upload(StoredInput.from_bytes(name, data), {"file_units": file_units})
-    return next((w for w in req.source.warnings if w.code == "file_units_contradict_file"), None)
+    return next((w for w in req.source.warnings if w.code == "file_unit_overridden"), None)
 
 
 def test_file_units_that_contradict_the_unit_the_file_states_are_a_warning_with_the_ratio():
