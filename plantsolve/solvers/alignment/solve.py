@@ -274,6 +274,7 @@ def _finish(request: AlignmentRequest, model: Model, out: Outcome, progress: Pro
     _warn_moved_far(request, model, result, gap0, ang0)
     _warn_fitting_span(request, model, result)
     _warn_radius(request, model, result)
+    _warn_tolerances(request, model, result)
     result.report.message += _cuts_said(request, result, gap0, ang0)
     progress(1.0, "done")
     return result
@@ -345,6 +346,27 @@ def _warn_radius(request: AlignmentRequest, model: Model, result: AlignmentResul
           f"{metres:.4g} m (plausible {lo * 1000:g} mm to {hi:g} m): the request's numbers look to be in another "
           f"unit than '{u}' ({likely}); every length of the result is read in {u}.",
           {"median_radius": float(np.median(radius)), "median_radius_m": metres, "plausible_m": [lo, hi], "units": u})
+
+
+def _warn_tolerances(request: AlignmentRequest, model: Model, result: AlignmentResult) -> None:
+    """``implausible_tolerance``: an explicit ``position_tolerance`` or ``connection_tolerance`` wider than the
+    components' median outside radius. A gap that wide is accepted as closed (or joins ends that far apart): no
+    scan or export tolerance is as wide as the pipe; a millimetre meant in a metre request is 1000 times it."""
+    radius = model.radius[np.isfinite(model.radius)]
+    if len(radius) == 0:
+        return
+    median, u = float(np.median(radius)), request.units
+    for name in ("position_tolerance", "connection_tolerance"):
+        value = getattr(request.options, name)
+        if value is None or value <= median or (name == "connection_tolerance" and request.source_pcf is None):
+            continue
+        effect = "gaps that wide are accepted as closed" if name == "position_tolerance" else \
+            "ends that far apart are connected"
+        _warn(result, "implausible_tolerance",
+              f"options.{name} {value:g} {u} is more than the components' median outside radius ({median:.4g} {u}): "
+              f"{effect} (no scan or export tolerance is as wide as the pipe); was it meant in another unit than "
+              f"the request's '{u}' (a millimetre in a metre request is 1000 times it)?",
+              {"field": name, "value": value, "median_radius": median, "units": u})
 
 
 # factors that turn the coordinates' apparent size into the bores' unit, with the mix-up each means

@@ -21,10 +21,19 @@ HEADER_BYTES = 4096  # the STEP header is looked for this far in
 MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 
 
+def _utf16_without_mark(head: bytes) -> bool:
+    """A NUL as every second byte and printable characters between: zero bytes alone (a binary STL's header)
+    are no text."""
+    for nul, chars in ((head[1::2], head[0::2]), (head[0::2], head[1::2])):
+        if nul == b"\x00" * len(nul) and all(32 <= c < 127 for c in chars):
+            return True
+    return False
+
+
 def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
-    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or head[1:8:2] == b"\x00" * 4 or head[0:8:2] == b"\x00" * 4:
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16_without_mark(head[:8]):
         raise reject("the file is UTF-16 text (two bytes a character, as Windows 'Unicode' saves it): a STEP physical "
                      "file is 8-bit text; save it as UTF-8 or ANSI and send it again")
     if not head.startswith(b"ISO-10303-21;"):

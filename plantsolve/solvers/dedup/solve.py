@@ -73,6 +73,18 @@ def _eligible(model, product, wanted: tuple[str, ...] | None, body) -> str | Non
     return None
 
 
+def _unmatched_entity_types(wanted: tuple[str, ...], products: list) -> list[Diagnostic]:
+    """A warning naming the ``options.entity_types`` no product of the model is (nor a subtype of): a run that
+    selects nothing shares nothing, and "0 products shared" would not say why."""
+    missing = [t for t in wanted if not any(p.is_a(t) for p in products)]
+    if not missing:
+        return []
+    return [Diagnostic(code="entity_types_unmatched", message=(
+        f"No product of the model is an {', '.join(missing)} (options.entity_types): "
+        f"{'nothing was' if len(missing) == len(wanted) else 'nothing of those was'} selected. The model's products "
+        f"are {', '.join(sorted({p.is_a() for p in products})[:12])}."), details={"entity_types": missing})]
+
+
 def described(classes: list) -> tuple[list[DedupClass], int]:
     """The result's classes (those of two or more members) and how many products share geometry."""
     out_classes = []
@@ -186,6 +198,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                     skipped.append({"global_id": p.GlobalId, "entity": p.is_a(), "reason": why})
                 continue
             candidates.append(make_candidate(p, body, model, points[p.id()], triangles[p.id()]))
+        if wanted:
+            warnings.extend(_unmatched_entity_types(wanted, products))
         lap("grouping")
         classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
                                 progress=progress, span=(0.35, 0.55))

@@ -20,6 +20,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.tube import LraRow, TubeOptions
 from plantsolve.solvers.base import FieldError
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
+from plantsolve.solvers.tube.number_cells import ROWS_LOOKED_AT, cell_delimiter, decimal_mark, number, starts_number
 from plantsolve.solvers.tube.model import control_polygon, model_from_control_polygon
 
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "ft": 304.8}
@@ -105,12 +106,13 @@ def _delimiter(lines: list[str]) -> str | None:
     return None
 
 
-def _number(cell: str, decimal_comma: bool) -> float | None:
-    """A cell's value; None when empty. Raises ValueError on text."""
+def _number(cell: str, mark: str, blank_delimited: bool) -> float | None:
+    """A cell's value in a file of decimal mark ``mark`` (:mod:`.number_cells`); None when empty. Raises ValueError
+    on text and on a cell of the other mark."""
     cell = cell.strip()
     if not cell:
         return None
-    v = float(cell.replace(",", ".") if decimal_comma else cell)
+    v = number(cell, mark, blank_delimited)
     if not np.isfinite(v):
         raise ValueError(f"{cell!r} is not finite")
     return v
@@ -158,16 +160,21 @@ def _angle_factor(unit: str | None, line: int, name: str) -> float:
 def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal:
     """LRA rows from the text of an LRA or XYZ-CLR CSV (see ``TubeOptions.nominal_csv``). Unreadable lines are
     skipped with a warning naming the line; raises NominalError (with the line) when nothing usable is left."""
+    text = text.removeprefix("\ufeff")  # a byte-order mark read into the text: not part of the first column's name
     lines = [(i, ln) for i, ln in enumerate(text.splitlines(), 1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise NominalError(None, None, "the nominal CSV holds no rows")
-    delim = _delimiter([ln for _, ln in lines])
-    decimal_comma = delim in (";", "\t", None) and any(re.fullmatch(r"-?\d+,\d+", c.strip()) for _, ln in lines[:5]
-                                                       for c in _split(ln, delim))
+    # the rule the scan reader follows (number_cells): the rows of numbers say their delimiter and decimal mark
+    number_rows = [ln.strip() for _, ln in lines if starts_number(ln)][:ROWS_LOOKED_AT]
+    delim = cell_delimiter(number_rows) if number_rows else _delimiter([ln for _, ln in lines])
+    mark = decimal_mark([_split(ln, delim) for ln in number_rows], delim)
+
+    def cell_value(cell: str) -> float | None:
+        return _number(cell, mark, delim is None)
 
     def numeric(line: str) -> bool:
         try:
-            [_number(c, decimal_comma) for c in _split(line, delim)]
+            [cell_value(c) for c in _split(line, delim)]
         except ValueError:
             return False
         return True
@@ -180,7 +187,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
                                    "text above the header", details={"line": lines[0][0], "text": lines[0][1][:120]}))
         lines = lines[1:]
     first_line, first = lines[0]
-    head = _split(first, delim)
+    # a header typed with another delimiter than the exported rows' (``length,angle`` over ``80;90``)
+    head = _split(first, delim if delim is None or delim in first else _delimiter([first]))
     header = not numeric(first)
     if header:
         roles, col_units = _header_columns(head)
@@ -207,7 +215,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         kind = fmt
         if kind == "auto":
             # an LRA's first row is a bend (CLR > 0) unless the tube is straight; an XYZ-CLR's first point is an end
-            c0 = _number(head[off + 3], decimal_comma) if len(head) > off + 3 else None
+            c0 = cell_value(head[off + 3]) if len(head) > off + 3 else None
             kind = "xyz_clr" if (c0 is None or c0 == 0) and len(lines) > 2 else "lra"
         need = ["x", "y_xyz", "z", "clr"] if kind == "xyz_clr" else ["length", "rotation", "angle", "clr"]
         cols = {r: off + k for k, r in enumerate(need)}
@@ -221,7 +229,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
             row = {}
             for r, c in cols.items():
                 # a trailing field left out is empty (an end point's CLR, the last row's angle)
-                v = _number(cells[c], decimal_comma) if c < len(cells) else None
+                v = cell_value(cells[c]) if c < len(cells) else None
                 row[r] = None if v is None else v * fac[r]
             if kind == "xyz_clr" and any(row[r] is None for r in ("x", "y_xyz", "z")):
                 raise ValueError("x, y and z are needed")

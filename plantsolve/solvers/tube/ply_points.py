@@ -26,6 +26,7 @@ class Prop:
     name: str
     type: str  # numpy type code without byte order
     count_type: str | None = None  # list properties: the type of the item count
+    line: int = 0  # of the header
 
 
 @dataclass
@@ -63,11 +64,13 @@ def _header(content: bytes) -> tuple[str, list[Element], int, int]:
             if words[0] == "format":
                 fmt = words[1]
             elif words[0] == "element":
+                if int(words[2]) < 0:  # numpy would read every record there is
+                    raise ValueError
                 elements.append(Element(words[1], int(words[2]), []))
             elif words[0] == "property" and words[1] == "list":
-                elements[-1].props.append(Prop(words[4], TYPES[words[3]], TYPES[words[2]]))
+                elements[-1].props.append(Prop(words[4], TYPES[words[3]], TYPES[words[2]], lineno))
             elif words[0] == "property":
-                elements[-1].props.append(Prop(words[2], TYPES[words[1]]))
+                elements[-1].props.append(Prop(words[2], TYPES[words[1]], line=lineno))
             else:
                 raise ValueError
         except (IndexError, KeyError, ValueError):
@@ -175,7 +178,38 @@ def _ascii_record(el: Element, words: list[str]) -> tuple[dict | None, str]:
     return rec, ""
 
 
+def _refuse_doubles_declared_float(content: bytes, start: int, elements: list[Element], order: str) -> None:
+    """A 422 naming the header's first float property when the body holds exactly the bytes of the declared
+    records written as 8-byte doubles and, read so, every vertex is a coordinate: read as the 4-byte floats the
+    header declares, half the records would be the halves of doubles (noise that may pass as coordinates) and the
+    other half bytes past the declared records."""
+    floats = [p for e in elements for p in e.props if p.type == "f4"]
+    if not floats or any(p.count_type is not None for e in elements for p in e.props):
+        return
+    as_doubles = [[(p.name, order + ("f8" if p.type == "f4" else p.type)) for p in e.props] for e in elements]
+    size = sum(e.count * np.dtype(d).itemsize for e, d in zip(elements, as_doubles))
+    if len(content) - start - size not in (0, 1, 2):  # a final newline (CRLF) after the records is no record
+        return
+    offset = start
+    for e, d in zip(elements, as_doubles):
+        if e.name == "vertex":
+            rows = np.frombuffer(content, np.dtype(d), e.count, offset=offset)
+            with np.errstate(invalid="ignore", over="ignore"):
+                xyz = np.column_stack([rows[c] for c in "xyz"]).astype(np.float64)
+            if len(xyz) == 0 or _garbled(xyz).any() or np.isnan(xyz).all():
+                return
+            break
+        offset += e.count * np.dtype(d).itemsize
+    first = floats[0]
+    raise reject(f"PLY header line {first.line} ('property float {first.name}'): the body holds exactly the bytes of "
+                 f"the declared records ({', '.join(f'{e.count} {e.name}' for e in elements)}) with 8-byte doubles "
+                 "for its float properties, and read so every vertex is a coordinate; read as the 4-byte floats the "
+                 "header declares they would be noise. Declare them 'property double' (or, if the file holds twice "
+                 "the records, state that count)")
+
+
 def _read_binary(content, start, _header_lines, elements, order, log, faces_below) -> dict:
+    _refuse_doubles_declared_float(content, start, elements, order)
     pos, out = start, {}
     for el in elements:
         want_faces = el.name == "face" and "vertex" in out and len(out["vertex"]) < faces_below

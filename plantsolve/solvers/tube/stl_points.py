@@ -10,8 +10,9 @@ import codecs
 
 import numpy as np
 
-from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.skipped_input import refuse_noise_stl
 from plantsolve.solvers.tube.read_log import ReadLog
 
@@ -27,8 +28,21 @@ def read_stl(content: bytes, log: ReadLog) -> np.ndarray:
             return _binary(content, count, log)
     text = _ascii_text(content)
     if text is None and len(content) >= BINARY_HEADER:
+        _refuse_text(content)
         return _binary(content, count, log)
     return _ascii(text or "", log)
+
+
+def _refuse_text(content: bytes) -> None:
+    """A 422 for text that is no ASCII STL (a point list, a PCF renamed .stl): read as binary, its characters
+    would be a triangle count of hundreds of millions and triangles of garbage. A binary STL's floats hold
+    control bytes (a zero byte in nearly every coordinate); text holds none."""
+    body = content[BINARY_HEADER:BINARY_HEADER + 4096]
+    if any(b < 9 or 13 < b < 32 for b in body):
+        return
+    holds = file_holds(content[:65536])
+    raise reject(f"not an STL file: it is text{f' holding {holds}' if holds else ''}, and not an ASCII STL (which "
+                 "starts with 'solid' and holds 'facet' records)")
 
 
 def _ascii_text(content: bytes) -> str | None:
@@ -52,6 +66,11 @@ def _ascii_text(content: bytes) -> str | None:
 def _binary(content: bytes, count: int, log: ReadLog) -> np.ndarray:
     available = (len(content) - BINARY_HEADER) // BINARY_TRIANGLE
     n = min(count, available)
+    if available > count:  # the header's count is smaller than what the exporter wrote: part of the scan unread
+        log.warn(Diagnostic(code="records_beyond_header", message=(
+            f"STL file: after the {count} triangles its header declares it holds {available - count} more whole "
+            "ones, which were not read; is the header's triangle count wrong? Only the declared triangles were "
+            "used."), details={"declared": {"triangle": count}, "beyond": available - count}))
     if n < count:
         log.truncate(f"the file ends after {n} of {count} triangles", element="triangle", read=n, declared=count)
     with np.errstate(invalid="ignore"):  # a signalling NaN of a damaged file: sorted out on the next line

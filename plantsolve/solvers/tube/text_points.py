@@ -4,8 +4,10 @@ A line that cannot be read — cut short (fewer columns than the file's other ro
 infinite coordinate, stray bytes — is left out and logged with its line number; the file is refused only when no
 point is left. Text is read as exporters write it (UTF-8, UTF-16 with its mark, else Windows-1252). Non-numeric
 lines before the first point are a header; lines starting with # or % are comments (``//X,Y,Z``, CloudCompare's
-header, is one too). Numbers written with a decimal comma, as a European locale writes them (``251,5;-112,4;30,6`` or
-blank-separated), are read as such: split at the commas they would be six numbers a row, and a wrong point.
+header, is one too). Numbers written as a spreadsheet exports them — a decimal comma (``251,5;-112,4;30,6`` or
+blank-separated), digit grouping (``2.515,5``, ``2 515,5``, a quoted ``"2,515.5"``) — are read as such by the rule
+the nominal reader shares (:mod:`.number_cells`): split at the commas they would be six numbers a row, and a wrong
+point. A row written with the file's other decimal mark is left out and named.
 
 A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
 easting, northing, elevation) are
@@ -16,20 +18,29 @@ nominal without a header): a tube scan is three coordinates per sample."""
 
 from __future__ import annotations
 
+import csv
 import math
 import re
 from collections import Counter
 from dataclasses import dataclass
+from itertools import islice
 
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import InputRejected, decode_text, reject
+from plantsolve.solvers.tube.number_cells import (
+    GROUPED,
+    ROWS_LOOKED_AT,
+    cell_delimiter,
+    decimal_mark,
+    plain,
+    starts_number,
+)
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
-_SPLIT_NO_COMMA = re.compile(r"[;\s]+")
-_DECIMAL_COMMA_NUMBER = re.compile(r"^[+-]?(?:\d+,\d+|\d+)(?:[eE][+-]?\d+)?$")
+_NOT_PLAIN_COMMA = ('"', ".", "'", "\u00a0", "\u202f")  # a row of a decimal-comma file read cell by cell
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
@@ -70,7 +81,7 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
     A header is a column header when it names as many columns as the rows hold, each name starting with a
     letter; refused (a file of another kind) when such a header names no x, y, z, or names a nominal's CLR."""
     names = _header_names(header) if header else []
-    if len(names) != width or not all(n[:1].isalpha() for n in names):
+    if not names or len(names) != width or not all(n[:1].isalpha() for n in names):
         return Columns()
     commented = header.startswith(("//", "#"))  # a comment names columns only when it names x, y, z
     parsed = [_name_and_unit(n) for n in names]
@@ -125,26 +136,52 @@ def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
     return header, header_line, 0
 
 
-def _decimal_comma(lines: list[str]) -> bool:
-    """Whether the rows write their numbers with a decimal comma: split only at semicolons and blanks, the first
-    rows of numbers hold three or more numbers each, some with a comma and none with a point (a comma-separated
-    row of plain numbers is one field there: ``1,2,3``, ``1, 2, 3``)."""
-    rows, commas = 0, False
-    for line in lines:
+def _number_rows(lines: list[str]) -> list[str]:
+    """The first rows that start like numbers and write a decimal mark or a separator (rows of integers say
+    neither), else the first rows that start like numbers."""
+    def rows():
+        return (s for s in (line.strip() for line in lines) if starts_number(s))
+
+    marked = list(islice((r for r in rows() if "," in r or "." in r), ROWS_LOOKED_AT))
+    return marked or list(islice(rows(), ROWS_LOOKED_AT))
+
+
+def _cells(line: str, delimiter: str | None) -> list[str]:
+    if delimiter is None:
+        return line.split()
+    cells = next(csv.reader([line], delimiter=delimiter)) if '"' in line else line.split(delimiter)
+    return [c for c in (c.strip() for c in cells) if c]  # Excel's trailing empty columns
+
+
+def _plain_rows(lines: list[str]) -> tuple[list[str], dict[int, str]]:
+    """The lines with each row of numbers rewritten as plain numbers between blanks when the file writes them as
+    a spreadsheet does (a decimal comma, digit grouping, quoted cells: :mod:`.number_cells`), and the rows that
+    cannot be read so (a cell of the other decimal mark), by line number. Other files are returned as they are."""
+    sample = _number_rows(lines)
+    delimiter = cell_delimiter(sample)
+    rows = [_cells(r, delimiter) for r in sample]
+    mark = decimal_mark(rows, delimiter)
+    blank = delimiter is None
+    if mark == "." and not any('"' in r for r in sample) and \
+            not any(GROUPED[mark, blank].match(c) for row in rows for c in row):
+        return lines, {}
+    out, unreadable = [], {}
+    written = "commas" if mark == "," else "points"
+    not_plain = _NOT_PLAIN_COMMA + (() if blank else (" ",))  # a blank between cells or grouping digits
+    for lineno, line in enumerate(lines, 1):
         s = line.strip()
-        if not s or s[0] in "#/%":
+        if not starts_number(s):
+            out.append(line)
             continue
-        fields = [f for f in _SPLIT_NO_COMMA.split(s) if f]
-        if not all(f[:1].isdigit() or f[:1] in "+-" for f in fields):
-            if rows:
-                return False
-            continue  # a header line
-        if len(fields) < 3 or not all(_DECIMAL_COMMA_NUMBER.match(f) for f in fields):
-            return False
-        rows, commas = rows + 1, commas or "," in s
-        if rows == 20:
-            break
-    return commas
+        if mark == "," and not any(c in s for c in not_plain):  # most rows: only commas to replace
+            out.append(s.replace(",", "."))
+            continue
+        try:
+            out.append(" ".join(plain(c, mark, blank) for c in _cells(s, delimiter)))
+        except ValueError:
+            unreadable[lineno] = f"a number of the other decimal mark (the file writes decimal {written})"
+            out.append("")
+    return out, unreadable
 
 
 def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]:
@@ -153,10 +190,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
         text = decode_text(content, "point list")
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
-    lines = text.splitlines()
-    if _decimal_comma(lines):
-        lines = [line.replace(",", ".") if line.strip()[:1].isdigit() or line.strip()[:1] in "+-" else line
-                 for line in lines]
+    lines, unreadable = _plain_rows(text.splitlines())
     header, header_line, width = _first_row(lines)
     cols = _columns(header, width, header_line)
     need = max(cols.index) + 1
@@ -165,6 +199,9 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     decimals: list[int] = []  # of each row's last number
     bad: list[tuple[int, str]] = []
     for lineno, line in enumerate(lines, 1):
+        if lineno in unreadable:
+            bad.append((lineno, unreadable[lineno]))
+            continue
         s = line.strip()
         if not s or s[0] in "#/%":
             continue

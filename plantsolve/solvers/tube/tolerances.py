@@ -31,6 +31,7 @@ from plantsolve.solvers.tube.nominal_files import UNIT_MM
 
 
 PLAUSIBLE_ANGLE_DEG = 10.0  # benders hold angles and rotations to a degree or so
+MIN_ANGLE_DEG = 0.1  # … no finer: a tolerance below it is radians typed as degrees (0.5° = 0.0087 rad)
 PLAUSIBLE_LENGTH_RADII = 4.0  # … and lengths to a fraction of the tube's diameter
 PLAUSIBLE_LENGTH_OF_PART = 0.05
 
@@ -39,7 +40,8 @@ def implausible(tol: InspectionTolerances | None, pipe_radius: float, nominal: l
                 units: str) -> list[Diagnostic]:
     """Warnings on given tolerances so wide that the inspection cannot fail what they cover: a length beyond 4 tube
     radii and 5 % of the nominal part's length (a millimetre tolerance given in a metre request), an angle or
-    rotation beyond 10°. The inspection uses them as given."""
+    rotation beyond 10°; and so fine that noise decides: an angle or rotation under 0.1° (radians given as degrees).
+    The inspection uses them as given."""
     if tol is None:
         return []
     part = sum(r.length for r in nominal) + sum(r.bend_radius * np.radians(r.angle) for r in nominal[:-1])
@@ -59,6 +61,12 @@ def implausible(tol: InspectionTolerances | None, pipe_radius: float, nominal: l
                 f"inspection_tolerances.{name} {value:g}° is more than {PLAUSIBLE_ANGLE_DEG:g}°: every bend within "
                 f"it passes (benders hold {name}s to about a degree); a typing slip?"),
                 details={"field": name, "tolerance": value, "units": "deg", "plausible_up_to": PLAUSIBLE_ANGLE_DEG}))
+        elif name in INSPECTION_DEFAULTS_DEG and value < MIN_ANGLE_DEG:
+            out.append(Diagnostic(code="implausible_inspection_tolerance", message=(
+                f"inspection_tolerances.{name} {value:g}° is less than {MIN_ANGLE_DEG:g}°, finer than benders hold "
+                f"and scans measure {name}s: the verdict is decided by the scan's noise; meant in radians "
+                f"({value:g} rad = {np.degrees(value):.3g}°)?"),
+                details={"field": name, "tolerance": value, "units": "deg", "plausible_from": MIN_ANGLE_DEG}))
     return out
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import io
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -151,6 +152,10 @@ def _read_las(content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str |
         raise reject(f"unreadable LAS/LAZ file: {str(exc) or type(exc).__name__}") from None
     if las is None or len(las) == 0:
         raise reject("the LAS/LAZ file holds no whole point record" + log.summary())
+    scales = np.asarray(header.scales, dtype=np.float64)
+    if not (np.isfinite(scales) & (scales != 0)).all():  # x = X * scale + offset: every point at the offset, or NaN
+        raise reject(f"the LAS header's scale factors are {', '.join(f'{v:g}' for v in scales)} (x, y, z): "
+                     "a scale of 0 or a non-finite one makes every coordinate the offset or NaN; the header is damaged")
     try:
         unit = las_crs_unit(laspy.LasData(header, las))
     except (ValueError, IndexError) as exc:
@@ -253,6 +258,17 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
                            f"the header's columns {', '.join(columns.names or [])}")
 
 
+def _overridden(ext: str, stated: CrsUnit, file_units: str, metres: float) -> Diagnostic:
+    """A warning that ``options.file_units`` contradicts the unit the file states: one of them is a mistake, and
+    every length of the result is off by their ratio if it is the option."""
+    own = short_name(stated.name, stated.metres)
+    return Diagnostic(code="file_unit_overridden", message=(
+        f"options.file_units ({file_units}) overrides the unit the {ext[1:].upper()} file states ({own}: "
+        f"{stated.evidence}): its coordinates were read as {file_units}, {metres / stated.metres:g} times what the "
+        f"file says. Leave file_units out if the file's {own} is right."),
+        details={"file_units": file_units, "file_unit": own, "ratio": metres / stated.metres})
+
+
 def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
                 target: str) -> tuple[UnitConversion, np.ndarray, list[Diagnostic]]:
     """How the file's coordinates become the request's: the conversion for the report, the factor per axis and
@@ -263,6 +279,8 @@ def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
     if file_units is not None:
         name, metres, basis = file_units, TO_MM[file_units] / 1000.0, "options.file_units"
         evidence = f"overrides the file's own: {stated.evidence}" if isinstance(stated, CrsUnit) else ""
+        if isinstance(stated, CrsUnit) and not stated.geographic and not math.isclose(stated.metres, metres):
+            warnings.append(_overridden(ext, stated, file_units, metres))
     elif isinstance(stated, str):
         raise reject(f"{ext[1:].upper()} file: {stated}; set options.file_units to the unit of its coordinates")
     elif stated is not None and stated.geographic:

@@ -4,6 +4,7 @@ DXF centreline out: read back and compared with what was written."""
 from __future__ import annotations
 
 import io
+import struct
 import tempfile
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 import trimesh
 
 from plantsolve.schemas.tube import TubeRequest
-from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.tube.artifacts import render_artifacts
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.solve import solve
@@ -176,3 +177,12 @@ def test_random_bytes_named_stl_are_refused_as_no_stl(seed):
     noise = np.random.default_rng(seed).bytes(20_000)
     with pytest.raises(InputRejected, match="not a binary STL"):
         TubeScan(parse_upload(StoredInput.from_bytes("noise.stl", noise), None))
+
+
+@pytest.mark.parametrize("scale", [0.0, float("nan")])
+def test_a_las_header_with_a_scale_of_zero_or_nan_is_refused_naming_the_scale(scale):
+    data = bytearray(_las_bytes(cloud() / 1000.0))
+    struct.pack_into("<d", data, 131, scale)  # the x scale factor of the public header block
+    # before: "all points coincide" (scale 0) or "every point has a non-finite coordinate" (NaN): not why
+    with pytest.raises(InputRejected, match=r"the LAS header's scale factors are (0|nan), 1e-06, 1e-06 \(x, y, z\)"):
+        parse_upload(StoredInput.from_bytes("scan.las", bytes(data)), {"file_units": "m"})

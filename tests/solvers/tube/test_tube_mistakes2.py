@@ -236,3 +236,67 @@ def test_a_ratio_between_two_unit_ratios_names_one_mixup_the_nearest():
 def test_a_nominal_written_from_the_other_end_raises_no_mixup():
     from plantsolve.solvers.tube.inspection import reversed_rows
     assert _codes(reversed_rows(_rows())) == {}
+
+
+# --- a PLY header whose types or counts are not its body's --------------------------------------------------
+
+
+@pytest.mark.parametrize("values", [POINTS, np.round(POINTS, 1)], ids=["3 decimals", "rounded"])
+def test_a_ply_of_doubles_declared_float_is_refused_naming_the_header_line(values):
+    # before: read as floats, the rounded scan's halves of doubles passed as 2,883 coordinates and were solved
+    # (records_beyond_header only); the other was refused as "fewer than 100 distinct points"
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("scan.ply", _binary_ply("float", values.astype("<f8"))), {})
+    msg = refused.value.errors[0].msg
+    assert msg.startswith("PLY header line 4 ('property float x'): the body holds exactly the bytes of the declared "
+                          "records (4000 vertex) with 8-byte doubles")
+    got = _points("scan.ply", _binary_ply("double", values.astype("<f8")))
+    np.testing.assert_allclose(got, values)
+
+
+def test_a_ply_of_floats_with_as_many_bytes_again_is_still_read_with_a_warning():
+    twice = np.vstack([POINTS, POINTS[::-1]]).astype("<f4")  # 8,000 float vertices under a count of 4,000
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(POINTS)}\nproperty float x\n"
+            "property float y\nproperty float z\nend_header\n")
+    warning, points = _warning("scan.ply", head.encode() + twice.tobytes(), "records_beyond_header")
+    assert warning is not None and len(points) == len(POINTS)
+
+
+def test_a_negative_ply_record_count_is_refused_naming_the_header_line():
+    # before: numpy read a count of -5 as "all there are", and the whole body was solved
+    content = _binary_ply("float", POINTS.astype("<f4")).replace(b"element vertex 4000", b"element vertex -5")
+    with pytest.raises(InputRejected, match="PLY header line 3 not understood: 'element vertex -5'"):
+        parse_upload(StoredInput.from_bytes("scan.ply", content), {})
+
+
+# --- a binary STL whose triangle count is not its body's, text renamed .stl ------------------------------------
+
+
+def _binary_stl(corners: np.ndarray, declared: int) -> bytes:
+    records = np.zeros(len(corners), [("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+    records["corners"] = corners
+    return b"binary stl".ljust(80, b" ") + np.uint32(declared).tobytes() + records.tobytes()
+
+
+@pytest.mark.parametrize("name", ["scan.xyz", "ladder.pcf"])
+def test_text_renamed_stl_is_refused_not_read_as_triangles_of_its_characters(name):
+    content = (SCAN_XYZ if name == "scan.xyz" else REPO / "examples" / "alignment" / "ladder.pcf").read_bytes()
+    # before: its characters were a count of 808,464,685 triangles and 20,000 "points" up to 1e11 were read
+    with pytest.raises(InputRejected, match="not an STL file: it is text"):
+        parse_upload(StoredInput.from_bytes("scan.stl", content), {})
+
+
+def test_a_binary_stl_holding_more_triangles_than_its_header_declares_says_so():
+    corners = POINTS[: 3 * 1000].reshape(-1, 3, 3)
+    warning, _ = _warning("scan.stl", _binary_stl(corners, 600), "records_beyond_header")
+    # before: the last 400 triangles were dropped without a word
+    assert warning is not None and warning.details == {"declared": {"triangle": 600}, "beyond": 400}
+    assert _warning("scan.stl", _binary_stl(corners, 1000), "records_beyond_header")[0] is None
+
+
+def test_an_angle_tolerance_in_radians_is_named():
+    # before: 0.0087 (0.5° in radians) failed the example's bends on the scan's noise, with no word on the tolerance
+    (warning,) = implausible(InspectionTolerances(angle=0.0087), 6.0, _rows(), "mm")
+    assert warning.details == {"field": "angle", "tolerance": 0.0087, "units": "deg", "plausible_from": 0.1}
+    assert "meant in radians (0.0087 rad = 0.498°)?" in warning.message
+    assert implausible(InspectionTolerances(angle=0.5, rotation=0.1), 6.0, _rows(), "mm") == []

@@ -242,3 +242,21 @@ def test_a_fit_that_fails_on_a_scan_too_small_for_its_unit_names_the_likely_unit
         solve(TubeRequest(points=(cloud_mm() / M).tolist()))
     assert "likely in m" in e.value.message and "file_units" in e.value.message
     assert e.value.details["extent"] == pytest.approx(0.1032, rel=0.01)
+
+
+def _contradiction(name: str, data: bytes, file_units: str):
+    req = parse_upload(StoredInput.from_bytes(name, data), {"file_units": file_units})
+    return next((w for w in req.source.warnings if w.code == "file_unit_overridden"), None)
+
+
+def test_file_units_that_contradict_the_unit_the_file_states_are_a_warning_with_the_ratio():
+    pts = cloud_mm()
+    header_m = ("x [m],y [m],z [m]\n" + "\n".join(",".join(f"{v:.7f}" for v in p) for p in pts / M)).encode()
+    # before: the option won without a word, every length 1000 times the header's
+    warning = _contradiction("scan.csv", header_m, "mm")
+    assert warning is not None and warning.details == {"file_units": "mm", "file_unit": "m", "ratio": 0.001}
+    assert "options.file_units (mm) overrides the unit the CSV file states (m: the header's columns" in warning.message
+    warning = _contradiction("scan.las", las_bytes(pts / M, wkt=WKT1_FEET), "m")
+    assert warning is not None and warning.details["ratio"] == pytest.approx(1 / 0.3048)
+    assert _contradiction("scan.csv", header_m, "m") is None  # the option says what the file says
+    assert _contradiction("scan.xyz", "\n".join(" ".join(map(str, p)) for p in pts).encode(), "cm") is None
