@@ -40,6 +40,15 @@ HEADER_UNIT = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z°]+)\s*[\]
 MIN_ANGLE_DEG = 1e-6
 
 
+def _looks_numeric(cell: str) -> bool:
+    """A cell that holds a number in either decimal mark (whether or not this file's reading accepts it)."""
+    try:
+        float(cell.strip().strip('"').replace(",", ".").replace(" ", ""))
+    except ValueError:
+        return False
+    return True
+
+
 class NominalError(ValueError):
     """A nominal that cannot be used: ``where`` is a line number (CSV) or a point index (XYZ-CLR)."""
 
@@ -244,6 +253,15 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     if not values:
         raise NominalError(None, None, "no row of the nominal CSV could be read" +
                            (f" ({warnings[0].message})" if warnings else ""))
+    # a row of numbers is a point or a bend of the part: leaving one out describes another part (a bend fewer, no
+    # end straight), which the inspection would then judge the scan against; lines of text (a units row, a
+    # signature) are only skipped
+    for warning in warnings:
+        line, text = warning.details["line"], warning.details["text"]
+        if warning.code == "nominal_line_skipped" and sum(_looks_numeric(c) for c in _split(text, delim)) >= 2:
+            reason = warning.message.split("skipped: ", 1)[-1]
+            raise NominalError(line, None, f"nominal CSV line {line} cannot be read ({reason}): a row of numbers "
+                               "left out would describe another part; correct or delete it")
     if kind == "xyz_clr":
         pts = np.array([[v["x"], v["y_xyz"], v["z"]] for v in values])
         clr = np.array([v.get("clr") or 0.0 for v in values[1:-1]])

@@ -91,11 +91,20 @@ def test_csv_forms_give_the_same_nominal(text):
                                [[80, 0, 90, 20], [60, 90, 90, 20], [80, 0, 0, 0]], atol=1e-6)
 
 
-def test_unreadable_lines_are_skipped_with_a_warning_naming_them():
-    got = read_nominal_csv("L,R,A,CLR\n80,0,90,20\n60,ninety,90,20\n60,90,90,20\n80,0,0,0\n")
+def test_an_unreadable_row_of_numbers_is_refused_naming_its_line():
+    # skipped, the table would be a part with a bend fewer, which the inspection judges the scan against
+    with pytest.raises(NominalError, match="line 3 cannot be read .*another part") as error:
+        read_nominal_csv("L,R,A,CLR\n80,0,90,20\n60,ninety,90,20\n60,90,90,20\n80,0,0,0\n")
+    assert error.value.where == 3
+    with pytest.raises(NominalError, match="line 5 cannot be read"):  # the end straight, cut
+        read_nominal_csv("L,R,A,CLR\n80,0,90,20\n60,90,90,20\n80,0,0,0\n8O,0,0,0\n")
+
+
+def test_unreadable_lines_before_or_after_the_rows_are_skipped_with_a_warning_naming_them():
+    got = read_nominal_csv("L,R,A,CLR\nmm,deg,deg,mm\n80,0,90,20\n60,90,90,20\n80,0,0,0\nchecked: J. Doe,,,\n")
     assert len(got.rows) == 3
-    assert [w.details["line"] for w in got.warnings] == [3]
-    assert "line 3" in got.warnings[0].message
+    assert [w.details["line"] for w in got.warnings] == [2, 6]
+    assert "line 2" in got.warnings[0].message and "line 6" in got.warnings[1].message
 
 
 def test_first_rotation_is_read_as_zero_with_a_warning():

@@ -82,10 +82,9 @@ def test_a_row_of_the_other_decimal_mark_is_named_not_read_as_another_number():
     assert len(request.points) == len(POINTS) - 1
     assert request.source.skipped_lines == [31]
     assert "a number of the other decimal mark (the file writes decimal commas)" in request.source.warnings[0].message
-    nominal = read_nominal_csv("length;rotation;angle;clr\n80,5;0;90;18\n8.000;45;45,5;18\n30;0;0;0\n")
-    (warning,) = nominal.warnings
-    assert warning.code == "nominal_line_skipped" and warning.details["line"] == 3
-    assert "'8.000' writes a decimal point in a file written with decimal commas" in warning.message
+    with pytest.raises(NominalError, match="line 3 cannot be read .'8.000' writes a decimal point in a file "
+                                           "written with decimal commas"):
+        read_nominal_csv("length;rotation;angle;clr\n80,5;0;90;18\n8.000;45;45,5;18\n30;0;0;0\n")
     with pytest.raises(NominalError, match="'8.000' writes a decimal point"):
         read_nominal_csv("length;rotation;angle;clr\n8.000;0;90,5;18,5\n")
 
