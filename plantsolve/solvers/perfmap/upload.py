@@ -69,8 +69,14 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, deco
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
-from plantsolve.solvers.perfmap.units import UnitError, check_quantity, fraction_factor, parse_unit
-from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc
+from plantsolve.solvers.perfmap.units import (
+    UnitError,
+    check_quantity,
+    fraction_factor,
+    parse_unit,
+    revolutions_per_minute,
+)
+from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc, mixed_efficiency_strays
 from plantsolve.solvers.perfmap.workbook import read_workbook
 from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
 
@@ -493,9 +499,12 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         if not unit and j < len(header_units):
             unit, basis_of[field] = header_units[j], "units_row"
         elif unit and j < len(header_units) and header_units[j] and not _same_unit(unit, header_units[j]):
-            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}) states {unit!r} but the row of units under "
-                         f"the header ({what} {units_line}) says {header_units[j]!r} for it: which is meant? Give "
-                         "the unit once", ("file", "header"))
+            if _is_unit(unit) or not _is_unit(header_units[j]):
+                raise reject(f"column {name.strip()!r} ({what} {numbers[0]}) states {unit!r} but the row of units "
+                             f"under the header ({what} {units_line}) says {header_units[j]!r} for it: which is "
+                             "meant? Give the unit once", ("file", "header"))
+            # a header's parenthesis that is no unit ('efficiency (isentropic)') over a units row stating one
+            unit, basis_of[field] = header_units[j], "units_row"
         unit_of[field] = unit
         scale[field] = 1.0
         if field in MEASURED:
@@ -744,26 +753,43 @@ def _refuse_mixed_efficiency(groups: dict, lines_of: dict, name: str, unit: str,
     makes the others 100 times off (0.85 read as 0.85 % beside 85 %), so the rows of the fewer kind are refused,
     named, whichever way the column is read."""
     cells = [(line, v) for key, g in groups.items() for line, v in zip(lines_of[key], g["efficiency"])]
-    fractions = [(line, v) for line, v in cells if abs(v) <= FRACTIONS]
-    if not fractions or len(fractions) == len(cells):
+    column = np.array([v for _, v in cells], dtype=float)
+    found = mixed_efficiency_strays(column, 1 / fraction_factor(unit))
+    if found is None:
         return
-    others = [(line, v) for line, v in cells if abs(v) > FRACTIONS]
-    odd, usual = (fractions, others) if len(fractions) <= len(others) else (others, fractions)
-    values = np.array([v for _, v in usual])
-    kind = "a fraction" if odd is fractions else "a per-cent value"
+    strays, odd_fractions = found
+    values = column[(np.abs(column) <= FRACTIONS) != odd_fractions]
+    odd = [cell for cell, stray in zip(cells, strays) if stray]
+    kind = "a fraction" if odd_fractions else "a per-cent value"
     raise InputRejected([FieldError(("file", "row", line, "efficiency"), (
         f"{what} {line}: efficiency {v:g} in column {name!r} ({unit}), whose other values lie in {values.min():.4g}.."
-        f"{values.max():.4g}: {kind} among {'per cent' if odd is fractions else 'fractions'}? One reading would "
+        f"{values.max():.4g}: {kind} among {'per cent' if odd_fractions else 'fractions'}? One reading would "
         "make these rows or the others 100 times off: write the column in one unit")) for line, v in odd[:10]])
 
 
 def _same_unit(a: str, b: str) -> bool:
-    """Two spellings of one unit (``kg/s`` and ``kg s^-1``; ``-`` and ``1``); as text when pint reads neither."""
+    """Two spellings of one unit (``kg/s`` and ``kg s^-1``; ``lbm/s`` and ``lb/s``; ``Hz`` and ``1/s``; ``1/min`` and
+    ``rpm``; ``-`` and ``1``), by value; as text when pint reads neither."""
     try:
         first, second = parse_unit(a), parse_unit(b)
     except UnitError:
         return a.strip().strip("[]()").strip().lower() == b.strip().strip("[]()").strip().lower()
-    return first.unit == second.unit
+    if first.unit == second.unit:
+        return True
+    if first.unit.dimensionality != second.unit.dimensionality:
+        return False
+    rpm = revolutions_per_minute(first.unit), revolutions_per_minute(second.unit)
+    if rpm[0] is not None:  # shaft speeds: a bare frequency counts revolutions, as the speed check reads it
+        return math.isclose(rpm[0], rpm[1], rel_tol=1e-9)
+    return math.isclose(first.factor_to(second), 1.0, rel_tol=1e-9)
+
+
+def _is_unit(text: str) -> bool:
+    try:
+        parse_unit(text)
+    except UnitError:
+        return False
+    return True
 
 
 def _is_percent(unit: str | None) -> bool:

@@ -116,19 +116,37 @@ def _efficiency_unit_against_values(request: PerfmapRequest) -> tuple[PerfmapReq
     return request.model_copy(update={"units": request.units.model_copy(update={"efficiency": "1"})}), [note]
 
 
-def _refuse_mixed(request: PerfmapRequest, unit: str, values: np.ndarray) -> None:
-    """Efficiencies in per cent with some typed as fractions (or the other way round): the fewer kind is refused,
-    named, since one reading makes them or the others 100 times off."""
+def mixed_efficiency_strays(values: np.ndarray, factor: float = 100.0) -> tuple[np.ndarray, bool] | None:
+    """Of an efficiency column stated in per cent (``factor`` 100) or per mille (1000), the cells typed in the other
+    reading — fractions (at most 1.5) among per cent, or per cent among fractions — and whether they are the
+    fractions; None when there are none. The fewer kind is odd only where rescaled it lands among the others
+    (within their range widened by 20 %): a real 1.2 % near choke beside 30–94 % is no fraction, nor is 0."""
     fractions = np.abs(values) <= FRACTIONS
-    if not fractions.any():
-        return
-    odd = fractions if fractions.sum() <= (~fractions).sum() else ~fractions
+    if not fractions.any() or fractions.all():
+        return None
+    odd_fractions = fractions.sum() <= (~fractions).sum()
+    odd = fractions if odd_fractions else ~fractions
     usual = values[~odd]
-    kind = "a fraction among per cent" if odd is fractions else "a per-cent value among fractions"
+    rescaled = values * factor if odd_fractions else values / factor
+    lo, hi = 0.8 * usual.min(), 1.2 * usual.max()
+    strays = odd & (values > 0) & (rescaled >= lo) & (rescaled <= hi)
+    return (strays, odd_fractions) if strays.any() else None
+
+
+def _refuse_mixed(request: PerfmapRequest, unit: str, values: np.ndarray) -> None:
+    """Efficiencies in per cent with some typed as fractions (or the other way round): the strays are refused,
+    named, since one reading makes them or the others 100 times off."""
+    found = mixed_efficiency_strays(values, 1 / fraction_factor(unit))
+    if found is None:
+        return
+    strays, odd_fractions = found
+    usual = values[(np.abs(values) <= FRACTIONS) != odd_fractions]
+    kind = "a fraction among per cent" if odd_fractions else "a per-cent value among fractions"
     errors = []
+    flat = iter(strays)
     for i, p in enumerate(request.positions):
         for k, v in enumerate(p.efficiency):
-            if (abs(v) <= FRACTIONS) == (odd is fractions) and len(errors) < 10:
+            if next(flat) and len(errors) < 10:
                 errors.append(FieldError(("positions", i, "efficiency", k), (
                     f"efficiency {v:g} where units.efficiency is {unit!r} and the other values lie in "
                     f"{usual.min():.4g}..{usual.max():.4g}: {kind}? Write them in one unit")))

@@ -54,10 +54,29 @@ def test_a_units_row_contradicting_the_header_is_refused_naming_both():
     assert error.loc == ("file", "header") and "'kg/s'" in error.msg and "'lb/s'" in error.msg and "line 2" in error.msg
 
 
-@pytest.mark.parametrize("units_row", ["rpm,kg/s,-,%", "[rpm],[kg s^-1],[1],[%]", ",,,"])
+@pytest.mark.parametrize("units_row", ["rpm,kg/s,-,%", "[rpm],[kg s^-1],[1],[%]", ",,,", "1/min,kg/s,-,%"])
 def test_a_units_row_agreeing_with_the_header_or_empty_is_read(units_row):
-    loaded = _load(_rig(units_row=units_row)) if units_row != ",,," else _load(_rig())
+    loaded = _load(_rig(units_row=units_row))
     assert loaded.units.flow == "kg/s" and len(loaded.settings) == 9
+
+
+@pytest.mark.parametrize("header, units_row", [
+    ("speed [Hz],flow [lbm/s],PR [-],efficiency [%]", "1/s,lb/s,-,%"),  # refused as contradicting before
+    ("speed [rpm],flow [kg/s],PR [-],efficiency (isentropic)", "rpm,kg/s,-,%"),  # refused: 'isentropic' no unit
+])
+def test_one_unit_spelt_two_ways_or_a_header_parenthesis_that_is_no_unit_is_read(header, units_row):
+    loaded = _load(_rig(header=header, units_row=units_row))
+    assert len(loaded.settings) == 9 and max(e for p in loaded.internal.positions for e in p.efficiency) < 1
+
+
+def test_a_real_low_efficiency_in_a_percent_column_is_no_stray_fraction():
+    # 1.2 % near choke beside 30-94 %: read as 0.012, not refused as 'a fraction among per cent' (100 x 1.2 = 120
+    # lies outside the others' range); an efficiency of 0 is refused as such, not as a fraction
+    loaded = _load(_rig(lambda r: "1.20" if r is ODD else f"{r[4] * 100:.2f}"))
+    assert min(e for p in loaded.internal.positions for e in p.efficiency) == pytest.approx(0.012)
+    with pytest.raises(InputRejected) as refused:
+        _load(_rig(lambda r: "0.00" if r is ODD else f"{r[4] * 100:.2f}"))
+    assert all("fraction" not in e.msg for e in refused.value.errors)
 
 
 def test_a_json_request_in_per_cent_with_one_fraction_is_refused_naming_the_value():
