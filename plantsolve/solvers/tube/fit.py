@@ -158,13 +158,17 @@ def rotvec_matrices(V: np.ndarray) -> np.ndarray:
     return M.reshape(-1, 3, 3)
 
 
-def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
+def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
+                   plan: JacobianBatch | None = None) -> np.ndarray:
     """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
     The same forward kinematics as model.build_spine, vectorised over the batch (the
     finite-difference Jacobian evaluates 2P models at once) and over the bends: each bend is a rigid
     step whose 4 × 4 matrix follows from its parameters elementwise, so the only loop over the bends is
-    one matrix product per bend."""
+    one matrix product per bend. With ``plan`` (X is ``plan``'s batch about its row 0) a row's start frame and
+    its products of the steps before the first bend its parameter moves are row 0's, taken as such: every row
+    computed on its own is what it computes in the whole batch (elementwise operations and a matrix product
+    per row), so these are the very numbers its own products give."""
     B = len(X)
     n = lay.n
     i = 6
@@ -181,7 +185,13 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
         rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
-    frames = rotvec_matrices(X[:, 3:6]) @ frame0
+    if plan is None:
+        frames = rotvec_matrices(X[:, 3:6]) @ frame0
+    else:  # the rows after the first ``turned`` + 1 have row 0's rotation vector: its frame
+        own = rotvec_matrices(X[:plan.turned + 1, 3:6]) @ frame0
+        frames = np.empty((B, 3, 3))
+        frames[:plan.turned + 1] = own
+        frames[plan.turned + 1:] = own[0]
     g = np.zeros((B, 2 * n + 1, 7))
     p0, t0 = X[:, :3], frames[:, :, 0]
     g[:, 0, :3] = p0
@@ -210,7 +220,10 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) ->
     T[:, 0, :3, 3] = p0
     T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
     for k in range(n):
-        T[:, k + 1] = T[:, k] @ M[:, k]
+        live = B if plan is None else plan.active[k]
+        T[:live, k + 1] = T[:live, k] @ M[:live, k]
+        if live < B:  # rows whose frames and steps up to bend k are row 0's
+            T[live:, k + 1] = T[0, k + 1]
     F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
     nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
     bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
@@ -233,16 +246,60 @@ def _steps(P: int, lay: Layout, scale: float) -> np.ndarray:
     return steps
 
 
-def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float, shift: np.ndarray,
-                          span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class JacobianBatch:
+    """The central-difference batch of a round (:func:`jacobian_batch`): row 0 the point, then each parameter's
+    + and − step (rows ``plus`` and ``minus``), ordered by the first bend the parameter moves (the start point and
+    frame move them all; the rotation vector's rows first); ``span`` = 2 × steps as (P, 1, 1)."""
+
+    shift: np.ndarray  # (P, P): the steps of the + and − rows 1 + 2m and 2 + 2m in row m (a permuted diagonal)
+    plus: np.ndarray
+    minus: np.ndarray
+    span: np.ndarray
+    turned: int  # rows 1 … turned change the rotation vector
+    active: tuple[int, ...]  # per bend k: the rows [:active[k]] whose frames or steps up to bend k are their own
+
+
+def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
+    """The batch of :func:`geometry_and_jacobian` for the steps of a round (:func:`_steps`)."""
+    P, n = len(steps), lay.n
+    first = np.full(P, n)  # the first bend whose 4 × 4 step a parameter changes (n: none, the pipe radius)
+    first[:6] = 0  # start point and frame: before the first bend
+    i = 6
+    first[i:i + max(n - 1, 0)] = np.arange(n - 1)  # the straight after bend k is in bend k's step
+    i += max(n - 1, 0)
+    first[i:i + max(n - 1, 0)] = np.arange(1, n)  # the rotation before bend k + 1
+    i += max(n - 1, 0)
+    first[i:i + n] = np.arange(n)
+    i += n
+    if lay.radius_mode == "free":
+        first[i:i + n] = np.arange(n)
+    elif lay.radius_mode == "common" and n:
+        first[i] = 0
+    elif lay.radius_mode == "dies" and n:
+        dies = np.asarray(lay.dies)
+        first[i:i + lay.n_radii] = [int(np.flatnonzero(dies == d)[0]) for d in range(lay.n_radii)]
+    order = sorted(range(P), key=lambda p: (first[p], not 3 <= p < 6))
+    pos = np.empty(P, int)
+    pos[order] = np.arange(P)
+    shift = np.zeros((P, P))
+    shift[pos, np.arange(P)] = steps
+    first_sorted = first[order]
+    active = tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
+    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
+
+
+def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
+                          plan: JacobianBatch) -> tuple[np.ndarray, np.ndarray]:
     """The geometry at x (S, 7) and its derivative by central differences (S, 7, P), from one batch: the
-    batch costs little more than one model (the forward kinematics is a loop over the bends). ``shift`` is
-    ``np.diag(steps)`` and ``span`` ``2 * steps`` as (P, 1, 1), of the :func:`_steps` of the round (the same for
-    all its calls)."""
-    P = len(x)
-    X = np.concatenate([x[None], x + shift, x - shift])
-    G = geometry_batch(X, lay, frame0, rp)
-    return G[0], ((G[1:P + 1] - G[P + 1:]) / span).transpose(1, 2, 0)
+    batch costs little more than one model (the forward kinematics is a loop over the bends). ``plan``: the
+    round's :func:`jacobian_batch` (the same for all its calls)."""
+    X = np.empty((2 * len(x) + 1, len(x)))
+    X[0] = x
+    np.add(x, plan.shift, out=X[1::2])  # (x ± a row of zeros but one: the rows x + diag(steps) and x - diag(steps))
+    np.subtract(x, plan.shift, out=X[2::2])
+    G = geometry_batch(X, lay, frame0, rp, plan)
+    return G[0], ((G[plan.plus] - G[plan.minus]) / plan.span).transpose(1, 2, 0)
 
 
 def _geometry_jacobian(x, lay, frame0, rp, scale):
@@ -690,13 +747,12 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     fused = f_scale is not None and not keep_terms
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
-    steps = _steps(len(x0), lay, scale)
-    shift, span = np.diag(steps), 2 * steps[:, None, None]
+    plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
 
     def geometry(x):
         key = x.tobytes()
         if latest.get("x") != key:
-            g, dG = geometry_and_jacobian(x, lay, frame0, rp, shift, span)
+            g, dG = geometry_and_jacobian(x, lay, frame0, rp, plan)
             latest.clear()
             latest.update(x=key, g=g, dG=dG)
         return latest["g"], latest["dG"]
