@@ -35,6 +35,7 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 from __future__ import annotations
 
 import functools
+import itertools
 
 import numpy as np
 
@@ -362,11 +363,12 @@ def parse_ldraw(text: str) -> dict:
                 skipped.append({"line": number, "reason": f"more than {MAX_PARTS} parts"})
                 continue
             if np.linalg.det(world_rot) < 0 and lookup(file_name) is not None:  # unknown parts: not analysed
-                plane = symmetry_plane(file_name)
-                if plane is None:
+                planes = symmetry_planes(file_name)
+                if not planes:
                     mirrored.append((ident, number, normalise_number(file_name)))
                 else:  # the part's mirror image is itself turned: the same connections and boxes, as a rotation
-                    world_rot = world_rot @ plane
+                    # (any of its symmetries gives the same shape; the one that turns it least is kept)
+                    world_rot = world_rot @ max(planes, key=lambda plane: np.trace(world_rot @ plane))
                     counts["mirrors_of_symmetric_parts"] += 1
             if role == "part":
                 embedded.add(sub)
@@ -437,29 +439,40 @@ def parse_ldraw(text: str) -> dict:
                                        "warnings": warnings}}
 
 
-MIRRORS = tuple(np.diag(d) for d in ((-1.0, 1.0, 1.0), (1.0, -1.0, 1.0), (1.0, 1.0, -1.0)))
+# The 24 improper signed permutations of the frame's axes: the mirrors about its x, y and z planes, about its
+# diagonal planes (a corner plate 2420 or brick 2357 is symmetric about x = z), and those times a rotation.
+MIRRORS = tuple(m for perm in itertools.permutations(range(3)) for signs in itertools.product((1.0, -1.0), repeat=3)
+                if np.linalg.det(m := np.diag(signs)[list(perm)]) < 0)
+# Points whose bore or grip is centred on them, so that their direction's sign says nothing (a through hole).
+CENTRED = frozenset({"pinhole", "axlehole", "barhole", "clip", "hole"})
 
 
 @functools.lru_cache(maxsize=1024)
-def symmetry_plane(file_name: str) -> np.ndarray | None:
-    """The mirror of the part's frame (x, y or z flipped) that maps its catalogue shape — every connection point
-    with its direction, type and profile, its bounding box and solids — onto itself; None when there is none (a
-    handed part, or symmetric only about another plane) or the part is not in the catalogue. Placed mirrored, such
-    a part is the same as placed by the matrix times this mirror, a rotation."""
+def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
+    """The mirrors of the part's frame (improper signed permutations of its axes, :data:`MIRRORS`) that map its
+    catalogue shape — every connection point with its direction (a through hole's either way), type and profile,
+    its bounding box and solids — onto itself; none for a handed part or one not in the catalogue. Placed
+    mirrored, such a part is the same as placed by the matrix times one of these mirrors, a rotation."""
     shape = lookup(file_name)
     if shape is None:
-        return None
+        return ()
+
+    def direction(frame: np.ndarray, c) -> list:
+        d = np.round(frame @ c.direction, 6)
+        if c.type in CENTRED and c.length <= 0 and d[np.flatnonzero(d)[:1]].sum() < 0:
+            d = -d
+        return (d + 0.0).tolist()
 
     def drawn(frame: np.ndarray) -> tuple[list, list]:
         """The connections and boxes of the shape in ``frame``, rounded, in a canonical order."""
-        connections = sorted((*np.round(frame @ c.point, 6).tolist(), *np.round(frame @ c.direction, 6).tolist(),
+        connections = sorted((*np.round(frame @ c.point, 6).tolist(), *direction(frame, c),
                               c.type, c.length, c.profile, c.depth) for c in shape.connectors)
         boxes = sorted((*np.round(frame @ centre, 6).tolist(), *size)
                        for centre, size in ((shape.box_center, shape.box_size), *shape.solids))
         return connections, boxes
 
     own = drawn(np.eye(3))
-    return next((mirror for mirror in MIRRORS if drawn(mirror) == own), None)
+    return tuple(mirror for mirror in MIRRORS if drawn(mirror) == own)
 
 
 def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:

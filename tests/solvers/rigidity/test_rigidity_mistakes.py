@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pydantic import ValidationError
 
@@ -240,6 +241,22 @@ def test_a_symmetric_part_placed_mirrored_is_read_as_the_rotation_it_equals():
     assert request.parts[2].rotation == [1, 0, 0, 0, 1, 0, 0, 0, 1]
     a, b = solve(request).result, solve(parse("stack.ldr", STACK)).result
     assert (a.dof, a.rigid, len(a.joints)) == (b.dof, b.rigid, len(b.joints))
+
+
+@pytest.mark.parametrize("number", ["2420", "2357", "4733"])
+def test_a_part_symmetric_about_a_diagonal_plane_placed_mirrored_is_no_mirrored_part(number):
+    """A corner plate, a corner brick, a brick with studs on its sides: each is its own mirror image about a
+    diagonal plane of its frame (x = z or x = -z; 4733's side holes point either way), so placed mirrored it is
+    one of its rotations, with the same joints (before: warned as a handed part)."""
+    base = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3022.dat\n"
+    drawn = f"1 4 0 -8 0 1 0 0 0 1 0 0 0 1 {number}.dat\n"
+    mirrored = f"1 4 0 -8 0 -1 0 0 0 1 0 0 0 1 {number}.dat\n"
+    request = parse("corner.ldr", base + mirrored)
+    assert request.source["mirrors_of_symmetric_parts"] == 1
+    assert not [w for w in request.source["warnings"] if w["code"] == "mirrored_parts"]
+    assert np.isclose(np.linalg.det(np.reshape(request.parts[1].rotation, (3, 3))), 1.0)
+    a, b = solve(request).result, solve(parse("corner.ldr", base + drawn)).result
+    assert (a.dof, len(a.joints)) == (b.dof, len(b.joints))
 
 
 # ---------------------------------------------------------------- lines after 0 NOFILE
