@@ -21,7 +21,7 @@ def _whole(value: str, what: str, line: int | None) -> int:
         number = float(text)
     except ValueError:
         number = float("nan")
-    if not number >= 1 or number != int(number) or number > 1e6:
+    if not 1 <= number <= 1e6 or number != int(number):  # NaN and infinity fail the range (int() of them raises)
         where = ("file", "line", line) if line else ("file",)
         raise reject(f"{what}{f' (line {line})' if line else ''} is {value!r}: EnergyPlus takes a whole number from "
                      "1 (how many identical zones this one stands for)", where)

@@ -3,6 +3,8 @@ is counted that many times in the totals, as EnergyPlus counts floor area; befor
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 from pathlib import Path
 
@@ -56,7 +58,7 @@ def test_a_zone_group_multiplies_the_zones_of_its_list_and_the_epjson_twin_agree
     assert (twin.total_volume, twin.total_floor_area) == (480.0, 160.0)
 
 
-@pytest.mark.parametrize("value", ["2.5", "0", "-1", "three"])
+@pytest.mark.parametrize("value", ["2.5", "0", "-1", "three", "inf", "1e400", "nan"])  # inf, 1e400: a 500 before
 def test_a_multiplier_energyplus_refuses_is_refused_naming_its_line(value):
     with pytest.raises(InputRejected) as refused:
         _solved("offices.idf", _with_multiplier(value))
@@ -74,3 +76,17 @@ def test_a_zone_group_of_a_missing_list_and_a_multiplier_for_no_zone_are_refused
     with pytest.raises(InputRejected) as refused:
         _solved("body.json", json.dumps(body))
     assert refused.value.errors[0].loc == ("zone_multipliers", "Ofice A")
+
+
+def test_zones_csv_states_each_zones_multiplier_so_that_its_rows_sum_to_the_totals():
+    from plantsolve.solvers.polyhedra.artifacts import render_artifacts
+    text = _with_multiplier("3")
+    request = parse_upload(StoredInput.from_bytes("offices.idf", text.encode()), None)
+    check_input(request)
+    solved = solve(request)
+    (table,) = [a for a in render_artifacts(request, solved) if a.name == "zones.csv"]
+    rows = list(csv.DictReader(io.StringIO(table.data.decode())))
+    zones = [r for r in rows if r["record"] == "zone"]
+    assert {r["id"]: r["multiplier"] for r in zones} == {"Office A Thermal Zone": "3", "Office B Thermal Zone": "1"}
+    assert sum(float(r["volume [m3]"]) * int(r["multiplier"]) for r in zones) == solved.result.total_volume == 240.0
+    assert sum(float(r["floor_area [m2]"]) * int(r["multiplier"]) for r in zones) == solved.result.total_floor_area
