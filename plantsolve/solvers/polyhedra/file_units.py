@@ -30,6 +30,11 @@ def stated(file_unit: str, metres: float, basis: str, evidence: str, **names: An
     return {"file_unit": file_unit, "file_unit_m": metres, "basis": basis, "evidence": evidence, **names}
 
 
+# The basis of a unit a file's format implies where the file assigns none (an IFC project without a length unit:
+# metres): an option naming another unit states what the file left open, it contradicts nothing.
+NONE_ASSIGNED = "none assigned"
+
+
 def symbol(metres: float) -> str:
     """The request unit of that size ('mm', 'ft', …), else the size in metres ('0.9144 m')."""
     for name, size in METRES.items():
@@ -71,7 +76,7 @@ def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | 
     out = {**body, "units": target, "source": source}
     if scale != 1.0:
         _scale(out, scale)
-    if file_units is not None and in_metres and said["file_unit"] != file_units:
+    if file_units is not None and in_metres and said["file_unit"] != file_units and said["basis"] != NONE_ASSIGNED:
         # the file states its unit: an option saying another is a contradiction, followed but never silent (with
         # the request in the option's unit nothing is converted, so units_converted would not say it)
         source["warnings"] = [*(source.get("warnings") or []), Diagnostic(code="file_unit_overridden", message=(

@@ -23,7 +23,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject, utf16_without_mark
-from plantsolve.solvers.polyhedra.file_units import stated, symbol
+from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
@@ -143,7 +143,8 @@ def parse_ifc(content: bytes) -> dict:
                      for s in spaces if s.id() in shaped}
     return {"units": "m", "vertices": np.concatenate(vertices).tolist(), "faces": faces,
             "source": {"format": "ifc", "schema": model.schema,
-                       "units": stated(symbol(length_scale), length_scale, "IfcUnitAssignment",
+                       "units": stated(symbol(length_scale), length_scale,
+                                       "IfcUnitAssignment" if length is not None else NONE_ASSIGNED,
                                        f"the IFC project's length unit, {length_name}"), "faces": len(faces), "zones": len(shaped),
                        "spaces": spaces_listed, "declared": declared, "declared_quantities": quantities_used,
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}

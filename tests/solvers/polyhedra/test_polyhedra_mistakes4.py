@@ -39,3 +39,14 @@ def test_file_units_on_an_idf_is_warned_energyplus_lengths_being_metres():
 def test_file_units_agreeing_with_the_file_says_nothing_more():
     result = _result("revit_room_feet.xml", {"file_units": "ft"})
     assert not [w for w in result.report.warnings if w.code == "file_unit_overridden"]
+
+
+def test_file_units_on_an_ifc_that_assigns_no_length_unit_state_what_it_left_open():
+    """IFC reads a project without a length unit in metres; an option naming the unit contradicts nothing there
+    (before: warned that the file 'states m')."""
+    text = (DATA / "ifcopenshell_spaces.ifc").read_text().replace("IFCUNITASSIGNMENT((#2,#3,#4))",
+                                                                   "IFCUNITASSIGNMENT((#3,#4))")
+    stated = _result("ifcopenshell_spaces.ifc")
+    left_open = solve(parse_upload(StoredInput.from_bytes("spaces.ifc", text.encode()), {"file_units": "mm"})).result
+    assert left_open.total_volume == pytest.approx(stated.total_volume, rel=1e-12)
+    assert not [w for w in left_open.report.warnings if w.code == "file_unit_overridden"]
