@@ -112,6 +112,16 @@ def _geometry(model: ifcopenshell.file, streamed: skeleton.Skeleton | None, prod
     return reader, points, triangles
 
 
+def _why_unverified(errors: list[str], differences: list[str], max_dev: float | None, tol: float) -> str:
+    """What the verification found, in words: the first validation errors, the entities whose counts changed, or
+    the largest deviation of a product from its input geometry."""
+    if errors:
+        return f"{len(errors)} validation error(s) the input did not have, first {errors[0]}"
+    if differences:
+        return f"the semantic entities changed ({'; '.join(differences[:3])})"
+    return f"a product moved {max_dev:g} from its input geometry, beyond the tolerance {tol:g}"
+
+
 def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
     """The deduplicated model's result and, when it passed its proof, the optimized file itself."""
     opts = source.options
@@ -291,11 +301,22 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         warnings.append(Diagnostic(code="verification_failed", message="The optimized file failed verification; "
                                    "it is not offered as an artifact", details={"max_deviation": max_dev,
                                                                                   "semantic_differences": differences}))
-    report = Report(status="ok" if not warnings else "warning",
-                    message=(f"{len(out_classes)} classes, {shared} of {products_total} products share geometry; "
-                             f"{len(optimized)} of {original_bytes} bytes ({mode})"),
-                    warnings=warnings,
-                    details={"source": {"format": "ifc", "schema": schema, "units": source_units}, "cpu_seconds": cpu, "written": written, "transforms_pooled": pooled, "postpass_removed": removed, "unprocessed": len(skipped)})
+    summary = (f"{len(out_classes)} classes, {shared} of {products_total} products share geometry; "
+               f"{len(optimized)} of {original_bytes} bytes ({mode})")
+    details = {"source": {"format": "ifc", "schema": schema, "units": source_units}, "cpu_seconds": cpu,
+               "written": written, "transforms_pooled": pooled, "postpass_removed": removed,
+               "unprocessed": len(skipped)}
+    if ok:
+        report = Report(status="ok" if not warnings else "warning", message=summary, warnings=warnings,
+                        details=details)
+    else:
+        # the job's deliverable is the optimized file: one that failed its proof is withheld, and a run with
+        # nothing to deliver has failed, whatever it learnt (the verification's findings are in its details)
+        report = Report(status="failed", stage="verification", warnings=warnings,
+                        message=f"The optimized file failed verification and is withheld: "
+                                f"{_why_unverified([] if inherited_errors else errors, differences, max_dev, tol)} "
+                                f"({summary}).",
+                        details={**details, "verification": verification.model_dump(mode="json")})
     ratio = len(optimized) / original_bytes if original_bytes else 1.0
     result = DedupResult(
         schema=schema, length_unit=unit_name, units=symbol, metres_per_unit=unit, tolerance=tol, sharing=mode,

@@ -245,6 +245,11 @@ def test_a_new_inverse_error_from_sharing_is_caught_and_the_file_withheld(monkey
     assert v.semantic_counts_equal and v.max_deviation <= 1e-5  # only the validation sees it
     assert sum("IfcProductDefinitionShape.ShapeOfProduct" in e for e in v.validation_errors) == 8
     assert any(w.code == "verification_failed" for w in solved.result.report.warnings)
+    # nothing to deliver: the report fails (the job with it), naming what was found, its details the verification
+    report = solved.result.report
+    assert report.status == "failed" and report.stage == "verification"
+    assert "8 validation error(s)" in report.message and "ShapeOfProduct" in report.message
+    assert report.details["verification"]["schema_valid"] is False
 
 
 def test_a_new_rule_error_on_a_written_instance_is_caught_even_when_the_input_had_errors(monkeypatch, proof_scope):
