@@ -271,7 +271,10 @@ def decode_text(content: bytes, what: str = "text file") -> str:
     if b"\x00" in content:
         if (text := utf16_without_mark(content)) is not None:
             return text
-        raise reject(f"this is a binary file (it contains NUL bytes), not a {what}")
+        from plantsolve.solvers.other_kinds import file_holds  # it refuses through this module: imported late
+
+        holds = file_holds(content[:65536])
+        raise reject(f"this is a binary file (it contains NUL bytes{f', {holds}' if holds else ''}), not a {what}")
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError:

@@ -15,9 +15,11 @@ from plantsolve.solvers.base import (
     InputRejected,
     StoredInput,
     json_object,
+    reject,
     utf16_without_mark,
     validated,
 )
+from plantsolve.solvers.other_kinds import file_holds
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -43,7 +45,11 @@ def _decoded(content: bytes) -> tuple[str, str]:
 def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     """The request of an uploaded PCF or JSON file (its extension checked by the intake); ``options``
     (the upload form's) override options given inside a JSON file."""
-    text, encoding = _decoded(source.read())
+    content = source.read()
+    if file_holds(content[:65536]) == "a binary STL mesh":  # every byte decodes as latin-1: said before it is
+        raise reject("this is a binary STL mesh, not a PCF or an alignment JSON request (a mesh is a polyhedra "
+                     "or tube input)")
+    text, encoding = _decoded(content)
     if source.extension == ".pcf":
         refuse_other_text(text)
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})

@@ -49,7 +49,8 @@ def test_an_entity_type_no_product_of_the_model_is_is_a_warning_naming_it():
 def test_a_binary_stl_sent_as_ifc_is_not_called_utf16_text():
     stl = trimesh.creation.box().export(file_type="stl")  # its 80-byte header is zeros
     # before: "the file is UTF-16 text ... save it as UTF-8 or ANSI"
-    with pytest.raises(InputRejected, match=r"not an IFC file \(a STEP physical file starts with 'ISO-10303-21;'\)"):
+    with pytest.raises(InputRejected, match=r"not an IFC file: it holds a binary STL mesh \(a STEP physical file starts "
+                                            r"with 'ISO-10303-21;'\)"):
         parse_upload(StoredInput.from_bytes("model.ifc", stl), {})
 
 
