@@ -417,9 +417,9 @@ class Assembly:
         return joined
 
     def _join_stud_tips(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
-        """Join, as :meth:`join_pieces` joins a point drawn off its mate, an anti-stud whose mouth is drawn on the tip of
-        a stud (STUD_LENGTH_IN out along the stud's axis, within SNAP, facing it): the part rests on the stud where a
-        build presses it on, as official models draw dishes, cones and round bricks made with an older library (set
+        """Join, as :meth:`join_pieces` joins a point drawn off its mate, an anti-stud whose mouth is drawn on the tip
+        of a stud (STUD_LENGTH_IN out along the stud's axis, within SNAP, facing it): the part rests on the stud where
+        a build presses it on, as official models draw dishes, cones and round bricks made with an older library (set
         10179's dish 4740 on a cone, 10019's dish 4285b on the four studs of a plate: every anti-stud on a stud's tip).
         Only between different pieces as they were before the pass; each pair's offset the stud's length."""
         found = []
