@@ -454,7 +454,10 @@ class Assembly:
         "antistud" the anti-studs whose mouth (a sliding bore's outer end) lies within SNAP of ``place`` (a stud's tip),
         for "stud" the studs whose tip lies there (an anti-stud's mouth)."""
         seen = set()
-        for cell in _around(place, STUD_LENGTH_IN + SLIP_BORE, RUN_CELL, RUN_OFFSET):
+        # a point is filed under its own cell, a run under every cell it passes (its mouth's too): a stud's base lies a
+        # stud's length from its tip, an anti-stud's mouth at the place
+        reach = SNAP + (STUD_LENGTH_IN if type == "stud" else 0.0)
+        for cell in _around(place, reach, RUN_CELL, RUN_OFFSET):
             for other, oi in itertools.chain(self._coarse.get(cell, ()), self._runs.get(cell, ())):
                 if (other, oi) in seen:
                     continue

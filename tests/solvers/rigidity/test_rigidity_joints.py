@@ -270,6 +270,14 @@ def test_a_dish_drawn_on_the_tips_of_the_studs_it_is_pressed_on_is_joined_and_na
     assert joints(dish_on_plate(-8)) == [("rigid", "stud", "3022", "4285b", 4)]
 
 
+@pytest.mark.parametrize("y, joined", [(-24, True), (-28, True), (-29, False)])
+def test_a_cone_whose_sliding_bore_opens_on_a_studs_tip_turns_on_it_as_seated(y, joined):
+    # the cone 4589's bore holds a stud's base anywhere along its last 2 LDU (a run ending at its mouth, y = 24): seated
+    # at -24, its mouth on the round plate's stud tip at -28 (as 10179-1 draws its cones), 1 LDU past the tip at -29
+    text = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 6141.dat\n1 4 0 {y} 0 1 0 0 0 1 0 0 0 1 4589.dat\n"
+    assert joints(text) == ([("hinge", "stud", "4589", "6141", 1)] if joined else [])
+
+
 @pytest.mark.parametrize("y, x", [(-13, 0), (-12.5, 0), (-12, 0.5), (-16, 0)])
 def test_a_dish_off_the_stud_tips_is_not_joined(y, x):
     assert joints(dish_on_plate(y, x)) == []
