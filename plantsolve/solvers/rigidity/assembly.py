@@ -20,8 +20,8 @@ A whole model read from a file then gets four passes (the job runs them once all
 whose jaws reach bar on both sides of a gap the data leaves in it, or round a rod thinner than a bar),
 :meth:`Assembly.seat_offset_studs` (studs gripped between a tube and a wall where the data states no anti-stud) and
 :meth:`Assembly.join_pieces` (pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers
-by ``FINGER_REACH``, a stud the place where a one-wide part's walls grip it by ``OFFSET_REACH``: a part drawn off its
-mate).
+by ``FINGER_REACH``, a stud the place where a one-wide part's walls grip it by ``OFFSET_REACH``, an anti-stud drawn on
+a stud's tip: a part drawn off its mate).
 """
 
 from __future__ import annotations
@@ -383,6 +383,7 @@ class Assembly:
                     self._offsets[(other, id)] = gap
                     joined.append((other, id, gap))
         joined += self._join_slipped_grips(groups, label, reach)
+        joined += self._join_stud_tips(groups, label)
         if joined:
             self._pebble_stale = True
         return joined
@@ -414,6 +415,60 @@ class Assembly:
                 self._offsets[(other, id)] = gap
                 joined.append((other, id, gap))
         return joined
+
+    def _join_stud_tips(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
+        """Join, as :meth:`join_pieces` joins a point drawn off its mate, an anti-stud whose mouth is drawn on the tip
+        of a stud (STUD_LENGTH_IN out along the stud's axis, within SNAP, facing it): the part rests on the stud where
+        a build presses it on, as official models draw dishes, cones and round bricks made with an older library (set
+        10179's dish 4740 on a cone, 10019's dish 4285b on the four studs of a plate: every anti-stud on a stud's tip).
+        Only between different pieces as they were before the pass; each pair's offset the stud's length."""
+        found = []
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type == "stud" and c.length <= 0:
+                        tip = placed.points[ci] + placed.directions[ci] * STUD_LENGTH_IN
+                        found += [(id, ci, other, oi) for other, oi in self._mouths_at(
+                            tip, placed.directions[ci], "antistud", label, label[id])]
+                    elif c.type == "antistud":
+                        mouth = placed.points[ci] + placed.directions[ci] * c.length
+                        found += [(other, oi, id, ci) for other, oi in self._mouths_at(
+                            mouth, placed.directions[ci], "stud", label, label[id])]
+        joined, mine = [], set()
+        for id, ci, other, oi in found:
+            pair = frozenset((id, other))
+            if pair not in mine and ((other, id) in self._links or (id, other) in self._links):
+                continue  # joined already (within rounding, or by a slip)
+            if pair not in mine:
+                mine.add(pair)
+                self._offsets[(other, id)] = STUD_LENGTH_IN
+                joined.append((other, id, STUD_LENGTH_IN))
+            if not any({(c.a, c.ca), (c.b, c.cb)} == {(id, ci), (other, oi)}
+                       for c in self._links.get((other, id), []) + self._links.get((id, other), [])):
+                self._link_at(id, ci, other, oi, "stud")  # every stud of the pair on a tip: two or more hold it rigid
+        return joined
+
+    def _mouths_at(self, place: np.ndarray, direction: np.ndarray, type: str, label: dict, piece: int):
+        """(part, connector) of the ``type`` points of parts of pieces other than ``piece`` facing ``direction``: for
+        "antistud" the anti-studs whose mouth (a sliding bore's outer end) lies within SNAP of ``place`` (a stud's tip),
+        for "stud" the studs whose tip lies there (an anti-stud's mouth)."""
+        seen = set()
+        # a point is filed under its own cell, a run under every cell it passes (its mouth's too): a stud's base lies a
+        # stud's length from its tip, an anti-stud's mouth at the place
+        reach = SNAP + (STUD_LENGTH_IN if type == "stud" else 0.0)
+        for cell in _around(place, reach, RUN_CELL, RUN_OFFSET):
+            for other, oi in itertools.chain(self._coarse.get(cell, ()), self._runs.get(cell, ())):
+                if (other, oi) in seen:
+                    continue
+                seen.add((other, oi))
+                o = self.parts[other]
+                c = o.shape.connectors[oi]
+                if label[other] == piece or c.type != type or float(direction @ o.directions[oi]) > -ALIGN:
+                    continue
+                end = o.points[oi] + o.directions[oi] * (c.length if type == "antistud" else STUD_LENGTH_IN)
+                if float(np.linalg.norm(end - place)) <= SNAP:
+                    yield other, oi
 
     def _midway_places(self, id: str, point: np.ndarray, direction: np.ndarray, label: dict, reach: float,
                        type: str):

@@ -3,9 +3,9 @@ own and how far it misses (the drawing's own gap), and the parts not in the cata
 
 A piece that the matching (within rounding) and :meth:`Assembly.join_pieces` (a slip of up to 3 LDU) left apart is
 either joined through a part the catalogue does not know (an embedded custom part, a hose segment), or its drawing
-places no joint: its nearest mate is further off than a slip (a brick resting on the tips of studs 4 LDU up, hinge
-arms drawn 5.8 LDU off each other's axis), or none lies near at all. The warnings name both, so that a reader can
-tell which.
+places no joint: its nearest mate is further off than a slip (a row of plates a plate's height off the studs it
+would sit on, hinge fingers a knuckle's diameter apart), or none lies near at all. The warnings name both, so that a
+reader can tell which.
 """
 
 from __future__ import annotations

@@ -249,8 +249,38 @@ def test_parts_drawn_two_ldu_off_their_mate_are_joined_and_named_with_the_offset
 
 @pytest.mark.parametrize("text", LITTLE_APART)
 def test_parts_four_ldu_off_their_mate_are_not_joined(text):
-    far = text.replace(" -6 0 1", " -4 0 1").replace(" 12 7 ", " 14 7 ").replace(" -10 0 1", " -12 0 1")
+    # sunk 4 LDU into the brick, 4 beside the hole, 4 beside the stud (4 above it the dish rests on its tip: below)
+    far = text.replace(" -6 0 1", " -4 0 1").replace(" 12 7 ", " 14 7 ").replace(" 0 -10 0 1", " 4 -8 0 1")
     assert far != text and joints(far) == []
+
+
+def dish_on_plate(y: float, x: float = 0.0) -> str:
+    # the 6 x 6 inverted dish 4285b over a 2 x 2 plate: seated at y = -8, its four corner anti-studs on the studs
+    return f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3022.dat\n1 4 {x} {y} 0 1 0 0 0 1 0 0 0 1 4285b.dat\n"
+
+
+def test_a_dish_drawn_on_the_tips_of_the_studs_it_is_pressed_on_is_joined_and_named_with_the_studs_length():
+    # 4 LDU up, every anti-stud's mouth on a stud's tip (as 10019-1 draws its dishes): held by the four studs
+    result = solve(parse("model.ldr", dish_on_plate(-12))).result
+    assert [(j.type, j.origin, j.connections) for j in result.joints] == [("rigid", "stud", 4)]
+    warning = next(w for w in result.report.warnings if w.code == "offset_joints")
+    assert [(sorted(pair["numbers"]), pair["offset_ldu"]) for pair in warning.details["pairs"]] == [
+        (["3022", "4285b"], 4.0)]
+    assert warning.details["stud_tip_ldu"] == 4.0 and "4 for an anti-stud drawn on a stud's tip" in warning.message
+    assert joints(dish_on_plate(-8)) == [("rigid", "stud", "3022", "4285b", 4)]
+
+
+@pytest.mark.parametrize("y, joined", [(-24, True), (-28, True), (-29, False)])
+def test_a_cone_whose_sliding_bore_opens_on_a_studs_tip_turns_on_it_as_seated(y, joined):
+    # the cone 4589's bore holds a stud's base anywhere along its last 2 LDU (a run ending at its mouth, y = 24): seated
+    # at -24, its mouth on the round plate's stud tip at -28 (as 10179-1 draws its cones), 1 LDU past the tip at -29
+    text = f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 6141.dat\n1 4 0 {y} 0 1 0 0 0 1 0 0 0 1 4589.dat\n"
+    assert joints(text) == ([("hinge", "stud", "4589", "6141", 1)] if joined else [])
+
+
+@pytest.mark.parametrize("y, x", [(-13, 0), (-12.5, 0), (-12, 0.5), (-16, 0)])
+def test_a_dish_off_the_stud_tips_is_not_joined(y, x):
+    assert joints(dish_on_plate(y, x)) == []
 
 
 def test_no_offset_is_assumed_where_most_parts_meet_nothing():
@@ -451,10 +481,10 @@ def test_a_part_joined_to_nothing_is_named_in_a_floating_parts_warning():
 
 
 def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_unknown_part_lies_beside_it():
-    # on a stack of two 2 x 2 bricks, a third resting on the tips of the studs (4 LDU up: more than the 3 LDU a slip
-    # is joined at); a 1 x 1 plate beside a part the catalogue does not know; a pair of plates far from anything
+    # on a stack of two 2 x 2 bricks, a third drawn 5 LDU up (more than the 3 LDU a slip is joined at, 1 LDU above the
+    # studs' tips); a 1 x 1 plate beside a part the catalogue does not know; a pair of plates far from anything
     text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
-            "1 4 0 -52 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
+            "1 4 0 -53 0 1 0 0 0 1 0 0 0 1 3003.dat\n"
             "1 4 0 -8 100 1 0 0 0 1 0 0 0 1 3024.dat\n1 4 0 0 110 1 0 0 0 1 0 0 0 1 no_such_part.dat\n"
             "1 4 500 -8 0 1 0 0 0 1 0 0 0 1 3023.dat\n1 4 500 -16 0 1 0 0 0 1 0 0 0 1 3023.dat\n")
     result = solve(parse("apart.ldr", text)).result
@@ -463,9 +493,9 @@ def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_
     assert [p["id"] for p in floating.details["parts"]] == ["L3", "L4"]
     brick, plate = floating.details["why"]
     assert brick == {"nearest": {"part": "L3", "number": "3003", "type": "antistud", "other": "L2",
-                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 4.0}, "unknown_near": []}
+                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 5.0}, "unknown_near": []}
     assert plate == {"nearest": None, "unknown_near": ["L5"]}
-    assert "L3 (3003) antistud 4 LDU from L2 (3003) stud" in floating.message
+    assert "L3 (3003) antistud 5 LDU from L2 (3003) stud" in floating.message
     assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
     pieces = warnings["separate_pieces"]
     assert pieces.details["why"] == [{"nearest": None, "unknown_near": []}]
