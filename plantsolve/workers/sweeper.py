@@ -9,7 +9,7 @@ from typing import Callable
 
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.leases import Enqueue, Pending, sweep_once
+from plantsolve.jobs.leases import Enqueue, Gone, Pending, sweep_once
 
 log = logging.getLogger("plantsolve.sweeper")
 
@@ -23,8 +23,8 @@ class Sweeper:
     (its dispatcher is restartable)."""
 
     def __init__(self, ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None,
-                 after_pass: Callable[[], None] | None = None):
-        self.ctx, self.enqueue, self.pending, self.after_pass = ctx, enqueue, pending, after_pass
+                 after_pass: Callable[[], None] | None = None, gone: Gone | None = None):
+        self.ctx, self.enqueue, self.pending, self.after_pass, self.gone = ctx, enqueue, pending, after_pass, gone
         self._failed = False
         self._lock = threading.Lock()
         self._stop: threading.Event | None = None
@@ -57,7 +57,7 @@ class Sweeper:
         """One pass; a pass that follows a failed one (the database was away) extends the running leases
         first (see :func:`plantsolve.jobs.leases.sweep_once`). Returns whether the pass succeeded."""
         try:
-            sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed)
+            sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed, gone=self.gone)
             self._failed = False
             if self.after_pass is not None:
                 self.after_pass()
