@@ -32,8 +32,8 @@ def declared_too_large(declared: bytes | None, limit: int) -> PayloadTooLarge | 
 
 def limited(receive: Receive, limit: int, idle_seconds: float) -> Receive:
     """``receive`` that counts the body as it streams and raises the 413 once it passes ``limit``, and the 408 when
-    the next part of a body under way takes longer than ``idle_seconds`` (a client that trickles its body, or
-    declared more than it sends, would hold the connection and the request's memory for as long as it likes).
+    the next part of a body under way takes longer than ``idle_seconds`` (a client that stops half way, or declared
+    more than it sends, would hold the connection and the request's memory for as long as it likes).
     Once the body is complete, ``receive`` waits unbounded again (a route listens for the client's disconnect)."""
     received = 0
     complete = False
