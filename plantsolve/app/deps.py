@@ -28,8 +28,7 @@ Caller = Annotated[Principal, Depends(require_api_key)]
 async def known_query(request: Request) -> None:
     """Refuse (422 naming each) a query parameter the route does not take: a misspelt one (``?callbackurl=`` for
     ``callback_url``, ``?stauts=failed``) would otherwise be dropped without a word, and the job be submitted without
-    its webhook, or the list be the whole list. The parameters a route takes are the ones its OpenAPI operation
-    names (routes left out of the document are not checked)."""
+    its webhook, or the list be the whole list."""
     if not request.query_params:
         return
     taken = _query_names(request)
@@ -46,16 +45,21 @@ async def known_query(request: Request) -> None:
 
 
 def _query_names(request: Request) -> frozenset[str] | None:
-    """The query parameters of the route serving ``request``, from the app's OpenAPI document (read once per
-    route); None for a route the document leaves out."""
+    """The query parameters the route serving ``request`` takes, its dependencies' included (read once per route);
+    None when the request reached no route of FastAPI's."""
     route = request.scope.get("route")
-    path = getattr(route, "path_format", None)
-    key = (path, request.method.lower())
+    dependant = getattr(route, "dependant", None)
+    if dependant is None:
+        return None
     cache = getattr(request.app.state, "query_names", None)
     if cache is None:
         cache = request.app.state.query_names = {}
+    key = (route.path, request.method)
     if key not in cache:
-        operation = request.app.openapi().get("paths", {}).get(path, {}).get(key[1])
-        cache[key] = None if operation is None else frozenset(
-            parameter["name"] for parameter in operation.get("parameters", []) if parameter.get("in") == "query")
+        names, todo = set(), [dependant]
+        while todo:
+            current = todo.pop()
+            names |= {field.alias for field in current.query_params}
+            todo += current.dependencies
+        cache[key] = frozenset(names)
     return cache[key]
