@@ -89,7 +89,8 @@ def test_a_client_that_leaves_before_its_body_is_read_is_no_error_in_the_log(tmp
     app = create_app(service_settings(tmp_path))
     with live_server(app) as base, caplog.at_level(logging.INFO):
         port = int(base.rsplit(":", 1)[1])
-        head = b"POST /v1/test-compute/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 100\r\n\r\n"
+        head = (b"POST /v1/test-compute/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                b"Content-Length: 100\r\n\r\n")
         sock = _raw(port, head, b'{"values": ')
         time.sleep(0.3)
         sock.close()
