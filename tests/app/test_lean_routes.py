@@ -8,13 +8,11 @@ from __future__ import annotations
 import uuid
 
 import pytest
-from fastapi import Request
 from fastapi.testclient import TestClient
 
-from plantsolve.app.deps import known_query
-from plantsolve.app.jobs import endpoints
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings
+from tests.support.routed import routed_by
 
 ALICE = {"Authorization": "Bearer key-a"}
 BOB = {"Authorization": "Bearer key-b"}
@@ -22,22 +20,17 @@ ROUTED = "?via=routes"  # any query string: the request goes through the router
 
 
 @pytest.fixture(params=["embedded", pytest.param("scaled", marks=pytest.mark.integration)])
-def client(request, tmp_path, monkeypatch):
+def client(request, tmp_path):
     """Embedded (SQLite: group commit, reads on the loop) and scaled (PostgreSQL and Redis: the submission's write
     and message and the status read awaited on the loop)."""
     scaled = {"database_url": request.getfixturevalue("pg_url"), "broker_url": request.getfixturevalue("redis_url")} \
         if request.param == "scaled" else {}
     settings = service_settings(tmp_path, api_keys=["alice:key-a", "bob:key-b"], **scaled)
-    monkeypatch.setattr(endpoints, "known_query", _via_taken)
-    with TestClient(create_app(settings, run_jobs=False)) as client:
+    with routed_by("via"):
+        app = create_app(settings, run_jobs=False)
+    with TestClient(app) as client:
         assert client.app.state.jobs.stores_on_loop == client.app.state.jobs.reads_on_loop == bool(scaled)
         yield client
-
-
-async def _via_taken(request: Request) -> None:
-    """The routes' check of query parameters, with ``via`` taken too."""
-    if set(request.query_params) != {"via"}:
-        await known_query(request)
 
 
 def _same_answer(lean, routed) -> None:
