@@ -383,19 +383,21 @@ def run_http(label: str, port: int, bin_dir: Path) -> tuple[dict[str, tuple[str,
     with tempfile.TemporaryDirectory(prefix="plantsolve-hostile-http-") as data_dir:
         log_path = Path(data_dir) / "server.log"
         server = start(port, data_dir, log_path, bin_dir, BODY_IDLE_SECONDS=str(HTTP_IDLE_SECONDS))
-        time.sleep(3)
-        baseline = rss(server.pid)
-        print(f"[{label}] server idle RSS {baseline / 2**20:.0f} MiB", flush=True)
-        for name, thunk in http_cases(base, port):
-            with Peak(server.pid) as peak:
-                begin = time.monotonic()
-                answer = thunk()
-                seconds = time.monotonic() - begin
-            head = answer.partition(b"\r\n\r\n")[0]
-            status = head.split(b"\r\n", 1)[0].decode("latin-1").removeprefix("HTTP/1.1 ")
-            rows[name] = (status, b"application/problem+json" in head.lower(), seconds, peak.server - baseline)
-        server.send_signal(signal.SIGTERM)
-        server.wait(timeout=60)
+        try:  # the server never outlives its data directory, whatever a case raises
+            time.sleep(3)
+            baseline = rss(server.pid)
+            print(f"[{label}] server idle RSS {baseline / 2**20:.0f} MiB", flush=True)
+            for name, thunk in http_cases(base, port):
+                with Peak(server.pid) as peak:
+                    begin = time.monotonic()
+                    answer = thunk()
+                    seconds = time.monotonic() - begin
+                head = answer.partition(b"\r\n\r\n")[0]
+                status = head.split(b"\r\n", 1)[0].decode("latin-1").removeprefix("HTTP/1.1 ")
+                rows[name] = (status, b"application/problem+json" in head.lower(), seconds, peak.server - baseline)
+        finally:
+            server.send_signal(signal.SIGTERM)
+            server.wait(timeout=60)
         tracebacks = log_path.read_text(errors="replace").count("Traceback")
     return rows, tracebacks
 
