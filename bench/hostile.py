@@ -11,15 +11,22 @@ The damaged-file cases are the repository's own example and public files with on
 is read (202) or refused (422), and the server log whether a reader failed ('failed in the reader').
 ``--before DIR`` runs every case on the checkout in DIR too (its own ``.venv``), after this one, in the same run.
 
-    python bench/hostile.py [--port 8765] [--before /tmp/base]
+``--http`` runs the HTTP-level cases instead (:func:`http_cases`, raw sockets): bodies far above or below what they
+declare, one that stalls, 10k multipart parts, deep nesting, invalid UTF-8, a compressed body, query parameters out
+of range or unknown, path traversal in artifact names, a client that leaves mid-body. Each row: the status line, whether
+the answer is a problem document, seconds, the API process's RSS growth; last, the server log's tracebacks.
+
+    python bench/hostile.py [--port 8765] [--before /tmp/base] [--http]
 """
 
 from __future__ import annotations
 
 import argparse
+import gzip
 import io
 import os
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -186,8 +193,8 @@ class Peak:
         self._thread.join()
 
 
-def start(port: int, data_dir: str, log_path: Path, bin_dir: Path = BIN) -> subprocess.Popen:
-    env = {**os.environ, "DATA_DIR": data_dir, "API_KEYS": "", "EMBEDDED_WORKERS": "1"}
+def start(port: int, data_dir: str, log_path: Path, bin_dir: Path = BIN, **settings: str) -> subprocess.Popen:
+    env = {**os.environ, "DATA_DIR": data_dir, "API_KEYS": "", "EMBEDDED_WORKERS": "1", **settings}
     log = open(log_path, "wb")
     server = subprocess.Popen([str(bin_dir / "plantsolve"), "serve", "--host", "127.0.0.1", "--port", str(port)],
                               stdout=log, stderr=subprocess.STDOUT, env=env, cwd=bin_dir.parents[1])
@@ -265,11 +272,162 @@ def run(label: str, port: int, bin_dir: Path) -> dict[str, tuple[int, float, int
     return rows
 
 
+# the server's wait for a stalled body in --http (BODY_IDLE_SECONDS; a checkout without the setting ignores it)
+HTTP_IDLE_SECONDS = 5
+
+
+def raw(port: int, head: bytes, body=(), *, pause: float = 0.0, half_close: bool = False,
+        timeout: float = 60) -> bytes:
+    """Send ``head`` and the parts of ``body`` (``pause`` seconds after the first part) on a new connection; the
+    answer as far as it came (``<no answer>`` when the server closed without one, ``<open>`` when it said nothing
+    within ``timeout``)."""
+    sock = socket.create_connection(("127.0.0.1", port), timeout=timeout)
+    data = b""
+    try:
+        try:
+            for index, part in enumerate([head, *body]):
+                sock.sendall(part)
+                if index == 1 and pause:
+                    time.sleep(pause)
+            if half_close:
+                sock.shutdown(socket.SHUT_WR)
+        except OSError:  # the server answered before the whole request was sent, and closed
+            pass
+        while b"\r\n\r\n" not in data or len(data.partition(b"\r\n\r\n")[2]) < _length(data):
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+        return data or b"<no answer>"
+    except socket.timeout:
+        return data or b"<open>"
+    except OSError:
+        return data or b"<reset>"
+    finally:
+        sock.close()
+
+
+def _length(data: bytes) -> int:
+    for line in data.partition(b"\r\n\r\n")[0].split(b"\r\n"):
+        if line.lower().startswith(b"content-length:"):
+            return int(line.split(b":")[1])
+    return 1 << 62
+
+
+def request(method: str, path: str, body: bytes = b"", content_type: str = "application/json", extra: str = "",
+            length: int | None = None) -> bytes:
+    return (f"{method} {path} HTTP/1.1\r\nHost: x\r\nContent-Type: {content_type}\r\n"
+            f"Content-Length: {len(body) if length is None else length}\r\n{extra}Connection: close\r\n\r\n"
+            ).encode("latin-1") + body
+
+
+def multipart(parts: list[tuple[str, str | None, bytes]]) -> tuple[bytes, str]:
+    boundary = "plantsolvebench"
+    body = b"".join(f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"'.encode()
+                    + (f'; filename="{filename}"'.encode() if filename else b"") + b"\r\n\r\n" + data + b"\r\n"
+                    for name, filename, data in parts) + f"--{boundary}--\r\n".encode()
+    return body, f"multipart/form-data; boundary={boundary}"
+
+
+def http_cases(base: str, port: int):
+    """(case, thunk returning the raw answer): the HTTP-level cases of ``--http``."""
+    meter = (ROOT / "examples/flowmeter/meter.json").read_bytes()
+    submit = "/v1/flowmeter/jobs"
+    yield "300 MB declared (above MAX_BODY_BYTES)", lambda: raw(port, request("POST", submit, length=300 << 20))
+    yield "2 GB declared, 15 bytes sent", lambda: raw(port, request("POST", submit, b'{"sections": [1', length=2 << 30))
+    yield "150 MB declared, 15 sent, then EOF", lambda: raw(
+        port, request("POST", submit, b'{"sections": [1', length=150 << 20), half_close=True, timeout=30)
+    yield f"body stalls {HTTP_IDLE_SECONDS + 3} s half way", lambda: raw(
+        port, request("POST", submit, length=len(meter)), [meter[:20], meter[20:]], pause=HTTP_IDLE_SECONDS + 3)
+
+    def chunked() -> bytes:
+        head = (f"POST {submit} HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                "Transfer-Encoding: chunked\r\nConnection: close\r\n\r\n").encode()
+        frame = b"100000\r\n" + b" " * 0x100000 + b"\r\n"
+        return raw(port, head, [frame] * 300 + [b"0\r\n\r\n"])
+    yield "300 MB chunked (no length)", chunked
+    yield "JSON nested 100k deep", lambda: raw(port, request("POST", submit, b"[" * 100_000 + b"]" * 100_000))
+    yield "multipart, 10k fields", lambda: raw(port, request(
+        "POST", submit, *multipart([(f"f{i}", None, b"v") for i in range(10_000)])))
+    yield "multipart, 10k files", lambda: raw(port, request(
+        "POST", submit, *multipart([("file", f"m{i}.json", meter) for i in range(10_000)])))
+    yield "invalid UTF-8 in a JSON string", lambda: raw(port, request(
+        "POST", submit, meter.replace(b'"', b'"\xff', 1)))
+    yield "gzip body, Content-Encoding: gzip", lambda: raw(port, request(
+        "POST", submit, gzip.compress(meter), extra="Content-Encoding: gzip\r\n"))
+    yield "plain body labelled gzip", lambda: raw(port, request("POST", submit, meter,
+                                                                extra="Content-Encoding: gzip\r\n"))
+    yield "callback URL misspelt (?callbackurl=)", lambda: raw(port, request(
+        "POST", f"{submit}?callbackurl=https://example.com/hook", meter))
+    for query in ("limit=-1", "limit=" + "9" * 30, "cursor=%25%25garbage", "cursor=eyJhIjogMX0", "stauts=failed"):
+        yield f"GET /v1/jobs?{query}", lambda query=query: raw(port, request("GET", f"/v1/jobs?{query}"))
+    yield "unknown kind", lambda: raw(port, request("POST", "/v1/nokind/jobs", b"{}"))
+    yield "job id not a UUID", lambda: raw(port, request("GET", "/v1/jobs/..%2F..%2Fetc"))
+
+    def traversal() -> bytes:
+        job = httpx.post(base + submit, content=meter, headers={"Content-Type": "application/json"}).json()["id"]
+        outcome(base, job)
+        answers = {raw(port, request("GET", f"/v1/jobs/{job}/artifacts/{name}")).split(b"\r\n", 1)[0]
+                   for name in ("..%2F..%2Fplantsolve.db", "%2e%2e%2fplantsolve.db", "..%5C..%5Cplantsolve.db",
+                                "%2Fetc%2Fpasswd")}
+        return b" / ".join(sorted(answers)) + b"\r\ncontent-type: application/problem+json\r\n\r\n"
+    yield "artifact names ../, %2e%2e, \\, /etc", traversal
+    yield "client leaves mid-body", lambda: raw(
+        port, request("POST", submit, meter[:20], length=len(meter)), half_close=True, timeout=30)
+
+
+def run_http(label: str, port: int, bin_dir: Path) -> tuple[dict[str, tuple[str, bool, float, int]], int]:
+    """Every HTTP-level case against a server started from ``bin_dir``; and the tracebacks in its log."""
+    base = f"http://127.0.0.1:{port}"
+    rows = {}
+    with tempfile.TemporaryDirectory(prefix="plantsolve-hostile-http-") as data_dir:
+        log_path = Path(data_dir) / "server.log"
+        server = start(port, data_dir, log_path, bin_dir, BODY_IDLE_SECONDS=str(HTTP_IDLE_SECONDS))
+        try:  # the server never outlives its data directory, whatever a case raises
+            time.sleep(3)
+            baseline = rss(server.pid)
+            print(f"[{label}] server idle RSS {baseline / 2**20:.0f} MiB", flush=True)
+            for name, thunk in http_cases(base, port):
+                with Peak(server.pid) as peak:
+                    begin = time.monotonic()
+                    answer = thunk()
+                    seconds = time.monotonic() - begin
+                head = answer.partition(b"\r\n\r\n")[0]
+                status = head.split(b"\r\n", 1)[0].decode("latin-1").removeprefix("HTTP/1.1 ")
+                rows[name] = (status, b"application/problem+json" in head.lower(), seconds, peak.server - baseline)
+        finally:
+            server.send_signal(signal.SIGTERM)
+            server.wait(timeout=60)
+        tracebacks = log_path.read_text(errors="replace").count("Traceback")
+    return rows, tracebacks
+
+
+def main_http(args) -> int:
+    runs = {"after": run_http("this checkout", args.port, BIN)}
+    if args.before:
+        runs["before"] = run_http(args.before, args.port + 1, Path(args.before).resolve() / ".venv" / "bin")
+    order = [r for r in ("before", "after") if r in runs]
+    print(f"\n{'case':40}" + "".join(f" | {r + ' status':>34} {'s':>6} {'MiB':>5}" for r in order))
+    for name in runs["after"][0]:
+        cells = ""
+        for r in order:
+            status, problem, seconds, growth = runs[r][0][name]
+            cells += f" | {status[:32]:>32} {'P' if problem else ' '} {seconds:>6.2f} {growth / 2**20:>5.0f}"
+        print(f"{name:40}{cells}")
+    print("P: the answer is application/problem+json; MiB: the API process's peak RSS growth over its idle RSS")
+    for r in order:
+        print(f"tracebacks in the server log ({r}): {runs[r][1]}")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--port", type=int, default=8765)
     parser.add_argument("--before", metavar="DIR", help="also run every case on the checkout in DIR (its .venv)")
+    parser.add_argument("--http", action="store_true", help="the HTTP-level cases instead of the hostile files")
     args = parser.parse_args()
+    if args.http:
+        return main_http(args)
     runs = {"after": run("this checkout", args.port, BIN)}
     if args.before:
         runs["before"] = run(args.before, args.port + 1, Path(args.before).resolve() / ".venv" / "bin")

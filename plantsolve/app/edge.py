@@ -33,17 +33,18 @@ from uuid import UUID, uuid4
 
 from asgi_correlation_id import correlation_id
 from starlette.middleware.cors import CORSMiddleware
-from starlette.requests import Request
+from starlette.requests import ClientDisconnect, Request
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plantsolve.app.auth import AuthMiddleware, KeyRing
 from plantsolve.app.jobs.lean import LeanRoutes
-from plantsolve.app.middleware import declared_too_large, limited, secured
+from plantsolve.app.middleware import declared_too_large, limited, secured, unsupported_encoding
 from plantsolve.app.problems import problem_response, unavailable
 from plantsolve.jobs.errors import is_infrastructure_failure
 
 REQUEST_ID = b"x-request-id"
 log = logging.getLogger("asgi_correlation_id")  # the logger (and message) of the middleware this replaces
+log_disconnect = logging.getLogger("plantsolve.api")
 
 
 def valid_request_id(value: str) -> bool:
@@ -57,9 +58,10 @@ def valid_request_id(value: str) -> bool:
 
 class EdgeMiddleware:
     def __init__(self, app: ASGIApp, *, keys: KeyRing, protect_docs: bool, max_body_bytes: int,
-                 cors_origins: list[str], lean: LeanRoutes | None = None):
+                 cors_origins: list[str], lean: LeanRoutes | None = None, body_idle_seconds: float = 30.0):
         self.app = app
         self.max_body_bytes = max_body_bytes
+        self.body_idle_seconds = body_idle_seconds
         self.auth = AuthMiddleware(None, keys=keys, protect_docs=protect_docs)
         self.lean = lean
         self.entry: ASGIApp = self.guarded
@@ -86,6 +88,9 @@ class EdgeMiddleware:
 
         try:
             await self.entry(scope, receive, secured(scope, identified))
+        except ClientDisconnect:  # the client left before its body was read: nobody to answer, nothing went wrong
+            log_disconnect.info("%s %s: the client disconnected before its body was read", scope["method"],
+                                scope.get("path", ""))
         except Exception as error:
             if started or not is_infrastructure_failure(error):
                 raise
@@ -110,11 +115,11 @@ class EdgeMiddleware:
         if principal is None:  # refused: the answer has been sent
             return
         refusal = declared_too_large(next((v for k, v in scope["headers"] if k.lower() == b"content-length"), None),
-                                     self.max_body_bytes)
+                                     self.max_body_bytes) or unsupported_encoding(scope["headers"])
         if refusal is not None:
             await problem_response(refusal)(scope, receive, send)
             return
-        receive = limited(receive, self.max_body_bytes)
+        receive = limited(receive, self.max_body_bytes, self.body_idle_seconds)
         route = self.lean.match(scope) if self.lean is not None else None
         if route is None:
             await self.app(scope, receive, send)

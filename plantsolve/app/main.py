@@ -89,7 +89,8 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
     # edge.py), which also answers the hot submit and status routes without the router
     lean = LeanRoutes(app.state.jobs, ctx.kinds, inline_reads=ctx.db.is_sqlite)
     app.add_middleware(EdgeMiddleware, keys=app.state.keys, protect_docs=settings.protect_docs,
-                       max_body_bytes=settings.max_body_bytes, cors_origins=settings.cors_origins, lean=lean)
+                       max_body_bytes=settings.max_body_bytes, cors_origins=settings.cors_origins, lean=lean,
+                       body_idle_seconds=settings.body_idle_seconds)
     problems.install(app)
     app.include_router(build_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))

@@ -7,6 +7,7 @@ is counted as it streams and refused as soon as it passes the limit.
 
 from __future__ import annotations
 
+import asyncio
 import base64
 import hashlib
 import re
@@ -14,7 +15,8 @@ import re
 from starlette.datastructures import MutableHeaders
 from starlette.types import Message, Receive, Scope, Send
 
-from plantsolve.app.problems import PayloadTooLarge
+from plantsolve.app.problems import PayloadTooLarge, RequestTimeout
+from plantsolve.jobs.errors import UnsupportedMediaType, field_problem
 
 
 def declared_too_large(declared: bytes | None, limit: int) -> PayloadTooLarge | None:
@@ -28,20 +30,47 @@ def declared_too_large(declared: bytes | None, limit: int) -> PayloadTooLarge | 
     return PayloadTooLarge(f"The body declares {int(declared)} bytes; the limit is {limit} bytes.") if too_large else None
 
 
-def limited(receive: Receive, limit: int) -> Receive:
-    """``receive`` that counts the body as it streams and raises the 413 once it passes ``limit``."""
+def limited(receive: Receive, limit: int, idle_seconds: float) -> Receive:
+    """``receive`` that counts the body as it streams and raises the 413 once it passes ``limit``, and the 408 when
+    the next part of a body under way takes longer than ``idle_seconds`` (a client that stops half way, or declared
+    more than it sends, would hold the connection and the request's memory for as long as it likes).
+    Once the body is complete, ``receive`` waits unbounded again (a route listens for the client's disconnect)."""
     received = 0
+    complete = False
 
     async def counting_receive() -> Message:
-        nonlocal received
-        message = await receive()
+        nonlocal received, complete
+        if complete:
+            return await receive()
+        try:
+            async with asyncio.timeout(idle_seconds):
+                message = await receive()
+        except TimeoutError:
+            raise RequestTimeout(f"No part of the request body arrived for {idle_seconds:g} s after {received} bytes; "
+                                 "send the body without pauses (and no more bytes than Content-Length declares).") \
+                from None
         if message["type"] == "http.request":
             received += len(message.get("body", b""))
             if received > limit:
                 raise PayloadTooLarge(f"The body passed the limit of {limit} bytes.")
+            complete = not message.get("more_body", False)
         return message
 
     return counting_receive
+
+
+def unsupported_encoding(headers: list[tuple[bytes, bytes]]) -> UnsupportedMediaType | None:
+    """The 415 of a body sent with a ``Content-Encoding`` (gzip, say): the service reads bodies as they are, so a
+    compressed body would be read as garbage and refused naming the wrong thing, and a plain body labelled compressed
+    would be taken while the label says otherwise."""
+    for name, value in headers:
+        if name.lower() == b"content-encoding":
+            coding = value.decode("latin-1").strip().lower()
+            if coding and coding != "identity":
+                return UnsupportedMediaType(
+                    f"Content-Encoding {coding!r} is not supported: send the body uncompressed.",
+                    errors=[field_problem(["header", "Content-Encoding"], "send the body uncompressed")])
+    return None
 
 
 # ---- security headers -----------------------------------------------------------------------------------

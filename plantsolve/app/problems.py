@@ -47,6 +47,13 @@ class PayloadTooLarge(ProblemError):
     status, title, slug = 413, "Request body too large", "payload-too-large"
 
 
+class RequestTimeout(ProblemError):
+    status, title, slug = 408, "Request body too slow", "request-timeout"
+
+    def __init__(self, detail: str):
+        super().__init__(detail, headers={"Connection": "close"})
+
+
 class ServiceUnavailable(ProblemError):
     status, title, slug = 503, "Service unavailable", "unavailable"
 
@@ -71,7 +78,8 @@ def problem_response(error: ProblemError, request: Request | None = None) -> JSO
     )
 
 
-_STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, PayloadTooLarge, UnsupportedMediaType, Unprocessable)}
+_STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict, RequestTimeout, PayloadTooLarge,
+                                                 UnsupportedMediaType, Unprocessable)}
 
 
 def _place(error: dict[str, Any], body: Any) -> list[str | int]:

@@ -41,6 +41,10 @@ class AppSettings(JobSettings):
         "from API_KEYS and ADMIN_KEYS, which every process shares already.",
     )
     max_body_bytes: int = Field(default=200 * 1024 * 1024, description="Largest accepted request body (413 above).")
+    body_idle_seconds: float = Field(
+        default=30.0, gt=0, le=3600,
+        description="Longest wait for the next bytes of a request body that has begun (408 after it): a client that "
+                    "stops half way, or sends less than it declared, holds no connection longer.")
     max_upload_bytes: int = Field(default=64 * 1024 * 1024, description="Largest accepted uploaded file (413 above).")
     auto_migrate: bool = Field(default=True, description="Upgrade the database schema when the API starts.")
     events_poll_seconds: float = Field(

@@ -49,7 +49,7 @@ import httpx
 from standardwebhooks import Webhook
 
 from plantsolve.app.auth import KeyRing
-from plantsolve.jobs.errors import NotFound, Unprocessable, field_problem
+from plantsolve.jobs.errors import NotFound, Unprocessable, field_problem, is_infrastructure_failure
 
 log = logging.getLogger("plantsolve.webhooks")
 
@@ -340,11 +340,22 @@ class WebhookNotifier:
         self._http.close()
 
     def _loop(self) -> None:
+        away = False  # the database was away at the last round: an outage is one line when it starts, one when it ends
         while not self._stop.wait(self.settings.webhook_poll_seconds):
             try:
                 self.send_due()
-            except Exception:  # a database hiccup: the next round tries again
-                log.exception("webhook round failed")
+            except Exception as error:  # the next round tries again
+                if not is_infrastructure_failure(error):
+                    log.exception("webhook round failed")
+                    continue
+                if not away:
+                    log.warning("webhook rounds fail (%s: %s); trying every %g s", type(error).__name__,
+                                (str(error).strip().splitlines() or [""])[0][:200], self.settings.webhook_poll_seconds)
+                away = True
+            else:
+                if away:
+                    log.info("webhook rounds work again")
+                away = False
 
     def send_due(self) -> int:
         """Claim every due delivery and hand it to the pool; returns how many were claimed."""

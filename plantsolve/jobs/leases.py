@@ -14,7 +14,7 @@ from typing import Callable
 
 from plantsolve.jobs import attempts
 from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.lifecycle import QUEUED, RUNNING
+from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.runner import lost_worker_report, pending_holder
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import LapsedAttempt
@@ -23,6 +23,9 @@ log = logging.getLogger("plantsolve.sweeper")
 
 Enqueue = Callable[[uuid.UUID, str], None]
 Pending = Callable[[], "int | None"]
+# whether the worker named so is known to be gone (a transport that can tell: the embedded service knows its host's
+# job processes); False when it runs or the transport cannot tell
+Gone = Callable[["str | None"], bool]
 
 # queued jobs one sweep looks at (never sent first, then the oldest): a backlog is worked off over several
 # sweeps instead of loaded whole every time
@@ -67,8 +70,20 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
     return lose_attempt(ctx, lost, why=how)
 
 
+def abandoned(ctx: ServiceContext, job_id: uuid.UUID, worker: str, alive_seconds: float) -> bool:
+    """Whether a job process named ``worker``, alive for ``alive_seconds``, holds no live attempt of ``job_id``: the job
+    finished or was cancelled, another worker holds it, or it is queued again (this process's lease lapsed and the
+    sweep took the attempt back: a stopped or hung process). Such a process can store nothing (every write is
+    fenced); it only takes a place in the pool and, while it runs, keeps its job from starting again. A process
+    younger than a lease is never judged so: it may not have claimed its job yet."""
+    if alive_seconds < ctx.settings.lease_seconds:
+        return False
+    job = ctx.repo.get(job_id, brief=True)
+    return job is None or is_finished(job.status) or job.status == QUEUED or job.worker != worker
+
+
 def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, *,
-               after_outage: bool = False) -> None:
+               after_outage: bool = False, gone: Gone | None = None) -> None:
     """One pass. Running attempts whose lease lapsed are lost (:func:`lose_attempt`). Queued jobs are enqueued
     again when their message never reached the broker (``enqueued_at`` unset), or when it is older than
     ``requeue_queued_after`` and the broker holds fewer messages than there are such jobs (the oldest first: a
@@ -78,14 +93,25 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
     ``after_outage``: the previous pass could not reach the database. Nobody could heartbeat meanwhile,
     so a lapsed lease says nothing about its worker: every running attempt first gets a full lease
     from now. A live worker's next heartbeat keeps its claim (no second solve, no attempt counted); a
-    dead worker's lease lapses one lease later and it is re-queued then."""
+    dead worker's lease lapses one lease later and it is re-queued then.
+
+    ``gone``: the transport's word that a worker no longer runs (a job process of a service that was killed and
+    started again on this host): its attempt is lost now, without waiting for its lease to lapse, so the job is not
+    shown running for a lease while nothing runs it."""
+    requeued: list[uuid.UUID] = []
+    failed = 0
+    if gone is not None:
+        for lost in ctx.repo.running_attempts():
+            if gone(lost.worker):
+                fate = lose_attempt(ctx, lost, why=f"its worker {lost.worker} is gone")
+                if fate == "requeued":
+                    requeued.append(lost.id)
+                failed += fate == "failed"
     if after_outage:
         extended = ctx.repo.extend_leases(ctx.settings.lease_seconds)
         if extended:
             log.warning("sweeper: the database was away; %d running lease(s) extended instead of lapsing", extended)
     now = utcnow()
-    requeued: list[uuid.UUID] = []
-    failed = 0
     for lost in ctx.repo.lapsed(now):
         beat = lost.heartbeat_at.isoformat() if lost.heartbeat_at else "the start"
         fate = lose_attempt(ctx, lost, why=f"no heartbeat since {beat}", lapsed_before=now)
@@ -117,9 +143,9 @@ def sweep_once(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = 
         log.info("sweeper: enqueued %d again, failed %d", sent, failed)
 
 
-def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None) -> None:
-    """At a dispatcher's start: jobs left queued (or running with a dead lease) by a previous process are
-    enqueued again."""
-    sweep_once(ctx, enqueue, pending)
+def resume(ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None, gone: Gone | None = None) -> None:
+    """At a dispatcher's start: jobs left queued (or running with a dead lease, or a worker ``gone`` says is gone) by
+    a previous process are enqueued again."""
+    sweep_once(ctx, enqueue, pending, gone=gone)
     for job_id, kind in ctx.repo.queued_jobs(limit=10_000):  # a dispatcher that pulls from the database takes what it can
         enqueue(job_id, kind)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import functools
+import os
 import sqlite3
 import threading
 import time
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
+from typing import Callable
 
 from sqlalchemy import Engine, create_engine, event, text
 from sqlalchemy.engine import make_url
@@ -138,24 +140,77 @@ def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None
             dbapi_connection.round_trip_seconds = bound
 
 
+class SQLiteFile:
+    """The SQLite file this process opened first, known by its device and inode. A data directory removed or replaced
+    under a running service (``rm -rf var``, a temporary-file cleaner, a volume unmounted) leaves the open connections
+    writing into a file that no longer has a name: a submission would be answered 202 and vanish with the process,
+    and a new connection would make a new, empty file at the path. So every write, every new connection and the
+    readiness probe first check that the path still names that file; if not, the database counts as unreachable (503,
+    ``/readyz`` 503) until a restart opens the file now at the path."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.known: tuple[int, int] | None = None
+
+    def _identity(self) -> tuple[int, int] | None:
+        try:
+            found = os.stat(self.path)
+        except FileNotFoundError:
+            return None
+        return found.st_dev, found.st_ino
+
+    def learn(self) -> None:
+        if self.known is None:
+            self.known = self._identity()
+
+    def check(self) -> None:
+        if self.known is not None and self._identity() != self.known:
+            raise sqlite3.OperationalError(
+                f"the database file {self.path} was removed or replaced while the service ran; nothing more is written "
+                "to the old one: restart the service to use the file now at that path")
+
+
 class WriteLock:
     """This process's SQLite write lock: a thread waits for it at most ``wait`` seconds, then its write fails as an
-    unreachable database would (503), instead of queueing behind a write that itself waits on a locked file."""
+    unreachable database would (503), instead of queueing behind a write that itself waits on a locked file. Taken,
+    it runs ``check`` (:meth:`SQLiteFile.check`): a write to a file that lost its name fails the same way."""
 
-    def __init__(self, wait: float):
+    def __init__(self, wait: float, check: Callable[[], None] | None = None):
         self.wait = wait
+        self.check = check
         self._lock = threading.Lock()
 
     def acquire(self, blocking: bool = True) -> bool:
-        return self._lock.acquire(blocking, self.wait if blocking else -1)
+        """Whether the lock was taken (False too when ``check`` fails: the caller's fallback takes it the way that
+        raises)."""
+        if not self._lock.acquire(blocking, self.wait if blocking else -1):
+            return False
+        try:
+            self._check()
+        except OperationalError:
+            self._lock.release()
+            return False
+        return True
 
     def release(self) -> None:
         self._lock.release()
+
+    def _check(self) -> None:
+        if self.check is not None:
+            try:
+                self.check()
+            except sqlite3.OperationalError as error:
+                raise OperationalError("(checking the database file)", None, error) from None
 
     def __enter__(self) -> "WriteLock":
         if not self._lock.acquire(timeout=self.wait):
             raise OperationalError("(waiting for this process's write lock)", None,
                                    sqlite3.OperationalError(f"database is locked (waited {self.wait:g} s)"))
+        try:
+            self._check()
+        except OperationalError:
+            self._lock.release()
+            raise
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -170,11 +225,21 @@ class Database:
         self.wait = wait
         self.engine = make_engine(url, wait=wait, statement=statement)
         self.sessions: sessionmaker[Session] = sessionmaker(self.engine, expire_on_commit=False)
+        database = make_url(url).database if self.is_sqlite else None
+        self.file = SQLiteFile(Path(database).resolve()) if database and database != ":memory:" else None
+        if self.file is not None:
+            self._watch_file(self.file)
         # SQLite has one writer at a time and its busy handler backs off by sleeping
         # (1, 2, 5, 10 ... ms), which wrecks latency when the API and the job pool write at
         # once. Threads of this process therefore queue for writes on a lock instead; other
         # processes (a CLI run) still fall back on the busy timeout.
-        self._write_lock = WriteLock(wait) if self.is_sqlite else None
+        self._write_lock = WriteLock(wait, self.file.check if self.file else None) if self.is_sqlite else None
+
+    def _watch_file(self, file: SQLiteFile) -> None:
+        """The first connection learns the file; a later one is refused when the path names another file or none
+        (SQLite would make a new, empty one)."""
+        event.listen(self.engine, "do_connect", lambda _dialect, _record, _cargs, _cparams: file.check())
+        event.listen(self.engine, "connect", lambda _dbapi_connection, _record: file.learn())
 
     def writing(self) -> AbstractContextManager:
         """Context for one write transaction: serialised in-process on SQLite, free on PostgreSQL."""

@@ -129,7 +129,8 @@ LEFT_OUT_OF_BRIEF = ("input", "input_options", "result")
 
 @dataclass(frozen=True)
 class LapsedAttempt:
-    """A running attempt whose lease lapsed: what the lease policy needs to decide its fate."""
+    """A running attempt whose lease lapsed (or whose worker is gone): what the lease policy needs to decide its
+    fate."""
 
     id: uuid.UUID
     kind: str
@@ -493,10 +494,18 @@ class JobRepository:
     def lapsed(self, now: datetime) -> list["LapsedAttempt"]:
         """Running attempts whose lease lapsed before ``now`` (their worker stopped heartbeating). The lease policy
         (:mod:`plantsolve.jobs.leases`) decides what becomes of each."""
+        return self._running(JOBS.c.lease_until < now)
+
+    def running_attempts(self) -> list["LapsedAttempt"]:
+        """Every running attempt, its lease lapsed or not: the lease policy asks the transport whether each one's
+        worker still runs (:func:`plantsolve.jobs.leases.sweep_once`)."""
+        return self._running()
+
+    def _running(self, *conditions) -> list["LapsedAttempt"]:
         with self.sessions.kw["bind"].connect() as connection:
             rows = connection.execute(
                 select(JOBS.c.id, JOBS.c.kind, JOBS.c.attempt, JOBS.c.max_attempts, JOBS.c.attempts, JOBS.c.worker,
-                       JOBS.c.heartbeat_at).where(JOBS.c.status == RUNNING, JOBS.c.lease_until < now)).all()
+                       JOBS.c.heartbeat_at).where(JOBS.c.status == RUNNING, *conditions)).all()
         return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat))
                 for job_id, kind, attempt, max_attempts, history, worker, beat in rows]
 

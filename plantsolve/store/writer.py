@@ -30,7 +30,7 @@ from contextlib import AbstractContextManager
 from typing import Any, Callable
 
 from sqlalchemy import Engine, Table
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import IntegrityError, OperationalError
 
 log = logging.getLogger("plantsolve.store")
 
@@ -159,11 +159,16 @@ class JobWriter:
                 leftover.append(item)
         if leftover:
             self._write(leftover)
-        lock = self.writing()
-        with lock:
-            if self._unwaiting is not None:
-                self._unwaiting.close()  # back to the pool
-                self._unwaiting = None
+        try:
+            with self.writing():
+                self._release_unwaiting()
+        except OperationalError:  # the database is away (its file was removed): no write can use the connection now
+            self._release_unwaiting()
+
+    def _release_unwaiting(self) -> None:
+        if self._unwaiting is not None:
+            self._unwaiting.close()  # back to the pool
+            self._unwaiting = None
 
     def _start(self) -> None:
         with self._start_lock:

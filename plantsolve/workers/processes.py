@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
-from plantsolve.jobs.leases import process_died, resume
+from plantsolve.jobs.leases import abandoned, process_died, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
 from plantsolve.solvers.base import SolverSpec
@@ -154,7 +154,9 @@ class _Running:
     worker: str
     deadline: float | None
     started: str | None  # see _started: read right after the start, while the process is surely this job's
+    began: float  # monotonic
     killed_at_limit: bool = False
+    abandoned: bool = False  # killed because its attempt had ended (see jobs.leases.abandoned)
 
     def kill(self) -> None:
         """Kill this job's process by its pid. ``process.kill()`` would not do: once the warm parent died, the
@@ -195,7 +197,7 @@ class ProcessDispatcher:
         # refill that found no more. A finished job refills from the database only then; the sweeper's pass refills
         # regardless (jobs queued by another process, or re-queued by the sweep itself).
         self._overflow = True
-        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=lambda: self._refill(always=True))
+        self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=self._after_sweep, gone=self.orphan_gone)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
         # before anything starts the forkserver (the upload readers share it): it imports all a job needs
@@ -209,7 +211,7 @@ class ProcessDispatcher:
         self._thread.start()
         self._start_watch = threading.Thread(target=self._watch_starts, name="job-start-watch", daemon=True)
         self._start_watch.start()
-        resume(self.ctx, self.enqueue, self.pending)
+        resume(self.ctx, self.enqueue, self.pending, gone=self.orphan_gone)
         self._sweeper.start()
 
     def stop(self) -> None:
@@ -252,6 +254,18 @@ class ProcessDispatcher:
             raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
         if self._start_stalled():
             raise RuntimeError("starting a job process hangs: the warm parent does not answer")
+
+    def orphan_gone(self, worker: str | None) -> bool:
+        """Whether ``worker`` is a job process of this host that no longer runs and that this dispatcher does not
+        supervise: one of a service that was killed (its job processes die with it) and started again, whose attempt
+        would otherwise show running until its lease lapsed. The ends of this dispatcher's own processes are the
+        supervisor's to judge (it knows a kill at the hard limit from a crash). A pid reused since is taken for
+        alive: that job waits for its lease, as before."""
+        pid = job_process_pid(worker)
+        if pid is None or _started(pid) is not None:
+            return False
+        with self._lock:
+            return all(child.worker != worker for child in self._running.values())
 
     def in_flight(self) -> int:
         """Jobs running or next in line in memory (at most ``window``)."""
@@ -376,7 +390,7 @@ class ProcessDispatcher:
             deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
             with self._lock:
                 self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline,
-                                                 _started(process.pid))
+                                                 _started(process.pid), time.monotonic())
                 self._starting = None
 
     def _start_stalled(self) -> bool:
@@ -407,22 +421,31 @@ class ProcessDispatcher:
         if child.process.exitcode is None:
             child.process.kill()
             child.process.join(1.0)
-        with self._lock:
-            self._running.pop(child.job_id, None)
+        try:
+            again = self._judge_end(child, outcome)
+        finally:
+            # only now: until its end is written, the sweeper leaves this process's attempt to the supervisor
+            with self._lock:
+                self._running.pop(child.job_id, None)
+        if again:
+            self.enqueue(child.job_id)
+
+    def _judge_end(self, child: _Running, outcome: str | None) -> bool:
+        """Write how ``child``'s attempt ended, when its process did not (killed at the hard limit, died); returns
+        whether its job goes back in line."""
         if self._stopping.is_set():
-            return
+            return False
         if child.killed_at_limit:
             if fail_killed_at_hard_limit(self.ctx, child.job_id, worker=child.worker):
                 log.warning("job %s killed at its hard time limit", child.job_id)
-            return
+            return False
         if outcome is None:
             fate = process_died(self.ctx, child.job_id, child.worker, child.process.exitcode)
-            log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
-                      child.process.exitcode, fate)
-            if fate in ("requeued", "queued"):
-                self.enqueue(child.job_id)
-        elif outcome == "requeued":
-            self.enqueue(child.job_id)
+            if not child.abandoned:
+                log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
+                          child.process.exitcode, fate)
+            return fate in ("requeued", "queued")
+        return outcome == "requeued"
 
     def _enforce_deadlines(self) -> None:
         now = time.monotonic()
@@ -432,6 +455,24 @@ class ProcessDispatcher:
         for child in overdue:
             child.killed_at_limit = True
             child.kill()
+
+    def _after_sweep(self) -> None:
+        self._kill_abandoned()
+        self._refill(always=True)
+
+    def _kill_abandoned(self) -> None:
+        """Kill each job process whose attempt has ended while it ran on (:func:`plantsolve.jobs.leases.abandoned`: a
+        process stopped or hung past its lease, whose job the sweep has just given back): its job then starts again in
+        a new process now, not at the old one's hard time limit, and its place in the pool is free."""
+        with self._lock:
+            children = [c for c in self._running.values() if not (c.killed_at_limit or c.abandoned)]
+        now = time.monotonic()
+        for child in children:
+            if abandoned(self.ctx, child.job_id, child.worker, now - child.began):
+                log.error("job %s: its process %d holds no live attempt any more (stopped or hung past its lease); "
+                          "killing it", child.job_id, child.process.pid)
+                child.abandoned = True
+                child.kill()
 
     def _refill(self, always: bool = False) -> None:
         """Take the oldest queued jobs into the window until it is full again (after a finished job only when some
@@ -460,3 +501,12 @@ class ProcessDispatcher:
 def worker_of(pid: int) -> str:
     """The worker name job process ``pid`` gives itself (:func:`plantsolve.jobs.context.worker_name`)."""
     return f"process@{socket.gethostname()}:{pid}"
+
+
+def job_process_pid(worker: str | None) -> int | None:
+    """The pid of the job process of this host named ``worker`` (:func:`worker_of`); None for another host's, or
+    another transport's worker. Host names are unique among the hosts sharing a database (as Celery's node names)."""
+    prefix = worker_of(0)[:-1]
+    if worker is None or not worker.startswith(prefix) or not worker[len(prefix):].isdigit():
+        return None
+    return int(worker[len(prefix):])

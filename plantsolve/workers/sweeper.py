@@ -9,36 +9,55 @@ from typing import Callable
 
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.leases import Enqueue, Pending, sweep_once
+from plantsolve.jobs.leases import Enqueue, Gone, Pending, sweep_once
 
 log = logging.getLogger("plantsolve.sweeper")
 
 
+# how long a stop waits for a pass under way to end (a pass is bounded by the database's own timeouts)
+STOP_SECONDS = 5.0
+
+
 class Sweeper:
-    """Runs :func:`sweep_once` every ``sweep_seconds`` in a daemon thread."""
+    """Runs :func:`sweep_once` every ``sweep_seconds`` in a daemon thread; ``stop()`` then ``start()`` runs it again
+    (its dispatcher is restartable)."""
 
     def __init__(self, ctx: ServiceContext, enqueue: Enqueue, pending: Pending | None = None,
-                 after_pass: Callable[[], None] | None = None):
-        self.ctx, self.enqueue, self.pending, self.after_pass = ctx, enqueue, pending, after_pass
-        self._stop = threading.Event()
+                 after_pass: Callable[[], None] | None = None, gone: Gone | None = None):
+        self.ctx, self.enqueue, self.pending, self.after_pass, self.gone = ctx, enqueue, pending, after_pass, gone
         self._failed = False
-        self._thread = threading.Thread(target=self._loop, name="sweeper", daemon=True)
+        self._lock = threading.Lock()
+        self._stop: threading.Event | None = None
+        self._thread: threading.Thread | None = None
 
     def start(self) -> None:
-        self._thread.start()
+        """Start the loop; a second start while it runs changes nothing. Each run has a thread and a stop event of
+        its own: a pass of the previous run still under way (a stop waits only ``STOP_SECONDS``) sees its own event
+        set and ends, never loops on beside the new one."""
+        with self._lock:
+            if self._stop is not None and not self._stop.is_set():
+                return
+            self._stop = threading.Event()
+            self._thread = threading.Thread(target=self._loop, args=(self._stop,), name="sweeper", daemon=True)
+            self._thread.start()
 
     def stop(self) -> None:
-        self._stop.set()
+        with self._lock:
+            stop, thread = self._stop, self._thread
+            if stop is not None:
+                stop.set()
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(STOP_SECONDS)
 
-    def _loop(self) -> None:
-        while not self._stop.wait(self.ctx.settings.sweep_seconds):
+    def _loop(self, stop: threading.Event) -> None:
+        while not stop.wait(self.ctx.settings.sweep_seconds):
             self.run_pass()
 
     def run_pass(self) -> bool:
         """One pass; a pass that follows a failed one (the database was away) extends the running leases
         first (see :func:`plantsolve.jobs.leases.sweep_once`). Returns whether the pass succeeded."""
         try:
-            sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed)
+            sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed, gone=self.gone)
             self._failed = False
             if self.after_pass is not None:
                 self.after_pass()

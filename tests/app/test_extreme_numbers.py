@@ -12,6 +12,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings
+from tests.support.routed import routed_by
 
 LIMIT = sys.get_int_max_str_digits()
 TOO_LONG = "9" * (LIMIT + 1)
@@ -23,7 +24,9 @@ EXTREMES = ["1" + "0" * (LIMIT - 1), "-" + "9" * LIMIT, "1e400", "-1e400", "4.9e
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
     settings = service_settings(tmp_path_factory.mktemp("extreme"))
-    with TestClient(create_app(settings, run_jobs=False), raise_server_exceptions=False) as client:
+    with routed_by("routed"):  # the routes take ?routed=1, which sends a request past the lean path
+        app = create_app(settings, run_jobs=False)
+    with TestClient(app, raise_server_exceptions=False) as client:
         yield client
 
 

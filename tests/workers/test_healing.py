@@ -188,8 +188,6 @@ def test_a_stop_ends_the_start_watch_so_a_quick_restart_has_one(service, monkeyp
 
     monkeypatch.setattr(ProcessDispatcher, "_start_stalled", busy_stall_check)
     dispatcher = service.app.state.dispatcher
-    # the sweeper's thread cannot be started twice; it is not what this test is about
-    monkeypatch.setattr(dispatcher._sweeper, "start", lambda: None)
     assert checked.wait(10)
     threading.Timer(1.0, release.set).start()
     dispatcher.stop()

@@ -14,7 +14,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.deps import Caller, Service
+from plantsolve.app.deps import Caller, Service, known_query
 from plantsolve.app.jobs.events import add_event_routes
 from plantsolve.app.jobs.lean import is_json
 from plantsolve.app.problems import PayloadTooLarge, responses
@@ -208,7 +208,8 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
 
 
 def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
-    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401, 500))
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key), Depends(known_query)],
+                       responses=responses(401, 500))
 
     for kind in sorted(kinds):
         spec = kinds[kind]

@@ -11,7 +11,7 @@ from typing import Mapping
 from fastapi import APIRouter, Depends
 
 from plantsolve.app.auth import require_api_key
-from plantsolve.app.deps import Caller, Service
+from plantsolve.app.deps import Caller, Service, known_query
 from plantsolve.app.jobs.endpoints import camel
 from plantsolve.app.problems import responses
 from plantsolve.solvers.base import ResultOperation, SolverSpec
@@ -34,7 +34,8 @@ def _example(operation: ResultOperation) -> dict | None:
 
 
 def build_operations_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
-    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key)], responses=responses(401, 500))
+    router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key), Depends(known_query)],
+                       responses=responses(401, 500))
     for kind in sorted(kinds):
         spec = kinds[kind]
         for operation in spec.operations:
