@@ -99,12 +99,16 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
             "solver", f"The solver failed on this input ({said}); it was not retried because the same input fails "
                       "the same way. Check the input's values (scale, degenerate geometry); the server log has the "
                       f"details of job {job_id}, attempt {attempt}."), error=said, crash=True)
+    # a disk, network or database error is the machine's, not the input's nor the solver's: said so, so that the
+    # user sends the same input again once the service is back instead of looking for a fault in it
     if attempt < max_attempts:
-        return Verdict("requeued", failure_report("solver", "The solver crashed; the job was re-queued."), error=said,
-                       retry=True, crash=True)
+        return Verdict("requeued", failure_report(
+            "infrastructure", f"An attempt failed on the machine's services (disk, network or database: {said}); the "
+                              "job was re-queued."), error=said, retry=True, crash=True)
     return Verdict("failed", failure_report(
-        "solver", f"The solver crashed on each of {attempt} attempts: {said} (the server log has the details of job "
-                  f"{job_id})."), error=said, crash=True)
+        "infrastructure", f"Each of {attempt} attempts failed on the machine's services (disk, network or database), "
+                          f"not on the input: {said}. Submit it again once the service is ready (the server log has "
+                          f"the details of job {job_id})."), error=said, crash=True)
 
 ERROR_CHARACTERS = 300
 
