@@ -28,15 +28,17 @@ Caller = Annotated[Principal, Depends(require_api_key)]
 async def known_query(request: Request) -> None:
     """Refuse (422 naming each) a query parameter the route does not take: a misspelt one (``?callbackurl=`` for
     ``callback_url``, ``?stauts=failed``) would otherwise be dropped without a word, and the job be submitted without
-    its webhook, or the list be the whole list."""
+    its webhook, or the list be the whole list. Only on routes that take parameters (on the others nothing can be
+    misspelt), and never a name starting with ``_`` (cache busters: jQuery's ``?_=1700000000``)."""
     if not request.query_params:
         return
     taken = _query_names(request)
-    if taken is None:
+    if not taken:
         return
-    unknown = [name for name in dict.fromkeys(request.query_params.keys()) if name not in taken]
+    unknown = [name for name in dict.fromkeys(request.query_params.keys())
+               if name not in taken and not name.startswith("_")]
     if unknown:
-        expected = ", ".join(sorted(taken)) or "none"
+        expected = ", ".join(sorted(taken))
         raise Unprocessable(
             f"Unknown query parameter{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))}; "
             f"this route takes: {expected}.",

@@ -14,6 +14,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 
 from plantsolve.jobs.errors import (
     MAX_JSON_DEPTH,
@@ -105,7 +106,12 @@ def install(app: FastAPI) -> None:
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, error: StarletteHTTPException):
         if error.status_code == 400 and str(error.detail) == "There was an error parsing the body":
-            # FastAPI's answer to a JSON body that is not text: unreadable input like any other
+            # FastAPI wraps whatever stopped it reading the body: our own bound (a stalled body's 408, an oversized
+            # one's 413) answers as itself, a client that left needs no answer, the rest is a body that is no text
+            if isinstance(error.__cause__, ProblemError):
+                return problem_response(error.__cause__, request)
+            if isinstance(error.__cause__, ClientDisconnect):
+                raise error.__cause__
             return problem_response(Unprocessable("The body is not valid JSON text.", errors=[
                 field_problem(["body"], "invalid JSON: not UTF-8 text", "json_invalid")]), request)
         cls = _STATUS_CLASSES.get(error.status_code)
