@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import socket
 from dataclasses import dataclass
@@ -62,5 +63,16 @@ class ServiceContext:
         self.store.close()
 
 
-def worker_name(mode: str) -> str:
-    return f"{mode}@{socket.gethostname()}:{os.getpid()}"
+def worker_name(mode: str, pid: int | None = None) -> str:
+    """``mode@host:pid`` of this process (or of ``pid`` on this host); the host carries its process-id namespace
+    (``host~4026531836``) where one can be read, since containers may share a host name (a fixed compose
+    ``hostname:``, host networking) while their pids are each their own."""
+    return f"{mode}@{socket.gethostname()}{_pid_namespace()}:{os.getpid() if pid is None else pid}"
+
+
+@functools.cache
+def _pid_namespace() -> str:
+    try:
+        return f"~{os.stat('/proc/self/ns/pid').st_ino}"
+    except OSError:
+        return ""

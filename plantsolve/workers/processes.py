@@ -18,7 +18,6 @@ import logging
 import multiprocessing
 import os
 import signal
-import socket
 import threading
 import time
 import uuid
@@ -500,12 +499,13 @@ class ProcessDispatcher:
 
 def worker_of(pid: int) -> str:
     """The worker name job process ``pid`` gives itself (:func:`plantsolve.jobs.context.worker_name`)."""
-    return f"process@{socket.gethostname()}:{pid}"
+    return worker_name("process", pid)
 
 
 def job_process_pid(worker: str | None) -> int | None:
     """The pid of the job process of this host named ``worker`` (:func:`worker_of`); None for another host's, or
-    another transport's worker. Host names are unique among the hosts sharing a database (as Celery's node names)."""
+    another transport's worker or another pid namespace's (a container of the same host name). Host names are unique
+    among the hosts sharing a database (as Celery's node names)."""
     prefix = worker_of(0)[:-1]
     if worker is None or not worker.startswith(prefix) or not worker[len(prefix):].isdigit():
         return None

@@ -12,6 +12,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
+from plantsolve.workers.processes import worker_of
 from tests.conftest import service_settings, wait_for
 
 
@@ -32,7 +33,8 @@ def test_jobs_run_in_worker_processes(pooled):
     assert done["status"] == "succeeded"
     assert pooled.get(f"/v1/jobs/{job['id']}/result").json()["norm"] == 5.0
     (attempt,) = done["attempts"]
-    assert attempt["worker"] == f"process@{socket.gethostname()}:{worker_pid}" and worker_pid != os.getpid()
+    assert attempt["worker"] == worker_of(worker_pid) and worker_pid != os.getpid()
+    assert attempt["worker"].startswith(f"process@{socket.gethostname()}~")  # with its pid namespace
 
 
 def test_a_backlog_waits_in_the_database_and_is_resumed_after_a_stop(tmp_path, caplog):

@@ -125,6 +125,10 @@ def test_a_job_process_that_still_runs_or_is_another_hosts_keeps_its_claim(tmp_p
         assert not dispatcher.orphan_gone("process@another-host:1")
         assert not dispatcher.orphan_gone("celery@" + worker_of(1).split("@", 1)[1])
         assert job_process_pid(worker_of(123)) == 123 and job_process_pid(None) is None
+        # a container of the same host name in another pid namespace: not this host's process to judge
+        host = worker_of(1).rsplit(":", 1)[0]
+        assert not dispatcher.orphan_gone(f"{host.split('~')[0]}~1:{4_194_000}")
+        assert not dispatcher.orphan_gone(f"{host.split('~')[0]}:{4_194_000}")  # nor one naming no namespace
         sweep_once(ctx, lambda *a: None, gone=dispatcher.orphan_gone)
         assert ctx.repo.get(alive).status == ctx.repo.get(elsewhere).status == "running"
     finally:
