@@ -232,6 +232,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         described = f"no header, {width} columns read as {'x, y, z, CLR' if kind == 'xyz_clr' else 'L, R, A, CLR'}"
     values: list[dict] = []
     value_lines: list[int] = []
+    unread: list[tuple[int, str, str]] = []  # the body's lines that could not be read: line, text, why
     for line_no, ln in body:
         cells = _split(ln, delim)
         try:
@@ -247,6 +248,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         except ValueError as exc:
             warnings.append(Diagnostic(code="nominal_line_skipped", message=f"nominal CSV line {line_no} skipped: "
                                        f"{exc}", details={"line": line_no, "text": ln[:120]}))
+            unread.append((line_no, ln, str(exc)))
             continue
         values.append(row)
         value_lines.append(line_no)
@@ -256,10 +258,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     # a row of numbers is a point or a bend of the part: leaving one out describes another part (a bend fewer, no
     # end straight), which the inspection would then judge the scan against; lines of text (a units row, a
     # signature) are only skipped
-    for warning in warnings:
-        line, text = warning.details["line"], warning.details["text"]
-        if warning.code == "nominal_line_skipped" and sum(_looks_numeric(c) for c in _split(text, delim)) >= 2:
-            reason = warning.message.split("skipped: ", 1)[-1]
+    for line, text, reason in unread:
+        if sum(_looks_numeric(c) for c in _split(text, delim)) >= 2:
             raise NominalError(line, None, f"nominal CSV line {line} cannot be read ({reason}): a row of numbers "
                                "left out would describe another part; correct or delete it")
     if kind == "xyz_clr":

@@ -100,6 +100,11 @@ def test_an_unreadable_row_of_numbers_is_refused_naming_its_line():
         read_nominal_csv("L,R,A,CLR\n80,0,90,20\n60,90,90,20\n80,0,0,0\n8O,0,0,0\n")
 
 
+def test_a_title_line_holding_numbers_above_the_header_is_still_only_skipped():
+    got = read_nominal_csv("Part,4711,Rev,3\nL,R,A,CLR\n80,0,90,20\n60,90,90,20\n80,0,0,0\n")
+    assert len(got.rows) == 3 and [w.details["line"] for w in got.warnings] == [1]
+
+
 def test_unreadable_lines_before_or_after_the_rows_are_skipped_with_a_warning_naming_them():
     got = read_nominal_csv("L,R,A,CLR\nmm,deg,deg,mm\n80,0,90,20\n60,90,90,20\n80,0,0,0\nchecked: J. Doe,,,\n")
     assert len(got.rows) == 3
