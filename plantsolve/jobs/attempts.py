@@ -7,6 +7,7 @@ a failure report, a typed :class:`Report`, says what went wrong in words and car
 
 from __future__ import annotations
 
+import errno
 import re
 import uuid
 from dataclasses import dataclass
@@ -100,15 +101,34 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
                       "the same way. Check the input's values (scale, degenerate geometry); the server log has the "
                       f"details of job {job_id}, attempt {attempt}."), error=said, crash=True)
     # a disk, network or database error is the machine's, not the input's nor the solver's: said so, so that the
-    # user sends the same input again once the service is back instead of looking for a fault in it
+    # user sends the same input again once the service is back instead of looking for a fault in it; another error
+    # of input and output (a file that is no gzip, one not found) may be either, and is said as such
     if attempt < max_attempts:
         return Verdict("requeued", failure_report(
-            "infrastructure", f"An attempt failed on the machine's services (disk, network or database: {said}); the "
-                              "job was re-queued."), error=said, retry=True, crash=True)
+            "infrastructure", f"An attempt failed on an input/output error ({said}); the job was re-queued."),
+            error=said, retry=True, crash=True)
+    if _the_machines(error):
+        message = (f"Each of {attempt} attempts failed on the machine's services (disk, network or database), not on "
+                   f"the input: {said}. Submit it again once the service is ready")
+    else:
+        message = (f"Each of {attempt} attempts failed on an input/output error ({said}): a service of the machine, "
+                   "or a file the input names or holds that cannot be read")
     return Verdict("failed", failure_report(
-        "infrastructure", f"Each of {attempt} attempts failed on the machine's services (disk, network or database), "
-                          f"not on the input: {said}. Submit it again once the service is ready (the server log has "
-                          f"the details of job {job_id})."), error=said, crash=True)
+        "infrastructure", f"{message} (the server log has the details of job {job_id})."), error=said, crash=True)
+
+
+# errno values that are the machine's (a full or failing disk, a network that is away), whatever the input
+MACHINE_ERRNOS = frozenset(getattr(errno, name) for name in (
+    "ENOSPC", "EDQUOT", "EIO", "EROFS", "ENOMEM", "ESTALE", "ECONNREFUSED", "ECONNRESET", "ECONNABORTED", "ETIMEDOUT",
+    "EHOSTUNREACH", "ENETUNREACH", "ENETDOWN", "EPIPE", "ENOTCONN") if hasattr(errno, name))
+
+
+def _the_machines(error: BaseException) -> bool:
+    """Whether an infrastructure failure is surely the machine's: a connection, a time-out, the database or broker
+    away, or an OSError of a full or failing disk or an unreachable network."""
+    if isinstance(error, (ConnectionError, TimeoutError)) or not isinstance(error, OSError):
+        return True
+    return error.errno in MACHINE_ERRNOS
 
 ERROR_CHARACTERS = 300
 
