@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import re
+import struct
 import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -257,6 +259,18 @@ def merge_upload_options(body: dict, options: dict | None) -> dict:
     return {**body, "options": merged} if merged else body
 
 
+def binary_stl(head: bytes) -> bool:
+    """A binary STL's start: an 80-byte header, a triangle count, then a first triangle of finite floats whose normal
+    is a unit vector or zero (exporters write either) and whose attribute word is zero."""
+    if len(head) < 134 or int.from_bytes(head[80:84], "little") == 0:
+        return False
+    numbers = struct.unpack("<12f", head[84:132])
+    if not all(math.isfinite(v) for v in numbers) or head[132:134] != b"\0\0":
+        return False
+    length = math.sqrt(sum(v * v for v in numbers[:3]))
+    return length < 1e-6 or abs(length - 1.0) < 1e-3
+
+
 def decode_text(content: bytes, what: str = "text file") -> str:
     """The text of an uploaded file as exporters write it: UTF-8 (with or without a byte-order mark),
     UTF-16 with its mark, or Windows-1252 (what Excel and older Windows tools write). Binary content
@@ -271,10 +285,8 @@ def decode_text(content: bytes, what: str = "text file") -> str:
     if b"\x00" in content:
         if (text := utf16_without_mark(content)) is not None:
             return text
-        from plantsolve.solvers.other_kinds import file_holds  # it refuses through this module: imported late
-
-        holds = file_holds(content[:65536])
-        raise reject(f"this is a binary file (it contains NUL bytes{f', {holds}' if holds else ''}), not a {what}")
+        holds = ", a binary STL mesh" if binary_stl(content[:134]) else ""
+        raise reject(f"this is a binary file (it contains NUL bytes{holds}), not a {what}")
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError:

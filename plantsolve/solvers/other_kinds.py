@@ -3,9 +3,7 @@ naming what it holds, instead of a list of 'extra fields not permitted'."""
 
 from __future__ import annotations
 
-import math
 import re
-import struct
 from collections.abc import Mapping
 from typing import Any
 
@@ -18,7 +16,7 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.schemas.tube import TubeRequest
-from plantsolve.solvers.base import reject
+from plantsolve.solvers.base import binary_stl, reject
 
 REQUESTS: Mapping[str, type[BaseModel]] = {
     "alignment": AlignmentRequest, "tube": TubeRequest, "perfmap": PerfmapRequest, "polyhedra": PolyhedraRequest,
@@ -100,7 +98,7 @@ def file_holds(head: bytes) -> str | None:
         return "an ASCII STL mesh"
     if low.startswith(b"ply"):
         return "a PLY point cloud or mesh"
-    if _binary_stl(head):
+    if binary_stl(head):
         return "a binary STL mesh"
     if _IDF_OBJECT.search(text[:65536]):
         return "an EnergyPlus IDF"
@@ -117,18 +115,6 @@ def file_holds(head: bytes) -> str | None:
         if len(rows) >= 2 and sep in rows[0] and all(_numbers(row.split(sep)) for row in rows[1:]):
             return "a CSV table with a header row" if not _numbers(rows[0].split(sep)) else "a CSV table of numbers"
     return None
-
-
-def _binary_stl(head: bytes) -> bool:
-    """A binary STL's start: an 80-byte header, a triangle count, then a first triangle of finite floats whose normal
-    is a unit vector or zero (exporters write either) and whose attribute word is zero."""
-    if len(head) < 134 or int.from_bytes(head[80:84], "little") == 0:
-        return False
-    numbers = struct.unpack("<12f", head[84:132])
-    if not all(math.isfinite(v) for v in numbers) or head[132:134] != b"\0\0":
-        return False
-    length = math.sqrt(sum(v * v for v in numbers[:3]))
-    return length < 1e-6 or abs(length - 1.0) < 1e-3
 
 
 def _ldraw(lines: list[list[bytes]]) -> bool:
