@@ -168,6 +168,17 @@ class PolyhedraRequest(StrictModel):
         "ZoneGroup's Zone List Multiplier, read from an IDF or epJSON upload): total_volume and total_floor_area "
         "count the zone that many times, as EnergyPlus counts floor area; the zone's own measures are one copy's. "
         "Zones not named count once.")
+    zones_outside_total_floor_area: list[Name] = Field(
+        default_factory=list, max_length=MAX_FACES,
+        description="Zones whose floor total_floor_area leaves out, as EnergyPlus leaves out a Zone whose Part of "
+        "Total Floor Area is No (plenums, attics; read from an IDF or epJSON upload); their own floor_area is still "
+        "given, and their volume still counts in total_volume.")
+    subsurface_multipliers: dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]] = Field(
+        default_factory=dict, max_length=MAX_FACES,
+        description="How many identical copies of a subsurface its host holds (EnergyPlus' Multiplier of a window, "
+        "glass door or door, read from an IDF or epJSON upload): the host's net_area loses each copy's area, as "
+        "EnergyPlus multiplies the subsurface's area; the subsurface's own area is one copy's. Subsurfaces not named "
+        "count once.")
     source: dict[str, Any] | None = Field(
         default=None,
         description="What the upload parser read (file format, objects skipped with line and reason); set by the "
@@ -193,7 +204,8 @@ class ZoneResult(BaseModel):
         json_schema_extra=unit(VOLUME))
     surface_area: float = Field(description="Sum of the enclosure faces' areas (units², net of holes, gross of "
                                 "subsurfaces).", json_schema_extra=unit(AREA))
-    net_surface_area: float = Field(description="surface_area minus the subsurfaces' areas (units²): the opaque area.",
+    net_surface_area: float = Field(description="surface_area minus the subsurfaces' areas (units², each times its "
+                                    "multiplier): the opaque area.",
                                     json_schema_extra=unit(AREA))
     floor_area: float = Field(
         description="Floor area (units²): the area of the zone's faces whose outward normal points down within "
@@ -227,6 +239,9 @@ class ZoneResult(BaseModel):
     face_count: int | None = Field(default=None, description="How many faces bound the zone.")
     multiplier: int = Field(default=1, description="How many times the totals count this zone (zone_multipliers); "
                             "its measures here are one copy's.")
+    part_of_total_floor_area: bool = Field(
+        default=True, description="Whether total_floor_area counts this zone's floor (false: named in "
+        "zones_outside_total_floor_area, EnergyPlus' Part of Total Floor Area = No).")
 
 
 class FaceResult(BaseModel):
@@ -235,7 +250,10 @@ class FaceResult(BaseModel):
     parent: str | None = None
     area: float = Field(description="Area (units²) of the face net of its holes, gross of its subsurfaces.",
                         json_schema_extra=unit(AREA))
-    net_area: float = Field(description="area minus the subsurfaces' areas (units²).", json_schema_extra=unit(AREA))
+    net_area: float = Field(description="area minus the subsurfaces' areas (units²), each times its multiplier.",
+                            json_schema_extra=unit(AREA))
+    multiplier: int = Field(default=1, description="A subsurface's: how many identical copies its host holds "
+                            "(subsurface_multipliers); its area here is one copy's.")
     perimeter: float = Field(description="Length of all the face's loops (units).", json_schema_extra=unit(LENGTH))
     normal: list[float] = Field(description="Unit normal (Newell), pointing out of the first zone as given.",
                                 json_schema_extra=unit("1"))
@@ -266,6 +284,8 @@ class PolyhedraResult(BaseModel):
     adjacency: list[Adjacency]
     total_volume: float | None = Field(description="Sum of the zones' volumes (units³), each times its multiplier; "
                                        "null when a zone is not closed.", json_schema_extra=unit(VOLUME))
-    total_floor_area: float = Field(description="Sum of the zones' floor areas (units²), each times its multiplier.",
+    total_floor_area: float = Field(description="Sum of the floor areas (units²) of the zones that are "
+                                    "part_of_total_floor_area, each times its multiplier (EnergyPlus' total floor "
+                                    "area).",
                                     json_schema_extra=unit(AREA))
     report: Report

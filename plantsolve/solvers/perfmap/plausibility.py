@@ -14,7 +14,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.perfmap.setting_lines import Setting
-from plantsolve.solvers.perfmap.units import UnitError, parse_unit, registry, revolutions_per_minute
+from plantsolve.solvers.perfmap.units import UnitError, parse_speed_unit, parse_unit, registry, revolutions_per_minute
 
 # peak isentropic/polytropic efficiency of a compressor's speed line
 EFFICIENCY_PEAK = (0.2, 0.98)
@@ -160,7 +160,7 @@ def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting])
         values = np.array([s.values[k] for s in settings], dtype=float)
         unit = units.settings[k] if k < len(units.settings) else None
         try:
-            parsed = parse_unit(unit) if unit else None
+            parsed = parse_speed_unit(unit) if unit else None
         except UnitError:
             continue
         if parsed is None:

@@ -13,6 +13,25 @@ from plantsolve.solvers.base import FieldError, InputRejected
 CHOKE_FLOW_TOLERANCE = 1e-4  # flows this close to the largest (fraction of the line's flow range) are the same
 
 
+@dataclass(frozen=True)
+class Repeat:
+    """Readings at one flow of one setting, averaged into one point."""
+
+    flow: float
+    points: tuple[int, ...]  # indices in the position's submitted lists
+    pressures: tuple[float, ...]
+    efficiencies: tuple[float, ...]
+
+    @property
+    def pressure_spread(self) -> float:
+        """(max - min) / mean of the pressures: how far the readings disagree."""
+        return (max(self.pressures) - min(self.pressures)) / float(np.mean(self.pressures))
+
+    @property
+    def efficiency_spread(self) -> float:
+        return (max(self.efficiencies) - min(self.efficiencies)) / float(np.mean(self.efficiencies))
+
+
 @dataclass
 class Setting:
     """One setting (its values in the order of the request's setting names), points sorted by flow,
@@ -25,6 +44,8 @@ class Setting:
     source_index: int  # index in request.positions
     merged_duplicates: int = 0
     repeated_flows: int = 0  # readings at an already measured flow, averaged
+    # each averaged group: flow, the points' indices in the submitted lists, their pressures and efficiencies
+    repeats: list[Repeat] = field(default_factory=list)
     choke_pressures: list[float] = field(default_factory=list)  # a vertical choke segment at x[-1], low to high
 
     names: tuple[str, ...] = ("theta", "phi")
@@ -103,13 +124,17 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
         keep = np.ones(len(x), dtype=bool)
         keep[choke] = False
         keep[top] = True
-        x, y, eta = x[keep], y[keep], eta[keep]
+        x, y, eta, order = x[keep], y[keep], eta[keep], order[keep]
+    repeats: list[Repeat] = []
     if np.any(np.diff(x) <= 0):
         # The same flow with other values elsewhere: repeated readings, averaged.
         xs, ys, es = [], [], []
         for members in np.split(np.arange(len(x)), np.flatnonzero(np.diff(x) > 0) + 1):
             xs.append(x[members[0]]); ys.append(float(np.mean(y[members]))); es.append(float(np.mean(eta[members])))
             repeated += len(members) - 1
+            if len(members) > 1:
+                repeats.append(Repeat(float(x[members[0]]), tuple(int(k) for k in order[members]),
+                                      tuple(map(float, y[members])), tuple(map(float, eta[members]))))
         x, y, eta = np.array(xs), np.array(ys), np.array(es)
     if len(x) < 3:
         errors.append(FieldError(("positions", i, "flow"),
@@ -121,7 +146,7 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
                                  f"the flow range {x[0]:g}..{x[-1]:g} is too narrow to fit a "
                                  "curve (relative span below 1e-9)"))
         return None
-    return Setting(values, x, y, eta, i, int(np.sum(same)), repeated, choke_pressures, names)
+    return Setting(values, x, y, eta, i, int(np.sum(same)), repeated, repeats, choke_pressures, names)
 
 
 def normalised_settings(*columns: np.ndarray) -> np.ndarray:

@@ -115,6 +115,21 @@ def revolutions_per_minute(unit: pint.Unit) -> float | None:
     return float(reg.Quantity(1.0, unit).to("1/min").magnitude)
 
 
+# Rig spellings of revolutions per minute that pint reads as something else or not at all: 'U/min' (Umdrehungen pro
+# Minute, German rigs) is pint's enzyme unit per minute, 'u/min' atomic mass units per minute; 'r/min', 'rev/min'
+# and 'min-1' it does not read. Read as another quantity, a speed setting's plausibility check was skipped.
+_RPM_SPELLINGS = re.compile(r"(?:[ur1]|rev|upm)\s*/\s*min|min\s*(?:\^|\*\*)?\s*-\s*1|min⁻¹|u/?pm|r\.?p\.?m\.?",
+                            re.IGNORECASE)
+
+
+def parse_speed_unit(text: str) -> Unit:
+    """The unit of a shaft speed: rig spellings of rpm (``U/min``, ``1/min``, ``min^-1``, ``r/min``, ``rev/min``)
+    read as rpm, any other as :func:`parse_unit` reads it (raising :class:`UnitError`)."""
+    if _RPM_SPELLINGS.fullmatch(text.strip().strip("[]()").strip()):
+        return Unit("rpm", registry().parse_units("rpm"))
+    return parse_unit(text)
+
+
 def _dimensions(unit: pint.Unit) -> str:
     return "" if unit.dimensionless else str(unit.dimensionality)
 
@@ -142,7 +157,7 @@ def speed_unit_error(name: str, text: str | None) -> str | None:
     if not text:
         return None
     try:
-        u = parse_unit(text)
+        u = parse_speed_unit(text)
     except UnitError:
         return None
     reg = registry()

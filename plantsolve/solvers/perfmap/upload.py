@@ -73,6 +73,7 @@ from plantsolve.solvers.perfmap.units import (
     UnitError,
     check_quantity,
     fraction_factor,
+    parse_speed_unit,
     parse_unit,
     revolutions_per_minute,
 )
@@ -771,7 +772,7 @@ def _same_unit(a: str, b: str) -> bool:
     """Two spellings of one unit (``kg/s`` and ``kg s^-1``; ``lbm/s`` and ``lb/s``; ``Hz`` and ``1/s``; ``1/min`` and
     ``rpm``; ``-`` and ``1``), by value; as text when pint reads neither."""
     try:
-        first, second = parse_unit(a), parse_unit(b)
+        first, second = parse_speed_unit(a), parse_speed_unit(b)  # 'U/min' is rpm, not pint's enzyme units
     except UnitError:
         return a.strip().strip("[]()").strip().lower() == b.strip().strip("[]()").strip().lower()
     if first.unit == second.unit:

@@ -111,12 +111,12 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     writer.writerow(["record", "id", "zones", "parent", f"volume [{u}3]", f"signed_volume [{u}3]", f"area [{u}2]",
                      f"net_area [{u}2]", f"perimeter [{u}]", "closed", "orientation", "open_edges",
                      "non_manifold_edges", "normal_x", "normal_y", "normal_z", f"planarity_error [{u}]",
-                     f"floor_area [{u}2]", "multiplier"])
+                     f"floor_area [{u}2]", "multiplier", "part_of_total_floor_area"])
     for z in result.zones:
         writer.writerow(["zone", z.id, "", "", "" if z.volume is None else repr(z.volume), repr(z.signed_volume),
                          repr(z.surface_area), repr(z.net_surface_area), "", z.closed, z.orientation,
                          z.open_edge_count, z.non_manifold_edge_count, "", "", "", "", repr(z.floor_area),
-                         z.multiplier])
+                         z.multiplier, z.part_of_total_floor_area])
     if face_table is None:
         return out.getvalue().encode()
     host = np.where(poly.face_parent >= 0, poly.face_parent, np.arange(poly.n_faces))
@@ -139,7 +139,7 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     area, perimeter, nx, ny, nz, planarity = columns
     blank = repeat("")
     writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
-                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, blank))
+                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, blank, blank))
     return out.getvalue().encode()
 
 
@@ -169,7 +169,7 @@ def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face
             bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
             _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
             bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
-            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",,\n", n)]))
+            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",,,\n", n)]))
     return parts
 
 

@@ -29,7 +29,8 @@ _INTERZONE_SUB = ("construction_name", "building_surface_name", "outside_boundar
                   *_SUB)
 FIELDS: dict[str, tuple[str, ...]] = {
     "zone": ("direction_of_relative_north", "x_origin", "y_origin", "z_origin", "type", "multiplier",
-             "ceiling_height", "volume", "floor_area"),
+             "ceiling_height", "volume", "floor_area", "zone_inside_convection_algorithm",
+             "zone_outside_convection_algorithm", "part_of_total_floor_area"),
     "buildingsurface:detailed": ("surface_type", *_DETAILED),
     "wall:detailed": _DETAILED,
     "roofceiling:detailed": _DETAILED,

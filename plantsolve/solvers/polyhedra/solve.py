@@ -19,6 +19,8 @@ from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
+from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, multipliers_applied, subsurface_copies, \
+    subsurface_multipliers_applied
 from plantsolve.solvers.polyhedra.declared import compare
 from plantsolve.solvers.polyhedra.duplicates import repeated_faces
 from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genus, orient, topology
@@ -189,7 +191,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     n_faces = poly.n_faces
     sub_area = np.zeros(n_faces)
     subs = np.flatnonzero(poly.face_parent >= 0)
-    np.add.at(sub_area, poly.face_parent[subs], area[subs])
+    copies = subsurface_copies(request, n_faces)
+    np.add.at(sub_area, poly.face_parent[subs], area[subs] * copies[subs])
     net_area = area - sub_area
     normal = an.measures.normal
 
@@ -205,6 +208,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     by_zone = np.argsort(gmap.use_zone, kind="stable")
     zone_bounds = np.searchsorted(gmap.use_zone[by_zone], np.arange(n_zones + 1))
     floors = floor_areas(an, n_zones)
+    outside = set(request.zones_outside_total_floor_area)
     for z in range(n_zones):
         if z % max(1, n_zones // 20) == 0:
             progress(0.85 + 0.08 * z / max(n_zones, 1), f"results: zone {z + 1} of {n_zones}")
@@ -238,6 +242,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             "id": zone_id, "volume": volume, "signed_volume": signed,
             "surface_area": float(area[faces].sum()), "net_surface_area": float(net_area[faces].sum()),
             "floor_area": float(floors[z]), "multiplier": multiplier,
+            "part_of_total_floor_area": poly.zone_ids[z] not in outside,
             "closed": closed, "orientation": label,
             "misoriented_faces": [poly.face_ids[f] for f in (misoriented if listed else misoriented[:MAX_LISTED_EDGES])],
             "misoriented_face_count": int(len(misoriented)),
@@ -326,7 +331,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         face_results = [{
             "id": poly.face_ids[f], "zones": zone_names[f] if parent[f] < 0 else zone_names[parent[f]],
             "parent": poly.face_ids[parent[f]] if parent[f] >= 0 else None, "area": area_l[f], "net_area": net_l[f],
-            "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f]} for f in range(n_faces)]
+            "perimeter": perim_l[f], "normal": normal_l[f], "planarity_error": planarity_l[f],
+            "multiplier": int(copies[f])} for f in range(n_faces)]
 
     details = {
         "zones": n_zones, "faces": n_faces, "darts": gmap.n_darts,
@@ -350,6 +356,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
             if differ:
                 warnings.append(differ)
     warnings.extend(multipliers_applied(zones))
+    warnings.extend(floor_areas_left_out(zones, request.units))
+    warnings.extend(subsurface_multipliers_applied(request, poly, area))
     sizes = zone_sizes(poly, gmap, n_zones)
     hint = unit_hint(request)
     warnings.extend(implausible(zones, {poly.zone_ids[z]: {"height": float(sizes[z, 2]),
@@ -363,24 +371,11 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
-        total_floor_area=float((floors * [z["multiplier"] for z in zones]).sum()),
+        total_floor_area=float((floors * [z["multiplier"] * z["part_of_total_floor_area"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",
                       message=f"{closed_count} of {n_zones} zone(s) closed", warnings=warnings, details=details),
     ), files={FACE_TABLE: _npy(area, net_area, an.measures.perimeter, normal, planarity)}
         if tabled else {})
-
-
-def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
-    """The zones the totals count more than once: a sum of the listed zones' measures is not the total."""
-    repeated = [z for z in zones if z["multiplier"] > 1]
-    if not repeated:
-        return []
-    listed = ", ".join(f"{z['id']!r} ×{z['multiplier']}" for z in repeated[:10]) + (" …" if len(repeated) > 10 else "")
-    return [Diagnostic(code="zone_multipliers_applied", message=(
-        f"{len(repeated)} zone(s) stand for several identical zones (EnergyPlus' Zone Multiplier): {listed}. "
-        "total_volume and total_floor_area count each that many times, as EnergyPlus counts floor area; the zones' "
-        "own measures are one copy's."),
-        details={"zones": {z["id"]: z["multiplier"] for z in repeated[:100]}})]
 
 
 def _npy(*columns: np.ndarray) -> bytes:

@@ -49,9 +49,11 @@ from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, jso
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
+from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
@@ -289,6 +291,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             windows.append((cls, fields, lines, line))
     by_name = {f["id"].lower(): f["id"] for f in faces}
     loops = {f["id"].lower(): f["loops"][0] for f in faces}
+    subsurface_copies: dict[str, int] = {}
     for cls, fields, lines, line in windows:
         name = fields[0] if fields else ""
         label = f"{cls} {name!r}"
@@ -301,8 +304,10 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                  "surface read from this file")
             if cls in SIMPLE_SUBSURFACES:  # placed on its host, already in world coordinates
                 points = subsurface(cls, fields, loops[fields[host].lower()])
+                multiplier_at = simple_multiplier_index(fields)
             else:
                 n_index = _fenestration_layout(fields)
+                multiplier_at = n_index - 1
                 points = _vertices(fields, lines, n_index)
                 zone_key = surface_zone[fields[host].lower()]
                 if relative and zone_key in zones:
@@ -316,6 +321,10 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             continue
         faces.append({"id": name, "loops": [points], "parent": by_name[fields[host].lower()]})
         face_line[name.lower()] = line
+        # a multiplier EnergyPlus refuses refuses the file (the window read once would be a wrong net area)
+        copies = subsurface_multiplier(cls, fields, lines, line, multiplier_at)
+        if copies > 1:
+            subsurface_copies[name] = copies
     if not any("parent" not in f for f in faces):
         first = skipped[0] if skipped else None
         where = (("file", "line", first["line"]) if first["line"] else ("file", first["object"])) if first else \
@@ -327,7 +336,10 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
+            **({"zones_outside_total_floor_area": outside} if outside else {}),
+            **({"subsurface_multipliers": subsurface_copies} if subsurface_copies else {}),
             "source": {"format": fmt, "faces": len(faces), "zones": len({z for f in faces for z in f.get("zones", [])}),
                        "units": stated("m", 1.0, "format", "EnergyPlus lengths are always metres"),
                        "vertex_entry": "clockwise" if clockwise else "counterclockwise",

@@ -70,12 +70,26 @@ def check_input(request: PolyhedraRequest) -> None:
 
 
 def _multiplier_errors(request: PolyhedraRequest) -> list[FieldError]:
-    """A multiplier for a zone no face bounds (a misspelt name would leave the zone counted once)."""
+    """A multiplier, or a zone left out of the total floor area, for a zone no face bounds (a misspelt name would
+    leave the zone counted once, or counted)."""
     zones = {zone for face in request.faces for zone in (face.zones or ["default"]) if face.parent is None}
     if request.mesh is not None:
         zones.add(request.mesh.zone)
-    return [FieldError(("zone_multipliers", name), f"no face bounds a zone {name!r} (zones: "
-                       f"{', '.join(sorted(zones)[:10])})") for name in request.zone_multipliers if name not in zones]
+    listed = ', '.join(sorted(zones)[:10])
+    return [FieldError(("zone_multipliers", name), f"no face bounds a zone {name!r} (zones: {listed})")
+            for name in request.zone_multipliers if name not in zones] + \
+        [FieldError(("zones_outside_total_floor_area", k), f"no face bounds a zone {name!r} (zones: {listed})")
+         for k, name in enumerate(request.zones_outside_total_floor_area) if name not in zones] + \
+        _subsurface_multiplier_errors(request)
+
+
+def _subsurface_multiplier_errors(request: PolyhedraRequest) -> list[FieldError]:
+    """A multiplier for a face that is not a subsurface (an enclosure face is not copied on a host)."""
+    if not request.subsurface_multipliers:
+        return []
+    subsurfaces = {face.id for face in request.faces if face.parent is not None}
+    return [FieldError(("subsurface_multipliers", name), f"{name!r} is not a subsurface (a face with a parent)")
+            for name in request.subsurface_multipliers if name not in subsurfaces]
 
 
 def _hole_errors(request: PolyhedraRequest) -> list[FieldError]:

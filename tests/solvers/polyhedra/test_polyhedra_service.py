@@ -70,8 +70,8 @@ def test_an_idf_asked_in_feet_through_the_api_is_converted_and_says_so(client):
     assert result["report"]["details"]["source"]["units"]["factor"] == pytest.approx(1 / 0.3048)
     table = client.get({a["name"]: a for a in job["artifacts"]}["zones.csv"]["url"]).text.splitlines()
     header = table[0].split(",")
-    assert "volume [ft3]" in header and header[-2:] == ["floor_area [ft2]", "multiplier"]
-    assert float(table[1].split(",")[-2]) == pytest.approx(20 / 0.3048 ** 2)
+    assert "volume [ft3]" in header and header[-3:] == ["floor_area [ft2]", "multiplier", "part_of_total_floor_area"]
+    assert float(table[1].split(",")[-3]) == pytest.approx(20 / 0.3048 ** 2)
 
 
 def test_an_absurd_option_and_another_kinds_file_are_422_at_submission(client):

@@ -1,0 +1,45 @@
+"""Repeated readings of one setting at one flow that disagree: they are averaged into one point, but repeat runs of
+one rig agree within a per cent or two; a spread beyond REPEAT_DISAGREEMENT is two runs (two rigs, two days, a
+swapped column) mixed in one line, and an average of them is neither. The warning names the spread and the points'
+lines so that the user sees it, instead of a quiet average."""
+
+from __future__ import annotations
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.perfmap.setting_lines import Repeat, Setting
+
+REPEAT_DISAGREEMENT = 0.05  # (max - min) / mean of the pressures or the efficiencies at one flow
+MAX_NAMED = 10
+
+
+def _where(setting: Setting, repeat: Repeat, rows_of: list[list[int]] | None, row_label: str) -> str:
+    if rows_of and setting.source_index < len(rows_of):
+        rows = rows_of[setting.source_index]
+        return f"{row_label}s {', '.join(str(rows[k]) for k in repeat.points if k < len(rows))}"
+    return f"points {', '.join(map(str, repeat.points))} of positions[{setting.source_index}]"
+
+
+def disagreeing_repeats(settings: list[Setting], rows_of: list[list[int]] | None = None,
+                        row_label: str = "line") -> list[Diagnostic]:
+    """One ``repeated_points_disagree`` warning naming every averaged group whose pressures or efficiencies spread
+    more than REPEAT_DISAGREEMENT (``rows_of[i][k]``: the file row of point k of position i, for an upload)."""
+    found = [(s, r) for s in settings for r in s.repeats
+             if max(r.pressure_spread, r.efficiency_spread) > REPEAT_DISAGREEMENT]
+    if not found:
+        return []
+    named = "; ".join(
+        f"setting {s.label}, flow {r.flow:g} ({_where(s, r, rows_of, row_label)}): pressures "
+        f"{', '.join(f'{v:.4g}' for v in r.pressures)} ({r.pressure_spread:.1%} apart), efficiencies "
+        f"{', '.join(f'{v:.4g}' for v in r.efficiencies)} ({r.efficiency_spread:.1%} apart)"
+        for s, r in found[:MAX_NAMED])
+    groups = [{"setting": list(s.values), "position": s.source_index, "flow": r.flow, "points": list(r.points),
+               "lines": [rows_of[s.source_index][k] for k in r.points] if rows_of else None,
+               "pressures": list(r.pressures), "efficiencies": list(r.efficiencies),
+               "pressure_spread": r.pressure_spread, "efficiency_spread": r.efficiency_spread} for s, r in found[:100]]
+    return [Diagnostic(
+        code="repeated_points_disagree",
+        message=f"{len(found)} group(s) of readings at one setting and flow disagree by more than "
+        f"{REPEAT_DISAGREEMENT:.0%} and were averaged: {named}{' …' if len(found) > MAX_NAMED else ''}. Repeat runs "
+        "of one rig agree closer: two runs (two rigs, two days?) mixed in one line, or a value mistyped? The average "
+        "is neither run; keep one run per line.",
+        details={"count": len(found), "threshold": REPEAT_DISAGREEMENT, "groups": groups})]

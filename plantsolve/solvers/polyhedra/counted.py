@@ -1,0 +1,65 @@
+"""What the totals and net areas count more than once, or leave out, as EnergyPlus counts them: a zone standing
+for several (Zone Multiplier), a zone outside the total floor area (Part of Total Floor Area = No), a subsurface
+standing for several on its host (a window's or door's Multiplier). Each named in a warning, since a sum of the
+listed measures is then not the total."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.polyhedra import PolyhedraRequest
+from plantsolve.solvers.polyhedra.polygons import Polygons
+
+
+def multipliers_applied(zones: list[dict]) -> list[Diagnostic]:
+    """The zones the totals count more than once: a sum of the listed zones' measures is not the total."""
+    repeated = [z for z in zones if z["multiplier"] > 1]
+    if not repeated:
+        return []
+    listed = ", ".join(f"{z['id']!r} ×{z['multiplier']}" for z in repeated[:10]) + (" …" if len(repeated) > 10 else "")
+    return [Diagnostic(code="zone_multipliers_applied", message=(
+        f"{len(repeated)} zone(s) stand for several identical zones (EnergyPlus' Zone Multiplier): {listed}. "
+        "total_volume and total_floor_area count each that many times, as EnergyPlus counts floor area; the zones' "
+        "own measures are one copy's."),
+        details={"zones": {z["id"]: z["multiplier"] for z in repeated[:100]}})]
+
+
+def subsurface_copies(request: PolyhedraRequest, n_faces: int) -> np.ndarray:
+    """Per face, how many copies of it its host holds (1 but for the subsurfaces subsurface_multipliers names)."""
+    copies = np.ones(n_faces)
+    if request.subsurface_multipliers:  # the faces come first, in request order, a mesh's triangles after them
+        for i, face in enumerate(request.faces):
+            copies[i] = request.subsurface_multipliers.get(face.id, 1)
+    return copies
+
+
+def subsurface_multipliers_applied(request: PolyhedraRequest, poly: Polygons, area: np.ndarray) -> list[Diagnostic]:
+    """The subsurfaces the hosts' net areas subtract more than once: a sum of the listed faces is not the host's."""
+    repeated = request.subsurface_multipliers
+    if not repeated:
+        return []
+    index = {face.id: i for i, face in enumerate(request.faces) if face.id in repeated}
+    listed = ", ".join(f"{name!r} ×{m} on {poly.face_ids[poly.face_parent[index[name]]]!r}"
+                       for name, m in list(repeated.items())[:10]) + (" …" if len(repeated) > 10 else "")
+    return [Diagnostic(code="subsurface_multipliers_applied", message=(
+        f"{len(repeated)} subsurface(s) stand for several identical ones on their host (EnergyPlus' window or door "
+        f"Multiplier): {listed}. The hosts' net_area and the zones' net_surface_area subtract each that many times, "
+        "as EnergyPlus multiplies their area; the subsurfaces' own area is one copy's."),
+        details={"faces": dict(list(repeated.items())[:100]),
+                 "area_subtracted": {name: float(area[index[name]] * m) for name, m in list(repeated.items())[:100]}})]
+
+
+def floor_areas_left_out(zones: list[dict], units: str) -> list[Diagnostic]:
+    """The zones total_floor_area leaves out: a sum of the listed zones' floor areas is not the total."""
+    left = [z for z in zones if not z["part_of_total_floor_area"]]
+    if not left:
+        return []
+    listed = ", ".join(f"{z['id']!r} ({z['floor_area']:.6g} {units}² ×{z['multiplier']})" for z in left[:10])
+    return [Diagnostic(code="zones_outside_total_floor_area", message=(
+        f"{len(left)} zone(s) are not part of the total floor area (EnergyPlus' Part of Total Floor Area = No: "
+        f"plenums, attics): {listed}{' …' if len(left) > 10 else ''}. total_floor_area leaves their floors out, as "
+        "EnergyPlus' Building Area table does; total_volume counts them."),
+        details={"zones": [z["id"] for z in left[:100]],
+                 "floor_area_left_out": float(sum(z["floor_area"] * z["multiplier"] for z in left)),
+                 "count": len(left)})]
