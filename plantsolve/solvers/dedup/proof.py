@@ -123,7 +123,8 @@ def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[
         a, b = before["properties"].get(key, 0), after["properties"].get(key, 0)
         if a != b:
             out.append(f"property {key[0]!s} {key[1]!s}: {a} before, {b} after")
-    restyled = [g for g in before["styles"] if after["styles"].get(g) != before["styles"][g]]
+    restyled = sorted(g for g in set(before["styles"]) | set(after["styles"])
+                      if after["styles"].get(g) != before["styles"].get(g))  # a style lost, changed or gained
     if restyled:
         out.append(f"{len(restyled)} product(s) with other styles, e.g. {restyled[0]}")
     return out[:limit]

@@ -119,7 +119,9 @@ def _why_unverified(errors: list[str], differences: list[str], max_dev: float | 
         return f"{len(errors)} validation error(s) the input did not have, first {errors[0]}"
     if differences:
         return f"the semantic entities changed ({'; '.join(differences[:3])})"
-    return f"a product moved {max_dev:g} from its input geometry, beyond the tolerance {tol:g}"
+    if max_dev is not None and max_dev > tol:
+        return f"a product moved {max_dev:g} from its input geometry, beyond the tolerance {tol:g}"
+    return "the written file's semantic fingerprint differs from the input's"
 
 
 def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:

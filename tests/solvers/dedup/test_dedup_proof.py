@@ -297,3 +297,13 @@ def test_the_proof_validates_what_changed_not_the_whole_file(proof_scope):
         solved = run(tunnel_file(3, "IFC4"), sharing="mapped_item", postpass=False)
         v = solved.result.verification
         assert v.schema_valid and v.instances_changed is None and v.instances_validated == len(list(reopen(solved)))
+
+
+def test_a_gained_style_is_named_and_a_failed_verification_is_always_said_in_words():
+    before = {"rooted": {}, "guids": set(), "properties": {}, "styles": {}}
+    after = {**before, "styles": {"2LCKQSQwj9leW7M2$719un": ("red",)}}
+    assert proof.fingerprint_differences(before, after) == ["1 product(s) with other styles, e.g. 2LCKQSQwj9leW7M2$719un"]
+    from plantsolve.solvers.dedup.solve import _why_unverified
+    assert "semantic fingerprint differs" in _why_unverified([], [], None, 1e-3)  # was a TypeError: a crash
+    assert "semantic fingerprint differs" in _why_unverified([], [], 2e-4, 1e-3)  # was 'beyond the tolerance'
+    assert "beyond the tolerance" in _why_unverified([], [], 2e-3, 1e-3)
