@@ -155,7 +155,7 @@ class SQLiteFile:
     def _identity(self) -> tuple[int, int] | None:
         try:
             found = os.stat(self.path)
-        except FileNotFoundError:
+        except OSError:  # gone, its folder replaced by a file, no longer ours to read, a stale network handle
             return None
         return found.st_dev, found.st_ino
 
@@ -226,6 +226,8 @@ class Database:
         self.engine = make_engine(url, wait=wait, statement=statement)
         self.sessions: sessionmaker[Session] = sessionmaker(self.engine, expire_on_commit=False)
         database = make_url(url).database if self.is_sqlite else None
+        if database and database.startswith("file:"):  # a URI filename (?uri=true): its path, without its query
+            database = database.removeprefix("file:").split("?", 1)[0] or None
         self.file = SQLiteFile(Path(database).resolve()) if database and database != ":memory:" else None
         if self.file is not None:
             self._watch_file(self.file)

@@ -12,6 +12,7 @@ import time
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
+from plantsolve.store.engine import Database
 from tests.conftest import service_settings, wait_for
 
 PROBLEM = "application/problem+json"
@@ -50,3 +51,11 @@ def test_a_database_file_replaced_under_the_service_is_not_written_until_a_resta
     with TestClient(create_app(settings)) as client:  # a restart opens the file now at the path
         assert client.get("/readyz").status_code == 200
         assert client.post("/v1/test-compute/jobs", json={"values": [3]}).status_code == 202
+
+
+def test_a_uri_filename_database_url_watches_its_file(tmp_path):
+    """'sqlite:///file:/…/u.db?uri=true' watched a file named 'file:/…' in the working folder: none was ever found,
+    so a removed database was written on without a word."""
+    folder = tmp_path
+    database = Database(f"sqlite:///file:{folder}/u.db?uri=true")
+    assert database.file is not None and database.file.path == (folder / "u.db").resolve()
