@@ -467,8 +467,8 @@ def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
         """The connections and boxes of the shape in ``frame``, rounded, in a canonical order."""
         connections = sorted((*np.round(frame @ c.point, 6).tolist(), *direction(frame, c),
                               c.type, c.length, c.profile, c.depth) for c in shape.connectors)
-        boxes = sorted((*np.round(frame @ centre, 6).tolist(), *size)
-                       for centre, size in ((shape.box_center, shape.box_size), *shape.solids))
+        boxes = sorted((*np.round(frame @ centre, 6).tolist(), *np.round(np.abs(frame) @ size, 6).tolist())
+                       for centre, size in ((shape.box_center, shape.box_size), *shape.solids))  # axes swapped too
         return connections, boxes
 
     own = drawn(np.eye(3))

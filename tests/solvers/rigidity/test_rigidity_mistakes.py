@@ -12,6 +12,8 @@ from pydantic import ValidationError
 
 from plantsolve.schemas.rigidity import RigidityOptions, RigidityRequest
 from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.rigidity import upload
+from plantsolve.solvers.rigidity.catalogue import Connector, PartShape
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -257,6 +259,20 @@ def test_a_part_symmetric_about_a_diagonal_plane_placed_mirrored_is_no_mirrored_
     assert np.isclose(np.linalg.det(np.reshape(request.parts[1].rotation, (3, 3))), 1.0)
     a, b = solve(request).result, solve(parse("corner.ldr", base + drawn)).result
     assert (a.dof, len(a.joints)) == (b.dof, len(b.joints))
+
+
+def test_a_mirror_that_swaps_axes_swaps_the_box_too(monkeypatch):
+    """A 20 x 8 x 60 LDU part with one stud at its middle is symmetric about its x and z planes, not about x = z,
+    which would turn its box into 60 x 8 x 20 (the box's size was compared unswapped: 4 mirrors were found)."""
+    part = PartShape("99999", "test block", (0.0, 4.0, 0.0), (20.0, 8.0, 60.0),
+                     (Connector("stud", (0, 0, 0), (0, -1, 0)),))
+    monkeypatch.setattr(upload, "lookup", lambda name: part)
+    upload.symmetry_planes.cache_clear()
+    try:
+        found = upload.symmetry_planes("99999.dat")
+        assert sorted(np.diag(m).tolist() for m in found) == [[-1.0, 1.0, 1.0], [1.0, 1.0, -1.0]]
+    finally:
+        upload.symmetry_planes.cache_clear()
 
 
 # ---------------------------------------------------------------- lines after 0 NOFILE
