@@ -130,7 +130,8 @@ def report_bend_count(result: TubeResult, windows: list[OffWindow], weak: list[i
     result.report.warnings.insert(0, Diagnostic(
         code="bend_count_uncertain",
         message=f"{n} bends reconstructed, but {'; and '.join(said)}. The tube may have "
-        f"{' or '.join(f'at least {a}' if a > n else str(a) for a in alternatives)} bends; LRA row(s) {', '.join(str(k + 1) for k in touched)} "
+        f"{' or '.join(f'at least {a}' if a > n else str(a) for a in alternatives)} bends; LRA row(s) "
+        f"{', '.join(str(k + 1) for k in touched)} "
         "are not determined.",
         details={"bends": n, "alternative_counts": alternatives,
                  "windows": [{"start": w.start, "end": w.end, "z": w.z, "mean_residual": w.mean,
