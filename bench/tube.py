@@ -301,7 +301,8 @@ def solve_cases(path: str) -> None:
                           "radius": float(dr.max()) if da is not None else None,
                           "radius_big": float(dr[big].max()) if da is not None and big.any() else None,
                           "end": end_err if da is not None else None,
-                          "ends": sorted([res.lra[0].length, res.lra[-1].length])}), flush=True)
+                          "ends": sorted([res.lra[0].length, res.lra[-1].length]),
+                          "codes": [w.code for w in res.report.warnings]}), flush=True)
     print(json.dumps({"peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}), flush=True)
 
 
@@ -375,6 +376,7 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
                        f"| {100 * worst['end'] if worst['end'] is not None else float('nan'):.4f} ")
             accuracy[side].append(columns)
             print(f"| {fam} | {side} {columns}| {np.median(cpu):.2f} / {cpu.max():.2f} / {cpu.sum():.1f} |", flush=True)
+    trust_table(sides, truth_n, fams)
     before, after = ({r["case"]: r for r in rows} for rows in sides.values())
     moved = {c: abs(np.subtract(before[c]["ends"], after[c]["ends"])).max() for c in before
              if c in after and "ends" in before[c] and "ends" in after[c] and before[c]["ends"] != after[c]["ends"]}
@@ -384,6 +386,29 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
                                                          else "NO"))
     print(f"cases whose end straight lengths differ between the sides: {len(moved)}/{len(before)}"
           + "".join(f"; {c}: {d:.3g}" for c, d in sorted(moved.items())))
+
+
+# a wrong answer: the wrong bend count, or with the right count a bend angle this many degrees off
+WRONG_ANGLE_DEG = 5.0
+
+
+def trust_table(sides: dict[str, list[dict]], truth_n: dict[str, int], fams: tuple[str, ...]) -> None:
+    """Per family and side: the wrong answers (bend count, or a bend angle over ``WRONG_ANGLE_DEG`` off) and how
+    many of them carry the warning ``bend_count_uncertain`` (recall), and the right answers that carry it
+    (false alarms)."""
+    print(f"wrong answers (bend count wrong, or a bend angle over {WRONG_ANGLE_DEG:g}° off) with the warning "
+          "bend_count_uncertain, and right answers with it")
+    print("| family | solver | wrong answers warned | right answers warned | wrong answers unwarned |")
+    print("|---|---|---:|---:|---|")
+    for fam in fams:
+        for side, rows in sides.items():
+            rows = [r for r in rows if r["case"].startswith(fam + "-") and r["got"] >= 0]
+            wrong = [r for r in rows if r["got"] != truth_n[r["case"]] or r["angle"] > WRONG_ANGLE_DEG]
+            right = [r for r in rows if r not in wrong]
+            warned = lambda rs: [r for r in rs if "bend_count_uncertain" in r.get("codes", ())]
+            missed = [r["case"] for r in wrong if r not in warned(wrong)]
+            print(f"| {fam} | {side} | {len(warned(wrong))}/{len(wrong)} | {len(warned(right))}/{len(right)} "
+                  f"| {', '.join(missed) or '—'} |", flush=True)
 
 
 def scale_one(path: str) -> None:

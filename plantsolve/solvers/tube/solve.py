@@ -27,6 +27,7 @@ from plantsolve.solvers.tube.inspection import inspect_request
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.lra import model_rows
+from plantsolve.solvers.tube.bend_count import off_windows, report_bend_count, weak_bends
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.validation import implausible_against_scan, implausible_extent, scan_extent
 
@@ -738,6 +739,9 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
                                ls.radius_model)
     loose = add_sigmas(result, ls, pts, opts)
     mark_rows(result.lra, ls.model, np.compress(ls.inlier, ls.segment), loose)
+    # before the inspection: the rows a systematic misfit lies on get no verdict
+    report_bend_count(result, off_windows(ls.model, pts, ls.residuals, ls.segment, ls.inlier), weak_bends(result),
+                      request.units)
     result.inspection = inspect_request(ls.model, opts, request.units, result.lra)
     if result.inspection is not None:
         report_inspection(result.report, result.inspection, request.units)
