@@ -112,7 +112,7 @@ def _geometry(model: ifcopenshell.file, streamed: skeleton.Skeleton | None, prod
     return reader, points, triangles
 
 
-def _why_unverified(errors: list[str], differences: list[str], max_dev: float | None, tol: float) -> str:
+def why_unverified(errors: list[str], differences: list[str], max_dev: float | None, tol: float) -> str:
     """What the verification found, in words: the first validation errors, the entities whose counts changed, or
     the largest deviation of a product from its input geometry."""
     if errors:
@@ -316,7 +316,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         # nothing to deliver has failed, whatever it learnt (the verification's findings are in its details)
         report = Report(status="failed", stage="verification", warnings=warnings,
                         message=f"The optimized file failed verification and is withheld: "
-                                f"{_why_unverified([] if inherited_errors else errors, differences, max_dev, tol)} "
+                                f"{why_unverified([] if inherited_errors else errors, differences, max_dev, tol)} "
                                 f"({summary}).",
                         details={**details, "verification": verification.model_dump(mode="json")})
     ratio = len(optimized) / original_bytes if original_bytes else 1.0

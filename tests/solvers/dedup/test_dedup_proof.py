@@ -20,6 +20,7 @@ from plantsolve.solvers.dedup import (
     skeleton,
 )
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
+from plantsolve.solvers.dedup.solve import why_unverified
 from tests.solvers.dedup.support import assert_round_trip, reopen, run
 
 
@@ -302,8 +303,8 @@ def test_the_proof_validates_what_changed_not_the_whole_file(proof_scope):
 def test_a_gained_style_is_named_and_a_failed_verification_is_always_said_in_words():
     before = {"rooted": {}, "guids": set(), "properties": {}, "styles": {}}
     after = {**before, "styles": {"2LCKQSQwj9leW7M2$719un": ("red",)}}
-    assert proof.fingerprint_differences(before, after) == ["1 product(s) with other styles, e.g. 2LCKQSQwj9leW7M2$719un"]
-    from plantsolve.solvers.dedup.solve import _why_unverified
-    assert "semantic fingerprint differs" in _why_unverified([], [], None, 1e-3)  # was a TypeError: a crash
-    assert "semantic fingerprint differs" in _why_unverified([], [], 2e-4, 1e-3)  # was 'beyond the tolerance'
-    assert "beyond the tolerance" in _why_unverified([], [], 2e-3, 1e-3)
+    assert proof.fingerprint_differences(before, after) == [
+        "1 product(s) with other styles, e.g. 2LCKQSQwj9leW7M2$719un"]
+    assert "semantic fingerprint differs" in why_unverified([], [], None, 1e-3)  # was a TypeError: a crash
+    assert "semantic fingerprint differs" in why_unverified([], [], 2e-4, 1e-3)  # was 'beyond the tolerance'
+    assert "beyond the tolerance" in why_unverified([], [], 2e-3, 1e-3)
