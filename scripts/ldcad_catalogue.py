@@ -17,11 +17,12 @@ What is read of each meta line (LDCad's meta syntax, ``[key=value]`` pairs):
   A axle, S square, ``L_``/``_L`` chamfers), ``center``, ``slide``, ``pos``, ``ori``, ``grid``,
   ``scale``. The cylinder's axis is the local −y of ``ori``: it runs from ``pos`` along −y for the
   sum of its section lengths (or is centred on ``pos`` with ``center=true``).
-- ``SNAP_CLP`` (a clip: ``radius``, ``length``, ``center``), ``SNAP_FGR`` (hinge fingers:
-  ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``, or starting there along the local
-  −y with ``center=false``), ``SNAP_GEN`` with ``bounding=sph`` (a ball joint when male, its socket when
-  female), with a ``group`` (a fit made only within the group: a tyre on its rim), or an ungrouped ``box`` or
-  ``cyl`` bounding (a fit of that shape and size only: a window's pane in its frame, a lid on its crate).
+- ``SNAP_CLP`` (a clip: ``radius`` of the rod it grips, default 4, a bar's; ``length``, ``center``),
+  ``SNAP_FGR`` (hinge fingers: ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``, or
+  starting there along the local −y with ``center=false``), ``SNAP_GEN`` with ``bounding=sph`` (a ball joint
+  when male, its socket when female), with a ``group`` (a fit made only within the group: a tyre on its rim),
+  or an ungrouped ``box`` or ``cyl`` bounding (a fit of that shape and size only: a window's pane in its frame, a
+  lid on its crate).
 
 The output is gzip text: a first line of JSON ``{"source": …, "units": …}``, then one line per part,
 ``number<TAB>{"n": name, "b": [xmin, ymin, zmin, xmax, ymax, zmax], "s": [snap, …]}`` (JSON after the
@@ -30,7 +31,8 @@ the bounding box of the part's drawn geometry and each snap one of
 
 - ``["cyl", gender, caps, slide, start, axis, [[shape, radius, length], …]]``: sections from ``start``
   along the unit vector ``axis``;
-- ``["clp", centre, axis, length]``; ``["fgr", gender, centre, axis, length]``;
+- ``["clp", centre, axis, length, radius]`` (``radius``: the rod the clip grips);
+  ``["fgr", gender, centre, axis, length]``;
 - ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``; ``["shp", gender, bounding,
   centre, axis]`` (``bounding`` as ``box 20 54 2``: an ungrouped generic snap).
 
@@ -198,7 +200,8 @@ def _own_snaps(line: str, params: dict, place) -> list[dict]:
         elif kind == "SNAP_CLP":
             length = float(params.get("length", 8))
             centre = origin if params.get("center", "").lower() == "true" else origin + down * length / 2
-            out.append({"id": snap_id, "kind": "clp", "centre": centre, "axis": down, "length": length})
+            out.append({"id": snap_id, "kind": "clp", "centre": centre, "axis": down, "length": length,
+                        "radius": float(params.get("radius", 4))})
         elif kind == "SNAP_FGR":
             seq = _floats(params.get("seq", "0"))
             # centred on pos unless center=false, when the run starts at pos (4715's two 11-LDU runs from x = -19
@@ -355,7 +358,7 @@ def _record(snap: dict, scale: bool = False) -> list:
                [[s, round(r, 3), round(length, 3)] for s, r, length in snap["secs"]]]
         return out + [int(bool(snap.get("scale")))] if scale else out
     if snap["kind"] == "clp":
-        return ["clp", _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
+        return ["clp", _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3), round(snap["radius"], 3)]
     if snap["kind"] == "fgr":
         return ["fgr", snap["gender"], _r(snap["centre"]), _r(snap["axis"]), round(snap["length"], 3)]
     if snap["kind"] == "gen":

@@ -32,9 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS, NOT_DOCKED,
-                                                   OPPOSED, RING_REACH, PartShape, collision_boxes, fit, fit_depth,
-                                                   lookup, mate, samples)
+from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, CLIPS, FIT_OVERLAP, FITS, GROUP, HOLE_RADIUS,
+                                                   NOT_DOCKED, OPPOSED, RING_REACH, Connector, PartShape,
+                                                   collision_boxes, fit, fit_depth, lookup, mate, samples)
+from plantsolve.solvers.rigidity.generated import BAR_RADIUS, RADIUS_FIT
 from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -187,6 +188,12 @@ def _on_run(point: np.ndarray, start: np.ndarray, axis: np.ndarray, length: floa
     return -beyond <= t <= length + beyond and float(np.linalg.norm(v - t * axis)) <= reach
 
 
+def _clip_radius(clip: Connector) -> float:
+    """The radius of the rod a clip grips (its profile's, :mod:`generated`); a bar's where it states none, as the
+    shadow library's clips default to."""
+    return float(clip.profile[0][1]) if clip.profile else BAR_RADIUS
+
+
 def _slip_beyond(connector, slip: float) -> float:
     """How far past a run's end the centre of ``connector`` (a hole, a clip) may lie for the slip pass to join
     them: half its bore (its mouth at the end: a bush drawn on an axle's tip) and ``slip`` more; SNAP without a
@@ -198,7 +205,7 @@ def _half_bore(connector) -> float:
     """Half the bore of a hole along a run (at most SLIP_BORE long): how far its centre lies inside its mouth. 0 for a
     clip, whose width is its jaws': a clip past a bar's end is no bush on an axle's tip, its jaws at the end do not
     hold it (:meth:`Assembly.seat_clips_across_gaps` seats a clip whose jaws reach bar on both sides)."""
-    return 0.0 if connector.type == "clip" else min(connector.depth, SLIP_BORE) / 2
+    return 0.0 if connector.type in CLIPS else min(connector.depth, SLIP_BORE) / 2
 
 
 def _clean(x: float) -> float | int:
@@ -662,7 +669,7 @@ class Assembly:
         of one other part on one line, one ending before the centre and one starting after it: the data states the bar
         in two pieces with the gap between them no wider than the clip (2921's handle: two 8 LDU bars either side of an
         8 LDU gap, where 6339-1 clips a tile on the handle's middle), and a clip held by bar on both sides is on the
-        bar; or where a rod thinner than a bar runs through the clip's centre along its axis
+        bar; or where a rod thinner than a bar, of the clip's radius, runs through the clip's centre along its axis
         (:meth:`_thin_rod_through`). A hinge about the bar or rod, as any clip on a bar. Returns the (clip's part,
         bar's part) pairs seated."""
         held = {(p, k) for conns in self._links.values() for c in conns if c.kind == "clip"
@@ -670,10 +677,11 @@ class Assembly:
         seated = []
         for id, placed in self.parts.items():
             for ci, c in enumerate(placed.shape.connectors):
-                if c.type != "clip" or c.depth <= 0 or (id, ci) in held:
+                if c.type not in CLIPS or c.depth <= 0 or (id, ci) in held:
                     continue
-                bar = (self._bar_across(id, placed.points[ci], placed.directions[ci], c.depth / 2 + SNAP)
-                       or self._thin_rod_through(id, placed.points[ci], placed.directions[ci]))
+                bar = ((c.type == "clip" and self._bar_across(id, placed.points[ci], placed.directions[ci],
+                                                               c.depth / 2 + SNAP))
+                       or self._thin_rod_through(id, placed.points[ci], placed.directions[ci], _clip_radius(c)))
                 if bar is None:
                     continue
                 other, oi = bar
@@ -695,19 +703,21 @@ class Assembly:
                 sides.setdefault(other, {}).setdefault(1, oi)
         return next(((other, found[-1]) for other, found in sorted(sides.items()) if len(found) == 2), None)
 
-    def _thin_rod_through(self, id: str, centre: np.ndarray, axis: np.ndarray):
+    def _thin_rod_through(self, id: str, centre: np.ndarray, axis: np.ndarray, radius: float):
         """(part, snap cylinder) of the first male snap cylinder of another part whose round section at the clip's
-        centre is thinner than a bar, on the clip's axis (parallel, within FIT_SNAP) and reaching past the centre on
-        both sides: the data makes bars of radius-4 sections only, and states a thinner rod only as a cylinder (the
-        chain tread link 3873 clips onto the next link's pin ends, radius 1.5, as set 10227 runs 36 of them); a rod
-        through a clip's centre is inside its jaws. None when no part has one there."""
+        centre is thinner than a bar and of the clip's ``radius`` (within RADIUS_FIT), on the
+        clip's axis (parallel, within FIT_SNAP) and reaching past the centre on both sides: the data makes bars of
+        radius-4 sections only, and states a thinner rod only as a cylinder (the chain tread link 3873 clips onto the
+        next link's pin ends, radius 1.5, as set 10227 runs 36 of them); a rod through a clip's centre is inside its
+        jaws, and held by them only when it is as thick as the rod they are made for (a bar's clip does not grip a
+        radius-1.5 pin end). None when no part has one there."""
         for other, oi, ends in self._runs_on_line(id, "fit_m", centre, axis, SNAP):
             o = self.parts[other]
             t = float((centre - o.points[oi]) @ o.directions[oi])  # where the centre lies along the cylinder
             start = 0.0
-            for shape, radius, length in o.shape.connectors[oi].profile:
+            for shape, rod, length in o.shape.connectors[oi].profile:
                 if start + SNAP < t < start + length - SNAP:
-                    if shape == "R" and radius < THIN_ROD:
+                    if shape == "R" and rod < THIN_ROD and abs(rod - radius) < RADIUS_FIT:
                         return other, oi
                     break
                 start += length

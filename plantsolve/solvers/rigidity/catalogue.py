@@ -83,6 +83,7 @@ class Connector:
 
 RING_REACH = 10.0 * 2 ** 0.5  # LDU: from a ring's centre to each of the four studs it stands between
 FITS = ("fit_m", "fit_f")  # a snap cylinder as the data states it (male, female): see :func:`fit`
+CLIPS = ("clip", "rodclip")  # a clip whose radius is a bar's, one for a rod of another radius (:mod:`generated`)
 NOT_DOCKED = (*FITS, "ring")  # found between placed parts only (docking poses come from points that meet)
 SAMPLE_STEP = {"axle": 10.0, "bar": 2.0}  # LDU: where docking tries a run (a hole every half stud, a clip anywhere)
 

@@ -122,7 +122,7 @@ def transform(snap: list, rot: np.ndarray, pos: np.ndarray) -> list:
             new_start = _placed(start, rot, pos)
         return ["cyl", gender, caps, slide, new_start, new_axis, secs, int(scale)]
     if kind == "clp":
-        return ["clp", _placed(snap[1], rot, pos), _direction(snap[2], rot)[0], snap[3]]
+        return ["clp", _placed(snap[1], rot, pos), _direction(snap[2], rot)[0], snap[3], snap[4]]
     if kind == "fgr":
         return ["fgr", snap[1], _placed(snap[2], rot, pos), _direction(snap[3], rot)[0], snap[4]]
     if kind == "gen":

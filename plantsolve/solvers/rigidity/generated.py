@@ -20,8 +20,11 @@ grid and compatible types, :data:`catalogue.MATES`):
   hole has both points at the hole's centre: coaxial, overlapping along the axis. A hole states its bore's
   length (its section's, or its slot's) as its ``depth``.
 - A male round section of radius 4 is a ``bar``, a point every 2 LDU along it (a clip holds it
-  anywhere); a clip (``SNAP_CLP``) is one ``clip`` point at its centre, its width along the bar its ``depth``.
-  Clip on bar: a hinge about the bar.
+  anywhere); a clip (``SNAP_CLP``) is one point at its centre, its width along the bar its ``depth``, the radius of
+  the rod it grips in its ``profile`` (``(("R", radius, width),)``): a ``clip`` when that radius is a bar's (within
+  :data:`RADIUS_FIT`), else a ``rodclip``, which no bar meets (a spanner's radius-6 jaws, a wheel clip's radius-2
+  ones: the shadow library states a clip's radius as that of the rod it is made for, 3711's 1.5 for its 1.5 pin
+  ends). Clip on bar: a hinge about the bar.
   Female radius-4 holes (hollow studs, a pin's bore) make no point.
 - Hinge fingers (``SNAP_FGR``) are one ``finger`` point at the centre of the finger run, along the
   hinge axis; two finger runs on one axis with one centre interlock (a hinge), whichever finger comes
@@ -62,6 +65,10 @@ RING_RADIUS = 8.0  # LDU: a round part's bottom ring, which fits between four st
 STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into an anti-stud (stud.dat's height)
 SLIDE_MIN = 0.5  # LDU: a sliding bore shorter than a stud and this is one anti-stud point at its mouth
 STUD_LENGTH = 6.0  # LDU: a round section of radius 6 this short is a stud (a pin's halves are 16 long)
+BAR_RADIUS = 4.0  # LDU: a bar's (LDraw's bar primitives, the shadow library's radius-4 sections)
+# LDU: how far a section's radius may be from a size to count as that size (a bar, a stud), and a clip's radius from a
+# rod's for the clip to hold it. The shadow library states radii to 0.1 LDU (3.6, 6.25), sizes 1 LDU apart or more.
+RADIUS_FIT = 0.5
 BOXED = re.compile(r"^(brick|plate|tile|technic brick)\s+\d+\s+x\s+\d+(\s+x\s+\d+)?(\s+with (holes|groove))?$")
 BEAM = re.compile(r"^technic beam\s+\d+$")
 
@@ -96,7 +103,7 @@ def numbers() -> frozenset[str]:
 
 
 def _near(value: float, target: float) -> bool:
-    return abs(value - target) < 0.5
+    return abs(value - target) < RADIUS_FIT
 
 
 def _section_at(secs: list, t: float) -> tuple[str, float, float] | None:
@@ -139,9 +146,9 @@ def _cylinder(gender: str, caps: str, slide: int, start, axis, secs) -> list[Poi
     for k, (shape, radius, piece) in enumerate(secs):
         if male and _is_stud(shape, radius, piece):  # a stud (a half pin's short end too): its base
             out.append(("stud", _point(start + axis * run), _point(axis)))
-        elif male and shape == "R" and _near(radius, 4):  # a bar: a clip or a bar hole holds it anywhere along it
+        elif male and shape == "R" and _near(radius, BAR_RADIUS):  # a bar: a clip or a bar hole holds it anywhere
             out.append(("bar", _point(start + axis * run), _point(axis), round(float(piece), 3)))
-        elif not male and shape == "R" and _near(radius, 4):
+        elif not male and shape == "R" and _near(radius, BAR_RADIUS):
             # a bar hole (a hollow stud, a holder's bore): a bar enters it at an open mouth
             if k == 0 and caps not in ("two", "a"):
                 out.append(("barhole", _point(start + axis * run), _point(axis)))
@@ -210,7 +217,9 @@ def connectors(snaps: list) -> tuple[Point, ...]:
                 out.append(("fit_m" if gender == "M" else "fit_f", _point(start), _point(axis), length,
                             tuple((str(shape), float(radius), float(piece)) for shape, radius, piece in secs)))
         elif kind == "clp":
-            out.append(("clip", _point(snap[1]), _point(snap[2]), 0.0, (), round(float(snap[3]), 3)))
+            width, radius = round(float(snap[3]), 3), round(float(snap[4]), 3)
+            out.append(("clip" if _near(radius, BAR_RADIUS) else "rodclip", _point(snap[1]), _point(snap[2]), 0.0,
+                        (("R", radius, width),), width))
         elif kind == "fgr":  # a run of fingers along the hinge axis, centred on the snap's position
             centre, axis, length = np.asarray(snap[2], float), np.asarray(snap[3], float), float(snap[4])
             out.append(("finger", _point(centre - axis * length / 2), _point(axis), round(length, 3)))

@@ -444,7 +444,7 @@ def parse_ldraw(text: str) -> dict:
 MIRRORS = tuple(m for perm in itertools.permutations(range(3)) for signs in itertools.product((1.0, -1.0), repeat=3)
                 if np.linalg.det(m := np.diag(signs)[list(perm)]) < 0)
 # Points whose bore or grip is centred on them, so that their direction's sign says nothing (a through hole).
-CENTRED = frozenset({"pinhole", "axlehole", "barhole", "clip", "hole"})
+CENTRED = frozenset({"pinhole", "axlehole", "barhole", "clip", "rodclip", "hole"})
 
 
 @functools.lru_cache(maxsize=1024)

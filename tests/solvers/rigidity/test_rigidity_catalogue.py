@@ -398,3 +398,27 @@ def test_a_pane_fits_its_frame_through_their_ungrouped_generic_snaps_and_nothing
     other = Assembly()
     other.add_part("frame", "2493b", (0, 0, 0))
     assert other.add_part("pane", "2494", (0, 0, 20)) == []  # a stud pitch off the slot: no fit
+
+
+def test_script_keeps_a_clips_radius_and_a_clip_of_another_radius_than_a_bars_is_no_bar_clip(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9007.dat", "0 Clip Test\n2 24 -10 0 0 10 0 0\n")
+    # 753's holder (radius 6), a bar's clip (radius 4) and one stating no radius (LDCad's default: a bar's)
+    _write(shadow, "parts/9007.dat", "0 !LDCAD SNAP_CLP [radius=6] [length=8] [pos=0 8 -30]\n"
+           "0 !LDCAD SNAP_CLP [radius=4] [length=8] [center=true] [pos=0 4 -20]\n"
+           "0 !LDCAD SNAP_CLP [length=4] [center=true] [pos=0 4 20]\n")
+    snaps = _script().derive(ldraw, shadow)["9007"]["s"]
+    assert [s[4] for s in snaps] == [6.0, 4.0, 4.0]
+    assert [c[0] for c in generated.connectors(snaps)] == ["rodclip", "clip", "clip"]
+    assert generated.connectors(snaps)[0] == ("rodclip", (0.0, 4.0, -30.0), (0.0, -1.0, 0.0), 0.0,
+                                              (("R", 6.0, 8.0),), 8.0)
+    assert mate("rodclip", "bar") is None and mate("clip", "bar") == "clip"
+
+
+@pytest.mark.parametrize("number, radius", [("753", 6.0), ("509", 6.0), ("4006", 6.0), ("55299", 6.0),
+                                            ("3652", 6.0), ("3712", 6.0), ("2312", 9.0), ("4085c", 4.0),
+                                            ("3873", 1.5)])
+def test_data_file_keeps_the_radius_the_shadow_library_states_for_a_clip(number, radius):
+    clips = [c for c in generated.connectors(generated.record(number)["s"]) if c[0] in ("clip", "rodclip")]
+    assert clips and {c[4][0][1] for c in clips} == {radius}
+    assert {c[0] for c in clips} == {"clip" if radius == 4.0 else "rodclip"}

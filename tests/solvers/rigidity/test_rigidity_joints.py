@@ -124,10 +124,27 @@ def test_a_clip_on_a_pins_axis_round_a_section_as_thick_as_a_stud_is_not_on_a_th
     text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n"
             "1 0 0 14 -20 0 -1 0 1 0 0 0 0 1 3673.dat\n")
     assert joints(text) == []
-    # the same clip round a thin rod there (a chain link's pin end, turned along y): held
+    # the same clip round a thin rod there (a chain link's pin end, radius 1.5, turned along y): a bar's clip (radius
+    # 4) does not grip a rod that thin, the link's own clips (radius 1.5) do (above)
     link = "1 0 0 {y} -36 0 -1 0 1 0 0 0 0 1 3873.dat\n"
-    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n" + link.format(y=-4.75)) == [
-        ("hinge", "clip", "3873", "4085c", 1)]
+    assert joints("1 4 0 0 0 1 0 0 0 1 0 0 0 1 4085c.dat\n" + link.format(y=-4.75)) == []
+
+
+# A bar 87994 (along y from its origin, 60 long) through a clip's centre along its axis, 30 LDU of bar on either side:
+# the clip plate 4085c's clip (radius 4, centre (0, 4, -20)) and the magnet holder 753's (radius 6, centre (0, 4, -30)),
+# a clip for a rod as thick as a pin, which a bar (radius 4) rattles in.
+BAR_THROUGH = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 {part}.dat\n1 0 0 -26 {z} 1 0 0 0 1 0 0 0 1 87994.dat\n"
+
+
+def test_a_clip_of_a_bars_radius_holds_a_bar_through_it():
+    assert joints(BAR_THROUGH.format(part="4085c", z=-20)) == [("hinge", "clip", "4085c", "87994", 1)]
+
+
+@pytest.mark.parametrize("part, z", [("753", -30), ("509", -30)])
+def test_a_clip_wider_than_a_bar_does_not_hold_a_bar_through_it(part, z):
+    result = solve(parse("model.ldr", BAR_THROUGH.format(part=part, z=z))).result
+    assert joints(BAR_THROUGH.format(part=part, z=z)) == []
+    assert "offset_joints" not in {w.code for w in result.report.warnings}  # nor the slip pass
 
 
 def hand_and_revolver(tilt: float, cross: float = 0.0) -> str:
