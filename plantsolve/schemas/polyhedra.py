@@ -32,6 +32,8 @@ AREA, VOLUME = LENGTH + "^2", LENGTH + "^3"
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
 MAX_ZONE_MULTIPLIER = 1_000_000
+# How many identical copies a named zone or subsurface stands for (EnergyPlus' Multiplier fields): whole, at least 1.
+Multipliers = dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
 
 
@@ -162,7 +164,7 @@ class PolyhedraRequest(StrictModel):
         default=None, description="A zone given as a triangle mesh (an STL upload is read into one); its triangles "
         "follow the faces.")
     options: PolyhedraOptions = Field(default_factory=PolyhedraOptions)
-    zone_multipliers: dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]] = Field(
+    zone_multipliers: Multipliers = Field(
         default_factory=dict, max_length=MAX_FACES,
         description="How many identical copies of a zone the building holds (EnergyPlus' Zone Multiplier times its "
         "ZoneGroup's Zone List Multiplier, read from an IDF or epJSON upload): total_volume and total_floor_area "
@@ -173,7 +175,7 @@ class PolyhedraRequest(StrictModel):
         description="Zones whose floor total_floor_area leaves out, as EnergyPlus leaves out a Zone whose Part of "
         "Total Floor Area is No (plenums, attics; read from an IDF or epJSON upload); their own floor_area is still "
         "given, and their volume still counts in total_volume.")
-    subsurface_multipliers: dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]] = Field(
+    subsurface_multipliers: Multipliers = Field(
         default_factory=dict, max_length=MAX_FACES,
         description="How many identical copies of a subsurface its host holds (EnergyPlus' Multiplier of a window, "
         "glass door or door, read from an IDF or epJSON upload): the host's net_area loses each copy's area, as "

@@ -76,19 +76,24 @@ def _answer(sock: socket.socket) -> bytes:
     return data
 
 
+def _stalled(base: str, path: str, declared: int, sent: bytes) -> bytes:
+    """The answer to a JSON POST that declares ``declared`` bytes and sends ``sent``, which must come within 5 s."""
+    head = (f"POST {path} HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+            f"Content-Length: {declared}\r\n\r\n").encode()
+    sock = _raw(int(base.rsplit(":", 1)[1]), head, sent)
+    started = time.monotonic()
+    answer = _answer(sock)
+    sock.close()
+    assert time.monotonic() - started < 5
+    return answer
+
+
 def test_a_body_that_stops_half_way_is_a_408_after_the_idle_time_not_a_connection_held_for_ever(tmp_path):
     """A client that declares 1000 bytes and sends 15 (or sends a byte now and then) held its connection and the
     request open for as long as it liked: the server waited without end."""
     app = create_app(service_settings(tmp_path, body_idle_seconds=0.5))
     with live_server(app) as base:
-        port = int(base.rsplit(":", 1)[1])
-        head = ("POST /v1/test-compute/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-                "Content-Length: 1000\r\n\r\n").encode()
-        sock = _raw(port, head, b'{"values": [1],')
-        started = time.monotonic()
-        answer = _answer(sock)
-        sock.close()
-        assert time.monotonic() - started < 5
+        answer = _stalled(base, "/v1/test-compute/jobs", 1000, b'{"values": [1],')
     status, _, rest = answer.partition(b"\r\n")
     assert status.startswith(b"HTTP/1.1 408") and b"application/problem+json" in rest.lower()
     assert b"after 15 bytes" in rest
@@ -100,14 +105,7 @@ def test_a_result_operations_stalled_or_oversized_body_answers_as_the_submit_rou
     path = f"/v1/perfmap/jobs/{uuid.uuid4()}/query"
     app = create_app(service_settings(tmp_path, body_idle_seconds=0.5, max_body_bytes=1000))
     with live_server(app) as base:
-        port = int(base.rsplit(":", 1)[1])
-        head = (f"POST {path} HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-                "Content-Length: 900\r\n\r\n").encode()
-        sock = _raw(port, head, b'{"flow": 1')
-        started = time.monotonic()
-        answer = _answer(sock)
-        sock.close()
-        assert time.monotonic() - started < 5
+        answer = _stalled(base, path, 900, b'{"flow": 1')
         assert answer.startswith(b"HTTP/1.1 408") and b"application/problem+json" in answer.lower()
         big = {"points": [{"flow": 1000.0 + k, "pressure": 1.2} for k in range(100)]}
         with httpx.Client(base_url=base) as http:
