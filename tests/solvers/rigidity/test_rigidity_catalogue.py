@@ -248,15 +248,20 @@ def test_an_official_mini_set_is_all_known_every_part_joined_and_nothing_collide
     assert result.collisions == []
 
 
-def test_a_tyre_fits_its_rim_through_their_snap_group_and_nothing_else():
+def _fits_rigidly_there_only(host: str, part: str, off: tuple[float, float, float]) -> None:
+    """``part`` placed at ``host``'s origin fits it by one rigid group connection; placed ``off`` it fits nothing."""
     assembly = Assembly()
-    assembly.add_part("rim", "4624", (0, 0, 0))
-    found = assembly.add_part("tyre", "3641", (0, 0, 0))
+    assembly.add_part("host", host, (0, 0, 0))
+    found = assembly.add_part("part", part, (0, 0, 0))
     assert [c.kind for c in found] == ["group"]
     assert assembly.analyse().mobility.dof == 0
     other = Assembly()
-    other.add_part("rim", "4624", (0, 0, 0))
-    assert other.add_part("tyre", "3641", (0, 0, 10)) == []  # off the rim: no fit
+    other.add_part("host", host, (0, 0, 0))
+    assert other.add_part("part", part, off) == []
+
+
+def test_a_tyre_fits_its_rim_through_their_snap_group_and_nothing_else():
+    _fits_rigidly_there_only("4624", "3641", (0, 0, 10))  # off the rim: no fit
 
 
 def test_docking_offers_poses_for_a_generated_part():
@@ -390,14 +395,7 @@ def test_a_pane_fits_its_frame_through_their_ungrouped_generic_snaps_and_nothing
     assert mate("shape:box 20 54 2:M", "shape:box 20 54 2:F") == "group"
     assert mate("shape:box 20 54 2:M", "shape:box 26 29.8 2:F") is None  # another size: no fit
     assert mate("shape:box 20 54 2:M", "group:box 20 54 2:F") is None  # nor a group's snap
-    assembly = Assembly()
-    assembly.add_part("frame", "2493b", (0, 0, 0))
-    found = assembly.add_part("pane", "2494", (0, 0, 0))
-    assert [c.kind for c in found] == ["group"]
-    assert assembly.analyse().mobility.dof == 0
-    other = Assembly()
-    other.add_part("frame", "2493b", (0, 0, 0))
-    assert other.add_part("pane", "2494", (0, 0, 20)) == []  # a stud pitch off the slot: no fit
+    _fits_rigidly_there_only("2493b", "2494", (0, 0, 20))  # a stud pitch off the slot: no fit
 
 
 def test_script_keeps_a_clips_radius_and_a_clip_of_another_radius_than_a_bars_is_no_bar_clip(tmp_path):
