@@ -14,12 +14,12 @@ from plantsolve.solvers.base import (
     FieldError,
     InputRejected,
     StoredInput,
+    binary_stl,
     json_object,
     reject,
     utf16_without_mark,
     validated,
 )
-from plantsolve.solvers.other_kinds import file_holds
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -46,7 +46,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     """The request of an uploaded PCF or JSON file (its extension checked by the intake); ``options``
     (the upload form's) override options given inside a JSON file."""
     content = source.read()
-    if file_holds(content[:65536]) == "a binary STL mesh":  # every byte decodes as latin-1: said before it is
+    if binary_stl(content[:134]):  # every byte decodes as latin-1: said before it is
         raise reject("this is a binary STL mesh, not a PCF or an alignment JSON request (a mesh is a polyhedra "
                      "or tube input)")
     text, encoding = _decoded(content)
