@@ -51,6 +51,7 @@ from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_o
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
+from plantsolve.solvers.polyhedra.idf_notes import notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
@@ -215,6 +216,7 @@ def parse_idf(text: str) -> dict:
         warnings.append(truncated_file(last, f"its last line has no line ending (the file was cut?): every object up "
                                        f"to the last ';' was read, whatever the file held after line {last} is "
                                        "missing.").model_dump())
+    warnings.extend(w.model_dump() for w in notes_in_other_units(text))
     return surfaces_from_objects(objects, skipped, warnings, "idf")
 
 
