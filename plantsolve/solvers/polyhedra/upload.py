@@ -45,7 +45,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
-    reject, validated
+    reject, utf16_without_mark, validated
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
@@ -54,6 +54,7 @@ from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_notes import notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
@@ -241,6 +242,11 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             if len(fields) > 4 and fields[4].strip().lower() == "world":
                 rect_relative = False
         elif cls == "zone" and fields and fields[0]:
+            if fields[0].lower() in zones:  # which origin, multiplier and floor-area rule is meant is unknown
+                first = zone_line[fields[0].lower()]
+                raise reject(f"Zone {fields[0]!r}{_where(line)} repeats the Zone {zone_names[fields[0].lower()]!r}"
+                             f"{_where(first)}: EnergyPlus refuses two zones of one name (names are "
+                             "case-insensitive)", ("file", "line", line) if line else ("file", "Zone", fields[0]))
             try:
                 values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
             except ValueError as e:
@@ -260,6 +266,10 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                     claim[key] = value
             if claim:
                 declared[fields[0]] = claim
+    for zone_key, claim in space_claims(objects).items():  # a Zone's own statement stands over its spaces' sum
+        if zone_key in zone_names:
+            name = zone_names[zone_key]
+            declared[name] = {**claim, **declared.get(name, {})}
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
@@ -459,6 +469,7 @@ def parse_stl(content: bytes) -> dict:
     import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
     import trimesh.exchange.stl  # noqa: PLC0415
 
+    content = _ascii_stl_from_utf16(content)
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
     declared = struct.unpack("<I", content[80:84])[0] if len(content) >= 84 else 0
@@ -532,6 +543,22 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _ascii_stl_from_utf16(content: bytes) -> bytes:
+    """An ASCII STL saved as UTF-16 (a Windows editor), as its ASCII bytes; other content as it is. Read as bytes it
+    passed for a binary STL cut short, of denormal floats that collapsed to nothing."""
+    text = None
+    if content[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        try:
+            text = content.decode("utf-16")
+        except UnicodeDecodeError:
+            return content
+    elif b"\x00" in content[:4096]:
+        text = utf16_without_mark(content)
+    if text is None or not text.lstrip().lower().startswith("solid"):
+        return content
+    return text.encode("utf-8", errors="replace")
 
 
 def parse_json(text: str) -> dict:

@@ -34,3 +34,61 @@ def test_field_notes_in_feet_are_named_and_file_units_reads_the_numbers_as_feet(
     assert [z.volume for z in as_feet.zones] == pytest.approx([60.0 * 0.3048 ** 3] * 2)
     plain = _solved(OFFICES)  # metre notes, and notes of other fields ({deg}): nothing said
     assert not [w for w in plain.report.warnings if w.code == "idf_notes_other_units"]
+
+
+@pytest.mark.parametrize("second", ["Office B Thermal Zone", "OFFICE B THERMAL ZONE"])
+def test_a_zone_defined_twice_is_refused_naming_both_lines(second):
+    """A second Zone object of one name (a pasted block, case aside) silently replaced the first's origin, multiplier
+    and floor-area rule; EnergyPlus refuses it, so does the reader, naming both lines."""
+    at = OFFICES.index("Zone,\n  Office B Thermal Zone")
+    text = OFFICES[:at] + f"Zone,\n  {second},\n  0,\n  99;\n\n" + OFFICES[at:]
+    first = text[:at].count("\n") + 1
+    with pytest.raises(InputRejected) as refused:
+        _solved(text)
+    (error,) = refused.value.errors
+    later = text.index("Zone,\n  Office B Thermal Zone", at + 1)
+    assert error.loc == ("file", "line", text[:later].count("\n") + 1)
+    assert f"line {first}" in error.msg and "two zones of one name" in error.msg
+
+
+def _spaces(*areas: str) -> str:
+    return "".join(f"\nSpace,\n  Office A part {k},  !- Name\n  Office A Thermal Zone,  !- Zone Name\n  ,  !- Ceiling "
+                   f"Height {{m}}\n  ,  !- Volume {{m3}}\n  {area},  !- Floor Area {{m2}}\n  General;  !- Space Type\n"
+                   for k, area in enumerate(areas, 1))
+
+
+def test_the_floor_area_a_zones_spaces_state_is_set_against_the_measured_one():
+    """EnergyPlus takes a Space's stated Floor Area over its floor surfaces'; the reader ignored Space objects, so a
+    zone whose spaces state 99 m² (EnergyPlus' report) measured 20 m², no word. Now the spaces' sum is the zone's
+    declared floor area, compared like a Zone's own."""
+    wrong = _solved(OFFICES + _spaces("99"))
+    (warning,) = [w for w in wrong.report.warnings if w.code == "declared_measures_differ"]
+    assert warning.details["zones"] == ["Office A Thermal Zone"]
+    (row,) = wrong.report.details["declared_comparison"]
+    assert row["declared_floor_area"] == pytest.approx(99.0) and row["floor_area"] == pytest.approx(20.0)
+    right = _solved(OFFICES + _spaces("12", "8"))  # two rooms of one zone: their sum
+    assert not [w for w in right.report.warnings if w.code == "declared_measures_differ"]
+    assert right.report.details["declared_comparison"][0]["declared_floor_area"] == pytest.approx(20.0)
+    partial = _solved(OFFICES + _spaces("99", "autocalculate"))  # one space measured by EnergyPlus: no sum to compare
+    assert "declared_comparison" not in partial.report.details
+
+
+def test_a_spaces_floor_area_in_epjson_is_compared_as_in_the_idf():
+    import json
+
+    document = json.loads((Path(__file__).parent / "data" / "openstudio_two_offices.epJSON").read_text())
+    zone = next(iter(document["Zone"]))
+    document["Space"] = {"Room": {"zone_name": zone, "floor_area": 99.0, "volume": "Autocalculate"}}
+    request = parse_upload(StoredInput.from_bytes("offices.epJSON", json.dumps(document).encode()), None)
+    assert request.source["declared"] == {zone: {"floor_area": 99.0}}
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le"])
+def test_an_ascii_stl_saved_as_utf16_is_read_as_the_box_it_is(encoding):
+    """Read as bytes, a UTF-16 ASCII STL passed for a binary STL cut short whose denormal floats collapsed: a 422 on
+    face 't1' that named nothing of the file. Now it is decoded and read."""
+    text = (Path(__file__).parent / "data" / "ascii_box.stl").read_text()
+    request = parse_upload(StoredInput.from_bytes("box.stl", text.encode(encoding)), None)
+    check_input(request)
+    (zone,) = solve(request).result.zones
+    assert zone.volume == pytest.approx(1.0) and not request.source["warnings"]
