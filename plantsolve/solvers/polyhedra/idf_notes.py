@@ -35,3 +35,20 @@ def notes_in_other_units(text: str) -> list[Diagnostic]:
         f"'{{{first}}}'), but EnergyPlus reads every IDF length in metres whatever a note says: the numbers were read "
         f"as metres. If they are in {first} (an IP export), give options.file_units = '{first}'."),
         details={"units": units, "lines": lines[:MAX_LINES_LISTED], "count": len(lines), "read_as": "m"})]
+
+
+def followed(warnings: list[dict], file_units: str | None) -> list[dict]:
+    """The reader's warnings with the notes' one saying the numbers were read in their unit when options.file_units
+    names it (the advice to give it would be followed already)."""
+    out = []
+    for w in warnings:
+        if isinstance(w, dict) and w.get("code") == "idf_notes_other_units" and file_units is not None and \
+                file_units in (w.get("details") or {}).get("units", []):
+            details = {**w["details"], "read_as": file_units}
+            lines = details.get("lines") or [None]
+            w = {**w, "details": details, "message": (
+                f"{details.get('count')} field note(s) of this IDF state lengths in {', '.join(details['units'])} (first "
+                f"at line {lines[0]}); EnergyPlus would read the numbers as metres, they were read as {file_units} as "
+                "options.file_units says.")}
+        out.append(w)
+    return out

@@ -51,7 +51,7 @@ from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_o
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
-from plantsolve.solvers.polyhedra.idf_notes import notes_in_other_units
+from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.space_claims import space_claims
@@ -616,6 +616,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     except InputRejected as refused:
         raise name_what_it_holds(refused, source.extension, content) from None
     fmt = (body.get("source") or {}).get("format") if isinstance(body.get("source"), dict) else None
+    if fmt == "idf" and form is not None and form.options.file_units is not None:
+        body["source"]["warnings"] = followed(body["source"]["warnings"], form.options.file_units)
     body = reconcile(body, form.units if form is not None and "units" in form.model_fields_set else None,
                      form.options.file_units if form is not None else None, fmt or source.extension[1:])
     try:

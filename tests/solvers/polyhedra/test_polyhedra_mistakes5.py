@@ -32,6 +32,8 @@ def test_field_notes_in_feet_are_named_and_file_units_reads_the_numbers_as_feet(
     assert [z.volume for z in result.zones] == pytest.approx([60.0, 60.0])
     as_feet = _solved(feet, {"file_units": "ft"})
     assert [z.volume for z in as_feet.zones] == pytest.approx([60.0 * 0.3048 ** 3] * 2)
+    (said,) = [w for w in as_feet.report.warnings if w.code == "idf_notes_other_units"]
+    assert said.details["read_as"] == "ft" and "as options.file_units says" in said.message
     plain = _solved(OFFICES)  # metre notes, and notes of other fields ({deg}): nothing said
     assert not [w for w in plain.report.warnings if w.code == "idf_notes_other_units"]
 
