@@ -346,7 +346,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
-    warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones))
+    rules = any(cls == "globalgeometryrules" for cls, *_ in objects)
+    warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -363,18 +364,23 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
 
 
 def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],
-                     lines: dict[str, int], world_zones: set[str]) -> list[Diagnostic]:
+                     lines: dict[str, int], world_zones: set[str], rules: bool = True) -> list[Diagnostic]:
     """EnergyPlus' warning for a World coordinate system over zones with an origin or a north axis: both are ignored,
-    so surfaces written relative to their zone (the rule switched without the coordinates) pile up at the origin."""
+    so surfaces written relative to their zone (the rule switched without the coordinates) pile up at the origin.
+    ``rules`` False: the file has no GlobalGeometryRules (an excerpt; EnergyPlus requires the object), and World is
+    what the reader assumed, which the warning says rather than blame a statement the file does not make."""
     moved = sorted((k for k in world_zones if any(zones.get(k, (0.0,) * 4))), key=lambda k: lines[k])
     if not moved:
         return []
     listed = ", ".join(f"{names[k]!r} (line {lines[k]})" for k in moved[:5]) + (" …" if len(moved) > 5 else "")
+    said = ("GlobalGeometryRules says World coordinates, so the origin and north axis of {n} zone(s) are ignored, as "
+            "EnergyPlus ignores them" if rules else "This IDF has no GlobalGeometryRules (EnergyPlus requires one): its "
+            "coordinates were read as World, so the origin and north axis of {n} zone(s) are ignored")
     return [Diagnostic(code="zone_origins_ignored", message=(
-        f"GlobalGeometryRules says World coordinates, so the origin and north axis of {len(moved)} zone(s) are ignored, "
-        f"as EnergyPlus ignores them: {listed}. If their surfaces are written relative to the zone, the zones are "
-        "misplaced (their adjacencies lost): say Relative."),
-        details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]]})]
+        f"{said.format(n=len(moved))}: {listed}. If their surfaces are written relative to the zone, the zones are "
+        "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),
+        details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]],
+                 "global_geometry_rules": rules})]
 
 
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:

@@ -94,3 +94,14 @@ def test_an_ascii_stl_saved_as_utf16_is_read_as_the_box_it_is(encoding):
     check_input(request)
     (zone,) = solve(request).result.zones
     assert zone.volume == pytest.approx(1.0) and not request.source["warnings"]
+
+
+def test_an_idf_without_global_geometry_rules_says_world_was_assumed_not_stated():
+    """Without GlobalGeometryRules (an excerpt of a model), the zone-origin warning said 'GlobalGeometryRules says
+    World coordinates', a statement the file does not make. Now it names the missing object and the assumption."""
+    import re
+
+    text = re.sub(r"GlobalGeometryRules,.*?;[^\n]*\n", "", OFFICES, flags=re.S)
+    (warning,) = [w for w in _solved(text).report.warnings if w.code == "zone_origins_ignored"]
+    assert "has no GlobalGeometryRules" in warning.message and "says World" not in warning.message
+    assert warning.details["global_geometry_rules"] is False and warning.details["zones"] == ["Office B Thermal Zone"]
