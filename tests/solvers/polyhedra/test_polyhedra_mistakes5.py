@@ -105,3 +105,23 @@ def test_an_idf_without_global_geometry_rules_says_world_was_assumed_not_stated(
     (warning,) = [w for w in _solved(text).report.warnings if w.code == "zone_origins_ignored"]
     assert "has no GlobalGeometryRules" in warning.message and "says World" not in warning.message
     assert warning.details["global_geometry_rules"] is False and warning.details["zones"] == ["Office B Thermal Zone"]
+
+
+def test_an_ifc_quantity_stating_its_own_unit_is_read_in_it():
+    """An IfcQuantityArea may state its own Unit (square feet in a metre project); the reader applied the project's
+    area unit to every quantity, so 215.28 ft² was declared as 215.28 m² against the 20 m² measured. Now the
+    quantity's own unit is used (and the project's when it states none)."""
+    text = (Path(__file__).parent / "data" / "ifcopenshell_spaces.ifc").read_text()
+    assert "#34=IFCQUANTITYAREA('NetFloorArea',$,$,20.,$);" in text
+    text = text.replace("#34=IFCQUANTITYAREA('NetFloorArea',$,$,20.,$);",
+                        "#34=IFCQUANTITYAREA('NetFloorArea',$,#9003,215.2782,$);\n"
+                        "#9001=IFCDIMENSIONALEXPONENTS(2,0,0,0,0,0,0);\n"
+                        "#9002=IFCMEASUREWITHUNIT(IFCAREAMEASURE(0.09290304),#3);\n"
+                        "#9003=IFCCONVERSIONBASEDUNIT(#9001,.AREAUNIT.,'square foot',#9002);")
+    plain = parse_upload(StoredInput.from_bytes("spaces.ifc", (Path(__file__).parent / "data" /
+                                                               "ifcopenshell_spaces.ifc").read_bytes()), None)
+    feet = parse_upload(StoredInput.from_bytes("spaces.ifc", text.encode()), None)
+    changed = [z for z, claim in feet.source["declared"].items() if claim != plain.source["declared"][z]]
+    (zone,) = changed
+    assert feet.source["declared"][zone]["floor_area"] == pytest.approx(20.0, rel=1e-6)
+    assert feet.source["declared"][zone]["volume"] == plain.source["declared"][zone]["volume"]
