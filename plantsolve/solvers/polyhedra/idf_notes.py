@@ -47,8 +47,8 @@ def followed(warnings: list[dict], file_units: str | None) -> list[dict]:
             details = {**w["details"], "read_as": file_units}
             lines = details.get("lines") or [None]
             w = {**w, "details": details, "message": (
-                f"{details.get('count')} field note(s) of this IDF state lengths in {', '.join(details['units'])} (first "
-                f"at line {lines[0]}); EnergyPlus would read the numbers as metres, they were read as {file_units} as "
-                "options.file_units says.")}
+                f"{details.get('count')} field note(s) of this IDF state lengths in {', '.join(details['units'])} "
+                f"(first at line {lines[0]}); EnergyPlus would read the numbers as metres, they were read as "
+                f"{file_units} as options.file_units says.")}
         out.append(w)
     return out

@@ -374,8 +374,8 @@ def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names:
         return []
     listed = ", ".join(f"{names[k]!r} (line {lines[k]})" for k in moved[:5]) + (" …" if len(moved) > 5 else "")
     said = ("GlobalGeometryRules says World coordinates, so the origin and north axis of {n} zone(s) are ignored, as "
-            "EnergyPlus ignores them" if rules else "This IDF has no GlobalGeometryRules (EnergyPlus requires one): its "
-            "coordinates were read as World, so the origin and north axis of {n} zone(s) are ignored")
+            "EnergyPlus ignores them" if rules else "This IDF has no GlobalGeometryRules (EnergyPlus requires one): "
+            "its coordinates were read as World, so the origin and north axis of {n} zone(s) are ignored")
     return [Diagnostic(code="zone_origins_ignored", message=(
         f"{said.format(n=len(moved))}: {listed}. If their surfaces are written relative to the zone, the zones are "
         "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),

@@ -28,7 +28,8 @@ def test_field_notes_in_feet_are_named_and_file_units_reads_the_numbers_as_feet(
     result = _solved(feet)
     (warning,) = [w for w in result.report.warnings if w.code == "idf_notes_other_units"]
     first = next(k for k, line in enumerate(feet.splitlines(), 1) if "{ft}" in line and "Origin" in line)
-    assert warning.details["units"] == ["ft"] and warning.details["lines"][0] == first and "file_units" in warning.message
+    assert warning.details["units"] == ["ft"] and warning.details["lines"][0] == first
+    assert "file_units" in warning.message
     assert [z.volume for z in result.zones] == pytest.approx([60.0, 60.0])
     as_feet = _solved(feet, {"file_units": "ft"})
     assert [z.volume for z in as_feet.zones] == pytest.approx([60.0 * 0.3048 ** 3] * 2)
@@ -101,7 +102,7 @@ def test_an_idf_without_global_geometry_rules_says_world_was_assumed_not_stated(
     World coordinates', a statement the file does not make. Now it names the missing object and the assumption."""
     import re
 
-    text = re.sub(r"GlobalGeometryRules,.*?;[^\n]*\n", "", OFFICES, flags=re.S)
+    text = re.sub(r"GlobalGeometryRules,.*?;[^\n]*\n", "", OFFICES, flags=re.DOTALL)
     (warning,) = [w for w in _solved(text).report.warnings if w.code == "zone_origins_ignored"]
     assert "has no GlobalGeometryRules" in warning.message and "says World" not in warning.message
     assert warning.details["global_geometry_rules"] is False and warning.details["zones"] == ["Office B Thermal Zone"]
