@@ -560,7 +560,7 @@ def _ascii_stl_from_utf16(content: bytes) -> bytes:
             text = content.decode("utf-16")
         except UnicodeDecodeError:
             return content
-    elif b"\x00" in content[:4096]:
+    elif b"\x00" in content[:4096] and utf16_without_mark(content[:4096]) is not None:  # a binary STL fails here
         text = utf16_without_mark(content)
     if text is None or not text.lstrip().lower().startswith("solid"):
         return content
