@@ -21,6 +21,7 @@ from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.plots import figure_artifact
 from plantsolve.schemas.polyhedra import MAX_LISTED_FACES
 from plantsolve.solvers.polyhedra import bulk_csv
+from plantsolve.solvers.polyhedra.counted import subsurface_copies
 from plantsolve.solvers.polyhedra.polygons import FaceIds, Polygons, from_request
 from plantsolve.solvers.polyhedra.solve import FACE_TABLE
 
@@ -103,8 +104,10 @@ def figures(request: PolyhedraRequest, result: PolyhedraResult) -> dict[str, Fig
     return {"zones": zones_figure(request, result)}
 
 
-def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | None) -> bytes:
-    """Zones, then every face when the solve handed over its face table (faces_csv)."""
+def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | None,
+           copies: np.ndarray | None = None) -> bytes:
+    """Zones, then every face when the solve handed over its face table (faces_csv). A zone row's multiplier is the
+    zone's, a face row's the number of copies of it its host holds (``copies``; 1 when None), as in the result."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     u = result.units
@@ -130,16 +133,20 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     parents[subs] = [poly.face_ids[p] for p in poly.face_parent[subs]]
     ids = poly.face_ids
     named = ids.names if isinstance(ids, FaceIds) else ids
+    # a window standing for four on its wall: its row says so, or the rows' net areas would not add up to its host's
+    multipliers = np.full(poly.n_faces, "1", dtype=object) if copies is None else \
+        np.asarray(copies, dtype=np.int64).astype(str).astype(object)
     if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]) and \
             np.isfinite(face_table).all():
         # one copy of the rows: the chunks joined behind the zone rows
-        return b"".join([out.getvalue().encode(), *_bulk_face_rows(poly, zones, parents, face_table)])
+        return b"".join([out.getvalue().encode(), *_bulk_face_rows(poly, zones, parents, multipliers, face_table)])
     columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
     net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
     area, perimeter, nx, ny, nz, planarity = columns
     blank = repeat("")
     writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
-                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, blank, blank))
+                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, multipliers.tolist(),
+                         blank))
     return out.getvalue().encode()
 
 
@@ -156,8 +163,8 @@ def _label_cells(labels: np.ndarray) -> np.ndarray:
     return bulk_csv.text_cells(values.tolist())[index.reshape(-1)]
 
 
-def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face_table: np.ndarray,
-                    chunk: int = 20_000) -> list[bytes]:
+def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, multipliers: np.ndarray,
+                    face_table: np.ndarray, chunk: int = 20_000) -> list[bytes]:
     """The face rows of a large table in chunks (bulk_csv: 17 significant digits, written by array operations)."""
     parts = []
     for s in range(0, poly.n_faces, chunk):
@@ -169,7 +176,8 @@ def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, face
             bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
             _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
             bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
-            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",,,\n", n)]))
+            num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",,", n),
+            _label_cells(multipliers[s:e]), bulk_csv.literal(",\n", n)]))
     return parts
 
 
@@ -178,4 +186,5 @@ def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact
     table = solved.files.get(FACE_TABLE)
     face_table = np.load(io.BytesIO(table), allow_pickle=False) if table is not None else None
     return [figure_artifact("zones.png", zones_figure(request, solved.result, poly), dpi=100),
-            Artifact("zones.csv", "text/csv", _table(solved.result, poly, face_table))]
+            Artifact("zones.csv", "text/csv", _table(solved.result, poly, face_table,
+                                                     subsurface_copies(request, poly.n_faces)))]

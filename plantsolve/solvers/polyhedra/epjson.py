@@ -49,6 +49,7 @@ FIELDS: dict[str, tuple[str, ...]] = {
              "width") for cls in ("ceiling:interzone", "floor:interzone")},
     "zonelist": ("zones",),
     "zonegroup": ("zone_list_name", "zone_list_multiplier"),
+    "space": ("zone_name", "ceiling_height", "volume", "floor_area"),
     "window": _WINDOW,
     "glazeddoor": _WINDOW,
     "door": ("construction_name", "building_surface_name", "multiplier", *_SUB),

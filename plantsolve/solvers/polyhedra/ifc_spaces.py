@@ -30,6 +30,20 @@ from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 MAX_SKIPPED_LISTED = 200
 
 
+def _scale(model: Any, qto: dict[str, Any], name: str, project: float) -> float:
+    """SI units per unit of the quantity ``name`` of the quantity set ``qto`` (get_psets' dict): its own Unit when it
+    states one (a quantity in square feet in a metre project), else the project's."""
+    import ifcopenshell.util.unit  # noqa: PLC0415  (third-party, only needed for IFC)
+
+    try:
+        quantity = next((q for q in getattr(model.by_id(qto["id"]), "Quantities", None) or ()
+                         if getattr(q, "Name", None) == name), None)
+        unit = getattr(quantity, "Unit", None)
+        return float(ifcopenshell.util.unit.get_unit_scale(unit)) if unit is not None else project
+    except (KeyError, RuntimeError, TypeError, ValueError, AttributeError):  # a damaged reference: the project's unit
+        return project
+
+
 def _quantity(quantities: dict[str, Any], *names: str) -> tuple[str, float] | None:
     for name in names:
         value = quantities.get(name)
@@ -126,9 +140,9 @@ def parse_ifc(content: bytes) -> dict:
         floor = _quantity(qto, "NetFloorArea", "GrossFloorArea")
         entry, used = {}, {}
         if volume:
-            entry["volume"], used["volume"] = volume[1] * volume_scale, volume[0]
+            entry["volume"], used["volume"] = volume[1] * _scale(model, qto, volume[0], volume_scale), volume[0]
         if floor:
-            entry["floor_area"], used["floor_area"] = floor[1] * area_scale, floor[0]
+            entry["floor_area"], used["floor_area"] = floor[1] * _scale(model, qto, floor[0], area_scale), floor[0]
         if entry:
             declared[zone_of[s.id()]], quantities_used[zone_of[s.id()]] = entry, used
     if unreadable:

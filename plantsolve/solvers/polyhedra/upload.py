@@ -45,14 +45,16 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
-    reject, validated
+    reject, utf16_without_mark, validated
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
+from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
@@ -215,6 +217,7 @@ def parse_idf(text: str) -> dict:
         warnings.append(truncated_file(last, f"its last line has no line ending (the file was cut?): every object up "
                                        f"to the last ';' was read, whatever the file held after line {last} is "
                                        "missing.").model_dump())
+    warnings.extend(w.model_dump() for w in notes_in_other_units(text))
     return surfaces_from_objects(objects, skipped, warnings, "idf")
 
 
@@ -239,6 +242,11 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             if len(fields) > 4 and fields[4].strip().lower() == "world":
                 rect_relative = False
         elif cls == "zone" and fields and fields[0]:
+            if fields[0].lower() in zones:  # which origin, multiplier and floor-area rule is meant is unknown
+                first = zone_line[fields[0].lower()]
+                raise reject(f"Zone {fields[0]!r}{_where(line)} repeats the Zone {zone_names[fields[0].lower()]!r}"
+                             f"{_where(first)}: EnergyPlus refuses two zones of one name (names are "
+                             "case-insensitive)", ("file", "line", line) if line else ("file", "Zone", fields[0]))
             try:
                 values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
             except ValueError as e:
@@ -258,6 +266,10 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                     claim[key] = value
             if claim:
                 declared[fields[0]] = claim
+    for zone_key, claim in space_claims(objects).items():  # a Zone's own statement stands over its spaces' sum
+        if zone_key in zone_names:
+            name = zone_names[zone_key]
+            declared[name] = {**claim, **declared.get(name, {})}
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
@@ -334,7 +346,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
-    warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones))
+    rules = any(cls == "globalgeometryrules" for cls, *_ in objects)
+    warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -351,18 +364,23 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
 
 
 def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],
-                     lines: dict[str, int], world_zones: set[str]) -> list[Diagnostic]:
+                     lines: dict[str, int], world_zones: set[str], rules: bool = True) -> list[Diagnostic]:
     """EnergyPlus' warning for a World coordinate system over zones with an origin or a north axis: both are ignored,
-    so surfaces written relative to their zone (the rule switched without the coordinates) pile up at the origin."""
+    so surfaces written relative to their zone (the rule switched without the coordinates) pile up at the origin.
+    ``rules`` False: the file has no GlobalGeometryRules (an excerpt; EnergyPlus requires the object), and World is
+    what the reader assumed, which the warning says rather than blame a statement the file does not make."""
     moved = sorted((k for k in world_zones if any(zones.get(k, (0.0,) * 4))), key=lambda k: lines[k])
     if not moved:
         return []
     listed = ", ".join(f"{names[k]!r} (line {lines[k]})" for k in moved[:5]) + (" …" if len(moved) > 5 else "")
+    said = ("GlobalGeometryRules says World coordinates, so the origin and north axis of {n} zone(s) are ignored, as "
+            "EnergyPlus ignores them" if rules else "This IDF has no GlobalGeometryRules (EnergyPlus requires one): "
+            "its coordinates were read as World, so the origin and north axis of {n} zone(s) are ignored")
     return [Diagnostic(code="zone_origins_ignored", message=(
-        f"GlobalGeometryRules says World coordinates, so the origin and north axis of {len(moved)} zone(s) are ignored, "
-        f"as EnergyPlus ignores them: {listed}. If their surfaces are written relative to the zone, the zones are "
-        "misplaced (their adjacencies lost): say Relative."),
-        details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]]})]
+        f"{said.format(n=len(moved))}: {listed}. If their surfaces are written relative to the zone, the zones are "
+        "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),
+        details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]],
+                 "global_geometry_rules": rules})]
 
 
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
@@ -457,6 +475,7 @@ def parse_stl(content: bytes) -> dict:
     import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
     import trimesh.exchange.stl  # noqa: PLC0415
 
+    content = _ascii_stl_from_utf16(content)
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
     declared = struct.unpack("<I", content[80:84])[0] if len(content) >= 84 else 0
@@ -532,6 +551,22 @@ def parse_stl(content: bytes) -> dict:
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
 
 
+def _ascii_stl_from_utf16(content: bytes) -> bytes:
+    """An ASCII STL saved as UTF-16 (a Windows editor), as its ASCII bytes; other content as it is. Read as bytes it
+    passed for a binary STL cut short, of denormal floats that collapsed to nothing."""
+    text = None
+    if content[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        try:
+            text = content.decode("utf-16")
+        except UnicodeDecodeError:
+            return content
+    elif b"\x00" in content[:4096] and utf16_without_mark(content[:4096]) is not None:  # a binary STL fails here
+        text = utf16_without_mark(content)
+    if text is None or not text.lstrip().lower().startswith("solid"):
+        return content
+    return text.encode("utf-8", errors="replace")
+
+
 def parse_json(text: str) -> dict:
     """A JSON request as a file; another kind's request or result is refused naming what it holds."""
     body = json_object(text, refuse_cut=True)
@@ -587,6 +622,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     except InputRejected as refused:
         raise name_what_it_holds(refused, source.extension, content) from None
     fmt = (body.get("source") or {}).get("format") if isinstance(body.get("source"), dict) else None
+    if fmt == "idf" and form is not None and form.options.file_units is not None:
+        body["source"]["warnings"] = followed(body["source"]["warnings"], form.options.file_units)
     body = reconcile(body, form.units if form is not None and "units" in form.model_fields_set else None,
                      form.options.file_units if form is not None else None, fmt or source.extension[1:])
     try:

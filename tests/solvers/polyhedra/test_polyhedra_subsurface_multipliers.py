@@ -91,3 +91,26 @@ def test_a_json_body_multiplying_a_face_that_is_no_subsurface_is_refused():
     with pytest.raises(InputRejected) as refused:
         _solved("body.json", json.dumps(body))
     assert refused.value.errors[0].loc == ("subsurface_multipliers", "Office A South")
+
+
+@pytest.mark.parametrize("bulk", [False, True])
+def test_zones_csv_face_rows_state_the_window_multiplier_so_the_rows_add_up_to_the_host(monkeypatch, bulk):
+    """zones.csv listed the window ×4 with a blank multiplier, one copy's area and its wall's net area less four
+    copies: its rows did not add up, no word. Now each face row states its multiplier, as the result does (the large
+    tables' array writer too)."""
+    import csv
+    import io
+
+    from plantsolve.solvers.polyhedra import artifacts
+
+    if bulk:
+        monkeypatch.setattr(artifacts, "MAX_LISTED_FACES", 3)
+    request = parse_upload(StoredInput.from_bytes("offices.idf", _window_multiplier("4")[0].encode()),
+                           {"options": {"faces_csv": True}})
+    check_input(request)
+    (table,) = [a for a in artifacts.render_artifacts(request, solve(request)) if a.name == "zones.csv"]
+    rows = {row["id"]: row for row in csv.DictReader(io.StringIO(table.data.decode())) if row["record"] == "face"}
+    window, wall = rows["Office A Window"], rows["Office A South"]
+    assert (window["multiplier"], wall["multiplier"]) == ("4", "1")
+    assert float(wall["net_area [m2]"]) == pytest.approx(
+        float(wall["area [m2]"]) - int(window["multiplier"]) * float(window["area [m2]"]))
