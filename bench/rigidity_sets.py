@@ -123,8 +123,9 @@ def totals(label: str, rows: list[dict]) -> str:
     CPU seconds."""
     return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
-            f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece {sum(r['pieces'] == 1 for r in rows)}, "
-            f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, offset pairs "
+            f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
+            f"{sum(r['pieces'] == 1 for r in rows)}, pieces not held {sum(r['pieces'] for r in rows)}, held "
+            f"{sum(r['held'] for r in rows)}, offset pairs "
             f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")
 
 
