@@ -18,6 +18,9 @@ files. Per model, ``before -> after``:
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
+
+Then the totals, after and (with a baseline) before: floating parts, models at most 5 % floating, models in one
+piece besides held sub-builds, pieces not held, held, offset pairs, CPU seconds.
 """
 
 from __future__ import annotations
@@ -93,8 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
     print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
           f"{'prim':>6s} {'cpu s':>11s}  floating parts (after)")
+    rows = []
     for path in files:
         row = measure(path)
+        rows.append(row)
         old = before.get(row["model"], row if not before else None)
 
         def pair(key, fmt="d", row=row, old=old):
@@ -105,7 +110,23 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
               f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
               f"{pair('seconds', '.2f'):>11s}  {names}")
+    olds = [before.get(row["model"]) for row in rows]
+    print(totals("after", rows))
+    if all(olds) and olds:
+        print(totals(f"before ({args.before})", olds))
     return 0
+
+
+def totals(label: str, rows: list[dict]) -> str:
+    """One line of totals over the models: floating parts, models at most 5 % floating, models in one piece besides
+    held sub-builds (the goal: a set that is one build comes out as one piece), pieces not held, held, offset pairs,
+    CPU seconds."""
+    return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
+            f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
+            f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
+            f"{sum(r['pieces'] == 1 for r in rows)}, pieces not held {sum(r['pieces'] for r in rows)}, held "
+            f"{sum(r['held'] for r in rows)}, offset pairs "
+            f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")
 
 
 if __name__ == "__main__":

@@ -271,6 +271,23 @@ def test_parts_four_ldu_off_their_mate_are_not_joined(text):
     assert far != text and joints(far) == []
 
 
+@pytest.mark.parametrize("between, joined", [("3068b", False), ("3022", True)])
+def test_a_brick_resting_on_a_tile_is_joined_to_nothing_though_its_anti_studs_lie_a_plates_height_over_studs(
+        between, joined):
+    """A 2 x 2 brick over the left half of a 2 x 4 brick with a 2 x 2 part between them: its four anti-studs lie 8 LDU
+    (a plate's height) up the axes of four studs. On a tile (3068b) it rests, held by nothing (10179-1 draws a Technic
+    brick 3700 so, on the tile 3068b over two 3894): the 8 LDU are no slip to join. On a plate (3022) it sits on
+    the plate's four studs."""
+    text = ("1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+            f"1 4 -20 -8 0 1 0 0 0 1 0 0 0 1 {between}.dat\n1 4 -20 -32 0 1 0 0 0 1 0 0 0 1 3003.dat\n")
+    assert joints(text) == [("rigid", "stud", "3001", between, 4)] + [("rigid", "stud", "3003", between, 4)] * joined
+    result = solve(parse("tile.ldr", text)).result
+    assert [pc.parts for pc in result.pieces] == ([["L1", "L2", "L3"]] if joined else [["L1", "L2"], ["L3"]])
+    if not joined:
+        why = next(w for w in result.report.warnings if w.code == "floating_parts").details["why"]
+        assert why[0]["nearest"]["gap_ldu"] == 8.0 and why[0]["nearest"]["other_number"] == "3001"
+
+
 def dish_on_plate(y: float, x: float = 0.0) -> str:
     # the 6 x 6 inverted dish 4285b over a 2 x 2 plate: seated at y = -8, its four corner anti-studs on the studs
     return f"1 4 0 0 0 1 0 0 0 1 0 0 0 1 3022.dat\n1 4 {x} {y} 0 1 0 0 0 1 0 0 0 1 4285b.dat\n"
