@@ -17,7 +17,9 @@ What is read of each meta line (LDCad's meta syntax, ``[key=value]`` pairs):
   A axle, S square, ``L_``/``_L`` chamfers), ``center``, ``slide``, ``pos``, ``ori``, ``grid``,
   ``scale``. The cylinder's axis is the local −y of ``ori``: it runs from ``pos`` along −y for the
   sum of its section lengths (or is centred on ``pos`` with ``center=true``).
-- ``SNAP_CLP`` (a clip: ``radius`` of the rod it grips, default 4, a bar's; ``length``, ``center``),
+- ``SNAP_CLP`` (a clip: ``radius`` of the rod it grips, default 4, a bar's; ``length``, ``center``; with a ``group``
+  a clip made for the cylinders of that group only, a pivot, and a ``SNAP_CYL`` of a group some clip names is also
+  that group's pivot at its middle: a universal joint's end 3712 on an arm of its centre 3326b),
   ``SNAP_FGR`` (hinge fingers: ``genderOfs``, ``seq`` of finger widths, ``radius``; centred on ``pos``, or
   starting there along the local −y with ``center=false``), ``SNAP_GEN`` with ``bounding=sph`` (a ball joint
   when male, its socket when female), with a ``group`` (a fit made only within the group: a tyre on its rim),
@@ -34,7 +36,8 @@ the bounding box of the part's drawn geometry and each snap one of
 - ``["clp", centre, axis, length, radius]`` (``radius``: the rod the clip grips);
   ``["fgr", gender, centre, axis, length]``;
 - ``["sph", gender, centre, radius]``; ``["gen", gender, group, centre, axis]``; ``["shp", gender, bounding,
-  centre, axis]`` (``bounding`` as ``box 20 54 2``: an ungrouped generic snap).
+  centre, axis]`` (``bounding`` as ``box 20 54 2``: an ungrouped generic snap); ``["pvt", gender, group, centre,
+  axis]`` (a grouped clip, ``F``, or the middle of a cylinder of its group, ``M``).
 
 The open stud tube primitives (``stud4.dat``, ``stud4a.dat``, ``stud4f*.dat``, ``stud4h.dat``) get the
 anti-stud the shadow library states for ``stud4o.dat`` when their own shadow states none (see ``TUBE``), and a
@@ -178,8 +181,9 @@ def _sections(value: str) -> list[list]:
     return out
 
 
-def _own_snaps(line: str, params: dict, place) -> list[dict]:
-    """The snaps of one SNAP_CYL/CLP/FGR/GEN line in the file's frame (one per grid position)."""
+def _own_snaps(line: str, params: dict, place, pivot_groups: frozenset = frozenset()) -> list[dict]:
+    """The snaps of one SNAP_CYL/CLP/FGR/GEN line in the file's frame (one per grid position); a grouped cylinder of
+    one of ``pivot_groups`` (the groups a clip states) is also that group's pivot at its middle."""
     kind = line.split()[2].upper()
     pos, ori = _frame(params)
     snap_id = (params.get("id") or params.get("ID") or "").lower()
@@ -197,6 +201,14 @@ def _own_snaps(line: str, params: dict, place) -> list[dict]:
                         "caps": params.get("caps", "one").lower(), "slide": params.get("slide", "").lower() == "true",
                         "start": start, "axis": down, "secs": secs,
                         "scale": params.get("scale", "").lower() in ("yonly", "yandr")})
+            if params.get("group", "").lower() in pivot_groups:
+                out.append({"id": snap_id, "kind": "pvt", "gender": "M", "group": params["group"].lower(),
+                            "centre": start + down * length / 2, "axis": down})
+        elif kind == "SNAP_CLP" and params.get("group"):  # a clip made for its group's cylinder only (3712 on 3326b)
+            length = float(params.get("length", 8))
+            centre = origin if params.get("center", "").lower() == "true" else origin + down * length / 2
+            out.append({"id": snap_id, "kind": "pvt", "gender": "F", "group": params["group"].lower(),
+                        "centre": centre, "axis": down})
         elif kind == "SNAP_CLP":
             length = float(params.get("length", 8))
             centre = origin if params.get("center", "").lower() == "true" else origin + down * length / 2
@@ -266,12 +278,23 @@ def _overlap(a: dict, b: dict, tol: float = 0.01) -> bool:
     return min(along, b_end) < length_a - tol and max(along, b_end) > tol
 
 
+def pivot_groups(shadow: Library) -> frozenset:
+    """The groups that a clip (``SNAP_CLP``) of the shadow library names, lower case."""
+    found = set()
+    for path in shadow.files.values():
+        for raw in path.read_text(encoding="utf-8", errors="replace").splitlines():
+            if "SNAP_CLP" in raw.split()[2:3]:
+                found.update(v.lower() for k, v in META.findall(raw) if k.lower() == "group")
+    return frozenset(found)
+
+
 class Deriver:
     def __init__(self, ldraw: Library, shadow: Library):
         self.ldraw, self.shadow = ldraw, shadow
         self._snaps: dict[str, list[dict]] = {}
         self._boxes: dict[str, np.ndarray | None] = {}
         self._stack: set[str] = set()
+        self.pivot_groups = pivot_groups(shadow)
 
     def snaps(self, name: str) -> list[dict]:
         key = name.strip().replace("\\", "/").lower()
@@ -311,7 +334,7 @@ class Deriver:
                 for offset in _grid_offsets(params.get("grid")):
                     own.extend(transform(s, ori, pos + ori @ offset) for s in self.snaps(params.get("ref", "")))
             else:
-                own.extend(_own_snaps(raw, params, lambda s: s))
+                own.extend(_own_snaps(raw, params, lambda s: s, self.pivot_groups))
         if added_hole:
             own = [dict(s, open_stud_hole=True) if s["kind"] == "cyl" and s["gender"] == "F" else s for s in own]
         inherited = []
@@ -365,6 +388,8 @@ def _record(snap: dict, scale: bool = False) -> list:
         return ["gen", snap["gender"], snap["group"], _r(snap["centre"]), _r(snap["axis"])]
     if snap["kind"] == "shp":
         return ["shp", snap["gender"], snap["shape"], _r(snap["centre"]), _r(snap["axis"])]
+    if snap["kind"] == "pvt":
+        return ["pvt", snap["gender"], snap["group"], _r(snap["centre"]), _r(snap["axis"])]
     return ["sph", snap["gender"], _r(snap["centre"]), round(snap["radius"], 3)]
 
 

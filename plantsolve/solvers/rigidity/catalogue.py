@@ -201,18 +201,20 @@ MATES = {
 GROUP = "group"  # the connection of a grouped generic snap pair (generated parts)
 
 
-GENERIC = ("group:", "shape:")  # generic snaps: of one group, or ungrouped of one bounding shape and size
+# generic snaps: of one group, ungrouped of one bounding shape and size, a grouped clip and its group's cylinder
+GENERIC = ("group:", "shape:", "pivot:")
 
 
 def mate(a: str, b: str) -> str | None:
     """The connection two connector types make, or None: :data:`MATES`, or the male and female of one
     generic snap group (``group:<name>:M`` with ``group:<name>:F``) or of one ungrouped bounding (``shape:box 20 54
-    2:M`` with ``shape:box 20 54 2:F``)."""
+    2:M`` with ``shape:box 20 54 2:F``), rigid, or of one clip group (``pivot:<name>:M`` with ``pivot:<name>:F``),
+    a hinge."""
     kind = MATES.get((a, b))
     if kind is None and a.startswith(GENERIC) and b.startswith(GENERIC):
         ga, gb = a.rsplit(":", 1), b.rsplit(":", 1)
         if ga[0] == gb[0] and ga[1] != gb[1]:
-            return GROUP
+            return "hinge" if a.startswith("pivot:") else GROUP
     return kind
 
 

@@ -34,6 +34,10 @@ grid and compatible types, :data:`catalogue.MATES`):
 - A generic snap of a ``group`` (a tyre on its rim, a drawer in its cabinet) is a ``group:<name>:M``
   or ``…:F`` point at its centre along its axis: male and female of one group at one point make a
   rigid connection (the fit holds).
+- A clip of a ``group`` (a universal joint's end, 3712, clipped on the cross of its centre, 3326b) is a
+  ``pivot:<name>:F`` point at its centre along its axis, and a cylinder of that group (each arm of the cross) also a
+  ``pivot:<name>:M`` point at its middle: male and female of one group at one point on one axis make a hinge about
+  it. Such a clip holds nothing else (it is made for its group's cylinder only).
 - An ungrouped generic snap with a box or cylinder bounding (a window's pane, its frame's slot; a lid on its crate)
   is a ``shape:<bounding>:M`` or ``…:F`` point at its centre along its axis: male and female of one bounding shape
   and size at one point make a rigid connection, as a group's do.
@@ -96,6 +100,12 @@ def shape_type(bounding: str, gender: str) -> str:
     """The connector type of an ungrouped generic snap: ``shape:<bounding>:M`` fits ``shape:<bounding>:F`` of the
     same bounding shape and size (``box 20 54 2``)."""
     return f"shape:{bounding}:{gender}"
+
+
+def pivot_type(group: str, gender: str) -> str:
+    """The connector type of a grouped clip (``F``) or of a cylinder of the clip's group (``M``): ``pivot:<name>:F``
+    fits ``pivot:<name>:M``, a hinge about their common axis."""
+    return f"pivot:{group}:{gender}"
 
 
 def numbers() -> frozenset[str]:
@@ -227,6 +237,8 @@ def connectors(snaps: list) -> tuple[Point, ...]:
             out.append((group_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "shp":
             out.append((shape_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
+        elif kind == "pvt":
+            out.append((pivot_type(snap[2], snap[1]), _point(snap[3]), _point(snap[4])))
         elif kind == "sph":
             out.append(("ball" if snap[1] == "M" else "socket", _point(snap[2]), (0.0, 0.0, 0.0)))
     unique, seen = [], set()

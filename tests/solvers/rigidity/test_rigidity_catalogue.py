@@ -414,9 +414,50 @@ def test_script_keeps_a_clips_radius_and_a_clip_of_another_radius_than_a_bars_is
 
 
 @pytest.mark.parametrize("number, radius", [("753", 6.0), ("509", 6.0), ("4006", 6.0), ("55299", 6.0),
-                                            ("3652", 6.0), ("3712", 6.0), ("2312", 9.0), ("4085c", 4.0),
+                                            ("3652", 6.0), ("2312", 9.0), ("4085c", 4.0),
                                             ("3873", 1.5)])
 def test_data_file_keeps_the_radius_the_shadow_library_states_for_a_clip(number, radius):
     clips = [c for c in generated.connectors(generated.record(number)["s"]) if c[0] in ("clip", "rodclip")]
     assert clips and {c[4][0][1] for c in clips} == {radius}
     assert {c[0] for c in clips} == {"clip" if radius == 4.0 else "rodclip"}
+
+
+def test_script_reads_a_grouped_clip_as_a_pivot_of_its_group_and_gives_the_groups_cylinders_one(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    _write(ldraw, "parts/9010.dat", "0 Universal Joint End Test\n2 24 -10 0 0 10 0 0\n")
+    _write(ldraw, "parts/9011.dat", "0 Universal Joint Centre Test\n2 24 -10 0 0 10 0 0\n")
+    # 3712's clip and 3326b's two arms as the shadow library states them; a cylinder of a group no clip names (an
+    # electric plug's) stays a cylinder only
+    _write(shadow, "parts/9010.dat", "0 !LDCAD SNAP_CLP [group=uniJnt] [radius=6] [length=20] [center=true] "
+           "[slide=false] [pos=0 0 -30] [ori=0 -1 0 1 0 0 0 0 1]\n")
+    _write(shadow, "parts/9011.dat",
+           "0 !LDCAD SNAP_CYL [group=uniJnt] [gender=M] [caps=two] [secs=R 6 20] [center=true] [ori=0 -1 0 1 0 0 0 0 1]\n"
+           "0 !LDCAD SNAP_CYL [group=uniJnt] [gender=M] [caps=two] [secs=R 6 20] [center=true] "
+           "[ori=-1 0 0 0 -1 0 0 0 1]\n"
+           "0 !LDCAD SNAP_CYL [group=elec] [gender=F] [caps=one] [secs=R 6 4] [pos=0 0 40]\n")
+    parts = _script().derive(ldraw, shadow)
+    assert parts["9010"]["s"] == [["pvt", "F", "unijnt", [0.0, 0.0, -30.0], [1.0, 0.0, 0.0]]]
+    arms = [s for s in parts["9011"]["s"] if s[0] == "pvt"]
+    assert arms == [["pvt", "M", "unijnt", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+                    ["pvt", "M", "unijnt", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]
+    assert [s[0] for s in parts["9011"]["s"]] == ["cyl", "pvt", "cyl", "pvt", "cyl"]
+    assert generated.connectors(parts["9010"]["s"]) == (("pivot:unijnt:F", (0.0, 0.0, -30.0), (1.0, 0.0, 0.0)),)
+    assert mate("pivot:unijnt:F", "pivot:unijnt:M") == "hinge"
+    assert mate("pivot:unijnt:F", "group:unijnt:M") is None and mate("pivot:unijnt:F", "bar") is None
+
+
+def test_a_universal_joint_hinges_each_end_on_its_arm_of_the_centre_and_nothing_off_it():
+    """3712 (end) clips on an arm of 3326b (centre), the shadow library's uniJnt group: the centre was joined to
+    nothing (7784's Batmobile floated it). Two ends on the two arms: two hinges, about x and about y, through the
+    centre's origin."""
+    turned = (0, 1, 0, 1, 0, 0, 0, 0, -1)  # local x onto y, z onto -z: the second end faces the first
+    assembly = Assembly()
+    assembly.add_part("centre", "3326b", (0, 0, 0))
+    first = assembly.add_part("a", "3712", (0, 0, 30))  # its clip 30 LDU along its -z: at the centre, along x
+    second = assembly.add_part("b", "3712", (0, 0, -30), turned)
+    assert [(c.kind, c.point, c.axis) for c in first] == [("hinge", (0, 0, 0), (1, 0, 0))]
+    assert [(c.kind, c.point, c.axis) for c in second] == [("hinge", (0, 0, 0), (0, 1, 0))]
+    apart = Assembly()
+    apart.add_part("centre", "3326b", (0, 0, 0))
+    assert apart.add_part("a", "3712", (0, 0, 50)) == []  # a stud pitch off: its clip is not on the arm
+
