@@ -37,7 +37,7 @@ MAX_DEPTH = 32
 # Snaps one embedded part may gather: a 48 x 48 base plate has 2 304 studs; sub-files placing sub-files ten times
 # over eight levels would gather 10^8, so a part over this stays unknown rather than filling the memory.
 MAX_SNAPS = 20_000
-POSITION = {"cyl": 4, "clp": 1, "fgr": 2, "gen": 3, "sph": 2}  # where a snap record holds its position
+POSITION = {"cyl": 4, "clp": 1, "fgr": 2, "gen": 3, "shp": 3, "pvt": 3, "sph": 2}  # where a snap record holds its position
 # ``<model> - <official name>``, in a subpart folder or not: an embedded copy of an official file as the OMR names it
 COPY_NAME = re.compile(r"^(?P<folder>(?:s|48|8)[\\/])?[^\\/]+? - (?P<name>[^\\/]+\.dat)$", re.IGNORECASE)
 # LDU: how far a copy's drawn points may lie outside the official part's box for the copy to be that part: a copy
@@ -125,8 +125,8 @@ def transform(snap: list, rot: np.ndarray, pos: np.ndarray) -> list:
         return ["clp", _placed(snap[1], rot, pos), _direction(snap[2], rot)[0], snap[3], snap[4]]
     if kind == "fgr":
         return ["fgr", snap[1], _placed(snap[2], rot, pos), _direction(snap[3], rot)[0], snap[4]]
-    if kind == "gen":
-        return ["gen", snap[1], snap[2], _placed(snap[3], rot, pos), _direction(snap[4], rot)[0]]
+    if kind in ("gen", "shp", "pvt"):  # gender, then a group or a bounding shape, then centre and axis
+        return [kind, snap[1], snap[2], _placed(snap[3], rot, pos), _direction(snap[4], rot)[0]]
     return ["sph", snap[1], _placed(snap[2], rot, pos), snap[3]]
 
 

@@ -93,6 +93,15 @@ def test_a_scaled_placement_stretches_an_axle_but_keeps_a_stud_centred():
     assert moved[4:7] == [[5.0, -2.0, 0.0], [0.0, -1.0, 0.0], [["R", 6.0, 4.0]]]
 
 
+@pytest.mark.parametrize("snap", [
+    ["shp", "M", "box 26 29.8 2", [0.0, 29.75, 0.0], [0.0, -1.0, 0.0]],  # s/51266s01.dat: a pane's generic shape
+    ["pvt", "F", "unijnt", [0.0, 29.75, 0.0], [0.0, -1.0, 0.0]]])  # a grouped clip's hinge
+def test_a_shape_or_pivot_snap_placed_turned_keeps_its_kind_group_and_turns_its_axis(snap):
+    quarter = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # y onto z
+    placed = transform(snap, quarter, np.array([10.0, 0.0, 0.0]))
+    assert placed == [snap[0], snap[1], snap[2], [10.0, 0.0, 29.75], [0.0, 0.0, -1.0]]
+
+
 def test_a_sub_file_that_draws_itself_adds_nothing():
     files = {"a.dat": [(1, "1 16 0 0 0 1 0 0 0 1 0 0 0 1 a.dat"), (2, "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat")]}
     record = Resolver(files, lambda name: name if name in files else None).record("a.dat")
