@@ -184,6 +184,27 @@ def _unit_row(cells: list[str], width: int) -> list[str | None] | None:
     return units + [None] * (width - len(units))
 
 
+def _decimals(cell: str, mark: str) -> int:
+    mantissa = cell.strip().strip('"').lower().split("e")[0]
+    return len(mantissa.split(mark, 1)[1]) if mark in mantissa else 0
+
+
+def _refuse_cut_number(rows: list[list[str]], line: int, mark: str) -> None:
+    """A table that ends without a line ending, its last number written with fewer decimals than every number of
+    its column above (printed with a fixed number of decimals), was cut inside that number: ``94.4`` of ``94.4211``
+    moves the part's end. Refused naming the line: a nominal with a wrong end judges the part wrongly."""
+    last = rows[-1]
+    filled = [j for j, c in enumerate(last) if c.strip()]
+    if not filled:
+        return
+    j = filled[-1]
+    above = {_decimals(r[j], mark) for r in rows[:-1] if j < len(r) and r[j].strip()}
+    if len(rows) > 2 and len(above) == 1 and _decimals(last[j], mark) < min(above):
+        raise NominalError(line, None, f"the table ends inside line {line} without a line ending, its last number "
+                           f"({last[j].strip()}) written with fewer decimals than the same column above ({min(above)}): "
+                           "the file was cut? Give the whole table")
+
+
 def _row_number(cells: list[str], col: int | None, value) -> float | None:
     if col is None or col >= len(cells):
         return None
@@ -309,6 +330,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     values: list[dict] = []
     value_lines: list[int] = []
     numbers: list[float | None] = []  # of the row-number column, where there is one
+    value_cells: list[list[str]] = []
     unread: list[tuple[int, str, str]] = []  # the body's lines that could not be read: line, text, why
     for line_no, ln in body:
         cells = _split(ln, delim)
@@ -329,6 +351,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
             continue
         values.append(row)
         value_lines.append(line_no)
+        value_cells.append(cells)
         numbers.append(_row_number(cells, index_col, cell_value))
     if not values:
         raise NominalError(None, None, "no row of the nominal CSV could be read" +
@@ -340,6 +363,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         if sum(_looks_numeric(c) for c in _split(text, delim)) >= 2:
             raise NominalError(line, None, f"nominal CSV line {line} cannot be read ({reason}): a row of numbers "
                                "left out would describe another part; correct or delete it")
+    if value_lines and value_lines[-1] == len(text.splitlines()) and not text.endswith(("\n", "\r")):
+        _refuse_cut_number(value_cells, value_lines[-1], mark)
     if index_col is not None and values and None not in numbers:
         values, value_lines = _in_row_number_order(values, value_lines, numbers, head[index_col], warnings)
     if kind == "xyz_clr":

@@ -84,3 +84,16 @@ def test_an_xyz_clr_list_ending_at_a_bend_is_refused_naming_the_point():
               {"x": 98, "y": 70.4558, "z": 0, "clr": 18}]
     (error,) = nominal_errors(TubeOptions(nominal_xyz_clr=points))
     assert error.loc == ("options", "nominal_xyz_clr", 2, "clr") and "end point is missing" in error.msg
+
+
+@pytest.mark.parametrize("cut", [1 + 3, 1 + 5])  # '94.4' and '94' of '94.4211,'
+def test_a_table_cut_inside_its_last_number_is_refused_naming_the_line(cut):
+    text = XYZ.replace("94.4211,\n", "94.4211,")[:-cut]
+    with pytest.raises(NominalError, match="ends inside line 6 .*fewer decimals") as error:
+        read_nominal_csv(text.replace("\n0,0,0,0,", "\n0,0.0000,0.0000,0.0000,").replace(
+            "1,98,0,0,18", "1,98.0000,0.0000,0.0000,18").replace("2,98,70.4558,0,18", "2,98.0000,70.4558,0.0000,18"))
+    assert error.value.where == 6
+
+
+def test_a_whole_table_without_a_final_line_ending_is_read():
+    np.testing.assert_allclose(_lra(read_nominal_csv(XYZ.rstrip("\n"))), PART, atol=2e-3)
