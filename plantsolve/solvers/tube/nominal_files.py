@@ -205,6 +205,20 @@ def _refuse_cut_number(rows: list[list[str]], line: int, mark: str) -> None:
                            "the file was cut? Give the whole table")
 
 
+def _short_last_row(rows: list[list[str]], line: int) -> list[Diagnostic]:
+    """A warning when a table ends without a line ending inside a last row holding fewer cells than every row above:
+    a row may leave its trailing fields out (the end straight's angle and CLR), but a file cut there ends so too,
+    and then its last value (``7`` of ``70``) is cut as well."""
+    widths = {len([c for c in r if c.strip()]) for r in rows[:-1]}
+    held = len([c for c in rows[-1] if c.strip()])
+    if len(rows) < 3 or len(widths) != 1 or held >= min(widths):
+        return []
+    return [Diagnostic(code="nominal_last_row_short", message=(
+        f"the nominal CSV ends without a line ending inside line {line}, which holds {held} of the {min(widths)} "
+        f"values of the rows above: if the file was cut, its last value ({rows[-1][held - 1].strip()!r}) is cut too. "
+        "Check the end of the table."), details={"line": line, "values": held, "values_above": min(widths)})]
+
+
 def _row_number(cells: list[str], col: int | None, value) -> float | None:
     if col is None or col >= len(cells):
         return None
@@ -365,6 +379,7 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
                                "left out would describe another part; correct or delete it")
     if value_lines and value_lines[-1] == len(text.splitlines()) and not text.endswith(("\n", "\r")):
         _refuse_cut_number(value_cells, value_lines[-1], mark)
+        warnings.extend(_short_last_row(value_cells, value_lines[-1]))
     if index_col is not None and values and None not in numbers:
         values, value_lines = _in_row_number_order(values, value_lines, numbers, head[index_col], warnings)
     if kind == "xyz_clr":

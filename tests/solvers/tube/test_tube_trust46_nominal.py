@@ -97,3 +97,11 @@ def test_a_table_cut_inside_its_last_number_is_refused_naming_the_line(cut):
 
 def test_a_whole_table_without_a_final_line_ending_is_read():
     np.testing.assert_allclose(_lra(read_nominal_csv(XYZ.rstrip("\n"))), PART, atol=2e-3)
+
+
+def test_a_table_ending_inside_a_short_last_row_says_it_may_be_cut():
+    got = read_nominal_csv(LRA.rstrip("\n")[:-len("0,0,0,0")])  # '4,7' of '4,70,0,0,0'
+    (warning,) = [w for w in got.warnings if w.code == "nominal_last_row_short"]
+    assert warning.details == {"line": 5, "values": 2, "values_above": 5} and "'7'" in warning.message
+    assert not read_nominal_csv(LRA.rstrip("\n")).warnings  # whole, without its final line ending
+    assert not read_nominal_csv(LRA.replace("4,70,0,0,0", "4,70")).warnings  # short, but not at a cut end
