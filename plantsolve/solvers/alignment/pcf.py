@@ -301,6 +301,7 @@ class Geometry:
     radius: float | None
     chord: np.ndarray | None = None  # return bend whose plane comes from its neighbours
     note: str | None = None  # what had to be taken from elsewhere
+    suspect: str | None = None  # why its own lines look mistyped though they can be interpreted (it is then held)
 
 
 def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
@@ -332,6 +333,8 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
     ftype = TYPE_OF.get(word)
     if ftype is None:
         ftype = "olet" if word.endswith("OLET") else TYPE_OF.get(word.split("-")[0], "other")
+    suspect = _uneven_arms(ends, c, q) if c is not None and len(ends) == 2 and not branches and (
+        ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))) else None
     chord = note = None
     if c is not None and len(ends) == 2 and not branches:
         e0, e1 = ends[0][1], ends[1][1]
@@ -348,9 +351,10 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
             if not on_line:
                 d = _unit(-off)
                 return Geometry([(e0, d), (e1, d.copy())], [ends[0][0], ends[1][0]], "fitting", ftype, radius,
-                                note="180 degree return bend: plane from the CENTRE-POINT offset")
+                                note="180 degree return bend: plane from the CENTRE-POINT offset", suspect=suspect)
             return Geometry([(e0, None), (e1, None)], [ends[0][0], ends[1][0]], "fitting", ftype, radius, chord=u,
-                            note="180 degree return bend with its CENTRE-POINT on the chord: plane from its neighbours")
+                            note="180 degree return bend with its CENTRE-POINT on the chord: plane from its neighbours",
+                            suspect=suspect)
         if on_line:
             # an inline item with a CENTRE-POINT (instrument, some valves): ports exactly opposite along the line
             c = None
@@ -372,7 +376,24 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         note = "no usable CENTRE-POINT: direction from the pipe it sits on or its branch"
     if snap and c is not None and ftype in ("elbow", "bend", "tee", "cross") and all(d is not None for _, d in ports):
         ports = snap_catalogue(ports, c, print_quantum([lines[i] for i in item.point_lines]))
-    return Geometry(ports, port_lines, "fitting", ftype, radius, chord=chord, note=note)
+    return Geometry(ports, port_lines, "fitting", ftype, radius, chord=chord, note=note, suspect=suspect)
+
+
+ARM_RATIO = 1.5  # an elbow's or bend's end points lie at one distance from its CENTRE-POINT (both arms are its radius)
+
+
+def _uneven_arms(ends: list, c: np.ndarray, quantum: float) -> str | None:
+    """Why an elbow or bend looks mistyped, None when it does not. It is symmetric: its two end points lie at the
+    same distance from its CENTRE-POINT (exports agree to their printed digits). One much further out than the
+    other is a mistyped coordinate (a 0 for a plant coordinate, a digit dropped); interpreted, the item would point
+    its port there and silently lose the connection it had."""
+    arms = [float(np.linalg.norm(p - c)) for _, p, _ in ends]
+    short, long = min(arms), max(arms)
+    if long > ARM_RATIO * short + 8.0 * quantum:
+        far = ends[int(np.argmax(arms))][0]
+        return (f"its end point on line {far + 1} lies {long:.6g} from the CENTRE-POINT, the other {short:.6g}: an "
+                "elbow's two arms are equal (a mistyped coordinate?)")
+    return None
 
 
 @dataclass
@@ -487,8 +508,17 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         comps_json, connections = _entries(comps, net, fixed_ids, {h["id"] for h in held})
         body = _body(units, comps_json, connections, opts, alias, text)
         failures = failing_components(body)
-        if not failures or attempt == 3:
+        # an elbow with uneven arms passes the model check pointing a port at its typo: held too (the model check's
+        # reason first, where it has one)
+        uneven = [k for k, c in enumerate(comps) if c["geometry"].suspect and c["geometry"].kind != "held"
+                  and k not in failures]
+        if (not failures and not uneven) or attempt == 3:
             break
+        for k in uneven:
+            c, g = comps[k], comps[k]["geometry"]
+            forced.append({"id": c["id"], "line": c["line"], "reason": g.suspect})
+            c["geometry"] = geometry[c["id"]] = Geometry([(p, None) for p, _ in g.ports], g.port_lines, "held",
+                                                          "other", g.radius)
         forced_ids = {h["id"] for h in forced}
         gone = set()
         for n, found in failures.items():
@@ -516,6 +546,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         notes.append(cut)
     notes.extend(_bore_notes(doc))
     notes.extend(_duplicate_notes(comps, doc))
+    notes.extend(_open_ends_inside_pipes(comps, net, doc))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
@@ -954,6 +985,51 @@ def _duplicate_notes(comps: list[dict], doc: Document) -> list[tuple[str, str, d
              f"{len(pairs)} PCF item(s) have the same keyword and end points as an earlier one ({listed}"
              f"{', ...' if len(pairs) > 5 else ''}): a block written twice? Only one of each pair joins its "
              "neighbours; the other is left where it was.", {"items": pairs[:200]}, "warning")]
+
+
+def _open_ends_inside_pipes(comps: list[dict], net: dict, doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning naming each pipe that runs through the open end point of another item (an olet's excepted: it sits
+    on its pipe): pipes join items at their ends, never through them, so the two overlap or one of the pipe's end
+    points was mistyped along its axis (a 0 for a plant coordinate): read as written, the pipe reaches past its
+    neighbour and the connection between them is lost without a gap to show for it."""
+    pos, owner, start, rad = net["pos"], net["owner"], net["start"], net["rad"]
+    joined = np.zeros(len(pos), dtype=bool)
+    for i, j in net["conns"]:
+        joined[i] = joined[j] = True
+    for i, j, _ in net["gaps"]:
+        joined[i] = joined[j] = True
+    open_ports = np.flatnonzero(~joined)
+    if len(open_ports) == 0:
+        return []
+    tree = cKDTree(pos[open_ports])
+    found = []
+    for k, c in enumerate(comps):
+        g = c["geometry"]
+        if g.kind != "pipe" or len(g.ports) != 2:
+            continue
+        a, b, r = pos[start[k]], pos[start[k] + 1], float(rad[start[k]])
+        length = float(np.linalg.norm(b - a))
+        if not length > 2.0 * r:
+            continue
+        axis = (b - a) / length
+        for m in tree.query_ball_point(0.5 * (a + b), 0.5 * length):
+            i = open_ports[m]
+            if owner[i] == k or comps[owner[i]]["geometry"].ftype == "olet":  # an olet sits on its pipe
+                continue
+            v = pos[i] - a
+            along = float(v @ axis)
+            if r < along < length - r and np.linalg.norm(v - along * axis) < r:
+                found.append({"pipe": c["id"], "pipe_line": c["line"], "item": comps[owner[i]]["id"],
+                              "end_point_line": comps[owner[i]]["geometry"].port_lines[i - start[owner[i]]] + 1})
+    if not found:
+        return []
+    listed = ", ".join(f"{f['pipe']} (line {f['pipe_line']}) through the end point of {f['item']} on line "
+                       f"{f['end_point_line']}" for f in found[:5])
+    return [("pcf_open_end_inside_pipe",
+             f"{len(found)} open end point(s) lie inside a pipe that runs past them ({listed}"
+             f"{', ...' if len(found) > 5 else ''}): pipes join items at their ends, so the two overlap or one of the "
+             "pipe's end points is mistyped along its axis; they are not connected. Correct the end point.",
+             {"items": found[:200]}, "warning")]
 
 
 def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:

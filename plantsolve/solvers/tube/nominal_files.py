@@ -69,11 +69,28 @@ def xyz_clr_from_rows(rows: list[LraRow]) -> tuple[np.ndarray, np.ndarray]:
     return control_polygon(model_from_rows(rows, 0.0))
 
 
-def rows_from_xyz_clr(points, clr) -> list[LraRow]:
-    """XYZ-CLR → LRA; ``points`` (n + 2, 3) start, intersection points, end; ``clr`` (n,) of the interior points.
-    Raises NominalError naming the point (0-based) that makes it impossible."""
+def _check_end_clrs(first: float, last: float, count: int) -> None:
+    """The start and end of an XYZ-CLR are no bends: a table that gives one of them a CLR and not the other was cut
+    after a bend (its end point lost) or is an LRA table read as points. (A table that gives both the die's CLR, as
+    some exports fill the column, says neither.)"""
+    if (first > 0) == (last > 0):
+        return
+    if last > 0:
+        raise NominalError(count - 1, "clr", f"the last point carries a CLR ({last:g}) but the first none: an end point "
+                           "is no bend, so the table ends at a bend and its end point is missing (was it cut?)")
+    raise NominalError(0, "clr", f"the first point carries a CLR ({first:g}) but the last none: the start point is no "
+                       "bend; is this an LRA table (length, rotation, angle, CLR: set nominal_format to lra) or is "
+                       "its start point missing?")
+
+
+def rows_from_xyz_clr(points, clr, end_clrs: tuple[float, float] | None = None) -> list[LraRow]:
+    """XYZ-CLR → LRA; ``points`` (n + 2, 3) start, intersection points, end; ``clr`` (n,) of the interior points;
+    ``end_clrs`` the CLRs the table gives its first and last points (checked to be alike: see
+    :func:`_check_end_clrs`). Raises NominalError naming the point (0-based) that makes it impossible."""
     pts = np.asarray(points, float).reshape(-1, 3)
     clr = np.asarray(clr, float)
+    if end_clrs is not None:
+        _check_end_clrs(*end_clrs, len(pts))
     if len(pts) < 2:
         raise NominalError(None, None, "at least two points (start and end) are needed")
     legs = np.linalg.norm(np.diff(pts, axis=0), axis=1)
@@ -150,6 +167,90 @@ def _header_columns(cells: list[str]) -> tuple[list[str | None], list[str | None
     return roles, units
 
 
+def _plain_name(cell: str) -> str:
+    m = HEADER_UNIT.match(cell.strip().lower())
+    return m.group("name").strip().replace(" ", "_").replace("-", "_")
+
+
+def _unit_row(cells: list[str], width: int) -> list[str | None] | None:
+    """The units of a line of unit names under the header (``,mm,deg,deg,mm``; ``[in]`` or ``(in)`` too), None
+    when the line is anything else."""
+    if len(cells) > width:
+        return None
+    units = [c.strip().strip("[]()").strip().lower() or None for c in cells]
+    known = [u for u in units if u is not None]
+    if not known or any(u not in UNIT_MM and u not in ANGLE_DEG for u in known):
+        return None
+    return units + [None] * (width - len(units))
+
+
+def _decimals(cell: str, mark: str) -> int:
+    mantissa = cell.strip().strip('"').lower().split("e")[0]
+    return len(mantissa.split(mark, 1)[1]) if mark in mantissa else 0
+
+
+def _refuse_cut_number(rows: list[list[str]], line: int, mark: str) -> None:
+    """A table that ends without a line ending, its last number written with fewer decimals than every number of
+    its column above (printed with a fixed number of decimals), was cut inside that number: ``94.4`` of ``94.4211``
+    moves the part's end. Refused naming the line: a nominal with a wrong end judges the part wrongly."""
+    last = rows[-1]
+    filled = [j for j, c in enumerate(last) if c.strip()]
+    if not filled:
+        return
+    j = filled[-1]
+    above = {_decimals(r[j], mark) for r in rows[:-1] if j < len(r) and r[j].strip()}
+    if len(rows) > 2 and len(above) == 1 and _decimals(last[j], mark) < min(above):
+        raise NominalError(line, None, f"the table ends inside line {line} without a line ending, its last number "
+                           f"({last[j].strip()}) written with fewer decimals than the same column above ({min(above)}): "
+                           "the file was cut? Give the whole table")
+
+
+def _short_last_row(rows: list[list[str]], line: int) -> list[Diagnostic]:
+    """A warning when a table ends without a line ending inside a last row holding fewer cells than every row above:
+    a row may leave its trailing fields out (the end straight's angle and CLR), but a file cut there ends so too,
+    and then its last value (``7`` of ``70``) is cut as well."""
+    widths = {len([c for c in r if c.strip()]) for r in rows[:-1]}
+    held = len([c for c in rows[-1] if c.strip()])
+    if len(rows) < 3 or len(widths) != 1 or held >= min(widths):
+        return []
+    return [Diagnostic(code="nominal_last_row_short", message=(
+        f"the nominal CSV ends without a line ending inside line {line}, which holds {held} of the {min(widths)} "
+        f"values of the rows above: if the file was cut, its last value ({rows[-1][held - 1].strip()!r}) is cut too. "
+        "Check the end of the table."), details={"line": line, "values": held, "values_above": min(widths)})]
+
+
+def _row_number(cells: list[str], col: int | None, value) -> float | None:
+    if col is None or col >= len(cells):
+        return None
+    try:
+        return value(cells[col])
+    except ValueError:
+        return None
+
+
+def _in_row_number_order(values: list[dict], lines: list[int], numbers: list[float], column: str,
+                         warnings: list[Diagnostic]) -> tuple[list[dict], list[int]]:
+    """The rows in the order their row-number column gives. A table sorted by another column in a spreadsheet
+    keeps its row numbers: read in the file's order it describes another part (bends swapped), which the
+    inspection would then judge the scan against. A number given twice cannot be ordered: refused."""
+    seen: dict[float, int] = {}
+    for n, line in zip(numbers, lines):
+        if n in seen:
+            raise NominalError(line, None, f"the {column!r} column numbers lines {seen[n]} and {line} alike ({n:g}): "
+                               "a row written twice? Each row of the part needs its own number")
+        seen[n] = line
+    order = sorted(range(len(values)), key=lambda k: numbers[k])
+    if order == list(range(len(values))):
+        return values, lines
+    moved = [lines[k] for i, k in enumerate(order) if k != i]
+    warnings.append(Diagnostic(code="nominal_rows_reordered", message=(
+        f"the nominal CSV's rows are not in the order of its {column!r} column (lines "
+        f"{', '.join(map(str, moved[:8]))}{', ...' if len(moved) > 8 else ''} stand elsewhere; sorted in a "
+        f"spreadsheet?): read in the order of {column!r}."),
+        details={"column": column, "lines_in_order": [lines[k] for k in order]}))
+    return [values[k] for k in order], [lines[k] for k in order]
+
+
 def _length_factor(unit: str | None, units: str, line: int, name: str) -> float:
     if unit is None:
         return 1.0
@@ -199,9 +300,19 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
     # a header typed with another delimiter than the exported rows' (``length,angle`` over ``80;90``)
     head = _split(first, delim if delim is None or delim in first else _delimiter([first]))
     header = not numeric(first)
+    index_col = None
     if header:
         roles, col_units = _header_columns(head)
         body = lines[1:]
+        if body and (units_row := _unit_row(_split(body[0][1], delim), len(head))) is not None:
+            # a second header line of units under the names (``length,angle`` then ``in,deg``): theirs
+            for c, u in enumerate(units_row):
+                if u and col_units[c] and u != col_units[c]:
+                    raise NominalError(body[0][0], None, f"column {head[c]!r} states the unit {col_units[c]!r} in its "
+                                       f"name and {u!r} in the units line below it")
+                col_units[c] = col_units[c] or u
+            body = body[1:]
+        index_col = next((c for c, name in enumerate(head) if _plain_name(name) in COLUMNS["index"]), None)
         kind = "xyz_clr" if {"x", "y_xyz", "z"} <= set(roles) else "lra"
         if fmt != "auto" and fmt != kind:
             raise NominalError(first_line, None, f"the header names {kind} columns ({', '.join(head)}), not {fmt}")
@@ -232,6 +343,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         described = f"no header, {width} columns read as {'x, y, z, CLR' if kind == 'xyz_clr' else 'L, R, A, CLR'}"
     values: list[dict] = []
     value_lines: list[int] = []
+    numbers: list[float | None] = []  # of the row-number column, where there is one
+    value_cells: list[list[str]] = []
     unread: list[tuple[int, str, str]] = []  # the body's lines that could not be read: line, text, why
     for line_no, ln in body:
         cells = _split(ln, delim)
@@ -252,6 +365,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
             continue
         values.append(row)
         value_lines.append(line_no)
+        value_cells.append(cells)
+        numbers.append(_row_number(cells, index_col, cell_value))
     if not values:
         raise NominalError(None, None, "no row of the nominal CSV could be read" +
                            (f" ({warnings[0].message})" if warnings else ""))
@@ -262,11 +377,16 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         if sum(_looks_numeric(c) for c in _split(text, delim)) >= 2:
             raise NominalError(line, None, f"nominal CSV line {line} cannot be read ({reason}): a row of numbers "
                                "left out would describe another part; correct or delete it")
+    if value_lines and value_lines[-1] == len(text.splitlines()) and not text.endswith(("\n", "\r")):
+        _refuse_cut_number(value_cells, value_lines[-1], mark)
+        warnings.extend(_short_last_row(value_cells, value_lines[-1]))
+    if index_col is not None and values and None not in numbers:
+        values, value_lines = _in_row_number_order(values, value_lines, numbers, head[index_col], warnings)
     if kind == "xyz_clr":
         pts = np.array([[v["x"], v["y_xyz"], v["z"]] for v in values])
         clr = np.array([v.get("clr") or 0.0 for v in values[1:-1]])
         try:
-            rows = rows_from_xyz_clr(pts, clr)
+            rows = rows_from_xyz_clr(pts, clr, (values[0].get("clr") or 0.0, values[-1].get("clr") or 0.0))
         except NominalError as exc:
             line = value_lines[exc.where] if exc.where is not None and exc.where < len(value_lines) else None
             raise NominalError(line, exc.field_name, exc.msg) from None
@@ -306,7 +426,8 @@ def resolve_nominal(opts: TubeOptions, units: str = "mm") -> Nominal | None:
         return Nominal(list(opts.nominal), "nominal: LRA rows")
     if opts.nominal_xyz_clr:
         p = opts.nominal_xyz_clr
-        rows = rows_from_xyz_clr([[q.x, q.y, q.z] for q in p], [q.clr or 0.0 for q in p[1:-1]])
+        rows = rows_from_xyz_clr([[q.x, q.y, q.z] for q in p], [q.clr or 0.0 for q in p[1:-1]],
+                                 (p[0].clr or 0.0, p[-1].clr or 0.0))
         return Nominal(rows, f"nominal_xyz_clr: {len(p)} points")
     if opts.nominal_csv:
         return read_nominal_csv(opts.nominal_csv, opts.nominal_format, units)

@@ -12,7 +12,9 @@ point. A row written with the file's other decimal mark is left out and named.
 A header line with one name per column is read: columns named x, y, z (``X``, ``x_mm``, ``x [m]``, ``point_x``, or
 easting, northing, elevation) are
 the coordinates wherever they stand (an index column first is common), and a unit they all state is the file's
-unit. A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
+unit, in their names or in a line of units under them (``x,y,z`` then ``mm,mm,mm``). Without a header, a first
+column that counts the rows (0 or 1, 2, 3, ...) is a row number: x, y, z are the next three columns (said in a
+warning). A header that names no x, y and z is a table of something else — a compressor map, an LRA or XYZ-CLR
 nominal — and is refused at intake naming its columns, as is a short table of four or five numbers a row (a
 nominal without a header): a tube scan is three coordinates per sample."""
 
@@ -27,7 +29,7 @@ from itertools import islice
 
 import numpy as np
 
-from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
@@ -130,10 +132,42 @@ def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
         try:
             [float(f) for f in fields]
         except ValueError:
-            header, header_line = s, lineno
+            named = _with_units_line(header, s) if header else None
+            header, header_line = (named, header_line) if named else (s, lineno)
             continue
         return header, header_line, len(fields)
     return header, header_line, 0
+
+
+def _with_units_line(names_line: str, units_line: str) -> str | None:
+    """The header of a names line followed by a line of their units (``x,y,z`` over ``mm,mm,mm``, as instruments
+    and spreadsheets export two header lines), None when ``units_line`` is no such line."""
+    names, units = _header_names(names_line), _header_names(units_line)
+    if len(names) != len(units):
+        return None
+    units = [u.strip("[]()").strip().lower() for u in units]
+    if not any(u in HEADER_UNITS for u in units) or any(u and u != "-" and u not in HEADER_UNITS for u in units):
+        return None
+    named = [f"{n} [{u}]" if u in HEADER_UNITS and _name_and_unit(n)[1] is None else n for n, u in zip(names, units)]
+    return ("//" if names_line.strip().startswith("//") else "") + ",".join(named)
+
+
+def _counts_rows(lines: list[str]) -> bool:
+    """Whether the first column of the rows of numbers counts them (0, 1, 2, ... or 1, 2, 3, ...): a row number
+    written before x, y, z by a file without a header. No scan's x is a run of consecutive integers."""
+    first = []
+    for line in lines:
+        s = line.strip()
+        if not s or not starts_number(s):
+            continue
+        try:
+            first.append(float(_SPLIT.split(s, maxsplit=1)[0]))
+        except ValueError:
+            return False
+        if len(first) == ROWS_LOOKED_AT:
+            break
+    steps = np.diff(first)
+    return len(first) >= 10 and first[0] in (0.0, 1.0) and bool(np.all(steps == 1.0))
 
 
 def _number_rows(lines: list[str]) -> list[str]:
@@ -193,6 +227,12 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     lines, unreadable = _plain_rows(text.splitlines())
     header, header_line, width = _first_row(lines)
     cols = _columns(header, width, header_line)
+    if cols.names is None and width >= 4 and _counts_rows(lines):
+        cols = Columns(index=(1, 2, 3))
+        log.warn(Diagnostic(code="row_numbers_skipped", message=(
+            f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
+            "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
+            "the columns are otherwise."), details={"columns": width, "x_y_z_columns": [2, 3, 4]}))
     need = max(cols.index) + 1
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns

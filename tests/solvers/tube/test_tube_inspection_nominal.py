@@ -106,7 +106,7 @@ def test_a_title_line_holding_numbers_above_the_header_is_still_only_skipped():
 
 
 def test_unreadable_lines_before_or_after_the_rows_are_skipped_with_a_warning_naming_them():
-    got = read_nominal_csv("L,R,A,CLR\nmm,deg,deg,mm\n80,0,90,20\n60,90,90,20\n80,0,0,0\nchecked: J. Doe,,,\n")
+    got = read_nominal_csv("L,R,A,CLR\nas drawn,,,\n80,0,90,20\n60,90,90,20\n80,0,0,0\nchecked: J. Doe,,,\n")
     assert len(got.rows) == 3
     assert [w.details["line"] for w in got.warnings] == [2, 6]
     assert "line 2" in got.warnings[0].message and "line 6" in got.warnings[1].message
