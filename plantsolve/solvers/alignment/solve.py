@@ -148,7 +148,9 @@ def _near_misses(request: AlignmentRequest) -> list[dict]:
 def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = frozenset()) -> list[dict]:
     """One component to hold still in every connected network that has no fixed component: its tie_in,
     else an item at a line's end connection (``nozzles``, from a PCF's END-CONNECTION records), else an
-    end flange (a flange with an open port), else its largest component; ties by id."""
+    end flange (a flange with an open port), else its largest component; ties by where the component lies (its
+    port positions to a micrometre, the lowest first), then by id: a file's ids may follow the order it is written
+    in (a PCF without component identifiers), and the held component must not."""
     comps = request.components
     index = {c.id: i for i, c in enumerate(comps)}
     fixed = np.array([c.fixed or c.id in set(request.options.fixed_components) for c in comps])
@@ -173,7 +175,8 @@ def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = froze
             span = float(np.max(np.linalg.norm(P - P[0], axis=1))) if len(P) > 1 else 0.0
             open_port = any((c.id, k) not in used for k in range(len(c.ports)))
             tier = 0 if c.type == "tie_in" else 1 if c.id in nozzles else 2 if (c.type == "flange" and open_port) else 3
-            return (tier, -span, c.id)
+            where = tuple(sorted(tuple(np.round(P, 3).tolist())))
+            return (tier, -round(span, 6), where, c.id)
 
         best = min(members, key=rank)
         tier = rank(best)[0]
