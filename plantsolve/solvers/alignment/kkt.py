@@ -165,19 +165,22 @@ class SchurSolve:
         # held by reference (the caller's matrices, A^T a view): a 100,000-component network's factorisation
         # is the largest thing alive during the solve, nothing beside it should be a copy
         self.H, self.Hinv, self.A, self.ldl, self.delta = H, Hinv, A, ldl, delta
+        # the transpose once, a view of A's arrays: made per product, its construction's checks cost as much as a
+        # product with it (each refinement takes two)
+        self.AT = A.T
         self.lu = None  # the LU that replaces the elimination once it did not converge
 
     def _eliminate(self, rhs: np.ndarray) -> np.ndarray:
         n = self.Hinv.shape[0]
         w = self.Hinv @ rhs[:n]
         dl = self.ldl.solve(self.A @ w - rhs[n:])
-        return np.concatenate([w - self.Hinv @ (self.A.T @ dl), dl])
+        return np.concatenate([w - self.Hinv @ (self.AT @ dl), dl])
 
     def _residual(self, rhs: np.ndarray, sol: np.ndarray) -> np.ndarray:
         """``rhs`` minus the regularised KKT matrix times ``sol``."""
         n = self.Hinv.shape[0]
         x, lam = sol[:n], sol[n:]
-        return rhs - np.concatenate([self.H @ x + self.A.T @ lam, self.A @ x - self.delta * lam])
+        return rhs - np.concatenate([self.H @ x + self.AT @ lam, self.A @ x - self.delta * lam])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         if self.lu is not None:
@@ -412,8 +415,9 @@ def _refine(H, g, A, residual, lu, stop, max_iter, stale):
     best = np.inf
     stall = 0
     steps = 0
+    AT = A.T  # once: a view, see SchurSolve
     for steps in range(1, max_iter + 1):
-        r1 = -(H @ x + g + A.T @ lam)
+        r1 = -(H @ x + g + AT @ lam)
         sol = lu.solve(np.concatenate([r1, r2]))
         if stale and not np.all(np.isfinite(sol)):
             return None
