@@ -97,6 +97,7 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
     use_cost = True
     best, first = (np.inf, q.copy()), np.inf
     cache: dict = {}  # never reused as a stale preconditioner here ("reuse" unset): it remembers refused LDL^Ts
+    owner = _owners(var, free, nv)
     for it in range(max_gn):
         if steps >= budget:
             break
@@ -136,10 +137,10 @@ def solve_rotations(model: Model, active: np.ndarray, stiffness: float, max_gn: 
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2 * m, nv)
         )
         rhs = -np.stack([np.einsum("ij,ij->i", e1, r), np.einsum("ij,ij->i", e2, r)], axis=1).ravel()
-        phi = quaternion_to_rotvec(q[free]).ravel()
-        g = hdiag * phi if use_cost else np.zeros(nv)
+        # feasibility steps have no gradient: the rotation vectors are only needed with the cost
+        g = hdiag * quaternion_to_rotvec(q[free]).ravel() if use_cost else np.zeros(nv)
         x, _, k = constrained_lstsq(H, g, A, lambda x: rhs - A @ x, stop=1e-17, max_iter=min(6, budget - steps),
-                                    cache=cache, owner=_owners(var, free, nv))
+                                    cache=cache, owner=owner)
         steps += k
         dq = rotvec_to_quaternion(x.reshape(-1, 3))
         q[free] = qmul(dq, q[free])
@@ -244,6 +245,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     sv[var[pf] + 6] = model.lref
     best, first = (np.inf, None), np.inf
     snapped = min(model.snap_pos / pos_scale, float(np.min(model.snap_ang, initial=1.0)))  # relative, as err
+    owner = _owners(var, free, nv)
     for it in range(max_gn):
         if step is not None:
             step(f"joint constrained Gauss-Newton, step {it + 1}")
@@ -288,13 +290,12 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         H, g = _joint_cost(model, st, P, var, nv, pipes, fits, w, w_rot, w_along, use_cost)
         cache["reuse"] = not use_cost and not np.any(short)
         # solve in lengths of lref (x = sv * y) and cost / lref^2: every entry O(1) whatever the units
-        Ssv = sp.diags(sv)
-        Hs = (Ssv @ H @ Ssv / model.lref**2).tocsc()
-        As = (A @ Ssv).tocsr()
+        Hs = scaled_cost(H, sv, model.lref)
+        As = (A @ sp.diags(sv)).tocsr()
         del A, H  # only the scaled copies are needed from here (peak memory: never both held into the solve)
         y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
                                     max_iter=min(8 if use_cost else 30, budget - steps), cache=cache,
-                                    owner=_owners(var, ~model.fixed, nv))
+                                    owner=owner)
         Hs = As = None  # else held while the next step builds its own
         x = sv * y
         steps += k
@@ -381,17 +382,17 @@ def _joint_cost(model: Model, st: JointState, P: np.ndarray, var: np.ndarray, nv
                 use_cost: bool) -> tuple[sp.csc_matrix, np.ndarray]:
     """Gauss-Newton model of the cost, ``0.5 x'Hx + g'x`` (``g`` zero once only feasibility steps are taken)."""
     free = ~model.fixed
-    e0 = model.P0[st.s0[pipes]]
-    e1 = model.P0[st.s0[pipes] + 1]
     # cost: rotations, fitting translations, pipe ends (perpendicular stiff, along cheap)
     hr, hc, hv = [], [], []
     g = np.zeros(nv)
     fr = np.flatnonzero(free)
-    phi = quaternion_to_rotvec(st.q[fr])
     for j in range(3):
         hr.append(var[fr] + j); hc.append(var[fr] + j); hv.append(2 * w_rot[fr])
         hr.append(var[fits] + 3 + j); hc.append(var[fits] + 3 + j); hv.append(2 * w[fits])
     if use_cost:
+        # the gradient only with the cost: feasibility steps (most of a round) skip the rotation vectors and the
+        # pipes' gradient products, which are half of this function's time there
+        phi = quaternion_to_rotvec(st.q[fr])
         np.add.at(g, (var[fr][:, None] + np.arange(3)).ravel(), (2 * w_rot[fr][:, None] * phi).ravel())
         np.add.at(g, (var[fits][:, None] + 3 + np.arange(3)).ravel(), (2 * w[fits][:, None] * st.t[fits]).ravel())
     if len(pipes):
@@ -400,21 +401,40 @@ def _joint_cost(model: Model, st: JointState, P: np.ndarray, var: np.ndarray, nv
         M = w[pipes][:, None, None] * (np.eye(3) - uu) + w_along * uu
         B0 = np.zeros((len(pipes), 3, 7)); B0[:, :, 3:6] = np.eye(3)
         B1 = B0.copy(); B1[:, :, 0:3] = -_skew(u) * st.L[pipes][:, None, None]; B1[:, :, 6] = u
-        c0 = (P[st.s0[pipes]] - e0).astype(float)
-        c1 = (P[st.s0[pipes] + 1] - e1).astype(float)
         # B0 picks the translation: its term is M in the translation block, exactly what the sum of products
         # over B0's zeros and ones gives, without the generic three-operand einsum (half of this function's time)
         Hp = np.einsum("kia,kij,kjb->kab", B1, M, B1)
         Hp[:, 3:6, 3:6] += M
         Hp *= 2
-        gp = 2 * (np.einsum("kia,kij,kj->ka", B0, M, c0) + np.einsum("kia,kij,kj->ka", B1, M, c1))
         for i in range(7):
             for j in range(7):
                 hr.append(var[pipes] + i); hc.append(var[pipes] + j); hv.append(Hp[:, i, j])
         if use_cost:
+            c0 = (P[st.s0[pipes]] - model.P0[st.s0[pipes]]).astype(float)
+            c1 = (P[st.s0[pipes] + 1] - model.P0[st.s0[pipes] + 1]).astype(float)
+            gp = 2 * (np.einsum("kia,kij,kj->ka", B0, M, c0) + np.einsum("kia,kij,kj->ka", B1, M, c1))
             np.add.at(g, (var[pipes][:, None] + np.arange(7)).ravel(), gp.ravel())
     H = sp.csc_matrix((np.concatenate(hv), (np.concatenate(hr), np.concatenate(hc))), shape=(nv, nv))
     return H, g
+
+
+def scaled_cost(H: sp.spmatrix, sv: np.ndarray, lref: float) -> sp.csc_matrix:
+    """``diag(sv) H diag(sv) / lref^2`` as CSC, each entry ``(sv_i h_ij) sv_j / lref^2`` and exact zeros dropped: the
+    numbers, pattern and order of the two sparse products with the diagonal it replaces, bit for bit, without their
+    two copies of H per Gauss-Newton step. Shares H's index arrays where no entry drops out."""
+    Hc = sp.csc_matrix(H)  # no copy when it is one
+    if not Hc.has_canonical_format:
+        Hc = Hc.copy()
+        Hc.sum_duplicates()  # sorted rows in every column, duplicates summed, as the products' CSC
+    data = sv[Hc.indices]
+    data *= Hc.data
+    data *= np.repeat(sv, np.diff(Hc.indptr))
+    data *= 1.0 / lref**2  # a sparse matrix divided by a number is multiplied by its reciprocal
+    Hs = sp.csc_matrix((data, Hc.indices, Hc.indptr), shape=Hc.shape)
+    if not np.all(data):
+        Hs.indices, Hs.indptr = Hs.indices.copy(), Hs.indptr.copy()  # H's stay as they are
+        Hs.eliminate_zeros()
+    return Hs
 
 
 def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None) -> Pose:

@@ -41,6 +41,9 @@ and the cut is the LU's (solve.py): decided on the LDL^T round's pose where that
 (cuts.settled_cut), else on an LU pass (measured: 0.84-0.90 times the LU's time on the 40,000-component
 plant-like network, which needs one cut, in three runs; 1.19 in one run with an LU pass always). The
 round after the cut is most of it and is the LU's in both: the README's alignment section has the sums.
+Another run on a machine loaded several times over (CPU seconds then vary by 10-20 % between runs of one code):
+plant-like 4,839 / 9,965 / 19,365 / 39,867 components 0.98 / 0.80 / 0.76 / 0.87 of the LU's CPU time and
+0.78 / 0.73 / 0.66 / 0.98 of its peak memory, the 39,867-component network's round after its cut 47 of 65 s.
 """
 
 from __future__ import annotations
@@ -165,19 +168,22 @@ class SchurSolve:
         # held by reference (the caller's matrices, A^T a view): a 100,000-component network's factorisation
         # is the largest thing alive during the solve, nothing beside it should be a copy
         self.H, self.Hinv, self.A, self.ldl, self.delta = H, Hinv, A, ldl, delta
+        # the transpose once, a view of A's arrays: made per product, its construction's checks cost as much as a
+        # product with it (each refinement takes two)
+        self.AT = A.T
         self.lu = None  # the LU that replaces the elimination once it did not converge
 
     def _eliminate(self, rhs: np.ndarray) -> np.ndarray:
         n = self.Hinv.shape[0]
         w = self.Hinv @ rhs[:n]
         dl = self.ldl.solve(self.A @ w - rhs[n:])
-        return np.concatenate([w - self.Hinv @ (self.A.T @ dl), dl])
+        return np.concatenate([w - self.Hinv @ (self.AT @ dl), dl])
 
     def _residual(self, rhs: np.ndarray, sol: np.ndarray) -> np.ndarray:
         """``rhs`` minus the regularised KKT matrix times ``sol``."""
         n = self.Hinv.shape[0]
         x, lam = sol[:n], sol[n:]
-        return rhs - np.concatenate([self.H @ x + self.A.T @ lam, self.A @ x - self.delta * lam])
+        return rhs - np.concatenate([self.H @ x + self.AT @ lam, self.A @ x - self.delta * lam])
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         if self.lu is not None:
@@ -412,8 +418,9 @@ def _refine(H, g, A, residual, lu, stop, max_iter, stale):
     best = np.inf
     stall = 0
     steps = 0
+    AT = A.T  # once: a view, see SchurSolve
     for steps in range(1, max_iter + 1):
-        r1 = -(H @ x + g + A.T @ lam)
+        r1 = -(H @ x + g + AT @ lam)
         sol = lu.solve(np.concatenate([r1, r2]))
         if stale and not np.all(np.isfinite(sol)):
             return None
