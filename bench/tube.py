@@ -80,15 +80,22 @@ def make_scan(n_points: int, path: str) -> None:
 
 
 def compare(truth, result):
-    """Errors of a result against the true model (best of both walking directions)."""
+    """Errors of a result against the true model walked the way the solver walked it: of the truth and the truth
+    reversed (with the result's bend count), the one whose segments start and end nearer the result's, segment
+    by segment. (By the bend angles alone the two directions tie on a tube of one bend, or of angles that read
+    the same both ways: the truth's own direction then won, and its end straights were compared with the
+    result's opposite ends.)"""
     got = model_from_result(result)
+    got_sp = build_spine(got)
     best = None
     for t in (truth, reverse_model(truth)):
         if t.n_bends != got.n_bends:
             continue
         da = np.degrees(np.abs(got.angles - t.angles))
         dr = np.abs(got.radii - t.radii) / t.radii
-        key = da.sum()
+        sp = build_spine(t)
+        key = float(np.linalg.norm(sp.start - got_sp.start, axis=1).sum() + np.linalg.norm(sp.end - got_sp.end,
+                                                                                           axis=1).sum())
         if best is None or key < best[0]:
             best = (key, da, dr, t)
     c, _ = sample_centreline(got, truth.pipe_radius / 4)

@@ -326,7 +326,7 @@ def recheck_by_bic(fitted: tuple, refit, bic, eps: float, max_tries: int = 6, ca
 
 
 def recheck_on_fit(fitted: tuple, P: np.ndarray, thr: float, margin: float, fit_pipe_radius: bool, rounds, eps: float,
-                   radius_mode: str = "free"):
+                   radius_mode: str = "free", assignment=None):
     """The bend count re-checked on a fit of the samples ``P`` (:func:`recheck_by_bic`): BIC n ln(RSS/n) + p ln n
     over the samples within ``thr`` of the fit so far, each candidate refitted by ``rounds`` (two rounds of
     at most 30 evaluations) as that fit was.
@@ -336,13 +336,14 @@ def recheck_on_fit(fitted: tuple, P: np.ndarray, thr: float, margin: float, fit_
     re-checks adjacent small bends on one die as one bend (:func:`pair_merge_candidates`), each candidate
     refitted with its radii held to the die(s), so that no free radius of a bend of a few degrees can run off
     during the comparison. ``fitted`` is the fit's tuple (model first); returns the kept tuple and the changes
-    (the tuple's last item is the candidate's radius mode when the radii are held)."""
+    (the tuple's last item is the candidate's radius mode when the radii are held). ``assignment(m, P)``:
+    ``fit.assign(m, P, margin)`` (the caller's, which may have it at hand)."""
     model = fitted[0]
     held = radius_mode in ("common", "dies")
     die_radii = []
     if held:
         die_radii = sorted({round(float(r), 9) for r in model.radii}) if radius_mode == "dies" else [float(model.radii[0])]
-    keep = np.abs(fit.assign(model, P, margin)[0]) <= thr
+    keep = np.abs((assignment or (lambda m, Q: fit.assign(m, Q, margin)))(model, P)[0]) <= thr
     N = int(keep.sum())
 
     def dies_of(m: TubeModel) -> tuple[int, ...]:

@@ -324,6 +324,16 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
             return m2, last_round[2]
         return m2, fit.assign(m2, pts_prune, margin)[0]
 
+    assigned: dict = {}  # (id(model), id(samples)) -> (model, samples, residuals, segments)
+
+    def assignment(m: TubeModel, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``fit.assign(m, P, margin)``, each model's on each set of samples computed once: the bend count's
+        re-check, the radius models and the final inliers all start from the fit they are given (read only)."""
+        key = (id(m), id(P))
+        if key not in assigned:
+            assigned[key] = (m, P, *fit.assign(m, P, margin))  # (the model and samples held: their ids stay theirs)
+        return assigned[key][2:]
+
     st.stage(0.6, 0.75, "choosing the number of bends")
 
     fitted = [(e,) + refit(mdl) for e, mdl in inits]
@@ -339,25 +349,25 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
     model, lm_info, thr, sig = rounds(model, pts_sub, thr0, 3, 60)
     if model.n_bends > 1 and mode == "free":
         (model, lm_info, thr, sig), rechecked = prune.recheck_on_fit((model, lm_info, thr, sig), pts_sub, thr, margin,
-                                                                     fit_rp, rounds, eps_used)
+                                                                     fit_rp, rounds, eps_used, assignment=assignment)
         changes = changes + rechecked
     radius = BendRadiusModel(chosen="fixed", criterion="options") if opts.bend_radius else None
     final_mode: dict = {}
     if model.n_bends and not opts.bend_radius:
         st.stage(0.8, 0.85, "choosing the bend radius model")
         model, lm_info, thr, radius, final_mode = choose_radius_model(model, pts_sub, thr, margin, opts, rounds,
-                                                                      lm_info, nominal_clr)
+                                                                      lm_info, nominal_clr, assignment)
         if model.n_bends > 1 and mode == "free" and final_mode.get("radius_mode") in ("common", "dies"):
             (model, lm_info, thr, final_mode), merged = prune.recheck_on_fit((model, lm_info, thr, final_mode), pts_sub,
                                                                              thr, margin, fit_rp, rounds, eps_used,
-                                                                             final_mode["radius_mode"])
+                                                                             final_mode["radius_mode"], assignment)
             if merged:
                 changes = changes + merged
                 # the radius models compared again for the tube with fewer bends, from its free fit
                 # (started at the converged shared fit, so no radius has room to run off)
                 free, lm_info, thr, _ = rounds(model, pts_sub, thr, 2, 30)
                 model, lm_info, thr, radius, final_mode = choose_radius_model(free, pts_sub, thr, margin, opts,
-                                                                              rounds, lm_info, nominal_clr)
+                                                                              rounds, lm_info, nominal_clr, assignment)
     st.stage(0.85, 0.97, "final least-squares fit on all samples")
     if N > len(sub):
         model, lm_info, thr, sig = rounds(model, pts, thr, 1, 10, **final_mode)
@@ -371,7 +381,8 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         ends = fit.near_ends(model, seg_all)
         res_all[ends], seg_all[ends] = fit.assign(model, np.take(pts, ends, axis=0), 0.0)
     else:
-        inlier = np.abs(fit.assign(model, pts, margin)[0]) <= thr
+        # (a subsample of every sample is all of them, in their order)
+        inlier = np.abs(assignment(model, pts if N > len(sub) else pts_sub)[0]) <= thr
         # final extents without the margin
         res_all, seg_all = fit.assign(model, pts, 0.0)
     last_rel = lm_info.get("last_relative_decrease")
@@ -467,7 +478,7 @@ def nominal_dies(model: TubeModel, weight: np.ndarray, nominal_clr: list[float])
 
 
 def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: float, opts: TubeOptions, rounds,
-                        lm_info: dict, nominal_clr: list[float] | None = None):
+                        lm_info: dict, nominal_clr: list[float] | None = None, assignment=None):
     """Bend radius models compared on the same samples: one die for all bends ('common'), two dies with the
     bends assigned by their free radii ('dies', three bends or more), with a nominal one die per CLR it names
     started at those CLRs and each bend on its nominal bend's die ('nominal_dies'; with the scan's bend count it
@@ -478,7 +489,11 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
     the options force one. Radius is weakly observable on short arcs, so a shared radius is both what the
     bender did and what the data support; the nominal's CLRs are the dies the bender was meant to use, a start
     the free radii of small bends do not give. Returns the model, its fit info, the threshold, the report and
-    the mode for the final fit on all samples."""
+    the mode for the final fit on all samples. ``assignment(m, P)``: ``fit.assign(m, P, margin)`` (the caller's,
+    which may have it at hand)."""
+    if assignment is None:
+        def assignment(m: TubeModel, P: np.ndarray):
+            return fit.assign(m, P, margin)
     n = model.n_bends
     forced = "common" if opts.common_bend_radius else opts.bend_radius_model
     if opts.dies:
@@ -491,12 +506,12 @@ def choose_radius_model(model: TubeModel, P: np.ndarray, thr: float, margin: flo
         return m, info, thr2, BendRadiusModel(chosen="given_dies", criterion="options", die_radii=die_r.tolist(),
                                               assignment=list(assign)), {"radius_mode": "fixed", "fixed_radii": fixed}
     candidates = {"per_bend": (model, lm_info, thr, {"radius_mode": "free"})}
-    res_free, seg_free = fit.assign(model, P, margin)
+    res_free, seg_free = assignment(model, P)
     assigned = {id(model): (model, res_free)}  # each candidate's residuals, computed once
 
     def residuals(m: TubeModel) -> np.ndarray:
         if id(m) not in assigned:
-            assigned[id(m)] = (m, fit.assign(m, P, margin)[0])
+            assigned[id(m)] = (m, assignment(m, P)[0])
         return assigned[id(m)][1]
 
     keep = np.abs(res_free) <= thr
