@@ -124,3 +124,19 @@ def test_a_header_stating_two_units_is_refused_naming_both(column):
     (error,) = refused.value.errors
     assert error.loc == ("file", "header") and "which is meant" in error.msg and repr(column) in error.msg
     assert _load(_rig("speed [rpm],Wc (lbm/s) [lb/s],PR [-],efficiency [%]"), "rig.csv").units.flow == "lb/s"
+
+
+def test_exports_of_a_map_in_pressures_not_ratios_are_said_to_hold_them():
+    """A rig table of pressures rises in kPa: pyCycle's PRmap and GasTurb's Pressure Ratio table were written in
+    kPa with no word in the report, and the cycle codes read them as ratios."""
+    from plantsolve.solvers.perfmap.solve import solve
+
+    def solved(pressure: str):
+        source = StoredInput.from_bytes("rig.csv", _rig(f"speed [rpm],flow [kg/s],{pressure},efficiency [%]").encode())
+        return solve(parse_upload(source, {"map": False})).result
+
+    kpa = solved("pressure rise [kPa]")
+    (warning,) = [w for w in kpa.report.warnings if w.code == "exports_pressure_not_ratio"]
+    assert warning.details == {"quantity": "pressure", "unit": "kPa"} and "PRmap" in warning.message
+    assert kpa.beta_map is not None  # the exports are still written, the unit stated beside their tables
+    assert not [w for w in solved("PR [-]").report.warnings if w.code == "exports_pressure_not_ratio"]
