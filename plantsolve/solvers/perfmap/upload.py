@@ -162,8 +162,11 @@ def _header_field(name: str) -> tuple[str | None, str]:
     whole = re.sub(r"[\s_\-]+", " ", label.lower()).strip()
     if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
         return _ALIAS[whole], ""
+    symbols = []
     while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0:
-        if not _symbol(m.group(1)):
+        if _symbol(m.group(1)):
+            symbols.append(m.group(1).strip())
+        else:
             unit = unit or m.group(1).strip()
         label = label[: m.start()]
     if label.endswith("%") and len(label) > 1:  # "efficiency %"
@@ -172,7 +175,9 @@ def _header_field(name: str) -> tuple[str | None, str]:
     if key not in _ALIAS and not unit and (split := _trailing_unit(label)):
         label, unit = split
         key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
-    return _ALIAS.get(key), unit
+    # a symbol of another quantity ('flow [pi]') is no name of this one: it stays the unit, which the check refuses
+    stray = [t for t in symbols if _ALIAS.get(re.sub(r"[\s_\-]+", " ", t.lower())) != _ALIAS.get(key)]
+    return _ALIAS.get(key), unit or (stray[0] if stray else "")
 
 
 def _stated_units(name: str) -> list[str]:

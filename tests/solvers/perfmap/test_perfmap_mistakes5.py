@@ -105,7 +105,7 @@ def test_the_symbol_of_the_pressure_ratio_in_brackets_names_it_and_scales_nothin
 
 
 @pytest.mark.parametrize("column, unit", [("PR [dB]", "dB"), ("PR [rad]", "rad"), ("efficiency [deg]", "deg"),
-                                          ("flow [count]", "count"), ("efficiency [mB]", "mB")])
+                                          ("flow [count]", "count"), ("efficiency [mB]", "mB"), ("flow [pi]", "pi")])
 def test_a_dimensionless_unit_that_is_no_ratio_is_refused_naming_the_column(column, unit):
     """Decibels scaled the ratios by 1.26, degrees the efficiencies by 0.0175; radians and counts were labels."""
     names = {"PR": "PR [-]", "efficiency": "efficiency [%]", "flow": "flow [kg/s]"}
