@@ -44,6 +44,8 @@ def meter_shape(request: FlowmeterRequest) -> MeterShape:
 
 # hard bounds of the bore (radius) in metres, whatever the unit: outside them no pipe exists
 RADIUS_M = (1e-5, 1000.0)
+# a mean stated beside samples agrees with theirs within this (rounded as written); otherwise which is meant is not known
+SAMPLED_MEAN_AGREEMENT = 0.01
 
 
 def check_input(request: FlowmeterRequest) -> None:
@@ -113,6 +115,10 @@ def check_input(request: FlowmeterRequest) -> None:
         errors += sample_errors(request)
     elif v.points is not None or v.values is not None:
         errors.append(FieldError(("velocity", "points"), f"points and values belong to type 'samples', not {v.type!r}"))
+    if "n" in v.model_fields_set and v.type != "power_law":
+        # {"mean": 2, "n": 7} without a type is the uniform profile: the exponent would go unused without a word
+        errors.append(FieldError(("velocity", "n"), f"the exponent n belongs to type 'power_law', not {v.type!r}: "
+                                 "give \"type\": \"power_law\", or leave n out"))
     if errors:
         raise InputRejected(errors)
 
@@ -230,4 +236,9 @@ def sample_errors(request: FlowmeterRequest) -> list[FieldError]:
     mean = float(np.sum(flow * quadrature.w) / np.pi)
     if not abs(mean) > 1e-9 * max(float(np.max(np.abs(flow))), 1e-300):
         return [FieldError(("velocity", "values"), "the sampled flow has no mean velocity; S = U / (2 R B v_mean) is undefined")]
+    if "mean" in v.model_fields_set and not abs(v.mean - mean) <= SAMPLED_MEAN_AGREEMENT * abs(mean):
+        # the samples are the flow, their mean the signal's: a stated mean meant to scale them would be ignored
+        return [FieldError(("velocity", "mean"),
+                           f"mean {v.mean:g} m/s, but the samples' mean velocity is {mean:.4g} m/s: with type 'samples' "
+                           "the samples are the flow (values in m/s); leave mean out, or scale the values")]
     return []

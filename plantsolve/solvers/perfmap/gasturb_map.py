@@ -486,9 +486,14 @@ def _flow_unit(options: dict, title: str, heading: str) -> tuple[dict, str | Non
             source = "title"
     if (m := re.search(r"\[([^\]]+)\]", heading)) is not None:
         try:
-            check_quantity("flow", m.group(1))
+            parsed = check_quantity("flow", m.group(1))
         except UnitError as e:
             raise reject(f"the Mass Flow table's unit: {e}", ("file", "Mass Flow")) from None
+        titled = units.get("flow") if source == "title" else None
+        if titled is not None and not _same_unit(check_quantity("flow", titled), parsed):
+            # the file states two units for one table: taking either would be a guess, 2.2 times off for kg/s and lb/s
+            raise reject(f"the Mass Flow table's line says {m.group(1).strip()!r} but the title says flow "
+                         f"[{titled}]: which is meant? State the unit once", ("file", "Mass Flow"))
         units["flow"], source = m.group(1).strip(), "Mass Flow table's line"
     for quantity, unit in (given or {}).items():
         if quantity not in ("flow", "pressure", "efficiency"):

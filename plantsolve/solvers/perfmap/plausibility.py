@@ -25,6 +25,9 @@ PRESSURE_PA = (10.0, 5e7)
 # mass flows in kg/s (a test rig's turbocharger to the largest fan) and volume flows in m³/s
 MASS_FLOW_KG_S = (1e-4, 1e4)
 VOLUME_FLOW_M3_S = (1e-6, 1e4)
+# the largest flow of a map in per cent of its design flow (the top speed line's choke end): a partial map of low
+# speed lines still reaches a few per cent, overspeed lines some 120 %
+FLOW_PERCENT = (5.0, 200.0)
 # corrected speeds: as a fraction of design, in per cent, and in rpm
 SPEED_FRACTION = (0.05, 1.5)
 SPEED_PERCENT = (5.0, 150.0)
@@ -128,6 +131,8 @@ def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
     if unit is None or unit in ("1", "-"):
         return []
     values = np.concatenate([s.x for s in settings])
+    if unit.strip().strip("[]()").strip() == "%":
+        return _flow_percent(values, unit)
     try:
         q = registry().Quantity(1.0, parse_unit(unit).unit)
     except UnitError:
@@ -145,6 +150,20 @@ def _flow(settings: list[Setting], unit: str | None) -> list[Diagnostic]:
                     quantity="flow", unit=unit, range=[lo, hi], values=[float(values.min()), float(values.max())])]
             return []
     return []
+
+
+def _flow_percent(values: np.ndarray, unit: str) -> list[Diagnostic]:
+    """A flow in per cent of design: its largest value is the top speed line's choke flow, not thousands of per cent
+    (kg/s or lbm/s labelled %) nor below a few per cent (fractions labelled %)."""
+    top = float(np.abs(values).max())
+    lo, hi = FLOW_PERCENT
+    if lo <= top <= hi:
+        return []
+    return [_warning(
+        "implausible_flow",
+        f"Flow: values {_range(values)} {unit}; the largest flow of a map in per cent of design lies in {lo:g}..{hi:g} "
+        + ("%: a mass or volume flow (kg/s, lbm/s) labelled %?" if top > hi else "%: fractions of design labelled %?"),
+        quantity="flow", unit=unit, range=[lo, hi], values=[float(values.min()), float(values.max())])]
 
 
 def named_as_speed(name: str) -> bool:

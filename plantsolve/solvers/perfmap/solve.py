@@ -427,6 +427,20 @@ def _warn_below_gspy(groups: dict[tuple, int], beta_values: int, warnings: list[
                  "files": [list(k) for k in few][:100]}))
 
 
+def _warn_pressure_not_ratio(units, warnings: list[Diagnostic]) -> None:
+    """pyCycle's PRmap and GasTurb's Pressure Ratio table hold ratios, and the cycle codes read them so: a map in
+    kPa (a pressure rise, an outlet pressure) is written there in kPa, which they would take for ratios of 3 or
+    300 without a word. The files state the unit beside the table; the report says it too."""
+    unit = units.pressure if units is not None else None
+    if unit is None or unit in ("1", "-"):
+        return
+    warnings.append(Diagnostic(
+        code="exports_pressure_not_ratio", message=f"The cycle-code exports (map_pycycle.py's PRmap, "
+        f"map_gasturb.map's Pressure Ratio table) hold the map's pressure in {unit}, not a pressure ratio: pyCycle, "
+        "GasTurb and GSP read those tables as ratios p2/p1. Submit pressure ratios (a column 'PR [-]') for a map "
+        "a cycle code can run.", details={"quantity": "pressure", "unit": unit}))
+
+
 def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnings: list[Diagnostic]) -> BetaMap | None:
     """Every speed line tabulated on the beta grid (:mod:`~plantsolve.solvers.perfmap.beta_grid`); None, with a
     warning naming the line, when some beta line would cross a speed line twice."""
@@ -468,6 +482,7 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
             "takes such flows as a vertical choke segment merges them; fewer beta lines avoid it.",
             details={"values": close[:100], "lines": option.lines}))
     _warn_beyond_gsp(settings, len(table.beta), warnings)
+    _warn_pressure_not_ratio(units, warnings)
     f = table.frame
     return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv, spacing=option.spacing,
                    beta=table.beta.tolist(), lines=lines,

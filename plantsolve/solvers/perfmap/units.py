@@ -14,6 +14,7 @@ efficiency is a fraction (``%`` and ``‰`` are divided out); settings keep thei
 from __future__ import annotations
 
 import functools
+import math
 import re
 from dataclasses import dataclass
 
@@ -144,7 +145,20 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
     if _dimensions(u.unit) not in allowed:
         raise UnitError(f"unit {text.strip()!r} ({u.unit.dimensionality if not u.dimensionless else 'dimensionless'})"
                         f" is not a unit of {quantity}: expected {' or '.join(allowed.values())}")
+    if u.dimensionless and not is_ratio_unit(u):
+        raise UnitError(f"unit {text.strip()!r} ({u.unit}) is no unit of a ratio or fraction: a dimensionless "
+                        f"{quantity} is written '-', '1', '%' or '‰' (a symbol such as π or η names the quantity: "
+                        "leave it out of the brackets)")
     return u
+
+
+def is_ratio_unit(u: Unit) -> bool:
+    """Whether a dimensionless unit scales a ratio by a power of ten (1, %, ‰, ppm, kg/kg): pint also reads π as a
+    number (3.14...), dB and Np as logarithmic ratios, and angles, bits and counts as dimensionless."""
+    q = registry().Quantity(1.0, u.unit).to_root_units()
+    if not q.dimensionless or str(q.units) != "dimensionless" or not q.magnitude > 0:
+        return False
+    return abs(math.log10(q.magnitude) - round(math.log10(q.magnitude))) < 1e-9
 
 
 def is_gauge(unit: Unit | None) -> bool:

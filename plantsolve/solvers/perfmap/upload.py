@@ -73,6 +73,7 @@ from plantsolve.solvers.perfmap.units import (
     UnitError,
     check_quantity,
     fraction_factor,
+    is_ratio_unit,
     parse_speed_unit,
     parse_unit,
     revolutions_per_minute,
@@ -143,14 +144,30 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
     return None
 
 
+def _symbol(text: str) -> bool:
+    """Whether bracketed text is the quantity's symbol or name ('PR (π)', 'efficiency (η)'), not its unit: pint
+    reads π as the number 3.14..., which would multiply every pressure ratio by it."""
+    if re.sub(r"[\s_\-]+", " ", text.strip().lower()) not in _ALIAS:
+        return False
+    try:
+        unit = parse_unit(text)
+    except UnitError:
+        return True
+    return unit.dimensionless and not is_ratio_unit(unit)
+
+
 def _header_field(name: str) -> tuple[str | None, str]:
     """(field or None, unit) of a header cell by the rules in the module docstring."""
     label, unit = name.strip().strip('"').strip(), ""
     whole = re.sub(r"[\s_\-]+", " ", label.lower()).strip()
     if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
         return _ALIAS[whole], ""
+    symbols = []
     while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0:
-        unit = unit or m.group(1).strip()
+        if _symbol(m.group(1)):
+            symbols.append(m.group(1).strip())
+        else:
+            unit = unit or m.group(1).strip()
         label = label[: m.start()]
     if label.endswith("%") and len(label) > 1:  # "efficiency %"
         label, unit = label[:-1].rstrip(" ,/"), unit or "%"
@@ -158,7 +175,20 @@ def _header_field(name: str) -> tuple[str | None, str]:
     if key not in _ALIAS and not unit and (split := _trailing_unit(label)):
         label, unit = split
         key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
-    return _ALIAS.get(key), unit
+    # a symbol of another quantity ('flow [pi]') is no name of this one: it stays the unit, which the check refuses
+    stray = [t for t in symbols if _ALIAS.get(re.sub(r"[\s_\-]+", " ", t.lower())) != _ALIAS.get(key)]
+    return _ALIAS.get(key), unit or (stray[0] if stray else "")
+
+
+def _stated_units(name: str) -> list[str]:
+    """Every unit a header cell states in brackets ('Wc (lbm/s) [kg/s]' states two), symbols and words that are no
+    unit ('(isentropic)') left out."""
+    label, units = name.strip().strip('"').strip(), []
+    while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0:
+        if not _symbol(m.group(1)) and _is_unit(m.group(1)):
+            units.append(m.group(1).strip())
+        label = label[: m.start()]
+    return units
 
 
 def _split_unit(name: str) -> tuple[str, str]:
@@ -200,10 +230,11 @@ def _find_header(rows: list[list[str]], column_roles: dict | None) -> int:
 
 
 def _units_row(row: list[str]) -> bool:
-    """A row of units under the header ('[kg/s]', 'bar', '%', '-'): no number in it, and every cell either
-    empty or a unit."""
+    """A row of units under the header ('[kg/s]', 'bar', '%', '-', '1'): every cell either empty or a unit, and no
+    number in it but the unit one ('1', as a pressure ratio's unit is written) beside a unit that is no number."""
     cells = [c.strip() for c in row if c.strip()]
-    if not cells or any(_is_number(c) for c in cells):
+    numbers = [c for c in cells if _is_number(c)]
+    if not cells or len(numbers) == len(cells) or any(c.strip("[]()").strip() != "1" for c in numbers):
         return False
     for c in cells:
         try:
@@ -495,6 +526,11 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         if field in col:
             raise reject(f"columns {rows[0][col[field]].strip()!r} and {name.strip()!r} both "
                           f"name the {field}; say which is which with the 'columns' option", ("file", "header"))
+        stated = _stated_units(name)
+        if any(not _same_unit(stated[0], other) for other in stated[1:]):
+            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}, column {j + 1}) states the units "
+                         f"{' and '.join(map(repr, stated[::-1]))}: which is meant? Give the unit once",
+                         ("file", "header"))
         col[field] = j
         basis_of[field] = "header"
         if not unit and j < len(header_units):
@@ -974,18 +1010,62 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
 _MAP_FLOW_UNIT = re.compile(r"""(?:units\s*\[\s*|units\s*=\s*\{[^}]*?)['"]WcMap['"]\s*[\]:]\s*=?\s*['"]([^'"]+)['"]""")
 
 
+def _names_units(node: ast.expr) -> bool:
+    return isinstance(node, ast.Name) and node.id == "units" or isinstance(node, ast.Attribute) and node.attr == "units"
+
+
+def _literal_text(node: ast.expr | None) -> str | None:
+    return node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None
+
+
+def _flow_unit_assignments(text: str) -> list[tuple[int, str | None]] | None:
+    """(line, unit) of each statement that sets the WcMap unit, in the order Python runs them: ``units['WcMap'] =
+    '...'``, and ``units = {...}`` (or ``dict(...)``), which leaves no unit when it holds no WcMap. None when the text
+    is no Python (then the lines are searched, comments left out)."""
+    try:
+        tree = ast.parse(text)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return None
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Assign):
+            continue
+        for target in node.targets:
+            if isinstance(target, ast.Subscript) and _names_units(target.value) \
+                    and _literal_text(target.slice) == "WcMap":
+                found.append((node.lineno, node.col_offset, _literal_text(node.value)))
+            elif _names_units(target):
+                value = node.value
+                if isinstance(value, ast.Dict):
+                    pairs = dict(zip((_literal_text(k) for k in value.keys), value.values))
+                elif isinstance(value, ast.Call) and isinstance(value.func, ast.Name) and value.func.id == "dict":
+                    pairs = {k.arg: k.value for k in value.keywords}
+                else:
+                    pairs = {}
+                found.append((node.lineno, node.col_offset, _literal_text(pairs.get("WcMap"))))
+    return [(line, unit) for line, _, unit in sorted(found, key=lambda f: f[:2])]
+
+
 def _map_data_flow_unit(text: str) -> str | None:
-    """The unit a pyCycle map states for ``WcMap`` (read, so a map in lbm/s is not a flow without a unit); its
-    ``NcMap`` unit is not read: pyCycle's own maps label relative speeds 'rpm'."""
-    m = _MAP_FLOW_UNIT.search(text)
-    if m is None:
+    """The unit a pyCycle map states for ``WcMap`` (read, so a map in lbm/s is not a flow without a unit) as pyCycle
+    would hold it after importing the file: its last assignment counts, and a unit in a comment or a docstring (an
+    old rig's, commented out) is no assignment. Its ``NcMap`` unit is not read: pyCycle's own maps label relative
+    speeds 'rpm'."""
+    assignments = _flow_unit_assignments(text)
+    if assignments is None:
+        uncommented = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
+        assignments = [(uncommented.count("\n", 0, m.start()) + 1, m.group(1))
+                       for m in _MAP_FLOW_UNIT.finditer(uncommented)]
+    if not assignments:
+        return None
+    line, unit = assignments[-1]
+    if unit is None:
         return None
     try:
-        check_quantity("flow", m.group(1))
+        check_quantity("flow", unit)
     except UnitError as e:
-        raise reject(f"units['WcMap'] = {m.group(1)!r} (line {text.count(chr(10), 0, m.start()) + 1}): {e}",
-                     ("file", "units", "WcMap")) from None
-    return m.group(1)
+        raise reject(f"units['WcMap'] = {unit!r} (line {line}): {e}", ("file", "units", "WcMap")) from None
+    return unit
 
 
 MAX_CSV_ROWS = 200_000
