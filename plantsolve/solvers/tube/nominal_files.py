@@ -189,20 +189,34 @@ def _decimals(cell: str, mark: str) -> int:
     return len(mantissa.split(mark, 1)[1]) if mark in mantissa else 0
 
 
-def _refuse_cut_number(rows: list[list[str]], line: int, mark: str) -> None:
+def _cut_number(rows: list[list[str]], line: int, mark: str) -> list[Diagnostic]:
     """A table that ends without a line ending, its last number written with fewer decimals than every number of
     its column above (printed with a fixed number of decimals), was cut inside that number: ``94.4`` of ``94.4211``
-    moves the part's end. Refused naming the line: a nominal with a wrong end judges the part wrongly."""
+    moves the part's end. Refused naming the line: a nominal with a wrong end judges the part wrongly. A last number
+    without a decimal mark may be a round value a spreadsheet writes so (a length ``80``) as well as ``94`` cut
+    before the mark: warned, naming it; a last ``0`` (the end straight's angle or CLR) is said nothing of."""
     last = rows[-1]
     filled = [j for j, c in enumerate(last) if c.strip()]
     if not filled:
-        return
+        return []
     j = filled[-1]
     above = {_decimals(r[j], mark) for r in rows[:-1] if j < len(r) and r[j].strip()}
-    if len(rows) > 2 and len(above) == 1 and _decimals(last[j], mark) < min(above):
+    cell = last[j].strip()
+    if len(rows) <= 2 or len(above) != 1 or _decimals(cell, mark) >= min(above):
+        return []
+    if mark in cell.strip('"').lower().split("e")[0]:
         raise NominalError(line, None, f"the table ends inside line {line} without a line ending, its last number "
-                           f"({last[j].strip()}) written with fewer decimals than the same column above ({min(above)}): "
+                           f"({cell}) written with fewer decimals than the same column above ({min(above)}): "
                            "the file was cut? Give the whole table")
+    try:
+        if float(cell.strip('"')) == 0:
+            return []
+    except ValueError:
+        return []
+    return [Diagnostic(code="nominal_last_row_short", message=(
+        f"the nominal CSV ends without a line ending inside line {line}, its last number ({cell}) written without "
+        f"the {min(above)} decimals of the same column above: if the file was cut, that number is cut too. Check the "
+        "end of the table."), details={"line": line, "value": cell, "decimals_above": min(above)})]
 
 
 def _short_last_row(rows: list[list[str]], line: int) -> list[Diagnostic]:
@@ -378,8 +392,8 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
             raise NominalError(line, None, f"nominal CSV line {line} cannot be read ({reason}): a row of numbers "
                                "left out would describe another part; correct or delete it")
     if value_lines and value_lines[-1] == len(text.splitlines()) and not text.endswith(("\n", "\r")):
-        _refuse_cut_number(value_cells, value_lines[-1], mark)
-        warnings.extend(_short_last_row(value_cells, value_lines[-1]))
+        cut = _cut_number(value_cells, value_lines[-1], mark)
+        warnings.extend(_short_last_row(value_cells, value_lines[-1]) or cut)
     if index_col is not None and values and None not in numbers:
         values, value_lines = _in_row_number_order(values, value_lines, numbers, head[index_col], warnings)
     if kind == "xyz_clr":

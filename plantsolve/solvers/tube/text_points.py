@@ -148,26 +148,36 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
     units = [u.strip("[]()").strip().lower() for u in units]
     if not any(u in HEADER_UNITS for u in units) or any(u and u != "-" and u not in HEADER_UNITS for u in units):
         return None
+    for n, u in zip(names, units):
+        stated = _name_and_unit(n)[1]
+        if stated in HEADER_UNITS and u in HEADER_UNITS and HEADER_UNITS[stated] != HEADER_UNITS[u]:
+            raise reject(f"the column {n!r} states the unit {stated!r} in its name and {u!r} in the line of units under "
+                         "it: say which one the numbers are in")
     named = [f"{n} [{u}]" if u in HEADER_UNITS and _name_and_unit(n)[1] is None else n for n, u in zip(names, units)]
     return ("//" if names_line.strip().startswith("//") else "") + ",".join(named)
 
 
 def _counts_rows(lines: list[str]) -> bool:
     """Whether the first column of the rows of numbers counts them (0, 1, 2, ... or 1, 2, 3, ...): a row number
-    written before x, y, z by a file without a header. No scan's x is a run of consecutive integers."""
-    first = []
+    written before x, y, z by a file without a header. A scan's x is hardly a run of consecutive integers; where it
+    is one (points sampled a unit apart along x) and the fourth column is a constant attribute (an intensity), the
+    columns after the count cannot be x, y, z: no point of a tube's surface shares one coordinate."""
+    rows = []
     for line in lines:
         s = line.strip()
         if not s or not starts_number(s):
             continue
         try:
-            first.append(float(_SPLIT.split(s, maxsplit=1)[0]))
+            rows.append([float(f) for f in _SPLIT.split(s) if f][:4])
         except ValueError:
             return False
-        if len(first) == ROWS_LOOKED_AT:
+        if len(rows) == ROWS_LOOKED_AT:
             break
-    steps = np.diff(first)
-    return len(first) >= 10 and first[0] in (0.0, 1.0) and bool(np.all(steps == 1.0))
+    if len(rows) < 10 or any(len(r) < 4 for r in rows):
+        return False
+    first = np.array([r[0] for r in rows])
+    fourth = np.array([r[3] for r in rows])
+    return first[0] in (0.0, 1.0) and bool(np.all(np.diff(first) == 1.0)) and bool(np.ptp(fourth) > 0)
 
 
 def _number_rows(lines: list[str]) -> list[str]:

@@ -86,13 +86,26 @@ def test_an_xyz_clr_list_ending_at_a_bend_is_refused_naming_the_point():
     assert error.loc == ("options", "nominal_xyz_clr", 2, "clr") and "end point is missing" in error.msg
 
 
-@pytest.mark.parametrize("cut", [1 + 3, 1 + 5])  # '94.4' and '94' of '94.4211,'
-def test_a_table_cut_inside_its_last_number_is_refused_naming_the_line(cut):
-    text = XYZ.replace("94.4211,\n", "94.4211,")[:-cut]
+def _fixed_decimals(text: str) -> str:
+    return text.replace("\n0,0,0,0,", "\n0,0.0000,0.0000,0.0000,").replace(
+        "1,98,0,0,18", "1,98.0000,0.0000,0.0000,18").replace("2,98,70.4558,0,18", "2,98.0000,70.4558,0.0000,18")
+
+
+def test_a_table_cut_inside_its_last_number_is_refused_naming_the_line():
+    text = XYZ.replace("94.4211,\n", "94.4211,")[:-(1 + 3)]  # '94.4' of '94.4211,'
     with pytest.raises(NominalError, match="ends inside line 6 .*fewer decimals") as error:
-        read_nominal_csv(text.replace("\n0,0,0,0,", "\n0,0.0000,0.0000,0.0000,").replace(
-            "1,98,0,0,18", "1,98.0000,0.0000,0.0000,18").replace("2,98,70.4558,0,18", "2,98.0000,70.4558,0.0000,18"))
+        read_nominal_csv(_fixed_decimals(text))
     assert error.value.where == 6
+
+
+def test_a_last_number_cut_before_its_decimal_mark_is_warned_and_a_round_end_value_is_read():
+    cut = read_nominal_csv(_fixed_decimals(XYZ.replace("94.4211,\n", "94.4211,")[:-(1 + 5)]))  # '94' of '94.4211,'
+    (warning,) = [w for w in cut.warnings if w.code == "nominal_last_row_short"]
+    assert warning.details == {"line": 6, "value": "94", "decimals_above": 4}
+    # a spreadsheet's export without a final line ending: the end row's CLR 0 and a round length are no cut
+    table = "L,R,A,CLR\n100.5,0,90,50.8\n200.5,90,45,50.8\n150.5,0,30,50.8\n80.5,0,0,0"
+    got = read_nominal_csv(table)
+    assert not got.warnings and read_nominal_csv(table + "\n").rows == got.rows
 
 
 def test_a_whole_table_without_a_final_line_ending_is_read():

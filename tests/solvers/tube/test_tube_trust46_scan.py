@@ -50,3 +50,20 @@ def test_a_fourth_column_after_x_y_z_is_not_taken_for_row_numbers():
     pts, source = _read(_rows(PTS, " ", first=None).replace("\n", " 17\n"), "scan.xyz")
     np.testing.assert_allclose(pts, PTS)
     assert not [w for w in source.warnings if w.code == "row_numbers_skipped"]
+
+
+def test_x_sampled_a_unit_apart_before_y_z_and_a_constant_intensity_stays_x():
+    x = np.arange(200.0)
+    text = "".join(f"{int(v)},{12.5 * np.cos(v):.4f},{12.5 * np.sin(v):.4f},0.80\n" for v in x)
+    pts, source = _read(text, "scan.xyz")
+    np.testing.assert_allclose(pts[:, 0], x)
+    assert not [w for w in source.warnings if w.code == "row_numbers_skipped"]
+
+
+def test_a_units_line_contradicting_the_units_in_the_column_names_is_refused_naming_both():
+    from plantsolve.solvers.base import InputRejected
+
+    with pytest.raises(InputRejected, match=r"'x \[mm\]' states the unit 'mm' in its name and 'in'"):
+        _read("x [mm],y [mm],z [mm]\nin,in,in\n" + _rows(PTS, ",", first=None), "scan.csv")
+    pts, _ = _read("x [mm],y [mm],z [mm]\nmm,mm,mm\n" + _rows(PTS, ",", first=None), "scan.csv")  # agreeing: read
+    np.testing.assert_allclose(pts, PTS)
