@@ -144,10 +144,15 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
     return None
 
 
+def _alias_key(text: str) -> str:
+    """A header name as ``_ALIAS`` keys it: lower case, runs of blanks, underscores and hyphens one blank."""
+    return re.sub(r"[\s_\-]+", " ", text.strip().lower()).strip()
+
+
 def _symbol(text: str) -> bool:
     """Whether bracketed text is the quantity's symbol or name ('PR (π)', 'efficiency (η)'), not its unit: pint
     reads π as the number 3.14..., which would multiply every pressure ratio by it."""
-    if re.sub(r"[\s_\-]+", " ", text.strip().lower()) not in _ALIAS:
+    if _alias_key(text) not in _ALIAS:
         return False
     try:
         unit = parse_unit(text)
@@ -159,7 +164,7 @@ def _symbol(text: str) -> bool:
 def _header_field(name: str) -> tuple[str | None, str]:
     """(field or None, unit) of a header cell by the rules in the module docstring."""
     label, unit = name.strip().strip('"').strip(), ""
-    whole = re.sub(r"[\s_\-]+", " ", label.lower()).strip()
+    whole = _alias_key(label)
     if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
         return _ALIAS[whole], ""
     symbols = []
@@ -171,12 +176,12 @@ def _header_field(name: str) -> tuple[str | None, str]:
         label = label[: m.start()]
     if label.endswith("%") and len(label) > 1:  # "efficiency %"
         label, unit = label[:-1].rstrip(" ,/"), unit or "%"
-    key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
+    key = _alias_key(label)
     if key not in _ALIAS and not unit and (split := _trailing_unit(label)):
         label, unit = split
-        key = re.sub(r"[\s_\-]+", " ", label.strip().lower()).strip()
+        key = _alias_key(label)
     # a symbol of another quantity ('flow [pi]') is no name of this one: it stays the unit, which the check refuses
-    stray = [t for t in symbols if _ALIAS.get(re.sub(r"[\s_\-]+", " ", t.lower())) != _ALIAS.get(key)]
+    stray = [t for t in symbols if _ALIAS.get(_alias_key(t)) != _ALIAS.get(key)]
     return _ALIAS.get(key), unit or (stray[0] if stray else "")
 
 
