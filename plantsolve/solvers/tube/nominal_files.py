@@ -20,8 +20,15 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.tube import LraRow, TubeOptions
 from plantsolve.solvers.base import FieldError
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
-from plantsolve.solvers.tube.number_cells import ROWS_LOOKED_AT, cell_delimiter, decimal_mark, number, starts_number
 from plantsolve.solvers.tube.model import control_polygon, model_from_control_polygon
+from plantsolve.solvers.tube.number_cells import (
+    ROWS_LOOKED_AT,
+    cell_delimiter,
+    decimal_mark,
+    decimals,
+    number,
+    starts_number,
+)
 
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "ft": 304.8}
 ANGLE_DEG = {"deg": 1.0, "°": 1.0, "degree": 1.0, "degrees": 1.0, "rad": float(np.degrees(1.0))}
@@ -184,11 +191,6 @@ def _unit_row(cells: list[str], width: int) -> list[str | None] | None:
     return units + [None] * (width - len(units))
 
 
-def _decimals(cell: str, mark: str) -> int:
-    mantissa = cell.strip().strip('"').lower().split("e")[0]
-    return len(mantissa.split(mark, 1)[1]) if mark in mantissa else 0
-
-
 def _cut_number(rows: list[list[str]], line: int, mark: str) -> list[Diagnostic]:
     """A table that ends without a line ending, its last number written with fewer decimals than every number of
     its column above (printed with a fixed number of decimals), was cut inside that number: ``94.4`` of ``94.4211``
@@ -200,9 +202,9 @@ def _cut_number(rows: list[list[str]], line: int, mark: str) -> list[Diagnostic]
     if not filled:
         return []
     j = filled[-1]
-    above = {_decimals(r[j], mark) for r in rows[:-1] if j < len(r) and r[j].strip()}
+    above = {decimals(r[j], mark) for r in rows[:-1] if j < len(r) and r[j].strip()}
     cell = last[j].strip()
-    if len(rows) <= 2 or len(above) != 1 or _decimals(cell, mark) >= min(above):
+    if len(rows) <= 2 or len(above) != 1 or decimals(cell, mark) >= min(above):
         return []
     if mark in cell.strip('"').lower().split("e")[0]:
         raise NominalError(line, None, f"the table ends inside line {line} without a line ending, its last number "

@@ -84,3 +84,10 @@ def plain(cell: str, mark: str, blank_is_delimiter: bool = True) -> str:
 def number(cell: str, mark: str, blank_is_delimiter: bool = True) -> float:
     """A cell's value (see :func:`plain`). Raises ValueError on text and on a cell written with the other mark."""
     return float(plain(cell, mark, blank_is_delimiter))
+
+
+def decimals(cell: str, mark: str = ".") -> int:
+    """How many digits a number cell writes after its decimal mark, its exponent left out: a file printed with a
+    fixed number of decimals writes them alike, so a last number with fewer was cut."""
+    mantissa = cell.strip().strip('"').lower().split("e")[0]
+    return len(mantissa.split(mark, 1)[1]) if mark in mantissa else 0

@@ -39,6 +39,9 @@ from plantsolve.solvers.tube.number_cells import (
     plain,
     starts_number,
 )
+from plantsolve.solvers.tube.number_cells import (
+    decimals as cell_decimals,
+)
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
@@ -271,7 +274,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
             bad.append((lineno, f"coordinate beyond {MAX_COORDINATE:g}"))
         else:
             rows.append((lineno, vals, len(fields)))
-            decimals.append(_decimals(fields[-1]))
+            decimals.append(cell_decimals(fields[-1]))
     # a row with fewer columns than the file's other rows was cut (its last number may be cut too)
     usual = Counter(n for _, _, n in rows).most_common(1)[0][0] if rows else 3
     short = [(ln, f"cut short ({n} of {usual} columns)") for ln, _, n in rows if n < usual]
@@ -291,11 +294,6 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
                      f"scan, which needs at least {MIN_SCAN_ROWS} x, y, z samples. Give a nominal as "
                      "options.nominal_csv with the scan as the file")
     return np.array(kept, dtype=np.float64), cols
-
-
-def _decimals(field: str) -> int:
-    mantissa = field.lower().split("e")[0]
-    return len(mantissa.split(".", 1)[1]) if "." in mantissa else 0
 
 
 def _cut_number(decimals: list[int]) -> bool:
