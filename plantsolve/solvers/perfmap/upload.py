@@ -13,6 +13,8 @@ CSV rules (as rig software and Excel write them):
   the row then has the header's width) or a decimal comma with thousands dots (``0,85``, ``1.234,5``); a column
   whose cells read both ways with nothing in the file to decide, or that mixes both, is refused naming its lines;
   a row with more cells than the header is not read (its line named);
+- cells that state their unit (``85.85%``, ``12.3 kg/s``; an .xlsx cell's number format says so too) are reconciled
+  with their column's unit (:mod:`~plantsolve.solvers.perfmap.cell_units`) or refused naming the column;
 - header: the first remaining line. A column's name is matched case-insensitively after
   stripping unit suffixes in brackets or parentheses (``Flow (m3/s)``, ``Theta [deg]``) and
   folding ``_``/``-``/blanks; accepted names per role are in :data:`HEADER_ALIASES` (rig and
