@@ -24,8 +24,8 @@ from plantsolve.solvers.skipped_input import line_list
 
 # a number as the table reads it (either decimal convention, thousands groups, an exponent) and a unit after it
 _NUMBER_AND_UNIT = re.compile(r"^(?P<number>[+\-\u2212]?[\d.,\u00a0\u202f]*\d(?:[eE][+\-]?\d+)?)\s*"
-                              r"(?P<unit>[^\d\s.,+\-].*?)\s*$")
-_RATIOS = {"%": "%", "‰": "‰", "percent": "%", "permille": "‰"}
+                              r"(?P<unit>(?:1\s*/\s*)?[^\d\s.,+\-].*?)\s*$")  # '1/min' begins with a digit
+_RATIOS = {"%": "%", "‰": "‰", "percent": "%", "pct": "%", "permille": "‰"}
 
 
 def split_cell(cell: str) -> tuple[str, str | None]:

@@ -160,3 +160,11 @@ def test_a_pycycle_efficiency_map_in_per_cent_is_refused_naming_effmap():
     with pytest.raises(InputRejected) as e:
         parse_upload(StoredInput.from_bytes("fan.py", per_cent.encode()), None)
     assert e.value.errors[0].loc == ("file", "effMap") and "per cent" in e.value.errors[0].msg
+
+
+def test_rig_spellings_in_cells_are_read_as_their_headers_unit():
+    # '1/min' begins with a digit, 'pct' is pint's picocarat: both are what rigs write for rpm and per cent
+    table = rows(speed=lambda s: f"{10_000 * s:g} 1/min", efficiency=lambda e: f"{100 * e:.6f} pct")
+    loaded = read("rig.csv", csv(["Speed [rpm]", "Flow [kg/s]", "PR", "Efficiency"], table))
+    assert loaded.request.setting_units == ["rpm"]
+    assert efficiencies(loaded) == pytest.approx(EFFICIENCY, abs=1e-8)
