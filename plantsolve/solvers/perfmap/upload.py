@@ -559,7 +559,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         if cells.unit:
             unit, basis_of[field] = cells.unit, "cells"
         cell_factors.update({(n, j): f for n, f in cells.factors.items()})
-        cell_conversions += [{"quantity": field, "column": name.strip(), "from_unit": k, "to_unit": unit or "1",
+        cell_conversions += [{"quantity": field, "column": name.strip(), "from_unit": k, "to_unit": _canonical(unit),
                               "factor": f, "basis": "cells"} for k, f in cells.converted.items()]
         unit_of[field] = unit
         scale[field] = 1.0
@@ -839,6 +839,14 @@ def _same_unit(a: str, b: str) -> bool:
     if rpm[0] is not None:  # shaft speeds: a bare frequency counts revolutions, as the speed check reads it
         return math.isclose(rpm[0], rpm[1], rel_tol=1e-9)
     return math.isclose(first.factor_to(second), 1.0, rel_tol=1e-9)
+
+
+def _canonical(unit: str) -> str:
+    """A unit as results state it ('-' and '' are '1'), or as written when pint does not read it."""
+    try:
+        return parse_unit(unit).text if unit else "1"
+    except UnitError:
+        return unit
 
 
 def _is_unit(text: str) -> bool:

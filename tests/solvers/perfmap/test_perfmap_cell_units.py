@@ -96,7 +96,7 @@ def test_per_cent_cells_among_plain_fractions_are_fractions():
     assert efficiencies(loaded) == pytest.approx(EFFICIENCY, abs=1e-8)
     assert "upload_rows_skipped" not in codes(loaded)
     conversion = next(c for c in loaded.source["conversions"] if c["basis"] == "cells")
-    assert conversion["from_unit"] == "%" and conversion["factor"] == pytest.approx(0.01)
+    assert conversion["from_unit"] == "%" and conversion["to_unit"] == "1" and conversion["factor"] == pytest.approx(0.01)
 
 
 def test_a_unit_in_the_number_format_is_the_columns_unit():
