@@ -32,7 +32,10 @@ def split_cell(cell: str) -> tuple[str, str | None]:
     """(number, unit) of a cell that writes a unit after its number, else (cell, None). Only a unit pint reads is
     split off, and no plain ratio word ('-', '1'): '0.85 (est)' or a date stays as written, and is refused as no
     number."""
-    m = _NUMBER_AND_UNIT.match(cell.strip().strip('"'))
+    text = cell.strip().strip('"').rstrip()
+    if not text or text[-1].isdigit():  # nearly every cell: a plain number, no unit after it
+        return cell, None
+    m = _NUMBER_AND_UNIT.match(text)
     if not m:
         return cell, None
     text = m.group("unit")
