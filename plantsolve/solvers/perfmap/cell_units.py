@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from plantsolve.solvers.base import FieldError
-from plantsolve.solvers.perfmap.units import Unit, UnitError, parse_speed_unit, registry
+from plantsolve.solvers.perfmap.units import Unit, UnitError, is_ratio_unit, parse_speed_unit, registry
 from plantsolve.solvers.skipped_input import line_list
 
 # a number as the table reads it (either decimal convention, thousands groups, an exponent) and a unit after it
@@ -28,26 +28,34 @@ _NUMBER_AND_UNIT = re.compile(r"^(?P<number>[+\-\u2212]?[\d.,\u00a0\u202f]*\d(?:
 _RATIOS = {"%": "%", "‰": "‰", "percent": "%", "pct": "%", "permille": "‰"}
 
 
+def cell_unit(text: str) -> str | None:
+    """The unit ``text`` is when written after a number ('%' for 'pct'), or None: only a unit pint reads that has
+    dimensions or is an angle, or a per cent or per mille; not a plain ratio word ('-', '1') or a word ('(est)')."""
+    if text.lower() in _RATIOS:
+        return _RATIOS[text.lower()]
+    try:
+        unit = parse_speed_unit(text)
+    except UnitError:
+        return None
+    if unit.dimensionless and not _angle(unit):
+        return None
+    return text
+
+
+def _angle(unit: Unit) -> bool:
+    """Whether a dimensionless unit is an angle (° , deg, rad), which pint counts as dimensionless."""
+    return any(word in str(unit.unit) for word in ("degree", "radian", "arcminute", "arcsecond", "gradian"))
+
+
 def split_cell(cell: str) -> tuple[str, str | None]:
-    """(number, unit) of a cell that writes a unit after its number, else (cell, None). Only a unit pint reads is
-    split off, and no plain ratio word ('-', '1'): '0.85 (est)' or a date stays as written, and is refused as no
-    number."""
+    """(number, unit) of a cell that writes a unit after its number (:func:`cell_unit`), else (cell, None): '0.85
+    (est)' or a date stays as written, and is refused as no number."""
     text = cell.strip().strip('"').rstrip()
     if not text or text[-1].isdigit():  # nearly every cell: a plain number, no unit after it
         return cell, None
     m = _NUMBER_AND_UNIT.match(text)
-    if not m:
-        return cell, None
-    text = m.group("unit")
-    if text.lower() in _RATIOS:
-        return m.group("number"), _RATIOS[text.lower()]
-    try:
-        unit = parse_speed_unit(text)
-    except UnitError:
-        return cell, None
-    if unit.dimensionless:
-        return cell, None
-    return m.group("number"), text
+    unit = cell_unit(m.group("unit")) if m else None
+    return (m.group("number"), unit) if unit else (cell, None)
 
 
 def _unit(text: str | None) -> Unit | None:
@@ -60,10 +68,11 @@ def _unit(text: str | None) -> Unit | None:
 
 
 def _ratio_factor(src: Unit | None, dst: Unit | None) -> float | None:
-    """Factor from one plain ratio unit (1, %, ‰; None is 1) to another, or None when either is no plain ratio."""
+    """Factor from one plain ratio unit (1, %, ‰; None is 1) to another, or None when either is no plain ratio (an
+    angle is dimensionless to pint, but degrees are no per cent)."""
     one = Unit("1", registry().dimensionless)
     src, dst = src or one, dst or one
-    if not (src.dimensionless and dst.dimensionless):
+    if not (is_ratio_unit(src) and is_ratio_unit(dst)):
         return None
     return src.factor_to(dst)
 

@@ -28,17 +28,7 @@ import openpyxl
 from openpyxl.utils.exceptions import InvalidFileException
 
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.perfmap.units import UnitError, parse_speed_unit
-
-
-def _is_unit(text: str) -> bool:
-    """Whether a number format's literal text is a unit ('kg/s', 'bar', '%'), not a word ('approx.')."""
-    if text in ("%", "‰"):
-        return True
-    try:
-        return not parse_speed_unit(text).dimensionless
-    except UnitError:
-        return False
+from plantsolve.solvers.perfmap.cell_units import cell_unit
 
 
 @dataclass
@@ -80,7 +70,8 @@ def _text(value, number_format: str = "General") -> str:
             # in decimal, so that 0.8585 is shown 85.85, not 85.85000000000001
             shown = Decimal(text).scaleb(2 * percents).normalize()
             return f"{shown:f}" + "%" * percents
-        return f"{text} {literal}" if literal and _is_unit(literal) else text
+        # a literal that is a unit ('kg/s', '%', '°'), not a word ('approx.'), is the cell's unit
+        return f"{text} {literal}" if literal and cell_unit(literal) else text
     if isinstance(value, (datetime, date, time)):
         return value.isoformat()
     return str(value).strip()

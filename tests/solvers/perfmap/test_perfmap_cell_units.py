@@ -168,3 +168,20 @@ def test_rig_spellings_in_cells_are_read_as_their_headers_unit():
     loaded = read("rig.csv", csv(["Speed [rpm]", "Flow [kg/s]", "PR", "Efficiency"], table))
     assert loaded.request.setting_units == ["rpm"]
     assert efficiencies(loaded) == pytest.approx(EFFICIENCY, abs=1e-8)
+
+
+@pytest.mark.parametrize("header, cell, unit", [("IGV [deg]", "{:g}°", "deg"), ("IGV", "{:g} deg", "deg"),
+                                                ("IGV", "{:g}°", "°")])
+def test_angles_written_in_the_cells_are_the_settings_unit(header, cell, unit):
+    angles = (-10.0, 0.0, 10.0)
+    table = [[cell.format(a), r[0], r[1] * (1 + a / 100), r[2], r[3]] for a in angles for r in rows()]
+    loaded = read("rig.csv", csv([header, "Speed", "Flow [kg/s]", "PR", "Efficiency"], table))
+    assert loaded.request.setting_units[0] == unit
+    assert sorted({p.setting[0] for p in loaded.request.positions}) == list(angles)
+
+
+def test_radians_in_the_cells_of_a_degree_column_are_refused():
+    table = [[f"{a} rad", *r] for a in (-0.1, 0.0, 0.1) for r in rows()]
+    with pytest.raises(InputRejected) as e:
+        read("rig.csv", csv(["IGV [deg]", "Speed", "Flow [kg/s]", "PR", "Efficiency"], table))
+    assert "'rad'" in e.value.errors[0].msg and "IGV [deg]" in e.value.errors[0].msg
