@@ -227,9 +227,10 @@ class ValueConversion(StrictModel):
     from_unit: str = Field(max_length=40, description="The unit the values were read in ('%', 'lbm/s', ...).")
     to_unit: str = Field(max_length=40, description="The unit they are used in ('1' for a fraction).")
     factor: float = Field(gt=0, le=1e12, description="Multiplier from the values read to the values used.")
-    basis: Literal["header", "units_row", "request", "result_units", "values"] = Field(
-        description="Where the unit came from: the column header, the row of units under it, the request's "
-        "units, options.result_units, or the values themselves (a header unit they contradict).")
+    basis: Literal["header", "units_row", "cells", "request", "result_units", "values"] = Field(
+        description="Where the unit came from: the column header, the row of units under it, the cells themselves "
+        "('85.85%', a number format stating a unit), the request's units, options.result_units, or the values "
+        "themselves (a header unit they contradict).")
 
 
 class PerfmapSource(StrictModel):

@@ -17,6 +17,11 @@ VELOCITY_M_S = (1e-3, 20.0)  # |mean velocity| of liquids in a meter
 SIGNAL_V = (1e-7, 0.1)  # |U|: 0.1 µV to 100 mV across the electrodes
 PROBE_SPREAD = 1e-3  # probe points all within this fraction of R of the centre: written in a unit 1000x larger
 RADIAN_HALF_ANGLE = math.pi / 2  # a patch's half-angle in radians is at most this; in degrees no patch is this narrow
+# a magnet's finite-element box reaches a few radii past the pipe: one that reaches 50 radii was written in a length
+# unit 1000 times smaller than the request's (mm with units 'm'), and the pipe then lies inside one cell of it
+GRID_REACH = 50.0
+# a protruding button enters the flow by a visible fraction of R; less than this is metres written with units 'mm'
+PROTRUSION_MIN = 1e-3
 
 
 def _outside(value: float, bounds: tuple[float, float]) -> bool:
@@ -57,7 +62,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
-    out += _probe_warnings(request)
+    out += _probe_warnings(request) + _grid_warnings(request) + _protrusion_warnings(request)
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -84,6 +89,43 @@ def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
         f"'{request.units}'? Probe points are in the request's units.",
         details={"quantity": "options.probe_points", "largest_radius": spread, "radius": radius,
                  "units": request.units})]
+
+
+def _grid_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
+    """A field grid reaching far beyond the pipe across it: the variation of B over the cross-section, which is what
+    a grid adds to a uniform field, falls between two grid nodes and is lost."""
+    f = request.magnetic_field
+    if f.type != "grid":
+        return []
+    radius = request.pipe.radius
+    reach = {name: max(abs(float(getattr(f, name)[0])), abs(float(getattr(f, name)[-1]))) for name in ("x", "y")}
+    far = {name: r for name, r in reach.items() if r > GRID_REACH * radius}
+    if not far:
+        return []
+    name, r = max(far.items(), key=lambda item: item[1])
+    return [Diagnostic(
+        code="implausible_field_grid",
+        message=f"Magnetic field grid: magnetic_field.{name} reaches {r:g} {request.units}, {r / radius:.4g} pipe radii "
+        f"(radius {radius:g} {request.units}); a magnet's field is computed a few radii around the pipe: grid "
+        f"coordinates in a unit 1000 times smaller than '{request.units}' (mm with units 'm')? The grid is in the "
+        "request's units; across the pipe the field is read between grid nodes this far apart.",
+        details={"quantity": f"magnetic_field.{name}", "reach": r, "radius": radius, "units": request.units,
+                 "radii": r / radius})]
+
+
+def _protrusion_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
+    """A button protruding by a hair of the radius: a protrusion in metres written with units 'mm'."""
+    e = request.electrodes
+    radius = request.pipe.radius
+    if e.shape != "button" or not 0 < e.protrusion < PROTRUSION_MIN * radius:
+        return []
+    return [Diagnostic(
+        code="implausible_electrode_protrusion",
+        message=f"Electrode protrusion: {e.protrusion:g} {request.units}, {e.protrusion / radius:.2g} of the radius "
+        f"{radius:g} {request.units}: a flush button in effect. A length in a unit 1000 times larger than "
+        f"'{request.units}' (metres with units 'mm')? The protrusion is in the request's units, and a protruding "
+        "button's sensitivity falls with it.",
+        details={"quantity": "electrodes.protrusion", "value": e.protrusion, "radius": radius, "units": request.units})]
 
 
 def signal_warnings(signal: float, request: FlowmeterRequest) -> list[Diagnostic]:

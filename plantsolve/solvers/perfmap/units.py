@@ -86,6 +86,8 @@ def parse_unit(text: str) -> Unit:
     s = text.strip().strip("[]()").strip()
     if s.lower() in _DIMENSIONLESS_WORDS:
         return Unit("1", registry().dimensionless)
+    if s.lower() == "pct":  # per cent as tables abbreviate it; pint reads a picocarat (a mass)
+        s = "percent"
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
          .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
     s = _DIGIT_EXPONENT.sub(r"\1**\2", s)

@@ -13,6 +13,8 @@ CSV rules (as rig software and Excel write them):
   the row then has the header's width) or a decimal comma with thousands dots (``0,85``, ``1.234,5``); a column
   whose cells read both ways with nothing in the file to decide, or that mixes both, is refused naming its lines;
   a row with more cells than the header is not read (its line named);
+- cells that state their unit (``85.85%``, ``12.3 kg/s``; an .xlsx cell's number format says so too) are reconciled
+  with their column's unit (:mod:`~plantsolve.solvers.perfmap.cell_units`) or refused naming the column;
 - header: the first remaining line. A column's name is matched case-insensitively after
   stripping unit suffixes in brackets or parentheses (``Flow (m3/s)``, ``Theta [deg]``) and
   folding ``_``/``-``/blanks; accepted names per role are in :data:`HEADER_ALIASES` (rig and
@@ -66,6 +68,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
@@ -145,8 +148,9 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
 
 
 def _alias_key(text: str) -> str:
-    """A header name as ``_ALIAS`` keys it: lower case, runs of blanks, underscores and hyphens one blank."""
-    return re.sub(r"[\s_\-]+", " ", text.strip().lower()).strip()
+    """A header name as ``_ALIAS`` keys it: lower case, runs of blanks, underscores and hyphens one blank, a word's
+    abbreviation dot dropped ('Eff.', 'Rel. speed')."""
+    return re.sub(r"[\s_\-]+", " ", re.sub(r"(?<=[a-z])\.(?=[\s_\-]|$)", "", text.strip().lower())).strip()
 
 
 def _symbol(text: str) -> bool:
@@ -514,6 +518,8 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
     unit_of: dict[str, str] = {}
     basis_of: dict[str, str] = {}  # where each column's unit came from: its header or the row of units under it
     measured_units: dict[str, str] = {}
+    cell_factors: dict[tuple[int, int], float] = {}  # (line, column) of a cell stating a unit: factor into the column's
+    cell_conversions: list[dict] = []
     ignored, recognised = [], []
     columns = {re.sub(r"[\s_\-]+", " ", k.strip().lower()): v for k, v in (column_roles or {}).items()}
     for j, name in enumerate(rows[0]):
@@ -547,6 +553,14 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                              "meant? Give the unit once", ("file", "header"))
             # a header's parenthesis that is no unit ('efficiency (isentropic)') over a units row stating one
             unit, basis_of[field] = header_units[j], "units_row"
+        cells = reconcile(rows[1:], numbers[1:], j, field, name.strip(), unit, what, _same_unit)
+        if cells.error:
+            raise InputRejected([cells.error])
+        if cells.unit:
+            unit, basis_of[field] = cells.unit, "cells"
+        cell_factors.update({(n, j): f for n, f in cells.factors.items()})
+        cell_conversions += [{"quantity": field, "column": name.strip(), "from_unit": k, "to_unit": _canonical(unit),
+                              "factor": f, "basis": "cells"} for k, f in cells.converted.items()]
         unit_of[field] = unit
         scale[field] = 1.0
         if field in MEASURED:
@@ -649,6 +663,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                 errors.append(FieldError(("file", "row", n, c),
                                          f"{what} {n}: {c} {shown!r} is not a number{hint}"))
                 continue
+            v *= cell_factors.get((n, j), 1.0)
             if not math.isfinite(v):
                 errors.append(FieldError(("file", "row", n, c),
                                          f"{what} {n}: {c} is {cell!r} (NaN or infinite)"))
@@ -688,7 +703,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
     if scale["efficiency"] != 1.0:
         _refuse_mixed_efficiency(groups, lines_of, names["efficiency"], unit_of["efficiency"], what)
     reading, contradictions = _values_against_units(groups, setting_cols, names, unit_of, scale)
-    conversions = []
+    conversions = list(cell_conversions)
     if reading["efficiency"] != 1.0:
         for g in groups.values():
             g["efficiency"] = [v * reading["efficiency"] for v in g["efficiency"]]
@@ -824,6 +839,14 @@ def _same_unit(a: str, b: str) -> bool:
     if rpm[0] is not None:  # shaft speeds: a bare frequency counts revolutions, as the speed check reads it
         return math.isclose(rpm[0], rpm[1], rel_tol=1e-9)
     return math.isclose(first.factor_to(second), 1.0, rel_tol=1e-9)
+
+
+def _canonical(unit: str) -> str:
+    """A unit as results state it ('-' and '' are '1'), or as written when pint does not read it."""
+    try:
+        return parse_unit(unit).text if unit else "1"
+    except UnitError:
+        return unit
 
 
 def _is_unit(text: str) -> bool:
@@ -997,6 +1020,10 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
             positions.append({"setting": [float(al), float(n)] if len(alpha) > 1 else [float(n)],
                               "flow": w[ok].tolist(), "pressure": pr[ok].tolist(), "efficiency": eff[ok].tolist()})
     if not positions:
+        eff = tables["effMap"][np.isfinite(tables["effMap"])]
+        if eff.size and np.all((eff > FRACTIONS) & (eff <= 100)):
+            raise reject(f"effMap holds {eff.min():g}..{eff.max():g}: per cent, where pyCycle's effMap is a fraction "
+                         "(0.85 for 85 %); divide it by 100", ("file", "effMap"))
         raise reject("no speed line of the map has 3 usable points (positive, finite, efficiency <= 1)")
     names = ["alpha", "Nc"] if len(alpha) > 1 else ["Nc"]
     notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines over "

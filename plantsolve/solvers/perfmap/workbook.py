@@ -5,7 +5,11 @@ What exporters and people do to a sheet, and what it becomes here:
 - merged cells (a title across the table, a speed value merged down its speed line): every cell of the
   range holds the range's value, as the sheet shows it;
 - blank rows and rows whose first cell starts with ``#``: skipped (their numbers are kept for messages);
-- numbers stored as text (``'0.85``, ``0,85``): parsed like CSV cells (decimal comma allowed);
+- numbers stored as text (``'0.85``, ``0,85``, ``65.85%``): parsed like CSV cells (decimal comma allowed);
+- number formats: a cell is read as Excel shows it where its format changes the unit: a percentage (``0.00%``)
+  as per cent with its ``%`` (0.8585 is ``85.85%``), a format writing a unit after the number (``0.00" kg/s"``,
+  ``0.0 "bar"``, ``0.0\\%``) with that unit; the table reader reconciles such cells with the column's header
+  (:mod:`plantsolve.solvers.perfmap.cell_units`). Other formats (decimals, thousands, colours) change nothing;
 - formulas: their value as last saved by Excel; a formula never calculated (a workbook written by a
   script) has none and becomes ``=<formula>``, which the table parser refuses naming the cell's row;
 - error values (``#DIV/0!``) and dates stay text and are refused as not numbers.
@@ -14,14 +18,17 @@ What exporters and people do to a sheet, and what it becomes here:
 from __future__ import annotations
 
 import io
+import re
 import zipfile
 from dataclasses import dataclass
 from datetime import date, datetime, time
+from decimal import Decimal
 
 import openpyxl
 from openpyxl.utils.exceptions import InvalidFileException
 
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.perfmap.cell_units import cell_unit
 
 
 @dataclass
@@ -31,13 +38,40 @@ class Sheet:
     numbers: list[int]  # 1-based sheet row of each
 
 
-def _text(value) -> str:
+_FORMAT_CODES = re.compile(r'"([^"]*)"|\\(.)|_.|\*.|\[[^\]]*\]|(%)')
+
+
+def format_unit(number_format: str) -> tuple[int, str]:
+    """What a cell's number format (its first section, for positive numbers) says of the value: how many times it
+    shows it as a percentage (Excel multiplies by 100 for each unquoted ``%``), and the literal text it writes
+    after it (``0.00" kg/s"``, ``0.0\\ \\b\\a\\r``), stripped."""
+    section = (number_format or "General").split(";")[0]
+    percents, literal = 0, []
+    for m in _FORMAT_CODES.finditer(section):
+        quoted, escaped, percent = m.groups()
+        if percent:
+            percents += 1
+        elif quoted is not None or escaped is not None:
+            literal.append(quoted if quoted is not None else escaped)
+    return percents, "".join(literal).strip()
+
+
+def _text(value, number_format: str = "General") -> str:
+    """A cell as Excel shows it, in the terms the table reader reads: a percentage as per cent with a ``%``
+    (0.8585 formatted ``0.00%`` is ``85.85%``), a number whose format writes a unit after it with that unit."""
     if value is None:
         return ""
     if isinstance(value, bool):
         return str(value).upper()
     if isinstance(value, (int, float)):
-        return repr(float(value)) if isinstance(value, float) else str(value)
+        text = repr(float(value)) if isinstance(value, float) else str(value)
+        percents, literal = format_unit(number_format)
+        if percents:
+            # in decimal, so that 0.8585 is shown 85.85, not 85.85000000000001
+            shown = Decimal(text).scaleb(2 * percents).normalize()
+            return f"{shown:f}" + "%" * percents
+        # a literal that is a unit ('kg/s', '%', '°'), not a word ('approx.'), is the cell's unit
+        return f"{text} {literal}" if literal and cell_unit(literal) else text
     if isinstance(value, (datetime, date, time)):
         return value.isoformat()
     return str(value).strip()
@@ -63,7 +97,7 @@ def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
     for ws in order:
         if ws.max_row > max_rows:
             raise reject(f"sheet {ws.title!r} has {ws.max_row:,} rows; at most {max_rows:,} are read")
-        grid = [[_text(v) for v in row] for row in ws.iter_rows(values_only=True)]
+        grid = [[_text(c.value, c.number_format) for c in row] for row in ws.iter_rows()]
         fws = formulas[ws.title]
         for r, row in enumerate(grid):
             for c, cell in enumerate(row):
