@@ -3,7 +3,9 @@
 EnergyPlus takes a Space's Floor Area, when given, instead of the area of its floor surfaces, and a zone's floor area
 is the sum of its spaces' unless the Zone object states its own (Input Output Reference, Space, "Field: Floor Area").
 So a zone whose every Space states a floor area (or a volume) declares their sum, which the solver sets against what
-it measures, as it does a Zone's own Volume and Floor Area.
+it measures, as it does a Zone's own Volume and Floor Area. A zone with surfaces that name no Space has one more space,
+EnergyPlus' '<zone>-Remainder', which states nothing and is measured: its Spaces' sum is only part of the zone, and is
+no claim about the whole.
 """
 
 from __future__ import annotations
@@ -21,9 +23,10 @@ def _positive(text: str) -> float | None:
     return value if math.isfinite(value) and value > 0 else None
 
 
-def space_claims(objects: list) -> dict[str, dict[str, float]]:
+def space_claims(objects: list, remainders: set[str] = frozenset()) -> dict[str, dict[str, float]]:
     """Zone (lower case) → {quantity: the sum its spaces state}, for the quantities every Space of the zone states,
-    from the objects (class, fields, field lines, line)."""
+    from the objects (class, fields, field lines, line); none for the ``remainders`` (lower case), zones with surfaces
+    in no Space."""
     stated: dict[str, dict[str, list[float | None]]] = {}
     for cls, fields, _, _ in objects:
         if cls != "space" or len(fields) < 2 or not fields[1]:
@@ -33,6 +36,8 @@ def space_claims(objects: list) -> dict[str, dict[str, float]]:
             zone[key].append(_positive(fields[index]) if index < len(fields) else None)
     claims: dict[str, dict[str, float]] = {}
     for zone, values in stated.items():
+        if zone in remainders:
+            continue
         claim = {key: sum(v) for key, v in values.items() if v and all(x is not None for x in v)}
         if claim:
             claims[zone] = claim

@@ -168,6 +168,32 @@ def _surface_layout(cls: str, fields: list[str]) -> tuple[int, int]:
     return zone_index + 1, zone_index + 6
 
 
+def _space_name(cls: str, fields: list[str]) -> str:
+    """The Space Name a base surface gives ('' when blank, or when its layout has no such field: EnergyPlus before
+    9.6)."""
+    if cls in SURFACE_CLASSES:
+        zone_index, _ = SURFACE_CLASSES[cls]
+        bc, _ = _surface_layout(cls, fields)
+        return fields[zone_index + 1].strip() if bc == zone_index + 2 else ""
+    trimmed = [f for f in fields]
+    while trimmed and not trimmed[-1].strip():
+        trimmed.pop()
+    has_object, _ = SIMPLE_SURFACES[cls]
+    return trimmed[3].strip() if len(trimmed) == 11 + has_object else ""  # Name, Construction, Zone, Space, …
+
+
+def remainders(objects: list[IdfObject]) -> set[str]:
+    """The zones (lower case) that have a base surface naming no Space: EnergyPlus gathers those surfaces into the
+    zone's '<zone>-Remainder' space, measured from its surfaces, beside the Space objects of the zone."""
+    out = set()
+    for cls, fields, _, _ in objects:
+        if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
+            zone_index = SURFACE_CLASSES[cls][0] if cls in SURFACE_CLASSES else 2
+            if len(fields) > zone_index and fields[zone_index].strip() and not _space_name(cls, fields):
+                out.add(fields[zone_index].strip().lower())
+    return out
+
+
 def _detailed_surface(cls: str, fields: list[str], lines: list[int]) -> tuple[str, list[list[float]]]:
     """The zone name and the vertices, as the file lists them, of a ``*:Detailed`` base surface."""
     zone_index, _ = SURFACE_CLASSES[cls]
@@ -266,10 +292,6 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                     claim[key] = value
             if claim:
                 declared[fields[0]] = claim
-    for zone_key, claim in space_claims(objects).items():  # a Zone's own statement stands over its spaces' sum
-        if zone_key in zone_names:
-            name = zone_names[zone_key]
-            declared[name] = {**claim, **declared.get(name, {})}
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
@@ -346,6 +368,11 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
+    # a Zone's own statement stands over its spaces' sum
+    for zone_key, claim in space_claims(objects, remainders(objects)).items():
+        if zone_key in zone_names:
+            name = zone_names[zone_key]
+            declared[name] = {**claim, **declared.get(name, {})}
     rules = any(cls == "globalgeometryrules" for cls, *_ in objects)
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
