@@ -15,6 +15,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing, skeleton
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.placements import why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
@@ -184,7 +185,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                                                 **streamed.parsed_entities}, ids_before))
             counts_before = dict(sorted((counts + streamed.inner).items()))
         if not points:
-            raise reject("no product geometry could be processed by the geometry kernel")
+            raise reject(why_nothing_placed(products, path))
         sizes = model_sizes(points.values())
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
@@ -195,7 +196,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         source_units.update(tolerance=tol, tolerance_from=tolerance_from)
         warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, sizes))
         before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
-        skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": "geometry could not be processed"}
+        skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": why_unprocessed(p)}
                    for p in products if p.id() not in points]
         lap("geometry")
         wanted = tuple(opts.entity_types) if opts.entity_types else None

@@ -25,8 +25,8 @@ def _solved(name: str, text: str):
 
 
 def _floor(name: str, space: str, corners: str) -> str:
-    return (f"BuildingSurface:Detailed,\n  {name},\n  Floor,\n  ,\n  Office A Thermal Zone,\n  {space},\n  Ground,\n  ,\n"
-            f"  NoSun,\n  NoWind,\n  ,\n  ,\n  {corners};\n\n")
+    return (f"BuildingSurface:Detailed,\n  {name},\n  Floor,\n  ,\n  Office A Thermal Zone,\n  {space},\n"
+            f"  Ground,\n  ,\n  NoSun,\n  NoWind,\n  ,\n  ,\n  {corners};\n\n")
 
 
 def _split_office_a(first_space: str, second_space: str, walls_space: str) -> str:
