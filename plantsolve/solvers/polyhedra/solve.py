@@ -30,6 +30,7 @@ from plantsolve.solvers.polyhedra.file_units import METRES
 from plantsolve.solvers.polyhedra.plausibility import implausible
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
+from plantsolve.solvers.polyhedra.subsurfaces import subsurface_warnings
 
 MAX_LISTED_EDGES = 1000
 FACE_TABLE = "faces.npy"  # the per-face numbers the zones.csv artifact lists (Solved.files)
@@ -314,6 +315,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         warnings.append(Diagnostic(code="subsurfaces_exceed_host", message=(
             "the subsurfaces of some faces have more area than their host."),
             details={"faces": sorted({poly.face_ids[poly.face_parent[f]] for f in oversized})}))
+    warnings.extend(subsurface_warnings(poly, planarity_tolerance, merge_tolerance, request.units))
     if an.repairs.holes_reversed:
         warnings.append(Diagnostic(code="holes_reversed", message=(
             f"{len(an.repairs.holes_reversed)} face(s) had inner loops running the same way as the outer loop; "

@@ -73,3 +73,54 @@ def test_an_epjson_boolean_part_of_total_floor_area_is_the_choice_it_says(part, 
     assert not [s for s in skipped if s["object"].startswith("zone")]
     assert result.total_floor_area == pytest.approx(total)
     assert [z.volume for z in result.zones] == pytest.approx([60.0, 60.0])
+
+
+WINDOW = ("  1.5, 0, 2.5,                            !- X,Y,Z Vertex 1 {m}\n"
+          "  1.5, 0, 1,                              !- X,Y,Z Vertex 2 {m}\n"
+          "  3.5, 0, 1,                              !- X,Y,Z Vertex 3 {m}\n"
+          "  3.5, 0, 2.5;                            !- X,Y,Z Vertex 4 {m}")
+
+
+def _window_at(*corners: tuple[float, float, float]) -> str:
+    assert WINDOW in OFFICES
+    return OFFICES.replace(WINDOW, "  " + ",\n  ".join(", ".join(map(str, c)) for c in corners) + ";")
+
+
+def _south_wall(result):
+    return next(f for f in result.faces if f.id == "Office A South")
+
+
+@pytest.mark.parametrize("corners, off_plane, outside", [
+    (((6, 0, 2.5), (6, 0, 1), (8, 0, 1), (8, 0, 2.5)), 0.0, 3.0),  # beside its wall, in its plane
+    (((1.5, 0.5, 2.5), (1.5, 0.5, 1), (3.5, 0.5, 1), (3.5, 0.5, 2.5)), 0.5, 0.0),  # half a metre out of the wall
+    (((3.5, 4, 2.5), (3.5, 4, 1), (1.5, 4, 1), (1.5, 4, 2.5)), 4.0, 0.0),  # the north wall's coordinates
+])
+def test_a_window_that_is_not_in_its_wall_is_named(corners, off_plane, outside):
+    """A window beside its wall, off its plane or drawn on another wall had its 3 m² taken off the wall's net area
+    (15 − 3 = 12 m²) with no word. The area is still taken, as EnergyPlus takes it, and the window is named with how
+    far it is off the plane and outside the outline."""
+    result = _solved("offices.idf", _window_at(*corners))
+    assert _south_wall(result).net_area == pytest.approx(12.0)
+    (warning,) = [w for w in result.report.warnings if w.code == "subsurface_outside_host"]
+    (entry,) = warning.details["subsurfaces"]
+    assert entry["face"] == "Office A Window" and entry["host"] == "Office A South"
+    assert entry["off_plane"] == pytest.approx(off_plane, abs=1e-9)
+    assert entry["outside"] == pytest.approx(outside, abs=1e-9)
+    plain = _solved("offices.idf", OFFICES)  # in its wall, a corner on the wall's edge too: nothing said
+    on_edge = _solved("offices.idf", _window_at((1.5, 0, 3), (1.5, 0, 0), (3.5, 0, 0), (3.5, 0, 3)))
+    for right in (plain, on_edge):
+        assert not [w for w in right.report.warnings if w.code in ("subsurface_outside_host", "subsurfaces_overlap")]
+
+
+def test_a_window_pasted_twice_is_named_with_the_area_counted_twice():
+    """Two windows over one opening (a block pasted twice under a new name) took 6 m² off the wall for 3 m² of glass,
+    no word."""
+    copy = OFFICES[OFFICES.index("FenestrationSurface:Detailed"):].replace("Office A Window", "Office A Window copy")
+    result = _solved("offices.idf", OFFICES + "\n" + copy)
+    assert _south_wall(result).net_area == pytest.approx(9.0)
+    (warning,) = [w for w in result.report.warnings if w.code == "subsurfaces_overlap"]
+    (pair,) = warning.details["pairs"]
+    assert pair["faces"] == ["Office A Window", "Office A Window copy"] and pair["host"] == "Office A South"
+    assert pair["overlap_area"] == pytest.approx(3.0)
+    beside = OFFICES + "\n" + copy.replace("1.5, 0,", "0.5, 0,").replace("3.5, 0,", "1.5, 0,")  # touching: no overlap
+    assert not [w for w in _solved("offices.idf", beside).report.warnings if w.code == "subsurfaces_overlap"]
