@@ -124,6 +124,15 @@ def _number(value: str) -> float:
     return x
 
 
+def _coordinate(value: str) -> float:
+    """A length of the file: beyond the schema's bound it is a writer's garbage, and the object holding it is skipped
+    naming its line (the schema's refusal would name a face index the file does not have)."""
+    x = _number(value)
+    if abs(x) > MAX_COORDINATE:
+        raise ValueError(f"{value!r} is beyond ±{MAX_COORDINATE:g}")
+    return x
+
+
 def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[float]]:
     """The vertex list after the Number of Vertices field at ``n_index``."""
     if n_index >= len(fields):
@@ -146,7 +155,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
     points = []
     for k in range(0, len(coords), 3):
         try:
-            points.append([_number(c) for c in coords[k:k + 3]])
+            points.append([_coordinate(c) for c in coords[k:k + 3]])
         except ValueError as e:
             raise ValueError(f"vertex {k // 3 + 1}{_where(lines[n_index + 1 + k])}: {e}") from None
     if len({tuple(p) for p in points}) < 3:
@@ -274,7 +283,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                              f"{_where(first)}: EnergyPlus refuses two zones of one name (names are "
                              "case-insensitive)", ("file", "line", line) if line else ("file", "Zone", fields[0]))
             try:
-                values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
+                values = [_coordinate(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
             except ValueError as e:
                 skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
                 values = [0.0] * 4
@@ -308,7 +317,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 zone_key = zone.lower()
                 # the rectangles have their own coordinate-system field (rect_relative)
                 if (relative if detailed else rect_relative) and zone_key in zones:
-                    points = _to_world(points, zones[zone_key])
+                    points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 else:
                     world_zones.add(zone_key)
                 if name.lower() in face_line:
@@ -345,7 +354,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 points = _vertices(fields, lines, n_index)
                 zone_key = surface_zone[fields[host].lower()]
                 if relative and zone_key in zones:
-                    points = _to_world(points, zones[zone_key])
+                    points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 if clockwise:
                     points = points[::-1]
             if name.lower() in face_line:
@@ -410,6 +419,14 @@ def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names:
                  "global_geometry_rules": rules})]
 
 
+def _placed(points: list[list[float]], zone: str, line: int | None) -> list[list[float]]:
+    """``points`` moved to their zone's origin, refused (the object skipped, naming the Zone) where the origin puts them
+    beyond the schema's bound."""
+    if any(abs(x) > MAX_COORDINATE for p in points for x in p):
+        raise ValueError(f"its Zone {zone!r}{_where(line)} origin puts it beyond ±{MAX_COORDINATE:g} m")
+    return points
+
+
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
     """Relative coordinates: rotate by the zone's relative north (clockwise, as a compass bearing) and
     move to its origin, as EnergyPlus does."""
@@ -449,7 +466,7 @@ def parse_obj(text: str) -> dict:
             try:
                 if len(parts) < 4:
                     raise ValueError(f"{len(parts) - 1} coordinates")
-                vertices.append([_number(p) for p in parts[1:4]])
+                vertices.append([_coordinate(p) for p in parts[1:4]])
             except ValueError as e:
                 # keep the numbering of later vertices: a placeholder that no usable face may use
                 vertices.append([math.nan] * 3)

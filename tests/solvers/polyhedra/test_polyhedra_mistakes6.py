@@ -124,3 +124,45 @@ def test_a_window_pasted_twice_is_named_with_the_area_counted_twice():
     assert pair["overlap_area"] == pytest.approx(3.0)
     beside = OFFICES + "\n" + copy.replace("1.5, 0,", "0.5, 0,").replace("3.5, 0,", "1.5, 0,")  # touching: no overlap
     assert not [w for w in _solved("offices.idf", beside).report.warnings if w.code == "subsurfaces_overlap"]
+
+
+def _skipped(result) -> list[dict]:
+    return result.report.details["source"]["skipped"]
+
+
+def test_a_coordinate_beyond_the_bound_skips_its_object_naming_the_line():
+    """A vertex of 1e300 (a writer's garbage), or a Zone origin that puts its surfaces past ±1e12 m, was a 422 on
+    'file.faces[1].loops[0][1][0]', an index the IDF does not have. Now the object is skipped with its line, as any
+    object that cannot be read, and the zone it leaves open has no volume."""
+    vertex = "  5, 4, 3,                                !- X,Y,Z Vertex 2 {m}"
+    text = OFFICES.replace(vertex, "  1e300, 4, 3,  !- X,Y,Z Vertex 2 {m}", 1)
+    result = _solved("offices.idf", text)
+    (entry,) = _skipped(result)
+    assert entry["object"] == "buildingsurface:detailed 'Office A Roof'" and "1e300" in entry["reason"]
+    assert entry["line"] == OFFICES[:OFFICES.index("  Office A Roof,")].count("\n")
+    assert [z.volume for z in result.zones] == [None, pytest.approx(60.0)]
+    origin = "  5,                                      !- X Origin {m}"
+    far = _solved("offices.idf", OFFICES.replace(origin, "  1e12,  !- X Origin {m}"))
+    zone_line = OFFICES[:OFFICES.index("  Office B Thermal Zone,                  !- Name")].count("\n")
+    reasons = {s["reason"] for s in _skipped(far)}
+    assert reasons == {f"its Zone 'Office B Thermal Zone' (line {zone_line}) origin puts it beyond ±1e+12 m"}
+    assert far.zones[1].volume is None
+
+
+def test_an_obj_vertex_beyond_the_bound_skips_it_naming_the_line():
+    vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1e300\nv 0 0 1\n"
+    result = _solved("room.obj", vertices + "f 1 3 2\nf 1 2 5\nf 2 3 5\nf 3 1 5\nf 1 2 4\n")
+    assert {(s["line"], s["object"]) for s in _skipped(result)} == {(4, "v"), (10, "f")}
+    assert result.zones[0].volume == pytest.approx(1 / 6)
+
+
+def test_a_simple_rectangle_beyond_the_bound_skips_it_naming_the_line():
+    text = (EXAMPLES / "four_zones_simple.idf").read_text()
+    wall = "Wall:Exterior,Zn002:Wall002,EXTERIOR,ZONE 2,90,90,20,0,0,20,10;"
+    result = _solved("simple.idf", text.replace(wall, wall.replace("90,90,20,", "90,90,1e300,")))
+    entry, window = _skipped(result)  # and its window, whose host is gone
+    assert window["object"] == "window 'Zn002:Wall002:Win001'"
+    assert entry["line"] == text[:text.index(wall)].count("\n") + 1 and "Starting X Coordinate is '1e300'" in \
+        entry["reason"]
+    four = pytest.approx(4000.0)
+    assert [z.volume for z in result.zones] == [four, None, four, four]
