@@ -1,0 +1,33 @@
+"""A fourth round of mistakes with dedup's files: an IFC 4.3 model labelled with a 4.3 name IfcOpenShell does not
+read."""
+
+from __future__ import annotations
+
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup.upload import parse_upload
+from tests.conftest import REPO
+
+TUNNEL = (REPO / "examples" / "dedup" / "tunnel_3rings.ifc").read_text()
+
+
+def _checked(text: str):
+    source = StoredInput.from_bytes("model.ifc", text.encode())
+    value = SPEC.input_of(parse_upload(source, {}), source)
+    SPEC.check_input(value)
+    return value
+
+
+@pytest.mark.parametrize("label", ["IFC4X3", "IFC4X3_ADD1", "IFC4X3_TC1"])
+def test_an_ifc43_label_ifcopenshell_does_not_read_is_refused_at_submission_naming_the_one_it_does(label):
+    """'IFC4X3' passed the check that listed IFC4X3 as accepted, and the job then failed in the parse with 'unknown or
+    unsupported IFC schema: Unsupported schema: IFC4X3'. Now the submission is refused naming the label to write."""
+    assert "FILE_SCHEMA(('IFC4'))" in TUNNEL
+    with pytest.raises(InputRejected) as refused:
+        _checked(TUNNEL.replace("FILE_SCHEMA(('IFC4'))", f"FILE_SCHEMA(('{label}'))"))
+    (error,) = refused.value.errors
+    assert error.loc == ("file",) and error.msg.startswith(f"FILE_SCHEMA {label!r}: IFC 4.3 is read as its final "
+                                                           "release, 'IFC4X3_ADD2'")
+    _checked(TUNNEL.replace("FILE_SCHEMA(('IFC4'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))  # the final label passes
