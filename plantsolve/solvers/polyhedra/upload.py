@@ -537,6 +537,9 @@ def parse_stl(content: bytes) -> dict:
         content = content[:end] + b"\nendsolid\n"
         warnings.append(truncated_file(line, "the ASCII STL has no 'endsolid' (the file was cut?); the facet cut "
                                        "there was not read.").model_dump())
+    elif not ascii_like and not binary_like and _is_text(content[84:4096]):
+        # text under an .stl name (an OBJ, a CSV) read as a binary STL cut short: its characters as garbage floats
+        raise reject("not an STL file: it is text, and not an ASCII STL ('solid … facet … endsolid')")
     elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
         whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
         if whole == 0:
@@ -593,6 +596,12 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _is_text(sample: bytes) -> bool:
+    """Printable ASCII and line breaks only: no binary STL's triangles (float32 normals and corners hold NULs and high
+    bytes within a few facets)."""
+    return bool(sample) and not sample.translate(None, bytes(range(32, 127)) + b"\t\r\n")
 
 
 def _ascii_stl_from_utf16(content: bytes) -> bytes:

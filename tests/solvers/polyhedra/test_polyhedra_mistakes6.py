@@ -166,3 +166,57 @@ def test_a_simple_rectangle_beyond_the_bound_skips_it_naming_the_line():
         entry["reason"]
     four = pytest.approx(4000.0)
     assert [z.volume for z in result.zones] == [four, None, four, four]
+
+
+def test_an_ifc_schema_label_ifcopenshell_does_not_read_is_named():
+    """'unreadable IFC file: No schema loaded' named nothing of the file; an IFC 4.3 model labelled 'IFC4X3' (a release
+    candidate's name) is refused naming its label and the one IfcOpenShell reads."""
+    from plantsolve.solvers.base import InputRejected
+
+    text = (Path(__file__).parent / "data" / "ifcopenshell_spaces.ifc").read_text()
+    assert "FILE_SCHEMA(('IFC4'))" in text
+    with pytest.raises(InputRejected, match=r"its header's FILE_SCHEMA is 'IFC4X3'; IfcOpenShell reads IFC2X3, IFC4, "
+                                            r"IFC4X3_ADD2"):
+        parse_upload(StoredInput.from_bytes("spaces.ifc", text.replace("'IFC4'", "'IFC4X3'").encode()), None)
+    request = parse_upload(StoredInput.from_bytes("spaces.ifc", text.replace("'IFC4'", "'IFC4X3_ADD2'").encode()), None)
+    assert request.source["schema"] == "IFC4X3"
+
+
+def test_an_obj_named_stl_is_refused_as_the_text_it_is():
+    """Text under an .stl name passed for a binary STL cut short (its characters read as a count of 825 million
+    triangles and as garbage floats), and the refusal named a face 't1' of it. Now it is refused as text, naming what
+    it holds."""
+    from plantsolve.solvers.base import InputRejected
+
+    obj = "g room\n" + "".join(f"v {x} {y} {z}\n" for x in (0, 5) for y in (0, 4) for z in (0, 3)) + \
+        "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n"
+    assert _solved("room.obj", obj).zones[0].volume == pytest.approx(60.0)
+    with pytest.raises(InputRejected, match=r"this file holds a Wavefront OBJ mesh, not an ASCII STL mesh as its name "
+                                            r"says: not an STL file: it is text"):
+        parse_upload(StoredInput.from_bytes("room.stl", obj.encode()), None)
+
+
+GBXML = (Path(__file__).parent / "data" / "openstudio_offices.xml").read_text(encoding="utf-8-sig")
+
+
+def test_a_gbxml_saved_as_utf16_with_its_utf8_declaration_is_read():
+    """Notepad's 'Unicode' keeps the declaration's encoding="utf-8" over UTF-16 bytes and their mark; expat refused the
+    file ('encoding specified in XML declaration is incorrect'). The mark says what the bytes are: it is read."""
+    assert GBXML.startswith('<?xml version="1.0" encoding="utf-8"?>')
+    plain = _solved("offices.xml", GBXML)
+    for encoding in ("utf-16", "utf-16-be"):
+        content = ("\ufeff" + GBXML if encoding == "utf-16-be" else GBXML).encode(encoding)
+        request = parse_upload(StoredInput.from_bytes("offices.xml", content), None)
+        check_input(request)
+        result = solve(request).result
+        assert [(z.id, z.volume) for z in result.zones] == [(z.id, z.volume) for z in plain.zones]
+
+
+def test_a_gbxml_coordinate_beyond_the_bound_skips_its_surface_naming_the_line():
+    at = GBXML.index("<Coordinate>", GBXML.index("<PlanarGeometry>", GBXML.index('<Surface id="su-A-south"')))
+    text = GBXML[:at] + "<Coordinate>1e300</Coordinate>" + GBXML[GBXML.index("</Coordinate>", at) + 13:]
+    result = _solved("offices.xml", text)
+    (entry,) = [s for s in _skipped(result) if s["object"] == "Surface 'su-A-south'"]
+    assert entry["line"] == GBXML[:GBXML.index('<Surface id="su-A-south"')].count("\n") + 1
+    assert entry["reason"].endswith("CartesianPoint 1 is beyond ±1e+12 m")
+    assert [z.volume for z in result.zones][:2] == [None, pytest.approx(60.0)]
