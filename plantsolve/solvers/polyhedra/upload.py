@@ -305,6 +305,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
     world_zones: set[str] = set()  # zones with surfaces placed in world coordinates: their origin is not used
+    undefined: dict[str, tuple[str, int]] = {}  # zones of relative surfaces without a Zone object: (name, first line)
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -320,6 +321,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                     points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 else:
                     world_zones.add(zone_key)
+                    if relative if detailed else rect_relative:  # relative to a zone whose origin no object gives
+                        undefined.setdefault(zone_key, (zone, line))
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
@@ -384,6 +387,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             declared[name] = {**claim, **declared.get(name, {})}
     rules = any(cls == "globalgeometryrules" for cls, *_ in objects)
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
+    warnings.extend(_zones_not_defined([undefined[k] for k in sorted(undefined, key=lambda k: undefined[k][1] or 0)
+                                        if k in used_zones]))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -397,6 +402,20 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                     if k.lower() in used_zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
+
+
+def _zones_not_defined(undefined: list[tuple[str, int]]) -> list[Diagnostic]:
+    """Surfaces written relative to a zone that no ``Zone`` object defines: EnergyPlus refuses them, and where their
+    zone's origin and north are is unknown; they are read as if both were 0, so a zone at x = 5 m lands on its
+    neighbour, its shared walls lost."""
+    if not undefined:
+        return []
+    listed = ", ".join(f"{name!r} (first surface line {line})" if line else repr(name) for name, line in undefined[:5])
+    return [Diagnostic(code="zones_not_defined", message=(
+        f"Surfaces are written relative to {len(undefined)} zone(s) no Zone object defines: {listed}"
+        f"{' …' if len(undefined) > 5 else ''}. EnergyPlus refuses such surfaces; they were read as if the zone's "
+        "origin and north axis were 0, which puts them elsewhere if the zone has an origin (add its Zone object)."),
+        details={"zones": [name for name, _ in undefined[:100]], "lines": [line for _, line in undefined[:100]]})]
 
 
 def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],

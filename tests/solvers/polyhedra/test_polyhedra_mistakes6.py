@@ -220,3 +220,19 @@ def test_a_gbxml_coordinate_beyond_the_bound_skips_its_surface_naming_the_line()
     assert entry["line"] == GBXML[:GBXML.index('<Surface id="su-A-south"')].count("\n") + 1
     assert entry["reason"].endswith("CartesianPoint 1 is beyond ±1e+12 m")
     assert [z.volume for z in result.zones][:2] == [None, pytest.approx(60.0)]
+
+
+def test_surfaces_relative_to_a_zone_no_zone_object_defines_are_named():
+    """Office B's Zone object left out (a block not copied): its surfaces, written relative to its origin at x = 5 m,
+    were read at x = 0, on top of office A, the 12 m² wall between them lost, with no word (EnergyPlus refuses them)."""
+    start = OFFICES.index("Zone,\n  Office B Thermal Zone")
+    text = OFFICES[:start] + OFFICES[OFFICES.index("BuildingSurface:Detailed", start):]
+    result = _solved("offices.idf", text)
+    (warning,) = [w for w in result.report.warnings if w.code == "zones_not_defined"]
+    assert warning.details["zones"] == ["Office B Thermal Zone"]
+    assert warning.details["lines"] == [text[:text.index("  Office B Floor,")].count("\n")]
+    assert not result.adjacency
+    whole = _solved("offices.idf", OFFICES)
+    assert whole.adjacency and not [w for w in whole.report.warnings if w.code == "zones_not_defined"]
+    world = text.replace("  Relative,                               !- Coordinate System", "  World,  !- Coordinate")
+    assert not [w for w in _solved("offices.idf", world).report.warnings if w.code == "zones_not_defined"]
