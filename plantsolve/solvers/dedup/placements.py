@@ -1,6 +1,6 @@
-"""Why a product's geometry could not be placed: a coordinate or direction of its placement chain that no
+"""Why a product cannot be placed or named: a coordinate or direction of its placement chain that no
 geometry kernel can use (a writer's 1e300, NaN or zero vector in a root placement leaves every product unplaced, and
-the kernel says only that nothing could be processed)."""
+the kernel says only that nothing could be processed), or a GlobalId it shares with another product."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from collections import Counter
 
 import numpy as np
 
-from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 
 NEWLINE = b"\n"
 MAX_CHAIN = 1000  # a placement chain longer than any model's (a cycle written by a broken exporter ends here)
@@ -110,3 +110,22 @@ def why_nothing_placed(products: list, path) -> str:
         text = None
     placing = f" in the placement of {count} of the {len(products)} products with geometry"
     return f"{message}: {describe(*seen[worst], text, placing)}"
+
+
+def repeated_global_ids(products: list) -> list[Diagnostic]:
+    """``duplicate_global_ids`` naming the products that share a GlobalId (a copied object an exporter did not give a
+    new one): the result names a class's members by GlobalId, so theirs say nothing of which product is meant."""
+    by_id: dict[str, list] = {}
+    for product in products:
+        by_id.setdefault(product.GlobalId, []).append(product)
+    repeated = {g: found for g, found in by_id.items() if len(found) > 1}
+    if not repeated:
+        return []
+    listed = "; ".join(f"{g}: " + ", ".join(f"#{p.id()} {p.is_a()} {p.Name!r}" for p in found[:4])
+                       for g, found in list(repeated.items())[:3])
+    return [Diagnostic(code="duplicate_global_ids", message=(
+        f"{sum(len(f) for f in repeated.values())} products share {len(repeated)} GlobalId(s) ({listed}"
+        f"{' …' if len(repeated) > 3 else ''}), which IFC requires unique: the classes' members name them by GlobalId, "
+        "so these do not say which product is meant (each is still optimized and verified by its instance)."),
+        details={"global_ids": {g: [f"#{p.id()}" for p in found] for g, found in list(repeated.items())[:100]},
+                 "count": len(repeated)})]

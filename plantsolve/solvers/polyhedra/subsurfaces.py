@@ -13,6 +13,7 @@ from plantsolve.solvers.polyhedra.holes import plane_frame
 from plantsolve.solvers.polyhedra.polygons import Polygons
 
 MAX_LISTED = 100
+MAX_PAIRS = 10_000  # pairs of touching subsurfaces measured per host
 
 
 def _outer(poly: Polygons, face: int) -> np.ndarray:
@@ -63,9 +64,9 @@ def misplaced_subsurfaces(poly: Polygons, planarity_tolerance: float,
         polygons = [shape for _, shape in shapes]
         tree = shapely.STRtree(polygons)
         left, right = tree.query(polygons, predicate="intersects")
-        for i, j in zip(left.tolist(), right.tolist(), strict=True):
-            if i >= j:
-                continue
+        once = left < right
+        # a thousand copies of one window would be half a million pairs: the first are enough to name them
+        for i, j in zip(left[once][:MAX_PAIRS].tolist(), right[once][:MAX_PAIRS].tolist(), strict=True):
             try:
                 area = float(shapely.intersection(polygons[i], polygons[j]).area)
             except shapely.errors.GEOSException:  # a self-intersecting window: no overlap measured

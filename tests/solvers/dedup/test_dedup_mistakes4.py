@@ -1,7 +1,9 @@
 """A fourth round of mistakes with dedup's files: an IFC 4.3 model labelled with a 4.3 name IfcOpenShell does not
-read."""
+read; products sharing a GlobalId."""
 
 from __future__ import annotations
+
+import re
 
 import pytest
 
@@ -11,6 +13,7 @@ from plantsolve.solvers.dedup.upload import parse_upload
 from tests.conftest import REPO
 
 TUNNEL = (REPO / "examples" / "dedup" / "tunnel_3rings.ifc").read_text()
+ZOO = (REPO / "examples" / "dedup" / "zoo_ifc2x3.ifc").read_text()
 
 
 def _checked(text: str):
@@ -31,3 +34,18 @@ def test_an_ifc43_label_ifcopenshell_does_not_read_is_refused_at_submission_nami
     assert error.loc == ("file",) and error.msg.startswith(f"FILE_SCHEMA {label!r}: IFC 4.3 is read as its final "
                                                            "release, 'IFC4X3_ADD2'")
     _checked(TUNNEL.replace("FILE_SCHEMA(('IFC4'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))  # the final label passes
+
+
+
+def test_products_sharing_a_globalid_are_named_and_each_is_verified():
+    """Two columns with one GlobalId (a copy the exporter did not renumber): the proof keyed the products by GlobalId,
+    so it checked 13 of the 14 processed and the class listed the same GlobalId twice, no word on which product. Now
+    each is verified by its instance and the shared GlobalId is named with both instances."""
+    first, second = re.findall(r"IFCCOLUMN\('([^']+)'", ZOO)[:2]
+    whole = SPEC.solve(_checked(ZOO), lambda *a: None).result
+    result = SPEC.solve(_checked(ZOO.replace(second, first)), lambda *a: None).result
+    assert result.verification.products_checked == whole.verification.products_checked == 14
+    (warning,) = [w for w in result.report.warnings if w.code == "duplicate_global_ids"]
+    assert warning.details == {"global_ids": {first: ["#955", "#970"]}, "count": 1}
+    assert "#955 IfcColumn 'column_a', #970 IfcColumn 'column_b'" in warning.message
+    assert "duplicate_global_ids" not in {w.code for w in whole.report.warnings}
