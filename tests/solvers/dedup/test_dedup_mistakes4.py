@@ -49,3 +49,21 @@ def test_products_sharing_a_globalid_are_named_and_each_is_verified():
     assert warning.details == {"global_ids": {first: ["#955", "#970"]}, "count": 1}
     assert "#955 IfcColumn 'column_a', #970 IfcColumn 'column_b'" in warning.message
     assert "duplicate_global_ids" not in {w.code for w in whole.report.warnings}
+
+
+def test_a_json_request_uploaded_as_a_file_is_solved_from_its_base64_model():
+    """A .json upload (the request, the model base64 in 'file', as the README offers) was refused 'not an IFC file: it
+    holds a JSON document': the loader took the uploaded JSON for the model. Now its 'file' is the model."""
+    import base64
+    import json
+
+    body = {"filename": "zoo.ifc", "file": base64.b64encode(ZOO.encode()).decode(), "options": {"postpass": False}}
+    source = StoredInput.from_bytes("request.json", json.dumps(body).encode())
+    value = SPEC.input_of(parse_upload(source, {}), source)
+    SPEC.check_input(value)
+    result = SPEC.solve(value, lambda *a: None).result
+    direct = SPEC.solve(_checked(ZOO), lambda *a: None).result
+    assert result.products_shared == direct.products_shared == 6 and result.schema_ == "IFC2X3"
+    source = StoredInput.from_bytes("request.json", json.dumps({"filename": "zoo.ifc"}).encode())
+    with pytest.raises(InputRejected, match="no file: send the IFC file as a multipart upload, or base64 in 'file'"):
+        SPEC.check_input(SPEC.input_of(parse_upload(source, {}), source))
