@@ -575,10 +575,10 @@ def parse_stl(content: bytes) -> dict:
     try:
         # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
         loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
-        if not {"vertices", "faces"} <= set(loaded):  # several solids: trimesh joins them
-            mesh = trimesh.load(io.BytesIO(content), file_type="stl", process=False, force="mesh")
-            loaded = {"vertices": getattr(mesh, "vertices", None), "faces": getattr(mesh, "faces", None),
-                      "metadata": getattr(mesh, "metadata", {})}
+        solid_names: list[str] = []
+        solid_of = None
+        if not {"vertices", "faces"} <= set(loaded):  # several solids (an ASCII file's rooms): one zone each
+            loaded, solid_names, solid_of = _joined_solids(loaded.get("geometry") or {})
     except Exception as e:  # trimesh raises many kinds for a broken file
         raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
     with np.errstate(invalid="ignore", over="ignore"):  # a broken file's garbage floats are sorted out below
@@ -599,6 +599,7 @@ def parse_stl(content: bytes) -> dict:
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
     if not good.all():
         triangles = triangles[good]
+        solid_of = solid_of[good] if solid_of is not None else None
     if len(triangles) == 0:
         raise reject(f"no usable triangle in the STL file (non-finite, beyond {MAX_COORDINATE:g} or repeated vertices)")
     if cut_binary:
@@ -606,6 +607,14 @@ def parse_stl(content: bytes) -> dict:
                          f"non-finite coordinates, coordinates beyond {MAX_COORDINATE:g} or repeated corners")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
+    if solid_of is not None and len(set(solid_of.tolist())) > 1:
+        # one zone per solid, as faces (a mesh is one zone): joined, two rooms were one zone named after the last
+        faces = [{"id": f"{solid_names[z]} t{k + 1}", "loops": [t], "zones": [solid_names[z]]}
+                 for k, (t, z) in enumerate(zip(triangles.tolist(), solid_of.tolist(), strict=True))]
+        return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
+                "source": {"format": "stl", "faces": len(faces), "zones": len(set(solid_of.tolist())),
+                           "solids": solid_names, "skipped": skipped, "skipped_count": int((~good).sum()),
+                           "warnings": warnings}}
     # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them
     used = np.zeros(len(vertices), dtype=bool)
     used[triangles] = True
@@ -615,6 +624,26 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _joined_solids(geometry: dict) -> tuple[dict, list[str], np.ndarray]:
+    """The solids of an ASCII STL (trimesh's ``geometry``: name → arrays) as one vertex and triangle array, the
+    solids' names (a repeated or blank name made unique, as zones must be) and each triangle's solid."""
+    names, vertices, triangles, solid_of, offset = [], [], [], [], 0
+    for k, (key, part) in enumerate(geometry.items()):
+        name = str((part.get("metadata") or {}).get("name") or key or "").strip() or f"solid {k + 1}"
+        names.append(name if name not in names else f"{name} ({k + 1})")
+        with np.errstate(invalid="ignore", over="ignore"):
+            points = np.asarray(part["vertices"], dtype=float).reshape(-1, 3)
+        corners = np.asarray(part["faces"], dtype=np.int64).reshape(-1, 3)
+        vertices.append(points)
+        triangles.append(corners + offset)
+        solid_of.append(np.full(len(corners), k))
+        offset += len(points)
+    if not triangles:
+        return {}, [], np.zeros(0, dtype=np.int64)
+    return ({"vertices": np.concatenate(vertices), "faces": np.concatenate(triangles)}, names,
+            np.concatenate(solid_of))
 
 
 def _is_text(sample: bytes) -> bool:

@@ -236,3 +236,25 @@ def test_surfaces_relative_to_a_zone_no_zone_object_defines_are_named():
     assert whole.adjacency and not [w for w in whole.report.warnings if w.code == "zones_not_defined"]
     world = text.replace("  Relative,                               !- Coordinate System", "  World,  !- Coordinate")
     assert not [w for w in _solved("offices.idf", world).report.warnings if w.code == "zones_not_defined"]
+
+
+def test_the_solids_of_an_ascii_stl_are_zones_of_their_own():
+    """Two rooms exported as two named solids of one ASCII STL were joined into one zone named after the last solid,
+    with both rooms' 120 m³ (and a non-manifold warning where they touch). Now each solid is a zone, their shared wall
+    an adjacency."""
+    import trimesh
+
+    def solid(name: str, shift: float) -> str:
+        box = trimesh.creation.box(extents=(5, 4, 3))
+        box.apply_translation([shift, 0, 0])
+        text = box.export(file_type="stl_ascii")
+        return f"solid {name}\n" + text.split("\n", 1)[1].rsplit("endsolid", 1)[0] + f"endsolid {name}\n"
+
+    result = _solved("rooms.stl", solid("room_a", 0) + solid("room_b", 5))
+    assert [(z.id, z.volume, z.floor_area) for z in result.zones] == [("room_a", pytest.approx(60.0), 20.0),
+                                                                      ("room_b", pytest.approx(60.0), 20.0)]
+    (shared,) = result.adjacency
+    assert shared.zones == ["room_a", "room_b"] and shared.area == pytest.approx(12.0)
+    assert not result.report.warnings
+    (one,) = _solved("room.stl", solid("room_a", 0)).zones  # one solid: the mesh as before
+    assert one.id == "room_a" and one.volume == pytest.approx(60.0)
