@@ -258,3 +258,20 @@ def test_the_solids_of_an_ascii_stl_are_zones_of_their_own():
     assert not result.report.warnings
     (one,) = _solved("room.stl", solid("room_a", 0)).zones  # one solid: the mesh as before
     assert one.id == "room_a" and one.volume == pytest.approx(60.0)
+
+
+def test_a_building_none_of_whose_zones_one_stands_in_is_named():
+    """A gbXML whose lengthUnit says Feet over numbers in metres (and states no Space measures) gave three offices
+    0.91 m high, 1.7 m³ each: each one plausible alone (a plenum), no word. A building of several zones whose tallest
+    is under 1.8 m is named, with the unit that makes it a storey."""
+    import re
+
+    bare = re.sub(r"<Area>[^<]*</Area>|<Volume>[^<]*</Volume>", "", GBXML)
+    feet = _solved("offices.xml", bare.replace('lengthUnit="Meters"', 'lengthUnit="Feet"'))
+    (warning,) = [w for w in feet.report.warnings if w.code == "implausible_building_height"]
+    assert warning.details["tallest_zone"] == "Space_A" and warning.details["height"] == pytest.approx(3 * 0.3048)
+    assert warning.details["likely_file_unit"] == "m" and "options.file_units 'm'" in warning.message
+    right = _solved("offices.xml", bare)
+    assert not [w for w in right.report.warnings if w.code.startswith("implausible")]
+    plenum = _solved("box.stl", (Path(__file__).parent / "data" / "ascii_box.stl").read_text())  # one low zone alone
+    assert not [w for w in plenum.report.warnings if w.code.startswith("implausible")]
