@@ -191,16 +191,17 @@ def _space_name(cls: str, fields: list[str]) -> str:
     return trimmed[3].strip() if len(trimmed) == 11 + has_object else ""  # Name, Construction, Zone, Space, …
 
 
-def remainders(objects: list[IdfObject]) -> set[str]:
-    """The zones (lower case) that have a base surface naming no Space: EnergyPlus gathers those surfaces into the
-    zone's '<zone>-Remainder' space, measured from its surfaces, beside the Space objects of the zone."""
-    out = set()
-    for cls, fields, _, _ in objects:
-        if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
-            zone_index = SURFACE_CLASSES[cls][0] if cls in SURFACE_CLASSES else 2
-            if len(fields) > zone_index and fields[zone_index].strip() and not _space_name(cls, fields):
-                out.add(fields[zone_index].strip().lower())
-    return out
+def _is_floor(cls: str, fields: list[str]) -> bool:
+    """A base surface EnergyPlus counts as floor (its Surface Type, or a Floor class)."""
+    if cls == "buildingsurface:detailed":
+        return len(fields) > 1 and fields[1].strip().lower() == "floor"
+    return cls.startswith("floor:")
+
+
+def _area(points: list[list[float]]) -> float:
+    """Newell's area of a planar polygon."""
+    loop = np.asarray(points, dtype=float)
+    return float(np.linalg.norm(np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0))) / 2
 
 
 def _detailed_surface(cls: str, fields: list[str], lines: list[int]) -> tuple[str, list[list[float]]]:
@@ -306,6 +307,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     surface_zone: dict[str, str] = {}
     world_zones: set[str] = set()  # zones with surfaces placed in world coordinates: their origin is not used
     undefined: dict[str, tuple[str, int]] = {}  # zones of relative surfaces without a Zone object: (name, first line)
+    # zones with surfaces in no Space (EnergyPlus' '<zone>-Remainder' space) → the floor area of those surfaces
+    remainder_floor: dict[str, float] = {}
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -330,6 +333,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 continue
             if detailed and clockwise:  # idf_rectangles builds the rectangles counter-clockwise already
                 points = points[::-1]
+            if not _space_name(cls, fields):
+                remainder_floor[zone_key] = remainder_floor.get(zone_key, 0.0) + (
+                    _area(points) if _is_floor(cls, fields) else 0.0)
             faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
@@ -381,7 +387,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
     # a Zone's own statement stands over its spaces' sum
-    for zone_key, claim in space_claims(objects, remainders(objects)).items():
+    for zone_key, claim in space_claims(objects, remainder_floor).items():
         if zone_key in zone_names:
             name = zone_names[zone_key]
             declared[name] = {**claim, **declared.get(name, {})}

@@ -44,15 +44,21 @@ def _space(name: str, volume: str, floor_area: str) -> str:
     return f"\nSpace,\n  {name},\n  Office A Thermal Zone,\n  ,\n  {volume},\n  {floor_area},\n  General;\n"
 
 
-@pytest.mark.parametrize("volume, floor_area", [("", "12"), ("36", "")])
-def test_a_zones_remainder_space_is_no_part_of_what_its_spaces_state(volume, floor_area):
-    """Surfaces of a zone that name no Space go to EnergyPlus' '<zone>-Remainder' space, measured from its surfaces:
-    the Space objects' sum (12 m² of the 20, 36 m³ of the 60) is no claim about the zone. It was compared as one: a
-    false declared_measures_differ on a right model."""
-    result = _solved("offices.idf", _split_office_a("A1", "", "") + _space("A1", volume, floor_area))
+def test_a_zones_remainder_space_is_measured_beside_what_its_spaces_state():
+    """Surfaces of a zone that name no Space go to EnergyPlus' '<zone>-Remainder' space, whose floor area is that of its
+    Floor surfaces: the zone's is the Spaces' stated 12 m² plus the remainder's 8 m². The Spaces' 12 m² alone was
+    compared with the 20 m² measured: a false declared_measures_differ on a right model. The remainder's volume is
+    EnergyPlus' own reckoning: a Space's stated volume then claims nothing about the zone."""
+    split = _split_office_a("A1", "", "")
+    result = _solved("offices.idf", split + _space("A1", "", "12"))
     assert not [w for w in result.report.warnings if w.code == "declared_measures_differ"]
-    assert "declared_comparison" not in result.report.details
-    assert [z.floor_area for z in result.zones] == pytest.approx([20.0, 20.0])
+    (row,) = result.report.details["declared_comparison"]
+    assert row["declared_floor_area"] == pytest.approx(20.0) and row["floor_area"] == pytest.approx(20.0)
+    wrong = _solved("offices.idf", split + _space("A1", "", "99"))  # 99 + 8 declared against 20 measured: named
+    (warning,) = [w for w in wrong.report.warnings if w.code == "declared_measures_differ"]
+    assert wrong.report.details["declared_comparison"][0]["declared_floor_area"] == pytest.approx(107.0)
+    volume = _solved("offices.idf", split + _space("A1", "36", ""))
+    assert "declared_comparison" not in volume.report.details
     # every surface in a Space: the Spaces' sum is the zone's, and a wrong one is still named
     whole = _split_office_a("A1", "A2", "A1") + _space("A1", "", "12") + _space("A2", "", "80")
     (warning,) = [w for w in _solved("offices.idf", whole).report.warnings if w.code == "declared_measures_differ"]
