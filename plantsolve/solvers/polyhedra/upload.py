@@ -284,7 +284,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                              f"{_where(first)}: EnergyPlus refuses two zones of one name (names are "
                              "case-insensitive)", ("file", "line", line) if line else ("file", "Zone", fields[0]))
             try:
-                values = [_coordinate(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
+                north, *origin = (fields + [""] * 4)[1:5]  # an angle, then lengths
+                values = [_number(north) if north.strip() else 0.0] + [_coordinate(f) if f.strip() else 0.0
+                                                                        for f in origin]
             except ValueError as e:
                 skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
                 values = [0.0] * 4
