@@ -72,7 +72,7 @@ def check_model(model: ifcopenshell.file, instances: int | None = None) -> None:
                      "and the optimized model numbers what it adds after the largest; renumber the file's instances "
                      "from #1, as any IFC export or STEP tool does")
     if model.schema not in ("IFC2X3", "IFC4") and not model.schema.startswith("IFC4X3"):
-        raise reject(f"unsupported IFC schema {model.schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
+        raise reject(f"unsupported IFC schema {model.schema!r}; accepted: IFC2X3, IFC4, IFC4X3_ADD2")
     if not model.by_type("IfcProject"):
         counts = Counter(entity.is_a() for entity in itertools.islice(model, 100_000))
         held = ", ".join(f"{n:,} {name}" for name, n in counts.most_common(3)) or "no instances"

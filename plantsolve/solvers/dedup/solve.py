@@ -15,6 +15,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing, skeleton
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
@@ -184,7 +185,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                                                 **streamed.parsed_entities}, ids_before))
             counts_before = dict(sorted((counts + streamed.inner).items()))
         if not points:
-            raise reject("no product geometry could be processed by the geometry kernel")
+            raise reject(why_nothing_placed(products, path))
         sizes = model_sizes(points.values())
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
@@ -194,8 +195,11 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             warnings.extend(precision_warnings)
         source_units.update(tolerance=tol, tolerance_from=tolerance_from)
         warnings.extend(judge(tol, opts.tolerance is not None, symbol, unit, sizes))
-        before = {p.GlobalId: points[p.id()] for p in products if p.id() in points}
-        skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": "geometry could not be processed"}
+        # by instance id (the written file keeps them): a GlobalId two products share would check only one
+        before = {p.id(): points[p.id()] for p in products if p.id() in points}
+        global_ids = {p.id(): p.GlobalId for p in products if p.id() in points}
+        warnings.extend(repeated_global_ids(products))
+        skipped = [{"global_id": p.GlobalId, "entity": p.is_a(), "reason": why_unprocessed(p)}
                    for p in products if p.id() not in points]
         lap("geometry")
         wanted = tuple(opts.entity_types) if opts.entity_types else None
@@ -231,7 +235,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                                 placements=reader.placements, shared=shared_placements)
         out_classes, shared = described(classes)
         # the proof looks the written points up in the trees the matching built of the products' own
-        shapes = {c.product.GlobalId: c.shape for c in candidates}
+        shapes = {c.product.id(): c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
         ids_now = compaction.grown(model, ids_before, shared_placements.skipped if shared_placements else ())
@@ -253,7 +257,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         lap("write")
         progress(0.75, "verifying: reading the written file back")
         check = ifcio.read_back(optimized)
-        again = {p.GlobalId: p for p in check.by_type("IfcProduct")}
+        again = {p.id(): p for p in check.by_type("IfcProduct")}
         back_products = [again[g] for g in before if g in again]
         after_points, _ = world_points(check, back_products, progress=progress, span=(0.75, 0.9),
                                        message="verifying geometry")
@@ -261,8 +265,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         missing = []
         for g, pts in before.items():
             prod = again.get(g)
-            if prod is None or prod.id() not in after_points:
-                missing.append(g)
+            if prod is None or prod.GlobalId != global_ids[g] or prod.id() not in after_points:
+                missing.append(global_ids[g])
                 continue
             deviations.append(proof.deviation(pts, after_points[prod.id()], shapes.get(g)))
         semantic_after = proof.semantic_fingerprint(check)

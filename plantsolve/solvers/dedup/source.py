@@ -60,8 +60,8 @@ class IfcSource:
     @cached_property
     def stored(self) -> StoredInput:
         """The upload, or the JSON request's ``file`` decoded (a 422 on ``file`` when absent or not base64)."""
-        if self.upload is not None:
-            return self.upload
+        if self.upload is not None and self.upload.extension != ".json":
+            return self.upload  # an uploaded .json is the request: its model is the base64 in 'file'
         if self.request.file is None:
             raise reject("no file: send the IFC file as a multipart upload, or base64 in 'file'", ("file",))
         try:

@@ -62,8 +62,14 @@ def check_input(source: IfcSource) -> None:
     if not schema.startswith("IFC"):
         raise reject(f"not an IFC model: it holds {file_holds(source.header())} (FILE_SCHEMA {schema!r}); dedup reads "
                      "IFC2X3, IFC4 and IFC4X3 models")
+    if schema.startswith("IFC4X3") and schema not in ifcopenshell_wrapper.schema_names():
+        # IfcOpenShell parses IFC 4.3 by its final release's name only: 'IFC4X3' (a release candidate's label, some
+        # exporters') failed in the parse as "No schema loaded", after a check that had listed IFC4X3 as accepted
+        raise reject(f"FILE_SCHEMA {schema!r}: IFC 4.3 is read as its final release, 'IFC4X3_ADD2' (IfcOpenShell reads "
+                     "no other 4.3 label); a model of IFC 4.3's entities can say FILE_SCHEMA(('IFC4X3_ADD2')) in its "
+                     "header")
     if not (schema in ("IFC2X3", "IFC4") or schema.startswith("IFC4X3")):
-        raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3")
+        raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3_ADD2")
     if source.options.tolerance is not None:
         with source.stream() as stream:
             unit = stated_length_unit(stream)

@@ -61,6 +61,9 @@ UNNAMED = {  # unique objects without a name field: the JSON key is not a field
     "globalgeometryrules": ("starting_vertex_position", "vertex_entry_direction", "coordinate_system",
                             "daylighting_reference_point_coordinate_system", "rectangular_surface_coordinate_system"),
 }
+# Yes/No choices: a JSON true or false there means the choice (a writer's own encoding; EnergyPlus' schema spells
+# "Yes"/"No"), not a field to drop the whole object over
+YES_NO = {"part_of_total_floor_area"}
 VERTEX_KEYS = ("vertex_x_coordinate", "vertex_y_coordinate", "vertex_z_coordinate")
 EXTENSIBLE = {"vertices": ("vertex", VERTEX_KEYS), "zones": ("zone", ("zone_name",))}  # lists of field groups
 
@@ -83,8 +86,12 @@ def _fields(cls: str, name: str, body: dict) -> list[str]:
     fields = [] if cls in UNNAMED else [name]
     for key in keys:
         if key not in EXTENSIBLE:
+            value = body.get(key)
+            if key in YES_NO and isinstance(value, bool):
+                fields.append("Yes" if value else "No")
+                continue
             try:
-                fields.append(_text(body.get(key)))
+                fields.append(_text(value))
             except ValueError as e:
                 raise ValueError(f"{key}: {e}") from None
             continue

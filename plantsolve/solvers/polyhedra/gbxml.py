@@ -20,12 +20,15 @@ is refused.
 
 from __future__ import annotations
 
+import codecs
 import math
+import re
 import xml.etree.ElementTree as ET
 from typing import Any
 from xml.parsers import expat
 
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.polyhedra.file_units import stated, symbol
 
@@ -70,6 +73,8 @@ def _polyloop(loop: ET.Element, scale: float) -> list[list[float]]:
             raise ValueError(f"CartesianPoint {k}: {[c.text for c in coordinates]} are not numbers") from None
         if not all(math.isfinite(v) for v in xyz):
             raise ValueError(f"CartesianPoint {k} is not finite")
+        if any(abs(v) > MAX_COORDINATE for v in xyz):  # the schema's refusal would name a face index, not the line
+            raise ValueError(f"CartesianPoint {k} is beyond ±{MAX_COORDINATE:g} m")
         points.append(xyz)
     if len({tuple(p) for p in points}) < 3:
         raise ValueError(f"{len({tuple(p) for p in points})} distinct points; a face needs at least 3")
@@ -142,8 +147,24 @@ def _parse(content: bytes) -> tuple[ET.Element, dict[int, int]]:
     return builder.close(), lines
 
 
+_DECLARED_ENCODING = re.compile(rb"^(<\?xml[^>]*?)\sencoding\s*=\s*(['\"])[^'\"]*\2")
+
+
+def _utf16_as_utf8(content: bytes) -> bytes:
+    """A file with a UTF-16 byte-order mark as UTF-8, its declaration's encoding dropped: an editor that saves as
+    'Unicode' keeps the declaration's encoding="utf-8", which expat refuses against the mark (and the mark is what
+    the bytes are). Other content as it is."""
+    if content[:2] not in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+        return content
+    try:
+        text = content.decode("utf-16").encode("utf-8")
+    except UnicodeDecodeError:
+        return content
+    return _DECLARED_ENCODING.sub(rb"\1", text, count=1)
+
+
 def parse_gbxml(content: bytes) -> dict:
-    root, lines = _parse(content)
+    root, lines = _parse(_utf16_as_utf8(content))
     if _local(root.tag) != "gbXML":
         raise reject(f"the XML file's root element is {_local(root.tag)!r}, not gbXML")
     warnings: list[dict] = []

@@ -9,7 +9,7 @@ import numpy as np
 import shapely
 
 
-def _plane_frame(outer: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+def plane_frame(outer: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Two orthonormal in-plane axes of a loop (Newell normal), None for a degenerate loop."""
     nxt = np.roll(outer, -1, axis=0)
     normal = np.cross(outer, nxt).sum(axis=0)
@@ -25,7 +25,7 @@ def _plane_frame(outer: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
 
 def holes_outside(loops: list[np.ndarray], tolerance: float) -> list[tuple[int, int]]:
     """(loop index, first vertex outside) of each hole (loops[1:]) with a vertex outside the outer loop."""
-    frame = _plane_frame(loops[0] - loops[0].mean(axis=0))
+    frame = plane_frame(loops[0] - loops[0].mean(axis=0))
     if frame is None:
         return []
     origin = loops[0].mean(axis=0)

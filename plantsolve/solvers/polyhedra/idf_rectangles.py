@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from plantsolve.schemas.polyhedra import MAX_COORDINATE
+
 # class -> (whether an Outside Boundary Condition Object field follows the zone/space name, default tilt)
 SIMPLE_SURFACES = {
     "wall:exterior": (False, 90.0),
@@ -56,6 +58,8 @@ def _numbers(fields: list[str], names: tuple[str, ...], defaults: dict[str, floa
             raise ValueError(f"{name} is {field!r}, not a number") from None
         if not math.isfinite(x):
             raise ValueError(f"{name} is {field!r}, not finite")
+        if abs(x) > MAX_COORDINATE:  # a writer's garbage: the schema's refusal would name a face index, not the line
+            raise ValueError(f"{name} is {field!r}, beyond ±{MAX_COORDINATE:g}")
         values.append(x)
     return values
 

@@ -16,6 +16,7 @@ against what it measures.
 from __future__ import annotations
 
 import codecs
+import re
 from collections import Counter
 from typing import Any
 
@@ -52,6 +53,19 @@ def _quantity(quantities: dict[str, Any], *names: str) -> tuple[str, float] | No
     return None
 
 
+def _unread_schema(text: str) -> str:
+    """'; its FILE_SCHEMA 'IFC4X3' …' when the header names a schema IfcOpenShell does not read ('No schema loaded'
+    says nothing of which), else ''."""
+    from ifcopenshell import ifcopenshell_wrapper  # noqa: PLC0415  (third-party, only needed for IFC)
+
+    found = re.search(r"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", text[:65536], re.IGNORECASE)
+    readable = [name for name in ifcopenshell_wrapper.schema_names() if name.startswith("IFC")]
+    if found is None or found.group(1).upper() in readable:
+        return ""
+    return (f" (its header's FILE_SCHEMA is {found.group(1)!r}; IfcOpenShell reads {', '.join(readable)}: IFC 4.3 as "
+            "its final release, 'IFC4X3_ADD2')")
+
+
 def parse_ifc(content: bytes) -> dict:
     import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
     import ifcopenshell.geom  # noqa: PLC0415
@@ -68,7 +82,7 @@ def parse_ifc(content: bytes) -> dict:
         model = ifcopenshell.file.from_string(text)
         spaces = model.by_type("IfcSpace")  # a file without a schema fails only here
     except Exception as e:  # the parser raises several kinds for a broken file
-        raise reject(f"unreadable IFC file: {str(e) or type(e).__name__}") from None
+        raise reject(f"unreadable IFC file: {str(e) or type(e).__name__}{_unread_schema(text)}") from None
     warnings = []
     cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
     if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not

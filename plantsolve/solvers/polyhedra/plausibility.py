@@ -34,6 +34,9 @@ RANGES = (
     Range("implausible_zone_extent", "horizontal extent", 1, 0.1, 3000.0, 10.0),
 )
 SUPERSCRIPT = {1: "", 2: "²", 3: "³"}
+# a building's tallest zone: a plenum or a crawlspace may be 0.5 m high, but a building of several zones none of which
+# a person stands in is feet (or inches) read as metres, which gives rooms of plausible volume one by one
+TALLEST = Range("implausible_building_height", "tallest zone's height", 1, 1.8, 1000.0, 3.0)
 
 
 def _mix_up(value_si: float, rng: Range, read_as: tuple[str, float]) -> tuple[str, float] | None:
@@ -94,3 +97,26 @@ def implausible(zones: Sequence[Mapping[str, Any]], measures: Mapping[str, Mappi
                 "likely_file_unit": mix[0] if mix else None,
                 "zones": {z: v for z, v, _ in found[:MAX_ZONES_LISTED]}, "count": len(found)}))
     return warnings
+
+
+def building_too_low(measures: Mapping[str, Mapping[str, float]], units: str, hint: str,
+                     read_as: tuple[str, float] | None = None) -> list[Diagnostic]:
+    """``implausible_building_height`` when two or more zones have a height and the tallest is under
+    :data:`TALLEST`'s 1.8 m, naming it and the unit that would make it a storey's."""
+    read_as = read_as or (units, METRES[units])
+    heights = {zone: size["height"] for zone, size in measures.items() if size.get("height", 0) > 0}
+    if len(heights) < 2:
+        return []
+    zone, value = max(heights.items(), key=lambda item: item[1])
+    si = value * METRES[units]
+    if si >= TALLEST.low:
+        return []
+    mix = _mix_up(si, TALLEST, read_as)
+    likely = (f"the numbers look like {mix[0]} read as {read_as[0]} ({si / read_as[1]:.4g} {mix[0]}, a storey's "
+              f"height): {hint.format(unit=mix[0])}") if mix else "check the coordinates' unit"
+    return [Diagnostic(code=TALLEST.code, message=(
+        f"The tallest of {len(heights)} zones, {zone!r}, is {value:.4g} {units} high: no zone of this building is "
+        f"{TALLEST.low / METRES[units]:.3g} {units} high, as a room one stands in is; {likely}."),
+        details={"quantity": TALLEST.quantity, "units": units, "tallest_zone": zone, "height": value,
+                 "zones": len(heights), "plausible_minimum": TALLEST.low / METRES[units],
+                 "likely_file_unit": mix[0] if mix else None})]

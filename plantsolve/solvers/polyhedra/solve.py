@@ -27,9 +27,10 @@ from plantsolve.solvers.polyhedra.diagnostics import Orientation, Topology, genu
 from plantsolve.solvers.polyhedra.gmap import GMap, build_gmap
 from plantsolve.solvers.polyhedra.measures import FaceMeasures, UseTerms, face_measures, use_terms
 from plantsolve.solvers.polyhedra.file_units import METRES
-from plantsolve.solvers.polyhedra.plausibility import implausible
+from plantsolve.solvers.polyhedra.plausibility import building_too_low, implausible
 from plantsolve.solvers.polyhedra.polygons import Polygons, from_request
 from plantsolve.solvers.polyhedra.repair import Repairs, repair
+from plantsolve.solvers.polyhedra.subsurfaces import subsurface_warnings
 
 MAX_LISTED_EDGES = 1000
 FACE_TABLE = "faces.npy"  # the per-face numbers the zones.csv artifact lists (Solved.files)
@@ -314,6 +315,7 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
         warnings.append(Diagnostic(code="subsurfaces_exceed_host", message=(
             "the subsurfaces of some faces have more area than their host."),
             details={"faces": sorted({poly.face_ids[poly.face_parent[f]] for f in oversized})}))
+    warnings.extend(subsurface_warnings(poly, planarity_tolerance, merge_tolerance, request.units))
     if an.repairs.holes_reversed:
         warnings.append(Diagnostic(code="holes_reversed", message=(
             f"{len(an.repairs.holes_reversed)} face(s) had inner loops running the same way as the outer loop; "
@@ -360,10 +362,11 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     warnings.extend(subsurface_multipliers_applied(request, poly, area))
     sizes = zone_sizes(poly, gmap, n_zones)
     hint = unit_hint(request)
-    warnings.extend(implausible(zones, {poly.zone_ids[z]: {"height": float(sizes[z, 2]),
-                                                           "extent": float(sizes[z, :2].max())}
-                                        for z in range(n_zones) if np.isfinite(sizes[z]).all()},
-                                request.units, hint, read_as(request)))
+    measured = {poly.zone_ids[z]: {"height": float(sizes[z, 2]), "extent": float(sizes[z, :2].max())}
+                for z in range(n_zones) if np.isfinite(sizes[z]).all()}
+    warnings.extend(implausible(zones, measured, request.units, hint, read_as(request)))
+    if not any(w.code == "implausible_zone_height" for w in warnings):  # a height out of range says it already
+        warnings.extend(building_too_low(measured, request.units, hint, read_as(request)))
     progress(0.95, "adjacency: shared and facing walls")
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")

@@ -124,6 +124,15 @@ def _number(value: str) -> float:
     return x
 
 
+def _coordinate(value: str) -> float:
+    """A length of the file: beyond the schema's bound it is a writer's garbage, and the object holding it is skipped
+    naming its line (the schema's refusal would name a face index the file does not have)."""
+    x = _number(value)
+    if abs(x) > MAX_COORDINATE:
+        raise ValueError(f"{value!r} is beyond ±{MAX_COORDINATE:g}")
+    return x
+
+
 def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[float]]:
     """The vertex list after the Number of Vertices field at ``n_index``."""
     if n_index >= len(fields):
@@ -146,7 +155,7 @@ def _vertices(fields: list[str], lines: list[int], n_index: int) -> list[list[fl
     points = []
     for k in range(0, len(coords), 3):
         try:
-            points.append([_number(c) for c in coords[k:k + 3]])
+            points.append([_coordinate(c) for c in coords[k:k + 3]])
         except ValueError as e:
             raise ValueError(f"vertex {k // 3 + 1}{_where(lines[n_index + 1 + k])}: {e}") from None
     if len({tuple(p) for p in points}) < 3:
@@ -166,6 +175,33 @@ def _surface_layout(cls: str, fields: list[str]) -> tuple[int, int]:
         if n_index < len(fields) and (len(fields) - n_index - 1) % 3 == 0:
             return zone_index + 1 + extra, n_index
     return zone_index + 1, zone_index + 6
+
+
+def _space_name(cls: str, fields: list[str]) -> str:
+    """The Space Name a base surface gives ('' when blank, or when its layout has no such field: EnergyPlus before
+    9.6)."""
+    if cls in SURFACE_CLASSES:
+        zone_index, _ = SURFACE_CLASSES[cls]
+        bc, _ = _surface_layout(cls, fields)
+        return fields[zone_index + 1].strip() if bc == zone_index + 2 else ""
+    trimmed = [f for f in fields]
+    while trimmed and not trimmed[-1].strip():
+        trimmed.pop()
+    has_object, _ = SIMPLE_SURFACES[cls]
+    return trimmed[3].strip() if len(trimmed) == 11 + has_object else ""  # Name, Construction, Zone, Space, …
+
+
+def _is_floor(cls: str, fields: list[str]) -> bool:
+    """A base surface EnergyPlus counts as floor (its Surface Type, or a Floor class)."""
+    if cls == "buildingsurface:detailed":
+        return len(fields) > 1 and fields[1].strip().lower() == "floor"
+    return cls.startswith("floor:")
+
+
+def _area(points: list[list[float]]) -> float:
+    """Newell's area of a planar polygon."""
+    loop = np.asarray(points, dtype=float)
+    return float(np.linalg.norm(np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0))) / 2
 
 
 def _detailed_surface(cls: str, fields: list[str], lines: list[int]) -> tuple[str, list[list[float]]]:
@@ -248,7 +284,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                              f"{_where(first)}: EnergyPlus refuses two zones of one name (names are "
                              "case-insensitive)", ("file", "line", line) if line else ("file", "Zone", fields[0]))
             try:
-                values = [_number(f) if f.strip() else 0.0 for f in (fields + [""] * 4)[1:5]]
+                north, *origin = (fields + [""] * 4)[1:5]  # an angle, then lengths
+                values = [_number(north) if north.strip() else 0.0] + [_coordinate(f) if f.strip() else 0.0
+                                                                        for f in origin]
             except ValueError as e:
                 skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
                 values = [0.0] * 4
@@ -266,14 +304,13 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                     claim[key] = value
             if claim:
                 declared[fields[0]] = claim
-    for zone_key, claim in space_claims(objects).items():  # a Zone's own statement stands over its spaces' sum
-        if zone_key in zone_names:
-            name = zone_names[zone_key]
-            declared[name] = {**claim, **declared.get(name, {})}
     faces: list[dict] = []
     face_line: dict[str, int] = {}
     surface_zone: dict[str, str] = {}
     world_zones: set[str] = set()  # zones with surfaces placed in world coordinates: their origin is not used
+    undefined: dict[str, tuple[str, int]] = {}  # zones of relative surfaces without a Zone object: (name, first line)
+    # zones with surfaces in no Space (EnergyPlus' '<zone>-Remainder' space) → the floor area of those surfaces
+    remainder_floor: dict[str, float] = {}
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -286,9 +323,11 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 zone_key = zone.lower()
                 # the rectangles have their own coordinate-system field (rect_relative)
                 if (relative if detailed else rect_relative) and zone_key in zones:
-                    points = _to_world(points, zones[zone_key])
+                    points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 else:
                     world_zones.add(zone_key)
+                    if relative if detailed else rect_relative:  # relative to a zone whose origin no object gives
+                        undefined.setdefault(zone_key, (zone, line))
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
             except ValueError as e:
@@ -296,6 +335,9 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 continue
             if detailed and clockwise:  # idf_rectangles builds the rectangles counter-clockwise already
                 points = points[::-1]
+            if not _space_name(cls, fields):
+                remainder_floor[zone_key] = remainder_floor.get(zone_key, 0.0) + (
+                    _area(points) if _is_floor(cls, fields) else 0.0)
             faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
@@ -323,7 +365,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 points = _vertices(fields, lines, n_index)
                 zone_key = surface_zone[fields[host].lower()]
                 if relative and zone_key in zones:
-                    points = _to_world(points, zones[zone_key])
+                    points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 if clockwise:
                     points = points[::-1]
             if name.lower() in face_line:
@@ -346,8 +388,15 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                   "surface (Wall:Exterior, Roof, Floor:GroundContact, …)")
         raise reject(reason, where)
     used_zones = {z.lower() for f in faces for z in f.get("zones", [])}
+    # a Zone's own statement stands over its spaces' sum
+    for zone_key, claim in space_claims(objects, remainder_floor).items():
+        if zone_key in zone_names:
+            name = zone_names[zone_key]
+            declared[name] = {**claim, **declared.get(name, {})}
     rules = any(cls == "globalgeometryrules" for cls, *_ in objects)
     warnings.extend(_origins_ignored(zones, zone_names, zone_line, world_zones & used_zones, rules))
+    warnings.extend(_zones_not_defined([undefined[k] for k in sorted(undefined, key=lambda k: undefined[k][1] or 0)
+                                        if k in used_zones]))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
@@ -361,6 +410,20 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                                     if k.lower() in used_zones},
                        "skipped": skipped[:MAX_SKIPPED_LISTED],
                        "skipped_count": len(skipped), "warnings": warnings}}
+
+
+def _zones_not_defined(undefined: list[tuple[str, int]]) -> list[Diagnostic]:
+    """Surfaces written relative to a zone that no ``Zone`` object defines: EnergyPlus refuses them, and where their
+    zone's origin and north are is unknown; they are read as if both were 0, so a zone at x = 5 m lands on its
+    neighbour, its shared walls lost."""
+    if not undefined:
+        return []
+    listed = ", ".join(f"{name!r} (first surface line {line})" if line else repr(name) for name, line in undefined[:5])
+    return [Diagnostic(code="zones_not_defined", message=(
+        f"Surfaces are written relative to {len(undefined)} zone(s) no Zone object defines: {listed}"
+        f"{' …' if len(undefined) > 5 else ''}. EnergyPlus refuses such surfaces; they were read as if the zone's "
+        "origin and north axis were 0, which puts them elsewhere if the zone has an origin (add its Zone object)."),
+        details={"zones": [name for name, _ in undefined[:100]], "lines": [line for _, line in undefined[:100]]})]
 
 
 def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names: dict[str, str],
@@ -381,6 +444,14 @@ def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names:
         "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),
         details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]],
                  "global_geometry_rules": rules})]
+
+
+def _placed(points: list[list[float]], zone: str, line: int | None) -> list[list[float]]:
+    """``points`` moved to their zone's origin, refused (the object skipped, naming the Zone) where the origin puts them
+    beyond the schema's bound."""
+    if any(abs(x) > MAX_COORDINATE for p in points for x in p):
+        raise ValueError(f"its Zone {zone!r}{_where(line)} origin puts it beyond ±{MAX_COORDINATE:g} m")
+    return points
 
 
 def _to_world(points: list[list[float]], zone: tuple[float, float, float, float]) -> list[list[float]]:
@@ -422,7 +493,7 @@ def parse_obj(text: str) -> dict:
             try:
                 if len(parts) < 4:
                     raise ValueError(f"{len(parts) - 1} coordinates")
-                vertices.append([_number(p) for p in parts[1:4]])
+                vertices.append([_coordinate(p) for p in parts[1:4]])
             except ValueError as e:
                 # keep the numbering of later vertices: a placeholder that no usable face may use
                 vertices.append([math.nan] * 3)
@@ -493,6 +564,9 @@ def parse_stl(content: bytes) -> dict:
         content = content[:end] + b"\nendsolid\n"
         warnings.append(truncated_file(line, "the ASCII STL has no 'endsolid' (the file was cut?); the facet cut "
                                        "there was not read.").model_dump())
+    elif not ascii_like and not binary_like and _is_text(content[84:4096]):
+        # text under an .stl name (an OBJ, a CSV) read as a binary STL cut short: its characters as garbage floats
+        raise reject("not an STL file: it is text, and not an ASCII STL ('solid … facet … endsolid')")
     elif not ascii_like and 84 < len(content) < 84 + 50 * declared:
         whole = (len(content) - 84) // 50  # a binary file cut short: its whole triangles are read
         if whole == 0:
@@ -509,10 +583,10 @@ def parse_stl(content: bytes) -> dict:
     try:
         # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
         loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
-        if not {"vertices", "faces"} <= set(loaded):  # several solids: trimesh joins them
-            mesh = trimesh.load(io.BytesIO(content), file_type="stl", process=False, force="mesh")
-            loaded = {"vertices": getattr(mesh, "vertices", None), "faces": getattr(mesh, "faces", None),
-                      "metadata": getattr(mesh, "metadata", {})}
+        solid_names: list[str] = []
+        solid_of = None
+        if not {"vertices", "faces"} <= set(loaded):  # several solids (an ASCII file's rooms): one zone each
+            loaded, solid_names, solid_of = _joined_solids(loaded.get("geometry") or {})
     except Exception as e:  # trimesh raises many kinds for a broken file
         raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
     with np.errstate(invalid="ignore", over="ignore"):  # a broken file's garbage floats are sorted out below
@@ -533,6 +607,7 @@ def parse_stl(content: bytes) -> dict:
                for k in np.flatnonzero(~good)[:MAX_SKIPPED_LISTED]]
     if not good.all():
         triangles = triangles[good]
+        solid_of = solid_of[good] if solid_of is not None else None
     if len(triangles) == 0:
         raise reject(f"no usable triangle in the STL file (non-finite, beyond {MAX_COORDINATE:g} or repeated vertices)")
     if cut_binary:
@@ -540,6 +615,14 @@ def parse_stl(content: bytes) -> dict:
                          f"non-finite coordinates, coordinates beyond {MAX_COORDINATE:g} or repeated corners")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
+    if solid_of is not None and len(set(solid_of.tolist())) > 1:
+        # one zone per solid, as faces (a mesh is one zone): joined, two rooms were one zone named after the last
+        faces = [{"id": f"{solid_names[z]} t{k + 1}", "loops": [t], "zones": [solid_names[z]]}
+                 for k, (t, z) in enumerate(zip(triangles.tolist(), solid_of.tolist(), strict=True))]
+        return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
+                "source": {"format": "stl", "faces": len(faces), "zones": len(set(solid_of.tolist())),
+                           "solids": solid_names, "skipped": skipped, "skipped_count": int((~good).sum()),
+                           "warnings": warnings}}
     # the triangles as two arrays (faces t1, t2, …): a face object per triangle would cost a million of them
     used = np.zeros(len(vertices), dtype=bool)
     used[triangles] = True
@@ -549,6 +632,32 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _joined_solids(geometry: dict) -> tuple[dict, list[str], np.ndarray]:
+    """The solids of an ASCII STL (trimesh's ``geometry``: name → arrays) as one vertex and triangle array, the
+    solids' names (a repeated or blank name made unique, as zones must be) and each triangle's solid."""
+    names, vertices, triangles, solid_of, offset = [], [], [], [], 0
+    for k, (key, part) in enumerate(geometry.items()):
+        name = str((part.get("metadata") or {}).get("name") or key or "").strip() or f"solid {k + 1}"
+        names.append(name if name not in names else f"{name} ({k + 1})")
+        with np.errstate(invalid="ignore", over="ignore"):
+            points = np.asarray(part["vertices"], dtype=float).reshape(-1, 3)
+        corners = np.asarray(part["faces"], dtype=np.int64).reshape(-1, 3)
+        vertices.append(points)
+        triangles.append(corners + offset)
+        solid_of.append(np.full(len(corners), k))
+        offset += len(points)
+    if not triangles:
+        return {}, [], np.zeros(0, dtype=np.int64)
+    return ({"vertices": np.concatenate(vertices), "faces": np.concatenate(triangles)}, names,
+            np.concatenate(solid_of))
+
+
+def _is_text(sample: bytes) -> bool:
+    """Printable ASCII and line breaks only: no binary STL's triangles (float32 normals and corners hold NULs and high
+    bytes within a few facets)."""
+    return bool(sample) and not sample.translate(None, bytes(range(32, 127)) + b"\t\r\n")
 
 
 def _ascii_stl_from_utf16(content: bytes) -> bytes:
