@@ -23,13 +23,14 @@ loop) shows up as the residual left by :func:`constrained_lstsq`; the caller cut
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from plantsolve.solvers.alignment.dualquat import minimal_rotation, qmul, qrotate
-from plantsolve.solvers.alignment.kkt import constrained_lstsq
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_schur
 from plantsolve.solvers.alignment.model import Model, collinear_fittings
 from plantsolve.solvers.geometry import quaternion_to_rotvec, rotvec_to_quaternion
 
@@ -437,11 +438,14 @@ def scaled_cost(H: sp.spmatrix, sv: np.ndarray, lref: float) -> sp.csc_matrix:
     return Hs
 
 
-def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None) -> Pose:
+def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None,
+                 joint_on_lu: bool = False) -> Pose:
     """Both stages; ``budget`` caps the Gauss-Newton and refinement steps (the pose reached is returned);
-    ``step(message)`` at every step of either."""
+    ``step(message)`` at every step of either. ``joint_on_lu``: the joint stage's KKT systems all by the pivoted
+    LU (:func:`kkt.use_schur`), the rotation stage's as the caller's context has them."""
     q, k1 = solve_rotations(model, active, stiffness, budget=budget, step=step)
-    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step)
+    with use_schur(False) if joint_on_lu else contextlib.nullcontext():
+        st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step)
     P, D = st.geometry()
     return Pose(q=st.q, P=P, D=D, iterations=k1 + k2)
 
