@@ -56,7 +56,7 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
 
     def run(mode: str, budget: int, said: str):
         with use_schur(False) if mode == "LU" else contextlib.nullcontext():
-            return solve_direct(model, active, opts.pipe_stiffness, budget=budget, joint_on_lu=mode == "LDL^T/LU",
+            return solve_direct(model, active, opts.pipe_stiffness, budget=budget, feasibility_on_lu=mode == "LDL^T/LU",
                                 step=lambda message: st.tick(f"direct solve{said}: {message}{cuts}"))
 
     def replaced_by_lu(before: int):
@@ -113,14 +113,16 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
 
 
 def _after_cut_ends(model: Model, active: np.ndarray, pose, capped: bool) -> bool:
-    """Whether the pose of a round after a cut, its rotation stage solved on the LDL^T and its joint stage on the
-    LU (``LDL^T/LU``), is the answer: where it closes every connection and turns no pipe inside out.
+    """Whether the pose of a round after a cut, its rotation stage and the joint stage's steps with the cost solved on
+    the LDL^T, its feasibility steps on the LU (``LDL^T/LU``), is the answer: where it closes every connection and
+    turns no pipe inside out.
 
     Else the LU's pass of the round replaces it, and every round after is the LU's (a network cut more than once is
     cut as the all-LU path cuts it, bit for bit). A conflict's plateau is where Gauss-Newton stops running off along
     it, which round-off moves: on a 4 x 2 conflict grid the LDL^T/LU round's plateau took another cut than the LU's,
     its impacts clear of the tie width as far as :func:`cuts.settled_cut` asks. A closing round has no plateau: it
-    ends within 1.3e-6 mm of the LU's. Its joint stage stays on the LU: on the LDL^T its crawl near singular loops
+    ends within 1e-6 mm of the LU's (the LDL^T's steps are refined to the LU's solutions, and the feasibility steps,
+    the crawl of singular loops among them, are the LU's). With the feasibility steps on the LDL^T too the crawl
     ended 5.2e-3 mm from the LU's on a 5 x 3 conflict grid."""
     if capped:
         return False

@@ -69,7 +69,7 @@ def test_lu_and_ldl_cut_the_same_connections_and_put_every_port_at_the_same_plac
     # every cut is decided on the LU's pose (or one the LU's would cut alike), and a network cut more than once has
     # every round after its second cut solved on the LU: its answer is the all-LU one bit for bit (its loops close
     # at a singular point of their constraints, where the last feasibility steps crawl: solving the last round's
-    # joint stage on the LDL^T left one of these 5.3e-3 mm from the LU's answer)
+    # feasibility steps on the LDL^T left one of these 5.3e-3 mm from the LU's answer)
     req, ref = solved[name]
     with use_schur(False):
         lu = solve(req).result
@@ -78,7 +78,7 @@ def test_lu_and_ldl_cut_the_same_connections_and_put_every_port_at_the_same_plac
 
 def test_a_cut_the_ldl_pose_settles_skips_the_lu_pass_and_still_gives_the_lu_answer(solved):
     # the 30 mm conflict's impacts stand apart: the LDL^T round decides the cut and its LU reference pass is not run
-    # (the round counted); the round after it (rotation stage on the LDL^T, joint stage on the LU) ends on a
+    # (the round counted); the round after it (feasibility steps on the LU, the rest on the LDL^T) ends on a
     # conflict again, so the LU's pass of that round replaces it and every round after is the LU's
     req, ref = solved["5x3 valves, shifted 30 mm and turned"]
     rounds = ref.report.details["rounds"]
@@ -93,10 +93,10 @@ def test_a_cut_the_ldl_pose_settles_skips_the_lu_pass_and_still_gives_the_lu_ans
 
 
 @pytest.mark.parametrize("case", [straight_run_between_tie_ins, conflicting_tie_ins_and_a_free_branch])
-def test_the_round_after_a_single_cut_solves_its_rotations_on_the_ldl_and_gives_the_lu_answer(case):
-    # one cut closes these: the round after it keeps the LDL^T for its rotation stage (0.4 of the LU's CPU there)
-    # and solves its joint stage on the LU; it closes, so it is the answer, with the all-LU path's cut and its ports
-    # (measured: at most 1.6e-7 mm apart on plant-like networks cut once)
+def test_the_round_after_a_single_cut_keeps_the_ldl_but_for_its_feasibility_steps_and_gives_the_lu_answer(case):
+    # one cut closes these: the round after it keeps the LDL^T for its rotation stage and the steps with the cost
+    # and solves its feasibility steps on the LU; it closes, so it is the answer, with the all-LU path's cut and its
+    # ports (measured: at most 1e-6 mm apart on plant-like networks cut once)
     req = case()
     ref = solve(req).result
     assert [r["factorisation"] for r in ref.report.details["rounds"]] == ["LDL^T", "LDL^T/LU"]
