@@ -23,13 +23,14 @@ loop) shows up as the residual left by :func:`constrained_lstsq`; the caller cut
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from plantsolve.solvers.alignment.dualquat import minimal_rotation, qmul, qrotate
-from plantsolve.solvers.alignment.kkt import constrained_lstsq
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_schur
 from plantsolve.solvers.alignment.model import Model, collinear_fittings
 from plantsolve.solvers.geometry import quaternion_to_rotvec, rotvec_to_quaternion
 
@@ -210,7 +211,7 @@ class JointState:
 
 
 def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: float, max_gn: int = 25,
-                budget: int = 10**9, step=None) -> tuple[JointState, int]:
+                budget: int = 10**9, step=None, feasibility_on_lu: bool = False) -> tuple[JointState, int]:
     """Gauss-Newton over all poses and pipe lengths with exact port constraints (see module doc)."""
     n = model.n_comp
     st = JointState(model, q)
@@ -246,6 +247,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     best, first = (np.inf, None), np.inf
     snapped = min(model.snap_pos / pos_scale, float(np.min(model.snap_ang, initial=1.0)))  # relative, as err
     owner = _owners(var, free, nv)
+    switched = False  # feasibility steps on the LU have begun
     for it in range(max_gn):
         if step is not None:
             step(f"joint constrained Gauss-Newton, step {it + 1}")
@@ -288,14 +290,23 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
         locked |= short
         A, rhs = _joint_constraints(model, st, P, D, a, b, rp, rd, var, nv, locked, pos_scale)
         H, g = _joint_cost(model, st, P, var, nv, pipes, fits, w, w_rot, w_along, use_cost)
+        on_lu = feasibility_on_lu and not use_cost
+        if on_lu and not switched:
+            # Only the last factorisation is kept: the first feasibility steps refine on it, as the all-LU path's
+            # do on its LU (the Schur solve is refined to the same operator; a fresh LU there instead moved ports by
+            # up to 0.64 mm, the crawl's flat directions). The rest (block inverse, analysis, couplings) goes, so
+            # nothing of the LDL^T's is held once that factorisation is let go for the LU's (peak memory)
+            cache = {key: cache[key] for key in ("lu", "shape") if key in cache}
+            switched = True
         cache["reuse"] = not use_cost and not np.any(short)
         # solve in lengths of lref (x = sv * y) and cost / lref^2: every entry O(1) whatever the units
         Hs = scaled_cost(H, sv, model.lref)
         As = (A @ sp.diags(sv)).tocsr()
         del A, H  # only the scaled copies are needed from here (peak memory: never both held into the solve)
-        y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
-                                    max_iter=min(8 if use_cost else 30, budget - steps), cache=cache,
-                                    owner=owner)
+        with use_schur(False) if on_lu else contextlib.nullcontext():
+            y, _, k = constrained_lstsq(Hs, sv * g / model.lref**2, As, lambda y: rhs - As @ y, stop=1e-20,
+                                        max_iter=min(8 if use_cost else 30, budget - steps), cache=cache,
+                                        owner=owner)
         Hs = As = None  # else held while the next step builds its own
         x = sv * y
         steps += k
@@ -437,11 +448,15 @@ def scaled_cost(H: sp.spmatrix, sv: np.ndarray, lref: float) -> sp.csc_matrix:
     return Hs
 
 
-def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None) -> Pose:
+def solve_direct(model: Model, active: np.ndarray, stiffness: float, budget: int = 10**9, step=None,
+                 feasibility_on_lu: bool = False) -> Pose:
     """Both stages; ``budget`` caps the Gauss-Newton and refinement steps (the pose reached is returned);
-    ``step(message)`` at every step of either."""
+    ``step(message)`` at every step of either. ``feasibility_on_lu``: the joint stage's feasibility steps (those
+    after the steps with the cost, the crawl near singular loops among them) solve their KKT systems by the
+    pivoted LU (:func:`kkt.use_schur`); the other steps as the caller's context has them."""
     q, k1 = solve_rotations(model, active, stiffness, budget=budget, step=step)
-    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step)
+    st, k2 = solve_joint(model, active, q, stiffness, budget=max(budget - k1, 0), step=step,
+                         feasibility_on_lu=feasibility_on_lu)
     P, D = st.geometry()
     return Pose(q=st.q, P=P, D=D, iterations=k1 + k2)
 

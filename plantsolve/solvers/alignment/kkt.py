@@ -29,18 +29,19 @@ elimination is then off by up to 1e-2 of the step where the LU is not. The Gauss
 built on the two followed different paths along the loops' flat directions and ended up to
 3.5e-4 mm apart (1.3e-4 mm on the 10,000-component plant-like bench network). Each Schur solve
 is therefore refined on the same regularised matrix (:class:`SchurSolve`), which gives the LU's
-solution back: the sequences then end 1e-7 mm apart on plant-like networks, 3e-11 mm on loop grids.
+solution back: the sequences then end up to 1e-5 mm apart on plant-like networks (3.3e-8 to 6.8e-6 mm at 5,000
+to 20,000 components), 3e-11 mm on loop grids.
 Where that refinement does not converge (at a singular point one elimination can be off by more than
 the step itself), the system and its later right-hand sides go to the pivoted LU of the regularised
 matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
 0.8 of its memory on plant-like networks of 10,000 and 100,000 (with one analysis per sequence: 0.78-0.87
-and 0.82 in three and one runs). Where a connection has to be cut, the rounds after the cut run on the LU
-and the cut is the LU's (solve.py): decided on the LDL^T round's pose where that settles it
-(cuts.settled_cut), else on an LU pass (measured: 0.84-0.90 times the LU's time on the 40,000-component
-plant-like network, which needs one cut, in three runs; 1.19 in one run with an LU pass always). The
-round after the cut is most of it and is the LU's in both: the README's alignment section has the sums.
+and 0.82 in three and one runs). Where a connection has to be cut, the cut is the LU's (solve.py): decided on
+the LDL^T round's pose where that settles it (cuts.settled_cut), else on an LU pass; the round after the first
+cut solves its feasibility steps on the LU and the rest here, the rounds after a second cut are all the
+LU's (2026-11-29: 0.70-0.77 of the LU's time on the 40,000-component network in three runs, 0.87-0.90 before).
+The round after the cut is most of a cut network's time: the README's alignment section has the sums.
 Another run on a machine loaded several times over (CPU seconds then vary by 10-20 % between runs of one code):
 plant-like 4,839 / 9,965 / 19,365 / 39,867 components 0.98 / 0.80 / 0.76 / 0.87 of the LU's CPU time and
 0.78 / 0.73 / 0.66 / 0.98 of its peak memory, the 39,867-component network's round after its cut 47 of 65 s.

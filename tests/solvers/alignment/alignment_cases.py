@@ -90,3 +90,25 @@ def route(points, radius=50.0, bend_radius=None, perturb=(0.0, 0.0, 0.0, 0.0), s
     if end_flanges:
         add("F-end", "fitting", [(pts[-1], -u[-1]), (pts[-1] + flange_len * u[-1], u[-1])], "flange", fixed=fixed_ends[1])
     return comps, conns
+
+
+SCAN_NOISE = (2.0, 0.3, 6.0, 1.5)  # pipes mm, deg; fittings mm, deg
+
+
+def straight_run_between_tie_ins():
+    # symmetric: the 10 mm offset is spread evenly over the run's two end connections, an exact tie
+    comps, conns = route([[0, 0, 0], [6000, 0, 0]], perturb=SCAN_NOISE, seed=3, fixed_ends=(True, True))
+    for p in comps[-1]["ports"]:
+        p["position"][1] += 10.0
+    return request(comps, conns, method="direct", max_iterations=200)
+
+
+def conflicting_tie_ins_and_a_free_branch():
+    e1 = elbow("E1", [0, 0, 0], [0, -1, 0], [1, 0, 0], fixed=True)
+    e2 = elbow("E2", [2000, 5.0, 0], [-1, 0, 0], [0, 1, 0], fixed=True)
+    comps = [e1, e2, pipe("P", [151.0, 0.8, -0.5], [1849.0, 3.0, 0.7]), pipe("Q", [0, -150, 0], [0, -1150, 0]),
+             elbow("E3", [0, -1300, 0], [0, 1, 0], [1, 0, 0], shift=(1.0, -2.0, 0.5), rot=[0, 0, 0.01]),
+             pipe("R", [150, -1300, 0], [1150, -1300, 0])]
+    conns = [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0), conn("E1", 0, "Q", 0), conn("Q", 1, "E3", 0),
+             conn("E3", 1, "R", 0)]
+    return request(comps, conns, method="direct")

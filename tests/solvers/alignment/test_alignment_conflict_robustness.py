@@ -12,28 +12,7 @@ from plantsolve.solvers.alignment.cuts import choose_cut, tie_width
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 
-from alignment_cases import conn, elbow, pipe, request, route
-
-NOISE = (2.0, 0.3, 6.0, 1.5)
-
-
-def _straight_run_between_tie_ins():
-    # symmetric: the 10 mm offset is spread evenly over the run's two end connections, an exact tie
-    comps, conns = route([[0, 0, 0], [6000, 0, 0]], perturb=NOISE, seed=3, fixed_ends=(True, True))
-    for p in comps[-1]["ports"]:
-        p["position"][1] += 10.0
-    return request(comps, conns, method="direct", max_iterations=200)
-
-
-def _conflicting_tie_ins_and_a_free_branch():
-    e1 = elbow("E1", [0, 0, 0], [0, -1, 0], [1, 0, 0], fixed=True)
-    e2 = elbow("E2", [2000, 5.0, 0], [-1, 0, 0], [0, 1, 0], fixed=True)
-    comps = [e1, e2, pipe("P", [151.0, 0.8, -0.5], [1849.0, 3.0, 0.7]), pipe("Q", [0, -150, 0], [0, -1150, 0]),
-             elbow("E3", [0, -1300, 0], [0, 1, 0], [1, 0, 0], shift=(1.0, -2.0, 0.5), rot=[0, 0, 0.01]),
-             pipe("R", [150, -1300, 0], [1150, -1300, 0])]
-    conns = [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0), conn("E1", 0, "Q", 0), conn("Q", 1, "E3", 0),
-             conn("E3", 1, "R", 0)]
-    return request(comps, conns, method="direct")
+from alignment_cases import conflicting_tie_ins_and_a_free_branch, straight_run_between_tie_ins
 
 
 def _loop_grid_with_a_turned_tie_in():
@@ -60,7 +39,7 @@ def _outcome(req: AlignmentRequest, res) -> tuple[set, dict]:
     return cuts, {c.id: np.array([p.position for p in c.ports]) for c in res.components}
 
 
-@pytest.mark.parametrize("case", [_straight_run_between_tie_ins, _conflicting_tie_ins_and_a_free_branch,
+@pytest.mark.parametrize("case", [straight_run_between_tie_ins, conflicting_tie_ins_and_a_free_branch,
                                   _loop_grid_with_a_turned_tie_in])
 def test_conflicts_are_cut_the_same_whatever_the_input_order(case):
     req = case()
@@ -75,7 +54,7 @@ def test_conflicts_are_cut_the_same_whatever_the_input_order(case):
 
 
 def test_impacts_within_the_snapped_residue_are_ties():
-    req = _straight_run_between_tie_ins()
+    req = straight_run_between_tie_ins()
     model = build_model(req)
     k = model.n_conn
     ang = np.zeros(k)
