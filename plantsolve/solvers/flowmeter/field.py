@@ -18,7 +18,7 @@ from scipy.interpolate import RegularGridInterpolator
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
-from plantsolve.solvers.flowmeter.field_points import PointsNotAGrid, place_on_grid
+from plantsolve.solvers.flowmeter.field_points import PlacedField, PointsNotAGrid, place_on_grid
 
 B_MAX = 100.0  # tesla, as the schema holds a grid's values
 FILE = ("options", "magnetic_field_file")
@@ -40,14 +40,14 @@ class RequestField:
     description: str
 
 
-def _placed(rows: np.ndarray, where) -> tuple:
-    """Rows on their grid; ``where(row)`` names a row in an error."""
+def _placed(rows: np.ndarray, where, label) -> PlacedField:
+    """Rows on their grid; ``where(row, message)`` is the error naming a row, ``label(row)`` a row in a message."""
     too_strong = np.flatnonzero(np.any(np.abs(rows[:, 3:]) > B_MAX, axis=1))
     if len(too_strong):
         raise InputRejected(where(int(too_strong[0]), f"|B| above {B_MAX:g} T ({', '.join(f'{v:g}' for v in rows[too_strong[0], 3:])}): "
                                                       "no magnet makes it (a field in gauss or mT read as tesla?)"))
     try:
-        return place_on_grid(rows)
+        return place_on_grid(rows, label)
     except PointsNotAGrid as exc:
         raise InputRejected(where(exc.row, str(exc))) from None
 
@@ -70,7 +70,7 @@ def request_field(request: FlowmeterRequest) -> RequestField | None:
         def where(row, msg):
             return FieldError(FILE, msg if row is None else f"line {int(table.lines[row])}: {msg}")
 
-        placed = _placed(table.rows, where)
+        placed = _placed(table.rows, where, lambda row: f"line {int(table.lines[row])}")
         return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, FILE, table.conversions,
                             table.length_unit is not None and table.field_unit is not None, table.description)
     if f.type == "points":
@@ -84,7 +84,7 @@ def request_field(request: FlowmeterRequest) -> RequestField | None:
         def where(row, msg):
             return FieldError(POINTS if row is None else (*POINTS, row), msg)
 
-        placed = _placed(np.asarray(f.points, dtype=float), where)
+        placed = _placed(np.asarray(f.points, dtype=float), where, lambda row: f"points[{row}]")
         return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, POINTS, [], True,
                             f"points, {len(f.points)} rows")
     if f.type == "grid":

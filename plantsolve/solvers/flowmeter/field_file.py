@@ -70,7 +70,7 @@ def _delimiter(line: str) -> str | None:
 
 def read_field_file(text: str, units: str) -> FieldTable:
     """The rows of a field file, converted to the request's ``units`` and tesla."""
-    lines = text.splitlines()
+    lines = text.lstrip("\ufeff").splitlines()  # a byte-order mark a Windows tool left before the first line
     meta: dict[str, str] = {}
     header: tuple[int, str] | None = None
     comsol = False

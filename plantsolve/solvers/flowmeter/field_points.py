@@ -72,9 +72,10 @@ def _stray_line(name: str, lines: np.ndarray, index: np.ndarray, tolerance: floa
     return None
 
 
-def place_on_grid(rows: np.ndarray) -> PlacedField:
+def place_on_grid(rows: np.ndarray, label=lambda row: f"row {row}") -> PlacedField:
     """Rows (n, 5 or 6) of x, y, z, bx, by[, bz] on their rectilinear grid; raises :class:`PointsNotAGrid`
-    naming a row (a point off the grid lines, a point given twice with other values) or a missing grid point."""
+    naming a row (a point off the grid lines, a point given twice with other values) or a missing grid point.
+    ``label(row)`` names another row in a message (a file's line)."""
     coordinates = rows[:, :3]
     extent = float(np.max(np.ptp(coordinates, axis=0))) if len(rows) else 0.0
     tolerance = LINE_TOLERANCE * max(extent, 1e-300)
@@ -107,7 +108,7 @@ def place_on_grid(rows: np.ndarray) -> PlacedField:
         pairs = sorted((max(int(a), int(b)), min(int(a), int(b))) for a, b in zip(order[differ], group_first[differ]))
         later, earlier = pairs[0]
         point = ", ".join(f"{v:g}" for v in rows[later, :3])
-        raise PointsNotAGrid(f"the point ({point}) is also row {earlier}, with another value: which is meant is not "
+        raise PointsNotAGrid(f"the point ({point}) is also {label(earlier)}, with another value: which is meant is not "
                              "known", later)
     unique = ordered[first_of]
     if len(unique) != int(np.prod(shape)):
