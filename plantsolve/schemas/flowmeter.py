@@ -153,7 +153,10 @@ class FlowmeterRequest(StrictModel):
     pipe: Pipe
     electrodes: Electrodes = Field(default_factory=Electrodes)
     magnetic_field: Annotated[UniformField | GridField | PointsField, Field(discriminator="type")] = Field(
-        default_factory=lambda: UniformField(type="uniform"))
+        default_factory=lambda: UniformField(type="uniform"),
+        description="'uniform' along +y; 'grid': a flat list per component in C order (x slowest); 'points': rows "
+        "of coordinates and values in any order, the form that needs no order. An FE tool's export goes in "
+        "options.magnetic_field_file instead.")
     velocity: Velocity = Field(default_factory=Velocity)
     reynolds: list[Annotated[float, Field(allow_inf_nan=False, gt=0, le=1e9)]] = Field(
         default_factory=list, max_length=1000,
