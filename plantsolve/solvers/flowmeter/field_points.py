@@ -38,7 +38,6 @@ class PlacedField:
     z: np.ndarray
     bx: np.ndarray  # (nx, ny, nz)
     by: np.ndarray
-    bz: np.ndarray | None
 
 
 def _grid_lines(values: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
@@ -121,5 +120,4 @@ def place_on_grid(rows: np.ndarray, label=lambda row: f"row {row}") -> PlacedFie
     grid = np.empty((int(np.prod(shape)), values.shape[1]))
     grid[ordered[first_of]] = values[order[first_of]]
     grid = grid.reshape(*shape, values.shape[1])
-    return PlacedField(lines[0], lines[1], lines[2], grid[..., 0], grid[..., 1],
-                       grid[..., 2] if values.shape[1] > 2 else None)
+    return PlacedField(lines[0], lines[1], lines[2], grid[..., 0], grid[..., 1])  # B_z does not enter U

@@ -69,7 +69,7 @@ def test_points_in_any_order_give_the_grid_s_to_the_last_bit(grid_sensitivity):
 @settings(max_examples=25, deadline=None)
 @given(st.randoms(use_true_random=False))
 def test_placing_shuffled_rows_gives_the_same_grid_bit_for_bit(random):
-    (x, y, z), rows = field((4, 3, 5))
+    (x, _, z), rows = field((4, 3, 5))
     order = list(range(len(rows)))
     random.shuffle(order)
     placed = place_on_grid(rows[order])
@@ -116,11 +116,11 @@ def comsol_export(rows: np.ndarray, length_unit: str, field_unit: str) -> str:
     head = ["% Model:              magnet.mph", "% Version:            COMSOL 6.1.0.252",
             "% Date:               Nov 29 2026, 10:12", "% Dimension:          3",
             f"% Nodes:              {len(rows)}", "% Expressions:        3",
-            "% Description:        Magnetic flux density, x-component, Magnetic flux density, y-component, "
-            "Magnetic flux density, z-component",
+            ("% Description:        Magnetic flux density, x-component, Magnetic flux density, y-component, "
+             "Magnetic flux density, z-component"),
             f"% Length unit:        {length_unit}",
-            f"% x                       y                        z                        mf.Bx ({field_unit})"
-            f"                mf.By ({field_unit})                mf.Bz ({field_unit})"]
+            (f"% x                       y                        z                        mf.Bx ({field_unit})"
+             f"                mf.By ({field_unit})                mf.Bz ({field_unit})")]
     body = ["  ".join(f"{v:.17g}" for v in (*row, 0.0)) for row in rows]
     return "\n".join(head + body) + "\n"
 
