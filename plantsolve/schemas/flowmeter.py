@@ -72,19 +72,36 @@ class UniformField(StrictModel):
 class GridField(StrictModel):
     """B on a rectilinear grid (from the magnet's finite-element model), trilinearly interpolated.
 
-    ``bx``, ``by``, ``bz`` hold one value per grid point in C order: the value at (x[i], y[j], z[k])
-    is at index (i * len(y) + j) * len(z) + k. The grid must cover the liner section
-    (|x|, |y| <= R, |z| <= L/2). S is normalised by B_y at the pipe centre.
+    ``bx``, ``by``, ``bz`` hold one value per grid point in C order (x slowest, z fastest): the value at
+    (x[i], y[j], z[k]) is at index (i * len(y) + j) * len(z) + k. A tool that writes x fastest (MATLAB,
+    numpy's order='F', COMSOL's grid export) gives another field that no check can tell apart when the axes
+    are equally long: give such a field as ``points`` (each value with its coordinates), which has no order.
+    The grid must cover the liner section (|x|, |y| <= R, |z| <= L/2). S is normalised by B_y at the pipe centre.
     """
 
     type: Literal["grid"]
     x: list[Measured] = Field(min_length=2, max_length=400, description="Grid x coordinates, increasing (units).")
     y: list[Measured] = Field(min_length=2, max_length=400, description="Grid y coordinates, increasing (units).")
     z: list[Measured] = Field(min_length=2, max_length=400, description="Grid z coordinates, increasing (units).")
-    bx: list[Tesla] = Field(max_length=2_000_000, description="B_x in tesla per grid point (C order).")
+    bx: list[Tesla] = Field(max_length=2_000_000, description="B_x in tesla per grid point, C order: x slowest, z "
+                            "fastest (index (i * len(y) + j) * len(z) + k); a field in another order is "
+                            "given as type 'points', which needs none.")
     by: list[Tesla] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
     bz: list[Tesla] | None = Field(default=None, max_length=2_000_000,
                                    description="B_z per grid point; it does not enter U (the flow is axial).")
+
+
+class PointsField(StrictModel):
+    """B at points, each row its coordinates and its value: the form FE tools export (a table of x, y, z, B_x,
+    B_y[, B_z]), in any row order. The points must make a complete rectilinear grid (every combination of the
+    x, y and z lines given once; a point given twice with the same value is kept once); they are placed on it by
+    their coordinates and trilinearly interpolated, as the ``grid`` form."""
+
+    type: Literal["points"]
+    points: list[list[Measured]] = Field(
+        min_length=8, max_length=1_000_000,
+        description="Rows [x, y, z, bx, by] or [x, y, z, bx, by, bz]: coordinates in the request's units, B in "
+        "tesla (|B| <= 100 T), in any order; together a complete rectilinear grid covering the liner section.")
 
 
 class Velocity(StrictModel):
@@ -103,6 +120,10 @@ class Velocity(StrictModel):
         default=None, max_length=100_000, description="Axial velocity (m/s) at each sample point, |v| <= 1000 m/s.")
 
 
+# the text of a field file: a 61 x 61 x 81 grid written at full precision by COMSOL is about 40 MB
+MAGNETIC_FIELD_FILE_MAX = 50_000_000
+
+
 class FlowmeterOptions(StrictModel):
     method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
         default="auto",
@@ -117,14 +138,25 @@ class FlowmeterOptions(StrictModel):
     probe_points: list[list[Measured]] = Field(
         default_factory=list, max_length=10_000,
         description="Points [x, y] (or [x, y, z]; z is ignored, W is z-integrated) where W is reported.")
+    magnetic_field_file: str | None = Field(
+        default=None, min_length=1, max_length=MAGNETIC_FIELD_FILE_MAX,
+        description="The magnetic field as the text of a file an FE tool exports, instead of `magnetic_field`: "
+        "COMSOL's spreadsheet export ('% Length unit: mm' and '% x y z mf.Bx (T) mf.By (T) mf.Bz (T)' header "
+        "lines, then rows) or a CSV whose header names the columns x, y, z, Bx, By[, Bz] with units "
+        "('x [mm]', 'Bx [mT]'; T, mT, uT, G; lengths m, cm, mm, um, in, ft; converted to the request's units and "
+        "tesla, and said). Rows in any order, together a complete rectilinear grid (as type 'points'); a header "
+        "without units is read in the request's units and tesla.")
 
 
 class FlowmeterRequest(StrictModel):
     units: Units = "mm"
     pipe: Pipe
     electrodes: Electrodes = Field(default_factory=Electrodes)
-    magnetic_field: Annotated[UniformField | GridField, Field(discriminator="type")] = Field(
-        default_factory=lambda: UniformField(type="uniform"))
+    magnetic_field: Annotated[UniformField | GridField | PointsField, Field(discriminator="type")] = Field(
+        default_factory=lambda: UniformField(type="uniform"),
+        description="'uniform' along +y; 'grid': a flat list per component in C order (x slowest); 'points': rows "
+        "of coordinates and values in any order, the form that needs no order. An FE tool's export goes in "
+        "options.magnetic_field_file instead.")
     velocity: Velocity = Field(default_factory=Velocity)
     reynolds: list[Annotated[float, Field(allow_inf_nan=False, gt=0, le=1e9)]] = Field(
         default_factory=list, max_length=1000,

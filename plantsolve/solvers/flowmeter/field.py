@@ -1,4 +1,6 @@
-"""The magnetic field: uniform along +y, or a user's grid (trilinear interpolation).
+"""The magnetic field: uniform along +y, or a user's grid (trilinear interpolation): given as a flat grid
+(C order), as points with their values, or as the text of an FE tool's export (modules field_points,
+field_file).
 
 With W_z = B_x j_y - B_y j_x and j = -grad(phi), the weight is B_y phi_x - B_x phi_y; for a
 current that does not vary along z (electrodes along the whole liner) only the z-average of B
@@ -14,6 +16,83 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
+from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
+from plantsolve.solvers.flowmeter.field_points import PlacedField, PointsNotAGrid, place_on_grid
+
+B_MAX = 100.0  # tesla, as the schema holds a grid's values
+FILE = ("options", "magnetic_field_file")
+POINTS = ("magnetic_field", "points")
+
+
+@dataclass
+class RequestField:
+    """The request's field on its rectilinear grid, in the request's units and tesla."""
+
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    bx: np.ndarray  # (nx, ny, nz)
+    by: np.ndarray
+    loc: tuple[str, ...]  # the request's field that gave it, for errors
+    conversions: list[dict]
+    units_stated: bool  # False for a file whose header gives no units (read as the request's units and tesla)
+    description: str
+
+
+def _placed(rows: np.ndarray, where, label) -> PlacedField:
+    """Rows on their grid; ``where(row, message)`` is the error naming a row, ``label(row)`` a row in a message."""
+    too_strong = np.flatnonzero(np.any(np.abs(rows[:, 3:]) > B_MAX, axis=1))
+    if len(too_strong):
+        raise InputRejected(where(int(too_strong[0]), f"|B| above {B_MAX:g} T ({', '.join(f'{v:g}' for v in rows[too_strong[0], 3:])}): "
+                                                      "no magnet makes it (a field in gauss or mT read as tesla?)"))
+    try:
+        return place_on_grid(rows, label)
+    except PointsNotAGrid as exc:
+        raise InputRejected(where(exc.row, str(exc))) from None
+
+
+def request_field(request: FlowmeterRequest) -> RequestField | None:
+    """The request's field on its grid, or None for a uniform field. Raises :class:`InputRejected` naming the
+    field (and the row or line) when points or a file do not make a complete grid. The flat ``grid`` form is
+    taken as checked (``validation.grid_errors``)."""
+    f = request.magnetic_field
+    text = request.options.magnetic_field_file
+    if text is not None:
+        if "magnetic_field" in request.model_fields_set:
+            raise InputRejected(FieldError(FILE, "the field is given twice, as magnetic_field and as this file: "
+                                                 "give one"))
+        try:
+            table = read_field_file(text, request.units)
+        except FieldFileError as exc:
+            raise InputRejected(FieldError(FILE, str(exc))) from None
+
+        def where(row, msg):
+            return FieldError(FILE, msg if row is None else f"line {int(table.lines[row])}: {msg}")
+
+        placed = _placed(table.rows, where, lambda row: f"line {int(table.lines[row])}")
+        return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, FILE, table.conversions,
+                            table.length_unit is not None and table.field_unit is not None, table.description)
+    if f.type == "points":
+        bad = [k for k, row in enumerate(f.points) if len(row) not in (5, 6)]
+        if bad:
+            raise InputRejected(FieldError((*POINTS, bad[0]), f"a row is [x, y, z, bx, by] or [x, y, z, bx, by, bz]; "
+                                                              f"got {len(f.points[bad[0]])} numbers"))
+        if len({len(row) for row in f.points}) > 1:
+            raise InputRejected(FieldError(POINTS, "some rows give bz, some not: give it in every row or in none"))
+
+        def where(row, msg):
+            return FieldError(POINTS if row is None else (*POINTS, row), msg)
+
+        placed = _placed(np.asarray(f.points, dtype=float), where, lambda row: f"points[{row}]")
+        return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, POINTS, [], True,
+                            f"points, {len(f.points)} rows")
+    if f.type == "grid":
+        shape = (len(f.x), len(f.y), len(f.z))
+        return RequestField(*(np.asarray(v, dtype=float) for v in (f.x, f.y, f.z)),
+                            np.asarray(f.bx, dtype=float).reshape(shape), np.asarray(f.by, dtype=float).reshape(shape),
+                            ("magnetic_field",), [], True, "grid (C order)")
+    return None
 
 
 @dataclass
@@ -51,15 +130,14 @@ class FieldGrid:
         return average
 
 
-def field_grid(request: FlowmeterRequest) -> FieldGrid | None:
-    """The request's grid field in radius units, or None for a uniform field."""
-    f = request.magnetic_field
-    if f.type != "grid":
+def field_grid(request: FlowmeterRequest, given: RequestField | None = None) -> FieldGrid | None:
+    """The request's grid field in radius units (``given``: its :func:`request_field`, if read), or None for a
+    uniform field."""
+    f = given if given is not None else request_field(request)
+    if f is None:
         return None
     radius = request.pipe.radius
-    x, y, z = (np.asarray(v, dtype=float) / radius for v in (f.x, f.y, f.z))
-    shape = (len(x), len(y), len(z))
-    bx = np.asarray(f.bx, dtype=float).reshape(shape)
-    by = np.asarray(f.by, dtype=float).reshape(shape)
+    x, y, z = (v / radius for v in (f.x, f.y, f.z))
+    bx, by = f.bx, f.by
     reference = float(RegularGridInterpolator((x, y, z), by)([[0.0, 0.0, 0.0]])[0])
     return FieldGrid(x, y, z, bx / reference, by / reference, reference)

@@ -20,7 +20,7 @@ from plantsolve.schemas.common import Diagnostic, Report
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult, LinearityPoint
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.flowmeter import fem, grid_weight, integral_equation, integral_equation_button, profiles, weight2d
-from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid
+from plantsolve.solvers.flowmeter.field import FieldGrid, field_grid, request_field
 from plantsolve.solvers.flowmeter.plausibility import METRES, request_warnings, signal_warnings
 from plantsolve.solvers.flowmeter.validation import meter_shape
 
@@ -293,10 +293,10 @@ def integral_equation_in_grid(solution, grid: FieldGrid, current: np.ndarray, mo
                         "field_z_truncation": truncation, "model": model + ", in the grid field (z modes of B)"})
 
 
-def virtual_current(request: FlowmeterRequest, progress: Progress) -> WeightField:
-    """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function."""
+def virtual_current(request: FlowmeterRequest, progress: Progress, grid: FieldGrid | None = None) -> WeightField:
+    """Sections 1-3: the virtual current of the electrodes, as its cross-section weight function (``grid``: the
+    request's field on its grid, if not uniform)."""
     g = meter_shape(request)
-    grid = field_grid(request)
     average = None if grid is None else grid.liner_average(g.half_liner)
     method = request.options.method
     if g.button is not None:
@@ -380,14 +380,15 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
     """The job on a checked request (``check_input``)."""
     g = meter_shape(request)
     radius = request.pipe.radius
+    given = request_field(request)
+    grid = field_grid(request, given)
     progress(0.05, "virtual current")
-    field = virtual_current(request, progress)
+    field = virtual_current(request, progress, grid)
     progress(0.85, "weight function integrals: the request's profile")
     velocity, profile, notes = velocity_function(request)
     s, mean = sensitivity(field, velocity)
     progress(0.9, "probes, the weight-function grid and the linearity curve")
     mean_velocity = request.velocity.mean if profile != "samples" else mean
-    grid = field_grid(request)
     b = request.magnetic_field.magnitude if grid is None else grid.reference
     signal = 2 * radius * METRES[request.units] * b * mean_velocity * s
     probes = []
@@ -404,11 +405,14 @@ def solve(request: FlowmeterRequest, progress: Progress = no_progress) -> Solved
     current = [[float(np.degrees(t)), float(j)] for t, j in field.electrode_current]
     current_map = [] if field.current_map is None else [
         [float(np.degrees(t)), float(z * radius), float(j)] for t, z, j in field.current_map]
-    notes = (request_warnings(request, b, mean if profile == "samples" else None) + notes
+    notes = (request_warnings(request, b, mean if profile == "samples" else None, given) + notes
              + signal_warnings(signal, request))
     source = {"conversions": [{"quantity": "length", "from_unit": request.units, "to_unit": "m",
                                "factor": METRES[request.units], "basis": "request",
-                               "used_for": "the signal U = 2 R B v_mean S (R in metres)"}]}
+                               "used_for": "the signal U = 2 R B v_mean S (R in metres)"}]
+              + ([] if given is None else given.conversions)}
+    if given is not None:
+        source["magnetic_field"] = given.description
     progress(1.0, "done")
     return Solved(FlowmeterResult(
         sensitivity=s, sensitivity_first_order=first_order, signal=signal, signal_mv=signal * 1e3,

@@ -10,6 +10,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.flowmeter.field import request_field
 from plantsolve.solvers.flowmeter.integral_equation import feasible
 from plantsolve.solvers.flowmeter.integral_equation_button import feasible as feasible_button
 from plantsolve.solvers.flowmeter.plausibility import METRES
@@ -108,7 +109,7 @@ def check_input(request: FlowmeterRequest) -> None:
         elif not np.hypot(p[0], p[1]) < radius:
             errors.append(FieldError(("options", "probe_points", k),
                                      f"({p[0]:g}, {p[1]:g}) is not inside the pipe (radius {radius:g})"))
-    if request.magnetic_field.type == "grid":
+    if request.magnetic_field.type in ("grid", "points") or request.options.magnetic_field_file is not None:
         errors += grid_errors(request, liner)
     v = request.velocity
     if v.type == "samples":
@@ -160,35 +161,54 @@ def button_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
 
 
 def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
+    """A field on a grid (flat, points or a file): a grid the solver can read, covering the liner section, with a
+    B_y at the centre to normalise by."""
     f = request.magnetic_field
     radius = request.pipe.radius
     if request.electrodes.shape == "point":
-        return [FieldError(("magnetic_field", "type"),
-                           "a grid field needs the 3-D virtual current, computed for patches and buttons only; "
-                           "point electrodes take a uniform field")]
+        loc = ("options", "magnetic_field_file") if request.options.magnetic_field_file is not None else ("magnetic_field", "type")
+        return [FieldError(loc, "a field on a grid needs the 3-D virtual current, computed for patches and buttons only; "
+                                "point electrodes take a uniform field")]
+    if f.type == "grid" and request.options.magnetic_field_file is None:
+        errors = flat_grid_errors(request)
+        if errors:
+            return errors
+    try:
+        field = request_field(request)
+    except InputRejected as exc:
+        return list(exc.errors)
     errors = []
     for name, reach in (("x", radius), ("y", radius), ("z", liner / 2)):
-        axis = np.asarray(getattr(f, name), dtype=float)
-        if np.any(np.diff(axis) <= 0):
+        axis = getattr(field, name)
+        if axis[0] > -reach * (1 - 1e-9) or axis[-1] < reach * (1 - 1e-9):
+            loc = ("magnetic_field", name) if field.loc == ("magnetic_field",) else field.loc
+            hint = "" if field.units_stated else (f"; the file's header states no length unit, so its coordinates are "
+                                                  f"read in the request's units ('{request.units}')")
+            errors.append(FieldError(loc, f"the grid spans {name} = {axis[0]:g}..{axis[-1]:g} and does not cover the pipe "
+                                          f"(-{reach:g}..{reach:g}{' along the liner' if name == 'z' else ''}, "
+                                          f"{request.units}){hint}"))
+    if errors:
+        return errors
+    centre = RegularGridInterpolator((field.x, field.y, field.z), field.by)([[0.0, 0.0, 0.0]])[0]
+    if not abs(centre) > 1e-12 * max(float(np.max(np.abs(field.by))), 1e-300):
+        loc = ("magnetic_field", "by") if field.loc == ("magnetic_field",) else field.loc
+        errors.append(FieldError(loc, "B_y at the pipe centre is zero; S is normalised by it (B along +y)"))
+    return errors
+
+
+def flat_grid_errors(request: FlowmeterRequest) -> list[FieldError]:
+    """The flat grid form: increasing axes and one value per grid point."""
+    f = request.magnetic_field
+    errors = []
+    for name in ("x", "y", "z"):
+        if np.any(np.diff(np.asarray(getattr(f, name), dtype=float)) <= 0):
             errors.append(FieldError(("magnetic_field", name), "grid coordinates must increase strictly"))
-        elif axis[0] > -reach * (1 - 1e-9) or axis[-1] < reach * (1 - 1e-9):
-            errors.append(FieldError(("magnetic_field", name),
-                                     f"the grid spans {axis[0]:g}..{axis[-1]:g} and does not cover the pipe "
-                                     f"(-{reach:g}..{reach:g} {'along the liner' if name == 'z' else ''})".rstrip()))
     count = len(f.x) * len(f.y) * len(f.z)
     for name in ("bx", "by", "bz"):
         values = getattr(f, name)
         if values is not None and len(values) != count:
             errors.append(FieldError(("magnetic_field", name),
                                      f"{len(values)} values for a {len(f.x)} x {len(f.y)} x {len(f.z)} grid ({count} points)"))
-    if errors:
-        return errors
-    x, y, z = (np.asarray(getattr(f, n), dtype=float) for n in ("x", "y", "z"))
-    by = np.asarray(f.by, dtype=float).reshape(len(x), len(y), len(z))
-    centre = RegularGridInterpolator((x, y, z), by)([[0.0, 0.0, 0.0]])[0]
-    if not abs(centre) > 1e-12 * max(float(np.max(np.abs(by))), 1e-300):
-        errors.append(FieldError(("magnetic_field", "by"),
-                                 "B_y at the pipe centre is zero; S is normalised by it (B along +y)"))
     return errors
 
 
