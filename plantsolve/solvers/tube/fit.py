@@ -768,11 +768,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
-             f_scale: float | None = None):
+             f_scale: float | None = None, max_nfev: int | None = None):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
     (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``. With ``f_scale`` (the soft-L1
     scale :func:`levenberg_marquardt` weights by) a large scan's residuals come with the normal equations at the
-    same point, one pass over the samples instead of two."""
+    same point, one pass over the samples instead of two; with ``max_nfev`` (its evaluation limit) the last
+    evaluation it may make comes without them."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -818,6 +819,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # are the very numbers ``_soft_l1`` gives over all samples); a rejected trial's sums are wasted, a
     # quarter of the evaluations
     fused = f_scale is not None and not keep_terms
+    # :func:`levenberg_marquardt` evaluates at most ``max_nfev`` times and forms no normal equations after its last
+    # evaluation: that one's sums (three quarters of an evaluation of a large scan) are left out
+    evaluations = [0]
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
     plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
@@ -842,12 +846,14 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         d = np.empty(N) if out is None else out
         terms = []
         r_p = x[-1] if lay.fit_pipe_radius else rp
-        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if fused else None
+        evaluations[0] += 1
+        summed = fused and (max_nfev is None or evaluations[0] < max_nfev)
+        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if summed else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
-            if fused:
+            if summed:
                 rb = d[b] - r_p
                 w = np.divide(rb, f_scale)
                 np.square(w, out=w)
@@ -908,7 +914,7 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
              max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
     given)."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale)
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale, max_nfev)
     x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info

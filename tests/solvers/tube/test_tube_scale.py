@@ -141,3 +141,19 @@ def test_reach_of_moved_segments_bounds_their_distance_from_the_replaced_ones():
     moved, replaced = fit._sub_spine(big, np.array([1])), fit._sub_spine(small, np.array([1]))
     reach = fit._reach(moved, replaced, 1.0)
     assert np.hypot(5.0, 5.0) <= reach <= np.hypot(5.0, 5.0) + 0.2
+
+
+def test_a_large_scans_last_evaluation_sums_no_normal_equations(monkeypatch):
+    # the LM forms no normal equations after its last allowed evaluation: a large scan's evaluations sum them,
+    # all but that one, and the iterates are those of summing them when the normal equations are asked for
+    m, pts, _, seg, keep, lay = _scan_problem(2 * fit.BLOCK)
+    made = []
+    gram_sums = fit._gram_sums
+    monkeypatch.setattr(fit, "_gram_sums", lambda *a: made.append(a) or gram_sums(*a))
+    x0, lo, hi, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=0.06, max_nfev=4)
+    x, info = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=4)
+    assert info["nfev"] == 4 and len(made) == 3
+    _, _, _, fun_p, normal_equations_p, _, _ = fit._problem(m, pts, seg, lay, keep)
+    x_p, info_p = fit.levenberg_marquardt(fun_p, normal_equations_p, x0, lo, hi, 0.06, max_nfev=4)
+    np.testing.assert_array_equal(x, x_p)
+    assert info == info_p
