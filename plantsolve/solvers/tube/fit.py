@@ -459,10 +459,9 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
     length 0 moves everything after it) are ``model``'s, whose distances each block of samples takes once. Its
     moved segments lie within a distance H of the ones they replace (:func:`_reach`), so a sample whose distance
     to those exceeds its distance to the kept segments by more than H is nearer a kept segment in the variant
-    too: the moved segments' distances are taken of the other samples only (on a scan of a few bends, a third
-    to a half of them). No array of the samples' size is made. ``keep``: the samples to sum over (a mask;
-    default all). Below ``SUMS_BY_REACH`` samples all distances are taken at once (:func:`_sums_of_squares_joint`):
-    the bounds and subsets cost more than they save."""
+    too: the moved segments' distances are taken of the other samples only. No array of the samples' size is
+    made. ``keep``: the samples to sum over (a mask; default all). Below ``SUMS_BY_REACH`` samples all distances
+    are taken at once (:func:`_sums_of_squares_joint`): the bounds and subsets cost more than they save."""
     if len(pts) < SUMS_BY_REACH:
         return _sums_of_squares_joint(model, variants, pts, keep)
     base = build_spine(model)
@@ -507,10 +506,11 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
 
 
 def _sums_of_squares_joint(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
-                    keep: np.ndarray | None = None) -> tuple[float, list[float]]:
-    """:func:`sums_of_squares` of a few samples: the segments of ``model`` and those of the variants that moved (further than round-off:
-    a straight clipped to length 0 moves everything after it) are one spine, whose distances a block of
-    samples takes at once; a variant's other segments are ``model``'s (the same to round-off)."""
+                           keep: np.ndarray | None = None) -> tuple[float, list[float]]:
+    """:func:`sums_of_squares` of a few samples: the segments of ``model`` and those of the variants that moved
+    (further than round-off: a straight clipped to length 0 moves everything after it) are one spine, whose
+    distances a block of samples takes at once; a variant's other segments are ``model``'s (the same to
+    round-off)."""
     base = build_spine(model)
     S = len(base.kind)
     scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
@@ -559,7 +559,8 @@ def _reach(moved: Spine, replaced: Spine, pipe_radius: float) -> float:
         else:
             a = s * moved.angle[k]
             R = moved.radius[k]
-            pts.append(moved.centre[k] - R * np.outer(np.cos(a), moved.normal[k]) + R * np.outer(np.sin(a), moved.tangent[k]))
+            pts.append(moved.centre[k] - R * np.outer(np.cos(a), moved.normal[k])
+                       + R * np.outer(np.sin(a), moved.tangent[k]))
     if not pts:
         return 0.0
     return float(segment_distances_t(np.vstack(pts), replaced).min(axis=0).max()) + h
