@@ -448,15 +448,69 @@ def _sub_spine(sp: Spine, k: np.ndarray) -> Spine:
                  sp.radius[k], sp.angle[k])
 
 
+SUMS_BY_REACH = 100_000  # samples from which :func:`sums_of_squares` bounds the moved segments' reach
+
+
 def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
                     keep: np.ndarray | None = None) -> tuple[float, list[float]]:
     """Σ (distance − pipe radius)² of the samples to ``model`` and to each of ``variants`` (models that differ
     from it near a few segments, such as :func:`model.with_radii` of one bend), the distance to the nearest
-    (bounded) segment. The segments of ``model`` and those of the variants that moved (further than round-off:
-    a straight clipped to length 0 moves everything after it) are one spine, whose distances a block of
-    samples takes at once; a variant's other segments are ``model``'s (the same to round-off). Ten variants
-    then cost about what four assignments do, and no array of the samples' size is made. ``keep``: the samples
-    to sum over (a mask; default all)."""
+    (bounded) segment. A variant's segments that did not move (further than round-off: a straight clipped to
+    length 0 moves everything after it) are ``model``'s, whose distances each block of samples takes once. Its
+    moved segments lie within a distance H of the ones they replace (:func:`_reach`), so a sample whose distance
+    to those exceeds its distance to the kept segments by more than H is nearer a kept segment in the variant
+    too: the moved segments' distances are taken of the other samples only. No array of the samples' size is
+    made. ``keep``: the samples to sum over (a mask; default all). Below ``SUMS_BY_REACH`` samples all distances
+    are taken at once (:func:`_sums_of_squares_joint`): the bounds and subsets cost more than they save."""
+    if len(pts) < SUMS_BY_REACH:
+        return _sums_of_squares_joint(model, variants, pts, keep)
+    base = build_spine(model)
+    S = len(base.kind)
+    scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
+    moved_of = []  # each variant's moved segments: their spine and its frames, their rows of model's spine, H
+    n_rows = S
+    for v in variants:
+        sp = build_spine(v)
+        diff = np.zeros(S, bool)
+        for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
+                     (base.normal, sp.normal)):
+            diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
+        diff |= (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+        moved = np.flatnonzero(diff)
+        sub = _sub_spine(sp, moved)
+        moved_of.append((sub, distance_frames(sub), moved, _reach(sub, _sub_spine(base, moved), model.pipe_radius)))
+        n_rows += len(moved)
+    frames = distance_frames(base)
+    rp = model.pipe_radius
+    # a bound's slack for the round-off of the distances it is compared with
+    slack = 1e-9 * (scale + max(float(-pts.min(initial=0.0)), float(pts.max(initial=0.0))))
+    rss0, rss = 0.0, [0.0] * len(variants)
+    step = max(1, INNER_CHUNK // n_rows)  # (the blocks of the joint spine of all moved segments: the same sums)
+    for a in range(0, len(pts), step):
+        q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
+        D = segment_distances_t(q, base, frames)
+        r = D.min(axis=0) - rp
+        rss0 += float(r @ r)
+        for i, ((sub, sub_frames, moved, reach), v) in enumerate(zip(moved_of, variants)):
+            if not len(moved):
+                d = D.min(axis=0)
+            else:
+                d = np.delete(D, moved, axis=0).min(axis=0, initial=np.inf)
+                near = np.flatnonzero(D[moved].min(axis=0) - reach <= d + slack)
+                if len(near):
+                    d[near] = np.minimum(d[near], segment_distances_t(np.take(q, near, axis=0), sub,
+                                                                        sub_frames).min(axis=0))
+            d -= v.pipe_radius
+            rss[i] += float(d @ d)
+    return rss0, rss
+
+
+def _sums_of_squares_joint(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
+                           keep: np.ndarray | None = None) -> tuple[float, list[float]]:
+    """:func:`sums_of_squares` of a few samples: the segments of ``model`` and those of the variants that moved
+    (further than round-off: a straight clipped to length 0 moves everything after it) are one spine, whose
+    distances a block of samples takes at once; a variant's other segments are ``model``'s (the same to
+    round-off)."""
     base = build_spine(model)
     S = len(base.kind)
     scale = float(np.abs(base.start).max(initial=0.0)) + float(np.abs(base.end).max(initial=0.0)) + model.pipe_radius
@@ -490,6 +544,26 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
             d = np.min(D[np.concatenate([own, kept])], axis=0) - v.pipe_radius
             rss[i] += float(d @ d)
     return rss0, rss
+
+
+def _reach(moved: Spine, replaced: Spine, pipe_radius: float) -> float:
+    """An upper bound of the distance from any point of the segments ``moved`` to the segments ``replaced``: the
+    largest distance of points along them a tenth of a pipe radius apart, plus that step (each point of a
+    segment lies within half a step of one of them, and a distance moves no faster than its point)."""
+    h = 0.1 * pipe_radius
+    pts = []
+    for k in range(len(moved.kind)):
+        s = np.linspace(0.0, 1.0, max(2, int(np.ceil(moved.length[k] / h)) + 1))
+        if moved.kind[k] == 0:
+            pts.append(moved.start[k] + np.outer(s * moved.length[k], moved.tangent[k]))
+        else:
+            a = s * moved.angle[k]
+            R = moved.radius[k]
+            pts.append(moved.centre[k] - R * np.outer(np.cos(a), moved.normal[k])
+                       + R * np.outer(np.sin(a), moved.tangent[k]))
+    if not pts:
+        return 0.0
+    return float(segment_distances_t(np.vstack(pts), replaced).min(axis=0).max()) + h
 
 
 HALO_GAP = 15.0  # gap, in mean sample spacings of the end, that cuts a halo off (exponential gaps: e^-15 ≈ 3e-7)
@@ -695,11 +769,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
-             f_scale: float | None = None):
+             f_scale: float | None = None, max_nfev: int | None = None):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
     (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``. With ``f_scale`` (the soft-L1
     scale :func:`levenberg_marquardt` weights by) a large scan's residuals come with the normal equations at the
-    same point, one pass over the samples instead of two."""
+    same point, one pass over the samples instead of two; with ``max_nfev`` (its evaluation limit) the last
+    evaluation it may make comes without them."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -745,6 +820,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # are the very numbers ``_soft_l1`` gives over all samples); a rejected trial's sums are wasted, a
     # quarter of the evaluations
     fused = f_scale is not None and not keep_terms
+    # :func:`levenberg_marquardt` evaluates at most ``max_nfev`` times and forms no normal equations after its last
+    # evaluation: that one's sums (three quarters of an evaluation of a large scan) are left out
+    evaluations = [0]
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
     plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
@@ -769,12 +847,14 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         d = np.empty(N) if out is None else out
         terms = []
         r_p = x[-1] if lay.fit_pipe_radius else rp
-        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if fused else None
+        evaluations[0] += 1
+        summed = fused and (max_nfev is None or evaluations[0] < max_nfev)
+        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if summed else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
-            if fused:
+            if summed:
                 rb = d[b] - r_p
                 w = np.divide(rb, f_scale)
                 np.square(w, out=w)
@@ -835,7 +915,7 @@ def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_
              max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
     given)."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale)
+    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale, max_nfev)
     x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
     m = unpack(x, lay, frame0, rp)
     return m, info

@@ -1,6 +1,7 @@
 """Shortcuts of the large-scan and hot paths give what the plain computations give."""
 
 import numpy as np
+import pytest
 
 from plantsolve.solvers import geometry
 from plantsolve.solvers.tube import fit, sample_order, vec3
@@ -55,12 +56,17 @@ def test_end_lengths_from_the_samples_at_the_ends_match_all_samples():
     np.testing.assert_allclose(full.lengths[[0, -1]], truth.lengths[[0, -1]], atol=0.3)
 
 
-def test_sums_of_squares_of_held_radii_are_those_of_whole_assignments():
+@pytest.mark.parametrize("by_reach", [False, True])
+def test_sums_of_squares_of_held_radii_are_those_of_whole_assignments(by_reach, monkeypatch):
     # the secant test's models (a bend's radius held at half or twice, the control polygon kept) share the fitted
     # model's distances to the segments they do not move; the sums are those of assigning every sample to each
     # model, also where doubling the first or the second bend's radius clips the 3 mm straight between them to 0
-    # and moves everything beyond
+    # and moves everything beyond; a large scan's way (the moved segments measured only on samples within their
+    # reach) gives them too
     from plantsolve.solvers.tube.model import with_radii
+
+    if by_reach:
+        monkeypatch.setattr(fit, "SUMS_BY_REACH", 0)
 
     rng = np.random.default_rng(4)
     model = make_model([[40, 0, 60, 12], [3, 45, 80, 12], [25, -30, 30, 12], [35, 0, 0, 0]], 3.0)
@@ -123,3 +129,31 @@ def test_levenberg_marquardt_reusing_its_arrays_is_the_one_making_fresh_ones():
     xb, info_b = fit.levenberg_marquardt(fresh, normal_equations, x0, lo, hi, 0.06, max_nfev=30)
     np.testing.assert_array_equal(xa, xb)
     assert info_a == info_b and info_a["nfev"] > 3
+
+
+def test_reach_of_moved_segments_bounds_their_distance_from_the_replaced_ones():
+    # a quarter arc of radius 10 against one of radius 5 from the same start and tangent: the point of the larger
+    # farthest from the smaller is its end, whose nearest point of the smaller arc is that one's end, 5 √2 away
+    # (the reach may exceed it by its sampling step, a tenth of the pipe radius)
+    from plantsolve.solvers.tube.model import build_spine
+
+    big, small = (build_spine(make_model([[0, 0, 90, r], [0, 0, 0, 0]], 1.0)) for r in (10.0, 5.0))
+    moved, replaced = fit._sub_spine(big, np.array([1])), fit._sub_spine(small, np.array([1]))
+    reach = fit._reach(moved, replaced, 1.0)
+    assert np.hypot(5.0, 5.0) <= reach <= np.hypot(5.0, 5.0) + 0.2
+
+
+def test_a_large_scans_last_evaluation_sums_no_normal_equations(monkeypatch):
+    # the LM forms no normal equations after its last allowed evaluation: a large scan's evaluations sum them,
+    # all but that one, and the iterates are those of summing them when the normal equations are asked for
+    m, pts, _, seg, keep, lay = _scan_problem(2 * fit.BLOCK)
+    made = []
+    gram_sums = fit._gram_sums
+    monkeypatch.setattr(fit, "_gram_sums", lambda *a: made.append(a) or gram_sums(*a))
+    x0, lo, hi, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=0.06, max_nfev=4)
+    x, info = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=4)
+    assert info["nfev"] == 4 and len(made) == 3
+    _, _, _, fun_p, normal_equations_p, _, _ = fit._problem(m, pts, seg, lay, keep)
+    x_p, info_p = fit.levenberg_marquardt(fun_p, normal_equations_p, x0, lo, hi, 0.06, max_nfev=4)
+    np.testing.assert_array_equal(x, x_p)
+    assert info == info_p
