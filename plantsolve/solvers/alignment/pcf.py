@@ -724,6 +724,9 @@ def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | N
     item is whole, what followed it is lost). An item followed by the MATERIALS section (or any record) was
     written whole."""
     tops = [i for i, line in enumerate(doc.lines) if line.strip() and not line[0].isspace()]
+    cut_word = _cut_keyword(doc)
+    if cut_word is not None:
+        return cut_word
     if not doc.items or not tops or doc.items[-1].line != tops[-1]:
         return None
     item, last = doc.items[-1], len(doc.lines) - 1
@@ -745,6 +748,24 @@ def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | N
     line = item.line + 1
     return ("truncated_file", f"The file ends inside the item at line {line} (the file was cut?): {lost}",
             {"line": line, "id": item.id, "keyword": item.keyword, "last_line": last + 1}, "warning")
+
+
+def _cut_keyword(doc: Document) -> tuple[str, str, dict, str] | None:
+    """The ``truncated_file`` note when the file's last line has no line ending and is the start of an item
+    keyword (``PI`` of PIPE, ``FLA`` of FLANGE): the file was cut as the next item began; read as an unknown
+    keyword, the loss was said as a spelling."""
+    last = len(doc.lines) - 1
+    word = doc.lines[last].strip().upper() if last >= 0 else ""
+    if (doc.endings[-1] != "" or not word or doc.lines[last][0].isspace() or " " in word or word in ITEM_KEYWORDS
+            or is_known_keyword(word)):
+        return None
+    starts = sorted(k for k in ITEM_KEYWORDS if k.startswith(word))
+    if not starts:
+        return None
+    return ("truncated_file", f"The file ends at line {last + 1} with {word!r} and no line ending: the start of "
+            f"{' or '.join(starts[:3])}{', ...' if len(starts) > 3 else ''} (the file was cut as an item began?); "
+            "the items the file held from there on are missing.",
+            {"line": last + 1, "id": None, "keyword": word, "last_line": last + 1}, "warning")
 
 
 def _at_end_connections(doc: Document, pos, owner, rad, comps) -> list[str]:

@@ -49,3 +49,21 @@ def test_a_file_without_units_co_ords_says_it_was_read_in_millimetres():
 def test_exports_and_fixtures_raise_neither(path):
     warnings = _warnings(path.read_bytes().decode("utf-8", errors="replace"))
     assert "pcf_bore_missing" not in warnings and "pcf_units_assumed" not in warnings
+
+
+LADDER = FIXTURES[-1].read_text()
+
+
+@pytest.mark.parametrize("cut", ["PI", "FLA", "ELB"])
+def test_a_file_cut_as_an_item_keyword_began_is_said_to_be_cut(cut):
+    whole = LADDER.splitlines()
+    k = next(i for i, line in enumerate(whole) if i > len(whole) // 2 and line == "PIPE")
+    text = "\n".join(whole[:k]) + "\n" + cut
+    message, details = _warnings(text)["truncated_file"]
+    assert details["line"] == k + 1 and details["keyword"] == cut and f"line {k + 1}" in message
+
+
+def test_an_unknown_word_with_its_line_ending_is_no_cut():
+    whole = LADDER.splitlines()
+    k = next(i for i, line in enumerate(whole) if i > len(whole) // 2 and line == "PIPE")
+    assert "truncated_file" not in _warnings("\n".join(whole[:k]) + "\nPI\n")
