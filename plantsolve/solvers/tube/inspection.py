@@ -154,6 +154,9 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
             f"ones (median): {'larger' if bigger == 'nominal' else 'smaller'} by the ratio of {pair} "
             f"({factor:g}). Is the nominal in another unit than it states (its header's unit, or {units} "
             "when it names none)?"), details={"ratio": ratio, "unit_ratio": factor, "units": units}))
+    diameter = _clr_as_diameter(nom, (got, model_rows(reverse_model(measured))), units)
+    if diameter is not None:
+        out.append(diameter)
     mirrored = _rotations_mirrored(nominal, (got, model_rows(reverse_model(measured))))
     if mirrored is not None:
         out.append(mirrored)
@@ -166,6 +169,32 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
             "CLR, or another unit?"), details={"rows": [i for i, _ in small], "clr": [c for _, c in small],
                                "pipe_radius": measured.pipe_radius}))
     return out
+
+
+DIAMETER_SLACK = 0.12  # the nominal's CLRs this near twice the measured ones, its straights this near them
+
+
+def _clr_as_diameter(nom: list[LraRow], directions, units: str) -> Diagnostic | None:
+    """A warning when the nominal's CLRs are twice the measured bend radii while its straights between bends are
+    the measured ones: the bend's diameter (or the die's) typed in the CLR column. A unit mix-up scales both."""
+    for rows in directions:
+        meas = rows[:-1]
+        if len(meas) != len(nom) or not nom:
+            return None
+        clr = [n.bend_radius / m.bend_radius for n, m in zip(nom, meas) if n.bend_radius > 0 and m.bend_radius > 0]
+        inner = [n.length / m.length for n, m in zip(nom[1:], meas[1:]) if n.length > 0 and m.length > 0]
+        if not clr or not inner:
+            return None
+        clr_ratio, length_ratio = float(np.median(clr)), float(np.median(inner))
+        if abs(clr_ratio / 2.0 - 1.0) < DIAMETER_SLACK and abs(length_ratio - 1.0) < DIAMETER_SLACK:
+            return Diagnostic(code="nominal_clr_as_diameter", message=(
+                f"The nominal's CLRs ({', '.join(f'{r.bend_radius:g}' for r in nom[:6])} {units}) are {clr_ratio:.3g} × "
+                f"the measured bend radii ({', '.join(f'{m.bend_radius:.4g}' for m in meas[:6])} {units}) while its "
+                f"straights match them ({length_ratio:.3g} ×): a diameter in the CLR column? The CLR is the "
+                "centreline's bend radius; every CLR check fails against a diameter."),
+                details={"clr_ratio": clr_ratio, "length_ratio": length_ratio,
+                         "nominal_clr": [r.bend_radius for r in nom], "measured_clr": [m.bend_radius for m in meas]})
+    return None
 
 
 SIGN_SHOWN_DEG = 10.0  # a rotation this far from 0° and 180° shows its sign through any scan's noise
