@@ -544,7 +544,9 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     cut = _cut_item(doc, {h["id"] for h in held + dropped + left_out})
     if cut is not None:
         notes.append(cut)
+    notes.extend(_assumed_units_notes(doc))
     notes.extend(_bore_notes(doc))
+    notes.extend(_missing_bore_notes(doc))
     notes.extend(_duplicate_notes(comps, doc))
     notes.extend(_open_ends_inside_pipes(comps, net, doc))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
@@ -722,6 +724,9 @@ def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | N
     item is whole, what followed it is lost). An item followed by the MATERIALS section (or any record) was
     written whole."""
     tops = [i for i, line in enumerate(doc.lines) if line.strip() and not line[0].isspace()]
+    cut_word = _cut_keyword(doc)
+    if cut_word is not None:
+        return cut_word
     if not doc.items or not tops or doc.items[-1].line != tops[-1]:
         return None
     item, last = doc.items[-1], len(doc.lines) - 1
@@ -743,6 +748,24 @@ def _cut_item(doc: Document, unread: set[str]) -> tuple[str, str, dict, str] | N
     line = item.line + 1
     return ("truncated_file", f"The file ends inside the item at line {line} (the file was cut?): {lost}",
             {"line": line, "id": item.id, "keyword": item.keyword, "last_line": last + 1}, "warning")
+
+
+def _cut_keyword(doc: Document) -> tuple[str, str, dict, str] | None:
+    """The ``truncated_file`` note when the file's last line has no line ending and is the start of an item
+    keyword (``PI`` of PIPE, ``FLA`` of FLANGE): the file was cut as the next item began; read as an unknown
+    keyword, the loss was said as a spelling."""
+    last = len(doc.lines) - 1
+    word = doc.lines[last].strip().upper() if last >= 0 else ""
+    if (doc.endings[-1] != "" or not word or doc.lines[last][0].isspace() or " " in word or word in ITEM_KEYWORDS
+            or is_known_keyword(word)):
+        return None
+    starts = sorted(k for k in ITEM_KEYWORDS if k.startswith(word))
+    if not starts:
+        return None
+    return ("truncated_file", f"The file ends at line {last + 1} with {word!r} and no line ending: the start of "
+            f"{' or '.join(starts[:3])}{', ...' if len(starts) > 3 else ''} (the file was cut as an item began?); "
+            "the items the file held from there on are missing.",
+            {"line": last + 1, "id": None, "keyword": word, "last_line": last + 1}, "warning")
 
 
 def _at_end_connections(doc: Document, pos, owner, rad, comps) -> list[str]:
@@ -1054,6 +1077,37 @@ def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
              f"{len(bad)} end point(s) state a bore that is no positive number ({listed}): read as no bore, so "
              "their items connect with the file's typical bore (10 mm when none is readable) and may be left "
              "unconnected; write the bore in UNITS-BORE.", {"points": bad[:200]}, "warning")]
+
+
+def _missing_bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning naming the END-POINT / BRANCHn-POINT lines written with three numbers and no bore: such an item
+    connects with the file's typical bore, and with none in the file a connection reaches only 5 mm (half of 10 mm),
+    so wider gaps of a large pipe are left open."""
+    bare = [{"id": it.id, "line": i + 1} for it in doc.items for i in it.point_lines
+            if doc.lines[i].split()[0].upper() != "CENTRE-POINT" and len(doc.lines[i].split()) == 4]
+    if not bare:
+        return []
+    points = sum(1 for it in doc.items for i in it.point_lines if doc.lines[i].split()[0].upper() != "CENTRE-POINT")
+    listed = ", ".join(f"line {b['line']}" for b in bare[:5]) + (", ..." if len(bare) > 5 else "")
+    reach = ("no end point of the file has one, so every connection reaches only as far as a 10 mm bore's" if
+             len(bare) == points else "their items connect with the file's typical bore")
+    return [("pcf_bore_missing",
+             f"{len(bare)} of {points} end point(s) give three coordinates and no bore ({listed}): {reach}; "
+             "gaps wider than that are left open. Write the bore (in UNITS-BORE) as each END-POINT's fourth number.",
+             {"points": bare[:200], "end_points": points}, "warning")]
+
+
+def _assumed_units_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning when no UNITS-CO-ORDS record states the coordinates' unit: read in millimetres (the PCF default),
+    an inch file's gaps and tolerances would be reported 25.4 times too small without a word."""
+    if "UNITS-CO-ORDS" in doc.header:
+        return []
+    bore = "" if "UNITS-BORE" in doc.header else " and bores"
+    return [("pcf_units_assumed",
+             f"The file has no UNITS-CO-ORDS record: its coordinates{bore} are read in millimetres (the PCF "
+             "default), and the result's gaps, tolerances and moves are in mm. If the file is in inches or metres, "
+             "add UNITS-CO-ORDS (and UNITS-BORE) to its header.",
+             {"quantity": "coordinate unit", "assumed": "MM"}, "warning")]
 
 
 def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:

@@ -17,7 +17,7 @@ from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, model_sizes
+from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, judge_product_size, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
 
 DEFAULT_PRECISION_M = 1e-5
@@ -187,6 +187,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         if not points:
             raise reject(why_nothing_placed(products, path))
         sizes = model_sizes(points.values())
+        warnings.extend(judge_product_size(sizes[0], symbol, unit))
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
         else:

@@ -40,6 +40,31 @@ def model_sizes(points: Iterable[np.ndarray]) -> tuple[float, float, float]:
     return float(np.median(sizes)), float(np.linalg.norm(b.max(axis=0) - a.min(axis=0))), float(np.abs(together).max())
 
 
+# The median product's size (bounding-box diagonal) of a real model: bolts and fittings of a few centimetres to
+# slabs and girders of tens of metres. Outside it, the numbers are in another unit than the IfcUnitAssignment says.
+PRODUCT_SIZE_M = (0.005, 200.0)
+
+
+def judge_product_size(median: float, unit_name: str, metres_per_unit: float) -> list[Diagnostic]:
+    """A warning when the median product, read in the file's stated length unit, is smaller than 5 mm or larger
+    than 200 m: a model whose IFCSIUNIT says MILLI over numbers written in metres has 2 mm doors (and every length,
+    tolerance and deviation of the result is then 1000 times off in `units`)."""
+    metres = median * metres_per_unit
+    low, high = PRODUCT_SIZE_M
+    if not (metres > 0 and (metres < low or metres > high)):
+        return []
+    likely = [name for name in ("m", "mm", "ft", "in", "cm") if UNITS_M[name] != metres_per_unit
+              and 0.05 <= median * UNITS_M[name] <= 20.0]
+    meant = (f"; the numbers read as {likely[0]} give {median * UNITS_M[likely[0]]:.3g} m: written in {likely[0]}?"
+             if likely else ".")
+    return [Diagnostic(code="implausible_product_size", message=(
+        f"The median product measures {median:.4g} {unit_name} across (= {metres:.3g} m, in the length unit the "
+        f"file's IfcUnitAssignment states), outside {low * 1000:g} mm - {high:g} m: the coordinates are likely in "
+        f"another unit than the file states, and the result's lengths, tolerance and deviations with them{meant}"),
+        details={"quantity": "median product size", "value": median, "unit": unit_name, "metres": metres,
+                 "plausible_range_m": [low, high], "likely_units": likely})]
+
+
 def _meant(tolerance: float, metres_per_unit: float) -> str:
     """The unit the number was likely meant in: the largest smaller unit in which it is at most WARN_M."""
     for name in ("mm", "cm", "in"):

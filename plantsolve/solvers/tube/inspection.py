@@ -154,6 +154,12 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
             f"ones (median): {'larger' if bigger == 'nominal' else 'smaller'} by the ratio of {pair} "
             f"({factor:g}). Is the nominal in another unit than it states (its header's unit, or {units} "
             "when it names none)?"), details={"ratio": ratio, "unit_ratio": factor, "units": units}))
+    diameter = _clr_as_diameter(nom, (got, model_rows(reverse_model(measured))), units)
+    if diameter is not None:
+        out.append(diameter)
+    mirrored = _rotations_mirrored(nominal, (got, model_rows(reverse_model(measured))))
+    if mirrored is not None:
+        out.append(mirrored)
     small = [(i + 1, r.bend_radius) for i, r in enumerate(nom) if 0 < r.bend_radius < measured.pipe_radius]
     if small:
         out.append(Diagnostic(code="implausible_nominal_clr", message=(
@@ -163,6 +169,71 @@ def nominal_mixups(measured: TubeModel, nominal: list[LraRow], units: str) -> li
             "CLR, or another unit?"), details={"rows": [i for i, _ in small], "clr": [c for _, c in small],
                                "pipe_radius": measured.pipe_radius}))
     return out
+
+
+DIAMETER_SLACK = 0.12  # the nominal's CLRs this near twice the measured ones, its straights this near them
+
+
+def _clr_as_diameter(nom: list[LraRow], directions, units: str) -> Diagnostic | None:
+    """A warning when the nominal's CLRs are twice the measured bend radii while its straights between bends are
+    the measured ones: the bend's diameter (or the die's) typed in the CLR column. A unit mix-up scales both."""
+    for rows in directions:
+        meas = rows[:-1]
+        if len(meas) != len(nom) or not nom:
+            return None
+        clr = [n.bend_radius / m.bend_radius for n, m in zip(nom, meas) if n.bend_radius > 0 and m.bend_radius > 0]
+        inner = [n.length / m.length for n, m in zip(nom[1:], meas[1:]) if n.length > 0 and m.length > 0]
+        if not clr or not inner:
+            return None
+        clr_ratio, length_ratio = float(np.median(clr)), float(np.median(inner))
+        if abs(clr_ratio / 2.0 - 1.0) < DIAMETER_SLACK and abs(length_ratio - 1.0) < DIAMETER_SLACK:
+            return Diagnostic(code="nominal_clr_as_diameter", message=(
+                f"The nominal's CLRs ({', '.join(f'{r.bend_radius:g}' for r in nom[:6])} {units}) are {clr_ratio:.3g} × "
+                f"the measured bend radii ({', '.join(f'{m.bend_radius:.4g}' for m in meas[:6])} {units}) while its "
+                f"straights match them ({length_ratio:.3g} ×): a diameter in the CLR column? The CLR is the "
+                "centreline's bend radius; every CLR check fails against a diameter."),
+                details={"clr_ratio": clr_ratio, "length_ratio": length_ratio,
+                         "nominal_clr": [r.bend_radius for r in nom], "measured_clr": [m.bend_radius for m in meas]})
+    return None
+
+
+SIGN_SHOWN_DEG = 10.0  # a rotation this far from 0° and 180° shows its sign through any scan's noise
+
+
+def _wrapped(degrees: np.ndarray) -> np.ndarray:
+    return (degrees + 180.0) % 360.0 - 180.0
+
+
+def _rotations_mirrored(nominal: list[LraRow], directions) -> Diagnostic | None:
+    """A warning when the nominal's rotations are the measured ones with the other sign, in the walking direction
+    that fits them best: a rotation counted left-handed (some benders and CAD programs count it clockwise looking
+    along the tube), which describes the mirror image of the part. Walking a tube from its other end reverses its
+    rotations' order, not their signs, so a part that is its own mirror image walked backwards says nothing."""
+    r_nom = np.array([r.rotation for r in nominal[1:-1]], float)
+    fits = []  # (mean deviation as given, negated, the measured rotations) per walking direction
+    for rows in directions:
+        if len(rows) != len(nominal):
+            continue
+        r_meas = np.array([r.rotation for r in rows[1:-1]], float)
+        telling = (np.abs(_wrapped(r_meas)) > SIGN_SHOWN_DEG) & (np.abs(_wrapped(r_meas)) < 180.0 - SIGN_SHOWN_DEG)
+        if not telling.any():
+            return None
+        fits.append((float(np.abs(_wrapped(r_nom - r_meas))[telling].mean()),
+                     float(np.abs(_wrapped(r_nom + r_meas))[telling].mean()), r_meas))
+    if not fits:
+        return None
+    as_given = min(f[0] for f in fits)
+    negated, _, shown = min(((f[1], k, f[2]) for k, f in enumerate(fits)), key=lambda f: f[:2])
+    if not (negated < 0.25 * as_given and as_given > SIGN_SHOWN_DEG):
+        return None
+    return Diagnostic(code="nominal_rotations_mirrored", message=(
+        f"The nominal's rotations ({', '.join(f'{r:g}' for r in r_nom[:6])}°) are the measured ones "
+        f"({', '.join(f'{r:.1f}' for r in shown[:6])}°) with the other sign (off by {negated:.1f}° on average that "
+        f"way, {as_given:.1f}° as given): counted left-handed? This project's rotations turn right-handed about the "
+        "tangent; a nominal counted the other way describes the part's mirror image, every such row fails, and "
+        "corrections.csv turns each by twice its angle. Negate the nominal's rotations if the bender counts them "
+        "clockwise."), details={"nominal_rotations": r_nom.tolist(), "measured_rotations": shown.tolist(),
+                                "mean_deviation_as_given": as_given, "mean_deviation_negated": negated})
 
 
 def _length_ratio(nom: list[LraRow], meas: list[LraRow], pipe_radius: float) -> float:

@@ -8,6 +8,7 @@ only for a sparse mesh, whose faces are sampled instead of its vertices (``faces
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +20,35 @@ from plantsolve.solvers.tube.read_log import ReadLog
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
          "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4",
          "double": "f8", "float64": "f8"}
+
+
+# A unit some scanners and converters state in a comment of the header (``comment units mm``, ``comment Unit: meter``,
+# ``obj_info length_unit = millimetres``); the PLY format itself has none.
+_UNIT_COMMENT = re.compile(r"^(?:comment|obj_info)\s+(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
+_UNIT_WORDS = {"mm": "mm", "millimeter": "mm", "millimeters": "mm", "millimetre": "mm", "millimetres": "mm",
+               "cm": "cm", "centimeter": "cm", "centimeters": "cm", "centimetre": "cm", "centimetres": "cm",
+               "m": "m", "meter": "m", "meters": "m", "metre": "m", "metres": "m",
+               "in": "in", "inch": "in", "inches": "in", "ft": "ft", "foot": "ft", "feet": "ft"}
+
+
+def stated_unit(content: bytes) -> tuple[str, str] | str | None:
+    """The length unit a comment of the PLY header states, and the evidence (its line); a message when comments
+    state two different units; None when none states one (or names no length unit this reader knows)."""
+    end = content.find(b"end_header")
+    if not content.startswith(b"ply") or end < 0:
+        return None
+    found = []
+    for lineno, line in enumerate(content[:end].decode("ascii", errors="replace").splitlines(), 1):
+        match = _UNIT_COMMENT.match(line.strip())
+        if match and match.group(1).lower() in _UNIT_WORDS:
+            found.append((_UNIT_WORDS[match.group(1).lower()], lineno, line.strip()))
+    if len({unit for unit, _, _ in found}) > 1:
+        return "its header comments state different units (" + ", ".join(
+            f"line {n}: {text!r}" for _, n, text in found[:4]) + ")"
+    if not found:
+        return None
+    unit, lineno, text = found[0]
+    return unit, f"the PLY header's comment on line {lineno}: {text!r}"
 
 
 @dataclass

@@ -19,6 +19,7 @@ from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import read_ply
+from plantsolve.solvers.tube.ply_points import stated_unit as stated_ply_unit
 from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.stl_points import read_stl
 from plantsolve.solvers.tube.text_points import read_text_points
@@ -239,7 +240,10 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
     if ext in (".las", ".laz"):
         return _read_las(content, log)
     if ext == ".ply":
-        return _read_ply(content, log), None
+        stated = stated_ply_unit(content)
+        if stated is None or isinstance(stated, str):
+            return _read_ply(content, log), stated
+        return _read_ply(content, log), HeaderUnit(stated[0], TO_MM[stated[0]] / 1000.0, stated[1])
     if ext == ".stl":
         return _read_stl(content, log), None
     if ext == ".obj":
