@@ -47,7 +47,9 @@ wheel holding pin primitive without shadow lines that does not draw ``wpin.dat``
 radius-4 cylinder on the same axis over it (see ``OPEN_STUD``). The car steering wheel's hub (``3828.dat``), which the
 shadow library states male, is read as the female bore its stand's column enters (see ``HUB_BORE``), and the solid
 wheel 4288's bore, which the shadow library states as an axle hole from its mouth, is read as drawn: 3 LDU round
-before the axle hole, the mouth a stud enters (see ``ROUND_MOUTH``).
+before the axle hole, the mouth a stud enters (see ``ROUND_MOUTH``). A primitive LDraw draws a second time without its
+edge lines (``stud3a.dat``, ``studa.dat``, ``stud16a.dat``, ``hipstuda.dat``), which the shadow library leaves without
+lines, states its edged twin's snaps, dropped in a file whose other snaps restate them (see ``EDGELESS``).
 
 Parts whose snap information is empty are left out (the solver reports them as unknown). How snaps
 become connection points and joints is the catalogue's business (plantsolve/solvers/rigidity/generated.py).
@@ -106,6 +108,12 @@ HUB_BORE = "3828.dat"
 # 3 LDU long, then the axle hole.
 ROUND_MOUTH = {"4288.dat": "0 !LDCAD SNAP_CYL [id=axleHole] [gender=F] [caps=none] [secs=R 6 3 A 6 17] [slide=true] "
                            "[pos=0 0 3] [ori=1 0 0 0 0 -1 0 1 0]"}
+# LDraw draws some primitives twice, once without their edge lines (stud3a.dat "Stud Tube Solid without Base Edges" for
+# stud3.dat, studa.dat for stud.dat, stud16a.dat, hipstuda.dat): the same solid. The shadow library states the snaps of
+# the edged one only, so the posts under the Technic bricks 1 x N (3700-3703, 2730), the 45-degree slopes 2 x 1 (3040)
+# and some 90 other parts that draw stud3a.dat had none. Such a primitive, named as its twin with an ``a`` and titled as
+# its twin "without ...", that the shadow library leaves without lines and that inherits none, states its twin's snaps.
+EDGELESS = re.compile(r"^([^/]+)a\.dat$")
 SNAP_KINDS = ("SNAP_CYL", "SNAP_CLP", "SNAP_FGR", "SNAP_GEN", "SNAP_INCL", "SNAP_CLEAR")
 
 
@@ -255,14 +263,20 @@ def transform(snap: dict, rot: np.ndarray, pos: np.ndarray) -> dict:
     return out
 
 
-def _without_restated_holes(snaps: list[dict]) -> list[dict]:
-    """``snaps`` less the holes added to open studs (``OPEN_STUD_HOLE``) that another female round radius-4
-    cylinder on the same axis overlaps."""
-    stated = [s for s in snaps if s["kind"] == "cyl" and s["gender"] == "F" and not s.get("open_stud_hole")
-              and any(shape.upper() == "R" and abs(r - 4) < 1e-6 for shape, r, _ in s["secs"])]
-    if not stated or not any(s.get("open_stud_hole") for s in snaps):
+def _without_restated(snaps: list[dict]) -> list[dict]:
+    """``snaps`` less the cylinders added where the shadow library states none (the open stud's hole,
+    ``OPEN_STUD_HOLE``; an edgeless primitive's twin's snaps, ``EDGELESS``) that a stated cylinder of the same gender,
+    with a section of the added one's shape and radius, overlaps on the same axis: the part stated its own."""
+    if not any(s.get("added") for s in snaps):
         return snaps
-    return [s for s in snaps if not (s.get("open_stud_hole") and any(_overlap(s, t) for t in stated))]
+    stated = [s for s in snaps if s["kind"] == "cyl" and not s.get("added")]
+    return [s for s in snaps if not (s.get("added") and s["kind"] == "cyl" and any(
+        t["gender"] == s["gender"] and _same_section(s, t) and _overlap(s, t) for t in stated))]
+
+
+def _same_section(added: dict, stated: dict) -> bool:
+    shape, radius, _ = added["secs"][0]
+    return any(t.upper() == shape.upper() and abs(r - radius) < 1e-6 for t, r, _ in stated["secs"])
 
 
 def _overlap(a: dict, b: dict, tol: float = 0.01) -> bool:
@@ -311,6 +325,9 @@ class Deriver:
         elif WHEEL_PIN.match(key) and unstated and all(child.lower() != "wpin.dat"
                                                         for _, _, child in self._children(key)):
             shadow = WHEEL_PIN_SNAP
+        twin = self._edged_twin(key) if unstated else None
+        if twin:
+            shadow = f"0 !LDCAD SNAP_INCL [ref={twin}]"
         if key == HUB_BORE:
             shadow = shadow.replace("[gender=M]", "[gender=F]")
         if key in ROUND_MOUTH:
@@ -336,14 +353,28 @@ class Deriver:
             else:
                 own.extend(_own_snaps(raw, params, lambda s: s, self.pivot_groups))
         if added_hole:
-            own = [dict(s, open_stud_hole=True) if s["kind"] == "cyl" and s["gender"] == "F" else s for s in own]
+            own = [dict(s, added=True) if s["kind"] == "cyl" and s["gender"] == "F" else s for s in own]
+        if twin:
+            own = [dict(s, added=True) for s in own]
         inherited = []
         if not clear_all:
             for rot, pos, child in self._children(key):
                 inherited.extend(transform(s, rot, pos) for s in self.snaps(child) if s["id"] not in clear_ids)
         self._stack.discard(key)
-        self._snaps[key] = _without_restated_holes(own + inherited)
+        self._snaps[key] = _without_restated(own + inherited)
         return self._snaps[key]
+
+    def _edged_twin(self, key: str) -> str | None:
+        """The primitive whose snaps ``key`` states (``EDGELESS``), or None."""
+        named = EDGELESS.match(key)
+        if not named or not (text := self.ldraw.text(key)):
+            return None
+        twin = f"{named.group(1)}.dat"
+        twin_title, title = _title(self.ldraw.text(twin) or ""), _title(text)
+        stated = any(line.split()[:2] == ["0", "!LDCAD"] for line in (self.shadow.text(twin) or "").splitlines())
+        if not (stated and twin_title and title.startswith(f"{twin_title} without ")):
+            return None
+        return None if any(self.snaps(child) for _, _, child in self._children(key)) else twin
 
     def _children(self, key: str):
         for raw in (self.ldraw.text(key) or "").splitlines():

@@ -306,6 +306,35 @@ def test_script_gives_a_wheel_pin_without_shadow_the_pin_of_wpin_dat_once(tmp_pa
         assert snap == ["cyl", "M", "one", 0, [32.0, 5.0, 0.0], [1.0, 0.0, 0.0], [["R", 4.0, 11.0], ["_L", 4.25, 1.0]]]
 
 
+def test_script_gives_a_primitive_without_edge_lines_its_edged_twins_snaps_once(tmp_path):
+    ldraw, shadow = tmp_path / "ldraw", tmp_path / "shadow"
+    # stud3a.dat is stud3.dat's post (radius 4, y -4..0) without its base edges; the shadow states stud3.dat only
+    post = "1 16 0 -4 0 4 0 0 0 4 0 0 0 4 4-4cyli.dat\n"
+    _write(ldraw, "p/stud3.dat", "0 Stud Tube Solid\n" + post + "1 16 0 0 0 4 0 0 0 1 0 0 0 4 4-4edge.dat\n")
+    _write(ldraw, "p/stud3a.dat", "0 Stud Tube Solid without Base Edges\n" + post)
+    _write(ldraw, "p/4-4cyli.dat", "0 Cylinder 1.0\n4 16 1 1 0 -1 1 0 -1 0 0 1 0 0\n")
+    _write(ldraw, "p/4-4edge.dat", "0 Circle 1.0\n2 24 1 0 0 -1 0 0\n")
+    # a primitive named like a twin whose title is not its twin's "without ...": not the same solid
+    _write(ldraw, "p/studa.dat", "0 Something Else\n" + post)
+    _write(ldraw, "p/stud.dat", "0 Stud\n" + post)
+    _write(shadow, "p/stud3.dat", "0 !LDCAD SNAP_CYL [id=stud3] [gender=M] [caps=one] [secs=R 4 4] [scale=YOnly]\n")
+    _write(shadow, "p/stud.dat", "0 !LDCAD SNAP_CYL [id=studC] [gender=M] [caps=one] [secs=R 6 4]\n")
+    # a Technic brick 1 x 2's post (stud3a.dat upside down, 1.5 times as long: y 18..24), a slope that states its
+    # post itself over the one it draws, and one that clears it by id
+    under = "1 16 0 18 0 1 0 0 0 -1.5 0 0 0 1 stud3a.dat\n"
+    _write(ldraw, "parts/9101.dat", "0 Technic Brick  1 x  2 Test\n" + under)
+    _write(ldraw, "parts/9102.dat", "0 Slope Test\n" + under)
+    _write(shadow, "parts/9102.dat", "0 !LDCAD SNAP_CYL [gender=M] [caps=one] [secs=R 4 6] [pos=0 24 0]\n")
+    _write(ldraw, "parts/9103.dat", "0 Cleared Test\n" + under + "1 16 0 0 0 1 0 0 0 1 0 0 0 1 stud.dat\n")
+    _write(shadow, "parts/9103.dat", "0 !LDCAD SNAP_CLEAR [id=stud3]\n")
+    _write(ldraw, "parts/9104.dat", "0 Other Test\n1 16 0 0 0 1 0 0 0 1 0 0 0 1 studa.dat\n")
+    parts = _script().derive(ldraw, shadow)
+    assert parts["9101"]["s"] == [["cyl", "M", "one", 0, [0.0, 18.0, 0.0], [0.0, 1.0, 0.0], [["R", 4.0, 6.0]]]]
+    assert parts["9102"]["s"] == [["cyl", "M", "one", 0, [0.0, 24.0, 0.0], [0.0, -1.0, 0.0], [["R", 4.0, 6.0]]]]
+    assert [s[4] for s in parts["9103"]["s"]] == [[0.0, 0.0, 0.0]]  # the stud only
+    assert "9104" not in parts
+
+
 def test_parts_the_shadow_library_renamed_since_the_ldraw_release_keep_their_own_lines():
     # The shadow library renamed 32556 to 32556a and 6192 to 6192a with LDraw's 2026-02 release; the 2024-05 library
     # still names them so. Their own lines (restored, data/README.md): the long pin one 60-LDU cylinder centred on

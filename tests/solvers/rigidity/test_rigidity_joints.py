@@ -371,17 +371,37 @@ def test_a_brick_whose_data_states_its_tubes_only_grips_the_studs_between_them(m
 
 
 def test_a_stud_midway_under_a_part_one_stud_wide_is_held_by_its_walls_unless_a_post_stands_there():
-    # OMR 21309 hangs 1 x 2 Technic bricks on jumper plates (15573): the jumper's one stud midway between the brick's
-    # two anti-studs, gripped by its long walls (a Technic brick has no post between them)
+    # a 1 x 2 plate with one centre stud (15573) under a 1 x 2 part: its stud midway between the part's two anti-studs
+    # (gripped by the long walls of a part that states no post there: the snap of the 1 x 2 tile 3069b, which
+    # draws no post)
     jumper = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 15573.dat\n"
-    assert joints(jumper + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
+    assert joints(jumper + "1 4 0 -8 0 1 0 0 0 1 0 0 0 1 3069b.dat\n") == [("hinge", "stud", "15573", "3069b", 1)]
     # turned a quarter turn it is the same grip; a quarter pitch along, the stud is neither midway nor under one
-    assert joints(jumper + "1 4 0 -24 0 0 0 1 0 1 0 -1 0 0 3700.dat\n") == [("hinge", "stud", "15573", "3700", 1)]
-    assert joints(jumper + "1 4 5 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == []
+    assert joints(jumper + "1 4 0 -8 0 0 0 1 0 1 0 -1 0 0 3069b.dat\n") == [("hinge", "stud", "15573", "3069b", 1)]
+    assert joints(jumper + "1 4 5 -8 0 1 0 0 0 1 0 0 0 1 3069b.dat\n") == []
     # a 1 x 2 brick states the post under its middle (the data's male cylinder): no room for a 1 x 1 plate's stud
     plate = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n"
-    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "stud", "3024", "3700", 1)]
     assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3004.dat\n") == []
+
+
+def test_the_post_of_a_part_drawn_with_the_edgeless_post_primitive_stands_in_a_hollow_stud_and_blocks_a_solid_one():
+    # the Technic brick 1 x 2 (3700) draws its post with stud3a.dat, which the snap data states through stud3.dat's
+    # line: OMR 21309 hangs four of them on jumper plates (15573), whose hollow stud takes the post (a round peg in
+    # a round bore: a hinge), quarter-turned or not
+    jumper = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 15573.dat\n"
+    assert joints(jumper + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == [("hinge", "fit", "15573", "3700", 1)]
+    assert joints(jumper + "1 4 0 -24 0 0 0 1 0 1 0 -1 0 0 3700.dat\n") == [("hinge", "fit", "15573", "3700", 1)]
+    assert joints(jumper + "1 4 5 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == []
+    # a 1 x 1 plate's solid stud where the post stands cannot be there: nothing (its walls were taken to grip it)
+    plate = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3024.dat\n"
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3700.dat\n") == []
+    assert joints(plate + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3701.dat\n") == []
+    # the generated slope 3040b's post (y 20..24 at z = -10) is a bar: in the jumper 3794a's hollow stud it turns and
+    # slides (as OMR 7140's R2-D2 stands on its legs' posts); over the jumper's stud by its anti-stud, a stud joint
+    jumper = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3794a.dat\n"
+    assert joints(jumper + "1 4 0 -24 10 1 0 0 0 1 0 0 0 1 3040b.dat\n") == [
+        ("cylindrical", "bar", "3040b", "3794a", 1)]
+    assert joints(jumper + "1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3040b.dat\n") == [("hinge", "stud", "3040b", "3794a", 1)]
 
 
 def test_a_male_cylinder_shorter_than_a_fit_depth_is_held_when_all_of_it_is_in_the_bore():
@@ -593,16 +613,18 @@ def test_the_x_wings_support_cart_and_the_parts_loose_in_it_stand_apart_as_one_h
     parts in one piece; two 3003 bricks lying on their side in its bed, and a 750/755 pair among the hose's 756
     segments (not in the catalogue), are pieces of their own. Together they are every known part of the two
     sub-models and touch nothing of the X-wing: the three pieces are one held sub-build, each named so, and
-    the report says how it was recognised. Biggs and R2-D2 are held sub-builds of one piece each."""
+    the report says how it was recognised. Biggs is a held sub-build of one piece; R2-D2 stands in the X-wing, each
+    leg's post (30362, drawn with stud3a.dat) in the hollow stud of a jumper plate 3794a."""
     request, result = omr("7140-1-X-wingFighter.mpd")
     number = {p.id: p.part for p in request.parts}
     cart = "7140 - Minifig - Rebel Technician.ldr + 7140 - Support Vehicle.ldr"
     assert [(len(pc.parts), pc.sub_build) for pc in result.pieces[1:]] == [
-        (67, cart), (10, "7140 - Minifig - Biggs Darklighter.ldr"), (4, "7140 - Minifig - R2-D2.ldr"),
-        (2, cart), (2, cart)]
-    assert [sorted(number[p] for p in pc.parts) for pc in result.pieces[4:]] == [["3003", "3003"], ["750", "755"]]
+        (67, cart), (10, "7140 - Minifig - Biggs Darklighter.ldr"), (2, cart), (2, cart)]
+    assert [sorted(number[p] for p in pc.parts) for pc in result.pieces[3:]] == [["3003", "3003"], ["750", "755"]]
     assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [
-        HELD_BY["loose"], HELD_BY["whole"], HELD_BY["whole"], HELD_BY["loose"], HELD_BY["loose"]]
+        HELD_BY["loose"], HELD_BY["whole"], HELD_BY["loose"], HELD_BY["loose"]]
+    legs = [j for j in result.joints if sorted(number[b] for b in j.bodies) == ["30362", "3794a"]]
+    assert [(j.type, j.origin) for j in legs] == [("cylindrical", "bar")] * 2
     assert "separate_pieces" not in {w.code for w in result.report.warnings}
 
 
