@@ -24,7 +24,10 @@ from plantsolve.solvers.skipped_input import line_list
 
 # a number as the table reads it (either decimal convention, thousands groups, an exponent) and a unit after it
 _NUMBER_AND_UNIT = re.compile(r"^(?P<number>[+\-\u2212]?[\d.,\u00a0\u202f]*\d(?:[eE][+\-]?\d+)?)\s*"
-                              r"(?P<unit>(?:1\s*/\s*)?[^\d\s.,+\-].*?)\s*$")  # '1/min' begins with a digit
+                              r"(?P<unit>(?:1\s*/\s*)?[^\d\s.,+\-].*)$")  # '1/min' begins with a digit
+# a number with a unit after it is short ('-1,234.5678 kg/s'); a longer cell is no such thing, and is refused as no
+# number without the unit pattern running over it
+_LONGEST = 64
 _RATIOS = {"%": "%", "‰": "‰", "percent": "%", "pct": "%", "permille": "‰"}
 
 
@@ -50,8 +53,8 @@ def _angle(unit: Unit) -> bool:
 def split_cell(cell: str) -> tuple[str, str | None]:
     """(number, unit) of a cell that writes a unit after its number (:func:`cell_unit`), else (cell, None): '0.85
     (est)' or a date stays as written, and is refused as no number."""
-    text = cell.strip().strip('"').rstrip()
-    if not text or text[-1].isdigit():  # nearly every cell: a plain number, no unit after it
+    text = cell.strip().strip('"').strip()  # stripped at both ends: the unit runs to the end, no blank after it
+    if not text or text[-1].isdigit() or len(text) > _LONGEST:  # nearly every cell: a plain number, no unit after it
         return cell, None
     m = _NUMBER_AND_UNIT.match(text)
     unit = cell_unit(m.group("unit")) if m else None

@@ -185,3 +185,21 @@ def test_radians_in_the_cells_of_a_degree_column_are_refused():
     with pytest.raises(InputRejected) as e:
         read("rig.csv", csv(["IGV [deg]", "Speed", "Flow [kg/s]", "PR", "Efficiency"], table))
     assert "'rad'" in e.value.errors[0].msg and "IGV [deg]" in e.value.errors[0].msg
+
+
+def test_a_long_cell_is_refused_as_no_number_without_the_unit_pattern_scanning_it():
+    # 'number, a word, 200 000 blanks, a word': the unit pattern's lazy group before '\s*$' retried the blanks at
+    # every extension (5 s of CPU for 40 KB); a cell longer than any number with its unit is no number
+    from plantsolve.solvers.perfmap.cell_units import split_cell
+
+    cell = "0.8 a" + " " * 200_000 + "b"
+    assert split_cell(cell) == (cell, None)
+    assert split_cell("  12.3 kg/s  ") == ("12.3", "kg/s")
+    table = rows()
+    text = "speed [rpm],flow [kg/s],pressure ratio,efficiency\n" + "\n".join(
+        ",".join(str(v) for v in r) for r in table)
+    text = text.replace(str(table[0][3]), cell, 1)
+    request = parse_upload(StoredInput.from_bytes("map.csv", text.encode()), None)
+    skipped = [w for w in request.upload_warnings if w.code == "upload_rows_skipped"]
+    assert skipped and "line 2: efficiency" in skipped[0].message and "is not a number" in skipped[0].message
+    assert len(skipped[0].message) < 500  # the cell is not repeated whole
