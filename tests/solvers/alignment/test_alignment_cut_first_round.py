@@ -19,6 +19,7 @@ def _answer(res) -> tuple[set, dict]:
 
 def _seeded(seed: int):
     # scan-like grids of 2 x 2 to 3 x 3 nodes whose second tie-in is shifted ~10 mm (sigma) and turned up to 3 deg
+    # (seed 117: main cut another connection than the all-LU path, ports 220 mm apart)
     rng = np.random.default_rng(seed)
     nx, ny = int(rng.integers(2, 4)), int(rng.integers(2, 4))
     shift = tuple(float(v) for v in np.round(rng.normal(0.0, 10.0, 3), 3))
@@ -30,7 +31,7 @@ CASES = {
     "3x3 loop grid, tie-in turned 3 deg": loop_grid_with_a_turned_tie_in,
     "2x2 seed 124": lambda: conflicting_tie_ins(2, 2, seed=124, shift=(13.965, 1.979, -0.364), turn=0.84,
                                                 valve_every=1),
-    **{f"seeded {seed}": (lambda seed=seed: _seeded(seed)) for seed in range(100, 116)},
+    **{f"seeded {seed}": (lambda seed=seed: _seeded(seed)) for seed in range(104, 120)},
 }
 
 
