@@ -50,8 +50,9 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     rounds: list[dict] = []  # what each round solved on and the iterations it counted (the report's details)
     st = Stages(progress)
     st.stage(0.1, 0.7, "direct solve")
-    # what each round solves on: "LDL^T" (the default's first round), "LU" (within use_schur(False), and every
-    # round after a cut the LU's pose decided), "LDL^T/LU" (the round after the first cut: see _after_cut_ends)
+    # what each round solves on: "LDL^T" (the default's first round), "LU" (within use_schur(False), the LU's pass
+    # of a round that ended on a conflict, and every round after a second cut), "LDL^T/LU" (the round after the
+    # first cut: see _after_cut_ends)
     mode = "LDL^T" if schur_in_use() else "LU"
 
     def run(mode: str, budget: int, said: str):
