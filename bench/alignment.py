@@ -289,8 +289,8 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
           "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
           "counted (rounds: each round's, with the factorisation it ran on and, in brackets, the steps and CPU seconds "
           "of its rotation averaging + joint Gauss-Newton; LDL^T/LU: the round after a first cut, its feasibility steps on "
-          "the LU; an LDL^T round whose cut an LU pass had to decide, or an LDL^T/LU round that did not close, is not "
-          "counted, the LU pass is).")
+          "the LU; an LDL^T round that ended on a conflict (the first cut is the LU pass's), or an LDL^T/LU round that did "
+          "not close, is not counted, the LU pass is).")
 
 
 def main() -> None:

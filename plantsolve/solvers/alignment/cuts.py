@@ -20,10 +20,6 @@ import numpy as np
 from plantsolve.solvers.alignment.model import Model
 
 CUT_MARGIN = 0.01  # relative: impacts within 1 % of the largest are equally to blame
-# relative: how far another factorisation's pose may move a conflict's impacts (measured: 1e-3 of the largest
-# impact, LU against LDL^T on a loop grid's 5 mm conflict); four times that for margin
-RESOLUTION = 4e-3
-SETTLED_ABOVE_SNAP = 1e3  # a conflict this many times what snapping closes is no crawl short of closing
 
 
 def error_impact(model: Model, gap: np.ndarray, ang: np.ndarray) -> np.ndarray:
@@ -50,27 +46,3 @@ def choose_cut(model: Model, active: np.ndarray, gap: np.ndarray, ang: np.ndarra
     near = np.flatnonzero(bad & (impact >= top - tie_width(model, top)))
     return int(min(near, key=lambda k: connection_key(model, k)))
 
-
-def settled_cut(model: Model, active: np.ndarray, gap: np.ndarray, ang: np.ndarray) -> int | None:
-    """The cut :func:`choose_cut` makes on this pose when any pose whose impacts, gaps and angle errors (times the
-    typical length) lie within :data:`RESOLUTION` of the largest impact of these makes the same one; else None.
-
-    Which connections tie with the largest is decided by where their impacts lie against the tie width, and a pose
-    of another factorisation moves them by up to RESOLUTION: the choice is settled when every connection lies
-    clear of that boundary by more than that, the tied ones are open by more than that, and the largest impact is
-    a conflict, far above what snapping closes (a Gauss-Newton sequence that crawled short of closing a singular
-    loop leaves a residual near it, which another factorisation may close)."""
-    k = choose_cut(model, active, gap, ang)
-    if k is None:
-        return None
-    impact = error_impact(model, gap, ang)
-    bad = active & ((gap > model.close_pos) | (ang > model.close_ang))
-    top = float(np.max(impact[bad]))
-    spread = RESOLUTION * top
-    if top - spread <= SETTLED_ABOVE_SNAP * (model.snap_pos + model.lref * float(np.max(model.snap_ang, initial=0.0))):
-        return None
-    low, high = top - spread - tie_width(model, top - spread), top + spread - tie_width(model, top + spread)
-    surely_open = (gap - spread > model.close_pos) | (ang * model.lref - spread > model.close_ang * model.lref)
-    surely_tied = (impact - spread >= high) & surely_open
-    surely_apart = impact + spread < low
-    return k if bool(np.all(surely_tied[active] | surely_apart[active])) else None

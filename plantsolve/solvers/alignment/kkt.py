@@ -37,10 +37,12 @@ matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
 0.8 of its memory on plant-like networks of 10,000 and 100,000 (with one analysis per sequence: 0.78-0.87
-and 0.82 in three and one runs). Where a connection has to be cut, the cut is the LU's (solve.py): decided on
-the LDL^T round's pose where that settles it (cuts.settled_cut), else on an LU pass; the round after the first
+and 0.82 in three and one runs). Where a connection has to be cut, the cut is the LU's (solve.py): a first round that ends on a conflict
+is run again on the LU, whose pose decides (a conflict's plateau depends on round-off); the round after the first
 cut solves its feasibility steps on the LU and the rest here, the rounds after a second cut are all the
-LU's (2026-11-29: 0.70-0.77 of the LU's time on the 40,000-component network in three runs, 0.87-0.90 before).
+LU's (2026-11-29: 0.98-1.03 of the LU's time on the 40,000-component network in three runs, 0.69-0.74 while the
+LDL^T's first round decided the cut where its impacts looked clear of the tie width, which took other cuts than
+the LU's on two of 42 grids).
 The round after the cut is most of a cut network's time: the README's alignment section has the sums.
 Another run on a machine loaded several times over (CPU seconds then vary by 10-20 % between runs of one code):
 plant-like 4,839 / 9,965 / 19,365 / 39,867 components 0.98 / 0.80 / 0.76 / 0.87 of the LU's CPU time and

@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact, settled_cut
+from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
@@ -50,8 +50,9 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     rounds: list[dict] = []  # what each round solved on and the iterations it counted (the report's details)
     st = Stages(progress)
     st.stage(0.1, 0.7, "direct solve")
-    # what each round solves on: "LDL^T" (the default's first round), "LU" (within use_schur(False), and every
-    # round after a cut the LU's pose decided), "LDL^T/LU" (the round after the first cut: see _after_cut_ends)
+    # what each round solves on: "LDL^T" (the default's first round), "LU" (within use_schur(False), the LU's pass
+    # of a round that ended on a conflict, and every round after a second cut), "LDL^T/LU" (the round after the
+    # first cut: see _after_cut_ends)
     mode = "LDL^T" if schur_in_use() else "LU"
 
     def run(mode: str, budget: int, said: str):
@@ -81,16 +82,14 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
         if k is not None and mode == "LDL^T":
-            # a cut is decided on the LU's pose: on singular loops the Schur complement's Gauss-Newton
-            # can stall short of closing where the LU's closes (measured: a 3 x 3 loop grid cut twice).
-            # Where the LDL^T's pose settles the choice (a conflict far above snapping, every impact clear of
-            # the tie width by more than the two factorisations' poses differ) the LU's pass would choose the
-            # same cut and is not run: the round after it starts from the input again, so the answer is the same
-            # (unless no cut may be made: then this pose would be the answer)
-            if len(reasons) >= opts.max_cuts or settled_cut(model, active, gap, ang) is None:
-                pose, iterations = replaced_by_lu(before)
-                gap, ang = connection_errors(model, pose.P, pose.D)
-                k = choose_cut(model, active, gap, ang)
+            # a cut is decided on the LU's pose: a conflict's first round stops on its plateau, where round-off
+            # decides how far Gauss-Newton ran along it (measured: the LDL^T's and the LU's plateaus 5 % and 10 x
+            # of the largest impact apart, each after five joint steps), so no margin on the LDL^T's pose tells
+            # the LU's choice; on singular loops the Schur complement's Gauss-Newton can also stall short of
+            # closing where the LU's closes (a 3 x 3 loop grid cut twice)
+            pose, iterations = replaced_by_lu(before)
+            gap, ang = connection_errors(model, pose.P, pose.D)
+            k = choose_cut(model, active, gap, ang)
             if k is not None:
                 mode = "LDL^T/LU"
         why = "conflict"
@@ -120,7 +119,7 @@ def _after_cut_ends(model: Model, active: np.ndarray, pose, capped: bool) -> boo
     Else the LU's pass of the round replaces it, and every round after is the LU's (a network cut more than once is
     cut as the all-LU path cuts it, bit for bit). A conflict's plateau is where Gauss-Newton stops running off along
     it, which round-off moves: on a 4 x 2 conflict grid the LDL^T/LU round's plateau took another cut than the LU's,
-    its impacts clear of the tie width as far as :func:`cuts.settled_cut` asks. A closing round has no plateau: it
+    its impacts clear of the tie width by 0.4 % of the largest. A closing round has no plateau: it
     ends within 1e-6 mm of the LU's (the LDL^T's steps are refined to the LU's solutions, and the feasibility steps,
     the crawl of singular loops among them, are the LU's). With the feasibility steps on the LDL^T too the crawl
     ended 5.2e-3 mm from the LU's on a 5 x 3 conflict grid."""

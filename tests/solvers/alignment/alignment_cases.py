@@ -112,3 +112,19 @@ def conflicting_tie_ins_and_a_free_branch():
     conns = [conn("E1", 1, "P", 0), conn("P", 1, "E2", 0), conn("E1", 0, "Q", 0), conn("Q", 1, "E3", 0),
              conn("E3", 1, "R", 0)]
     return request(comps, conns, method="direct")
+
+
+def loop_grid_with_a_turned_tie_in():
+    # a 3 x 3 loop grid whose second tie-in's port directions are turned 3 deg about z (its ports stay in place):
+    # its first round stops on the conflict's plateau, where the two factorisations' poses lie far apart
+    from scipy.spatial.transform import Rotation
+
+    from plantsolve.solvers.alignment.synthetic import grid_network
+
+    req = grid_network(3, 3, seed=2, tie_ins=((0, 0), (2, 2)), origin=(1.0e6, 2.0e5, 1.0e4),
+                       options={"method": "direct", "max_cuts": 5})
+    comps = [c.model_copy(deep=True) for c in req.components]
+    moved = [c for c in comps if c.fixed][-1]
+    for p in moved.ports:
+        p.direction = Rotation.from_rotvec([0.0, 0.0, np.radians(3.0)]).apply(p.direction).tolist()
+    return req.model_copy(update={"components": comps})

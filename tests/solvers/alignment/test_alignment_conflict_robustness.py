@@ -4,7 +4,6 @@ broken by the connections' (id, port) keys."""
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.solve import solve
@@ -12,17 +11,11 @@ from plantsolve.solvers.alignment.cuts import choose_cut, tie_width
 from plantsolve.solvers.alignment.model import build_model
 from plantsolve.solvers.alignment.synthetic import grid_network
 
-from alignment_cases import conflicting_tie_ins_and_a_free_branch, straight_run_between_tie_ins
-
-
-def _loop_grid_with_a_turned_tie_in():
-    req = grid_network(3, 3, seed=2, tie_ins=((0, 0), (2, 2)), origin=(1.0e6, 2.0e5, 1.0e4),
-                       options={"method": "direct", "max_cuts": 5})
-    comps = [c.model_copy(deep=True) for c in req.components]
-    moved = [c for c in comps if c.fixed][-1]
-    for p in moved.ports:
-        p.direction = Rotation.from_rotvec([0.0, 0.0, np.radians(3.0)]).apply(p.direction).tolist()
-    return req.model_copy(update={"components": comps})
+from alignment_cases import (
+    conflicting_tie_ins_and_a_free_branch,
+    loop_grid_with_a_turned_tie_in,
+    straight_run_between_tie_ins,
+)
 
 
 def _shuffled(req: AlignmentRequest, seed: int) -> AlignmentRequest:
@@ -40,7 +33,7 @@ def _outcome(req: AlignmentRequest, res) -> tuple[set, dict]:
 
 
 @pytest.mark.parametrize("case", [straight_run_between_tie_ins, conflicting_tie_ins_and_a_free_branch,
-                                  _loop_grid_with_a_turned_tie_in])
+                                  loop_grid_with_a_turned_tie_in])
 def test_conflicts_are_cut_the_same_whatever_the_input_order(case):
     req = case()
     ref = solve(req).result
