@@ -57,7 +57,8 @@ def misplaced_subsurfaces(poly: Polygons, planarity_tolerance: float,
             misplaced.append({"face": poly.face_ids[sub], "host": poly.face_ids[host], "off_plane": off_plane,
                               "outside": outside})
         else:
-            by_host.setdefault(host, []).append((sub, shapely.Polygon(local[:, :2])))
+            # a self-intersecting window (corners in a bow-tie order) as the areas it covers, so its overlap is measured
+            by_host.setdefault(host, []).append((sub, shapely.make_valid(shapely.Polygon(local[:, :2]))))
     for host, shapes in by_host.items():
         if len(shapes) < 2:
             continue
@@ -67,10 +68,7 @@ def misplaced_subsurfaces(poly: Polygons, planarity_tolerance: float,
         once = left < right
         # a thousand copies of one window would be half a million pairs: the first are enough to name them
         for i, j in zip(left[once][:MAX_PAIRS].tolist(), right[once][:MAX_PAIRS].tolist(), strict=True):
-            try:
-                area = float(shapely.intersection(polygons[i], polygons[j]).area)
-            except shapely.errors.GEOSException:  # a self-intersecting window: no overlap measured
-                continue
+            area = float(shapely.intersection(polygons[i], polygons[j]).area)
             if area > merge_tolerance * max(polygons[i].length, polygons[j].length):  # more than a shared edge
                 overlaps.append({"faces": [poly.face_ids[shapes[i][0]], poly.face_ids[shapes[j][0]]],
                                  "host": poly.face_ids[host], "overlap_area": area})

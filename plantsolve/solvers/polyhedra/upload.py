@@ -615,8 +615,9 @@ def parse_stl(content: bytes) -> dict:
                          f"non-finite coordinates, coordinates beyond {MAX_COORDINATE:g} or repeated corners")
     # an ASCII file names its solid; a binary header is free text, often an exporter's banner
     name = (str((loaded.get("metadata") or {}).get("name") or "").strip() if ascii_like else "") or "default"
-    if solid_of is not None and len(set(solid_of.tolist())) > 1:
-        # one zone per solid, as faces (a mesh is one zone): joined, two rooms were one zone named after the last
+    if solid_of is not None and len(set(solid_of.tolist())) > 1 and _each_closed(vertices, triangles, solid_of):
+        # one zone per solid, as faces (a mesh is one zone): joined, two rooms were one zone named after the last.
+        # Only where each solid is closed on its own: CAD tools also write one room as a solid per wall or group
         faces = [{"id": f"{solid_names[z]} t{k + 1}", "loops": [t], "zones": [solid_names[z]]}
                  for k, (t, z) in enumerate(zip(triangles.tolist(), solid_of.tolist(), strict=True))]
         return {"units": "m", "vertices": vertices.tolist(), "faces": faces,
@@ -632,6 +633,17 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _each_closed(vertices: np.ndarray, triangles: np.ndarray, solid_of: np.ndarray) -> bool:
+    """Whether every solid's triangles close on their own: each edge, its corners matched by coordinates (the reader
+    keeps every facet's corners apart), borne by an even number of its triangles."""
+    _, point = np.unique(vertices, axis=0, return_inverse=True)
+    corners = point.reshape(-1)[triangles]
+    edges = np.sort(np.concatenate([corners[:, [0, 1]], corners[:, [1, 2]], corners[:, [2, 0]]]), axis=1)
+    owner = np.concatenate([solid_of] * 3)
+    _, counts = np.unique(np.column_stack([owner, edges]), axis=0, return_counts=True)
+    return bool(np.all(counts % 2 == 0))
 
 
 def _joined_solids(geometry: dict) -> tuple[dict, list[str], np.ndarray]:

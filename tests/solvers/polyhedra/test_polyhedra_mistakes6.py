@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
@@ -266,6 +267,23 @@ def test_the_solids_of_an_ascii_stl_are_zones_of_their_own():
     assert one.id == "room_a" and one.volume == pytest.approx(60.0)
 
 
+def test_one_room_written_as_a_solid_per_wall_stays_one_zone():
+    """CAD tools also write one room as a solid per object or group (floor, roof, four walls): none closes alone, so
+    they are one zone, as before solids were zones (each solid a zone, six open zones and no volume)."""
+    import trimesh
+
+    box = trimesh.creation.box(extents=(5, 4, 3))
+    parts = []
+    for k, (normal, name) in enumerate([((0, 0, -1), "floor"), ((0, 0, 1), "roof"), ((1, 0, 0), "wall_e"),
+                                        ((-1, 0, 0), "wall_w"), ((0, 1, 0), "wall_n"), ((0, -1, 0), "wall_s")]):
+        side = box.face_normals @ np.array(normal, dtype=float) > 0.5
+        part = trimesh.Trimesh(box.vertices, box.faces[side], process=False)
+        text = part.export(file_type="stl_ascii")
+        parts.append(f"solid {name}\n" + text.split("\n", 1)[1].rsplit("endsolid", 1)[0] + f"endsolid {name}\n")
+    (zone,) = _solved("room.stl", "".join(parts)).zones
+    assert zone.volume == pytest.approx(60.0) and zone.floor_area == pytest.approx(20.0)
+
+
 def test_a_building_none_of_whose_zones_one_stands_in_is_named():
     """A gbXML whose lengthUnit says Feet over numbers in metres (and states no Space measures) gave three offices
     0.91 m high, 1.7 m³ each: each one plausible alone (a plenum), no word. A building of several zones whose tallest
@@ -281,3 +299,17 @@ def test_a_building_none_of_whose_zones_one_stands_in_is_named():
     assert not [w for w in right.report.warnings if w.code.startswith("implausible")]
     plenum = _solved("box.stl", (Path(__file__).parent / "data" / "ascii_box.stl").read_text())  # one low zone alone
     assert not [w for w in plenum.report.warnings if w.code.startswith("implausible")]
+
+
+def test_a_self_intersecting_window_over_another_is_measured_as_the_area_it_covers():
+    """A window whose corners are in a bow-tie order overlapping another window: GEOS refused to intersect the invalid
+    polygon and the pair was skipped, no word. Its two triangles (0.5 m² each, meeting at y = 2, z = 1.5) reach into the
+    pane (y 1.5 to 2.5) by 0.125 m² each: 0.25 m² in all."""
+    body = json.loads((Path(__file__).parents[3] / "examples" / "polyhedra" / "gable_house.json").read_text())
+    body["faces"] += [
+        {"id": "bowtie", "parent": "wall-west", "loops": [[[0, 1, 1], [0, 3, 2], [0, 3, 1], [0, 1, 2]]]},
+        {"id": "pane", "parent": "wall-west", "loops": [[[0, 1.5, 0.5], [0, 1.5, 2.5], [0, 2.5, 2.5], [0, 2.5, 0.5]]]}]
+    result = _solved("house.json", json.dumps(body))
+    (warning,) = [w for w in result.report.warnings if w.code == "subsurfaces_overlap"]
+    (pair,) = warning.details["pairs"]
+    assert sorted(pair["faces"]) == ["bowtie", "pane"] and pair["overlap_area"] == pytest.approx(0.25)
