@@ -111,12 +111,15 @@ def test_cli_runs_stay_out_of_the_servers_database_unless_named(tmp_path):
 
 
 def test_a_perfmap_run_prints_each_of_its_warnings_with_its_code(tmp_path):
-    """The issue's case: the N+3 map succeeds with warnings, and standard error lists every one."""
+    """The issue's case: the N+3 map succeeds with warnings, and standard error lists every one; the --options
+    given reach the solver (the map on the grid asked for) and every artifact is written beside the result."""
     examples = Path(__file__).resolve().parents[2] / "examples" / "perfmap"
     done = run_plantsolve(["solve", "perfmap", str(examples / "n3_fan_map.csv"), "-o", "map.json",
                            "--options", '{"grid": [16, 16]}'], tmp_path, timeout=300)
     assert done.returncode == 0, done.stderr
-    warnings = json.loads((tmp_path / "map.json").read_text())["report"]["warnings"]
+    result = json.loads((tmp_path / "map.json").read_text())
+    assert len(result["map"]["flow"]) == 16 and len(result["map"]["pressure"]) == 16
+    warnings = result["report"]["warnings"]
     printed = [ln for ln in done.stderr.splitlines() if ln.startswith("warning [")]
     assert warnings and len(printed) == len(warnings)
     assert [ln.split("]")[0][len("warning ["):] for ln in printed] == [w["code"] for w in warnings]

@@ -45,8 +45,8 @@ def test_api_and_two_workers_share_no_disk(back_end, pg_url, redis_url, tmp_path
                                                                 if k.startswith(("BLOB", "S3"))})
         assert settings.resolved_blob_store == back_end  # postgres: the default on a PostgreSQL DATABASE_URL
         client = stack.enter_context(TestClient(create_app(settings)))  # migrates the database
-        workers = [Worker(_worker_env(pg_url, redis_url, folders[name], blob_env), name, folders[name] / "worker.log")
-                   for name in ("worker-1", "worker-2")]
+        workers = Worker.several([(_worker_env(pg_url, redis_url, folders[name], blob_env), name,
+                                   folders[name] / "worker.log") for name in ("worker-1", "worker-2")])
         for worker in workers:
             stack.callback(worker.stop)
 

@@ -1,6 +1,6 @@
 """The perfmap solver through the service: JSON and CSV submissions, artifacts, the inverse
-query endpoint, bad input as 422, and the CLI — on the real N+3 fan map (pyCycle, Apache-2.0;
-see examples/perfmap/README.md)."""
+query endpoint and bad input as 422 — on the real N+3 fan map (pyCycle, Apache-2.0; see
+examples/perfmap/README.md). The CLI's run of this map is tests/cli/test_cli.py's (one subprocess solve)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from tests.conftest import REPO, run_plantsolve, wait_for
+from tests.conftest import REPO, wait_for
 
 EXAMPLES = REPO / "examples" / "perfmap"
 
@@ -84,13 +84,6 @@ def test_csv_upload_and_bad_tables(finished):
     for name, content in (("m.txt", b"theta"), ("rig.xls", b"\xd0\xcf\x11\xe0")):  # an old Excel workbook too
         refused = client.post("/v1/perfmap/jobs", files={"file": (name, content, "application/octet-stream")})
         assert refused.status_code == 415 and ".xlsx" in refused.json()["detail"], refused.text
-
-
-def test_cli_solves_the_example(tmp_path):
-    done = run_plantsolve(["solve", "perfmap", str(EXAMPLES / "n3_fan_map.csv"), "-o", str(tmp_path / "map.json"), "--options", '{"grid": [24, 24]}'], tmp_path)
-    assert done.returncode == 0, done.stderr
-    result = json.loads((tmp_path / "map.json").read_text())
-    assert len(result["map"]["flow"]) == 24 and (tmp_path / "map_artifacts" / "map.png").exists()
 
 
 def test_units_xlsx_upload_and_csv_exports_through_the_service(finished):
