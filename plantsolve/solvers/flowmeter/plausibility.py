@@ -54,7 +54,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"{FIELD_T[0]:g} to {FIELD_T[1]:g} T: " + ("mT written as T?" if abs(field_tesla) > FIELD_T[1]
                                                          else "gauss or µT written as T?")
             + (" The field file's header states no unit for B: its values were read as tesla."
-               if grid is not None and not grid.units_stated else ""),
+               if grid is not None and grid.field_unit is None else ""),
             details={"quantity": "magnetic_field", "value": field_tesla, "range_t": list(FIELD_T)}))
     v = request.velocity
     samples = v.type == "samples"
@@ -113,7 +113,7 @@ def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Di
         message=f"Magnetic field grid: {quantity} reaches {r:g} {request.units}, {r / radius:.4g} pipe radii "
         f"(radius {radius:g} {request.units}); a magnet's field is computed a few radii around the pipe: grid "
         f"coordinates in a unit 1000 times smaller than '{request.units}' (mm with units 'm')? The grid is in the "
-        "request's units" + ("" if f.units_stated else " (the field file's header states no length unit)")
+        "request's units" + ("" if f.length_unit is not None else " (the field file's header states no length unit)")
         + "; across the pipe the field is read between grid nodes this far apart.",
         details={"quantity": quantity, "reach": r, "radius": radius, "units": request.units,
                  "radii": r / radius})]
