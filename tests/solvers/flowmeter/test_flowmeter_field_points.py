@@ -213,3 +213,72 @@ def test_many_thin_grid_lines_are_refused_from_their_counts_at_once():
     rows = np.column_stack([xs, np.arange(len(xs)) % 2, np.arange(len(xs)) % 3 // 2, 0 * xs, 0.01 + 0 * xs])
     with pytest.raises(PointsNotAGrid, match=f"the points lie on {2 * m - 1} distinct x values"):
         place_on_grid(rows)
+
+
+def plain_csv(rows: np.ndarray, header: str = "x [mm],y [mm],z [mm],Bx [T],By [T]", end: str = "") -> str:
+    return header + end + "\n" + "\n".join(",".join(f"{v:.17g}" for v in row[:5]) + end for row in rows) + "\n"
+
+
+@pytest.mark.parametrize("text", [
+    plain_csv(fortran_rows(1.0, 1.0), '"x [mm]","y [mm]","z [mm]","Bx [T]","By [T]"'),  # R's write.csv, pandas
+    plain_csv(fortran_rows(1.0, 1.0), end=","),  # a delimiter ending every line
+    plain_csv(fortran_rows(1.0, 1e4), "x [MM],y [MM],z [MM],Bx [Gauss],By [Gauss]"),
+    plain_csv(fortran_rows(1.0, 1.0), "x [mm],y [mm],z [mm],Bx [tesla],By [tesla]"),
+    plain_csv(fortran_rows(1.0, 1e3), "x [mm],y [mm],z [mm],Bx [millitesla],By [millitesla]"),
+])
+def test_quoted_headers_trailing_delimiters_and_unit_spellings_read_as_the_plain_file(text):
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    plain = read_field_file(plain_csv(fortran_rows(1.0, 1.0)), "mm")
+    table = read_field_file(text, "mm")
+    np.testing.assert_allclose(table.rows, plain.rows, rtol=1e-15, atol=0)
+    assert (table.lines == plain.lines).all() and table.length_unit == "mm"
+
+
+def test_a_unit_whose_case_decides_it_is_not_read_in_another_case():
+    with pytest.raises(InputRejected, match="field unit 'MT' is not known"):  # megatesla, not mT
+        request(magnetic_field_file=plain_csv(fortran_rows(1.0, 1e3), "x [mm],y [mm],z [mm],Bx [MT],By [MT]"))
+
+
+def test_a_contradicting_length_unit_is_refused_and_agreeing_spellings_are_one():
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    comsol = comsol_export(fortran_rows(1.0, 1.0), "m", "T").replace("% x  ", "% x (mm)  ", 1)
+    with pytest.raises(InputRejected, match="coordinates are given in m and mm"):
+        request(magnetic_field_file=comsol)
+    assert read_field_file(comsol_export(fortran_rows(1.0, 1.0), "MM", "T"), "mm").length_unit == "mm"
+
+
+def test_a_header_stating_mm_over_coordinates_in_metres_is_not_said_to_state_no_unit():
+    text = plain_csv(fortran_rows(1e-3, 1.0), "x [mm],y [mm],z [mm],Bx,By")
+    with pytest.raises(InputRejected) as refused:
+        request(magnetic_field_file=text)
+    message = refused.value.errors[0].msg
+    assert "does not cover the pipe" in message and "header states its coordinates in mm" in message
+    assert "no length unit" not in message
+
+
+# Header lines that once made the header's patterns backtrack over the whole line for each place in it: seconds
+# for tens of kB. The answer is asserted; were a pattern quadratic again, these would turn visibly slow (minutes).
+def test_a_long_header_line_of_blanks_reads_in_linear_time():
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    text = "% a" + " " * 100_000 + "b\n% x y z mf.Bx (T) mf.By (T)\n1 2 3 4 5\n"
+    assert read_field_file(text, "mm").rows.tolist() == [[1.0, 2.0, 3.0, 4.0, 5.0]]
+
+
+@pytest.mark.parametrize("text", ["% " + "a(" * 100_000 + "\n1 2 3 4 5\n",
+                                  "x,y,z,Bx,By " + "[a" * 100_000 + "\n1,2,3,4,5\n"])
+def test_a_long_header_line_of_unclosed_brackets_is_refused_in_linear_time(text):
+    from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
+
+    with pytest.raises(FieldFileError, match=r"line 1: the header names no column .*and \d+ more|names no column by"):
+        read_field_file(text, "mm")
+
+
+def test_a_file_of_more_rows_than_a_grid_has_points_is_refused(monkeypatch):
+    from plantsolve.solvers.flowmeter import field as field_module
+
+    monkeypatch.setattr(field_module, "GRID_POINTS_MAX", 692)  # the file's 693 rows, one too many
+    with pytest.raises(InputRejected, match="the file holds 693 rows; a field has at most 692 points"):
+        request(magnetic_field_file=plain_csv(fortran_rows(1.0, 1.0)))
