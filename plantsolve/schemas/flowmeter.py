@@ -32,6 +32,10 @@ from plantsolve.schemas.common import Measured, Report, StrictModel, Units, unit
 Tesla = Annotated[float, Field(allow_inf_nan=False, ge=-100, le=100)]
 
 
+# a grid field's points (a flat grid's values, a field file's rows)
+GRID_POINTS_MAX = 2_000_000
+
+
 class Pipe(StrictModel):
     radius: float = Field(gt=0, le=1e9, allow_inf_nan=False, description="Inner radius R of the liner.")
     liner_length: float | None = Field(
@@ -74,8 +78,9 @@ class GridField(StrictModel):
 
     ``bx``, ``by``, ``bz`` hold one value per grid point in C order (x slowest, z fastest): the value at
     (x[i], y[j], z[k]) is at index (i * len(y) + j) * len(z) + k. A tool that writes x fastest (MATLAB,
-    numpy's order='F', COMSOL's grid export) gives another field that no check can tell apart when the axes
-    are equally long: give such a field as ``points`` (each value with its coordinates), which has no order.
+    numpy's order='F', COMSOL's grid export) gives another field, which the values alone cannot tell apart
+    (a smooth field reads smooth in several orders): give such a field as ``points`` (each value with its
+    coordinates), which has no order.
     The grid must cover the liner section (|x|, |y| <= R, |z| <= L/2). S is normalised by B_y at the pipe centre.
     """
 
@@ -83,11 +88,11 @@ class GridField(StrictModel):
     x: list[Measured] = Field(min_length=2, max_length=400, description="Grid x coordinates, increasing (units).")
     y: list[Measured] = Field(min_length=2, max_length=400, description="Grid y coordinates, increasing (units).")
     z: list[Measured] = Field(min_length=2, max_length=400, description="Grid z coordinates, increasing (units).")
-    bx: list[Tesla] = Field(max_length=2_000_000, description="B_x in tesla per grid point, C order: x slowest, z "
+    bx: list[Tesla] = Field(max_length=GRID_POINTS_MAX, description="B_x in tesla per grid point, C order: x slowest, z "
                             "fastest (index (i * len(y) + j) * len(z) + k); a field in another order is "
                             "given as type 'points', which needs none.")
-    by: list[Tesla] = Field(max_length=2_000_000, description="B_y in tesla per grid point (C order).")
-    bz: list[Tesla] | None = Field(default=None, max_length=2_000_000,
+    by: list[Tesla] = Field(max_length=GRID_POINTS_MAX, description="B_y in tesla per grid point (C order).")
+    bz: list[Tesla] | None = Field(default=None, max_length=GRID_POINTS_MAX,
                                    description="B_z per grid point; it does not enter U (the flow is axial).")
 
 
@@ -120,7 +125,8 @@ class Velocity(StrictModel):
         default=None, max_length=100_000, description="Axial velocity (m/s) at each sample point, |v| <= 1000 m/s.")
 
 
-# the text of a field file: a 61 x 61 x 81 grid written at full precision by COMSOL is about 40 MB
+# the text of a field file: a 61 x 61 x 81 grid written at full precision by COMSOL is about 40 MB; its rows are
+# at most GRID_POINTS_MAX (2,000,000), a grid's points, refused beyond
 MAGNETIC_FIELD_FILE_MAX = 50_000_000
 
 

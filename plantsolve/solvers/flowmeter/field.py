@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
-from plantsolve.schemas.flowmeter import FlowmeterRequest
+from plantsolve.schemas.flowmeter import GRID_POINTS_MAX, FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
 from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
 from plantsolve.solvers.flowmeter.field_points import PlacedField, PointsNotAGrid, place_on_grid
@@ -36,7 +36,10 @@ class RequestField:
     by: np.ndarray
     loc: tuple[str, ...]  # the request's field that gave it, for errors
     conversions: list[dict]
-    units_stated: bool  # False for a file whose header gives no units (read as the request's units and tesla)
+    # the units a file's header states, each on its own (None: not stated, read as the request's units or tesla);
+    # the request's forms state theirs by the schema
+    length_unit: str | None
+    field_unit: str | None
     description: str
 
 
@@ -66,13 +69,16 @@ def request_field(request: FlowmeterRequest) -> RequestField | None:
             table = read_field_file(text, request.units)
         except FieldFileError as exc:
             raise InputRejected(FieldError(FILE, str(exc))) from None
+        if len(table.rows) > GRID_POINTS_MAX:
+            raise InputRejected(FieldError(FILE, f"the file holds {len(table.rows)} rows; a field has at most "
+                                                 f"{GRID_POINTS_MAX:,} points (a grid's)"))
 
         def where(row, msg):
             return FieldError(FILE, msg if row is None else f"line {int(table.lines[row])}: {msg}")
 
         placed = _placed(table.rows, where, lambda row: f"line {int(table.lines[row])}")
         return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, FILE, table.conversions,
-                            table.length_unit is not None and table.field_unit is not None, table.description)
+                            table.length_unit, table.field_unit, table.description)
     if f.type == "points":
         bad = [k for k, row in enumerate(f.points) if len(row) not in (5, 6)]
         if bad:
@@ -85,13 +91,13 @@ def request_field(request: FlowmeterRequest) -> RequestField | None:
             return FieldError(POINTS if row is None else (*POINTS, row), msg)
 
         placed = _placed(np.asarray(f.points, dtype=float), where, lambda row: f"points[{row}]")
-        return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, POINTS, [], True,
+        return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, POINTS, [], request.units, "T",
                             f"points, {len(f.points)} rows")
     if f.type == "grid":
         shape = (len(f.x), len(f.y), len(f.z))
         return RequestField(*(np.asarray(v, dtype=float) for v in (f.x, f.y, f.z)),
                             np.asarray(f.bx, dtype=float).reshape(shape), np.asarray(f.by, dtype=float).reshape(shape),
-                            ("magnetic_field",), [], True, "grid (C order)")
+                            ("magnetic_field",), [], request.units, "T", "grid (C order)")
     return None
 
 

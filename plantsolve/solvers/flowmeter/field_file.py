@@ -11,6 +11,7 @@ sectionwise formats (the values' order implied, not written) are refused naming 
 
 from __future__ import annotations
 
+import io
 import re
 from dataclasses import dataclass, field
 
@@ -18,14 +19,18 @@ import numpy as np
 
 LENGTH_M = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "in": 0.0254, "ft": 0.3048}
 FIELD_T = {"T": 1.0, "mT": 1e-3, "uT": 1e-6, "µT": 1e-6, "μT": 1e-6, "nT": 1e-9, "G": 1e-4, "Gs": 1e-4,
-           "gauss": 1e-4, "kG": 0.1}
+           "gauss": 1e-4, "kG": 0.1, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9}
+# units read only as written: mT (MT would be megatesla), kG (kg is a mass); the others in any case ([Gauss], [MM])
+CASE_KEPT = {"mT", "kG"}
 ROLES = ("x", "y", "z", "bx", "by", "bz")
 # a header token: a name, its unit in brackets, and COMSOL's '@ t=0.1' of a solution in a sweep
-TOKEN = re.compile(r"[^\s()\[\]]+(?:\s*[(\[][^)\]]*[)\]])?(?:\s*@\s*\S+)?")
+# (a unit holds no bracket: each bracket ends a scan, so a line of unclosed brackets is read in linear time)
+TOKEN = re.compile(r"[^\s()\[\]]+(?:\s*[(\[][^()\[\]]*[)\]])?(?:\s*@\s*\S+)?")
 # COMSOL's header keys (its .csv export writes '% Length unit,mm': known by the key, not the colon)
 COMSOL_META = {"model", "version", "date", "dimension", "nodes", "expressions", "description", "length unit", "table"}
-META = re.compile(r"^\s*([A-Za-z][A-Za-z ]*?)\s*[:,]\s*(.*)$")
-UNIT = re.compile(r"[(\[]\s*([^)\]]*?)\s*[)\]]")
+# the key's letters and blanks cannot match the separator: one way to read a line, linear in its length
+META = re.compile(r"([A-Za-z][A-Za-z ]*)[:,](.*)")
+UNIT = re.compile(r"[(\[]([^()\[\]]*)[)\]]")
 
 
 class FieldFileError(ValueError):
@@ -52,13 +57,25 @@ def _role(token: str) -> str | None:
 
 def _unit(token: str) -> str | None:
     found = UNIT.search(token.split("@")[0])
-    return found.group(1) if found and found.group(1) else None
+    return found.group(1).strip() or None if found else None
 
 
 def _split(line: str, delimiter: str | None) -> list[str]:
+    """A line's fields: quotes around a field (R's write.csv, pandas) and a delimiter ending the line dropped."""
     if delimiter is None:
         return line.split()
-    return [part.strip() for part in line.split(delimiter)]
+    parts = [part.strip().strip('"').strip() for part in line.split(delimiter)]
+    return parts[:-1] if len(parts) > 1 and parts[-1] == "" and line.rstrip().endswith(delimiter) else parts
+
+
+def _lines(text: str, start: int = 0, number: int = 1):
+    """(line number, line, its offset, the next line's offset) from ``start`` on, one at a time: a field file of
+    millions of rows is not split into millions of strings."""
+    while start < len(text):
+        end = text.find("\n", start)
+        end = len(text) if end < 0 else end
+        yield number, text[start:end].rstrip("\r"), start, end + 1
+        start, number = end + 1, number + 1
 
 
 def _delimiter(line: str) -> str | None:
@@ -70,12 +87,14 @@ def _delimiter(line: str) -> str | None:
 
 def read_field_file(text: str, units: str) -> FieldTable:
     """The rows of a field file, converted to the request's ``units`` and tesla."""
-    lines = text.lstrip("\ufeff").splitlines()  # a byte-order mark a Windows tool left before the first line
+    text = text.lstrip("\ufeff")  # a byte-order mark a Windows tool left before the first line
+    if "\n" not in text:
+        text = text.replace("\r", "\n")  # a classic Mac file's line ends
     meta: dict[str, str] = {}
     header: tuple[int, str] | None = None
     comsol = False
     first_data = None
-    for number, raw in enumerate(lines, start=1):
+    for number, raw, offset, _ in _lines(text):
         line = raw.strip()
         if not line or line.startswith("#"):
             continue
@@ -94,7 +113,7 @@ def read_field_file(text: str, units: str) -> FieldTable:
                 header = (number, body)
             continue
         if re.match(r"^[-+.\d]", line) and not re.match(r"^[-+]?[A-Za-z]", line):
-            first_data = number
+            first_data = (number, offset, line)
             break
         if header is not None and not comsol:
             raise FieldFileError(f"line {number}: '{line[:60]}' is neither a number row nor the header (line {header[0]})")
@@ -105,7 +124,7 @@ def read_field_file(text: str, units: str) -> FieldTable:
                              "is not guessed")
     if first_data is None:
         raise FieldFileError(f"the file has a header (line {header[0]}) but no rows of numbers")
-    delimiter = _delimiter(lines[first_data - 1].strip())
+    delimiter = _delimiter(first_data[2])
     header_delimiter = _delimiter(header[1])
     tokens = _split(header[1], header_delimiter) if header_delimiter else TOKEN.findall(header[1])
     tokens = [t for t in tokens if t]
@@ -121,32 +140,13 @@ def read_field_file(text: str, units: str) -> FieldTable:
                                  "several solutions (a sweep or times); export one")
     missing = [r for r in ROLES[:5] if r not in roles]
     if missing:
+        named = ", ".join(repr(t[:40]) for t in tokens[:10]) + (f" and {len(tokens) - 10} more" if len(tokens) > 10 else "")
         raise FieldFileError(f"line {header[0]}: the header names no column {', '.join(missing)} (it names "
-                             f"{', '.join(repr(t) for t in tokens)}); a field file needs x, y, z, Bx and By")
+                             f"{named}); a field file needs x, y, z, Bx and By")
     length_unit = _length_unit(tokens, roles, meta, header[0])
     field_unit = _field_unit(tokens, roles, header[0])
     used = [roles[r][0] for r in ROLES if r in roles]
-    decimal_comma = delimiter == ";"
-    data, numbers = [], []
-    for number in range(first_data, len(lines) + 1):
-        line = lines[number - 1].strip()
-        if not line or line.startswith(("%", "#")):
-            continue
-        parts = _split(line, delimiter)
-        if len(parts) != len(tokens):
-            raise FieldFileError(f"line {number}: {len(parts)} values for the header's {len(tokens)} columns (line "
-                                 f"{header[0]}){'; a cut file?' if number == len(lines) else ''}")
-        try:
-            values = [float(parts[c].replace(",", ".") if decimal_comma else parts[c]) for c in used]
-        except ValueError:
-            raise FieldFileError(f"line {number}: '{line[:60]}' is not a row of numbers") from None
-        if not all(np.isfinite(values)):
-            raise FieldFileError(f"line {number}: a value is {'NaN' if any(np.isnan(values)) else 'infinite'} (COMSOL "
-                                 "writes NaN at points outside its geometry): export the field on a grid inside the "
-                                 "model, around the liner section")
-        data.append(values)
-        numbers.append(number)
-    rows = np.asarray(data, dtype=float)
+    rows, numbers = _rows(text, first_data[:2], len(tokens), used, delimiter, header[0])
     length_factor = 1.0 if length_unit is None else LENGTH_M[length_unit] / LENGTH_M[units]
     field_factor = 1.0 if field_unit is None else FIELD_T[field_unit]
     conversions = []
@@ -159,29 +159,85 @@ def read_field_file(text: str, units: str) -> FieldTable:
         conversions.append({"quantity": "magnetic field file: B", "from_unit": field_unit, "to_unit": "T",
                             "factor": field_factor, "basis": "the file's header"})
     kind = "COMSOL spreadsheet export" if comsol else "CSV with a header"
-    return FieldTable(rows, np.asarray(numbers), length_unit, field_unit, conversions,
+    return FieldTable(rows, numbers, length_unit, field_unit, conversions,
                       f"{kind}, {len(rows)} rows, columns {', '.join(tokens[c] for c in used)}")
+
+
+def _rows(text: str, first: tuple[int, int], columns: int, used: list[int], delimiter: str | None,
+           header: int) -> tuple[np.ndarray, np.ndarray]:
+    """The number rows from line ``first`` (its number, its offset) on, the ``used`` columns, and each row's line
+    number. numpy's reader takes a file of plain rows (at most 2,000,000, the grid's points) in one pass; any
+    other file (comment lines among the rows, a row of text, NaN, a cut line) is read line by line, which names the
+    line at fault."""
+    number, start = first
+    block = text[start:]
+    if delimiter == ";":
+        block = block.replace(",", ".")  # decimal commas
+    try:
+        table = np.loadtxt(io.StringIO(block), delimiter=delimiter, comments=None, quotechar='"', ndmin=2)
+    except ValueError:
+        table = None
+    if (table is not None and table.shape[1] == columns and np.all(np.isfinite(table[:, used]))
+            and len(table) == block.count("\n", 0, len(block.rstrip())) + 1):
+        return table[:, used], number + np.arange(len(table))
+    return _rows_by_line(text, first, columns, used, delimiter, header)
+
+
+def _rows_by_line(text: str, first: tuple[int, int], columns: int, used: list[int], delimiter: str | None,
+                  header: int) -> tuple[np.ndarray, np.ndarray]:
+    first_number, start = first
+    most = text.count("\n", start) + 1
+    rows, numbers, count = np.empty((most, len(used))), np.empty(most, dtype=np.int64), 0
+    decimal_comma = delimiter == ";"
+    for number, raw, _, after in _lines(text, start, first_number):
+        line = raw.strip()
+        if not line or line.startswith(("%", "#")):
+            continue
+        parts = _split(line, delimiter)
+        if len(parts) != columns:
+            raise FieldFileError(f"line {number}: {len(parts)} values for the header's {columns} columns (line "
+                                 f"{header}){'; a cut file?' if not text[after:].strip() else ''}")
+        try:
+            values = [float(parts[c].replace(",", ".") if decimal_comma else parts[c]) for c in used]
+        except ValueError:
+            raise FieldFileError(f"line {number}: '{line[:60]}' is not a row of numbers") from None
+        if not all(np.isfinite(values)):
+            raise FieldFileError(f"line {number}: a value is {'NaN' if any(np.isnan(values)) else 'infinite'} (COMSOL "
+                                 "writes NaN at points outside its geometry): export the field on a grid inside the "
+                                 "model, around the liner section")
+        rows[count], numbers[count], count = values, number, count + 1
+    return rows[:count], numbers[:count]
 
 
 def _length_unit(tokens: list[str], roles: dict[str, list[int]], meta: dict[str, str], line: int) -> str | None:
     stated = {_unit(tokens[roles[r][0]]) for r in ("x", "y", "z")} - {None}
     if "length unit" in meta:
         stated.add(meta["length unit"])
+    stated = {_known(unit, LENGTH_M) or unit for unit in stated}  # [MM] and % Length unit: mm agree
     if len(stated) > 1:
         raise FieldFileError(f"line {line}: the coordinates are given in {' and '.join(sorted(stated))}: which is meant "
                              "is not known")
     unit = next(iter(stated), None)
-    if unit is not None and unit not in LENGTH_M:
+    if unit is not None and _known(unit, LENGTH_M) is None:
         raise FieldFileError(f"line {line}: length unit '{unit}' is not known (m, cm, mm, um, in, ft)")
-    return unit
+    return None if unit is None else _known(unit, LENGTH_M)
 
 
 def _field_unit(tokens: list[str], roles: dict[str, list[int]], line: int) -> str | None:
     stated = {_unit(tokens[roles[r][0]]) for r in ("bx", "by", "bz") if r in roles}
+    stated = {unit if unit is None else _known(unit, FIELD_T) or unit for unit in stated}
     if len(stated - {None}) > 1 or (len(stated) > 1 and None in stated):
         raise FieldFileError(f"line {line}: the field's columns state different units "
                              f"({', '.join(tokens[roles[r][0]] for r in ('bx', 'by', 'bz') if r in roles)})")
     unit = next(iter(stated), None)
-    if unit is not None and unit not in FIELD_T:
-        raise FieldFileError(f"line {line}: field unit '{unit}' is not known (T, mT, uT, G)")
-    return unit
+    if unit is not None and _known(unit, FIELD_T) is None:
+        raise FieldFileError(f"line {line}: field unit '{unit}' is not known (T, mT, uT, G, tesla, gauss)")
+    return None if unit is None else _known(unit, FIELD_T)
+
+
+def _known(unit: str, table: dict[str, float]) -> str | None:
+    """The table's spelling of a unit: as written, else in another case where that is unambiguous."""
+    if unit in table:
+        return unit
+    alike = {name for name in table if name.lower() == unit.lower() and name not in CASE_KEPT}
+    return alike.pop() if len(alike) == 1 else None

@@ -53,22 +53,32 @@ def _grid_lines(values: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.nd
 
 def _stray_line(name: str, lines: np.ndarray, index: np.ndarray, tolerance: float) -> PointsNotAGrid | None:
     """A line holding few rows next to full ones: rows off a grid line by more than the tolerance (a value
-    written with another rounding, or edited)."""
+    written with another rounding, or edited). Decided from the counts once, in linear time: a file of many thin
+    lines must not cost a pass over the lines per thin line."""
     counts = np.bincount(index, minlength=len(lines))
-    full = int(np.bincount(counts).argmax()) if len(counts) else 0
-    for k in np.argsort(counts, kind="stable"):
-        if counts[k] > full / 2 or len(lines) < 3:
-            return None
-        others = np.delete(lines, k)
-        nearest = others[np.argmin(np.abs(others - lines[k]))]
-        spacing = np.min(np.diff(others)) if len(others) > 1 else np.inf
-        if abs(nearest - lines[k]) < 0.25 * spacing:
-            row = int(np.flatnonzero(index == k)[0])
-            return PointsNotAGrid(
-                f"{name} = {lines[k]:.10g} lies off the grid line {name} = {nearest:.10g} by "
-                f"{abs(nearest - lines[k]):.3g} (the tolerance is {tolerance:.3g}); {counts[k]} row(s) give it, "
-                f"{full} each of the other lines: the points do not make a rectilinear grid", row)
-    return None
+    if len(lines) < 3:
+        return None
+    full = int(np.bincount(counts).argmax())
+    gaps = np.diff(lines)
+    # the other lines' smallest spacing without line k: its two gaps merge into one
+    before = np.minimum.accumulate(np.concatenate([[np.inf, np.inf], gaps]))[:len(lines)]  # gaps left of k-1
+    after = np.minimum.accumulate(np.concatenate([gaps, [np.inf, np.inf]])[::-1])[::-1][1:]  # gaps right of k+1
+    left = np.concatenate([[np.inf], gaps])
+    right = np.concatenate([gaps, [np.inf]])
+    merged = np.where(np.isfinite(left) & np.isfinite(right), left + right, np.inf)
+    spacing = np.minimum(np.minimum(before, after), merged)
+    nearest = np.minimum(left, right)
+    stray = (counts <= full / 2) & (nearest < 0.25 * spacing)
+    if not np.any(stray):
+        return None
+    thin_first = np.argsort(counts, kind="stable")
+    k = int(thin_first[np.argmax(stray[thin_first])])
+    neighbour = lines[k - 1] if left[k] <= right[k] else lines[k + 1]
+    row = int(np.flatnonzero(index == k)[0])
+    return PointsNotAGrid(
+        f"{name} = {lines[k]:.10g} lies off the grid line {name} = {neighbour:.10g} by "
+        f"{abs(neighbour - lines[k]):.3g} (the tolerance is {tolerance:.3g}); {counts[k]} row(s) give it, "
+        f"{full} each of the other lines: the points do not make a rectilinear grid", row)
 
 
 def place_on_grid(rows: np.ndarray, label=lambda row: f"row {row}") -> PlacedField:

@@ -10,7 +10,6 @@ import math
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.flowmeter.field import RequestField, request_field
-from plantsolve.solvers.flowmeter.field_order import smoother_order
 
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic meters made
@@ -55,7 +54,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"{FIELD_T[0]:g} to {FIELD_T[1]:g} T: " + ("mT written as T?" if abs(field_tesla) > FIELD_T[1]
                                                          else "gauss or µT written as T?")
             + (" The field file's header states no unit for B: its values were read as tesla."
-               if grid is not None and not grid.units_stated else ""),
+               if grid is not None and grid.field_unit is None else ""),
             details={"quantity": "magnetic_field", "value": field_tesla, "range_t": list(FIELD_T)}))
     v = request.velocity
     samples = v.type == "samples"
@@ -68,8 +67,7 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
-    out += (_probe_warnings(request) + _grid_warnings(request, grid) + _order_warnings(grid)
-            + _protrusion_warnings(request))
+    out += (_probe_warnings(request) + _grid_warnings(request, grid) + _protrusion_warnings(request))
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -115,29 +113,10 @@ def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Di
         message=f"Magnetic field grid: {quantity} reaches {r:g} {request.units}, {r / radius:.4g} pipe radii "
         f"(radius {radius:g} {request.units}); a magnet's field is computed a few radii around the pipe: grid "
         f"coordinates in a unit 1000 times smaller than '{request.units}' (mm with units 'm')? The grid is in the "
-        "request's units" + ("" if f.units_stated else " (the field file's header states no length unit)")
+        "request's units" + ("" if f.length_unit is not None else " (the field file's header states no length unit)")
         + "; across the pipe the field is read between grid nodes this far apart.",
         details={"quantity": quantity, "reach": r, "radius": radius, "units": request.units,
                  "radii": r / radius})]
-
-
-def _order_warnings(f: RequestField | None) -> list[Diagnostic]:
-    """A flat grid whose values read far smoother in another axis order than the stated C order: written x fastest
-    (MATLAB, numpy's order='F') or y first, the values describe another field."""
-    if f is None or f.loc != ("magnetic_field",):
-        return []
-    found = smoother_order(f.bx, f.by, f.bx.shape)
-    if found is None:
-        return []
-    order, ratio = found
-    return [Diagnostic(
-        code="implausible_field_order",
-        message=f"Magnetic field grid: the values of magnetic_field.bx and .by are {ratio:.3g} times rougher read in the "
-        f"stated C order (x slowest, z fastest) than read with the axes {order[0]}, {order[1]}, {order[2]} from slowest "
-        "to fastest: written in another order (MATLAB and numpy's order='F' write x fastest)? A magnet's field is smooth; "
-        "read in the wrong order it is another field and S another number. Give the field as type 'points' (each value "
-        "with its coordinates) and no order is needed.",
-        details={"quantity": "magnetic_field.by", "smoother_order": order, "roughness_ratio": ratio})]
 
 
 def _protrusion_warnings(request: FlowmeterRequest) -> list[Diagnostic]:

@@ -10,7 +10,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.base import FieldError, InputRejected
-from plantsolve.solvers.flowmeter.field import request_field
+from plantsolve.solvers.flowmeter.field import FILE, request_field
 from plantsolve.solvers.flowmeter.integral_equation import feasible
 from plantsolve.solvers.flowmeter.integral_equation_button import feasible as feasible_button
 from plantsolve.solvers.flowmeter.plausibility import METRES
@@ -182,8 +182,13 @@ def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
         axis = getattr(field, name)
         if axis[0] > -reach * (1 - 1e-9) or axis[-1] < reach * (1 - 1e-9):
             loc = ("magnetic_field", name) if field.loc == ("magnetic_field",) else field.loc
-            hint = "" if field.units_stated else (f"; the file's header states no length unit, so its coordinates are "
-                                                  f"read in the request's units ('{request.units}')")
+            if field.length_unit is None:
+                hint = (f"; the file's header states no length unit, so its coordinates are read in the request's "
+                        f"units ('{request.units}')")
+            elif field.loc == FILE:
+                hint = f"; the file's header states its coordinates in {field.length_unit}"
+            else:
+                hint = ""
             errors.append(FieldError(loc, f"the grid spans {name} = {axis[0]:g}..{axis[-1]:g} and does not cover the pipe "
                                           f"(-{reach:g}..{reach:g}{' along the liner' if name == 'z' else ''}, "
                                           f"{request.units}){hint}"))

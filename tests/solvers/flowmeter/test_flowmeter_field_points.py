@@ -191,39 +191,94 @@ def test_an_uploaded_request_takes_the_field_file_from_the_forms_options(grid_se
     assert sensitivity(req) == pytest.approx(grid_sensitivity, abs=1e-12)
 
 
-def order_warning(magnetic_field):
+def test_a_correctly_ordered_flat_grid_varying_along_x_draws_no_warning():
+    """The reviewer's grid: B_y linear in x over 5 x 5 x 101 points, in C order. A roughness comparison of axis
+    orders called it 20 times rougher than another order; a correct field must draw no warning."""
     from plantsolve.solvers.flowmeter.plausibility import request_warnings
 
-    req = request(magnetic_field)
-    return [w for w in request_warnings(req, 0.01) if w.code == "implausible_field_order"]
+    x, y, z = np.linspace(-60, 60, 5), np.linspace(-60, 60, 5), np.linspace(-300, 300, 101)
+    gx = np.meshgrid(x, y, z, indexing="ij")[0]
+    req = request({"type": "grid", "x": x.tolist(), "y": y.tolist(), "z": z.tolist(),
+                   "bx": np.zeros(gx.size).tolist(), "by": (0.01 * (1 + 0.3 * gx / 50)).ravel().tolist()})
+    assert [w.code for w in request_warnings(req, 0.01)] == []
 
 
-def test_a_flat_grid_written_x_fastest_is_warned_and_the_c_order_is_not():
-    _, rows = field()
-    fortran = np.column_stack([c.reshape(SHAPE).ravel(order="F") for c in rows.T])
-    (warning,) = order_warning({**grid_form(), "bx": fortran[:, 3].tolist(), "by": fortran[:, 4].tolist()})
-    assert warning.details["smoother_order"] == "zyx" and "type 'points'" in warning.message
-    assert order_warning(grid_form()) == []
+def test_many_thin_grid_lines_are_refused_from_their_counts_at_once():
+    """x-lines of 2 rows alternating with x-lines of 1 row: each thin line once cost a pass over all lines (30k
+    lines took seconds, 80k 17 s CPU). Were the check quadratic again, this test would turn visibly slow."""
+    m = 30_000
+    x = np.arange(2 * m - 1, dtype=float)
+    per_line = np.where(np.arange(2 * m - 1) % 2 == 0, 2, 1)
+    xs = np.repeat(x, per_line)
+    rows = np.column_stack([xs, np.arange(len(xs)) % 2, np.arange(len(xs)) % 3 // 2, 0 * xs, 0.01 + 0 * xs])
+    with pytest.raises(PointsNotAGrid, match=f"the points lie on {2 * m - 1} distinct x values"):
+        place_on_grid(rows)
 
 
-@pytest.mark.parametrize("shape", [(2, 3, 4), (3, 3, 7), (5, 5, 5), (21, 21, 13), (41, 41, 3), (4, 6, 25)])
-@pytest.mark.parametrize("kind", ["gaussian", "dipoles", "pole_edge", "noisy"])
-def test_smooth_fields_in_their_stated_order_raise_no_order_warning(shape, kind):
-    from plantsolve.solvers.flowmeter.field_order import smoother_order
+def plain_csv(rows: np.ndarray, header: str = "x [mm],y [mm],z [mm],Bx [T],By [T]", end: str = "") -> str:
+    return header + end + "\n" + "\n".join(",".join(f"{v:.17g}" for v in row[:5]) + end for row in rows) + "\n"
 
-    rng = np.random.default_rng(sum(shape))
-    x, y, z = (np.linspace(-r, r, n) for r, n in zip((1.2, 1.1, 3.2), shape))
-    gx, gy, gz = np.meshgrid(x, y, z, indexing="ij")
-    if kind == "gaussian":
-        by, bx = np.exp(-(gz / 1.5) ** 2) * (1 + 0.2 * gx), 0.1 * gx * gy * np.exp(-(gz / 1.5) ** 2)
-    elif kind == "dipoles":  # two coils above and below the pipe
-        by, bx = 0 * gx, 0 * gx
-        for side in (1, -1):
-            ry = gy - 2.2 * side
-            r2 = gx**2 + ry**2 + gz**2
-            by, bx = by - (3 * ry**2 / r2 - 1) / r2**1.5, bx + 3 * gx * ry / r2**2.5
-    elif kind == "pole_edge":  # the steep fall of B beyond a pole shoe
-        by, bx = 1 / (1 + np.exp((np.abs(gz) - 1.5) / 0.1)) + 0 * gx, 0.05 * gx * gy
-    else:
-        by, bx = 1 + 0.1 * gx + rng.normal(0, 0.02, gx.shape), rng.normal(0, 0.02, gx.shape)
-    assert smoother_order(bx, by, shape) is None
+
+@pytest.mark.parametrize("text", [
+    plain_csv(fortran_rows(1.0, 1.0), '"x [mm]","y [mm]","z [mm]","Bx [T]","By [T]"'),  # R's write.csv, pandas
+    plain_csv(fortran_rows(1.0, 1.0), end=","),  # a delimiter ending every line
+    plain_csv(fortran_rows(1.0, 1e4), "x [MM],y [MM],z [MM],Bx [Gauss],By [Gauss]"),
+    plain_csv(fortran_rows(1.0, 1.0), "x [mm],y [mm],z [mm],Bx [tesla],By [tesla]"),
+    plain_csv(fortran_rows(1.0, 1e3), "x [mm],y [mm],z [mm],Bx [millitesla],By [millitesla]"),
+])
+def test_quoted_headers_trailing_delimiters_and_unit_spellings_read_as_the_plain_file(text):
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    plain = read_field_file(plain_csv(fortran_rows(1.0, 1.0)), "mm")
+    table = read_field_file(text, "mm")
+    np.testing.assert_allclose(table.rows, plain.rows, rtol=1e-15, atol=0)
+    assert (table.lines == plain.lines).all() and table.length_unit == "mm"
+
+
+def test_a_unit_whose_case_decides_it_is_not_read_in_another_case():
+    with pytest.raises(InputRejected, match="field unit 'MT' is not known"):  # megatesla, not mT
+        request(magnetic_field_file=plain_csv(fortran_rows(1.0, 1e3), "x [mm],y [mm],z [mm],Bx [MT],By [MT]"))
+
+
+def test_a_contradicting_length_unit_is_refused_and_agreeing_spellings_are_one():
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    comsol = comsol_export(fortran_rows(1.0, 1.0), "m", "T").replace("% x  ", "% x (mm)  ", 1)
+    with pytest.raises(InputRejected, match="coordinates are given in m and mm"):
+        request(magnetic_field_file=comsol)
+    assert read_field_file(comsol_export(fortran_rows(1.0, 1.0), "MM", "T"), "mm").length_unit == "mm"
+
+
+def test_a_header_stating_mm_over_coordinates_in_metres_is_not_said_to_state_no_unit():
+    text = plain_csv(fortran_rows(1e-3, 1.0), "x [mm],y [mm],z [mm],Bx,By")
+    with pytest.raises(InputRejected) as refused:
+        request(magnetic_field_file=text)
+    message = refused.value.errors[0].msg
+    assert "does not cover the pipe" in message and "header states its coordinates in mm" in message
+    assert "no length unit" not in message
+
+
+# Header lines that once made the header's patterns backtrack over the whole line for each place in it: seconds
+# for tens of kB. The answer is asserted; were a pattern quadratic again, these would turn visibly slow (minutes).
+def test_a_long_header_line_of_blanks_reads_in_linear_time():
+    from plantsolve.solvers.flowmeter.field_file import read_field_file
+
+    text = "% a" + " " * 100_000 + "b\n% x y z mf.Bx (T) mf.By (T)\n1 2 3 4 5\n"
+    assert read_field_file(text, "mm").rows.tolist() == [[1.0, 2.0, 3.0, 4.0, 5.0]]
+
+
+@pytest.mark.parametrize("text", ["% " + "a(" * 100_000 + "\n1 2 3 4 5\n",
+                                  "x,y,z,Bx,By " + "[a" * 100_000 + "\n1,2,3,4,5\n"])
+def test_a_long_header_line_of_unclosed_brackets_is_refused_in_linear_time(text):
+    from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
+
+    with pytest.raises(FieldFileError, match=r"line 1: the header names no column .*and \d+ more|names no column by"):
+        read_field_file(text, "mm")
+
+
+def test_a_file_of_more_rows_than_a_grid_has_points_is_refused(monkeypatch):
+    from plantsolve.solvers.flowmeter import field as field_module
+
+    monkeypatch.setattr(field_module, "GRID_POINTS_MAX", 692)  # the file's 693 rows, one too many
+    with pytest.raises(InputRejected, match="the file holds 693 rows; a field has at most 692 points"):
+        request(magnetic_field_file=plain_csv(fortran_rows(1.0, 1.0)))
