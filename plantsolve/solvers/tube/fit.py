@@ -471,11 +471,7 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
     n_rows = S
     for v in variants:
         sp = build_spine(v)
-        diff = np.zeros(S, bool)
-        for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
-                     (base.normal, sp.normal)):
-            diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
-        diff |= (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+        diff = _moved(base, sp, scale)
         moved = np.flatnonzero(diff)
         sub = _sub_spine(sp, moved)
         moved_of.append((sub, distance_frames(sub), moved, _reach(sub, _sub_spine(base, moved), model.pipe_radius)))
@@ -505,6 +501,15 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
     return rss0, rss
 
 
+def _moved(base, sp, scale: float) -> np.ndarray:
+    """Which segments of spine ``sp`` moved from ``base``'s further than round-off (``scale``: the spine's size)."""
+    diff = np.zeros(len(base.kind), bool)
+    for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
+                 (base.normal, sp.normal)):
+        diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
+    return diff | (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+
+
 def _sums_of_squares_joint(model: TubeModel, variants: list[TubeModel], pts: np.ndarray,
                            keep: np.ndarray | None = None) -> tuple[float, list[float]]:
     """:func:`sums_of_squares` of a few samples: the segments of ``model`` and those of the variants that moved
@@ -519,11 +524,7 @@ def _sums_of_squares_joint(model: TubeModel, variants: list[TubeModel], pts: np.
     n_rows = S
     for v in variants:
         sp = build_spine(v)
-        diff = np.zeros(S, bool)
-        for x, y in ((base.start, sp.start), (base.end, sp.end), (base.centre, sp.centre), (base.tangent, sp.tangent),
-                     (base.normal, sp.normal)):
-            diff |= np.abs(x - y).max(axis=1) > 1e-12 * scale
-        diff |= (np.abs(base.radius - sp.radius) > 1e-12 * scale) | (np.abs(base.angle - sp.angle) > 1e-12)
+        diff = _moved(base, sp, scale)
         moved = np.flatnonzero(diff)
         parts.append(moved)
         spines.append(sp)
