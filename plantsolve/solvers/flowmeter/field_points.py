@@ -13,11 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# coordinates closer than this fraction of the grid's largest extent lie on one grid line (a tool's rounding,
-# -0 and 1e-17 for 0); farther, a point lies off the lines
+# coordinates closer than this fraction of the grid's largest extent (its middle half's, doubled) lie on one grid
+# line (a tool's rounding, -0 and 1e-17 for 0); farther, a point lies off the lines
 LINE_TOLERANCE = 1e-6
 # two rows at one grid point are one value given twice when they agree to this (relative to the largest |B|)
 SAME_VALUE = 1e-9
+# a thinly populated end line farther than this many times the other lines' widest spacing is a mistyped coordinate
+FAR_LINE = 100.0
 AXES = ("x", "y", "z")
 
 
@@ -81,12 +83,34 @@ def _stray_line(name: str, lines: np.ndarray, index: np.ndarray, tolerance: floa
         f"{full} each of the other lines: the points do not make a rectilinear grid", row)
 
 
+def _far_line(name: str, lines: np.ndarray, index: np.ndarray) -> PointsNotAGrid | None:
+    """A line at an end of the axis, holding few rows, far beyond the others (more than FAR_LINE times their widest
+    spacing from its neighbour): a mistyped coordinate or one in another unit, which would otherwise be named as
+    the grid points the row is missing from."""
+    if len(lines) < 3:
+        return None
+    counts = np.bincount(index, minlength=len(lines))
+    full = int(np.bincount(counts).argmax())
+    for k, neighbour, others in ((0, 1, np.diff(lines[1:])), (len(lines) - 1, len(lines) - 2, np.diff(lines[:-1]))):
+        gap = abs(lines[k] - lines[neighbour])
+        if counts[k] <= full / 2 and gap > FAR_LINE * float(np.max(others)):
+            row = int(np.flatnonzero(index == k)[0])
+            return PointsNotAGrid(
+                f"{name} = {lines[k]:.10g} lies {gap:.3g} beyond the grid line {name} = {lines[neighbour]:.10g}, where "
+                f"the other {name} lines are at most {float(np.max(others)):.3g} apart; {counts[k]} row(s) give it, "
+                f"{full} each of the other lines: a mistyped coordinate, or one in another unit?", row)
+    return None
+
+
 def place_on_grid(rows: np.ndarray, label=lambda row: f"row {row}") -> PlacedField:
     """Rows (n, 5 or 6) of x, y, z, bx, by[, bz] on their rectilinear grid; raises :class:`PointsNotAGrid`
     naming a row (a point off the grid lines, a point given twice with other values) or a missing grid point.
     ``label(row)`` names another row in a message (a file's line)."""
     coordinates = rows[:, :3]
-    extent = float(np.max(np.ptp(coordinates, axis=0))) if len(rows) else 0.0
+    # the extent of the rows' middle half, doubled: a few mistyped coordinates (1e12) must not widen the tolerance
+    # until every other line merges into one
+    low, high = np.percentile(coordinates, [25, 75], axis=0) if len(rows) else (np.zeros(3), np.zeros(3))
+    extent = 2.0 * float(np.max(high - low))
     tolerance = LINE_TOLERANCE * max(extent, 1e-300)
     lines, index = [], []
     for axis, name in enumerate(AXES):
@@ -100,7 +124,7 @@ def place_on_grid(rows: np.ndarray, label=lambda row: f"row {row}") -> PlacedFie
         lines.append(line)
         index.append(member)
     for name, line, member in zip(AXES, lines, index):
-        stray = _stray_line(name, line, member, tolerance)
+        stray = _far_line(name, line, member) or _stray_line(name, line, member, tolerance)
         if stray:
             raise stray
     shape = tuple(len(line) for line in lines)

@@ -109,6 +109,20 @@ def test_points_that_make_no_grid_are_refused_naming_the_row(mistake, row, words
     assert loc == (("magnetic_field", "points") if row is None else ("magnetic_field", "points", row))
 
 
+@pytest.mark.parametrize("value", [6000.0, 1e12, -1e12])
+def test_a_mistyped_coordinate_far_beyond_the_grid_is_named_with_its_row(value):
+    """One x typed 1e12 (or 6000: metres' digits in mm) among x = -60..60: the line tolerance, taken of the whole
+    extent, merged every other x line into one ("every point has x = ..."); now the row is named."""
+    _, rows = field((4, 3, 5))
+    rows[9, 0] = value
+    with pytest.raises(PointsNotAGrid, match="a mistyped coordinate") as caught:
+        place_on_grid(rows)
+    assert caught.value.row == 9
+    with pytest.raises(InputRejected) as refused:
+        request({"type": "points", "points": rows.tolist()})
+    assert refused.value.errors[0].loc == ("magnetic_field", "points", 9)
+
+
 def comsol_export(rows: np.ndarray, length_unit: str, field_unit: str) -> str:
     """A COMSOL spreadsheet export (Results > Export > Data) reproduced from its documented layout: '%' header
     lines, the columns' line with each expression's unit, then rows blank separated in the model's length unit,
