@@ -8,11 +8,13 @@ import pytest
 from plantsolve.schemas.common import Units
 from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
 from plantsolve.solvers.length_units import METRES, SIZES, spellings, unit_named, unit_of_size
-from plantsolve.solvers.perfmap.upload import _column_names
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.polyhedra.file_units import symbol
 from plantsolve.solvers.tube.las_units import US_SURVEY_FOOT_M, short_name
 from plantsolve.solvers.tube.ply_points import stated_unit
-from plantsolve.solvers.tube.text_points import _columns, _with_units_line
+from plantsolve.solvers.tube.read_log import ReadLog
+from plantsolve.solvers.tube.text_points import read_text_points
 
 # each reader's spellings on main (its own table), by the unit they name
 TEXT_HEADER_BEFORE = {"mm": "mm", "cm": "cm", "m": "m", "in": "in", "inch": "in", "ft": "ft", "feet": "ft"}
@@ -37,18 +39,30 @@ def test_the_vocabulary_names_the_request_units_and_their_sizes():
     assert unit_of_size(US_SURVEY_FOOT_M) is None and unit_of_size(1e-6) is None and unit_of_size(1e-6, SIZES) == "um"
 
 
+def _text_unit(text: str) -> str | None:
+    points, columns = read_text_points(text.encode(), ReadLog("csv"))
+    assert points.tolist() == [[1, 2, 3], [4, 5, 6]]
+    return columns.unit
+
+
 @pytest.mark.parametrize("word", sorted(WORDS))
 def test_a_tube_text_header_reads_every_word(word):
-    # before: 'millimetres', 'meter', 'inches', 'foot' ... were refused ("not a length unit read here")
-    assert _columns(f"x [{word}],y [{word}],z [{word}]", 3, 1).unit == WORDS[word]
-    assert _with_units_line("x,y,z", f"{word},{word},{word}") == f"x [{word}],y [{word}],z [{word}]"
+    # before: 'millimetres', 'meter', 'inches', 'foot' ... were refused ("not a length unit read here"), and a line
+    # of them under the names was taken for the header ("no x, y, z")
+    assert _text_unit(f"x [{word}],y [{word}],z [{word}]\n1,2,3\n4,5,6\n") == WORDS[word]
+    assert _text_unit(f"x,y,z\n{word},{word},{word}\n1,2,3\n4,5,6\n") == WORDS[word]
+
+
+def _refusal(text: str) -> str:
+    with pytest.raises(InputRejected) as refused:
+        read_text_points(text.encode(), ReadLog("csv"))
+    return refused.value.errors[0].msg
 
 
 def test_a_tube_text_header_still_refuses_what_is_no_length_unit_listing_the_units():
-    with pytest.raises(Exception, match=r"unit 'deg', which is not a length unit read here \(cm, ft, in, m, mm\)"):
-        _columns("x [deg],y [deg],z [deg]", 3, 1)
-    with pytest.raises(Exception, match="states the unit 'millimetres' in its name and 'in'"):
-        _with_units_line("x [millimetres],y,z", "in,in,in")
+    assert _refusal("x [deg],y [deg],z [deg]\n1,2,3\n") == ("line 1: the coordinate columns state the unit 'deg', "
+                                                             "which is not a length unit read here (cm, ft, in, m, mm)")
+    assert "states the unit 'millimetres' in its name and 'in'" in _refusal("x [millimetres],y,z\nin,in,in\n1,2,3\n")
 
 
 @pytest.mark.parametrize("word", sorted(PLY_BEFORE))
@@ -81,9 +95,14 @@ def test_a_field_file_with_micro_sign_and_greek_mu_states_one_unit():
 
 
 @pytest.mark.parametrize("word", sorted(WORDS))
-def test_a_perfmap_column_name_drops_every_length_word(word):
+def test_a_tube_bending_table_sent_to_perfmap_is_named_whatever_length_word_its_columns_end_in(word):
+    # before: 'length_meters' was a column 'length meters', and the table got the generic header message
     assert PERFMAP_BEFORE <= spellings()
-    assert _column_names(f"length_{word}, rotation, angle_deg") == {"length", "rotation", "angle"}
+    table = StoredInput.from_bytes("bends.csv", f"length_{word},rotation,angle_deg\n100,0,90\n200,90,45\n".encode())
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(table, None)
+    assert refused.value.errors[0].msg.startswith(
+        "this file holds a tube's bending table (columns angle, length, rotation) (for tube), not a compressor map")
 
 
 def test_sizes_are_named_as_before():
