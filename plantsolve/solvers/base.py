@@ -422,6 +422,8 @@ class SolverSpec:
       OpenAPI document shows it and the contract test runs every kind through it.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
       stopped), ``max_attempts`` (``None``: the service's ``MAX_ATTEMPTS``).
+    - ``upload_hint``: a sentence the 415 of a file type the kind does not read ends with, saying
+      where such a file goes instead (a file the request holds as text, say); empty: none.
 
     The functions may be given as ``"module:attribute"`` strings: they become :class:`Deferred`
     functions, imported on first use, so that the kind map (names, schemas, upload extensions, limits)
@@ -438,6 +440,7 @@ class SolverSpec:
     parse_upload: Callable[[StoredInput, dict | None], BaseModel] | str | None = None
     render_artifacts: Callable[[Any, Solved], list[Artifact]] | str | None = None
     upload_extensions: tuple[str, ...] = ()
+    upload_hint: str = ""
     soft_time_limit: float = 600.0
     time_limit: float = 660.0
     max_attempts: int | None = None

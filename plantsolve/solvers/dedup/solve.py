@@ -17,8 +17,9 @@ from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.dedup.tolerance import UNITS_M, from_precision, judge, judge_product_size, model_sizes
+from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
+from plantsolve.solvers.length_units import unit_of_size
 
 DEFAULT_PRECISION_M = 1e-5
 MAX_LISTED = 200
@@ -49,9 +50,9 @@ def length_unit_name(model: ifcopenshell.file) -> str:
 def length_unit_symbol(model: ifcopenshell.file, metres: float) -> str:
     """The project's length unit as a symbol pint reads ('mm', 'ft'), else its size in metres."""
     unit = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT")
-    for name, size in UNITS_M.items():
-        if abs(size - metres) <= 1e-12 * size:
-            return name
+    name = unit_of_size(metres)
+    if name is not None:
+        return name
     symbol = ifcopenshell.util.unit.get_unit_symbol(unit) if unit is not None else ""
     return symbol if symbol and symbol.isalpha() else f"{metres:g} m"
 

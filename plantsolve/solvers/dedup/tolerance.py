@@ -14,13 +14,13 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.length_units import METRES
 
 INTAKE_REFUSE_M = 0.1  # refused at submission: no two products 10 cm apart are one shape
 WARN_M = 0.005  # a tolerance above 5 mm merges what a drawing tells apart
 WARN_OF_SIZE = 0.005  # … or above 0.5 % of the median product size
 REFUSE_OF_SIZE = 0.05  # from 5 % of the median product size on, different shapes verify as one: refused
 FLOAT_RESOLUTION = 1e-14  # a tolerance below this many times the coordinates' magnitude cannot verify anything
-UNITS_M = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 
 
 def model_sizes(points: Iterable[np.ndarray]) -> tuple[float, float, float]:
@@ -53,9 +53,9 @@ def judge_product_size(median: float, unit_name: str, metres_per_unit: float) ->
     low, high = PRODUCT_SIZE_M
     if not (metres > 0 and (metres < low or metres > high)):
         return []
-    likely = [name for name in ("m", "mm", "ft", "in", "cm") if UNITS_M[name] != metres_per_unit
-              and 0.05 <= median * UNITS_M[name] <= 20.0]
-    meant = (f"; the numbers read as {likely[0]} give {median * UNITS_M[likely[0]]:.3g} m: written in {likely[0]}?"
+    likely = [name for name in ("m", "mm", "ft", "in", "cm") if METRES[name] != metres_per_unit
+              and 0.05 <= median * METRES[name] <= 20.0]
+    meant = (f"; the numbers read as {likely[0]} give {median * METRES[likely[0]]:.3g} m: written in {likely[0]}?"
              if likely else ".")
     return [Diagnostic(code="implausible_product_size", message=(
         f"The median product measures {median:.4g} {unit_name} across (= {metres:.3g} m, in the length unit the "
@@ -68,8 +68,8 @@ def judge_product_size(median: float, unit_name: str, metres_per_unit: float) ->
 def _meant(tolerance: float, metres_per_unit: float) -> str:
     """The unit the number was likely meant in: the largest smaller unit in which it is at most WARN_M."""
     for name in ("mm", "cm", "in"):
-        if UNITS_M[name] < metres_per_unit and tolerance * UNITS_M[name] <= WARN_M:
-            return f"; meant in {name} ({tolerance:g} {name} = {tolerance * UNITS_M[name] / metres_per_unit:g} " \
+        if METRES[name] < metres_per_unit and tolerance * METRES[name] <= WARN_M:
+            return f"; meant in {name} ({tolerance:g} {name} = {tolerance * METRES[name] / metres_per_unit:g} " \
                    "in the file's unit)?"
     return ""
 

@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-LENGTH_M = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "in": 0.0254, "ft": 0.3048}
+from plantsolve.solvers.length_units import SIZES, unit_named
+
 FIELD_T = {"T": 1.0, "mT": 1e-3, "uT": 1e-6, "µT": 1e-6, "μT": 1e-6, "nT": 1e-9, "G": 1e-4, "Gs": 1e-4,
            "gauss": 1e-4, "kG": 0.1, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9}
 # units read only as written: mT (MT would be megatesla), kG (kg is a mass); the others in any case ([Gauss], [MM])
@@ -147,7 +148,7 @@ def read_field_file(text: str, units: str) -> FieldTable:
     field_unit = _field_unit(tokens, roles, header[0])
     used = [roles[r][0] for r in ROLES if r in roles]
     rows, numbers = _rows(text, first_data[:2], len(tokens), used, delimiter, header[0])
-    length_factor = 1.0 if length_unit is None else LENGTH_M[length_unit] / LENGTH_M[units]
+    length_factor = 1.0 if length_unit is None else SIZES[length_unit] / SIZES[units]
     field_factor = 1.0 if field_unit is None else FIELD_T[field_unit]
     conversions = []
     if length_unit is not None and length_factor != 1.0:
@@ -213,14 +214,14 @@ def _length_unit(tokens: list[str], roles: dict[str, list[int]], meta: dict[str,
     stated = {_unit(tokens[roles[r][0]]) for r in ("x", "y", "z")} - {None}
     if "length unit" in meta:
         stated.add(meta["length unit"])
-    stated = {_known(unit, LENGTH_M) or unit for unit in stated}  # [MM] and % Length unit: mm agree
+    stated = {unit_named(unit, SIZES) or unit for unit in stated}  # [MM] and % Length unit: mm agree
     if len(stated) > 1:
         raise FieldFileError(f"line {line}: the coordinates are given in {' and '.join(sorted(stated))}: which is meant "
                              "is not known")
     unit = next(iter(stated), None)
-    if unit is not None and _known(unit, LENGTH_M) is None:
+    if unit is not None and unit_named(unit, SIZES) is None:
         raise FieldFileError(f"line {line}: length unit '{unit}' is not known (m, cm, mm, um, in, ft)")
-    return None if unit is None else _known(unit, LENGTH_M)
+    return None if unit is None else unit_named(unit, SIZES)
 
 
 def _field_unit(tokens: list[str], roles: dict[str, list[int]], line: int) -> str | None:

@@ -10,8 +10,8 @@ import math
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.flowmeter import FlowmeterRequest
 from plantsolve.solvers.flowmeter.field import RequestField, request_field
+from plantsolve.solvers.length_units import METRES
 
-METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic meters made
 FIELD_T = (1e-4, 0.5)  # |B| at the pipe centre: a meter's coils give a few mT
 VELOCITY_M_S = (1e-3, 20.0)  # |mean velocity| of liquids in a meter

@@ -68,6 +68,7 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
@@ -314,7 +315,7 @@ _OTHER_FORMATS = (
     (re.compile(r"\A\s*[\[{]"), "a JSON document (upload it as .json)", "perfmap"),
 )
 # unit words tube tables append to their column names ('length_mm', 'angle_deg')
-_UNIT_WORDS = {"mm", "cm", "m", "in", "inch", "ft", "deg", "degree", "degrees", "rad"}
+_UNIT_WORDS = spellings() | {"deg", "degree", "degrees", "rad"}
 # a tube's bending table (LRA: length, rotation, angle; YBC: feed, rotation, bend) and its points (x y z, XYZ-CLR)
 _BENDING_COLUMNS = ({"length", "rotation", "angle"}, {"l", "r", "a"}, {"y", "b", "c"}, {"feed", "rotation", "bend"})
 _POINT_COLUMNS = {"x", "y", "z", "nx", "ny", "nz", "intensity", "i", "r", "g", "b", "point", "row", "index", "id", "no",

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.length_units import METRES, unit_of_size
 
 FORMATS = {"idf": "IDF", "epjson": "epJSON", "gbxml": "gbXML", "ifc": "IFC", "obj": "OBJ", "stl": "STL", "json": "JSON"}
-METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}  # metres per unit of each request unit
 
 
 def stated(file_unit: str, metres: float, basis: str, evidence: str, **names: Any) -> dict[str, Any]:
@@ -37,10 +37,7 @@ NONE_ASSIGNED = "none assigned"
 
 def symbol(metres: float) -> str:
     """The request unit of that size ('mm', 'ft', …), else the size in metres ('0.9144 m')."""
-    for name, size in METRES.items():
-        if abs(size - metres) <= 1e-12 * size:
-            return name
-    return f"{metres:g} m"
+    return unit_of_size(metres) or f"{metres:g} m"
 
 
 def reconcile(body: dict[str, Any], request_unit: str | None, file_units: str | None, fmt: str) -> dict[str, Any]:

@@ -11,14 +11,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from plantsolve.solvers.length_units import unit_of_size
+
 US_SURVEY_FOOT_M = 1200.0 / 3937.0
 # EPSG unit-of-measure codes a GeoTIFF key may hold, with their length in metres
 EPSG_LENGTH_UNITS = {9001: ("metre", 1.0), 9002: ("foot", 0.3048), 9003: ("US survey foot", US_SURVEY_FOOT_M),
                      1025: ("millimetre", 0.001), 1033: ("centimetre", 0.01), 9036: ("kilometre", 1000.0)}
 PROJ_LINEAR_UNITS_KEY, VERTICAL_UNITS_KEY, MODEL_TYPE_KEY = 3076, 4099, 1024
 MODEL_TYPE_GEOGRAPHIC = 2
-# the names the service uses for the lengths a CRS may state (the request's units, and the US survey foot)
-SHORT_NAMES = {1.0: "m", 0.3048: "ft", US_SURVEY_FOOT_M: "us_ft", 0.001: "mm", 0.01: "cm", 0.0254: "in"}
 
 
 @dataclass(frozen=True)
@@ -35,10 +35,11 @@ class CrsUnit:
 
 
 def short_name(name: str, metres: float) -> str:
-    for m, short in SHORT_NAMES.items():
-        if abs(metres - m) <= 1e-9 * m:
-            return short
-    return name
+    """The name the service uses for a length a CRS states: a request unit's, 'us_ft' for the US survey foot (a
+    CRS's own unit, no request's), else the CRS's name."""
+    if abs(metres - US_SURVEY_FOOT_M) <= 1e-9 * US_SURVEY_FOOT_M:
+        return "us_ft"
+    return unit_of_size(metres) or name
 
 
 # ---- WKT -----------------------------------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.length_units import unit_named
 from plantsolve.solvers.tube.read_log import ReadLog
 
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
@@ -23,12 +24,9 @@ TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2"
 
 
 # A unit some scanners and converters state in a comment of the header (``comment units mm``, ``comment Unit: meter``,
-# ``obj_info length_unit = millimetres``); the PLY format itself has none.
+# ``obj_info length_unit = millimetres``); the PLY format itself has none. A comment's unit is one word of letters
+# (the header is ASCII, so no 'µm'), one of the request's units (length_units).
 _UNIT_COMMENT = re.compile(r"^(?:comment|obj_info)\s+(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
-_UNIT_WORDS = {"mm": "mm", "millimeter": "mm", "millimeters": "mm", "millimetre": "mm", "millimetres": "mm",
-               "cm": "cm", "centimeter": "cm", "centimeters": "cm", "centimetre": "cm", "centimetres": "cm",
-               "m": "m", "meter": "m", "meters": "m", "metre": "m", "metres": "m",
-               "in": "in", "inch": "in", "inches": "in", "ft": "ft", "foot": "ft", "feet": "ft"}
 
 
 def stated_unit(content: bytes) -> tuple[str, str] | str | None:
@@ -40,8 +38,8 @@ def stated_unit(content: bytes) -> tuple[str, str] | str | None:
     found = []
     for lineno, line in enumerate(content[:end].decode("ascii", errors="replace").splitlines(), 1):
         match = _UNIT_COMMENT.match(line.strip())
-        if match and match.group(1).lower() in _UNIT_WORDS:
-            found.append((_UNIT_WORDS[match.group(1).lower()], lineno, line.strip()))
+        if match and (unit := unit_named(match.group(1))):
+            found.append((unit, lineno, line.strip()))
     if len({unit for unit, _, _ in found}) > 1:
         return "its header comments state different units (" + ", ".join(
             f"line {n}: {text!r}" for _, n, text in found[:4]) + ")"

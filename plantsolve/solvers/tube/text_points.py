@@ -31,6 +31,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
+from plantsolve.solvers.length_units import METRES, unit_named
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
@@ -50,7 +51,6 @@ _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
-HEADER_UNITS = {"mm": "mm", "cm": "cm", "m": "m", "in": "in", "inch": "in", "ft": "ft", "feet": "ft"}
 NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
 MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
 
@@ -117,10 +117,10 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
             "(or only some of them one)"))
     if len(units) == 1 and None not in units:
         (u,) = units
-        if u not in HEADER_UNITS:
+        unit = unit_named(u)
+        if unit is None:
             raise reject(f"line {header_line}: the coordinate columns state the unit {u!r}, which is not a length "
-                         f"unit read here ({', '.join(sorted(set(HEADER_UNITS.values())))})")
-        unit = HEADER_UNITS[u]
+                         f"unit read here ({', '.join(sorted(METRES))})")
     return Columns(index, unit, names)
 
 
@@ -149,14 +149,15 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
     if len(names) != len(units):
         return None
     units = [u.strip("[]()").strip().lower() for u in units]
-    if not any(u in HEADER_UNITS for u in units) or any(u and u != "-" and u not in HEADER_UNITS for u in units):
+    if not any(unit_named(u) for u in units) or any(u and u != "-" and not unit_named(u) for u in units):
         return None
     for n, u in zip(names, units):
         stated = _name_and_unit(n)[1]
-        if stated in HEADER_UNITS and u in HEADER_UNITS and HEADER_UNITS[stated] != HEADER_UNITS[u]:
+        said = unit_named(stated) if stated else None
+        if said and unit_named(u) and said != unit_named(u):
             raise reject(f"the column {n!r} states the unit {stated!r} in its name and {u!r} in the line of units under "
                          "it: say which one the numbers are in")
-    named = [f"{n} [{u}]" if u in HEADER_UNITS and _name_and_unit(n)[1] is None else n for n, u in zip(names, units)]
+    named = [f"{n} [{u}]" if unit_named(u) and _name_and_unit(n)[1] is None else n for n, u in zip(names, units)]
     return ("//" if names_line.strip().startswith("//") else "") + ",".join(named)
 
 

@@ -1,0 +1,47 @@
+"""Length units: one vocabulary of their names, sizes and spellings for every kind's readers and checks.
+
+A unit has one canonical name (the request's ``units`` words of ``schemas.common.Units``, and ``um`` for the
+micrometres an FE tool's export may state) and the spellings a file or header writes it in, read in any case
+('MM', 'Meters'). A reader takes the names it can convert to (``among``); what a file format adds of its own
+(the LAS/GeoTIFF US survey foot, a PLY comment's letters-only words) stays with that reader. Plain tables and
+pure functions: nothing here changes after import, and nothing imports pint (a table of six sizes does not
+need a unit registry's import time).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from types import MappingProxyType
+
+# metres per unit of each request unit (schemas.common.Units)
+METRES = MappingProxyType({"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048})
+# ... and of every unit named here: files may state micrometres, which no request is written in
+SIZES = MappingProxyType({**METRES, "um": 1e-6})
+
+# the words and symbols that name each unit (lower case; the micro sign and the Greek mu both occur)
+SPELLINGS = MappingProxyType({
+    "mm": ("mm", "millimetre", "millimetres", "millimeter", "millimeters"),
+    "cm": ("cm", "centimetre", "centimetres", "centimeter", "centimeters"),
+    "m": ("m", "metre", "metres", "meter", "meters"),
+    "in": ("in", "inch", "inches"),
+    "ft": ("ft", "foot", "feet"),
+    "um": ("um", "µm", "μm", "micrometre", "micrometres", "micrometer", "micrometers", "micron", "microns"),
+})
+_NAMED = MappingProxyType({spelling: unit for unit, spellings in SPELLINGS.items() for spelling in spellings})
+
+
+def unit_named(word: str, among: Iterable[str] = METRES) -> str | None:
+    """The canonical name of the unit ``word`` spells (in any case, blanks around it ignored) when it is one of
+    ``among`` (default: the request's units), else None."""
+    unit = _NAMED.get(word.strip().lower())
+    return unit if unit is not None and unit in among else None
+
+
+def spellings(among: Iterable[str] = METRES) -> frozenset[str]:
+    """Every spelling (lower case) of the units ``among``."""
+    return frozenset(s for unit in among for s in SPELLINGS[unit])
+
+
+def unit_of_size(metres: float, among: Iterable[str] = METRES) -> str | None:
+    """The unit among ``among`` that is ``metres`` long (to 1e-9, as a file's stated factor is rounded), or None."""
+    return next((unit for unit in among if abs(SIZES[unit] - metres) <= 1e-9 * SIZES[unit]), None)
