@@ -42,6 +42,21 @@ def _answer(body: dict, names: dict[str, str] | None = None) -> tuple[set, dict]
     return cuts, ports
 
 
+def _in_cm(body: dict) -> dict:
+    return {**body, "units": "cm", "components": [
+        {**c, "radius": c["radius"] / 10, "ports": [{**p, "position": [x / 10 for x in p["position"]]} for p in c["ports"]]}
+        for c in body["components"]]}
+
+
+def _renamed(body: dict) -> tuple[dict, dict[str, str]]:
+    """``body`` with every component renamed so that the ids sort the other way round, and the renaming."""
+    ids = sorted(c["id"] for c in body["components"])
+    names = {old: f"z{len(ids) - k:03d}" for k, old in enumerate(ids)}
+    return {**body, "components": [{**c, "id": names[c["id"]]} for c in body["components"]],
+            "connections": [{"from": [names[c["from"][0]], c["from"][1]], "to": [names[c["to"][0]], c["to"][1]]}
+                            for c in body["connections"]]}, names
+
+
 def _largest_move(a: dict, b: dict) -> float:
     return max(float(np.linalg.norm(a[k] - b[k])) for k in a)
 
@@ -51,18 +66,10 @@ def test_a_conflict_is_cut_at_the_moved_tie_in_whatever_the_unit_frame_or_names(
     # the known answer: the two connections of the moved tie-in, nothing at the other one
     assert cuts == {frozenset({("P10", 1), ("N2-2", 0)}), frozenset({("P12", 1), ("N2-2", 1)})}
 
-    in_cm = {**conflict, "units": "cm", "components": [
-        {**c, "radius": c["radius"] / 10, "ports": [{**p, "position": [x / 10 for x in p["position"]]} for p in c["ports"]]}
-        for c in conflict["components"]]}
-    cm_cuts, cm_ports = _answer(in_cm)
+    cm_cuts, cm_ports = _answer(_in_cm(conflict))
     assert cm_cuts == cuts and _largest_move(ports, cm_ports) < 1e-6  # mm
 
-    ids = sorted(c["id"] for c in conflict["components"])
-    names = {old: f"z{len(ids) - k:03d}" for k, old in enumerate(ids)}  # the sort order of the ids reversed
-    renamed = {**conflict, "components": [{**c, "id": names[c["id"]]} for c in conflict["components"]],
-               "connections": [{"from": [names[c["from"][0]], c["from"][1]], "to": [names[c["to"][0]], c["to"][1]]}
-                               for c in conflict["connections"]]}
-    renamed_cuts, renamed_ports = _answer(renamed, names)
+    renamed_cuts, renamed_ports = _answer(*_renamed(conflict))
     assert renamed_cuts == cuts and _largest_move(ports, renamed_ports) < 1e-6  # mm
 
     R, t = Rotation.from_rotvec([0.3, -0.2, 0.5]), np.array([125.0, -40.0, 9.0])
@@ -72,3 +79,15 @@ def test_a_conflict_is_cut_at_the_moved_tie_in_whatever_the_unit_frame_or_names(
     moved_cuts, moved_ports = _answer(moved)
     assert moved_cuts == cuts
     assert _largest_move(ports, {k: R.inv().apply(p - t) for k, p in moved_ports.items()}) < FLAT_MODES_MM
+
+
+@pytest.mark.xfail(strict=True, reason="alignment: on this 4 x 2 conflict the first round's plateau itself differs with "
+                   "the components renamed (impacts 1, 0.99, 0.95, 0.95, then 0.65 as named; 1, 0.985, 0.973, 0.962, "
+                   "then 0.68 renamed: the canonical order, hence the factorisation, follows the ids), so other "
+                   "connections are cut (4 and 5) and ports end up 58 mm apart; a cut decided on a pose the conflict "
+                   "determines is needed, not on where Gauss-Newton stopped")
+def test_a_conflict_whose_plateau_moves_with_the_names_is_cut_at_the_same_connections():
+    conflict = conflicting_tie_ins(4, 2, seed=4, shift=(0.0, 0.0, 30.0), turn=1.0).model_dump(mode="json", by_alias=True)
+    cuts, ports = _answer(conflict)
+    renamed_cuts, renamed_ports = _answer(*_renamed(conflict))
+    assert renamed_cuts == cuts and _largest_move(ports, renamed_ports) < 1e-6  # mm
