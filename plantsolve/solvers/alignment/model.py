@@ -8,6 +8,7 @@ tolerance, so the solvers work relative to a centre and keep base positions in
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -77,6 +78,12 @@ class Model:
     @property
     def close_ang(self) -> np.ndarray:
         return np.maximum(self.ang_tol, self.snap_ang)
+
+    @cached_property
+    def measured_errors(self) -> tuple[np.ndarray, np.ndarray]:
+        """Gap (units) and angle error (radians) of every connection as the request has them: what ranks the
+        connections equally to blame for a conflict (:func:`cuts.worst_measured`)."""
+        return connection_errors(self, self.P0, self.D0)
 
     @property
     def n_comp(self) -> int:

@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import choose_cut, connection_key, error_impact
+from plantsolve.solvers.alignment.cuts import choose_cut, worst_measured
 from plantsolve.solvers.alignment.direct import solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
@@ -144,10 +144,7 @@ def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:
     cand = np.flatnonzero(active & (np.isin(model.conn_a, ports) | np.isin(model.conn_b, ports)))
     if len(cand) == 0:
         return None
-    gap0, ang0 = connection_errors(model, model.P0, model.D0)
-    impact = error_impact(model, gap0[cand], ang0[cand])
-    keys = [connection_key(model, k) for k in cand]
-    return int(cand[min(range(len(cand)), key=lambda i: (-impact[i], keys[i]))])
+    return worst_measured(model, cand)
 
 
 def _near_misses(request: AlignmentRequest) -> list[dict]:

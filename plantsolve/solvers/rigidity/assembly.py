@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -106,6 +107,20 @@ def part_solid(shape: PartShape, rotation: np.ndarray, position: np.ndarray) -> 
     if not boxes:
         return None
     return boxes[0] if len(boxes) == 1 else Solid(pieces=tuple(boxes))
+
+
+def natural_order(id: str) -> list[tuple[int, str]]:
+    """Sort key of an id with its digits compared as numbers: an upload's L7 (line 7) before its L11."""
+    return [(int(run), "") if run.isdigit() else (-1, run) for run in re.split(r"(\d+)", id)]
+
+
+def _line_direction(axis: tuple | None) -> tuple | None:
+    """``axis`` or its opposite, whichever has its first non-zero component positive: the sign a line has
+    whichever of its two connectors it was read from (``None``, a ball's: no axis)."""
+    if axis is None:
+        return None
+    first = next((v for v in axis if v != 0), 0)
+    return tuple(0.0 - v for v in axis) if first < 0 else axis
 
 
 @dataclass(frozen=True)
@@ -918,17 +933,23 @@ class Assembly:
     # ---------------------------------------------------------------- queries
     @staticmethod
     def _pair_joints(a: str, b: str, conns: list[Connection]) -> list[JointSpec]:
+        """The joints inferred between parts ``a`` and ``b``, named and ordered by the parts' ids and the
+        connections' places, not by which part the file placed first: a model written in another order
+        answers with the same joint ids, points and axes (a connection's axis is its later part's connector,
+        so an axis is given as the line's direction whose first non-zero component is positive)."""
+        a, b = sorted((a, b), key=natural_order)
+        conns = sorted(conns, key=lambda c: (c.point, c.kind, _line_direction(c.axis) or ()))
         studs = [c for c in conns if c.kind == "stud"]
         if len(studs) >= 2 or any(c.kind == "axle" for c in conns):
             c = conns[0]
-            return [JointSpec(f"{a}~{b}", "rigid", (a, b), c.point, c.axis,
+            return [JointSpec(f"{a}~{b}", "rigid", (a, b), c.point, _line_direction(c.axis),
                               "axle" if any(x.kind == "axle" for x in conns) else "stud", len(conns))]
         return [JointSpec(f"{a}~{b}" + (f"#{k + 1}" if len(conns) > 1 else ""), JOINT_OF[c.kind], (a, b), c.point,
-                          c.axis, ORIGIN_OF.get(c.kind, c.kind), 1) for k, c in enumerate(conns)]
+                          _line_direction(c.axis), ORIGIN_OF.get(c.kind, c.kind), 1) for k, c in enumerate(conns)]
 
     def all_joints(self) -> list[JointSpec]:
         out = list(self.joints.values())
-        for (a, b), conns in self._links.items():
+        for (a, b), conns in sorted(self._links.items(), key=lambda link: sorted(map(natural_order, link[0]))):
             out.extend(self._pair_joints(a, b, conns))
         return out
 

@@ -12,7 +12,8 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import FINGER_REACH, OFFSET_REACH, SNAP, STUD_LENGTH_IN, Assembly, JointSpec
+from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, OFFSET_REACH, SNAP, STUD_LENGTH_IN, Assembly, JointSpec,
+                                                  natural_order)
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
@@ -69,10 +70,11 @@ def _superbricks(ids: list[str], groups: list[list[int]], rod_pairs: list[tuple[
 
 def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
     """(first, repeat) id pairs of parts with one part number at one pose (to 0.001 LDU and 1e-6 in the
-    rotation): a part placed twice, as an editor's duplicate-and-forget-to-move leaves it."""
+    rotation): a part placed twice, as an editor's duplicate-and-forget-to-move leaves it. The first is the id
+    that sorts first in natural order (an upload's earlier line), whatever order the parts are listed in."""
     first: dict[tuple, str] = {}
     out = []
-    for part in request.parts:
+    for part in sorted(request.parts, key=lambda p: natural_order(p.id)):
         key = (lookup(part.part).number if lookup(part.part) else part.part.lower(),
                tuple(round(float(v) * 1000) for v in part.position), tuple(round(float(v) * 1e6) for v in part.rotation))
         if key in first:

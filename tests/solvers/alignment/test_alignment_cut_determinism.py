@@ -7,7 +7,7 @@ import pytest
 
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import CUT_MARGIN, choose_cut, connection_key, tie_width
+from plantsolve.solvers.alignment.cuts import CUT_MARGIN, choose_cut, connection_key, error_impact, tie_width
 from plantsolve.solvers.alignment.direct import connection_basis
 from plantsolve.solvers.alignment.kkt import use_schur
 from plantsolve.solvers.alignment.model import build_model
@@ -111,17 +111,28 @@ def _two_conflicting(req: AlignmentRequest):
     return model, gap, ang, first, second
 
 
-def test_impacts_within_the_margin_are_cut_in_the_stable_order_of_their_ends():
+def test_impacts_within_the_margin_are_cut_where_the_request_was_measured_worst():
     req = conflicting_tie_ins(3, 3, seed=2, turn=3.0)
     model, gap, ang, first, second = _two_conflicting(req)
+    measured = error_impact(model, *model.measured_errors)
+    worse, better = (first, second) if measured[first] > measured[second] else (second, first)
     active = np.ones(model.n_conn, dtype=bool)
     top = 5.0  # mm
-    for bump in (0.9, 0.5, -0.5, -0.9):  # either one larger by less than the margin: the smaller key is cut
-        gap[first], gap[second] = top, top + bump * CUT_MARGIN * top
-        assert choose_cut(model, active, gap, ang) == first
-    gap[second] = top * (1 + 2 * CUT_MARGIN)  # beyond the margin the larger impact is cut, whatever its key
-    assert choose_cut(model, active, gap, ang) == second
+    for bump in (0.9, 0.5, -0.5, -0.9):  # either one larger by less than the margin: the worse measured is cut
+        gap[worse], gap[better] = top, top + bump * CUT_MARGIN * top
+        assert choose_cut(model, active, gap, ang) == worse
+    gap[better] = top * (1 + 2 * CUT_MARGIN)  # beyond the margin the larger impact is cut, however it was measured
+    assert choose_cut(model, active, gap, ang) == better
     assert tie_width(model, top) == pytest.approx(CUT_MARGIN * top)
+
+
+def test_impacts_equal_as_solved_and_as_measured_are_cut_in_the_stable_order_of_their_ends():
+    req = conflicting_tie_ins(3, 3, seed=2, turn=3.0)
+    model, gap, ang, first, second = _two_conflicting(req)
+    model.measured_errors = (np.zeros(model.n_conn), np.zeros(model.n_conn))  # a request measured closed
+    active = np.ones(model.n_conn, dtype=bool)
+    gap[second], gap[first] = 5.0, 5.0 * (1 - 0.5 * CUT_MARGIN)
+    assert choose_cut(model, active, gap, ang) == first
 
 
 def test_the_cut_does_not_depend_on_which_end_a_connection_names_first():
