@@ -94,7 +94,17 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
     if isinstance(error, SolverError):
         return Verdict("failed", failure_report(error.stage, error.message, **error.details), error=error.message)
     # reports say what happened in words; exception class names stay in the server log
-    said = clean(error) or "internal error"
+    words = clean(error)
+    said = words or "internal error"
+    if isinstance(error, MemoryError):
+        # an allocation the process could not make: the same input asks for the same memory again, so it is not
+        # retried, and the user is told what ran out (a bare MemoryError says nothing: "internal error" did not)
+        detail = f" ({words})" if words else ""
+        return Verdict("failed", failure_report(
+            "solver", f"The solver ran out of memory on this input{detail}; it was not retried because the same "
+                      "input needs the same memory. Send a smaller input (fewer points or elements, a coarser "
+                      f"resolution); the server log has the details of job {job_id}, attempt {attempt}."),
+            error="out of memory", crash=True)
     if not is_infrastructure_failure(error):
         return Verdict("failed", failure_report(
             "solver", f"The solver failed on this input ({said}); it was not retried because the same input fails "

@@ -8,6 +8,7 @@ embedded pool calls :func:`lose_attempt` at once when a job process dies."""
 from __future__ import annotations
 
 import logging
+import signal
 import uuid
 from datetime import datetime, timedelta
 from typing import Callable
@@ -40,7 +41,7 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     waiting = previous.get("outcome") == "result_pending" or (
         lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
-    report = lost_worker_report(lost.attempt, cap)
+    report = lost_worker_report(lost.attempt, cap, why)
     history = attempts.ended(lost.attempts, lost.attempt, lost.worker,
                              "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why)
     if lost.attempt >= cap:
@@ -65,6 +66,10 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
         return "none"
     how = f"the job process was killed by signal {-exitcode}" if exitcode is not None and exitcode < 0 \
         else f"the job process exited with code {exitcode}"
+    if exitcode == -signal.SIGKILL:
+        # nothing in the service sends it but the hard time limit (reported as such) and the kill of an abandoned
+        # process (whose attempt has ended): it came from outside, most often the kernel's out-of-memory killer
+        how += " (SIGKILL: sent by the kernel when memory runs out, or by an operator)"
     lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
                          job.heartbeat_at)
     return lose_attempt(ctx, lost, why=how)

@@ -115,12 +115,14 @@ class AttemptMonitor:
             raise Stop("cancelled")
 
 
-def lost_worker_report(attempt: int, max_attempts: int) -> dict:
+def lost_worker_report(attempt: int, max_attempts: int, why: str | None = None) -> dict:
     """Report for a job whose worker is gone (killed, crashed host, out of memory); the attempts' history says
-    how each attempt ended."""
+    how each attempt ended, the report how the last one did (``why``): a user whose job was killed by the kernel
+    for its memory is told so, not that a worker "stopped responding"."""
+    how = f" (the last: {why})" if why else ""
     if attempt >= max_attempts:
-        return failure_report("worker", f"The job's worker stopped responding on each of {attempt} attempts; giving up.")
-    return failure_report("worker", "The worker stopped responding; the job was re-queued.")
+        return failure_report("worker", f"The job's worker was lost on each of {attempt} attempts{how}; giving up.")
+    return failure_report("worker", f"The worker was lost{how}; the job was re-queued.")
 
 
 def _call_with_deadline(function: Callable[[], Any], deadline: float | None) -> Any:

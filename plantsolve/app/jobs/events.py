@@ -10,13 +10,16 @@ progress changes after the stream opened (filtered by ``kind`` and ``status``); 
 Both poll the jobs' status columns every ``EVENTS_POLL_SECONDS`` instead of listening to the
 process that runs the job: a job may run in a Celery worker on another machine, and the database
 is the one place every mode writes progress to. A comment line every ``EVENTS_PING_SECONDS`` keeps
-proxies from closing an idle stream; the stream stops when the client goes away.
+proxies from closing an idle stream; the stream stops when the client goes away. A database that goes away
+while a stream is open pauses it (the pings go on) until it is back, instead of breaking it off mid-body; one
+that is away when a stream is asked for is a 503 problem, as for every other request.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import uuid
 from datetime import datetime, timedelta, timezone
 from typing import Any, AsyncIterator
@@ -27,12 +30,14 @@ from starlette.concurrency import run_in_threadpool
 
 from plantsolve.app.deps import Caller, Service
 from plantsolve.app.problems import responses
-from plantsolve.jobs.errors import NotFound
+from plantsolve.jobs.errors import NotFound, is_infrastructure_failure
 from plantsolve.jobs.lifecycle import is_finished
-from plantsolve.jobs.service import JobService, JobState
+from plantsolve.jobs.service import JobRecord, JobService, JobState
 from plantsolve.schemas.jobs import JobStatus
 
 EVENT_STREAM = "text/event-stream"
+
+log = logging.getLogger("plantsolve.api")
 
 # sent ahead of a new stream so that a client reconnects after this long (milliseconds)
 RETRY_MS = 3000
@@ -54,39 +59,79 @@ def _response(events: AsyncIterator[ServerSentEvent], request: Request) -> Event
                                headers={"Cache-Control": "no-store"})
 
 
-async def job_event_stream(request: Request, service: JobService, job_id: uuid.UUID, sees: str | None) -> AsyncIterator[ServerSentEvent]:
+class _Outage:
+    """A stream's database outages: a poll that found the database away is skipped (the stream pauses, its pings go
+    on), said once in the log per outage, not at every poll."""
+
+    def __init__(self, what: str):
+        self.what, self.away = what, False
+
+    def met(self, error: Exception) -> None:
+        if not is_infrastructure_failure(error):
+            raise error
+        if not self.away:
+            log.warning("event stream of %s paused: the database is away (%s)", self.what, type(error).__name__)
+        self.away = True
+
+    def over(self) -> None:
+        self.away = False
+
+
+async def job_event_stream(request: Request, service: JobService, job: JobRecord, sees: str | None) -> AsyncIterator[ServerSentEvent]:
+    """The stream of ``job`` (read by the endpoint, so that a database away when it is asked for is a 503)."""
     settings = request.app.state.settings
-    job = await run_in_threadpool(service.get, job_id, sees, brief=True)
-    view = await run_in_threadpool(service.view, job)
-    first = _job_event(view.model_dump_json())
+    outage = _Outage(f"job {job.id}")
+    job_id = job.id
+    first: ServerSentEvent | None = None
+    while first is None:  # its view reads the artifacts too: the database may have gone since the endpoint's read
+        try:
+            first = _job_event((await run_in_threadpool(service.view, job)).model_dump_json())
+        except Exception as error:
+            outage.met(error)
+            await asyncio.sleep(settings.events_poll_seconds)
+    outage.over()
     first.retry = RETRY_MS
     yield first
     seen = JobState.of(job).signature
     status = job.status
     while not is_finished(status):
         await asyncio.sleep(settings.events_poll_seconds)
-        state = await run_in_threadpool(service.state, job_id)
-        if state is None:  # deleted under us: nothing more will happen
+        try:
+            state = await run_in_threadpool(service.state, job_id)
+            if state is None:  # deleted under us: nothing more will happen
+                break
+            if state.signature == seen:
+                outage.over()
+                continue
+            job = await run_in_threadpool(service.get, job_id, sees, brief=True)
+            view = await run_in_threadpool(service.view, job)
+        except NotFound:  # deleted under us
             break
-        if state.signature == seen:
+        except Exception as error:
+            outage.met(error)
             continue
-        job = await run_in_threadpool(service.get, job_id, sees, brief=True)
-        view = await run_in_threadpool(service.view, job)
+        outage.over()
         seen = JobState.of(job).signature
         status = job.status
         yield _job_event(view.model_dump_json())
     yield ServerSentEvent(data=json.dumps({"status": status}), event="end", sep=SEP)
 
 
-async def jobs_event_stream(request: Request, service: JobService, sees: str | None, kind: str | None,
-                            status: str | None) -> AsyncIterator[ServerSentEvent]:
-    settings = request.app.state.settings
+async def known_states(service: JobService, sees: str | None, kind: str | None) -> tuple[datetime, dict[uuid.UUID, tuple]]:
+    """Where the stream of every job starts: the jobs it already knows (read by the endpoint, so that a database away
+    when it is asked for is a 503) and the creation time from which it looks for new ones."""
     # a job created between two polls is caught by its creation time; a second of slack covers the
     # clocks of the processes that write created_at
     since = datetime.now(timezone.utc) - timedelta(seconds=1)
-    known: dict[uuid.UUID, tuple] = {}
-    for state in await run_in_threadpool(lambda: service.states(since=since, owner=sees, kind=kind)):
-        known[state.id] = state.signature
+    states = await run_in_threadpool(lambda: service.states(since=since, owner=sees, kind=kind))
+    return since, {state.id: state.signature for state in states}
+
+
+async def jobs_event_stream(request: Request, service: JobService, sees: str | None, kind: str | None,
+                            status: str | None, since: datetime,
+                            known: dict[uuid.UUID, tuple]) -> AsyncIterator[ServerSentEvent]:
+    settings = request.app.state.settings
+    outage = _Outage("every job")
     opened = ServerSentEvent(comment="watching jobs", sep=SEP)
     opened.retry = RETRY_MS
     yield opened
@@ -94,21 +139,36 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
         await asyncio.sleep(settings.events_poll_seconds)
         now = datetime.now(timezone.utc)
         active = [job_id for job_id, signature in known.items() if not is_finished(signature[0])]
-        states: list[JobState] = await run_in_threadpool(
-            lambda: service.states(since=since, ids=active, owner=sees, kind=kind))
-        since = now - timedelta(seconds=1)
+        # a poll the database failed is looked at again from the same creation time: no new job is missed, and a
+        # change not sent (its signature not taken) is sent by the next poll
+        missed = False
+        try:
+            states: list[JobState] = await run_in_threadpool(
+                lambda: service.states(since=since, ids=active, owner=sees, kind=kind))
+        except Exception as error:
+            outage.met(error)
+            continue
         for state in states:
             if known.get(state.id) == state.signature:
                 continue
-            known[state.id] = state.signature
             if status and state.status != status:
+                known[state.id] = state.signature
                 continue
             try:
                 job = await run_in_threadpool(service.get, state.id, sees, brief=True)
+                view = await run_in_threadpool(service.view, job)
             except NotFound:  # deleted under us
+                known[state.id] = state.signature
                 continue
-            view = await run_in_threadpool(service.view, job)
+            except Exception as error:
+                outage.met(error)
+                missed = True
+                continue
+            known[state.id] = state.signature
             yield _job_event(view.model_dump_json())
+        if not missed:
+            since = now - timedelta(seconds=1)
+            outage.over()
         # forget jobs that ended and left the creation window: nothing more happens to them
         current = {state.id for state in states}
         for job_id in [j for j, signature in known.items() if is_finished(signature[0]) and j not in current]:
@@ -134,7 +194,8 @@ def add_event_routes(router: APIRouter) -> None:
     )
     async def stream_job_list_events(request: Request, service: Service, caller: Caller, kind: str | None = None,
                                      status: JobStatus | None = None) -> EventSourceResponse:
-        return _response(jobs_event_stream(request, service, caller.sees, kind, status), request)
+        since, known = await known_states(service, caller.sees, kind)
+        return _response(jobs_event_stream(request, service, caller.sees, kind, status, since, known), request)
 
     @router.get(
         "/jobs/{job_id}/events",
@@ -152,5 +213,5 @@ def add_event_routes(router: APIRouter) -> None:
     )
     async def stream_job_events(job_id: uuid.UUID, request: Request, service: Service, caller: Caller) -> EventSourceResponse:
         # an unknown or foreign job is a 404 problem before the stream starts
-        await run_in_threadpool(service.get, job_id, caller.sees, brief=True)
-        return _response(job_event_stream(request, service, job_id, caller.sees), request)
+        job = await run_in_threadpool(service.get, job_id, caller.sees, brief=True)
+        return _response(job_event_stream(request, service, job, caller.sees), request)
