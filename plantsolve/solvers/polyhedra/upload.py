@@ -56,7 +56,7 @@ from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMP
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
-from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
+from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
@@ -268,6 +268,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     declared: dict[str, dict[str, float]] = {}
     zone_names: dict[str, str] = {}
     zone_line: dict[str, int] = {}
+    unreadable_origin: dict[str, str] = {}  # zones (lower case) whose origin or north is not a number → why
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
             if len(fields) > 1 and fields[1].strip().lower() in ("clockwise",):
@@ -288,7 +289,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 values = [_number(north) if north.strip() else 0.0] + [_coordinate(f) if f.strip() else 0.0
                                                                         for f in origin]
             except ValueError as e:
-                skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
+                # used only where a surface is placed relative to this zone: then it is refused (_placed_in)
+                unreadable_origin[fields[0].lower()] = f"origin or north: {e}"
                 values = [0.0] * 4
             zones[fields[0].lower()] = tuple(values)
             zone_names[fields[0].lower()] = fields[0]
@@ -323,6 +325,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 zone_key = zone.lower()
                 # the rectangles have their own coordinate-system field (rect_relative)
                 if (relative if detailed else rect_relative) and zone_key in zones:
+                    _refuse_unreadable_origin(zone_key, unreadable_origin, zone_names, zone_line, line)
                     points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 else:
                     world_zones.add(zone_key)
@@ -330,6 +333,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                         undefined.setdefault(zone_key, (zone, line))
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+            except InputRejected:
+                raise
             except ValueError as e:
                 skipped.append({"line": line, "object": f"{cls} {name!r}", "reason": str(e)})
                 continue
@@ -365,11 +370,14 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 points = _vertices(fields, lines, n_index)
                 zone_key = surface_zone[fields[host].lower()]
                 if relative and zone_key in zones:
+                    _refuse_unreadable_origin(zone_key, unreadable_origin, zone_names, zone_line, line)
                     points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 if clockwise:
                     points = points[::-1]
             if name.lower() in face_line:
                 raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+        except InputRejected:
+            raise
         except ValueError as e:
             skipped.append({"line": line, "object": label, "reason": str(e)})
             continue
@@ -398,6 +406,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     warnings.extend(_zones_not_defined([undefined[k] for k in sorted(undefined, key=lambda k: undefined[k][1] or 0)
                                         if k in used_zones]))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    warnings.extend(w.model_dump() for w in zone_list_strays(objects, zone_names))
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
             **({"zones_outside_total_floor_area": outside} if outside else {}),
@@ -444,6 +453,19 @@ def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names:
         "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),
         details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]],
                  "global_geometry_rules": rules})]
+
+
+def _refuse_unreadable_origin(zone_key: str, unreadable: dict[str, str], names: dict[str, str], lines: dict[str, int],
+                              surface_line: int | None) -> None:
+    """A 422 naming the Zone's line when a surface is placed relative to a zone whose origin or north is no number:
+    EnergyPlus refuses such a Zone, and read as 0 it put the zone on its neighbour (its shared walls lost, no word
+    but a skipped-list entry)."""
+    if zone_key not in unreadable:
+        return
+    at = lines.get(zone_key)
+    raise reject(f"Zone {names[zone_key]!r}{_where(at)} {unreadable[zone_key]}; the surface{_where(surface_line)} is "
+                 "placed relative to that zone, so where it is cannot be known (EnergyPlus refuses such a Zone)",
+                 ("file", "line", at) if at else ("file", "Zone", names[zone_key]))
 
 
 def _placed(points: list[list[float]], zone: str, line: int | None) -> list[list[float]]:
@@ -518,8 +540,8 @@ def parse_obj(text: str) -> dict:
             except ValueError as e:
                 skipped.append({"line": at, "object": "f", "reason": str(e)})
                 continue
-            faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [group or obj_name or "default"]})
-    warnings: list[dict] = []
+            faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [(obj_name, group)]})
+    warnings: list[dict] = _obj_zones(faces)
     last = len(text.splitlines())
     if ends_mid_line(text) and skipped and skipped[-1]["line"] == last:
         warnings.append(truncated_file(last, f"its last line has no line ending and could not be read "
@@ -539,6 +561,35 @@ def parse_obj(text: str) -> dict:
     return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
             "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
+
+
+def _obj_zones(faces: list[dict]) -> list[dict]:
+    """Each face's zone from its (``o``, ``g``) names, in place; a warning when the file has both and they cut it
+    differently. Several ``o`` objects are the rooms (Blender and Rhino write an object per room, and ``g`` within
+    it per material or layer: zones by ``g`` cut a room into open pieces); one ``o`` (a file-wide name) or none
+    leaves the ``g`` groups as the rooms (SketchUp, Revit, 3ds Max)."""
+    pairs = [f["zones"][0] for f in faces]
+    objects = {o for o, _ in pairs if o}
+    by_object = len(objects) > 1
+    for f, (o, g) in zip(faces, pairs, strict=True):
+        f["zones"] = [(o or g if by_object else g or o) or "default"]
+    groups = {g for _, g in pairs if g}
+    if not objects or not groups:
+        return []
+    zones = [f["zones"][0] for f in faces]
+    other = [(g or o if by_object else o or g) or "default" for o, g in pairs]
+    if len(set(zones)) == len(set(other)) == len(set(zip(zones, other, strict=True))):
+        return []  # the same cut under other names: nothing to choose
+    zones, other = set(zones), set(other)
+    chosen, unused = ("o", "g") if by_object else ("g", "o")
+    return [Diagnostic(code="obj_zones_chosen", message=(
+        f"This OBJ names {len(objects)} object(s) ('o') and {len(groups)} group(s) ('g'), which cut its faces "
+        f"differently: the {len(zones)} zone(s) are its '{chosen}' names"
+        + (" (several objects: each object is a room, its groups parts of it, as Blender and Rhino write them)"
+           if by_object else " (one object: its groups are the rooms, as SketchUp and Revit write them)")
+        + f"; by '{unused}' there would be {len(other)}. Rename them in the file if the other cut is meant."),
+        details={"zones_by": chosen, "zones": len(zones), "objects": len(objects), "groups": len(groups)}
+    ).model_dump()]
 
 
 def parse_stl(content: bytes) -> dict:
