@@ -44,21 +44,23 @@ def _plausible(quantity: str, metres: float) -> bool:
 def judge_typical_sizes(products: Iterable, points: Mapping[int, np.ndarray], storey_elevations: Iterable[float | None],
                         unit_name: str, metres_per_unit: float) -> list[Diagnostic]:
     """Warning ``implausible_product_size`` when doors, walls or storeys, read in the file's stated unit, are outside
-    what buildings have, naming the unit in which every such measure would be plausible."""
+    what buildings have and another unit makes every one of them plausible, naming that unit."""
     medians = _medians(products, points, storey_elevations)
     wrong = {q: v for q, (v, _) in medians.items() if not _plausible(q, v * metres_per_unit)}
     if not wrong:
         return []
     likely = [name for name in ("m", "mm", "cm", "ft", "in") if UNITS_M[name] != metres_per_unit
               and all(_plausible(q, v * UNITS_M[name]) for q, (v, _) in medians.items())]
+    if not likely:  # no unit makes the building plausible: odd elements (garden walls, hatches), not a unit
+        return []
     said = "; ".join(f"the median {q} is {v:.4g} {unit_name} (= {v * metres_per_unit:.3g} m, of {medians[q][1]})"
                      for q, v in wrong.items())
-    meant = (f": the numbers read as {likely[0]} give {', '.join(f'{v * UNITS_M[likely[0]]:.3g} m' for v in wrong.values())}"
-             f" - written in {likely[0]}?" if likely else ".")
+    read_so = ", ".join(f"{v * UNITS_M[likely[0]]:.3g} m" for v in wrong.values())
+    meant = f": the numbers read as {likely[0]} give {read_so}"
     return [Diagnostic(code="implausible_product_size", message=(
         f"In the length unit the file's IfcUnitAssignment states ({unit_name}), {said}: outside what buildings have, "
         f"so the coordinates are likely in another unit, and the result's lengths, tolerance and deviations with "
-        f"them{meant}"),
+        f"them{meant} - written in {likely[0]}?"),
         details={"quantity": ", ".join(wrong), "values": wrong, "unit": unit_name, "metres_per_unit": metres_per_unit,
                  "plausible_range_m": {q: list(HEIGHTS_M[q][1] if q in HEIGHTS_M else STOREY_HEIGHT_M) for q in wrong},
                  "likely_units": likely})]

@@ -541,7 +541,7 @@ def parse_obj(text: str) -> dict:
                 skipped.append({"line": at, "object": "f", "reason": str(e)})
                 continue
             faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [(obj_name, group)]})
-    warnings: list[dict] = _obj_zones(faces)
+    warnings: list[dict] = _obj_zones(faces, vertices)
     last = len(text.splitlines())
     if ends_mid_line(text) and skipped and skipped[-1]["line"] == last:
         warnings.append(truncated_file(last, f"its last line has no line ending and could not be read "
@@ -563,33 +563,49 @@ def parse_obj(text: str) -> dict:
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
 
 
-def _obj_zones(faces: list[dict]) -> list[dict]:
+def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
     """Each face's zone from its (``o``, ``g``) names, in place; a warning when the file has both and they cut it
-    differently. Several ``o`` objects are the rooms (Blender and Rhino write an object per room, and ``g`` within
-    it per material or layer: zones by ``g`` cut a room into open pieces); one ``o`` (a file-wide name) or none
-    leaves the ``g`` groups as the rooms (SketchUp, Revit, 3ds Max)."""
+    differently. The cut under which more zones close is taken: Blender writes an object per room and, with material
+    groups, ``g`` within it per material (zones by ``g`` are open pieces of rooms); Rhino writes an object per
+    surface and ``g`` per layer, SketchUp and Revit a group per room (zones by ``o`` are open pieces). Where both
+    close as many, several objects are the rooms, else (one file-wide ``o``) the groups are."""
     pairs = [f["zones"][0] for f in faces]
-    objects = {o for o, _ in pairs if o}
-    by_object = len(objects) > 1
-    for f, (o, g) in zip(faces, pairs, strict=True):
-        f["zones"] = [(o or g if by_object else g or o) or "default"]
-    groups = {g for _, g in pairs if g}
-    if not objects or not groups:
+    by_group = [(g or o) or "default" for o, g in pairs]
+    by_object = [(o or g) or "default" for o, g in pairs]
+    objects, groups = {o for o, _ in pairs if o}, {g for _, g in pairs if g}
+    same = len(set(by_group)) == len(set(by_object)) == len(set(zip(by_group, by_object, strict=True)))
+    closed = {"g": 0, "o": 0} if same else {"g": _closed_zones(faces, vertices, by_group),
+                                              "o": _closed_zones(faces, vertices, by_object)}
+    chosen = max(("o", "g") if len(objects) > 1 else ("g", "o"), key=lambda k: closed[k])  # ties: the first
+    for f, zone in zip(faces, by_object if chosen == "o" else by_group, strict=True):
+        f["zones"] = [zone]
+    if same:
         return []
-    zones = [f["zones"][0] for f in faces]
-    other = [(g or o if by_object else o or g) or "default" for o, g in pairs]
-    if len(set(zones)) == len(set(other)) == len(set(zip(zones, other, strict=True))):
-        return []  # the same cut under other names: nothing to choose
-    zones, other = set(zones), set(other)
-    chosen, unused = ("o", "g") if by_object else ("g", "o")
+    unused = "g" if chosen == "o" else "o"
+    counts = {"o": len(set(by_object)), "g": len(set(by_group))}
     return [Diagnostic(code="obj_zones_chosen", message=(
         f"This OBJ names {len(objects)} object(s) ('o') and {len(groups)} group(s) ('g'), which cut its faces "
-        f"differently: the {len(zones)} zone(s) are its '{chosen}' names"
-        + (" (several objects: each object is a room, its groups parts of it, as Blender and Rhino write them)"
-           if by_object else " (one object: its groups are the rooms, as SketchUp and Revit write them)")
-        + f"; by '{unused}' there would be {len(other)}. Rename them in the file if the other cut is meant."),
-        details={"zones_by": chosen, "zones": len(zones), "objects": len(objects), "groups": len(groups)}
-    ).model_dump()]
+        f"differently: the {counts[chosen]} zone(s) are its '{chosen}' names, of which {closed[chosen]} close; by "
+        f"'{unused}' there would be {counts[unused]}, of which {closed[unused]} close. Rename them in the file if the "
+        "other cut is meant."),
+        details={"zones_by": chosen, "zones": counts[chosen], "closed": closed[chosen], "objects": len(objects),
+                 "groups": len(groups), f"closed_by_{unused}": closed[unused]}).model_dump()]
+
+
+def _closed_zones(faces: list[dict], vertices: list[list[float]], zone_of: list[str]) -> int:
+    """How many zones of the cut ``zone_of`` (each face's zone) close: every edge, its corners matched by coordinates
+    (SketchUp writes each face's corners apart), borne by an even number of the zone's faces."""
+    points = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    _, corner = np.unique(points, axis=0, return_inverse=True)
+    corner = corner.reshape(-1)
+    names = {name: k for k, name in enumerate(dict.fromkeys(zone_of))}
+    edges = [(names[zone], *sorted((int(corner[a]), int(corner[b]))))
+             for f, zone in zip(faces, zone_of, strict=True)
+             for a, b in zip(f["loops"][0], f["loops"][0][1:] + f["loops"][0][:1], strict=True)]
+    table = np.asarray(edges, dtype=np.int64).reshape(-1, 3)
+    keys, counts = np.unique(table, axis=0, return_counts=True)
+    open_zones = set(keys[counts % 2 == 1, 0].tolist())
+    return len(names) - len(open_zones)
 
 
 def parse_stl(content: bytes) -> dict:

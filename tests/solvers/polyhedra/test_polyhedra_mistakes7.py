@@ -58,7 +58,8 @@ def test_a_zone_group_whose_list_names_a_zone_the_file_lacks_is_refused_naming_i
     with pytest.raises(InputRejected) as refused:
         _solved("offices.idf", text.encode())
     (error,) = refused.value.errors
-    assert "'Office B Zone'" in error.msg and error.loc == ("file", "line", text[:text.index("Office B Zone")].count("\n") + 1)
+    line = text[:text.index("Office B Zone")].count("\n") + 1
+    assert "'Office B Zone'" in error.msg and error.loc == ("file", "line", line)
 
 
 def test_a_zone_list_naming_a_zone_the_file_lacks_is_named():
@@ -93,22 +94,33 @@ def _faces(faces: tuple[str, ...], offset: int) -> list[str]:
     return [" ".join(["f", *(str(int(i) + offset) for i in f.split()[1:])]) for f in faces]
 
 
-def test_an_obj_of_several_objects_with_material_groups_makes_a_zone_per_object():
+def _rooms(lines: list[str]):
+    request, result = _solved("rooms.obj", ("\n".join(lines) + "\n").encode())
+    assert sorted(z.id for z in result.zones) == ["Room0", "Room1"]
+    assert [z.volume for z in result.zones] == pytest.approx([1.0, 1.0])
+    return [w for w in request.source["warnings"] if w["code"] == "obj_zones_chosen"]
+
+
+def test_an_obj_naming_objects_and_groups_makes_the_zones_of_the_cut_that_closes():
     """Blender writes 'o Room' and, with material groups, 'g Room_Wall' / 'g Room_Floor' within it: the zones were the
-    groups, each room cut into two open pieces sharing no volume."""
+    groups, each room cut into two open pieces with no volume. Rhino writes an object per surface and a group per
+    layer: there the groups are the rooms."""
     lines = []
     for k, x0 in enumerate((0.0, 3.0)):
         lines += [f"o Room{k}", *_cube(x0), f"g Room{k}_Floor", *_faces(CUBE_FACES[:1], 8 * k),
                   f"g Room{k}_Walls", *_faces(CUBE_FACES[1:], 8 * k)]
-    request, result = _solved("rooms.obj", ("\n".join(lines) + "\n").encode())
-    assert sorted(z.id for z in result.zones) == ["Room0", "Room1"]
-    assert [z.volume for z in result.zones] == pytest.approx([1.0, 1.0])
-    (warning,) = [w for w in request.source["warnings"] if w["code"] == "obj_zones_chosen"]
-    assert warning["details"] == {"zones_by": "o", "zones": 2, "objects": 2, "groups": 4}
-    # one file-wide object with a group per room (as SketchUp and Revit write rooms): the groups stay the zones
+    (warning,) = _rooms(lines)
+    assert warning["details"] == {"zones_by": "o", "zones": 2, "closed": 2, "objects": 2, "groups": 4,
+                                  "closed_by_g": 0}
+    lines = []
+    for k, x0 in enumerate((0.0, 3.0)):
+        lines += [f"g Room{k}", *_cube(x0)]
+        lines += [line for j, face in enumerate(_faces(CUBE_FACES, 8 * k)) for line in (f"o Surface{k}_{j}", face)]
+    (warning,) = _rooms(lines)
+    assert warning["details"] == {"zones_by": "g", "zones": 2, "closed": 2, "objects": 12, "groups": 2,
+                                  "closed_by_o": 0}
+    # one file-wide object with a group per room (both cuts close as many): the groups stay the zones
     lines = ["o Building"]
     for k, x0 in enumerate((0.0, 3.0)):
         lines += [f"g Room{k}", *_cube(x0), *_faces(CUBE_FACES, 8 * k)]
-    _, result = _solved("rooms.obj", ("\n".join(lines) + "\n").encode())
-    assert sorted(z.id for z in result.zones) == ["Room0", "Room1"]
-    assert [z.volume for z in result.zones] == pytest.approx([1.0, 1.0])
+    _rooms(lines)
