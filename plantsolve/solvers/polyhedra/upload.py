@@ -54,6 +54,7 @@ from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
@@ -191,6 +192,17 @@ def _space_name(cls: str, fields: list[str]) -> str:
     return trimmed[3].strip() if len(trimmed) == 11 + has_object else ""  # Name, Construction, Zone, Space, …
 
 
+def _twin(cls: str, fields: list[str]) -> str:
+    """The surface a ``*:Detailed`` base surface names as its other side (Outside Boundary Condition 'Surface'), or
+    ''."""
+    if cls not in SURFACE_CLASSES:
+        return ""
+    bc, _ = _surface_layout(cls, fields)
+    if bc + 1 < len(fields) and fields[bc].strip().lower() == "surface":
+        return fields[bc + 1].strip()
+    return ""
+
+
 def _is_floor(cls: str, fields: list[str]) -> bool:
     """A base surface EnergyPlus counts as floor (its Surface Type, or a Floor class)."""
     if cls == "buildingsurface:detailed":
@@ -313,6 +325,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     undefined: dict[str, tuple[str, int]] = {}  # zones of relative surfaces without a Zone object: (name, first line)
     # zones with surfaces in no Space (EnergyPlus' '<zone>-Remainder' space) → the floor area of those surfaces
     remainder_floor: dict[str, float] = {}
+    partners: dict[str, tuple[str, int]] = {}  # interzone surface (lower case) → (the twin it names, its line)
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -346,10 +359,14 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
+            twin = _twin(cls, fields)
+            if twin:
+                partners[name.lower()] = (twin, line)
         elif cls == "fenestrationsurface:detailed" or cls in SIMPLE_SUBSURFACES:
             windows.append((cls, fields, lines, line))
     by_name = {f["id"].lower(): f["id"] for f in faces}
     loops = {f["id"].lower(): f["loops"][0] for f in faces}
+    warnings.extend(w.model_dump() for w in twins_apart(partners, loops, by_name))
     subsurface_copies: dict[str, int] = {}
     for cls, fields, lines, line in windows:
         name = fields[0] if fields else ""

@@ -124,3 +124,16 @@ def test_an_obj_naming_objects_and_groups_makes_the_zones_of_the_cut_that_closes
     for k, x0 in enumerate((0.0, 3.0)):
         lines += [f"g Room{k}", *_cube(x0), *_faces(CUBE_FACES, 8 * k)]
     _rooms(lines)
+
+
+def test_interzone_twins_that_do_not_meet_are_named():
+    """Office B's X Origin typed 50 for 5: both volumes right, the shared wall (Office A East, whose other side is
+    Office B West) silently lost from the adjacency. The twins' centres lie 45 m apart."""
+    request, result = _solved("offices.idf", OFFICES.replace(B_ORIGIN, "  50,").encode())
+    assert [z.volume for z in result.zones] == pytest.approx([60.0, 60.0]) and not result.adjacency
+    (warning,) = [w for w in request.source["warnings"] if w["code"] == "interzone_surfaces_apart"]
+    (pair,) = warning["details"]["pairs"]
+    assert {pair["surface"], pair["twin"]} == {"Office A East", "Office B West"}
+    assert pair["distance"] == pytest.approx(45.0)
+    assert "interzone_surfaces_apart" not in _codes(parse_upload(StoredInput.from_bytes("o.idf", OFFICES.encode()),
+                                                                 None))
