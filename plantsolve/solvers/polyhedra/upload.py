@@ -591,8 +591,10 @@ def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
     by_object = [(o or g) or "default" for o, g in pairs]
     objects, groups = {o for o, _ in pairs if o}, {g for _, g in pairs if g}
     same = len(set(by_group)) == len(set(by_object)) == len(set(zip(by_group, by_object, strict=True)))
-    closed = {"g": 0, "o": 0} if same else {"g": _closed_zones(faces, vertices, by_group),
-                                              "o": _closed_zones(faces, vertices, by_object)}
+    closed = {"g": 0, "o": 0}
+    if not same:
+        edges, lengths = _edges(faces, vertices)
+        closed = {"g": _closed_zones(edges, lengths, by_group), "o": _closed_zones(edges, lengths, by_object)}
     chosen = max(("o", "g") if len(objects) > 1 else ("g", "o"), key=lambda k: closed[k])  # ties: the first
     for f, zone in zip(faces, by_object if chosen == "o" else by_group, strict=True):
         f["zones"] = [zone]
@@ -609,20 +611,31 @@ def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
                  "groups": len(groups), f"closed_by_{unused}": closed[unused]}).model_dump()]
 
 
-def _closed_zones(faces: list[dict], vertices: list[list[float]], zone_of: list[str]) -> int:
-    """How many zones of the cut ``zone_of`` (each face's zone) close: every edge, its corners matched by coordinates
-    (SketchUp writes each face's corners apart), borne by an even number of the zone's faces."""
-    points = np.asarray(vertices, dtype=float).reshape(-1, 3)
-    _, corner = np.unique(points, axis=0, return_inverse=True)
-    corner = corner.reshape(-1)
+def _edges(faces: list[dict], vertices: list[list[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Each face side as one number (its two corners matched by coordinates, as SketchUp writes each face's corners
+    apart, in either order), and the number of sides of each face."""
+    _, corner = np.unique(np.asarray(vertices, dtype=float).reshape(-1, 3), axis=0, return_inverse=True)
+    corner = corner.reshape(-1).astype(np.int64)
+    loops = [f["loops"][0] for f in faces]
+    lengths = np.fromiter((len(loop) for loop in loops), dtype=np.int64, count=len(loops))
+    first = corner[np.fromiter((v for loop in loops for v in loop), dtype=np.int64, count=int(lengths.sum()))]
+    following = np.arange(1, len(first) + 1)  # each corner's next in its loop, the last's the loop's first
+    ends = np.cumsum(lengths)
+    following[ends - 1] = ends - lengths
+    second = first[following]
+    return np.minimum(first, second) * (int(corner.max()) + 1) + np.maximum(first, second), lengths
+
+
+def _closed_zones(edges: np.ndarray, lengths: np.ndarray, zone_of: list[str]) -> int:
+    """How many zones of the cut ``zone_of`` (each face's zone) close: every side borne by an even number of the
+    zone's faces (``edges``, ``lengths``: :func:`_edges`)."""
     names = {name: k for k, name in enumerate(dict.fromkeys(zone_of))}
-    edges = [(names[zone], *sorted((int(corner[a]), int(corner[b]))))
-             for f, zone in zip(faces, zone_of, strict=True)
-             for a, b in zip(f["loops"][0], f["loops"][0][1:] + f["loops"][0][:1], strict=True)]
-    table = np.asarray(edges, dtype=np.int64).reshape(-1, 3)
-    keys, counts = np.unique(table, axis=0, return_counts=True)
-    open_zones = set(keys[counts % 2 == 1, 0].tolist())
-    return len(names) - len(open_zones)
+    zone = np.repeat(np.fromiter((names[z] for z in zone_of), dtype=np.int64, count=len(zone_of)), lengths)
+    order = np.lexsort((edges, zone))
+    zone, edge = zone[order], edges[order]
+    starts = np.flatnonzero(np.r_[True, (zone[1:] != zone[:-1]) | (edge[1:] != edge[:-1])])
+    counts = np.diff(np.r_[starts, len(edge)])
+    return len(names) - len(np.unique(zone[starts[counts % 2 == 1]]))
 
 
 def parse_stl(content: bytes) -> dict:
