@@ -9,14 +9,16 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 
-APART_M = 0.05  # twins' centres further apart than a rounding of the writer: not the same wall
+# twins' centres further apart than this are not paired by the solver (merge_tolerance, default 1e-6 m), and a writer's
+# rounding stays far below it; a tenth of a millimetre's drift in a hand-edited file would lose the adjacency too
+APART_M = 0.001
 MAX_LISTED = 5
 
 
 def twins_apart(partners: dict[str, tuple[str, int | None]], loops: dict[str, list[list[float]]],
                 names: dict[str, str]) -> list[Diagnostic]:
     """Warning ``interzone_surfaces_apart`` for each pair of twin surfaces (``partners``: surface, lower case → (the
-    twin it names, its line)) whose centres lie more than 5 cm apart; ``loops``: surface (lower case) → its world
+    twin it names, its line)) whose centres lie more than 1 mm apart; ``loops``: surface (lower case) → its world
     vertices (m); ``names``: surface (lower case) → its name as written."""
     apart = []
     seen: set[frozenset[str]] = set()
@@ -25,7 +27,7 @@ def twins_apart(partners: dict[str, tuple[str, int | None]], loops: dict[str, li
         if twin.lower() not in loops or surface not in loops or pair in seen:
             continue
         seen.add(pair)
-        distance = float(np.linalg.norm(np.mean(loops[surface], axis=0) - np.mean(loops[twin.lower()], axis=0)))
+        distance = float(np.linalg.norm(_centroid(loops[surface]) - _centroid(loops[twin.lower()])))
         if distance > APART_M:
             apart.append((names[surface], names[twin.lower()], line, distance))
     if not apart:
@@ -35,6 +37,20 @@ def twins_apart(partners: dict[str, tuple[str, int | None]], loops: dict[str, li
     return [Diagnostic(code="interzone_surfaces_apart", message=(
         f"{len(apart)} pair(s) of interzone surfaces (Outside Boundary Condition 'Surface', each naming the other) do "
         f"not lie on one another: {listed} between their centres. One of their zones is misplaced (its origin, north "
-        "axis, or coordinates written for another coordinate system), and the adjacency between them is lost."),
+        "axis, or coordinates written for another coordinate system, or a coordinate typed with another rounding), and "
+        "the adjacency between them is lost (faces are paired where they coincide within options.merge_tolerance)."),
         details={"quantity": "distance between interzone twins", "units": "m",
                  "pairs": [{"surface": a, "twin": b, "line": line, "distance": d} for a, b, line, d in apart[:100]]})]
+
+
+def _centroid(points: list[list[float]]) -> np.ndarray:
+    """The area centroid of a planar polygon (a twin written with an extra corner on an edge has the same one; the mean
+    of the corners moves)."""
+    loop = np.asarray(points, dtype=float)
+    normal = np.cross(loop, np.roll(loop, -1, axis=0)).sum(axis=0)
+    size = np.linalg.norm(normal)
+    if size == 0:
+        return loop.mean(axis=0)
+    base, a, b = loop[0], loop[1:-1], loop[2:]
+    areas = np.cross(a - base, b - base) @ (normal / size)
+    return ((base + a + b) / 3 * areas[:, None]).sum(axis=0) / areas.sum()

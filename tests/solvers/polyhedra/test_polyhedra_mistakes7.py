@@ -137,3 +137,8 @@ def test_interzone_twins_that_do_not_meet_are_named():
     assert pair["distance"] == pytest.approx(45.0)
     assert "interzone_surfaces_apart" not in _codes(parse_upload(StoredInput.from_bytes("o.idf", OFFICES.encode()),
                                                                  None))
+    # 1 cm (5.01 for 5) is past what the solver pairs (merge_tolerance 1e-6 m): the adjacency is lost all the same
+    request, result = _solved("offices.idf", OFFICES.replace(B_ORIGIN, "  5.01,").encode())
+    assert not result.adjacency
+    (warning,) = [w for w in request.source["warnings"] if w["code"] == "interzone_surfaces_apart"]
+    assert warning["details"]["pairs"][0]["distance"] == pytest.approx(0.01)
