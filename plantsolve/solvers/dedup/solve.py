@@ -190,7 +190,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         sizes = model_sizes(points.values())
         # the median product first; where it passes, doors, walls and storeys (CENTI over metres gives 2 cm doors)
         warnings.extend(judge_product_size(sizes[0], symbol, unit) or judge_typical_sizes(
-            products, points, (s.Elevation for s in model.by_type("IfcBuildingStorey")), symbol, unit))
+            products, points, (s.Elevation for s in model.by_type("IfcBuildingStorey")), symbol, unit, UNITS_M))
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
         else:

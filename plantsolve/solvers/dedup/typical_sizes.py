@@ -12,7 +12,6 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
-from plantsolve.solvers.dedup.tolerance import UNITS_M
 
 # quantity → (the IFC class whose members it measures, plausible range of its median in metres)
 HEIGHTS_M = {"door height": ("IfcDoor", (1.5, 6.0)), "wall height": ("IfcWall", (1.0, 50.0))}
@@ -42,20 +41,21 @@ def _plausible(quantity: str, metres: float) -> bool:
 
 
 def judge_typical_sizes(products: Iterable, points: Mapping[int, np.ndarray], storey_elevations: Iterable[float | None],
-                        unit_name: str, metres_per_unit: float) -> list[Diagnostic]:
+                        unit_name: str, metres_per_unit: float, units_m: Mapping[str, float]) -> list[Diagnostic]:
     """Warning ``implausible_product_size`` when doors, walls or storeys, read in the file's stated unit, are outside
-    what buildings have and another unit makes every one of them plausible, naming that unit."""
+    what buildings have and another of ``units_m`` (name → metres: the length units the project names) makes every one
+    of them plausible, naming that unit."""
     medians = _medians(products, points, storey_elevations)
     wrong = {q: v for q, (v, _) in medians.items() if not _plausible(q, v * metres_per_unit)}
     if not wrong:
         return []
-    likely = [name for name in ("m", "mm", "cm", "ft", "in") if UNITS_M[name] != metres_per_unit
-              and all(_plausible(q, v * UNITS_M[name]) for q, (v, _) in medians.items())]
+    likely = [name for name in ("m", "mm", "cm", "ft", "in") if units_m[name] != metres_per_unit
+              and all(_plausible(q, v * units_m[name]) for q, (v, _) in medians.items())]
     if not likely:  # no unit makes the building plausible: odd elements (garden walls, hatches), not a unit
         return []
     said = "; ".join(f"the median {q} is {v:.4g} {unit_name} (= {v * metres_per_unit:.3g} m, of {medians[q][1]})"
                      for q, v in wrong.items())
-    read_so = ", ".join(f"{v * UNITS_M[likely[0]]:.3g} m" for v in wrong.values())
+    read_so = ", ".join(f"{v * units_m[likely[0]]:.3g} m" for v in wrong.values())
     meant = f": the numbers read as {likely[0]} give {read_so}"
     return [Diagnostic(code="implausible_product_size", message=(
         f"In the length unit the file's IfcUnitAssignment states ({unit_name}), {said}: outside what buildings have, "
