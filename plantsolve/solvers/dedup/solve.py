@@ -18,8 +18,9 @@ from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, poo
 from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
+from plantsolve.solvers.dedup.typical_sizes import judge_typical_sizes
 from plantsolve.solvers.dedup.worldgeom import world_points
-from plantsolve.solvers.length_units import unit_of_size
+from plantsolve.solvers.length_units import METRES, unit_of_size
 
 DEFAULT_PRECISION_M = 1e-5
 MAX_LISTED = 200
@@ -188,7 +189,9 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         if not points:
             raise reject(why_nothing_placed(products, path))
         sizes = model_sizes(points.values())
-        warnings.extend(judge_product_size(sizes[0], symbol, unit))
+        # the median product first; where it passes, doors, walls and storeys (CENTI over metres gives 2 cm doors)
+        warnings.extend(judge_product_size(sizes[0], symbol, unit) or judge_typical_sizes(
+            products, points, (s.Elevation for s in model.by_type("IfcBuildingStorey")), symbol, unit, METRES))
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
         else:

@@ -163,11 +163,37 @@ def _utf16_as_utf8(content: bytes) -> bytes:
     return _DECLARED_ENCODING.sub(rb"\1", text, count=1)
 
 
+_ENCODING = re.compile(rb"^(?:\xef\xbb\xbf)?\s*<\?xml[^>]*?\sencoding\s*=\s*(['\"])([^'\"]*)\1")
+
+
+def _windows_text_as_utf8(content: bytes) -> tuple[bytes, Diagnostic | None]:
+    """A file that says (or, saying nothing, means) UTF-8 but is not, as UTF-8 read from Windows-1252, with a warning
+    naming the encoding; other content as it is. Windows tools save a room name 'Büro' as the byte 0xFC under
+    encoding="utf-8", which expat refuses as an 'invalid token'; only names and text differ, not a number."""
+    declared = _ENCODING.match(content)
+    name = declared.group(2).decode("ascii", "replace").strip().lower() if declared else "utf-8"
+    if name.replace("-", "").replace("_", "") != "utf8" or content[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+        return content, None
+    try:
+        content.decode("utf-8")
+        return content, None
+    except UnicodeDecodeError as e:
+        bad = e.start
+    line = content.count(b"\n", 0, bad) + 1
+    text = content.removeprefix(codecs.BOM_UTF8).decode("cp1252", errors="replace").encode("utf-8")
+    return _DECLARED_ENCODING.sub(rb"\1", text, count=1), Diagnostic(code="encoding_assumed", message=(
+        f"The file says {'encoding=' + repr(name) if declared else 'nothing of its encoding (XML then means UTF-8)'}"
+        f" but is not UTF-8 (byte 0x{content[bad]:02X} on line {line}): it was read as Windows-1252, as Windows "
+        "tools write it. Only names and text are affected; check the names of spaces in the result."),
+        details={"declared": name, "read_as": "cp1252", "line": line})
+
+
 def parse_gbxml(content: bytes) -> dict:
+    content, misdeclared = _windows_text_as_utf8(content)
     root, lines = _parse(_utf16_as_utf8(content))
     if _local(root.tag) != "gbXML":
         raise reject(f"the XML file's root element is {_local(root.tag)!r}, not gbXML")
-    warnings: list[dict] = []
+    warnings: list[dict] = [misdeclared.model_dump()] if misdeclared is not None else []
     skipped: list[dict] = []
     length_name, scale = _unit(root, "lengthUnit", LENGTH, "Meters")
     if scale is None:

@@ -54,9 +54,10 @@ from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
+from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
-from plantsolve.solvers.polyhedra.zone_multipliers import zone_multipliers
+from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
@@ -191,6 +192,17 @@ def _space_name(cls: str, fields: list[str]) -> str:
     return trimmed[3].strip() if len(trimmed) == 11 + has_object else ""  # Name, Construction, Zone, Space, …
 
 
+def _twin(cls: str, fields: list[str]) -> str:
+    """The surface a ``*:Detailed`` base surface names as its other side (Outside Boundary Condition 'Surface'), or
+    ''."""
+    if cls not in SURFACE_CLASSES:
+        return ""
+    bc, _ = _surface_layout(cls, fields)
+    if bc + 1 < len(fields) and fields[bc].strip().lower() == "surface":
+        return fields[bc + 1].strip()
+    return ""
+
+
 def _is_floor(cls: str, fields: list[str]) -> bool:
     """A base surface EnergyPlus counts as floor (its Surface Type, or a Floor class)."""
     if cls == "buildingsurface:detailed":
@@ -268,6 +280,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     declared: dict[str, dict[str, float]] = {}
     zone_names: dict[str, str] = {}
     zone_line: dict[str, int] = {}
+    unreadable_origin: dict[str, str] = {}  # zones (lower case) whose origin or north is not a number → why
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
             if len(fields) > 1 and fields[1].strip().lower() in ("clockwise",):
@@ -288,7 +301,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 values = [_number(north) if north.strip() else 0.0] + [_coordinate(f) if f.strip() else 0.0
                                                                         for f in origin]
             except ValueError as e:
-                skipped.append({"line": line, "object": f"Zone {fields[0]}", "reason": f"origin or north: {e}"})
+                # used only where a surface is placed relative to this zone: then it is refused (_placed_in)
+                unreadable_origin[fields[0].lower()] = f"origin or north: {e}"
                 values = [0.0] * 4
             zones[fields[0].lower()] = tuple(values)
             zone_names[fields[0].lower()] = fields[0]
@@ -311,6 +325,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     undefined: dict[str, tuple[str, int]] = {}  # zones of relative surfaces without a Zone object: (name, first line)
     # zones with surfaces in no Space (EnergyPlus' '<zone>-Remainder' space) → the floor area of those surfaces
     remainder_floor: dict[str, float] = {}
+    partners: dict[str, tuple[str, int]] = {}  # interzone surface (lower case) → (the twin it names, its line)
     windows = []
     for cls, fields, lines, line in objects:
         if cls in SURFACE_CLASSES or cls in SIMPLE_SURFACES:
@@ -323,6 +338,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 zone_key = zone.lower()
                 # the rectangles have their own coordinate-system field (rect_relative)
                 if (relative if detailed else rect_relative) and zone_key in zones:
+                    _refuse_unreadable_origin(zone_key, unreadable_origin, zone_names, zone_line, line)
                     points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 else:
                     world_zones.add(zone_key)
@@ -330,6 +346,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                         undefined.setdefault(zone_key, (zone, line))
                 if name.lower() in face_line:
                     raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+            except InputRejected:
+                raise
             except ValueError as e:
                 skipped.append({"line": line, "object": f"{cls} {name!r}", "reason": str(e)})
                 continue
@@ -341,10 +359,14 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
             faces.append({"id": name, "loops": [points], "zones": [zone_names.get(zone_key, zone)]})
             face_line[name.lower()] = line
             surface_zone[name.lower()] = zone_key
+            twin = _twin(cls, fields)
+            if twin:
+                partners[name.lower()] = (twin, line)
         elif cls == "fenestrationsurface:detailed" or cls in SIMPLE_SUBSURFACES:
             windows.append((cls, fields, lines, line))
     by_name = {f["id"].lower(): f["id"] for f in faces}
     loops = {f["id"].lower(): f["loops"][0] for f in faces}
+    warnings.extend(w.model_dump() for w in twins_apart(partners, loops, by_name))
     subsurface_copies: dict[str, int] = {}
     for cls, fields, lines, line in windows:
         name = fields[0] if fields else ""
@@ -365,11 +387,14 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 points = _vertices(fields, lines, n_index)
                 zone_key = surface_zone[fields[host].lower()]
                 if relative and zone_key in zones:
+                    _refuse_unreadable_origin(zone_key, unreadable_origin, zone_names, zone_line, line)
                     points = _placed(_to_world(points, zones[zone_key]), zone_names[zone_key], zone_line[zone_key])
                 if clockwise:
                     points = points[::-1]
             if name.lower() in face_line:
                 raise ValueError(f"a surface of this name is already{_where(face_line[name.lower()])}")
+        except InputRejected:
+            raise
         except ValueError as e:
             skipped.append({"line": line, "object": label, "reason": str(e)})
             continue
@@ -398,6 +423,7 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     warnings.extend(_zones_not_defined([undefined[k] for k in sorted(undefined, key=lambda k: undefined[k][1] or 0)
                                         if k in used_zones]))
     multipliers = {zone_names[k]: m for k, m in zone_multipliers(objects, zone_names).items() if k in used_zones}
+    warnings.extend(w.model_dump() for w in zone_list_strays(objects, zone_names))
     outside = sorted(zone_names[k] for k in zones_outside_total_floor_area(objects) if k in used_zones)
     return {"units": "m", "faces": faces, **({"zone_multipliers": multipliers} if multipliers else {}),
             **({"zones_outside_total_floor_area": outside} if outside else {}),
@@ -444,6 +470,19 @@ def _origins_ignored(zones: dict[str, tuple[float, float, float, float]], names:
         "misplaced (their adjacencies lost): say Relative" + ("." if rules else " in a GlobalGeometryRules object.")),
         details={"zones": [names[k] for k in moved[:100]], "lines": [lines[k] for k in moved[:100]],
                  "global_geometry_rules": rules})]
+
+
+def _refuse_unreadable_origin(zone_key: str, unreadable: dict[str, str], names: dict[str, str], lines: dict[str, int],
+                              surface_line: int | None) -> None:
+    """A 422 naming the Zone's line when a surface is placed relative to a zone whose origin or north is no number:
+    EnergyPlus refuses such a Zone, and read as 0 it put the zone on its neighbour (its shared walls lost, no word
+    but a skipped-list entry)."""
+    if zone_key not in unreadable:
+        return
+    at = lines.get(zone_key)
+    raise reject(f"Zone {names[zone_key]!r}{_where(at)} {unreadable[zone_key]}; the surface{_where(surface_line)} is "
+                 "placed relative to that zone, so where it is cannot be known (EnergyPlus refuses such a Zone)",
+                 ("file", "line", at) if at else ("file", "Zone", names[zone_key]))
 
 
 def _placed(points: list[list[float]], zone: str, line: int | None) -> list[list[float]]:
@@ -518,8 +557,8 @@ def parse_obj(text: str) -> dict:
             except ValueError as e:
                 skipped.append({"line": at, "object": "f", "reason": str(e)})
                 continue
-            faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [group or obj_name or "default"]})
-    warnings: list[dict] = []
+            faces.append({"id": f"f{len(faces) + 1}", "loops": [loop], "zones": [(obj_name, group)]})
+    warnings: list[dict] = _obj_zones(faces, vertices)
     last = len(text.splitlines())
     if ends_mid_line(text) and skipped and skipped[-1]["line"] == last:
         warnings.append(truncated_file(last, f"its last line has no line ending and could not be read "
@@ -539,6 +578,64 @@ def parse_obj(text: str) -> dict:
     return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
             "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
+
+
+def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
+    """Each face's zone from its (``o``, ``g``) names, in place; a warning when the file has both and they cut it
+    differently. The cut under which more zones close is taken: Blender writes an object per room and, with material
+    groups, ``g`` within it per material (zones by ``g`` are open pieces of rooms); Rhino writes an object per
+    surface and ``g`` per layer, SketchUp and Revit a group per room (zones by ``o`` are open pieces). Where both
+    close as many, several objects are the rooms, else (one file-wide ``o``) the groups are."""
+    pairs = [f["zones"][0] for f in faces]
+    by_group = [(g or o) or "default" for o, g in pairs]
+    by_object = [(o or g) or "default" for o, g in pairs]
+    objects, groups = {o for o, _ in pairs if o}, {g for _, g in pairs if g}
+    same = len(set(by_group)) == len(set(by_object)) == len(set(zip(by_group, by_object, strict=True)))
+    closed = {"g": 0, "o": 0}
+    if not same:
+        edges, lengths = _edges(faces, vertices)
+        closed = {"g": _closed_zones(edges, lengths, by_group), "o": _closed_zones(edges, lengths, by_object)}
+    chosen = max(("o", "g") if len(objects) > 1 else ("g", "o"), key=lambda k: closed[k])  # ties: the first
+    for f, zone in zip(faces, by_object if chosen == "o" else by_group, strict=True):
+        f["zones"] = [zone]
+    if same:
+        return []
+    unused = "g" if chosen == "o" else "o"
+    counts = {"o": len(set(by_object)), "g": len(set(by_group))}
+    return [Diagnostic(code="obj_zones_chosen", message=(
+        f"This OBJ names {len(objects)} object(s) ('o') and {len(groups)} group(s) ('g'), which cut its faces "
+        f"differently: the {counts[chosen]} zone(s) are its '{chosen}' names, of which {closed[chosen]} close; by "
+        f"'{unused}' there would be {counts[unused]}, of which {closed[unused]} close. Rename them in the file if the "
+        "other cut is meant."),
+        details={"zones_by": chosen, "zones": counts[chosen], "closed": closed[chosen], "objects": len(objects),
+                 "groups": len(groups), f"closed_by_{unused}": closed[unused]}).model_dump()]
+
+
+def _edges(faces: list[dict], vertices: list[list[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Each face side as one number (its two corners matched by coordinates, as SketchUp writes each face's corners
+    apart, in either order), and the number of sides of each face."""
+    _, corner = np.unique(np.asarray(vertices, dtype=float).reshape(-1, 3), axis=0, return_inverse=True)
+    corner = corner.reshape(-1).astype(np.int64)
+    loops = [f["loops"][0] for f in faces]
+    lengths = np.fromiter((len(loop) for loop in loops), dtype=np.int64, count=len(loops))
+    first = corner[np.fromiter((v for loop in loops for v in loop), dtype=np.int64, count=int(lengths.sum()))]
+    following = np.arange(1, len(first) + 1)  # each corner's next in its loop, the last's the loop's first
+    ends = np.cumsum(lengths)
+    following[ends - 1] = ends - lengths
+    second = first[following]
+    return np.minimum(first, second) * (int(corner.max()) + 1) + np.maximum(first, second), lengths
+
+
+def _closed_zones(edges: np.ndarray, lengths: np.ndarray, zone_of: list[str]) -> int:
+    """How many zones of the cut ``zone_of`` (each face's zone) close: every side borne by an even number of the
+    zone's faces (``edges``, ``lengths``: :func:`_edges`)."""
+    names = {name: k for k, name in enumerate(dict.fromkeys(zone_of))}
+    zone = np.repeat(np.fromiter((names[z] for z in zone_of), dtype=np.int64, count=len(zone_of)), lengths)
+    order = np.lexsort((edges, zone))
+    zone, edge = zone[order], edges[order]
+    starts = np.flatnonzero(np.r_[True, (zone[1:] != zone[:-1]) | (edge[1:] != edge[:-1])])
+    counts = np.diff(np.r_[starts, len(edge)])
+    return len(names) - len(np.unique(zone[starts[counts % 2 == 1]]))
 
 
 def parse_stl(content: bytes) -> dict:
