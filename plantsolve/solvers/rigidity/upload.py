@@ -220,7 +220,7 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
             out[name] = "model"
             continue
         kind = _section_type(lines)
-        if kind in PART_TYPES:
+        if kind in PART_TYPES and not (lookup(name) is None and len(_catalogue_parts(lines)) >= 2):
             out[name] = "part"
         elif kind in GEOMETRY_TYPES:
             out[name] = "geometry"
@@ -231,6 +231,31 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
         else:
             out[name] = "model"
     return out
+
+
+def _catalogue_parts(lines: list[tuple[int, str]]) -> list[str]:
+    """The catalogue parts a sub-file's type-1 lines place (their numbers, in line order)."""
+    return [normalise_number(name) for _, raw in lines if raw.split()[:1] == ["1"] and len(raw.split()) >= 15
+            and lookup(name := raw.split(None, 14)[14].strip()) is not None]
+
+
+def _headed_parts_expanded(files: dict[str, list[tuple[int, str]]], roles: dict[str, str], main: str) -> Diagnostic | None:
+    """A warning naming the sub-files headed ``!LDRAW_ORG Part`` that were expanded as sub-models: a header copied
+    from a part file onto a sub-model (or an unofficial shortcut of several parts). Read as one part, the parts it
+    places would be glued into one rigid body — a hinge among them frozen, the degrees of freedom undercounted."""
+    headed = [name for name, role in roles.items()
+              if role == "model" and name != main and _section_type(files[name]) in PART_TYPES]
+    if not headed:
+        return None
+    placed = {name: _catalogue_parts(files[name]) for name in headed}
+    named = ", ".join(f"{name!r} ({len(placed[name])} parts: {', '.join(placed[name][:4])}"
+                      f"{' …' if len(placed[name]) > 4 else ''})" for name in headed[:5])
+    return Diagnostic(
+        code="part_header_on_submodel", message=f"{len(headed)} sub-file(s) headed '0 !LDRAW_ORG Part' place several "
+        f"catalogue parts: {named}{' and more' if len(headed) > 5 else ''}. Each was read as a sub-model, its parts "
+        "analysed one by one (as one part they would move as one rigid body); if it is one moulded part, give it a "
+        "name of the catalogue or draw it of primitives",
+        details={"submodels": headed[:MAX_SKIPPED_LISTED]})
 
 
 PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
@@ -393,6 +418,8 @@ def parse_ldraw(text: str) -> dict:
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if mirrored:
         warnings.append(mirrored_parts(mirrored).model_dump())
+    if (headed := _headed_parts_expanded(files, roles, main)) is not None:
+        warnings.append(headed.model_dump())
     if outside:
         warnings.append(Diagnostic(
             code="lines_outside_files", message=f"{len(outside)} type-1 line(s) after a '0 NOFILE' and before any "
