@@ -324,7 +324,9 @@ def parse_ldraw(text: str) -> dict:
             try:
                 values = [float(t) for t in tokens[2:14]]
             except ValueError:
-                skipped.append({"line": number, "reason": "position or rotation is not a number"})
+                comma = next((t for t in tokens[2:14] if _numbers(t) and "," in t), None)
+                skipped.append({"line": number, "reason": "position or rotation is not a number" + (
+                    f" ({comma!r}: a decimal comma; LDraw numbers take a decimal point)" if comma else "")})
                 continue
             if not np.isfinite(values).all():
                 skipped.append({"line": number, "reason": "position or rotation is not finite"})
@@ -518,6 +520,7 @@ def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:
                  "numbers": numbers[:MAX_SKIPPED_LISTED]})
 
 
+LINE_TYPES = {"0", "1", "2", "3", "4", "5"}
 OBJ_KEYWORDS = {"v", "vn", "vt", "f", "o", "g", "s", "l", "usemtl", "mtllib"}
 SNIFFED_LINES = 200
 
@@ -557,7 +560,8 @@ def other_format(text: str) -> str | None:
                           and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
         return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"
     delimiter = next((d for d in (",", ";", "\t") if all(d in raw for raw in lines[:5])), None)
-    if delimiter is not None:
+    ldraw_lines = all(raw.split()[0] in LINE_TYPES and len(raw.split()) >= 8 for raw in lines[:5])
+    if delimiter is not None and not ldraw_lines:  # LDraw lines with decimal commas are no table
         columns = [c.strip() for c in lines[0].split(delimiter)]
         return f"a table of {len(columns)} columns ({', '.join(columns[:8])})"
     if all(_numbers(raw) for raw in lines[:20]) and lines[0].split()[0] not in ("0", "1", "2", "3", "4", "5"):

@@ -3,7 +3,9 @@ expanded as a sub-model: read as one part, its hinge was frozen and the model's 
 
 from __future__ import annotations
 
-from plantsolve.solvers.base import StoredInput
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 from tests.conftest import REPO
@@ -26,3 +28,15 @@ def test_a_sub_model_headed_part_keeps_its_hinges_and_is_warned_about():
         warning = next(w for w in result.report.warnings if w.code == "part_header_on_submodel")
         assert warning.details["submodels"] == ["wall.ldr"]
         assert "'wall.ldr' (9 parts: 3001, 3001, 3937, 3938 …)" in warning.message
+
+
+def test_ldraw_lines_with_decimal_commas_are_named_so_not_called_a_table():
+    text = "1 4 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 3001.dat\n" \
+           "1 4 0,0 -24,0 0,0 1,0 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 3001.dat\n"
+    with pytest.raises(InputRejected) as caught:
+        parse_upload(StoredInput.from_bytes("model.ldr", text.encode()), None)
+    (error,) = caught.value.errors
+    assert error.loc == ("file",)
+    assert error.msg == ("the file places no part (no usable type-1 line) — line 1: position or rotation is not a "
+                         "number ('0,0': a decimal comma; LDraw numbers take a decimal point); line 2: position or "
+                         "rotation is not a number ('0,0': a decimal comma; LDraw numbers take a decimal point)")
