@@ -222,7 +222,8 @@ def _read_e57(source: StoredInput) -> np.ndarray:
             e57 = pye57.E57(str(path))
             scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
         except Exception as exc:  # libE57 raises its own errors on corrupt files
-            raise reject(f"unreadable E57 file: {exc}") from None
+            # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
+            raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
     parts = [np.column_stack([d["cartesianX"], d["cartesianY"], d["cartesianZ"]]) for d in scans
              if "cartesianX" in d]
     if not parts:
