@@ -240,9 +240,10 @@ def _catalogue_parts(lines: list[tuple[int, str]]) -> list[str]:
 
 
 def _headed_parts_expanded(files: dict[str, list[tuple[int, str]]], roles: dict[str, str], main: str) -> Diagnostic | None:
-    """A warning naming the sub-files headed ``!LDRAW_ORG Part`` that were expanded as sub-models: a header copied
-    from a part file onto a sub-model (or an unofficial shortcut of several parts). Read as one part, the parts it
-    places would be glued into one rigid body — a hinge among them frozen, the degrees of freedom undercounted."""
+    """A warning naming the sub-files headed ``!LDRAW_ORG Part`` or ``Shortcut`` that were expanded as sub-models: a
+    header copied from a part file onto a sub-model, or an unofficial shortcut of several parts (a hinge's two halves).
+    Read as one part, the parts it places would be glued into one rigid body — a hinge among them frozen, the degrees
+    of freedom undercounted."""
     headed = [name for name, role in roles.items()
               if role == "model" and name != main and _section_type(files[name]) in PART_TYPES]
     if not headed:
@@ -251,8 +252,8 @@ def _headed_parts_expanded(files: dict[str, list[tuple[int, str]]], roles: dict[
     named = ", ".join(f"{name!r} ({len(placed[name])} parts: {', '.join(placed[name][:4])}"
                       f"{' …' if len(placed[name]) > 4 else ''})" for name in headed[:5])
     return Diagnostic(
-        code="part_header_on_submodel", message=f"{len(headed)} sub-file(s) headed '0 !LDRAW_ORG Part' place several "
-        f"catalogue parts: {named}{' and more' if len(headed) > 5 else ''}. Each was read as a sub-model, its parts "
+        code="part_header_on_submodel", message=f"{len(headed)} sub-file(s) headed as a part ('0 !LDRAW_ORG Part' or "
+        f"'Shortcut') place several catalogue parts: {named}{' and more' if len(headed) > 5 else ''}. Each was read as a sub-model, its parts "
         "analysed one by one (as one part they would move as one rigid body); if it is one moulded part, give it a "
         "name of the catalogue or draw it of primitives",
         details={"submodels": headed[:MAX_SKIPPED_LISTED]})

@@ -30,6 +30,16 @@ def test_a_sub_model_headed_part_keeps_its_hinges_and_is_warned_about():
         assert "'wall.ldr' (9 parts: 3001, 3001, 3937, 3938 …)" in warning.message
 
 
+def test_an_unofficial_shortcut_of_a_hinge_s_two_halves_keeps_the_hinge():
+    text = "\n".join(["0 FILE main.ldr", "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat",
+                      "1 15 -20 -24 10 1 0 0 0 1 0 0 0 1 hinge.dat", "0 FILE hinge.dat",
+                      "0 !LDRAW_ORG Unofficial_Shortcut", "1 15 0 0 0 1 0 0 0 1 0 0 0 1 3937.dat",
+                      "1 15 0 0 0 1 0 0 0 1 0 0 0 1 3938.dat"]) + "\n"
+    result = solve(parse_upload(StoredInput.from_bytes("hinge.mpd", text.encode()), None)).result
+    assert (result.dof, len(result.clusters)) == (1, 2)  # the top half turns about the hinge (was 0: one body)
+    assert [w.code for w in result.report.warnings] == ["part_header_on_submodel"]
+
+
 def test_ldraw_lines_with_decimal_commas_are_named_so_not_called_a_table():
     text = "1 4 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 3001.dat\n" \
            "1 4 0,0 -24,0 0,0 1,0 0,0 0,0 0,0 1,0 0,0 0,0 0,0 1,0 3001.dat\n"
