@@ -368,6 +368,10 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
     if not ports:
         raise ItemProblem(f"no END-POINT or BRANCH1-POINT line (a {word} needs at least one)")
     need = {"tee": 3, "cross": 4, "elbow": 2, "bend": 2, "reducer": 2, "valve": 2}.get(ftype, 1)
+    if len(ports) < need and len(ends) == 2 and ftype in ("tee", "cross"):
+        # a tee's run without its branch line: the branch pipe would be left unjoined there without a word
+        suspect = (f"a {word} has {need - 2} BRANCH-POINT line(s) beside its two END-POINTs, this one "
+                   f"{len(branches)}: the branch line was lost, and the pipe it joins is not connected to it")
     if len(ports) < need:  # set-on tees and the like: only the branch is a port
         ftype = "olet" if len(ports) == 1 else "other"
     if ftype in ("elbow", "bend") and c is None:

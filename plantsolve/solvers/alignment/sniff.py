@@ -15,6 +15,10 @@ from plantsolve.solvers.other_kinds import held_kind
 
 PCF_KEYWORDS = re.compile(r"^\s*(END-POINT|CENTRE-POINT|BRANCH1-POINT|CO-ORDS|PIPELINE-REFERENCE|ISOGEN-FILES|UNITS-BORE|"
                           r"UNITS-CO-ORDS|PIPE|ELBOW|TEE|FLANGE|VALVE)\b", re.MULTILINE)
+# an indented point line in any case ('    end-point 0 0 0 100'): the PCF reader takes keywords in any case, so a file
+# written in lower case is a PCF, not a text to name
+POINT_LINE_ANY_CASE = re.compile(r"^[ \t]+(END-POINT|CENTRE-POINT|BRANCH1-POINT)[ \t]+[-+.\d]",
+                                 re.MULTILINE | re.IGNORECASE)
 _NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
 
@@ -31,7 +35,7 @@ def refuse_other_json(body: dict) -> None:
 
 def refuse_other_text(text: str) -> None:
     """A 422 on ``file`` when a .pcf upload holds no PCF keyword at all, saying what it holds instead."""
-    if PCF_KEYWORDS.search(text) or not text.strip():  # an empty file: the PCF reader says so
+    if PCF_KEYWORDS.search(text) or POINT_LINE_ANY_CASE.search(text) or not text.strip():  # empty: the reader says so
         return
     raise reject("no PCF components with END-POINT/CENTRE-POINT/BRANCH1-POINT lines were found: this is no PCF "
                  f"(not one PCF keyword in it), it holds {describe(text)}")

@@ -220,7 +220,7 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
             out[name] = "model"
             continue
         kind = _section_type(lines)
-        if kind in PART_TYPES:
+        if kind in PART_TYPES and not (lookup(name) is None and len(_catalogue_parts(lines)) >= 2):
             out[name] = "part"
         elif kind in GEOMETRY_TYPES:
             out[name] = "geometry"
@@ -231,6 +231,32 @@ def _classify(files: dict[str, list[tuple[int, str]]], main: str) -> dict[str, s
         else:
             out[name] = "model"
     return out
+
+
+def _catalogue_parts(lines: list[tuple[int, str]]) -> list[str]:
+    """The catalogue parts a sub-file's type-1 lines place (their numbers, in line order)."""
+    return [normalise_number(name) for _, raw in lines if raw.split()[:1] == ["1"] and len(raw.split()) >= 15
+            and lookup(name := raw.split(None, 14)[14].strip()) is not None]
+
+
+def _headed_parts_expanded(files: dict[str, list[tuple[int, str]]], roles: dict[str, str], main: str) -> Diagnostic | None:
+    """A warning naming the sub-files headed ``!LDRAW_ORG Part`` or ``Shortcut`` that were expanded as sub-models: a
+    header copied from a part file onto a sub-model, or an unofficial shortcut of several parts (a hinge's two halves).
+    Read as one part, the parts it places would be glued into one rigid body — a hinge among them frozen, the degrees
+    of freedom undercounted."""
+    headed = [name for name, role in roles.items()
+              if role == "model" and name != main and _section_type(files[name]) in PART_TYPES]
+    if not headed:
+        return None
+    placed = {name: _catalogue_parts(files[name]) for name in headed}
+    named = ", ".join(f"{name!r} ({len(placed[name])} parts: {', '.join(placed[name][:4])}"
+                      f"{' …' if len(placed[name]) > 4 else ''})" for name in headed[:5])
+    return Diagnostic(
+        code="part_header_on_submodel", message=f"{len(headed)} sub-file(s) headed as a part ('0 !LDRAW_ORG Part' or "
+        f"'Shortcut') place several catalogue parts: {named}{' and more' if len(headed) > 5 else ''}. Each was read as a sub-model, its parts "
+        "analysed one by one (as one part they would move as one rigid body); if it is one moulded part, give it a "
+        "name of the catalogue or draw it of primitives",
+        details={"submodels": headed[:MAX_SKIPPED_LISTED]})
 
 
 PART_EXTENSIONS = (".dat", ".ldr", ".mpd", ".l3b")  # a type-1 line names its file with the extension
@@ -299,7 +325,9 @@ def parse_ldraw(text: str) -> dict:
             try:
                 values = [float(t) for t in tokens[2:14]]
             except ValueError:
-                skipped.append({"line": number, "reason": "position or rotation is not a number"})
+                comma = next((t for t in tokens[2:14] if _numbers(t) and "," in t), None)
+                skipped.append({"line": number, "reason": "position or rotation is not a number" + (
+                    f" ({comma!r}: a decimal comma; LDraw numbers take a decimal point)" if comma else "")})
                 continue
             if not np.isfinite(values).all():
                 skipped.append({"line": number, "reason": "position or rotation is not finite"})
@@ -393,6 +421,8 @@ def parse_ldraw(text: str) -> dict:
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if mirrored:
         warnings.append(mirrored_parts(mirrored).model_dump())
+    if (headed := _headed_parts_expanded(files, roles, main)) is not None:
+        warnings.append(headed.model_dump())
     if outside:
         warnings.append(Diagnostic(
             code="lines_outside_files", message=f"{len(outside)} type-1 line(s) after a '0 NOFILE' and before any "
@@ -491,6 +521,7 @@ def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:
                  "numbers": numbers[:MAX_SKIPPED_LISTED]})
 
 
+LINE_TYPES = {"0", "1", "2", "3", "4", "5"}
 OBJ_KEYWORDS = {"v", "vn", "vt", "f", "o", "g", "s", "l", "usemtl", "mtllib"}
 SNIFFED_LINES = 200
 
@@ -530,7 +561,8 @@ def other_format(text: str) -> str | None:
                           and raw.split(",")[0].strip() and raw.split(",")[0].strip()[0].isalpha()})[:5]
         return "an EnergyPlus IDF building model (objects such as " + ", ".join(objects) + ")"
     delimiter = next((d for d in (",", ";", "\t") if all(d in raw for raw in lines[:5])), None)
-    if delimiter is not None:
+    ldraw_lines = all(raw.split()[0] in LINE_TYPES and len(raw.split()) >= 8 for raw in lines[:5])
+    if delimiter is not None and not ldraw_lines:  # LDraw lines with decimal commas are no table
         columns = [c.strip() for c in lines[0].split(delimiter)]
         return f"a table of {len(columns)} columns ({', '.join(columns[:8])})"
     if all(_numbers(raw) for raw in lines[:20]) and lines[0].split()[0] not in ("0", "1", "2", "3", "4", "5"):

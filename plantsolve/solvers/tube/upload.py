@@ -163,7 +163,29 @@ def _read_las(content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str |
         unit = f"the file's CRS record cannot be read ({exc})"
     pts = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
     _check_las_bounds(pts, header, log)
+    _refuse_coarse_scale(las, scales, unit)
     return pts, unit
+
+
+# A LAS record stores x = X * scale + offset with X an integer: a scale of 0.01 m (laspy's and PDAL's default)
+# rounds every coordinate to 10 mm, more than a small tube's radius. Refused when the step is at least this many
+# metres and it has merged most points into the same positions: no fit can be made of what is left.
+COARSE_LAS_STEP_M = 0.002
+MERGED_SHARE = 0.5
+
+
+def _refuse_coarse_scale(las, scales: np.ndarray, unit: CrsUnit | str | None) -> None:
+    metres = unit.metres if isinstance(unit, CrsUnit) and not unit.geographic else 1.0  # none stated: metres
+    step = float(np.abs(scales).max()) * metres
+    if step < COARSE_LAS_STEP_M:
+        return
+    records = np.column_stack([np.asarray(las.X), np.asarray(las.Y), np.asarray(las.Z)])  # the stored integers
+    distinct = len(np.unique(records, axis=0))
+    if distinct <= MERGED_SHARE * len(records):
+        raise reject(f"the LAS header's scale factors ({', '.join(f'{v:g}' for v in scales)}) round every "
+                     f"coordinate to {step * 1000:g} mm steps: the file's {len(records):,} points fall on "
+                     f"{distinct:,} distinct positions, too coarse for a tube scan; export it again with a finer "
+                     "scale (0.0001 m, or 0.001 ft)")
 
 
 def _check_las_bounds(pts: np.ndarray, header, log: ReadLog) -> None:
@@ -200,7 +222,8 @@ def _read_e57(source: StoredInput) -> np.ndarray:
             e57 = pye57.E57(str(path))
             scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
         except Exception as exc:  # libE57 raises its own errors on corrupt files
-            raise reject(f"unreadable E57 file: {exc}") from None
+            # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
+            raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
     parts = [np.column_stack([d["cartesianX"], d["cartesianY"], d["cartesianZ"]]) for d in scans
              if "cartesianX" in d]
     if not parts:
