@@ -43,7 +43,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+# a --one-job child given --code DIR loads the checkout in DIR: chosen here, before anything of plantsolve is imported
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, sys.argv[sys.argv.index("--code") + 1] if "--code" in sys.argv else str(ROOT))
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest  # noqa: E402
 from plantsolve.solvers.base import no_progress  # noqa: E402
@@ -72,7 +74,7 @@ def main() -> None:
     parser.add_argument("--code", help=argparse.SUPPRESS)  # the checkout a --one-job child imports
     args = parser.parse_args()
     if args.one_job:
-        one_field_file_job(*args.one_job, args.code)
+        one_field_file_job(*args.one_job)
         return
     if args.field_file_job:
         field_file_job(args.sides, args.before)
@@ -241,11 +243,10 @@ def field_file_text(n: int) -> str:
     return "x [mm],y [mm],z [mm],Bx [mT],By [mT]\n" + "\n".join(lines) + "\n"
 
 
-def one_field_file_job(path: str, out: str, code: str | None) -> None:
+def one_field_file_job(path: str, out: str) -> None:
     """The job on the field file at ``path`` in this (fresh) process: solve and artifacts, as the worker runs
-    them; CPU s, peak RSS and the result's JSON written to ``out``."""
-    if code is not None:  # this process has imported nothing of plantsolve yet, so that checkout is the one loaded
-        sys.path.insert(0, code)
+    them; CPU s, peak RSS, the checkout it ran and the result's JSON written to ``out``."""
+    import plantsolve
     from plantsolve.schemas.flowmeter import FlowmeterRequest
     from plantsolve.solvers.base import validated
     from plantsolve.solvers.flowmeter.artifacts import render_artifacts
@@ -261,7 +262,8 @@ def one_field_file_job(path: str, out: str, code: str | None) -> None:
     after = resource.getrusage(resource.RUSAGE_SELF)
     Path(out).write_text(json.dumps({
         "cpu_s": after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime,
-        "peak_rss_mb": after.ru_maxrss / 1024, "result": solved.result.model_dump(mode="json")}))
+        "peak_rss_mb": after.ru_maxrss / 1024, "code": str(Path(plantsolve.__file__).resolve().parents[1]),
+        "result": solved.result.model_dump(mode="json")}))
 
 
 def numbers(value, path="") -> dict[str, float]:
@@ -310,6 +312,8 @@ def field_file_job(sides: list[int], before: str | None) -> None:
                 command = [sys.executable, __file__, "--one-job", str(path), str(out)] + (["--code", code] if code else [])
                 subprocess.run(command, check=True)
                 results[label] = json.loads(out.read_text())
+                ran = Path(results[label]["code"])
+                assert ran == Path(code or ROOT).resolve(), f"{label} ran the code in {ran}"
             for label, _ in codes:
                 r = results[label]
                 gap = ""
