@@ -72,39 +72,43 @@ def add_wave_modes(total: np.ndarray, offset: np.ndarray, slope: np.ndarray, z0:
     k2 = k**2
     span = max(1, min(intervals, block // modes))  # knots per block
     width = max(1, min(columns, block // (span * modes)))  # columns per block
-    starts = range(0, intervals, span)
+    # the sines and cosines are the same for every column: with every knot in one block they are made once;
+    # else (a grid with many planes along z, hence few columns) all columns take each knot block in turn
+    one_block = span == intervals
+    group = width if one_block else columns
     terms = np.empty((width, span + 1, modes))  # row 0: the sum over the knots so far
     second = np.empty((width, span, modes))
-    sums = np.empty((width, modes))
+    sums = np.empty((group, modes))
 
-    def waves(zb):
-        """sin(k z) and cos(k z) at the knots zb of each block, (knots, modes)."""
-        for j0 in starts:
-            phase = k[None, :] * zb[j0:j0 + span, None]
-            yield np.sin(phase), np.cos(phase)
+    def waves(zb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """sin(k z) and cos(k z) at the knots zb, (knots, modes)."""
+        phase = k[None, :] * zb[:, None]
+        return np.sin(phase), np.cos(phase)
 
-    # the sines and cosines are the same for every column: made once when they fit in one buffer
     ends = ((z1, 1.0), (z0, -1.0))
-    kept = [list(waves(zb)) for zb, _ in ends] if intervals * modes <= block else None
-    for c0 in range(0, columns, width):
-        c1 = min(c0 + width, columns)
-        w = c1 - c0
+    kept = [waves(zb) for zb, _ in ends] if one_block else None
+    for g0 in range(0, columns, group):
+        g1 = min(g0 + group, columns)
         for end, (zb, sign) in enumerate(ends):
-            sums[:w] = 0.0
-            for j0, (sine, cosine) in zip(starts, kept[end] if kept is not None else waves(zb)):
+            sums[:g1 - g0] = 0.0
+            for j0 in range(0, intervals, span):
                 j1 = min(j0 + span, intervals)
                 s = j1 - j0
                 zz = zb[j0:j1, None]
-                a, b = offset[c0:c1, j0:j1, None], slope[c0:c1, j0:j1, None]
-                part, tail = terms[:w, 1:s + 1], second[:w, :s]
-                np.multiply(a + b * zz, sine, out=part)
-                np.divide(part, k, out=part)
-                np.multiply(b, cosine, out=tail)
-                np.divide(tail, k2, out=tail)
-                np.add(part, tail, out=part)
-                terms[:w, 0] = sums[:w]
-                np.sum(terms[:w, :s + 1], axis=1, out=sums[:w])
-            total[c0:c1] += sign * sums[:w]
+                sine, cosine = kept[end] if one_block else waves(zb[j0:j1])
+                for c0 in range(g0, g1, width):
+                    c1 = min(c0 + width, g1)
+                    w = c1 - c0
+                    a, b = offset[c0:c1, j0:j1, None], slope[c0:c1, j0:j1, None]
+                    part, tail = terms[:w, 1:s + 1], second[:w, :s]
+                    np.multiply(a + b * zz, sine, out=part)
+                    np.divide(part, k, out=part)
+                    np.multiply(b, cosine, out=tail)
+                    np.divide(tail, k2, out=tail)
+                    np.add(part, tail, out=part)
+                    terms[:w, 0] = sums[c0 - g0:c1 - g0]
+                    np.sum(terms[:w, :s + 1], axis=1, out=sums[c0 - g0:c1 - g0])
+            total[g0:g1] += sign * sums[:g1 - g0]
 
 
 def all_ratios(x: np.ndarray, top: int) -> np.ndarray:

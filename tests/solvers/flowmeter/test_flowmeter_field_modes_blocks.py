@@ -46,8 +46,9 @@ def random_grid(nx: int, ny: int, z: np.ndarray, seed: int) -> FieldGrid:
 def test_every_block_gives_the_one_expression_bit_for_bit(z, cut):
     grid = random_grid(3, 4, z, seed=7)
     want = one_expression(grid, cut, 97)
-    # block 1: one column and one knot at a time; 7: several knots, never all; 96 * 5: some columns, all knots
-    for block in (1, 7, 96 * 5, 10**6):
+    # 96 modes. Block 1 or 7: one column and one knot at a time; 96 * 5: five knots at a time; 96 * 40: every knot
+    # of one column at a time (all 12 columns in the third case); 10**6: everything at once
+    for block in (1, 7, 96 * 5, 96 * 40, 10**6):
         got = field_modes(grid, cut, 97, block=block)
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]), block
 
