@@ -61,10 +61,11 @@ def add_wave_modes(total: np.ndarray, offset: np.ndarray, slope: np.ndarray, z0:
     column c's offset and slope on knot interval j; total (columns, modes), offset and slope (columns, knots).
 
     The (columns x knots x modes) terms are made in blocks of at most about ``block`` floats (some columns,
-    some knots) in two preallocated buffers, so memory does not grow with the grid. Each term is the same
-    sequence of operations as one array expression over everything, and the knots are summed in the same
-    order (one after another: row 0 of the buffer carries each column's sum over the knots before), so the
-    result is the same to the last bit whatever the block."""
+    some knots) in two preallocated buffers, so the working memory does not grow with the grid (beyond one sum
+    per column and mode when the knots take several blocks: a grid with that many planes has few columns). Each
+    term is the same sequence of operations as one array expression over everything, and the knots are summed
+    in the same order (one after another: row 0 of the buffer carries each column's sum over the knots before),
+    so the result is the same to the last bit whatever the block."""
     columns, intervals = offset.shape
     modes = len(k)
     if modes == 0 or columns == 0:
