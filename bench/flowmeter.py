@@ -20,19 +20,32 @@ Further tables:
   (b) Richardson extrapolation of the uncalibrated FEM over three meshes (order fitted) against
   the integral equation; (c) the integral equation's error estimate against its 1e-6 reference;
 - a grid field varying across and along the pipe: the integral equation against the FEM on refined
-  meshes, and their times.
+  meshes, and their times;
+- a field file job: a field varying along z given as ``options.magnetic_field_file`` (a CSV of n x n x 2n
+  rows, 200 k and 2 M), the job (solve and artifacts) in a fresh process per size and code: CPU s, peak RSS
+  (the process's, the file's text and its parse included) and S; with ``--before DIR`` the same job on
+  the plantsolve checkout in DIR (e.g. ``git archive main`` extracted) in the same run, and the largest
+  relative difference of any reported number. Only this table:
+
+    python bench/flowmeter.py --field-file-job [--before DIR] [--sides 46 100]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import resource
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+# a --one-job child given --code DIR loads the checkout in DIR: chosen here, before anything of plantsolve is imported
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, sys.argv[sys.argv.index("--code") + 1] if "--code" in sys.argv else str(ROOT))
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest  # noqa: E402
 from plantsolve.solvers.base import no_progress  # noqa: E402
@@ -53,7 +66,19 @@ def run(beta: float, a: float | None, method: str, tolerance: float = 1e-3, reyn
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--field-file-job", action="store_true", help="only the field file job table")
+    parser.add_argument("--before", metavar="DIR", help="the field file job also on the plantsolve checkout in DIR")
+    parser.add_argument("--sides", type=int, nargs="+", default=[46, 100],
+                        help="field file grids n x n x 2n (46: 194,672 rows; 100: 2,000,000)")
+    parser.add_argument("--one-job", nargs=2, metavar=("FILE", "OUT"), help=argparse.SUPPRESS)  # in this process
+    parser.add_argument("--code", help=argparse.SUPPRESS)  # the checkout a --one-job child imports
     args = parser.parse_args()
+    if args.one_job:
+        one_field_file_job(*args.one_job)
+        return
+    if args.field_file_job:
+        field_file_job(args.sides, args.before)
+        return
     reference_tolerance = 4.4e-4 if args.quick else 2.5e-4  # mesh sizes 0.08 and 0.06 R
     print(f"{'beta':>5} {'a/R':>6} | {'method':<15} {'S':>9} {'|err|':>9} {'est.':>9} {'s':>6}")
     for beta in (5.0, 22.5, 45.0):
@@ -202,6 +227,101 @@ def grid_fields(quick: bool) -> None:
             r = solve(FlowmeterRequest.model_validate(body), no_progress).result
             cells.append(f"{r.sensitivity:.6f} ({r.error_estimate:.1e}, {time.perf_counter() - t0:5.2f})")
         print(f"{label:<26} | " + " | ".join(f"{c:>28}" for c in cells))
+
+
+def field_file_text(n: int) -> str:
+    """A CSV field file of n x n x 2n rows over a 100 mm pipe's section and +-200 mm along it (liner +-150 mm):
+    B_y falls off along z and varies across, B_x varies across; mm and mT, short numbers (2 M rows stay within
+    the schema's 50 MB)."""
+    x = np.round(np.linspace(-99, 99, n), 1)
+    z = np.round(np.linspace(-199, 199, 2 * n), 1)
+    gx, gy, gz = np.meshgrid(x, x, z, indexing="ij")
+    decay = np.exp(-(gz / 75.0) ** 2)
+    by = (10.0 * (1 + 0.002 * gx + 0.001 * gy) * decay).ravel()
+    bx = (0.3 * 0.0004 * gx * gy * decay).ravel()
+    lines = [f"{a:g},{b:g},{c:g},{d:.2g},{e:.4g}" for a, b, c, d, e in zip(gx.ravel(), gy.ravel(), gz.ravel(), bx, by)]
+    return "x [mm],y [mm],z [mm],Bx [mT],By [mT]\n" + "\n".join(lines) + "\n"
+
+
+def one_field_file_job(path: str, out: str) -> None:
+    """The job on the field file at ``path`` in this (fresh) process: solve and artifacts, as the worker runs
+    them; CPU s, peak RSS, the checkout it ran and the result's JSON written to ``out``."""
+    import plantsolve
+    from plantsolve.schemas.flowmeter import FlowmeterRequest
+    from plantsolve.solvers.base import validated
+    from plantsolve.solvers.flowmeter.artifacts import render_artifacts
+    from plantsolve.solvers.flowmeter.solve import solve
+
+    request = validated(FlowmeterRequest, {
+        "units": "mm", "pipe": {"radius": 50.0, "liner_length": 300.0},
+        "electrodes": {"shape": "patch", "half_angle": 22.5, "half_length": 20.0},
+        "velocity": {"type": "uniform", "mean": 1.0}, "options": {"magnetic_field_file": Path(path).read_text()}})
+    before = resource.getrusage(resource.RUSAGE_SELF)
+    solved = solve(request, no_progress)
+    list(render_artifacts(request, solved))
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    Path(out).write_text(json.dumps({
+        "cpu_s": after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime,
+        "peak_rss_mb": after.ru_maxrss / 1024, "code": str(Path(plantsolve.__file__).resolve().parents[1]),
+        "result": solved.result.model_dump(mode="json")}))
+
+
+def numbers(value, path="") -> dict[str, float]:
+    """Every number in a result's JSON, keyed by its path."""
+    if isinstance(value, dict):
+        return {k: v for key, item in value.items() for k, v in numbers(item, f"{path}.{key}").items()}
+    if isinstance(value, list):
+        return {k: v for i, item in enumerate(value) for k, v in numbers(item, f"{path}[{i}]").items()}
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return {path: float(value)}
+    return {}
+
+
+def largest_relative_difference(a: dict, b: dict) -> tuple[float, str]:
+    """The largest |a - b| / max(|a|, |b|) over the numbers both results report (and the path of it); a number
+    only one of them reports counts as inf."""
+    na, nb = numbers(a), numbers(b)
+    worst, where = 0.0, ""
+    for key in na.keys() | nb.keys():
+        if key not in na or key not in nb:
+            gap = float("inf")
+        else:
+            scale = max(abs(na[key]), abs(nb[key]))
+            gap = 0.0 if na[key] == nb[key] else abs(na[key] - nb[key]) / scale
+        if gap > worst:
+            worst, where = gap, key
+    return worst, where
+
+
+def field_file_job(sides: list[int], before: str | None) -> None:
+    print()
+    print("field file job (options.magnetic_field_file, n x n x 2n rows, patch 22.5 deg, a 20 mm, R 50 mm, liner "
+          "300 mm): solve and artifacts in a fresh process each; peak RSS of the process (file text and parse included)")
+    print(f"{'rows':>10} {'code':<8} {'CPU s':>7} {'peak RSS MB':>12} {'S':>18} {'max rel. diff':>14}")
+    codes = [("this", None)] + ([("before", before)] if before else [])
+    with tempfile.TemporaryDirectory() as folder:
+        for n in sides:
+            path = Path(folder) / f"field_{n}.csv"
+            text = field_file_text(n)
+            path.write_text(text)
+            rows = text.count("\n") - 1
+            del text
+            results = {}
+            for label, code in codes:
+                out = Path(folder) / f"{label}_{n}.json"
+                command = [sys.executable, __file__, "--one-job", str(path), str(out)] + (["--code", code] if code else [])
+                subprocess.run(command, check=True)
+                results[label] = json.loads(out.read_text())
+                ran = Path(results[label]["code"])
+                assert ran == Path(code or ROOT).resolve(), f"{label} ran the code in {ran}"
+            for label, _ in codes:
+                r = results[label]
+                gap = ""
+                if label != "this":
+                    worst, where = largest_relative_difference(results["this"]["result"], r["result"])
+                    gap = f"{worst:.1e}" + (f" ({where})" if worst else "")
+                print(f"{rows:>10} {label:<8} {r['cpu_s']:>7.2f} {r['peak_rss_mb']:>12.0f} "
+                      f"{r['result']['sensitivity']:>18.15f} {gap:>14}")
 
 
 if __name__ == "__main__":

@@ -31,8 +31,12 @@ from plantsolve.solvers.flowmeter.integral_equation import IntegralEquationSolut
 from plantsolve.solvers.flowmeter.profiles import DiscQuadrature, disc_quadrature
 
 
-def field_modes(grid: FieldGrid, cut: float, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """b_x,n and b_y,n = integral_{-cut}^{cut} B cos(k_n z) dz at the grid columns, shape (nx, ny, count)."""
+BLOCK = 1 << 20  # floats in one working buffer (8 MB): the (columns x knots x modes) terms go through it in blocks
+
+
+def field_modes(grid: FieldGrid, cut: float, count: int, block: int = BLOCK) -> tuple[np.ndarray, np.ndarray]:
+    """b_x,n and b_y,n = integral_{-cut}^{cut} B cos(k_n z) dz at the grid columns, shape (nx, ny, count).
+    The terms of n > 0 are made about ``block`` floats at a time (:func:`add_wave_modes`)."""
     k = np.arange(count) * np.pi / cut
     inner = grid.z[(grid.z > -cut) & (grid.z < cut)]
     knots = np.concatenate([[-cut], inner, [cut]])
@@ -46,13 +50,66 @@ def field_modes(grid: FieldGrid, cut: float, count: int) -> tuple[np.ndarray, np
         total = np.zeros((len(columns), count))
         # n = 0: the plain integral; n > 0: (a + s z) sin(kz)/k + s cos(kz)/k^2 between the knots
         total[:, 0] = np.sum(offset * (z1 - z0) + slope * (z1**2 - z0**2) / 2, axis=1)
-        kk = k[1:][None, None, :]
-        for zb, sign in ((z1, 1.0), (z0, -1.0)):
-            zz = zb[None, :, None]
-            value = (offset[:, :, None] + slope[:, :, None] * zz) * np.sin(kk * zz) / kk + slope[:, :, None] * np.cos(kk * zz) / kk**2
-            total[:, 1:] += sign * value.sum(axis=1)
+        add_wave_modes(total[:, 1:], offset, slope, z0, z1, k[1:], block)
         out.append(total.reshape(len(grid.x), len(grid.y), count))
     return out[0], out[1]
+
+
+def add_wave_modes(total: np.ndarray, offset: np.ndarray, slope: np.ndarray, z0: np.ndarray, z1: np.ndarray,
+                   k: np.ndarray, block: int) -> None:
+    """total[c, n] += sum_j [(a + s z) sin(k_n z)/k_n + s cos(k_n z)/k_n^2] from z0_j to z1_j, a and s each
+    column c's offset and slope on knot interval j; total (columns, modes), offset and slope (columns, knots).
+
+    The (columns x knots x modes) terms are made in blocks of at most about ``block`` floats (some columns,
+    some knots) in two preallocated buffers, so the working memory does not grow with the grid (beyond one sum
+    per column and mode when the knots take several blocks: a grid with that many planes has few columns). Each
+    term is the same sequence of operations as one array expression over everything, and the knots are summed
+    in the same order (one after another: row 0 of the buffer carries each column's sum over the knots before),
+    so the result is the same to the last bit whatever the block."""
+    columns, intervals = offset.shape
+    modes = len(k)
+    if modes == 0 or columns == 0:
+        return
+    k2 = k**2
+    span = max(1, min(intervals, block // modes))  # knots per block
+    width = max(1, min(columns, block // (span * modes)))  # columns per block
+    # the sines and cosines are the same for every column: with every knot in one block they are made once;
+    # else (a grid with many planes along z, hence few columns) all columns take each knot block in turn
+    one_block = span == intervals
+    group = width if one_block else columns
+    terms = np.empty((width, span + 1, modes))  # row 0: the sum over the knots so far
+    second = np.empty((width, span, modes))
+    sums = np.empty((group, modes))
+
+    def waves(zb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """sin(k z) and cos(k z) at the knots zb, (knots, modes)."""
+        phase = k[None, :] * zb[:, None]
+        return np.sin(phase), np.cos(phase)
+
+    ends = ((z1, 1.0), (z0, -1.0))
+    kept = [waves(zb) for zb, _ in ends] if one_block else None
+    for g0 in range(0, columns, group):
+        g1 = min(g0 + group, columns)
+        for end, (zb, sign) in enumerate(ends):
+            sums[:g1 - g0] = 0.0
+            for j0 in range(0, intervals, span):
+                j1 = min(j0 + span, intervals)
+                s = j1 - j0
+                zz = zb[j0:j1, None]
+                sine, cosine = kept[end] if one_block else waves(zb[j0:j1])
+                for c0 in range(g0, g1, width):
+                    c1 = min(c0 + width, g1)
+                    w = c1 - c0
+                    a, b = offset[c0:c1, j0:j1, None], slope[c0:c1, j0:j1, None]
+                    part, tail = terms[:w, 1:s + 1], second[:w, :s]
+                    np.multiply(a + b * zz, sine, out=part)
+                    np.divide(part, k, out=part)
+                    np.multiply(b, cosine, out=tail)
+                    np.divide(tail, k2, out=tail)
+                    np.add(part, tail, out=part)
+                    terms[:w, 0] = sums[c0 - g0:c1 - g0]
+                    np.sum(terms[:w, :s + 1], axis=1, out=sums[c0 - g0:c1 - g0])
+            total[g0:g1] += sign * sums[:g1 - g0]
 
 
 def all_ratios(x: np.ndarray, top: int) -> np.ndarray:
