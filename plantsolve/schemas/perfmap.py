@@ -543,7 +543,10 @@ class PerfmapQueryRequest(StrictModel):
     @model_validator(mode="before")
     @classmethod
     def _single_point(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "points" not in data and {"flow", "pressure"} <= set(data):
+        if isinstance(data, dict) and "points" not in data and {"flow", "pressure"} & set(data):
+            # validated as the point it is, so that an error names its field ('units', 'flow'), not 'points.0.…'
+            # (which the body does not have: the problem named '/0') or 'points' missing beside 'flow' extra
+            QueryPoint.model_validate(data)
             return {"points": [data]}
         return data
 

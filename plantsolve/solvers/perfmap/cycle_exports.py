@@ -104,12 +104,12 @@ def pycycle_module(result: PerfmapResult) -> bytes | None:
     """A pyCycle ``MapData`` module of the beta grid, in the layout of pyCycle's own map modules: everything its
     ``CompressorMap`` reads (``param_data``/``output_data`` for the interpolators, ``defaults``, ``RlineStall``)
     and the surge and choke lines. None when the settings are no full grid of at most two parameters (pyCycle's
-    tables are rectangular in alpha x Nc)."""
+    tables are rectangular in alpha x Nc) or hold one speed line (its interpolation needs two)."""
     if len(result.setting_names) > 2:
         return None
     gs = groups(result)
     speeds = [tuple(result.beta_map.lines[k].setting[-1] for k in ks) for _, ks in gs]
-    if any(s != speeds[0] for s in speeds):
+    if any(s != speeds[0] for s in speeds) or len(speeds[0]) < 2:  # one speed line: no table OpenMDAO takes
         return None
     beta = np.array(result.beta_map.beta)
     order = np.argsort(-beta, kind="stable")  # surge (R-line 1) first

@@ -171,6 +171,41 @@ def named_as_speed(name: str) -> bool:
     return re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) in SPEED_NAMES
 
 
+# Names rigs give a vane setting, matched as named_as_speed matches: such a setting is never the speed the cycle-code
+# exports take the last setting for. Not theta and phi: the paper's vane angles, but this project's pyCycle example
+# (and its readers' users) put the speed in phi; their unit tells (an angle is no speed)
+GEOMETRY_NAMES = {"igv", "igv angle", "inlet guide vane", "inlet guide vanes", "vgv", "vgv angle",
+                  "variable guide vane", "stator angle", "vsv", "alpha", "α", "alphamap", "alpha map", "diffuser",
+                  "diffuser angle", "diffuser vane", "diffuser setting"}
+
+
+def _is_angle(unit: str | None) -> bool:
+    try:
+        return unit is not None and any(w in str(parse_unit(unit).unit) for w in ("degree", "radian"))
+    except UnitError:
+        return False
+
+
+def last_setting_not_speed(names: list[str], units: list[str | None]) -> Diagnostic | None:
+    """The warning of exports whose speed lines are no speed: map_pycycle.py's NcMap, the GasTurb tables' speed
+    column and the (speed, beta) query take the LAST setting for the speed; a last setting named or measured as a
+    vane angle (the paper's diffuser angle phi in degrees; a table whose diffuser column follows its speed) is
+    written there as the speed, and a cycle code runs it so."""
+    last, unit = names[-1], units[-1] if units else None
+    speed = [n for n in names[:-1] if named_as_speed(n)]
+    plain = re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", last).strip().lower())
+    if named_as_speed(last) or not (speed or plain in GEOMETRY_NAMES or _is_angle(unit)):
+        return None
+    because = f"the speed is {speed[0]!r}" if speed else f"{last!r} is a vane setting" + (
+        f" (in {unit})" if _is_angle(unit) else "")
+    return _warning(
+        "exports_last_setting_not_speed",
+        f"The cycle-code exports (map_pycycle.py's NcMap, map_gasturb*.map's speed lines) and the (speed, beta) "
+        f"query take the last setting, {last!r}, for the speed, but {because}: a cycle code would run its values as "
+        "corrected speeds. List the speed last in setting_names (and each position's setting values in that order) "
+        "for exports a cycle code can use.", quantity="settings", setting=last, setting_names=list(names))
+
+
 def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting]) -> list[Diagnostic]:
     out = []
     for k, name in enumerate(request.setting_names):

@@ -45,6 +45,7 @@ from plantsolve.solvers.perfmap.fitting import (
     fit_eta_setting,
     fit_pressure_setting,
 )
+from plantsolve.solvers.perfmap.plausibility import last_setting_not_speed
 from plantsolve.solvers.perfmap.performance_map import binned_map, curve_ranges, exact_map, grid_axes
 from plantsolve.solvers.perfmap.triangulation import map_simplices
 from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
@@ -392,6 +393,13 @@ def _warn_beyond_gsp(settings: list[Setting], beta_values: int, warnings: list[D
     for s in settings:
         groups[tuple(s.values[:-1])] = groups.get(tuple(s.values[:-1]), 0) + 1
     _warn_below_gspy(groups, beta_values, warnings)
+    if min(groups.values()) < PYCYCLE_MIN_SPEED_LINES:
+        warnings.append(Diagnostic(
+            code="pycycle_export_not_possible", message="No map_pycycle.py: the map has one speed line"
+            + (" per value of the other settings" if len(groups) > 1 else "") + ", and pyCycle's CompressorMap "
+            f"interpolates its tables over the speed, which needs at least {PYCYCLE_MIN_SPEED_LINES} speed lines "
+            "(OpenMDAO refuses the table). The GasTurb table and map_beta.csv are written.",
+            details={"speed_lines": min(groups.values()), "minimum": PYCYCLE_MIN_SPEED_LINES}))
     over = {k: n for k, n in groups.items() if n > GSP_MAX_ARGUMENTS}
     if over:
         key, n = max(over.items(), key=lambda kv: kv[1])
@@ -405,6 +413,10 @@ def _warn_beyond_gsp(settings: list[Setting], beta_values: int, warnings: list[D
             details={"speed_lines": n, "limit": GSP_MAX_ARGUMENTS, "rows_limit": GSP_MAX_PARAMETERS,
                      "files": [list(k) for k in over][:100]}))
 
+
+# pyCycle's CompressorMap interpolates (alpha, Nc, R-line) linearly: OpenMDAO refuses a table with one value along an
+# axis ('There are 1 points in a data dimension'); a single alpha is repeated, as pyCycle's maps do, a speed cannot be
+PYCYCLE_MIN_SPEED_LINES = 2
 
 # GSPy reads a compressor map into scipy's cubic grid interpolators over (speed, beta), which need four values
 # along each axis: with fewer its map reader raises, and the file cannot be used there at all.
@@ -425,6 +437,38 @@ def _warn_below_gspy(groups: dict[tuple, int], beta_values: int, warnings: list[
         f"{GSPY_MIN_VALUES} speed lines a file and options.beta_grid.lines of at least {GSPY_MIN_VALUES}.",
         details={"speed_lines": n, "beta_values": beta_values, "minimum": GSPY_MIN_VALUES,
                  "files": [list(k) for k in few][:100]}))
+
+
+# On a compressor's map a faster speed line lies at larger flows at every beta (the surge and choke lines rise with
+# the speed): pyCycle's nine maps and GasTurb's samples keep that within 0.8 % of the flow. A line further back is a
+# speed value typed wrong or lines that cross, which the exports and the (speed, beta) query interpolate as given.
+SPEED_ORDER_TOLERANCE = 0.02
+
+
+def _warn_speed_lines_out_of_order(settings: list[Setting], flow: np.ndarray, beta: np.ndarray,
+                                   warnings: list[Diagnostic]) -> None:
+    groups: dict[tuple, list[int]] = {}
+    for k, s in enumerate(settings):
+        groups.setdefault(tuple(s.values[:-1]), []).append(k)
+    worst = None
+    for ks in groups.values():
+        ks = sorted(ks, key=lambda k: settings[k].values[-1])
+        back = (flow[ks[:-1]] - flow[ks[1:]]) / np.abs(flow[ks[:-1]]).max(axis=1, keepdims=True)
+        if back.size and back.max() > SPEED_ORDER_TOLERANCE and (worst is None or back.max() > worst[0]):
+            i, j = np.unravel_index(int(np.argmax(back)), back.shape)
+            worst = (float(back.max()), ks[i], ks[i + 1], int(j))
+    if worst is None:
+        return
+    share, lo, hi, j = worst
+    slow, fast = settings[lo], settings[hi]
+    warnings.append(Diagnostic(
+        code="speed_lines_out_of_order", message=f"The faster speed line {fast.label} lies at smaller flows than the "
+        f"slower {slow.label}: at beta {beta[j]:.3g} its flow is {flow[hi, j]:.6g}, {100 * share:.0f} % of the line's "
+        f"largest flow below the slower line's {flow[lo, j]:.6g}. On a compressor map faster lines lie at larger flows "
+        "(surge and choke lines rise with the speed): is a speed value wrong, or do the lines cross? The exports and "
+        "the (speed, beta) query interpolate between them as given.",
+        details={"quantity": "settings", "slower": list(slow.values), "faster": list(fast.values),
+                 "beta": float(beta[j]), "flows": [float(flow[lo, j]), float(flow[hi, j])]}))
 
 
 def _warn_pressure_not_ratio(units, warnings: list[Diagnostic]) -> None:
@@ -483,6 +527,7 @@ def beta_tables(curves: CurveSet, settings: list[Setting], option, units, warnin
             details={"values": close[:100], "lines": option.lines}))
     _warn_beyond_gsp(settings, len(table.beta), warnings)
     _warn_pressure_not_ratio(units, warnings)
+    _warn_speed_lines_out_of_order(settings, table.flow, table.beta, warnings)
     f = table.frame
     return BetaMap(shape=option.shape, exponent=f.p, vertex_flow=f.xv, vertex_pressure=f.yv, spacing=option.spacing,
                    beta=table.beta.tolist(), lines=lines,
@@ -608,6 +653,8 @@ def _performance(value: PerfmapInput, progress: Progress) -> PerfmapResult:
     beta_map = beta_tables(curves, settings, opts.beta_grid, units, warnings)
     if beta_map is not None:
         beta_map.c_unit = _c_unit(units, beta_map.exponent)
+        if (misplaced := last_setting_not_speed(request.setting_names, units.settings)) is not None:
+            warnings.append(misplaced)
     progress(0.62, "surge and choke lines and the beta grid done")
 
     ranges = curve_ranges(curves)

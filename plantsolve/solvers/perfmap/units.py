@@ -26,7 +26,7 @@ from plantsolve.solvers.base import FieldError, InputRejected
 # Spellings of rig software and cycle codes that pint does not know (pint has ‰ as 'permille' already:
 # defining it again logs a redefinition warning on every run).
 _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
-                "bara = bar", "mbarg = millibar")
+                "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal")
 
 
 @functools.cache
@@ -48,7 +48,12 @@ ALLOWED = {
 }
 # Gauge pressures are above the ambient, which no file states: converting one to an absolute unit (or back)
 # with a factor alone would shift every value by about an atmosphere without a word.
-GAUGE = frozenset({"barg", "psig", "mbarg"})
+GAUGE = frozenset({"barg", "psig", "mbarg", "kPag", "MPag"})
+# A pressure marked absolute or gauge as rig sheets and process data sheets write it: 'kPa(a)', 'bar (abs)', 'psi(g)',
+# 'kPa gauge'. Read bare, 'kPa(a)' lost its closing bracket and pint refused it, while 'psia' and 'bara' passed.
+_PRESSURE_MARK = re.compile(r"(?P<unit>[A-Za-z]+)\s*(?:\(\s*(?P<mark>a|abs|g|gauge)\s*\)|\s(?P<word>abs|gauge))",
+                            re.IGNORECASE)
+_GAUGE_OF = {"bar": "barg", "psi": "psig", "mbar": "mbarg", "kPa": "kPag", "MPa": "MPag"}
 # Units whose dimensions a setting named as a speed may have: relative (fraction, %), rotational (rpm, 1/s,
 # rad/s) or corrected rotational (rpm/sqrt(K)).
 SPEED_DIMENSIONS = {"1": "relative (fraction, %)", "rpm": "rotational (rpm, 1/min, rad/s)",
@@ -83,6 +88,9 @@ class Unit:
 
 def parse_unit(text: str) -> Unit:
     """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it."""
+    marked = _marked_pressure(text.strip().strip("[]").strip())
+    if marked is not None:
+        return marked
     s = text.strip().strip("[]()").strip()
     if s.lower() in _DIMENSIONLESS_WORDS:
         return Unit("1", registry().dimensionless)
@@ -100,6 +108,29 @@ def parse_unit(text: str) -> Unit:
     if unit.dimensionless and str(unit) == "dimensionless":
         return Unit("1", unit)
     return Unit(format(unit, "~P") or "1", unit)
+
+
+def _marked_pressure(text: str) -> Unit | None:
+    """A pressure unit marked absolute ('kPa(a)', 'bar abs': the pressure itself) or gauge ('kPa(g)': the project's
+    gauge unit, e.g. kPag, which no factor converts to an absolute one); None when ``text`` carries no mark."""
+    match = _PRESSURE_MARK.fullmatch(text)
+    if match is None:
+        return None
+    name, mark = match["unit"], (match["mark"] or match["word"]).lower()
+    try:
+        unit = registry().parse_units(name)
+    except Exception:  # pint's parser raises many types on garbage
+        unit = None
+    if unit is None or unit.dimensionality != registry().parse_units("Pa").dimensionality:
+        raise UnitError(f"unit {text!r}: '{name}' marked {'absolute' if mark.startswith('a') else 'gauge'} is no "
+                        "pressure unit (write e.g. kPa(a), bar(g), psia)")
+    if mark.startswith("a"):
+        return Unit(format(unit, "~P"), unit)
+    gauge = _GAUGE_OF.get(format(unit, "~P"))
+    if gauge is None:
+        raise UnitError(f"unit {text!r}: a gauge pressure is read in {', '.join(f'{u}(g)' for u in _GAUGE_OF)}; "
+                        f"write the {name} values as absolute pressures or in one of those")
+    return Unit(gauge, registry().parse_units(gauge))
 
 
 # pint counts an angle in radians, so a bare frequency (Hz, 1/s, 1/min) is read as radians per time and 1 Hz as

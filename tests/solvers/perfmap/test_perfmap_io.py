@@ -92,8 +92,10 @@ def test_too_few_settings_for_a_map_but_envelope_possible():
         body["options"]["map"] = flag
         res = solve(PerfmapRequest.model_validate(body)).result
         assert res.map is None and len(res.envelopes) == 1 and res.triangles == []  # one theta
-        # one speed line: its GasTurb export is one GSPy cannot load (it needs four), and the report says so
-        assert [w.code for w in res.report.warnings] == ["gasturb_below_gspy_minimum", code]
+        # one speed line: its GasTurb export is one GSPy cannot load (it needs four), pyCycle takes none (it needs
+        # two): the report says both
+        assert [w.code for w in res.report.warnings] == ["gasturb_below_gspy_minimum", "pycycle_export_not_possible",
+                                                         code]
 
 
 def test_settings_on_one_line_give_the_one_parameter_map():
