@@ -202,7 +202,9 @@ class ZoneResult(BaseModel):
         description="Enclosed volume (units³), null unless the zone's surface is closed; faces turned the wrong "
         "way are counted the right way (they are listed in misoriented_faces).", json_schema_extra=unit(VOLUME))
     signed_volume: float = Field(
-        description="Divergence-theorem volume (units³) with the faces as given: negative when inside out.",
+        description="Divergence-theorem volume (units³) with the faces as given: negative when inside out. Of an "
+                    "open zone, the volume its faces bound with a cone from the zone's centre (the mean of its faces' "
+                    "vertex means) over each opening.",
         json_schema_extra=unit(VOLUME))
     surface_area: float = Field(description="Sum of the enclosure faces' areas (units², net of holes, gross of "
                                 "subsurfaces).", json_schema_extra=unit(AREA))

@@ -16,8 +16,6 @@ from plantsolve.solvers.tube.solve import solve as solve_tube
 from plantsolve.solvers.tube.synthetic import example as tube_example
 
 
-@pytest.mark.xfail(strict=True, reason="tube: the shipped example stated in metres fails in local_fit ('could not "
-                   "estimate a pipe radius', estimate 0.494 m for a 4 mm tube); in mm, cm and inches it fits")
 def test_the_tube_example_in_metres_fits_the_same_tube():
     body = tube_example()
     in_mm = solve_tube(TubeRequest.model_validate(body)).result
@@ -28,9 +26,6 @@ def test_the_tube_example_in_metres_fits_the_same_tube():
     assert [1000 * row.length for row in in_m.lra] == pytest.approx([row.length for row in in_mm.lra], abs=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason="polyhedra: an open zone's signed_volume is taken about the mean of its faces' "
-                   "first vertices, so it moves with where a loop starts (open box: 2/3 as given, 0.7333 with the "
-                   "south wall's loop starting at its third vertex)")
 def test_an_open_zones_signed_volume_does_not_depend_on_where_a_loop_starts():
     body = open_box()
     turned = copy.deepcopy(body)

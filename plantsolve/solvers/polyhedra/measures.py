@@ -26,6 +26,9 @@ class FaceMeasures:
     origin: np.ndarray | None  # (F, 3) first vertex of the face: the frame of the face terms
     area_vector: np.ndarray  # (F, 3) Newell vector, holes subtracted (they run the other way)
     flux: np.ndarray | None  # (F, 3) per axis k: integral of (x_k - origin_k) n_k over the face
+    # (F, 3) the mean of the face's vertices relative to its origin: the zone's frame is made of these, so that an
+    # open zone's signed volume (which depends on its frame) does not move with where a loop starts
+    centroid: np.ndarray | None
     perimeter: np.ndarray  # (F,)
     planarity_error: np.ndarray  # (F,)
 
@@ -100,7 +103,7 @@ def face_measures(poly: Polygons) -> FaceMeasures:
     nonempty = starts[1:] > starts[:-1]
     if len(distance):
         planarity[nonempty] = np.maximum.reduceat(distance, starts[:-1][nonempty])
-    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
+    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, centroid=centroid, perimeter=perimeter,
                         planarity_error=planarity)
 
 
@@ -139,7 +142,7 @@ def _triangle_measures(poly: Polygons) -> FaceMeasures:
     planarity = np.abs(np.einsum("ij,ij->i", centroid, normal))
     for corner in (t1, t2):
         np.maximum(planarity, np.abs(np.einsum("ij,ij->i", corner - centroid, normal)), out=planarity)
-    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, perimeter=perimeter,
+    return FaceMeasures(origin=origin, area_vector=area_vector, flux=flux, centroid=centroid, perimeter=perimeter,
                         planarity_error=planarity)
 
 
@@ -164,13 +167,15 @@ def use_terms(measures: FaceMeasures, use_face: np.ndarray, use_zone: np.ndarray
         np.array_equal(use_face, np.arange(len(use_face)))  # one use per face, as given (a mesh)
     origin = measures.origin if identity else measures.origin[use_face]
     counts = np.bincount(use_zone, minlength=n_zones)
-    # the zone's frame: the mean of its faces' origins, each taken relative to the zone's first face
+    # the zone's frame: the mean of its faces' vertex means, each taken relative to the zone's first face
     # origin so that the mean of large coordinates loses nothing
     first = np.full(n_zones, len(use_zone), dtype=np.int64)
     np.minimum.at(first, use_zone, np.arange(len(use_zone)))
     base = origin[np.minimum(first, len(use_zone) - 1)] if len(use_zone) else np.zeros((n_zones, 3))
     shift = origin - base[use_zone]
-    mean_shift = np.stack([np.bincount(use_zone, weights=shift[:, k], minlength=n_zones) for k in range(3)], axis=1)
+    centroid = measures.centroid if identity else measures.centroid[use_face]
+    mean_shift = np.stack([np.bincount(use_zone, weights=shift[:, k] + centroid[:, k], minlength=n_zones)
+                           for k in range(3)], axis=1)
     centre_offset = mean_shift / np.maximum(counts, 1)[:, None]
     offset = shift - centre_offset[use_zone]  # o_f - c_z, small
     if identity:  # the same numbers without copying the face terms (a sign of +1 changes nothing)

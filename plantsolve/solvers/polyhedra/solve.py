@@ -61,7 +61,7 @@ def analyse(poly: Polygons, merge_tolerance: float = 1e-6, progress: Progress = 
     st.stage(0.55, 0.65, "measures: volume terms per face use")
     terms = use_terms(measures, gmap.use_face, gmap.use_zone, gmap.use_sign, n_zones)
     # the face terms live on in the use terms: not kept twice (a million faces' origins and fluxes, 46 MB)
-    measures = replace(measures, origin=None, flux=None)
+    measures = replace(measures, origin=None, flux=None, centroid=None)
     st.stage(0.65, 0.75, "diagnostics: orientation of the sheets")
     volume = terms.flux.sum(axis=1) / 3.0
     orientation = orient(gmap, measures.area[gmap.use_face], volume, n_zones)

@@ -73,8 +73,10 @@ def fit_quadrics(nb: np.ndarray, w: np.ndarray, centres: np.ndarray) -> LocalFit
     A = np.stack([x * x, y * y, x * y, x, y, np.ones_like(x)], -1)  # (M, K, 6)
     AtA = _weighted_gram(A, w)
     Atz = np.einsum("mki,mk->mi", A, w * z)
-    scale = np.maximum(np.einsum("mii->mi", AtA).max(1), 1e-300)
-    reg = 1e-10 * scale[:, None, None] * np.eye(6)
+    # a ridge on each column by its own size: the quadratic columns are h² times the linear ones, so a ridge
+    # sized by the largest column would swamp them in metres (h ~ 1e-3) and not in millimetres
+    diag = np.einsum("mii->mi", AtA)
+    reg = 1e-10 * np.maximum(diag, 1e-300 + 1e-300 * diag.max(1, keepdims=True))[:, :, None] * np.eye(6)
     ok = count >= 6
     try:
         coef = np.linalg.solve(AtA + reg, Atz[..., None])[..., 0]

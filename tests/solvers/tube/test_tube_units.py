@@ -234,14 +234,27 @@ def test_file_units_in_a_json_request_is_ignored_with_a_warning_and_refused_for_
     assert e.value.errors[0].loc == ("options", "file_units")
 
 
+def test_a_scan_too_small_for_its_unit_is_fitted_and_its_likely_unit_named():
+    from plantsolve.schemas.tube import TubeRequest
+
+    # a 4 mm tube in metres, read as millimetres: 0.1 mm long; the local fits are unit-free, so the tube is found
+    # (it failed to give a radius before) and the result says which unit its numbers are likely in
+    result = solve(TubeRequest(points=(cloud_mm() / M).tolist())).result
+    assert result.pipe_radius == pytest.approx(0.004, rel=0.01)
+    (warning,) = [w for w in result.report.warnings if w.code == "implausible_pipe_radius"]
+    assert "likely in m" in warning.message and "file_units" in warning.message
+
+
 def test_a_fit_that_fails_on_a_scan_too_small_for_its_unit_names_the_likely_unit():
     from plantsolve.schemas.tube import TubeRequest
     from plantsolve.solvers.base import SolverError
 
-    with pytest.raises(SolverError) as e:  # a 4 mm tube in metres, read as millimetres: 0.1 mm long
-        solve(TubeRequest(points=(cloud_mm() / M).tolist()))
+    rng = np.random.default_rng(1)  # a 0.1 mm patch of a plane: no tube at any unit
+    patch = np.c_[rng.uniform(0, 0.1, (3000, 2)), rng.normal(0, 1e-6, 3000)]
+    with pytest.raises(SolverError) as e:
+        solve(TubeRequest(points=patch.tolist()))
     assert "likely in m" in e.value.message and "file_units" in e.value.message
-    assert e.value.details["extent"] == pytest.approx(0.1032, rel=0.01)
+    assert e.value.details["extent"] == pytest.approx(0.1414, rel=0.01)
 
 
 def _contradiction(name: str, data: bytes, file_units: str):
