@@ -496,13 +496,22 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
     for a in range(0, len(pts), step):
         q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
         D = segment_distances_t(q, base, frames)
-        r = D.min(axis=0) - rp
+        # the minima over the first and over the last segments: a variant's kept segments are a run before
+        # and a run after its moved ones (a bend and the straights beside it), whose minimum is the smaller
+        # of the two (a minimum is exact: the numbers of the minimum over the kept rows)
+        head, tail = _running_minima(D)
+        r = head[-1] - rp
         rss0 += float(r @ r)
         for i, ((sub, sub_frames, moved, reach), v) in enumerate(zip(moved_of, variants)):
             if not len(moved):
-                d = D.min(axis=0)
+                d = head[-1].copy()
+            elif moved[-1] - moved[0] == len(moved) - 1:  # one run of segments
+                lo, hi = moved[0], moved[-1]
+                d = (np.minimum(head[lo - 1], tail[hi + 1]) if lo and hi < S - 1 else head[lo - 1].copy() if lo
+                     else tail[hi + 1].copy() if hi < S - 1 else np.full(len(q), np.inf))
             else:
                 d = np.delete(D, moved, axis=0).min(axis=0, initial=np.inf)
+            if len(moved):
                 near = np.flatnonzero(D[moved].min(axis=0) - reach <= d + slack)
                 if len(near):
                     d[near] = np.minimum(d[near], segment_distances_t(np.take(q, near, axis=0), sub,
@@ -510,6 +519,17 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
             d -= v.pipe_radius
             rss[i] += float(d @ d)
     return rss0, rss
+
+
+def _running_minima(D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row k of the first: the minimum of rows 0 … k of D; of the second: of rows k … last (a row at a time: an
+    accumulation down the columns of D walks them with a stride of a whole row)."""
+    head, tail = np.empty_like(D), np.empty_like(D)
+    head[0], tail[-1] = D[0], D[-1]
+    for k in range(1, len(D)):
+        np.minimum(head[k - 1], D[k], out=head[k])
+        np.minimum(tail[-k], D[-k - 1], out=tail[-k - 1])
+    return head, tail
 
 
 def _moved(base, sp, scale: float) -> np.ndarray:
@@ -775,7 +795,8 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     """Distance of each point to its own (unbounded) line or circle, all samples in one pass, and the terms
     :func:`_sample_gradient` takes on from. Component-major: ``q`` (3, n) the points, ``gs`` (7, n) the
     geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles; every
-    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3)."""
+    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3). In the
+    terms ``arc`` is True or False when every sample is on an arc or none is."""
     c, a, R = gs[:3], gs[3:6], gs[6]
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
@@ -785,9 +806,14 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
-    dd = rho.copy()
-    if arc.any():
+    # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
+    mixed = bool(arc.any()) and not arc.all()
+    if mixed:
+        dd = rho.copy()
         dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
+    else:
+        dd = np.hypot(rho - R, s) if arc.any() else rho
+        arc = bool(arc.any())
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -796,12 +822,21 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     (the formulas of :func:`_run_gradient`, a line's as an arc's with (rho - R) / dist = 1 and s / dist = 0)."""
     w, s, perp, rho, a, R, dd, arc = terms
     e = perp / np.maximum(rho, 1e-300)
+    if arc is False:  # lines only: u = 1, v = 0 (the same numbers but for the sign of a zero)
+        np.negative(e, out=out[:3])
+        np.multiply(s, e, out=out[3:6])
+        np.negative(out[3:6], out=out[3:6])
+        out[6] = 0.0
+        return
     inv = 1.0 / np.maximum(dd, 1e-300)
-    u = np.where(arc, (rho - R) * inv, 1.0)
-    v = np.where(arc, s * inv, 0.0)
+    if arc is True:  # arcs only
+        u, v = (rho - R) * inv, s * inv
+    else:
+        u = np.where(arc, (rho - R) * inv, 1.0)
+        v = np.where(arc, s * inv, 0.0)
     out[:3] = -(u * e + v * a)
     out[3:6] = v * w - (u * s) * e
-    out[6] = np.where(arc, -u, 0.0)
+    out[6] = np.where(arc, -u, 0.0) if arc is not True else -u
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
