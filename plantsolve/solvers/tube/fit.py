@@ -386,7 +386,8 @@ def extended(model: TubeModel, margin: float) -> TubeModel:
 def assign(model: TubeModel, pts: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
     """Residual (bounded distance − pipe radius) and nearest segment of every sample."""
     d, seg = spine_distance(pts, build_spine(extended(model, margin)))
-    return d - model.pipe_radius, seg
+    d -= model.pipe_radius  # (in place: a large scan's distances are fresh memory of its size)
+    return d, seg
 
 
 INNER_CHUNK = 200_000  # points × segments per block of :class:`EndAssignment` (as ``spine_distance``)
@@ -433,14 +434,24 @@ class EndAssignment:
 
     def __call__(self, model: TubeModel) -> tuple[np.ndarray, np.ndarray]:
         sp = build_spine(extended(model, self.margin))
-        d0, d1 = segment_distances_t(self.pts, _sub_spine(sp, np.array([0, self.S - 1])))
-        lo = np.minimum(np.minimum(d0, self.lo), d1)
-        cut = lo + self._tol(sp)
-        first = d0 <= cut
-        mid = ~first & (self.lo <= cut)
-        seg = np.where(first, 0, np.where(mid, self.idx, self.S - 1))
-        d = np.where(first, d0, np.where(mid, self.lo, d1))
-        return d - model.pipe_radius, seg
+        ends = _sub_spine(sp, np.array([0, self.S - 1]))
+        frames = distance_frames(ends)
+        tol = self._tol(sp)
+        n = len(self.pts)
+        res, seg = np.empty(n), np.empty(n, self.idx.dtype)
+        # a block of samples at a time: the temporaries stay in the processor's cache, and a large scan's
+        # end samples get no fresh arrays of their number but the two returned
+        for b in _blocks(n):
+            d0, d1 = segment_distances_t(self.pts[b], ends, frames)
+            inner = self.lo[b]
+            lo = np.minimum(np.minimum(d0, inner), d1)
+            cut = lo + tol
+            first = d0 <= cut
+            mid = ~first & (inner <= cut)
+            seg[b] = np.where(first, 0, np.where(mid, self.idx[b], self.S - 1))
+            res[b] = np.where(first, d0, np.where(mid, inner, d1))
+        res -= model.pipe_radius
+        return res, seg
 
 
 def _sub_spine(sp: Spine, k: np.ndarray) -> Spine:
@@ -485,13 +496,22 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
     for a in range(0, len(pts), step):
         q = pts[a:a + step] if keep is None else pts[a:a + step][keep[a:a + step]]
         D = segment_distances_t(q, base, frames)
-        r = D.min(axis=0) - rp
+        # the minima over the first and over the last segments: a variant's kept segments are a run before
+        # and a run after its moved ones (a bend and the straights beside it), whose minimum is the smaller
+        # of the two (a minimum is exact: the numbers of the minimum over the kept rows)
+        head, tail = _running_minima(D)
+        r = head[-1] - rp
         rss0 += float(r @ r)
         for i, ((sub, sub_frames, moved, reach), v) in enumerate(zip(moved_of, variants)):
             if not len(moved):
-                d = D.min(axis=0)
+                d = head[-1].copy()
+            elif moved[-1] - moved[0] == len(moved) - 1:  # one run of segments
+                lo, hi = moved[0], moved[-1]
+                d = (np.minimum(head[lo - 1], tail[hi + 1]) if lo and hi < S - 1 else head[lo - 1].copy() if lo
+                     else tail[hi + 1].copy() if hi < S - 1 else np.full(len(q), np.inf))
             else:
                 d = np.delete(D, moved, axis=0).min(axis=0, initial=np.inf)
+            if len(moved):
                 near = np.flatnonzero(D[moved].min(axis=0) - reach <= d + slack)
                 if len(near):
                     d[near] = np.minimum(d[near], segment_distances_t(np.take(q, near, axis=0), sub,
@@ -499,6 +519,17 @@ def sums_of_squares(model: TubeModel, variants: list[TubeModel], pts: np.ndarray
             d -= v.pipe_radius
             rss[i] += float(d @ d)
     return rss0, rss
+
+
+def _running_minima(D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row k of the first: the minimum of rows 0 … k of D; of the second: of rows k … last (a row at a time: an
+    accumulation down the columns of D walks them with a stride of a whole row)."""
+    head, tail = np.empty_like(D), np.empty_like(D)
+    head[0], tail[-1] = D[0], D[-1]
+    for k in range(1, len(D)):
+        np.minimum(head[k - 1], D[k], out=head[k])
+        np.minimum(tail[-k], D[-k - 1], out=tail[-k - 1])
+    return head, tail
 
 
 def _moved(base, sp, scale: float) -> np.ndarray:
@@ -641,7 +672,7 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np
         sel = _on(seg, 0, keep)
         if sel.any():
             q = np.compress(sel, pts, axis=0)
-            proj = (q - m.start) @ t0
+            proj = _along(q, m.start, t0)
             hi = _robust_max(proj, q, rp)
             lo = -_robust_max(-proj, q, rp)
             m.start = m.start + lo * t0
@@ -650,18 +681,39 @@ def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np
     first_arc_start = sp.end[0]
     sel = _on(seg, 0, keep)
     q = np.compress(sel, pts, axis=0)
-    L0 = max(0.0, _robust_max(-((q - first_arc_start) @ t0), q, rp)) if sel.any() else 0.0
+    L0 = max(0.0, _robust_max(np.negative(proj := _along(q, first_arc_start, t0), out=proj), q, rp)) if sel.any() else 0.0
     m.start = first_arc_start - L0 * t0
     lengths = m.lengths.copy()
     lengths[0] = L0
     sel = _on(seg, last, keep)
     if sel.any():
         q = np.compress(sel, pts, axis=0)
-        lengths[-1] = max(0.0, _robust_max((q - sp.start[last]) @ sp.tangent[last], q, rp))
+        lengths[-1] = max(0.0, _robust_max(_along(q, sp.start[last], sp.tangent[last]), q, rp))
     else:
         lengths[-1] = 0.0
     m.lengths = lengths
     return m
+
+
+def _along(q: np.ndarray, origin: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(q - origin) @ t`` a block of samples at a time (the numbers of the whole product): no (n, 3)
+    temporary of a large scan's end samples."""
+    out = np.empty(len(q))
+    buf = np.empty((min(BLOCK + 1, len(q)), 3))
+    for b in _blocks(len(q)):
+        part = np.subtract(q[b], origin, out=buf[:b.stop - b.start])
+        np.matmul(part, t, out=out[b])
+    return out
+
+
+def _blocks(n: int) -> list[slice]:
+    """Slices of ``BLOCK`` samples covering n, a last one of a single sample joined to the one before: a
+    product of one row is a dot product in numpy, whose sums can differ in the last bit from the matrix
+    product's that the whole array gives."""
+    starts = list(range(0, n, BLOCK))
+    if len(starts) > 1 and n - starts[-1] == 1:
+        starts.pop()
+    return [slice(a, b) for a, b in zip(starts, starts[1:] + [n])]
 
 
 def _on(seg: np.ndarray, k: int, keep: np.ndarray | None) -> np.ndarray:
@@ -689,7 +741,10 @@ def near_ends(model: TubeModel, seg: np.ndarray) -> np.ndarray:
     arc next to it): the ones a change of the end lengths or of the end margin moves (unless the tube
     passes within a few pipe radii of its own end)."""
     S = 2 * model.n_bends + 1
-    return np.flatnonzero(np.isin(seg, np.unique([0, 1, S - 2, S - 1])))
+    # (two comparisons, not np.isin: that builds index arrays of the samples' size in 64 bits)
+    near = seg <= 1
+    near |= seg >= S - 2
+    return np.flatnonzero(near)
 
 
 def assign_for_ends(model: TubeModel, pts: np.ndarray, margin: float):
@@ -740,7 +795,8 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     """Distance of each point to its own (unbounded) line or circle, all samples in one pass, and the terms
     :func:`_sample_gradient` takes on from. Component-major: ``q`` (3, n) the points, ``gs`` (7, n) the
     geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles; every
-    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3)."""
+    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3). In the
+    terms ``arc`` is True or False when every sample is on an arc or none is."""
     c, a, R = gs[:3], gs[3:6], gs[6]
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
@@ -750,9 +806,14 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
-    dd = rho.copy()
-    if arc.any():
+    # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
+    mixed = bool(arc.any()) and not arc.all()
+    if mixed:
+        dd = rho.copy()
         dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
+    else:
+        dd = np.hypot(rho - R, s) if arc.any() else rho
+        arc = bool(arc.any())
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -761,12 +822,21 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     (the formulas of :func:`_run_gradient`, a line's as an arc's with (rho - R) / dist = 1 and s / dist = 0)."""
     w, s, perp, rho, a, R, dd, arc = terms
     e = perp / np.maximum(rho, 1e-300)
+    if arc is False:  # lines only: u = 1, v = 0 (the same numbers but for the sign of a zero)
+        np.negative(e, out=out[:3])
+        np.multiply(s, e, out=out[3:6])
+        np.negative(out[3:6], out=out[3:6])
+        out[6] = 0.0
+        return
     inv = 1.0 / np.maximum(dd, 1e-300)
-    u = np.where(arc, (rho - R) * inv, 1.0)
-    v = np.where(arc, s * inv, 0.0)
+    if arc is True:  # arcs only
+        u, v = (rho - R) * inv, s * inv
+    else:
+        u = np.where(arc, (rho - R) * inv, 1.0)
+        v = np.where(arc, s * inv, 0.0)
     out[:3] = -(u * e + v * a)
     out[3:6] = v * w - (u * s) * e
-    out[6] = np.where(arc, -u, 0.0)
+    out[6] = np.where(arc, -u, 0.0) if arc is not True else -u
 
 
 def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, keep: np.ndarray | None = None,
@@ -791,21 +861,19 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # Gram matrix is one product; the residual order is irrelevant to the solver
     # (a stable sort of the segment numbers in the smallest integers that hold them: a radix sort)
     small = np.int16 if len(kind) < 2 ** 15 else np.int64
-    if keep is None:
-        order = np.argsort(seg.astype(small), kind="stable")
+    if len(seg) <= BLOCK:
+        if keep is None:
+            order = np.argsort(seg.astype(small), kind="stable")
+        else:
+            rows = np.flatnonzero(keep)
+            order = rows[np.argsort(seg[rows].astype(small), kind="stable")]
+            del rows
+        pts_t = np.empty((3, len(order)))
+        for j in range(3):
+            np.take(pts[:, j], order, out=pts_t[j])
+        seg = seg[order].astype(small)
     else:
-        rows = np.flatnonzero(keep)
-        order = rows[np.argsort(seg[rows].astype(small), kind="stable")]
-        del rows
-    # the points component-major (3, N), as the distances take them, gathered a coordinate at a time (no
-    # sample-major copy of a large scan on the way)
-    pts_t = np.empty((3, len(order)))
-    for j in range(3):
-        np.take(pts[:, j], order, out=pts_t[j])
-    # the sorted segment numbers, the arcs per block (a scan of millions of samples holds no second
-    # full-size array of either)
-    seg = seg[order].astype(small)
-    del order
+        pts_t, seg = _sorted_by_segment(pts, seg, keep, len(kind), small)
     is_arc = kind != 0
     N = pts_t.shape[1]
     blocks = [slice(b0, min(b0 + BLOCK, N)) for b0 in range(0, N, BLOCK)]
@@ -908,6 +976,30 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     return x0, lo, hi, fun, normal_equations, frame0, rp
 
 
+def _sorted_by_segment(pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None, n_segments: int,
+                       small: type) -> tuple[np.ndarray, np.ndarray]:
+    """The samples ``keep`` marks (all without it) sorted by their segment, ties in sample order, as (3, n)
+    component-major points and their sorted segment numbers: the order and numbers of a stable argsort of
+    ``seg[keep]``. For a large scan: the left-out samples sort last under a segment number of their own (no
+    index array of the kept ones, nor its segments, to sort), the sorted segment numbers are runs of known
+    length, and the points are gathered a block of the order at a time (np.take of a strided coordinate
+    column copies the whole column first). Fresh memory of a scan's size costs the kernel a page fault per
+    page, some 5 % of a 10 M-sample solve per such array."""
+    key = seg.astype(small)
+    if keep is not None:
+        np.copyto(key, n_segments, where=~keep)
+    # (bincount casts its input to 64 bits: a block at a time)
+    counts = sum(np.bincount(key[b], minlength=n_segments + 1) for b in _blocks(len(key)))[:n_segments]
+    order = np.argsort(key, kind="stable")[:int(counts.sum())]
+    del key
+    pts_t = np.empty((3, len(order)))
+    buf = np.empty((min(BLOCK, len(order)), 3))
+    for a in range(0, len(order), BLOCK):
+        rows = np.take(pts, order[a:a + BLOCK], axis=0, out=buf[:len(order[a:a + BLOCK])])
+        pts_t[:, a:a + len(rows)] = rows.T
+    return pts_t, np.repeat(np.arange(n_segments, dtype=small), counts)
+
+
 def _gram_sums(k_dim: int, n_segments: int) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros((n_segments, k_dim, k_dim)), np.zeros((n_segments, k_dim))
 
@@ -930,7 +1022,8 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
     'radii' (n; a shared radius gives every bend its sigma, a held one 0). ``keep``: as :func:`solve_lm`'s."""
     x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay, keep)
     r = fun(x0)
-    A, _ = normal_equations(x0, np.ones(len(r)), r)
+    # unit weights as a view of one number (a large scan's array of ones was fresh memory of its size)
+    A, _ = normal_equations(x0, np.broadcast_to(1.0, r.shape), r)
     N, P = len(r), len(x0)
     s2 = float(r @ r) / max(N - P, 1)
     cov = s2 * np.linalg.pinv(A)

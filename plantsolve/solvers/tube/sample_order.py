@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 _SIGN = np.uint64(1 << 63)
+_BLOCK = 1 << 20
 
 
 def lexicographic(pts: np.ndarray) -> np.ndarray:
@@ -27,7 +28,8 @@ def lexicographic(pts: np.ndarray) -> np.ndarray:
     del negative
     key >>= shift
     key <<= shift
-    key |= np.arange(n, dtype=np.uint64)
+    for a in range(0, n, _BLOCK):  # (no array of positions of the scan's size: fresh memory costs the kernel)
+        key[a:a + _BLOCK] |= np.arange(a, min(a + _BLOCK, n), dtype=np.uint64)
     key.sort()
     order = (key & np.uint64((1 << int(shift)) - 1)).view(np.intp)
     key >>= shift

@@ -648,20 +648,32 @@ def residual_summary(ls: LeastSquaresFit) -> tuple[Residuals, list[SegmentQualit
     """Distances of the inliers to the fitted surface, overall and per segment."""
     absr = np.compress(ls.inlier, ls.residuals)
     np.abs(absr, out=absr)
-    residuals = Residuals(count=len(absr), median=float(np.median(absr)), p95=float(np.percentile(absr, 95)),
-                          max=float(absr.max()), rms=float(np.sqrt(np.mean(absr ** 2))))
+    # one scratch array for the squares and the partitions of the median and percentiles (the numbers of
+    # np.median(absr), np.mean(absr ** 2) …, which each took a fresh copy of a large scan's inliers)
+    scratch = np.empty_like(absr)
+
+    def stats(a: np.ndarray) -> dict[str, float]:
+        work = scratch[:len(a)]
+        rms = float(np.sqrt(np.mean(np.square(a, out=work))))
+        np.copyto(work, a)
+        median = float(np.median(work, overwrite_input=True))
+        return {"median": median, "rms": rms, "max": float(a.max())}
+
+    overall = stats(absr)
+    np.copyto(scratch, absr)
+    residuals = Residuals(count=len(absr), median=overall["median"],
+                          p95=float(np.percentile(scratch, 95, overwrite_input=True)), max=overall["max"],
+                          rms=overall["rms"])
     sp = build_spine(ls.model)
     # each segment's inliers picked from the inliers' distances (in sample order, as from all samples): a pass over
     # the inliers per segment, not three over every sample
     seg_in = np.compress(ls.inlier, ls.segment)
+    m = np.empty(len(seg_in), bool)
     quality = []
     for k in range(len(sp.kind)):
-        m = seg_in == k
-        a = np.compress(m, absr)
+        a = np.compress(np.equal(seg_in, k, out=m), absr)
         quality.append(SegmentQuality(index=k, type="arc" if sp.kind[k] else "line", count=len(a),
-                                      median=float(np.median(a)) if len(a) else 0.0,
-                                      rms=float(np.sqrt(np.mean(a ** 2))) if len(a) else 0.0,
-                                      max=float(a.max()) if len(a) else 0.0))
+                                      **(stats(a) if len(a) else {"median": 0.0, "rms": 0.0, "max": 0.0})))
     return residuals, quality
 
 
