@@ -150,8 +150,6 @@ class CeleryDispatcher:
     thread) or through a Redis connection of the running event loop (:meth:`enqueue_on_loop`, awaited: no thread). A
     publish that fails raises: the caller leaves the job to the sweeper, as before."""
 
-    workers_apart = True
-
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
         self.celery = create_celery(ctx.settings, publisher=True)
@@ -164,7 +162,9 @@ class CeleryDispatcher:
         self._templates: dict[str, TaskMessageTemplate] = {}  # by kind
         self._redis_url = ctx.settings.broker_url or ""
         self._loop_publisher: _LoopPublisher | None = None
+        # the workers' roll call (workers/roll_call.py) lives in Redis: with another broker readiness cannot count them
         self._roll = WorkerRoll(roll_client(self._redis_url)) if self.enqueues_on_loop else None
+        self.workers_apart = self._roll is not None
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
         channel = self._open()
