@@ -7,15 +7,18 @@ worker's signal handlers are called as Celery calls them (tests/workers/test_int
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 import redis
 from celery import signals
 from fastapi.testclient import TestClient
 
-from plantsolve.app.main import create_app
+from plantsolve.app.main import create_app, readiness
 from plantsolve.jobs.context import worker_name
 from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.workers import celery_app
+from plantsolve.workers.celery_app import CeleryDispatcher
 from plantsolve.workers.roll_call import ROLL_KEY, Announcer, WorkerRoll
 from tests.conftest import service_settings
 
@@ -124,10 +127,11 @@ def test_a_worker_joins_the_roll_when_ready_beats_on_its_timer_and_leaves_when_i
     assert _ready(client) == (503, NOBODY)
 
 
-def test_a_broker_that_does_not_answer_makes_both_parts_unavailable(tmp_path):
-    settings = service_settings(tmp_path, broker_url="redis://127.0.0.1:9/0")  # nothing listens on port 9
-    with TestClient(create_app(settings, run_jobs=False), raise_server_exceptions=False) as client:
-        assert _ready(client) == (503, {**READY, "jobs": "unavailable", "workers": "unavailable"})
+def test_a_broker_that_does_not_answer_makes_both_parts_unavailable(client):
+    ctx = client.app.state.ctx
+    away = dataclasses.replace(ctx, settings=ctx.settings.model_copy(update={"broker_url": "redis://127.0.0.1:9/0"}))
+    status = readiness(away, CeleryDispatcher(away))  # nothing listens on port 9
+    assert (status.status, status.checks) == ("unavailable", {**READY, "jobs": "unavailable", "workers": "unavailable"})
 
 
 def test_a_window_no_longer_than_a_beat_is_refused():
