@@ -17,6 +17,7 @@ import logging
 
 from redis import Redis
 from redis.backoff import NoBackoff
+from redis.exceptions import RedisError
 from redis.retry import Retry
 
 log = logging.getLogger("plantsolve.celery")
@@ -82,7 +83,7 @@ class Announcer:
             return
         try:
             self.roll.announce(self.member, self.window_seconds)
-        except Exception as error:  # Redis away: readiness says so too; this worker beats again at the next tick
+        except RedisError as error:  # Redis away: readiness says so too; this worker beats again at the next tick
             log.warning("could not tell Redis this worker is alive: %s: %s", type(error).__name__, error)
 
     def stop(self) -> None:
@@ -92,5 +93,5 @@ class Announcer:
         self.stopped = True
         try:
             self.roll.withdraw(self.member)
-        except Exception as error:  # it drops out of the roll after the window instead
+        except RedisError as error:  # it drops out of the roll after the window instead
             log.warning("could not take this worker off the roll: %s: %s", type(error).__name__, error)

@@ -19,7 +19,7 @@ from plantsolve.jobs.context import worker_name
 from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.workers import celery_app
 from plantsolve.workers.celery_app import CeleryDispatcher
-from plantsolve.workers.roll_call import ROLL_KEY, Announcer, WorkerRoll
+from plantsolve.workers.roll_call import ROLL_KEY, Announcer, WorkerRoll, roll_client
 from tests.conftest import service_settings
 
 ALIVE = 15.0  # WORKER_ALIVE_SECONDS: the default
@@ -132,6 +132,14 @@ def test_a_broker_that_does_not_answer_makes_both_parts_unavailable(client):
     away = dataclasses.replace(ctx, settings=ctx.settings.model_copy(update={"broker_url": "redis://127.0.0.1:9/0"}))
     status = readiness(away, CeleryDispatcher(away))  # nothing listens on port 9
     assert (status.status, status.checks) == ("unavailable", {**READY, "jobs": "unavailable", "workers": "unavailable"})
+
+
+def test_a_beat_that_cannot_reach_redis_is_logged_and_the_worker_goes_on(caplog):
+    away = Announcer(WorkerRoll(roll_client("redis://127.0.0.1:9/0")), "celery@a:1", ALIVE)  # nothing on port 9
+    away.beat()  # on the worker's event loop: raising there would stop the worker's timer
+    away.withdraw()
+    assert [r.getMessage().split(":")[0] for r in caplog.records if r.name == "plantsolve.celery"] == [
+        "could not tell Redis this worker is alive", "could not take this worker off the roll"]
 
 
 def test_a_window_no_longer_than_a_beat_is_refused():
