@@ -23,6 +23,7 @@ from plantsolve.app.metrics import build_metrics
 from plantsolve.app.settings import AppSettings, get_settings
 from plantsolve.app.webhooks import WebhookNotifier, WebhookSecrets
 from plantsolve.jobs.context import ServiceContext
+from plantsolve.jobs.dispatch import NoWorkers
 from plantsolve.jobs.service import JobService
 from plantsolve.schemas.jobs import HealthStatus, Problem, UploadedInput
 from plantsolve.workers.dispatch import make_dispatcher
@@ -141,9 +142,15 @@ def readiness(ctx: ServiceContext, dispatcher) -> HealthStatus:
         try:
             probe()
             checks[name] = "ok"
+        except NoWorkers as error:  # the queue takes jobs, nobody runs them
+            checks[name] = "ok"
+            checks["workers"] = "unavailable"
+            log.warning("not ready: workers: %s", error)
         except Exception as error:
             checks[name] = "unavailable"
             log.warning("not ready: %s: %s: %s", name, type(error).__name__, " ".join(str(error).split())[:500])
+    if getattr(dispatcher, "workers_apart", False):  # Celery: the queue's answer told whether a worker is there
+        checks.setdefault("workers", "ok" if checks["jobs"] == "ok" else "unavailable")
     ok = all(value == "ok" for value in checks.values())
     return HealthStatus(status="ok" if ok else "unavailable", checks=checks)
 

@@ -8,10 +8,18 @@ import uuid
 from typing import Protocol
 
 
+class NoWorkers(RuntimeError):
+    """The queue takes jobs, but no worker has said it is alive lately (WORKER_ALIVE_SECONDS): nobody would run
+    them."""
+
+
 class Dispatcher(Protocol):
     # True when enqueue hands the id over in this process's memory and returns at once (no broker across the
     # network): an event loop may call it. Transports without it are called from a thread.
     in_process: bool = False
+    # True when the jobs run in processes the service does not start (Celery workers): ``ping`` then raises
+    # :class:`NoWorkers` when the queue answers but none of them is there, and readiness names ``workers``.
+    workers_apart: bool = False
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None: ...
 
@@ -20,7 +28,7 @@ class Dispatcher(Protocol):
     # the queue answers.
 
     def ping(self) -> None:
-        """Raise if the queue cannot accept jobs."""
+        """Raise if the queue cannot accept jobs (:class:`NoWorkers`: it can, but nobody would run them)."""
 
     def pending(self) -> int | None:
         """Messages waiting for a worker, or None when the queue cannot tell."""

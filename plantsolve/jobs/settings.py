@@ -10,7 +10,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 from pydantic_settings import NoDecode
 
 from plantsolve.store.settings import StoreSettings
@@ -56,6 +56,14 @@ class JobSettings(StoreSettings):
         description="A queued job whose message is older than this and that the broker no longer holds (its queue "
         "is shorter than the queued jobs) is enqueued again; jobs whose enqueue failed are enqueued at the next sweep.",
     )
+    worker_beat_seconds: float = Field(
+        default=5.0, gt=0,
+        description="Scaled mode: how often each Celery worker tells Redis it is alive (and once when it is ready).")
+    worker_alive_seconds: float = Field(
+        default=15.0, gt=0,
+        description="Scaled mode: a Celery worker last heard from longer ago than this is taken for gone; with none "
+        "heard from within it, /readyz is 503 naming 'workers'. Keep it a few beats long (one late beat is no "
+        "outage): above WORKER_BEAT_SECONDS.")
     result_write_seconds: float = Field(
         default=60.0, ge=0,
         description="How long the final write of a computed result is retried (with backoff) while the database is "
@@ -82,6 +90,15 @@ class JobSettings(StoreSettings):
     @classmethod
     def _split_plugins(cls, value: object) -> object:
         return split_commas(value)
+
+    @field_validator("worker_alive_seconds")
+    @classmethod
+    def _alive_spans_a_beat(cls, value: float, info: ValidationInfo) -> float:
+        beat = info.data.get("worker_beat_seconds")
+        if beat is not None and value <= beat:
+            raise ValueError(f"must be longer than WORKER_BEAT_SECONDS ({beat}): a live worker would flicker out "
+                             "between its beats")
+        return value
 
     @property
     def embedded(self) -> bool:

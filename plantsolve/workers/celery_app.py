@@ -25,10 +25,12 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from plantsolve.jobs.context import ServiceContext, worker_name
+from plantsolve.jobs.dispatch import NoWorkers
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.solvers.kinds import load_kinds
 from plantsolve.workers.logs import configure_logging
+from plantsolve.workers.roll_call import Announcer, WorkerRoll, roll_client
 from plantsolve.workers.sweeper import Sweeper
 from plantsolve.workers.task_message import TaskMessageTemplate
 
@@ -160,6 +162,9 @@ class CeleryDispatcher:
         self._templates: dict[str, TaskMessageTemplate] = {}  # by kind
         self._redis_url = ctx.settings.broker_url or ""
         self._loop_publisher: _LoopPublisher | None = None
+        # the workers' roll call (workers/roll_call.py) lives in Redis: with another broker readiness cannot count them
+        self._roll = WorkerRoll(roll_client(self._redis_url)) if self.enqueues_on_loop else None
+        self.workers_apart = self._roll is not None
 
     def enqueue(self, job_id: uuid.UUID, kind: str) -> None:
         channel = self._open()
@@ -257,8 +262,15 @@ class CeleryDispatcher:
             return None
 
     def ping(self) -> None:
-        with self.celery.connection_for_write() as connection:
-            connection.ensure_connection(max_retries=1, timeout=2)
+        """Raises when the broker does not answer, :class:`NoWorkers` when it does but no worker has been heard from
+        within ``WORKER_ALIVE_SECONDS`` (Redis: one command answers both; another broker is only reached)."""
+        if self._roll is None:
+            with self.celery.connection_for_write() as connection:
+                connection.ensure_connection(max_retries=1, timeout=2)
+            return
+        window = self.ctx.settings.worker_alive_seconds
+        if self._roll.alive(window) == 0:
+            raise NoWorkers(f"no Celery worker has been heard from within {window:g} s")
 
     def start(self) -> None:
         self._sweeper.start()
@@ -267,6 +279,8 @@ class CeleryDispatcher:
         self._sweeper.stop()
         with self._opening:
             self._close_producer()
+        if self._roll is not None:
+            self._roll.client.close()
 
 
 _ctx_lock = threading.Lock()
@@ -319,3 +333,35 @@ def _hard_time_limit(sender=None, exception=None, args=None, **_kwargs) -> None:
     ctx, _ = _worker_context()
     if fail_killed_at_hard_limit(ctx, uuid.UUID(str(args[0]))):
         log.warning("job %s killed at its hard time limit", args[0])
+
+
+_announcer: Announcer | None = None
+
+
+@signals.worker_ready.connect
+def _join_the_roll(sender=None, **_kwargs) -> None:
+    """In the worker's main process, once it consumes: say it is alive now and every ``WORKER_BEAT_SECONDS`` on the
+    worker's own timer (the event loop that consumes: a worker whose loop is stuck falls silent too). Redis
+    brokers only (the roll lives there)."""
+    global _announcer
+    settings = get_job_settings()
+    if (settings.broker_url or "").split("://", 1)[0] not in ("redis", "rediss"):
+        return
+    _announcer = Announcer(WorkerRoll(roll_client(settings.broker_url)), worker_name("celery"),
+                           settings.worker_alive_seconds)
+    _announcer.beat()
+    sender.timer.call_repeatedly(settings.worker_beat_seconds, _announcer.beat)
+
+
+@signals.worker_shutting_down.connect
+def _stop_beating(**_kwargs) -> None:
+    """A shutdown was asked for (in the signal handler): a draining worker takes no new job, so it beats no more
+    and drops out of the roll within the window, or at once when it has shut down."""
+    if _announcer is not None:
+        _announcer.stop()
+
+
+@signals.worker_shutdown.connect
+def _leave_the_roll(**_kwargs) -> None:
+    if _announcer is not None:
+        _announcer.withdraw()

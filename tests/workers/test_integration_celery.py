@@ -20,6 +20,7 @@ from tests.conftest import REPO, service_settings, wait_for
 pytestmark = pytest.mark.integration
 
 BIN = Path(sys.executable).parent
+ALIVE = 2.0  # WORKER_ALIVE_SECONDS of these tests' API and workers (the workers beat every 0.3 s)
 
 
 def _env(pg_url: str, redis_url: str, data_dir: Path) -> dict[str, str]:
@@ -33,6 +34,8 @@ def _env(pg_url: str, redis_url: str, data_dir: Path) -> dict[str, str]:
         LEASE_SECONDS="2",
         SWEEP_SECONDS="0.5",
         PROGRESS_WRITE_SECONDS="0",
+        WORKER_BEAT_SECONDS="0.3",
+        WORKER_ALIVE_SECONDS=str(ALIVE),
         PYTHONPATH=str(REPO),
     )
     return env
@@ -54,7 +57,8 @@ class Worker:
 
     def wait_ready(self) -> Worker:
         deadline = time.monotonic() + 60
-        while b"ready" not in self.log.read_bytes():
+        # Celery's "<node> ready." line (a bare b"ready" also matched a path in an earlier warning: ".../ready48f/...")
+        while b" ready.\n" not in self.log.read_bytes():
             if self.process.poll() is not None or time.monotonic() > deadline:
                 raise AssertionError(f"worker did not start:\n{self.log.read_text()[-3000:]}")
             time.sleep(0.1)
@@ -99,7 +103,8 @@ def scaled(pg_url, redis_url, tmp_path_factory):
     data_dir = tmp_path_factory.mktemp("scaled")
     env = _env(pg_url, redis_url, data_dir)
     settings = service_settings(
-        data_dir, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5
+        data_dir, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5,
+        worker_beat_seconds=0.3, worker_alive_seconds=ALIVE,
     )
     with TestClient(create_app(settings)) as client:  # migrates the fresh database
         worker = Worker(env, "main", data_dir / "worker-main.log")
@@ -120,7 +125,7 @@ def test_job_runs_end_to_end_on_postgres_and_celery(scaled):
     assert client.get(f"/v1/jobs/{done['id']}/result").json()["norm"] == 5.0
     artifact = client.get(f"/v1/jobs/{done['id']}/artifacts/values.txt")
     assert artifact.status_code == 200 and artifact.content == b"3.0\n4.0"
-    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok"}
+    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok", "workers": "ok"}
 
 
 def test_embedded_and_celery_give_identical_results(scaled, tmp_path):
@@ -236,23 +241,42 @@ def unstaffed(pg_url, redis_url, tmp_path):
     """The scaled API with no worker running yet (the test starts and kills its own)."""
     env = _env(pg_url, redis_url, tmp_path)
     settings = service_settings(
-        tmp_path, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5
+        tmp_path, database_url=pg_url, broker_url=redis_url, heartbeat_seconds=0.3, lease_seconds=2.0, sweep_seconds=0.5,
+        worker_beat_seconds=0.3, worker_alive_seconds=ALIVE,
     )
     with TestClient(create_app(settings)) as client:
         yield client, env, tmp_path
 
 
-def test_killed_worker_job_reruns_on_another_attempt(unstaffed, scaled_workers_stopped):
+def _readiness(client) -> tuple[int, str]:
+    response = client.get("/readyz")
+    return response.status_code, response.json()["checks"].get("workers")
+
+
+def test_killed_worker_job_reruns_on_another_attempt(unstaffed, scaled_workers_stopped, redis_url):
+    """Also readiness with no worker there: the module's worker, stopped cleanly, took itself off the roll at once;
+    a SIGKILLed one drops out within WORKER_ALIVE_SECONDS; one started is counted as soon as it is ready."""
+    import redis
+
     client, env, data_dir = unstaffed
+    roll = [member.decode() for member in redis.Redis.from_url(redis_url).zrange("plantsolve:workers", 0, -1)]
+    assert not [member for member in roll for worker in _main_workers if member.endswith(f":{worker.process.pid}")]
+    assert _readiness(client) == (503, "unavailable")
     markers = data_dir / "markers"
     victim = Worker(env, "victim", data_dir / "worker-victim.log")
     rescuer = None
     try:
+        assert _readiness(client) == (200, "ok")
         job = client.post("/v1/test-compute/jobs", json={"values": [5.0], "seconds": 4, "marker_dir": str(markers)}).json()
         wait_for(client, job["id"], statuses=("running",), timeout=60)
         victim.kill()  # SIGKILL to the whole worker: no clean shutdown, no ack, no result
+        killed_at = time.monotonic()
         assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "running"
+        while _readiness(client) != (503, "unavailable"):
+            assert time.monotonic() - killed_at < ALIVE + 1.0, "a SIGKILLed worker still counted after the window"
+            time.sleep(0.1)
         rescuer = Worker(env, "rescuer", data_dir / "worker-rescuer.log")
+        assert _readiness(client) == (200, "ok")
         done = wait_for(client, job["id"], timeout=90)
         assert done["status"] == "succeeded", done
         assert done["attempt"] == 2
