@@ -127,7 +127,7 @@ def upload_extension(spec: SolverSpec, filename: str) -> str:
     if extension not in spec.upload_extensions:
         raise UnsupportedMediaType(
             f"File type {extension or '(none)'!r} is not accepted by {spec.kind!r}; "
-            f"accepted: {', '.join(spec.upload_extensions)}." + (f" {spec.upload_hint}" if spec.upload_hint else "")
+            f"accepted: {', '.join(spec.upload_extensions)}." + (f" {hint}" if (hint := spec.upload_hint(extension)) else "")
         )
     return extension
 

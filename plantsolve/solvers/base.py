@@ -422,8 +422,8 @@ class SolverSpec:
       OpenAPI document shows it and the contract test runs every kind through it.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
       stopped), ``max_attempts`` (``None``: the service's ``MAX_ATTEMPTS``).
-    - ``upload_hint``: a sentence the 415 of a file type the kind does not read ends with, saying
-      where such a file goes instead (a file the request holds as text, say); empty: none.
+    - ``upload_hints``: pairs of file types (lower case, with the dot) and a sentence the 415 of those
+      types ends with, saying where such a file goes instead (a file the request holds as text, say).
 
     The functions may be given as ``"module:attribute"`` strings: they become :class:`Deferred`
     functions, imported on first use, so that the kind map (names, schemas, upload extensions, limits)
@@ -440,7 +440,7 @@ class SolverSpec:
     parse_upload: Callable[[StoredInput, dict | None], BaseModel] | str | None = None
     render_artifacts: Callable[[Any, Solved], list[Artifact]] | str | None = None
     upload_extensions: tuple[str, ...] = ()
-    upload_hint: str = ""
+    upload_hints: tuple[tuple[tuple[str, ...], str], ...] = ()
     soft_time_limit: float = 600.0
     time_limit: float = 660.0
     max_attempts: int | None = None
@@ -466,6 +466,10 @@ class SolverSpec:
         names = [op.name for op in self.operations]
         if len(set(names)) != len(names):
             raise ValueError(f"{self.kind}: operation names repeat: {names}")
+
+    def upload_hint(self, extension: str) -> str:
+        """What the 415 of a file of type ``extension`` adds (empty: nothing)."""
+        return next((hint for types, hint in self.upload_hints if extension in types), "")
 
     def input_of(self, request: BaseModel, source: StoredInput | None = None) -> Any:
         """The kind's input value for a request (and its stored file, for an upload)."""

@@ -19,7 +19,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from plantsolve.solvers.length_units import METRES  # noqa: F401  (the kind's validation and solve take it from here)
 
 FAR = 100.0  # a port this many times further out than the rest of its network is a mistyped coordinate
 LONGEST_PIPE_M = 10_000.0  # a straight pipe up to 10 km long reaches as far out as it is long

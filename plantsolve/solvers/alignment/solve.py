@@ -21,7 +21,6 @@ from plantsolve.solvers.alignment.model import Model, build_model, connection_er
 from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.plausibility import (
     FITTING_SPAN,
-    METRES,
     MOVE_ANGLES,
     MOVE_EXTENT,
     MOVE_GAPS,
@@ -30,6 +29,7 @@ from plantsolve.solvers.alignment.plausibility import (
     fitting_span_in_bores,
     moved_far,
 )
+from plantsolve.solvers.length_units import METRES
 from plantsolve.solvers.base import (
     InputRejected,
     Progress,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment.plausibility import FAR, METRES, far_ports
+from plantsolve.solvers.alignment.plausibility import FAR, far_ports
+from plantsolve.solvers.length_units import METRES
 from plantsolve.solvers.base import FieldError, InputRejected
 
 MIN_PORTS = {

@@ -42,12 +42,14 @@ def _plausible(quantity: str, metres: float) -> bool:
 
 def judge_typical_sizes(products: Iterable, points: Mapping[int, np.ndarray], storey_elevations: Iterable[float | None],
                         unit_name: str, metres_per_unit: float, units_m: Mapping[str, float]) -> list[Diagnostic]:
-    """Warning ``implausible_product_size`` when doors, walls or storeys, read in the file's stated unit, are outside
-    what buildings have and another of ``units_m`` (name → metres: the length units the project names) makes every one
+    """Warning ``implausible_product_size`` when doors, walls and storeys (those measured, doors or walls among
+    them), read in the file's stated unit, are all outside what buildings have and another of ``units_m`` (name → metres: the length units the project names) makes every one
     of them plausible, naming that unit."""
     medians = _medians(products, points, storey_elevations)
     wrong = {q: v for q, (v, _) in medians.items() if not _plausible(q, v * metres_per_unit)}
-    if not wrong:
+    # a unit is wrong for the whole file: every quantity measured must say so, doors or walls among them (storey
+    # levels alone mislead: a slab level 300 mm above its floor level, a foundation level 1.2 m below the ground's)
+    if not wrong or len(wrong) < len(medians) or not any(q in HEIGHTS_M for q in wrong):
         return []
     likely = [name for name in ("m", "mm", "cm", "ft", "in") if units_m[name] != metres_per_unit
               and all(_plausible(q, v * units_m[name]) for q, (v, _) in medians.items())]

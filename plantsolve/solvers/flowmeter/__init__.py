@@ -28,8 +28,9 @@ SPEC = SolverSpec(
     render_artifacts="plantsolve.solvers.flowmeter.artifacts:render_artifacts",
     upload_extensions=UPLOAD_EXTENSIONS,
     # the one file a flowmeter job reads besides its request is a field file, which the request holds as text
-    upload_hint="A magnetic field file (an FE tool's export: COMSOL .txt or .csv, a CSV with a header) is not "
-                "uploaded as the file: put its text in the JSON request as options.magnetic_field_file.",
+    upload_hints=(((".txt", ".csv", ".tsv", ".dat"), "A magnetic field file (an FE tool's export: COMSOL .txt or .csv, a CSV "
+                   "with a header) is not uploaded as the file: put its text in the JSON request as "
+                   "options.magnetic_field_file."),),
     example=stored_example(__name__),  # synthetic.example(), written out
     # closed forms take well under a second; the FEM reference a few seconds at its finest mesh
     soft_time_limit=120,

@@ -585,7 +585,7 @@ def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
     differently. The cut under which more zones close is taken: Blender writes an object per room and, with material
     groups, ``g`` within it per material (zones by ``g`` are open pieces of rooms); Rhino writes an object per
     surface and ``g`` per layer, SketchUp and Revit a group per room (zones by ``o`` are open pieces). Where both
-    close as many, several objects are the rooms, else (one file-wide ``o``) the groups are."""
+    close as many, the groups are (as before this choice was made: what OBJ readers zone by)."""
     pairs = [f["zones"][0] for f in faces]
     by_group = [(g or o) or "default" for o, g in pairs]
     by_object = [(o or g) or "default" for o, g in pairs]
@@ -595,7 +595,7 @@ def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
     if not same:
         edges, lengths = _edges(faces, vertices)
         closed = {"g": _closed_zones(edges, lengths, by_group), "o": _closed_zones(edges, lengths, by_object)}
-    chosen = max(("o", "g") if len(objects) > 1 else ("g", "o"), key=lambda k: closed[k])  # ties: the first
+    chosen = "o" if closed["o"] > closed["g"] else "g"  # ties keep the groups, as OBJ readers zone by 'g'
     for f, zone in zip(faces, by_object if chosen == "o" else by_group, strict=True):
         f["zones"] = [zone]
     if same:
@@ -614,7 +614,10 @@ def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
 def _edges(faces: list[dict], vertices: list[list[float]]) -> tuple[np.ndarray, np.ndarray]:
     """Each face side as one number (its two corners matched by coordinates, as SketchUp writes each face's corners
     apart, in either order), and the number of sides of each face."""
-    _, corner = np.unique(np.asarray(vertices, dtype=float).reshape(-1, 3), axis=0, return_inverse=True)
+    points = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    # corners a modeller wrote with round-off apart (1e-9 m) are one corner, as the solver's merge tolerance makes them
+    step = 1e-7 * max(float(np.ptp(points, axis=0).max()) if len(points) else 0.0, 1e-300)
+    _, corner = np.unique(np.round(points / step), axis=0, return_inverse=True)
     corner = corner.reshape(-1).astype(np.int64)
     loops = [f["loops"][0] for f in faces]
     lengths = np.fromiter((len(loop) for loop in loops), dtype=np.int64, count=len(loops))

@@ -109,9 +109,11 @@ def part_solid(shape: PartShape, rotation: np.ndarray, position: np.ndarray) -> 
     return boxes[0] if len(boxes) == 1 else Solid(pieces=tuple(boxes))
 
 
-def natural_order(id: str) -> list[tuple[int, str]]:
-    """Sort key of an id with its digits compared as numbers: an upload's L7 (line 7) before its L11."""
-    return [(int(run), "") if run.isdigit() else (-1, run) for run in re.split(r"(\d+)", id)]
+def natural_order(id: str) -> tuple[list[tuple[int, str]], str]:
+    """Sort key of an id with its runs of ASCII digits compared as numbers (an upload's L7, line 7, before its L11),
+    then the id itself, so that ids equal as numbers (p01, p1) still have one order whatever the input's."""
+    runs = re.split(r"([0-9]+)", id)  # the digit runs at the odd places ('²' is a digit to str.isdigit, not to int)
+    return [(int(run), "") if i % 2 else (-1, run) for i, run in enumerate(runs)], id
 
 
 def _line_direction(axis: tuple | None) -> tuple | None:

@@ -565,7 +565,7 @@ def other_format(text: str) -> str | None:
     if delimiter is not None and not ldraw_lines:  # LDraw lines with decimal commas are no table
         columns = [c.strip() for c in lines[0].split(delimiter)]
         return f"a table of {len(columns)} columns ({', '.join(columns[:8])})"
-    if all(_numbers(raw) for raw in lines[:20]) and lines[0].split()[0] not in ("0", "1", "2", "3", "4", "5"):
+    if all(_numbers(raw) for raw in lines[:20]) and lines[0].split()[0] not in LINE_TYPES:
         return f"a list of numbers, {len(lines[0].split())} per line (a point cloud or a scan, not part placements)"
     return None
 

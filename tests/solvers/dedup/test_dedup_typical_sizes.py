@@ -38,3 +38,18 @@ def test_centimetres_stated_over_numbers_in_metres_are_named_by_door_wall_and_st
     (warning,) = _warnings(model)
     assert warning.details["values"] == pytest.approx({"door height": 2.1, "wall height": 3.0, "storey height": 3.0})
     assert warning.details["likely_units"][0] == "m" and "written in m?" in warning.message
+
+
+def test_odd_storey_levels_under_walls_of_the_right_height_are_no_unit_mistake():
+    """Revit writes a slab level 300 mm above its floor level: storeys 0.3 m apart in a millimetre model whose walls
+    are 3 m high; read in cm they would all be plausible, but the walls say the unit is right (a false alarm before)."""
+    walls = [Product("Wall", entity="IfcWall", extrusion=(5000.0, 200.0, 3000.0), name=f"Wall {k}") for k in range(3)]
+    model = build_model(ModelSpec(products=walls))
+    (unit,) = [u for u in model.by_type("IfcSIUnit") if u.UnitType == "LENGTHUNIT"]
+    unit.Prefix = "MILLI"
+    building = model.by_type("IfcBuilding")[0]
+    for k, elevation in enumerate((0.0, 300.0, 3000.0, 3300.0)):
+        storey = ifcopenshell.api.run("root.create_entity", model, ifc_class="IfcBuildingStorey", name=f"L{k}")
+        storey.Elevation = elevation
+        ifcopenshell.api.run("aggregate.assign_object", model, products=[storey], relating_object=building)
+    assert not _warnings(model)

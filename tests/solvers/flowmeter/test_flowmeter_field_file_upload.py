@@ -1,5 +1,5 @@
 """A field file uploaded as a flowmeter job's file: the 415 says where it goes (options.magnetic_field_file), where it
-said only "accepted: .json"; a kind without such a hint (SolverSpec.upload_hint) says what it did."""
+said only "accepted: .json"; a kind without such a hint (SolverSpec.upload_hints) says what it did."""
 
 import pytest
 
@@ -25,3 +25,7 @@ def test_a_field_file_uploaded_as_the_file_is_a_415_naming_the_option():
     plain = SolverSpec(kind="plain", request_model=SPEC.request_model, result_model=SPEC.result_model,
                        solve=SPEC.solve, version="1", parse_upload=SPEC.parse_upload, upload_extensions=(".json",))
     assert _refusal(plain, "field.csv") == "File type '.csv' is not accepted by 'plain'; accepted: .json."
+
+
+def test_a_file_of_another_kind_is_not_told_about_field_files():
+    assert _refusal(SPEC, "model.ifc") == "File type '.ifc' is not accepted by 'flowmeter'; accepted: .json."
