@@ -115,12 +115,12 @@ def scan_gaps(model: TubeModel, pts: np.ndarray, inlier: np.ndarray) -> list[Sca
         fields: dict[int, list[str]] = {}
         for k in np.flatnonzero((seg_end - sp.length < along[b]) & (seg_end > along[a]) & (sp.length > 0)):
             fields.setdefault(int(k) // 2, []).extend(["angle", "bend_radius"] if k % 2 else ["length"])
-        offset, misaligned = _one_bend_joins(c[a], tangent[a], c[b], tangent[b], ALIGN_RADII * r)
+        offset, misaligned = one_bend_joins(c[a], tangent[a], c[b], tangent[b], ALIGN_RADII * r)
         out.append(ScanGap(float(along[a]), float(along[b]), fields, offset, misaligned))
     return out
 
 
-def _one_bend_joins(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarray, tol: float) -> tuple[float, str | None]:
+def one_bend_joins(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarray, tol: float) -> tuple[float, str | None]:
     """Whether one bend (or a straight) can lead from the side ending at ``pa`` heading ``ta`` to the side starting
     at ``pb`` heading ``tb``: a bend lies in one plane, so the two axes must meet (within ``tol``) at a corner ahead
     of the first side and behind the second; parallel axes must be one line (a straight) or point back (a U-bend).
