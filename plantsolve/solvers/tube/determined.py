@@ -62,7 +62,7 @@ def mark_rows(rows: list[LraRow], model: TubeModel, seg_inlier: np.ndarray, loos
 
 
 # A stretch of the fitted centreline with no inlier sample is a scan gap when it is longer than both of these: ten
-# pipe radii (five diameters: a real scan's shadows behind a clamp or the inside of a bend are shorter), and thirty
+# pipe radii (five diameters; a single view that misses the far side still projects onto every stretch), and thirty
 # times the samples' mean spacing along the centreline (n samples spread at random along a length L leave no gap
 # over k L / n but with odds about n e^-k: 1e-6 at k = 30 for ten million samples, so a sparse scan raises none)
 GAP_RADII = 10.0
@@ -72,7 +72,7 @@ GAP_STEP_RADII = 0.25
 # the two sides of a gap line up as one tube's when one bend (or none) can join them: their axes pass within this
 # many pipe radii of each other, meeting ahead of both sides
 ALIGN_RADII = 0.5
-# at most this many inlier samples are projected (a stride through them; the spacing is that of the ones used)
+# at most this many samples are projected (a stride through all, its inliers kept; the spacing is that of those)
 GAP_MAX_SAMPLES = 30_000
 
 
@@ -82,7 +82,7 @@ class ScanGap:
     end: float  # where they start again
     fields: dict[int, list[str]]  # LRA row (0-based) -> its fields the unsampled stretch lies on
     offset: float  # the closest approach of the two sides' axes (0 when they meet), request units
-    misaligned: str | None  # why no one bend joins the two sides (None when one can): the fit's bends there are invented
+    misaligned: str | None  # why no one bend joins the sides (None when one can): the fit's bends there are invented
 
     @property
     def two_pieces(self) -> bool:
@@ -96,9 +96,8 @@ class ScanGap:
 def scan_gaps(model: TubeModel, pts: np.ndarray, inlier: np.ndarray) -> list[ScanGap]:
     """The stretches of the fitted centreline no inlier sample lies beside (nearest centreline point), longer than
     :data:`GAP_RADII` pipe radii and :data:`GAP_SPACINGS` mean sample spacings, in order along the tube."""
-    idx = np.flatnonzero(inlier)
-    if len(idx) > GAP_MAX_SAMPLES:
-        idx = idx[:: int(np.ceil(len(idx) / GAP_MAX_SAMPLES))]
+    idx = np.arange(0, len(pts), int(np.ceil(len(pts) / GAP_MAX_SAMPLES)))  # (no index array of a large scan's size)
+    idx = idx[inlier[idx]]
     if len(idx) < 2:
         return []
     r = model.pipe_radius
@@ -120,7 +119,8 @@ def scan_gaps(model: TubeModel, pts: np.ndarray, inlier: np.ndarray) -> list[Sca
     return out
 
 
-def one_bend_joins(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarray, tol: float) -> tuple[float, str | None]:
+def one_bend_joins(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarray,
+                   tol: float) -> tuple[float, str | None]:
     """Whether one bend (or a straight) can lead from the side ending at ``pa`` heading ``ta`` to the side starting
     at ``pb`` heading ``tb``: a bend lies in one plane, so the two axes must meet (within ``tol``) at a corner ahead
     of the first side and behind the second; parallel axes must be one line (a straight) or point back (a U-bend).
@@ -142,6 +142,15 @@ def one_bend_joins(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarra
     return offset, None if s >= -tol and u <= tol else "the two sides' axes meet behind one of them"
 
 
+def gap_fields(gaps: list[ScanGap]) -> dict[int, list[str]]:
+    """The fields (LRA row, 0-based -> names) any of ``gaps`` lies on."""
+    out: dict[int, list[str]] = {}
+    for g in gaps:
+        for k, fields in g.fields.items():
+            out[k] = [f for f in FIELD_ORDER if f in out.get(k, ()) or f in fields]
+    return out
+
+
 def report_scan_gaps(result: TubeResult, gaps: list[ScanGap], units: str) -> None:
     """The warning ``scan_gap`` (first on the list: what the rows describe is in doubt) naming each unsampled
     stretch, where it is, how long and the rows it lies on, which are marked not determined (so an inspection gives
@@ -159,7 +168,8 @@ def report_scan_gaps(result: TubeResult, gaps: list[ScanGap], units: str) -> Non
     pieces = [g for g in gaps if g.two_pieces]
     said = "; ".join(
         f"from {g.start:.4g} to {g.end:.4g} {units} along the centreline ({g.length:.4g} {units}, "
-        f"{g.length / (2 * result.pipe_radius):.3g} pipe diameters; rows {', '.join(str(k + 1) for k in sorted(g.fields))})"
+        f"{g.length / (2 * result.pipe_radius):.3g} pipe diameters; "
+        f"rows {', '.join(str(k + 1) for k in sorted(g.fields))})"
         + (f", where {g.misaligned} (their axes' closest approach {g.offset:.3g} {units}): no single bend joins them"
            if g.two_pieces else "") for g in gaps)
     verdict = ("The scan may hold two pieces: the fit joins them with bends no sample shows" if pieces
@@ -168,8 +178,9 @@ def report_scan_gaps(result: TubeResult, gaps: list[ScanGap], units: str) -> Non
         code="scan_gap",
         message=f"No samples lie on the fitted tube {said}. {verdict}; LRA row(s) "
         f"{', '.join(str(k + 1) for k in touched)} are not determined. Scan the gap, or solve each piece alone.",
-        details={"gaps": [{"start": g.start, "end": g.end, "length": g.length, "rows": [k + 1 for k in sorted(g.fields)],
-                           "two_pieces": g.two_pieces, "axes_offset": g.offset, "why_two_pieces": g.misaligned}
+        details={"gaps": [{"start": g.start, "end": g.end, "length": g.length,
+                           "rows": [k + 1 for k in sorted(g.fields)], "two_pieces": g.two_pieces,
+                           "axes_offset": g.offset, "why_two_pieces": g.misaligned}
                           for g in gaps],
                  "two_pieces": bool(pieces), "rows": [k + 1 for k in touched], "gap_radii": GAP_RADII,
                  "gap_spacings": GAP_SPACINGS, "units": units}))

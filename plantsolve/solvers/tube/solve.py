@@ -22,7 +22,7 @@ from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sample_order, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
-from plantsolve.solvers.tube.determined import mark_rows, report_scan_gaps, scan_gaps
+from plantsolve.solvers.tube.determined import gap_fields, mark_rows, report_scan_gaps, scan_gaps
 from plantsolve.solvers.tube.inspection import inspect_request, withdraw_verdicts
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
@@ -774,7 +774,7 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     result.inspection = inspect_request(ls.model, opts, request.units, result.lra)
     if result.inspection is not None and gaps:  # no verdict on what no sample shows
         two_pieces = any(g.two_pieces for g in gaps)
-        withdraw_verdicts(result.inspection, None if two_pieces else {k: f for g in gaps for k, f in g.fields.items()})
+        withdraw_verdicts(result.inspection, None if two_pieces else gap_fields(gaps))
     if result.inspection is not None:
         report_inspection(result.report, result.inspection, request.units)
     progress(1.0, "done")

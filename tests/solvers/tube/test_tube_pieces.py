@@ -115,9 +115,10 @@ def test_the_gap_rule_on_the_true_tube():
     (g,) = scan_gaps(m, cut, np.ones(len(cut), bool))
     assert abs(g.start - 130.0) < 4.0 and abs(g.end - 190.0) < 4.0 and not g.two_pieces  # 200 samples: ~1.2 mm apart
     assert g.fields == {1: ["length"]}
-    x, y, z = np.eye(3)
-    assert one_bend_joins(np.zeros(3), x, np.array([50.0, 0, 25.0]), y, 1.0) == (25.0, "the two sides' axes do not meet")
-    assert one_bend_joins(np.zeros(3), x, np.array([50.0, 20.0, 0]), y, 1.0) == (0.0, None)  # a 90° corner ahead
-    assert one_bend_joins(np.zeros(3), x, np.array([50.0, 20.0, 0]), x, 1.0)[1] == "the two sides run parallel, side by side"
-    assert one_bend_joins(np.zeros(3), x, np.array([0, 20.0, 0]), -x, 1.0) == (0.0, None)  # a U-bend
-    assert one_bend_joins(np.zeros(3), x, np.array([-50.0, 20.0, 0]), y, 1.0)[1] == "the two sides' axes meet behind one of them"
+    x, y, _ = np.eye(3)
+    o = np.zeros(3)
+    assert one_bend_joins(o, x, np.array([50.0, 0, 25.0]), y, 1.0) == (25.0, "the two sides' axes do not meet")
+    assert one_bend_joins(o, x, np.array([50.0, 20.0, 0]), y, 1.0) == (0.0, None)  # a 90° corner ahead
+    assert one_bend_joins(o, x, np.array([50.0, 20.0, 0]), x, 1.0)[1] == "the two sides run parallel, side by side"
+    assert one_bend_joins(o, x, np.array([0, 20.0, 0]), -x, 1.0) == (0.0, None)  # a U-bend
+    assert one_bend_joins(o, x, np.array([-50.0, 20.0, 0]), y, 1.0)[1] == "the two sides' axes meet behind one of them"
