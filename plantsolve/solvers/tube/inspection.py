@@ -288,6 +288,33 @@ def _verdict(matched: bool, rows, ends) -> tuple[str, list[int], list[int]]:
     return "pass", failed, undetermined
 
 
+def withdraw_verdicts(ins: Inspection, fields: dict[int, list[str]] | None = None) -> None:
+    """No verdict on ``fields`` (measured LRA row, 0-based in the result's walking direction -> its fields), or on
+    every field and end point when None: fields no sample shows (a stretch the scan did not see, ``scan_gap``) are
+    the fit's guess, and a scan that may hold two pieces was fitted as one tube through bends no sample shows, so
+    one nominal aligned to it says nothing row by row."""
+    n = len(ins.rows) - 1
+    picked: dict[int, set[str]] = {}
+    for k, names in (fields or {}).items():
+        for f in names:  # a reversed walk: row i's straight is row n - i's, its bend bend n - 1 - i's
+            i = k if not ins.reversed else (n - k if f in ("length", "rotation") else n - 1 - k)
+            picked.setdefault(i, set()).add(f)
+    for i, row in enumerate(ins.rows):
+        names = [f for f in ("length", "rotation", "angle", "bend_radius") if getattr(row, f)
+                 and (fields is None or f in picked.get(i, ()))]
+        for f in names:
+            check = getattr(row, f)
+            check.ok, check.determined = True, False
+        row.failed = [f for f in row.failed if f not in names]
+        row.undetermined = [f for f in ("length", "rotation", "angle", "bend_radius")
+                            if f in row.undetermined or f in names]
+        row.ok = not row.failed
+    if fields is None:
+        for end in ins.end_points:
+            end.ok, end.determined = True, False
+    ins.verdict, ins.failed_rows, ins.undetermined_rows = _verdict(ins.matched, ins.rows, ins.end_points)
+
+
 def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opts: TubeOptions | None = None,
             units: str = "mm", source: str = "nominal: LRA rows",
             warnings: list[Diagnostic] | None = None, measured_rows: list[LraRow] | None = None) -> Inspection:

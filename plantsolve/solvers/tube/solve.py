@@ -22,8 +22,8 @@ from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sample_order, spine
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
-from plantsolve.solvers.tube.determined import mark_rows
-from plantsolve.solvers.tube.inspection import inspect_request
+from plantsolve.solvers.tube.determined import gap_fields, mark_rows, report_scan_gaps, scan_gaps
+from plantsolve.solvers.tube.inspection import inspect_request, withdraw_verdicts
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.lra import model_rows
@@ -769,7 +769,12 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
     # before the inspection: the rows a systematic misfit lies on get no verdict
     report_bend_count(result, off_windows(ls.model, pts, ls.residuals, ls.segment, ls.inlier), weak_bends(result),
                       request.units)
+    gaps = scan_gaps(ls.model, pts, ls.inlier)
+    report_scan_gaps(result, gaps, request.units)
     result.inspection = inspect_request(ls.model, opts, request.units, result.lra)
+    if result.inspection is not None and gaps:  # no verdict on what no sample shows
+        two_pieces = any(g.two_pieces for g in gaps)
+        withdraw_verdicts(result.inspection, None if two_pieces else gap_fields(gaps))
     if result.inspection is not None:
         report_inspection(result.report, result.inspection, request.units)
     progress(1.0, "done")
