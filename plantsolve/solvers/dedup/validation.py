@@ -4,11 +4,14 @@ by in the unit the file defines (its text scanned, the model not parsed)."""
 
 from __future__ import annotations
 
+import functools
 import re
+from collections import Counter
 
 from ifcopenshell import ifcopenshell_wrapper
 
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.dedup.ifcio import DEFINITION
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.other_kinds import file_holds
@@ -55,6 +58,60 @@ def refuse_unknown_entity_types(names: list[str], schema: str) -> None:
                          ("options", "entity_types", i))
 
 
+CHUNK = 1 << 20
+# IfcProduct.Representation is an IfcProductRepresentation: IfcProductDefinitionShape (IFC2X3 may write the
+# supertype itself); without one, no product has geometry
+SHAPES = {b"IFCPRODUCTDEFINITIONSHAPE", b"IFCPRODUCTREPRESENTATION"}
+
+
+@functools.lru_cache(maxsize=8)  # a schema's table, the same every call: walked once per process (3 ms)
+def _entities(schema: str) -> dict[bytes, tuple[str, bool]]:
+    """The schema's entities by their name as STEP writes it (capitals): (their name, whether a product)."""
+    return {d.name().upper().encode(): (d.name(), _is_product(d)) for d in _schema_definition(schema).declarations()
+            if isinstance(d, ifcopenshell_wrapper.entity)}
+
+
+@functools.lru_cache(maxsize=8)
+def _products(schema: str) -> frozenset[bytes]:
+    return frozenset(name for name, (_, is_product) in _entities(schema).items() if is_product)
+
+
+def _held(counts: Counter, entities: dict[bytes, tuple[str, bool]]) -> str:
+    return ", ".join(f"{n:,} {entities.get(name, (name.decode(errors='replace'),))[0]}"
+                     for name, n in counts.most_common(3))
+
+
+def refuse_without_products(source: IfcSource, schema: str) -> None:
+    """A 422 for a model with nothing to share: no instance at all (a header and an empty DATA section), no product,
+    or no product shape. The instances' entity names are scanned in chunks (the model not parsed) until a product
+    and a shape were both seen, in a usual export near the start; the solve refused these files only after the
+    job had been accepted."""
+    entities = _entities(schema)
+    products = _products(schema)
+    counts: Counter = Counter()
+    product = shape = False
+    carry = b""
+    with source.stream() as stream:
+        while chunk := stream.read(CHUNK):
+            text = carry + chunk
+            cut = text.rfind(b";")  # an instance definition is seen whole: the text up to its last ';'
+            text, carry = (text[:cut + 1], text[cut + 1:]) if cut >= 0 else (b"", text[-4096:])
+            names = Counter(m.group(2).upper() for m in DEFINITION.finditer(text))
+            counts.update(names)
+            product = product or not products.isdisjoint(names)
+            shape = shape or not SHAPES.isdisjoint(names)
+            if product and shape:
+                return
+    if not counts:
+        raise reject("the file holds no model: its DATA section has no instance (a STEP header alone); export the "
+                     "model with its products")
+    if not product:
+        raise reject(f"the model has no product (no IfcProduct such as IfcWall or IfcBuildingElementProxy), so no "
+                     f"geometry to share; it holds {_held(counts, entities)}")
+    raise reject("no product of the model has geometry (no IfcProductDefinitionShape: every product's Representation "
+                 f"is empty), so there is nothing to share; it holds {_held(counts, entities)}")
+
+
 def check_input(source: IfcSource) -> None:
     schema = header_schema(source.header())
     if schema is None:
@@ -70,6 +127,7 @@ def check_input(source: IfcSource) -> None:
                      "header")
     if not (schema in ("IFC2X3", "IFC4") or schema.startswith("IFC4X3")):
         raise reject(f"unsupported IFC schema {schema!r}; accepted: IFC2X3, IFC4, IFC4X3_ADD2")
+    refuse_without_products(source, schema)
     if source.options.tolerance is not None:
         with source.stream() as stream:
             unit = stated_length_unit(stream)

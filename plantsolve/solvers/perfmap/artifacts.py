@@ -376,8 +376,10 @@ def _csv_header(result: PerfmapResult, quantity: str) -> str:
 
 
 def _setting_headers(result: PerfmapResult) -> list[str]:
+    """'theta [deg]', a ratio 'Nc [-]' as every other dimensionless column and the plots' axes (a GasTurb map's
+    speed, unit '1', was 'Nc [1]'); bare where the request stated no unit."""
     units = result.setting_units or [""] * len(result.setting_names)
-    return [n + (f" [{u}]" if u else "") for n, u in zip(result.setting_names, units)]
+    return [n + (f" [{'-' if _is_ratio(u) else u}]" if u else "") for n, u in zip(result.setting_names, units)]
 
 
 def _to_csv(header: list[str], rows) -> bytes:

@@ -113,7 +113,7 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     u = result.units
     writer.writerow(["record", "id", "zones", "parent", f"volume [{u}3]", f"signed_volume [{u}3]", f"area [{u}2]",
                      f"net_area [{u}2]", f"perimeter [{u}]", "closed", "orientation", "open_edges",
-                     "non_manifold_edges", "normal_x", "normal_y", "normal_z", f"planarity_error [{u}]",
+                     "non_manifold_edges", "normal_x [-]", "normal_y [-]", "normal_z [-]", f"planarity_error [{u}]",
                      f"floor_area [{u}2]", "multiplier", "part_of_total_floor_area"])
     for z in result.zones:
         writer.writerow(["zone", z.id, "", "", "" if z.volume is None else repr(z.volume), repr(z.signed_volume),

@@ -27,7 +27,8 @@ itself (an embedded unofficial part) whose definition draws official primitives,
 (``stud.dat``, ``connhole.dat``, ``s/3001s01.dat``): its snaps are theirs, placed by the definition's matrices
 (:mod:`embedded`), handed to the solver in ``source.parts_from_primitives`` (part number -> catalogue record),
 and the solver says which parts it recognised so;
-the file is refused (422 naming the file) only when it places no part at all.
+the file is refused (422 naming the file) only when it places no part at all, or when it is one part's own
+drawing (headed ``0 !LDRAW_ORG Part``, placing no catalogue part), not a model.
 Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside sub-models;
 ``source.submodel_placements`` maps each placed sub-model's id prefix (``L12/``) to its file name.
 """
@@ -283,9 +284,27 @@ def _cut_last_line(text: str) -> int | None:
 INVISIBLE = dict.fromkeys(map(ord, "\ufeff\u200b\u200c\u200d\u2060"))
 
 
+def _refuse_a_part_drawing(lines: list[tuple[int, str]]) -> None:
+    """A 422 for a file that is one part's (or primitive's) definition from the LDraw library, headed
+    ``0 !LDRAW_ORG Part`` and drawing the part (lines 2-5, primitives such as stud.dat) without placing a catalogue
+    part: it was answered as a model of unknown parts with 0 degrees of freedom, or 'places no part'."""
+    kind = _section_type(lines)
+    if kind not in PART_TYPES | GEOMETRY_TYPES or _catalogue_parts(lines):
+        return
+    header = next(t for _, raw in lines if len(t := raw.split()) >= 3 and t[0] == "0"
+                  and t[1].upper().lstrip("!") == "LDRAW_ORG")
+    name = next((raw.split(None, 2)[2].strip() for _, raw in lines
+                 if raw.split()[:2] == ["0", "Name:"] and len(raw.split()) > 2), None)
+    raise reject(f"the file is a part's drawing, not a model: its header '0 {' '.join(header[1:3])}' says it defines "
+                 f"{'the part ' + repr(name) if name else 'one part'} (its lines draw that part's own geometry), and it "
+                 "places no part; the rigidity kind analyses a model, an .ldr or .mpd whose type-1 lines place parts "
+                 "(this one among them)")
+
+
 def parse_ldraw(text: str) -> dict:
     text = text.translate(INVISIBLE)
     main, files, outside = _files(text)
+    _refuse_a_part_drawing(files.get(main, []))
     roles = _classify(files, main)
     embedded: set[str] = set()
     parts: list[dict] = []

@@ -11,7 +11,6 @@ import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.dedup import SPEC, source
-from tests.conftest import wait_for
 from tests.solvers.dedup.support import assert_round_trip
 
 HEADER = ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('ViewDefinition [CoordinationView]'),'2;1');\n"
@@ -35,11 +34,12 @@ def test_a_step_file_without_an_ifc_project_says_so():
     assert error.loc == ("file",) and "no IfcProject" in error.msg and "500 IfcCartesianPoint" in error.msg
 
 
-def test_the_job_fails_with_a_report_on_the_input_not_an_exception_name(client):
-    job = client.post("/v1/dedup/jobs", files={"file": ("points.ifc", points_only(300), "application/x-step")}).json()
-    done = wait_for(client, job["id"], timeout=120)
-    assert done["status"] == "failed" and done["report"]["stage"] == "input"
-    assert "no IfcProject" in done["report"]["message"] and "Error" not in done["report"]["message"]
+def test_a_file_of_points_only_is_refused_at_submission_naming_what_it_holds(client):
+    """It was accepted (202) and the job failed at stage input; the intake's scan of entity names refuses it."""
+    refused = client.post("/v1/dedup/jobs", files={"file": ("points.ifc", points_only(300), "application/x-step")})
+    assert refused.status_code == 422 and refused.headers["content-type"].startswith("application/problem+json")
+    (error,) = refused.json()["errors"]
+    assert error["loc"] == ["file"] and "has no product" in error["msg"] and "300 IfcCartesianPoint" in error["msg"]
 
 
 def _zipped(content: bytes) -> bytes:

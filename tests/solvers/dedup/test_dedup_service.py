@@ -123,9 +123,10 @@ def test_a_file_without_geometry_is_refused():
     content = build_model(ModelSpec(products=[], containers=1)).to_string().encode()
     source = StoredInput.from_bytes("empty.ifc", content)
     value = SPEC.input_of(parse_upload(source, None), source)
-    SPEC.check_input(value)
     with pytest.raises(InputRejected, match="no product with geometry"):
         solve(value, lambda *a: None)
+    with pytest.raises(InputRejected, match="no product of the model has geometry"):  # and at submission
+        SPEC.check_input(value)
 
 
 def test_json_with_base64_and_the_cli(tmp_path):
