@@ -120,14 +120,21 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
 def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, step):
     """A round that ended with a connection open is carried on (:func:`direct.continue_closing`) before any cut: a cut
     is decided only where the continuation stalls too, its largest residual falling by less than 10 % a step for three
-    steps in a row however far each step is taken; where it closes every connection, nothing is cut. Returns the pose,
-    its connection errors, the connection to cut (None: closed) and the steps taken."""
+    steps in a row however far each step is taken, with a residual more than 1,000 times the closing tolerance (see
+    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Returns the pose (where it does
+    not close, the round's own: a conflict is cut as it was), its connection errors, the connection to cut (None:
+    closed) and the steps taken (counted: they were spent)."""
 
     def closed(P, D) -> bool:
         gap, ang = connection_errors(model, P, D)
         return choose_cut(model, active, gap, ang) is None
 
-    pose, taken = continue_closing(model, active, pose, opts.pipe_stiffness, closed, budget=min(budget, 60), step=step)
+    carried, taken = continue_closing(model, active, pose, opts.pipe_stiffness, closed, budget=min(budget, 60),
+                                      step=step)
+    gap, ang = connection_errors(model, carried.P, carried.D)
+    if choose_cut(model, active, gap, ang) is None:
+        return carried, gap, ang, None, taken
+    # a conflict: cut on the round's own pose, as without the continuation (its steps only confirm the stall)
     gap, ang = connection_errors(model, pose.P, pose.D)
     return pose, gap, ang, choose_cut(model, active, gap, ang), taken
 
