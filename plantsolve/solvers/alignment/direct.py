@@ -539,6 +539,7 @@ def continue_closing(model: Model, active: np.ndarray, pose: Pose, stiffness: fl
     # the round's last factorisation preconditions the first steps (refined on the current system; a fresh one where
     # it does not contract): a conflict's continuation is then one solve and no factorisation
     cache: dict = {**st.kkt, "reuse": True}
+    st.kkt = {}  # handed over: a fresh factorisation below replaces it, never held beside it (peak memory)
     while steps < budget and nv and len(a) and not closed(P, D):
         if step is not None:
             step(f"continuing a stalled round, step {steps + 1}")

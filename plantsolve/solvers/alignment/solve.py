@@ -55,10 +55,20 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     # first cut: see _after_cut_ends)
     mode = "LDL^T" if schur_in_use() else "LU"
 
+    last: list = []  # the last round's pose, whose factorisation a continuation reuses
+
+    def release() -> None:
+        for held in last:
+            held.state.kkt = {}  # peak memory: never two rounds' factorisations at once
+        last.clear()
+
     def run(mode: str, budget: int, said: str):
+        release()
         with use_schur(False) if mode == "LU" else contextlib.nullcontext():
-            return solve_direct(model, active, opts.pipe_stiffness, budget=budget, feasibility_on_lu=mode == "LDL^T/LU",
-                                step=lambda message: st.tick(f"direct solve{said}: {message}{cuts}"))
+            found = solve_direct(model, active, opts.pipe_stiffness, budget=budget, feasibility_on_lu=mode == "LDL^T/LU",
+                                 step=lambda message: st.tick(f"direct solve{said}: {message}{cuts}"))
+        last.append(found)
+        return found
 
     def replaced_by_lu(before: int):
         # the LU's pass of the same round: its pose decides, its iterations are counted instead
@@ -95,6 +105,7 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         if k is not None and iterations < opts.max_iterations:
             pose, gap, ang, k, taken = _continue_round(model, active, pose, opts, opts.max_iterations - iterations,
                                                        lambda message: st.tick(f"direct solve: {message}{cuts}"))
+            release()
             iterations += taken
             rounds.append({"factorisation": "LU", "iterations": taken, "counted": True, "continuation": True,
                            "closed": k is None})
