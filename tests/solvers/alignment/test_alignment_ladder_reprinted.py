@@ -1,4 +1,4 @@
-"""The shipped ladder re-printed (decimals, inches, metres, blocks shuffled) is aligned alike (issue #39 item 2).
+"""The shipped ladder re-printed (decimals, inches, metres, blocks shuffled) is aligned alike.
 
 As written, its first round crawled along the ladder's singular loops (the residual falling by ~0.9 a step) and its
 stall rule stopped 1.4e-9 of the typical length short of closing: one connection (N1-1 port 1 - P3 port 1) was cut
