@@ -13,11 +13,11 @@ from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import choose_cut, worst_measured
-from plantsolve.solvers.alignment.direct import solve_direct
+from plantsolve.solvers.alignment.direct import continue_closing, solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
-from plantsolve.solvers.alignment.model import Model, build_model, connection_errors
+from plantsolve.solvers.alignment.model import Model, build_model, connection_errors, resolve_tolerances
 from plantsolve.solvers.alignment.pcf import interpret_pcf, pcf_notes, pcf_tolerances
 from plantsolve.solvers.alignment.plausibility import (
     FITTING_SPAN,
@@ -55,10 +55,20 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     # first cut: see _after_cut_ends)
     mode = "LDL^T" if schur_in_use() else "LU"
 
+    last: list = []  # the last round's pose, whose factorisation a continuation reuses
+
+    def release() -> None:
+        for held in last:
+            held.state.kkt = {}  # peak memory: never two rounds' factorisations at once
+        last.clear()
+
     def run(mode: str, budget: int, said: str):
+        release()
         with use_schur(False) if mode == "LU" else contextlib.nullcontext():
-            return solve_direct(model, active, opts.pipe_stiffness, budget=budget, feasibility_on_lu=mode == "LDL^T/LU",
-                                step=lambda message: st.tick(f"direct solve{said}: {message}{cuts}"))
+            found = solve_direct(model, active, opts.pipe_stiffness, budget=budget, feasibility_on_lu=mode == "LDL^T/LU",
+                                 step=lambda message: st.tick(f"direct solve{said}: {message}{cuts}"))
+        last.append(found)
+        return found
 
     def replaced_by_lu(before: int):
         # the LU's pass of the same round: its pose decides, its iterations are counted instead
@@ -92,6 +102,13 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
             k = choose_cut(model, active, gap, ang)
             if k is not None:
                 mode = "LDL^T/LU"
+        if k is not None and iterations < opts.max_iterations:
+            pose, gap, ang, k, taken = _continue_round(model, active, pose, opts, opts.max_iterations - iterations,
+                                                       lambda message: st.tick(f"direct solve: {message}{cuts}"))
+            release()
+            iterations += taken
+            rounds.append({"factorisation": "LU", "iterations": taken, "counted": True, "continuation": True,
+                           "closed": k is None})
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
@@ -109,6 +126,28 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         errors[k] = (float(gap[k]), float(ang[k]))
     return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
                    cut_reason=reasons, cut_errors=errors, extra={"rounds": rounds})
+
+
+def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, step):
+    """A round that ended with a connection open is carried on (:func:`direct.continue_closing`) before any cut: a cut
+    is decided only where the continuation stalls too, its largest residual falling by less than 10 % a step for three
+    steps in a row however far each step is taken, with a residual more than 1,000 times the closing tolerance (see
+    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Returns the pose (where it does
+    not close, the round's own: a conflict is cut as it was), its connection errors, the connection to cut (None:
+    closed) and the steps taken (counted: they were spent)."""
+
+    def closed(P, D) -> bool:
+        gap, ang = connection_errors(model, P, D)
+        return choose_cut(model, active, gap, ang) is None
+
+    carried, taken = continue_closing(model, active, pose, opts.pipe_stiffness, closed, budget=min(budget, 60),
+                                      step=step)
+    gap, ang = connection_errors(model, carried.P, carried.D)
+    if choose_cut(model, active, gap, ang) is None:
+        return carried, gap, ang, None, taken
+    # a conflict: cut on the round's own pose, as without the continuation (its steps only confirm the stall)
+    gap, ang = connection_errors(model, pose.P, pose.D)
+    return pose, gap, ang, choose_cut(model, active, gap, ang), taken
 
 
 def _after_cut_ends(model: Model, active: np.ndarray, pose, capped: bool) -> bool:
@@ -170,7 +209,8 @@ def _near_misses(request: AlignmentRequest) -> list[dict]:
 def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = frozenset()) -> list[dict]:
     """One component to hold still in every connected network that has no fixed component: its tie_in,
     else an item at a line's end connection (``nozzles``, from a PCF's END-CONNECTION records), else an
-    end flange (a flange with an open port), else its largest component; ties by where the component lies (its
+    end flange (a flange with an open port), else its largest component (spans within twice the position tolerance
+    or 1e-6 of the largest are equal: the coordinates' round-off); ties by where the component lies (its
     port positions to a micrometre, the lowest first), then by id: a file's ids may follow the order it is written
     in (a PCF without component identifiers), and the held component must not."""
     comps = request.components
@@ -185,23 +225,34 @@ def anchor_components(request: AlignmentRequest, nozzles: frozenset[str] = froze
     used = {tuple(c.from_) for c in request.connections} | {tuple(c.to) for c in request.connections}
     has_conn = np.zeros(n, dtype=bool)
     has_conn[a] = has_conn[b] = True
+    # two printed coordinates each off by up to the position tolerance (a PCF: its printed precision)
+    span_tie = 2 * resolve_tolerances(request)[0]
     out = []
     for net in np.unique(label[has_conn]):
         members = np.flatnonzero(label == net)
         if np.any(fixed[members]):
             continue
 
-        def rank(i: int):
+        def tier_span(i: int) -> tuple[int, float]:
             c = comps[i]
             P = np.array([p.position for p in c.ports], dtype=float)
             span = float(np.max(np.linalg.norm(P - P[0], axis=1))) if len(P) > 1 else 0.0
             open_port = any((c.id, k) not in used for k in range(len(c.ports)))
             tier = 0 if c.type == "tie_in" else 1 if c.id in nozzles else 2 if (c.type == "flange" and open_port) else 3
-            where = tuple(sorted(tuple(np.round(P, 3).tolist())))
-            return (tier, -round(span, 6), where, c.id)
+            return tier, span
 
-        best = min(members, key=rank)
-        tier = rank(best)[0]
+        def where(i: int) -> tuple:
+            P = np.array([p.position for p in comps[i].ports], dtype=float)
+            return tuple(sorted(tuple(np.round(P, 3).tolist())))
+
+        ranks = {i: tier_span(i) for i in members}
+        tier = min(r[0] for r in ranks.values())
+        top = max(r[1] for r in ranks.values() if r[0] == tier)
+        # spans within the coordinates' round-off of the largest are equal (the shipped ladder's four 2,700 mm pipes
+        # differ by 1e-11 mm as written and by 2e-4 mm printed to 3 decimals: the held pipe, hence every port of the
+        # answer, followed the printing)
+        equal = [i for i, (t, span) in ranks.items() if t == tier and span >= top - max(span_tie, 1e-6 * top)]
+        best = min(equal, key=lambda i: (where(i), comps[i].id))
         out.append({"id": comps[best].id, "network_size": int(len(members)),
                     "why": ["tie_in", "at an end connection", "end flange (open port)", "largest component"][tier]})
     return out

@@ -75,8 +75,10 @@ def test_the_first_cut_is_decided_by_the_lus_pass_and_every_counted_round_is_the
     # conflict again, so the LU's pass of that round replaces it and every round after is the LU's
     req, ref = solved["5x3 valves, shifted 30 mm and turned"]
     rounds = ref.report.details["rounds"]
-    said = [(r["factorisation"], r["counted"]) for r in rounds]
-    assert said == [("LDL^T", False), ("LU", True), ("LDL^T/LU", False)] + [("LU", True)] * (len(rounds) - 3)
+    # a round that ends with a connection open is continued on the LU before its cut (solve._continue_round)
+    said = [(r["factorisation"], r["counted"]) for r in rounds if not r.get("continuation")]
+    assert said == [("LDL^T", False), ("LU", True), ("LDL^T/LU", False)] + [("LU", True)] * (len(said) - 3)
+    assert all(r["factorisation"] == "LU" and r["counted"] and not r["closed"] for r in rounds if r.get("continuation"))
     assert sum(r["iterations"] for r in rounds if r["counted"]) == ref.iterations
     with use_schur(False):
         lu = solve(req).result
@@ -93,7 +95,7 @@ def test_the_round_after_a_single_cut_keeps_the_ldl_but_for_its_feasibility_step
     # ports (measured: at most 1e-6 mm apart on plant-like networks cut once)
     req = case()
     ref = solve(req).result
-    said = [(r["factorisation"], r["counted"]) for r in ref.report.details["rounds"]]
+    said = [(r["factorisation"], r["counted"]) for r in ref.report.details["rounds"] if not r.get("continuation")]
     assert said == [("LDL^T", False), ("LU", True), ("LDL^T/LU", True)]  # the first cut is the LU pass's
     with use_schur(False):
         lu = solve(req).result

@@ -162,8 +162,9 @@ def test_the_reread_check_catches_a_gap_far_below_the_tolerance_and_prints_it(ne
     (said,) = [m for p in check.problems if p.startswith("connection N2:1 - N3:0")
                and (m := re.search(r"re-reads (\S+) mm apart", p))]
     assert float(said.group(1)) >= 0.9 * half  # printed to three significant digits, not rounded to nothing
-    if decimals == 4:  # the tee's ports sit on their printed END-POINTs here: the gap is the shift itself
-        assert check.max_gap == pytest.approx(half, rel=1e-3) and said.group(1) == "5e-05"
+    # the shift itself and the half digits the tee's port lies off its printed END-POINT (at most one per coordinate;
+    # which ports sit on theirs follows the held flange, chosen among the equal-span end flanges by where they lie)
+    assert half * (1 - 1e-3) <= check.max_gap <= half * np.sqrt(3) * (1 + 1e-3)
 
 
 def test_a_ring_of_four_quarter_elbows_is_left_out_like_two_half_bends():
