@@ -220,28 +220,33 @@ class JointState:
         return P, D
 
 
+def _joint_layout(model: Model, active: np.ndarray, stiffness: float):
+    """The joint solve's unknowns and weights: each free component's column offset (``var``, 6 columns, a pipe 7),
+    their count, the weights, the active connections with a free end (``a``, ``b``), the free pipes and fittings."""
+    free = ~model.fixed
+    width = np.where(model.is_pipe, 7, 6)
+    offs = np.concatenate([[0], np.cumsum(np.where(free, width, 0))])
+    var = np.where(free, offs[:-1], -1)
+    w, w_rot = _weights(model, stiffness)
+    # a rotation by phi moves a component's ports by about size * phi: weigh it in the same length units as
+    # the translations, so the answer does not depend on whether the request is in mm, m or inches
+    w_rot = w_rot * model.lref**2
+    pc = model.port_comp
+    a, b = model.conn_a[active], model.conn_b[active]
+    keep = free[pc[a]] | free[pc[b]]
+    return (free, var, int(offs[-1]), w, w_rot, a[keep], b[keep], np.flatnonzero(model.is_pipe & free),
+            np.flatnonzero(~model.is_pipe & free))
+
+
 def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: float, max_gn: int = 25,
                 budget: int = 10**9, step=None, feasibility_on_lu: bool = False) -> tuple[JointState, int]:
     """Gauss-Newton over all poses and pipe lengths with exact port constraints (see module doc)."""
     n = model.n_comp
     st = JointState(model, q)
-    free = ~model.fixed
-    width = np.where(model.is_pipe, 7, 6)
-    offs = np.concatenate([[0], np.cumsum(np.where(free, width, 0))])
-    var = np.where(free, offs[:-1], -1)
-    nv = int(offs[-1])
-    w, w_rot = _weights(model, stiffness)
-    # a rotation by phi moves a component's ports by about size * phi: weigh it in the same length units as
-    # the translations, so the answer does not depend on whether the request is in mm, m or inches
-    w_rot = w_rot * model.lref**2
+    free, var, nv, w, w_rot, a, b, pipes, fits = _joint_layout(model, active, stiffness)
     w_along = 1e-3
     pc = model.port_comp
-    a, b = model.conn_a[active], model.conn_b[active]
-    keep = free[pc[a]] | free[pc[b]]
-    a, b = a[keep], b[keep]
     m_conn = len(a)
-    pipes = np.flatnonzero(model.is_pipe & free)
-    fits = np.flatnonzero(~model.is_pipe & free)
     locked = np.zeros(n, dtype=bool)
     steps = 0
     use_cost = True
@@ -505,19 +510,8 @@ def continue_closing(model: Model, active: np.ndarray, pose: Pose, stiffness: fl
     the ladder's crawl was 4e-6 mm open. ``closed(P, D)`` says when every connection is closed; returns the pose reached
     and the KKT steps taken (at most ``budget``)."""
     st = pose.state
-    free = ~model.fixed
-    width = np.where(model.is_pipe, 7, 6)
-    offs = np.concatenate([[0], np.cumsum(np.where(free, width, 0))])
-    var = np.where(free, offs[:-1], -1)
-    nv = int(offs[-1])
-    w, w_rot = _weights(model, stiffness)
-    w_rot = w_rot * model.lref**2
+    free, var, nv, w, w_rot, a, b, pipes, fits = _joint_layout(model, active, stiffness)
     pc = model.port_comp
-    a, b = model.conn_a[active], model.conn_b[active]
-    keep = free[pc[a]] | free[pc[b]]
-    a, b = a[keep], b[keep]
-    pipes = np.flatnonzero(model.is_pipe & free)
-    fits = np.flatnonzero(~model.is_pipe & free)
     fr = np.flatnonzero(free)
     sv = np.ones(nv)
     sv[(var[fr][:, None] + 3 + np.arange(3)).ravel()] = model.lref
