@@ -24,7 +24,7 @@ import numpy as np
 
 from plantsolve.solvers.alignment.model import Model
 
-CUT_MARGIN = 0.1  # relative: impacts within 10 % of the largest are equally to blame (twice the drift measured)
+CUT_MARGIN = 0.05  # relative: impacts within 5 % of the largest are equally to blame (the factorisations' drift measured)
 
 
 def error_impact(model: Model, gap: np.ndarray, ang: np.ndarray) -> np.ndarray:
