@@ -934,12 +934,13 @@ class Assembly:
 
     # ---------------------------------------------------------------- queries
     @staticmethod
-    def _pair_joints(a: str, b: str, conns: list[Connection]) -> list[JointSpec]:
+    def _pair_joints(a: str, b: str, conns: list[Connection], ordered: bool = False) -> list[JointSpec]:
         """The joints inferred between parts ``a`` and ``b``, named and ordered by the parts' ids and the
         connections' places, not by which part the file placed first: a model written in another order
         answers with the same joint ids, points and axes (a connection's axis is its later part's connector,
         so an axis is given as the line's direction whose first non-zero component is positive)."""
-        a, b = sorted((a, b), key=natural_order)
+        if not ordered:
+            a, b = sorted((a, b), key=natural_order)
         conns = sorted(conns, key=lambda c: (c.point, c.kind, _line_direction(c.axis) or ()))
         studs = [c for c in conns if c.kind == "stud"]
         if len(studs) >= 2 or any(c.kind == "axle" for c in conns):
@@ -951,8 +952,12 @@ class Assembly:
 
     def all_joints(self) -> list[JointSpec]:
         out = list(self.joints.values())
-        for (a, b), conns in sorted(self._links.items(), key=lambda link: sorted(map(natural_order, link[0]))):
-            out.extend(self._pair_joints(a, b, conns))
+        pairs = []  # each pair's ends in natural order, each id's key made once per end (a large model's joints)
+        for (a, b), conns in self._links.items():
+            key_a, key_b = natural_order(a), natural_order(b)
+            pairs.append(((key_a, key_b), a, b, conns) if key_a <= key_b else ((key_b, key_a), b, a, conns))
+        for _, a, b, conns in sorted(pairs, key=lambda pair: pair[0]):
+            out.extend(self._pair_joints(a, b, conns, ordered=True))
         return out
 
     def rod_pairs(self) -> list[tuple[str, str]]:
