@@ -231,7 +231,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
 def _unwritable(folder: Path) -> str | None:
     """Why files cannot be written into ``folder`` (made when missing), or ``None``."""
     probe = folder
-    while not probe.exists() and probe != probe.parent:  # the nearest existing folder decides whether the rest can be made
+    while not probe.exists() and probe != probe.parent:  # the missing folders are made in the nearest that exists
         probe = probe.parent
     if not probe.is_dir():
         return f"{probe} is a file, not a folder"

@@ -119,7 +119,7 @@ def test_files_of_an_earlier_run_in_the_artifact_folder_are_named(tmp_path):
     (tmp_path / "out_artifacts" / "inspection.png").write_bytes(b"an earlier run's plot")
     done = run(["solve", "test-verdict", "in.json", "-o", "out.json"], tmp_path)
     assert done.returncode == 0, done.stderr
-    assert (f"note: out_artifacts also holds 1 file(s) this run did not write (an earlier run's?): inspection.png"
+    assert ("note: out_artifacts also holds 1 file(s) this run did not write (an earlier run's?): inspection.png"
             in done.stderr)
 
 
