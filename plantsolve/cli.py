@@ -208,7 +208,8 @@ def _print_warnings(report: dict | None) -> int:
 def cmd_solve(args: argparse.Namespace) -> int:
     path = Path(args.input)
     if not path.is_file():
-        print(f"plantsolve: no such file: {path}", file=sys.stderr)
+        print(f"plantsolve: {path} is a folder, not a file" if path.is_dir() else f"plantsolve: no such file: {path}",
+              file=sys.stderr)
         return 2
     if args.options is not None:
         try:
@@ -226,6 +227,23 @@ def cmd_solve(args: argparse.Namespace) -> int:
         return 2
     with tempfile.TemporaryDirectory(prefix="plantsolve-cli-") as scratch:
         return _solve(args, path, _solve_settings(args, Path(scratch)))
+
+
+def _shown_url(url: str) -> str:
+    """A database URL as it may be printed: its password as ***."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import ArgumentError
+
+    try:
+        return make_url(url).render_as_string(hide_password=True)
+    except ArgumentError:
+        return url
+
+
+def _first_line(error: BaseException) -> str:
+    """An error's own sentence, without the SQL and the link to the docs SQLAlchemy appends."""
+    text = str(getattr(error, "orig", None) or error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
 
 
 def _unwritable(folder: Path) -> str | None:
@@ -250,6 +268,11 @@ def output_problem(args: argparse.Namespace) -> str | None:
                                           else None)
         if why:
             return f"-o {out}: {why}"
+    if args.data_dir:
+        data = Path(args.data_dir)
+        why = f"{data} is a file, not a folder" if data.is_file() else _unwritable(data)
+        if why:
+            return f"--data-dir {data}: {why}"
     if args.artifacts or args.output:
         folder = _artifact_folder(args)
         why = f"{folder} is a file, not a folder" if folder.is_file() else _unwritable(folder)
@@ -278,8 +301,16 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
     from plantsolve.jobs.runner import run_job
     from plantsolve.jobs.service import JobService
 
+    from sqlalchemy.exc import SQLAlchemyError
+
     # a temporary store of this run alone gets its tables at once; a named one (--store, --data-dir) is migrated
-    ctx = ServiceContext.create(settings, migrate=True if args.store or args.data_dir else "scratch")
+    try:
+        ctx = ServiceContext.create(settings, migrate=True if args.store or args.data_dir else "scratch")
+    except (SQLAlchemyError, OSError) as error:  # a URL of no database there is, a folder that is a file
+        named = f"--store {_shown_url(args.store)}" if args.store else f"--data-dir {args.data_dir}" if args.data_dir \
+            else "the store"
+        print(f"plantsolve: {named}: the database cannot be opened: {_first_line(error)}", file=sys.stderr)
+        return 2
     try:
         upload = not (path.suffix.lower() == ".json" and args.options is None)
         ctx.kinds[args.kind].preload(SOLVE_ROLES + (("parse_upload",) if upload else ()))

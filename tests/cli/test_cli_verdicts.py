@@ -140,3 +140,17 @@ def test_solve_help_states_the_units_and_the_exit_codes():
     helped = solve.choices["solve"].format_help()
     assert "3 a result written whose report holds a verdict against it" in " ".join(helped.split())
     assert "by default alignment mm, flowmeter mm, polyhedra m, rigidity mm, tube mm" in " ".join(helped.split())
+
+
+def test_a_folder_as_input_a_file_as_data_dir_and_a_store_that_cannot_open_exit_2_in_a_line(tmp_path):
+    (tmp_path / "in.json").write_text(json.dumps({"codes": []}))
+    (tmp_path / "a_file").write_text("")
+    for args, expected in (
+            (["tests"], "plantsolve: tests is a folder, not a file"),
+            (["in.json", "--data-dir", "a_file"], "plantsolve: --data-dir a_file: a_file is a file, not a folder"),
+            (["in.json", "--store", "postgres://me:secret@nohost/db"],
+             "plantsolve: --store postgres://me:***@nohost/db: the database cannot be opened: Can't load plugin: "
+             "sqlalchemy.dialects:postgres")):
+        (tmp_path / "tests").mkdir(exist_ok=True)
+        done = run(["solve", "test-verdict", *args], tmp_path)
+        assert done.returncode == 2 and done.stderr.strip() == expected, done.stderr
