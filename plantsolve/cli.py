@@ -19,6 +19,7 @@ import gc
 import json
 import logging
 import os
+import shlex
 import socket
 import sys
 import tempfile
@@ -335,6 +336,11 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
                 print(json.dumps(problem, indent=2), file=sys.stderr)
             else:
                 print(problem_lines(problem, options_of(args), ctx.kinds[args.kind], upload), file=sys.stderr)
+                readers = other_readers(ctx.kinds, path.suffix.lower(), args.kind) if problem.get("status") == 415 \
+                    else []
+                if readers:  # refused already: every kind's spec is read only now
+                    print(f"  {path.suffix.lower()} files are read by {', '.join(readers)}: plantsolve solve "
+                          f"{readers[0]} {shlex.quote(str(path))}", file=sys.stderr)
             return 2
         job_id = submitted.job.id
         name = worker_name("cli")
@@ -369,6 +375,11 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
         return 1
     finally:
         ctx.close()
+
+
+def other_readers(kinds: Mapping[str, Any], suffix: str, kind: str) -> list[str]:
+    """The kinds other than ``kind`` that read files ending in ``suffix``."""
+    return sorted(k for k in kinds if k != kind and suffix in kinds[k].upload_extensions)
 
 
 def options_of(args: argparse.Namespace) -> dict | None:

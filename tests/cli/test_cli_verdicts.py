@@ -154,3 +154,11 @@ def test_a_folder_as_input_a_file_as_data_dir_and_a_store_that_cannot_open_exit_
         (tmp_path / "tests").mkdir(exist_ok=True)
         done = run(["solve", "test-verdict", *args], tmp_path)
         assert done.returncode == 2 and done.stderr.strip() == expected, done.stderr
+
+
+def test_a_file_of_another_kind_is_refused_naming_the_kinds_that_read_it(tmp_path):
+    (tmp_path / "my numbers.txt").write_text("1\n2\n")
+    done = run(["solve", "test-verdict", "my numbers.txt"], tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines()[-1] == \
+        "  .txt files are read by test-compute, tube: plantsolve solve test-compute 'my numbers.txt'"
