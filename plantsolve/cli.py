@@ -363,7 +363,8 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
                           f"run's?): {', '.join(others[:8])}{', ...' if len(others) > 8 else ''}", file=sys.stderr)
             report = job.report or (job.result or {}).get("report")
             n = _print_warnings(report)
-            note = assumed_unit_note(report, path.name, options_of(args), ctx.kinds[args.kind])
+            note = (assumed_unit_note(report, path.name, options_of(args), ctx.kinds[args.kind]) if upload
+                    else unstated_units_note(content, path.name, ctx.kinds[args.kind]))
             if note:
                 print(note, file=sys.stderr)
             return finished_line(str(job_id), report, n)
@@ -418,6 +419,17 @@ def assumed_unit_note(report: dict | None, filename: str, options: dict | None, 
     example = json.dumps({option: "mm" if units["request_unit"] == "m" else "m"})
     return (f"note: {filename} states no unit: its numbers were read as {units['request_unit']}, the request's "
             f"default 'units'; if they are in another unit, say so: --options '{example}'")
+
+
+def unstated_units_note(content: bytes, filename: str, spec) -> str | None:
+    """A line when a JSON request states no ``units`` and the kind's default was taken. The text is searched, not
+    parsed again (a request of many megabytes): a key ``"units"`` anywhere counts as stated, so the line is never
+    said wrongly, only now and then left out."""
+    field = spec.request_model.model_fields.get("units")
+    if field is None or not isinstance(field.default, str) or b'"units"' in content:
+        return None
+    return (f"note: {filename} states no 'units': its numbers were read as {field.default}, the default; "
+            f"if they are in another unit, add \"units\" to the request")
 
 
 def field_path(loc: list) -> str:

@@ -162,3 +162,11 @@ def test_a_file_of_another_kind_is_refused_naming_the_kinds_that_read_it(tmp_pat
     assert done.returncode == 2, done.stderr
     assert done.stderr.splitlines()[-1] == \
         "  .txt files are read by test-compute, tube: plantsolve solve test-compute 'my numbers.txt'"
+
+
+def test_a_request_without_units_is_said_to_be_read_in_the_default():
+    note = cli.unstated_units_note(b'{"faces": []}', "house.json", KINDS["polyhedra"])
+    assert note == ("note: house.json states no 'units': its numbers were read as m, the default; if they are in "
+                    "another unit, add \"units\" to the request")
+    assert cli.unstated_units_note(b'{"faces": [], "units": "mm"}', "house.json", KINDS["polyhedra"]) is None
+    assert cli.unstated_units_note(b'{"points": []}', "map.json", KINDS["perfmap"]) is None  # no default to take
