@@ -4,11 +4,11 @@
 the same runner as the service, in a store of its own (not the server's database, unless ``--store`` or
 ``--data-dir`` names it); the result goes to OUT or standard output, artifacts to ``--artifacts DIR``
 (default next to OUT, or a temporary folder), warnings with their codes to standard error. Exit
-codes: 0 success, 3 a result written whose report holds a verdict against it (a failed or undetermined
-inspection, a fit not converged, a verification failed, a tolerance not reached: the line before the exit names
-it), 2 invalid input (one line per bad field; ``--json`` prints the problem document) or a command line or output
-path refused, 1 solver failure (the report is written). A progress bar goes to standard error while the job runs (on a terminal, or
-with ``--progress``).
+codes: 0 success; 3 a result written whose report holds a verdict against it (a failed or undetermined
+inspection, a fit not converged, a verification failed, a tolerance not reached: the last line names it); 2
+invalid input (one line per bad field; ``--json`` prints the problem document), or a command line, an output path
+or a store refused before the run; 1 solver failure (the report is written). A progress bar goes to standard error
+while the job runs (on a terminal, or with ``--progress``).
 """
 
 from __future__ import annotations
@@ -296,13 +296,13 @@ def _collect_from_now_on() -> None:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
+    from sqlalchemy.exc import SQLAlchemyError
+
     from plantsolve.jobs.context import ServiceContext, worker_name
     from plantsolve.jobs.errors import ProblemError
     from plantsolve.jobs.lifecycle import SUCCEEDED
     from plantsolve.jobs.runner import run_job
     from plantsolve.jobs.service import JobService
-
-    from sqlalchemy.exc import SQLAlchemyError
 
     # a temporary store of this run alone gets its tables at once; a named one (--store, --data-dir) is migrated
     try:
