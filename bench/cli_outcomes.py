@@ -116,15 +116,15 @@ def main() -> None:
                 for side, root in sides.items():  # a folder of its own: no run finds another's artifacts
                     runs[side].append(run(root, argv, Path(tempfile.mkdtemp(prefix=f"{side}-", dir=scratch))))
             b, a = (min(runs[s], key=lambda r: r["cpu"]) for s in ("before", "after"))
-            cut = args.width
-
-            def shown(r: dict) -> str:  # a job's id and the scratch folder are noise beside what the line says
-                line = re.sub(r"[0-9a-f]{8}(-[0-9a-f]{4}){3}-[0-9a-f]{12}", "<id>", r["last"]).replace(folder, "…")
-                return line[:cut].replace("|", "\\|")
-
             print(f"| {group} | {name} | {b['code']} → {a['code']} | {'yes' if b['traceback'] else 'no'} → "
                   f"{'yes' if a['traceback'] else 'no'} | {b['cpu']:.2f} / {a['cpu']:.2f} | {b['rss']:.0f} / "
-                  f"{a['rss']:.0f} | {shown(b)} | {shown(a)} |", flush=True)
+                  f"{a['rss']:.0f} | {shown(b, folder, args.width)} | {shown(a, folder, args.width)} |", flush=True)
+
+
+def shown(run: dict, scratch: str, width: int) -> str:
+    """A run's last line for the table: a job's id and the scratch folder are noise beside what it says."""
+    line = re.sub(r"[0-9a-f]{8}(-[0-9a-f]{4}){3}-[0-9a-f]{12}", "<id>", run["last"]).replace(scratch, "…")
+    return line[:width].replace("|", "\\|")
 
 
 if __name__ == "__main__":
