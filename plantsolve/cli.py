@@ -188,12 +188,19 @@ def _solve_settings(args: argparse.Namespace, scratch: Path):
     return settings.model_copy(update={"data_dir": scratch, "database_url": None, "artifact_dir": None})
 
 
+def _beside_output(args: argparse.Namespace) -> bool:
+    """Whether ``-o OUT`` names a file the artifacts' folder goes beside: not a device or a pipe (``-o /dev/null``
+    discards the result; its artifacts do not belong in ``/dev``)."""
+    out = Path(args.output) if args.output else None
+    return out is not None and (not out.exists() or out.is_file() or out.is_dir())
+
+
 def _artifact_folder(args: argparse.Namespace) -> Path:
     """``--artifacts``, else ``<OUT stem>_artifacts`` next to ``-o OUT``, else a new temporary folder (the
-    result went to standard output: nothing is written into the current directory unasked)."""
+    result went to standard output or a device: nothing is written into the current directory unasked)."""
     if args.artifacts:
         return Path(args.artifacts)
-    if args.output:
+    if _beside_output(args):
         out = Path(args.output)
         return out.with_name(out.stem + "_artifacts")
     return Path(tempfile.mkdtemp(prefix=f"plantsolve-{args.kind}-artifacts-"))
@@ -274,7 +281,7 @@ def output_problem(args: argparse.Namespace) -> str | None:
         why = f"{data} is a file, not a folder" if data.is_file() else _unwritable(data)
         if why:
             return f"--data-dir {data}: {why}"
-    if args.artifacts or args.output:
+    if args.artifacts or _beside_output(args):
         folder = _artifact_folder(args)
         why = f"{folder} is a file, not a folder" if folder.is_file() else _unwritable(folder)
         if why:

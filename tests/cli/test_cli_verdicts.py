@@ -170,3 +170,13 @@ def test_a_request_without_units_is_said_to_be_read_in_the_default():
                     "another unit, add \"units\" to the request")
     assert cli.unstated_units_note(b'{"faces": [], "units": "mm"}', "house.json", KINDS["polyhedra"]) is None
     assert cli.unstated_units_note(b'{"points": []}', "map.json", KINDS["perfmap"]) is None  # no default to take
+
+
+def test_a_result_sent_to_dev_null_puts_no_artifact_folder_into_dev():
+    args = _args(output="/dev/null")
+    assert cli.output_problem(args) is None
+    folder = cli._artifact_folder(args)
+    try:
+        assert folder.parent != Path("/dev") and folder.name.startswith("plantsolve-tube-artifacts-")
+    finally:
+        folder.rmdir()
