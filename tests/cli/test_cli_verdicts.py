@@ -90,7 +90,7 @@ def test_a_misspelt_request_field_gets_the_close_match():
 
 
 def _args(**given) -> argparse.Namespace:
-    return argparse.Namespace(**{"output": None, "artifacts": None, "kind": "tube", **given})
+    return argparse.Namespace(**{"output": None, "artifacts": None, "data_dir": None, "kind": "tube", **given})
 
 
 def test_outputs_that_cannot_be_written_are_refused_before_the_run(tmp_path):
