@@ -364,7 +364,8 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
                 for artifact in artifacts:
                     (folder / artifact.name).write_bytes(service.artifact(job_id, artifact.name)[1].read())
                 print(f"artifacts: {', '.join(a.name for a in artifacts)} in {folder}", file=sys.stderr)
-                others = sorted(p.name for p in folder.iterdir() if p.name not in {a.name for a in artifacts})
+                ours = {a.name for a in artifacts} | {Path(f).resolve() for f in (args.input, args.output) if f}
+                others = sorted(p.name for p in folder.iterdir() if p.name not in ours and p.resolve() not in ours)
                 if others:  # an earlier run's inspection plot beside this run's files would be read as this run's
                     print(f"note: {folder} also holds {len(others)} file(s) this run did not write (an earlier "
                           f"run's?): {', '.join(others[:8])}{', ...' if len(others) > 8 else ''}", file=sys.stderr)

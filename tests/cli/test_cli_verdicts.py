@@ -180,3 +180,10 @@ def test_a_result_sent_to_dev_null_puts_no_artifact_folder_into_dev():
         assert folder.parent != Path("/dev") and folder.name.startswith("plantsolve-tube-artifacts-")
     finally:
         folder.rmdir()
+
+
+def test_artifacts_into_the_folder_of_the_input_and_the_result_name_neither_as_an_earlier_runs(tmp_path):
+    (tmp_path / "in.json").write_text(json.dumps({"codes": []}))
+    done = run(["solve", "test-verdict", "in.json", "-o", "out.json", "--artifacts", "."], tmp_path)
+    assert done.returncode == 0 and "note:" not in done.stderr, done.stderr
+    assert (tmp_path / "codes.txt").exists()
