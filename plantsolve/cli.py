@@ -4,9 +4,11 @@
 the same runner as the service, in a store of its own (not the server's database, unless ``--store`` or
 ``--data-dir`` names it); the result goes to OUT or standard output, artifacts to ``--artifacts DIR``
 (default next to OUT, or a temporary folder), warnings with their codes to standard error. Exit
-codes: 0 success, 2 invalid input (one line per bad field; ``--json`` prints the problem document), 1 solver
-failure (the report is written). A progress bar goes to standard error while the job runs (on a terminal, or
-with ``--progress``).
+codes: 0 success; 3 a result written whose report holds a verdict against it (a failed or undetermined
+inspection, a fit not converged, a verification failed, a tolerance not reached: the last line names it); 2
+invalid input (one line per bad field; ``--json`` prints the problem document), or a command line, an output path
+or a store refused before the run; 1 solver failure (the report is written). A progress bar goes to standard error
+while the job runs (on a terminal, or with ``--progress``).
 """
 
 from __future__ import annotations
@@ -17,9 +19,11 @@ import gc
 import json
 import logging
 import os
+import shlex
 import socket
 import sys
 import tempfile
+import textwrap
 import threading
 import uuid
 from pathlib import Path
@@ -84,6 +88,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
+# a job that succeeded but whose report holds a verdict against its result (plantsolve/app/verdicts.py)
+EXIT_VERDICT = 3
 SHUTDOWN_SECONDS = 5
 LOG_LEVELS = ["critical", "error", "warning", "info", "debug"]
 
@@ -182,12 +188,19 @@ def _solve_settings(args: argparse.Namespace, scratch: Path):
     return settings.model_copy(update={"data_dir": scratch, "database_url": None, "artifact_dir": None})
 
 
+def _beside_output(args: argparse.Namespace) -> bool:
+    """Whether ``-o OUT`` names a file the artifacts' folder goes beside: not a device or a pipe (``-o /dev/null``
+    discards the result; its artifacts do not belong in ``/dev``)."""
+    out = Path(args.output) if args.output else None
+    return out is not None and (not out.exists() or out.is_file() or out.is_dir())
+
+
 def _artifact_folder(args: argparse.Namespace) -> Path:
     """``--artifacts``, else ``<OUT stem>_artifacts`` next to ``-o OUT``, else a new temporary folder (the
-    result went to standard output: nothing is written into the current directory unasked)."""
+    result went to standard output or a device: nothing is written into the current directory unasked)."""
     if args.artifacts:
         return Path(args.artifacts)
-    if args.output:
+    if _beside_output(args):
         out = Path(args.output)
         return out.with_name(out.stem + "_artifacts")
     return Path(tempfile.mkdtemp(prefix=f"plantsolve-{args.kind}-artifacts-"))
@@ -203,7 +216,8 @@ def _print_warnings(report: dict | None) -> int:
 def cmd_solve(args: argparse.Namespace) -> int:
     path = Path(args.input)
     if not path.is_file():
-        print(f"plantsolve: no such file: {path}", file=sys.stderr)
+        print(f"plantsolve: {path} is a folder, not a file" if path.is_dir() else f"plantsolve: no such file: {path}",
+              file=sys.stderr)
         return 2
     if args.options is not None:
         try:
@@ -215,8 +229,65 @@ def cmd_solve(args: argparse.Namespace) -> int:
             print(f"plantsolve: --options must be a JSON object, e.g. '{{\"units\": \"m\"}}', not "
                   f"{type(options).__name__}", file=sys.stderr)
             return 2
+    refused = output_problem(args)
+    if refused:  # said before the run: a solve of minutes is not lost to a result it cannot write
+        print(f"plantsolve: {refused}", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory(prefix="plantsolve-cli-") as scratch:
         return _solve(args, path, _solve_settings(args, Path(scratch)))
+
+
+def _shown_url(url: str) -> str:
+    """A database URL as it may be printed: its password as ***."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import ArgumentError
+
+    try:
+        return make_url(url).render_as_string(hide_password=True)
+    except ArgumentError:
+        return url
+
+
+def _first_line(error: BaseException) -> str:
+    """An error's own sentence, without the SQL and the link to the docs SQLAlchemy appends."""
+    text = str(getattr(error, "orig", None) or error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
+
+
+def _unwritable(folder: Path) -> str | None:
+    """Why files cannot be written into ``folder`` (made when missing), or ``None``."""
+    probe = folder
+    while not probe.exists() and probe != probe.parent:  # the missing folders are made in the nearest that exists
+        probe = probe.parent
+    if not probe.is_dir():
+        return f"{probe} is a file, not a folder"
+    if not os.access(probe, os.W_OK | os.X_OK):
+        return f"{probe} is not writable"
+    return None
+
+
+def output_problem(args: argparse.Namespace) -> str | None:
+    """Why ``-o`` or the artifact folder cannot be written, or ``None``."""
+    if args.output:
+        out = Path(args.output)
+        if out.is_dir():
+            return f"-o {out} is a folder: name the result file, e.g. -o {out / 'result.json'}"
+        why = _unwritable(out.parent) or (f"{out} is not writable" if out.exists() and not os.access(out, os.W_OK)
+                                          else None)
+        if why:
+            return f"-o {out}: {why}"
+    if args.data_dir:
+        data = Path(args.data_dir)
+        why = f"{data} is a file, not a folder" if data.is_file() else _unwritable(data)
+        if why:
+            return f"--data-dir {data}: {why}"
+    if args.artifacts or _beside_output(args):
+        folder = _artifact_folder(args)
+        why = f"{folder} is a file, not a folder" if folder.is_file() else _unwritable(folder)
+        if why:
+            return f"{'--artifacts' if args.artifacts else 'the artifact folder'} {folder}: {why}" + (
+                "" if args.artifacts else " (name another with --artifacts DIR)")
+    return None
 
 
 # what a run of one job calls of its kind (and, for a file, its reader): imported before the job, see below
@@ -232,6 +303,8 @@ def _collect_from_now_on() -> None:
 
 
 def _solve(args: argparse.Namespace, path: Path, settings) -> int:
+    from sqlalchemy.exc import SQLAlchemyError
+
     from plantsolve.jobs.context import ServiceContext, worker_name
     from plantsolve.jobs.errors import ProblemError
     from plantsolve.jobs.lifecycle import SUCCEEDED
@@ -239,7 +312,13 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
     from plantsolve.jobs.service import JobService
 
     # a temporary store of this run alone gets its tables at once; a named one (--store, --data-dir) is migrated
-    ctx = ServiceContext.create(settings, migrate=True if args.store or args.data_dir else "scratch")
+    try:
+        ctx = ServiceContext.create(settings, migrate=True if args.store or args.data_dir else "scratch")
+    except (SQLAlchemyError, OSError) as error:  # a URL of no database there is, a folder that is a file
+        named = f"--store {_shown_url(args.store)}" if args.store else f"--data-dir {args.data_dir}" if args.data_dir \
+            else "the store"
+        print(f"plantsolve: {named}: the database cannot be opened: {_first_line(error)}", file=sys.stderr)
+        return 2
     try:
         upload = not (path.suffix.lower() == ".json" and args.options is None)
         ctx.kinds[args.kind].preload(SOLVE_ROLES + (("parse_upload",) if upload else ()))
@@ -263,7 +342,12 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
             if args.json:
                 print(json.dumps(problem, indent=2), file=sys.stderr)
             else:
-                print(problem_lines(problem, json.loads(args.options) if args.options else None), file=sys.stderr)
+                print(problem_lines(problem, options_of(args), ctx.kinds[args.kind], upload), file=sys.stderr)
+                readers = other_readers(ctx.kinds, path.suffix.lower(), args.kind) if problem.get("status") == 415 \
+                    else []
+                if readers:  # refused already: every kind's spec is read only now
+                    print(f"  {path.suffix.lower()} files are read by {', '.join(readers)}: plantsolve solve "
+                          f"{readers[0]} {shlex.quote(str(path))}", file=sys.stderr)
             return 2
         job_id = submitted.job.id
         name = worker_name("cli")
@@ -280,10 +364,18 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
                 for artifact in artifacts:
                     (folder / artifact.name).write_bytes(service.artifact(job_id, artifact.name)[1].read())
                 print(f"artifacts: {', '.join(a.name for a in artifacts)} in {folder}", file=sys.stderr)
+                ours = {a.name for a in artifacts} | {Path(f).resolve() for f in (args.input, args.output) if f}
+                others = sorted(p.name for p in folder.iterdir() if p.name not in ours and p.resolve() not in ours)
+                if others:  # an earlier run's inspection plot beside this run's files would be read as this run's
+                    print(f"note: {folder} also holds {len(others)} file(s) this run did not write (an earlier "
+                          f"run's?): {', '.join(others[:8])}{', ...' if len(others) > 8 else ''}", file=sys.stderr)
             report = job.report or (job.result or {}).get("report")
             n = _print_warnings(report)
-            print(f"job {job_id} succeeded" + (f" with {n} warning(s) (above)" if n else ""), file=sys.stderr)
-            return 0
+            note = (assumed_unit_note(report, path.name, options_of(args), ctx.kinds[args.kind]) if upload
+                    else unstated_units_note(content, path.name, ctx.kinds[args.kind]))
+            if note:
+                print(note, file=sys.stderr)
+            return finished_line(str(job_id), report, n)
         failure = {"job": str(job_id), "status": job.status, "report": job.report}
         if args.output or args.json:
             _write(args.output, failure, stream=sys.stderr)
@@ -294,6 +386,60 @@ def _solve(args: argparse.Namespace, path: Path, settings) -> int:
         ctx.close()
 
 
+def other_readers(kinds: Mapping[str, Any], suffix: str, kind: str) -> list[str]:
+    """The kinds other than ``kind`` that read files ending in ``suffix``."""
+    return sorted(k for k in kinds if k != kind and suffix in kinds[k].upload_extensions)
+
+
+def options_of(args: argparse.Namespace) -> dict | None:
+    return json.loads(args.options) if args.options else None
+
+
+def finished_line(job_id: str, report: dict | None, warnings: int) -> int:
+    """The run's last line and exit code: 0 when the result stands, 3 when a warning of the report is a verdict
+    against it (a failed inspection, a fit not converged: the result and artifacts are written all the same)."""
+    from plantsolve.app.verdicts import report_warnings, verdicts
+
+    found = verdicts(report_warnings(report))
+    counted = f" with {warnings} warning(s) (above)" if warnings else ""
+    if not found:
+        print(f"job {job_id} succeeded{counted}", file=sys.stderr)
+        return 0
+    head = found[0]
+    print(f"job {job_id} finished{counted}, but the verdict is {head.label} [{head.code}]: the result does not pass "
+          f"(exit code {EXIT_VERDICT})", file=sys.stderr)
+    return EXIT_VERDICT
+
+
+def assumed_unit_note(report: dict | None, filename: str, options: dict | None, spec) -> str | None:
+    """A line when an uploaded file stated no unit and ``--options`` named none either, so its numbers were read in
+    the request's default unit (``report.details.source.units.basis == "request"``, as the kinds that read such
+    files record it): a file in metres read as millimetres is a thousand times off without any warning."""
+    source = ((report or {}).get("details") or {}).get("source")
+    units = source.get("units") if isinstance(source, dict) else None
+    if not isinstance(units, dict) or units.get("basis") != "request" or not units.get("request_unit"):
+        return None
+    from plantsolve.app.dashboard_views import options_model
+
+    option = "file_units" if "file_units" in options_model(spec).model_fields else "units"
+    if options and (option in options or "units" in options):
+        return None
+    example = json.dumps({option: "mm" if units["request_unit"] == "m" else "m"})
+    return (f"note: {filename} states no unit: its numbers were read as {units['request_unit']}, the request's "
+            f"default 'units'; if they are in another unit, say so: --options '{example}'")
+
+
+def unstated_units_note(content: bytes, filename: str, spec) -> str | None:
+    """A line when a JSON request states no ``units`` and the kind's default was taken. The text is searched, not
+    parsed again (a request of many megabytes): a key ``"units"`` anywhere counts as stated, so the line is never
+    said wrongly, only now and then left out."""
+    field = spec.request_model.model_fields.get("units")
+    if field is None or not isinstance(field.default, str) or b'"units"' in content:
+        return None
+    return (f"note: {filename} states no 'units': its numbers were read as {field.default}, the default; "
+            f"if they are in another unit, add \"units\" to the request")
+
+
 def field_path(loc: list) -> str:
     """A field's place as one writes it: ``values[1]``, ``options.grid``, ``file.row[12]``."""
     text = ""
@@ -302,9 +448,52 @@ def field_path(loc: list) -> str:
     return text or "(input)"
 
 
-def problem_lines(problem: dict, options: dict | None) -> str:
+def _model_in(annotation: Any):
+    """The pydantic model an annotation holds (``Model``, ``Model | None``, ``list[Model]``), or ``None``."""
+    import typing
+
+    from pydantic import BaseModel
+
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    return next((m for m in map(_model_in, typing.get_args(annotation)) if m is not None), None)
+
+
+def field_names(model, loc: list) -> set[str]:
+    """The field names a request may hold at ``loc`` (the place of a field it does not take), by the request model;
+    empty where the model does not say (a mapping's keys)."""
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        field = next((f for n, f in model.model_fields.items() if part in (n, f.alias)), None)
+        model = _model_in(field.annotation) if field is not None else None
+        if model is None:
+            return set()
+    return {f.alias or n for n, f in model.model_fields.items()}
+
+
+def close_match(error: dict, spec, upload: bool) -> str:
+    """`` (did you mean 'points'?)`` for a field the request does not take (a misspelt key) when one it takes is
+    close, else nothing. An upload's ``--options`` may set the kind's options and the request's own fields."""
+    import difflib
+
+    from plantsolve.app.dashboard_views import options_model
+
+    loc = list(error.get("loc") or [])
+    if spec is None or error.get("type") != "extra_forbidden" or not loc or not isinstance(loc[-1], str):
+        return ""
+    if upload and loc[:1] == ["options"] and len(loc) == 2:
+        names = set(options_model(spec).model_fields) | set(spec.request_model.model_fields)
+    else:
+        names = field_names(spec.request_model, loc)
+    close = difflib.get_close_matches(loc[-1], sorted(names), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def problem_lines(problem: dict, options: dict | None, spec=None, upload: bool = False) -> str:
     """A problem document as a headline and one line per bad field. A field the command's ``--options`` set is
-    named as such (its value came from there, not from the input file)."""
+    named as such (its value came from there, not from the input file); a field the request does not take is given
+    the close match among those it takes (with the kind's ``spec``)."""
     head, errors = problem.get("title", "error"), problem.get("errors") or []
     if errors:  # the detail repeats the fields' messages: the lines below say them once each
         head = f"{head} ({len(errors)} field{'s' if len(errors) > 1 else ''}):"
@@ -316,7 +505,7 @@ def problem_lines(problem: dict, options: dict | None) -> str:
         inner = loc[1:] if loc[:1] == ["options"] else loc
         from_options = options is not None and bool(inner) and inner[0] in options
         lines.append(f"  {'--options ' if from_options else ''}{field_path(inner if from_options else loc)}: "
-                     f"{error.get('msg', '')}")
+                     f"{error.get('msg', '')}{close_match(error, spec, upload)}")
     if errors:
         lines.append("  (--json prints the whole problem document)")
     return "\n".join(lines)
@@ -426,6 +615,16 @@ def kinds_epilog(kinds: Mapping[str, Any]) -> str:
         spec = kinds[kind]
         files = ", ".join(spec.upload_extensions) or "JSON request only"
         lines.append(f"  {kind:<{width}}  {(spec.description or '').split('. ')[0].rstrip('.')} [{files}]")
+    defaults = {kind: field.default for kind in sorted(kinds)
+                if (field := kinds[kind].request_model.model_fields.get("units")) is not None
+                and isinstance(field.default, str)}
+    lines.append(textwrap.fill(
+        "units: a file's numbers are read in the unit the file states (a column header 'x [m]', an IFC unit "
+        "assignment, LDraw units, EnergyPlus metres); a file that states none is read in the request's 'units', "
+        f"by default {', '.join(f'{k} {u}' for k, u in defaults.items())} (--options '{{\"units\": \"m\"}}'; "
+        "'file_units' for the file alone), and the run says so on standard error. Every number of a result is in "
+        "the unit its result's 'units' fields name; each field's unit is in /docs of a server (x-unit).",
+        width=118, initial_indent="\n", subsequent_indent="  "))
     lines.append("\nJSON requests, options and result fields of every kind: README.md (Solvers), /docs of a server.")
     return "\n".join(lines)
 
@@ -453,7 +652,7 @@ def build_parser(kinds: Mapping[str, Any] | None = None, *, describe_kinds: bool
     serve.add_argument("--log-level", default=None, choices=log_levels,
                        help="least severe log line written, by uvicorn and the plantsolve loggers of the API and its job "
                        "processes (default: LOG_LEVEL, else info)")
-    serve.set_defaults(func=cmd_serve)
+    serve.set_defaults(func=cmd_serve, command_parser=serve)
 
     worker = commands.add_parser("worker", formatter_class=HelpFormatter,
                                  help="start a Celery worker (scaled mode, needs BROKER_URL)",
@@ -464,7 +663,7 @@ def build_parser(kinds: Mapping[str, Any] | None = None, *, describe_kinds: bool
     worker.add_argument("--log-level", default=None, choices=log_levels,
                         help="least severe log line written, by Celery and the plantsolve loggers (default: LOG_LEVEL, "
                         "else info)")
-    worker.set_defaults(func=cmd_worker)
+    worker.set_defaults(func=cmd_worker, command_parser=worker)
 
     solve = commands.add_parser("solve", formatter_class=HelpFormatter,
                                 help="run one job in this process and write its result",
@@ -481,7 +680,8 @@ def build_parser(kinds: Mapping[str, Any] | None = None, *, describe_kinds: bool
     solve.add_argument("-o", "--output", metavar="OUT", help="result JSON (default: standard output)")
     solve.add_argument("--options", metavar="JSON",
                        help="JSON object of options for a file input, as the upload form's 'options', e.g. "
-                       "'{\"units\": \"m\"}' (default: none; the kind's defaults)")
+                       "'{\"units\": \"m\"}' for lengths in metres (default: none; the kind's defaults, its units "
+                       "below)")
     solve.add_argument("--artifacts", metavar="DIR",
                        help="folder for artifacts (default: <OUT stem>_artifacts next to OUT; without -o a new "
                        "temporary folder, named on standard error)")
@@ -502,12 +702,12 @@ def build_parser(kinds: Mapping[str, Any] | None = None, *, describe_kinds: bool
     solve.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                        help="a progress bar on standard error while the job runs (default: when standard error is "
                        "a terminal)")
-    solve.set_defaults(func=cmd_solve)
+    solve.set_defaults(func=cmd_solve, command_parser=solve)
 
     migrate = commands.add_parser("migrate", formatter_class=HelpFormatter, help="upgrade the database schema",
                                   description="Upgrade the database (DATABASE_URL, or DATA_DIR's SQLite file) to the\n"
                                   "newest schema revision.")
-    migrate.set_defaults(func=cmd_migrate)
+    migrate.set_defaults(func=cmd_migrate, command_parser=migrate)
     return parser
 
 
@@ -555,8 +755,26 @@ def main(argv: list[str] | None = None) -> int:
     _configure_logs(argv)
     # the kind map (the settings for its plugins) only for solve; every kind's package only for its help
     wants_help = bool({"-h", "--help"} & set(argv))
-    args = build_parser(_kinds() if _command(argv) == "solve" else None, describe_kinds=wants_help).parse_args(argv)
+    args, extras = build_parser(_kinds() if _command(argv) == "solve" else None,
+                                describe_kinds=wants_help).parse_known_args(argv)
+    if extras:
+        refuse_unknown(args.command_parser, extras)
     return args.func(args)
+
+
+def refuse_unknown(parser: argparse.ArgumentParser, extras: list[str]) -> None:
+    """Exit 2 naming the first word the command does not take, with the option it most likely meant (argparse's own
+    message names no close match, and comes with the usage of ``plantsolve`` rather than of the command)."""
+    import difflib
+
+    word = extras[0]
+    if not word.startswith("-"):
+        parser.error(f"unexpected argument {word!r} (one INPUT per run)" if parser.prog.endswith(" solve")
+                     else f"unexpected argument {word!r}")
+    names = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
+    close = difflib.get_close_matches(word.split("=", 1)[0], names, n=1, cutoff=0.6)
+    parser.error(f"unknown option {word.split('=', 1)[0]}" + (f"; did you mean {close[0]}?" if close else
+                                                               f"; the options are {', '.join(names)}"))
 
 
 if __name__ == "__main__":

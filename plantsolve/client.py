@@ -6,6 +6,8 @@
         job = client.submit("perfmap", file="n3_fan_map.csv", options={"model": "auto"})
         job = client.wait(job, progress=lambda j: print(f"{j.fraction:4.0%} {j.message}"))
         result = client.result(job)             # the kind's result document (raises if the job failed)
+        if job.verdict:                         # succeeded, but the result does not pass (a failed inspection)
+            print(job.verdict["code"], job.verdict["message"])
         client.download_artifacts(job, "out")   # every plot and file, SHA-256 checked
 
 ``wait`` follows the job's Server-Sent Events (``GET /v1/jobs/{id}/events``) and falls back to polling
@@ -32,6 +34,10 @@ from typing import Any, AsyncIterator, Awaitable, Callable, Iterator, Mapping, U
 import httpx
 
 FINISHED = ("succeeded", "failed", "cancelled")
+# the report warnings that are a verdict against a result, not a caveat on it (the service's
+# plantsolve/app/verdicts.py; copied because this module imports nothing of plantsolve)
+VERDICT_CODES = frozenset({"inspection_failed", "inspection_not_determined", "inspection_not_comparable",
+                           "not_converged", "verification_failed", "tolerance_not_reached"})
 RECONNECT_SECONDS = 1.0  # pause before opening a cut event stream again
 FileArgument = Union[str, Path, bytes, tuple[str, bytes]]
 
@@ -148,6 +154,15 @@ class Job:
     @property
     def warnings(self) -> list[dict[str, Any]]:
         return list((self.report or {}).get("warnings") or [])
+
+    @property
+    def verdict(self) -> dict[str, Any] | None:
+        """The first warning of a succeeded job's report that says its result does not pass (``code``,
+        ``message``: a failed or undetermined inspection, a fit not converged, ...), else ``None``. ``status``
+        says the job ran to its end; this says whether its answer is a pass."""
+        if self.status != "succeeded":
+            return None
+        return next((w for w in self.warnings if w.get("code") in VERDICT_CODES), None)
 
 
 JobRef = Union[Job, str]

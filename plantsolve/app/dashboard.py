@@ -28,6 +28,7 @@ from plantsolve.app.auth import (COOKIE, LOGIN_COOKIE, LoginTokens, Sessions, co
                                  require_api_key)
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
+from plantsolve.app.verdicts import report_warnings, verdicts
 from plantsolve.jobs.errors import Conflict, NotFound, ProblemError, Unprocessable, field_problem
 from plantsolve.jobs.lifecycle import STATUSES, is_finished
 from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
@@ -117,12 +118,19 @@ def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
         "progress": views.progress_text(view.status, view.progress.fraction),
         "finished": is_finished(view.status),
         "warnings": view.report.warnings if view.report is not None else [],
+        "verdicts": verdicts(report_warnings(view.report)) if view.status == "succeeded" else [],
         "plots": views.plots(artifacts),
         "artifacts": artifacts,
         "input": views.input_view(job),
-        "summary": views.result_summary(job.result) if job.status == "succeeded" else [],
+        "summary": (views.result_summary(job.result, _result_model(service, view.kind))
+                    if job.status == "succeeded" else []),
         "token": _token_for(request),
     }
+
+
+def _result_model(service: JobService, kind: str) -> Any:
+    """The kind's result model (the units of its fields), or ``None`` for a kind this process no longer has."""
+    return service.ctx.kinds[kind].result_model if kind in service.ctx.kinds else None
 
 
 def _token_for(request: Request) -> str:

@@ -4,12 +4,15 @@ so a page and the JSON a browser receives live (``GET /v1/jobs/{id}``, its event
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass
 from datetime import datetime
+from functools import lru_cache
 from typing import Any
 
 from pydantic import BaseModel, create_model
 
+from plantsolve.app.verdicts import Verdict, report_warnings, verdicts
 from plantsolve.schemas.jobs import ArtifactInfo, JobView
 from plantsolve.solvers.base import SolverSpec
 
@@ -59,6 +62,7 @@ class Row:
     input: str = "JSON"
     first_warning: str = ""  # the report's first warning's code (a kind puts its gravest first: a failed inspection)
     first_warning_message: str = ""
+    verdict: Verdict | None = None  # a warning that is a verdict against the result: shown beside 'succeeded'
 
 
 def input_label(job: Any) -> str:
@@ -86,6 +90,7 @@ def row(view: JobView, input: str = "JSON") -> Row:
         input=input,
         first_warning=first.code if first is not None else "",
         first_warning_message=first.message[:300] if first is not None else "",
+        verdict=next(iter(verdicts(report_warnings(report))), None) if view.status == "succeeded" else None,
     )
 
 
@@ -101,10 +106,61 @@ def pretty(value: Any, indent: str = "") -> str:
     return json.dumps(value, ensure_ascii=False, allow_nan=True, separators=(", ", ": "))
 
 
-def result_summary(result: Any) -> list[tuple[str, str]]:
-    """The result's scalar fields (two levels deep) for people; lists and objects by their size.
-    The full result is one link away."""
-    rows: list[tuple[str, str]] = []
+_PLACEHOLDER = re.compile(r"\{([A-Za-z_][A-Za-z0-9_.]*)\}")
+
+
+@lru_cache(maxsize=64)
+def _schema(model: type[BaseModel]) -> dict[str, Any]:
+    return model.model_json_schema(mode="serialization")
+
+
+def _property(schema: dict[str, Any], defs: dict[str, Any], name: str) -> dict[str, Any] | None:
+    """The schema of the member ``name`` of an object schema (through references and ``X | None``)."""
+    stack = [schema]
+    while stack:
+        node = stack.pop()
+        if "$ref" in node:
+            node = defs.get(node["$ref"].rsplit("/", 1)[-1], {})
+        if name in (node.get("properties") or {}):
+            return node["properties"][name]
+        stack.extend(node.get("anyOf", []) + node.get("allOf", []))
+    return None
+
+
+def field_unit(model: type[BaseModel] | None, result: Any, path: tuple[str, ...]) -> str:
+    """The unit of the result field at ``path`` as the result model states it (``x-unit``), its placeholders
+    (``{units}``, ``{units.flow}``) filled from the result itself; ``""`` where none is stated (counts, names)."""
+    if model is None:
+        return ""
+    root = _schema(model)
+    defs, node, unit = root.get("$defs", {}), root, ""
+    for name in path:
+        inner = _property(node, defs, name)
+        if inner is None:  # a member of a mapping (timings.parse): the mapping's unit is its values'
+            return _filled(unit, result) if node.get("additionalProperties") else ""
+        node, unit = inner, inner.get("x-unit") or ""
+        if not unit and "$ref" in inner:
+            unit = defs.get(inner["$ref"].rsplit("/", 1)[-1], {}).get("x-unit", "")
+    return _filled(unit, result)
+
+
+def _filled(unit: Any, result: Any) -> str:
+    """``unit`` with each ``{field}`` replaced by the unit the result's field holds."""
+    def fill(match: re.Match) -> str:
+        value: Any = result
+        for key in match.group(1).split("."):
+            value = value.get(key) if isinstance(value, dict) else None
+        if isinstance(value, list) and all(isinstance(v, str) for v in value):  # one unit per column of the rows
+            return "per column: " + ", ".join(value)
+        return str(value) if isinstance(value, str) else match.group(0)
+
+    return _PLACEHOLDER.sub(fill, unit) if isinstance(unit, str) else ""
+
+
+def result_summary(result: Any, model: type[BaseModel] | None = None) -> list[tuple[str, str, str]]:
+    """The result's scalar fields (two levels deep) for people, each with its unit (from ``model``, the kind's
+    result model; ``1``: a pure number); lists and objects by their size. The full result is one link away."""
+    rows: list[tuple[str, str, str]] = []
 
     def describe(value: Any) -> str:
         if value is None:
@@ -119,15 +175,23 @@ def result_summary(result: Any) -> list[tuple[str, str]]:
             return f"object with {len(value)} field(s)"
         return str(value)
 
+    def numeric(value: Any) -> bool:
+        if isinstance(value, list):
+            return bool(value) and all(map(numeric, value))
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+    def unit(value: Any, *path: str) -> str:
+        return field_unit(model, result, path) if numeric(value) else ""
+
     if not isinstance(result, dict):
-        return [("result", describe(result))]
+        return [("result", describe(result), "")]
     for key, value in result.items():
         if key == "report":  # shown in full on its own
             continue
         if isinstance(value, dict) and 0 < len(value) <= 12:
-            rows += [(f"{key}.{sub}", describe(v)) for sub, v in value.items()]
+            rows += [(f"{key}.{sub}", describe(v), unit(v, key, sub)) for sub, v in value.items()]
         else:
-            rows.append((key, describe(value)))
+            rows.append((key, describe(value), unit(value, key)))
     return rows[:SUMMARY_ROWS]
 
 

@@ -172,3 +172,24 @@ def test_the_example_script_submits_waits_and_downloads(server, tmp_path):
                           "test-compute", str(numbers), "--options", '{"seconds": -1}'],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "seconds" in bad.stderr
+
+
+def _view(status: str, *codes: str) -> dict:
+    return {"id": "j", "kind": "tube", "status": status, "progress": {"fraction": 1.0, "message": ""}, "summary": "",
+            "report": {"status": "warning", "warnings": [{"code": c, "message": f"{c} said"} for c in codes]}}
+
+
+def test_a_job_says_whether_its_result_passes_beside_its_status():
+    """'succeeded' means the job ran to its end; ``verdict`` is the first warning saying its answer is no (a failed
+    inspection), which a script would otherwise have to know every kind's codes to find."""
+    job = Job.from_view(_view("succeeded", "scan_gap", "inspection_failed", "not_converged"))
+    assert job.verdict == {"code": "inspection_failed", "message": "inspection_failed said"}
+    assert Job.from_view(_view("succeeded", "scan_gap")).verdict is None
+    assert Job.from_view(_view("failed", "not_converged")).verdict is None  # a failure says so with its status
+
+
+def test_the_clients_verdict_codes_are_the_services():
+    from plantsolve.app.verdicts import VERDICTS
+    from plantsolve.client import VERDICT_CODES
+
+    assert VERDICT_CODES == set(VERDICTS)

@@ -168,10 +168,38 @@ def test_progress_shows_the_status_not_a_share_of_a_finished_solver():
 
 
 def test_result_summary_lists_scalars_and_sizes():
-    rows = dict(result_summary({"total": 1.23456789, "points": [[0, 0]] * 7, "range": [1.0, 2.5], "note": None,
-                                "fit": {"rms": 0.5, "method": "ls"}, "report": {"status": "ok"}}))
+    rows = {name: value for name, value, _ in result_summary(
+        {"total": 1.23456789, "points": [[0, 0]] * 7, "range": [1.0, 2.5], "note": None,
+         "fit": {"rms": 0.5, "method": "ls"}, "report": {"status": "ok"}})}
     assert rows == {"total": "1.23457", "points": "list of 7", "range": "[1, 2.5]", "note": "—",
                     "fit.rms": "0.5", "fit.method": "ls"}
+
+
+@pytest.mark.parametrize("kind, result, expected", [
+    # the unit a field states, its placeholder filled from the result's own units fields; counts have none
+    ("tube", {"pipe_radius": 6.0, "start": [1.0, 2.0, 3.0], "units": "in", "residuals": {"count": 5, "rms": 0.1},
+              "orientation": [1.0, 0.0, 0.0, 0.0]},
+     {"pipe_radius": "in", "start": "in", "units": "", "residuals.count": "", "residuals.rms": "in",
+      "orientation": "1"}),
+    ("perfmap", {"units": {"flow": "kg/s", "pressure": "1", "efficiency": "1"}, "flow_range": [1.0, 2.0]},
+     {"units.flow": "", "units.pressure": "", "units.efficiency": "", "flow_range": "kg/s"}),
+    ("flowmeter", {"signal": 0.002, "units": "mm", "grid_units": ["mm", "mm", "1"], "grid": [[0.0, 0.0, 1.0]]},
+     {"signal": "V", "units": "", "grid_units": "", "grid": "per column: mm, mm, 1"}),
+    ("dedup", {"timings": {"parse": 0.01}, "products_total": 3, "tolerance": 1e-5, "units": "m"},
+     {"timings.parse": "s", "products_total": "", "tolerance": "m", "units": ""}),
+])
+def test_result_summary_gives_each_number_its_unit(kind, result, expected):
+    assert {name: unit for name, _, unit in result_summary(result, KINDS[kind].result_model)} == expected
+
+
+def test_a_job_page_shows_the_units_of_its_result(client):
+    assert result_summary({"norm": 5.0}, KINDS["polyhedra"].result_model) == [("norm", "5", "")]  # none made up
+    request = {**KINDS["polyhedra"].example(), "units": "cm"}
+    job = wait_for(client, client.post("/v1/polyhedra/jobs", json=request).json()["id"])
+    assert job["status"] == "succeeded", job
+    page = client.get(f"/dashboard/jobs/{job['id']}").text
+    assert "<thead><tr><th>field</th><th>value</th><th>unit</th></tr></thead>" in page
+    assert re.search(r'<tr><th>total_volume</th><td>[0-9.e+]+</td><td class="unit">cm\^3</td></tr>', page)
 
 
 @pytest.fixture

@@ -301,3 +301,37 @@ def test_a_plot_opens_full_size_and_the_first_warning_heads_the_page(site):
     # the live list swaps a row in when its job changes: read it afresh until it shows the finished job
     first_warning = f'tr[data-job="{warned["id"]}"] [data-field=first-warning]'
     wait.until(lambda d: d.find_element(By.CSS_SELECTOR, first_warning).text == "negative")
+
+
+@pytest.fixture
+def inspecting_site(tmp_path):
+    plugins = ["tests.support.kinds", "tests.app.test_dashboard_glance"]  # test-inspect: a failed inspection
+    app = create_app(service_settings(tmp_path, api_keys=[f"alice:{KEY}"], plugins=plugins))
+    with browser.page_on(app, "dashboard browser test") as (base, driver):
+        yield app, base, driver
+
+
+def test_a_failed_inspection_that_finishes_on_an_open_list_shows_its_verdict(inspecting_site):
+    """The live list swaps in the finished row with its red FAIL beside 'succeeded'; its page heads with the
+    verdict's banner, not a yellow warning."""
+    from selenium.common.exceptions import StaleElementReferenceException
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    app, base, driver = inspecting_site
+    wait = WebDriverWait(driver, 60, poll_frequency=0.2, ignored_exceptions=(StaleElementReferenceException,))
+    api = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {KEY}"}, timeout=10)
+    _login(driver, base)
+    wait.until(lambda d: d.current_url.rstrip("/").endswith("/dashboard"))
+    job = api.post("/v1/test-inspect/jobs", json={}).json()  # after the list was shown: it arrives live
+    verdict = f'tr[data-job="{job["id"]}"] [data-field=verdict]'
+    wait.until(lambda d: d.find_elements(By.CSS_SELECTOR, verdict) and
+               d.find_element(By.CSS_SELECTOR, verdict).text == "✗ FAIL")
+    status = driver.find_element(By.CSS_SELECTOR, f'tr[data-job="{job["id"]}"] [data-field=status]').text
+    assert status == "succeeded"
+    colour = driver.find_element(By.CSS_SELECTOR, verdict).value_of_css_property("background-color")
+    assert colour == "rgba(176, 0, 32, 1)"  # the failed status's red
+    driver.get(f"{base}/dashboard/jobs/{job['id']}")
+    banner = wait.until(lambda d: d.find_element(By.ID, "report-banner"))
+    assert banner.text.startswith("Verdict: FAIL — the job ran to the end, but its result does not pass: "
+                                  "inspection_failed") and "verdict" in banner.get_attribute("class")

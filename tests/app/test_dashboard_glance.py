@@ -66,12 +66,34 @@ def test_the_first_warning_is_on_the_list_row_and_atop_the_page(client):
     assert "first-warning" not in _row(page, clean["id"])
 
     detail = client.get(f"/dashboard/jobs/{warned['id']}").text
-    banner = re.search(r'<div class="banner warn" role="alert" id="report-banner">(.*?)</div>', detail, re.S).group(1)
+    banner = re.search(r'<div class="banner verdict" role="alert" id="report-banner">(.*?)</div>', detail,
+                       re.S).group(1)
     assert "<code>inspection_failed</code>" in banner and html.unescape(banner).count(WARNINGS[0]["message"]) == 1
-    assert "and 2 more warnings" in banner and 'href="#warnings"' in banner
+    assert "2 other warnings" in banner and 'href="#warnings"' in banner
     # at the top: before the facts, the report and the plots
     assert detail.index('id="report-banner"') < detail.index('class="facts"') < detail.index('id="warnings"')
     assert 'id="report-banner"' not in client.get(f"/dashboard/jobs/{clean['id']}").text
+
+
+def test_a_failed_verdict_is_shown_beside_succeeded_not_as_a_warning_alone(client):
+    """A failed inspection is a job that succeeded with a result that does not pass: the list and the page say
+    FAIL in red beside the green 'succeeded'; a warning that is only a caveat keeps the yellow banner."""
+    failed = wait_for(client, client.post("/v1/test-inspect/jobs", json={}).json()["id"])
+    caveat = wait_for(client, client.post("/v1/test-compute/jobs", json={"values": [-1.0]}).json()["id"])
+    page = client.get("/dashboard").text
+    row = _row(page, failed["id"])
+    assert 'class="status-succeeded has-verdict"' in row
+    assert re.search(r'<span class="badge verdict" data-field="verdict" title="([^"]*)">&#10007; FAIL</span>', row)
+    assert "has-warnings" in _row(page, caveat["id"]) and 'data-field="verdict"' not in _row(page, caveat["id"])
+
+    detail = client.get(f"/dashboard/jobs/{failed['id']}").text
+    headline = re.search(r'<p class="headline">(.*?)</p>', detail, re.S).group(1)
+    assert headline.index(">succeeded<") < headline.index("&#10007; FAIL</a>")
+    banner = re.search(r'<div class="banner verdict" role="alert" id="report-banner">(.*?)</div>', detail,
+                       re.S).group(1)
+    assert banner.startswith("<b>Verdict: FAIL</b> &mdash; the job ran to\n  the end, but its result does not pass")
+    other = client.get(f"/dashboard/jobs/{caveat['id']}").text
+    assert '<div class="banner warn" role="alert" id="report-banner">' in other and 'data-field="verdict"' not in other
 
 
 def test_a_failed_jobs_page_opens_with_its_stage_and_message(client):
