@@ -77,3 +77,31 @@ def test_an_npy_saved_transposed_is_read_as_its_points_and_says_so(dtype):
     (warning,) = request.source.warnings
     assert warning.code == "npy_transposed" and warning.details == {"shape": [3, 4000]}
     np.testing.assert_allclose(np.asarray(request.points), POINTS, rtol=1e-6)
+
+
+def _pts_rows(points: np.ndarray) -> str:
+    # Leica PTS: x y z intensity r g b
+    return "".join(f"{x:.3f} {y:.3f} {z:.3f} -1204 87 91 93\n" for x, y, z in points)
+
+
+def test_a_pts_file_renamed_txt_reads_its_counts_as_counts():
+    # before: each count was a record "with fewer than 3 coordinates", and the job a warning for a whole file
+    one = _request("scan.txt", (f"{len(POINTS)}\n" + _pts_rows(POINTS)).encode())
+    two = _request("scan.txt", (f"1500\n{_pts_rows(POINTS[:1500])}2500\n{_pts_rows(POINTS[1500:])}").encode())
+    for request in (one, two):
+        assert _codes(request) == []
+        np.testing.assert_allclose(np.asarray(request.points), POINTS, atol=5e-4)
+
+
+def test_a_pts_file_holding_fewer_rows_than_its_count_says_it_was_cut():
+    request = _request("scan.xyz", (f"{len(POINTS)}\n" + _pts_rows(POINTS[:2500])).encode())
+    (warning,) = request.source.warnings  # before: no word of the 1,500 rows missing
+    assert warning.code == "file_truncated" and warning.details == {"declared": 4000, "read": 2500, "line": 1}
+    assert len(request.points) == 2500 and request.source.truncated
+
+
+def test_a_pts_count_the_rows_exceed_is_said():
+    request = _request("scan.txt", ("1000\n" + _pts_rows(POINTS)).encode())
+    (warning,) = request.source.warnings
+    assert warning.code == "point_count_disagrees" and warning.details == {"line": 1, "declared": 1000, "read": 4000}
+    assert len(request.points) == 4000
