@@ -265,8 +265,10 @@ def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
     hash of the coordinates' bits in the usual case, the exact rows compared only when two keys are equal."""
     if len(pts) < 2:
         return None
-    bits = np.ascontiguousarray(pts + 0.0).view(np.uint64)  # + 0.0: -0.0 and 0.0 are one position
-    key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15) ^ bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F) ^ bits[:, 2]
+    bits = np.ascontiguousarray(pts, dtype=np.float64).view(np.uint64)  # no copy; a 0.0 repeated as -0.0 is missed
+    key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+    key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+    key ^= bits[:, 2]
     key.sort()
     if not (key[1:] == key[:-1]).any():
         return None
