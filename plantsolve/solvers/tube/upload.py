@@ -249,7 +249,7 @@ def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
         raise reject(f"unreadable NPY file: {exc}") from None
     if arr.ndim == 2 and arr.shape[0] == 3 and arr.shape[1] > 3 and np.issubdtype(arr.dtype, np.number):
         # x, y, z as three rows (saved as pts.T, or from MATLAB's column-major habit): read as three points of
-        # N values they were refused as too few points, naming neither the shape nor the mix-up
+        # N values, they were refused as too few points, naming neither the shape nor the mix-up
         log.warn(Diagnostic(code="npy_transposed", message=(
             f"NPY file: the array has shape {arr.shape}, three rows of {arr.shape[1]} values: read as "
             f"{arr.shape[1]} points (x, y, z in its rows). Save it as (N, 3) to say so."),
