@@ -281,13 +281,72 @@ def _coincident(points: list[np.ndarray], quantum: float) -> bool:
     return bool(np.max(np.linalg.norm(P - P[0], axis=1)) <= eps)
 
 
-def _angle_record(value: str | None) -> float | None:
-    """ANGLE in degrees; E3D writes hundredths of a degree (ANGLE 18000)."""
+# How far an elbow's ANGLE and BEND-RADIUS records may differ from what its end points and CENTRE-POINT give before
+# the two are said to contradict each other (the printed digits of an export move the points' angle far less)
+RECORD_ANGLE_DEG = 1.0
+RECORD_RADIUS_SHARE = 0.02
+
+
+def _angle_record(value: str | None, turn: float | None = None) -> float | None:
+    """ANGLE in degrees; E3D writes hundredths of a degree (ANGLE 18000, ANGLE 4500). A value up to 360 reads both
+    ways (ANGLE 180 is 180° or E3D's 1.8°): the turn ``turn`` the item's points give (degrees, None without one)
+    decides when it matches the hundredths alone; read as degrees, a 1.8° elbow became a 180° return bend whose
+    ports pointed sideways and lost both its connections."""
     try:
         a = abs(float((value or "").split()[0]))
     except (ValueError, IndexError):
         return None
-    return a / 100.0 if a > 360.0 else a
+    if a > 360.0:
+        return a / 100.0
+    if turn is not None and abs(a / 100.0 - turn) <= RECORD_ANGLE_DEG < abs(a - turn):
+        return a / 100.0
+    return a
+
+
+def _turn_from_points(e0: np.ndarray, e1: np.ndarray, c: np.ndarray) -> float | None:
+    """The turn (degrees) of an elbow whose CENTRE-POINT is the corner of its two straights: 180° less the angle
+    between its arms; None when an arm has no length."""
+    a0, a1 = _unit(e0 - c), _unit(e1 - c)
+    if a0 is None or a1 is None:
+        return None
+    return 180.0 - float(np.degrees(np.arccos(np.clip(a0 @ a1, -1.0, 1.0))))
+
+
+def _record_line(item: Item, doc: Document, word: str) -> int:
+    """The 1-based line of an item's first ``word`` record (the item's own line when it has none)."""
+    for i in range(item.line + 1, len(doc.lines)):
+        line = doc.lines[i]
+        if line and not line[0].isspace():
+            break
+        parts = line.split()
+        if parts and parts[0].upper() == word:
+            return i + 1
+    return item.line + 1
+
+
+def _records_against_points(item: Item, doc: Document, turn: float, arms: list[float]) -> list[dict]:
+    """The ANGLE and BEND-RADIUS records of an elbow or bend that contradict its points: the corner (its
+    CENTRE-POINT) and end points give the turn and, with the arms' length R·tan(turn / 2), the radius. The points are
+    what is aligned; a record that says otherwise is a mistyped record or a mistyped point, and the file does not
+    say which."""
+    out = []
+    raw = item.records.get("ANGLE")
+    angle = _angle_record(raw, turn)
+    if angle is not None and abs(angle - turn) > RECORD_ANGLE_DEG:
+        out.append({"record": "ANGLE", "record_line": _record_line(item, doc, "ANGLE"), "value": raw.split()[0],
+                    "read_as": angle, "from_points": round(turn, 4), "unit": "deg"})
+    try:
+        radius = float(item.records.get("BEND-RADIUS", "").split()[0])
+    except (ValueError, IndexError):
+        radius = None
+    half = np.tan(np.radians(turn) / 2.0)
+    if radius is not None and radius > 0 and 0.1 < turn < 179.0:
+        from_points = float(np.mean(arms)) / half
+        if abs(radius - from_points) > RECORD_RADIUS_SHARE * from_points + 4.0 * doc.quantum / half:
+            out.append({"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
+                        "value": item.records["BEND-RADIUS"].split()[0], "read_as": radius,
+                        "from_points": round(from_points, 6), "unit": doc.units or "mm"})
+    return out
 
 
 @dataclass
@@ -302,6 +361,7 @@ class Geometry:
     chord: np.ndarray | None = None  # return bend whose plane comes from its neighbours
     note: str | None = None  # what had to be taken from elsewhere
     suspect: str | None = None  # why its own lines look mistyped though they can be interpreted (it is then held)
+    contradicted: list[dict] = field(default_factory=list)  # its ANGLE / BEND-RADIUS records its points contradict
 
 
 def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
@@ -336,13 +396,15 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
     suspect = _uneven_arms(ends, c, q) if c is not None and len(ends) == 2 and not branches and (
         ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))) else None
     chord = note = None
+    contradicted: list[dict] = []
     if c is not None and len(ends) == 2 and not branches:
         e0, e1 = ends[0][1], ends[1][1]
         span = float(np.linalg.norm(e1 - e0))
         u = (e1 - e0) / span if span > 0 else None
         off = (c - e0) - np.dot(c - e0, u) * u if u is not None else None
         on_line = off is not None and np.linalg.norm(off) <= max(1e-3 * span, 4.0 * q)
-        angle = _angle_record(item.records.get("ANGLE"))
+        turn = _turn_from_points(e0, e1, c) if not on_line else None
+        angle = _angle_record(item.records.get("ANGLE"), turn)
         turning = ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))
         if turning and u is not None and (on_line or (angle is not None and abs(angle - 180.0) < 0.5)):
             # a 180 degree return bend: both ports parallel, normal to the chord, away from the CENTRE-POINT
@@ -358,6 +420,8 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         if on_line:
             # an inline item with a CENTRE-POINT (instrument, some valves): ports exactly opposite along the line
             c = None
+        elif turning and turn is not None:
+            contradicted = _records_against_points(item, doc, turn, [float(np.linalg.norm(e - c)) for e in (e0, e1)])
     ports, port_lines = [], []
     for k, (i, p, _) in enumerate(ends + branches):
         d = _unit(p - c) if c is not None else None
@@ -380,7 +444,8 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         note = "no usable CENTRE-POINT: direction from the pipe it sits on or its branch"
     if snap and c is not None and ftype in ("elbow", "bend", "tee", "cross") and all(d is not None for _, d in ports):
         ports = snap_catalogue(ports, c, print_quantum([lines[i] for i in item.point_lines]))
-    return Geometry(ports, port_lines, "fitting", ftype, radius, chord=chord, note=note, suspect=suspect)
+    return Geometry(ports, port_lines, "fitting", ftype, radius, chord=chord, note=note, suspect=suspect,
+                    contradicted=contradicted)
 
 
 ARM_RATIO = 1.5  # an elbow's or bend's end points lie at one distance from its CENTRE-POINT (both arms are its radius)
@@ -552,6 +617,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_bore_notes(doc))
     notes.extend(_missing_bore_notes(doc))
     notes.extend(_duplicate_notes(comps, doc))
+    notes.extend(_record_notes(comps))
     notes.extend(_open_ends_inside_pipes(comps, net, doc))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
@@ -982,6 +1048,21 @@ def _notes(doc, geometry, held, dropped, resolved, gaps, comps, owner, left_out)
         "items": [{"id": it.id, "keyword": it.keyword, "line": it.line + 1, "position_id": it.position_id}
                   for it in doc.items[:5000]]}, "detail"))
     return notes
+
+
+def _record_notes(comps: list[dict]) -> list[tuple[str, str, dict, str]]:
+    """A warning naming each elbow whose ANGLE or BEND-RADIUS record its points contradict (see
+    :func:`_records_against_points`): it was aligned as its points say."""
+    found = [{"id": c["id"], "line": c["line"], **r} for c in comps if c["geometry"].kind == "fitting"
+             for r in c["geometry"].contradicted]
+    if not found:
+        return []
+    said = "; ".join(f"line {f['record_line']}: {f['record']} {f['value']} of {f['id']} (line {f['line']}), its points "
+                     f"give {f['from_points']:g} {f['unit']}" for f in found[:4]) + ("; ..." if len(found) > 4 else "")
+    return [("pcf_records_contradict_points",
+             f"{len(found)} record(s) of elbows or bends contradict their END-POINT and CENTRE-POINT lines ({said}): "
+             "aligned as the points say. Check which of the two was mistyped.",
+             {"records": found[:200]}, "warning")]
 
 
 def _first_reasons(items: list[dict]) -> str:

@@ -50,7 +50,7 @@ def _csv(rows: list[list]) -> bytes:
 
 def lra_csv(result: TubeResult) -> bytes:
     u = result.units
-    rows = [["row", f"length_{u}", "rotation_deg", "angle_deg", f"bend_radius_{u}"]]
+    rows = [["row", f"length [{u}]", "rotation [deg]", "angle [deg]", f"bend_radius [{u}]"]]
     for i, r in enumerate(result.lra, 1):
         rows.append([i, f"{r.length:.6f}", f"{r.rotation:.6f}", f"{r.angle:.6f}", f"{r.bend_radius:.6f}"])
     return _csv(rows)
@@ -59,7 +59,7 @@ def lra_csv(result: TubeResult) -> bytes:
 def xyz_clr_csv(result: TubeResult, model: TubeModel) -> bytes:
     u = result.units
     pts, clr = control_polygon(model)
-    rows = [["point", f"x_{u}", f"y_{u}", f"z_{u}", f"clr_{u}"]]
+    rows = [["point", f"x [{u}]", f"y [{u}]", f"z [{u}]", f"clr [{u}]"]]
     for i, p in enumerate(pts):
         c = f"{clr[i - 1]:.6f}" if 0 < i < len(pts) - 1 else ""
         rows.append([i, f"{p[0]:.6f}", f"{p[1]:.6f}", f"{p[2]:.6f}", c])
@@ -193,13 +193,18 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
 
 def corrections_csv(result: TubeResult) -> bytes:
     """Per LRA row: nominal, measured, deviation (measured − nominal), pass / fail / not determined with the
-    failed and the undetermined fields, and the next part's deltas, springback (commanded − measured) and command. Units in the header."""
+    failed and the undetermined fields, the part's verdict and the end points out of tolerance, and the next part's
+    deltas, springback (commanded − measured) and command. Units in the header. The part's verdict stands on every
+    row: end points out of tolerance fail a part whose every row is within its tolerances (deviations that stack
+    along the tube), and a table of rows alone said 'pass' on each."""
     ins, u = result.inspection, result.units
+    ends_out = " ".join(e.end for e in ins.end_points if not e.ok)
     head = ["row"]
     for what in ("nominal", "measured", "deviation"):
-        head += [f"{what}_length_{u}", f"{what}_rotation_deg", f"{what}_angle_deg", f"{what}_clr_{u}"]
-    head += ["status", "failed_fields", "undetermined_fields", f"delta_length_{u}", "delta_rotation_deg", "delta_angle_deg",
-             "springback_deg", f"next_length_{u}", "next_rotation_deg", "next_angle_deg", f"next_clr_{u}"]
+        head += [f"{what}_length [{u}]", f"{what}_rotation [deg]", f"{what}_angle [deg]", f"{what}_clr [{u}]"]
+    head += ["status", "failed_fields", "undetermined_fields", "part_verdict", "end_points_failed",
+             f"delta_length [{u}]", "delta_rotation [deg]", "delta_angle [deg]", "springback [deg]",
+             f"next_length [{u}]", "next_rotation [deg]", "next_angle [deg]", f"next_clr [{u}]"]
     rows = [head]
 
     def num(v):
@@ -211,9 +216,9 @@ def corrections_csv(result: TubeResult) -> bytes:
         for what in ("nominal", "measured", "deviation"):
             line += [num(getattr(f, what)) if f is not None else "" for f in checks]
         status = "fail" if not r.ok else "not determined" if r.undetermined else "pass"
-        line += [status, " ".join(r.failed), " ".join(r.undetermined), num(c.delta_length), num(c.delta_rotation),
-                 num(c.delta_angle), num(c.springback), num(c.next.length), num(c.next.rotation), num(c.next.angle),
-                 num(c.next.bend_radius)]
+        line += [status, " ".join(r.failed), " ".join(r.undetermined), ins.verdict, ends_out, num(c.delta_length),
+                 num(c.delta_rotation), num(c.delta_angle), num(c.springback), num(c.next.length),
+                 num(c.next.rotation), num(c.next.angle), num(c.next.bend_radius)]
         rows.append(line)
     return _csv(rows)
 

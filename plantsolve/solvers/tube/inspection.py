@@ -366,7 +366,9 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opt
         rows = tol_check.check_rows(nominal_rows, meas_rows, tol)
         fixes, fits = next_part.corrections(nominal_rows, meas_rows, opts.springback_model)
     short = (bool(rows) and not rows[0].length.determined, bool(rows) and not rows[-1].length.determined)
-    ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol, short)
+    reach = tuple(tol_check.PROVEN * (r.length.sigma or 0.0) if r.length.bound == "lower" else 0.0
+                  for r in (rows[0], rows[-1])) if rows else (0.0, 0.0)
+    ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol, short, reach)
     verdict, failed, undetermined = _verdict(matched, rows, ends)
     return Inspection(matched=matched, nominal_bends=nominal.n_bends, measured_bends=m.n_bends, reversed=reversed_,
                       measured_lra=meas_rows, bends=bends, last_length=last_length, sheath_deviation=float(d.max()),

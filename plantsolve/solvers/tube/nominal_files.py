@@ -416,6 +416,15 @@ def read_nominal_csv(text: str, fmt: str = "auto", units: str = "mm") -> Nominal
         if last and (v.get("angle") or 0.0) != 0:
             raise NominalError(value_lines[i], "angle", "the last LRA row is the final straight: its angle must be 0 "
                                "(add the final straight as a row of its own)")
+    blank = [line for line, v in zip(value_lines[1:-1], values[1:-1]) if v.get("rotation") is None]
+    if blank:
+        # a rotation left out (a cell deleted, a value lost in the export) is read as 0°: said, since the inspection
+        # then fails a right part by the rotation the cell held
+        warnings.append(Diagnostic(code="nominal_rotation_empty", message=(
+            f"nominal CSV line{'s' if len(blank) > 1 else ''} {', '.join(map(str, blank[:8]))}"
+            f"{', ...' if len(blank) > 8 else ''}: the rotation cell is empty, read as 0°. Write 0 where the bend "
+            "plane does not turn; a lost value makes the inspection judge that row against 0°."),
+            details={"lines": blank}))
     if rows[0]["rotation"] != 0:
         warnings.append(Diagnostic(code="nominal_first_rotation", message=f"nominal CSV line {value_lines[0]}: the "
                                    f"first rotation ({rows[0]['rotation']:g}°) turns the whole part only; read as 0",

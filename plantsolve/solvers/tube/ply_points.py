@@ -108,6 +108,11 @@ def _header(content: bytes) -> tuple[str, list[Element], int, int]:
     return fmt, elements, body, len(lines)
 
 
+def elements(content: bytes) -> list[Element]:
+    """The elements a PLY header declares (its records unread)."""
+    return _header(content)[1]
+
+
 def read_ply(content: bytes, log: ReadLog, faces_below: int) -> PlyData:
     fmt, elements, start, header_lines = _header(content)
     vertex = next((e for e in elements if e.name == "vertex"), None)

@@ -239,6 +239,9 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     except InputRejected as e:
         raise reject(f"the file is not text in UTF-8, UTF-16 or Windows-1252: {e.errors[0].msg}") from None
     lines, unreadable = _plain_rows(text.splitlines())
+    counts = _pts_counts(lines)
+    for lineno in counts:
+        lines[lineno - 1] = ""
     header, header_line, width = _first_row(lines)
     cols = _columns(header, width, header_line)
     if cols.names is None and width >= 4 and _counts_rows(lines):
@@ -288,6 +291,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     last_point_line = max([ln for ln, _, _ in rows] + [ln for ln, _ in bad], default=0)
     if ends_mid_line and any(ln == last_point_line for ln, _ in bad + short):
         log.truncate(f"the file ends mid-line (line {last_point_line})", line=last_point_line)
+    _check_pts_counts(counts, [ln for ln, _, _ in rows] + [ln for ln, _ in bad], log)
     if not kept:
         raise reject(f"no readable 'x y z' rows found{log.summary()}")
     if len(kept) < MIN_SCAN_ROWS and usual in (4, 5):
@@ -295,6 +299,45 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
                      f"scan, which needs at least {MIN_SCAN_ROWS} x, y, z samples. Give a nominal as "
                      "options.nominal_csv with the scan as the file")
     return np.array(kept, dtype=np.float64), cols
+
+
+_COUNT = re.compile(r"^\d+$")
+
+
+def _pts_counts(lines: list[str]) -> dict[int, int]:
+    """The point counts of a Leica PTS file renamed .txt or .xyz (line number -> count): its first line counts the
+    rows of x, y, z (intensity, r, g, b) under it, and a file of several scans writes a count above each. Read as
+    rows, each count was a record 'with fewer than 3 coordinates' and the counts were never compared with the rows.
+    Only a file whose first line is such a count has them."""
+    def next_row(i: int) -> list[str]:
+        following = next((t.strip() for t in lines[i + 1:] if t.strip()), "")
+        return [f for f in _SPLIT.split(following) if f]
+
+    first = next((i for i, t in enumerate(lines) if t.strip()), None)
+    if first is None or not _COUNT.match(lines[first].strip()) or len(next_row(first)) < 3:
+        return {}
+    return {i + 1: int(t.strip()) for i, t in enumerate(lines) if _COUNT.match(t.strip()) and len(next_row(i)) >= 3}
+
+
+def _check_pts_counts(counts: dict[int, int], row_lines: list[int], log: ReadLog) -> None:
+    """Each PTS count against the rows under it (up to the next count): a last scan holding fewer rows than its
+    count was cut; any other disagreement is said too (a count edited by hand, or scans joined)."""
+    starts = sorted(counts)
+    for k, start in enumerate(starts):
+        end = starts[k + 1] if k + 1 < len(starts) else math.inf
+        held = sum(start < ln < end for ln in row_lines)
+        declared = counts[start]
+        if held == declared:
+            continue
+        if held < declared and end == math.inf:
+            log.truncate(f"the point count on line {start} says {declared} rows follow, the file holds {held} (the "
+                         "file was cut?); those were read.", declared=declared, read=held, line=start)
+        else:
+            log.warn(Diagnostic(code="point_count_disagrees", message=(
+                f"the point count on line {start} says {declared} rows follow, {held} do before "
+                f"{'the next count' if end != math.inf else 'the end of the file'}: every row was read. Check "
+                "that no scan was cut or joined to another."),
+                details={"line": start, "declared": declared, "read": held}))
 
 
 def _cut_number(decimals: list[int]) -> bool:

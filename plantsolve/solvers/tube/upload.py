@@ -18,6 +18,7 @@ from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitCo
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
+from plantsolve.solvers.tube.ply_points import elements as ply_elements
 from plantsolve.solvers.tube.ply_points import read_ply
 from plantsolve.solvers.tube.ply_points import stated_unit as stated_ply_unit
 from plantsolve.solvers.tube.read_log import ReadLog
@@ -55,7 +56,12 @@ def _mesh_points(vertices: np.ndarray, triangles: np.ndarray | None, file_type: 
             return np.asarray(pts, dtype=np.float64)
     if not finite.any():
         raise reject(f"{file_type.upper()} file holds no vertices{log.summary()}")
-    return vertices[finite].astype(np.float64)
+    vertices = vertices[finite].astype(np.float64)
+    if triangles is not None and len(triangles):
+        # a mesh written triangle by triangle repeats each corner on every face: one sample per vertex, as STL's
+        first = _first_of_each(vertices)
+        return vertices if first is None else vertices[first]
+    return vertices
 
 
 def _obj_checked(content: bytes, log: ReadLog) -> bytes:
@@ -123,6 +129,11 @@ def _read_stl(content: bytes, log: ReadLog) -> np.ndarray:
 
 def _read_ply(content: bytes, log: ReadLog) -> np.ndarray:
     data = read_ply(content, log, MESH_MIN_VERTICES)
+    if data.triangles is None and any(e.name == "face" and e.count for e in ply_elements(content)):
+        # a dense mesh's faces are not read, but its vertices are still a mesh's: one sample per position
+        vertices = data.vertices[np.isfinite(data.vertices).all(1)]
+        first = _first_of_each(vertices)
+        return _mesh_points(vertices if first is None else vertices[first], None, "ply", log)
     return _mesh_points(data.vertices, data.triangles, "ply", log)
 
 
@@ -231,14 +242,56 @@ def _read_e57(source: StoredInput) -> np.ndarray:
     return np.vstack(parts).astype(np.float64)
 
 
-def _read_npy(content: bytes) -> np.ndarray:
+def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
     try:
         arr = np.load(io.BytesIO(content), allow_pickle=False)
     except Exception as exc:
         raise reject(f"unreadable NPY file: {exc}") from None
+    if arr.ndim == 2 and arr.shape[0] == 3 and arr.shape[1] > 3 and np.issubdtype(arr.dtype, np.number):
+        # x, y, z as three rows (saved as pts.T, or from MATLAB's column-major habit): read as three points of
+        # N values, they were refused as too few points, naming neither the shape nor the mix-up
+        log.warn(Diagnostic(code="npy_transposed", message=(
+            f"NPY file: the array has shape {arr.shape}, three rows of {arr.shape[1]} values: read as "
+            f"{arr.shape[1]} points (x, y, z in its rows). Save it as (N, 3) to say so."),
+            details={"shape": list(arr.shape)}))
+        arr = arr.T
     if arr.ndim != 2 or arr.shape[1] < 3 or not np.issubdtype(arr.dtype, np.number):
         raise reject(f"NPY array must be numeric with shape (N, 3), got {arr.shape} {arr.dtype}")
     return np.asarray(arr[:, :3], dtype=np.float64)
+
+
+def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
+    """The indices (ascending) of the first sample at each position, None when no position repeats: one sort of a
+    hash of the coordinates' bits in the usual case, the exact rows compared only when two keys are equal."""
+    if len(pts) < 2:
+        return None
+    bits = np.ascontiguousarray(pts, dtype=np.float64).view(np.uint64)  # no copy; a 0.0 repeated as -0.0 is missed
+    key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+    key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+    key ^= bits[:, 2]
+    key.sort()
+    if not (key[1:] == key[:-1]).any():
+        return None
+    first = np.sort(np.unique(pts + 0.0, axis=0, return_index=True)[1])
+    return first if len(first) < len(pts) else None
+
+
+def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog) -> np.ndarray:
+    """The samples with each exact repeat of an earlier one left out, and a warning saying how many. A file (or a
+    scan) pasted twice holds every sample twice: fitted as it is, every sigma of the result was √2 too small, and
+    the inspection gave verdicts the samples do not carry. Leaving a repeat out is never wrong: a position measured
+    twice says little more than once. (LAS stores integers on its scale's grid, where distinct returns share
+    positions; its coarse scales are refused on their own.)"""
+    first = None if ext in (".las", ".laz") else _first_of_each(pts)
+    if first is None:
+        return pts
+    repeats = len(pts) - len(first)
+    log.warn(Diagnostic(code="duplicate_points", message=(
+        f"{ext[1:].upper()} file: {repeats:,} of its {len(pts):,} samples repeat an earlier one exactly (a file or "
+        f"scan pasted twice, or coordinates written with too few digits): each position was read once. Counted "
+        "twice, they would have made every sigma of the result too small."),
+        details={"repeated": repeats, "samples": len(pts), "kept": len(first)}))
+    return pts[first]
 
 
 E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
@@ -272,7 +325,7 @@ def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit
     if ext == ".obj":
         return _read_mesh(content, "obj", log), None
     if ext == ".npy":
-        return _read_npy(content), None
+        return _read_npy(content, log), None
     holds = file_holds(content[:65536])
     if holds is not None and not holds.startswith(POINT_TEXT):  # a model of another kind, not a list of samples
         raise reject(f"the file holds {holds}, not x, y, z samples of a scan")
@@ -386,6 +439,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
                 raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
             log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
             pts = pts[bounded]
+        pts = _without_repeats(pts, ext, log)
         source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
                                     skipped_lines=log.lines, truncated=log.truncation is not None,
                                     warnings=log.warnings() + unit_warnings)

@@ -77,13 +77,13 @@ def test_scan_corrections_are_the_negated_errors(solved):
 def test_corrections_csv_states_units_and_the_corrections(solved):
     result = solved[1].result
     table = list(csv.DictReader(io.StringIO(corrections_csv(result).decode())))
-    assert {"nominal_length_mm", "deviation_angle_deg", "springback_deg", "next_angle_deg", "next_clr_mm",
+    assert {"nominal_length [mm]", "deviation_angle [deg]", "springback [deg]", "next_angle [deg]", "next_clr [mm]",
             "status", "failed_fields"} <= set(table[0])
     assert [t["status"] for t in table] == ["fail", "fail", "fail", "pass"]
     assert table[2]["failed_fields"] == "length angle"
     for t, c in zip(table, result.inspection.corrections):
-        assert float(t["next_angle_deg"]) == pytest.approx(c.next.angle, abs=1e-6)
-        assert float(t["delta_length_mm"]) == pytest.approx(c.delta_length, abs=1e-6)
+        assert float(t["next_angle [deg]"]) == pytest.approx(c.next.angle, abs=1e-6)
+        assert float(t["delta_length [mm]"]) == pytest.approx(c.delta_length, abs=1e-6)
 
 
 @pytest.mark.slow

@@ -155,7 +155,7 @@ def test_artifacts(cloud):
     ply = trimesh.load(io.BytesIO(by["deviation.ply"].data), file_type="ply")
     assert len(ply.vertices) == len(pts) and ply.colors.shape == (len(pts), 4)
     rows = list(csv.reader(io.StringIO(by["lra.csv"].data.decode())))
-    assert rows[0][1] == "length_mm"
+    assert rows[0][1] == "length [mm]"
     np.testing.assert_allclose([float(r[3]) for r in rows[1:]], [r.angle for r in res.lra], atol=1e-6)
     xyz = list(csv.reader(io.StringIO(by["xyz_clr.csv"].data.decode())))[1:]
     P = np.array([[float(v) for v in r[1:4]] for r in xyz])

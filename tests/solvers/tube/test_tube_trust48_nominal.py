@@ -1,0 +1,82 @@
+"""Inspection verdicts the samples do not carry, and nominal tables with a cell lost: a lower bound within the
+tolerance passed whatever its sigma (a sparse scan's end straight 0.36 ± 0.48 mm past the nominal end passed a
+part made 1.8 mm long), and an empty rotation cell was read as 0° without a word."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from plantsolve.schemas.tube import LraRow, TubeOptions, TubeRequest
+from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.nominal_files import read_nominal_csv
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.solve import solve
+from plantsolve.solvers.tube.synthetic import make_model
+from tests.conftest import REPO
+
+NOMINAL = [[120, 0, 90, 30], [100, 60, 45, 30], [130, 0, 0, 0]]
+
+
+def _rows(table) -> list[LraRow]:
+    return [LraRow(length=a, rotation=b, angle=c, bend_radius=d) for a, b, c, d in table]
+
+
+def _inspected(past_end: float, sigma: float):
+    """The part as the samples show it, its last straight ``past_end`` mm past the nominal's, a lower bound (the
+    samples end there) with the samples' spacing ``sigma``."""
+    seen = np.array(NOMINAL, float)
+    seen[-1, 0] += past_end
+    known = _rows(seen)
+    for row, spacing in ((known[0], 0.05), (known[-1], sigma)):  # the start densely sampled
+        row.length_bound, row.sigma_length, row.undetermined = "lower", spacing, ["length"]
+    return inspect(make_model(seen, 8.0), _rows(NOMINAL), 0.8, TubeOptions(), measured_rows=known)
+
+
+def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdict():
+    ins = _inspected(0.36, 0.48)  # the part may end 0.36 + 3 x 0.48 = 1.8 mm past the nominal: tolerance 1 mm
+    last = ins.rows[-1].length
+    assert last.deviation == pytest.approx(0.36) and last.bound == "lower"
+    assert not last.determined and last.ok and ins.rows[-1].undetermined == ["length"]
+    assert ins.verdict == "not_determined" and ins.undetermined_rows == [3]  # before: "pass"
+    assert ins.end_points[1].determined and ins.end_points[1].ok  # 0.34 + 3 x 0.48 mm: within its 2 mm
+
+
+@pytest.mark.parametrize("past_end, sigma, verdict", [
+    (0.36, 0.05, "pass"),  # dense samples: 0.51 mm at most, within 1 mm
+    (-0.6, 0.4, "pass"),  # 0.6 mm at most, the end point 1.8 mm
+    (1.4, 0.05, "fail"),  # samples past the nominal end by more than the tolerance: proven too long
+    (-1.4, 0.05, "not_determined"),  # short of the nominal: the scan may be short, not the part
+])
+def test_a_lower_bound_is_judged_by_how_far_the_part_may_reach(past_end, sigma, verdict):
+    ins = _inspected(past_end, sigma)
+    assert ins.verdict == verdict
+    assert ins.rows[-1].length.determined == (verdict != "not_determined")
+
+
+def test_an_end_point_passes_only_when_the_part_may_not_reach_past_its_tolerance():
+    ins = _inspected(0.36, 0.6)  # the end point about 0.36 mm off, the part's end up to 2.16 mm: tolerance 2 mm
+    end = ins.end_points[1]
+    assert end.deviation == pytest.approx(0.36, abs=0.05) and end.ok and not end.determined
+
+
+SCAN_XYZ = (REPO / "examples" / "tube" / "scan.xyz").read_text()
+
+
+def test_an_empty_rotation_cell_is_read_as_0_and_said_naming_its_line_in_the_jobs_report():
+    table = "length,rotation,angle,clr\n80,0,90,18\n45,,45,18\n30,-45,30,18\n70,0,0,0\n"
+    nominal = read_nominal_csv(table)
+    assert [r.rotation for r in nominal.rows] == [0, 0, -45, 0]
+    (warning,) = nominal.warnings
+    assert warning.code == "nominal_rotation_empty" and warning.details == {"lines": [3]}
+    assert "line 3: the rotation cell is empty, read as 0°" in warning.message
+    points = np.array([[float(v) for v in line.split()] for line in SCAN_XYZ.splitlines()])
+    result = solve(TubeScan(TubeRequest(points=points.tolist(), options={"nominal_csv": table}))).result
+    assert result.report.status == "warning" and "nominal_rotation_empty" in [w.code for w in result.report.warnings]
+
+
+def test_rotations_written_out_and_the_first_and_last_rows_left_empty_say_nothing():
+    nominal = read_nominal_csv("length,rotation,angle,clr\n80,,90,18\n45,90,45,18\n30,-45,30,18\n70\n")
+    assert nominal.warnings == [] and [r.rotation for r in nominal.rows] == [0, 90, -45, 0]
