@@ -168,3 +168,25 @@ def test_refitting_our_curves_csv_keeps_each_line_within_its_stated_error():
         assert b.floor == 0.0 and b.pressure_max_rel_error <= 0.01
         if a.family == "spline3":
             assert b.family == "spline3" and b.pressure_max_rel_error < 1e-6
+
+
+def _speed_lines(speeds, header="Nc,flow [kg/s],PR,efficiency") -> str:
+    rows = [f"{s:g},{f + 0.5 * k:g},{base - 0.02 * k * k:g},{0.8 + 0.02 * k - 0.01 * k * k:g}"
+            for s, base in zip(speeds, (1.0, 1.2, 1.4)) for k, f in enumerate((10, 11, 12, 13))]
+    return "\n".join([header, *rows]) + "\n"
+
+
+@pytest.mark.parametrize("speeds, header, says", [
+    ((-0.8, -0.9, -1.0), "Nc,flow [kg/s],PR,efficiency", "negative speeds"),  # a flipped sign: said nothing
+    ((0.0, 0.9, 1.0), "speed,flow [kg/s],PR,efficiency", "zero"),
+    ((-8000.0, 9000.0, 10000.0), "speed [rpm],flow [kg/s],PR,efficiency", "negative speeds"),  # a stray minus
+])
+def test_a_speed_line_at_no_or_negative_speed_is_warned_naming_the_setting(speeds, header, says):
+    source = StoredInput.from_bytes("rig.csv", _speed_lines(speeds, header).encode())
+    loaded = load(parse_upload(source, {"map": False}), source)
+    (warning,) = [w for w in loaded.warnings if w.code == "implausible_speed"]
+    assert warning.details["quantity"] == loaded.request.setting_names[0]
+    assert warning.details["values"] == [min(speeds), max(speeds)] and says in warning.message
+    positive = StoredInput.from_bytes("rig.csv", _speed_lines([abs(s) or 0.8 for s in speeds], header).encode())
+    assert not [w for w in load(parse_upload(positive, {"map": False}), positive).warnings
+                if w.code == "implausible_speed"]
