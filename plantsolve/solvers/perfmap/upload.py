@@ -596,6 +596,12 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                      ("options", "columns"))
     settings_found = [r for r in SETTING_ROLES if r in col]
     missing = [c for c in MEASURED if c not in col]
+    keys = [_role_key(h) for h in rows[0]]
+    if (missing or not settings_found) and any(k.startswith("max efficiency") for k in keys) \
+            and any(k.startswith("optimal ") for k in keys):
+        raise reject(f"the header ({what} {numbers[0]}) is that of a perfmap map.csv (flow, pressure, 'max efficiency' "
+                     "and the 'optimal' settings): a map's grid of best efficiencies, not measured speed lines; upload "
+                     "the rig's data, or the job's curves.csv (its fitted speed lines)", ("file", "header"))
     if missing or not settings_found:
         need = missing + ([] if settings_found else ["a setting (speed, IGV, VGV, alpha, diffuser, theta or phi)"])
         raise reject(

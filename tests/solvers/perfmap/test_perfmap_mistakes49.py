@@ -190,3 +190,19 @@ def test_a_speed_line_at_no_or_negative_speed_is_warned_naming_the_setting(speed
     positive = StoredInput.from_bytes("rig.csv", _speed_lines([abs(s) or 0.8 for s in speeds], header).encode())
     assert not [w for w in load(parse_upload(positive, {"map": False}), positive).warnings
                 if w.code == "implausible_speed"]
+
+
+def test_our_map_csv_uploaded_as_a_rig_table_is_refused_saying_what_it_is():
+    """The job's map.csv (the best-efficiency grid) sent back instead of curves.csv: refused as 'missing:
+    efficiency', which told nothing of the mix-up."""
+    from plantsolve.solvers.perfmap.artifacts import map_csv
+
+    body = json.loads((REPO / "examples" / "perfmap" / "n3_fan_map.json").read_text())
+    body["options"] = {**body["options"], "grid": [12, 10]}
+    body["positions"] = body["positions"][:3] + body["positions"][9:12]  # two IGV angles, three speeds each
+    exported = map_csv(solve(PerfmapRequest.model_validate(body)).result)
+    assert exported.decode().splitlines()[0].startswith("flow [lbm/s],pressure [-],max efficiency [-],optimal theta")
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("map.csv", exported), {"map": False})
+    (error,) = refused.value.errors
+    assert error.loc == ("file", "header") and "map.csv" in error.msg and "curves.csv" in error.msg
