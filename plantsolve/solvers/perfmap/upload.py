@@ -597,6 +597,15 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
     settings_found = [r for r in SETTING_ROLES if r in col]
     missing = [c for c in MEASURED if c not in col]
     keys = [_role_key(h) for h in rows[0]]
+    # a mapping of a header the file lacks (a typo, another rig's file): the column it meant was not read so
+    unmatched = {k: v for k, v in (column_roles or {}).items() if _role_key(k) not in keys}
+    if unmatched:
+        notes_before.append(Diagnostic(
+            code="upload_columns_unmatched",
+            message=f"options.columns maps {', '.join(f'{k!r} (to {v})' for k, v in unmatched.items())}, which no "
+            f"header of the file ({what} {numbers[0]}) is: not used. The headers are "
+            f"{', '.join(repr(h.strip()) for h in rows[0])}.",
+            details={"columns": unmatched, "headers": [h.strip() for h in rows[0]]}))
     if (missing or not settings_found) and any(k.startswith("max efficiency") for k in keys) \
             and any(k.startswith("optimal ") for k in keys):
         raise reject(f"the header ({what} {numbers[0]}) is that of a perfmap map.csv (flow, pressure, 'max efficiency' "
@@ -610,6 +619,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
             f"header to a role with the 'columns' option); missing: {', '.join(need)}; found: "
             f"{', '.join(repr(h.strip()) for h in rows[0])}"
             + hint
+            + (f" — options.columns names no header of the file: {', '.join(map(repr, unmatched))}" if unmatched else "")
             + (f" — the first {what} that is not blank or '#' must be the header"
                if all(_is_number(h) for h in rows[0] if h.strip()) else ""),
             ("file", "header"))

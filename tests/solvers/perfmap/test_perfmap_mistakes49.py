@@ -206,3 +206,20 @@ def test_our_map_csv_uploaded_as_a_rig_table_is_refused_saying_what_it_is():
         parse_upload(StoredInput.from_bytes("map.csv", exported), {"map": False})
     (error,) = refused.value.errors
     assert error.loc == ("file", "header") and "map.csv" in error.msg and "curves.csv" in error.msg
+
+
+def test_a_column_mapping_that_names_no_header_is_said_not_silently_dropped():
+    """options.columns {'Qx': 'flow'} over a file without 'Qx': the file's own 'flow' column was read without a word
+    (the user meant another column); and a refusal for a missing column did not say the mapping matched nothing."""
+    text = _speed_lines((0.8, 0.9, 1.0), "Nc,flow [kg/s],PR,efficiency")
+    request = parse_upload(StoredInput.from_bytes("rig.csv", text.encode()), {"map": False, "columns": {"Qx": "flow"}})
+    (note,) = [w for w in request.upload_warnings if w.code == "upload_columns_unmatched"]
+    assert note.details == {"columns": {"Qx": "flow"}, "headers": ["Nc", "flow [kg/s]", "PR", "efficiency"]}
+    matched = parse_upload(StoredInput.from_bytes("rig.csv", text.encode()),
+                           {"map": False, "columns": {"FLOW [KG/S]": "flow"}})  # matched in any case
+    assert not [w for w in matched.upload_warnings or [] if w.code == "upload_columns_unmatched"]
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("rig.csv", text.replace("flow [kg/s]", "Q").encode()),
+                     {"columns": {"q [m3/h]": "flow"}})
+    (error,) = refused.value.errors
+    assert "missing: flow" in error.msg and "options.columns names no header of the file: 'q [m3/h]'" in error.msg
