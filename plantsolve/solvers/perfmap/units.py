@@ -164,7 +164,7 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
         parts = iter(spelling)
         candidate = re.sub(r"[A-Za-z]+", lambda _: next(parts), text)
         unit = _pint_unit(candidate)
-        if unit is not None and _dimensions(unit) in dimensions:
+        if unit is not None and _dimensions(unit) in dimensions and (not unit.dimensionless or _plain(unit)):
             found.setdefault(candidate, unit)
     distinct: dict[str, pint.Unit] = {}
     for candidate, unit in found.items():
@@ -176,6 +176,12 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
         readings = " or ".join(f"{c} ({u})" for c, u in sorted(distinct.items()))
         raise AmbiguousUnit(f"unit {written!r} reads as {readings}: units are case-sensitive, write it in its own case")
     return next(iter(distinct.values()), None)
+
+
+def _plain(unit: pint.Unit) -> bool:
+    """Whether a dimensionless unit is a ratio's (%, ‰) or an angle's (degree, radian): what a rig file writes, and
+    not a word in capitals that pint also reads ('ALPHA' the fine-structure constant, 'MASS' milliarcseconds)."""
+    return str(unit) in ("degree", "radian") or is_ratio_unit(Unit(format(unit, "~P"), unit))
 
 
 def _marked_pressure(text: str) -> Unit | None:

@@ -223,3 +223,14 @@ def test_a_column_mapping_that_names_no_header_is_said_not_silently_dropped():
                      {"columns": {"q [m3/h]": "flow"}})
     (error,) = refused.value.errors
     assert "missing: flow" in error.msg and "options.columns names no header of the file: 'q [m3/h]'" in error.msg
+
+
+@pytest.mark.parametrize("word", ["ALPHA", "MASS", "ETA", "FLOW", "SPEED"])
+def test_a_word_in_capitals_is_not_recased_into_a_dimensionless_constant(word):
+    """'alpha' is pint's fine-structure constant and 'mas' its milliarcsecond: a row of capitalised words under a
+    header must not read as a row of units."""
+    from plantsolve.solvers.perfmap.units import UnitError, parse_unit
+
+    with pytest.raises(UnitError):
+        parse_unit(word)
+    assert parse_unit("DEG").text == "deg" and parse_unit("PERCENT").text == "%"
