@@ -234,3 +234,28 @@ def test_a_word_in_capitals_is_not_recased_into_a_dimensionless_constant(word):
     with pytest.raises(UnitError):
         parse_unit(word)
     assert parse_unit("DEG").text == "deg" and parse_unit("PERCENT").text == "%"
+
+
+def test_rows_and_columns_in_another_order_give_the_same_map_to_the_last_bit():
+    """A rig table sorted otherwise (rows shuffled, columns permuted, units in upper case): the same settings, the
+    same coefficients and the same map, bit for bit."""
+    import random
+
+    lines = [line.split(",") for line in N3.splitlines()]
+    header = lines[0]
+    rows = [row for row in lines[1:] if row[0] in ("0.0", "5.0") and row[1] in ("0.5", "0.7", "0.9")]
+    shuffled = rows[:]
+    random.Random(7).shuffle(shuffled)
+    order = [4, 2, 0, 3, 1]
+
+    def solved(head, body):
+        text = "\n".join(",".join(cells) for cells in [head, *body]) + "\n"
+        return solve(parse_upload(StoredInput.from_bytes("rig.csv", text.encode()), {"grid": [12, 10]})).result
+
+    first = solved([*header[:2], "flow [kg/s]", "pressure [bar]", "efficiency"], rows)
+    again = solved([["theta", "phi", "FLOW [KG/S]", "PRESSURE [BAR]", "EFFICIENCY"][k] for k in order],
+                   [[r[k] for k in order] for r in shuffled])
+    assert [s.setting for s in again.settings] == [s.setting for s in first.settings] and len(first.settings) == 6
+    assert [s.pressure_coefficients for s in again.settings] == [s.pressure_coefficients for s in first.settings]
+    assert [s.efficiency_coefficients for s in again.settings] == [s.efficiency_coefficients for s in first.settings]
+    assert again.map.efficiency == first.map.efficiency and again.units == first.units
