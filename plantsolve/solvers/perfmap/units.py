@@ -27,7 +27,12 @@ from plantsolve.solvers.base import FieldError, InputRejected
 # Spellings of rig software and cycle codes that pint does not know (pint has ‰ as 'permille' already:
 # defining it again logs a redefinition warning on every run).
 _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
-                "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal")
+                "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal",
+                # fan and pump rigs' volume flows: pint read 'cfm' as centifermis, a length
+                "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute")
+# Volumes at standard or normal conditions: a mass flow in volume units, which no factor makes an actual volume flow.
+_STANDARD_VOLUMES = re.compile(r"(?:s|std\s*)cf[mhs]|mmscfd|(?:n|s)\s*m(?:3|\^3|³|\*\*3)\s*/\s*(?:h|hr|s|min|d)",
+                               re.IGNORECASE)
 
 
 @functools.cache
@@ -108,6 +113,10 @@ def parse_unit(text: str, dimensions: frozenset[str] | None = None) -> Unit:
         return Unit("1", registry().dimensionless)
     if s.lower() == "pct":  # per cent as tables abbreviate it; pint reads a picocarat (a mass)
         s = "percent"
+    if _STANDARD_VOLUMES.fullmatch(s):
+        raise UnitError(f"unit {text.strip()!r} is a volume flow at standard (normal) conditions, a mass flow in "
+                        "volume units: no factor makes it an actual volume flow without those conditions; convert "
+                        "it to a mass flow (kg/s) or state the actual volume flow (m3/h, acfm)")
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
          .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
     s = _DIGIT_EXPONENT.sub(r"\1**\2", s)
@@ -140,20 +149,22 @@ def _casings(word: str) -> list[str]:
         tried = {word, word.lower(), word.upper(), word.title()}
     else:
         tried = {"".join(c) for c in itertools.product(*({ch.lower(), ch.upper()} for ch in word))}
-    found = []
-    for spelling in sorted(tried):
-        try:
-            if registry().parse_unit_name(spelling):
-                found.append(spelling)
-        except Exception:  # pint raises on some spellings instead of returning no reading
-            continue
-    return found
+    return [spelling for spelling in sorted(tried) if registry().parse_unit_name(spelling)]
+
+
+_WORD = re.compile(r"[A-Za-z][A-Za-z0-9]*")  # 'H2O' one word: 'INH2O' is inH2O
+
+
+def _respelled(text: str, words: tuple[str, ...]) -> str:
+    """``text`` with its words (:data:`_WORD`) replaced by ``words`` in order."""
+    replacing = iter(words)
+    return _WORD.sub(lambda _: next(replacing), text)
 
 
 def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit | None:
     """The unit ``text`` is in the one casing of its words that has ``dimensions``; None when none has; raises
     :class:`UnitError` when casings of other magnitude do (``written`` as the file wrote it, for the message)."""
-    words = re.findall(r"[A-Za-z]+", text)
+    words = _WORD.findall(text)
     if not words:
         return None
     choices = [_casings(w) for w in words]
@@ -161,8 +172,7 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
         return None
     found: dict[str, pint.Unit] = {}
     for spelling in itertools.product(*choices):
-        parts = iter(spelling)
-        candidate = re.sub(r"[A-Za-z]+", lambda _: next(parts), text)
+        candidate = _respelled(text, spelling)
         unit = _pint_unit(candidate)
         if unit is not None and _dimensions(unit) in dimensions and (not unit.dimensionless or _plain(unit)):
             found.setdefault(candidate, unit)

@@ -259,3 +259,28 @@ def test_rows_and_columns_in_another_order_give_the_same_map_to_the_last_bit():
     assert [s.pressure_coefficients for s in again.settings] == [s.pressure_coefficients for s in first.settings]
     assert [s.efficiency_coefficients for s in again.settings] == [s.efficiency_coefficients for s in first.settings]
     assert again.map.efficiency == first.map.efficiency and again.units == first.units
+
+
+@pytest.mark.parametrize("unit, stated, to_m3_per_h", [
+    ("cfm", "cfm", 0.3048 ** 3 * 60), ("CFM", "cfm", 0.3048 ** 3 * 60), ("ACFM", "acfm", 0.3048 ** 3 * 60),  # pint: centifermis
+    ("gpm", "gpm", 0.003785411784 * 60),
+])
+def test_a_fan_rigs_cubic_feet_per_minute_is_a_volume_flow(unit, stated, to_m3_per_h):
+    loaded = _load(f"theta,phi,flow [{unit}],pressure,efficiency", options={"result_units": {"flow": "m3/h"}})
+    (conversion,) = [c for c in loaded.source["conversions"] if c["quantity"] == "flow"]
+    assert conversion["from_unit"] == stated and conversion["factor"] == pytest.approx(to_m3_per_h, rel=1e-9)
+
+
+@pytest.mark.parametrize("unit", ["SCFM", "scfm", "Nm3/h", "Nm³/h", "Sm3/h", "MMSCFD"])
+def test_a_flow_at_standard_conditions_is_refused_saying_it_is_a_mass_flow(unit):
+    """'Nm3/h' was 'not understood' and 'SCFM' read as nothing: a standard volume is a mass flow in disguise, and
+    converting it as an actual volume would be off by the density ratio."""
+    with pytest.raises(InputRejected) as refused:
+        _load(f"theta,phi,flow [{unit}],pressure,efficiency")
+    (error,) = refused.value.errors
+    assert error.loc == ("file", "header") and "standard (normal) conditions" in error.msg
+
+
+@pytest.mark.parametrize("unit, stated", [("INH2O", "inH2O"), ("inh2o", "inH2O")])
+def test_a_water_column_in_capitals_is_read(unit, stated):
+    assert _load(f"theta,phi,flow,pressure [{unit}],efficiency").units.pressure == stated
