@@ -319,7 +319,8 @@ class SettingFit(BaseModel):
     pressure_fit: Literal["least_squares", "minimax"] = Field(
         default="least_squares", description="Criterion of this setting's pressure fit: options.fit, except "
         "where 'auto' found no least-squares fit within 1 % of the floor and took a minimax one (a "
-        "'pressure_fit_minimax' warning says so).")
+        "'pressure_fit_minimax' warning says so), and 'least_squares' where a minimax fit's linear programme failed "
+        "and least squares ran instead (a 'pressure_fit_not_minimax' warning says so).")
     pressure_max_rel_error: float = Field(description="max_i |y(x_i) - y_i| / |y_i|.", json_schema_extra=ONE)
     efficiency_max_rel_error: float = Field(description="max_i |eta(x_i) - eta_i| / |eta_i|.", json_schema_extra=ONE)
     pressure_loo: float | None = Field(

@@ -121,9 +121,10 @@ class IfcSource:
         stored = self.stored
         try:
             with zipfile.ZipFile(stored.path if stored.path is not None else io.BytesIO(stored.content)) as archive:
-                names = [n for n in archive.namelist() if n.lower().endswith(".ifc")]
+                names = [n for n in archive.namelist() if n.lower().endswith(".ifc") and not _mac_metadata(n)]
                 if len(names) != 1:
-                    raise reject(f"an .ifczip must hold exactly one .ifc file; this one holds {len(names)}")
+                    raise reject(f"an .ifczip must hold exactly one .ifc file; this one holds {len(names)}"
+                                 + (f" ({', '.join(map(repr, names[:5]))})" if names else ""))
                 declared = archive.getinfo(names[0]).file_size
                 if declared > MAX_IFC_INFLATED:
                     raise reject(f"the .ifc inside this .ifczip inflates to {declared:,} bytes; at most "
@@ -137,6 +138,13 @@ class IfcSource:
         except (zlib.error, EOFError) as error:  # the member's compressed bytes are corrupt or end early
             raise reject(f"the .ifc inside this .ifczip cannot be inflated: the archive is damaged or cut short "
                          f"({error})") from None
+
+
+def _mac_metadata(name: str) -> bool:
+    """Whether a zip member is the metadata macOS's Finder adds when it compresses a file: '__MACOSX/._model.ifc' (an
+    AppleDouble resource fork, no model), which made a Mac's archive of one model hold 'two .ifc files'."""
+    parts = name.split("/")
+    return parts[0] == "__MACOSX" or parts[-1].startswith("._")
 
 
 # the most an .ifczip's model may inflate to, counted on the inflated bytes as they come (a zip may lie

@@ -172,8 +172,11 @@ def _rows(text: str, first: tuple[int, int], columns: int, used: list[int], deli
     line at fault."""
     number, start = first
     block = text[start:]
-    if delimiter == ";":
-        block = block.replace(",", ".")  # decimal commas
+    # decimal commas: in a ';' file (Excel's CSV in a decimal-comma locale), and in a tab-separated one whose numbers
+    # hold commas and no point (the same Excel's 'Text (tab delimited)'), where a comma can separate nothing
+    decimal_comma = delimiter == ";" or (delimiter == "\t" and "," in block and "." not in block)
+    if decimal_comma:
+        block = block.replace(",", ".")
     try:
         table = np.loadtxt(io.StringIO(block), delimiter=delimiter, comments=None, quotechar='"', ndmin=2)
     except ValueError:
@@ -181,15 +184,14 @@ def _rows(text: str, first: tuple[int, int], columns: int, used: list[int], deli
     if (table is not None and table.shape[1] == columns and np.all(np.isfinite(table[:, used]))
             and len(table) == block.count("\n", 0, len(block.rstrip())) + 1):
         return table[:, used], number + np.arange(len(table))
-    return _rows_by_line(text, first, columns, used, delimiter, header)
+    return _rows_by_line(text, first, columns, used, delimiter, header, decimal_comma)
 
 
 def _rows_by_line(text: str, first: tuple[int, int], columns: int, used: list[int], delimiter: str | None,
-                  header: int) -> tuple[np.ndarray, np.ndarray]:
+                  header: int, decimal_comma: bool) -> tuple[np.ndarray, np.ndarray]:
     first_number, start = first
     most = text.count("\n", start) + 1
     rows, numbers, count = np.empty((most, len(used))), np.empty(most, dtype=np.int64), 0
-    decimal_comma = delimiter == ";"
     for number, raw, _, after in _lines(text, start, first_number):
         line = raw.strip()
         if not line or line.startswith(("%", "#")):
@@ -201,7 +203,10 @@ def _rows_by_line(text: str, first: tuple[int, int], columns: int, used: list[in
         try:
             values = [float(parts[c].replace(",", ".") if decimal_comma else parts[c]) for c in used]
         except ValueError:
-            raise FieldFileError(f"line {number}: '{line[:60]}' is not a row of numbers") from None
+            mixed = delimiter == "\t" and not decimal_comma and "," in line
+            raise FieldFileError(f"line {number}: '{line[:60]}' is not a row of numbers"
+                                 + ("; decimal commas among decimal points: write the file in one" if mixed else "")
+                                 ) from None
         if not all(np.isfinite(values)):
             raise FieldFileError(f"line {number}: a value is {'NaN' if any(np.isnan(values)) else 'infinite'} (COMSOL "
                                  "writes NaN at points outside its geometry): export the field on a grid inside the "

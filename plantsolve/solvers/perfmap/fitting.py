@@ -41,6 +41,7 @@ class CurveFit:
     params: np.ndarray  # linear: control values c; log: (a, beta, c) in t; concave: values at the knots
     active: int = 0  # side conditions active at the solution
     knots: np.ndarray | None = None  # concave: the knots' t
+    minimax: bool = False  # the criterion that ran: a minimax whose linear programme failed is least squares
 
     def __call__(self, t: np.ndarray) -> np.ndarray:
         if self.family == "log":
@@ -70,8 +71,9 @@ def _bounded_lsq(A: np.ndarray, b: np.ndarray, n_free: int) -> np.ndarray:
     return np.concatenate([zF, -w])
 
 
-def _minimax_lp(A: np.ndarray, b: np.ndarray, n_free: int, weights: np.ndarray) -> np.ndarray:
-    """argmin max_i w_i |A z - b|_i subject to z[n_free:] <= 0 (LP in (z, e))."""
+def _minimax_lp(A: np.ndarray, b: np.ndarray, n_free: int, weights: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(argmin max_i w_i |A z - b|_i subject to z[n_free:] <= 0 (LP in (z, e)), True); (the least-squares
+    solution, False) where HiGHS fails, so that the fit states the criterion that ran."""
     n = A.shape[1]
     WA = A * weights[:, None]
     Wb = b * weights
@@ -82,9 +84,9 @@ def _minimax_lp(A: np.ndarray, b: np.ndarray, n_free: int, weights: np.ndarray) 
     cost = np.zeros(n + 1)
     cost[-1] = 1.0
     res = linprog(cost, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs")
-    if res.status != 0:  # numerically hopeless LP: fall back to least squares
-        return _bounded_lsq(A, b, n_free)
-    return res.x[:n]
+    if res.status != 0:  # numerically hopeless LP
+        return _bounded_lsq(A, b, n_free), False
+    return res.x[:n], True
 
 
 def fit_linear(family: str, t: np.ndarray, y: np.ndarray, shape: str, minimax: bool,
@@ -94,18 +96,18 @@ def fit_linear(family: str, t: np.ndarray, y: np.ndarray, shape: str, minimax: b
     n = B.shape[1]
     if shape == "free":
         if minimax:
-            c = _minimax_lp(B, y, n, 1.0 / np.abs(y))
+            c, minimax = _minimax_lp(B, y, n, 1.0 / np.abs(y))
         else:
             c = np.linalg.lstsq(B, y, rcond=None)[0]
-        return CurveFit(family, c, 0)
+        return CurveFit(family, c, 0, minimax=minimax)
     T = difference_transform(n)
     n_free = 1 if shape == "decreasing_concave" else 2
     A = B @ T
-    z = _minimax_lp(A, y, n_free, 1.0 / np.abs(y)) if minimax else _bounded_lsq(A, y, n_free)
+    z, minimax = _minimax_lp(A, y, n_free, 1.0 / np.abs(y)) if minimax else (_bounded_lsq(A, y, n_free), False)
     z[n_free:] = np.minimum(z[n_free:], 0.0)  # LP solvers may return +1e-17
     scale = max(float(np.max(np.abs(y))), 1e-300)
     active = int(np.sum(z[n_free:] > -1e-12 * scale))
-    return CurveFit(family, T @ z, active)
+    return CurveFit(family, T @ z, active, minimax=minimax)
 
 
 # ---------------------------------------------------------------- concave (piecewise linear)
@@ -126,10 +128,11 @@ def fit_concave(t: np.ndarray, y: np.ndarray, minimax: bool) -> CurveFit:
     (or minimax) over the convex set of such curves, exactly (NNLS or LP after :func:`concave_transform`).
     Its minimax error is the setting's floor: no decreasing concave curve does better."""
     F = concave_transform(t)
-    z = _minimax_lp(F, y, 1, 1.0 / np.abs(y)) if minimax else _bounded_lsq(F, y, 1)
+    z, minimax = _minimax_lp(F, y, 1, 1.0 / np.abs(y)) if minimax else (_bounded_lsq(F, y, 1), False)
     z[1:] = np.minimum(z[1:], 0.0)
     scale = max(float(np.max(np.abs(y))), 1e-300)
-    return CurveFit("concave", F @ z, int(np.sum(z[1:] > -1e-12 * scale)), knots=np.array(t, dtype=float))
+    return CurveFit("concave", F @ z, int(np.sum(z[1:] > -1e-12 * scale)), knots=np.array(t, dtype=float),
+                    minimax=minimax)
 
 
 # ---------------------------------------------------------------- log family
@@ -149,12 +152,12 @@ def _log_profile(beta: np.ndarray, t: np.ndarray, y: np.ndarray):
     return a, c, np.einsum("ij,ij->i", r, r)
 
 
-def _log_minimax_at(beta: float, t: np.ndarray, y: np.ndarray) -> tuple[float, np.ndarray]:
+def _log_minimax_at(beta: float, t: np.ndarray, y: np.ndarray) -> tuple[float, np.ndarray, bool]:
     A = np.column_stack([-np.log(beta - t), np.ones_like(t)])  # z = (-a, c): -a <= 0
     A = A[:, ::-1]  # free variable first
-    z = _minimax_lp(A, y, 1, 1.0 / np.abs(y))
+    z, solved = _minimax_lp(A, y, 1, 1.0 / np.abs(y))
     params = np.array([-z[1], beta, z[0]])
-    return max_rel_error(log_eval(params, t), y), params
+    return max_rel_error(log_eval(params, t), y), params, solved
 
 
 def fit_log(t: np.ndarray, y: np.ndarray, minimax: bool, polish: bool = True) -> CurveFit:
@@ -170,7 +173,7 @@ def fit_log(t: np.ndarray, y: np.ndarray, minimax: bool, polish: bool = True) ->
         best = min([_log_minimax_at(1.0 + np.exp(res.x), t, y), _log_minimax_at(coarse[k], t, y)],
                    key=lambda p: p[0])
         params = best[1]
-        return CurveFit("log", params, int(params[0] <= 0.0))
+        return CurveFit("log", params, int(params[0] <= 0.0), minimax=best[2])
 
     a, c, sse = _log_profile(grid, t, y)
     k = int(np.argmin(sse))
@@ -277,7 +280,7 @@ class PressureResult:
 def fit_pressure_setting(family: str, t, y, minimax: bool, with_loo: bool = True) -> PressureResult:
     fy = fit_pressure(family, t, y, minimax)
     return PressureResult(family, fy, max_rel_error(fy(t), y),
-                          pressure_loo(family, t, y) if with_loo else None, minimax)
+                          pressure_loo(family, t, y) if with_loo else None, fy.minimax)
 
 
 @dataclass

@@ -213,6 +213,14 @@ def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting])
             continue
         values = np.array([s.values[k] for s in settings], dtype=float)
         unit = units.settings[k] if k < len(units.settings) else None
+        if values.min() <= 0:  # in any unit or none: no speed line runs at zero or backwards
+            out.append(_warning(
+                "implausible_speed",
+                f"Corrected speed {name!r}: values {_range(values)} include "
+                f"{'negative speeds' if values.min() < 0 else 'zero'}: a compressor's speed lines run at positive "
+                "speeds: a stray minus, or another column (an angle?) read as the speed?",
+                quantity=name, unit=unit, range=[0.0, None], values=[float(values.min()), float(values.max())]))
+            continue
         try:
             parsed = parse_speed_unit(unit) if unit else None
         except UnitError:

@@ -313,6 +313,14 @@ def setting_results(ch: Characteristics, settings: list[Setting], pressure_choic
                 f"{family} curve minimises the worst relative error instead ({100 * r.err:.2f}%).",
                 details={**where, "family": family, "fit": "minimax", "max_rel_error": r.err, "floor": floor,
                          "least_squares_family": ls.family, "least_squares_max_rel_error": ls.err}))
+        if opts.fit == "minimax" and not r.minimax:
+            warnings.append(Diagnostic(
+                code="pressure_fit_not_minimax",
+                message=f"Setting {s.label}: options.fit is 'minimax' but the linear programme of this line's "
+                f"{family} curve failed (HiGHS), so it is fitted by least squares ({100 * r.err:.2f}% at its worst "
+                "point): settings[].pressure_fit says 'least_squares'.",
+                details={**where, "family": family, "fit": "least_squares", "asked": "minimax",
+                         "max_rel_error": r.err}))
         if r.err > floor + PRESSURE_EXCESS:
             reason, why = _floor_missed_reason(opts)
             warnings.append(Diagnostic(

@@ -14,6 +14,7 @@ efficiency is a fraction (``%`` and ``‰`` are divided out); settings keep thei
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import re
 from dataclasses import dataclass
@@ -26,7 +27,12 @@ from plantsolve.solvers.base import FieldError, InputRejected
 # Spellings of rig software and cycle codes that pint does not know (pint has ‰ as 'permille' already:
 # defining it again logs a redefinition warning on every run).
 _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
-                "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal")
+                "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal",
+                # fan and pump rigs' volume flows: pint read 'cfm' as centifermis, a length
+                "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute")
+# Volumes at standard or normal conditions: a mass flow in volume units, which no factor makes an actual volume flow.
+_STANDARD_VOLUMES = re.compile(r"(?:s|std\s*)cf[mhs]|mmscfd|(?:n|s)\s*m(?:3|\^3|³|\*\*3)\s*/\s*(?:h|hr|s|min|d)",
+                               re.IGNORECASE)
 
 
 @functools.cache
@@ -64,11 +70,19 @@ SPEED_DIMENSIONS = {"1": "relative (fraction, %)", "rpm": "rotational (rpm, 1/mi
 OTHER_QUANTITIES = ("K", "Pa", "kg", "m", "kg/s", "m^3/s", "s")
 _DIMENSIONLESS_WORDS = {"", "-", "–", "1", "—", "/", "ratio", "dimensionless", "frac", "fraction", "n/a", "na"}
 # Exponents written as plain digits after a length ('m3/h', 'cm3/s', 'ft3/min').
-_DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])")
+_DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])", re.IGNORECASE)
+# What a rig file's columns hold: a unit written in another case ('KG/S', 'KPA', 'M3/H') is re-cased only into one of
+# these, so that 'KG' is kilograms and not kilogauss, 'PA' pascals and not petaamperes.
+_RIG_UNITS = ("kg/s", "m^3/s", "Pa", "m", "J/kg", "1", "1/s", "rpm/K^0.5", "K", "kg", "s", "W")
+_LONGEST_RECASED = 10  # letters of a word whose every casing is tried (2^10 spellings at most)
 
 
 class UnitError(ValueError):
     """A unit that is not understood or has the wrong dimensions for its quantity."""
+
+
+class AmbiguousUnit(UnitError):
+    """A unit written in a casing that reads as two units of the quantity ('MPA': MPa or mPa)."""
 
 
 @dataclass(frozen=True)
@@ -86,8 +100,11 @@ class Unit:
         return float(registry().Quantity(1.0, self.unit).to(other.unit).magnitude)
 
 
-def parse_unit(text: str) -> Unit:
-    """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it."""
+def parse_unit(text: str, dimensions: frozenset[str] | None = None) -> Unit:
+    """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it. Units are case-sensitive
+    ('MPa' is not 'mPa'), but one that pint cannot read as written, or that lacks ``dimensions`` (those of
+    :func:`_dimensions`) when they are given, is read in the one casing that has them ('KG/S' is kg/s, 'PA' under a
+    pressure Pa), and refused when two casings do ('MPA': MPa or mPa)."""
     marked = _marked_pressure(text.strip().strip("[]").strip())
     if marked is not None:
         return marked
@@ -96,18 +113,85 @@ def parse_unit(text: str) -> Unit:
         return Unit("1", registry().dimensionless)
     if s.lower() == "pct":  # per cent as tables abbreviate it; pint reads a picocarat (a mass)
         s = "percent"
+    if _STANDARD_VOLUMES.fullmatch(s):
+        raise UnitError(f"unit {text.strip()!r} is a volume flow at standard (normal) conditions, a mass flow in "
+                        "volume units: no factor makes it an actual volume flow without those conditions; convert "
+                        "it to a mass flow (kg/s) or state the actual volume flow (m3/h, acfm)")
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
          .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
     s = _DIGIT_EXPONENT.sub(r"\1**\2", s)
     s = s.replace("^", "**")
-    try:
-        unit = registry().parse_units(s)
-    except Exception:  # pint's parser raises many types on garbage (tokenize, syntax, key, attribute errors)
-        raise UnitError(f"unit {text.strip()!r} is not understood (write e.g. kg/s, m3/h, bar, kPa, psi, %, rpm)") \
-            from None
+    unit = _pint_unit(s)
+    if unit is None or (dimensions is not None and _dimensions(unit) not in dimensions):
+        unit = _recased(text.strip(), s, dimensions or _rig_dimensions()) or unit
+    if unit is None:
+        raise UnitError(f"unit {text.strip()!r} is not understood (write e.g. kg/s, m3/h, bar, kPa, psi, %, rpm)")
     if unit.dimensionless and str(unit) == "dimensionless":
         return Unit("1", unit)
     return Unit(format(unit, "~P") or "1", unit)
+
+
+def _pint_unit(text: str) -> pint.Unit | None:
+    try:
+        return registry().parse_units(text)
+    except Exception:  # pint's parser raises many types on garbage (tokenize, syntax, key, attribute errors)
+        return None
+
+
+@functools.cache
+def _rig_dimensions() -> frozenset[str]:
+    return frozenset(_dimensions(registry().parse_units(u.replace("^", "**"))) for u in _RIG_UNITS)
+
+
+def _casings(word: str) -> list[str]:
+    """The spellings of ``word`` in every casing that pint reads as a unit name."""
+    if len(word) > _LONGEST_RECASED:
+        tried = {word, word.lower(), word.upper(), word.title()}
+    else:
+        tried = {"".join(c) for c in itertools.product(*({ch.lower(), ch.upper()} for ch in word))}
+    return [spelling for spelling in sorted(tried) if registry().parse_unit_name(spelling)]
+
+
+_WORD = re.compile(r"[A-Za-z][A-Za-z0-9]*")  # 'H2O' one word: 'INH2O' is inH2O
+
+
+def _respelled(text: str, words: tuple[str, ...]) -> str:
+    """``text`` with its words (:data:`_WORD`) replaced by ``words`` in order."""
+    replacing = iter(words)
+    return _WORD.sub(lambda _: next(replacing), text)
+
+
+def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit | None:
+    """The unit ``text`` is in the one casing of its words that has ``dimensions``; None when none has; raises
+    :class:`UnitError` when casings of other magnitude do (``written`` as the file wrote it, for the message)."""
+    words = _WORD.findall(text)
+    if not words:
+        return None
+    choices = [_casings(w) for w in words]
+    if not all(choices) or math.prod(map(len, choices)) > 256:
+        return None
+    found: dict[str, pint.Unit] = {}
+    for spelling in itertools.product(*choices):
+        candidate = _respelled(text, spelling)
+        unit = _pint_unit(candidate)
+        if unit is not None and _dimensions(unit) in dimensions and (not unit.dimensionless or _plain(unit)):
+            found.setdefault(candidate, unit)
+    distinct: dict[str, pint.Unit] = {}
+    for candidate, unit in found.items():
+        if not any(unit.dimensionality == other.dimensionality
+                   and math.isclose(registry().Quantity(1.0, unit).to(other).magnitude, 1.0, rel_tol=1e-9)
+                   for other in distinct.values()):
+            distinct[candidate] = unit
+    if len(distinct) > 1:
+        readings = " or ".join(f"{c} ({u})" for c, u in sorted(distinct.items()))
+        raise AmbiguousUnit(f"unit {written!r} reads as {readings}: units are case-sensitive, write it in its own case")
+    return next(iter(distinct.values()), None)
+
+
+def _plain(unit: pint.Unit) -> bool:
+    """Whether a dimensionless unit is a ratio's (%, ‰) or an angle's (degree, radian): what a rig file writes, and
+    not a word in capitals that pint also reads ('ALPHA' the fine-structure constant, 'MASS' milliarcseconds)."""
+    return str(unit) in ("degree", "radian") or is_ratio_unit(Unit(format(unit, "~P"), unit))
 
 
 def _marked_pressure(text: str) -> Unit | None:
@@ -117,11 +201,14 @@ def _marked_pressure(text: str) -> Unit | None:
     if match is None:
         return None
     name, mark = match["unit"], (match["mark"] or match["word"]).lower()
+    pressure = _dimensions(registry().parse_units("Pa"))
     try:
-        unit = registry().parse_units(name)
-    except Exception:  # pint's parser raises many types on garbage
+        unit = parse_unit(name, frozenset({pressure})).unit
+    except AmbiguousUnit:
+        raise
+    except UnitError:
         unit = None
-    if unit is None or unit.dimensionality != registry().parse_units("Pa").dimensionality:
+    if unit is None or _dimensions(unit) != pressure:
         raise UnitError(f"unit {text!r}: '{name}' marked {'absolute' if mark.startswith('a') else 'gauge'} is no "
                         "pressure unit (write e.g. kPa(a), bar(g), psia)")
     if mark.startswith("a"):
@@ -173,8 +260,8 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
     :class:`UnitError` when it is not understood or its dimensions do not fit the quantity."""
     if text is None:
         return None
-    u = parse_unit(text)
     allowed = ALLOWED[quantity]
+    u = parse_unit(text, frozenset(allowed))
     if _dimensions(u.unit) not in allowed:
         raise UnitError(f"unit {text.strip()!r} ({u.unit.dimensionality if not u.dimensionless else 'dimensionless'})"
                         f" is not a unit of {quantity}: expected {' or '.join(allowed.values())}")

@@ -118,7 +118,9 @@ HEADER_ALIASES = {
 SETTING_ROLES = ("theta", "igv", "vgv", "alpha", "phi", "speed", "diffuser")
 ROLES = tuple(HEADER_ALIASES) + ("ignore",)
 _ALIAS = {a: field for field, names in HEADER_ALIASES.items() for a in names}
-_UNIT_SUFFIX = re.compile(r"\s*[\[(]([^\[\]()]*)[\])]\s*$")
+# A unit in trailing brackets; a pressure's absolute or gauge mark may nest in them ('pressure [kPa(a)]').
+_PRESSURE_MARK = re.compile(r"\s*(?:a|abs|g|gauge)\s*", re.IGNORECASE)  # the mark of 'kPa(a)', no unit alone
+_UNIT_SUFFIX = re.compile(r"\s*[\[(]([^\[\]()]*(?:\(\s*(?:a|abs|g|gauge)\s*\))?)[\])]\s*$", re.IGNORECASE)
 _MAX_ROW_ERRORS = 20
 _HEADER_SEARCH_ROWS = 30
 # Pressure names that are ratios: such a column without a unit is dimensionless.
@@ -144,7 +146,10 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
                     parse_unit(tail)
                 except UnitError:
                     continue
-                return head.strip(), tail.strip().strip("()[]").strip()
+                tail = tail.strip()
+                if tail[:1] in "([" and tail[-1:] in ")]" and not _PRESSURE_MARK.fullmatch(tail[1:-1]):
+                    tail = tail[1:-1]  # 'Flow / (kg/s)'; not the mark of 'kPa(a)'
+                return head.strip(), tail.strip()
     return None
 
 
@@ -173,12 +178,14 @@ def _header_field(name: str) -> tuple[str | None, str]:
     if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
         return _ALIAS[whole], ""
     symbols = []
-    while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0:
+    while (m := _UNIT_SUFFIX.search(label)) and m.start() > 0 and not _PRESSURE_MARK.fullmatch(m.group(1)):
         if _symbol(m.group(1)):
             symbols.append(m.group(1).strip())
         else:
             unit = unit or m.group(1).strip()
         label = label[: m.start()]
+        if label.rstrip().endswith(" /"):  # quantity calculus, ISO 80000-1: 'Flow / (kg/s)'
+            label = label.rstrip()[:-1]
     if label.endswith("%") and len(label) > 1:  # "efficiency %"
         label, unit = label[:-1].rstrip(" ,/"), unit or "%"
     key = _alias_key(label)
@@ -589,6 +596,21 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                      ("options", "columns"))
     settings_found = [r for r in SETTING_ROLES if r in col]
     missing = [c for c in MEASURED if c not in col]
+    keys = [_role_key(h) for h in rows[0]]
+    # a mapping of a header the file lacks (a typo, another rig's file): the column it meant was not read so
+    unmatched = {k: v for k, v in (column_roles or {}).items() if _role_key(k) not in keys}
+    if unmatched:
+        notes_before.append(Diagnostic(
+            code="upload_columns_unmatched",
+            message=f"options.columns maps {', '.join(f'{k!r} (to {v})' for k, v in unmatched.items())}, which no "
+            f"header of the file ({what} {numbers[0]}) is: not used. The headers are "
+            f"{', '.join(repr(h.strip()) for h in rows[0])}.",
+            details={"columns": unmatched, "headers": [h.strip() for h in rows[0]]}))
+    if (missing or not settings_found) and any(k.startswith("max efficiency") for k in keys) \
+            and any(k.startswith("optimal ") for k in keys):
+        raise reject(f"the header ({what} {numbers[0]}) is that of a perfmap map.csv (flow, pressure, 'max efficiency' "
+                     "and the 'optimal' settings): a map's grid of best efficiencies, not measured speed lines; upload "
+                     "the rig's data, or the job's curves.csv (its fitted speed lines)", ("file", "header"))
     if missing or not settings_found:
         need = missing + ([] if settings_found else ["a setting (speed, IGV, VGV, alpha, diffuser, theta or phi)"])
         raise reject(
@@ -597,6 +619,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
             f"header to a role with the 'columns' option); missing: {', '.join(need)}; found: "
             f"{', '.join(repr(h.strip()) for h in rows[0])}"
             + hint
+            + (f" — options.columns names no header of the file: {', '.join(map(repr, unmatched))}" if unmatched else "")
             + (f" — the first {what} that is not blank or '#' must be the header"
                if all(_is_number(h) for h in rows[0] if h.strip()) else ""),
             ("file", "header"))
