@@ -35,7 +35,8 @@ import httpx
 
 FINISHED = ("succeeded", "failed", "cancelled")
 # the report warnings that are a verdict against a result, not a caveat on it (the service's
-# plantsolve/app/verdicts.py; copied because this module imports nothing of plantsolve)
+# plantsolve/schemas/common.py VERDICT_CODES, stated in each report as ``verdict``; copied for reports stored
+# before that field, because this module imports nothing of plantsolve)
 VERDICT_CODES = frozenset({"inspection_failed", "inspection_not_determined", "inspection_not_comparable",
                            "not_converged", "verification_failed", "tolerance_not_reached"})
 RECONNECT_SECONDS = 1.0  # pause before opening a cut event stream again
@@ -162,6 +163,8 @@ class Job:
         says the job ran to its end; this says whether its answer is a pass."""
         if self.status != "succeeded":
             return None
+        if "verdict" in (self.report or {}):  # the service's own statement (label, code, message)
+            return self.report["verdict"]
         return next((w for w in self.warnings if w.get("code") in VERDICT_CODES), None)
 
 

@@ -12,7 +12,8 @@ from typing import Any
 
 from pydantic import BaseModel, create_model
 
-from plantsolve.app.verdicts import Verdict, report_warnings, verdicts
+from plantsolve.app.verdicts import report_warnings, verdicts
+from plantsolve.schemas.common import ReportVerdict
 from plantsolve.schemas.jobs import ArtifactInfo, JobView
 from plantsolve.solvers.base import SolverSpec
 
@@ -62,7 +63,7 @@ class Row:
     input: str = "JSON"
     first_warning: str = ""  # the report's first warning's code (a kind puts its gravest first: a failed inspection)
     first_warning_message: str = ""
-    verdict: Verdict | None = None  # a warning that is a verdict against the result: shown beside 'succeeded'
+    verdict: ReportVerdict | None = None  # a warning that is a verdict against the result: shown beside 'succeeded'
 
 
 def input_label(job: Any) -> str:

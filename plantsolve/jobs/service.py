@@ -23,6 +23,7 @@ from plantsolve.jobs.dispatch import Dispatcher
 from plantsolve.jobs.errors import Conflict, NotFound, Unprocessable, field_problem, from_input_rejected
 from plantsolve.jobs.lifecycle import CANCELLED, QUEUED, RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.runner import failure_report
+from plantsolve.schemas.common import VERDICT_CODES
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
 from plantsolve.store.blobs import BlobMissing, BlobReader
@@ -422,8 +423,12 @@ def _summary(job: JobRecord) -> str:
     if job.status == RUNNING:
         return f"Running (attempt {job.attempt}): {job.progress_message} ({job.progress:.0%})."
     if job.status == SUCCEEDED:
-        warnings = len(report.get("warnings") or [])
-        return report.get("message") or ("Succeeded" + (f" with {warnings} warning(s)." if warnings else "."))
+        warnings = report.get("warnings") or []
+        head = next((w for w in warnings if isinstance(w, dict) and w.get("code") in VERDICT_CODES), None)
+        if head is not None:  # "succeeded" alone reads as a pass
+            return (f"Finished, but the result does not pass: {VERDICT_CODES[head['code']]} [{head['code']}]: "
+                    f"{head.get('message', '')}")
+        return report.get("message") or ("Succeeded" + (f" with {len(warnings)} warning(s)." if warnings else "."))
     return report.get("message") or job.status.capitalize() + "."
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, computed_field
 from pydantic_core import PydanticCustomError
 
 def json_integer(value: Any) -> Any:
@@ -82,10 +82,33 @@ class Diagnostic(BaseModel):
     details: dict[str, Any] = Field(default_factory=dict)
 
 
+VERDICT_CODES: dict[str, str] = {
+    "inspection_failed": "FAIL",
+    "inspection_not_determined": "NOT DETERMINED",
+    "inspection_not_comparable": "NOT COMPARABLE",
+    "not_converged": "NOT CONVERGED",
+    "verification_failed": "VERIFICATION FAILED",
+    "tolerance_not_reached": "TOLERANCE NOT REACHED",
+}
+"""The warning codes that are a verdict against a result, each with its headline. Most warnings are caveats on an
+answer that stands (a file's unit converted, a fit less close); these say the answer is *no* or *not known*: a tube
+out of tolerance or not measurable against its nominal, a fit stopped before it converged, an optimized model that
+failed its own verification, an accuracy asked for and not reached."""
+
+
+class ReportVerdict(BaseModel):
+    """A warning of the report that says the result does not pass what was asked."""
+
+    label: str = Field(description="The verdict in a word or two: FAIL, NOT DETERMINED, NOT CONVERGED, ...")
+    code: str = Field(description="The warning's code, one of the verdict codes.")
+    message: str = Field(description="The warning's sentence.")
+
+
 class Report(BaseModel):
     """What a solver says about its run.
 
-    On success: ``status`` is ``"ok"`` or ``"warning"`` with the warnings and diagnostics.
+    On success: ``status`` is ``"ok"`` or ``"warning"`` with the warnings and diagnostics, and ``verdict`` says
+    whether one of the warnings is a verdict against the result (the job ran to its end; its answer is no).
     On failure: ``status`` is ``"failed"``, ``stage`` names the stage that failed,
     ``message`` is a human sentence and ``details`` carries the machine-readable facts.
     """
@@ -95,3 +118,15 @@ class Report(BaseModel):
     message: str = ""
     warnings: list[Diagnostic] = Field(default_factory=list)
     details: dict[str, Any] = Field(default_factory=dict)
+
+    @computed_field(description="The first warning that is a verdict against the result (a failed or undetermined "
+                                "inspection, a fit not converged, a verification failed, a tolerance not reached: a "
+                                "kind puts its gravest first); null when the result stands or the run failed.")
+    @property
+    def verdict(self) -> ReportVerdict | None:
+        if self.status == "failed":
+            return None
+        for warning in self.warnings:
+            if warning.code in VERDICT_CODES:
+                return ReportVerdict(label=VERDICT_CODES[warning.code], code=warning.code, message=warning.message)
+        return None

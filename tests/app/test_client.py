@@ -189,7 +189,7 @@ def test_a_job_says_whether_its_result_passes_beside_its_status():
 
 
 def test_the_clients_verdict_codes_are_the_services():
-    from plantsolve.app.verdicts import VERDICTS
+    from plantsolve.schemas.common import VERDICT_CODES as VERDICTS
     from plantsolve.client import VERDICT_CODES
 
     assert VERDICT_CODES == set(VERDICTS)

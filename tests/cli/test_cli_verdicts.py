@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from plantsolve import cli
-from plantsolve.app.verdicts import VERDICTS
+from plantsolve.schemas.common import VERDICT_CODES as VERDICTS
 from plantsolve.solvers.kinds import KINDS, load_kinds
 from tests.conftest import REPO
 
