@@ -272,8 +272,10 @@ def output_problem(args: argparse.Namespace) -> str | None:
         out = Path(args.output)
         if out.is_dir():
             return f"-o {out} is a folder: name the result file, e.g. -o {out / 'result.json'}"
-        why = _unwritable(out.parent) or (f"{out} is not writable" if out.exists() and not os.access(out, os.W_OK)
-                                          else None)
+        # the result is written in place: a file that exists needs only its own write access (/dev/null for
+        # anyone), a new one the folder's
+        why = ((f"{out} is not writable" if not os.access(out, os.W_OK) else None) if out.exists()
+               else _unwritable(out.parent))
         if why:
             return f"-o {out}: {why}"
     if args.data_dir:
