@@ -36,7 +36,7 @@ import traceback
 from contextlib import contextmanager
 from multiprocessing import forkserver
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 from pydantic import ValidationError
 
@@ -307,20 +307,28 @@ def check(spec: SolverSpec, job_input: Any) -> None:
 
 
 @contextmanager
-def read_stored(spec: SolverSpec, job: JobRecord, files: BlobStore) -> Iterator[Any]:
+def read_stored(spec: SolverSpec, job: JobRecord, files: BlobStore,
+                on_request: Callable[[Any], None] | None = None) -> Iterator[Any]:
     """The kind's input value re-read from a job's stored input (in the worker; not checked again), for
-    the duration of the ``with`` block (a temporary copy of an upload is removed after it)."""
+    the duration of the ``with`` block (a temporary copy of an upload is removed after it). ``on_request`` is
+    given the request as soon as it is read, before the kind's ``load`` (which may fail too)."""
+    seen = on_request or (lambda request: None)
+
+    def input_of(request: Any, source: StoredInput | None = None) -> Any:
+        seen(request)
+        return spec.input_of(request, source)
+
     try:
         if job.input_kind == "json":
-            yield spec.input_of(spec.request_model.model_validate(job.input))
+            yield input_of(spec.request_model.model_validate(job.input))
         elif job.input_kind == "json_file":
-            yield spec.input_of(spec.request_model.model_validate_json(files.get(job.input_file)))
+            yield input_of(spec.request_model.model_validate_json(files.get(job.input_file)))
         elif job.input_kind == "upload":
             if spec.parse_upload is None:
                 raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
             with files.local_file(job.input_file, job.input_filename or "") as path:
                 source = StoredInput.from_path(path, job.input_filename)
-                yield spec.input_of(spec.parse_upload(source, job.input_options), source)
+                yield input_of(spec.parse_upload(source, job.input_options), source)
         else:
             raise SolverError("input", f"unknown input kind {job.input_kind!r}")
     except BlobMissing:
