@@ -118,8 +118,8 @@ def _install_health(app: FastAPI) -> None:
         "/readyz",
         response_model=HealthStatus,
         tags=["health"],
-        summary="Whether the service can take a job now: the database takes a write, the blob store a file, and a job "
-                "can start",
+        summary="Whether the service can take a job now: the database takes a write, the blob store a file, its disks "
+                "have room, and a job can start",
         operation_id="getReadiness",
         responses={503: {"model": HealthStatus, "description": "A part cannot (named in checks; details in the log)"},
                    **problems.responses(500)},
@@ -136,7 +136,7 @@ def readiness(ctx: ServiceContext, dispatcher) -> HealthStatus:
     """Each part ``ok`` or ``unavailable``; why a part is unavailable goes to the log only (it may hold addresses and
     driver messages)."""
     probes = (("database", ctx.db.ping), ("files", lambda: ctx.files.put(READINESS_PROBE, b"ok")),
-              ("jobs", dispatcher.ping))
+              ("disk", ctx.store.check_disk), ("jobs", dispatcher.ping))
     checks: dict[str, str] = {}
     for name, probe in probes:
         try:

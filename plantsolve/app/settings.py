@@ -54,6 +54,10 @@ class AppSettings(JobSettings):
     events_ping_seconds: float = Field(
         default=15.0, gt=0, le=3600, description="Period of the keep-alive comment on an open event stream."
     )
+    events_outage_seconds: float = Field(
+        default=30.0, gt=0, le=3600,
+        description="Longest an open event stream pauses while the database is away: then it sends an 'error' event "
+        "(a 503 problem) with a retry hint and ends.")
 
     webhook_secrets: Annotated[list[str], NoDecode] = Field(
         default_factory=list,

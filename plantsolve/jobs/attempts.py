@@ -110,6 +110,15 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
             "solver", f"The solver failed on this input ({said}); it was not retried because the same input fails "
                       "the same way. Check the input's values (scale, degenerate geometry); the server log has the "
                       f"details of job {job_id}, attempt {attempt}."), error=said, crash=True)
+    if disk_full(error):
+        # a full disk stays full for longer than a re-queued job waits: another attempt would solve again and meet
+        # it again (three solves for one failure); the result's write was already retried for RESULT_WRITE_SECONDS
+        return Verdict("failed", failure_report(
+            "infrastructure", f"A disk of the service is full ({said}): the job failed on the machine, not on the "
+                              "input. It was not retried, since another attempt would meet the same full disk after "
+                              "solving again; submit it again once space is freed (the server log has the details "
+                              f"of job {job_id}).",
+            disk_full=True), error=said, crash=True)
     # a disk, network or database error is the machine's, not the input's nor the solver's: said so, so that the
     # user sends the same input again once the service is back instead of looking for a fault in it; another error
     # of input and output (a file that is no gzip, one not found) may be either, and is said as such
@@ -131,6 +140,26 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
 MACHINE_ERRNOS = frozenset(getattr(errno, name) for name in (
     "ENOSPC", "EDQUOT", "EIO", "EROFS", "ENOMEM", "ESTALE", "ECONNREFUSED", "ECONNRESET", "ECONNABORTED", "ETIMEDOUT",
     "EHOSTUNREACH", "ENETUNREACH", "ENETDOWN", "EPIPE", "ENOTCONN") if hasattr(errno, name))
+
+
+DISK_FULL_ERRNOS = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT") if hasattr(errno, name))
+SQLITE_FULL = 13  # SQLite's "database or disk is full"
+POSTGRES_DISK_FULL = "53100"  # SQLSTATE disk_full
+
+
+def disk_full(error: BaseException) -> bool:
+    """Whether ``error``, or an error it was raised from, says a disk (or a quota) is full: an OSError of ENOSPC
+    or EDQUOT, SQLite's SQLITE_FULL, PostgreSQL's disk_full."""
+    seen: set[int] = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        if isinstance(error, OSError) and error.errno in DISK_FULL_ERRNOS:
+            return True
+        if getattr(error, "sqlite_errorcode", None) == SQLITE_FULL \
+                or getattr(error, "sqlstate", None) == POSTGRES_DISK_FULL:
+            return True
+        error = getattr(error, "orig", None) or error.__cause__ or error.__context__
+    return False
 
 
 def _the_machines(error: BaseException) -> bool:

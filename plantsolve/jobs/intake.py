@@ -24,6 +24,7 @@ Every refusal is an :class:`~plantsolve.jobs.errors.Unprocessable` (422) or
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import math
@@ -36,7 +37,7 @@ import traceback
 from contextlib import contextmanager
 from multiprocessing import forkserver
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 from pydantic import ValidationError
 
@@ -217,12 +218,43 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
     if source.path is None:
         raise ValueError("a bounded read needs the upload stored on disk")
     check_text_lines(source)
+    _bounded(spec, "upload", source, options, plugins, memory_bytes=memory_bytes, seconds=seconds, start=start)
+
+
+def read_json_bounded(spec: SolverSpec, source: StoredInput, plugins: Iterable[str] = (), *,
+                      memory_bytes: int = UPLOAD_READ_MEMORY, seconds: float = UPLOAD_READ_SECONDS,
+                      start: str = "forkserver") -> str:
+    """:func:`read_json` and :func:`check` of a large JSON body stored on disk, in a bounded child process as an
+    upload is read (a field file's text of two million rows is 2 CPU s and 400 MB to validate and check): the
+    SHA-256 of the kind and the body's canonical form (:func:`canonical_json`, what idempotency compares), or the
+    422 naming the body's field (or the body, when reading it needs more memory or time than allowed)."""
+    if source.path is None:
+        raise ValueError("a bounded read needs the body stored on disk")
+    prescan_json(source.read(), array_bounds(spec.request_model), "The body")  # as read_json: the bounds first
+    return _bounded(spec, "json", source, None, plugins, memory_bytes=memory_bytes, seconds=seconds, start=start)
+
+
+def canonical_json(value: Any) -> bytes:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode()
+
+
+def body_hash(kind: str, raw: Any) -> str:
+    """The SHA-256 by which two JSON submissions are the same request: the kind and the body's canonical form."""
+    return hashlib.sha256(kind.encode() + b"\n" + canonical_json(raw)).hexdigest()
+
+
+# what a bounded read reads, and how its refusals name it: (JSON path, a noun for the message)
+_READ_AS = {"upload": (["file"], "The uploaded file", "this file", "an upload"),
+            "json": ([], "The body", "this body", "a JSON body")}
+
+
+def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | None, plugins: Iterable[str], *,
+             memory_bytes: int, seconds: float, start: str) -> Any:
     plugins = tuple(plugins)
     try:
         pickled = pickle.dumps((spec.kind, plugins) if load_kinds(plugins).get(spec.kind) is spec else spec)
     except (pickle.PicklingError, AttributeError, TypeError):
-        check(spec, read_upload(spec, source, options))
-        return
+        return _read(spec, what, source, options)
     if start not in READER_STARTS:
         raise ValueError(f"no reader start {start!r}; known: {', '.join(READER_STARTS)}")
     if start == "fork":
@@ -233,7 +265,7 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
     receiver, sender = context.Pipe(duplex=False)
     process = context.Process(
         target=_read_in_child, daemon=True, name=f"read-{spec.kind}",
-        args=(sender, pickled, str(source.path), source.name, options, memory_bytes, seconds))
+        args=(sender, pickled, what, str(source.path), source.name, options, memory_bytes, seconds))
     process.start()
     sender.close()
     died = False
@@ -249,21 +281,35 @@ def read_upload_bounded(spec: SolverSpec, source: StoredInput, options: dict | N
     if died and process.exitcode == -signal.SIGXCPU:  # the soft CPU limit (the default action ends the process)
         outcome = ("time",)
     if outcome[0] == "ok":
-        return
+        return outcome[1]
     if outcome[0] == "invalid":
         raise Unprocessable(outcome[1], errors=outcome[2])
+    loc, subject, this, one = _READ_AS[what]
     if outcome[0] == "memory":
-        msg = f"reading this file needs more than the {memory_bytes // 2**20} MiB an upload may take to read"
-        raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_large")])
+        msg = f"reading {this} needs more than the {memory_bytes // 2**20} MiB {one} may take to read"
+        raise Unprocessable(f"{subject} could not be read: {msg}.", errors=[field_problem(loc, msg, "too_large")])
     if outcome[0] == "time":
-        msg = f"reading this file takes longer than the {seconds:g} CPU seconds an upload may take to read"
-        raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "too_slow")])
-    log.warning("reading an uploaded %s file for %s failed in the reader:\n%s", source.extension, spec.kind, outcome[1])
-    msg = f"the file could not be read as a {source.extension or 'file'} file for {spec.kind} (it is malformed)"
-    raise Unprocessable(f"The uploaded file could not be read: {msg}.", errors=[field_problem(["file"], msg, "value_error")])
+        msg = f"reading {this} takes longer than the {seconds:g} CPU seconds {one} may take to read"
+        raise Unprocessable(f"{subject} could not be read: {msg}.", errors=[field_problem(loc, msg, "too_slow")])
+    log.warning("reading %s for %s failed in the reader:\n%s", f"an uploaded {source.extension} file"
+                if what == "upload" else "a JSON body", spec.kind, outcome[1])
+    msg = f"the file could not be read as a {source.extension or 'file'} file for {spec.kind} (it is malformed)" \
+        if what == "upload" else f"the body could not be read as a {spec.kind} request"
+    raise Unprocessable(f"{subject} could not be read: {msg}.", errors=[field_problem(loc, msg, "value_error")])
 
 
-def _read_in_child(sender, pickled: bytes, path: str, name: str, options: dict | None,
+def _read(spec: SolverSpec, what: str, source: StoredInput, options: dict | None) -> Any:
+    """What a bounded read does, in whichever process runs it: an upload read and checked (None), or a JSON body
+    read and checked (its :func:`body_hash`)."""
+    if what == "upload":
+        check(spec, read_upload(spec, source, options))
+        return None
+    raw, job_input = read_json(spec, source.read())
+    check(spec, job_input)
+    return body_hash(spec.kind, raw)
+
+
+def _read_in_child(sender, pickled: bytes, what: str, path: str, name: str, options: dict | None,
                    memory_bytes: int, seconds: float) -> None:
     """In the reading process: limits first, then the reader; only the outcome goes back."""
     try:
@@ -274,8 +320,7 @@ def _read_in_child(sender, pickled: bytes, path: str, name: str, options: dict |
         if isinstance(spec, tuple):
             kind, plugins = spec
             spec = load_kinds(plugins)[kind]
-        check(spec, read_upload(spec, StoredInput.from_path(Path(path), name), options))
-        outcome: tuple = ("ok",)
+        outcome: tuple = ("ok", _read(spec, what, StoredInput.from_path(Path(path), name), options))
     except Unprocessable as error:
         outcome = ("invalid", error.detail, error.errors)
     except MemoryError:
@@ -307,20 +352,28 @@ def check(spec: SolverSpec, job_input: Any) -> None:
 
 
 @contextmanager
-def read_stored(spec: SolverSpec, job: JobRecord, files: BlobStore) -> Iterator[Any]:
+def read_stored(spec: SolverSpec, job: JobRecord, files: BlobStore,
+                on_request: Callable[[Any], None] | None = None) -> Iterator[Any]:
     """The kind's input value re-read from a job's stored input (in the worker; not checked again), for
-    the duration of the ``with`` block (a temporary copy of an upload is removed after it)."""
+    the duration of the ``with`` block (a temporary copy of an upload is removed after it). ``on_request`` is
+    given the request as soon as it is read, before the kind's ``load`` (which may fail too)."""
+    seen = on_request or (lambda request: None)
+
+    def input_of(request: Any, source: StoredInput | None = None) -> Any:
+        seen(request)
+        return spec.input_of(request, source)
+
     try:
         if job.input_kind == "json":
-            yield spec.input_of(spec.request_model.model_validate(job.input))
+            yield input_of(spec.request_model.model_validate(job.input))
         elif job.input_kind == "json_file":
-            yield spec.input_of(spec.request_model.model_validate_json(files.get(job.input_file)))
+            yield input_of(spec.request_model.model_validate_json(files.get(job.input_file)))
         elif job.input_kind == "upload":
             if spec.parse_upload is None:
                 raise SolverError("input", f"solver kind {spec.kind!r} accepts no file uploads")
             with files.local_file(job.input_file, job.input_filename or "") as path:
                 source = StoredInput.from_path(path, job.input_filename)
-                yield spec.input_of(spec.parse_upload(source, job.input_options), source)
+                yield input_of(spec.parse_upload(source, job.input_options), source)
         else:
             raise SolverError("input", f"unknown input kind {job.input_kind!r}")
     except BlobMissing:

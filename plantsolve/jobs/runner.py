@@ -23,6 +23,7 @@ from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_repor
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
+from plantsolve.jobs.reader_notes import reader_warnings, with_reader_warnings
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
@@ -212,12 +213,14 @@ def _run_claimed(
 
     log_book = AttemptLog(job.attempts, attempt, worker)
     soft_limit, hard_limit = ctx.limits(spec)
+    read: list[dict] = []  # the reader's warnings: a failure report keeps them, as a result's report does
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
             holder = pending_holder(ctx, job_id)
             if holder is not None:
                 return _store_pending(ctx, job_id, attempt, holder, monitor, log_book)
-            with intake.read_stored(spec, job, ctx.files) as job_input:  # a temporary copy lives until the end
+            with intake.read_stored(spec, job, ctx.files,
+                                    on_request=lambda request: read.extend(reader_warnings(request))) as job_input:
                 solved = _call_with_deadline(
                     lambda: spec.solve(job_input, monitor.progress),
                     hard_limit if hard_limit_in_thread else None,
@@ -230,6 +233,8 @@ def _run_claimed(
                 log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
             elif verdict.crash:
                 log.exception("job %s attempt %d crashed", job_id, attempt)  # the traceback stays in the server log
+    if read:
+        verdict = dataclasses.replace(verdict, report=with_reader_warnings(verdict.report, read))
     return _conclude(ctx, job, attempt, verdict, monitor, log_book, requeue)
 
 

@@ -53,10 +53,6 @@ class Submitted:
     view: JobView | None = None
 
 
-def _canonical(value: Any) -> bytes:
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False).encode()
-
-
 def safe_filename(name: str) -> str:
     base = re.sub(r"[^A-Za-z0-9._-]+", "_", name.rsplit("/", 1)[-1].rsplit("\\", 1)[-1]).strip("._")
     return base[:120] or "upload"
@@ -100,17 +96,27 @@ class JobService:
 
     def take_json(self, kind: str, body: bytes, idempotency_key: str | None, *, owner: str = "",
                   callback_url: str | None = None) -> NewJob:
-        """A JSON submission read, checked and ready to store (a large request's input stored as a file already)."""
+        """A JSON submission read, checked and ready to store (a large request's input stored as a file already).
+
+        A large request (more than ``INLINE_INPUT_BYTES``) is stored as it came and read and checked from its file in
+        a bounded process, as an upload is: this process holds its bytes, never the objects made of them."""
         spec = self.spec(kind)
-        raw, job_input = intake.read_json(spec, body)
-        intake.check(spec, job_input)
-        self._intake_loaded.add(kind)
-        body_hash = hashlib.sha256(kind.encode() + b"\n" + _canonical(raw)).hexdigest()
         job_id = uuid.uuid4()
         if not self.stores_inline(len(body)):
-            blob = self.ctx.files.put(f"{job_id}/input/request.json", _canonical(raw))
-            fields = {"input_kind": "json_file", "input_file": blob.key}
+            blob = self.ctx.files.put(f"{job_id}/input/request.json", body)
+            try:
+                with self.ctx.files.local_file(blob.key, "request.json") as path:
+                    body_hash = intake.read_json_bounded(spec, StoredInput.from_path(path, "request.json"),
+                                                         self.ctx.settings.plugins, start=self._reader_start)
+            except Exception:
+                self.ctx.files.delete(blob.key)
+                raise
+            fields: dict[str, Any] = {"input_kind": "json_file", "input_file": blob.key}
         else:
+            raw, job_input = intake.read_json(spec, body)
+            intake.check(spec, job_input)
+            self._intake_loaded.add(kind)
+            body_hash = intake.body_hash(kind, raw)
             fields = {"input_kind": "json", "input": raw}
         return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
 
@@ -135,7 +141,7 @@ class JobService:
             intake.read_upload(spec, StoredInput.from_bytes(filename, content), options)  # the 422 of an empty file
         intake.check_text_lines(StoredInput.from_bytes(filename, content))
         digest = hashlib.sha256()
-        for part in (kind.encode(), extension.encode(), _canonical(options), content):
+        for part in (kind.encode(), extension.encode(), intake.canonical_json(options), content):
             digest.update(hashlib.sha256(part).digest())
         job_id = uuid.uuid4()
         # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from plantsolve.store.blobs import BlobStore, LocalBlobStore
 from plantsolve.store.blobs_database import DatabaseBlobStore
 from plantsolve.store.blobs_s3 import S3BlobStore
+from plantsolve.store.disk import check_free_space
 from plantsolve.store.engine import Database
 from plantsolve.store.loop_connections import LoopConnections
 from plantsolve.store.loop_connections import available as loop_connections_available
@@ -28,6 +30,7 @@ class Store:
     sessions: SessionRepository
     spool: LocalBlobStore
     loop_connections: LoopConnections | None = None
+    min_free_disk_bytes: int = 0
 
     @classmethod
     def open(cls, settings: StoreSettings, *, migrate: bool | str = False) -> "Store":
@@ -46,7 +49,16 @@ class Store:
             if loop_connections_available(db.engine) else None
         repo = JobRepository(db.sessions, db.writing, group_commit=db.is_sqlite, loop_connections=loop_connections)
         return cls(db=db, repo=repo, files=open_blob_store(settings, db, local),
-                   sessions=SessionRepository(db.sessions, db.writing), spool=local, loop_connections=loop_connections)
+                   sessions=SessionRepository(db.sessions, db.writing), spool=local, loop_connections=loop_connections,
+                   min_free_disk_bytes=settings.min_free_disk_bytes)
+
+    def check_disk(self) -> None:
+        """Raise :class:`~plantsolve.store.disk.DiskLow` when a disk this process writes to (``ARTIFACT_DIR``, the
+        SQLite file's folder) has less than ``MIN_FREE_DISK_BYTES`` free."""
+        folders: dict[str, Path] = {"ARTIFACT_DIR": self.spool.root}
+        if self.db.file is not None:
+            folders["database"] = self.db.file.path.parent
+        check_free_space(folders, self.min_free_disk_bytes)
 
     def close(self) -> None:
         self.repo.close()

@@ -47,6 +47,10 @@ class StoreSettings(BaseSettings):
         default=10.0, gt=0, le=600,
         description="PostgreSQL: how long one statement may run (statement_timeout) and data may wait unacknowledged "
         "on a dead link (tcp_user_timeout), so a black-holed database answers 503 in seconds.")
+    min_free_disk_bytes: int = Field(
+        default=512 * 2**20, ge=0,
+        description="Free space below which the service is not ready (/readyz 503 naming 'disk'), on the disk of "
+        "ARTIFACT_DIR and of the SQLite file; 0: not checked.")
     s3_bucket: str | None = Field(default=None, description="BLOB_STORE=s3: the bucket (it must exist).")
     s3_endpoint_url: str | None = Field(
         default=None, description="BLOB_STORE=s3: the server's URL when it is not AWS (MinIO, Ceph, Garage …).")

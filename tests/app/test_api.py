@@ -192,7 +192,7 @@ def test_api_keys(tmp_path):
 def test_no_auth_by_default_and_health(client):
     assert client.get("/v1/jobs").status_code == 200
     ready = client.get("/readyz")
-    assert ready.status_code == 200 and ready.json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok"}
+    assert ready.status_code == 200 and ready.json()["checks"] == {"database": "ok", "files": "ok", "disk": "ok", "jobs": "ok"}
 
 
 def test_openapi_declares_kinds_and_errors(client):

@@ -105,3 +105,41 @@ def test_the_stream_of_every_job_asked_for_while_the_database_is_away_is_a_503_p
     assert response.status_code == 503
     assert response.headers["content-type"] == "application/problem+json"
     assert int(response.headers["Retry-After"]) > 0
+
+
+@pytest.mark.parametrize("path", ["job", "/v1/jobs/events"])
+def test_a_stream_whose_database_stays_away_ends_with_a_problem_and_a_retry_hint(tmp_path, monkeypatch, caplog, path):
+    """EVENTS_OUTAGE_SECONDS bounds the pause: then an `error` event (a 503 problem) with `retry` and the stream ends.
+    Before, the stream paused with pings for as long as the database was away, and said nothing."""
+    settings = service_settings(tmp_path, events_poll_seconds=0.02, events_ping_seconds=0.1,
+                                events_outage_seconds=0.5)
+    app = create_app(settings, run_jobs=False)
+    with TestClient(app, raise_server_exceptions=False) as client:
+        repo = app.state.ctx.repo
+        job = client.post("/v1/test-compute/jobs", json={"values": [1.0]}).json()
+        url = f"/v1/jobs/{job['id']}/events" if path == "job" else path
+        outage = Outage(repo.state if path == "job" else repo.states)
+        monkeypatch.setattr(repo, "state" if path == "job" else "states", outage)
+        lines: list[str] = []
+        with client.stream("GET", url) as response:
+            assert response.status_code == 200
+            iterator = response.iter_lines()
+            for line in iterator:
+                lines.append(line)
+                if line.startswith(("event: job", ": watching")):
+                    break
+            outage.away = True  # and stays away
+            started = time.monotonic()
+            for line in iterator:  # the stream ends by itself (pings keep the lines coming meanwhile)
+                lines.append(line)
+                assert time.monotonic() - started < 10, "the stream did not end while the database stayed away"
+            paused = time.monotonic() - started
+    assert outage.refused >= 2
+    assert 0.5 <= paused < 10, paused
+    received = list(events(iter(lines)))
+    name, problem = received[-1]
+    assert name == "error"
+    assert problem["status"] == 503 and problem["type"].endswith("/unavailable") and problem["instance"] == url
+    assert "unreachable for 0.5 s" in problem["detail"] and problem["extra"] == {"retry_after": 5}
+    assert "retry: 5000" in lines[lines.index("event: error"):]  # the reconnection delay, in milliseconds
+    assert [r.getMessage() for r in caplog.records if "ended: the database" in r.getMessage()]

@@ -61,7 +61,8 @@ def test_a_sqlite_file_locked_by_another_process_gives_503_within_the_busy_timeo
         # two bounded waits at most (this process's write lock, then SQLite's busy timeout), plus the machine's slack
         assert max(timings.values()) < 2 * WAIT + 3, timings
         ready = client.get("/readyz").json()
-        assert ready == {"status": "unavailable", "checks": {"database": "unavailable", "files": "ok", "jobs": "ok"}}
+        assert ready == {"status": "unavailable",
+                         "checks": {"database": "unavailable", "files": "ok", "disk": "ok", "jobs": "ok"}}
     finally:
         holder.kill()
         holder.wait()
@@ -76,9 +77,37 @@ def test_readiness_names_a_blob_store_that_cannot_take_a_file_and_tells_no_detai
     artifacts.write_text("not a folder")  # a disk that refuses: every file write fails
     ready = client.get("/readyz")
     assert ready.status_code == 503
-    assert ready.json() == {"status": "unavailable", "checks": {"database": "ok", "files": "unavailable", "jobs": "ok"}}
+    assert ready.json() == {"status": "unavailable",
+                            "checks": {"database": "ok", "files": "unavailable", "disk": "ok", "jobs": "ok"}}
     assert str(tmp_path) not in ready.text
     assert any("not ready: files" in r.getMessage() and r.exc_info is None for r in caplog.records)
+
+
+@pytest.mark.parametrize("margin, status", [(2**30, 503), (-2**20, 200)])
+def test_readiness_names_a_disk_below_the_free_space_floor(tmp_path, caplog, margin, status):
+    """MIN_FREE_DISK_BYTES above the free space of the disk that holds ARTIFACT_DIR and the SQLite file (measured
+    here): 503 naming 'disk', the folder and its free space in the log only; just below it: ready."""
+    floor = max(0, shutil.disk_usage(tmp_path).free + margin)
+    with TestClient(create_app(service_settings(tmp_path, min_free_disk_bytes=floor)),
+                    raise_server_exceptions=False) as client:
+        ready = client.get("/readyz")
+    assert ready.status_code == status
+    if status == 200:
+        return
+    assert ready.json() == {"status": "unavailable",
+                            "checks": {"database": "ok", "files": "ok", "disk": "unavailable", "jobs": "ok"}}
+    assert str(tmp_path) not in ready.text
+    said = [r.getMessage() for r in caplog.records if "not ready: disk" in r.getMessage()]
+    # one disk holds both folders: named once, by the first role
+    assert said and "ARTIFACT_DIR" in said[-1] and "MiB free" in said[-1] and "database (" not in said[-1], said
+
+
+def test_a_floor_of_zero_checks_nothing(tmp_path):
+    from plantsolve.store.disk import DiskLow, check_free_space
+
+    check_free_space({"ARTIFACT_DIR": tmp_path / "not" / "made"}, 0)
+    with pytest.raises(DiskLow, match=r"ARTIFACT_DIR .*not/made.*MiB free"):
+        check_free_space({"ARTIFACT_DIR": tmp_path / "not" / "made"}, shutil.disk_usage(tmp_path).free + 2**30)
 
 
 def _silent_server() -> tuple[socket.socket, int]:

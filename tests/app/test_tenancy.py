@@ -68,7 +68,7 @@ def test_docs_and_readiness_details_need_a_key(tenants):
         assert client.get(path).status_code == 401, path
         assert client.get(path, headers=A).status_code == 200, path
     assert client.get("/healthz").status_code == 200
-    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok"}
+    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "disk": "ok", "jobs": "ok"}
 
 
 def test_a_browser_logs_in_to_the_dashboard_with_a_cookie(tenants):

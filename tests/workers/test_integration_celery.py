@@ -125,7 +125,7 @@ def test_job_runs_end_to_end_on_postgres_and_celery(scaled):
     assert client.get(f"/v1/jobs/{done['id']}/result").json()["norm"] == 5.0
     artifact = client.get(f"/v1/jobs/{done['id']}/artifacts/values.txt")
     assert artifact.status_code == 200 and artifact.content == b"3.0\n4.0"
-    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "jobs": "ok", "workers": "ok"}
+    assert client.get("/readyz").json()["checks"] == {"database": "ok", "files": "ok", "disk": "ok", "jobs": "ok", "workers": "ok"}
 
 
 def test_embedded_and_celery_give_identical_results(scaled, tmp_path):

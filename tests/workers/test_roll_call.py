@@ -23,7 +23,7 @@ from plantsolve.workers.roll_call import ROLL_KEY, Announcer, WorkerRoll, roll_c
 from tests.conftest import service_settings
 
 ALIVE = 15.0  # WORKER_ALIVE_SECONDS: the default
-READY = {"database": "ok", "files": "ok", "jobs": "ok", "workers": "ok"}
+READY = {"database": "ok", "files": "ok", "disk": "ok", "jobs": "ok", "workers": "ok"}
 NOBODY = {**READY, "workers": "unavailable"}
 
 

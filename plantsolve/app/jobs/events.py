@@ -11,8 +11,9 @@ Both poll the jobs' status columns every ``EVENTS_POLL_SECONDS`` instead of list
 process that runs the job: a job may run in a Celery worker on another machine, and the database
 is the one place every mode writes progress to. A comment line every ``EVENTS_PING_SECONDS`` keeps
 proxies from closing an idle stream; the stream stops when the client goes away. A database that goes away
-while a stream is open pauses it (the pings go on) until it is back, instead of breaking it off mid-body; one
-that is away when a stream is asked for is a 503 problem, as for every other request.
+while a stream is open pauses it (the pings go on) until it is back, instead of breaking it off mid-body, for at most
+``EVENTS_OUTAGE_SECONDS``: then the stream sends ``event: error`` (a 503 problem, ``retry`` set to the reconnection
+delay) and ends. One that is away when a stream is asked for is a 503 problem, as for every other request.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import time
 import uuid
 from datetime import datetime, timedelta, timezone
 from typing import Any, AsyncIterator
@@ -29,7 +31,7 @@ from sse_starlette import EventSourceResponse, ServerSentEvent
 from starlette.concurrency import run_in_threadpool
 
 from plantsolve.app.deps import Caller, Service
-from plantsolve.app.problems import responses
+from plantsolve.app.problems import RETRY_AFTER_SECONDS, ServiceUnavailable, responses
 from plantsolve.jobs.errors import NotFound, is_infrastructure_failure
 from plantsolve.jobs.lifecycle import is_finished
 from plantsolve.jobs.service import JobRecord, JobService, JobState
@@ -61,26 +63,46 @@ def _response(events: AsyncIterator[ServerSentEvent], request: Request) -> Event
 
 class _Outage:
     """A stream's database outages: a poll that found the database away is skipped (the stream pauses, its pings go
-    on), said once in the log per outage, not at every poll."""
+    on), said once in the log per outage, not at every poll; an outage longer than ``limit`` seconds ends the stream
+    (:attr:`expired`, :meth:`ending`), so that no client waits on a stream that says nothing for as long as the
+    database is away."""
 
-    def __init__(self, what: str):
-        self.what, self.away = what, False
+    def __init__(self, what: str, limit: float, path: str, replayed: str):
+        self.what, self.limit, self.path, self.replayed = what, limit, path, replayed
+        self.since: float | None = None
 
     def met(self, error: Exception) -> None:
         if not is_infrastructure_failure(error):
             raise error
-        if not self.away:
+        if self.since is None:
             log.warning("event stream of %s paused: the database is away (%s)", self.what, type(error).__name__)
-        self.away = True
+            self.since = time.monotonic()
 
     def over(self) -> None:
-        self.away = False
+        self.since = None
+
+    @property
+    def expired(self) -> bool:
+        return self.since is not None and time.monotonic() - self.since >= self.limit
+
+    def ending(self) -> ServerSentEvent:
+        """The stream's last event: a 503 problem saying how long the database has been away, and when to reconnect
+        (the ``retry`` field, and ``Retry-After`` seconds in the problem's details)."""
+        log.warning("event stream of %s ended: the database has been away for %g s", self.what, self.limit)
+        problem = ServiceUnavailable(
+            f"The database has been unreachable for {self.limit:g} s (EVENTS_OUTAGE_SECONDS); this stream ends. "
+            f"Reconnect after {RETRY_AFTER_SECONDS} s: {self.replayed}", extra={"retry_after": RETRY_AFTER_SECONDS})
+        event = ServerSentEvent(data=json.dumps(problem.to_problem(instance=self.path).model_dump(
+            mode="json", exclude_none=True)), event="error", sep=SEP)
+        event.retry = RETRY_AFTER_SECONDS * 1000
+        return event
 
 
 async def job_event_stream(request: Request, service: JobService, job: JobRecord, sees: str | None) -> AsyncIterator[ServerSentEvent]:
     """The stream of ``job`` (read by the endpoint, so that a database away when it is asked for is a 503)."""
     settings = request.app.state.settings
-    outage = _Outage(f"job {job.id}")
+    outage = _Outage(f"job {job.id}", settings.events_outage_seconds, request.url.path,
+                     "the new stream starts with the job's view as it is then.")
     job_id = job.id
     first: ServerSentEvent | None = None
     while first is None:  # its view reads the artifacts too: the database may have gone since the endpoint's read
@@ -88,6 +110,9 @@ async def job_event_stream(request: Request, service: JobService, job: JobRecord
             first = _job_event((await run_in_threadpool(service.view, job)).model_dump_json())
         except Exception as error:
             outage.met(error)
+            if outage.expired:
+                yield outage.ending()
+                return
             await asyncio.sleep(settings.events_poll_seconds)
     outage.over()
     first.retry = RETRY_MS
@@ -109,6 +134,9 @@ async def job_event_stream(request: Request, service: JobService, job: JobRecord
             break
         except Exception as error:
             outage.met(error)
+            if outage.expired:
+                yield outage.ending()
+                return
             continue
         outage.over()
         seen = JobState.of(job).signature
@@ -131,7 +159,8 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
                             status: str | None, since: datetime,
                             known: dict[uuid.UUID, tuple]) -> AsyncIterator[ServerSentEvent]:
     settings = request.app.state.settings
-    outage = _Outage("every job")
+    outage = _Outage("every job", settings.events_outage_seconds, request.url.path,
+                     "the new stream sends the changes after it opens; those made meanwhile are in GET /v1/jobs.")
     opened = ServerSentEvent(comment="watching jobs", sep=SEP)
     opened.retry = RETRY_MS
     yield opened
@@ -147,6 +176,9 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
                 lambda: service.states(since=since, ids=active, owner=sees, kind=kind))
         except Exception as error:
             outage.met(error)
+            if outage.expired:
+                yield outage.ending()
+                return
             continue
         for state in states:
             if known.get(state.id) == state.signature:
@@ -163,6 +195,9 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
             except Exception as error:
                 outage.met(error)
                 missed = True
+                if outage.expired:
+                    yield outage.ending()
+                    return
                 continue
             known[state.id] = state.signature
             yield _job_event(view.model_dump_json())
@@ -187,7 +222,9 @@ def add_event_routes(router: APIRouter) -> None:
         description=(
             "A `text/event-stream` of `event: job` (data: the job view, as `GET /v1/jobs/{id}`) for every job you "
             "may see whose status or progress changes after you connect; `kind` and `status` filter them (a job "
-            "is sent when its new status matches). It never ends; a comment line every ~15 s keeps it open."
+            "is sent when its new status matches). It ends only when the database stays unreachable for "
+            "EVENTS_OUTAGE_SECONDS (30 s): then `event: error` (data: a 503 problem) with a `retry` delay; a comment "
+            "line every ~15 s keeps it open."
         ),
         response_class=EventSourceResponse,
         responses={**_stream_doc("The event stream"), **responses(422)},
@@ -206,7 +243,8 @@ def add_event_routes(router: APIRouter) -> None:
             "A `text/event-stream`: first `event: job` whose data is the job view (exactly `GET /v1/jobs/{id}`), "
             "then one whenever the status or progress (fraction or message) changes; after a terminal status "
             "(succeeded, failed, cancelled) `event: end` with data `{\"status\": \"<final>\"}`, and the stream "
-            "closes. A comment line every ~15 s keeps it open."
+            "closes. A database unreachable for EVENTS_OUTAGE_SECONDS (30 s) ends it too, with `event: error` (data: "
+            "a 503 problem) and a `retry` delay. A comment line every ~15 s keeps it open."
         ),
         response_class=EventSourceResponse,
         responses={**_stream_doc("The event stream"), **responses(404, 422)},

@@ -1,0 +1,245 @@
+"""Killed processes on a real ``plantsolve serve`` (embedded default, SQLite, a private data dir): does every job end
+solved exactly once or failed with a reason, and does ``/readyz`` tell the truth meanwhile?
+
+Scenarios (each on a fresh service; jobs of the test kind ``test-compute``, which writes a marker file per finished
+solve, so the markers count the solves):
+
+- ``warm``: kill -9 of the idle warm parent; /readyz is polled until it is 200 again, then jobs are submitted;
+- ``jobs``: kill -9 of every job process while two jobs run and two wait;
+- ``stop``: SIGSTOP of one running job process (its lease lapses; the sweep takes the attempt back and kills it);
+- ``api``: kill -9 of the API process with two jobs running and four queued, then ``serve`` again on the same data dir.
+
+Each row: the scenario, the jobs' final statuses, the solves per job, whether a failed job's report says why, the
+/readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR`` runs the
+same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
+stopped process is noticed in seconds.
+
+    python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import httpx
+
+HERE = Path(__file__).resolve().parent.parent
+BIN = Path(sys.executable).parent
+JOB_SECONDS = 3.0
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] not in ("Z", "X"):
+                found.append(int(entry.name))
+    return found
+
+
+def _forkservers(api: int) -> list[int]:
+    out = []
+    for pid in _children(api):
+        try:
+            if b"multiprocessing.forkserver" in Path(f"/proc/{pid}/cmdline").read_bytes():
+                out.append(pid)
+        except OSError:
+            pass
+    return out
+
+
+class Service:
+    def __init__(self, tree: Path, data: Path):
+        self.tree, self.data, self.port = tree, data, _free_port()
+        self.env = {**os.environ, "PYTHONPATH": str(tree), "PLUGINS": "tests.support.kinds", "DATA_DIR": str(data),
+                    "LEASE_SECONDS": "8", "HEARTBEAT_SECONDS": "1", "SWEEP_SECONDS": "1", "EMBEDDED_WORKERS": "2",
+                    "LOG_FORMAT": "text", "LOG_LEVEL": "warning"}
+        self.process: subprocess.Popen | None = None
+        self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=30)
+        self.ready_seen: list[str] = []
+
+    def start(self) -> None:
+        log = open(self.data / "serve.log", "ab")
+        self.process = subprocess.Popen([str(BIN / "plantsolve"), "serve", "--port", str(self.port)], cwd=self.tree,
+                                        env=self.env, stdout=log, stderr=subprocess.STDOUT)
+        self.wait_ready(60)
+
+    def ready(self) -> str:
+        try:
+            response = self.client.get("/readyz", timeout=10)
+            said = "200" if response.status_code == 200 else \
+                f"{response.status_code} {','.join(k for k, v in response.json()['checks'].items() if v != 'ok')}"
+        except httpx.HTTPError:
+            said = "no answer"
+        if not self.ready_seen or self.ready_seen[-1] != said:
+            self.ready_seen.append(said)
+        return said
+
+    def wait_ready(self, seconds: float) -> None:
+        until = time.monotonic() + seconds
+        while self.ready() != "200":
+            if time.monotonic() > until:
+                raise RuntimeError(f"not ready after {seconds} s: {self.ready_seen}")
+            time.sleep(0.2)
+
+    def submit(self, n: int, markers: Path) -> list[str]:
+        ids = []
+        for i in range(n):
+            body = {"values": [float(i)], "seconds": JOB_SECONDS, "marker_dir": str(markers / str(i))}
+            ids.append(self.client.post("/v1/test-compute/jobs", json=body).json()["id"])
+        return ids
+
+    def jobs(self, ids: list[str]) -> list[dict]:
+        return [self.client.get(f"/v1/jobs/{i}").json() for i in ids]
+
+    def job_processes(self) -> list[int]:
+        return [pid for server in _forkservers(self.process.pid) for pid in _children(server)]
+
+    def wait_running(self, count: int, seconds: float = 30) -> list[int]:
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            pids = self.job_processes()
+            if len(pids) >= count:
+                return pids
+            time.sleep(0.1)
+        raise RuntimeError("jobs did not start")
+
+    def wait_finished(self, ids: list[str], seconds: float) -> tuple[list[dict], float]:
+        started = time.monotonic()
+        while time.monotonic() - started < seconds:
+            jobs = self.jobs(ids)
+            if all(j["status"] in ("succeeded", "failed", "cancelled") for j in jobs):
+                return jobs, time.monotonic() - started
+            self.ready()
+            time.sleep(0.3)
+        return self.jobs(ids), float("nan")
+
+    def stop(self) -> None:
+        if self.process and self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(20)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        for pid in _stray(self.data):
+            os.kill(pid, signal.SIGKILL)
+
+
+def _stray(data: Path) -> list[int]:
+    """Processes left of a killed service (none should be): their environment names its data dir."""
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit() and int(entry.name) != os.getpid():
+            try:
+                if f"DATA_DIR={data}".encode() in (entry / "environ").read_bytes():
+                    out.append(int(entry.name))
+            except OSError:
+                pass
+    return out
+
+
+def _what(pid: int) -> str:
+    """A process's role, read from its command line: the warm parent (forkserver), a job process, or other."""
+    try:
+        argv = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return "gone"
+    return "warm parent" if b"forkserver" in argv and b"main" in argv else \
+        "job process" if b"multiprocessing" in argv or b"forkserver" in argv else argv.split(b"\0")[0].decode()[-40:]
+
+
+def scenario(name: str, tree: Path) -> dict:
+    data = Path(tempfile.mkdtemp(prefix=f"kill-{name}-"))
+    markers = data / "markers"
+    service = Service(tree, data)
+    service.start()
+    note = ""
+    try:
+        if name == "warm":
+            servers = _forkservers(service.process.pid)
+            os.kill(servers[0], signal.SIGKILL)
+            until = time.monotonic() + 60
+            service.ready()
+            while service.ready() != "200" and time.monotonic() < until:
+                time.sleep(0.1)
+            ids = service.submit(4, markers)
+        elif name == "jobs":
+            ids = service.submit(4, markers)
+            pids = service.wait_running(2)
+            time.sleep(1.0)
+            for pid in pids:
+                os.kill(pid, signal.SIGKILL)
+        elif name == "stop":
+            ids = service.submit(2, markers)
+            pids = service.wait_running(2)
+            time.sleep(0.5)
+            os.kill(pids[0], signal.SIGSTOP)
+            stopped = pids[0]
+        elif name == "api":
+            ids = service.submit(6, markers)
+            service.wait_running(2)
+            time.sleep(1.0)
+            service.process.kill()
+            service.process.wait()
+            killed = time.monotonic()
+            lingered: dict[int, str] = {}
+            while (left := _stray(data)) and time.monotonic() - killed < 10:
+                lingered.update({pid: _what(pid) for pid in left if pid not in lingered})
+                time.sleep(0.1)
+            note = (f"after the kill {len(lingered)} process(es) lingered ({', '.join(sorted(set(lingered.values())))})"
+                    f" for {time.monotonic() - killed:.1f} s" if lingered else "no process outlived the kill")
+            for pid in left:
+                os.kill(pid, signal.SIGKILL)
+            service.start()
+        else:
+            raise ValueError(name)
+        jobs, seconds = service.wait_finished(ids, 120)
+        if name == "stop":
+            alive = Path(f"/proc/{stopped}").exists() and \
+                Path(f"/proc/{stopped}/stat").read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+            note = "stopped process " + ("still alive" if alive else "killed")
+        service.wait_ready(30)
+        service.ready()
+    finally:
+        service.stop()
+    solves = [len(list((markers / str(i)).glob("*"))) if (markers / str(i)).exists() else 0 for i in range(len(ids))]
+    statuses = [j["status"] for j in jobs]
+    reasons = [bool((j.get("report") or {}).get("message")) for j in jobs if j["status"] == "failed"]
+    once = all((s == "succeeded" and n == 1) or (s == "failed" and n <= 1) for s, n in zip(statuses, solves))
+    return {"scenario": name, "statuses": statuses, "solves": solves, "failed_say_why": all(reasons),
+            "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--before", type=Path)
+    parser.add_argument("--only", default="warm,jobs,stop,api")
+    args = parser.parse_args()
+    for tree in ([args.before] if args.before else []) + [HERE]:
+        for name in args.only.split(","):
+            row = scenario(name, tree)
+            print(json.dumps({"tree": str(tree), **row}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
