@@ -168,7 +168,11 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     one matrix product per bend. With ``plan`` (X is ``plan``'s batch about its row 0) a row's start frame and
     its products of the steps before the first bend its parameter moves are row 0's, taken as such: every row
     computed on its own is what it computes in the whole batch (elementwise operations and a matrix product
-    per row), so these are the very numbers its own products give."""
+    per row), so these are the very numbers its own products give. The plan's products of one bend are two
+    matrix products instead of one per row (the rows whose parameters leave the bend's step alone times row 0's
+    step, stacked; row 0's frame times the steps of the rows whose parameters move it first there, side by side):
+    a 4 × 4 product is a BLAS call whose overhead is many times its arithmetic, and an entry of a product is
+    the same sum of the same terms whichever rows or columns are computed with it."""
     B = len(X)
     n = lay.n
     i = 6
@@ -188,7 +192,7 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     if plan is None:
         frames = rotvec_matrices(X[:, 3:6]) @ frame0
     else:  # the rows after the first ``turned`` + 1 have row 0's rotation vector: its frame
-        own = rotvec_matrices(X[:plan.turned + 1, 3:6]) @ frame0
+        own = (rotvec_matrices(X[:plan.turned + 1, 3:6]).reshape(-1, 3) @ frame0).reshape(-1, 3, 3)
         frames = np.empty((B, 3, 3))
         frames[:plan.turned + 1] = own
         frames[plan.turned + 1:] = own[0]
@@ -201,12 +205,14 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     # bend k as one rigid step from its arc start (frame F_k, point p_k) to the next arc start: turn about the
     # tangent by the rotation (Rx), bend about the binormal by the angle (Rz, offset (R sin a, R (1 - cos a),
     # 0) in the turned frame), then the straight after it along the new tangent; in homogeneous 4 x 4 form
-    # the frames of all bends are one product per bend for the whole batch
+    # the frames of all bends are one product per bend for the whole batch (bend-major: a bend's rows are one
+    # block of memory, which its stacked product reads and writes in place)
     rots = np.concatenate([np.zeros((B, 1)), rm], 1)
     after = np.concatenate([lm, np.zeros((B, 1))], 1)  # the straight after each bend (the end one: 0)
     c, s_ = np.cos(rots), np.sin(rots)
     ca, sa = np.cos(ang), np.sin(ang)
-    M = np.zeros((B, n, 4, 4))
+    c, s_, ca, sa, rad, after = c.T, s_.T, ca.T, sa.T, rad.T, after.T  # (n, B)
+    M = np.zeros((n, B, 4, 4))
     M[..., 0, 0], M[..., 0, 1] = ca, -sa
     M[..., 1, 0], M[..., 1, 1], M[..., 1, 2] = c * sa, c * ca, -s_
     M[..., 2, 0], M[..., 2, 1], M[..., 2, 2] = s_ * sa, s_ * ca, c
@@ -215,24 +221,32 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     M[..., 1, 3] = c * (off + after * sa)
     M[..., 2, 3] = s_ * (off + after * sa)
     M[..., 3, 3] = 1.0
-    T = np.empty((B, n + 1, 4, 4))
-    T[:, 0, :3, :3] = frames
-    T[:, 0, :3, 3] = p0
-    T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
+    T = np.empty((n + 1, B, 4, 4))
+    T[0, :, :3, :3] = frames
+    T[0, :, :3, 3] = p0
+    T[0, :, 3] = (0.0, 0.0, 0.0, 1.0)
     for k in range(n):
-        live = B if plan is None else plan.active[k]
-        T[:live, k + 1] = T[:live, k] @ M[:live, k]
+        if plan is None:
+            np.matmul(T[k], M[k], out=T[k + 1])
+            continue
+        shared, live, both = plan.shared[k], plan.active[k], plan.both[k]
+        np.matmul(T[k, :shared].reshape(-1, 4), M[k, 0], out=T[k + 1, :shared].reshape(-1, 4))
+        if live > shared:  # the rows whose parameter moves this bend's step first: row 0's frame times theirs
+            steps = np.matmul(T[k, 0], M[k, shared:live].transpose(1, 0, 2).reshape(4, -1))
+            T[k + 1, shared:live] = steps.reshape(4, live - shared, 4).transpose(1, 0, 2)
+        if len(both):  # a shared radius moves this step and an earlier one: a product of the row's own
+            T[k + 1, both] = np.matmul(T[k, both], M[k, both])
         if live < B:  # rows whose frames and steps up to bend k are row 0's
-            T[live:, k + 1] = T[0, k + 1]
-    F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
+            T[k + 1, live:] = T[k + 1, 0]
+    F, P = T[:n, :, :3, :3], T[:n, :, :3, 3]  # each bend's arc start, before its rotation
     nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
     bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
-    g[:, 1::2, :3] = P + rad[..., None] * nt
-    g[:, 1::2, 3:6] = bt
-    g[:, 1::2, 6] = rad
+    g[:, 1::2, :3] = (P + rad[..., None] * nt).transpose(1, 0, 2)
+    g[:, 1::2, 3:6] = bt.transpose(1, 0, 2)
+    g[:, 1::2, 6] = rad.T
     # the straights after the bends start at the arc ends, along the next frames' tangents
-    g[:, 2::2, :3] = P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt
-    g[:, 2::2, 3:6] = T[:, 1:, :3, 0]
+    g[:, 2::2, :3] = (P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt).transpose(1, 0, 2)
+    g[:, 2::2, 3:6] = T[1:, :, :3, 0].transpose(1, 0, 2)
     return g
 
 
@@ -258,6 +272,11 @@ class JacobianBatch:
     span: np.ndarray
     turned: int  # rows 1 … turned change the rotation vector
     active: tuple[int, ...]  # per bend k: the rows [:active[k]] whose frames or steps up to bend k are their own
+    # per bend k: the rows [shared[k]:active[k]] are those whose parameter moves bend k's step and no earlier one
+    # (their frames before it are row 0's), the rows [:shared[k]] take row 0's step but those in both[k], which
+    # a shared radius moves there and before
+    shared: tuple[int, ...]
+    both: tuple[np.ndarray, ...]
 
 
 def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
@@ -279,6 +298,21 @@ def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     elif lay.radius_mode == "dies" and n:
         dies = np.asarray(lay.dies)
         first[i:i + lay.n_radii] = [int(np.flatnonzero(dies == d)[0]) for d in range(lay.n_radii)]
+    moves = np.zeros((P, n), bool)  # the bends whose step a parameter enters
+    i = 6
+    moves[i + np.arange(n - 1), np.arange(n - 1)] = True
+    i += max(n - 1, 0)
+    moves[i + np.arange(n - 1), np.arange(1, n)] = True
+    i += max(n - 1, 0)
+    moves[i + np.arange(n), np.arange(n)] = True
+    i += n
+    if lay.radius_mode == "free":
+        moves[i + np.arange(n), np.arange(n)] = True
+    elif lay.radius_mode == "common" and n:
+        moves[i] = True
+    elif lay.radius_mode == "dies" and n:
+        moves[i + np.asarray(lay.dies), np.arange(n)] = True
+    # (within a bend's parameters, those of the start point and frame, which move no step, come first)
     order = sorted(range(P), key=lambda p: (first[p], not 3 <= p < 6))
     pos = np.empty(P, int)
     pos[order] = np.arange(P)
@@ -286,7 +320,10 @@ def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     shift[pos, np.arange(P)] = steps
     first_sorted = first[order]
     active = tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
-    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
+    rows = np.stack([1 + 2 * pos, 2 + 2 * pos], axis=1)  # each parameter's two rows
+    shared = tuple(active[k] - 2 * int(np.count_nonzero(moves[:, k] & (first == k))) for k in range(n))
+    both = tuple(np.sort(rows[moves[:, k] & (first < k)].ravel()) for k in range(n))
+    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active, shared, both)
 
 
 def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
@@ -896,13 +933,17 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
 
     plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
 
-    def geometry(x):
+    def geometry(x, jacobian: bool = False):
+        """The geometry at x, with its Jacobian when asked: a trial the solver rejects (nearly half of them)
+        needs the residuals only, and the Jacobian's batch of 2P + 1 models costs several of one. (A row of the
+        batch computes what it computes alone, so the geometry is the same numbers either way.)"""
         key = x.tobytes()
         if latest.get("x") != key:
-            g, dG = geometry_and_jacobian(x, lay, frame0, rp, plan)
             latest.clear()
-            latest.update(x=key, g=g, dG=dG)
-        return latest["g"], latest["dG"]
+            latest.update(x=key, g=geometry_batch(x[None], lay, frame0, rp)[0])
+        if jacobian and "dG" not in latest:
+            latest["dG"] = geometry_and_jacobian(x, lay, frame0, rp, plan)[1]
+        return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):
         arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
@@ -918,7 +959,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         r_p = x[-1] if lay.fit_pipe_radius else rp
         evaluations[0] += 1
         summed = fused and (max_nfev is None or evaluations[0] < max_nfev)
-        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if summed else None
+        sums = _gram_sums(7 + int(lay.fit_pipe_radius), len(kind)) if summed else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
@@ -956,7 +997,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
         # the geometry and the distances' terms at x, as fun has just computed them (the same numbers again)
-        g, dG = geometry(x)
+        g, dG = geometry(x, jacobian=True)
         terms = latest.get("terms")
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
