@@ -24,6 +24,7 @@ which stays fast with many samples and on a loaded machine.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -168,11 +169,7 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     one matrix product per bend. With ``plan`` (X is ``plan``'s batch about its row 0) a row's start frame and
     its products of the steps before the first bend its parameter moves are row 0's, taken as such: every row
     computed on its own is what it computes in the whole batch (elementwise operations and a matrix product
-    per row), so these are the very numbers its own products give. The plan's products of one bend are two
-    matrix products instead of one per row (the rows whose parameters leave the bend's step alone times row 0's
-    step, stacked; row 0's frame times the steps of the rows whose parameters move it first there, side by side):
-    a 4 × 4 product is a BLAS call whose overhead is many times its arithmetic, and an entry of a product is
-    the same sum of the same terms whichever rows or columns are computed with it."""
+    per row), so these are the very numbers its own products give."""
     B = len(X)
     n = lay.n
     i = 6
@@ -192,7 +189,7 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     if plan is None:
         frames = rotvec_matrices(X[:, 3:6]) @ frame0
     else:  # the rows after the first ``turned`` + 1 have row 0's rotation vector: its frame
-        own = (rotvec_matrices(X[:plan.turned + 1, 3:6]).reshape(-1, 3) @ frame0).reshape(-1, 3, 3)
+        own = rotvec_matrices(X[:plan.turned + 1, 3:6]) @ frame0
         frames = np.empty((B, 3, 3))
         frames[:plan.turned + 1] = own
         frames[plan.turned + 1:] = own[0]
@@ -205,14 +202,12 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     # bend k as one rigid step from its arc start (frame F_k, point p_k) to the next arc start: turn about the
     # tangent by the rotation (Rx), bend about the binormal by the angle (Rz, offset (R sin a, R (1 - cos a),
     # 0) in the turned frame), then the straight after it along the new tangent; in homogeneous 4 x 4 form
-    # the frames of all bends are one product per bend for the whole batch (bend-major: a bend's rows are one
-    # block of memory, which its stacked product reads and writes in place)
+    # the frames of all bends are one product per bend for the whole batch
     rots = np.concatenate([np.zeros((B, 1)), rm], 1)
     after = np.concatenate([lm, np.zeros((B, 1))], 1)  # the straight after each bend (the end one: 0)
     c, s_ = np.cos(rots), np.sin(rots)
     ca, sa = np.cos(ang), np.sin(ang)
-    c, s_, ca, sa, rad, after = c.T, s_.T, ca.T, sa.T, rad.T, after.T  # (n, B)
-    M = np.zeros((n, B, 4, 4))
+    M = np.zeros((B, n, 4, 4))
     M[..., 0, 0], M[..., 0, 1] = ca, -sa
     M[..., 1, 0], M[..., 1, 1], M[..., 1, 2] = c * sa, c * ca, -s_
     M[..., 2, 0], M[..., 2, 1], M[..., 2, 2] = s_ * sa, s_ * ca, c
@@ -221,32 +216,24 @@ def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
     M[..., 1, 3] = c * (off + after * sa)
     M[..., 2, 3] = s_ * (off + after * sa)
     M[..., 3, 3] = 1.0
-    T = np.empty((n + 1, B, 4, 4))
-    T[0, :, :3, :3] = frames
-    T[0, :, :3, 3] = p0
-    T[0, :, 3] = (0.0, 0.0, 0.0, 1.0)
+    T = np.empty((B, n + 1, 4, 4))
+    T[:, 0, :3, :3] = frames
+    T[:, 0, :3, 3] = p0
+    T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
     for k in range(n):
-        if plan is None:
-            np.matmul(T[k], M[k], out=T[k + 1])
-            continue
-        shared, live, both = plan.shared[k], plan.active[k], plan.both[k]
-        np.matmul(T[k, :shared].reshape(-1, 4), M[k, 0], out=T[k + 1, :shared].reshape(-1, 4))
-        if live > shared:  # the rows whose parameter moves this bend's step first: row 0's frame times theirs
-            steps = np.matmul(T[k, 0], M[k, shared:live].transpose(1, 0, 2).reshape(4, -1))
-            T[k + 1, shared:live] = steps.reshape(4, live - shared, 4).transpose(1, 0, 2)
-        if len(both):  # a shared radius moves this step and an earlier one: a product of the row's own
-            T[k + 1, both] = np.matmul(T[k, both], M[k, both])
+        live = B if plan is None else plan.active[k]
+        T[:live, k + 1] = T[:live, k] @ M[:live, k]
         if live < B:  # rows whose frames and steps up to bend k are row 0's
-            T[k + 1, live:] = T[k + 1, 0]
-    F, P = T[:n, :, :3, :3], T[:n, :, :3, 3]  # each bend's arc start, before its rotation
+            T[live:, k + 1] = T[0, k + 1]
+    F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
     nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
     bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
-    g[:, 1::2, :3] = (P + rad[..., None] * nt).transpose(1, 0, 2)
-    g[:, 1::2, 3:6] = bt.transpose(1, 0, 2)
-    g[:, 1::2, 6] = rad.T
+    g[:, 1::2, :3] = P + rad[..., None] * nt
+    g[:, 1::2, 3:6] = bt
+    g[:, 1::2, 6] = rad
     # the straights after the bends start at the arc ends, along the next frames' tangents
-    g[:, 2::2, :3] = (P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt).transpose(1, 0, 2)
-    g[:, 2::2, 3:6] = T[1:, :, :3, 0].transpose(1, 0, 2)
+    g[:, 2::2, :3] = P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt
+    g[:, 2::2, 3:6] = T[:, 1:, :3, 0]
     return g
 
 
@@ -272,16 +259,22 @@ class JacobianBatch:
     span: np.ndarray
     turned: int  # rows 1 … turned change the rotation vector
     active: tuple[int, ...]  # per bend k: the rows [:active[k]] whose frames or steps up to bend k are their own
-    # per bend k: the rows [shared[k]:active[k]] are those whose parameter moves bend k's step and no earlier one
-    # (their frames before it are row 0's), the rows [:shared[k]] take row 0's step but those in both[k], which
-    # a shared radius moves there and before
-    shared: tuple[int, ...]
-    both: tuple[np.ndarray, ...]
 
 
 def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     """The batch of :func:`geometry_and_jacobian` for the steps of a round (:func:`_steps`)."""
-    P, n = len(steps), lay.n
+    pos, active = _batch_rows(len(steps), lay.n, lay.radius_mode, tuple(lay.dies))
+    shift = np.zeros((len(steps), len(steps)))
+    shift[pos, np.arange(len(steps))] = steps
+    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
+
+
+@functools.lru_cache(maxsize=256)
+def _batch_rows(P: int, n: int, radius_mode: str, dies: tuple[int, ...]) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The rows of :func:`jacobian_batch` of a layout (P parameters, n bends; a pipe radius parameter, if any, is
+    the last): each parameter's position among the batch's pairs of rows, and per bend k the rows ``active[k]``
+    of :class:`JacobianBatch`. The same for every round of a layout (the bend count's choice fits a few layouts
+    dozens of times); the positions are shared: read only."""
     first = np.full(P, n)  # the first bend whose 4 × 4 step a parameter changes (n: none, the pipe radius)
     first[:6] = 0  # start point and frame: before the first bend
     i = 6
@@ -291,39 +284,19 @@ def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     i += max(n - 1, 0)
     first[i:i + n] = np.arange(n)
     i += n
-    if lay.radius_mode == "free":
+    if radius_mode == "free":
         first[i:i + n] = np.arange(n)
-    elif lay.radius_mode == "common" and n:
+    elif radius_mode == "common" and n:
         first[i] = 0
-    elif lay.radius_mode == "dies" and n:
-        dies = np.asarray(lay.dies)
-        first[i:i + lay.n_radii] = [int(np.flatnonzero(dies == d)[0]) for d in range(lay.n_radii)]
-    moves = np.zeros((P, n), bool)  # the bends whose step a parameter enters
-    i = 6
-    moves[i + np.arange(n - 1), np.arange(n - 1)] = True
-    i += max(n - 1, 0)
-    moves[i + np.arange(n - 1), np.arange(1, n)] = True
-    i += max(n - 1, 0)
-    moves[i + np.arange(n), np.arange(n)] = True
-    i += n
-    if lay.radius_mode == "free":
-        moves[i + np.arange(n), np.arange(n)] = True
-    elif lay.radius_mode == "common" and n:
-        moves[i] = True
-    elif lay.radius_mode == "dies" and n:
-        moves[i + np.asarray(lay.dies), np.arange(n)] = True
-    # (within a bend's parameters, those of the start point and frame, which move no step, come first)
+    elif radius_mode == "dies" and n:
+        die = np.asarray(dies)
+        first[i:i + max(dies) + 1] = [int(np.flatnonzero(die == d)[0]) for d in range(max(dies) + 1)]
     order = sorted(range(P), key=lambda p: (first[p], not 3 <= p < 6))
     pos = np.empty(P, int)
     pos[order] = np.arange(P)
-    shift = np.zeros((P, P))
-    shift[pos, np.arange(P)] = steps
+    pos.setflags(write=False)
     first_sorted = first[order]
-    active = tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
-    rows = np.stack([1 + 2 * pos, 2 + 2 * pos], axis=1)  # each parameter's two rows
-    shared = tuple(active[k] - 2 * int(np.count_nonzero(moves[:, k] & (first == k))) for k in range(n))
-    both = tuple(np.sort(rows[moves[:, k] & (first < k)].ravel()) for k in range(n))
-    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active, shared, both)
+    return pos, tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
 
 
 def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
@@ -828,12 +801,22 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
 BLOCK = 65_536  # samples per pass of fun and the normal equations (the per-sample temporaries stay in cache)
 
 
-def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np.ndarray, tuple]:
+def _arc_samples(arc: np.ndarray) -> bool | np.ndarray:
+    """Which samples of a block ``arc`` marks as on a circle: True when all are, False when none is, else their
+    indices (:func:`_sample_distance` takes them; a round's blocks keep theirs)."""
+    if not arc.any():
+        return False
+    return True if arc.all() else np.flatnonzero(arc)
+
+
+def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray,
+                     on_arc: bool | np.ndarray | None = None) -> tuple[np.ndarray, tuple]:
     """Distance of each point to its own (unbounded) line or circle, all samples in one pass, and the terms
     :func:`_sample_gradient` takes on from. Component-major: ``q`` (3, n) the points, ``gs`` (7, n) the
-    geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles; every
-    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3). In the
-    terms ``arc`` is True or False when every sample is on an arc or none is."""
+    geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles
+    (``on_arc``: its :func:`_arc_samples`, when known); every operation then runs over rows of n samples (a
+    sample-major (n, 3) array hands numpy loops of 3). In the terms ``arc`` is True or False when every sample
+    is on an arc or none is."""
     c, a, R = gs[:3], gs[3:6], gs[6]
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
@@ -844,13 +827,15 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
     # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
-    mixed = bool(arc.any()) and not arc.all()
-    if mixed:
-        dd = rho.copy()
-        dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
-    else:
-        dd = np.hypot(rho - R, s) if arc.any() else rho
-        arc = bool(arc.any())
+    if on_arc is None:
+        on_arc = _arc_samples(arc)
+    if on_arc is True:
+        dd = np.hypot(rho - R, s)
+        return dd, (w, s, perp, rho, a, R, dd, True)
+    if on_arc is False:
+        return rho, (w, s, perp, rho, a, R, rho, False)
+    dd = rho.copy()
+    dd[on_arc] = np.hypot(rho.take(on_arc) - R.take(on_arc), s.take(on_arc))
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -918,6 +903,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # each block's samples per segment: their geometry is each segment's repeated (the samples are sorted)
     counts = [np.bincount(seg[b], minlength=len(kind)) for b in blocks]
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
+    on_arc = [_arc_samples(a) for a in arcs] if arcs is not None else None
 
     keep_terms = len(blocks) == 1
     # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
@@ -946,8 +932,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):
-        arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
-        return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arc)
+        if arcs is None:
+            return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), np.repeat(is_arc, counts[i]))
+        return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arcs[i], on_arc[i])
 
     def fun(x, out=None):
         """The residuals at x, into ``out`` when given (a large scan's array, reused: fresh memory of its
