@@ -24,6 +24,7 @@ which stays fast with many samples and on a loaded machine.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -262,7 +263,18 @@ class JacobianBatch:
 
 def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     """The batch of :func:`geometry_and_jacobian` for the steps of a round (:func:`_steps`)."""
-    P, n = len(steps), lay.n
+    pos, active = _batch_rows(len(steps), lay.n, lay.radius_mode, tuple(lay.dies))
+    shift = np.zeros((len(steps), len(steps)))
+    shift[pos, np.arange(len(steps))] = steps
+    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
+
+
+@functools.lru_cache(maxsize=256)
+def _batch_rows(P: int, n: int, radius_mode: str, dies: tuple[int, ...]) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The rows of :func:`jacobian_batch` of a layout (P parameters, n bends; a pipe radius parameter, if any, is
+    the last): each parameter's position among the batch's pairs of rows, and per bend k the rows ``active[k]``
+    of :class:`JacobianBatch`. The same for every round of a layout (the bend count's choice fits a few layouts
+    dozens of times); the positions are shared: read only."""
     first = np.full(P, n)  # the first bend whose 4 × 4 step a parameter changes (n: none, the pipe radius)
     first[:6] = 0  # start point and frame: before the first bend
     i = 6
@@ -272,21 +284,19 @@ def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
     i += max(n - 1, 0)
     first[i:i + n] = np.arange(n)
     i += n
-    if lay.radius_mode == "free":
+    if radius_mode == "free":
         first[i:i + n] = np.arange(n)
-    elif lay.radius_mode == "common" and n:
+    elif radius_mode == "common" and n:
         first[i] = 0
-    elif lay.radius_mode == "dies" and n:
-        dies = np.asarray(lay.dies)
-        first[i:i + lay.n_radii] = [int(np.flatnonzero(dies == d)[0]) for d in range(lay.n_radii)]
+    elif radius_mode == "dies" and n:
+        die = np.asarray(dies)
+        first[i:i + max(dies) + 1] = [int(np.flatnonzero(die == d)[0]) for d in range(max(dies) + 1)]
     order = sorted(range(P), key=lambda p: (first[p], not 3 <= p < 6))
     pos = np.empty(P, int)
     pos[order] = np.arange(P)
-    shift = np.zeros((P, P))
-    shift[pos, np.arange(P)] = steps
+    pos.setflags(write=False)
     first_sorted = first[order]
-    active = tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
-    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
+    return pos, tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
 
 
 def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
@@ -791,12 +801,22 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
 BLOCK = 65_536  # samples per pass of fun and the normal equations (the per-sample temporaries stay in cache)
 
 
-def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np.ndarray, tuple]:
+def _arc_samples(arc: np.ndarray) -> bool | np.ndarray:
+    """Which samples of a block ``arc`` marks as on a circle: True when all are, False when none is, else their
+    indices (:func:`_sample_distance` takes them; a round's blocks keep theirs)."""
+    if not arc.any():
+        return False
+    return True if arc.all() else np.flatnonzero(arc)
+
+
+def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray,
+                     on_arc: bool | np.ndarray | None = None) -> tuple[np.ndarray, tuple]:
     """Distance of each point to its own (unbounded) line or circle, all samples in one pass, and the terms
     :func:`_sample_gradient` takes on from. Component-major: ``q`` (3, n) the points, ``gs`` (7, n) the
-    geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles; every
-    operation then runs over rows of n samples (a sample-major (n, 3) array hands numpy loops of 3). In the
-    terms ``arc`` is True or False when every sample is on an arc or none is."""
+    geometry of each one's segment (columns of :func:`_geometry`'s rows), ``arc`` marks the circles
+    (``on_arc``: its :func:`_arc_samples`, when known); every operation then runs over rows of n samples (a
+    sample-major (n, 3) array hands numpy loops of 3). In the terms ``arc`` is True or False when every sample
+    is on an arc or none is."""
     c, a, R = gs[:3], gs[3:6], gs[6]
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
@@ -807,13 +827,15 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray) -> tuple[np
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
     # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
-    mixed = bool(arc.any()) and not arc.all()
-    if mixed:
-        dd = rho.copy()
-        dd[arc] = np.hypot(rho[arc] - R[arc], s[arc])
-    else:
-        dd = np.hypot(rho - R, s) if arc.any() else rho
-        arc = bool(arc.any())
+    if on_arc is None:
+        on_arc = _arc_samples(arc)
+    if on_arc is True:
+        dd = np.hypot(rho - R, s)
+        return dd, (w, s, perp, rho, a, R, dd, True)
+    if on_arc is False:
+        return rho, (w, s, perp, rho, a, R, rho, False)
+    dd = rho.copy()
+    dd[on_arc] = np.hypot(rho.take(on_arc) - R.take(on_arc), s.take(on_arc))
     return dd, (w, s, perp, rho, a, R, dd, arc)
 
 
@@ -881,6 +903,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # each block's samples per segment: their geometry is each segment's repeated (the samples are sorted)
     counts = [np.bincount(seg[b], minlength=len(kind)) for b in blocks]
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
+    on_arc = [_arc_samples(a) for a in arcs] if arcs is not None else None
 
     keep_terms = len(blocks) == 1
     # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
@@ -896,17 +919,22 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
 
     plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
 
-    def geometry(x):
+    def geometry(x, jacobian: bool = False):
+        """The geometry at x, with its Jacobian when asked: a trial the solver rejects (nearly half of them)
+        needs the residuals only, and the Jacobian's batch of 2P + 1 models costs several of one. (A row of the
+        batch computes what it computes alone, so the geometry is the same numbers either way.)"""
         key = x.tobytes()
         if latest.get("x") != key:
-            g, dG = geometry_and_jacobian(x, lay, frame0, rp, plan)
             latest.clear()
-            latest.update(x=key, g=g, dG=dG)
-        return latest["g"], latest["dG"]
+            latest.update(x=key, g=geometry_batch(x[None], lay, frame0, rp)[0])
+        if jacobian and "dG" not in latest:
+            latest["dG"] = geometry_and_jacobian(x, lay, frame0, rp, plan)[1]
+        return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):
-        arc = arcs[i] if arcs is not None else np.repeat(is_arc, counts[i])
-        return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arc)
+        if arcs is None:
+            return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), np.repeat(is_arc, counts[i]))
+        return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arcs[i], on_arc[i])
 
     def fun(x, out=None):
         """The residuals at x, into ``out`` when given (a large scan's array, reused: fresh memory of its
@@ -918,7 +946,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         r_p = x[-1] if lay.fit_pipe_radius else rp
         evaluations[0] += 1
         summed = fused and (max_nfev is None or evaluations[0] < max_nfev)
-        sums = _gram_sums(latest["dG"].shape[1] + int(lay.fit_pipe_radius), len(kind)) if summed else None
+        sums = _gram_sums(7 + int(lay.fit_pipe_radius), len(kind)) if summed else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
@@ -956,7 +984,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         segment's geometry Jacobian D_k (7 × P), so every segment's samples add D_kᵀ (Gᵀ W G) D_k with
         G their (n, 7) gradients: a 7 × 7 product per sample instead of a P × P one."""
         # the geometry and the distances' terms at x, as fun has just computed them (the same numbers again)
-        g, dG = geometry(x)
+        g, dG = geometry(x, jacobian=True)
         terms = latest.get("terms")
         P = len(x)
         if lay.fit_pipe_radius:  # the constant -1 of the pipe radius as an 8th geometry gradient
