@@ -17,7 +17,9 @@ CENTRE-POINT lies on their chord take the reversed direction of the ports they t
 return bend's two ports are parallel, normal to its chord); an OLET without a usable
 CENTRE-POINT points away from the axis of the pipe it sits on. Zero-length items (a WELD,
 a GASKET without thickness, a zero-length PIPE) are connection points: their neighbours are
-connected directly and they are written where that connection ends up. Facing flange faces a
+connected directly and they are written where that connection ends up (a PIPE has a length: one without is
+named in a warning, an END-POINT typed twice). Bores that disagree where they should agree (an item's two
+END-POINTs, reducers excepted; two connected end points) are named with their lines. Facing flange faces a
 gasket's thickness apart are joined by a rigid spacer, so the gap is kept, not closed. An
 item that still cannot be interpreted is kept verbatim and held fixed (or, without readable
 points, left out of the solve), and listed in the report with the reason. The interpreted
@@ -1167,11 +1169,12 @@ def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, st
              "typed twice: correct it.", {"items": found[:200]}, "warning")]
 
 
-# Bores of one item's two END-POINTs, or of two mated end points, agree to a rounding; a REDUCER (or a reducing
-# flange, elbow or tee) changes bore, but by no more than this ratio (ASME B16.9 concentric reducers reach about
-# 3:1): a larger step is a bore in another unit (152.4 written in an inch-bore file) or a dropped digit.
+# Bores of one item's two END-POINTs, or of two mated end points, agree to a rounding; a REDUCER (a reducing
+# flange or elbow, a swage, an adapter) changes bore, but by no more than this ratio (ASME B16.9 concentric reducers
+# reach about 3:1): a larger step is a bore in another unit (152.4 written in an inch-bore file) or a dropped digit.
 BORE_SHARE = 0.01
 REDUCER_RATIO = 4.0
+BORE_CHANGING = ("REDUC", "SWAGE", "ADAPTER")  # in the keyword
 
 
 def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tuple[str, str, dict, str]]:
@@ -1194,7 +1197,7 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
         lines = [i for i in c["geometry"].port_lines if doc.lines[i].split()[0].upper() == "END-POINT"]
         if len(lines) == 2:
             a, b = bore(lines[0]), bore(lines[1])
-            if differ(a, b, REDUCER_RATIO if "REDUC" in c["word"] else 1.0):
+            if differ(a, b, REDUCER_RATIO if any(w in c["word"] for w in BORE_CHANGING) else 1.0):
                 found.append({"where": "item", "id": c["id"], "line": lines[0] + 1, "bore": a,
                               "other_id": c["id"], "other_line": lines[1] + 1, "other_bore": b})
     owner, start = net["owner"], net["start"]
@@ -1213,8 +1216,8 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
                           f"({f['id']} joins {f['other_id']})") for f in found[:5]) + ("; ..." if len(found) > 5 else "")
     return [("pcf_bore_mismatch",
              f"{len(found)} pair(s) of end points disagree in bore ({unit}) where they should agree ({listed}): a "
-             "pipe, elbow or valve keeps its bore and mated ends share one (only reducers change it, and by less "
-             f"than {REDUCER_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
+             "pipe, elbow or valve keeps its bore and mated ends share one (only reducers, swages and adapters "
+             f"change it, and by less than {REDUCER_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
              {"pairs": found[:200], "unit": unit}, "warning")]
 
 

@@ -75,3 +75,14 @@ def test_a_reducers_change_of_bore_is_not_named_but_an_implausible_one_is():
 def test_exports_and_fixtures_raise_no_bore_mismatch_or_zero_length_pipe(path):
     assert not {"pcf_bore_mismatch", "pcf_zero_length_pipe"} & set(
         _warnings(path.read_bytes().decode("utf-8", errors="replace")))
+
+
+def test_a_swage_changes_bore_like_a_reducer():
+    text = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\n"
+            "PIPE\n    END-POINT 0.0 0.0 0.0 100.0\n    END-POINT 1000.0 0.0 0.0 100.0\n"
+            "SWAGE\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1150.0 0.0 0.0 50.0\n"
+            "PIPE\n    END-POINT 1150.0 0.0 0.0 50.0\n    END-POINT 2150.0 0.0 0.0 50.0\n")
+    assert "pcf_bore_mismatch" not in _warnings(text)
+    (pair,) = _warnings(text.replace("SWAGE", "VALVE"))["pcf_bore_mismatch"][1]["pairs"]  # a valve keeps its bore
+    assert (pair["where"], pair["line"], pair["bore"], pair["other_line"], pair["other_bore"]) == (
+        "item", 7, 100.0, 8, 50.0)
