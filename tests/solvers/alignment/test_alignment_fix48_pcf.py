@@ -50,7 +50,8 @@ def test_a_bore_in_mm_in_an_inch_bore_file_is_named_with_both_lines_and_bores():
     lines = SP3D.splitlines()
     n = next(k for k, line in enumerate(lines) if line.startswith("\tend-point\t-40.04"))
     lines[n] = lines[n].replace("4.0000", "152.4000")
-    message, details = _warnings("\n".join(lines) + "\n")["pcf_bore_mismatch"]
+    (warning,) = [w for w in _report("\n".join(lines) + "\n").warnings if w.code == "pcf_bore_mismatch"]
+    message, details = warning.message, warning.details
     pairs = {(p["where"], p["line"], p["bore"], p["other_line"], p["other_bore"]) for p in details["pairs"]}
     # against the pipe's own other end, and against the cross's end it joins (line 21)
     assert pairs == {("item", 17, 4.0, 18, 152.4), ("connection", 18, 152.4, 21, 4.0)}
