@@ -4,7 +4,9 @@
         --options '{"model": "auto"}' -o map.json --artifacts map_artifacts
 
 INPUT ending in .json is sent as the JSON request; any other file is uploaded (with --options).
-Exit codes: 0 succeeded, 1 the job failed or was cancelled, 2 the service refused the input.
+Exit codes: 0 succeeded, 1 the job failed or was cancelled, 2 the service refused the input, 3 the job succeeded
+but its result does not pass (a failed inspection, a fit not converged: the result and artifacts are saved all the
+same), as the plantsolve command line exits.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ import sys
 from pathlib import Path
 
 from plantsolve.client import ApiError, Client, Job
+
+EXIT_VERDICT = 3  # the command line's code for a result that does not pass
 
 
 def show_progress(job: Job) -> None:
@@ -66,6 +70,10 @@ def main() -> int:
         if args.artifacts:
             for path in client.download_artifacts(job, args.artifacts):
                 print(f"  saved {path}", file=sys.stderr)
+    if job.verdict:  # 'succeeded' says the job ran to its end, not that its answer is a pass
+        print(f"job {job.id} finished, but the verdict is against the result [{job.verdict.get('code')}]: "
+              f"{job.verdict.get('message')} (exit code {EXIT_VERDICT})", file=sys.stderr)
+        return EXIT_VERDICT
     return 0
 
 

@@ -270,6 +270,7 @@ def build_dashboard() -> APIRouter:
         source = str(form.get("source") or "json")
         options, body = str(form.get("options") or ""), str(form.get("body") or "")
         defaults = str(form.get("option_defaults") or "")
+        units = str(form.get("units") or "")
         try:
             _check_form(request, str(form.get("token") or ""))
             if source == "upload":
@@ -279,7 +280,7 @@ def build_dashboard() -> APIRouter:
                 if upload.size is not None and upload.size > settings.max_upload_bytes:
                     raise PayloadTooLarge(f"The file has {upload.size} bytes; the limit is {settings.max_upload_bytes} bytes.")
                 content = await upload.read()
-                chosen = _changed_options(options, defaults)
+                chosen = _with_units(_changed_options(options, defaults), units)
                 submitted = await run_in_threadpool(
                     lambda: service.submit_upload(kind, upload.filename, content, chosen, None, owner=who.owner))
             else:
@@ -289,6 +290,7 @@ def build_dashboard() -> APIRouter:
             problem = error.to_problem(instance=str(request.url.path))
             sent = {"options": options} if source == "upload" else {"body": body}  # the other form keeps its example
             sent["source"] = source
+            sent["units"] = units
             return _page(request, "submit.html", error.status, **_form_context(request, spec, problem=problem, **sent))
         return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
@@ -323,6 +325,25 @@ def _changed_options(options: str, defaults: str) -> str | None:
     return json.dumps(changed) if changed else None
 
 
+def _with_units(options: str | None, units: str) -> str | None:
+    """The options text with the form's result unit (the request's ``units``) among them, where their readers take
+    it; left out, the kind's default applies (and the upload's report says the default was taken). A ``units`` in
+    the options text that names another unit is a contradiction: refused naming both."""
+    if not units:
+        return options
+    try:
+        sent = json.loads(options) if options else {}
+    except json.JSONDecodeError:
+        return options  # the intake refuses it, naming the field
+    if not isinstance(sent, dict):
+        return options
+    if sent.get("units", units) != units:
+        raise Unprocessable("The result unit is given twice.", errors=[field_problem(
+            ["units"], f"the form's result unit is {units!r}, the options say {sent['units']!r}: choose one",
+            "value_error")])
+    return json.dumps({**sent, "units": units})
+
+
 def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:
     """The submit page: the JSON form prefilled with the kind's example; the upload form's options with their
     defaults (the example's options over them) and the schema its fields are generated from."""
@@ -338,6 +359,8 @@ def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str
         # what the kind does anyway: an option left at its default is not sent (see _changed_options)
         "option_defaults": json.dumps(defaults),
         "options_schema": views.options_schema(spec),
+        "units_choices": views.upload_units(spec),
+        "units": "",
         "body": views.pretty(example) if example is not None else "",
     }
     return {**context, **values}

@@ -237,6 +237,22 @@ def options_model(spec: SolverSpec) -> type[BaseModel]:
     return create_model(f"{spec.request_model.__name__}UploadOptions", **fields)
 
 
+# The kinds whose upload readers take the request's ``units`` (the unit of every number of the result) from the
+# form beside their options: a file's numbers are converted into it. Other kinds refuse the key (their unit comes
+# from the file, or they have none).
+UNITS_FROM_UPLOAD_FORM = frozenset({"tube", "polyhedra", "rigidity"})
+
+
+def upload_units(spec: SolverSpec) -> tuple[list[str], str] | None:
+    """The choices and default of the upload form's result unit (the request's ``units``), None for a kind whose
+    upload takes none."""
+    field = spec.request_model.model_fields.get("units")
+    if spec.kind not in UNITS_FROM_UPLOAD_FORM or field is None:
+        return None
+    choices = spec.request_model.model_json_schema()["properties"]["units"].get("enum")
+    return (list(choices), str(field.default)) if choices else None
+
+
 def options_schema(spec: SolverSpec) -> dict[str, Any]:
     """The JSON schema the submit page's option form is generated from (by static/dashboard.js)."""
     return options_model(spec).model_json_schema()

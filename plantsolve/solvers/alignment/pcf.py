@@ -17,7 +17,9 @@ CENTRE-POINT lies on their chord take the reversed direction of the ports they t
 return bend's two ports are parallel, normal to its chord); an OLET without a usable
 CENTRE-POINT points away from the axis of the pipe it sits on. Zero-length items (a WELD,
 a GASKET without thickness, a zero-length PIPE) are connection points: their neighbours are
-connected directly and they are written where that connection ends up. Facing flange faces a
+connected directly and they are written where that connection ends up (a PIPE has a length: one without is
+named in a warning, an END-POINT typed twice). Bores that disagree where they should agree (an item's two
+END-POINTs, reducers excepted; two connected end points) are named with their lines. Facing flange faces a
 gasket's thickness apart are joined by a rigid spacer, so the gap is kept, not closed. An
 item that still cannot be interpreted is kept verbatim and held fixed (or, without readable
 points, left out of the solve), and listed in the report with the reason. The interpreted
@@ -619,6 +621,8 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_duplicate_notes(comps, doc))
     notes.extend(_record_notes(comps))
     notes.extend(_open_ends_inside_pipes(comps, net, doc))
+    notes.extend(_zero_length_pipe_notes(doc, geometry))
+    notes.extend(_bore_mismatch_notes(comps, net, doc))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
@@ -1138,6 +1142,83 @@ def _open_ends_inside_pipes(comps: list[dict], net: dict, doc: Document) -> list
              f"{', ...' if len(found) > 5 else ''}): pipes join items at their ends, so the two overlap or one of the "
              "pipe's end points is mistyped along its axis; they are not connected. Correct the end point.",
              {"items": found[:200]}, "warning")]
+
+
+def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, str, dict, str]]:
+    """A warning naming each PIPE whose two END-POINTs are one point (to the printed digits): a weld or a gasket
+    may have no length, a pipe has one, so an end point was typed twice. Read as a joint, the pipe joins nothing at
+    its real far end and the item there is left open, warned about under its own name only."""
+    found = []
+    for it in doc.items:
+        g = geometry.get(it.id)
+        if g is None or g.kind != "joint" or not (it.keyword == "PIPE" or it.keyword.startswith("PIPE-")):
+            continue
+        ends = [read_point(doc.lines[i])[0] for i in it.point_lines if doc.lines[i].split()[0].upper() == "END-POINT"]
+        if len(ends) != 2:
+            continue
+        found.append({"id": it.id, "line": it.line + 1, "end_point_lines": [i + 1 for i in it.point_lines],
+                      "length": float(np.linalg.norm(ends[1] - ends[0])), "unit": doc.units or "mm"})
+    if not found:
+        return []
+    listed = ", ".join(f"{f['id']} (line {f['line']}, end points on lines "
+                       f"{' and '.join(str(n) for n in f['end_point_lines'])}: length {f['length']:g} {f['unit']})"
+                       for f in found[:5]) + (", ..." if len(found) > 5 else "")
+    return [("pcf_zero_length_pipe",
+             f"{len(found)} PIPE(s) have two END-POINTs at one place ({listed}): read as a zero-length joint, so "
+             "the pipe joins nothing at its far end and the item there is left unconnected. One END-POINT was "
+             "typed twice: correct it.", {"items": found[:200]}, "warning")]
+
+
+# Bores of one item's two END-POINTs, or of two mated end points, agree to a rounding; a REDUCER (a reducing
+# flange or elbow, a swage, an adapter) changes bore, but by no more than this ratio (ASME B16.9 concentric reducers
+# reach about 3:1): a larger step is a bore in another unit (152.4 written in an inch-bore file) or a dropped digit.
+BORE_SHARE = 0.01
+REDUCER_RATIO = 4.0
+BORE_CHANGING = ("REDUC", "SWAGE", "ADAPTER")  # in the keyword
+
+
+def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tuple[str, str, dict, str]]:
+    """A warning naming the lines and both bores where an item's two END-POINTs, or two connected end points of
+    neighbours, disagree in bore beyond what reducers allow. The connection is made by position either way; a bore
+    typo widens or narrows how far that item's end points reach, and the size the isometric shows is wrong."""
+    unit = UNITS.get(doc.header.get("UNITS-BORE", doc.header.get("UNITS-CO-ORDS", "MM")), doc.units or "mm")
+
+    def bore(line: int) -> float | None:
+        try:
+            return read_point(doc.lines[line])[1]
+        except ItemProblem:
+            return None
+
+    def differ(a: float | None, b: float | None, ratio: float) -> bool:
+        return a is not None and b is not None and max(a, b) > ratio * min(a, b) * (1.0 + BORE_SHARE)
+
+    found = []
+    for c in comps:
+        lines = [i for i in c["geometry"].port_lines if doc.lines[i].split()[0].upper() == "END-POINT"]
+        if len(lines) == 2:
+            a, b = bore(lines[0]), bore(lines[1])
+            if differ(a, b, REDUCER_RATIO if any(w in c["word"] for w in BORE_CHANGING) else 1.0):
+                found.append({"where": "item", "id": c["id"], "line": lines[0] + 1, "bore": a,
+                              "other_id": c["id"], "other_line": lines[1] + 1, "other_bore": b})
+    owner, start = net["owner"], net["start"]
+    for i, j in [(i, j) for i, j in net["conns"]] + [(i, j) for i, j, _ in net["gaps"]]:
+        ci, cj = comps[owner[i]], comps[owner[j]]
+        li, lj = ci["geometry"].port_lines[i - start[owner[i]]], cj["geometry"].port_lines[j - start[owner[j]]]
+        a, b = bore(li), bore(lj)
+        if differ(a, b, 1.0):
+            found.append({"where": "connection", "id": ci["id"], "line": li + 1, "bore": a,
+                          "other_id": cj["id"], "other_line": lj + 1, "other_bore": b})
+    if not found:
+        return []
+    found.sort(key=lambda f: (f["line"], f["other_line"]))
+    listed = "; ".join(f"line {f['line']} bore {f['bore']:g} against line {f['other_line']} bore {f['other_bore']:g} "
+                       + ("(two ends of " + f["id"] + ")" if f["where"] == "item" else
+                          f"({f['id']} joins {f['other_id']})") for f in found[:5]) + ("; ..." if len(found) > 5 else "")
+    return [("pcf_bore_mismatch",
+             f"{len(found)} pair(s) of end points disagree in bore ({unit}) where they should agree ({listed}): a "
+             "pipe, elbow or valve keeps its bore and mated ends share one (only reducers, swages and adapters "
+             f"change it, and by less than {REDUCER_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
+             {"pairs": found[:200], "unit": unit}, "warning")]
 
 
 def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:

@@ -24,7 +24,7 @@ from plantsolve.solvers.tube.ply_points import stated_unit as stated_ply_unit
 from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.stl_points import read_stl
 from plantsolve.solvers.tube.text_points import read_text_points
-from plantsolve.solvers.tube.validation import UNIT_MM
+from plantsolve.solvers.tube.validation import EXTENT_MM_PLAUSIBLE, UNIT_MM, likely_units, scan_extent
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
 TO_MM = UNIT_MM  # millimetres per unit of each of the request's units
@@ -349,10 +349,11 @@ def _overridden(ext: str, stated: CrsUnit, file_units: str, metres: float) -> Di
         details={"file_units": file_units, "file_unit": own, "ratio": metres / stated.metres})
 
 
-def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
-                target: str) -> tuple[UnitConversion, np.ndarray, list[Diagnostic]]:
+def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None, target: str,
+                stated_units: bool = True) -> tuple[UnitConversion, np.ndarray, list[Diagnostic]]:
     """How the file's coordinates become the request's: the conversion for the report, the factor per axis and
-    a warning when the unit was assumed. ``options.file_units`` overrides what the file states."""
+    a warning when the unit was assumed. ``options.file_units`` overrides what the file states; ``stated_units``:
+    whether the request's unit was given (else it is the default, mm)."""
     warnings: list[Diagnostic] = []
     to_target = 1000.0 / TO_MM[target]  # metres → the request's unit
     z_name = z_metres = None
@@ -380,14 +381,36 @@ def _conversion(ext: str, stated: CrsUnit | str | None, file_units: str | None,
             "Set options.file_units if they are in another unit.",
             details={"file_unit": "m", "request_unit": target, "factor": 1000.0 / TO_MM[target]}))
     else:
+        said = "units" if stated_units else "default units (none given)"
         conv = UnitConversion(file_unit=target, request_unit=target, factor=1.0, basis="request",
-                              evidence=f"{ext[1:].upper()} files state no unit: read in the request's")
+                              evidence=f"{ext[1:].upper()} files state no unit: read in the request's {said}, {target}")
         return conv, np.ones(3), warnings
     factor = metres * to_target
     z_factor = z_metres * to_target if z_metres is not None else None
     conv = UnitConversion(file_unit=name, request_unit=target, factor=factor, z_file_unit=z_name, z_factor=z_factor,
                           basis=basis, evidence=evidence)
     return conv, np.array([factor, factor, z_factor or factor]), warnings
+
+
+def _default_unit_implausible(ext: str, pts: np.ndarray, target: str) -> list[Diagnostic]:
+    """A warning when a file stating no unit, with no unit given either, was read in the default unit and its size
+    is implausible for a tube in it but plausible in another: a scan in metres read as millimetres is a thousand
+    times too small, and its fit fails or its result is off by that factor. The size (the bounding box's
+    diagonal) is known before the fit, so the warning comes with any result and names the unit to give."""
+    extent = scan_extent(pts)
+    mm = extent * TO_MM[target]
+    lo, hi = EXTENT_MM_PLAUSIBLE
+    likely = likely_units(mm, EXTENT_MM_PLAUSIBLE, target) if not lo <= mm <= hi else []
+    if not likely:
+        return []
+    return [Diagnostic(
+        code="file_units_assumed",
+        message=f"The {ext[1:].upper()} file states no unit and none was given: its coordinates were read in "
+        f"{target}, the default, but the scan then spans {extent:.4g} {target}, implausible for a tube (expected "
+        f"{lo:g} mm to {hi / 1000:g} m); they are likely in {' or '.join(likely)}. Set options.file_units "
+        f"(e.g. {likely[0]!r}) to the unit of the file's coordinates.",
+        details={"file_unit": target, "request_unit": target, "basis": "default", "extent": extent,
+                 "plausible_mm": [lo, hi], "likely_units": likely})]
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
@@ -430,9 +453,11 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
                 raise reject("every point of the file has a non-finite coordinate")
             log.skip(None, "non-finite coordinate", count=len(bad))
             pts = pts[finite]
-        conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target)
+        conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target, units is not None)
         if not (factors == 1.0).all():
             pts = pts * factors
+        if conversion.basis == "request" and units is None:
+            unit_warnings += _default_unit_implausible(ext, pts, target)
         bounded = (np.abs(pts) <= MAX_COORDINATE).all(1)
         if not bounded.all():  # one absurd float of a binary file (LAS, NPY, a PLY cut in its header) is one point
             if not bounded.any():
