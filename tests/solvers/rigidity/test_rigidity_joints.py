@@ -551,9 +551,14 @@ def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_
     assert plate == {"nearest": None, "unknown_near": ["L5"]}
     assert "L3 (3003) antistud 5 LDU from L2 (3003) stud" in floating.message
     assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
-    pieces = warnings["separate_pieces"]
-    assert pieces.details["why"] == [{"nearest": None, "unknown_near": []}]
-    assert "L6: no mate within 40 LDU" in pieces.message
+    # the pair of plates 500 LDU off touches nothing and has no mate within 40 LDU: drawn apart, a separate build;
+    # the brick 5 LDU up and the plate beside the unknown part are no build apart (a slip, or held by that part)
+    assert "separate_pieces" not in warnings
+    assert warnings["separate_builds"].details["builds"] == [
+        {"first": "L6", "parts": 2, "numbers": ["3023"], "placements": ["main model"], "nearest_ldu": None}]
+    assert "L6 (2 part(s): 3023; in main model; no mate within 40 LDU)" in warnings["separate_builds"].message
+    assert [(pc.parts, pc.drawn_apart) for pc in result.pieces] == [
+        (["L1", "L2"], False), (["L6", "L7"], True), (["L3"], False), (["L4"], False)]
 
 
 def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_one_is_not():
