@@ -13,14 +13,17 @@ files. Per model, ``before -> after``:
 - ``floating``: known parts joined to nothing, and their share of the known parts (the target is at most 5 %);
 - ``pieces``: connected pieces of the known parts that are no held sub-build (a set that is one build is one
   piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
-  placed sub-models, or minifigure parts only; ``report.details.held_pieces``);
+  placed sub-models, or minifigure parts only; ``report.details.held_pieces``), and ``apart``: of the pieces not
+  held, those the drawing itself places apart (touching no other part, no mate within 10 LDU, no unknown part beside
+  them: a second vehicle, accessories laid aside; ``Piece.drawn_apart``, ``report.details.separate_builds``);
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 
 Then the totals, after and (with a baseline) before: floating parts, models at most 5 % floating, models in one
-piece besides held sub-builds, pieces not held, held, offset pairs, CPU seconds.
+piece besides held sub-builds, and besides held sub-builds and pieces drawn apart (each other piece is one whose joint
+was not found), pieces not held, held, drawn apart, offset pairs, CPU seconds.
 """
 
 from __future__ import annotations
@@ -54,10 +57,11 @@ def measure(path: Path) -> dict:
     floating = [p for p in known if p.id not in joined]
     details = result.report.details
     held = len(details.get("held_pieces") or [])
+    apart = sum(bool(getattr(pc, "drawn_apart", False)) for pc in result.pieces)  # a solver before the field: none
     offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
     recognised = next((len(w.details["ids"]) for w in result.report.warnings if w.code == "parts_from_primitives"), 0)
     return {"model": path.name, "known": len(known), "floating": len(floating),
-            "pieces": details.get("connected_pieces") - held, "held": held, "offset": offsets,
+            "pieces": details.get("connected_pieces") - held, "held": held, "apart": apart, "offset": offsets,
             "prim": recognised, "seconds": seconds,
             "floating_parts": dict(Counter(p.part for p in floating))}
 
@@ -94,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
-    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
+    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
           f"{'prim':>6s} {'cpu s':>11s}  floating parts (after)")
     rows = []
     for path in files:
@@ -108,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
-              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
+              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
               f"{pair('seconds', '.2f'):>11s}  {names}")
     olds = [before.get(row["model"]) for row in rows]
     print(totals("after", rows))
@@ -119,13 +123,14 @@ def main(argv: list[str] | None = None) -> int:
 
 def totals(label: str, rows: list[dict]) -> str:
     """One line of totals over the models: floating parts, models at most 5 % floating, models in one piece besides
-    held sub-builds (the goal: a set that is one build comes out as one piece), pieces not held, held, offset pairs,
-    CPU seconds."""
+    held sub-builds (the goal: a set that is one build comes out as one piece) and besides held sub-builds and pieces
+    drawn apart (a set of several builds said so), pieces not held, held, drawn apart, offset pairs, CPU seconds."""
     return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
             f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
-            f"{sum(r['pieces'] == 1 for r in rows)}, pieces not held {sum(r['pieces'] for r in rows)}, held "
-            f"{sum(r['held'] for r in rows)}, offset pairs "
+            f"{sum(r['pieces'] == 1 for r in rows)} (or drawn apart {sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
+            f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, drawn apart "
+            f"{sum(r['apart'] for r in rows)}, offset pairs "
             f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")
 
 
