@@ -128,7 +128,8 @@ def totals(label: str, rows: list[dict]) -> str:
     return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
             f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
-            f"{sum(r['pieces'] == 1 for r in rows)} (or drawn apart {sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
+            f"{sum(r['pieces'] == 1 for r in rows)} (or drawn apart "
+            f"{sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
             f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, drawn apart "
             f"{sum(r['apart'] for r in rows)}, offset pairs "
             f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")

@@ -18,9 +18,9 @@ from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_n
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
-from plantsolve.solvers.rigidity.pieces import (APART_MISS, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance,
-                                                drawn_apart, far_parts, joints_by_part, line_of, loose_sub_builds,
-                                                mostly_floating, pieces, sub_build)
+from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
+                                                clearance, drawn_apart, far_parts, joints_by_part, line_of,
+                                                loose_sub_builds, mostly_floating, pieces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -34,9 +34,10 @@ HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and noth
                     f"parts not in the catalogue"}
 LISTED_IN_MESSAGE = 10
 # how report.details.separate_builds recognised each piece (pieces.drawn_apart)
-APART_BY = (f"touching no part outside it (collision boxes at least {TOUCH_GAP:g} LDU apart, parts without one at their "
-            f"origin), no connection point within {APART_MISS:g} LDU of a mate (none within {REACH:g} LDU, or the "
-            f"nearest miss further), no part outside the catalogue with its origin within {UNKNOWN_REACH:g} LDU")
+APART_BY = (f"standing clear of every part outside it by more than a slip (collision boxes at least {APART_GAP:g} LDU "
+            f"apart, parts without one at their origin), no connection point within {APART_MISS:g} LDU of a mate (none "
+            f"within {REACH:g} LDU, or the nearest miss further), no part outside the catalogue with its origin within "
+            f"{UNKNOWN_REACH:g} LDU")
 LISTED_MISSES = 20  # floating parts and separate pieces whose nearest miss the warnings give (details.why)
 
 
@@ -277,8 +278,8 @@ def _boxes(part_ids: list[str], assembly: Assembly) -> tuple[dict, dict, dict, d
 
 def _separate_builds(found: list[Piece], assembly: Assembly, positions: dict, unknown: list[str],
                      misses: Misses | None, source: dict) -> list[dict]:
-    """Mark the pieces that the drawing places apart (:func:`pieces.drawn_apart`: no held sub-build, touching nothing
-    outside them, no mate within APART_MISS, no unknown part beside them) and describe each for
+    """Mark the pieces that the drawing places apart (:func:`pieces.drawn_apart`: no held sub-build, standing APART_GAP
+    clear of everything outside them, no mate within APART_MISS, no unknown part beside them) and describe each for
     report.details.separate_builds: its first part, part count, the top-level placements it lies in (the sub-models
     the main model places, by file name, or "main model" for its own lines) and its nearest miss (LDU, None: no mate
     within misses.REACH)."""
@@ -337,16 +338,19 @@ def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assem
     if builds:
         out.append(Diagnostic(code="separate_builds", message=f"the drawing places {len(builds)} piece(s) apart from "
                               f"the rest of the model, so it is {len(builds) + 1} or more builds as drawn (a second "
-                              "vehicle, an animal, an accessory or spare parts laid aside, or a part fallen off; no joint "
-                              "can join "
-                              f"them as drawn): {APART_BY}: "
-                              + "; ".join(f"{b['first']} ({b['parts']} part(s): {', '.join(b['numbers'][:3])}"
-                                          f"{' …' if len(b['numbers']) > 3 else ''}; in {', '.join(b['placements'][:3])}"
-                                          + (f"; nearest mate {b['nearest_ldu']:g} LDU off" if b['nearest_ldu']
-                                             is not None else f"; no mate within {REACH:g} LDU") + ")"
-                                          for b in builds[:LISTED_IN_MESSAGE]),
+                              "vehicle, an animal, an accessory or spare parts laid aside, or a part fallen off; no "
+                              f"joint can join them as drawn): {APART_BY}: "
+                              + "; ".join(_build_text(b) for b in builds[:LISTED_IN_MESSAGE]),
                               details={"builds": builds[:MAX_LISTED], "rule": APART_BY}))
     return out
+
+
+def _build_text(build: dict) -> str:
+    """A separate build in words: its first part, its part count and first numbers, where it lies, its nearest miss."""
+    numbers = ", ".join(build["numbers"][:3]) + (" …" if len(build["numbers"]) > 3 else "")
+    near = (f"nearest mate {build['nearest_ldu']:g} LDU off" if build["nearest_ldu"] is not None
+            else f"no mate within {REACH:g} LDU")
+    return f"{build['first']} ({build['parts']} part(s): {numbers}; in {', '.join(build['placements'][:3])}; {near})"
 
 
 def _why(piece: list[str], misses: Misses, positions: dict, unknown: list[str]) -> dict:

@@ -12,7 +12,8 @@ import pytest
 
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.rigidity import generated
-from plantsolve.solvers.rigidity.pieces import clearance, drawn_apart, loose_sub_builds, sub_build
+from plantsolve.solvers.rigidity.assembly import OFFSET_REACH
+from plantsolve.solvers.rigidity.pieces import APART_GAP, clearance, drawn_apart, loose_sub_builds, sub_build
 from plantsolve.solvers.rigidity.solve import APART_BY, HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -574,7 +575,7 @@ BUILD = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 300
 
 
 def _pair(x: float, y: float, z: float = 0) -> str:
-    """Two 1 x 2 plates stacked, the lower one's top at height ``y`` (LDU, up is negative) and centre at ``x``, ``z``."""
+    """Two 1 x 2 plates stacked, the lower one's top at height ``y`` (LDU, up negative), its centre at ``x``, ``z``."""
     return f"1 4 {x} {y} {z} 1 0 0 0 1 0 0 0 1 3023.dat\n1 4 {x} {y - 8} {z} 1 0 0 0 1 0 0 0 1 3023.dat\n"
 
 
@@ -582,6 +583,7 @@ def _pair(x: float, y: float, z: float = 0) -> str:
     (_pair(200, -8), True, None),  # 200 LDU off on the floor: touching nothing, no mate within 40 LDU
     (_pair(0, -40, 10), False, 8.0),  # over the top brick's studs with a plate's height of air (a plate left out?)
     (_pair(60, -8), False, 22.36),  # against the lower brick's side: lying against the build
+    (_pair(62, -8), False, 24.17),  # 2 LDU off that side: drawn off what it is pressed on, within a slip
     (_pair(200, -8) + "1 4 210 0 0 1 0 0 0 1 0 0 0 1 no_such_part.dat\n", False, None),  # beside an unknown part
 ])
 def test_a_piece_touching_nothing_with_no_mate_within_half_a_pitch_is_a_separate_build(extra, apart, nearest):
@@ -607,9 +609,10 @@ def test_a_piece_touching_nothing_with_no_mate_within_half_a_pitch_is_a_separate
         assert [(w["nearest"] or {}).get("gap_ldu") for w in warnings["separate_pieces"].details["why"]] == [nearest]
 
 
-def test_drawn_apart_needs_no_touch_no_mate_within_half_a_pitch_and_no_unknown_part_beside():
-    assert drawn_apart(0.5, None, False) and drawn_apart(40.0, 10.01, False)
-    assert not drawn_apart(0.49, None, False)  # lying against the rest (collision boxes within 0.5 LDU)
+def test_drawn_apart_needs_more_than_a_slip_clear_no_mate_within_half_a_pitch_and_no_unknown_part_beside():
+    assert APART_GAP == OFFSET_REACH  # a piece a slip off the rest may be a part drawn off its mate
+    assert drawn_apart(3.1, None, False) and drawn_apart(40.0, 10.01, False)
+    assert not drawn_apart(3.0, None, False)  # 3 LDU off the rest: drawn off what it is pressed on (set 4096's wheel)
     assert not drawn_apart(40.0, 10.0, False)  # a mate within half a pitch: a slip or a plate's height off
     assert not drawn_apart(40.0, None, True)  # an unknown part beside it may hold it
 
