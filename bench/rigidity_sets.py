@@ -21,6 +21,13 @@ files. Per model, ``before -> after``:
   definitions draw (the ``parts_from_primitives`` warning);
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 
+With ``--why`` (no baseline) each model not in one piece besides held sub-builds gets a row classing every piece apart
+that is no held sub-build by why it is apart: ``B`` drawn apart (a separate build), ``U`` beside a part not in the
+catalogue (origins within 60 LDU: it may hold the piece), ``C`` a minifigure with what it holds (at least half of its
+parts minifigure parts), ``A8`` a stud and an anti-stud a plate's height (8 LDU) apart on one axis (air or a tile
+between), ``A3-10`` another mate 3 to 10 LDU off (its types counted in the totals), ``AT`` the rest: lying against
+the build with no mate within 10 LDU (tilted, on a smooth face) or standing off it up to a slip.
+
 Then the totals, after and (with a baseline) before: floating parts, models at most 5 % floating, models in one
 piece besides held sub-builds, and besides held sub-builds and pieces drawn apart (each other piece is one whose joint
 was not found), pieces not held, held, drawn apart, offset pairs, CPU seconds.
@@ -66,6 +73,48 @@ def measure(path: Path) -> dict:
             "floating_parts": dict(Counter(p.part for p in floating))}
 
 
+WHY = ("B", "U", "C", "A8", "A3-10", "AT")
+
+
+def why(path: Path) -> tuple[dict, Counter, Counter]:
+    """(the measured row, the pieces apart that are no held sub-build by class (WHY, module docstring), the mate types
+    of the A3-10 ones) of one model."""
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.rigidity.misses import Misses, unknown_near
+    from plantsolve.solvers.rigidity.pieces import MINIFIG, NAME_MARKS
+    from plantsolve.solvers.rigidity.solve import build, recorded_parts, solve
+    from plantsolve.solvers.rigidity.upload import parse_upload
+
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
+    result = solve(request).result
+    assembly, unknown = build(request, recorded_parts(request.source or {})[0])
+    misses = Misses(assembly)
+    positions = {p.id: p.position for p in request.parts}
+    classes, types = Counter(), Counter()
+    for pc in result.pieces[1:]:
+        if pc.sub_build is not None:
+            continue
+        near = misses.nearest(pc.parts)
+        gap = near["gap_ldu"] if near else None
+        figures = sum(assembly.parts[p].shape.name.lstrip(NAME_MARKS).lower().startswith(MINIFIG) for p in pc.parts)
+        if pc.drawn_apart:
+            classes["B"] += 1
+        elif unknown_near(pc.parts, positions, [u.id for u in unknown]):
+            classes["U"] += 1
+        elif len(pc.parts) > 1 and 2 * figures >= len(pc.parts):
+            classes["C"] += 1
+        elif gap is not None and abs(gap - 8) < 0.35 and {near["type"], near["other_type"]} == {"stud", "antistud"}:
+            classes["A8"] += 1
+        elif gap is not None and gap <= 10:
+            classes["A3-10"] += 1
+            types["/".join(sorted((near["type"], near["other_type"])))] += 1
+        else:
+            classes["AT"] += 1
+    held = len(result.report.details.get("held_pieces") or [])
+    return {"model": path.name, "known": len(result.parts), "pieces": len(result.pieces) - held, "held": held}, \
+        classes, types
+
+
 def baseline(ref: str, files: list[Path]) -> dict[str, dict]:
     """The rows of ``files`` measured with the ``plantsolve`` package of git ``ref``, in a child process."""
     archive = subprocess.run(["git", "archive", "--format=tar", ref, "plantsolve"], cwd=ROOT, check=True,
@@ -87,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("paths", nargs="+", type=Path, help="folders of .ldr/.mpd models, or model files")
     parser.add_argument("--before", default="main", help="git ref of the baseline solver, or 'none'")
     parser.add_argument("--json", action="store_true", help="one JSON row per model (the baseline's child uses it)")
+    parser.add_argument("--why", action="store_true", help="class the pieces apart of each model (no baseline)")
     args = parser.parse_args(argv)
     files = []
     for path in args.paths:
@@ -95,6 +145,21 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         for path in files:
             print(json.dumps(measure(path)), flush=True)
+        return 0
+    if args.why:
+        print("| model | known | pieces (not held) | held | " + " | ".join(WHY) + " |")
+        all_classes, all_types, split = Counter(), Counter(), 0
+        for path in files:
+            row, classes, types = why(path)
+            all_classes.update(classes)
+            all_types.update(types)
+            if row["pieces"] > 1:
+                split += 1
+                print(f"| {path.stem} | {row['known']} | {row['pieces']} | {row['held']} | "
+                      + " | ".join(str(classes[k] or "") for k in WHY) + " |", flush=True)
+        print(f"{split} of {len(files)} models not in one piece besides held sub-builds; pieces apart by class: "
+              + ", ".join(f"{k} {all_classes[k]}" for k in WHY) + "; A3-10 mates: "
+              + ", ".join(f"{k} {n}" for k, n in all_types.most_common()))
         return 0
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
