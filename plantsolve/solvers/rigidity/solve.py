@@ -12,8 +12,8 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, OFFSET_REACH, SNAP, STUD_LENGTH_IN, Assembly, JointSpec,
-                                                  natural_order)
+from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, OFFSET_REACH, SNAP, STUD_LENGTH_IN,
+                                                  Assembly, JointSpec, natural_order)
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
@@ -195,6 +195,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     builds = _separate_builds(piece_results, assembly, positions, unknown_ids, misses, source)
     warnings.extend(_piece_warnings(part_results, piece_results, assembly, positions, unknown_ids, misses, builds))
     warnings.extend(_offset_warnings(assembly))
+    warnings.extend(_tilt_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
@@ -395,6 +396,25 @@ def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
                                            "offset_ldu": round(gap, 3)} for (a, b), gap in listed[:MAX_LISTED]],
                                 "reach_ldu": OFFSET_REACH, "finger_reach_ldu": FINGER_REACH,
                                 "stud_tip_ldu": STUD_LENGTH_IN})]
+
+
+def _tilt_warnings(assembly: Assembly) -> list[Diagnostic]:
+    """``tilted_joints``: the part pairs joined by hinge fingers that share their middle with their axes drawn turned
+    off each other (:meth:`Assembly.join_pieces`), each with the angle."""
+    tilts = assembly.tilts()
+    if not tilts:
+        return []
+    listed = sorted(tilts.items(), key=lambda item: (-item[1], natural_order(item[0][0])))
+    return [Diagnostic(code="tilted_joints", message=f"{len(tilts)} pair(s) of parts are joined by hinge fingers whose "
+                       f"axes are drawn up to {listed[0][1]:.3g} degrees off each other, their middles on one point (a "
+                       "part swung about another axis than its hinge's; joined as a hinge about the turned part's "
+                       f"axis, at most {math.degrees(math.acos(FINGER_TILT)):g} degrees): "
+                       + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
+                                   f"{angle:.3g} degrees" for (a, b), angle in listed[:LISTED_IN_MESSAGE]),
+                       details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
+                                                                         assembly.parts[b].number],
+                                           "angle_degrees": round(angle, 2)} for (a, b), angle in listed[:MAX_LISTED]],
+                                "max_angle_degrees": round(math.degrees(math.acos(FINGER_TILT)), 6)})]
 
 
 # Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts

@@ -571,6 +571,33 @@ def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_
         (["L1", "L2"], False), (["L6", "L7"], True), (["L3"], False), (["L4"], False)]
 
 
+@pytest.mark.parametrize("degrees, shift, joined", [(0, 0, True), (15, 0, True), (25, 0, True), (40, 0, False),
+                                                     (15, 1, False)])
+def test_a_control_stick_swung_sideways_on_its_base_is_a_hinge_in_its_fingers(degrees, shift, joined):
+    """Sets 10179 and 75827 draw the control stick 4593 swung 15 to 25 degrees sideways (about z) on its base 4592: its
+    knuckle's finger run shares its middle with the base's, its axis turned off theirs. Joints counted by hand: the
+    base on a 1 x 1 plate's stud (a hinge about the stud) and the stick in the base (a hinge): dof 2. Up to 30 degrees
+    it is joined (named in tilted_joints; at 0 by the matching itself); turned 40 degrees, or with its middle 1 LDU off
+    the base's, it is joined to nothing (dof 2 + 6 - 1: the plate and base's hinge, and the stick loose)."""
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    text = ("1 4 0 8 0 1 0 0 0 1 0 0 0 1 3024.dat\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 4592.dat\n"
+            f"1 4 {shift} 0 0 {c:.6f} {-s:.6f} 0 {s:.6f} {c:.6f} 0 0 0 1 4593.dat\n")
+    result = solve(parse("stick.ldr", text)).result
+    assert [(j.id, j.type, j.origin) for j in result.joints] == [("L1~L2", "hinge", "stud")] + [
+        ("L2~L3", "hinge", "hinge")] * joined
+    assert result.dof == (2 if joined else 7)
+    warnings = {w.code: w for w in result.report.warnings}
+    if joined and degrees:
+        assert warnings["tilted_joints"].details["pairs"] == [
+            {"parts": ["L2", "L3"], "numbers": ["4592", "4593"], "angle_degrees": float(degrees)}]
+        assert f"L2 (4592) and L3 (4593) {degrees} degrees" in warnings["tilted_joints"].message
+        axis = next(j.axis for j in result.joints if j.id == "L2~L3")
+        assert np.allclose(axis, [c, s, 0], atol=1e-6)  # about the stick's own (turned) finger axis
+    else:
+        assert "tilted_joints" not in warnings
+    assert ("floating_parts" in warnings) != joined
+
+
 BUILD = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"  # two 2 x 4 bricks stacked
 
 
