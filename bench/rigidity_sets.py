@@ -13,14 +13,24 @@ files. Per model, ``before -> after``:
 - ``floating``: known parts joined to nothing, and their share of the known parts (the target is at most 5 %);
 - ``pieces``: connected pieces of the known parts that are no held sub-build (a set that is one build is one
   piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
-  placed sub-models, or minifigure parts only; ``report.details.held_pieces``);
+  placed sub-models, or minifigure parts only; ``report.details.held_pieces``), and ``apart``: of the pieces not
+  held, those the drawing itself places apart (touching no other part, no mate within 10 LDU, no unknown part beside
+  them: a second vehicle, accessories laid aside; ``Piece.drawn_apart``, ``report.details.separate_builds``);
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 
+With ``--why`` (no baseline) each model not in one piece besides held sub-builds gets a row classing every piece apart
+that is no held sub-build by why it is apart: ``B`` drawn apart (a separate build), ``U`` beside a part not in the
+catalogue (origins within 60 LDU: it may hold the piece), ``C`` a minifigure with what it holds (at least half of its
+parts minifigure parts), ``A8`` a stud and an anti-stud a plate's height (8 LDU) apart on one axis (air or a tile
+between), ``A3-10`` another mate 3 to 10 LDU off (its types counted in the totals), ``AT`` the rest: lying against
+the build with no mate within 10 LDU (tilted, on a smooth face) or standing off it up to a slip.
+
 Then the totals, after and (with a baseline) before: floating parts, models at most 5 % floating, models in one
-piece besides held sub-builds, pieces not held, held, offset pairs, CPU seconds.
+piece besides held sub-builds, and besides held sub-builds and pieces drawn apart (each other piece is one whose joint
+was not found), pieces not held, held, drawn apart, offset pairs, CPU seconds.
 """
 
 from __future__ import annotations
@@ -54,12 +64,55 @@ def measure(path: Path) -> dict:
     floating = [p for p in known if p.id not in joined]
     details = result.report.details
     held = len(details.get("held_pieces") or [])
+    apart = sum(bool(getattr(pc, "drawn_apart", False)) for pc in result.pieces)  # a solver before the field: none
     offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
     recognised = next((len(w.details["ids"]) for w in result.report.warnings if w.code == "parts_from_primitives"), 0)
     return {"model": path.name, "known": len(known), "floating": len(floating),
-            "pieces": details.get("connected_pieces") - held, "held": held, "offset": offsets,
+            "pieces": details.get("connected_pieces") - held, "held": held, "apart": apart, "offset": offsets,
             "prim": recognised, "seconds": seconds,
             "floating_parts": dict(Counter(p.part for p in floating))}
+
+
+WHY = ("B", "U", "C", "A8", "A3-10", "AT")
+
+
+def why(path: Path) -> tuple[dict, Counter, Counter]:
+    """(the measured row, the pieces apart that are no held sub-build by class (WHY, module docstring), the mate types
+    of the A3-10 ones) of one model."""
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.rigidity.misses import Misses, unknown_near
+    from plantsolve.solvers.rigidity.pieces import MINIFIG, NAME_MARKS
+    from plantsolve.solvers.rigidity.solve import build, recorded_parts, solve
+    from plantsolve.solvers.rigidity.upload import parse_upload
+
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
+    result = solve(request).result
+    assembly, unknown = build(request, recorded_parts(request.source or {})[0])
+    misses = Misses(assembly)
+    positions = {p.id: p.position for p in request.parts}
+    classes, types = Counter(), Counter()
+    for pc in result.pieces[1:]:
+        if pc.sub_build is not None:
+            continue
+        near = misses.nearest(pc.parts)
+        gap = near["gap_ldu"] if near else None
+        figures = sum(assembly.parts[p].shape.name.lstrip(NAME_MARKS).lower().startswith(MINIFIG) for p in pc.parts)
+        if pc.drawn_apart:
+            classes["B"] += 1
+        elif unknown_near(pc.parts, positions, [u.id for u in unknown]):
+            classes["U"] += 1
+        elif len(pc.parts) > 1 and 2 * figures >= len(pc.parts):
+            classes["C"] += 1
+        elif gap is not None and abs(gap - 8) < 0.35 and {near["type"], near["other_type"]} == {"stud", "antistud"}:
+            classes["A8"] += 1
+        elif gap is not None and gap <= 10:
+            classes["A3-10"] += 1
+            types["/".join(sorted((near["type"], near["other_type"])))] += 1
+        else:
+            classes["AT"] += 1
+    held = len(result.report.details.get("held_pieces") or [])
+    return {"model": path.name, "known": len(result.parts), "pieces": len(result.pieces) - held, "held": held}, \
+        classes, types
 
 
 def baseline(ref: str, files: list[Path]) -> dict[str, dict]:
@@ -83,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("paths", nargs="+", type=Path, help="folders of .ldr/.mpd models, or model files")
     parser.add_argument("--before", default="main", help="git ref of the baseline solver, or 'none'")
     parser.add_argument("--json", action="store_true", help="one JSON row per model (the baseline's child uses it)")
+    parser.add_argument("--why", action="store_true", help="class the pieces apart of each model (no baseline)")
     args = parser.parse_args(argv)
     files = []
     for path in args.paths:
@@ -92,9 +146,24 @@ def main(argv: list[str] | None = None) -> int:
         for path in files:
             print(json.dumps(measure(path)), flush=True)
         return 0
+    if args.why:
+        print("| model | known | pieces (not held) | held | " + " | ".join(WHY) + " |")
+        all_classes, all_types, split = Counter(), Counter(), 0
+        for path in files:
+            row, classes, types = why(path)
+            all_classes.update(classes)
+            all_types.update(types)
+            if row["pieces"] > 1:
+                split += 1
+                print(f"| {path.stem} | {row['known']} | {row['pieces']} | {row['held']} | "
+                      + " | ".join(str(classes[k] or "") for k in WHY) + " |", flush=True)
+        print(f"{split} of {len(files)} models not in one piece besides held sub-builds; pieces apart by class: "
+              + ", ".join(f"{k} {all_classes[k]}" for k in WHY) + "; A3-10 mates: "
+              + ", ".join(f"{k} {n}" for k, n in all_types.most_common()))
+        return 0
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
-    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'offset':>6s} "
+    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
           f"{'prim':>6s} {'cpu s':>11s}  floating parts (after)")
     rows = []
     for path in files:
@@ -108,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
-              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
+              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
               f"{pair('seconds', '.2f'):>11s}  {names}")
     olds = [before.get(row["model"]) for row in rows]
     print(totals("after", rows))
@@ -119,13 +188,15 @@ def main(argv: list[str] | None = None) -> int:
 
 def totals(label: str, rows: list[dict]) -> str:
     """One line of totals over the models: floating parts, models at most 5 % floating, models in one piece besides
-    held sub-builds (the goal: a set that is one build comes out as one piece), pieces not held, held, offset pairs,
-    CPU seconds."""
+    held sub-builds (the goal: a set that is one build comes out as one piece) and besides held sub-builds and pieces
+    drawn apart (a set of several builds said so), pieces not held, held, drawn apart, offset pairs, CPU seconds."""
     return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
             f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
-            f"{sum(r['pieces'] == 1 for r in rows)}, pieces not held {sum(r['pieces'] for r in rows)}, held "
-            f"{sum(r['held'] for r in rows)}, offset pairs "
+            f"{sum(r['pieces'] == 1 for r in rows)} (or drawn apart "
+            f"{sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
+            f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, drawn apart "
+            f"{sum(r['apart'] for r in rows)}, offset pairs "
             f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")
 
 

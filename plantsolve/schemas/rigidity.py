@@ -155,6 +155,15 @@ class Piece(BaseModel):
                                   "those, none touching a part of the largest piece: whole sub-models lying against "
                                   "the build are a part of it whose joint was not found), joined by ' + ', or "
                                   "'minifigure' (only minifigure parts); null for a piece of the build itself.")
+    drawn_apart: bool = Field(default=False, description="True for a piece (no held sub-build, not the largest) that "
+                              "the drawing itself places apart, a separate build: its parts stand clear of every part "
+                              "outside it by more than a slip (collision boxes at least 3.1 LDU apart, parts without "
+                              "one at their origin), no connection point of it lies within 10 LDU (half a stud "
+                              "pitch) of a mate, and no part outside the catalogue lies beside it (origins within 60 "
+                              "LDU). A second vehicle, an animal, an accessory or spare parts laid aside, or a part "
+                              "fallen off: no joint can join it as drawn. Listed in report.details.separate_builds "
+                              "and the separate_builds warning; other pieces apart are named in separate_pieces (a "
+                              "joint not found).")
 
 
 class RigidityResult(BaseModel):

@@ -21,7 +21,8 @@ whose jaws reach bar on both sides of a gap the data leaves in it, or round a ro
 :meth:`Assembly.seat_offset_studs` (studs gripped between a tube and a wall where the data states no anti-stud) and
 :meth:`Assembly.join_pieces` (pieces joined where a point misses its mate by at most ``OFFSET_REACH``, hinge fingers
 by ``FINGER_REACH``, a stud the place where a one-wide part's walls grip it by ``OFFSET_REACH``, an anti-stud drawn on
-a stud's tip: a part drawn off its mate).
+a stud's tip: a part drawn off its mate; hinge fingers sharing their middle with their axes up to 30 degrees apart: a
+part swung about another axis than its hinge's).
 """
 
 from __future__ import annotations
@@ -70,6 +71,10 @@ SLIP_BORE = 20.0
 # instead of its socket's axis (tilted 10° from it) sits 5° off the socket; the axes must still stay within
 # FIT_SNAP of each other over the depth they share.
 FIT_ALIGN = math.cos(math.radians(10.0))
+# |cos| between two runs of hinge fingers whose middles coincide (within SNAP) for join_pieces to join them as a hinge:
+# a control stick 4593 drawn swung 15 to 25 degrees sideways on its base 4592 (sets 10179, 75827) still has its
+# knuckle in the base's fingers, its axis turned off theirs. Two runs can share a middle only on one pin.
+FINGER_TILT = math.cos(math.radians(30.0))
 # LDU: a male round section thinner than this is a rod a clip holds but no bar hole (the data's bars are radius 4)
 THIN_ROD = 3.5
 HALF_PITCH = 10.0  # LDU: half a stud pitch
@@ -244,6 +249,7 @@ class Assembly:
         self._rings: dict[tuple, list[tuple[str, int]]] = {}  # rings (kept apart: only studs look for them)
         self._links: dict[tuple[str, str], list[Connection]] = {}
         self._offsets: dict[tuple[str, str], float] = {}  # pairs joined by join_pieces: their offset
+        self._tilts: dict[tuple[str, str], float] = {}  # pairs joined by turned hinge fingers: the angle (degrees)
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
         self._pebble_stale = False
@@ -408,6 +414,7 @@ class Assembly:
                     joined.append((other, id, gap))
         joined += self._join_slipped_grips(groups, label, reach)
         joined += self._join_stud_tips(groups, label)
+        joined += self._join_tilted_fingers(groups, label)
         if joined:
             self._pebble_stale = True
         return joined
@@ -472,6 +479,48 @@ class Assembly:
                        for c in self._links.get((other, id), []) + self._links.get((id, other), [])):
                 self._link_at(id, ci, other, oi, "stud")  # every stud of the pair on a tip: two or more hold it rigid
         return joined
+
+    def _join_tilted_fingers(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
+        """Join, as a hinge, two runs of hinge fingers of parts of different pieces whose middles lie within SNAP of
+        each other and whose axes are turned less than 30 degrees (FINGER_TILT) but more than ALIGN off each other
+        (parallel runs meet in the matching): a part swung about another axis than its hinge's, its knuckle still in
+        the other's fingers (a control stick 4593 on its base 4592). Only between different pieces as they were before
+        the pass; each pair once, its angle in :meth:`tilts`. Returns (part, part, 0) per pair: their fingers meet."""
+        joined = []
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type != "finger" or c.length <= 0:
+                        continue
+                    middle = placed.points[ci] + placed.directions[ci] * (c.length / 2)
+                    for other, oi in self._runs_at(middle):
+                        o = self.parts[other]
+                        theirs = o.shape.connectors[oi]
+                        cos = abs(float(placed.directions[ci] @ o.directions[oi]))
+                        if (label[other] == label[id] or theirs.type != "finger" or not FINGER_TILT <= cos < ALIGN
+                                or (other, id) in self._links or (id, other) in self._links):
+                            continue
+                        if float(np.linalg.norm(o.points[oi] + o.directions[oi] * (theirs.length / 2) - middle)) > SNAP:
+                            continue
+                        self._link_at(id, ci, other, oi, "hinge")
+                        self._tilts[(other, id)] = math.degrees(math.acos(min(cos, 1.0)))
+                        joined.append((other, id, 0.0))
+        return joined
+
+    def _runs_at(self, point: np.ndarray):
+        """(part, connector) of the runs filed under the RUN_CELL cells within SNAP of ``point``, each once."""
+        seen = set()
+        for cell in _around(point, SNAP, RUN_CELL, RUN_OFFSET):
+            for found in self._runs.get(cell, ()):
+                if found not in seen:
+                    seen.add(found)
+                    yield found
+
+    def tilts(self) -> dict[tuple[str, str], float]:
+        """(part, part) -> the angle (degrees) between the axes of the hinge fingers :meth:`join_pieces` joined turned
+        off each other."""
+        return dict(self._tilts)
 
     def _mouths_at(self, place: np.ndarray, direction: np.ndarray, type: str, label: dict, piece: int):
         """(part, connector) of the ``type`` points of parts of pieces other than ``piece`` facing ``direction``: for
@@ -913,6 +962,7 @@ class Assembly:
             for pair in ((other, id), (id, other)):
                 self._links.pop(pair, None)
                 self._offsets.pop(pair, None)
+                self._tilts.pop(pair, None)
             self._neighbours[other].discard(id)
         self._pebble_stale = True
 

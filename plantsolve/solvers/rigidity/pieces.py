@@ -8,8 +8,11 @@ the largest piece (:func:`clearance` under TOUCH_GAP: a sub-model lying against 
 joint was not found, as OMR 10174's roof, tilted 9 degrees on the head), or when it holds minifigure parts only
 (a minifigure whose hands hold nothing of the build). Pieces that are no sub-build each are one together when
 they are the known parts of whole placed sub-models and stand LOOSE_CLEARANCE clear of the build
-(:func:`loose_sub_builds`). Any other piece means joints the catalogue did not find, or a model that really is
-in pieces: the solver warns about it.
+(:func:`loose_sub_builds`). Of the other pieces, one that the drawing itself places apart (:func:`drawn_apart`:
+touching no part outside it, no connection point within APART_MISS of a mate, no part outside the catalogue beside it)
+is a separate build: a second vehicle, an accessory or spare parts laid aside, or a part fallen off, which no joint
+finding can join. Any other piece means joints the catalogue did not find, or a model that really is in pieces: the
+solver warns about it.
 """
 
 from __future__ import annotations
@@ -35,6 +38,14 @@ TOUCH_GAP = 0.5  # LDU: boxes this close touch (a part resting on another whose 
 # origin, to be one sub-build together (loose_sub_builds). Hose and cable segments joined through parts not in
 # the catalogue lie within a stud of the build (OMR 8002: 6-34 LDU, 21309: 20-23); a cart beside its X-wing 105.
 LOOSE_CLEARANCE = 40.0
+# LDU: half a stud pitch, how far a piece's nearest mate must lie (misses.Misses.nearest) for the piece to be drawn
+# apart (drawn_apart). Up to a plate's height (8 LDU: a row a plate above the studs it would sit on) the gap may be a
+# plate the model omits or one the library has thickened since, so such a piece stays one whose joint was not found.
+APART_MISS = 10.0
+# LDU: how far clear of every other part a piece must stand to be drawn apart: more than the slip that
+# Assembly.join_pieces takes for a part drawn off its mate (assembly.OFFSET_REACH), so that a part drawn 2 LDU off
+# what it is pressed on (a spare wheel on a truck's panel, set 4096) is not said to be apart.
+APART_GAP = 3.1
 
 
 def mostly_floating(floating: int, parts: int) -> bool:
@@ -99,6 +110,16 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     if all(names.get(p, "").lstrip(NAME_MARKS).lower().startswith(MINIFIG) for p in piece):
         return MINIFIGURE
     return None
+
+
+def drawn_apart(gap: float, nearest: float | None, beside_unknown: bool) -> bool:
+    """A piece the drawing places apart from the rest of the model: its parts at least APART_GAP from every part
+    outside it (``gap``, :func:`clearance` against all of them, parts without a collision shape at their origin), its
+    nearest mate further than APART_MISS (``nearest`` in LDU, None: none within misses.REACH) and no part outside the
+    catalogue beside it (``beside_unknown``: it may be what holds the piece). Lying against the build (a roof on its
+    walls), a plate's height off its mates or beside a part the catalogue lacks, a piece may be joined in the model
+    and is not said to be apart."""
+    return gap >= APART_GAP and (nearest is None or nearest > APART_MISS) and not beside_unknown
 
 
 def loose_sub_builds(apart: Sequence[Sequence[str]], part_ids: Sequence[str],

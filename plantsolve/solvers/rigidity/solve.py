@@ -12,15 +12,15 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, OFFSET_REACH, SNAP, STUD_LENGTH_IN, Assembly, JointSpec,
-                                                  natural_order)
+from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, OFFSET_REACH, SNAP, STUD_LENGTH_IN,
+                                                  Assembly, JointSpec, natural_order)
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
-from plantsolve.solvers.rigidity.misses import REACH, Misses, unknown_near
-from plantsolve.solvers.rigidity.pieces import (LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP, clearance, far_parts,
-                                                joints_by_part, line_of, loose_sub_builds, mostly_floating, pieces,
-                                                sub_build)
+from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
+from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
+                                                clearance, drawn_apart, far_parts, joints_by_part, line_of,
+                                                loose_sub_builds, mostly_floating, pieces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -33,6 +33,11 @@ HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and noth
                     f"boxes, or the origins of parts without one): parts loose in a sub-build, or joined to it by "
                     f"parts not in the catalogue"}
 LISTED_IN_MESSAGE = 10
+# how report.details.separate_builds recognised each piece (pieces.drawn_apart)
+APART_BY = (f"standing clear of every part outside it by more than a slip (collision boxes at least {APART_GAP:g} LDU "
+            f"apart, parts without one at their origin), no connection point within {APART_MISS:g} LDU of a mate (none "
+            f"within {REACH:g} LDU, or the nearest miss further), no part outside the catalogue with its origin within "
+            f"{UNKNOWN_REACH:g} LDU")
 LISTED_MISSES = 20  # floating parts and separate pieces whose nearest miss the warnings give (details.why)
 
 
@@ -183,8 +188,14 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                     for p in part_ids]
     piece_results, held_by = _pieces(part_ids, by_part, assembly, source)
     positions = {p.id: np.asarray(p.position, float) for p in request.parts}
-    warnings.extend(_piece_warnings(part_results, piece_results, assembly, positions, [u.id for u in unknown]))
+    unknown_ids = [u.id for u in unknown]
+    floating = [p.id for p in part_results if not p.joints]
+    misses = Misses(assembly) if (floating and len(part_results) > 1) or any(
+        pc.sub_build is None for pc in piece_results[1:]) else None
+    builds = _separate_builds(piece_results, assembly, positions, unknown_ids, misses, source)
+    warnings.extend(_piece_warnings(part_results, piece_results, assembly, positions, unknown_ids, misses, builds))
     warnings.extend(_offset_warnings(assembly))
+    warnings.extend(_tilt_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
@@ -200,11 +211,15 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     if held:  # a held sub-build is not a fault, but a reader of the message must not take the set for one piece
         message += (f"; {len(held)} sub-build(s) stand apart as held pieces: "
                     + ", ".join(f"{pc.sub_build} ({len(pc.parts)} parts)" for pc in held[:LISTED_IN_MESSAGE]))
+    if builds:  # nor a set of several builds for one build in pieces
+        message += (f"; the drawing places {len(builds)} piece(s) apart as separate builds: "
+                    + ", ".join(f"{b['first']} ({b['parts']} parts)" for b in builds[:LISTED_IN_MESSAGE]))
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
         "held_pieces": [{"parts": len(pc.parts), "sub_build": pc.sub_build, "recognised_by": held_by[k]}
                         for k, pc in enumerate(piece_results) if k in held_by],
+        "separate_builds": builds[:MAX_LISTED], "separate_builds_rule": APART_BY,
         "rank_method": mob.rank_method,
         "source": request.source or {}})
     progress(1.0, "done")
@@ -227,13 +242,7 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
     groups = pieces(part_ids, {p: joined for p, (_, joined) in by_part.items()})
     if not groups:
         return [], {}
-    ids, _, lower, upper = assembly.solid_boxes()
-    finite = np.isfinite(lower).all(axis=1)
-    lows = {b: lo for b, lo, ok in zip(ids, lower, finite) if ok}
-    highs = {b: hi for b, hi, ok in zip(ids, upper, finite) if ok}
-    # a part without a collision shape (a minifigure's, a hose segment) is its origin when pieces must stand clear
-    points = {p: assembly.parts[p].position for p in part_ids if p not in lows}
-    lows_or_points, highs_or_points = {**lows, **points}, {**highs, **points}
+    lows, highs, lows_or_points, highs_or_points = _boxes(part_ids, assembly)
     found: list[str | None] = [None]
     held_by: dict[int, str] = {}
     apart: list[int] = []  # pieces standing apart from the largest that are no sub-build each
@@ -256,17 +265,61 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
                                                                                held_by.items()}
 
 
+def _boxes(part_ids: list[str], assembly: Assembly) -> tuple[dict, dict, dict, dict]:
+    """The parts' world-aligned collision boxes (lower, upper corners by id), and the same with each part that has no
+    collision shape (a minifigure's, a hose segment) as a point at its origin, as pieces that must stand clear count
+    it."""
+    ids, _, lower, upper = assembly.solid_boxes()
+    finite = np.isfinite(lower).all(axis=1)
+    lows = {b: lo for b, lo, ok in zip(ids, lower, finite) if ok}
+    highs = {b: hi for b, hi, ok in zip(ids, upper, finite) if ok}
+    points = {p: assembly.parts[p].position for p in part_ids if p not in lows}
+    return lows, highs, {**lows, **points}, {**highs, **points}
+
+
+def _separate_builds(found: list[Piece], assembly: Assembly, positions: dict, unknown: list[str],
+                     misses: Misses | None, source: dict) -> list[dict]:
+    """Mark the pieces that the drawing places apart (:func:`pieces.drawn_apart`: no held sub-build, standing APART_GAP
+    clear of everything outside them, no mate within APART_MISS, no unknown part beside them) and describe each for
+    report.details.separate_builds: its first part, part count, the top-level placements it lies in (the sub-models
+    the main model places, by file name, or "main model" for its own lines) and its nearest miss (LDU, None: no mate
+    within misses.REACH)."""
+    part_count = sum(len(pc.parts) for pc in found)
+    if misses is None or mostly_floating(sum(len(pc.parts) == 1 for pc in found), part_count):
+        return []  # where most parts meet nothing (a parts list, or positions in another unit) no build is told apart
+    part_ids = [p for pc in found for p in pc.parts]
+    _, _, lows, highs = _boxes(part_ids, assembly)
+    placements = source.get("submodel_placements") if isinstance(source.get("submodel_placements"), dict) else {}
+    out = []
+    for pc in found[1:]:
+        if pc.sub_build is not None:
+            continue
+        members = set(pc.parts)
+        rest = [p for p in part_ids if p not in members]
+        near = misses.nearest(pc.parts)
+        gap = near["gap_ldu"] if near is not None else None
+        if not drawn_apart(clearance(pc.parts, rest, lows, highs), gap,
+                           bool(unknown_near(pc.parts, positions, unknown))):
+            continue
+        pc.drawn_apart = True
+        tops = list(dict.fromkeys(p.split("/")[0] + "/" if "/" in p else "" for p in pc.parts))
+        out.append({"first": pc.parts[0], "parts": len(pc.parts),
+                    "numbers": sorted({assembly.parts[p].number for p in pc.parts})[:LISTED_IN_MESSAGE],
+                    "placements": [placements.get(t, t.rstrip("/")) if t else "main model" for t in tops],
+                    "nearest_ldu": gap})
+    return out
+
+
 def _named(ids, assembly: Assembly) -> str:
     shown = [f"{p} ({assembly.parts[p].number})" for p in ids[:LISTED_IN_MESSAGE]]
     return ", ".join(shown) + (f" and {len(ids) - len(shown)} more" if len(ids) > len(shown) else "")
 
 
 def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assembly, positions: dict,
-                    unknown: list[str]) -> list[Diagnostic]:
+                    unknown: list[str], misses: Misses | None, builds: list[dict]) -> list[Diagnostic]:
     out = []
     floating = [p.id for p in parts if not p.joints]
-    apart = [pc for pc in found[1:] if pc.sub_build is None and len(pc.parts) > 1]
-    misses = Misses(assembly) if (floating and len(parts) > 1) or apart else None
+    apart = [pc for pc in found[1:] if pc.sub_build is None and not pc.drawn_apart and len(pc.parts) > 1]
     if floating and len(parts) > 1:
         why = [_why([p], misses, positions, unknown) for p in floating[:LISTED_MISSES]]
         out.append(Diagnostic(code="floating_parts", message=f"{len(floating)} of {len(parts)} known part(s) are "
@@ -283,7 +336,22 @@ def _piece_warnings(parts: list[PartJoints], found: list[Piece], assembly: Assem
                               + "; ".join(_named(pc.parts, assembly) for pc in apart[:LISTED_IN_MESSAGE])
                               + "; " + _why_text([pc.parts[0] for pc in apart], why, assembly),
                               details={"pieces": [pc.parts[:MAX_LISTED] for pc in apart[:MAX_LISTED]], "why": why}))
+    if builds:
+        out.append(Diagnostic(code="separate_builds", message=f"the drawing places {len(builds)} piece(s) apart from "
+                              f"the rest of the model, so it is {len(builds) + 1} or more builds as drawn (a second "
+                              "vehicle, an animal, an accessory or spare parts laid aside, or a part fallen off; no "
+                              f"joint can join them as drawn): {APART_BY}: "
+                              + "; ".join(_build_text(b) for b in builds[:LISTED_IN_MESSAGE]),
+                              details={"builds": builds[:MAX_LISTED], "rule": APART_BY}))
     return out
+
+
+def _build_text(build: dict) -> str:
+    """A separate build in words: its first part, its part count and first numbers, where it lies, its nearest miss."""
+    numbers = ", ".join(build["numbers"][:3]) + (" …" if len(build["numbers"]) > 3 else "")
+    near = (f"nearest mate {build['nearest_ldu']:g} LDU off" if build["nearest_ldu"] is not None
+            else f"no mate within {REACH:g} LDU")
+    return f"{build['first']} ({build['parts']} part(s): {numbers}; in {', '.join(build['placements'][:3])}; {near})"
 
 
 def _why(piece: list[str], misses: Misses, positions: dict, unknown: list[str]) -> dict:
@@ -328,6 +396,25 @@ def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
                                            "offset_ldu": round(gap, 3)} for (a, b), gap in listed[:MAX_LISTED]],
                                 "reach_ldu": OFFSET_REACH, "finger_reach_ldu": FINGER_REACH,
                                 "stud_tip_ldu": STUD_LENGTH_IN})]
+
+
+def _tilt_warnings(assembly: Assembly) -> list[Diagnostic]:
+    """``tilted_joints``: the part pairs joined by hinge fingers that share their middle with their axes drawn turned
+    off each other (:meth:`Assembly.join_pieces`), each with the angle."""
+    tilts = assembly.tilts()
+    if not tilts:
+        return []
+    listed = sorted(tilts.items(), key=lambda item: (-item[1], natural_order(item[0][0])))
+    return [Diagnostic(code="tilted_joints", message=f"{len(tilts)} pair(s) of parts are joined by hinge fingers whose "
+                       f"axes are drawn up to {listed[0][1]:.3g} degrees off each other, their middles on one point (a "
+                       "part swung about another axis than its hinge's; joined as a hinge about the turned part's "
+                       f"axis, at most {math.degrees(math.acos(FINGER_TILT)):g} degrees): "
+                       + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
+                                   f"{angle:.3g} degrees" for (a, b), angle in listed[:LISTED_IN_MESSAGE]),
+                       details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
+                                                                         assembly.parts[b].number],
+                                           "angle_degrees": round(angle, 2)} for (a, b), angle in listed[:MAX_LISTED]],
+                                "max_angle_degrees": round(math.degrees(math.acos(FINGER_TILT)), 6)})]
 
 
 # Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts

@@ -12,8 +12,9 @@ import pytest
 
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.rigidity import generated
-from plantsolve.solvers.rigidity.pieces import clearance, loose_sub_builds, sub_build
-from plantsolve.solvers.rigidity.solve import HELD_BY, solve
+from plantsolve.solvers.rigidity.assembly import OFFSET_REACH
+from plantsolve.solvers.rigidity.pieces import APART_GAP, clearance, drawn_apart, loose_sub_builds, sub_build
+from plantsolve.solvers.rigidity.solve import APART_BY, HELD_BY, solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
 HERE = Path(__file__).parent
@@ -495,6 +496,10 @@ def test_an_official_set_has_every_known_part_joined_and_is_one_build(name):
     assert ("stand apart as held pieces" in result.report.message) == bool(apart)
     assert all(held in result.report.message for held in apart)
     assert result.collisions == []
+    # one build: no piece drawn apart, and no separate_pieces either
+    assert [pc.drawn_apart for pc in result.pieces] == [False] * len(result.pieces)
+    assert result.report.details["separate_builds"] == []
+    assert not {"separate_builds", "separate_pieces"} & {w.code for w in result.report.warnings}
 
 
 def test_the_at_at_head_hangs_on_a_hinge_drawn_two_ldu_off_its_fingers():
@@ -515,12 +520,17 @@ def test_larger_sets_leave_at_most_five_percent_of_their_known_parts_joined_to_n
     """Island Hopper (5935: its pteranodon is placed in the air beside the plane; the skis hang half a stud along
     the wings' outer rows) and the X-wing with its support cart (7140, 48 parts not in the catalogue; the cart
     with the pilot on it stands apart, two pairs of its parts joined to nothing of it: held, see below)."""
-    for name, floating_parts, build_pieces in (("5935-1-IslandHopper.mpd", ["30478"], 2),
-                                               ("7140-1-X-wingFighter.mpd", [], 1)):
+    for name, floating_parts, build_pieces, apart in (("5935-1-IslandHopper.mpd", ["30478"], 2, ["L14"]),
+                                                      ("7140-1-X-wingFighter.mpd", [], 1, [])):
         request, result = omr(name)
         floating = [p.part for p in result.parts if not p.joints]
         assert floating == floating_parts and len(floating) <= 0.05 * len(result.parts)
         assert len([p for p in result.pieces if p.sub_build is None]) == build_pieces
+        # the pteranodon touches nothing and has no mate within 40 LDU: the drawing places it apart, which the result
+        # says (a separate build), not a piece whose joint was not found
+        assert [pc.parts for pc in result.pieces if pc.drawn_apart] == [[p] for p in apart]
+        assert [b["first"] for b in result.report.details["separate_builds"]] == apart
+        assert "separate_pieces" not in {w.code for w in result.report.warnings}
 
 
 def test_a_part_joined_to_nothing_is_named_in_a_floating_parts_warning():
@@ -551,9 +561,98 @@ def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_
     assert plate == {"nearest": None, "unknown_near": ["L5"]}
     assert "L3 (3003) antistud 5 LDU from L2 (3003) stud" in floating.message
     assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
-    pieces = warnings["separate_pieces"]
-    assert pieces.details["why"] == [{"nearest": None, "unknown_near": []}]
-    assert "L6: no mate within 40 LDU" in pieces.message
+    # the pair of plates 500 LDU off touches nothing and has no mate within 40 LDU: drawn apart, a separate build;
+    # the brick 5 LDU up and the plate beside the unknown part are no build apart (a slip, or held by that part)
+    assert "separate_pieces" not in warnings
+    assert warnings["separate_builds"].details["builds"] == [
+        {"first": "L6", "parts": 2, "numbers": ["3023"], "placements": ["main model"], "nearest_ldu": None}]
+    assert "L6 (2 part(s): 3023; in main model; no mate within 40 LDU)" in warnings["separate_builds"].message
+    assert [(pc.parts, pc.drawn_apart) for pc in result.pieces] == [
+        (["L1", "L2"], False), (["L6", "L7"], True), (["L3"], False), (["L4"], False)]
+
+
+@pytest.mark.parametrize("degrees, shift, joined", [(0, 0, True), (15, 0, True), (25, 0, True), (40, 0, False),
+                                                     (15, 1, False)])
+def test_a_control_stick_swung_sideways_on_its_base_is_a_hinge_in_its_fingers(degrees, shift, joined):
+    """Sets 10179 and 75827 draw the control stick 4593 swung 15 to 25 degrees sideways (about z) on its base 4592: its
+    knuckle's finger run shares its middle with the base's, its axis turned off theirs. Joints counted by hand: the
+    base on a 1 x 1 plate's stud (a hinge about the stud) and the stick in the base (a hinge): dof 2. Up to 30 degrees
+    it is joined (named in tilted_joints; at 0 by the matching itself); turned 40 degrees, or with its middle 1 LDU off
+    the base's, it is joined to nothing (dof 2 + 6 - 1: the plate and base's hinge, and the stick loose)."""
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    text = ("1 4 0 8 0 1 0 0 0 1 0 0 0 1 3024.dat\n1 4 0 0 0 1 0 0 0 1 0 0 0 1 4592.dat\n"
+            f"1 4 {shift} 0 0 {c:.6f} {-s:.6f} 0 {s:.6f} {c:.6f} 0 0 0 1 4593.dat\n")
+    result = solve(parse("stick.ldr", text)).result
+    assert [(j.id, j.type, j.origin) for j in result.joints] == [("L1~L2", "hinge", "stud")] + [
+        ("L2~L3", "hinge", "hinge")] * joined
+    assert result.dof == (2 if joined else 7)
+    warnings = {w.code: w for w in result.report.warnings}
+    if joined and degrees:
+        assert warnings["tilted_joints"].details["pairs"] == [
+            {"parts": ["L2", "L3"], "numbers": ["4592", "4593"], "angle_degrees": float(degrees)}]
+        assert f"L2 (4592) and L3 (4593) {degrees} degrees" in warnings["tilted_joints"].message
+        axis = next(j.axis for j in result.joints if j.id == "L2~L3")
+        assert np.allclose(axis, [c, s, 0], atol=1e-6)  # about the stick's own (turned) finger axis
+    else:
+        assert "tilted_joints" not in warnings
+    assert ("floating_parts" in warnings) != joined
+
+
+BUILD = "1 4 0 0 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 -24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"  # two 2 x 4 bricks stacked
+
+
+def _pair(x: float, y: float, z: float = 0) -> str:
+    """Two 1 x 2 plates stacked, the lower one's top at height ``y`` (LDU, up negative), its centre at ``x``, ``z``."""
+    return f"1 4 {x} {y} {z} 1 0 0 0 1 0 0 0 1 3023.dat\n1 4 {x} {y - 8} {z} 1 0 0 0 1 0 0 0 1 3023.dat\n"
+
+
+@pytest.mark.parametrize("extra, apart, nearest", [
+    (_pair(200, -8), True, None),  # 200 LDU off on the floor: touching nothing, no mate within 40 LDU
+    (_pair(0, -40, 10), False, 8.0),  # over the top brick's studs with a plate's height of air (a plate left out?)
+    (_pair(60, -8), False, 22.36),  # against the lower brick's side: lying against the build
+    (_pair(62, -8), False, 24.17),  # 2 LDU off that side: drawn off what it is pressed on, within a slip
+    (_pair(200, -8) + "1 4 210 0 0 1 0 0 0 1 0 0 0 1 no_such_part.dat\n", False, None),  # beside an unknown part
+])
+def test_a_piece_touching_nothing_with_no_mate_within_half_a_pitch_is_a_separate_build(extra, apart, nearest):
+    """Joints counted by hand: the bricks' eight studs (one rigid joint) and the plates' two (one rigid joint), two
+    pieces, so 6 degrees of freedom between them. Only the pair on the floor 200 LDU off is drawn apart; a plate's
+    height of air over studs, a side lying against the build and an unknown part beside them may each hide a joint,
+    and the pair stays a piece whose joint was not found (separate_pieces)."""
+    result = solve(parse("builds.ldr", BUILD + extra)).result
+    assert [(len(j.bodies), j.type) for j in result.joints] == [(2, "rigid"), (2, "rigid")]
+    assert (result.dof, result.report.details["connected_pieces"]) == (6, 2)
+    assert [(pc.parts, pc.sub_build, pc.drawn_apart) for pc in result.pieces] == [
+        (["L1", "L2"], None, False), (["L3", "L4"], None, apart)]
+    warnings = {w.code: w for w in result.report.warnings}
+    assert ("separate_builds" in warnings, "separate_pieces" in warnings) == (apart, not apart)
+    if apart:
+        assert result.report.details["separate_builds"] == warnings["separate_builds"].details["builds"] == [
+            {"first": "L3", "parts": 2, "numbers": ["3023"], "placements": ["main model"], "nearest_ldu": nearest}]
+        assert warnings["separate_builds"].details["rule"] == result.report.details["separate_builds_rule"] == APART_BY
+        assert "so it is 2 or more builds as drawn" in warnings["separate_builds"].message
+        assert "the drawing places 1 piece(s) apart as separate builds: L3 (2 parts)" in result.report.message
+    else:
+        assert result.report.details["separate_builds"] == []
+        assert [(w["nearest"] or {}).get("gap_ldu") for w in warnings["separate_pieces"].details["why"]] == [nearest]
+
+
+def test_drawn_apart_needs_more_than_a_slip_clear_no_mate_within_half_a_pitch_and_no_unknown_part_beside():
+    assert APART_GAP == OFFSET_REACH  # a piece a slip off the rest may be a part drawn off its mate
+    assert drawn_apart(3.1, None, False) and drawn_apart(40.0, 10.01, False)
+    assert not drawn_apart(3.0, None, False)  # 3 LDU off the rest: drawn off what it is pressed on (set 4096's wheel)
+    assert not drawn_apart(40.0, 10.0, False)  # a mate within half a pitch: a slip or a plate's height off
+    assert not drawn_apart(40.0, None, True)  # an unknown part beside it may hold it
+
+
+def test_a_whole_sub_model_standing_apart_stays_a_held_sub_build_not_a_separate_build():
+    """A held sub-build (whole placed sub-models touching nothing) is named as before; the drawn-apart rule is only
+    for the pieces that are no held sub-build, and a file whose parts mostly meet nothing tells no build apart."""
+    text = ("0 FILE main.ldr\n" + BUILD + "1 4 200 0 0 1 0 0 0 1 0 0 0 1 pair.ldr\n0 FILE pair.ldr\n" + _pair(0, -8))
+    result = solve(parse("held.mpd", text)).result
+    assert [(pc.sub_build, pc.drawn_apart) for pc in result.pieces] == [(None, False), ("pair.ldr", False)]
+    loose = "".join(f"1 4 {100 * k} 0 0 1 0 0 0 1 0 0 0 1 3023.dat\n" for k in range(5))  # a parts list
+    result = solve(parse("list.ldr", _pair(0, -8) + loose)).result
+    assert result.report.details["separate_builds"] == [] and not any(pc.drawn_apart for pc in result.pieces)
 
 
 def test_a_piece_of_whole_sub_models_is_a_held_sub_build_and_a_piece_of_part_of_one_is_not():
