@@ -11,6 +11,7 @@ import pytest
 
 from plantsolve.schemas.tube import LraRow, TubeOptions, TubeRequest
 from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.inspection_report import inspection_outcome
 from plantsolve.solvers.tube.nominal_files import read_nominal_csv
 from plantsolve.solvers.tube.scan import TubeScan
 from plantsolve.solvers.tube.solve import solve
@@ -42,6 +43,9 @@ def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdic
     assert not last.determined and last.ok and ins.rows[-1].undetermined == ["length"]
     assert ins.verdict == "not_determined" and ins.undetermined_rows == [3]  # before: "pass"
     assert ins.end_points[1].determined and ins.end_points[1].ok  # 0.34 + 3 x 0.48 mm: within its 2 mm
+    _, warning = inspection_outcome(ins, "mm")
+    assert warning.code == "inspection_not_determined" and "rows 3 (length)" in warning.message
+    assert "or within the tolerance by less than three sigmas (the part may end further on)" in warning.message
 
 
 @pytest.mark.parametrize("past_end, sigma, verdict", [
@@ -49,6 +53,7 @@ def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdic
     (-0.6, 0.4, "pass"),  # 0.6 mm at most, the end point 1.8 mm
     (1.4, 0.05, "fail"),  # samples past the nominal end by more than the tolerance: proven too long
     (-1.4, 0.05, "not_determined"),  # short of the nominal: the scan may be short, not the part
+    (0.5, 0.3, "not_determined"),  # within 1 mm, but the part may end 1.4 mm past: a pass before the 3-sigma rule
 ])
 def test_a_lower_bound_is_judged_by_how_far_the_part_may_reach(past_end, sigma, verdict):
     ins = _inspected(past_end, sigma)
