@@ -72,3 +72,30 @@ def test_micron_under_a_pressure_is_refused_as_a_head_or_a_vacuum_pressure(unit)
     assert error.loc == ("file", "header") and "µmHg" in error.msg and "micrometres" in error.msg
     assert check_quantity("pressure", "umHg").factor_to(check_quantity("pressure", "Pa")) == pytest.approx(
         0.133322387415, rel=1e-6)
+
+
+@pytest.mark.parametrize("header, says, suggested, reads", [
+    ("pressure [kPa] (g)", "gauge mark outside the unit: write", "pressure [kPa(g)]", "kPag"),
+    ("Pressure (psi) (gauge)", "gauge mark outside the unit: write", "Pressure [psi(gauge)]", "psig"),
+    ("pressure [bar] (a)", "absolute mark outside the unit: write", "pressure [bar(a)]", "bar"),
+    ("pressure (g)", "gauge mark without a unit: write the unit with its mark, e.g.", "pressure [kPa(g)]", "kPag"),
+])
+def test_a_pressure_mark_after_the_units_brackets_is_refused_naming_the_column(header, says, suggested, reads):
+    """Refused as 'missing: pressure', the column not named: the mark belongs inside the unit's brackets; the header
+    the message suggests reads."""
+    with pytest.raises(InputRejected) as refused:
+        _load(f"theta,phi,flow,{header},efficiency")
+    (error,) = refused.value.errors
+    assert error.loc == ("file", "header")
+    assert error.msg == f"column {header!r} (line 1, column 4): {says} {suggested}"
+    assert _load(f"theta,phi,flow,{suggested},efficiency").units.pressure == reads
+
+
+def test_a_speed_at_zero_is_warned_without_naming_compressors():
+    """perfmap reads fans' and pumps' maps too: their speed lines also run at positive speeds."""
+    rows = [f"{s:g},{f + 0.5 * k:g},{base - 0.02 * k * k:g},{0.8 + 0.02 * k - 0.01 * k * k:g}"
+            for s, base in zip((0.0, 0.9, 1.0), (1.0, 1.2, 1.4)) for k, f in enumerate((10, 11, 12, 13))]
+    source = StoredInput.from_bytes("rig.csv", "\n".join(["speed,flow [kg/s],PR,efficiency", *rows]).encode())
+    (warning,) = [w for w in load(parse_upload(source, {"map": False}), source).warnings
+                  if w.code == "implausible_speed"]
+    assert "zero: speed lines run at positive speeds" in warning.message and "compressor" not in warning.message
