@@ -194,8 +194,8 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
     distinct: dict[str, pint.Unit] = {}
     chosen: set[str] = set()  # readings that some casing gives without a sub-milli prefix from a capital
     for candidate, (unit, sub_milli) in found.items():
-        same = next((c for c, other in distinct.items() if unit.dimensionality == other.dimensionality and math.isclose(
-            registry().Quantity(1.0, unit).to(other).magnitude, 1.0, rel_tol=1e-9)), None)
+        same = next((c for c, other in distinct.items() if unit.dimensionality == other.dimensionality
+                     and math.isclose(registry().Quantity(1.0, unit).to(other).magnitude, 1.0, rel_tol=1e-9)), None)
         if same is None:
             distinct[candidate] = unit
             same = candidate

@@ -153,8 +153,8 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
     return None
 
 
-_MARK_AFTER = re.compile(r"(?P<label>.*?)\s*(?:[\[(](?P<unit>[^\[\]()]*)[\])])?\s*[\[(]\s*(?P<mark>a|abs|g|gauge)\s*[\])]\s*$",
-                         re.IGNORECASE)
+_MARK_AFTER = re.compile(r"(?P<label>.*?)\s*(?:[\[(](?P<unit>[^\[\]()]*)[\])])?"
+                         r"\s*[\[(]\s*(?P<mark>a|abs|g|gauge)\s*[\])]\s*$", re.IGNORECASE)
 
 
 def _mark_outside_unit(name: str) -> str | None:
@@ -554,7 +554,8 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         if key in columns:
             field = None if columns[key] == "ignore" else columns[key]
         if field is None and (marked := _mark_outside_unit(name)):
-            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}, column {j + 1}): {marked}", ("file", "header"))
+            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}, column {j + 1}): {marked}",
+                         ("file", "header"))
         if field is None:
             if name.strip():
                 ignored.append(name.strip())
