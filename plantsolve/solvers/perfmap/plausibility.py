@@ -217,7 +217,7 @@ def _speed(request: PerfmapRequest, units: ResultUnits, settings: list[Setting])
             out.append(_warning(
                 "implausible_speed",
                 f"Corrected speed {name!r}: values {_range(values)} include "
-                f"{'negative speeds' if values.min() < 0 else 'zero'}: a compressor's speed lines run at positive "
+                f"{'negative speeds' if values.min() < 0 else 'zero'}: speed lines run at positive "
                 "speeds: a stray minus, or another column (an angle?) read as the speed?",
                 quantity=name, unit=unit, range=[0.0, None], values=[float(values.min()), float(values.max())]))
             continue

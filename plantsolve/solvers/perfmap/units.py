@@ -31,8 +31,12 @@ _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC 
                 # fan and pump rigs' volume flows: pint read 'cfm' as centifermis, a length
                 "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute")
 # Volumes at standard or normal conditions: a mass flow in volume units, which no factor makes an actual volume flow.
-_STANDARD_VOLUMES = re.compile(r"(?:s|std\s*)cf[mhs]|mmscfd|(?:n|s)\s*m(?:3|\^3|³|\*\*3)\s*/\s*(?:h|hr|s|min|d)",
-                               re.IGNORECASE)
+# Normal or standard litres ('Nl/min', 'SLPM', 'sccm') too: re-cased, 'NL/MIN' read as nanolitres, 1e6 too small.
+_CUBED = r"(?:3|\^3|³|\*\*3)"
+_PER_TIME = r"(?:h|hr|hour|s|sec|m|min|d|day)"
+_STANDARD_VOLUMES = re.compile(
+    rf"(?:k|m|mm)?(?:s|std\s*)(?:cf|ft{_CUBED})\s*(?:[mhsd]|/\s*{_PER_TIME})"
+    rf"|k?[ns]\s*(?:m{_CUBED}|l|ml|cm{_CUBED}|cc)\s*/\s*{_PER_TIME}|[ns]lp[mhs]|[ns]lm|scc[ms]", re.IGNORECASE)
 
 
 @functools.cache
@@ -75,6 +79,9 @@ _DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])"
 # these, so that 'KG' is kilograms and not kilogauss, 'PA' pascals and not petaamperes.
 _RIG_UNITS = ("kg/s", "m^3/s", "Pa", "m", "J/kg", "1", "1/s", "rpm/K^0.5", "K", "kg", "s", "W")
 _LONGEST_RECASED = 10  # letters of a word whose every casing is tried (2^10 spellings at most)
+_SUB_MILLI = frozenset({"micro", "nano", "pico", "femto", "atto", "zepto", "yocto", "ronto", "quecto"})
+# 'micron' under a pressure: a head in micrometres to pint, but vacuum gauges' micron is the micrometre of mercury.
+_MICRON = re.compile(r"microns?", re.IGNORECASE)
 
 
 class UnitError(ValueError):
@@ -152,6 +159,14 @@ def _casings(word: str) -> list[str]:
     return [spelling for spelling in sorted(tried) if registry().parse_unit_name(spelling)]
 
 
+def _lowered_into_sub_milli(word: str, spelling: str) -> bool:
+    """Whether ``spelling`` lowers the leading capital of ``word`` into a prefix below milli: a capital there is the
+    N or S of normal and standard volumes ('NL/MIN'), not a nano or pico, which would read values a million times
+    too small without a word."""
+    return word[0].isupper() and spelling[0].islower() and all(
+        prefix in _SUB_MILLI for prefix, _, _ in registry().parse_unit_name(spelling))
+
+
 _WORD = re.compile(r"[A-Za-z][A-Za-z0-9]*")  # 'H2O' one word: 'INH2O' is inH2O
 
 
@@ -170,22 +185,27 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
     choices = [_casings(w) for w in words]
     if not all(choices) or math.prod(map(len, choices)) > 256:
         return None
-    found: dict[str, pint.Unit] = {}
+    found: dict[str, tuple[pint.Unit, bool]] = {}
     for spelling in itertools.product(*choices):
         candidate = _respelled(text, spelling)
         unit = _pint_unit(candidate)
         if unit is not None and _dimensions(unit) in dimensions and (not unit.dimensionless or _plain(unit)):
-            found.setdefault(candidate, unit)
+            found.setdefault(candidate, (unit, any(map(_lowered_into_sub_milli, words, spelling))))
     distinct: dict[str, pint.Unit] = {}
-    for candidate, unit in found.items():
-        if not any(unit.dimensionality == other.dimensionality
-                   and math.isclose(registry().Quantity(1.0, unit).to(other).magnitude, 1.0, rel_tol=1e-9)
-                   for other in distinct.values()):
+    chosen: set[str] = set()  # readings that some casing gives without a sub-milli prefix from a capital
+    for candidate, (unit, sub_milli) in found.items():
+        same = next((c for c, other in distinct.items() if unit.dimensionality == other.dimensionality
+                     and math.isclose(registry().Quantity(1.0, unit).to(other).magnitude, 1.0, rel_tol=1e-9)), None)
+        if same is None:
             distinct[candidate] = unit
+            same = candidate
+        if not sub_milli:
+            chosen.add(same)
+    # A sub-milli reading still counts as a second reading ('PM': Pm or pm is refused, not read as petametres).
     if len(distinct) > 1:
         readings = " or ".join(f"{c} ({u})" for c, u in sorted(distinct.items()))
         raise AmbiguousUnit(f"unit {written!r} reads as {readings}: units are case-sensitive, write it in its own case")
-    return next(iter(distinct.values()), None)
+    return next((distinct[c] for c in chosen), None)
 
 
 def _plain(unit: pint.Unit) -> bool:
@@ -261,6 +281,9 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
     if text is None:
         return None
     allowed = ALLOWED[quantity]
+    if quantity == "pressure" and _MICRON.fullmatch(text.strip().strip("[]()").strip()):
+        raise AmbiguousUnit(f"unit {text.strip()!r} of a pressure reads as a head in micrometres (µm) or as a vacuum "
+                            "pressure in micrometres of mercury (µmHg, 0.133 Pa): write µm or µmHg")
     u = parse_unit(text, frozenset(allowed))
     if _dimensions(u.unit) not in allowed:
         raise UnitError(f"unit {text.strip()!r} ({u.unit.dimensionality if not u.dimensionless else 'dimensionless'})"

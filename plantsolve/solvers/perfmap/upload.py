@@ -153,6 +153,24 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
     return None
 
 
+_MARK_AFTER = re.compile(r"(?P<label>.*?)\s*(?:[\[(](?P<unit>[^\[\]()]*)[\])])?"
+                         r"\s*[\[(]\s*(?P<mark>a|abs|g|gauge)\s*[\])]\s*$", re.IGNORECASE)
+
+
+def _mark_outside_unit(name: str) -> str | None:
+    """Why a header whose pressure mark stands after its unit's brackets or alone ('pressure [kPa] (g)',
+    'pressure (g)') is not read, or None: the mark belongs to the unit ('pressure [kPa(g)]'). Refused as 'missing:
+    pressure' before, without naming the column."""
+    m = _MARK_AFTER.fullmatch(name.strip().strip('"').strip())
+    if m is None or _header_field(m["label"])[0] != "pressure" or _role_key(m["label"]) in _RATIO_NAMES:
+        return None
+    kind = "gauge" if m["mark"].lower().startswith("g") else "absolute"
+    written = f"{m['label'].strip()} [{(m['unit'] or '').strip() or 'kPa'}({m['mark'].strip()})]"
+    if not (m["unit"] or "").strip():
+        return f"{kind} mark without a unit: write the unit with its mark, e.g. {written}"
+    return f"{kind} mark outside the unit: write {written}"
+
+
 def _alias_key(text: str) -> str:
     """A header name as ``_ALIAS`` keys it: lower case, runs of blanks, underscores and hyphens one blank, a word's
     abbreviation dot dropped ('Eff.', 'Rel. speed')."""
@@ -535,6 +553,9 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         key = re.sub(r"[\s_\-]+", " ", name.strip().strip('"').strip().lower())
         if key in columns:
             field = None if columns[key] == "ignore" else columns[key]
+        if field is None and (marked := _mark_outside_unit(name)):
+            raise reject(f"column {name.strip()!r} ({what} {numbers[0]}, column {j + 1}): {marked}",
+                         ("file", "header"))
         if field is None:
             if name.strip():
                 ignored.append(name.strip())

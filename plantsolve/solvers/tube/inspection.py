@@ -365,7 +365,7 @@ def inspect(measured: TubeModel, nominal_rows: list[LraRow], damping: float, opt
     if matched:
         rows = tol_check.check_rows(nominal_rows, meas_rows, tol)
         fixes, fits = next_part.corrections(nominal_rows, meas_rows, opts.springback_model)
-    short = (bool(rows) and not rows[0].length.determined, bool(rows) and not rows[-1].length.determined)
+    short = tuple(bool(rows) and tol_check.stops_short(rows[k].length) for k in (0, -1))
     reach = tuple(tol_check.PROVEN * (r.length.sigma or 0.0) if r.length.bound == "lower" else 0.0
                   for r in (rows[0], rows[-1])) if rows else (0.0, 0.0)
     ends = tol_check.check_end_points(nominal_ends, np.array([sp_m.start[0], sp_m.end[-1]]), tol, short, reach)

@@ -66,8 +66,9 @@ def inspection_outcome(ins: Inspection, units: str) -> tuple[str, Diagnostic | N
         text = "; ".join(parts)
         return f"inspection NOT DETERMINED: {text}", Diagnostic(
             code="inspection_not_determined", message=f"Inspection not determined: the samples do not determine "
-            f"{text} (an end straight they stop short on, a bend seen from one side, or a sigma larger than the "
-            "tolerance); every determined field is within tolerance. Scan those parts of the tube again, or "
+            f"{text} (an end straight they stop short on, a bend seen from one side, a sigma larger than the "
+            "tolerance, or within the tolerance by less than three sigmas (the part may end further on)); every "
+            "determined field is within tolerance. Scan those parts of the tube again, or "
             "measure them.",
             details={"rows": ins.undetermined_rows, "fields": _fields(ins.rows, "undetermined"),
                      "undetermined": _field_details(ins.rows, "undetermined", units),

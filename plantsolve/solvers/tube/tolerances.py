@@ -128,18 +128,29 @@ def check_rows(nominal: list[LraRow], measured: list[LraRow], tol: InspectionTol
     return out
 
 
+def stops_short(length: LengthCheck) -> bool:
+    """Whether the samples may stop short of an end straight's end by an unknown amount, so that its end point is no
+    verdict: a lower bound short of the nominal by more than the tolerance, or a length not determined otherwise (a
+    gap, a sigma beyond the tolerance). A lower bound within the tolerance but not by three sigmas is no such case:
+    the part's end lies at most three sigmas further on (``reach`` of :func:`check_end_points`), and an end point
+    off by more than the tolerance plus that is a proven failure."""
+    if length.determined:
+        return False
+    return length.bound != "lower" or length.deviation < -length.tolerance * (1 + 1e-9)
+
+
 def check_end_points(nominal_ends: np.ndarray, measured_ends: np.ndarray, tol: InspectionTolerances,
                      short: tuple[bool, bool] = (False, False),
                      reach: tuple[float, float] = (0.0, 0.0)) -> list[EndPointCheck]:
     """Both ends (start, end), each a distance after the best-fit alignment; an end whose straight the samples
-    stop short on (``short``) is no verdict unless it lies beyond the tolerance on the far side. ``reach``: how far
-    past the last samples the part's end may lie (three sigmas of an end straight that is a lower bound); an end
-    passes only when that far still is within the tolerance."""
+    stop short on (``short``, :func:`stops_short`) is no verdict unless it passes. ``reach``: how far past the last
+    samples the part's end may lie (three sigmas of an end straight that is a lower bound); an end passes only when
+    that far still is within the tolerance, and fails only when it lies beyond the tolerance even that much nearer."""
     out = []
     for name, a, b, s, r in zip(("start", "end"), nominal_ends, measured_ends, short, reach):
         d = float(np.linalg.norm(np.asarray(a) - np.asarray(b)))
         passed = bool(d + r <= tol.end_point)
-        failed = bool(d > tol.end_point) and not s
+        failed = bool(d - r > tol.end_point) and not s
         out.append(EndPointCheck(end=name, deviation=d, tolerance=tol.end_point, ok=not failed,
                                  determined=passed or failed))
     return out

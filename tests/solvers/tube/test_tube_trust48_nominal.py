@@ -4,18 +4,15 @@ part made 1.8 mm long), and an empty rotation cell was read as 0° without a wor
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
+from plantsolve.schemas.common import Report
 from plantsolve.schemas.tube import LraRow, TubeOptions, TubeRequest
-from plantsolve.solvers.tube.inspection import inspect
+from plantsolve.solvers.tube.inspection import inspect, inspect_request
+from plantsolve.solvers.tube.inspection_report import inspection_outcome, report_inspection
 from plantsolve.solvers.tube.nominal_files import read_nominal_csv
-from plantsolve.solvers.tube.scan import TubeScan
-from plantsolve.solvers.tube.solve import solve
 from plantsolve.solvers.tube.synthetic import make_model
-from tests.conftest import REPO
 
 NOMINAL = [[120, 0, 90, 30], [100, 60, 45, 30], [130, 0, 0, 0]]
 
@@ -42,6 +39,9 @@ def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdic
     assert not last.determined and last.ok and ins.rows[-1].undetermined == ["length"]
     assert ins.verdict == "not_determined" and ins.undetermined_rows == [3]  # before: "pass"
     assert ins.end_points[1].determined and ins.end_points[1].ok  # 0.34 + 3 x 0.48 mm: within its 2 mm
+    _, warning = inspection_outcome(ins, "mm")
+    assert warning.code == "inspection_not_determined" and "rows 3 (length)" in warning.message
+    assert "or within the tolerance by less than three sigmas (the part may end further on)" in warning.message
 
 
 @pytest.mark.parametrize("past_end, sigma, verdict", [
@@ -49,6 +49,7 @@ def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdic
     (-0.6, 0.4, "pass"),  # 0.6 mm at most, the end point 1.8 mm
     (1.4, 0.05, "fail"),  # samples past the nominal end by more than the tolerance: proven too long
     (-1.4, 0.05, "not_determined"),  # short of the nominal: the scan may be short, not the part
+    (0.5, 0.3, "not_determined"),  # within 1 mm, but the part may end 1.4 mm past: a pass before the 3-sigma rule
 ])
 def test_a_lower_bound_is_judged_by_how_far_the_part_may_reach(past_end, sigma, verdict):
     ins = _inspected(past_end, sigma)
@@ -62,9 +63,6 @@ def test_an_end_point_passes_only_when_the_part_may_not_reach_past_its_tolerance
     assert end.deviation == pytest.approx(0.36, abs=0.05) and end.ok and not end.determined
 
 
-SCAN_XYZ = (REPO / "examples" / "tube" / "scan.xyz").read_text()
-
-
 def test_an_empty_rotation_cell_is_read_as_0_and_said_naming_its_line_in_the_jobs_report():
     table = "length,rotation,angle,clr\n80,0,90,18\n45,,45,18\n30,-45,30,18\n70,0,0,0\n"
     nominal = read_nominal_csv(table)
@@ -72,9 +70,15 @@ def test_an_empty_rotation_cell_is_read_as_0_and_said_naming_its_line_in_the_job
     (warning,) = nominal.warnings
     assert warning.code == "nominal_rotation_empty" and warning.details == {"lines": [3]}
     assert "line 3: the rotation cell is empty, read as 0°" in warning.message
-    points = np.array([[float(v) for v in line.split()] for line in SCAN_XYZ.splitlines()])
-    result = solve(TubeScan(TubeRequest(points=points.tolist(), options={"nominal_csv": table}))).result
-    assert result.report.status == "warning" and "nominal_rotation_empty" in [w.code for w in result.report.warnings]
+    # the request as the service validates it, inspected as a job does (a part made to the nominal), its report
+    request = TubeRequest(points=[[0.0, 0.0, 0.0]] * 3, options={"nominal_csv": table})
+    part = make_model([[r.length, r.rotation, r.angle, r.bend_radius] for r in nominal.rows], 4.0)
+    ins = inspect_request(part, request.options, request.units)
+    assert ins.verdict == "pass" and [w.code for w in ins.warnings] == ["nominal_rotation_empty"]
+    report = Report(status="ok", message="Solved.")
+    report_inspection(report, ins, request.units)
+    assert report.status == "warning" and [w.code for w in report.warnings] == ["nominal_rotation_empty"]
+    assert report.warnings[0].message == warning.message
 
 
 def test_rotations_written_out_and_the_first_and_last_rows_left_empty_say_nothing():
