@@ -4,8 +4,6 @@ during a database outage), the result and the artifacts not yet stored wait in t
 
 from __future__ import annotations
 
-import uuid
-
 import pytest
 
 from plantsolve.jobs.context import ServiceContext
@@ -14,14 +12,7 @@ from plantsolve.jobs.service import JobService
 from plantsolve.store.blobs import BlobStoreUnavailable
 from tests.conftest import service_settings
 from tests.store.s3_server import moto_s3
-
-
-class Queue:
-    def __init__(self):
-        self.enqueued: list[uuid.UUID] = []
-
-    def enqueue(self, job_id, kind=""):
-        self.enqueued.append(job_id)
+from tests.support.dispatch import Recorder
 
 
 def _database_away(*args, **kwargs):
@@ -37,7 +28,7 @@ def _machine(tmp_path, name: str, **settings) -> ServiceContext:
 
 
 def _download(ctx, job_id, name) -> bytes:
-    return JobService(ctx, Queue()).artifact(job_id, name)[1].read()
+    return JobService(ctx, Recorder()).artifact(job_id, name)[1].read()
 
 
 def test_a_result_spooled_in_s3_is_stored_by_a_worker_on_another_machine_without_solving(tmp_path, monkeypatch):
@@ -46,12 +37,12 @@ def test_a_result_spooled_in_s3_is_stored_by_a_worker_on_another_machine_without
         first, second = _machine(tmp_path, "one", **s3), _machine(tmp_path, "two", **s3)
         try:
             markers = tmp_path / "runs"
-            job_id = JobService(first, Queue()).submit_json(
+            job_id = JobService(first, Recorder()).submit_json(
                 "test-compute", f'{{"values": [3, 4], "marker_dir": "{markers}"}}'.encode(), None).job.id
             monkeypatch.setattr(first.repo, "finish_success", _database_away)
-            assert run_job(first, job_id, worker="w1", requeue=Queue().enqueue) == "requeued"
+            assert run_job(first, job_id, worker="w1", requeue=Recorder().enqueue) == "requeued"
             assert first.files.exists(pending_path(job_id))  # in the bucket, not on machine one's disk
-            assert run_job(second, job_id, worker="w2", requeue=Queue().enqueue) == "succeeded"
+            assert run_job(second, job_id, worker="w2", requeue=Recorder().enqueue) == "succeeded"
             job = second.repo.get(job_id)
             assert job.result["norm"] == 5.0 and len(list(markers.iterdir())) == 1  # solved once
             assert [(h["worker"], h["outcome"]) for h in job.attempts] == [("w1", "result_pending"), ("w2", "succeeded")]
@@ -68,7 +59,7 @@ def test_when_the_blob_store_is_away_too_the_result_and_its_artifacts_wait_on_th
     ctx = _machine(tmp_path, "one", blob_store="postgres")  # the database table back-end (here on SQLite)
     try:
         markers = tmp_path / "runs"
-        job_id = JobService(ctx, Queue()).submit_json(
+        job_id = JobService(ctx, Recorder()).submit_json(
             "test-compute", f'{{"values": [6, 8], "marker_dir": "{markers}"}}'.encode(), None).job.id
         put = ctx.files.put
 
@@ -77,12 +68,12 @@ def test_when_the_blob_store_is_away_too_the_result_and_its_artifacts_wait_on_th
 
         monkeypatch.setattr(ctx.files, "put", away)
         monkeypatch.setattr(ctx.repo, "finish_success", _database_away)
-        assert run_job(ctx, job_id, worker="w1", requeue=Queue().enqueue) == "requeued"
+        assert run_job(ctx, job_id, worker="w1", requeue=Recorder().enqueue) == "requeued"
         assert ctx.spool.exists(pending_path(job_id))  # this machine's folder took it
         assert ctx.spool.get(pending_artifact_key(job_id, "values.txt")) == b"6.0\n8.0"
         monkeypatch.undo()  # the database is back
         assert ctx.files.put == put
-        assert run_job(ctx, job_id, worker="w1", requeue=Queue().enqueue) == "succeeded"
+        assert run_job(ctx, job_id, worker="w1", requeue=Recorder().enqueue) == "succeeded"
         job = ctx.repo.get(job_id)
         assert job.result["norm"] == 10.0 and len(list(markers.iterdir())) == 1  # solved once
         assert not (job.report or job.result["report"]).get("warnings")  # no artifact was dropped
@@ -97,13 +88,13 @@ def test_when_the_blob_store_is_away_too_the_result_and_its_artifacts_wait_on_th
 def test_a_submitted_input_missing_from_the_blob_store_fails_the_job_with_a_report(tmp_path, kind):
     ctx = _machine(tmp_path, "one", inline_input_bytes=16)
     try:
-        service = JobService(ctx, Queue())
+        service = JobService(ctx, Recorder())
         if kind == "upload":
             job = service.submit_upload("test-compute", "n.txt", b"1\n2\n", None, None).job
         else:
             job = service.submit_json("test-compute", b'{"values": [1, 2, 3, 4, 5]}', None).job
         ctx.files.delete(job.input_file)
-        assert run_job(ctx, job.id, worker="w", requeue=Queue().enqueue) == "failed"
+        assert run_job(ctx, job.id, worker="w", requeue=Recorder().enqueue) == "failed"
         report = ctx.repo.get(job.id).report
         assert report["stage"] == "input" and "missing from the blob store" in report["message"]
     finally:

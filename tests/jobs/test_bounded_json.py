@@ -15,19 +15,15 @@ from plantsolve.jobs.errors import Unprocessable
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import StoredInput
 from tests.conftest import service_settings
+from tests.support.dispatch import Recorder
 
 PLUGINS = ["tests.support.kinds", "tests.jobs.pid_kind"]
-
-
-class Queue:
-    def enqueue(self, job_id, kind=""):
-        pass
 
 
 @pytest.fixture
 def service(tmp_path):
     ctx = ServiceContext.create(service_settings(tmp_path, plugins=PLUGINS, inline_input_bytes=1000), migrate=True)
-    yield JobService(ctx, Queue())
+    yield JobService(ctx, Recorder())
     ctx.close()
 
 

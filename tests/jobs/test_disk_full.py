@@ -16,14 +16,7 @@ from plantsolve.jobs.runner import pending_artifact_key, run_job
 from plantsolve.jobs.service import JobService
 from plantsolve.store.blobs import BlobStoreUnavailable
 from tests.conftest import service_settings
-
-
-class Queue:
-    def __init__(self):
-        self.enqueued: list[uuid.UUID] = []
-
-    def enqueue(self, job_id, kind=""):
-        self.enqueued.append(job_id)
+from tests.support.dispatch import Recorder
 
 
 @pytest.fixture
@@ -47,7 +40,7 @@ def _no_space(ctx, monkeypatch) -> list[str]:
 
 def test_artifacts_on_a_full_disk_fail_the_job_once_without_solving_again(ctx, tmp_path, monkeypatch):
     markers = tmp_path / "runs"
-    queue = Queue()
+    queue = Recorder()
     job_id = JobService(ctx, queue).submit_json(
         "test-compute", f'{{"values": [3, 4], "marker_dir": "{markers}"}}'.encode(), None).job.id
     tried = _no_space(ctx, monkeypatch)

@@ -16,6 +16,7 @@ from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService, NewJob
 from plantsolve.solvers.base import SolverError, StoredInput
 from tests.conftest import REPO, service_settings
+from tests.support.dispatch import Recorder
 
 EXAMPLES = REPO / "examples"
 
@@ -51,18 +52,6 @@ CASES = [
     ("polyhedra", "two.idf", _idf, "truncated_file", "line 263"),
     ("polyhedra", "offices.xml", _gbxml, "encoding_assumed", "line 3"),
 ]
-
-
-class Recorder:
-    def __init__(self):
-        self.enqueued: list[uuid.UUID] = []
-
-    def enqueue(self, job_id, kind=""):
-        self.enqueued.append(job_id)
-
-    def ping(self): ...
-    def start(self): ...
-    def stop(self): ...
 
 
 @pytest.fixture

@@ -14,14 +14,7 @@ from plantsolve.jobs.leases import process_died
 from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService
 from tests.conftest import service_settings
-
-
-class Recorder:
-    def __init__(self):
-        self.enqueued: list[uuid.UUID] = []
-
-    def enqueue(self, job_id, kind=""):
-        self.enqueued.append(job_id)
+from tests.support.dispatch import Recorder
 
 
 @pytest.fixture

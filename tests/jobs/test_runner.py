@@ -23,18 +23,7 @@ from plantsolve.solvers.base import Solved, SolverError
 from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import StoredArtifact
 from tests.conftest import service_settings
-
-
-class Recorder:
-    def __init__(self):
-        self.enqueued: list[uuid.UUID] = []
-
-    def enqueue(self, job_id, kind=""):
-        self.enqueued.append(job_id)
-
-    def ping(self): ...
-    def start(self): ...
-    def stop(self): ...
+from tests.support.dispatch import Recorder
 
 
 @pytest.fixture
