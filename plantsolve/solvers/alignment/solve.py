@@ -13,7 +13,7 @@ from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import choose_cut, worst_measured
-from plantsolve.solvers.alignment.direct import continue_closing, solve_direct
+from plantsolve.solvers.alignment.direct import continue_closing, settle_conflict, solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
@@ -132,9 +132,11 @@ def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, s
     """A round that ended with a connection open is carried on (:func:`direct.continue_closing`) before any cut: a cut
     is decided only where the continuation stalls too, its largest residual falling by less than 10 % a step for three
     steps in a row however far each step is taken, with a residual more than 1,000 times the closing tolerance (see
-    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Returns the pose (where it does
-    not close, the round's own: a conflict is cut as it was), its connection errors, the connection to cut (None:
-    closed) and the steps taken (counted: they were spent)."""
+    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Where it does not, the cut is
+    decided on the pose where the network comes to rest with its connections as springs
+    (:func:`direct.settle_conflict`). Returns the pose (where it does not close, the round's own), the connection
+    errors the choice was made on (the settled pose's where a conflict is cut), the connection to cut (None: closed)
+    and the steps taken (counted: they were spent)."""
 
     def closed(P, D) -> bool:
         gap, ang = connection_errors(model, P, D)
@@ -145,9 +147,11 @@ def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, s
     gap, ang = connection_errors(model, carried.P, carried.D)
     if choose_cut(model, active, gap, ang) is None:
         return carried, gap, ang, None, taken
-    # a conflict: cut on the round's own pose, as without the continuation (its steps only confirm the stall)
-    gap, ang = connection_errors(model, pose.P, pose.D)
-    return pose, gap, ang, choose_cut(model, active, gap, ang), taken
+    # a conflict: cut where the network comes to rest with its connections as springs, which it determines, not where
+    # the round's Gauss-Newton stopped on its plateau (round-off's, hence the names' and the factorisation's)
+    settled, settling = settle_conflict(model, active, opts.pipe_stiffness, step=step)
+    gap, ang = connection_errors(model, settled.P, settled.D)
+    return pose, gap, ang, choose_cut(model, active, gap, ang), taken + settling
 
 
 def _after_cut_ends(model: Model, active: np.ndarray, pose, capped: bool) -> bool:
