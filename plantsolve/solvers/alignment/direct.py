@@ -29,10 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from plantsolve.solvers.alignment.dualquat import minimal_rotation, qmul, qrotate
-from plantsolve.solvers.alignment.kkt import constrained_lstsq, use_schur
+from plantsolve.solvers.alignment.kkt import constrained_lstsq, regularised_factor, use_schur
 from plantsolve.solvers.alignment.model import Model, collinear_fittings
 from plantsolve.solvers.geometry import quaternion_to_rotvec, rotvec_to_quaternion
 
@@ -601,6 +600,8 @@ def settle_conflict(model: Model, active: np.ndarray, stiffness: float, budget: 
     locked = np.zeros(model.n_comp, dtype=bool)
     pos_scale = model.lref
     w_along = 1e-3
+    owner = _owners(var, free, nv)
+    cache: dict = {}  # one ordering and analysis of the complement for the whole sequence
 
     def energy(state: JointState):
         """Positions, directions, their residuals and the sum minimised (the cost as _joint_cost models it)."""
@@ -633,10 +634,10 @@ def settle_conflict(model: Model, active: np.ndarray, stiffness: float, budget: 
         Hs, As = scaled_cost(H, sv, model.lref), (A @ sp.diags(sv)).tocsr()
         del A, H
         # the Gauss-Newton step of cost + springs: [[H, A^T], [A, -compliance I]] [y; f] = [-g; rhs], f the springs'
-        # forces; quasi-definite and well conditioned, solved as it is (no refinement towards closing)
-        K = sp.bmat([[Hs, As.T], [As, -compliance * sp.identity(As.shape[0])]], format="csc")
-        y = splu(K).solve(np.concatenate([-sv * g / model.lref**2, rhs]))[:nv]
-        del K, Hs, As
+        # forces; quasi-definite and well conditioned, so either factorisation gives it to round-off
+        y = regularised_factor(Hs, As, compliance, cache, owner).solve(np.concatenate([-sv * g / model.lref**2,
+                                                                                        rhs]))[:nv]
+        del Hs, As
         steps += 1
         x = sv * y
         alpha = 1.0
