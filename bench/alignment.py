@@ -196,38 +196,48 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     })
 
 
-def _time_stages() -> list[tuple[int, float]]:
-    """(steps, CPU seconds) of every call of the direct method's two stages (rotation averaging, joint
-    Gauss-Newton) in this child process, in order: two per round. The stage functions are wrapped where
-    ``solve_direct`` looks them up; a checkout without them leaves the list empty."""
-    from plantsolve.solvers.alignment import direct
+def _time_stages() -> list[tuple[str, int, float]]:
+    """(what, steps, CPU seconds) of every call of the direct method's two stages (rotation averaging, joint
+    Gauss-Newton: two per round), of a stalled round's continuation and of a conflict's settling in this child
+    process, in order. The functions are wrapped where their callers look them up; a checkout without them leaves the
+    list empty."""
+    from plantsolve.solvers.alignment import direct, solve
 
-    calls: list[tuple[int, float]] = []
-    for name in ("solve_rotations", "solve_joint"):
-        inner = getattr(direct, name, None)
+    calls: list[tuple[str, int, float]] = []
+    for module, name in ((direct, "solve_rotations"), (direct, "solve_joint"), (solve, "continue_closing"),
+                         (solve, "settle_conflict")):
+        inner = getattr(module, name, None)
         if inner is None:
-            return []
+            calls.clear()
+            return calls
 
-        def timed(*args, _inner=inner, **kwargs):
+        def timed(*args, _inner=inner, _name=name, **kwargs):
             c0 = _cpu_s()
             out = _inner(*args, **kwargs)
-            calls.append((int(out[1]), _cpu_s() - c0))
+            calls.append((_name, int(out[1]), _cpu_s() - c0))
             return out
 
-        setattr(direct, name, timed)
+        setattr(module, name, timed)
     return calls
 
 
-def _rounds_said(rounds: list[dict], stages: list[tuple[int, float]]) -> str:
+def _rounds_said(rounds: list[dict], stages: list[tuple[str, int, float]]) -> str:
     """Each round's iterations and factorisation, with its stages' steps and CPU seconds where they were timed
-    (``rotation steps + joint steps``, ``rotation s + joint s``)."""
-    timed = len(stages) == 2 * len(rounds)
-    said = []
-    for i, r in enumerate(rounds):
-        text = f"{r['iterations']} {r['factorisation']}" + ("" if r["counted"] else " (not counted)")
+    (``rotation steps + joint steps``, ``rotation s + joint s``; a continuation's or a settling's steps and seconds)."""
+    kinds = []
+    for r in rounds:
+        kinds.append(["continue_closing"] if r.get("continuation") else ["settle_conflict"] if r.get("settled")
+                     else ["solve_rotations", "solve_joint"])
+    timed = [name for name, *_ in stages] == [k for ks in kinds for k in ks]
+    said, at = [], 0
+    for r, ks in zip(rounds, kinds):
+        what = "continued" if r.get("continuation") else "settled" if r.get("settled") else ""
+        text = f"{r['iterations']} {r['factorisation']}" + (f" {what}" if what else "") + \
+            ("" if r["counted"] else " (not counted)")
         if timed:
-            (k1, c1), (k2, c2) = stages[2 * i], stages[2 * i + 1]
-            text += f" [{k1}+{k2} steps, {c1:.1f}+{c2:.1f} s]"
+            part = stages[at:at + len(ks)]
+            at += len(ks)
+            text += f" [{'+'.join(str(k) for _, k, _ in part)} steps, {'+'.join(f'{c:.1f}' for *_, c in part)} s]"
         said.append(text)
     return " + ".join(said)
 
@@ -297,8 +307,9 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
           "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
           "counted (rounds: each round's, with the factorisation it ran on and, in brackets, the steps and CPU seconds "
           "of its rotation averaging + joint Gauss-Newton; LDL^T/LU: the round after a first cut, its feasibility steps on "
-          "the LU; an LDL^T round that ended on a conflict (the first cut is the LU pass's), or an LDL^T/LU round that did "
-          "not close, is not counted, the LU pass is).")
+          "the LU; continued: a round that ended open, carried on by feasibility steps on the LU; settled: a conflict's "
+          "settling, whose pose decides the cut; a round that only its continuation closed is not counted, the LU's "
+          "pass of it is).")
 
 
 def main() -> None:
