@@ -121,8 +121,12 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
                 iterations += settling
                 rounds.append({"factorisation": "LU" if mode == "LU" else "LDL^T", "iterations": settling,
                                "counted": True, "settled": True})
+                # among the connections the round left open: the springs also carry the scan gaps the round closed
+                # (a share of them beside a small component's weights), which are no conflict
+                open_gap, open_ang = connection_errors(model, pose.P, pose.D)
+                left_open = (open_gap > model.close_pos) | (open_ang > model.close_ang)
                 gap, ang = connection_errors(model, settled.P, settled.D)
-                k = choose_cut(model, active, gap, ang)
+                k = choose_cut(model, active & left_open, gap, ang)
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
