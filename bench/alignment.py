@@ -28,6 +28,14 @@ order, about half the connections named from their other end), and says whether 
 
     python bench/alignment.py --scaling-only --family conflict --side 12
     python bench/alignment.py --scaling-only --family plant --side 132 --code lu --code before --before DIR
+
+``--conflicts``: the cut choice on 360 small synthetic conflicts (loop grids of 2 x 2 to 4 x 3 nodes, 6 seeds, 6
+placements of the second tie-in, with and without inline valves), each solved as written, with its components
+renamed (ids sorting the other way), shuffled, in cm and moved rigidly: cuts, answers that move a component more
+than 145 mm (a fold: an elbow's arm is 150 mm), how many variants cut other connections than the request as
+written, and with ``--before DIR`` the answers closer to or further from the request than that checkout's:
+
+    python bench/alignment.py --conflicts --before DIR
 """
 
 from __future__ import annotations
@@ -188,38 +196,48 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
     })
 
 
-def _time_stages() -> list[tuple[int, float]]:
-    """(steps, CPU seconds) of every call of the direct method's two stages (rotation averaging, joint
-    Gauss-Newton) in this child process, in order: two per round. The stage functions are wrapped where
-    ``solve_direct`` looks them up; a checkout without them leaves the list empty."""
-    from plantsolve.solvers.alignment import direct
+def _time_stages() -> list[tuple[str, int, float]]:
+    """(what, steps, CPU seconds) of every call of the direct method's two stages (rotation averaging, joint
+    Gauss-Newton: two per round), of a stalled round's continuation and of a conflict's settling in this child
+    process, in order. The functions are wrapped where their callers look them up; a checkout without them leaves the
+    list empty."""
+    from plantsolve.solvers.alignment import direct, solve
 
-    calls: list[tuple[int, float]] = []
-    for name in ("solve_rotations", "solve_joint"):
-        inner = getattr(direct, name, None)
+    calls: list[tuple[str, int, float]] = []
+    for module, name in ((direct, "solve_rotations"), (direct, "solve_joint"), (solve, "continue_closing"),
+                         (solve, "settle_conflict")):
+        inner = getattr(module, name, None)
         if inner is None:
-            return []
+            calls.clear()
+            return calls
 
-        def timed(*args, _inner=inner, **kwargs):
+        def timed(*args, _inner=inner, _name=name, **kwargs):
             c0 = _cpu_s()
             out = _inner(*args, **kwargs)
-            calls.append((int(out[1]), _cpu_s() - c0))
+            calls.append((_name, int(out[1]), _cpu_s() - c0))
             return out
 
-        setattr(direct, name, timed)
+        setattr(module, name, timed)
     return calls
 
 
-def _rounds_said(rounds: list[dict], stages: list[tuple[int, float]]) -> str:
+def _rounds_said(rounds: list[dict], stages: list[tuple[str, int, float]]) -> str:
     """Each round's iterations and factorisation, with its stages' steps and CPU seconds where they were timed
-    (``rotation steps + joint steps``, ``rotation s + joint s``)."""
-    timed = len(stages) == 2 * len(rounds)
-    said = []
-    for i, r in enumerate(rounds):
-        text = f"{r['iterations']} {r['factorisation']}" + ("" if r["counted"] else " (not counted)")
+    (``rotation steps + joint steps``, ``rotation s + joint s``; a continuation's or a settling's steps and seconds)."""
+    kinds = []
+    for r in rounds:
+        kinds.append(["continue_closing"] if r.get("continuation") else ["settle_conflict"] if r.get("settled")
+                     else ["solve_rotations", "solve_joint"])
+    timed = [name for name, *_ in stages] == [k for ks in kinds for k in ks]
+    said, at = [], 0
+    for r, ks in zip(rounds, kinds):
+        what = "continued" if r.get("continuation") else "settled" if r.get("settled") else ""
+        text = f"{r['iterations']} {r['factorisation']}" + (f" {what}" if what else "") + \
+            ("" if r["counted"] else " (not counted)")
         if timed:
-            (k1, c1), (k2, c2) = stages[2 * i], stages[2 * i + 1]
-            text += f" [{k1}+{k2} steps, {c1:.1f}+{c2:.1f} s]"
+            part = stages[at:at + len(ks)]
+            at += len(ks)
+            text += f" [{'+'.join(str(k) for _, k, _ in part)} steps, {'+'.join(f'{c:.1f}' for *_, c in part)} s]"
         said.append(text)
     return " + ".join(said)
 
@@ -289,8 +307,9 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
           "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
           "counted (rounds: each round's, with the factorisation it ran on and, in brackets, the steps and CPU seconds "
           "of its rotation averaging + joint Gauss-Newton; LDL^T/LU: the round after a first cut, its feasibility steps on "
-          "the LU; an LDL^T round that ended on a conflict (the first cut is the LU pass's), or an LDL^T/LU round that did "
-          "not close, is not counted, the LU pass is).")
+          "the LU; continued: a round that ended open, carried on by feasibility steps on the LU; settled: a conflict's "
+          "settling, whose pose decides the cut; a round that only its continuation closed is not counted, the LU's "
+          "pass of it is).")
 
 
 def main() -> None:
@@ -304,7 +323,11 @@ def main() -> None:
     ap.add_argument("--side", type=int, action="append", help="only networks of this side (a short run)")
     ap.add_argument("--code", action="append", choices=("lu", "shuf", "shufLU", "before"),
                     help="only these rows beside 'this' (a large network once: --code lu --code before)")
+    ap.add_argument("--conflicts", action="store_true", help="only the cut choice on 360 small synthetic conflicts")
     args = ap.parse_args()
+    if args.conflicts:
+        conflicts(args.before)
+        return
     if not args.scaling_only:
         methods(args.quick, args.dq_iterations)
     for family in args.family or ("grid", "plant", "conflict"):
@@ -330,6 +353,139 @@ def methods(quick: bool, dq_iterations: int) -> None:
     print("\nmax gap: largest gap left in the result (mm); residual*: solver residual that was snapped to "
           "bit-identical ports (converged runs) or the largest gap (others); pipe axis: mean distance of the "
           "measured pipe ends from the new axis (mm); fitting: mean largest port movement of fittings (mm).")
+
+
+CONFLICT_GRIDS = ((2, 2), (3, 2), (3, 3), (4, 2), (4, 3))
+CONFLICT_SEEDS = range(6)
+# where the second tie-in is placed: (shift in mm, turn about z in degrees)
+CONFLICT_PLACEMENTS = (((40.0, 0.0, 0.0), 2.0), ((0.0, 0.0, 30.0), 1.0), ((0.0, 30.0, 0.0), 2.0),
+                       ((20.0, -20.0, 10.0), 0.5), ((0.0, 0.0, 0.0), 3.0), ((15.0, 0.0, -25.0), 1.5))
+CONFLICT_VARIANTS = ("written", "renamed", "shuffled", "cm", "moved")
+FOLD_MM = 145.0  # a component moved further than this has been folded over (an elbow's arm is 150 mm)
+CLOSER_MM = 20.0  # answers whose largest displacement differs by more than this are closer or further
+
+
+def conflict_cases() -> list[tuple]:
+    """(nx, ny, seed, shift, turn, valve_every) of the 360 conflicts."""
+    return [(nx, ny, seed, shift, turn, valves) for nx, ny in CONFLICT_GRIDS for seed in CONFLICT_SEEDS
+            for shift, turn in CONFLICT_PLACEMENTS for valves in (0, 3)]
+
+
+def _variant(body: dict, kind: str):
+    """``body`` as the variant ``kind`` states it, with what maps its answer back: (body, names back, mm per unit,
+    its rigid motion (R, t) on positions in mm or None)."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    back, mm, motion = {}, 1.0, None
+    if kind == "renamed":
+        ids = sorted(c["id"] for c in body["components"])
+        names = {old: f"z{len(ids) - k:03d}" for k, old in enumerate(ids)}
+        back = {new: old for old, new in names.items()}
+        body = {**body, "components": [{**c, "id": names[c["id"]]} for c in body["components"]],
+                "connections": [{"from": [names[c["from"][0]], c["from"][1]], "to": [names[c["to"][0]], c["to"][1]]}
+                                for c in body["connections"]]}
+    elif kind == "shuffled":
+        from plantsolve.schemas.alignment import AlignmentRequest
+        from plantsolve.solvers.alignment.synthetic import reordered
+
+        body = reordered(AlignmentRequest.model_validate(body), seed=5).model_dump(mode="json", by_alias=True)
+    elif kind == "cm":
+        mm = 10.0
+        body = {**body, "units": "cm", "components": [
+            {**c, "radius": c["radius"] / 10, "ports": [{**p, "position": [x / 10 for x in p["position"]]}
+                                                         for p in c["ports"]]} for c in body["components"]]}
+    elif kind == "moved":
+        R, t = Rotation.from_rotvec([0.3, -0.2, 0.5]), np.array([125.0, -40.0, 9.0])
+        body = {**body, "components": [{**c, "ports": [
+            {**p, "position": (R.apply(p["position"]) + t).tolist(), "direction": R.apply(p["direction"]).tolist()}
+            for p in c["ports"]]} for c in body["components"]]}
+        motion = (R, t)
+    return body, back, mm, motion
+
+
+def _solve_conflicts(code: str | None, queue) -> None:
+    """In a child process: every conflict in every variant, by the checkout in ``code`` (None: this one)."""
+    if code is not None:
+        sys.path.insert(0, code)
+    import numpy as np
+
+    from plantsolve.schemas.alignment import AlignmentRequest
+    from plantsolve.solvers.alignment.solve import solve
+    from plantsolve.solvers.alignment.synthetic import conflicting_tie_ins
+
+    out = []
+    c0 = _cpu_s()
+    for nx, ny, seed, shift, turn, valves in conflict_cases():
+        written = conflicting_tie_ins(nx, ny, seed=seed, shift=shift, turn=turn, valve_every=valves)
+        body = written.model_dump(mode="json", by_alias=True)
+        case = {}
+        for kind in CONFLICT_VARIANTS:
+            given, back, mm, motion = _variant(body, kind)
+            solved = solve(AlignmentRequest.model_validate(given))
+            res = getattr(solved, "result", solved)
+            cuts = sorted(tuple(sorted([(back.get(c.from_[0], c.from_[0]), int(c.from_[1])),
+                                        (back.get(c.to[0], c.to[0]), int(c.to[1]))]))
+                          for c in res.connections if c.cut)
+            ports = {}
+            for c in res.components:
+                for k, p in enumerate(c.ports):
+                    x = np.array(p.position) * mm
+                    ports[(back.get(c.id, c.id), k)] = x if motion is None else motion[0].inv().apply(x - motion[1])
+            case[kind] = {"cuts": cuts, "moved": max(c.displacement for c in res.components) * mm,
+                          "converged": res.converged, "ports": ports}
+        out.append(case)
+    queue.put({"cases": out, "cpu_s": _cpu_s() - c0, "process_mib": _rss_kib("VmHWM") / 1024.0})
+
+
+def conflicts(before: str | None) -> None:
+    """The cut choice on :func:`conflict_cases` (see the module doc), this code and ``before`` in the same run."""
+    import numpy as np
+
+    ctx = mp.get_context("fork")
+    started = {}
+    for label, code in [("this", None)] + ([("before", before)] if before else []):  # side by side: 2 cores
+        q = ctx.Queue()
+        p = ctx.Process(target=_solve_conflicts, args=(code, q))
+        p.start()
+        started[label] = (p, q)
+    found = {label: q.get() for label, (p, q) in started.items()}
+    for p, _ in started.values():
+        p.join()
+    cases = conflict_cases()
+    print(f"\nCut choice on {len(cases)} synthetic conflicts, each in {len(CONFLICT_VARIANTS)} variants "
+          f"({', '.join(CONFLICT_VARIANTS)})")
+    head = (f"{'code':>6} {'cuts':>5} {'folded':>6} {'unconv':>6} {'variants cut otherwise':>22} "
+            f"{'same cuts, max |dP| mm':>22} {'cpu s':>7} {'proc MiB':>8}")
+    print(head)
+    print("-" * len(head))
+    for label, run in found.items():
+        rows = run["cases"]
+        cuts = sum(len(r["written"]["cuts"]) for r in rows)
+        folded = sum(r["written"]["moved"] > FOLD_MM for r in rows)
+        unconv = sum(not r[k]["converged"] for r in rows for k in CONFLICT_VARIANTS)
+        other = {k: sum(r[k]["cuts"] != r["written"]["cuts"] for r in rows) for k in CONFLICT_VARIANTS[1:]}
+        dp = max((max(float(np.linalg.norm(r[k]["ports"][x] - r["written"]["ports"][x])) for x in r[k]["ports"])
+                  for r in rows for k in CONFLICT_VARIANTS[1:] if r[k]["cuts"] == r["written"]["cuts"]), default=0.0)
+        said = f"{sum(other.values())} (" + " ".join(f"{k} {v}" for k, v in other.items()) + ")"
+        print(f"{label:>6} {cuts:>5} {folded:>6} {unconv:>6} {said:>22} {dp:>22.2e} {run['cpu_s']:>7.1f} "
+              f"{run['process_mib']:>8.0f}")
+    if "before" in found:
+        now = np.array([r["written"]["moved"] for r in found["this"]["cases"]])
+        old = np.array([r["written"]["moved"] for r in found["before"]["cases"]])
+        diff = now - old
+        worst = int(np.argmax(diff))
+        new_folds = [cases[i] for i in np.flatnonzero((now > FOLD_MM) & (old <= FOLD_MM))]
+        same = sum(a["written"]["cuts"] == b["written"]["cuts"] for a, b in zip(found["this"]["cases"],
+                                                                                found["before"]["cases"]))
+        print(f"\nthis beside before, as written: the same cuts in {same} of {len(cases)}; largest displacement "
+              f"closer to the request by more than {CLOSER_MM:g} mm in {int(np.sum(diff < -CLOSER_MM))}, further in "
+              f"{int(np.sum(diff > CLOSER_MM))} (the worst by {diff[worst]:.1f} mm: {cases[worst]}); "
+              f"newly folded: {new_folds or 'none'}")
+    print(f"folded: a component moved more than {FOLD_MM:g} mm; unconv: answers not converged (all variants); "
+          "variants cut otherwise: variants whose cuts differ from the request as written; max |dP|: the largest "
+          "difference of a port (mm, in the written frame) between a variant and the request as written where both "
+          "cut the same connections; cpu s: all solves of the code, in one process.")
 
 
 if __name__ == "__main__":

@@ -81,11 +81,6 @@ def test_a_conflict_is_cut_at_the_moved_tie_in_whatever_the_unit_frame_or_names(
     assert _largest_move(ports, {k: R.inv().apply(p - t) for k, p in moved_ports.items()}) < FLAT_MODES_MM
 
 
-@pytest.mark.xfail(strict=True, reason="alignment: on this 4 x 2 conflict the first round's plateau itself differs with "
-                   "the components renamed (impacts 1, 0.99, 0.95, 0.95, then 0.65 as named; 1, 0.985, 0.973, 0.962, "
-                   "then 0.68 renamed: the canonical order, hence the factorisation, follows the ids), so other "
-                   "connections are cut (4 and 5) and ports end up 58 mm apart; a cut decided on a pose the conflict "
-                   "determines is needed, not on where Gauss-Newton stopped")
 def test_a_conflict_whose_plateau_moves_with_the_names_is_cut_at_the_same_connections():
     conflict = conflicting_tie_ins(4, 2, seed=4, shift=(0.0, 0.0, 30.0), turn=1.0).model_dump(mode="json", by_alias=True)
     cuts, ports = _answer(conflict)

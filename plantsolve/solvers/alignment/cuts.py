@@ -3,15 +3,14 @@
 Shared by both methods. The error impact of a connection is its gap plus its angle error
 times the model's typical length, so position and angle errors compare in one unit.
 
-A conflict is a least-squares residual spread over the connections of a loop or a path between
-tie-ins: connections in series on that path carry the same share of it in exact arithmetic, but
-which of them looks largest is decided by the last digits of the pose, and those depend on the
-factorisation, the frame, the unit and the order of the ids: near a loop of catalogue fittings (a
-singular point of its constraints) the pose is only resolved to about the square root of the
-closing residual, and a conflict's plateau is where Gauss-Newton stopped running off along it
-(measured on a 3 x 3 conflict grid: the eight connections of the path between its tie-ins at 0.978
-to 1 of the largest impact in cm and at 0.9996 to 1 in mm, the next at 0.53; the LDL^T's and the
-LU's plateaus 5 % apart). So impacts within :data:`CUT_MARGIN` of the largest (or within the
+The direct method reads the impacts on the pose where the network comes to rest with its connections
+as springs (:func:`direct.settle_conflict`), which the network determines, not on the round's plateau,
+where Gauss-Newton stopped running off along the conflict (round-off decides that one, hence the
+factorisation, the frame, the unit and the order of the ids: measured on a 3 x 3 conflict grid, the
+eight connections of the path between its tie-ins at 0.978 to 1 of the largest impact in cm and at
+0.9996 to 1 in mm; the LDL^T's and the LU's plateaus 5 % apart). Connections in series on the path
+of a conflict may still carry nearly the same share of it, and which of them looks largest is then
+the last digits'. So impacts within :data:`CUT_MARGIN` of the largest (or within the
 snapped residue) count as equal, and among them the connection that was measured worst is cut
 (its gap and angle error in the request, which no solve, frame, unit or name changes); only where
 those are equal too does the smaller (component id, port) end decide: never the input order, never

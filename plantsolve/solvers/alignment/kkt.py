@@ -37,12 +37,12 @@ matrix instead.
 Measured in one bench run (bench/alignment.py), refinements included: 0.45-0.55 of the LU's CPU time
 and 0.6-0.7 of its peak memory on loop grids of 3,351 to 34,749 components, 0.86-0.93 of its time and
 0.8 of its memory on plant-like networks of 10,000 and 100,000 (with one analysis per sequence: 0.78-0.87
-and 0.82 in three and one runs). Where a connection has to be cut, the cut is the LU's (solve.py): a first round that ends on a conflict
-is run again on the LU, whose pose decides (a conflict's plateau depends on round-off); the round after the first
-cut solves its feasibility steps on the LU and the rest here, the rounds after a second cut are all the
-LU's (2026-11-29: 0.98-1.03 of the LU's time on the 40,000-component network in three runs, 0.69-0.74 while the
-LDL^T's first round decided the cut where its impacts looked clear of the tie width, which took other cuts than
-the LU's on two of 42 grids).
+and 0.82 in three and one runs). Where a connection has to be cut (solve.py), the cut is decided on
+the pose where the network comes to rest with its connections as springs (direct.settle_conflict, each step a
+:func:`regularised_factor` solve), which either factorisation gives to round-off, not on the plateau where a
+conflict's round stopped (round-off's); so the first round is the LDL^T's even where it ends on a conflict, the round
+after the first cut solves its feasibility steps on the LU and the rest here, the rounds after a second cut are all
+the LU's.
 The round after the cut is most of a cut network's time: the README's alignment section has the sums.
 Another run on a machine loaded several times over (CPU seconds then vary by 10-20 % between runs of one code):
 plant-like 4,839 / 9,965 / 19,365 / 39,867 components 0.98 / 0.80 / 0.76 / 0.87 of the LU's CPU time and
@@ -113,16 +113,29 @@ def constrained_lstsq(
     return _refine(H, g, A, residual, lu, stop, max_iter, stale=False)
 
 
-def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np.ndarray | None = None):
+def regularised_factor(H: sp.spmatrix, A: sp.spmatrix, delta: float, cache: dict | None = None,
+                       owner: np.ndarray | None = None):
+    """A factorisation of ``[[H, A^T], [A, -delta I]]`` itself (``.solve(rhs)``): its own solutions, not the
+    constrained ones that :func:`constrained_lstsq` refines towards. ``delta`` is a compliance (the rows of ``A``
+    as springs), not a regularisation. By the Schur complement where it is in use and positive definite (its
+    elimination refined on this same matrix: :class:`SchurSolve`), else the pivoted LU; ``cache`` and ``owner`` keep
+    one ordering and analysis for a sequence of them, as in :func:`constrained_lstsq`."""
+    return _factor(H, A, cache, owner, delta)
+
+
+def _factor(H: sp.spmatrix, A: sp.spmatrix, cache: dict | None = None, owner: np.ndarray | None = None,
+            delta: float | None = None):
     """Factorisation of the regularised (quasi-definite) KKT matrix: by its Schur complement when that is
-    positive definite, else the sparse LU (see the module doc)."""
+    positive definite, else the sparse LU (see the module doc). ``delta``: 1e-14 of the matrices' scale unless
+    given."""
     m = A.shape[0]
-    hd = H.diagonal()
-    Ar = sp.csr_matrix(A)  # no copy when it is one
-    col = np.bincount(Ar.indices, weights=Ar.data**2, minlength=A.shape[1])  # squared column norms, no copy of A
-    scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
-    acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
-    delta = 1e-14 * acol / scale
+    if delta is None:
+        hd = H.diagonal()
+        Ar = sp.csr_matrix(A)  # no copy when it is one
+        col = np.bincount(Ar.indices, weights=Ar.data**2, minlength=A.shape[1])  # squared column norms, no copy of A
+        scale = np.median(hd[hd > 0]) if np.any(hd > 0) else 1.0
+        acol = np.median(col[col > 0]) if np.any(col > 0) else 1.0
+        delta = 1e-14 * acol / scale
     if _SCHUR.get():
         Hinv = _held_inverse(H, cache)
         if Hinv is not None:

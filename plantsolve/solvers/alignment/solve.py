@@ -13,7 +13,7 @@ from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
 from plantsolve.solvers.alignment.cuts import choose_cut, worst_measured
-from plantsolve.solvers.alignment.direct import continue_closing, solve_direct
+from plantsolve.solvers.alignment.direct import continue_closing, settle_conflict, solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
 from plantsolve.solvers.alignment.kkt import schur_in_use, use_schur
@@ -50,9 +50,9 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
     rounds: list[dict] = []  # what each round solved on and the iterations it counted (the report's details)
     st = Stages(progress)
     st.stage(0.1, 0.7, "direct solve")
-    # what each round solves on: "LDL^T" (the default's first round), "LU" (within use_schur(False), the LU's pass
-    # of a round that ended on a conflict, and every round after a second cut), "LDL^T/LU" (the round after the
-    # first cut: see _after_cut_ends)
+    # what each round solves on: "LDL^T" (the default's first round), "LDL^T/LU" (the round after the first cut: its
+    # feasibility steps on the LU), "LU" (within use_schur(False), every round after a second cut, the LU's pass of a
+    # round that only its continuation closed and every round after such a pass of the round after the first cut)
     mode = "LDL^T" if schur_in_use() else "LU"
 
     last: list = []  # the last round's pose, whose factorisation a continuation reuses
@@ -70,12 +70,14 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         last.append(found)
         return found
 
-    def replaced_by_lu(before: int):
-        # the LU's pass of the same round: its pose decides, its iterations are counted instead
-        rounds[-1]["counted"] = False
-        pose = run("LU", opts.max_iterations - before, " (reference LU)")
-        rounds.append({"factorisation": "LU", "iterations": pose.iterations, "counted": True})
-        return pose, before + pose.iterations
+    def carried_on(pose):
+        """The round's pose carried on by feasibility steps (None where that cannot close it) and its steps."""
+        carried, taken = _continue_round(model, active, pose, opts, opts.max_iterations - iterations,
+                                         lambda message: st.tick(f"direct solve: {message}{cuts}"))
+        release()
+        rounds.append({"factorisation": "LU", "iterations": taken, "counted": True, "continuation": True,
+                       "closed": carried is not None})
+        return carried, taken
 
     while True:
         cuts = f" ({len(reasons)} cut(s) so far)" if reasons else ""
@@ -83,32 +85,48 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         pose = run(mode, opts.max_iterations - iterations, "")
         iterations += pose.iterations
         rounds.append({"factorisation": mode, "iterations": pose.iterations, "counted": True})
-        if mode == "LDL^T/LU" and not _after_cut_ends(model, active, pose, iterations >= opts.max_iterations):
-            pose, iterations = replaced_by_lu(before)
-            mode = "LU"
         if iterations >= opts.max_iterations:
             reason = f"iteration cap ({opts.max_iterations}) reached"
             break
         gap, ang = connection_errors(model, pose.P, pose.D)
         k = choose_cut(model, active, gap, ang)
-        if k is not None and mode == "LDL^T":
-            # a cut is decided on the LU's pose: a conflict's first round stops on its plateau, where round-off
-            # decides how far Gauss-Newton ran along it (measured: the LDL^T's and the LU's plateaus 5 % and 10 x
-            # of the largest impact apart, each after five joint steps), so no margin on the LDL^T's pose tells
-            # the LU's choice; on singular loops the Schur complement's Gauss-Newton can also stall short of
-            # closing where the LU's closes (a 3 x 3 loop grid cut twice)
-            pose, iterations = replaced_by_lu(before)
-            gap, ang = connection_errors(model, pose.P, pose.D)
-            k = choose_cut(model, active, gap, ang)
-            if k is not None:
-                mode = "LDL^T/LU"
-        if k is not None and iterations < opts.max_iterations:
-            pose, gap, ang, k, taken = _continue_round(model, active, pose, opts, opts.max_iterations - iterations,
-                                                       lambda message: st.tick(f"direct solve: {message}{cuts}"))
-            release()
+        if k is not None:
+            carried, taken = carried_on(pose)
             iterations += taken
-            rounds.append({"factorisation": "LU", "iterations": taken, "counted": True, "continuation": True,
-                           "closed": k is None})
+            if carried is not None and mode != "LU":
+                # the round can close: only its continuation did, from where the LDL^T's Gauss-Newton stalled (on
+                # singular loops it can stall short of closing where the LU's closes), and where a crawl along the
+                # loops' flat directions ends depends on where it starts. The LU's pass of the round replaces both, so
+                # the answer is the all-LU path's
+                rounds[-2]["counted"] = rounds[-1]["counted"] = False
+                rounds.append({"factorisation": "LU", "iterations": 0, "counted": True})
+                pose = run("LU", opts.max_iterations - before, " (reference LU)")
+                rounds[-1]["iterations"] = pose.iterations
+                iterations = before + pose.iterations
+                mode = "LU" if mode == "LDL^T/LU" else mode
+                gap, ang = connection_errors(model, pose.P, pose.D)
+                k = choose_cut(model, active, gap, ang)
+                carried = pose
+                if k is not None and iterations < opts.max_iterations:
+                    carried, taken = carried_on(pose)
+                    iterations += taken
+            if carried is not None:
+                pose, k = carried, None
+            elif iterations < opts.max_iterations:
+                # a conflict: cut where the network comes to rest with its connections as springs, which it
+                # determines, not where the round's Gauss-Newton stopped on its plateau (round-off's, hence the
+                # names' and the factorisation's): on either factorisation, the same cut
+                settled, settling = settle_conflict(model, active, opts.pipe_stiffness,
+                                                    step=lambda message: st.tick(f"direct solve: {message}{cuts}"))
+                iterations += settling
+                rounds.append({"factorisation": "LU" if mode == "LU" else "LDL^T", "iterations": settling,
+                               "counted": True, "settled": True})
+                # among the connections the round left open: the springs also carry the scan gaps the round closed
+                # (a share of them beside a small component's weights), which are no conflict
+                open_gap, open_ang = connection_errors(model, pose.P, pose.D)
+                left_open = (open_gap > model.close_pos) | (open_ang > model.close_ang)
+                gap, ang = connection_errors(model, settled.P, settled.D)
+                k = choose_cut(model, active & left_open, gap, ang)
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative
@@ -124,6 +142,10 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
         active[k] = False
         reasons[k] = why
         errors[k] = (float(gap[k]), float(ang[k]))
+        # the round after the first cut keeps the LDL^T but for its feasibility steps (it ends within 1e-6 mm of the
+        # LU's where it closes); after a second cut every round is the LU's, so a network cut more than once gets the
+        # all-LU answer bit for bit (each round starts from the measured pose: only the cuts carry over)
+        mode = "LDL^T/LU" if mode == "LDL^T" else "LU"
     return Outcome(P=pose.P, D=pose.D, iterations=iterations, stop_reason=reason, active=active,
                    cut_reason=reasons, cut_errors=errors, extra={"rounds": rounds})
 
@@ -132,9 +154,8 @@ def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, s
     """A round that ended with a connection open is carried on (:func:`direct.continue_closing`) before any cut: a cut
     is decided only where the continuation stalls too, its largest residual falling by less than 10 % a step for three
     steps in a row however far each step is taken, with a residual more than 1,000 times the closing tolerance (see
-    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Returns the pose (where it does
-    not close, the round's own: a conflict is cut as it was), its connection errors, the connection to cut (None:
-    closed) and the steps taken (counted: they were spent)."""
+    :func:`direct.continue_closing`); where it closes every connection, nothing is cut. Returns the pose it closed
+    (None where it did not) and the steps taken (counted: they were spent)."""
 
     def closed(P, D) -> bool:
         gap, ang = connection_errors(model, P, D)
@@ -142,30 +163,7 @@ def _continue_round(model: Model, active: np.ndarray, pose, opts, budget: int, s
 
     carried, taken = continue_closing(model, active, pose, opts.pipe_stiffness, closed, budget=min(budget, 60),
                                       step=step)
-    gap, ang = connection_errors(model, carried.P, carried.D)
-    if choose_cut(model, active, gap, ang) is None:
-        return carried, gap, ang, None, taken
-    # a conflict: cut on the round's own pose, as without the continuation (its steps only confirm the stall)
-    gap, ang = connection_errors(model, pose.P, pose.D)
-    return pose, gap, ang, choose_cut(model, active, gap, ang), taken
-
-
-def _after_cut_ends(model: Model, active: np.ndarray, pose, capped: bool) -> bool:
-    """Whether the pose of a round after a cut, its rotation stage and the joint stage's steps with the cost solved on
-    the LDL^T, its feasibility steps on the LU (``LDL^T/LU``), is the answer: where it closes every connection and
-    turns no pipe inside out.
-
-    Else the LU's pass of the round replaces it, and every round after is the LU's (a network cut more than once is
-    cut as the all-LU path cuts it, bit for bit). A conflict's plateau is where Gauss-Newton stops running off along
-    it, which round-off moves: on a 4 x 2 conflict grid the LDL^T/LU round's plateau took another cut than the LU's,
-    its impacts clear of the tie width by 0.4 % of the largest. A closing round has no plateau: it
-    ends within 1e-6 mm of the LU's (the LDL^T's steps are refined to the LU's solutions, and the feasibility steps,
-    the crawl of singular loops among them, are the LU's). With the feasibility steps on the LDL^T too the crawl
-    ended 5.2e-3 mm from the LU's on a 5 x 3 conflict grid."""
-    if capped:
-        return False
-    gap, ang = connection_errors(model, pose.P, pose.D)
-    return choose_cut(model, active, gap, ang) is None and _flip_cut(model, active, pose) is None
+    return (carried if closed(carried.P, carried.D) else None), taken
 
 
 def _flip_cut(model: Model, active: np.ndarray, pose) -> int | None:

@@ -12,6 +12,8 @@ from plantsolve.solvers.alignment.kkt import (
     block_inverse,
     complement_factor,
     coupling_pattern,
+    regularised_factor,
+    use_schur,
 )
 
 
@@ -158,3 +160,20 @@ def test_the_complement_keeps_the_couplings_pattern_when_the_jacobian_has_exact_
         patterns.append((kept.indptr.copy(), kept.indices.copy(), upper.nnz))
     assert patterns[0][2] != patterns[1][2]  # the product's own pattern changed
     assert all(np.array_equal(p, q) for p, q in zip(patterns[0][:2], patterns[1][:2]))
+
+
+@pytest.mark.parametrize("schur", [True, False])
+def test_the_regularised_factor_solves_the_matrix_with_its_compliance_not_the_constrained_one(schur):
+    # springs, not constraints: [[H, A^T], [A, -delta I]] z = rhs as written (a penalised least squares), on the
+    # Schur complement's LDL^T or the LU alike; the constrained solve would close A x = b exactly, this one does not
+    rng = np.random.default_rng(5)
+    n, m, delta = 30, 12, 1e-2
+    blocks = [np.array([[rng.uniform(0.5, 2.0)]]) for _ in range(n)]
+    H = sp.block_diag(blocks, format="csc")
+    A = sp.random(m, n, density=0.3, random_state=3, format="csr") + sp.eye(m, n, format="csr")
+    rhs = rng.normal(size=n + m)
+    K = np.block([[H.toarray(), A.T.toarray()], [A.toarray(), -delta * np.eye(m)]])
+    with use_schur(schur):
+        z = regularised_factor(H, A, delta).solve(rhs)
+    assert np.allclose(z, np.linalg.solve(K, rhs), rtol=0, atol=1e-12)
+    assert np.max(np.abs(A @ z[:n] - rhs[n:])) > 1e-3  # the springs give: their force is (A x - b) / delta
