@@ -223,10 +223,11 @@ def _check_las_bounds(pts: np.ndarray, header, log: ReadLog) -> None:
                      "header_maxs": hi.tolist(), "point_mins": got_lo.tolist(), "point_maxs": got_hi.tolist()}))
 
 
-def _read_e57(source: StoredInput) -> np.ndarray:
+def _read_e57(source: StoredInput) -> tuple[np.ndarray, bool]:
     """E57 scans (pye57, which reads files on disk only): every scan's cartesian points, each in world
-    coordinates (its pose applied)."""
+    coordinates (its pose applied), and whether every scan stores them as scaled integers (on a grid)."""
     import pye57
+    from pye57 import libe57
 
     with source.as_file() as path:
         try:
@@ -235,11 +236,15 @@ def _read_e57(source: StoredInput) -> np.ndarray:
         except Exception as exc:  # libE57 raises its own errors on corrupt files
             # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
             raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
+            scaled = [libe57.StructureNode(e57.get_header(i).node["points"].prototype()).get(axis).type()
+                      == libe57.NodeType.E57_SCALED_INTEGER
+                      for i, d in enumerate(scans) if "cartesianX" in d for axis in ("cartesianX", "cartesianY",
+                                                                                      "cartesianZ")]
     parts = [np.column_stack([d["cartesianX"], d["cartesianY"], d["cartesianZ"]]) for d in scans
              if "cartesianX" in d]
     if not parts:
         raise reject("E57 file holds no cartesian points")
-    return np.vstack(parts).astype(np.float64)
+    return np.vstack(parts).astype(np.float64), all(scaled)
 
 
 def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
@@ -276,22 +281,72 @@ def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
     return first if len(first) < len(pts) else None
 
 
-def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog) -> np.ndarray:
-    """The samples with each exact repeat of an earlier one left out, and a warning saying how many. A file (or a
-    scan) pasted twice holds every sample twice: fitted as it is, every sigma of the result was √2 too small, and
-    the inspection gave verdicts the samples do not carry. Leaving a repeat out is never wrong: a position measured
-    twice says little more than once. (LAS stores integers on its scale's grid, where distinct returns share
-    positions; its coarse scales are refused on their own.)"""
-    first = None if ext in (".las", ".laz") else _first_of_each(pts)
+# A block pasted again: at least this many consecutive rows equal to an earlier run of as many. A coarse print makes
+# single samples coincide; a run of them in the file's order is a copy.
+PASTE_ROWS = 4
+# Coincidences a print's resolution explains: at most this share of the pairs of distinct samples one print step
+# apart (the example scan printed to 0 or 1 decimals at 1-10 times its size gives 0.07-0.16; samples spread evenly
+# on the grid give 1/26 in a volume, 1/8 on a plane).
+GRID_SHARE = 0.25
+
+
+def _in_pasted_blocks(pts: np.ndarray) -> np.ndarray:
+    """Which rows lie in a run of at least :data:`PASTE_ROWS` consecutive rows equal to an earlier run (each such row
+    repeats an earlier one)."""
+    rows = np.zeros(len(pts), dtype=bool)
+    if len(pts) < PASTE_ROWS:
+        return rows
+    first = _first_of_each(np.hstack([pts[:-1], pts[1:]]))  # consecutive pairs: a copied run repeats its pairs too
+    if first is None:
+        return rows
+    repeated = np.ones(len(pts) - 1, dtype=bool)
+    repeated[first] = False
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], repeated.view(np.int8), [0]])))
+    for start, stop in zip(edges[::2], edges[1::2]):
+        if stop - start >= PASTE_ROWS - 1:
+            rows[start:stop + 1] = True
+    return rows
+
+
+def _print_explains(distinct: np.ndarray, repeats: int) -> bool:
+    """Whether ``repeats`` coincidences are what the print's resolution gives the ``distinct`` positions: the
+    closest distinct samples (Chebyshev distance) are one print step apart, and samples coincide about as often as
+    :data:`GRID_SHARE` of the pairs at that step."""
+    from scipy.spatial import cKDTree
+
+    if len(distinct) < 2:
+        return False
+    tree = cKDTree(distinct)
+    step = float(tree.query(distinct, k=2, p=np.inf)[0][:, 1].min())
+    near = (tree.count_neighbors(tree, step * (1.0 + 1e-9), p=np.inf) - len(distinct)) / 2.0
+    predicted = GRID_SHARE * near
+    return repeats <= predicted + 3.0 * math.sqrt(predicted) + 1.0
+
+
+def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog, on_grid: bool = False) -> np.ndarray:
+    """The samples without a file or scan pasted twice, and a warning saying how many were left out. Pasted, it
+    holds every sample twice: fitted as it is, every sigma of the result was √2 too small, and the inspection gave
+    verdicts the samples do not carry. A paste is a run of rows repeating an earlier run, or more exact repeats
+    than the print's resolution explains. Samples printed coarsely (1 mm) coincide without being copies: each is a
+    measurement and is kept. Files of scaled integers (LAS, ``on_grid``: E57 ScaledInteger) store positions on
+    their scale's grid, where distinct returns share positions; their coarse scales are refused on their own."""
+    first = None if on_grid else _first_of_each(pts)
     if first is None:
         return pts
-    repeats = len(pts) - len(first)
+    keep = ~_in_pasted_blocks(pts)  # the rows of a copied run are repeats of earlier rows
+    loose = int(keep.sum()) - len(first)
+    if loose and not _print_explains(pts[first], loose):
+        keep[:] = False
+        keep[first] = True
+    repeats = int((~keep).sum())
+    if repeats == 0:
+        return pts
     log.warn(Diagnostic(code="duplicate_points", message=(
-        f"{ext[1:].upper()} file: {repeats:,} of its {len(pts):,} samples repeat an earlier one exactly (a file or "
-        f"scan pasted twice, or coordinates written with too few digits): each position was read once. Counted "
-        "twice, they would have made every sigma of the result too small."),
-        details={"repeated": repeats, "samples": len(pts), "kept": len(first)}))
-    return pts[first]
+        f"{ext[1:].upper()} file: {repeats:,} of its {len(pts):,} samples repeat an earlier one exactly, in runs or "
+        "more often than the print's resolution explains (a file or scan pasted twice): each position was read "
+        "once. Counted twice, they would have made every sigma of the result too small."),
+        details={"repeated": repeats, "samples": len(pts), "kept": len(pts) - repeats}))
+    return pts[keep]
 
 
 E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
@@ -306,15 +361,23 @@ class HeaderUnit(CrsUnit):
 POINT_TEXT = ("a CSV table", "an ASCII STL", "a PLY", "a Wavefront OBJ")
 
 
-def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
-    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
-    the file or its format states (None: none)."""
+def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None, bool]:
+    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), the unit the
+    file or its format states (None: none) and whether it stores them as scaled integers (on a grid)."""
     ext = source.extension
     if ext == ".e57":
-        return _read_e57(source), E57_METRES
+        pts, scaled = _read_e57(source)
+        return pts, E57_METRES, scaled
     content = source.read()
     if ext in (".las", ".laz"):
-        return _read_las(content, log)
+        return *_read_las(content, log), True
+    pts, stated = _read_unscaled(source, content, log)
+    return pts, stated, False
+
+
+def _read_unscaled(source: StoredInput, content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
+    """The samples and stated unit of a scan file other than E57 and LAS/LAZ."""
+    ext = source.extension
     if ext == ".ply":
         stated = stated_ply_unit(content)
         if stated is None or isinstance(stated, str):
@@ -443,7 +506,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}; one of "
                                             f"{', '.join(TO_MM)}")])
         log = ReadLog(ext[1:])
-        pts, stated = _read_points(source, log)
+        pts, stated, on_grid = _read_points(source, log)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
             raise reject("file holds no 3D points")
         finite = np.isfinite(pts).all(1)
@@ -464,7 +527,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
                 raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
             log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
             pts = pts[bounded]
-        pts = _without_repeats(pts, ext, log)
+        pts = _without_repeats(pts, ext, log, on_grid)
         source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
                                     skipped_lines=log.lines, truncated=log.truncation is not None,
                                     warnings=log.warnings() + unit_warnings)
