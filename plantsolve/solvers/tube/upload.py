@@ -233,13 +233,13 @@ def _read_e57(source: StoredInput) -> tuple[np.ndarray, bool]:
         try:
             e57 = pye57.E57(str(path))
             scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
-        except Exception as exc:  # libE57 raises its own errors on corrupt files
-            # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
-            raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
             scaled = [libe57.StructureNode(e57.get_header(i).node["points"].prototype()).get(axis).type()
                       == libe57.NodeType.E57_SCALED_INTEGER
                       for i, d in enumerate(scans) if "cartesianX" in d for axis in ("cartesianX", "cartesianY",
                                                                                       "cartesianZ")]
+        except Exception as exc:  # libE57 raises its own errors on corrupt files
+            # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
+            raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
     parts = [np.column_stack([d["cartesianX"], d["cartesianY"], d["cartesianZ"]]) for d in scans
              if "cartesianX" in d]
     if not parts:
