@@ -265,17 +265,22 @@ def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
     return np.asarray(arr[:, :3], dtype=np.float64)
 
 
-def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
-    """The indices (ascending) of the first sample at each position, None when no position repeats: one sort of a
-    hash of the coordinates' bits in the usual case, the exact rows compared only when two keys are equal."""
+def _may_repeat(pts: np.ndarray) -> bool:
+    """False when no position repeats, told by one sort of a hash of the coordinates' bits; True when two keys are
+    equal (the rows themselves then say)."""
     if len(pts) < 2:
-        return None
+        return False
     bits = np.ascontiguousarray(pts, dtype=np.float64).view(np.uint64)  # no copy; a 0.0 repeated as -0.0 is missed
     key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
     key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
     key ^= bits[:, 2]
     key.sort()
-    if not (key[1:] == key[:-1]).any():
+    return bool((key[1:] == key[:-1]).any())
+
+
+def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
+    """The indices (ascending) of the first sample at each position, None when no position repeats."""
+    if not _may_repeat(pts):
         return None
     first = np.sort(np.unique(pts + 0.0, axis=0, return_index=True)[1])
     return first if len(first) < len(pts) else None
@@ -284,23 +289,28 @@ def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
 # A block pasted again: at least this many consecutive rows equal to an earlier run of as many. A coarse print makes
 # single samples coincide; a run of them in the file's order is a copy.
 PASTE_ROWS = 4
-# Coincidences a print's resolution explains: at most this share of the pairs of distinct samples one print step
-# apart (the example scan printed to 0 or 1 decimals at 1-10 times its size gives 0.07-0.16; samples spread evenly
-# on the grid give 1/26 in a volume, 1/8 on a plane).
+# Coincidences a print's resolution explains: samples spread evenly at the print's step coincide as often as they lie
+# one step apart in one direction, at most this share of the pairs of samples one step apart (1/26 in a volume, about
+# 1/8 on a surface; the example scan printed to 0 or 1 decimals at 1-3 times its size and a synthetic 300,000-sample
+# scan printed to 1 mm and 0.1 mm give 0.04-0.10)
 GRID_SHARE = 0.25
+# Repeats of at most this share of the samples are kept unasked: counted twice, they make the sigmas too small by
+# at most half of it, and the question costs a neighbour search over every distinct sample
+REPEAT_SHARE_IGNORED = 1e-3
 
 
-def _in_pasted_blocks(pts: np.ndarray) -> np.ndarray:
+def _in_pasted_blocks(position: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """Which rows lie in a run of at least :data:`PASTE_ROWS` consecutive rows equal to an earlier run (each such row
-    repeats an earlier one)."""
-    rows = np.zeros(len(pts), dtype=bool)
-    if len(pts) < PASTE_ROWS:
+    repeats an earlier one); ``position``: each row's position's number, ``counts``: how many rows each has."""
+    rows = np.zeros(len(position), dtype=bool)
+    shared = counts[position] > 1
+    pair = np.flatnonzero(shared[:-1] & shared[1:])  # a copied run repeats its consecutive pairs too
+    if len(pair) < PASTE_ROWS - 1:
         return rows
-    first = _first_of_each(np.hstack([pts[:-1], pts[1:]]))  # consecutive pairs: a copied run repeats its pairs too
-    if first is None:
-        return rows
-    repeated = np.ones(len(pts) - 1, dtype=bool)
-    repeated[first] = False
+    _, first = np.unique(np.column_stack([position[pair], position[pair + 1]]), axis=0, return_index=True)
+    repeated = np.zeros(len(position) - 1, dtype=bool)
+    repeated[pair] = True
+    repeated[pair[first]] = False
     edges = np.flatnonzero(np.diff(np.concatenate([[0], repeated.view(np.int8), [0]])))
     for start, stop in zip(edges[::2], edges[1::2]):
         if stop - start >= PASTE_ROWS - 1:
@@ -308,19 +318,23 @@ def _in_pasted_blocks(pts: np.ndarray) -> np.ndarray:
     return rows
 
 
-def _print_explains(distinct: np.ndarray, repeats: int) -> bool:
-    """Whether ``repeats`` coincidences are what the print's resolution gives the ``distinct`` positions: the
-    closest distinct samples (Chebyshev distance) are one print step apart, and samples coincide about as often as
-    :data:`GRID_SHARE` of the pairs at that step."""
+def _print_explains(distinct: np.ndarray, counts: np.ndarray) -> bool:
+    """Whether the exact repeats of the samples at the ``distinct`` positions (``counts`` samples at each) are what
+    the print's resolution gives: the closest distinct samples (Chebyshev distance) are one print step apart, and
+    pairs of samples at one place are no more than :data:`GRID_SHARE` of the pairs one step apart. A paste adds
+    pairs at one place alone; a coarse print (a dense scan on a 1 mm grid as well) has them in proportion."""
     from scipy.spatial import cKDTree
 
     if len(distinct) < 2:
         return False
     tree = cKDTree(distinct)
     step = float(tree.query(distinct, k=2, p=np.inf)[0][:, 1].min())
-    near = (tree.count_neighbors(tree, step * (1.0 + 1e-9), p=np.inf) - len(distinct)) / 2.0
-    predicted = GRID_SHARE * near
-    return repeats <= predicted + 3.0 * math.sqrt(predicted) + 1.0
+    c = counts.astype(np.float64)
+    squares = float(c @ c)
+    apart = (tree.count_neighbors(tree, step * (1.0 + 1e-9), p=np.inf, weights=(c, c)) - squares) / 2.0
+    together = (squares - float(c.sum())) / 2.0
+    predicted = GRID_SHARE * apart
+    return together <= predicted + 3.0 * math.sqrt(predicted) + 1.0
 
 
 def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog, on_grid: bool = False) -> np.ndarray:
@@ -330,14 +344,20 @@ def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog, on_grid: bool = Fa
     than the print's resolution explains. Samples printed coarsely (1 mm) coincide without being copies: each is a
     measurement and is kept. Files of scaled integers (LAS, ``on_grid``: E57 ScaledInteger) store positions on
     their scale's grid, where distinct returns share positions; their coarse scales are refused on their own."""
-    first = None if on_grid else _first_of_each(pts)
-    if first is None:
+    if on_grid or not _may_repeat(pts):
         return pts
-    keep = ~_in_pasted_blocks(pts)  # the rows of a copied run are repeats of earlier rows
-    loose = int(keep.sum()) - len(first)
-    if loose and not _print_explains(pts[first], loose):
-        keep[:] = False
-        keep[first] = True
+    distinct, first, position, counts = np.unique(pts + 0.0, axis=0, return_index=True, return_inverse=True,
+                                                  return_counts=True)
+    position = position.ravel()
+    if len(distinct) == len(pts):
+        return pts
+    keep = ~_in_pasted_blocks(position, counts)  # the rows of a copied run are repeats of earlier rows
+    loose = int(keep.sum()) - len(distinct)
+    if loose > REPEAT_SHARE_IGNORED * len(pts):
+        left = np.bincount(position[keep], minlength=len(distinct))
+        if not _print_explains(distinct[left > 0], left[left > 0]):
+            keep[:] = False
+            keep[first] = True
     repeats = int((~keep).sum())
     if repeats == 0:
         return pts

@@ -104,3 +104,18 @@ def test_a_scaled_integer_e57_keeps_every_sample_like_las(monkeypatch, scale):
     # the same rows written as floats: 50 scattered repeats that a 0.0001 mm print does not explain are copies
     floats = parse_upload(StoredInput.from_bytes("scan.e57", _e57(rows, monkeypatch, None)), {})
     assert floats.source.warnings[0].details == {"repeated": 50, "samples": 4050, "kept": 4000}
+
+
+def test_a_dense_scan_printed_to_one_mm_keeps_every_sample():
+    from plantsolve.solvers.tube.synthetic import clear_tube, surface_samples
+
+    rng = np.random.default_rng(1)
+    tube = clear_tube(rng, pipe_radius=10.0, n_bends=2)
+    scan = np.round(surface_samples(tube, 40_000, rng, view=rng.normal(size=3), noise=0.1), 0)
+    distinct = len(np.unique(scan, axis=0))
+    assert len(scan) > 3 * distinct  # several samples in each 1 mm cell: more coincide than lie one step apart
+    buf = io.BytesIO()
+    np.save(buf, scan)
+    request = parse_upload(StoredInput.from_bytes("scan.npy", buf.getvalue()), {})
+    assert [w.code for w in request.source.warnings] == []
+    assert request.source.points == len(scan)
