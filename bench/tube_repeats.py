@@ -84,7 +84,7 @@ def main() -> None:
             got = []
             for code in (ref, ROOT):
                 run = subprocess.run([sys.executable, "-c", CHILD, code, name, path], env=env, capture_output=True,
-                                     text=True)
+                                     text=True, check=False)
                 if run.returncode:
                     sys.exit(f"{label} with {code}: {run.stderr.strip().splitlines()[-1]}")
                 got.append(json.loads(run.stdout))

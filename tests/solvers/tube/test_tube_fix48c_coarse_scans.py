@@ -64,11 +64,11 @@ class _ScaledIntegerXYZ:
     def __getattr__(self, name):
         return getattr(self._lib, name)
 
-    def FloatNode(self, imf, *args):  # noqa: N802 - libe57's name
+    def FloatNode(self, imf, *args):
         if len(args) == 4:  # a point field's prototype: value, precision, minimum, maximum
             value, _, low, high = args
             s = self._scale
-            return self._lib.ScaledIntegerNode(imf, int(round(value / s)), int(np.floor(low / s)) - 1,
+            return self._lib.ScaledIntegerNode(imf, round(value / s), int(np.floor(low / s)) - 1,
                                                int(np.ceil(high / s)) + 1, s, 0.0)
         return self._lib.FloatNode(imf, *args)
 
