@@ -145,17 +145,36 @@ def field_unit(model: type[BaseModel] | None, result: Any, path: tuple[str, ...]
     return _filled(unit, result)
 
 
+NOT_STATED = "not stated"
+
+
 def _filled(unit: Any, result: Any) -> str:
-    """``unit`` with each ``{field}`` replaced by the unit the result's field holds."""
+    """``unit`` with each ``{field}`` replaced by the unit the result's field holds (``{units.settings.0}``: the
+    first of a list); :data:`NOT_STATED` for the whole unit when a field it names holds none (a request that stated
+    no units), never the placeholder itself."""
+    unstated = False
+
     def fill(match: re.Match) -> str:
+        nonlocal unstated
         value: Any = result
         for key in match.group(1).split("."):
-            value = value.get(key) if isinstance(value, dict) else None
-        if isinstance(value, list) and all(isinstance(v, str) for v in value):  # one unit per column of the rows
+            if isinstance(value, dict):
+                value = value.get(key)
+            elif isinstance(value, list) and key.isdigit() and int(key) < len(value):
+                value = value[int(key)]
+            else:
+                value = None
+        if isinstance(value, list) and value and all(isinstance(v, str) for v in value):  # one unit per column
             return "per column: " + ", ".join(value)
-        return str(value) if isinstance(value, str) else match.group(0)
+        if isinstance(value, str):
+            return value
+        unstated = True
+        return ""
 
-    return _PLACEHOLDER.sub(fill, unit) if isinstance(unit, str) else ""
+    if not isinstance(unit, str):
+        return ""
+    filled = _PLACEHOLDER.sub(fill, unit)
+    return NOT_STATED if unstated else filled
 
 
 def result_summary(result: Any, model: type[BaseModel] | None = None) -> list[tuple[str, str, str]]:

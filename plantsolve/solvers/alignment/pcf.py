@@ -289,20 +289,52 @@ RECORD_ANGLE_DEG = 1.0
 RECORD_RADIUS_SHARE = 0.02
 
 
-def _angle_record(value: str | None, turn: float | None = None) -> float | None:
+def _angle_record(value: str | None, turn: float | None = None, radius_fits: bool = True) -> float | None:
     """ANGLE in degrees; E3D writes hundredths of a degree (ANGLE 18000, ANGLE 4500). A value up to 360 reads both
     ways (ANGLE 180 is 180° or E3D's 1.8°): the turn ``turn`` the item's points give (degrees, None without one)
-    decides when it matches the hundredths alone; read as degrees, a 1.8° elbow became a 180° return bend whose
-    ports pointed sideways and lost both its connections."""
+    decides when it matches the hundredths alone and ``radius_fits`` (the BEND-RADIUS record, if any, agrees with
+    the points at that turn); read as degrees, a 1.8° elbow became a 180° return bend whose ports pointed sideways
+    and lost both its connections. The radius is what tells a 180° return bend whose CENTRE-POINT was nudged off
+    its chord from such an elbow: the points alone agree with a small turn for both."""
     try:
         a = abs(float((value or "").split()[0]))
     except (ValueError, IndexError):
         return None
     if a > 360.0:
         return a / 100.0
-    if turn is not None and abs(a / 100.0 - turn) <= RECORD_ANGLE_DEG < abs(a - turn):
+    if turn is not None and radius_fits and abs(a / 100.0 - turn) <= RECORD_ANGLE_DEG < abs(a - turn):
         return a / 100.0
     return a
+
+
+def _bend_radius(item: Item) -> float | None:
+    """The BEND-RADIUS record (file units), None without a usable one."""
+    try:
+        radius = float(item.records.get("BEND-RADIUS", "").split()[0])
+    except (ValueError, IndexError):
+        return None
+    return radius if np.isfinite(radius) and radius > 0 else None
+
+
+def _radius_from_points(turn: float, arms: list[float]) -> tuple[float, float] | None:
+    """The radius an elbow's points give (its arms are R·tan(turn / 2)) and tan(turn / 2); None where the turn
+    does not fix one (no turn, or a return bend)."""
+    if not 0.1 < turn < 179.0:
+        return None
+    half = float(np.tan(np.radians(turn) / 2.0))
+    return float(np.mean(arms)) / half, half
+
+
+def _radius_contradicts(radius: float, turn: float, arms: list[float], quantum: float) -> float | None:
+    """The radius the points give when the BEND-RADIUS record ``radius`` differs from it by more than the records'
+    share and the printed digits explain, else None."""
+    found = _radius_from_points(turn, arms)
+    if found is None:
+        return None
+    from_points, half = found
+    if abs(radius - from_points) > RECORD_RADIUS_SHARE * from_points + 4.0 * quantum / half:
+        return from_points
+    return None
 
 
 def _turn_from_points(e0: np.ndarray, e1: np.ndarray, c: np.ndarray) -> float | None:
@@ -333,21 +365,16 @@ def _records_against_points(item: Item, doc: Document, turn: float, arms: list[f
     say which."""
     out = []
     raw = item.records.get("ANGLE")
-    angle = _angle_record(raw, turn)
+    radius = _bend_radius(item)
+    from_points = None if radius is None else _radius_contradicts(radius, turn, arms, doc.quantum)
+    angle = _angle_record(raw, turn, from_points is None)
     if angle is not None and abs(angle - turn) > RECORD_ANGLE_DEG:
         out.append({"record": "ANGLE", "record_line": _record_line(item, doc, "ANGLE"), "value": raw.split()[0],
                     "read_as": angle, "from_points": round(turn, 4), "unit": "deg"})
-    try:
-        radius = float(item.records.get("BEND-RADIUS", "").split()[0])
-    except (ValueError, IndexError):
-        radius = None
-    half = np.tan(np.radians(turn) / 2.0)
-    if radius is not None and radius > 0 and 0.1 < turn < 179.0:
-        from_points = float(np.mean(arms)) / half
-        if abs(radius - from_points) > RECORD_RADIUS_SHARE * from_points + 4.0 * doc.quantum / half:
-            out.append({"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
-                        "value": item.records["BEND-RADIUS"].split()[0], "read_as": radius,
-                        "from_points": round(from_points, 6), "unit": doc.units or "mm"})
+    if from_points is not None:
+        out.append({"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
+                    "value": item.records["BEND-RADIUS"].split()[0], "read_as": radius,
+                    "from_points": round(from_points, 6), "unit": doc.units or "mm"})
     return out
 
 
@@ -406,24 +433,33 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         off = (c - e0) - np.dot(c - e0, u) * u if u is not None else None
         on_line = off is not None and np.linalg.norm(off) <= max(1e-3 * span, 4.0 * q)
         turn = _turn_from_points(e0, e1, c) if not on_line else None
-        angle = _angle_record(item.records.get("ANGLE"), turn)
+        arms = [float(np.linalg.norm(e - c)) for e in (e0, e1)]
+        bend_radius = _bend_radius(item)
+        radius_fits = turn is None or bend_radius is None or _radius_contradicts(bend_radius, turn, arms, q) is None
+        angle = _angle_record(item.records.get("ANGLE"), turn, radius_fits)
         turning = ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))
         if turning and u is not None and (on_line or (angle is not None and abs(angle - 180.0) < 0.5)):
             # a 180 degree return bend: both ports parallel, normal to the chord, away from the CENTRE-POINT
             # side; a centre on the chord (the arc's centre) does not tell which side: the neighbours do
             ftype = "bend" if ftype not in ("elbow", "bend") else ftype
+            if bend_radius is not None and abs(span / 2.0 - bend_radius) > RECORD_RADIUS_SHARE * bend_radius + 4.0 * q:
+                # its chord is its diameter
+                contradicted = [{"record": "BEND-RADIUS", "record_line": _record_line(item, doc, "BEND-RADIUS"),
+                                 "value": item.records["BEND-RADIUS"].split()[0], "read_as": bend_radius,
+                                 "from_points": round(span / 2.0, 6), "unit": doc.units or "mm"}]
             if not on_line:
                 d = _unit(-off)
                 return Geometry([(e0, d), (e1, d.copy())], [ends[0][0], ends[1][0]], "fitting", ftype, radius,
-                                note="180 degree return bend: plane from the CENTRE-POINT offset", suspect=suspect)
+                                note="180 degree return bend: plane from the CENTRE-POINT offset", suspect=suspect,
+                                contradicted=contradicted)
             return Geometry([(e0, None), (e1, None)], [ends[0][0], ends[1][0]], "fitting", ftype, radius, chord=u,
                             note="180 degree return bend with its CENTRE-POINT on the chord: plane from its neighbours",
-                            suspect=suspect)
+                            suspect=suspect, contradicted=contradicted)
         if on_line:
             # an inline item with a CENTRE-POINT (instrument, some valves): ports exactly opposite along the line
             c = None
         elif turning and turn is not None:
-            contradicted = _records_against_points(item, doc, turn, [float(np.linalg.norm(e - c)) for e in (e0, e1)])
+            contradicted = _records_against_points(item, doc, turn, arms)
     ports, port_lines = [], []
     for k, (i, p, _) in enumerate(ends + branches):
         d = _unit(p - c) if c is not None else None

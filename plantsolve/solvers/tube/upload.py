@@ -223,15 +223,20 @@ def _check_las_bounds(pts: np.ndarray, header, log: ReadLog) -> None:
                      "header_maxs": hi.tolist(), "point_mins": got_lo.tolist(), "point_maxs": got_hi.tolist()}))
 
 
-def _read_e57(source: StoredInput) -> np.ndarray:
+def _read_e57(source: StoredInput) -> tuple[np.ndarray, bool]:
     """E57 scans (pye57, which reads files on disk only): every scan's cartesian points, each in world
-    coordinates (its pose applied)."""
+    coordinates (its pose applied), and whether every scan stores them as scaled integers (on a grid)."""
     import pye57
+    from pye57 import libe57
 
     with source.as_file() as path:
         try:
             e57 = pye57.E57(str(path))
             scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
+            scaled = [libe57.StructureNode(e57.get_header(i).node["points"].prototype()).get(axis).type()
+                      == libe57.NodeType.E57_SCALED_INTEGER
+                      for i, d in enumerate(scans) if "cartesianX" in d for axis in ("cartesianX", "cartesianY",
+                                                                                      "cartesianZ")]
         except Exception as exc:  # libE57 raises its own errors on corrupt files
             # its first line says what failed; the rest is its debug dump, naming the server's path of the upload
             raise reject(f"unreadable E57 file: {(str(exc).strip().splitlines() or [type(exc).__name__])[0]}") from None
@@ -239,7 +244,7 @@ def _read_e57(source: StoredInput) -> np.ndarray:
              if "cartesianX" in d]
     if not parts:
         raise reject("E57 file holds no cartesian points")
-    return np.vstack(parts).astype(np.float64)
+    return np.vstack(parts).astype(np.float64), all(scaled)
 
 
 def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
@@ -260,38 +265,108 @@ def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
     return np.asarray(arr[:, :3], dtype=np.float64)
 
 
-def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
-    """The indices (ascending) of the first sample at each position, None when no position repeats: one sort of a
-    hash of the coordinates' bits in the usual case, the exact rows compared only when two keys are equal."""
+def _may_repeat(pts: np.ndarray) -> bool:
+    """False when no position repeats, told by one sort of a hash of the coordinates' bits; True when two keys are
+    equal (the rows themselves then say)."""
     if len(pts) < 2:
-        return None
+        return False
     bits = np.ascontiguousarray(pts, dtype=np.float64).view(np.uint64)  # no copy; a 0.0 repeated as -0.0 is missed
     key = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
     key ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
     key ^= bits[:, 2]
     key.sort()
-    if not (key[1:] == key[:-1]).any():
+    return bool((key[1:] == key[:-1]).any())
+
+
+def _first_of_each(pts: np.ndarray) -> np.ndarray | None:
+    """The indices (ascending) of the first sample at each position, None when no position repeats."""
+    if not _may_repeat(pts):
         return None
     first = np.sort(np.unique(pts + 0.0, axis=0, return_index=True)[1])
     return first if len(first) < len(pts) else None
 
 
-def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog) -> np.ndarray:
-    """The samples with each exact repeat of an earlier one left out, and a warning saying how many. A file (or a
-    scan) pasted twice holds every sample twice: fitted as it is, every sigma of the result was √2 too small, and
-    the inspection gave verdicts the samples do not carry. Leaving a repeat out is never wrong: a position measured
-    twice says little more than once. (LAS stores integers on its scale's grid, where distinct returns share
-    positions; its coarse scales are refused on their own.)"""
-    first = None if ext in (".las", ".laz") else _first_of_each(pts)
-    if first is None:
+# A block pasted again: at least this many consecutive rows equal to an earlier run of as many. A coarse print makes
+# single samples coincide; a run of them in the file's order is a copy.
+PASTE_ROWS = 4
+# Coincidences a print's resolution explains: samples spread evenly at the print's step coincide as often as they lie
+# one step apart in one direction, at most this share of the pairs of samples one step apart (1/26 in a volume, about
+# 1/8 on a surface; the example scan printed to 0 or 1 decimals at 1-3 times its size and a synthetic 300,000-sample
+# scan printed to 1 mm and 0.1 mm give 0.04-0.10)
+GRID_SHARE = 0.25
+# Repeats of at most this share of the samples are kept unasked: counted twice, they make the sigmas too small by
+# at most half of it, and the question costs a neighbour search over every distinct sample
+REPEAT_SHARE_IGNORED = 1e-3
+
+
+def _in_pasted_blocks(position: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Which rows lie in a run of at least :data:`PASTE_ROWS` consecutive rows equal to an earlier run (each such row
+    repeats an earlier one); ``position``: each row's position's number, ``counts``: how many rows each has."""
+    rows = np.zeros(len(position), dtype=bool)
+    shared = counts[position] > 1
+    pair = np.flatnonzero(shared[:-1] & shared[1:])  # a copied run repeats its consecutive pairs too
+    if len(pair) < PASTE_ROWS - 1:
+        return rows
+    _, first = np.unique(np.column_stack([position[pair], position[pair + 1]]), axis=0, return_index=True)
+    repeated = np.zeros(len(position) - 1, dtype=bool)
+    repeated[pair] = True
+    repeated[pair[first]] = False
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], repeated.view(np.int8), [0]])))
+    for start, stop in zip(edges[::2], edges[1::2]):
+        if stop - start >= PASTE_ROWS - 1:
+            rows[start:stop + 1] = True
+    return rows
+
+
+def _print_explains(distinct: np.ndarray, counts: np.ndarray) -> bool:
+    """Whether the exact repeats of the samples at the ``distinct`` positions (``counts`` samples at each) are what
+    the print's resolution gives: the closest distinct samples (Chebyshev distance) are one print step apart, and
+    pairs of samples at one place are no more than :data:`GRID_SHARE` of the pairs one step apart. A paste adds
+    pairs at one place alone; a coarse print (a dense scan on a 1 mm grid as well) has them in proportion."""
+    from scipy.spatial import cKDTree
+
+    if len(distinct) < 2:
+        return False
+    tree = cKDTree(distinct)
+    step = float(tree.query(distinct, k=2, p=np.inf)[0][:, 1].min())
+    c = counts.astype(np.float64)
+    squares = float(c @ c)
+    apart = (tree.count_neighbors(tree, step * (1.0 + 1e-9), p=np.inf, weights=(c, c)) - squares) / 2.0
+    together = (squares - float(c.sum())) / 2.0
+    predicted = GRID_SHARE * apart
+    return together <= predicted + 3.0 * math.sqrt(predicted) + 1.0
+
+
+def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog, on_grid: bool = False) -> np.ndarray:
+    """The samples without a file or scan pasted twice, and a warning saying how many were left out. Pasted, it
+    holds every sample twice: fitted as it is, every sigma of the result was √2 too small, and the inspection gave
+    verdicts the samples do not carry. A paste is a run of rows repeating an earlier run, or more exact repeats
+    than the print's resolution explains. Samples printed coarsely (1 mm) coincide without being copies: each is a
+    measurement and is kept. Files of scaled integers (LAS, ``on_grid``: E57 ScaledInteger) store positions on
+    their scale's grid, where distinct returns share positions; their coarse scales are refused on their own."""
+    if on_grid or not _may_repeat(pts):
         return pts
-    repeats = len(pts) - len(first)
+    distinct, first, position, counts = np.unique(pts + 0.0, axis=0, return_index=True, return_inverse=True,
+                                                  return_counts=True)
+    position = position.ravel()
+    if len(distinct) == len(pts):
+        return pts
+    keep = ~_in_pasted_blocks(position, counts)  # the rows of a copied run are repeats of earlier rows
+    loose = int(keep.sum()) - len(distinct)
+    if loose > REPEAT_SHARE_IGNORED * len(pts):
+        left = np.bincount(position[keep], minlength=len(distinct))
+        if not _print_explains(distinct[left > 0], left[left > 0]):
+            keep[:] = False
+            keep[first] = True
+    repeats = int((~keep).sum())
+    if repeats == 0:
+        return pts
     log.warn(Diagnostic(code="duplicate_points", message=(
-        f"{ext[1:].upper()} file: {repeats:,} of its {len(pts):,} samples repeat an earlier one exactly (a file or "
-        f"scan pasted twice, or coordinates written with too few digits): each position was read once. Counted "
-        "twice, they would have made every sigma of the result too small."),
-        details={"repeated": repeats, "samples": len(pts), "kept": len(first)}))
-    return pts[first]
+        f"{ext[1:].upper()} file: {repeats:,} of its {len(pts):,} samples repeat an earlier one exactly, in runs or "
+        "more often than the print's resolution explains (a file or scan pasted twice): each position was read "
+        "once. Counted twice, they would have made every sigma of the result too small."),
+        details={"repeated": repeats, "samples": len(pts), "kept": len(pts) - repeats}))
+    return pts[keep]
 
 
 E57_METRES = CrsUnit("metre", 1.0, "E57 standard: cartesian coordinates in metres")
@@ -306,15 +381,23 @@ class HeaderUnit(CrsUnit):
 POINT_TEXT = ("a CSV table", "an ASCII STL", "a PLY", "a Wavefront OBJ")
 
 
-def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
-    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), and the unit
-    the file or its format states (None: none)."""
+def _read_points(source: StoredInput, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None, bool]:
+    """The samples of a scan file, by its extension (intake accepted only ``UPLOAD_EXTENSIONS``), the unit the
+    file or its format states (None: none) and whether it stores them as scaled integers (on a grid)."""
     ext = source.extension
     if ext == ".e57":
-        return _read_e57(source), E57_METRES
+        pts, scaled = _read_e57(source)
+        return pts, E57_METRES, scaled
     content = source.read()
     if ext in (".las", ".laz"):
-        return _read_las(content, log)
+        return *_read_las(content, log), True
+    pts, stated = _read_unscaled(source, content, log)
+    return pts, stated, False
+
+
+def _read_unscaled(source: StoredInput, content: bytes, log: ReadLog) -> tuple[np.ndarray, CrsUnit | str | None]:
+    """The samples and stated unit of a scan file other than E57 and LAS/LAZ."""
+    ext = source.extension
     if ext == ".ply":
         stated = stated_ply_unit(content)
         if stated is None or isinstance(stated, str):
@@ -443,7 +526,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}; one of "
                                             f"{', '.join(TO_MM)}")])
         log = ReadLog(ext[1:])
-        pts, stated = _read_points(source, log)
+        pts, stated, on_grid = _read_points(source, log)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
             raise reject("file holds no 3D points")
         finite = np.isfinite(pts).all(1)
@@ -464,7 +547,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
                 raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
             log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
             pts = pts[bounded]
-        pts = _without_repeats(pts, ext, log)
+        pts = _without_repeats(pts, ext, log, on_grid)
         source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
                                     skipped_lines=log.lines, truncated=log.truncation is not None,
                                     warnings=log.warnings() + unit_warnings)
