@@ -64,6 +64,10 @@ def test_a_tube_upload_with_a_chosen_unit_is_requested_and_read_in_it(client):
     request = KINDS["tube"].parse_upload(StoredInput.from_bytes("scan.xyz", SCAN), {"units": "m"})
     assert request.units == "m" and request.source.units.factor == 1.0  # the file read in the unit chosen
     _stop(client, job_id)
+    # the choice reads the file too where it states no unit: the form says so, not "result unit" alone
+    label = re.search(r"<label>Unit \(the request's <code>units</code>(.*?)<select", client.get(
+        "/dashboard/submit/tube").text, re.S)
+    assert label and "the file's coordinates where the file states no unit" in label.group(1) and "file_units" in label.group(1)
 
 
 def test_the_default_is_not_sent_and_a_contradicting_unit_is_refused_naming_both(client):
