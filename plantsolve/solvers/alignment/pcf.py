@@ -1205,12 +1205,13 @@ def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, st
              "typed twice: correct it.", {"items": found[:200]}, "warning")]
 
 
-# Bores of one item's two END-POINTs, or of two mated end points, agree to a rounding; a REDUCER (a reducing
-# flange or elbow, a swage, an adapter) changes bore, but by no more than this ratio (ASME B16.9 concentric reducers
-# reach about 3:1): a larger step is a bore in another unit (152.4 written in an inch-bore file) or a dropped digit.
+# Bores of a pipe's (a gasket's, a weld's) two END-POINTs, or of two mated end points, agree to a rounding; any other
+# item may change bore (a reducer, a reducing elbow or coupling, a swage nipple to 8:1, an instrument), but by no
+# more than this ratio: a larger step is a bore in another unit (152.4 written in an inch-bore file, 25.4:1) or a
+# dropped digit.
 BORE_SHARE = 0.01
-REDUCER_RATIO = 4.0
-BORE_CHANGING = ("REDUC", "SWAGE", "ADAPTER")  # in the keyword
+FITTING_RATIO = 10.0
+BORE_KEEPING = ("PIPE", "GASKET", "WELD")  # keywords of items whose two ends share one bore
 
 
 def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tuple[str, str, dict, str]]:
@@ -1233,7 +1234,7 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
         lines = [i for i in c["geometry"].port_lines if doc.lines[i].split()[0].upper() == "END-POINT"]
         if len(lines) == 2:
             a, b = bore(lines[0]), bore(lines[1])
-            if differ(a, b, REDUCER_RATIO if any(w in c["word"] for w in BORE_CHANGING) else 1.0):
+            if differ(a, b, 1.0 if c["word"] in BORE_KEEPING else FITTING_RATIO):
                 found.append({"where": "item", "id": c["id"], "line": lines[0] + 1, "bore": a,
                               "other_id": c["id"], "other_line": lines[1] + 1, "other_bore": b})
     owner, start = net["owner"], net["start"]
@@ -1252,8 +1253,8 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
                           f"({f['id']} joins {f['other_id']})") for f in found[:5]) + ("; ..." if len(found) > 5 else "")
     return [("pcf_bore_mismatch",
              f"{len(found)} pair(s) of end points disagree in bore ({unit}) where they should agree ({listed}): a "
-             "pipe, elbow or valve keeps its bore and mated ends share one (only reducers, swages and adapters "
-             f"change it, and by less than {REDUCER_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
+             "pipe keeps its bore and mated ends share one (fittings may change it, by less than "
+             f"{FITTING_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
              {"pairs": found[:200], "unit": unit}, "warning")]
 
 

@@ -78,12 +78,21 @@ def test_exports_and_fixtures_raise_no_bore_mismatch_or_zero_length_pipe(path):
         _warnings(path.read_bytes().decode("utf-8", errors="replace")))
 
 
-def test_a_swage_changes_bore_like_a_reducer():
+def test_fittings_change_bore_and_pipes_keep_it():
     text = ("UNITS-BORE MM\nUNITS-CO-ORDS MM\n"
             "PIPE\n    END-POINT 0.0 0.0 0.0 100.0\n    END-POINT 1000.0 0.0 0.0 100.0\n"
-            "SWAGE\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1150.0 0.0 0.0 50.0\n"
-            "PIPE\n    END-POINT 1150.0 0.0 0.0 50.0\n    END-POINT 2150.0 0.0 0.0 50.0\n")
-    assert "pcf_bore_mismatch" not in _warnings(text)
-    (pair,) = _warnings(text.replace("SWAGE", "VALVE"))["pcf_bore_mismatch"][1]["pairs"]  # a valve keeps its bore
+            "SWAGE\n    END-POINT 1000.0 0.0 0.0 100.0\n    END-POINT 1150.0 0.0 0.0 12.5\n"
+            "PIPE\n    END-POINT 1150.0 0.0 0.0 12.5\n    END-POINT 2150.0 0.0 0.0 12.5\n")
+    # a swage nipple 8:1, a reducing coupling, an in-line instrument: fittings that change bore
+    for word in ("SWAGE", "COUPLING", "INSTRUMENT", "VALVE"):
+        assert "pcf_bore_mismatch" not in _warnings(text.replace("SWAGE", word)), word
+    (pair,) = _warnings(text.replace("SWAGE", "PIPE"))["pcf_bore_mismatch"][1]["pairs"]  # a pipe keeps its bore
     assert (pair["where"], pair["line"], pair["bore"], pair["other_line"], pair["other_bore"]) == (
-        "item", 7, 100.0, 8, 50.0)
+        "item", 7, 100.0, 8, 12.5)
+    # a bore of a fitting written in mm in an inch-bore file: 25.4 times, beyond any fitting
+    inch = text.replace("UNITS-BORE MM", "UNITS-BORE INCH").replace(" 100.0", " 4.0").replace(" 12.5", " 2.0")
+    assert "pcf_bore_mismatch" not in _warnings(inch)
+    pairs = _warnings(inch.replace("1150.0 0.0 0.0 2.0\nPIPE", "1150.0 0.0 0.0 50.8\nPIPE", 1)
+                      )["pcf_bore_mismatch"][1]["pairs"]
+    assert {(p["where"], p["line"], p["bore"], p["other_line"], p["other_bore"]) for p in pairs} == {
+        ("item", 7, 4.0, 8, 50.8), ("connection", 8, 50.8, 10, 2.0)}
