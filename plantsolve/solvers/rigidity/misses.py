@@ -89,8 +89,9 @@ class Misses:
 
     def nearest(self, piece: Sequence[str]) -> dict | None:
         """The closest pair of connection points of compatible types, one of a part of ``piece`` and one of a part
-        outside it: ``{"part", "number", "type", "other", "other_number", "other_type", "gap_ldu"}``; None when no
-        such pair lies within REACH."""
+        outside it: ``{"part", "number", "type", "other", "other_number", "other_type", "gap_ldu", "sideways_ldu"}``
+        (``sideways_ldu``: how far the other point lies off the line of this one's direction); None when no such pair
+        lies within REACH."""
         members = [self.index[p] for p in piece]
         inside = np.zeros(len(self.ids), bool)
         inside[members] = True
@@ -127,8 +128,11 @@ class Misses:
         gap, i, j = best
         pid, oid = mine[m_owner[i]], others[o_owner[j]]
         kinds = sorted(self._codes, key=self._codes.get)
+        offset = o_points[j] - m_points[i]
+        sideways = float(np.linalg.norm(offset - np.dot(offset, m_dirs[i]) * m_dirs[i]))
         return {"part": pid, "number": self.parts[pid].number, "type": kinds[m_codes[i]], "other": oid,
-                "other_number": self.parts[oid].number, "other_type": kinds[o_codes[j]], "gap_ldu": round(gap, 2)}
+                "other_number": self.parts[oid].number, "other_type": kinds[o_codes[j]], "gap_ldu": round(gap, 2),
+                "sideways_ldu": round(sideways, 2)}
 
 
 def unknown_near(piece: Sequence[str], positions: dict[str, np.ndarray], unknown: Sequence[str]) -> list[str]:

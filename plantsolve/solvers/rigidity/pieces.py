@@ -42,6 +42,7 @@ LOOSE_CLEARANCE = 40.0
 # apart (drawn_apart). Up to a plate's height (8 LDU: a row a plate above the studs it would sit on) the gap may be a
 # plate the model omits or one the library has thickened since, so such a piece stays one whose joint was not found.
 APART_MISS = 10.0
+LINED_UP = 0.5  # LDU: a mate this close to the line of a point's axis is straight above or below it (LDraw rounding)
 # LDU: how far clear of every other part a piece must stand to be drawn apart: more than the slip that
 # Assembly.join_pieces takes for a part drawn off its mate (assembly.OFFSET_REACH), so that a part drawn 2 LDU off
 # what it is pressed on (a spare wheel on a truck's panel, set 4096) is not said to be apart.
@@ -112,14 +113,17 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     return None
 
 
-def drawn_apart(gap: float, nearest: float | None, beside_unknown: bool) -> bool:
+def drawn_apart(gap: float, nearest: float | None, beside_unknown: bool, lined_up: bool = False) -> bool:
     """A piece the drawing places apart from the rest of the model: its parts at least APART_GAP from every part
     outside it (``gap``, :func:`clearance` against all of them, parts without a collision shape at their origin), its
     nearest mate further than APART_MISS (``nearest`` in LDU, None: none within misses.REACH) and no part outside the
-    catalogue beside it (``beside_unknown``: it may be what holds the piece). Lying against the build (a roof on its
-    walls), a plate's height off its mates or beside a part the catalogue lacks, a piece may be joined in the model
-    and is not said to be apart."""
-    return gap >= APART_GAP and (nearest is None or nearest > APART_MISS) and not beside_unknown
+    catalogue beside it (``beside_unknown``: it may be what holds the piece), and that mate not straight along its
+    point's axis (``lined_up``: studs facing anti-studs a brick's height off are a brick left out of the drawing, not a
+    second build). Lying against the build (a roof on its walls), a plate's height off its mates, lined up with a
+    mate within misses.REACH or beside a part the catalogue lacks, a piece may be joined in the model and is not said
+    to be apart."""
+    return (gap >= APART_GAP and (nearest is None or nearest > APART_MISS) and not beside_unknown
+            and not lined_up)
 
 
 def loose_sub_builds(apart: Sequence[Sequence[str]], part_ids: Sequence[str],

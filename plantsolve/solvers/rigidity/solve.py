@@ -18,7 +18,7 @@ from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_n
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
-from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
+from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
                                                 clearance, drawn_apart, far_parts, joints_by_part, line_of,
                                                 loose_sub_builds, mostly_floating, pieces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
@@ -298,8 +298,9 @@ def _separate_builds(found: list[Piece], assembly: Assembly, positions: dict, un
         rest = [p for p in part_ids if p not in members]
         near = misses.nearest(pc.parts)
         gap = near["gap_ldu"] if near is not None else None
+        lined_up = near is not None and near["sideways_ldu"] <= LINED_UP
         if not drawn_apart(clearance(pc.parts, rest, lows, highs), gap,
-                           bool(unknown_near(pc.parts, positions, unknown))):
+                           bool(unknown_near(pc.parts, positions, unknown)), lined_up):
             continue
         pc.drawn_apart = True
         tops = list(dict.fromkeys(p.split("/")[0] + "/" if "/" in p else "" for p in pc.parts))

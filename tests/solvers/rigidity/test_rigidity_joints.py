@@ -557,7 +557,8 @@ def test_the_warnings_say_how_far_a_part_apart_misses_its_nearest_mate_and_what_
     assert [p["id"] for p in floating.details["parts"]] == ["L3", "L4"]
     brick, plate = floating.details["why"]
     assert brick == {"nearest": {"part": "L3", "number": "3003", "type": "antistud", "other": "L2",
-                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 5.0}, "unknown_near": []}
+                                 "other_number": "3003", "other_type": "stud", "gap_ldu": 5.0,
+                                 "sideways_ldu": 0.0}, "unknown_near": []}
     assert plate == {"nearest": None, "unknown_near": ["L5"]}
     assert "L3 (3003) antistud 5 LDU from L2 (3003) stud" in floating.message
     assert "L4: no mate within 40 LDU beside part(s) not in the catalogue: L5" in floating.message
@@ -609,6 +610,8 @@ def _pair(x: float, y: float, z: float = 0) -> str:
 @pytest.mark.parametrize("extra, apart, nearest", [
     (_pair(200, -8), True, None),  # 200 LDU off on the floor: touching nothing, no mate within 40 LDU
     (_pair(0, -40, 10), False, 8.0),  # over the top brick's studs with a plate's height of air (a plate left out?)
+    (_pair(0, -56, 10), False, 24.0),  # a brick's height straight over the studs: a brick left out, not a build
+    (_pair(0, -64, 10), False, 32.0),  # and a brick and a plate
     (_pair(60, -8), False, 22.36),  # against the lower brick's side: lying against the build
     (_pair(62, -8), False, 24.17),  # 2 LDU off that side: drawn off what it is pressed on, within a slip
     (_pair(200, -8) + "1 4 210 0 0 1 0 0 0 1 0 0 0 1 no_such_part.dat\n", False, None),  # beside an unknown part
@@ -642,6 +645,7 @@ def test_drawn_apart_needs_more_than_a_slip_clear_no_mate_within_half_a_pitch_an
     assert not drawn_apart(3.0, None, False)  # 3 LDU off the rest: drawn off what it is pressed on (set 4096's wheel)
     assert not drawn_apart(40.0, 10.0, False)  # a mate within half a pitch: a slip or a plate's height off
     assert not drawn_apart(40.0, None, True)  # an unknown part beside it may hold it
+    assert not drawn_apart(40.0, 24.0, False, lined_up=True)  # studs facing anti-studs a brick off: one left out
 
 
 def test_a_whole_sub_model_standing_apart_stays_a_held_sub_build_not_a_separate_build():
