@@ -318,6 +318,22 @@ def _in_pasted_blocks(position: np.ndarray, counts: np.ndarray) -> np.ndarray:
     return rows
 
 
+# A file held twice in another order (reversed, shuffled, each row doubled) has every position an even number of
+# times; a print's coincidences give odd counts among this many positions with a chance of 2**-EVEN_POSITIONS at most.
+EVEN_POSITIONS = 64
+
+
+def _first_halves(position: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Rows to keep of a file held twice: at each position the first half of its rows (a coarse print's own
+    coincidences, held twice too, are kept once each)."""
+    order = np.argsort(position, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rank = np.arange(len(position)) - np.repeat(starts, counts)
+    keep = np.zeros(len(position), dtype=bool)
+    keep[order[rank < np.repeat(counts // 2, counts)]] = True
+    return keep
+
+
 def _print_explains(distinct: np.ndarray, counts: np.ndarray) -> bool:
     """Whether the exact repeats of the samples at the ``distinct`` positions (``counts`` samples at each) are what
     the print's resolution gives: the closest distinct samples (Chebyshev distance) are one print step apart, and
@@ -351,8 +367,12 @@ def _without_repeats(pts: np.ndarray, ext: str, log: ReadLog, on_grid: bool = Fa
     position = position.ravel()
     if len(distinct) == len(pts):
         return pts
-    keep = ~_in_pasted_blocks(position, counts)  # the rows of a copied run are repeats of earlier rows
-    loose = int(keep.sum()) - len(distinct)
+    if len(distinct) >= EVEN_POSITIONS and not (counts % 2).any():
+        keep = _first_halves(position, counts)  # the whole file again, in whatever order (reversed, shuffled)
+        loose = 0
+    else:
+        keep = ~_in_pasted_blocks(position, counts)  # the rows of a copied run are repeats of earlier rows
+        loose = int(keep.sum()) - len(distinct)
     if loose > REPEAT_SHARE_IGNORED * len(pts):
         left = np.bincount(position[keep], minlength=len(distinct))
         if not _print_explains(distinct[left > 0], left[left > 0]):
