@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from plantsolve.schemas.alignment import AlignmentRequest, AlignmentResult
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.alignment.canonical import canonical_order
-from plantsolve.solvers.alignment.cuts import choose_cut, worst_measured
+from plantsolve.solvers.alignment.cuts import choose_cut, settled_locates, worst_measured
 from plantsolve.solvers.alignment.direct import continue_closing, settle_conflict, solve_direct
 from plantsolve.solvers.alignment.finalize import Outcome, build_result
 from plantsolve.solvers.alignment.iterative import solve_dual_quaternion
@@ -124,9 +124,12 @@ def _direct_with_cuts(model: Model, request: AlignmentRequest, progress: Progres
                 # among the connections the round left open: the springs also carry the scan gaps the round closed
                 # (a share of them beside a small component's weights), which are no conflict
                 open_gap, open_ang = connection_errors(model, pose.P, pose.D)
-                left_open = (open_gap > model.close_pos) | (open_ang > model.close_ang)
-                gap, ang = connection_errors(model, settled.P, settled.D)
-                k = choose_cut(model, active & left_open, gap, ang)
+                left_open = active & ((open_gap > model.close_pos) | (open_ang > model.close_ang))
+                settled_gap, settled_ang = connection_errors(model, settled.P, settled.D)
+                # unless the round stalled far below what the springs carry there: then on the round's own pose
+                located = settled_locates(model, left_open, open_gap, open_ang, settled_gap, settled_ang)
+                gap, ang = (settled_gap, settled_ang) if located else (open_gap, open_ang)
+                k = choose_cut(model, left_open, gap, ang)
         why = "conflict"
         if k is None:
             # closed, but a pipe may have been turned inside out (a loop that only closes with a negative

@@ -25,7 +25,12 @@ CASES = {
     "4x2 seed 4, tie-in 30 mm up, turned 1 deg": {"nx": 4, "ny": 2, "seed": 4, "shift": (0.0, 0.0, 30.0), "turn": 1.0},
     "3x3 seed 2, tie-in 40 mm off, turned 2 deg": {"nx": 3, "ny": 3, "seed": 2, "shift": (40.0, 0.0, 0.0), "turn": 2.0},
     "3x2 seed 0 valves, tie-in turned 3 deg": {"nx": 3, "ny": 2, "seed": 0, "turn": 3.0, "valve_every": 3},
+    # its third round stalls far below the springs and is cut on its own pose (cuts.settled_locates)
+    "4x3 seed 0, tie-in 40 mm off, turned 2 deg": {"nx": 4, "ny": 3, "seed": 0, "shift": (40.0, 0.0, 0.0), "turn": 2.0},
 }
+# how far apart the variants' ports may end (mm): the 4 x 3 grid's last round closes by a crawl along a loop's flat
+# mode, which ends 3.3e-5 mm apart in the variants (the same cuts)
+PORTS_APART = {"4x3 seed 0, tie-in 40 mm off, turned 2 deg": 1e-4}
 R, T = Rotation.from_rotvec([0.3, -0.2, 0.5]), np.array([125.0, -40.0, 9.0])
 
 
@@ -81,25 +86,25 @@ def _largest(a: dict, b: dict) -> float:
 @pytest.fixture(scope="module", params=list(CASES))
 def written(request):
     body = conflicting_tie_ins(**CASES[request.param]).model_dump(mode="json", by_alias=True)
-    return body, _answer(body)
+    return body, _answer(body), PORTS_APART.get(request.param, 1e-6)
 
 
 @pytest.mark.parametrize("seed", [1, 2])
 def test_renamed_and_shuffled_conflicts_are_cut_alike(written, seed):
-    body, (cuts, ports, errors) = written
+    body, (cuts, ports, errors), apart = written
     assert cuts
     renamed, back = _renamed(body, seed)
     shuffled = reordered(AlignmentRequest.model_validate(renamed), seed=seed).model_dump(mode="json", by_alias=True)
     other_cuts, other_ports, other_errors = _answer(shuffled, back)
     assert other_cuts == cuts
-    assert _largest(ports, other_ports) < 1e-6  # mm
+    assert _largest(ports, other_ports) < apart  # mm
     assert all(abs(other_errors[k] - errors[k]) <= 1e-6 * max(errors.values()) for k in cuts)
 
 
 def test_a_conflict_in_cm_or_moved_is_cut_alike(written):
-    body, (cuts, ports, errors) = written
+    body, (cuts, ports, errors), apart = written
     cm_cuts, cm_ports, cm_errors = _answer(_in_cm(body), mm=10.0)
-    assert cm_cuts == cuts and _largest(ports, cm_ports) < 1e-6  # mm
+    assert cm_cuts == cuts and _largest(ports, cm_ports) < apart  # mm
     moved_cuts, moved_ports, moved_errors = _answer(_moved(body), undo=True)
     assert moved_cuts == cuts
     # after a rotation the last round's crawl along the loops' flat twist modes ends elsewhere (they are determined
