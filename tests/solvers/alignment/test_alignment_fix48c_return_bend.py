@@ -9,6 +9,7 @@ from plantsolve.solvers.alignment.pcf import interpret_pcf
 from plantsolve.solvers.alignment.solve import solve
 from plantsolve.solvers.alignment.upload import parse_upload
 from plantsolve.solvers.base import StoredInput
+from tests.support.pcf_lines import elbow_line
 
 R = 228.6  # mm, a 6" long-radius return bend
 
@@ -45,19 +46,8 @@ def test_a_return_bend_whose_chord_is_twice_its_bend_radius_stays_180_degrees(of
 
 
 def _elbow(theta: float, radius: float, radius_record: float) -> str:
-    """Pipe, elbow of ``theta`` degrees on ``radius`` (CENTRE-POINT the corner) recorded ANGLE 180 and BEND-RADIUS
-    ``radius_record``, pipe."""
-    t = np.radians(theta)
-    arm = radius * np.tan(t / 2)
-    e0 = np.array([1000.0, 0, 0])
-    corner = e0 + [arm, 0, 0]
-    d = np.array([np.cos(t), np.sin(t), 0.0])
-    e1 = corner + arm * d
-    return ("ISOGEN-FILES ISOGEN.FLS\nUNITS-BORE MM\nUNITS-CO-ORDS MM\nPIPELINE-REFERENCE TEST-1\n"
-            f"PIPE\n    END-POINT {_f([0, 0, 0])} 100.0000\n    END-POINT {_f(e0)} 100.0000\n"
-            f"ELBOW\n    END-POINT {_f(e0)} 100.0000\n    END-POINT {_f(e1)} 100.0000\n    CENTRE-POINT {_f(corner)}\n"
-            f"    ANGLE 180\n    BEND-RADIUS {radius_record:.4f}\n"
-            f"PIPE\n    END-POINT {_f(e1)} 100.0000\n    END-POINT {_f(e1 + 1000 * d)} 100.0000\n")
+    """Pipe, elbow of ``theta`` degrees on ``radius`` recorded ANGLE 180 and BEND-RADIUS ``radius_record``, pipe."""
+    return elbow_line(theta, "180", radius, radius_record)
 
 
 def test_e3ds_hundredths_still_read_when_the_bend_radius_fits_the_small_turn():
