@@ -287,6 +287,10 @@ def _coincident(points: list[np.ndarray], quantum: float) -> bool:
 # the two are said to contradict each other (the printed digits of an export move the points' angle far less)
 RECORD_ANGLE_DEG = 1.0
 RECORD_RADIUS_SHARE = 0.02
+# Bores a bend's radius may span (pulled bends reach about 10 D): a small turn read from an ANGLE in hundredths whose
+# points give a larger radius is a 180° return bend whose CENTRE-POINT was nudged off its chord (a 6" bend 2 mm off
+# gives 14.5 m, 95 bores)
+SMALL_TURN_BORES = 10.0
 
 
 def _angle_record(value: str | None, turn: float | None = None, radius_fits: bool = True) -> float | None:
@@ -435,7 +439,11 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         turn = _turn_from_points(e0, e1, c) if not on_line else None
         arms = [float(np.linalg.norm(e - c)) for e in (e0, e1)]
         bend_radius = _bend_radius(item)
-        radius_fits = turn is None or bend_radius is None or _radius_contradicts(bend_radius, turn, arms, q) is None
+        if bend_radius is not None:
+            radius_fits = turn is None or _radius_contradicts(bend_radius, turn, arms, q) is None
+        else:  # no record: a small turn must still be a bend a pipe of this bore is made to, not a nudged return bend
+            implied = _radius_from_points(turn, arms) if turn is not None and radius else None
+            radius_fits = implied is None or implied[0] <= SMALL_TURN_BORES * 2.0 * radius
         angle = _angle_record(item.records.get("ANGLE"), turn, radius_fits)
         turning = ftype in ("elbow", "bend") or word.startswith(("ELBOW", "BEND"))
         if turning and u is not None and (on_line or (angle is not None and abs(angle - 180.0) < 0.5)):

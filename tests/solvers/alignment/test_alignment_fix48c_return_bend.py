@@ -69,3 +69,21 @@ def test_a_bend_radius_that_fits_neither_reading_keeps_the_degrees_and_is_named_
     assert found["from_points"] == pytest.approx(R * np.sin(np.radians(0.9)), abs=1e-3)
     request = parse_upload(StoredInput.from_bytes("line.pcf", _elbow(1.8, R, 1000.0).encode()), {})
     assert "pcf_unconnected_items" in {w.code for w in solve(request).result.report.warnings}
+
+
+@pytest.mark.parametrize("off", [2.0, 3.0])
+def test_without_a_bend_radius_a_nudged_return_bend_stays_180_degrees_by_its_bore(off):
+    """No BEND-RADIUS: read as 1.8°, the points would give a radius of 14.5 m on a 100 mm bore (a 6" bend nudged 2 mm
+    off its chord), which no bend of that pipe has; a small turn is read only where the radius fits a bend."""
+    text = _return_bend(off, radius_record=None)
+    request = parse_upload(StoredInput.from_bytes("line.pcf", text.encode()), {})
+    assert len(request.connections) == 2
+    assert not {"pcf_unconnected_items", "pcf_near_miss"} & {w.code for w in solve(request).result.report.warnings}
+
+
+def test_without_a_bend_radius_e3ds_hundredths_are_read_on_a_bend_of_a_few_bores():
+    request = parse_upload(StoredInput.from_bytes("line.pcf", elbow_line(1.8, "180", R).replace(
+        f"    BEND-RADIUS {R:.4f}\n", "").encode()), {})
+    elbow = next(c for c in request.components if c.kind == "fitting")
+    d0, d1 = (np.asarray(p.direction) / np.linalg.norm(p.direction) for p in elbow.ports)
+    assert 180.0 - np.degrees(np.arccos(np.clip(d0 @ d1, -1, 1))) == pytest.approx(1.8, abs=1e-3)
