@@ -1188,17 +1188,25 @@ def _open_ends_inside_pipes(comps: list[dict], net: dict, doc: Document) -> list
              {"items": found[:200]}, "warning")]
 
 
+# A pipe shorter than this share of its bore is no pipe cut to length (pups start at about one bore): its far END-POINT
+# was typed onto, or next to, its near one
+SHORT_PIPE_BORES = 0.1
+
+
 def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, str, dict, str]]:
-    """A warning naming each PIPE whose two END-POINTs are one point (to the printed digits): a weld or a gasket
-    may have no length, a pipe has one, so an end point was typed twice. Read as a joint, the pipe joins nothing at
+    """A warning naming each PIPE whose two END-POINTs are one point (to the printed digits), or lie closer than
+    :data:`SHORT_PIPE_BORES` of its bore: a weld or a gasket may have no length, a pipe has one, so an end point was
+    typed twice, or next to the other. Read as a joint, the pipe joins nothing at
     its real far end and the item there is left open, warned about under its own name only."""
     found = []
     for it in doc.items:
         g = geometry.get(it.id)
-        if g is None or g.kind != "joint" or not (it.keyword == "PIPE" or it.keyword.startswith("PIPE-")):
+        if g is None or g.kind not in ("joint", "pipe") or not (it.keyword == "PIPE" or it.keyword.startswith("PIPE-")):
             continue
         ends = [read_point(doc.lines[i])[0] for i in it.point_lines if doc.lines[i].split()[0].upper() == "END-POINT"]
         if len(ends) != 2:
+            continue
+        if g.kind == "pipe" and not (g.radius and np.linalg.norm(ends[1] - ends[0]) < SHORT_PIPE_BORES * 2.0 * g.radius):
             continue
         found.append({"id": it.id, "line": it.line + 1, "end_point_lines": [i + 1 for i in it.point_lines],
                       "length": float(np.linalg.norm(ends[1] - ends[0])), "unit": doc.units or "mm"})
@@ -1208,9 +1216,9 @@ def _zero_length_pipe_notes(doc: Document, geometry: dict) -> list[tuple[str, st
                        f"{' and '.join(str(n) for n in f['end_point_lines'])}: length {f['length']:g} {f['unit']})"
                        for f in found[:5]) + (", ..." if len(found) > 5 else "")
     return [("pcf_zero_length_pipe",
-             f"{len(found)} PIPE(s) have two END-POINTs at one place ({listed}): read as a zero-length joint, so "
-             "the pipe joins nothing at its far end and the item there is left unconnected. One END-POINT was "
-             "typed twice: correct it.", {"items": found[:200]}, "warning")]
+             f"{len(found)} PIPE(s) have two END-POINTs at one place or within a tenth of their bore ({listed}): "
+             "no pipe is that short, so the pipe joins nothing at its real far end and the item there is left "
+             "unconnected. One END-POINT was typed twice, or next to the other: correct it.", {"items": found[:200]}, "warning")]
 
 
 # Bores of a pipe's (a gasket's, a weld's) two END-POINTs, or of two mated end points, agree to a rounding; any other

@@ -41,8 +41,19 @@ def test_a_pipe_whose_end_points_were_typed_the_same_is_named_with_its_line_and_
     assert "PIPE-3 (line 12" in warning.message and "length 0 mm" in warning.message
 
 
+@pytest.mark.parametrize("far, length", [("1152.4000 152.5000", 0.1), ("1152.4000 154.4000", 2.0)])
+def test_a_pipe_whose_far_end_point_was_typed_next_to_its_near_one_is_named(far, length):
+    report = _report(LINE.replace("END-POINT 1152.4000 1152.4000 0.0000", f"END-POINT {far} 0.0000"))
+    (warning,) = [w for w in report.warnings if w.code == "pcf_zero_length_pipe"]
+    (found,) = warning.details["items"]
+    assert found["id"] == "PIPE-3" and found["length"] == pytest.approx(length) and found["unit"] == "mm"
+
+
 def test_a_whole_line_names_no_zero_length_pipe():
     assert "pcf_zero_length_pipe" not in {w.code for w in _report(LINE).warnings}
+    # a pup of one bore is a pipe
+    pup = LINE.replace("END-POINT 1152.4000 1152.4000 0.0000", "END-POINT 1152.4000 252.4000 0.0000")
+    assert "pcf_zero_length_pipe" not in {w.code for w in _report(pup).warnings}
 
 
 def test_a_bore_in_mm_in_an_inch_bore_file_is_named_with_both_lines_and_bores():
