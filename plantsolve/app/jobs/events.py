@@ -71,12 +71,15 @@ class _Outage:
         self.what, self.limit, self.path, self.replayed = what, limit, path, replayed
         self.since: float | None = None
 
-    def met(self, error: Exception) -> None:
+    def met(self, error: Exception) -> ServerSentEvent | None:
+        """A poll failed with ``error``: re-raised unless the database is away; the stream's last event
+        (:meth:`ending`) once the outage has lasted ``limit`` seconds, else None (the stream pauses)."""
         if not is_infrastructure_failure(error):
             raise error
         if self.since is None:
             log.warning("event stream of %s paused: the database is away (%s)", self.what, type(error).__name__)
             self.since = time.monotonic()
+        return self.ending() if self.expired else None
 
     def over(self) -> None:
         self.since = None
@@ -109,9 +112,8 @@ async def job_event_stream(request: Request, service: JobService, job: JobRecord
         try:
             first = _job_event((await run_in_threadpool(service.view, job)).model_dump_json())
         except Exception as error:
-            outage.met(error)
-            if outage.expired:
-                yield outage.ending()
+            if (ending := outage.met(error)) is not None:
+                yield ending
                 return
             await asyncio.sleep(settings.events_poll_seconds)
     outage.over()
@@ -133,9 +135,8 @@ async def job_event_stream(request: Request, service: JobService, job: JobRecord
         except NotFound:  # deleted under us
             break
         except Exception as error:
-            outage.met(error)
-            if outage.expired:
-                yield outage.ending()
+            if (ending := outage.met(error)) is not None:
+                yield ending
                 return
             continue
         outage.over()
@@ -175,9 +176,8 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
             states: list[JobState] = await run_in_threadpool(
                 lambda: service.states(since=since, ids=active, owner=sees, kind=kind))
         except Exception as error:
-            outage.met(error)
-            if outage.expired:
-                yield outage.ending()
+            if (ending := outage.met(error)) is not None:
+                yield ending
                 return
             continue
         for state in states:
@@ -193,10 +193,9 @@ async def jobs_event_stream(request: Request, service: JobService, sees: str | N
                 known[state.id] = state.signature
                 continue
             except Exception as error:
-                outage.met(error)
                 missed = True
-                if outage.expired:
-                    yield outage.ending()
+                if (ending := outage.met(error)) is not None:
+                    yield ending
                     return
                 continue
             known[state.id] = state.signature
