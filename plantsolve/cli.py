@@ -88,7 +88,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
-# a job that succeeded but whose report holds a verdict against its result (plantsolve/app/verdicts.py)
+# a job that succeeded but whose report holds a verdict against its result (schemas.common.VERDICT_CODES)
 EXIT_VERDICT = 3
 SHUTDOWN_SECONDS = 5
 LOG_LEVELS = ["critical", "error", "warning", "info", "debug"]
@@ -400,9 +400,10 @@ def options_of(args: argparse.Namespace) -> dict | None:
 def finished_line(job_id: str, report: dict | None, warnings: int) -> int:
     """The run's last line and exit code: 0 when the result stands, 3 when a warning of the report is a verdict
     against it (a failed inspection, a fit not converged: the result and artifacts are written all the same)."""
-    from plantsolve.app.verdicts import report_warnings, verdicts
+    from plantsolve.app.verdicts import report_warnings
+    from plantsolve.schemas.common import verdicts_of
 
-    found = verdicts(report_warnings(report))
+    found = verdicts_of(report_warnings(report))
     counted = f" with {warnings} warning(s) (above)" if warnings else ""
     if not found:
         print(f"job {job_id} succeeded{counted}", file=sys.stderr)

@@ -28,10 +28,11 @@ from plantsolve.app.auth import (COOKIE, LOGIN_COOKIE, LoginTokens, Sessions, co
                                  require_api_key)
 from plantsolve.app.deps import service_of
 from plantsolve.app.problems import PayloadTooLarge
-from plantsolve.app.verdicts import report_warnings, verdicts
+from plantsolve.app.verdicts import report_warnings
 from plantsolve.jobs.errors import Conflict, NotFound, ProblemError, Unprocessable, field_problem
 from plantsolve.jobs.lifecycle import STATUSES, is_finished
 from plantsolve.jobs.service import JobService, decode_cursor, encode_cursor
+from plantsolve.schemas.common import verdicts_of
 from plantsolve.solvers.base import SolverSpec
 
 HERE = Path(__file__).parent
@@ -118,7 +119,7 @@ def _job_context(request: Request, job_id: uuid.UUID) -> dict[str, Any]:
         "progress": views.progress_text(view.status, view.progress.fraction),
         "finished": is_finished(view.status),
         "warnings": view.report.warnings if view.report is not None else [],
-        "verdicts": verdicts(report_warnings(view.report)) if view.status == "succeeded" else [],
+        "verdicts": verdicts_of(report_warnings(view.report)) if view.status == "succeeded" else [],
         "plots": views.plots(artifacts),
         "artifacts": artifacts,
         "input": views.input_view(job),

@@ -12,8 +12,8 @@ from typing import Any
 
 from pydantic import BaseModel, create_model
 
-from plantsolve.app.verdicts import report_warnings, verdicts
-from plantsolve.schemas.common import ReportVerdict
+from plantsolve.app.verdicts import report_warnings
+from plantsolve.schemas.common import ReportVerdict, verdicts_of
 from plantsolve.schemas.jobs import ArtifactInfo, JobView
 from plantsolve.solvers.base import SolverSpec
 
@@ -91,7 +91,7 @@ def row(view: JobView, input: str = "JSON") -> Row:
         input=input,
         first_warning=first.code if first is not None else "",
         first_warning_message=first.message[:300] if first is not None else "",
-        verdict=next(iter(verdicts(report_warnings(report))), None) if view.status == "succeeded" else None,
+        verdict=next(iter(verdicts_of(report_warnings(report))), None) if view.status == "succeeded" else None,
     )
 
 

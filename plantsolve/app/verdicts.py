@@ -1,7 +1,7 @@
 """Whether a finished job's result answers what was asked, for the surfaces that show it.
 
 The verdict codes and the value type are the schema's (``plantsolve.schemas.common``: ``VERDICT_CODES``,
-``ReportVerdict``, ``Report.verdict``): "succeeded" alone would read as a pass where a warning says the answer is
+``ReportVerdict``, ``verdicts_of``, ``Report.verdict``): "succeeded" alone would read as a pass where a warning says the answer is
 *no*, so every surface says the verdict beside it: the CLI exits 3 (see ``plantsolve/cli.py``), the dashboard shows
 a badge and a banner, the API's job view and result carry ``report.verdict``, and the client's ``Job.verdict`` reads
 it (``plantsolve/client.py`` keeps a copy of the codes for reports stored before the field: it imports nothing of
@@ -10,24 +10,7 @@ plantsolve; a test keeps the two equal).
 
 from __future__ import annotations
 
-from typing import Any, Iterable
-
-from plantsolve.schemas.common import VERDICT_CODES, ReportVerdict
-
-
-def _field(warning: Any, name: str) -> str:
-    value = warning.get(name) if isinstance(warning, dict) else getattr(warning, name, None)
-    return str(value or "")
-
-
-def verdicts(warnings: Iterable[Any] | None) -> list[ReportVerdict]:
-    """The report's warnings (dicts as stored, or ``Diagnostic`` models) that are verdicts, in the report's order."""
-    found = []
-    for warning in warnings or ():
-        code = _field(warning, "code")
-        if code in VERDICT_CODES:
-            found.append(ReportVerdict(label=VERDICT_CODES[code], code=code, message=_field(warning, "message")))
-    return found
+from typing import Any
 
 
 def report_warnings(report: Any) -> list[Any]:

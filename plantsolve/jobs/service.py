@@ -23,7 +23,7 @@ from plantsolve.jobs.dispatch import Dispatcher
 from plantsolve.jobs.errors import Conflict, NotFound, Unprocessable, field_problem, from_input_rejected
 from plantsolve.jobs.lifecycle import CANCELLED, QUEUED, RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.runner import failure_report
-from plantsolve.schemas.common import VERDICT_CODES
+from plantsolve.schemas.common import verdicts_of
 from plantsolve.schemas.jobs import ArtifactInfo, AttemptInfo, CallbackInfo, JobList, JobProgress, JobTimings, JobView
 from plantsolve.solvers.base import InputRejected, ResultNotUsable, ResultOperation, SolverSpec, StoredInput
 from plantsolve.store.blobs import BlobMissing, BlobReader
@@ -430,10 +430,9 @@ def _summary(job: JobRecord) -> str:
         return f"Running (attempt {job.attempt}): {job.progress_message} ({job.progress:.0%})."
     if job.status == SUCCEEDED:
         warnings = report.get("warnings") or []
-        head = next((w for w in warnings if isinstance(w, dict) and w.get("code") in VERDICT_CODES), None)
+        head = next(iter(verdicts_of(warnings)), None)
         if head is not None:  # "succeeded" alone reads as a pass
-            return (f"Finished, but the result does not pass: {VERDICT_CODES[head['code']]} [{head['code']}]: "
-                    f"{head.get('message', '')}")
+            return f"Finished, but the result does not pass: {head.label} [{head.code}]: {head.message}"
         return report.get("message") or ("Succeeded" + (f" with {len(warnings)} warning(s)." if warnings else "."))
     return report.get("message") or job.status.capitalize() + "."
 

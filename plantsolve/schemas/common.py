@@ -10,6 +10,7 @@ Conventions (they hold for every solver):
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
 from typing import Annotated, Any, Literal
 
@@ -104,6 +105,17 @@ class ReportVerdict(BaseModel):
     message: str = Field(description="The warning's sentence.")
 
 
+def verdicts_of(warnings: Iterable[Any] | None) -> list[ReportVerdict]:
+    """The warnings (``Diagnostic`` models, or dicts as a report is stored) that are verdicts, in their order."""
+    found = []
+    for warning in warnings or ():
+        code, message = ((warning.get("code"), warning.get("message")) if isinstance(warning, Mapping)
+                         else (warning.code, warning.message))
+        if code in VERDICT_CODES:
+            found.append(ReportVerdict(label=VERDICT_CODES[code], code=code, message=str(message or "")))
+    return found
+
+
 class Report(BaseModel):
     """What a solver says about its run.
 
@@ -126,7 +138,4 @@ class Report(BaseModel):
     def verdict(self) -> ReportVerdict | None:
         if self.status == "failed":
             return None
-        for warning in self.warnings:
-            if warning.code in VERDICT_CODES:
-                return ReportVerdict(label=VERDICT_CODES[warning.code], code=warning.code, message=warning.message)
-        return None
+        return next(iter(verdicts_of(self.warnings)), None)
