@@ -74,6 +74,8 @@ from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_bo
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import (
+    AmbiguousUnit,
+    StandardVolume,
     UnitError,
     check_quantity,
     fraction_factor,
@@ -144,6 +146,8 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
             if head.strip() and tail.strip():
                 try:
                     parse_unit(tail)
+                except (AmbiguousUnit, StandardVolume):
+                    pass  # a unit, refused for its reason naming the column ('Flow, Nm3/h'), not an unnamed header
                 except UnitError:
                     continue
                 tail = tail.strip()
