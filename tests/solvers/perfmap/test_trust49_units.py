@@ -75,6 +75,16 @@ def test_vacuum_and_water_gauge_pressures_convert_at_pints_own_factor(unit, pint
     assert loaded.internal.positions[0].pressure[0] == pytest.approx(1.076 * expected, rel=1e-12)
 
 
+@pytest.mark.parametrize("written, pint_name", [("UL/MIN", "microliter / minute"), ("uL/min", "microliter / minute")])
+def test_a_capital_u_is_read_as_micro_as_upper_case_has_no_mu(written, pint_name):
+    """Refused before as not understood: a leading capital is never lowered into a prefix below milli (NL/MIN is not
+    nanolitres), but U is no N or S of normal or standard volumes; it is how upper case writes µ."""
+    loaded = _load(_with_header(f"theta,phi,flow [{written}],pressure,efficiency"), {"result_units": {"flow": "m3/h"}})
+    (conversion,) = [c for c in loaded.source["conversions"] if c["quantity"] == "flow"]
+    expected = pint.UnitRegistry().Quantity(1.0, pint_name).to("meter ** 3 / hour").magnitude
+    assert conversion["factor"] == pytest.approx(expected, rel=1e-12)
+
+
 @pytest.mark.parametrize("unit, readings", [("MMHG", ("MmHg", "mmHg")), ("mmhg", ("MmHg", "mmHg")),
                                             ("MMH2O", ("MmH2O", "mmH2O")), ("MTORR", ("MTorr", "mTorr"))])
 def test_a_pressure_whose_casing_reads_as_two_is_refused_naming_both_as_MBAR_is(unit, readings):
