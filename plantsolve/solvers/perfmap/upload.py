@@ -1149,6 +1149,34 @@ def _map_data_flow_unit(text: str) -> str | None:
     return unit
 
 
+def _map_data_cut(text: str) -> Diagnostic | None:
+    """A pyCycle map whose file ends inside a statement after its tables (an array cut short is refused by
+    :func:`_parse_map_data`): the tables are whole and read, but what followed them, the units pyCycle states
+    (``units['WcMap'] = 'lbm/s'``), is lost; the flow then came out without its unit, and nothing said the file was
+    cut. Cut there means: Python cannot parse the end of the file, or the file ends mid-line in a statement that
+    does nothing (``Map.units['WcMap']``, an assignment without its value), which no map file writes."""
+    try:
+        tree = ast.parse(text)
+    except SyntaxError as e:
+        if not (ends_mid_line(text) or "never closed" in str(e.msg) or "EOF" in str(e.msg)):
+            return None
+        line = e.lineno or text.rstrip().count("\n") + 1
+    except (ValueError, RecursionError, MemoryError):
+        return None
+    else:
+        last = tree.body[-1] if tree.body else None
+        if not (ends_mid_line(text) and isinstance(last, ast.Expr)
+                and not isinstance(last.value, (ast.Call, ast.Constant))):
+            return None
+        line = last.lineno
+    flow = _map_data_flow_unit(text)
+    return truncated_file(line, "the statement there is cut (the file was cut after its tables?): the tables were "
+                          "read whole, what follows them is not" + (
+                              f"; the flow's unit was stated before the cut ({flow})" if flow else
+                              "; no unit of the flow (WcMap) was read, so the flow has none (lbm/s as pyCycle's maps, "
+                              "or kg/s?)"), what="pyCycle map statements after the tables")
+
+
 MAX_CSV_ROWS = 200_000
 
 
@@ -1182,6 +1210,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     lines: list[list[int]] = []
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
+        cut = _map_data_cut(text)
+        notes = notes + ([cut] if cut else [])
         body = {"positions": positions, "setting_names": names,
                 "units": {"flow": _map_data_flow_unit(text), "pressure": "1", "efficiency": "1"},
                 "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
