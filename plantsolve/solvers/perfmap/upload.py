@@ -1197,7 +1197,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
-        return _validated(body, options, lines)
+        return _validated(*_with_units_option(body, options, "sheet"), lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
         body, lines, options = gasturb_request_body(content, options)
         return _validated(body, options, lines)
@@ -1228,7 +1228,49 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
-    return _validated(body, options, lines)
+        return _validated(body, options, lines)
+    return _validated(*_with_units_option(body, options, "CSV" if ext == ".csv" else "pyCycle map"), lines)
+
+
+_OPTION_QUANTITIES = ("flow", "pressure")
+
+
+def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dict, dict | None]:
+    """(body, options) with the upload's ``units`` option (``{"flow": "kg/s"}``, as a GasTurb map takes it) read into
+    the body: the unit of a quantity the file leaves unstated (a header 'flow' without brackets), said in a note; one
+    contradicting the unit the file states is refused naming both. It was refused as 'extra inputs', while the
+    message for ``result_units`` asked for ``units.flow``, which an upload had no way to give."""
+    if not isinstance(options, dict) or "units" not in options:
+        return body, options
+    options = dict(options)
+    given = options.pop("units")
+    if not isinstance(given, dict):
+        raise reject("options.units must be an object such as {\"flow\": \"kg/s\"}", ("options", "units"))
+    units = dict(body.get("units") or {})
+    notes = list(body.get("upload_warnings") or [])
+    for quantity, unit in given.items():
+        loc = ("options", "units", quantity)
+        if quantity not in _OPTION_QUANTITIES:
+            raise reject(f"options.units.{quantity}: a {what}'s units given as an option are those of flow and "
+                         "pressure" + (" (an efficiency's unit is its column's: 'efficiency [%]')"
+                                       if quantity == "efficiency" else ""), loc)
+        if not isinstance(unit, str):
+            raise reject(f"options.units.{quantity} must be a unit text such as 'kg/s'", loc)
+        try:
+            check_quantity(quantity, unit)
+        except UnitError as e:
+            raise reject(f"options.units.{quantity}: {e}", loc) from None
+        stated = units.get(quantity)
+        if stated:
+            if not _same_unit(stated, unit):
+                raise reject(f"options.units.{quantity} {unit!r} contradicts the {what}, which states {stated!r}: say "
+                             "which is right (leave the option out to use the file's, or correct the file)", loc)
+            continue
+        units[quantity] = unit
+        notes.append(Diagnostic(code="upload_units_option", message=f"The {what} states no unit of its {quantity}: "
+                                f"read in {unit}, as options.units.{quantity} says.",
+                                details={"quantity": quantity, "unit": unit}).model_dump())
+    return {**body, "units": units, "upload_warnings": notes}, options
 
 
 def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:
