@@ -86,6 +86,19 @@ def _delimiter(line: str) -> str | None:
     return None
 
 
+# a number as a decimal-comma locale writes it (an integer, or digits a comma digits), among blanks
+_COMMA_NUMBER = re.compile(r"[-+]?\d+(?:,\d+)?(?:[eE][-+]?\d+)?")
+
+
+def _blank_separated_decimal_commas(line: str) -> bool:
+    """Whether a row separates its values by blanks and writes decimal commas ('-60  0,00092  0,0021'): every
+    blank-separated field a number so written, at least one with a comma. '1, 2, 3' (comma separated, blanks after)
+    is not: its fields end in the comma."""
+    fields = line.split()
+    return (len(fields) > 1 and any("," in f for f in fields)
+            and all(_COMMA_NUMBER.fullmatch(f) for f in fields))
+
+
 def read_field_file(text: str, units: str) -> FieldTable:
     """The rows of a field file, converted to the request's ``units`` and tesla."""
     text = text.lstrip("\ufeff")  # a byte-order mark a Windows tool left before the first line
@@ -127,6 +140,8 @@ def read_field_file(text: str, units: str) -> FieldTable:
         raise FieldFileError(f"the file has a header (line {header[0]}) but no rows of numbers")
     delimiter = _delimiter(first_data[2])
     header_delimiter = _delimiter(header[1])
+    if header_delimiter is None and delimiter == "," and _blank_separated_decimal_commas(first_data[2]):
+        delimiter = None  # COMSOL's blank-separated rows from a decimal-comma locale: its commas separate nothing
     tokens = _split(header[1], header_delimiter) if header_delimiter else TOKEN.findall(header[1])
     tokens = [t for t in tokens if t]
     roles: dict[str, list[int]] = {}
@@ -172,9 +187,10 @@ def _rows(text: str, first: tuple[int, int], columns: int, used: list[int], deli
     line at fault."""
     number, start = first
     block = text[start:]
-    # decimal commas: in a ';' file (Excel's CSV in a decimal-comma locale), and in a tab-separated one whose numbers
-    # hold commas and no point (the same Excel's 'Text (tab delimited)'), where a comma can separate nothing
-    decimal_comma = delimiter == ";" or (delimiter == "\t" and "," in block and "." not in block)
+    # decimal commas: in a ';' file (Excel's CSV in a decimal-comma locale), and in a tab- or blank-separated one whose
+    # numbers hold commas and no point (the same Excel's 'Text (tab delimited)', a blank-separated export from that
+    # locale), where a comma can separate nothing
+    decimal_comma = delimiter == ";" or (delimiter in ("\t", None) and "," in block and "." not in block)
     if decimal_comma:
         block = block.replace(",", ".")
     try:
@@ -203,7 +219,7 @@ def _rows_by_line(text: str, first: tuple[int, int], columns: int, used: list[in
         try:
             values = [float(parts[c].replace(",", ".") if decimal_comma else parts[c]) for c in used]
         except ValueError:
-            mixed = delimiter == "\t" and not decimal_comma and "," in line
+            mixed = delimiter in ("\t", None) and not decimal_comma and "," in line
             raise FieldFileError(f"line {number}: '{line[:60]}' is not a row of numbers"
                                  + ("; decimal commas among decimal points: write the file in one" if mixed else "")
                                  ) from None

@@ -19,7 +19,14 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from plantsolve.solvers.base import FieldError
-from plantsolve.solvers.perfmap.units import Unit, UnitError, is_ratio_unit, parse_speed_unit, registry
+from plantsolve.solvers.perfmap.units import (
+    StandardVolume,
+    Unit,
+    UnitError,
+    is_ratio_unit,
+    parse_speed_unit,
+    registry,
+)
 from plantsolve.solvers.skipped_input import line_list
 
 # a number as the table reads it (either decimal convention, thousands groups, an exponent) and a unit after it
@@ -38,6 +45,8 @@ def cell_unit(text: str) -> str | None:
         return _RATIOS[text.lower()]
     try:
         unit = parse_speed_unit(text)
+    except StandardVolume:
+        return text  # a unit all the same: the column is refused saying why, not its cells as 'not a number'
     except UnitError:
         return None
     if unit.dimensionless and not _angle(unit):

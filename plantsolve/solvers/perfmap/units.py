@@ -29,7 +29,10 @@ from plantsolve.solvers.base import FieldError, InputRejected
 _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC = 1000 * mmH2O", "barg = bar",
                 "bara = bar", "mbarg = millibar", "kPag = kilopascal", "MPag = megapascal",
                 # fan and pump rigs' volume flows: pint read 'cfm' as centifermis, a length
-                "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute")
+                "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute",
+                # vacuum and fan rigs' pressures: pint has 'torr' but not 'Torr' (so no 'mTorr', read as megatorr or
+                # millitorr), nor water gauge as US fan tables (in. WG, WC) and Japanese ones (mmAq) write it
+                "Torr = torr", "inWC = inH2O", "inWG = inH2O", "mmWG = mmH2O", "mmAq = mmH2O")
 # Volumes at standard or normal conditions: a mass flow in volume units, which no factor makes an actual volume flow.
 # Normal or standard litres ('Nl/min', 'SLPM', 'sccm') too: re-cased, 'NL/MIN' read as nanolitres, 1e6 too small.
 _CUBED = r"(?:3|\^3|³|\*\*3)"
@@ -92,6 +95,11 @@ class AmbiguousUnit(UnitError):
     """A unit written in a casing that reads as two units of the quantity ('MPA': MPa or mPa)."""
 
 
+class StandardVolume(UnitError):
+    """A volume flow at standard or normal conditions ('Nm3/h', 'nl/min', 'SCFM'): a unit, but of a mass flow that
+    no factor converts without the reference state."""
+
+
 @dataclass(frozen=True)
 class Unit:
     """A parsed unit: its canonical spelling (what results state) and its pint unit."""
@@ -121,7 +129,7 @@ def parse_unit(text: str, dimensions: frozenset[str] | None = None) -> Unit:
     if s.lower() == "pct":  # per cent as tables abbreviate it; pint reads a picocarat (a mass)
         s = "percent"
     if _STANDARD_VOLUMES.fullmatch(s):
-        raise UnitError(f"unit {text.strip()!r} is a volume flow at standard (normal) conditions, a mass flow in "
+        raise StandardVolume(f"unit {text.strip()!r} is a volume flow at standard (normal) conditions, a mass flow in "
                         "volume units: no factor makes it an actual volume flow without those conditions; convert "
                         "it to a mass flow (kg/s) or state the actual volume flow (m3/h, acfm)")
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
@@ -162,7 +170,10 @@ def _casings(word: str) -> list[str]:
 def _lowered_into_sub_milli(word: str, spelling: str) -> bool:
     """Whether ``spelling`` lowers the leading capital of ``word`` into a prefix below milli: a capital there is the
     N or S of normal and standard volumes ('NL/MIN'), not a nano or pico, which would read values a million times
-    too small without a word."""
+    too small without a word. A capital U is the exception: upper case has no µ, and 'U' is how it writes micro
+    ('UMHG' is µmHg, as 'umHg' is)."""
+    if word[0] == "U" and spelling[0] == "u":
+        return False
     return word[0].isupper() and spelling[0].islower() and all(
         prefix in _SUB_MILLI for prefix, _, _ in registry().parse_unit_name(spelling))
 

@@ -74,6 +74,8 @@ from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_bo
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import (
+    AmbiguousUnit,
+    StandardVolume,
     UnitError,
     check_quantity,
     fraction_factor,
@@ -144,6 +146,8 @@ def _trailing_unit(label: str) -> tuple[str, str] | None:
             if head.strip() and tail.strip():
                 try:
                     parse_unit(tail)
+                except (AmbiguousUnit, StandardVolume):
+                    pass  # a unit, refused for its reason naming the column ('Flow, Nm3/h'), not an unnamed header
                 except UnitError:
                     continue
                 tail = tail.strip()
@@ -1145,6 +1149,34 @@ def _map_data_flow_unit(text: str) -> str | None:
     return unit
 
 
+def _map_data_cut(text: str) -> Diagnostic | None:
+    """A pyCycle map whose file ends inside a statement after its tables (an array cut short is refused by
+    :func:`_parse_map_data`): the tables are whole and read, but what followed them, the units pyCycle states
+    (``units['WcMap'] = 'lbm/s'``), is lost; the flow then came out without its unit, and nothing said the file was
+    cut. Cut there means: Python cannot parse the end of the file, or the file ends mid-line in a statement that
+    does nothing (``Map.units['WcMap']``, an assignment without its value), which no map file writes."""
+    try:
+        tree = ast.parse(text)
+    except SyntaxError as e:
+        if not (ends_mid_line(text) or "never closed" in str(e.msg) or "EOF" in str(e.msg)):
+            return None
+        line = e.lineno or text.rstrip().count("\n") + 1
+    except (ValueError, RecursionError, MemoryError):
+        return None
+    else:
+        last = tree.body[-1] if tree.body else None
+        if not (ends_mid_line(text) and isinstance(last, ast.Expr)
+                and not isinstance(last.value, (ast.Call, ast.Constant))):
+            return None
+        line = last.lineno
+    flow = _map_data_flow_unit(text)
+    return truncated_file(line, "the statement there is cut (the file was cut after its tables?): the tables were "
+                          "read whole, what follows them is not" + (
+                              f"; the flow's unit was stated before the cut ({flow})" if flow else
+                              "; no unit of the flow (WcMap) was read, so the flow has none (lbm/s as pyCycle's maps, "
+                              "or kg/s?)"), what="pyCycle map statements after the tables")
+
+
 MAX_CSV_ROWS = 200_000
 
 
@@ -1165,7 +1197,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
-        return _validated(body, options, lines)
+        return _validated(*_with_units_option(body, options, "sheet"), lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
         body, lines, options = gasturb_request_body(content, options)
         return _validated(body, options, lines)
@@ -1178,6 +1210,8 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     lines: list[list[int]] = []
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
+        cut = _map_data_cut(text)
+        notes = notes + ([cut] if cut else [])
         body = {"positions": positions, "setting_names": names,
                 "units": {"flow": _map_data_flow_unit(text), "pressure": "1", "efficiency": "1"},
                 "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
@@ -1194,7 +1228,49 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
-    return _validated(body, options, lines)
+        return _validated(body, options, lines)
+    return _validated(*_with_units_option(body, options, "CSV" if ext == ".csv" else "pyCycle map"), lines)
+
+
+_OPTION_QUANTITIES = ("flow", "pressure")
+
+
+def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dict, dict | None]:
+    """(body, options) with the upload's ``units`` option (``{"flow": "kg/s"}``, as a GasTurb map takes it) read into
+    the body: the unit of a quantity the file leaves unstated (a header 'flow' without brackets), said in a note; one
+    contradicting the unit the file states is refused naming both. It was refused as 'extra inputs', while the
+    message for ``result_units`` asked for ``units.flow``, which an upload had no way to give."""
+    if not isinstance(options, dict) or "units" not in options:
+        return body, options
+    options = dict(options)
+    given = options.pop("units")
+    if not isinstance(given, dict):
+        raise reject("options.units must be an object such as {\"flow\": \"kg/s\"}", ("options", "units"))
+    units = dict(body.get("units") or {})
+    notes = list(body.get("upload_warnings") or [])
+    for quantity, unit in given.items():
+        loc = ("options", "units", quantity)
+        if quantity not in _OPTION_QUANTITIES:
+            raise reject(f"options.units.{quantity}: a {what}'s units given as an option are those of flow and "
+                         "pressure" + (" (an efficiency's unit is its column's: 'efficiency [%]')"
+                                       if quantity == "efficiency" else ""), loc)
+        if not isinstance(unit, str):
+            raise reject(f"options.units.{quantity} must be a unit text such as 'kg/s'", loc)
+        try:
+            check_quantity(quantity, unit)
+        except UnitError as e:
+            raise reject(f"options.units.{quantity}: {e}", loc) from None
+        stated = units.get(quantity)
+        if stated:
+            if not _same_unit(stated, unit):
+                raise reject(f"options.units.{quantity} {unit!r} contradicts the {what}, which states {stated!r}: say "
+                             "which is right (leave the option out to use the file's, or correct the file)", loc)
+            continue
+        units[quantity] = unit
+        notes.append(Diagnostic(code="upload_units_option", message=f"The {what} states no unit of its {quantity}: "
+                                f"read in {unit}, as options.units.{quantity} says.",
+                                details={"quantity": quantity, "unit": unit}).model_dump())
+    return {**body, "units": units, "upload_warnings": notes}, options
 
 
 def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:

@@ -3,7 +3,9 @@ CSV rules (header detection, units, decimal commas, row messages) apply unchange
 
 What exporters and people do to a sheet, and what it becomes here:
 - merged cells (a title across the table, a speed value merged down its speed line): every cell of the
-  range holds the range's value, as the sheet shows it;
+  range holds the range's value, as the sheet shows it; but a word merged down (a header cell spanning the
+  header and the units row) is in the range's first row only: repeated, it made the units row no units row
+  (its units dropped, the row refused as 'not a number');
 - blank rows and rows whose first cell starts with ``#``: skipped (their numbers are kept for messages);
 - numbers stored as text (``'0.85``, ``0,85``, ``65.85%``): parsed like CSV cells (decimal comma allowed);
 - number formats: a cell is read as Excel shows it where its format changes the unit: a percentage (``0.00%``)
@@ -28,7 +30,7 @@ import openpyxl
 from openpyxl.utils.exceptions import InvalidFileException
 
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.perfmap.cell_units import cell_unit
+from plantsolve.solvers.perfmap.cell_units import cell_unit, split_cell
 
 
 @dataclass
@@ -77,6 +79,13 @@ def _text(value, number_format: str = "General") -> str:
     return str(value).strip()
 
 
+def _label(text: str) -> bool:
+    """Whether a cell holds a word, not a value: 'Flow' merged down over the header and the units row is one label
+    (the units row under it then reads 'kg/s' beside a blank), while '100 rpm' merged down its speed line is a value of
+    every row."""
+    return any(ch.isalpha() for ch in text) and split_cell(text)[1] is None
+
+
 def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
     """The workbook's sheets in order (hidden ones last); raises :class:`InputRejected` when it is not a
     readable .xlsx or a sheet is longer than ``max_rows``."""
@@ -107,7 +116,8 @@ def read_workbook(content: bytes, max_rows: int) -> list[Sheet]:
                         row[c] = f
         for rng in ws.merged_cells.ranges:
             top = grid[rng.min_row - 1][rng.min_col - 1] if rng.min_row - 1 < len(grid) else ""
-            for r in range(rng.min_row - 1, min(rng.max_row, len(grid))):
+            last = rng.max_row if not _label(top) else rng.min_row
+            for r in range(rng.min_row - 1, min(last, len(grid))):
                 for c in range(rng.min_col - 1, min(rng.max_col, len(grid[r]))):
                     grid[r][c] = top
         rows, numbers = [], []

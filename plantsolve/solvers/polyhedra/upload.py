@@ -273,6 +273,26 @@ def _where(line: int | None) -> str:
     return f" (line {line})" if line else ""
 
 
+# GlobalGeometryRules' choice fields (after the Starting Vertex Position, which changes no polygon) and EnergyPlus'
+# keys: a word outside them ('Clockwize', 'Relativ') read as the default would reverse every face or move every zone
+_GEOMETRY_RULE_KEYS = (("Vertex Entry Direction", ("counterclockwise", "clockwise")),
+                       ("Coordinate System", ("relative", "world", "absolute")),
+                       ("Daylighting Reference Point Coordinate System", ("relative", "world", "absolute")),
+                       ("Rectangular Surface Coordinate System", ("relative", "world", "absolute")))
+
+
+def _check_geometry_rules(fields: list[str], lines: list[int], line: int) -> None:
+    """Refuses (422 naming the field and its line) a GlobalGeometryRules field that is none of EnergyPlus' keys, as
+    EnergyPlus does; a blank field keeps its default."""
+    for index, (name, keys) in enumerate(_GEOMETRY_RULE_KEYS, start=1):
+        value = fields[index].strip() if index < len(fields) else ""
+        if value and value.lower() not in keys:
+            at = lines[index] if index < len(lines) and lines[index] else line
+            raise reject(f"GlobalGeometryRules{_where(at)}: {name} is {value!r}, none of EnergyPlus' "
+                         f"{', '.join(k.title() for k in keys)}", ("file", "line", at) if at else
+                         ("file", "GlobalGeometryRules", name))
+
+
 def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warnings: list[dict], fmt: str) -> dict:
     """The request body of EnergyPlus' objects (from an IDF or an epJSON file, fields in IDD order)."""
     clockwise, relative, rect_relative = False, False, True
@@ -281,8 +301,15 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
     zone_names: dict[str, str] = {}
     zone_line: dict[str, int] = {}
     unreadable_origin: dict[str, str] = {}  # zones (lower case) whose origin or north is not a number → why
+    rules_line: int | None = None
     for cls, fields, lines, line in objects:
         if cls == "globalgeometryrules":
+            if rules_line is not None:
+                raise reject(f"a second GlobalGeometryRules{_where(line)} after the one{_where(rules_line)}: "
+                             "EnergyPlus allows one, and which vertex order and coordinate system is meant is not "
+                             "known; keep one", ("file", "line", line) if line else ("file", "GlobalGeometryRules"))
+            rules_line = line or 0
+            _check_geometry_rules(fields, lines, line)
             if len(fields) > 1 and fields[1].strip().lower() in ("clockwise",):
                 clockwise = True
             if len(fields) > 2 and fields[2].strip().lower() == "relative":

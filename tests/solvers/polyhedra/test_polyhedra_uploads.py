@@ -57,7 +57,7 @@ def test_openstudio_export_with_space_names_relative_coordinates_and_interzone_w
     assert text[shade["line"] - 1] == "buildingsurface:detailed," and "Broken Shade" in text[shade["line"]]
     orphan = skipped["fenestrationsurface:detailed 'Office B Orphan Window'"]
     assert "Office B Nowhere" in orphan["reason"] and "Orphan Window" in text[orphan["line"]]
-    assert [w.code for w in result.report.warnings] == ["objects_skipped"]
+    assert [w.code for w in result.report.warnings] == ["skipped_lines"]
 
 
 def test_legacy_idf_clockwise_and_free_formatting():
@@ -198,7 +198,7 @@ def test_obj_cut_inside_its_last_face_line_warns_naming_the_line():
     result = solve(upload("cut.obj", cut)).result
     warnings = {w.code: w for w in result.report.warnings}
     assert warnings["truncated_file"].details["line"] == last and f"line {last}" in warnings["truncated_file"].message
-    assert warnings["objects_skipped"].details["lines"] == [last] and warnings["objects_skipped"].details["count"] == 1
+    assert warnings["skipped_lines"].details["lines"] == [last] and warnings["skipped_lines"].details["count"] == 1
 
 
 def test_ascii_stl_cut_before_endsolid_reads_its_whole_facets_and_warns():
