@@ -54,7 +54,7 @@ def skipped_lines(skipped: Sequence[Mapping[str, Any]], what: str = "line", coun
                   code: str = "skipped_lines") -> Diagnostic:
     """One warning for every record of the file that was skipped; each entry has its ``line`` and ``reason``.
     ``count`` is the number skipped when ``skipped`` lists only the first of them; ``code`` is a kind's own
-    name for it where it had one before (polyhedra's ``objects_skipped``)."""
+    name for it where it has one (perfmap's ``upload_rows_skipped``)."""
     count = len(skipped) if count is None else max(count, len(skipped))
     lines = sorted({int(s["line"]) for s in skipped if isinstance(s.get("line"), int)})
     first = skipped[0] if skipped else {}
