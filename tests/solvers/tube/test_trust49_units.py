@@ -1,0 +1,54 @@
+"""A unit in an upload's form or JSON file by any of its spellings ('MM', 'Millimetres', 'IN') is read; 'Mm' is
+refused naming both of its readings (SI's megametre, millimetres with a slipped shift key). Before, each was
+refused as an unknown unit. One table of spellings: ``solvers.length_units``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.tube.scan import TubeScan
+from plantsolve.solvers.tube.upload import parse_upload
+from tests.conftest import REPO
+
+SCAN_XYZ = (REPO / "examples" / "tube" / "scan.xyz").read_bytes()
+POINTS = np.loadtxt(REPO / "examples" / "tube" / "scan.xyz")
+
+
+@pytest.mark.parametrize("word, unit", [("MM", "mm"), ("Millimetres", "mm"), ("millimeters", "mm"), ("CM", "cm"),
+                                        ("M", "m"), ("Metres", "m"), ("IN", "in"), ("Inches", "in"), ("FT", "ft")])
+def test_a_file_unit_in_any_spelling_converts_the_points(word, unit):
+    request = parse_upload(StoredInput.from_bytes("scan.xyz", SCAN_XYZ), {"file_units": word})
+    factor = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}[unit]
+    assert request.options.file_units == unit and request.units == "mm"
+    np.testing.assert_allclose(np.asarray(TubeScan(request).points), POINTS * factor, rtol=1e-12)
+
+
+@pytest.mark.parametrize("word, unit", [("MM", "mm"), ("Inches", "in")])
+def test_a_request_unit_in_any_spelling_is_the_results_unit(word, unit):
+    form = parse_upload(StoredInput.from_bytes("scan.xyz", SCAN_XYZ), {"units": word, "file_units": "mm"})
+    body = {"points": POINTS.tolist(), "units": word}
+    in_file = parse_upload(StoredInput.from_bytes("scan.json", json.dumps(body).encode()), {})
+    assert form.units == in_file.units == unit
+
+
+def _refusal(call) -> tuple[tuple, str]:
+    with pytest.raises(InputRejected) as caught:
+        call()
+    (error,) = caught.value.errors
+    return error.loc, error.msg
+
+
+@pytest.mark.parametrize("options, loc", [({"file_units": "Mm"}, ("options", "file_units")),
+                                          ({"units": "Mm"}, ("options", "units"))])
+def test_mm_with_a_capital_m_is_refused_naming_both_readings(options, loc):
+    got, msg = _refusal(lambda: parse_upload(StoredInput.from_bytes("scan.xyz", SCAN_XYZ), options))
+    assert got == loc and "megametre" in msg and "millimetres" in msg
+
+
+def test_an_unknown_unit_is_still_refused_naming_the_units():
+    loc, msg = _refusal(lambda: parse_upload(StoredInput.from_bytes("scan.xyz", SCAN_XYZ), {"file_units": "yd"}))
+    assert loc == ("options", "file_units") and msg.startswith("unknown unit 'yd'; one of mm, cm, m, in, ft")
