@@ -285,6 +285,10 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     if ends_mid_line and rows and rows[-1][2] >= usual and rows[-1][0] == len(lines) and _cut_number(decimals):
         short.append((rows[-1][0], "cut short (its last number has fewer decimals than the other rows')"))
         rows[-1] = (rows[-1][0], rows[-1][1], -1)
+    if cols.names is None and len(rows) == 3 and not bad and usual >= MIN_SCAN_ROWS:
+        transposed = _rows_as_columns([lines[ln - 1] for ln, _, _ in rows], log)
+        if transposed is not None:
+            return transposed, cols
     kept = [v for _, v, n in rows if n >= usual]
     for ln, reason in sorted(bad + short):
         log.skip(ln, reason)
@@ -302,6 +306,22 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
 
 
 _COUNT = re.compile(r"^\d+$")
+
+
+def _rows_as_columns(three: list[str], log: ReadLog) -> np.ndarray | None:
+    """x, y, z written as three rows of N numbers (a table saved transposed, MATLAB's column-major habit), read as
+    N points with a warning; None when the rows are not numbers of one length. Read row by row they were three
+    points, refused as too few without naming the mix-up."""
+    try:
+        values = [[float(f) for f in _SPLIT.split(line.strip()) if f] for line in three]
+    except ValueError:
+        return None
+    if len({len(v) for v in values}) != 1:
+        return None
+    log.warn(Diagnostic(code="text_transposed", message=(
+        f"the file holds three rows of {len(values[0])} numbers and no header: read as {len(values[0])} points "
+        "(x, y, z in its rows). Write one point a line to say so."), details={"rows": 3, "columns": len(values[0])}))
+    return np.array(values, dtype=np.float64).T
 
 
 def _pts_counts(lines: list[str]) -> dict[int, int]:

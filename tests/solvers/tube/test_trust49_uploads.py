@@ -1,6 +1,7 @@
-"""A unit in an upload's form or JSON file by any of its spellings ('MM', 'Millimetres', 'IN') is read; 'Mm' is
-refused naming both of its readings (SI's megametre, millimetres with a slipped shift key). Before, each was
-refused as an unknown unit. One table of spellings: ``solvers.length_units``."""
+"""Tube uploads as users get them wrong: a unit in the form or a JSON file by any of its spellings ('MM',
+'Millimetres', 'IN') is read, 'Mm' refused naming both of its readings (SI's megametre, millimetres with a slipped
+shift key); before, each was refused as an unknown unit (one table of spellings: ``solvers.length_units``). A text
+file of x, y, z as three rows is read transposed, with a warning."""
 
 from __future__ import annotations
 
@@ -52,3 +53,13 @@ def test_mm_with_a_capital_m_is_refused_naming_both_readings(options, loc):
 def test_an_unknown_unit_is_still_refused_naming_the_units():
     loc, msg = _refusal(lambda: parse_upload(StoredInput.from_bytes("scan.xyz", SCAN_XYZ), {"file_units": "yd"}))
     assert loc == ("options", "file_units") and msg.startswith("unknown unit 'yd'; one of mm, cm, m, in, ft")
+
+
+@pytest.mark.parametrize("separator", [" ", ",", "\t"])
+def test_a_text_file_of_three_rows_of_coordinates_is_read_transposed_and_says_so(separator):
+    text = "\n".join(separator.join(repr(v) for v in row) for row in POINTS.T.tolist()) + "\n"
+    request = parse_upload(StoredInput.from_bytes("scan.csv", text.encode()), {})
+    # before: three points of the first three numbers of each row, refused as 'at least 100 points are needed'
+    (warning,) = request.source.warnings
+    assert warning.code == "text_transposed" and warning.details == {"rows": 3, "columns": 4000}
+    np.testing.assert_array_equal(np.asarray(TubeScan(request).points), POINTS)
