@@ -63,3 +63,31 @@ def test_a_text_file_of_three_rows_of_coordinates_is_read_transposed_and_says_so
     (warning,) = request.source.warnings
     assert warning.code == "text_transposed" and warning.details == {"rows": 3, "columns": 4000}
     np.testing.assert_array_equal(np.asarray(TubeScan(request).points), POINTS)
+
+
+def _pts_lines(points: np.ndarray, other: np.ndarray, decimals: int) -> list[str]:
+    return [" ".join(f"{v:.{decimals}f}" for v in p) + " " + " ".join(map(str, o)) for p, o in zip(points, other)]
+
+
+@pytest.mark.parametrize("decimals", [0, 3])
+def test_half_a_pts_file_pasted_again_shuffled_is_read_once_where_its_intensities_tell(decimals):
+    rng = np.random.default_rng(0)
+    other = np.column_stack([rng.integers(-2048, 2048, len(POINTS)), rng.integers(0, 256, (len(POINTS), 3))])
+    lines = _pts_lines(POINTS, other, decimals)
+    once = parse_upload(StoredInput.from_bytes("scan.txt", "\n".join(lines).encode()), {})
+    pasted = lines + [lines[k] for k in rng.permutation(len(lines))[:2000]]
+    twice = parse_upload(StoredInput.from_bytes("scan.txt", "\n".join(pasted).encode()), {})
+    # before, printed to 1 mm: 6,000 samples, no warning (the positions alone hold no more coincidences than a
+    # denser scan's); the samples of the file given once, in its order, make the same request
+    assert once.source.warnings == []
+    (warning,) = twice.source.warnings
+    assert warning.code == "duplicate_points" and warning.details == {"repeated": 2000, "samples": 6000, "kept": 4000}
+    assert twice.model_dump(exclude={"source"}) == once.model_dump(exclude={"source"})
+
+
+def test_coincident_positions_of_different_intensities_are_all_kept():
+    rng = np.random.default_rng(1)
+    other = np.column_stack([rng.integers(-2048, 2048, len(POINTS)), rng.integers(0, 256, (len(POINTS), 3))])
+    lines = _pts_lines(POINTS, other, 0)  # printed to 1 mm: 1,138 samples share a position with an earlier one
+    request = parse_upload(StoredInput.from_bytes("scan.txt", "\n".join(lines).encode()), {})
+    assert request.source.warnings == [] and request.source.points == len(POINTS)
