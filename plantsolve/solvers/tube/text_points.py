@@ -253,7 +253,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     need = max(cols.index) + 1
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns
-    others: list[tuple[str, ...]] = []  # each row's cells beside x, y, z (intensity, colour)
+    texts: list[str] = []  # each row's line
     decimals: list[int] = []  # of each row's last number
     bad: list[tuple[int, str]] = []
     for lineno, line in enumerate(lines, 1):
@@ -279,7 +279,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
             bad.append((lineno, f"coordinate beyond {MAX_COORDINATE:g}"))
         else:
             rows.append((lineno, vals, len(fields)))
-            others.append(tuple(f for k, f in enumerate(fields) if k not in cols.index))
+            texts.append(s)
             decimals.append(cell_decimals(fields[-1]))
     # a row with fewer columns than the file's other rows was cut (its last number may be cut too)
     usual = Counter(n for _, _, n in rows).most_common(1)[0][0] if rows else 3
@@ -293,7 +293,8 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
             return transposed, cols
     whole = [n >= usual for _, _, n in rows]
     kept = [v for (_, v, _), w in zip(rows, whole) if w]
-    kept = _without_copied_lines(kept, [o for o, w in zip(others, whole) if w], log)
+    if usual > 3:
+        kept = _without_copied_lines(kept, [t for t, w in zip(texts, whole) if w], cols, log)
     for ln, reason in sorted(bad + short):
         log.skip(ln, reason)
     last_point_line = max([ln for ln, _, _ in rows] + [ln for ln, _ in bad], default=0)
@@ -319,27 +320,28 @@ INFORMATIVE_VALUES = 64
 COPIED_SHARE = 0.01
 
 
-def _without_copied_lines(kept: list[list[float]], others: list[tuple[str, ...]], log: ReadLog) -> list[list[float]]:
-    """The rows without those that repeat an earlier row in every column, when the columns beside x, y, z take
-    :data:`INFORMATIVE_VALUES` values or more and the copies are :data:`COPIED_SHARE` of the rows or more, with a
-    warning. Half of a file pasted again in another order, printed to 1 mm, holds no more coincident positions than
-    a denser scan would (every cell of a dense print holds several samples): the positions alone cannot tell it,
-    but a sample's intensity and colour differ from its neighbour's."""
-    if not others or not others[0] or len(set(others)) < INFORMATIVE_VALUES:
-        return kept
-    seen: set[tuple] = set()
+def _without_copied_lines(kept: list[list[float]], texts: list[str], cols: Columns, log: ReadLog) -> list[list[float]]:
+    """The rows (``kept``, their lines ``texts``) without those that repeat an earlier line, when the columns beside
+    x, y, z take :data:`INFORMATIVE_VALUES` values or more and the copies are :data:`COPIED_SHARE` of the rows or
+    more, with a warning. Half of a file pasted again in another order, printed to 1 mm, holds no more coincident
+    positions than a denser scan would (every cell of a dense print holds several samples): the positions alone
+    cannot tell it, but a sample's intensity and colour differ from its neighbour's."""
+    seen: set[str] = set()
     copy = []
-    for xyz, other in zip(kept, others):
-        key = (*xyz, *other)
-        copy.append(key in seen)
-        seen.add(key)
+    for text in texts:
+        copy.append(text in seen)
+        seen.add(text)
     copies = sum(copy)
     if copies < COPIED_SHARE * len(kept):
         return kept
+    others = {tuple(f for k, f in enumerate([f for f in _SPLIT.split(t) if f]) if k not in cols.index) for t in seen}
+    if len(others) < INFORMATIVE_VALUES:  # intensity and colour of one value (a writer's constant): no telling
+        return kept
+    width = len(next(iter(others)))
     log.warn(Diagnostic(code="duplicate_points", message=(
         f"{copies:,} of the file's {len(kept):,} rows repeat an earlier row in every column (x, y, z and the "
-        f"{len(others[0])} beside them): a file or scan pasted twice; each was read once. Counted twice, they "
-        "would have made every sigma of the result too small."),
+        f"{width} beside them): a file or scan pasted twice; each was read once. Counted twice, they would have "
+        "made every sigma of the result too small."),
         details={"repeated": copies, "samples": len(kept), "kept": len(kept) - copies}))
     return [xyz for xyz, c in zip(kept, copy) if not c]
 
