@@ -45,3 +45,19 @@ def spellings(among: Iterable[str] = METRES) -> frozenset[str]:
 def unit_of_size(metres: float, among: Iterable[str] = METRES) -> str | None:
     """The unit among ``among`` that is ``metres`` long (to 1e-9, as a file's stated factor is rounded), or None."""
     return next((unit for unit in among if abs(SIZES[unit] - metres) <= 1e-9 * SIZES[unit]), None)
+
+
+# spellings that name a unit in one reading and another unit in another, with both readings
+AMBIGUOUS = MappingProxyType({"Mm": "the megametre (in SI, M is mega) or millimetres typed with a slipped shift key"})
+
+
+def request_unit(word: object) -> str:
+    """The request unit (``METRES``) a form's or a file's ``word`` spells in any case ('MM', 'Millimetres', 'IN');
+    ValueError saying why for a spelling of two readings ('Mm') or of no request unit."""
+    if isinstance(word, str) and word.strip() in AMBIGUOUS:
+        raise ValueError(f"{word.strip()!r} reads as {AMBIGUOUS[word.strip()]}; write mm for millimetres (no request "
+                         f"is in megametres)")
+    unit = unit_named(word) if isinstance(word, str) else None
+    if unit is None:
+        raise ValueError(f"unknown unit {word!r}; one of {', '.join(METRES)} (or their names: millimetres, inches, ...)")
+    return unit

@@ -482,6 +482,11 @@ def interpret_item(item: Item, doc: Document, snap: bool) -> Geometry:
         # a tee's run without its branch line: the branch pipe would be left unjoined there without a word
         suspect = (f"a {word} has {need - 2} BRANCH-POINT line(s) beside its two END-POINTs, this one "
                    f"{len(branches)}: the branch line was lost, and the pipe it joins is not connected to it")
+    if len(ends) == 1 and need >= 2:
+        # an item of two ends with one END-POINT line: the other was lost (cut, or typed as another record); read
+        # as a set-on item of fewer ports it was aligned as if whole, what it joins there left open without a word
+        suspect = (f"{'an' if word[0] in 'AEIOU' else 'a'} {word} has two END-POINT lines, this one 1 (line {ends[0][0] + 1}): the other was lost, and "
+                   "what it joins there is not connected to it")
     if len(ports) < need:  # set-on tees and the like: only the branch is a port
         ftype = "olet" if len(ports) == 1 else "other"
     if ftype in ("elbow", "bend") and c is None:

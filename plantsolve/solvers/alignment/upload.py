@@ -20,6 +20,7 @@ from plantsolve.solvers.base import (
     utf16_without_mark,
     validated,
 )
+from plantsolve.solvers.length_units import request_unit
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -55,6 +56,11 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
         return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
     body = json_object(text, refuse_cut=True)
     refuse_other_json(body)
+    if isinstance(body.get("units"), str):  # 'MM', 'millimetres': the unit by any of its spellings
+        try:
+            body["units"] = request_unit(body["units"])
+        except ValueError as exc:
+            raise InputRejected([FieldError(("file", "units"), str(exc))]) from None
     if options:
         if not isinstance(options, dict):
             raise InputRejected([FieldError(("options",), "options must be an object")])

@@ -29,6 +29,8 @@ MIN_WINDOW_SAMPLES = 20
 # |mean| / standard error above which a window is off the fit: the right tubes of the bench stay under 5.6 over
 # their 50-200 windows (b2b_coplanar 4.8 and 5.6, the rest under 3.7), the wrong bend counts from 10.2 to 44
 Z_LIMIT = 8.0
+# the relative step of a float32 coordinate (2^-23: 1.2e-4 mm at 1000 mm), under which a residual is rounding
+COORDINATE_STEP = 2.0 ** -23
 # at most this many samples are used (a stride through the inliers): the statistic is for the pattern, and
 # the tree's query on tens of millions of samples would cost more than the fit
 MAX_SAMPLES = 30_000
@@ -53,7 +55,9 @@ def off_windows(model: TubeModel, pts: np.ndarray, residuals: np.ndarray, segmen
     if len(idx) < MIN_WINDOW_SAMPLES:
         return []
     r = residuals[idx]
-    s = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    # no residual is finer than the coordinates' float32 step (STL and PLY store float32); a noise-free scan's
+    # spread is that rounding, or float64's, and means of 1e-12 mm came out hundreds of standard errors off
+    s = max(1.4826 * float(np.median(np.abs(r - np.median(r)))), COORDINATE_STEP * float(np.abs(pts[idx]).max()))
     if not s > 0:
         return []
     step = STEP_RADII * model.pipe_radius

@@ -253,6 +253,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     need = max(cols.index) + 1
     ends_mid_line = bool(text) and not text.endswith(("\n", "\r"))
     rows: list[tuple[int, list[float], int]] = []  # line number, x y z, number of columns
+    texts: list[str] = []  # each row's line
     decimals: list[int] = []  # of each row's last number
     bad: list[tuple[int, str]] = []
     for lineno, line in enumerate(lines, 1):
@@ -278,6 +279,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
             bad.append((lineno, f"coordinate beyond {MAX_COORDINATE:g}"))
         else:
             rows.append((lineno, vals, len(fields)))
+            texts.append(s)
             decimals.append(cell_decimals(fields[-1]))
     # a row with fewer columns than the file's other rows was cut (its last number may be cut too)
     usual = Counter(n for _, _, n in rows).most_common(1)[0][0] if rows else 3
@@ -285,7 +287,14 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     if ends_mid_line and rows and rows[-1][2] >= usual and rows[-1][0] == len(lines) and _cut_number(decimals):
         short.append((rows[-1][0], "cut short (its last number has fewer decimals than the other rows')"))
         rows[-1] = (rows[-1][0], rows[-1][1], -1)
-    kept = [v for _, v, n in rows if n >= usual]
+    if cols.names is None and len(rows) == 3 and not bad and usual >= MIN_SCAN_ROWS:
+        transposed = _rows_as_columns([lines[ln - 1] for ln, _, _ in rows], log)
+        if transposed is not None:
+            return transposed, cols
+    whole = [n >= usual for _, _, n in rows]
+    kept = [v for (_, v, _), w in zip(rows, whole) if w]
+    if usual > 3:
+        kept = _without_copied_lines(kept, [t for t, w in zip(texts, whole) if w], cols, log)
     for ln, reason in sorted(bad + short):
         log.skip(ln, reason)
     last_point_line = max([ln for ln, _, _ in rows] + [ln for ln, _ in bad], default=0)
@@ -302,6 +311,55 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
 
 
 _COUNT = re.compile(r"^\d+$")
+
+
+# A file's columns beside x, y, z (intensity, colour) that take at least this many values tell samples at one printed
+# position apart: two rows equal in every column are then one sample written twice, in whatever order
+INFORMATIVE_VALUES = 64
+# ... and left out when they are at least this share of the rows (a few coincidences of every column are harmless)
+COPIED_SHARE = 0.01
+
+
+def _without_copied_lines(kept: list[list[float]], texts: list[str], cols: Columns, log: ReadLog) -> list[list[float]]:
+    """The rows (``kept``, their lines ``texts``) without those that repeat an earlier line, when the columns beside
+    x, y, z take :data:`INFORMATIVE_VALUES` values or more and the copies are :data:`COPIED_SHARE` of the rows or
+    more, with a warning. Half of a file pasted again in another order, printed to 1 mm, holds no more coincident
+    positions than a denser scan would (every cell of a dense print holds several samples): the positions alone
+    cannot tell it, but a sample's intensity and colour differ from its neighbour's."""
+    seen: set[str] = set()
+    copy = []
+    for text in texts:
+        copy.append(text in seen)
+        seen.add(text)
+    copies = sum(copy)
+    if copies < COPIED_SHARE * len(kept):
+        return kept
+    others = {tuple(f for k, f in enumerate([f for f in _SPLIT.split(t) if f]) if k not in cols.index) for t in seen}
+    if len(others) < INFORMATIVE_VALUES:  # intensity and colour of one value (a writer's constant): no telling
+        return kept
+    width = len(next(iter(others)))
+    log.warn(Diagnostic(code="duplicate_points", message=(
+        f"{copies:,} of the file's {len(kept):,} rows repeat an earlier row in every column (x, y, z and the "
+        f"{width} beside them): a file or scan pasted twice; each was read once. Counted twice, they would have "
+        "made every sigma of the result too small."),
+        details={"repeated": copies, "samples": len(kept), "kept": len(kept) - copies}))
+    return [xyz for xyz, c in zip(kept, copy) if not c]
+
+
+def _rows_as_columns(three: list[str], log: ReadLog) -> np.ndarray | None:
+    """x, y, z written as three rows of N numbers (a table saved transposed, MATLAB's column-major habit), read as
+    N points with a warning; None when the rows are not numbers of one length. Read row by row they were three
+    points, refused as too few without naming the mix-up."""
+    try:
+        values = [[float(f) for f in _SPLIT.split(line.strip()) if f] for line in three]
+    except ValueError:
+        return None
+    if len({len(v) for v in values}) != 1:
+        return None
+    log.warn(Diagnostic(code="text_transposed", message=(
+        f"the file holds three rows of {len(values[0])} numbers and no header: read as {len(values[0])} points "
+        "(x, y, z in its rows). Write one point a line to say so."), details={"rows": 3, "columns": len(values[0])}))
+    return np.array(values, dtype=np.float64).T
 
 
 def _pts_counts(lines: list[str]) -> dict[int, int]:

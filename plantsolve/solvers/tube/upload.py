@@ -16,6 +16,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
+from plantsolve.solvers.length_units import request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import elements as ply_elements
@@ -516,6 +517,15 @@ def _default_unit_implausible(ext: str, pts: np.ndarray, target: str) -> list[Di
                  "plausible_mm": [lo, hi], "likely_units": likely})]
 
 
+def _unit_option(word: object, loc: tuple) -> str:
+    """A unit given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres'); a 422 naming
+    ``loc`` for a spelling of two readings ('Mm') or of no unit."""
+    try:
+        return request_unit(word)
+    except ValueError as exc:
+        raise InputRejected([FieldError(loc, str(exc))]) from None
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
     """Uploaded scan → :class:`TubeRequest` (format from the extension, case-insensitive)."""
     ext = source.extension
@@ -523,10 +533,10 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
     opts = dict(options or {})
     if "units" in opts:  # tolerate units passed among the options
         units = opts.pop("units")
+        units = None if units is None else _unit_option(units, ("options", "units"))
     file_units = opts.get("file_units")
-    if file_units is not None and file_units not in TO_MM:
-        raise InputRejected([FieldError(("options", "file_units"), f"unknown unit {file_units!r}; one of "
-                                        f"{', '.join(TO_MM)}")])
+    if file_units is not None:
+        file_units = opts["file_units"] = _unit_option(file_units, ("options", "file_units"))
     if ext == ".json":
         if file_units is not None:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
@@ -537,14 +547,13 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             raise reject(f"the JSON holds {keys}: not a tube request, which holds `points` (the x, y, z samples of "
                          "the scan); is it a request for another kind?")
         body = dict(doc)
+        if isinstance(body.get("units"), str):
+            body["units"] = _unit_option(body["units"], ("file", "units"))
         body["options"] = {**(body.get("options") or {}), **opts}
         if units:
             body["units"] = units
     else:
         target = units or "mm"
-        if target not in TO_MM:
-            raise InputRejected([FieldError(("options", "units"), f"unknown unit {target!r}; one of "
-                                            f"{', '.join(TO_MM)}")])
         log = ReadLog(ext[1:])
         pts, stated, on_grid = _read_points(source, log)
         if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
