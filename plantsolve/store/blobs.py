@@ -132,18 +132,29 @@ class LocalBlobStore(BlobStore):
         self.root = Path(root)
 
     def put(self, key: str, data: bytes) -> StoredBlob:
+        """Write the blob; on any failure (a full disk mid-write, at the close or at the rename) nothing of it is
+        left: neither its temporary file nor the folders this write made for it."""
         target = self.path(key)
+        made = [folder for folder in (target.parent, *target.parent.parents)
+                if folder.is_relative_to(self.root.resolve()) and folder != self.root.resolve() and not folder.exists()]
+        tmp = None
         try:
-            target.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".tmp-")
-        except OSError as error:
-            raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
-        try:
+            try:
+                target.parent.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".tmp-")
+            except OSError as error:
+                raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
             with os.fdopen(fd, "wb") as handle:
                 handle.write(data)
             os.replace(tmp, target)
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            if tmp is not None:
+                Path(tmp).unlink(missing_ok=True)
+            for folder in made:  # the deepest first; one another writer has filled meanwhile stays
+                try:
+                    folder.rmdir()
+                except OSError:
+                    break
             raise
         return StoredBlob(key, len(data), digest(data))
 

@@ -524,6 +524,14 @@ class JobRepository:
                 ).order_by(JOBS.c.enqueued_at.is_not(None), JOBS.c.created_at).limit(limit)).all()
         return [(job_id, sent is not None) for job_id, sent in rows]
 
+    def mark_queued(self, message: str, *, only: str | None = None) -> int:
+        """Set the progress message of the queued jobs (those whose message is ``only``, when given) to ``message``:
+        what a queued job waits for. Returns how many changed."""
+        statement = update(JOBS).where(JOBS.c.status == QUEUED, JOBS.c.progress_message != message)
+        if only is not None:
+            statement = statement.where(JOBS.c.progress_message == only)
+        return self._execute(statement.values(progress_message=message))
+
     def count_queued(self) -> int:
         with self.sessions() as session:
             return int(session.scalar(select(func.count()).select_from(Job).where(Job.status == QUEUED)))

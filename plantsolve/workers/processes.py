@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
+from plantsolve.jobs.holds import DiskHold
 from plantsolve.jobs.leases import abandoned, process_died, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
@@ -197,6 +198,7 @@ class ProcessDispatcher:
         # regardless (jobs queued by another process, or re-queued by the sweep itself).
         self._overflow = True
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=self._after_sweep, gone=self.orphan_gone)
+        self._disk = DiskHold(ctx)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
         # before anything starts the forkserver (the upload readers share it): it imports all a job needs
@@ -355,10 +357,16 @@ class ProcessDispatcher:
 
     def _launch(self) -> None:
         """Start a process for each job next in line while fewer than ``size`` run. A job is recorded as running
-        only once its process started; one whose start failed goes back to the head of the line."""
+        only once its process started; one whose start failed goes back to the head of the line. None starts while
+        the disk is below its floor (:class:`~plantsolve.jobs.holds.DiskHold`: the jobs stay queued, saying why)."""
         while not self._stopping.is_set():
             with self._lock:
                 if len(self._running) >= self.size or not self._waiting:
+                    return
+            if self._disk.holds():
+                return
+            with self._lock:
+                if not self._waiting:
                     return
                 job_id, kind = self._waiting.popleft()
                 self._starting = job_id
