@@ -1,0 +1,62 @@
+"""What saying an alignment PCF's reader warnings again costs a job (``SolverSpec.reader_notes``, read by the runner
+as soon as it has read the input, so that a failed or lost job's report keeps them): CPU seconds of the runner's
+read (the upload parsed into a request) before (main: no notes) and after (the request parsed, then its notes said
+again), beside the solve, per PCF fixture. Each figure is the best of ``--repeat`` runs (the machine is shared), the
+reader's interpretation cache emptied before each read; ``notes s`` is the notes said right after the read, as the
+runner does (the reader keeps its last interpretations: a hit), ``cold s`` with that cache emptied (the worst case).
+
+    python bench/jobs49_reader_notes_cost.py [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+
+from alignment_pcf import inputs  # noqa: E402
+
+from plantsolve.jobs.reader_notes import reader_warnings  # noqa: E402
+from plantsolve.solvers.alignment.pcf import _interpret_cached  # noqa: E402
+from plantsolve.solvers.base import StoredInput  # noqa: E402
+from plantsolve.solvers.kinds import KINDS  # noqa: E402
+
+
+def cpu(function, repeat: int, cold: bool = False) -> tuple[float, object]:
+    best, value = float("inf"), None
+    for _ in range(repeat):
+        if cold:
+            _interpret_cached.cache_clear()
+        start = time.process_time()
+        value = function()
+        best = min(best, time.process_time() - start)
+    return best, value
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    spec = KINDS["alignment"]
+    print(f"{'file':34} {'read s (main)':>13} {'notes s':>8} {'read s (branch)':>15} {'cold s':>7} {'solve s':>8} "
+          f"{'added/job':>9} {'warnings':>8}")
+    for name, raw, _fixed, _methods in inputs():
+        source = StoredInput.from_bytes("line.pcf", raw)
+        try:
+            read, request = cpu(lambda: spec.parse_upload(source, {}), args.repeat, cold=True)
+        except Exception as error:  # a file the reader refuses (422): no job runs it
+            print(f"{name:34} refused: {type(error).__name__}")
+            continue
+        notes, said = cpu(lambda: reader_warnings(request, spec), args.repeat)
+        cold, _ = cpu(lambda: reader_warnings(request, spec), args.repeat, cold=True)
+        solve, _ = cpu(lambda: spec.solve(request, lambda fraction, message="": None), 1, cold=True)
+        print(f"{name:34} {read:13.3f} {notes:8.3f} {read + notes:15.3f} {cold:7.3f} {solve:8.3f} "
+              f"{notes / (read + solve):9.1%} {len(said):8d}")
+
+
+if __name__ == "__main__":
+    main()
