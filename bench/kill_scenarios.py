@@ -7,14 +7,21 @@ solve, so the markers count the solves):
 - ``warm``: kill -9 of the idle warm parent; /readyz is polled until it is 200 again, then jobs are submitted;
 - ``jobs``: kill -9 of every job process while two jobs run and two wait;
 - ``stop``: SIGSTOP of one running job process (its lease lapses; the sweep takes the attempt back and kills it);
-- ``api``: kill -9 of the API process with two jobs running and four queued, then ``serve`` again on the same data dir.
+- ``api``: kill -9 of the API process with two jobs running and four queued, then ``serve`` again on the same data dir;
+- ``warm-submit``: kill -9 of the idle warm parent and four jobs submitted at once, while it starts again (accepted
+  jobs must run);
+- ``warm-twice``: kill -9 of the idle warm parent, and of the new one as soon as it is there, then four jobs;
+- ``warm-stop``: SIGSTOP of the idle warm parent, then four jobs (their start hangs until the watch kills it);
+- ``jobs-twice``: kill -9 of both running job processes, then of the processes that run the same jobs again (two
+  attempts lost per job, the third runs them);
+- ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again.
 
-Each row: the scenario, the jobs' final statuses, the solves per job, whether a failed job's report says why, the
+Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says why, the
 /readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR`` runs the
 same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
 stopped process is noticed in seconds.
 
-    python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api]
+    python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api,...]
 """
 
 from __future__ import annotations
@@ -168,6 +175,29 @@ def _what(pid: int) -> str:
         "job process" if b"multiprocessing" in argv or b"forkserver" in argv else argv.split(b"\0")[0].decode()[-40:]
 
 
+def _replaced(service: "Service", old: set[int], seconds: float = 60) -> list[int]:
+    """Job processes that were not among ``old``, once there are any."""
+    until = time.monotonic() + seconds
+    while time.monotonic() < until:
+        new = [pid for pid in service.job_processes() if pid not in old]
+        if new:
+            return new
+        service.ready()
+        time.sleep(0.05)
+    raise RuntimeError("no job process ran the jobs again")
+
+
+def _new_warm_parent(service: "Service", old: set[int], seconds: float = 60) -> int:
+    until = time.monotonic() + seconds
+    while time.monotonic() < until:
+        new = [pid for pid in _forkservers(service.process.pid) if pid not in old]
+        if new:
+            return new[0]
+        service.ready()
+        time.sleep(0.02)
+    raise RuntimeError("no new warm parent")
+
+
 def scenario(name: str, tree: Path) -> dict:
     data = Path(tempfile.mkdtemp(prefix=f"kill-{name}-"))
     markers = data / "markers"
@@ -211,10 +241,47 @@ def scenario(name: str, tree: Path) -> dict:
             for pid in left:
                 os.kill(pid, signal.SIGKILL)
             service.start()
+        elif name == "warm-submit":
+            os.kill(_forkservers(service.process.pid)[0], signal.SIGKILL)
+            ids = service.submit(4, markers)
+        elif name == "warm-twice":
+            first = _forkservers(service.process.pid)[0]
+            os.kill(first, signal.SIGKILL)
+            os.kill(_new_warm_parent(service, {first}), signal.SIGKILL)
+            ids = service.submit(4, markers)
+        elif name == "warm-stop":
+            os.kill(_forkservers(service.process.pid)[0], signal.SIGSTOP)
+            service.ready()
+            ids = service.submit(4, markers)
+        elif name == "jobs-twice":
+            ids = service.submit(2, markers)
+            first = service.wait_running(2)
+            time.sleep(1.0)
+            for pid in first:
+                os.kill(pid, signal.SIGKILL)
+            seen = set(first)
+            for _ in range(2):
+                again = _replaced(service, seen)
+                seen.update(again)
+                time.sleep(0.5)
+                for pid in again:
+                    os.kill(pid, signal.SIGKILL)
+                if len(seen) >= 4:
+                    break
+        elif name == "stop-kill":
+            ids = service.submit(1, markers)
+            (pid,) = service.wait_running(1)
+            time.sleep(0.5)
+            os.kill(pid, signal.SIGSTOP)
+            stopped = pid
+            again = _replaced(service, {pid})
+            time.sleep(0.5)
+            for other in again:
+                os.kill(other, signal.SIGKILL)
         else:
             raise ValueError(name)
         jobs, seconds = service.wait_finished(ids, 120)
-        if name == "stop":
+        if name in ("stop", "stop-kill"):
             alive = Path(f"/proc/{stopped}").exists() and \
                 Path(f"/proc/{stopped}/stat").read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
             note = "stopped process " + ("still alive" if alive else "killed")
@@ -226,14 +293,18 @@ def scenario(name: str, tree: Path) -> dict:
     statuses = [j["status"] for j in jobs]
     reasons = [bool((j.get("report") or {}).get("message")) for j in jobs if j["status"] == "failed"]
     once = all((s == "succeeded" and n == 1) or (s == "failed" and n <= 1) for s, n in zip(statuses, solves))
-    return {"scenario": name, "statuses": statuses, "solves": solves, "failed_say_why": all(reasons),
+    if name == "warm-stop":
+        for pid in _stray(data):  # the stopped warm parent, if the service left it
+            os.kill(pid, signal.SIGKILL)
+    return {"scenario": name, "statuses": statuses, "solves": solves, "attempts": [j["attempt"] for j in jobs],
+            "failed_say_why": all(reasons),
             "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path)
-    parser.add_argument("--only", default="warm,jobs,stop,api")
+    parser.add_argument("--only", default="warm,jobs,stop,api,warm-submit,warm-twice,warm-stop,jobs-twice,stop-kill")
     args = parser.parse_args()
     for tree in ([args.before] if args.before else []) + [HERE]:
         for name in args.only.split(","):
