@@ -18,12 +18,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 
-from alignment_pcf import inputs  # noqa: E402
+from alignment_pcf import inputs
 
-from plantsolve.jobs.reader_notes import reader_warnings  # noqa: E402
-from plantsolve.solvers.alignment.pcf import _interpret_cached  # noqa: E402
-from plantsolve.solvers.base import StoredInput  # noqa: E402
-from plantsolve.solvers.kinds import KINDS  # noqa: E402
+from plantsolve.jobs.reader_notes import reader_warnings
+from plantsolve.solvers.alignment.pcf import _interpret_cached
+from plantsolve.solvers.base import InputRejected, StoredInput
+from plantsolve.solvers.kinds import KINDS
 
 
 def cpu(function, repeat: int, cold: bool = False) -> tuple[float, object]:
@@ -47,13 +47,14 @@ def main() -> None:
     for name, raw, _fixed, _methods in inputs():
         source = StoredInput.from_bytes("line.pcf", raw)
         try:
-            read, request = cpu(lambda: spec.parse_upload(source, {}), args.repeat, cold=True)
-        except Exception as error:  # a file the reader refuses (422): no job runs it
+            read, request = cpu(lambda source=source: spec.parse_upload(source, {}), args.repeat, cold=True)
+        except InputRejected as error:  # a file the reader refuses (422): no job runs it
             print(f"{name:34} refused: {type(error).__name__}")
             continue
-        notes, said = cpu(lambda: reader_warnings(request, spec), args.repeat)
-        cold, _ = cpu(lambda: reader_warnings(request, spec), args.repeat, cold=True)
-        solve, _ = cpu(lambda: spec.solve(request, lambda fraction, message="": None), 1, cold=True)
+        notes, said = cpu(lambda request=request: reader_warnings(request, spec), args.repeat)
+        cold, _ = cpu(lambda request=request: reader_warnings(request, spec), args.repeat, cold=True)
+        solve, _ = cpu(lambda request=request: spec.solve(request, lambda fraction, message="": None), 1,
+                       cold=True)
         print(f"{name:34} {read:13.3f} {notes:8.3f} {read + notes:15.3f} {cold:7.3f} {solve:8.3f} "
               f"{notes / (read + solve):9.1%} {len(said):8d}")
 

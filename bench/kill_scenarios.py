@@ -16,9 +16,9 @@ solve, so the markers count the solves):
   attempts lost per job, the third runs them);
 - ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again.
 
-Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says why, the
-/readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR`` runs the
-same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
+Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says
+why, the /readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR``
+runs the same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
 stopped process is noticed in seconds.
 
     python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api,...]
@@ -175,7 +175,7 @@ def _what(pid: int) -> str:
         "job process" if b"multiprocessing" in argv or b"forkserver" in argv else argv.split(b"\0")[0].decode()[-40:]
 
 
-def _replaced(service: "Service", old: set[int], seconds: float = 60) -> list[int]:
+def _replaced(service: Service, old: set[int], seconds: float = 60) -> list[int]:
     """Job processes that were not among ``old``, once there are any."""
     until = time.monotonic() + seconds
     while time.monotonic() < until:
@@ -187,7 +187,7 @@ def _replaced(service: "Service", old: set[int], seconds: float = 60) -> list[in
     raise RuntimeError("no job process ran the jobs again")
 
 
-def _new_warm_parent(service: "Service", old: set[int], seconds: float = 60) -> int:
+def _new_warm_parent(service: Service, old: set[int], seconds: float = 60) -> int:
     until = time.monotonic() + seconds
     while time.monotonic() < until:
         new = [pid for pid in _forkservers(service.process.pid) if pid not in old]

@@ -124,8 +124,8 @@ class JobService:
 
     def has_room(self) -> None:
         """Raise :class:`DiskSpaceLow` (503) while the service's disk is below ``MIN_FREE_DISK_BYTES``: a submission
-        then is refused, as readiness says ``disk``, rather than taken while no job starts (:mod:`plantsolve.jobs.holds`)
-        or into a store that may not hold it."""
+        then is refused, as readiness says ``disk``, rather than taken while no job starts
+        (:mod:`plantsolve.jobs.holds`) or into a store that may not hold it."""
         why = disk_low(self.ctx)
         if why is not None:
             log.warning("submission refused: %s", why)

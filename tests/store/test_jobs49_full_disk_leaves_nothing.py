@@ -9,8 +9,8 @@ import os
 import pytest
 from fastapi.testclient import TestClient
 
-import plantsolve.store.blobs as blobs
 from plantsolve.app.main import create_app
+from plantsolve.store import blobs
 from plantsolve.store.blobs import LocalBlobStore
 from tests.conftest import REPO, service_settings
 
@@ -19,7 +19,8 @@ _fdopen, _replace = os.fdopen, os.replace
 
 
 class _FillingFile:
-    """A file whose disk fills: half of a write lands, then ENOSPC (``at="write"``), or at its close (``at="close"``)."""
+    """A file whose disk fills: half of a write lands, then ENOSPC (``at="write"``) or ENOSPC at its close
+    (``at="close"``)."""
 
     def __init__(self, handle, at: str):
         self.handle, self.at = handle, at
