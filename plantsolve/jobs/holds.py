@@ -38,6 +38,7 @@ class DiskHold:
     def __init__(self, ctx: ServiceContext):
         self.ctx = ctx
         self.held = False
+        self._marked = True  # whether jobs may be marked waiting (by this hold, or by one of an earlier start)
         self._looked = float("-inf")
         self._lock = threading.Lock()  # a pool's threads ask it each
 
@@ -51,13 +52,20 @@ class DiskHold:
             return self.held
         self._looked = now
         why = disk_low(self.ctx)
-        if why is not None:
-            if not self.held:
-                log.error("holding queued jobs: %s", why)
-            self.held = True
-            self.ctx.repo.mark_queued(DISK_WAIT)
-        elif self.held:
-            self.held = False
+        if why is not None and not self.held:
+            log.error("holding queued jobs: %s", why)
+        elif why is None and self.held:
             log.warning("disk space is back: queued jobs start again")
-            self.ctx.repo.mark_queued("queued", only=DISK_WAIT)
+        self.held = why is not None
+        if self.held or self._marked:
+            try:  # while held, each look marks the jobs queued since; once, when the hold ends, they are unmarked
+                if self.held:
+                    self.ctx.repo.mark_queued(DISK_WAIT)
+                else:
+                    self.ctx.repo.mark_queued("queued", only=DISK_WAIT)
+                self._marked = self.held
+            except Exception as error:  # the database is away: the hold stands (or ends) all the same
+                log.warning("queued jobs could not be marked %s (%s)", "waiting" if self.held else "queued",
+                            type(error).__name__)
+                self._marked = True  # the next look tries again
         return self.held
