@@ -121,14 +121,17 @@ class Service:
     def job_processes(self) -> list[int]:
         return [pid for server in _forkservers(self.process.pid) for pid in _children(server)]
 
-    def wait_running(self, count: int, seconds: float = 30) -> list[int]:
+    def wait_claimed(self, ids: list[str], count: int, attempt: int = 1, seconds: float = 60) -> list[int]:
+        """The job processes, once ``count`` of the jobs run their attempt ``attempt`` (claimed: a process killed
+        before its claim loses no attempt, and the scenario would test nothing)."""
         until = time.monotonic() + seconds
         while time.monotonic() < until:
-            pids = self.job_processes()
-            if len(pids) >= count:
-                return pids
-            time.sleep(0.1)
-        raise RuntimeError("jobs did not start")
+            running = [j for j in self.jobs(ids) if j["status"] == "running" and j["attempt"] == attempt]
+            if len(running) >= count:
+                return self.job_processes()
+            self.ready()
+            time.sleep(0.05)
+        raise RuntimeError(f"{count} job(s) did not start attempt {attempt}")
 
     def wait_finished(self, ids: list[str], seconds: float) -> tuple[list[dict], float]:
         started = time.monotonic()
@@ -175,18 +178,6 @@ def _what(pid: int) -> str:
         "job process" if b"multiprocessing" in argv or b"forkserver" in argv else argv.split(b"\0")[0].decode()[-40:]
 
 
-def _replaced(service: Service, old: set[int], seconds: float = 60) -> list[int]:
-    """Job processes that were not among ``old``, once there are any."""
-    until = time.monotonic() + seconds
-    while time.monotonic() < until:
-        new = [pid for pid in service.job_processes() if pid not in old]
-        if new:
-            return new
-        service.ready()
-        time.sleep(0.05)
-    raise RuntimeError("no job process ran the jobs again")
-
-
 def _new_warm_parent(service: Service, old: set[int], seconds: float = 60) -> int:
     until = time.monotonic() + seconds
     while time.monotonic() < until:
@@ -215,19 +206,19 @@ def scenario(name: str, tree: Path) -> dict:
             ids = service.submit(4, markers)
         elif name == "jobs":
             ids = service.submit(4, markers)
-            pids = service.wait_running(2)
-            time.sleep(1.0)
+            pids = service.wait_claimed(ids, 2)
+            time.sleep(0.5)
             for pid in pids:
                 os.kill(pid, signal.SIGKILL)
         elif name == "stop":
             ids = service.submit(2, markers)
-            pids = service.wait_running(2)
+            pids = service.wait_claimed(ids, 2)
             time.sleep(0.5)
             os.kill(pids[0], signal.SIGSTOP)
             stopped = pids[0]
         elif name == "api":
             ids = service.submit(6, markers)
-            service.wait_running(2)
+            service.wait_claimed(ids, 2)
             time.sleep(1.0)
             service.process.kill()
             service.process.wait()
@@ -255,29 +246,22 @@ def scenario(name: str, tree: Path) -> dict:
             ids = service.submit(4, markers)
         elif name == "jobs-twice":
             ids = service.submit(2, markers)
-            first = service.wait_running(2)
-            time.sleep(1.0)
-            for pid in first:
-                os.kill(pid, signal.SIGKILL)
-            seen = set(first)
-            for _ in range(2):
-                again = _replaced(service, seen)
-                seen.update(again)
+            for attempt in (1, 2):
+                pids = service.wait_claimed(ids, 2, attempt)
                 time.sleep(0.5)
-                for pid in again:
+                for pid in pids:
                     os.kill(pid, signal.SIGKILL)
-                if len(seen) >= 4:
-                    break
         elif name == "stop-kill":
             ids = service.submit(1, markers)
-            (pid,) = service.wait_running(1)
+            (pid,) = service.wait_claimed(ids, 1)
             time.sleep(0.5)
             os.kill(pid, signal.SIGSTOP)
             stopped = pid
-            again = _replaced(service, {pid})
+            service.wait_claimed(ids, 1, 2)
             time.sleep(0.5)
-            for other in again:
-                os.kill(other, signal.SIGKILL)
+            for other in service.job_processes():
+                if other != pid:
+                    os.kill(other, signal.SIGKILL)
         else:
             raise ValueError(name)
         jobs, seconds = service.wait_finished(ids, 120)
