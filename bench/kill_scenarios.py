@@ -242,7 +242,8 @@ def scenario(name: str, tree: Path) -> dict:
             ids = service.submit(4, markers)
         elif name == "warm-stop":
             os.kill(_forkservers(service.process.pid)[0], signal.SIGSTOP)
-            service.ready()
+            time.sleep(0.5)
+            note = f"/readyz 0.5 s after the stop: {service.ready()}"
             ids = service.submit(4, markers)
         elif name == "jobs-twice":
             ids = service.submit(2, markers)
