@@ -165,8 +165,8 @@ PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
         (415, "Unsupported content type or file type"),
         (422, "Invalid input: 'errors' names each bad field by its JSON path"),
         (500, "Unexpected error (logged; the document says no more)"),
-        (503, "The database, the queue or the file store is unreachable: nothing was lost, try again after "
-              "Retry-After seconds"),
+        (503, "The database, the queue or the file store is unreachable, or the disk is short of space (type "
+              "disk-space-low, as /readyz's 'disk'): nothing was lost, try again after Retry-After seconds"),
     )
 }
 
