@@ -66,3 +66,10 @@ def test_queued_jobs_wait_while_the_disk_is_low_and_run_once_it_has_room(tmp_pat
             done = wait_for(client, job, timeout=60)
             assert (done["status"], done["attempt"]) == ("succeeded", 1)
         assert client.get("/readyz").status_code == 200
+
+
+def test_the_submit_routes_document_their_503(tmp_path):
+    with TestClient(create_app(service_settings(tmp_path))) as client:
+        paths = client.get("/openapi.json").json()["paths"]
+    documented = paths["/v1/tube/jobs"]["post"]["responses"]["503"]
+    assert "disk" in documented["description"] and "Retry-After" in documented["description"]
