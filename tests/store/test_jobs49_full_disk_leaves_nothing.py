@@ -80,3 +80,26 @@ def test_an_upload_on_a_full_disk_is_a_503_naming_disk_space_and_keeps_nothing(t
         assert response.headers["retry-after"] == "60"
         assert _left(tmp_path / "artifacts") == before
         assert client.get("/v1/jobs").json()["items"] == []
+
+
+def test_a_refused_upload_leaves_no_folder_behind(tmp_path):
+    """A 422 (the reader refuses the file) deletes the stored upload and the folders it was stored in: each refusal
+    would otherwise leave its ``<job id>/input`` folder, one more for every bad file sent."""
+    with TestClient(create_app(service_settings(tmp_path))) as client:
+        before = _left(tmp_path / "artifacts")
+        for _ in range(3):
+            assert client.post("/v1/tube/jobs", files={"file": ("scan.xyz", b"not a scan\n")}).status_code == 422
+        assert _left(tmp_path / "artifacts") == before
+
+
+def test_deleting_a_blob_keeps_folders_that_hold_others(tmp_path):
+    store = LocalBlobStore(tmp_path)
+    store.put("job/input/a.xyz", b"a")
+    store.put("job/a1/plot.png", b"p")
+    store.delete("job/input/a.xyz")
+    assert _left(tmp_path) == ["job", "job/a1", "job/a1/plot.png"]
+    store.delete("job/a1/plot.png")
+    store.delete("job/a1/plot.png")  # a missing blob is no error
+    assert _left(tmp_path) == []
+    store.put("job/input/b.xyz", b"b")  # a folder pruned is made again
+    assert store.get("job/input/b.xyz") == b"b"
