@@ -7,14 +7,21 @@ solve, so the markers count the solves):
 - ``warm``: kill -9 of the idle warm parent; /readyz is polled until it is 200 again, then jobs are submitted;
 - ``jobs``: kill -9 of every job process while two jobs run and two wait;
 - ``stop``: SIGSTOP of one running job process (its lease lapses; the sweep takes the attempt back and kills it);
-- ``api``: kill -9 of the API process with two jobs running and four queued, then ``serve`` again on the same data dir.
+- ``api``: kill -9 of the API process with two jobs running and four queued, then ``serve`` again on the same data dir;
+- ``warm-submit``: kill -9 of the idle warm parent and four jobs submitted at once, while it starts again (accepted
+  jobs must run);
+- ``warm-twice``: kill -9 of the idle warm parent, and of the new one as soon as it is there, then four jobs;
+- ``warm-stop``: SIGSTOP of the idle warm parent, then four jobs (their start hangs until the watch kills it);
+- ``jobs-twice``: kill -9 of both running job processes, then of the processes that run the same jobs again (two
+  attempts lost per job, the third runs them);
+- ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again.
 
-Each row: the scenario, the jobs' final statuses, the solves per job, whether a failed job's report says why, the
-/readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR`` runs the
-same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
+Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says
+why, the /readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR``
+runs the same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
 stopped process is noticed in seconds.
 
-    python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api]
+    python bench/kill_scenarios.py [--before /tmp/base] [--only warm,jobs,stop,api,...]
 """
 
 from __future__ import annotations
@@ -114,14 +121,17 @@ class Service:
     def job_processes(self) -> list[int]:
         return [pid for server in _forkservers(self.process.pid) for pid in _children(server)]
 
-    def wait_running(self, count: int, seconds: float = 30) -> list[int]:
+    def wait_claimed(self, ids: list[str], count: int, attempt: int = 1, seconds: float = 60) -> list[int]:
+        """The job processes, once ``count`` of the jobs run their attempt ``attempt`` (claimed: a process killed
+        before its claim loses no attempt, and the scenario would test nothing)."""
         until = time.monotonic() + seconds
         while time.monotonic() < until:
-            pids = self.job_processes()
-            if len(pids) >= count:
-                return pids
-            time.sleep(0.1)
-        raise RuntimeError("jobs did not start")
+            running = [j for j in self.jobs(ids) if j["status"] == "running" and j["attempt"] == attempt]
+            if len(running) >= count:
+                return self.job_processes()
+            self.ready()
+            time.sleep(0.05)
+        raise RuntimeError(f"{count} job(s) did not start attempt {attempt}")
 
     def wait_finished(self, ids: list[str], seconds: float) -> tuple[list[dict], float]:
         started = time.monotonic()
@@ -168,6 +178,17 @@ def _what(pid: int) -> str:
         "job process" if b"multiprocessing" in argv or b"forkserver" in argv else argv.split(b"\0")[0].decode()[-40:]
 
 
+def _new_warm_parent(service: Service, old: set[int], seconds: float = 60) -> int:
+    until = time.monotonic() + seconds
+    while time.monotonic() < until:
+        new = [pid for pid in _forkservers(service.process.pid) if pid not in old]
+        if new:
+            return new[0]
+        service.ready()
+        time.sleep(0.02)
+    raise RuntimeError("no new warm parent")
+
+
 def scenario(name: str, tree: Path) -> dict:
     data = Path(tempfile.mkdtemp(prefix=f"kill-{name}-"))
     markers = data / "markers"
@@ -185,19 +206,19 @@ def scenario(name: str, tree: Path) -> dict:
             ids = service.submit(4, markers)
         elif name == "jobs":
             ids = service.submit(4, markers)
-            pids = service.wait_running(2)
-            time.sleep(1.0)
+            pids = service.wait_claimed(ids, 2)
+            time.sleep(0.5)
             for pid in pids:
                 os.kill(pid, signal.SIGKILL)
         elif name == "stop":
             ids = service.submit(2, markers)
-            pids = service.wait_running(2)
+            pids = service.wait_claimed(ids, 2)
             time.sleep(0.5)
             os.kill(pids[0], signal.SIGSTOP)
             stopped = pids[0]
         elif name == "api":
             ids = service.submit(6, markers)
-            service.wait_running(2)
+            service.wait_claimed(ids, 2)
             time.sleep(1.0)
             service.process.kill()
             service.process.wait()
@@ -211,10 +232,41 @@ def scenario(name: str, tree: Path) -> dict:
             for pid in left:
                 os.kill(pid, signal.SIGKILL)
             service.start()
+        elif name == "warm-submit":
+            os.kill(_forkservers(service.process.pid)[0], signal.SIGKILL)
+            ids = service.submit(4, markers)
+        elif name == "warm-twice":
+            first = _forkservers(service.process.pid)[0]
+            os.kill(first, signal.SIGKILL)
+            os.kill(_new_warm_parent(service, {first}), signal.SIGKILL)
+            ids = service.submit(4, markers)
+        elif name == "warm-stop":
+            os.kill(_forkservers(service.process.pid)[0], signal.SIGSTOP)
+            time.sleep(0.5)
+            note = f"/readyz 0.5 s after the stop: {service.ready()}"
+            ids = service.submit(4, markers)
+        elif name == "jobs-twice":
+            ids = service.submit(2, markers)
+            for attempt in (1, 2):
+                pids = service.wait_claimed(ids, 2, attempt)
+                time.sleep(0.5)
+                for pid in pids:
+                    os.kill(pid, signal.SIGKILL)
+        elif name == "stop-kill":
+            ids = service.submit(1, markers)
+            (pid,) = service.wait_claimed(ids, 1)
+            time.sleep(0.5)
+            os.kill(pid, signal.SIGSTOP)
+            stopped = pid
+            service.wait_claimed(ids, 1, 2)
+            time.sleep(0.5)
+            for other in service.job_processes():
+                if other != pid:
+                    os.kill(other, signal.SIGKILL)
         else:
             raise ValueError(name)
         jobs, seconds = service.wait_finished(ids, 120)
-        if name == "stop":
+        if name in ("stop", "stop-kill"):
             alive = Path(f"/proc/{stopped}").exists() and \
                 Path(f"/proc/{stopped}/stat").read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
             note = "stopped process " + ("still alive" if alive else "killed")
@@ -226,14 +278,18 @@ def scenario(name: str, tree: Path) -> dict:
     statuses = [j["status"] for j in jobs]
     reasons = [bool((j.get("report") or {}).get("message")) for j in jobs if j["status"] == "failed"]
     once = all((s == "succeeded" and n == 1) or (s == "failed" and n <= 1) for s, n in zip(statuses, solves))
-    return {"scenario": name, "statuses": statuses, "solves": solves, "failed_say_why": all(reasons),
+    if name == "warm-stop":
+        for pid in _stray(data):  # the stopped warm parent, if the service left it
+            os.kill(pid, signal.SIGKILL)
+    return {"scenario": name, "statuses": statuses, "solves": solves, "attempts": [j["attempt"] for j in jobs],
+            "failed_say_why": all(reasons),
             "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path)
-    parser.add_argument("--only", default="warm,jobs,stop,api")
+    parser.add_argument("--only", default="warm,jobs,stop,api,warm-submit,warm-twice,warm-stop,jobs-twice,stop-kill")
     args = parser.parse_args()
     for tree in ([args.before] if args.before else []) + [HERE]:
         for name in args.only.split(","):

@@ -16,9 +16,11 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
+from plantsolve.jobs.attempts import disk_full
 from plantsolve.jobs.errors import (
     MAX_JSON_DEPTH,
     Conflict,
+    DiskSpaceLow,
     NotFound,
     ProblemError,
     Unprocessable,
@@ -59,11 +61,15 @@ class ServiceUnavailable(ProblemError):
     status, title, slug = 503, "Service unavailable", "unavailable"
 
 
-def unavailable(error: BaseException, path: str) -> ServiceUnavailable:
+def unavailable(error: BaseException, path: str) -> ProblemError:
     """The 503 of an infrastructure failure (``is_infrastructure_failure``), logged as one line without a
-    traceback: an outage answers many requests, and its cause is the same in each."""
+    traceback: an outage answers many requests, and its cause is the same in each. A full disk (met while an upload
+    was stored, say) is named as such, as readiness names ``disk``: waiting seconds will not help."""
     reason = (str(error).strip().splitlines() or [""])[0][:200]
     log.warning("503 on %s: %s%s", path, type(error).__name__, f": {reason}" if reason else "")
+    if disk_full(error):
+        return DiskSpaceLow("The service's disk is full, so this request could not be stored (nothing of it was "
+                            "kept; the jobs already queued are not lost). Submit again once space is freed.")
     return ServiceUnavailable(
         "A service this request needs (the database, the queue or the file store) is unreachable; "
         "nothing was lost. Try again shortly.", headers={"Retry-After": str(RETRY_AFTER_SECONDS)})
@@ -159,8 +165,8 @@ PROBLEM_RESPONSES: dict[int | str, dict[str, Any]] = {
         (415, "Unsupported content type or file type"),
         (422, "Invalid input: 'errors' names each bad field by its JSON path"),
         (500, "Unexpected error (logged; the document says no more)"),
-        (503, "The database, the queue or the file store is unreachable: nothing was lost, try again after "
-              "Retry-After seconds"),
+        (503, "The database, the queue or the file store is unreachable, or the disk is short of space (type "
+              "disk-space-low, as /readyz's 'disk'): nothing was lost, try again after Retry-After seconds"),
     )
 }
 

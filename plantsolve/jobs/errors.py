@@ -74,6 +74,22 @@ class Unprocessable(ProblemError):
     status, title, slug = 422, "Invalid input", "invalid-input"
 
 
+# how long a client is asked to wait when the service's disk is short of space: freeing it takes an operator minutes
+DISK_RETRY_AFTER_SECONDS = 60
+
+
+class DiskSpaceLow(ProblemError):
+    """The service's disk has less free space than ``MIN_FREE_DISK_BYTES`` (or is full): a submission is refused, as
+    ``/readyz`` says ``disk``, rather than taken into a store that may not hold it; nothing was stored."""
+
+    status, title, slug = 503, "Disk space low", "disk-space-low"
+
+    def __init__(self, detail: str | None = None):
+        super().__init__(detail or "The service's disk is short of free space, so no submission is taken now (nothing "
+                         "was stored; the jobs already queued wait, none is lost). Submit again once space is freed.",
+                         headers={"Retry-After": str(DISK_RETRY_AFTER_SECONDS)})
+
+
 def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (), document: Any = None) -> Unprocessable:
     """422 naming each bad field; with the submitted ``document`` the locations are its JSON paths (the tags
     pydantic puts in them for a member of a union are left out)."""

@@ -16,6 +16,7 @@ from typing import Callable
 from plantsolve.jobs import attempts
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
+from plantsolve.jobs.reader_notes import held, with_reader_warnings
 from plantsolve.jobs.runner import lost_worker_report, pending_holder
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import LapsedAttempt
@@ -41,7 +42,8 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     waiting = previous.get("outcome") == "result_pending" or (
         lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
-    report = lost_worker_report(lost.attempt, cap, why)
+    # the reader's warnings, written by the lost attempt once it read its input (or by an earlier one), are kept
+    report = with_reader_warnings(lost_worker_report(lost.attempt, cap, why), held(lost.report))
     history = attempts.ended(lost.attempts, lost.attempt, lost.worker,
                              "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why)
     if lost.attempt >= cap:
@@ -71,7 +73,7 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
         # process (whose attempt has ended): it came from outside, most often the kernel's out-of-memory killer
         how += " (SIGKILL: sent by the kernel when memory runs out, or by an operator)"
     lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
-                         job.heartbeat_at)
+                         job.heartbeat_at, job.report)
     return lose_attempt(ctx, lost, why=how)
 
 

@@ -8,7 +8,13 @@ not lose the word on how its file was read). Found without knowing the kind, by 
   ``source.warnings``, perfmap's ``upload_warnings``), its sub-models walked field by field (lists of models, a
   scan's points, are not walked: a reader's notes are a field of their own);
 - plain: a ``source`` mapping as :mod:`plantsolve.solvers.skipped_input` describes it (polyhedra, rigidity): its
-  ``warnings``, and its ``skipped`` records said as one warning.
+  ``warnings``, and its ``skipped`` records said as one warning;
+- said again: a kind whose request keeps only its source's text (alignment's PCF) names in its spec the function that
+  says the reader's notes again from it (``SolverSpec.reader_notes``); its notes of level ``warning``.
+
+The runner writes them into the job's report as soon as it has read the input (:func:`reading_report`), so that an
+attempt that ends without a word from its process (killed, out of memory, its lease lapsed) still has them: the lease
+policy's report keeps the warnings of the report it replaces (:func:`held`).
 """
 
 from __future__ import annotations
@@ -17,15 +23,17 @@ from typing import Any, Iterator, Mapping
 
 from pydantic import BaseModel
 
-from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.common import Diagnostic, Report
+from plantsolve.solvers.base import SolverSpec
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 # nesting of sub-models walked: a request's reader notes sit a level or two down
 DEPTH = 4
 
 
-def reader_warnings(request: Any) -> list[dict]:
-    """The reader's warnings of ``request`` (a kind's request model), as report entries, each once, in order."""
+def reader_warnings(request: Any, spec: SolverSpec | None = None) -> list[dict]:
+    """The reader's warnings of ``request`` (a request model of ``spec``'s kind), as report entries, each once, in
+    order."""
     found: list[Diagnostic] = list(_typed(request, DEPTH))
     source = getattr(request, "source", None)
     if isinstance(source, Mapping):
@@ -34,6 +42,9 @@ def reader_warnings(request: Any) -> list[dict]:
             count = source.get("skipped_count")
             found.append(skipped_lines(skipped, "record", count if isinstance(count, int) else None))
         found.extend(source_warnings(source))
+    if spec is not None and spec.reader_notes is not None and getattr(request, spec.reader_source, None) is not None:
+        found.extend(Diagnostic(code=code, message=message, details=details)
+                     for code, message, details, level in spec.reader_notes(request) if level == "warning")
     seen: set[tuple[str, str]] = set()
     entries = []
     for diagnostic in found:
@@ -60,3 +71,16 @@ def with_reader_warnings(report: dict | None, warnings: list[dict]) -> dict | No
     held = {(w.get("code"), w.get("message")) for w in report.get("warnings") or [] if isinstance(w, dict)}
     added = [w for w in warnings if (w["code"], w["message"]) not in held]
     return {**report, "warnings": [*added, *(report.get("warnings") or [])]} if added else report
+
+
+def reading_report(warnings: list[dict]) -> dict:
+    """The report a running attempt writes once it has read its input with ``warnings``: what the job's report says
+    until the attempt ends (its message stays empty: the attempt's progress says what it does)."""
+    return Report(status="warning", warnings=warnings).model_dump(mode="json")
+
+
+def held(report: dict | None) -> list[dict]:
+    """The reader's warnings held in the report of a job that has not finished: its only warnings then (the report of
+    an earlier attempt that failed or was lost, or the one its running attempt wrote on reading the input: each
+    carries the reader's warnings and no others)."""
+    return [w for w in (report or {}).get("warnings") or [] if isinstance(w, dict) and "code" in w and "message" in w]

@@ -23,7 +23,7 @@ from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_repor
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING
-from plantsolve.jobs.reader_notes import reader_warnings, with_reader_warnings
+from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
@@ -220,7 +220,8 @@ def _run_claimed(
             if holder is not None:
                 return _store_pending(ctx, job_id, attempt, holder, monitor, log_book)
             with intake.read_stored(spec, job, ctx.files,
-                                    on_request=lambda request: read.extend(reader_warnings(request))) as job_input:
+                                    on_request=lambda request: read.extend(_noted(ctx, job, attempt, spec, request))
+                                    ) as job_input:
                 solved = _call_with_deadline(
                     lambda: spec.solve(job_input, monitor.progress),
                     hard_limit if hard_limit_in_thread else None,
@@ -236,6 +237,20 @@ def _run_claimed(
     if read:
         verdict = dataclasses.replace(verdict, report=with_reader_warnings(verdict.report, read))
     return _conclude(ctx, job, attempt, verdict, monitor, log_book, requeue)
+
+
+def _noted(ctx: ServiceContext, job, attempt: int, spec, request: Any) -> list[dict]:
+    """The reader's warnings of the request just read, written into the job's report at once (fenced on the attempt):
+    an attempt that ends without a word from this process (killed, out of memory, its lease lapsed) is reported by
+    the lease policy, which keeps them from there."""
+    warnings = reader_warnings(request, spec)
+    report = with_reader_warnings(job.report or reading_report([]), warnings)
+    if warnings and held(report) != held(job.report):
+        try:
+            ctx.repo.note_report(job.id, attempt, report)
+        except Exception as error:  # the failure report of this process still carries them
+            log.warning("job %s: the reader's warnings could not be written yet (%s)", job.id, type(error).__name__)
+    return warnings
 
 
 def _conclude(ctx: ServiceContext, job, attempt: int, verdict: Verdict, monitor: AttemptMonitor,
@@ -424,7 +439,8 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker:
         if limit else "The solver was killed at its hard time limit.",
         time_limit=limit, killed=True)
     history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit")
-    return ctx.repo.finish_failure(job_id, job.attempt, report=report, run_seconds=None, attempts=history)
+    return ctx.repo.finish_failure(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),
+                                   run_seconds=None, attempts=history)
 
 
 def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
@@ -438,5 +454,6 @@ def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
                              error="the service stopped while the job ran")
     report = failure_report("worker", "The service stopped while the job ran; it was re-queued and runs again "
                             "at the next start (this attempt is not counted).")
-    return ctx.repo.requeue(job_id, job.attempt, report=report, attempts=history, grant_attempt=True)
+    return ctx.repo.requeue(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),
+                            attempts=history, grant_attempt=True)
 

@@ -20,7 +20,8 @@ from typing import Any, Callable, Iterable, Mapping
 from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.dispatch import Dispatcher
-from plantsolve.jobs.errors import Conflict, NotFound, Unprocessable, field_problem, from_input_rejected
+from plantsolve.jobs.errors import Conflict, DiskSpaceLow, NotFound, Unprocessable, field_problem, from_input_rejected
+from plantsolve.jobs.holds import DISK_WAIT, disk_low
 from plantsolve.jobs.lifecycle import CANCELLED, QUEUED, RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.runner import failure_report
 from plantsolve.schemas.common import verdicts_of
@@ -101,6 +102,7 @@ class JobService:
         A large request (more than ``INLINE_INPUT_BYTES``) is stored as it came and read and checked from its file in
         a bounded process, as an upload is: this process holds its bytes, never the objects made of them."""
         spec = self.spec(kind)
+        self.has_room()
         job_id = uuid.uuid4()
         if not self.stores_inline(len(body)):
             blob = self.ctx.files.put(f"{job_id}/input/request.json", body)
@@ -120,6 +122,15 @@ class JobService:
             fields = {"input_kind": "json", "input": raw}
         return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
 
+    def has_room(self) -> None:
+        """Raise :class:`DiskSpaceLow` (503) while the service's disk is below ``MIN_FREE_DISK_BYTES``: a submission
+        then is refused, as readiness says ``disk``, rather than taken while no job starts
+        (:mod:`plantsolve.jobs.holds`) or into a store that may not hold it."""
+        why = disk_low(self.ctx)
+        if why is not None:
+            log.warning("submission refused: %s", why)
+            raise DiskSpaceLow()
+
     def intake_loaded(self, kind: str) -> bool:
         """Whether this process has read a JSON submission of ``kind`` (so the kind's checks, imported on first use,
         are loaded: reading another costs microseconds, not an import)."""
@@ -135,6 +146,7 @@ class JobService:
         *, owner: str = "", callback_url: str | None = None,
     ) -> Submitted:
         spec = self.spec(kind)
+        self.has_room()
         extension = intake.upload_extension(spec, filename)
         options = intake.upload_options(options_text)
         if not content:
@@ -424,6 +436,9 @@ def _callback(url: str | None) -> dict[str, Any]:
 
 def _summary(job: JobRecord) -> str:
     report = job.report or {}
+    if job.status == QUEUED and job.progress_message == DISK_WAIT:
+        return ("Waiting: disk space low. The service starts no job while its disk is below MIN_FREE_DISK_BYTES; this "
+                "one stays queued and starts once space is freed.")
     if job.status == QUEUED:
         return "Waiting for a worker." if job.attempt == 0 else f"Re-queued after attempt {job.attempt}: {report.get('message', '')}"
     if job.status == RUNNING:

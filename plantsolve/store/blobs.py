@@ -132,18 +132,19 @@ class LocalBlobStore(BlobStore):
         self.root = Path(root)
 
     def put(self, key: str, data: bytes) -> StoredBlob:
+        """Write the blob; on any failure (a full disk mid-write, at the close or at the rename) nothing of it is
+        left: neither its temporary file nor a folder left empty (:meth:`_prune`)."""
         target = self.path(key)
+        tmp = None
         try:
-            target.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".tmp-")
-        except OSError as error:
-            raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
-        try:
+            fd, tmp = self._temporary(target.parent)
             with os.fdopen(fd, "wb") as handle:
                 handle.write(data)
             os.replace(tmp, target)
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            if tmp is not None:
+                Path(tmp).unlink(missing_ok=True)
+            self._prune(target.parent)
             raise
         return StoredBlob(key, len(data), digest(data))
 
@@ -161,7 +162,33 @@ class LocalBlobStore(BlobStore):
         return self.path(key).is_file()
 
     def delete(self, key: str) -> None:
-        self.path(key).unlink(missing_ok=True)
+        """Remove the blob and the folders it leaves empty (a refused upload's ``<job id>/input``: each would
+        otherwise stay behind, one per refusal)."""
+        path = self.path(key)
+        path.unlink(missing_ok=True)
+        self._prune(path.parent)
+
+    def _temporary(self, folder: Path) -> tuple[int, str]:
+        """A new temporary file in ``folder``, made if missing."""
+        try:
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+            except FileNotFoundError:  # a prune removed the folder between its making and the file's
+                folder.mkdir(parents=True, exist_ok=True)
+                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+        except OSError as error:
+            raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
+
+    def _prune(self, folder: Path) -> None:
+        """Remove ``folder`` and its parents below the root while they are empty."""
+        root = self.root.resolve()
+        while folder != root and folder.is_relative_to(root):
+            try:
+                folder.rmdir()
+            except OSError:  # not empty (another blob, or a write under way), or gone already
+                return
+            folder = folder.parent
 
     @contextmanager
     def local_file(self, key: str, name: str = "") -> Iterator[Path]:

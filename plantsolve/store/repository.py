@@ -139,6 +139,7 @@ class LapsedAttempt:
     attempts: list
     worker: str | None
     heartbeat_at: datetime | None
+    report: dict | None = None  # what the job's report says meanwhile (the reader's warnings an attempt wrote)
 
 
 class JobRepository:
@@ -402,6 +403,10 @@ class JobRepository:
     def set_progress(self, job_id: uuid.UUID, attempt: int, fraction: float, message: str) -> bool:
         return self._fenced(job_id, attempt, progress=fraction, progress_message=message[:2000])
 
+    def note_report(self, job_id: uuid.UUID, attempt: int, report: Any) -> bool:
+        """The running attempt's report until it ends (fenced): what the attempt has to say already."""
+        return self._fenced(job_id, attempt, report=report)
+
     def finish_success(
         self,
         job_id: uuid.UUID,
@@ -505,9 +510,9 @@ class JobRepository:
         with self.sessions.kw["bind"].connect() as connection:
             rows = connection.execute(
                 select(JOBS.c.id, JOBS.c.kind, JOBS.c.attempt, JOBS.c.max_attempts, JOBS.c.attempts, JOBS.c.worker,
-                       JOBS.c.heartbeat_at).where(JOBS.c.status == RUNNING, *conditions)).all()
-        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat))
-                for job_id, kind, attempt, max_attempts, history, worker, beat in rows]
+                       JOBS.c.heartbeat_at, JOBS.c.report).where(JOBS.c.status == RUNNING, *conditions)).all()
+        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat), report)
+                for job_id, kind, attempt, max_attempts, history, worker, beat, report in rows]
 
     def unsent(self, *, sent_before: datetime, limit: int = 1000) -> list[tuple[uuid.UUID, bool]]:
         """Queued jobs whose message never reached the broker, or reached it before ``sent_before``: ``(id, reached
@@ -518,6 +523,14 @@ class JobRepository:
                     JOBS.c.status == QUEUED, or_(JOBS.c.enqueued_at.is_(None), JOBS.c.enqueued_at < sent_before)
                 ).order_by(JOBS.c.enqueued_at.is_not(None), JOBS.c.created_at).limit(limit)).all()
         return [(job_id, sent is not None) for job_id, sent in rows]
+
+    def mark_queued(self, message: str, *, only: str | None = None) -> int:
+        """Set the progress message of the queued jobs (those whose message is ``only``, when given) to ``message``:
+        what a queued job waits for. Returns how many changed."""
+        statement = update(JOBS).where(JOBS.c.status == QUEUED, JOBS.c.progress_message != message)
+        if only is not None:
+            statement = statement.where(JOBS.c.progress_message == only)
+        return self._execute(statement.values(progress_message=message))
 
     def count_queued(self) -> int:
         with self.sessions() as session:

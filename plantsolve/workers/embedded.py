@@ -8,6 +8,7 @@ import threading
 import uuid
 
 from plantsolve.jobs.context import ServiceContext, worker_name
+from plantsolve.jobs.holds import LOOK_SECONDS, DiskHold
 from plantsolve.jobs.leases import resume
 from plantsolve.jobs.runner import run_job
 from plantsolve.workers.sweeper import Sweeper
@@ -28,6 +29,8 @@ class EmbeddedDispatcher:
         self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending)
+        self._disk = DiskHold(ctx)
+        self._stopping = threading.Event()
         self.name = worker_name("embedded")
 
     def enqueue(self, job_id: uuid.UUID, kind: str = "") -> None:
@@ -46,6 +49,7 @@ class EmbeddedDispatcher:
             raise RuntimeError("the embedded job pool has stopped")
 
     def start(self) -> None:
+        self._stopping.clear()
         for index in range(self.size):
             thread = threading.Thread(target=self._work, name=f"job-pool-{index}", daemon=True)
             thread.start()
@@ -54,6 +58,7 @@ class EmbeddedDispatcher:
         self._sweeper.start()
 
     def stop(self) -> None:
+        self._stopping.set()
         self._sweeper.stop()
         for _ in self._threads:
             self._queue.put(None)
@@ -66,8 +71,13 @@ class EmbeddedDispatcher:
             job_id = self._queue.get()
             if job_id is None:
                 return
+            # a job taken while the disk is below its floor waits, queued (see jobs.holds); a stop leaves it so
+            while not self._stopping.is_set() and self._disk.holds():
+                self._stopping.wait(LOOK_SECONDS)
             with self._lock:
                 self._pending.discard(job_id)
+            if self._stopping.is_set():
+                return
             try:
                 run_job(self.ctx, job_id, worker=self.name, requeue=self.enqueue)
             except Exception:  # the pool must survive anything a job does

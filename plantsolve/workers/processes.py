@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
+from plantsolve.jobs.holds import DiskHold
 from plantsolve.jobs.leases import abandoned, process_died, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
@@ -118,6 +119,12 @@ def _stat(pid: int) -> list[str] | None:
         return None
 
 
+def _stopped(pid: int | None) -> bool:
+    """Whether process ``pid`` is stopped (SIGSTOP, or a tracer holds it): it forks nothing until it is continued."""
+    fields = _stat(pid) if pid is not None else None
+    return fields is not None and fields[0] in ("T", "t")
+
+
 def _started(pid: int) -> str | None:
     """When running process ``pid`` started (clock ticks since boot), None when it does not run: with its pid this
     names one process, so a pid freed and reused by an unrelated process is never taken for it."""
@@ -197,6 +204,7 @@ class ProcessDispatcher:
         # regardless (jobs queued by another process, or re-queued by the sweep itself).
         self._overflow = True
         self._sweeper = Sweeper(ctx, self.enqueue, self.pending, after_pass=self._after_sweep, gone=self.orphan_gone)
+        self._disk = DiskHold(ctx)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
         # before anything starts the forkserver (the upload readers share it): it imports all a job needs
@@ -253,6 +261,8 @@ class ProcessDispatcher:
             raise RuntimeError(f"job processes cannot be started: {self._start_failed}")
         if self._start_stalled():
             raise RuntimeError("starting a job process hangs: the warm parent does not answer")
+        if _stopped(self._warm_parent):
+            raise RuntimeError("the job processes' warm parent is stopped: no job process can start")
 
     def orphan_gone(self, worker: str | None) -> bool:
         """Whether ``worker`` is a job process of this host that no longer runs and that this dispatcher does not
@@ -355,10 +365,16 @@ class ProcessDispatcher:
 
     def _launch(self) -> None:
         """Start a process for each job next in line while fewer than ``size`` run. A job is recorded as running
-        only once its process started; one whose start failed goes back to the head of the line."""
+        only once its process started; one whose start failed goes back to the head of the line. None starts while
+        the disk is below its floor (:class:`~plantsolve.jobs.holds.DiskHold`: the jobs stay queued, saying why)."""
         while not self._stopping.is_set():
             with self._lock:
                 if len(self._running) >= self.size or not self._waiting:
+                    return
+            if self._disk.holds():
+                return
+            with self._lock:
+                if not self._waiting:
                     return
                 job_id, kind = self._waiting.popleft()
                 self._starting = job_id
@@ -397,14 +413,22 @@ class ProcessDispatcher:
         return began is not None and time.monotonic() - began > STALL_SECONDS
 
     def _watch_starts(self) -> None:
-        """Kill a warm parent that leaves a job process's start waiting (see ``STALL_SECONDS``): the start then fails,
-        its job goes back to the head of the line, and the supervisor starts a new warm parent."""
+        """Kill a warm parent that leaves a job process's start waiting (see ``STALL_SECONDS``), or that has been
+        stopped (SIGSTOP) that long while idle, so that the next job need not wait for it: a start under way then
+        fails, its job goes back to the head of the line, and the supervisor starts a new warm parent. Meanwhile
+        readiness says no job can start (:meth:`ping`)."""
+        stopped_since: float | None = None
         while not self._stopping.wait(TICK_SECONDS):
-            if not self._start_stalled():
+            warm = self._warm_parent
+            stopped_since = (stopped_since or time.monotonic()) if warm is not None and _stopped(warm) else None
+            idle_stopped = stopped_since is not None and time.monotonic() - stopped_since > STALL_SECONDS
+            if not (self._start_stalled() or idle_stopped):
                 continue
+            why = "it has been stopped" if idle_stopped else "a job process's start has waited on it"
+            stopped_since = None
             for warm in _warm_parents():
-                log.error("a job process's start has waited %.0f s on the warm parent %d: killing it",
-                          time.monotonic() - (self._start_began or time.monotonic()), warm)
+                log.error("the warm parent %d does not answer (%s for more than %.0f s): killing it", warm, why,
+                          STALL_SECONDS)
                 try:
                     os.kill(warm, signal.SIGKILL)
                 except ProcessLookupError:

@@ -224,7 +224,7 @@ def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
             summary=f"Submit {a_or_an(kind)} {kind} job",
             description=(spec.description or f"Run the {kind} solver.")
             + "\n\nAnswers 202 with the job and a Location header; 200 with the existing job for a repeated Idempotency-Key.",
-            responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(400, 413, 415, 422)},
+            responses={200: {"model": JobView, "description": "Same Idempotency-Key and body: the existing job"}, **responses(400, 413, 415, 422, 503)},
             openapi_extra=submit_openapi(spec),
         )
 
