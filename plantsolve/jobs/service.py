@@ -102,7 +102,7 @@ class JobService:
         A large request (more than ``INLINE_INPUT_BYTES``) is stored as it came and read and checked from its file in
         a bounded process, as an upload is: this process holds its bytes, never the objects made of them."""
         spec = self.spec(kind)
-        self.has_room()
+        self.has_room(idempotency_key, owner)
         job_id = uuid.uuid4()
         if not self.stores_inline(len(body)):
             blob = self.ctx.files.put(f"{job_id}/input/request.json", body)
@@ -122,14 +122,19 @@ class JobService:
             fields = {"input_kind": "json", "input": raw}
         return NewJob(spec, job_id, body_hash, idempotency_key, {**fields, **_callback(callback_url)}, owner)
 
-    def has_room(self) -> None:
+    def has_room(self, idempotency_key: str | None = None, owner: str = "") -> None:
         """Raise :class:`DiskSpaceLow` (503) while the service's disk is below ``MIN_FREE_DISK_BYTES``: a submission
         then is refused, as readiness says ``disk``, rather than taken while no job starts
-        (:mod:`plantsolve.jobs.holds`) or into a store that may not hold it."""
+        (:mod:`plantsolve.jobs.holds`) or into a store that may not hold it. A repeated request whose
+        ``idempotency_key`` names a stored job stores nothing new: it is answered with that job (or its conflict)."""
         why = disk_low(self.ctx)
-        if why is not None:
-            log.warning("submission refused: %s", why)
-            raise DiskSpaceLow()
+        if why is None:
+            return
+        if idempotency_key is not None:
+            if self.ctx.repo.get_by_idempotency_key(_stored_key(owner, idempotency_key)) is not None:
+                return
+        log.warning("submission refused: %s", why)
+        raise DiskSpaceLow()
 
     def intake_loaded(self, kind: str) -> bool:
         """Whether this process has read a JSON submission of ``kind`` (so the kind's checks, imported on first use,
@@ -146,7 +151,7 @@ class JobService:
         *, owner: str = "", callback_url: str | None = None,
     ) -> Submitted:
         spec = self.spec(kind)
-        self.has_room()
+        self.has_room(idempotency_key, owner)
         extension = intake.upload_extension(spec, filename)
         options = intake.upload_options(options_text)
         if not content:
@@ -246,7 +251,7 @@ class JobService:
             max_attempts=new.spec.max_attempts or self.ctx.settings.max_attempts,
             progress=0.0,
             progress_message="queued",
-            idempotency_key=f"{owner}:{key}" if key is not None and owner else key,
+            idempotency_key=_stored_key(owner, key),
             owner=owner,
             body_hash=new.body_hash,
             solver_version=new.spec.version,
@@ -425,6 +430,11 @@ class JobService:
             callback=(CallbackInfo(url=job.callback_url, state=job.callback_state, attempts=job.callback_attempts or 0,
                                    error=job.callback_error) if job.callback_url and job.callback_state else None),
         )
+
+
+def _stored_key(owner: str, key: str | None) -> str | None:
+    """An idempotency key as the store keeps it: each tenant's keys apart."""
+    return f"{owner}:{key}" if key is not None and owner else key
 
 
 def _callback(url: str | None) -> dict[str, Any]:

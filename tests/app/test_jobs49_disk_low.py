@@ -73,3 +73,25 @@ def test_the_submit_routes_document_their_503(tmp_path):
         paths = client.get("/openapi.json").json()["paths"]
     documented = paths["/v1/tube/jobs"]["post"]["responses"]["503"]
     assert "disk" in documented["description"] and "Retry-After" in documented["description"]
+
+
+@pytest.mark.parametrize("upload", [False, True])
+def test_a_repeated_request_whose_key_names_a_job_is_answered_with_it_while_the_disk_is_low(tmp_path, upload):
+    """The client whose first answer was lost repeats its request with the same Idempotency-Key: its job exists, so
+    nothing new is stored and the answer is that job, not a 503 saying nothing was stored; a new key is refused."""
+    scan = (REPO / "examples" / "tube" / "scan.xyz").read_bytes()
+
+    def submit(client, key):
+        headers = {"Idempotency-Key": key}
+        if upload:
+            return client.post("/v1/tube/jobs", files={"file": ("scan.xyz", scan)}, headers=headers)
+        return client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 0.5}, headers=headers)
+
+    with TestClient(create_app(service_settings(tmp_path))) as client:
+        first = submit(client, "order-42")
+        assert first.status_code == 202, first.text
+        _low(client, NO_DISK)
+        again = submit(client, "order-42")
+        assert again.status_code == 200, again.text
+        assert again.json()["id"] == first.json()["id"]
+        _refused(submit(client, "order-43"))
