@@ -102,3 +102,17 @@ def test_the_api_reports_the_warning_with_the_likely_unit(client):
     result = client.get(f"/v1/jobs/{view['id']}/result").json()
     (warning,) = [w for w in result["report"]["warnings"] if w["code"] == "implausible_field_grid"]
     assert warning["details"]["likely_unit"] == "mm" and warning["details"]["quantity"] == "options.magnetic_field_file"
+
+
+def test_points_in_mm_under_a_request_in_cm_are_warned_naming_the_points_and_mm():
+    body = json.loads((EXAMPLES / "field_points.json").read_text())
+    body["units"] = "cm"
+    body["pipe"] = {k: v / 10 for k, v in body["pipe"].items()}
+    body["electrodes"]["half_length"] /= 10
+    body["options"]["probe_points"] = [[c / 10 for c in p] for p in body["options"]["probe_points"]]
+    genuine = solved(FlowmeterRequest.model_validate({**body, "magnetic_field": {
+        "type": "points", "points": [[*(c / 10 for c in row[:3]), *row[3:]] for row in body["magnetic_field"]["points"]]}}))
+    assert genuine.sensitivity == pytest.approx(0.91426, abs=1e-5) and not grid_warnings(genuine)
+    (warning,) = grid_warnings(solved(FlowmeterRequest.model_validate(body)))
+    assert warning.details["quantity"] == "magnetic_field.points" and warning.details["likely_unit"] == "mm"
+    assert "the request's units ('cm')" in warning.message
