@@ -69,6 +69,8 @@ MAX_SKIPPED_LISTED = 200
 DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 # an ASCII STL's lines of numbers: its corners and its facets' normals
 STL_NUMBERS = re.compile(rb"^[ \t]*(?:vertex|facet[ \t]+normal)[ \t][^\n]*", re.IGNORECASE | re.MULTILINE)
+# ... one that writes a decimal comma (a digit, a comma, a digit within a number)
+STL_COMMA_LINE = re.compile(rb"^[ \t]*(?:vertex|facet[ \t]+normal)[ \t][^\n]*?\d,\d[^\n]*", re.IGNORECASE | re.MULTILINE)
 
 SURFACE_CLASSES = {
     # class -> (index of the zone name, index of the surface type or None) before any Space Name field
@@ -775,21 +777,41 @@ def parse_stl(content: bytes) -> dict:
 
 
 def _refuse_unreadable_numbers(content: bytes, only_commas: bool) -> None:
-    """Refuse an ASCII STL naming its first 'vertex' or 'facet normal' line whose numbers do not read: one written
-    with decimal commas (its reader said only 'ValueError', with no line), or, unless ``only_commas``, any other.
-    A file without a comma is not scanned for commas (a million facets' lines cost a second of the regex)."""
-    if only_commas and b"," not in content:
+    """Refuse an ASCII STL naming its first 'vertex' or 'facet normal' line written with a decimal comma (its reader
+    said only 'ValueError', with no line), or, unless ``only_commas``, the first whose numbers do not read. The
+    commas are looked for by one regular-expression search, and only in a file holding a comma."""
+    found = _comma_line(content)
+    if found is None and not only_commas:
+        found = next((m for m in STL_NUMBERS.finditer(content) if not _all_numbers(_stl_numbers(m))), None)
+    if found is None:
         return
-    for found in STL_NUMBERS.finditer(content):
-        words = found.group(0).decode("ascii", "replace").split()
-        numbers = words[2:] if words[0].lower() == "facet" else words[1:]
-        comma = next((w for w in numbers if DECIMAL_COMMA.fullmatch(w)), None)
-        unread = comma is not None or (not only_commas and not _all_numbers(numbers))
-        if unread:
-            line = content.count(b"\n", 0, found.start()) + 1
-            why = (f"{comma!r} is a decimal comma; STL numbers take a decimal point (export with a point)"
-                   if comma is not None else "not three numbers")
-            raise reject(f"line {line}: {' '.join(words)[:80]!r}: {why}", ("file", "line", line))
+    line = content.count(b"\n", 0, found.start()) + 1
+    comma = next((w for w in _stl_numbers(found) if DECIMAL_COMMA.fullmatch(w)), None)
+    why = (f"{comma!r} is a decimal comma; STL numbers take a decimal point (export with a point)" if comma is not None
+           else "not three numbers")
+    raise reject(f"line {line}: {' '.join(found.group(0).decode('ascii', 'replace').split())[:80]!r}: {why}",
+                 ("file", "line", line))
+
+
+def _comma_line(content: bytes) -> re.Match | None:
+    """The first number line written with a decimal comma, looked for only in the lines that hold a comma (a clean
+    file holds none, or a few in its solids' names: a search through every line costs a third of the parse)."""
+    comma = content.find(b",")
+    while comma >= 0:
+        start = content.rfind(b"\n", 0, comma) + 1
+        end = content.find(b"\n", comma)
+        end = len(content) if end < 0 else end
+        found = STL_COMMA_LINE.match(content, start, end)
+        if found:
+            return found
+        comma = content.find(b",", end)
+    return None
+
+
+def _stl_numbers(found: re.Match) -> list[str]:
+    """The words after 'vertex' or 'facet normal' of a line STL_NUMBERS matched."""
+    words = found.group(0).decode("ascii", "replace").split()
+    return words[2:] if words[0].lower() == "facet" else words[1:]
 
 
 def _all_numbers(words: list[str]) -> bool:

@@ -74,3 +74,10 @@ def test_files_with_decimal_points_still_read_and_a_comma_in_a_solid_name_is_no_
     for name, text in (("room.stl", ascii_stl()), ("room.stl", ascii_stl(name="room 1, level 2")), ("room.obj", obj())):
         request = parsed(name, text)
         assert request is not None
+
+
+def test_an_ascii_stl_vertex_of_other_text_is_named_by_its_line():
+    text = ascii_stl().replace("vertex 3.2500 3.2500 3.2500", "vertex 3.2500 3.2500 n/a", 1)
+    line = text[:text.index("n/a")].count("\n") + 1
+    error = refusal("room.stl", text)
+    assert error.loc == ("file", "line", line) and error.msg == f"line {line}: 'vertex 3.2500 3.2500 n/a': not three numbers"
