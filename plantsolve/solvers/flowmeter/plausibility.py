@@ -113,7 +113,7 @@ def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Di
     elif f.length_unit is None:
         read_as = f"the request's units ('{stated}'): the field file's header states no length unit"
     else:
-        read_as = f"{stated}, the unit the file's header states"
+        read_as = f"'{stated}', the unit the file's header states"
     reach = {name: max(abs(float(getattr(f, name)[0])), abs(float(getattr(f, name)[-1]))) for name in ("x", "y")}
     far = {name: r for name, r in reach.items() if r > GRID_REACH * radius}
     if far:
@@ -132,9 +132,9 @@ def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Di
         return []
     quantity = ".".join(f.loc)
     point = ", ".join(f"{v:g}" for v in structure.point)
-    guess = (f"coordinates in {structure.likely_unit} read as {stated}? (S changes with the unit: the field's "
+    guess = (f"coordinates in {structure.likely_unit} read as '{stated}'? (S changes with the unit: the field's "
              "variation across the pipe is what a grid adds to a uniform field)" if structure.likely_unit else
-             f"coordinates in a smaller unit than {stated}?")
+             f"coordinates in a smaller unit than '{stated}'?")
     return [Diagnostic(
         code="implausible_field_grid",
         message=f"Magnetic field grid: the field of {quantity} first differs by half from its centre value at ({point}) "

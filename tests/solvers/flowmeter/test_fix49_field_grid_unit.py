@@ -57,7 +57,7 @@ def test_millimetres_under_another_stated_unit_are_warned_naming_the_file_and_mm
     (warning,) = grid_warnings(result)
     assert warning.details["likely_unit"] == "mm" and warning.details["read_in"] == unit
     assert "options.magnetic_field_file" in warning.message or "options.magnetic_field_file" in warning.details["quantity"]
-    assert "in mm read as" in warning.message
+    assert f"in mm read as '{unit}'?" in warning.message
 
 
 @pytest.mark.parametrize("units", ["cm", "in"])
