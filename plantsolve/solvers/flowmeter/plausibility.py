@@ -9,7 +9,8 @@ import math
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.flowmeter.field import RequestField, request_field
+from plantsolve.solvers.flowmeter.field import FILE, RequestField, request_field
+from plantsolve.solvers.flowmeter.grid_scale import far_structure
 from plantsolve.solvers.length_units import METRES
 
 BORE_M = (0.002, 3.2)  # inner diameter: DN2 to DN3200, the electromagnetic meters made
@@ -97,26 +98,53 @@ def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:
 
 
 def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Diagnostic]:
-    """A field grid reaching far beyond the pipe across it: the variation of B over the cross-section, which is what
-    a grid adds to a uniform field, falls between two grid nodes and is lost."""
+    """A field grid reaching far beyond the pipe across it, or whose field changes only far beyond the liner section:
+    the variation of B over the cross-section, which is what a grid adds to a uniform field, falls between two grid
+    nodes and is lost. Both are coordinates in a smaller unit than they are read in."""
     if f is None:
         return []
     radius = request.pipe.radius
+    liner = request.pipe.liner_length if request.pipe.liner_length is not None else 6 * radius
+    stated = f.length_unit or request.units
+    structure = far_structure(f.x, f.y, f.z, f.bx, f.by, radius, liner / 2, stated)
+    likely = structure.likely_unit if structure is not None else None
+    if f.loc != FILE:
+        read_as = f"the request's units ('{stated}')"
+    elif f.length_unit is None:
+        read_as = f"the request's units ('{stated}'): the field file's header states no length unit"
+    else:
+        read_as = f"'{stated}', the unit the file's header states"
     reach = {name: max(abs(float(getattr(f, name)[0])), abs(float(getattr(f, name)[-1]))) for name in ("x", "y")}
     far = {name: r for name, r in reach.items() if r > GRID_REACH * radius}
-    if not far:
+    if far:
+        name, r = max(far.items(), key=lambda item: item[1])
+        quantity = f"magnetic_field.{name}" if f.loc == ("magnetic_field",) else ".".join(f.loc) + f" ({name})"
+        guess = (f"grid coordinates in {likely} read as '{stated}'?" if likely is not None else
+                 f"grid coordinates in a unit 1000 times smaller than '{request.units}' (mm with units 'm')?")
+        return [Diagnostic(
+            code="implausible_field_grid",
+            message=f"Magnetic field grid: {quantity} reaches {r:g} {request.units}, {r / radius:.4g} pipe radii "
+            f"(radius {radius:g} {request.units}); a magnet's field is computed a few radii around the pipe: {guess} "
+            f"The grid is read in {read_as}; across the pipe the field is read between grid nodes this far apart.",
+            details={"quantity": quantity, "reach": r, "radius": radius, "units": request.units,
+                     "radii": r / radius, "read_in": stated, "likely_unit": likely})]
+    if structure is None:
         return []
-    name, r = max(far.items(), key=lambda item: item[1])
-    quantity = f"magnetic_field.{name}" if f.loc == ("magnetic_field",) else ".".join(f.loc) + f" ({name})"
+    quantity = ".".join(f.loc)
+    point = ", ".join(f"{v:g}" for v in structure.point)
+    guess = (f"coordinates in {structure.likely_unit} read as '{stated}'? (S changes with the unit: the field's "
+             "variation across the pipe is what a grid adds to a uniform field)" if structure.likely_unit else
+             f"coordinates in a smaller unit than '{stated}'?")
     return [Diagnostic(
         code="implausible_field_grid",
-        message=f"Magnetic field grid: {quantity} reaches {r:g} {request.units}, {r / radius:.4g} pipe radii "
-        f"(radius {radius:g} {request.units}); a magnet's field is computed a few radii around the pipe: grid "
-        f"coordinates in a unit 1000 times smaller than '{request.units}' (mm with units 'm')? The grid is in the "
-        "request's units" + ("" if f.length_unit is not None else " (the field file's header states no length unit)")
-        + "; across the pipe the field is read between grid nodes this far apart.",
-        details={"quantity": quantity, "reach": r, "radius": radius, "units": request.units,
-                 "radii": r / radius})]
+        message=f"Magnetic field grid: the field of {quantity} first differs by half from its centre value at ({point}) "
+        f"{request.units}, {structure.reach:.3g} times as far as the liner section reaches (radius {radius:g}, "
+        f"half-length {liner / 2:g} {request.units}); a meter's coils sit on the pipe and their field changes within "
+        f"about the liner section, so across the pipe this field is read nearly uniform. The grid is read in "
+        f"{read_as}: {guess}",
+        details={"quantity": quantity, "read_in": stated, "likely_unit": structure.likely_unit,
+                 "structure_point": list(structure.point), "structure_reach": structure.reach,
+                 "radius": radius, "half_liner": liner / 2, "units": request.units})]
 
 
 def _protrusion_warnings(request: FlowmeterRequest) -> list[Diagnostic]:

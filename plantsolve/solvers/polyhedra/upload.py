@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 import struct
 from dataclasses import replace
 
@@ -64,6 +65,12 @@ from plantsolve.solvers.upload_form import form_model, validated_upload
 UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
+# a number as a decimal-comma locale writes it ('3,25'); STL and OBJ numbers take a decimal point
+DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
+# an ASCII STL's lines of numbers: its corners and its facets' normals
+STL_NUMBERS = re.compile(rb"^[ \t]*(?:vertex|facet[ \t]+normal)[ \t][^\n]*", re.IGNORECASE | re.MULTILINE)
+# ... one that writes a decimal comma (a digit, a comma, a digit within a number)
+STL_COMMA_LINE = re.compile(rb"^[ \t]*(?:vertex|facet[ \t]+normal)[ \t][^\n]*?\d,\d[^\n]*", re.IGNORECASE | re.MULTILINE)
 
 SURFACE_CLASSES = {
     # class -> (index of the zone name, index of the surface type or None) before any Space Name field
@@ -563,7 +570,10 @@ def parse_obj(text: str) -> dict:
             except ValueError as e:
                 # keep the numbering of later vertices: a placeholder that no usable face may use
                 vertices.append([math.nan] * 3)
-                skipped.append({"line": at, "object": "v", "reason": f"not a vertex: {e}"})
+                comma = next((p for p in parts[1:4] if DECIMAL_COMMA.fullmatch(p)), None)
+                reason = (f"{comma!r} is a decimal comma; OBJ numbers take a decimal point" if comma is not None
+                          else str(e))
+                skipped.append({"line": at, "object": "v", "reason": f"not a vertex: {reason}"})
         elif key == "g":
             group = " ".join(parts[1:]) or None
         elif key == "o":
@@ -707,6 +717,8 @@ def parse_stl(content: bytes) -> dict:
     if not (ascii_like or binary_like):
         raise reject("not an STL file (neither ASCII 'solid … facet' nor a binary STL whose size matches its "
                      "triangle count)")
+    if ascii_like:
+        _refuse_unreadable_numbers(content, only_commas=True)
     try:
         # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
         loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
@@ -715,6 +727,8 @@ def parse_stl(content: bytes) -> dict:
         if not {"vertices", "faces"} <= set(loaded):  # several solids (an ASCII file's rooms): one zone each
             loaded, solid_names, solid_of = _joined_solids(loaded.get("geometry") or {})
     except Exception as e:  # trimesh raises many kinds for a broken file
+        if ascii_like:
+            _refuse_unreadable_numbers(content, only_commas=False)
         raise reject(f"unreadable STL: {type(e).__name__}: {e}") from None
     with np.errstate(invalid="ignore", over="ignore"):  # a broken file's garbage floats are sorted out below
         vertices = np.asarray(loaded["vertices"] if loaded.get("vertices") is not None else np.zeros((0, 3)),
@@ -760,6 +774,51 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _refuse_unreadable_numbers(content: bytes, only_commas: bool) -> None:
+    """Refuse an ASCII STL naming its first 'vertex' or 'facet normal' line written with a decimal comma (its reader
+    said only 'ValueError', with no line), or, unless ``only_commas``, the first whose numbers do not read. The
+    commas are looked for by one regular-expression search, and only in a file holding a comma."""
+    found = _comma_line(content)
+    if found is None and not only_commas:
+        found = next((m for m in STL_NUMBERS.finditer(content) if not _all_numbers(_stl_numbers(m))), None)
+    if found is None:
+        return
+    line = content.count(b"\n", 0, found.start()) + 1
+    comma = next((w for w in _stl_numbers(found) if DECIMAL_COMMA.fullmatch(w)), None)
+    why = (f"{comma!r} is a decimal comma; STL numbers take a decimal point (export with a point)" if comma is not None
+           else "not three numbers")
+    raise reject(f"line {line}: {' '.join(found.group(0).decode('ascii', 'replace').split())[:80]!r}: {why}",
+                 ("file", "line", line))
+
+
+def _comma_line(content: bytes) -> re.Match | None:
+    """The first number line written with a decimal comma, looked for only in the lines that hold a comma (a clean
+    file holds none, or a few in its solids' names: a search through every line costs a third of the parse)."""
+    comma = content.find(b",")
+    while comma >= 0:
+        start = content.rfind(b"\n", 0, comma) + 1
+        end = content.find(b"\n", comma)
+        end = len(content) if end < 0 else end
+        found = STL_COMMA_LINE.match(content, start, end)
+        if found:
+            return found
+        comma = content.find(b",", end)
+    return None
+
+
+def _stl_numbers(found: re.Match) -> list[str]:
+    """The words after 'vertex' or 'facet normal' of a line STL_NUMBERS matched."""
+    words = found.group(0).decode("ascii", "replace").split()
+    return words[2:] if words[0].lower() == "facet" else words[1:]
+
+
+def _all_numbers(words: list[str]) -> bool:
+    try:
+        return len([float(w) for w in words]) == 3
+    except ValueError:
+        return False
 
 
 def _each_closed(vertices: np.ndarray, triangles: np.ndarray, solid_of: np.ndarray) -> bool:
