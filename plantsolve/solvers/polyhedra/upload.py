@@ -321,8 +321,8 @@ def surfaces_from_objects(objects: list[IdfObject], skipped: list[dict], warning
                 clockwise = True
             if len(fields) > 2 and fields[2].strip().lower() == "relative":
                 relative = True
-            # the simple-geometry rectangles have their own field, Relative unless it says World
-            if len(fields) > 4 and fields[4].strip().lower() == "world":
+            # the simple-geometry rectangles have their own field, Relative unless it says World or Absolute (one choice)
+            if len(fields) > 4 and fields[4].strip().lower() in ("world", "absolute"):
                 rect_relative = False
         elif cls == "zone" and fields and fields[0]:
             if fields[0].lower() in zones:  # which origin, multiplier and floor-area rule is meant is unknown

@@ -68,3 +68,20 @@ def test_energyplus_keys_in_any_case_are_read(written):
     """EnergyPlus reads its keys case-insensitively; so does the reader (the vertices' order flips, not the volume)."""
     result = solve(_upload("cw.idf", OFFICES.replace(RULES, RULES.replace("Counterclockwise", written)))).result
     assert [z.volume for z in result.zones] == pytest.approx([60.0, 60.0])
+
+
+def test_absolute_rectangles_are_world_rectangles():
+    """EnergyPlus' keys for the Rectangular Surface Coordinate System are Relative, World and Absolute, World and
+    Absolute one choice: the simple-geometry rectangles are placed as written, not from their zone's origin."""
+    source = (Path(__file__).parents[3] / "examples" / "polyhedra" / "four_zones_simple.idf").read_text()
+
+    def surfaces(word: str):
+        text = source.replace("World;                   !- Coordinate System",
+                              "World,                   !- Coordinate System\n    World,  !- Daylighting\n"
+                              f"    {word};  !- Rectangular Surface Coordinate System")
+        request = _upload("m.idf", text).model_dump(mode="json")
+        return request["vertices"], request["faces"], request["mesh"]
+
+    world, absolute, relative = surfaces("World"), surfaces("Absolute"), surfaces("Relative")
+    assert world != relative  # the zones have origins: the choice moves the rectangles
+    assert absolute == world
