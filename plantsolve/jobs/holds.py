@@ -1,9 +1,9 @@
 """When queued jobs are held instead of started: the disk of the service (``ARTIFACT_DIR``, the SQLite file) is below
 ``MIN_FREE_DISK_BYTES``. A job started then could solve for minutes and find no room for its result (a full disk
 fails a job at once: :func:`plantsolve.jobs.attempts.judge`), so no worker starts one until space returns (a pool's
-dispatcher waits; a Celery task is retried after ``HELD_TASK_COUNTDOWN_SECONDS``); the
-held jobs stay queued (nothing submitted is lost, no attempt is counted) and say so in their progress message, which
-the job's view and summary show. Submissions meanwhile are refused with a 503 naming disk space, as ``/readyz`` is 503
+dispatcher waits; a Celery task is retried after ``HELD_TASK_COUNTDOWN_SECONDS``); the held jobs stay queued (nothing
+submitted is lost, no attempt is counted) and say so in their progress message, which the job's view and summary
+show. Submissions meanwhile are refused with a 503 naming disk space, as ``/readyz`` is 503
 naming ``disk`` (:class:`~plantsolve.jobs.errors.DiskSpaceLow`)."""
 
 from __future__ import annotations

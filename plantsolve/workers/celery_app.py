@@ -304,11 +304,21 @@ def _worker_context():
         return _ctx, _dispatcher
 
 
+def _sent_again(ctx: ServiceContext, job_id: uuid.UUID) -> None:
+    """The held job's message is sent again now (its retry): not one the sweeper is to send another of while the
+    worker keeps it for its countdown, where the broker's queue length does not count it."""
+    try:
+        ctx.repo.mark_enqueued(job_id)
+    except Exception as error:  # the database is away: the sweeper may send a second message, which runs once
+        log.warning("job %s: its held message could not be marked sent (%s)", job_id, type(error).__name__)
+
+
 def _run_job_task(task, job_id: str) -> str:
     ctx, dispatcher = _worker_context()
-    if _disk_hold.holds():  # the job stays queued ('waiting: disk space low'); its task asks again after a while
-        raise task.retry(countdown=HELD_TASK_COUNTDOWN_SECONDS)
     job_uuid = uuid.UUID(job_id)
+    if _disk_hold.holds():  # the job stays queued ('waiting: disk space low'); its task asks again after a while
+        _sent_again(ctx, job_uuid)
+        raise task.retry(countdown=HELD_TASK_COUNTDOWN_SECONDS)
     outcome = run_job(
         ctx,
         job_uuid,

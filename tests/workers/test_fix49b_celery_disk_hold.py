@@ -7,12 +7,14 @@ subprocesses, as ``test_integration_celery.py``."""
 from __future__ import annotations
 
 import time
+import uuid
+from datetime import datetime, timezone
 
 import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
-from plantsolve.jobs.holds import DISK_WAIT
+from plantsolve.jobs.holds import DISK_WAIT, HELD_TASK_COUNTDOWN_SECONDS
 from tests.conftest import service_settings, wait_for
 from tests.workers.test_integration_celery import ALIVE, Worker, _env
 
@@ -34,8 +36,12 @@ def test_a_celery_worker_holds_queued_jobs_while_its_disk_is_low(pg_url, redis_u
             while not all(client.get(f"/v1/jobs/{job}").json()["progress"]["message"] == DISK_WAIT for job in jobs):
                 assert time.monotonic() < deadline, [client.get(f"/v1/jobs/{job}").json() for job in jobs]
                 time.sleep(0.1)
-            time.sleep(5.0)  # held over several countdowns, not started nor failed
+            time.sleep(8.0)  # held over several countdowns (and past no REQUEUE_QUEUED_AFTER), not started nor failed
             for job in jobs:
+                # its message is sent again with each countdown: the sweeper (a queued job's message older than
+                # REQUEUE_QUEUED_AFTER is taken for lost) sends no other
+                sent = client.app.state.ctx.repo.get(uuid.UUID(job)).enqueued_at
+                assert (datetime.now(timezone.utc) - sent).total_seconds() < 2 * HELD_TASK_COUNTDOWN_SECONDS + 2
                 view = client.get(f"/v1/jobs/{job}").json()
                 assert (view["status"], view["attempt"], view["progress"]["message"]) == ("queued", 0, DISK_WAIT)
                 assert view["summary"].startswith("Waiting: disk space low")
