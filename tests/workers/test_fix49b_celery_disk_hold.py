@@ -36,7 +36,7 @@ def test_a_celery_worker_holds_queued_jobs_while_its_disk_is_low(pg_url, redis_u
             while not all(client.get(f"/v1/jobs/{job}").json()["progress"]["message"] == DISK_WAIT for job in jobs):
                 assert time.monotonic() < deadline, [client.get(f"/v1/jobs/{job}").json() for job in jobs]
                 time.sleep(0.1)
-            time.sleep(8.0)  # held over several countdowns (and past no REQUEUE_QUEUED_AFTER), not started nor failed
+            time.sleep(8.0)  # held over several countdowns, not started nor failed
             for job in jobs:
                 # its message is sent again with each countdown: the sweeper (a queued job's message older than
                 # REQUEUE_QUEUED_AFTER is taken for lost) sends no other
