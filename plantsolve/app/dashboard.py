@@ -69,6 +69,13 @@ def _page(request: Request, name: str, status_code: int = 200, **context: Any) -
     return templates.TemplateResponse(request, name, context, status_code=status_code)
 
 
+def _with_headers(page: HTMLResponse, error: ProblemError) -> HTMLResponse:
+    """The page showing ``error`` with the headers its problem carries, as the API's answer has them (a 503's
+    ``Retry-After``: disk space low)."""
+    page.headers.update(error.headers)
+    return page
+
+
 def _login_page(request: Request, status_code: int, message: str, csrf: str | None = None) -> HTMLResponse:
     """The login form with a CSRF token the server signed (see ``auth.LoginTokens``), also set as a cookie scoped
     to the login: the post must send both, they must match, and the server must have issued the token (signed
@@ -247,8 +254,9 @@ def build_dashboard() -> APIRouter:
             submitted = await run_in_threadpool(_submit_again, service, job_id, who)
         except NotFound as error:
             return _not_found(request, error)
-        except ProblemError as error:  # the kind changed since and refuses the input: say so on the job's page
-            return _page(request, "error.html", error.status, title=error.title, message=error.detail)
+        except ProblemError as error:  # the kind changed since and refuses the input, or the disk is low: say so
+            return _with_headers(_page(request, "error.html", error.status, title=error.title, message=error.detail),
+                                 error)
         return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
     @router.get("/dashboard/submit/{kind}", response_class=HTMLResponse, dependencies=authorised)
@@ -292,7 +300,8 @@ def build_dashboard() -> APIRouter:
             sent = {"options": options} if source == "upload" else {"body": body}  # the other form keeps its example
             sent["source"] = source
             sent["units"] = units
-            return _page(request, "submit.html", error.status, **_form_context(request, spec, problem=problem, **sent))
+            return _with_headers(_page(request, "submit.html", error.status,
+                                       **_form_context(request, spec, problem=problem, **sent)), error)
         return RedirectResponse(f"/dashboard/jobs/{submitted.job.id}", status_code=303)
 
     return router

@@ -1,8 +1,9 @@
 """When queued jobs are held instead of started: the disk of the service (``ARTIFACT_DIR``, the SQLite file) is below
 ``MIN_FREE_DISK_BYTES``. A job started then could solve for minutes and find no room for its result (a full disk
-fails a job at once: :func:`plantsolve.jobs.attempts.judge`), so the dispatcher starts none until space returns; the
-held jobs stay queued (nothing submitted is lost, no attempt is counted) and say so in their progress message, which
-the job's view and summary show. Submissions meanwhile are refused with a 503 naming disk space, as ``/readyz`` is 503
+fails a job at once: :func:`plantsolve.jobs.attempts.judge`), so no worker starts one until space returns (a pool's
+dispatcher waits; a Celery task is retried after ``HELD_TASK_COUNTDOWN_SECONDS``); the held jobs stay queued (nothing
+submitted is lost, no attempt is counted) and say so in their progress message, which the job's view and summary
+show. Submissions meanwhile are refused with a 503 naming disk space, as ``/readyz`` is 503
 naming ``disk`` (:class:`~plantsolve.jobs.errors.DiskSpaceLow`)."""
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ log = logging.getLogger("plantsolve.holds")
 DISK_WAIT = "waiting: disk space low"
 # how often a hold looks at the disk and marks jobs queued meanwhile (re-queued by the sweep, or by another process)
 LOOK_SECONDS = 1.0
+# how long a held job's Celery task waits before it asks again (its message is sent anew with this countdown: the
+# job keeps its place in the broker, no attempt is counted, and it starts within this long of space returning)
+HELD_TASK_COUNTDOWN_SECONDS = 2.0
 
 
 def disk_low(ctx: ServiceContext) -> str | None:

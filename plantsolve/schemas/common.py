@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
+from types import MappingProxyType
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, computed_field
@@ -51,8 +52,41 @@ Direction3 = Annotated[list[DirectionComponent], Field(min_length=3, max_length=
 Quaternion = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]
 """A rotation quaternion ``[w, x, y, z]`` (scalar first)."""
 
-Units = Literal["mm", "cm", "m", "in", "ft"]
-"""Length unit of a request; results are given in the same unit."""
+UnitName = Literal["mm", "cm", "m", "in", "ft"]
+"""The canonical name of a request's length unit (the OpenAPI enum)."""
+
+UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    "mm": ("mm", "millimetre", "millimetres", "millimeter", "millimeters"),
+    "cm": ("cm", "centimetre", "centimetres", "centimeter", "centimeters"),
+    "m": ("m", "metre", "metres", "meter", "meters"),
+    "in": ("in", "inch", "inches"),
+    "ft": ("ft", "foot", "feet"),
+})
+"""The words and symbols (lower case, read in any case) that name each request unit: the one table of them, which
+the readers of files (``solvers.length_units``) extend with the units only a file states."""
+
+AMBIGUOUS_UNITS: Mapping[str, str] = MappingProxyType({
+    "Mm": "the megametre (in SI, M is mega) or millimetres typed with a slipped shift key"})
+"""Spellings that name a unit in one reading and another unit in another, with both readings."""
+
+_UNIT_OF_SPELLING = {spelling: name for name, spellings in UNIT_SPELLINGS.items() for spelling in spellings}
+
+
+def spelled_unit(word: Any) -> Any:
+    """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ' → 'mm', 'mm', 'in'); a value error
+    naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
+    if not isinstance(word, str):
+        return word
+    if word.strip() in AMBIGUOUS_UNITS:
+        raise PydanticCustomError(
+            "ambiguous_unit", "'{word}' reads as {readings}; write mm for millimetres (no request is in megametres)",
+            {"word": word.strip(), "readings": AMBIGUOUS_UNITS[word.strip()]})
+    return _UNIT_OF_SPELLING.get(word.strip().lower(), word)
+
+
+Units = Annotated[UnitName, BeforeValidator(spelled_unit)]
+"""Length unit of a request; results are given in the same unit. A request may spell it in any case and by its name
+('MM', 'Millimetres', 'IN'); the OpenAPI document lists the canonical names, which every result gives."""
 
 LENGTH = "{units}"
 """The unit of a result's lengths: the result's own ``units`` field (the request's length unit)."""

@@ -13,18 +13,17 @@ from __future__ import annotations
 from collections.abc import Iterable
 from types import MappingProxyType
 
+from plantsolve.schemas.common import UNIT_SPELLINGS, spelled_unit
+
 # metres per unit of each request unit (schemas.common.Units)
 METRES = MappingProxyType({"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048})
 # ... and of every unit named here: files may state micrometres, which no request is written in
 SIZES = MappingProxyType({**METRES, "um": 1e-6})
 
-# the words and symbols that name each unit (lower case; the micro sign and the Greek mu both occur)
+# the words and symbols that name each unit (lower case): the request units' (one table, the schema's, which reads
+# them in a JSON body) and micrometres (the micro sign and the Greek mu both occur)
 SPELLINGS = MappingProxyType({
-    "mm": ("mm", "millimetre", "millimetres", "millimeter", "millimeters"),
-    "cm": ("cm", "centimetre", "centimetres", "centimeter", "centimeters"),
-    "m": ("m", "metre", "metres", "meter", "meters"),
-    "in": ("in", "inch", "inches"),
-    "ft": ("ft", "foot", "feet"),
+    **UNIT_SPELLINGS,
     "um": ("um", "µm", "μm", "micrometre", "micrometres", "micrometer", "micrometers", "micron", "microns"),
 })
 _NAMED = MappingProxyType({spelling: unit for unit, spellings in SPELLINGS.items() for spelling in spellings})
@@ -47,17 +46,11 @@ def unit_of_size(metres: float, among: Iterable[str] = METRES) -> str | None:
     return next((unit for unit in among if abs(SIZES[unit] - metres) <= 1e-9 * SIZES[unit]), None)
 
 
-# spellings that name a unit in one reading and another unit in another, with both readings
-AMBIGUOUS = MappingProxyType({"Mm": "the megametre (in SI, M is mega) or millimetres typed with a slipped shift key"})
-
-
 def request_unit(word: object) -> str:
-    """The request unit (``METRES``) a form's or a file's ``word`` spells in any case ('MM', 'Millimetres', 'IN');
-    ValueError saying why for a spelling of two readings ('Mm') or of no request unit."""
-    if isinstance(word, str) and word.strip() in AMBIGUOUS:
-        raise ValueError(f"{word.strip()!r} reads as {AMBIGUOUS[word.strip()]}; write mm for millimetres (no request "
-                         f"is in megametres)")
-    unit = unit_named(word) if isinstance(word, str) else None
-    if unit is None:
+    """The request unit (``METRES``) a form's or a file's ``word`` spells in any case ('MM', 'Millimetres', 'IN'), as
+    a JSON request's ``units`` reads it; ValueError saying why for a spelling of two readings ('Mm') or of no request
+    unit."""
+    unit = spelled_unit(word)  # a ValueError naming both readings of 'Mm'
+    if not isinstance(unit, str) or unit not in METRES:
         raise ValueError(f"unknown unit {word!r}; one of {', '.join(METRES)} (or their names: millimetres, inches, ...)")
     return unit

@@ -26,6 +26,7 @@ from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.dispatch import NoWorkers
+from plantsolve.jobs.holds import HELD_TASK_COUNTDOWN_SECONDS, DiskHold
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.solvers.kinds import load_kinds
@@ -132,7 +133,8 @@ def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
         broker_connection_retry_on_startup=True,
         worker_hijack_root_logger=False,
     )
-    app.task(name="plantsolve.run_job", bind=True)(_run_job_task)
+    # a held job's task is retried for as long as the disk is low (max_retries None: no count of them)
+    app.task(name="plantsolve.run_job", bind=True, max_retries=None)(_run_job_task)
     return app
 
 
@@ -286,23 +288,37 @@ class CeleryDispatcher:
 _ctx_lock = threading.Lock()
 _ctx = None
 _dispatcher = None
+_disk_hold = None
 
 
 def _worker_context():
-    """One database context and dispatcher per worker process, made on first use."""
-    global _ctx, _dispatcher
+    """One database context, dispatcher and disk hold per worker process, made on first use."""
+    global _ctx, _dispatcher, _disk_hold
     with _ctx_lock:
         if _ctx is None:
             settings = get_job_settings()
             configure_logging(settings.log_format, settings.log_level)
             _ctx = ServiceContext.create(settings)
             _dispatcher = CeleryDispatcher(_ctx)
+            _disk_hold = DiskHold(_ctx)
         return _ctx, _dispatcher
+
+
+def _sent_again(ctx: ServiceContext, job_id: uuid.UUID) -> None:
+    """The held job's message is sent again now (its retry): not one the sweeper is to send another of while the
+    worker keeps it for its countdown, where the broker's queue length does not count it."""
+    try:
+        ctx.repo.mark_enqueued(job_id)
+    except Exception as error:  # the database is away: the sweeper may send a second message, which runs once
+        log.warning("job %s: its held message could not be marked sent (%s)", job_id, type(error).__name__)
 
 
 def _run_job_task(task, job_id: str) -> str:
     ctx, dispatcher = _worker_context()
     job_uuid = uuid.UUID(job_id)
+    if _disk_hold.holds():  # the job stays queued ('waiting: disk space low'); its task asks again after a while
+        _sent_again(ctx, job_uuid)
+        raise task.retry(countdown=HELD_TASK_COUNTDOWN_SECONDS)
     outcome = run_job(
         ctx,
         job_uuid,

@@ -5,7 +5,7 @@ from typing import get_args
 
 import pytest
 
-from plantsolve.schemas.common import Units
+from plantsolve.schemas.common import UnitName
 from plantsolve.solvers.flowmeter.field_file import FieldFileError, read_field_file
 from plantsolve.solvers.length_units import METRES, SIZES, spellings, unit_named, unit_of_size
 from plantsolve.solvers.base import InputRejected, StoredInput
@@ -29,7 +29,7 @@ WORDS = {**TEXT_HEADER_BEFORE, **PLY_BEFORE}
 
 
 def test_the_vocabulary_names_the_request_units_and_their_sizes():
-    assert set(METRES) == set(get_args(Units))
+    assert set(METRES) == set(get_args(UnitName))
     assert dict(METRES) == {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
     assert SIZES["um"] == 1e-6 and unit_named("um") is None and unit_named("Microns", SIZES) == "um"
     assert {word: unit_named(word.upper()) for word in WORDS} == WORDS

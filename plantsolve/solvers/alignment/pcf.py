@@ -1339,7 +1339,10 @@ def parse_pcf(text: str, options: dict | None) -> AlignmentRequest:
 
 
 def pcf_notes(request: AlignmentRequest) -> list[tuple[str, str, dict, str]]:
-    """Report notes about the request's source PCF: (code, message, details, 'warning' | 'detail')."""
+    """Report notes about the request's source PCF: (code, message, details, 'warning' | 'detail'); none for a
+    request that has no PCF (a JSON one)."""
+    if request.source_pcf is None:
+        return []
     try:
         return interpret_pcf(request.source_pcf, request.options).notes
     except InputRejected:  # a source_pcf that does not belong to this request (edited JSON)
