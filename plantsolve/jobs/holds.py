@@ -26,11 +26,15 @@ HELD_TASK_COUNTDOWN_SECONDS = 2.0
 
 
 def disk_low(ctx: ServiceContext) -> str | None:
-    """Why the disk is short of space (the folders and their free space), or None when it has room."""
+    """Why the disk is short of space (the folders and their free space), or None when it has room. A disk whose
+    free space cannot be read (a stale network mount: ESTALE) has no known room: it holds jobs and refuses
+    submissions as a full one does, as readiness says ``disk`` then too."""
     try:
         ctx.store.check_disk()
     except DiskLow as error:
         return str(error)
+    except OSError as error:
+        return f"the free space of the service's disk could not be read ({error})"
     return None
 
 

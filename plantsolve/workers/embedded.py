@@ -72,7 +72,7 @@ class EmbeddedDispatcher:
             if job_id is None:
                 return
             # a job taken while the disk is below its floor waits, queued (see jobs.holds); a stop leaves it so
-            while not self._stopping.is_set() and self._disk.holds():
+            while not self._stopping.is_set() and self._held():
                 self._stopping.wait(LOOK_SECONDS)
             with self._lock:
                 self._pending.discard(job_id)
@@ -82,3 +82,10 @@ class EmbeddedDispatcher:
                 run_job(self.ctx, job_id, worker=self.name, requeue=self.enqueue)
             except Exception:  # the pool must survive anything a job does
                 log.exception("job %s: runner error", job_id)
+
+    def _held(self) -> bool:
+        try:
+            return self._disk.holds()
+        except Exception:  # the pool's threads must outlive a look that fails: it holds, the next look decides
+            log.exception("the disk hold could not be asked; holding")
+            return True

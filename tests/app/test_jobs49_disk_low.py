@@ -95,3 +95,29 @@ def test_a_repeated_request_whose_key_names_a_job_is_answered_with_it_while_the_
         assert again.status_code == 200, again.text
         assert again.json()["id"] == first.json()["id"]
         _refused(submit(client, "order-43"))
+
+
+def test_a_disk_whose_free_space_cannot_be_read_holds_jobs_until_it_can(tmp_path):
+    """A stale network mount makes statvfs raise (ESTALE): the hold counts that look as held, the pool's threads
+    live on, and the queued jobs run once the disk answers again."""
+    import errno
+
+    settings = service_settings(tmp_path, embedded_workers=1, min_free_disk_bytes=1)
+    with TestClient(create_app(settings)) as client:
+        store = client.app.state.ctx.store
+        first = client.post("/v1/test-compute/jobs", json={"values": [1.0], "seconds": 1.5}).json()["id"]
+        wait_for(client, first, statuses=("running",), timeout=60)
+        queued = [client.post("/v1/test-compute/jobs", json={"values": [float(i)]}).json()["id"] for i in (2, 3)]
+
+        def stale() -> None:
+            raise OSError(errno.ESTALE, "Stale file handle")
+
+        store.check_disk = stale
+        try:
+            assert wait_for(client, first, timeout=60)["status"] == "succeeded"
+            time.sleep(2.0)
+            assert [client.get(f"/v1/jobs/{job}").json()["status"] for job in queued] == ["queued", "queued"]
+        finally:
+            del store.check_disk  # the mount is back
+        for job in queued:
+            assert wait_for(client, job, timeout=60)["status"] == "succeeded"
