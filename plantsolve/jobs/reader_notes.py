@@ -42,7 +42,7 @@ def reader_warnings(request: Any, spec: SolverSpec | None = None) -> list[dict]:
             count = source.get("skipped_count")
             found.append(skipped_lines(skipped, "record", count if isinstance(count, int) else None))
         found.extend(source_warnings(source))
-    if spec is not None and spec.reader_notes is not None and getattr(request, spec.reader_source, None) is not None:
+    if spec is not None and spec.reader_notes is not None:
         found.extend(Diagnostic(code=code, message=message, details=details)
                      for code, message, details, level in spec.reader_notes(request) if level == "warning")
     seen: set[tuple[str, str]] = set()

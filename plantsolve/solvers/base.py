@@ -421,9 +421,8 @@ class SolverSpec:
     - ``example() -> dict``: a small valid request body (JSON) that solves in seconds; the
       OpenAPI document shows it and the contract test runs every kind through it.
     - ``reader_notes(request) -> [(code, message, details, level)]``: for a kind whose request keeps its
-      source file's text (in its field ``reader_source``) rather than what the reader found in it (alignment's
-      PCF), the reader's notes said again from that text, asked only of a request whose ``reader_source`` is
-      set; those of level ``"warning"`` are reader's warnings, which every report of the job carries, a failed
+      source file's text rather than what the reader found in it (alignment's PCF), the reader's notes said again
+      from that text (a request without that text has none); those of level ``"warning"`` are reader's warnings, which every report of the job carries, a failed
       one too (``plantsolve.jobs.reader_notes``). A kind whose reader writes its notes into the request
       (``Diagnostic`` fields, a ``source`` mapping) needs neither.
     - limits: ``soft_time_limit`` (the solver is asked to stop), ``time_limit`` (it is
@@ -454,7 +453,6 @@ class SolverSpec:
     operations: tuple[ResultOperation, ...] = ()
     example: Callable[[], dict[str, Any]] | str | None = None
     reader_notes: Callable[[Any], Iterable[tuple[str, str, dict, str]]] | str | None = None
-    reader_source: str | None = None
 
     FUNCTIONS = ("solve", "load", "check_input", "parse_upload", "render_artifacts", "example", "reader_notes")
     # what reading an upload and checking it runs (the upload readers' processes import these ahead)
@@ -471,8 +469,6 @@ class SolverSpec:
             raise ValueError(f"{self.kind}: parse_upload needs upload_extensions")
         if any(not e.startswith(".") or e != e.lower() for e in self.upload_extensions):
             raise ValueError(f"{self.kind}: upload extensions are lower case and start with a dot")
-        if (self.reader_notes is None) != (self.reader_source is None):
-            raise ValueError(f"{self.kind}: reader_notes and reader_source go together")
         names = [op.name for op in self.operations]
         if len(set(names)) != len(names):
             raise ValueError(f"{self.kind}: operation names repeat: {names}")

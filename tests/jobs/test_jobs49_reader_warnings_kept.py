@@ -155,13 +155,6 @@ def test_alignment_reader_warnings_are_those_a_succeeded_job_reports(tmp_path):
     assert reader_warnings(request.model_copy(update={"source_pcf": None}), spec) == []
 
 
-def test_reader_notes_and_their_source_field_go_together():
-    from plantsolve.solvers.kinds import KINDS
-
-    with pytest.raises(ValueError, match="go together"):
-        dataclasses.replace(KINDS["alignment"], reader_source=None)
-
-
 def test_a_job_read_without_warnings_writes_no_report_while_it_runs(tmp_path):
     ctx = _context(tmp_path)
     try:

@@ -24,7 +24,7 @@ SPEC = SolverSpec(
     check_input="plantsolve.solvers.alignment.validation:check_input",
     parse_upload="plantsolve.solvers.alignment.upload:parse_upload",
     render_artifacts="plantsolve.solvers.alignment.artifacts:render_artifacts",
-    reader_notes="plantsolve.solvers.alignment.pcf:pcf_notes", reader_source="source_pcf",
+    reader_notes="plantsolve.solvers.alignment.pcf:pcf_notes",
     upload_extensions=UPLOAD_EXTENSIONS,
     example=stored_example(__name__),  # synthetic.example(), written out
     soft_time_limit=300,
