@@ -510,13 +510,13 @@ class Assembly:
     def _join_shifted_rows(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
         """Join, as :meth:`join_pieces` joins a point drawn off its mate, two parts of different pieces whose studs and
         anti-studs face each other in one plane (the anti-studs' mouths within SHIFT_PLANE of the studs' bases along
-        their axes) all shifted by one and the same offset across it, more than a slip (OFFSET_REACH) and at most half a
-        pitch, on SHIFTED_ROW_STUDS or more studs: the part lies on the studs, drawn beside them. In that plane the
-        studs stand inside the other part's underside, which no build allows but on its anti-studs: set 6761 draws its
-        base plate 3.2 LDU off the grid the walls on it stand on. A single stud so shifted (a part that may turn
-        on it) or offsets that differ (parts resting askew) are not joined. Only between different pieces as they were
+        their axes), all shifted by one and the same offset across it, more than a slip (OFFSET_REACH) and less than
+        half a pitch, on SHIFTED_ROW_STUDS or more studs: the part lies on the studs, drawn beside them. In that plane
+        the studs stand inside the other part, which no build allows but in its anti-studs: set 6761 draws its base
+        plate 9.8 LDU off the grid of the 18 parts standing on it. A single stud so shifted (a part that may turn on
+        it) or offsets that differ (parts resting askew) are not joined. Only between different pieces as they were
         before the pass; the pair's offset the shift."""
-        shifts: dict[tuple[str, str], list[tuple[int, int, np.ndarray]]] = {}
+        shifts: dict[tuple[str, str], dict[tuple, np.ndarray]] = {}  # part pair -> (stud, anti-stud) -> offset
         for group in groups[1:]:
             for id in group:
                 placed = self.parts[id]
@@ -526,15 +526,13 @@ class Assembly:
                     for other, oi, v in self._shifted_mates(id, ci, label):
                         stud, mouth = ((id, ci), (other, oi)) if c.type == "stud" else ((other, oi), (id, ci))
                         shift = v if c.type == "stud" else -v  # from the stud's base to the anti-stud's mouth
-                        key = tuple(sorted((id, other)))
-                        entry = (stud, mouth, shift)
-                        if entry[:2] not in [(a, b) for a, b, _ in shifts.get(key, [])]:
-                            shifts.setdefault(key, []).append(entry)
+                        pairs = shifts.setdefault(tuple(sorted((id, other))), {})
+                        pairs.setdefault((stud, mouth), shift)  # met from both parts when both are apart: once
         joined = []
         for (a, b), pairs in sorted(shifts.items()):
             if (a, b) in self._links or (b, a) in self._links:
                 continue
-            shift, held = _common_shift(pairs)
+            shift, held = _common_shift([(stud, mouth, v) for (stud, mouth), v in pairs.items()])
             if shift is None:
                 continue
             for (sid, si), (mid, mi), _ in held:
@@ -546,8 +544,9 @@ class Assembly:
 
     def _shifted_mates(self, id: str, ci: int, label: dict):
         """(part, connector, offset) of the points of parts of other pieces that mate connector ``ci`` of ``id`` (an
-        anti-stud for a stud, a stud for an anti-stud, length 0) facing it in its plane (within SHIFT_PLANE along its axis)
-        more than OFFSET_REACH and at most HALF_PITCH beside it."""
+        anti-stud for a stud, a stud for an anti-stud, length 0) facing it in its plane (within SHIFT_PLANE along its
+        axis) more than OFFSET_REACH and less than HALF_PITCH beside it (at half a pitch a part stands between two
+        studs, where only a grip holds it: :meth:`seat_offset_studs`)."""
         placed = self.parts[id]
         point, direction = placed.points[ci], placed.directions[ci]
         wanted = "antistud" if placed.shape.connectors[ci].type == "stud" else "stud"
@@ -560,7 +559,8 @@ class Assembly:
                 if float(direction @ o.directions[oi]) > -ALIGN:
                     continue
                 v = o.points[oi] - point
-                if abs(float(v @ direction)) <= SHIFT_PLANE and OFFSET_REACH < float(np.linalg.norm(v)) <= HALF_PITCH + SNAP:
+                across = float(np.linalg.norm(v))
+                if abs(float(v @ direction)) <= SHIFT_PLANE and OFFSET_REACH < across < HALF_PITCH - SNAP:
                     yield other, oi, v
 
     def _join_tilted_fingers(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
