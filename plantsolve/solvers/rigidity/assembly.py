@@ -242,7 +242,7 @@ def _clean(x: float) -> float | int:
     return r if abs(float(x) - r) < 1e-9 else float(x)
 
 
-def _common_shift(pairs: list) -> tuple[np.ndarray | None, list]:
+def common_shift(pairs: list) -> tuple[np.ndarray | None, list]:
     """The one offset (within SNAP) that SHIFTED_ROW_STUDS or more distinct studs share with distinct anti-studs among
     ``pairs`` ((stud, anti-stud, offset) each), and the pairs with it; (None, []) when no offset is shared so, or two
     are (a grid shifted half a pitch meets two rows of mates equally well)."""
@@ -532,7 +532,7 @@ class Assembly:
         for (a, b), pairs in sorted(shifts.items()):
             if (a, b) in self._links or (b, a) in self._links:
                 continue
-            shift, held = _common_shift([(stud, mouth, v) for (stud, mouth), v in pairs.items()])
+            shift, held = common_shift([(stud, mouth, v) for (stud, mouth), v in pairs.items()])
             if shift is None:
                 continue
             for (sid, si), (mid, mi), _ in held:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from plantsolve.solvers.base import StoredInput
-from plantsolve.solvers.rigidity.assembly import _common_shift
+from plantsolve.solvers.rigidity.assembly import common_shift
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 
@@ -58,8 +58,8 @@ def test_two_shifts_that_each_reach_two_studs_equally_are_no_shift():
     # a grid drawn half a pitch along meets the studs either side as well: neither is the joint
     a, b = np.array([10.0, 0, 0]), np.array([-10.0, 0, 0])
     pairs = [(("s", 0), ("m", 0), a), (("s", 1), ("m", 1), a), (("s", 0), ("m", 2), b), (("s", 1), ("m", 3), b)]
-    assert _common_shift(pairs) == (None, [])
-    shift, held = _common_shift(pairs + [(("s", 2), ("m", 4), a)])
+    assert common_shift(pairs) == (None, [])
+    shift, held = common_shift(pairs + [(("s", 2), ("m", 4), a)])
     assert np.allclose(shift, a) and len(held) == 3
     # one stud reaching two mouths with one offset is no second stud
-    assert _common_shift([(("s", 0), ("m", 0), a), (("s", 0), ("m", 1), a + 0.01)]) == (None, [])
+    assert common_shift([(("s", 0), ("m", 0), a), (("s", 0), ("m", 1), a + 0.01)]) == (None, [])
