@@ -78,6 +78,12 @@ FINGER_TILT = math.cos(math.radians(30.0))
 # LDU: a male round section thinner than this is a rod a clip holds but no bar hole (the data's bars are radius 4)
 THIN_ROD = 3.5
 HALF_PITCH = 10.0  # LDU: half a stud pitch
+# studs that must share one shift across the plane of their anti-studs for join_pieces to join a part drawn beside the
+# studs it lies on (Assembly._join_shifted_rows): two hold it rigid, and one shift shared by two is no chance
+SHIFTED_ROW_STUDS = 2
+# LDU: how far off one plane a stud's base and the anti-stud's mouth beside it may be drawn for that shift to be read
+# (Assembly._join_shifted_rows): set 6761's base plate lies 0.16 LDU low as well as 3.2 LDU aside
+SHIFT_PLANE = 0.5
 STUD_LENGTH_IN = 4.0  # LDU: how far a stud reaches into the part above it (stud.dat's height)
 RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a run (an axle, a bar)
 ALIGN = 0.999  # |cos| between directions that count as parallel
@@ -234,6 +240,26 @@ def _clean(x: float) -> float | int:
     """Integer-valued coordinates as ints (LDraw units), so the exact pass can use them."""
     r = round(float(x))
     return r if abs(float(x) - r) < 1e-9 else float(x)
+
+
+def common_shift(pairs: list) -> tuple[np.ndarray | None, list]:
+    """The one offset (within SNAP) that SHIFTED_ROW_STUDS or more distinct studs share with distinct anti-studs among
+    ``pairs`` ((stud, anti-stud, offset) each), and the pairs with it; (None, []) when no offset is shared so, or two
+    are (a grid shifted half a pitch meets two rows of mates equally well)."""
+    best, ties = None, 0
+    for _, _, shift in pairs:
+        held = [p for p in pairs if float(np.linalg.norm(p[2] - shift)) <= SNAP]
+        studs, mouths = {p[0] for p in held}, {p[1] for p in held}
+        count = min(len(studs), len(mouths))
+        if count < SHIFTED_ROW_STUDS:
+            continue
+        if best is None or count > best[0]:
+            best, ties = (count, shift, held), 0
+        elif count == best[0] and float(np.linalg.norm(shift - best[1])) > SNAP:
+            ties += 1
+    if best is None or ties:
+        return None, []
+    return best[1], best[2]
 
 
 class Assembly:
@@ -414,6 +440,7 @@ class Assembly:
                     joined.append((other, id, gap))
         joined += self._join_slipped_grips(groups, label, reach)
         joined += self._join_stud_tips(groups, label)
+        joined += self._join_shifted_rows(groups, label)
         joined += self._join_tilted_fingers(groups, label)
         if joined:
             self._pebble_stale = True
@@ -479,6 +506,62 @@ class Assembly:
                        for c in self._links.get((other, id), []) + self._links.get((id, other), [])):
                 self._link_at(id, ci, other, oi, "stud")  # every stud of the pair on a tip: two or more hold it rigid
         return joined
+
+    def _join_shifted_rows(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
+        """Join, as :meth:`join_pieces` joins a point drawn off its mate, two parts of different pieces whose studs and
+        anti-studs face each other in one plane (the anti-studs' mouths within SHIFT_PLANE of the studs' bases along
+        their axes), all shifted by one and the same offset across it, more than a slip (OFFSET_REACH) and less than
+        half a pitch, on SHIFTED_ROW_STUDS or more studs: the part lies on the studs, drawn beside them. In that plane
+        the studs stand inside the other part, which no build allows but in its anti-studs: set 6761 draws its base
+        plate 9.8 LDU off the grid of the 18 parts standing on it. A single stud so shifted (a part that may turn on
+        it) or offsets that differ (parts resting askew) are not joined. Only between different pieces as they were
+        before the pass; the pair's offset the shift."""
+        shifts: dict[tuple[str, str], dict[tuple, np.ndarray]] = {}  # part pair -> (stud, anti-stud) -> offset
+        for group in groups[1:]:
+            for id in group:
+                placed = self.parts[id]
+                for ci, c in enumerate(placed.shape.connectors):
+                    if c.type not in ("stud", "antistud") or c.length > 0:
+                        continue
+                    for other, oi, v in self._shifted_mates(id, ci, label):
+                        stud, mouth = ((id, ci), (other, oi)) if c.type == "stud" else ((other, oi), (id, ci))
+                        shift = v if c.type == "stud" else -v  # from the stud's base to the anti-stud's mouth
+                        pairs = shifts.setdefault(tuple(sorted((id, other))), {})
+                        pairs.setdefault((stud, mouth), shift)  # met from both parts when both are apart: once
+        joined = []
+        for (a, b), pairs in sorted(shifts.items()):
+            if (a, b) in self._links or (b, a) in self._links:
+                continue
+            shift, held = common_shift([(stud, mouth, v) for (stud, mouth), v in pairs.items()])
+            if shift is None:
+                continue
+            for (sid, si), (mid, mi), _ in held:
+                self._link_at(mid, mi, sid, si, "stud")
+            gap = float(np.linalg.norm(shift))
+            self._offsets[(a, b)] = gap
+            joined.append((a, b, gap))
+        return joined
+
+    def _shifted_mates(self, id: str, ci: int, label: dict):
+        """(part, connector, offset) of the points of parts of other pieces that mate connector ``ci`` of ``id`` (an
+        anti-stud for a stud, a stud for an anti-stud, length 0) facing it in its plane (within SHIFT_PLANE along its
+        axis) more than OFFSET_REACH and less than HALF_PITCH beside it (at half a pitch a part stands between two
+        studs, where only a grip holds it: :meth:`seat_offset_studs`)."""
+        placed = self.parts[id]
+        point, direction = placed.points[ci], placed.directions[ci]
+        wanted = "antistud" if placed.shape.connectors[ci].type == "stud" else "stud"
+        for cell in _around(point, HALF_PITCH + SNAP, RUN_CELL, RUN_OFFSET):
+            for other, oi in self._coarse.get(cell, ()):
+                o = self.parts[other]
+                c = o.shape.connectors[oi]
+                if label[other] == label[id] or c.type != wanted or c.length > 0:
+                    continue
+                if float(direction @ o.directions[oi]) > -ALIGN:
+                    continue
+                v = o.points[oi] - point
+                across = float(np.linalg.norm(v))
+                if abs(float(v @ direction)) <= SHIFT_PLANE and OFFSET_REACH < across < HALF_PITCH - SNAP:
+                    yield other, oi, v
 
     def _join_tilted_fingers(self, groups: list[list[str]], label: dict) -> list[tuple[str, str, float]]:
         """Join, as a hinge, two runs of hinge fingers of parts of different pieces whose middles lie within SNAP of

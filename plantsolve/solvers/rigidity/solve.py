@@ -12,8 +12,8 @@ from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResul
                                          RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
-from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, OFFSET_REACH, SNAP, STUD_LENGTH_IN,
-                                                  Assembly, JointSpec, natural_order)
+from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, HALF_PITCH, OFFSET_REACH, SNAP,
+                                                  STUD_LENGTH_IN, Assembly, JointSpec, natural_order)
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
@@ -389,14 +389,15 @@ def _offset_warnings(assembly: Assembly) -> list[Diagnostic]:
                        f"connection points miss each other by more than rounding ({SNAP:g} LDU), up to {worst:.3g} LDU "
                        f"(at most {OFFSET_REACH:g} is taken for a part drawn off its mate, {FINGER_REACH:g} between "
                        f"the axes of interleaved hinge fingers, {STUD_LENGTH_IN:g} for an anti-stud drawn on a stud's "
-                       "tip; 1 LDU = 0.4 mm): "
+                       f"tip, under {HALF_PITCH:g} for a part's studs all drawn one way beside their anti-studs in "
+                       "one plane; 1 LDU = 0.4 mm): "
                        + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number}) "
                                    f"{gap:.3g} LDU" for (a, b), gap in listed[:LISTED_IN_MESSAGE]),
                        details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
                                                                          assembly.parts[b].number],
                                            "offset_ldu": round(gap, 3)} for (a, b), gap in listed[:MAX_LISTED]],
                                 "reach_ldu": OFFSET_REACH, "finger_reach_ldu": FINGER_REACH,
-                                "stud_tip_ldu": STUD_LENGTH_IN})]
+                                "stud_tip_ldu": STUD_LENGTH_IN, "shifted_rows_ldu": HALF_PITCH})]
 
 
 def _tilt_warnings(assembly: Assembly) -> list[Diagnostic]:
