@@ -314,6 +314,7 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
             cache = {key: cache[key] for key in ("lu", "shape") if key in cache}
             switched = True
         cache["reuse"] = not use_cost and not np.any(short)
+        cache["crawl"] = crawl
         # solve in lengths of lref (x = sv * y) and cost / lref^2: every entry O(1) whatever the units
         Hs = scaled_cost(H, sv, model.lref)
         As = (A @ sp.diags(sv)).tocsr()
