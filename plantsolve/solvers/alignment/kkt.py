@@ -11,7 +11,9 @@ in extended precision, which is where the last digits of the closure are decided
 
 A factorisation may be passed back in (``cache``): near convergence of an outer
 Gauss-Newton loop the matrix barely changes, and the refinement, which always uses the
-current ``H`` and ``A``, converges with a slightly stale preconditioner too.
+current ``H`` and ``A``, converges with a slightly stale preconditioner too; where it does not contract
+(near a singular loop an earlier step's factorisation can be a poor inverse), the step is refactored
+(:func:`_refine`).
 
 The cost is block diagonal (one small block per component), so by default the system is solved
 by eliminating it: the Schur complement ``A H^-1 A^T + delta I`` is symmetric positive definite and
