@@ -431,8 +431,10 @@ def _couplings(A: sp.spmatrix, owner: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 def _refine(H, g, A, residual, lu, stop, max_iter, stale, slow=False):
     """Iterative refinement: ``(x, residual, steps)``. With a stale factorisation (an earlier Gauss-Newton step's) the
-    steps taken (an int) instead where it does not contract: a step that leaves the constraint residual above
-    :data:`STALE_CONTRACTION` of the one before while it is still above :data:`STALE_REACH` of where it started
+    steps taken (an int) instead where it does not contract: a step that leaves both the constraint residual and the
+    correction of ``x`` above :data:`STALE_CONTRACTION` of the step before's while the residual is still above
+    :data:`STALE_REACH` of where it started (a conflict's inconsistent constraints leave a residual no refinement
+    lowers, but its corrections still shrink where the factorisation serves)
     (``slow``: only where the first step does not lower it, as in the crawl of a round below what snapping closes,
     ``cache["crawl"]`` of :func:`constrained_lstsq`, whose slow refinements on the stale factorisation are the same on
     either factorisation and keep their answers together; see :func:`direct.solve_joint`).
@@ -448,7 +450,7 @@ def _refine(H, g, A, residual, lu, stop, max_iter, stale, slow=False):
     r2 = residual(x)
     start = float(np.max(np.abs(r2))) if m else 0.0
     best = np.inf
-    last = start
+    last, moved = start, np.inf  # the residual and the correction of x at the step before
     stall = 0
     steps = 0
     AT = A.T  # once: a view, see SchurSolve
@@ -465,10 +467,11 @@ def _refine(H, g, A, residual, lu, stop, max_iter, stale, slow=False):
         err = float(np.max(np.abs(r2)))
         if stale and (not np.isfinite(err) or (steps == 1 and not err < start)):
             return steps
-        if stale and not slow and err > STALE_CONTRACTION * last and err > STALE_REACH * start:
-            return steps
-        last = err
         step = float(np.max(np.abs(sol[:n]))) if n else 0.0
+        if (stale and not slow and err > STALE_CONTRACTION * last and step > STALE_CONTRACTION * moved
+                and err > STALE_REACH * start):
+            return steps
+        last, moved = err, step
         if err <= stop and step <= max(stop, 1e-14 * (1.0 + float(np.max(np.abs(x))))):
             break
         if err < 0.5 * best:
@@ -480,8 +483,8 @@ def _refine(H, g, A, residual, lu, stop, max_iter, stale, slow=False):
     return x, r2, steps
 
 
-# a stale factorisation is kept while each refinement step at least halves the constraint residual, or once that is
-# below a thousandth of where it started (round-off's floor, which no step halves, lies below that: measured 1e-10 to
-# 3e-5 of the start with a fresh factorisation)
+# a stale factorisation is kept while each refinement step at least halves the constraint residual or the correction,
+# or once the residual is below a thousandth of where it started (round-off's floor, which no step halves, lies below
+# that: measured 1e-10 to 3e-5 of the start with a fresh factorisation)
 STALE_CONTRACTION = 0.5
 STALE_REACH = 1e-3
