@@ -72,12 +72,13 @@ def settled_locates(model: Model, left_open: np.ndarray, gap: np.ndarray, ang: n
     The springs carry the conflict and a share of every scan gap the round closed. Where the round stalls far below
     the settled pose's impacts on the connections it left open (less than :data:`SETTLED_SHARE` of the largest), what
     is left open is no conflict of the size the springs carry: the scan gaps' shares decide the settled largest, and
-    which connection that is says nothing of where the round stalled. Measured: the 40,000-component plant-like
-    network of ``bench/alignment.py`` (its tie-ins unmoved: it closes as built) stalls 0.0187 mm open at one tee, where
-    its settled impacts among the 241 connections left open reach 8.6 mm at another: cut there it stalled again (4 cuts
-    where its own pose's largest takes one). The 744 cut decisions of the 360 conflicts of ``--conflicts`` stall at
-    0.09 to 300 times the settled impacts but for 12, after the tie-in was cut on two 4 x 3 grids (4.5e-5 and 1e-4):
-    on them as many cuts as the settled choice took, in every variant alike.
+    which connection that is says nothing of where the round stalled. Measured before the rounds refused a stale
+    factorisation whose refinement does not contract (``kkt._refine``; since then those rounds close): the
+    40,000-component plant-like network of ``bench/alignment.py`` (its tie-ins unmoved: it closes as built) stalled
+    0.0187 mm open at one tee, where its settled impacts among the 241 connections left open reach 8.6 mm at another:
+    cut there it stalled again (4 cuts where its own pose's largest took one); the 744 cut decisions of the 360
+    conflicts of ``--conflicts`` stalled at 0.09 to 300 times the settled impacts but for 12, after the tie-in was cut
+    on two 4 x 3 grids (4.5e-5 and 1e-4). The rule stays for a stall of another cause.
     Both impacts are in the request's unit, so the choice does not depend on it."""
     if not np.any(left_open):
         return False

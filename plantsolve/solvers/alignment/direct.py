@@ -314,6 +314,9 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
             cache = {key: cache[key] for key in ("lu", "shape") if key in cache}
             switched = True
         cache["reuse"] = not use_cost and not np.any(short)
+        # an earlier step's factorisation is refused where its refinement does not contract (kkt._refine), but for the
+        # crawl's slow refinement: its steps are the same on either factorisation, which keeps their answers together
+        cache["crawl"] = crawl
         # solve in lengths of lref (x = sv * y) and cost / lref^2: every entry O(1) whatever the units
         Hs = scaled_cost(H, sv, model.lref)
         As = (A @ sp.diags(sv)).tocsr()
@@ -531,8 +534,9 @@ def continue_closing(model: Model, active: np.ndarray, pose: Pose, stiffness: fl
     P, D, rp, rd, err = residual(st)
     steps = stalls = 0
     # the round's last factorisation preconditions the first steps (refined on the current system; a fresh one where
-    # it does not contract): a conflict's continuation is then one solve and no factorisation
-    cache: dict = {**st.kkt, "reuse": True}
+    # it does not contract, never the crawl's slow refinement: the continuation is above what snapping closes): a
+    # conflict's continuation is then one solve and no factorisation
+    cache: dict = {**st.kkt, "reuse": True, "crawl": False}
     st.kkt = {}  # handed over: a fresh factorisation below replaces it, never held beside it (peak memory)
     while steps < budget and nv and len(a) and not closed(P, D):
         if step is not None:

@@ -25,7 +25,7 @@ CASES = {
     "4x2 seed 4, tie-in 30 mm up, turned 1 deg": {"nx": 4, "ny": 2, "seed": 4, "shift": (0.0, 0.0, 30.0), "turn": 1.0},
     "3x3 seed 2, tie-in 40 mm off, turned 2 deg": {"nx": 3, "ny": 3, "seed": 2, "shift": (40.0, 0.0, 0.0), "turn": 2.0},
     "3x2 seed 0 valves, tie-in turned 3 deg": {"nx": 3, "ny": 2, "seed": 0, "turn": 3.0, "valve_every": 3},
-    # its third round stalls far below the springs and is cut on its own pose (cuts.settled_locates)
+    # cut twice at its tie-in; the round after closes by a crawl along a loop's flat mode
     "4x3 seed 0, tie-in 40 mm off, turned 2 deg": {"nx": 4, "ny": 3, "seed": 0, "shift": (40.0, 0.0, 0.0), "turn": 2.0},
 }
 # how far apart the variants' ports may end (mm): the 4 x 3 grid's last round closes by a crawl along a loop's flat
