@@ -862,8 +862,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     else:
         u = np.where(arc, (rho - R) * inv, 1.0)
         v = np.where(arc, s * inv, 0.0)
-    out[:3] = -(u * e + v * a)
-    out[3:6] = v * w - (u * s) * e
+    # -(u e + v a) and v w - (u s) e through two scratch arrays of three rows (each a fresh array per product
+    # and a copy into the strided ``out`` cost more than the products)
+    ue, va = np.multiply(u, e), np.multiply(v, a)
+    np.negative(np.add(ue, va, out=ue), out=out[:3])
+    np.multiply(u * s, e, out=ue)
+    np.subtract(np.multiply(v, w, out=va), ue, out=out[3:6])
     out[6] = np.where(arc, -u, 0.0) if arc is not True else -u
 
 
@@ -977,6 +981,11 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         if lay.fit_pipe_radius:
             G[:, 7] = 1.0
         Gw = G * w[:, None]
+        if len(blocks) == 1:  # each segment's samples are one run: its sums are the products themselves
+            for k, sl in runs[i]:
+                np.matmul(G[sl].T, Gw[sl], out=gram[k])
+                np.matmul(Gw[sl].T, rb[sl], out=rhs[k])
+            return
         for k, sl in runs[i]:
             gram[k] += G[sl].T @ Gw[sl]
             rhs[k] += Gw[sl].T @ rb[sl]
