@@ -827,9 +827,16 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray,
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
     # distances to the last bit
-    s = (w[0] * a[0] + w[2] * a[2]) + w[1] * a[1]
-    perp = w - s * a
-    rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
+    # (in place into two rows of scratch: a fresh array per product costs more than the product)
+    s, t = np.multiply(w[0], a[0]), np.multiply(w[2], a[2])
+    s += t
+    s += np.multiply(w[1], a[1], out=t)
+    perp = np.multiply(s, a)
+    np.subtract(w, perp, out=perp)
+    rho = np.multiply(perp[0], perp[0])
+    rho += np.multiply(perp[2], perp[2], out=t)
+    rho += np.multiply(perp[1], perp[1], out=t)
+    np.sqrt(rho, out=rho)
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
     # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
