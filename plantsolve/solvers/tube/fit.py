@@ -13,8 +13,8 @@ between solves; the first and last straights are infinite lines during a solve, 
 lengths follow from the extent of their samples afterwards (a bounded end would cost
 nothing when too long). The Jacobian is analytic per sample (derivative of the distance
 with respect to the segment's line or circle) chained with the derivative of the segment
-geometry with respect to the LRA parameters (analytic too: each parameter moves the tube
-from some segment on as one rigid body, :func:`geometry_jacobian`). Each round is solved by
+geometry with respect to the LRA parameters (central differences of the forward
+kinematics, which is cheap: it involves no samples). Each round is solved by
 Levenberg–Marquardt (Marquardt diagonal scaling, soft-L1 robust loss by iteratively
 reweighted normal equations, bounds by projection). Written out rather than calling
 scipy.optimize.least_squares because that solver takes an SVD of the full N×P Jacobian
@@ -24,6 +24,7 @@ which stays fast with many samples and on a loaded machine.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -130,8 +131,8 @@ _ENTRIES = np.array([0, 4, 8, 3, 2, 7, 1, 6, 5])  # flat (row-major) index of ea
 
 def rotvec_matrices(V: np.ndarray) -> np.ndarray:
     """Rotation matrices (B, 3, 3) of rotation vectors V (B, 3) by Rodrigues' formula; below 1e-3 rad the
-    coefficients sin θ / θ and (1 - cos θ) / θ² from their Taylor series (near 0, where 1 - cos θ loses its
-    digits to cancellation). The entries' three kinds (diagonal,
+    coefficients sin θ / θ and (1 - cos θ) / θ² from their Taylor series (the finite-difference steps of the
+    Jacobian are 1e-6 rad, where 1 - cos θ has lost most of its digits). The entries' three kinds (diagonal,
     the products b·x·y that both off-diagonal entries of a pair share, a·z that one adds and the other
     subtracts) each computed for all three components in one operation: a batch of a few rows costs numpy's
     per-call overhead, not arithmetic."""
@@ -158,29 +159,17 @@ def rotvec_matrices(V: np.ndarray) -> np.ndarray:
     return M.reshape(-1, 3, 3)
 
 
-def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float) -> np.ndarray:
-    """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7) (:func:`_kinematics`)."""
-    return _kinematics(X, lay, frame0)[0]
+def geometry_batch(X: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
+                   plan: JacobianBatch | None = None) -> np.ndarray:
+    """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7).
 
-
-@dataclass(frozen=True)
-class Bends:
-    """The forward kinematics of one parameter vector, bend by bend (n bends), as :func:`_kinematics` computes
-    them on the way to the geometry: what :func:`geometry_jacobian` takes the derivatives from."""
-
-    tangent: np.ndarray  # (n, 3) the tangent at each bend's arc start
-    origin: np.ndarray  # (n, 3) each bend's arc start
-    normal: np.ndarray  # (n, 3) the turned normal (toward the arc's centre)
-    sin: np.ndarray  # (n,) sine and cosine of each bend angle
-    cos: np.ndarray
-
-
-def _kinematics(X: np.ndarray, lay: Layout, frame0: np.ndarray) -> tuple[np.ndarray, Bends]:
-    """Segment geometry for a batch of parameter vectors X (B, P): (B, S, 7), and row 0's :class:`Bends`.
-
-    The same forward kinematics as model.build_spine, vectorised over the batch and over the bends: each bend is
-    a rigid step whose 4 × 4 matrix follows from its parameters elementwise, so the only loop over the bends is
-    one matrix product per bend."""
+    The same forward kinematics as model.build_spine, vectorised over the batch (the
+    finite-difference Jacobian evaluates 2P models at once) and over the bends: each bend is a rigid
+    step whose 4 × 4 matrix follows from its parameters elementwise, so the only loop over the bends is
+    one matrix product per bend. With ``plan`` (X is ``plan``'s batch about its row 0) a row's start frame and
+    its products of the steps before the first bend its parameter moves are row 0's, taken as such: every row
+    computed on its own is what it computes in the whole batch (elementwise operations and a matrix product
+    per row), so these are the very numbers its own products give."""
     B = len(X)
     n = lay.n
     i = 6
@@ -197,13 +186,19 @@ def _kinematics(X: np.ndarray, lay: Layout, frame0: np.ndarray) -> tuple[np.ndar
         rad = np.tile(np.asarray(lay.fixed_radii, dtype=float), (B, 1))
     else:
         rad = np.full((B, n), lay.fixed_bend_radius or 0.0)
-    frames = rotvec_matrices(X[:, 3:6]) @ frame0
+    if plan is None:
+        frames = rotvec_matrices(X[:, 3:6]) @ frame0
+    else:  # the rows after the first ``turned`` + 1 have row 0's rotation vector: its frame
+        own = rotvec_matrices(X[:plan.turned + 1, 3:6]) @ frame0
+        frames = np.empty((B, 3, 3))
+        frames[:plan.turned + 1] = own
+        frames[plan.turned + 1:] = own[0]
     g = np.zeros((B, 2 * n + 1, 7))
     p0, t0 = X[:, :3], frames[:, :, 0]
     g[:, 0, :3] = p0
     g[:, 0, 3:6] = t0
     if not n:
-        return g, Bends(*(np.zeros((0, 3)),) * 3, np.zeros(0), np.zeros(0))
+        return g
     # bend k as one rigid step from its arc start (frame F_k, point p_k) to the next arc start: turn about the
     # tangent by the rotation (Rx), bend about the binormal by the angle (Rz, offset (R sin a, R (1 - cos a),
     # 0) in the turned frame), then the straight after it along the new tangent; in homogeneous 4 x 4 form
@@ -226,7 +221,10 @@ def _kinematics(X: np.ndarray, lay: Layout, frame0: np.ndarray) -> tuple[np.ndar
     T[:, 0, :3, 3] = p0
     T[:, 0, 3] = (0.0, 0.0, 0.0, 1.0)
     for k in range(n):
-        T[:, k + 1] = T[:, k] @ M[:, k]
+        live = B if plan is None else plan.active[k]
+        T[:live, k + 1] = T[:live, k] @ M[:live, k]
+        if live < B:  # rows whose frames and steps up to bend k are row 0's
+            T[live:, k + 1] = T[0, k + 1]
     F, P = T[:, :n, :3, :3], T[:, :n, :3, 3]  # each bend's arc start, before its rotation
     nt = F[..., 1] * c[..., None] + F[..., 2] * s_[..., None]  # the turned normal (toward the centre)
     bt = F[..., 2] * c[..., None] - F[..., 1] * s_[..., None]  # the turned binormal (the arc's axis)
@@ -236,95 +234,91 @@ def _kinematics(X: np.ndarray, lay: Layout, frame0: np.ndarray) -> tuple[np.ndar
     # the straights after the bends start at the arc ends, along the next frames' tangents
     g[:, 2::2, :3] = P + (rad * sa)[..., None] * F[..., 0] + off[..., None] * nt
     g[:, 2::2, 3:6] = T[:, 1:, :3, 0]
-    return g, Bends(F[0, :, :, 0], P[0], nt[0], sa[0], ca[0])
+    return g
 
 
-_YZX, _ZXY = np.array([1, 2, 0]), np.array([2, 0, 1])
-# the cross-product matrices [q]× of a geometry row's point (columns 0-2) and direction (3-5): entries (0,1),
-# (0,2), (1,0), (1,2), (2,0), (2,1) of each (flat, row-major) take these columns with these signs
-_SKEW_AT = np.array([1, 2, 3, 5, 6, 7])
-_SKEW_OF = np.array([2, 1, 2, 0, 1, 0, 5, 4, 5, 3, 4, 3])
-_SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+def _steps(P: int, lay: Layout, scale: float) -> np.ndarray:
+    """Central-difference steps of the parameters: 1e-6 of the pipe radius for lengths, 1e-6 rad for angles."""
+    steps = np.full(P, 1e-6)
+    steps[:3] = 1e-6 * scale
+    i = 6 + max(lay.n - 1, 0)
+    steps[6:i] = 1e-6 * scale
+    steps[i + max(lay.n - 1, 0) + lay.n:] = 1e-6 * scale
+    return steps
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a × b over the last axis (np.cross's numbers without its axis handling, which costs more than a few
-    rows' arithmetic)."""
-    return a[..., _YZX] * b[..., _ZXY] - a[..., _ZXY] * b[..., _YZX]
+@dataclass(frozen=True)
+class JacobianBatch:
+    """The central-difference batch of a round (:func:`jacobian_batch`): row 0 the point, then each parameter's
+    + and − step (rows ``plus`` and ``minus``), ordered by the first bend the parameter moves (the start point and
+    frame move them all; the rotation vector's rows first); ``span`` = 2 × steps as (P, 1, 1)."""
+
+    shift: np.ndarray  # (P, P): the steps of the + and − rows 1 + 2m and 2 + 2m in row m (a permuted diagonal)
+    plus: np.ndarray
+    minus: np.ndarray
+    span: np.ndarray
+    turned: int  # rows 1 … turned change the rotation vector
+    active: tuple[int, ...]  # per bend k: the rows [:active[k]] whose frames or steps up to bend k are their own
 
 
-def _left_jacobian(v: np.ndarray) -> np.ndarray:
-    """The left Jacobian of the rotation vector v: a change dv of v turns its rotation matrix by the small
-    rotation (J dv) applied after it. Below 1e-3 rad the coefficients (1 - cos θ) / θ² and (θ - sin θ) / θ³
-    from their Taylor series (rotvec_matrices' threshold: both lose their digits to cancellation there)."""
-    th2 = float(v @ v)
-    th = np.sqrt(th2)
-    if th < 1e-3:
-        b = 0.5 - th2 / 24.0 + th2 * th2 / 720.0
-        c = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
-    else:
-        b = (1.0 - np.cos(th)) / th2
-        c = (th - np.sin(th)) / (th2 * th)
-    K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    return np.eye(3) + b * K + c * (K @ K)
+def jacobian_batch(lay: Layout, steps: np.ndarray) -> JacobianBatch:
+    """The batch of :func:`geometry_and_jacobian` for the steps of a round (:func:`_steps`)."""
+    pos, active = _batch_rows(len(steps), lay.n, lay.radius_mode, tuple(lay.dies))
+    shift = np.zeros((len(steps), len(steps)))
+    shift[pos, np.arange(len(steps))] = steps
+    return JacobianBatch(shift, 1 + 2 * pos, 2 + 2 * pos, 2 * steps[:, None, None], 6, active)
 
 
-def geometry_jacobian(x: np.ndarray, lay: Layout, g: np.ndarray, bends: Bends) -> np.ndarray:
-    """d(geometry)/d(parameters) (S, 7, P) at x, whose geometry ``g`` (S, 7) and :class:`Bends` are
-    :func:`_kinematics`' (row 0).
-
-    Each parameter moves the tube from some segment on as one rigid body, by a small rotation ω about a point
-    and a translation (a twist: a point q moves by ω × q + v, a direction a by ω × a): the start point
-    translates everything; the start frame's rotation vector turns everything about the start point (its left
-    Jacobian); the straight after bend k moves the segments after it along its tangent; bend k's rotation turns
-    the tube from its arc on about the tangent at the arc start; its angle turns the tube after the arc about
-    the arc's axis through its centre; its radius moves the arc's centre along the turned normal (and the
-    radius itself) and translates the tube after the arc by the arc end's move. A shared radius adds the
-    moves of its bends; the pipe radius moves no segment."""
-    n = lay.n
-    S = 2 * n + 1
-    n_lin = 6 + 2 * max(n - 1, 0) + n  # the parameters before the radii
-    Pv = n_lin + n  # one radius per bend, folded into the layout's radius parameters at the end
-    W, V = np.zeros((Pv, 3)), np.zeros((Pv, 3))
-    first = np.zeros(Pv, int)  # the first segment each moves as part of the rigid body
-    V[0:3] = np.eye(3)
-    W[3:6] = _left_jacobian(x[3:6]).T
-    V[3:6] = _cross(g[0, :3], W[3:6])  # (about the start point: -ω × p0)
-    arcs, lines = g[1::2], g[2::2]
-    k = np.arange(n)
+@functools.lru_cache(maxsize=256)
+def _batch_rows(P: int, n: int, radius_mode: str, dies: tuple[int, ...]) -> tuple[np.ndarray, tuple[int, ...]]:
+    """The rows of :func:`jacobian_batch` of a layout (P parameters, n bends; a pipe radius parameter, if any, is
+    the last): each parameter's position among the batch's pairs of rows, and per bend k the rows ``active[k]``
+    of :class:`JacobianBatch`. The same for every round of a layout (the bend count's choice fits a few layouts
+    dozens of times); the positions are shared: read only."""
+    first = np.full(P, n)  # the first bend whose 4 × 4 step a parameter changes (n: none, the pipe radius)
+    first[:6] = 0  # start point and frame: before the first bend
     i = 6
-    if n > 1:
-        V[i:i + n - 1] = lines[:-1, 3:6]
-        first[i:i + n - 1] = 2 * k[:-1] + 3
-        i += n - 1
-        W[i:i + n - 1] = bends.tangent[1:]
-        V[i:i + n - 1] = _cross(bends.origin[1:], bends.tangent[1:])
-        first[i:i + n - 1] = 2 * k[1:] + 1
-        i += n - 1
-    W[i:i + n] = arcs[:, 3:6]
-    V[i:i + n] = _cross(arcs[:, :3], arcs[:, 3:6])
-    first[i:i + n] = 2 * k + 2
+    first[i:i + max(n - 1, 0)] = np.arange(n - 1)  # the straight after bend k is in bend k's step
+    i += max(n - 1, 0)
+    first[i:i + max(n - 1, 0)] = np.arange(1, n)  # the rotation before bend k + 1
+    i += max(n - 1, 0)
+    first[i:i + n] = np.arange(n)
     i += n
-    V[i:i + n] = bends.sin[:, None] * bends.tangent + (1.0 - bends.cos)[:, None] * bends.normal
-    first[i:i + n] = 2 * k + 2
-    # ω × q = -[q]× ω: every segment's point and direction as two cross-product matrices, one product for all
-    K = np.zeros((S, 2, 9))
-    K[:, :, _SKEW_AT] = g[:, _SKEW_OF].reshape(S, 2, 6) * _SKEW_SIGN
-    dG = np.zeros((S, 7, Pv))
-    np.matmul(K.reshape(S, 6, 3), W.T, out=dG[:, :6])
-    dG[:, :3] -= V.T  # (the negated twist's move: negated back below)
-    dG[:, :6] *= np.where(np.arange(S)[:, None] >= first[None, :], -1.0, 0.0)[:, None, :]
-    if n:
-        dG[2 * k + 1, 0:3, n_lin + k] = bends.normal
-        dG[2 * k + 1, 6, n_lin + k] = 1.0
-    out = np.zeros((S, 7, lay.size))
-    out[..., :n_lin] = dG[..., :n_lin]
-    if lay.n_radii:
-        fold = np.zeros((n, lay.n_radii))
-        fold[k, np.asarray(lay.dies, dtype=int) if lay.radius_mode == "dies" else
-             (k if lay.radius_mode == "free" else 0)] = 1.0
-        out[..., n_lin:n_lin + lay.n_radii] = dG[..., n_lin:] @ fold
-    return out
+    if radius_mode == "free":
+        first[i:i + n] = np.arange(n)
+    elif radius_mode == "common" and n:
+        first[i] = 0
+    elif radius_mode == "dies" and n:
+        die = np.asarray(dies)
+        first[i:i + max(dies) + 1] = [int(np.flatnonzero(die == d)[0]) for d in range(max(dies) + 1)]
+    order = sorted(range(P), key=lambda p: (first[p], not 3 <= p < 6))
+    pos = np.empty(P, int)
+    pos[order] = np.arange(P)
+    pos.setflags(write=False)
+    first_sorted = first[order]
+    return pos, tuple(1 + 2 * int(np.searchsorted(first_sorted, k, side="right")) for k in range(n))
+
+
+def geometry_and_jacobian(x: np.ndarray, lay: Layout, frame0: np.ndarray, rp: float,
+                          plan: JacobianBatch) -> tuple[np.ndarray, np.ndarray]:
+    """The geometry at x (S, 7) and its derivative by central differences (S, 7, P), from one batch: the
+    batch costs little more than one model (the forward kinematics is a loop over the bends). ``plan``: the
+    round's :func:`jacobian_batch` (the same for all its calls)."""
+    X = np.empty((2 * len(x) + 1, len(x)))
+    X[0] = x
+    np.add(x, plan.shift, out=X[1::2])  # (x ± a row of zeros but one: the rows x + diag(steps) and x - diag(steps))
+    np.subtract(x, plan.shift, out=X[2::2])
+    G = geometry_batch(X, lay, frame0, rp, plan)
+    return G[0], ((G[plan.plus] - G[plan.minus]) / plan.span).transpose(1, 2, 0)
+
+
+def _geometry_jacobian(x, lay, frame0, rp, scale):
+    """d(geometry)/d(params) by central differences: (S, 7, P)."""
+    P = len(x)
+    steps = _steps(P, lay, scale)
+    X = np.concatenate([x + np.diag(steps), x - np.diag(steps)])
+    G = geometry_batch(X, lay, frame0, rp)
+    return np.moveaxis((G[:P] - G[P:]) / (2 * steps[:, None, None]), 0, -1)
 
 
 def _groups(seg: np.ndarray, block: int = 65_536) -> list[tuple[int, slice]]:
@@ -895,6 +889,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     # the first/last segments are unbounded lines, middle ones unbounded too (fixed assignment); lines and
     # arcs alternate
     kind = np.arange(2 * lay.n + 1) % 2
+    scale = max(rp, 1e-9)
     # samples sorted by their (fixed) segment: each segment's samples are runs of a block, whose
     # Gram matrix is one product; the residual order is irrelevant to the solver
     # (a stable sort of the segment numbers in the smallest integers that hold them: a radix sort)
@@ -933,16 +928,18 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     evaluations = [0]
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
+    plan = jacobian_batch(lay, _steps(len(x0), lay, scale))
+
     def geometry(x, jacobian: bool = False):
-        """The geometry at x, with its Jacobian when asked (the normal equations come at the point fun has just
-        evaluated: its kinematics are at hand)."""
+        """The geometry at x, with its Jacobian when asked: a trial the solver rejects (nearly half of them)
+        needs the residuals only, and the Jacobian's batch of 2P + 1 models costs several of one. (A row of the
+        batch computes what it computes alone, so the geometry is the same numbers either way.)"""
         key = x.tobytes()
         if latest.get("x") != key:
             latest.clear()
-            g, bends = _kinematics(x[None], lay, frame0)
-            latest.update(x=key, g=g[0], bends=bends)
+            latest.update(x=key, g=geometry_batch(x[None], lay, frame0, rp)[0])
         if jacobian and "dG" not in latest:
-            latest["dG"] = geometry_jacobian(x, lay, latest["g"], latest["bends"])
+            latest["dG"] = geometry_and_jacobian(x, lay, frame0, rp, plan)[1]
         return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):

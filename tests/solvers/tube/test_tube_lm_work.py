@@ -1,6 +1,6 @@
-"""Work a least-squares round does once: the Jacobian only at the points whose normal equations are formed (a
-rejected trial needs its residuals only), the arc samples of a block found once; the numbers are those of the work
-done every time."""
+"""Work a least-squares round does once: the Jacobian's batch of 2P + 1 models only at the points whose normal
+equations are formed (a rejected trial needs its residuals only), the batch rows of a layout computed once, the
+arc samples of a block found once; the numbers are those of the work done every time."""
 
 from __future__ import annotations
 
@@ -24,14 +24,14 @@ def _problem_inputs(seed: int = 4):
     return start, pts, seg
 
 
-def test_the_jacobian_is_formed_only_where_normal_equations_are_formed(monkeypatch):
-    jacobians, normal_equations, evaluations = [], [], []
-    jacobian = fit.geometry_jacobian
+def test_the_jacobian_is_batched_only_where_normal_equations_are_formed(monkeypatch):
+    batches, normal_equations, evaluations = [], [], []
+    batch = fit.geometry_and_jacobian
     lm = fit.levenberg_marquardt
 
-    def counted_jacobian(x, *args, **kwargs):
-        jacobians.append(x.copy())
-        return jacobian(x, *args, **kwargs)
+    def counted_batch(x, *args, **kwargs):
+        batches.append(x.copy())
+        return batch(x, *args, **kwargs)
 
     def counted_lm(fun, ne, *args, **kwargs):
         def fun_counted(x, out=None):
@@ -44,15 +44,44 @@ def test_the_jacobian_is_formed_only_where_normal_equations_are_formed(monkeypat
 
         return lm(fun_counted, ne_counted, *args, **kwargs)
 
-    monkeypatch.setattr(fit, "geometry_jacobian", counted_jacobian)
+    monkeypatch.setattr(fit, "geometry_and_jacobian", counted_batch)
     monkeypatch.setattr(fit, "levenberg_marquardt", counted_lm)
     start, pts, seg = _problem_inputs()
     lay = fit.Layout(start.n_bends, "free", None, True)
     _, info = fit.solve_lm(start, pts, seg, lay, f_scale=0.04, max_nfev=40)
     assert info["nfev"] == len(evaluations) > len(normal_equations) >= 2  # some trials were rejected
-    # one Jacobian per point the normal equations are formed at, and at that point
-    assert len(jacobians) == len(normal_equations)
-    assert all(np.array_equal(a, b) for a, b in zip(jacobians, normal_equations))
+    # one batch per point the normal equations are formed at, and at that point
+    assert len(batches) == len(normal_equations)
+    assert all(np.array_equal(a, b) for a, b in zip(batches, normal_equations))
+
+
+def test_a_rounds_geometry_alone_is_the_batchs_row_to_the_bit():
+    # the residuals of a trial come from the geometry of its point alone, the normal equations from the batch:
+    # both are the same numbers, in every radius layout
+    start, _, _ = _problem_inputs()
+    n = start.n_bends
+    rng = np.random.default_rng(11)
+    for lay in (fit.Layout(n, "free", None, True), fit.Layout(n, "common", None, False),
+                fit.Layout(n, "dies", None, True, (1, 0, 1)), fit.Layout(n, "fixed", 10.0, True)):
+        x = fit.pack(start, lay)
+        for turn in (0.0, 1e-4, 0.3):
+            x = x + rng.normal(scale=1e-3, size=len(x))
+            x[3:6] = turn * np.array([0.6, -0.8, 0.3])
+            plan = fit.jacobian_batch(lay, fit._steps(len(x), lay, 2.0))
+            g, _ = fit.geometry_and_jacobian(x, lay, start.frame, 2.0, plan)
+            assert np.array_equal(fit.geometry_batch(x[None], lay, start.frame, 2.0)[0], g)
+
+
+def test_a_layouts_batch_rows_are_computed_once_and_shared_read_only():
+    lay = fit.Layout(3, "dies", None, True, (1, 0, 1))
+    steps = fit._steps(lay.size, lay, 2.0)
+    a, b = fit.jacobian_batch(lay, steps), fit.jacobian_batch(lay, 2 * steps)
+    assert a.active == b.active and np.array_equal(a.plus, b.plus) and np.array_equal(a.minus, b.minus)
+    assert not np.array_equal(a.shift, b.shift)  # the steps are each round's own
+    pos, _ = fit._batch_rows(lay.size, lay.n, lay.radius_mode, lay.dies)
+    assert pos is fit._batch_rows(lay.size, lay.n, lay.radius_mode, lay.dies)[0] and not pos.flags.writeable
+    # the rows of a plus and a minus step of every parameter, each row once
+    assert sorted(np.concatenate([a.plus, a.minus]).tolist()) == list(range(1, 2 * lay.size + 1))
 
 
 def test_the_arc_samples_of_a_block_given_or_found_give_the_same_distances_and_terms():

@@ -57,8 +57,39 @@ def test_geometry_batch_matches_forward_kinematics():
         np.testing.assert_allclose(g1, g2, atol=1e-12)
 
 
+@pytest.mark.parametrize("rows", [
+    [[30, 0, 40, 10], [12, 70, 200, 9], [20, -30, 15, 12], [25, 0, 0, 0]],
+    [[30, 0, 40, 10], [25, 0, 0, 0]],
+    [[30, 0, 0, 0]],
+], ids=["3 bends", "1 bend", "straight"])
+def test_jacobian_batch_gives_the_central_differences_of_the_whole_batch_to_the_bit(rows):
+    # the plan's batch takes a row's start frame and its products before the first bend its parameter moves from
+    # row 0 (they are row 0's numbers): the geometry and central differences are those of the plain batch x,
+    # x + diag(steps), x - diag(steps), computed for every row, to the last bit, in every radius layout
+    m = make_model(rows, 2.0)
+    rng = np.random.default_rng(7)
+    n = m.n_bends
+    layouts = [fit.Layout(n, "free", None, True), fit.Layout(n, "common", None, False),
+               fit.Layout(n, "fixed", 10.0, True), fit.Layout(n, "fixed", None, True, (), (9.0,) * n)]
+    if n > 1:
+        layouts.append(fit.Layout(n, "dies", None, True, (1, 0, 1)))
+    for lay in layouts:
+        x = fit.pack(m, lay)
+        for turn in (0.0, 1e-4, 0.3):  # the start frame's rotation vector: none, on the Taylor branch, beyond
+            x = x + rng.normal(scale=1e-3, size=len(x))
+            x[3:6] = turn * np.array([0.6, -0.8, 0.3])
+            steps = fit._steps(len(x), lay, 2.0)
+            P = len(x)
+            G = fit.geometry_batch(np.concatenate([x[None], x + np.diag(steps), x - np.diag(steps)]), lay, m.frame,
+                                   2.0)
+            dG = ((G[1:P + 1] - G[P + 1:]) / (2 * steps[:, None, None])).transpose(1, 2, 0)
+            g2, dG2 = fit.geometry_and_jacobian(x, lay, m.frame, 2.0, fit.jacobian_batch(lay, steps))
+            assert np.array_equal(g2, G[0]) and np.array_equal(dG2, dG)
+            assert np.array_equal(np.signbit(dG2), np.signbit(dG))
+
+
 def test_rotation_matrices_of_rotation_vectors_are_scipys_small_and_large_angles_in_one_batch():
-    """Rodrigues' formula with the Taylor coefficients below 1e-3 rad (a small turn of the start frame) and the closed
+    """Rodrigues' formula with the Taylor coefficients below 1e-3 rad (a Jacobian step's 1e-6 rad) and the closed
     form above, in one batch and in batches of small angles only, against scipy's rotation vectors."""
     from scipy.spatial.transform import Rotation
 
@@ -224,8 +255,7 @@ def test_normal_equations_match_the_dense_jacobian(block, monkeypatch):
         g = fit.geometry_batch(x0[None], lay, frame0, rp)[0]
         kind = fit.build_spine(fit.unpack(x0, lay, frame0, rp)).kind
         _, gr = fit._dist_and_grad(pts[order], groups, g, kind, True)
-        g_all, bends = fit._kinematics(x0[None], lay, frame0)
-        dG = fit.geometry_jacobian(x0, lay, g_all[0], bends)
+        dG = fit._geometry_jacobian(x0, lay, frame0, rp, rp)
         J = np.concatenate([gr[sl] @ dG[k] for k, sl in groups])
         if fit_rp:
             J[:, -1] -= 1.0
