@@ -821,9 +821,16 @@ def _sample_distance(q: np.ndarray, gs: np.ndarray, arc: np.ndarray,
     w = q - c
     # the dot products summed in the order of the sample-major einsum they replace, (x + z) + y: the same
     # distances to the last bit
-    s = (w[0] * a[0] + w[2] * a[2]) + w[1] * a[1]
-    perp = w - s * a
-    rho = np.sqrt((perp[0] * perp[0] + perp[2] * perp[2]) + perp[1] * perp[1])
+    # (in place into two rows of scratch: a fresh array per product costs more than the product)
+    s, t = np.multiply(w[0], a[0]), np.multiply(w[2], a[2])
+    s += t
+    s += np.multiply(w[1], a[1], out=t)
+    perp = np.multiply(s, a)
+    np.subtract(w, perp, out=perp)
+    rho = np.multiply(perp[0], perp[0])
+    rho += np.multiply(perp[2], perp[2], out=t)
+    rho += np.multiply(perp[1], perp[1], out=t)
+    np.sqrt(rho, out=rho)
     # a line's R is 0 and its distance the perpendicular one; np.hypot (the arcs') costs some 20 times a
     # product, so it runs on the arcs' samples only
     # the samples are sorted by segment, so most blocks hold lines only or arcs only: those need no selection
@@ -856,8 +863,12 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     else:
         u = np.where(arc, (rho - R) * inv, 1.0)
         v = np.where(arc, s * inv, 0.0)
-    out[:3] = -(u * e + v * a)
-    out[3:6] = v * w - (u * s) * e
+    # -(u e + v a) and v w - (u s) e through two scratch arrays of three rows (each a fresh array per product
+    # and a copy into the strided ``out`` cost more than the products)
+    ue, va = np.multiply(u, e), np.multiply(v, a)
+    np.negative(np.add(ue, va, out=ue), out=out[:3])
+    np.multiply(u * s, e, out=ue)
+    np.subtract(np.multiply(v, w, out=va), ue, out=out[3:6])
     out[6] = np.where(arc, -u, 0.0) if arc is not True else -u
 
 
@@ -974,6 +985,11 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         if lay.fit_pipe_radius:
             G[:, 7] = 1.0
         Gw = G * w[:, None]
+        if len(blocks) == 1:  # each segment's samples are one run: its sums are the products themselves
+            for k, sl in runs[i]:
+                np.matmul(G[sl].T, Gw[sl], out=gram[k])
+                np.matmul(Gw[sl].T, rb[sl], out=rhs[k])
+            return
         for k, sl in runs[i]:
             gram[k] += G[sl].T @ Gw[sl]
             rhs[k] += Gw[sl].T @ rb[sl]
