@@ -342,7 +342,7 @@ def _without_copied_lines(kept: list[list[float]], texts: list[str], cols: Colum
     others = {tuple(f for k, f in enumerate([f for f in _SPLIT.split(t) if f]) if k not in cols.index) for t in seen}
     if len(others) < INFORMATIVE_VALUES:  # intensity and colour of one value (a writer's constant): no telling
         return kept
-    if copies < CHANCE_FACTOR * _chance_repeats(kept, texts, cols):
+    if copies < CHANCE_FACTOR * chance_repeats(kept, texts, cols):
         return kept
     width = len(next(iter(others)))
     log.warn(Diagnostic(code="duplicate_points", message=(
@@ -353,7 +353,7 @@ def _without_copied_lines(kept: list[list[float]], texts: list[str], cols: Colum
     return [xyz for xyz, c in zip(kept, copy) if not c]
 
 
-def _chance_repeats(kept: list[list[float]], texts: list[str], cols: Columns) -> float:
+def chance_repeats(kept: list[list[float]], texts: list[str], cols: Columns) -> float:
     """The number of rows expected to repeat an earlier row in every column were the columns beside x, y, z drawn
     independently of the position, as often as the file holds each of their value tuples: a position held by n rows
     shows n − Σ_v (1 − (1 − p_v)^n) repeats, p_v the share of the rows whose other columns read v."""

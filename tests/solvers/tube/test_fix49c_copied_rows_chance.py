@@ -11,7 +11,11 @@ import pytest
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.synthetic import clear_tube, surface_samples
-from plantsolve.solvers.tube.text_points import Columns, _chance_repeats, read_text_points
+from plantsolve.solvers.tube.text_points import (
+    Columns,
+    chance_repeats,
+    read_text_points,
+)
 from plantsolve.solvers.tube.upload import parse_upload
 
 
@@ -41,11 +45,11 @@ def test_the_chance_of_a_whole_row_repeating_is_what_independent_columns_give():
     lines = _dense_print(8.0)
     repeats = len(lines) - len(set(lines))
     kept = [[float(v) for v in line.split()[:3]] for line in lines]
-    assert repeats == 3773 and abs(_chance_repeats(kept, lines, Columns()) - repeats) < 0.02 * repeats
+    assert repeats == 3773 and abs(chance_repeats(kept, lines, Columns()) - repeats) < 0.02 * repeats
     # one constant column beside x, y, z: every row at an earlier row's position repeats it
     constant = [" ".join(line.split()[:3]) + " 7" for line in lines]
     positions = len(lines) - len({tuple(k) for k in kept})
-    assert _chance_repeats(kept, constant, Columns()) == pytest.approx(positions)
+    assert chance_repeats(kept, constant, Columns()) == pytest.approx(positions)
 
 
 def test_half_a_dense_scan_pasted_again_shuffled_is_still_read_once():
