@@ -2,8 +2,8 @@
 the machine is shared), CPU seconds:
 
 - reading a dense PTS text file printed to 1 mm (x y z intensity r g b, intensity ~N(1500, 30), constant colour) of
-  200,000 samples, where whole rows repeat by chance and the chance of it is now counted, and the same file with half
-  of it pasted again shuffled;
+  200,000 samples, where whole rows repeat by chance and rows at one place are now compared with rows at
+  neighbouring places, and the same file with half of it pasted again shuffled;
 - ``check_input`` of a 1 mm tube scanned from one side with 0.15 mm noise, 20,000 samples, ``options.pipe_radius``
   1 mm (the measurement now also gives the fits' noise), and whether the radius was refused.
 
