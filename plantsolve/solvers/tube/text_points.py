@@ -363,19 +363,20 @@ def agreement_over_chance(kept: list[list[float]], texts: list[str], cols: Colum
     has them agree: chance is the rate of two rows at neighbouring positions (one print step apart on each axis:
     the 26 around), or, with fewer than :data:`NEAR_PAIRS_MIN` such pairs, Σ p_v², p_v the share of the rows whose
     other columns read v."""
+    # each row's other columns numbered (by their tuple's hash: two tuples share one with a chance of 2^-64)
     _, value = np.unique([hash(tuple(f for k, f in enumerate([f for f in _SPLIT.split(t) if f]) if k not in cols.index))
                           for t in texts], return_inverse=True)
     value = value.ravel().astype(np.int64)
+    values = int(value.max()) + 1
     places, place = np.unique(np.asarray(kept), axis=0, return_inverse=True)
     place = place.ravel()
     n_place = np.bincount(place).astype(np.float64)
     pairs = float((n_place * (n_place - 1)).sum() / 2)
-    place_value, n_place_value = np.unique(place * (value.max() + 1) + value, return_counts=True)
+    place_value, n_place_value = np.unique(place * values + value, return_counts=True)
     agree = float((n_place_value * (n_place_value - 1.0)).sum() / 2)
     if pairs == 0:
         return 0.0
-    near = _near_rate(places, n_place, place_value // (value.max() + 1), place_value % (value.max() + 1),
-                      n_place_value.astype(np.float64))
+    near = _near_rate(places, n_place, place_value // values, place_value % values, n_place_value.astype(np.float64))
     if near is None:
         p = np.bincount(value) / len(value)
         near = float(p @ p)
