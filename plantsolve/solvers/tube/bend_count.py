@@ -45,6 +45,12 @@ class OffWindow:
     fields: dict[int, list[str]]  # LRA row (0-based) -> its fields the window's samples lie on
 
 
+def centred_size(pts: np.ndarray) -> float:
+    """The largest distance of a coordinate from the samples' centre (per axis): the scan's size, the same
+    wherever the scan is placed."""
+    return float(max(np.abs(pts[:, k] - pts[:, k].mean()).max() for k in range(3)))
+
+
 def off_windows(model: TubeModel, pts: np.ndarray, residuals: np.ndarray, segment: np.ndarray,
                 inlier: np.ndarray) -> list[OffWindow]:
     """The windows of the centreline whose inlier samples' mean residual is more than :data:`Z_LIMIT` standard
@@ -55,9 +61,10 @@ def off_windows(model: TubeModel, pts: np.ndarray, residuals: np.ndarray, segmen
     if len(idx) < MIN_WINDOW_SAMPLES:
         return []
     r = residuals[idx]
-    # no residual is finer than the coordinates' float32 step (STL and PLY store float32); a noise-free scan's
-    # spread is that rounding, or float64's, and means of 1e-12 mm came out hundreds of standard errors off
-    s = max(1.4826 * float(np.median(np.abs(r - np.median(r)))), COORDINATE_STEP * float(np.abs(pts[idx]).max()))
+    # no residual is finer than the float32 step of the scan's size (STL and PLY store float32); a noise-free
+    # scan's spread is that rounding, or float64's, and means of 1e-12 mm came out hundreds of standard errors
+    # off. The size is taken about the samples' centre: where the scan sits (site coordinates) changes nothing.
+    s = max(1.4826 * float(np.median(np.abs(r - np.median(r)))), COORDINATE_STEP * centred_size(pts[idx]))
     if not s > 0:
         return []
     step = STEP_RADII * model.pipe_radius
