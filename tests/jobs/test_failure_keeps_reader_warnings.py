@@ -6,17 +6,16 @@ from __future__ import annotations
 
 import dataclasses
 import time
-import uuid
 
 import pytest
 
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.reader_notes import reader_warnings
 from plantsolve.jobs.runner import run_job
-from plantsolve.jobs.service import JobService, NewJob
+from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverError, StoredInput
 from tests.conftest import REPO, service_settings
-from tests.support.dispatch import Recorder
+from tests.support.dispatch import Recorder, stored_upload
 
 EXAMPLES = REPO / "examples"
 
@@ -61,15 +60,6 @@ def ctx(tmp_path):
     context.close()
 
 
-def _upload(ctx: ServiceContext, kind: str, name: str, content: bytes) -> uuid.UUID:
-    """The job row of an upload that the intake took (its bounded reading has its own tests)."""
-    job_id = uuid.uuid4()
-    blob = ctx.files.put(f"{job_id}/input/{name}", content)
-    new = NewJob(ctx.spec(kind), job_id, uuid.uuid4().hex, None,
-                 {"input_kind": "upload", "input_file": blob.key, "input_filename": name, "input_options": None})
-    return JobService(ctx, Recorder()).store(new).job.id
-
-
 def _failing(ctx: ServiceContext, kind: str, solve) -> None:
     ctx.kinds = {**ctx.kinds, kind: dataclasses.replace(ctx.spec(kind), solve=solve, render_artifacts=None)}
 
@@ -81,7 +71,7 @@ def _codes(report: dict) -> list[str]:
 @pytest.mark.parametrize("kind, name, content, code, names", CASES, ids=[f"{c[0]}-{c[1]}" for c in CASES])
 def test_a_failed_solve_keeps_the_readers_warnings(ctx, kind, name, content, code, names):
     data = content()
-    job_id = _upload(ctx, kind, name, data)
+    job_id = stored_upload(ctx, kind, name, data)
 
     def fails(job_input, progress):
         raise SolverError("fit", "no bend could be fitted", {"stage_detail": 1})
@@ -121,7 +111,7 @@ def test_every_way_a_solve_fails_keeps_them(ctx):
 
     queue = Recorder()
     for solve, stage in ((crash, "solver"), (memory, "solver"), (slow, "time_limit"), (disk, "infrastructure")):
-        job_id = _upload(ctx, "tube", "scan.xyz", _tube())
+        job_id = stored_upload(ctx, "tube", "scan.xyz", _tube())
         _failing(ctx, "tube", solve)
         while (outcome := run_job(ctx, job_id, worker="w", requeue=queue.enqueue)) == "requeued":
             assert _codes(ctx.repo.get(job_id).report) == ["records_skipped"]  # the re-queued job's report too

@@ -18,12 +18,11 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import process_died, sweep_once
 from plantsolve.jobs.reader_notes import reader_warnings
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
-from plantsolve.jobs.service import JobService, NewJob
 from plantsolve.solvers.base import SolverError, StoredInput
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import JOBS
 from tests.conftest import REPO, service_settings
-from tests.support.dispatch import Recorder
+from tests.support.dispatch import Recorder, stored_upload
 from tests.support.pcf_lines import elbow_line
 
 SCAN = (REPO / "examples" / "tube" / "scan.xyz").read_bytes() + b"12.0 abc 4\n"  # line 4001 is skipped
@@ -31,14 +30,6 @@ SCAN = (REPO / "examples" / "tube" / "scan.xyz").read_bytes() + b"12.0 abc 4\n" 
 
 def _context(tmp_path, **settings) -> ServiceContext:
     return ServiceContext.create(service_settings(tmp_path, **settings), migrate=True)
-
-
-def _upload(ctx: ServiceContext, kind: str, name: str, content: bytes) -> uuid.UUID:
-    job_id = uuid.uuid4()
-    blob = ctx.files.put(f"{job_id}/input/{name}", content)
-    new = NewJob(ctx.spec(kind), job_id, uuid.uuid4().hex, None,
-                 {"input_kind": "upload", "input_file": blob.key, "input_filename": name, "input_options": None})
-    return JobService(ctx, Recorder()).store(new).job.id
 
 
 def _codes(report: dict | None) -> list[str]:
@@ -71,7 +62,7 @@ def _running(ctx: ServiceContext, job_id: uuid.UUID) -> tuple[threading.Thread, 
 def test_a_job_whose_process_died_keeps_the_readers_warnings(tmp_path, attempts):
     ctx = _context(tmp_path, max_attempts=attempts)
     try:
-        job_id = _upload(ctx, "tube", "scan.xyz", SCAN)
+        job_id = stored_upload(ctx, "tube", "scan.xyz", SCAN)
         thread, hanging = _running(ctx, job_id)
         # the running job already says how its file was read
         assert _codes(ctx.repo.get(job_id).report) == ["records_skipped"]
@@ -89,7 +80,7 @@ def test_a_job_whose_process_died_keeps_the_readers_warnings(tmp_path, attempts)
 def test_a_job_whose_lease_lapsed_keeps_the_readers_warnings(tmp_path):
     ctx = _context(tmp_path, max_attempts=1)
     try:
-        job_id = _upload(ctx, "tube", "scan.xyz", SCAN)
+        job_id = stored_upload(ctx, "tube", "scan.xyz", SCAN)
         thread, hanging = _running(ctx, job_id)
         with ctx.db.engine.begin() as connection:  # the process stopped: no heartbeat renewed its lease
             connection.execute(update(JOBS).where(JOBS.c.id == job_id)
@@ -107,7 +98,7 @@ def test_a_job_whose_lease_lapsed_keeps_the_readers_warnings(tmp_path):
 def test_a_job_killed_at_its_hard_time_limit_keeps_the_readers_warnings(tmp_path):
     ctx = _context(tmp_path)
     try:
-        job_id = _upload(ctx, "tube", "scan.xyz", SCAN)
+        job_id = stored_upload(ctx, "tube", "scan.xyz", SCAN)
         thread, hanging = _running(ctx, job_id)
         assert fail_killed_at_hard_limit(ctx, job_id, worker="w")
         hanging.release.set()
@@ -125,7 +116,7 @@ CONTRADICTED = elbow_line(45.0, "9000")  # ANGLE 9000 (90 deg) on line 12 of an 
 def test_a_failed_alignment_of_a_pcf_keeps_its_readers_warnings(tmp_path):
     ctx = _context(tmp_path)
     try:
-        job_id = _upload(ctx, "alignment", "line.pcf", CONTRADICTED.encode())
+        job_id = stored_upload(ctx, "alignment", "line.pcf", CONTRADICTED.encode())
 
         def fails(job_input, progress):
             raise SolverError("kkt", "the constraint system is singular")
@@ -158,7 +149,7 @@ def test_alignment_reader_warnings_are_those_a_succeeded_job_reports(tmp_path):
 def test_a_job_read_without_warnings_writes_no_report_while_it_runs(tmp_path):
     ctx = _context(tmp_path)
     try:
-        job_id = _upload(ctx, "tube", "scan.xyz", (REPO / "examples" / "tube" / "scan.xyz").read_bytes())
+        job_id = stored_upload(ctx, "tube", "scan.xyz", (REPO / "examples" / "tube" / "scan.xyz").read_bytes())
         thread, hanging = _running(ctx, job_id)
         time.sleep(0.2)
         assert ctx.repo.get(job_id).report is None
