@@ -160,6 +160,11 @@ class JobService:
         digest = hashlib.sha256()
         for part in (kind.encode(), extension.encode(), intake.canonical_json(options), content):
             digest.update(hashlib.sha256(part).digest())
+        if idempotency_key is not None:  # a repeated request is answered with its job: its upload is not stored again
+            existing = self.ctx.repo.get_by_idempotency_key(_stored_key(owner, idempotency_key))
+            if existing is not None:
+                return self.stored(NewJob(spec, existing.id, digest.hexdigest(), idempotency_key, {}, owner),
+                                   existing, False)
         job_id = uuid.uuid4()
         # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one
         blob = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
@@ -215,8 +220,10 @@ class JobService:
 
     def stored(self, new: NewJob, stored: JobRecord, created: bool) -> Submitted:
         """The outcome of storing ``new``: the new job, or the job of the same idempotency key (the same request:
-        200; another: 422)."""
+        200; another: 422). The input file a repeated request wrote (a large JSON body, read from it) is removed:
+        the job it names has its own."""
         if not created:
+            self._drop_input(new)
             if stored.body_hash != new.body_hash or stored.kind != new.spec.kind:
                 raise Unprocessable(
                     "This Idempotency-Key was already used with a different request.",
@@ -226,6 +233,14 @@ class JobService:
         log.info("job %s (%s) submitted", stored.id, stored.kind,
                  extra={"job_id": str(stored.id), "kind": stored.kind, "status": QUEUED.value})
         return Submitted(stored, True)
+
+    def _drop_input(self, new: NewJob) -> None:
+        key = new.fields.get("input_file")
+        if key:
+            try:
+                self.ctx.files.delete(key)
+            except Exception:  # the answer stands; a file left behind is the store's leftover, not the client's
+                log.warning("input %s of a repeated request was not removed", key, exc_info=True)
 
     @property
     def dispatches_at_once(self) -> bool:

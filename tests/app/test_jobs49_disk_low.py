@@ -121,3 +121,28 @@ def test_a_disk_whose_free_space_cannot_be_read_holds_jobs_until_it_can(tmp_path
             del store.check_disk  # the mount is back
         for job in queued:
             assert wait_for(client, job, timeout=60)["status"] == "succeeded"
+
+
+@pytest.mark.parametrize("low", [False, True])
+def test_a_repeated_request_stores_no_second_input(tmp_path, low):
+    """A repeated upload or large JSON body (its Idempotency-Key names a stored job) is answered with that job and
+    leaves no input file of its own behind, with the disk low or not: one input file per job."""
+    scan = (REPO / "examples" / "tube" / "scan.xyz").read_bytes()
+    large = b'{"values": [' + b", ".join(b"1.0" for _ in range(2000)) + b"]}"
+    with TestClient(create_app(service_settings(tmp_path, inline_input_bytes=1024))) as client:
+        def submit(key):
+            headers = {"Idempotency-Key": key}
+            if key == "upload":
+                return client.post("/v1/tube/jobs", files={"file": ("scan.xyz", scan)}, headers=headers)
+            return client.post("/v1/test-compute/jobs", content=large,
+                               headers={**headers, "content-type": "application/json"})
+
+        first = {key: submit(key).json()["id"] for key in ("upload", "json")}
+        if low:
+            _low(client, NO_DISK)
+        for key in ("upload", "json", "upload", "json"):
+            again = submit(key)
+            assert again.status_code == 200 and again.json()["id"] == first[key], again.text
+        inputs = sorted(p.relative_to(tmp_path / "artifacts").parts[0]
+                        for p in (tmp_path / "artifacts").rglob("*") if p.is_file() and "input" in p.parts)
+        assert inputs == sorted(first.values())
