@@ -1,7 +1,7 @@
 """When queued jobs are held instead of started: the disk of the service (``ARTIFACT_DIR``, the SQLite file) is below
 ``MIN_FREE_DISK_BYTES``. A job started then could solve for minutes and find no room for its result (a full disk
 fails a job at once: :func:`plantsolve.jobs.attempts.judge`), so no worker starts one until space returns (a pool's
-dispatcher waits; a Celery task is retried after ``HELD_TASK_COUNTDOWN_SECONDS``); the held jobs stay queued (nothing
+dispatcher waits; a Celery task is retried after :func:`held_countdown`); the held jobs stay queued (nothing
 submitted is lost, no attempt is counted) and say so in their progress message, which the job's view and summary
 show. Submissions meanwhile are refused with a 503 naming disk space, as ``/readyz`` is 503
 naming ``disk`` (:class:`~plantsolve.jobs.errors.DiskSpaceLow`)."""
@@ -20,9 +20,17 @@ log = logging.getLogger("plantsolve.holds")
 DISK_WAIT = "waiting: disk space low"
 # how often a hold looks at the disk and marks jobs queued meanwhile (re-queued by the sweep, or by another process)
 LOOK_SECONDS = 1.0
-# how long a held job's Celery task waits before it asks again (its message is sent anew with this countdown: the
-# job keeps its place in the broker, no attempt is counted, and it starts within this long of space returning)
+# how long a held job's Celery task first waits before it asks again (its message is sent anew with this countdown:
+# the job keeps its place in the broker, no attempt is counted); each wait doubles, up to half the sweeper's
+# ``requeue_queued_after``, so a long outage costs each held job a write and a publish every few seconds at most
 HELD_TASK_COUNTDOWN_SECONDS = 2.0
+
+
+def held_countdown(retries: int, requeue_queued_after: float) -> float:
+    """Seconds a held job's task waits after ``retries`` waits before it: 2, 4, 8 … up to half of
+    ``requeue_queued_after`` (so its message is marked sent again before the sweeper takes it for lost)."""
+    cap = max(HELD_TASK_COUNTDOWN_SECONDS, requeue_queued_after / 2)
+    return min(HELD_TASK_COUNTDOWN_SECONDS * 2 ** min(retries, 30), cap)
 
 
 def disk_low(ctx: ServiceContext) -> str | None:

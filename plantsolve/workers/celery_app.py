@@ -26,7 +26,7 @@ from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.dispatch import NoWorkers
-from plantsolve.jobs.holds import HELD_TASK_COUNTDOWN_SECONDS, DiskHold
+from plantsolve.jobs.holds import DiskHold, held_countdown
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, run_job
 from plantsolve.jobs.settings import JobSettings, get_job_settings
 from plantsolve.solvers.kinds import load_kinds
@@ -318,7 +318,7 @@ def _run_job_task(task, job_id: str) -> str:
     job_uuid = uuid.UUID(job_id)
     if _disk_hold.holds():  # the job stays queued ('waiting: disk space low'); its task asks again after a while
         _sent_again(ctx, job_uuid)
-        raise task.retry(countdown=HELD_TASK_COUNTDOWN_SECONDS)
+        raise task.retry(countdown=held_countdown(task.request.retries or 0, ctx.settings.requeue_queued_after))
     outcome = run_job(
         ctx,
         job_uuid,

@@ -1,6 +1,6 @@
 """A Celery worker whose disk is below MIN_FREE_DISK_BYTES starts no job, as the built-in pools do
-(``jobs/holds.py``): the job stays queued saying "waiting: disk space low", its task asking again every
-``HELD_TASK_COUNTDOWN_SECONDS``, and runs once on a worker with room, as its first attempt. Before, a Celery worker
+(``jobs/holds.py``): the job stays queued saying "waiting: disk space low", its task asking again after
+``held_countdown`` (2, 4, 8 … s, up to half of REQUEUE_QUEUED_AFTER), and runs once on a worker with room, as its first attempt. Before, a Celery worker
 started it anyway (a solve that could find no room for its result). Real PostgreSQL, Redis and ``plantsolve worker``
 subprocesses, as ``test_integration_celery.py``."""
 
@@ -14,13 +14,18 @@ import pytest
 from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
-from plantsolve.jobs.holds import DISK_WAIT, HELD_TASK_COUNTDOWN_SECONDS
+from plantsolve.jobs.holds import DISK_WAIT, held_countdown
 from tests.conftest import service_settings, wait_for
 from tests.workers.test_integration_celery import ALIVE, Worker, _env
 
 pytestmark = pytest.mark.integration
 
 NO_DISK = str(2 ** 62)  # a floor no disk reaches
+
+
+def test_a_held_tasks_wait_doubles_up_to_half_of_requeue_queued_after():
+    assert [held_countdown(r, 20.0) for r in range(6)] == [2.0, 4.0, 8.0, 10.0, 10.0, 10.0]
+    assert held_countdown(0, 1.5) == 2.0 and held_countdown(1000, 60.0) == 30.0
 
 
 def test_a_celery_worker_holds_queued_jobs_while_its_disk_is_low(pg_url, redis_url, tmp_path):
@@ -41,7 +46,8 @@ def test_a_celery_worker_holds_queued_jobs_while_its_disk_is_low(pg_url, redis_u
                 # its message is sent again with each countdown: the sweeper (a queued job's message older than
                 # REQUEUE_QUEUED_AFTER is taken for lost) sends no other
                 sent = client.app.state.ctx.repo.get(uuid.UUID(job)).enqueued_at
-                assert (datetime.now(timezone.utc) - sent).total_seconds() < 2 * HELD_TASK_COUNTDOWN_SECONDS + 2
+                age = (datetime.now(timezone.utc) - sent).total_seconds()
+                assert age < client.app.state.ctx.settings.requeue_queued_after, age
                 view = client.get(f"/v1/jobs/{job}").json()
                 assert (view["status"], view["attempt"], view["progress"]["message"]) == ("queued", 0, DISK_WAIT)
                 assert view["summary"].startswith("Waiting: disk space low")
