@@ -59,14 +59,13 @@ from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
+from plantsolve.solvers.decimal_comma import is_decimal_comma
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
 UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
 MAX_SKIPPED_LISTED = 200
-# a number as a decimal-comma locale writes it ('3,25'); STL and OBJ numbers take a decimal point
-DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 # an ASCII STL's lines of numbers: its corners and its facets' normals
 STL_NUMBERS = re.compile(rb"^[ \t]*(?:vertex|facet[ \t]+normal)[ \t][^\n]*", re.IGNORECASE | re.MULTILINE)
 # ... one that writes a decimal comma (a digit, a comma, a digit within a number)
@@ -570,7 +569,7 @@ def parse_obj(text: str) -> dict:
             except ValueError as e:
                 # keep the numbering of later vertices: a placeholder that no usable face may use
                 vertices.append([math.nan] * 3)
-                comma = next((p for p in parts[1:4] if DECIMAL_COMMA.fullmatch(p)), None)
+                comma = next((p for p in parts[1:4] if is_decimal_comma(p)), None)
                 reason = (f"{comma!r} is a decimal comma; OBJ numbers take a decimal point" if comma is not None
                           else str(e))
                 skipped.append({"line": at, "object": "v", "reason": f"not a vertex: {reason}"})
@@ -786,7 +785,7 @@ def _refuse_unreadable_numbers(content: bytes, only_commas: bool) -> None:
     if found is None:
         return
     line = content.count(b"\n", 0, found.start()) + 1
-    comma = next((w for w in _stl_numbers(found) if DECIMAL_COMMA.fullmatch(w)), None)
+    comma = next((w for w in _stl_numbers(found) if is_decimal_comma(w)), None)
     why = (f"{comma!r} is a decimal comma; STL numbers take a decimal point (export with a point)" if comma is not None
            else "not three numbers")
     raise reject(f"line {line}: {' '.join(found.group(0).decode('ascii', 'replace').split())[:80]!r}: {why}",

@@ -7,21 +7,18 @@ facet cut off at the end of the file or holding a vertex line that cannot be rea
 from __future__ import annotations
 
 import codecs
-import re
 
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
+from plantsolve.solvers.decimal_comma import is_decimal_comma
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.skipped_input import refuse_noise_stl
 from plantsolve.solvers.tube.read_log import ReadLog
 
 BINARY_HEADER, BINARY_TRIANGLE = 84, 50  # bytes: 80 header + uint32 count; 12 float32 + uint16 per triangle
 _TRIANGLE = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
-
-# a number of a decimal-comma locale's export (`3,25`); a reason is one fixed string: the read log counts by it
-DECIMAL_COMMA = re.compile(r"[-+]?\d*,\d+(?:[eE][-+]?\d+)?")
 
 
 def read_stl(content: bytes, log: ReadLog) -> np.ndarray:
@@ -106,7 +103,7 @@ def _ascii(text: str, log: ReadLog) -> np.ndarray:
                     bad = bad or (lineno, f"non-finite coordinate or one beyond {MAX_COORDINATE:g}")
                 corners.append(xyz)
             except ValueError:
-                comma = any(DECIMAL_COMMA.fullmatch(w) for w in words[1:4])
+                comma = any(is_decimal_comma(w) for w in words[1:4])  # a fixed reason: the log counts by it
                 bad = bad or (lineno, "vertex written with decimal commas (STL numbers take a decimal point)" if comma
                               else "vertex not numbers")
         elif key == "endfacet" and facet_line is not None:
