@@ -41,7 +41,7 @@ def test_a_field_files_coordinate_header_in_mm_is_refused_naming_both_readings()
 def test_a_point_lists_column_header_in_mm_is_refused_naming_both_readings(header):
     rows = "".join(f"{t:.3f},{2 * t:.3f},{0.5 * t:.3f}\n" for t in np.linspace(0, 500, 200))
     with pytest.raises(InputRejected) as refused:
-        TubeScan(parse_upload(StoredInput.from_bytes("scan.csv", (header + rows).encode()), None)).points
+        _ = TubeScan(parse_upload(StoredInput.from_bytes("scan.csv", (header + rows).encode()), None)).points
     _names_both_readings(str(refused.value))
 
 
