@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from types import MappingProxyType
 
-from plantsolve.schemas.common import UNIT_SPELLINGS, spelled_unit
+from plantsolve.schemas.common import AMBIGUOUS_UNITS, UNIT_SPELLINGS, spelled_unit
 
 # metres per unit of each request unit (schemas.common.Units)
 METRES = MappingProxyType({"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048})
@@ -31,9 +31,19 @@ _NAMED = MappingProxyType({spelling: unit for unit, spellings in SPELLINGS.items
 
 def unit_named(word: str, among: Iterable[str] = METRES) -> str | None:
     """The canonical name of the unit ``word`` spells (in any case, blanks around it ignored) when it is one of
-    ``among`` (default: the request's units), else None."""
+    ``among`` (default: the request's units), else None; None for a spelling of two readings ('Mm', which
+    ``two_readings`` names), as a JSON body's ``units`` refuses it."""
+    if two_readings(word) is not None:
+        return None
     unit = _NAMED.get(word.strip().lower())
     return unit if unit is not None and unit in among else None
+
+
+def two_readings(word: str) -> str | None:
+    """Why a file's ``word`` names no one unit ("'Mm' reads as the megametre ... or millimetres ..."), the
+    schema's rule for a JSON body's ``units``; None for any other word."""
+    readings = AMBIGUOUS_UNITS.get(word.strip())
+    return None if readings is None else f"{word.strip()!r} reads as {readings}; write mm for millimetres"
 
 
 def spellings(among: Iterable[str] = METRES) -> frozenset[str]:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from plantsolve.solvers.length_units import SIZES, unit_named
+from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
 
 FIELD_T = {"T": 1.0, "mT": 1e-3, "uT": 1e-6, "µT": 1e-6, "μT": 1e-6, "nT": 1e-9, "G": 1e-4, "Gs": 1e-4,
            "gauss": 1e-4, "kG": 0.1, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9}
@@ -240,6 +240,8 @@ def _length_unit(tokens: list[str], roles: dict[str, list[int]], meta: dict[str,
         raise FieldFileError(f"line {line}: the coordinates are given in {' and '.join(sorted(stated))}: which is meant "
                              "is not known")
     unit = next(iter(stated), None)
+    if unit is not None and (readings := two_readings(unit)) is not None:
+        raise FieldFileError(f"line {line}: length unit {readings}")
     if unit is not None and unit_named(unit, SIZES) is None:
         raise FieldFileError(f"line {line}: length unit '{unit}' is not known (m, cm, mm, um, in, ft)")
     return None if unit is None else unit_named(unit, SIZES)

@@ -132,9 +132,9 @@ def _grid_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Di
         return []
     quantity = ".".join(f.loc)
     point = ", ".join(f"{v:g}" for v in structure.point)
-    guess = (f"coordinates in {structure.likely_unit} read as '{stated}'? (S changes with the unit: the field's "
-             "variation across the pipe is what a grid adds to a uniform field)" if structure.likely_unit else
-             f"coordinates in a smaller unit than '{stated}'?")
+    guess = (f"coordinates in {structure.likely_unit} read as '{stated}'? (S changes with the unit: read in "
+             f"{structure.likely_unit}, the field changes across the liner section, and that variation is what a grid "
+             "adds to a uniform field)")
     return [Diagnostic(
         code="implausible_field_grid",
         message=f"Magnetic field grid: the field of {quantity} first differs by half from its centre value at ({point}) "

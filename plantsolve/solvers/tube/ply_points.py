@@ -15,7 +15,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.length_units import unit_named
+from plantsolve.solvers.length_units import two_readings, unit_named
 from plantsolve.solvers.tube.read_log import ReadLog
 
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
@@ -38,6 +38,8 @@ def stated_unit(content: bytes) -> tuple[str, str] | str | None:
     found = []
     for lineno, line in enumerate(content[:end].decode("ascii", errors="replace").splitlines(), 1):
         match = _UNIT_COMMENT.match(line.strip())
+        if match and (readings := two_readings(match.group(1))) is not None:
+            return f"its header comment on line {lineno} ({line.strip()!r}) states the unit {readings}"
         if match and (unit := unit_named(match.group(1))):
             found.append((unit, lineno, line.strip()))
     if len({unit for unit, _, _ in found}) > 1:

@@ -31,7 +31,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
-from plantsolve.solvers.length_units import METRES, unit_named
+from plantsolve.solvers.length_units import METRES, two_readings, unit_named
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
@@ -47,7 +47,7 @@ from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
 _NOT_PLAIN_COMMA = ('"', ".", "'", "\u00a0", "\u202f")  # a row of a decimal-comma file read cell by cell
-_UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$")
+_UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$", re.IGNORECASE)
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
@@ -75,10 +75,13 @@ def _header_names(line: str) -> list[str]:
 
 
 def _name_and_unit(name: str) -> tuple[str, str | None]:
-    m = _UNIT_SUFFIX.match(name.strip().lower())
+    """A column's name (lower case) and the unit it states, in lower case but for a spelling of two readings
+    ('Mm'), which keeps its case to be refused where the header's unit is read."""
+    m = _UNIT_SUFFIX.match(name.strip())
     if m is None:
         return name.strip().lower(), None
-    return m.group("name").strip(), m.group("u1") or m.group("u2")
+    unit = m.group("u1") or m.group("u2")
+    return m.group("name").strip().lower(), unit if unit is None or two_readings(unit) else unit.lower()
 
 
 def _columns(header: str | None, width: int, header_line: int) -> Columns:
@@ -118,6 +121,8 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
     if len(units) == 1 and None not in units:
         (u,) = units
         unit = unit_named(u)
+        if unit is None and (readings := two_readings(u)) is not None:
+            raise reject(f"line {header_line}: the coordinate columns state the unit {readings}")
         if unit is None:
             raise reject(f"line {header_line}: the coordinate columns state the unit {u!r}, which is not a length "
                          f"unit read here ({', '.join(sorted(METRES))})")
@@ -148,8 +153,9 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
     names, units = _header_names(names_line), _header_names(units_line)
     if len(names) != len(units):
         return None
-    units = [u.strip("[]()").strip().lower() for u in units]
-    if not any(unit_named(u) for u in units) or any(u and u != "-" and not unit_named(u) for u in units):
+    units = [u.strip("[]()").strip() for u in units]  # case kept: 'Mm' is refused where the header's unit is read
+    named_at_all = [unit_named(u) or two_readings(u) for u in units]
+    if not any(named_at_all) or any(u and u != "-" and not n for u, n in zip(units, named_at_all)):
         return None
     for n, u in zip(names, units):
         stated = _name_and_unit(n)[1]
@@ -157,7 +163,7 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
         if said and unit_named(u) and said != unit_named(u):
             raise reject(f"the column {n!r} states the unit {stated!r} in its name and {u!r} in the line of units under "
                          "it: say which one the numbers are in")
-    named = [f"{n} [{u}]" if unit_named(u) and _name_and_unit(n)[1] is None else n for n, u in zip(names, units)]
+    named = [f"{n} [{u}]" if k and _name_and_unit(n)[1] is None else n for n, u, k in zip(names, units, named_at_all)]
     return ("//" if names_line.strip().startswith("//") else "") + ",".join(named)
 
 
