@@ -151,7 +151,6 @@ class JobService:
         *, owner: str = "", callback_url: str | None = None,
     ) -> Submitted:
         spec = self.spec(kind)
-        self.has_room(idempotency_key, owner)
         extension = intake.upload_extension(spec, filename)
         options = intake.upload_options(options_text)
         if not content:
@@ -165,6 +164,7 @@ class JobService:
             if existing is not None:
                 return self.stored(NewJob(spec, existing.id, digest.hexdigest(), idempotency_key, {}, owner),
                                    existing, False)
+        self.has_room()  # the key, if any, names no job: this request would store its upload
         job_id = uuid.uuid4()
         # stored first: the upload is read (and checked) from its file, in a bounded process, not in this one
         blob = self.ctx.files.put(f"{job_id}/input/{safe_filename(filename)}", content)
