@@ -115,11 +115,19 @@ class Unit:
         return float(registry().Quantity(1.0, self.unit).to(other.unit).magnitude)
 
 
+# the longest text read as a unit (the longest real ones, 'pound / second ** 1', are a third of it)
+LONGEST_UNIT = 64
+
+
 def parse_unit(text: str, dimensions: frozenset[str] | None = None) -> Unit:
     """A unit as exporters write it; raises :class:`UnitError` when pint cannot read it. Units are case-sensitive
     ('MPa' is not 'mPa'), but one that pint cannot read as written, or that lacks ``dimensions`` (those of
     :func:`_dimensions`) when they are given, is read in the one casing that has them ('KG/S' is kg/s, 'PA' under a
-    pressure Pa), and refused when two casings do ('MPA': MPa or mPa)."""
+    pressure Pa), and refused when two casings do ('MPA': MPa or mPa). A text longer than ``LONGEST_UNIT`` is no
+    unit: it is refused before pint and the casings are tried on it (a pasted paragraph took seconds)."""
+    if len(text) > LONGEST_UNIT:
+        raise UnitError(f"unit text of {len(text):,} characters ({text[:20]!r}…) is no unit: units are at most "
+                        f"{LONGEST_UNIT} characters ('kg/s', 'ft**3/min', 'kPa(a)')")
     marked = _marked_pressure(text.strip().strip("[]").strip())
     if marked is not None:
         return marked

@@ -83,3 +83,15 @@ def test_through_the_api_the_option_reaches_the_result(tmp_path):
         assert refused.status_code == 422
         (error,) = refused.json()["errors"]
         assert error["pointer"] == "/options/units/flow" and "'lbm/s'" in error["msg"]
+
+
+def test_a_pasted_paragraph_as_a_unit_is_refused_at_once_naming_the_option():
+    """A unit option of 100,000 characters took the upload's whole CPU budget (8 s) before it was refused unnamed;
+    it is refused by its length, before pint and the casings are tried on it."""
+    from plantsolve.solvers.base import InputRejected, StoredInput
+    from plantsolve.solvers.perfmap.upload import parse_upload
+
+    table = b"flow,pressure ratio,efficiency,speed\n1,1.2,0.8,1000\n2,1.3,0.82,1000\n3,1.25,0.81,1000\n"
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("rig.csv", table), {"units": {"flow": "k" * 100_000}})
+    assert "options.units.flow" in str(refused.value) and "100,000 characters" in str(refused.value)
