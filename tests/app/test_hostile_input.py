@@ -168,3 +168,13 @@ def test_tube_and_perfmap_values_beyond_1e12_are_refused_naming_the_value(client
 def test_an_error_inside_a_union_field_points_into_the_document(client, points, pointers):
     problem = client.post("/v1/tube/jobs", json={"points": points}).json()
     assert [e["pointer"] for e in problem["errors"]] == pointers, problem
+
+
+def test_a_form_part_nothing_reads_is_a_422_naming_it(client):
+    """A 'units' part beside the file was ignored: the file read in the default unit, the job accepted."""
+    files = {"file": ("n.txt", b"1\n", "text/plain")}
+    response = client.post("/v1/test-compute/jobs", files=files, data={"units": "m"})
+    assert response.status_code == 422 and response.headers["content-type"] == PROBLEM
+    assert [e["loc"] for e in response.json()["errors"]] == [["units"]]
+    assert "options" in response.json()["detail"]
+    assert client.post("/v1/test-compute/jobs", files=files, data={"options": "{}"}).status_code == 202

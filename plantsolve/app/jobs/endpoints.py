@@ -35,6 +35,9 @@ IdempotencyKey = Annotated[
     ),
 ]
 
+# the parts of a multipart submission: the file and the JSON of its options
+FORM_PARTS = ("file", "options")
+
 
 def _json(model, status_code: int = 200, headers: dict[str, str] | None = None) -> Response:
     """Serialise an already-validated model once (the route's response_model documents it)."""
@@ -99,6 +102,14 @@ def submit_route(kind: str):
                 raise Unprocessable(
                     "A multipart submission needs a 'file' part.",
                     errors=[field_problem(["file"], "missing file part", "missing")],
+                )
+            strays = sorted(set(form.keys()) - set(FORM_PARTS))
+            if strays:  # a 'units' part beside the file would be ignored: the file read in the default unit
+                raise Unprocessable(
+                    f"A multipart submission has the parts {', '.join(FORM_PARTS)}; "
+                    f"{', '.join(repr(name) for name in strays)} is read by nothing: put request settings such as "
+                    "units inside 'options' (a JSON object).",
+                    errors=[field_problem([name], "form part read by nothing", "extra_forbidden") for name in strays],
                 )
             upload_limit = request.app.state.settings.max_upload_bytes
             if upload.size is not None and upload.size > upload_limit:
