@@ -27,6 +27,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
+from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
@@ -104,6 +105,9 @@ def parse_ifc(content: bytes) -> dict:
                                        "in transfer or export. The spaces, quantities and relations after the cut "
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
+    left_out = lines_left_out(text, model, cut is not None)
+    if left_out is not None:
+        warnings.append(left_out.model_dump())
     if not spaces:
         products = Counter(p.is_a() for p in model.by_type("IfcProduct"))
         held = ", ".join(f"{n} {name}" for name, n in products.most_common(4)) or "no product"
@@ -155,7 +159,8 @@ def parse_ifc(content: bytes) -> dict:
         ranked = sorted(skipped, key=lambda entry: entry["reason"] == "no representation")
         said = "; ".join(f"{entry['object']}: {entry['reason']}" for entry in ranked[:3])
         more = f"; and {len(ranked) - 3} more" if len(ranked) > 3 else ""
-        raise reject(f"no usable IfcSpace: {said}{more}{was_cut}", ("file", ranked[0]["object"]))
+        unread = f" ({left_out.message})" if left_out is not None else ""
+        raise reject(f"no usable IfcSpace: {said}{more}{was_cut}{unread}", ("file", ranked[0]["object"]))
     area_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "AREAUNIT")
     volume_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "VOLUMEUNIT")
     declared: dict[str, dict] = {}

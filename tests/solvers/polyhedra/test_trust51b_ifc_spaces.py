@@ -49,3 +49,33 @@ def _placed_far(content: bytes) -> bytes:
         point = re.search(rf"#{placement}=IFCAXIS2PLACEMENT2D\(#(\d+),", text).group(1)
         text = re.sub(rf"#{point}=IFCCARTESIANPOINT\(\([^)]*\)\);", f"#{point}=IFCCARTESIANPOINT((1.E300,0.));", text)
     return text.encode("latin-1")
+
+
+# space 101's body as an IFC4 triangulated face set: the same 5 x 4 x 3 m box, in mm
+TESSELLATED = SPACES.replace(
+    b"#26=IFCEXTRUDEDAREASOLID(#22,#24,#25,3000.);",
+    b"#26=IFCTRIANGULATEDFACESET(#90,$,.T.,((1,3,2),(1,4,3),(5,6,7),(5,7,8),(1,2,6),(1,6,5),(2,3,7),(2,7,6),(3,4,8),"
+    b"(3,8,7),(4,1,5),(4,5,8)),$);\n#90=IFCCARTESIANPOINTLIST3D(((0.,0.,0.),(5000.,0.,0.),(5000.,4000.,0.),"
+    b"(0.,4000.,0.),(0.,0.,3000.),(5000.,0.,3000.),(5000.,4000.,3000.),(0.,4000.,3000.)));",
+).replace(b"'Body','SweptSolid',(#26)", b"'Body','Tessellation',(#26)")
+
+
+def test_an_ifc4_body_in_a_file_labelled_ifc2x3_is_named_with_its_line():
+    """IfcOpenShell drops the instances the header's schema lacks without a word: the space came out as 'no triangles'
+    and the zone was gone from the total with no reason a user could act on."""
+    labelled = TESSELLATED.replace(b"FILE_SCHEMA(('IFC4'))", b"FILE_SCHEMA(('IFC2X3'))")
+    request = _request(labelled)
+    result = solve(request).result
+    assert {z.id for z in result.zones} == {"102", "103"}
+    (warning,) = [w for w in result.report.warnings if w.code == "ifc_lines_not_read"]
+    lines = labelled.decode().splitlines()
+    assert warning.details["foreign_entities"] == {"IFCTRIANGULATEDFACESET": 33, "IFCCARTESIANPOINTLIST3D": 34}
+    assert lines[32].startswith("#26=IFCTRIANGULATEDFACESET") and lines[33].startswith("#90=IFCCARTESIANPOINTLIST3D")
+    assert "FILE_SCHEMA IFC2X3 does not have: IFCTRIANGULATEDFACESET (line 33)" in warning.message
+    assert warning.details["instances_defined"] - warning.details["instances_read"] == 2
+
+
+def test_the_same_body_under_its_own_schema_is_measured_and_nothing_is_said():
+    result = solve(_request(TESSELLATED)).result
+    assert {z.id: z.volume for z in result.zones}["101"] == pytest.approx(60.0)
+    assert "ifc_lines_not_read" not in [w.code for w in result.report.warnings]
