@@ -3,7 +3,8 @@
 Faces come from ``Campus/Surface``: its ``PlanarGeometry/PolyLoop`` of ``CartesianPoint/Coordinate``
 triples, counter-clockwise seen from outside its first ``AdjacentSpaceId`` (a second one makes it the
 wall between two spaces, written once; the same space twice, as Revit writes a slab on grade, is one); each ``Opening``'s PolyLoop is a subsurface of its surface.
-A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops. Zones are named
+A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops, in the shell's own ``unit`` when
+it states one (``shell_unit_differs`` when that is not the file's ``lengthUnit``). Zones are named
 by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface without an adjacent space
 (``Shade``) bounds no zone and is skipped, like anything else that cannot be read, with its line and
 reason.
@@ -88,6 +89,24 @@ def _planar(element: ET.Element, scale: float) -> list[list[float]]:
         raise ValueError("no PlanarGeometry/PolyLoop" + (" (only RectangularGeometry)"
                                                           if _child(element, "RectangularGeometry") is not None else ""))
     return _polyloop(loop, scale)
+
+
+def _shell_scale(shell: ET.Element, length_name: str, scale: float, lines: dict[int, int],
+                 warnings: list[dict]) -> float | None:
+    """Metres per unit of a ``ShellGeometry``'s coordinates: its own ``unit`` attribute where it states one (gbXML gives
+    the shell a unit of its own), else the file's ``lengthUnit``; None for a unit gbXML does not have. A shell whose
+    unit is not the file's was read in the file's unit, its space's volume off by the cube of the ratio, unsaid."""
+    own = (shell.get("unit") or "").strip()
+    if not own or own.lower() == length_name.lower():
+        return scale
+    factor = LENGTH.get(own.lower())
+    if factor is not None and factor != scale:
+        line = lines.get(id(shell))
+        warnings.append(Diagnostic(code="shell_unit_differs", message=(
+            f"The ShellGeometry on line {line} states its unit {own!r}, not the file's lengthUnit {length_name!r}: "
+            f"its coordinates were read in {own} (× {factor / scale:g} of the file's unit)."),
+            details={"line": line, "unit": own, "lengthUnit": length_name}).model_dump())
+    return factor
 
 
 def _id_and_label(element: ET.Element, tag: str) -> tuple[str, str]:
@@ -280,10 +299,15 @@ def parse_gbxml(content: bytes) -> dict:
         if closed is None:
             skip(space, f"Space {sid!r}", "no Surface names it and it has no ShellGeometry/ClosedShell")
             continue
+        shell_scale = _shell_scale(shell, length_name, scale, lines, warnings)
+        if shell_scale is None:
+            skip(shell, f"Space {sid!r} ShellGeometry", f"its unit {shell.get('unit')!r} is not a gbXML length unit "
+                 f"({', '.join(LENGTH)})")
+            continue
         for k, loop in enumerate(_children(closed, "PolyLoop"), 1):
             label = f"Space {sid!r} ClosedShell PolyLoop {k}"
             try:
-                points = _polyloop(loop, scale)
+                points = _polyloop(loop, shell_scale)
             except ValueError as e:
                 skip(loop, label, str(e))
                 continue
