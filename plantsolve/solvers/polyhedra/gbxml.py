@@ -3,6 +3,7 @@
 Faces come from ``Campus/Surface``: its ``PlanarGeometry/PolyLoop`` of ``CartesianPoint/Coordinate``
 triples, counter-clockwise seen from outside its first ``AdjacentSpaceId`` (a second one makes it the
 wall between two spaces, written once; the same space twice, as Revit writes a slab on grade, is one); each ``Opening``'s PolyLoop is a subsurface of its surface.
+A ``RectangularGeometry`` its polygon contradicts is named (:mod:`.gbxml_rectangles`); the polygon is measured.
 A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops, in the shell's own ``unit`` when
 it states one (``shell_unit_differs`` when that is not the file's ``lengthUnit``). Zones are named
 by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface without an adjacent space
@@ -32,6 +33,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.polyhedra.file_units import stated, symbol
+from plantsolve.solvers.polyhedra.gbxml_rectangles import differs, rectangles_differ
 
 MAX_SKIPPED_LISTED = 200
 LENGTH = {"meters": 1.0, "centimeters": 0.01, "millimeters": 0.001, "kilometers": 1000.0, "feet": 0.3048,
@@ -253,6 +255,7 @@ def parse_gbxml(content: bytes) -> dict:
         face_line[face["id"]] = lines.get(id(element))
 
     bounded: set[str] = set()
+    contradicted: list[tuple[str, int | None, str]] = []
     for campus in campuses:
         for surface in _children(campus, "Surface"):
             sid, label = _id_and_label(surface, "Surface")
@@ -279,6 +282,9 @@ def parse_gbxml(content: bytes) -> dict:
             add({"id": sid, "loops": [points], "zones": adjacent}, surface, label)
             if len(faces) == before:
                 continue
+            why = differs(surface, points, scale, _child)
+            if why is not None:
+                contradicted.append((sid, lines.get(id(surface)), why))
             bounded.update(adjacent)
             for opening in _children(surface, "Opening"):
                 oid, olabel = _id_and_label(opening, "Opening")
@@ -290,6 +296,9 @@ def parse_gbxml(content: bytes) -> dict:
                     skip(opening, olabel, str(e))
                     continue
                 add({"id": oid, "loops": [opoints], "parent": sid}, opening, olabel)
+                why = differs(opening, opoints, scale, _child)
+                if why is not None:
+                    contradicted.append((oid, lines.get(id(opening)), why))
 
     for sid, space in spaces.items():
         if sid in bounded:
@@ -321,6 +330,9 @@ def parse_gbxml(content: bytes) -> dict:
             raise reject(f"no usable surface: {first['object']}{at}: {first['reason']}", where)
         raise reject("no Campus/Surface with a PlanarGeometry and no Space with a ShellGeometry in this gbXML file")
 
+    contradiction = rectangles_differ(contradicted)
+    if contradiction is not None:
+        warnings.append(contradiction.model_dump())
     names = {sid: ((_child(s, "Name").text or "").strip() if _child(s, "Name") is not None else "")
              for sid, s in spaces.items()}
     declared = {}
