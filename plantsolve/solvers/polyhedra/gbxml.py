@@ -4,8 +4,8 @@ Faces come from ``Campus/Surface``: its ``PlanarGeometry/PolyLoop`` of ``Cartesi
 triples, counter-clockwise seen from outside its first ``AdjacentSpaceId`` (a second one makes it the
 wall between two spaces, written once; the same space twice, as Revit writes a slab on grade, is one); each ``Opening``'s PolyLoop is a subsurface of its surface.
 A ``RectangularGeometry`` its polygon contradicts is named (:mod:`.gbxml_rectangles`); the polygon is measured.
-A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops, in the shell's own ``unit`` when
-it states one (``shell_unit_differs`` when that is not the file's ``lengthUnit``). Zones are named
+A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops (in ``lengthUnit``; a shell whose
+own ``unit`` says otherwise is named, ``shell_unit_differs``). Zones are named
 by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface without an adjacent space
 (``Shade``) bounds no zone and is skipped, like anything else that cannot be read, with its line and
 reason.
@@ -93,22 +93,22 @@ def _planar(element: ET.Element, scale: float) -> list[list[float]]:
     return _polyloop(loop, scale)
 
 
-def _shell_scale(shell: ET.Element, length_name: str, scale: float, lines: dict[int, int],
-                 warnings: list[dict]) -> float | None:
-    """Metres per unit of a ``ShellGeometry``'s coordinates: its own ``unit`` attribute where it states one (gbXML gives
-    the shell a unit of its own), else the file's ``lengthUnit``; None for a unit gbXML does not have. A shell whose
-    unit is not the file's was read in the file's unit, its space's volume off by the cube of the ratio, unsaid."""
+def _say_shell_unit(shell: ET.Element, length_name: str, lines: dict[int, int], warnings: list[dict]) -> None:
+    """The warning for a ``ShellGeometry`` whose own ``unit`` is not the file's ``lengthUnit``: the file contradicts
+    itself, and which of the two is right only its writer knows. The shell is read in ``lengthUnit``, as the surfaces
+    are, so that every zone of the building is measured in one unit and the plausibility checks see one building (a
+    lengthUnit of Feet over metres is named there); before, the shell's unit went unread and unsaid."""
     own = (shell.get("unit") or "").strip()
     if not own or own.lower() == length_name.lower():
-        return scale
+        return
+    line = lines.get(id(shell))
     factor = LENGTH.get(own.lower())
-    if factor is not None and factor != scale:
-        line = lines.get(id(shell))
-        warnings.append(Diagnostic(code="shell_unit_differs", message=(
-            f"The ShellGeometry on line {line} states its unit {own!r}, not the file's lengthUnit {length_name!r}: "
-            f"its coordinates were read in {own} (× {factor / scale:g} of the file's unit)."),
-            details={"line": line, "unit": own, "lengthUnit": length_name}).model_dump())
-    return factor
+    ratio = (f" (read in {own}, its space's volume would be {(factor / LENGTH[length_name.lower()]) ** 3:.4g} times "
+             "as large)") if factor is not None and length_name.lower() in LENGTH else ""
+    warnings.append(Diagnostic(code="shell_unit_differs", message=(
+        f"The ShellGeometry on line {line} states its unit {own!r}, the file's lengthUnit is {length_name!r}: the "
+        f"file contradicts itself. Its coordinates were read in {length_name}, as the surfaces are{ratio}."),
+        details={"line": line, "unit": own, "lengthUnit": length_name}).model_dump())
 
 
 def _id_and_label(element: ET.Element, tag: str) -> tuple[str, str]:
@@ -308,15 +308,11 @@ def parse_gbxml(content: bytes) -> dict:
         if closed is None:
             skip(space, f"Space {sid!r}", "no Surface names it and it has no ShellGeometry/ClosedShell")
             continue
-        shell_scale = _shell_scale(shell, length_name, scale, lines, warnings)
-        if shell_scale is None:
-            skip(shell, f"Space {sid!r} ShellGeometry", f"its unit {shell.get('unit')!r} is not a gbXML length unit "
-                 f"({', '.join(LENGTH)})")
-            continue
+        _say_shell_unit(shell, length_name, lines, warnings)
         for k, loop in enumerate(_children(closed, "PolyLoop"), 1):
             label = f"Space {sid!r} ClosedShell PolyLoop {k}"
             try:
-                points = _polyloop(loop, shell_scale)
+                points = _polyloop(loop, scale)
             except ValueError as e:
                 skip(loop, label, str(e))
                 continue
