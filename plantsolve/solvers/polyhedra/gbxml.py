@@ -3,7 +3,9 @@
 Faces come from ``Campus/Surface``: its ``PlanarGeometry/PolyLoop`` of ``CartesianPoint/Coordinate``
 triples, counter-clockwise seen from outside its first ``AdjacentSpaceId`` (a second one makes it the
 wall between two spaces, written once; the same space twice, as Revit writes a slab on grade, is one); each ``Opening``'s PolyLoop is a subsurface of its surface.
-A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops. Zones are named
+A ``RectangularGeometry`` its polygon contradicts is named (:mod:`.gbxml_rectangles`); the polygon is measured.
+A space no surface names is read from its own ``ShellGeometry/ClosedShell`` PolyLoops (in ``lengthUnit``; a shell whose
+own ``unit`` says otherwise is named, ``shell_unit_differs``). Zones are named
 by the space's ``id`` (its ``Name`` is listed in ``source.spaces``). A surface without an adjacent space
 (``Shade``) bounds no zone and is skipped, like anything else that cannot be read, with its line and
 reason.
@@ -31,6 +33,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.polyhedra.file_units import stated, symbol
+from plantsolve.solvers.polyhedra.gbxml_rectangles import differs, rectangles_differ
 
 MAX_SKIPPED_LISTED = 200
 LENGTH = {"meters": 1.0, "centimeters": 0.01, "millimeters": 0.001, "kilometers": 1000.0, "feet": 0.3048,
@@ -88,6 +91,24 @@ def _planar(element: ET.Element, scale: float) -> list[list[float]]:
         raise ValueError("no PlanarGeometry/PolyLoop" + (" (only RectangularGeometry)"
                                                           if _child(element, "RectangularGeometry") is not None else ""))
     return _polyloop(loop, scale)
+
+
+def _say_shell_unit(shell: ET.Element, length_name: str, lines: dict[int, int], warnings: list[dict]) -> None:
+    """The warning for a ``ShellGeometry`` whose own ``unit`` is not the file's ``lengthUnit``: the file contradicts
+    itself, and which of the two is right only its writer knows. The shell is read in ``lengthUnit``, as the surfaces
+    are, so that every zone of the building is measured in one unit and the plausibility checks see one building (a
+    lengthUnit of Feet over metres is named there); before, the shell's unit went unread and unsaid."""
+    own = (shell.get("unit") or "").strip()
+    if not own or own.lower() == length_name.lower():
+        return
+    line = lines.get(id(shell))
+    factor = LENGTH.get(own.lower())
+    ratio = (f" (read in {own}, its space's volume would be {(factor / LENGTH[length_name.lower()]) ** 3:.4g} times "
+             "as large)") if factor is not None and length_name.lower() in LENGTH else ""
+    warnings.append(Diagnostic(code="shell_unit_differs", message=(
+        f"The ShellGeometry on line {line} states its unit {own!r}, the file's lengthUnit is {length_name!r}: the "
+        f"file contradicts itself. Its coordinates were read in {length_name}, as the surfaces are{ratio}."),
+        details={"line": line, "unit": own, "lengthUnit": length_name}).model_dump())
 
 
 def _id_and_label(element: ET.Element, tag: str) -> tuple[str, str]:
@@ -234,6 +255,7 @@ def parse_gbxml(content: bytes) -> dict:
         face_line[face["id"]] = lines.get(id(element))
 
     bounded: set[str] = set()
+    contradicted: list[tuple[str, int | None, str]] = []
     for campus in campuses:
         for surface in _children(campus, "Surface"):
             sid, label = _id_and_label(surface, "Surface")
@@ -260,6 +282,9 @@ def parse_gbxml(content: bytes) -> dict:
             add({"id": sid, "loops": [points], "zones": adjacent}, surface, label)
             if len(faces) == before:
                 continue
+            why = differs(surface, points, scale, _child)
+            if why is not None:
+                contradicted.append((sid, lines.get(id(surface)), why))
             bounded.update(adjacent)
             for opening in _children(surface, "Opening"):
                 oid, olabel = _id_and_label(opening, "Opening")
@@ -271,6 +296,9 @@ def parse_gbxml(content: bytes) -> dict:
                     skip(opening, olabel, str(e))
                     continue
                 add({"id": oid, "loops": [opoints], "parent": sid}, opening, olabel)
+                why = differs(opening, opoints, scale, _child)
+                if why is not None:
+                    contradicted.append((oid, lines.get(id(opening)), why))
 
     for sid, space in spaces.items():
         if sid in bounded:
@@ -280,6 +308,7 @@ def parse_gbxml(content: bytes) -> dict:
         if closed is None:
             skip(space, f"Space {sid!r}", "no Surface names it and it has no ShellGeometry/ClosedShell")
             continue
+        _say_shell_unit(shell, length_name, lines, warnings)
         for k, loop in enumerate(_children(closed, "PolyLoop"), 1):
             label = f"Space {sid!r} ClosedShell PolyLoop {k}"
             try:
@@ -297,6 +326,9 @@ def parse_gbxml(content: bytes) -> dict:
             raise reject(f"no usable surface: {first['object']}{at}: {first['reason']}", where)
         raise reject("no Campus/Surface with a PlanarGeometry and no Space with a ShellGeometry in this gbXML file")
 
+    contradiction = rectangles_differ(contradicted)
+    if contradiction is not None:
+        warnings.append(contradiction.model_dump())
     names = {sid: ((_child(s, "Name").text or "").strip() if _child(s, "Name") is not None else "")
              for sid, s in spaces.items()}
     declared = {}

@@ -3,8 +3,9 @@ in world coordinates and metres (its triangles are the zone's faces, ``<zone> t1
 triangles are fine for the volume), compared with the space's own ``Qto_SpaceBaseQuantities`` (IFC2X3 exporters' ``BaseQuantities``).
 
 Zones are named by the space's ``Name`` (its ``GlobalId`` when the name is missing or not unique);
-``source.spaces`` lists GlobalId, Name and LongName. A space the kernel cannot tessellate, or without a
-representation, is skipped with its ``#id`` and reason; the file is refused (422) when no space is left. A file
+``source.spaces`` lists GlobalId, Name and LongName. A space the kernel cannot tessellate, without a
+representation, or whose body lands beyond the schema's coordinate bound (a garbled placement), is skipped with its
+``#id`` and reason; the file is refused (422) when no space is left. A file
 cut short (no ``END-ISO-10303-21;`` at its end) is read as far as it goes with a ``truncated_file`` warning,
 and a space whose property sets refer to entities the file lacks keeps its zone without declared quantities
 (``ifc_quantities_unreadable``).
@@ -23,8 +24,10 @@ from typing import Any
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
+from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
@@ -66,6 +69,17 @@ def _unread_schema(text: str) -> str:
             "its final release, 'IFC4X3_ADD2')")
 
 
+def _beyond_bound(verts: np.ndarray) -> str | None:
+    """Why a space's tessellated body is no room (a vertex not finite or past the schema's bound), else None."""
+    if not np.isfinite(verts).all():
+        return "a vertex of its body is not a finite number (a placement or point of the file is not)"
+    worst = float(np.abs(verts).max()) if verts.size else 0.0
+    if worst > MAX_COORDINATE:
+        return (f"a vertex of its body lies {worst:.3g} m from the origin, beyond ±{MAX_COORDINATE:g} m (a placement "
+                "or point of the file is garbled)")
+    return None
+
+
 def parse_ifc(content: bytes) -> dict:
     import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
     import ifcopenshell.geom  # noqa: PLC0415
@@ -91,6 +105,9 @@ def parse_ifc(content: bytes) -> dict:
                                        "in transfer or export. The spaces, quantities and relations after the cut "
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
+    left_out = lines_left_out(text, model, cut is not None)
+    if left_out is not None:
+        warnings.append(left_out.model_dump())
     if not spaces:
         products = Counter(p.is_a() for p in model.by_type("IfcProduct"))
         held = ", ".join(f"{n} {name}" for name, n in products.most_common(4)) or "no product"
@@ -111,6 +128,7 @@ def parse_ifc(content: bytes) -> dict:
     vertices: list[np.ndarray] = []
     faces: list[dict] = []
     shaped: set[int] = set()
+    garbled: set[int] = set()
     offset = 0
     if with_body:
         iterator = ifcopenshell.geom.iterator(settings, model, 1, include=with_body)
@@ -120,7 +138,11 @@ def parse_ifc(content: bytes) -> dict:
                 verts = np.asarray(shape.geometry.verts, dtype=float).reshape(-1, 3)  # metres
                 triangles = np.asarray(shape.geometry.faces, dtype=np.int64).reshape(-1, 3)
                 zone = zone_of[shape.id]
-                if len(triangles):
+                far = _beyond_bound(verts)
+                if far is not None:  # a garbled placement or point: the schema would refuse the file naming an index
+                    skipped.append({"line": None, "object": label[shape.id], "reason": far})
+                    garbled.add(shape.id)
+                elif len(triangles):
                     shaped.add(shape.id)
                     vertices.append(verts)
                     faces.extend({"id": f"{zone} t{k + 1}", "loops": [(t + offset).tolist()], "zones": [zone]}
@@ -129,12 +151,16 @@ def parse_ifc(content: bytes) -> dict:
                 if not iterator.next():
                     break
     for s in with_body:
-        if s.id() not in shaped:
+        if s.id() not in shaped | garbled:
             skipped.append({"line": None, "object": label[s.id()],
                             "reason": "IfcOpenShell's geometry kernel made no triangles of its representation"})
     if not faces:
-        first = skipped[0]
-        raise reject(f"no usable IfcSpace: {first['object']}: {first['reason']}{was_cut}", ("file", first["object"]))
+        # a space's body garbled is the likelier cause than a space without one (a room-less placeholder)
+        ranked = sorted(skipped, key=lambda entry: entry["reason"] == "no representation")
+        said = "; ".join(f"{entry['object']}: {entry['reason']}" for entry in ranked[:3])
+        more = f"; and {len(ranked) - 3} more" if len(ranked) > 3 else ""
+        unread = f" ({left_out.message})" if left_out is not None else ""
+        raise reject(f"no usable IfcSpace: {said}{more}{was_cut}{unread}", ("file", ranked[0]["object"]))
     area_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "AREAUNIT")
     volume_scale = ifcopenshell.util.unit.calculate_unit_scale(model, "VOLUMEUNIT")
     declared: dict[str, dict] = {}

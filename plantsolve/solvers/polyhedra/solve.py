@@ -19,6 +19,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 from plantsolve.solvers.stages import Stages
 from plantsolve.solvers.polyhedra.adjacency import adjacency
+from plantsolve.solvers.polyhedra.closure_verdict import volumes_not_determined
 from plantsolve.solvers.polyhedra.counted import floor_areas_left_out, multipliers_applied, subsurface_copies, \
     subsurface_multipliers_applied
 from plantsolve.solvers.polyhedra.declared import compare
@@ -371,6 +372,9 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     adjacent = adjacency(poly, area, normal)
     progress(1.0, "done")
     closed_count = sum(1 for z in zones if z["volume"] is not None)
+    verdict = volumes_not_determined(zones, warnings)
+    if verdict is not None:  # the gravest first: Report.verdict is the first verdict among the warnings
+        warnings.insert(0, verdict)
     return Solved(PolyhedraResult(
         units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,

@@ -682,7 +682,7 @@ def parse_stl(content: bytes) -> dict:
     import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
     import trimesh.exchange.stl  # noqa: PLC0415
 
-    content = _ascii_stl_from_utf16(content)
+    content = _without_utf8_mark(_ascii_stl_from_utf16(content))
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
     declared = struct.unpack("<I", content[80:84])[0] if len(content) >= 84 else 0
@@ -855,6 +855,16 @@ def _is_text(sample: bytes) -> bool:
     """Printable ASCII and line breaks only: no binary STL's triangles (float32 normals and corners hold NULs and high
     bytes within a few facets)."""
     return bool(sample) and not sample.translate(None, bytes(range(32, 127)) + b"\t\r\n")
+
+
+def _without_utf8_mark(content: bytes) -> bytes:
+    """An ASCII STL saved by an editor that writes UTF-8 with a byte-order mark, without the mark: before it the file
+    did not start with 'solid' and was refused as text that is no STL. A binary STL's 80-byte header may start with
+    any bytes, so the mark goes only when an ASCII STL follows."""
+    binary = len(content) >= 84 and 84 + 50 * struct.unpack("<I", content[80:84])[0] == len(content)
+    if content.startswith(b"\xef\xbb\xbf") and content[3:1027].lstrip().lower().startswith(b"solid") and not binary:
+        return content[3:]
+    return content
 
 
 def _ascii_stl_from_utf16(content: bytes) -> bytes:

@@ -1,0 +1,44 @@
+"""The report-level verdict of a run whose volumes are not all known.
+
+A zone that is not closed (or whose faces cannot be oriented, or repeat, or vanished in the merge) gets
+``volume: null`` and a warning of its own; the result's ``total_volume`` is null with it. Those warnings are caveats
+to a reader skimming the report: a job that 'succeeded' with status ``warning`` reads as a pass. The question a
+polyhedra job answers is the volume, so a zone without one is a verdict against the result — ``NOT DETERMINED`` —
+which the job view, the CLI's exit status and the dashboard show beside 'succeeded'.
+"""
+
+from __future__ import annotations
+
+from plantsolve.schemas.common import Diagnostic
+
+NOT_DETERMINED = "inspection_not_determined"  # the schema's verdict code for an answer that is not known
+_LISTED = 5
+
+
+def _why(zone: dict, codes: dict[str, set[str]]) -> str:
+    said = codes.get(zone["id"], set())
+    if "zone_without_faces" in said:
+        return "no face left after merging"
+    if "duplicate_faces" in said:
+        return "faces listed twice"
+    if not zone["closed"]:
+        return f"not closed, {zone['open_edge_count']} open edge(s)"
+    return "faces cannot be oriented consistently"
+
+
+def volumes_not_determined(zones: list[dict], warnings: list[Diagnostic]) -> Diagnostic | None:
+    """The verdict naming the zones whose volume is not given (each with why), or None when every zone has one."""
+    missing = [z for z in zones if z["volume"] is None]
+    if not missing:
+        return None
+    codes: dict[str, set[str]] = {}
+    for w in warnings:
+        zone = (w.details or {}).get("zone")
+        if isinstance(zone, str):
+            codes.setdefault(zone, set()).add(w.code)
+    named = "; ".join(f"{z['id']!r}: {_why(z, codes)}" for z in missing[:_LISTED])
+    more = f"; and {len(missing) - _LISTED} more" if len(missing) > _LISTED else ""
+    return Diagnostic(code=NOT_DETERMINED, message=(
+        f"Volume not determined for {len(missing)} of {len(zones)} zone(s) ({named}{more}): their volume and "
+        "total_volume are null. Close the zones (the open edges are listed per zone) and send the file again."),
+        details={"zones": [z["id"] for z in missing], "zones_total": len(zones)})
