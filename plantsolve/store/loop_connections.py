@@ -13,6 +13,7 @@ reads it, as through psycopg.
 The bounds are those of the engine's connections (:mod:`plantsolve.store.engine`): the server's statement, lock and
 idle-in-transaction timeouts; a connect that gets no answer gives up after ``wait``; each round trip waits at most
 ``statement + wait`` on the client (a black-holed link: the connection is closed and the call raises); a connection
+the server closed while it was idle is dropped, not used (the loop read its farewell); one
 idle :data:`~plantsolve.store.engine.PING_IDLE_SECONDS` is pinged with the bound ``wait`` before use (a ping that
 fails drops every idle connection); a request waits at most ``wait`` for a free connection. A driver error comes
 back as SQLAlchemy's exception of its class (an ``IntegrityError`` for a taken unique key; a connection that broke,
@@ -129,6 +130,9 @@ class LoopConnections:
     async def _checkout(self):
         while self._idle:
             connection, returned = self._idle.pop()
+            if connection.is_closed():  # the server ended it meanwhile (this loop has read its farewell)
+                _terminate(connection)
+                continue
             if time.monotonic() - returned < engine_module.PING_IDLE_SECONDS:
                 return connection
             try:
