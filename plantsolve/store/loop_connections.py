@@ -84,7 +84,14 @@ class LoopConnections:
         await self._run("execute", statement, args)
 
     async def fetch(self, statement: str, *args: Any) -> list[Any]:
-        """The rows of one query (each a record: by position or by name)."""
+        """The rows of one query (each a record: by position or by name). A query that met a connection the server
+        had just ended (its farewell came with the answer) is asked once more, on another connection: a read is safe
+        to repeat, and the database is there."""
+        try:
+            return await self._run("fetch", statement, args)
+        except OperationalError as error:
+            if not _ended_by_server(error.orig):
+                raise
         return await self._run("fetch", statement, args)
 
     async def _run(self, method: str, statement: str, args: tuple) -> Any:
@@ -155,6 +162,15 @@ class LoopConnections:
         idle, self._idle = self._idle, []
         for connection, _ in idle:
             _terminate(connection)
+
+
+def _ended_by_server(error: BaseException | None) -> bool:
+    """Whether a driver error says the server ended the connection (``pg_terminate_backend``, an idle-session
+    timeout, a pooler): not a timeout, not a server that does not answer."""
+    asyncpg = _asyncpg()
+    return isinstance(error, (asyncpg.ConnectionDoesNotExistError, asyncpg.InternalClientError,
+                              asyncpg.AdminShutdownError)) or \
+        (isinstance(error, asyncpg.InterfaceError) and "closed" in str(error))
 
 
 def _terminated(connection) -> None:

@@ -67,3 +67,19 @@ def test_a_loop_connection_ended_by_the_server_is_not_used(db, pg_url):
     finally:
         connections.close()
     assert after != before
+
+
+def test_a_read_that_meets_the_servers_farewell_is_read_again_on_a_new_connection(db, pg_url):
+    connections = LoopConnections(db.engine, wait=db.wait, statement=10.0)
+
+    async def twice() -> tuple[int, int]:
+        (first,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
+        _end_backends(pg_url)  # blocking the loop: it reads the farewell only once the next read is sent
+        (second,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
+        return first["pid"], second["pid"]
+
+    try:
+        before, after = asyncio.run(twice())
+    finally:
+        connections.close()
+    assert after != before
