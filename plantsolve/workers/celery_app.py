@@ -370,18 +370,21 @@ def _join_the_roll(sender=None, **_kwargs) -> None:
     sender.timer.call_repeatedly(settings.worker_beat_seconds, _announcer.beat)
 
 
-class RollCallAfterReconnect(bootsteps.StartStopStep):
-    """The roll call's beat, put back on the worker's timer each time its event loop starts again. A worker whose
-    broker connection broke (Redis restarted, its port closed a moment) empties its event loop's timer before it
-    connects again; ``worker_ready`` is not sent a second time, so the worker went on running jobs while it beat no
-    more, and readiness said ``workers: unavailable`` until it was restarted. The first start is left to
-    :func:`_join_the_roll` (no announcer yet: the loop starts before the worker is ready)."""
+def _rejoin_the_roll(_worker, hub) -> None:
+    """Put the roll call's beat back on the worker's timer as its event loop starts again. A worker whose broker
+    connection broke (Redis restarted, its port closed a moment) empties its event loop's timer before it connects
+    again, and ``worker_ready`` is not sent a second time: the worker went on running jobs while it beat no more, and
+    readiness said ``workers: unavailable`` until it was restarted. The first start is left to :func:`_join_the_roll`
+    (no announcer yet: the loop starts before the worker is ready)."""
+    if _announcer is None or _announcer.stopped:
+        return
+    _announcer.beat()  # back on the roll now, not a beat later
+    hub.timer.call_repeatedly(get_job_settings().worker_beat_seconds, _announcer.beat)
 
-    def register_with_event_loop(self, worker, hub) -> None:
-        if _announcer is None or _announcer.stopped:
-            return
-        _announcer.beat()  # back on the roll now, not a beat later
-        hub.timer.call_repeatedly(get_job_settings().worker_beat_seconds, _announcer.beat)
+
+# A worker step: Celery calls each step's register_with_event_loop(worker, hub) whenever the event loop starts.
+RollCallAfterReconnect = type("RollCallAfterReconnect", (bootsteps.StartStopStep,),
+                              {"register_with_event_loop": staticmethod(_rejoin_the_roll)})
 
 
 @signals.worker_shutting_down.connect
