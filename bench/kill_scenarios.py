@@ -14,10 +14,22 @@ solve, so the markers count the solves):
 - ``warm-stop``: SIGSTOP of the idle warm parent, then four jobs (their start hangs until the watch kills it);
 - ``jobs-twice``: kill -9 of both running job processes, then of the processes that run the same jobs again (two
   attempts lost per job, the third runs them);
-- ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again.
+- ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again;
+- ``warm-fork``: kill -9 of the warm parent again and again while twelve short jobs start (kills that land mid-fork);
+- ``store-kill``: kill -9 of the job processes once their solve is at its end (mid-store: the marker counts the
+  solve before its result is written, so a kill there costs a second solve);
+- ``cancel-kill``: two running jobs cancelled, one just after its process was killed, one just before;
+- ``sqlite-lock``: another process holds the SQLite file's write lock (``BEGIN EXCLUSIVE``) for 8 s under two
+  running jobs;
+- ``two-apis``: a second ``serve`` on the same data dir, three jobs submitted to each, the second killed with -9;
+- ``read-only``: the artifacts folder made read-only (a read-only bind mount: needs root) for 8 s under two running
+  jobs;
+- ``webhook-dead``: three jobs whose ``callback_url`` is a closed port;
+- ``idempotency``: an ``Idempotency-Key`` reused with another body, another kind, an upload, and the same body.
 
 Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says
-why, the /readyz answers seen (in order, repeats folded), and the seconds until every job had ended. ``--before DIR``
+why, the /readyz answers seen (in order, repeats folded), what HTTP answered meanwhile (by route and status, where the
+scenario probes), and the seconds until every job had ended. ``--before DIR``
 runs the same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
 stopped process is noticed in seconds.
 
@@ -29,8 +41,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import random
 import signal
 import socket
+import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -79,10 +93,41 @@ class Service:
         self.tree, self.data, self.port = tree, data, _free_port()
         self.env = {**os.environ, "PYTHONPATH": str(tree), "PLUGINS": "tests.support.kinds", "DATA_DIR": str(data),
                     "LEASE_SECONDS": "8", "HEARTBEAT_SECONDS": "1", "SWEEP_SECONDS": "1", "EMBEDDED_WORKERS": "2",
-                    "LOG_FORMAT": "text", "LOG_LEVEL": "warning"}
+                    "LOG_FORMAT": "text", "LOG_LEVEL": "warning",
+                    # webhook-dead: signed callbacks to this host, retried quickly
+                    "WEBHOOK_SECRETS": "whsec_QUJDREVGR0hJSktMTU5PUFFSU1RVVldYWVo=", "WEBHOOK_PRIVATE_TARGETS": "true",
+                    "WEBHOOK_RETRY_SECONDS": "0.2"}
         self.process: subprocess.Popen | None = None
         self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=30)
         self.ready_seen: list[str] = []
+        self.answers: dict[str, int] = {}
+        self.extra: list[str] = []  # jobs accepted by the probes meanwhile (they must end too)
+
+    def probe(self, job_id: str) -> None:
+        """One round of what clients ask meanwhile (a job's view, the list, a JSON submission, an upload), tallied by
+        route and status; a 5xx other than 503 is kept whole."""
+        for method, path, extra in (("get", f"/v1/jobs/{job_id}", {}), ("get", "/v1/jobs", {}),
+                                    ("post", "/v1/test-compute/jobs", {"json": {"values": [3.5]}}),
+                                    ("post", "/v1/test-compute/jobs", {"files": {"file": ("v.txt", b"1.5\n2.5\n")}})):
+            route = "GET /v1/jobs/{id}" if path.startswith("/v1/jobs/") else \
+                f"{method.upper()} {path}{' upload' if 'files' in extra else ''}"
+            try:
+                response = getattr(self.client, method)(path, timeout=30, **extra)
+                key = f"{route} {response.status_code}"
+                if response.status_code == 202:
+                    self.extra.append(response.json()["id"])
+                elif response.status_code >= 500 and response.status_code != 503:
+                    key += f" {response.text[:120]}"
+            except httpx.HTTPError as error:
+                key = f"{route} {type(error).__name__}"
+            self.answers[key] = self.answers.get(key, 0) + 1
+
+    def probe_for(self, seconds: float, job_id: str) -> None:
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            self.ready()
+            self.probe(job_id)
+            time.sleep(0.3)
 
     def start(self) -> None:
         log = open(self.data / "serve.log", "ab")
@@ -263,8 +308,115 @@ def scenario(name: str, tree: Path) -> dict:
             for other in service.job_processes():
                 if other != pid:
                     os.kill(other, signal.SIGKILL)
+        elif name == "warm-fork":
+            ids = []
+            for i in range(12):
+                body = {"values": [i + 0.5], "seconds": 0.2, "marker_dir": str(markers / str(i))}
+                ids.append(service.client.post("/v1/test-compute/jobs", json=body).json()["id"])
+            kills, until = 0, time.monotonic() + 20
+            while time.monotonic() < until and not all(
+                    j["status"] in ("succeeded", "failed") for j in service.jobs(ids)):
+                for pid in _forkservers(service.process.pid):
+                    time.sleep(random.uniform(0, 0.05))
+                    try:
+                        os.kill(pid, signal.SIGKILL)
+                        kills += 1
+                    except ProcessLookupError:
+                        pass
+                service.ready()
+                time.sleep(random.uniform(0.05, 0.5))
+            note = f"{kills} kills of the warm parent"
+        elif name == "store-kill":
+            ids, kills = [], 0
+            for i in range(6):  # 20,000 values: their artifact takes a moment to write
+                body = {"values": [v + 0.5 for v in range(20_000)], "seconds": 1.0, "marker_dir": str(markers / str(i))}
+                ids.append(service.client.post("/v1/test-compute/jobs", json=body).json()["id"])
+            until = time.monotonic() + 40
+            while time.monotonic() < until:
+                jobs = service.jobs(ids)
+                if all(j["status"] in ("succeeded", "failed") for j in jobs):
+                    break
+                if any(j["status"] == "running" and j["attempt"] == 1 and j["progress"]["fraction"] >= 0.95
+                       for j in jobs):
+                    time.sleep(random.uniform(0, 0.1))
+                    for pid in service.job_processes():
+                        try:
+                            os.kill(pid, signal.SIGKILL)
+                            kills += 1
+                        except ProcessLookupError:
+                            pass
+                time.sleep(0.01)
+            note = f"{kills} job processes killed at the end of their solve"
+        elif name == "cancel-kill":
+            ids = service.submit(2, markers)
+            pids = service.wait_claimed(ids, 2)
+            time.sleep(0.3)
+            os.kill(pids[0], signal.SIGKILL)
+            said = [service.client.post(f"/v1/jobs/{ids[0]}/cancel").status_code]
+            said.append(service.client.post(f"/v1/jobs/{ids[1]}/cancel").status_code)
+            os.kill(pids[1], signal.SIGKILL)
+            time.sleep(2)
+            note = f"cancel answered {said}; job processes left: {len(service.job_processes())}"
+        elif name == "sqlite-lock":
+            ids = service.submit(2, markers)
+            service.wait_claimed(ids, 2)
+            holder = sqlite3.connect(data / "plantsolve.db", timeout=5, isolation_level=None)
+            holder.execute("BEGIN EXCLUSIVE")
+            try:
+                service.probe_for(8, ids[0])
+            finally:
+                holder.execute("ROLLBACK")
+                holder.close()
+        elif name == "two-apis":
+            other = Service(tree, data)
+            other.start()
+            ids = service.submit(3, markers)
+            for i in range(3, 6):
+                body = {"values": [i + 0.5], "seconds": JOB_SECONDS, "marker_dir": str(markers / str(i))}
+                ids.append(other.client.post("/v1/test-compute/jobs", json=body).json()["id"])
+            service.wait_claimed(ids, 2)
+            time.sleep(0.5)
+            other.process.kill()
+            other.process.wait()
+            service.probe_for(3, ids[0])
+            note = f"/readyz of the killed one before its kill: {other.ready_seen}"
+        elif name == "read-only":
+            ids = service.submit(2, markers)
+            service.wait_claimed(ids, 2)
+            folder = data / "artifacts"
+            subprocess.run(["mount", "--bind", str(folder), str(folder)], check=True)
+            try:
+                subprocess.run(["mount", "-o", "remount,ro,bind", str(folder)], check=True)
+                service.probe_for(8, ids[0])
+                note = f"while read-only: {[j['status'] for j in service.jobs(ids)]}"
+            finally:
+                subprocess.run(["umount", str(folder)], check=True)
+        elif name == "webhook-dead":
+            dead = _free_port()
+            ids = []
+            for i in range(3):
+                body = {"values": [i + 0.5], "seconds": 0.5, "marker_dir": str(markers / str(i))}
+                ids.append(service.client.post(f"/v1/test-compute/jobs?callback_url=http://127.0.0.1:{dead}/hook",
+                                               json=body).json()["id"])
+            service.wait_finished(ids, 60)
+            time.sleep(3)
+            started = time.monotonic()
+            service.ready()
+            note = (f"callbacks {sorted({(j.get('callback') or {}).get('state') for j in service.jobs(ids)})}, "
+                    f"/readyz then {time.monotonic() - started:.2f} s")
+        elif name == "idempotency":
+            def post(kind: str, key: str, **extra) -> str:
+                return str(service.client.post(f"/v1/{kind}/jobs", headers={"Idempotency-Key": key}, **extra).status_code)
+            body = {"values": [1.5], "seconds": 0.2, "marker_dir": str(markers / "0")}
+            first = service.client.post("/v1/test-compute/jobs", headers={"Idempotency-Key": "k"}, json=body)
+            ids = [first.json()["id"]]
+            note = (f"first {first.status_code}; other body {post('test-compute', 'k', json={'values': [2.5]})}, "
+                    f"other kind {post('test-crash', 'k', json={'message': 'x'})}, "
+                    f"upload {post('test-compute', 'k', files={'file': ('v.txt', b'1.5')})}, "
+                    f"same body {post('test-compute', 'k', json=body)}")
         else:
             raise ValueError(name)
+        ids = ids + service.extra
         jobs, seconds = service.wait_finished(ids, 120)
         if name in ("stop", "stop-kill"):
             alive = Path(f"/proc/{stopped}").exists() and \
@@ -274,22 +426,27 @@ def scenario(name: str, tree: Path) -> dict:
         service.ready()
     finally:
         service.stop()
+    accepted = jobs[len(ids) - len(service.extra):]  # the probes' jobs: they must end, solved (no markers)
+    ids, jobs = ids[:len(ids) - len(service.extra)], jobs[:len(ids) - len(service.extra)]
     solves = [len(list((markers / str(i)).glob("*"))) if (markers / str(i)).exists() else 0 for i in range(len(ids))]
     statuses = [j["status"] for j in jobs]
     reasons = [bool((j.get("report") or {}).get("message")) for j in jobs if j["status"] == "failed"]
-    once = all((s == "succeeded" and n == 1) or (s == "failed" and n <= 1) for s, n in zip(statuses, solves))
+    once = all((s == "succeeded" and n == 1) or (s in ("failed", "cancelled") and n <= 1) for s, n in zip(statuses, solves))
     if name == "warm-stop":
         for pid in _stray(data):  # the stopped warm parent, if the service left it
             os.kill(pid, signal.SIGKILL)
     return {"scenario": name, "statuses": statuses, "solves": solves, "attempts": [j["attempt"] for j in jobs],
             "failed_say_why": all(reasons),
-            "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note}
+            "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note,
+            "answers": service.answers,
+            "accepted_meanwhile": f"{sum(j['status'] == 'succeeded' for j in accepted)} of {len(accepted)} succeeded"}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--before", type=Path)
-    parser.add_argument("--only", default="warm,jobs,stop,api,warm-submit,warm-twice,warm-stop,jobs-twice,stop-kill")
+    parser.add_argument("--only", default="warm,jobs,stop,api,warm-submit,warm-twice,warm-stop,jobs-twice,stop-kill,"
+                        "warm-fork,store-kill,cancel-kill,sqlite-lock,two-apis,read-only,webhook-dead,idempotency")
     args = parser.parse_args()
     for tree in ([args.before] if args.before else []) + [HERE]:
         for name in args.only.split(","):

@@ -17,15 +17,29 @@ does. The shipped DATABASE_WAIT_SECONDS and DATABASE_STATEMENT_SECONDS, the API 
 (EMBEDDED_MODE=thread: the bounds are the API process's); a request gets ``--patience`` seconds before the
 bench gives up on it. This mode stops nothing and may run beside the tests.
 
+``--scaled``: the scaled path under killed processes and outages, for this checkout and the one ``--before`` names, in
+the same run (each scenario on a database of its own on the local PostgreSQL, a Redis server of its own on a free
+port, ``plantsolve serve`` and ``plantsolve worker`` processes): ``worker-kill`` (kill -9 of a Celery worker mid-job,
+another started), ``worker-stop`` (SIGSTOP of one mid-job, another started), ``redis-queued`` (Redis restarted, empty,
+with jobs queued and no worker; a worker started after), ``redis-running`` (Redis restarted under a busy worker),
+``pg-kill`` (``pg_terminate_backend`` of every connection to the scenario's database, again and again, as the jobs
+store their results). Each row: final statuses, solves per job (marker files), attempts, what HTTP answered meanwhile,
+the ``/readyz`` answers in order, and ``/readyz`` at the end. Stops nothing shared: the PostgreSQL cluster and the
+shared Redis are left alone.
+
     python bench/outage.py [--outage 20] [--lease 8]
     python bench/outage.py --black-hole [--before main|DIR|none] [--patience 60]
+    python bench/outage.py --scaled [--before main|DIR|none] [--only worker-kill,redis-running,...]
 """
 
 from __future__ import annotations
 
 import argparse
 import concurrent.futures
+import json
 import os
+import random
+import signal
 import socket
 import subprocess
 import sys
@@ -119,17 +133,7 @@ def black_hole_side(code: Path, patience: float) -> list[tuple[str, str]]:
 
 
 def black_hole(args: argparse.Namespace) -> int:
-    sides = [("this", REPO)]
-    remove = None
-    if args.before != "none":
-        if Path(args.before).is_dir():
-            sides.insert(0, (Path(args.before).name, Path(args.before)))
-        else:
-            folder = Path(tempfile.mkdtemp(prefix="outage-before-")) / "before"
-            subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), args.before],
-                           check=True, capture_output=True)
-            remove = folder
-            sides.insert(0, (args.before, folder))
+    sides, remove = _sides(args.before)
     try:
         measured = [(label, black_hole_side(code, args.patience)) for label, code in sides]
     finally:
@@ -144,16 +148,242 @@ def black_hole(args: argparse.Namespace) -> int:
     return 0
 
 
+SCALED = ("worker-kill", "worker-stop", "redis-queued", "redis-running", "pg-kill")
+
+
+class ScaledService:
+    """One scenario's scaled service: a database and a Redis server of its own, the API, Celery workers."""
+
+    def __init__(self, code: Path, work: Path):
+        self.work, self.code = work, code
+        self.redis_port, self.port = free_port(), free_port()
+        self.redis = self._redis()
+        self.database = f"plantsolve_scaled_{uuid.uuid4().hex[:8]}"
+        with psycopg.connect(ADMIN, autocommit=True) as admin:
+            admin.execute(f'CREATE DATABASE "{self.database}"')
+        self.env = {**os.environ, "PYTHONPATH": f"{code}{os.pathsep}{REPO}", "PLUGINS": "tests.support.kinds",
+                    "DATA_DIR": str(work / "var"),
+                    "DATABASE_URL": f"postgresql+psycopg://postgres@127.0.0.1:5432/{self.database}",
+                    "BROKER_URL": f"redis://127.0.0.1:{self.redis_port}/0", "LEASE_SECONDS": "4",
+                    "HEARTBEAT_SECONDS": "0.5", "SWEEP_SECONDS": "1", "WORKER_BEAT_SECONDS": "0.5",
+                    "WORKER_ALIVE_SECONDS": "3", "REQUEUE_QUEUED_AFTER": "10", "PROGRESS_WRITE_SECONDS": "0",
+                    "LOG_FORMAT": "text", "MIN_FREE_DISK_BYTES": "0"}
+        self.bin = Path(sys.executable).parent
+        subprocess.run([str(self.bin / "plantsolve"), "migrate"], env=self.env, check=True, capture_output=True)
+        self.api = subprocess.Popen([str(self.bin / "plantsolve"), "serve", "--port", str(self.port)], env=self.env,
+                                    cwd=work, stdout=(work / "api.log").open("ab"), stderr=subprocess.STDOUT)
+        self.client = httpx.Client(base_url=f"http://127.0.0.1:{self.port}", timeout=30)
+        self.workers: list[subprocess.Popen] = []
+        self.ready_seen: list[str] = []
+        self.answers: dict[str, int] = {}
+        self.extra: list[str] = []
+        until = time.monotonic() + 120
+        while self.ready() not in ("200", "503 workers"):
+            if time.monotonic() > until or self.api.poll() is not None:
+                raise SystemExit(f"the API did not start: {(work / 'api.log').read_text()[-2000:]}")
+            time.sleep(0.3)
+
+    def _redis(self) -> subprocess.Popen:
+        return subprocess.Popen(["redis-server", "--port", str(self.redis_port), "--bind", "127.0.0.1", "--save", "",
+                                 "--appendonly", "no"], stdout=(self.work / "redis.log").open("ab"),
+                                stderr=subprocess.STDOUT)
+
+    def restart_redis(self, away: float) -> None:
+        """Redis killed, ``away`` seconds of HTTP probes, then started again empty (no persistence)."""
+        self.redis.kill()
+        self.redis.wait()
+        self.probe_for(away)
+        self.redis = self._redis()
+
+    def worker(self, name: str) -> subprocess.Popen:
+        log = self.work / f"worker-{name}.log"
+        process = subprocess.Popen([str(self.bin / "plantsolve"), "worker", "--concurrency", "1", "--hostname",
+                                    f"{name}@%h", "--log-level", "info"], env=self.env, cwd=self.work,
+                                   stdout=log.open("ab"), stderr=subprocess.STDOUT, start_new_session=True)
+        until = time.monotonic() + 120
+        while b" ready.\n" not in log.read_bytes():
+            if process.poll() is not None or time.monotonic() > until:
+                raise SystemExit(f"worker {name} did not start: {log.read_text()[-2000:]}")
+            time.sleep(0.2)
+        self.workers.append(process)
+        return process
+
+    def ready(self) -> str:
+        try:
+            response = self.client.get("/readyz", timeout=10)
+            said = "200" if response.status_code == 200 else \
+                f"{response.status_code} {','.join(k for k, v in response.json()['checks'].items() if v != 'ok')}"
+        except httpx.HTTPError as error:
+            said = f"no answer ({type(error).__name__})"
+        if not self.ready_seen or self.ready_seen[-1] != said:
+            self.ready_seen.append(said)
+        return said
+
+    def submit(self, i: int, seconds: float) -> str:
+        body = {"values": [1.0 + i], "seconds": seconds, "marker_dir": str(self.work / "markers" / str(i))}
+        return self.client.post("/v1/test-compute/jobs", json=body).json()["id"]
+
+    def jobs(self, ids: list[str]) -> list[dict]:
+        return [self.client.get(f"/v1/jobs/{i}").json() for i in ids]
+
+    def wait_running(self, job_id: str) -> None:
+        until = time.monotonic() + 60
+        while self.jobs([job_id])[0]["status"] != "running":
+            if time.monotonic() > until:
+                raise SystemExit("the job did not start")
+            time.sleep(0.1)
+
+    def probe(self, job_id: str) -> None:
+        """One round of what clients ask meanwhile; the answers are tallied by route and status."""
+        for method, path, extra in (("get", f"/v1/jobs/{job_id}", {}), ("get", "/v1/jobs", {}),
+                                    ("post", "/v1/test-compute/jobs", {"json": {"values": [3.0]}})):
+            route = "GET /v1/jobs/{id}" if path.startswith("/v1/jobs/") else f"{method.upper()} {path}"
+            try:
+                response = getattr(self.client, method)(path, timeout=20, **extra)
+                key = f"{route} {response.status_code}"
+                if response.status_code == 202:
+                    self.extra.append(response.json()["id"])
+            except httpx.HTTPError as error:
+                key = f"{route} {type(error).__name__}"
+            self.answers[key] = self.answers.get(key, 0) + 1
+
+    def probe_for(self, seconds: float, job_id: str | None = None) -> None:
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            self.ready()
+            if job_id:
+                self.probe(job_id)
+            time.sleep(0.3)
+
+    def finish(self, ids: list[str], seconds: float = 120) -> list[dict]:
+        until = time.monotonic() + seconds
+        while time.monotonic() < until:
+            jobs = self.jobs(ids)
+            self.ready()
+            if all(j["status"] in ("succeeded", "failed", "cancelled") for j in jobs):
+                return jobs
+            time.sleep(0.3)
+        return self.jobs(ids)
+
+    def close(self) -> None:
+        for process in self.workers:
+            try:
+                os.killpg(process.pid, signal.SIGCONT)
+                os.killpg(process.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+        for process in self.workers:
+            try:
+                process.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+        self.api.terminate()
+        try:
+            self.api.wait(30)
+        except subprocess.TimeoutExpired:
+            self.api.kill()
+        self.redis.kill()
+        with psycopg.connect(ADMIN, autocommit=True) as admin:
+            admin.execute(f'DROP DATABASE IF EXISTS "{self.database}" WITH (FORCE)')
+
+
+def scaled_scenario(name: str, code: Path) -> dict:
+    work = Path(tempfile.mkdtemp(prefix=f"scaled-{name}-"))
+    service = ScaledService(code, work)
+    try:
+        if name in ("worker-kill", "worker-stop"):
+            first = service.worker("a")
+            ids = [service.submit(i, 2.0) for i in range(2)]
+            service.wait_running(ids[0])
+            time.sleep(0.5)
+            if name == "worker-kill":
+                os.killpg(first.pid, signal.SIGKILL)
+                first.wait()
+            else:
+                os.killpg(first.pid, signal.SIGSTOP)
+            service.probe_for(4, ids[0])
+            service.worker("b")
+        elif name == "redis-queued":
+            ids = [service.submit(i, 0.5) for i in range(4)]
+            service.restart_redis(5)
+            service.probe_for(3, ids[0])
+            service.worker("a")
+        elif name == "redis-running":
+            service.worker("a")
+            ids = [service.submit(i, 3.0) for i in range(4)]
+            service.wait_running(ids[0])
+            service.restart_redis(5)
+        elif name == "pg-kill":
+            service.worker("a")
+            ids = [service.submit(i, 1.0) for i in range(6)]
+            until = time.monotonic() + 30
+            with psycopg.connect(ADMIN, autocommit=True) as admin:
+                while time.monotonic() < until:
+                    jobs = service.jobs(ids)
+                    if all(j["status"] in ("succeeded", "failed") for j in jobs):
+                        break
+                    if any(j["status"] == "running" and j["progress"]["fraction"] >= 0.9 for j in jobs):
+                        time.sleep(random.uniform(0, 0.08))
+                        admin.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = %s",
+                                      (service.database,))
+                        service.probe(ids[0])
+                    time.sleep(0.02)
+        else:
+            raise ValueError(name)
+        jobs = service.finish(ids + service.extra)
+        time.sleep(2)  # the workers' next beats
+        final = service.ready()
+    finally:
+        service.close()
+    marked = [len(list((work / "markers" / str(i)).glob("*"))) for i in range(len(ids))]
+    mine = jobs[:len(ids)]
+    return {"scenario": name, "statuses": [j["status"] for j in mine], "solves": marked,
+            "attempts": [j["attempt"] for j in mine],
+            "submitted_meanwhile": f"{sum(j['status'] == 'succeeded' for j in jobs[len(ids):])} of "
+                                   f"{len(jobs) - len(ids)} succeeded",
+            "answers": service.answers, "readyz": service.ready_seen, "readyz_at_end": final}
+
+
+def scaled(args: argparse.Namespace) -> int:
+    sides, remove = _sides(args.before)
+    try:
+        for label, code in sides:
+            for name in args.only.split(","):
+                print(json.dumps({"tree": label, **scaled_scenario(name, code)}), flush=True)
+    finally:
+        if remove is not None:
+            subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(remove)], check=False)
+    return 0
+
+
+def _sides(before: str) -> tuple[list[tuple[str, Path]], Path | None]:
+    """(label, checkout) to measure, ``before`` first; and the temporary worktree made for it, to remove after."""
+    sides = [("this", REPO)]
+    if before == "none":
+        return sides, None
+    if Path(before).is_dir():
+        return [(Path(before).name, Path(before)), *sides], None
+    folder = Path(tempfile.mkdtemp(prefix="outage-before-")) / "before"
+    subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(folder), before], check=True,
+                   capture_output=True)
+    return [(before, folder), *sides], folder
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--outage", type=float, default=20.0, help="seconds PostgreSQL is down (default 20)")
     parser.add_argument("--lease", type=float, default=8.0, help="LEASE_SECONDS of the server (default 8)")
     parser.add_argument("--black-hole", action="store_true", help="a link that dies without a word (see above)")
-    parser.add_argument("--before", default="main", help="--black-hole: the checkout beside this one ('none': none)")
+    parser.add_argument("--scaled", action="store_true", help="the scaled path's killed processes and outages")
+    parser.add_argument("--only", default=",".join(SCALED), help="--scaled: the scenarios to run")
+    parser.add_argument("--before", default="main",
+                        help="--black-hole, --scaled: the checkout beside this one ('none': none)")
     parser.add_argument("--patience", type=float, default=60.0, help="--black-hole: seconds a request is given")
     args = parser.parse_args()
     if args.black_hole:
         return black_hole(args)
+    if args.scaled:
+        return scaled(args)
     name = f"plantsolve_outage_{uuid.uuid4().hex[:8]}"
     with psycopg.connect(ADMIN, autocommit=True) as admin:
         admin.execute(f'CREATE DATABASE "{name}"')

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import os
+import select
 import sqlite3
 import threading
 import time
@@ -75,8 +76,19 @@ def postgres_bounds(url: str, *, wait: float, statement: float) -> dict[str, obj
 
 
 # A pooled connection that was idle this long is pinged before a request uses it (one that came back a moment
-# ago is not: under load a ping per request cost a round trip and a fifth of a submission's CPU time)
+# ago is not: under load a ping per request cost a round trip and a fifth of a submission's CPU time, unless the
+# server has spoken on it meanwhile: see spoke_while_idle)
 PING_IDLE_SECONDS = 0.25
+
+
+def spoke_while_idle(fd: int) -> bool:
+    """Whether the socket ``fd`` of an idle PostgreSQL connection has something to read. Nothing was asked, so it
+    is most often the server's farewell before it closed the connection (its backend ended by
+    ``pg_terminate_backend``, an idle-session timeout, a pooler or a failover): the connection must not carry a
+    request. One system call, no round trip."""
+    poller = select.poll()
+    poller.register(fd, select.POLLIN | select.POLLERR | select.POLLHUP)
+    return bool(poller.poll(0))
 
 
 @functools.cache
@@ -110,9 +122,9 @@ def bounded_connection_class() -> type:
 
 def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None:
     """Connections made as ``BoundedConnection`` (a round trip waits at most ``statement + wait``); a pooled
-    connection idle for :data:`PING_IDLE_SECONDS` is pinged first with the bound ``wait`` (a ping that gets no
-    answer in time, or fails, drops the pool's connections and the checkout connects anew: SQLAlchemy's
-    pessimistic disconnect handling, with a bounded ping)."""
+    connection idle for :data:`PING_IDLE_SECONDS`, or one the server has spoken on meanwhile (:func:`spoke_while_idle`),
+    is pinged first with the bound ``wait`` (a ping that gets no answer in time, or fails, drops the pool's
+    connections and the checkout connects anew: SQLAlchemy's pessimistic disconnect handling, with a bounded ping)."""
 
     @event.listens_for(engine, "do_connect")
     def connect(_dialect, record, cargs, cparams):
@@ -127,7 +139,8 @@ def _bound_round_trips(engine: Engine, *, wait: float, statement: float) -> None
 
     @event.listens_for(engine, "checkout")
     def ping_after_idle(dbapi_connection, record, *_proxy) -> None:
-        if time.monotonic() - record.info.get("returned", 0.0) < PING_IDLE_SECONDS:
+        if time.monotonic() - record.info.get("returned", 0.0) < PING_IDLE_SECONDS and \
+                not (dbapi_connection.closed or spoke_while_idle(dbapi_connection.fileno())):
             return
         bound = dbapi_connection.round_trip_seconds
         dbapi_connection.round_trip_seconds = wait

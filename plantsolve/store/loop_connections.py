@@ -13,6 +13,7 @@ reads it, as through psycopg.
 The bounds are those of the engine's connections (:mod:`plantsolve.store.engine`): the server's statement, lock and
 idle-in-transaction timeouts; a connect that gets no answer gives up after ``wait``; each round trip waits at most
 ``statement + wait`` on the client (a black-holed link: the connection is closed and the call raises); a connection
+the server closed while it was idle is dropped, not used (the loop read its farewell); one
 idle :data:`~plantsolve.store.engine.PING_IDLE_SECONDS` is pinged with the bound ``wait`` before use (a ping that
 fails drops every idle connection); a request waits at most ``wait`` for a free connection. A driver error comes
 back as SQLAlchemy's exception of its class (an ``IntegrityError`` for a taken unique key; a connection that broke,
@@ -83,7 +84,14 @@ class LoopConnections:
         await self._run("execute", statement, args)
 
     async def fetch(self, statement: str, *args: Any) -> list[Any]:
-        """The rows of one query (each a record: by position or by name)."""
+        """The rows of one query (each a record: by position or by name). A query that met a connection the server
+        had just ended (its farewell came with the answer) is asked once more, on another connection: a read is safe
+        to repeat, and the database is there."""
+        try:
+            return await self._run("fetch", statement, args)
+        except OperationalError as error:
+            if not _ended_by_server(error.orig):
+                raise
         return await self._run("fetch", statement, args)
 
     async def _run(self, method: str, statement: str, args: tuple) -> Any:
@@ -129,6 +137,9 @@ class LoopConnections:
     async def _checkout(self):
         while self._idle:
             connection, returned = self._idle.pop()
+            if connection.is_closed():  # the server ended it meanwhile (this loop has read its farewell)
+                _terminate(connection)
+                continue
             if time.monotonic() - returned < engine_module.PING_IDLE_SECONDS:
                 return connection
             try:
@@ -151,6 +162,15 @@ class LoopConnections:
         idle, self._idle = self._idle, []
         for connection, _ in idle:
             _terminate(connection)
+
+
+def _ended_by_server(error: BaseException | None) -> bool:
+    """Whether a driver error says the server ended the connection (``pg_terminate_backend``, an idle-session
+    timeout, a pooler): not a timeout, not a server that does not answer."""
+    asyncpg = _asyncpg()
+    return isinstance(error, (asyncpg.ConnectionDoesNotExistError, asyncpg.InternalClientError,
+                              asyncpg.AdminShutdownError)) or \
+        (isinstance(error, asyncpg.InterfaceError) and "closed" in str(error))
 
 
 def _terminated(connection) -> None:

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from contextlib import contextmanager
 from functools import cached_property
 
-from celery import Celery, signals
+from celery import Celery, bootsteps, signals
 from celery.exceptions import SoftTimeLimitExceeded, TimeLimitExceeded
 from kombu import Producer
 from kombu.transport.redis import Channel as RedisChannel
@@ -133,6 +133,7 @@ def create_celery(settings: JobSettings, *, publisher: bool = False) -> Celery:
         broker_connection_retry_on_startup=True,
         worker_hijack_root_logger=False,
     )
+    app.steps["worker"].add(RollCallAfterReconnect)
     # a held job's task is retried for as long as the disk is low (max_retries None: no count of them)
     app.task(name="plantsolve.run_job", bind=True, max_retries=None)(_run_job_task)
     return app
@@ -367,6 +368,23 @@ def _join_the_roll(sender=None, **_kwargs) -> None:
                            settings.worker_alive_seconds)
     _announcer.beat()
     sender.timer.call_repeatedly(settings.worker_beat_seconds, _announcer.beat)
+
+
+def _rejoin_the_roll(_worker, hub) -> None:
+    """Put the roll call's beat back on the worker's timer as its event loop starts again. A worker whose broker
+    connection broke (Redis restarted, its port closed a moment) empties its event loop's timer before it connects
+    again, and ``worker_ready`` is not sent a second time: the worker went on running jobs while it beat no more, and
+    readiness said ``workers: unavailable`` until it was restarted. The first start is left to :func:`_join_the_roll`
+    (no announcer yet: the loop starts before the worker is ready)."""
+    if _announcer is None or _announcer.stopped:
+        return
+    _announcer.beat()  # back on the roll now, not a beat later
+    hub.timer.call_repeatedly(get_job_settings().worker_beat_seconds, _announcer.beat)
+
+
+# A worker step: Celery calls each step's register_with_event_loop(worker, hub) whenever the event loop starts.
+RollCallAfterReconnect = type("RollCallAfterReconnect", (bootsteps.StartStopStep,),
+                              {"register_with_event_loop": staticmethod(_rejoin_the_roll)})
 
 
 @signals.worker_shutting_down.connect

@@ -55,8 +55,13 @@ class Sweeper:
 
     def run_pass(self) -> bool:
         """One pass; a pass that follows a failed one (the database was away) extends the running leases
-        first (see :func:`plantsolve.jobs.leases.sweep_once`). Returns whether the pass succeeded."""
+        first (see :func:`plantsolve.jobs.leases.sweep_once`). A pass first checks that the database takes a write
+        (as readiness does): while it takes none (a SQLite file whose write lock another process holds, a read-only
+        standby) nobody's heartbeat is written either, though the pass's reads go on and may find nothing to write;
+        such a pass fails, so that the leases that lapse meanwhile are extended, not swept. Returns whether the pass
+        succeeded."""
         try:
+            self.ctx.db.ping()
             sweep_once(self.ctx, self.enqueue, self.pending, after_outage=self._failed, gone=self.gone)
             self._failed = False
             if self.after_pass is not None:

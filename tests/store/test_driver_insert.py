@@ -77,6 +77,7 @@ def test_a_taken_idempotency_key_answers_with_the_job_that_holds_it(repo, monkey
 
 def test_a_connection_broken_under_the_insert_is_an_infrastructure_error_and_the_next_submit_works(repo, admin, monkeypatch):
     monkeypatch.setattr(engine, "PING_IDLE_SECONDS", 3600.0)  # no ping on checkout: the insert meets the break
+    monkeypatch.setattr(engine, "spoke_while_idle", lambda fd: False)  # the server's farewell not arrived yet
     repo.create(_job())  # a pooled connection, back in the pool a moment ago (no ping before its next use)
     with repo._engine.connect() as connection:
         pid = connection.execute(text("SELECT pg_backend_pid()")).scalar()
