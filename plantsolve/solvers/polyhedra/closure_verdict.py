@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from plantsolve.schemas.common import Diagnostic
 
-NOT_DETERMINED = "inspection_not_determined"  # the schema's verdict code for an answer that is not known
 _LISTED = 5
 
 
@@ -38,7 +37,7 @@ def volumes_not_determined(zones: list[dict], warnings: list[Diagnostic]) -> Dia
             codes.setdefault(zone, set()).add(w.code)
     named = "; ".join(f"{z['id']!r}: {_why(z, codes)}" for z in missing[:_LISTED])
     more = f"; and {len(missing) - _LISTED} more" if len(missing) > _LISTED else ""
-    return Diagnostic(code=NOT_DETERMINED, message=(
+    return Diagnostic(code="volume_not_determined", message=(
         f"Volume not determined for {len(missing)} of {len(zones)} zone(s) ({named}{more}): their volume and "
         "total_volume are null. Close the zones (the open edges are listed per zone) and send the file again."),
         details={"zones": [z["id"] for z in missing], "zones_total": len(zones)})

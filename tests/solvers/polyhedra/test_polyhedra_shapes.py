@@ -127,7 +127,7 @@ def test_open_box_has_no_volume_and_says_where():
     assert z.flux_volumes == pytest.approx([1.0, 1.0, 0.4]) and z.vector_area_sum == pytest.approx([0, 0, -1])
     assert z.signed_volume == pytest.approx(0.8)
     assert z.genus == 0 and z.euler_characteristic == 1
-    assert [w.code for w in result.report.warnings] == ["inspection_not_determined", "zone_not_closed"]
+    assert [w.code for w in result.report.warnings] == ["volume_not_determined", "zone_not_closed"]
     assert result.report.status == "warning" and result.report.verdict.label == "NOT DETERMINED"
 
 

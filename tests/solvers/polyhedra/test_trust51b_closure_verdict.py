@@ -30,7 +30,7 @@ def test_an_open_zone_is_a_not_determined_verdict_naming_it_and_closed_zones_are
     assert volumes == {"Office A Thermal Zone": None, "Office B Thermal Zone": pytest.approx(60.0)}
     assert result["total_volume"] is None
     verdict = result["report"]["verdict"]
-    assert verdict["code"] == "inspection_not_determined" and verdict["label"] == "NOT DETERMINED"
+    assert verdict["code"] == "volume_not_determined" and verdict["label"] == "NOT DETERMINED"
     assert "'Office A Thermal Zone': not closed, 4 open edge(s)" in verdict["message"]
     assert "Office B" not in verdict["message"] and "1 of 2 zone(s)" in verdict["message"]
     assert job["report"]["verdict"] == verdict  # the job view says it beside 'succeeded'
@@ -47,14 +47,13 @@ def test_a_surface_given_twice_says_why_the_volume_is_missing():
     start = IDF.index(b"BuildingSurface:Detailed,\n  Office B Roof")
     roof = IDF[start:IDF.index(b"\n\n", start)].replace(b"Office B Roof", b"Office B Roof again")
     result = solve(parse_upload(StoredInput.from_bytes("b.idf", IDF + b"\n" + roof + b"\n"), None)).result
-    assert result.report.verdict.code == "inspection_not_determined"
+    assert result.report.verdict.code == "volume_not_determined"
     assert "'Office B Thermal Zone': faces listed twice" in result.report.verdict.message
 
 
 def test_the_verdict_code_is_one_the_schema_counts_as_a_verdict():
     from plantsolve.schemas.common import VERDICT_CODES
-    from plantsolve.solvers.polyhedra.closure_verdict import NOT_DETERMINED
 
-    assert VERDICT_CODES[NOT_DETERMINED] == "NOT DETERMINED"
+    assert VERDICT_CODES["volume_not_determined"] == "NOT DETERMINED"
 
 
