@@ -321,10 +321,9 @@ class WebhookNotifier:
 
     def __init__(self, service, secrets: WebhookSecrets, settings, transport: httpx.BaseTransport | None = None):
         self.service, self.secrets, self.settings = service, secrets, settings
-        # the pinned transport resolves each target once and connects to the address it checked
-        transport = transport or PinnedTransport(allow_private=settings.webhook_private_targets)
-        self._http = httpx.Client(timeout=settings.webhook_timeout_seconds, transport=transport, trust_env=False,
-                                  headers={"User-Agent": "plantsolve-webhook"})
+        self._transport = transport
+        self._http: httpx.Client | None = None
+        self._http_lock = threading.Lock()
         self._pool = ThreadPoolExecutor(max_workers=4, thread_name_prefix="webhook")
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="webhook-notifier", daemon=True)
@@ -337,7 +336,20 @@ class WebhookNotifier:
         if self._thread.is_alive():
             self._thread.join(timeout=5)
         self._pool.shutdown(wait=True, cancel_futures=True)
-        self._http.close()
+        with self._http_lock:
+            if self._http is not None:
+                self._http.close()
+
+    def _client(self) -> httpx.Client:
+        """The HTTP client, made at the first delivery: most services send no webhook, and its TLS contexts (the CA
+        bundle read twice) were a fifth of every app's start."""
+        with self._http_lock:
+            if self._http is None:
+                # the pinned transport resolves each target once and connects to the address it checked
+                transport = self._transport or PinnedTransport(allow_private=self.settings.webhook_private_targets)
+                self._http = httpx.Client(timeout=self.settings.webhook_timeout_seconds, transport=transport,
+                                          trust_env=False, headers={"User-Agent": "plantsolve-webhook"})
+            return self._http
 
     def _loop(self) -> None:
         away = False  # the database was away at the last round: an outage is one line when it starts, one when it ends
@@ -382,7 +394,7 @@ class WebhookNotifier:
             headers.update(signed_headers(secret, message_id(job_id), body))
         error = None
         try:
-            response = self._http.post(job.callback_url, content=body, headers=headers)
+            response = self._client().post(job.callback_url, content=body, headers=headers)
             if not 200 <= response.status_code < 300:
                 error = f"HTTP {response.status_code}"
         except RefusedTarget as refused:  # checked on the address it was about to connect to: not retried

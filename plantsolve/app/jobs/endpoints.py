@@ -179,15 +179,20 @@ def upload_options_model(spec: SolverSpec) -> type[BaseModel] | None:
     request's ``options``, flat. Open to further keys: some kinds' file readers take keys of their own from the form
     (the request's ``units``, the file's unit); keys nothing reads are refused with a 422 naming them. None for a
     kind whose request has no ``options`` object (plugin kinds): the part is then documented as a JSON object."""
-    options = spec.request_model.model_fields.get("options")
-    model = options.annotation if options is not None else None
-    if not (isinstance(model, type) and issubclass(model, BaseModel)):
+    model = _options_of(spec)
+    if model is None:
         return None
     fields: dict[str, Any] = {name: (field.annotation, field) for name, field in model.model_fields.items()}
     config = ConfigDict(**{**model.model_config, "extra": "allow", "title": upload_options_name(spec)})
     return create_model(upload_options_name(spec), __config__=config, __doc__=(
         f"The multipart 'options' part of {a_or_an(spec.kind)} {spec.kind} upload: the request's options, flat; "
         "further keys a file reader takes (e.g. 'units') are passed on."), **fields)
+
+
+def _options_of(spec: SolverSpec) -> type[BaseModel] | None:
+    options = spec.request_model.model_fields.get("options")
+    model = options.annotation if options is not None else None
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
 
 def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
@@ -197,7 +202,7 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     if spec.example is not None:
         content["application/json"]["example"] = spec.example()
     if spec.upload_extensions:
-        typed = upload_options_model(spec) is not None
+        typed = _options_of(spec) is not None
         options = ({"$ref": f"#/components/schemas/{upload_options_name(spec)}"} if typed else
                    {"type": "object", "additionalProperties": True})
         content["multipart/form-data"] = {
