@@ -36,11 +36,11 @@ def test_a_sub_model_lying_on_a_tile_is_held_resting():
 
 @pytest.mark.parametrize("main", [
     # turned 45 degrees on the top brick's studs, where no anti-stud meets one
-    "0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
-    f"1 4 0 0 0 {C45} 0 {S45} 0 1 0 -{S45} 0 {C45} car.ldr\n",
+    ("0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 0 24 0 1 0 0 0 1 0 0 0 1 3001.dat\n"
+     f"1 4 0 0 0 {C45} 0 {S45} 0 1 0 -{S45} 0 {C45} car.ldr\n"),
     # on a 2 x 2 tile and against the side of a 2 x 2 brick beside it, both on a 2 x 4 brick
-    "0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 -20 40 0 1 0 0 0 1 0 0 0 1 3068b.dat\n"
-    "1 4 20 24 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 -20 16 0 1 0 0 0 1 0 0 0 1 car.ldr\n",
+    ("0 FILE main.ldr\n1 4 0 48 0 1 0 0 0 1 0 0 0 1 3001.dat\n1 4 -20 40 0 1 0 0 0 1 0 0 0 1 3068b.dat\n"
+     "1 4 20 24 0 1 0 0 0 1 0 0 0 1 3003.dat\n1 4 -20 16 0 1 0 0 0 1 0 0 0 1 car.ldr\n"),
 ])
 def test_a_sub_model_lying_on_studs_or_against_a_side_is_no_held_sub_build(main):
     found, held_by, warnings = pieces(main)
