@@ -81,6 +81,10 @@ HALF_PITCH = 10.0  # LDU: half a stud pitch
 # studs that must share one shift across the plane of their anti-studs for join_pieces to join a part drawn beside the
 # studs it lies on (Assembly._join_shifted_rows): two hold it rigid, and one shift shared by two is no chance
 SHIFTED_ROW_STUDS = 2
+# parts, each joined on SHIFTED_ROW_STUDS or more studs, that must show one part's grid drawn off by one shift for a
+# part on fewer of its studs drawn by that shift to be joined (Assembly._join_on_shifted_grids): one partner's shift
+# could be its own slip
+GRID_SHIFT_PARTNERS = 2
 # LDU: how far off one plane a stud's base and the anti-stud's mouth beside it may be drawn for that shift to be read
 # (Assembly._join_shifted_rows): set 6761's base plate lies 0.16 LDU low as well as 3.2 LDU aside
 SHIFT_PLANE = 0.5
@@ -528,7 +532,7 @@ class Assembly:
                         shift = v if c.type == "stud" else -v  # from the stud's base to the anti-stud's mouth
                         pairs = shifts.setdefault(tuple(sorted((id, other))), {})
                         pairs.setdefault((stud, mouth), shift)  # met from both parts when both are apart: once
-        joined = []
+        joined, grids = [], {}  # grids: part -> the shifts (from its point to its partner's) it was joined at
         for (a, b), pairs in sorted(shifts.items()):
             if (a, b) in self._links or (b, a) in self._links:
                 continue
@@ -537,9 +541,46 @@ class Assembly:
                 continue
             for (sid, si), (mid, mi), _ in held:
                 self._link_at(mid, mi, sid, si, "stud")
+            stud_part = held[0][0][0]
+            for part, v in ((stud_part, shift), (b if stud_part == a else a, -shift)):
+                grids.setdefault(part, []).append(v)
             gap = float(np.linalg.norm(shift))
             self._offsets[(a, b)] = gap
             joined.append((a, b, gap))
+        return joined + self._join_on_shifted_grids(shifts, grids)
+
+    def _join_on_shifted_grids(self, shifts: dict, grids: dict) -> list[tuple[str, str, float]]:
+        """Join a part lying on fewer studs than :meth:`_join_shifted_rows` needs (one stud: the others of its row
+        missing, as on a base plate's raised hill) when its stud is drawn beside its anti-stud by the very shift that
+        GRID_SHIFT_PARTNERS or more other parts, each joined on two or more studs, show the other part's grid drawn off
+        by: set 6761 draws its base plate 9.8 LDU off the grid of the parts on it, and a 1 x 4 plate over the hill has
+        one stud of it under its row. Every point of the pair must share that shift (a second offset: the part stands
+        otherwise). ``shifts`` as gathered there, ``grids`` part -> the shifts from its points to its partners' it was
+        joined at."""
+        established = {}
+        for part, found in grids.items():
+            for v in found:
+                if sum(float(np.linalg.norm(w - v)) <= SNAP for w in found) >= GRID_SHIFT_PARTNERS:
+                    established[part] = v
+                    break
+        joined = []
+        for (a, b), pairs in sorted(shifts.items()):
+            if (a, b) in self._links or (b, a) in self._links:
+                continue
+            for grid, other in ((a, b), (b, a)):
+                if grid not in established:
+                    continue
+                shift = established[grid]
+                # the shift from the grid part's point to the other's, whichever of the two holds the stud
+                offsets = [v if stud[0] == grid else -v for (stud, _), v in pairs.items()]
+                if not all(float(np.linalg.norm(v - shift)) <= SNAP for v in offsets):
+                    continue
+                for (sid, si), (mid, mi) in pairs:
+                    self._link_at(mid, mi, sid, si, "stud")
+                gap = float(np.linalg.norm(shift))
+                self._offsets[(a, b)] = gap
+                joined.append((a, b, gap))
+                break
         return joined
 
     def _shifted_mates(self, id: str, ci: int, label: dict):

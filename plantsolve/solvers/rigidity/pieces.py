@@ -18,7 +18,7 @@ solver warns about it.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -111,6 +111,36 @@ def sub_build(piece: Sequence[str], part_ids: Sequence[str], placements: Mapping
     if all(names.get(p, "").lstrip(NAME_MARKS).lower().startswith(MINIFIG) for p in piece):
         return MINIFIGURE
     return None
+
+
+def resting_on_smooth_faces(piece: Sequence[str], build: Sequence[str], lower: Mapping[str, np.ndarray],
+                            upper: Mapping[str, np.ndarray], studs_up: Callable[[str], np.ndarray]) -> bool:
+    """Whether ``piece`` touches ``build`` (boxes within TOUCH_GAP, as :func:`clearance` measures) only lying on top
+    of it where the build has no stud: every part of the piece that touches a part of the build has that part under
+    it (the build part's top, LDraw's y pointing down, at or below the piece part's bottom), and none of the touched
+    parts has an upward stud (``studs_up``: part -> its studs' points pointing up, an (n, 3) array) within the piece
+    part's footprint. Nothing there can hold the piece (a brick resting on a tile is held by nothing): a vehicle
+    standing on a road of tiles (10214's four cars), a floor lifted onto a wall capped with tiles. A piece touching
+    nothing is False (:func:`clearance` decides it)."""
+    theirs = [p for p in build if p in lower]
+    if not theirs:
+        return False
+    lo_b, hi_b = np.array([lower[p] for p in theirs]), np.array([upper[p] for p in theirs])
+    touched_any = False
+    for p in piece:
+        if p not in lower:
+            continue
+        gaps = np.max(np.maximum(lower[p] - hi_b, lo_b - upper[p]), axis=1)
+        for k in np.nonzero(gaps < TOUCH_GAP)[0]:
+            touched_any = True
+            if lo_b[k][1] < upper[p][1] - TOUCH_GAP:
+                return False  # beside or under it, not only under it
+            studs = studs_up(theirs[k])
+            inside = ((studs[:, 0] > lower[p][0] - TOUCH_GAP) & (studs[:, 0] < upper[p][0] + TOUCH_GAP)
+                      & (studs[:, 2] > lower[p][2] - TOUCH_GAP) & (studs[:, 2] < upper[p][2] + TOUCH_GAP))
+            if inside.any():
+                return False
+    return touched_any
 
 
 def drawn_apart(gap: float, nearest: float | None, beside_unknown: bool, lined_up: bool = False) -> bool:

@@ -20,13 +20,17 @@ from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
 from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
                                                 clearance, drawn_apart, far_parts, joints_by_part, line_of,
-                                                loose_sub_builds, mostly_floating, pieces, sub_build)
+                                                loose_sub_builds, mostly_floating, pieces,
+                                                resting_on_smooth_faces, sub_build)
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
 # how report.details.held_pieces recognised each piece (pieces.sub_build, pieces.clearance, pieces.loose_sub_builds)
 HELD_BY = {"whole": f"every known part of the named placed sub-model(s) and nothing else, none touching a part of "
                     f"the largest piece (collision boxes at least {TOUCH_GAP:g} LDU apart)",
+           "resting": f"every known part of the named placed sub-model(s) and nothing else, touching the largest piece "
+                      f"(collision boxes within {TOUCH_GAP:g} LDU) only lying on top of its parts where they have no "
+                      f"stud (a tile): nothing there can hold it, as a vehicle standing on a road",
            "minifigure": "minifigure parts only",
            "loose": f"one of the pieces that together are every known part of the named placed sub-model(s) and "
                     f"nothing else, all at least {LOOSE_CLEARANCE:g} LDU clear of the largest piece (collision "
@@ -249,7 +253,10 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
     for k, g in enumerate(groups[1:], start=1):
         name = sub_build(g, part_ids, placements, names)
         if name is not None and name != MINIFIGURE and clearance(g, groups[0], lows, highs) < TOUCH_GAP:
-            name = None  # whole sub-models lying against the build: a part of it whose joint was not found
+            if resting_on_smooth_faces(g, groups[0], lows, highs, lambda p: _studs_up(assembly, p)):
+                held_by[k] = "resting"  # nothing where it lies could hold it: a car on a road of tiles
+            else:
+                name = None  # whole sub-models lying against the build: a part of it whose joint was not found
         elif name is not None:
             held_by[k] = "minifigure" if name == MINIFIGURE else "whole"
         if name in (None, MINIFIGURE) and all("/" in p for p in g) and clearance(
@@ -263,6 +270,14 @@ def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
             found[k], held_by[k] = name, "loose"
     return [Piece(parts=g, sub_build=name) for g, name in zip(groups, found)], {k: HELD_BY[v] for k, v in
                                                                                held_by.items()}
+
+
+def _studs_up(assembly: Assembly, id: str) -> np.ndarray:
+    """The points of part ``id``'s studs that point up (LDraw's -y, within 1 degree), an (n, 3) array."""
+    placed = assembly.parts[id]
+    rows = [placed.points[k] for k, c in enumerate(placed.shape.connectors)
+            if c.type == "stud" and float(placed.directions[k][1]) < -0.9998]
+    return np.array(rows, dtype=float).reshape(-1, 3)
 
 
 def _boxes(part_ids: list[str], assembly: Assembly) -> tuple[dict, dict, dict, dict]:
