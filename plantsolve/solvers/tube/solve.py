@@ -23,6 +23,7 @@ from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sampl
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
 from plantsolve.solvers.tube.determined import gap_fields, mark_rows, report_scan_gaps, scan_gaps
+from plantsolve.solvers.tube.given_pipe_radius import given_radius_warning
 from plantsolve.solvers.tube.inspection import inspect_request, withdraw_verdicts
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
@@ -758,6 +759,8 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         details["source"] = request.source.model_dump()
     warnings.extend(implausible_against_scan(ls.model, opts, request.units, scan_extent(pts),
                                              request.source.units.file_unit if request.source else None))
+    if opts.pipe_radius and (off := given_radius_warning(ls.model, pts, ls.segment, ls.inlier, request.units)):
+        warnings.insert(0, off)
     if ls.radius_model is not None and ls.radius_model.summary:
         details["bend_radius_model"] = ls.radius_model.summary
     report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",
