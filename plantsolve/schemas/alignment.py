@@ -13,14 +13,15 @@ part, ``x -> R x + t`` with dual part ``0.5 * (0, t) * real``).
 
 from __future__ import annotations
 
-from typing import Literal
+import re
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic_core import PydanticCustomError
 
 from plantsolve.schemas.common import (
     LENGTH,
     Direction3,
-    FiniteFloat,
     Integer,
     Point3,
     Quaternion,
@@ -30,6 +31,23 @@ from plantsolve.schemas.common import (
     Vec3,
     unit,
 )
+
+_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
+
+
+def option_number(value: Any) -> Any:
+    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"1"``
+    is the same 1, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a position
+    tolerance of 1 unit without a word), nor is a string only Python reads as one (``"1_0"`` is 10 to it)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
+    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
+        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+    return value
+
+
+Number = Annotated[float, Field(allow_inf_nan=False), BeforeValidator(option_number)]
+"""A finite number of the request's options and radii (:func:`option_number`)."""
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -64,7 +82,7 @@ class Component(StrictModel):
         description="Catalogue type of a fitting (elbow, tee, cross, reducer, valve, flange, cap, olet, "
         "tie_in, other); decides the minimum number of ports. Ignored for pipes.",
     )
-    radius: FiniteFloat | None = Field(
+    radius: Number | None = Field(
         default=None,
         gt=0,
         le=1e12,
@@ -104,12 +122,12 @@ class AlignmentOptions(StrictModel):
         "units, 1e-10 rad), aveva_e3d (1 mm, 0.01 rad), revit (1e-9 ft, 1e-10 rad), custom (1e-10 units, 1e-10 rad). "
         "Explicit position_tolerance / angle_tolerance override the profile. The report names what was used.",
     )
-    position_tolerance: FiniteFloat | None = Field(
+    position_tolerance: Number | None = Field(
         default=None, gt=0, le=1000.0,
         description="Largest accepted port gap, in the request's units (at most 1000: a metre in mm; a gap wider "
         "than a pipe run is no scan tolerance)."
     )
-    angle_tolerance: FiniteFloat | None = Field(
+    angle_tolerance: Number | None = Field(
         default=None,
         gt=0,
         le=10.0,
@@ -131,25 +149,25 @@ class AlignmentOptions(StrictModel):
         description="'direct': rotation averaging + sparse constrained least squares (closes loops exactly); "
         "'dual_quaternion': the paper's alternating mean-displacement iteration.",
     )
-    pipe_stiffness: FiniteFloat = Field(
+    pipe_stiffness: Number = Field(
         default=10.0,
         ge=1e-6,
         le=1e6,
         description="How much more a pipe axis resists moving than a fitting of the same length (1e-6 to 1e6: "
         "beyond, one of the two weights vanishes in the other's round-off).",
     )
-    min_pipe_length_factor: FiniteFloat = Field(
+    min_pipe_length_factor: Number = Field(
         default=0.1, gt=0, le=100.0,
         description="Minimum pipe length as a multiple of the pipe radius (no flips; at most 100 radii)."
     )
-    step_limit: FiniteFloat | None = Field(
+    step_limit: Number | None = Field(
         default=None,
         gt=0,
         le=1e6,
         description="Dual-quaternion method: largest port movement of a fitting per step, in units (at most 1e6) "
         "(pipes get half, long pipes less). Default: half the largest initial gap.",
     )
-    explosion_factor: FiniteFloat = Field(
+    explosion_factor: Number = Field(
         default=50.0,
         gt=1,
         le=1e9,
@@ -162,14 +180,14 @@ class AlignmentOptions(StrictModel):
     fixed_components: list[str] = Field(
         default_factory=list, description="Ids of additional tie-ins (same as fixed=true on the component)."
     )
-    shape_tolerance: FiniteFloat = Field(
+    shape_tolerance: Number = Field(
         default=1.0,
         gt=0,
         le=45.0,
         description="Degrees: how far a pipe's ports may be from collinear-and-opposite before the input is rejected "
         "(at most 45: beyond, a bend is no straight pipe).",
     )
-    connection_tolerance: FiniteFloat | None = Field(
+    connection_tolerance: Number | None = Field(
         default=None,
         gt=0,
         le=1000.0,

@@ -19,11 +19,13 @@ LRA convention (the public contract of ``lra`` tables, measured and nominal):
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
+from pydantic_core import PydanticCustomError
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Point3, Quaternion,
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, Point3, Quaternion,
                                       Report, StrictModel, Units, Vec3, json_integer, unit)
 
 MAX_POINTS = 5_000_000
@@ -33,6 +35,23 @@ MAX_POINTS = 5_000_000
 MAX_OPTION_LENGTH = 1e6
 MAX_NOMINAL_LENGTH = 1e12  # a nominal's lengths: the coordinates' bound (``common.MAX_COORDINATE``)
 DEG = unit("deg")
+
+_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
+
+
+def option_number(value: Any) -> Any:
+    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"6"``
+    is the same 6, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a tolerance of 1
+    mm without a word), nor is a string only Python reads as one (``"6_0"`` is 60 to it)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
+    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
+        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+    return value
+
+
+Number = Annotated[float, Field(allow_inf_nan=False), BeforeValidator(option_number)]
+"""A finite number of the request (:func:`option_number`)."""
 LEN = unit(LENGTH)
 
 FILE_UNITS_HELP = (
@@ -61,31 +80,31 @@ class NpyPoints(StrictModel):
 class LraRow(StrictModel):
     """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
 
-    length: FiniteFloat = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
+    length: Number = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
                                 description="Straight length before the bend, in the request's units.")
-    rotation: FiniteFloat = Field(
+    rotation: Number = Field(
         default=0.0, ge=-360, le=360, json_schema_extra=DEG,
         description="Rotation of the in-plane normal about the current tangent before the bend, "
         "degrees, right-hand rule. 0 in the first row.",
     )
-    angle: FiniteFloat = Field(
+    angle: Number = Field(
         default=0.0, ge=0, lt=360, json_schema_extra=DEG, description="Bend angle in degrees (0 in the last row)."
     )
-    bend_radius: FiniteFloat = Field(
+    bend_radius: Number = Field(
         default=0.0, ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
         description="Centreline bend radius (CLR) of this bend; 0 in the last row."
     )
-    sigma_length: FiniteFloat | None = Field(
+    sigma_length: Number | None = Field(
         default=None, ge=0, json_schema_extra=LEN, description="Results: standard deviation of the length. For an end "
         "straight, whose extent is where the samples end, the spacing of the samples along the tube there: the tube "
         "ends about one to three times this beyond the last sample when they reach its cut end (its length is a "
         "lower bound, `length_bound`)."
     )
-    sigma_rotation: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
+    sigma_rotation: Number | None = Field(default=None, ge=0, json_schema_extra=DEG,
                                                description="Results: standard deviation, degrees.")
-    sigma_angle: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
+    sigma_angle: Number | None = Field(default=None, ge=0, json_schema_extra=DEG,
                                             description="Results: standard deviation, degrees.")
-    sigma_bend_radius: FiniteFloat | None = Field(
+    sigma_bend_radius: Number | None = Field(
         default=None, ge=0, json_schema_extra=LEN,
         description="Results: standard deviation of the bend radius (0 when held by the options)."
     )
@@ -111,7 +130,7 @@ class XyzClrPoint(StrictModel):
     x: Coordinate
     y: Coordinate
     z: Coordinate
-    clr: FiniteFloat | None = Field(default=None, ge=0, le=MAX_NOMINAL_LENGTH, description="Centreline bend radius of the bend at this "
+    clr: Number | None = Field(default=None, ge=0, le=MAX_NOMINAL_LENGTH, description="Centreline bend radius of the bend at this "
                                     "point, request units; null (or 0) at the two ends.")
 
 
@@ -126,21 +145,21 @@ class InspectionTolerances(StrictModel):
     angle ±0.5°, bend radius (CLR) ±1 mm, end point ±2 mm (the millimetre defaults are converted into the
     request's units)."""
 
-    length: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    length: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                        description="Straight length, request units.")
-    rotation: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+    rotation: Number | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
                                          description="Rotation of the bend plane, degrees.")
-    angle: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+    angle: Number | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
                                       description="Bend angle, degrees.")
-    bend_radius: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    bend_radius: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                             description="Centreline bend radius, request units.")
-    end_point: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    end_point: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                           description="Distance of each measured tube end from "
                                           "the nominal one after best-fit alignment, request units.")
 
 
 class TubeOptions(StrictModel):
-    tolerance: FiniteFloat | None = Field(
+    tolerance: Number | None = Field(
         default=None,
         gt=0,
         le=MAX_OPTION_LENGTH,
@@ -148,12 +167,12 @@ class TubeOptions(StrictModel):
         "spline when choosing the number of segments (request units). Default: derived from the "
         "pipe radius and the estimated noise (max(0.08·pipe radius, 4·spine noise)).",
     )
-    pipe_radius: FiniteFloat | None = Field(
+    pipe_radius: Number | None = Field(
         default=None, gt=0, le=MAX_OPTION_LENGTH,
         description="Known outer pipe radius (request units); fixed in every fit when given. It must fit the scan: "
         "no larger than the samples' extent, no smaller than half their spacing (else 422 naming it)."
     )
-    bend_radius: FiniteFloat | None = Field(
+    bend_radius: Number | None = Field(
         default=None,
         gt=0,
         le=MAX_OPTION_LENGTH,
@@ -170,7 +189,7 @@ class TubeOptions(StrictModel):
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
         "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
     )
-    dies: list[Annotated[float, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
+    dies: list[Annotated[Number, Field(gt=0, le=MAX_OPTION_LENGTH)]] | None = Field(
         default=None, min_length=1, max_length=20,
         description="Centreline radii of the dies available (request units): each bend gets the nearest die "
         "(by its freely fitted radius), and its radius is held at that die's.",
@@ -182,7 +201,7 @@ class TubeOptions(StrictModel):
         description="Nominal LRA table (same convention and units) for inspection: the "
         "reconstruction is aligned to it and per-bend deviations and corrected LRA are reported.",
     )
-    damping: FiniteFloat = Field(
+    damping: Number = Field(
         default=1.0,
         gt=0,
         le=1.5,
