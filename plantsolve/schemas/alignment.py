@@ -14,14 +14,15 @@ part, ``x -> R x + t`` with dual part ``0.5 * (0, t) * real``).
 from __future__ import annotations
 
 import re
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 from pydantic_core import PydanticCustomError
 
 from plantsolve.schemas.common import (
     LENGTH,
     Direction3,
+    FiniteFloat,
     Integer,
     Point3,
     Quaternion,
@@ -46,8 +47,17 @@ def option_number(value: Any) -> Any:
     return value
 
 
-Number = Annotated[float, Field(allow_inf_nan=False), BeforeValidator(option_number)]
-"""A finite number of the request's options and radii (:func:`option_number`)."""
+def plain_numbers(*fields: str):
+    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
+    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
+
+    def check(cls, value: Any) -> Any:
+        for item in value if isinstance(value, list) else (value,):
+            option_number(item)
+        return value
+
+    return field_validator(*fields, mode="before")(check)
+
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -69,6 +79,8 @@ class Port(StrictModel):
 class Component(StrictModel):
     """A straight pipe (two collinear, opposite ports; its length may change) or a rigid fitting."""
 
+    _plain_numbers = plain_numbers("radius")
+
     # stated for clients and generated tests; the solver's input check says why a pipe is refused
     model_config = ConfigDict(json_schema_extra={
         "if": {"properties": {"kind": {"const": "pipe"}}},
@@ -82,7 +94,7 @@ class Component(StrictModel):
         description="Catalogue type of a fitting (elbow, tee, cross, reducer, valve, flange, cap, olet, "
         "tie_in, other); decides the minimum number of ports. Ignored for pipes.",
     )
-    radius: Number | None = Field(
+    radius: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=1e12,
@@ -114,6 +126,9 @@ class Connection(StrictModel):
 class AlignmentOptions(StrictModel):
     """Tolerances and method. Unset tolerances come from ``tolerance_profile``."""
 
+    _plain_numbers = plain_numbers("position_tolerance", "angle_tolerance", "pipe_stiffness", "min_pipe_length_factor",
+                                   "step_limit", "explosion_factor", "shape_tolerance", "connection_tolerance")
+
     tolerance_profile: Literal["auto", "autocad_plant3d", "aveva_e3d", "revit", "custom"] = Field(
         default="auto",
         description="Preset tolerances. 'auto' (default): for a PCF, the exporting tool named in the file sets the "
@@ -122,12 +137,12 @@ class AlignmentOptions(StrictModel):
         "units, 1e-10 rad), aveva_e3d (1 mm, 0.01 rad), revit (1e-9 ft, 1e-10 rad), custom (1e-10 units, 1e-10 rad). "
         "Explicit position_tolerance / angle_tolerance override the profile. The report names what was used.",
     )
-    position_tolerance: Number | None = Field(
+    position_tolerance: FiniteFloat | None = Field(
         default=None, gt=0, le=1000.0,
         description="Largest accepted port gap, in the request's units (at most 1000: a metre in mm; a gap wider "
         "than a pipe run is no scan tolerance)."
     )
-    angle_tolerance: Number | None = Field(
+    angle_tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=10.0,
@@ -149,25 +164,25 @@ class AlignmentOptions(StrictModel):
         description="'direct': rotation averaging + sparse constrained least squares (closes loops exactly); "
         "'dual_quaternion': the paper's alternating mean-displacement iteration.",
     )
-    pipe_stiffness: Number = Field(
+    pipe_stiffness: FiniteFloat = Field(
         default=10.0,
         ge=1e-6,
         le=1e6,
         description="How much more a pipe axis resists moving than a fitting of the same length (1e-6 to 1e6: "
         "beyond, one of the two weights vanishes in the other's round-off).",
     )
-    min_pipe_length_factor: Number = Field(
+    min_pipe_length_factor: FiniteFloat = Field(
         default=0.1, gt=0, le=100.0,
         description="Minimum pipe length as a multiple of the pipe radius (no flips; at most 100 radii)."
     )
-    step_limit: Number | None = Field(
+    step_limit: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=1e6,
         description="Dual-quaternion method: largest port movement of a fitting per step, in units (at most 1e6) "
         "(pipes get half, long pipes less). Default: half the largest initial gap.",
     )
-    explosion_factor: Number = Field(
+    explosion_factor: FiniteFloat = Field(
         default=50.0,
         gt=1,
         le=1e9,
@@ -180,14 +195,14 @@ class AlignmentOptions(StrictModel):
     fixed_components: list[str] = Field(
         default_factory=list, description="Ids of additional tie-ins (same as fixed=true on the component)."
     )
-    shape_tolerance: Number = Field(
+    shape_tolerance: FiniteFloat = Field(
         default=1.0,
         gt=0,
         le=45.0,
         description="Degrees: how far a pipe's ports may be from collinear-and-opposite before the input is rejected "
         "(at most 45: beyond, a bend is no straight pipe).",
     )
-    connection_tolerance: Number | None = Field(
+    connection_tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=1000.0,

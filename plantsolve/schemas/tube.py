@@ -22,10 +22,10 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, Point3, Quaternion,
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Point3, Quaternion,
                                       Report, StrictModel, Units, Vec3, json_integer, unit)
 
 MAX_POINTS = 5_000_000
@@ -35,6 +35,7 @@ MAX_POINTS = 5_000_000
 MAX_OPTION_LENGTH = 1e6
 MAX_NOMINAL_LENGTH = 1e12  # a nominal's lengths: the coordinates' bound (``common.MAX_COORDINATE``)
 DEG = unit("deg")
+LEN = unit(LENGTH)
 
 _PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
 
@@ -50,9 +51,17 @@ def option_number(value: Any) -> Any:
     return value
 
 
-Number = Annotated[float, Field(allow_inf_nan=False), BeforeValidator(option_number)]
-"""A finite number of the request (:func:`option_number`)."""
-LEN = unit(LENGTH)
+def plain_numbers(*fields: str):
+    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
+    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
+
+    def check(cls, value: Any) -> Any:
+        for item in value if isinstance(value, list) else (value,):
+            option_number(item)
+        return value
+
+    return field_validator(*fields, mode="before")(check)
+
 
 FILE_UNITS_HELP = (
     "Length unit of the coordinates in an uploaded point file (uploads only). It overrides the file format's own "
@@ -80,31 +89,33 @@ class NpyPoints(StrictModel):
 class LraRow(StrictModel):
     """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
 
-    length: Number = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
+    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius")
+
+    length: FiniteFloat = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
                                 description="Straight length before the bend, in the request's units.")
-    rotation: Number = Field(
+    rotation: FiniteFloat = Field(
         default=0.0, ge=-360, le=360, json_schema_extra=DEG,
         description="Rotation of the in-plane normal about the current tangent before the bend, "
         "degrees, right-hand rule. 0 in the first row.",
     )
-    angle: Number = Field(
+    angle: FiniteFloat = Field(
         default=0.0, ge=0, lt=360, json_schema_extra=DEG, description="Bend angle in degrees (0 in the last row)."
     )
-    bend_radius: Number = Field(
+    bend_radius: FiniteFloat = Field(
         default=0.0, ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
         description="Centreline bend radius (CLR) of this bend; 0 in the last row."
     )
-    sigma_length: Number | None = Field(
+    sigma_length: FiniteFloat | None = Field(
         default=None, ge=0, json_schema_extra=LEN, description="Results: standard deviation of the length. For an end "
         "straight, whose extent is where the samples end, the spacing of the samples along the tube there: the tube "
         "ends about one to three times this beyond the last sample when they reach its cut end (its length is a "
         "lower bound, `length_bound`)."
     )
-    sigma_rotation: Number | None = Field(default=None, ge=0, json_schema_extra=DEG,
+    sigma_rotation: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
                                                description="Results: standard deviation, degrees.")
-    sigma_angle: Number | None = Field(default=None, ge=0, json_schema_extra=DEG,
+    sigma_angle: FiniteFloat | None = Field(default=None, ge=0, json_schema_extra=DEG,
                                             description="Results: standard deviation, degrees.")
-    sigma_bend_radius: Number | None = Field(
+    sigma_bend_radius: FiniteFloat | None = Field(
         default=None, ge=0, json_schema_extra=LEN,
         description="Results: standard deviation of the bend radius (0 when held by the options)."
     )
@@ -127,10 +138,12 @@ class XyzClrPoint(StrictModel):
     """One point of an XYZ-CLR nominal: the intersection of two consecutive straights of the centreline (or an
     end of the tube) and the centreline bend radius of the bend there."""
 
+    _plain_numbers = plain_numbers("clr")
+
     x: Coordinate
     y: Coordinate
     z: Coordinate
-    clr: Number | None = Field(default=None, ge=0, le=MAX_NOMINAL_LENGTH, description="Centreline bend radius of the bend at this "
+    clr: FiniteFloat | None = Field(default=None, ge=0, le=MAX_NOMINAL_LENGTH, description="Centreline bend radius of the bend at this "
                                     "point, request units; null (or 0) at the two ends.")
 
 
@@ -145,21 +158,25 @@ class InspectionTolerances(StrictModel):
     angle ±0.5°, bend radius (CLR) ±1 mm, end point ±2 mm (the millimetre defaults are converted into the
     request's units)."""
 
-    length: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius", "end_point")
+
+    length: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                        description="Straight length, request units.")
-    rotation: Number | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+    rotation: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
                                          description="Rotation of the bend plane, degrees.")
-    angle: Number | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
+    angle: FiniteFloat | None = Field(default=None, gt=0, le=180, json_schema_extra=DEG,
                                       description="Bend angle, degrees.")
-    bend_radius: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    bend_radius: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                             description="Centreline bend radius, request units.")
-    end_point: Number | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
+    end_point: FiniteFloat | None = Field(default=None, gt=0, le=MAX_OPTION_LENGTH, json_schema_extra=LEN,
                                           description="Distance of each measured tube end from "
                                           "the nominal one after best-fit alignment, request units.")
 
 
 class TubeOptions(StrictModel):
-    tolerance: Number | None = Field(
+
+    _plain_numbers = plain_numbers("tolerance", "pipe_radius", "bend_radius", "dies", "damping")
+    tolerance: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=MAX_OPTION_LENGTH,
@@ -167,12 +184,12 @@ class TubeOptions(StrictModel):
         "spline when choosing the number of segments (request units). Default: derived from the "
         "pipe radius and the estimated noise (max(0.08·pipe radius, 4·spine noise)).",
     )
-    pipe_radius: Number | None = Field(
+    pipe_radius: FiniteFloat | None = Field(
         default=None, gt=0, le=MAX_OPTION_LENGTH,
         description="Known outer pipe radius (request units); fixed in every fit when given. It must fit the scan: "
         "no larger than the samples' extent, no smaller than half their spacing (else 422 naming it)."
     )
-    bend_radius: Number | None = Field(
+    bend_radius: FiniteFloat | None = Field(
         default=None,
         gt=0,
         le=MAX_OPTION_LENGTH,
@@ -189,7 +206,7 @@ class TubeOptions(StrictModel):
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
         "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
     )
-    dies: list[Annotated[Number, Field(gt=0, le=MAX_OPTION_LENGTH)]] | None = Field(
+    dies: list[Annotated[float, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
         default=None, min_length=1, max_length=20,
         description="Centreline radii of the dies available (request units): each bend gets the nearest die "
         "(by its freely fitted radius), and its radius is held at that die's.",
@@ -201,7 +218,7 @@ class TubeOptions(StrictModel):
         description="Nominal LRA table (same convention and units) for inspection: the "
         "reconstruction is aligned to it and per-bend deviations and corrected LRA are reported.",
     )
-    damping: Number = Field(
+    damping: FiniteFloat = Field(
         default=1.0,
         gt=0,
         le=1.5,

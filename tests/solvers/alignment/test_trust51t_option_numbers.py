@@ -39,3 +39,12 @@ def test_a_json_request_reads_the_same_way():
     with pytest.raises(InputRejected) as refused:
         parse_upload(StoredInput.from_bytes("ladder.json", json.dumps(radius).encode()), None)
     assert refused.value.errors[0].loc[-3:] == ("components", 0, "radius")
+
+
+def test_the_schema_keeps_the_bounds_of_the_checked_fields():
+    from plantsolve.schemas.alignment import AlignmentOptions, Component
+
+    props = AlignmentOptions.model_json_schema()["properties"]
+    assert props["position_tolerance"]["anyOf"][0] == {"exclusiveMinimum": 0, "maximum": 1000.0, "type": "number"}
+    assert props["pipe_stiffness"]["minimum"] == 1e-6
+    assert Component.model_json_schema()["properties"]["radius"]["anyOf"][0]["exclusiveMinimum"] == 0
