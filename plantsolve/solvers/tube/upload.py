@@ -439,7 +439,7 @@ def _read_unscaled(source: StoredInput, content: bytes, log: ReadLog) -> tuple[n
     if columns.unit is None:
         return pts, None
     return pts, HeaderUnit(columns.unit, TO_MM[columns.unit] / 1000.0,
-                           f"the header's columns {', '.join(columns.names or [])}")
+                           columns.stated_by or f"the header's columns {', '.join(columns.names or [])}")
 
 
 def _overridden(ext: str, stated: CrsUnit, file_units: str, metres: float) -> Diagnostic:
