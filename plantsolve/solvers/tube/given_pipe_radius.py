@@ -14,7 +14,9 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.base import SolverError
 from plantsolve.solvers.tube.model import TubeModel, build_spine
+from plantsolve.solvers.tube.validation import measured_pipe_radius
 
 # a given radius this far from the straights' circles (as a ratio) is no radius of this tube; the right radius
 # is within 1 % on the synthetic scans of the tests (noise to 3 % of the radius, one side or all round)
@@ -91,3 +93,17 @@ def given_radius_warning(model: TubeModel, pts: np.ndarray, segment: np.ndarray,
         "measured, or give the outer radius."),
         details={"pipe_radius": given, "measured_pipe_radius": shown, "ratio": ratio, "units": units,
                  "plausible": [shown * (1 - DISAGREEMENT), shown * (1 + DISAGREEMENT)]})
+
+
+def with_given_radius_hint(exc: SolverError, given: float | None, pts: np.ndarray, units: str) -> SolverError:
+    """A stage after the local fits failed while a given pipe radius was held (the spine of a tube of another
+    size collapses, or finds too few samples on its surface): the error names the option and the radius the
+    local fits show, the likely cause ("the spine point cloud collapsed to a point" alone named neither)."""
+    if not given:
+        return exc
+    shown = measured_pipe_radius(pts)
+    about = f"; the samples' cross-sections show about {shown:.3g} {units}" if shown else ""
+    return SolverError(exc.stage, (
+        f"{exc.message}. options.pipe_radius = {given:g} {units} was held in every fit{about}: if it is not this "
+        "tube's outer radius, leave pipe_radius out to have it measured"),
+        {**exc.details, "pipe_radius": given, "measured_pipe_radius": shown, "units": units})

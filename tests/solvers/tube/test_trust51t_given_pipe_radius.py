@@ -32,3 +32,15 @@ def test_a_given_radius_off_the_samples_is_warned_naming_both(factor):
 def test_the_right_radius_given_is_not_warned():
     result = solve(TubeScan(TubeRequest(points=_scan().tolist(), options={"pipe_radius": RADIUS}))).result
     assert [w.code for w in result.report.warnings] == []
+
+
+def test_a_fit_that_fails_on_a_given_radius_names_it():
+    from plantsolve.schemas.tube import TubeRequest as Request
+    from plantsolve.solvers.base import SolverError
+
+    model = make_model([(120, 0, 90, 30), (80, 45, 60, 30), (100, 0, 0, 0)], 6.0)
+    pts = surface_samples(model, 4000, np.random.default_rng(0), noise=0.03)
+    with pytest.raises(SolverError) as failed:
+        solve(TubeScan(Request(points=pts.tolist(), options={"pipe_radius": 4.6})))
+    assert "options.pipe_radius = 4.6 mm" in failed.value.message
+    assert failed.value.details["measured_pipe_radius"] == pytest.approx(6.0, rel=0.15)
