@@ -580,9 +580,8 @@ def interpret_pcf(text: str, options) -> Interpretation:
 
 def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     doc = read_document(text)
+    _refuse_unknown_units(doc)
     units = doc.units
-    if units is None:
-        raise reject(f"unsupported UNITS-CO-ORDS {doc.header.get('UNITS-CO-ORDS')!r}")
     _refuse_contradicting_units(doc)
     alias = {it.position_id: it.id for it in doc.items}
     _refuse_ambiguous_fixed(doc, opts.fixed_components)
@@ -675,6 +674,18 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
+
+
+def _refuse_unknown_units(doc: Document) -> None:
+    """A 422 naming the line of a UNITS-CO-ORDS or UNITS-BORE record whose unit is none read here. An unknown
+    UNITS-BORE was taken for the coordinates' unit without a word, so bores in another unit reached 25.4 or 1000
+    times too far or too short when end points were joined."""
+    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
+        for i, line in enumerate(doc.lines):
+            words = line.split()
+            if line[:1].strip() and len(words) > 1 and words[0].upper() == record and words[1].upper() not in UNITS:
+                raise reject(f"line {i + 1}: {record} {words[1]!r} is no unit read here (MM, CM, M, INCH, FT and "
+                             "their spellings); write the unit the file's numbers are in")
 
 
 def _refuse_contradicting_units(doc: Document) -> None:
