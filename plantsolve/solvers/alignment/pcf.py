@@ -266,9 +266,20 @@ def read_point(line: str) -> tuple[np.ndarray, float | None]:
             bore = float(parts[4])
         except ValueError:
             bore = None
-        if bore is not None and not (np.isfinite(bore) and bore > 0):
+        if bore is not None and not _readable_bore(bore):
             bore = None
     return xyz, bore
+
+
+# the largest bore read: beyond it a bore is a typing accident (1e300 was refused by the request's radius bound
+# naming ``components[i].radius``, not the file's line); a thousandth of the coordinates' bound, so that a bore in
+# feet in a millimetre file stays within that bound too
+MAX_BORE = MAX_COORDINATE / 1000
+
+
+def _readable_bore(bore: float) -> bool:
+    """A bore that is a positive number up to :data:`MAX_BORE`."""
+    return bool(np.isfinite(bore) and 0 < bore <= MAX_BORE)
 
 
 def _unit(x: np.ndarray) -> np.ndarray | None:
@@ -1291,8 +1302,9 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
 
 
 def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
-    """A warning naming the point lines whose bore (the fifth field) is written but is no positive number: such
-    an item connects as one without a bore, with the file's typical reach (10 mm when none has a bore)."""
+    """A warning naming the point lines whose bore (the fifth field) is written but is no positive number (or one
+    beyond :data:`MAX_BORE`): such an item connects as one without a bore, with the file's typical reach (10 mm
+    when none has a bore)."""
     bad = []
     for it in doc.items:
         for i in it.point_lines:
@@ -1303,14 +1315,14 @@ def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
                 bore = float(parts[4])
             except ValueError:
                 bore = float("nan")
-            if not (np.isfinite(bore) and bore > 0):
+            if not _readable_bore(bore):
                 bad.append({"id": it.id, "line": i + 1, "bore": parts[4]})
     if not bad:
         return []
     listed = ", ".join(f"line {b['line']} ({b['bore']})" for b in bad[:5]) + (", ..." if len(bad) > 5 else "")
     return [("pcf_bore_unreadable",
-             f"{len(bad)} end point(s) state a bore that is no positive number ({listed}): read as no bore, so "
-             "their items connect with the file's typical bore (10 mm when none is readable) and may be left "
+             f"{len(bad)} end point(s) state a bore that is no positive number, or beyond {MAX_BORE:g} ({listed}): "
+             "read as no bore, so their items connect with the file's typical bore (10 mm when none is readable) and may be left "
              "unconnected; write the bore in UNITS-BORE.", {"points": bad[:200]}, "warning")]
 
 

@@ -26,3 +26,13 @@ def test_the_spellings_read_are_still_read(unit):
     request = parse_upload(StoredInput.from_bytes("ladder.pcf", PCF.replace("UNITS-BORE MM", f"UNITS-BORE {unit}")
                                                   .encode()), None)
     assert len(request.components) == 19
+
+
+def test_an_absurd_bore_is_unreadable_naming_its_line_not_a_refused_radius():
+    from plantsolve.solvers.alignment.pcf import pcf_notes
+
+    text = PCF.replace("10000.0000 100.0000", "10000.0000 1e300", 1)
+    request = parse_upload(StoredInput.from_bytes("ladder.pcf", text.encode()), None)
+    (note,) = [n for n in pcf_notes(request) if n[0] == "pcf_bore_unreadable"]
+    assert "line 8 (1e300)" in note[1]
+    assert all(c.radius is None or c.radius < 1e6 for c in request.components)
