@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.alignment.upload import parse_upload
+from plantsolve.solvers.base import InputRejected, StoredInput
 
 EXAMPLES = Path(__file__).parents[3] / "examples" / "alignment"
 PCF = (EXAMPLES / "ladder.pcf").read_bytes()

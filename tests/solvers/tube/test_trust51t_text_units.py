@@ -44,7 +44,7 @@ def test_a_comment_unit_not_read_or_contradicting_the_header_is_refused(head, li
     with pytest.raises(InputRejected) as refused:
         _read(_text(head, PTS / INCH))
     assert refused.value.errors[0].loc == ("file",) and line in refused.value.errors[0].msg
-    req, points = _read(_text(head, PTS / INCH), {"file_units": "in"})
+    _, points = _read(_text(head, PTS / INCH), {"file_units": "in"})
     assert np.allclose(points, PTS, atol=1e-4)
 
 
