@@ -22,6 +22,7 @@ from plantsolve.solvers.tube.validation import measured_pipe_radius
 # is within 1 % on the synthetic scans of the tests (noise to 3 % of the radius, one side or all round)
 DISAGREEMENT = 0.08
 MIN_SAMPLES = 40  # on a straight, for its circle
+MAX_SAMPLES = 20_000  # of a straight, evenly taken: the radius to 1e-3 needs no more, and a large scan's cost stays
 MIN_ARC_DEG = 90.0  # the samples of a straight must span this much of its circumference
 
 
@@ -52,10 +53,10 @@ def straights_radius(model: TubeModel, pts: np.ndarray, segment: np.ndarray, kee
     sp = build_spine(model)
     radii, weights = [], []
     for k in np.flatnonzero(sp.kind == 0):
-        on = keep & (segment == k)
-        if np.count_nonzero(on) < MIN_SAMPLES:
+        on = np.flatnonzero(keep & (segment == k))
+        if len(on) < MIN_SAMPLES:
             continue
-        p = pts[on] - sp.start[k]
+        p = pts[on[:: len(on) // MAX_SAMPLES + 1]] - sp.start[k]
         axis = sp.tangent[k] / np.linalg.norm(sp.tangent[k])
         u = np.cross(axis, [1.0, 0, 0] if abs(axis[0]) < 0.9 else [0, 1.0, 0])
         u /= np.linalg.norm(u)
