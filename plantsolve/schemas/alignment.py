@@ -13,9 +13,11 @@ part, ``x -> R x + t`` with dual part ``0.5 * (0, t) * real``).
 
 from __future__ import annotations
 
-from typing import Literal
+import re
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic_core import PydanticCustomError
 
 from plantsolve.schemas.common import (
     LENGTH,
@@ -30,6 +32,32 @@ from plantsolve.schemas.common import (
     Vec3,
     unit,
 )
+
+_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
+
+
+def option_number(value: Any) -> Any:
+    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"1"``
+    is the same 1, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a position
+    tolerance of 1 unit without a word), nor is a string only Python reads as one (``"1_0"`` is 10 to it)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
+    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
+        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+    return value
+
+
+def plain_numbers(*fields: str):
+    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
+    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
+
+    def check(cls, value: Any) -> Any:
+        for item in value if isinstance(value, list) else (value,):
+            option_number(item)
+        return value
+
+    return field_validator(*fields, mode="before")(check)
+
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"
@@ -50,6 +78,8 @@ class Port(StrictModel):
 
 class Component(StrictModel):
     """A straight pipe (two collinear, opposite ports; its length may change) or a rigid fitting."""
+
+    _plain_numbers = plain_numbers("radius")
 
     # stated for clients and generated tests; the solver's input check says why a pipe is refused
     model_config = ConfigDict(json_schema_extra={
@@ -95,6 +125,9 @@ class Connection(StrictModel):
 
 class AlignmentOptions(StrictModel):
     """Tolerances and method. Unset tolerances come from ``tolerance_profile``."""
+
+    _plain_numbers = plain_numbers("position_tolerance", "angle_tolerance", "pipe_stiffness", "min_pipe_length_factor",
+                                   "step_limit", "explosion_factor", "shape_tolerance", "connection_tolerance")
 
     tolerance_profile: Literal["auto", "autocad_plant3d", "aveva_e3d", "revit", "custom"] = Field(
         default="auto",

@@ -266,9 +266,20 @@ def read_point(line: str) -> tuple[np.ndarray, float | None]:
             bore = float(parts[4])
         except ValueError:
             bore = None
-        if bore is not None and not (np.isfinite(bore) and bore > 0):
+        if bore is not None and not _readable_bore(bore):
             bore = None
     return xyz, bore
+
+
+# the largest bore read: beyond it a bore is a typing accident (1e300 was refused by the request's radius bound
+# naming ``components[i].radius``, not the file's line); a thousandth of the coordinates' bound, so that a bore in
+# feet in a millimetre file stays within that bound too
+MAX_BORE = MAX_COORDINATE / 1000
+
+
+def _readable_bore(bore: float) -> bool:
+    """A bore that is a positive number up to :data:`MAX_BORE`."""
+    return bool(np.isfinite(bore) and 0 < bore <= MAX_BORE)
 
 
 def _unit(x: np.ndarray) -> np.ndarray | None:
@@ -580,9 +591,8 @@ def interpret_pcf(text: str, options) -> Interpretation:
 
 def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     doc = read_document(text)
+    _refuse_unknown_units(doc)
     units = doc.units
-    if units is None:
-        raise reject(f"unsupported UNITS-CO-ORDS {doc.header.get('UNITS-CO-ORDS')!r}")
     _refuse_contradicting_units(doc)
     alias = {it.position_id: it.id for it in doc.items}
     _refuse_ambiguous_fixed(doc, opts.fixed_components)
@@ -675,6 +685,18 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
+
+
+def _refuse_unknown_units(doc: Document) -> None:
+    """A 422 naming the line of a UNITS-CO-ORDS or UNITS-BORE record whose unit is none read here. An unknown
+    UNITS-BORE was taken for the coordinates' unit without a word, so bores in another unit reached 25.4 or 1000
+    times too far or too short when end points were joined."""
+    for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
+        for i, line in enumerate(doc.lines):
+            words = line.split()
+            if line[:1].strip() and len(words) > 1 and words[0].upper() == record and words[1].upper() not in UNITS:
+                raise reject(f"line {i + 1}: {record} {words[1]!r} is no unit read here (MM, CM, M, INCH, FT and "
+                             "their spellings); write the unit the file's numbers are in")
 
 
 def _refuse_contradicting_units(doc: Document) -> None:
@@ -1280,8 +1302,9 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
 
 
 def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
-    """A warning naming the point lines whose bore (the fifth field) is written but is no positive number: such
-    an item connects as one without a bore, with the file's typical reach (10 mm when none has a bore)."""
+    """A warning naming the point lines whose bore (the fifth field) is written but is no positive number (or one
+    beyond :data:`MAX_BORE`): such an item connects as one without a bore, with the file's typical reach (10 mm
+    when none has a bore)."""
     bad = []
     for it in doc.items:
         for i in it.point_lines:
@@ -1292,14 +1315,14 @@ def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
                 bore = float(parts[4])
             except ValueError:
                 bore = float("nan")
-            if not (np.isfinite(bore) and bore > 0):
+            if not _readable_bore(bore):
                 bad.append({"id": it.id, "line": i + 1, "bore": parts[4]})
     if not bad:
         return []
     listed = ", ".join(f"line {b['line']} ({b['bore']})" for b in bad[:5]) + (", ..." if len(bad) > 5 else "")
     return [("pcf_bore_unreadable",
-             f"{len(bad)} end point(s) state a bore that is no positive number ({listed}): read as no bore, so "
-             "their items connect with the file's typical bore (10 mm when none is readable) and may be left "
+             f"{len(bad)} end point(s) state a bore that is no positive number, or beyond {MAX_BORE:g} ({listed}): "
+             "read as no bore, so their items connect with the file's typical bore (10 mm when none is readable) and may be left "
              "unconnected; write the bore in UNITS-BORE.", {"points": bad[:200]}, "warning")]
 
 

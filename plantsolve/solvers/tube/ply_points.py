@@ -15,7 +15,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.length_units import two_readings, unit_named
+from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
 from plantsolve.solvers.tube.read_log import ReadLog
 
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
@@ -25,13 +25,17 @@ TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2"
 
 # A unit some scanners and converters state in a comment of the header (``comment units mm``, ``comment Unit: meter``,
 # ``obj_info length_unit = millimetres``); the PLY format itself has none. A comment's unit is one word of letters
-# (the header is ASCII, so no 'µm'), one of the request's units (length_units).
+# (the header is ASCII, so no 'µm'): one of the request's units or micrometres (length_units), read; a word that says
+# no unit is stated, no statement; any other word (``furlong``, ``yd``, ``dm``) states a unit this reader cannot
+# convert, so the file is refused naming the line: read in the request's unit instead, a scan in yards or
+# decimetres came back 914 or 100 times too small, a yard-stick tube plausible in millimetres without a word.
 _UNIT_COMMENT = re.compile(r"^(?:comment|obj_info)\s+(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
+_NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
 
 
 def stated_unit(content: bytes) -> tuple[str, str] | str | None:
     """The length unit a comment of the PLY header states, and the evidence (its line); a message when comments
-    state two different units; None when none states one (or names no length unit this reader knows)."""
+    state two different units, or a unit this reader cannot convert; None when none states one."""
     end = content.find(b"end_header")
     if not content.startswith(b"ply") or end < 0:
         return None
@@ -40,8 +44,11 @@ def stated_unit(content: bytes) -> tuple[str, str] | str | None:
         match = _UNIT_COMMENT.match(line.strip())
         if match and (readings := two_readings(match.group(1))) is not None:
             return f"its header comment on line {lineno} ({line.strip()!r}) states the unit {readings}"
-        if match and (unit := unit_named(match.group(1))):
+        if match and (unit := unit_named(match.group(1), SIZES)):
             found.append((unit, lineno, line.strip()))
+        elif match and match.group(1).lower() not in _NO_UNIT:
+            return (f"its header comment on line {lineno} ({line.strip()!r}) states the unit {match.group(1)!r}, "
+                    f"which is no length unit read here ({', '.join(SIZES)})")
     if len({unit for unit, _, _ in found}) > 1:
         return "its header comments state different units (" + ", ".join(
             f"line {n}: {text!r}" for _, n, text in found[:4]) + ")"

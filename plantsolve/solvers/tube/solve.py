@@ -23,6 +23,7 @@ from plantsolve.solvers.tube import arcline, curve, fit, local_fit, prune, sampl
 from plantsolve.solvers.tube.model import (TubeModel, build_spine, control_polygon, frame_quaternion, reverse_model,
                                           with_radii)
 from plantsolve.solvers.tube.determined import gap_fields, mark_rows, report_scan_gaps, scan_gaps
+from plantsolve.solvers.tube.given_pipe_radius import given_radius_warning, with_given_radius_hint
 from plantsolve.solvers.tube.inspection import inspect_request, withdraw_verdicts
 from plantsolve.solvers.tube.inspection_report import report_inspection
 from plantsolve.solvers.tube.nominal_files import resolve_nominal
@@ -707,28 +708,31 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         raise with_unit_hint(exc, pts, request) from None
     timings["local_fit"] = time.perf_counter() - t0
 
-    st.stage(0.12, 0.3, "MLS spine projection")
-    t0 = time.perf_counter()
-    ss = mls_spine(lf, opts, st.tick)
-    rp = ss.pipe_radius
-    timings["spine"] = time.perf_counter() - t0
-
-    st.stage(0.3, 0.42, "curve reconstruction")
-    t0 = time.perf_counter()
-    pc = polygonal_curve(ss, opts, warnings)
-    timings["curve"] = time.perf_counter() - t0
-
-    st.stage(0.42, 0.55, "arc-line spline")
-    t0 = time.perf_counter()
-    inits = arcline_candidates(pc, rp, opts, warnings)
-    n_bends_initial = [mdl.n_bends for _, mdl in inits]
-    timings["arcline"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
     nominal = resolve_nominal(opts, request.units)
     nominal_clr = [r.bend_radius for r in nominal.rows[:-1]] if nominal is not None and not opts.bend_radius else None
-    ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings, nominal_clr)
-    timings["least_squares"] = time.perf_counter() - t0
+    try:  # a given pipe radius is held in every stage below: when one fails, the radius is the likely cause
+        st.stage(0.12, 0.3, "MLS spine projection")
+        t0 = time.perf_counter()
+        ss = mls_spine(lf, opts, st.tick)
+        rp = ss.pipe_radius
+        timings["spine"] = time.perf_counter() - t0
+
+        st.stage(0.3, 0.42, "curve reconstruction")
+        t0 = time.perf_counter()
+        pc = polygonal_curve(ss, opts, warnings)
+        timings["curve"] = time.perf_counter() - t0
+
+        st.stage(0.42, 0.55, "arc-line spline")
+        t0 = time.perf_counter()
+        inits = arcline_candidates(pc, rp, opts, warnings)
+        n_bends_initial = [mdl.n_bends for _, mdl in inits]
+        timings["arcline"] = time.perf_counter() - t0
+
+        t0 = time.perf_counter()
+        ls = least_squares_fit(pts, inits, rp, lf.sigma_surface, opts, rng, progress, warnings, nominal_clr)
+        timings["least_squares"] = time.perf_counter() - t0
+    except SolverError as exc:
+        raise with_given_radius_hint(exc, opts.pipe_radius, pts, request.units) from None
     canonical_direction(ls, pts)
 
     st.stage(0.97, 1.0, "report")
@@ -758,6 +762,8 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         details["source"] = request.source.model_dump()
     warnings.extend(implausible_against_scan(ls.model, opts, request.units, scan_extent(pts),
                                              request.source.units.file_unit if request.source else None))
+    if opts.pipe_radius and (off := given_radius_warning(ls.model, pts, ls.segment, ls.inlier, request.units)):
+        warnings.insert(0, off)
     if ls.radius_model is not None and ls.radius_model.summary:
         details["bend_radius_model"] = ls.radius_model.summary
     report = Report(status="warning" if warnings else "ok", message=f"{ls.model.n_bends} bends reconstructed.",

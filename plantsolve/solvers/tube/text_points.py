@@ -24,7 +24,7 @@ import csv
 import math
 import re
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import islice, product
 
 import numpy as np
@@ -46,6 +46,7 @@ from plantsolve.solvers.tube.number_cells import (
 from plantsolve.solvers.tube.read_log import ReadLog
 
 _SPLIT = re.compile(r"[,;\s]+")
+_BRACKETED = re.compile(r"[\[(][^\])]*[\])]")  # a unit in brackets: ``[mm]``, ``(in)``
 _NOT_PLAIN_COMMA = ('"', ".", "'", "\u00a0", "\u202f")  # a row of a decimal-comma file read cell by cell
 _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$", re.IGNORECASE)
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
@@ -63,15 +64,24 @@ class Columns:
     unit: str | None = None
     names: list[str] | None = None
     conflict: str | None = None  # why the header's units cannot be taken (only options.file_units reads the file)
+    stated_by: str | None = None  # the comment line that states ``unit``, when no column name does
 
 
 def _header_names(line: str) -> list[str]:
-    """A header line split as its delimiter says (a comma, semicolon or tab, else blanks): ``x [mm]`` is one name."""
+    """A header line split as its delimiter says (a comma, semicolon or tab, else blanks): ``x [mm]`` is one name,
+    also between blanks (``x [m] y [m] z [m]``: split at every blank, its units were columns of their own, the
+    header no column header, and the file read in the request's unit)."""
     s = line.strip().lstrip("/#").strip()
     for delim in (",", ";", "\t"):
         if delim in s:
             return [c.strip() for c in s.split(delim)]
-    return s.split()
+    names: list[str] = []
+    for word in s.split():
+        if names and _BRACKETED.fullmatch(word):
+            names[-1] = f"{names[-1]} {word}"
+        else:
+            names.append(word)
+    return names
 
 
 def _name_and_unit(name: str) -> tuple[str, str | None]:
@@ -127,6 +137,45 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
             raise reject(f"line {header_line}: the coordinate columns state the unit {u!r}, which is not a length "
                          f"unit read here ({', '.join(sorted(METRES))})")
     return Columns(index, unit, names)
+
+
+# A comment before the first row that states the coordinates' unit (``# units: in``, ``// Unit = millimetres``), as
+# PLY headers' comments do: read as the file's unit (it was ignored, and a scan in inches read as millimetres gave a
+# tube 25.4 times too small whose size could still pass for one); a word naming no unit read here refuses the file
+# unless options.file_units says the unit, as a column header's does.
+_UNIT_COMMENT = re.compile(r"^(?:#|//|%)\s*(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
+_NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
+
+
+def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
+    """``cols`` with the unit a comment before the first row states (:data:`_UNIT_COMMENT`); a conflict when it
+    names no unit read here or another than the column header's or another comment's."""
+    found = []
+    for lineno, line in enumerate(lines, 1):
+        s = line.strip()
+        if s and s[0] not in "#/%" and starts_number(s):
+            break
+        match = _UNIT_COMMENT.match(s)
+        if match is None or match.group(1).lower() in _NO_UNIT:
+            continue
+        unit = unit_named(match.group(1))
+        if unit is None:
+            return replace(cols, unit=None, conflict=(
+                f"line {lineno}: its comment {s!r} states the unit {match.group(1)!r}, which is no length unit read "
+                f"here ({', '.join(sorted(METRES))})"))
+        found.append((unit, lineno, s))
+    if not found or cols.conflict is not None:
+        return cols
+    units = {u for u, _, _ in found} | ({cols.unit} if cols.unit else set())
+    if len(units) > 1:
+        said = [f"line {n}: {text!r}" for _, n, text in found[:3]]
+        if cols.unit:
+            said.append(f"the columns {', '.join(cols.names or [])}")
+        return replace(cols, unit=None, conflict="it states different units (" + "; ".join(said) + ")")
+    if cols.unit:
+        return cols
+    unit, lineno, text = found[0]
+    return replace(cols, unit=unit, stated_by=f"its comment on line {lineno}: {text!r}")
 
 
 def _first_row(lines: list[str]) -> tuple[str | None, int, int]:
@@ -249,7 +298,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     for lineno in counts:
         lines[lineno - 1] = ""
     header, header_line, width = _first_row(lines)
-    cols = _columns(header, width, header_line)
+    cols = _with_comment_unit(_columns(header, width, header_line), lines)
     if cols.names is None and width >= 4 and _counts_rows(lines):
         cols = Columns(index=(1, 2, 3))
         log.warn(Diagnostic(code="row_numbers_skipped", message=(

@@ -16,7 +16,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
-from plantsolve.solvers.length_units import request_unit
+from plantsolve.solvers.length_units import SIZES, request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import elements as ply_elements
@@ -423,7 +423,7 @@ def _read_unscaled(source: StoredInput, content: bytes, log: ReadLog) -> tuple[n
         stated = stated_ply_unit(content)
         if stated is None or isinstance(stated, str):
             return _read_ply(content, log), stated
-        return _read_ply(content, log), HeaderUnit(stated[0], TO_MM[stated[0]] / 1000.0, stated[1])
+        return _read_ply(content, log), HeaderUnit(stated[0], SIZES[stated[0]], stated[1])
     if ext == ".stl":
         return _read_stl(content, log), None
     if ext == ".obj":
@@ -439,7 +439,7 @@ def _read_unscaled(source: StoredInput, content: bytes, log: ReadLog) -> tuple[n
     if columns.unit is None:
         return pts, None
     return pts, HeaderUnit(columns.unit, TO_MM[columns.unit] / 1000.0,
-                           f"the header's columns {', '.join(columns.names or [])}")
+                           columns.stated_by or f"the header's columns {', '.join(columns.names or [])}")
 
 
 def _overridden(ext: str, stated: CrsUnit, file_units: str, metres: float) -> Diagnostic:
