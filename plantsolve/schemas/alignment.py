@@ -13,11 +13,9 @@ part, ``x -> R x + t`` with dual part ``0.5 * (0, t) * real``).
 
 from __future__ import annotations
 
-import re
-from typing import Any, Literal
+from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
-from pydantic_core import PydanticCustomError
+from pydantic import BaseModel, ConfigDict, Field
 
 from plantsolve.schemas.common import (
     LENGTH,
@@ -30,34 +28,9 @@ from plantsolve.schemas.common import (
     StrictModel,
     Units,
     Vec3,
+    plain_numbers,
     unit,
 )
-
-_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
-
-
-def option_number(value: Any) -> Any:
-    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"1"``
-    is the same 1, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a position
-    tolerance of 1 unit without a word), nor is a string only Python reads as one (``"1_0"`` is 10 to it)."""
-    if isinstance(value, bool):
-        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
-    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
-        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
-    return value
-
-
-def plain_numbers(*fields: str):
-    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
-    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
-
-    def check(cls, value: Any) -> Any:
-        for item in value if isinstance(value, list) else (value,):
-            option_number(item)
-        return value
-
-    return field_validator(*fields, mode="before")(check)
-
 
 FittingType = Literal[
     "elbow", "bend", "tee", "cross", "reducer", "valve", "flange", "cap", "olet", "tie_in", "other"

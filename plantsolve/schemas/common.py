@@ -10,12 +10,13 @@ Conventions (they hold for every solver):
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
 from types import MappingProxyType
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, computed_field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, computed_field, field_validator
 from pydantic_core import PydanticCustomError
 
 def json_integer(value: Any) -> Any:
@@ -54,6 +55,33 @@ Quaternion = Annotated[list[FiniteFloat], Field(min_length=4, max_length=4)]
 
 UnitName = Literal["mm", "cm", "m", "in", "ft"]
 """The canonical name of a request's length unit (the OpenAPI enum)."""
+
+_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
+
+
+def option_number(value: Any) -> Any:
+    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"6"``
+    is the same 6, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a tube's tolerance
+    of 1 mm and an alignment's position tolerance of 1 unit without a word), nor is a string only Python reads as one
+    (``"6_0"`` is 60 to it)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
+    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
+        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+    return value
+
+
+def plain_numbers(*fields: str):
+    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
+    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
+
+    def check(cls, value: Any) -> Any:
+        for item in value if isinstance(value, list) else (value,):
+            option_number(item)
+        return value
+
+    return field_validator(*fields, mode="before")(check)
+
 
 UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({
     "mm": ("mm", "millimetre", "millimetres", "millimeter", "millimeters"),

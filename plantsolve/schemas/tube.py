@@ -19,14 +19,12 @@ LRA convention (the public contract of ``lra`` tables, measured and nominal):
 
 from __future__ import annotations
 
-import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, field_validator, model_validator
-from pydantic_core import PydanticCustomError
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
 
 from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Point3, Quaternion,
-                                      Report, StrictModel, Units, Vec3, json_integer, unit)
+                                      Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
 
 MAX_POINTS = 5_000_000
 # the largest length an option may hold, in the request's units: 1e6 is a kilometre in millimetres and 300 km in
@@ -36,32 +34,6 @@ MAX_OPTION_LENGTH = 1e6
 MAX_NOMINAL_LENGTH = 1e12  # a nominal's lengths: the coordinates' bound (``common.MAX_COORDINATE``)
 DEG = unit("deg")
 LEN = unit(LENGTH)
-
-_PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
-
-
-def option_number(value: Any) -> Any:
-    """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"6"``
-    is the same 6, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a tolerance of 1
-    mm without a word), nor is a string only Python reads as one (``"6_0"`` is 60 to it)."""
-    if isinstance(value, bool):
-        raise PydanticCustomError("float_type", "Input should be a number, not true or false")
-    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
-        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
-    return value
-
-
-def plain_numbers(*fields: str):
-    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
-    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
-
-    def check(cls, value: Any) -> Any:
-        for item in value if isinstance(value, list) else (value,):
-            option_number(item)
-        return value
-
-    return field_validator(*fields, mode="before")(check)
-
 
 FILE_UNITS_HELP = (
     "Length unit of the coordinates in an uploaded point file (uploads only). It overrides the file format's own "
