@@ -20,9 +20,14 @@ import numpy as np
 from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
 
 FIELD_T = {"T": 1.0, "mT": 1e-3, "uT": 1e-6, "µT": 1e-6, "μT": 1e-6, "nT": 1e-9, "G": 1e-4, "Gs": 1e-4,
-           "gauss": 1e-4, "kG": 0.1, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9}
-# units read only as written: mT (MT would be megatesla), kG (kg is a mass); the others in any case ([Gauss], [MM])
-CASE_KEPT = {"mT", "kG"}
+           "gauss": 1e-4, "kG": 0.1, "mG": 1e-7, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9,
+           "milligauss": 1e-7, "kilogauss": 0.1,
+           # the tesla in SI base spellings, as older FE tools and field mappers label it
+           "Wb/m2": 1.0, "Wb/m^2": 1.0, "Wb/m²": 1.0, "Wb/m**2": 1.0, "V*s/m^2": 1.0, "Vs/m2": 1.0, "Vs/m^2": 1.0,
+           "V*s/m2": 1.0, "V·s/m²": 1.0}
+# units read only as written: mT (MT would be megatesla), kG (kg is a mass), mG (MG megagauss); the others in any case
+# ([Gauss], [MM])
+CASE_KEPT = {"mT", "kG", "mG"}
 ROLES = ("x", "y", "z", "bx", "by", "bz")
 # a header token: a name, its unit in brackets, and COMSOL's '@ t=0.1' of a solution in a sweep
 # (a unit holds no bracket: each bracket ends a scan, so a line of unclosed brackets is read in linear time)
@@ -255,7 +260,7 @@ def _field_unit(tokens: list[str], roles: dict[str, list[int]], line: int) -> st
                              f"({', '.join(tokens[roles[r][0]] for r in ('bx', 'by', 'bz') if r in roles)})")
     unit = next(iter(stated), None)
     if unit is not None and _known(unit, FIELD_T) is None:
-        raise FieldFileError(f"line {line}: field unit '{unit}' is not known (T, mT, uT, G, tesla, gauss)")
+        raise FieldFileError(f"line {line}: field unit '{unit}' is not known (T, mT, uT, G, mG, Wb/m2, tesla, gauss)")
     return None if unit is None else _known(unit, FIELD_T)
 
 

@@ -29,6 +29,7 @@ is read with a ``truncated_file`` warning.
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from dataclasses import dataclass, field
@@ -410,9 +411,26 @@ def _limit_line_off_map(s: TableSet) -> list[Diagnostic]:
     return out
 
 
-def _check_set(s: TableSet, cut_line: int | None) -> list[Diagnostic]:
+def _misspelt(missing: list[str], ignored: list[dict]) -> list[tuple[int, str]]:
+    """(line, clause) of each table read as one a compressor map does not need whose heading is a missing table's
+    keyword misspelt ('Efficency', 'Massflow', 'Press. Ratio'). Without it the refusal said only that the table was
+    missing, while a user looking at the file saw it there."""
+    def key(text: str) -> str:
+        return re.sub(r"[^a-z]", "", re.sub(r"[\[(].*", "", text.lower()))
+    found = []
+    for name in missing:
+        close = [t for t in ignored if difflib.SequenceMatcher(None, key(t["table"]), key(name)).ratio() >= 0.75]
+        found += [(t["line"], (f"line {t['line']} heads a table {t['table'].strip()!r}: the {name} keyword "
+                               "misspelt? (read as a table a compressor map does not need)")) for t in close[:1]]
+    return found
+
+
+def _check_set(s: TableSet, cut_line: int | None, ignored: list[dict] = ()) -> list[Diagnostic]:
     missing = [t for t in SPEED_TABLES if t not in s.tables]
     where = f" of the set at line {s.line} ({s.label} = {s.setting:g})" if s.setting is not None else ""
+    if missing and (misspelt := _misspelt(missing, list(ignored))):
+        raise reject(f"no {' and no '.join(missing)} table{where}; " + "; ".join(c for _, c in misspelt),
+                     ("file", "line", misspelt[0][0]))
     if missing:
         # the last tables missing and nothing after them: the file stops where they would begin
         present = [t for t in SPEED_TABLES if t in s.tables]
@@ -526,8 +544,9 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
     options = dict(options or {})
     map_type, title, reynolds, sets, notes = read_map(text)
     cut = next((d.details.get("line") for d in notes if d.code == "truncated_file"), None)
+    ignored = [t for d in notes if d.code == "upload_tables_ignored" for t in d.details["tables"]]
     for s in sets:
-        notes.extend(_check_set(s, cut))
+        notes.extend(_check_set(s, cut, ignored))
     if len(sets) == 1 and sets[0].setting is not None:  # one geometry: its setting is a note, not a parameter
         only = sets[0]
         notes.append(Diagnostic(code="upload_geometry_setting", message=(

@@ -64,8 +64,12 @@ ALLOWED = {
 GAUGE = frozenset({"barg", "psig", "mbarg", "kPag", "MPag"})
 # A pressure marked absolute or gauge as rig sheets and process data sheets write it: 'kPa(a)', 'bar (abs)', 'psi(g)',
 # 'kPa gauge'. Read bare, 'kPa(a)' lost its closing bracket and pint refused it, while 'psia' and 'bara' passed.
-_PRESSURE_MARK = re.compile(r"(?P<unit>[A-Za-z]+)\s*(?:\(\s*(?P<mark>a|abs|g|gauge)\s*\)|\s(?P<word>abs|gauge))",
+# A lone letter after a space is a mark too ('bar g', 'kPa a', 'psi G': pint read 'bar g' as bar times grams, a refusal
+# naming mass squared), and so is a capital glued to a unit written in its own case ('MPaA', 'kPaA': Asian process
+# data sheets write gauge and absolute so, as 'MPaG').
+_PRESSURE_MARK = re.compile(r"(?P<unit>[A-Za-z]+)\s*(?:\(\s*(?P<mark>a|abs|g|gauge)\s*\)|\s(?P<word>abs|gauge|a|g))",
                             re.IGNORECASE)
+_GLUED_MARK = re.compile(r"(?P<unit>[A-Za-z]*[a-z])(?P<word>[AG])")
 _GAUGE_OF = {"bar": "barg", "psi": "psig", "mbar": "mbarg", "kPa": "kPag", "MPa": "MPag"}
 # Units whose dimensions a setting named as a speed may have: relative (fraction, %), rotational (rpm, 1/s,
 # rad/s) or corrected rotational (rpm/sqrt(K)).
@@ -186,6 +190,23 @@ def _lowered_into_sub_milli(word: str, spelling: str) -> bool:
         prefix in _SUB_MILLI for prefix, _, _ in registry().parse_unit_name(spelling))
 
 
+# Prefixes a capital gives in a re-cased unit that no instrument puts on a head (mmHg, inH2O, mmWC), on torr or on a
+# gauge unit: 'MMHG' is mmHg and 'MTORR' mTorr (vacuum gauges' upper-case displays and exports), never megametres of
+# mercury (1.3 million bar) or megatorr. A megabar is a unit in use, so 'MBAR' (Mbar or mbar) stays refused.
+_UPWARD_PREFIXES = frozenset({"mega", "giga", "tera", "peta", "exa", "zetta", "yotta", "ronna", "quetta"})
+_UNSCALED = frozenset({"torr", "Torr", "mWC", "mmWC", "inWC", "inWG", "mmWG", "mmAq", "standard_atmosphere",
+                       "technical_atmosphere"}) | GAUGE | {"barg"}
+
+
+def _scaled_up_unscalable(spelling: str) -> bool:
+    """Whether pint reads ``spelling`` only as a head, torr or gauge unit under a prefix of mega or more."""
+    readings = registry().parse_unit_name(spelling)
+    return bool(readings) and all(
+        (prefix in _UPWARD_PREFIXES and (name in _UNSCALED or name.endswith(("_Hg", "_H2O")) or "_H2O_" in name))
+        or (prefix and name.startswith(("inch_", "foot_")))  # 'MINHG' is no milli-inch of mercury either
+        for prefix, name, _ in readings)
+
+
 _WORD = re.compile(r"[A-Za-z][A-Za-z0-9]*")  # 'H2O' one word: 'INH2O' is inH2O
 
 
@@ -206,6 +227,8 @@ def _recased(written: str, text: str, dimensions: frozenset[str]) -> pint.Unit |
         return None
     found: dict[str, tuple[pint.Unit, bool]] = {}
     for spelling in itertools.product(*choices):
+        if any(map(_scaled_up_unscalable, spelling)):
+            continue
         candidate = _respelled(text, spelling)
         unit = _pint_unit(candidate)
         if unit is not None and _dimensions(unit) in dimensions and (not unit.dimensionless or _plain(unit)):
@@ -238,8 +261,11 @@ def _marked_pressure(text: str) -> Unit | None:
     gauge unit, e.g. kPag, which no factor converts to an absolute one); None when ``text`` carries no mark."""
     match = _PRESSURE_MARK.fullmatch(text)
     if match is None:
-        return None
-    name, mark = match["unit"], (match["mark"] or match["word"]).lower()
+        match = _GLUED_MARK.fullmatch(text)
+        glued = match and _pint_unit(match["unit"])
+        if glued is None or _dimensions(glued) != _dimensions(registry().parse_units("Pa")):
+            return None  # 'mA', 'kG': no pressure before the capital, so no mark
+    name, mark = match["unit"], (match.groupdict().get("mark") or match["word"]).lower()
     pressure = _dimensions(registry().parse_units("Pa"))
     try:
         unit = parse_unit(name, frozenset({pressure})).unit
@@ -303,7 +329,16 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
     if quantity == "pressure" and _MICRON.fullmatch(text.strip().strip("[]()").strip()):
         raise AmbiguousUnit(f"unit {text.strip()!r} of a pressure reads as a head in micrometres (µm) or as a vacuum "
                             "pressure in micrometres of mercury (µmHg, 0.133 Pa): write µm or µmHg")
-    u = parse_unit(text, frozenset(allowed))
+    try:
+        u = parse_unit(text, frozenset(allowed))
+    except (AmbiguousUnit, StandardVolume):
+        raise
+    except UnitError:
+        u = _weight_per_area(text) if quantity == "pressure" else None
+        if u is None:
+            raise
+    if quantity == "pressure" and _dimensions(u.unit) not in allowed:
+        u = _weight_per_area(text) or u  # 'kg/cm2': kgf/cm²; 'kg/cm2g' pint read as kilogram-grams per area
     if _dimensions(u.unit) not in allowed:
         raise UnitError(f"unit {text.strip()!r} ({u.unit.dimensionality if not u.dimensionless else 'dimensionless'})"
                         f" is not a unit of {quantity}: expected {' or '.join(allowed.values())}")
@@ -312,6 +347,34 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
                         f"{quantity} is written '-', '1', '%' or '‰' (a symbol such as π or η names the quantity: "
                         "leave it out of the brackets)")
     return u
+
+
+_MASS_WORD = re.compile(r"\b(kg|g|t|lb|lbs|lbm)\b(?=\s*/)", re.IGNORECASE)
+_PER_AREA = re.compile(r"(?P<unit>[^()]*/\s*(?:cm|m|in|ft|sq\s*in)\s*(?:2|²|\^2|\*\*2)?)\s*"
+                       r"(?:\(\s*(?P<mark>a|abs|g|gauge)\s*\)|(?P<word>a|abs|g|gauge))?", re.IGNORECASE)
+
+
+def _weight_per_area(text: str) -> Unit | None:
+    """A mass per area under a pressure ('kg/cm2', 'KG/CM2 A', 'lb/in²') as the weight of that mass per area (kgf/cm²,
+    lbf/in²): how data sheets write the technical atmosphere and psi; a mass per area is no pressure at all, so no
+    other reading exists. None when ``text`` is no such unit; a gauge mark ('kg/cm2g') is refused, the project having
+    no gauge unit of it."""
+    match = _PER_AREA.fullmatch(text.strip().strip("[]").strip())
+    if match is None or not _MASS_WORD.search(match["unit"]):
+        return None
+    force = _MASS_WORD.sub(lambda m: {"lbs": "lbf", "lbm": "lbf"}.get(m[1].lower(), m[1].lower() + "f"),
+                           match["unit"].lower().replace("sq in", "in**2").replace("sqin", "in**2"))
+    try:
+        unit = parse_unit(force)
+    except UnitError:
+        return None
+    if _dimensions(unit.unit) != _dimensions(registry().parse_units("Pa")):
+        return None
+    if (match["mark"] or match["word"] or "a").lower().startswith("g"):
+        raise UnitError(f"unit {text.strip()!r} is a gauge pressure in {unit.text}, which is read only in "
+                        f"{', '.join(f'{u}(g)' for u in _GAUGE_OF)}: convert it (1 kgf/cm² = 0.980665 bar) or give "
+                        "absolute pressures")
+    return unit
 
 
 def is_ratio_unit(u: Unit) -> bool:

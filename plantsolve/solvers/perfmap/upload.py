@@ -664,6 +664,7 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
         scale.setdefault(r, 1.0)
     roles = tuple(setting_cols) + MEASURED
 
+    _refuse_second_header(rows, numbers, col, unit_of, columns, what)
     width = len(rows[0])
     regrouped: list[int] = []
     data = []
@@ -811,6 +812,45 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
 
 
 _PERCENTS = (FRACTIONS, 100.0)  # a column whose values lie in here (none at or below 1.5) holds per cent
+
+
+def _refuse_second_header(rows: list[list[str]], numbers: list[int], col: dict[str, int], unit_of: dict[str, str],
+                          columns: dict[str, str], what: str) -> None:
+    """A header further down (two tables pasted into one file or sheet, each under its own header) that puts a
+    column elsewhere or states another unit than the first header, or a row of units under it that does, is refused
+    naming its line: its rows were read under the first header's columns and units (flows in kg/s under a first
+    header's lb/s, read 2.2 times too small, with only a note that one line was skipped). A header repeated as it is,
+    its units too, is skipped as any unreadable row is; a unit where the first header states none must be '-' or '1'."""
+    repeated = False
+    for n, r in zip(numbers[1:], rows[1:]):
+        if isinstance(r, _Unreadable) or all(_is_number(c) or not c.strip() for c in r):
+            repeated = False
+            continue
+        if repeated and _units_row(r):
+            changed = [f"{rows[0][j].strip()!r} in {c.strip()!r} (above: {unit_of[f] or 'no unit'!r})"
+                       for f, j in col.items() if j < len(r) and (c := r[j].strip().strip("[]()").strip())
+                       and f in unit_of and not _same_unit(unit_of[f] or "1", c)]
+            if changed:
+                raise reject(f"{what} {n}: a row of units under a second header that states other units than the "
+                             f"first ({what} {numbers[0]}): {', '.join(changed)}; two tables in one file? Upload each "
+                             "on its own, or write both in one unit", ("file", "row", n))
+            continue
+        fields = {}
+        for j, name in enumerate(r):
+            key = re.sub(r"[\s_\-]+", " ", name.strip().strip('"').strip().lower())
+            field, unit = (columns[key], "") if key in columns else _header_field(name)
+            if field in col and field not in fields:
+                fields[field] = (j, unit, name.strip())
+        repeated = len(set(fields) & set(MEASURED)) >= 2
+        if not repeated:
+            continue
+        moved = [f"{f} in column {j + 1} (above: {col[f] + 1})" for f, (j, _, _) in fields.items() if j != col[f]]
+        units = [f"{name!r} (above: {rows[0][col[f]].strip()!r})" for f, (_, unit, name) in fields.items()
+                 if unit and not _same_unit(unit_of.get(f) or "1", unit)]
+        if moved or units:
+            raise reject(f"{what} {n} is a second header that reads its columns otherwise than the first ({what} "
+                         f"{numbers[0]}): {', '.join(moved + units)}; two tables in one file? Upload each on its own, "
+                         "or write them under one header", ("file", "row", n))
 
 
 def _values_against_units(groups: dict, setting_cols: list[str], names: dict[str, str], unit_of: dict[str, str],

@@ -85,15 +85,6 @@ def test_a_capital_u_is_read_as_micro_as_upper_case_has_no_mu(written, pint_name
     assert conversion["factor"] == pytest.approx(expected, rel=1e-12)
 
 
-@pytest.mark.parametrize("unit, readings", [("MMHG", ("MmHg", "mmHg")), ("mmhg", ("MmHg", "mmHg")),
-                                            ("MMH2O", ("MmH2O", "mmH2O")), ("MTORR", ("MTorr", "mTorr"))])
-def test_a_pressure_whose_casing_reads_as_two_is_refused_naming_both_as_MBAR_is(unit, readings):
-    with pytest.raises(InputRejected) as refused:
-        _load(_with_header(f"theta,phi,flow,pressure [{unit}],efficiency"))
-    (error,) = refused.value.errors
-    assert error.loc == ("file", "header") and all(r in error.msg for r in readings) and "case" in error.msg
-
-
 def test_an_ambiguous_unit_after_a_comma_is_refused_naming_its_column():
     """Before: 'pressure, MPA' was no header cell at all ('must name the columns flow, pressure, …')."""
     with pytest.raises(InputRejected) as refused:
