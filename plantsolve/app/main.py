@@ -16,7 +16,7 @@ from plantsolve.app.auth import KeyRing
 from plantsolve.app.dashboard import install_dashboard
 from plantsolve.app.docs import install_docs
 from plantsolve.app.edge import EdgeMiddleware
-from plantsolve.app.jobs.endpoints import build_router, build_unknown_kind_router, declares_kind, upload_options_model
+from plantsolve.app.jobs.endpoints import build_unknown_kind_router, declares_kind, jobs_router, upload_options_model
 from plantsolve.app.jobs.lean import LeanRoutes
 from plantsolve.app.jobs.operations import build_operations_router
 from plantsolve.app.metrics import build_metrics
@@ -93,7 +93,7 @@ def create_app(settings: AppSettings | None = None, *, run_jobs: bool = True) ->
                        max_body_bytes=settings.max_body_bytes, cors_origins=settings.cors_origins, lean=lean,
                        body_idle_seconds=settings.body_idle_seconds)
     problems.install(app)
-    app.include_router(build_router(ctx.kinds))
+    app.include_router(jobs_router(ctx.kinds))
     app.include_router(build_operations_router(ctx.kinds))
     install_dashboard(app)
     app.include_router(build_metrics(app.state.jobs, ctx.kinds))

@@ -21,8 +21,9 @@ def routed_by(name: str) -> Iterator[None]:
         if set(request.query_params) != {name}:
             await check(request)
 
-    endpoints.known_query = taking
+    built = endpoints.ROUTERS
+    endpoints.known_query, endpoints.ROUTERS = taking, {}  # routers built with the check, not the process's
     try:
         yield
     finally:
-        endpoints.known_query = check
+        endpoints.known_query, endpoints.ROUTERS = check, built

@@ -223,6 +223,20 @@ def submit_openapi(spec: SolverSpec) -> dict[str, Any]:
     return {"requestBody": {"required": True, "content": content}}
 
 
+ROUTERS: dict[tuple[tuple[str, int], ...], tuple[Mapping[str, SolverSpec], APIRouter]] = {}
+
+
+def jobs_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
+    """:func:`build_router`'s router, built once per process for one set of kinds. Its routes depend on the kinds
+    alone (a request finds its service, settings and secrets through its own app), and FastAPI makes each route's
+    validators as it is added: three quarters of an app's start, for every app a process makes (a test suite makes
+    hundreds). The entry keeps the kinds it was built for, so the ids in its key stay theirs."""
+    key = tuple((kind, id(kinds[kind])) for kind in sorted(kinds))
+    if key not in ROUTERS:
+        ROUTERS[key] = (kinds, build_router(kinds))
+    return ROUTERS[key][1]
+
+
 def build_router(kinds: Mapping[str, SolverSpec]) -> APIRouter:
     router = APIRouter(prefix="/v1", dependencies=[Depends(require_api_key), Depends(known_query)],
                        responses=responses(401, 500))
