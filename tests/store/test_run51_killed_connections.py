@@ -53,28 +53,19 @@ def test_an_engine_connection_ended_by_the_server_is_not_used(db, pg_url):
     assert after != before
 
 
-def test_a_loop_connection_ended_by_the_server_is_not_used(db, pg_url):
+@pytest.mark.parametrize("blocking", [False, True], ids=["ended-while-idle", "farewell-met-by-the-read"])
+def test_a_loop_connection_ended_by_the_server_is_not_used_and_a_read_that_meets_its_farewell_is_asked_again(
+        db, pg_url, blocking):
+    """Ended while the loop is free, the closed connection is known and skipped; ended while the loop is blocked, the
+    next read is sent before the farewell is read, meets it, and is asked once more on a new connection."""
     connections = LoopConnections(db.engine, wait=db.wait, statement=10.0)
 
     async def twice() -> tuple[int, int]:
         (first,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
-        await asyncio.to_thread(_end_backends, pg_url)
-        (second,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
-        return first["pid"], second["pid"]
-
-    try:
-        before, after = asyncio.run(twice())
-    finally:
-        connections.close()
-    assert after != before
-
-
-def test_a_read_that_meets_the_servers_farewell_is_read_again_on_a_new_connection(db, pg_url):
-    connections = LoopConnections(db.engine, wait=db.wait, statement=10.0)
-
-    async def twice() -> tuple[int, int]:
-        (first,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
-        _end_backends(pg_url)  # blocking the loop: it reads the farewell only once the next read is sent
+        if blocking:
+            _end_backends(pg_url)
+        else:
+            await asyncio.to_thread(_end_backends, pg_url)
         (second,) = await connections.fetch("SELECT pg_backend_pid() AS pid")
         return first["pid"], second["pid"]
 
