@@ -266,13 +266,21 @@ def parse_idf(text: str) -> dict:
                         "reason": "the file ends inside this object (no closing ';'): not read"})
         warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
                                        object=label).model_dump())
-    elif ends_mid_line(text) and objects:  # cut after a ';', in a comment or blanks: the objects after it are gone
+    elif ends_mid_line(text) and objects and not ends_with_semicolon(text):
+        # cut after a ';', in a comment or blanks: the objects after it are gone (a hand edit that ends on the
+        # last object's ';' without a line ending loses nothing, and is not a cut file)
         last = len(text.splitlines())
         warnings.append(truncated_file(last, f"its last line has no line ending (the file was cut?): every object up "
                                        f"to the last ';' was read, whatever the file held after line {last} is "
                                        "missing.").model_dump())
     warnings.extend(w.model_dump() for w in notes_in_other_units(text))
     return surfaces_from_objects(objects, skipped, warnings, "idf")
+
+
+def ends_with_semicolon(text: str) -> bool:
+    """The text ends on an object's ';' (blanks after it aside), not inside a comment after it."""
+    last = text.rstrip(" \t\x00\x1a").splitlines()[-1]
+    return "!" not in last and last.endswith(";")
 
 
 def _where(line: int | None) -> str:
