@@ -14,7 +14,7 @@ AGREE = 1e-3  # relative difference of two sizes that are one unit written twice
 def project_length_scale(model) -> float:
     """Metres per unit of the project's length unit (1 when it assigns none); a 422 on ``file`` naming the units
     when it assigns two of different sizes."""
-    import ifcopenshell.util.unit  # noqa: PLC0415  (third-party, only needed for IFC)
+    import ifcopenshell.util.unit  # third-party, only needed for IFC
 
     projects = model.by_type("IfcProject")
     assignment = projects[0].UnitsInContext if projects else None
