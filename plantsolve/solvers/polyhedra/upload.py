@@ -56,10 +56,12 @@ from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_unit
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
+from plantsolve.solvers.polyhedra.obj_units import header_unit
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.decimal_comma import is_decimal_comma
+from plantsolve.solvers.length_units import METRES
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
@@ -619,9 +621,15 @@ def parse_obj(text: str) -> dict:
     remap = {old: new for new, old in enumerate(used)}
     for f in faces:
         f["loops"] = [[remap[v] for v in f["loops"][0]]]
-    return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
-            "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
-                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
+    source = {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
+              "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}
+    kept = [vertices[v] for v in used]
+    said = header_unit(text)
+    if said is not None:  # converted to metres here, as the formats that state their unit are
+        unit, number, comment = said
+        kept = [[c * METRES[unit] for c in p] for p in kept]
+        source["units"] = stated(unit, METRES[unit], "header", f"the OBJ header's comment on line {number}: {comment!r}")
+    return {"units": "m", "vertices": kept, "faces": faces, "source": source}
 
 
 def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:
