@@ -98,8 +98,22 @@ def polyhedra_cases():
          None, ("refuse", "file_units")),
         ("JSON upload with options.file_units ft", "house.json", _read("examples/polyhedra/gable_house.json"),
          {"file_units": "ft"}, ("clean", ())),
+        ("SketchUp OBJ in inches (header says so)", "room.obj", _sketchup_box("inches", 0.0254), None,
+         ("volume", 30.0)),
+        ("SketchUp OBJ in feet (header says so)", "room.obj", _sketchup_box("feet", 0.3048), None, ("volume", 30.0)),
+        ("SketchUp OBJ in meters", "room.obj", _sketchup_box("meters", 1.0), None, ("volume", 30.0)),
         ("gbXML named .idf", "m.idf", _read("examples/polyhedra/offices.xml"), None, ("refuse", "file")),
     ]
+
+
+def _sketchup_box(word: str, size: float) -> bytes:
+    """A 3 x 4 x 2.5 m room as SketchUp exports it in ``word`` (``size`` m each)."""
+    a, b, c = 3 / size, 4 / size, 2.5 / size
+    points = [(x, y, z) for x in (0, a) for y in (0, b) for z in (0, c)]
+    quads = ((1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4))
+    return ("# Alias OBJ Model File\n# Exported from SketchUp, (c) 2000-2012 Trimble Navigation Limited\n"
+            f"# File units = {word}\n\no room\n" + "".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in points)
+            + "".join("f " + " ".join(map(str, q)) + "\n" for q in quads)).encode()
 
 
 def _two_ifc_units(units: str) -> bytes:
@@ -222,6 +236,10 @@ def judge(expect, outcome, result, results_by_name) -> str:
         return "WRONG" if result is not None else "failed"
     if result is None:
         return "REFUSED"
+    if how == "volume":
+        if abs(result["total_volume"] - what) <= 1e-3 * what:
+            return "right"
+        return "right" if any(c.startswith("implausible_") for c in codes) else "WRONG"
     if how == "units":
         right = result["units"] == what and abs(result["metres_per_unit"] - METRES_PER[what]) < 1e-9 * METRES_PER[what]
         return "right" if right and not any(c.startswith("implausible_") for c in codes) else "WRONG"
