@@ -61,7 +61,6 @@ from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.decimal_comma import is_decimal_comma
-from plantsolve.solvers.length_units import METRES
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
 from plantsolve.solvers.upload_form import form_model, validated_upload
 
@@ -624,11 +623,12 @@ def parse_obj(text: str) -> dict:
     source = {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
               "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}
     kept = [vertices[v] for v in used]
-    said = header_unit(text)
+    said, unread = header_unit(text)
+    warnings.extend(w.model_dump() for w in unread)
     if said is not None:  # converted to metres here, as the formats that state their unit are
-        unit, number, comment = said
-        kept = [[c * METRES[unit] for c in p] for p in kept]
-        source["units"] = stated(unit, METRES[unit], "header", f"the OBJ header's comment on line {number}: {comment!r}")
+        kept = [[c * said.metres for c in p] for p in kept]
+        source["units"] = stated(said.name, said.metres, "header",
+                                 f"the OBJ header's comment on line {said.line}: {said.comment!r}")
     return {"units": "m", "vertices": kept, "faces": faces, "source": source}
 
 

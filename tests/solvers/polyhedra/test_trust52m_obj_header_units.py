@@ -40,8 +40,21 @@ def test_the_header_unit_goes_to_the_request_units_and_an_option_overriding_it_i
     assert "file_unit_overridden" in {w.code for w in overridden.report.warnings}
 
 
-@pytest.mark.parametrize("header", ["", "# units: furlongs\n", "# File units = inches\n# units: meter\n",
-                                    "o first\n# File units = inches\n"])
-def test_no_unit_or_an_unclear_one_leaves_the_numbers_in_the_request_units(header):
+def test_yards_which_no_request_is_in_are_converted_too():
+    request, result = measured(box_obj(3 / 0.9144, 4 / 0.9144, 2.5 / 0.9144, SKETCHUP.format("yards")))
+    assert result.zones[0].volume == pytest.approx(30.0) and request.source["units"]["file_unit"] == "yd"
+
+
+@pytest.mark.parametrize("header", ["", "o first\n# File units = inches\n"])
+def test_no_header_unit_leaves_the_numbers_in_the_request_units(header):
     request, result = measured(box_obj(3, 4, 2.5, header))
     assert result.zones[0].volume == pytest.approx(30.0) and request.source["units"]["basis"] == "request"
+    assert "file_unit_not_read" not in {w.code for w in result.report.warnings}
+
+
+@pytest.mark.parametrize("header, line", [("# units: furlongs\n", 1), ("# File units = inches\n# units: meter\n", 2)])
+def test_a_header_unit_not_read_is_warned_naming_its_line(header, line):
+    request, result = measured(box_obj(3, 4, 2.5, header))
+    assert result.zones[0].volume == pytest.approx(30.0) and request.source["units"]["basis"] == "request"
+    (warning,) = [w for w in result.report.warnings if w.code == "file_unit_not_read"]
+    assert warning.details["line"] == line and f"line {line}" in warning.message
