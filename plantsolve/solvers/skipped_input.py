@@ -59,7 +59,9 @@ def skipped_lines(skipped: Sequence[Mapping[str, Any]], what: str = "line", coun
     lines = sorted({int(s["line"]) for s in skipped if isinstance(s.get("line"), int)})
     first = skipped[0] if skipped else {}
     where = f" at line {line_list(lines)}" if lines else ""
-    why = f"; first: {first['reason']}" if first.get("reason") else ""
+    # without a line number (an IFC entity, an epJSON object) the object's name is all that tells the user where
+    what_first = f"{first['object']}: " if first.get("object") else ""
+    why = f"; first: {what_first}{first['reason']}" if first.get("reason") else ""
     return Diagnostic(code=code, message=f"{count} {what}(s) of the file could not be read and were "
                       f"skipped{where}{why}.",
                       details={"lines": lines[:LINES_LISTED], "count": count,

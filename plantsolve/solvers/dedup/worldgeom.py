@@ -8,11 +8,11 @@ import numpy as np
 
 import ifcopenshell
 import ifcopenshell.geom
-import ifcopenshell.util.unit
 
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows_each
+from plantsolve.solvers.dedup.unit_assignment import project_length_scale
 
 
 def _usable(points: np.ndarray) -> bool:
@@ -58,7 +58,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     products = rest
     if not products:
         return points, triangles
-    unit = ifcopenshell.util.unit.calculate_unit_scale(model)
+    unit = project_length_scale(model)
     try:
         iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
     except RuntimeError:  # a reference the file does not resolve refuses the whole batch: each product alone

@@ -135,10 +135,10 @@ def button_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
             out.append(FieldError(("electrodes", "radius"), f"'radius' belongs to button electrodes, not {e.shape!r}"))
         if e.protrusion != 0:
             out.append(FieldError(("electrodes", "protrusion"), f"'protrusion' belongs to button electrodes, not {e.shape!r}"))
-        return out
-    errors = []
+        return out + half_angle_errors(request)
+    errors = half_angle_errors(request)
     if e.radius is None:
-        return [FieldError(("electrodes", "radius"), "a button electrode needs its radius r_e")]
+        return errors + [FieldError(("electrodes", "radius"), "a button electrode needs its radius r_e")]
     if e.half_length is not None:
         errors.append(FieldError(("electrodes", "half_length"), "button electrodes have no half-length; leave it null"))
     if not 0.02 * radius <= e.radius <= 0.8 * radius:
@@ -158,6 +158,18 @@ def button_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:
         errors.append(FieldError(("pipe", "liner_length"),
                                  f"L/R = {liner / radius:g}; at most 200 (the virtual current has decayed long before)"))
     return errors
+
+
+def half_angle_errors(request: FlowmeterRequest) -> list[FieldError]:
+    """A half-angle given with point or button electrodes would go unused: the user who wrote it may have meant
+    patches, and the answer would not show that it was ignored."""
+    e = request.electrodes
+    if e.shape == "patch" or "half_angle" not in e.model_fields_set:
+        return []
+    size = "a button's size is its 'radius'" if e.shape == "button" else "a point electrode has no size"
+    return [FieldError(("electrodes", "half_angle"),
+                       f"'half_angle' belongs to patch electrodes, not {e.shape!r} ({size}): give "
+                       "\"shape\": \"patch\", or leave half_angle out")]
 
 
 def grid_errors(request: FlowmeterRequest, liner: float) -> list[FieldError]:

@@ -56,6 +56,7 @@ from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_unit
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
+from plantsolve.solvers.polyhedra.obj_units import header_unit
 from plantsolve.solvers.polyhedra.space_claims import space_claims
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
@@ -266,13 +267,21 @@ def parse_idf(text: str) -> dict:
                         "reason": "the file ends inside this object (no closing ';'): not read"})
         warnings.append(truncated_file(line, f"{label} has no closing ';' (the file was cut?); it was not read.",
                                        object=label).model_dump())
-    elif ends_mid_line(text) and objects:  # cut after a ';', in a comment or blanks: the objects after it are gone
+    elif ends_mid_line(text) and objects and not ends_with_semicolon(text):
+        # cut after a ';', in a comment or blanks: the objects after it are gone (a hand edit that ends on the
+        # last object's ';' without a line ending loses nothing, and is not a cut file)
         last = len(text.splitlines())
         warnings.append(truncated_file(last, f"its last line has no line ending (the file was cut?): every object up "
                                        f"to the last ';' was read, whatever the file held after line {last} is "
                                        "missing.").model_dump())
     warnings.extend(w.model_dump() for w in notes_in_other_units(text))
     return surfaces_from_objects(objects, skipped, warnings, "idf")
+
+
+def ends_with_semicolon(text: str) -> bool:
+    """The text ends on an object's ';' (blanks after it aside), not inside a comment after it."""
+    last = text.rstrip(" \t\x00\x1a").splitlines()[-1]
+    return "!" not in last and last.endswith(";")
 
 
 def _where(line: int | None) -> str:
@@ -611,9 +620,16 @@ def parse_obj(text: str) -> dict:
     remap = {old: new for new, old in enumerate(used)}
     for f in faces:
         f["loops"] = [[remap[v] for v in f["loops"][0]]]
-    return {"units": "m", "vertices": [vertices[v] for v in used], "faces": faces,
-            "source": {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
-                       "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}}
+    source = {"format": "obj", "faces": len(faces), "zones": len({f["zones"][0] for f in faces}),
+              "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped), "warnings": warnings}
+    kept = [vertices[v] for v in used]
+    said, unread = header_unit(text)
+    warnings.extend(w.model_dump() for w in unread)
+    if said is not None:  # converted to metres here, as the formats that state their unit are
+        kept = [[c * said.metres for c in p] for p in kept]
+        source["units"] = stated(said.name, said.metres, "header",
+                                 f"the OBJ header's comment on line {said.line}: {said.comment!r}")
+    return {"units": "m", "vertices": kept, "faces": faces, "source": source}
 
 
 def _obj_zones(faces: list[dict], vertices: list[list[float]]) -> list[dict]:

@@ -148,4 +148,17 @@ def _option_errors(request: PolyhedraRequest) -> list[FieldError]:
             errors.append(FieldError(("options", name), f"{name} {value:g} {request.units} is more than "
                                      f"{bound:g} {request.units}{in_metres}, beyond any building's: a value "
                                      "meant in another unit?"))
-    return errors
+    return errors + _unused_file_units(request)
+
+
+def _unused_file_units(request: PolyhedraRequest) -> list[FieldError]:
+    """``options.file_units`` says in what unit an uploaded file's numbers are; a JSON body's vertices are in its
+    ``units``, and the option would change nothing: vertices meant in feet would be measured in metres without a
+    word."""
+    file_units = request.options.file_units
+    said = (request.source or {}).get("units")
+    if file_units is None or isinstance(said, dict) and said.get("basis") == "options.file_units":
+        return []
+    return [FieldError(("options", "file_units"), f"file_units ({file_units!r}) is the unit of an uploaded file's "
+                       f"numbers; this request's vertices are in its 'units' ({request.units!r}): give \"units\": "
+                       f"\"{file_units}\" if they are in {file_units}, or leave file_units out")]
