@@ -70,8 +70,8 @@ def test_a_ply_comment_reads_what_it_did(word):
     assert stated_unit(f"ply\nformat ascii 1.0\ncomment units {word.upper()}\nend_header\n".encode())[0] == PLY_BEFORE[word]
 
 
-def test_a_ply_comment_in_a_unit_no_request_has_is_not_taken():
-    assert stated_unit(b"ply\nformat ascii 1.0\ncomment units microns\nend_header\n") is None
+def test_a_ply_comment_in_micrometres_is_read_though_no_request_has_that_unit():
+    assert stated_unit(b"ply\nformat ascii 1.0\ncomment units microns\nend_header\n")[0] == "um"
 
 
 FIELD = "x [{u}], y [{u}], z [{u}], Bx [T], By [T]\n1, 2, 3, 0.1, 0.2\n"
