@@ -19,8 +19,8 @@ from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
 from plantsolve.solvers.dedup.typical_sizes import judge_typical_sizes
-from plantsolve.solvers.dedup.unit_assignment import named_unit_warnings, project_length_scale
-from plantsolve.solvers.dedup.worldgeom import world_points
+from plantsolve.solvers.dedup.worldgeom import DEPENDS, world_points
+from plantsolve.solvers.ifc_units import named_unit_warnings, project_length_scale
 from plantsolve.solvers.length_units import METRES, unit_of_size
 
 DEFAULT_PRECISION_M = 1e-5
@@ -153,7 +153,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         if mode == "product_shape" and schema == "IFC2X3":
             raise reject("'product_shape' needs IFC4 or later: in IFC2X3 an IfcProductDefinitionShape belongs to "
                          "exactly one product (ShapeOfProduct [1:1]); use 'mapped_item'", ("options", "sharing"))
-        unit = project_length_scale(model)
+        unit = project_length_scale(model, DEPENDS)
         warnings.extend(named_unit_warnings(model))
         unit_name = length_unit_name(model)
         symbol = length_unit_symbol(model, unit)

@@ -12,7 +12,9 @@ import ifcopenshell.geom
 from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup.explicit import ExplicitReader, unique_rows_each
-from plantsolve.solvers.dedup.unit_assignment import project_length_scale
+from plantsolve.solvers.ifc_units import project_length_scale
+
+DEPENDS = "the tolerance and every deviation are in it"  # what the project's length unit decides
 
 
 def _usable(points: np.ndarray) -> bool:
@@ -58,7 +60,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
     products = rest
     if not products:
         return points, triangles
-    unit = project_length_scale(model)
+    unit = project_length_scale(model, DEPENDS)
     try:
         iterator = ifcopenshell.geom.iterator(geometry_settings(), model, threads, include=products)
     except RuntimeError:  # a reference the file does not resolve refuses the whole batch: each product alone

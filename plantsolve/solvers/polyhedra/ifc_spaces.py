@@ -26,13 +26,14 @@ import numpy as np
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
+from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
-from plantsolve.solvers.polyhedra.ifc_length_unit import project_length_scale
 from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
 MAX_SKIPPED_LISTED = 200
+VOLUMES_DEPEND = "the zones' volumes differ by the cube of their ratio"  # on the project's length unit
 
 
 def _scale(model: Any, qto: dict[str, Any], name: str, project: float) -> float:
@@ -98,7 +99,7 @@ def parse_ifc(content: bytes) -> dict:
         spaces = model.by_type("IfcSpace")  # a file without a schema fails only here
     except Exception as e:  # the parser raises several kinds for a broken file
         raise reject(f"unreadable IFC file: {str(e) or type(e).__name__}{_unread_schema(text)}") from None
-    project_length_scale(model)  # before the kernel reads the geometry in one of two units
+    project_length_scale(model, VOLUMES_DEPEND)  # before the kernel reads the geometry in one of two units
     warnings = []
     cut = where_cut(text[-TRAILER_BYTES:].encode("latin-1", errors="replace"))
     if cut is not None:  # the spaces read are whole; those after the cut, and relations written last, are not
@@ -192,7 +193,7 @@ def parse_ifc(content: bytes) -> dict:
             f"The property sets of {len(unreadable)} space(s) cannot be read (they refer to entities the file does "
             f"not hold): their declared quantities were not compared, first {unreadable[0]}."),
             details={"spaces": unreadable[:MAX_SKIPPED_LISTED]}).model_dump())
-    length_scale = project_length_scale(model)
+    length_scale = project_length_scale(model, VOLUMES_DEPEND)
     length = ifcopenshell.util.unit.get_project_unit(model, "LENGTHUNIT")
     length_name = ifcopenshell.util.unit.get_full_unit_name(length) if length is not None else "none assigned: metres"
     spaces_listed = {zone_of[s.id()]: {"global_id": s.GlobalId, "name": s.Name, "long_name": s.LongName}

@@ -1,9 +1,10 @@
-"""The project's one length unit, and what its IfcUnitAssignment says against itself.
+"""An IFC project's one length unit, and what its IfcUnitAssignment says against itself (dedup, polyhedra).
 
-IfcOpenShell's unit scale multiplies every LENGTHUNIT the assignment lists: a project listing METRE and a FOOT
-(IFC allows one unit per type) was reported as ``length_unit: METRE``, ``units: ft``, 0.3048 m per unit; two
-MILLI METREs as a micrometre. Which of two different units the coordinates are in is not known, and the tolerance
-and every deviation are in it: refused naming both. A unit named FOOT or INCH whose conversion factor is another
+IfcOpenShell's unit scale multiplies every LENGTHUNIT the assignment lists, and its geometry kernel takes one of them
+by their order: a project listing METRE and a FOOT (IFC allows one unit per type) was reported by dedup as
+``length_unit: METRE``, ``units: ft``, 0.3048 m per unit, two MILLI METREs as a micrometre; polyhedra's rooms came out
+60 m³ listed one way round and 1.7e9 m³ the other. Which of two different units the coordinates are in is not known:
+refused naming both; one unit listed twice is that unit. A unit named FOOT or INCH whose conversion factor is another
 unit's (an INCH of 0.3048 m, copied from a foot) is used by its factor, as the geometry kernel uses it, and warned
 naming the name and the factor, so that ``length_unit`` and ``units`` do not contradict each other silently."""
 
@@ -32,18 +33,18 @@ def _said(unit, scale: float) -> str:
     return f"{name} (#{unit.id()}, {scale:g} m)"
 
 
-def project_length_scale(model: ifcopenshell.file) -> float:
+def project_length_scale(model: ifcopenshell.file, depends: str) -> float:
     """Metres per unit of the project's length unit (1 when it assigns none); a 422 on ``file`` when it assigns
-    two of different sizes."""
+    two of different sizes, saying what ``depends`` on the unit."""
     units = _length_units(model)
     scales = [float(ifcopenshell.util.unit.get_unit_scale(u)) for u in units]
     if not scales:
         return 1.0
     if any(abs(s - scales[0]) > AGREE * abs(scales[0]) for s in scales[1:]):
         listed = " and ".join(_said(u, s) for u, s in zip(units, scales, strict=True))
-        raise reject(f"the project's IfcUnitAssignment assigns {len(units)} length units, {listed}: IFC allows one "
-                     "unit per type, and which one the coordinates are in is not known (the tolerance and every "
-                     "deviation are in it). Keep the one the model was drawn in", ("file",))
+        raise reject(f"the IFC project's IfcUnitAssignment assigns {len(units)} length units, {listed}: IFC allows one "
+                     "unit per type, and which one the coordinates are in is not known ({depends}). Keep the one the "
+                     "model was drawn in", ("file",))
     return scales[0]
 
 
