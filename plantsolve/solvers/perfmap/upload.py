@@ -808,7 +808,10 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                                 f"converted to a fraction (× {scale['efficiency']:g}; now {eff.min():.4g}.."
                                 f"{eff.max():.4g}).", details={"factor": scale["efficiency"],
                                                               "column": names["efficiency"]}))
-    return list(groups.values()), list(lines_of.values()), notes, meta
+    # the positions by their settings, not by the row each first appears on: a table whose rows come in another order
+    # is the same request (the warnings' positions name the same speed line)
+    keys = sorted(groups)
+    return [groups[k] for k in keys], [lines_of[k] for k in keys], notes, meta
 
 
 _PERCENTS = (FRACTIONS, 100.0)  # a column whose values lie in here (none at or below 1.5) holds per cent

@@ -161,8 +161,13 @@ def test_canonical_order_runs_every_connection_from_its_smaller_end():
     ends = [((c.from_[0], c.from_[1]), (c.to[0], c.to[1])) for c in canon.connections]
     assert all(a < b for a, b in ends) and ends == sorted(ends)
     assert [c.id for c in canon.components] == sorted(c.id for c in req.components)
-    for k, c in enumerate(req.connections):  # conns maps every connection of the request to its canonical place
-        assert {tuple(c.from_), tuple(c.to)} == set(ends[conns[k]])
+    # conns maps every connection of the request to its canonical place, which joins the same two ports (numbered
+    # there in the canonical order of each component's ports)
+    def port(r, end):
+        comp = next(c for c in r.components if c.id == end[0])
+        return end[0], tuple(comp.ports[end[1]].position)
+    for k, c in enumerate(req.connections):
+        assert {port(req, c.from_), port(req, c.to)} == {port(canon, e) for e in ends[conns[k]]}
 
 
 def test_the_direction_constraint_of_a_swapped_connection_is_the_same_up_to_sign():
