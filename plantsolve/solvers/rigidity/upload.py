@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+import re
 
 import numpy as np
 
@@ -318,6 +319,7 @@ def parse_ldraw(text: str) -> dict:
     resolver = Resolver(files, lambda name: _resolve(name, files))
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
     mirrored: list[tuple[str, int, str]] = []  # (id, line, number) of parts whose placement mirrors them
+    drawn: dict[int, str] = {}  # line -> file name, of subparts and primitives placed in a model
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -358,6 +360,7 @@ def parse_ldraw(text: str) -> dict:
             role = roles.get(sub, "model") if sub is not None else None
             if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws (scaled or not)
+                drawn.setdefault(number, file_name)
                 continue
             if abs(np.linalg.det(local_rot)) < 1e-6:
                 skipped.append({"line": number, "reason": "the rotation matrix is singular"})
@@ -440,6 +443,8 @@ def parse_ldraw(text: str) -> dict:
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if mirrored:
         warnings.append(mirrored_parts(mirrored).model_dump())
+    if drawn:
+        warnings.append(geometry_placed(drawn).model_dump())
     if (headed := _headed_parts_expanded(files, roles, main)) is not None:
         warnings.append(headed.model_dump())
     if outside:
@@ -522,6 +527,28 @@ def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
 
     own = drawn(np.eye(3))
     return tuple(mirror for mirror in MIRRORS if drawn(mirror) == own)
+
+
+SUBPART = re.compile(r"(?:parts/)?s/(\w+?)s\d+[a-z]?\.dat$")
+
+
+def geometry_placed(drawn: dict[int, str]) -> Diagnostic:
+    """Subparts and primitives placed by a model's own lines: drawn geometry, no part, so not analysed. A user who
+    typed a subpart's name (``s\\3001s01.dat``) for its part (3001) sees the part it belongs to named."""
+    lines = sorted(drawn)
+
+    def named(line: int) -> str:
+        found = SUBPART.match(_key(drawn[line]))
+        return f"line {line}: '{drawn[line]}'" + (f" (a subpart of {found.group(1)})" if found else "")
+
+    return Diagnostic(
+        code="geometry_placed", message=f"{len(lines)} line(s) of a model place a subpart or primitive, drawn "
+        f"geometry that is no part: {'; '.join(named(line) for line in lines[:10])}{' and more' if len(lines) > 10 else ''}"
+        ". They were not analysed (no connection, no collision shape: a part drawn so, a bent hose's segments "
+        "among them, is missing from the analysis); where a part was meant, place the part itself (3001.dat, not "
+        "s\\3001s01.dat).",
+        details={"lines": lines[:MAX_SKIPPED_LISTED], "files": [drawn[line] for line in lines[:MAX_SKIPPED_LISTED]],
+                 "count": len(lines)})
 
 
 def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:
