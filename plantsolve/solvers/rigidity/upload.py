@@ -35,6 +35,7 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 
 from __future__ import annotations
 
+import difflib
 import functools
 import itertools
 import re
@@ -180,6 +181,17 @@ def _resolve(name: str, files: dict) -> str | None:
         if folder + key in files:
             return folder + key
     return None
+
+
+def _named_alike(name: str, files: dict) -> str | None:
+    """The sub-file whose name is nearest a name the file places but does not hold: the same but for its
+    extension (``.dat`` for ``.ldr``) or a typing slip; None when none is near."""
+    stem = _key(name).rsplit(".", 1)[0]
+    for key in files:
+        if key != PRELUDE and key.rsplit(".", 1)[0] == stem:
+            return key
+    near = difflib.get_close_matches(_key(name), [key for key in files if key != PRELUDE], n=1, cutoff=0.85)
+    return near[0] if near else None
 
 
 def _section_type(lines: list[tuple[int, str]]) -> str | None:
@@ -386,9 +398,12 @@ def parse_ldraw(text: str) -> dict:
                 continue
             ident = f"{prefix}L{number}"
             if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
+                alike = _named_alike(file_name, files)
                 skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
-                                "hold (an .mpd cut short, or an .ldr whose sub-models are separate files: send them "
-                                "as one .mpd)"})
+                                "hold " + (f"(it holds {alike!r}, named alike: a name misspelt, or its extension "
+                                           "changed? names must match but for case)" if alike else
+                                           "(an .mpd cut short, or an .ldr whose sub-models are separate files: send "
+                                           "them as one .mpd)")})
                 continue
             if role == "model":
                 if sub in stack:
@@ -493,20 +508,21 @@ def parse_ldraw(text: str) -> dict:
                                        "warnings": warnings}}
 
 
-# The 24 improper signed permutations of the frame's axes: the mirrors about its x, y and z planes, about its
-# diagonal planes (a corner plate 2420 or brick 2357 is symmetric about x = z), and those times a rotation.
-MIRRORS = tuple(m for perm in itertools.permutations(range(3)) for signs in itertools.product((1.0, -1.0), repeat=3)
-                if np.linalg.det(m := np.diag(signs)[list(perm)]) < 0)
+# The 24 signed permutations of the frame's axes of each handedness. The improper ones are the mirrors about its x,
+# y and z planes, about its diagonal planes (a corner plate 2420 or brick 2357 is symmetric about x = z), and those
+# times a rotation; the proper ones the turns that may take a part onto itself (a 2 x 4 brick's half turn about y).
+SIGNED_PERMUTATIONS = tuple(np.diag(signs)[list(perm)] for perm in itertools.permutations(range(3))
+                            for signs in itertools.product((1.0, -1.0), repeat=3))
+MIRRORS = tuple(m for m in SIGNED_PERMUTATIONS if np.linalg.det(m) < 0)
+TURNS = tuple(m for m in SIGNED_PERMUTATIONS if np.linalg.det(m) > 0)
 # Points whose bore or grip is centred on them, so that their direction's sign says nothing (a through hole).
 CENTRED = frozenset({"pinhole", "axlehole", "barhole", "clip", "rodclip", "hole"})
 
 
-@functools.lru_cache(maxsize=1024)
-def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
-    """The mirrors of the part's frame (improper signed permutations of its axes, :data:`MIRRORS`) that map its
-    catalogue shape — every connection point with its direction (a through hole's either way), type and profile,
-    its bounding box and solids — onto itself; none for a handed part or one not in the catalogue. Placed
-    mirrored, such a part is the same as placed by the matrix times one of these mirrors, a rotation."""
+def _onto_itself(file_name: str, frames: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """The ``frames`` that map the part's catalogue shape — every connection point with its direction (a through
+    hole's either way), type and profile, its bounding box and solids — onto itself; none for a part not in the
+    catalogue."""
     shape = lookup(file_name)
     if shape is None:
         return ()
@@ -526,7 +542,23 @@ def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
         return connections, boxes
 
     own = drawn(np.eye(3))
-    return tuple(mirror for mirror in MIRRORS if drawn(mirror) == own)
+    return tuple(frame for frame in frames if drawn(frame) == own)
+
+
+@functools.lru_cache(maxsize=1024)
+def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
+    """The mirrors of the part's frame (:data:`MIRRORS`) that map its catalogue shape onto itself; none for a
+    handed part or one not in the catalogue. Placed mirrored, such a part is the same as placed by the matrix times
+    one of these mirrors, a rotation."""
+    return _onto_itself(file_name, MIRRORS)
+
+
+@functools.lru_cache(maxsize=1024)
+def symmetry_turns(file_name: str) -> tuple[np.ndarray, ...]:
+    """The turns of the part's frame (:data:`TURNS`, the identity among them) that map its catalogue shape onto
+    itself: placed by the matrix times any of them, the part is where it was (a 2 x 4 brick turned half about its
+    y axis). Only the identity for a part not in the catalogue."""
+    return _onto_itself(file_name, TURNS) or (np.eye(3),)
 
 
 SUBPART = re.compile(r"(?:parts/)?s/(\w+?)s\d+[a-z]?\.dat$")
