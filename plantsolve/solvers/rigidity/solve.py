@@ -4,6 +4,7 @@ count, collisions and docking."""
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
 
@@ -189,9 +190,13 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                                    f"{', '.join(unreadable[:LISTED_IN_MESSAGE])}): they stay unknown",
                                    details={"parts": unreadable[:100]}))
     if unknown:
+        tally = Counter(u.part for u in unknown)
+        named = ", ".join(f"{number} ({count})" for number, count in sorted(tally.items(), key=lambda t: (-t[1], t[0]))
+                          [:LISTED_IN_MESSAGE])
         warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
-                                   "were left out of the analysis (not guessed)",
-                                   details={"parts": sorted({u.part for u in unknown})[:100]}))
+                                   f"were left out of the analysis (not guessed): {len(tally)} number(s), {named}"
+                                   f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}",
+                                   details={"parts": sorted(tally)[:100]}))
     source = request.source or {}
     skipped = [s for s in source.get("skipped") or [] if isinstance(s, dict)]
     if skipped:  # lines of the uploaded file that placed nothing: the analysis is of the rest

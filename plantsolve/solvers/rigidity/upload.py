@@ -447,6 +447,11 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    # a line of a sub-model placed n times is skipped n times: one line of the file, said once
+    first_of_line: dict[int, dict] = {}
+    for entry in skipped:
+        first_of_line.setdefault(entry["line"], entry)
+    skipped = list(first_of_line.values())
     if hand_typed:
         worst = max(off for _, off in hand_typed)
         lines = sorted({n for n, _ in hand_typed})

@@ -96,3 +96,24 @@ def test_the_symmetric_duplicate_rule_leaves_distinct_placements_of_a_handed_par
                       {"id": "b", "part": "41769", "position": [0, 0, 0],
                        "rotation": np.diag([-1.0, 1.0, -1.0]).ravel().tolist()}]}
     assert "duplicate_parts" not in codes(solve(RigidityRequest.model_validate(body)).result)
+
+
+def test_a_submodel_cycle_is_one_skipped_line_however_often_its_submodel_is_placed():
+    """The engine, placed four times, places the fighter that places it: line 91 is skipped, once (it was counted
+    as 4 lines skipped 'at line 91'); the model is analysed without it, as drawn."""
+    looped = XWING.replace("0 FILE 30051 - Engine.ldr\n",
+                           "0 FILE 30051 - Engine.ldr\n1 0 0 0 0 1 0 0 0 1 0 0 0 1 30051 - Fighter.ldr\n")
+    request = parse("xwing.mpd", looped)
+    assert request.source["skipped_count"] == 1
+    (entry,) = request.source["skipped"]
+    assert entry["line"] == 91 and "includes itself (30051 - fighter.ldr -> 30051 - engine.ldr" in entry["reason"]
+    result, plain = solve(request).result, solve(parse("xwing.mpd", XWING)).result
+    assert codes(result)["skipped_lines"].message.startswith("1 line(s)")
+    assert (result.dof, len(result.parts)) == (plain.dof, len(plain.parts)) == (44, 61)
+
+
+def test_unknown_parts_are_named_with_their_counts():
+    text = WALL + "".join(f"1 4 0 {-100 * k} 0 1 0 0 0 1 0 0 0 1 {n}.dat\n" for k, n in
+                          enumerate(["99999x", "99999x", "88888y"], start=2))
+    found = codes(solve(parse("wall.ldr", text)).result)["unknown_parts"]
+    assert found.message.endswith("left out of the analysis (not guessed): 2 number(s), 99999x (2), 88888y (1)")
