@@ -193,9 +193,10 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         tally = Counter(u.part for u in unknown)
         named = ", ".join(f"{number} ({count})" for number, count in sorted(tally.items(), key=lambda t: (-t[1], t[0]))
                           [:LISTED_IN_MESSAGE])
-        warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
-                                   f"were left out of the analysis (not guessed): {len(tally)} number(s), {named}"
-                                   f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}",
+        warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} of {len(request.parts)} part(s) are "
+                                   f"not in the catalogue and were left out of the analysis (not guessed): "
+                                   f"{len(tally)} number(s), {named}{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}"
+                                   f"; dof, rigid and pieces are of the other {len(request.parts) - len(unknown)}",
                                    details={"parts": sorted(tally)[:100]}))
     source = request.source or {}
     skipped = [s for s in source.get("skipped") or [] if isinstance(s, dict)]

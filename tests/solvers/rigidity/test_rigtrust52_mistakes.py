@@ -116,4 +116,6 @@ def test_unknown_parts_are_named_with_their_counts():
     text = WALL + "".join(f"1 4 0 {-100 * k} 0 1 0 0 0 1 0 0 0 1 {n}.dat\n" for k, n in
                           enumerate(["99999x", "99999x", "88888y"], start=2))
     found = codes(solve(parse("wall.ldr", text)).result)["unknown_parts"]
-    assert found.message.endswith("left out of the analysis (not guessed): 2 number(s), 99999x (2), 88888y (1)")
+    assert found.message.startswith("3 of 12 part(s) are not in the catalogue")
+    assert found.message.endswith("(not guessed): 2 number(s), 99999x (2), 88888y (1); dof, rigid and pieces are of "
+                                  "the other 9")
