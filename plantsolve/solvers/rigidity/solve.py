@@ -18,6 +18,7 @@ from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, HAL
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.rigidity.mobility import NEAR_CUT
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
 from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
                                                 clearance, drawn_apart, far_parts, joints_by_part, line_of,
@@ -195,7 +196,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                           [:LISTED_IN_MESSAGE])
         warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} of {len(request.parts)} part(s) are "
                                    f"not in the catalogue and were left out of the analysis (not guessed): "
-                                   f"{len(tally)} number(s), {named}{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}"
+                                   f"{len(tally)} number(s), {named}"
+                                   f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}"
                                    f"; dof, rigid and pieces are of the other {len(request.parts) - len(unknown)}",
                                    details={"parts": sorted(tally)[:100]}))
     source = request.source or {}
@@ -249,6 +251,16 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     n_pieces = mob.details["components"]
     superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
     special = mob.dof > analysis.generic_dof
+    near = mob.details.get("near_cut") or []
+    if near:  # before special_position: that one's reading rests on this rank
+        warnings.append(Diagnostic(
+            code="rank_uncertain", message=f"dof {mob.dof} may be up to {len(near)} too high: the float rank counted "
+            f"{len(near)} singular value(s) as zero that lie within a factor {NEAR_CUT:g} below its cut "
+            f"(rank_tolerance = {request.options.rank_tolerance:g}; the nearest at {near[0]:.2g} of the cut). Lengths "
+            f"spanning too many orders of magnitude (a joint's point far from the others': the model's joints span "
+            f"{mob.details['model_size']:.3g} {'ldu' if request.parts else request.units} from their middle) hide a "
+            "lever under the cut; lower options.rank_tolerance, or check the numbers",
+            details={"near_cut": near, "rank_tolerance": request.options.rank_tolerance}))
     if special:
         warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
                                    f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes)"))

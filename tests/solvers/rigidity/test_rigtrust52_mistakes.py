@@ -9,6 +9,7 @@ import pytest
 
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.rigidity import synthetic
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import parse_upload
 from tests.conftest import REPO
@@ -119,3 +120,20 @@ def test_unknown_parts_are_named_with_their_counts():
     assert found.message.startswith("3 of 12 part(s) are not in the catalogue")
     assert found.message.endswith("(not guessed): 2 number(s), 99999x (2), 88888y (1); dof, rigid and pieces are of "
                                   "the other 9")
+
+
+@pytest.mark.parametrize("far, dof, uncertain", [(1e4, 1, False), (1e10, 2, True), (1e11, 2, True)])
+def test_a_joint_typed_absurdly_far_says_the_float_rank_is_uncertain(far, dof, uncertain):
+    """A planar four-bar has 1 degree of freedom wherever its hinges stand. With one hinge 1e10 mm from the others'
+    50 mm the float rank, on coordinates scaled by the model's size, sees a lever 1e-10 of it: a singular value
+    0.4 of the cut, counted zero, and dof 2. The answer is warned as uncertain, naming the margin (it read as a
+    special position only); a hinge 1e4 mm off is resolved and not warned."""
+    body = synthetic.four_bar()
+    body["joints"][0]["point"] = [0.5, far, 0]
+    result = solve(RigidityRequest.model_validate(body)).result
+    assert result.rank_method == "svd" and result.dof == dof
+    found = codes(result)
+    assert ("rank_uncertain" in found) is uncertain
+    if uncertain:
+        assert found["rank_uncertain"].message.startswith("dof 2 may be up to 1 too high")
+        assert 0.01 < found["rank_uncertain"].details["near_cut"][0] < 1
