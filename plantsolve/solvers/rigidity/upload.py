@@ -370,7 +370,8 @@ def parse_ldraw(text: str) -> dict:
             local_rot = np.array(values[3:]).reshape(3, 3)
             sub = _resolve(file_name, files)
             role = roles.get(sub, "model") if sub is not None else None
-            if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
+            if role == "geometry" or (role is None and (_key(file_name).startswith(GEOMETRY_FOLDERS) or (
+                    lookup(file_name) is None and official(file_name) is not None))):  # stud.dat, no folder
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws (scaled or not)
                 drawn.setdefault(number, file_name)
                 continue

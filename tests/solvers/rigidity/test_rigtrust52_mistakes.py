@@ -29,14 +29,15 @@ def codes(result) -> dict:
 @pytest.mark.parametrize("line, named", [
     ("1 4 0 -200 0 1 0 0 0 1 0 0 0 1 s\\3001s01.dat", "line 22: 's\\3001s01.dat' (a subpart of 3001)"),
     ("1 4 0 -200 0 1 0 0 0 1 0 0 0 1 p/4-4disc.dat", "line 22: 'p/4-4disc.dat'"),
+    ("1 4 0 -200 0 1 0 0 0 1 0 0 0 1 stud.dat", "line 22: 'stud.dat'"),  # a primitive without its folder
 ])
 def test_a_subpart_or_primitive_placed_in_a_model_is_named_not_dropped_silently(line, named):
     request = parse("wall.ldr", WALL + line + "\n")
     result = solve(request).result
     placed = codes(result)["geometry_placed"]
     assert named in placed.message and placed.details["lines"] == [22]
-    # the analysis is of the other parts, as without the line
-    assert (result.dof, len(result.parts)) == (4, 9)
+    # the analysis is of the other parts, as without the line (stud.dat was an unknown part 'stud')
+    assert (result.dof, len(result.parts), result.unknown_parts) == (4, 9, [])
     assert result.report.status == "warning"
 
 
