@@ -92,16 +92,22 @@ def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
     rotation, up to the turns that take the part onto itself): a part placed twice, as an editor's
     duplicate-and-forget-to-move leaves it. The first is the id that sorts first in natural order (an upload's
     earlier line), whatever order the parts are listed in."""
-    first: dict[tuple, str] = {}
-    out = []
+    at: dict[tuple, list] = {}  # (number, position) -> its parts in natural order
     for part in sorted(request.parts, key=lambda p: natural_order(p.id)):
         number = lookup(part.part).number if lookup(part.part) else part.part.lower()
-        key = (number, tuple(round(float(v) * 1000) for v in part.position), _pose_key(number, part.rotation))
-        if key in first:
-            out.append((first[key], part.id))
-        else:
-            first[key] = part.id
-    return out
+        at.setdefault((number, tuple(round(float(v) * 1000) for v in part.position)), []).append(part)
+    out = []
+    for (number, _), placed in at.items():
+        if len(placed) < 2:  # the part's symmetries are sought only where a repeat may be
+            continue
+        first: dict[tuple, str] = {}
+        for part in placed:
+            key = _pose_key(number, part.rotation)
+            if key in first:
+                out.append((first[key], part.id))
+            else:
+                first[key] = part.id
+    return sorted(out, key=lambda pair: natural_order(pair[1]))
 
 
 def recorded_parts(source: dict) -> tuple[dict[str, PartShape], list[str]]:
