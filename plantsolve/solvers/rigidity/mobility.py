@@ -43,6 +43,11 @@ from plantsolve.solvers.rigidity.screws import FREEDOM, constraint_rows, freedom
 
 RANK_TOLERANCE = 1e-9
 CLUSTER_TOLERANCE = 1e-6
+# A singular value counted as zero but within this factor below the float rank's cut makes the dof uncertain: the
+# 61 official models of the OMR fixtures and the LDrawParser.jl assets show none there (their smallest counted
+# singular values lie 1.1 to 940 times above the cut, their zeros more than this factor below), while a joint 1e10
+# model units from the others' 50 puts a four-bar's lever at 0.4 of the cut.
+NEAR_CUT = 1e3
 EXACT_LIMIT = 2 ** 30  # integer inputs above this are treated as floats (they are not LDraw units)
 
 
@@ -153,8 +158,10 @@ def _screws(joint: Joint, exact: bool, centre, size) -> np.ndarray:
 
 
 def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint], sb: list[int], exact: bool,
-               centre, size, rank_tolerance: float):
-    """(rank, basis of joint rates, body twists in the basis, joint columns, prime or None) of one block."""
+               centre, size, rank_tolerance: float, near: list[float] | None = None):
+    """(rank, basis of joint rates, body twists in the basis, joint columns, prime or None) of one block; ``near``
+    gathers the float rank's singular values counted as zero within :data:`NEAR_CUT` of the cut (see
+    :func:`_svd_nullspace`)."""
     screws = {k: _screws(all_joints[k], exact, centre, size) for k in joints}
     col, n_cols = {}, 0
     for k in joints:
@@ -191,7 +198,7 @@ def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint]
         block[:, col[k]:col[k] + screws[k].shape[1]] -= screws[k]
         rows.append(block)
     matrix = np.vstack(rows)
-    rank, basis, p = _nullspace(matrix, exact, rank_tolerance)
+    rank, basis, p = _nullspace(matrix, exact, rank_tolerance, near)
     nullity = basis.shape[1]
     twists = {root: np.zeros((6, nullity), dtype=basis.dtype)}
     for x in order[1:]:
@@ -209,22 +216,28 @@ def loop_block(bodies: list[int], joints: list[int], all_joints: Sequence[Joint]
     return rank, basis, twists, col, screws, p
 
 
-def _nullspace(matrix: np.ndarray, exact: bool, tolerance: float) -> tuple[int, np.ndarray, int | None]:
+def _nullspace(matrix: np.ndarray, exact: bool, tolerance: float,
+               near: list[float] | None = None) -> tuple[int, np.ndarray, int | None]:
     """Rank and null-space basis of ``matrix``, with the prime of the arithmetic: exact (modular) for integer
     entries, else by SVD (prime None)."""
     if exact:
         return modrank.exact_nullspace(matrix)
-    rank, basis = _svd_nullspace(matrix, tolerance)
+    rank, basis = _svd_nullspace(matrix, tolerance, near)
     return rank, basis, None
 
 
-def _svd_nullspace(matrix: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
+def _svd_nullspace(matrix: np.ndarray, tolerance: float, near: list[float] | None = None) -> tuple[int, np.ndarray]:
+    """Rank and null-space basis by SVD. Each singular value counted as zero that lies within a factor
+    :data:`NEAR_CUT` below the cut is added to ``near`` as its ratio to the cut: a motion the rank grants only by
+    that margin (a lever 1e-10 of the model's size lies just under it)."""
     n_cols = matrix.shape[1]
     if matrix.shape[0] == 0 or n_cols == 0:
         return 0, np.eye(n_cols)
     _, s, vt = np.linalg.svd(matrix, full_matrices=True)
     cut = tolerance * max(matrix.shape) * (s[0] if s.size else 0.0)
     rank = int((s > cut).sum()) if s.size and s[0] > 0 else 0
+    if near is not None and rank:
+        near.extend(float(v / cut) for v in s[rank:] if v > cut / NEAR_CUT)
     return rank, vt[rank:].T
 
 
@@ -235,6 +248,7 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
         exact = is_exact(joints)
     centre, size = _float_frame(joints)
     uf = _UnionFind(n_bodies)
+    near: list[float] = []
     redundant = 0
     moves = [False] * len(joints)
     for k, j in enumerate(joints):
@@ -277,7 +291,7 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
             continue
         if method == "loops":
             rank, basis, twists, jcol, screws, p = loop_block(bodies, block_joints, joints, sb_of, exact, centre,
-                                                              size, rank_tolerance)
+                                                              size, rank_tolerance, near)
             nullity = basis.shape[1]
             n_rows = sum(6 - FREEDOM[joints[k].kind] for k in block_joints)
             total_rows += n_rows
@@ -288,7 +302,7 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
         else:
             matrix, col = block_matrix(bodies, block_joints, joints, sb_of, exact, centre, size)
             total_rows += matrix.shape[0]
-            rank, basis, p = _nullspace(matrix, exact, rank_tolerance)
+            rank, basis, p = _nullspace(matrix, exact, rank_tolerance, near)
             nullity = basis.shape[1]
             redundant += matrix.shape[0] - rank
             twists = {b: basis[col[b]:col[b] + 6] if b in col else np.zeros((6, nullity), dtype=basis.dtype)
@@ -323,7 +337,8 @@ def analyse(n_bodies: int, joints: Sequence[Joint], *, exact: bool | None = None
     return Mobility(dof=dof, clusters=clusters, superbricks=superbricks, moves=moves,
                     redundant_constraints=redundant, rank_method="modular" if exact else "svd",
                     rows=total_rows, blocks=n_blocks, largest_block=largest,
-                    details={"components": components, "model_size": size})
+                    details={"components": components, "model_size": size,
+                             "near_cut": sorted(near, reverse=True)[:10]})
 
 
 def dense_svd_dof(n_bodies: int, joints: Sequence[Joint], rank_tolerance: float = RANK_TOLERANCE) -> int:

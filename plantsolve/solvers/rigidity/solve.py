@@ -4,6 +4,7 @@ count, collisions and docking."""
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
 
@@ -17,11 +18,13 @@ from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, HAL
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.rigidity.mobility import NEAR_CUT
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
 from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
                                                 clearance, drawn_apart, far_parts, joints_by_part, line_of,
                                                 loose_sub_builds, mostly_floating, pieces,
                                                 resting_on_smooth_faces, sub_build)
+from plantsolve.solvers.rigidity.upload import symmetry_planes, symmetry_turns
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -77,20 +80,34 @@ def _superbricks(ids: list[str], groups: list[list[int]], rod_pairs: list[tuple[
     return list(out.values())
 
 
+def _pose_key(number: str, rotation: list[float]) -> tuple:
+    """The rotation as a key that is one for every turn that takes the part onto itself (a 2 x 4 brick placed
+    turned half about its y axis stands where it stood): the least of the rotation times each of its turns."""
+    rot = np.reshape(np.asarray(rotation, float), (3, 3))
+    return min(tuple(round(float(v) * 1e6) + 0 for v in (rot @ turn).ravel()) for turn in symmetry_turns(number))
+
+
 def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
     """(first, repeat) id pairs of parts with one part number at one pose (to 0.001 LDU and 1e-6 in the
-    rotation): a part placed twice, as an editor's duplicate-and-forget-to-move leaves it. The first is the id
-    that sorts first in natural order (an upload's earlier line), whatever order the parts are listed in."""
-    first: dict[tuple, str] = {}
-    out = []
+    rotation, up to the turns that take the part onto itself): a part placed twice, as an editor's
+    duplicate-and-forget-to-move leaves it. The first is the id that sorts first in natural order (an upload's
+    earlier line), whatever order the parts are listed in."""
+    at: dict[tuple, list] = {}  # (number, position) -> its parts in natural order
     for part in sorted(request.parts, key=lambda p: natural_order(p.id)):
-        key = (lookup(part.part).number if lookup(part.part) else part.part.lower(),
-               tuple(round(float(v) * 1000) for v in part.position), tuple(round(float(v) * 1e6) for v in part.rotation))
-        if key in first:
-            out.append((first[key], part.id))
-        else:
-            first[key] = part.id
-    return out
+        number = lookup(part.part).number if lookup(part.part) else part.part.lower()
+        at.setdefault((number, tuple(round(float(v) * 1000) for v in part.position)), []).append(part)
+    out = []
+    for (number, _), placed in at.items():
+        if len(placed) < 2:  # the part's symmetries are sought only where a repeat may be
+            continue
+        first: dict[tuple, str] = {}
+        for part in placed:
+            key = _pose_key(number, part.rotation)
+            if key in first:
+                out.append((first[key], part.id))
+            else:
+                first[key] = part.id
+    return sorted(out, key=lambda pair: natural_order(pair[1]))
 
 
 def recorded_parts(source: dict) -> tuple[dict[str, PartShape], list[str]]:
@@ -132,11 +149,39 @@ def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None
     return assembly, unknown
 
 
+def unmirrored(request: RigidityRequest) -> tuple[RigidityRequest, Diagnostic | None]:
+    """A written request's parts whose rotation mirrors them (negative determinant), as the LDraw reader takes
+    them: a part symmetric about a plane of its frame as the rotation its mirror image equals, a handed part as
+    given and named in a ``mirrored_parts`` warning (its mirror image is its twin, another part number). An
+    upload's parts were so taken by its reader."""
+    if (request.source or {}).get("format") == "ldraw":
+        return request, None
+    parts, handed = [], []
+    for i, part in enumerate(request.parts):
+        rot = np.reshape(np.asarray(part.rotation, float), (3, 3))
+        if np.linalg.det(rot) < 0 and lookup(part.part) is not None:
+            planes = symmetry_planes(part.part)
+            if planes:
+                turned = rot @ max(planes, key=lambda plane: np.trace(rot @ plane))
+                part = part.model_copy(update={"rotation": [float(v) + 0.0 for v in turned.ravel()]})
+            else:
+                handed.append(f"parts[{i}] {part.id!r} ({lookup(part.part).number})")
+        parts.append(part)
+    warning = Diagnostic(
+        code="mirrored_parts", message=f"{len(handed)} part(s) have a rotation of negative determinant, a mirror: "
+        f"{', '.join(handed[:LISTED_IN_MESSAGE])}{' and more' if len(handed) > LISTED_IN_MESSAGE else ''}. No part "
+        "can be built mirrored — a handed part's mirror image is its twin of the other hand, another part number. "
+        "They were analysed as given; give each its twin's number, or a rotation.",
+        details={"parts": handed[:MAX_LISTED]}) if handed else None
+    return request.model_copy(update={"parts": parts}), warning
+
+
 def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(0.0, "building the assembly")
+    request, mirrored = unmirrored(request)
     recorded, unreadable = recorded_parts(request.source or {})
     assembly, unknown = build(request, recorded)
-    warnings: list[Diagnostic] = []
+    warnings: list[Diagnostic] = [mirrored] if mirrored else []
     recognised = [p.id for p in request.parts if p.id in assembly.parts and lookup(p.part) is None] if recorded else []
     if recognised:
         numbers = sorted({assembly.parts[p].number for p in recognised})
@@ -152,9 +197,15 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                                    f"{', '.join(unreadable[:LISTED_IN_MESSAGE])}): they stay unknown",
                                    details={"parts": unreadable[:100]}))
     if unknown:
-        warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} part(s) are not in the catalogue and "
-                                   "were left out of the analysis (not guessed)",
-                                   details={"parts": sorted({u.part for u in unknown})[:100]}))
+        tally = Counter(u.part for u in unknown)
+        named = ", ".join(f"{number} ({count})" for number, count in sorted(tally.items(), key=lambda t: (-t[1], t[0]))
+                          [:LISTED_IN_MESSAGE])
+        warnings.append(Diagnostic(code="unknown_parts", message=f"{len(unknown)} of {len(request.parts)} part(s) are "
+                                   f"not in the catalogue and were left out of the analysis (not guessed): "
+                                   f"{len(tally)} number(s), {named}"
+                                   f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}"
+                                   f"; dof, rigid and pieces are of the other {len(request.parts) - len(unknown)}",
+                                   details={"parts": sorted(tally)[:100]}))
     source = request.source or {}
     skipped = [s for s in source.get("skipped") or [] if isinstance(s, dict)]
     if skipped:  # lines of the uploaded file that placed nothing: the analysis is of the rest
@@ -164,7 +215,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     twice = repeated_placements(request)
     if twice:
         warnings.append(Diagnostic(code="duplicate_parts", message=f"{len(twice)} part(s) repeat another part at "
-                                   "the same pose (part number, position and rotation): "
+                                   "the same pose (part number, position and rotation, or a turn that takes the "
+                                   "part onto itself): "
                                    + ", ".join(f"{b} repeats {a}" for a, b in twice[:20]),
                                    details={"pairs": [list(p) for p in twice[:MAX_LISTED]]}))
     progress(0.2, "exact mobility")
@@ -205,6 +257,16 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     n_pieces = mob.details["components"]
     superbricks = _superbricks(ids, mob.superbricks, assembly.rod_pairs())
     special = mob.dof > analysis.generic_dof
+    near = mob.details.get("near_cut") or []
+    if near:  # before special_position: that one's reading rests on this rank
+        warnings.append(Diagnostic(
+            code="rank_uncertain", message=f"dof {mob.dof} may be up to {len(near)} too high: the float rank counted "
+            f"{len(near)} singular value(s) as zero that lie within a factor {NEAR_CUT:g} below its cut "
+            f"(rank_tolerance = {request.options.rank_tolerance:g}; the nearest at {near[0]:.2g} of the cut). Lengths "
+            f"spanning too many orders of magnitude (a joint's point far from the others': the model's joints span "
+            f"{mob.details['model_size']:.3g} {'ldu' if request.parts else request.units} from their middle) hide a "
+            "lever under the cut; lower options.rank_tolerance, or check the numbers",
+            details={"near_cut": near, "rank_tolerance": request.options.rank_tolerance}))
     if special:
         warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
                                    f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes)"))

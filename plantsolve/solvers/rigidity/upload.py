@@ -35,8 +35,10 @@ Part ids are ``L<line>`` in the main model and ``<parent id>/L<line>`` inside su
 
 from __future__ import annotations
 
+import difflib
 import functools
 import itertools
+import re
 
 import numpy as np
 
@@ -181,6 +183,17 @@ def _resolve(name: str, files: dict) -> str | None:
     return None
 
 
+def _named_alike(name: str, files: dict) -> str | None:
+    """The sub-file whose name is nearest a name the file places but does not hold: the same but for its
+    extension (``.dat`` for ``.ldr``) or a typing slip; None when none is near."""
+    stem = _key(name).rsplit(".", 1)[0]
+    for key in files:
+        if key != PRELUDE and key.rsplit(".", 1)[0] == stem:
+            return key
+    near = difflib.get_close_matches(_key(name), [key for key in files if key != PRELUDE], n=1, cutoff=0.85)
+    return near[0] if near else None
+
+
 def _section_type(lines: list[tuple[int, str]]) -> str | None:
     """The ``!LDRAW_ORG`` type of a sub-file in lower case without ``unofficial_`` ('part', 'subpart',
     'model', …), or None without that header."""
@@ -318,6 +331,7 @@ def parse_ldraw(text: str) -> dict:
     resolver = Resolver(files, lambda name: _resolve(name, files))
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
     mirrored: list[tuple[str, int, str]] = []  # (id, line, number) of parts whose placement mirrors them
+    drawn: dict[int, str] = {}  # line -> file name, of subparts and primitives placed in a model
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -356,8 +370,10 @@ def parse_ldraw(text: str) -> dict:
             local_rot = np.array(values[3:]).reshape(3, 3)
             sub = _resolve(file_name, files)
             role = roles.get(sub, "model") if sub is not None else None
-            if role == "geometry" or (role is None and _key(file_name).startswith(GEOMETRY_FOLDERS)):
+            if role == "geometry" or (role is None and (_key(file_name).startswith(GEOMETRY_FOLDERS) or (
+                    lookup(file_name) is None and official(file_name) is not None))):  # stud.dat, no folder
                 counts["geometry_lines"] += 1  # a primitive or subpart placed in a model draws (scaled or not)
+                drawn.setdefault(number, file_name)
                 continue
             if abs(np.linalg.det(local_rot)) < 1e-6:
                 skipped.append({"line": number, "reason": "the rotation matrix is singular"})
@@ -383,9 +399,12 @@ def parse_ldraw(text: str) -> dict:
                 continue
             ident = f"{prefix}L{number}"
             if role is None and _key(file_name).endswith(MODEL_EXTENSIONS):  # parts are .dat: this is a model
+                alike = _named_alike(file_name, files)
                 skipped.append({"line": number, "reason": f"places sub-model {file_name!r}, which the file does not "
-                                "hold (an .mpd cut short, or an .ldr whose sub-models are separate files: send them "
-                                "as one .mpd)"})
+                                "hold " + (f"(it holds {alike!r}, named alike: a name misspelt, or its extension "
+                                           "changed? names must match but for case)" if alike else
+                                           "(an .mpd cut short, or an .ldr whose sub-models are separate files: send "
+                                           "them as one .mpd)")})
                 continue
             if role == "model":
                 if sub in stack:
@@ -429,6 +448,11 @@ def parse_ldraw(text: str) -> dict:
                           "rotation": [_tidy(v) for v in world_rot.reshape(-1)]})
 
     expand(main, np.eye(3), np.zeros(3), "", (main,))
+    # a line of a sub-model placed n times is skipped n times: one line of the file, said once
+    first_of_line: dict[int, dict] = {}
+    for entry in skipped:
+        first_of_line.setdefault(entry["line"], entry)
+    skipped = list(first_of_line.values())
     if hand_typed:
         worst = max(off for _, off in hand_typed)
         lines = sorted({n for n, _ in hand_typed})
@@ -440,6 +464,8 @@ def parse_ldraw(text: str) -> dict:
             details={"lines": lines[:MAX_SKIPPED_LISTED], "max_off": round(worst, 4)}).model_dump())
     if mirrored:
         warnings.append(mirrored_parts(mirrored).model_dump())
+    if drawn:
+        warnings.append(geometry_placed(drawn).model_dump())
     if (headed := _headed_parts_expanded(files, roles, main)) is not None:
         warnings.append(headed.model_dump())
     if outside:
@@ -488,20 +514,21 @@ def parse_ldraw(text: str) -> dict:
                                        "warnings": warnings}}
 
 
-# The 24 improper signed permutations of the frame's axes: the mirrors about its x, y and z planes, about its
-# diagonal planes (a corner plate 2420 or brick 2357 is symmetric about x = z), and those times a rotation.
-MIRRORS = tuple(m for perm in itertools.permutations(range(3)) for signs in itertools.product((1.0, -1.0), repeat=3)
-                if np.linalg.det(m := np.diag(signs)[list(perm)]) < 0)
+# The 24 signed permutations of the frame's axes of each handedness. The improper ones are the mirrors about its x,
+# y and z planes, about its diagonal planes (a corner plate 2420 or brick 2357 is symmetric about x = z), and those
+# times a rotation; the proper ones the turns that may take a part onto itself (a 2 x 4 brick's half turn about y).
+SIGNED_PERMUTATIONS = tuple(np.diag(signs)[list(perm)] for perm in itertools.permutations(range(3))
+                            for signs in itertools.product((1.0, -1.0), repeat=3))
+MIRRORS = tuple(m for m in SIGNED_PERMUTATIONS if np.linalg.det(m) < 0)
+TURNS = tuple(m for m in SIGNED_PERMUTATIONS if np.linalg.det(m) > 0)
 # Points whose bore or grip is centred on them, so that their direction's sign says nothing (a through hole).
 CENTRED = frozenset({"pinhole", "axlehole", "barhole", "clip", "rodclip", "hole"})
 
 
-@functools.lru_cache(maxsize=1024)
-def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
-    """The mirrors of the part's frame (improper signed permutations of its axes, :data:`MIRRORS`) that map its
-    catalogue shape — every connection point with its direction (a through hole's either way), type and profile,
-    its bounding box and solids — onto itself; none for a handed part or one not in the catalogue. Placed
-    mirrored, such a part is the same as placed by the matrix times one of these mirrors, a rotation."""
+def _onto_itself(file_name: str, frames: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """The ``frames`` that map the part's catalogue shape — every connection point with its direction (a through
+    hole's either way), type and profile, its bounding box and solids — onto itself; none for a part not in the
+    catalogue."""
     shape = lookup(file_name)
     if shape is None:
         return ()
@@ -521,7 +548,45 @@ def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
         return connections, boxes
 
     own = drawn(np.eye(3))
-    return tuple(mirror for mirror in MIRRORS if drawn(mirror) == own)
+    return tuple(frame for frame in frames if drawn(frame) == own)
+
+
+@functools.lru_cache(maxsize=1024)
+def symmetry_planes(file_name: str) -> tuple[np.ndarray, ...]:
+    """The mirrors of the part's frame (:data:`MIRRORS`) that map its catalogue shape onto itself; none for a
+    handed part or one not in the catalogue. Placed mirrored, such a part is the same as placed by the matrix times
+    one of these mirrors, a rotation."""
+    return _onto_itself(file_name, MIRRORS)
+
+
+@functools.lru_cache(maxsize=1024)
+def symmetry_turns(file_name: str) -> tuple[np.ndarray, ...]:
+    """The turns of the part's frame (:data:`TURNS`, the identity among them) that map its catalogue shape onto
+    itself: placed by the matrix times any of them, the part is where it was (a 2 x 4 brick turned half about its
+    y axis). Only the identity for a part not in the catalogue."""
+    return _onto_itself(file_name, TURNS) or (np.eye(3),)
+
+
+SUBPART = re.compile(r"(?:parts/)?s/(\w+?)s\d+[a-z]?\.dat$")
+
+
+def geometry_placed(drawn: dict[int, str]) -> Diagnostic:
+    """Subparts and primitives placed by a model's own lines: drawn geometry, no part, so not analysed. A user who
+    typed a subpart's name (``s\\3001s01.dat``) for its part (3001) sees the part it belongs to named."""
+    lines = sorted(drawn)
+
+    def named(line: int) -> str:
+        found = SUBPART.match(_key(drawn[line]))
+        return f"line {line}: '{drawn[line]}'" + (f" (a subpart of {found.group(1)})" if found else "")
+
+    return Diagnostic(
+        code="geometry_placed", message=f"{len(lines)} line(s) of a model place a subpart or primitive, drawn "
+        f"geometry that is no part: {'; '.join(named(line) for line in lines[:10])}{' and more' if len(lines) > 10 else ''}"
+        ". They were not analysed (no connection, no collision shape: a part drawn so, a bent hose's segments "
+        "among them, is missing from the analysis); where a part was meant, place the part itself (3001.dat, not "
+        "s\\3001s01.dat).",
+        details={"lines": lines[:MAX_SKIPPED_LISTED], "files": [drawn[line] for line in lines[:MAX_SKIPPED_LISTED]],
+                 "count": len(lines)})
 
 
 def mirrored_parts(mirrored: list[tuple[str, int, str]]) -> Diagnostic:
