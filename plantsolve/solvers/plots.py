@@ -34,6 +34,21 @@ def figure_artifact(name: str, fig: Figure, dpi: int = DPI, **savefig: object) -
     return Artifact(name=name, media_type=MEDIA_TYPES[fmt], data=figure_bytes(fig, fmt, dpi, **savefig))
 
 
+def figure_artifacts(stem: str, fig: Figure, formats: tuple[str, ...] = ("png", "svg"), dpi: int = DPI,
+                     **savefig: object) -> list[Artifact]:
+    """The figure as one artifact per format (``map.png``, ``map.svg``), laid out once: the first save runs the
+    figure's layout engine, which then stands down (``"none"`` keeps every position it set), so the later formats
+    are drawn at the same positions without measuring every label again. An SVG carries no date: the same result
+    gives the same bytes."""
+    out = []
+    for fmt in formats:
+        extra = {"metadata": {"Date": None}, **savefig} if fmt == "svg" else savefig
+        out.append(figure_artifact(f"{stem}.{fmt}", fig, dpi, **extra))
+        if fig.get_layout_engine() is not None:
+            fig.set_layout_engine("none")
+    return out
+
+
 def thin_labels(labels: list, renderer=None) -> None:
     """Hide contour labels (``ax.clabel(..., inline=False)``'s texts) that would overlap one already kept: where
     contours bunch (near a singular electrode edge, along a steep map border) matplotlib places labels on top of
