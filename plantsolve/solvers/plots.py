@@ -8,6 +8,7 @@ draws, not with the kind map."""
 from __future__ import annotations
 
 import io
+import math
 from typing import TYPE_CHECKING
 
 from plantsolve.solvers.base import Artifact
@@ -49,6 +50,26 @@ def figure_artifacts(stem: str, fig: Figure, formats: tuple[str, ...] = ("png", 
     return out
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079")
+
+
+def decade_label(value: float, _position=None) -> str:
+    """'10³' for 1000, '10⁻⁶' for 1e-6, as plain text: matplotlib's log axes write 10^3 in mathtext, whose parser a
+    fresh job process builds first (about a tenth of a second), then lays out as a formula. Not a decade: ''."""
+    if not value > 0:
+        return ""
+    exponent = math.log10(value)
+    if abs(exponent - round(exponent)) > 1e-9:
+        return ""
+    return "10" + str(int(round(exponent))).translate(_SUPERSCRIPT)
+
+
+def plain_decades(axis) -> None:
+    """A log axis's decades labelled '10³' in plain text (the look of matplotlib's own labels, without mathtext);
+    a function given as formatter is matplotlib's FuncFormatter."""
+    axis.set_major_formatter(decade_label)
+
+
 def thin_labels(labels: list, renderer=None) -> None:
     """Hide contour labels (``ax.clabel(..., inline=False)``'s texts) that would overlap one already kept: where
     contours bunch (near a singular electrode edge, along a steep map border) matplotlib places labels on top of
@@ -58,7 +79,12 @@ def thin_labels(labels: list, renderer=None) -> None:
         return
     fig = labels[0].get_figure(root=True)
     if renderer is None:
-        fig.draw_without_rendering()  # labels know their place only once the figure is laid out
+        if fig.get_layout_engine() is None:
+            # axes at fixed places: only an axes' aspect moves it, and a whole draw would cost as much as the save
+            for ax in {label.axes for label in labels}:
+                ax.apply_aspect()
+        else:
+            fig.draw_without_rendering()  # labels know their place only once the figure is laid out
         renderer = fig._get_renderer()
     kept = []
     for label in labels:
