@@ -54,14 +54,17 @@ _SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u207
 
 
 def decade_label(value: float, _position=None) -> str:
-    """'10³' for 1000, '10⁻⁶' for 1e-6, as plain text: matplotlib's log axes write 10^3 in mathtext, whose parser a
-    fresh job process builds first (about a tenth of a second), then lays out as a formula. Not a decade: ''."""
-    if not value > 0:
+    """'10³' for 1000, '10⁻⁶' for 1e-6, '−10²' for -100 and '0' (a symmetric log axis's middle), as plain text:
+    matplotlib's log axes write 10^3 in mathtext, whose parser a fresh job process builds first (about a tenth of a
+    second), then lays out as a formula. Not a decade: ''."""
+    if value == 0:
+        return "0"
+    if not math.isfinite(value):
         return ""
-    exponent = math.log10(value)
+    exponent = math.log10(abs(value))
     if abs(exponent - round(exponent)) > 1e-9:
         return ""
-    return "10" + str(int(round(exponent))).translate(_SUPERSCRIPT)
+    return ("\u2212" if value < 0 else "") + "10" + str(round(exponent)).translate(_SUPERSCRIPT)
 
 
 def plain_decades(axis) -> None:
