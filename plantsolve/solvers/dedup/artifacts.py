@@ -12,7 +12,7 @@ from matplotlib.figure import Figure  # no pyplot: no global figure state
 from plantsolve.schemas.dedup import DedupResult
 from plantsolve.solvers.base import Artifact, Solved
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.plots import figure_artifact
+from plantsolve.solvers.plots import figure_artifact, plain_decades
 
 MAX_BARS = 24
 
@@ -33,8 +33,10 @@ def classes_csv(result: DedupResult) -> bytes:
 
 
 def counts_figure(result: DedupResult) -> Figure:
+    # ties by name: a set's order changes from process to process (string hashes), and with it which of the tied
+    # types made the first MAX_BARS and their order: the same result drew different charts
     names = sorted(set(result.entity_counts_before) | set(result.entity_counts_after),
-                   key=lambda n: -max(result.entity_counts_before.get(n, 0), result.entity_counts_after.get(n, 0)))
+                   key=lambda n: (-max(result.entity_counts_before.get(n, 0), result.entity_counts_after.get(n, 0)), n))
     names = names[:MAX_BARS]
     before = np.array([result.entity_counts_before.get(n, 0) for n in names], dtype=float)
     after = np.array([result.entity_counts_after.get(n, 0) for n in names], dtype=float)
@@ -47,6 +49,7 @@ def counts_figure(result: DedupResult) -> Figure:
     ax.set_yticks(y, names, fontsize=8)
     ax.invert_yaxis()
     ax.set_xscale("symlog", linthresh=1)
+    plain_decades(ax.xaxis)
     ax.set_xlabel("instances in the file [count] (symmetric log scale)")
     ax.set_ylabel("IFC entity type")
     ax.set_title(f"Instances per entity type: {result.products_shared} of {result.products_total} products share "

@@ -6,25 +6,38 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: no global figure state
 from matplotlib.lines import Line2D
+from matplotlib.path import Path
+from matplotlib.textpath import TextPath
 from matplotlib.tri import Triangulation
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest, FlowmeterResult
 from plantsolve.solvers.base import Artifact, Solved
-from plantsolve.solvers.plots import figure_artifact, thin_labels
+from plantsolve.solvers.plots import figure_artifact, plain_decades, thin_labels
+
+
+def glyph_marker(glyph: str) -> Path:
+    """A marker drawn as a font's glyph ('↑'), centred: as ``marker="$\\uparrow$"`` looks, without mathtext (whose
+    parser a job process builds first)."""
+    path = TextPath((0, 0), glyph)
+    lo, hi = path.vertices.min(axis=0), path.vertices.max(axis=0)
+    return Path(path.vertices - (lo + hi) / 2, path.codes)
 
 
 def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
     grid = np.asarray(result.grid, dtype=float)
     radius, units = request.pipe.radius, request.units
-    fig = Figure(figsize=(6.4, 6.2), layout="constrained")
-    ax = fig.add_subplot()
+    # fixed places (constrained layout's for the example): measuring every label for the layout, and again for the
+    # labels' thinning, cost more than drawing the map
+    fig = Figure(figsize=(6.4, 6.2))
+    ax = fig.add_axes((0.0997, 0.0672, 0.7165, 0.9261))
     tri = Triangulation(grid[:, 0], grid[:, 1])
     # the point electrodes' W is unbounded at the wall: colour the central range
     lo, hi = np.percentile(grid[:, 2], [1, 99])
     filled = ax.tricontourf(tri, np.clip(grid[:, 2], lo, hi), levels=20, cmap="viridis")
     lines = ax.tricontour(tri, np.clip(grid[:, 2], lo, hi), levels=10, colors="k", linewidths=0.5)
     labels = ax.clabel(lines, fontsize=8, fmt="%.2f", inline=False)
-    fig.colorbar(filled, ax=ax, label="weight function W [-]")
+    bar = fig.add_axes((0.852, 0.0672, 0.0449, 0.9261), label="<colorbar>")  # the label fig.colorbar(ax=) gives
+    fig.colorbar(filled, cax=bar, label="weight function W [-]")
     t = np.linspace(0, 2 * np.pi, 400)
     ax.plot(radius * np.cos(t), radius * np.sin(t), color="0.3", lw=1)
     if request.electrodes.shape == "patch":
@@ -48,9 +61,9 @@ def weight_map(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
            title=f"W over the cross-section\nS = {result.sensitivity:.5f} ({result.method})")
     # below the axes: inside, the legend covered the contours near the wall
     fig.legend(handles=[Line2D([], [], color="red", lw=4, label="electrodes"),
-                        Line2D([], [], color="0.3", marker=r"$\uparrow$", lw=0, label="B along +y (white arrow)"),
+                        Line2D([], [], color="0.3", marker=glyph_marker("\u2191"), lw=0, label="B along +y (white arrow)"),
                         Line2D([], [], color="k", lw=0.5, label="contours of W")],
-               loc="outside lower center", ncol=3, fontsize=8)
+               loc="lower center", ncol=3, fontsize=8)
     thin_labels(labels)
     return fig
 
@@ -79,6 +92,7 @@ def current_plot(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
            ylabel="j R²/I (finite electrodes), j R/I′ (full length) [-]",
            title="virtual current density across the electrode (total = 1)")
     ax.set_yscale("log")
+    plain_decades(ax.yaxis)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     if len(grid):
@@ -96,11 +110,13 @@ def current_plot(request: FlowmeterRequest, result: FlowmeterResult) -> Figure:
 
 
 def linearity_plot(result: FlowmeterResult) -> Figure:
-    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    fig = Figure(figsize=(6.4, 4.0))
+    fig.subplots_adjust(left=0.12, bottom=0.1253, right=0.9935, top=0.9363)  # constrained layout's, less its cost
     ax = fig.add_subplot()
     re = [p.reynolds for p in result.linearity]
     s = [p.sensitivity for p in result.linearity]
     ax.semilogx(re, s, "o-", label="S(Re)")
+    plain_decades(ax.xaxis)
     ax.axhline(result.sensitivity_first_order, color="0.5", ls="--", label="first order sin(beta)/beta")
     ax.set(xlabel="Reynolds number Re [-]", ylabel="sensitivity S [-]", title="linearity")
     ax.legend(fontsize=8)

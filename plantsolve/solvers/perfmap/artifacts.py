@@ -22,16 +22,11 @@ from plantsolve.solvers.perfmap.cycle_exports import beta_csv, gasturb_tables, p
 from plantsolve.solvers.perfmap.families import curveset_from_fits
 from plantsolve.solvers.perfmap.validation import PerfmapInput, loaded
 from plantsolve.solvers.perfmap.performance_map import distance_to_region
-from plantsolve.solvers.plots import figure_artifact
+from plantsolve.solvers.plots import figure_artifacts
 
 _SMALL_MULTIPLES_MAX = 36
 # the efficiency axis's colour: matplotlib's orange (C1) is 2.5:1 on white, too faint for its tick labels
 EFFICIENCY_COLOUR = "#b35806"
-
-
-def _save(fig: Figure, stem: str) -> list[Artifact]:
-    # an SVG without its date: the same result gives the same bytes
-    return [figure_artifact(f"{stem}.png", fig), figure_artifact(f"{stem}.svg", fig, metadata={"Date": None})]
 
 
 def _measured(request: PerfmapRequest):
@@ -144,22 +139,21 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
             ax2.plot(p.flow, p.efficiency, "o", color=col, ms=2.5)
     ax1.set(xlabel=xlabel, ylabel=ylabel, title=f"Characteristics ({n} settings)")
     ax2.set(xlabel=xlabel, ylabel=elabel, title="Efficiency")
-    fig.legend(handles=[_line("k-", "fitted curve"), _line("ko", "measured", ms=3)], loc="outside lower center",
+    fig.legend(handles=[_line("fitted curve", "k"), _line("measured", "k", "", "o", ms=3)], loc="outside lower center",
                ncol=2, fontsize=8)
     return fig
 
 
-def _line(style: str, label: str, **kw):
-    """A legend entry without data (matplotlib.lines.Line2D through a throwaway figure's axes)."""
-    if not style:
-        return Line2D([], [], label=label, **kw)
-    return Figure().subplots().plot([], [], style, label=label, **kw)[0]
+def _line(label: str, color: str, linestyle: str = "-", marker: str = "", **kw) -> Line2D:
+    """A legend entry without data: a line, or with no linestyle a marker alone (as ``plot``'s 'ko'). Made bare:
+    a throwaway figure's axes to plot it on cost more than the whole legend."""
+    return Line2D([], [], label=label, color=color, linestyle=linestyle or "none", marker=marker or "none", **kw)
 
 
 def _legend_handles(pname: str = "pressure"):
-    return [_line("C0-", f"{pname} (fit, left axis)"), _line("C0o", f"{pname} (measured)", ms=3.5),
-            _line("--", "efficiency (fit, right axis)", color=EFFICIENCY_COLOUR),
-            _line("^", "efficiency (measured)", color=EFFICIENCY_COLOUR, ms=3.5)]
+    return [_line(f"{pname} (fit, left axis)", "C0"), _line(f"{pname} (measured)", "C0", "", "o", ms=3.5),
+            _line("efficiency (fit, right axis)", EFFICIENCY_COLOUR, "--"),
+            _line("efficiency (measured)", EFFICIENCY_COLOUR, "", "^", ms=3.5)]
 
 
 def _envelopes(result: PerfmapResult) -> Figure:
@@ -187,7 +181,7 @@ def _envelopes(result: PerfmapResult) -> Figure:
         ax3.plot(env.flow, env.phi, ":", color=f"C{j % 10}", lw=1.5)
     ax3.set_ylabel(f"{names[-1]} on the max-curve (dotted)")
     handles = [h for h in ax1.get_lines() if not h.get_label().startswith("_")]
-    handles += [_line("k-", "thin: characteristics", lw=0.7), _line("k:", f"dotted: {names[-1]} (right axis)")]
+    handles += [_line("thin: characteristics", "k", lw=0.7), _line(f"dotted: {names[-1]} (right axis)", "k", ":")]
     fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 6), fontsize=8)
     if not result.envelopes:
         ax1.text(0.5, 0.5, "no envelopes", transform=ax1.transAxes, ha="center")
@@ -203,6 +197,7 @@ LABEL_COLOURS = {"orange": "#7a3e00", "white": "black", "pink": "#8b1a4a"}
 LABEL_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.9}
 _REFINE = 4  # contour grids are refined this many times per map cell
 _BOUNDARY_NODES = 160  # nodes per axis of the distance field the reachable boundary is drawn from
+_BAND_CHUNK = 500  # band nodes per call of the distance to the region
 
 
 def setting_levels(values: np.ndarray):
@@ -270,7 +265,12 @@ def reachable_boundary(result: PerfmapResult):
     near = band[J, I]
     t = np.linspace(0.0, 1.0, m.t_samples)
     tri = np.array(result.triangles, dtype=int).reshape(-1, 3)
-    d[near] = distance_to_region(curves, tri, t, FX[near], FY[near], (lo_x, hi_x, lo_y, hi_y))
+    ranges = (lo_x, hi_x, lo_y, hi_y)
+    fx_near, fy_near = FX[near], FY[near]
+    # a few hundred nodes at a time: the distance's exact pass holds arrays per (node, nearby block), which for
+    # the whole band at once were a quarter of a GiB
+    d[near] = np.concatenate([distance_to_region(curves, tri, t, fx_near[k:k + _BAND_CHUNK], fy_near[k:k + _BAND_CHUNK],
+                                                 ranges) for k in range(0, len(fx_near), _BAND_CHUNK)] or [[]])
     return fx, fy, d
 
 
@@ -286,7 +286,7 @@ def _map(result: PerfmapResult) -> Figure:
         for k in range(len(result.settings)):
             ax.plot(X[k], Y[k], "k-", lw=0.8)
         ax.set(xlabel=xlabel, ylabel=ylabel, title="Characteristics (no map requested)")
-        fig.legend(handles=[_line("k-", "setting characteristics")], loc="outside lower center", fontsize=8)
+        fig.legend(handles=[_line("setting characteristics", "k")], loc="outside lower center", fontsize=8)
         return fig
     gx, gy = np.array(m.flow), np.array(m.pressure)
     eta = np.array(m.efficiency, dtype=float)
@@ -316,10 +316,10 @@ def _map(result: PerfmapResult) -> Figure:
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
     _limit_lines(ax, result)
-    handles = [_line("k-", "setting characteristics", lw=0.6)]
-    handles += [_line("", f"optimal {name}", color=colour, linestyle=style)
+    handles = [_line("setting characteristics", "k", lw=0.6)]
+    handles += [_line(f"optimal {name}", colour, style)
                 for name, (colour, style) in zip(names, CONTOUR_STYLES[len(names) - 1])]
-    handles += [_line("r-", "reachable boundary")]
+    handles += [_line("reachable boundary", "r")]
     handles += [h for h in ax.get_lines() if h.get_label() in ("surge line", "surge margin line", "choke line")]
     # below the axes: a legend inside would cover the reachable region it explains
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, facecolor="lightgrey")
@@ -427,7 +427,7 @@ def render_artifacts(value: PerfmapInput | PerfmapRequest, solved: Solved) -> li
     result = solved.result
     out = []
     for stem, fig in figures(value, result).items():
-        out += _save(fig, stem)
+        out += figure_artifacts(stem, fig)
     out.append(Artifact(name="curves.csv", media_type="text/csv", data=curves_csv(result)))
     if result.map is not None:
         out.append(Artifact(name="map.csv", media_type="text/csv", data=map_csv(result)))
