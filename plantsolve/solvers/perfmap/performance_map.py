@@ -359,7 +359,7 @@ def distance_to_region(curves, triangles, t, X, Y, ranges) -> np.ndarray:
         k = min(3, lb.shape[1])
         near = np.argpartition(lb, k - 1, axis=1)[:, :k]
         ub = _segment_distance(p[:, None, None, :], A[near]).min(axis=(1, 2))
-        qi, bi = np.nonzero(lb <= ub[:, None])
+        qi, bi = np.nonzero(lb < ub[:, None])  # a block whose bound is the best found cannot lower it (inside: 0)
         best = ub.copy()
         for c0 in range(0, len(qi), 100_000):
             qq, bb = qi[c0 : c0 + 100_000], bi[c0 : c0 + 100_000]
