@@ -31,7 +31,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
-from plantsolve.solvers.length_units import METRES, two_readings, unit_named
+from plantsolve.solvers.length_units import METRES, SIZES, comment_unit, two_readings, unit_named
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
@@ -143,26 +143,28 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
 # PLY headers' comments do: read as the file's unit (it was ignored, and a scan in inches read as millimetres gave a
 # tube 25.4 times too small whose size could still pass for one); a word naming no unit read here refuses the file
 # unless options.file_units says the unit, as a column header's does.
-_UNIT_COMMENT = re.compile(r"^(?:#|//|%)\s*(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
-_NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
+_COMMENT = re.compile(r"^(?:#|//|%)\s*(.*)$")
 
 
 def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
-    """``cols`` with the unit a comment before the first row states (:data:`_UNIT_COMMENT`); a conflict when it
+    """``cols`` with the unit a comment before the first row states (``length_units.comment_unit``); a conflict when it
     names no unit read here or another than the column header's or another comment's."""
     found = []
     for lineno, line in enumerate(lines, 1):
         s = line.strip()
         if s and s[0] not in "#/%" and starts_number(s):
             break
-        match = _UNIT_COMMENT.match(s)
-        if match is None or match.group(1).lower() in _NO_UNIT:
+        comment = _COMMENT.match(s)
+        stated = comment_unit(comment.group(1)) if comment else None
+        if stated is None:
             continue
-        unit = unit_named(match.group(1))
+        word, unit = stated
         if unit is None:
+            # micrometres are a length unit, which a PLY comment's may be; a text scan's unit is one of the request's
+            what = two_readings(word) or (f"{word!r} (micrometres), in which a text scan is not read" if
+                                          unit_named(word, SIZES) else f"{word!r}, which is no length unit read here")
             return replace(cols, unit=None, conflict=(
-                f"line {lineno}: its comment {s!r} states the unit {match.group(1)!r}, which is no length unit read "
-                f"here ({', '.join(sorted(METRES))})"))
+                f"line {lineno}: its comment {s!r} states the unit {what} ({', '.join(sorted(METRES))})"))
         found.append((unit, lineno, s))
     if not found or cols.conflict is not None:
         return cols
@@ -300,7 +302,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     header, header_line, width = _first_row(lines)
     cols = _with_comment_unit(_columns(header, width, header_line), lines)
     if cols.names is None and width >= 4 and _counts_rows(lines):
-        cols = Columns(index=(1, 2, 3))
+        cols = replace(cols, index=(1, 2, 3))  # the unit a comment states (or its conflict) kept
         log.warn(Diagnostic(code="row_numbers_skipped", message=(
             f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
             "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
