@@ -52,6 +52,8 @@ _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
+# ... or in letters alone (``E N H``, ``E (m) N (m) H (m)``), read so only when no column is x, y or z
+SHORT_SURVEY_NAMES = ({"e", "n"}, {"h", "z", "u"})
 NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
 MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
 
@@ -70,18 +72,32 @@ class Columns:
 def _header_names(line: str) -> list[str]:
     """A header line split as its delimiter says (a comma, semicolon or tab, else blanks): ``x [mm]`` is one name,
     also between blanks (``x [m] y [m] z [m]``: split at every blank, its units were columns of their own, the
-    header no column header, and the file read in the request's unit)."""
+    header no column header, and the file read in the request's unit) when the bracketed word is a length unit."""
     s = line.strip().lstrip("/#").strip()
     for delim in (",", ";", "\t"):
         if delim in s:
             return [c.strip() for c in s.split(delim)]
     names: list[str] = []
     for word in s.split():
-        if names and _BRACKETED.fullmatch(word):
+        if names and _BRACKETED.fullmatch(word) and word[1:-1].strip() and \
+                (_length_unit(word[1:-1]) or not _axis_name(names[-1])):
             names[-1] = f"{names[-1]} {word}"
         else:
             names.append(word)
     return names
+
+
+def _length_unit(word: str) -> bool:
+    """Whether ``word`` spells a length unit (of two readings too, refused where the header's unit is read): only
+    such a bracketed word is a coordinate column's unit; in ``x (east)`` and ``z []`` the brackets are words of
+    their own (a column's unit, they made x, y, z state units not read)."""
+    return bool(unit_named(word.strip(), SIZES) or two_readings(word))
+
+
+def _axis_name(name: str) -> bool:
+    """Whether a blank-separated header's ``name`` names a coordinate (x, easting, E, ...)."""
+    n = name.strip().lower()
+    return bool(_COORDINATE.match(n)) or n in SURVEY_AXES or n in set.union(*SHORT_SURVEY_NAMES)
 
 
 def _name_and_unit(name: str) -> tuple[str, str | None]:
@@ -109,6 +125,9 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
         axis = m.group("axis") if m else SURVEY_AXES.get(n)
         if axis and axis not in axes:
             axes[axis] = i
+    if not axes and SHORT_SURVEY_NAMES[0] <= {n for n, _ in parsed} and SHORT_SURVEY_NAMES[1] & {n for n, _ in parsed}:
+        short = {n: i for i, (n, _) in reversed(list(enumerate(parsed)))}
+        axes = {"x": short["e"], "y": short["n"], "z": min(short[n] for n in SHORT_SURVEY_NAMES[1] if n in short)}
     plain = [n for n, _ in parsed]
     nominal = sorted(NOMINAL_NAMES & set(plain))
     if commented and (nominal or len(axes) < 3):
@@ -122,7 +141,11 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
                      f"{'no' if not axes else 'not all of'} x, y, z. A tube scan holds three coordinates per "
                      "sample (x, y, z columns); is this a file for another kind (a rig or compressor-map table?)")
     index = (axes["x"], axes["y"], axes["z"])
-    units = {parsed[i][1] for i in index}
+    stated = [parsed[i][1] for i in index]
+    last = index.index(max(index))
+    if stated[last] is not None and all(u is None for k, u in enumerate(stated) if k != last):
+        stated = [stated[last]] * 3  # ``X Y Z [mm]``: a unit after the last coordinate is the three's
+    units = set(stated)
     unit = None
     if len(units) > 1:  # x in mm and y in m (or x in m, y and z without one): no one unit is the header's
         return Columns(index, None, names, conflict=(
