@@ -53,7 +53,7 @@ _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axi
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
 # ... or in letters alone (``E N H``, ``E (m) N (m) H (m)``), read so only when no column is x, y or z
-SHORT_SURVEY_NAMES = ({"e", "n"}, {"h", "z", "u"})
+SHORT_SURVEY_NAMES = ({"e", "n"}, {"h", "u"})
 NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
 MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
 
@@ -89,8 +89,8 @@ def _header_names(line: str) -> list[str]:
 
 def _length_unit(word: str) -> bool:
     """Whether ``word`` spells a length unit (of two readings too, refused where the header's unit is read): only
-    such a bracketed word is a coordinate column's unit; in ``x (east)`` and ``z []`` the brackets are words of
-    their own (a column's unit, they made x, y, z state units not read)."""
+    such a bracketed word is a coordinate column's unit. ``x (east)`` and ``z []`` are names and words of their own
+    (taken for units, the header's x, y, z stated units that are none and the file was refused)."""
     return bool(unit_named(word.strip(), SIZES) or two_readings(word))
 
 
@@ -125,8 +125,9 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
         axis = m.group("axis") if m else SURVEY_AXES.get(n)
         if axis and axis not in axes:
             axes[axis] = i
-    if not axes and SHORT_SURVEY_NAMES[0] <= {n for n, _ in parsed} and SHORT_SURVEY_NAMES[1] & {n for n, _ in parsed}:
-        short = {n: i for i, (n, _) in reversed(list(enumerate(parsed)))}
+    named = {n for n, _ in parsed}
+    if not axes and SHORT_SURVEY_NAMES[0] <= named and SHORT_SURVEY_NAMES[1] & named:
+        short = {n: i for i, (n, _) in reversed(list(enumerate(parsed)))}  # each name's first column
         axes = {"x": short["e"], "y": short["n"], "z": min(short[n] for n in SHORT_SURVEY_NAMES[1] if n in short)}
     plain = [n for n, _ in parsed]
     nominal = sorted(NOMINAL_NAMES & set(plain))
@@ -170,8 +171,8 @@ _COMMENT = re.compile(r"^(?:#|//|%)\s*(.*)$")
 
 
 def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
-    """``cols`` with the unit a comment before the first row states (``length_units.comment_unit``); a conflict when it
-    names no unit read here or another than the column header's or another comment's."""
+    """``cols`` with the unit a comment before the first row states (``length_units.comment_unit``); a conflict
+    when it names no unit read here or another than the column header's or another comment's."""
     found = []
     for lineno, line in enumerate(lines, 1):
         s = line.strip()

@@ -15,7 +15,8 @@ PCF = (Path(__file__).parents[3] / "examples" / "alignment" / "ladder.pcf").read
 BARE = re.sub(r"(?m)^UNITS-CO-ORDS.*$", "UNITS-CO-ORDS", PCF)
 
 
-@pytest.mark.parametrize(("text", "line"), [(BARE, 3), ("UNITS-CO-ORDS\n" + PCF, 1), (BARE.replace("UNITS-CO-ORDS", "units-co-ords"), 3)])
+@pytest.mark.parametrize(("text", "line"), [(BARE, 3), ("UNITS-CO-ORDS\n" + PCF, 1),
+                                            (BARE.replace("UNITS-CO-ORDS", "units-co-ords"), 3)])
 def test_a_bare_units_co_ords_is_refused_naming_its_line(text, line):
     with pytest.raises(InputRejected) as refused:
         parse_upload(StoredInput.from_bytes("ladder.pcf", text.encode()), None)

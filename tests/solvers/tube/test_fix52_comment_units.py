@@ -44,7 +44,8 @@ def test_a_ply_comment_starting_with_unit_but_stating_none_is_no_statement(comme
 
 
 @pytest.mark.parametrize(("comment", "unit"), [("comment units mm", "mm"), ("comment Unit: meter", "m"),
-                                               ("obj_info length_unit = millimetres", "mm"), ("comment units um", "um")])
+                                               ("obj_info length_unit = millimetres", "mm"),
+                                               ("comment units um", "um")])
 def test_a_ply_comment_stating_a_unit_is_still_read(comment, unit):
     assert stated_unit(_ply_header(comment))[0] == unit
 
