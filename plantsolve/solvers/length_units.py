@@ -10,6 +10,7 @@ need a unit registry's import time).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from types import MappingProxyType
 
@@ -64,3 +65,22 @@ def request_unit(word: object) -> str:
     if not isinstance(unit, str) or unit not in METRES:
         raise ValueError(f"unknown unit {word!r}; one of {', '.join(METRES)} (or their names: millimetres, inches, ...)")
     return unit
+
+
+# A comment that states the coordinates' unit, as scanners and converters write one before the data (``# units: in``,
+# ``comment Unit = meter``, ``obj_info length_unit millimetres``): the word ``unit(s)``, a separator (a colon, an
+# equals sign or a blank: without one, ``# units``, ``# unitless`` and ``# Unity`` were read as stating the units
+# 's', 'less' and 'y') and one word of letters, or the micro sign's 'µm'
+COMMENT_UNIT = re.compile(r"(?:length[_ ]?)?units?(?:\s*[:=]\s*|\s+)([a-zµμ]+)\s*$", re.IGNORECASE)
+# the words by which a comment says no unit is stated
+NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
+
+
+def comment_unit(text: str, among: Iterable[str] = METRES) -> tuple[str, str | None] | None:
+    """What the comment ``text`` (its marker taken off: ``units: in``) states of the coordinates' unit: the word
+    and the unit among ``among`` it names (None: a unit not among them, or a spelling of two readings, which
+    ``two_readings`` names); None when it states none (another comment, or a word of :data:`NO_UNIT`)."""
+    match = COMMENT_UNIT.fullmatch(text.strip())
+    if match is None or match.group(1).lower() in NO_UNIT:
+        return None
+    return match.group(1), unit_named(match.group(1), among)

@@ -287,15 +287,24 @@ class Database:
     def ping(self) -> None:
         """Raises unless the database can take a write now (within the bounds above): on SQLite the write lock is
         taken and released (a file locked by another process, or a read-only one, fails), on PostgreSQL a server
-        that answers read-only (a standby) fails."""
+        that answers read-only (a standby) fails, and so does a jobs table whose rows cannot be written within the
+        database wait: the lock every UPDATE takes is asked for and given back (another session's lock that blocks
+        writes, a migration's CREATE INDEX, made heartbeats wait and fail while reads went on). Writers do not
+        block that lock, so the check waits on nothing else."""
         if self.is_sqlite:
             with self.writing(), self.engine.connect() as connection:
                 connection.exec_driver_sql("BEGIN IMMEDIATE")
                 connection.exec_driver_sql("ROLLBACK")
             return
-        with self.engine.connect() as connection:
-            if connection.execute(text("SHOW transaction_read_only")).scalar() == "on":
+        with self.engine.connect() as connection, connection.begin() as transaction:
+            connection.exec_driver_sql(f"SET LOCAL lock_timeout = {max(1, int(self.wait * 1000))}")
+            read_only, migrated = connection.execute(text(
+                "SELECT current_setting('transaction_read_only'), to_regclass('jobs') IS NOT NULL")).one()
+            if read_only == "on":
                 raise OperationalError("SHOW transaction_read_only", None, RuntimeError("the database is read-only"))
+            if migrated:
+                connection.exec_driver_sql("LOCK TABLE jobs IN ROW EXCLUSIVE MODE")
+            transaction.rollback()
 
     def dispose(self) -> None:
         self.engine.dispose()

@@ -694,6 +694,11 @@ def _refuse_unknown_units(doc: Document) -> None:
     for record in ("UNITS-CO-ORDS", "UNITS-BORE"):
         for i, line in enumerate(doc.lines):
             words = line.split()
+            # a bare UNITS-CO-ORDS states a unit without naming it: no default can be taken for it (it crashed the
+            # joining of end points, a generic 422 or a crashed job)
+            if line[:1].strip() and len(words) == 1 and words[0].upper() == record == "UNITS-CO-ORDS":
+                raise reject(f"line {i + 1}: {record} names no unit; write the unit the file's coordinates are in "
+                             "(MM, CM, M, INCH, FT)")
             if line[:1].strip() and len(words) > 1 and words[0].upper() == record and words[1].upper() not in UNITS:
                 raise reject(f"line {i + 1}: {record} {words[1]!r} is no unit read here (MM, CM, M, INCH, FT and "
                              "their spellings); write the unit the file's numbers are in")

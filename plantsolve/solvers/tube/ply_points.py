@@ -15,7 +15,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
+from plantsolve.solvers.length_units import SIZES, comment_unit, two_readings
 from plantsolve.solvers.tube.read_log import ReadLog
 
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
@@ -29,8 +29,7 @@ TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2"
 # no unit is stated, no statement; any other word (``furlong``, ``yd``, ``dm``) states a unit this reader cannot
 # convert, so the file is refused naming the line: read in the request's unit instead, a scan in yards or
 # decimetres came back 914 or 100 times too small, a yard-stick tube plausible in millimetres without a word.
-_UNIT_COMMENT = re.compile(r"^(?:comment|obj_info)\s+(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
-_NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
+_COMMENT = re.compile(r"^(?:comment|obj_info)\s+(.*)$", re.IGNORECASE)
 
 
 def stated_unit(content: bytes) -> tuple[str, str] | str | None:
@@ -41,14 +40,17 @@ def stated_unit(content: bytes) -> tuple[str, str] | str | None:
         return None
     found = []
     for lineno, line in enumerate(content[:end].decode("ascii", errors="replace").splitlines(), 1):
-        match = _UNIT_COMMENT.match(line.strip())
-        if match and (readings := two_readings(match.group(1))) is not None:
+        comment = _COMMENT.match(line.strip())
+        stated = comment_unit(comment.group(1), SIZES) if comment else None
+        if stated is None:
+            continue
+        word, unit = stated
+        if (readings := two_readings(word)) is not None:
             return f"its header comment on line {lineno} ({line.strip()!r}) states the unit {readings}"
-        if match and (unit := unit_named(match.group(1), SIZES)):
-            found.append((unit, lineno, line.strip()))
-        elif match and match.group(1).lower() not in _NO_UNIT:
-            return (f"its header comment on line {lineno} ({line.strip()!r}) states the unit {match.group(1)!r}, "
+        if unit is None:
+            return (f"its header comment on line {lineno} ({line.strip()!r}) states the unit {word!r}, "
                     f"which is no length unit read here ({', '.join(SIZES)})")
+        found.append((unit, lineno, line.strip()))
     if len({unit for unit, _, _ in found}) > 1:
         return "its header comments state different units (" + ", ".join(
             f"line {n}: {text!r}" for _, n, text in found[:4]) + ")"

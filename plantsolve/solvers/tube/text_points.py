@@ -31,7 +31,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
-from plantsolve.solvers.length_units import METRES, two_readings, unit_named
+from plantsolve.solvers.length_units import METRES, SIZES, comment_unit, two_readings, unit_named
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
@@ -52,6 +52,8 @@ _UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
+# ... or in letters alone (``E N H``, ``E (m) N (m) H (m)``), read so only when no column is x, y or z
+SHORT_SURVEY_NAMES = ({"e", "n"}, {"h", "u"})
 NOMINAL_NAMES = {"clr", "bend_radius", "radius", "length", "rotation", "angle", "feed", "twist", "bend_angle"}
 MIN_SCAN_ROWS = 100  # the solver's minimum (``validation.MIN_POINTS``)
 
@@ -70,18 +72,32 @@ class Columns:
 def _header_names(line: str) -> list[str]:
     """A header line split as its delimiter says (a comma, semicolon or tab, else blanks): ``x [mm]`` is one name,
     also between blanks (``x [m] y [m] z [m]``: split at every blank, its units were columns of their own, the
-    header no column header, and the file read in the request's unit)."""
+    header no column header, and the file read in the request's unit) when the bracketed word is a length unit."""
     s = line.strip().lstrip("/#").strip()
     for delim in (",", ";", "\t"):
         if delim in s:
             return [c.strip() for c in s.split(delim)]
     names: list[str] = []
     for word in s.split():
-        if names and _BRACKETED.fullmatch(word):
+        if names and _BRACKETED.fullmatch(word) and word[1:-1].strip() and \
+                (_length_unit(word[1:-1]) or not _axis_name(names[-1])):
             names[-1] = f"{names[-1]} {word}"
         else:
             names.append(word)
     return names
+
+
+def _length_unit(word: str) -> bool:
+    """Whether ``word`` spells a length unit (of two readings too, refused where the header's unit is read): only
+    such a bracketed word is a coordinate column's unit. ``x (east)`` and ``z []`` are names and words of their own
+    (taken for units, the header's x, y, z stated units that are none and the file was refused)."""
+    return bool(unit_named(word.strip(), SIZES) or two_readings(word))
+
+
+def _axis_name(name: str) -> bool:
+    """Whether a blank-separated header's ``name`` names a coordinate (x, easting, E, ...)."""
+    n = name.strip().lower()
+    return bool(_COORDINATE.match(n)) or n in SURVEY_AXES or n in set.union(*SHORT_SURVEY_NAMES)
 
 
 def _name_and_unit(name: str) -> tuple[str, str | None]:
@@ -109,6 +125,10 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
         axis = m.group("axis") if m else SURVEY_AXES.get(n)
         if axis and axis not in axes:
             axes[axis] = i
+    named = {n for n, _ in parsed}
+    if not axes and SHORT_SURVEY_NAMES[0] <= named and SHORT_SURVEY_NAMES[1] & named:
+        short = {n: i for i, (n, _) in reversed(list(enumerate(parsed)))}  # each name's first column
+        axes = {"x": short["e"], "y": short["n"], "z": min(short[n] for n in SHORT_SURVEY_NAMES[1] if n in short)}
     plain = [n for n, _ in parsed]
     nominal = sorted(NOMINAL_NAMES & set(plain))
     if commented and (nominal or len(axes) < 3):
@@ -122,7 +142,11 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
                      f"{'no' if not axes else 'not all of'} x, y, z. A tube scan holds three coordinates per "
                      "sample (x, y, z columns); is this a file for another kind (a rig or compressor-map table?)")
     index = (axes["x"], axes["y"], axes["z"])
-    units = {parsed[i][1] for i in index}
+    stated = [parsed[i][1] for i in index]
+    last = index.index(max(index))
+    if stated[last] is not None and all(u is None for k, u in enumerate(stated) if k != last):
+        stated = [stated[last]] * 3  # ``X Y Z [mm]``: a unit after the last coordinate is the three's
+    units = set(stated)
     unit = None
     if len(units) > 1:  # x in mm and y in m (or x in m, y and z without one): no one unit is the header's
         return Columns(index, None, names, conflict=(
@@ -143,26 +167,28 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
 # PLY headers' comments do: read as the file's unit (it was ignored, and a scan in inches read as millimetres gave a
 # tube 25.4 times too small whose size could still pass for one); a word naming no unit read here refuses the file
 # unless options.file_units says the unit, as a column header's does.
-_UNIT_COMMENT = re.compile(r"^(?:#|//|%)\s*(?:length[_ ]?)?units?\s*[:=]?\s*([a-z]+)\s*$", re.IGNORECASE)
-_NO_UNIT = frozenset({"none", "unknown", "unitless", "undefined", "unspecified", "arbitrary", "na", "n", "default"})
+_COMMENT = re.compile(r"^(?:#|//|%)\s*(.*)$")
 
 
 def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
-    """``cols`` with the unit a comment before the first row states (:data:`_UNIT_COMMENT`); a conflict when it
-    names no unit read here or another than the column header's or another comment's."""
+    """``cols`` with the unit a comment before the first row states (``length_units.comment_unit``); a conflict
+    when it names no unit read here or another than the column header's or another comment's."""
     found = []
     for lineno, line in enumerate(lines, 1):
         s = line.strip()
         if s and s[0] not in "#/%" and starts_number(s):
             break
-        match = _UNIT_COMMENT.match(s)
-        if match is None or match.group(1).lower() in _NO_UNIT:
+        comment = _COMMENT.match(s)
+        stated = comment_unit(comment.group(1)) if comment else None
+        if stated is None:
             continue
-        unit = unit_named(match.group(1))
+        word, unit = stated
         if unit is None:
+            # micrometres are a length unit, which a PLY comment's may be; a text scan's unit is one of the request's
+            what = two_readings(word) or (f"{word!r} (micrometres), in which a text scan is not read" if
+                                          unit_named(word, SIZES) else f"{word!r}, which is no length unit read here")
             return replace(cols, unit=None, conflict=(
-                f"line {lineno}: its comment {s!r} states the unit {match.group(1)!r}, which is no length unit read "
-                f"here ({', '.join(sorted(METRES))})"))
+                f"line {lineno}: its comment {s!r} states the unit {what} ({', '.join(sorted(METRES))})"))
         found.append((unit, lineno, s))
     if not found or cols.conflict is not None:
         return cols
@@ -300,7 +326,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     header, header_line, width = _first_row(lines)
     cols = _with_comment_unit(_columns(header, width, header_line), lines)
     if cols.names is None and width >= 4 and _counts_rows(lines):
-        cols = Columns(index=(1, 2, 3))
+        cols = replace(cols, index=(1, 2, 3))  # the unit a comment states (or its conflict) kept
         log.warn(Diagnostic(code="row_numbers_skipped", message=(
             f"the rows of {width} numbers have no header and their first column counts them (0 or 1, 2, 3, ...): "
             "it was read as row numbers, x, y, z from the next three columns. Add a header (e.g. 'n x y z') if "
