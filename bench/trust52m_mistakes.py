@@ -13,13 +13,11 @@ against what the input means:
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import random
-import subprocess
-import sys
-import time
+
+from mistakes_table import compare  # bench/, the script's folder, is first on sys.path
 
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
@@ -307,36 +305,8 @@ if __name__ == "__main__":
 """
 
 
-def run(tree: str) -> list[dict]:
-    done = subprocess.run([sys.executable, "-c", CHILD, tree, HERE], cwd=tree, capture_output=True, text=True,
-                          env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}, check=False)
-    rows = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    if done.returncode:
-        sys.stderr.write(done.stderr[-3000:])
-    return rows
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--ref", default=None, help="a checkout to measure beside this tree (main's worktree)")
-    parser.add_argument("--verbose", action="store_true", help="print what each answer said")
-    args = parser.parse_args()
-    trees = ([("ref", args.ref)] if args.ref else []) + [("this", ROOT)]
-    t0 = time.time()
-    results = {label: run(tree) for label, tree in trees}
-    print(f"{'case':56s} " + " ".join(f"{label:>8s}" for label, _ in trees))
-    for i, row in enumerate(results["this"]):
-        cells = [results[label][i]["verdict"] if i < len(results[label]) else "-" for label, _ in trees]
-        print(f"{row['kind'][:5]} {row['case'][:50]:50s} " + " ".join(f"{c:>8s}" for c in cells))
-        if args.verbose:
-            for label, _ in trees:
-                if i < len(results[label]):
-                    print(f"      {label}: {results[label][i]['code']} {results[label][i]['said'][:240]}")
-    for label, _ in trees:
-        rows = results[label]
-        count = {v: sum(r["verdict"] == v for r in rows) for v in ("right", "WRONG", "REFUSED", "warned", "500")}
-        print(f"{label}: {len(rows)} cases, " + ", ".join(f"{k} {v}" for k, v in count.items()))
-    print(f"wall {time.time() - t0:.0f} s")
+    compare(__doc__.split("\n\n")[0], CHILD, ROOT, HERE, width=50)
 
 
 if __name__ == "__main__":

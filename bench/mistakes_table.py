@@ -1,0 +1,49 @@
+"""Users' mistakes judged in two trees, side by side: each tree's answers come from a child process (a bench's
+CHILD script run in that tree, printing one JSON line per case: kind, case, verdict, code, said), and the table
+prints every case's verdict per tree and a count of each verdict. Shared by bench/trust51t_mistakes.py and
+bench/trust52m_mistakes.py."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+VERDICTS = ("right", "WRONG", "REFUSED", "warned", "500")
+
+
+def answers(tree: str, child: str, bench_dir: str) -> list[dict]:
+    """The child's verdict lines, run in ``tree`` (its plantsolve, its tests' settings)."""
+    done = subprocess.run([sys.executable, "-c", child, tree, bench_dir], cwd=tree, capture_output=True, text=True,
+                          env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}, check=False)
+    rows = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    if done.returncode:
+        sys.stderr.write(done.stderr[-3000:])
+    return rows
+
+
+def compare(description: str, child: str, root: str, bench_dir: str, width: int = 50) -> None:
+    """The command line (``--ref DIR``, ``--verbose``) and the table: this tree beside the reference checkout."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--ref", default=None, help="a checkout to measure beside this tree (main's worktree)")
+    parser.add_argument("--verbose", action="store_true", help="print what each answer said")
+    args = parser.parse_args()
+    trees = ([("ref", args.ref)] if args.ref else []) + [("this", root)]
+    t0 = time.time()
+    results = {label: answers(tree, child, bench_dir) for label, tree in trees}
+    print(f"{'case':{width + 6}s} " + " ".join(f"{label:>8s}" for label, _ in trees))
+    for i, row in enumerate(results["this"]):
+        cells = [results[label][i]["verdict"] if i < len(results[label]) else "-" for label, _ in trees]
+        print(f"{row['kind'][:5]} {row['case'][:width]:{width}s} " + " ".join(f"{c:>8s}" for c in cells))
+        if args.verbose:
+            for label, _ in trees:
+                if i < len(results[label]):
+                    print(f"      {label}: {results[label][i]['code']} {results[label][i]['said'][:240]}")
+    for label, _ in trees:
+        rows = results[label]
+        print(f"{label}: {len(rows)} cases, " + ", ".join(f"{v} {sum(r['verdict'] == v for r in rows)}"
+                                                       for v in VERDICTS))
+    print(f"wall {time.time() - t0:.0f} s")
