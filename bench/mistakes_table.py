@@ -14,6 +14,43 @@ import time
 
 VERDICTS = ("right", "WRONG", "REFUSED", "warned", "500")
 
+# the start of every child: the tree's code and the bench's module on sys.path, the tree's app, and one submission
+# (a file with its options, or a JSON body when the name is None) waited for to its end
+_CHILD_HEAD = r"""
+import json, os, sys, tempfile, pathlib, time
+sys.path.insert(0, sys.argv[1])
+sys.path.insert(1, sys.argv[2])
+import logging
+logging.disable(logging.WARNING)
+from fastapi.testclient import TestClient
+from plantsolve.app.main import create_app
+from tests.conftest import service_settings, wait_for
+import MODULE as m
+import plantsolve
+assert plantsolve.__file__.startswith(sys.argv[1]), plantsolve.__file__
+
+def submit(c, kind, name, data, options, limit=300):
+    if name is None:  # a JSON body, no file
+        r = c.post(f"/v1/{kind}/jobs", content=data, headers={"Content-Type": "application/json"})
+    else:
+        files = {"file": (name, data)}
+        form = {"options": json.dumps(options)} if options else {}
+        r = c.post(f"/v1/{kind}/jobs", files=files, data=form)
+    if r.status_code != 202:
+        doc = r.json() if r.headers.get("content-type", "").endswith("json") else {}
+        errs = doc.get("errors") or doc.get("invalid_params") or []
+        return (r.status_code, json.dumps(errs or doc.get("detail"))[:limit], None), None
+    view = wait_for(c, r.json()["id"], timeout=300)
+    res = c.get(f"/v1/jobs/{r.json()['id']}/result").json() if view["status"] == "succeeded" else None
+    return (r.status_code, None, view), res
+
+"""
+
+
+def child_script(module: str, body: str) -> str:
+    """A child's script: the common start, importing ``module`` (the bench) as ``m``, then the bench's ``body``."""
+    return _CHILD_HEAD.replace("MODULE", module) + body
+
 
 def answers(tree: str, child: str, bench_dir: str) -> list[dict]:
     """The child's verdict lines, run in ``tree`` (its plantsolve, its tests' settings)."""

@@ -17,7 +17,10 @@ import json
 import os
 import random
 
-from mistakes_table import compare  # bench/, the script's folder, is first on sys.path
+from mistakes_table import (  # bench/, the script's folder, is first on sys.path
+    child_script,
+    compare,
+)
 
 for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
@@ -252,34 +255,7 @@ def judge(expect, outcome, result, results_by_name) -> str:
     return "warned" if any(c in codes for c in what) else "right"
 
 
-CHILD = r"""
-import json, os, sys, tempfile, pathlib, time
-sys.path.insert(0, sys.argv[1])
-sys.path.insert(1, sys.argv[2])
-import logging
-logging.disable(logging.WARNING)
-from fastapi.testclient import TestClient
-from plantsolve.app.main import create_app
-from tests.conftest import service_settings, wait_for
-import trust52m_mistakes as m
-import plantsolve
-assert plantsolve.__file__.startswith(sys.argv[1]), plantsolve.__file__
-
-def submit(c, kind, name, data, options):
-    if name is None:  # a JSON body, no file
-        r = c.post(f"/v1/{kind}/jobs", content=data, headers={"Content-Type": "application/json"})
-    else:
-        files = {"file": (name, data)}
-        form = {"options": json.dumps(options)} if options else {}
-        r = c.post(f"/v1/{kind}/jobs", files=files, data=form)
-    if r.status_code != 202:
-        doc = r.json() if r.headers.get("content-type", "").endswith("json") else {}
-        errs = doc.get("errors") or doc.get("invalid_params") or []
-        return (r.status_code, json.dumps(errs or doc.get("detail"))[:300], None), None
-    view = wait_for(c, r.json()["id"], timeout=300)
-    res = c.get(f"/v1/jobs/{r.json()['id']}/result").json() if view["status"] == "succeeded" else None
-    return (r.status_code, None, view), res
-
+CHILD = child_script("trust52m_mistakes", r"""
 if __name__ == "__main__":
     tmp = pathlib.Path(tempfile.mkdtemp())
     with TestClient(create_app(service_settings(tmp))) as c:
@@ -302,7 +278,7 @@ if __name__ == "__main__":
                     said = "failed: " + (view.get("summary") or view.get("error") or "")[:160]
                 print(json.dumps({"kind": kind, "case": name, "verdict": verdict, "code": code, "said": said}),
                       flush=True)
-"""
+""")
 
 
 def main() -> None:
