@@ -17,13 +17,22 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 DPI = 110
+SVG_ID_SALT = "plantsolve"
 MEDIA_TYPES = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}
 
 
 def figure_bytes(fig: Figure, fmt: str = "png", dpi: int = DPI, **savefig: object) -> bytes:
-    """The figure saved as ``fmt`` (png, svg or pdf) at ``dpi``."""
+    """The figure saved as ``fmt`` (png, svg or pdf) at ``dpi``. An SVG's element ids are hashes of their content
+    under a fixed salt (matplotlib's default salt is a random one per save), so the same figure gives the same bytes
+    and the same ``X-Content-SHA256``."""
     buffer = io.BytesIO()
-    fig.savefig(buffer, format=fmt, dpi=dpi, **savefig)
+    if fmt == "svg":
+        import matplotlib
+
+        with matplotlib.rc_context({"svg.hashsalt": SVG_ID_SALT}):
+            fig.savefig(buffer, format=fmt, dpi=dpi, **savefig)
+    else:
+        fig.savefig(buffer, format=fmt, dpi=dpi, **savefig)
     return buffer.getvalue()
 
 
