@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from plantsolve.app.settings import AppSettings
+from tests.support.xdist_groups import pytest_collection_modifyitems  # noqa: F401  (a hook: pytest finds it here)
 
 REPO = Path(__file__).resolve().parents[1]
 PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
@@ -127,11 +128,3 @@ def redis_url():
     connection.flushdb()
     yield REDIS_URL
     connection.flushdb()
-
-
-def pytest_collection_modifyitems(config, items):
-    """Under pytest-xdist (``make test``: ``-n 2 --dist loadgroup``) the integration tests run together on one
-    worker: they start Celery workers and servers of their own, and two such at once would only fight for the cores."""
-    for item in items:
-        if item.get_closest_marker("integration") is not None:
-            item.add_marker(pytest.mark.xdist_group("integration"))
