@@ -67,6 +67,18 @@ def client(settings):
         yield test_client
 
 
+@pytest.fixture(scope="module")
+def chromium_driver():
+    """One headless Chromium for a module's browser tests (20 s page loads), each on a fresh tab of it
+    (tests.support.browser.page_on); skipped with the reason where there is none, failed with CI=true."""
+    from tests.support import browser
+
+    browser.require("browser tests")
+    with browser.chromium() as driver:
+        driver.set_page_load_timeout(20)
+        yield driver
+
+
 def wait_for(client, job_id: str, statuses=("succeeded", "failed", "cancelled"), timeout: float = 30.0, headers=None) -> dict:
     deadline = time.monotonic() + timeout
     while True:
