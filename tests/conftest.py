@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from plantsolve.app.settings import AppSettings
+from tests.support.xdist_groups import pytest_collection_modifyitems  # noqa: F401  (a hook: pytest finds it here)
 
 REPO = Path(__file__).resolve().parents[1]
 PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
@@ -64,6 +65,18 @@ def client(settings):
 
     with TestClient(create_app(settings)) as test_client:
         yield test_client
+
+
+@pytest.fixture(scope="module")
+def chromium_driver():
+    """One headless Chromium for a module's browser tests (20 s page loads), each on a fresh tab of it
+    (tests.support.browser.page_on); skipped with the reason where there is none, failed with CI=true."""
+    from tests.support import browser
+
+    browser.require("browser tests")
+    with browser.chromium() as driver:
+        driver.set_page_load_timeout(20)
+        yield driver
 
 
 def wait_for(client, job_id: str, statuses=("succeeded", "failed", "cancelled"), timeout: float = 30.0, headers=None) -> dict:
@@ -127,11 +140,3 @@ def redis_url():
     connection.flushdb()
     yield REDIS_URL
     connection.flushdb()
-
-
-def pytest_collection_modifyitems(config, items):
-    """Under pytest-xdist (``make test``: ``-n 2 --dist loadgroup``) the integration tests run together on one
-    worker: they start Celery workers and servers of their own, and two such at once would only fight for the cores."""
-    for item in items:
-        if item.get_closest_marker("integration") is not None:
-            item.add_marker(pytest.mark.xdist_group("integration"))

@@ -23,9 +23,9 @@ FAN_MAP = REPO / "examples" / "perfmap" / "n3_fan_map.csv"
 
 
 @pytest.fixture
-def site(tmp_path):
+def site(tmp_path, chromium_driver):
     app = create_app(service_settings(tmp_path, api_keys=[f"alice:{KEY}"]))
-    with browser.page_on(app, "dashboard browser test") as (base, driver):
+    with browser.page_on(app, chromium_driver) as (base, driver):
         yield app, base, driver
 
 
@@ -304,10 +304,10 @@ def test_a_plot_opens_full_size_and_the_first_warning_heads_the_page(site):
 
 
 @pytest.fixture
-def inspecting_site(tmp_path):
+def inspecting_site(tmp_path, chromium_driver):
     plugins = ["tests.support.kinds", "tests.app.test_dashboard_glance"]  # test-inspect: a failed inspection
     app = create_app(service_settings(tmp_path, api_keys=[f"alice:{KEY}"], plugins=plugins))
-    with browser.page_on(app, "dashboard browser test") as (base, driver):
+    with browser.page_on(app, chromium_driver) as (base, driver):
         yield app, base, driver
 
 
@@ -335,3 +335,18 @@ def test_a_failed_inspection_that_finishes_on_an_open_list_shows_its_verdict(ins
     banner = wait.until(lambda d: d.find_element(By.ID, "report-banner"))
     assert banner.text.startswith("Verdict: FAIL — the job ran to the end, but its result does not pass: "
                                   "inspection_failed") and "verdict" in banner.get_attribute("class")
+
+
+def test_each_test_has_a_tab_as_fresh_as_a_new_browsers(site, tmp_path):
+    """The module's tests share one Chromium: what a test left in it (a script injected into each new document,
+    a cookie for the host, whatever the port) does not reach the next test's page."""
+    app, base, driver = site
+    driver.get(f"{base}/healthz")
+    driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": "window.leftOver = true;"})
+    driver.add_cookie({"name": "left_over", "value": "1"})
+    driver.get(f"{base}/healthz")
+    assert driver.execute_script("return window.leftOver === true;") and driver.get_cookie("left_over")
+    with browser.page_on(create_app(service_settings(tmp_path / "next")), driver) as (later, _):
+        driver.get(f"{later}/healthz")
+        assert driver.execute_script("return window.leftOver === undefined;")
+        assert driver.get_cookie("left_over") is None and len(driver.window_handles) == 1

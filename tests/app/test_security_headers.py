@@ -85,9 +85,9 @@ document.addEventListener('securitypolicyviolation',
 
 
 @pytest.fixture
-def site(tmp_path):
+def site(tmp_path, chromium_driver):
     app = create_app(service_settings(tmp_path, api_keys=["alice:key-a"], protect_docs=False))
-    with browser.page_on(app, "browser test") as (base, driver):
+    with browser.page_on(app, chromium_driver) as (base, driver):
         driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": VIOLATIONS})
         yield base, driver
 

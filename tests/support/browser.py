@@ -1,5 +1,6 @@
 """A real service on a free port and a headless Chromium driving it (Debian's ``chromium`` and
-``chromium-driver`` with Selenium). Used by the browser test and ``scripts/dashboard_screenshots.py``."""
+``chromium-driver`` with Selenium). Used by the browser tests (their Chromium: the ``chromium_driver`` fixture of
+tests/conftest.py) and ``scripts/dashboard_screenshots.py``."""
 
 from __future__ import annotations
 
@@ -30,18 +31,36 @@ def missing() -> str | None:
     return None
 
 
-@contextmanager
-def page_on(app, what: str) -> Iterator[tuple[str, object]]:
-    """``app`` served on loopback and a headless Chromium (20 s page loads) to drive it: (base URL, driver).
-    Without a browser the test is skipped with the reason, or fails with CI=true, where it must run."""
+def require(what: str) -> None:
+    """Skip the test, saying why no browser can run here, or fail it with CI=true, where it must run."""
     reason = missing()
     if reason and os.environ.get("CI", "").lower() == "true":
         pytest.fail(f"CI=true: the {what} must run, but {reason}")
     if reason:
         pytest.skip(f"no headless browser: {reason}")
-    with serve(app) as base, chromium() as driver:
-        driver.set_page_load_timeout(20)
-        yield base, driver
+
+
+@contextmanager
+def page_on(app, driver) -> Iterator[tuple[str, object]]:
+    """``app`` served on loopback and ``driver`` (a module's shared Chromium) on a page as fresh as a new browser's:
+    (base URL, driver). A browser starts in a second of CPU; a tab of its own per test is what isolates it."""
+    with serve(app) as base:
+        yield base, fresh_tab(driver)
+
+
+def fresh_tab(driver):
+    """``driver`` in a new tab, its other tabs closed and every cookie gone: scripts a test had Chromium inject
+    into each new document (DevTools' addScriptToEvaluateOnNewDocument) belong to the tab it added them to, and a
+    login cookie, kept per host whatever the port, would otherwise reach the next test's server."""
+    earlier = list(driver.window_handles)
+    driver.switch_to.new_window("tab")
+    current = driver.current_window_handle
+    for handle in earlier:
+        driver.switch_to.window(handle)
+        driver.close()
+    driver.switch_to.window(current)
+    driver.execute_cdp_cmd("Network.clearBrowserCookies", {})
+    return driver
 
 
 def serve(app):

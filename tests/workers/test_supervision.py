@@ -128,7 +128,9 @@ def served(tmp_path):
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs Linux /proc")
 def test_job_processes_die_with_a_killed_service_and_write_nothing(served, tmp_path):
     markers = tmp_path / "runs"
-    served.running_job({"values": [1.0], "seconds": 6, "marker_dir": str(markers)})
+    seconds = 4  # long enough to be killed while running: the kill follows the running status at once
+    served.running_job({"values": [1.0], "seconds": seconds, "marker_dir": str(markers)})
+    running_at = time.monotonic()
     workers = _descendants(served.process.pid)
     assert len(workers) >= 2  # the warm parent and the job's process
     served.process.send_signal(signal.SIGKILL)
@@ -140,7 +142,7 @@ def test_job_processes_die_with_a_killed_service_and_write_nothing(served, tmp_p
         time.sleep(0.1)
     left = {pid: _cmdline(pid) for pid in workers if _alive(pid)}
     assert not left, f"a process outlived its service: {left}"
-    time.sleep(7)  # past the moment the solve would have finished
+    time.sleep(max(0.0, running_at + seconds + 1.0 - time.monotonic()))  # past the moment the solve would have finished
     assert not markers.exists() or not list(markers.iterdir()), "an orphan finished the job"
 
 
