@@ -19,6 +19,8 @@ files. Per model, ``before -> after``:
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
+- ``verdict``: the report's verdict code after (``not_one_piece``: pieces apart besides held sub-builds and
+  pieces drawn apart; ``rigidity_not_determined``: the known parts no majority), ``-`` for none;
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 
 With ``--why`` (no baseline) each model not in one piece besides held sub-builds gets a row classing every piece apart
@@ -30,7 +32,7 @@ the build with no mate within 10 LDU (tilted, on a smooth face) or standing off 
 
 Then the totals, after and (with a baseline) before: floating parts, models at most 5 % floating, models in one
 piece besides held sub-builds, and besides held sub-builds and pieces drawn apart (each other piece is one whose joint
-was not found), pieces not held, held, drawn apart, offset pairs, CPU seconds.
+was not found), pieces not held, held, drawn apart, offset pairs, the verdicts by code, CPU seconds.
 """
 
 from __future__ import annotations
@@ -70,6 +72,7 @@ def measure(path: Path) -> dict:
     return {"model": path.name, "known": len(known), "floating": len(floating),
             "pieces": details.get("connected_pieces") - held, "held": held, "apart": apart, "offset": offsets,
             "prim": recognised, "seconds": seconds,
+            "verdict": result.report.verdict.code if result.report.verdict else None,
             "floating_parts": dict(Counter(p.part for p in floating))}
 
 
@@ -164,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
     print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
-          f"{'prim':>6s} {'cpu s':>11s}  floating parts (after)")
+          f"{'prim':>6s} {'cpu s':>11s} {'verdict':>24s}  floating parts (after)")
     rows = []
     for path in files:
         row = measure(path)
@@ -178,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
               f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
-              f"{pair('seconds', '.2f'):>11s}  {names}")
+              f"{pair('seconds', '.2f'):>11s} {row['verdict'] or '-':>24s}  {names}")
     olds = [before.get(row["model"]) for row in rows]
     print(totals("after", rows))
     if all(olds) and olds:
@@ -189,7 +192,8 @@ def main(argv: list[str] | None = None) -> int:
 def totals(label: str, rows: list[dict]) -> str:
     """One line of totals over the models: floating parts, models at most 5 % floating, models in one piece besides
     held sub-builds (the goal: a set that is one build comes out as one piece) and besides held sub-builds and pieces
-    drawn apart (a set of several builds said so), pieces not held, held, drawn apart, offset pairs, CPU seconds."""
+    drawn apart (a set of several builds said so), pieces not held, held, drawn apart, offset pairs, the verdicts by
+    code, CPU seconds."""
     return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
             f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
@@ -197,7 +201,9 @@ def totals(label: str, rows: list[dict]) -> str:
             f"{sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
             f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, drawn apart "
             f"{sum(r['apart'] for r in rows)}, offset pairs "
-            f"{sum(r['offset'] for r in rows)}, CPU {sum(r['seconds'] for r in rows):.1f} s")
+            f"{sum(r['offset'] for r in rows)}, verdicts "
+            f"{dict(Counter(r.get('verdict') for r in rows if r.get('verdict'))) or 'none'}, "
+            f"CPU {sum(r['seconds'] for r in rows):.1f} s")
 
 
 if __name__ == "__main__":

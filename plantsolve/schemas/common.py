@@ -150,6 +150,8 @@ VERDICT_CODES: dict[str, str] = {
     "inspection_not_determined": "NOT DETERMINED",
     "inspection_not_comparable": "NOT COMPARABLE",
     "volume_not_determined": "NOT DETERMINED",
+    "rigidity_not_determined": "NOT DETERMINED",
+    "not_one_piece": "NOT ONE PIECE",
     "not_converged": "NOT CONVERGED",
     "verification_failed": "VERIFICATION FAILED",
     "tolerance_not_reached": "TOLERANCE NOT REACHED",
@@ -157,7 +159,8 @@ VERDICT_CODES: dict[str, str] = {
 """The warning codes that are a verdict against a result, each with its headline. Most warnings are caveats on an
 answer that stands (a file's unit converted, a fit less close); these say the answer is *no* or *not known*: a tube
 out of tolerance or not measurable against its nominal, a zone whose volume is not known, a fit stopped before it converged, an optimized model that
-failed its own verification, an accuracy asked for and not reached."""
+failed its own verification, an accuracy asked for and not reached, a LEGO model mostly of parts not in the catalogue or
+one that comes apart as analysed."""
 
 
 class ReportVerdict(BaseModel):

@@ -176,7 +176,14 @@ class RigidityResult(BaseModel):
     generic_dof: int = Field(description="The (6,6) pebble game's count for generic positions (exact for hinges and "
                              "rigid joints; for ball, slider and cylindrical joints a lower bound).")
     special_position: bool = Field(description="dof > generic_dof: the geometry moves more than its joint count says.")
-    rigid: bool = Field(description="One connected piece with dof 0.")
+    rigid: bool | None = Field(description="One connected piece with dof 0. Of a LEGO model: of its known parts, "
+                               "and null when the parts not in the catalogue are at least half of it (a chain of "
+                               "segments, an LSynth hose, counted as one): the verdict rigidity_not_determined (NOT "
+                               "DETERMINED). A LEGO model is one build unless its drawing says otherwise: known parts "
+                               "in pieces besides held sub-builds (Piece.sub_build) and separate builds drawn apart "
+                               "(Piece.drawn_apart) make it false with the verdict not_one_piece (NOT ONE PIECE: loose "
+                               "as drawn, or held by a joint the catalogue does not know); a model of bodies and "
+                               "joints in several pieces is false with no verdict (its joints are the user's).")
     clusters: list[list[str]] = Field(description="Maximal rigid clusters; every body or part in exactly one.")
     superbricks: list[list[str]] = Field(description="Groups joined by rigid connections alone.")
     joints: list[JointResult]

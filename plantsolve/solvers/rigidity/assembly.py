@@ -547,7 +547,38 @@ class Assembly:
             gap = float(np.linalg.norm(shift))
             self._offsets[(a, b)] = gap
             joined.append((a, b, gap))
+        joined += self._join_shifted_across_parts(shifts, {p for g in groups[1:] for p in g})
         return joined + self._join_on_shifted_grids(shifts, grids)
+
+    def _join_shifted_across_parts(self, shifts: dict, lying: set[str]) -> list[tuple[str, str, float]]:
+        """Join a part of a piece besides the largest (in ``lying``) whose points meet those of two or more other parts,
+        one or a few of each, all shifted by one offset as :meth:`_join_shifted_rows` reads it (SHIFTED_ROW_STUDS or
+        more of its own points sharing it): the part lies drawn beside the studs of several parts (set 21109 lays two
+        1 x 3 tiles 63864 across three parts' single studs, every anti-stud 4 LDU aside), the shift its own, which
+        the pairs of parts, one stud each, do not show. ``shifts`` as gathered there; pairs joined already are left."""
+        own: dict[str, list] = {}  # lying part -> (stud, anti-stud, offset from its point to its partner's)
+        for (a, b), pairs in sorted(shifts.items()):
+            if (a, b) in self._links or (b, a) in self._links:
+                continue
+            for (stud, mouth), v in pairs.items():
+                for part, sign in ((stud[0], 1.0), (mouth[0], -1.0)):
+                    if part in lying:
+                        own.setdefault(part, []).append((stud, mouth, sign * v))
+        joined = []
+        for part, found in sorted(own.items()):
+            shift, held = common_shift(found)
+            partners = {q for stud, mouth, _ in held for q in (stud[0], mouth[0]) if q != part}
+            if shift is None or len(partners) < 2:
+                continue  # one partner: the pair's own rule has decided
+            fresh = {q for q in partners if (part, q) not in self._links and (q, part) not in self._links}
+            for stud, mouth, _ in held:
+                (pid, pi), (oid, oi) = (stud, mouth) if stud[0] == part else (mouth, stud)
+                if oid in fresh:  # not joined by another lying part's shift in this pass
+                    self._link_at(oid, oi, pid, pi, "stud")  # at the partner's point: the grid it lies on
+            for other in sorted(fresh):
+                self._offsets[(part, other)] = float(np.linalg.norm(shift))
+                joined.append((part, other, float(np.linalg.norm(shift))))
+        return joined
 
     def _join_on_shifted_grids(self, shifts: dict, grids: dict) -> list[tuple[str, str, float]]:
         """Join a part lying on fewer studs than :meth:`_join_shifted_rows` needs (one stud: the others of its row

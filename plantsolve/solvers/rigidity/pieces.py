@@ -233,10 +233,11 @@ def line_of(part_id: str) -> int | None:
 def far_parts(part_ids: Sequence[str], positions: np.ndarray) -> list[tuple[str, float, float]]:
     """(id, distance from the middle, the bound it passed) of parts implausibly far from the middle of the
     model (the median of the part positions): beyond FAR_LDU and beyond FAR_FACTOR times the median distance
-    of the parts from the middle. Needs three parts at least (two have no middle to stand apart from)."""
-    if len(part_ids) < 3:
+    of the parts from the middle. Of two parts, whose middle is halfway, the median distance is their own: only
+    FAR_LDU bounds them, and both are named (which one is off cannot be told)."""
+    if len(part_ids) < 2:
         return []
     middle = np.median(positions, axis=0)
     distance = np.linalg.norm(positions - middle, axis=1)
-    bound = max(FAR_LDU, FAR_FACTOR * (float(np.median(distance)) + PITCH))
+    bound = FAR_LDU if len(part_ids) == 2 else max(FAR_LDU, FAR_FACTOR * (float(np.median(distance)) + PITCH))
     return [(p, float(d), bound) for p, d in zip(part_ids, distance) if d > bound]

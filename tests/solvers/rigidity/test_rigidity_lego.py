@@ -139,7 +139,9 @@ def test_an_axle_centred_in_a_one_wide_brick_is_held():
 def test_unknown_parts_are_reported_not_guessed():
     result = run([part("a", "3001", 0, 0, 0), part("x", "99999", 0, -24, 0)])
     assert [(u.id, u.part) for u in result.unknown_parts] == [("x", "99999")]
-    assert result.clusters == [["a"]] and result.report.warnings[0].code == "unknown_parts"
+    assert result.clusters == [["a"]] and [w.code for w in result.report.warnings] == ["rigidity_not_determined",
+                                                                                       "unknown_parts"]
+    assert result.rigid is None  # one known part of two: no answer for the model
 
 
 def test_every_catalogue_part_has_a_box_and_typed_connectors():

@@ -1,0 +1,77 @@
+"""When a LEGO model's answer is no answer: the verdicts a parts model's report can hold.
+
+- ``rigidity_not_determined`` (NOT DETERMINED): the parts not in the catalogue are at least half of the model (its
+  known parts no majority), so ``dof``, ``rigid`` and the pieces, counted over the known parts only, say nothing of
+  the model: ``rigid`` is null. A flexible element an editor draws as a chain of short segments (an LSynth hose or
+  rope, a hose of segments 754) is one element, not hundreds of parts (:func:`unknown_elements`).
+- ``not_one_piece`` (NOT ONE PIECE): a model is one build unless its drawing says otherwise, so known parts that come
+  apart into pieces besides the held sub-builds (a minifigure, a whole sub-model standing clear) and the separate
+  builds the drawing places apart (a second vehicle, spares laid aside) are a build that falls apart as analysed:
+  either loose as drawn, or held by a joint the catalogue does not know. ``rigid`` is false either way; the
+  ``floating_parts`` and ``separate_pieces`` warnings name each with its nearest miss.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.rigidity import Piece
+
+# LDU: half a plate's height. Two solid parts of one number whose origins are closer than this overlap, so parts so
+# placed are segments of one flexible element (LSynth draws its hoses and ropes 1-3 LDU a segment).
+SEGMENT_STEP = 4.0
+KNOWN_MAJORITY = 0.5  # the share of the model's elements the known parts must exceed for a verdict on the model
+
+
+def unknown_elements(numbers: Sequence[str], positions: np.ndarray) -> int:
+    """How many elements the unknown parts (``numbers``, origins ``positions``) are: parts of one number chained
+    with origins within SEGMENT_STEP of each other count once."""
+    if not len(numbers):
+        return 0
+    positions = np.asarray(positions, float).reshape(-1, 3)
+    count = 0
+    for number in set(numbers):
+        at = positions[[k for k, n in enumerate(numbers) if n == number]]
+        pairs = cKDTree(at).query_pairs(SEGMENT_STEP, output_type="ndarray").reshape(-1, 2)
+        links = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(at), len(at)))
+        count += connected_components(links, directed=False)[0]
+    return int(count)
+
+
+def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positions: np.ndarray) -> Diagnostic | None:
+    """``rigidity_not_determined`` when the known parts are no majority of the model's elements."""
+    if not len(unknown_numbers):
+        return None
+    elements = unknown_elements(unknown_numbers, unknown_positions)
+    share = elements / (known + elements)
+    if share < 1.0 - KNOWN_MAJORITY:
+        return None
+    return Diagnostic(
+        code="rigidity_not_determined", message=f"rigidity not determined: the parts not in the catalogue are "
+        f"{share:.0%} of the model ({len(unknown_numbers)} part(s), {elements} element(s) counting a chain of "
+        f"segments as one; {known} known part(s)), so dof, rigid and the pieces, counted over the known parts only, "
+        f"cover no majority of it (rigid is null; a verdict needs the known parts above {KNOWN_MAJORITY:.0%})",
+        details={"unknown_share": round(share, 4), "unknown_parts": len(unknown_numbers),
+                 "unknown_elements": elements, "known_parts": known, "known_share_needed": KNOWN_MAJORITY})
+
+
+def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:
+    """``not_one_piece`` when pieces besides the largest are neither held sub-builds nor drawn apart."""
+    loose = [pc for pc in found[1:] if pc.sub_build is None and not pc.drawn_apart]
+    if not loose:
+        return None
+    singles = sum(len(pc.parts) == 1 for pc in loose)
+    return Diagnostic(
+        code="not_one_piece", message=f"not one piece: besides the largest piece ({len(found[0].parts)} parts), "
+        f"{len(loose)} piece(s) ({singles} single part(s), {len(loose) - singles} of several parts) are joined to "
+        "nothing else, though no held sub-build (a minifigure, a whole sub-model standing clear) and not drawn apart "
+        "(they touch the build, or lie within a slip of a mate): the build falls apart as analysed, either loose as "
+        "drawn or held by a joint the catalogue does not know (floating_parts and separate_pieces name each with "
+        "its nearest miss); rigid is false and dof counts 6 for each",
+        details={"pieces": len(loose), "single_parts": singles, "parts": sum(len(pc.parts) for pc in loose)})
