@@ -19,7 +19,7 @@ files. Per model, ``before -> after``:
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
-- ``verdict``: the report's verdict code after (``not_one_piece``: pieces apart besides held sub-builds and
+- ``verdict``: the report's verdict code after (``one_piece_not_determined``: pieces apart besides held sub-builds and
   pieces drawn apart; ``rigidity_not_determined``: the known parts no majority), ``-`` for none;
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
 

@@ -39,7 +39,7 @@ FINISHED = ("succeeded", "failed", "cancelled")
 # before that field, because this module imports nothing of plantsolve)
 VERDICT_CODES = frozenset({"inspection_failed", "inspection_not_determined", "inspection_not_comparable",
                            "volume_not_determined", "rigidity_not_determined",
-                           "not_one_piece", "not_converged", "verification_failed", "tolerance_not_reached"})
+                           "one_piece_not_determined", "not_converged", "verification_failed", "tolerance_not_reached"})
 RECONNECT_SECONDS = 1.0  # pause before opening a cut event stream again
 FileArgument = Union[str, Path, bytes, tuple[str, bytes]]
 

@@ -151,7 +151,7 @@ VERDICT_CODES: dict[str, str] = {
     "inspection_not_comparable": "NOT COMPARABLE",
     "volume_not_determined": "NOT DETERMINED",
     "rigidity_not_determined": "NOT DETERMINED",
-    "not_one_piece": "NOT ONE PIECE",
+    "one_piece_not_determined": "NOT DETERMINED",
     "not_converged": "NOT CONVERGED",
     "verification_failed": "VERIFICATION FAILED",
     "tolerance_not_reached": "TOLERANCE NOT REACHED",
@@ -160,7 +160,7 @@ VERDICT_CODES: dict[str, str] = {
 answer that stands (a file's unit converted, a fit less close); these say the answer is *no* or *not known*: a tube
 out of tolerance or not measurable against its nominal, a zone whose volume is not known, a fit stopped before it converged, an optimized model that
 failed its own verification, an accuracy asked for and not reached, a LEGO model mostly of parts not in the catalogue or
-one that comes apart as analysed."""
+one that comes apart as analysed (loose as drawn or held by joints the catalogue lacks: not known which)."""
 
 
 class ReportVerdict(BaseModel):

@@ -181,8 +181,9 @@ class RigidityResult(BaseModel):
                                "segments, an LSynth hose, counted as one): the verdict rigidity_not_determined (NOT "
                                "DETERMINED). A LEGO model is one build unless its drawing says otherwise: known parts "
                                "in pieces besides held sub-builds (Piece.sub_build) and separate builds drawn apart "
-                               "(Piece.drawn_apart) make it false with the verdict not_one_piece (NOT ONE PIECE: loose "
-                               "as drawn, or held by a joint the catalogue does not know); a model of bodies and "
+                               "(Piece.drawn_apart) make it null with the verdict one_piece_not_determined (NOT "
+                               "DETERMINED: loose as drawn, or held by a joint the catalogue does not know, which the "
+                               "drawing cannot tell); a model of bodies and "
                                "joints in several pieces is false with no verdict (its joints are the user's).")
     clusters: list[list[str]] = Field(description="Maximal rigid clusters; every body or part in exactly one.")
     superbricks: list[list[str]] = Field(description="Groups joined by rigid connections alone.")

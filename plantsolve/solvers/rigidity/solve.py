@@ -297,7 +297,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(1.0, "done")
     return Solved(RigidityResult(
         length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
-        special_position=special, rigid=None if coverage else bool(ids) and n_pieces == 1 and mob.dof == 0,
+        special_position=special, rigid=None if coverage or apart else bool(ids) and n_pieces == 1 and mob.dof == 0,
         clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],

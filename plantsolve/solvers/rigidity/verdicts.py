@@ -4,11 +4,13 @@
   known parts no majority), so ``dof``, ``rigid`` and the pieces, counted over the known parts only, say nothing of
   the model: ``rigid`` is null. A flexible element an editor draws as a chain of short segments (an LSynth hose or
   rope, a hose of segments 754) is one element, not hundreds of parts (:func:`unknown_elements`).
-- ``not_one_piece`` (NOT ONE PIECE): a model is one build unless its drawing says otherwise, so known parts that come
-  apart into pieces besides the held sub-builds (a minifigure, a whole sub-model standing clear) and the separate
-  builds the drawing places apart (a second vehicle, spares laid aside) are a build that falls apart as analysed:
-  either loose as drawn, or held by a joint the catalogue does not know. ``rigid`` is false either way; the
-  ``floating_parts`` and ``separate_pieces`` warnings name each with its nearest miss.
+- ``one_piece_not_determined`` (NOT DETERMINED): a model is one build unless its drawing says otherwise, so known parts
+  that come apart into pieces besides the held sub-builds (a minifigure, a whole sub-model standing clear) and the
+  separate builds the drawing places apart (a second vehicle, spares laid aside) are a build that falls apart as
+  analysed: either loose as drawn, or held by a joint the catalogue does not know. Which of the two cannot be told
+  from the drawing (official sets that are one build still come apart so, at joints the catalogue lacks), so
+  ``rigid`` is null, not false; the ``floating_parts`` and ``separate_pieces`` warnings name each piece with its
+  nearest miss.
 """
 
 from __future__ import annotations
@@ -62,16 +64,16 @@ def coverage_verdict(known: int, unknown_numbers: Sequence[str], unknown_positio
 
 
 def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:
-    """``not_one_piece`` when pieces besides the largest are neither held sub-builds nor drawn apart."""
+    """``one_piece_not_determined`` when pieces besides the largest are neither held sub-builds nor drawn apart."""
     loose = [pc for pc in found[1:] if pc.sub_build is None and not pc.drawn_apart]
     if not loose:
         return None
     singles = sum(len(pc.parts) == 1 for pc in loose)
     return Diagnostic(
-        code="not_one_piece", message=f"not one piece: besides the largest piece ({len(found[0].parts)} parts), "
+        code="one_piece_not_determined", message=f"whether the model is one piece is not determined: besides the largest piece ({len(found[0].parts)} parts), "
         f"{len(loose)} piece(s) ({singles} single part(s), {len(loose) - singles} of several parts) are joined to "
         "nothing else, though no held sub-build (a minifigure, a whole sub-model standing clear) and not drawn apart "
         "(they touch the build, or lie within a slip of a mate): the build falls apart as analysed, either loose as "
         "drawn or held by a joint the catalogue does not know (floating_parts and separate_pieces name each with "
-        "its nearest miss); rigid is false and dof counts 6 for each",
+        "its nearest miss); rigid is null and dof counts 6 for each",
         details={"pieces": len(loose), "single_parts": singles, "parts": sum(len(pc.parts) for pc in loose)})

@@ -46,4 +46,4 @@ def test_a_tile_drawn_4_ldu_beside_three_plates_single_studs_is_joined_as_drawn_
 ])
 def test_a_tile_not_lying_beside_two_partners_studs_in_their_plane_is_not_joined(top):
     result, joints, _ = solved(BRICK + top)
-    assert not [j for j in joints if "63864" in j] and result.report.verdict.code == "not_one_piece"
+    assert not [j for j in joints if "63864" in j] and result.report.verdict.code == "one_piece_not_determined"

@@ -1,5 +1,5 @@
 """The verdicts of a LEGO model's report: a model mostly of parts outside the catalogue is NOT DETERMINED (rigid
-null), a build that comes apart as analysed is NOT ONE PIECE, two parts typed a world apart are warned."""
+null), a build that comes apart as analysed is NOT DETERMINED (loose or a joint the catalogue lacks), two parts typed a world apart are warned."""
 
 from __future__ import annotations
 
@@ -58,12 +58,12 @@ def test_a_hose_drawn_as_a_chain_of_segments_is_one_element():
     assert unknown_elements(["a", "b"], np.zeros((2, 3))) == 2  # two numbers at one place: two parts
 
 
-def test_bricks_side_by_side_with_no_joint_are_not_one_piece():
+def test_bricks_side_by_side_with_no_joint_are_not_determined_as_one_piece():
     # two bricks touching face to face (the second 40 LDU along z): nothing holds them together
     result = solve(parts((BRICK, (0, 0, 0)), (BRICK, (0, 0, 40)), (BRICK, (0, -24, 0)))).result
-    assert result.rigid is False and len(result.pieces) == 2 and not result.pieces[1].drawn_apart
+    assert result.rigid is None and len(result.pieces) == 2 and not result.pieces[1].drawn_apart
     verdict = result.report.verdict
-    assert (verdict.label, verdict.code) == ("NOT ONE PIECE", "not_one_piece")
+    assert (verdict.label, verdict.code) == ("NOT DETERMINED", "one_piece_not_determined")
     details = result.report.warnings[0].details
     assert (details["pieces"], details["single_parts"], details["parts"]) == (1, 1, 1)
     assert "floating_parts" in codes(result)
