@@ -1,0 +1,97 @@
+"""Coherent representatives: each class's representative taken from the same copy of the repeated assembly as
+the reference class's, so that the members of one copy share one transform across classes (the pool).
+
+The classes come out of the matching with their first product in GlobalId order as representative: an order
+no instance numbering decides, but one that scatters the representatives over the model (GlobalIds are random),
+so a tunnel ring's eight segments would each need their own transform. The reference class is the largest (ties:
+the smallest representative GlobalId); another class's representative ``c`` belongs to the reference's copy when
+its transform is the inverse of a reference member's (the copy the class's first representative lies in, seen
+from the reference's): the inverse of a reference member's transform takes the class's representative onto
+``c`` (a transform the matching found may differ from it by a symmetry of the shape, so it is verified, not
+compared). Re-rooted transforms are verified again, two ways, within the
+tolerance; a class any of whose members would fail keeps its representative.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from plantsolve.solvers.dedup.matching import Match, verify
+
+if TYPE_CHECKING:  # grouping calls cohere: the class is only named here
+    from plantsolve.solvers.dedup.grouping import CongruenceClass
+
+
+def _affine(m: Match) -> tuple[np.ndarray, np.ndarray]:
+    return m.rotation * m.scale, m.translation
+
+
+def _reference(classes: list[CongruenceClass]) -> CongruenceClass | None:
+    shared = [c for c in classes if len(c.members) > 1]
+    if not shared:
+        return None
+    return min(shared, key=lambda c: (-len(c.members), str(c.representative.product.GlobalId)))
+
+
+def _in_reference_copy(cls: CongruenceClass, ref: CongruenceClass, tol: float) -> int | None:
+    """The index of the member of ``cls`` in the reference's copy, else None.
+
+    The reference's transforms take its copy onto every other copy: applied to the centre of the member in the
+    reference's copy, each lands on the centre of a member of ``cls`` (a symmetry of a shape keeps its centre, so
+    the transforms the matching happened to pick do not matter). A member of another copy lands on fewer (a
+    straight row of copies: past its end), or on none (a copy turned or moved otherwise). The member whose centre
+    lands on most, then the smallest GlobalId; None when that is the representative already, or when no member
+    lands more often than by chance (once: the identity)."""
+    linear = np.stack([m.rotation * m.scale for _, m in ref.members])
+    shift = np.stack([m.translation for _, m in ref.members])
+    centres = np.stack([cand.shape.centre for cand, _ in cls.members])
+    landed = np.einsum("kij,mj->mki", linear, centres) + shift[None, :, :]  # (member, reference transform, 3)
+    near = cKDTree(centres).query(landed.reshape(-1, 3), k=1, distance_upper_bound=2 * tol)[0]
+    hits = np.isfinite(near).reshape(len(centres), len(ref.members)).sum(axis=1)
+    best = min(range(len(centres)), key=lambda k: (-int(hits[k]), str(cls.members[k][0].product.GlobalId), k))
+    return best if hits[best] > 1 else None
+
+
+def _rerooted(cls: CongruenceClass, k: int, tol: float) -> CongruenceClass | None:
+    """``cls`` with member ``k`` as representative, every transform verified again; None if one fails."""
+    new_rep, via = cls.members[k]
+    linear_c, shift_c = _affine(via)
+    undo = np.linalg.inv(linear_c)
+    members = [(new_rep, Match(np.eye(3), 1.0, np.zeros(3), 0.0, False))]
+    for j, (cand, m) in enumerate(cls.members):
+        if j == k:
+            continue
+        linear_m, shift_m = _affine(m)
+        scale = m.scale / via.scale
+        rotation = (linear_m @ undo) / scale
+        translation = shift_m - linear_m @ undo @ shift_c
+        moved = Match(rotation, scale, translation, 0.0, bool(np.linalg.det(rotation) < 0))
+        dev = verify(new_rep.shape, cand.shape, moved, tol)
+        if not dev <= tol:
+            return None
+        moved.deviation = dev
+        members.append((cand, moved))
+    return replace(cls, representative=new_rep, members=members)
+
+
+def cohere(classes: list[CongruenceClass], tol: float) -> int:
+    """Re-root each class in the reference's copy where it verifies (in place); how many classes changed."""
+    ref = _reference(classes)
+    if ref is None:
+        return 0
+    changed = 0
+    for i, cls in enumerate(classes):
+        if cls is ref or len(cls.members) < 2:
+            continue
+        k = _in_reference_copy(cls, ref, tol)
+        if not k:  # none, or the representative is in the reference's copy already
+            continue
+        rerooted = _rerooted(cls, k, tol)
+        if rerooted is not None:
+            classes[i] = rerooted
+            changed += 1
+    return changed
