@@ -10,12 +10,11 @@ transforms and the written file would follow the numbering."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.congruence import Candidate, CongruenceClass
 from plantsolve.solvers.dedup.matching import (
     Match,
     Shape,
@@ -27,19 +26,6 @@ from plantsolve.solvers.dedup.representatives import cohere
 
 QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
 CANONICAL_DEPTH = 8
-
-
-@dataclass
-class Candidate:
-    product: object  # the ifcopenshell entity_instance
-    key: tuple
-    shape: Shape
-
-
-@dataclass
-class CongruenceClass:
-    representative: Candidate
-    members: list[tuple[Candidate, Match]] = field(default_factory=list)  # the representative first (identity)
 
 
 def canonical(value, depth: int = CANONICAL_DEPTH):

@@ -70,7 +70,7 @@ def standard_share(diameters: np.ndarray, metres_per_unit: float) -> float:
 
 def judge_pipe_diameters(products: Iterable, points: Mapping[int, np.ndarray], unit_name: str, metres_per_unit: float,
                          units_m: Mapping[str, float]) -> list[Diagnostic]:
-    """Warning ``implausible_pipe_diameter`` when the pipe segments' outside diameters, read in the file's stated
+    """Warning ``implausible_product_size`` (its quantity: the pipe outside diameter) when the pipe segments' outside diameters, read in the file's stated
     unit, are mostly no standard pipe size and read in another of ``units_m`` (name → metres) nearly all are."""
     measured = [d for d in (outside_diameter(points[p.id()]) for p in products if p.id() in points and is_pipe(p))
                 if d is not None and d > 0]
@@ -86,7 +86,7 @@ def judge_pipe_diameters(products: Iterable, points: Mapping[int, np.ndarray], u
         return []
     shown = sorted({round(d, 6) for d in measured})[:6]
     said = ", ".join(f"{d:.4g}" for d in shown)
-    return [Diagnostic(code="implausible_pipe_diameter", message=(
+    return [Diagnostic(code="implausible_product_size", message=(
         f"In the length unit the file's IfcUnitAssignment states ({unit_name}), {1 - stated:.0%} of the "
         f"{len(measured)} pipe segments have an outside diameter no standard pipe has (ASME B36.10M, ISO 4200): "
         f"{said} {unit_name}; read as {likely[0]} they are standard sizes "

@@ -14,16 +14,11 @@ tolerance; a class any of whose members would fail keeps its representative.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import TYPE_CHECKING
-
 import numpy as np
 from scipy.spatial import cKDTree
 
+from plantsolve.solvers.dedup.congruence import CongruenceClass
 from plantsolve.solvers.dedup.matching import Match, verify
-
-if TYPE_CHECKING:  # grouping calls cohere: the class is only named here
-    from plantsolve.solvers.dedup.grouping import CongruenceClass
 
 
 def _affine(m: Match) -> tuple[np.ndarray, np.ndarray]:
@@ -75,7 +70,7 @@ def _rerooted(cls: CongruenceClass, k: int, tol: float) -> CongruenceClass | Non
             return None
         moved.deviation = dev
         members.append((cand, moved))
-    return replace(cls, representative=new_rep, members=members)
+    return CongruenceClass(new_rep, members)
 
 
 def cohere(classes: list[CongruenceClass], tol: float) -> int:

@@ -61,18 +61,16 @@ def test_the_outside_diameter_of_a_tessellated_pipe_in_any_direction():
 
 def test_metres_under_a_foot_assignment_are_named_by_the_pipe_diameters():
     model = _plant()
-    assert "implausible_pipe_diameter" not in _warnings(model)  # in metres, as stated: nothing to say
+    assert "implausible_product_size" not in _warnings(model)  # in metres, as stated: nothing to say
     # before: nothing said (the median product, 0.6 ft across, is no odd product)
-    codes = _warnings(_foot(_plant()))
-    warning = codes["implausible_pipe_diameter"]
-    assert "implausible_product_size" not in codes
+    warning = _warnings(_foot(_plant()))["implausible_product_size"]
     assert warning.details["quantity"] == "pipe outside diameter" and warning.details["likely_units"][0] == "m"
     assert warning.details["pipes_measured"] == 10 and warning.details["standard_share"] == 0.0
     assert "written in m?" in warning.message and "114.3 mm" in warning.message
 
 
 def test_a_plant_in_feet_under_a_foot_assignment_and_pipes_drawn_at_nominal_size_say_nothing():
-    assert "implausible_pipe_diameter" not in _warnings(_foot(_plant(scale=1 / 0.3048)))
+    assert "implausible_product_size" not in _warnings(_foot(_plant(scale=1 / 0.3048)))
     # DN 50 … 200 drawn as 50 … 200 mm: a standard size in no unit, so no evidence of one
     nominal = _foot(_plant(outside=(0.05, 0.08, 0.1, 0.15, 0.2)))
-    assert "implausible_pipe_diameter" not in _warnings(nominal)
+    assert "implausible_product_size" not in _warnings(nominal)
