@@ -18,7 +18,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.dedup.congruence import CongruenceClass
-from plantsolve.solvers.dedup.matching import Match, verify
+from plantsolve.solvers.dedup.matching import Match, det3s, one_to_one, verify
+
+TRIED = 64  # members tried as the reference copy's (each costs a query of every reference transform)
 
 
 def _affine(m: Match) -> tuple[np.ndarray, np.ndarray]:
@@ -38,34 +40,55 @@ def _in_reference_copy(cls: CongruenceClass, ref: CongruenceClass, tol: float) -
     The reference's transforms take its copy onto every other copy: applied to the centre of the member in the
     reference's copy, each lands on the centre of a member of ``cls`` (a symmetry of a shape keeps its centre, so
     the transforms the matching happened to pick do not matter). A member of another copy lands on fewer (a
-    straight row of copies: past its end), or on none (a copy turned or moved otherwise). The member whose centre
-    lands on most, then the smallest GlobalId; None when that is the representative already, or when no member
-    lands more often than by chance (once: the identity)."""
+    straight row of copies: past its end), or on none (a copy turned or moved otherwise). The members nearest the
+    reference's representative are tried first (then by GlobalId): the first on which every transform lands, else
+    the one of the first ``TRIED`` that most land on. None when that is the representative already, or when no
+    member is landed on more often than by chance (once: the identity)."""
     linear = np.stack([m.rotation * m.scale for _, m in ref.members])
     shift = np.stack([m.translation for _, m in ref.members])
     centres = np.stack([cand.shape.centre for cand, _ in cls.members])
-    landed = np.einsum("kij,mj->mki", linear, centres) + shift[None, :, :]  # (member, reference transform, 3)
-    near = cKDTree(centres).query(landed.reshape(-1, 3), k=1, distance_upper_bound=2 * tol)[0]
-    hits = np.isfinite(near).reshape(len(centres), len(ref.members)).sum(axis=1)
-    best = min(range(len(centres)), key=lambda k: (-int(hits[k]), str(cls.members[k][0].product.GlobalId), k))
-    return best if hits[best] > 1 else None
+    tree = cKDTree(centres)
+    origin = ref.representative.shape.centre
+    near = np.linalg.norm(centres - origin, axis=1).tolist()
+    order = sorted(range(len(centres)), key=lambda k: (near[k], str(cls.members[k][0].product.GlobalId)))
+    best, most = None, 1
+    for k in order[:TRIED]:
+        landed = linear @ centres[k] + shift
+        hits = int(np.isfinite(tree.query(landed, k=1, distance_upper_bound=2 * tol)[0]).sum())
+        if hits > most:
+            best, most = k, hits
+        if hits == len(ref.members):
+            break
+    return best
 
 
 def _rerooted(cls: CongruenceClass, k: int, tol: float) -> CongruenceClass | None:
-    """``cls`` with member ``k`` as representative, every transform verified again; None if one fails."""
+    """``cls`` with member ``k`` as representative, every transform verified again; None if one fails. The members'
+    new transforms and moved points come from stacked products; each is then looked up in its member's tree once
+    (a one-to-one nearest-point map within the tolerance is the two-way Hausdorff distance, as in ``verify``, which
+    decides the rest)."""
     new_rep, via = cls.members[k]
+    others = [(cand, m) for j, (cand, m) in enumerate(cls.members) if j != k]
     linear_c, shift_c = _affine(via)
     undo = np.linalg.inv(linear_c)
+    scales = np.array([m.scale / via.scale for _, m in others])
+    linear = np.stack([_affine(m)[0] for _, m in others]) @ undo  # (member, 3, 3): rotation × scale
+    translations = np.stack([_affine(m)[1] for _, m in others]) - linear @ shift_c
+    rotations = linear / scales[:, None, None]
+    improper = det3s(rotations) < 0
+    shape = new_rep.shape
+    moved_all = (np.matmul(shape.local, linear.transpose(0, 2, 1)) + (linear @ shape.centre)[:, None, :]
+                 + translations[:, None, :])
     members = [(new_rep, Match(np.eye(3), 1.0, np.zeros(3), 0.0, False))]
-    for j, (cand, m) in enumerate(cls.members):
-        if j == k:
-            continue
-        linear_m, shift_m = _affine(m)
-        scale = m.scale / via.scale
-        rotation = (linear_m @ undo) / scale
-        translation = shift_m - linear_m @ undo @ shift_c
-        moved = Match(rotation, scale, translation, 0.0, bool(np.linalg.det(rotation) < 0))
-        dev = verify(new_rep.shape, cand.shape, moved, tol)
+    for j, (cand, _) in enumerate(others):
+        moved = Match(rotations[j], float(scales[j]), translations[j], 0.0, bool(improper[j]))
+        dev = np.inf
+        if len(shape.local) == len(cand.shape.local) > 0:
+            dist, idx = cand.shape.tree.query(moved_all[j] - cand.shape.centre, k=1, distance_upper_bound=tol * 1.0001)
+            if float(dist.max()) <= tol and one_to_one(idx, len(cand.shape.local)):
+                dev = float(dist.max())
+        if not dev <= tol:
+            dev = verify(shape, cand.shape, moved, tol)
         if not dev <= tol:
             return None
         moved.deviation = dev
