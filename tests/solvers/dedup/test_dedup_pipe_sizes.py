@@ -74,3 +74,24 @@ def test_a_plant_in_feet_under_a_foot_assignment_and_pipes_drawn_at_nominal_size
     # DN 50 … 200 drawn as 50 … 200 mm: a standard size in no unit, so no evidence of one
     nominal = _foot(_plant(outside=(0.05, 0.08, 0.1, 0.15, 0.2)))
     assert "implausible_product_size" not in _warnings(nominal)
+
+
+def test_ifc2x3_flow_segments_typed_as_pipe_segments_are_measured_too():
+    """IFC2X3 has no IfcPipeSegment: its pipes are IfcFlowSegments typed by an IfcPipeSegmentType (an untyped flow
+    segment may be a duct or a cable carrier, and is not measured)."""
+    def plant(typed: bool):
+        products = []
+        for k, d in enumerate(OUTSIDE_M):
+            pipe = _pipe(d, 2.0 + k, pose(30.0 * k, 70.0, 40.0 * k, [5.0 * k, 0.0, 1.5]), f"Pipe {k}")
+            pipe.entity = "IfcFlowSegment"
+            products.append(pipe)
+        model = build_model(ModelSpec(schema="IFC2X3", products=products))
+        if typed:
+            pipe_type = ifcopenshell.api.run("root.create_entity", model, ifc_class="IfcPipeSegmentType", name="Pipe")
+            ifcopenshell.api.run("type.assign_type", model, related_objects=model.by_type("IfcFlowSegment"),
+                                 relating_type=pipe_type)
+        return _foot(model)
+
+    warning = _warnings(plant(typed=True))["implausible_product_size"]
+    assert warning.details["quantity"] == "pipe outside diameter" and warning.details["pipes_measured"] == 5
+    assert "implausible_product_size" not in _warnings(plant(typed=False))
