@@ -2,18 +2,19 @@
 entity, ``ObjectType``, predefined type, the structure and styling of their body representation and
 an invariant signature of their world geometry (point and triangle counts exactly; principal spreads
 and centred-distance quantiles within the tolerance, through a k-d tree so that only plausible pairs
-are ever compared). Within a group, the first unassigned product becomes a representative and every
-candidate near it in signature space is matched (``matching.match``); a candidate that fails stays
-for a later representative."""
+are ever compared). Within a group, the first unassigned product in GlobalId order becomes a
+representative and every candidate near it in signature space is matched (``matching.match``); a
+candidate that fails stays for a later representative. GlobalId order, not the file's: another
+exporter writing the same model numbers its instances differently, and the representatives, the
+transforms and the written file would follow the numbering."""
 
 from __future__ import annotations
-
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.solvers.base import Progress, no_progress
+from plantsolve.solvers.dedup.congruence import Candidate, CongruenceClass
 from plantsolve.solvers.dedup.matching import (
     Match,
     Shape,
@@ -21,22 +22,10 @@ from plantsolve.solvers.dedup.matching import (
     make_shape,
     match,
 )
+from plantsolve.solvers.dedup.representatives import cohere
 
 QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
 CANONICAL_DEPTH = 8
-
-
-@dataclass
-class Candidate:
-    product: object  # the ifcopenshell entity_instance
-    key: tuple
-    shape: Shape
-
-
-@dataclass
-class CongruenceClass:
-    representative: Candidate
-    members: list[tuple[Candidate, Match]] = field(default_factory=list)  # the representative first (identity)
 
 
 def canonical(value, depth: int = CANONICAL_DEPTH):
@@ -79,11 +68,21 @@ def product_key(product, representation, model, n_points: int, n_triangles: int)
             n_points, n_triangles)
 
 
+def canonical_order(candidates: list[Candidate]) -> list[Candidate]:
+    """The candidates by GlobalId; products that repeat a GlobalId (an invalid file, warned about) by their
+    world centre, then by every world point: an order no instance number decides, unless two products
+    repeat both their GlobalId and their geometry."""
+    return sorted(candidates, key=lambda c: (str(c.product.GlobalId), c.shape.centre.tolist(),
+                                             c.shape.points.tobytes()))
+
+
 def build_classes(candidates: list[Candidate], tol: float, *, allow_mirror: bool, allow_scale: bool,
                   progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0)) -> list[CongruenceClass]:
-    """Every candidate in exactly one class (singletons included), in file order."""
+    """Every candidate in exactly one class (singletons included), in the GlobalId order of their first members,
+    each class's representative from the reference class's copy of the assembly where one is
+    (:func:`representatives.cohere`)."""
     groups: dict[tuple, list[Candidate]] = {}
-    for c in candidates:
+    for c in canonical_order(candidates):
         groups.setdefault(c.key, []).append(c)
     classes: list[CongruenceClass] = []
     done = 0
@@ -114,6 +113,7 @@ def build_classes(candidates: list[Candidate], tol: float, *, allow_mirror: bool
             done += len(cls.members)
             if len(classes) % 16 == 0:
                 progress(lo + (hi - lo) * done / max(len(candidates), 1), "matching")
+    cohere(classes, tol)
     return classes
 
 

@@ -33,7 +33,7 @@ import ifcopenshell.util.placement
 from plantsolve.solvers.base import Progress, no_progress
 from plantsolve.solvers.dedup import compaction
 from plantsolve.solvers.dedup.compaction import remove_batch
-from plantsolve.solvers.dedup.grouping import CongruenceClass
+from plantsolve.solvers.dedup.congruence import CongruenceClass
 
 
 class Placements:

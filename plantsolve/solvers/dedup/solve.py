@@ -15,6 +15,7 @@ from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing, skeleton
 from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
+from plantsolve.solvers.dedup.pipe_sizes import judge_pipe_diameters
 from plantsolve.solvers.dedup.placements import repeated_global_ids, why_nothing_placed, why_unprocessed
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
@@ -191,9 +192,11 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         if not points:
             raise reject(why_nothing_placed(products, path))
         sizes = model_sizes(points.values())
-        # the median product first; where it passes, doors, walls and storeys (CENTI over metres gives 2 cm doors)
+        # the median product first; where it passes, doors, walls and storeys (CENTI over metres gives 2 cm doors),
+        # then the pipes' outside diameters (a plant model has no doors; METRE numbers under FOOT give 35 mm pipes)
         warnings.extend(judge_product_size(sizes[0], symbol, unit) or judge_typical_sizes(
-            products, points, (s.Elevation for s in model.by_type("IfcBuildingStorey")), symbol, unit, METRES))
+            products, points, (s.Elevation for s in model.by_type("IfcBuildingStorey")), symbol, unit, METRES)
+            or judge_pipe_diameters(products, points, symbol, unit, METRES))
         if opts.tolerance is not None:
             tol, tolerance_from = float(opts.tolerance), "options.tolerance"
         else:
