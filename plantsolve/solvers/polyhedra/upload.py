@@ -29,7 +29,7 @@ gbXML (``.xml``, ``.gbxml``): ``Campus/Surface`` PolyLoops with their AdjacentSp
 
 IFC: ``IfcSpace`` bodies tessellated by IfcOpenShell (``ifc_spaces``), with their base quantities.
 
-STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
+STL (binary, read with numpy; ASCII, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
 ``t1``, ``t2``, … in file order).
 """
 
@@ -47,17 +47,16 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
     reject, utf16_without_mark, validated
-from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
-from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.obj_units import header_unit
 from plantsolve.solvers.polyhedra.space_claims import space_claims
+from plantsolve.solvers.polyhedra.stl_binary import HEADER_BYTES, binary_stl_arrays, is_binary_stl
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.decimal_comma import is_decimal_comma
@@ -694,10 +693,8 @@ def _closed_zones(edges: np.ndarray, lengths: np.ndarray, zone_of: list[str]) ->
 
 
 def parse_stl(content: bytes) -> dict:
-    """One zone of triangles (trimesh reads the file; vertices stay unwelded, the solver merges them)."""
-    import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
-    import trimesh.exchange.stl  # noqa: PLC0415
-
+    """One zone of triangles (a binary file read by :mod:`.stl_binary`, an ASCII one by trimesh; vertices stay
+    unwelded, the solver merges them)."""
     content = _without_utf8_mark(_ascii_stl_from_utf16(content))
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
@@ -735,8 +732,7 @@ def parse_stl(content: bytes) -> dict:
     if ascii_like:
         _refuse_unreadable_numbers(content, only_commas=True)
     try:
-        # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
-        loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
+        loaded = _read_stl(content)
         solid_names: list[str] = []
         solid_of = None
         if not {"vertices", "faces"} <= set(loaded):  # several solids (an ASCII file's rooms): one zone each
@@ -789,6 +785,19 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _read_stl(content: bytes) -> dict:
+    """The reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles). A file
+    whose size matches its triangle count is binary, whatever its first bytes, as trimesh's reader tries it first."""
+    if is_binary_stl(content):
+        if len(content) == HEADER_BYTES:  # no triangle: as trimesh's reader, no geometry
+            return {"geometry": {}}
+        vertices, triangles = binary_stl_arrays(content)
+        return {"vertices": vertices, "faces": triangles}
+    import trimesh.exchange.stl  # noqa: PLC0415  (an ASCII file only: importing trimesh costs half a second)
+
+    return trimesh.exchange.stl.load_stl_ascii(io.BytesIO(content))
 
 
 def _refuse_unreadable_numbers(content: bytes, only_commas: bool) -> None:
@@ -904,6 +913,8 @@ def parse_json(text: str) -> dict:
     body = json_object(text, refuse_cut=True)
     if _is_epjson(body):  # an epJSON saved under .json: its geometry, not a refusal of its keys as request fields
         return parse_epjson(text)
+    from plantsolve.solvers.other_kinds import refuse_other_kind  # noqa: PLC0415  (every kind's schemas: JSON only)
+
     refuse_other_kind(body, "polyhedra")
     return body
 
@@ -925,6 +936,9 @@ def read_file(extension: str, content: bytes) -> dict:
     if extension in (".xml", ".gbxml"):
         return parse_gbxml(content)
     if extension == ".ifc":
+        # IfcOpenShell (70 MB of address space) for an IFC file only, not in every reader and job of this kind
+        from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc  # noqa: PLC0415
+
         return parse_ifc(content)
     text = decode_text(content)
     return {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(extension, parse_json)(text)
@@ -933,6 +947,8 @@ def read_file(extension: str, content: bytes) -> dict:
 def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -> InputRejected:
     """A reader's refusal, said to be about a file of another format when its start shows one (a CSV named
     .idf, a STEP CAD model named .ifc, an OBJ point cloud)."""
+    from plantsolve.solvers.other_kinds import file_holds  # noqa: PLC0415  (every kind's schemas: on a refusal only)
+
     holds = file_holds(content[:65536])
     if holds is None or holds.startswith(EXPECTED.get(extension, "?")) or extension == ".stl" and "STL" in holds:
         return refused
