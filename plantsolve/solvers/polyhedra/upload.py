@@ -47,12 +47,14 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
 from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
     reject, utf16_without_mark, validated
+from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
 from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
+from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.obj_units import header_unit
 from plantsolve.solvers.polyhedra.space_claims import space_claims
@@ -913,8 +915,6 @@ def parse_json(text: str) -> dict:
     body = json_object(text, refuse_cut=True)
     if _is_epjson(body):  # an epJSON saved under .json: its geometry, not a refusal of its keys as request fields
         return parse_epjson(text)
-    from plantsolve.solvers.other_kinds import refuse_other_kind  # noqa: PLC0415  (every kind's schemas: JSON only)
-
     refuse_other_kind(body, "polyhedra")
     return body
 
@@ -936,9 +936,6 @@ def read_file(extension: str, content: bytes) -> dict:
     if extension in (".xml", ".gbxml"):
         return parse_gbxml(content)
     if extension == ".ifc":
-        # IfcOpenShell (70 MB of address space) for an IFC file only, not in every reader and job of this kind
-        from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc  # noqa: PLC0415
-
         return parse_ifc(content)
     text = decode_text(content)
     return {".idf": parse_idf, ".epjson": parse_epjson, ".obj": parse_obj}.get(extension, parse_json)(text)
@@ -947,8 +944,6 @@ def read_file(extension: str, content: bytes) -> dict:
 def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -> InputRejected:
     """A reader's refusal, said to be about a file of another format when its start shows one (a CSV named
     .idf, a STEP CAD model named .ifc, an OBJ point cloud)."""
-    from plantsolve.solvers.other_kinds import file_holds  # noqa: PLC0415  (every kind's schemas: on a refusal only)
-
     holds = file_holds(content[:65536])
     if holds is None or holds.startswith(EXPECTED.get(extension, "?")) or extension == ".stl" and "STL" in holds:
         return refused
