@@ -17,9 +17,9 @@ full analysis again in a fresh process each (CPU seconds, peak RSS of the proces
 ``--before``, the other checkout's. Last, end to end: the mesh as a binary STL through
 ``plantsolve solve polyhedra`` (a child process: CPU seconds user + system, its peak RSS, the result
 JSON's and the artifacts' sizes) against trimesh loading the same file and taking volume and area
-in a child process of its own. CPU seconds come from the children's ``wait4`` rusage.
-The per-face rows of zones.csv (180 MiB for the million triangles) are written above 10,000 faces only
-when asked (options.faces_csv): the last row asks for them.
+in a child process of its own, each checkout without and with the per-face rows of zones.csv (180 MiB for
+the million triangles, written above 10,000 faces only when options.faces_csv asks), each run ``--repeats``
+times interleaved (median CPU, largest peak RSS). CPU seconds come from the children's ``wait4`` rusage.
 Targets: 1,000 zones < 2 s; the million-triangle mesh within 2x of trimesh in process, under 1 GB;
 end to end (`plantsolve solve`, its whole process) within 2x of trimesh's whole process reading the
 file, under 1 GB peak RSS.
@@ -187,48 +187,63 @@ def python_of(repo: Path) -> Path:
     return venv if venv.exists() else Path(sys.executable)
 
 
-def end_to_end(n_major: int, n_minor: int, checkouts: dict[str, Path]) -> None:
+def end_to_end(n_major: int, n_minor: int, checkouts: dict[str, Path], repeats: int = 3) -> None:
+    """The mesh as a binary STL through each checkout's whole pipeline and its command line, with and without the
+    per-face rows, beside trimesh's process: each run ``repeats`` times, interleaved (the machine is shared), its
+    median CPU seconds and its largest peak RSS."""
     vertices, triangles = torus_mesh(n_major, n_minor)
     with tempfile.TemporaryDirectory(prefix="bench-polyhedra-") as folder:
         work = Path(folder)
         stl = work / "torus.stl"
         trimesh.Trimesh(vertices=vertices, faces=triangles, process=False).export(stl)
-        t_process, t_rss, out = child([sys.executable, "-c", CHILD_TRIMESH_FILE, str(stl)])
-        tm = json.loads(out)
-        t_cpu = tm["cpu"]  # load + volume + area, after its imports
-        print(f"\nend to end: the {len(triangles):,}-triangle torus as a binary STL ({stl.stat().st_size / 2**20:.0f} MiB) "
-              "through `plantsolve solve polyhedra torus.stl -o out.json` (a temporary store, artifacts written)")
-        print("| run | CPU [s] | ratio to trimesh | ratio to trimesh's process | peak RSS [MiB] | result JSON [MiB] "
-              "| CSV [MiB] | volume |")
-        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-        print(f"| trimesh load + volume + area of the file (its whole process, imports included: {t_process:.2f} s) | "
-              f"{t_cpu:.2f} | 1.00 | | {t_rss:.0f} | | | {tm['volume']:.9f} |")
+        rows: dict[str, dict] = {"trimesh": {"argv": [sys.executable, "-c", CHILD_TRIMESH_FILE, str(stl)]}}
         for label, repo in checkouts.items():
-            try:
-                cpu, rss, out = child([str(python_of(repo)), "-c", CHILD_PIPELINE, str(repo), str(stl)])
-            except RuntimeError as failed:
-                print(f"| read + check + solve + JSON + artifacts in one process ({label}) | failed: "
-                      f"{' '.join(str(failed).split())[-160:]} | | | | | | |")
-            else:
-                got = json.loads(out)
-                print(f"| read + check + solve + JSON + artifacts in one process ({label}) | {got['cpu']:.2f} | "
-                      f"{got['cpu'] / t_cpu:.2f} | | {rss:.0f} | {got['json'] / 2**20:.1f} | {got['csv'] / 2**20:.0f} | "
-                      f"{got['volume']:.9f} |")
-        runs = {label: (repo, []) for label, repo in checkouts.items()}
-        runs["this, faces_csv asked"] = (REPO, ["--options", '{"faces_csv": true}'])
-        for k, (label, (repo, options)) in enumerate(runs.items()):
-            out_json = work / f"run{k}.json"
-            argv = [str(python_of(repo)), "-c", CHILD_CLI, "solve", "polyhedra", str(stl), "-o", str(out_json),
-                    "--no-progress", *options]
-            try:
-                cpu, rss, _ = child(argv, cwd=work)
-            except RuntimeError as failed:
-                print(f"| plantsolve solve ({label}) | failed: {' '.join(str(failed).split())[-160:]} | | | | | | |")
+            rows[f"pipeline ({label})"] = {"argv": [str(python_of(repo)), "-c", CHILD_PIPELINE, str(repo), str(stl)]}
+        for options, asked in (([], ""), (["--options", '{"faces_csv": true}'], ", faces_csv asked")):
+            for label, repo in checkouts.items():
+                rows[f"cli ({label}{asked})"] = {"repo": repo, "options": options}
+        for attempt in range(repeats):
+            for k, (name, row) in enumerate(rows.items()):
+                out_json = work / f"run{k}.json"
+                argv = row.get("argv") or [str(python_of(row["repo"])), "-c", CHILD_CLI, "solve", "polyhedra", str(stl),
+                                           "-o", str(out_json), "--no-progress", *row["options"]]
+                try:
+                    cpu, rss, out = child(argv, cwd=work)
+                except RuntimeError as failed:
+                    row["failed"] = " ".join(str(failed).split())[-160:]
+                    continue
+                row.setdefault("cpu", []).append(cpu)
+                row["rss"] = max(row.get("rss", 0.0), rss)
+                if "argv" in row:  # a child that times its own work, after its imports
+                    row["got"] = json.loads(out)
+                    row.setdefault("work", []).append(row["got"]["cpu"])
+                else:
+                    row["got"] = {"volume": json.loads(out_json.read_text())["total_volume"],
+                                  "json": out_json.stat().st_size,
+                                  "csv": (work / f"run{k}_artifacts" / "zones.csv").stat().st_size}
+        trimesh_row = rows.pop("trimesh")
+        t_cpu = float(np.median(trimesh_row["work"]))  # load + volume + area, after its imports
+        t_process = float(np.median(trimesh_row["cpu"]))
+        print(f"\nend to end: the {len(triangles):,}-triangle torus as a binary STL ({stl.stat().st_size / 2**20:.0f} MiB) "
+              "through `plantsolve solve polyhedra torus.stl -o out.json` (a temporary store, artifacts written); "
+              f"median CPU of {repeats} interleaved runs, largest peak RSS")
+        print("| run | CPU [s] | ratio to trimesh's load + volume + area | ratio to trimesh's whole process "
+              "| peak RSS [MiB] | result JSON [MiB] | CSV [MiB] | volume |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+        print(f"| trimesh: load + volume + area, after its imports | {t_cpu:.2f} | 1.00 | | | | | |")
+        print(f"| trimesh: its whole process (imports, load, volume, area) | {t_process:.2f} | "
+              f"{t_process / t_cpu:.2f} | 1.00 | {trimesh_row['rss']:.0f} | | | {trimesh_row['got']['volume']:.9f} |")
+        for name, row in rows.items():
+            pipeline = name.startswith("pipeline")
+            what = (f"read + check + solve + JSON + artifacts, after the imports, no job domain {name[9:]}" if pipeline
+                    else f"plantsolve solve, its whole process {name[4:]}")
+            if "cpu" not in row:
+                print(f"| {what} | failed: {row.get('failed')} | | | | | | |")
                 continue
-            result = json.loads(out_json.read_text())
-            csv_size = (work / f"run{k}_artifacts" / "zones.csv").stat().st_size
-            print(f"| plantsolve solve ({label}) | {cpu:.2f} | {cpu / t_cpu:.2f} | {cpu / t_process:.2f} | {rss:.0f} | "
-                  f"{out_json.stat().st_size / 2**20:.1f} | {csv_size / 2**20:.0f} | {result['total_volume']:.9f} |")
+            cpu, got = float(np.median(row["work" if pipeline else "cpu"])), row["got"]
+            whole = "" if pipeline else f"{cpu / t_process:.2f}"
+            print(f"| {what} | {cpu:.2f} | {cpu / t_cpu:.2f} | {whole} | {row['rss']:.0f} | "
+                  f"{got['json'] / 2**20:.1f} | {got['csv'] / 2**20:.0f} | {got['volume']:.9f} |")
 
 
 def mesh(n_major, n_minor):
@@ -350,6 +365,7 @@ def main() -> None:
     parser.add_argument("--formats-only", action="store_true", help="only the same rooms read from each format")
     parser.add_argument("--end-to-end-only", action="store_true",
                         help="only the mesh through `plantsolve solve` beside trimesh reading the file")
+    parser.add_argument("--repeats", type=int, default=3, help="runs of each end-to-end row (median CPU, largest RSS)")
     args = parser.parse_args()
     if args.formats_only:
         formats(*((10, 10) if args.quick else (30, 30)))
@@ -362,7 +378,7 @@ def main() -> None:
     if not args.end_to_end_only:
         mesh(*size)
         fresh_analysis(*size, checkouts)
-    end_to_end(*size, checkouts)
+    end_to_end(*size, checkouts, args.repeats)
 
 
 if __name__ == "__main__":

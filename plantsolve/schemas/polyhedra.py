@@ -280,9 +280,14 @@ class PolyhedraResult(BaseModel):
     units: Units = Field(description="The length unit of every length, area (units²) and volume (units³) here.")
     zones: list[ZoneResult]
     faces: list[FaceResult] = Field(description="Every face, when faces_listed (else empty: the zones.csv artifact "
-                                    "has them).")
+                                    "has a row per face when faces_in_csv).")
     faces_listed: bool = Field(default=True, description="Whether faces and each zone's faces list every face "
                                "(the option list_faces).")
+    faces_in_csv: bool | None = Field(default=None, description="Whether the zones.csv artifact has a row per face "
+                                      f"after the zone rows (the option faces_csv; omitted, up to {MAX_LISTED_FACES} "
+                                      "faces). When neither this nor faces_listed, the per-face numbers are nowhere: "
+                                      "send options.faces_csv true (or list_faces true) to have them. Null in a "
+                                      "result stored before this field.")
     edge_length_total: float = Field(description="Total length (units) of the distinct edges of all faces.",
                                      json_schema_extra=unit(LENGTH))
     adjacency: list[Adjacency]

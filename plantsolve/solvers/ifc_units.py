@@ -10,11 +10,13 @@ naming the name and the factor, so that ``length_unit`` and ``units`` do not con
 
 from __future__ import annotations
 
-import ifcopenshell
-import ifcopenshell.util.unit
+from typing import TYPE_CHECKING
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.solvers.base import reject
+
+if TYPE_CHECKING:
+    import ifcopenshell
 
 # the names IFC's conversion-based length units are written with, and their size in metres
 NAMED_M = {"FOOT": 0.3048, "FEET": 0.3048, "INCH": 0.0254, "YARD": 0.9144, "MILE": 1609.344}
@@ -36,6 +38,8 @@ def _said(unit, scale: float) -> str:
 def project_length_scale(model: ifcopenshell.file, depends: str) -> float:
     """Metres per unit of the project's length unit (1 when it assigns none); a 422 on ``file`` when it assigns
     two of different sizes, saying what ``depends`` on the unit."""
+    import ifcopenshell.util.unit  # noqa: PLC0415  (third-party, only needed for IFC: 70 MB of address space)
+
     units = _length_units(model)
     scales = [float(ifcopenshell.util.unit.get_unit_scale(u)) for u in units]
     if not scales:
@@ -51,6 +55,8 @@ def project_length_scale(model: ifcopenshell.file, depends: str) -> float:
 def named_unit_warnings(model: ifcopenshell.file) -> list[Diagnostic]:
     """Warning ``length_unit_factor_differs`` for a conversion-based length unit whose name (FOOT, INCH …) states
     another size than its conversion factor."""
+    import ifcopenshell.util.unit  # noqa: PLC0415  (third-party, only needed for IFC)
+
     out = []
     for unit in _length_units(model):
         if not unit.is_a("IfcConversionBasedUnit"):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Iterator
 from itertools import repeat
 
 import numpy as np
@@ -134,19 +135,22 @@ def _table(result: PolyhedraResult, poly: Polygons, face_table: np.ndarray | Non
     ids = poly.face_ids
     named = ids.names if isinstance(ids, FaceIds) else ids
     # a window standing for four on its wall: its row says so, or the rows' net areas would not add up to its host's
-    multipliers = np.full(poly.n_faces, "1", dtype=object) if copies is None else \
-        np.asarray(copies, dtype=np.int64).astype(str).astype(object)
+    copies = np.ones(poly.n_faces, dtype=np.int64) if copies is None else np.asarray(copies, dtype=np.int64)
     if poly.n_faces > MAX_LISTED_FACES and bulk_csv.writable([*poly.zone_ids, *named]) and \
             np.isfinite(face_table).all():
-        # one copy of the rows: the chunks joined behind the zone rows
-        return b"".join([out.getvalue().encode(), *_bulk_face_rows(poly, zones, parents, multipliers, face_table)])
+        # one copy of the rows: each chunk written behind the zone rows as it is made (BytesIO hands its buffer
+        # over without copying it); joined at the end, the chunks and the table were both held, 2 x 180 MB
+        table = io.BytesIO()
+        table.write(out.getvalue().encode())
+        table.writelines(_bulk_face_rows(poly, zones, parents, copies, face_table))
+        return table.getvalue()
+    multipliers = copies.astype(str).tolist()
     columns = [list(map(repr, face_table[:, k].tolist())) for k in range(face_table.shape[1]) if k != 1]
     net = columns[0] if np.array_equal(face_table[:, 0], face_table[:, 1]) else list(map(repr, face_table[:, 1].tolist()))
     area, perimeter, nx, ny, nz, planarity = columns
     blank = repeat("")
     writer.writerows(zip(repeat("face"), poly.face_ids, zones.tolist(), parents.tolist(), blank, blank, area, net,
-                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, multipliers.tolist(),
-                         blank))
+                         perimeter, blank, blank, blank, blank, nx, ny, nz, planarity, blank, multipliers, blank))
     return out.getvalue().encode()
 
 
@@ -163,22 +167,21 @@ def _label_cells(labels: np.ndarray) -> np.ndarray:
     return bulk_csv.text_cells(values.tolist())[index.reshape(-1)]
 
 
-def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, multipliers: np.ndarray,
-                    face_table: np.ndarray, chunk: int = 20_000) -> list[bytes]:
-    """The face rows of a large table in chunks (bulk_csv: 17 significant digits, written by array operations)."""
-    parts = []
+def _bulk_face_rows(poly: Polygons, zones: np.ndarray, parents: np.ndarray, copies: np.ndarray,
+                    face_table: np.ndarray, chunk: int = 20_000) -> Iterator[bytes]:
+    """The face rows of a large table in chunks (bulk_csv: 17 significant digits, written by array operations); the
+    multipliers made text a chunk at a time (a million faces' at once were 140 MB of strings)."""
     for s in range(0, poly.n_faces, chunk):
         e = min(s + chunk, poly.n_faces)
         n = e - s
         num = [bulk_csv.number_cells(face_table[s:e, k]) for k in range(face_table.shape[1])]
         comma = bulk_csv.literal(",", n)
-        parts.append(bulk_csv.rows([
+        yield bulk_csv.rows([
             bulk_csv.literal("face,", n), _id_cells(poly, s, e), comma,
             _label_cells(zones[s:e]), comma, _label_cells(parents[s:e]),
             bulk_csv.literal(",,,", n), num[0], comma, num[1], comma, num[2], bulk_csv.literal(",,,,,", n),
             num[3], comma, num[4], comma, num[5], comma, num[6], bulk_csv.literal(",,", n),
-            _label_cells(multipliers[s:e]), bulk_csv.literal(",\n", n)]))
-    return parts
+            _label_cells(copies[s:e]), bulk_csv.literal(",\n", n)])
 
 
 def render_artifacts(request: PolyhedraRequest, solved: Solved) -> list[Artifact]:

@@ -376,7 +376,8 @@ def solve(request: PolyhedraRequest, progress: Progress = no_progress) -> Solved
     if verdict is not None:  # the gravest first: Report.verdict is the first verdict among the warnings
         warnings.insert(0, verdict)
     return Solved(PolyhedraResult(
-        units=request.units, zones=zones, faces=face_results, faces_listed=listed, edge_length_total=edge_length_total,
+        units=request.units, zones=zones, faces=face_results, faces_listed=listed, faces_in_csv=tabled,
+        edge_length_total=edge_length_total,
         adjacency=adjacent, total_volume=total if all_closed else None,
         total_floor_area=float((floors * [z["multiplier"] * z["part_of_total_floor_area"] for z in zones]).sum()),
         report=Report(status="warning" if warnings else "ok",

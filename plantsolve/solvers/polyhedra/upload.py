@@ -29,7 +29,7 @@ gbXML (``.xml``, ``.gbxml``): ``Campus/Surface`` PolyLoops with their AdjacentSp
 
 IFC: ``IfcSpace`` bodies tessellated by IfcOpenShell (``ifc_spaces``), with their base quantities.
 
-STL (ASCII or binary, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
+STL (binary, read with numpy; ASCII, read with trimesh): one zone, its triangles as the request's ``mesh`` (faces
 ``t1``, ``t2``, … in file order).
 """
 
@@ -58,6 +58,7 @@ from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
 from plantsolve.solvers.polyhedra.obj_units import header_unit
 from plantsolve.solvers.polyhedra.space_claims import space_claims
+from plantsolve.solvers.polyhedra.stl_binary import HEADER_BYTES, binary_stl_arrays, is_binary_stl
 from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplier_index, subsurface_multiplier
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.decimal_comma import is_decimal_comma
@@ -694,10 +695,8 @@ def _closed_zones(edges: np.ndarray, lengths: np.ndarray, zone_of: list[str]) ->
 
 
 def parse_stl(content: bytes) -> dict:
-    """One zone of triangles (trimesh reads the file; vertices stay unwelded, the solver merges them)."""
-    import trimesh  # noqa: PLC0415  (third-party, only needed for STL)
-    import trimesh.exchange.stl  # noqa: PLC0415
-
+    """One zone of triangles (a binary file read by :mod:`.stl_binary`, an ASCII one by trimesh; vertices stay
+    unwelded, the solver merges them)."""
     content = _without_utf8_mark(_ascii_stl_from_utf16(content))
     head = content[:1024].lstrip().lower()
     ascii_like = head.startswith(b"solid") and b"facet" in content[:4096].lower()
@@ -735,8 +734,7 @@ def parse_stl(content: bytes) -> dict:
     if ascii_like:
         _refuse_unreadable_numbers(content, only_commas=True)
     try:
-        # the reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles)
-        loaded = trimesh.exchange.stl.load_stl(io.BytesIO(content))
+        loaded = _read_stl(content)
         solid_names: list[str] = []
         solid_of = None
         if not {"vertices", "faces"} <= set(loaded):  # several solids (an ASCII file's rooms): one zone each
@@ -789,6 +787,19 @@ def parse_stl(content: bytes) -> dict:
     return {"units": "m", "mesh": {"zone": name, "vertices": vertices, "triangles": triangles, "id_prefix": "t"},
             "source": {"format": "stl", "faces": len(triangles), "zones": 1, "skipped": skipped,
                        "skipped_count": int((~good).sum()), "warnings": warnings}}
+
+
+def _read_stl(content: bytes) -> dict:
+    """The reader's arrays as they are (a Trimesh object would hash them: a second of a million triangles). A file
+    whose size matches its triangle count is binary, whatever its first bytes, as trimesh's reader tries it first."""
+    if is_binary_stl(content):
+        if len(content) == HEADER_BYTES:  # no triangle: as trimesh's reader, no geometry
+            return {"geometry": {}}
+        vertices, triangles = binary_stl_arrays(content)
+        return {"vertices": vertices, "faces": triangles}
+    import trimesh.exchange.stl  # noqa: PLC0415  (an ASCII file only: importing trimesh costs half a second)
+
+    return trimesh.exchange.stl.load_stl_ascii(io.BytesIO(content))
 
 
 def _refuse_unreadable_numbers(content: bytes, only_commas: bool) -> None:
