@@ -65,7 +65,8 @@ def test_metres_under_a_foot_assignment_are_named_by_the_pipe_diameters():
     # before: nothing said (the median product, 0.6 ft across, is no odd product)
     warning = _warnings(_foot(_plant()))["implausible_product_size"]
     assert warning.details["quantity"] == "pipe outside diameter" and warning.details["likely_units"][0] == "m"
-    assert warning.details["pipes_measured"] == 10 and warning.details["standard_share"] == 0.0
+    # 4.5 and 8.625 in read as feet are 34.8 and 66.8 mm, a copper tube's 35 and 66.7: 4 of 10 plausible, no majority
+    assert warning.details["pipes_measured"] == 10 and warning.details["standard_share"] == 0.4
     assert "written in m?" in warning.message and "114.3 mm" in warning.message
 
 
@@ -95,3 +96,25 @@ def test_ifc2x3_flow_segments_typed_as_pipe_segments_are_measured_too():
     warning = _warnings(plant(typed=True))["implausible_product_size"]
     assert warning.details["quantity"] == "pipe outside diameter" and warning.details["pipes_measured"] == 5
     assert "implausible_product_size" not in _warnings(plant(typed=False))
+
+
+def _millimetre(model):
+    (unit,) = [u for u in model.by_type("IfcSIUnit") if u.UnitType == "LENGTHUNIT"]
+    unit.Prefix = "MILLI"
+    return model
+
+
+@pytest.mark.parametrize("outside_mm", [
+    (18.0, 22.0, 28.0, 42.0),  # copper EN 1057: as inches, 18, 22 and 28 in are steel pipes of NPS 18 to 28
+    (20.0, 32.0, 40.0),  # PE ISO 4065 (20 and 40 in are NPS 20 and 40)
+    (16.0, 20.0, 26.0, 32.0, 40.0),  # multilayer
+])
+def test_an_honest_millimetre_plant_in_copper_or_plastic_tube_is_not_called_inches(outside_mm):
+    model = _millimetre(_plant(scale=1000.0, outside=tuple(d / 1000.0 for d in outside_mm)))
+    assert "implausible_product_size" not in _warnings(model)
+
+
+def test_an_honest_foot_plant_in_astm_b88_copper_is_not_called_metres():
+    # 3/4, 1-1/4 and 2-1/2 copper: 7/8, 1-3/8 and 2-5/8 in outside; 2-5/8 in is 0.0729 ft, as metres NPS 2-1/2's 73.0 mm
+    model = _foot(_plant(scale=1 / 0.3048, outside=tuple(d * 0.0254 for d in (0.875, 1.375, 2.625))))
+    assert "implausible_product_size" not in _warnings(model)
