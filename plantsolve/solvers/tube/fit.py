@@ -418,7 +418,9 @@ class EndAssignment:
         rows = np.arange(S) if full else np.arange(1, S - 1)
         sub = _sub_spine(sp, rows)
         self.lo = np.empty(len(pts))
-        self.idx = np.empty(len(pts), int)
+        # the inner segments' numbers in 16 bits when they fit (as spine_distance's): a large scan's end samples
+        # are millions, and the numbers each model's assignment returns take this type too
+        self.idx = np.empty(len(pts), np.int16 if S < 2 ** 15 else np.intp)
         if full:
             d, seg = np.empty(len(pts)), np.empty(len(pts), int)
         step = max(1, INNER_CHUNK // max(len(rows), 1))
@@ -784,6 +786,8 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
             return model, res, seg, True
         seen.append((model, res, seg))
+        if i >= 3:  # only the last two iterations' assignments can be returned (below): no older one is held
+            seen[i - 3] = (seen[i - 3][0], None, None)
         if i >= 2 and np.array_equal(model.start, seen[i - 2][0].start) and np.array_equal(model.lengths,
                                                                                          seen[i - 2][0].lengths):
             # the ends swing between two lengths (the outermost samples with company differ by a stray sample
