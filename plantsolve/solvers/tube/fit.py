@@ -418,7 +418,9 @@ class EndAssignment:
         rows = np.arange(S) if full else np.arange(1, S - 1)
         sub = _sub_spine(sp, rows)
         self.lo = np.empty(len(pts))
-        self.idx = np.empty(len(pts), int)
+        # the inner segments' numbers in 16 bits when they fit (as spine_distance's): a large scan's end samples
+        # are millions, and the numbers each model's assignment returns take this type too
+        self.idx = np.empty(len(pts), np.int16 if S < 2 ** 15 else np.intp)
         if full:
             d, seg = np.empty(len(pts)), np.empty(len(pts), int)
         step = max(1, INNER_CHUNK // max(len(rows), 1))
@@ -784,6 +786,8 @@ def end_lengths(model: TubeModel, pts: np.ndarray, res: np.ndarray, seg: np.ndar
         if np.abs(m_new.lengths[[0, -1]] - model.lengths[[0, -1]]).max() <= 1e-3 * rp:
             return model, res, seg, True
         seen.append((model, res, seg))
+        if i >= 3:  # only the last two iterations' assignments can be returned (below): no older one is held
+            seen[i - 3] = (seen[i - 3][0], None, None)
         if i >= 2 and np.array_equal(model.start, seen[i - 2][0].start) and np.array_equal(model.lengths,
                                                                                          seen[i - 2][0].lengths):
             # the ends swing between two lengths (the outermost samples with company differ by a stray sample
@@ -876,9 +880,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
              f_scale: float | None = None, max_nfev: int | None = None):
     """Start vector, bounds, residual and Jacobian functions of one round with a fixed assignment; with ``keep``
     (a mask) of the samples it marks, as if given ``pts[keep]`` and ``seg[keep]``. With ``f_scale`` (the soft-L1
-    scale :func:`levenberg_marquardt` weights by) a large scan's residuals come with the normal equations at the
-    same point, one pass over the samples instead of two; with ``max_nfev`` (its evaluation limit) the last
-    evaluation it may make comes without them."""
+    scale :func:`levenberg_marquardt` weights by) a large scan (more than one block) also gets its cost function,
+    which sums the normal equations at the same point, one pass over the samples instead of two, and keeps no
+    array of their size; ``max_nfev``: the solver's evaluation limit (the last evaluation sums none). Returns
+    x0, lo, hi, fun, normal_equations, frame0, rp and that cost function (None for a small scan)."""
     frame0 = model.frame.copy()
     rp = model.pipe_radius
     x0 = pack(model, lay)
@@ -918,13 +923,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
 
     keep_terms = len(blocks) == 1
     # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
-    # computing them again costs a third of an LM iteration: with the weights' scale known, each block's share of
-    # the normal equations is summed while its distances are at hand (the weights are elementwise, so a block's
-    # are the very numbers ``_soft_l1`` gives over all samples); a rejected trial's sums are wasted, a
-    # quarter of the evaluations
-    fused = f_scale is not None and not keep_terms
-    # :func:`levenberg_marquardt` evaluates at most ``max_nfev`` times and forms no normal equations after its last
-    # evaluation: that one's sums (three quarters of an evaluation of a large scan) are left out
+    # computing them again costs a third of an LM iteration: with the weights' scale known, its solver takes the
+    # cost (``cost``), which sums the normal equations on the way
+    streamed = f_scale is not None and not keep_terms
     evaluations = [0]
     latest: dict = {}  # the latest evaluation: the normal equations come at the point fun has just accepted
 
@@ -948,32 +949,53 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arcs[i], on_arc[i])
 
     def fun(x, out=None):
-        """The residuals at x, into ``out`` when given (a large scan's array, reused: fresh memory of its
-        size costs the system more than filling it)."""
+        """The residuals at x, into ``out`` when given."""
         g, _ = geometry(x)
         g_t = g.T.copy()
         d = np.empty(N) if out is None else out
         terms = []
         r_p = x[-1] if lay.fit_pipe_radius else rp
         evaluations[0] += 1
-        summed = fused and (max_nfev is None or evaluations[0] < max_nfev)
-        sums = _gram_sums(7 + int(lay.fit_pipe_radius), len(kind)) if summed else None
         for i, b in enumerate(blocks):
             d[b], t = distance(g_t, i, b)
             if keep_terms:
                 terms.append(t)
-            if summed:
-                rb = d[b] - r_p
-                w = np.divide(rb, f_scale)
-                np.square(w, out=w)
-                w += 1.0
-                np.sqrt(w, out=w)
-                np.divide(1.0, w, out=w)
-                add_block(sums, i, t, w, rb)
         latest["terms"] = terms if keep_terms else None
-        latest["sums"] = sums
+        latest["sums"] = None
         d -= r_p
         return d
+
+    def cost(x) -> float:
+        """A large scan's soft-L1 cost at x (``_soft_l1``'s number to the last bit), each block's share of the
+        normal equations summed while its distances are at hand: no array of the samples' size (its residuals,
+        weights and their spares were five, some 40 bytes a sample, each page faulted in by the kernel). The
+        weights are elementwise, so a block's are the very numbers ``_soft_l1`` gives over all samples; the
+        cost's sum is numpy's pairwise sum over all of them, taken in its own splits (``PairwiseSum``). A
+        rejected trial's sums are wasted, a quarter of the evaluations; the last evaluation the solver may make
+        (``max_nfev``) sums none, as no normal equations follow it."""
+        g, _ = geometry(x)
+        g_t = g.T.copy()
+        r_p = x[-1] if lay.fit_pipe_radius else rp
+        evaluations[0] += 1
+        summed = max_nfev is None or evaluations[0] < max_nfev
+        sums = _gram_sums(7 + int(lay.fit_pipe_radius), len(kind)) if summed else None
+        total = PairwiseSum(N)
+        for i, b in enumerate(blocks):
+            d_b, t = distance(g_t, i, b)
+            rb = np.subtract(d_b, r_p)  # (the distances are terms of the gradient: not in place)
+            # in place: the numbers of _soft_l1, (r / f) ** 2, sqrt(1 + z), 2 (sq - 1), 1 / sq
+            sq = np.divide(rb, f_scale)
+            np.square(sq, out=sq)
+            sq += 1.0
+            np.sqrt(sq, out=sq)
+            part = np.subtract(sq, 1.0)
+            part *= 2.0
+            total.add(part)
+            if summed:
+                add_block(sums, i, t, np.divide(1.0, sq, out=sq), rb)
+        latest["terms"] = None
+        latest["sums"] = sums
+        return float(f_scale * f_scale * total.value())
 
     def add_block(sums, i: int, t: tuple, w: np.ndarray, rb: np.ndarray) -> None:
         """A block's share of the normal equations' per-segment sums, Gᵀ W G and Gᵀ W r."""
@@ -1008,7 +1030,7 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
             last[:, 0, -1] = -1.0
             dG = np.concatenate([dG, last], axis=1)
         sums = latest.get("sums")
-        if sums is None:  # (fused: fun has summed them at x with these weights)
+        if sums is None:  # (streamed: cost has summed them at x with its weights)
             sums = _gram_sums(dG.shape[1], len(dG))
             g_t = g.T.copy() if terms is None else None
             for i, b in enumerate(blocks):
@@ -1017,30 +1039,34 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         D = dG.reshape(-1, P)
         return D.T @ np.matmul(gram, dG).reshape(-1, P), D.T @ rhs.reshape(-1)
 
-    return x0, lo, hi, fun, normal_equations, frame0, rp
+    return x0, lo, hi, fun, normal_equations, frame0, rp, (cost if streamed else None)
 
 
 def _sorted_by_segment(pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None, n_segments: int,
                        small: type) -> tuple[np.ndarray, np.ndarray]:
     """The samples ``keep`` marks (all without it) sorted by their segment, ties in sample order, as (3, n)
     component-major points and their sorted segment numbers: the order and numbers of a stable argsort of
-    ``seg[keep]``. For a large scan: the left-out samples sort last under a segment number of their own (no
-    index array of the kept ones, nor its segments, to sort), the sorted segment numbers are runs of known
-    length, and the points are gathered a block of the order at a time (np.take of a strided coordinate
-    column copies the whole column first). Fresh memory of a scan's size costs the kernel a page fault per
-    page, some 5 % of a 10 M-sample solve per such array."""
+    ``seg[keep]``. For a large scan: the samples a block at a time, each block's sorted by segment and its
+    runs written where their segment's samples go (a counting sort: no order of the scan's size, nor the
+    radix sort's buffer of that size beside it, 16 bytes a sample at the final round's peak), the left-out
+    samples sorting last under a segment number of their own. Fresh memory of a scan's size costs the kernel
+    a page fault per page, some 5 % of a 10 M-sample solve per such array."""
     key = seg.astype(small)
     if keep is not None:
         np.copyto(key, n_segments, where=~keep)
     # (bincount casts its input to 64 bits: a block at a time)
-    counts = sum(np.bincount(key[b], minlength=n_segments + 1) for b in _blocks(len(key)))[:n_segments]
-    order = np.argsort(key, kind="stable")[:int(counts.sum())]
-    del key
-    pts_t = np.empty((3, len(order)))
-    buf = np.empty((min(BLOCK, len(order)), 3))
-    for a in range(0, len(order), BLOCK):
-        rows = np.take(pts, order[a:a + BLOCK], axis=0, out=buf[:len(order[a:a + BLOCK])])
-        pts_t[:, a:a + len(rows)] = rows.T
+    per_block = [np.bincount(key[b], minlength=n_segments + 1)[:n_segments] for b in _blocks(len(key))]
+    counts = sum(per_block)
+    fill = np.concatenate([[0], np.cumsum(counts)[:-1]])  # where each segment's next sample goes
+    pts_t = np.empty((3, int(counts.sum())))
+    for b, n_b in zip(_blocks(len(key)), per_block):
+        order = np.argsort(key[b], kind="stable")[:int(n_b.sum())]
+        rows = np.take(pts[b], order, axis=0)
+        at = 0
+        for k in np.flatnonzero(n_b):
+            pts_t[:, fill[k]:fill[k] + n_b[k]] = rows[at:at + n_b[k]].T
+            fill[k] += n_b[k]
+            at += n_b[k]
     return pts_t, np.repeat(np.arange(n_segments, dtype=small), counts)
 
 
@@ -1048,12 +1074,66 @@ def _gram_sums(k_dim: int, n_segments: int) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros((n_segments, k_dim, k_dim)), np.zeros((n_segments, k_dim))
 
 
+class PairwiseSum:
+    """``np.sum`` of ``n`` numbers handed over a part at a time, to the last bit, holding at most a leaf of them.
+
+    numpy sums a contiguous float array pairwise: a range of more than 8 × 16 numbers splits at half its length
+    rounded down to a multiple of 8, the halves summed alike and added. The ranges of at most ``leaf`` numbers
+    are summed by numpy itself (``np.add.reduce`` from 0.0: the same splits from there on), the rest of the
+    tree here, in its order."""
+
+    def __init__(self, n: int, leaf: int = BLOCK):
+        self.tree = self._split(n, leaf)
+        self.sizes = list(self._leaves(self.tree))
+        self.sums: list[float] = []
+        self.parts: list[np.ndarray] = []  # numbers handed over, not yet summed
+        self.held = 0
+
+    @classmethod
+    def _split(cls, n: int, leaf: int):
+        if n <= leaf:
+            return n
+        half = n // 2
+        half -= half % 8
+        return (cls._split(half, leaf), cls._split(n - half, leaf))
+
+    @classmethod
+    def _leaves(cls, tree):
+        if isinstance(tree, int):
+            yield tree
+        else:
+            for sub in tree:
+                yield from cls._leaves(sub)
+
+    def add(self, part: np.ndarray) -> None:
+        """The next numbers, in their order."""
+        self.parts.append(part)
+        self.held += len(part)
+        while len(self.sums) < len(self.sizes) and self.held >= self.sizes[len(self.sums)]:
+            size = self.sizes[len(self.sums)]
+            numbers = np.concatenate(self.parts) if len(self.parts) > 1 else self.parts[0]
+            self.sums.append(float(np.add.reduce(numbers[:size], initial=0.0)))
+            rest = numbers[size:]
+            self.parts, self.held = ([rest] if len(rest) else []), len(rest)
+
+    def value(self) -> float:
+        """The sum of all ``n`` numbers (all handed over)."""
+        if len(self.sums) != len(self.sizes):
+            raise ValueError(f"{sum(self.sizes[len(self.sums):]) - self.held} numbers not handed over")
+        leaves = iter(self.sums)
+
+        def total(tree) -> float:
+            return next(leaves) if isinstance(tree, int) else total(tree[0]) + total(tree[1])
+
+        return total(self.tree)
+
+
 def solve_lm(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, f_scale: float,
              max_nfev: int = 60, tick=None, keep: np.ndarray | None = None) -> tuple[TubeModel, dict]:
     """One least-squares round with a fixed sample-to-segment assignment (of the samples ``keep`` marks, when
     given)."""
-    x0, lo, hi, fun, normal_equations, frame0, rp = _problem(model, pts, seg, lay, keep, f_scale, max_nfev)
-    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick)
+    x0, lo, hi, fun, normal_equations, frame0, rp, cost = _problem(model, pts, seg, lay, keep, f_scale, max_nfev)
+    x, info = levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev, tick=tick, cost=cost)
     m = unpack(x, lay, frame0, rp)
     return m, info
 
@@ -1064,7 +1144,7 @@ def parameter_sigmas(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: La
     covariance s^2 (J^T J)^+ with s^2 = RSS / (N - P) from the residuals of the given (inlier) samples.
     Returns arrays 'lengths' (inner straights, n - 1), 'rotations' (n - 1), 'angles' (n, radians) and
     'radii' (n; a shared radius gives every bend its sigma, a held one 0). ``keep``: as :func:`solve_lm`'s."""
-    x0, _, _, fun, normal_equations, _, _ = _problem(model, pts, seg, lay, keep)
+    x0, _, _, fun, normal_equations, _, _, _ = _problem(model, pts, seg, lay, keep)
     r = fun(x0)
     # unit weights as a view of one number (a large scan's array of ones was fresh memory of its size)
     A, _ = normal_equations(x0, np.broadcast_to(1.0, r.shape), r)
@@ -1109,17 +1189,23 @@ def _soft_l1(r: np.ndarray, f: float, out: np.ndarray | None = None,
     return cost, terms
 
 
-def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None):
+def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, tol=1e-10, tick=None, cost=None):
     """Bounded, robust Levenberg–Marquardt on the normal equations (see module doc):
     ``normal_equations(x, w, r)`` gives Jᵀ W J and Jᵀ W r for the sample weights w and residuals r.
 
     ``tick()`` is called once per iteration (progress / cancellation). ``fun(x, out)`` writes the residuals
     into ``out`` when it is an array: a trial's residuals and weights go into the arrays of the last rejected
-    trial or the last replaced point (a large scan makes no fresh arrays of its size per evaluation)."""
+    trial or the last replaced point. ``cost(x)``, when given, is the soft-L1 cost at x in place of ``fun`` and
+    ``_soft_l1`` (a large scan's: ``normal_equations`` then takes its sums, and no residuals or weights)."""
     x = x0.copy()
-    r = fun(x, out=None)
-    scratch = np.empty_like(r)
-    cost, w = _soft_l1(r, f_scale, scratch=scratch)
+    streamed = cost is not None
+    cost_at = cost
+    if streamed:
+        cost, r, w = cost_at(x), None, None
+    else:
+        r = fun(x, out=None)
+        scratch = np.empty_like(r)
+        cost, w = _soft_l1(r, f_scale, scratch=scratch)
     spare_r = spare_w = None
     lam = 1e-3
     nfev, status = 1, 0
@@ -1158,9 +1244,12 @@ def levenberg_marquardt(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60,
                     break
                 continue
             xn = np.clip(x + step, lo, hi)
-            rn = fun(xn, out=spare_r)
             nfev += 1
-            cn, wn = _soft_l1(rn, f_scale, out=spare_w, scratch=scratch)
+            if streamed:
+                cn, rn, wn = cost_at(xn), None, None
+            else:
+                rn = fun(xn, out=spare_r)
+                cn, wn = _soft_l1(rn, f_scale, out=spare_w, scratch=scratch)
             spare_r, spare_w = rn, wn  # a rejected trial's arrays take the next one
             if np.isfinite(cn) and cn <= cost:
                 dcost = cost - cn

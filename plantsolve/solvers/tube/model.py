@@ -307,29 +307,55 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
     c -= off[:, None]
     L, A = len(lines), len(arcs)
     out = np.empty((S, len(pts)))
+    # the formulas' operations in their order, in place in a few scratch arrays: the same numbers to the last bit
+    # as fresh temporaries, with a third of the memory passes (each temporary of a block's size was a fresh array)
     if L:
         a, b, h = c[:L], c[L:2 * L], c[2 * L:3 * L]
         # a − clip(a, 0, length): the offset beyond either end of the straight
-        da = np.maximum(a - sp.length[lines][:, None], 0.0) + np.minimum(a, 0.0)
-        out[lines] = np.sqrt(da * da + b * b + h * h)
+        da = np.subtract(a, sp.length[lines][:, None])
+        np.maximum(da, 0.0, out=da)
+        sq = np.minimum(a, 0.0)
+        da += sq
+        da *= da
+        da += np.multiply(b, b, out=sq)
+        da += np.multiply(h, h, out=sq)  # (da² + b²) + h²
+        out[lines] = np.sqrt(da, out=da)
     if A:
         o = 3 * L
         x, y, z = c[o:o + A], c[o + A:o + 2 * A], c[o + 2 * A:]
         R, ang = sp.radius[arcs][:, None], sp.angle[arcs][:, None]
         ca, sa = np.cos(ang), np.sin(ang)
-        z2 = z * z
-        rho = np.sqrt(x * x + y * y)
-        d_in2 = (rho - R) ** 2 + z2
+        z2 = np.multiply(z, z)
+        yy = np.multiply(y, y)
+        d_in = np.multiply(x, x)  # (ρ − R)² + z², ρ = √(x² + y²)
+        d_in += yy
+        np.sqrt(d_in, out=d_in)
+        d_in -= R
+        d_in *= d_in
+        d_in += z2
         # arc start is (R, 0, 0) and arc end (R cos a, R sin a, 0) in the arc frame
-        d_s = (x - R) ** 2 + y * y + z2
-        d_e = (x - R * ca) ** 2 + (y - R * sa) ** 2 + z2
+        d_s = np.subtract(x, R)  # ((x − R)² + y²) + z²
+        d_s *= d_s
+        d_s += yy
+        d_s += z2
+        d_e = np.subtract(x, R * ca)  # ((x − R cos a)² + (y − R sin a)²) + z²
+        d_e *= d_e
+        t = np.subtract(y, R * sa, out=yy)
+        t *= t
+        d_e += t
+        d_e += z2
+        np.minimum(d_s, d_e, out=d_s)
         # polar angle of (x, y) in [0, angle]: upper half plane and not beyond the end
         # direction (angles ≤ π), or either (angles > π); on the boundary both branches agree
-        before_end = ca * y - sa * x <= 0.0
-        upper = y >= 0.0
-        inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
+        before_end = np.multiply(ca, y, out=d_e)
+        before_end -= np.multiply(sa, x, out=t)
+        before_end = np.less_equal(before_end, 0.0)
+        inside = np.greater_equal(y, 0.0)
+        for r in range(A):
+            (np.logical_and if ang[r, 0] <= np.pi else np.logical_or)(inside[r], before_end[r], out=inside[r])
         # one square root of whichever squared distance applies (the same numbers as a root of each)
-        out[arcs] = np.sqrt(np.where(inside, d_in2, np.minimum(d_s, d_e)))
+        np.copyto(d_s, d_in, where=inside)
+        out[arcs] = np.sqrt(d_s, out=d_s)
     return out
 
 

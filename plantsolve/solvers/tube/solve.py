@@ -282,6 +282,7 @@ def least_squares_fit(pts: np.ndarray, inits: list[tuple[float, TubeModel]], rp:
         res, seg = fit.assign(m, P, margin)
         for _ in range(n_rounds):
             inl = within(res, thr)
+            res = None  # (each round assigns anew: a large scan's residuals make room for its solve)
             if inl.sum() < 10 + lay.size:
                 raise SolverError("least_squares", "too few samples near the initial tube surface",
                                   {"inliers": int(inl.sum())})

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, sample_centreline, spine_distance)
+from plantsolve.solvers.tube.model import (TubeModel, build_spine, closest_points, distance_frames, sample_centreline,
+                                          segment_distances_t, spine_distance)
 from plantsolve.solvers.tube.inspection import align
 from plantsolve.solvers.tube.synthetic import random_tube
 
@@ -34,6 +35,42 @@ def test_spine_distance_matches_dense_polyline(seed):
     np.testing.assert_allclose(d, ref, atol=sagitta + 1e-9 * m.pipe_radius, rtol=0)
     c = closest_points(pts, sp, idx)
     np.testing.assert_allclose(np.linalg.norm(pts - c, axis=1), d, atol=1e-9 * m.pipe_radius)
+
+
+def _distances_fresh(pts, sp):
+    """The segment distances written as plain expressions, a fresh array per operation: what the in-place
+    kernel must give to the last bit (the fits' numbers, and so the benches' figures, rest on those bits)."""
+    W, off, lines, arcs = distance_frames(sp)
+    c = np.ascontiguousarray(W.T) @ np.ascontiguousarray(pts.T)
+    c -= off[:, None]
+    L, A = len(lines), len(arcs)
+    out = np.empty((len(sp.kind), len(pts)))
+    a, b, h = c[:L], c[L:2 * L], c[2 * L:3 * L]
+    da = np.maximum(a - sp.length[lines][:, None], 0.0) + np.minimum(a, 0.0)
+    out[lines] = np.sqrt(da * da + b * b + h * h)
+    x, y, z = c[3 * L:3 * L + A], c[3 * L + A:3 * L + 2 * A], c[3 * L + 2 * A:]
+    R, ang = sp.radius[arcs][:, None], sp.angle[arcs][:, None]
+    ca, sa = np.cos(ang), np.sin(ang)
+    d_in2 = (np.sqrt(x * x + y * y) - R) ** 2 + z * z
+    d_s = (x - R) ** 2 + y * y + z * z
+    d_e = (x - R * ca) ** 2 + (y - R * sa) ** 2 + z * z
+    before_end, upper = ca * y - sa * x <= 0.0, y >= 0.0
+    inside = np.where(ang <= np.pi, upper & before_end, upper | before_end)
+    out[arcs] = np.sqrt(np.where(inside, d_in2, np.minimum(d_s, d_e)))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_segment_distances_are_the_plain_formulas_to_the_bit(seed):
+    rng = np.random.default_rng(seed)
+    m = random_tube(rng, n_bends=5)
+    m.angles[1] = np.radians(250.0)  # both branches of the in-arc test
+    m.lengths[2] = 0.0  # a zero-length straight
+    sp = build_spine(m)
+    lo, hi = sp.start.min(0) - 3 * m.pipe_radius, sp.start.max(0) + 3 * m.pipe_radius
+    pts = np.vstack([rng.uniform(lo, hi, size=(3000, 3)), sp.start, sp.end, sp.centre[sp.kind == 1]])
+    got = segment_distances_t(pts, sp)
+    assert np.array_equal(got.view(np.uint64), _distances_fresh(pts, sp).view(np.uint64))
 
 
 def test_junction_ties_go_to_the_earlier_segment():

@@ -246,7 +246,7 @@ def test_normal_equations_match_the_dense_jacobian(block, monkeypatch):
     _, seg = fit.assign(m, pts, 4.0)
     for mode, fit_rp in (("free", True), ("common", False)):
         lay = fit.Layout(m.n_bends, mode, None, fit_rp)
-        x0, _, _, fun, normal_equations, frame0, rp = fit._problem(m, pts, seg, lay)
+        x0, _, _, fun, normal_equations, frame0, rp, _ = fit._problem(m, pts, seg, lay)
         r = fun(x0)
         w = rng.uniform(0.2, 1.0, len(r))
         A, b = normal_equations(x0, w, r)
@@ -271,7 +271,7 @@ def test_normal_equations_after_fun_are_those_computed_afresh():
     pts = surface_samples(m, 2000, rng, noise=0.02)
     _, seg = fit.assign(m, pts, 4.0)
     lay = fit.Layout(m.n_bends, "free", None, True)
-    x0, _, _, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay)
+    x0, _, _, fun, normal_equations, _, _, _ = fit._problem(m, pts, seg, lay)
     x1 = x0 + rng.normal(size=len(x0)) * 1e-4
     r = fun(x1)
     w = rng.uniform(0.2, 1.0, len(r))

@@ -98,8 +98,8 @@ def _scan_problem(n_samples: int):
 def test_a_round_on_the_samples_a_mask_keeps_is_the_round_on_their_copy_bit_for_bit():
     # more samples than one block of the normal equations: the large-scan path
     m, pts, _, seg, keep, lay = _scan_problem(2 * fit.BLOCK)
-    x0, _, _, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep)
-    y0, _, _, fun_c, normal_equations_c, _, _ = fit._problem(m, pts[keep], seg[keep], lay)
+    x0, _, _, fun, normal_equations, _, _, _ = fit._problem(m, pts, seg, lay, keep)
+    y0, _, _, fun_c, normal_equations_c, _, _, _ = fit._problem(m, pts[keep], seg[keep], lay)
     np.testing.assert_array_equal(x0, y0)
     r, r_c = fun(x0), fun_c(x0)
     np.testing.assert_array_equal(r, r_c)
@@ -108,14 +108,15 @@ def test_a_round_on_the_samples_a_mask_keeps_is_the_round_on_their_copy_bit_for_
         np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(fit.set_end_lengths(m, pts, seg, keep).lengths,
                                   fit.set_end_lengths(m, pts[keep], seg[keep]).lengths)
-    # with the weights' scale given, the normal equations are summed during the evaluation: the same numbers
+    # with the weights' scale given, the cost comes a block at a time with the normal equations summed on the way:
+    # the same numbers as from every sample's residuals and weights
     f = 0.06
-    _, _, _, fun_f, normal_equations_f, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=f)
+    _, _, _, _, normal_equations_f, _, _, cost_f = fit._problem(m, pts, seg, lay, keep, f_scale=f)
     x1 = x0 + 1e-4
     r1 = fun(x1)
-    np.testing.assert_array_equal(fun_f(x1), r1)
-    _, w1 = fit._soft_l1(r1, f)
-    for a, b in zip(normal_equations_f(x1, w1, r1), normal_equations(x1, w1, r1)):
+    cost1, w1 = fit._soft_l1(r1, f)
+    assert cost_f(x1) == cost1
+    for a, b in zip(normal_equations_f(x1, None, None), normal_equations(x1, w1, r1)):
         np.testing.assert_array_equal(a, b)
 
 
@@ -123,7 +124,7 @@ def test_levenberg_marquardt_reusing_its_arrays_is_the_one_making_fresh_ones():
     # a trial's residuals and weights go into the arrays of the last rejected trial or the point left behind:
     # the iterates are those of fresh arrays each evaluation
     m, pts, _, seg, keep, lay = _scan_problem(20000)
-    x0, lo, hi, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep)
+    x0, lo, hi, fun, normal_equations, _, _, _ = fit._problem(m, pts, seg, lay, keep)
     fresh = lambda x, out=None: fun(x)  # noqa: E731
     xa, info_a = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=30)
     xb, info_b = fit.levenberg_marquardt(fresh, normal_equations, x0, lo, hi, 0.06, max_nfev=30)
@@ -150,10 +151,10 @@ def test_a_large_scans_last_evaluation_sums_no_normal_equations(monkeypatch):
     made = []
     gram_sums = fit._gram_sums
     monkeypatch.setattr(fit, "_gram_sums", lambda *a: made.append(a) or gram_sums(*a))
-    x0, lo, hi, fun, normal_equations, _, _ = fit._problem(m, pts, seg, lay, keep, f_scale=0.06, max_nfev=4)
-    x, info = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=4)
+    x0, lo, hi, fun, normal_equations, _, _, cost = fit._problem(m, pts, seg, lay, keep, f_scale=0.06, max_nfev=4)
+    x, info = fit.levenberg_marquardt(fun, normal_equations, x0, lo, hi, 0.06, max_nfev=4, cost=cost)
     assert info["nfev"] == 4 and len(made) == 3
-    _, _, _, fun_p, normal_equations_p, _, _ = fit._problem(m, pts, seg, lay, keep)
+    _, _, _, fun_p, normal_equations_p, _, _, _ = fit._problem(m, pts, seg, lay, keep)
     x_p, info_p = fit.levenberg_marquardt(fun_p, normal_equations_p, x0, lo, hi, 0.06, max_nfev=4)
     np.testing.assert_array_equal(x, x_p)
     assert info == info_p
