@@ -23,7 +23,7 @@ from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_repor
 from plantsolve.jobs.computed import Computed
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.lifecycle import RUNNING
+from plantsolve.jobs.lifecycle import RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
@@ -404,7 +404,18 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
         _unspool(ctx, job_id, spooled_in)
         if kept is not None:
             computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], stored)
+    elif kept is not None:
+        _discard_if_finished(ctx, job_id, kept)
     return "succeeded" if written else "stale"
+
+
+def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict) -> None:
+    """The commit found the attempt no longer running: once the job has finished (cancelled meanwhile, or stored by
+    another attempt, whose artifacts may be kept payloads), no attempt will adopt the output kept; while it runs
+    again, the running attempt may."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is not None and is_finished(job.status):
+        computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], ctx.repo.artifacts(job_id))
 
 
 def _spool(ctx: ServiceContext, job_id, payload: dict, waiting: list[Artifact]) -> None:

@@ -25,8 +25,9 @@ class Killed(BaseException):
 
 
 @pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
+def ctx(tmp_path, request):
+    context = ServiceContext.create(service_settings(tmp_path, blob_store=getattr(request, "param", "local")),
+                                    migrate=True)
     yield context
     context.close()
 
@@ -69,8 +70,11 @@ def _blobs(ctx, job_id) -> list[str]:
     return sorted(str(p.relative_to(ctx.files.root)) for p in (ctx.files.root / str(job_id)).rglob("*") if p.is_file())
 
 
-@pytest.mark.parametrize("step", ["render", "commit"])
+@pytest.mark.parametrize("step, ctx", [("render", "local"), ("commit", "local"), ("commit", "postgres")],
+                         indirect=["ctx"])
 def test_a_process_killed_between_its_solve_and_the_commit_is_not_solved_again(ctx, tmp_path, monkeypatch, step):
+    """On the blob back-ends of both paths: a local folder (embedded), the database's table (scaled; here on
+    SQLite)."""
     markers = tmp_path / "runs"
     job_id = _submit(ctx, f'{{"values": [3, 4], "marker_dir": "{markers}"}}')
     if step == "render":
@@ -96,7 +100,8 @@ def test_a_process_killed_between_its_solve_and_the_commit_is_not_solved_again(c
     assert job.attempts[1]["error"] == "result computed by attempt 1"
     assert JobService(ctx, Recorder()).artifact(job_id, "values.txt")[1].read() == b"3.0\n4.0"
     # the kept result went with the commit; the artifacts stay under the attempt that computed them
-    assert _blobs(ctx, job_id) == [f"{job_id}/a1/summary.json", f"{job_id}/a1/values.txt"]
+    assert sorted(a.path for a in ctx.repo.artifacts(job_id)) == [f"{job_id}/a1/summary.json", f"{job_id}/a1/values.txt"]
+    assert not ctx.files.exists(result_key(job_id, 1))
 
 
 def test_a_job_that_is_not_killed_leaves_only_its_artifacts(ctx, monkeypatch):
@@ -175,3 +180,17 @@ def test_a_blob_store_that_does_not_take_the_kept_result_costs_the_job_nothing(c
     job_id = _submit(ctx, '{"values": [5]}')
     assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "succeeded"
     assert ctx.repo.get(job_id).result["total"] == 5.0
+
+
+def test_a_job_cancelled_while_its_artifacts_render_leaves_no_kept_result(ctx, monkeypatch):
+    spec = ctx.spec("test-compute")
+    job_id = _submit(ctx, '{"values": [7]}')
+
+    def render(request, solved):
+        JobService(ctx, Recorder()).cancel(job_id)
+        return spec.render_artifacts(request, solved)
+
+    _patch_spec(ctx, monkeypatch, render_artifacts=render)
+    assert run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue) == "stale"
+    assert ctx.repo.get(job_id).status == "cancelled"
+    assert not ctx.files.exists(result_key(job_id, 1))
