@@ -24,7 +24,7 @@ from pydantic import ValidationError
 
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.solvers.base import Artifact, SolverSpec, Solved
-from plantsolve.store.blobs import BlobMissing, BlobStoreUnavailable, StoredBlob, digest
+from plantsolve.store.blobs import BlobMissing, BlobStore, BlobStoreUnavailable, StoredBlob, digest
 from plantsolve.store.repository import JobRecord, StoredArtifact
 
 log = logging.getLogger("plantsolve.runner")
@@ -59,7 +59,7 @@ class Computed:
         return blob
 
 
-def keep(files, spec: SolverSpec, job_id: uuid.UUID, attempt: int, solved: Solved, result_json: dict,
+def keep(files: BlobStore, spec: SolverSpec, job_id: uuid.UUID, attempt: int, solved: Solved, result_json: dict,
          result_text: str, solve_seconds: float) -> Computed:
     """Write the solve's output (payloads first, the result last) into the blob store ``files``; ``result_text`` is
     ``result_json`` as JSON. A store that refuses it is logged and the output is returned unkept."""
@@ -78,7 +78,7 @@ def keep(files, spec: SolverSpec, job_id: uuid.UUID, attempt: int, solved: Solve
     return Computed(attempt, result_json, solved, solve_seconds, payloads, kept=True)
 
 
-def adopt(files, spec: SolverSpec, job: JobRecord, attempt: int) -> Computed | None:
+def adopt(files: BlobStore, spec: SolverSpec, job: JobRecord, attempt: int) -> Computed | None:
     """The output an earlier attempt of ``job`` kept and never committed (the newest, by the same solver version), or
     None. Looks at nothing on a first attempt."""
     for earlier in range(attempt - 1, 0, -1):
@@ -104,7 +104,7 @@ def adopt(files, spec: SolverSpec, job: JobRecord, attempt: int) -> Computed | N
     return None
 
 
-def kept_by(files, job_id: uuid.UUID, attempt: int) -> bool:
+def kept_by(files: BlobStore, job_id: uuid.UUID, attempt: int) -> bool:
     """Whether ``attempt`` of the job kept a computed result (a lost attempt's: the next one stores it without
     solving). A blob store that cannot tell counts as no."""
     try:
@@ -113,7 +113,7 @@ def kept_by(files, job_id: uuid.UUID, attempt: int) -> bool:
         return False
 
 
-def discard(files, job_id: uuid.UUID, attempt: int, payloads: Iterable[str], stored: Iterable[StoredArtifact]) -> None:
+def discard(files: BlobStore, job_id: uuid.UUID, attempt: int, payloads: Iterable[str], stored: Iterable[StoredArtifact]) -> None:
     """The commit holds the result: the kept output goes, but for the payloads an artifact now stores."""
     in_use = {artifact.path for artifact in stored}
     try:
