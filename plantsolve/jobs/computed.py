@@ -113,7 +113,8 @@ def kept_by(files: BlobStore, job_id: uuid.UUID, attempt: int) -> bool:
         return False
 
 
-def discard(files: BlobStore, job_id: uuid.UUID, attempt: int, payloads: Iterable[str], stored: Iterable[StoredArtifact]) -> None:
+def discard(files: BlobStore, job_id: uuid.UUID, attempt: int, payloads: Iterable[str],
+            stored: Iterable[StoredArtifact]) -> None:
     """The commit holds the result: the kept output goes, but for the payloads an artifact now stores."""
     in_use = {artifact.path for artifact in stored}
     try:
