@@ -16,8 +16,9 @@ solve, so the markers count the solves):
   attempts lost per job, the third runs them);
 - ``stop-kill``: SIGSTOP of one running job process, then kill -9 of the process that runs its job again;
 - ``warm-fork``: kill -9 of the warm parent again and again while twelve short jobs start (kills that land mid-fork);
-- ``store-kill``: kill -9 of the job processes once their solve is at its end (mid-store: the marker counts the
-  solve before its result is written, so a kill there costs a second solve);
+- ``store-kill``: kill -9 of each job process as soon as its solve is done and before its result's commit (jobs of
+  ``bench/kill_kinds.py``'s ``test-slow-render``: the solve's marker names its process, whose artifacts then take 2 s
+  to render): a job solved twice is a kill in that window that cost a second solve;
 - ``cancel-kill``: two running jobs cancelled, one just after its process was killed, one just before;
 - ``sqlite-lock``: another process holds the SQLite file's write lock (``BEGIN EXCLUSIVE``) for 8 s under two
   running jobs;
@@ -27,7 +28,8 @@ solve, so the markers count the solves):
 - ``webhook-dead``: three jobs whose ``callback_url`` is a closed port;
 - ``idempotency``: an ``Idempotency-Key`` reused with another body, another kind, an upload, and the same body.
 
-Each row: the scenario, the jobs' final statuses, the solves and attempts per job, whether a failed job's report says
+Each row: the scenario, the jobs' final statuses, the solves and attempts per job, each job's attempt history
+(outcomes), whether a failed job's report says
 why, the /readyz answers seen (in order, repeats folded), what HTTP answered meanwhile (by route and status, where the
 scenario probes), and the seconds until every job had ended. ``--before DIR``
 runs the same on another checkout (its source, this checkout's .venv) first. LEASE_SECONDS is 8 and the sweep 1 s, so that a
@@ -56,6 +58,7 @@ import httpx
 HERE = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
 JOB_SECONDS = 3.0
+START_SECONDS = 240  # the warm parent imports every kind: a minute and more on a machine shared with other work
 
 
 def _free_port() -> int:
@@ -91,7 +94,8 @@ def _forkservers(api: int) -> list[int]:
 class Service:
     def __init__(self, tree: Path, data: Path):
         self.tree, self.data, self.port = tree, data, _free_port()
-        self.env = {**os.environ, "PYTHONPATH": str(tree), "PLUGINS": "tests.support.kinds", "DATA_DIR": str(data),
+        self.env = {**os.environ, "PYTHONPATH": f"{tree}{os.pathsep}{HERE / 'bench'}",
+                    "PLUGINS": "tests.support.kinds,kill_kinds", "DATA_DIR": str(data),
                     "LEASE_SECONDS": "8", "HEARTBEAT_SECONDS": "1", "SWEEP_SECONDS": "1", "EMBEDDED_WORKERS": "2",
                     "LOG_FORMAT": "text", "LOG_LEVEL": "warning",
                     # webhook-dead: signed callbacks to this host, retried quickly
@@ -133,7 +137,7 @@ class Service:
         log = open(self.data / "serve.log", "ab")
         self.process = subprocess.Popen([str(BIN / "plantsolve"), "serve", "--port", str(self.port)], cwd=self.tree,
                                         env=self.env, stdout=log, stderr=subprocess.STDOUT)
-        self.wait_ready(60)
+        self.wait_ready(START_SECONDS)
 
     def ready(self) -> str:
         try:
@@ -238,9 +242,9 @@ def scenario(name: str, tree: Path) -> dict:
     data = Path(tempfile.mkdtemp(prefix=f"kill-{name}-"))
     markers = data / "markers"
     service = Service(tree, data)
-    service.start()
     note = ""
     try:
+        service.start()
         if name == "warm":
             servers = _forkservers(service.process.pid)
             os.kill(servers[0], signal.SIGKILL)
@@ -327,26 +331,26 @@ def scenario(name: str, tree: Path) -> dict:
                 time.sleep(random.uniform(0.05, 0.5))
             note = f"{kills} kills of the warm parent"
         elif name == "store-kill":
-            ids, kills = [], 0
-            for i in range(6):  # 20,000 values: their artifact takes a moment to write
-                body = {"values": [v + 0.5 for v in range(20_000)], "seconds": 1.0, "marker_dir": str(markers / str(i))}
-                ids.append(service.client.post("/v1/test-compute/jobs", json=body).json()["id"])
-            until = time.monotonic() + 40
-            while time.monotonic() < until:
-                jobs = service.jobs(ids)
-                if all(j["status"] in ("succeeded", "failed") for j in jobs):
-                    break
-                if any(j["status"] == "running" and j["attempt"] == 1 and j["progress"]["fraction"] >= 0.95
-                       for j in jobs):
-                    time.sleep(random.uniform(0, 0.1))
-                    for pid in service.job_processes():
+            ids = [service.client.post("/v1/test-slow-render/jobs", json={
+                "values": [i + 0.5], "seconds": 1.0, "render_seconds": 2.0, "marker_dir": str(markers / str(i))}
+            ).json()["id"] for i in range(4)]
+            due: dict[int, tuple[float, int]] = {}  # job -> (when its solving process dies, its pid)
+            killed: set[int] = set()
+            until = time.monotonic() + 60
+            while len(killed) < len(ids) and time.monotonic() < until:
+                for i in set(range(len(ids))) - set(due):
+                    done = list((markers / str(i)).glob("done-*")) if (markers / str(i)).exists() else []
+                    if done:  # solved; it renders for 2 s before it stores anything: it dies at a moment of those
+                        due[i] = (time.monotonic() + random.uniform(0.05, 1.5), int(done[0].name.split("-")[1]))
+                for i, (when, pid) in due.items():
+                    if i not in killed and time.monotonic() >= when:
                         try:
                             os.kill(pid, signal.SIGKILL)
-                            kills += 1
                         except ProcessLookupError:
                             pass
+                        killed.add(i)
                 time.sleep(0.01)
-            note = f"{kills} job processes killed at the end of their solve"
+            note = f"{len(killed)} job processes killed between their solve and their result's commit"
         elif name == "cancel-kill":
             ids = service.submit(2, markers)
             pids = service.wait_claimed(ids, 2)
@@ -436,6 +440,7 @@ def scenario(name: str, tree: Path) -> dict:
         for pid in _stray(data):  # the stopped warm parent, if the service left it
             os.kill(pid, signal.SIGKILL)
     return {"scenario": name, "statuses": statuses, "solves": solves, "attempts": [j["attempt"] for j in jobs],
+            "outcomes": [[a["outcome"] for a in j.get("attempts") or []] for j in jobs],
             "failed_say_why": all(reasons),
             "exactly_once": once, "readyz": service.ready_seen, "seconds": round(seconds, 1), "note": note,
             "answers": service.answers,

@@ -23,13 +23,16 @@ port, ``plantsolve serve`` and ``plantsolve worker`` processes): ``worker-kill``
 another started), ``worker-stop`` (SIGSTOP of one mid-job, another started), ``redis-queued`` (Redis restarted, empty,
 with jobs queued and no worker; a worker started after), ``redis-running`` (Redis restarted under a busy worker),
 ``pg-kill`` (``pg_terminate_backend`` of every connection to the scenario's database, again and again, as the jobs
-store their results). Each row: final statuses, solves per job (marker files), attempts, what HTTP answered meanwhile,
+store their results), ``store-kill`` (kill -9 of the worker busy with two jobs once the first is solved and before
+its result's commit: ``bench/kill_kinds.py``'s ``test-slow-render``, whose artifacts take 2 s to render; another
+worker started), ``cancel`` (a running job cancelled). Each row: final statuses, solves per job (marker files),
+attempts and each attempt's outcome, what HTTP answered meanwhile,
 the ``/readyz`` answers in order, and ``/readyz`` at the end. Stops nothing shared: the PostgreSQL cluster and the
 shared Redis are left alone.
 
     python bench/outage.py [--outage 20] [--lease 8]
     python bench/outage.py --black-hole [--before main|DIR|none] [--patience 60]
-    python bench/outage.py --scaled [--before main|DIR|none] [--only worker-kill,redis-running,...]
+    python bench/outage.py --scaled [--before main|DIR|none] [--only worker-kill,redis-running,store-kill,...]
 """
 
 from __future__ import annotations
@@ -148,7 +151,7 @@ def black_hole(args: argparse.Namespace) -> int:
     return 0
 
 
-SCALED = ("worker-kill", "worker-stop", "redis-queued", "redis-running", "pg-kill")
+SCALED = ("worker-kill", "worker-stop", "redis-queued", "redis-running", "pg-kill", "store-kill", "cancel")
 
 
 class ScaledService:
@@ -161,7 +164,8 @@ class ScaledService:
         self.database = f"plantsolve_scaled_{uuid.uuid4().hex[:8]}"
         with psycopg.connect(ADMIN, autocommit=True) as admin:
             admin.execute(f'CREATE DATABASE "{self.database}"')
-        self.env = {**os.environ, "PYTHONPATH": f"{code}{os.pathsep}{REPO}", "PLUGINS": "tests.support.kinds",
+        self.env = {**os.environ, "PYTHONPATH": f"{code}{os.pathsep}{REPO}{os.pathsep}{REPO / 'bench'}",
+                    "PLUGINS": "tests.support.kinds,kill_kinds",
                     "DATA_DIR": str(work / "var"),
                     "DATABASE_URL": f"postgresql+psycopg://postgres@127.0.0.1:5432/{self.database}",
                     "BROKER_URL": f"redis://127.0.0.1:{self.redis_port}/0", "LEASE_SECONDS": "4",
@@ -328,6 +332,26 @@ def scaled_scenario(name: str, code: Path) -> dict:
                                       (service.database,))
                         service.probe(ids[0])
                     time.sleep(0.02)
+        elif name == "store-kill":
+            first = service.worker("a")
+            ids = [service.client.post("/v1/test-slow-render/jobs", json={
+                "values": [1.0 + i], "seconds": 1.0, "render_seconds": 2.0,
+                "marker_dir": str(work / "markers" / str(i))}).json()["id"] for i in range(2)]
+            until = time.monotonic() + 60
+            while not (work / "markers" / "0").exists() and time.monotonic() < until:
+                time.sleep(0.01)
+            time.sleep(random.uniform(0.05, 1.5))  # solved, and rendering for 2 s before it stores anything
+            os.killpg(first.pid, signal.SIGKILL)
+            first.wait()
+            service.probe_for(2, ids[0])
+            service.worker("b")
+        elif name == "cancel":
+            service.worker("a")
+            ids = [service.submit(0, 20.0)]
+            service.wait_running(ids[0])
+            time.sleep(0.5)
+            service.answers["POST /v1/jobs/{id}/cancel " + str(service.client.post(f"/v1/jobs/{ids[0]}/cancel")
+                                                               .status_code)] = 1
         else:
             raise ValueError(name)
         jobs = service.finish(ids + service.extra)
@@ -338,7 +362,7 @@ def scaled_scenario(name: str, code: Path) -> dict:
     marked = [len(list((work / "markers" / str(i)).glob("*"))) for i in range(len(ids))]
     mine = jobs[:len(ids)]
     return {"scenario": name, "statuses": [j["status"] for j in mine], "solves": marked,
-            "attempts": [j["attempt"] for j in mine],
+            "attempts": [j["attempt"] for j in mine], "outcomes": [[a["outcome"] for a in j["attempts"]] for j in mine],
             "submitted_meanwhile": f"{sum(j['status'] == 'succeeded' for j in jobs[len(ids):])} of "
                                    f"{len(jobs) - len(ids)} succeeded",
             "answers": service.answers, "readyz": service.ready_seen, "readyz_at_end": final}

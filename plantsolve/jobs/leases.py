@@ -13,7 +13,7 @@ import uuid
 from datetime import datetime, timedelta
 from typing import Callable
 
-from plantsolve.jobs import attempts
+from plantsolve.jobs import attempts, computed
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, with_reader_warnings
@@ -39,7 +39,12 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     ``"stale"`` (the fenced write found the attempt no longer running: it finished, was cancelled, or, with
     ``lapsed_before``, heartbeated meanwhile)."""
     previous = next((h for h in lost.attempts if h.get("attempt") == lost.attempt), {})
-    waiting = previous.get("outcome") == "result_pending" or (
+    # a result the attempt computed and kept before it was lost is stored by the next attempt without solving, and
+    # so gets that attempt even when this one was the last
+    solved = computed.kept_by(ctx.files, lost.id, lost.attempt)
+    if solved:
+        why += "; its result was kept, and the next attempt stores it without solving again"
+    waiting = previous.get("outcome") == "result_pending" or solved or (
         lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
     # the reader's warnings, written by the lost attempt once it read its input (or by an earlier one), are kept

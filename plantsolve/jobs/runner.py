@@ -18,11 +18,12 @@ from typing import Any, Callable
 
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
-from plantsolve.jobs import attempts, intake
+from plantsolve.jobs import attempts, computed, intake
 from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_report, judge
+from plantsolve.jobs.computed import Computed
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.lifecycle import RUNNING
+from plantsolve.jobs.lifecycle import RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
@@ -219,14 +220,19 @@ def _run_claimed(
             holder = pending_holder(ctx, job_id)
             if holder is not None:
                 return _store_pending(ctx, job_id, attempt, holder, monitor, log_book)
+            # the output of an earlier attempt's solve that was killed before its commit, if any
+            output = computed.adopt(ctx.files, spec, job, attempt)
             with intake.read_stored(spec, job, ctx.files,
                                     on_request=lambda request: read.extend(_noted(ctx, job, attempt, spec, request))
                                     ) as job_input:
-                solved = _call_with_deadline(
-                    lambda: spec.solve(job_input, monitor.progress),
-                    hard_limit if hard_limit_in_thread else None,
-                )
-                return _store_success(ctx, spec, job_id, attempt, job_input, solved, monitor, log_book)
+                if output is None:
+                    solved = _call_with_deadline(
+                        lambda: spec.solve(job_input, monitor.progress),
+                        hard_limit if hard_limit_in_thread else None,
+                    )
+                    result_json, text = _checked(spec, solved)
+                    output = computed.keep(ctx.files, spec, job_id, attempt, solved, result_json, text, monitor.elapsed)
+                return _store_success(ctx, spec, job_id, attempt, job_input, output, monitor, log_book)
         except Exception as error:  # the retry policy decides (attempts.judge)
             verdict = judge(error, job_id=job_id, attempt=attempt, max_attempts=job.max_attempts,
                             limits=ctx.limits(spec), elapsed=monitor.elapsed, time_limit_errors=time_limit_errors)
@@ -290,14 +296,14 @@ def _non_finite_paths(value: Any, path: str = "") -> list[str]:
     return []
 
 
-def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved: Solved, monitor: AttemptMonitor,
-                   log_book: AttemptLog) -> str:
+def _checked(spec, solved: Solved) -> tuple[dict, str]:
+    """The solve's result as stored, and as JSON text; a result no job may hold is the solver's failure."""
     result = solved.result
     if not isinstance(result, spec.result_model):
         result = spec.result_model.model_validate(result)
     result_json = result.model_dump(mode="json", by_alias=True)
     try:
-        json.dumps(result_json, allow_nan=False)
+        text = json.dumps(result_json, allow_nan=False)
     except ValueError:
         # JSON has no NaN or infinity: a result carrying them is a solver bug, and retrying
         # the same input would give the same numbers.
@@ -305,24 +311,36 @@ def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, solved
             "result", "The solver produced non-finite numbers (NaN or infinity) in its result.",
             {"paths": _non_finite_paths(result_json)[:20]},
         ) from None
-    report = dict(result_json.get("report") or Report().model_dump(mode="json"))
+    report = result_json.get("report") or {}
     if report.get("status") == "failed":
         # a solver that says in its own report that it failed has no result to offer: the job fails with that
         # report, never "succeeded" beside it
         raise SolverError(report.get("stage") or "result", report.get("message") or "The solver reported a failure.",
                           report.get("details") or {})
+    return result_json, text
+
+
+def _store_success(ctx: ServiceContext, spec, job_id, attempt, job_input, output: Computed, monitor: AttemptMonitor,
+                   log_book: AttemptLog) -> str:
+    """Render the artifacts of a solve's ``output`` (this attempt's, or one an earlier attempt kept) and store it."""
+    result_json = output.result_json
+    report = dict(result_json.get("report") or Report().model_dump(mode="json"))
     if report.get("status") == "ok" and report.get("warnings"):
         report["status"] = "warning"  # a warning is never hidden behind "ok"
     rendered: list[Artifact] = []
     if spec.render_artifacts is not None:
         try:
-            rendered = list(spec.render_artifacts(job_input, solved))
+            rendered = list(spec.render_artifacts(job_input, output.solved))
         except Cancelled:
             raise
         except Exception as error:  # the result stands; the missing files are reported
             log.exception("artifacts of job %s failed", job_id)
             _warn_artifacts(report, f"Artifacts could not be rendered: {error}")
-    return _write_result(ctx, job_id, attempt, attempt, result_json, report, [], rendered, monitor.elapsed, log_book)
+    adopted = output.attempt != attempt
+    return _write_result(ctx, job_id, attempt, output.attempt, result_json, report, [], rendered,
+                         output.solve_seconds + monitor.elapsed if adopted else monitor.elapsed, log_book,
+                         note=f"result computed by attempt {output.attempt}" if adopted else None, output=output,
+                         kept=computed.described(output))
 
 
 def _warn_artifacts(report: dict, message: str) -> None:
@@ -343,17 +361,20 @@ def _with_report(result_json: dict, report: dict) -> dict:
 
 def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result_json, report,
                   stored: list[StoredArtifact], rendered: list[Artifact], run_seconds: float, log_book: AttemptLog,
-                  note: str | None = None, spooled_in: BlobStore | None = None) -> str:
+                  note: str | None = None, spooled_in: BlobStore | None = None, output: Computed | None = None,
+                  kept: dict | None = None) -> str:
     """The artifacts' blobs, then the final write; retried with backoff while the blob store or the database
     is unreachable (the heartbeat keeps the lease meanwhile). If that never succeeds, the result (and the
-    artifacts not stored yet) waits in a spool for the next attempt (:func:`_spools`)."""
+    artifacts not stored yet) waits in a spool for the next attempt (:func:`_spools`). An artifact whose bytes a
+    kept payload of ``output`` holds is that blob; once the result is written, the output ``kept`` goes."""
     stored, waiting = list(stored), list(rendered)
 
     def store_all() -> bool:
         while waiting:
             artifact = waiting[0]
             try:
-                blob = ctx.files.put(f"{job_id}/a{computed_by}/{artifact.name}", artifact.data)
+                blob = (output.artifact_blob(artifact) if output is not None else None) \
+                    or ctx.files.put(f"{job_id}/a{computed_by}/{artifact.name}", artifact.data)
             except Exception as error:
                 if is_infrastructure_failure(error):
                     raise
@@ -376,12 +397,25 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
             raise
         payload = {"attempt": computed_by, "result": result_json, "report": report, "run_seconds": run_seconds,
                    "artifacts": [dataclasses.asdict(a) for a in stored],
-                   "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting]}
+                   "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting], "kept": kept}
         _spool(ctx, job_id, payload, waiting)
         raise ResultPending(str(error)) from error
     if written:
         _unspool(ctx, job_id, spooled_in)
+        if kept is not None:
+            computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], stored)
+    elif kept is not None:
+        _discard_if_finished(ctx, job_id, kept)
     return "succeeded" if written else "stale"
+
+
+def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict) -> None:
+    """The commit found the attempt no longer running: once the job has finished (cancelled meanwhile, or stored by
+    another attempt, whose artifacts may be kept payloads), no attempt will adopt the output kept; while it runs
+    again, the running attempt may."""
+    job = ctx.repo.get(job_id, brief=True)
+    if job is not None and is_finished(job.status):
+        computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], ctx.repo.artifacts(job_id))
 
 
 def _spool(ctx: ServiceContext, job_id, payload: dict, waiting: list[Artifact]) -> None:
@@ -421,7 +455,7 @@ def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, moni
                for a in payload.get("unstored", [])]
     return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"], stored, waiting,
                          payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}",
-                         spooled_in=holder)
+                         spooled_in=holder, kept=payload.get("kept"))
 
 
 def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker: str | None = None) -> bool:

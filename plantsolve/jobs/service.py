@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Callable, Iterable, Mapping
 
-from plantsolve.jobs import intake
+from plantsolve.jobs import attempts, intake
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.dispatch import Dispatcher
 from plantsolve.jobs.errors import Conflict, DiskSpaceLow, NotFound, Unprocessable, field_problem, from_input_rejected
@@ -57,6 +57,9 @@ class Submitted:
 def safe_filename(name: str) -> str:
     base = re.sub(r"[^A-Za-z0-9._-]+", "_", name.rsplit("/", 1)[-1].rsplit("\\", 1)[-1]).strip("._")
     return base[:120] or "upload"
+
+
+CANCEL_TRIES = 20  # reads and conditional writes of a cancel, each lost only to another transition of the job
 
 
 class JobService:
@@ -359,13 +362,26 @@ class JobService:
         return self.ctx.repo.record_callback(job_id, attempt, **outcome)
 
     def cancel(self, job_id: uuid.UUID, sees: str | None = None) -> JobRecord:
-        self.get(job_id, sees)
-        outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."))
-        if outcome is None:
-            raise NotFound(f"No job {job_id}.")
-        if outcome != CANCELLED:
-            raise Conflict(f"Job {job_id} has already finished ({outcome}); it cannot be cancelled.", extra={"status": outcome})
-        return self.get(job_id, brief=True)
+        """Cancel a queued or running job; a running attempt ends in the history as ``cancelled``, like every
+        attempt (its process notices at its next fenced write, or is killed as abandoned, and writes nothing)."""
+        for _ in range(CANCEL_TRIES):
+            job = self.get(job_id, sees, brief=True)
+            if job.status == CANCELLED:
+                return job  # a repeated cancel (its first answer lost) is answered as the first was
+            if is_finished(job.status):
+                raise Conflict(f"Job {job_id} has already finished ({job.status}); it cannot be cancelled.",
+                               extra={"status": job.status})
+            history = attempts.ended(job.attempts, job.attempt, job.worker, "cancelled") if job.status == RUNNING \
+                else None
+            outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."),
+                                           attempts=history, seen=(job.status, job.attempt))
+            if outcome is None:
+                raise NotFound(f"No job {job_id}.")
+            if outcome == CANCELLED:
+                return self.get(job_id, brief=True)
+            # claimed, lost, re-queued or finished between the read and the write: read it again
+        raise Conflict(f"Job {job_id} changed state {CANCEL_TRIES} times while it was being cancelled; try again.",
+                       extra={"status": outcome})
 
     def result(self, job_id: uuid.UUID, sees: str | None = None, *, kind: str | None = None) -> Any:
         """The result of a succeeded job; ``kind``: only a job of that kind (404 for another)."""

@@ -481,14 +481,18 @@ class JobRepository:
 
     # ---- user actions and housekeeping -----------------------------------------------------
 
-    def cancel(self, job_id: uuid.UUID, *, report: Any) -> str | None:
-        """Cancel a queued or running job. Returns the status the job has afterwards, or None
-        when it does not exist. A running attempt notices at its next fenced write."""
+    def cancel(self, job_id: uuid.UUID, *, report: Any, attempts: list | None = None,
+               seen: tuple[str, int] | None = None) -> str | None:
+        """Cancel a queued or running job, with the attempt history ``attempts`` when given. ``seen``: only while the
+        job is still at that (status, attempt). Returns the status the job has afterwards, or None when it does not
+        exist. A running attempt notices at its next fenced write."""
+        statement = update(Job).where(Job.id == job_id, Job.status.in_(CANCEL.sources))
+        if seen is not None:
+            statement = statement.where(Job.status == seen[0], Job.attempt == seen[1])
+        extra = {} if attempts is None else {"attempts": attempts}
         with self.writing(), self.sessions() as session:
             updated = session.execute(
-                update(Job)
-                .where(Job.id == job_id, Job.status.in_(CANCEL.sources))
-                .values(status=CANCEL.target, finished_at=utcnow(), lease_until=None, report=report)
+                statement.values(status=CANCEL.target, finished_at=utcnow(), lease_until=None, report=report, **extra)
             ).rowcount
             session.commit()
             if updated == 1:
