@@ -61,7 +61,8 @@ class NpyPoints(StrictModel):
 class LraRow(StrictModel):
     """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
 
-    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius")
+    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius", "sigma_length", "sigma_rotation",
+                                   "sigma_angle", "sigma_bend_radius")
 
     length: FiniteFloat = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
                                 description="Straight length before the bend, in the request's units.")
