@@ -5,9 +5,11 @@ Two ways in: ``body`` is a JSON request body (``model_validate_json(..., strict=
 and ``upload`` is the same document as an uploaded .json file or a form's options (parsed, then ``model_validate`` in
 lax mode, as ``solvers.base.validated``). Each row runs in a process of its own: the CPU seconds and the growth of
 the peak RSS of the validation alone (the body read and, for an upload, parsed before), and what it answered. The
-``+true`` rows hold one ``true`` as the last number of the large array: main reads it as 1.0 in an upload.
+``+true`` rows hold one ``true`` as the last number of the large array: main reads it as 1.0 in an upload. With
+``--repeat N`` each row is the least CPU and the largest RSS of N runs, the trees taking turns (a shared machine's
+noise is some 15 %).
 
-    python bench/bool_numbers.py [--before /work/wt/boolnum53-base] [--scale 1.0]
+    python bench/bool_numbers.py [--before /work/wt/boolnum53-base] [--scale 1.0] [--repeat 3] [--kinds tube ...]
 """
 
 from __future__ import annotations
@@ -126,6 +128,7 @@ def main() -> None:
     parser.add_argument("--before", type=Path, help="another checkout (main's worktree), measured in the same run")
     parser.add_argument("--scale", type=float, default=1.0, help="multiplies every body's size")
     parser.add_argument("--kinds", nargs="*", default=list(CASES))
+    parser.add_argument("--repeat", type=int, default=1, help="runs per row: the least CPU, the largest RSS")
     args = parser.parse_args()
     folder = Path(os.environ.get("TMPDIR", "/tmp")) / f"bool-numbers-{os.getpid()}"
     folder.mkdir(parents=True, exist_ok=True)
@@ -144,7 +147,9 @@ def main() -> None:
         size = f"{what.format(n=f'{n:,}')}, {plain.stat().st_size / 1e6:.0f} MB"
         for mode, body, label in (("body", plain, "body"), ("upload", plain, "upload"),
                                   ("upload", marked, "upload+true")):
-            rows = [run(tree, kind, mode, body) for _, tree in trees]
+            runs = [[run(tree, kind, mode, body) for _, tree in trees] for _ in range(args.repeat)]
+            rows = [{"cpu": min(r[i]["cpu"] for r in runs), "rss": max(r[i]["rss"] for r in runs),
+                     "answer": runs[0][i]["answer"]} for i in range(len(trees))]
             print(f"{kind:10} {size[:38]:38} {label:10} " + " ".join(
                 f"{row['cpu']:>10.2f} {row['rss']:>9.0f}" for row in rows) + "  " +
                 " | ".join(row["answer"] for row in rows), flush=True)

@@ -5,7 +5,10 @@ Conventions (they hold for every solver):
 - angles are in **degrees** in every public schema (solvers work in radians inside);
 - quaternions are ``[w, x, y, z]`` (scalar first), unit norm, active rotation;
 - every float in a request must be finite: NaN and infinity are rejected with a 422
-  that names the field.
+  that names the field;
+- every number in a request is a number (:data:`Number`): ``true``, ``false`` and strings are refused with a 422
+  that names the field, whichever way the request came (a body, an uploaded file, a form's options); only an option
+  an upload form may type as text is read from one (``"6"``, :func:`plain_numbers`).
 """
 
 from __future__ import annotations
