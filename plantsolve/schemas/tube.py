@@ -21,10 +21,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, StrictInt, Tag, model_validator
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Integer, Number, Point3,
-                                      Quaternion, Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Number, Point3, Quaternion,
+                                      Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
 
 MAX_POINTS = 5_000_000
 # the largest length an option may hold, in the request's units: 1e6 is a kilometre in millimetres and 300 km in
@@ -262,11 +262,11 @@ class PointSource(StrictModel):
     """What the upload parser read from a point file: set by the upload parser, not needed in JSON bodies."""
 
     format: str = Field(description="File format read, e.g. 'las', 'ply', 'xyz'.")
-    points: Integer = Field(ge=0, description="Points kept.")
+    points: StrictInt = Field(ge=0, description="Points kept.")
     units: UnitConversion
-    skipped: Integer = Field(default=0, ge=0, description="Records (lines, vertices) that could not be read and were "
+    skipped: StrictInt = Field(default=0, ge=0, description="Records (lines, vertices) that could not be read and were "
                          "left out; each is listed in the warnings.")
-    skipped_lines: list[Integer] = Field(default_factory=list, description="1-based line numbers of the first skipped "
+    skipped_lines: list[StrictInt] = Field(default_factory=list, description="1-based line numbers of the first skipped "
                                      "records (text formats; at most 10).")
     truncated: bool = Field(default=False, description="The file ends before the records its header declares, or "
                             "mid-record.")
