@@ -44,20 +44,20 @@ Number = Annotated[float, Strict()]
 because an uploaded .json file and an upload form's options are validated from parsed JSON in pydantic's lax mode,
 where a bare float reads ``true`` as 1.0 (a JSON body is validated strictly as a whole); the strict check is pydantic's
 own, in its compiled core, so a million-point array costs no more than before. An option a form may type as text
-("6") is read by :func:`plain_numbers`. Every number type of a request below is one of these."""
+("6") is read by :func:`plain_numbers`. The number types below are made of it."""
 
-FiniteFloat = Annotated[float, Strict(), Field(allow_inf_nan=False)]
+FiniteFloat = Annotated[Number, Field(allow_inf_nan=False)]
 """A number that must be finite (NaN and +-inf are rejected)."""
 
 Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
 # Input magnitudes a plant model can have: coordinates within 1e12 of the unit (a light-hour in mm),
 # direction components within 1e9 (they are normalised; 1e200 only overflows the solvers' products).
 MAX_COORDINATE = 1e12
-Coordinate = Annotated[float, Strict(), Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
-Measured = Annotated[float, Strict(), Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
+Coordinate = Annotated[Number, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+Measured = Annotated[Number, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
 """A measured value (flow, pressure, a setting) within 1e12 of its unit: beyond that only overflows."""
 Point3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
-DirectionComponent = Annotated[float, Strict(), Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
+DirectionComponent = Annotated[Number, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
 Direction3 = Annotated[list[DirectionComponent], Field(min_length=3, max_length=3)]
 """A point or a direction ``[x, y, z]``."""
 
