@@ -5,7 +5,10 @@ Conventions (they hold for every solver):
 - angles are in **degrees** in every public schema (solvers work in radians inside);
 - quaternions are ``[w, x, y, z]`` (scalar first), unit norm, active rotation;
 - every float in a request must be finite: NaN and infinity are rejected with a 422
-  that names the field.
+  that names the field;
+- every number in a request is a number (:data:`Number`): ``true``, ``false`` and strings are refused with a 422
+  that names the field, whichever way the request came (a body, an uploaded file, a form's options); only an option
+  an upload form may type as text is read from one (``"6"``, :func:`plain_numbers`).
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ from numbers import Integral, Real
 from types import MappingProxyType
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, computed_field, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, ValidationInfo, computed_field, \
+    field_validator
 from pydantic_core import PydanticCustomError
 
 def json_integer(value: Any) -> Any:
@@ -35,18 +39,25 @@ Integer = Annotated[int, BeforeValidator(json_integer)]
 otherwise (no ``true`` for 1, no ``"5"`` for 5). Bounds go before the validator, or the schema loses them:
 ``Annotated[int, Field(ge=0), BeforeValidator(json_integer)]``."""
 
-FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
-"""A float that must be finite (NaN and +-inf are rejected)."""
+Number = Annotated[float, Strict()]
+"""A number of a request: a JSON number (``6``, ``6.0``, ``-1e3``), never ``true``/``false`` nor a string. Strict,
+because an uploaded .json file and an upload form's options are validated from parsed JSON in pydantic's lax mode,
+where a bare float reads ``true`` as 1.0 (a JSON body is validated strictly as a whole); the strict check is pydantic's
+own, in its compiled core, so a million-point array costs no more than before. An option a form may type as text
+("6") is read by :func:`plain_numbers`. The number types below are made of it."""
+
+FiniteFloat = Annotated[Number, Field(allow_inf_nan=False)]
+"""A number that must be finite (NaN and +-inf are rejected)."""
 
 Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
 # Input magnitudes a plant model can have: coordinates within 1e12 of the unit (a light-hour in mm),
 # direction components within 1e9 (they are normalised; 1e200 only overflows the solvers' products).
 MAX_COORDINATE = 1e12
-Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
-Measured = Annotated[float, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
+Coordinate = Annotated[Number, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+Measured = Annotated[Number, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
 """A measured value (flow, pressure, a setting) within 1e12 of its unit: beyond that only overflows."""
 Point3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
-DirectionComponent = Annotated[float, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
+DirectionComponent = Annotated[Number, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]
 Direction3 = Annotated[list[DirectionComponent], Field(min_length=3, max_length=3)]
 """A point or a direction ``[x, y, z]``."""
 
@@ -59,26 +70,30 @@ UnitName = Literal["mm", "cm", "m", "in", "ft"]
 _PLAIN_NUMBER = re.compile(r"\s*[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\s*")
 
 
-def option_number(value: Any) -> Any:
+def option_number(value: Any, info: ValidationInfo | None = None) -> Any:
     """A number of the request: a JSON number, or a string of one as an upload form's options are typed (``"6"``
-    is the same 6, so it is read). ``true`` and ``false`` are no number (read as 1 and 0 they made a tube's tolerance
-    of 1 mm and an alignment's position tolerance of 1 unit without a word), nor is a string only Python reads as one
-    (``"6_0"`` is 60 to it)."""
+    is the same 6, so it is read, as a float for the strict number type to take). ``true`` and ``false`` are no number
+    (read as 1 and 0 they made a tube's tolerance of 1 mm and an alignment's position tolerance of 1 unit without a
+    word), nor is a string only Python reads as one (``"6_0"`` is 60 to it). A JSON body (validated in JSON mode) is
+    held to its schema: there a string stays a string, which the number type refuses."""
     if isinstance(value, bool):
         raise PydanticCustomError("float_type", "Input should be a number, not true or false")
-    if isinstance(value, str) and not _PLAIN_NUMBER.fullmatch(value):
-        raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+    if isinstance(value, str) and (info is None or info.mode != "json"):
+        if not _PLAIN_NUMBER.fullmatch(value):
+            raise PydanticCustomError("float_parsing", "Input should be a number (digits, a point, an exponent)")
+        return float(value)
     return value
 
 
 def plain_numbers(*fields: str):
-    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`; a
-    validator of the field, not of its type, so that the JSON schema keeps the field's bounds."""
+    """A model's before-validator holding ``fields`` (numbers, or lists of numbers) to :func:`option_number`: the
+    fields an upload form may type as text; a validator of the field, not of its type, so that the JSON schema keeps
+    the field's bounds."""
 
-    def check(cls, value: Any) -> Any:
-        for item in value if isinstance(value, list) else (value,):
-            option_number(item)
-        return value
+    def check(cls, value: Any, info: ValidationInfo) -> Any:
+        if isinstance(value, list):
+            return [option_number(item, info) for item in value]
+        return option_number(value, info)
 
     return field_validator(*fields, mode="before")(check)
 

@@ -18,19 +18,21 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import FiniteFloat, Report, StrictModel, unit
+from plantsolve.schemas.common import FiniteFloat, Number, Report, StrictModel, plain_numbers, unit
 
 MAX_FILE_CHARS = 96 * 1024 * 1024
 EntityName = Annotated[str, Field(min_length=3, max_length=100, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")]
 
 
 class DedupOptions(StrictModel):
+    _plain_numbers = plain_numbers("tolerance")
+
     sharing: Literal["mapped_item", "product_shape", "auto"] = Field(
         default="mapped_item",
         description="How members reuse their class's geometry: 'mapped_item' (IfcRepresentationMap + IfcMappedItem, "
         "IFC2X3 and later), 'product_shape' (members share the representative's IfcProductDefinitionShape and "
         "carry the transform in their placement; IFC4 and later only), 'auto' (the smallest valid for the schema).")
-    tolerance: Annotated[float, Field(gt=0, le=1e3, allow_inf_nan=False)] | None = Field(
+    tolerance: Annotated[Number, Field(gt=0, le=1e3, allow_inf_nan=False)] | None = Field(
         default=None,
         description="Largest allowed distance between a member's points and its transformed representative, both "
         "ways, in the IFC file's own length unit (its IfcUnitAssignment: metres for most exports, millimetres for "

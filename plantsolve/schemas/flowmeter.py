@@ -25,11 +25,11 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import Measured, Report, StrictModel, Units, unit
+from plantsolve.schemas.common import Measured, Number, Report, StrictModel, Units, plain_numbers, unit
 
 
 # a field component in tesla: the strongest magnets built reach tens of tesla
-Tesla = Annotated[float, Field(allow_inf_nan=False, ge=-100, le=100)]
+Tesla = Annotated[Number, Field(allow_inf_nan=False, ge=-100, le=100)]
 
 
 # a grid field's points (a flat grid's values, a field file's rows)
@@ -37,8 +37,8 @@ GRID_POINTS_MAX = 2_000_000
 
 
 class Pipe(StrictModel):
-    radius: float = Field(gt=0, le=1e9, allow_inf_nan=False, description="Inner radius R of the liner.")
-    liner_length: float | None = Field(
+    radius: Number = Field(gt=0, le=1e9, allow_inf_nan=False, description="Inner radius R of the liner.")
+    liner_length: Number | None = Field(
         default=None, gt=0, le=1e10, allow_inf_nan=False,
         description="Length L of the insulating liner (default 3 diameters, 6 R). The liner section is "
         "modelled as an insulated pipe of this length, its end cross-sections insulated too.")
@@ -50,18 +50,18 @@ class Electrodes(StrictModel):
         description="'patch': theta-z patches of half-angle beta and half-length a, equipotential; "
         "'point': point electrodes (Shercliff's weight function); 'button': cylindrical electrodes of "
         "radius r_e through the wall along x, protruding l_e into the flow (0: flush discs), equipotential.")
-    half_angle: float = Field(
+    half_angle: Number = Field(
         default=22.5, gt=0, lt=90, allow_inf_nan=False,
         description="Half-angle beta of a patch electrode, degrees, 0 < beta < 90 (not used by points and buttons).")
-    half_length: float | None = Field(
+    half_length: Number | None = Field(
         default=None, gt=0, le=1e10, allow_inf_nan=False,
         description="Half-length a of a patch electrode along z; null means electrodes along the whole "
         "liner (the 2-D case, solved exactly). Null for points and buttons.")
-    radius: float | None = Field(
+    radius: Number | None = Field(
         default=None, gt=0, le=1e9, allow_inf_nan=False,
         description="Radius r_e of a button electrode (units): its face on the wall is y^2 + z^2 <= r_e^2; "
         "0.02 R <= r_e <= 0.8 R and r_e <= L/2. Required for buttons only.")
-    protrusion: float = Field(
+    protrusion: Number = Field(
         default=0.0, ge=0, le=1e9, allow_inf_nan=False,
         description="Length l_e by which a button enters the flow (units), 0 <= l_e <= 0.9 R (the two tips stay apart); 0 is a flush disc. "
         "Buttons only.")
@@ -69,7 +69,7 @@ class Electrodes(StrictModel):
 
 class UniformField(StrictModel):
     type: Literal["uniform"] = Field(description="The field's form; it selects the model (uniform or grid).")
-    magnitude: float = Field(default=0.01, gt=0, le=100, allow_inf_nan=False,
+    magnitude: Number = Field(default=0.01, gt=0, le=100, allow_inf_nan=False,
                              description="|B| in tesla, along +y (at most 100 T; meters use a few mT).")
 
 
@@ -115,13 +115,13 @@ class Velocity(StrictModel):
         description="'uniform': v = mean; 'laminar': 2 mean (1 - r^2/R^2); 'power_law': "
         "mean (n+1)(2n+1)/(2n^2) (1 - r/R)^(1/n); 'samples': values at points of the cross-section, "
         "linearly interpolated on their Delaunay triangulation.")
-    mean: float = Field(default=1.0, ge=-1000, le=1000, allow_inf_nan=False,
+    mean: Number = Field(default=1.0, ge=-1000, le=1000, allow_inf_nan=False,
                         description="Mean axial velocity (m/s), for the analytic profiles; |v| <= 1000 m/s.")
-    n: float = Field(default=7.0, ge=1, le=100, allow_inf_nan=False, description="Power-law exponent.")
+    n: Number = Field(default=7.0, ge=1, le=100, allow_inf_nan=False, description="Power-law exponent.")
     points: list[list[Measured]] | None = Field(
         default=None, max_length=100_000,
         description="Sample points [x, y] in the request's units (for 'samples'); they must cover the cross-section.")
-    values: list[Annotated[float, Field(allow_inf_nan=False, ge=-1000, le=1000)]] | None = Field(
+    values: list[Annotated[Number, Field(allow_inf_nan=False, ge=-1000, le=1000)]] | None = Field(
         default=None, max_length=100_000, description="Axial velocity (m/s) at each sample point, |v| <= 1000 m/s.")
 
 
@@ -131,6 +131,8 @@ MAGNETIC_FIELD_FILE_MAX = 50_000_000
 
 
 class FlowmeterOptions(StrictModel):
+    _plain_numbers = plain_numbers("tolerance")
+
     method: Literal["auto", "integral_equation", "fem", "first_order"] = Field(
         default="auto",
         description="'auto': closed form for full-length (2-D) and point electrodes, the integral equation for "
@@ -139,7 +141,7 @@ class FlowmeterOptions(StrictModel):
         "'integral_equation': the Galerkin integral equation on the electrode (patches and flush buttons); 'fem': "
         "finite elements (scikit-fem) for patches and buttons; 'first_order': the uniform current-density iterate "
         "(S = sin(beta)/beta for patches).")
-    tolerance: float = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
+    tolerance: Number = Field(default=1e-3, ge=1e-6, le=0.1, allow_inf_nan=False,
                              description="Target accuracy of S; for 'fem' it sets the mesh size.")
     probe_points: list[list[Measured]] = Field(
         default_factory=list, max_length=10_000,
@@ -164,7 +166,7 @@ class FlowmeterRequest(StrictModel):
         "of coordinates and values in any order, the form that needs no order. An FE tool's export goes in "
         "options.magnetic_field_file instead.")
     velocity: Velocity = Field(default_factory=Velocity)
-    reynolds: list[Annotated[float, Field(allow_inf_nan=False, gt=0, le=1e9)]] = Field(
+    reynolds: list[Annotated[Number, Field(allow_inf_nan=False, gt=0, le=1e9)]] = Field(
         default_factory=list, max_length=1000,
         description="Reynolds numbers for the linearity curve: laminar profile below 2300, else the power "
         "law with n = -1.7 + 1.8 log10(Re) (at least that of Re = 4000).")

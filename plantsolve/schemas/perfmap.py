@@ -20,7 +20,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
 
-from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Report, StrictModel, unit
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Number, Report, StrictModel, \
+    plain_numbers, unit
 
 # units of result fields (x-unit in the OpenAPI document): placeholders name the result's ``units`` fields
 FLOW = unit("{units.flow}")
@@ -144,6 +145,8 @@ class BetaGridOption(StrictModel):
 
 
 class PerfmapOptions(StrictModel):
+    _plain_numbers = plain_numbers("surge_margin")
+
     model: Literal["auto", "parabola", "log", "cubic", "spline2", "spline3", "concave"] = Field(
         default="auto",
         description="Pressure curve family for the characteristics; 'auto' picks the paper family "
@@ -191,7 +194,7 @@ class PerfmapOptions(StrictModel):
         default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
     concave_efficiency: bool = Field(
         default=False, description="Also constrain the efficiency curve to be concave.")
-    surge_margin: float = Field(
+    surge_margin: Number = Field(
         default=0.0, ge=0.0, le=1.0,
         description="Surge margin for the 'surge_margin_line' (0: none): on each characteristic the point whose "
         "pressure is the surge pressure / (1 + margin), i.e. SM = p_surge / p - 1 at constant setting.")
@@ -226,7 +229,7 @@ class ValueConversion(StrictModel):
     column: str | None = Field(default=None, max_length=200, description="The file's column header (uploads).")
     from_unit: str = Field(max_length=40, description="The unit the values were read in ('%', 'lbm/s', ...).")
     to_unit: str = Field(max_length=40, description="The unit they are used in ('1' for a fraction).")
-    factor: float = Field(gt=0, le=1e12, description="Multiplier from the values read to the values used.")
+    factor: Number = Field(gt=0, le=1e12, description="Multiplier from the values read to the values used.")
     basis: Literal["header", "units_row", "cells", "request", "result_units", "values"] = Field(
         description="Where the unit came from: the column header, the row of units under it, the cells themselves "
         "('85.85%', a number format stating a unit), the request's units, options.result_units, or the values "

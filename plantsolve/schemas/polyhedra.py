@@ -21,7 +21,7 @@ from pydantic import BaseModel, BeforeValidator, Discriminator, Field, PlainSeri
     TypeAdapter, WithJsonSchema
 
 from plantsolve.schemas.common import LENGTH, MAX_COORDINATE, FiniteFloat, Point3, Report, StrictModel, Units, \
-    json_integer, unit
+    json_integer, plain_numbers, unit
 
 MAX_VERTICES = 5_000_000
 MAX_FACES = 2_000_000
@@ -33,7 +33,7 @@ AREA, VOLUME = LENGTH + "^2", LENGTH + "^3"
 Name = Annotated[str, Field(min_length=1, max_length=200)]
 MAX_ZONE_MULTIPLIER = 1_000_000
 # How many identical copies a named zone or subsurface stands for (EnergyPlus' Multiplier fields): whole, at least 1.
-Multipliers = dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER)]]
+Multipliers = dict[Name, Annotated[int, Field(ge=1, le=MAX_ZONE_MULTIPLIER), BeforeValidator(json_integer)]]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_VERTICES), BeforeValidator(json_integer)]
 
 
@@ -125,6 +125,8 @@ class TriangleMesh(StrictModel):
 
 
 class PolyhedraOptions(StrictModel):
+    _plain_numbers = plain_numbers("merge_tolerance", "planarity_tolerance")
+
     merge_tolerance: FiniteFloat = Field(
         default=1e-6, ge=0.0, le=100.0,
         description="Vertices closer than this (request units) are one vertex; also the distance within which a "

@@ -18,18 +18,18 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, Field
 
-from plantsolve.schemas.common import (Direction3, FiniteFloat, Point3, Quaternion, Report, StrictModel, Units,
-                                       json_integer, unit)
+from plantsolve.schemas.common import (Direction3, FiniteFloat, Number, Point3, Quaternion, Report, StrictModel,
+                                       Units, json_integer, plain_numbers, unit)
 
 MAX_BODIES = 20_000
 MAX_JOINTS = 100_000
 MAX_MESH_VERTICES = 200_000
 
 Name = Annotated[str, Field(min_length=1, max_length=200)]
-PositiveLength = Annotated[float, Field(allow_inf_nan=False, gt=0.0, le=1e12)]
+PositiveLength = Annotated[Number, Field(allow_inf_nan=False, gt=0.0, le=1e12)]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_MESH_VERTICES), BeforeValidator(json_integer)]
 JointType = Literal["rigid", "hinge", "ball", "slider", "cylindrical"]
-Matrix9 = Annotated[list[Annotated[float, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]],
+Matrix9 = Annotated[list[Annotated[Number, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]],
                     Field(min_length=9, max_length=9)]
 
 
@@ -81,6 +81,8 @@ class DockOptions(StrictModel):
 
 
 class RigidityOptions(StrictModel):
+    _plain_numbers = plain_numbers("contact_tolerance", "rank_tolerance")
+
     dock: DockOptions | None = Field(default=None, description="A part to find docking poses for (parts models).")
     contact_tolerance: FiniteFloat = Field(
         default=0.01, ge=0.0, le=100.0,

@@ -21,9 +21,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, BeforeValidator, Discriminator, Field, StrictInt, Tag, model_validator
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Point3, Quaternion,
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Number, Point3, Quaternion,
                                       Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
 
 MAX_POINTS = 5_000_000
@@ -61,7 +61,8 @@ class NpyPoints(StrictModel):
 class LraRow(StrictModel):
     """One LRA row: straight, then rotate the bend plane, then bend (see module convention)."""
 
-    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius")
+    _plain_numbers = plain_numbers("length", "rotation", "angle", "bend_radius", "sigma_length", "sigma_rotation",
+                                   "sigma_angle", "sigma_bend_radius")
 
     length: FiniteFloat = Field(ge=0, le=MAX_NOMINAL_LENGTH, json_schema_extra=LEN,
                                 description="Straight length before the bend, in the request's units.")
@@ -110,7 +111,7 @@ class XyzClrPoint(StrictModel):
     """One point of an XYZ-CLR nominal: the intersection of two consecutive straights of the centreline (or an
     end of the tube) and the centreline bend radius of the bend there."""
 
-    _plain_numbers = plain_numbers("clr")
+    _plain_numbers = plain_numbers("x", "y", "z", "clr")
 
     x: Coordinate
     y: Coordinate
@@ -178,7 +179,7 @@ class TubeOptions(StrictModel):
         "dies: two radii, bends assigned by the data), 'per_bend' (a free radius per bend), or 'auto' (the one "
         "with the smallest Bayesian information criterion on the surface residuals; reported in the result).",
     )
-    dies: list[Annotated[float, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
+    dies: list[Annotated[Number, Field(gt=0, le=MAX_OPTION_LENGTH, allow_inf_nan=False)]] | None = Field(
         default=None, min_length=1, max_length=20,
         description="Centreline radii of the dies available (request units): each bend gets the nearest die "
         "(by its freely fitted radius), and its radius is held at that die's.",
@@ -244,11 +245,11 @@ class UnitConversion(StrictModel):
     file_unit: str = Field(description="The file's length unit: mm, cm, m, in, ft, us_ft (US survey foot) or the "
                            "name a CRS gives.")
     request_unit: Units
-    factor: float = Field(gt=0, description="Multiplier from the file's x, y (and z unless z_factor is given) to "
+    factor: Number = Field(gt=0, description="Multiplier from the file's x, y (and z unless z_factor is given) to "
                           "the request's unit; 1 when none was needed.")
     z_file_unit: str | None = Field(default=None, description="The z unit when the file's CRS states a vertical unit "
                                     "other than the horizontal one.")
-    z_factor: float | None = Field(default=None, gt=0, description="Multiplier for z when z_file_unit is given.")
+    z_factor: Number | None = Field(default=None, gt=0, description="Multiplier for z when z_file_unit is given.")
     basis: Literal["options.file_units", "crs", "header", "format", "assumed", "request"] = Field(
         description="Where the file unit came from: the option, the file's CRS, a text file's column header "
         "(`x [m]`, `x_mm`), the format's standard (E57: metres), assumed (a LAS/LAZ file stating no unit: metres), "
@@ -261,11 +262,11 @@ class PointSource(StrictModel):
     """What the upload parser read from a point file: set by the upload parser, not needed in JSON bodies."""
 
     format: str = Field(description="File format read, e.g. 'las', 'ply', 'xyz'.")
-    points: int = Field(ge=0, description="Points kept.")
+    points: StrictInt = Field(ge=0, description="Points kept.")
     units: UnitConversion
-    skipped: int = Field(default=0, ge=0, description="Records (lines, vertices) that could not be read and were "
+    skipped: StrictInt = Field(default=0, ge=0, description="Records (lines, vertices) that could not be read and were "
                          "left out; each is listed in the warnings.")
-    skipped_lines: list[int] = Field(default_factory=list, description="1-based line numbers of the first skipped "
+    skipped_lines: list[StrictInt] = Field(default_factory=list, description="1-based line numbers of the first skipped "
                                      "records (text formats; at most 10).")
     truncated: bool = Field(default=False, description="The file ends before the records its header declares, or "
                             "mid-record.")
