@@ -16,7 +16,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
-from plantsolve.solvers.length_units import SIZES, request_unit
+from plantsolve.solvers.length_units import METRES, SIZES, request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import elements as ply_elements
@@ -28,7 +28,7 @@ from plantsolve.solvers.tube.text_points import read_text_points
 from plantsolve.solvers.tube.validation import EXTENT_MM_PLAUSIBLE, UNIT_MM, likely_units, scan_extent
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
-TO_MM = UNIT_MM  # millimetres per unit of each of the request's units
+TO_MM = UNIT_MM  # millimetres per unit of each unit a file's coordinates may be in (micrometres too)
 # a mesh with fewer vertices than this is a CAD-style tessellation: its faces are sampled instead
 MESH_MIN_VERTICES = 2000
 MESH_SAMPLES = 20_000
@@ -517,11 +517,11 @@ def _default_unit_implausible(ext: str, pts: np.ndarray, target: str) -> list[Di
                  "plausible_mm": [lo, hi], "likely_units": likely})]
 
 
-def _unit_option(word: object, loc: tuple) -> str:
-    """A unit given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres'); a 422 naming
-    ``loc`` for a spelling of two readings ('Mm') or of no unit."""
+def _unit_option(word: object, loc: tuple, among=METRES) -> str:
+    """A unit among ``among`` given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres');
+    a 422 naming ``loc`` for a spelling of two readings ('Mm') or of no unit among them."""
     try:
-        return request_unit(word)
+        return request_unit(word, among)
     except ValueError as exc:
         raise InputRejected([FieldError(loc, str(exc))]) from None
 
@@ -536,7 +536,13 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         units = None if units is None else _unit_option(units, ("options", "units"))
     file_units = opts.get("file_units")
     if file_units is not None:
-        file_units = opts["file_units"] = _unit_option(file_units, ("options", "file_units"))
+        # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the source's
+        # conversion keeps it, the options only the request's units
+        file_units = _unit_option(file_units, ("options", "file_units"), SIZES)
+        if file_units in METRES:
+            opts["file_units"] = file_units
+        else:
+            del opts["file_units"]
     if ext == ".json":
         if file_units is not None:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "

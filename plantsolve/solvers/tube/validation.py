@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.length_units import SIZES
 from plantsolve.solvers.tube import local_fit
 from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
@@ -231,7 +234,8 @@ def pipe_radius_against_measured(pts: np.ndarray, pipe_radius: float, units: str
 RADIUS_MM_PLAUSIBLE = (0.5, 2000.0)
 # and of a scan of one tube (its bounding-box diagonal)
 EXTENT_MM_PLAUSIBLE = (5.0, 200_000.0)
-UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+# millimetres per unit of each unit a scan's coordinates may be in: the request's and micrometres (length_units)
+UNIT_MM = MappingProxyType({unit: metres * 1000.0 for unit, metres in SIZES.items()})
 
 
 def likely_units(mm: float, bounds: tuple[float, float], read_as: str) -> list[str]:
