@@ -263,7 +263,37 @@ def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
         arr = arr.T
     if arr.ndim != 2 or arr.shape[1] < 3 or not np.issubdtype(arr.dtype, np.number):
         raise reject(f"NPY array must be numeric with shape (N, 3), got {arr.shape} {arr.dtype}")
-    return np.asarray(arr[:, :3], dtype=np.float64)
+    if arr.shape[1] > 3:
+        return _npy_coordinates(arr, log)
+    return np.asarray(arr, dtype=np.float64)
+
+
+def _npy_coordinates(arr: np.ndarray, log: ReadLog) -> np.ndarray:
+    """x, y, z of an NPY array of more than three columns, said in a warning naming the columns left out: an NPY
+    has no header to say which columns are the coordinates. The first three are (x y z intensity, x y z r g b and
+    x y z with normals are how scan tools save clouds), unless the first column counts the rows (0 or 1, 2, 3, ...),
+    as a text scan's row number is read: then the next three. Before, the first three columns were read without a
+    word, a row number among them."""
+    rows = len(arr)
+    first = np.asarray(arr[:, 0], dtype=np.float64)
+    numbered = rows > 1 and any(np.array_equal(first, np.arange(start, start + rows)) for start in (0, 1))
+    start = 1 if numbered and arr.shape[1] >= 4 else 0
+    dropped = [k for k in range(arr.shape[1]) if not start <= k < start + 3]
+    said = ", ".join(f"column {k + 1}{_span(np.asarray(arr[:, k], dtype=np.float64))}" for k in dropped[:8])
+    why = ("its first column counts the rows (a row number): x, y, z read from columns 2 to 4" if start
+           else "x, y, z read from its first three columns")
+    log.warn(Diagnostic(code="npy_columns_dropped", message=(
+        f"NPY file: the array has shape {arr.shape}, {arr.shape[1]} values a point: {why}; left out "
+        f"{said}{', ...' if len(dropped) > 8 else ''} (an intensity, colour or normal?). Save it as (N, 3) if "
+        "other columns are the coordinates."),
+        details={"shape": list(arr.shape), "coordinate_columns": [start + 1, start + 2, start + 3],
+                 "dropped_columns": [k + 1 for k in dropped], "row_numbers": bool(start)}))
+    return np.asarray(arr[:, start:start + 3], dtype=np.float64)
+
+
+def _span(values: np.ndarray) -> str:
+    finite = values[np.isfinite(values)]
+    return f" ({finite.min():.4g} to {finite.max():.4g})" if len(finite) else ""
 
 
 def _may_repeat(pts: np.ndarray) -> bool:
