@@ -224,8 +224,9 @@ def pipe_radius_against_measured(pts: np.ndarray, pipe_radius: float, units: str
     # a ratio near one unit's size in another's: the scan's coordinates in that unit, read in the request's
     slip = [u for u in UNIT_MM if u != units and abs(np.log(ratio * UNIT_MM[units] / UNIT_MM[u])) < np.log(limit)]
     why = ("a diameter? The radius is half of it." if abs(ratio - 2.0) < 0.3 else
-           f"is the scan in {slip[0]} (read as {units}: set options.file_units to {slip[0]!r}), or is the radius "
-           "another tube's?" if slip else "a radius in another unit, or of another tube?")
+           f"a radius in another unit (the scan's coordinates in {slip[0]}, read as {units}? Set "
+           f"options.file_units to {slip[0]!r} for an upload, or units), or of another tube?" if slip
+           else "a radius in another unit, or of another tube?")
     return [FieldError(loc=("options", "pipe_radius"), msg=(
         f"pipe radius {pipe_radius:g} {units} is {ratio:.2g} times the radius the scan's cross-sections show "
         f"({measured:.3g} {units}): {why} The fit holds a given radius fixed and cannot follow a tube of another "

@@ -51,4 +51,4 @@ def test_a_given_radius_in_mm_over_a_scan_in_inches_is_refused_naming_inches():
     with pytest.raises(InputRejected) as refused:
         check_input(TubeScan(_request(longer / INCH, {"pipe_radius": 20.0})))
     (error,) = refused.value.errors
-    assert error.loc == ("options", "pipe_radius") and "options.file_units to 'in'" in error.msg
+    assert error.loc == ("options", "pipe_radius") and "options.file_units to 'in'" in error.msg and "another unit" in error.msg
