@@ -1309,7 +1309,7 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
 
 
 def _bore_size_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
-    """``implausible_bore``: most end points' bores are nominal sizes of the other unit system alone
+    """``pcf_bore_units``: most end points' bores are nominal sizes of the other unit system alone
     (:func:`pcf_bore_sizes.other_system_bores`), naming the UNITS record that states the bores' unit and the first
     such bores' lines. Under INCH, a file written in millimetres is then read 25.4 times too large, its network with
     it, and no ratio the solve checks disagrees."""
@@ -1338,7 +1338,7 @@ def _bore_size_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
     words = {"in": "inches", "mm": "millimetres"}
     coords = (" UNITS-CO-ORDS states the same unit: the coordinates, and so every length of the result, are likely "
               "off by as much." if doc.units == unit else "")
-    return [("implausible_bore",
+    return [("pcf_bore_units",
              f"{where} reads the bores in {words[unit]}, but {len(other)} of the {len(bores)} end points' bores are "
              f"{system} ({listed}): is the file written in {words[likely]}? Read in {words[unit]}, every bore is "
              f"{TO_MM[unit] / TO_MM[likely]:.3g} times what was meant.{coords} Correct the UNITS records.",
