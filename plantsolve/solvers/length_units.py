@@ -57,14 +57,17 @@ def unit_of_size(metres: float, among: Iterable[str] = METRES) -> str | None:
     return next((unit for unit in among if abs(SIZES[unit] - metres) <= 1e-9 * SIZES[unit]), None)
 
 
-def request_unit(word: object) -> str:
-    """The request unit (``METRES``) a form's or a file's ``word`` spells in any case ('MM', 'Millimetres', 'IN'), as
-    a JSON request's ``units`` reads it; ValueError saying why for a spelling of two readings ('Mm') or of no request
-    unit."""
+def request_unit(word: object, among: Iterable[str] = METRES) -> str:
+    """The unit among ``among`` (default: the request's units, ``METRES``) a form's or a file's ``word`` spells in any
+    case ('MM', 'Millimetres', 'IN', and 'µm' or 'microns' when ``among`` holds micrometres), as a JSON request's
+    ``units`` reads it; ValueError saying why for a spelling of two readings ('Mm') or of no unit among them."""
     unit = spelled_unit(word)  # a ValueError naming both readings of 'Mm'
-    if not isinstance(unit, str) or unit not in METRES:
-        raise ValueError(f"unknown unit {word!r}; one of {', '.join(METRES)} (or their names: millimetres, inches, ...)")
-    return unit
+    if isinstance(unit, str) and unit in among:
+        return unit
+    named = unit_named(word, among) if isinstance(word, str) else None
+    if named is None:
+        raise ValueError(f"unknown unit {word!r}; one of {', '.join(among)} (or their names: millimetres, inches, ...)")
+    return named
 
 
 # A comment that states the coordinates' unit, as scanners and converters write one before the data (``# units: in``,

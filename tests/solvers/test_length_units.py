@@ -61,7 +61,7 @@ def _refusal(text: str) -> str:
 
 def test_a_tube_text_header_still_refuses_what_is_no_length_unit_listing_the_units():
     assert _refusal("x [deg],y [deg],z [deg]\n1,2,3\n") == ("line 1: the coordinate columns state the unit 'deg', "
-                                                             "which is not a length unit read here (cm, ft, in, m, mm)")
+                                                             "which is not a length unit read here (mm, cm, m, in, ft, um)")
     assert "states the unit 'millimetres' in its name and 'in'" in _refusal("x [millimetres],y,z\nin,in,in\n1,2,3\n")
 
 

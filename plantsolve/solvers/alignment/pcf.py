@@ -44,6 +44,7 @@ from scipy.spatial import cKDTree
 
 from plantsolve.schemas.alignment import AlignmentOptions, AlignmentRequest
 from plantsolve.schemas.common import MAX_COORDINATE
+from plantsolve.solvers.alignment.pcf_bore_sizes import other_system_bores
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
 from plantsolve.solvers.alignment.pcf_model_check import TURNING, closed_rings, failing_components
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
@@ -676,6 +677,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         notes.append(cut)
     notes.extend(_assumed_units_notes(doc))
     notes.extend(_bore_notes(doc))
+    notes.extend(_bore_size_notes(doc))
     notes.extend(_missing_bore_notes(doc))
     notes.extend(_duplicate_notes(comps, doc))
     notes.extend(_record_notes(comps))
@@ -1304,6 +1306,44 @@ def _bore_mismatch_notes(comps: list[dict], net: dict, doc: Document) -> list[tu
              "pipe keeps its bore and mated ends share one (fittings may change it, by less than "
              f"{FITTING_RATIO:g}:1). A bore in another unit or a mistyped digit? Correct the bore.",
              {"pairs": found[:200], "unit": unit}, "warning")]
+
+
+def _bore_size_notes(doc: Document) -> list[tuple[str, str, dict, str]]:
+    """``pcf_bore_units``: most end points' bores are nominal sizes of the other unit system alone
+    (:func:`pcf_bore_sizes.other_system_bores`), naming the UNITS record that states the bores' unit and the first
+    such bores' lines. Under INCH, a file written in millimetres is then read 25.4 times too large, its network with
+    it, and no ratio the solve checks disagrees."""
+    record = "UNITS-BORE" if "UNITS-BORE" in doc.header else "UNITS-CO-ORDS"
+    unit = UNITS.get(doc.header.get(record, "MM"))
+    bores = []
+    for it in doc.items:
+        for i in it.point_lines:
+            parts = doc.lines[i].split()
+            if parts[0].upper() != "CENTRE-POINT" and len(parts) >= 5:
+                try:
+                    bore = float(parts[4])
+                except ValueError:
+                    continue
+                if _readable_bore(bore):
+                    bores.append((i + 1, bore))
+    found = other_system_bores(bores, unit) if unit else None
+    if found is None:
+        return []
+    likely, other = found
+    stated_on = next((i + 1 for i, line in enumerate(doc.lines) if line.split()[:1] == [record]), None)
+    where = f"line {stated_on}: {record} {doc.header.get(record)}" if stated_on else f"{record} (not written: MM)"
+    listed = ", ".join(f"line {line} ({b:g})" for line, b in other[:5]) + (", ..." if len(other) > 5 else "")
+    system = ("DN sizes in millimetres and no NPS (inch) size" if likely == "mm" else
+              "NPS sizes in inches and below the smallest DN (6 mm)")
+    words = {"in": "inches", "mm": "millimetres"}
+    coords = (" UNITS-CO-ORDS states the same unit: the coordinates, and so every length of the result, are likely "
+              "off by as much." if doc.units == unit else "")
+    return [("pcf_bore_units",
+             f"{where} reads the bores in {words[unit]}, but {len(other)} of the {len(bores)} end points' bores are "
+             f"{system} ({listed}): is the file written in {words[likely]}? Read in {words[unit]}, every bore is "
+             f"{TO_MM[unit] / TO_MM[likely]:.3g} times what was meant.{coords} Correct the UNITS records.",
+             {"record": record, "line": stated_on, "unit": unit, "likely_unit": likely,
+              "bores": [{"line": line, "bore": b} for line, b in other[:200]], "end_points": len(bores)}, "warning")]
 
 
 def _bore_notes(doc: Document) -> list[tuple[str, str, dict, str]]:

@@ -70,7 +70,8 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
-from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, request_body as gasturb_request_body
+from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
+from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
 from plantsolve.solvers.perfmap.units import (
@@ -720,7 +721,15 @@ def _parse_table(rows: list[list[str]], numbers: list[int], column_roles: dict |
                 continue
             vals[c] = v
         cut_number = _cut_number(data, n, r) if n == cut_line and len(errors) == row_start else None
-        if n == cut_line and (len(errors) > row_start or len(r) < width or cut_number):
+        if cut_number and not cut_number["certain"] and len(r) >= width:
+            name = rows[0][cut_number["column"] - 1].strip() if cut_number["column"] <= len(rows[0]) else ""
+            cut_note = truncated_file(n, f"its last row has no line ending, and its column {name!r} may be cut "
+                                      f"({cut_number['reason']}): the row was read as written; check its last value "
+                                      "against the source, and whether the table goes on beyond it.",
+                                      column_name=name, cells=len(r), header_cells=width,
+                                      **{k: v for k, v in cut_number.items() if k != "reason"})
+            cut_number = None
+        elif n == cut_line and (len(errors) > row_start or len(r) < width or cut_number):
             why = ([e.msg for e in errors[row_start:]] or ([cut_number["reason"]] if cut_number else [])
                    or [f"{len(r)} of the header's {width} cells"])
             del errors[row_start:]
@@ -1018,13 +1027,27 @@ def _cut_number(data: list[tuple[int, list[str]]], line: int, row: list[str]) ->
     column = [decimals(r[j]) for n, r in data if n != line and not isinstance(r, _Unreadable) and j < len(r)
               and r[j].strip()]
     column = [d for d in column if d is not None]
+    if last is None or not column or last >= max(column):
+        return None
+    share = sum(d <= last for d in column) / len(column)
     # fewer decimals than nearly every cell of the column (exporters drop trailing zeros now and then: one in a
-    # hundred cells may be that short)
-    if last is None or not column or sum(d <= last for d in column) > 0.02 * len(column):
+    # hundred cells may be that short): cut; a few such cells more, and the last may be cut or one of them. One
+    # zero dropped leaves a tenth of the cells a decimal short: a last cell one short is such a cell unless rare
+    if share > (MAYBE_CUT_SHARE if max(column) - last >= 2 else MAYBE_CUT_SHARE_ONE):
         return None
     return {"column": j + 1, "value": row[j].strip(), "decimals": last, "column_decimals": [min(column), max(column)],
+            "short_share": share, "certain": share <= CUT_SHARE,
             "reason": f"its last value {row[j].strip()!r} has {last} decimal(s) where the column's other values have "
-                      f"{min(column)}" + (f" to {max(column)}" if max(column) != min(column) else "")}
+                      f"{min(column)}" + (f" to {max(column)}" if max(column) != min(column) else "")
+                      + ("" if share <= CUT_SHARE else f" ({100 * share:.2g} % of them {last} or fewer)")}
+
+
+# a last cell with fewer decimals than all but this share of its column's cells ends a cut file: the row is not read
+CUT_SHARE = 0.02
+# ... than all but this share: the file may be cut there (a trailing zero dropped as often leaves the cell that
+# short): the row is read, and a warning names the column and the value
+MAYBE_CUT_SHARE = 0.25
+MAYBE_CUT_SHARE_ONE = 0.05  # ... for a last cell one decimal short of the column's longest
 
 
 _MAP_ARRAY = re.compile(r"^\s*(?:\w+\.)?(alphaMap|NcMap|RlineMap|WcMap|PRmap|effMap)\s*=\s*(?:np\.|numpy\.)?array\(",
@@ -1120,6 +1143,17 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
     names = ["alpha", "Nc"] if len(alpha) > 1 else ["Nc"]
     notes = [Diagnostic(code="upload_settings", message=f"pyCycle/NPSS map: {len(positions)} speed lines over "
                         f"{' and '.join(names)}.", details={"names": names})]
+    speeds = np.array(sorted({p["setting"][-1] for p in positions}))
+    if speeds.max() > MAX_RELATIVE_SPEED:
+        # pyCycle's NcMap is the corrected speed over its design value (its maps: 0.5 to 1.1, 1.0 at design); per
+        # cent of design there reads 100 times the speed, and a query or the exports at a relative speed miss the map
+        notes.append(Diagnostic(code="implausible_speed", message=(
+            f"NcMap holds {speeds.min():g}..{speeds.max():g}: pyCycle's NcMap is the relative corrected speed (1.0 "
+            f"at design; its maps hold 0.5 to 1.1), plausible up to {MAX_RELATIVE_SPEED:g}: per cent of design"
+            f"{' (divide by 100)' if speeds.max() <= 150 else ''} or rpm? The speeds are kept as written, and "
+            "queries and the cycle-code exports take them so."),
+            details={"quantity": "Nc", "table": "NcMap", "values": [float(speeds.min()), float(speeds.max())],
+                     "range": [0.0, MAX_RELATIVE_SPEED]}))
     if dropped or short:
         points_at = "; ".join(f"{d['table']}{d['index']} = {d['value']} (Nc {d['Nc']:g})" for d in dropped_at[:5])
         notes.append(Diagnostic(code="upload_points_dropped",

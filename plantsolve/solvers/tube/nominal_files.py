@@ -13,12 +13,14 @@ import csv
 import io
 import re
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.tube import LraRow, TubeOptions
 from plantsolve.solvers.base import FieldError
+from plantsolve.solvers.length_units import SIZES, SPELLINGS
 from plantsolve.solvers.tube.lra import model_from_rows, model_rows
 from plantsolve.solvers.tube.model import control_polygon, model_from_control_polygon
 from plantsolve.solvers.tube.number_cells import (
@@ -30,7 +32,8 @@ from plantsolve.solvers.tube.number_cells import (
     starts_number,
 )
 
-UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "ft": 304.8}
+# millimetres per length unit, by each of its spellings (length_units' one table: 'inch', 'millimetres', 'µm' too)
+UNIT_MM = MappingProxyType({spelling: SIZES[unit] * 1000.0 for unit, names in SPELLINGS.items() for spelling in names})
 ANGLE_DEG = {"deg": 1.0, "°": 1.0, "degree": 1.0, "degrees": 1.0, "rad": float(np.degrees(1.0))}
 
 # column names of the shops' tables (YBC: Y feed, B rotation, C bend angle), lower case, units stripped
@@ -43,7 +46,7 @@ COLUMNS = {
     "x": {"x"}, "y_xyz": {"y"}, "z": {"z"},
     "index": {"row", "point", "pt", "no", "nr", "index", "idx", "#", "bend", "n", "id", "step"},
 }
-HEADER_UNIT = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z°]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft|deg|rad))?$")
+HEADER_UNIT = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-zµμ°]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft|um|deg|rad))?$")
 MIN_ANGLE_DEG = 1e-6
 
 

@@ -30,7 +30,12 @@ from plantsolve.solvers.tube.nominal_files import resolve_nominal
 from plantsolve.solvers.tube.lra import model_rows
 from plantsolve.solvers.tube.bend_count import off_windows, report_bend_count, weak_bends
 from plantsolve.solvers.tube.scan import TubeScan
-from plantsolve.solvers.tube.validation import implausible_against_scan, implausible_extent, scan_extent
+from plantsolve.solvers.tube.validation import (
+    assumed_unit_small_radius,
+    implausible_against_scan,
+    implausible_extent,
+    scan_extent,
+)
 
 WORK_MAX = 30_000  # samples used for the local stages (1–3)
 LM_SUBSAMPLE = 20_000  # early least-squares rounds
@@ -763,6 +768,8 @@ def solve(scan: TubeScan | TubeRequest, progress: Progress = no_progress) -> Sol
         details["source"] = request.source.model_dump()
     warnings.extend(implausible_against_scan(ls.model, opts, request.units, scan_extent(pts),
                                              request.source.units.file_unit if request.source else None))
+    if (assumed := assumed_unit_small_radius(float(ls.model.pipe_radius), request)) is not None:
+        warnings.append(assumed)
     if opts.pipe_radius and (off := given_radius_warning(ls.model, pts, ls.segment, ls.inlier, request.units)):
         warnings.insert(0, off)
     if ls.radius_model is not None and ls.radius_model.summary:

@@ -31,7 +31,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import InputRejected, decode_text, reject
-from plantsolve.solvers.length_units import METRES, SIZES, comment_unit, two_readings, unit_named
+from plantsolve.solvers.length_units import SIZES, comment_unit, two_readings, unit_named
 from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
@@ -48,7 +48,8 @@ from plantsolve.solvers.tube.read_log import ReadLog
 _SPLIT = re.compile(r"[,;\s]+")
 _BRACKETED = re.compile(r"[\[(][^\])]*[\])]")  # a unit in brackets: ``[mm]``, ``(in)``
 _NOT_PLAIN_COMMA = ('"', ".", "'", "\u00a0", "\u202f")  # a row of a decimal-comma file read cell by cell
-_UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-z]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft))$", re.IGNORECASE)
+_UNIT_SUFFIX = re.compile(r"^(?P<name>.*?)(?:[\s_]*[\[(]\s*(?P<u1>[a-zµμ]+)\s*[\])]|_(?P<u2>mm|cm|m|in|ft|um|µm|μm))$",
+                          re.IGNORECASE)
 _COORDINATE = re.compile(r"^(?:point|pos|position|coord|coordinate)?[_ ]?(?P<axis>[xyz])(?:[_ ]?(?:coord|coordinate))?$")
 SURVEY_AXES = {"easting": "x", "east": "x", "northing": "y", "north": "y", "elevation": "z", "elev": "z",
                "height": "z"}  # a surveyor's export names the axes so
@@ -154,12 +155,12 @@ def _columns(header: str | None, width: int, header_line: int) -> Columns:
             "(or only some of them one)"))
     if len(units) == 1 and None not in units:
         (u,) = units
-        unit = unit_named(u)
+        unit = unit_named(u, SIZES)
         if unit is None and (readings := two_readings(u)) is not None:
             raise reject(f"line {header_line}: the coordinate columns state the unit {readings}")
         if unit is None:
             raise reject(f"line {header_line}: the coordinate columns state the unit {u!r}, which is not a length "
-                         f"unit read here ({', '.join(sorted(METRES))})")
+                         f"unit read here ({', '.join(SIZES)})")
     return Columns(index, unit, names)
 
 
@@ -179,16 +180,14 @@ def _with_comment_unit(cols: Columns, lines: list[str]) -> Columns:
         if s and s[0] not in "#/%" and starts_number(s):
             break
         comment = _COMMENT.match(s)
-        stated = comment_unit(comment.group(1)) if comment else None
+        stated = comment_unit(comment.group(1), SIZES) if comment else None
         if stated is None:
             continue
         word, unit = stated
         if unit is None:
-            # micrometres are a length unit, which a PLY comment's may be; a text scan's unit is one of the request's
-            what = two_readings(word) or (f"{word!r} (micrometres), in which a text scan is not read" if
-                                          unit_named(word, SIZES) else f"{word!r}, which is no length unit read here")
+            what = two_readings(word) or f"{word!r}, which is no length unit read here"
             return replace(cols, unit=None, conflict=(
-                f"line {lineno}: its comment {s!r} states the unit {what} ({', '.join(sorted(METRES))})"))
+                f"line {lineno}: its comment {s!r} states the unit {what} ({', '.join(SIZES)})"))
         found.append((unit, lineno, s))
     if not found or cols.conflict is not None:
         return cols
@@ -229,13 +228,13 @@ def _with_units_line(names_line: str, units_line: str) -> str | None:
     if len(names) != len(units):
         return None
     units = [u.strip("[]()").strip() for u in units]  # case kept: 'Mm' is refused where the header's unit is read
-    named_at_all = [unit_named(u) or two_readings(u) for u in units]
+    named_at_all = [unit_named(u, SIZES) or two_readings(u) for u in units]
     if not any(named_at_all) or any(u and u != "-" and not n for u, n in zip(units, named_at_all)):
         return None
     for n, u in zip(names, units):
         stated = _name_and_unit(n)[1]
-        said = unit_named(stated) if stated else None
-        if said and unit_named(u) and said != unit_named(u):
+        said = unit_named(stated, SIZES) if stated else None
+        if said and unit_named(u, SIZES) and said != unit_named(u, SIZES):
             raise reject(f"the column {n!r} states the unit {stated!r} in its name and {u!r} in the line of units under "
                          "it: say which one the numbers are in")
     named = [f"{n} [{u}]" if k and _name_and_unit(n)[1] is None else n for n, u, k in zip(names, units, named_at_all)]

@@ -16,7 +16,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
-from plantsolve.solvers.length_units import SIZES, request_unit
+from plantsolve.solvers.length_units import METRES, SIZES, request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import elements as ply_elements
@@ -28,7 +28,7 @@ from plantsolve.solvers.tube.text_points import read_text_points
 from plantsolve.solvers.tube.validation import EXTENT_MM_PLAUSIBLE, UNIT_MM, likely_units, scan_extent
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
-TO_MM = UNIT_MM  # millimetres per unit of each of the request's units
+TO_MM = UNIT_MM  # millimetres per unit of each unit a file's coordinates may be in (micrometres too)
 # a mesh with fewer vertices than this is a CAD-style tessellation: its faces are sampled instead
 MESH_MIN_VERTICES = 2000
 MESH_SAMPLES = 20_000
@@ -263,7 +263,37 @@ def _read_npy(content: bytes, log: ReadLog) -> np.ndarray:
         arr = arr.T
     if arr.ndim != 2 or arr.shape[1] < 3 or not np.issubdtype(arr.dtype, np.number):
         raise reject(f"NPY array must be numeric with shape (N, 3), got {arr.shape} {arr.dtype}")
-    return np.asarray(arr[:, :3], dtype=np.float64)
+    if arr.shape[1] > 3:
+        return _npy_coordinates(arr, log)
+    return np.asarray(arr, dtype=np.float64)
+
+
+def _npy_coordinates(arr: np.ndarray, log: ReadLog) -> np.ndarray:
+    """x, y, z of an NPY array of more than three columns, said in a warning naming the columns left out: an NPY
+    has no header to say which columns are the coordinates. The first three are (x y z intensity, x y z r g b and
+    x y z with normals are how scan tools save clouds), unless the first column counts the rows (0 or 1, 2, 3, ...),
+    as a text scan's row number is read: then the next three. Before, the first three columns were read without a
+    word, a row number among them."""
+    rows = len(arr)
+    first = np.asarray(arr[:, 0], dtype=np.float64)
+    numbered = rows > 1 and any(np.array_equal(first, np.arange(start, start + rows)) for start in (0, 1))
+    start = 1 if numbered and arr.shape[1] >= 4 else 0
+    dropped = [k for k in range(arr.shape[1]) if not start <= k < start + 3]
+    said = ", ".join(f"column {k + 1}{_span(np.asarray(arr[:, k], dtype=np.float64))}" for k in dropped[:8])
+    why = ("its first column counts the rows (a row number): x, y, z read from columns 2 to 4" if start
+           else "x, y, z read from its first three columns")
+    log.warn(Diagnostic(code="npy_columns_dropped", message=(
+        f"NPY file: the array has shape {arr.shape}, {arr.shape[1]} values a point: {why}; left out "
+        f"{said}{', ...' if len(dropped) > 8 else ''} (an intensity, colour or normal?). Save it as (N, 3) if "
+        "other columns are the coordinates."),
+        details={"shape": list(arr.shape), "coordinate_columns": [start + 1, start + 2, start + 3],
+                 "dropped_columns": [k + 1 for k in dropped], "row_numbers": bool(start)}))
+    return np.asarray(arr[:, start:start + 3], dtype=np.float64)
+
+
+def _span(values: np.ndarray) -> str:
+    finite = values[np.isfinite(values)]
+    return f" ({finite.min():.4g} to {finite.max():.4g})" if len(finite) else ""
 
 
 def _may_repeat(pts: np.ndarray) -> bool:
@@ -517,11 +547,11 @@ def _default_unit_implausible(ext: str, pts: np.ndarray, target: str) -> list[Di
                  "plausible_mm": [lo, hi], "likely_units": likely})]
 
 
-def _unit_option(word: object, loc: tuple) -> str:
-    """A unit given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres'); a 422 naming
-    ``loc`` for a spelling of two readings ('Mm') or of no unit."""
+def _unit_option(word: object, loc: tuple, among=METRES) -> str:
+    """A unit among ``among`` given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres');
+    a 422 naming ``loc`` for a spelling of two readings ('Mm') or of no unit among them."""
     try:
-        return request_unit(word)
+        return request_unit(word, among)
     except ValueError as exc:
         raise InputRejected([FieldError(loc, str(exc))]) from None
 
@@ -536,7 +566,13 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         units = None if units is None else _unit_option(units, ("options", "units"))
     file_units = opts.get("file_units")
     if file_units is not None:
-        file_units = opts["file_units"] = _unit_option(file_units, ("options", "file_units"))
+        # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the source's
+        # conversion keeps it, the options only the request's units
+        file_units = _unit_option(file_units, ("options", "file_units"), SIZES)
+        if file_units in METRES:
+            opts["file_units"] = file_units
+        else:
+            del opts["file_units"]
     if ext == ".json":
         if file_units is not None:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "

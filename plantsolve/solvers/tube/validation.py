@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected
+from plantsolve.solvers.length_units import SIZES
 from plantsolve.solvers.tube import local_fit
 from plantsolve.solvers.tube.nominal_files import nominal_errors
 from plantsolve.solvers.tube.scan import TubeScan
@@ -218,8 +221,12 @@ def pipe_radius_against_measured(pts: np.ndarray, pipe_radius: float, units: str
     if shown_share(pts, pipe_radius) >= SHOWN_SHARE:
         return []
     ratio = pipe_radius / measured
+    # a ratio near one unit's size in another's: the scan's coordinates in that unit, read in the request's
+    slip = [u for u in UNIT_MM if u != units and abs(np.log(ratio * UNIT_MM[units] / UNIT_MM[u])) < np.log(limit)]
     why = ("a diameter? The radius is half of it." if abs(ratio - 2.0) < 0.3 else
-           "a radius in another unit, or of another tube?")
+           f"a radius in another unit (the scan's coordinates in {slip[0]}, read as {units}? Set "
+           f"options.file_units to {slip[0]!r} for an upload, or units), or of another tube?" if slip
+           else "a radius in another unit, or of another tube?")
     return [FieldError(loc=("options", "pipe_radius"), msg=(
         f"pipe radius {pipe_radius:g} {units} is {ratio:.2g} times the radius the scan's cross-sections show "
         f"({measured:.3g} {units}): {why} The fit holds a given radius fixed and cannot follow a tube of another "
@@ -231,7 +238,8 @@ def pipe_radius_against_measured(pts: np.ndarray, pipe_radius: float, units: str
 RADIUS_MM_PLAUSIBLE = (0.5, 2000.0)
 # and of a scan of one tube (its bounding-box diagonal)
 EXTENT_MM_PLAUSIBLE = (5.0, 200_000.0)
-UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
+# millimetres per unit of each unit a scan's coordinates may be in: the request's and micrometres (length_units)
+UNIT_MM = MappingProxyType({unit: metres * 1000.0 for unit, metres in SIZES.items()})
 
 
 def likely_units(mm: float, bounds: tuple[float, float], read_as: str) -> list[str]:
@@ -264,6 +272,41 @@ def implausible_pipe_radius(pipe_radius: float, units: str, file_units: str | No
         f"(expected {lo:g} mm to {hi / 1000:g} m): {hint}; set options.file_units (uploads) or units.",
         details={"pipe_radius": pipe_radius, "units": units, "pipe_radius_mm": mm, "plausible_mm": [lo, hi],
                  "read_as": read_as, "likely_units": likely})
+
+
+# A fitted radius under this many millimetres, read in the default unit because nothing stated one, is a capillary's
+# (under 3 mm across); the same numbers in inches or centimetres are a common tube's (a 20 mm tube scanned in inches
+# reads as 0.79 mm, every length 25.4 times too small, and passes every physical bound)
+SMALL_RADIUS_MM = 1.5
+# the units such a scan was likely written in: the imperial shop's and the one a metric export's slip gives
+SMALL_RADIUS_LIKELY = ("in", "cm")
+UNIT_WORDS = {"in": "inches", "cm": "centimetres"}
+
+
+def assumed_unit_small_radius(pipe_radius: float, request) -> Diagnostic | None:
+    """A warning when an uploaded scan that states no unit, with none given (no ``units``, no ``file_units``, no
+    radius or nominal in a unit to compare with), was read in the default unit and its fitted radius is a
+    capillary's there (:data:`SMALL_RADIUS_MM`): the unit was assumed, and in inches or centimetres the same scan is
+    a common tube. Stating the unit (millimetres for a capillary) says which."""
+    source, opts = request.source, request.options
+    if source is None or source.units.basis != "request" or "units" in request.model_fields_set:
+        return None
+    if opts.pipe_radius or opts.nominal or opts.nominal_xyz_clr or opts.nominal_csv:
+        return None  # a radius or a nominal in the request's unit: checked against the scan on their own
+    units = request.units
+    mm = pipe_radius * UNIT_MM[units]
+    if not RADIUS_MM_PLAUSIBLE[0] <= mm < SMALL_RADIUS_MM:
+        return None  # a plausible tube's, or implausible_pipe_radius's
+    other = {u: pipe_radius * UNIT_MM[u] for u in SMALL_RADIUS_LIKELY if u != units}
+    said = " or ".join(f"{r:.3g} mm if the file is in {UNIT_WORDS[u]}" for u, r in other.items())
+    in_mm = "" if units == "mm" else f" ({mm:.3g} mm)"
+    return Diagnostic(code="file_units_assumed", message=(
+        f"The {source.format.upper()} file states no unit and none was given: its coordinates were read in {units}, "
+        f"the default, and the fitted pipe radius is {pipe_radius:.3g} {units}{in_mm}, a capillary's; it is "
+        f"{said}, a common tube's (every length scales alike). Set options.file_units to the unit of the file's "
+        f"coordinates ('{units}' if it is a capillary)."),
+        details={"pipe_radius": pipe_radius, "units": units, "pipe_radius_mm": mm, "basis": "default",
+                 "small_radius_mm": SMALL_RADIUS_MM, "pipe_radius_mm_if": other})
 
 
 # a bend radius (CLR) under the pipe radius is no bend a bender makes (the inner wall would fold); one over

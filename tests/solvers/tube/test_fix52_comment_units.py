@@ -58,12 +58,6 @@ def test_one_reading_of_a_unit_comment(text, stated):
     assert comment_unit(text, SIZES) == stated
 
 
-def test_a_text_scan_in_micrometres_is_refused_saying_so():
-    with pytest.raises(InputRejected) as refused:
-        _read(_text("# units: microns\n", PTS * 1000))
-    assert "line 1" in refused.value.errors[0].msg and "micrometres" in refused.value.errors[0].msg
-
-
 @pytest.mark.parametrize("head", ["# units: in\n", "// Unit = inches\n"])
 def test_numbered_rows_keep_the_unit_a_comment_states(head):
     req, points = _read(_text(head, PTS / INCH, numbered=True))
