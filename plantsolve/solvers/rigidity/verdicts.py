@@ -40,6 +40,11 @@ def unknown_elements(numbers: Sequence[str], positions: np.ndarray) -> int:
     count = 0
     for number in set(numbers):
         at = positions[[k for k, n in enumerate(numbers) if n == number]]
+        # parts in one cell of side SEGMENT_STEP / sqrt(3) are within SEGMENT_STEP of each other, so one stands for
+        # them all: the pairs are then bounded by the cells around each, not quadratic in parts placed at one spot
+        # (20,000 copies of a part at one origin gave 2e8 pairs, 10 GB)
+        _, first = np.unique(np.floor(at * (np.sqrt(3.0) / SEGMENT_STEP)), axis=0, return_index=True)
+        at = at[np.sort(first)]
         pairs = cKDTree(at).query_pairs(SEGMENT_STEP, output_type="ndarray").reshape(-1, 2)
         links = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(at), len(at)))
         count += connected_components(links, directed=False)[0]

@@ -3,6 +3,8 @@ null), a build that comes apart as analysed is NOT DETERMINED (loose or a joint 
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 
@@ -96,3 +98,15 @@ def test_two_parts_typed_a_world_apart_are_warned(apart, warned):
     if warned:  # which of the two is off cannot be told: both are named
         assert [p["id"] for p in far.details["parts"]] == ["p0", "p1"]
         assert far.details["parts"][0]["distance_ldu"] == pytest.approx(apart / 2)
+
+
+def test_copies_of_an_unknown_part_at_one_spot_are_one_element_in_bounded_memory():
+    """5,000 copies at one origin: every pair of them within a segment's step (12.5 M pairs, 200 MB of pair indices
+    before); one stands for all parts of a cell now."""
+    tracemalloc.start()
+    try:
+        assert unknown_elements(["zzz"] * 5000, np.zeros((5000, 3))) == 1
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20e6
