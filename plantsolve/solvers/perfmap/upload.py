@@ -194,9 +194,16 @@ def _symbol(text: str) -> bool:
     return unit.dimensionless and not is_ratio_unit(unit)
 
 
+MAX_HEADER_CELL = 200  # characters: no column name with its unit is longer
+
+
 def _header_field(name: str) -> tuple[str | None, str]:
-    """(field or None, unit) of a header cell by the rules in the module docstring."""
+    """(field or None, unit) of a header cell by the rules in the module docstring. A longer cell is no column name:
+    the unit pattern's search from each blank of a long run of blanks is quadratic (a 200,000-character data cell
+    met as a candidate header took 6 CPU minutes)."""
     label, unit = name.strip().strip('"').strip(), ""
+    if len(label) > MAX_HEADER_CELL:
+        return None, ""
     whole = _alias_key(label)
     if whole in _ALIAS:  # a name with brackets of its own, e.g. 'N/sqrt(theta)'
         return _ALIAS[whole], ""
