@@ -24,6 +24,7 @@ from plantsolve.store.models import Job, utcnow
 from plantsolve.store.repository import StoredArtifact
 from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
+from tests.support.running import running_in_thread
 
 
 @pytest.fixture
@@ -127,13 +128,7 @@ def test_hanging_solver_hits_the_time_limit(ctx):
 
 def test_cancel_running_job_stops_the_solver(ctx):
     job_id = submit(ctx, "test-compute", b'{"values": [1], "seconds": 20}')
-    outcome: list[str] = []
-    thread = threading.Thread(target=lambda: outcome.append(run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue)))
-    thread.start()
-    deadline = time.monotonic() + 10
-    while ctx.repo.get(job_id).status != "running":
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    thread, outcome = running_in_thread(ctx, job_id)
     started = time.monotonic()
     assert JobService(ctx, Recorder()).cancel(job_id).status == "cancelled"
     thread.join(timeout=10)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import threading
-import time
 import uuid
 
 import pytest
@@ -15,6 +13,7 @@ from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService
 from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
+from tests.support.running import running_in_thread
 
 
 @pytest.fixture
@@ -34,13 +33,7 @@ def _history(ctx, job_id) -> list[tuple]:
 
 def test_a_running_job_cancelled_ends_its_attempt_as_cancelled(ctx):
     job_id = _submit(ctx, b'{"values": [1], "seconds": 20}')
-    outcome: list[str] = []
-    thread = threading.Thread(target=lambda: outcome.append(run_job(ctx, job_id, worker="w", requeue=Recorder().enqueue)))
-    thread.start()
-    deadline = time.monotonic() + 10
-    while ctx.repo.get(job_id).status != "running":
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    thread, outcome = running_in_thread(ctx, job_id)
     view = JobService(ctx, Recorder()).view(JobService(ctx, Recorder()).cancel(job_id))
     assert [(a.attempt, a.worker, a.outcome) for a in view.attempts] == [(1, "w", "cancelled")]  # main: []
     assert view.attempts[0].finished_at is not None
