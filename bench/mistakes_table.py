@@ -1,7 +1,7 @@
 """Users' mistakes judged in two trees, side by side: each tree's answers come from a child process (a bench's
 CHILD script run in that tree, printing one JSON line per case: kind, case, verdict, code, said), and the table
-prints every case's verdict per tree and a count of each verdict. Shared by bench/trust51t_mistakes.py and
-bench/trust52m_mistakes.py."""
+prints every case's verdict per tree and a count of each verdict. Shared by bench/trust51t_mistakes.py,
+bench/trust52m_mistakes.py and bench/trust53r_mistakes.py."""
 
 from __future__ import annotations
 
@@ -13,6 +13,12 @@ import sys
 import time
 
 VERDICTS = ("right", "WRONG", "REFUSED", "warned", "500")
+BENCH = os.path.dirname(os.path.abspath(__file__))  # the benches' folder, first on a bench's sys.path
+ROOT = os.path.dirname(BENCH)  # this tree
+
+# imported by each mistakes bench before numpy: one BLAS thread, as the job processes run
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
 
 # the start of every child: the tree's code and the bench's module on sys.path, the tree's app, and one submission
 # (a file with its options, or a JSON body when the name is None) waited for to its end

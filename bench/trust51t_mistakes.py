@@ -16,19 +16,15 @@ alignment's: the closed ports of the ladder as written (to 0.01 mm), its cuts.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 from mistakes_table import (  # bench/, the script's folder, is first on sys.path
+    BENCH,
+    ROOT,
     child_script,
     compare,
 )
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
 
 TUBE_RADIUS = 6.0
 TUBE_ANGLES = (90.0, 60.0)
@@ -331,7 +327,7 @@ if __name__ == "__main__":
 
 
 def main() -> None:
-    compare(__doc__.split("\n\n")[0], CHILD, ROOT, HERE, width=44)
+    compare(__doc__.split("\n\n")[0], CHILD, ROOT, BENCH, width=44)
 
 
 if __name__ == "__main__":

@@ -18,16 +18,13 @@ import os
 import random
 
 from mistakes_table import (  # bench/, the script's folder, is first on sys.path
+    BENCH,
+    ROOT,
     child_script,
     compare,
 )
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
-
-HERE = os.path.dirname(os.path.abspath(__file__))
 METRES_PER = {"m": 1.0, "mm": 1e-3, "ft": 0.3048, "in": 0.0254}
-ROOT = os.path.dirname(HERE)
 
 
 def _read(path: str) -> bytes:
@@ -282,7 +279,7 @@ if __name__ == "__main__":
 
 
 def main() -> None:
-    compare(__doc__.split("\n\n")[0], CHILD, ROOT, HERE, width=50)
+    compare(__doc__.split("\n\n")[0], CHILD, ROOT, BENCH, width=50)
 
 
 if __name__ == "__main__":

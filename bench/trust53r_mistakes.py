@@ -17,22 +17,17 @@ alignment's: the ladder's closed ports as written (to 0.01 mm); a map's: no fals
 
 from __future__ import annotations
 
-import json
-import os
 import re
 from pathlib import Path
 
 from mistakes_table import (  # bench/, the script's folder, is first on sys.path
+    BENCH,
+    ROOT,
     child_script,
     compare,
 )
-from trust51t_mistakes import INCH, TUBE_RADIUS, _npy, _scale_pcf, judge_alignment, judge_tube, tube_points, xyz
+from trust51t_mistakes import INCH, TUBE_RADIUS, _npy, _scale_pcf, judge_tube, tube_points, xyz
 
-for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_name, "1")
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
 
 
 def tube_cases():
@@ -170,7 +165,7 @@ if __name__ == "__main__":
 
 
 def main() -> None:
-    compare(__doc__.split("\n\n")[0], CHILD, ROOT, HERE, width=46)
+    compare(__doc__.split("\n\n")[0], CHILD, ROOT, BENCH, width=46)
 
 
 if __name__ == "__main__":
