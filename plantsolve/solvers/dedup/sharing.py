@@ -6,7 +6,9 @@ concept): each class's geometry is written once and reused, with IfcOpenShell.
   ``geometry.map_representation``); every member, the representative included, gets a new body
   ``IfcShapeRepresentation`` holding one ``IfcMappedItem`` whose ``IfcCartesianTransformationOperator3D``
   carries the member's transform expressed in its own object frame
-  (``P_member⁻¹ · T · P_representative``); mirror and scale only ever go here.
+  (``P_member⁻¹ · T · P_representative``); mirror and scale only ever go here. With the post-pass, members
+  whose operators hold the same values (a ring's segments of every class) get one operator, made once
+  (:class:`SharedOperators`).
 - ``product_shape`` (IFC4 and later; ``ShapeOfProduct`` is [1:1] in IFC2X3): rigid members share the
   representative's ``IfcProductDefinitionShape`` and get a new ``IfcLocalPlacement`` (same parent)
   carrying the transform. A member whose product shape holds more than its body representation, or
