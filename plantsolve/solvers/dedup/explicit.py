@@ -6,10 +6,12 @@ times cheaper than tessellating; a product with anything else (an extrusion, a b
 and goes to the geometry kernel instead, before and after alike.
 
 An ``ExplicitReader`` reads one model and remembers what it read: each body representation's points in
-its own frame and each placement's matrix, so products that share them (the optimized model: one
-representation for a whole class) are read once and placed each on its own; and, when asked, the ids
-of every instance under each body item it walked (the sharing phase finds the old geometry it
-detached from them, without walking millions of instances again)."""
+its own frame, each placement's matrix and each mapped item's operator and mapping origin, so products that
+share them are read once and placed each on its own (the optimized model: one representation for a whole
+class; with ``mapped_item`` sharing, an item per member whose operator, once the post-pass merged those of
+equal values, is a ring's for the members of every class); and, when asked, the ids of every instance under
+each body item it walked (the sharing phase finds the old geometry it detached from them, without walking
+millions of instances again)."""
 
 from __future__ import annotations
 
@@ -54,6 +56,8 @@ class ExplicitReader:
         self._roles: dict[str, int] = {}
         self._bodies: dict[int, tuple[np.ndarray, int] | None] = {}
         self._items: dict[int, tuple[np.ndarray, int] | None] = {}
+        self._operators: dict[int, np.ndarray] = {}  # transformation operator id → its matrix
+        self._origins: dict[int, np.ndarray] = {}  # representation map id → its mapping origin's matrix
         self._shape_bodies: dict[int, object] = {}  # product shape id → its body representation
         self.placements = Placements()  # the sharing places the same products again
 
@@ -95,13 +99,13 @@ class ExplicitReader:
 
     def _item_points(self, item, depth: int) -> tuple[np.ndarray, int] | None:
         if item.is_a("IfcMappedItem"):
-            inner = item.MappingSource.MappedRepresentation
-            if not item.MappingTarget.is_a("IfcCartesianTransformationOperator3D"):
+            source, target = item.MappingSource, item.MappingTarget
+            if not target.is_a("IfcCartesianTransformationOperator3D"):
                 return None
-            m = np.asarray(ifcopenshell.util.placement.get_mappeditem_transformation(item), dtype=float)
-            got = self.items_points(inner.Items or (), depth + 1)
+            got = self.items_points(source.MappedRepresentation.Items or (), depth + 1)
             if got is None:
                 return None
+            m = self._mapping(source, target)
             pts, faces = got
             return pts @ m[:3, :3].T + m[:3, 3], faces
         if any(item.is_a(t) for t in FACE_SETS):
@@ -118,6 +122,18 @@ class ExplicitReader:
                 return None
             return np.asarray(got[0], dtype=float), got[1]
         return None
+
+    def _mapping(self, source, target) -> np.ndarray:
+        """``get_mappeditem_transformation`` of an item mapping ``source`` by ``target``: the same product of the
+        same two matrices, each worked out once per instance."""
+        operator = self._operators.get(target.id())
+        if operator is None:
+            operator = self._operators[target.id()] = ifcopenshell.util.placement.get_cartesiantransformationoperator3d(
+                target)
+        origin = self._origins.get(source.id())
+        if origin is None:
+            origin = self._origins[source.id()] = ifcopenshell.util.placement.get_axis2placement(source.MappingOrigin)
+        return np.asarray(operator @ origin, dtype=float)
 
     def items_points(self, items, depth: int = 0) -> tuple[np.ndarray, int] | None:
         parts, faces = [], 0

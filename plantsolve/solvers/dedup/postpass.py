@@ -51,20 +51,22 @@ def _pinned(model: ifcopenshell.file) -> set[int]:
     return pinned
 
 
-def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, dict[int, int]]:
+def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, dict[int, int], list[tuple[int, int]]]:
     """Every instance after what it references; roots taken in id order, so the first of identical
     instances (the one kept) does not depend on how the model's storage happens to be ordered. With it,
     for each id in ``watched`` reached from another instance: the id of the instance whose expansion
-    reached it (the last to push it: the stack gives that entry first, and nothing pushes it once expanded)."""
-    order, state, reached = [], {}, {}
+    reached it (the last to push it: the stack gives that entry first, and nothing pushes it once expanded);
+    and where the others that refer to it would have met a copy of their own: (position in the order, referrer),
+    a copy being met as the instance itself is, when the stack gives its referrer's entry."""
+    order, state, reached, copies = [], {}, {}, []
     by_id = model.by_id
     for first in sorted(model.entity_names()):
         if first in state:
             continue
         root = by_id(first)
-        stack = [(root, False)]
+        stack = [(root, False, 0)]
         while stack:
-            inst, expanded = stack.pop()
+            inst, expanded, pusher = stack.pop()
             key = inst.id()
             if expanded:
                 if state.get(key) != 2:
@@ -72,15 +74,20 @@ def _topological(model: ifcopenshell.file, watched=frozenset()) -> tuple[list, d
                     order.append(inst)
                 continue
             if key in state:
+                if pusher and key in watched:
+                    copies.append((len(order), pusher))
                 continue
             state[key] = 1
-            stack.append((inst, True))
+            stack.append((inst, True, 0))
             for child in model.traverse(inst, max_levels=1)[1:]:
-                if child.id() and child.id() not in state:
-                    stack.append((child, False))
-                    if watched and child.id() in watched:
-                        reached[child.id()] = key
-    return order, reached
+                c = child.id()
+                if c and c not in state:
+                    stack.append((child, False, key))
+                    if watched and c in watched:
+                        reached[c] = key
+                elif c and watched and c in watched:
+                    stack.append((child, False, key))
+    return order, reached, copies
 
 
 def _substituted(value, remap: dict[int, object]):
@@ -111,10 +118,10 @@ def _key_of(value):
 def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
                     span: tuple[float, float] = (0.0, 1.0), shared=None) -> dict[str, int]:
     """Merge identical non-rooted instances; returns how many of each entity were removed. ``shared``
-    (``sharing.SharedPlacements``): placements the sharing made once for several members, numbered here
+    (``sharing.SharedPlacements``, ``sharing.SharedOperators``): what the sharing made once for several members, numbered here
     as the one this merge would keep; what it did not make is counted as removed."""
     pinned = _pinned(model)
-    order, reached = _topological(model, shared.watched() if shared is not None else frozenset())
+    order, reached, copies = _topological(model, shared.watched() if shared is not None else frozenset())
     if shared is not None:
         order = shared.renumbered(model, order, reached)
     remap: dict[int, object] = {}
@@ -145,13 +152,15 @@ def merge_identical(model: ifcopenshell.file, progress: Progress = no_progress,
             canonical[key] = inst
         else:
             remap[inst.id()] = first
-            duplicates.append(inst)
-    removed: dict[str, int] = {}
-    unused = [dup for dup in duplicates if model.get_total_inverses(dup) == 0]
-    for dup in unused:
-        removed[dup.is_a()] = removed.get(dup.is_a(), 0) + 1
-    remove_batch(model, unused)
+            duplicates.append((k, inst))
+    unused = [(k, dup) for k, dup in duplicates if model.get_total_inverses(dup) == 0]
+    # what was removed, each entity counted where the walk met it first: the copies never made are met, part
+    # by part in the order the walk finishes them, where their referrers' entries came off the stack
+    met = [(k, 0, dup.is_a()) for k, dup in unused]
     if shared is not None:
-        for name, n in shared.counts().items():
-            removed[name] = removed.get(name, 0) + n
+        met += [(k, -1, name) for k, _ in copies for name in shared.WALKED]
+    removed: dict[str, int] = {}
+    for _, _, name in sorted(met, key=lambda m: m[:2]):
+        removed[name] = removed.get(name, 0) + 1
+    remove_batch(model, [dup for _, dup in unused])
     return removed

@@ -238,17 +238,18 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
                 c.product = model.by_id(c.product.id())
             ids_before, streamed = compaction.instance_ids(model), None
         detached = sharing.Detached(model)
-        # with the post-pass, a ring's members' equal new placements are made once (the post-pass numbers them)
-        shared_placements = (sharing.SharedPlacements(model) if opts.postpass and mode == "product_shape"
-                             and sharing.SharedPlacements.applies(model) else None)
+        # with the post-pass, a ring's members' equal new placements (product_shape) or operators (mapped_item)
+        # are made once (the post-pass numbers them)
+        made_once = {"product_shape": sharing.SharedPlacements, "mapped_item": sharing.SharedOperators}[mode]
+        shared_once = made_once(model) if opts.postpass and made_once.applies(model) else None
         written = sharing.apply(model, classes, mode, progress=progress, span=(0.55, 0.65), detached=detached,
-                                placements=reader.placements, shared=shared_placements)
+                                placements=reader.placements, shared=shared_once)
         out_classes, shared = described(classes)
         # the proof looks the written points up in the trees the matching built of the products' own
         shapes = {c.product.id(): c.shape for c in candidates}
         products_total = len(products)
         # the old model's instances are not used past this point: a rebuilt model replaces it
-        ids_now = compaction.grown(model, ids_before, shared_placements.skipped if shared_placements else ())
+        ids_now = compaction.grown(model, ids_before, shared_once.skipped if shared_once else ())
         del ids_before
         if streamed is None:
             model = compaction.compacted(model, detached.roots, detached.styled_by, known=known, everything=ids_now)
@@ -259,7 +260,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         lap("sharing")
         removed = {}
         if opts.postpass:
-            removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72), shared=shared_placements)
+            removed = postpass.merge_identical(model, progress=progress, span=(0.65, 0.72), shared=shared_once)
         lap("postpass")
         progress(0.72, "writing the optimized file")
         optimized = ifcio.model_text(model)
