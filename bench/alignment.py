@@ -383,6 +383,9 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
                 said.append(f"{r['components']}: {r['cpu_s']:.2f} s {r['peak_mib']:.0f} / {r['process_mib']:.0f} MiB"
                             + (f" (k cpu {_exponent(prev, r, 'cpu_s')}, k mem {_exponent(prev, r, 'peak_mib')}; "
                                f"per pass {' '.join(per)})" if i else ""))
+            if len(least) > 2:
+                ends = [_exponent(p[label][0], p[label][-1], "cpu_s") for p in passes]
+                said.append(f"first to last k cpu {_exponent(least[0], least[-1], 'cpu_s')}, per pass {' '.join(ends)}")
             print(f"  {label:>6}  " + "; ".join(said))
     print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
           "growth of the resident set during the solve (the request is built before); proc MiB: the process's peak "
