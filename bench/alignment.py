@@ -29,6 +29,18 @@ order, about half the connections named from their other end), and says whether 
     python bench/alignment.py --scaling-only --family conflict --side 12
     python bench/alignment.py --scaling-only --family plant --side 132 --code lu --code before --before DIR
 
+``--repeat N`` runs every size and code N times, interleaved (this, lu, before, this, ...: a loaded machine's
+drift falls on all of them), then prints the least CPU time of each and the exponents between them, from the first
+size to the last too (#42's goal: plant-like 4,839 -> 19,365 components, ``--side 46 --side 92``); single runs of one
+code gave exponents 1.02 and 1.18 for it under load. ``--steps`` prints this code's KKT solves per stage and phase
+(rotation; the joint stage's steps with the cost, feasibility steps, and the crawl below what snapping closes): Gauss-
+Newton steps, the refinement steps that ``iter`` counts, fresh factorisations, CPU seconds and residuals. It shows
+what the iteration count is: the joint stage runs to its cap of 25 Gauss-Newton steps, each 1 to 30 refinement steps
+depending on how close the hardest loop is to its singular point, not on the network's size:
+
+    python bench/alignment.py --scaling-only --family plant --side 46 --side 92 --code lu --code before \
+        --before DIR --repeat 2 --steps
+
 ``--conflicts``: the cut choice on 360 small synthetic conflicts (loop grids of 2 x 2 to 4 x 3 nodes, 6 seeds, 6
 placements of the second tie-in, with and without inline valves), each solved as written, with its components
 renamed (ids sorting the other way), shuffled, in cm and moved rigidly: cuts, answers that move a component more
