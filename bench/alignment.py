@@ -31,8 +31,9 @@ order, about half the connections named from their other end), and says whether 
 
 ``--repeat N`` runs every size and code N times, interleaved (this, lu, before, this, ...: a loaded machine's
 drift falls on all of them), then prints the least CPU time of each and the exponents between them, from the first
-size to the last too (#42's goal: plant-like 4,839 -> 19,365 components, ``--side 46 --side 92``); single runs of one
-code gave exponents 1.02 and 1.18 for it under load. ``--steps`` prints this code's KKT solves per stage and phase
+size to the last too (#42's goal: plant-like 4,839 -> 19,365 components, ``--side 46 --side 92``); four runs of one
+code (2026-11-30, ``this`` and ``before`` both at main, load 12 on 2 cores) gave 0.97, 1.04, 1.10 and 1.21 for it.
+``--steps`` prints this code's KKT solves per stage and phase
 (rotation; the joint stage's steps with the cost, feasibility steps, and the crawl below what snapping closes): Gauss-
 Newton steps, the refinement steps that ``iter`` counts, fresh factorisations, CPU seconds and residuals. It shows
 what the iteration count is: the joint stage runs to its cap of 25 Gauss-Newton steps, each 1 to 30 refinement steps
@@ -242,7 +243,8 @@ def _trace_solves() -> list[dict]:
     largest constraint residual the step starts from (relative: lengths in typical component lengths, directions in
     radians), its refinement steps (what ``iterations`` counts) and whether it factored afresh or refined on an
     earlier step's factorisation. ``direct.constrained_lstsq`` is wrapped where the stages look it up; the residual at
-    the start costs one product with the constraints per solve, so a traced run's CPU time is not the bench's."""
+    the start costs one product with the constraints per solve (a few dozen per round), which the traced run's CPU time
+includes."""
     import sys as _sys
 
     import numpy as np
