@@ -29,6 +29,19 @@ order, about half the connections named from their other end), and says whether 
     python bench/alignment.py --scaling-only --family conflict --side 12
     python bench/alignment.py --scaling-only --family plant --side 132 --code lu --code before --before DIR
 
+``--repeat N`` runs every size and code N times, interleaved (this, lu, before, this, ...: a loaded machine's
+drift falls on all of them), then prints the least CPU time of each and the exponents between them, from the first
+size to the last too (#42's goal: plant-like 4,839 -> 19,365 components, ``--side 46 --side 92``); four runs of one
+code (2026-11-30, ``this`` and ``before`` both at main, load 12 on 2 cores) gave 0.97, 1.04, 1.10 and 1.21 for it.
+``--steps`` prints this code's KKT solves per stage and phase
+(rotation; the joint stage's steps with the cost, feasibility steps, and the crawl below what snapping closes): Gauss-
+Newton steps, the refinement steps that ``iter`` counts, fresh factorisations, CPU seconds and residuals. It shows
+what the iteration count is: the joint stage runs to its cap of 25 Gauss-Newton steps, each 1 to 30 refinement steps
+depending on how close the hardest loop is to its singular point, not on the network's size:
+
+    python bench/alignment.py --scaling-only --family plant --side 46 --side 92 --code lu --code before \
+        --before DIR --repeat 2 --steps
+
 ``--conflicts``: the cut choice on 360 small synthetic conflicts (loop grids of 2 x 2 to 4 x 3 nodes, 6 seeds, 6
 placements of the second tie-in, with and without inline valves), each solved as written, with its components
 renamed (ids sorting the other way), shuffled, in cm and moved rigidly: cuts, answers that move a component more
@@ -144,7 +157,7 @@ def plant_network(side: int, seed: int = 7, options: dict | None = None):
 
 
 def _run(side: int, method: str, max_iterations: int | None, queue, code: str | None = None,
-         family: str = "grid", lu: bool = False, shuffled: bool = False) -> None:
+         family: str = "grid", lu: bool = False, shuffled: bool = False, steps: bool = False) -> None:
     if code is not None:
         # the child has imported nothing of plantsolve yet, so this checkout is the one it loads
         sys.path.insert(0, code)
@@ -174,6 +187,7 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
 
         given = reordered(req)
     stages = _time_stages()
+    solves = _trace_solves() if steps else []
     base = _rss_kib("VmRSS")
     t0, c0 = time.perf_counter(), _cpu_s()
     with mode:
@@ -193,6 +207,7 @@ def _run(side: int, method: str, max_iterations: int | None, queue, code: str | 
         "pipe_axis_mean": d["pipe_axis_movement"]["mean"], "fitting_mean": d["fitting_displacement"]["mean"],
         "cuts": len(res.cut_connections), "stop": d["stop_reason"],
         "rounds": _rounds_said(d.get("rounds") or [], stages),
+        "solves": solves,
     })
 
 
@@ -221,6 +236,62 @@ def _time_stages() -> list[tuple[str, int, float]]:
     return calls
 
 
+def _trace_solves() -> list[dict]:
+    """Every KKT solve of the rotation stage, the joint stage and a continuation in this child process, in order:
+    the stage, the joint stage's phase (``cost``: steps with the cost's gradient; ``feasibility``: minimum-norm steps
+    onto the constraints; ``crawl``: feasibility steps once every connection is within what snapping closes), the
+    largest constraint residual the step starts from (relative: lengths in typical component lengths, directions in
+    radians), its refinement steps (what ``iterations`` counts) and whether it factored afresh or refined on an
+    earlier step's factorisation. ``direct.constrained_lstsq`` is wrapped where the stages look it up; the residual at
+    the start costs one product with the constraints per solve (a few dozen per round), which the traced run's CPU time
+includes."""
+    import sys as _sys
+
+    import numpy as np
+
+    from plantsolve.solvers.alignment import direct
+
+    found: list[dict] = []
+    inner = direct.constrained_lstsq
+
+    def traced(H, g, A, residual, **kwargs):
+        cache = kwargs.get("cache")
+        held = cache.get("lu") if cache is not None else None
+        start = float(np.max(np.abs(residual(np.zeros(H.shape[0]))), initial=0.0))
+        c0 = _cpu_s()
+        out = inner(H, g, A, residual, **kwargs)
+        stage = _sys._getframe(1).f_code.co_name
+        phase = ("crawl" if cache.get("crawl") else "cost" if np.any(g) else "feasibility") \
+            if stage == "solve_joint" else ""
+        found.append({"stage": stage, "phase": phase, "start": start, "steps": int(out[2]),
+                      "fresh": cache is None or cache.get("lu") is not held, "cpu_s": _cpu_s() - c0})
+        return out
+
+    direct.constrained_lstsq = traced
+    return found
+
+
+def _steps_said(solves: list[dict]) -> list[str]:
+    """The traced solves (:func:`_trace_solves`) per stage and phase: Gauss-Newton steps, refinement steps, how many
+    factored afresh, CPU seconds, the residual at the phase's first and last step, and each step's refinement steps
+    (``*``: a fresh factorisation)."""
+    lines, groups = [], []
+    for s in solves:
+        key = (s["stage"], s["phase"])
+        if groups and groups[-1][0] == key:
+            groups[-1][1].append(s)
+        else:
+            groups.append((key, [s]))
+    for (stage, phase), group in groups:
+        name = {"solve_rotations": "rotation", "solve_joint": "joint", "continue_closing": "continued"}.get(stage, stage)
+        each = " ".join(f"{s['steps']}{'*' if s['fresh'] else ''}" for s in group)
+        lines.append(f"    {name:>9} {phase:>11}: {len(group):>3} GN steps, {sum(s['steps'] for s in group):>4} "
+                     f"refinement steps, {sum(s['fresh'] for s in group):>3} fresh, "
+                     f"{sum(s['cpu_s'] for s in group):6.2f} s, residual {group[0]['start']:.1e} -> "
+                     f"{group[-1]['start']:.1e}  [{each}]")
+    return lines
+
+
 def _rounds_said(rounds: list[dict], stages: list[tuple[str, int, float]]) -> str:
     """Each round's iterations and factorisation, with its stages' steps and CPU seconds where they were timed
     (``rotation steps + joint steps``, ``rotation s + joint s``; a continuation's or a settling's steps and seconds)."""
@@ -243,10 +314,10 @@ def _rounds_said(rounds: list[dict], stages: list[tuple[str, int, float]]) -> st
 
 
 def run_case(side: int, method: str, max_iterations: int | None, code: str | None = None, family: str = "grid",
-             lu: bool = False, shuffled: bool = False) -> dict:
+             lu: bool = False, shuffled: bool = False, steps: bool = False) -> dict:
     ctx = mp.get_context("fork")
     q = ctx.Queue()
-    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, lu, shuffled))
+    p = ctx.Process(target=_run, args=(side, method, max_iterations, q, code, family, lu, shuffled, steps))
     p.start()
     out = q.get()
     p.join()
@@ -260,9 +331,12 @@ def _exponent(small: dict | None, large: dict, key: str) -> str:
 
 
 def scaling(quick: bool, before: str | None, family: str = "grid", only: list[int] | None = None,
-            codes: list[str] | None = None) -> None:
+            codes: list[str] | None = None, repeat: int = 1, steps: bool = False) -> None:
     """Direct method on growing networks of one family: this code, the same code within ``use_schur(False)``,
-    the same network shuffled (order and connection ends), and with ``before`` the code in that directory."""
+    the same network shuffled (order and connection ends), and with ``before`` the code in that directory.
+    ``repeat``: every size and code that many times, interleaved (this, lu, before, this, lu, before, ...), then the
+    least CPU time of each and the exponents between them; ``steps``: this code's KKT solves per stage and phase
+    (:func:`_steps_said`)."""
     import numpy as np
 
     sides = {"grid": SCALING_SIDES[:-1] if quick else SCALING_SIDES, "plant": PLANT_SIDES[:1] if quick else PLANT_SIDES,
@@ -282,26 +356,51 @@ def scaling(quick: bool, before: str | None, family: str = "grid", only: list[in
           "shuffled, half its connections named from the other end)")
     print(head)
     print("-" * len(head))
-    rows: dict[str, list[dict]] = {}
-    for side in sides:
-        here = None
-        for label, code, lu, shuffled in runs:
-            r = run_case(side, "direct", None, code, family, lu, shuffled)
-            pos = np.array(r.pop("positions"))
-            here = here or {**r, "P": pos}
-            dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")
-            same = "yes" if r.get("cut_set") == here.get("cut_set") else "NO"
-            prev = rows.get(label, [None])[-1]
-            rows.setdefault(label, []).append(r)
-            print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
-                  f"{r['peak_mib']:>9.1f} {r['process_mib']:>9.0f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
-                  f"{r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4}  {r['stop']}"
-                  + (f"; rounds: {r['rounds']}" if r["rounds"] else ""), flush=True)
+    rows: dict[str, list[dict]] = {}  # the first pass's, for the ratios
+    passes: list[dict[str, list[dict]]] = []
+    for rep in range(repeat):
+        mine: dict[str, list[dict]] = {}
+        passes.append(mine)
+        for side in sides:
+            here = None
+            for label, code, lu, shuffled in runs:
+                r = run_case(side, "direct", None, code, family, lu, shuffled, steps and label == "this")
+                pos = np.array(r.pop("positions"))
+                here = here or {**r, "P": pos}
+                dp = float(np.max(np.abs(pos - here["P"]))) if pos.shape == here["P"].shape else float("nan")
+                same = "yes" if r.get("cut_set") == here.get("cut_set") else "NO"
+                prev = mine.get(label, [None])[-1]
+                mine.setdefault(label, []).append(r)
+                if rep == 0:
+                    rows.setdefault(label, []).append(r)
+                print(f"{label:>6} {r['components']:>10} {r['connections']:>11} {r['wall_s']:>8.2f} {r['cpu_s']:>8.2f} "
+                      f"{r['peak_mib']:>9.1f} {r['process_mib']:>9.0f} {r['max_gap']:>9.2e} {_exponent(prev, r, 'cpu_s'):>6} {_exponent(prev, r, 'peak_mib'):>6} "
+                      f"{r['iterations']:>5} {dp:>9.1e} {r['cuts']:>4} {same:>4}  {r['stop']}"
+                      + (f"; rounds: {r['rounds']}" if r["rounds"] else ""), flush=True)
+                for line in _steps_said(r["solves"]):
+                    print(line, flush=True)
     for label in [x for x, *_ in runs[1:] if x in rows]:
         print(f"\nthis / {label}:")
         for now, old in zip(rows["this"], rows[label]):
             print(f"  {now['components']:>6} components: CPU time {now['cpu_s'] / old['cpu_s']:.2f}, "
                   f"peak memory {now['peak_mib'] / max(old['peak_mib'], 1e-9):.2f}")
+    if repeat > 1:
+        print(f"\nleast of {repeat} interleaved runs (CPU s, peak MiB, proc MiB; k: exponents between the least; "
+              "per pass: each pass's own CPU exponents):")
+        for label, *_ in runs:
+            least = [{key: min(p[label][i][key] for p in passes) for key in ("cpu_s", "peak_mib", "process_mib")}
+                     | {"components": passes[0][label][i]["components"]} for i in range(len(sides))]
+            said = []
+            for i, r in enumerate(least):
+                prev = least[i - 1] if i else None
+                per = [_exponent(p[label][i - 1], p[label][i], "cpu_s") for p in passes] if i else []
+                said.append(f"{r['components']}: {r['cpu_s']:.2f} s {r['peak_mib']:.0f} / {r['process_mib']:.0f} MiB"
+                            + (f" (k cpu {_exponent(prev, r, 'cpu_s')}, k mem {_exponent(prev, r, 'peak_mib')}; "
+                               f"per pass {' '.join(per)})" if i else ""))
+            if len(least) > 2:
+                ends = [_exponent(p[label][0], p[label][-1], "cpu_s") for p in passes]
+                said.append(f"first to last k cpu {_exponent(least[0], least[-1], 'cpu_s')}, per pass {' '.join(ends)}")
+            print(f"  {label:>6}  " + "; ".join(said))
     print("cpu s: user + system time of the solve (what other load on the machine changes least); peak MiB: "
           "growth of the resident set during the solve (the request is built before); proc MiB: the process's peak "
           "resident set (request and imports included); iter: Gauss-Newton and refinement steps of the rounds "
@@ -323,6 +422,10 @@ def main() -> None:
     ap.add_argument("--side", type=int, action="append", help="only networks of this side (a short run)")
     ap.add_argument("--code", action="append", choices=("lu", "shuf", "shufLU", "before"),
                     help="only these rows beside 'this' (a large network once: --code lu --code before)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="every size and code this many times, interleaved; then the least CPU time of each")
+    ap.add_argument("--steps", action="store_true",
+                    help="this code's KKT solves per stage and phase (Gauss-Newton and refinement steps)")
     ap.add_argument("--conflicts", action="store_true", help="only the cut choice on 360 small synthetic conflicts")
     args = ap.parse_args()
     if args.conflicts:
@@ -331,7 +434,7 @@ def main() -> None:
     if not args.scaling_only:
         methods(args.quick, args.dq_iterations)
     for family in args.family or ("grid", "plant", "conflict"):
-        scaling(args.quick, args.before, family, args.side, args.code)
+        scaling(args.quick, args.before, family, args.side, args.code, args.repeat, args.steps)
 
 
 def methods(quick: bool, dq_iterations: int) -> None:
