@@ -6,6 +6,8 @@ Conventions (they hold for every solver):
 - quaternions are ``[w, x, y, z]`` (scalar first), unit norm, active rotation;
 - every float in a request must be finite: NaN and infinity are rejected with a 422
   that names the field;
+- every yes/no in a request is JSON's ``true`` or ``false`` (:data:`Flag`): ``1``, ``"yes"``, ``"on"`` are refused
+  with a 422 that names the field, whichever way the request came;
 - every number in a request is a number (:data:`Number`): ``true``, ``false`` and strings are refused with a 422
   that names the field, whichever way the request came (a body, an uploaded file, a form's options); only an option
   an upload form may type as text is read from one (``"6"``, :func:`plain_numbers`).
@@ -13,6 +15,7 @@ Conventions (they hold for every solver):
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
@@ -45,6 +48,29 @@ because an uploaded .json file and an upload form's options are validated from p
 where a bare float reads ``true`` as 1.0 (a JSON body is validated strictly as a whole); the strict check is pydantic's
 own, in its compiled core, so a million-point array costs no more than before. An option a form may type as text
 ("6") is read by :func:`plain_numbers`. The number types below are made of it."""
+
+def json_boolean(value: Any) -> Any:
+    """JSON's ``true`` or ``false``; anything else a 422 saying which two values a yes/no takes."""
+    if not isinstance(value, bool):
+        raise PydanticCustomError("bool_type", "Input should be true or false (JSON's booleans; not {value})",
+                                  {"value": json_text(value)})
+    return value
+
+
+def json_text(value: Any) -> str:
+    """A refused value as the JSON that holds it (``"yes"``, ``1``), cut at 40 characters."""
+    try:
+        text = json.dumps(value, ensure_ascii=False)
+    except (TypeError, ValueError):
+        text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+Flag = Annotated[bool, Strict(), BeforeValidator(json_boolean)]
+"""A yes/no of a request: JSON's ``true`` or ``false``, nothing else. Strict for the reason :data:`Number` is: in lax
+mode (an uploaded .json file, a form's options) pydantic reads ``1``, ``0``, ``"yes"``, ``"on"``, ``"true"`` and
+``"1"`` as booleans, so a ``"no"`` meant as a word, or a count of 1, silently switched an option. Every bool of a
+request is one of these (a test walks the request models)."""
 
 FiniteFloat = Annotated[Number, Field(allow_inf_nan=False)]
 """A number that must be finite (NaN and +-inf are rejected)."""

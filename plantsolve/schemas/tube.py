@@ -23,7 +23,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, StrictInt, Tag, model_validator
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Number, Point3, Quaternion,
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Flag, Number, Point3, Quaternion,
                                       Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
 
 MAX_POINTS = 5_000_000
@@ -92,7 +92,7 @@ class LraRow(StrictModel):
         default=None, ge=0, json_schema_extra=LEN,
         description="Results: standard deviation of the bend radius (0 when held by the options)."
     )
-    determined: bool | None = Field(
+    determined: Flag | None = Field(
         default=None, description="Results: false when a field of this row is not determined by the samples "
         "(listed in `undetermined`): an end straight the samples stop short on, or a bend they see from one side "
         "only. Null in a nominal.")
@@ -169,7 +169,7 @@ class TubeOptions(StrictModel):
         description="Known centreline bend radius (request units); when given all bends are "
         "fitted with this fixed radius.",
     )
-    common_bend_radius: bool = Field(
+    common_bend_radius: Flag = Field(
         default=False, description="Fit one bend radius shared by all bends (typical of rotary-draw benders); "
         "the same as bend_radius_model 'common'."
     )
@@ -268,7 +268,7 @@ class PointSource(StrictModel):
                          "left out; each is listed in the warnings.")
     skipped_lines: list[StrictInt] = Field(default_factory=list, description="1-based line numbers of the first skipped "
                                      "records (text formats; at most 10).")
-    truncated: bool = Field(default=False, description="The file ends before the records its header declares, or "
+    truncated: Flag = Field(default=False, description="The file ends before the records its header declares, or "
                             "mid-record.")
     warnings: list[Diagnostic] = Field(default_factory=list, description="The reader's warnings; the solver adds "
                                        "them to report.warnings.")
