@@ -81,6 +81,10 @@ CASES = [  # (case, kind, file (name, bytes) or None, options or JSON body)
      changed(POLY(), ("faces", 1, "loops", 0, 2, 1), "x")),
     ("loc: rigidity .json bodies.0.shape.box.size.2 'x'", "rigidity",
      as_file("model.json", changed(RIG(), ("bodies", 0, "shape", "box", "size", 2), "x")), None),
+    ("loc: flowmeter .json magnetic_field.magnitude 'x'", "flowmeter",
+     as_file("meter.json", changed(FLOW(), ("magnetic_field", "magnitude"), "x")), None),
+    ("loc: perfmap beta body points.1.beta 'half'", "perfmap/jobs/00000000-0000-4000-8000-000000000000/beta", None,
+     {"points": [{"setting": [0.0, 0.9], "beta": 0.5}, {"speed": 0.9, "beta": "half"}]}),
     ("units: tube body units 'um'", "tube", None, changed(TUBE(), ("units",), "um")),
     ("units: tube body options.file_units 'um'", "tube", None, changed(TUBE(), ("options", "file_units"), "um")),
     ("units: tube .xyz form file_units 'µm'", "tube", XYZ, {"file_units": "µm"}),
@@ -107,7 +111,7 @@ def answer(response):
 with TestClient(create_app(service_settings(pathlib.Path(tempfile.mkdtemp())), run_jobs=False)) as client:
     for case, kind, upload, payload in CASES:
         if upload is None:
-            response = client.post(f"/v1/{kind}/jobs", json=payload)
+            response = client.post(f"/v1/{kind}" if "/" in kind else f"/v1/{kind}/jobs", json=payload)
         else:
             data = {"options": json.dumps(payload)} if payload is not None else {}
             response = client.post(f"/v1/{kind}/jobs", files={"file": upload}, data=data)

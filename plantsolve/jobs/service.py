@@ -414,7 +414,7 @@ class JobService:
         except ResultNotUsable as error:
             raise Conflict(f"Job {job_id} {error}") from None
         except InputRejected as error:
-            raise from_input_rejected(error) from None
+            raise from_input_rejected(error, model=operation.request_model) from None
 
     def list(self, kind: str | None, status: str | None, cursor: str | None, limit: int,
              sees: str | None = None) -> JobList:
