@@ -134,16 +134,24 @@ UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({
 """The words and symbols (lower case, read in any case) that name each request unit: the one table of them, which
 the readers of files (``solvers.length_units``) extend with the units only a file states."""
 
+MICROMETRE_SPELLINGS = ("um", "µm", "μm", "micrometre", "micrometres", "micrometer", "micrometers", "micron", "microns")
+"""Micrometres, as an FE or CMM export names them (the micro sign and the Greek mu both occur): a unit a file's
+coordinates may be in, which no request is written in."""
+
+FILE_UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({**UNIT_SPELLINGS, "um": MICROMETRE_SPELLINGS})
+"""Every length unit a file may state, and its spellings: the request units and micrometres. The readers' table of
+sizes (``solvers.length_units.SIZES``) has exactly these units."""
+
 AMBIGUOUS_UNITS: Mapping[str, str] = MappingProxyType({
     "Mm": "the megametre (in SI, M is mega) or millimetres typed with a slipped shift key"})
 """Spellings that name a unit in one reading and another unit in another, with both readings."""
 
-_UNIT_OF_SPELLING = {spelling: name for name, spellings in UNIT_SPELLINGS.items() for spelling in spellings}
+_UNIT_OF_SPELLING = {spelling: name for name, spellings in FILE_UNIT_SPELLINGS.items() for spelling in spellings}
 
 
-def spelled_unit(word: Any) -> Any:
-    """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ' → 'mm', 'mm', 'in'); a value error
-    naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
+def spelled_file_unit(word: Any) -> Any:
+    """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ', 'µm' → 'mm', 'mm', 'in', 'um'); a value
+    error naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
     if not isinstance(word, str):
         return word
     if word.strip() in AMBIGUOUS_UNITS:
@@ -153,9 +161,28 @@ def spelled_unit(word: Any) -> Any:
     return _UNIT_OF_SPELLING.get(word.strip().lower(), word)
 
 
+def spelled_unit(word: Any) -> Any:
+    """:func:`spelled_file_unit` for a request's unit, which is never micrometres: those are refused saying so (the
+    enum's own message would list the units, as if 'µm' were a typing slip)."""
+    unit = spelled_file_unit(word)
+    if isinstance(unit, str) and unit not in UNIT_SPELLINGS and unit in FILE_UNIT_SPELLINGS:
+        raise PydanticCustomError(
+            "literal_error", "'{word}' is micrometres, a unit only a file's coordinates may be in (a tube scan's "
+            "options.file_units); this unit is one of {units}", {"word": str(word).strip(), "units": ", ".join(
+                UNIT_SPELLINGS)})
+    return unit
+
+
 Units = Annotated[UnitName, BeforeValidator(spelled_unit)]
 """Length unit of a request; results are given in the same unit. A request may spell it in any case and by its name
 ('MM', 'Millimetres', 'IN'); the OpenAPI document lists the canonical names, which every result gives."""
+
+FileUnitName = Literal["mm", "cm", "m", "in", "ft", "um"]
+"""The canonical name of a length unit a file's coordinates may be in (the OpenAPI enum)."""
+
+FileUnits = Annotated[FileUnitName, BeforeValidator(spelled_file_unit)]
+"""The length unit of a file's coordinates, where its reader converts every unit of :data:`FILE_UNIT_SPELLINGS`
+(a tube scan's): the request's units and micrometres ('um', 'µm', 'μm', 'microns'), in any case."""
 
 LENGTH = "{units}"
 """The unit of a result's lengths: the result's own ``units`` field (the request's length unit)."""
