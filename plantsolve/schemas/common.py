@@ -149,7 +149,7 @@ AMBIGUOUS_UNITS: Mapping[str, str] = MappingProxyType({
 _UNIT_OF_SPELLING = {spelling: name for name, spellings in FILE_UNIT_SPELLINGS.items() for spelling in spellings}
 
 
-def spelled_file_unit(word: Any) -> Any:
+def spelled_unit(word: Any) -> Any:
     """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ', 'µm' → 'mm', 'mm', 'in', 'um'); a value
     error naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
     if not isinstance(word, str):
@@ -161,10 +161,10 @@ def spelled_file_unit(word: Any) -> Any:
     return _UNIT_OF_SPELLING.get(word.strip().lower(), word)
 
 
-def spelled_unit(word: Any) -> Any:
-    """:func:`spelled_file_unit` for a request's unit, which is never micrometres: those are refused saying so (the
+def spelled_request_unit(word: Any) -> Any:
+    """:func:`spelled_unit` for a request's unit, which is never micrometres: those are refused saying so (the
     enum's own message would list the units, as if 'µm' were a typing slip)."""
-    unit = spelled_file_unit(word)
+    unit = spelled_unit(word)
     if isinstance(unit, str) and unit not in UNIT_SPELLINGS and unit in FILE_UNIT_SPELLINGS:
         raise PydanticCustomError(
             "literal_error", "'{word}' is micrometres, a unit only a file's coordinates may be in (a tube scan's "
@@ -173,14 +173,14 @@ def spelled_unit(word: Any) -> Any:
     return unit
 
 
-Units = Annotated[UnitName, BeforeValidator(spelled_unit)]
+Units = Annotated[UnitName, BeforeValidator(spelled_request_unit)]
 """Length unit of a request; results are given in the same unit. A request may spell it in any case and by its name
 ('MM', 'Millimetres', 'IN'); the OpenAPI document lists the canonical names, which every result gives."""
 
 FileUnitName = Literal["mm", "cm", "m", "in", "ft", "um"]
 """The canonical name of a length unit a file's coordinates may be in (the OpenAPI enum)."""
 
-FileUnits = Annotated[FileUnitName, BeforeValidator(spelled_file_unit)]
+FileUnits = Annotated[FileUnitName, BeforeValidator(spelled_unit)]
 """The length unit of a file's coordinates, where its reader converts every unit of :data:`FILE_UNIT_SPELLINGS`
 (a tube scan's): the request's units and micrometres ('um', 'µm', 'μm', 'microns'), in any case."""
 

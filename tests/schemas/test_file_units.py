@@ -124,3 +124,19 @@ def test_a_tube_json_bodys_file_units_in_micrometres_are_taken_and_warned_ignore
     response = client.post("/v1/tube/jobs", json=document)
     assert response.status_code == 202, response.text
     assert client.get(response.headers["Location"] + "/input").json()["options"]["file_units"] == "µm"
+
+
+@pytest.mark.parametrize("word", ["um", "µm", "μm", "microns"])
+def test_a_tube_scan_in_micrometres_is_converted_by_the_factor(client, word):
+    """Through the API (accepted) and the reader (the number): a micrometre is a thousandth of the request's mm."""
+    from plantsolve.solvers.base import StoredInput
+
+    response = client.post("/v1/tube/jobs", files={"file": _file("examples/tube/scan.xyz")},
+                           data={"options": json.dumps({"file_units": word})})
+    assert response.status_code == 202, response.text
+    name, data = _file("examples/tube/scan.xyz")
+    spec = load_kinds(())["tube"]
+    plain = spec.parse_upload(StoredInput.from_bytes(name, data), None)
+    micro = spec.parse_upload(StoredInput.from_bytes(name, data), {"file_units": word})
+    assert micro.source.units.file_unit == "um" and micro.source.units.factor == pytest.approx(1e-3)
+    assert micro.points[0] == pytest.approx([v * 1e-3 for v in plain.points[0]])
