@@ -13,6 +13,7 @@ from asgi_correlation_id import correlation_id
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
@@ -27,8 +28,8 @@ from plantsolve.jobs.errors import (
     UnsupportedMediaType,
     field_problem,
     is_infrastructure_failure,
-    json_path,
     summary,
+    user_path,
 )
 from plantsolve.schemas.jobs import Problem
 
@@ -89,14 +90,21 @@ _STATUS_CLASSES = {cls.status: cls for cls in (Unauthorized, NotFound, Conflict,
                                                  UnsupportedMediaType, Unprocessable)}
 
 
-def _place(error: dict[str, Any], body: Any) -> list[str | int]:
+def _place(error: dict[str, Any], request: Request) -> list[str | int]:
     """Where a routed request's validation error is: a JSON body's field by its path in the body as sent (as
     the submit routes name it: ``points/0/beta``, without the tags pydantic puts in for the member of a union);
     a query, path or header parameter as FastAPI names it (``query/limit``)."""
     loc = list(error["loc"])
-    if loc[:1] == ["body"] and isinstance(body, (dict, list)) and error["type"] != "json_invalid":
-        return json_path(body, loc[1:], error["type"])
+    if loc[:1] == ["body"] and error["type"] != "json_invalid":
+        return user_path(loc[1:], _body_model(request))
     return loc
+
+
+def _body_model(request: Request) -> type[BaseModel] | None:
+    """The model a route validates its JSON body as (a kind operation's request), when it takes one whole."""
+    body = getattr(request.scope.get("route"), "body_field", None)
+    model = getattr(getattr(body, "field_info", None), "annotation", None)
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
 
 def install(app: FastAPI) -> None:
@@ -106,7 +114,7 @@ def install(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request: Request, error: RequestValidationError):
-        errors = [field_problem(_place(e, error.body), e["msg"], e["type"]) for e in error.errors()]
+        errors = [field_problem(_place(e, request), e["msg"], e["type"]) for e in error.errors()]
         return problem_response(Unprocessable(summary(errors), errors=errors), request)
 
     @app.exception_handler(StarletteHTTPException)

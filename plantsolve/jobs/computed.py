@@ -126,6 +126,25 @@ def discard(files: BlobStore, job_id: uuid.UUID, attempt: int, payloads: Iterabl
         log.warning("the kept result of job %s could not be removed", job_id, exc_info=True)
 
 
+def discard_superseded(files: BlobStore, job_id: uuid.UUID, attempt: int, stored: Iterable[StoredArtifact],
+                       but: int | None = None) -> None:
+    """The job has ended with attempt ``attempt`` (its result committed, or its failure): the outputs its earlier
+    attempts kept go too, but for ``but`` (the one the caller discards itself) and the payloads an artifact now
+    stores. Such an output was superseded, not adopted: solved by another solver version, unreadable, or kept by an
+    attempt that lost its lease and went on solving after the next attempt had looked for it. No attempt runs after
+    an end, so none would adopt it; left, it would lie in the blob store for good. An attempt that kept nothing costs
+    one ``exists`` (none on a first attempt)."""
+    stored = list(stored)
+    for earlier in range(1, attempt + 1):
+        if earlier == but or not kept_by(files, job_id, earlier):
+            continue
+        try:
+            payloads = json.loads(files.get(result_key(job_id, earlier))).get("payloads", [])
+        except (BlobMissing, BlobStoreUnavailable, ValueError, AttributeError):
+            payloads = []  # unreadable: its result goes, the payloads it named cannot be found
+        discard(files, job_id, earlier, payloads, stored)
+
+
 def described(computed: Computed) -> dict[str, Any] | None:
     """What :func:`discard` needs of the output kept in the blob store (None: nothing was kept); a result spooled for
     a later attempt carries it."""

@@ -10,7 +10,7 @@ import re
 import sys
 from typing import Any, Iterable, Sequence
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 from sqlalchemy import exc as sqlalchemy_exc
 
 from plantsolve.schemas.jobs import Problem
@@ -90,39 +90,151 @@ class DiskSpaceLow(ProblemError):
                          headers={"Retry-After": str(DISK_RETRY_AFTER_SECONDS)})
 
 
-def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (), document: Any = None) -> Unprocessable:
-    """422 naming each bad field; with the submitted ``document`` the locations are its JSON paths (the tags
-    pydantic puts in them for a member of a union are left out)."""
-    errors = [field_problem([*prefix, *json_path(document, e["loc"], e["type"])], e["msg"], e["type"])
+def from_validation_error(error: ValidationError, prefix: Sequence[str | int] = (),
+                          model: type[BaseModel] | None = None) -> Unprocessable:
+    """422 naming each bad field of ``model`` (the one validated) by its path as the user wrote it
+    (:func:`user_path`)."""
+    errors = [field_problem([*prefix, *user_path(e["loc"], model)], e["msg"], e["type"])
               for e in error.errors(include_url=False)]
     return Unprocessable(summary(errors), errors=errors)
 
 
-def json_path(document: Any, loc: Sequence[str | int], error_type: str = "") -> list[str | int]:
-    """``loc`` as a path into ``document``: a string step that names no key of the value it stands on (a
-    union member's tag such as ``list[...]``) is dropped, except a missing field's name, the last step of a
-    ``missing`` error."""
-    if document is None:
+def from_input_rejected(error: InputRejected, prefix: Sequence[str | int] = (),
+                        model: type[BaseModel] | None = None) -> Unprocessable:
+    """422 of a solver's refusal: its fields' paths as the user wrote them, where one went through ``model``'s
+    validation (a reader's ``validated``) and so holds pydantic's tags."""
+    errors = [field_problem([*prefix, *user_path(e.loc, model)], e.msg, e.type) for e in error.errors]
+    return Unprocessable(summary(errors), errors=errors)
+
+
+# the wrappers pydantic's validation passes through without a step of the location, and where their inner schema is
+_WRAPPED = {"model": ("schema",), "definitions": ("schema",), "default": ("schema",), "nullable": ("schema",),
+            "function-after": ("schema",), "function-before": ("schema",), "function-wrap": ("schema",),
+            "model-field": ("schema",), "typed-dict-field": ("schema",), "dataclass-field": ("schema",),
+            "dataclass": ("schema",), "lax-or-strict": ("lax_schema", "strict_schema"),
+            "json-or-python": ("json_schema", "python_schema")}
+
+
+def user_path(loc: Sequence[str | int], model: type[BaseModel] | None) -> list[str | int]:
+    """``loc`` of an error of ``model``'s validation as the path the user wrote: the tags pydantic puts in a location
+    for the member of a union (``points.list.0.0``, ``loops.0.function-after[...].1``) left out, every other step
+    kept. A location may start with steps outside the model (``file``: a reader's prefix), which are kept, and a
+    solver's own location (``file.line.7``), which names no field, passes unchanged.
+
+    The model's validation schema says which steps are a union's: walked alongside ``loc``, a step at a union (or
+    a discriminated union) is the member's tag, and the next step goes on in that member (in every member when the
+    tag is pydantic's generated name); a step the walk does not know ends the walk and the rest is kept as is."""
+    if model is None:
         return list(loc)
-    path: list[str | int] = []
-    node: Any = document
-    for i, step in enumerate(loc):
-        last = i == len(loc) - 1
-        if isinstance(step, str) and not (isinstance(node, dict) and (step in node or (last and error_type == "missing"))):
+    schema, refs = _core(model)
+    steps = list(loc)
+    start = 0
+    root = _open([schema], refs)
+    while start < len(steps) and isinstance(steps[start], str) and not _takes(root, steps[start]):
+        start += 1  # a reader's prefix ('file'): neither a field of the model nor the tag of its member
+    if start == len(steps):
+        return steps
+    path, nodes = steps[:start], [schema]
+    for i in range(start, len(steps)):
+        step = steps[i]
+        frontier = _open(nodes, refs)
+        inner = [child for node in frontier for child in _child(node, step)]
+        if inner:
+            path.append(step)
+            nodes = inner
             continue
-        path.append(step)
-        if isinstance(node, dict) and isinstance(step, str):
-            node = node.get(step)
-        elif isinstance(node, list) and isinstance(step, int) and -len(node) <= step < len(node):
-            node = node[step]
-        else:
-            node = None
+        members = [member for node in frontier for member in _members(node, step)]
+        if members:  # a union's tag: not in the user's document
+            nodes = members
+            continue
+        return path + steps[i:]
     return path
 
 
-def from_input_rejected(error: InputRejected, prefix: Sequence[str | int] = ()) -> Unprocessable:
-    errors = [field_problem([*prefix, *e.loc], e.msg, e.type) for e in error.errors]
-    return Unprocessable(summary(errors), errors=errors)
+@functools.lru_cache(maxsize=64)
+def _core(model: type[BaseModel]) -> tuple[dict, dict[str, dict]]:
+    """A model's core (validation) schema and its definitions by reference."""
+    schema = model.__pydantic_core_schema__
+    refs: dict[str, dict] = {}
+    stack: list[Any] = [schema]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict):
+            if isinstance(node.get("ref"), str) and "type" in node:
+                refs[node["ref"]] = node
+            stack.extend(value for key, value in node.items() if key not in ("metadata", "serialization"))
+        elif isinstance(node, (list, tuple)):
+            stack.extend(node)
+    return schema, refs
+
+
+def _open(nodes: list[dict], refs: dict[str, dict]) -> list[dict]:
+    """The nodes that take a step of a location: wrappers (a reference, a validator function, a default ...) opened."""
+    found, stack, seen = [], list(nodes), set()
+    while stack:
+        node = stack.pop()
+        if not isinstance(node, dict) or id(node) in seen:
+            continue
+        seen.add(id(node))
+        kind = node.get("type")
+        if kind == "definition-ref":
+            stack.append(refs.get(node.get("schema_ref"), {}))
+        elif kind == "model" and node.get("root_model"):
+            stack.append(node.get("schema"))
+        elif kind in _WRAPPED:
+            stack.extend(node.get(key) for key in _WRAPPED[kind])
+        elif kind == "chain":
+            stack.extend(node.get("steps", ()))
+        else:
+            found.append(node)
+    return found
+
+
+def _takes(nodes: list[dict], step: str | int) -> bool:
+    return any(_child(node, step) or _members(node, step) for node in nodes)
+
+
+def _child(node: dict, step: str | int) -> list[dict]:
+    """Where ``step`` leads from ``node`` as a step of the user's document (a field, an item, a key), if it does."""
+    kind = node.get("type")
+    if kind in ("model-fields", "typed-dict") and isinstance(step, str):
+        for name, field in node.get("fields", {}).items():
+            if step == name or step == field.get("validation_alias"):
+                return [field]
+    elif kind == "dataclass-args" and isinstance(step, str):
+        return [field for field in node.get("fields", ()) if field.get("name") == step]
+    elif kind in ("list", "set", "frozenset", "generator") and isinstance(step, int):
+        return [node.get("items_schema") or {"type": "any"}]
+    elif kind == "tuple" and isinstance(step, int):
+        items = node.get("items_schema") or [{"type": "any"}]
+        return [items[min(step, len(items) - 1)]]
+    elif kind == "dict":
+        return [node.get("values_schema") or {"type": "any"}]
+    return []
+
+
+def _members(node: dict, step: str | int) -> list[dict]:
+    """The members of a union ``node`` that ``step`` tags: a discriminated union's tag, a member's own label, or
+    (a name pydantic made up, ``list[...]``, ``function-after[...]``) every unlabelled member."""
+    kind = node.get("type")
+    if kind == "tagged-union":
+        choices = node.get("choices", {})
+        return [choices[step]] if step in choices else [choices[str(step)]] if str(step) in choices else []
+    if kind != "union":
+        return []
+    labelled = [choice[0] for choice in node.get("choices", ()) if isinstance(choice, tuple) and choice[1] == step]
+    if labelled or not isinstance(step, str):
+        return labelled
+    return [choice for choice in node.get("choices", ()) if not isinstance(choice, tuple) and _named(choice, step)]
+
+
+def _named(choice: dict, step: str) -> bool:
+    """Whether ``step`` is the name pydantic gives the unlabelled union member ``choice``: its type, with what it
+    holds in brackets (``list[float]``, ``function-after[check(), ...]``), or a model's class name."""
+    kind = str(choice.get("type"))
+    cls = choice.get("cls")
+    return step == kind or step.startswith(kind + "[") or (isinstance(cls, type) and step == cls.__name__) \
+        or kind == "definition-ref" and step == str(choice.get("schema_ref", "")).split(":")[0].rsplit(".", 1)[-1]
 
 
 def summary(errors: Iterable[dict[str, Any]]) -> str:

@@ -68,12 +68,12 @@ def read_json(spec: SolverSpec, body: bytes) -> tuple[Any, Any]:
     except ValidationError as error:
         integral = _with_integral_numbers_as_integers(raw, error)
         if integral is None:
-            raise _another_kinds(spec, raw) or from_validation_error(error, document=raw) from None
+            raise _another_kinds(spec, raw) or from_validation_error(error, model=spec.request_model) from None
         raw = integral
         try:
             request = spec.request_model.model_validate_json(json.dumps(raw), strict=True)
         except ValidationError as error:
-            raise _another_kinds(spec, raw) or from_validation_error(error, document=raw) from None
+            raise _another_kinds(spec, raw) or from_validation_error(error, model=spec.request_model) from None
     return raw, _input(spec, request)
 
 
@@ -152,9 +152,9 @@ def read_upload(spec: SolverSpec, source: StoredInput, options: dict | None) -> 
     try:
         request = spec.parse_upload(source, options)
     except InputRejected as error:
-        raise from_input_rejected(error) from None
+        raise from_input_rejected(error, model=spec.request_model) from None
     except ValidationError as error:
-        raise from_validation_error(error) from None
+        raise from_validation_error(error, model=spec.request_model) from None
     except RecursionError:
         raise Unprocessable("The uploaded file is nested too deeply to be read.",
                             errors=[field_problem(["file"], "nested too deeply", "json_too_deep")]) from None
@@ -348,7 +348,7 @@ def check(spec: SolverSpec, job_input: Any) -> None:
     try:
         spec.check_input(job_input)
     except InputRejected as error:
-        raise from_input_rejected(error) from None
+        raise from_input_rejected(error, model=spec.request_model) from None
 
 
 @contextmanager
@@ -385,6 +385,6 @@ def _input(spec: SolverSpec, request: Any, source: StoredInput | None = None) ->
     try:
         return spec.input_of(request, source)
     except InputRejected as error:
-        raise from_input_rejected(error) from None
+        raise from_input_rejected(error, model=spec.request_model) from None
     except ValidationError as error:
-        raise from_validation_error(error) from None
+        raise from_validation_error(error, model=spec.request_model) from None

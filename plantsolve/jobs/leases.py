@@ -19,7 +19,7 @@ from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, with_reader_warnings
 from plantsolve.jobs.runner import lost_worker_report, pending_holder
 from plantsolve.store.models import utcnow
-from plantsolve.store.repository import LapsedAttempt
+from plantsolve.store.repository import LapsedAttempt, as_utc
 
 log = logging.getLogger("plantsolve.sweeper")
 
@@ -50,7 +50,8 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     # the reader's warnings, written by the lost attempt once it read its input (or by an earlier one), are kept
     report = with_reader_warnings(lost_worker_report(lost.attempt, cap, why), held(lost.report))
     history = attempts.ended(lost.attempts, lost.attempt, lost.worker,
-                             "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why)
+                             "result_pending" if previous.get("outcome") == "result_pending" else "lost", error=why,
+                             started_at=lost.started_at)
     if lost.attempt >= cap:
         written = ctx.repo.finish_failure(lost.id, lost.attempt, report=report, run_seconds=None, attempts=history,
                                           lapsed_before=lapsed_before)
@@ -78,7 +79,7 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
         # process (whose attempt has ended): it came from outside, most often the kernel's out-of-memory killer
         how += " (SIGKILL: sent by the kernel when memory runs out, or by an operator)"
     lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
-                         job.heartbeat_at, job.report)
+                         job.heartbeat_at, job.report, as_utc(job.attempt_started_at))
     return lose_attempt(ctx, lost, why=how)
 
 

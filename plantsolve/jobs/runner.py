@@ -29,7 +29,7 @@ from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
 from plantsolve.store.models import utcnow
-from plantsolve.store.repository import StoredArtifact
+from plantsolve.store.repository import StoredArtifact, as_utc
 
 log = logging.getLogger("plantsolve.runner")
 
@@ -273,6 +273,8 @@ def _conclude(ctx: ServiceContext, job, attempt: int, verdict: Verdict, monitor:
         return "stale"
     written = ctx.repo.finish_failure(job.id, attempt, report=verdict.report, run_seconds=monitor.elapsed,
                                       attempts=history)
+    if written:  # no attempt follows a failure: what earlier ones kept (this one's own too) would lie there for good
+        computed.discard_superseded(ctx.files, job.id, attempt, [])
     return "failed" if written else "stale"
 
 
@@ -404,6 +406,7 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
         _unspool(ctx, job_id, spooled_in)
         if kept is not None:
             computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], stored)
+        computed.discard_superseded(ctx.files, job_id, attempt, stored, but=kept["attempt"] if kept else None)
     elif kept is not None:
         _discard_if_finished(ctx, job_id, kept)
     return "succeeded" if written else "stale"
@@ -411,11 +414,13 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
 
 def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict) -> None:
     """The commit found the attempt no longer running: once the job has finished (cancelled meanwhile, or stored by
-    another attempt, whose artifacts may be kept payloads), no attempt will adopt the output kept; while it runs
-    again, the running attempt may."""
+    another attempt, whose artifacts may be kept payloads), no attempt will adopt the output kept, nor one an earlier
+    attempt kept; while it runs again, the running attempt may."""
     job = ctx.repo.get(job_id, brief=True)
     if job is not None and is_finished(job.status):
-        computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], ctx.repo.artifacts(job_id))
+        artifacts = ctx.repo.artifacts(job_id)
+        computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], artifacts)
+        computed.discard_superseded(ctx.files, job_id, job.attempt, artifacts, but=kept["attempt"])
 
 
 def _spool(ctx: ServiceContext, job_id, payload: dict, waiting: list[Artifact]) -> None:
@@ -472,7 +477,8 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker:
         f"The solver ignored its soft time limit and was killed at the hard limit ({limit:g} s)."
         if limit else "The solver was killed at its hard time limit.",
         time_limit=limit, killed=True)
-    history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit")
+    history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit",
+                             started_at=as_utc(job.attempt_started_at))
     return ctx.repo.finish_failure(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),
                                    run_seconds=None, attempts=history)
 
@@ -485,7 +491,7 @@ def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     if job is None or job.status != RUNNING:
         return False
     history = attempts.ended(job.attempts, job.attempt, job.worker, "handed_back",
-                             error="the service stopped while the job ran")
+                             error="the service stopped while the job ran", started_at=as_utc(job.attempt_started_at))
     report = failure_report("worker", "The service stopped while the job ran; it was re-queued and runs again "
                             "at the next start (this attempt is not counted).")
     return ctx.repo.requeue(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),

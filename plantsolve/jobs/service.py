@@ -371,8 +371,8 @@ class JobService:
             if is_finished(job.status):
                 raise Conflict(f"Job {job_id} has already finished ({job.status}); it cannot be cancelled.",
                                extra={"status": job.status})
-            history = attempts.ended(job.attempts, job.attempt, job.worker, "cancelled") if job.status == RUNNING \
-                else None
+            history = attempts.ended(job.attempts, job.attempt, job.worker, "cancelled",
+                                     started_at=as_utc(job.attempt_started_at)) if job.status == RUNNING else None
             outcome = self.ctx.repo.cancel(job_id, report=failure_report("cancelled", "Cancelled on request."),
                                            attempts=history, seen=(job.status, job.attempt))
             if outcome is None:
@@ -414,7 +414,7 @@ class JobService:
         except ResultNotUsable as error:
             raise Conflict(f"Job {job_id} {error}") from None
         except InputRejected as error:
-            raise from_input_rejected(error) from None
+            raise from_input_rejected(error, model=operation.request_model) from None
 
     def list(self, kind: str | None, status: str | None, cursor: str | None, limit: int,
              sees: str | None = None) -> JobList:

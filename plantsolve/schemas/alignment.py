@@ -21,6 +21,7 @@ from plantsolve.schemas.common import (
     LENGTH,
     Direction3,
     FiniteFloat,
+    Flag,
     Integer,
     Point3,
     Quaternion,
@@ -74,7 +75,7 @@ class Component(StrictModel):
         description="Outside radius in the request's units. For pipes it sets the minimum pipe length "
         "(options.min_pipe_length_factor x radius); without it a hundredth of the measured length is used.",
     )
-    fixed: bool = Field(
+    fixed: Flag = Field(
         default=False,
         description="A tie-in: the component never moves (its output coordinates are its input, bit for bit).",
     )
@@ -127,7 +128,7 @@ class AlignmentOptions(StrictModel):
         description="Iteration cap of either method (direct: Gauss-Newton and refinement steps over all cut rounds; "
         "dual_quaternion: alternating steps). A run stopped by the cap says so in its stop reason.",
     )
-    anchor: bool = Field(
+    anchor: Flag = Field(
         default=True,
         description="When a connected network has no fixed component, hold one still (a tie_in, else an end flange, "
         "else its largest component) so the result is reproducible; the report names it.",

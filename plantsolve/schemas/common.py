@@ -6,6 +6,8 @@ Conventions (they hold for every solver):
 - quaternions are ``[w, x, y, z]`` (scalar first), unit norm, active rotation;
 - every float in a request must be finite: NaN and infinity are rejected with a 422
   that names the field;
+- every yes/no in a request is JSON's ``true`` or ``false`` (:data:`Flag`): ``1``, ``"yes"``, ``"on"`` are refused
+  with a 422 that names the field, whichever way the request came;
 - every number in a request is a number (:data:`Number`): ``true``, ``false`` and strings are refused with a 422
   that names the field, whichever way the request came (a body, an uploaded file, a form's options); only an option
   an upload form may type as text is read from one (``"6"``, :func:`plain_numbers`).
@@ -13,6 +15,7 @@ Conventions (they hold for every solver):
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Iterable, Mapping
 from numbers import Integral, Real
@@ -45,6 +48,29 @@ because an uploaded .json file and an upload form's options are validated from p
 where a bare float reads ``true`` as 1.0 (a JSON body is validated strictly as a whole); the strict check is pydantic's
 own, in its compiled core, so a million-point array costs no more than before. An option a form may type as text
 ("6") is read by :func:`plain_numbers`. The number types below are made of it."""
+
+def json_boolean(value: Any) -> Any:
+    """JSON's ``true`` or ``false``; anything else a 422 saying which two values a yes/no takes."""
+    if not isinstance(value, bool):
+        raise PydanticCustomError("bool_type", "Input should be true or false (JSON's booleans; not {value})",
+                                  {"value": json_text(value)})
+    return value
+
+
+def json_text(value: Any) -> str:
+    """A refused value as the JSON that holds it (``"yes"``, ``1``), cut at 40 characters."""
+    try:
+        text = json.dumps(value, ensure_ascii=False)
+    except (TypeError, ValueError):
+        text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+Flag = Annotated[bool, Strict(), BeforeValidator(json_boolean)]
+"""A yes/no of a request: JSON's ``true`` or ``false``, nothing else. Strict for the reason :data:`Number` is: in lax
+mode (an uploaded .json file, a form's options) pydantic reads ``1``, ``0``, ``"yes"``, ``"on"``, ``"true"`` and
+``"1"`` as booleans, so a ``"no"`` meant as a word, or a count of 1, silently switched an option. Every bool of a
+request is one of these (a test walks the request models)."""
 
 FiniteFloat = Annotated[Number, Field(allow_inf_nan=False)]
 """A number that must be finite (NaN and +-inf are rejected)."""
@@ -108,16 +134,24 @@ UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({
 """The words and symbols (lower case, read in any case) that name each request unit: the one table of them, which
 the readers of files (``solvers.length_units``) extend with the units only a file states."""
 
+MICROMETRE_SPELLINGS = ("um", "µm", "μm", "micrometre", "micrometres", "micrometer", "micrometers", "micron", "microns")
+"""Micrometres, as an FE or CMM export names them (the micro sign and the Greek mu both occur): a unit a file's
+coordinates may be in, which no request is written in."""
+
+FILE_UNIT_SPELLINGS: Mapping[str, tuple[str, ...]] = MappingProxyType({**UNIT_SPELLINGS, "um": MICROMETRE_SPELLINGS})
+"""Every length unit a file may state, and its spellings: the request units and micrometres. The readers' table of
+sizes (``solvers.length_units.SIZES``) has exactly these units."""
+
 AMBIGUOUS_UNITS: Mapping[str, str] = MappingProxyType({
     "Mm": "the megametre (in SI, M is mega) or millimetres typed with a slipped shift key"})
 """Spellings that name a unit in one reading and another unit in another, with both readings."""
 
-_UNIT_OF_SPELLING = {spelling: name for name, spellings in UNIT_SPELLINGS.items() for spelling in spellings}
+_UNIT_OF_SPELLING = {spelling: name for name, spellings in FILE_UNIT_SPELLINGS.items() for spelling in spellings}
 
 
 def spelled_unit(word: Any) -> Any:
-    """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ' → 'mm', 'mm', 'in'); a value error
-    naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
+    """The canonical unit name ``word`` spells ('MM', 'Millimetres', ' IN ', 'µm' → 'mm', 'mm', 'in', 'um'); a value
+    error naming both readings for 'Mm'; anything else unchanged, for the enum to refuse by its own rule."""
     if not isinstance(word, str):
         return word
     if word.strip() in AMBIGUOUS_UNITS:
@@ -127,9 +161,28 @@ def spelled_unit(word: Any) -> Any:
     return _UNIT_OF_SPELLING.get(word.strip().lower(), word)
 
 
-Units = Annotated[UnitName, BeforeValidator(spelled_unit)]
+def spelled_request_unit(word: Any) -> Any:
+    """:func:`spelled_unit` for a request's unit, which is never micrometres: those are refused saying so (the
+    enum's own message would list the units, as if 'µm' were a typing slip)."""
+    unit = spelled_unit(word)
+    if isinstance(unit, str) and unit not in UNIT_SPELLINGS and unit in FILE_UNIT_SPELLINGS:
+        raise PydanticCustomError(
+            "literal_error", "'{word}' is micrometres, a unit only a file's coordinates may be in (a tube scan's "
+            "options.file_units); this unit is one of {units}", {"word": str(word).strip(), "units": ", ".join(
+                UNIT_SPELLINGS)})
+    return unit
+
+
+Units = Annotated[UnitName, BeforeValidator(spelled_request_unit)]
 """Length unit of a request; results are given in the same unit. A request may spell it in any case and by its name
 ('MM', 'Millimetres', 'IN'); the OpenAPI document lists the canonical names, which every result gives."""
+
+FileUnitName = Literal["mm", "cm", "m", "in", "ft", "um"]
+"""The canonical name of a length unit a file's coordinates may be in (the OpenAPI enum)."""
+
+FileUnits = Annotated[FileUnitName, BeforeValidator(spelled_unit)]
+"""The length unit of a file's coordinates, where its reader converts every unit of :data:`FILE_UNIT_SPELLINGS`
+(a tube scan's): the request's units and micrometres ('um', 'µm', 'μm', 'microns'), in any case."""
 
 LENGTH = "{units}"
 """The unit of a result's lengths: the result's own ``units`` field (the request's length unit)."""

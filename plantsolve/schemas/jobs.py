@@ -47,7 +47,8 @@ class AttemptInfo(BaseModel):
 
     attempt: int
     worker: str | None = None
-    started_at: datetime | None = None
+    started_at: datetime | None = Field(default=None, description="When the attempt was claimed, whoever ended it "
+                                        "(null only for an attempt that ran before the service recorded starts).")
     finished_at: datetime | None = None
     outcome: Literal["succeeded", "failed", "requeued", "time_limit", "cancelled", "lost", "result_pending",
                      "handed_back"] = Field(

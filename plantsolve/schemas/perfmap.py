@@ -20,7 +20,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, RootModel, Tag, field_validator, model_validator
 
-from plantsolve.schemas.common import Diagnostic, FiniteFloat, Integer, Measured, Number, Report, StrictModel, \
+from plantsolve.schemas.common import Diagnostic, FiniteFloat, Flag, Integer, Measured, Number, Report, StrictModel, \
     plain_numbers, unit
 
 # units of result fields (x-unit in the OpenAPI document): placeholders name the result's ``units`` fields
@@ -171,7 +171,7 @@ class PerfmapOptions(StrictModel):
         default_factory=lambda: [64, 64], min_length=2, max_length=2,
         description="Map grid [nx, ny]: nodes along flow and along pressure (2..400 each; the map is stored "
         "with the job).")
-    map: bool | None = Field(
+    map: Flag | None = Field(
         default=None,
         description="Compute the performance map; it needs >= 3 settings not all on one line "
         "in (theta, phi). null (default): compute it when the settings allow one, otherwise "
@@ -192,7 +192,7 @@ class PerfmapOptions(StrictModel):
         "the max-curve (paper section 3, N = 50).")
     envelope_points: Integer = Field(
         default=200, ge=2, le=10_000, description="Flow samples along each envelope.")
-    concave_efficiency: bool = Field(
+    concave_efficiency: Flag = Field(
         default=False, description="Also constrain the efficiency curve to be concave.")
     surge_margin: Number = Field(
         default=0.0, ge=0.0, le=1.0,

@@ -20,7 +20,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, PlainSerializer, PlainValidator, Tag, \
     TypeAdapter, WithJsonSchema
 
-from plantsolve.schemas.common import LENGTH, MAX_COORDINATE, FiniteFloat, Point3, Report, StrictModel, Units, \
+from plantsolve.schemas.common import LENGTH, MAX_COORDINATE, FiniteFloat, Flag, Point3, Report, StrictModel, Units, \
     json_integer, plain_numbers, unit
 
 MAX_VERTICES = 5_000_000
@@ -143,12 +143,12 @@ class PolyhedraOptions(StrictModel):
         "lengthUnit that contradicts its numbers) or saying what it does not (OBJ and STL state none: they are read "
         "in the request's units unless this is given). The numbers are converted to the request's units; "
         "report.details.source.units says how.")
-    list_faces: bool | None = Field(
+    list_faces: Flag | None = Field(
         default=None,
         description=f"List every face in the result (faces, each zone's faces and misoriented faces): true always, "
         f"false never; omitted: when the request has at most {MAX_LISTED_FACES} faces. The zones.csv artifact "
         "lists them as faces_csv says.")
-    faces_csv: bool | None = Field(
+    faces_csv: Flag | None = Field(
         default=None,
         description=f"A row per face in the zones.csv artifact (area, net area, perimeter, normal, planarity error) "
         f"after the zone rows: true always, false never; omitted: when the request has at most {MAX_LISTED_FACES} "

@@ -23,8 +23,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, Discriminator, Field, StrictInt, Tag, model_validator
 
-from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FiniteFloat, Number, Point3, Quaternion,
-                                      Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
+from plantsolve.schemas.common import (LENGTH, Coordinate, Diagnostic, FileUnits, FiniteFloat, Flag, Number, Point3,
+                                      Quaternion, Report, StrictModel, Units, Vec3, json_integer, plain_numbers, unit)
 
 MAX_POINTS = 5_000_000
 # the largest length an option may hold, in the request's units: 1e6 is a kilometre in millimetres and 300 km in
@@ -36,7 +36,8 @@ DEG = unit("deg")
 LEN = unit(LENGTH)
 
 FILE_UNITS_HELP = (
-    "Length unit of the coordinates in an uploaded point file (uploads only). It overrides the file format's own "
+    "Length unit of the coordinates in an uploaded point file (uploads only): a request unit or micrometres ('um', "
+    "also 'µm'). It overrides the file format's own "
     "convention, which is: LAS/LAZ — the linear unit of the file's CRS (OGC WKT VLR/EVLR, else GeoTIFF keys "
     "ProjLinearUnits 3076 / VerticalUnits 4099), metres when the file states none (as scanners write them; the "
     "report then warns 'file_units_assumed'); E57 — metres (the standard's); XYZ, CSV, TXT — the unit their column "
@@ -92,7 +93,7 @@ class LraRow(StrictModel):
         default=None, ge=0, json_schema_extra=LEN,
         description="Results: standard deviation of the bend radius (0 when held by the options)."
     )
-    determined: bool | None = Field(
+    determined: Flag | None = Field(
         default=None, description="Results: false when a field of this row is not determined by the samples "
         "(listed in `undetermined`): an end straight the samples stop short on, or a bend they see from one side "
         "only. Null in a nominal.")
@@ -169,7 +170,7 @@ class TubeOptions(StrictModel):
         description="Known centreline bend radius (request units); when given all bends are "
         "fitted with this fixed radius.",
     )
-    common_bend_radius: bool = Field(
+    common_bend_radius: Flag = Field(
         default=False, description="Fit one bend radius shared by all bends (typical of rotary-draw benders); "
         "the same as bend_radius_model 'common'."
     )
@@ -224,7 +225,7 @@ class TubeOptions(StrictModel):
         "commanded angles falls back to k = 1).",
     )
     seed: Annotated[int, Field(ge=0, le=2**32 - 1), BeforeValidator(json_integer)] = Field(default=0, description="Seed of the subsampling random generator.")
-    file_units: Units | None = Field(default=None, description=FILE_UNITS_HELP)
+    file_units: FileUnits | None = Field(default=None, description=FILE_UNITS_HELP)
 
     @model_validator(mode="after")
     def _one_nominal(self):
@@ -268,7 +269,7 @@ class PointSource(StrictModel):
                          "left out; each is listed in the warnings.")
     skipped_lines: list[StrictInt] = Field(default_factory=list, description="1-based line numbers of the first skipped "
                                      "records (text formats; at most 10).")
-    truncated: bool = Field(default=False, description="The file ends before the records its header declares, or "
+    truncated: Flag = Field(default=False, description="The file ends before the records its header declares, or "
                             "mid-record.")
     warnings: list[Diagnostic] = Field(default_factory=list, description="The reader's warnings; the solver adds "
                                        "them to report.warnings.")

@@ -55,6 +55,9 @@ class Job(Base):
     created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True), default=utcnow)
     enqueued_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    # when the attempt now running (or the last one) was claimed: its history entry's start, whoever ends it (the
+    # runner, a cancel, the lease policy, a hand-back)
+    attempt_started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
     run_seconds: Mapped[float | None] = mapped_column(Float)
     # the completion webhook: state None (no callback) | "pending" | "delivered" | "failed"; while pending,

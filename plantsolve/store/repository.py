@@ -95,6 +95,7 @@ class JobRecord:
     created_at: datetime
     enqueued_at: datetime | None
     started_at: datetime | None
+    attempt_started_at: datetime | None
     finished_at: datetime | None
     run_seconds: float | None
     callback_url: str | None
@@ -140,6 +141,7 @@ class LapsedAttempt:
     worker: str | None
     heartbeat_at: datetime | None
     report: dict | None = None  # what the job's report says meanwhile (the reader's warnings an attempt wrote)
+    started_at: datetime | None = None  # when the attempt was claimed
 
 
 class JobRepository:
@@ -386,6 +388,7 @@ class JobRepository:
                 lease_until=now + timedelta(seconds=lease_seconds),
                 heartbeat_at=now,
                 started_at=func.coalesce(JOBS.c.started_at, now),
+                attempt_started_at=now,
                 worker=worker,
                 progress=0.0,
                 progress_message="started",
@@ -514,9 +517,11 @@ class JobRepository:
         with self.sessions.kw["bind"].connect() as connection:
             rows = connection.execute(
                 select(JOBS.c.id, JOBS.c.kind, JOBS.c.attempt, JOBS.c.max_attempts, JOBS.c.attempts, JOBS.c.worker,
-                       JOBS.c.heartbeat_at, JOBS.c.report).where(JOBS.c.status == RUNNING, *conditions)).all()
-        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat), report)
-                for job_id, kind, attempt, max_attempts, history, worker, beat, report in rows]
+                       JOBS.c.heartbeat_at, JOBS.c.report, JOBS.c.attempt_started_at)
+                .where(JOBS.c.status == RUNNING, *conditions)).all()
+        return [LapsedAttempt(job_id, kind, attempt, max_attempts, list(history or []), worker, as_utc(beat), report,
+                              as_utc(started))
+                for job_id, kind, attempt, max_attempts, history, worker, beat, report, started in rows]
 
     def unsent(self, *, sent_before: datetime, limit: int = 1000) -> list[tuple[uuid.UUID, bool]]:
         """Queued jobs whose message never reached the broker, or reached it before ``sent_before``: ``(id, reached

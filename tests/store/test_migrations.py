@@ -17,7 +17,7 @@ def _assert_upgraded_and_matching(db: Database) -> None:
     with db.engine.connect() as connection:
         assert set(inspect(connection).get_table_names()) >= {"jobs", "artifacts", "blobs", "alembic_version"}
         context = MigrationContext.configure(connection)
-        assert context.get_current_revision() == "0006"
+        assert context.get_current_revision() == "0007"
         assert compare_metadata(context, Base.metadata) == []
 
 
