@@ -18,7 +18,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
-from plantsolve.schemas.common import FiniteFloat, Number, Report, StrictModel, plain_numbers, unit
+from plantsolve.schemas.common import FiniteFloat, Flag, Number, Report, StrictModel, plain_numbers, unit
 
 MAX_FILE_CHARS = 96 * 1024 * 1024
 EntityName = Annotated[str, Field(min_length=3, max_length=100, pattern=r"^[A-Za-z][A-Za-z0-9_]*$")]
@@ -39,11 +39,11 @@ class DedupOptions(StrictModel):
         "some; the result's units says which), not in the request's. Default: the model context's Precision (1e-5 m "
         "when absent). Refused beyond 0.1 m or from 5 % of the median product's size; warned above 5 mm or 0.5 % "
         "of it (implausible_tolerance).")
-    allow_mirror: bool = Field(default=False, description="Let mirrored copies join a class (written as IfcMappedItem).")
-    allow_scale: bool = Field(default=False, description="Let uniformly scaled copies join a class (IfcMappedItem).")
-    postpass: bool = Field(default=True, description="Merge identical non-rooted instances afterwards (points, "
+    allow_mirror: Flag = Field(default=False, description="Let mirrored copies join a class (written as IfcMappedItem).")
+    allow_scale: Flag = Field(default=False, description="Let uniformly scaled copies join a class (IfcMappedItem).")
+    postpass: Flag = Field(default=True, description="Merge identical non-rooted instances afterwards (points, "
                            "directions, placements, styles), respecting the schema's inverse cardinalities.")
-    express_rules: bool = Field(default=True, description="Validate the output against the schema's EXPRESS "
+    express_rules: Flag = Field(default=True, description="Validate the output against the schema's EXPRESS "
                                 "rules too (a few seconds more); false checks types, cardinalities and inverses only.")
     entity_types: list[EntityName] | None = Field(
         default=None, max_length=200,

@@ -14,19 +14,16 @@ import re
 from collections.abc import Iterable
 from types import MappingProxyType
 
-from plantsolve.schemas.common import AMBIGUOUS_UNITS, UNIT_SPELLINGS, spelled_unit
+from plantsolve.schemas.common import AMBIGUOUS_UNITS, FILE_UNIT_SPELLINGS, spelled_unit
 
 # metres per unit of each request unit (schemas.common.Units)
 METRES = MappingProxyType({"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048})
 # ... and of every unit named here: files may state micrometres, which no request is written in
 SIZES = MappingProxyType({**METRES, "um": 1e-6})
 
-# the words and symbols that name each unit (lower case): the request units' (one table, the schema's, which reads
-# them in a JSON body) and micrometres (the micro sign and the Greek mu both occur)
-SPELLINGS = MappingProxyType({
-    **UNIT_SPELLINGS,
-    "um": ("um", "µm", "μm", "micrometre", "micrometres", "micrometer", "micrometers", "micron", "microns"),
-})
+# the words and symbols that name each unit (lower case): the schema's table (the request units, which it reads in a
+# JSON body, and micrometres, which a tube scan's file_units takes; the micro sign and the Greek mu both occur)
+SPELLINGS = FILE_UNIT_SPELLINGS
 _NAMED = MappingProxyType({spelling: unit for unit, spellings in SPELLINGS.items() for spelling in spellings})
 
 

@@ -150,13 +150,7 @@ def _request_models(kind: str) -> list[type[BaseModel]]:
     return [spec.request_model, *(operation.request_model for operation in spec.operations)]
 
 
-OWNED_ELSEWHERE = {"dedup": "schemas/dedup.py's DedupOptions bools (allow_mirror, allow_scale, postpass, "
-                            "express_rules) are another room's: each should be Flag"}
-
-
-@pytest.mark.parametrize("kind", [pytest.param(kind, marks=pytest.mark.xfail(reason=OWNED_ELSEWHERE[kind],
-                                                                              strict=True))
-                                  if kind in OWNED_ELSEWHERE else kind for kind in sorted(KINDS)])
+@pytest.mark.parametrize("kind", sorted(KINDS))
 def test_every_bool_of_every_request_is_strict(kind):
     """A walk of the request models (and the kind operations' bodies): a new bool field that is a plain ``bool``
     fails here."""
