@@ -116,3 +116,26 @@ def test_many_copies_at_one_spot_cost_a_bounded_count_per_copy():
     search only (about 90 calls)."""
     per_copy = (_calls(100) - _calls(10)) / 90
     assert per_copy < 150
+
+
+def test_the_generator_lists_the_stickers_of_a_library(tmp_path):
+    import gzip
+    import importlib.util
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[3] / "scripts" / "ldcad_catalogue.py"
+    spec = importlib.util.spec_from_file_location("ldcad_catalogue", script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    parts = tmp_path / "parts"
+    (parts / "s").mkdir(parents=True)
+    files = {"900a.dat": "0 Sticker  1 x  2 with Stripes\n", "900b.dat": "0 =Sticker  1 x  1 Logo\n",
+             "900c.dat": "0 Tile 1 x 2 with Logo\n0 !CATEGORY Sticker\n",  # a category line decides
+             "900d.dat": "0 Brick 1 x 2 with Logo Sticker\n0 !CATEGORY Sticker Shortcut\n",
+             "900e.dat": "0 Brick 1 x 2\n", "s/900as01.dat": "0 ~Sticker  1 x  2 Subpart\n"}
+    for name, text in files.items():
+        (parts / name).write_text(text)
+    out = tmp_path / "stickers.txt.gz"
+    assert module.main(["--ldraw", str(tmp_path), "--stickers", str(out), "--source", "test"]) == 0
+    lines = gzip.decompress(out.read_bytes()).decode().splitlines()
+    assert lines == ['{"source": "test"}', "900a", "900b", "900c"]  # no shortcut, brick or subpart
