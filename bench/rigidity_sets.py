@@ -87,12 +87,18 @@ def why(path: Path) -> tuple[dict, Counter, Counter]:
     from plantsolve.solvers.base import StoredInput
     from plantsolve.solvers.rigidity.misses import Misses, unknown_near
     from plantsolve.solvers.rigidity.pieces import MINIFIG, NAME_MARKS
-    from plantsolve.solvers.rigidity.solve import build, recorded_parts, repeated_placements, set_aside, solve
+    from plantsolve.solvers.rigidity.solve import (
+        build,
+        recorded_parts,
+        set_aside,
+        solve,
+    )
+    from plantsolve.solvers.rigidity.solve import repeated_placements as repeats
     from plantsolve.solvers.rigidity.upload import parse_upload
 
     request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
     result = solve(request).result
-    stickers, copies = set_aside(request, repeated_placements(request))
+    stickers, copies = set_aside(request, repeats(request))
     assembly, unknown = build(request, recorded_parts(request.source or {})[0], {p.id for p in stickers} | set(copies))
     misses = Misses(assembly)
     positions = {p.id: p.position for p in request.parts}
