@@ -8,8 +8,8 @@ Nothing is fetched: the models are read from what is named (the OMR sets of thre
 ``--before none`` skips it), taken out of git into a temporary folder and run in a child process on the same
 files. Per model, ``before -> after``:
 
-- ``known``: parts read and in the catalogue (the others are left out of the analysis; a reader that skips fewer
-  lines reads more);
+- ``known``: parts read and analysed (in the catalogue; a reader that skips fewer lines reads more), ``unknown``:
+  parts not in the catalogue, ``stk``: stickers left out of the analysis and named (the ``stickers`` warning);
 - ``floating``: known parts joined to nothing, and their share of the known parts (the target is at most 5 %);
 - ``pieces``: connected pieces of the known parts that are no held sub-build (a set that is one build is one
   piece), and ``held``: the pieces the solver recognises as held sub-builds (a minifigure, a droid: whole
@@ -60,8 +60,8 @@ def measure(path: Path) -> dict:
     request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
     result = solve(request).result
     seconds = time.process_time() - start
-    unknown = {u.id for u in result.unknown_parts}
-    known = [p for p in request.parts if p.id not in unknown]
+    analysed = {p.id for p in result.parts}  # the known parts (no stickers, no copies beyond a repeat)
+    known = [p for p in request.parts if p.id in analysed]
     joined = {b for j in result.joints for b in j.bodies}
     floating = [p for p in known if p.id not in joined]
     details = result.report.details
@@ -69,7 +69,9 @@ def measure(path: Path) -> dict:
     apart = sum(bool(getattr(pc, "drawn_apart", False)) for pc in result.pieces)  # a solver before the field: none
     offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
     recognised = next((len(w.details["ids"]) for w in result.report.warnings if w.code == "parts_from_primitives"), 0)
-    return {"model": path.name, "known": len(known), "floating": len(floating),
+    stickers = next((w.details["count"] for w in result.report.warnings if w.code == "stickers"), 0)
+    return {"model": path.name, "known": len(known), "unknown": len(result.unknown_parts), "stickers": stickers,
+            "floating": len(floating),
             "pieces": details.get("connected_pieces") - held, "held": held, "apart": apart, "offset": offsets,
             "prim": recognised, "seconds": seconds,
             "verdict": result.report.verdict.code if result.report.verdict else None,
@@ -85,12 +87,19 @@ def why(path: Path) -> tuple[dict, Counter, Counter]:
     from plantsolve.solvers.base import StoredInput
     from plantsolve.solvers.rigidity.misses import Misses, unknown_near
     from plantsolve.solvers.rigidity.pieces import MINIFIG, NAME_MARKS
-    from plantsolve.solvers.rigidity.solve import build, recorded_parts, solve
+    from plantsolve.solvers.rigidity.solve import (
+        build,
+        recorded_parts,
+        set_aside,
+        solve,
+    )
+    from plantsolve.solvers.rigidity.solve import repeated_placements as repeats
     from plantsolve.solvers.rigidity.upload import parse_upload
 
     request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
     result = solve(request).result
-    assembly, unknown = build(request, recorded_parts(request.source or {})[0])
+    stickers, copies = set_aside(request, repeats(request))
+    assembly, unknown = build(request, recorded_parts(request.source or {})[0], {p.id for p in stickers} | set(copies))
     misses = Misses(assembly)
     positions = {p.id: p.position for p in request.parts}
     classes, types = Counter(), Counter()
@@ -166,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
-    print(f"{'model':34s} {'known':>9s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
+    print(f"{'model':34s} {'known':>9s} {'unknown':>9s} {'stk':>5s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
           f"{'prim':>6s} {'cpu s':>11s} {'verdict':>24s}  floating parts (after)")
     rows = []
     for path in files:
@@ -179,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
 
         share = 100.0 * row["floating"] / row["known"] if row["known"] else 0.0
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
-        print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('floating'):>8s} ({share:4.1f} %) "
+        print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('unknown'):>9s} {pair('stickers'):>5s} "
+              f"{pair('floating'):>8s} ({share:4.1f} %) "
               f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
               f"{pair('seconds', '.2f'):>11s} {row['verdict'] or '-':>24s}  {names}")
     olds = [before.get(row["model"]) for row in rows]
@@ -194,7 +204,8 @@ def totals(label: str, rows: list[dict]) -> str:
     held sub-builds (the goal: a set that is one build comes out as one piece) and besides held sub-builds and pieces
     drawn apart (a set of several builds said so), pieces not held, held, drawn apart, offset pairs, the verdicts by
     code, CPU seconds."""
-    return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, floating "
+    return (f"{label}: {len(rows)} models, {sum(r['known'] for r in rows)} known parts, unknown "
+            f"{sum(r['unknown'] for r in rows)}, stickers {sum(r['stickers'] for r in rows)}, floating "
             f"{sum(r['floating'] for r in rows)}, at most 5 % floating "
             f"{sum(r['floating'] <= 0.05 * r['known'] for r in rows)}, one piece "
             f"{sum(r['pieces'] == 1 for r in rows)} (or drawn apart "

@@ -59,6 +59,12 @@ empty: primitives (``p/``, keyed as a part's type-1 line names them: ``stud.dat`
 (``s/3001s01.dat``), keyed with ``.dat`` so that no key is a part number. A model's own (unofficial) part
 draws them; the solver's reader resolves such a part down to them (plantsolve/solvers/rigidity/embedded.py).
 A cylinder there carries an eighth field, 1 when a scaled placement stretches its sections (``scale``).
+
+``--stickers FILE.txt.gz`` writes the numbers of the library's stickers (the header line, then one number a line):
+the parts whose LDraw category is ``Sticker``, stated by a ``0 !CATEGORY`` line or, without one, the first word of the
+title after LDraw's marks (``~`` moved or alias, ``_``, ``|``, ``=``). A sticker has no snap information (it is
+drawn flat on a face): the solver leaves it out of the analysis rather than counting it unknown. ``Sticker
+Shortcut`` (a part with its sticker applied) is another category: such a part has its own snaps.
 """
 
 from __future__ import annotations
@@ -73,6 +79,7 @@ from pathlib import Path
 import numpy as np
 
 from plantsolve.solvers.rigidity.ldraw_lines import drawn_points, placement
+from plantsolve.solvers.rigidity.stickers import STICKER, category
 
 META = re.compile(r"\[([A-Za-z]+)=([^\]]*)\]")
 # The tubes under bricks and plates (LDraw's open stud tube primitives) grip a stud placed between four studs.
@@ -432,6 +439,13 @@ def _title(text: str) -> str:
     return ""
 
 
+def sticker_numbers(ldraw_root: Path) -> list[str]:
+    """The numbers of the parts (``parts/*.dat``) whose category is ``Sticker``, sorted."""
+    ldraw = Library(ldraw_root)
+    return sorted(rel[:-4] for rel in ldraw.files if rel.endswith(".dat") and "/" not in rel
+                  and ldraw.find(rel).parent.name == "parts" and category(ldraw.text(rel).splitlines()) == STICKER)
+
+
 def derive(ldraw_root: Path, shadow_root: Path, subfiles: dict | None = None) -> dict:
     """The parts with snap information (keyed by number); the primitives and subparts with snap information go
     into ``subfiles`` (keyed by file name) when it is given."""
@@ -456,7 +470,11 @@ def derive(ldraw_root: Path, shadow_root: Path, subfiles: dict | None = None) ->
 
 
 def _write(path: Path, header: dict, records: dict) -> None:
-    data = write_lines(header, records).encode()
+    _write_text(path, write_lines(header, records))
+
+
+def _write_text(path: Path, text: str) -> None:
+    data = text.encode()
     with open(path, "wb") as raw, gzip.GzipFile(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0) as handle:
         handle.write(data)  # no name, mtime 0: the same libraries give the same bytes
 
@@ -470,14 +488,23 @@ def write_lines(header: dict, parts: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--ldraw", type=Path, required=True, help="LDraw.org parts library folder (parts/, p/)")
-    parser.add_argument("--shadow", type=Path, required=True, help="LDCad shadow library folder (parts/, p/)")
-    parser.add_argument("--out", type=Path, required=True, help="output .tsv.gz")
+    parser.add_argument("--shadow", type=Path, help="LDCad shadow library folder (parts/, p/); needed with --out")
+    parser.add_argument("--out", type=Path, help="output .tsv.gz of the parts with snaps")
     parser.add_argument("--subfiles", type=Path, help="output .tsv.gz of the primitives and subparts with snaps")
+    parser.add_argument("--stickers", type=Path, help="output .txt.gz of the numbers of the library's stickers")
     parser.add_argument("--source", default="", help="versions of the two libraries, recorded in the file")
     args = parser.parse_args(argv)
+    header = {"source": args.source, "units": "LDU, part frame, -y up"}
+    if args.stickers:
+        numbers = sticker_numbers(args.ldraw)
+        _write_text(args.stickers, "\n".join([json.dumps({"source": args.source}, sort_keys=True), *numbers]) + "\n")
+        print(f"{len(numbers)} stickers written to {args.stickers}", file=sys.stderr)
+    if args.out is None:
+        return 0
+    if args.shadow is None:
+        parser.error("--out needs --shadow")
     subfiles: dict = {}
     parts = derive(args.ldraw, args.shadow, subfiles)
-    header = {"source": args.source, "units": "LDU, part frame, -y up"}
     _write(args.out, header, parts)
     print(f"{len(parts)} parts with snap information written to {args.out}", file=sys.stderr)
     if args.subfiles:

@@ -24,6 +24,7 @@ from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP,
                                                 clearance, drawn_apart, far_parts, joints_by_part, line_of,
                                                 loose_sub_builds, mostly_floating, pieces,
                                                 resting_on_smooth_faces, sub_build)
+from plantsolve.solvers.rigidity.stickers import is_sticker
 from plantsolve.solvers.rigidity.upload import symmetry_planes, symmetry_turns
 from plantsolve.solvers.rigidity.verdicts import coverage_verdict, one_piece_verdict
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
@@ -111,6 +112,26 @@ def repeated_placements(request: RigidityRequest) -> list[tuple[str, str]]:
     return sorted(out, key=lambda pair: natural_order(pair[1]))
 
 
+COPIES_ANALYSED = 2  # parts of one number analysed at one pose: the part and one repeat (a duplicate, warned)
+
+
+def set_aside(request: RigidityRequest, repeats: list[tuple[str, str]]) -> tuple[list[UnknownPart], list[str]]:
+    """The parts left out of the analysis: the stickers (:mod:`stickers`: drawn flat on a face, no joint, no load),
+    and the repeats of a part at one pose beyond the first (``repeats``: :func:`repeated_placements`). A further
+    copy at a pose adds no joint, collision or piece that the first repeat does not show already, while every
+    copy was matched against every other (1,500 plates 3024 at one spot took two minutes)."""
+    defined = {normalise_number(str(n)) for n in (request.source or {}).get("stickers_defined") or ()}
+    stickers = [UnknownPart(id=p.id, part=p.part) for p in request.parts
+                if lookup(p.part) is None and is_sticker(normalise_number(p.part), defined)]
+    copies = Counter()
+    extra = []
+    for first, repeat in repeats:
+        copies[first] += 1
+        if copies[first] >= COPIES_ANALYSED:
+            extra.append(repeat)
+    return stickers, extra
+
+
 def recorded_parts(source: dict) -> tuple[dict[str, PartShape], list[str]]:
     """The parts the upload reader recognised from the primitives their embedded definitions draw
     (``source.parts_from_primitives``: part number -> catalogue record), and the numbers whose record is unreadable
@@ -125,9 +146,10 @@ def recorded_parts(source: dict) -> tuple[dict[str, PartShape], list[str]]:
     return shapes, unreadable
 
 
-def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None) -> tuple[Assembly, list[UnknownPart]]:
+def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None,
+          left_out: frozenset[str] | set[str] = frozenset()) -> tuple[Assembly, list[UnknownPart]]:
     """The assembly of a request: bodies and joints, or catalogue parts and the ``recorded`` parts of the file
-    (:func:`recorded_parts`), unknown parts set aside."""
+    (:func:`recorded_parts`), unknown parts set aside, the parts of ids ``left_out`` (:func:`set_aside`) left out."""
     assembly = Assembly()
     unknown = []
     recorded = recorded or {}
@@ -137,6 +159,8 @@ def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None
         axis = tuple(joint.axis) if joint.axis is not None else None
         assembly.add_joint(JointSpec(joint.id, joint.type, (joint.bodies[0], joint.bodies[1]), tuple(joint.point), axis))
     for part in request.parts:
+        if part.id in left_out:
+            continue
         known = lookup(part.part) is not None
         shape = None if known else recorded.get(normalise_number(part.part))  # a catalogue part keeps its own
         if not known and shape is None:
@@ -181,7 +205,9 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(0.0, "building the assembly")
     request, mirrored = unmirrored(request)
     recorded, unreadable = recorded_parts(request.source or {})
-    assembly, unknown = build(request, recorded)
+    twice = repeated_placements(request)
+    stickers, copies = set_aside(request, twice)
+    assembly, unknown = build(request, recorded, {p.id for p in stickers} | set(copies))
     warnings: list[Diagnostic] = [mirrored] if mirrored else []
     recognised = [p.id for p in request.parts if p.id in assembly.parts and lookup(p.part) is None] if recorded else []
     if recognised:
@@ -205,7 +231,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                                    f"not in the catalogue and were left out of the analysis (not guessed): "
                                    f"{len(tally)} number(s), {named}"
                                    f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}"
-                                   f"; dof, rigid and pieces are of the other {len(request.parts) - len(unknown)}",
+                                   f"; dof, rigid and pieces are of the other "
+                                   f"{len(request.parts) - len(unknown) - len(stickers) - len(copies)}",
                                    details={"parts": sorted(tally)[:100]}))
     source = request.source or {}
     skipped = [s for s in source.get("skipped") or [] if isinstance(s, dict)]
@@ -213,13 +240,27 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         count = source.get("skipped_count")
         warnings.append(skipped_lines(skipped, "line", count if isinstance(count, int) else None))
     warnings.extend(source_warnings(source))
-    twice = repeated_placements(request)
     if twice:
         warnings.append(Diagnostic(code="duplicate_parts", message=f"{len(twice)} part(s) repeat another part at "
                                    "the same pose (part number, position and rotation, or a turn that takes the "
                                    "part onto itself): "
-                                   + ", ".join(f"{b} repeats {a}" for a, b in twice[:20]),
-                                   details={"pairs": [list(p) for p in twice[:MAX_LISTED]]}))
+                                   + ", ".join(f"{b} repeats {a}" for a, b in twice[:20])
+                                   + (f"; {len(copies)} further cop(ies) of a part at a pose where it and one "
+                                      "repeat stand already are left out of the analysis (each would add only the "
+                                      "same joints and collisions again)" if copies else ""),
+                                   details={"pairs": [list(p) for p in twice[:MAX_LISTED]],
+                                            "left_out": len(copies), "left_out_ids": copies[:MAX_LISTED]}))
+    if stickers:
+        tally = Counter(normalise_number(p.part) for p in stickers)
+        named = ", ".join(f"{number} ({count})" for number, count in sorted(tally.items(), key=lambda t: (-t[1], t[0]))
+                          [:LISTED_IN_MESSAGE])
+        warnings.append(Diagnostic(
+            code="stickers", message=f"{len(stickers)} sticker(s) ({len(tally)} number(s): {named}"
+            f"{' and more' if len(tally) > LISTED_IN_MESSAGE else ''}) are left out of the analysis: a sticker is "
+            "drawn flat on another part's face and carries no joint and no load (LDraw category Sticker); they are "
+            "not counted as parts the catalogue lacks",
+            details={"count": len(stickers), "parts": dict(sorted(tally.items())[:100]),
+                     "ids": [p.id for p in stickers][:MAX_LISTED]}))
     progress(0.2, "exact mobility")
     analysis = assembly.analyse(rank_tolerance=request.options.rank_tolerance)
     mob = analysis.mobility

@@ -48,6 +48,7 @@ from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
 from plantsolve.solvers.rigidity.embedded import Resolver, official
+from plantsolve.solvers.rigidity.stickers import STICKER, category
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
 from plantsolve.solvers.upload_form import validated_upload
 
@@ -332,6 +333,7 @@ def parse_ldraw(text: str) -> dict:
     from_primitives: dict[str, dict] = {}  # part number -> catalogue record, of embedded parts not in the catalogue
     mirrored: list[tuple[str, int, str]] = []  # (id, line, number) of parts whose placement mirrors them
     drawn: dict[int, str] = {}  # line -> file name, of subparts and primitives placed in a model
+    stickers: set[str] = set()  # numbers of the parts the file defines whose header says they are stickers
 
     def expand(name: str, rot: np.ndarray, pos: np.ndarray, prefix: str, stack: tuple[str, ...]) -> None:
         for number, raw in files.get(name, []):
@@ -439,6 +441,8 @@ def parse_ldraw(text: str) -> dict:
             if role == "part":
                 embedded.add(sub)
                 number = normalise_number(file_name)
+                if lookup(file_name) is None and category(raw for _, raw in files[sub]) == STICKER:
+                    stickers.add(number)
                 if number not in from_primitives and lookup(file_name) is None:
                     record = resolver.record(sub)
                     if record is not None:
@@ -509,6 +513,7 @@ def parse_ldraw(text: str) -> dict:
                                        "submodels": sum(r == "model" for n, r in roles.items() if n != main),
                                        "embedded_parts": sorted(embedded), **counts,
                                        "parts_from_primitives": from_primitives,
+                                       "stickers_defined": sorted(stickers),
                                        "submodel_placements": placements,
                                        "skipped": skipped[:MAX_SKIPPED_LISTED], "skipped_count": len(skipped),
                                        "warnings": warnings}}
