@@ -30,8 +30,9 @@ def _cpu_seconds() -> tuple[float, float]:
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     path = os.environ.get(ENV)
-    if not path:
+    if not path or getattr(item, "_cpu_logged", False):  # hooked twice (the conftest's and a -p of it): one line
         return (yield)
+    item._cpu_logged = True
     wall, (own, children) = time.perf_counter(), _cpu_seconds()
     try:
         return (yield)
