@@ -17,6 +17,7 @@ import pytest
 
 from plantsolve.app.settings import AppSettings
 from tests.support.xdist_groups import pytest_collection_modifyitems  # noqa: F401  (a hook: pytest finds it here)
+from tests.support.cpu_log import pytest_runtest_protocol  # noqa: F401  (a hook: PLANTSOLVE_TEST_CPU_LOG=<file>)
 
 REPO = Path(__file__).resolve().parents[1]
 PG_ADMIN_URL = os.environ.get("TEST_PG_ADMIN_URL", "postgresql://postgres@127.0.0.1:5432/postgres")
@@ -67,10 +68,11 @@ def client(settings):
         yield test_client
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def chromium_driver():
-    """One headless Chromium for a module's browser tests (20 s page loads), each on a fresh tab of it
-    (tests.support.browser.page_on); skipped with the reason where there is none, failed with CI=true."""
+    """One headless Chromium for a test process's browser tests (20 s page loads), each on a fresh tab of it
+    (tests.support.browser.page_on): a browser's start-up is CPU seconds, a fresh tab is what isolates a test.
+    Skipped with the reason where there is none, failed with CI=true."""
     from tests.support import browser
 
     browser.require("browser tests")

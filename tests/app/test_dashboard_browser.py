@@ -338,7 +338,7 @@ def test_a_failed_inspection_that_finishes_on_an_open_list_shows_its_verdict(ins
 
 
 def test_each_test_has_a_tab_as_fresh_as_a_new_browsers(site, tmp_path):
-    """The module's tests share one Chromium: what a test left in it (a script injected into each new document,
+    """The browser tests of a test process share one Chromium: what a test left in it (a script injected into each new document,
     a cookie for the host, whatever the port) does not reach the next test's page."""
     app, base, driver = site
     driver.get(f"{base}/healthz")

@@ -42,8 +42,8 @@ def require(what: str) -> None:
 
 @contextmanager
 def page_on(app, driver) -> Iterator[tuple[str, object]]:
-    """``app`` served on loopback and ``driver`` (a module's shared Chromium) on a page as fresh as a new browser's:
-    (base URL, driver). A browser starts in a second of CPU; a tab of its own per test is what isolates it."""
+    """``app`` served on loopback and ``driver`` (the test process's shared Chromium) on a page as fresh as a new
+    browser's: (base URL, driver). A browser starts in a second of CPU; a tab of its own per test is what isolates it."""
     with serve(app) as base:
         yield base, fresh_tab(driver)
 
