@@ -920,6 +920,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     counts = [np.bincount(seg[b], minlength=len(kind)) for b in blocks]
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
     on_arc = [_arc_samples(a) for a in arcs] if arcs is not None else None
+    # a block of one segment's samples (nearly every block of a large scan) takes that segment's geometry as one
+    # column, broadcast: elementwise operations give the numbers of its repeated copy, without the copy (7 rows
+    # of the block's length written and read again per pass)
+    alone = [runs_b[0][0] if len(runs_b) == 1 else None for runs_b in runs]
 
     keep_terms = len(blocks) == 1
     # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
@@ -944,6 +948,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):
+        k = alone[i]
+        if k is not None:
+            return _sample_distance(pts_t[:, b], g_t[:, k:k + 1], is_arc[k], bool(is_arc[k]))
         if arcs is None:
             return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), np.repeat(is_arc, counts[i]))
         return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arcs[i], on_arc[i])
