@@ -35,6 +35,7 @@ from plantsolve.solvers.tube.model import (
     TubeModel,
     build_spine,
     distance_frames,
+    first_within,
     segment_distances_t,
     spine_distance,
 )
@@ -429,13 +430,13 @@ class EndAssignment:
             m = segment_distances_t(pts[a:a + step], sub)
             if full:
                 lo = m.min(axis=0)
-                i = np.argmax(m <= lo + tol, axis=0)
+                i = first_within(m, lo + tol)
                 seg[a:a + step] = i
                 d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
                 m = m[1:S - 1]
             lo = m.min(axis=0)
             self.lo[a:a + step] = lo
-            self.idx[a:a + step] = 1 + np.argmax(m <= lo + tol, axis=0)
+            self.idx[a:a + step] = 1 + first_within(m, lo + tol)
         if full:
             self.res, self.seg = d - model.pipe_radius, seg
 
