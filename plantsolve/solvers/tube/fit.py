@@ -858,8 +858,8 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     e = perp / np.maximum(rho, 1e-300)
     if arc is False:  # lines only: u = 1, v = 0 (the same numbers but for the sign of a zero)
         np.negative(e, out=out[:3])
-        np.multiply(s, e, out=out[3:6])
-        np.negative(out[3:6], out=out[3:6])
+        # (-s) e is -(s e) to the bit (rounding is symmetric about zero): one pass over the strided rows, not two
+        np.multiply(np.negative(s), e, out=out[3:6])
         out[6] = 0.0
         return
     inv = 1.0 / np.maximum(dd, 1e-300)

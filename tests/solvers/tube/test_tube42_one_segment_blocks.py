@@ -62,3 +62,20 @@ def test_a_streamed_rounds_blocks_of_one_segment_repeat_no_geometry(monkeypatch)
     # the cost is the soft-L1 cost of the residuals over all samples to the bit
     r = fun(x0)
     assert first == fit._soft_l1(r, 0.04)[0]
+
+
+def test_a_lines_gradient_is_the_negated_products_to_the_bit_zeros_signs_too():
+    rng = np.random.default_rng(5)
+    n = 3000
+    q = rng.normal(scale=10.0, size=(3, n))
+    g = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])  # the z axis
+    q[:, :50] = 0.0  # samples on the axis: distance 0, gradient terms of zero, whose signs show
+    q[2, 50:100] = 0.0  # at height 0: s = ±0
+    d, terms = fit._sample_distance(q, g[:, None], False, False)
+    out = np.empty((7, n))
+    fit._sample_gradient(terms, out)
+    _, s, perp, rho, _, _, _, _ = terms
+    e = perp / np.maximum(rho, 1e-300)
+    expected = np.vstack([-e, -(s * e), np.zeros((1, n))])
+    assert np.array_equal(out, expected) and np.array_equal(np.signbit(out), np.signbit(expected))
+    np.testing.assert_allclose(d, np.hypot(q[0], q[1]), rtol=1e-15)
