@@ -35,6 +35,7 @@ from plantsolve.solvers.tube.model import (
     TubeModel,
     build_spine,
     distance_frames,
+    first_within,
     segment_distances_t,
     spine_distance,
 )
@@ -429,13 +430,13 @@ class EndAssignment:
             m = segment_distances_t(pts[a:a + step], sub)
             if full:
                 lo = m.min(axis=0)
-                i = np.argmax(m <= lo + tol, axis=0)
+                i = first_within(m, lo + tol)
                 seg[a:a + step] = i
                 d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
                 m = m[1:S - 1]
             lo = m.min(axis=0)
             self.lo[a:a + step] = lo
-            self.idx[a:a + step] = 1 + np.argmax(m <= lo + tol, axis=0)
+            self.idx[a:a + step] = 1 + first_within(m, lo + tol)
         if full:
             self.res, self.seg = d - model.pipe_radius, seg
 
@@ -857,8 +858,8 @@ def _sample_gradient(terms: tuple, out: np.ndarray) -> None:
     e = perp / np.maximum(rho, 1e-300)
     if arc is False:  # lines only: u = 1, v = 0 (the same numbers but for the sign of a zero)
         np.negative(e, out=out[:3])
-        np.multiply(s, e, out=out[3:6])
-        np.negative(out[3:6], out=out[3:6])
+        # (-s) e is -(s e) to the bit (rounding is symmetric about zero): one pass over the strided rows, not two
+        np.multiply(np.negative(s), e, out=out[3:6])
         out[6] = 0.0
         return
     inv = 1.0 / np.maximum(dd, 1e-300)
@@ -920,6 +921,10 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
     counts = [np.bincount(seg[b], minlength=len(kind)) for b in blocks]
     arcs = [np.repeat(is_arc, c) for c in counts] if len(blocks) == 1 else None  # a large scan's: per pass
     on_arc = [_arc_samples(a) for a in arcs] if arcs is not None else None
+    # a block of one segment's samples (nearly every block of a large scan) takes that segment's geometry as one
+    # column, broadcast: elementwise operations give the numbers of its repeated copy, without the copy (7 rows
+    # of the block's length written and read again per pass)
+    alone = [runs_b[0][0] if len(runs_b) == 1 else None for runs_b in runs]
 
     keep_terms = len(blocks) == 1
     # a large scan's distances cannot all be kept for the normal equations (some 14 numbers a sample), and
@@ -944,6 +949,9 @@ def _problem(model: TubeModel, pts: np.ndarray, seg: np.ndarray, lay: Layout, ke
         return latest["g"], latest.get("dG")
 
     def distance(g_t: np.ndarray, i: int, b: slice):
+        k = alone[i]
+        if k is not None:
+            return _sample_distance(pts_t[:, b], g_t[:, k:k + 1], is_arc[k], bool(is_arc[k]))
         if arcs is None:
             return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), np.repeat(is_arc, counts[i]))
         return _sample_distance(pts_t[:, b], np.repeat(g_t, counts[i], axis=1), arcs[i], on_arc[i])

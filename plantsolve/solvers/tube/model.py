@@ -359,6 +359,29 @@ def segment_distances_t(pts: np.ndarray, sp: Spine, frames=None) -> np.ndarray:
     return out
 
 
+def first_within(m: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """``np.argmax(m <= cut, axis=0)``: per column of ``m`` (S, n) the first row at most ``cut`` (0 when none is).
+
+    As a bit per row (rows up to 63): each column's hits form a number of 16, 32 or 64 bits, whose lowest set bit is
+    the first row. numpy's argmax down the columns of a C-ordered array walks them with a stride of a whole row, seven
+    times the time of the rows' comparisons here; the result is the same integers."""
+    S, n = m.shape
+    if S > 63:
+        return np.argmax(m <= cut, axis=0)
+    word = np.uint16 if S <= 16 else np.uint32 if S <= 32 else np.uint64
+    bits = np.zeros(n, word)
+    hit = np.empty(n, bool)
+    one = word(1)
+    for k in range(S - 1, -1, -1):
+        bits <<= one
+        bits |= np.less_equal(m[k], cut, out=hit)
+    # the lowest set bit alone (x & -x), a power of two that a double holds exactly: its exponent is the row
+    np.bitwise_and(bits, np.negative(bits), out=bits)
+    row = np.frexp(bits.astype(np.float64))[1]
+    row -= 1
+    return np.maximum(row, 0, out=row)
+
+
 def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
                    frames=None) -> tuple[np.ndarray, np.ndarray]:
     """Distance of each point to the centreline and the index of the closest segment.
@@ -377,7 +400,7 @@ def spine_distance(pts: np.ndarray, sp: Spine, chunk: int = 200_000,
         # first segment within round-off of the minimum: a point at a junction (or at a
         # zero-length straight) goes to the earlier segment, independent of round-off
         lo = m.min(axis=0)
-        i = np.argmax(m <= lo + tol, axis=0)
+        i = first_within(m, lo + tol)
         idx[a:a + step] = i
         d[a:a + step] = np.take_along_axis(m, i[None], 0)[0]
     return d, idx
