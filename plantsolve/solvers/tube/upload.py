@@ -566,13 +566,9 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         units = None if units is None else _unit_option(units, ("options", "units"))
     file_units = opts.get("file_units")
     if file_units is not None:
-        # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the source's
-        # conversion keeps it, the options only the request's units
-        file_units = _unit_option(file_units, ("options", "file_units"), SIZES)
-        if file_units in METRES:
-            opts["file_units"] = file_units
-        else:
-            del opts["file_units"]
+        # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the stored
+        # request keeps what the user said, canonically spelled
+        file_units = opts["file_units"] = _unit_option(file_units, ("options", "file_units"), SIZES)
     if ext == ".json":
         if file_units is not None:
             raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "

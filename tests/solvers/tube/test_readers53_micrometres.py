@@ -30,6 +30,7 @@ def test_a_text_scan_stating_micrometres_is_read_in_them(head, sep):
 def test_options_file_units_in_micrometres_reads_a_scan_stating_none(word):
     req = parse_upload(StoredInput.from_bytes("scan.xyz", _text("", PTS * 1000)), {"file_units": word})
     assert (req.source.units.basis, req.source.units.file_unit) == ("options.file_units", "um")
+    assert req.options.file_units == "um"  # the stored request says what the user said, as for any other unit
     assert np.allclose(TubeScan(req).points, PTS, atol=1e-3)
 
 
