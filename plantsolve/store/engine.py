@@ -271,18 +271,24 @@ class Database:
 
         config = Config()
         config.set_main_option("script_location", str(MIGRATIONS_DIR))
-        with self.engine.begin() as connection:
-            dbapi_connection = connection.connection.dbapi_connection
-            bound = getattr(dbapi_connection, "round_trip_seconds", None)
-            if not self.is_sqlite:  # a migration may rewrite a large table: no request's statement bound
-                connection.exec_driver_sql("SET LOCAL statement_timeout = 0")
-                dbapi_connection.round_trip_seconds = None
+        with self.engine.connect() as connection:
             try:
-                config.attributes["connection"] = connection
-                command.upgrade(config, "head")
+                with connection.begin():
+                    dbapi_connection = connection.connection.dbapi_connection
+                    bound = getattr(dbapi_connection, "round_trip_seconds", None)
+                    if not self.is_sqlite:  # a migration may rewrite a large table: no request's statement bound
+                        connection.exec_driver_sql("SET LOCAL statement_timeout = 0")
+                        dbapi_connection.round_trip_seconds = None
+                    try:
+                        config.attributes["connection"] = connection
+                        command.upgrade(config, "head")
+                    finally:
+                        if bound is not None:
+                            dbapi_connection.round_trip_seconds = bound
             finally:
-                if bound is not None:
-                    dbapi_connection.round_trip_seconds = bound
+                if self.is_sqlite:  # the migration turned them off for its table copies (migrations/env.py)
+                    connection.exec_driver_sql("PRAGMA foreign_keys=ON")
+                    connection.commit()
 
     def ping(self) -> None:
         """Raises unless the database can take a write now (within the bounds above): on SQLite the write lock is

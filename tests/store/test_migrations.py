@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+import uuid
+from datetime import datetime, timezone
+
 import pytest
+from alembic import command
 from alembic.autogenerate import compare_metadata
+from alembic.config import Config
 from alembic.migration import MigrationContext
-from sqlalchemy import inspect
+from sqlalchemy import inspect, text
 
 from plantsolve.store import Database
+from plantsolve.store.engine import MIGRATIONS_DIR
 from plantsolve.store.models import Base
 
 
@@ -40,5 +46,52 @@ def test_upgrade_empty_postgresql(pg_url):
             storage = connection.exec_driver_sql(
                 "SELECT attstorage FROM pg_attribute WHERE attrelid = 'blobs'::regclass AND attname = 'data'").scalar()
         assert storage == "e"
+    finally:
+        db.dispose()
+
+
+def _migrate(db: Database, revision: str, down: bool) -> None:
+    """Alembic's own command on a connection of ``db``, as an operator's downgrade runs it."""
+    config = Config()
+    config.set_main_option("script_location", str(MIGRATIONS_DIR))
+    with db.engine.connect() as connection:
+        with connection.begin():
+            config.attributes["connection"] = connection
+            (command.downgrade if down else command.upgrade)(config, revision)
+        connection.exec_driver_sql("PRAGMA foreign_keys=ON")
+        connection.commit()
+
+
+def _rows(db: Database) -> tuple[int, int]:
+    with db.engine.connect() as connection:
+        return (connection.exec_driver_sql("SELECT count(*) FROM jobs").scalar(),
+                connection.exec_driver_sql("SELECT count(*) FROM artifacts").scalar())
+
+
+def test_a_sqlite_downgrade_and_upgrade_keep_every_artifact_row(tmp_path):
+    """Batch mode rebuilds the jobs table on SQLite (a dropped column, an altered type) and drops the old one; with
+    foreign keys on, that drop deleted every artifact row (ON DELETE CASCADE) while the jobs survived."""
+    db = Database(f"sqlite:///{tmp_path / 'kept.db'}")
+    try:
+        db.migrate()
+        now = datetime.now(timezone.utc)
+        with db.engine.begin() as connection:
+            connection.execute(text(
+                "INSERT INTO jobs (id, kind, status, attempt, max_attempts, progress, progress_message, input_kind, "
+                "owner, body_hash, solver_version, created_at, callback_attempts, started_at) VALUES "
+                "(:id, 'tube', 'succeeded', 1, 3, 1.0, '', 'json', '', 'h', 'v', :now, 0, :now)"),
+                {"id": uuid.uuid4().hex, "now": now})
+            job_id = connection.exec_driver_sql("SELECT id FROM jobs").scalar()
+            connection.execute(text(
+                "INSERT INTO artifacts (job_id, attempt, name, media_type, size, sha256, path, created_at) VALUES "
+                "(:id, 1, 'result.json', 'application/json', 1, 's', 'p', :now)"), {"id": job_id, "now": now})
+        assert _rows(db) == (1, 1)
+        _migrate(db, "0001", down=True)  # through every revision's downgrade that rebuilds jobs (0007, 0004, 0002)
+        assert _rows(db) == (1, 1)
+        db.migrate()  # and up again: 0002 rebuilds jobs on its way
+        assert _rows(db) == (1, 1)
+        with db.engine.connect() as connection:
+            assert connection.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1  # on again for the service
+            assert connection.exec_driver_sql("PRAGMA foreign_key_check").all() == []
     finally:
         db.dispose()

@@ -10,6 +10,12 @@ target_metadata = Base.metadata
 
 
 def _run(connection) -> None:
+    if connection.dialect.name == "sqlite":
+        # batch mode copies a table and drops the old one, and with foreign keys on that drop deletes every row that
+        # references it (a downgrade's rebuilt jobs table took every artifact row with it, ON DELETE CASCADE). Off
+        # before the migration's first write (a PRAGMA in a transaction does nothing); whoever handed the connection
+        # in turns it on again after the commit (Database.migrate), the command line's engine is dropped
+        connection.exec_driver_sql("PRAGMA foreign_keys=OFF")
     context.configure(
         connection=connection,
         target_metadata=target_metadata,
