@@ -133,16 +133,22 @@ def discard_superseded(files: BlobStore, job_id: uuid.UUID, attempt: int, stored
     stores. Such an output was superseded, not adopted: solved by another solver version, unreadable, or kept by an
     attempt that lost its lease and went on solving after the next attempt had looked for it. No attempt runs after
     an end, so none would adopt it; left, it would lie in the blob store for good. An attempt that kept nothing costs
-    one ``exists`` (none on a first attempt)."""
+    one ``exists`` (none on a first attempt). Best effort, as :func:`discard`: the job's end is written already, and
+    a blob store that fails here leaves an orphan, never a failed job."""
     stored = list(stored)
-    for earlier in range(1, attempt + 1):
-        if earlier == but or not kept_by(files, job_id, earlier):
-            continue
-        try:
-            payloads = json.loads(files.get(result_key(job_id, earlier))).get("payloads", [])
-        except (BlobMissing, BlobStoreUnavailable, ValueError, AttributeError):
-            payloads = []  # unreadable: its result goes, the payloads it named cannot be found
-        discard(files, job_id, earlier, payloads, stored)
+    try:
+        for earlier in range(1, attempt + 1):
+            if earlier == but or not kept_by(files, job_id, earlier):
+                continue
+            try:
+                payloads = json.loads(files.get(result_key(job_id, earlier))).get("payloads", [])
+            except BlobStoreUnavailable:
+                continue  # its index is what finds its payloads: kept for a later end to remove
+            except (BlobMissing, ValueError, AttributeError):
+                payloads = []  # unreadable: its result goes, the payloads it named cannot be found
+            discard(files, job_id, earlier, payloads, stored)
+    except Exception:
+        log.warning("the outputs earlier attempts of job %s kept could not be removed", job_id, exc_info=True)
 
 
 def described(computed: Computed) -> dict[str, Any] | None:

@@ -55,6 +55,8 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     if lost.attempt >= cap:
         written = ctx.repo.finish_failure(lost.id, lost.attempt, report=report, run_seconds=None, attempts=history,
                                           lapsed_before=lapsed_before)
+        if written:
+            computed.discard_superseded(ctx.files, lost.id, lost.attempt, [])
         return "failed" if written else "stale"
     written = ctx.repo.requeue(lost.id, lost.attempt, report=report, attempts=history,
                                grant_attempt=cap > lost.max_attempts, lapsed_before=lapsed_before)

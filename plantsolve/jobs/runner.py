@@ -479,8 +479,11 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker:
         time_limit=limit, killed=True)
     history = attempts.ended(job.attempts, job.attempt, job.worker, "time_limit", error="killed at the hard time limit",
                              started_at=as_utc(job.attempt_started_at))
-    return ctx.repo.finish_failure(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),
-                                   run_seconds=None, attempts=history)
+    written = ctx.repo.finish_failure(job_id, job.attempt, report=with_reader_warnings(report, held(job.report)),
+                                      run_seconds=None, attempts=history)
+    if written:
+        computed.discard_superseded(ctx.files, job_id, job.attempt, [])
+    return written
 
 
 def handed_back(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
