@@ -95,9 +95,9 @@ def _place(error: dict[str, Any], request: Request) -> list[str | int]:
     the submit routes name it: ``points/0/beta``, without the tags pydantic puts in for the member of a union);
     a query, path or header parameter as FastAPI names it (``query/limit``)."""
     loc = list(error["loc"])
-    if loc[:1] == ["body"] and error["type"] != "json_invalid":
+    if loc[:1] == ["body"] and loc[1:] and error["type"] != "json_invalid":
         return user_path(loc[1:], _body_model(request))
-    return loc
+    return loc  # the body as a whole (missing, not an object) is named 'body', as FastAPI names it
 
 
 def _body_model(request: Request) -> type[BaseModel] | None:

@@ -137,6 +137,8 @@ def user_path(loc: Sequence[str | int], model: type[BaseModel] | None) -> list[s
     path, nodes = steps[:start], [schema]
     for i in range(start, len(steps)):
         step = steps[i]
+        if not isinstance(step, (str, int)):
+            return path + steps[i:]  # no step of a document: the rest as it is
         frontier = _open(nodes, refs)
         inner = [child for node in frontier for child in _child(node, step)]
         if inner:
@@ -205,7 +207,7 @@ def _child(node: dict, step: str | int) -> list[dict]:
         return [field for field in node.get("fields", ()) if field.get("name") == step]
     elif kind in ("list", "set", "frozenset", "generator") and isinstance(step, int):
         return [node.get("items_schema") or {"type": "any"}]
-    elif kind == "tuple" and isinstance(step, int):
+    elif kind == "tuple" and isinstance(step, int) and step >= 0:
         items = node.get("items_schema") or [{"type": "any"}]
         return [items[min(step, len(items) - 1)]]
     elif kind == "dict":
