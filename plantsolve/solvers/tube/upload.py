@@ -581,7 +581,11 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         body = dict(doc)
         if isinstance(body.get("units"), str):
             body["units"] = _unit_option(body["units"], ("file", "units"))
-        body["options"] = {**(body.get("options") or {}), **opts}
+        own = body.get("options") or {}
+        if not isinstance(own, dict):
+            raise InputRejected([FieldError(("file", "options"), "options must be an object of the scan's options "
+                                            f"(e.g. {{\"pipe_radius\": 6}}), not {type(own).__name__}")])
+        body["options"] = {**own, **opts}
         if units:
             body["units"] = units
     else:
