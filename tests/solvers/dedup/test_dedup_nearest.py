@@ -82,7 +82,10 @@ def test_the_shapes_nearest_is_of_its_centred_points():
 def test_a_copy_a_little_moved_is_answered_without_the_tree():
     points = _arc_segment()
     nearest = NearestPoints(points)
-    d, i = nearest.query(points[::-1] + 1e-9, window=4e-5)
-    d2, i2 = nearest.query(points[::-1] + 1e-9, distance_upper_bound=4e-5)
+    moved = points[::-1] + 1e-9
+    d, i = nearest.query(moved, window=4e-5)
+    d2, i2 = nearest.query(moved, distance_upper_bound=4e-5)
     assert nearest._tree is None
-    assert d.tobytes() == d2.tobytes() == cKDTree(points).query(points[::-1] + 1e-9)[0].tobytes()
+    want_d, want_i = cKDTree(points).query(moved)
+    assert d.tobytes() == d2.tobytes() == want_d.tobytes()
+    assert np.array_equal(i, want_i) and np.array_equal(i2, want_i)
