@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from plantsolve.solvers.dedup.nearest import NearestPoints
 from plantsolve.solvers.geometry import kabsch
 
 MAX_ICP_STEPS = 30
@@ -38,14 +39,19 @@ class Shape:
     eigenvalues: np.ndarray  # ascending, of the centred covariance
     axes: np.ndarray  # columns: principal axes (matching eigenvalues)
     radius: float  # RMS distance from the centre
-    _tree: cKDTree | None = None
+    _nearest: NearestPoints | None = None
     memo: dict = field(default_factory=dict)  # what matching derives from this shape alone, kept for its next match
 
     @property
+    def nearest(self) -> NearestPoints:
+        """The nearest of ``local`` to given points (a k-d tree's answers, mostly without its search)."""
+        if self._nearest is None:
+            self._nearest = NearestPoints(self.local)
+        return self._nearest
+
+    @property
     def tree(self) -> cKDTree:
-        if self._tree is None:
-            self._tree = cKDTree(self.local)
-        return self._tree
+        return self.nearest.tree
 
 
 def make_shape(points: np.ndarray) -> Shape:
@@ -97,7 +103,7 @@ def one_to_one(idx: np.ndarray, n: int) -> bool:
     return len(idx) == n and bool(hit.all())
 
 
-def hausdorff(a: np.ndarray, b: np.ndarray, tree_b: cKDTree | None = None, tree_a: cKDTree | None = None,
+def hausdorff(a: np.ndarray, b: np.ndarray, tree_b: cKDTree | NearestPoints | None = None, tree_a: cKDTree | None = None,
               bound: float = np.inf) -> float:
     """Two-way Hausdorff distance of point sets ``a`` and ``b`` (stops early past ``bound``)."""
     tree_b = tree_b or cKDTree(b)
@@ -182,14 +188,15 @@ def _anchor_guesses(rep: Shape, member: Shape, tol: float, allow_mirror: bool) -
     return guesses
 
 
-def first_steps(rep_local: np.ndarray, member: Shape, rotations: list[np.ndarray]) -> list[tuple]:
+def first_steps(rep_local: np.ndarray, member: Shape, rotations: list[np.ndarray], window: float = 0.0) -> list[tuple]:
     """The nearest member points of ``rep_local`` moved by each rotation, as :func:`_refine`'s first step
     finds them: one stacked ``np.matmul`` (per matrix the same BLAS call as its ``@``: the same bits) and
-    one tree query for all of them (a point's nearest neighbour does not depend on the other points)."""
+    one tree query for all of them (a point's nearest neighbour does not depend on the other points); a point
+    landing within ``window`` of one member point alone is answered without the tree's search."""
     if not rotations:
         return []
     moved = np.matmul(rep_local, np.stack(rotations).transpose(0, 2, 1)) + np.zeros(3)
-    dist, idx = member.tree.query(moved.reshape(-1, 3), k=1)
+    dist, idx = member.nearest.query(moved.reshape(-1, 3), k=1, window=window)
     n = len(rep_local)
     return [(dist[i * n:(i + 1) * n], idx[i * n:(i + 1) * n]) for i in range(len(rotations))]
 
@@ -251,7 +258,7 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
     # and all of the best eight only when none does (a rough guess that ICP still has to pull in). The
     # search stops past 4·tol: a point's distance within it is the one an unbounded search finds (the
     # same nearest point), one past it is only known to be past it, which is all 'close' asks
-    d = member.tree.query(moved, k=1, distance_upper_bound=4 * tol * 1.0001)[0]
+    d = member.nearest.query(moved, k=1, distance_upper_bound=4 * tol * 1.0001)[0]
     worst = d.reshape(len(candidates), -1).max(axis=1)
     close = [r for d, r in sorted(zip(worst.tolist(), candidates), key=lambda s: s[0]) if d <= 4 * tol]
     if not close:  # the best eight by their true distances
@@ -270,7 +277,7 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
             return
         if not one_to_one(idx, len(member.local)):
             # not one-to-one: the way back needs its own search
-            dev = hausdorff(rep_local @ r.T + t, member.local, member.tree, bound=tol)
+            dev = hausdorff(rep_local @ r.T + t, member.local, member.nearest, bound=tol)
             if dev > tol:
                 return
         # one-to-one within tol: every member point is within dev of its preimage, so the two-way
@@ -280,7 +287,7 @@ def match(rep: Shape, member: Shape, tol: float, *, allow_mirror: bool = False, 
         if best is None or key < (round(float(np.trace(best.rotation)), 9) * -1, best.deviation):
             best = cand
 
-    for r0, first in zip(tries, first_steps(rep_local, member, tries)):
+    for r0, first in zip(tries, first_steps(rep_local, member, tries, 4 * tol)):
         consider(r0, first)
     if best is None:
         for r0 in _anchor_guesses(rep, member, tol, allow_mirror):
@@ -300,7 +307,7 @@ def verify(rep: Shape, member: Shape, m: Match, tol: float) -> float:
         return hausdorff(moved, member.local, member.tree)
     # a wrong transform (most the pool tries) already moves some of a few points farther than tol from the
     # member: that alone is a value above tol, and the whole set is queried only for the others
-    few = member.tree.query(_sample(moved), k=1, distance_upper_bound=tol * 1.0001)[0]
+    few = member.nearest.query(_sample(moved), k=1, distance_upper_bound=tol * 1.0001)[0]
     if float(np.max(few)) > tol:
         return float(np.max(few))
     return _verify_all(moved, member, tol)
@@ -312,7 +319,7 @@ def _sample(moved: np.ndarray) -> np.ndarray:
 
 def _verify_all(moved: np.ndarray, member: Shape, tol: float) -> float:
     """:func:`verify` past its sample."""
-    dist, idx = member.tree.query(moved, k=1, distance_upper_bound=tol * 1.0001)
+    dist, idx = member.nearest.query(moved, k=1, distance_upper_bound=tol * 1.0001)
     first = float(np.max(dist))
     if first > tol:
         return first
@@ -350,7 +357,7 @@ def _first_verified_together(rep: Shape, member: Shape, tries: list[Match], tol:
     moved = (np.matmul(rep.local, scaled.transpose(0, 2, 1)) + np.matmul(scaled, rep.centre)[:, None, :]
              + np.stack([m.translation for m in tries])[:, None, :] - member.centre)
     samples = moved[:, ::max(1, n // VERIFY_SAMPLE)]
-    few = member.tree.query(samples.reshape(-1, 3), k=1, distance_upper_bound=tol * 1.0001)[0]
+    few = member.nearest.query(samples.reshape(-1, 3), k=1, distance_upper_bound=tol * 1.0001)[0]
     worst = few.reshape(len(tries), -1).max(axis=1)
     for i in np.flatnonzero(~(worst > tol)).tolist():
         dev = _verify_all(moved[i], member, tol)

@@ -130,15 +130,16 @@ def fingerprint_differences(before: dict, after: dict, limit: int = 20) -> list[
     return out[:limit]
 
 
-def deviation(before: np.ndarray, after: np.ndarray, known: Shape | None = None) -> float:
+def deviation(before: np.ndarray, after: np.ndarray, known: Shape | None = None, window: float = 0.0) -> float:
     """Two-way Hausdorff distance of two point sets, centred on the first for accuracy. When the sets
     are equally large and every point of one has another nearest point in the other, that map is
     one-to-one and the way back is no farther: one tree, one query. ``known``: the matching's shape of
     ``before`` (its centre, centred points and k-d tree, built while matching): the written points are
-    then looked up in that tree, and only a map that is not one-to-one needs a tree of theirs."""
+    then looked up in that tree, and only a map that is not one-to-one needs a tree of theirs; ``window``: how
+    close a written point must land to one of ``known``'s alone to be answered without the tree's search."""
     if known is not None:
         a, b = known.local, after - known.centre
-        dist, idx = known.tree.query(b)
+        dist, idx = known.nearest.query(b, window=window)
         first = float(np.max(dist))
         if len(a) == len(b) and one_to_one(idx, len(a)):
             return first

@@ -84,7 +84,8 @@ def _rerooted(cls: CongruenceClass, k: int, tol: float) -> CongruenceClass | Non
         moved = Match(rotations[j], float(scales[j]), translations[j], 0.0, bool(improper[j]))
         dev = np.inf
         if len(shape.local) == len(cand.shape.local) > 0:
-            dist, idx = cand.shape.tree.query(moved_all[j] - cand.shape.centre, k=1, distance_upper_bound=tol * 1.0001)
+            dist, idx = cand.shape.nearest.query(moved_all[j] - cand.shape.centre, k=1,
+                                                  distance_upper_bound=tol * 1.0001)
             if float(dist.max()) <= tol and one_to_one(idx, len(cand.shape.local)):
                 dev = float(dist.max())
         if not dev <= tol:

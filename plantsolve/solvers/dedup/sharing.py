@@ -64,13 +64,15 @@ class Placements:
     def axes(self, axes) -> np.ndarray:
         """``get_axis2placement(axes)``, worked out once per set of values (each of the tunnel's 4,240 products has
         a placement of its own, holding one of a few sets): the values are the key as ``repr`` writes them, which
-        tells -0.0 from 0.0, so the matrix is the one the library computes from them, bit for bit."""
-        location = axes.Location if axes.is_a() == "IfcAxis2Placement3D" else None
-        coordinates = getattr(location, "Coordinates", None) if location is not None else None
+        tells -0.0 from 0.0, so the matrix is the one the library computes from them, bit for bit. The values are read
+        by attribute position (Location, Axis, RefDirection; Coordinates; DirectionRatios): half the cost of reading
+        them by name, for each of the products' placements."""
+        location = axes[0] if axes.is_a() == "IfcAxis2Placement3D" else None
+        coordinates = location[0] if location is not None and location.is_a() == "IfcCartesianPoint" else None
         if not coordinates:  # another kind of placement, or a location the library asks the kernel for
             return ifcopenshell.util.placement.get_axis2placement(axes)
-        z, x = axes.Axis, axes.RefDirection
-        key = repr((coordinates, z.DirectionRatios if z else None, x.DirectionRatios if x else None))
+        z, x = axes[1], axes[2]
+        key = repr((coordinates, z[0] if z else None, x[0] if x else None))
         matrix = self._axes.get(key)
         if matrix is None:
             matrix = self._axes[key] = ifcopenshell.util.placement.get_axis2placement(axes)

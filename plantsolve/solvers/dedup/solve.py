@@ -279,7 +279,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             if prod is None or prod.GlobalId != global_ids[g] or prod.id() not in after_points:
                 missing.append(global_ids[g])
                 continue
-            deviations.append(proof.deviation(pts, after_points[prod.id()], shapes.get(g)))
+            deviations.append(proof.deviation(pts, after_points[prod.id()], shapes.get(g), tol))
         semantic_after = proof.semantic_fingerprint(check)
         semantic_equal = semantic_after == semantic_before and not missing
         differences = proof.fingerprint_differences(semantic_before, semantic_after)
