@@ -234,7 +234,7 @@ def test_the_maps_boundary_field_is_the_whole_bands_wherever_it_is_drawn(rig, mo
 
 def _offset_rig():
     """The rig with its pressures in Pa around 2e6: the y axis writes '1e6' above itself."""
-    lines = [";".join(["Speed [rpm]", "Flow [kg/s]", "Pressure [Pa]", "Efficiency [%]"])]
+    lines = ["Speed [rpm];Flow [kg/s];Pressure [Pa];Efficiency [%]"]
     for p in LINES:
         for f, pr, e in zip(p["flow"], p["pressure"], p["efficiency"]):
             lines.append(";".join(str(v) for v in (p["setting"][0] * 10000, f, 2e6 * pr, 100 * e)))
@@ -249,6 +249,7 @@ def test_the_panels_titles_stand_where_matplotlibs_placement_puts_them(rig, case
     as the automatic one, and a panel whose y axis writes an offset ('1e6') keeps the automatic placement, which
     lifts its title over it."""
     from matplotlib.axis import YAxis
+
     from plantsolve.solvers.perfmap import artifacts
     from plantsolve.solvers.plots import figure_bytes
 
