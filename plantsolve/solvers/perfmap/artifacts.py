@@ -112,13 +112,13 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
             if p is not None:
                 ax.plot(p.flow, p.pressure, "C0o", ms=3.5, label=f"{pname} (measured)")
                 ax2.plot(p.flow, p.efficiency, "^", color=EFFICIENCY_COLOUR, ms=3.5, label="efficiency (measured)")
-            ax.set_title(f"{_label(result, _values(s))}  (p {100 * s.pressure_max_rel_error:.1f}%,"
-                         f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8)
             ax.set_xlabel(xlabel, fontsize=8)
             ax.set_ylabel(ylabel, fontsize=8, color="C0")
             ax2.set_ylabel(elabel, fontsize=8, color=EFFICIENCY_COLOUR)
             ax.tick_params(labelsize=8)
             ax2.tick_params(labelsize=8, colors=EFFICIENCY_COLOUR)
+            ax.set_title(f"{_label(result, _values(s))}  (p {100 * s.pressure_max_rel_error:.1f}%,"
+                         f" η {100 * s.efficiency_max_rel_error:.1f}%)", fontsize=8, **_title_place(ax, ax2))
         for ax in axes[n:]:
             ax.set_visible(False)
         fig.legend(handles=_legend_handles(pname), loc="lower center", ncol=4, fontsize=8, frameon=False)
@@ -142,6 +142,19 @@ def _characteristics(request: PerfmapRequest, result: PerfmapResult) -> Figure:
     fig.legend(handles=[_line("fitted curve", "k"), _line("measured", "k", "", "o", ms=3)], loc="outside lower center",
                ncol=2, fontsize=8)
     return fig
+
+
+def _title_place(*twins) -> dict:
+    """``set_title``'s place for a panel whose axes (``twins``) write their ticks below and no offset or power of
+    ten above a y axis: on the axes' top edge, where matplotlib's automatic placement leaves it then. Asking it
+    measures every tick label of both y axes at each save (a fifth of the characteristics' CPU with 18 panels);
+    a panel with an offset text keeps the automatic placement, which lifts the title over it."""
+    for ax in twins:
+        formatter = ax.yaxis.get_major_formatter()
+        formatter.set_locs(ax.yaxis.get_majorticklocs())
+        if formatter.get_offset() or ax.xaxis.get_ticks_position() != "bottom" or ax.xaxis.get_label_position() == "top":
+            return {}
+    return {"y": 1.0}
 
 
 def _line(label: str, color: str, linestyle: str = "-", marker: str = "", **kw) -> Line2D:
@@ -244,15 +257,16 @@ def resample(gx: np.ndarray, gy: np.ndarray, z: np.ndarray, fx: np.ndarray, fy: 
 
 def reachable_boundary(result: PerfmapResult):
     """(fx, fy, d): the distance (range-normalised) from a fine grid of nodes to the reachable region
-    (0 inside), whose contour at a small level is the region's boundary drawn smoothly — the map's own
-    grid only says reachable or not per node, and its 0/1 contour is a staircase. The distance is computed
-    in the band of fine nodes within two map cells of the map's boundary; elsewhere the map's node decides."""
+    (0 inside), whose contour at ``boundary_level(fx, fy)`` is the region's boundary drawn smoothly — the map's
+    own grid only says reachable or not per node, and its 0/1 contour is a staircase. The distance is computed
+    in the band of fine nodes within two map cells of the map's boundary; elsewhere the map's node decides
+    (0 reachable, 1 not). Within the band it is exact wherever it is below ``boundary_cap(fx, fy)``, and 1
+    beyond: what the drawing reads (see :func:`distance_near`)."""
     curves = curveset_from_fits(result.settings)
     lo_x, hi_x = result.flow_range
     lo_y, hi_y = result.pressure_range
     fx = np.linspace(lo_x, hi_x, _BOUNDARY_NODES)
     fy = np.linspace(lo_y, hi_y, _BOUNDARY_NODES)
-    FX, FY = np.meshgrid(fx, fy)
     m = result.map
     gx, gy = np.array(m.flow), np.array(m.pressure)
     ok = np.isfinite(np.array(m.efficiency, dtype=float))
@@ -266,12 +280,67 @@ def reachable_boundary(result: PerfmapResult):
     t = np.linspace(0.0, 1.0, m.t_samples)
     tri = np.array(result.triangles, dtype=int).reshape(-1, 3)
     ranges = (lo_x, hi_x, lo_y, hi_y)
-    fx_near, fy_near = FX[near], FY[near]
-    # a few hundred nodes at a time: the distance's exact pass holds arrays per (node, nearby block), which for
-    # the whole band at once were a quarter of a GiB
-    d[near] = np.concatenate([distance_to_region(curves, tri, t, fx_near[k:k + _BAND_CHUNK], fy_near[k:k + _BAND_CHUNK],
-                                                 ranges) for k in range(0, len(fx_near), _BAND_CHUNK)] or [[]])
+
+    def distance(x, y):
+        # a few hundred points at a time: the distance's exact pass holds arrays per (point, nearby block), which
+        # for the whole band at once were a quarter of a GiB
+        return np.concatenate([distance_to_region(curves, tri, t, x[k:k + _BAND_CHUNK], y[k:k + _BAND_CHUNK], ranges)
+                               for k in range(0, len(x), _BAND_CHUNK)] or [[]])
+
+    exact = distance_near(distance, fx, fy, near, boundary_cap(fx, fy))
+    d[near] = exact[near]
     return fx, fy, d
+
+
+def _cell(fx: np.ndarray, fy: np.ndarray) -> float:
+    """The larger side of a cell of the (fx x fy) grid in range-normalised units."""
+    return max((fx[1] - fx[0]) / (fx[-1] - fx[0]), (fy[1] - fy[0]) / (fy[-1] - fy[0]))
+
+
+def boundary_level(fx: np.ndarray, fy: np.ndarray) -> float:
+    """The distance to the region at which the boundary is drawn: a quarter of a fine cell."""
+    return 0.25 * _cell(fx, fy)
+
+
+def boundary_cap(fx: np.ndarray, fy: np.ndarray) -> float:
+    """Beyond this distance a node's value changes nothing drawn: the distance is 1-Lipschitz, so a node further
+    than the level plus a cell's diagonal has every neighbour beyond the level (no cell of it crosses the boundary
+    contour, and the filled map masks it either way). A hair over, for rounding."""
+    return (boundary_level(fx, fy) + math.sqrt(2.0) * _cell(fx, fy)) * (1 + 1e-6)
+
+
+def distance_near(distance, fx: np.ndarray, fy: np.ndarray, wanted: np.ndarray, cap: float) -> np.ndarray:
+    """``distance(x, y)`` (range-normalised, 1-Lipschitz) at the ``wanted`` nodes of the grid (fx x fy) where it
+    is at most ``cap``; 1 at every other node. Quadtree: the distance at a block's centre less the block's
+    half-diagonal bounds every node of the block from below, so a block whose bound exceeds ``cap`` is left out
+    whole and the others are split in four, down to single nodes. Only the nodes near the region are evaluated
+    one by one (the band of a coarse map is mostly far from it)."""
+    ny, nx = wanted.shape
+    hx, hy = 1.0 / (len(fx) - 1), 1.0 / (len(fy) - 1)  # a cell in range-normalised units
+    counts = np.zeros((ny + 1, nx + 1), dtype=int)  # summed-area table: wanted nodes in a block in O(1)
+    counts[1:, 1:] = wanted.cumsum(0).cumsum(1)
+    out = np.ones(wanted.shape)
+    side = 1 << max(0, math.ceil(math.log2(max(nx, ny))) - 3)  # 8 x 8 blocks to begin with
+    blocks = [(j, i) for j in range(0, ny, side) for i in range(0, nx, side)]
+    while blocks:
+        blocks = [(j, i) for j, i in blocks if counts[min(j + side, ny), min(i + side, nx)] - counts[j, min(i + side, nx)]
+                  - counts[min(j + side, ny), i] + counts[j, i] > 0]
+        if not blocks:
+            break
+        b = np.array(blocks)
+        # the centre of each block's nodes (a block at the grid's far edge is cut short there)
+        cj = (b[:, 0] + np.minimum(b[:, 0] + side, ny) - 1) / 2
+        ci = (b[:, 1] + np.minimum(b[:, 1] + side, nx) - 1) / 2
+        dc = distance(np.interp(ci, np.arange(nx), fx), np.interp(cj, np.arange(ny), fy))
+        if side == 1:
+            out[b[:, 0], b[:, 1]] = np.where(dc <= cap, dc, 1.0)
+            break
+        reach = math.hypot((side - 1) / 2 * hx, (side - 1) / 2 * hy) * (1 + 1e-9)
+        half = side // 2
+        blocks = [(j + dj, i + di) for (j, i), lower in zip(blocks, dc - reach) if lower <= cap
+                  for dj in (0, half) for di in (0, half) if j + dj < ny and i + di < nx]
+        side = half
+    return out
 
 
 def _map(result: PerfmapResult) -> Figure:
@@ -298,9 +367,9 @@ def _map(result: PerfmapResult) -> Figure:
         lo, hi = np.nanmin(eta), np.nanmax(eta)
         levels = MaxNLocator(14).tick_values(lo, hi) if hi > lo else [lo, lo + 1e-9]
         bx, by, d = reachable_boundary(result)
-        h = max((bx[1] - bx[0]) / (bx[-1] - bx[0]), (by[1] - by[0]) / (by[-1] - by[0]))
+        level = boundary_level(bx, by)
         # filled on the boundary's fine grid, so that the colours end at the smooth boundary too
-        fine_eta = np.ma.masked_where(d > 0.25 * h, resample(gx, gy, eta, bx, by))
+        fine_eta = np.ma.masked_where(d > level, resample(gx, gy, eta, bx, by))
         cf = ax.contourf(bx, by, fine_eta, levels=levels, cmap="viridis")
         fig.colorbar(cf, ax=ax, label=axis_label(result, "efficiency", "max efficiency η"))
         measured = np.array([_values(s) for s in result.settings], dtype=float).reshape(len(result.settings), -1)
@@ -312,7 +381,7 @@ def _map(result: PerfmapResult) -> Figure:
                 cs.set_path_effects([patheffects.Stroke(linewidth=2.2, foreground="0.15"), patheffects.Normal()])
                 for text in ax.clabel(cs, fontsize=8, fmt=f"{_bare(name)}=%.3g", colors=LABEL_COLOURS[colour]):
                     text.set_bbox(LABEL_BOX)
-        ax.contour(bx, by, d, levels=[0.25 * h], colors="red", linewidths=1.5)
+        ax.contour(bx, by, d, levels=[level], colors="red", linewidths=1.5)
     for k in range(len(result.settings)):
         ax.plot(X[k], Y[k], "k-", lw=0.6, alpha=0.7)
     _limit_lines(ax, result)

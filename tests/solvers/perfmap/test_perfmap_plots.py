@@ -180,3 +180,96 @@ def test_the_maps_contour_labels_read_on_every_colour_of_the_map(synthetic_reque
         for under in (colormaps["viridis"](0.0), colormaps["viridis"](1.0)):  # darkest and lightest of the map
             seen = alpha * np.array(to_rgb(box.get_facecolor())) + (1 - alpha) * np.array(to_rgb(under))
             assert _contrast(text.get_color(), seen) >= 4.5, (text.get_text(), text.get_color())
+
+
+def test_the_boundary_distance_is_evaluated_only_where_the_drawing_reads_it():
+    """A disk of radius 0.3 (distance max(0, |p - c| - 0.3), closed form): exact at every wanted node within the
+    cap, 1 at the others, which lie beyond it; the far nodes are left out by blocks, not one by one."""
+    from plantsolve.solvers.perfmap.artifacts import boundary_cap, boundary_level, distance_near
+
+    fx, fy = np.linspace(0.0, 1.0, 120), np.linspace(0.0, 1.0, 90)
+    evaluated = []
+
+    def disk(x, y):
+        evaluated.append(len(x))
+        return np.maximum(np.hypot(x - 0.4, y - 0.55) - 0.3, 0.0)
+
+    wanted = np.ones((len(fy), len(fx)), dtype=bool)
+    wanted[:10] = False  # a node not asked for is not evaluated
+    cap = boundary_cap(fx, fy)
+    assert boundary_level(fx, fy) == pytest.approx(0.25 / 89) and cap == pytest.approx((0.25 + 2 ** 0.5) / 89)
+    d = distance_near(disk, fx, fy, wanted, cap)
+    exact = np.maximum(np.hypot(fx[None, :] - 0.4, fy[:, None] - 0.55) - 0.3, 0.0)
+    close = wanted & (exact <= cap)
+    assert np.array_equal(d[close], exact[close]) and np.all(d[~close] == 1.0) and np.all(exact[wanted & ~close] > cap)
+    assert sum(evaluated) < 0.6 * wanted.sum(), sum(evaluated)
+
+
+def test_the_maps_boundary_field_is_the_whole_bands_wherever_it_is_drawn(rig, monkeypatch):
+    """The map's boundary field against the band evaluated node by node (the cap lifted): the same at every node
+    within the cap (the boundary contour and the filled map's mask read nothing else), beyond it on both sides
+    elsewhere, and with fewer points evaluated on a coarse map's wide band."""
+    from plantsolve.solvers.perfmap import artifacts
+
+    _, res = rig
+    counted = []
+    distance = artifacts.distance_to_region
+
+    def recorded(curves, tri, t, x, y, ranges):
+        counted.append(len(x))
+        return distance(curves, tri, t, x, y, ranges)
+
+    monkeypatch.setattr(artifacts, "distance_to_region", recorded)
+    fx, fy, d = reachable_boundary(res)
+    pruned = sum(counted)
+    counted.clear()
+    monkeypatch.setattr(artifacts, "boundary_cap", lambda fx, fy: np.inf)
+    _, _, whole = reachable_boundary(res)
+    monkeypatch.undo()
+    cap = artifacts.boundary_cap(fx, fy)
+    close = whole <= cap
+    assert np.array_equal(d[close], whole[close]) and np.all(d[~close] > cap)
+    assert pruned < 0.7 * sum(counted), (pruned, sum(counted))
+
+
+def _offset_rig():
+    """The rig with its pressures in Pa around 2e6: the y axis writes '1e6' above itself."""
+    lines = ["Speed [rpm];Flow [kg/s];Pressure [Pa];Efficiency [%]"]
+    for p in LINES:
+        for f, pr, e in zip(p["flow"], p["pressure"], p["efficiency"]):
+            lines.append(";".join(str(v) for v in (p["setting"][0] * 10000, f, 2e6 * pr, 100 * e)))
+    req = parse_upload(StoredInput.from_bytes("rig.csv", "\n".join(lines).encode()), {"grid": [16, 16]})
+    return req, solve(req).result
+
+
+@pytest.mark.parametrize("case", ["rig", "offset"])
+def test_the_panels_titles_stand_where_matplotlibs_placement_puts_them(rig, case, monkeypatch):
+    """Each characteristics panel's title is placed on its axes' top edge without matplotlib measuring both y axes'
+    tick labels at every save (it moves a title only over ticks or an offset text above the axes): the same place
+    as the automatic one, and a panel whose y axis writes an offset ('1e6') keeps the automatic placement, which
+    lifts its title over it."""
+    from matplotlib.axis import YAxis
+
+    from plantsolve.solvers.perfmap import artifacts
+    from plantsolve.solvers.plots import figure_bytes
+
+    req, res = rig if case == "rig" else _offset_rig()
+
+    def titles(fig):
+        figure_bytes(fig, "png")
+        renderer = fig._get_renderer()
+        return [ax.title.get_window_extent(renderer).bounds for ax in fig.axes if ax.get_title()]
+
+    measured = []
+    tightbbox = YAxis.get_tightbbox
+    monkeypatch.setattr(YAxis, "get_tightbbox", lambda self, *a, **k: measured.append(self) or tightbbox(self, *a, **k))
+    fig = figures(req, res)["characteristics"]
+    placed = titles(fig)
+    shown = [ax.yaxis.offsetText.get_text() for ax in fig.axes if ax.get_visible()]
+    if case == "rig":
+        assert not measured and not any(shown), shown
+    else:
+        assert measured and "1e6" in shown, shown  # matplotlib measured the offset texts, and lifted the titles
+    check_figure(fig)
+    monkeypatch.setattr(artifacts, "_title_place", lambda *twins: {})
+    assert placed == titles(figures(req, res)["characteristics"])
