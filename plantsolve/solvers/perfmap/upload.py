@@ -1312,7 +1312,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
-        return _validated(body, options, lines)
+        return _validated(body, options, lines, document=("positions",) if _bare_list(text) else ())
     return _validated(*_with_units_option(body, options, "CSV" if ext == ".csv" else "pyCycle map"), lines)
 
 
@@ -1357,8 +1357,12 @@ def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dic
     return {**body, "units": units, "upload_warnings": notes}, options
 
 
-def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:
-    """The request of a parsed file, its errors named by file row where the file has rows."""
+def _validated(body: dict, options: dict | None, lines: list[list[int]],
+               document: tuple[str, ...] | None = None) -> PerfmapRequest:
+    """The request of a parsed file, its errors named by file row where the file has rows, by their path in the file
+    where the file is the request (``document``: the steps of the request's path the file leaves out, ``positions``
+    for a bare list of positions), and by the form's option where the value came from the form."""
+    form = options if isinstance(options, dict) else {}
     if options:
         body = {**body, "options": {**(body.get("options") or {}), **options}}
     try:
@@ -1367,8 +1371,11 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
         errs = []
         for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
             loc, path = fe.loc, "/".join(map(str, fe.loc))
-            if options and loc[:1] == ("options",):  # form options point at the options
-                errs.append(FieldError(loc, f"{path}: {fe.msg}", fe.type))
+            if len(loc) > 1 and loc[0] == "options" and loc[1] in form:  # a form option: named as the form names it
+                errs.append(FieldError(loc, fe.msg, fe.type))
+            elif document is not None:
+                written = loc[len(document):] if loc[:len(document)] == document else loc
+                errs.append(FieldError(("file", *written), fe.msg, fe.type))
             elif lines:
                 where, prefix = file_loc(loc, lines, lambda i: _setting_of(body["positions"][i]),
                                          body["source"]["row_label"])
@@ -1376,7 +1383,7 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
                 if fe.type == "too_short" and len(loc) == 3:
                     msg, where = "needs at least 3 measured points (rows)", where[:3]
                 errs.append(FieldError(where, prefix + msg, fe.type))
-            else:
+            else:  # a request the reader made of the file: its path is no place in the file, only the reader's word
                 errs.append(FieldError(("file",), f"{path}: {fe.msg}", fe.type))
         seen, unique = set(), []
         for fe in errs:  # the three lists of one short setting give one message
@@ -1385,6 +1392,11 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
                 unique.append(fe)
         raise InputRejected(unique) from None
     return request
+
+
+def _bare_list(text: str) -> bool:
+    """Whether a JSON file is a list of positions saved on its own (read as the request's ``positions``)."""
+    return text.lstrip("\ufeff \t\r\n").startswith("[")
 
 
 def _setting_of(position: dict) -> tuple:
