@@ -1364,7 +1364,10 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]],
     for a bare list of positions), and by the form's option where the value came from the form."""
     form = options if isinstance(options, dict) else {}
     if options:
-        body = {**body, "options": {**(body.get("options") or {}), **options}}
+        inner = body.get("options") or {}
+        if not isinstance(inner, dict):  # laid under the form's options it failed as an unreadable file
+            raise reject("options must be an object", ("file", "options"), "dict_type")
+        body = {**body, "options": {**inner, **options}}
     try:
         request = validated(PerfmapRequest, body, ())
     except InputRejected as e:

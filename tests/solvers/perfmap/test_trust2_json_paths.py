@@ -78,3 +78,9 @@ def test_a_bad_form_option_is_named_as_the_form_names_it_and_the_files_own_by_th
     document = _changed(EXAMPLE, ("options", "result_units"), {"flow": 5})
     errors = _refused(client, document, {"map": 1})
     assert sorted(e["loc"] for e in errors) == [["file", "options", "result_units", "flow"], ["options", "map"]]
+
+
+def test_a_files_options_that_are_no_object_under_form_options_are_named(client):
+    """Laid under the form's options, a list failed as an unreadable file ('malformed', no place named)."""
+    errors = _refused(client, {**EXAMPLE, "options": [1]}, {"map": False})
+    assert [(e["loc"], e["msg"]) for e in errors] == [(["file", "options"], "options must be an object")]
