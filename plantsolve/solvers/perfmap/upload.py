@@ -1088,6 +1088,35 @@ def _floats(value):
         return math.inf if value > 0 else -math.inf
 
 
+def _not_a_number(literal: str) -> tuple[int, str] | None:
+    """(line within ``literal``, its text) of the first element of an array literal that is no number, or None."""
+    try:
+        tree = ast.parse(literal, mode="eval")
+    except SyntaxError as e:  # a word Python does not read ('1.2.3', '0,85')
+        lines = literal.splitlines()
+        if not e.lineno or e.lineno > len(lines):
+            return None
+        line, at = lines[e.lineno - 1], (e.offset or 1) - 1
+        cells = [cell for cell in re.finditer(r"[^,\[\]()\s]+", line) if cell.start() <= at < cell.end() + 1]
+        return e.lineno, (cells[0].group() if cells else line.strip())[:60]
+    except (ValueError, MemoryError, RecursionError):
+        return None
+    bad = [node for node in ast.walk(tree.body) if not isinstance(node, (ast.List, ast.Tuple, ast.expr_context))
+           and not _numeric_literal(node)]
+    outermost = [node for node in bad if not any(node is not other and node in ast.walk(other) for other in bad)]
+    if not outermost:
+        return None
+    first = min(outermost, key=lambda node: (node.lineno, node.col_offset))
+    return first.lineno, (ast.get_source_segment(literal, first) or "")[:60]
+
+
+def _numeric_literal(node: ast.AST) -> bool:
+    """A literal number, signed or not, as a map's arrays hold them (``-0.5``, ``1e3``)."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
+
+
 def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]:
     """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
     ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
@@ -1107,7 +1136,13 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
         try:
             arrays[name] = np.array(_floats(ast.literal_eval(literal)), dtype=float)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
+            start = text.count("\n", 0, text.index("[", m.end() - 1))
+            where = _not_a_number(literal)
+            if where is None:
+                raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
+            line, written = start + where[0], where[1]
+            raise reject(f"{name}, line {line}: {written!r} is not a number (the map's arrays are nested lists of "
+                         "numbers)", ("file", "line", line)) from None
     missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]
     if missing:
         raise reject(f"no compressor MAP_DATA here: missing {', '.join(missing)} (a pyCycle/NPSS map defines "

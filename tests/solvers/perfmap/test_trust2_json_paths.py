@@ -84,3 +84,22 @@ def test_a_files_options_that_are_no_object_under_form_options_are_named(client)
     """Laid under the form's options, a list failed as an unreadable file ('malformed', no place named)."""
     errors = _refused(client, {**EXAMPLE, "options": [1]}, {"map": False})
     assert [(e["loc"], e["msg"]) for e in errors] == [(["file", "options"], "options must be an object")]
+
+
+NCP01 = (Path(__file__).parent / "data" / "pycycle" / "ncp01.py").read_text()
+
+
+@pytest.mark.parametrize("word", ["1e9999x", "1.2.3", "None", '"1.3114"', "-x"])
+def test_a_pycycle_maps_word_that_is_no_number_is_named_by_its_line(word):
+    """It was named by the array alone ('file.PRmap: not a numeric array literal'), in a table of hundreds of
+    numbers."""
+    from plantsolve.solvers.base import InputRejected, StoredInput
+    from plantsolve.solvers.perfmap.upload import parse_upload
+
+    lines = NCP01.split("\n")
+    assert "1.3114" in lines[71] and "PRmap" in "".join(lines[60:71])
+    lines[71] = lines[71].replace("1.3114", word, 1)
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("ncp01.py", "\n".join(lines).encode()), None)
+    (error,) = refused.value.errors
+    assert error.loc == ("file", "line", 72) and error.msg.startswith(f"PRmap, line 72: {word!r} is not a number")
