@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
-from plantsolve.jobs.errors import is_infrastructure_failure
+from plantsolve.jobs.errors import is_infrastructure_failure, user_path
 from plantsolve.schemas.common import Report
 from plantsolve.schemas.jobs import AttemptInfo as AttemptEntry
 from plantsolve.solvers.base import Cancelled, InputRejected, SolverError
@@ -67,11 +67,15 @@ class Verdict:
 
 
 def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: int, limits: tuple[float, float],
-          elapsed: float, time_limit_errors: tuple[type[BaseException], ...] = ()) -> Verdict:
+          elapsed: float, time_limit_errors: tuple[type[BaseException], ...] = (),
+          model: type[BaseModel] | None = None) -> Verdict:
     """The retry policy. A stop asked for (cancelled, lease lost) ends the attempt quietly; the time limit, a refused
     input and a solver's own failure fail the job; a result that the database did not take is stored by the next
     attempt (granted one when this was the last); a crash of the machine's services (network, disk, database) is
-    retried until the attempt cap; any other crash repeats on the same input and fails the job at once."""
+    retried until the attempt cap; any other crash repeats on the same input and fails the job at once.
+
+    ``model`` is the kind's request model: a refused input's fields are named by the paths the user wrote
+    (:func:`~plantsolve.jobs.errors.user_path`), as the 422 of a submission names them."""
     if isinstance(error, Stop) and error.reason != "time_limit":
         return Verdict("cancelled")
     if isinstance(error, Stop) or isinstance(error, time_limit_errors):
@@ -84,12 +88,14 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
             "result", "The result was computed but the database did not take it; the next attempt stores it without "
                       "solving again."), retry=True, grant_attempt=attempt >= max_attempts)
     if isinstance(error, InputRejected):
-        report = failure_report("input", error.title,
-                                errors=[{"loc": list(e.loc), "msg": e.msg, "type": e.type} for e in error.errors])
+        report = failure_report("input", error.title, errors=[
+            {"loc": user_path(e.loc, model), "msg": e.msg, "type": e.type} for e in error.errors])
         return Verdict("failed", report, error=report["message"])
     if isinstance(error, ValidationError):
-        report = failure_report("input", "The stored input no longer validates.",
-                                errors=error.errors(include_url=False, include_context=False))
+        # only the request's own validation has the request's paths (a result that fails its model has others)
+        validated = model if model is not None and error.title == model.__name__ else None
+        report = failure_report("input", "The stored input no longer validates.", errors=[
+            {**e, "loc": user_path(e["loc"], validated)} for e in error.errors(include_url=False, include_context=False)])
         return Verdict("failed", report, error=report["message"])
     if isinstance(error, SolverError):
         return Verdict("failed", failure_report(error.stage, error.message, **error.details), error=error.message)

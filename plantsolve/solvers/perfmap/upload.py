@@ -1088,6 +1088,35 @@ def _floats(value):
         return math.inf if value > 0 else -math.inf
 
 
+def _not_a_number(literal: str) -> tuple[int, str] | None:
+    """(line within ``literal``, its text) of the first element of an array literal that is no number, or None."""
+    try:
+        tree = ast.parse(literal, mode="eval")
+    except SyntaxError as e:  # a word Python does not read ('1.2.3', '0,85')
+        lines = literal.splitlines()
+        if not e.lineno or e.lineno > len(lines):
+            return None
+        line, at = lines[e.lineno - 1], (e.offset or 1) - 1
+        cells = [cell for cell in re.finditer(r"[^,\[\]()\s]+", line) if cell.start() <= at < cell.end() + 1]
+        return e.lineno, (cells[0].group() if cells else line.strip())[:60]
+    except (ValueError, MemoryError, RecursionError):
+        return None
+    bad = [node for node in ast.walk(tree.body) if not isinstance(node, (ast.List, ast.Tuple, ast.expr_context))
+           and not _numeric_literal(node)]
+    outermost = [node for node in bad if not any(node is not other and node in ast.walk(other) for other in bad)]
+    if not outermost:
+        return None
+    first = min(outermost, key=lambda node: (node.lineno, node.col_offset))
+    return first.lineno, (ast.get_source_segment(literal, first) or "")[:60]
+
+
+def _numeric_literal(node: ast.AST) -> bool:
+    """A literal number, signed or not, as a map's arrays hold them (``-0.5``, ``1e3``)."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
+
+
 def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]:
     """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
     ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
@@ -1107,7 +1136,13 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
         try:
             arrays[name] = np.array(_floats(ast.literal_eval(literal)), dtype=float)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
+            start = text.count("\n", 0, text.index("[", m.end() - 1))
+            where = _not_a_number(literal)
+            if where is None:
+                raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
+            line, written = start + where[0], where[1]
+            raise reject(f"{name}, line {line}: {written!r} is not a number (the map's arrays are nested lists of "
+                         "numbers)", ("file", "line", line)) from None
     missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]
     if missing:
         raise reject(f"no compressor MAP_DATA here: missing {', '.join(missing)} (a pyCycle/NPSS map defines "
@@ -1312,7 +1347,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
-        return _validated(body, options, lines)
+        return _validated(body, options, lines, document=("positions",) if _bare_list(text) else ())
     return _validated(*_with_units_option(body, options, "CSV" if ext == ".csv" else "pyCycle map"), lines)
 
 
@@ -1357,18 +1392,28 @@ def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dic
     return {**body, "units": units, "upload_warnings": notes}, options
 
 
-def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> PerfmapRequest:
-    """The request of a parsed file, its errors named by file row where the file has rows."""
+def _validated(body: dict, options: dict | None, lines: list[list[int]],
+               document: tuple[str, ...] | None = None) -> PerfmapRequest:
+    """The request of a parsed file, its errors named by file row where the file has rows, by their path in the file
+    where the file is the request (``document``: the steps of the request's path the file leaves out, ``positions``
+    for a bare list of positions), and by the form's option where the value came from the form."""
+    form = options if isinstance(options, dict) else {}
     if options:
-        body = {**body, "options": {**(body.get("options") or {}), **options}}
+        inner = body.get("options") or {}
+        if not isinstance(inner, dict):  # laid under the form's options it failed as an unreadable file
+            raise reject("options must be an object", ("file", "options"), "dict_type")
+        body = {**body, "options": {**inner, **options}}
     try:
         request = validated(PerfmapRequest, body, ())
     except InputRejected as e:
         errs = []
         for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
             loc, path = fe.loc, "/".join(map(str, fe.loc))
-            if options and loc[:1] == ("options",):  # form options point at the options
-                errs.append(FieldError(loc, f"{path}: {fe.msg}", fe.type))
+            if len(loc) > 1 and loc[0] == "options" and loc[1] in form:  # a form option: named as the form names it
+                errs.append(FieldError(loc, fe.msg, fe.type))
+            elif document is not None:
+                written = loc[len(document):] if loc[:len(document)] == document else loc
+                errs.append(FieldError(("file", *written), fe.msg, fe.type))
             elif lines:
                 where, prefix = file_loc(loc, lines, lambda i: _setting_of(body["positions"][i]),
                                          body["source"]["row_label"])
@@ -1376,7 +1421,7 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
                 if fe.type == "too_short" and len(loc) == 3:
                     msg, where = "needs at least 3 measured points (rows)", where[:3]
                 errs.append(FieldError(where, prefix + msg, fe.type))
-            else:
+            else:  # a request the reader made of the file: its path is no place in the file, only the reader's word
                 errs.append(FieldError(("file",), f"{path}: {fe.msg}", fe.type))
         seen, unique = set(), []
         for fe in errs:  # the three lists of one short setting give one message
@@ -1385,6 +1430,11 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]]) -> Perf
                 unique.append(fe)
         raise InputRejected(unique) from None
     return request
+
+
+def _bare_list(text: str) -> bool:
+    """Whether a JSON file is a list of positions saved on its own (read as the request's ``positions``)."""
+    return text.lstrip("\ufeff \t\r\n").startswith("[")
 
 
 def _setting_of(position: dict) -> tuple:

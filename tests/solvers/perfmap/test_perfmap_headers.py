@@ -119,7 +119,8 @@ def test_a_pycycle_map_cut_inside_its_last_table_says_where():
     (b"import numpy as np\nX = np.array([1, 2])\n", "missing NcMap"),
     (b"M.NcMap = np.array([0.5, 1.0])\nM.WcMap = np.array([[1, 2, 3]])\nM.PRmap = np.array([[1, 2, 3]])\n"
      b"M.effMap = np.array([[0.5, 0.5, 0.5]])\n", "shape"),
-    (b"M.NcMap = np.array([0.5])\nM.WcMap = np.array([[1, 2, __import__('os')]])\n", "not a numeric array"),
+    (b"M.NcMap = np.array([0.5])\nM.WcMap = np.array([[1, 2, __import__('os')]])\n",
+     "WcMap, line 2: \"__import__('os')\" is not a number"),
 ])
 def test_map_data_that_cannot_be_read_says_why(text, needle):
     with pytest.raises(InputRejected) as e:
