@@ -235,7 +235,8 @@ def _run_claimed(
                 return _store_success(ctx, spec, job_id, attempt, job_input, output, monitor, log_book)
         except Exception as error:  # the retry policy decides (attempts.judge)
             verdict = judge(error, job_id=job_id, attempt=attempt, max_attempts=job.max_attempts,
-                            limits=ctx.limits(spec), elapsed=monitor.elapsed, time_limit_errors=time_limit_errors)
+                            limits=ctx.limits(spec), elapsed=monitor.elapsed, time_limit_errors=time_limit_errors,
+                            model=spec.request_model)
             if verdict.outcome == "result_pending":
                 log.error("job %s attempt %d: result spooled; the next attempt stores it", job_id, attempt)
             elif verdict.crash:
