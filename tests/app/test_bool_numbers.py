@@ -8,7 +8,6 @@ upload form may type as text (``"6"``) is still read as that number."""
 
 from __future__ import annotations
 
-import copy
 import json
 import types
 import typing
@@ -24,6 +23,7 @@ from plantsolve.jobs.errors import Unprocessable
 from plantsolve.schemas.common import json_integer
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.kinds import load_kinds
+from tests.support.documents import with_value
 
 REPO = Path(__file__).resolve().parents[2]
 KINDS = load_kinds(())
@@ -71,15 +71,6 @@ NUMBERS = [
 ]
 
 
-def _with(body: dict, path: tuple, value) -> dict:
-    body = copy.deepcopy(body)
-    node = body
-    for step in path[:-1]:
-        node = node.setdefault(step, {}) if isinstance(step, str) else node[step]
-    node[path[-1]] = value
-    return body
-
-
 def _at(value, path: tuple):
     for step in path:
         value = getattr(value, step) if isinstance(value, BaseModel) else value[step]
@@ -114,7 +105,7 @@ def _names(error: dict, path: tuple) -> bool:
 @pytest.mark.parametrize(("name", "path"), NUMBERS)
 @pytest.mark.parametrize("value", [True, False])
 def test_true_and_false_in_a_json_body_are_refused_naming_the_path(name, path, value):
-    errors = _body_refusal(name, _with(BODIES[name](), path, value))
+    errors = _body_refusal(name, with_value(BODIES[name](), path, value))
     assert [e["loc"] for e in errors] == [list(path)], errors
     assert errors[0]["type"] == "float_type"
 
@@ -123,7 +114,7 @@ def test_true_and_false_in_a_json_body_are_refused_naming_the_path(name, path, v
 def test_true_in_an_uploaded_json_file_is_refused_naming_the_path(name, path):
     """The upload path validated in lax mode: on main most of these were read as 1.0 and accepted, or refused for
     what the 1 made (a flowmeter liner 300 radii long), not for the true."""
-    body = _with(BODIES[name](), path, True)
+    body = with_value(BODIES[name](), path, True)
     errors = _upload_refusal(name, body)
     assert len(errors) == 1 and _names(errors[0], path), errors
     assert errors[0]["type"] == "float_type"
@@ -165,7 +156,7 @@ def test_numbers_are_read_as_written_in_a_body_and_an_upload(name, path, value):
     """6, 6.0 and -1e3 are still numbers (strict floats take JSON's integers) wherever the field's bounds allow
     them: the same value read by the JSON body's validation and by the upload's."""
     spec = _spec(name)
-    text = json.dumps(_with(BODIES[name](), path, value)).encode()
+    text = json.dumps(with_value(BODIES[name](), path, value)).encode()
     request = spec.request_model.model_validate_json(text, strict=True)  # what intake.read_json validates with
     assert _at(request, path) == float(value) and type(_at(request, path)) is float
     uploaded = spec.parse_upload(StoredInput.from_bytes("request.json", text), None)
@@ -297,7 +288,7 @@ def test_the_api_answers_a_problem_document_naming_the_path(client):
     read as 1), a tube form's tolerance true, and a perfmap query's flow true (main: answered, 'infeasible at flow
     1'). The query's body is validated before its job is looked up: no job is needed to see it refused. Some 10 s:
     the app, and the upload readers' forkserver the first upload starts (the path under test)."""
-    meter = _with(BODIES["flowmeter"](), ("pipe", "radius"), True)
+    meter = with_value(BODIES["flowmeter"](), ("pipe", "radius"), True)
     response = client.post("/v1/flowmeter/jobs", files={"file": ("meter.json", json.dumps(meter).encode())})
     assert response.status_code == 422 and response.headers["content-type"] == PROBLEM
     assert [e["pointer"] for e in response.json()["errors"]] == ["/file/pipe/radius"]

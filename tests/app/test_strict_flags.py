@@ -7,10 +7,8 @@ Every bool of a request is now :data:`plantsolve.schemas.common.Flag` (strict, i
 
 from __future__ import annotations
 
-import copy
 import json
 import tempfile
-import types
 import typing
 from pathlib import Path
 
@@ -21,6 +19,7 @@ from pydantic import BaseModel, Strict
 from plantsolve.app.main import create_app
 from plantsolve.solvers.kinds import load_kinds
 from tests.conftest import service_settings
+from tests.support.documents import with_value
 
 REPO = Path(__file__).resolve().parents[2]
 KINDS = load_kinds(())
@@ -29,15 +28,6 @@ LAX_TRUTHS = ["yes", "on", "true", "1", 1, 0, "no", "off", "false", "0", 1.0]
 
 def _example(path: str) -> dict:
     return json.loads((REPO / path).read_text())
-
-
-def _changed(body: dict, path: tuple, value) -> dict:
-    body = copy.deepcopy(body)
-    node = body
-    for step in path[:-1]:
-        node = node.setdefault(step, {}) if isinstance(step, str) else node[step]
-    node[path[-1]] = value
-    return body
 
 
 def _file(path: str) -> tuple[str, bytes]:
@@ -90,7 +80,7 @@ def _refused_naming(response, loc: list) -> None:
 @pytest.mark.parametrize("value", LAX_TRUTHS[:6])
 def test_a_lax_boolean_in_an_uploaded_json_file_is_refused_naming_it(client, kind, example, path, value):
     """On main each of these was a 202: the file's "yes" or 1 read as true."""
-    body = _changed(_example(example), path, value)
+    body = with_value(_example(example), path, value)
     response = client.post(f"/v1/{kind}/jobs", files={"file": (f"{kind}.json", json.dumps(body).encode())})
     # tube merges a .json file's options with the form's, and names them by their own path (as the form's)
     _refused_naming(response, list(path) if kind == "tube" and path[0] == "options" else ["file", *path])
@@ -117,9 +107,9 @@ def test_true_and_false_in_the_form_options_are_taken(client, kind, upload, opti
 @pytest.mark.parametrize(("kind", "example", "path"), JSON_FILES)
 def test_a_json_body_stays_strict_and_takes_true(client, kind, example, path):
     body = _example(example)
-    response = client.post(f"/v1/{kind}/jobs", json=_changed(body, path, "true"))
+    response = client.post(f"/v1/{kind}/jobs", json=with_value(body, path, "true"))
     assert response.status_code == 422 and response.json()["errors"][0]["loc"] == list(path), response.text
-    assert client.post(f"/v1/{kind}/jobs", json=_changed(body, path, True)).status_code == 202
+    assert client.post(f"/v1/{kind}/jobs", json=with_value(body, path, True)).status_code == 202
 
 
 def _flat(annotation) -> list:

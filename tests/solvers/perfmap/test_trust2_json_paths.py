@@ -4,7 +4,6 @@ path only in the message. A value the upload form gave is named as the form name
 
 from __future__ import annotations
 
-import copy
 import json
 import tempfile
 from pathlib import Path
@@ -14,6 +13,7 @@ from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
 from tests.conftest import service_settings
+from tests.support.documents import with_value
 
 EXAMPLE = json.loads((Path(__file__).resolve().parents[3] / "examples" / "perfmap" / "n3_fan_map.json").read_text())
 
@@ -23,15 +23,6 @@ def client():
     with tempfile.TemporaryDirectory() as folder:
         with TestClient(create_app(service_settings(Path(folder)), run_jobs=False)) as test_client:
             yield test_client
-
-
-def _changed(document, path: tuple, value):
-    document = copy.deepcopy(document)
-    node = document
-    for step in path[:-1]:
-        node = node.setdefault(step, {}) if isinstance(node, dict) else node[step]
-    node[path[-1]] = value
-    return document
 
 
 def _refused(client, document, options: dict | None = None) -> list[dict]:
@@ -54,7 +45,7 @@ BAD = [
 
 @pytest.mark.parametrize(("path", "value", "type_"), BAD)
 def test_a_bad_value_in_the_file_is_named_by_its_path_in_the_file(client, path, value, type_):
-    errors = _refused(client, _changed(EXAMPLE, path, value))
+    errors = _refused(client, with_value(EXAMPLE, path, value))
     assert [(e["loc"], e["type"]) for e in errors] == [(["file", *path], type_)], errors
     assert errors[0]["pointer"] == "/file/" + "/".join(map(str, path))
     assert "/".join(map(str, path)) not in errors[0]["msg"]  # the place is the loc's, not repeated in the words
@@ -62,7 +53,7 @@ def test_a_bad_value_in_the_file_is_named_by_its_path_in_the_file(client, path, 
 
 @pytest.mark.parametrize(("path", "value", "type_"), BAD)
 def test_the_file_names_the_place_a_json_body_names(client, path, value, type_):
-    document = _changed(EXAMPLE, path, value)
+    document = with_value(EXAMPLE, path, value)
     body = client.post("/v1/perfmap/jobs", json=document)
     assert body.status_code == 422
     assert [["file", *e["loc"]] for e in body.json()["errors"]] == [e["loc"] for e in _refused(client, document)]
@@ -70,12 +61,12 @@ def test_the_file_names_the_place_a_json_body_names(client, path, value, type_):
 
 def test_a_bare_list_of_positions_is_named_without_the_requests_field(client):
     """A list of positions saved on its own: the user's path starts at the list."""
-    positions = _changed(EXAMPLE["positions"], (3, "flow", 2), "x")
+    positions = with_value(EXAMPLE["positions"], (3, "flow", 2), "x")
     assert [e["loc"] for e in _refused(client, positions)] == [["file", 3, "flow", 2]]
 
 
 def test_a_bad_form_option_is_named_as_the_form_names_it_and_the_files_own_by_the_file(client):
-    document = _changed(EXAMPLE, ("options", "result_units"), {"flow": 5})
+    document = with_value(EXAMPLE, ("options", "result_units"), {"flow": 5})
     errors = _refused(client, document, {"map": 1})
     assert sorted(e["loc"] for e in errors) == [["file", "options", "result_units", "flow"], ["options", "map"]]
 
