@@ -11,9 +11,9 @@ import ifcopenshell.geom
 import ifcopenshell.util.unit
 
 from plantsolve.solvers.base import Solved, StoredInput
-from plantsolve.solvers.dedup import SPEC, sharing
+from plantsolve.solvers.dedup import SPEC, compaction, postpass, sharing
 from plantsolve.solvers.dedup.explicit import ExplicitReader
-from plantsolve.solvers.dedup.grouping import build_classes, make_candidate
+from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.solve import solve
 from plantsolve.solvers.dedup.upload import parse_upload
@@ -122,3 +122,21 @@ def zoo_expected(allow_mirror: bool = False, allow_scale: bool = False) -> set[f
         chiral.add("chiral_scaled_1pct")
     return {frozenset(chiral), frozenset({"cube_a", "cube_b"}), frozenset({"mapped_a", "mapped_b"}),
             frozenset({"column_a", "column_b"})}
+
+
+def shared_and_merged(model: ifcopenshell.file, mode: str, shared, *, allow_mirror: bool = False,
+                      rebuild: bool = True) -> tuple[str, dict[str, int]]:
+    """The model shared in ``mode`` (with ``shared``: a ``sharing.SharedPlacements`` or ``SharedOperators``, or
+    None for one new instance per member), compacted and merged by the post-pass: its STEP text and the post-pass's
+    removed counts."""
+    classes, reader = classes_of(model, allow_mirror=allow_mirror)
+    pool_transforms(classes, 1e-5)  # as the solve does: a ring's members then get the same transform
+    before = compaction.instance_ids(model)
+    detached = sharing.Detached(model)
+    sharing.apply(model, classes, mode, detached=detached, shared=shared)
+    everything = compaction.grown(model, before, shared.skipped if shared else ())
+    assert sorted(everything.tolist()) == sorted(model.entity_names())
+    model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
+                                 everything=everything, rebuild=rebuild)
+    removed = postpass.merge_identical(model, shared=shared)
+    return model.to_string().split("DATA;", 1)[1], removed  # the header holds the time of writing

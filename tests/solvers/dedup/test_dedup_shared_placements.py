@@ -9,27 +9,9 @@ import pytest
 
 import ifcopenshell
 
-from plantsolve.solvers.dedup import compaction, postpass, sharing
-from plantsolve.solvers.dedup.grouping import pool_transforms
+from plantsolve.solvers.dedup import sharing
 from plantsolve.solvers.dedup.synthetic import build_model, tunnel_file, zoo_spec
-from tests.solvers.dedup.support import classes_of
-
-
-def _optimized(model: ifcopenshell.file, shared: sharing.SharedPlacements | None, *, allow_mirror: bool = False,
-               rebuild: bool = True) -> tuple[str, dict[str, int]]:
-    """The model shared (product_shape), compacted and merged by the post-pass: its STEP text and the
-    post-pass's removed counts."""
-    classes, reader = classes_of(model, allow_mirror=allow_mirror)
-    pool_transforms(classes, 1e-5)  # as the solve does: a ring's members then get the same transform
-    before = compaction.instance_ids(model)
-    detached = sharing.Detached(model)
-    sharing.apply(model, classes, "product_shape", detached=detached, shared=shared)
-    everything = compaction.grown(model, before, shared.skipped if shared else ())
-    assert sorted(everything.tolist()) == sorted(model.entity_names())
-    model = compaction.compacted(model, detached.roots, detached.styled_by, known=reader.closures,
-                                 everything=everything, rebuild=rebuild)
-    removed = postpass.merge_identical(model, shared=shared)
-    return model.to_string().split("DATA;", 1)[1], removed  # the header holds the time of writing
+from tests.solvers.dedup.support import shared_and_merged
 
 
 def _reached_backwards(model: ifcopenshell.file) -> ifcopenshell.file:
@@ -59,10 +41,12 @@ MODELS = {"tunnel": lambda: tunnel_file(4, "IFC4", face_set="surface_model"),
 @pytest.mark.parametrize("allow_mirror", [False, True])  # mirrored members fall back to mapped items
 @pytest.mark.parametrize("rebuild", [True, False])
 def test_made_once_gives_the_same_file_as_made_for_each_member(name, allow_mirror, rebuild):
-    text, removed = _optimized(MODELS[name](), None, allow_mirror=allow_mirror, rebuild=rebuild)
+    text, removed = shared_and_merged(MODELS[name](), "product_shape", None,
+                                       allow_mirror=allow_mirror, rebuild=rebuild)
     model = MODELS[name]()
     shared = sharing.SharedPlacements(model)
-    text_once, removed_once = _optimized(model, shared, allow_mirror=allow_mirror, rebuild=rebuild)
+    text_once, removed_once = shared_and_merged(model, "product_shape", shared,
+                                       allow_mirror=allow_mirror, rebuild=rebuild)
     assert text_once == text
     assert list(removed_once.items()) == list(removed.items())
     if name.startswith("tunnel"):  # a ring's members share one placement: most were not made at all
@@ -72,10 +56,10 @@ def test_made_once_gives_the_same_file_as_made_for_each_member(name, allow_mirro
 def test_the_kept_placement_is_numbered_as_the_post_pass_keeps_it(monkeypatch):
     """The post-pass reaches a ring's members in its own order, not in the order their placements were made:
     keeping each placement under the numbers it was made with gives another file than main's."""
-    text, _ = _optimized(MODELS["tunnel reached backwards"](), None)
+    text, _ = shared_and_merged(MODELS["tunnel reached backwards"](), "product_shape", None)
     model = MODELS["tunnel reached backwards"]()
     monkeypatch.setattr(sharing.SharedPlacements, "renumbered", lambda self, model, order, reached: order)
-    text_first_made, _ = _optimized(model, sharing.SharedPlacements(model))
+    text_first_made, _ = shared_and_merged(model, "product_shape", sharing.SharedPlacements(model))
     assert text_first_made != text
 
 
