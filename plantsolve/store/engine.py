@@ -286,9 +286,19 @@ class Database:
                         if bound is not None:
                             dbapi_connection.round_trip_seconds = bound
             finally:
-                if self.is_sqlite:  # the migration turned them off for its table copies (migrations/env.py)
-                    connection.exec_driver_sql("PRAGMA foreign_keys=ON")
-                    connection.commit()
+                if self.is_sqlite:
+                    # the migration turned foreign keys off for its table copies (migrations/env.py): on again, and
+                    # where that did nothing (a PRAGMA inside a transaction a failed commit left open) the connection
+                    # is closed instead of given back to the pool, whose next one opens with them on
+                    try:
+                        connection.rollback()
+                        connection.exec_driver_sql("PRAGMA foreign_keys=ON")
+                        on = connection.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1
+                        connection.commit()
+                    except Exception:
+                        on = False
+                    if not on:
+                        connection.invalidate()
 
     def ping(self) -> None:
         """Raises unless the database can take a write now (within the bounds above): on SQLite the write lock is

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sqlite3
 import uuid
 from datetime import datetime, timezone
 
@@ -93,5 +94,28 @@ def test_a_sqlite_downgrade_and_upgrade_keep_every_artifact_row(tmp_path):
         with db.engine.connect() as connection:
             assert connection.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1  # on again for the service
             assert connection.exec_driver_sql("PRAGMA foreign_key_check").all() == []
+    finally:
+        db.dispose()
+
+
+def test_a_migration_whose_commit_fails_leaves_no_pooled_connection_without_foreign_keys(tmp_path):
+    """A commit that fails can leave SQLite's transaction open, where turning foreign keys on again does nothing:
+    that connection is closed, not pooled."""
+    db = Database(f"sqlite:///{tmp_path / 'full.db'}")
+    real_commit, failures = db.engine.dialect.do_commit, []
+
+    def commit_failing_once(dbapi_connection):
+        if not failures:
+            failures.append(True)
+            raise sqlite3.OperationalError("database or disk is full")
+        return real_commit(dbapi_connection)
+
+    db.engine.dialect.do_commit = commit_failing_once
+    try:
+        with pytest.raises(Exception, match="disk is full"):
+            db.migrate()
+        db.engine.dialect.do_commit = real_commit
+        with db.engine.connect() as connection:
+            assert connection.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1
     finally:
         db.dispose()

@@ -1101,9 +1101,15 @@ def _not_a_number(literal: str) -> tuple[int, str] | None:
         return e.lineno, (cells[0].group() if cells else line.strip())[:60]
     except (ValueError, MemoryError, RecursionError):
         return None
-    bad = [node for node in ast.walk(tree.body) if not isinstance(node, (ast.List, ast.Tuple, ast.expr_context))
-           and not _numeric_literal(node)]
-    outermost = [node for node in bad if not any(node is not other and node in ast.walk(other) for other in bad)]
+    # down through the brackets only: an element that is neither a bracket nor a number is a bad cell, and what is
+    # inside it (a call's arguments) is not looked at, so the walk is linear in the cells
+    outermost, stack = [], [tree.body]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.List, ast.Tuple)):
+            stack.extend(node.elts)
+        elif not _numeric_literal(node):
+            outermost.append(node)
     if not outermost:
         return None
     first = min(outermost, key=lambda node: (node.lineno, node.col_offset))

@@ -94,3 +94,25 @@ def test_a_pycycle_maps_word_that_is_no_number_is_named_by_its_line(word):
         parse_upload(StoredInput.from_bytes("ncp01.py", "\n".join(lines).encode()), None)
     (error,) = refused.value.errors
     assert error.loc == ("file", "line", 72) and error.msg.startswith(f"PRmap, line 72: {word!r} is not a number")
+
+
+def test_finding_the_first_word_that_is_no_number_is_linear_in_the_cells(monkeypatch):
+    """Each bad cell was checked against every other for being inside it: 4,000 'nan' cells outran the reader's 8
+    CPU seconds, so the user got a time-out instead of the line. The walk now goes down through brackets only."""
+    import ast
+
+    from plantsolve.solvers.perfmap import upload
+
+    visited = []
+    real_walk = ast.walk
+
+    def counted_walk(node):
+        for inner in real_walk(node):
+            visited.append(inner)
+            yield inner
+
+    monkeypatch.setattr(upload.ast, "walk", counted_walk)
+    cells = 4000
+    literal = "[[" + ", ".join(["nan"] * cells) + "],\n [f(x), 1.0]]"
+    assert upload._not_a_number(literal) == (1, "nan")
+    assert len(visited) <= 10 * cells
