@@ -16,22 +16,13 @@ import pytest
 
 from plantsolve.jobs import computed
 from plantsolve.jobs.computed import payload_key, result_key
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import process_died, sweep_once
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import Solved
 from plantsolve.store.models import utcnow
-from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
 from tests.support.running import running_in_thread
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
-    yield context
-    context.close()
 
 
 def _submit(ctx, body: str) -> uuid.UUID:

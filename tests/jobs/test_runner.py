@@ -27,13 +27,6 @@ from tests.support.dispatch import Recorder
 from tests.support.running import running_in_thread
 
 
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
-    yield context
-    context.close()
-
-
 def submit(ctx, kind, body: bytes) -> uuid.UUID:
     return JobService(ctx, Recorder()).submit_json(kind, body, None).job.id
 

@@ -6,22 +6,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pytest
 
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService
-from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
 
 SCAN = (Path(__file__).resolve().parents[2] / "examples" / "tube" / "scan_request.json").read_bytes()
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
-    yield context
-    context.close()
 
 
 def test_a_stored_input_that_no_longer_validates_names_the_users_path(ctx):

@@ -6,21 +6,12 @@ import uuid
 
 import pytest
 
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import Conflict
 from plantsolve.jobs.leases import process_died
 from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService
-from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
 from tests.support.running import running_in_thread
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
-    yield context
-    context.close()
 
 
 def _submit(ctx, body: bytes) -> uuid.UUID:

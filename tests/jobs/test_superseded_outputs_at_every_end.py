@@ -11,25 +11,15 @@ import json
 import logging
 import uuid
 
-import pytest
 
 from plantsolve.jobs import computed
 from plantsolve.jobs.computed import payload_key, result_key
-from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.leases import process_died
 from plantsolve.jobs.runner import fail_killed_at_hard_limit
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import Solved
 from plantsolve.store.blobs import BlobStoreUnavailable
-from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
-
-
-@pytest.fixture
-def ctx(tmp_path):
-    context = ServiceContext.create(service_settings(tmp_path), migrate=True)
-    yield context
-    context.close()
 
 
 def _blobs(ctx, job_id) -> list[str]:
