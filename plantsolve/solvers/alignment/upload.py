@@ -15,6 +15,7 @@ from plantsolve.solvers.base import (
     InputRejected,
     StoredInput,
     binary_stl,
+    file_options,
     json_object,
     reject,
     utf16_without_mark,
@@ -90,9 +91,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     if form:
         if "units" in form:
             body["units"] = _form_unit(body.get("units"), form.pop("units"))
-        inner = body.get("options") or {}
-        if not isinstance(inner, dict):
-            raise InputRejected([FieldError(("file", "options"), "options must be an object")])
+        inner = file_options(body)
         if form:
             body["options"] = {**inner, **form}
     try:

@@ -6,7 +6,7 @@ the request names it, and the solve opens the stored file (:mod:`.source`)."""
 from __future__ import annotations
 
 from plantsolve.schemas.dedup import DedupOptions, DedupRequest
-from plantsolve.solvers.base import StoredInput, json_object, reject, validated
+from plantsolve.solvers.base import StoredInput, file_options, json_object, reject, validated
 from plantsolve.solvers.dedup.ifcio import HEADER_BYTES, check_header
 from plantsolve.solvers.dedup.source import ZIP_MAGIC, ends, is_blank
 from plantsolve.solvers.other_kinds import refuse_other_kind
@@ -32,7 +32,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> DedupRequest:
         body = json_object(source.read(), refuse_cut=True)
         refuse_other_kind(body, "dedup")
         if options:
-            body = {**body, "options": {**(body.get("options") or {}), **_options(options).model_dump(exclude_unset=True)}}
+            body = {**body, "options": {**file_options(body), **_options(options).model_dump(exclude_unset=True)}}
         return validated(DedupRequest, body, ("file",))
     head, tail = ends(source, HEADER_BYTES, TRAILER_BYTES)
     if source.extension == ".ifc":

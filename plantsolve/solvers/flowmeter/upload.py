@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, file_options, json_object, reject, validated
 from plantsolve.solvers.other_kinds import refuse_other_kind
 
 UPLOAD_EXTENSIONS = (".json",)
@@ -20,7 +20,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
     body = json_object(text, refuse_cut=True)
     refuse_other_kind(body, "flowmeter")
     if options:
-        body = {**body, "options": {**(body.get("options") or {}), **options}}
+        body = {**body, "options": {**file_options(body), **options}}
     try:
         return validated(FlowmeterRequest, body)
     except InputRejected as exc:

@@ -67,7 +67,8 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, file_options, json_object, \
+    reject, validated
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
@@ -1405,10 +1406,7 @@ def _validated(body: dict, options: dict | None, lines: list[list[int]],
     for a bare list of positions), and by the form's option where the value came from the form."""
     form = options if isinstance(options, dict) else {}
     if options:
-        inner = body.get("options") or {}
-        if not isinstance(inner, dict):  # laid under the form's options it failed as an unreadable file
-            raise reject("options must be an object", ("file", "options"), "dict_type")
-        body = {**body, "options": {**inner, **options}}
+        body = {**body, "options": {**file_options(body), **options}}
     try:
         request = validated(PerfmapRequest, body, ())
     except InputRejected as e:

@@ -15,7 +15,7 @@ import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject, validated
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, file_options, json_object, reject, validated
 from plantsolve.solvers.length_units import METRES, SIZES, request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
@@ -581,11 +581,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         body = dict(doc)
         if isinstance(body.get("units"), str):
             body["units"] = _unit_option(body["units"], ("file", "units"))
-        own = body.get("options") or {}
-        if not isinstance(own, dict):
-            raise InputRejected([FieldError(("file", "options"), "options must be an object of the scan's options "
-                                            f"(e.g. {{\"pipe_radius\": 6}}), not {type(own).__name__}")])
-        body["options"] = {**own, **opts}
+        body["options"] = {**file_options(body), **opts}
         if units:
             body["units"] = units
     else:
