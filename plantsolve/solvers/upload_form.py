@@ -198,10 +198,9 @@ def merged(body: dict, form: Form, rules: FormRules) -> dict:
     return out
 
 
-def request_of_file(body: dict, options: Any, rules: FormRules) -> Any:
-    """The request of an uploaded request file ``body`` with the form's ``options`` joined to it: the form's values
-    and the file's options checked side by side (each bad one named, the file's first), then the two joined and
-    validated as the kind's request."""
+def form_beside(body: dict, options: Any, rules: FormRules) -> Form:
+    """The form's ``options`` read beside the request file ``body``: a bad value of the form's and one of the file's
+    own options are named together (the file's first), not one after the other is mended."""
     errors: list[FieldError] = []
     try:
         form = read_form(options, rules)
@@ -209,12 +208,19 @@ def request_of_file(body: dict, options: Any, rules: FormRules) -> Any:
         errors += rejected.errors
     try:
         own = file_options(body)
-        if errors:  # the file's own options are refused beside the form's values, not after they are mended
+        if errors:
             validated(rules.options_model, own, ("file", "options"))
     except InputRejected as rejected:
         errors[:0] = rejected.errors
     if errors:
         raise InputRejected(errors)
+    return form
+
+
+def request_of_file(body: dict, options: Any, rules: FormRules) -> Any:
+    """The request of an uploaded request file ``body`` with the form's ``options`` joined to it
+    (:func:`form_beside`, :func:`merged`, :func:`validated_request`)."""
+    form = form_beside(body, options, rules)
     return validated_request(rules, merged(body, form, rules), form)
 
 

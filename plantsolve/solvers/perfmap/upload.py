@@ -89,7 +89,7 @@ from plantsolve.solvers.perfmap.units import (
 from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc, mixed_efficiency_strays
 from plantsolve.solvers.perfmap.workbook import read_workbook
 from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
-from plantsolve.solvers.upload_form import Form, FormRules, merged, read_form
+from plantsolve.solvers.upload_form import Form, FormRules, form_beside, merged, read_form
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py", ".map")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -1315,6 +1315,14 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     workbook, a pyCycle/NPSS map or a JSON request, by the file's extension (the intake has checked it), with the
     upload form's ``options`` joined to it by the rules of :mod:`plantsolve.solvers.upload_form`: the form's
     ``units`` (``{"flow": "kg/s"}``) states what the file leaves unstated (:func:`_with_units_option`)."""
+    if source.extension == ".json":
+        text = _decode(source.read())
+        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
+                           refuse_cut=True)
+        refuse_other_kind(body, "perfmap")
+        form = form_beside(body, options, FORM)
+        return _validated(_with_units_option(body, form.units, "JSON request"), form, [],
+                          document=("positions",) if _bare_list(text) else ())
     form = read_form(options, FORM)
     try:
         return _parse(source, form)
@@ -1323,6 +1331,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
 
 
 def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
+    """The request of a table or map file (CSV, workbook, pyCycle or GasTurb map)."""
     ext = source.extension
     content = source.read()
     if ext == ".xlsx":
@@ -1347,18 +1356,12 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         body = {"positions": positions, "setting_names": names,
                 "units": {"flow": _map_data_flow_unit(text), "pressure": "1", "efficiency": "1"},
                 "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
-    elif ext == ".csv":
+    else:
         positions, lines, notes, meta = _parse_csv(text, form.read.columns)
         body: dict = {"positions": positions, **meta}
         body["source"] = {**body["source"], "format": "csv", "rows": lines}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
-    else:
-        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
-                           refuse_cut=True)
-        refuse_other_kind(body, "perfmap")
-        return _validated(_with_units_option(body, form.units, "JSON request"), form, lines,
-                          document=("positions",) if _bare_list(text) else ())
     return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form, lines)
 
 
