@@ -31,14 +31,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import cache
-from typing import Any, Callable, Literal, TypeVar, get_args, get_origin
+from typing import Any, Callable, Literal, get_args, get_origin
 
 from pydantic import BaseModel, create_model
 
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
 from plantsolve.solvers.length_units import SIZES, request_unit
 
-Request = TypeVar("Request", bound=BaseModel)
 UnitsRule = Literal["file", "result", "quantities"]
 
 
@@ -133,8 +132,8 @@ def _said_as_unit(error: FieldError, model: type[BaseModel], given: dict) -> Fie
     """``error`` of a unit field's enum refusing a word as :func:`request_unit` says it: the units with their names
     (``unknown unit 'yd'; one of mm, cm, m, in, ft (or their names: ...)``), not the bare list of symbols. The
     schema's own words for a word it knows (micrometres where a request's unit cannot be) stay."""
-    name = error.loc[-1]
-    field_info = model.model_fields.get(name) if isinstance(name, str) else None
+    name = error.loc[-1]  # the field itself, held by the form's options (or nested options) part
+    field_info = model.model_fields.get(name) if isinstance(name, str) and error.loc[-2:-1] == ("options",) else None
     word = given.get(name)
     among = _unit_names(field_info.annotation) if field_info is not None else ()
     if not among or not isinstance(word, str) or error.type != "literal_error" or \
