@@ -244,31 +244,6 @@ def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold
     return body
 
 
-def file_options(body: dict) -> dict:
-    """The options an uploaded request file states itself, for the form's to be laid over: none when it has no
-    ``options``; anything but an object (``[]``, ``""``, ``0``, ``null``) is refused naming ``file.options``, as
-    validating the file alone would (laid under the form's, it was taken for no options at all)."""
-    own = body.get("options", {})
-    if not isinstance(own, dict):
-        raise reject("options must be an object", ("file", "options"), "dict_type")
-    return own
-
-
-def merge_upload_options(body: dict, options: dict | None) -> dict:
-    """A request read from an uploaded file, with the form's ``options`` laid over it: ``units`` goes to
-    the top level, everything else (flat, or nested under ``options``) into the request's ``options``."""
-    if not options:
-        return body
-    if not isinstance(options, dict):
-        raise reject("options must be a JSON object", ("options",))
-    options = dict(options)
-    if "units" in options:
-        body = {**body, "units": options.pop("units")}
-    nested = options.pop("options", None)
-    merged = {**file_options(body), **(nested if isinstance(nested, dict) else {}), **options}
-    return {**body, "options": merged} if merged else body
-
-
 def binary_stl(head: bytes) -> bool:
     """A binary STL's start: an 80-byte header, a triangle count, then a first triangle of finite floats whose normal
     is a unit vector or zero (exporters write either) and whose attribute word is zero."""

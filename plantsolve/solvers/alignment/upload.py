@@ -5,7 +5,7 @@ from __future__ import annotations
 import codecs
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment.pcf import options_from, parse_pcf
+from plantsolve.solvers.alignment.pcf import parse_pcf
 from plantsolve.solvers.alignment.sniff import (
     refuse_other_json,
     refuse_other_text,
@@ -15,13 +15,12 @@ from plantsolve.solvers.base import (
     InputRejected,
     StoredInput,
     binary_stl,
-    file_options,
     json_object,
     reject,
     utf16_without_mark,
-    validated,
 )
 from plantsolve.solvers.length_units import request_unit
+from plantsolve.solvers.upload_form import FormRules, read_form, request_of_file
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
 
@@ -45,6 +44,7 @@ def _decoded(content: bytes) -> tuple[str, str]:
 
 
 _UNIT_RECORDS = ("UNITS-CO-ORDS", "UNITS-BORE")
+FORM = FormRules(AlignmentRequest, units="file")
 
 
 def _refuse_units_option(text: str, options: dict | None) -> None:
@@ -63,15 +63,16 @@ def _refuse_units_option(text: str, options: dict | None) -> None:
         + "Leave options.units out, or correct those records if the file's numbers are in another unit"),
         "extra_forbidden")]
     try:
-        options_from({key: value for key, value in options.items() if key != "units"})
+        read_form({key: value for key, value in options.items() if key != "units"}, FORM)
     except InputRejected as error:
         errors.extend(error.errors)
     raise InputRejected(errors)
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
-    """The request of an uploaded PCF or JSON file (its extension checked by the intake); ``options``
-    (the upload form's) override options given inside a JSON file."""
+    """The request of an uploaded PCF or JSON file (its extension checked by the intake), with the upload form's
+    ``options`` joined to it by the rules of :mod:`plantsolve.solvers.upload_form` (a PCF takes no ``units``: it
+    states its own)."""
     content = source.read()
     if binary_stl(content[:134]):  # every byte decodes as latin-1: said before it is
         raise reject("this is a binary STL mesh, not a PCF or an alignment JSON request (a mesh is a polyhedra "
@@ -80,25 +81,17 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
     if source.extension == ".pcf":
         refuse_other_text(text)
         _refuse_units_option(text, options)
-        return parse_pcf(text, options).model_copy(update={"source_encoding": encoding})
+        form = read_form(options, FORM)
+        try:
+            request = parse_pcf(text, form.read)
+        except InputRejected as rejected:  # an option the PCF's reading refuses (a fixed component it lacks)
+            raise InputRejected([form.named(e) or e for e in rejected.errors]) from None
+        return request.model_copy(update={"source_encoding": encoding})
     body = json_object(text, refuse_cut=True)
     refuse_other_json(body)
     if "units" in body:
         body["units"] = _unit(body["units"], ("file", "units"))
-    if options and not isinstance(options, dict):
-        raise InputRejected([FieldError(("options",), "options must be an object")])
-    form = dict(options or {})
-    if form:
-        if "units" in form:
-            body["units"] = _form_unit(body.get("units"), form.pop("units"))
-        inner = file_options(body)
-        if form:
-            body["options"] = {**inner, **form}
-    try:
-        return validated(AlignmentRequest, body, ())
-    except InputRejected as error:  # a value the form gave is named as the form names it, the file's by the file
-        raise InputRejected([FieldError(e.loc if e.loc[:1] == ("options",) and e.loc[1:2] and e.loc[1] in form
-                                        else ("file", *e.loc), e.msg, e.type) for e in error.errors]) from None
+    return request_of_file(body, options, FORM)
 
 
 def _unit(given, loc: tuple) -> object:
@@ -109,15 +102,3 @@ def _unit(given, loc: tuple) -> object:
         return request_unit(given)
     except ValueError as exc:
         raise InputRejected([FieldError(loc, str(exc))]) from None
-
-
-def _form_unit(stated, given) -> object:
-    """The form's ``units`` for a JSON file: the unit of a file that states none; the file's own when it states one,
-    which the form may repeat but not contradict (which of the two the numbers are in is not known). It was laid
-    into the request's options and refused as 'Extra inputs are not permitted', named inside the file."""
-    unit = _unit(given, ("options", "units"))
-    if stated is not None and unit != stated:
-        raise InputRejected([FieldError(("options", "units"), (
-            f"options.units {given!r} contradicts the file's units {stated!r}: say which is right (leave the option "
-            "out to use the file's, or correct the file)"))])
-    return unit

@@ -2,30 +2,22 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, file_options, json_object, reject, validated
+from plantsolve.solvers.base import StoredInput, decode_text, json_object, reject
 from plantsolve.solvers.other_kinds import refuse_other_kind
+from plantsolve.solvers.upload_form import FormRules, request_of_file
 
 UPLOAD_EXTENSIONS = (".json",)
+FORM = FormRules(FlowmeterRequest, units="file")
 
 
 def parse_upload(source: StoredInput, options: dict | None) -> FlowmeterRequest:
-    """A JSON request file; ``options`` (the upload form's options) override the file's options."""
+    """A JSON request file with the upload form's ``options`` joined to it by the rules of
+    :mod:`plantsolve.solvers.upload_form` (the form's ``units`` is that of a file that states none)."""
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
     text = decode_text(content, "JSON file")
     body = json_object(text, refuse_cut=True)
     refuse_other_kind(body, "flowmeter")
-    if options:
-        body = {**body, "options": {**file_options(body), **options}}
-    try:
-        return validated(FlowmeterRequest, body)
-    except InputRejected as exc:
-        if not options:
-            raise
-        # the form's options are merged over the file's: their errors name the form field, not the file
-        raise InputRejected([replace(e, loc=e.loc[1:]) if e.loc[1:2] == ("options",) else e
-                             for e in exc.errors]) from None
+    return request_of_file(body, options, FORM)

@@ -62,13 +62,13 @@ import math
 import re
 import zipfile
 import zlib
+from typing import Any
 
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, file_options, json_object, \
-    reject, validated
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
 from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
@@ -89,6 +89,7 @@ from plantsolve.solvers.perfmap.units import (
 from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc, mixed_efficiency_strays
 from plantsolve.solvers.perfmap.workbook import read_workbook
 from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
+from plantsolve.solvers.upload_form import Form, FormRules, form_beside, merged, read_form
 
 UPLOAD_EXTENSIONS = (".csv", ".xlsx", ".json", ".py", ".map")
 MEASURED = ("flow", "pressure", "efficiency")
@@ -1306,27 +1307,41 @@ def _map_data_cut(text: str) -> Diagnostic | None:
 MAX_CSV_ROWS = 200_000
 
 
+FORM = FormRules(PerfmapRequest, units="quantities")
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     """CSV (columns theta, phi, flow, pressure, efficiency; rules in the module docstring), an Excel
-    workbook, a pyCycle/NPSS map or a JSON request, by the file's extension (the intake has checked it);
-    ``options`` (the upload form's options) override options given inside a JSON file."""
+    workbook, a pyCycle/NPSS map or a JSON request, by the file's extension (the intake has checked it), with the
+    upload form's ``options`` joined to it by the rules of :mod:`plantsolve.solvers.upload_form`: the form's
+    ``units`` (``{"flow": "kg/s"}``) states what the file leaves unstated (:func:`_with_units_option`)."""
+    if source.extension == ".json":
+        text = _decode(source.read())
+        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
+                           refuse_cut=True)
+        refuse_other_kind(body, "perfmap")
+        form = form_beside(body, options, FORM)
+        return _validated(_with_units_option(body, form.units, "JSON request"), form, [],
+                          document=("positions",) if _bare_list(text) else ())
+    form = read_form(options, FORM)
+    try:
+        return _parse(source, form)
+    except InputRejected as rejected:  # a reading option the reader refused (a sheet the workbook lacks)
+        raise InputRejected([form.named(e) or e for e in rejected.errors]) from None
+
+
+def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
+    """The request of a table or map file (CSV, workbook, pyCycle or GasTurb map)."""
     ext = source.extension
     content = source.read()
     if ext == ".xlsx":
-        options = dict(options or {})
-        roles = options.get("columns")
-        if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
-            raise reject("options.columns must map header names to roles", ("options", "columns"))
-        sheet = options.get("sheet")
-        if sheet is not None and not isinstance(sheet, str):
-            raise reject("options.sheet must be a sheet name", ("options", "sheet"))
-        positions, lines, notes, meta = _parse_xlsx(content, roles, sheet)
+        positions, lines, notes, meta = _parse_xlsx(content, form.read.columns, form.read.sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
-        return _validated(*_with_units_option(body, options, "sheet"), lines)
+        return _validated(_with_units_option(body, form.units, "sheet"), form, lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
-        body, lines, options = gasturb_request_body(content, options)
-        return _validated(body, options, lines)
+        body, lines, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
+        return _validated(body, form, lines)
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
         # counted before any parsing: a table far beyond any rig's is refused in milliseconds
@@ -1341,37 +1356,29 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
         body = {"positions": positions, "setting_names": names,
                 "units": {"flow": _map_data_flow_unit(text), "pressure": "1", "efficiency": "1"},
                 "upload_warnings": [d.model_dump() for d in notes], "source": {"format": "pycycle"}}
-    elif ext == ".csv":
-        roles = (options or {}).get("columns") if isinstance(options, dict) else None
-        if roles is not None and not (isinstance(roles, dict) and all(isinstance(v, str) for v in roles.values())):
-            raise reject("options.columns must map header names to roles", ("options", "columns"))
-        positions, lines, notes, meta = _parse_csv(text, roles)
+    else:
+        positions, lines, notes, meta = _parse_csv(text, form.read.columns)
         body: dict = {"positions": positions, **meta}
         body["source"] = {**body["source"], "format": "csv", "rows": lines}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
-    else:
-        body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
-                           refuse_cut=True)
-        refuse_other_kind(body, "perfmap")
-        return _validated(body, options, lines, document=("positions",) if _bare_list(text) else ())
-    return _validated(*_with_units_option(body, options, "CSV" if ext == ".csv" else "pyCycle map"), lines)
+    return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form, lines)
 
 
 _OPTION_QUANTITIES = ("flow", "pressure")
 
 
-def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dict, dict | None]:
-    """(body, options) with the upload's ``units`` option (``{"flow": "kg/s"}``, as a GasTurb map takes it) read into
-    the body: the unit of a quantity the file leaves unstated (a header 'flow' without brackets), said in a note; one
-    contradicting the unit the file states is refused naming both. It was refused as 'extra inputs', while the
-    message for ``result_units`` asked for ``units.flow``, which an upload had no way to give."""
-    if not isinstance(options, dict) or "units" not in options:
-        return body, options
-    options = dict(options)
-    given = options.pop("units")
+def _with_units_option(body: dict, given: Any, what: str) -> dict:
+    """``body`` with the upload form's ``units`` (``{"flow": "kg/s"}``, as a GasTurb map takes it) read into it: the
+    unit of a quantity the file leaves unstated (a header 'flow' without brackets), said in a note; one contradicting
+    the unit the file states is refused naming both. It was refused as 'extra inputs', while the message for
+    ``result_units`` asked for ``units.flow``, which an upload had no way to give."""
+    if given is None:
+        return body
     if not isinstance(given, dict):
         raise reject("options.units must be an object such as {\"flow\": \"kg/s\"}", ("options", "units"))
+    if not isinstance(body.get("units") or {}, dict):
+        return body  # a request file's units that are no object: refused by the schema, naming file.units
     units = dict(body.get("units") or {})
     notes = list(body.get("upload_warnings") or [])
     for quantity, unit in given.items():
@@ -1388,7 +1395,7 @@ def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dic
             raise reject(f"options.units.{quantity}: {e}", loc) from None
         stated = units.get(quantity)
         if stated:
-            if not _same_unit(stated, unit):
+            if not isinstance(stated, str) or not _same_unit(stated, unit):
                 raise reject(f"options.units.{quantity} {unit!r} contradicts the {what}, which states {stated!r}: say "
                              "which is right (leave the option out to use the file's, or correct the file)", loc)
             continue
@@ -1396,25 +1403,23 @@ def _with_units_option(body: dict, options: dict | None, what: str) -> tuple[dic
         notes.append(Diagnostic(code="upload_units_option", message=f"The {what} states no unit of its {quantity}: "
                                 f"read in {unit}, as options.units.{quantity} says.",
                                 details={"quantity": quantity, "unit": unit}).model_dump())
-    return {**body, "units": units, "upload_warnings": notes}, options
+    return {**body, "units": units, "upload_warnings": notes}
 
 
-def _validated(body: dict, options: dict | None, lines: list[list[int]],
+def _validated(body: dict, form: Form, lines: list[list[int]],
                document: tuple[str, ...] | None = None) -> PerfmapRequest:
     """The request of a parsed file, its errors named by file row where the file has rows, by their path in the file
     where the file is the request (``document``: the steps of the request's path the file leaves out, ``positions``
     for a bare list of positions), and by the form's option where the value came from the form."""
-    form = options if isinstance(options, dict) else {}
-    if options:
-        body = {**body, "options": {**file_options(body), **options}}
+    body = merged(body, form, FORM)
     try:
         request = validated(PerfmapRequest, body, ())
     except InputRejected as e:
         errs = []
         for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
             loc, path = fe.loc, "/".join(map(str, fe.loc))
-            if len(loc) > 1 and loc[0] == "options" and loc[1] in form:  # a form option: named as the form names it
-                errs.append(FieldError(loc, fe.msg, fe.type))
+            if (named := form.named(fe)) is not None:  # a form option: named as the form names it
+                errs.append(named)
             elif document is not None:
                 written = loc[len(document):] if loc[:len(document)] == document else loc
                 errs.append(FieldError(("file", *written), fe.msg, fe.type))

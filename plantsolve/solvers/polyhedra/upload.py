@@ -45,8 +45,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.polyhedra import MAX_COORDINATE, PolyhedraRequest
-from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, merge_upload_options, \
-    reject, utf16_without_mark, validated
+from plantsolve.solvers.base import InputRejected, StoredInput, decode_text, json_object, reject, utf16_without_mark
 from plantsolve.solvers.other_kinds import file_holds, refuse_other_kind
 from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_objects
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
@@ -63,7 +62,7 @@ from plantsolve.solvers.polyhedra.subsurface_multipliers import simple_multiplie
 from plantsolve.solvers.polyhedra.zone_multipliers import zone_list_strays, zone_multipliers
 from plantsolve.solvers.decimal_comma import is_decimal_comma
 from plantsolve.solvers.skipped_input import ends_mid_line, refuse_noise_stl, truncated_file
-from plantsolve.solvers.upload_form import form_model, validated_upload
+from plantsolve.solvers.upload_form import FormRules, merged, read_form, validated_request
 
 UPLOAD_EXTENSIONS = (".idf", ".epjson", ".xml", ".gbxml", ".ifc", ".obj", ".stl", ".json")
 LOOP_KINDS = ("indices", "points")  # the tags of the Loop union (schemas.polyhedra)
@@ -952,11 +951,15 @@ def name_what_it_holds(refused: InputRejected, extension: str, content: bytes) -
                                              f"says: {first.msg}"), *rest])
 
 
+FORM = FormRules(PolyhedraRequest, units="result")
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
-    """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request; ``options`` (the
-    form's options: ``units``, ``merge_tolerance``, ``planarity_tolerance``, ``file_units``) override what the file
-    says, and the file's lengths are converted to the request's ``units`` (:mod:`.file_units`)."""
-    form = validated(form_model(PolyhedraRequest), merge_upload_options({}, options), ()) if options else None
+    """An IDF, epJSON, gbXML, IFC, OBJ, STL or JSON file (intake checked the extension) as a request, with the upload
+    form's ``options`` (``units``, ``merge_tolerance``, ``planarity_tolerance``, ``file_units`` …) joined to it by the
+    rules of :mod:`plantsolve.solvers.upload_form`: the form's ``units`` is the result's, and the file's lengths are
+    converted into it (:mod:`.file_units`)."""
+    form = read_form(options, FORM)
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
@@ -965,14 +968,13 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     except InputRejected as refused:
         raise name_what_it_holds(refused, source.extension, content) from None
     fmt = (body.get("source") or {}).get("format") if isinstance(body.get("source"), dict) else None
-    if fmt == "idf" and form is not None and form.options.file_units is not None:
-        body["source"]["warnings"] = followed(body["source"]["warnings"], form.options.file_units)
-    body = reconcile(body, form.units if form is not None and "units" in form.model_fields_set else None,
-                     form.options.file_units if form is not None else None, fmt or source.extension[1:])
-    try:
-        return validated_upload(PolyhedraRequest, body, options)
-    except InputRejected as rejected:  # pydantic names a loop's branch (indices or points) in the path: no key of the file
-        raise InputRejected([replace(e, loc=_without_branch(e.loc)) for e in rejected.errors]) from None
+    file_units = form.read.file_units
+    if fmt == "idf" and file_units is not None:
+        body["source"]["warnings"] = followed(body["source"]["warnings"], file_units)
+    body = reconcile(body, form.units, file_units, fmt or source.extension[1:])
+    # pydantic names a loop's branch (indices or points) in the path: no key of the file
+    return validated_request(FORM, merged(body, form, FORM), form,
+                             elsewhere=lambda e: replace(e, loc=("file", *_without_branch(e.loc))))
 
 
 def _without_branch(loc: tuple) -> tuple:

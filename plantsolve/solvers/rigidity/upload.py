@@ -50,7 +50,7 @@ from plantsolve.solvers.rigidity.catalogue import lookup, normalise_number
 from plantsolve.solvers.rigidity.embedded import Resolver, official
 from plantsolve.solvers.rigidity.stickers import STICKER, category
 from plantsolve.solvers.skipped_input import ends_mid_line, truncated_file
-from plantsolve.solvers.upload_form import validated_upload
+from plantsolve.solvers.upload_form import FormRules, request_of_file
 
 UPLOAD_EXTENSIONS = (".ldr", ".mpd", ".json")
 MAX_DEPTH = 32
@@ -673,9 +673,13 @@ def _tidy(v: float) -> float:
     return float(r) if abs(v - r) < 1e-5 else float(v)
 
 
+FORM = FormRules(RigidityRequest, units="file")
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
-    """An LDraw or JSON file (intake checked the extension) as a request; ``options`` (the form's:
-    ``contact_tolerance``, ``dock``, ``rank_tolerance``) override what the file says."""
+    """An LDraw or JSON file (intake checked the extension) as a request, with the upload form's ``options``
+    (``units``, ``contact_tolerance``, ``dock``, ``rank_tolerance``) joined to it by the rules of
+    :mod:`plantsolve.solvers.upload_form`."""
     content = source.read()
     if not content.strip():
         raise reject("the file is empty")
@@ -683,7 +687,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> RigidityRequest:
     body = json_object(text) if source.extension == ".json" else parse_ldraw(text)
     if source.extension == ".json":
         _refuse_other_request(body)
-    return validated_upload(RigidityRequest, body, options)
+    return request_of_file(body, options, FORM)
 
 
 MODEL_FIELDS = ("bodies", "joints", "parts")

@@ -9,13 +9,12 @@ from __future__ import annotations
 import base64
 import io
 import math
-from dataclasses import replace
 
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, file_options, json_object, reject, validated
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject
 from plantsolve.solvers.length_units import METRES, SIZES, request_unit
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
@@ -26,6 +25,7 @@ from plantsolve.solvers.tube.read_log import ReadLog
 from plantsolve.solvers.tube.stl_points import read_stl
 from plantsolve.solvers.tube.text_points import read_text_points
 from plantsolve.solvers.tube.validation import EXTENT_MM_PLAUSIBLE, UNIT_MM, likely_units, scan_extent
+from plantsolve.solvers.upload_form import FormRules, merged, read_form, validated_request
 
 UPLOAD_EXTENSIONS = (".ply", ".stl", ".obj", ".e57", ".las", ".laz", ".xyz", ".csv", ".txt", ".npy", ".json")
 TO_MM = UNIT_MM  # millimetres per unit of each unit a file's coordinates may be in (micrometres too)
@@ -556,22 +556,23 @@ def _unit_option(word: object, loc: tuple, among=METRES) -> str:
         raise InputRejected([FieldError(loc, str(exc))]) from None
 
 
+FORM = FormRules(TubeRequest, units="file")
+
+
 def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
-    """Uploaded scan → :class:`TubeRequest` (format from the extension, case-insensitive)."""
+    """Uploaded scan → :class:`TubeRequest` (format from the extension, case-insensitive), with the upload form's
+    ``options`` joined to it by the rules of :mod:`plantsolve.solvers.upload_form`: the form's ``units`` is the
+    unit of a scan's coordinates where the scan states none (and the result's), and may not contradict a request
+    file's."""
     ext = source.extension
-    units = None
-    opts = dict(options or {})
-    if "units" in opts:  # tolerate units passed among the options
-        units = opts.pop("units")
-        units = None if units is None else _unit_option(units, ("options", "units"))
-    file_units = opts.get("file_units")
-    if file_units is not None:
-        # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the stored
-        # request keeps what the user said, canonically spelled
-        file_units = opts["file_units"] = _unit_option(file_units, ("options", "file_units"), SIZES)
+    form = read_form(options, FORM)
+    units = form.units
+    # a file's unit may be one no request is written in (micrometres, an FE or CMM export's): the stored request
+    # keeps what the user said, canonically spelled
+    file_units = form.read.file_units
     if ext == ".json":
         if file_units is not None:
-            raise InputRejected([FieldError(("options", "file_units"), "a JSON file is a request: its points are in "
+            raise InputRejected([FieldError(form.at["file_units"], "a JSON file is a request: its points are in "
                                             "its `units` (set units instead)")])
         doc = json_object(source.read(), "JSON must be a request object or a list of [x, y, z]", list_as="points")
         if "points" not in doc:
@@ -581,45 +582,34 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
         body = dict(doc)
         if isinstance(body.get("units"), str):
             body["units"] = _unit_option(body["units"], ("file", "units"))
-        body["options"] = {**file_options(body), **opts}
-        if units:
-            body["units"] = units
-    else:
-        target = units or "mm"
-        log = ReadLog(ext[1:])
-        pts, stated, on_grid = _read_points(source, log)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
-            raise reject("file holds no 3D points")
-        finite = np.isfinite(pts).all(1)
-        if not finite.all():  # binary formats (LAS, NPY, E57) have no lines to name: a count
-            bad = np.flatnonzero(~finite)
-            if len(bad) == len(pts):
-                raise reject("every point of the file has a non-finite coordinate")
-            log.skip(None, "non-finite coordinate", count=len(bad))
-            pts = pts[finite]
-        conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target, units is not None)
-        if not (factors == 1.0).all():
-            pts = pts * factors
-        if conversion.basis == "request" and units is None:
-            unit_warnings += _default_unit_implausible(ext, pts, target)
-        bounded = (np.abs(pts) <= MAX_COORDINATE).all(1)
-        if not bounded.all():  # one absurd float of a binary file (LAS, NPY, a PLY cut in its header) is one point
-            if not bounded.any():
-                raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
-            log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
-            pts = pts[bounded]
-        pts = _without_repeats(pts, ext, log, on_grid)
-        source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
-                                    skipped_lines=log.lines, truncated=log.truncation is not None,
-                                    warnings=log.warnings() + unit_warnings)
-        body = {"points": points_field(pts), "options": opts, "source": source_report.model_dump()}
-        if units:
-            body["units"] = units
-    try:
-        return validated(TubeRequest, body, ())
-    except InputRejected as exc:
-        if ext != ".json":
-            raise
-        # the points of a JSON file are the file's; its options are merged with the form's, so they keep their own path
-        raise InputRejected([replace(e, loc=("file", *e.loc)) if e.loc[:1] == ("points",) else e
-                             for e in exc.errors]) from None
+        return validated_request(FORM, merged(body, form, FORM), form)
+    target = units or "mm"
+    log = ReadLog(ext[1:])
+    pts, stated, on_grid = _read_points(source, log)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
+        raise reject("file holds no 3D points")
+    finite = np.isfinite(pts).all(1)
+    if not finite.all():  # binary formats (LAS, NPY, E57) have no lines to name: a count
+        bad = np.flatnonzero(~finite)
+        if len(bad) == len(pts):
+            raise reject("every point of the file has a non-finite coordinate")
+        log.skip(None, "non-finite coordinate", count=len(bad))
+        pts = pts[finite]
+    conversion, factors, unit_warnings = _conversion(ext, stated, file_units, target, units is not None)
+    if not (factors == 1.0).all():
+        pts = pts * factors
+    if conversion.basis == "request" and units is None:
+        unit_warnings += _default_unit_implausible(ext, pts, target)
+    bounded = (np.abs(pts) <= MAX_COORDINATE).all(1)
+    if not bounded.all():  # one absurd float of a binary file (LAS, NPY, a PLY cut in its header) is one point
+        if not bounded.any():
+            raise reject(f"every point of the file has a coordinate beyond {MAX_COORDINATE:g} {target}")
+        log.skip(None, f"coordinate beyond {MAX_COORDINATE:g} {target}", count=int((~bounded).sum()))
+        pts = pts[bounded]
+    pts = _without_repeats(pts, ext, log, on_grid)
+    source_report = PointSource(format=ext[1:], points=len(pts), units=conversion, skipped=log.count,
+                                skipped_lines=log.lines, truncated=log.truncation is not None,
+                                warnings=log.warnings() + unit_warnings)
+    body = {"points": points_field(pts), "source": source_report.model_dump()}
+    # the request is the reader's making: its paths are the request's, a form option's the form's
+    return validated_request(FORM, merged(body, form, FORM), form, elsewhere=lambda error: error)
