@@ -102,6 +102,11 @@ class BlobStore(ABC):
     def delete(self, key: str) -> None:
         """Remove the blob; a missing one is no error."""
 
+    @abstractmethod
+    def keys(self, prefix: str) -> Iterator[str]:
+        """The keys that start with ``prefix`` (a folder's, ending in '/'), in no set order. A listing, for sweeps
+        of a few blobs kept under one prefix (the spool), not for a job's reads."""
+
     def get(self, key: str) -> bytes:
         return self.open(key).read()
 
@@ -167,6 +172,17 @@ class LocalBlobStore(BlobStore):
         path = self.path(key)
         path.unlink(missing_ok=True)
         self._prune(path.parent)
+
+    def keys(self, prefix: str) -> Iterator[str]:
+        """Every file under the prefix's folder, a temporary one that a killed put left behind too (its name starts
+        with '.tmp-'; deleting it by its key removes it)."""
+        folder = self.path(check_key(prefix.rstrip("/")))
+        root = self.root.resolve()
+        try:
+            found = [path.relative_to(root).as_posix() for path in folder.rglob("*") if path.is_file()]
+        except OSError as error:
+            raise BlobStoreUnavailable(f"the blob folder cannot be read: {error.strerror}") from error
+        return iter(found)
 
     def _temporary(self, folder: Path) -> tuple[int, str]:
         """A new temporary file in ``folder``, made if missing."""
