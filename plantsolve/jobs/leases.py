@@ -44,8 +44,10 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     solved = computed.kept_by(ctx.files, lost.id, lost.attempt)
     if solved:
         why += "; its result was kept, and the next attempt stores it without solving again"
+    # a result this very attempt spooled (its re-queue did not get through) is granted its attempt too, once: an
+    # attempt that was to store a spooled result and was lost as well is not (each grant would call for another)
     waiting = previous.get("outcome") == "result_pending" or solved or (
-        lost.attempt >= lost.max_attempts and spool.holder(ctx, lost.id) is not None)
+        lost.attempt >= lost.max_attempts and spool.spooled_by(ctx, lost.id) == lost.attempt)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
     # the reader's warnings, written by the lost attempt once it read its input (or by an earlier one), are kept
     report = with_reader_warnings(lost_worker_report(lost.attempt, cap, why), held(lost.report))

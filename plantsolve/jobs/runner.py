@@ -25,9 +25,9 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
+from plantsolve.jobs.spool import pending_artifact_key, pending_path  # noqa: F401  (the spool's keys, named here too)
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
-from plantsolve.jobs.spool import pending_artifact_key, pending_path  # noqa: F401  (where a spooled result lies)
 from plantsolve.store.blobs import BlobStore
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact, as_utc
@@ -380,14 +380,14 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
     except Exception as error:
         if not is_infrastructure_failure(error):
             raise
-        payload = {"attempt": computed_by, "result": result_json, "report": report, "run_seconds": run_seconds,
+        payload = {"attempt": computed_by, "spooled_by": attempt, "result": result_json, "report": report, "run_seconds": run_seconds,
                    "artifacts": [dataclasses.asdict(a) for a in stored],
                    "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting], "kept": kept}
         spool.write(ctx, job_id, payload, waiting)
-        raise ResultPending(str(error)) from error
+        raise ResultPending(str(error), solved_here=computed_by == attempt) from error
     if written:
         if attempt > 1:  # a spool is an earlier attempt's: a first attempt has none to look for
-            spool.remove(ctx, job_id)
+            spool.remove(ctx, job_id, [artifact.path for artifact in stored])
         if kept is not None:
             computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], stored)
         computed.discard_superseded(ctx.files, job_id, attempt, stored, but=kept["attempt"] if kept else None)
@@ -403,7 +403,7 @@ def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict | None) -> None
     job = ctx.repo.get(job_id, brief=True)
     if job is None or not is_finished(job.status):
         return
-    spool.remove(ctx, job_id)
+    spool.remove(ctx, job_id, spool.result_keys(ctx, job))
     if kept is not None:
         artifacts = ctx.repo.artifacts(job_id)
         computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], artifacts)
@@ -414,8 +414,8 @@ def tidy_ended(ctx: ServiceContext, job) -> None:
     """Remove what the last process of an ended ``job`` (a record) was to remove after its commit and may not have,
     killed in between: its spooled result and the outputs kept before the commit (but for the payloads its
     artifacts store). Costs an ``exists`` per spool store and per attempt when nothing is left."""
-    spool.remove(ctx, job.id)
     stored = ctx.repo.artifacts(job.id) if job.status == SUCCEEDED else []
+    spool.remove(ctx, job.id, [artifact.path for artifact in stored])
     computed.discard_superseded(ctx.files, job.id, job.attempt, stored)
 
 

@@ -20,12 +20,14 @@ import json
 import logging
 import uuid
 from dataclasses import dataclass
+from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.lifecycle import is_finished
+from plantsolve.jobs.lifecycle import SUCCEEDED, is_finished
 from plantsolve.solvers.base import Artifact
-from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
+from plantsolve.store.blobs import BlobMissing, BlobStore, BlobStoreUnavailable
+from plantsolve.store.repository import JobRecord
 
 log = logging.getLogger("plantsolve.runner")
 
@@ -57,6 +59,17 @@ def holder(ctx: ServiceContext, job_id: uuid.UUID) -> BlobStore | None:
         except BlobStoreUnavailable:
             continue
     return None
+
+
+def spooled_by(ctx: ServiceContext, job_id: uuid.UUID) -> int | None:
+    """The attempt that wrote the job's spooled result, if one waits (None too when it cannot be read)."""
+    store = holder(ctx, job_id)
+    if store is None:
+        return None
+    try:
+        return json.loads(store.get(pending_path(job_id))).get("spooled_by")
+    except (BlobMissing, BlobStoreUnavailable, ValueError, AttributeError):
+        return None
 
 
 @dataclass(frozen=True)
@@ -103,23 +116,42 @@ def read(store: BlobStore, job_id: uuid.UUID) -> Spooled:
     return Spooled(payload, waiting)
 
 
-def remove(ctx: ServiceContext, job_id: uuid.UUID) -> None:
+def remove(ctx: ServiceContext, job_id: uuid.UUID, in_use: Iterable[str] = ()) -> None:
     """The job has ended, or its spooled result is stored: its spool goes from every store that holds one (one
-    ``exists`` each when there is none). The artifacts it names go first, the result last, so that a removal cut
-    short leaves the index that finds them."""
+    ``exists`` each when there is none), and so do the artifacts the spooling attempt had stored already, but for
+    those the job's result holds (``in_use``: their keys). The artifacts go first, the result (the index that finds
+    them) last, so that a removal cut short is finished by a later one."""
     for store in stores(ctx):
         try:
-            if not store.exists(pending_path(job_id)):
-                continue
-            try:
-                names = [a["name"] for a in json.loads(store.get(pending_path(job_id))).get("unstored", [])]
-            except (ValueError, TypeError, KeyError, AttributeError):
-                names = []  # unreadable: the start-up sweep's listing finds its artifacts
-            for name in names:
-                store.delete(pending_artifact_key(job_id, name))
-            store.delete(pending_path(job_id))
+            if store.exists(pending_path(job_id)):
+                _remove_spool(ctx, store, job_id, [], set(in_use))
         except Exception:
             log.warning("the spooled result of job %s could not be removed", job_id, exc_info=True)
+
+
+def _remove_spool(ctx: ServiceContext, store: BlobStore, job_id: uuid.UUID, found: list[str], in_use: set[str]) -> int:
+    """Remove one job's spool from ``store``: the keys ``found`` under its prefix, the artifacts its result names (the
+    unstored ones in this store, the stored ones in the blob store, but for ``in_use``), then the result. Returns how
+    many blobs went."""
+    unstored: list[str] = []
+    stored: list[str] = []
+    try:
+        payload = json.loads(store.get(pending_path(job_id)))
+        unstored = [pending_artifact_key(job_id, a["name"]) for a in payload.get("unstored", [])]
+        stored = [a["path"] for a in payload.get("artifacts", [])]
+    except BlobMissing:
+        pass  # cut short before its result was written: ``found`` holds what there is
+    except (ValueError, TypeError, KeyError, AttributeError):
+        log.warning("the spooled result of job %s cannot be read; its stored artifacts stay", job_id)
+    index = pending_path(job_id)
+    for key in dict.fromkeys([*found, *unstored]):
+        if key != index:
+            store.delete(key)
+    for key in stored:
+        if key not in in_use:
+            ctx.files.delete(key)
+    store.delete(index)
+    return len(set(found) | set(unstored) | {index}) + len([k for k in stored if k not in in_use])
 
 
 def remove_if_ended(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
@@ -128,14 +160,22 @@ def remove_if_ended(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     job = ctx.repo.get(job_id, brief=True)
     if job is not None and not is_finished(job.status):
         return False
-    remove(ctx, job_id)
+    remove(ctx, job_id, result_keys(ctx, job))
     return True
 
 
+def result_keys(ctx: ServiceContext, job: JobRecord | None) -> list[str]:
+    """The keys of the artifacts an ended job's result holds (none unless it succeeded)."""
+    if job is None or job.status != SUCCEEDED:
+        return []
+    return [artifact.path for artifact in ctx.repo.artifacts(job.id)]
+
+
 def sweep(ctx: ServiceContext) -> int:
-    """Remove every spooled blob whose job has ended or is gone, in every store this process reaches; a spool whose
-    job is queued or running stays for its next attempt. Returns how many blobs went. Raises when the database
-    cannot say how a job stands (the caller tries again later); a store that cannot be listed is skipped."""
+    """Remove every spool whose job has ended or is gone, in every store this process reaches, with what it names
+    (:func:`remove`); a spool whose job is queued or running stays for its next attempt. Returns how many blobs went.
+    Raises when the database cannot say how a job stands (the caller tries again later); a store that cannot be
+    listed or emptied is left for a later start."""
     removed = 0
     for store in stores(ctx):
         try:
@@ -147,18 +187,18 @@ def sweep(ctx: ServiceContext) -> int:
         for key in keys:
             by_job.setdefault(_job_of(key), []).append(key)
         for job_id, found in by_job.items():
-            if job_id is not None:
+            try:
+                if job_id is None:  # no job's (a stray file under the prefix)
+                    for key in found:
+                        store.delete(key)
+                    removed += len(found)
+                    continue
                 job = ctx.repo.get(job_id, brief=True)
                 if job is not None and not is_finished(job.status):
                     continue
-            # artifacts first, the result (the index an end's removal reads) last
-            for key in sorted(found, key=lambda k: k.endswith("/result.json")):
-                try:
-                    store.delete(key)
-                    removed += 1
-                except BlobStoreUnavailable:
-                    log.warning("the spooled blob %s could not be removed; swept at a later start", key)
-                    break
+                removed += _remove_spool(ctx, store, job_id, found, set(result_keys(ctx, job)))
+            except BlobStoreUnavailable:
+                log.warning("the spool of job %s could not be removed; swept at a later start", job_id)
     if removed:
         log.info("spool: removed %d blob(s) of jobs that have ended", removed)
     return removed
