@@ -403,7 +403,7 @@ def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict | None) -> None
     job = ctx.repo.get(job_id, brief=True)
     if job is None or not is_finished(job.status):
         return
-    spool.remove(ctx, job_id, spool.result_keys(ctx, job))
+    spool.remove(ctx, job_id, [artifact.path for artifact in spool.result_artifacts(ctx, job)])
     if kept is not None:
         artifacts = ctx.repo.artifacts(job_id)
         computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], artifacts)

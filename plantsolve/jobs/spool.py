@@ -22,6 +22,7 @@ import uuid
 from dataclasses import dataclass
 from typing import Iterable
 
+from plantsolve.jobs import computed
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import SUCCEEDED, is_finished
@@ -160,15 +161,15 @@ def remove_if_ended(ctx: ServiceContext, job_id: uuid.UUID) -> bool:
     job = ctx.repo.get(job_id, brief=True)
     if job is not None and not is_finished(job.status):
         return False
-    remove(ctx, job_id, result_keys(ctx, job))
+    remove(ctx, job_id, [artifact.path for artifact in result_artifacts(ctx, job)])
     return True
 
 
-def result_keys(ctx: ServiceContext, job: JobRecord | None) -> list[str]:
-    """The keys of the artifacts an ended job's result holds (none unless it succeeded)."""
+def result_artifacts(ctx: ServiceContext, job: JobRecord | None) -> list:
+    """The artifacts an ended job's result holds (none unless it succeeded)."""
     if job is None or job.status != SUCCEEDED:
         return []
-    return [artifact.path for artifact in ctx.repo.artifacts(job.id)]
+    return ctx.repo.artifacts(job.id)
 
 
 def sweep(ctx: ServiceContext) -> int:
@@ -196,7 +197,10 @@ def sweep(ctx: ServiceContext) -> int:
                 job = ctx.repo.get(job_id, brief=True)
                 if job is not None and not is_finished(job.status):
                     continue
-                removed += _remove_spool(ctx, store, job_id, found, set(result_keys(ctx, job)))
+                held = result_artifacts(ctx, job)
+                removed += _remove_spool(ctx, store, job_id, found, {artifact.path for artifact in held})
+                if job is not None:  # the process killed before this clean-up left the outputs kept before a commit
+                    computed.discard_superseded(ctx.files, job_id, job.attempt, held)
             except BlobStoreUnavailable:
                 log.warning("the spool of job %s could not be removed; swept at a later start", job_id)
     if removed:
