@@ -18,6 +18,7 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, with_reader_warnings
 from plantsolve.jobs.runner import lost_worker_report, tidy_ended
+from plantsolve.store.blobs import LocalBlobStore
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import LapsedAttempt, as_utc
 
@@ -89,6 +90,15 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
     lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
                          job.heartbeat_at, job.report, as_utc(job.attempt_started_at))
     return lose_attempt(ctx, lost, why=how)
+
+
+def remove_temporaries(ctx: ServiceContext, job_id: uuid.UUID, pid: int) -> int:
+    """Job process ``pid`` of ``job_id`` died without a word (killed, out of memory): the temporary files of the blob
+    writes it was in the middle of (an artifact, a kept output, a spooled result) are never renamed into place, nor
+    removed; in this machine's folders (the local blob store's, the spool's) they go now. Returns how many went."""
+    folders = {id(store): store for store in (ctx.files, ctx.spool) if isinstance(store, LocalBlobStore)}
+    return sum(store.remove_temporaries(prefix, pid) for store in folders.values()
+               for prefix in (f"{job_id}/", f"{spool.PREFIX}{job_id}/"))
 
 
 def abandoned(ctx: ServiceContext, job_id: uuid.UUID, worker: str, alive_seconds: float) -> bool:

@@ -123,6 +123,11 @@ class BlobStore(ABC):
             yield path
 
 
+def temporary_prefix(pid: int) -> str:
+    """How the temporary files of a put by process ``pid`` begin (the pid: a killed writer's are found by it)."""
+    return f".tmp-{pid}-"
+
+
 def digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -189,12 +194,24 @@ class LocalBlobStore(BlobStore):
         try:
             try:
                 folder.mkdir(parents=True, exist_ok=True)
-                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+                return tempfile.mkstemp(dir=folder, prefix=temporary_prefix(os.getpid()))
             except FileNotFoundError:  # a prune removed the folder between its making and the file's
                 folder.mkdir(parents=True, exist_ok=True)
-                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+                return tempfile.mkstemp(dir=folder, prefix=temporary_prefix(os.getpid()))
         except OSError as error:
             raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
+
+    def remove_temporaries(self, prefix: str, pid: int) -> int:
+        """Remove the temporary files that process ``pid`` left under the prefix's folder: a process killed in the
+        middle of a put (its temporary file is never renamed into place, nor removed). Returns how many went."""
+        removed = 0
+        for key in self.keys(prefix):
+            path = self.path(key)
+            if path.name.startswith(temporary_prefix(pid)):
+                path.unlink(missing_ok=True)
+                self._prune(path.parent)
+                removed += 1
+        return removed
 
     def _prune(self, folder: Path) -> None:
         """Remove ``folder`` and its parents below the root while they are empty."""

@@ -217,3 +217,19 @@ def test_a_result_the_database_never_takes_in_time_ends_the_job_at_its_cap(ctx, 
     assert [h["outcome"] for h in job.attempts] == ["result_pending", "result_pending", "failed"]
     assert len(list((tmp_path / "runs").iterdir())) == 1  # solved once
     assert _files(ctx) == []
+
+
+def test_the_temporary_files_of_a_dead_process_go_and_another_processs_stay(ctx):
+    from plantsolve.jobs.leases import remove_temporaries
+    from plantsolve.store.blobs import temporary_prefix
+
+    job_id = uuid.uuid4()
+    dead, live = ctx.files.root / str(job_id) / "a1", ctx.files.root / spool.PREFIX / str(job_id) / "artifacts"
+    for folder in (dead, live):
+        folder.mkdir(parents=True)
+    (dead / f"{temporary_prefix(4242)}x").write_bytes(b"half")
+    (live / f"{temporary_prefix(4242)}y").write_bytes(b"half")
+    (live / f"{temporary_prefix(4343)}z").write_bytes(b"under way")
+    assert remove_temporaries(ctx, job_id, 4242) == 2
+    assert _files(ctx) == [f"{spool.PREFIX}{job_id}/artifacts/{temporary_prefix(4343)}z"]
+    assert not (ctx.files.root / str(job_id)).exists()  # its emptied folders went too

@@ -1,6 +1,7 @@
 """Real job processes of the embedded default killed around the spool: a process killed while its result's write
 waits on the database (the SQLite write lock held by another process, long enough that it spools the result), and a
-service started again on a folder where killed processes left spools. Readiness says 503 while the database takes no
+service started again on a folder where killed processes left spools. A killed process's interrupted puts leave
+temporary files: the supervisor removes them. Readiness says 503 while the database takes no
 write; every job ends exactly once (solved once: its spooled result is stored, not solved again) and no spool is
 left behind."""
 
@@ -22,6 +23,7 @@ from plantsolve.jobs import spool
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.runner import run_job
 from plantsolve.jobs.service import JobService
+from plantsolve.store.blobs import temporary_prefix
 from tests.conftest import service_settings, wait_for
 from tests.support.dispatch import Recorder
 
@@ -73,6 +75,9 @@ def test_a_job_process_killed_while_its_result_waits_on_the_database_is_solved_o
             assert client.get("/readyz").json()["checks"]["database"] == "unavailable"
             pending = settings.resolved_artifact_dir / spool.pending_path(uuid.UUID(job_id))
             _until(pending.exists, 60, "the result was not spooled")
+            # what a put cut short by the kill leaves: its temporary file, never renamed into place
+            interrupted = settings.resolved_artifact_dir / job_id / "a1" / f"{temporary_prefix(pid)}plot"
+            interrupted.write_bytes(b"half a plot")
             try:
                 os.kill(pid, signal.SIGKILL)  # mid-write: its re-queue waits on the lock
             except ProcessLookupError:  # its re-queue gave up first, and the process ended on that error
@@ -88,7 +93,9 @@ def test_a_job_process_killed_while_its_result_waits_on_the_database_is_solved_o
     assert view["attempts"][-1]["outcome"] == "succeeded" and "computed by attempt 1" in view["attempts"][-1]["error"]
     assert not pending.exists() and not (settings.resolved_artifact_dir / spool.PREFIX).exists()
     assert [f for f in _files(settings.resolved_artifact_dir) if not f.startswith(job_id)] == []
-    assert [a["name"] for a in view["artifacts"]] and ".computed.json" not in str(_files(settings.resolved_artifact_dir))
+    left = _files(settings.resolved_artifact_dir)
+    assert [a["name"] for a in view["artifacts"]] and ".computed.json" not in str(left)
+    assert not interrupted.exists() and ".tmp-" not in str(left)
 
 
 def _away(*args, **kwargs):
