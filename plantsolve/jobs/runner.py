@@ -380,8 +380,8 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
     except Exception as error:
         if not is_infrastructure_failure(error):
             raise
-        payload = {"attempt": computed_by, "spooled_by": attempt, "result": result_json, "report": report, "run_seconds": run_seconds,
-                   "artifacts": [dataclasses.asdict(a) for a in stored],
+        payload = {"attempt": computed_by, "spooled_by": attempt, "result": result_json, "report": report,
+                   "run_seconds": run_seconds, "artifacts": [dataclasses.asdict(a) for a in stored],
                    "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting], "kept": kept}
         spool.write(ctx, job_id, payload, waiting)
         raise ResultPending(str(error), solved_here=computed_by == attempt) from error
@@ -403,9 +403,9 @@ def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict | None) -> None
     job = ctx.repo.get(job_id, brief=True)
     if job is None or not is_finished(job.status):
         return
-    spool.remove(ctx, job_id, [artifact.path for artifact in spool.result_artifacts(ctx, job)])
+    artifacts = spool.result_artifacts(ctx, job)
+    spool.remove(ctx, job_id, [artifact.path for artifact in artifacts])
     if kept is not None:
-        artifacts = ctx.repo.artifacts(job_id)
         computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], artifacts)
         computed.discard_superseded(ctx.files, job_id, job.attempt, artifacts, but=kept["attempt"])
 

@@ -55,7 +55,8 @@ def _runs(markers: Path) -> int:
 
 def _files(root: Path) -> list[str]:
     """The blob folder's files but readiness's probe."""
-    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file() and p.name != ".readiness-probe")
+    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*")
+                  if p.is_file() and p.name != ".readiness-probe")
 
 
 def test_a_job_process_killed_while_its_result_waits_on_the_database_is_solved_once(tmp_path):
