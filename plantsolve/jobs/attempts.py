@@ -35,7 +35,12 @@ class Stop(Cancelled):
 
 class ResultPending(ConnectionError):
     """A computed result the database did not take in time: it waits in the blob store (or, when that is
-    away too, in this machine's spool folder) for the next attempt."""
+    away too, in this machine's spool folder) for the next attempt. ``solved_here``: the attempt that spooled it
+    solved it (False: it stored an earlier attempt's spooled or kept result, and failed to)."""
+
+    def __init__(self, message: str, *, solved_here: bool = True):
+        super().__init__(message)
+        self.solved_here = solved_here
 
 
 def failure_report(stage: str, message: str, **details: Any) -> dict:
@@ -83,6 +88,13 @@ def judge(error: Exception, *, job_id: uuid.UUID, attempt: int, max_attempts: in
         return Verdict("time_limit", failure_report(
             "time_limit", f"The solver ran past its time limit ({soft:g} s soft, {hard:g} s hard) and was stopped.",
             soft_time_limit=soft, time_limit=hard, elapsed_seconds=round(elapsed, 3)))
+    if isinstance(error, ResultPending) and attempt >= max_attempts and not error.solved_here:
+        # the attempt granted to store a waiting result could not store it either: one grant per result, or a
+        # write the database always refuses in time (a result too large for its statement timeout) would re-queue
+        # the job for ever
+        message = (f"The result was computed but could not be stored in {attempt} attempts ({clean(error)}); "
+                   "giving up.")
+        return Verdict("failed", failure_report("infrastructure", message), error=clean(error))
     if isinstance(error, ResultPending):
         return Verdict("result_pending", failure_report(
             "result", "The result was computed but the database did not take it; the next attempt stores it without "

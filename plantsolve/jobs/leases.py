@@ -13,11 +13,12 @@ import uuid
 from datetime import datetime, timedelta
 from typing import Callable
 
-from plantsolve.jobs import attempts, computed
+from plantsolve.jobs import attempts, computed, spool
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.lifecycle import QUEUED, RUNNING, is_finished
 from plantsolve.jobs.reader_notes import held, with_reader_warnings
-from plantsolve.jobs.runner import lost_worker_report, pending_holder
+from plantsolve.jobs.runner import lost_worker_report, tidy_ended
+from plantsolve.store.blobs import LocalBlobStore
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import LapsedAttempt, as_utc
 
@@ -44,8 +45,10 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
     solved = computed.kept_by(ctx.files, lost.id, lost.attempt)
     if solved:
         why += "; its result was kept, and the next attempt stores it without solving again"
+    # a result this very attempt spooled (its re-queue did not get through) is granted its attempt too, once: an
+    # attempt that was to store a spooled result and was lost as well is not (each grant would call for another)
     waiting = previous.get("outcome") == "result_pending" or solved or (
-        lost.attempt >= lost.max_attempts and pending_holder(ctx, lost.id) is not None)
+        lost.attempt >= lost.max_attempts and spool.spooled_by(ctx, lost.id) == lost.attempt)
     cap = lost.max_attempts + 1 if waiting and lost.attempt >= lost.max_attempts else lost.max_attempts
     # the reader's warnings, written by the lost attempt once it read its input (or by an earlier one), are kept
     report = with_reader_warnings(lost_worker_report(lost.attempt, cap, why), held(lost.report))
@@ -57,6 +60,7 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
                                           lapsed_before=lapsed_before)
         if written:
             computed.discard_superseded(ctx.files, lost.id, lost.attempt, [])
+            spool.remove(ctx, lost.id)
         return "failed" if written else "stale"
     written = ctx.repo.requeue(lost.id, lost.attempt, report=report, attempts=history,
                                grant_attempt=cap > lost.max_attempts, lapsed_before=lapsed_before)
@@ -72,6 +76,9 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
         return "none"
     if job.status == QUEUED:
         return "queued"  # it died before its claim
+    if is_finished(job.status) and job.worker == worker:
+        tidy_ended(ctx, job)  # it ended the job, and may have died before it removed what it kept or spooled
+        return "none"
     if job.status != RUNNING or job.worker != worker:
         return "none"
     how = f"the job process was killed by signal {-exitcode}" if exitcode is not None and exitcode < 0 \
@@ -83,6 +90,15 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
     lost = LapsedAttempt(job.id, job.kind, job.attempt, job.max_attempts, list(job.attempts or []), job.worker,
                          job.heartbeat_at, job.report, as_utc(job.attempt_started_at))
     return lose_attempt(ctx, lost, why=how)
+
+
+def remove_temporaries(ctx: ServiceContext, job_id: uuid.UUID, pid: int) -> int:
+    """Job process ``pid`` of ``job_id`` died without a word (killed, out of memory): the temporary files of the blob
+    writes it was in the middle of (an artifact, a kept output, a spooled result) are never renamed into place, nor
+    removed; in this machine's folders (the local blob store's, the spool's) they go now. Returns how many went."""
+    folders = {id(store): store for store in (ctx.files, ctx.spool) if isinstance(store, LocalBlobStore)}
+    return sum(store.remove_temporaries(prefix, pid) for store in folders.values()
+               for prefix in (f"{job_id}/", f"{spool.PREFIX}{job_id}/"))
 
 
 def abandoned(ctx: ServiceContext, job_id: uuid.UUID, worker: str, alive_seconds: float) -> bool:

@@ -18,46 +18,21 @@ from typing import Any, Callable
 
 from tenacity import Retrying, retry_if_exception, stop_after_delay, wait_exponential
 
-from plantsolve.jobs import attempts, computed, intake
+from plantsolve.jobs import attempts, computed, intake, spool
 from plantsolve.jobs.attempts import ResultPending, Stop, Verdict, failure_report, judge
 from plantsolve.jobs.computed import Computed
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
-from plantsolve.jobs.lifecycle import RUNNING, is_finished
+from plantsolve.jobs.lifecycle import RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
+from plantsolve.jobs.spool import pending_artifact_key, pending_path  # noqa: F401  (the spool's keys, named here too)
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
-from plantsolve.store.blobs import BlobStore, BlobStoreUnavailable
+from plantsolve.store.blobs import BlobStore
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact, as_utc
 
 log = logging.getLogger("plantsolve.runner")
-
-
-def pending_path(job_id: uuid.UUID) -> str:
-    return f"{job_id}/pending-result.json"
-
-
-def pending_artifact_key(job_id: uuid.UUID, name: str) -> str:
-    """Where an artifact of a spooled result waits that the blob store did not take."""
-    return f"{job_id}/pending/{name}"
-
-
-def _spools(ctx: ServiceContext) -> list[BlobStore]:
-    """Where a computed result may wait: the blob store first (every worker finds it there), then this
-    machine's folder (the PostgreSQL back-end is away with the database; only this machine finds it)."""
-    return [ctx.files] if ctx.spool is ctx.files else [ctx.files, ctx.spool]
-
-
-def pending_holder(ctx: ServiceContext, job_id: uuid.UUID) -> BlobStore | None:
-    """The store holding a result that an earlier attempt computed but could not write, if any."""
-    for store in _spools(ctx):
-        try:
-            if store.exists(pending_path(job_id)):
-                return store
-        except BlobStoreUnavailable:
-            continue
-    return None
 
 
 class AttemptMonitor:
@@ -199,6 +174,10 @@ def _run_claimed(
         return "skipped"
     attempt = ctx.repo.claim(job_id, lease_seconds=ctx.settings.lease_seconds, worker=worker)
     if attempt is None:
+        if is_finished(job.status) and job.attempt:
+            # a delivery again after the end (Celery's, of a task whose worker was killed): that worker may have
+            # been killed between the commit and its clean-up
+            tidy_ended(ctx, job)
         return "skipped"
     claimed.update(kind=job.kind, attempt=attempt)
     if on_claim is not None:
@@ -217,9 +196,9 @@ def _run_claimed(
     read: list[dict] = []  # the reader's warnings: a failure report keeps them, as a result's report does
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
-            holder = pending_holder(ctx, job_id)
+            holder = spool.holder(ctx, job_id)
             if holder is not None:
-                return _store_pending(ctx, job_id, attempt, holder, monitor, log_book)
+                return _store_pending(ctx, job_id, attempt, holder, log_book)
             # the output of an earlier attempt's solve that was killed before its commit, if any
             output = computed.adopt(ctx.files, spec, job, attempt)
             with intake.read_stored(spec, job, ctx.files,
@@ -271,11 +250,14 @@ def _conclude(ctx: ServiceContext, job, attempt: int, verdict: Verdict, monitor:
                             grant_attempt=verdict.grant_attempt):
             requeue(job.id, job.kind)
             return "requeued"
+        if verdict.outcome == "result_pending":  # spooled after the job ended (cancelled, or stored by another)
+            spool.remove_if_ended(ctx, job.id)
         return "stale"
     written = ctx.repo.finish_failure(job.id, attempt, report=verdict.report, run_seconds=monitor.elapsed,
                                       attempts=history)
     if written:  # no attempt follows a failure: what earlier ones kept (this one's own too) would lie there for good
         computed.discard_superseded(ctx.files, job.id, attempt, [])
+        spool.remove(ctx, job.id)
     return "failed" if written else "stale"
 
 
@@ -364,12 +346,12 @@ def _with_report(result_json: dict, report: dict) -> dict:
 
 def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result_json, report,
                   stored: list[StoredArtifact], rendered: list[Artifact], run_seconds: float, log_book: AttemptLog,
-                  note: str | None = None, spooled_in: BlobStore | None = None, output: Computed | None = None,
-                  kept: dict | None = None) -> str:
+                  note: str | None = None, output: Computed | None = None, kept: dict | None = None) -> str:
     """The artifacts' blobs, then the final write; retried with backoff while the blob store or the database
     is unreachable (the heartbeat keeps the lease meanwhile). If that never succeeds, the result (and the
-    artifacts not stored yet) waits in a spool for the next attempt (:func:`_spools`). An artifact whose bytes a
-    kept payload of ``output`` holds is that blob; once the result is written, the output ``kept`` goes."""
+    artifacts not stored yet) waits in the spool for the next attempt (:mod:`plantsolve.jobs.spool`). An artifact
+    whose bytes a kept payload of ``output`` holds is that blob; once the result is written, the output ``kept``
+    goes, and so does a spooled result (this attempt's source, or one an attempt that lost the job left)."""
     stored, waiting = list(stored), list(rendered)
 
     def store_all() -> bool:
@@ -398,70 +380,53 @@ def _write_result(ctx: ServiceContext, job_id, attempt, computed_by: int, result
     except Exception as error:
         if not is_infrastructure_failure(error):
             raise
-        payload = {"attempt": computed_by, "result": result_json, "report": report, "run_seconds": run_seconds,
-                   "artifacts": [dataclasses.asdict(a) for a in stored],
+        payload = {"attempt": computed_by, "spooled_by": attempt, "result": result_json, "report": report,
+                   "run_seconds": run_seconds, "artifacts": [dataclasses.asdict(a) for a in stored],
                    "unstored": [{"name": a.name, "media_type": a.media_type} for a in waiting], "kept": kept}
-        _spool(ctx, job_id, payload, waiting)
-        raise ResultPending(str(error)) from error
+        spool.write(ctx, job_id, payload, waiting)
+        raise ResultPending(str(error), solved_here=computed_by == attempt) from error
     if written:
-        _unspool(ctx, job_id, spooled_in)
+        if attempt > 1:  # a spool is an earlier attempt's: a first attempt has none to look for
+            spool.remove(ctx, job_id, [artifact.path for artifact in stored])
         if kept is not None:
             computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], stored)
         computed.discard_superseded(ctx.files, job_id, attempt, stored, but=kept["attempt"] if kept else None)
-    elif kept is not None:
+    else:
         _discard_if_finished(ctx, job_id, kept)
     return "succeeded" if written else "stale"
 
 
-def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict) -> None:
+def _discard_if_finished(ctx: ServiceContext, job_id, kept: dict | None) -> None:
     """The commit found the attempt no longer running: once the job has finished (cancelled meanwhile, or stored by
     another attempt, whose artifacts may be kept payloads), no attempt will adopt the output kept, nor one an earlier
-    attempt kept; while it runs again, the running attempt may."""
+    attempt kept, nor store a spooled result; while it runs again, the running attempt may."""
     job = ctx.repo.get(job_id, brief=True)
-    if job is not None and is_finished(job.status):
-        artifacts = ctx.repo.artifacts(job_id)
+    if job is None or not is_finished(job.status):
+        return
+    artifacts = spool.result_artifacts(ctx, job)
+    spool.remove(ctx, job_id, [artifact.path for artifact in artifacts])
+    if kept is not None:
         computed.discard(ctx.files, job_id, kept["attempt"], kept["payloads"], artifacts)
         computed.discard_superseded(ctx.files, job_id, job.attempt, artifacts, but=kept["attempt"])
 
 
-def _spool(ctx: ServiceContext, job_id, payload: dict, waiting: list[Artifact]) -> None:
-    error: BaseException | None = None
-    for store in _spools(ctx):
-        try:
-            for artifact in waiting:
-                store.put(pending_artifact_key(job_id, artifact.name), artifact.data)
-            store.put(pending_path(job_id), json.dumps(payload).encode())  # last: its presence says all is there
-            return
-        except Exception as away:
-            if not is_infrastructure_failure(away):
-                raise
-            error = away
-    raise error
+def tidy_ended(ctx: ServiceContext, job) -> None:
+    """Remove what the last process of an ended ``job`` (a record) was to remove after its commit and may not have,
+    killed in between: its spooled result and the outputs kept before the commit (but for the payloads its
+    artifacts store). Costs an ``exists`` per spool store and per attempt when nothing is left."""
+    stored = ctx.repo.artifacts(job.id) if job.status == SUCCEEDED else []
+    spool.remove(ctx, job.id, [artifact.path for artifact in stored])
+    computed.discard_superseded(ctx.files, job.id, job.attempt, stored)
 
 
-def _unspool(ctx: ServiceContext, job_id, holder: BlobStore | None) -> None:
-    """The result is written: its spool, if any, goes (a leftover would only be found and dropped later)."""
-    if holder is None:
-        return
-    try:
-        payload = json.loads(holder.get(pending_path(job_id)))
-        holder.delete(pending_path(job_id))
-        for artifact in payload.get("unstored", []):
-            holder.delete(pending_artifact_key(job_id, artifact["name"]))
-    except Exception:
-        log.warning("the spooled result of job %s could not be removed", job_id, exc_info=True)
-
-
-def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, monitor: AttemptMonitor,
-                   log_book: AttemptLog) -> str:
+def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, log_book: AttemptLog) -> str:
     """An earlier attempt computed the result but could not store it: store it now, without solving."""
-    payload = json.loads(holder.get(pending_path(job_id)))
+    spooled = spool.read(holder, job_id)
+    payload = spooled.payload
     stored = [StoredArtifact(**a) for a in payload["artifacts"]]
-    waiting = [Artifact(a["name"], a["media_type"], holder.get(pending_artifact_key(job_id, a["name"])))
-               for a in payload.get("unstored", [])]
-    return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"], stored, waiting,
-                         payload["run_seconds"], log_book, note=f"result computed by attempt {payload['attempt']}",
-                         spooled_in=holder, kept=payload.get("kept"))
+    return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"], stored,
+                         spooled.waiting, payload["run_seconds"], log_book,
+                         note=f"result computed by attempt {payload['attempt']}", kept=payload.get("kept"))
 
 
 def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker: str | None = None) -> bool:
@@ -484,6 +449,7 @@ def fail_killed_at_hard_limit(ctx: ServiceContext, job_id: uuid.UUID, *, worker:
                                       run_seconds=None, attempts=history)
     if written:
         computed.discard_superseded(ctx.files, job_id, job.attempt, [])
+        spool.remove(ctx, job_id)
     return written
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Callable, Iterable, Mapping
 
-from plantsolve.jobs import attempts, computed, intake
+from plantsolve.jobs import attempts, computed, intake, spool
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.dispatch import Dispatcher
 from plantsolve.jobs.errors import Conflict, DiskSpaceLow, NotFound, Unprocessable, field_problem, from_input_rejected
@@ -379,6 +379,8 @@ class JobService:
                 raise NotFound(f"No job {job_id}.")
             if outcome == CANCELLED:
                 computed.discard_superseded(self.ctx.files, job_id, job.attempt, [])
+                if job.attempt:  # an attempt may have spooled its result for the next one, which will not come
+                    spool.remove(self.ctx, job_id)
                 return self.get(job_id, brief=True)
             # claimed, lost, re-queued or finished between the read and the write: read it again
         raise Conflict(f"Job {job_id} changed state {CANCEL_TRIES} times while it was being cancelled; try again.",

@@ -102,6 +102,11 @@ class BlobStore(ABC):
     def delete(self, key: str) -> None:
         """Remove the blob; a missing one is no error."""
 
+    @abstractmethod
+    def keys(self, prefix: str) -> Iterator[str]:
+        """The keys that start with ``prefix`` (a folder's, ending in '/'), in no set order. A listing, for sweeps
+        of a few blobs kept under one prefix (the spool), not for a job's reads."""
+
     def get(self, key: str) -> bytes:
         return self.open(key).read()
 
@@ -116,6 +121,11 @@ class BlobStore(ABC):
                 for chunk in reader.chunks():
                     handle.write(chunk)
             yield path
+
+
+def temporary_prefix(pid: int) -> str:
+    """How the temporary files of a put by process ``pid`` begin (the pid: a killed writer's are found by it)."""
+    return f".tmp-{pid}-"
 
 
 def digest(data: bytes) -> str:
@@ -168,17 +178,40 @@ class LocalBlobStore(BlobStore):
         path.unlink(missing_ok=True)
         self._prune(path.parent)
 
+    def keys(self, prefix: str) -> Iterator[str]:
+        """Every file under the prefix's folder, a temporary one that a killed put left behind too (its name starts
+        with '.tmp-'; deleting it by its key removes it)."""
+        folder = self.path(check_key(prefix.rstrip("/")))
+        root = self.root.resolve()
+        try:
+            found = [path.relative_to(root).as_posix() for path in folder.rglob("*") if path.is_file()]
+        except OSError as error:
+            raise BlobStoreUnavailable(f"the blob folder cannot be read: {error.strerror}") from error
+        return iter(found)
+
     def _temporary(self, folder: Path) -> tuple[int, str]:
         """A new temporary file in ``folder``, made if missing."""
         try:
             try:
                 folder.mkdir(parents=True, exist_ok=True)
-                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+                return tempfile.mkstemp(dir=folder, prefix=temporary_prefix(os.getpid()))
             except FileNotFoundError:  # a prune removed the folder between its making and the file's
                 folder.mkdir(parents=True, exist_ok=True)
-                return tempfile.mkstemp(dir=folder, prefix=".tmp-")
+                return tempfile.mkstemp(dir=folder, prefix=temporary_prefix(os.getpid()))
         except OSError as error:
             raise BlobStoreUnavailable(f"the blob folder cannot be written: {error.strerror}") from error
+
+    def remove_temporaries(self, prefix: str, pid: int) -> int:
+        """Remove the temporary files that process ``pid`` left under the prefix's folder: a process killed in the
+        middle of a put (its temporary file is never renamed into place, nor removed). Returns how many went."""
+        removed = 0
+        for key in self.keys(prefix):
+            path = self.path(key)
+            if path.name.startswith(temporary_prefix(pid)):
+                path.unlink(missing_ok=True)
+                self._prune(path.parent)
+                removed += 1
+        return removed
 
     def _prune(self, folder: Path) -> None:
         """Remove ``folder`` and its parents below the root while they are empty."""

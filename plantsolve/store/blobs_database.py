@@ -52,6 +52,12 @@ class DatabaseBlobStore(BlobStore):
         with _reachable(), self.db.writing(), self.db.engine.begin() as connection:
             connection.execute(delete(Blob).where(Blob.key == check_key(key)))
 
+    def keys(self, prefix: str) -> Iterator[str]:
+        """A scan of the keys (no index serves a prefix under every collation): for sweeps, not per job."""
+        with _reachable(), self.db.engine.connect() as connection:
+            found = connection.execute(select(Blob.key).where(Blob.key.startswith(prefix, autoescape=True))).scalars()
+            return iter(list(found))
+
     def _slices(self, key: str, size: int) -> Iterator[bytes]:
         for offset in range(0, size, READ_SLICE_BYTES):
             with _reachable(), self.db.engine.connect() as connection:

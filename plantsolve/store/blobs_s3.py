@@ -55,6 +55,12 @@ class S3BlobStore(BlobStore):
         with _reachable(check_key(key)):
             self.client.delete_object(Bucket=self.bucket, Key=key)
 
+    def keys(self, prefix: str) -> Iterator[str]:
+        with _reachable(prefix):
+            pages = self.client.get_paginator("list_objects_v2").paginate(Bucket=self.bucket, Prefix=prefix)
+            found = [item["Key"] for page in pages for item in page.get("Contents", [])]
+        return iter(found)
+
     @staticmethod
     def _chunks(key: str, body) -> Iterator[bytes]:
         with _reachable(key):

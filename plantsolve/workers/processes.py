@@ -29,7 +29,7 @@ from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.holds import DiskHold
-from plantsolve.jobs.leases import abandoned, process_died, resume
+from plantsolve.jobs.leases import abandoned, process_died, remove_temporaries, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
 from plantsolve.solvers.base import SolverSpec
@@ -456,6 +456,12 @@ class ProcessDispatcher:
     def _judge_end(self, child: _Running, outcome: str | None) -> bool:
         """Write how ``child``'s attempt ended, when its process did not (killed at the hard limit, died); returns
         whether its job goes back in line."""
+        if outcome is None:
+            try:
+                remove_temporaries(self.ctx, child.job_id, child.process.pid)
+            except Exception:  # best effort: a folder that cannot be read keeps them, the job goes on
+                log.warning("job %s: the temporary files of its dead process could not be removed", child.job_id,
+                            exc_info=True)
         if self._stopping.is_set():
             return False
         if child.killed_at_limit:

@@ -1,5 +1,6 @@
 """The sweeper loop: runs the lease policy (:func:`plantsolve.jobs.leases.sweep_once`) every
-``SWEEP_SECONDS`` in a daemon thread of every API and worker process."""
+``SWEEP_SECONDS`` in a daemon thread of every API and worker process, and once per start the spool's sweep
+(:func:`plantsolve.jobs.spool.sweep`: spooled results whose job ended while no process was left to remove them)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import logging
 import threading
 from typing import Callable
 
+from plantsolve.jobs import spool
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.leases import Enqueue, Gone, Pending, sweep_once
@@ -26,6 +28,7 @@ class Sweeper:
                  after_pass: Callable[[], None] | None = None, gone: Gone | None = None):
         self.ctx, self.enqueue, self.pending, self.after_pass, self.gone = ctx, enqueue, pending, after_pass, gone
         self._failed = False
+        self._spool_swept = False
         self._lock = threading.Lock()
         self._stop: threading.Event | None = None
         self._thread: threading.Thread | None = None
@@ -38,6 +41,7 @@ class Sweeper:
             if self._stop is not None and not self._stop.is_set():
                 return
             self._stop = threading.Event()
+            self._spool_swept = False
             self._thread = threading.Thread(target=self._loop, args=(self._stop,), name="sweeper", daemon=True)
             self._thread.start()
 
@@ -50,8 +54,24 @@ class Sweeper:
             thread.join(STOP_SECONDS)
 
     def _loop(self, stop: threading.Event) -> None:
+        self.sweep_spool()
         while not stop.wait(self.ctx.settings.sweep_seconds):
             self.run_pass()
+            self.sweep_spool()
+
+    def sweep_spool(self) -> bool:
+        """The spool's sweep, once per start: tried again after each pass until it has run (the database may be away
+        at the start). Returns whether it has run."""
+        if self._spool_swept:
+            return True
+        try:
+            spool.sweep(self.ctx)
+        except Exception as error:
+            log.warning("the spool's sweep failed (%s): tried again after the next pass", type(error).__name__,
+                        exc_info=not is_infrastructure_failure(error))
+            return False
+        self._spool_swept = True
+        return True
 
     def run_pass(self) -> bool:
         """One pass; a pass that follows a failed one (the database was away) extends the running leases
