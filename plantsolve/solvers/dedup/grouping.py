@@ -135,6 +135,7 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
     _, near = tree.query(centres - centres.mean(axis=0), k=min(neighbours, len(entries)))
     class_of = np.array([ci for ci, _ in entries])
     replaced = 0
+    final: dict[int, tuple] = {}  # entry → its transform's key and its match, read once (it is final when read)
     for index, (ci, k) in enumerate(entries):
         cls = classes[ci]
         cand, m = cls.members[k]
@@ -142,10 +143,13 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
         tries = []
         row = np.atleast_1d(near[index])
         for n in row[class_of[row] < ci].tolist():  # only members of earlier classes, whose transforms are final
-            cj, kj = entries[n]
-            other = classes[cj].members[kj][1]
-            # a pooled transform is the same arrays in every member that took it: tried once
-            key = (id(other.rotation), id(other.translation), other.scale)
+            got = final.get(n)
+            if got is None:
+                cj, kj = entries[n]
+                other = classes[cj].members[kj][1]
+                # a pooled transform is the same arrays in every member that took it: tried once
+                got = final[n] = ((id(other.rotation), id(other.translation), other.scale), other)
+            key, other = got
             if key in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
                 continue
             tried.add(key)
