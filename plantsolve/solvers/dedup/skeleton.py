@@ -41,7 +41,7 @@ NAMES = ITEMS + tuple(LEVELS)
 LEVEL_OF = np.array([-1] + [0] * len(ITEMS) + list(LEVELS.values()), dtype=np.int8)  # by code; 0: not named
 POINT_LEVEL, FACE_LEVEL = 5, 2
 MAX_DIGITS = 10  # instance numbers below 2^31
-CHUNK = 1 << 24
+CHUNK = 1 << 20
 READ_GAP, READ_RUN = 1 << 12, 1 << 20  # lines closer than READ_GAP are read in one call of at most READ_RUN bytes
 # the characters of a point's coordinates written plainly (no '$', '*', string, NaN or spaces)
 _PLAIN = np.zeros(256, dtype=bool)
@@ -49,10 +49,14 @@ _PLAIN[np.frombuffer(b"0123456789.+-eE,", dtype=np.uint8)] = True
 
 
 def _where(seg: np.ndarray, byte: int, at_least: bool = False) -> np.ndarray:
-    """Positions of ``byte`` (or, ``at_least``, of any byte from it up) in ``seg``, a chunk at a time (no mask as
-    long as the file)."""
-    parts = [(np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte) + i).astype(np.int32)
-             for i in range(0, len(seg), CHUNK)]
+    """Positions of ``byte`` (or, ``at_least``, of any byte from it up) in ``seg``, a megabyte at a time: no mask as
+    long as the file, and each chunk's mask and positions stay in the cache (16 MB chunks took twice as long for the
+    tunnel's 6.9 M '#'s); positions made 32-bit before they are offset (the file is under 2 GiB)."""
+    parts = []
+    for i in range(0, len(seg), CHUNK):
+        part = np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte).astype(np.int32)
+        part += i
+        parts.append(part)
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int32)
 
 
