@@ -72,6 +72,9 @@ def canonical_order(candidates: list[Candidate]) -> list[Candidate]:
     """The candidates by GlobalId; products that repeat a GlobalId (an invalid file, warned about) by their
     world centre, then by every world point: an order no instance number decides, unless two products
     repeat both their GlobalId and their geometry."""
+    global_ids = [str(c.product.GlobalId) for c in candidates]
+    if len(set(global_ids)) == len(global_ids):  # no tie to break: the points' bytes are not made (15 MB, tunnel)
+        return [candidates[i] for i in sorted(range(len(candidates)), key=global_ids.__getitem__)]
     return sorted(candidates, key=lambda c: (str(c.product.GlobalId), c.shape.centre.tolist(),
                                              c.shape.points.tobytes()))
 
@@ -135,6 +138,7 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
     _, near = tree.query(centres - centres.mean(axis=0), k=min(neighbours, len(entries)))
     class_of = np.array([ci for ci, _ in entries])
     replaced = 0
+    final: dict[int, tuple] = {}  # entry → its transform's key and its match, read once (it is final when read)
     for index, (ci, k) in enumerate(entries):
         cls = classes[ci]
         cand, m = cls.members[k]
@@ -142,10 +146,13 @@ def pool_transforms(classes: list[CongruenceClass], tol: float, neighbours: int 
         tries = []
         row = np.atleast_1d(near[index])
         for n in row[class_of[row] < ci].tolist():  # only members of earlier classes, whose transforms are final
-            cj, kj = entries[n]
-            other = classes[cj].members[kj][1]
-            # a pooled transform is the same arrays in every member that took it: tried once
-            key = (id(other.rotation), id(other.translation), other.scale)
+            got = final.get(n)
+            if got is None:
+                cj, kj = entries[n]
+                other = classes[cj].members[kj][1]
+                # a pooled transform is the same arrays in every member that took it: tried once
+                got = final[n] = ((id(other.rotation), id(other.translation), other.scale), other)
+            key, other = got
             if key in tried or other.mirror != m.mirror or abs(other.scale - m.scale) > 1e-12:
                 continue
             tried.add(key)

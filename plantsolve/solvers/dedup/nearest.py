@@ -15,6 +15,8 @@ rounding, so no answer rests on a tie.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -55,7 +57,7 @@ class NearestPoints:
             raise ValueError("only the nearest point (k=1)")
         x = np.asarray(x, dtype=float)
         n, m = len(self.points), len(x)
-        bounded = bool(np.isfinite(distance_upper_bound))
+        bounded = math.isfinite(distance_upper_bound)
         width = float(distance_upper_bound) if bounded else (float(window) if window is not None else 0.0)
         if n == 0 or m == 0 or not width > 0:
             return self.tree.query(x, k=1, distance_upper_bound=distance_upper_bound)
@@ -69,6 +71,8 @@ class NearestPoints:
         d = np.sqrt(diff[:, 0] + diff[:, 1] + diff[:, 2])
         one = count == 1
         found = one & (d <= width - slack)
+        if found.all() and np.isfinite(along).all():  # the usual answer: every point next to one point alone
+            return d, near
         dist = np.where(found, d, np.inf)
         idx = np.where(found, near, n)
         settled = found

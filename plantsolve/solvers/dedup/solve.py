@@ -271,7 +271,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         again = {p.id(): p for p in check.by_type("IfcProduct")}
         back_products = [again[g] for g in before if g in again]
         after_points, _ = world_points(check, back_products, progress=progress, span=(0.75, 0.9),
-                                       message="verifying geometry")
+                                       message="verifying geometry", unique=False)
         deviations = []
         missing = []
         for g, pts in before.items():

@@ -32,13 +32,16 @@ def geometry_settings() -> ifcopenshell.geom.settings:
 
 def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
                  progress: Progress = no_progress, span: tuple[float, float] = (0.0, 1.0),
-                 message: str = "geometry", reader: ExplicitReader | None = None,
+                 message: str = "geometry", reader: ExplicitReader | None = None, unique: bool = True,
                  ) -> tuple[dict[int, np.ndarray], dict[int, int]]:
     """``{product id: unique world points (n, 3) in file units}`` and ``{product id: face count}``
     (explicit meshes: their points and polygons as written, through ``reader`` when given; anything
     else: the kernel's tessellation, its vertices and triangles); a product the kernel cannot
     tessellate, or whose points are not numbers, not finite or beyond :data:`MAX_COORDINATE`, is missing
-    from both."""
+    from both. ``unique=False``: each product's world points as read or tessellated, a point written twice kept
+    twice (the proof's Hausdorff distances are those of the unique points, bit for bit: each row is the same
+    product of the same numbers, and a repeat is as far as its twin; sorting 632 k points cost the tunnel's
+    proof 0.15 s)."""
     points: dict[int, np.ndarray] = {}
     triangles: dict[int, int] = {}
     rest = []
@@ -55,7 +58,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
             read[product.id()], triangles[product.id()] = got
         if k % 500 == 0:
             progress(span[0] + (span[1] - span[0]) * 0.5 * k / len(products), message)
-    points.update(zip(read, unique_rows_each(list(read.values()))))
+    points.update(zip(read, unique_rows_each(list(read.values()))) if unique else read)
     del read
     products = rest
     if not products:
@@ -72,7 +75,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
             if one.initialize():
                 verts = np.asarray(one.get().geometry.verts, dtype=float).reshape(-1, 3) / unit
                 if len(verts) and _usable(verts):
-                    points[product.id()] = np.unique(verts, axis=0)
+                    points[product.id()] = np.unique(verts, axis=0) if unique else verts
                     triangles[product.id()] = len(one.get().geometry.faces) // 3
         return points, triangles
     total = len(products)
@@ -84,7 +87,7 @@ def world_points(model: ifcopenshell.file, products: list, *, threads: int = 1,
         shape = iterator.get()
         verts = np.asarray(shape.geometry.verts, dtype=float).reshape(-1, 3) / unit
         if len(verts) and _usable(verts):
-            points[shape.id] = np.unique(verts, axis=0)
+            points[shape.id] = np.unique(verts, axis=0) if unique else verts
             triangles[shape.id] = len(shape.geometry.faces) // 3
         if (len(points) - done) % 200 == 0:
             progress(lo + (hi - lo) * min(0.5 + 0.5 * (len(points) - done) / total, 1.0), message)
