@@ -643,17 +643,27 @@ def _halo_cut(p: np.ndarray) -> float | None:
 def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
     """Largest projection among samples that have company: an isolated stray sample just
     beyond a tube end must not lengthen the tube (≥ 3 neighbours within 0.5 r), nor a sparse
-    halo of them (:func:`_halo_cut`), which in a dense scan has company from the end itself."""
+    halo of them (:func:`_halo_cut`), which in a dense scan has company from the end itself.
+
+    A halo cut leaves the samples at most the cut (whose largest projection is the cut itself), and the rule
+    starts again on them: they are kept as a mask of ``proj`` rather than copies of ``proj`` and ``pts`` (a
+    dense scan's end holds millions of samples), the candidates found in the same order as in such copies."""
     if len(proj) == 0:
         return 0.0
-    zone = proj >= proj.max() - 3.0 * rp
-    cand = np.flatnonzero(zone)
-    if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
-        cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
-    cut = _halo_cut(np.sort(proj[cand])[::-1])
-    if cut is not None:
-        body = proj <= cut
-        return _robust_max(proj[body], np.compress(body, pts, axis=0), rp)
+    top = proj.max()
+    body = None  # the samples left by the halo cuts (None: all)
+    while True:
+        zone = proj >= top - 3.0 * rp
+        if body is not None:
+            zone &= body
+        cand = np.flatnonzero(zone)
+        if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
+            cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
+        cut = _halo_cut(np.sort(proj[cand])[::-1])
+        if cut is None:
+            break
+        body = np.less_equal(proj, cut, out=body)  # (each cut lies below the last: the samples at most it)
+        top = cut
     if len(cand) > 4:
         # the outermost candidates first, a few at a time: the first with company is the answer, and it is
         # nearly always among the first few (counts by brute force: no tree of all candidates per call)
@@ -670,7 +680,7 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
             if len(dense):
                 return float(proj[cand[a + dense[0]]])
             a += size
-    return float(np.percentile(proj, 99.5))
+    return float(np.percentile(proj if body is None else proj[body], 99.5))
 
 
 def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None = None) -> TubeModel:
