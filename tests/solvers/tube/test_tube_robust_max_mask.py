@@ -64,3 +64,18 @@ def test_an_end_without_a_halo_and_a_sparse_one_are_as_on_copies():
     for n, halos in ((50_000, []), (30, [(2, 0.0, 1.0)]), (3, [])):
         proj, pts = straight_end(rng, n, 50.0, 1.0, halos)
         assert fit._robust_max(proj, pts, 1.0) == robust_max_on_copies(proj, pts, 1.0)
+
+
+def test_an_end_given_as_row_numbers_of_all_samples_is_as_on_its_copies():
+    # set_end_lengths hands over an end's samples as their rows among all samples, not as copies of them
+    rng = np.random.default_rng(11)
+    proj, pts = straight_end(rng, 100_000, 80.0, 2.0, [(6, 0.4, 3.0)])
+    order = rng.permutation(len(pts))
+    everything = pts[order]  # the end's samples scattered among the others (here: all samples are the end's)
+    rows = np.sort(rng.choice(len(pts), 70_000, replace=False))
+    end = everything[rows]
+    got = fit._robust_max(end[:, 0].copy(), everything, 2.0, rows)
+    assert got == robust_max_on_copies(end[:, 0].copy(), end, 2.0)
+    assert got == pytest.approx(80.0, abs=0.01)
+    along = fit._along(everything, rows, np.array([1.0, 2.0, 3.0]), np.array([0.6, 0.0, 0.8]))
+    np.testing.assert_array_equal(along, (end - [1.0, 2.0, 3.0]) @ np.array([0.6, 0.0, 0.8]))
