@@ -6,8 +6,9 @@
                                          # apart, nearly coplanar back-to-back bends)
     python bench/tube.py --families 20 --radius-models auto,per_bend   # also with one free radius per bend
     python bench/tube.py --before-after 10 [--ref main]   # every family, main's solver vs this tree's
-    python bench/tube.py --scale 3e5,1.2e6,3e6,1e7,3e7 [--ref main] [--ref-max 1e7]   # large scans, main's solver
-                                         # vs this tree's, CPU seconds and peak RSS of a fresh process each
+    python bench/tube.py --scale 3e5,1.2e6,3e6,1e7,3e7 [--ref main] [--ref-max 1e7] [--heap]   # large scans, main's
+                                         # solver vs this tree's, CPU seconds and peak RSS of a fresh process each
+                                         # (--heap: this tree's also with freed memory kept in glibc's heap)
 
 Scan simulator (plantsolve/solvers/tube/synthetic.py): one viewpoint, area-correct sampling, Gaussian
 noise of 1–1.5 % of the pipe radius along the normal, 0.5 % uniform outliers; random tubes
@@ -443,9 +444,16 @@ def scale_one(path: str) -> None:
                       "true_ends": sorted(m.lengths[[0, -1]].tolist())}), flush=True)
 
 
-def scale(sizes: list[int], ref: str, ref_max: int) -> None:
+# glibc's malloc hands every block above its mmap threshold (at most 32 MiB) to fresh pages of the kernel and gives
+# them back when freed: from about 4 million samples each array of a scan's size is such a block, faulted in anew
+# (zeroed) each time. With these the freed blocks stay in the heap for the next one (what --heap measures).
+HEAP_KEPT = {"MALLOC_MMAP_THRESHOLD_": str(2 ** 32), "MALLOC_TRIM_THRESHOLD_": str(2 ** 36)}
+
+
+def scale(sizes: list[int], ref: str, ref_max: int, heap: bool = False) -> None:
     """Large scans of the --make tube (4 bends, pipe radius 10), each solved in a fresh process by the solver
-    of git revision ``ref`` (up to ``ref_max`` points) and by this tree's."""
+    of git revision ``ref`` (up to ``ref_max`` points) and by this tree's; with ``heap`` this tree's once more in
+    a process whose freed memory stays in glibc's heap (``HEAP_KEPT``)."""
     import tempfile
 
     repo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -458,10 +466,13 @@ def scale(sizes: list[int], ref: str, ref_max: int) -> None:
         for n in sizes:
             path = os.path.join(tmp, f"scan_{n}.npy")
             subprocess.run([sys.executable, __file__, "--make", str(n), path], check=True)
-            for side, code in ((f"before ({ref})", before_code), ("after (this tree)", "")):
+            sides = [(f"before ({ref})", before_code, {}), ("after (this tree)", "", {})]
+            if heap:
+                sides.append(("after, heap kept", "", HEAP_KEPT))
+            for side, code, extra in sides:
                 if code and n > ref_max:
                     continue
-                env = {**os.environ, "TUBE_BENCH_CODE": code}
+                env = {**os.environ, "TUBE_BENCH_CODE": code, **extra}
                 out = subprocess.run([sys.executable, __file__, "--scale-one", path], capture_output=True, text=True,
                                      check=True, env=env)
                 rows.append({"side": side, **json.loads(out.stdout.strip().splitlines()[-1])})
@@ -506,13 +517,15 @@ def main():
     ap.add_argument("--scale", help="comma-separated point counts (1e6,3e6,1e7): large scans, --ref's solver and "
                     "this tree's")
     ap.add_argument("--ref-max", type=float, default=3e6, help="largest scan --scale gives the --ref solver")
+    ap.add_argument("--heap", action="store_true", help="--scale: this tree's solver also with glibc's freed memory "
+                    "kept in its heap (MALLOC_MMAP_THRESHOLD_, MALLOC_TRIM_THRESHOLD_)")
     ap.add_argument("--scale-one", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.scale_one:
         scale_one(a.scale_one)
         return
     if a.scale:
-        scale([int(float(v)) for v in a.scale.split(",")], a.ref, int(a.ref_max))
+        scale([int(float(v)) for v in a.scale.split(",")], a.ref, int(a.ref_max), a.heap)
         return
     if a.solve_cases:
         solve_cases(a.solve_cases)

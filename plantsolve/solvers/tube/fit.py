@@ -640,25 +640,36 @@ def _halo_cut(p: np.ndarray) -> float | None:
     return float(p[np.flatnonzero(halo)[-1] + 1])
 
 
-def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
+def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float, rows: np.ndarray | None = None) -> float:
     """Largest projection among samples that have company: an isolated stray sample just
     beyond a tube end must not lengthen the tube (≥ 3 neighbours within 0.5 r), nor a sparse
-    halo of them (:func:`_halo_cut`), which in a dense scan has company from the end itself."""
+    halo of them (:func:`_halo_cut`), which in a dense scan has company from the end itself.
+    ``rows``: the rows of ``pts`` whose projections ``proj`` holds (default all, in order).
+
+    A halo cut leaves the samples at most the cut (whose largest projection is the cut itself), and the rule
+    starts again on them: they are kept as a mask of ``proj`` rather than copies of ``proj`` and ``pts`` (a
+    dense scan's end holds millions of samples), the candidates found in the same order as in such copies."""
     if len(proj) == 0:
         return 0.0
-    zone = proj >= proj.max() - 3.0 * rp
-    cand = np.flatnonzero(zone)
-    if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
-        cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
-    cut = _halo_cut(np.sort(proj[cand])[::-1])
-    if cut is not None:
-        body = proj <= cut
-        return _robust_max(proj[body], np.compress(body, pts, axis=0), rp)
+    top = proj.max()
+    body = None  # the samples left by the halo cuts (None: all)
+    while True:
+        zone = proj >= top - 3.0 * rp
+        if body is not None:
+            zone &= body
+        cand = np.flatnonzero(zone)
+        if len(cand) > 2000:  # dense scans: the 2000 outermost samples decide
+            cand = cand[np.argpartition(-proj[cand], 2000)[:2000]]
+        cut = _halo_cut(np.sort(proj[cand])[::-1])
+        if cut is None:
+            break
+        body = np.less_equal(proj, cut, out=body)  # (each cut lies below the last: the samples at most it)
+        top = cut
     if len(cand) > 4:
         # the outermost candidates first, a few at a time: the first with company is the answer, and it is
         # nearly always among the first few (counts by brute force: no tree of all candidates per call)
         cand = cand[np.argsort(-proj[cand], kind="stable")]
-        q = np.take(pts, cand, axis=0)
+        q = np.take(pts, cand if rows is None else rows[cand], axis=0)
         r2 = (0.5 * rp) ** 2
         a = 0
         for size in itertools.chain((4, 28), itertools.repeat(32)):  # the first 4, then 32 at a time
@@ -670,51 +681,54 @@ def _robust_max(proj: np.ndarray, pts: np.ndarray, rp: float) -> float:
             if len(dense):
                 return float(proj[cand[a + dense[0]]])
             a += size
-    return float(np.percentile(proj, 99.5))
+    return float(np.percentile(proj if body is None else proj[body], 99.5))
 
 
 def set_end_lengths(model: TubeModel, pts: np.ndarray, seg: np.ndarray, keep: np.ndarray | None = None) -> TubeModel:
-    """First/last straight lengths from the extent of their samples (those ``keep`` marks, when given). (The
-    samples of an end gathered by np.compress: the rows pts[sel] gives, in a third of its time.)"""
+    """First/last straight lengths from the extent of their samples (those ``keep`` marks, when given). An end's
+    samples are taken as their row numbers, gathered a block at a time for their projections and by the few
+    candidates :func:`_robust_max` checks for company (a dense scan's end straight holds millions of samples:
+    copies of them were fresh memory of 24 bytes a sample per end and call, their numbers are 8)."""
     m = model.copy()
     rp = max(m.pipe_radius, 1e-12)
     sp = build_spine(model)  # (the copy's own would be built anew)
     last = len(sp.kind) - 1
     t0 = m.frame[:, 0]
     if last == 0:  # straight tube: one line holds both ends
-        sel = _on(seg, 0, keep)
-        if sel.any():
-            q = np.compress(sel, pts, axis=0)
-            proj = _along(q, m.start, t0)
-            hi = _robust_max(proj, q, rp)
-            lo = -_robust_max(-proj, q, rp)
+        rows = np.flatnonzero(_on(seg, 0, keep))
+        if len(rows):
+            proj = _along(pts, rows, m.start, t0)
+            hi = _robust_max(proj, pts, rp, rows)
+            lo = -_robust_max(-proj, pts, rp, rows)
             m.start = m.start + lo * t0
             m.lengths = np.array([max(hi - lo, 0.0)])
         return m
     first_arc_start = sp.end[0]
-    sel = _on(seg, 0, keep)
-    q = np.compress(sel, pts, axis=0)
-    L0 = max(0.0, _robust_max(np.negative(proj := _along(q, first_arc_start, t0), out=proj), q, rp)) if sel.any() else 0.0
+    rows = np.flatnonzero(_on(seg, 0, keep))
+    L0 = (max(0.0, _robust_max(np.negative(proj := _along(pts, rows, first_arc_start, t0), out=proj), pts, rp, rows))
+          if len(rows) else 0.0)
     m.start = first_arc_start - L0 * t0
     lengths = m.lengths.copy()
     lengths[0] = L0
-    sel = _on(seg, last, keep)
-    if sel.any():
-        q = np.compress(sel, pts, axis=0)
-        lengths[-1] = max(0.0, _robust_max(_along(q, sp.start[last], sp.tangent[last]), q, rp))
+    rows = np.flatnonzero(_on(seg, last, keep))
+    if len(rows):
+        lengths[-1] = max(0.0, _robust_max(_along(pts, rows, sp.start[last], sp.tangent[last]), pts, rp, rows))
     else:
         lengths[-1] = 0.0
     m.lengths = lengths
     return m
 
 
-def _along(q: np.ndarray, origin: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """``(q - origin) @ t`` a block of samples at a time (the numbers of the whole product): no (n, 3)
-    temporary of a large scan's end samples."""
-    out = np.empty(len(q))
-    buf = np.empty((min(BLOCK + 1, len(q)), 3))
-    for b in _blocks(len(q)):
-        part = np.subtract(q[b], origin, out=buf[:b.stop - b.start])
+def _along(pts: np.ndarray, rows: np.ndarray, origin: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``(pts[rows] - origin) @ t`` a block of rows at a time (the numbers of the whole product: each block's
+    product is the one its rows' copy gave, whose blocks these are): no (n, 3) copy of a large scan's end
+    samples."""
+    out = np.empty(len(rows))
+    buf = np.empty((min(BLOCK + 1, len(rows)), 3))
+    for b in _blocks(len(rows)):
+        # (mode "clip": rows from np.flatnonzero are in range, and "raise" copies through a buffer of its own)
+        part = np.take(pts, rows[b], axis=0, out=buf[:b.stop - b.start], mode="clip")
+        np.subtract(part, origin, out=part)
         np.matmul(part, t, out=out[b])
     return out
 
