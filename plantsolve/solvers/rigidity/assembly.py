@@ -668,13 +668,15 @@ class Assembly:
     def join_by_contact(self) -> list[tuple[str, str]]:
         """Join, by ``contact`` joints (planar, :mod:`contacts`), a part clamped in a gap of another piece: its
         collision box touches two boxes of that piece's parts face on face as drawn (within CONTACT_GAP) on opposite
-        sides (normals opposed), where neither part of each pair has a stud or anti-stud facing across the contact (faces the snap
-        data says nothing about). Wedged between faces a build holds apart by the part's width it is held by
-        friction (a panel between two bricks of a wall, a part in a slot); touching on one side only (two bricks side
-        by side, a brick resting on a tile), or between parts of two different pieces (bricks touching in a row,
-        pressed by nothing), it is held by nothing, and stays apart. Run after every snap pass, only between pieces as they were before this
-        pass (so the result does not depend on their order), not at all when most parts are joined to nothing. Each
-        pair once, its normal in :meth:`contacts`. Returns the (part, part) pairs joined."""
+        sides (normals opposed), where neither part of each pair has a stud or anti-stud facing across the contact
+        (faces the snap data says nothing about). Wedged between faces a build holds apart by the part's width, it is
+        held by friction (a panel between two bricks of a wall, a part in a slot); touching on one side only (two
+        bricks side by side, a brick resting on a tile), or between parts of two different pieces (bricks touching in
+        a row, pressed by nothing), it is held by nothing, and stays apart. Run after every snap pass, only between
+        pieces as they were before this pass (so the result does not depend on their order), not at all when most
+        parts are joined to nothing. One contact per part and piece holding it, with that piece's part first in
+        natural order among those clamping it (a second, parallel contact would hold nothing more), its normal in
+        :meth:`contacts`. Returns the (part, part) pairs joined."""
         groups = self.part_pieces()
         if len(groups) < 2 or mostly_floating(sum(len(g) == 1 for g in groups), len(self.parts)):
             return []

@@ -86,7 +86,8 @@ def test_a_brick_wedged_in_a_gap_of_a_build_is_joined_by_one_planar_contact(gap)
     # one contact with the piece that holds it (the first wall in line order; the other, parallel, would hold nothing
     # more)
     assert contact == [("planar", ["L2", "L4"], [1.0, 0.0, 0.0])]
-    assert found.joints[[j.origin for j in found.joints].index("contact")].point == pytest.approx([-20 - gap / 2, -16, 0])
+    point = next(j.point for j in found.joints if j.origin == "contact")
+    assert point == pytest.approx([-20 - gap / 2, -16, 0])
     # one piece; counted by hand: each 1 x 1 brick on one stud turns about it (1 + 1), the wedged brick keeps the
     # slide in the wall's plane and the turn about x (3), where apart it had 6
     assert [pc.parts for pc in found.pieces] == [["L1", "L2", "L3", "L4"]] and found.dof == 5 == found.generic_dof
@@ -104,8 +105,7 @@ def test_a_narrower_part_wedged_the_same_way_is_joined(text, why):
 
 
 @pytest.mark.parametrize("text, why", [
-    (wedged(width="3022"), "a 2 x 2 plate (8 high) between the walls 8 LDU over the studs: still wedged? no, 3022 is "
-                           "8 high and spans y -32..-24: it meets the walls only along an edge"),
+    (wedged(width="3022"), "a 2 x 2 plate, 8 high, from 32 to 24 LDU up: it meets the walls' tops only along edges"),
     (WALLS + f"1 4 0 -32 0 {I} 3010.dat\n", "a 1 x 4 brick (80 long) drawn through the walls: a collision"),
     (WALLS + f"1 4 1 -32 0 {I} 3004.dat\n", "1 LDU into one wall and 1 LDU off the other: a collision"),
     (WALLS.replace("1 4 30 -24", "1 4 31 -24") + f"1 4 0 -32 0 {I} 3003.dat\n",
