@@ -38,7 +38,7 @@ from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, CLIPS, FIT_OVE
                                                    NOT_DOCKED, OPPOSED, RING_REACH, Connector, PartShape,
                                                    collision_boxes, fit, fit_depth, lookup, mate, samples)
 from plantsolve.solvers.rigidity.generated import BAR_RADIUS, RADIUS_FIT
-from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
+from plantsolve.solvers.rigidity.collisions import Shapes, Solid, find_collisions
 from plantsolve.solvers.rigidity.contacts import CONTACT_GAP, FACE_TYPES, studs_across, touching
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
@@ -683,7 +683,8 @@ class Assembly:
         label = {p: k for k, g in enumerate(groups) for p in g}
         ids, solids, lo, hi = self.solid_boxes()
         index = {b: k for k, b in enumerate(ids)}
-        shapes: dict[int, object] = {}
+        shapes: dict[tuple[int, bool], Shapes] = {}  # (solid, boxes only) -> its shapes for contacts.touching
+        aligned: dict[int, bool] = {}  # solid -> every piece a box along the world axes (contacts.touching)
         faces: dict[str, list[tuple[np.ndarray, str, tuple]]] = {}  # part -> (outward normal, other, contact)
         seen: set[frozenset] = set()
         for group in groups[1:]:
@@ -700,9 +701,17 @@ class Assembly:
                         continue
                     seen.add(pair)
                     for m in (k, j):
-                        if m not in shapes:
-                            shapes[m] = solids[m].fcl_object()
-                    contact = touching(shapes[k], shapes[j])
+                        if m not in aligned:
+                            boxes = solids[m].pieces or (solids[m],)
+                            aligned[m] = all(b.rotation is not None and np.isin(b.rotation, (-1.0, 0.0, 1.0)).all()
+                                             for b in boxes)
+                    both = aligned[k] and aligned[j]
+                    for m in (k, j):  # boxes along the axes need no FCL object: their world boxes answer
+                        if (m, both) not in shapes:
+                            boxes = solids[m].pieces or (solids[m],)
+                            shapes[(m, both)] = (Shapes([], *map(np.array, zip(*(b.aabb() for b in boxes)))) if both
+                                                 else solids[m].fcl_object())
+                    contact = touching(shapes[(k, both)], shapes[(j, both)], aligned=both)
                     if contact is None or any(self._faces_studs(p, *contact) for p in (id, other)):
                         continue
                     normal, low, high = contact

@@ -29,14 +29,28 @@ ALIGN = 0.999  # |cos| between a stud's axis and the contact normal for the stud
 FACE_TYPES = ("stud", "antistud")  # connection points whose faces the snap data governs
 
 
-def touching(a: Shapes, b: Shapes, gap: float = CONTACT_GAP) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def touching(a: Shapes, b: Shapes, gap: float = CONTACT_GAP,
+             aligned: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Where two solids touch face on face: (normal from ``a`` to ``b``, lower and upper corner of the patch, the
     intersection of the two touching pieces' world boxes grown by ``gap``) of the first pair of pieces that touch over
     a patch at least FACE wide along two axes, or None when none do or any pair overlaps deeper than ``gap`` (one
-    drawn inside the other: a collision, not a contact)."""
+    drawn inside the other: a collision, not a contact). ``aligned``: every piece of both is a box along the world
+    axes, its world box itself, so the boxes alone answer (as FCL would: the depth of two boxes is their least overlap
+    along an axis, the normal that axis) without FCL's objects."""
     near = ((a.lo[:, None, :] <= b.hi[None, :, :] + gap) & (b.lo[None, :, :] <= a.hi[:, None, :] + gap)).all(axis=2)
     found = None
     for i, j in zip(*np.nonzero(near)):
+        overlap = np.minimum(a.hi[i], b.hi[j]) - np.maximum(a.lo[i], b.lo[j])  # negative: apart along that axis
+        if aligned:
+            if overlap.min() < -gap:
+                continue
+            if overlap.min() > gap:
+                return None
+            axis = int(np.argmin(overlap))
+            normal = np.eye(3)[axis] * (1.0 if b.lo[j][axis] + b.hi[j][axis] >= a.lo[i][axis] + a.hi[i][axis] else -1.0)
+            if found is None and (overlap >= FACE).sum() >= 2:
+                found = (normal, np.maximum(a.lo[i], b.lo[j]) - gap, np.minimum(a.hi[i], b.hi[j]) + gap)
+            continue
         request = fcl.CollisionRequest(enable_contact=True, num_max_contacts=4)
         result = fcl.CollisionResult()
         if fcl.collide(a.objects[i], b.objects[j], request, result):
@@ -48,8 +62,7 @@ def touching(a: Shapes, b: Shapes, gap: float = CONTACT_GAP) -> tuple[np.ndarray
             if fcl.distance(a.objects[i], b.objects[j], fcl.DistanceRequest(enable_nearest_points=True), out) > gap:
                 continue
             normal = np.asarray(out.nearest_points[1], float) - np.asarray(out.nearest_points[0], float)
-        wide = np.minimum(a.hi[i], b.hi[j]) - np.maximum(a.lo[i], b.lo[j]) >= FACE
-        if found is None and normal is not None and np.linalg.norm(normal) > 1e-9 and wide.sum() >= 2:
+        if found is None and normal is not None and np.linalg.norm(normal) > 1e-9 and (overlap >= FACE).sum() >= 2:
             found = (normal / np.linalg.norm(normal), np.maximum(a.lo[i], b.lo[j]) - gap,
                      np.minimum(a.hi[i], b.hi[j]) + gap)
     return found

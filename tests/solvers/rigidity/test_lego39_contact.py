@@ -153,3 +153,11 @@ def test_bricks_meeting_only_along_an_edge_stay_two_pieces():
     # the second brick one brick higher and one brick along: their boxes share an edge, no face
     found = result(two("3001", "3001", "80 -24 0"))
     assert [pc.parts for pc in found.pieces] == [["L1"], ["L2"]] and found.joints == []
+
+
+@pytest.mark.parametrize("turn", ["1 0 0 0 1 0 0 0 1", "0.9999999 0 0.0004 0 1 0 -0.0004 0 0.9999999"])
+def test_a_brick_wedged_is_joined_whether_the_boxes_or_fcl_answer(turn):
+    # the wedged brick along the axes (its box is its world box: the boxes answer) or turned by 0.02 degrees, as a
+    # rotation printed with 7 digits leaves it (FCL answers): one contact either way
+    found = result(WALLS + f"1 4 0 -32 0 {turn} 3003.dat\n")
+    assert [(j.type, j.bodies) for j in found.joints if j.origin == "contact"] == [("planar", ["L2", "L4"])]
