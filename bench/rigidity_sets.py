@@ -17,11 +17,20 @@ files. Per model, ``before -> after``:
   held, those the drawing itself places apart (touching no other part, no mate within 10 LDU, no unknown part beside
   them: a second vehicle, accessories laid aside; ``Piece.drawn_apart``, ``report.details.separate_builds``);
 - ``offset``: part pairs joined although drawn up to 3 LDU off their mate (the ``offset_joints`` warning);
+- ``cont``: part pairs joined by contact only, a part wedged in a gap of another piece (the ``contact_joints``
+  warning; a solver before it: 0);
 - ``prim``: of the known parts, those the model defines itself, recognised from the official primitives their
   definitions draw (the ``parts_from_primitives`` warning);
 - ``verdict``: the report's verdict code after (``one_piece_not_determined``: pieces apart besides held sub-builds and
   pieces drawn apart; ``rigidity_not_determined``: the known parts no majority), ``-`` for none;
 - CPU seconds of the parse and solve, and the part numbers of the floating parts after (with counts).
+
+With ``--near`` (no baseline) each model gets a row of its near misses: pairs of connection points of two parts
+that would mate (types that fit, directions parallel or opposed within 2.6 degrees; runs and snap cylinders left
+out) and are not connected, by how far apart they are drawn (LDU, bands ``0.1-0.25`` … ``2-3``; within 0.1 they
+are matched), split into pairs of parts joined otherwise (``j``: a second point of a pair already joined, such as
+a bore's second mouth) and pairs of parts not joined to each other (``n``: a joint the tolerance misses, if LDraw's
+rounding put it there), with the closest few listed.
 
 With ``--why`` (no baseline) each model not in one piece besides held sub-builds gets a row classing every piece apart
 that is no held sub-build by why it is apart: ``B`` drawn apart (a separate build), ``U`` beside a part not in the
@@ -70,15 +79,63 @@ def measure(path: Path) -> dict:
     offsets = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "offset_joints"), 0)
     recognised = next((len(w.details["ids"]) for w in result.report.warnings if w.code == "parts_from_primitives"), 0)
     stickers = next((w.details["count"] for w in result.report.warnings if w.code == "stickers"), 0)
+    contacts = next((len(w.details["pairs"]) for w in result.report.warnings if w.code == "contact_joints"), 0)
     return {"model": path.name, "known": len(known), "unknown": len(result.unknown_parts), "stickers": stickers,
             "floating": len(floating),
             "pieces": details.get("connected_pieces") - held, "held": held, "apart": apart, "offset": offsets,
+            "contact": contacts, "dof": result.dof,
             "prim": recognised, "seconds": seconds,
             "verdict": result.report.verdict.code if result.report.verdict else None,
             "floating_parts": dict(Counter(p.part for p in floating))}
 
 
 WHY = ("B", "U", "C", "A8", "A3-10", "AT")
+NEAR_BANDS = (0.25, 0.5, 1.0, 2.0, 3.0)  # LDU: upper ends of the near-miss bands (the lower end of the first: 0.1)
+
+
+def near_misses(path: Path) -> tuple[Counter, list[tuple]]:
+    """(counts by (band, 'j' or 'n'), the closest pairs) of the point pairs of two parts of one model that would mate
+    and are drawn 0.1 to 3 LDU apart unconnected (module docstring, ``--near``)."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+
+    from plantsolve.solvers.base import StoredInput
+    from plantsolve.solvers.rigidity.assembly import ALIGN, SNAP
+    from plantsolve.solvers.rigidity.catalogue import ANY_DIRECTION, FITS, OPPOSED, mate
+    from plantsolve.solvers.rigidity.solve import build, recorded_parts, repeated_placements, set_aside
+    from plantsolve.solvers.rigidity.upload import parse_upload
+
+    request = parse_upload(StoredInput.from_bytes(path.name, path.read_bytes()), None)
+    stickers, copies = set_aside(request, repeated_placements(request))
+    assembly, _ = build(request, recorded_parts(request.source or {})[0], {p.id for p in stickers} | set(copies))
+    rows = [(pid, k, c.type, placed.points[k], placed.directions[k]) for pid, placed in assembly.parts.items()
+            for k, c in enumerate(placed.shape.connectors) if c.type not in FITS and c.length <= 0]
+    used, joined = set(), set()
+    for conns in assembly._links.values():  # a bench may look inside: which points each connection took
+        for c in conns:
+            used.update({(c.a, c.ca), (c.b, c.cb)})
+            joined.add(frozenset((c.a, c.b)))
+    counts, closest = Counter(), []
+    if not rows:
+        return counts, closest
+    points = np.array([r[3] for r in rows])
+    for i, j in cKDTree(points).query_pairs(NEAR_BANDS[-1]):
+        (a, ka, ta, pa, da), (b, kb, tb, pb, db) = rows[i], rows[j]
+        kind = mate(ta, tb)
+        if a == b or kind in (None, "ring") or ((a, ka) in used and (b, kb) in used):
+            continue
+        cos = float(da @ db)
+        if (kind in OPPOSED and cos > -ALIGN) or (kind not in OPPOSED and kind not in ANY_DIRECTION
+                                                  and abs(cos) < ALIGN):
+            continue
+        gap = float(np.linalg.norm(pa - pb))
+        if gap <= SNAP:
+            continue
+        band = next(b for b in NEAR_BANDS if gap <= b)
+        side = "j" if frozenset((a, b)) in joined else "n"
+        counts[(band, side)] += 1
+        closest.append((round(gap, 3), side, f"{assembly.parts[a].number} {ta}", f"{assembly.parts[b].number} {tb}"))
+    return counts, sorted(closest)[:3]
 
 
 def why(path: Path) -> tuple[dict, Counter, Counter]:
@@ -149,6 +206,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--before", default="main", help="git ref of the baseline solver, or 'none'")
     parser.add_argument("--json", action="store_true", help="one JSON row per model (the baseline's child uses it)")
     parser.add_argument("--why", action="store_true", help="class the pieces apart of each model (no baseline)")
+    parser.add_argument("--near", action="store_true", help="near misses of connection points (no baseline)")
     args = parser.parse_args(argv)
     files = []
     for path in args.paths:
@@ -157,6 +215,18 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         for path in files:
             print(json.dumps(measure(path)), flush=True)
+        return 0
+    if args.near:
+        bands = [f"{lo:g}-{hi:g}" for lo, hi in zip((0.1,) + NEAR_BANDS[:-1], NEAR_BANDS)]
+        print("| model | " + " | ".join(f"{b} j/n" for b in bands) + " | closest |")
+        total = Counter()
+        for path in files:
+            counts, closest = near_misses(path)
+            total.update(counts)
+            print(f"| {path.stem} | " + " | ".join(f"{counts[(hi, 'j')]}/{counts[(hi, 'n')]}" for hi in NEAR_BANDS)
+                  + " | " + "; ".join(f"{g} {s} {a} - {b}" for g, s, a, b in closest) + " |", flush=True)
+        print("all: " + ", ".join(f"{b} LDU {total[(hi, 'j')]} joined otherwise / {total[(hi, 'n')]} not"
+                                  for b, hi in zip(bands, NEAR_BANDS)))
         return 0
     if args.why:
         print("| model | known | pieces (not held) | held | " + " | ".join(WHY) + " |")
@@ -176,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
     before = baseline(args.before, files) if args.before != "none" else {}
     print(f"baseline: {args.before}" + (" (plantsolve of that git ref)" if before else ""))
     print(f"{'model':34s} {'known':>9s} {'unknown':>9s} {'stk':>5s} {'floating':>17s} {'pieces':>7s} {'held':>6s} {'apart':>6s} {'offset':>6s} "
-          f"{'prim':>6s} {'cpu s':>11s} {'verdict':>24s}  floating parts (after)")
+          f"{'cont':>5s} {'dof':>9s} {'prim':>6s} {'cpu s':>11s} {'verdict':>24s}  floating parts (after)")
     rows = []
     for path in files:
         row = measure(path)
@@ -190,7 +260,8 @@ def main(argv: list[str] | None = None) -> int:
         names = ", ".join(f"{n} x{c}" if c > 1 else n for n, c in sorted(row["floating_parts"].items()))
         print(f"{row['model'][:34]:34s} {pair('known'):>9s} {pair('unknown'):>9s} {pair('stickers'):>5s} "
               f"{pair('floating'):>8s} ({share:4.1f} %) "
-              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} {pair('prim'):>6s} "
+              f"{pair('pieces'):>7s} {pair('held'):>6s} {pair('apart'):>6s} {pair('offset'):>6s} "
+              f"{pair('contact'):>5s} {pair('dof'):>9s} {pair('prim'):>6s} "
               f"{pair('seconds', '.2f'):>11s} {row['verdict'] or '-':>24s}  {names}")
     olds = [before.get(row["model"]) for row in rows]
     print(totals("after", rows))
@@ -212,7 +283,7 @@ def totals(label: str, rows: list[dict]) -> str:
             f"{sum(r['pieces'] - r['apart'] == 1 for r in rows)}), "
             f"pieces not held {sum(r['pieces'] for r in rows)}, held {sum(r['held'] for r in rows)}, drawn apart "
             f"{sum(r['apart'] for r in rows)}, offset pairs "
-            f"{sum(r['offset'] for r in rows)}, verdicts "
+            f"{sum(r['offset'] for r in rows)}, contact pairs {sum(r.get('contact', 0) for r in rows)}, verdicts "
             f"{dict(Counter(r.get('verdict') for r in rows if r.get('verdict'))) or 'none'}, "
             f"CPU {sum(r['seconds'] for r in rows):.1f} s")
 

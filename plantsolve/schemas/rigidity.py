@@ -29,6 +29,8 @@ Name = Annotated[str, Field(min_length=1, max_length=200)]
 PositiveLength = Annotated[Number, Field(allow_inf_nan=False, gt=0.0, le=1e12)]
 VertexIndex = Annotated[int, Field(ge=0, lt=MAX_MESH_VERTICES), BeforeValidator(json_integer)]
 JointType = Literal["rigid", "hinge", "ball", "slider", "cylindrical"]
+# a result's joints may also be planar: a LEGO contact joint (face on face), inferred, never a request's
+ResultJointType = Literal["rigid", "hinge", "ball", "slider", "cylindrical", "planar"]
 Matrix9 = Annotated[list[Annotated[Number, Field(allow_inf_nan=False, ge=-1e6, le=1e6)]],
                     Field(min_length=9, max_length=9)]
 
@@ -110,16 +112,21 @@ LENGTH_UNIT = "{length_unit}"  # the result's own length_unit field ('ldu' for p
 
 class JointResult(BaseModel):
     id: str
-    type: JointType
+    type: ResultJointType = Field(description="rigid, hinge (revolute), ball (spherical), slider (prismatic), "
+                                  "cylindrical, or planar (a contact joint: the slide in the faces' plane and the "
+                                  "turn about their normal, its axis).")
     bodies: list[str]
     point: list[float] = Field(description="A point of the joint [x, y, z] (length_unit).",
                                json_schema_extra=unit(LENGTH_UNIT))
-    axis: list[float] | None = Field(description="Unit axis [dx, dy, dz] of a hinge, slider or cylindrical joint; "
+    axis: list[float] | None = Field(description="Unit axis [dx, dy, dz] of a hinge, slider or cylindrical joint, the "
+                                     "normal of a planar one; "
                                      "null for a ball joint.", json_schema_extra=unit("1"))
     origin: str = Field(description="input (a request joint) or the inferred LEGO connection: stud, pin, axle, "
                         "hinge, ball (ball in socket), clip (clip on bar), bar (bar in a bar or axle hole), "
                         "group (a grouped fit, e.g. tyre on rim), fit (a snap cylinder in its bore: an arm in a "
-                        "torso).")
+                        "torso), contact (planar: collision boxes touching face on face as drawn where no snap "
+                        "meets and neither face has studs across the contact; holds 3 degrees of freedom, the "
+                        "normal's translation and the two tilts).")
     connections: int = Field(description="Connection points behind the joint (several studs make one rigid joint).")
     moves: bool = Field(description="The joint's relative twist is non-zero in some motion of the model.")
 

@@ -38,7 +38,8 @@ from plantsolve.solvers.rigidity.catalogue import (ANY_DIRECTION, CLIPS, FIT_OVE
                                                    NOT_DOCKED, OPPOSED, RING_REACH, Connector, PartShape,
                                                    collision_boxes, fit, fit_depth, lookup, mate, samples)
 from plantsolve.solvers.rigidity.generated import BAR_RADIUS, RADIUS_FIT
-from plantsolve.solvers.rigidity.collisions import Solid, find_collisions
+from plantsolve.solvers.rigidity.collisions import Shapes, Solid, find_collisions
+from plantsolve.solvers.rigidity.contacts import CONTACT_GAP, FACE_TYPES, studs_across, touching
 from plantsolve.solvers.rigidity.mobility import Joint, Mobility, analyse
 from plantsolve.solvers.rigidity.pebble import PebbleGame
 from plantsolve.solvers.rigidity.pieces import mostly_floating, pieces
@@ -93,7 +94,7 @@ RUN_CELL = 20.0  # LDU: the coarse cells that find the holes and clips along a r
 ALIGN = 0.999  # |cos| between directions that count as parallel
 JOINT_OF = {"stud": "hinge", "pin": "hinge", "axle_round": "cylindrical", "hinge": "hinge", "axle": "rigid",
             "ball": "ball", "clip": "hinge", "group": "rigid", "bar": "cylindrical", "fit": "hinge",
-            "fit_keyed": "rigid"}
+            "fit_keyed": "rigid", "contact": "planar"}
 ORIGIN_OF = {"axle_round": "axle", "fit_keyed": "fit"}  # the connection kinds results name by what is inserted
 # one part inside (or interlocked with) the other: not a collision
 INSERTED = {"pin", "axle", "axle_round", "ball", "clip", "hinge", "group", "bar", "fit", "fit_keyed"}
@@ -280,6 +281,7 @@ class Assembly:
         self._links: dict[tuple[str, str], list[Connection]] = {}
         self._offsets: dict[tuple[str, str], float] = {}  # pairs joined by join_pieces: their offset
         self._tilts: dict[tuple[str, str], float] = {}  # pairs joined by turned hinge fingers: the angle (degrees)
+        self._contacts: dict[tuple[str, str], tuple] = {}  # pairs joined by join_by_contact: the contact's normal
         self._neighbours: dict[str, set[str]] = {}
         self._pebble = PebbleGame()
         self._pebble_stale = False
@@ -662,6 +664,93 @@ class Assembly:
                         self._tilts[(other, id)] = math.degrees(math.acos(min(cos, 1.0)))
                         joined.append((other, id, 0.0))
         return joined
+
+    def join_by_contact(self) -> list[tuple[str, str]]:
+        """Join, by ``contact`` joints (planar, :mod:`contacts`), a part clamped in a gap of another piece: its
+        collision box touches two boxes of that piece's parts face on face as drawn (within CONTACT_GAP) on opposite
+        sides (normals opposed), where neither part of each pair has a stud or anti-stud facing across the contact
+        (faces the snap data says nothing about). Wedged between faces a build holds apart by the part's width, it is
+        held by friction (a panel between two bricks of a wall, a part in a slot); touching on one side only (two
+        bricks side by side, a brick resting on a tile), or between parts of two different pieces (bricks touching in
+        a row, pressed by nothing), it is held by nothing, and stays apart. Run after every snap pass, only between
+        pieces as they were before this pass (so the result does not depend on their order), not at all when most
+        parts are joined to nothing. One contact per part and piece holding it, with that piece's part first in
+        natural order among those clamping it (a second, parallel contact would hold nothing more), its normal in
+        :meth:`contacts`. Returns the (part, part) pairs joined."""
+        groups = self.part_pieces()
+        if len(groups) < 2 or mostly_floating(sum(len(g) == 1 for g in groups), len(self.parts)):
+            return []
+        label = {p: k for k, g in enumerate(groups) for p in g}
+        ids, solids, lo, hi = self.solid_boxes()
+        index = {b: k for k, b in enumerate(ids)}
+        shapes: dict[tuple[int, bool], Shapes] = {}  # (solid, boxes only) -> its shapes for contacts.touching
+        aligned: dict[int, bool] = {}  # solid -> every piece a box along the world axes (contacts.touching)
+        faces: dict[str, list[tuple[np.ndarray, str, tuple]]] = {}  # part -> (outward normal, other, contact)
+        seen: set[frozenset] = set()
+        for group in groups[1:]:
+            for id in group:
+                k = index[id]
+                if solids[k] is None:
+                    continue
+                near = np.flatnonzero(((lo[k] <= hi + CONTACT_GAP) & (lo <= hi[k] + CONTACT_GAP)).all(axis=1))
+                for j in near:
+                    other = ids[j]
+                    pair = frozenset((id, other))
+                    if (other not in self.parts or solids[j] is None or label[other] == label[id] or pair in seen
+                            or (other, id) in self._links or (id, other) in self._links):
+                        continue
+                    seen.add(pair)
+                    for m in (k, j):
+                        if m not in aligned:
+                            boxes = solids[m].pieces or (solids[m],)
+                            aligned[m] = all(b.rotation is not None and np.isin(b.rotation, (-1.0, 0.0, 1.0)).all()
+                                             for b in boxes)
+                    both = aligned[k] and aligned[j]
+                    for m in (k, j):  # boxes along the axes need no FCL object: their world boxes answer
+                        if (m, both) not in shapes:
+                            boxes = solids[m].pieces or (solids[m],)
+                            shapes[(m, both)] = (Shapes([], *map(np.array, zip(*(b.aabb() for b in boxes)))) if both
+                                                 else solids[m].fcl_object())
+                    contact = touching(shapes[(k, both)], shapes[(j, both)], aligned=both)
+                    if contact is None or any(self._faces_studs(p, *contact) for p in (id, other)):
+                        continue
+                    normal, low, high = contact
+                    point = tuple(_clean(v) for v in (low + high) / 2)
+                    axis = _line_direction(tuple(_clean(v) for v in np.round(normal, 9)))
+                    faces.setdefault(id, []).append((normal, other, (point, axis)))
+                    faces.setdefault(other, []).append((-normal, id, (point, axis)))
+        joined = []
+        for id in sorted(faces, key=natural_order):
+            sides = faces[id]
+            # opposite faces of one other piece: the gap in that build holds the part (parts of two pieces would
+            # only be parts touching in a row, pressed by nothing)
+            clamps = {o for n, o, _ in sides
+                      if any(float(n @ m) <= -ALIGN and label[o2] == label[o] for m, o2, _ in sides)}
+            held = set()  # the pieces holding it: one contact each (a second, parallel, would hold nothing more)
+            for normal, other, (point, axis) in sorted(sides, key=lambda side: natural_order(side[1])):
+                if (other not in clamps or label[other] in held or (other, id) in self._links
+                        or (id, other) in self._links):
+                    continue
+                held.add(label[other])
+                a, b = sorted((id, other), key=natural_order)
+                self._links[(a, b)] = [Connection(a, -1, b, -1, "contact", point, axis)]
+                self._neighbours[a].add(b)
+                self._neighbours[b].add(a)
+                self._contacts[(a, b)] = axis
+                joined.append((a, b))
+        if joined:
+            self._pebble_stale = True
+        return joined
+
+    def _faces_studs(self, id: str, normal: np.ndarray, low: np.ndarray, high: np.ndarray) -> bool:
+        """Whether part ``id`` has a stud or anti-stud in the contact patch [low, high] facing along ``normal``."""
+        placed = self.parts[id]
+        rows = [k for k, c in enumerate(placed.shape.connectors) if c.type in FACE_TYPES]
+        return studs_across(placed.points[rows], placed.directions[rows], normal, low, high)
+
+    def contacts(self) -> dict[tuple[str, str], tuple]:
+        """(part, part) -> the contact normal of the pairs :meth:`join_by_contact` joined."""
+        return dict(self._contacts)
 
     def _runs_at(self, point: np.ndarray):
         """(part, connector) of the runs filed under the RUN_CELL cells within SNAP of ``point``, each once."""
@@ -1118,6 +1207,7 @@ class Assembly:
                 self._links.pop(pair, None)
                 self._offsets.pop(pair, None)
                 self._tilts.pop(pair, None)
+                self._contacts.pop(pair, None)
             self._neighbours[other].discard(id)
         self._pebble_stale = True
 

@@ -5,9 +5,9 @@ on its line) say a generic framework's constraint rank is the size of a largest 
 of its bar multigraph; the pebble game of Jacobs–Hendrickson, in the general (k,l) form of
 Lee–Streinu, finds it. Each body holds six pebbles; a bar is independent when seven pebbles can be
 gathered on its two ends, and it then takes one. A joint leaving f freedoms counts as 6 − f bars
-(hinge 5, cylindrical 4, ball 3, slider 5 — a slider is a hinge at infinity, rigid 6).
+(hinge 5, cylindrical 4, ball 3, planar 3, slider 5 — a slider is a hinge at infinity, rigid 6).
 
-The count is exact for bars and hinges (the theorems above). Ball, slider and cylindrical joints
+The count is exact for bars and hinges (the theorems above). Ball, planar, slider and cylindrical joints
 enter as their number of constraint rows; their rows are not generic bars (a ball's three forces
 meet in a point), so for them the count bounds the generic rank from above: two bodies on two ball
 joints count as rigid but turn about the line through the balls in every position, and the exact

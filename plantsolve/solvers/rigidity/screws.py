@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-FREEDOM = {"rigid": 0, "hinge": 1, "slider": 1, "cylindrical": 2, "ball": 3}
-"""Degrees of freedom each joint type leaves between its two bodies."""
+FREEDOM = {"rigid": 0, "hinge": 1, "slider": 1, "cylindrical": 2, "ball": 3, "planar": 3}
+"""Degrees of freedom each joint type leaves between its two bodies. A planar joint (face on face: a LEGO
+``contact`` joint, whose axis is the faces' normal) leaves the slide in the faces' plane and the turn about the
+normal; it holds the normal's translation and the two tilts."""
 
 E = np.eye(3)
 
@@ -84,6 +86,10 @@ def constraint_rows(kind: str, point, axis) -> np.ndarray:
             force(f)
         for k in range(3):
             couple(e[k])
+    elif kind == "planar":
+        force(a)
+        for m in _perpendiculars(a):
+            couple(m)
     else:
         raise ValueError(f"unknown joint type {kind!r}")
     return np.array(rows)
@@ -97,7 +103,8 @@ def freedom_screws(kind: str, point, axis) -> np.ndarray:
     e = np.eye(3, dtype=p.dtype)
     cols = {"rigid": [], "hinge": [np.concatenate([a, cross(p, a)])], "slider": [np.concatenate([zero, a])],
             "cylindrical": [np.concatenate([a, cross(p, a)]), np.concatenate([zero, a])],
-            "ball": [np.concatenate([e[k], cross(p, e[k])]) for k in range(3)]}[kind]
+            "ball": [np.concatenate([e[k], cross(p, e[k])]) for k in range(3)],
+            "planar": [np.concatenate([a, cross(p, a)]), *(np.concatenate([zero, t]) for t in _perpendiculars(a))]}[kind]
     return np.array(cols, dtype=p.dtype).reshape(-1, 6).T
 
 
@@ -115,4 +122,6 @@ def allowed_twists(kind: str, point, axis) -> np.ndarray:
         return np.array([np.concatenate([a, cross(p, a)]), np.concatenate([np.zeros(3), a])])
     if kind == "ball":
         return np.array([np.concatenate([E[k], cross(p, E[k])]) for k in range(3)])
+    if kind == "planar":
+        return np.array([np.concatenate([a, cross(p, a)]), *(np.concatenate([np.zeros(3), t]) for t in _perpendiculars(a))])
     raise ValueError(f"unknown joint type {kind!r}")

@@ -17,6 +17,7 @@ from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, HAL
                                                   STUD_LENGTH_IN, Assembly, JointSpec, natural_order)
 from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_number, recorded_part
 from plantsolve.solvers.rigidity.collisions import Solid
+from plantsolve.solvers.rigidity.contacts import CONTACT_GAP
 from plantsolve.solvers.rigidity.docking import dock
 from plantsolve.solvers.rigidity.mobility import NEAR_CUT
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
@@ -171,6 +172,7 @@ def build(request: RigidityRequest, recorded: dict[str, PartShape] | None = None
     assembly.seat_clips_across_gaps()
     assembly.seat_offset_studs()
     assembly.join_pieces()
+    assembly.join_by_contact()
     return assembly, unknown
 
 
@@ -294,6 +296,7 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     warnings.extend(_piece_warnings(part_results, piece_results, assembly, positions, unknown_ids, misses, builds))
     warnings.extend(_offset_warnings(assembly))
     warnings.extend(_tilt_warnings(assembly))
+    warnings.extend(_contact_warnings(assembly))
     warnings.extend(_far_part_warnings(part_ids, assembly))
     warnings.extend(_spacing_warnings(part_results, assembly))
     n_pieces = mob.details["components"]
@@ -541,6 +544,29 @@ def _tilt_warnings(assembly: Assembly) -> list[Diagnostic]:
                                                                          assembly.parts[b].number],
                                            "angle_degrees": round(angle, 2)} for (a, b), angle in listed[:MAX_LISTED]],
                                 "max_angle_degrees": round(math.degrees(math.acos(FINGER_TILT)), 6)})]
+
+
+def _contact_warnings(assembly: Assembly) -> list[Diagnostic]:
+    """``contact_joints``: the part pairs joined by face contact where no snap meets, a part wedged in a gap of another
+    piece (:meth:`Assembly.join_by_contact`), each with the contact's normal."""
+    contacts = assembly.contacts()
+    if not contacts:
+        return []
+    listed = sorted(contacts.items(), key=lambda item: (natural_order(item[0][0]), natural_order(item[0][1])))
+    return [Diagnostic(code="contact_joints", message=f"{len(contacts)} pair(s) of parts are joined by contact only: "
+                       "a part wedged in a gap of another piece, its collision box touching two of that piece's face "
+                       f"on face on opposite sides as drawn (within {CONTACT_GAP:g} LDU), where no snap of the "
+                       "catalogue meets and no face carries studs or anti-studs across the contact (held by "
+                       "friction). A contact joint is planar: it holds the "
+                       "translation along the normal and the two tilts, and leaves the slide in the faces' plane and "
+                       "the turn about the normal (3 degrees of freedom; a stud joint leaves 1, two studs 0): "
+                       + ", ".join(f"{a} ({assembly.parts[a].number}) and {b} ({assembly.parts[b].number})"
+                                   for (a, b), _ in listed[:LISTED_IN_MESSAGE]),
+                       details={"pairs": [{"parts": [a, b], "numbers": [assembly.parts[a].number,
+                                                                         assembly.parts[b].number],
+                                           "normal": [float(v) for v in normal]} for (a, b), normal in
+                                          listed[:MAX_LISTED]],
+                                "gap_ldu": CONTACT_GAP})]
 
 
 # Units a model's positions may have been written in instead of LDU, with the factor to LDU: a model whose parts

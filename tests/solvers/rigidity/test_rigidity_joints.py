@@ -713,19 +713,23 @@ def test_the_clearance_of_two_pieces_is_the_least_gap_between_their_boxes():
 
 def test_the_x_wings_support_cart_and_the_parts_loose_in_it_stand_apart_as_one_held_sub_build():
     """OMR 7140: the support vehicle (sub-model at line 18) with its technician (line 16) standing on it is 67
-    parts in one piece; two 3003 bricks lying on their side in its bed, and a 750/755 pair among the hose's 756
-    segments (not in the catalogue), are pieces of their own. Together they are every known part of the two
-    sub-models and touch nothing of the X-wing: the three pieces are one held sub-build, each named so, and
+    parts in one piece, and with the two 3003 bricks lying on their side in its bed, wedged between the bed's two
+    tiles 2431 standing on edge (joined by contact, no snap meeting; one contact, the parallel second holds nothing
+    more), 69; a 750/755 pair among the hose's 756
+    segments (not in the catalogue) is a piece of its own. Together they are every known part of the two
+    sub-models and touch nothing of the X-wing: the two pieces are one held sub-build, each named so, and
     the report says how it was recognised. Biggs is a held sub-build of one piece; R2-D2 stands in the X-wing, each
     leg's post (30362, drawn with stud3a.dat) in the hollow stud of a jumper plate 3794a."""
     request, result = omr("7140-1-X-wingFighter.mpd")
     number = {p.id: p.part for p in request.parts}
     cart = "7140 - Minifig - Rebel Technician.ldr + 7140 - Support Vehicle.ldr"
     assert [(len(pc.parts), pc.sub_build) for pc in result.pieces[1:]] == [
-        (67, cart), (10, "7140 - Minifig - Biggs Darklighter.ldr"), (2, cart), (2, cart)]
-    assert [sorted(number[p] for p in pc.parts) for pc in result.pieces[3:]] == [["3003", "3003"], ["750", "755"]]
+        (69, cart), (10, "7140 - Minifig - Biggs Darklighter.ldr"), (2, cart)]
+    assert [sorted(number[p] for p in pc.parts) for pc in result.pieces[3:]] == [["750", "755"]]
+    assert [sorted(number[b] for b in j.bodies) for j in result.joints if j.origin == "contact"] == [
+        ["2431", "3003"], ["2431", "3003"]]
     assert [h["recognised_by"] for h in result.report.details["held_pieces"]] == [
-        HELD_BY["loose"], HELD_BY["whole"], HELD_BY["loose"], HELD_BY["loose"]]
+        HELD_BY["loose"], HELD_BY["whole"], HELD_BY["loose"]]
     legs = [j for j in result.joints if sorted(number[b] for b in j.bodies) == ["30362", "3794a"]]
     assert [(j.type, j.origin) for j in legs] == [("cylindrical", "bar")] * 2
     assert "separate_pieces" not in {w.code for w in result.report.warnings}
