@@ -1,5 +1,6 @@
 """A GasTurb/GSP map holding a number beyond any map's (``1e308`` typed for a missing value, a run-away export) is
-refused naming its line; it crashed the reader (a 422 saying only that the file is malformed)."""
+refused naming its line; it crashed the reader (a 422 saying only that the file is malformed). A map of blank lines
+is refused saying so (it was said to look like JSON)."""
 
 from __future__ import annotations
 
@@ -58,3 +59,11 @@ def test_a_geometry_setting_beyond_1e12_is_refused_naming_its_line():
     head, first, second = "\n".join(sets[0][:2]), "\n".join(sets[0][2:]), "\n".join(sets[1][2:])
     error = _refused(f"{head}\nVG angle = 1e308 [deg]\n{first}VG angle = 5 [deg]\n{second}")
     assert error.loc == ("file", "line", 3) and "setting 1e+308" in error.msg
+
+
+@pytest.mark.parametrize("text", ["\n\n  \n", "\ufeff\r\n\t\r\n"])
+def test_a_map_of_blank_lines_is_refused_saying_so_not_taken_for_json(text):
+    with pytest.raises(InputRejected) as caught:
+        parse_upload(StoredInput("m.map", content=text.encode()), None)
+    (error,) = caught.value.errors
+    assert error.loc == ("file",) and "only blank lines" in error.msg and "JSON" not in error.msg
