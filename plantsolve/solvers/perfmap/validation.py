@@ -127,12 +127,10 @@ def _written(document: dict, loc: tuple) -> bool:
     """Whether the uploaded JSON request holds a value at ``loc``."""
     node: Any = document
     for step in loc:
-        if isinstance(node, dict) and step in node:
-            node = node[step]
-        elif isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node):
-            node = node[step]
-        else:
+        if not (isinstance(node, dict) and step in node
+                or isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node)):
             return False
+        node = node[step]
     return True
 
 
