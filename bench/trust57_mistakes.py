@@ -634,14 +634,20 @@ def child(kinds: list[str], only: list[str] | None = None) -> None:
                 print(json.dumps(row), flush=True)
 
 
-def run(tree: Path, kinds: list[str]) -> list[dict]:
+def run(tree: Path, kinds: list[str], only: list[str] | None = None) -> list[dict]:
     """The rows of one tree, run in a child process with that tree's code first on sys.path."""
-    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds], cwd=tree, capture_output=True,
+    done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds, *(["--cases", *only] if only else [])],
+                          cwd=tree, capture_output=True,
                           text=True, env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"},
                           check=False)
     if done.returncode:
         sys.stderr.write(done.stderr[-3000:])
     return [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+
+
+def _saved(path: str, kinds: list[str]) -> list[dict]:
+    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line.startswith("{")]
+    return [row for row in rows if row["kind"] in kinds]
 
 
 def main() -> None:
@@ -650,6 +656,7 @@ def main() -> None:
     parser.add_argument("--cases", nargs="*", default=None, help="only the mistakes whose names hold one of these")
     parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
     parser.add_argument("--ref-rows", default=None, help="the reference's rows saved from an earlier run (--child)")
+    parser.add_argument("--rows", default=None, help="this tree's rows saved from an earlier run (--child)")
     parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
     args = parser.parse_args()
     if args.child:
@@ -657,11 +664,10 @@ def main() -> None:
         child(args.kinds, args.cases)
         return
     t0 = time.time()
-    after = run(ROOT, args.kinds)
-    before = run(Path(args.ref), args.kinds) if args.ref else []
+    after = _saved(args.rows, args.kinds) if args.rows else run(ROOT, args.kinds, args.cases)
+    before = run(Path(args.ref), args.kinds, args.cases) if args.ref else []
     if args.ref_rows:
-        before = [json.loads(line) for line in Path(args.ref_rows).read_text().splitlines() if line.startswith("{")]
-        before = [row for row in before if row["kind"] in args.kinds]
+        before = _saved(args.ref_rows, args.kinds)
     look = ("500", "CRASH", "NO WORD", "OTHER READING", "job failed")
     print("| kind | mistake | " + ("before | " if before else "") + "HTTP | outcome | message excerpt |")
     print("| --- | --- | " + ("--- | " if before else "") + "--- | --- | --- |")
