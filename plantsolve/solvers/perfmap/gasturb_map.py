@@ -262,9 +262,8 @@ def _skip_table(src: _Lines, name: str, n: int) -> dict:
 def _not_a_map(text: str) -> InputRejected:
     head = text.lstrip()[:2000]
     if not head:
-        return reject("the file holds only blank lines: no GasTurb/GSP compressor map (a '99 title' line and the "
-                      "tables Mass Flow, Efficiency, Pressure Ratio)")
-    if "MapData" in head or "np.array(" in head or head.startswith(("import ", "from ")):
+        hint = "the file holds only blank lines"
+    elif "MapData" in head or "np.array(" in head or head.startswith(("import ", "from ")):
         hint = "it is Python text (a pyCycle/NPSS MapData module?): upload it as .py"
     elif head[:1] in "{[":
         hint = "it looks like JSON: upload a JSON request as .json"
