@@ -24,6 +24,8 @@ MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
 def _utf16_without_mark(head: bytes) -> bool:
     """A NUL as every second byte and printable characters between: zero bytes alone (a binary STL's header)
     are no text."""
+    if len(head) < 2:  # nothing to tell by (an empty model inside an .ifczip was said to be UTF-16)
+        return False
     for nul, chars in ((head[1::2], head[0::2]), (head[0::2], head[1::2])):
         if nul == b"\x00" * len(nul) and all(32 <= c < 127 for c in chars):
             return True
@@ -33,6 +35,8 @@ def _utf16_without_mark(head: bytes) -> bool:
 def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
+    if not head:
+        raise reject("the IFC model is empty (no STEP text; an .ifczip holding an empty .ifc?)")
     if head[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16_without_mark(head[:8]):
         raise reject("the file is UTF-16 text (two bytes a character, as Windows 'Unicode' saves it): a STEP physical "
                      "file is 8-bit text; save it as UTF-8 or ANSI and send it again")

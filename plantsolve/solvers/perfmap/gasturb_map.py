@@ -54,6 +54,7 @@ MAX_ROWS = 2000
 GSP_MAX_ARGUMENTS = 40
 GSP_MAX_PARAMETERS = 150
 MAX_DROPPED_NAMED = 20  # map points left out named with their table, line, speed and beta in the warning
+MAX_MEASURED = 1e12  # the bound of the request's measured values (schemas.common.Measured)
 MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"
@@ -198,7 +199,8 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
         raise reject(f"line {n}: the {name} table's key {key:g} announces {rows - 1} rows of {cols - 1} values; at "
                      f"most {MAX_ROWS} of {MAX_ARGUMENTS} are read (GSP reads {GSP_MAX_PARAMETERS} of {GSP_MAX_ARGUMENTS})", ("file", "line", n))
     src.i += 1
-    args, _ = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
+    args, arg_lines = _read_values(src, head[1:], cols - 1, name, keyword_line, "arguments")
+    _refuse_beyond_bound(args, arg_lines, name, "argument")
     params, values, value_lines, param_lines = [], [], [], []
     for r in range(rows - 1):
         if src.done():
@@ -210,6 +212,7 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
         row = _numbers(line, m, f"{name} table")
         src.i += 1
         vals, lines = _read_values(src, row[1:], cols - 1, name, keyword_line, f"row {r + 1}")
+        _refuse_beyond_bound(row[:1] + vals, [m] + lines, name, "value")
         params.append(row[0])
         values.append(vals)
         value_lines.append(lines)
@@ -220,6 +223,18 @@ def _read_table(src: _Lines, name: str, keyword_line: int) -> Table:
                      ("file", "line", m))
     return Table(name, keyword_line, np.array(args), np.array(params), np.array(values), np.array(value_lines),
                  param_lines)
+
+
+def _refuse_beyond_bound(values: list[float], lines: list[int], table: str, what: str) -> None:
+    """A finite value beyond :data:`MAX_MEASURED` (``1e308`` typed for a missing one, a run-away export) is refused
+    naming its line: a map holds nothing that large, and the request could not hold it. NaN and infinities stay
+    missing values, which the reader drops with a note."""
+    for value, line in zip(values, lines):
+        if math.isfinite(value) and abs(value) > MAX_MEASURED:
+            where = f"{table!r} line" if what == "setting" else f"the {table} table"
+            raise reject(f"line {line}: {what} {value:g} in {where} is beyond {MAX_MEASURED:g}, no value "
+                         "of a map (a placeholder for a missing value? Leave the point out, or write NaN)",
+                         ("file", "line", line))
 
 
 def _key_follows(src: _Lines) -> bool:
@@ -246,7 +261,9 @@ def _skip_table(src: _Lines, name: str, n: int) -> dict:
 
 def _not_a_map(text: str) -> InputRejected:
     head = text.lstrip()[:2000]
-    if "MapData" in head or "np.array(" in head or head.startswith(("import ", "from ")):
+    if not head:
+        hint = "the file holds only blank lines"
+    elif "MapData" in head or "np.array(" in head or head.startswith(("import ", "from ")):
         hint = "it is Python text (a pyCycle/NPSS MapData module?): upload it as .py"
     elif head[:1] in "{[":
         hint = "it looks like JSON: upload a JSON request as .json"
@@ -306,6 +323,7 @@ def read_map(text: str) -> tuple[int | None, str, dict, list[TableSet], list[Dia
                          "with flow", ("file", "line", n))
         if name is None and (setting := _SETTING_LINE.match(stripped)):
             label, value, unit = setting.group(1).strip(), _number(setting.group(2)), (setting.group(3) or "").strip()
+            _refuse_beyond_bound([value], [n], label, "setting")
             current = sets[-1]
             if current.tables or current.setting is not None:
                 if current.setting is None:

@@ -12,7 +12,7 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, loads_json
 from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
 from plantsolve.solvers.perfmap.repeats import disagreeing_repeats
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
@@ -57,21 +57,22 @@ def file_loc(loc: tuple, rows_of: list[list[int]], values_of: Callable[[int], tu
 
 def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapInput:
     """The request converted (``units``, ``options.result_units``) and prepared; raises :class:`InputRejected`
-    naming the field, or for a table the file row, of each bad value."""
+    naming the field of each bad value, and for an upload its place in the file (``file.<path>`` of a JSON file,
+    ``file.row.<n>`` or ``file.header`` of a table) or the form's option it came from."""
+    try:
+        return _load(request, source)
+    except InputRejected as error:
+        if source is None and not (request.source and request.source.rows):
+            raise
+        document = _uploaded_document(source)
+        raise InputRejected([_in_file(e, request, document) for e in error.errors]) from None
+
+
+def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
     _check_setting_units(request)
     stated, contradicted = _efficiency_unit_against_values(request)
     internal, units = to_internal(stated)
-    try:
-        settings = prepare(internal)
-    except InputRejected as error:
-        if not (request.source and request.source.rows):
-            raise
-        errors = []
-        for e in error.errors:
-            where, prefix = file_loc(tuple(e.loc), request.source.rows, request.setting_values,
-                                     request.source.row_label)
-            errors.append(FieldError(where, prefix + e.msg, e.type))
-        raise InputRejected(errors) from None
+    settings = prepare(internal)
     conversions = [c.model_dump() for c in (request.source.conversions if request.source else [])]
     conversions += request_conversions(stated)
     info: dict[str, Any] = {"format": request.source.format if request.source else "json",
@@ -82,6 +83,61 @@ def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapI
     repeats = disagreeing_repeats(settings, rows_of, request.source.row_label if rows_of else "line")
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings) + repeats)
+
+
+def _uploaded_document(source: StoredInput | None) -> Any:
+    """An uploaded JSON file as parsed (a request object, or a bare list of positions); None for another file."""
+    if source is None or source.extension != ".json":
+        return None
+    try:
+        return loads_json(decode_text(source.read(), "JSON file"))
+    except (InputRejected, ValueError):
+        return None
+
+
+def _in_file(error: FieldError, request: PerfmapRequest, document: Any) -> FieldError:
+    """A refusal at a request path said where the user wrote the value: in a JSON file at its path there
+    (``file.positions.0.flow``, or ``file.0.flow`` of a bare list of positions), in a table at its row
+    (``file.row.12.flow``) or its header (a unit), or at the form's option it came from (``options.<name>``)."""
+    loc = tuple(error.loc)
+    if loc[:1] == ("file",):
+        return error
+    rows = request.source.rows if request.source else []
+    if isinstance(document, list):
+        loc = loc[1:] if loc[:1] == ("positions",) else loc
+        return FieldError(("file", *loc), error.msg, error.type)
+    if isinstance(document, dict):
+        if loc[:1] == ("options",) and not _written(document, loc):
+            return error  # not in the file: the form's option
+        return FieldError(("file", *loc), error.msg, error.type)
+    if rows and loc[:1] == ("positions",):
+        where, prefix = file_loc(loc, rows, request.setting_values, request.source.row_label)
+        return FieldError(where, prefix + error.msg, error.type)
+    if loc[:1] == ("options",):
+        return error  # a table holds no options: the form's
+    path = ".".join(map(str, loc))
+    if loc[:1] == ("units",) and _unit_from_form(request, loc[-1]):
+        return FieldError(("options", *loc), error.msg, error.type)
+    at_header = loc[:1] in (("units",), ("setting_units",)) and request.source and \
+        request.source.format in ("csv", "xlsx")
+    return FieldError(("file", "header") if at_header else ("file",), f"{path}: {error.msg}", error.type)
+
+
+def _written(document: dict, loc: tuple) -> bool:
+    """Whether the uploaded JSON request holds a value at ``loc``."""
+    node: Any = document
+    for step in loc:
+        if not (isinstance(node, dict) and step in node
+                or isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node)):
+            return False
+        node = node[step]
+    return True
+
+
+def _unit_from_form(request: PerfmapRequest, quantity: Any) -> bool:
+    """Whether the reader took a quantity's unit from the form's ``options.units`` (its note says so)."""
+    return any(w.code == "upload_units_option" and (w.details or {}).get("quantity") == quantity
+               for w in request.upload_warnings)
 
 
 def _check_setting_units(request: PerfmapRequest) -> None:

@@ -51,6 +51,26 @@ def cell_delimiter(rows: list[str]) -> str | None:
     return None if all(len(f) >= 3 and all(_COMMA_NUMBER.match(c) for c in f) for f in split) else ","
 
 
+_FRACTION = re.compile(r"^\d+$")
+
+
+def commas_split_decimals(rows: list[list[str]], names: int = 0) -> bool:
+    """Whether comma-separated rows are numbers written with decimal commas in a file whose cells the comma also
+    separates (``251,000,-112,446,30,572``: 251.000, -112.446, 30.572 split in six): every row holds twice the
+    header's ``names`` cells, or, without one, an even number of at least six cells of which every second one is
+    unsigned digits of one length (a fixed number of decimals) and none writes a decimal point. Read cell by cell
+    such a row gives x = 251, y = 0, z = -112: a wrong point for every row."""
+    if not rows or any("." in c for row in rows for c in row):
+        return False
+    if names:
+        return all(len(row) == 2 * names for row in rows)
+    widths = {len(row) for row in rows}
+    if len(widths) != 1 or (width := widths.pop()) < 6 or width % 2:
+        return False
+    fractions = [row[k] for row in rows for k in range(1, width, 2)]
+    return all(_FRACTION.match(c) for c in fractions) and len({len(c) for c in fractions}) == 1
+
+
 def cell_mark(cell: str) -> str | None:
     """The decimal mark a cell writes (``,`` or ``.``), None for an integer or text."""
     m = _LAST_MARK.search(cell.strip())

@@ -36,6 +36,7 @@ from plantsolve.solvers.tube.number_cells import (
     GROUPED,
     ROWS_LOOKED_AT,
     cell_delimiter,
+    commas_split_decimals,
     decimal_mark,
     plain,
     starts_number,
@@ -312,6 +313,23 @@ def _plain_rows(lines: list[str]) -> tuple[list[str], dict[int, str]]:
     return out, unreadable
 
 
+def _refuse_split_decimals(lines: list[str], header: str | None, header_line: int) -> None:
+    """A comma-separated file whose numbers write decimal commas is refused naming its first row: each number is
+    two cells there, and no rule tells which commas separate cells (read cell by cell, every point was wrong)."""
+    sample = _number_rows(lines)
+    if not sample or cell_delimiter(sample) != ",":
+        return
+    names = _header_names(header) if header else []
+    named = len(names) if names and all(n[:1].isalpha() for n in names) else 0
+    if not commas_split_decimals([_cells(r, ",") for r in sample], named):
+        return
+    first = next(n for n, line in enumerate(lines, 1) if line.strip() == sample[0])
+    under = f" under the {named} columns of line {header_line}" if named else ""
+    raise reject(f"line {first}: {len(_cells(sample[0], ','))} comma-separated cells{under} ({sample[0][:60]}): "
+                 "numbers written with decimal commas in a file whose cells commas also separate? They cannot be told "
+                 "apart: save the file with ';' between the cells (or with decimal points)", ("file", "line", first))
+
+
 def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]:
     # UTF-8, UTF-16 with its mark or Windows-1252: a line of stray bytes is one unreadable line, not the file's end
     try:
@@ -323,6 +341,7 @@ def read_text_points(content: bytes, log: ReadLog) -> tuple[np.ndarray, Columns]
     for lineno in counts:
         lines[lineno - 1] = ""
     header, header_line, width = _first_row(lines)
+    _refuse_split_decimals(lines, header, header_line)
     cols = _with_comment_unit(_columns(header, width, header_line), lines)
     if cols.names is None and width >= 4 and _counts_rows(lines):
         cols = replace(cols, index=(1, 2, 3))  # the unit a comment states (or its conflict) kept
