@@ -28,7 +28,6 @@ from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, 
 from plantsolve.jobs.spool import pending_artifact_key, pending_path  # noqa: F401  (the spool's keys, named here too)
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
-from plantsolve.store.blobs import BlobStore
 from plantsolve.store.models import utcnow
 from plantsolve.store.repository import StoredArtifact, as_utc
 
@@ -196,9 +195,9 @@ def _run_claimed(
     read: list[dict] = []  # the reader's warnings: a failure report keeps them, as a result's report does
     with AttemptMonitor(ctx, job_id, attempt, soft_limit) as monitor:
         try:
-            holder = spool.holder(ctx, job_id)
-            if holder is not None:
-                return _store_pending(ctx, job_id, attempt, holder, log_book)
+            spooled = spool.take(ctx, job_id)
+            if spooled is not None:
+                return _store_spooled(ctx, job_id, attempt, spooled, log_book)
             # the output of an earlier attempt's solve that was killed before its commit, if any
             output = computed.adopt(ctx.files, spec, job, attempt)
             with intake.read_stored(spec, job, ctx.files,
@@ -419,13 +418,11 @@ def tidy_ended(ctx: ServiceContext, job) -> None:
     computed.discard_superseded(ctx.files, job.id, job.attempt, stored)
 
 
-def _store_pending(ctx: ServiceContext, job_id, attempt, holder: BlobStore, log_book: AttemptLog) -> str:
+def _store_spooled(ctx: ServiceContext, job_id, attempt, spooled: spool.Spooled, log_book: AttemptLog) -> str:
     """An earlier attempt computed the result but could not store it: store it now, without solving."""
-    spooled = spool.read(holder, job_id)
     payload = spooled.payload
-    stored = [StoredArtifact(**a) for a in payload["artifacts"]]
-    return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"], stored,
-                         spooled.waiting, payload["run_seconds"], log_book,
+    return _write_result(ctx, job_id, attempt, payload["attempt"], payload["result"], payload["report"],
+                         spooled.stored, spooled.waiting, payload["run_seconds"], log_book,
                          note=f"result computed by attempt {payload['attempt']}", kept=payload.get("kept"))
 
 

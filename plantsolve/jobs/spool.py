@@ -28,7 +28,7 @@ from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import SUCCEEDED, is_finished
 from plantsolve.solvers.base import Artifact
 from plantsolve.store.blobs import BlobMissing, BlobStore, BlobStoreUnavailable
-from plantsolve.store.repository import JobRecord
+from plantsolve.store.repository import JobRecord, StoredArtifact
 
 log = logging.getLogger("plantsolve.runner")
 
@@ -75,10 +75,11 @@ def spooled_by(ctx: ServiceContext, job_id: uuid.UUID) -> int | None:
 
 @dataclass(frozen=True)
 class Spooled:
-    """A spooled result as written: the ``payload`` (result, report, artifacts stored and those waiting) and the
-    bytes of the artifacts that wait."""
+    """A spooled result as written: the ``payload`` (the attempt that computed it, result, report, run seconds, the
+    output kept), the artifacts stored already and the bytes of those that wait."""
 
     payload: dict
+    stored: list[StoredArtifact]
     waiting: list[Artifact]
 
 
@@ -110,11 +111,26 @@ def _delete_quietly(store: BlobStore, keys: list[str]) -> None:
         log.warning("%d spooled blob(s) of a spool cut short could not be removed", len(keys), exc_info=True)
 
 
-def read(store: BlobStore, job_id: uuid.UUID) -> Spooled:
-    payload = json.loads(store.get(pending_path(job_id)))
-    waiting = [Artifact(a["name"], a["media_type"], store.get(pending_artifact_key(job_id, a["name"])))
-               for a in payload.get("unstored", [])]
-    return Spooled(payload, waiting)
+def take(ctx: ServiceContext, job_id: uuid.UUID) -> Spooled | None:
+    """The spooled result that waits for this attempt, read whole; None when none waits, or when it cannot be used
+    (a blob of it missing, unreadable): it is removed then, and the attempt solves again, which is always right,
+    instead of failing the job as if its input had. A store that cannot be reached raises (the attempt is retried)."""
+    store = holder(ctx, job_id)
+    if store is None:
+        return None
+    try:
+        payload = json.loads(store.get(pending_path(job_id)))
+        stored = [StoredArtifact(**artifact) for artifact in payload["artifacts"]]
+        waiting = [Artifact(a["name"], a["media_type"], store.get(pending_artifact_key(job_id, a["name"])))
+                   for a in payload.get("unstored", [])]
+        missing = {"attempt", "result", "report", "run_seconds"} - payload.keys()  # what the storing attempt reads
+        if missing:
+            raise KeyError(sorted(missing))
+    except (BlobMissing, ValueError, KeyError, TypeError, AttributeError) as error:
+        log.warning("job %s: its spooled result cannot be used (%s); it is solved again", job_id, type(error).__name__)
+        remove(ctx, job_id)
+        return None
+    return Spooled(payload, stored, waiting)
 
 
 def remove(ctx: ServiceContext, job_id: uuid.UUID, in_use: Iterable[str] = ()) -> None:

@@ -233,3 +233,24 @@ def test_the_temporary_files_of_a_dead_process_go_and_another_processs_stay(ctx)
     assert remove_temporaries(ctx, job_id, 4242) == 2
     assert _files(ctx) == [f"{spool.PREFIX}{job_id}/artifacts/{temporary_prefix(4343)}z"]
     assert not (ctx.files.root / str(job_id)).exists()  # its emptied folders went too
+
+
+@pytest.mark.parametrize("damage", ["artifact missing", "result unreadable"])
+def test_a_spooled_result_that_cannot_be_used_is_solved_again_not_a_failed_job(ctx, monkeypatch, tmp_path, damage):
+    """It failed the job as the solver's failure on this input ("the same input fails the same way")."""
+    job_id = JobService(ctx, Recorder()).submit_json(
+        "test-compute", f'{{"values": [3, 4], "marker_dir": "{tmp_path / "runs"}"}}'.encode(), None).job.id
+    with monkeypatch.context() as patch:  # the artifacts wait with the result: the blob store took none
+        patch.setattr(ctx.repo, "finish_success", _away)
+        put = ctx.files.put
+        patch.setattr(ctx.files, "put", lambda key, data: put(key, data) if key.startswith(spool.PREFIX) or
+                      ".computed" in key else _away())
+        assert run_job(ctx, job_id, worker="w1", requeue=Recorder().enqueue) == "requeued"
+    if damage == "artifact missing":
+        ctx.files.delete(spool.pending_artifact_key(job_id, "values.txt"))
+    else:
+        ctx.files.put(spool.pending_path(job_id), b'{"attempt": 1, "artifacts": []')
+    assert run_job(ctx, job_id, worker="w2", requeue=Recorder().enqueue) == "succeeded"
+    job = ctx.repo.get(job_id)
+    assert job.result["norm"] == 5.0 and [h["outcome"] for h in job.attempts] == ["result_pending", "succeeded"]
+    assert spool.holder(ctx, job_id) is None
