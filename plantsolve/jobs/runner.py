@@ -25,7 +25,6 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.errors import is_infrastructure_failure
 from plantsolve.jobs.lifecycle import RUNNING, SUCCEEDED, is_finished
 from plantsolve.jobs.reader_notes import held, reader_warnings, reading_report, with_reader_warnings
-from plantsolve.jobs.spool import pending_artifact_key, pending_path  # noqa: F401  (the spool's keys, named here too)
 from plantsolve.schemas.common import Report
 from plantsolve.solvers.base import Artifact, Cancelled, Solved, SolverError
 from plantsolve.store.models import utcnow

@@ -7,7 +7,8 @@ from __future__ import annotations
 import pytest
 
 from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.runner import pending_artifact_key, pending_path, run_job
+from plantsolve.jobs.runner import run_job
+from plantsolve.jobs.spool import pending_artifact_key, pending_path
 from plantsolve.jobs.service import JobService
 from plantsolve.store.blobs import BlobStoreUnavailable
 from tests.conftest import service_settings

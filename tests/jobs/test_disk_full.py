@@ -12,7 +12,8 @@ from sqlalchemy.exc import OperationalError
 
 from plantsolve.jobs.attempts import disk_full, judge
 from plantsolve.jobs.context import ServiceContext
-from plantsolve.jobs.runner import pending_artifact_key, run_job
+from plantsolve.jobs.runner import run_job
+from plantsolve.jobs.spool import pending_artifact_key
 from plantsolve.jobs.service import JobService
 from plantsolve.store.blobs import BlobStoreUnavailable
 from tests.conftest import service_settings
