@@ -44,13 +44,15 @@ def test_the_kinds_offered_are_those_whose_upload_reads_units_from_the_form(kind
     spec = KINDS[kind]
     field = spec.request_model.model_fields.get("units")
     other = next((u for u in ("m", "mm") if field is not None and u != field.default), "m")
+    # a request file that states no unit: the form's is its unit (one the file states may not be contradicted)
+    example = {key: value for key, value in spec.example().items() if key != "units"}
     try:
-        request = spec.parse_upload(StoredInput.from_bytes("x.json", json.dumps(spec.example()).encode()),
-                                    {"units": other})
+        request = spec.parse_upload(StoredInput.from_bytes("x.json", json.dumps(example).encode()), {"units": other})
         taken = getattr(request, "units", None) == other
     except InputRejected:
         taken = False
-    assert taken == (kind in UNITS_FROM_UPLOAD_FORM) == (upload_units(spec) is not None)
+    assert taken or kind not in UNITS_FROM_UPLOAD_FORM  # the dashboard offers the choice only where it is taken
+    assert (kind in UNITS_FROM_UPLOAD_FORM) == (upload_units(spec) is not None)
 
 
 def test_a_tube_upload_with_a_chosen_unit_is_requested_and_read_in_it(client):

@@ -82,8 +82,7 @@ def test_a_lax_boolean_in_an_uploaded_json_file_is_refused_naming_it(client, kin
     """On main each of these was a 202: the file's "yes" or 1 read as true."""
     body = with_value(_example(example), path, value)
     response = client.post(f"/v1/{kind}/jobs", files={"file": (f"{kind}.json", json.dumps(body).encode())})
-    # tube merges a .json file's options with the form's, and names them by their own path (as the form's)
-    _refused_naming(response, list(path) if kind == "tube" and path[0] == "options" else ["file", *path])
+    _refused_naming(response, ["file", *path])
 
 
 @pytest.mark.parametrize(("kind", "upload", "option"), FORM_OPTIONS)

@@ -159,10 +159,14 @@ def test_parse_csv_semicolon_and_column_order():
     assert req.positions[1].phi == 1 and req.positions[1].flow == [1, 2, 3, 4]
 
 
-def test_parse_json_file_with_form_options_override():
+def test_parse_json_file_with_form_options_joined_and_a_contradiction_refused():
     body = _body(grid=[30, 30])
-    req = parse_upload(StoredInput.from_bytes("x.json", json.dumps(body).encode()), {"grid": [12, 11]})
-    assert req.options.grid == [12, 11] and req.options.model == "cubic"
+    req = parse_upload(StoredInput.from_bytes("x.json", json.dumps(body).encode()), {"fit": "minimax"})
+    assert req.options.grid == [30, 30] and req.options.fit == "minimax" and req.options.model == "cubic"
+    with pytest.raises(InputRejected) as refused:
+        parse_upload(StoredInput.from_bytes("x.json", json.dumps(body).encode()), {"grid": [12, 11]})
+    (error,) = refused.value.errors
+    assert error.loc == ("options", "grid") and "file.options.grid" in error.msg
 
 
 @pytest.mark.parametrize("name,content,needle", [
