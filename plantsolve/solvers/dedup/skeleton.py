@@ -41,7 +41,7 @@ NAMES = ITEMS + tuple(LEVELS)
 LEVEL_OF = np.array([-1] + [0] * len(ITEMS) + list(LEVELS.values()), dtype=np.int8)  # by code; 0: not named
 POINT_LEVEL, FACE_LEVEL = 5, 2
 MAX_DIGITS = 10  # instance numbers below 2^31
-CHUNK = 1 << 20
+CHUNK = 1 << 24
 READ_GAP, READ_RUN = 1 << 12, 1 << 20  # lines closer than READ_GAP are read in one call of at most READ_RUN bytes
 # the characters of a point's coordinates written plainly (no '$', '*', string, NaN or spaces)
 _PLAIN = np.zeros(256, dtype=bool)
@@ -49,9 +49,9 @@ _PLAIN[np.frombuffer(b"0123456789.+-eE,", dtype=np.uint8)] = True
 
 
 def _where(seg: np.ndarray, byte: int, at_least: bool = False) -> np.ndarray:
-    """Positions of ``byte`` (or, ``at_least``, of any byte from it up) in ``seg``, a megabyte at a time: no mask as
-    long as the file, and each chunk's mask and positions stay in the cache (16 MB chunks took twice as long for the
-    tunnel's 6.9 M '#'s); positions made 32-bit before they are offset (the file is under 2 GiB)."""
+    """Positions of ``byte`` (or, ``at_least``, of any byte from it up) in ``seg``, a chunk at a time (no mask as
+    long as the file; megabyte chunks were faster alone but left the scan's peak 7 MiB higher), made 32-bit before
+    they are offset (the file is under 2 GiB)."""
     parts = []
     for i in range(0, len(seg), CHUNK):
         part = np.flatnonzero(seg[i:i + CHUNK] >= byte if at_least else seg[i:i + CHUNK] == byte).astype(np.int32)
@@ -293,7 +293,7 @@ def _scan(seg: np.ndarray, length: int):
     numbers, digits = _numbers(seg, hashes + 1)
     # the lines' '#' taken by index (one pass over the mask, not one per array); each line's references are
     # the '#'s up to the next line's: their source repeated that often (no running count over every '#')
-    line_at = np.flatnonzero(opens)
+    line_at = np.flatnonzero(opens).astype(np.int32)
     ids, id_digits = numbers[line_at], digits[line_at]
     after = hashes[line_at] + 1 + id_digits
     refs = ~opens
@@ -324,23 +324,21 @@ def _scan(seg: np.ndarray, length: int):
     # every name with its '(' is at least eight bytes long: its first word is compared whole, all names' in one
     # sorted search, and each name's further words only on the lines whose first word is its
     firsts = np.unique(np.array([_words(name + b"(")[0][0] for name in NAMES], dtype=np.uint64))
-    at = np.minimum(np.searchsorted(firsts, first_word), len(firsts) - 1).astype(np.uint8)
-    candidates = np.flatnonzero(firsts[at] == first_word)
-    at = at[candidates]
-    by_first = np.argsort(at, kind="stable")  # candidates grouped by first word, each group in line order
-    bounds = np.searchsorted(at[by_first], np.arange(len(firsts) + 1))
+    at = np.searchsorted(firsts, first_word).astype(np.uint8)
+    np.minimum(at, len(firsts) - 1, out=at)
+    candidates = np.flatnonzero(firsts[at] == first_word).astype(np.int32)  # lines of a name's first word
+    at = at[candidates]  # which first word
     del first_word
     for k, name in enumerate(NAMES, start=1):
         words = _words(name + b"(")
-        f = int(np.searchsorted(firsts, words[0][0]))
-        rows = candidates[by_first[bounds[f]:bounds[f + 1]]]
+        rows = candidates[at == np.searchsorted(firsts, words[0][0])]
         for w, part in enumerate(words[1:], start=1):
             if part is None:
                 continue
             value, mask = part
             rows = rows[table[names_at[rows] + 8 * w].view("<u8")[:, 0] & mask == value]
         code[rows] = k
-    del candidates, at, by_first
+    del candidates, at
     name_len = np.array([0] + [len(name) for name in NAMES], dtype=np.int16)[code]
     dst = np.where((numbers < size) & (digits > 0), line_of[np.minimum(numbers, size - 1)], -1).astype(np.int32)
     return ids, starts, ends, names_at, code, name_len, src, dst, line_of
