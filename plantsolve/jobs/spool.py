@@ -128,7 +128,9 @@ def take(ctx: ServiceContext, job_id: uuid.UUID) -> Spooled | None:
             raise KeyError(sorted(missing))
     except (BlobMissing, ValueError, KeyError, TypeError, AttributeError) as error:
         log.warning("job %s: its spooled result cannot be used (%s); it is solved again", job_id, type(error).__name__)
-        remove(ctx, job_id)
+        # read again now: an attempt whose lease lapsed may find the spool half removed by the attempt that stored it,
+        # and the artifacts that job's result now holds must stay
+        remove(ctx, job_id, [artifact.path for artifact in result_artifacts(ctx, ctx.repo.get(job_id, brief=True))])
         return None
     return Spooled(payload, stored, waiting)
 
@@ -214,11 +216,15 @@ def sweep(ctx: ServiceContext) -> int:
                 if job is not None and not is_finished(job.status):
                     continue
                 held = result_artifacts(ctx, job)
+            except BlobStoreUnavailable:
+                log.warning("the spool of job %s could not be removed; swept at a later start", job_id)
+                continue
+            try:
                 removed += _remove_spool(ctx, store, job_id, found, {artifact.path for artifact in held})
                 if job is not None:  # the process killed before this clean-up left the outputs kept before a commit
                     computed.discard_superseded(ctx.files, job_id, job.attempt, held)
-            except BlobStoreUnavailable:
-                log.warning("the spool of job %s could not be removed; swept at a later start", job_id)
+            except Exception:  # one spool that cannot be removed must not keep the sweep from the others
+                log.warning("the spool of job %s could not be removed; swept at a later start", job_id, exc_info=True)
     if removed:
         log.info("spool: removed %d blob(s) of jobs that have ended", removed)
     return removed

@@ -254,3 +254,50 @@ def test_a_spooled_result_that_cannot_be_used_is_solved_again_not_a_failed_job(c
     job = ctx.repo.get(job_id)
     assert job.result["norm"] == 5.0 and [h["outcome"] for h in job.attempts] == ["result_pending", "succeeded"]
     assert spool.holder(ctx, job_id) is None
+
+
+def test_a_lapsed_attempt_that_finds_the_spool_half_removed_keeps_the_succeeded_jobs_artifacts(ctx, monkeypatch, tmp_path):
+    import json
+
+    job_id = _spooled(ctx, monkeypatch, tmp_path)
+    # a spool with an artifact the blob store had refused: the storing attempt removes that blob before the index
+    key = spool.pending_path(job_id)
+    payload = json.loads(ctx.files.get(key))
+    payload["unstored"] = [{"name": "plot.png", "media_type": "image/png"}]
+    ctx.files.put(spool.pending_artifact_key(job_id, "plot.png"), b"png")
+    ctx.files.put(key, json.dumps(payload).encode())
+    real_delete = ctx.files.delete
+    taken = []
+
+    def delete(name):
+        real_delete(name)
+        if name == spool.pending_artifact_key(job_id, "plot.png") and not taken:
+            taken.append("taking")
+            taken.append(spool.take(ctx, job_id))  # an attempt whose lease lapsed reads the spool right now
+
+    monkeypatch.setattr(ctx.files, "delete", delete)
+    assert run_job(ctx, job_id, worker="w2", requeue=Recorder().enqueue) == "succeeded"
+    assert taken == ["taking", None]
+    held = _artifacts(ctx, job_id)
+    assert f"{job_id}/a1/values.txt" in held and all(ctx.files.exists(path) for path in held)
+
+
+def test_a_spool_the_sweep_cannot_remove_does_not_keep_it_from_the_others(ctx, monkeypatch):
+    ended = []
+    for _ in range(2):
+        job_id = JobService(ctx, Recorder()).submit_json("test-compute", b'{"values": [1]}', None).job.id
+        assert ctx.repo.claim(job_id, lease_seconds=60, worker="w1") == 1
+        assert ctx.repo.finish_failure(job_id, 1, report={"status": "failed"}, run_seconds=1.0)
+        ctx.files.put(spool.pending_artifact_key(job_id, "values.txt"), b"1.0")
+        ended.append(job_id)
+    stuck = spool.pending_artifact_key(ended[0], "values.txt")
+    real_delete = ctx.files.delete
+
+    def delete(name):
+        if name == stuck:
+            raise PermissionError(name)  # not the store being away: a file this process may not remove
+        real_delete(name)
+
+    monkeypatch.setattr(ctx.files, "delete", delete)
+    spool.sweep(ctx)
+    assert _files(ctx) == [stuck]  # the other job's spool went
