@@ -355,17 +355,16 @@ def _with_units(options: str | None, units: str) -> str | None:
 
 
 def _form_context(request: Request, spec: SolverSpec, **values: Any) -> dict[str, Any]:
-    """The submit page: the JSON form prefilled with the kind's example; the upload form's options with their
-    defaults (the example's options over them) and the schema its fields are generated from."""
+    """The submit page: the JSON form prefilled with the kind's example; the upload form's options at their
+    defaults (what the kind does with none sent: an uploaded request file's own options are not contradicted by
+    values nobody typed) and the schema its fields are generated from."""
     example = spec.example() if spec.example is not None else None
-    example_options = example.get("options") if isinstance(example, dict) else None
     defaults = views.option_defaults(spec)
-    shown = views.option_defaults(spec, example_options if isinstance(example_options, dict) else None)
     context = {
         "spec": spec,
         "token": _token_for(request),
         "problem": None,
-        "options": views.pretty(shown),
+        "options": views.pretty(defaults),
         # what the kind does anyway: an option left at its default is not sent (see _changed_options)
         "option_defaults": json.dumps(defaults),
         "options_schema": views.options_schema(spec),

@@ -277,9 +277,9 @@ def options_schema(spec: SolverSpec) -> dict[str, Any]:
     return options_model(spec).model_json_schema()
 
 
-def option_defaults(spec: SolverSpec, example_options: dict | None = None) -> dict[str, Any]:
+def option_defaults(spec: SolverSpec) -> dict[str, Any]:
     """The upload form's options as first shown: every option's default (those without one, or null, are left
-    out: the kind decides), with the kind's example options over them."""
+    out: the kind decides)."""
     defaults = {}
     for name, field in options_model(spec).model_fields.items():
         if field.is_required():
@@ -288,7 +288,7 @@ def option_defaults(spec: SolverSpec, example_options: dict | None = None) -> di
         if value is None:
             continue
         defaults[name] = value.model_dump(mode="json") if isinstance(value, BaseModel) else value
-    return json.loads(json.dumps({**defaults, **(example_options or {})}, default=str))
+    return json.loads(json.dumps(defaults, default=str))
 
 
 def changed_options(sent: dict | None, shown: dict | None) -> dict | None:
