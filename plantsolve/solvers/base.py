@@ -229,6 +229,10 @@ def json_object(text: str | bytes, not_an_object: str = "the JSON file must hold
     Windows editor's UTF-16 or Windows-1252)."""
     if isinstance(text, bytes):
         text = decode_text(text, "JSON file")
+    if not text.replace("\ufeff", "").strip():
+        # json reports an empty text as ending early, which read as a cut file (a byte-order mark is no content)
+        raise reject("the JSON file is empty (it holds only blank lines or whitespace): upload the file holding "
+                     "the request")
     try:
         body = loads_json(text)
     except json.JSONDecodeError as e:
@@ -271,7 +275,8 @@ def decode_text(content: bytes, what: str = "text file") -> str:
         if (text := utf16_without_mark(content)) is not None:
             return text
         holds = ", a binary STL mesh" if binary_stl(content[:134]) else ""
-        raise reject(f"this is a binary file (it contains NUL bytes{holds}), not a {what}")
+        raise reject(f"this is a binary file (it contains NUL bytes, the first at byte offset {content.index(0)}{holds}), "
+                     f"not a {what}")
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError:

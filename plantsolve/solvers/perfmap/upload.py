@@ -62,7 +62,7 @@ import math
 import re
 import zipfile
 import zlib
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -71,7 +71,7 @@ from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
-from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
+from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_MEASURED, MAX_RELATIVE_SPEED
 from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
@@ -133,11 +133,17 @@ _RATIO_NAMES = {"pressure ratio", "total pressure ratio", "total to total pressu
                 "π", "p2/p1", "pt2/pt1"}
 
 
-def _decode(content: bytes) -> str:
-    if content[:4] == b"PK\x03\x04":
+# What an upload of each text extension must be, as a refusal of binary content names it.
+_TEXT_FORMATS = {".csv": "CSV text file", ".json": "JSON request (a text file)",
+                 ".py": "pyCycle/NPSS map (a Python text file)"}
+
+
+def _decode(content: bytes, extension: str) -> str:
+    what = _TEXT_FORMATS[extension]
+    if content[:4] == b"PK\x03\x04" and extension == ".csv":
         raise reject("this is a zip archive (an Excel .xlsx workbook?), not a CSV text "
                       "file: save the sheet as 'CSV (comma delimited)' or 'CSV UTF-8'")
-    return decode_text(content, "CSV text file")
+    return decode_text(content, what)
 
 
 def _trailing_unit(label: str) -> tuple[str, str] | None:
@@ -1125,12 +1131,35 @@ def _numeric_literal(node: ast.AST) -> bool:
     return isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool)
 
 
+def _refuse_beyond_bound(name: str, values: np.ndarray, literal: str, start: int) -> None:
+    """A finite value beyond :data:`MAX_MEASURED` in a map's array (``1e308`` typed for a missing one, a run-away
+    export) refused naming its line (``start`` lines precede the literal): a map holds nothing that large, and the
+    request cannot hold it (it was refused at its place in the request, ``positions/0/flow/0``, no line named)."""
+    finite = values[np.isfinite(values)]
+    if not finite.size or np.abs(finite).max() <= MAX_MEASURED:
+        return
+    beyond = []
+    for node in ast.walk(ast.parse(literal, mode="eval")):  # parsed before, by literal_eval
+        if not isinstance(node, (ast.UnaryOp, ast.Constant)) or not _numeric_literal(node):
+            continue
+        value = _floats(ast.literal_eval(node))
+        if math.isfinite(value) and abs(value) > MAX_MEASURED:
+            beyond.append((node.lineno, node.col_offset, ast.get_source_segment(literal, node) or f"{value:g}"))
+    line, _, written = min(beyond)
+    line += start
+    mend = ("a speed line's setting: correct it" if name in ("NcMap", "alphaMap") else
+            "a placeholder for a missing value? Write 0 there: a point that is not positive is dropped, with a note")
+    raise reject(f"{name}, line {line}: {written} is beyond {MAX_MEASURED:g}, no value of a map ({mend})",
+                 ("file", "line", line))
+
+
 def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]:
     """A pyCycle/NPSS ``MapData`` compressor map (``alphaMap``, ``NcMap``, ``RlineMap`` and the tables
     ``WcMap``, ``PRmap``, ``effMap`` indexed [alpha][Nc][R-line], or [Nc][R-line] without alpha). The text is
     read, never run: only the array literals are evaluated (``ast.literal_eval``). Each (alpha, Nc) is a
     speed line (theta = alpha, phi = Nc); points whose values are not positive and finite are dropped and
-    reported; a line with fewer than 3 points left is dropped and reported."""
+    reported; a line with fewer than 3 points left is dropped and reported. A value beyond 1e12 is refused naming its
+    line."""
     arrays: dict[str, np.ndarray] = {}
     text = text.replace("\r\n", "\n").replace("\r", "\n")  # classic Mac line ends: ``^`` sees only LF
     for m in _MAP_ARRAY.finditer(text):
@@ -1141,16 +1170,17 @@ def _parse_map_data(text: str) -> tuple[list[dict], list[Diagnostic], list[str]]
             line = text.count("\n", 0, m.start(1)) + 1
             raise reject(f"{name} (line {line}) is not closed before the file ends: the file was cut? The map "
                          "needs the whole table.", ("file", name), type="truncated_file") from None
+        start = text.count("\n", 0, text.index("[", m.end() - 1))
         try:
             arrays[name] = np.array(_floats(ast.literal_eval(literal)), dtype=float)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            start = text.count("\n", 0, text.index("[", m.end() - 1))
             where = _not_a_number(literal)
             if where is None:
                 raise reject(f"{name}: not a numeric array literal (nested lists of numbers)", ("file", name)) from None
             line, written = start + where[0], where[1]
             raise reject(f"{name}, line {line}: {written!r} is not a number (the map's arrays are nested lists of "
                          "numbers)", ("file", "line", line)) from None
+        _refuse_beyond_bound(name, arrays[name], literal, start)
     missing = [n for n in ("NcMap", "WcMap", "PRmap", "effMap") if n not in arrays]
     if missing:
         raise reject(f"no compressor MAP_DATA here: missing {', '.join(missing)} (a pyCycle/NPSS map defines "
@@ -1316,7 +1346,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
     upload form's ``options`` joined to it by the rules of :mod:`plantsolve.solvers.upload_form`: the form's
     ``units`` (``{"flow": "kg/s"}``) states what the file leaves unstated (:func:`_with_units_option`)."""
     if source.extension == ".json":
-        text = _decode(source.read())
+        text = _decode(source.read(), ".json")
         body = json_object(text, "the JSON file must hold a request object or a list of positions", list_as="positions",
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
@@ -1340,14 +1370,15 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
         return _validated(_with_units_option(body, form.units, "sheet"), form, lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
-        body, lines, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
-        return _validated(body, form, lines)
+        body, _, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
+        _refuse_setting_named_as_speed(body, content)
+        return _validated(body, form, [], places=lambda: _map_places(body, content))
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
         # counted before any parsing: a table far beyond any rig's is refused in milliseconds
         raise reject(f"the table has {n_lines:,} lines; at most {MAX_CSV_ROWS:,} rows are read "
                      "(2,000 settings of 100 points)")
-    text = _decode(content)
+    text = _decode(content, ext)
     lines: list[list[int]] = []
     if ext == ".py":
         positions, notes, names = _parse_map_data(text)
@@ -1363,6 +1394,36 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form, lines)
+
+
+def _setting_line(label: str, text: str) -> int | None:
+    """The first line of a GasTurb/GSP map that sets its geometry setting ('VG angle = -5 [deg]')."""
+    setting = re.compile(rf"\s*{re.escape(label)}\s*[:=]")
+    return next((n for n, line in enumerate(text.splitlines(), 1) if setting.match(line)), None)
+
+
+def _refuse_setting_named_as_speed(body: dict, content: bytes) -> None:
+    """A variable-geometry map whose setting lines name the speed ('Nc = 0.9 ...' above each set of tables): its
+    settings and its speeds would be two parameters of one name (it crashed the reader: a 500)."""
+    names = body["setting_names"]
+    if len(names) == len(set(names)):
+        return
+    line = _setting_line(names[0], decode_text(content))
+    raise reject(f"line {line}: the setting line names {names[0]!r}, the name of the map's speed: a set of tables is "
+                 "headed by its geometry setting ('VG angle = -5 [deg]'); the speeds are each table's rows",
+                 ("file", "line", line))
+
+
+def _map_places(body: dict, content: bytes) -> dict[tuple, int]:
+    """The file line of each value of a GasTurb/GSP map's request that is no point, for a refusal to name: the flow's
+    unit (the line whose brackets state it, the Mass Flow table's or the title; a unit from the form is the form's)."""
+    text, places = decode_text(content), {}
+    if unit := (body.get("units") or {}).get("flow"):
+        stated = re.compile(rf"\[\s*{re.escape(unit)}\s*\]")
+        n = next((n for n, line in enumerate(text.splitlines(), 1) if stated.search(line)), None)
+        if n is not None:
+            places[("units", "flow")] = n
+    return places
 
 
 _OPTION_QUANTITIES = ("flow", "pressure")
@@ -1406,16 +1467,17 @@ def _with_units_option(body: dict, given: Any, what: str) -> dict:
     return {**body, "units": units, "upload_warnings": notes}
 
 
-def _validated(body: dict, form: Form, lines: list[list[int]],
-               document: tuple[str, ...] | None = None) -> PerfmapRequest:
+def _validated(body: dict, form: Form, lines: list[list[int]], document: tuple[str, ...] | None = None,
+               places: Callable[[], dict[tuple, int]] | None = None) -> PerfmapRequest:
     """The request of a parsed file, its errors named by file row where the file has rows, by their path in the file
     where the file is the request (``document``: the steps of the request's path the file leaves out, ``positions``
-    for a bare list of positions), and by the form's option where the value came from the form."""
+    for a bare list of positions), by the line ``places`` gives a request path (a map's flow unit), and by the form's
+    option where the value came from the form."""
     body = merged(body, form, FORM)
     try:
         request = validated(PerfmapRequest, body, ())
     except InputRejected as e:
-        errs = []
+        errs, at_line = [], places() if places else {}
         for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
             loc, path = fe.loc, "/".join(map(str, fe.loc))
             if (named := form.named(fe)) is not None:  # a form option: named as the form names it
@@ -1423,6 +1485,11 @@ def _validated(body: dict, form: Form, lines: list[list[int]],
             elif document is not None:
                 written = loc[len(document):] if loc[:len(document)] == document else loc
                 errs.append(FieldError(("file", *written), fe.msg, fe.type))
+            elif loc[:1] == ("units",) and len(loc) > 1 and isinstance(form.units, dict) \
+                    and loc[1] in form.units and form.units[loc[1]] == (body.get("units") or {}).get(loc[1]):
+                errs.append(FieldError(("options", *loc), f"options.units.{loc[1]}: {fe.msg}", fe.type))
+            elif (line := at_line.get(tuple(loc[:2]))) is not None:
+                errs.append(FieldError(("file", "line", line), f"line {line}: {path}: {fe.msg}", fe.type))
             elif lines:
                 where, prefix = file_loc(loc, lines, lambda i: _setting_of(body["positions"][i]),
                                          body["source"]["row_label"])
