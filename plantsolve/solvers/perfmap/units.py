@@ -81,6 +81,8 @@ SPEED_DIMENSIONS = {"1": "relative (fraction, %)", "rpm": "rotational (rpm, 1/mi
 OTHER_QUANTITIES = ("K", "Pa", "kg", "m", "kg/s", "m^3/s", "s")
 _DIMENSIONLESS_WORDS = {"", "-", "–", "1", "—", "/", "ratio", "dimensionless", "frac", "fraction", "n/a", "na"}
 # Exponents written as plain digits after a length ('m3/h', 'cm3/s', 'ft3/min').
+# 'pounds mass' and 'pound-force' as data sheets spell them out: pint would read 'mass' as milli-arcseconds
+_POUND_WORDS = re.compile(r"\bpounds?[\s_-]*(?P<kind>mass|force)\b", re.IGNORECASE)
 _DIGIT_EXPONENT = re.compile(r"(?<![A-Za-z])(m|cm|mm|dm|ft|in|l)([23])(?![0-9])", re.IGNORECASE)
 # What a rig file's columns hold: a unit written in another case ('KG/S', 'KPA', 'M3/H') is re-cased only into one of
 # these, so that 'KG' is kilograms and not kilogauss, 'PA' pascals and not petaamperes.
@@ -146,6 +148,7 @@ def parse_unit(text: str, dimensions: frozenset[str] | None = None) -> Unit:
                         "it to a mass flow (kg/s) or state the actual volume flow (m3/h, acfm)")
     s = (s.replace("·", "*").replace("⋅", "*").replace("°C", "degC").replace("°F", "degF")
          .replace("° C", "degC").replace("deg C", "degC").replace("deg F", "degF"))
+    s = _POUND_WORDS.sub(lambda m: "lbm" if m["kind"].lower() == "mass" else "lbf", s)
     s = _DIGIT_EXPONENT.sub(r"\1**\2", s)
     s = s.replace("^", "**")
     unit = _pint_unit(s)
@@ -346,7 +349,17 @@ def check_quantity(quantity: str, text: str | None) -> Unit | None:
         raise UnitError(f"unit {text.strip()!r} ({u.unit}) is no unit of a ratio or fraction: a dimensionless "
                         f"{quantity} is written '-', '1', '%' or '‰' (a symbol such as π or η names the quantity: "
                         "leave it out of the brackets)")
+    if _holds_an_angle(u.unit):
+        raise UnitError(f"unit {text.strip()!r} reads as {u.unit} (an angle in it: pint reads 'mass' as milli-arcseconds,"
+                        f" 'rad' as radians), no unit of {quantity}: write it by its symbol (lbm/s, kg/s, lbf/in², %)")
     return u
+
+
+def _holds_an_angle(unit: pint.Unit) -> bool:
+    """Whether an angle is among the unit's factors. pint counts an angle dimensionless, so a word it splits into a
+    prefix and an angle ('pounds mass' as pound·milli-arcsecond) passes for a mass flow off by a factor of 5e-9;
+    no flow, pressure or efficiency of a rig table carries an angle."""
+    return "radian" in str(registry().get_root_units(unit)[1])
 
 
 _MASS_WORD = re.compile(r"\b(kg|g|t|lb|lbs|lbm)\b(?=\s*/)", re.IGNORECASE)
