@@ -17,8 +17,14 @@ from plantsolve.solvers.step_file import where_cut
 # an instance's definition: '#12=' after a line's start or the ';' ending the one before
 DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 MAX_NAMED = 5
+NEWLINE = b"\n"
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
 MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
+# IfcOpenShell's parser on an instance written with more or fewer attributes than its entity has in the header's
+# schema (it pads or drops them without failing): "Expected 9 attribute values, found 8 for instance #955"
+ATTRIBUTE_COUNT = "VAL016"
+_COUNTS = re.compile(r"Expected (\d+) attribute values, found (\d+) for instance #(\d+)")
+SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3_ADD2")  # what dedup reads
 
 
 def _utf16_without_mark(head: bytes) -> bool:
@@ -52,9 +58,17 @@ def check_header(head: bytes, tail: bytes) -> None:
                      "file was cut in transfer or export, and nothing of a cut model is optimized (send the whole file)")
 
 
-def open_path(path: str) -> ifcopenshell.file:
+def parser_log() -> ifcopenshell.logger:
+    """A logger that keeps one parse's messages in memory (the parse's own, not the process's log)."""
+    log = ifcopenshell.logger()
+    log.output_format(ifcopenshell.logger.FMT_INMEMORY)
+    return log
+
+
+def open_path(path: str, log: ifcopenshell.logger | None = None) -> ifcopenshell.file:
+    """The model at ``path``; ``log``: a :func:`parser_log` that receives the parser's messages."""
     try:
-        model = ifcopenshell.open(path)
+        model = ifcopenshell.open(path, logger=log) if log is not None else ifcopenshell.open(path)
     except Exception as e:  # the parser raises several kinds for a broken file
         message = str(e) or type(e).__name__
         if "schema" in message.lower():
@@ -155,3 +169,39 @@ def _missing(model: ifcopenshell.file, number: int) -> bool:
     except RuntimeError:
         return True
     return False
+
+
+def _attribute_count(schema: str, entity: str) -> int | None:
+    try:
+        return ifcopenshell.schema_by_name(schema).declaration_by_name(entity).attribute_count()
+    except (RuntimeError, IndexError):  # no such entity in that schema
+        return None
+
+
+def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, path: str) -> None:
+    """Refuses a model whose instances have another number of attributes than their entities have in the header's
+    FILE_SCHEMA (an IFC2X3 file labelled IFC4: its IfcColumn has 8, IFC4's 9): the parser padded or dropped values
+    without a word, and the optimized file would be written in a schema its content is not. Names the first such
+    line, its entity's count in each schema dedup reads, and how many instances are so."""
+    wrong = [found for message in log.log_messages() if message.code == ATTRIBUTE_COUNT
+             for found in (_COUNTS.search(message.message),) if found]
+    if not wrong:
+        return
+    expected, written, number = (int(g) for g in wrong[0].groups())
+    entity = model.by_id(number).is_a()
+    with open(path, "rb") as stream:
+        text = stream.read()
+    at = re.search(rb"(?:^|[;\n])[ \t\r]*#" + str(number).encode() + rb"[ \t]*=", text)
+    line = f"line {text.count(NEWLINE, 0, at.end()) + 1}: " if at else ""
+    counts = {schema: _attribute_count(schema, entity) for schema in SCHEMAS if schema != model.schema_identifier}
+    fits = [schema for schema, count in counts.items() if count == written]
+    others = ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
+                       for schema, count in counts.items())
+    entities = sorted({model.by_id(int(found.group(3))).is_a() for found in wrong})
+    raise reject(
+        f"{line}#{number}={entity.upper()} is written with {written} attribute{'' if written == 1 else 's'}, and {entity} has {expected} in the "
+        f"header's FILE_SCHEMA {model.schema_identifier} ({others}); {len(wrong):,} instance(s) of "
+        f"{', '.join(entities[:MAX_NAMED])}{' …' if len(entities) > MAX_NAMED else ''} are so. "
+        + (f"The content looks like {' or '.join(fits)}: is the header's FILE_SCHEMA wrong? Write the schema the "
+           "exporter wrote the model in" if fits else "The file is of another schema than its header says, or broken")
+        + "; nothing of it is optimized, as the optimized model would be written in a schema its content is not")

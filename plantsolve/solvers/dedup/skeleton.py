@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import os
 import re
+import tempfile
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -187,9 +188,13 @@ class Skeleton:
     instances: int  # in the whole file
     index: LineIndex = field(repr=False)  # each instance's line and how often it is referred to
 
-    def model(self) -> ifcopenshell.file:
-        """The skeleton parsed by IfcOpenShell (the same bytes as in the file: IfcOpenShell takes text as UTF-8)."""
-        return ifcopenshell.file.from_string(self.skeleton.decode("utf-8"))
+    def model(self, log: ifcopenshell.logger | None = None) -> ifcopenshell.file:
+        """The skeleton parsed by IfcOpenShell (the same bytes as in the file); ``log``: an ``ifcio.parser_log`` that
+        receives the parser's messages. Parsed from a file, as only a parse from a file takes a logger."""
+        with tempfile.TemporaryDirectory(prefix="dedup-skeleton-") as folder:
+            path = Path(folder) / "skeleton.ifc"
+            path.write_bytes(self.skeleton)
+            return ifcopenshell.open(str(path), logger=log or ifcio.parser_log())
 
     def texts(self, ids: np.ndarray, header: str, trailer: str) -> dict[int, str]:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
@@ -513,20 +518,26 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
     except Exception:  # noqa: BLE001 (text the scan did not foresee: the whole parse reads it, or refuses it by name)
         found = None
     if found is not None:
+        log = ifcio.parser_log()
         try:
-            model = found.model()
+            model = found.model(log)
             ifcio.check_model(model, found.instances)
         except Exception:  # noqa: BLE001 (a refusal or a parse error: the whole file says which, in its words)
             pass
         else:
             # every line of the skeleton is one instance (the scan vouches for it): one fewer is one IfcOpenShell
-            # could not read, which the whole file's parse names
-            if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#"):
+            # could not read, and an instance of another attribute count than its entity's is of another schema,
+            # which the whole file's parse names
+            if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#") and \
+                    not log.count(ifcio.ATTRIBUTE_COUNT):
                 return model, found
-    model = ifcio.open_path(str(path))
+    log = ifcio.parser_log()
+    model = ifcio.open_path(str(path), log)
     text = Path(path).read_bytes()
     if len(model.entity_names()) < ifcio.defined_instances(text):
         ifcio.refuse_unread(text, model)
+    del text
+    ifcio.refuse_attribute_counts(log, model, str(path))
     return model, None
 
 
