@@ -9,6 +9,7 @@ import re
 from collections import Counter
 
 import ifcopenshell
+import numpy as np
 
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.other_kinds import file_holds
@@ -168,6 +169,38 @@ def _missing(model: ifcopenshell.file, number: int) -> bool:
         model.by_id(number)
     except RuntimeError:
         return True
+    return False
+
+
+_STRING = re.compile(r"'(?:[^']|'')*'")  # a STEP string, its quotes doubled inside
+
+
+def written_attributes(line: str) -> int | None:
+    """How many attribute values a STEP instance line writes (None: a complex instance, or no argument list): its
+    commas outside strings at the first bracket level, counted with numpy (a point list's line can be megabytes)."""
+    name, _, arguments = line.partition("=")[2].partition("(")
+    if not name.strip() or not arguments:
+        return None
+    text = np.frombuffer(_STRING.sub("''", "(" + arguments).encode("latin-1", "replace"), dtype=np.uint8)
+    depth = np.cumsum((text == ord("(")).astype(np.int32) - (text == ord(")")))
+    if len(text) < 2 or depth[1] == 0 and text[1] == ord(")"):  # '()': no value at all
+        return 0
+    return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
+
+
+def misfits_schema(model: ifcopenshell.file, lines) -> bool:
+    """Whether the first instance of an entity in ``model`` is written (``lines``: ids → their lines in the file) with
+    another number of attributes than the entity has in the model's schema: the file is of another schema than its
+    header says (what a whole parse with a :func:`parser_log` names: :func:`refuse_attribute_counts`)."""
+    firsts = {}
+    for entity in model.types():
+        first = model.by_type(entity, include_subtypes=False)
+        if first:
+            firsts[first[0].id()] = first[0]
+    for number, line in lines(list(firsts)).items():
+        written = written_attributes(line)
+        if written is not None and written != len(firsts[number]):
+            return True
     return False
 
 

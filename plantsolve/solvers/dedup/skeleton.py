@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -188,13 +187,9 @@ class Skeleton:
     instances: int  # in the whole file
     index: LineIndex = field(repr=False)  # each instance's line and how often it is referred to
 
-    def model(self, log: ifcopenshell.logger | None = None) -> ifcopenshell.file:
-        """The skeleton parsed by IfcOpenShell (the same bytes as in the file); ``log``: an ``ifcio.parser_log`` that
-        receives the parser's messages. Parsed from a file, as only a parse from a file takes a logger."""
-        with tempfile.TemporaryDirectory(prefix="dedup-skeleton-") as folder:
-            path = Path(folder) / "skeleton.ifc"
-            path.write_bytes(self.skeleton)
-            return ifcopenshell.open(str(path), logger=log or ifcio.parser_log())
+    def model(self) -> ifcopenshell.file:
+        """The skeleton parsed by IfcOpenShell (the same bytes as in the file: IfcOpenShell takes text as UTF-8)."""
+        return ifcopenshell.file.from_string(self.skeleton.decode("utf-8"))
 
     def texts(self, ids: np.ndarray, header: str, trailer: str) -> dict[int, str]:
         """``{id: STEP text as IfcOpenShell writes it}`` of instances under the items (and the items'
@@ -518,18 +513,17 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
     except Exception:  # noqa: BLE001 (text the scan did not foresee: the whole parse reads it, or refuses it by name)
         found = None
     if found is not None:
-        log = ifcio.parser_log()
         try:
-            model = found.model(log)
+            model = found.model()
             ifcio.check_model(model, found.instances)
         except Exception:  # noqa: BLE001 (a refusal or a parse error: the whole file says which, in its words)
             pass
         else:
             # every line of the skeleton is one instance (the scan vouches for it): one fewer is one IfcOpenShell
-            # could not read, and an instance of another attribute count than its entity's is of another schema,
-            # which the whole file's parse names
+            # could not read, and an entity written with another number of attributes than the schema's is of
+            # another schema, which the whole file's parse names
             if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#") and \
-                    not log.count(ifcio.ATTRIBUTE_COUNT):
+                    not ifcio.misfits_schema(model, found.index.lines):
                 return model, found
     log = ifcio.parser_log()
     model = ifcio.open_path(str(path), log)

@@ -6,11 +6,14 @@ and the model was optimized and written as the header's schema), with the entity
 from __future__ import annotations
 
 import re
+import tempfile
+from pathlib import Path
 
 import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
-from plantsolve.solvers.dedup import SPEC
+from plantsolve.solvers.dedup import SPEC, skeleton
+from plantsolve.solvers.dedup.ifcio import misfits_schema, written_attributes
 from plantsolve.solvers.dedup.upload import parse_upload
 from tests.conftest import REPO
 
@@ -68,3 +71,24 @@ def test_ifc4_content_under_other_headers_is_refused_naming_the_line():
 def test_an_ifc2x3_model_labelled_ifc4x3_is_refused_naming_a_line():
     msg = _refusal(ZOO.replace("FILE_SCHEMA(('IFC2X3'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))
     assert "IFCPRESENTATIONSTYLEASSIGNMENT (line 993)" in msg
+
+
+@pytest.mark.parametrize("line, count", [
+    ("#955=IFCCOLUMN('3$BNBp3Jn5twsNIlAsNjjL',#5,'column_a',$,'column',#945,#954,$);", 8),
+    ("#7=IFCPROPERTYSINGLEVALUE('a, (b)','it''s, (c',IFCLABEL('x,y'),$);", 4),  # commas and brackets in strings
+    ("#8=IFCPOLYLOOP((#1,#2,#3));", 1),
+    ("#9 = IFCCARTESIANPOINTLIST3D(((0.,0.,0.),(1.,0.,0.)),$);", 2),
+    ("#10=IFCPRESENTATIONLAYERASSIGNMENT();", 0),
+    ("#11=(IFCLENGTHMEASURE()IFCNAMEDUNIT(*,.LENGTHUNIT.));", None),  # a complex instance: its parts have their own
+])
+def test_the_attributes_a_line_writes_are_counted_at_its_first_bracket_level(line, count):
+    assert written_attributes(line) == count
+
+
+def test_the_line_scan_tells_a_model_of_another_schema_by_its_first_instances():
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "model.ifc"
+        for header, misfits in (("IFC2X3", False), ("IFC4", True)):
+            path.write_text(ZOO.replace("FILE_SCHEMA(('IFC2X3'))", f"FILE_SCHEMA(('{header}'))"))
+            found = skeleton.read(path)
+            assert misfits_schema(found.model(), found.index.lines) is misfits
