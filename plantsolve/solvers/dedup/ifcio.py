@@ -69,7 +69,7 @@ def parser_log() -> ifcopenshell.logger:
 def open_path(path: str, log: ifcopenshell.logger | None = None) -> ifcopenshell.file:
     """The model at ``path``; ``log``: a :func:`parser_log` that receives the parser's messages."""
     try:
-        model = ifcopenshell.open(path, logger=log) if log is not None else ifcopenshell.open(path)
+        model = ifcopenshell.open(path, logger=log)
     except Exception as e:  # the parser raises several kinds for a broken file
         message = str(e) or type(e).__name__
         if "schema" in message.lower():
@@ -231,9 +231,10 @@ def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, 
     others = ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
                        for schema, count in counts.items())
     entities = sorted({model.by_id(int(found.group(3))).is_a() for found in wrong})
+    plural = "" if written == 1 else "s"
     raise reject(
-        f"{line}#{number}={entity.upper()} is written with {written} attribute{'' if written == 1 else 's'}, and {entity} has {expected} in the "
-        f"header's FILE_SCHEMA {model.schema_identifier} ({others}); {len(wrong):,} instance(s) of "
+        f"{line}#{number}={entity.upper()} is written with {written} attribute{plural}, and {entity} has {expected} in "
+        f"the header's FILE_SCHEMA {model.schema_identifier} ({others}); {len(wrong):,} instance(s) of "
         f"{', '.join(entities[:MAX_NAMED])}{' …' if len(entities) > MAX_NAMED else ''} are so. "
         + (f"The content looks like {' or '.join(fits)}: is the header's FILE_SCHEMA wrong? Write the schema the "
            "exporter wrote the model in" if fits else "The file is of another schema than its header says, or broken")
