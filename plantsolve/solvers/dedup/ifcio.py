@@ -188,18 +188,21 @@ def written_attributes(line: str) -> int | None:
     return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
 
 
-def misfits_schema(model: ifcopenshell.file, lines) -> bool:
-    """Whether the first instance of an entity in ``model`` is written (``lines``: ids → their lines in the file) with
-    another number of attributes than the entity has in the model's schema: the file is of another schema than its
-    header says (what a whole parse with a :func:`parser_log` names: :func:`refuse_attribute_counts`)."""
-    firsts = {}
+def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
+    """Whether the first line of an entity in ``text`` (a model's STEP text, ``model`` parsed from it) is written
+    (``lines``: ids → their lines as the file has them) with another number of attributes than the entity has in the
+    model's schema: the file is of another schema than its header says (what a whole parse with a :func:`parser_log`
+    names: :func:`refuse_attribute_counts`). Each entity's first line is searched for in the text: the model's own
+    instances, listed by type, would each stay in IfcOpenShell's cache of instance objects."""
+    schema = ifcopenshell.schema_by_name(model.schema_identifier)
+    firsts: dict[int, int] = {}
     for entity in model.types():
-        first = model.by_type(entity, include_subtypes=False)
-        if first:
-            firsts[first[0].id()] = first[0]
+        found = re.search(rb"(?:^|\n)#(\d+)[ \t]*=[ \t]*" + entity.encode() + rb"[ \t]*\(", text, re.IGNORECASE)
+        if found:
+            firsts[int(found.group(1))] = schema.declaration_by_name(entity).attribute_count()
     for number, line in lines(list(firsts)).items():
         written = written_attributes(line)
-        if written is not None and written != len(firsts[number]):
+        if written is not None and written != firsts[number]:
             return True
     return False
 

@@ -523,7 +523,7 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
             # could not read, and an entity written with another number of attributes than the schema's is of
             # another schema, which the whole file's parse names
             if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#") and \
-                    not ifcio.misfits_schema(model, found.index.lines):
+                    not ifcio.misfits_schema(model, found.skeleton, found.index.lines):
                 return model, found
     log = ifcio.parser_log()
     model = ifcio.open_path(str(path), log)

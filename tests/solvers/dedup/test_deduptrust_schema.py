@@ -91,4 +91,4 @@ def test_the_line_scan_tells_a_model_of_another_schema_by_its_first_instances():
         for header, misfits in (("IFC2X3", False), ("IFC4", True)):
             path.write_text(ZOO.replace("FILE_SCHEMA(('IFC2X3'))", f"FILE_SCHEMA(('{header}'))"))
             found = skeleton.read(path)
-            assert misfits_schema(found.model(), found.index.lines) is misfits
+            assert misfits_schema(found.model(), found.skeleton, found.index.lines) is misfits
