@@ -9,6 +9,7 @@ import re
 from collections import Counter
 
 import ifcopenshell
+import numpy as np
 
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.other_kinds import file_holds
@@ -17,8 +18,14 @@ from plantsolve.solvers.step_file import where_cut
 # an instance's definition: '#12=' after a line's start or the ';' ending the one before
 DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 MAX_NAMED = 5
+NEWLINE = b"\n"
 HEADER_BYTES = 4096  # the STEP header is looked for this far in
 MAX_INSTANCE_NUMBER = 2**31 - 1  # IfcOpenShell's by_id takes a C int
+# IfcOpenShell's parser on an instance written with more or fewer attributes than its entity has in the header's
+# schema (it pads or drops them without failing): "Expected 9 attribute values, found 8 for instance #955"
+ATTRIBUTE_COUNT = "VAL016"
+_COUNTS = re.compile(r"Expected (\d+) attribute values, found (\d+) for instance #(\d+)")
+SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3_ADD2")  # what dedup reads
 
 
 def _utf16_without_mark(head: bytes) -> bool:
@@ -52,9 +59,17 @@ def check_header(head: bytes, tail: bytes) -> None:
                      "file was cut in transfer or export, and nothing of a cut model is optimized (send the whole file)")
 
 
-def open_path(path: str) -> ifcopenshell.file:
+def parser_log() -> ifcopenshell.logger:
+    """A logger that keeps one parse's messages in memory (the parse's own, not the process's log)."""
+    log = ifcopenshell.logger()
+    log.output_format(ifcopenshell.logger.FMT_INMEMORY)
+    return log
+
+
+def open_path(path: str, log: ifcopenshell.logger | None = None) -> ifcopenshell.file:
+    """The model at ``path``; ``log``: a :func:`parser_log` that receives the parser's messages."""
     try:
-        model = ifcopenshell.open(path)
+        model = ifcopenshell.open(path, logger=log)
     except Exception as e:  # the parser raises several kinds for a broken file
         message = str(e) or type(e).__name__
         if "schema" in message.lower():
@@ -155,3 +170,75 @@ def _missing(model: ifcopenshell.file, number: int) -> bool:
     except RuntimeError:
         return True
     return False
+
+
+_STRING = re.compile(r"'(?:[^']|'')*'")  # a STEP string, its quotes doubled inside
+
+
+def written_attributes(line: str) -> int | None:
+    """How many attribute values a STEP instance line writes (None: a complex instance, or no argument list): its
+    commas outside strings at the first bracket level, counted with numpy (a point list's line can be megabytes)."""
+    name, _, arguments = line.partition("=")[2].partition("(")
+    if not name.strip() or not arguments:
+        return None
+    text = np.frombuffer(_STRING.sub("''", "(" + arguments).encode("latin-1", "replace"), dtype=np.uint8)
+    depth = np.cumsum((text == ord("(")).astype(np.int32) - (text == ord(")")))
+    if len(text) < 2 or depth[1] == 0 and text[1] == ord(")"):  # '()': no value at all
+        return 0
+    return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
+
+
+def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
+    """Whether the first line of an entity in ``text`` (a model's STEP text, ``model`` parsed from it) is written
+    (``lines``: ids → their lines as the file has them) with another number of attributes than the entity has in the
+    model's schema: the file is of another schema than its header says (what a whole parse with a :func:`parser_log`
+    names: :func:`refuse_attribute_counts`). Each entity's first line is searched for in the text: the model's own
+    instances, listed by type, would each stay in IfcOpenShell's cache of instance objects."""
+    schema = ifcopenshell.schema_by_name(model.schema_identifier)
+    firsts: dict[int, int] = {}
+    for entity in model.types():
+        found = re.search(rb"(?:^|\n)#(\d+)[ \t]*=[ \t]*" + entity.encode() + rb"[ \t]*\(", text, re.IGNORECASE)
+        if found:
+            firsts[int(found.group(1))] = schema.declaration_by_name(entity).attribute_count()
+    for number, line in lines(list(firsts)).items():
+        written = written_attributes(line)
+        if written is not None and written != firsts[number]:
+            return True
+    return False
+
+
+def _attribute_count(schema: str, entity: str) -> int | None:
+    try:
+        return ifcopenshell.schema_by_name(schema).declaration_by_name(entity).attribute_count()
+    except (RuntimeError, IndexError):  # no such entity in that schema
+        return None
+
+
+def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, path: str) -> None:
+    """Refuses a model whose instances have another number of attributes than their entities have in the header's
+    FILE_SCHEMA (an IFC2X3 file labelled IFC4: its IfcColumn has 8, IFC4's 9): the parser padded or dropped values
+    without a word, and the optimized file would be written in a schema its content is not. Names the first such
+    line, its entity's count in each schema dedup reads, and how many instances are so."""
+    wrong = [found for message in log.log_messages() if message.code == ATTRIBUTE_COUNT
+             for found in (_COUNTS.search(message.message),) if found]
+    if not wrong:
+        return
+    expected, written, number = (int(g) for g in wrong[0].groups())
+    entity = model.by_id(number).is_a()
+    with open(path, "rb") as stream:
+        text = stream.read()
+    at = re.search(rb"(?:^|[;\n])[ \t\r]*#" + str(number).encode() + rb"[ \t]*=", text)
+    line = f"line {text.count(NEWLINE, 0, at.end()) + 1}: " if at else ""
+    counts = {schema: _attribute_count(schema, entity) for schema in SCHEMAS if schema != model.schema_identifier}
+    fits = [schema for schema, count in counts.items() if count == written]
+    others = ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
+                       for schema, count in counts.items())
+    entities = sorted({model.by_id(int(found.group(3))).is_a() for found in wrong})
+    plural = "" if written == 1 else "s"
+    raise reject(
+        f"{line}#{number}={entity.upper()} is written with {written} attribute{plural}, and {entity} has {expected} in "
+        f"the header's FILE_SCHEMA {model.schema_identifier} ({others}); {len(wrong):,} instance(s) of "
+        f"{', '.join(entities[:MAX_NAMED])}{' …' if len(entities) > MAX_NAMED else ''} are so. "
+        + (f"The content looks like {' or '.join(fits)}: is the header's FILE_SCHEMA wrong? Write the schema the "
+           "exporter wrote the model in" if fits else "The file is of another schema than its header says, or broken")
+        + "; nothing of it is optimized, as the optimized model would be written in a schema its content is not")

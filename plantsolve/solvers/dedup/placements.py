@@ -57,6 +57,54 @@ def _axis_placement_problem(placement) -> tuple[object, str] | None:
     return None
 
 
+def _beyond_precision(placement, precision: float | None) -> tuple[object, str] | None:
+    """(the location, why) when a coordinate of ``placement``'s Location is so large that the numbers next to it (a
+    double's spacing there) are further apart than the context's Precision: a point placed in it cannot be told
+    from one ``precision`` away."""
+    location = getattr(placement, "Location", None)
+    if not precision or not math.isfinite(precision) or precision <= 0 or location is None or \
+            not location.is_a("IfcCartesianPoint"):
+        return None
+    for value in location.Coordinates or ():
+        if np.spacing(abs(float(value))) > precision:
+            return location, (f"coordinate {value!r} is so large that the numbers next to it are "
+                              f"{np.spacing(abs(float(value))):g} apart, more than the context's Precision "
+                              f"{precision:g}: nothing placed in it keeps that precision")
+    return None
+
+
+def _attribute_holding(placement, instance) -> str:
+    """The attribute of an IfcAxis2Placement that holds ``instance`` ('' for the placement itself)."""
+    for name in ("Location", "Axis", "RefDirection"):
+        if getattr(placement, name, None) == instance:
+            return name
+    return ""
+
+
+def world_coordinate_problem(model, path) -> str | None:
+    """What is wrong with the WorldCoordinateSystem of a representation context, every product's geometry placed in
+    it (a writer's 1e308, NaN, a zero or parallel axis, or a location beyond what the context's Precision can carry),
+    named by the context's attribute and the instance with its line in the file at ``path``; None when every
+    context's is sound. The geometry kernel tessellates without it, so no product is left unplaced, and deviations
+    measured without it would be claimed for a model whose every point is meaningless."""
+    for context in model.by_type("IfcGeometricRepresentationContext"):
+        if context.is_a("IfcGeometricRepresentationSubContext"):  # its parent's system, derived
+            continue
+        system = context.WorldCoordinateSystem
+        if system is None:
+            continue
+        found = _axis_placement_problem(system) or _beyond_precision(system, context.Precision)
+        if found is None:
+            continue
+        instance, problem = found
+        held = _attribute_holding(system, instance)
+        where = f", the WorldCoordinateSystem of #{context.id()}={context.is_a()}"
+        if held:
+            where = f", the {held} of #{system.id()}={system.is_a()}{where}"
+        return describe(instance, problem, _text(path), where)
+    return None
+
+
 def placement_problem(product) -> tuple[object, str] | None:
     """The first instance of ``product``'s placement chain (from the product up to the root) whose numbers no kernel
     can place with, and why; None when the chain is sound (or not a chain of local placements)."""
@@ -89,6 +137,14 @@ def why_unprocessed(product) -> str:
     return "geometry could not be processed" + (f": {describe(*found)}" if found else "")
 
 
+def _text(path) -> bytes | None:
+    try:
+        with open(path, "rb") as stream:
+            return stream.read()
+    except OSError:
+        return None
+
+
 def why_nothing_placed(products: list, path) -> str:
     """The refusal of a model none of whose products the kernel could place: the placement instance most of them
     share a fault in (a root placement, usually), named with its line."""
@@ -103,11 +159,7 @@ def why_nothing_placed(products: list, path) -> str:
     if not faults:
         return message
     worst, count = faults.most_common(1)[0]
-    try:
-        with open(path, "rb") as stream:
-            text = stream.read()
-    except OSError:
-        text = None
+    text = _text(path)
     placing = f" in the placement of {count} of the {len(products)} products with geometry"
     return f"{message}: {describe(*seen[worst], text, placing)}"
 

@@ -520,13 +520,18 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
             pass
         else:
             # every line of the skeleton is one instance (the scan vouches for it): one fewer is one IfcOpenShell
-            # could not read, which the whole file's parse names
-            if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#"):
+            # could not read, and an entity written with another number of attributes than the schema's is of
+            # another schema, which the whole file's parse names
+            if len(model.entity_names()) == found.skeleton.count(b"\n#") + found.skeleton.startswith(b"#") and \
+                    not ifcio.misfits_schema(model, found.skeleton, found.index.lines):
                 return model, found
-    model = ifcio.open_path(str(path))
+    log = ifcio.parser_log()
+    model = ifcio.open_path(str(path), log)
     text = Path(path).read_bytes()
     if len(model.entity_names()) < ifcio.defined_instances(text):
         ifcio.refuse_unread(text, model)
+    del text
+    ifcio.refuse_attribute_counts(log, model, str(path))
     return model, None
 
 
