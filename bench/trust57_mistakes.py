@@ -304,12 +304,7 @@ def polyhedra_cases() -> list[Case]:
     ifc = (data / "ifcopenshell_spaces.ifc").read_text()
     latin = _replace_once(idf, "! Two 5 x 4", "! Büro Zwei 5 x 4")
     objects = re.compile(r"^[A-Za-z][A-Za-z:]*,\s*$")
-    ifc_lines = ifc.splitlines()
-    data_at = ifc_lines.index("DATA;") + 1
-    end_at = ifc_lines.index("ENDSEC;", data_at)
-    entities = ifc_lines[data_at:end_at]
-    random.Random(57).shuffle(entities)
-    ifc_shuffled = "\n".join(ifc_lines[:data_at] + entities + ifc_lines[end_at:]) + "\n"
+    ifc_shuffled = _entities_shuffled(ifc)
     vertex = re.search(r"vertex (\S+)", stl).group(1)
     return [
         ("polyhedra", "clean idf", "zones.idf", idf.encode(), None, "same", None),
@@ -493,14 +488,19 @@ def _zipped(name: str, text: str) -> bytes:
     return out.getvalue()
 
 
-def dedup_cases() -> list[Case]:
-    ifc = _text("examples/dedup/zoo_ifc2x3.ifc")
+def _entities_shuffled(ifc: str) -> str:
+    """An IFC file with its DATA section's lines in another order (an IFC's meaning does not depend on it)."""
     lines = ifc.splitlines()
     data_at = lines.index("DATA;") + 1
     end_at = lines.index("ENDSEC;", data_at)
     entities = lines[data_at:end_at]
     random.Random(57).shuffle(entities)
-    shuffled = "\n".join(lines[:data_at] + entities + lines[end_at:]) + "\n"
+    return "\n".join(lines[:data_at] + entities + lines[end_at:]) + "\n"
+
+
+def dedup_cases() -> list[Case]:
+    ifc = _text("examples/dedup/zoo_ifc2x3.ifc")
+    shuffled = _entities_shuffled(ifc)
     latin = ifc.replace("FILE_DESCRIPTION(", "/* Büro */ FILE_DESCRIPTION(", 1)
     return [
         ("dedup", "clean ifc", "zoo.ifc", ifc.encode(), None, "same", None),
