@@ -12,7 +12,7 @@ from pydantic import BaseModel
 from plantsolve.schemas.alignment import AlignmentRequest
 from plantsolve.schemas.dedup import DedupRequest
 from plantsolve.schemas.flowmeter import FlowmeterRequest
-from plantsolve.schemas.perfmap import PerfmapRequest
+from plantsolve.schemas.perfmap import PerfmapBetaQueryRequest, PerfmapQueryRequest, PerfmapRequest
 from plantsolve.schemas.polyhedra import PolyhedraRequest
 from plantsolve.schemas.rigidity import RigidityRequest
 from plantsolve.schemas.tube import TubeRequest
@@ -22,6 +22,11 @@ REQUESTS: Mapping[str, type[BaseModel]] = {
     "alignment": AlignmentRequest, "tube": TubeRequest, "perfmap": PerfmapRequest, "polyhedra": PolyhedraRequest,
     "flowmeter": FlowmeterRequest, "rigidity": RigidityRequest, "dedup": DedupRequest,
 }
+# bodies of the questions a finished job answers, by kind: its path under /v1/<kind>/jobs/<job id>/
+QUESTIONS: Mapping[str, Mapping[str, type[BaseModel]]] = {
+    "perfmap": {"query": PerfmapQueryRequest, "beta": PerfmapBetaQueryRequest},
+}
+QUESTION_KEYS = {"points", "flow", "pressure", "speed", "beta", "setting"}
 KEYS_NAMED = 4
 SHARED_FIELDS = {"units", "options", "source"}  # fields many kinds' requests have: they tell no kind apart
 
@@ -41,6 +46,9 @@ def held_kind(body: Mapping[str, Any], own: str) -> str | None:
         return f"{_a(kind)} result (its 'kind' is {kind!r})"
     if kind == own and "report" in body:
         return f"{_a(own)} result (its 'kind' is {own!r} and it has a 'report'), not a request"
+    question = _question(body)
+    if question is not None:
+        return question
     ours = request_fields(own)
     foreign = set(body) - ours
     if not foreign:
@@ -53,6 +61,25 @@ def held_kind(body: Mapping[str, Any], own: str) -> str | None:
         return None
     named = sorted(foreign & request_fields(best))[:KEYS_NAMED]
     return f"{_a(best)} request (its keys {', '.join(map(repr, named))} are {best}'s request fields)"
+
+
+def _question(body: Mapping[str, Any]) -> str | None:
+    """What ``body`` asks when it is the question a finished job answers (duty points for a map), not a request.
+    Only a body shaped like one is validated (a list of points whose first is an object, or one point): a request's
+    million points are not checked one by one against another schema."""
+    points = body.get("points")
+    if not (set(body) <= QUESTION_KEYS and (points is None or (isinstance(points, list) and points
+                                                                and isinstance(points[0], dict)))):
+        return None
+    for kind, questions in QUESTIONS.items():
+        for path, model in questions.items():
+            try:
+                model.model_validate(body)
+            except ValueError:
+                continue
+            return (f"{_a(kind)} {path} question (what a finished {kind} job answers: POST it to "
+                    f"/v1/{kind}/jobs/<job id>/{path})")
+    return None
 
 
 def _a(word: str) -> str:
