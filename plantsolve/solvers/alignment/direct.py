@@ -245,7 +245,6 @@ def solve_joint(model: Model, active: np.ndarray, q: np.ndarray, stiffness: floa
     st = JointState(model, q)
     free, var, nv, w, w_rot, a, b, pipes, fits = _joint_layout(model, active, stiffness)
     w_along = 1e-3
-    pc = model.port_comp
     m_conn = len(a)
     locked = np.zeros(n, dtype=bool)
     steps = 0
@@ -514,7 +513,6 @@ def continue_closing(model: Model, active: np.ndarray, pose: Pose, stiffness: fl
     and the KKT steps taken (at most ``budget``)."""
     st = pose.state
     free, var, nv, w, w_rot, a, b, pipes, fits = _joint_layout(model, active, stiffness)
-    pc = model.port_comp
     fr = np.flatnonzero(free)
     sv = np.ones(nv)
     sv[(var[fr][:, None] + 3 + np.arange(3)).ravel()] = model.lref
