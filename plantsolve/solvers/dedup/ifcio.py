@@ -109,6 +109,12 @@ def read_back(text: bytes) -> ifcopenshell.file:
     return ifcopenshell.file.from_string(text.decode())
 
 
+def instance_line(text: bytes, number: int) -> int | None:
+    """The line of a STEP text on which instance ``#number`` is defined, None when it is not."""
+    found = re.search(rb"(?:^|[;\n])[ \t\r]*#" + str(number).encode() + rb"[ \t]*=", text)
+    return None if found is None else text.count(NEWLINE, 0, found.end()) + 1
+
+
 def defined_instances(text: bytes) -> int:
     """How many instances a STEP text defines (IfcOpenShell's count falls short of it where it could not read one)."""
     return sum(1 for _ in DEFINITION.finditer(text))
@@ -214,7 +220,7 @@ def _attribute_count(schema: str, entity: str) -> int | None:
         return None
 
 
-def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, path: str) -> None:
+def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, text: bytes) -> None:
     """Refuses a model whose instances have another number of attributes than their entities have in the header's
     FILE_SCHEMA (an IFC2X3 file labelled IFC4: its IfcColumn has 8, IFC4's 9): the parser padded or dropped values
     without a word, and the optimized file would be written in a schema its content is not. Names the first such
@@ -225,10 +231,8 @@ def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, 
         return
     expected, written, number = (int(g) for g in wrong[0].groups())
     entity = model.by_id(number).is_a()
-    with open(path, "rb") as stream:
-        text = stream.read()
-    at = re.search(rb"(?:^|[;\n])[ \t\r]*#" + str(number).encode() + rb"[ \t]*=", text)
-    line = f"line {text.count(NEWLINE, 0, at.end()) + 1}: " if at else ""
+    at = instance_line(text, number)
+    line = f"line {at}: " if at else ""
     counts = {schema: _attribute_count(schema, entity) for schema in SCHEMAS if schema != model.schema_identifier}
     fits = [schema for schema, count in counts.items() if count == written]
     others = ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"

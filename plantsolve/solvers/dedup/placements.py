@@ -5,14 +5,13 @@ the kernel says only that nothing could be processed), or a GlobalId it shares w
 from __future__ import annotations
 
 import math
-import re
 from collections import Counter
 
 import numpy as np
 
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
+from plantsolve.solvers.dedup.ifcio import instance_line
 
-NEWLINE = b"\n"
 MAX_CHAIN = 1000  # a placement chain longer than any model's (a cycle written by a broken exporter ends here)
 
 
@@ -123,11 +122,8 @@ def placement_problem(product) -> tuple[object, str] | None:
 
 def describe(instance, problem: str, text: bytes | None = None, placing: str = "") -> str:
     """'#19=IfcCartesianPoint (line 26) in the placement of 15 of the 15 products with geometry: coordinate …'."""
-    line = ""
-    if text is not None:
-        found = re.search(rb"(?:^|\n)\s*#" + str(instance.id()).encode() + rb"\s*=", text)
-        if found:
-            line = f" (line {text.count(NEWLINE, 0, found.end()) + 1})"
+    at = instance_line(text, instance.id()) if text is not None else None
+    line = f" (line {at})" if at else ""
     return f"#{instance.id()}={instance.is_a()}{line}{placing}: {problem}"
 
 

@@ -530,8 +530,7 @@ def open_model(path: Path) -> tuple[ifcopenshell.file, Skeleton | None]:
     text = Path(path).read_bytes()
     if len(model.entity_names()) < ifcio.defined_instances(text):
         ifcio.refuse_unread(text, model)
-    del text
-    ifcio.refuse_attribute_counts(log, model, str(path))
+    ifcio.refuse_attribute_counts(log, model, text)
     return model, None
 
 
