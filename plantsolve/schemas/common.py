@@ -80,7 +80,8 @@ Vec3 = Annotated[list[FiniteFloat], Field(min_length=3, max_length=3)]
 # direction components within 1e9 (they are normalised; 1e200 only overflows the solvers' products).
 MAX_COORDINATE = 1e12
 Coordinate = Annotated[Number, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
-Measured = Annotated[Number, Field(allow_inf_nan=False, ge=-1e12, le=1e12)]
+MAX_MEASURED = 1e12
+Measured = Annotated[Number, Field(allow_inf_nan=False, ge=-MAX_MEASURED, le=MAX_MEASURED)]
 """A measured value (flow, pressure, a setting) within 1e12 of its unit: beyond that only overflows."""
 Point3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 DirectionComponent = Annotated[Number, Field(allow_inf_nan=False, ge=-1e9, le=1e9)]

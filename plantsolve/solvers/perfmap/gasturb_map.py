@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pint
 
-from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
 from plantsolve.solvers.perfmap.units import UnitError, check_quantity
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
@@ -54,7 +54,6 @@ MAX_ROWS = 2000
 GSP_MAX_ARGUMENTS = 40
 GSP_MAX_PARAMETERS = 150
 MAX_DROPPED_NAMED = 20  # map points left out named with their table, line, speed and beta in the warning
-MAX_MEASURED = 1e12  # the bound of the request's measured values (schemas.common.Measured)
 MAX_RELATIVE_SPEED = 3.0  # relative corrected speeds above this are percent or rpm (implausible_speed)
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eEdD][+-]?\d+)?$")
 _SETTING_LINE = re.compile(r"^\s*([A-Za-z][^:=]*?)\s*[:=]\s*([-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?)\s*"

@@ -66,12 +66,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from plantsolve.schemas.common import Diagnostic
+from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, json_object, reject, validated
 from plantsolve.solvers.length_units import spellings
 from plantsolve.solvers.perfmap.cell_units import reconcile
-from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_MEASURED, MAX_RELATIVE_SPEED
+from plantsolve.solvers.perfmap.gasturb_map import MAX_DROPPED_NAMED, MAX_RELATIVE_SPEED
 from plantsolve.solvers.perfmap.gasturb_map import request_body as gasturb_request_body
 from plantsolve.solvers.other_kinds import refuse_other_kind
 from plantsolve.solvers.perfmap.numbers import COMMA, POINT, decimals, number, survey
