@@ -23,9 +23,10 @@ COLUMNS = re.compile(r"^(#\d+=IFCCOLUMN\(.*)\);$", re.MULTILINE)
 
 
 def _refusal(text: str) -> str:
+    """The solve's refusal (intake's check, which refuses what its scan sees first, is left out: see
+    test_trust58_intake_schema)."""
     source = StoredInput.from_bytes("model.ifc", text.encode())
     value = SPEC.input_of(parse_upload(source, {}), source)
-    SPEC.check_input(value)
     with pytest.raises(InputRejected) as refused:
         SPEC.solve(value, lambda *a: None)
     (error,) = refused.value.errors
