@@ -9,11 +9,10 @@ import re
 from collections import Counter
 
 import ifcopenshell
-import numpy as np
 
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import where_cut
+from plantsolve.solvers.step_file import where_cut, written_attributes
 
 # an instance's definition: '#12=' after a line's start or the ';' ending the one before
 DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
@@ -167,22 +166,6 @@ def _missing(model: ifcopenshell.file, number: int) -> bool:
     return False
 
 
-_STRING = re.compile(r"'(?:[^']|'')*'")  # a STEP string, its quotes doubled inside
-
-
-def written_attributes(line: str) -> int | None:
-    """How many attribute values a STEP instance line writes (None: a complex instance, or no argument list): its
-    commas outside strings at the first bracket level, counted with numpy (a point list's line can be megabytes)."""
-    name, _, arguments = line.partition("=")[2].partition("(")
-    if not name.strip() or not arguments:
-        return None
-    text = np.frombuffer(_STRING.sub("''", "(" + arguments).encode("latin-1", "replace"), dtype=np.uint8)
-    depth = np.cumsum((text == ord("(")).astype(np.int32) - (text == ord(")")))
-    if len(text) < 2 or depth[1] == 0 and text[1] == ord(")"):  # '()': no value at all
-        return 0
-    return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
-
-
 def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
     """Whether the first line of an entity in ``text`` (a model's STEP text, ``model`` parsed from it) is written
     (``lines``: ids → their lines as the file has them) with another number of attributes than the entity has in the
@@ -214,12 +197,6 @@ def counts_elsewhere(counts: dict[str, int | None]) -> str:
     """'9 in IFC4, none in IFC2X3': an entity's attribute count in each schema of ``counts``."""
     return ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
                      for schema, count in counts.items())
-
-
-def whole_instance(line: str) -> bool:
-    """Whether a line holds one whole instance: it ends with ';' outside strings, its brackets closed."""
-    bare = _STRING.sub("''", line).rstrip()
-    return bare.endswith(";") and bare.count("(") == bare.count(")")
 
 
 def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, text: bytes) -> None:

@@ -11,11 +11,11 @@ from collections import Counter
 from ifcopenshell import ifcopenshell_wrapper
 
 from plantsolve.solvers.base import reject
-from plantsolve.solvers.dedup.ifcio import DEFINITION, SCHEMAS, attribute_count, counts_elsewhere, whole_instance, \
-    written_attributes
+from plantsolve.solvers.dedup.ifcio import DEFINITION, SCHEMAS, attribute_count, counts_elsewhere
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.other_kinds import file_holds
+from plantsolve.solvers.step_file import whole_instance, written_attributes
 
 _SCHEMA = re.compile(rb"FILE_SCHEMA\s*\(\s*\(\s*'([A-Za-z0-9_]+)", re.IGNORECASE)
 
@@ -135,8 +135,8 @@ def refuse_other_schema(text: bytes, firsts: list[re.Match], lines_before: int, 
         written_name = name.decode("ascii")
         if name not in entities:
             fits = [other for other in SCHEMAS if other != schema and attribute_count(other, written_name) is not None]
-            raise reject(f"line {at}: #{match.group(1).decode()}={written_name} is no entity of the header's FILE_SCHEMA "
-                         f"{schema}" + (f" (it is one of {' and '.join(fits)})" if fits else "") +
+            raise reject(f"line {at}: #{match.group(1).decode()}={written_name} is no entity of the header's "
+                         f"FILE_SCHEMA {schema}" + (f" (it is one of {' and '.join(fits)})" if fits else "") +
                          ": the file is of another schema than its header says, and nothing of it can be optimized "
                          "as that schema; write the schema the exporter wrote the model in")
         start = text.rfind(b"\n", 0, match.start(1)) + 1

@@ -13,8 +13,9 @@ import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.dedup import SPEC, skeleton
-from plantsolve.solvers.dedup.ifcio import misfits_schema, written_attributes
+from plantsolve.solvers.dedup.ifcio import misfits_schema
 from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.step_file import written_attributes
 from tests.conftest import REPO
 
 ZOO = (REPO / "examples" / "dedup" / "zoo_ifc2x3.ifc").read_text()
