@@ -8,10 +8,12 @@ import functools
 import re
 from collections import Counter
 
+import ifcopenshell
 from ifcopenshell import ifcopenshell_wrapper
 
 from plantsolve.solvers.base import reject
 from plantsolve.solvers.dedup.ifcio import DEFINITION, SCHEMAS, attribute_count, counts_elsewhere
+from plantsolve.solvers.dedup.placements import world_coordinate_problem, world_refusal
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import refuse_at_intake, stated_length_unit
 from plantsolve.solvers.other_kinds import file_holds
@@ -102,6 +104,8 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
             found = list(DEFINITION.finditer(text))
             names = Counter(m.group(2).upper() for m in found)
             refuse_other_schema(text, [m for m in found if m.group(2).upper() not in counts], lines_before, schema)
+            if not lines_before:  # the contexts and their world coordinate systems come first in an export
+                refuse_unplaceable_world(text, schema)
             lines_before += text.count(b"\n")
             counts.update(names)
             product = product or not products.isdisjoint(names)
@@ -157,6 +161,46 @@ def refuse_other_schema(text: bytes, firsts: list[re.Match], lines_before: int, 
                         if fits else "The file is of another schema than its header says, or broken; ")
                      + "nothing of it is optimized, as the optimized model would be written in a schema its content "
                      "is not")
+
+
+_CONTEXT = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*IFCGEOMETRICREPRESENTATIONCONTEXT[ \t]*\(",
+                      re.IGNORECASE | re.MULTILINE)
+_REFERENCE = re.compile(rb"#(\d+)")
+WORLD_DEPTH = 3  # context -> its WorldCoordinateSystem -> its Location, Axis, RefDirection
+
+
+def _definitions(text: bytes, number: int, depth: int, found: dict[int, bytes]) -> bool:
+    """``found`` filled with the definitions of instance ``number`` and of those it refers to, ``depth`` levels down;
+    False when one of them is not in ``text`` (further on in the file: the solve looks at it)."""
+    if number in found:
+        return True
+    line = re.search(rb"(?:^|;)[ \t\r]*(#" + str(number).encode() + rb"[ \t]*=[^;]*;)", text, re.MULTILINE)
+    if line is None:
+        return False
+    found[number] = line.group(1)
+    return depth == 0 or all(_definitions(text, int(ref), depth - 1, found)
+                             for ref in _REFERENCE.findall(line.group(1).split(b"=", 1)[1]))
+
+
+def refuse_unplaceable_world(text: bytes, schema: str) -> None:
+    """A 422 for a representation context whose WorldCoordinateSystem no product can be placed in (a writer's 1e308, a
+    zero or parallel axis, a location beyond the context's Precision), read from the file's first chunk: the context
+    and the instances it refers to as a model of their own, judged as the solve judges the whole model's (which it
+    refused only after the job had been accepted)."""
+    for context in _CONTEXT.finditer(text):
+        found: dict[int, bytes] = {}
+        if not _definitions(text, int(context.group(1)), WORLD_DEPTH, found):
+            continue
+        data = b"\n".join(found[k] for k in sorted(found)).decode("latin-1")
+        try:
+            world = ifcopenshell.file.from_string(
+                "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('','',(''),(''),'','','');\n"
+                f"FILE_SCHEMA(('{schema}'));\nENDSEC;\nDATA;\n{data}\nENDSEC;\nEND-ISO-10303-21;\n")
+            problem = world_coordinate_problem(world, text=text)
+        except Exception:  # noqa: BLE001 - what the parser cannot read alone, the solve reads in the whole model
+            continue
+        if problem:
+            raise reject(world_refusal(problem))
 
 
 def check_input(source: IfcSource) -> None:
