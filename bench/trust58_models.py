@@ -12,6 +12,7 @@ The outcome column: ``refused``, ``scaled``/``same``, ``warned <codes>``, and th
 ``OTHER ANSWER`` (an invariant mistake answered with other numbers).
 
     python bench/trust58_models.py [--ref /work/main] [--kinds polyhedra rigidity dedup] [--cases word ...]
+    python bench/trust58_models.py --intake-cpu [--ref /work/main]   # dedup's submission check: CPU s, peak RSS
 """
 
 from __future__ import annotations
@@ -290,6 +291,42 @@ def child(kinds: list[str], only: list[str] | None) -> None:
                 print(json.dumps(row), flush=True)
 
 
+INTAKE = """
+import resource, sys, tempfile, time
+from pathlib import Path
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.dedup import SPEC
+text = Path(sys.argv[1]).read_bytes()
+filler = b"".join(b"#%d=IFCCARTESIANPOINT((0.,0.,%d.));\\n" % (900000 + k, k) for k in range(int(sys.argv[2])))
+text = text.replace(b"DATA;\\n", b"DATA;\\n" + filler, 1)  # points before the products: the whole file is scanned
+with tempfile.TemporaryDirectory() as tmp:
+    path = Path(tmp) / "big.ifc"
+    path.write_bytes(text)
+    best = float("inf")
+    for _ in range(3):
+        source = StoredInput.from_path(path, "big.ifc")
+        value = SPEC.input_of(SPEC.parse_upload(source, None), source)
+        t0 = time.process_time()
+        SPEC.check_input(value)
+        best = min(best, time.process_time() - t0)
+print(len(text), best, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+"""
+
+
+def intake_cpu(trees: list[Path], points: int = 1_500_000) -> None:
+    """dedup's check at submission on the zoo after ``points`` points (some 60 MB): CPU seconds (least of 3) and the
+    process's peak RSS, each tree in turn, twice (interleaved)."""
+    print("| tree | file MB | check_input CPU s (least of 3) | peak RSS MB |")
+    print("| --- | --- | --- | --- |")
+    for _ in range(2):
+        for tree in trees:
+            done = subprocess.run([sys.executable, "-c", INTAKE, str(ROOT / "examples/dedup/zoo_ifc2x3.ifc"),
+                                   str(points)], cwd=tree, capture_output=True, text=True, check=False,
+                                  env={**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"})
+            size, cpu, rss = done.stdout.split()
+            print(f"| {tree} | {int(size) / 1e6:.1f} | {float(cpu):.3f} | {float(rss):.0f} |")
+
+
 def run(tree: Path, kinds: list[str], only: list[str] | None) -> list[dict]:
     done = subprocess.run([sys.executable, __file__, "--child", "--kinds", *kinds, *(["--cases", *only] if only else [])],
                           cwd=tree, capture_output=True, text=True, check=False,
@@ -305,7 +342,11 @@ def main() -> None:
     parser.add_argument("--cases", nargs="*", default=None, help="only the mistakes whose names hold one of these")
     parser.add_argument("--ref", default=None, help="a checkout to run beside this tree (the branch's start)")
     parser.add_argument("--child", action="store_true", help="print this tree's rows as JSON lines, no table")
+    parser.add_argument("--intake-cpu", action="store_true", help="dedup's submission check's CPU on a 60 MB model")
     args = parser.parse_args()
+    if args.intake_cpu:
+        intake_cpu([ROOT] + ([Path(args.ref)] if args.ref else []))
+        return
     if args.child:
         sys.path.insert(0, os.getcwd())
         child(args.kinds, args.cases)
