@@ -9,7 +9,7 @@ API (TestClient, jobs run to their end), each judged on the answer's numbers rat
 
 The outcome column: ``refused``, ``scaled``/``same``, ``warned <codes>``, and the rows to look at: ``500``,
 ``CRASH`` (a 422 saying only "malformed"), ``NO WORD`` (a flagged mistake answered with no new warning),
-``OTHER ANSWER`` (an invariant mistake answered with other numbers).
+``OTHER ANSWER`` (an invariant mistake answered with other numbers), ``failed`` (accepted, refused after the 202).
 
     python bench/trust58_models.py [--ref /work/main] [--kinds polyhedra rigidity dedup] [--cases word ...]
     python bench/trust58_models.py --intake-cpu [--ref /work/main]   # dedup's submission check: CPU s, peak RSS
@@ -194,6 +194,14 @@ def dedup_cases() -> list[tuple]:
          _replace_once(zoo, "FILE_SCHEMA(('IFC2X3'))", "FILE_SCHEMA(('IFC4X3'))").encode(), None, "flag"),
         ("dedup", "IFC2X3 headed IFC4X3_ADD2 (zoo)", "zoo.ifc",
          _replace_once(zoo, "FILE_SCHEMA(('IFC2X3'))", "FILE_SCHEMA(('IFC4X3_ADD2'))").encode(), None, "flag"),
+        ("dedup", "WCS location 1E308 (zoo)", "zoo.ifc",
+         _replace_once(zoo, "#9=IFCCARTESIANPOINT((0.,0.,0.));", "#9=IFCCARTESIANPOINT((1.E308,0.,0.));").encode(),
+         None, "flag"),
+        ("dedup", "WCS axis of no length (zoo)", "zoo.ifc",
+         _replace_once(zoo, "#10=IFCDIRECTION((0.,0.,1.));", "#10=IFCDIRECTION((0.,0.,0.));").encode(), None, "flag"),
+        ("dedup", "WCS location 1E9 (zoo, georeferenced)", "zoo.ifc",
+         _replace_once(zoo, "#9=IFCCARTESIANPOINT((0.,0.,0.));", "#9=IFCCARTESIANPOINT((1.E9,-2.5E6,30.));").encode(),
+         None, "same"),
         ("dedup", "entities shuffled (zoo)", "zoo.ifc", _step_entities_shuffled(zoo).encode(), None, "same"),
         ("dedup", f"clean ifc (tunnel, {schema})", "tunnel.ifc", tunnel.encode(), None, "same"),
         ("dedup", f"{schema} headed {other} (tunnel)", "tunnel.ifc",
@@ -362,7 +370,7 @@ def main() -> None:
         said = (json.dumps(row["answer"]) + " " if "answer" in row else "") + row["said"]
         print(f"| {row['kind']} | {row['mistake']} | {cell}{row['status']} | {row['outcome']} | "
               f"{said.replace('|', '/').replace(chr(10), ' ')[:140]} |")
-    look = ("500", "CRASH", "NO WORD", "OTHER ANSWER", "job ")
+    look = ("500", "CRASH", "NO WORD", "OTHER ANSWER", "job ", "failed (")  # failed: refused only after the 202
     for label, rows in (("before", list(before.values())), ("after", after)):
         if rows:
             flagged = sum(r["outcome"].startswith(look) for r in rows)
