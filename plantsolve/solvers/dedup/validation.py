@@ -71,8 +71,8 @@ SHAPES = {b"IFCPRODUCTDEFINITIONSHAPE", b"IFCPRODUCTREPRESENTATION"}
 def _entities(schema: str) -> dict[bytes, tuple[str, bool, int]]:
     """The schema's entities by their name as STEP writes it (capitals): (their name, whether a product, how many
     attributes)."""
-    return {d.name().upper().encode(): (d.name(), _is_product(d), d.attribute_count()) for d in _schema_definition(schema).declarations()
-            if isinstance(d, ifcopenshell_wrapper.entity)}
+    return {d.name().upper().encode(): (d.name(), _is_product(d), d.attribute_count())
+            for d in _schema_definition(schema).declarations() if isinstance(d, ifcopenshell_wrapper.entity)}
 
 
 @functools.lru_cache(maxsize=8)
@@ -122,7 +122,7 @@ def refuse_without_products(source: IfcSource, schema: str) -> None:
                  f"is empty), so there is nothing to share; it holds {_held(counts, entities)}")
 
 
-def first_definition(text: bytes, name: bytes) -> re.Match:
+def first_definition(text: bytes, name: bytes) -> re.Match | None:
     """A definition of an instance of entity ``name`` (as STEP writes it, capitals) in ``text``, which holds one: the
     first written '#n=NAME(' at a line's start, found by a plain search (a case-blind pattern search took a second
     over a 60 MB model), else the first the pattern finds."""
@@ -135,7 +135,7 @@ def first_definition(text: bytes, name: bytes) -> re.Match:
                      re.IGNORECASE | re.MULTILINE)
 
 
-def refuse_other_schema(text: bytes, firsts: list[re.Match], lines_before: int, schema: str) -> None:
+def refuse_other_schema(text: bytes, firsts: list[re.Match | None], lines_before: int, schema: str) -> None:
     """A 422 for a model of another schema than its header's FILE_SCHEMA, seen in the text intake scans: an entity
     the schema does not have, or an entity's first instance written with another number of attributes than it has
     there (an IFC2X3 model labelled IFC4: its IfcColumn has 8, IFC4's 9). The solve's parse refused these only after
@@ -144,6 +144,8 @@ def refuse_other_schema(text: bytes, firsts: list[re.Match], lines_before: int, 
     entities = _entities(schema)
     seen: set[bytes] = set()
     for match in firsts:
+        if match is None:
+            continue
         name = match.group(2).upper()
         if not name or name in seen:  # a complex instance names its parts inside its brackets
             continue
