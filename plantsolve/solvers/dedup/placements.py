@@ -91,8 +91,8 @@ def world_coordinate_problem(model, path=None, text: bytes | None = None) -> str
     """What is wrong with the WorldCoordinateSystem of a representation context, every product's geometry placed in
     it (a writer's 1e308, NaN, a zero or parallel axis, or a location beyond what the context's Precision can carry),
     named by the context's attribute and the instance with its line in the file at ``path`` (or in its ``text``);
-    None when every context's is sound. The geometry kernel tessellates without it, so no product is left unplaced, and deviations
-    measured without it would be claimed for a model whose every point is meaningless."""
+    None when every context's is sound. The geometry kernel tessellates without it, so no product is left unplaced,
+    and deviations measured without it would be claimed for a model whose every point is meaningless."""
     for context in model.by_type("IfcGeometricRepresentationContext"):
         if context.is_a("IfcGeometricRepresentationSubContext"):  # its parent's system, derived
             continue
