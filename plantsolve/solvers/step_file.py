@@ -1,10 +1,13 @@
 """STEP physical files (ISO 10303-21, the text IFC models are written in): whether one ends where the standard
 says it ends, and where one that was cut stops. Shared by the kinds that read IFC (dedup refuses a cut model,
-polyhedra reads the spaces it holds and says the file was cut)."""
+polyhedra reads the spaces it holds and says the file was cut), and how many attribute values an instance line
+writes (both hold it against the schema its header names)."""
 
 from __future__ import annotations
 
 import re
+
+import numpy as np
 
 TRAILER_BYTES = 256  # END-ISO-10303-21; is looked for this far from the end
 
@@ -27,3 +30,25 @@ def where_cut(tail: bytes) -> str | None:
     if trailer.rstrip().endswith(b"ENDSEC;"):
         return "it stops after its DATA section's 'ENDSEC;'"
     return f"it stops inside entity #{last[-1].decode()}"
+
+
+_STRING = re.compile(r"'(?:[^']|'')*'")  # a STEP string, its quotes doubled inside
+
+
+def written_attributes(line: str) -> int | None:
+    """How many attribute values a STEP instance line writes (None: a complex instance, or no argument list): its
+    commas outside strings at the first bracket level, counted with numpy (a point list's line can be megabytes)."""
+    name, _, arguments = line.partition("=")[2].partition("(")
+    if not name.strip() or not arguments:
+        return None
+    text = np.frombuffer(_STRING.sub("''", "(" + arguments).encode("latin-1", "replace"), dtype=np.uint8)
+    depth = np.cumsum((text == ord("(")).astype(np.int32) - (text == ord(")")))
+    if len(text) < 2 or depth[1] == 0 and text[1] == ord(")"):  # '()': no value at all
+        return 0
+    return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
+
+
+def whole_instance(line: str) -> bool:
+    """Whether a line holds one whole instance: it ends with ';' outside strings, its brackets closed."""
+    bare = _STRING.sub("''", line).rstrip()
+    return bare.endswith(";") and bare.count("(") == bare.count(")")

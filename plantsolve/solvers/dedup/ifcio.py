@@ -9,11 +9,10 @@ import re
 from collections import Counter
 
 import ifcopenshell
-import numpy as np
 
-from plantsolve.solvers.base import reject
+from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.other_kinds import file_holds
-from plantsolve.solvers.step_file import where_cut
+from plantsolve.solvers.step_file import where_cut, written_attributes
 
 # an instance's definition: '#12=' after a line's start or the ';' ending the one before
 DEFINITION = re.compile(rb"(?:^|;)[ \t\r]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
@@ -28,23 +27,12 @@ _COUNTS = re.compile(r"Expected (\d+) attribute values, found (\d+) for instance
 SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3_ADD2")  # what dedup reads
 
 
-def _utf16_without_mark(head: bytes) -> bool:
-    """A NUL as every second byte and printable characters between: zero bytes alone (a binary STL's header)
-    are no text."""
-    if len(head) < 2:  # nothing to tell by (an empty model inside an .ifczip was said to be UTF-16)
-        return False
-    for nul, chars in ((head[1::2], head[0::2]), (head[0::2], head[1::2])):
-        if nul == b"\x00" * len(nul) and all(32 <= c < 127 for c in chars):
-            return True
-    return False
-
-
 def check_header(head: bytes, tail: bytes) -> None:
     """A whole STEP physical file, judged by its first ``HEADER_BYTES`` and its last ``TRAILER_BYTES``."""
     head = head[:HEADER_BYTES].lstrip(b"\xef\xbb\xbf \r\n\t")
     if not head:
         raise reject("the IFC model is empty (no STEP text; an .ifczip holding an empty .ifc?)")
-    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or _utf16_without_mark(head[:8]):
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff") or utf16_without_mark(head[:8]) is not None:
         raise reject("the file is UTF-16 text (two bytes a character, as Windows 'Unicode' saves it): a STEP physical "
                      "file is 8-bit text; save it as UTF-8 or ANSI and send it again")
     if not head.startswith(b"ISO-10303-21;"):
@@ -178,22 +166,6 @@ def _missing(model: ifcopenshell.file, number: int) -> bool:
     return False
 
 
-_STRING = re.compile(r"'(?:[^']|'')*'")  # a STEP string, its quotes doubled inside
-
-
-def written_attributes(line: str) -> int | None:
-    """How many attribute values a STEP instance line writes (None: a complex instance, or no argument list): its
-    commas outside strings at the first bracket level, counted with numpy (a point list's line can be megabytes)."""
-    name, _, arguments = line.partition("=")[2].partition("(")
-    if not name.strip() or not arguments:
-        return None
-    text = np.frombuffer(_STRING.sub("''", "(" + arguments).encode("latin-1", "replace"), dtype=np.uint8)
-    depth = np.cumsum((text == ord("(")).astype(np.int32) - (text == ord(")")))
-    if len(text) < 2 or depth[1] == 0 and text[1] == ord(")"):  # '()': no value at all
-        return 0
-    return int(np.count_nonzero((text == ord(",")) & (depth == 1))) + 1
-
-
 def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
     """Whether the first line of an entity in ``text`` (a model's STEP text, ``model`` parsed from it) is written
     (``lines``: ids → their lines as the file has them) with another number of attributes than the entity has in the
@@ -213,11 +185,18 @@ def misfits_schema(model: ifcopenshell.file, text: bytes, lines) -> bool:
     return False
 
 
-def _attribute_count(schema: str, entity: str) -> int | None:
+def attribute_count(schema: str, entity: str) -> int | None:
+    """How many attributes ``entity`` has in ``schema``, None when the schema has no such entity."""
     try:
         return ifcopenshell.schema_by_name(schema).declaration_by_name(entity).attribute_count()
     except (RuntimeError, IndexError):  # no such entity in that schema
         return None
+
+
+def counts_elsewhere(counts: dict[str, int | None]) -> str:
+    """'9 in IFC4, none in IFC2X3': an entity's attribute count in each schema of ``counts``."""
+    return ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
+                     for schema, count in counts.items())
 
 
 def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, text: bytes) -> None:
@@ -233,10 +212,9 @@ def refuse_attribute_counts(log: ifcopenshell.logger, model: ifcopenshell.file, 
     entity = model.by_id(number).is_a()
     at = instance_line(text, number)
     line = f"line {at}: " if at else ""
-    counts = {schema: _attribute_count(schema, entity) for schema in SCHEMAS if schema != model.schema_identifier}
+    counts = {schema: attribute_count(schema, entity) for schema in SCHEMAS if schema != model.schema_identifier}
     fits = [schema for schema, count in counts.items() if count == written]
-    others = ", ".join(f"{count} in {schema}" if count is not None else f"none in {schema}"
-                       for schema, count in counts.items())
+    others = counts_elsewhere(counts)
     entities = sorted({model.by_id(int(found.group(3))).is_a() for found in wrong})
     plural = "" if written == 1 else "s"
     raise reject(

@@ -80,12 +80,19 @@ def _attribute_holding(placement, instance) -> str:
     return ""
 
 
-def world_coordinate_problem(model, path) -> str | None:
+def world_refusal(problem: str) -> str:
+    """The refusal of a model whose world coordinate system is ``problem`` (:func:`world_coordinate_problem`)."""
+    return (f"the model's world coordinate system cannot place its products: {problem}; every product's geometry is "
+            "placed in it, so no deviation could be verified (most exporters write it at 0,0,0 with its Axis along Z "
+            "and its RefDirection along X)")
+
+
+def world_coordinate_problem(model, path=None, text: bytes | None = None) -> str | None:
     """What is wrong with the WorldCoordinateSystem of a representation context, every product's geometry placed in
     it (a writer's 1e308, NaN, a zero or parallel axis, or a location beyond what the context's Precision can carry),
-    named by the context's attribute and the instance with its line in the file at ``path``; None when every
-    context's is sound. The geometry kernel tessellates without it, so no product is left unplaced, and deviations
-    measured without it would be claimed for a model whose every point is meaningless."""
+    named by the context's attribute and the instance with its line in the file at ``path`` (or in its ``text``);
+    None when every context's is sound. The geometry kernel tessellates without it, so no product is left unplaced,
+    and deviations measured without it would be claimed for a model whose every point is meaningless."""
     for context in model.by_type("IfcGeometricRepresentationContext"):
         if context.is_a("IfcGeometricRepresentationSubContext"):  # its parent's system, derived
             continue
@@ -100,7 +107,7 @@ def world_coordinate_problem(model, path) -> str | None:
         where = f", the WorldCoordinateSystem of #{context.id()}={context.is_a()}"
         if held:
             where = f", the {held} of #{system.id()}={system.is_a()}{where}"
-        return describe(instance, problem, _text(path), where)
+        return describe(instance, problem, text if text is not None else _text(path), where)
     return None
 
 

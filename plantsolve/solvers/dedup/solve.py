@@ -17,7 +17,7 @@ from plantsolve.solvers.dedup.explicit import ExplicitReader
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.pipe_sizes import judge_pipe_diameters
 from plantsolve.solvers.dedup.placements import (repeated_global_ids, why_nothing_placed, why_unprocessed,
-                                                 world_coordinate_problem)
+                                                 world_coordinate_problem, world_refusal)
 from plantsolve.solvers.dedup.source import IfcSource
 from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
 from plantsolve.solvers.dedup.typical_sizes import judge_typical_sizes
@@ -176,9 +176,7 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             raise reject("the file has no product with geometry (no IfcProduct has a Representation)")
         broken_world = world_coordinate_problem(model, path)
         if broken_world:  # the kernel places without it: the deviations would be claimed for meaningless points
-            raise reject(f"the model's world coordinate system cannot place its products: {broken_world}; every "
-                         "product's geometry is placed in it, so no deviation could be verified (most exporters "
-                         "write it at 0,0,0 with its Axis along Z and its RefDirection along X)")
+            raise reject(world_refusal(broken_world))
         progress(0.05, "tessellating products in world coordinates")
         reader, points, triangles = _geometry(model, streamed, products, progress)
         if reader.needs_whole_model:  # the kernel tessellates a product with a streamed item: the whole file it is

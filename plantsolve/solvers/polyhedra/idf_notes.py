@@ -1,4 +1,5 @@
-"""An IDF's field notes (``!- X,Y,Z Vertex 1 {ft}``) stating a length unit other than EnergyPlus' metres.
+"""An IDF's field notes (``!- X,Y,Z Vertex 1 {ft}``) stating a length unit other than EnergyPlus' metres, and its
+tables asked for in inch-pound units.
 
 EnergyPlus reads every IDF length in metres and ignores comments, so the reader does too; but notes in feet or inches
 are what a hand-made or scripted IP export writes beside numbers in feet: read as metres, every volume is 35 times too
@@ -10,6 +11,8 @@ from __future__ import annotations
 import re
 
 from plantsolve.schemas.common import Diagnostic
+
+IMPERIAL = ("ft", "in")
 
 # the note of a geometry field (vertex, origin, coordinate, length, height, width, area, volume) with a length, area or
 # volume unit in braces, as the IDD writes {m}, {m2}, {m3}: any but metres
@@ -52,3 +55,26 @@ def followed(warnings: list[dict], file_units: str | None) -> list[dict]:
                 f"{file_units} as options.file_units says.")}
         out.append(w)
     return out
+
+
+def tables_in_inch_pound(objects: list[tuple[str, list[str], list[int], int]]) -> list[Diagnostic]:
+    """A warning when the IDF's OutputControl:Table:Style asks EnergyPlus for inch-pound tables: its user reads zone
+    volumes in ft3 and areas in ft2 there, while the file's lengths (and so these results, unless the request asks for
+    feet) are metres; a 120 m3 zone next to a table's 4238 ft3 looks like a disagreement, and a metre number read as
+    feet is 35 times off in volume."""
+    for cls, fields, _, line in objects:
+        if cls == "outputcontrol:table:style" and len(fields) > 1 and fields[1].lower().startswith("inchpound"):
+            return [Diagnostic(code="idf_tables_inch_pound", message=(
+                f"line {line}: OutputControl:Table:Style asks EnergyPlus for {fields[1]} tables (volumes in ft3, areas "
+                "in ft2), but the IDF's lengths are metres, as EnergyPlus reads every IDF: these results are in "
+                "the request's unit (metres unless options.units names another); give options.units = 'ft' to have "
+                "them in the tables' feet."),
+                details={"line": line, "unit_conversion": fields[1], "file_unit": "m"})]
+    return []
+
+
+def tables_answered(warnings: list[dict], request_unit: str) -> list[dict]:
+    """The reader's warnings without the inch-pound tables' one when the request is in feet or inches already."""
+    if request_unit not in IMPERIAL:
+        return warnings
+    return [w for w in warnings if not (isinstance(w, dict) and w.get("code") == "idf_tables_inch_pound")]

@@ -28,7 +28,7 @@ from plantsolve.schemas.polyhedra import MAX_COORDINATE
 from plantsolve.solvers.base import reject, utf16_without_mark
 from plantsolve.solvers.ifc_units import project_length_scale
 from plantsolve.solvers.polyhedra.file_units import NONE_ASSIGNED, stated, symbol
-from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out
+from plantsolve.solvers.polyhedra.ifc_unread import lines_left_out, lines_of_another_schema
 from plantsolve.solvers.skipped_input import truncated_file
 from plantsolve.solvers.step_file import TRAILER_BYTES, where_cut
 
@@ -109,8 +109,9 @@ def parse_ifc(content: bytes) -> dict:
                                        "are missing; the zones are those of the spaces read.", cut=cut).model_dump())
     was_cut = f" (the file was cut short: {cut})" if cut else ""
     left_out = lines_left_out(text, model, cut is not None)
-    if left_out is not None:
-        warnings.append(left_out.model_dump())
+    for found in (left_out, lines_of_another_schema(text, model)):
+        if found is not None:
+            warnings.append(found.model_dump())
     if not spaces:
         products = Counter(p.is_a() for p in model.by_type("IfcProduct"))
         held = ", ".join(f"{n} {name}" for name, n in products.most_common(4)) or "no product"

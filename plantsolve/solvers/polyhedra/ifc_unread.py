@@ -1,4 +1,5 @@
-"""The lines of an IFC file IfcOpenShell left out of the model it read, and why.
+"""The lines of an IFC file IfcOpenShell left out of the model it read, and why; and those it read as the header's
+schema though they are written in another's.
 
 IfcOpenShell reads a STEP file against the schema its header's FILE_SCHEMA names and drops, without raising, every
 instance it cannot read that way: an entity the schema lacks (an IFC4 ``IfcTriangulatedFaceSet`` in a file labelled
@@ -14,6 +15,7 @@ import re
 from typing import Any
 
 from plantsolve.schemas.common import Diagnostic
+from plantsolve.solvers.step_file import whole_instance, written_attributes
 
 _DEFINITION = re.compile(r"^[ \t]*#(\d+)[ \t]*=[ \t]*([A-Za-z0-9_]*)", re.MULTILINE)
 _NAMED = 5
@@ -67,3 +69,56 @@ def lines_left_out(text: str, model: Any, cut: bool) -> Diagnostic | None:
         "header says?"),
         details={"schema": model.schema_identifier, "instances_defined": defined, "instances_read": len(read),
                  "foreign_entities": foreign, "unread_lines": [at for at, _ in unread]})
+
+
+def lines_of_another_schema(text: str, model: Any) -> Diagnostic | None:
+    """The warning naming the first line written with another number of attributes than its entity has in the
+    header's FILE_SCHEMA (an IFC4 model labelled IFC2X3: its IfcQuantityArea has 5 values, IFC2X3's 4), or None.
+    IfcOpenShell pads or drops the values without a word, and reads those it keeps by their place in the header's
+    schema: a quantity or a geometry parameter may be read from another attribute. The first instance of each entity
+    is looked at, the text read until each entity the model holds was met."""
+    import ifcopenshell  # noqa: PLC0415  (third-party, only needed for IFC)
+
+    schema = ifcopenshell.schema_by_name(model.schema_identifier)
+    seen: set[str] = set()
+    checked, types = 0, len(model.types())
+    for match in _DEFINITION.finditer(text):
+        name = match.group(2).upper()
+        if not name or name in seen:
+            continue
+        if checked >= types:
+            break
+        seen.add(name)
+        try:
+            expected = schema.declaration_by_name(name).attribute_count()
+        except RuntimeError:  # an entity the schema lacks: lines_left_out names it
+            continue
+        checked += 1
+        end = text.find("\n", match.end())
+        line = text[match.start(1) - 1:end if end >= 0 else len(text)]
+        written = written_attributes(line) if whole_instance(line) else None
+        if written is None or written == expected:
+            continue
+        at = text.count("\n", 0, match.start(1)) + 1
+        entity = schema.declaration_by_name(name).name()
+        fits = [other for other in ("IFC2X3", "IFC4", "IFC4X3_ADD2") if other != model.schema_identifier
+                and _count_in(other, name) == written]
+        return Diagnostic(code="ifc_schema_misfit", message=(
+            f"line {at}: #{match.group(1)}={name} is written with {written} attribute value(s), and {entity} has "
+            f"{expected} in the header's FILE_SCHEMA {model.schema_identifier}"
+            + (f" (the count of {' and '.join(fits)})" if fits else "")
+            + ": IfcOpenShell read the file as its header says, padding or dropping values, so a quantity or a "
+            "shape parameter may be read from another attribute. Is the header's FILE_SCHEMA wrong? Write the schema "
+            "the exporter wrote the model in."),
+            details={"line": at, "entity": entity, "written": written, "expected": expected,
+                     "schema": model.schema_identifier, "fits": fits})
+    return None
+
+
+def _count_in(schema: str, name: str) -> int | None:
+    import ifcopenshell  # noqa: PLC0415
+
+    try:
+        return ifcopenshell.schema_by_name(schema).declaration_by_name(name).attribute_count()
+    except RuntimeError:
+        return None

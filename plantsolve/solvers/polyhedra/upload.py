@@ -51,7 +51,8 @@ from plantsolve.solvers.polyhedra.epjson import FIELDS as EPJSON_TYPES, epjson_o
 from plantsolve.solvers.polyhedra.file_units import reconcile, stated
 from plantsolve.solvers.polyhedra.floor_area_parts import zones_outside_total_floor_area
 from plantsolve.solvers.polyhedra.gbxml import parse_gbxml
-from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units
+from plantsolve.solvers.polyhedra.idf_notes import followed, notes_in_other_units, tables_answered, \
+    tables_in_inch_pound
 from plantsolve.solvers.polyhedra.idf_rectangles import SIMPLE_SUBSURFACES, SIMPLE_SURFACES, base_surface, subsurface
 from plantsolve.solvers.polyhedra.ifc_spaces import parse_ifc
 from plantsolve.solvers.polyhedra.interzone import twins_apart
@@ -275,6 +276,7 @@ def parse_idf(text: str) -> dict:
                                        f"to the last ';' was read, whatever the file held after line {last} is "
                                        "missing.").model_dump())
     warnings.extend(w.model_dump() for w in notes_in_other_units(text))
+    warnings.extend(w.model_dump() for w in tables_in_inch_pound(objects))
     return surfaces_from_objects(objects, skipped, warnings, "idf")
 
 
@@ -972,6 +974,9 @@ def parse_upload(source: StoredInput, options: dict | None) -> PolyhedraRequest:
     if fmt == "idf" and file_units is not None:
         body["source"]["warnings"] = followed(body["source"]["warnings"], file_units)
     body = reconcile(body, form.units, file_units, fmt or source.extension[1:])
+    if fmt == "idf" and isinstance(body["source"].get("units"), dict):
+        source_of = body["source"]
+        source_of["warnings"] = tables_answered(source_of["warnings"], source_of["units"]["request_unit"])
     # pydantic names a loop's branch (indices or points) in the path: no key of the file
     return validated_request(FORM, merged(body, form, FORM), form,
                              elsewhere=lambda e: replace(e, loc=("file", *_without_branch(e.loc))))

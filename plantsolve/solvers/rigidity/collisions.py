@@ -85,12 +85,27 @@ def overlapping_pairs(lo: np.ndarray, hi: np.ndarray, tolerance: float) -> np.nd
     return np.concatenate(pairs) if pairs else np.zeros((0, 2), dtype=int)
 
 
-def _depth(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float:
-    request = fcl.CollisionRequest(enable_contact=True, num_max_contacts=16)
+def near_pieces(a: Shapes, b: Shapes, gap: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i, j) of ``a``'s and ``b``'s pieces whose world boxes meet, each grown by ``gap``."""
+    return np.nonzero(((a.lo[:, None, :] <= b.hi[None, :, :] + gap) & (b.lo[None, :, :] <= a.hi[:, None, :] + gap))
+                      .all(axis=2))
+
+
+def collide(a: fcl.CollisionObject, b: fcl.CollisionObject, contacts: int = 16) -> fcl.CollisionResult | None:
+    """FCL's contacts (at most ``contacts``) of two objects that collide, None when they do not."""
+    request = fcl.CollisionRequest(enable_contact=True, num_max_contacts=contacts)
     result = fcl.CollisionResult()
-    if not fcl.collide(a, b, request, result):
-        return -1.0
+    return result if fcl.collide(a, b, request, result) else None
+
+
+def deepest(result: fcl.CollisionResult) -> float:
+    """The largest penetration depth of a collision's contacts (0 when they only touch)."""
     return max((float(c.penetration_depth) for c in result.contacts), default=0.0)
+
+
+def _depth(a: fcl.CollisionObject, b: fcl.CollisionObject) -> float:
+    result = collide(a, b)
+    return -1.0 if result is None else deepest(result)
 
 
 def penetration(a: Shapes, b: Shapes) -> float:
@@ -98,9 +113,8 @@ def penetration(a: Shapes, b: Shapes) -> float:
     only pieces whose world boxes overlap are given to FCL."""
     if len(a.objects) == 1 and len(b.objects) == 1:  # two plain boxes: the broad phase has matched them
         return _depth(a.objects[0], b.objects[0])
-    near = ((a.lo[:, None, :] <= b.hi[None, :, :]) & (b.lo[None, :, :] <= a.hi[:, None, :])).all(axis=2)
     depth = -1.0
-    for i, j in zip(*np.nonzero(near)):
+    for i, j in zip(*near_pieces(a, b)):
         depth = max(depth, _depth(a.objects[i], b.objects[j]))
     return depth
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import fcl
 import numpy as np
 
-from plantsolve.solvers.rigidity.collisions import Shapes
+from plantsolve.solvers.rigidity.collisions import Shapes, collide, deepest, near_pieces
 
 CONTACT_GAP = 0.1  # LDU: faces this close (apart or into each other) touch as drawn (assembly.SNAP: LDraw's rounding)
 # LDU: how wide the patch where two boxes meet must be across at least two axes to be faces touching (an edge or a
@@ -37,9 +37,8 @@ def touching(a: Shapes, b: Shapes, gap: float = CONTACT_GAP,
     drawn inside the other: a collision, not a contact). ``aligned``: every piece of both is a box along the world
     axes, its world box itself, so the boxes alone answer (as FCL would: the depth of two boxes is their least overlap
     along an axis, the normal that axis) without FCL's objects."""
-    near = ((a.lo[:, None, :] <= b.hi[None, :, :] + gap) & (b.lo[None, :, :] <= a.hi[:, None, :] + gap)).all(axis=2)
     found = None
-    for i, j in zip(*np.nonzero(near)):
+    for i, j in zip(*near_pieces(a, b, gap)):
         overlap = np.minimum(a.hi[i], b.hi[j]) - np.maximum(a.lo[i], b.lo[j])  # negative: apart along that axis
         if aligned:
             if overlap.min() < -gap:
@@ -51,10 +50,9 @@ def touching(a: Shapes, b: Shapes, gap: float = CONTACT_GAP,
             if found is None and (overlap >= FACE).sum() >= 2:
                 found = (normal, np.maximum(a.lo[i], b.lo[j]) - gap, np.minimum(a.hi[i], b.hi[j]) + gap)
             continue
-        request = fcl.CollisionRequest(enable_contact=True, num_max_contacts=4)
-        result = fcl.CollisionResult()
-        if fcl.collide(a.objects[i], b.objects[j], request, result):
-            if max((float(c.penetration_depth) for c in result.contacts), default=0.0) > gap:
+        result = collide(a.objects[i], b.objects[j], contacts=4)
+        if result is not None:
+            if deepest(result) > gap:
                 return None
             normal = np.asarray(result.contacts[0].normal, float) if result.contacts else None
         else:

@@ -27,7 +27,7 @@ from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP,
                                                 resting_on_smooth_faces, sub_build)
 from plantsolve.solvers.rigidity.stickers import is_sticker
 from plantsolve.solvers.rigidity.upload import symmetry_planes, symmetry_turns
-from plantsolve.solvers.rigidity.verdicts import coverage_verdict, one_piece_verdict
+from plantsolve.solvers.rigidity.verdicts import coverage_verdict, missing_submodels_verdict, one_piece_verdict
 from plantsolve.solvers.skipped_input import skipped_lines, source_warnings
 
 MAX_LISTED = 1000
@@ -329,7 +329,9 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
                                 np.array([positions[u.id] for u in unknown], dtype=float).reshape(-1, 3))
     # a model of parts is one build unless its drawing says otherwise (bodies and joints: the joints are the user's)
     apart = one_piece_verdict(piece_results) if request.parts else None
-    warnings = [v for v in (coverage, apart) if v is not None] + warnings  # the verdicts first, the gravest first
+    missing = missing_submodels_verdict((request.source or {}).get("missing_submodels") or {})
+    # the verdicts first, the gravest first
+    warnings = [v for v in (missing, coverage, apart) if v is not None] + warnings
     report = Report(status="warning" if warnings else "ok", message=message, warnings=warnings, details={
         "bodies": len(ids), "joints": len(joints), "constraint_rows": mob.rows, "blocks": mob.blocks,
         "largest_block": mob.largest_block, "connected_pieces": n_pieces,
@@ -341,7 +343,8 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
     progress(1.0, "done")
     return Solved(RigidityResult(
         length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
-        special_position=special, rigid=None if coverage or apart else bool(ids) and n_pieces == 1 and mob.dof == 0,
+        special_position=special,
+        rigid=None if missing or coverage or apart else bool(ids) and n_pieces == 1 and mob.dof == 0,
         clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],

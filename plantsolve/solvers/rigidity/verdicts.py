@@ -11,6 +11,9 @@
   from the drawing (official sets that are one build still come apart so, at joints the catalogue lacks), so
   ``rigid`` is null, not false; the ``floating_parts`` and ``separate_pieces`` warnings name each piece with its
   nearest miss.
+- ``rigidity_not_determined`` too when the file places sub-models it does not hold (an ``.mpd`` whose ``0 FILE``
+  section was lost, an ``.ldr`` sent without its sub-model files): the parts they hold are in no count, and what they
+  would join or leave loose cannot be told, so ``rigid`` is null whatever the parts present make.
 """
 
 from __future__ import annotations
@@ -82,3 +85,17 @@ def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:
         "drawn or held by a joint the catalogue does not know (floating_parts and separate_pieces name each with "
         "its nearest miss); rigid is null and dof counts 6 for each",
         details={"pieces": len(loose), "single_parts": singles, "parts": sum(len(pc.parts) for pc in loose)})
+
+
+def missing_submodels_verdict(missing: dict[str, list[int]]) -> Diagnostic | None:
+    """``rigidity_not_determined`` when the file places sub-models it does not hold (``missing``: name -> the lines
+    placing it)."""
+    if not missing:
+        return None
+    named = ", ".join(f"{name!r} (line {', '.join(map(str, lines[:3]))})" for name, lines in list(missing.items())[:5])
+    return Diagnostic(
+        code="rigidity_not_determined", message=f"rigidity not determined: the file places {len(missing)} sub-model(s) "
+        f"it does not hold — {named}{' and more' if len(missing) > 5 else ''}: their parts are not analysed, and what "
+        "they would join or leave loose cannot be told, so dof and the pieces are of the parts present only (rigid is "
+        "null); send the model with its sub-models as one .mpd",
+        details={"missing_submodels": sorted(missing), "lines": {name: lines for name, lines in missing.items()}})

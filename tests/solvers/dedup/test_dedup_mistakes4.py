@@ -33,7 +33,10 @@ def test_an_ifc43_label_ifcopenshell_does_not_read_is_refused_at_submission_nami
     (error,) = refused.value.errors
     assert error.loc == ("file",) and error.msg.startswith(f"FILE_SCHEMA {label!r}: IFC 4.3 is read as its final "
                                                            "release, 'IFC4X3_ADD2'")
-    _checked(TUNNEL.replace("FILE_SCHEMA(('IFC4'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))  # the final label passes
+    # the final label passes the label check; the tunnel's IFC4 content under it is then refused as such
+    with pytest.raises(InputRejected) as refused:
+        _checked(TUNNEL.replace("FILE_SCHEMA(('IFC4'))", "FILE_SCHEMA(('IFC4X3_ADD2'))"))
+    assert "IFC 4.3 is read as" not in refused.value.errors[0].msg and "looks like IFC4" in refused.value.errors[0].msg
 
 
 

@@ -13,8 +13,9 @@ import pytest
 
 from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.dedup import SPEC, skeleton
-from plantsolve.solvers.dedup.ifcio import misfits_schema, written_attributes
+from plantsolve.solvers.dedup.ifcio import misfits_schema
 from plantsolve.solvers.dedup.upload import parse_upload
+from plantsolve.solvers.step_file import written_attributes
 from tests.conftest import REPO
 
 ZOO = (REPO / "examples" / "dedup" / "zoo_ifc2x3.ifc").read_text()
@@ -23,9 +24,10 @@ COLUMNS = re.compile(r"^(#\d+=IFCCOLUMN\(.*)\);$", re.MULTILINE)
 
 
 def _refusal(text: str) -> str:
+    """The solve's refusal (intake's check, which refuses what its scan sees first, is left out: see
+    test_trust58_intake_schema)."""
     source = StoredInput.from_bytes("model.ifc", text.encode())
     value = SPEC.input_of(parse_upload(source, {}), source)
-    SPEC.check_input(value)
     with pytest.raises(InputRejected) as refused:
         SPEC.solve(value, lambda *a: None)
     (error,) = refused.value.errors
