@@ -182,6 +182,20 @@ _forkserver = multiprocessing.get_context("forkserver")
 READER_STARTS = ("forkserver", "fork")
 
 
+# What the forkserver imports when it starts, in the order first asked for. It is one per process (multiprocessing's):
+# the upload readers fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so
+# each adds its modules and neither replaces the other's (the readers' list, set after the job processes' one, had
+# left the warm parent without a single solver: each job process imported its kind's solver itself).
+_preloaded: dict[str, None] = {}
+
+
+def preload_in_forkserver(modules: Iterable[str]) -> list[str]:
+    """Add ``modules`` to what the forkserver imports at its next start; returns the whole list."""
+    _preloaded.update(dict.fromkeys(modules))
+    _forkserver.set_forkserver_preload(list(_preloaded))
+    return list(_preloaded)
+
+
 def start_readers(kinds: Iterable[SolverSpec]) -> None:
     """Start the readers' forkserver in the background, so the first upload does not wait: it imports this module
     and these kinds' readers and checks once (seconds), and each reading process forks from it with them imported.
@@ -190,7 +204,7 @@ def start_readers(kinds: Iterable[SolverSpec]) -> None:
     modules = [module for spec in kinds for module in spec.modules(SolverSpec.READERS)]
     if not modules:
         return
-    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)])
+    preload_in_forkserver(["plantsolve.jobs.intake", *modules])
     threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
 
 
