@@ -30,7 +30,7 @@ from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.holds import DiskHold
-from plantsolve.jobs.intake import preload_in_forkserver
+from plantsolve.jobs.intake import FORKSERVER_STARTS, preload_in_forkserver
 from plantsolve.jobs.leases import abandoned, process_died, remove_temporaries, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
@@ -52,12 +52,8 @@ RETRY_SECONDS = 1.0
 # waits on a warm parent that hangs (stopped, deadlocked): it would wait forever while the service took jobs, so
 # readiness says no job can start and the warm parent is killed, which ends the wait and starts a new one.
 STALL_SECONDS = 10.0
-# A warm parent that dies at every start (the out-of-memory killer takes it, a library crashes at import) is started
-# again after a wait that doubles with each failure in a row, up to WARM_BACKOFF_MAX: each start imports every kind
-# (CPU seconds), and one every RETRY_SECONDS, for as long as the cause lasted, kept a core busy for nothing.
-WARM_BACKOFF_MAX = 30.0
-# a warm parent that dies sooner than this after it came up counts as a failed start
-WARM_STABLE_SECONDS = 60.0
+# the longest pause before a job whose process died before its claim, again and again, starts again (see _unclaimed)
+UNCLAIMED_PAUSE_MAX = 30.0
 
 _warm = multiprocessing.get_context("forkserver")
 
@@ -223,7 +219,7 @@ class ProcessDispatcher:
         self._starting: uuid.UUID | None = None  # taken from the line, its process not started yet
         # A job whose process died before it claimed the job (nothing of it ran, no attempt counted) goes back in line
         # at once the first time, after a pause doubling with each such death in a row after that (up to
-        # WARM_BACKOFF_MAX): a process killed at every start (a watchdog, the out-of-memory killer, a database job
+        # UNCLAIMED_PAUSE_MAX): a process killed at every start (a watchdog, the out-of-memory killer, a database job
         # processes cannot open) was started again at once, hundreds of times a minute, for as long as the cause lasted.
         self._unclaimed: dict[uuid.UUID, int] = {}  # job -> its processes that died before the claim, in a row
         self._later: dict[uuid.UUID, tuple[float, str]] = {}  # job -> when it goes back in line (monotonic), its kind
@@ -235,8 +231,6 @@ class ProcessDispatcher:
         self._start_watch: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
         self._warm_since = 0.0  # when it came up (monotonic)
-        self._warm_failures = 0  # failed starts in a row (see WARM_BACKOFF_MAX)
-        self._warm_due = 0.0  # when the next start may be tried (monotonic)
         self._start_failed: str | None = None
         self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
         # Whether a job may wait in its row beyond the window: set when an enqueue found the window full, cleared by a
@@ -296,9 +290,9 @@ class ProcessDispatcher:
         """Raises when no job can start now: the supervisor is not running, or the warm parent is not (yet) up."""
         if self._thread is None or not self._thread.is_alive():
             raise RuntimeError("the job supervisor is not running")
-        if self._warm_parent is None and self._warm_failures:
-            raise RuntimeError(f"the job processes' warm parent failed {self._warm_failures} start(s) in a row; "
-                               f"the next in {max(0.0, self._warm_due - time.monotonic()):.0f} s")
+        if self._warm_parent is None and FORKSERVER_STARTS.pause_left() > 0:
+            raise RuntimeError(f"the job processes' warm parent failed {FORKSERVER_STARTS.failures} start(s) in a row; "
+                               f"the next in {FORKSERVER_STARTS.pause_left():.0f} s")
         if self._warm_parent is None or not is_warm_parent(self._warm_parent):
             raise RuntimeError("the job processes' warm parent is starting")
         if self._start_failed is not None:
@@ -363,7 +357,7 @@ class ProcessDispatcher:
     def _supervise(self) -> None:
         while not self._stopping.is_set():
             try:
-                if self._warm_parent is None and time.monotonic() >= self._warm_due:
+                if self._warm_parent is None and FORKSERVER_STARTS.pause_left() == 0:
                     self._warm_up()
                 self._back_in_line()
                 self._launch()
@@ -371,7 +365,7 @@ class ProcessDispatcher:
                     watched = {child.receiver: child for child in self._running.values()}
                     dues = [due for due, _ in self._later.values()]
                 if self._warm_parent is None:
-                    dues.append(self._warm_due)
+                    dues.append(time.monotonic() + FORKSERVER_STARTS.pause_left())
                 timeout = TICK_SECONDS if self._start_failed is None else RETRY_SECONDS
                 timeout = min([timeout, *(max(0.05, due - time.monotonic()) for due in dues)])
                 ready = wait([*watched, self._wake_r], timeout=timeout)
@@ -400,8 +394,8 @@ class ProcessDispatcher:
 
     def _warm_up(self) -> None:
         """Fork once from the warm parent (starting it, which imports every kind, when it is not running) and
-        learn its pid: from then on a job starts in milliseconds. A start that fails is tried again later (see
-        ``WARM_BACKOFF_MAX``)."""
+        learn its pid: from then on a job starts in milliseconds. A start that fails is tried again later
+        (:class:`~plantsolve.jobs.intake.ForkserverStarts`)."""
         started = time.monotonic()
         receiver, sender = _warm.Pipe(duplex=False)
         try:
@@ -421,22 +415,16 @@ class ProcessDispatcher:
             receiver.close()
 
     def _warm_died(self) -> None:
-        lived = time.monotonic() - self._warm_since
         self._warm_parent = None
-        if lived >= WARM_STABLE_SECONDS:
-            self._warm_failures = 0
-            log.error("the job processes' warm parent died; starting it again")
-        else:
-            self._warm_failed(f"died {lived:.1f} s after it came up")
+        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up")
 
     def _warm_failed(self, what: str) -> None:
-        """A failed start of the warm parent: the next waits twice as long as the one before (see
-        ``WARM_BACKOFF_MAX``); the jobs stay queued meanwhile and readiness says no job can start."""
-        self._warm_failures += 1
-        pause = min(RETRY_SECONDS * 2 ** (self._warm_failures - 1), WARM_BACKOFF_MAX)
-        self._warm_due = time.monotonic() + pause
-        log.error("the job processes' warm parent %s, %d time(s) in a row; the next start in %.0f s (queued jobs wait)",
-                  what, self._warm_failures, pause)
+        """A failed start of the warm parent, or its death: started again at once the first time, after a pause that
+        doubles with each failure in a row after that (:class:`~plantsolve.jobs.intake.ForkserverStarts`); the jobs
+        stay queued meanwhile and readiness says no job can start."""
+        pause = FORKSERVER_STARTS.failed()
+        log.error("the job processes' warm parent %s (%d time(s) in a row); %s", what, FORKSERVER_STARTS.failures,
+                  f"the next start in {pause:g} s, queued jobs waiting" if pause else "starting it again")
 
     def _launch(self) -> None:
         """Start a process for each job next in line while fewer than ``size`` run. A job is recorded as running
@@ -537,7 +525,7 @@ class ProcessDispatcher:
         if deaths == 1:
             log.error("job %s: its process died before it could claim the job; it starts again", job_id)
             return True
-        pause = min(RETRY_SECONDS * 2 ** (deaths - 2), WARM_BACKOFF_MAX)
+        pause = min(RETRY_SECONDS * 2 ** (deaths - 2), UNCLAIMED_PAUSE_MAX)
         job = self.ctx.repo.get(job_id, brief=True)
         with self._lock:
             self._later[job_id] = (time.monotonic() + pause, job.kind if job is not None else "")

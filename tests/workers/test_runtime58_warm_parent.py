@@ -1,19 +1,23 @@
 """The embedded service's warm parent and job processes under repeated deaths (``bench/kill58.py`` runs them on a
 real server): the warm parent imports every kind's solver (the upload readers' list had replaced the job processes'
-one), a warm parent that dies at every start is tried again ever later instead of every second, a job whose process
+one), a warm parent that dies at every start is tried again ever later instead of every second (and an upload starts
+none while its starts are paused: a 503), a job whose process
 dies before its claim again and again waits longer each time instead of being started again at once, and a job
 process whose warm parent died with it is not said to have exited with code 255."""
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import time
 import uuid
 from multiprocessing import forkserver
 
 import pytest
+from fastapi.testclient import TestClient
 
 from plantsolve.app.main import create_app
+from plantsolve.jobs import intake
 from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverSpec
@@ -50,7 +54,7 @@ def test_the_warm_parent_imports_every_kinds_solver_and_the_upload_readers(tmp_p
 
 
 class _DiesAtStart:
-    """A warm parent that dies at every start: the probe's start fails as multiprocessing's does then."""
+    """A forkserver that dies at every start: a process's start fails as multiprocessing's does then."""
 
     starts: list[float] = []
 
@@ -62,29 +66,52 @@ class _DiesAtStart:
         raise EOFError("unexpected EOF")
 
 
-def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_readiness_says_so(ctx, monkeypatch):
-    monkeypatch.setattr(processes, "RETRY_SECONDS", 0.05)
-    monkeypatch.setattr(processes, "WARM_BACKOFF_MAX", 0.4)
-    monkeypatch.setattr(processes._warm, "Process", _DiesAtStart)
+@pytest.fixture
+def starts(monkeypatch):
+    """The process's forkserver gate, fresh, with short pauses: 0, 0.05, 0.1, 0.2, 0.4, 0.4 ... s."""
+    gate = intake.FORKSERVER_STARTS
+    for name, value in (("first_pause", 0.05), ("longest", 0.4), ("failures", 0), ("_last", float("-inf")),
+                        ("_due", float("-inf"))):
+        monkeypatch.setattr(gate, name, value)
     _DiesAtStart.starts = []
+    return gate
+
+
+def test_a_warm_parent_that_dies_at_every_start_is_tried_again_ever_later_and_readiness_says_so(ctx, starts,
+                                                                                                  monkeypatch):
+    monkeypatch.setattr(processes._warm, "Process", _DiesAtStart)
     dispatcher = ProcessDispatcher(ctx, workers=1)
     dispatcher.start()
     try:
         job_id = _queued(ctx)
         dispatcher.enqueue(job_id, "test-compute")
         time.sleep(2.0)
-        starts = list(_DiesAtStart.starts)
-        # waits 0.05, 0.1, 0.2, 0.4, 0.4 ... s: 8 or 9 starts in 2 s (before: one every 0.05 s, 40)
-        assert 5 <= len(starts) <= 10, starts
-        gaps = [b - a for a, b in zip(starts, starts[1:])]
-        assert all(later >= earlier * 0.9 for earlier, later in zip(gaps, gaps[1:])), gaps
-        assert max(gaps) >= 0.35
+        tried = list(_DiesAtStart.starts)
+        # at 0, 0, 0.05, 0.15, 0.35, 0.75, 1.15, 1.55, 1.95 s: 8 or 9 starts in 2 s (before: one a second for ever,
+        # at whatever the cost of a start)
+        assert 5 <= len(tried) <= 10, tried
+        gaps = [b - a for a, b in zip(tried, tried[1:])]
+        assert gaps[0] < 0.15 and min(gaps[-3:]) >= 0.35, gaps  # at once, then up to the longest pause
         with pytest.raises(RuntimeError, match=r"warm parent failed \d+ start\(s\) in a row; the next in"):
             dispatcher.ping()
         # the job is held, not started (a start would start the warm parent before its pause) and not lost
         assert ctx.repo.get(job_id).status == "queued" and dispatcher.running() == {}
     finally:
         dispatcher.stop()
+
+
+def test_an_upload_is_a_503_without_a_forkserver_start_while_its_starts_are_paused(tmp_path, starts, monkeypatch):
+    monkeypatch.setattr(forkserver, "ensure_running", lambda: None)  # no readers' forkserver started by the app
+    monkeypatch.setattr(starts, "first_pause", 5.0)
+    forkserver_context = multiprocessing.get_context("forkserver")
+    monkeypatch.setattr(forkserver_context, "Process", _DiesAtStart)
+    with TestClient(create_app(service_settings(tmp_path))) as client:
+        said = [client.post("/v1/test-compute/jobs", files={"file": ("v.txt", b"1.5\n")}) for _ in range(4)]
+        assert client.get("/v1/jobs").json()["items"] == []  # nothing stored
+    assert [r.status_code for r in said] == [503] * 4 and all(r.headers.get("retry-after") for r in said)
+    # the first failure is tried again at once, the second pauses the starts: the last two uploads start nothing
+    # (before: each upload started a forkserver, which imports every kind, and saw it die)
+    assert len(_DiesAtStart.starts) == 2 and starts.failures == 2 and starts.pause_left() > 0
 
 
 def test_a_job_whose_process_dies_before_its_claim_again_and_again_waits_longer_each_time(ctx, monkeypatch):
