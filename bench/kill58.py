@@ -15,8 +15,8 @@
   many processes were started for it (a loop that spins starts hundreds), how its attempts ended;
 - ``api-handover``: twelve submissions at once and kill -9 of the API in the middle of them (some rows committed and
   not handed over), then ``serve`` again: every job answered 202, and every row, ends solved exactly once;
-- ``job-cpu``: what the warm parent holds for a job: three jobs of each of two real kinds (``examples/rigidity``'s four-bar
-  linkage, ``examples/perfmap``'s fan map), one at a time; CPU seconds each job's process spent (the warm parent's
+- ``job-cpu``: what the warm parent holds for a job: three jobs of each of two real kinds (``examples/rigidity``'s
+  four-bar linkage, ``examples/perfmap``'s fan map), one at a time; CPU seconds each job's process spent (the warm parent's
   reaped children's, over the jobs): a warm parent without the kind's solver makes each job import it;
 - ``disk-full``: the data dir (SQLite file, artifacts) on a 48 MiB tmpfs filled up while two jobs run (their result
   writes meet ENOSPC), space freed after 8 s: final statuses, what the reports say, ``/readyz`` meanwhile, and a job
@@ -141,7 +141,8 @@ def scenario(name: str, tree: Path, idle: float, loop: float, die_after: float) 
                         killed.add(pid)
                 time.sleep(0.005)
             job = service.jobs(ids)[0]
-            note = f"{len(killed)} job processes killed in {loop:.0f} s; then: {job['status']}, attempt {job['attempt']}"
+            note = (f"{len(killed)} job processes killed in {loop:.0f} s; then: {job['status']}, "
+                    f"attempt {job['attempt']}")
         elif name == "api-handover":
             answers: list[tuple[int, str | None]] = []
             lock = threading.Lock()

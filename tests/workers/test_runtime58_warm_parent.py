@@ -22,7 +22,7 @@ from plantsolve.jobs.context import ServiceContext
 from plantsolve.jobs.service import JobService
 from plantsolve.solvers.base import SolverSpec
 from plantsolve.workers import processes
-from plantsolve.workers.processes import ProcessDispatcher, _Running, warm_modules
+from plantsolve.workers.processes import ProcessDispatcher, warm_modules
 from tests.conftest import service_settings
 from tests.support.dispatch import Recorder
 
@@ -151,7 +151,8 @@ def test_a_job_process_whose_warm_parent_died_too_is_not_said_to_have_exited_wit
     worker = processes.worker_of(4_000_000)  # no such process
     assert ctx.repo.claim(job_id, lease_seconds=60, worker=worker) == 1
     gone_warm_parent = os.getpid()  # not a forkserver of this process
-    child = _Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(), gone_warm_parent)
+    child = processes._Running(job_id, _Ended(4_000_000), None, worker, None, None, time.monotonic(),
+                               gone_warm_parent)
     assert dispatcher._judge_end(child, None) is True  # re-queued
     job = ctx.repo.get(job_id)
     # before: "the job process exited with code 255" (multiprocessing's stand-in), though a SIGKILL had ended it
