@@ -16,8 +16,8 @@
 - ``api-handover``: twelve submissions at once and kill -9 of the API in the middle of them (some rows committed and
   not handed over), then ``serve`` again: every job answered 202, and every row, ends solved exactly once;
 - ``job-cpu``: what the warm parent holds for a job: three jobs of each of two real kinds (``examples/rigidity``'s
-  four-bar linkage, ``examples/perfmap``'s fan map), one at a time; CPU seconds each job's process spent (the warm parent's
-  reaped children's, over the jobs): a warm parent without the kind's solver makes each job import it;
+  four-bar linkage, ``examples/perfmap``'s fan map), one at a time; CPU seconds each job's process spent (the warm
+  parent's reaped children's, over the jobs): a warm parent without the kind's solver makes each job import it;
 - ``disk-full``: the data dir (SQLite file, artifacts) on a 48 MiB tmpfs filled up while two jobs run (their result
   writes meet ENOSPC), space freed after 8 s: final statuses, what the reports say, ``/readyz`` meanwhile, and a job
   submitted after.
