@@ -26,8 +26,8 @@ with jobs queued and no worker; a worker started after), ``redis-running`` (Redi
 store their results), ``pg-restart`` (a PostgreSQL cluster of the bench's own, stopped with four jobs running and
 queued for 8 s of HTTP probes, then started again), ``store-kill`` (kill -9 of the worker busy with two jobs once the
 first is solved and before its result's commit: ``bench/kill_kinds.py``'s ``test-slow-render``, whose artifacts take
-2 s to render; another worker started), ``cancel`` (a running job cancelled). Each row: final statuses, solves per job (marker files),
-attempts and each attempt's outcome, what HTTP answered meanwhile,
+2 s to render; another worker started), ``cancel`` (a running job cancelled). Each row: final statuses, solves per
+job (marker files), attempts and each attempt's outcome, what HTTP answered meanwhile,
 the ``/readyz`` answers in order, and ``/readyz`` at the end. Stops nothing shared: the PostgreSQL cluster and the
 shared Redis are left alone.
 
