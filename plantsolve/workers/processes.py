@@ -52,6 +52,8 @@ RETRY_SECONDS = 1.0
 # waits on a warm parent that hangs (stopped, deadlocked): it would wait forever while the service took jobs, so
 # readiness says no job can start and the warm parent is killed, which ends the wait and starts a new one.
 STALL_SECONDS = 10.0
+# how long the ends of job processes killed with the warm parent may take to reach the supervisor (see _supervise)
+WARM_DEATH_SECONDS = 0.2
 # the longest pause before a job whose process died before its claim, again and again, starts again (see _unclaimed)
 UNCLAIMED_PAUSE_MAX = 30.0
 
@@ -358,22 +360,20 @@ class ProcessDispatcher:
         while not self._stopping.is_set():
             try:
                 if self._warm_parent is None and FORKSERVER_STARTS.pause_left() == 0:
+                    # the ends of job processes killed with the warm parent are judged before the seconds of its start
+                    # (its death makes multiprocessing's exit status of theirs unknown; judged after, a lapsed lease
+                    # had often taken their attempts first)
+                    if self._running:
+                        self._reap(WARM_DEATH_SECONDS)
                     self._warm_up()
                 self._back_in_line()
                 self._launch()
                 with self._lock:
-                    watched = {child.receiver: child for child in self._running.values()}
                     dues = [due for due, _ in self._later.values()]
                 if self._warm_parent is None:
                     dues.append(time.monotonic() + FORKSERVER_STARTS.pause_left())
                 timeout = TICK_SECONDS if self._start_failed is None else RETRY_SECONDS
-                timeout = min([timeout, *(max(0.05, due - time.monotonic()) for due in dues)])
-                ready = wait([*watched, self._wake_r], timeout=timeout)
-                if self._wake_r in ready:
-                    os.read(self._wake_r, 4096)
-                ended = [watched[r] for r in ready if r in watched]
-                for child in ended:
-                    self._ended(child)
+                ended = self._reap(min([timeout, *(max(0.05, due - time.monotonic()) for due in dues)]))
                 self._enforce_deadlines()
                 if self._warm_parent is not None and not is_warm_parent(self._warm_parent):
                     self._warm_died()
@@ -382,6 +382,18 @@ class ProcessDispatcher:
             except Exception:  # the supervisor must survive anything
                 log.exception("job supervisor error")
                 self._stopping.wait(RETRY_SECONDS)
+
+    def _reap(self, timeout: float) -> int:
+        """Wait up to ``timeout`` for a job process's end (or a wake-up) and judge the ends; returns how many."""
+        with self._lock:
+            watched = {child.receiver: child for child in self._running.values()}
+        ready = wait([*watched, self._wake_r], timeout=timeout)
+        if self._wake_r in ready:
+            os.read(self._wake_r, 4096)
+        ended = [watched[r] for r in ready if r in watched]
+        for child in ended:
+            self._ended(child)
+        return len(ended)
 
     def _back_in_line(self) -> None:
         """Put the jobs whose pause is over (see ``_unclaimed``) back at the end of the line."""
