@@ -23,10 +23,11 @@ port, ``plantsolve serve`` and ``plantsolve worker`` processes): ``worker-kill``
 another started), ``worker-stop`` (SIGSTOP of one mid-job, another started), ``redis-queued`` (Redis restarted, empty,
 with jobs queued and no worker; a worker started after), ``redis-running`` (Redis restarted under a busy worker),
 ``pg-kill`` (``pg_terminate_backend`` of every connection to the scenario's database, again and again, as the jobs
-store their results), ``store-kill`` (kill -9 of the worker busy with two jobs once the first is solved and before
-its result's commit: ``bench/kill_kinds.py``'s ``test-slow-render``, whose artifacts take 2 s to render; another
-worker started), ``cancel`` (a running job cancelled). Each row: final statuses, solves per job (marker files),
-attempts and each attempt's outcome, what HTTP answered meanwhile,
+store their results), ``pg-restart`` (a PostgreSQL cluster of the bench's own, stopped with four jobs running and
+queued for 8 s of HTTP probes, then started again), ``store-kill`` (kill -9 of the worker busy with two jobs once the
+first is solved and before its result's commit: ``bench/kill_kinds.py``'s ``test-slow-render``, whose artifacts take
+2 s to render; another worker started), ``cancel`` (a running job cancelled). Each row: final statuses, solves per
+job (marker files), attempts and each attempt's outcome, what HTTP answered meanwhile,
 the ``/readyz`` answers in order, and ``/readyz`` at the end. Stops nothing shared: the PostgreSQL cluster and the
 shared Redis are left alone.
 
@@ -42,6 +43,8 @@ import concurrent.futures
 import json
 import os
 import random
+import shlex
+import shutil
 import signal
 import socket
 import subprocess
@@ -151,23 +154,57 @@ def black_hole(args: argparse.Namespace) -> int:
     return 0
 
 
-SCALED = ("worker-kill", "worker-stop", "redis-queued", "redis-running", "pg-kill", "store-kill", "cancel")
+SCALED = ("worker-kill", "worker-stop", "redis-queued", "redis-running", "pg-kill", "store-kill", "cancel",
+          "pg-restart")
+
+
+class PrivateCluster:
+    """A PostgreSQL cluster of the bench's own (``initdb`` in a temporary folder, a free port, run as the ``postgres``
+    user): stopped and started at will while the shared one serves the tests."""
+
+    def __init__(self):
+        self.folder = Path(tempfile.mkdtemp(prefix="pg-private-"))
+        shutil.chown(self.folder, "postgres")
+        self.port = free_port()
+        self.admin = f"postgresql://postgres@127.0.0.1:{self.port}/postgres"
+        self._as_postgres(["initdb", "-D", str(self.folder / "data"), "-A", "trust", "-U", "postgres"])
+        self.start()
+
+    def _as_postgres(self, argv: list[str]) -> None:
+        subprocess.run(["su", "postgres", "-c", " ".join(shlex.quote(arg) for arg in argv)], check=True,
+                       capture_output=True)
+
+    def start(self) -> None:
+        self._as_postgres(["pg_ctl", "-D", str(self.folder / "data"), "-l", str(self.folder / "log"), "-w", "-o",
+                           f"-p {self.port} -k {self.folder} -c listen_addresses=127.0.0.1", "start"])
+
+    def stop(self, mode: str = "fast") -> None:
+        self._as_postgres(["pg_ctl", "-D", str(self.folder / "data"), "-m", mode, "-w", "stop"])
+
+    def remove(self) -> None:
+        try:
+            self.stop("immediate")
+        except subprocess.CalledProcessError:
+            pass
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class ScaledService:
     """One scenario's scaled service: a database and a Redis server of its own, the API, Celery workers."""
 
-    def __init__(self, code: Path, work: Path):
-        self.work, self.code = work, code
+    def __init__(self, code: Path, work: Path, cluster: PrivateCluster | None = None):
+        self.work, self.code, self.cluster = work, code, cluster
+        self.admin = cluster.admin if cluster is not None else ADMIN
         self.redis_port, self.port = free_port(), free_port()
         self.redis = self._redis()
         self.database = f"plantsolve_scaled_{uuid.uuid4().hex[:8]}"
-        with psycopg.connect(ADMIN, autocommit=True) as admin:
+        with psycopg.connect(self.admin, autocommit=True) as admin:
             admin.execute(f'CREATE DATABASE "{self.database}"')
+        database_port = cluster.port if cluster is not None else 5432
         self.env = {**os.environ, "PYTHONPATH": f"{code}{os.pathsep}{REPO}{os.pathsep}{REPO / 'bench'}",
                     "PLUGINS": "tests.support.kinds,kill_kinds",
                     "DATA_DIR": str(work / "var"),
-                    "DATABASE_URL": f"postgresql+psycopg://postgres@127.0.0.1:5432/{self.database}",
+                    "DATABASE_URL": f"postgresql+psycopg://postgres@127.0.0.1:{database_port}/{self.database}",
                     "BROKER_URL": f"redis://127.0.0.1:{self.redis_port}/0", "LEASE_SECONDS": "4",
                     "HEARTBEAT_SECONDS": "0.5", "SWEEP_SECONDS": "1", "WORKER_BEAT_SECONDS": "0.5",
                     "WORKER_ALIVE_SECONDS": "3", "REQUEUE_QUEUED_AFTER": "10", "PROGRESS_WRITE_SECONDS": "0",
@@ -287,13 +324,18 @@ class ScaledService:
         except subprocess.TimeoutExpired:
             self.api.kill()
         self.redis.kill()
+        if self.cluster is not None:
+            self.cluster.remove()
+            return
         with psycopg.connect(ADMIN, autocommit=True) as admin:
             admin.execute(f'DROP DATABASE IF EXISTS "{self.database}" WITH (FORCE)')
 
 
 def scaled_scenario(name: str, code: Path) -> dict:
     work = Path(tempfile.mkdtemp(prefix=f"scaled-{name}-"))
-    service = ScaledService(code, work)
+    cluster = PrivateCluster() if name == "pg-restart" else None
+    service = ScaledService(code, work, cluster)
+    note = ""
     try:
         if name in ("worker-kill", "worker-stop"):
             first = service.worker("a")
@@ -345,6 +387,18 @@ def scaled_scenario(name: str, code: Path) -> dict:
             first.wait()
             service.probe_for(2, ids[0])
             service.worker("b")
+        elif name == "pg-restart":
+            service.worker("a")
+            ids = [service.submit(i, 2.0) for i in range(4)]
+            service.wait_running(ids[0])
+            time.sleep(0.5)
+            cluster.stop()
+            service.probe_for(8, ids[0])
+            cluster.start()
+            back = time.monotonic()
+            while service.ready() != "200" and time.monotonic() - back < 60:
+                time.sleep(0.1)
+            note = f"/readyz 200 {time.monotonic() - back:.1f} s after PostgreSQL was back"
         elif name == "cancel":
             service.worker("a")
             ids = [service.submit(0, 20.0)]
@@ -365,7 +419,7 @@ def scaled_scenario(name: str, code: Path) -> dict:
             "attempts": [j["attempt"] for j in mine], "outcomes": [[a["outcome"] for a in j["attempts"]] for j in mine],
             "submitted_meanwhile": f"{sum(j['status'] == 'succeeded' for j in jobs[len(ids):])} of "
                                    f"{len(jobs) - len(ids)} succeeded",
-            "answers": service.answers, "readyz": service.ready_seen, "readyz_at_end": final}
+            "answers": service.answers, "readyz": service.ready_seen, "readyz_at_end": final, "note": note}
 
 
 def scaled(args: argparse.Namespace) -> int:

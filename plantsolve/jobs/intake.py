@@ -33,6 +33,7 @@ import pickle
 import resource
 import signal
 import threading
+import time
 import traceback
 from contextlib import contextmanager
 from multiprocessing import forkserver
@@ -182,6 +183,60 @@ _forkserver = multiprocessing.get_context("forkserver")
 READER_STARTS = ("forkserver", "fork")
 
 
+# What the forkserver imports when it starts, in the order first asked for. It is one per process (multiprocessing's):
+# the upload readers fork from it and so do the embedded service's job processes (plantsolve.workers.processes), so
+# each adds its modules and neither replaces the other's (the readers' list, set after the job processes' one, had
+# left the warm parent without a single solver: each job process imported its kind's solver itself).
+_preloaded: dict[str, None] = {}
+
+
+def preload_in_forkserver(modules: Iterable[str]) -> list[str]:
+    """Add ``modules`` to what the forkserver imports at its next start; returns the whole list."""
+    _preloaded.update(dict.fromkeys(modules))
+    _forkserver.set_forkserver_preload(list(_preloaded))
+    return list(_preloaded)
+
+
+class ForkserverStarts:
+    """The forkserver's failed starts in a row, and when the next may be tried. It is one per process, and whoever needs
+    it first starts it: the job processes' dispatcher (it is their warm parent) or an upload's reading process. One
+    that dies at every start (the out-of-memory killer, a library that crashes at import) costs each start the imports
+    of every kind: the dispatcher tried again every second, and each upload started one of its own, for as long as
+    the cause lasted. Now the first failure is tried again at once, the next after ``first_pause``, then twice as long
+    each time up to ``longest``; a failure more than ``apart`` seconds after the one before counts as a first."""
+
+    def __init__(self, first_pause: float = 1.0, longest: float = 30.0, apart: float = 60.0):
+        self.first_pause, self.longest, self.apart = first_pause, longest, apart
+        self.failures = 0
+        self._last = float("-inf")  # the last failure (monotonic)
+        self._due = float("-inf")  # when the next start may be tried (monotonic)
+        self._lock = threading.Lock()
+
+    def failed(self) -> float:
+        """A start failed, or the forkserver died: returns the pause before the next start."""
+        with self._lock:
+            now = time.monotonic()
+            self.failures = self.failures + 1 if now - self._last < self.apart else 1
+            self._last = now
+            pause = 0.0 if self.failures == 1 else min(self.first_pause * 2 ** (self.failures - 2), self.longest)
+            self._due = now + pause
+            return pause
+
+    def pause_left(self) -> float:
+        """Seconds until the next start may be tried (0: now)."""
+        return max(0.0, self._due - time.monotonic())
+
+    def refuse_while_paused(self) -> None:
+        """Raise (an infrastructure failure: a 503) while a start may not be tried."""
+        left = self.pause_left()
+        if left > 0:
+            raise ConnectionRefusedError(f"the forkserver failed {self.failures} start(s) in a row; the next may be "
+                                         f"tried in {left:.1f} s")
+
+
+FORKSERVER_STARTS = ForkserverStarts()
+
+
 def start_readers(kinds: Iterable[SolverSpec]) -> None:
     """Start the readers' forkserver in the background, so the first upload does not wait: it imports this module
     and these kinds' readers and checks once (seconds), and each reading process forks from it with them imported.
@@ -190,7 +245,7 @@ def start_readers(kinds: Iterable[SolverSpec]) -> None:
     modules = [module for spec in kinds for module in spec.modules(SolverSpec.READERS)]
     if not modules:
         return
-    _forkserver.set_forkserver_preload(["plantsolve.jobs.intake", *dict.fromkeys(modules)])
+    preload_in_forkserver(["plantsolve.jobs.intake", *modules])
     threading.Thread(target=forkserver.ensure_running, name="upload-readers", daemon=True).start()
 
 
@@ -261,13 +316,22 @@ def _bounded(spec: SolverSpec, what: str, source: StoredInput, options: dict | N
         if threading.active_count() > 1:
             raise RuntimeError("reading processes are forked only from a process with one thread")
         spec.preload(SolverSpec.READERS)  # here, so the child imports nothing under its memory limit
+    if start == "forkserver":
+        FORKSERVER_STARTS.refuse_while_paused()
     context = multiprocessing.get_context(start)
     receiver, sender = context.Pipe(duplex=False)
     process = context.Process(
         target=_read_in_child, daemon=True, name=f"read-{spec.kind}",
         args=(sender, pickled, what, str(source.path), source.name, options, memory_bytes, seconds))
-    process.start()
-    sender.close()
+    try:
+        process.start()
+    except Exception:
+        receiver.close()
+        if start == "forkserver":
+            FORKSERVER_STARTS.failed()
+        raise
+    finally:
+        sender.close()
     died = False
     try:
         outcome = receiver.recv() if receiver.poll(seconds * UPLOAD_READ_WALL_FACTOR + 2) else ("time",)

@@ -70,6 +70,7 @@ def lose_attempt(ctx: ServiceContext, lost: LapsedAttempt, *, why: str, lapsed_b
 def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: int | None) -> str:
     """A job process ended without saying how its job ended (killed, out of memory, a crash in native code): if
     it held the job's running attempt, that attempt is lost now, without waiting for its lease to lapse.
+    ``exitcode``: the process's (negative: the signal that killed it), None when it is not known.
     Returns ``"requeued"`` or ``"queued"`` (the caller enqueues it), ``"failed"``, or ``"none"``."""
     job = ctx.repo.get(job_id, brief=True)
     if job is None:
@@ -81,7 +82,8 @@ def process_died(ctx: ServiceContext, job_id: uuid.UUID, worker: str, exitcode: 
         return "none"
     if job.status != RUNNING or job.worker != worker:
         return "none"
-    how = f"the job process was killed by signal {-exitcode}" if exitcode is not None and exitcode < 0 \
+    how = "the job process died, how is not known (its exit status was lost: the process that reports it died too)" \
+        if exitcode is None else f"the job process was killed by signal {-exitcode}" if exitcode < 0 \
         else f"the job process exited with code {exitcode}"
     if exitcode == -signal.SIGKILL:
         # nothing in the service sends it but the hard time limit (reported as such) and the kill of an abandoned

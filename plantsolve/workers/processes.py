@@ -30,6 +30,7 @@ from typing import Iterable
 
 from plantsolve.jobs.context import ServiceContext, worker_name
 from plantsolve.jobs.holds import DiskHold
+from plantsolve.jobs.intake import FORKSERVER_STARTS, preload_in_forkserver
 from plantsolve.jobs.leases import abandoned, process_died, remove_temporaries, resume
 from plantsolve.jobs.runner import fail_killed_at_hard_limit, handed_back, run_job
 from plantsolve.jobs.settings import JobSettings
@@ -51,6 +52,10 @@ RETRY_SECONDS = 1.0
 # waits on a warm parent that hangs (stopped, deadlocked): it would wait forever while the service took jobs, so
 # readiness says no job can start and the warm parent is killed, which ends the wait and starts a new one.
 STALL_SECONDS = 10.0
+# how long the ends of job processes killed with the warm parent may take to reach the supervisor (see _supervise)
+WARM_DEATH_SECONDS = 0.2
+# the longest pause before a job whose process died before its claim, again and again, starts again (see _unclaimed)
+UNCLAIMED_PAUSE_MAX = 30.0
 
 _warm = multiprocessing.get_context("forkserver")
 
@@ -184,6 +189,7 @@ class _Running:
     deadline: float | None
     started: str | None  # see _started: read right after the start, while the process is surely this job's
     began: float  # monotonic
+    warm: int | None  # the warm parent it was forked from: it reports the process's exit status
     killed_at_limit: bool = False
     abandoned: bool = False  # killed because its attempt had ended (see jobs.leases.abandoned)
 
@@ -213,6 +219,12 @@ class ProcessDispatcher:
         self._running: dict[uuid.UUID, _Running] = {}
         self._waiting: deque[tuple[uuid.UUID, str]] = deque()
         self._starting: uuid.UUID | None = None  # taken from the line, its process not started yet
+        # A job whose process died before it claimed the job (nothing of it ran, no attempt counted) goes back in line
+        # at once the first time, after a pause doubling with each such death in a row after that (up to
+        # UNCLAIMED_PAUSE_MAX): a process killed at every start (a watchdog, the out-of-memory killer, a database job
+        # processes cannot open) was started again at once, hundreds of times a minute, for as long as the cause lasted.
+        self._unclaimed: dict[uuid.UUID, int] = {}  # job -> its processes that died before the claim, in a row
+        self._later: dict[uuid.UUID, tuple[float, str]] = {}  # job -> when it goes back in line (monotonic), its kind
         self._lock = threading.Lock()
         self._wake_r, self._wake_w = os.pipe()
         os.set_blocking(self._wake_w, False)
@@ -220,6 +232,7 @@ class ProcessDispatcher:
         self._thread: threading.Thread | None = None
         self._start_watch: threading.Thread | None = None
         self._warm_parent: int | None = None  # its pid once a fork has come back from it
+        self._warm_since = 0.0  # when it came up (monotonic)
         self._start_failed: str | None = None
         self._start_began: float | None = None  # when the start of a job process under way began (monotonic)
         # Whether a job may wait in its row beyond the window: set when an enqueue found the window full, cleared by a
@@ -230,8 +243,8 @@ class ProcessDispatcher:
         self._disk = DiskHold(ctx)
         settings = JobSettings.model_validate(ctx.settings.model_dump(include=set(JobSettings.model_fields)))
         self._settings_json = settings.model_dump_json()
-        # before anything starts the forkserver (the upload readers share it): it imports all a job needs
-        _warm.set_forkserver_preload(warm_modules(ctx.kinds.values(), ctx.settings.plugins))
+        # before anything starts the forkserver (the upload readers share it, adding theirs): it imports all a job needs
+        preload_in_forkserver(warm_modules(ctx.kinds.values(), ctx.settings.plugins))
 
     # ---- the dispatcher protocol ----------------------------------------------------------------
 
@@ -262,6 +275,7 @@ class ProcessDispatcher:
             running = list(self._running.values())
             self._running.clear()
             self._waiting.clear()
+            self._later.clear()
         for child in running:
             try:
                 handed_back(self.ctx, child.job_id)
@@ -278,6 +292,9 @@ class ProcessDispatcher:
         """Raises when no job can start now: the supervisor is not running, or the warm parent is not (yet) up."""
         if self._thread is None or not self._thread.is_alive():
             raise RuntimeError("the job supervisor is not running")
+        if self._warm_parent is None and FORKSERVER_STARTS.pause_left() > 0:
+            raise RuntimeError(f"the job processes' warm parent failed {FORKSERVER_STARTS.failures} start(s) in a row; "
+                               f"the next in {FORKSERVER_STARTS.pause_left():.0f} s")
         if self._warm_parent is None or not is_warm_parent(self._warm_parent):
             raise RuntimeError("the job processes' warm parent is starting")
         if self._start_failed is not None:
@@ -306,7 +323,8 @@ class ProcessDispatcher:
 
     def _held(self) -> set[uuid.UUID]:
         """The jobs in hand (under the lock): running, starting, next in line."""
-        return {*self._running, *(j for j, _ in self._waiting), *([self._starting] if self._starting else [])}
+        return {*self._running, *(j for j, _ in self._waiting), *([self._starting] if self._starting else []),
+                *self._later}
 
     def running(self) -> dict[uuid.UUID, int]:
         """The process id of each running job."""
@@ -339,52 +357,86 @@ class ProcessDispatcher:
             pass
 
     def _supervise(self) -> None:
-        self._warm_up()
         while not self._stopping.is_set():
             try:
+                if self._warm_parent is None and FORKSERVER_STARTS.pause_left() == 0:
+                    # the ends of job processes killed with the warm parent are judged before the seconds of its start
+                    # (its death makes multiprocessing's exit status of theirs unknown; judged after, a lapsed lease
+                    # had often taken their attempts first)
+                    if self._running:
+                        self._reap(WARM_DEATH_SECONDS)
+                    self._warm_up()
+                self._back_in_line()
                 self._launch()
                 with self._lock:
-                    watched = {child.receiver: child for child in self._running.values()}
-                ready = wait([*watched, self._wake_r], timeout=TICK_SECONDS if self._start_failed is None
-                             else RETRY_SECONDS)
-                if self._wake_r in ready:
-                    os.read(self._wake_r, 4096)
-                ended = [watched[r] for r in ready if r in watched]
-                for child in ended:
-                    self._ended(child)
+                    dues = [due for due, _ in self._later.values()]
+                if self._warm_parent is None:
+                    dues.append(time.monotonic() + FORKSERVER_STARTS.pause_left())
+                timeout = TICK_SECONDS if self._start_failed is None else RETRY_SECONDS
+                ended = self._reap(min([timeout, *(max(0.05, due - time.monotonic()) for due in dues)]))
                 self._enforce_deadlines()
                 if self._warm_parent is not None and not is_warm_parent(self._warm_parent):
-                    log.error("the job processes' warm parent died; starting it again")
-                    self._warm_parent = None
-                    self._warm_up()
+                    self._warm_died()
                 if ended:
                     self._refill()
             except Exception:  # the supervisor must survive anything
                 log.exception("job supervisor error")
                 self._stopping.wait(RETRY_SECONDS)
 
+    def _reap(self, timeout: float) -> int:
+        """Wait up to ``timeout`` for a job process's end (or a wake-up) and judge the ends; returns how many."""
+        with self._lock:
+            watched = {child.receiver: child for child in self._running.values()}
+        ready = wait([*watched, self._wake_r], timeout=timeout)
+        if self._wake_r in ready:
+            os.read(self._wake_r, 4096)
+        ended = [watched[r] for r in ready if r in watched]
+        for child in ended:
+            self._ended(child)
+        return len(ended)
+
+    def _back_in_line(self) -> None:
+        """Put the jobs whose pause is over (see ``_unclaimed``) back at the end of the line."""
+        now = time.monotonic()
+        with self._lock:
+            due = [(job_id, kind) for job_id, (when, kind) in self._later.items() if when <= now]
+            for job_id, kind in due:
+                del self._later[job_id]
+                self._waiting.append((job_id, kind))
+
     def _warm_up(self) -> None:
         """Fork once from the warm parent (starting it, which imports every kind, when it is not running) and
-        learn its pid: from then on a job starts in milliseconds."""
-        while not self._stopping.is_set():
-            started = time.monotonic()
-            receiver, sender = _warm.Pipe(duplex=False)
-            try:
-                probe = _warm.Process(target=_parent_pid, args=(sender,), daemon=True, name="warm-probe")
-                probe.start()
-                sender.close()
-                self._warm_parent = receiver.recv()
-                probe.join(5)
-                self._start_failed = None
-                log.info("job processes ready: warm parent %d up in %.1f s", self._warm_parent,
-                         time.monotonic() - started)
-                return
-            except Exception as error:
-                self._start_failed = type(error).__name__
-                log.error("the job processes' warm parent could not be started (%s); trying again", error)
-                self._stopping.wait(RETRY_SECONDS)
-            finally:
-                receiver.close()
+        learn its pid: from then on a job starts in milliseconds. A start that fails is tried again later
+        (:class:`~plantsolve.jobs.intake.ForkserverStarts`)."""
+        started = time.monotonic()
+        receiver, sender = _warm.Pipe(duplex=False)
+        try:
+            probe = _warm.Process(target=_parent_pid, args=(sender,), daemon=True, name="warm-probe")
+            probe.start()
+            sender.close()
+            self._warm_parent = receiver.recv()
+            probe.join(5)
+            self._start_failed = None
+            self._warm_since = time.monotonic()
+            log.info("job processes ready: warm parent %d up in %.1f s", self._warm_parent, time.monotonic() - started)
+        except Exception as error:
+            self._start_failed = type(error).__name__
+            self._warm_failed(f"could not be started ({error})")
+        finally:
+            sender.close()
+            receiver.close()
+
+    def _warm_died(self) -> None:
+        self._warm_parent = None
+        self._warm_failed(f"died {time.monotonic() - self._warm_since:.1f} s after it came up")
+
+    def _warm_failed(self, what: str) -> None:
+        """A failed start of the warm parent, or its death: started again at once the first time, after a pause that
+        doubles with each failure in a row after that (:class:`~plantsolve.jobs.intake.ForkserverStarts`); the jobs
+        stay queued meanwhile and readiness says no job can start."""
+        pause = FORKSERVER_STARTS.failed()
+        log.error("the job processes' warm parent %s (%d time(s) in a row); %s", what, FORKSERVER_STARTS.failures,
+                  f"the next start in {pause:g} s, queued jobs waiting" if pause else "starting it again")
 
     def _launch(self) -> None:
         """Start a process for each job next in line while fewer than ``size`` run. A job is recorded as running
@@ -394,6 +446,8 @@ class ProcessDispatcher:
             with self._lock:
                 if len(self._running) >= self.size or not self._waiting:
                     return
+            if self._warm_parent is None:
+                return  # its start would start the warm parent, before its pause (see _warm_failed)
             if self._disk.holds():
                 return
             with self._lock:
@@ -428,7 +482,7 @@ class ProcessDispatcher:
             deadline = time.monotonic() + self.ctx.limits(spec)[1] + HARD_LIMIT_GRACE if spec is not None else None
             with self._lock:
                 self._running[job_id] = _Running(job_id, process, receiver, worker_of(process.pid), deadline,
-                                                 _started(process.pid), time.monotonic())
+                                                 _started(process.pid), time.monotonic(), self._warm_parent)
                 self._starting = None
 
     def _start_stalled(self) -> bool:
@@ -476,6 +530,21 @@ class ProcessDispatcher:
         if again:
             self.enqueue(child.job_id)
 
+    def _died_unclaimed(self, job_id: uuid.UUID) -> bool:
+        """``job_id``'s process died before it claimed the job: whether it goes back in line now (the first time in a
+        row), or after a pause (see ``_unclaimed``)."""
+        deaths = self._unclaimed[job_id] = self._unclaimed.get(job_id, 0) + 1
+        if deaths == 1:
+            log.error("job %s: its process died before it could claim the job; it starts again", job_id)
+            return True
+        pause = min(RETRY_SECONDS * 2 ** (deaths - 2), UNCLAIMED_PAUSE_MAX)
+        job = self.ctx.repo.get(job_id, brief=True)
+        with self._lock:
+            self._later[job_id] = (time.monotonic() + pause, job.kind if job is not None else "")
+        log.error("job %s: its process died before it could claim the job, %d times in a row; it starts again in "
+                  "%.0f s (no attempt counted)", job_id, deaths, pause)
+        return False
+
     def _judge_end(self, child: _Running, outcome: str | None) -> bool:
         """Write how ``child``'s attempt ended, when its process did not (killed at the hard limit, died); returns
         whether its job goes back in line."""
@@ -492,11 +561,20 @@ class ProcessDispatcher:
                 log.warning("job %s killed at its hard time limit", child.job_id)
             return False
         if outcome is None:
-            fate = process_died(self.ctx, child.job_id, child.worker, child.process.exitcode)
+            exitcode = child.process.exitcode
+            if exitcode == 255 and (child.warm is None or not is_warm_parent(child.warm)):
+                # multiprocessing's stand-in when the warm parent that reports a job process's end died first (killed
+                # with it, say): the job process's own status is not known, and was most often a signal, not 255
+                exitcode = None
+            fate = process_died(self.ctx, child.job_id, child.worker, exitcode)
+            if fate == "queued":
+                return self._died_unclaimed(child.job_id)
+            self._unclaimed.pop(child.job_id, None)
             if not child.abandoned:
                 log.error("job %s: its process died (exit code %s); the job is %s", child.job_id,
-                          child.process.exitcode, fate)
-            return fate in ("requeued", "queued")
+                          "unknown" if exitcode is None else exitcode, fate)
+            return fate == "requeued"
+        self._unclaimed.pop(child.job_id, None)
         return outcome == "requeued"
 
     def _enforce_deadlines(self) -> None:
