@@ -126,7 +126,7 @@ def test_a_pcf_of_two_tied_runs_is_cut_alike_with_its_blocks_shuffled_or_its_ids
     assert ends_x == [-150, 150]
     rng = np.random.default_rng(3)
     for names in ({"T": "T", "RP": "A", "RF": "B", "LP": "C", "LF": "D"},
-                  {"T": "z", "RP": "y", "RF": "x", "LP": "w", "LF": "v"}):
+                  {"T": "a", "RP": "b", "RF": "c", "LP": "d", "LF": "e"}):  # the names sort the other way round
         blocks, head = _tee_pcf(names)
         shuffled = [blocks[i] for i in rng.permutation(len(blocks))]
         again_cuts, again = _pcf_answer(shuffled, head, names)
