@@ -66,7 +66,7 @@ def world_ports(model: Model, out: Outcome) -> tuple[np.ndarray, np.ndarray, np.
         return P, D, np.zeros_like(closed)
     a, b = model.conn_a[closed], model.conn_b[closed]
     fa, fb = fixed_ports[a], fixed_ports[b]
-    a_first = model.port_rank[a] <= model.port_rank[b]  # the network's order of the two, not their names'
+    a_first = np.array([model.key[i] <= model.key[j] for i, j in zip(a, b)], dtype=bool)
     rep_is_a = fa | (~fb & a_first)
     rep = np.where(rep_is_a, a, b)
     other = np.where(rep_is_a, b, a)

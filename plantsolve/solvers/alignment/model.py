@@ -57,7 +57,9 @@ class Model:
     size: np.ndarray  # [n] "length" of a component (pipe length, fitting arm sum)
     lref: float  # typical length, makes weights dimensionless
     min_length: np.ndarray  # [n] minimum pipe length (0 for fittings)
-    key: list[tuple[str, int]]  # [np] (id, port) of each port: its name, which the order of a port_rank tie decides
+    # [np] (id, port) of each port: which of two closed ports (within round-off) is the snapped one's copy, and the
+    # order of a port_rank tie
+    key: list[tuple[str, int]]
 
     @property
     def snap_pos(self) -> float:
@@ -90,8 +92,8 @@ class Model:
         """[np] each port's place in an order the network decides, not its listing nor its names: by the port's
         distance from the middle of all ports, then its position and its direction as written; only ports alike in
         all of these (none but a duplicated component's) by their (id, port). What a tie of equal measurements is
-        decided by (:func:`cuts.connection_key`, the snapped representative, a row's first port): decided by the
-        names, a network renamed was cut at the other end of a symmetric run, 10 mm from the first answer."""
+        decided by (:func:`cuts.connection_key`, a row's first port): decided by the names, a network renamed was cut
+        at the other end of a symmetric run, 8 mm from the first answer."""
         n = len(self.key)
         by_name = np.empty(n, dtype=np.intp)
         by_name[sorted(range(n), key=self.key.__getitem__)] = np.arange(n)
