@@ -128,12 +128,18 @@ def _read_units(request_model: type[BaseModel], given: Any) -> tuple[Any, list[F
         return given, [_said_as_unit(e, model, {"units": given}) for e in rejected.errors]
 
 
-def _said_as_unit(error: FieldError, model: type[BaseModel], given: dict) -> FieldError:
+_FORM_PARTS = (("options",), ("options", "options"))
+"""Where the form's options part holds an option in a refusal's path: flat, or nested as a request holds them."""
+
+
+def _said_as_unit(error: FieldError, model: type[BaseModel], given: dict,
+                  within: tuple[tuple, ...] = _FORM_PARTS) -> FieldError:
     """``error`` of a unit field's enum refusing a word as :func:`request_unit` says it: the units with their names
     (``unknown unit 'yd'; one of mm, cm, m, in, ft (or their names: ...)``), not the bare list of symbols. The
-    schema's own words for a word it knows (micrometres where a request's unit cannot be) stay."""
-    name = error.loc[-1]  # the field itself, held by the form's options (or nested options) part
-    field_info = model.model_fields.get(name) if isinstance(name, str) and error.loc[-2:-1] == ("options",) else None
+    schema's own words for a word it knows (micrometres where a request's unit cannot be) stay. ``within``: the paths
+    under which ``model``'s own fields lie in a refusal (the form's options part; ``((),)`` for the request's)."""
+    name = error.loc[-1]  # a field of ``model`` itself only when directly under ``within``, not one nested deeper
+    field_info = model.model_fields.get(name) if isinstance(name, str) and error.loc[:-1] in within else None
     word = given.get(name)
     among = _unit_names(field_info.annotation) if field_info is not None else ()
     if not among or not isinstance(word, str) or error.type != "literal_error" or \
@@ -235,4 +241,5 @@ def validated_request(rules: FormRules, body: dict, form: Form,
     try:
         return validated(rules.request_model, body, ())
     except InputRejected as rejected:
-        raise InputRejected([form.named(e) or elsewhere(e) for e in rejected.errors]) from None
+        raise InputRejected([form.named(e) or elsewhere(_said_as_unit(e, rules.request_model, body, ((),)))
+                             for e in rejected.errors]) from None

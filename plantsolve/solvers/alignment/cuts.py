@@ -13,8 +13,8 @@ of a conflict may still carry nearly the same share of it, and which of them loo
 the last digits'. So impacts within :data:`CUT_MARGIN` of the largest (or within the
 snapped residue) count as equal, and among them the connection that was measured worst is cut
 (its gap and angle error in the request, which no solve, frame, unit or name changes); only where
-those are equal too does the smaller (component id, port) end decide: never the input order, never
-round-off.
+those are equal too (a symmetric network) does where its ends lie decide (:attr:`Model.port_rank`):
+never the input order, the names or round-off.
 """
 
 from __future__ import annotations
@@ -37,9 +37,10 @@ def tie_width(model: Model, top: float) -> float:
     return max(model.snap_pos, CUT_MARGIN * top)
 
 
-def connection_key(model: Model, k: int) -> tuple[str, int]:
-    """The smaller (component id, port) end of connection ``k``: its place in the stable order of the tie-break."""
-    return min(model.key[model.conn_a[k]], model.key[model.conn_b[k]])
+def connection_key(model: Model, k: int) -> int:
+    """The place of connection ``k`` in the stable order of the tie-break: its end first in :attr:`Model.port_rank`
+    (where the network has its ports, never how they are listed or named)."""
+    return int(min(model.port_rank[model.conn_a[k]], model.port_rank[model.conn_b[k]]))
 
 
 def choose_cut(model: Model, active: np.ndarray, gap: np.ndarray, ang: np.ndarray, only_bad: bool = True) -> int | None:
@@ -56,13 +57,12 @@ def choose_cut(model: Model, active: np.ndarray, gap: np.ndarray, ang: np.ndarra
 def worst_measured(model: Model, candidates: np.ndarray) -> int:
     """The candidate connection whose ends were furthest apart as measured (gap plus angle error times the
     typical length, in the request's pose); measured impacts within round-off of coordinates (the snapped
-    residue, or 1e-9 of the largest) are equal, and the smaller (component id, port) end decides among them."""
+    residue, or 1e-9 of the largest) are equal, and where their ends lie decides among them (:func:`connection_key`)."""
     gap0, ang0 = model.measured_errors
     measured = error_impact(model, gap0[candidates], ang0[candidates])
     worst = float(np.max(measured))
     equal = candidates[measured >= worst - max(model.snap_pos, 1e-9 * worst)]
     return int(min(equal, key=lambda k: connection_key(model, k)))
-
 
 
 def settled_locates(model: Model, left_open: np.ndarray, gap: np.ndarray, ang: np.ndarray, settled_gap: np.ndarray,

@@ -116,7 +116,7 @@ class Network:
             # walk the chain from an end (a port whose partner is not in the row)
             ports = np.concatenate([np.arange(m.port_start[c], m.port_start[c + 1]) for c in mem])
             ends = ports[partner[ports] < 0]
-            start = int(min(ends, key=lambda p: m.key[p])) if len(ends) else int(ports[0])
+            start = int(ends[np.argmin(m.port_rank[ends])]) if len(ends) else int(ports[0])
             order, p = [], start
             seen = set()
             while p >= 0 and pc[p] not in seen:

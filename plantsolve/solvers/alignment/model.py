@@ -57,7 +57,9 @@ class Model:
     size: np.ndarray  # [n] "length" of a component (pipe length, fitting arm sum)
     lref: float  # typical length, makes weights dimensionless
     min_length: np.ndarray  # [n] minimum pipe length (0 for fittings)
-    key: list[tuple[str, int]]  # [np] canonical (id, port) of each port, order-independent tie-breaks
+    # [np] (id, port) of each port: which of two closed ports (within round-off) is the snapped one's copy, and the
+    # order of a port_rank tie
+    key: list[tuple[str, int]]
 
     @property
     def snap_pos(self) -> float:
@@ -84,6 +86,24 @@ class Model:
         """Gap (units) and angle error (radians) of every connection as the request has them: what ranks the
         connections equally to blame for a conflict (:func:`cuts.worst_measured`)."""
         return connection_errors(self, self.P0, self.D0)
+
+    @cached_property
+    def port_rank(self) -> np.ndarray:
+        """[np] each port's place in an order the network decides, not its listing nor its names: by the port's
+        distance from the middle of all ports, then its position and its direction as written; only ports alike in
+        all of these (none but a duplicated component's) by their (id, port). What a tie of equal measurements is
+        decided by (:func:`cuts.connection_key`, a row's first port): decided by the names, a network renamed was cut
+        at the other end of a symmetric run, 8 mm from the first answer."""
+        n = len(self.key)
+        by_name = np.empty(n, dtype=np.intp)
+        by_name[sorted(range(n), key=self.key.__getitem__)] = np.arange(n)
+        P = self.P_in
+        # the mean of the positions in their own sorted order: the same bits however they were listed
+        middle = P[np.lexsort(P.T[::-1])].mean(axis=0) if n else np.zeros(3)
+        d2 = ((P - middle) ** 2).sum(axis=1)
+        rank = np.empty(n, dtype=np.intp)
+        rank[np.lexsort((by_name, *self.D_in.T[::-1], *P.T[::-1], d2))] = np.arange(n)
+        return rank
 
     @property
     def n_comp(self) -> int:

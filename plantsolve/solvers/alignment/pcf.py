@@ -47,6 +47,7 @@ from plantsolve.schemas.common import MAX_COORDINATE
 from plantsolve.solvers.alignment.pcf_bore_sizes import other_system_bores
 from plantsolve.solvers.alignment.pcf_catalogue import print_quantum, snap_catalogue
 from plantsolve.solvers.alignment.pcf_model_check import TURNING, closed_rings, failing_components
+from plantsolve.solvers.alignment.plausibility import RADIUS_JUMP, radius_jumps
 from plantsolve.solvers.base import FieldError, InputRejected, reject, validated
 
 POINT_KEYS = ("END-POINT", "CENTRE-POINT", "BRANCH1-POINT", "BRANCH2-POINT", "BRANCH3-POINT")
@@ -637,6 +638,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
         held, resolved = list(held_read) + forced, []
         net = _connect(comps, doc, opts, units, tol[0], held, resolved)
         comps_json, connections = _entries(comps, net, fixed_ids, {h["id"] for h in held})
+        unsized = _without_jumping_radii(comps_json, connections)
         body = _body(units, comps_json, connections, opts, alias, text)
         failures = failing_components(body)
         # an elbow with uneven arms passes the model check pointing a port at its typo: held too (the model check's
@@ -684,6 +686,7 @@ def _interpret(text: str, opts: AlignmentOptions) -> Interpretation:
     notes.extend(_open_ends_inside_pipes(comps, net, doc))
     notes.extend(_zero_length_pipe_notes(doc, geometry))
     notes.extend(_bore_mismatch_notes(comps, net, doc))
+    notes.extend(_unsized_notes(unsized, {c["id"]: c["line"] for c in comps}, units or "mm"))
     notes.extend(_notes(doc, geometry, held, dropped, resolved, net["gaps"], comps, net["owner"], left_out))
     return Interpretation(body=body, notes=notes, geometry=geometry,
                           nozzles=_at_end_connections(doc, net["pos"], net["owner"], net["rad"], comps))
@@ -859,6 +862,34 @@ def _entries(comps: list[dict], net: dict, fixed_ids: set[str], held_ids: set[st
                                                      {"position": pos[j].tolist(), "direction": (-dirs[j]).tolist()}]})
         connections += [{"from": [a, int(local[i])], "to": [sid, 0]}, {"from": [b, int(local[j])], "to": [sid, 1]}]
     return comps_json, connections
+
+
+def _without_jumping_radii(comps_json: list[dict], connections: list[dict]) -> list[dict]:
+    """The items whose radius (from their bores) is more than :data:`plausibility.RADIUS_JUMP` times those of every
+    item they join, each with its radius and theirs; their radius is taken out of the request (a bore typed in
+    another unit or with a wrong exponent: as a radius, it weighted or lengthened the item so that the network was
+    cut around it, or dragged metres; the model check held the item, which still failed it, and left it out)."""
+    index = {c["id"]: k for k, c in enumerate(comps_json)}
+    radius = np.array([np.nan if c["radius"] is None else c["radius"] for c in comps_json], dtype=float)
+    ends = np.array([(index[c["from"][0]], index[c["to"][0]]) for c in connections], dtype=np.intp).reshape(-1, 2)
+    out = []
+    for k, beside in radius_jumps(radius, ends[:, 0], ends[:, 1]):
+        out.append({"id": comps_json[k]["id"], "radius": float(radius[k]), "beside": beside})
+        comps_json[k]["radius"] = None
+    return out
+
+
+def _unsized_notes(unsized: list[dict], lines: dict[str, int], units: str) -> list[tuple[str, str, dict, str]]:
+    """``pcf_radius_ignored``: the items whose bore-given radius was not used (:func:`_without_jumping_radii`)."""
+    if not unsized:
+        return []
+    listed = ", ".join(f"{u['id']} (line {lines.get(u['id'], '?')}) {u['radius']:.4g} {units} beside {u['beside']:.4g} "
+                       f"{units}" for u in unsized[:5]) + (", ..." if len(unsized) > 5 else "")
+    return [("pcf_radius_ignored",
+             f"{len(unsized)} item(s) have a radius (half the bore) more than {RADIUS_JUMP:g} times that of every item "
+             f"they join ({listed}): a bore in another unit or a mistyped exponent? Their bore was not used as their "
+             "size (the alignment moves them as items of unknown bore); correct the bore.",
+             {"items": unsized[:200], "units": units}, "warning")]
 
 
 def _body(units, comps_json, connections, opts, alias, text) -> dict:

@@ -148,4 +148,22 @@ def fitting_span_in_bores(pos: np.ndarray, counts: np.ndarray, radius: np.ndarra
     return float(np.median(span[use] / (2.0 * radius[use]))), len(use)
 
 
+RADIUS_JUMP = 100.0  # connected ports share a bore; a reducer changes it by a few times, never a hundred
+
+
+def radius_jumps(radius: np.ndarray, comp_a: np.ndarray, comp_b: np.ndarray) -> list[tuple[int, float]]:
+    """(component, the largest radius among those it is connected to) of every component whose radius is more than
+    :data:`RADIUS_JUMP` times that largest one: a radius in another unit or with a wrong exponent (one elbow's 1e6 mm
+    beside its 50 mm pipes weighted it so that the network was cut around it, said to be a conflict; one pipe's
+    5e4 mm made it at least 5 m long and dragged eleven components 2.3 m). ``radius``: nan where not given."""
+    if len(comp_a) == 0:
+        return []
+    known = np.where(np.isfinite(radius), radius, 0.0)
+    beside = np.zeros(len(radius))
+    np.maximum.at(beside, comp_a, known[comp_b])
+    np.maximum.at(beside, comp_b, known[comp_a])
+    jumps = np.flatnonzero((beside > 0) & (known > RADIUS_JUMP * beside))
+    return [(int(c), float(beside[c])) for c in jumps]
+
+
 PIPE_RADIUS_M = (0.002, 2.5)  # plausible median outside radius of a plant's pipes and fittings, in metres

@@ -19,7 +19,6 @@ from plantsolve.solvers.base import (
     reject,
     utf16_without_mark,
 )
-from plantsolve.solvers.length_units import request_unit
 from plantsolve.solvers.upload_form import FormRules, read_form, request_of_file
 
 UPLOAD_EXTENSIONS = (".pcf", ".json")
@@ -89,16 +88,4 @@ def parse_upload(source: StoredInput, options: dict | None) -> AlignmentRequest:
         return request.model_copy(update={"source_encoding": encoding})
     body = json_object(text, refuse_cut=True)
     refuse_other_json(body)
-    if "units" in body:
-        body["units"] = _unit(body["units"], ("file", "units"))
     return request_of_file(body, options, FORM)
-
-
-def _unit(given, loc: tuple) -> object:
-    """A request's unit by any of its spellings ('MM', 'millimetres'); what is no text is left to the schema."""
-    if not isinstance(given, str):
-        return given
-    try:
-        return request_unit(given)
-    except ValueError as exc:
-        raise InputRejected([FieldError(loc, str(exc))]) from None

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from plantsolve.schemas.alignment import AlignmentRequest
-from plantsolve.solvers.alignment.plausibility import FAR, far_ports
+from plantsolve.solvers.alignment.plausibility import FAR, RADIUS_JUMP, far_ports, radius_jumps
 from plantsolve.solvers.length_units import METRES
 from plantsolve.solvers.base import FieldError, InputRejected
 
@@ -121,6 +121,7 @@ def check_input(request: AlignmentRequest) -> None:
             errors.append(FieldError(("connections", j, "to"), "a connection must join two different components"))
         elif ok:
             joined.append((index[conn.from_[0]], index[conn.to[0]]))
+    errors += _radius_jumps(request, joined)
     far = _far_ports(request, pos, owner, start, joined, counts)
     if far:
         # a port far out also turns its fitting's centroid or its pipe's axis: those refusals only repeat it
@@ -133,6 +134,21 @@ def check_input(request: AlignmentRequest) -> None:
             errors.append(FieldError(("options", "fixed_components", k), f"unknown component {cid!r}"))
     if errors:
         raise InputRejected(errors)
+
+
+def _radius_jumps(request: AlignmentRequest, joined: list[tuple[int, int]]) -> list[FieldError]:
+    """A refusal for every radius far beyond those of the components it is connected to (see
+    :func:`plausibility.radius_jumps`)."""
+    if not joined:
+        return []
+    ab = np.array(joined, dtype=np.intp)
+    radius = np.array([np.nan if c.radius is None else c.radius for c in request.components], dtype=float)
+    u = request.units
+    return [FieldError(("components", c, "radius"), (
+        f"radius {radius[c]:.4g} {u} of component {request.components[c].id!r} is more than {RADIUS_JUMP:g} times "
+        f"the largest radius of the components it is connected to ({beside:.4g} {u}): connected ports share a bore "
+        "(a reducer changes it a few times); a value in another unit or a wrong exponent? Correct the radius, or "
+        "leave it out"), "value_error") for c, beside in radius_jumps(radius, ab[:, 0], ab[:, 1])[:50]]
 
 
 def _far_ports(request: AlignmentRequest, pos: np.ndarray, owner: np.ndarray, start: np.ndarray,

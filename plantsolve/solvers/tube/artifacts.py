@@ -280,9 +280,11 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
         ax.set_xlabel(f"1st principal axis of the measured centreline [{u}]")
         ax.set_ylabel(f"{'2nd' if j == 1 else '3rd'} principal axis [{u}]")
         ax.set_title(view)
-    ends = ", ".join(f"{e.end} {e.deviation:.3g} {u}" for e in ins.end_points)
+    ends = ", ".join(f"{e.end} {e.deviation:.3g} {u}" + ("" if e.determined else " (not determined)")
+                     for e in ins.end_points)
+    open_rows = f"; rows not determined {', '.join(map(str, ins.undetermined_rows))}" if ins.undetermined_rows else ""
     fig.suptitle(f"Inspection {ins.verdict.replace('_', ' ').upper()}: rows out of tolerance "
-                 f"{', '.join(map(str, ins.failed_rows)) or 'none'}; end points {ends}"
+                 f"{', '.join(map(str, ins.failed_rows)) or 'none'}{open_rows}; end points {ends}"
                  + ("" if ins.matched else f"; nominal {ins.nominal_bends} bends, scan {ins.measured_bends}"))
     handles = [Line2D([], [], color="k", ls="--", lw=1.2, label="nominal (best-fit aligned)"),
                Line2D([], [], color="C0", lw=1.6, label="measured"),
@@ -298,6 +300,11 @@ ROW_FIELDS = (("length", "length", "{u}"), ("rotation", "rotation", "deg"), ("an
 VERDICT_COLOURS = {"pass": "C0", "fail": "C3", "not determined": "0.7"}
 
 
+def _state(check) -> str:
+    """A field's or an end point's verdict: its ``ok`` is true, and no pass, where the samples do not determine it."""
+    return "not determined" if not check.determined else ("pass" if check.ok else "fail")
+
+
 def _row_panel(ax, ins, name: str, label: str, unit: str) -> None:
     """Deviation (measured − nominal) of one field per LRA row: bars coloured by verdict, ±2 sigma whiskers,
     and the tolerance band (±tolerance about zero) the verdict is taken against."""
@@ -310,7 +317,7 @@ def _row_panel(ax, ins, name: str, label: str, unit: str) -> None:
     ax.axhline(0.0, color="0.4", lw=0.6)
     lim = max([abs(c.deviation) + 2 * (c.sigma or 0.0) for _, c in checks] + [1.3 * tol if tol else 0.0, 1e-12])
     for row, c in checks:
-        state = "not determined" if not c.determined else ("pass" if c.ok else "fail")
+        state = _state(c)
         ax.bar(row, c.deviation, 0.6, color=VERDICT_COLOURS[state], hatch="//" if state == "not determined" else None,
                edgecolor="0.35" if state == "not determined" else None, lw=0.5)
         if c.sigma:
@@ -360,11 +367,11 @@ def inspection_figure(request: TubeRequest, result: TubeResult) -> Figure | None
         tol, span = ins.tolerances.end_point, 0.1 * arc[-1]
         for a, b in ((0.0, span), (arc[-1] - span, arc[-1])):
             ax.fill_between([a, b], 0.0, tol, color="C2", alpha=0.18, lw=0)
-        for e, x in zip(ins.end_points, (0.0, arc[-1])):
-            ax.plot(x, e.deviation, "D", color="C3" if not e.ok else "C0", ms=6)
+        for e, x in zip(ins.end_points, (0.0, arc[-1])):  # an end the samples stop short of is no pass: grey
+            ax.plot(x, e.deviation, "D", color=VERDICT_COLOURS[_state(e)], ms=6)
         handles += [Patch(color="C2", alpha=0.18, label=f"end-point tolerance (±{tol:.3g} {u})"),
                     Line2D([], [], color="0.3", marker="D", ls="",
-                           label="end point after best fit (blue: within, red: out)")]
+                           label="end point after best fit (blue: within, red: out, grey: not determined)")]
         ax.set_ylim(0.0, 1.1 * max(float(d.max()), tol, *(e.deviation for e in ins.end_points)))
     ax.set_xlabel(f"arc length along the measured centreline [{u}]")
     ax.set_ylabel(f"distance from nominal centreline [{u}]")

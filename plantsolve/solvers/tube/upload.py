@@ -15,7 +15,7 @@ import numpy as np
 from plantsolve.schemas.common import MAX_COORDINATE, Diagnostic
 from plantsolve.schemas.tube import MAX_POINTS, PointSource, TubeRequest, UnitConversion
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, json_object, reject
-from plantsolve.solvers.length_units import METRES, SIZES, request_unit
+from plantsolve.solvers.length_units import SIZES
 from plantsolve.solvers.other_kinds import file_holds
 from plantsolve.solvers.tube.las_units import CrsUnit, las_crs_unit, short_name
 from plantsolve.solvers.tube.ply_points import elements as ply_elements
@@ -547,15 +547,6 @@ def _default_unit_implausible(ext: str, pts: np.ndarray, target: str) -> list[Di
                  "plausible_mm": [lo, hi], "likely_units": likely})]
 
 
-def _unit_option(word: object, loc: tuple, among=METRES) -> str:
-    """A unit among ``among`` given in the upload form or a JSON file, by any of its spellings ('MM', 'millimetres');
-    a 422 naming ``loc`` for a spelling of two readings ('Mm') or of no unit among them."""
-    try:
-        return request_unit(word, among)
-    except ValueError as exc:
-        raise InputRejected([FieldError(loc, str(exc))]) from None
-
-
 FORM = FormRules(TubeRequest, units="file")
 
 
@@ -579,10 +570,7 @@ def parse_upload(source: StoredInput, options: dict | None) -> TubeRequest:
             keys = ", ".join(sorted(map(str, doc))[:12]) or "nothing"
             raise reject(f"the JSON holds {keys}: not a tube request, which holds `points` (the x, y, z samples of "
                          "the scan); is it a request for another kind?")
-        body = dict(doc)
-        if isinstance(body.get("units"), str):
-            body["units"] = _unit_option(body["units"], ("file", "units"))
-        return validated_request(FORM, merged(body, form, FORM), form)
+        return validated_request(FORM, merged(dict(doc), form, FORM), form)
     target = units or "mm"
     log = ReadLog(ext[1:])
     pts, stated, on_grid = _read_points(source, log)
