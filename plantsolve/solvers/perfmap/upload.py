@@ -1371,7 +1371,6 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         return _validated(_with_units_option(body, form.units, "sheet"), form, lines)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
         body, _, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
-        _refuse_setting_named_as_speed(body, content)
         return _validated(body, form, [], places=lambda: _map_places(body, content))
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
@@ -1394,24 +1393,6 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
     return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form, lines)
-
-
-def _setting_line(label: str, text: str) -> int | None:
-    """The first line of a GasTurb/GSP map that sets its geometry setting ('VG angle = -5 [deg]')."""
-    setting = re.compile(rf"\s*{re.escape(label)}\s*[:=]")
-    return next((n for n, line in enumerate(text.splitlines(), 1) if setting.match(line)), None)
-
-
-def _refuse_setting_named_as_speed(body: dict, content: bytes) -> None:
-    """A variable-geometry map whose setting lines name the speed ('Nc = 0.9 ...' above each set of tables): its
-    settings and its speeds would be two parameters of one name (it crashed the reader: a 500)."""
-    names = body["setting_names"]
-    if len(names) == len(set(names)):
-        return
-    line = _setting_line(names[0], decode_text(content))
-    raise reject(f"line {line}: the setting line names {names[0]!r}, the name of the map's speed: a set of tables is "
-                 "headed by its geometry setting ('VG angle = -5 [deg]'); the speeds are each table's rows",
-                 ("file", "line", line))
 
 
 def _map_places(body: dict, content: bytes) -> dict[tuple, int]:
