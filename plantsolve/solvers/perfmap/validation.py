@@ -14,7 +14,7 @@ from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
 from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
 from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
-from plantsolve.solvers.perfmap.repeats import disagreeing_repeats
+from plantsolve.solvers.perfmap.repeats import disagreeing_repeats, identical_lines
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
 from plantsolve.solvers.perfmap.units import (
     UnitError,
@@ -80,7 +80,8 @@ def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
     if source is not None:
         info["file"] = source.name
     rows_of = request.source.rows if request.source and request.source.rows else None
-    repeats = disagreeing_repeats(settings, rows_of, request.source.row_label if rows_of else "line")
+    label = request.source.row_label if rows_of else "line"
+    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label)
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings) + repeats)
 
