@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from plantsolve.solvers.base import StoredInput
 from plantsolve.solvers.perfmap.upload import parse_upload
 from plantsolve.solvers.perfmap.validation import load
@@ -45,3 +47,17 @@ def test_a_pycycle_map_repeating_its_table_at_a_second_alpha_is_not_warned():
     loaded = _loaded("ncp01.py", text)
     assert len({s.values[0] for s in loaded.settings}) == 2  # two alpha planes, the same tables
     assert "setting_lines_identical" not in {w.code for w in loaded.warnings}
+
+
+def test_flow_in_pounds_per_second_as_engine_decks_write_it_pps_is_lbm_per_s():
+    """'pps' was refused as a length (pint's pico-parsec-seconds)."""
+    def flows(unit: str) -> list[float]:
+        text = "\n".join([f"speed [-],flow [{unit}],pressure ratio [-],efficiency [-]"]
+                         + [",".join([r[1], *r[2:]]) for r in ROWS]) + "\n"
+        source = StoredInput.from_bytes("m.csv", text.encode())
+        request = parse_upload(source, {"map": False, "result_units": {"flow": "kg/s"}})
+        return [v for p in load(request, source).internal.positions for v in p.flow]
+
+    got = flows("pps")
+    assert got == flows("lbm/s")
+    assert got[0] == pytest.approx(float(ROWS[0][2]) * 0.45359237, rel=1e-12)
