@@ -1351,11 +1351,11 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
         form = form_beside(body, options, FORM)
+        origin = {"format": "json", "document": "positions" if _bare_list(text) else "request"}
         own = body.get("source", {})
         if isinstance(own, dict):  # anything else is refused naming file.source
-            body = {**body, "source": {**own, "format": "json",
-                                       "document": "positions" if _bare_list(text) else "request"}}
-        return _validated(_with_units_option(body, form.units, "JSON request"), form)
+            body = {**body, "source": {**own, **origin}}
+        return _validated(_with_units_option(body, form.units, "JSON request"), form, origin=origin)
     form = read_form(options, FORM)
     try:
         return _parse(source, form)
@@ -1452,17 +1452,19 @@ def _with_units_option(body: dict, given: Any, what: str) -> dict:
     return {**body, "units": units, "upload_warnings": notes}
 
 
-def _validated(body: dict, form: Form, places: Callable[[], dict[tuple, int]] | None = None) -> PerfmapRequest:
+def _validated(body: dict, form: Form, places: Callable[[], dict[tuple, int]] | None = None,
+               origin: dict | None = None) -> PerfmapRequest:
     """The request of a parsed file with the form's options laid in, the form's places of its values kept in its
     ``source`` (a refusal when loading names them too); each bad value named where the user wrote it
-    (:func:`placed`: the form's field, the JSON file's path, the table's row or the line ``places`` gives)."""
+    (:func:`placed`: the form's field, the JSON file's path, the table's row or the line ``places`` gives;
+    ``origin``, what the reader found, where the file's own ``source`` is no object to keep it in)."""
     body = merged(body, form, FORM)
     if isinstance(body.get("source"), dict):
         body["source"] = {**body["source"], "form": _form_places(body, form)}
     try:
         return validated(PerfmapRequest, body, ())
     except InputRejected as e:
-        where = body["source"] if isinstance(body.get("source"), dict) else {}
+        where = body["source"] if isinstance(body.get("source"), dict) else (origin or {})
         at_line = places() if places else {}
         errs = [placed(fe, where, lambda i: _setting_of(body["positions"][i]), at_line) for fe in e.errors]
         seen, unique = set(), []

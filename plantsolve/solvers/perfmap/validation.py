@@ -94,7 +94,7 @@ def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int]
     ``lines`` gives a request path (a map's flow unit), in a table at its row (``file.row.12.flow``, its setting
     named by ``setting_of``) or its header (a unit), else in the file under its request path."""
     loc = tuple(error.loc)
-    if loc[:1] in (("file",), ()):
+    if loc[:1] == ("file",):
         return error
     path = ".".join(map(str, loc))
     if (form := (source.get("form") or {}).get(".".join(map(str, loc[:2])))) is not None:
@@ -115,7 +115,8 @@ def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int]
             msg, where = "needs at least 3 measured points (rows)", where[:3]
         return FieldError(where, prefix + msg, error.type)
     at_header = loc[:1] in (("units",), ("setting_units",)) and source.get("format") in ("csv", "xlsx")
-    return FieldError(("file", "header") if at_header else ("file",), f"{path}: {error.msg}", error.type)
+    return FieldError(("file", "header") if at_header else ("file",), f"{path}: {error.msg}" if path else error.msg,
+                      error.type)
 
 
 def _check_setting_units(request: PerfmapRequest) -> None:

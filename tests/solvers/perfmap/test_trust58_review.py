@@ -68,3 +68,11 @@ def test_a_point_at_zero_flow_is_refused_naming_its_row_and_the_flow(efficiency,
     error, = _errors("m.csv", _csv([",".join(first[:2] + ["0", first[3], efficiency])] + ROWS[1:]))
     assert error.loc == ("file", "row", 2, "flow")
     assert said in error.msg and "lines 2, 3" in error.msg
+
+
+def test_a_json_files_request_wide_refusal_and_a_source_of_its_own_are_named_in_the_file():
+    body = json.loads((EXAMPLES / "n3_fan_map.json").read_text())
+    error, = _errors("m.json", json.dumps({**body, "setting_units": ["deg"]}))
+    assert error.loc == ("file",) and "setting_units needs 2 entries" in error.msg
+    error, = _errors("m.json", json.dumps({**body, "source": "csv"}))
+    assert error.loc == ("file", "source")
