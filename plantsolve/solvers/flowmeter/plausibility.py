@@ -1,7 +1,8 @@
 """Plausibility of an electromagnetic flow meter's request and signal: warnings ``implausible_<quantity>`` naming
 the quantity, its value, the range meters are built for and the likely mix-up (the README's flowmeter section lists
-them). Outside these ranges the physics still holds (S depends on shape only), so nothing is refused here; the
-hard bounds are the schema's and the input check's."""
+them), and what a field file leaves unsaid: its units (``field_file_unit_not_stated``) or its end
+(``truncated_file``, cut inside its last number). Outside these ranges the physics still holds (S depends on shape
+only), so nothing is refused here; the hard bounds are the schema's and the input check's."""
 
 from __future__ import annotations
 
@@ -83,11 +84,18 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
 
 
 def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Diagnostic]:
-    """A field file whose header states no length unit or no unit of B is read in the request's units and in tesla:
+    """A field file cut inside its last number (``truncated_file``); a field file whose header states no length unit or no unit of B is read in the request's units and in tesla:
     said, naming what was assumed, since a file in m read as mm (or in mT read as T) passes the range checks when
     its numbers happen to fit them, and the answer would not show the assumption."""
-    if f is None or f.loc != FILE or (f.length_unit is not None and f.field_unit is not None):
+    if f is None or f.loc != FILE:
         return []
+    cut = [] if f.cut is None else [Diagnostic(
+        code="truncated_file",
+        message=f"Magnetic field file: it has no line ending after its last row, and {f.cut}: the file was cut "
+        "inside that number? It was read as written; check the file's end against the export.",
+        details={"quantity": ".".join(FILE), "reason": f.cut})]
+    if f.length_unit is not None and f.field_unit is not None:
+        return cut
     missing = [what for what, unit in (("length", f.length_unit), ("field", f.field_unit)) if unit is None]
     assumed = {"length": f"its coordinates were read in the request's units ('{request.units}')",
                "field": "its B values were read as tesla"}
@@ -99,7 +107,8 @@ def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> li
         + ". State them in the header ('% Length unit: mm' or 'x [mm]'; 'Bx [T]') if the file is in other units: "
         "the sensitivity depends on the grid's lengths and the signal on B.",
         details={"quantity": ".".join(FILE), "not_stated": missing, "read_in": {
-            **({"length": request.units} if "length" in missing else {}), **({"field": "T"} if "field" in missing else {})}})]
+            **({"length": request.units} if "length" in missing else {}), **({"field": "T"} if "field" in missing else {})}})
+    ] + cut
 
 
 def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:

@@ -49,3 +49,19 @@ def test_a_field_file_without_a_unit_is_read_in_the_requests_units_and_says_so(t
 def test_a_field_file_stating_its_units_says_nothing_of_them():
     _, said = _said(COMSOL)
     assert said == []
+
+
+@pytest.mark.parametrize("cut, value", [(2, "0.0016411162"), (8, "0.0016"), (12, "0.")])
+def test_a_field_file_ending_inside_its_last_number_is_read_and_warned_naming_the_value(cut, value):
+    whole = COMSOL.rstrip("\n")
+    request = _request(whole[:-cut])
+    field = request_field(request)
+    (warning,) = [w for w in request_warnings(request, 0.003, grid=field) if w.code == "truncated_file"]
+    assert f"its last value {value!r}" in warning.message and "(9 to 10)" in warning.message
+    assert field.by.shape == request_field(_request(COMSOL)).by.shape  # read whole: every point of the grid
+
+
+@pytest.mark.parametrize("text", [COMSOL, COMSOL.rstrip("\n"), COMSOL.rstrip("\n").rsplit(None, 1)[0] + " -0"])
+def test_a_whole_field_file_with_or_without_its_last_line_end_says_nothing_of_a_cut(text):
+    request = _request(text)
+    assert "truncated_file" not in {w.code for w in request_warnings(request, 0.003, grid=request_field(request))}
