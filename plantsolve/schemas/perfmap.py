@@ -239,7 +239,7 @@ class ValueConversion(StrictModel):
 class PerfmapSource(StrictModel):
     """What the upload reader found: set by the upload parser, not needed in JSON bodies."""
 
-    format: Literal["csv", "xlsx", "pycycle", "json"] = Field(description="The format read.")
+    format: Literal["csv", "xlsx", "pycycle", "gasturb", "json"] = Field(description="The format read.")
     row_label: str = Field(default="line", max_length=200,
                            description="How the file's rows are named in messages ('line', \"sheet 'Map' row\").")
     rows: list[list[Integer]] = Field(
@@ -248,6 +248,13 @@ class PerfmapSource(StrictModel):
         "refusal of a value names.")
     conversions: list[ValueConversion] = Field(default_factory=list, max_length=20,
                                               description="Unit conversions the reader made.")
+    document: Literal["request", "positions"] | None = Field(
+        default=None, description="A JSON upload: the file holds the request, or a bare list of its positions "
+        "(a value's place in the file is its request path, less 'positions' for a list).")
+    form: dict[str, list[str]] = Field(
+        default_factory=dict, max_length=100,
+        description="The values the upload form gave ('options.beta_grid', 'units.flow'), each with its place in the "
+        "form (['options', 'options', 'beta_grid']): what a refusal of that value names.")
 
 
 class PerfmapRequest(StrictModel):

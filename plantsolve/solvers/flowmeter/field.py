@@ -41,6 +41,7 @@ class RequestField:
     length_unit: str | None
     field_unit: str | None
     description: str
+    cut: str | None = None  # a file's: why its last value may be cut
 
 
 def _placed(rows: np.ndarray, where, label) -> PlacedField:
@@ -78,7 +79,7 @@ def request_field(request: FlowmeterRequest) -> RequestField | None:
 
         placed = _placed(table.rows, where, lambda row: f"line {int(table.lines[row])}")
         return RequestField(placed.x, placed.y, placed.z, placed.bx, placed.by, FILE, table.conversions,
-                            table.length_unit, table.field_unit, table.description)
+                            table.length_unit, table.field_unit, table.description, table.cut)
     if f.type == "points":
         bad = [k for k, row in enumerate(f.points) if len(row) not in (5, 6)]
         if bad:

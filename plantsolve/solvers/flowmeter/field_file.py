@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from plantsolve.solvers.length_units import SIZES, two_readings, unit_named
+from plantsolve.solvers.skipped_input import ends_mid_line
 
 FIELD_T = {"T": 1.0, "mT": 1e-3, "uT": 1e-6, "µT": 1e-6, "μT": 1e-6, "nT": 1e-9, "G": 1e-4, "Gs": 1e-4,
            "gauss": 1e-4, "kG": 0.1, "mG": 1e-7, "tesla": 1.0, "millitesla": 1e-3, "microtesla": 1e-6, "nanotesla": 1e-9,
@@ -53,6 +54,7 @@ class FieldTable:
     field_unit: str | None
     conversions: list[dict] = field(default_factory=list)
     description: str = ""
+    cut: str | None = None  # why the last row's last value may be cut (the file ends inside it), else None
 
 
 def _role(token: str) -> str | None:
@@ -181,7 +183,40 @@ def read_field_file(text: str, units: str) -> FieldTable:
                             "factor": field_factor, "basis": "the file's header"})
     kind = "COMSOL spreadsheet export" if comsol else "CSV with a header"
     return FieldTable(rows, numbers, length_unit, field_unit, conversions,
-                      f"{kind}, {len(rows)} rows, columns {', '.join(tokens[c] for c in used)}")
+                      f"{kind}, {len(rows)} rows, columns {', '.join(tokens[c] for c in used)}",
+                      _cut_last_value(text, delimiter, max(used)))
+
+
+CUT_SAMPLE = 1000  # rows before the last whose digits the last value is held against
+CUT_SHARE = 0.05  # a last value shorter than all but this share of them was cut
+
+
+def _significant(cell: str) -> int:
+    mantissa = re.split(r"[eEdD]", cell.strip().lstrip("+-"))[0].replace(".", "").replace(",", "")
+    return len(mantissa.lstrip("0"))
+
+
+def _cut_last_value(text: str, delimiter: str | None, column: int) -> str | None:
+    """Why a file without a final line ending may end inside its last number (0.001641116268 -> 0.0016411), or
+    None: its last value has fewer significant digits than all but a few of the nonzero values before it in its
+    column. Such a row reads whole, a number short of its digits (cut to '0.00', the field there is lost)."""
+    if not ends_mid_line(text):
+        return None
+    lines = [line for line in text.rstrip(" \t\x00\x1a").splitlines()[-CUT_SAMPLE - 1:] if line.strip()]
+    cells = [_split(line.strip(), delimiter) if delimiter else line.split() for line in lines]
+    column_cells = [c[column] for c in cells[:-1] if len(c) > column and re.fullmatch(r"[-+]?[\d.,]+(?:[eEdD][-+]?\d+)?",
+                                                                                    c[column].strip())]
+    last = cells[-1][column] if len(cells[-1]) > column else None
+    digits = [_significant(c) for c in column_cells if _significant(c) > 0]
+    if last is None or not digits:
+        return None
+    if _significant(last) == 0 and not last.strip().endswith((".", "e", "E", "-", "+")):
+        return None  # a zero as exporters write it ('0', '-0', '0.0'): no digits to lose
+    short = sum(d <= _significant(last) for d in digits) / len(digits)
+    if short >= CUT_SHARE:
+        return None
+    return (f"its last value {last.strip()!r} has {_significant(last)} significant digit(s) where {100 * (1 - short):.3g} "
+            f"% of the nonzero values above it in its column have more ({min(digits)} to {max(digits)})")
 
 
 def _rows(text: str, first: tuple[int, int], columns: int, used: list[int], delimiter: str | None,

@@ -1,7 +1,8 @@
 """Plausibility of an electromagnetic flow meter's request and signal: warnings ``implausible_<quantity>`` naming
 the quantity, its value, the range meters are built for and the likely mix-up (the README's flowmeter section lists
-them). Outside these ranges the physics still holds (S depends on shape only), so nothing is refused here; the
-hard bounds are the schema's and the input check's."""
+them), and what a field file leaves unsaid: its units (``field_file_unit_not_stated``) or its end
+(``truncated_file``, cut inside its last number). Outside these ranges the physics still holds (S depends on shape
+only), so nothing is refused here; the hard bounds are the schema's and the input check's."""
 
 from __future__ import annotations
 
@@ -68,7 +69,8 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             f"meters at {VELOCITY_M_S[0]:g} to {VELOCITY_M_S[1]:g} m/s: "
             + ("mm/s or cm/s written as m/s?" if abs(mean) > VELOCITY_M_S[1] else "a flow rate instead of a velocity?"),
             details={"quantity": quantity, "value": mean, "range_m_s": list(VELOCITY_M_S)}))
-    out += (_probe_warnings(request) + _grid_warnings(request, grid) + _protrusion_warnings(request))
+    out += (_file_unit_warnings(request, grid) + _probe_warnings(request) + _grid_warnings(request, grid)
+            + _protrusion_warnings(request))
     e = request.electrodes
     if e.shape == "patch" and e.half_angle <= RADIAN_HALF_ANGLE:
         out.append(Diagnostic(
@@ -79,6 +81,34 @@ def request_warnings(request: FlowmeterRequest, field_tesla: float,
             details={"quantity": "electrodes.half_angle", "value": e.half_angle, "units": "deg",
                      "as_radians_deg": math.degrees(e.half_angle)}))
     return out
+
+
+def _file_unit_warnings(request: FlowmeterRequest, f: RequestField | None) -> list[Diagnostic]:
+    """A field file cut inside its last number (``truncated_file``); a field file whose header states no length unit or no unit of B is read in the request's units and in tesla:
+    said, naming what was assumed, since a file in m read as mm (or in mT read as T) passes the range checks when
+    its numbers happen to fit them, and the answer would not show the assumption."""
+    if f is None or f.loc != FILE:
+        return []
+    cut = [] if f.cut is None else [Diagnostic(
+        code="truncated_file",
+        message=f"Magnetic field file: it has no line ending after its last row, and {f.cut}: the file was cut "
+        "inside that number? It was read as written; check the file's end against the export.",
+        details={"quantity": ".".join(FILE), "reason": f.cut})]
+    if f.length_unit is not None and f.field_unit is not None:
+        return cut
+    missing = [what for what, unit in (("length", f.length_unit), ("field", f.field_unit)) if unit is None]
+    assumed = {"length": f"its coordinates were read in the request's units ('{request.units}')",
+               "field": "its B values were read as tesla"}
+    return [Diagnostic(
+        code="field_file_unit_not_stated",
+        message="Magnetic field file: its header states no " + " and no ".join(
+            {"length": "length unit", "field": "unit of B"}[m] for m in missing) + ": "
+        + " and ".join(assumed[m] for m in missing)
+        + ". State them in the header ('% Length unit: mm' or 'x [mm]'; 'Bx [T]') if the file is in other units: "
+        "the sensitivity depends on the grid's lengths and the signal on B.",
+        details={"quantity": ".".join(FILE), "not_stated": missing, "read_in": {
+            **({"length": request.units} if "length" in missing else {}), **({"field": "T"} if "field" in missing else {})}})
+    ] + cut
 
 
 def _probe_warnings(request: FlowmeterRequest) -> list[Diagnostic]:

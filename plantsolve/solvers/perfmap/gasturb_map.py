@@ -39,8 +39,9 @@ import pint
 
 from plantsolve.schemas.common import MAX_MEASURED, Diagnostic
 from plantsolve.solvers.base import FieldError, InputRejected, decode_text, reject
-from plantsolve.solvers.perfmap.units import UnitError, check_quantity
+from plantsolve.solvers.perfmap.plausibility import named_as_speed
 from plantsolve.solvers.perfmap.setting_lines import CHOKE_FLOW_TOLERANCE
+from plantsolve.solvers.perfmap.units import UnitError, check_quantity
 from plantsolve.solvers.skipped_input import truncated_file
 
 SPEED_TABLES = ("Mass Flow", "Efficiency", "Pressure Ratio")
@@ -582,6 +583,11 @@ def request_body(content: bytes, options: dict | None) -> tuple[dict, list[list[
         if len(set(values)) < len(values):
             s = next(s for i, s in enumerate(sets) if s.setting in values[:i])
             raise reject(f"line {s.line}: {s.label} = {s.setting:g} appears twice", ("file", "line", s.line))
+        if named_as_speed(sets[0].label):
+            # its settings and the speeds of its rows would be two parameters of one name (it crashed the reader)
+            raise reject(f"line {sets[0].line}: the setting line names {sets[0].label!r}, a name of the map's speed: a "
+                         "set of tables is headed by its geometry setting ('VG angle = -5 [deg]'); the speeds are "
+                         "each table's rows", ("file", "line", sets[0].line))
     units, unit_source = _flow_unit(options, title, sets[0].tables["Mass Flow"].heading)
     options.pop("units", None)
     positions, lines = [], []

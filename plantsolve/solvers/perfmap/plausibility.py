@@ -167,8 +167,10 @@ def _flow_percent(values: np.ndarray, unit: str) -> list[Diagnostic]:
 
 
 def named_as_speed(name: str) -> bool:
-    """Whether a setting's name (its unit in brackets dropped) is one rigs and cycle codes give a speed."""
-    return re.sub(r"[\s_\-]+", " ", re.sub(r"\s*[\[(].*$", "", name).strip().lower()) in SPEED_NAMES
+    """Whether a setting's name (its unit in brackets dropped) is one rigs and cycle codes give a speed; a name
+    whose brackets are its own ('N/sqrt(theta)') is one as written."""
+    return any(re.sub(r"[\s_\-]+", " ", n.strip().lower()) in SPEED_NAMES
+               for n in (name, re.sub(r"\s*[\[(].*$", "", name)))
 
 
 # Names rigs give a vane setting, matched as named_as_speed matches: such a setting is never the speed the cycle-code

@@ -43,3 +43,37 @@ def disagreeing_repeats(settings: list[Setting], rows_of: list[list[int]] | None
         "of one rig agree closer: two runs (two rigs, two days?) mixed in one line, or a value mistyped? The average "
         "is neither run; keep one run per line.",
         details={"count": len(found), "threshold": REPEAT_DISAGREEMENT, "groups": groups})]
+
+
+def identical_lines(settings: list[Setting], rows_of: list[list[int]] | None = None,
+                    row_label: str = "line") -> list[Diagnostic]:
+    """One ``setting_lines_identical`` warning naming two lines of one geometry (settings alike but the last, the
+    speed) whose measured points are the same points, flow, pressure and efficiency alike: a rig measures two
+    speeds to two lines, so one line pasted a second time under the next speed is what that is, and the map was
+    built with the true line lost. Identical planes of another geometry setting are no mistake: pyCycle's maps
+    without variable geometry repeat their table at a second alpha."""
+    seen: dict[bytes, Setting] = {}
+    pairs = []
+    for s in settings:
+        key = repr(s.values[:-1]).encode() + b"".join(v.tobytes() for v in (s.x, s.y, s.eta))
+        if key in seen:
+            pairs.append((seen[key], s))
+        else:
+            seen[key] = s
+
+    def where(s: Setting) -> str:
+        if rows_of and s.source_index < len(rows_of):
+            rows = rows_of[s.source_index]
+            return f"{row_label}s {rows[0]}..{rows[-1]}"
+        return f"positions[{s.source_index}]"
+
+    if not pairs:
+        return []
+    named = "; ".join(f"{a.label} ({where(a)}) and {b.label} ({where(b)})" for a, b in pairs[:MAX_NAMED])
+    return [Diagnostic(
+        code="setting_lines_identical",
+        message=f"{len(pairs)} pair(s) of settings hold the same {len(pairs[0][0].x)} measured points, flow, "
+        f"pressure and efficiency alike: {named}{' …' if len(pairs) > MAX_NAMED else ''}. Two settings measure two "
+        "lines: one line pasted a second time under another setting's value? The map is built as given.",
+        details={"pairs": [{"settings": [list(a.values), list(b.values)],
+                            "positions": [a.source_index, b.source_index]} for a, b in pairs[:100]]})]

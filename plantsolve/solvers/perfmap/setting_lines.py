@@ -78,6 +78,22 @@ def _not_positive(values: np.ndarray, i: int, name: str, plural: str, errors: li
     return True
 
 
+def _zero_flow(x: np.ndarray, eta: np.ndarray, i: int, errors: list[FieldError]) -> bool:
+    """Whether a position has a point at zero flow, with an error naming the first: no flow does no useful work, so
+    an efficiency beside it (0.66 where the flow reads 0) is a flow left empty or mistyped, and a shut-off point
+    (efficiency 0) lies outside what the efficiency curves fit. Fitted, it passed as a poor fit only."""
+    if not np.any(x == 0):
+        return False
+    k = int(np.argmax(x == 0))
+    errors.append(FieldError(("positions", i, "flow", k), (
+        f"flow 0 beside efficiency {eta[k]:g}: at zero flow a compressor does no useful work (its efficiency is 0), "
+        "so this is no point of the characteristic: a flow left empty or mistyped? (a shut-off point cannot be "
+        "fitted: leave it out)" if eta[k] != 0 else
+        "flow 0 and efficiency 0: a shut-off point, which the efficiency curves cannot be fitted through: leave it "
+        "out")))
+    return True
+
+
 def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float, ...] = (),
                       names: tuple[str, ...] = ("theta", "phi"),
                       choke_tolerance: float = CHOKE_FLOW_TOLERANCE) -> Setting | None:
@@ -94,7 +110,7 @@ def _prepare_position(i: int, pos, errors: list[FieldError], values: tuple[float
     # Point-specific errors name the point (loc ..., field, k; k = index in the submitted
     # list) so that a CSV upload can point at the file row.
     bad = _not_positive(y, i, "pressure", "pressures", errors)
-    if _not_positive(eta, i, "efficiency", "efficiencies", errors):
+    if _zero_flow(x, eta, i, errors) or _not_positive(eta, i, "efficiency", "efficiencies", errors):
         bad = True
     elif np.any(eta > 1):  # fitted curves are held to 0 <= eta <= 1
         k = int(np.argmax(eta > 1))  # the first offending point

@@ -32,7 +32,9 @@ _DEFINITIONS = ("lbm = pound", "psia = psi", "psig = psi", "mmWC = mmH2O", "mWC 
                 "cfm = foot ** 3 / minute", "acfm = foot ** 3 / minute", "gpm = gallon / minute",
                 # vacuum and fan rigs' pressures: pint has 'torr' but not 'Torr' (so no 'mTorr', read as megatorr or
                 # millitorr), nor water gauge as US fan tables (in. WG, WC) and Japanese ones (mmAq) write it
-                "Torr = torr", "inWC = inH2O", "inWG = inH2O", "mmWG = mmH2O", "mmAq = mmH2O")
+                "Torr = torr", "inWC = inH2O", "inWG = inH2O", "mmWG = mmH2O", "mmAq = mmH2O",
+                # engine decks' pounds per second ('Wc [pps]'): pint read it as pico-parsec-seconds, refused as a length
+                "pps = pound / second")
 # Volumes at standard or normal conditions: a mass flow in volume units, which no factor makes an actual volume flow.
 # Normal or standard litres ('Nl/min', 'SLPM', 'sccm') too: re-cased, 'NL/MIN' read as nanolitres, 1e6 too small.
 _CUBED = r"(?:3|\^3|³|\*\*3)"

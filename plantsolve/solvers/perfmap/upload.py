@@ -86,7 +86,7 @@ from plantsolve.solvers.perfmap.units import (
     parse_unit,
     revolutions_per_minute,
 )
-from plantsolve.solvers.perfmap.validation import FRACTIONS, file_loc, mixed_efficiency_strays
+from plantsolve.solvers.perfmap.validation import FRACTIONS, mixed_efficiency_strays, placed
 from plantsolve.solvers.perfmap.workbook import read_workbook
 from plantsolve.solvers.skipped_input import ends_mid_line, line_list, skipped_lines, truncated_file
 from plantsolve.solvers.upload_form import Form, FormRules, form_beside, merged, read_form
@@ -1351,8 +1351,11 @@ def parse_upload(source: StoredInput, options: dict | None) -> PerfmapRequest:
                            refuse_cut=True)
         refuse_other_kind(body, "perfmap")
         form = form_beside(body, options, FORM)
-        return _validated(_with_units_option(body, form.units, "JSON request"), form, [],
-                          document=("positions",) if _bare_list(text) else ())
+        origin = {"format": "json", "document": "positions" if _bare_list(text) else "request"}
+        own = body.get("source", {})
+        if isinstance(own, dict):  # anything else is refused naming file.source
+            body = {**body, "source": {**own, **origin}}
+        return _validated(_with_units_option(body, form.units, "JSON request"), form, origin=origin)
     form = read_form(options, FORM)
     try:
         return _parse(source, form)
@@ -1368,11 +1371,11 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         positions, lines, notes, meta = _parse_xlsx(content, form.read.columns, form.read.sheet)
         body = {"positions": positions, **meta, "upload_warnings": [d.model_dump() for d in notes]}
         body["source"] = {**body["source"], "format": "xlsx", "rows": lines}
-        return _validated(_with_units_option(body, form.units, "sheet"), form, lines)
+        return _validated(_with_units_option(body, form.units, "sheet"), form)
     if ext == ".map":  # GasTurb / GSP map tables (gasturb_map.py)
         body, _, _ = gasturb_request_body(content, None if form.units is None else {"units": form.units})
-        _refuse_setting_named_as_speed(body, content)
-        return _validated(body, form, [], places=lambda: _map_places(body, content))
+        body["source"] = {"format": "gasturb"}
+        return _validated(body, form, places=lambda: _map_places(body, content))
     n_lines = content.count(b"\n") if ext == ".csv" else 0
     if n_lines > MAX_CSV_ROWS:
         # counted before any parsing: a table far beyond any rig's is refused in milliseconds
@@ -1393,25 +1396,7 @@ def _parse(source: StoredInput, form: Form) -> PerfmapRequest:
         body["source"] = {**body["source"], "format": "csv", "rows": lines}
         if notes:
             body["upload_warnings"] = [d.model_dump() for d in notes]
-    return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form, lines)
-
-
-def _setting_line(label: str, text: str) -> int | None:
-    """The first line of a GasTurb/GSP map that sets its geometry setting ('VG angle = -5 [deg]')."""
-    setting = re.compile(rf"\s*{re.escape(label)}\s*[:=]")
-    return next((n for n, line in enumerate(text.splitlines(), 1) if setting.match(line)), None)
-
-
-def _refuse_setting_named_as_speed(body: dict, content: bytes) -> None:
-    """A variable-geometry map whose setting lines name the speed ('Nc = 0.9 ...' above each set of tables): its
-    settings and its speeds would be two parameters of one name (it crashed the reader: a 500)."""
-    names = body["setting_names"]
-    if len(names) == len(set(names)):
-        return
-    line = _setting_line(names[0], decode_text(content))
-    raise reject(f"line {line}: the setting line names {names[0]!r}, the name of the map's speed: a set of tables is "
-                 "headed by its geometry setting ('VG angle = -5 [deg]'); the speeds are each table's rows",
-                 ("file", "line", line))
+    return _validated(_with_units_option(body, form.units, "CSV" if ext == ".csv" else "pyCycle map"), form)
 
 
 def _map_places(body: dict, content: bytes) -> dict[tuple, int]:
@@ -1467,45 +1452,36 @@ def _with_units_option(body: dict, given: Any, what: str) -> dict:
     return {**body, "units": units, "upload_warnings": notes}
 
 
-def _validated(body: dict, form: Form, lines: list[list[int]], document: tuple[str, ...] | None = None,
-               places: Callable[[], dict[tuple, int]] | None = None) -> PerfmapRequest:
-    """The request of a parsed file, its errors named by file row where the file has rows, by their path in the file
-    where the file is the request (``document``: the steps of the request's path the file leaves out, ``positions``
-    for a bare list of positions), by the line ``places`` gives a request path (a map's flow unit), and by the form's
-    option where the value came from the form."""
+def _validated(body: dict, form: Form, places: Callable[[], dict[tuple, int]] | None = None,
+               origin: dict | None = None) -> PerfmapRequest:
+    """The request of a parsed file with the form's options laid in, the form's places of its values kept in its
+    ``source`` (a refusal when loading names them too); each bad value named where the user wrote it
+    (:func:`placed`: the form's field, the JSON file's path, the table's row or the line ``places`` gives;
+    ``origin``, what the reader found, where the file's own ``source`` is no object to keep it in)."""
     body = merged(body, form, FORM)
+    if isinstance(body.get("source"), dict):
+        body["source"] = {**body["source"], "form": _form_places(body, form)}
     try:
-        request = validated(PerfmapRequest, body, ())
+        return validated(PerfmapRequest, body, ())
     except InputRejected as e:
-        errs, at_line = [], places() if places else {}
-        for fe in e.errors:  # at the request's paths (no prefix): each is pointed at its place below
-            loc, path = fe.loc, "/".join(map(str, fe.loc))
-            if (named := form.named(fe)) is not None:  # a form option: named as the form names it
-                errs.append(named)
-            elif document is not None:
-                written = loc[len(document):] if loc[:len(document)] == document else loc
-                errs.append(FieldError(("file", *written), fe.msg, fe.type))
-            elif loc[:1] == ("units",) and len(loc) > 1 and isinstance(form.units, dict) \
-                    and loc[1] in form.units and form.units[loc[1]] == (body.get("units") or {}).get(loc[1]):
-                errs.append(FieldError(("options", *loc), f"options.units.{loc[1]}: {fe.msg}", fe.type))
-            elif (line := at_line.get(tuple(loc[:2]))) is not None:
-                errs.append(FieldError(("file", "line", line), f"line {line}: {path}: {fe.msg}", fe.type))
-            elif lines:
-                where, prefix = file_loc(loc, lines, lambda i: _setting_of(body["positions"][i]),
-                                         body["source"]["row_label"])
-                msg = fe.msg
-                if fe.type == "too_short" and len(loc) == 3:
-                    msg, where = "needs at least 3 measured points (rows)", where[:3]
-                errs.append(FieldError(where, prefix + msg, fe.type))
-            else:  # a request the reader made of the file: its path is no place in the file, only the reader's word
-                errs.append(FieldError(("file",), f"{path}: {fe.msg}", fe.type))
+        where = body["source"] if isinstance(body.get("source"), dict) else (origin or {})
+        at_line = places() if places else {}
+        errs = [placed(fe, where, lambda i: _setting_of(body["positions"][i]), at_line) for fe in e.errors]
         seen, unique = set(), []
         for fe in errs:  # the three lists of one short setting give one message
             if (fe.loc, fe.msg) not in seen:
                 seen.add((fe.loc, fe.msg))
                 unique.append(fe)
         raise InputRejected(unique) from None
-    return request
+
+
+def _form_places(body: dict, form: Form) -> dict[str, list[str]]:
+    """The request paths whose values the form gave ('options.beta_grid', 'units.flow') and their places in the
+    form: its options, and the units it gave that the request holds."""
+    units = body.get("units") if isinstance(body.get("units"), dict) else {}
+    given = form.units if isinstance(form.units, dict) else {}
+    return {**{f"options.{name}": list(at) for name, at in form.at.items()},
+            **{f"units.{q}": ["options", "units", q] for q, unit in given.items() if units.get(q) == unit}}
 
 
 def _bare_list(text: str) -> bool:

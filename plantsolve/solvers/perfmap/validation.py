@@ -12,9 +12,9 @@ import numpy as np
 
 from plantsolve.schemas.common import Diagnostic
 from plantsolve.schemas.perfmap import PerfmapRequest, ResultUnits
-from plantsolve.solvers.base import FieldError, InputRejected, StoredInput, decode_text, loads_json
+from plantsolve.solvers.base import FieldError, InputRejected, StoredInput
 from plantsolve.solvers.perfmap.plausibility import named_as_speed, plausibility_warnings
-from plantsolve.solvers.perfmap.repeats import disagreeing_repeats
+from plantsolve.solvers.perfmap.repeats import disagreeing_repeats, identical_lines
 from plantsolve.solvers.perfmap.setting_lines import Setting, prepare
 from plantsolve.solvers.perfmap.units import (
     UnitError,
@@ -58,14 +58,14 @@ def file_loc(loc: tuple, rows_of: list[list[int]], values_of: Callable[[int], tu
 def load(request: PerfmapRequest, source: StoredInput | None = None) -> PerfmapInput:
     """The request converted (``units``, ``options.result_units``) and prepared; raises :class:`InputRejected`
     naming the field of each bad value, and for an upload its place in the file (``file.<path>`` of a JSON file,
-    ``file.row.<n>`` or ``file.header`` of a table) or the form's option it came from."""
+    ``file.row.<n>`` or ``file.header`` of a table) or the form's option it came from (:func:`placed`)."""
     try:
         return _load(request, source)
     except InputRejected as error:
         if source is None and not (request.source and request.source.rows):
             raise
-        document = _uploaded_document(source)
-        raise InputRejected([_in_file(e, request, document) for e in error.errors]) from None
+        where = request.source.model_dump() if request.source else {}
+        raise InputRejected([placed(e, where, request.setting_values) for e in error.errors]) from None
 
 
 def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
@@ -80,71 +80,50 @@ def _load(request: PerfmapRequest, source: StoredInput | None) -> PerfmapInput:
     if source is not None:
         info["file"] = source.name
     rows_of = request.source.rows if request.source and request.source.rows else None
-    repeats = disagreeing_repeats(settings, rows_of, request.source.row_label if rows_of else "line")
+    label = request.source.row_label if rows_of else "line"
+    repeats = disagreeing_repeats(settings, rows_of, label) + identical_lines(settings, rows_of, label)
     return PerfmapInput(request, internal, units, settings, info,
                         contradicted + plausibility_warnings(internal, units, settings) + repeats)
 
 
-def _uploaded_document(source: StoredInput | None) -> Any:
-    """An uploaded JSON file as parsed (a request object, or a bare list of positions); None for another file."""
-    if source is None or source.extension != ".json":
-        return None
-    try:
-        return loads_json(decode_text(source.read(), "JSON file"))
-    except (InputRejected, ValueError):
-        return None
-
-
-def _in_file(error: FieldError, request: PerfmapRequest, document: Any) -> FieldError:
-    """A refusal at a request path said where the user wrote the value: in a JSON file at its path there
-    (``file.positions.0.flow``, or ``file.0.flow`` of a bare list of positions), in a table at its row
-    (``file.row.12.flow``) or its header (a unit), or at the form's option it came from (``options.<name>``)."""
+def placed(error: FieldError, source: dict[str, Any], setting_of: Callable[[int], tuple],
+           lines: dict[tuple, int] | None = None) -> FieldError:
+    """A refusal at a request path said where the user wrote the value, for the reader's schema check and the
+    checks of :func:`load` alike: at the upload form's field when the form gave it (``source['form']``), in a JSON
+    file at its path there (``file.positions.0.flow``, ``file.0.flow`` of a bare list of positions), at a file line
+    ``lines`` gives a request path (a map's flow unit), in a table at its row (``file.row.12.flow``, its setting
+    named by ``setting_of``) or its header (a unit), else in the file under its request path."""
     loc = tuple(error.loc)
     if loc[:1] == ("file",):
         return error
-    rows = request.source.rows if request.source else []
-    if isinstance(document, list):
-        loc = loc[1:] if loc[:1] == ("positions",) else loc
-        return FieldError(("file", *loc), error.msg, error.type)
-    if isinstance(document, dict):
-        if loc[:1] == ("options",) and not _written(document, loc):
-            return error  # not in the file: the form's option
-        return FieldError(("file", *loc), error.msg, error.type)
-    if rows and loc[:1] == ("positions",):
-        where, prefix = file_loc(loc, rows, request.setting_values, request.source.row_label)
-        return FieldError(where, prefix + error.msg, error.type)
-    if loc[:1] == ("options",):
-        return error  # a table holds no options: the form's
     path = ".".join(map(str, loc))
-    if loc[:1] == ("units",) and _unit_from_form(request, loc[-1]):
-        return FieldError(("options", *loc), error.msg, error.type)
-    at_header = loc[:1] in (("units",), ("setting_units",)) and request.source and \
-        request.source.format in ("csv", "xlsx")
-    return FieldError(("file", "header") if at_header else ("file",), f"{path}: {error.msg}", error.type)
-
-
-def _written(document: dict, loc: tuple) -> bool:
-    """Whether the uploaded JSON request holds a value at ``loc``."""
-    node: Any = document
-    for step in loc:
-        if not (isinstance(node, dict) and step in node
-                or isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node)):
-            return False
-        node = node[step]
-    return True
-
-
-def _unit_from_form(request: PerfmapRequest, quantity: Any) -> bool:
-    """Whether the reader took a quantity's unit from the form's ``options.units`` (its note says so)."""
-    return any(w.code == "upload_units_option" and (w.details or {}).get("quantity") == quantity
-               for w in request.upload_warnings)
+    if (form := (source.get("form") or {}).get(".".join(map(str, loc[:2])))) is not None:
+        at = (*form, *loc[2:])
+        return FieldError(at, error.msg if loc[0] == "options" else f"{'.'.join(at)}: {error.msg}", error.type)
+    if document := source.get("document"):
+        written = loc[1:] if document == "positions" and loc[:1] == ("positions",) else loc
+        return FieldError(("file", *written), error.msg, error.type)
+    if loc[:1] == ("options",):
+        return error  # a table or map holds no options: the form's
+    if (line := (lines or {}).get(loc[:2])) is not None:
+        return FieldError(("file", "line", line), f"line {line}: {path.replace('.', '/')}: {error.msg}", error.type)
+    rows = source.get("rows") or []
+    if rows and loc[:1] == ("positions",):
+        where, prefix = file_loc(loc, rows, setting_of, source.get("row_label") or "line")
+        msg = error.msg
+        if error.type == "too_short" and len(loc) == 3:  # the three lists of a short setting: its rows
+            msg, where = "needs at least 3 measured points (rows)", where[:3]
+        return FieldError(where, prefix + msg, error.type)
+    at_header = loc[:1] in (("units",), ("setting_units",)) and source.get("format") in ("csv", "xlsx")
+    return FieldError(("file", "header") if at_header else ("file",), f"{path}: {error.msg}" if path else error.msg,
+                      error.type)
 
 
 def _check_setting_units(request: PerfmapRequest) -> None:
     """A setting named as a speed whose unit is no speed (``speed [K]``: a temperature column taken for it) is
     refused naming ``setting_units[k]``; the map would be drawn over the wrong quantity."""
     units = request.setting_units or []
-    table = bool(request.source and request.source.rows)  # a file's setting units come from its header
+    table = bool(request.source and request.source.format in ("csv", "xlsx"))  # units from the header
     errors = [FieldError(("file", "header") if table else ("setting_units", k), message)
               for k, (name, unit) in enumerate(zip(request.setting_names, units))
               if named_as_speed(name) and (message := speed_unit_error(name, unit))]
