@@ -16,8 +16,8 @@ of each other and of the pieces' rigid motions: their dof add, and ``dof`` less 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
