@@ -54,21 +54,23 @@ def left_out_by_placement(classes: list, tol: float, unit: str) -> list[Diagnost
     """``placement_beyond_tolerance``: the products that share with no other (a class of one) although a product of
     their group looks alike (:data:`ROUNDING_STEPS`), placed where the doubles' spacing is at least
     :data:`ROUNDING_SHARE` of the tolerance, each named with its placement's magnitude and the look-alike."""
+    steps = {id(cls): float(np.spacing(float(np.abs(cls.representative.shape.points).max())))
+             for cls in classes if len(cls.members) == 1}
+    coarse = {k: step for k, step in steps.items() if step >= ROUNDING_SHARE * tol}
+    if not coarse:  # the common case: the signatures are not computed again
+        return []
     by_key: dict[tuple, list] = {}
     for cls in classes:
         by_key.setdefault(cls.representative.key, []).append(cls)
     found = []
     for group in by_key.values():
-        if len(group) < 2:
+        if len(group) < 2 or not any(id(cls) in coarse for cls in group):
             continue
         sig = signatures([cls.representative.shape for cls in group])
         for k, cls in enumerate(group):
-            if len(cls.members) > 1:
+            if id(cls) not in coarse:
                 continue
-            shape = cls.representative.shape
-            step = float(np.spacing(float(np.abs(shape.points).max())))
-            if step < ROUNDING_SHARE * tol:
-                continue
+            shape, step = cls.representative.shape, coarse[id(cls)]
             gaps = np.abs(sig - sig[k]).max(axis=1)
             gaps[k] = np.inf
             j = int(np.argmin(gaps))
