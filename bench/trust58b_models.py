@@ -20,12 +20,12 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from plantsolve.schemas.rigidity import RigidityRequest  # noqa: E402
-from plantsolve.solvers.base import StoredInput  # noqa: E402
-from plantsolve.solvers.dedup import SPEC as DEDUP  # noqa: E402
-from plantsolve.solvers.dedup import solve as dedup_solve  # noqa: E402
-from plantsolve.solvers.rigidity import solve as rigidity_solve  # noqa: E402
-from plantsolve.solvers.rigidity.upload import parse_ldraw  # noqa: E402
+from plantsolve.schemas.rigidity import RigidityRequest
+from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.dedup import SPEC as DEDUP
+from plantsolve.solvers.dedup import solve as dedup_solve
+from plantsolve.solvers.rigidity import solve as rigidity_solve
+from plantsolve.solvers.rigidity.upload import parse_ldraw
 
 TUNNEL = (ROOT / "examples/dedup/tunnel_3rings.ifc").read_bytes()
 OMR = ROOT / "tests/solvers/rigidity/omr"
@@ -55,7 +55,7 @@ def rigidity_rows(files: list[Path], repeat: int) -> list[tuple]:
     rows = []
     for path in files:
         request = RigidityRequest.model_validate(parse_ldraw(path.read_text(encoding="utf-8", errors="replace")))
-        cpu, base, solved = _least_cpu(lambda: rigidity_solve.solve(request), repeat,
+        cpu, base, solved = _least_cpu(lambda request=request: rigidity_solve.solve(request), repeat,
                                        [(rigidity_solve, "lone_motions", lambda clusters, joints: [])])
         r = solved.result
         lone = sum(m.dof for m in r.lone_motions)
