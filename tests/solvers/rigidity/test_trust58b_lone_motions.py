@@ -99,3 +99,16 @@ def test_hinged_top_turns_alone_about_its_shared_hinge_line():
     warning = next(w for w in result.report.warnings if w.code == "special_position")
     assert "1 x (3938 + 3938 + 3020)" not in warning.message and "2 x 3938 + 3020" in warning.message
     assert warning.details == {"lone_dof": 1, "linked_dof": 0}
+
+
+def test_no_lone_motion_is_claimed_that_the_rank_does_not_count():
+    # a door on two hinges 1e-11 off one line: the default rank takes them for one line (the door turns), a rank
+    # cut at 1e-15 holds them apart (dof 0); the lone motions are sought among the rank's clusters, so none is listed
+    # although the joints lie on one line to the lone test's own tolerance
+    body = {"units": "mm", "bodies": [{"id": "ground"}, {"id": "door"}], "joints": [
+        {"id": "top", "type": "hinge", "bodies": ["ground", "door"], "point": [0, 0, 0], "axis": [0, 1, 0]},
+        {"id": "bottom", "type": "hinge", "bodies": ["ground", "door"], "point": [1e-11, 50, 0], "axis": [0, 1, 0]}]}
+    turning = run(body)
+    assert turning.dof == 1 and [m.parts for m in turning.lone_motions] == [["door"]] and turning.linked_dof == 0
+    held = run({**body, "options": {"rank_tolerance": 1e-15}})
+    assert held.dof == 0 and held.lone_motions == [] and held.linked_dof == 0
