@@ -175,6 +175,16 @@ class Piece(BaseModel):
                               "joint not found).")
 
 
+class LoneMotion(BaseModel):
+    parts: list[str] = Field(description="Ids of the rigid cluster's parts (or bodies).")
+    numbers: list[str] = Field(description="Their part numbers, in the same order (bodies: empty).")
+    point: list[float] = Field(description="A point [x, y, z] of the line it turns about (length_unit).",
+                               json_schema_extra=unit(LENGTH_UNIT))
+    axis: list[float] = Field(description="The line's unit direction [dx, dy, dz].", json_schema_extra=unit("1"))
+    slides: bool = Field(description="Every joint with the rest is cylindrical: it slides along the line too.")
+    dof: int = Field(description="Its share of dof: 1 (turns), 2 (turns and slides).")
+
+
 class RigidityResult(BaseModel):
     kind: Literal["rigidity"] = Field(default="rigidity", description="The solver kind of this result (what tells the "
                                    "results of GET /v1/jobs/{id}/result apart).")
@@ -195,6 +205,16 @@ class RigidityResult(BaseModel):
                                "drawing cannot tell); a model of bodies and "
                                "joints in several pieces is false with no verdict (its joints are the user's).")
     clusters: list[list[str]] = Field(description="Maximal rigid clusters; every body or part in exactly one.")
+    lone_motions: list[LoneMotion] = Field(default_factory=list, description="The rigid clusters that turn alone "
+                                           "about one line through every joint they have with the rest, moving no "
+                                           "other part: a pin or an axle turning in round holes, a wheel or a gear "
+                                           "on its axle, a door on its hinge. Each piece's largest cluster is its "
+                                           "reference and is not listed. Their dof add up: this list is what "
+                                           "accounts for dof beyond linked_dof.")
+    linked_dof: int | None = Field(default=None, description="dof less the lone motions' dof and less 6 for each "
+                                   "connected piece beyond the first: the motions that move several clusters "
+                                   "relative to each other (a hinge chain, a linkage). 0: the model moves only by "
+                                   "parts turning (or sliding) alone in place.")
     superbricks: list[list[str]] = Field(description="Groups joined by rigid connections alone.")
     joints: list[JointResult]
     redundant_constraints: int = Field(description="Constraint rows minus the rank of the constraint matrix.")

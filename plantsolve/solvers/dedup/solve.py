@@ -14,12 +14,13 @@ from plantsolve.schemas.dedup import DedupClass, DedupResult, Verification
 from plantsolve.solvers.base import Progress, Solved, no_progress, reject
 from plantsolve.solvers.dedup import compaction, ifcio, postpass, proof, sharing, skeleton
 from plantsolve.solvers.dedup.explicit import ExplicitReader
+from plantsolve.solvers.dedup.far_products import left_out_by_placement, placement_outliers
 from plantsolve.solvers.dedup.grouping import build_classes, make_candidate, pool_transforms
 from plantsolve.solvers.dedup.pipe_sizes import judge_pipe_diameters
 from plantsolve.solvers.dedup.placements import (repeated_global_ids, why_nothing_placed, why_unprocessed,
                                                  world_coordinate_problem, world_refusal)
 from plantsolve.solvers.dedup.source import IfcSource
-from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes
+from plantsolve.solvers.dedup.tolerance import from_precision, judge, judge_product_size, model_sizes, product_boxes
 from plantsolve.solvers.dedup.typical_sizes import judge_typical_sizes
 from plantsolve.solvers.dedup.worldgeom import DEPENDS, world_points
 from plantsolve.solvers.ifc_units import named_unit_warnings, project_length_scale
@@ -195,7 +196,8 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
             counts_before = dict(sorted((counts + streamed.inner).items()))
         if not points:
             raise reject(why_nothing_placed(products, path))
-        sizes = model_sizes(points.values())
+        boxes = product_boxes(points.values())
+        sizes = model_sizes(boxes)
         # the median product first; where it passes, doors, walls and storeys (CENTI over metres gives 2 cm doors),
         # then the pipes' outside diameters (a plant model has no doors; METRE numbers under FOOT give 35 mm pipes)
         warnings.extend(judge_product_size(sizes[0], symbol, unit) or judge_typical_sizes(
@@ -234,6 +236,11 @@ def solve(source: IfcSource, progress: Progress = no_progress) -> Solved:
         classes = build_classes(candidates, tol, allow_mirror=opts.allow_mirror, allow_scale=opts.allow_scale,
                                 progress=progress, span=(0.35, 0.55))
         pooled = pool_transforms(classes, tol)
+        warnings.extend(left_out_by_placement(classes, tol, symbol))
+        warnings.extend(placement_outliers(products, dict(zip(points, (boxes[0] + boxes[1]) / 2)), sizes[0], symbol,
+                                           {c.product.GlobalId for cls in classes if len(cls.members) > 1
+                                            for c, _ in cls.members}))
+        del boxes
         lap("matching")
         if streamed is not None and not skeleton.rebuild_expected(streamed, reader.closures, classes):
             # little goes: removing it from the whole model is cheaper than writing what stays (compaction)

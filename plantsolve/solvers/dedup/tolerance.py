@@ -23,21 +23,29 @@ REFUSE_OF_SIZE = 0.05  # from 5 % of the median product size on, different shape
 FLOAT_RESOLUTION = 1e-14  # a tolerance below this many times the coordinates' magnitude cannot verify anything
 
 
-def model_sizes(points: Iterable[np.ndarray]) -> tuple[float, float, float]:
-    """(median product size, model extent, largest coordinate magnitude), in file units: sizes are bounding-box
-    diagonals."""
+def product_boxes(points: Iterable[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Each product's bounding box, (lower corners, upper corners) as (n, 3) arrays in the order given."""
     parts = list(points)
     if not parts:
-        return 0.0, 0.0, 0.0
+        return np.zeros((0, 3)), np.zeros((0, 3))
     counts = np.array([len(p) for p in parts])
     if not counts.all():  # an empty product has no box (min of nothing): as the products one by one would say
         raise ValueError("a product without points has no size")
     # every product's box at once (minima and maxima are exact, whatever the grouping)
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
     together = np.concatenate(parts)
-    a, b = np.minimum.reduceat(together, starts, axis=0), np.maximum.reduceat(together, starts, axis=0)
+    return np.minimum.reduceat(together, starts, axis=0), np.maximum.reduceat(together, starts, axis=0)
+
+
+def model_sizes(boxes: tuple[np.ndarray, np.ndarray]) -> tuple[float, float, float]:
+    """(median product size, model extent, largest coordinate magnitude), in file units, of the products' ``boxes``
+    (:func:`product_boxes`): sizes are bounding-box diagonals."""
+    a, b = boxes
+    if not len(a):
+        return 0.0, 0.0, 0.0
     sizes = [math.sqrt(d.dot(d)) for d in b - a]  # np.linalg.norm of a vector: the same dot product, the same root
-    return float(np.median(sizes)), float(np.linalg.norm(b.max(axis=0) - a.min(axis=0))), float(np.abs(together).max())
+    far = max(float(np.abs(a).max()), float(np.abs(b).max()))  # a box's corners hold its points' extremes
+    return float(np.median(sizes)), float(np.linalg.norm(b.max(axis=0) - a.min(axis=0))), far
 
 
 # The median product's size (bounding-box diagonal) of a real model: bolts and fittings of a few centimetres to

@@ -9,8 +9,8 @@ from collections import Counter
 import numpy as np
 
 from plantsolve.schemas.common import Diagnostic, Report
-from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, PartJoints, Piece, RigidityRequest,
-                                         RigidityResult, UnknownPart)
+from plantsolve.schemas.rigidity import (Collision, DockingCandidate, JointResult, LoneMotion, PartJoints, Piece,
+                                         RigidityRequest, RigidityResult, UnknownPart)
 from plantsolve.solvers.base import Progress, Solved, no_progress
 from plantsolve.solvers.geometry import rotation as quaternion_rotation
 from plantsolve.solvers.rigidity.assembly import (FINGER_REACH, FINGER_TILT, HALF_PITCH, OFFSET_REACH, SNAP,
@@ -19,6 +19,7 @@ from plantsolve.solvers.rigidity.catalogue import PartShape, lookup, normalise_n
 from plantsolve.solvers.rigidity.collisions import Solid
 from plantsolve.solvers.rigidity.contacts import CONTACT_GAP
 from plantsolve.solvers.rigidity.docking import dock
+from plantsolve.solvers.rigidity.lone import lone_motions
 from plantsolve.solvers.rigidity.mobility import NEAR_CUT
 from plantsolve.solvers.rigidity.misses import REACH, UNKNOWN_REACH, Misses, unknown_near
 from plantsolve.solvers.rigidity.pieces import (APART_GAP, APART_MISS, LINED_UP, LOOSE_CLEARANCE, MINIFIGURE, TOUCH_GAP,
@@ -312,12 +313,24 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
             f"{mob.details['model_size']:.3g} {'ldu' if request.parts else request.units} from their middle) hide a "
             "lever under the cut; lower options.rank_tolerance, or check the numbers",
             details={"near_cut": near, "rank_tolerance": request.options.rank_tolerance}))
+    clusters = [[ids[b] for b in c] for c in mob.clusters]
+    lone = [LoneMotion(parts=m.parts, numbers=[assembly.parts[p].number for p in m.parts if p in assembly.parts],
+                       point=list(m.point), axis=list(m.axis), slides=m.slides, dof=m.dof)
+            for m in lone_motions(clusters, analysis.joints)]
+    linked = mob.dof - sum(m.dof for m in lone) - 6 * (n_pieces - 1)
+    said_lone = _lone_text(lone, linked)
     if special:
         warnings.append(Diagnostic(code="special_position", message=f"the geometry has {mob.dof} degree(s) of freedom "
-                                   f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes)"))
+                                   f"where its joint count gives {analysis.generic_dof} (parallel or collinear axes"
+                                   + (f": the joint count takes a part's joints on one line for independent ones); "
+                                      f"{said_lone}" if lone else ")"),
+                                   details={"lone_dof": sum(m.dof for m in lone), "linked_dof": linked}))
     movable = sum(m for m in mob.moves)
-    message = (f"dof {mob.dof} (generic count {analysis.generic_dof}); {len(mob.clusters)} rigid cluster(s) of "
-               f"{len(ids)} bodies; {movable} of {len(joints)} joints move; {len(collisions)} collision(s)")
+    message = (f"dof {mob.dof} (generic count {analysis.generic_dof}"
+               + (f"; {sum(m.dof for m in lone)} of them from {len(lone)} cluster(s) turning alone "
+                  f"(result.lone_motions), {linked} linked" if lone else "") + ")"
+               + f"; {len(mob.clusters)} rigid cluster(s) of {len(ids)} bodies; {movable} of {len(joints)} joints "
+               f"move; {len(collisions)} collision(s)")
     held = [pc for pc in piece_results[1:] if pc.sub_build]
     if held:  # a held sub-build is not a fault, but a reader of the message must not take the set for one piece
         message += (f"; {len(held)} sub-build(s) stand apart as held pieces: "
@@ -345,11 +358,30 @@ def solve(request: RigidityRequest, progress: Progress = no_progress) -> Solved:
         length_unit="ldu" if request.parts else request.units, dof=mob.dof, generic_dof=analysis.generic_dof,
         special_position=special,
         rigid=None if missing or coverage or apart else bool(ids) and n_pieces == 1 and mob.dof == 0,
-        clusters=[[ids[b] for b in c] for c in mob.clusters], superbricks=superbricks,
+        clusters=clusters, lone_motions=lone, linked_dof=linked, superbricks=superbricks,
         joints=joints, redundant_constraints=mob.redundant_constraints,
         collisions=[Collision(bodies=[a, b], depth=d) for a, b, d in collisions[:MAX_LISTED]],
         docking=docking, unknown_parts=unknown, parts=part_results, pieces=piece_results, rank_method=mob.rank_method,
         report=report))
+
+
+def _lone_text(lone: list[LoneMotion], linked: int) -> str:
+    """The lone motions in words (:mod:`lone`): how many dof they make, what turns, grouped by part numbers (ids for
+    bodies), the first of each group named, and what is left."""
+    groups: dict[str, list[LoneMotion]] = {}
+    for m in lone:
+        kinds = Counter(m.numbers)
+        key = " + ".join(f"{n} x {k}" if n > 1 else k for k, n in kinds.items()) or "body"
+        groups.setdefault(key if len(kinds) < 2 and sum(kinds.values()) < 2 else f"({key})", []).append(m)
+    ranked = sorted(groups.items(), key=lambda g: (-len(g[1]), g[0]))
+    named = ", ".join(f"{len(ms)} x {key} (first {ms[0].parts[0]})" for key, ms in ranked[:LISTED_IN_MESSAGE])
+    sliding = sum(m.slides for m in lone)
+    return (f"{sum(m.dof for m in lone)} of them are {len(lone)} rigid cluster(s) turning alone about one line "
+            f"through all their joints, moving no other part (a pin or an axle in round holes, a wheel or a gear on "
+            f"its axle, a door on its hinge): {named}{' and more' if len(ranked) > LISTED_IN_MESSAGE else ''}"
+            + (f"; {sliding} of them slide along that line too (cylindrical joints only)" if sliding else "")
+            + f"; {linked} move several clusters together (result.lone_motions lists each, result.linked_dof counts "
+            "the rest)")
 
 
 def _pieces(part_ids: list[str], by_part: dict, assembly: Assembly,
