@@ -77,6 +77,8 @@ def test_occlusion_across_a_bend_gets_no_inspection_verdict():
     # main: inspection FAIL on the bend radius the fit invented in the gap (32.8 for 12 mm)
     assert res.inspection.verdict == "not_determined"
     assert not res.inspection.failed_rows
+    (open_row,) = [r for r in res.inspection.rows if "angle" in r.undetermined]  # the bend in the gap: no verdict
+    assert open_row.ok is None and open_row.angle.ok is None and open_row.bend_radius.ok is None
 
 
 def test_two_pieces_out_of_line_are_said_to_be_so_and_get_no_verdict():
