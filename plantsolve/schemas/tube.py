@@ -413,8 +413,9 @@ class EndPointCheck(BaseModel):
     ok: bool | None = Field(description="Within tolerance: true or false when determined, null when not (no verdict "
                             "either way: see `determined`).")
     determined: bool = Field(default=True, description="False when the samples stop short of the nominal end on "
-                             "this end's straight (its length is a lower bound), or when the part's end, up to three sigmas past "
-                             "the last samples, may lie within the tolerance or beyond it: `ok` is then null.")
+                             "this end's straight (its length is a lower bound), or when the part's end, up to three "
+                             "sigmas past the last samples, may lie within the tolerance or beyond it: `ok` is then "
+                             "null.")
 
 
 class SpringbackFit(BaseModel):
