@@ -351,8 +351,10 @@ class BendDeviation(BaseModel):
     bend_radius: float = Field(json_schema_extra=LEN, description="measured − nominal bend radius")
 
 
+FIELD_OK = ("Within tolerance: true or false when the samples determine this field, null when they do not (no "
+            "verdict either way: see `determined`).")
 FIELD_DETERMINED = ("False when the samples do not determine this field (an end straight they stop short on, a bend "
-                    "they see from one side, a sigma larger than the tolerance): then `ok` is not a verdict, the row "
+                    "they see from one side, a sigma larger than the tolerance): then `ok` is null, the row "
                     "lists it in `undetermined`, and `bound` or `sigma` says what is known.")
 
 
@@ -364,7 +366,7 @@ class LengthCheck(BaseModel):
     measured: float = Field(json_schema_extra=LEN)
     deviation: float = Field(json_schema_extra=LEN)
     tolerance: float = Field(json_schema_extra=LEN)
-    ok: bool = Field(description="Within tolerance (true, and not a verdict, when not determined).")
+    ok: bool | None = Field(description=FIELD_OK)
     determined: bool = Field(default=True, description=FIELD_DETERMINED)
     sigma: float | None = Field(default=None, json_schema_extra=LEN, description="Standard deviation of the "
                                 "measured value (for an end straight: the samples' spacing at its end).")
@@ -379,7 +381,7 @@ class AngleCheck(BaseModel):
     measured: float = Field(json_schema_extra=DEG)
     deviation: float = Field(json_schema_extra=DEG)
     tolerance: float = Field(json_schema_extra=DEG)
-    ok: bool = Field(description="Within tolerance (true, and not a verdict, when not determined).")
+    ok: bool | None = Field(description=FIELD_OK)
     determined: bool = Field(default=True, description=FIELD_DETERMINED)
     sigma: float | None = Field(default=None, json_schema_extra=DEG, description="Standard deviation of the "
                                 "measured value.")
@@ -398,7 +400,9 @@ class InspectionRow(BaseModel):
     failed: list[str] = Field(default_factory=list, description="Determined fields out of tolerance.")
     undetermined: list[str] = Field(default_factory=list, description="Fields the samples do not determine (no "
                                     "verdict on them).")
-    ok: bool = Field(description="No determined field out of tolerance.")
+    ok: bool | None = Field(description="False when a determined field is out of tolerance (`failed`); null when "
+                            "none is but a field is not determined (`undetermined`): the row is neither passed nor "
+                            "failed; true only when every field is determined and within tolerance.")
 
 
 class EndPointCheck(BaseModel):
@@ -406,9 +410,12 @@ class EndPointCheck(BaseModel):
     deviation: float = Field(json_schema_extra=LEN, description="Distance of the measured end from the nominal one "
                              "after best-fit alignment, request units.")
     tolerance: float = Field(json_schema_extra=LEN)
-    ok: bool
+    ok: bool | None = Field(description="Within tolerance: true or false when determined, null when not (no verdict "
+                            "either way: see `determined`).")
     determined: bool = Field(default=True, description="False when the samples stop short of the nominal end on "
-                             "this end's straight (its length is a lower bound): the distance is then no verdict.")
+                             "this end's straight (its length is a lower bound), or when the part's end, up to three "
+                             "sigmas past the last samples, may lie within the tolerance or beyond it: `ok` is then "
+                             "null.")
 
 
 class SpringbackFit(BaseModel):

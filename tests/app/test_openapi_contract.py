@@ -20,6 +20,7 @@ from sqlalchemy import update
 
 from plantsolve.app.main import create_app
 from plantsolve.jobs.runner import run_job
+from plantsolve.schemas.tube import EndPointCheck, InspectionRow, LengthCheck
 from plantsolve.solvers.kinds import KINDS
 from plantsolve.store.models import Job as JobRow
 from tests.conftest import service_settings, wait_for
@@ -218,6 +219,18 @@ def test_a_generated_client_imports_and_calls_the_app(tmp_path):
             result = any_result.sync(uploaded.id, client=client)
             assert isinstance(result, models.PolyhedraResult) and result.kind == "polyhedra"
             assert result.zones[0].volume == pytest.approx(8.0)  # a 2 x 2 x 2 cube
+        # a tube inspection's row and end point the samples do not determine: ok null, read and written as null
+        # by the generated models (not dropped, not read as a pass)
+        undetermined = LengthCheck(nominal=70.0, measured=30.2, deviation=-39.8, tolerance=1.0, ok=None,
+                                   determined=False, sigma=0.4, bound="lower")
+        row = InspectionRow(row=4, length=undetermined, undetermined=["length"], ok=None).model_dump(mode="json")
+        end = EndPointCheck(end="end", deviation=0.3, tolerance=2.0, ok=None, determined=False).model_dump(mode="json")
+        parsed_row, parsed_end = models.InspectionRow.from_dict(row), models.EndPointCheck.from_dict(end)
+        assert parsed_row.ok is None and parsed_row.length.ok is None and parsed_end.ok is None
+        assert parsed_row.to_dict()["ok"] is None and parsed_end.to_dict()["ok"] is None
+        for model in (models.InspectionRow, models.LengthCheck, models.AngleCheck, models.EndPointCheck):
+            hint = str(model.__annotations__["ok"])  # a string: the generated modules postpone annotations
+            assert "None" in hint and "bool" in hint, (model, hint)
     finally:
         sys.path.remove(str(tmp_path))
         for name in [n for n in sys.modules if n.startswith("plantsolve_generated")]:

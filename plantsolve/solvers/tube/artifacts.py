@@ -196,18 +196,19 @@ def overview_figure(result: TubeResult, model: TubeModel, pts: np.ndarray, dev: 
 
 def corrections_csv(result: TubeResult) -> bytes:
     """Per LRA row: nominal, measured, deviation (measured − nominal), pass / fail / not determined with the
-    failed and the undetermined fields, the part's verdict and the end points out of tolerance, and the next part's
-    deltas, springback (commanded − measured) and command. Units in the header. The part's verdict stands on every
-    row: end points out of tolerance fail a part whose every row is within its tolerances (deviations that stack
-    along the tube), and a table of rows alone said 'pass' on each."""
+    failed and the undetermined fields, the part's verdict, the end points out of tolerance and those not
+    determined, and the next part's deltas, springback (commanded − measured) and command. Units in the header. The
+    part's verdict stands on every row: end points out of tolerance fail a part whose every row is within its
+    tolerances (deviations that stack along the tube), and a table of rows alone said 'pass' on each."""
     ins, u = result.inspection, result.units
-    ends_out = " ".join(e.end for e in ins.end_points if not e.ok)
+    ends_out = " ".join(e.end for e in ins.end_points if e.ok is False)
+    ends_open = " ".join(e.end for e in ins.end_points if e.ok is None)
     head = ["row"]
     for what in ("nominal", "measured", "deviation"):
         head += [f"{what}_length [{u}]", f"{what}_rotation [deg]", f"{what}_angle [deg]", f"{what}_clr [{u}]"]
     head += ["status", "failed_fields", "undetermined_fields", "part_verdict", "end_points_failed",
-             f"delta_length [{u}]", "delta_rotation [deg]", "delta_angle [deg]", "springback [deg]",
-             f"next_length [{u}]", "next_rotation [deg]", "next_angle [deg]", f"next_clr [{u}]"]
+             "end_points_not_determined", f"delta_length [{u}]", "delta_rotation [deg]", "delta_angle [deg]",
+             "springback [deg]", f"next_length [{u}]", "next_rotation [deg]", "next_angle [deg]", f"next_clr [{u}]"]
     rows = [head]
 
     def num(v):
@@ -218,10 +219,9 @@ def corrections_csv(result: TubeResult) -> bytes:
         line = [r.row]
         for what in ("nominal", "measured", "deviation"):
             line += [num(getattr(f, what)) if f is not None else "" for f in checks]
-        status = "fail" if not r.ok else "not determined" if r.undetermined else "pass"
-        line += [status, " ".join(r.failed), " ".join(r.undetermined), ins.verdict, ends_out, num(c.delta_length),
-                 num(c.delta_rotation), num(c.delta_angle), num(c.springback), num(c.next.length),
-                 num(c.next.rotation), num(c.next.angle), num(c.next.bend_radius)]
+        line += [_state(r), " ".join(r.failed), " ".join(r.undetermined), ins.verdict, ends_out, ends_open,
+                 num(c.delta_length), num(c.delta_rotation), num(c.delta_angle), num(c.springback),
+                 num(c.next.length), num(c.next.rotation), num(c.next.angle), num(c.next.bend_radius)]
         rows.append(line)
     return _csv(rows)
 
@@ -265,7 +265,7 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
     centre = qm.mean(0)
     axes = np.linalg.svd(qm - centre, full_matrices=False)[2]
     anchors = (_row_anchors(measured) - centre) @ axes.T if ins.matched else np.zeros((0, 3))
-    bad = [r for r in ins.rows if not r.ok]
+    bad = [r for r in ins.rows if r.ok is False]
     fig = Figure(figsize=(12, 5.6), layout="constrained")
     for ax, (i, j), view in zip(fig.subplots(1, 2), ((0, 1), (0, 2)), ("plan", "elevation")):
         pm, pn = (qm - centre) @ axes.T, (qn - centre) @ axes.T
@@ -298,11 +298,13 @@ def overlay_figure(request: TubeRequest, result: TubeResult) -> Figure | None:
 ROW_FIELDS = (("length", "length", "{u}"), ("rotation", "rotation", "deg"), ("angle", "bend angle", "deg"),
               ("bend_radius", "CLR", "{u}"))
 VERDICT_COLOURS = {"pass": "C0", "fail": "C3", "not determined": "0.7"}
+STATES = {True: "pass", False: "fail", None: "not determined"}
 
 
 def _state(check) -> str:
-    """A field's or an end point's verdict: its ``ok`` is true, and no pass, where the samples do not determine it."""
-    return "not determined" if not check.determined else ("pass" if check.ok else "fail")
+    """A row's, a field's or an end point's verdict in words, from its ``ok`` (null where the samples do not
+    determine it)."""
+    return STATES[check.ok]
 
 
 def _row_panel(ax, ins, name: str, label: str, unit: str) -> None:

@@ -277,11 +277,11 @@ def _with_knowledge(rows: list[LraRow], known: list[LraRow] | None) -> list[LraR
 
 
 def _verdict(matched: bool, rows, ends) -> tuple[str, list[int], list[int]]:
-    failed = [r.row for r in rows if not r.ok]
+    failed = [r.row for r in rows if r.ok is False]  # null: no verdict, neither a pass nor a failure
     undetermined = [r.row for r in rows if r.undetermined]
     if not matched:
         return "not_comparable", [], []
-    if failed or not all(e.ok for e in ends):
+    if failed or any(e.ok is False for e in ends):
         return "fail", failed, undetermined
     if undetermined or not all(e.determined for e in ends):
         return "not_determined", failed, undetermined
@@ -304,14 +304,14 @@ def withdraw_verdicts(ins: Inspection, fields: dict[int, list[str]] | None = Non
                  and (fields is None or f in picked.get(i, ()))]
         for f in names:
             check = getattr(row, f)
-            check.ok, check.determined = True, False
+            check.ok, check.determined = None, False
         row.failed = [f for f in row.failed if f not in names]
         row.undetermined = [f for f in ("length", "rotation", "angle", "bend_radius")
                             if f in row.undetermined or f in names]
-        row.ok = not row.failed
+        row.ok = tol_check.row_ok(row.failed, row.undetermined)
     if fields is None:
         for end in ins.end_points:
-            end.ok, end.determined = True, False
+            end.ok, end.determined = None, False
     ins.verdict, ins.failed_rows, ins.undetermined_rows = _verdict(ins.matched, ins.rows, ins.end_points)
 
 

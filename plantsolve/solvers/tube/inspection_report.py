@@ -43,7 +43,7 @@ def inspection_outcome(ins: Inspection, units: str) -> tuple[str, Diagnostic | N
             "belongs to this part, or whether a bend was merged or split (report.details.pruned).",
             details={"nominal_bends": ins.nominal_bends, "measured_bends": ins.measured_bends,
                      "sheath_deviation": ins.sheath_deviation})
-    bad_ends = [e for e in ins.end_points if not e.ok]
+    bad_ends = [e for e in ins.end_points if e.ok is False]
     open_ends = [e for e in ins.end_points if not e.determined]
     if ins.verdict == "fail":
         parts = [_rows_text(ins.rows, "failed")] if ins.failed_rows else []

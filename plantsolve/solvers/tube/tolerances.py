@@ -105,8 +105,14 @@ def _check(nominal: float, measured: LraRow, name: str, tolerance: float, wrap: 
     elif name in measured.undetermined or (sigma is not None and sigma > tolerance):
         determined = abs(dev) > tolerance + PROVEN * (sigma or 0.0)
     model = AngleCheck if name in ("rotation", "angle") else LengthCheck
-    return model(nominal=nominal, measured=value, deviation=dev, tolerance=tolerance, ok=ok or not determined,
+    return model(nominal=nominal, measured=value, deviation=dev, tolerance=tolerance, ok=ok if determined else None,
                  determined=determined, sigma=sigma, bound=bound)
+
+
+def row_ok(failed: list[str], undetermined: list[str]) -> bool | None:
+    """A row's verdict from its fields': failed when a determined field is out of tolerance, none (null) when no
+    field failed but one is not determined, passed only when every field is determined and within tolerance."""
+    return False if failed else None if undetermined else True
 
 
 def check_rows(nominal: list[LraRow], measured: list[LraRow], tol: InspectionTolerances) -> list[InspectionRow]:
@@ -122,9 +128,10 @@ def check_rows(nominal: list[LraRow], measured: list[LraRow], tol: InspectionTol
         if i < n:
             fields["angle"] = _check(nr.angle, mr, "angle", tol.angle)
             fields["bend_radius"] = _check(nr.bend_radius, mr, "bend_radius", tol.bend_radius)
-        failed = [k for k, v in fields.items() if not v.ok]
+        failed = [k for k, v in fields.items() if v.ok is False]
         undetermined = [k for k, v in fields.items() if not v.determined]
-        out.append(InspectionRow(row=i + 1, failed=failed, undetermined=undetermined, ok=not failed, **fields))
+        out.append(InspectionRow(row=i + 1, failed=failed, undetermined=undetermined, ok=row_ok(failed, undetermined),
+                                 **fields))
     return out
 
 
@@ -151,6 +158,6 @@ def check_end_points(nominal_ends: np.ndarray, measured_ends: np.ndarray, tol: I
         d = float(np.linalg.norm(np.asarray(a) - np.asarray(b)))
         passed = bool(d + r <= tol.end_point)
         failed = bool(d - r > tol.end_point) and not s
-        out.append(EndPointCheck(end=name, deviation=d, tolerance=tol.end_point, ok=not failed,
-                                 determined=passed or failed))
+        out.append(EndPointCheck(end=name, deviation=d, tolerance=tol.end_point,
+                                 ok=passed if passed or failed else None, determined=passed or failed))
     return out

@@ -83,8 +83,39 @@ def test_the_inspections_verdict_is_said_on_every_surface(solved, name):
 def test_an_end_point_the_samples_stop_short_of_is_drawn_not_determined(solved):
     result = solved["not determined"]
     end = result.inspection.end_points[1]
-    assert end.ok and not end.determined  # no verdict: 'ok' is true by the schema's convention
+    assert end.ok is None and not end.determined  # no verdict: neither a pass nor a failure
     request = TubeRequest.model_validate({"points": [[0.0, 0.0, 0.0]] * 4, "options": {"nominal_csv": NOMINAL_CSV}})
     fig = inspection_figure(request, result)
     diamonds = [line for line in fig.axes[0].get_lines() if line.get_marker() == "D"]
     assert [d.get_color() for d in diamonds] == [VERDICT_COLOURS["pass"], VERDICT_COLOURS["not determined"]]
+
+
+FIELDS = ("length", "rotation", "angle", "bend_radius")
+
+
+def _oks(inspection: dict) -> tuple[list, list, dict]:
+    """Each row's ``ok``, each end point's, and each field's (row, field) -> ok, read from the stored JSON."""
+    fields = {(r["row"], f): r[f]["ok"] for r in inspection["rows"] for f in FIELDS if r[f] is not None}
+    return [r["ok"] for r in inspection["rows"]], [e["ok"] for e in inspection["end_points"]], fields
+
+
+def test_ok_is_null_where_the_scan_does_not_determine_and_a_verdict_elsewhere(solved):
+    """``ok`` said true on a field, row or end point the samples do not determine (a client reading it saw a pass
+    where nothing was measured): it is null there now, true only on what is determined and within tolerance, false
+    on what is determined and out of it; the corrections table writes 'not determined', never 'True'."""
+    stored = {name: json.loads(result.model_dump_json())["inspection"] for name, result in solved.items()}
+    rows, ends, fields = _oks(stored["pass"])
+    assert rows == [True] * 4 and ends == [True, True] and set(fields.values()) == {True}
+
+    rows, ends, fields = _oks(stored["fail"])  # row 2 bent 45° against a nominal 48°, everything else determined
+    assert rows == [True, False, True, True] and ends == [True, True]
+    assert [k for k, ok in fields.items() if ok is not True] == [(2, "angle")] and fields[2, "angle"] is False
+
+    rows, ends, fields = _oks(stored["not determined"])  # the scan stops 40 mm short of the last straight's end
+    assert ends == [True, None] and rows == [True, True, True, None]
+    assert [k for k, ok in fields.items() if ok is not True] == [(4, "length")] and fields[4, "length"] is None
+    assert stored["not determined"]["verdict"] == "not_determined"
+    text = corrections_csv(solved["not determined"]).decode()
+    last = list(csv.DictReader(io.StringIO(text)))[-1]
+    assert last["status"] == "not determined" and last["end_points_not_determined"] == "end"
+    assert last["end_points_failed"] == "" and "True" not in text and "None" not in text

@@ -38,11 +38,11 @@ def test_an_end_point_beyond_the_tolerance_plus_the_reach_fails_on_a_sparse_scan
     said 'not determined': the part passed no check and failed none); the start 2.7 mm off may lie 1.8 mm off, within
     its 2 mm, and 3.6 mm off: no verdict (before the 3-sigma rule it failed)."""
     ins = _inspected(0.3)
-    assert [(r.length.determined, r.length.ok) for r in (ins.rows[0], ins.rows[-1])] == [(False, True)] * 2
+    assert [(r.length.determined, r.length.ok) for r in (ins.rows[0], ins.rows[-1])] == [(False, None)] * 2
     start, end = ins.end_points
     assert start.deviation == pytest.approx(2.71, abs=0.02) and end.deviation == pytest.approx(4.52, abs=0.02)
     assert (end.ok, end.determined) == (False, True)
-    assert (start.ok, start.determined) == (True, False)
+    assert (start.ok, start.determined) == (None, False)
     assert ins.verdict == "fail"
 
 
@@ -59,6 +59,7 @@ def test_only_a_lower_bound_short_by_more_than_the_tolerance_stops_short(past_no
     sigma = 0.3
     determined = past_nominal > 1.0 or -1.0 <= past_nominal and past_nominal + PROVEN * sigma <= 1.0
     check = LengthCheck(nominal=300.0, measured=300.0 + past_nominal, deviation=past_nominal, tolerance=1.0,
-                        ok=True, determined=determined, sigma=sigma, bound="lower")
+                        ok=abs(past_nominal) <= 1.0 if determined else None, determined=determined, sigma=sigma,
+                        bound="lower")
     assert short(check) == stops_short
     assert short(check.model_copy(update={"bound": None, "determined": False}))  # a gap, a sigma too wide

@@ -188,9 +188,9 @@ def test_an_end_straight_the_samples_stop_short_on_is_not_determined():
     last = ins.rows[-1]
     assert last.length.deviation == pytest.approx(-2.2)
     assert not last.length.determined and last.length.bound == "lower" and last.length.sigma == 0.05
-    assert last.failed == [] and last.undetermined == ["length"] and last.ok
+    assert last.failed == [] and last.undetermined == ["length"] and last.ok is None and last.length.ok is None
     assert ins.failed_rows == [] and ins.undetermined_rows == [4] and ins.verdict == "not_determined"
-    assert not ins.end_points[1].determined and ins.end_points[1].ok
+    assert not ins.end_points[1].determined and ins.end_points[1].ok is None
     report = Report(message="3 bends reconstructed.")
     report_inspection(report, ins, "mm")
     assert report.status == "warning" and report.warnings[0].code == "inspection_not_determined"

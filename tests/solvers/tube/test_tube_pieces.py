@@ -77,6 +77,8 @@ def test_occlusion_across_a_bend_gets_no_inspection_verdict():
     # main: inspection FAIL on the bend radius the fit invented in the gap (32.8 for 12 mm)
     assert res.inspection.verdict == "not_determined"
     assert not res.inspection.failed_rows
+    (open_row,) = [r for r in res.inspection.rows if "angle" in r.undetermined]  # the bend in the gap: no verdict
+    assert open_row.ok is None and open_row.angle.ok is None and open_row.bend_radius.ok is None
 
 
 def test_two_pieces_out_of_line_are_said_to_be_so_and_get_no_verdict():
@@ -93,6 +95,11 @@ def test_two_pieces_out_of_line_are_said_to_be_so_and_get_no_verdict():
     assert g["two_pieces"] and w.details["two_pieces"] and "two pieces" in res.report.message
     assert all(not r.determined for r in res.lra[:-1])
     assert res.inspection.verdict == "not_determined" and not res.inspection.failed_rows
+    # no verdict on anything: every row, field and end point null, none read as a pass (they said true before)
+    ins = res.inspection
+    assert [e.ok for e in ins.end_points] == [None, None] and all(r.ok is None for r in ins.rows)
+    assert all(getattr(r, f) is None or getattr(r, f).ok is None
+               for r in ins.rows for f in ("length", "rotation", "angle", "bend_radius"))
 
 
 def test_two_tubes_side_by_side_leave_a_u_bend_no_sample_shows():

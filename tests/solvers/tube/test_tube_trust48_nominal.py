@@ -36,9 +36,9 @@ def test_a_lower_bound_within_the_tolerance_but_not_by_three_sigmas_is_no_verdic
     ins = _inspected(0.36, 0.48)  # the part may end 0.36 + 3 x 0.48 = 1.8 mm past the nominal: tolerance 1 mm
     last = ins.rows[-1].length
     assert last.deviation == pytest.approx(0.36) and last.bound == "lower"
-    assert not last.determined and last.ok and ins.rows[-1].undetermined == ["length"]
+    assert not last.determined and last.ok is None and ins.rows[-1].undetermined == ["length"]
     assert ins.verdict == "not_determined" and ins.undetermined_rows == [3]  # before: "pass"
-    assert ins.end_points[1].determined and ins.end_points[1].ok  # 0.34 + 3 x 0.48 mm: within its 2 mm
+    assert ins.end_points[1].determined and ins.end_points[1].ok is True  # 0.34 + 3 x 0.48 mm: within its 2 mm
     _, warning = inspection_outcome(ins, "mm")
     assert warning.code == "inspection_not_determined" and "rows 3 (length)" in warning.message
     assert "or within the tolerance by less than three sigmas (the part may end further on)" in warning.message
@@ -60,7 +60,7 @@ def test_a_lower_bound_is_judged_by_how_far_the_part_may_reach(past_end, sigma, 
 def test_an_end_point_passes_only_when_the_part_may_not_reach_past_its_tolerance():
     ins = _inspected(0.36, 0.6)  # the end point about 0.36 mm off, the part's end up to 2.16 mm: tolerance 2 mm
     end = ins.end_points[1]
-    assert end.deviation == pytest.approx(0.36, abs=0.05) and end.ok and not end.determined
+    assert end.deviation == pytest.approx(0.36, abs=0.05) and end.ok is None and not end.determined
 
 
 def test_an_empty_rotation_cell_is_read_as_0_and_said_naming_its_line_in_the_jobs_report():

@@ -59,8 +59,8 @@ MADE = [[300.4, 0, 90.45, 30], [300.4, 90.9, 90.45, 30], [300.4, -89.1, 90.45, 3
 def test_a_part_failed_on_its_end_points_alone_is_no_table_of_passes():
     nominal = [LraRow(length=a, rotation=b, angle=c, bend_radius=d) for a, b, c, d in NOMINAL]
     ins = inspect(make_model(MADE, 6.0), nominal, 0.8, TubeOptions())
-    assert ins.verdict == "fail" and ins.failed_rows == [] and all(r.ok for r in ins.rows)
-    assert [e.end for e in ins.end_points if not e.ok] == ["start", "end"]
+    assert ins.verdict == "fail" and ins.failed_rows == [] and all(r.ok is True for r in ins.rows)
+    assert [e.end for e in ins.end_points if e.ok is False] == ["start", "end"]
     table = list(csv.DictReader(io.StringIO(corrections_csv(SimpleNamespace(inspection=ins, units="mm")).decode())))
     assert [t["status"] for t in table] == ["pass"] * 4  # each row alone is within its tolerances ...
     assert {t["part_verdict"] for t in table} == {"fail"}  # ... the part is not
