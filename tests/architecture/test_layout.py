@@ -7,6 +7,7 @@ process with workers; schemas are imported by everyone and import nothing of our
 from __future__ import annotations
 
 import ast
+import functools
 import tomllib
 from pathlib import Path
 
@@ -35,10 +36,19 @@ EXTRA = {
 }
 
 
+@functools.cache
+def _import_statements(path: Path) -> tuple[tuple[ast.Import | ast.ImportFrom, bool], ...]:
+    """A file's import statements at any depth, each with whether it is at the module's top level: parsed once per
+    test process, as three checks read every source file; only these nodes are kept, not the whole tree."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    top_level = {id(node) for node in tree.body}
+    return tuple((node, id(node) in top_level) for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom)))
+
+
 def _imports(path: Path) -> set[str]:
     """Every plantsolve module a file imports, at any depth (function-level imports too)."""
     names: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+    for node, _ in _import_statements(path):
         if isinstance(node, ast.Import):
             names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -123,18 +133,14 @@ def test_no_import_cycles_and_no_imports_hidden_in_functions():
     hidden = []
     for path in SOURCES:
         module = _module_name(path)
-        tree = ast.parse(path.read_text())
-        top_level = set()
-        for node in tree.body:
-            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("plantsolve"):
+        statements = _import_statements(path)
+        for node, top_level in statements:
+            if top_level and isinstance(node, ast.ImportFrom) and (node.module or "").startswith("plantsolve"):
                 for alias in node.names:
                     target = f"{node.module}.{alias.name}"
                     graph.add_edge(module, target if _is_module(target) else node.module)
-                top_level.add(id(node))
-            elif isinstance(node, ast.Import):
-                top_level.add(id(node))
-        for node in ast.walk(tree):
-            if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in top_level:
+        for node, top_level in statements:
+            if not top_level:
                 names = [node.module or ""] if isinstance(node, ast.ImportFrom) else [a.name for a in node.names]
                 if any(n.startswith("plantsolve") for n in names) and path.name != "cli.py" and "migrations" not in path.parts \
                         and path.relative_to(REPO).as_posix() != "plantsolve/workers/dispatch.py":
@@ -147,7 +153,7 @@ def test_no_import_cycles_and_no_imports_hidden_in_functions():
 def test_no_private_name_is_imported_from_another_module():
     offenders = []
     for path in sorted([*PACKAGE.rglob("*.py"), *(REPO / "tests").rglob("*.py"), *(REPO / "bench").rglob("*.py")]):
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node, _ in _import_statements(path):
             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("plantsolve"):
                 offenders += [f"{path.relative_to(REPO)}:{node.lineno} {alias.name}" for alias in node.names
                               if alias.name.startswith("_") and not alias.name.startswith("__")]
