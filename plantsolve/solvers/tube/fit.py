@@ -311,16 +311,14 @@ def geometry_one(x: np.ndarray, lay: Layout, frame0: np.ndarray) -> np.ndarray:
     Ts = T[:, :3].tolist()
     out = xs[:3] + t0 + [0.0]
     for k in range(n):
-        F = Ts[k]
+        (f00, f01, f02, p0), (f10, f11, f12, p1), (f20, f21, f22, p2) = Ts[k]
         (c, s), (ca, sa), r = cs[k], csa[k], rad[k]
         off, rsa = r * (1.0 - ca), r * sa
-        nt = [F[j][1] * c + F[j][2] * s for j in range(3)]
-        out += [F[j][3] + r * nt[j] for j in range(3)]
-        out += [F[j][2] * c - F[j][1] * s for j in range(3)]
-        out.append(r)
-        out += [F[j][3] + rsa * F[j][0] + off * nt[j] for j in range(3)]
-        out += [Ts[k + 1][j][0] for j in range(3)]
-        out.append(0.0)
+        n0, n1, n2 = f01 * c + f02 * s, f11 * c + f12 * s, f21 * c + f22 * s  # the turned normal
+        nxt = Ts[k + 1]
+        out += (p0 + r * n0, p1 + r * n1, p2 + r * n2, f02 * c - f01 * s, f12 * c - f11 * s, f22 * c - f21 * s, r,
+                p0 + rsa * f00 + off * n0, p1 + rsa * f10 + off * n1, p2 + rsa * f20 + off * n2,
+                nxt[0][0], nxt[1][0], nxt[2][0], 0.0)
     return np.array(out).reshape(2 * n + 1, 7)
 
 
