@@ -396,6 +396,59 @@ def before_after(n_tubes: int, ref: str, n_random: int | None = None, repeat: in
           + "".join(f"; {c}: {d:.3g}" for c, d in sorted(moved.items())))
 
 
+FLAT_WINDOW = 10  # --lm-trace: the cost's decrease over this many last evaluations of a round
+
+
+def lm_trace(name: str) -> None:
+    """Every Levenberg–Marquardt round of one --before-after case (``family-NNN``): its parameters and samples,
+    evaluation limit and use, accepted steps, why it stopped, and how much its cost still moved over its last
+    ``FLAT_WINDOW`` evaluations, relatively and times its samples (≈ Δχ², the cost being about N σ²: a change
+    of 1 moves a parameter about one standard deviation). A round at its limit with a Δχ² well above 0.01
+    was still moving its answer when it stopped: a stopping rule on a flat cost cannot end it sooner."""
+    from plantsolve.solvers.tube import fit
+
+    fam, i = name.rsplit("-", 1)
+    _, pts = _case(fam, (1000 if fam == "random" else 5000) + int(i))
+    rounds = []
+    lm = fit.levenberg_marquardt
+
+    def traced(fun, normal_equations, x0, lo, hi, f_scale, max_nfev=60, *args, **kwargs):
+        costs, n = [], []
+
+        def fun_costed(x, out=None):  # the residuals the solver asked for, their cost noted on the side
+            r = fun(x, out=out)
+            costs.append(fit._soft_l1(r, f_scale)[0])
+            n[:] = [len(r)]
+            return r
+
+        x, info = lm(fun_costed, normal_equations, x0, lo, hi, f_scale, max_nfev, *args, **kwargs)
+        rounds.append((len(x0), n[0] if n else 0, max_nfev, costs, info))
+        return x, info
+
+    fit.levenberg_marquardt = traced
+    try:
+        t0 = time.process_time()
+        solve(TubeRequest(points=pts.tolist()))
+        cpu = time.process_time() - t0
+    finally:
+        fit.levenberg_marquardt = lm
+    print(f"LM rounds of {name} ({cpu:.2f} CPU s with the tracing)")
+    print(f"| round | parameters | samples | limit | evaluations | accepted | stopped | cost decrease over the last "
+          f"{FLAT_WINDOW} evaluations | × samples (≈ Δχ²) |")
+    print("|---:|---:|---:|---:|---:|---:|---|---:|---:|")
+    at_limit = 0
+    for k, (P, N, limit, costs, info) in enumerate(rounds, 1):
+        best = np.minimum.accumulate(costs)
+        accepted = int(np.count_nonzero(np.asarray(costs[1:]) <= best[:-1]))
+        stop = "limit" if info["nfev"] >= limit else {2: "converged", 3: "no descent"}.get(info["status"], "?")
+        at_limit += stop == "limit"
+        w = min(FLAT_WINDOW, len(best) - 1)
+        rel = (best[-1 - w] - best[-1]) / best[-1] if w > 0 else 0.0
+        print(f"| {k} | {P} | {N} | {limit} | {info['nfev']} | {accepted} | {stop} | {rel:.1e} | {rel * N:.3g} |")
+    print(f"{at_limit}/{len(rounds)} rounds stopped at their evaluation limit, "
+          f"{sum(r[4]['nfev'] for r in rounds)} evaluations in all")
+
+
 # a wrong answer: the wrong bend count, or with the right count a bend angle this many degrees off
 WRONG_ANGLE_DEG = 5.0
 
@@ -513,6 +566,8 @@ def main():
     ap.add_argument("--random-tubes", type=int, help="--before-after: this many random tubes (default: N)")
     ap.add_argument("--repeat", type=int, default=1, help="--before-after: solve every case this many times a side "
                     "(the least CPU time is kept)")
+    ap.add_argument("--lm-trace", metavar="CASE", help="every least-squares round of one --before-after case "
+                    "(small_bends-010): evaluations used, why it stopped, how much its cost still moved")
     ap.add_argument("--solve-cases", help=argparse.SUPPRESS)
     ap.add_argument("--scale", help="comma-separated point counts (1e6,3e6,1e7): large scans, --ref's solver and "
                     "this tree's")
@@ -529,6 +584,9 @@ def main():
         return
     if a.solve_cases:
         solve_cases(a.solve_cases)
+        return
+    if a.lm_trace:
+        lm_trace(a.lm_trace)
         return
     if a.before_after:
         before_after(a.before_after, a.ref, a.random_tubes, a.repeat)
