@@ -87,13 +87,18 @@ def one_piece_verdict(found: Sequence[Piece]) -> Diagnostic | None:
         details={"pieces": len(loose), "single_parts": singles, "parts": sum(len(pc.parts) for pc in loose)})
 
 
+def names_lines(missing: object) -> bool:
+    """Whether ``missing`` is what the LDraw reader writes as ``source.missing_submodels``: each sub-model's name ->
+    the lines placing it."""
+    return isinstance(missing, dict) and all(
+        isinstance(name, str) and isinstance(lines, list) and all(type(n) is int for n in lines)
+        for name, lines in missing.items())
+
+
 def missing_submodels_verdict(missing: object) -> Diagnostic | None:
     """``submodels_missing`` when the file places sub-models it does not hold (``missing``: name -> the lines placing
-    it, as the LDraw reader writes ``source.missing_submodels``; a hand-written request's value of another shape says
-    nothing the verdict can name, and is passed over)."""
-    if not isinstance(missing, dict) or not missing or not all(
-            isinstance(name, str) and isinstance(lines, list) and all(type(n) is int for n in lines)
-            for name, lines in missing.items()):
+    it; a value of another shape, which intake refuses in a written request, says nothing the verdict can name)."""
+    if not missing or not names_lines(missing):
         return None
 
     def placed(name: str, lines: list[int]) -> str:

@@ -1,16 +1,18 @@
 """Sub-models a file places but does not hold: named once whatever the case of each line's name (LDraw matches names
 regardless of case), with their lines ('lines 6, 7'), under their own verdict code ``submodels_missing`` (NOT
-DETERMINED); a hand-written request's ``source.missing_submodels`` of another shape is passed over, no longer a crash
-of the solve after the 202; the lines kept are bounded."""
+DETERMINED); a hand-written request's ``source.missing_submodels`` of another shape is refused at intake naming the
+field, and passed over by a solve called without intake, no longer a crash after the 202; the lines kept are
+bounded."""
 
 from __future__ import annotations
 
 import pytest
 
 from plantsolve.schemas.common import VERDICT_CODES
-from plantsolve.solvers.base import StoredInput
+from plantsolve.solvers.base import InputRejected, StoredInput
 from plantsolve.solvers.rigidity.solve import solve
 from plantsolve.solvers.rigidity.upload import MAX_SKIPPED_LISTED, parse_ldraw, parse_upload
+from plantsolve.solvers.rigidity.validation import check_input
 
 TOWER = """0 FILE tower.ldr
 1 16 0 0 0 1 0 0 0 1 0 0 0 1 lower.ldr
@@ -50,3 +52,13 @@ def test_the_lines_placing_a_missing_submodel_are_kept_to_the_listed_bound_in_or
         f"1 16 {k} 0 0 1 0 0 0 1 0 0 0 1 {'GONE' if k % 2 else 'gone'}.ldr\n" for k in range(MAX_SKIPPED_LISTED + 50))
     missing = parse_ldraw(text)["source"]["missing_submodels"]
     assert missing == {"gone.ldr": list(range(3, MAX_SKIPPED_LISTED + 3))}
+
+
+@pytest.mark.parametrize("written", [["upper.ldr"], {"upper.ldr": 3}, "upper.ldr", {"upper.ldr": ["6"]}])
+def test_a_written_request_with_missing_submodels_of_another_shape_is_refused_naming_the_field(written):
+    request = _request()
+    check_input(request)
+    with pytest.raises(InputRejected) as refused:  # before: accepted, and the solve crashed after the 202
+        check_input(request.model_copy(update={"source": {**request.source, "missing_submodels": written}}))
+    (error,) = refused.value.errors
+    assert error.loc == ("source", "missing_submodels") and "the lines placing it" in error.msg
